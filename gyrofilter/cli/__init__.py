@@ -1,0 +1,76 @@
+"""The ``gyrofilter`` command: the only place that parses argv, prints and exits.
+
+Each subcommand lives in its own module ``gyrofilter.cli.<name>`` with two functions:
+``add_arguments(parser)`` and ``run(args) -> int``. Modules are imported only when their
+command runs (or for ``--help``), so ``gyrofilter replay`` does not import the analysis code.
+Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors and Ctrl-C become one
+line on stderr and a non-zero exit code; a traceback is a bug.
+"""
+import argparse
+import importlib
+import os
+import sys
+
+from ..errors import GyroFilterError
+
+# command name -> (module, one-line summary)
+COMMANDS = {
+    "replay": ("gyrofilter.cli.replay", "filter a recording with the real-time pipeline"),
+    "record": ("gyrofilter.cli.record", "record a live source to a recording file"),
+    "run": ("gyrofilter.cli.run", "filter a live source in real time"),
+    "allan": ("gyrofilter.cli.allan", "Allan deviation and noise coefficients of a recording"),
+    "simulate": ("gyrofilter.cli.simulate", "simulate a gyro recording from a noise model"),
+    "gap": ("gyrofilter.cli.gap", "find what the baseline noise model gets wrong about a recording"),
+    "arma": ("gyrofilter.cli.arma", "ARMA model of the bias (paper 003)"),
+    "evaluate": ("gyrofilter.cli.evaluate", "compare filters on static, synthetic-motion and reference data"),
+}
+
+EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
+
+
+def build_parser(command=None):
+    parser = argparse.ArgumentParser(
+        prog="gyrofilter",
+        description="Real-time filtering and error analysis for low-cost MEMS gyroscopes (MPU6050).",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (module_name, summary) in COMMANDS.items():
+        p = sub.add_parser(name, help=summary, description=summary)
+        if command in (None, name):
+            importlib.import_module(module_name).add_arguments(p)
+    return parser
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = next((a for a in argv if not a.startswith("-")), None)
+    if command not in COMMANDS:
+        command = None
+    try:
+        parser = build_parser(command)
+        args = parser.parse_args(argv)
+        if args.command is None:
+            parser.print_help()
+            return EXIT_BAD_INPUT
+        module = importlib.import_module(COMMANDS[args.command][0])
+        return module.run(args) or 0
+    except KeyboardInterrupt:
+        print("gyrofilter: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        # stdout closed early (e.g. piped into `head`): not an error worth a message
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
+    except (GyroFilterError, OSError, ValueError) as exc:
+        print(f"gyrofilter: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def _one_line(exc):
+    if isinstance(exc, OSError) and exc.filename:
+        text = f"{exc.filename}: {exc.strerror or exc}"
+    else:
+        text = str(exc) or type(exc).__name__
+    return " ".join(text.split())

@@ -1,0 +1,29 @@
+"""Exceptions raised by gyrofilter.
+
+Library code raises these; only the command line catches them and prints one line.
+Every message names what was wrong and where (file and line, register, setting).
+"""
+
+
+class GyroFilterError(Exception):
+    """Base class: a problem the user can act on (bad input, bad setting, device fault)."""
+
+
+class SettingsError(GyroFilterError, ValueError):
+    """A setting is out of range or inconsistent; raised once, at construction."""
+
+
+class RecordingError(GyroFilterError, ValueError):
+    """A recording file is malformed: the message names the file, the line and the reason."""
+
+
+class CalibrationError(GyroFilterError):
+    """Start-up bias calibration failed (for example the sensor moved while calibrating)."""
+
+
+class DeviceError(GyroFilterError):
+    """A sensor or port could not be opened, identified or read."""
+
+
+class SourceEnded(Exception):
+    """A finite source (replay file, simulation, closed port) has delivered its last sample."""
