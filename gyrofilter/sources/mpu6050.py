@@ -1,0 +1,552 @@
+"""MPU-6050 gyroscope over I2C (Linux i2c-dev through smbus2), read through the chip's FIFO.
+
+Entry point: :func:`open_mpu6050` returns a live source (see the source protocol in
+``gyrofilter/sources``): ``header``, ``columns``, ``read()``, ``pop_notes()``, ``stats``, ``close()``.
+
+What the driver does, with the datasheet sections it follows (InvenSense RM-MPU-6000A-00 rev 4.2,
+register map; PS-MPU-6000A-00 rev 3.4, product specification):
+
+* identifies the chip by WHO_AM_I (0x75, section 4.32): 0x68 is an MPU-6050; relatives and clones
+  are named and refused unless ``allow_chip`` lets them through;
+* resets it (PWR_MGMT_1.DEVICE_RESET), wakes it with the clock from the PLL (CLKSEL = 1, section 4.30),
+  with a timeout on every wait;
+* sets full scale (GYRO_CONFIG.FS_SEL bits 4:3: 250/500/1000/2000 deg/s = 131/65.5/32.8/16.4 LSB per
+  deg/s), digital low-pass filter (CONFIG.DLPF_CFG bits 2:0) and sample rate
+  ``rate = gyro output rate / (1 + SMPLRT_DIV)`` with a gyro output rate of 8 kHz for DLPF_CFG 0 or 7
+  and 1 kHz otherwise (section 4.2); every written register is read back before data are trusted;
+* reads the FIFO (section 4.6: gyro X, Y, Z and optionally TEMP, written in register order, so TEMP
+  comes first): FIFO_COUNT (0x72/0x73) then whole frames, big-endian 16-bit two's complement;
+* time stamps samples from the sensor's clock: ``t = sample_index / sample_rate_hz``; a FIFO overflow
+  (INT_STATUS.FIFO_OFLOW_INT, bit 4) resets the FIFO, keeps frame alignment, and records the gap
+  (samples lost, estimated from the host clock at the configured rate) as a note and as a jump in t;
+* retries transient I2C errors (EIO 5, EREMOTEIO 121) with a bounded exponential back-off and
+  counts them in ``stats["retries"]``.
+
+Temperature: T / degC = TEMP_OUT / 340 + 36.53 (section 4.18).
+
+smbus2 is imported only when a bus is opened by number or path; a bus object can be injected
+instead (anything with smbus2's ``read_byte_data``, ``write_byte_data``, ``read_i2c_block_data``
+and, optionally, ``i2c_rdwr``).
+"""
+import errno as _errno
+import time
+from datetime import datetime, timezone
+
+import numpy as np
+
+from ..errors import DeviceError, SettingsError
+from . import mpu6050_registers as R
+
+__all__ = ["open_mpu6050", "MPU6050Source", "CHIPS", "sample_rate_settings", "auto_dlpf_cfg",
+           "decode_fifo", "frame_layout", "temperature_c"]
+
+# WHO_AM_I value -> (name, FIFO bytes, temperature LSB per degC, temperature offset degC, usable)
+# "usable" = shares the MPU-6050 gyro/FIFO registers, so allow_chip may let it through.
+# MPU-6500 family: PS-MPU-6500A-01 (FIFO 512 bytes, T = TEMP_OUT/333.87 + 21);
+# MPU-9250: PS-MPU-9250A-01; MPU-9255 reads 0x73; ICM-20689: DS-000143 (WHO_AM_I 0x98).
+CHIPS = {
+    0x68: ("MPU6050", 1024, 340.0, 36.53, True),
+    0x70: ("MPU6500", 512, 333.87, 21.0, True),
+    0x71: ("MPU9250", 512, 333.87, 21.0, True),
+    0x73: ("MPU9255", 512, 333.87, 21.0, True),
+    0x74: ("MPU6515", 512, 333.87, 21.0, True),
+    0x72: ("MPU6050 clone (WHO_AM_I 0x72, sold as MPU6050/GY-521)", 512, 340.0, 36.53, True),
+    0x98: ("ICM-20689 or a clone sold as MPU6050/MPU6500", 512, 326.8, 25.0, True),
+    0x12: ("ICM-20602", 512, 326.8, 25.0, True),
+    0x11: ("ICM-20600", 512, 326.8, 25.0, True),
+    0xAF: ("ICM-20608", 512, 326.8, 25.0, True),
+    0x19: ("MPU6886", 512, 326.8, 25.0, True),
+    0x47: ("ICM-42688-P (different register map)", 0, 1.0, 0.0, False),
+    0x42: ("ICM-42605 (different register map)", 0, 1.0, 0.0, False),
+}
+MPU6050_ID = 0x68
+
+TRANSIENT_ERRNOS = (_errno.EIO, _errno.EREMOTEIO)  # 5, 121
+I2C_BLOCK_MAX = 32          # SMBus I2C-block transfers carry at most 32 bytes
+I2C_FUNC_I2C = 0x00000001   # adapter supports plain I2C messages (I2C_RDWR)
+
+_NO_WAIT = object()
+
+
+def lsb_per_dps_for(range_dps):
+    """Return (FS_SEL, LSB per deg/s) for a full scale of ``range_dps`` (250, 500, 1000 or 2000)."""
+    for fs_sel, (full_scale, lsb) in R.GYRO_FULL_SCALE.items():
+        if float(range_dps) == full_scale:
+            return fs_sel, lsb
+    raise SettingsError(f"range_dps={range_dps!r} is not an MPU6050 full scale; expected one of "
+                        f"{', '.join(str(v[0]) for v in R.GYRO_FULL_SCALE.values())} (deg/s)")
+
+
+def auto_dlpf_cfg(rate_hz):
+    """Widest DLPF bandwidth below the Nyquist frequency ``rate_hz / 2`` (DLPF_CFG 0..6).
+
+    Table from register map section 4.3 (gyro bandwidth 256, 188, 98, 42, 20, 10, 5 Hz).
+    Falls back to DLPF_CFG 6 (5 Hz) for rates below 10 Hz.
+    """
+    for cfg in range(0, 7):
+        if R.DLPF[cfg][0] < rate_hz / 2.0:
+            return cfg
+    return 6
+
+
+def sample_rate_settings(rate_hz, dlpf_cfg):
+    """Return (SMPLRT_DIV, actual rate Hz, gyro output rate Hz) for a requested rate.
+
+    rate = gyro_output_rate / (1 + SMPLRT_DIV), gyro_output_rate = 8 kHz when DLPF_CFG is 0 or 7,
+    else 1 kHz (register map section 4.2). A rate that no divider 0..255 reaches exactly is refused
+    with the nearest reachable rates in the message.
+    """
+    if dlpf_cfg not in R.DLPF:
+        raise SettingsError(f"dlpf={dlpf_cfg!r}: CONFIG.DLPF_CFG (bits 2:0) takes 0..7")
+    base_hz = R.DLPF[dlpf_cfg][2]
+    try:
+        rate_hz = float(rate_hz)
+    except (TypeError, ValueError):
+        raise SettingsError(f"rate_hz={rate_hz!r} is not a number") from None
+    if not rate_hz > 0:
+        raise SettingsError(f"rate_hz={rate_hz!r} must be positive")
+    div_f = base_hz / rate_hz - 1.0
+    div = int(round(div_f))
+    if 0 <= div <= 255 and abs(base_hz / (1 + div) - rate_hz) <= 1e-6 * rate_hz:
+        return div, base_hz / (1 + div), base_hz
+    lo = min(255, max(0, int(np.floor(div_f))))
+    hi = min(255, max(0, lo + 1))
+    near = sorted({base_hz / (1 + d) for d in (lo, hi)}, reverse=True)
+    near_txt = " or ".join(f"{r:g} Hz (SMPLRT_DIV={int(round(base_hz / r - 1))})" for r in near)
+    raise SettingsError(
+        f"rate_hz={rate_hz:g} is not reachable with DLPF_CFG={dlpf_cfg}: the MPU6050 samples at "
+        f"{base_hz:g} Hz / (1 + SMPLRT_DIV), SMPLRT_DIV 0..255; nearest: {near_txt}")
+
+
+def frame_layout(temperature):
+    """Names of the 16-bit words in one FIFO frame, in FIFO order (register order, section 4.6)."""
+    return (("temp",) if temperature else ()) + ("gx", "gy", "gz")
+
+
+def decode_fifo(buf, n_words):
+    """Decode whole FIFO frames: big-endian 16-bit two's complement -> int16 array (frames, n_words)."""
+    return np.frombuffer(bytes(buf), dtype=">i2").reshape(-1, n_words)
+
+
+def temperature_c(raw, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):
+    """T / degC = TEMP_OUT / 340 + 36.53 (register map section 4.18)."""
+    return np.asarray(raw, dtype=float) / lsb_per_c + offset_c
+
+
+def _bus_name(bus):
+    if isinstance(bus, int):
+        return f"/dev/i2c-{bus}"
+    if isinstance(bus, str):
+        return bus
+    return repr(bus)
+
+
+def _bus_number(bus):
+    if isinstance(bus, int):
+        return bus
+    if isinstance(bus, str) and bus.startswith("/dev/i2c-") and bus[9:].isdigit():
+        return int(bus[9:])
+    return 1
+
+
+def _open_bus(bus):
+    """Open ``/dev/i2c-N`` with smbus2; turn the OS errors into one-line errors with a hint."""
+    import smbus2  # imported only when a device is opened
+
+    name = _bus_name(bus)
+    try:
+        return smbus2.SMBus(bus)
+    except FileNotFoundError:
+        raise DeviceError(
+            f"no I2C bus {name}: enable I2C (sudo raspi-config -> Interface Options -> I2C, or "
+            f"dtparam=i2c_arm=on in /boot/firmware/config.txt) and reboot; `ls /dev/i2c-*` lists the buses") from None
+    except PermissionError:
+        raise DeviceError(
+            f"permission denied opening {name}: add your user to the i2c group "
+            f"(sudo adduser $USER i2c, then log out and in) or check the device's permissions") from None
+    except OSError as exc:
+        raise DeviceError(f"cannot open I2C bus {name}: {exc.strerror or exc} (errno {exc.errno})") from None
+
+
+class MPU6050Source:
+    """A configured MPU-6050 streaming gyro (and temperature) samples from its FIFO.
+
+    Use :func:`open_mpu6050`; the constructor does all the bus traffic of start-up.
+    ``read()`` returns rows ``[t, gx, gy, gz(, temp)]``: t in seconds from the sensor's sample
+    index, gyro in LSB (``header["lsb_per_dps"]`` LSB per deg/s), temp in deg C.
+    """
+
+    def __init__(self, bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, temperature=True,
+                 allow_chip=None, *, transfer="auto", clock=None, sleep=None, wall_clock=None,
+                 poll_interval_s=0.02, max_wait_s=0.1, max_retries=5, retry_backoff_s=0.001,
+                 reset_timeout_s=0.5, fifo_bytes=None):
+        # settings are checked before any bus traffic
+        if address not in (0x68, 0x69):
+            raise SettingsError(f"address=0x{int(address):02X}: an MPU6050 answers at 0x68 (AD0 low) "
+                                f"or 0x69 (AD0 high)")
+        self.fs_sel, self.lsb_per_dps = lsb_per_dps_for(range_dps)
+        self.full_scale_dps = R.GYRO_FULL_SCALE[self.fs_sel][0]
+        self.dlpf_cfg = auto_dlpf_cfg(float(rate_hz)) if dlpf is None else dlpf
+        if self.dlpf_cfg not in R.DLPF:
+            raise SettingsError(f"dlpf={dlpf!r}: CONFIG.DLPF_CFG (bits 2:0) takes 0..7 (or None: automatic)")
+        self.smplrt_div, self.sample_rate_hz, self.gyro_output_rate_hz = sample_rate_settings(
+            rate_hz, self.dlpf_cfg)
+        if transfer not in ("auto", "smbus", "rdwr"):
+            raise SettingsError(f"transfer={transfer!r}: expected 'auto', 'smbus' or 'rdwr'")
+        self.temperature = bool(temperature)
+        self.address = int(address)
+        self.bus_name = _bus_name(bus)
+        self._clock = clock or time.monotonic
+        self._sleep = sleep or time.sleep
+        self._wall_clock = wall_clock or time.time
+        self.poll_interval_s = float(poll_interval_s)
+        self.max_wait_s = float(max_wait_s)
+        self.max_retries = int(max_retries)
+        self.retry_backoff_s = float(retry_backoff_s)
+        self.reset_timeout_s = float(reset_timeout_s)
+        self.stats = {"samples": 0, "lost_samples": 0, "retries": 0, "overflows": 0, "resyncs": 0,
+                      "polls": 0, "fifo_bytes_read": 0}
+        self._notes = []
+        self._layout = frame_layout(self.temperature)
+        self._n_words = len(self._layout)
+        self.frame_bytes = 2 * self._n_words
+        self._owns_bus = isinstance(bus, (int, str))
+        self._bus = _open_bus(bus) if self._owns_bus else bus
+        self._closed = False
+        try:
+            self.chip_id = self._identify(allow_chip)
+            name, chip_fifo, self._temp_lsb_per_c, self._temp_offset_c, _ = CHIPS[self.chip_id]
+            self.chip_name = name
+            self.fifo_size_bytes = int(fifo_bytes or chip_fifo)
+            self.use_rdwr = self._choose_transfer(transfer)
+            self._start()
+        except BaseException:
+            self._close_bus()
+            raise
+        self.columns = ["t", "gx", "gy", "gz"] + (["temp"] if self.temperature else [])
+        self.header = self._make_header()
+
+    # ---------------------------------------------------------------- bus access with retries
+
+    def _where(self):
+        return f"0x{self.address:02X} on {self.bus_name}"
+
+    def _xfer(self, what, fn, *args):
+        """Call one bus transaction; retry EIO/EREMOTEIO with back-off 1, 2, 4, ... ms (bounded)."""
+        for attempt in range(self.max_retries + 1):
+            try:
+                return fn(*args)
+            except OSError as exc:
+                code = exc.errno
+                if code in TRANSIENT_ERRNOS and attempt < self.max_retries:
+                    self.stats["retries"] += 1
+                    self._sleep(self.retry_backoff_s * (2 ** attempt))
+                    continue
+                raise self._io_error(what, exc, attempt + 1) from None
+
+    def _io_error(self, what, exc, attempts):
+        code = exc.errno
+        desc = f"errno {code}: {exc.strerror or _errno.errorcode.get(code, '?')}"
+        if code in (_errno.ENXIO, _errno.EREMOTEIO) and not getattr(self, "_identified", False):
+            return DeviceError(
+                f"no chip answers at {self._where()} ({desc}): check the wiring (VCC 3.3 V, GND, "
+                f"SDA to GPIO2/pin 3, SCL to GPIO3/pin 5) and the address (0x68 with AD0 low, 0x69 with "
+                f"AD0 high); `i2cdetect -y {_bus_number(self.bus_name)}` should list it")
+        if code == _errno.EBUSY:
+            return DeviceError(
+                f"address {self._where()} is busy ({desc}): a kernel driver owns it (remove "
+                f"dtoverlay=mpu6050 from /boot/firmware/config.txt and reboot)")
+        return DeviceError(f"I2C transfer failed at {self._where()} reading/writing {what} after "
+                           f"{attempts} attempt(s) ({desc}): check wiring, cable length and pull-ups")
+
+    def _read_byte(self, reg):
+        return self._xfer(str(reg), self._bus.read_byte_data, self.address, reg.address)
+
+    def _write_byte(self, reg, value):
+        self._xfer(str(reg), self._bus.write_byte_data, self.address, reg.address, value)
+
+    def _read_block(self, reg, length):
+        return self._xfer(str(reg), self._bus.read_i2c_block_data, self.address, reg.address, length)
+
+    # ---------------------------------------------------------------- start-up
+
+    def _identify(self, allow_chip):
+        self._identified = False
+        who = self._read_byte(R.WHO_AM_I)
+        self._identified = True
+        if who == MPU6050_ID:
+            return who
+        known = CHIPS.get(who)
+        allowed = (allow_chip is True or allow_chip == who
+                   or (isinstance(allow_chip, (list, tuple, set, frozenset)) and who in allow_chip))
+        if known is None:
+            raise DeviceError(
+                f"chip at {self._where()} answers WHO_AM_I (0x75) = 0x{who:02X}, not 0x68 (MPU6050), "
+                f"and is not a known relative: wrong device at this address? (`i2cdetect -y "
+                f"{_bus_number(self.bus_name)}` lists what answers)")
+        if not known[4]:
+            raise DeviceError(f"chip at {self._where()} is a {known[0]} (WHO_AM_I 0x{who:02X}); this driver "
+                              f"speaks the MPU6050 register map only")
+        if not allowed:
+            raise DeviceError(
+                f"chip at {self._where()} is a {known[0]} (WHO_AM_I 0x{who:02X}), not an MPU6050 (0x68): "
+                f"its gyro registers are similar but FIFO size, filters and temperature scale differ; "
+                f"pass allow_chip=0x{who:02X} to use it anyway")
+        return who
+
+    def _choose_transfer(self, transfer):
+        has_rdwr = hasattr(self._bus, "i2c_rdwr")
+        if transfer == "smbus":
+            return False
+        if transfer == "rdwr":
+            if not has_rdwr:
+                raise SettingsError("transfer='rdwr' needs a bus with i2c_rdwr (smbus2.SMBus)")
+            return True
+        funcs = getattr(self._bus, "funcs", 0)
+        return bool(has_rdwr and int(funcs) & I2C_FUNC_I2C)
+
+    def _wait_for(self, reg, done, what, timeout_s):
+        """Poll ``reg`` until ``done(value)``; DeviceError after ``timeout_s`` (every wait is bounded)."""
+        deadline = self._clock() + timeout_s
+        while True:
+            value = self._read_byte(reg)
+            if done(value):
+                return value
+            if self._clock() >= deadline:
+                raise DeviceError(f"{what} at {self._where()}: {reg} still reads 0x{value:02X} after "
+                                  f"{timeout_s:g} s; power-cycle the sensor")
+            self._sleep(0.005)
+
+    def _start(self):
+        pm1 = R.PWR_MGMT_1
+        # reset (section 4.30), then wait for DEVICE_RESET to clear
+        self._write_byte(pm1, pm1.put(0, "DEVICE_RESET", 1))
+        self._sleep(0.05)
+        self._wait_for(pm1, lambda v: not v & pm1.mask("DEVICE_RESET"), "reset did not finish",
+                       self.reset_timeout_s)
+        self._write_byte(R.SIGNAL_PATH_RESET, 0x07)
+        self._sleep(0.01)
+        # wake with the clock from the PLL (X gyro reference)
+        self._write_byte(pm1, pm1.put(0, "CLKSEL", R.CLKSEL_PLL_XGYRO))
+        self._wait_for(pm1, lambda v: not v & pm1.mask("SLEEP"), "chip did not wake up",
+                       self.reset_timeout_s)
+        self._sleep(0.05)  # gyro start-up time, product spec table 6.1: 30 ms typical
+        # configuration (FIFO stopped while configuring)
+        fifo_en = (R.FIFO_EN.mask("XG_FIFO_EN") | R.FIFO_EN.mask("YG_FIFO_EN") | R.FIFO_EN.mask("ZG_FIFO_EN")
+                   | (R.FIFO_EN.mask("TEMP_FIFO_EN") if self.temperature else 0))
+        writes = [
+            (R.USER_CTRL, 0x00, 0xFF),
+            (R.FIFO_EN, 0x00, 0xFF),
+            (R.SMPLRT_DIV, self.smplrt_div, 0xFF),
+            (R.CONFIG, R.CONFIG.put(0, "DLPF_CFG", self.dlpf_cfg), 0xFF),
+            (R.GYRO_CONFIG, R.GYRO_CONFIG.put(0, "FS_SEL", self.fs_sel), 0xFF),
+            (R.INT_PIN_CFG, 0x00, 0xFF),
+            (R.INT_ENABLE, R.INT_ENABLE.mask("FIFO_OFLOW_EN"), 0xFF),
+            (R.PWR_MGMT_2, 0x00, 0xFF),
+            (R.FIFO_EN, fifo_en, 0xFF),
+        ]
+        for reg, value, _ in writes:
+            self._write_byte(reg, value)
+        final = {}
+        for reg, value, mask in writes:
+            final[reg.address] = (reg, value, mask)
+        final[pm1.address] = (pm1, pm1.put(0, "CLKSEL", R.CLKSEL_PLL_XGYRO), 0xFF)
+        # read every written register back; refuse to start on a mismatch
+        for reg, value, mask in final.values():
+            got = self._read_byte(reg)
+            if (got & mask) != (value & mask):
+                raise DeviceError(
+                    f"{self.chip_name} at {self._where()}: register {reg} reads back 0x{got:02X} after "
+                    f"writing 0x{value:02X}; refusing to start (bad connection or not an MPU6050)")
+        self._fifo_restart()
+        self.start_time_utc = datetime.fromtimestamp(self._wall_clock(), tz=timezone.utc).isoformat(
+            timespec="milliseconds").replace("+00:00", "Z")
+
+    def _fifo_restart(self):
+        """Stop, reset and re-enable the FIFO; clear INT_STATUS; anchor the host clock to the next sample."""
+        uc = R.USER_CTRL
+        self._write_byte(uc, uc.put(0, "FIFO_RESET", 1))           # FIFO_RESET while FIFO_EN = 0
+        self._wait_for(uc, lambda v: not v & uc.mask("FIFO_RESET"), "FIFO reset did not finish",
+                       self.reset_timeout_s)
+        self._read_byte(R.INT_STATUS)                               # clears FIFO_OFLOW_INT
+        self._write_byte(uc, uc.put(0, "FIFO_EN", 1))
+        got = self._read_byte(uc)
+        if not got & uc.mask("FIFO_EN"):
+            raise DeviceError(f"{self.chip_name} at {self._where()}: register {uc} reads back 0x{got:02X} "
+                              f"after writing 0x{uc.put(0, 'FIFO_EN', 1):02X}; refusing to start")
+        self._anchor_time = self._clock()
+        self._anchor_index = getattr(self, "_next_index", 0)
+        self._next_index = self._anchor_index
+        self._last_poll = self._anchor_time
+
+    def _make_header(self):
+        bw = R.DLPF[self.dlpf_cfg][0]
+        head = {
+            "sensor": "MPU6050" if self.chip_id == MPU6050_ID else self.chip_name,
+            "chip_id": f"0x{self.chip_id:02X}",
+            "sample_rate_hz": f"{self.sample_rate_hz:.10g}",
+            "gyro_unit": "lsb",
+            "lsb_per_dps": f"{self.lsb_per_dps:g}",
+            "full_scale_dps": f"{self.full_scale_dps:g}",
+            "dlpf_cfg": str(self.dlpf_cfg),
+            "dlpf_bandwidth_hz": "none" if bw is None else f"{bw:g}",
+            "smplrt_div": str(self.smplrt_div),
+            "gyro_output_rate_hz": f"{self.gyro_output_rate_hz:g}",
+            "clock_source": "PLL, X gyro reference (CLKSEL=1)",
+            "start_time_utc": self.start_time_utc,
+            "i2c_bus": self.bus_name,
+            "i2c_address": f"0x{self.address:02X}",
+            "time_base": "t = sample_index / sample_rate_hz (sensor clock); lost samples show as jumps in t",
+            "source": "gyrofilter.sources.mpu6050 (FIFO)",
+        }
+        if self.temperature:
+            head["temp_formula"] = f"temp_c = TEMP_OUT / {self._temp_lsb_per_c:g} + {self._temp_offset_c:g}"
+        return head
+
+    # ---------------------------------------------------------------- streaming
+
+    def _fifo_count(self):
+        hi, lo = self._read_block(R.FIFO_COUNT_H, 2)
+        return (hi << 8) | lo
+
+    def _read_fifo(self, n_bytes):
+        """Read ``n_bytes`` (whole frames) from FIFO_R_W: one I2C_RDWR transfer, or <=32-byte blocks."""
+        if self.use_rdwr:
+            from smbus2 import i2c_msg
+
+            def rdwr():
+                w = i2c_msg.write(self.address, [R.FIFO_R_W.address])
+                r = i2c_msg.read(self.address, n_bytes)
+                self._bus.i2c_rdwr(w, r)
+                return bytes(r)
+            return self._xfer(str(R.FIFO_R_W), rdwr)
+        per_block = (I2C_BLOCK_MAX // self.frame_bytes) * self.frame_bytes
+        out = bytearray()
+        while len(out) < n_bytes:
+            k = min(per_block, n_bytes - len(out))
+            out += bytes(self._read_block(R.FIFO_R_W, k))
+        return out
+
+    def _gap(self, reason):
+        """Reset the FIFO after an overflow or lost alignment and record the gap.
+
+        Samples lost = round((now - anchor) * rate) - (samples delivered since the anchor), where the
+        anchor is the last FIFO (re)start: an estimate from the host clock at the configured rate
+        (the sensor's own clock is within about +-1 % of nominal, product spec table 6.1).
+        """
+        now = self._clock()
+        produced = int(round((now - self._anchor_time) * self.sample_rate_hz))
+        lost = max(0, produced - (self._next_index - self._anchor_index))
+        at_t = self._next_index / self.sample_rate_hz
+        self._next_index += lost
+        self.stats["lost_samples"] += lost
+        self._fifo_restart()
+        self._notes.append(f"gap: {lost} samples lost before t={self._next_index / self.sample_rate_hz:.6g} s "
+                           f"(last good sample at t={at_t - 1 / self.sample_rate_hz:.6g} s; {reason}; "
+                           f"count estimated from the host clock)")
+
+    def _poll(self):
+        """One look at the FIFO: overflow check, count, whole frames -> rows."""
+        self.stats["polls"] += 1
+        self._last_poll = self._clock()
+        status = self._read_byte(R.INT_STATUS)
+        if status & R.INT_STATUS.mask("FIFO_OFLOW_INT"):
+            self.stats["overflows"] += 1
+            self._gap("FIFO overflow")
+            return self._empty()
+        count = self._fifo_count()
+        if count > self.fifo_size_bytes - self.frame_bytes:
+            # full: the next sample overwrites the oldest bytes, alignment is no longer guaranteed
+            self.stats["overflows"] += 1
+            self._gap("FIFO overflow")
+            return self._empty()
+        if count % self.frame_bytes:
+            self.stats["resyncs"] += 1
+            self._gap(f"FIFO count {count} not a multiple of the {self.frame_bytes}-byte frame")
+            return self._empty()
+        if count == 0:
+            return self._empty()
+        buf = self._read_fifo(count)
+        self.stats["fifo_bytes_read"] += len(buf)
+        words = decode_fifo(buf, self._n_words)
+        n = len(words)
+        rows = np.empty((n, 4 + self.temperature))
+        rows[:, 0] = (self._next_index + np.arange(n)) / self.sample_rate_hz
+        if self.temperature:
+            rows[:, 1:4] = words[:, 1:4]
+            rows[:, 4] = temperature_c(words[:, 0], self._temp_lsb_per_c, self._temp_offset_c)
+        else:
+            rows[:, 1:4] = words
+        self._next_index += n
+        self.stats["samples"] += n
+        return rows
+
+    def _empty(self):
+        return np.empty((0, 4 + self.temperature))
+
+    def read(self):
+        """Rows available now (shape (n, len(columns))); waits at most ``max_wait_s`` for the first."""
+        if self._closed:
+            raise DeviceError(f"{self.chip_name} at {self._where()} is closed")
+        start = self._clock()
+        wait = self._last_poll + self.poll_interval_s - start
+        if wait > 0:
+            self._sleep(min(wait, self.max_wait_s))
+        while True:
+            rows = self._poll()
+            if len(rows) or self._notes:
+                return rows
+            left = start + self.max_wait_s - self._clock()
+            if left <= 0:
+                return rows
+            self._sleep(min(self.poll_interval_s, left))
+
+    def pop_notes(self):
+        """Events since the last call (gaps), as one-line strings."""
+        notes, self._notes = self._notes, []
+        return notes
+
+    def _close_bus(self):
+        if self._owns_bus and self._bus is not None:
+            try:
+                self._bus.close()
+            except OSError:
+                pass
+
+    def close(self):
+        """Stop the FIFO, put the chip to sleep (best effort) and close the bus if we opened it."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._bus.write_byte_data(self.address, R.USER_CTRL.address, 0x00)
+            self._bus.write_byte_data(self.address, R.PWR_MGMT_1.address,
+                                      R.PWR_MGMT_1.put(R.CLKSEL_PLL_XGYRO, "SLEEP", 1))
+        except OSError:
+            pass
+        self._close_bus()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def open_mpu6050(bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, temperature=True,
+                 allow_chip=None, **options):
+    """Open, identify, reset and configure an MPU-6050; return a live source reading its FIFO.
+
+    bus: I2C bus number (``/dev/i2c-N``), a device path, or an smbus2-like bus object (not closed
+    by the source). address: 0x68 (AD0 low) or 0x69 (AD0 high). rate_hz: sample rate, exactly
+    ``gyro_output_rate / (1 + SMPLRT_DIV)`` (8 kHz for DLPF_CFG 0/7, else 1 kHz). range_dps: full
+    scale 250/500/1000/2000 deg/s (131/65.5/32.8/16.4 LSB per deg/s). dlpf: CONFIG.DLPF_CFG 0..7,
+    None picks the widest bandwidth below rate_hz/2. temperature: put TEMP_OUT in the FIFO and a
+    ``temp`` column (deg C) in the rows. allow_chip: None accepts only WHO_AM_I 0x68; a chip id, a
+    collection of ids, or True lets named relatives (MPU6500, MPU9250, ...) through.
+
+    Options (keyword only): transfer ('auto', 'smbus', 'rdwr'), clock/sleep/wall_clock (injected
+    time functions), poll_interval_s (0.02), max_wait_s (0.1), max_retries (5), retry_backoff_s
+    (0.001), reset_timeout_s (0.5), fifo_bytes (FIFO size override).
+    """
+    return MPU6050Source(bus, address, rate_hz, range_dps, dlpf, temperature, allow_chip, **options)
