@@ -1,6 +1,302 @@
-"""Placeholder while the pipeline is written (replaced in the next commit)."""
+"""The paper-001 real-time pipeline, three axes, streaming and batch.
+
+    raw (deg/s) -> start-up bias calibration -> block averaging with gross-error rejection
+                -> Kalman filter with least-squares-prediction prior -> filtered (deg/s)
+
+Stages: :mod:`gyrofilter.calibration` (001 section 2.1), :mod:`gyrofilter.averaging` (2.2),
+:mod:`gyrofilter.predictor` and :mod:`gyrofilter.kalman` (2.3). Output: one row per block of
+``block_len`` samples, at ``sample_rate_hz / block_len``.
+
+``update()`` (one sample at a time) and ``filter()`` (an array) share the state and the
+arithmetic, so any mix of calls gives the same numbers as feeding every sample to ``update()``.
+The state has a fixed size: nothing grows per sample, so a filter can run for days.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+from . import kalman
+from .averaging import average_block, average_blocks
+from .calibration import Calibration, calibrate
+from .errors import CalibrationError, SettingsError
+from .predictor import weight_table
+from .presets import PRESETS
+
+
+@dataclass(frozen=True)
+class FilterSettings:
+    """Settings of :class:`GyroFilter`; the defaults are paper 001's values (preset "paper").
+
+    ============================ ========= ===================================================
+    setting                      default   meaning
+    ============================ ========= ===================================================
+    calibration_s                2.0       start-up still window for the bias (s); 0 = none
+    calibration_retry_s          0.0       keep trying new windows for this long (s) when the
+                                           sensor moved; 0 = raise at once
+    stillness_z                  6.0       stillness limit (noise units, see calibration)
+    max_bias_dps                 20.0      largest plausible bias (deg/s; MPU6050 datasheet)
+    block_len                    5         L, samples per non-sliding block (001: 5)
+    outlier_q_dps                1.0       q, gross-error threshold |x_i - mean| (deg/s)
+    fifo_depth                   10        posteriors in the LS-prediction FIFO (001: 10)
+    fit_order                    2         order of the LS fit (001: 2, quadratic)
+    p0_dps2                      1.0       P0, variance of the initial state ((deg/s)^2)
+    qr_window                    10        blocks over which Q and R are computed; 0 = all
+    qr_stat                      variance  "variance" or "std": reading of sigma in eqs 11-12
+    r_source                     window    "window" (eq. 12) or "calibration" (fixed R)
+    backend                      auto      "auto", "python" or "numba" for the Kalman loop
+    ============================ ========= ===================================================
+
+    On q: paper 001 saw gross errors of more than 200 LSB; one such spike in a block of 5 sits
+    4/5 * 200 = 160 LSB from the block mean, while its own example block
+    (67, 49, 55, -233, 21) puts normal samples up to 75 LSB from the mean. q = 1 deg/s
+    (131 LSB at +-250 deg/s) separates the two.
+    """
+
+    calibration_s: float = 2.0
+    calibration_retry_s: float = 0.0
+    stillness_z: float = 6.0
+    max_bias_dps: float = 20.0
+    block_len: int = 5
+    outlier_q_dps: float = 1.0
+    fifo_depth: int = 10
+    fit_order: int = 2
+    p0_dps2: float = 1.0
+    qr_window: int = 10
+    qr_stat: str = "variance"
+    r_source: str = "window"
+    backend: str = "auto"
+
+    def validate(self):
+        def need(cond, name, what):
+            if not cond:
+                raise SettingsError(f"setting {name}={getattr(self, name)!r}: {what}")
+
+        for name in ("calibration_s", "calibration_retry_s", "stillness_z", "max_bias_dps", "outlier_q_dps", "p0_dps2"):
+            value = getattr(self, name)
+            need(isinstance(value, (int, float)) and math.isfinite(value), name, "must be a finite number")
+        need(self.calibration_s >= 0, "calibration_s", "must be >= 0 seconds")
+        need(self.calibration_retry_s >= 0, "calibration_retry_s", "must be >= 0 seconds")
+        need(self.stillness_z > 0, "stillness_z", "must be > 0")
+        need(self.max_bias_dps > 0, "max_bias_dps", "must be > 0 deg/s")
+        need(self.outlier_q_dps > 0, "outlier_q_dps", "must be > 0 deg/s")
+        need(self.p0_dps2 > 0, "p0_dps2", "must be > 0 (deg/s)^2")
+        for name, low in (("block_len", 1), ("fifo_depth", 1), ("fit_order", 0), ("qr_window", 0)):
+            value = getattr(self, name)
+            need(isinstance(value, int) and not isinstance(value, bool) and value >= low, name, f"must be an integer >= {low}")
+        need(self.qr_window != 1, "qr_window", "must be 0 (all) or >= 2: a variance needs two values")
+        need(self.qr_stat in ("variance", "std"), "qr_stat", "must be 'variance' or 'std'")
+        need(self.r_source in ("window", "calibration"), "r_source", "must be 'window' or 'calibration'")
+        need(self.backend in ("auto", "python", "numba"), "backend", "must be 'auto', 'python' or 'numba'")
+
+
+SETTING_NAMES = tuple(f.name for f in fields(FilterSettings))
 
 
 class GyroFilter:
-    def __init__(self, *args, **kwargs):
-        raise NotImplementedError("the pipeline is being written")
+    """Paper-001 filter for a three-axis gyro; see the module docstring and FilterSettings.
+
+    >>> f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
+    >>> f.update((0.01, -0.02, 0.0)) is None      # calibrating
+    True
+
+    ``calibration`` (a :class:`~gyrofilter.calibration.Calibration` or the path of a saved one)
+    skips the start-up calibration. Explicit keyword settings override the ``preset``.
+    """
+
+    def __init__(self, sample_rate_hz, calibration_s=None, *, preset="paper", calibration=None, **settings):
+        if preset not in PRESETS:
+            raise SettingsError(f"unknown preset {preset!r}; choose one of {', '.join(PRESETS)}")
+        unknown = sorted(set(settings) - set(SETTING_NAMES))
+        if unknown:
+            raise SettingsError(f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(SETTING_NAMES)}")
+        chosen = dict(PRESETS[preset])
+        chosen.update(settings)
+        if calibration_s is not None:
+            chosen["calibration_s"] = calibration_s
+        self.settings = FilterSettings(**chosen)
+        self.settings.validate()
+        if not (isinstance(sample_rate_hz, (int, float)) and math.isfinite(sample_rate_hz) and sample_rate_hz > 0):
+            raise SettingsError(f"sample_rate_hz must be a positive number, got {sample_rate_hz!r}")
+        self.sample_rate_hz = float(sample_rate_hz)
+        self.preset = preset
+        s = self.settings
+        self._run = self._choose_backend(s.backend)
+        self._w_table = weight_table(s.fifo_depth, s.fit_order)
+        # Kalman state (fixed size)
+        width = max(s.qr_window, 1)
+        self._fifo = np.zeros((3, s.fifo_depth))
+        self._p = np.zeros(3)
+        self._qbuf = np.zeros((3, width))
+        self._rbuf = np.zeros((3, width))
+        self._sums = np.zeros((4, 3))
+        self._counters = np.zeros(6, dtype=np.int64)
+        self._r0 = np.full(3, s.p0_dps2)
+        self._y1 = np.zeros((1, 3))
+        self._out1 = np.zeros((1, 3))
+        # the kernel's state arguments, bound once: the arrays are updated in place
+        self._kernel_args = (
+            self._w_table, self._fifo, self._p, self._qbuf, self._rbuf, self._sums, self._counters,
+            self._r0, s.p0_dps2, s.qr_window, s.qr_stat == "std", s.r_source == "calibration",
+        )
+        # block and calibration state
+        self._block = []
+        self.rejected = np.zeros(3, dtype=np.int64)
+        self.fallback_blocks = np.zeros(3, dtype=np.int64)
+        self.blocks_out = 0
+        self.calibration = None
+        self._bias = (0.0, 0.0, 0.0)
+        self._cal_needed = int(round(s.calibration_s * self.sample_rate_hz))
+        self._cal_buf = None
+        self._cal_fill = 0
+        self._cal_tries_left = 0
+        if calibration is not None:
+            self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration)
+            self._apply_calibration(self.calibration)
+        elif self._cal_needed > 0:
+            self._cal_buf = np.zeros((self._cal_needed, 3))
+            self._cal_tries_left = int(s.calibration_retry_s // max(s.calibration_s, 1e-9))
+
+    # ------------------------------------------------------------------ public API
+
+    @property
+    def bias_dps(self):
+        """Start-up bias estimate per axis (deg/s), or None while calibrating."""
+        return None if self._cal_buf is not None else self._bias
+
+    @property
+    def calibrating(self) -> bool:
+        return self._cal_buf is not None
+
+    @property
+    def output_rate_hz(self) -> float:
+        return self.sample_rate_hz / self.settings.block_len
+
+    @property
+    def pending_samples(self) -> int:
+        """Samples held for a block that is not full yet (they produce output once it is)."""
+        return len(self._block)
+
+    def update(self, sample):
+        """Feed one sample (gx, gy, gz) in deg/s.
+
+        Returns None while calibrating and between blocks, else the filtered (x, y, z) in deg/s
+        for the block this sample completed.
+        """
+        if self._cal_buf is not None:
+            self._cal_buf[self._cal_fill] = sample
+            self._cal_fill += 1
+            if self._cal_fill == self._cal_needed:
+                self._finish_calibration()
+            return None
+        block = self._block
+        block.append(sample)
+        if len(block) < self.settings.block_len:
+            return None
+        self._block = []
+        q = self.settings.outlier_q_dps
+        y1 = self._y1
+        for a, values in enumerate(zip(*block)):
+            mean, rejected, fallback = average_block(values, q)
+            if rejected or fallback:
+                self.rejected[a] += rejected
+                self.fallback_blocks[a] += fallback
+            if not math.isfinite(mean):
+                raise SettingsError(f"samples must be finite numbers; block {self.blocks_out} holds {values}")
+            y1[0, a] = mean - self._bias[a]
+        self._run(y1, self._out1, *self._kernel_args)
+        self.blocks_out += 1
+        x, y, z = self._out1[0].tolist()
+        return (x, y, z)
+
+    def filter(self, samples_dps) -> np.ndarray:
+        """Feed an (N, 3) array in deg/s; returns the filtered blocks it completed, (M, 3).
+
+        From a new filter, M = (N - calibration samples) // block_len and row k is block k after
+        the calibration. Leftover samples wait in the filter for the next call.
+        """
+        x = np.asarray(samples_dps, dtype=float)
+        if x.ndim != 2 or x.shape[1] != 3:
+            raise SettingsError(f"samples_dps must have shape (N, 3), got {x.shape}")
+        bad = ~np.isfinite(x).all(axis=1)
+        if bad.any():
+            raise SettingsError(f"samples_dps row {int(np.flatnonzero(bad)[0])} is not finite: {x[bad][0].tolist()}")
+        outputs = []
+        i = 0
+        while self._cal_buf is not None and i < len(x):
+            take = min(self._cal_needed - self._cal_fill, len(x) - i)
+            self._cal_buf[self._cal_fill : self._cal_fill + take] = x[i : i + take]
+            self._cal_fill += take
+            i += take
+            if self._cal_fill == self._cal_needed:
+                self._finish_calibration()
+        while self._block and i < len(x):
+            row = self.update(x[i])
+            i += 1
+            if row is not None:
+                outputs.append(np.array([row]))
+        length = self.settings.block_len
+        n_blocks = (len(x) - i) // length
+        if n_blocks:
+            blocks = x[i : i + n_blocks * length].reshape(n_blocks, length, 3)
+            y, rejected, fallback = average_blocks(blocks, self.settings.outlier_q_dps)
+            self.rejected += rejected.sum(axis=0)
+            self.fallback_blocks += fallback.sum(axis=0)
+            y -= np.asarray(self._bias)
+            out = np.empty_like(y)
+            self._run(y, out, *self._kernel_args)
+            self.blocks_out += n_blocks
+            outputs.append(out)
+            i += n_blocks * length
+        self._block = [tuple(row) for row in x[i:].tolist()]
+        if not outputs:
+            return np.empty((0, 3))
+        return np.concatenate(outputs)
+
+    def state_dict(self) -> dict:
+        """The settings and counters worth reporting (plain Python values)."""
+        return {
+            "preset": self.preset,
+            "settings": asdict(self.settings),
+            "bias_dps": self.bias_dps,
+            "blocks_out": self.blocks_out,
+            "rejected": self.rejected.tolist(),
+            "fallback_blocks": self.fallback_blocks.tolist(),
+        }
+
+    # ------------------------------------------------------------------ internals
+
+    @staticmethod
+    def _choose_backend(backend):
+        if backend == "python":
+            return kalman.run_blocks
+        compiled = kalman.compiled_run_blocks()
+        if compiled is None:
+            if backend == "numba":
+                raise SettingsError("backend='numba' needs numba: pip install 'gyrofilter[fast]'")
+            return kalman.run_blocks
+        return compiled
+
+
+    def _finish_calibration(self):
+        s = self.settings
+        try:
+            cal = calibrate(self._cal_buf, self.sample_rate_hz, stillness_threshold=s.stillness_z, max_bias_dps=s.max_bias_dps)
+        except CalibrationError:
+            if self._cal_tries_left <= 0:
+                raise
+            self._cal_tries_left -= 1
+            self._cal_fill = 0
+            return
+        self.calibration = cal
+        self._apply_calibration(cal)
+
+    def _apply_calibration(self, cal):
+        self._bias = tuple(float(b) for b in cal.bias_dps)
+        # initial Q and R: the variance of a block mean of the calibration's white noise
+        self._r0[:] = [max(n * n / self.settings.block_len, kalman.VAR_FLOOR) for n in cal.noise_std_dps]
+        if self.settings.qr_stat == "std":
+            np.sqrt(self._r0, out=self._r0)
+        self._cal_buf = None

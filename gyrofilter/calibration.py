@@ -1,0 +1,124 @@
+"""Start-up bias calibration with a stillness check (paper 001, section 2.1).
+
+Paper 001: keep the sensor still after power-up, record the zero-rate output for a while, take
+the mean per axis and subtract it from every later sample:
+
+    b = (1/n) * sum_{i=1..n} x_i                                                     (001, 2.1)
+
+A wrong bias is worse than none, so the window is checked before it is accepted. Under
+stillness the window is a constant plus noise. The check, per axis:
+
+1. White-noise level from first differences, insensitive to slow changes:
+   sigma = std(x[i+1] - x[i]) / sqrt(2).
+2. Split the window into ``n_sub`` (10) equal sub-windows of m samples and take their means
+   m_k. Still, each m_k differs from the overall mean by noise of standard deviation about
+   sigma / sqrt(m). The statistic is z = max_k |m_k - mean| / (sigma / sqrt(m)); the window
+   is refused when z > ``stillness_z`` (default 6: a still white-noise window exceeds it with a
+   probability below 1e-7, while a turn of the board shifts some sub-window mean far more).
+3. A constant rotation cannot be told from a bias by a gyro alone; a mean beyond
+   ``max_bias_dps`` (default 20 deg/s, the MPU6050 datasheet's initial zero-rate-output
+   tolerance) is refused as implausible for a bias.
+
+The accepted calibration can be saved to and loaded from a small JSON file so that a device
+can skip re-learning (the bias changes between power-ups, so reuse it only for the same run).
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import CalibrationError, SettingsError
+
+N_SUB_WINDOWS = 10
+AXES = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Result of a start-up calibration: bias and white-noise level per axis (deg/s)."""
+
+    bias_dps: tuple
+    noise_std_dps: tuple
+    samples: int
+    sample_rate_hz: float
+
+    def to_json(self) -> str:
+        return json.dumps(
+            {
+                "gyrofilter-calibration": 1,
+                "bias_dps": list(self.bias_dps),
+                "noise_std_dps": list(self.noise_std_dps),
+                "samples": self.samples,
+                "sample_rate_hz": self.sample_rate_hz,
+                "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            },
+            indent=2,
+        )
+
+    def save(self, path):
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(self.to_json() + "\n")
+
+    @classmethod
+    def load(cls, path) -> "Calibration":
+        try:
+            with open(path, encoding="utf-8") as fh:
+                data = json.load(fh)
+        except json.JSONDecodeError as exc:
+            raise CalibrationError(f"{path}: not a calibration JSON file ({exc.msg} at line {exc.lineno})") from None
+        try:
+            bias = tuple(float(v) for v in data["bias_dps"])
+            noise = tuple(float(v) for v in data["noise_std_dps"])
+            cal = cls(bias, noise, int(data["samples"]), float(data["sample_rate_hz"]))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CalibrationError(f"{path}: calibration file lacks or mangles {exc}") from None
+        if len(bias) != 3 or len(noise) != 3 or not all(map(math.isfinite, bias + noise)):
+            raise CalibrationError(f"{path}: bias_dps and noise_std_dps must each hold 3 finite numbers")
+        return cls(bias, noise, cal.samples, cal.sample_rate_hz)
+
+
+def stillness_z(window_dps) -> np.ndarray:
+    """The stillness statistic z per axis (see the module docstring) of an (n, 3) window."""
+    x = np.asarray(window_dps, dtype=float)
+    m = len(x) // N_SUB_WINDOWS
+    sigma = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
+    sub_means = x[: m * N_SUB_WINDOWS].reshape(N_SUB_WINDOWS, m, 3).mean(axis=1)
+    spread = np.abs(sub_means - x.mean(axis=0)).max(axis=0)
+    scale = sigma / math.sqrt(m)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(scale > 0, spread / scale, np.where(spread > 0, np.inf, 0.0))
+    return z
+
+
+def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=20.0) -> Calibration:
+    """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
+
+    ``window_dps`` is (n, 3) in deg/s with n >= 2 * N_SUB_WINDOWS. Raises CalibrationError
+    naming the axis and the statistic when the window is not still.
+    """
+    x = np.asarray(window_dps, dtype=float)
+    if x.ndim != 2 or x.shape[1] != 3:
+        raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")
+    if len(x) < 2 * N_SUB_WINDOWS:
+        raise SettingsError(
+            f"calibration needs at least {2 * N_SUB_WINDOWS} samples, got {len(x)}; raise calibration_s"
+        )
+    bias = x.mean(axis=0)
+    z = stillness_z(x)
+    for i, axis in enumerate(AXES):
+        if abs(bias[i]) > max_bias_dps:
+            raise CalibrationError(
+                f"calibration: axis {axis} reads {bias[i]:.3g} deg/s on average, beyond the plausible bias "
+                f"of {max_bias_dps:g} deg/s: is the sensor turning? Keep it still while calibrating"
+            )
+        if z[i] > stillness_threshold:
+            raise CalibrationError(
+                f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
+                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:g} s"
+            )
+    sigma = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
+    return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz))
