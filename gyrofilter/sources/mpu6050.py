@@ -65,8 +65,6 @@ TRANSIENT_ERRNOS = (_errno.EIO, _errno.EREMOTEIO)  # 5, 121
 I2C_BLOCK_MAX = 32          # SMBus I2C-block transfers carry at most 32 bytes
 I2C_FUNC_I2C = 0x00000001   # adapter supports plain I2C messages (I2C_RDWR)
 
-_NO_WAIT = object()
-
 
 def lsb_per_dps_for(range_dps):
     """Return (FS_SEL, LSB per deg/s) for a full scale of ``range_dps`` (250, 500, 1000 or 2000)."""
@@ -410,22 +408,33 @@ class MPU6050Source:
         return (hi << 8) | lo
 
     def _read_fifo(self, n_bytes):
-        """Read ``n_bytes`` (whole frames) from FIFO_R_W: one I2C_RDWR transfer, or <=32-byte blocks."""
+        """Read ``n_bytes`` (whole frames) from FIFO_R_W without retrying: returns (bytes, error or None).
+
+        With I2C_RDWR one combined transfer (register pointer write + read) takes all bytes; otherwise
+        SMBus I2C-block reads of at most 32 bytes, each a whole number of frames, so the bytes read
+        before a failing block are whole frames and are kept. A failed read is not repeated here:
+        the caller re-reads FIFO_COUNT first, since a failure part-way may have consumed FIFO bytes.
+        """
         if self.use_rdwr:
             from smbus2 import i2c_msg
 
-            def rdwr():
-                w = i2c_msg.write(self.address, [R.FIFO_R_W.address])
-                r = i2c_msg.read(self.address, n_bytes)
+            w = i2c_msg.write(self.address, [R.FIFO_R_W.address])
+            r = i2c_msg.read(self.address, n_bytes)
+            try:
                 self._bus.i2c_rdwr(w, r)
-                return bytes(r)
-            return self._xfer(str(R.FIFO_R_W), rdwr)
+            except OSError as exc:
+                return b"", exc
+            return bytes(r), None
         per_block = (I2C_BLOCK_MAX // self.frame_bytes) * self.frame_bytes
         out = bytearray()
+        read_block = self._bus.read_i2c_block_data
         while len(out) < n_bytes:
             k = min(per_block, n_bytes - len(out))
-            out += bytes(self._read_block(R.FIFO_R_W, k))
-        return out
+            try:
+                out += bytes(read_block(self.address, R.FIFO_R_W.address, k))
+            except OSError as exc:
+                return bytes(out), exc
+        return bytes(out), None
 
     def _gap(self, reason):
         """Reset the FIFO after an overflow or lost alignment and record the gap.
@@ -446,27 +455,55 @@ class MPU6050Source:
                            f"count estimated from the host clock)")
 
     def _poll(self):
-        """One look at the FIFO: overflow check, count, whole frames -> rows."""
+        """One look at the FIFO: overflow check, count, whole frames -> rows.
+
+        A FIFO data read that fails with EREMOTEIO (121: NACK, nothing transferred) is retried after
+        re-reading INT_STATUS and FIFO_COUNT; one that fails with EIO (5: may have stopped part-way
+        and consumed bytes) resets the FIFO and records a gap, so frames never lose alignment. A
+        FIFO_COUNT that is not a whole number of frames also resets the FIFO (recorded as a gap).
+        """
         self.stats["polls"] += 1
         self._last_poll = self._clock()
-        status = self._read_byte(R.INT_STATUS)
-        if status & R.INT_STATUS.mask("FIFO_OFLOW_INT"):
-            self.stats["overflows"] += 1
-            self._gap("FIFO overflow")
-            return self._empty()
-        count = self._fifo_count()
-        if count > self.fifo_size_bytes - self.frame_bytes:
-            # full: the next sample overwrites the oldest bytes, alignment is no longer guaranteed
-            self.stats["overflows"] += 1
-            self._gap("FIFO overflow")
-            return self._empty()
-        if count % self.frame_bytes:
-            self.stats["resyncs"] += 1
-            self._gap(f"FIFO count {count} not a multiple of the {self.frame_bytes}-byte frame")
-            return self._empty()
-        if count == 0:
-            return self._empty()
-        buf = self._read_fifo(count)
+        empty = self._empty()
+        for attempt in range(self.max_retries + 1):
+            status = self._read_byte(R.INT_STATUS)
+            if status & R.INT_STATUS.mask("FIFO_OFLOW_INT"):
+                self.stats["overflows"] += 1
+                self._gap("FIFO overflow")
+                return empty
+            count = self._fifo_count()
+            if count > self.fifo_size_bytes - self.frame_bytes:
+                # full: the next sample overwrites the oldest bytes, alignment is no longer guaranteed
+                self.stats["overflows"] += 1
+                self._gap("FIFO overflow")
+                return empty
+            if count % self.frame_bytes:
+                self.stats["resyncs"] += 1
+                self._gap(f"FIFO count {count} is not a whole number of {self.frame_bytes}-byte frames; "
+                          f"FIFO reset")
+                return empty
+            if count == 0:
+                return empty
+            buf, exc = self._read_fifo(count)
+            rows = self._rows(buf) if buf else empty
+            if exc is None:
+                return rows
+            code = exc.errno
+            if code in TRANSIENT_ERRNOS and attempt < self.max_retries:
+                self.stats["retries"] += 1
+                if code == _errno.EIO:
+                    self.stats["resyncs"] += 1
+                    self._gap(f"FIFO read failed part-way (errno {code}); FIFO reset to keep frame alignment")
+                    return rows
+                self._sleep(self.retry_backoff_s * (2 ** attempt))
+                if len(rows):
+                    return rows
+                continue
+            raise self._io_error(str(R.FIFO_R_W), exc, attempt + 1)
+        return empty
+
+    def _rows(self, buf):
+        """Decode whole frames into rows [t, gx, gy, gz(, temp)] and advance the sample index."""
         self.stats["fifo_bytes_read"] += len(buf)
         words = decode_fifo(buf, self._n_words)
         n = len(words)
