@@ -34,6 +34,7 @@ import numpy as np
 from .errors import CalibrationError, SettingsError
 
 N_SUB_WINDOWS = 10
+NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
 AXES = ("x", "y", "z")
 
 
@@ -88,10 +89,8 @@ def stillness_z(window_dps) -> np.ndarray:
     sigma = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
     sub_means = x[: m * N_SUB_WINDOWS].reshape(N_SUB_WINDOWS, m, 3).mean(axis=1)
     spread = np.abs(sub_means - x.mean(axis=0)).max(axis=0)
-    scale = sigma / math.sqrt(m)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(scale > 0, spread / scale, np.where(spread > 0, np.inf, 0.0))
-    return z
+    scale = np.maximum(sigma / math.sqrt(m), NOISE_FLOOR_DPS)
+    return spread / scale
 
 
 def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=20.0) -> Calibration:

@@ -1,0 +1,66 @@
+"""Pieces shared by the commands: filter options, warnings, the summary table."""
+import sys
+
+import numpy as np
+
+from ..pipeline import GyroFilter
+from ..presets import PRESETS
+
+
+def say(text):
+    """A message for the user (stderr, so that stdout stays data)."""
+    print(text, file=sys.stderr)
+
+
+def print_warnings(warnings):
+    for text in warnings:
+        say(f"gyrofilter: warning: {text}")
+
+
+def warn_about_gaps(rec):
+    """Say so when the t column shows missing samples (the filter assumes uniform sampling)."""
+    if "t" not in rec.columns or len(rec) < 2:
+        return
+    dt = np.diff(rec.columns["t"])
+    gaps = int((dt > 1.5 / rec.sample_rate_hz).sum())
+    if gaps:
+        say(f"gyrofilter: warning: {rec.path}: t shows {gaps} gap(s) longer than 1.5 sample intervals; the filter treats the samples as uniform")
+
+
+def add_filter_arguments(parser):
+    parser.add_argument("--preset", default="paper", choices=sorted(PRESETS), help="filter settings preset (default: paper, the faithful paper-001 pipeline)")
+    parser.add_argument("--calibration-s", type=float, default=None, help="start-up calibration window in seconds (default 2; the sensor must be still)")
+    parser.add_argument("--calibration", metavar="JSON", help="use a saved calibration instead of calibrating")
+    parser.add_argument("--save-calibration", metavar="JSON", help="save the start-up calibration to this file")
+
+
+def make_filter(args, sample_rate_hz):
+    return GyroFilter(sample_rate_hz, args.calibration_s, preset=args.preset, calibration=args.calibration)
+
+
+def save_calibration(args, filt):
+    if args.save_calibration and filt.calibration is not None:
+        filt.calibration.save(args.save_calibration)
+        say(f"saved the calibration to {args.save_calibration}")
+
+
+def print_summary(path, rec, filt, raw, filtered):
+    """The per-axis table: raw and filtered mean/std, std ratio, rejected samples."""
+    print(f"recording: {path}")
+    print(f"  {len(rec)} samples at {rec.sample_rate_hz:g} Hz ({rec.duration_s:.1f} s), unit {rec.gyro_unit}")
+    cal = filt.calibration
+    if cal is not None:
+        print(f"  bias (start-up calibration, {cal.samples} samples): " + ", ".join(f"{b:+.4f}" for b in cal.bias_dps) + " deg/s")
+    print(f"  filter: preset {filt.preset}, {len(filtered)} output rows at {filt.output_rate_hz:g} Hz")
+    if filt.pending_samples:
+        print(f"  {filt.pending_samples} trailing sample(s) did not fill a block of {filt.settings.block_len} and produced no output")
+    if len(filtered) < 2:
+        print("  too few filtered rows for statistics")
+        return
+    print("  axis   raw mean    raw std   filt mean   filt std  std ratio  rejected")
+    raw_mean, raw_std = raw.mean(axis=0), raw.std(axis=0, ddof=1)
+    f_mean, f_std = filtered.mean(axis=0), filtered.std(axis=0, ddof=1)
+    for a, name in enumerate("xyz"):
+        ratio = raw_std[a] / f_std[a] if f_std[a] > 0 else float("inf")
+        print(f"  {name}    {raw_mean[a]:+9.4f}  {raw_std[a]:9.4f}  {f_mean[a]:+9.4f}  {f_std[a]:9.4f}  {ratio:8.2f}x  {int(filt.rejected[a]):8d}")
+    print("  (deg/s; raw = the samples after the calibration window that the filter consumed)")

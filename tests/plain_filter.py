@@ -1,0 +1,56 @@
+"""The paper-001 pipeline written the plain way: an oracle for tests and the benchmark baseline.
+
+filterpy's KalmanFilter per axis and block, np.polyfit per prediction, np.var over explicit
+windows. Slow and obvious on purpose; it shares no code with gyrofilter's kernel.
+"""
+import numpy as np
+from filterpy.kalman import KalmanFilter
+
+
+def plain_filter(samples_dps, sample_rate_hz, calibration_s=2.0, block_len=5, q_dps=1.0, depth=10, order=2, p0=1.0, window=10, use_std=False):
+    x = np.asarray(samples_dps, dtype=float)
+    n_cal = int(round(calibration_s * sample_rate_hz))
+    cal = x[:n_cal]
+    bias = cal.mean(axis=0)
+    noise = np.std(np.diff(cal, axis=0), axis=0, ddof=1) / np.sqrt(2.0)
+    r0 = np.maximum(noise**2 / block_len, 1e-12)
+    if use_std:
+        r0 = np.sqrt(r0)
+    body = x[n_cal:]
+    m = len(body) // block_len
+    blocks = body[: m * block_len].reshape(m, block_len, 3)
+    out = np.empty((m, 3))
+    stat = (lambda v: max(np.std(v, ddof=1), 1e-12)) if use_std else (lambda v: max(np.var(v, ddof=1), 1e-12))
+    for a in range(3):
+        kf = KalmanFilter(dim_x=1, dim_z=1)
+        kf.F[:] = 1.0
+        kf.H[:] = 1.0
+        posts, diffs, meas = [], [], []
+        for k in range(m):
+            b = blocks[k, :, a]
+            mean = b.mean()
+            keep = np.abs(b - mean) <= q_dps
+            y = (b[keep].mean() if keep.any() else mean) - bias[a]
+            meas.append(y)
+            if k == 0:
+                prior, p_prior = 0.0, p0
+            else:
+                hist = np.array(posts[-depth:])
+                t = np.arange(len(hist))
+                coef = np.polyfit(t, hist, min(order, len(hist) - 1))
+                prior = np.polyval(coef, len(hist))
+                q = stat(diffs[-window:]) if len(diffs) >= 2 else r0[a]
+                kf.x[:] = prior
+                kf.Q[:] = q
+                kf.predict()
+                p_prior = kf.P[0, 0]
+            r = stat(meas[-window:]) if len(meas) >= 2 else r0[a]
+            kf.x[:] = prior
+            kf.P[:] = p_prior
+            kf.update(y, R=r)
+            post = kf.x[0, 0]
+            if k > 0:
+                diffs.append(post - prior)
+            posts.append(post)
+            out[k, a] = post
+    return out

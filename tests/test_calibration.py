@@ -1,0 +1,61 @@
+import json
+
+import numpy as np
+import pytest
+
+from gyrofilter.calibration import Calibration, calibrate, stillness_z
+from gyrofilter.errors import CalibrationError, SettingsError
+
+
+def still(n=200, bias=(1.0, -2.0, 0.5), sigma=0.1, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.asarray(bias) + rng.normal(0, sigma, (n, 3))
+
+
+def test_still_window_gives_mean_bias_and_noise():
+    x = still(2000)
+    cal = calibrate(x, 100.0)
+    np.testing.assert_allclose(cal.bias_dps, x.mean(axis=0))
+    np.testing.assert_allclose(cal.noise_std_dps, 0.1, rtol=0.05)
+
+
+def test_false_alarm_rate_of_the_stillness_check_is_low():
+    # 300 still windows of white noise, quantised like an MPU6050: none may be refused
+    for seed in range(300):
+        x = np.round(still(200, seed=seed) * 131) / 131
+        assert stillness_z(x).max() < 6.0
+
+
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_a_turn_during_calibration_is_refused(axis):
+    x = still(200, seed=axis)
+    x[120:160, axis] += 3.0  # a 0.4 s turn at 3 deg/s
+    with pytest.raises(CalibrationError, match=f"axis {'xyz'[axis]}"):
+        calibrate(x, 100.0)
+
+
+def test_a_slow_ramp_is_refused_and_a_constant_spin_beyond_datasheet_bias_too():
+    x = still(200)
+    x[:, 2] += np.linspace(0, 1.5, 200)
+    with pytest.raises(CalibrationError, match="moved"):
+        calibrate(x, 100.0)
+    with pytest.raises(CalibrationError, match="plausible bias"):
+        calibrate(still(200, bias=(0, 45.0, 0)), 100.0)
+
+
+def test_too_short_window_is_a_settings_error():
+    with pytest.raises(SettingsError, match="at least 20"):
+        calibrate(still(10), 100.0)
+
+
+def test_save_load_round_trip_and_bad_files(tmp_path):
+    cal = calibrate(still(500), 100.0)
+    path = tmp_path / "cal.json"
+    cal.save(path)
+    assert Calibration.load(path) == cal
+    path.write_text("{not json")
+    with pytest.raises(CalibrationError, match="not a calibration JSON"):
+        Calibration.load(path)
+    path.write_text(json.dumps({"bias_dps": [1, 2], "noise_std_dps": [1, 1, 1], "samples": 3, "sample_rate_hz": 100}))
+    with pytest.raises(CalibrationError, match="3 finite numbers"):
+        Calibration.load(path)

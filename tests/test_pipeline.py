@@ -1,0 +1,164 @@
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from gyrofilter import GyroFilter
+from gyrofilter.calibration import Calibration
+from gyrofilter.errors import CalibrationError, SettingsError
+from gyrofilter.kalman import compiled_run_blocks
+from plain_filter import plain_filter
+
+BACKENDS = ["python"] + (["numba"] if compiled_run_blocks() is not None else [])
+
+
+def noisy(n, seed=0, bias=(1.5, -0.7, 3.0), sigma=0.1, spikes=0.0):
+    rng = np.random.default_rng(seed)
+    x = np.asarray(bias) + rng.normal(0, sigma, (n, 3))
+    if spikes:
+        hit = rng.random((n, 3)) < spikes
+        x[hit] += rng.choice([-2.5, 2.5], hit.sum())
+    return x
+
+
+def stream(filt, x):
+    rows = [filt.update(tuple(s)) for s in x.tolist()]
+    return np.array([r for r in rows if r is not None]).reshape(-1, 3)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("settings", [{}, {"qr_stat": "std"}, {"qr_window": 0}, {"r_source": "calibration", "fit_order": 1}, {"block_len": 3, "fifo_depth": 4}])
+def test_update_and_filter_give_the_same_numbers(backend, settings):
+    x = noisy(3000, spikes=0.02)
+    a = stream(GyroFilter(100.0, backend=backend, **settings), x)
+    b = GyroFilter(100.0, backend=backend, **settings).filter(x)
+    assert a.shape == b.shape
+    assert np.array_equal(a, b)
+
+
+def test_mixed_calls_continue_the_same_state():
+    x = noisy(4000, seed=2, spikes=0.01)
+    whole = GyroFilter(100.0).filter(x)
+    f = GyroFilter(100.0)
+    parts = [f.filter(x[:150]), stream(f, x[150:1003]), f.filter(x[1003:2999]), stream(f, x[2999:3001]), f.filter(x[3001:])]
+    assert np.array_equal(np.concatenate(parts), whole)
+
+
+@pytest.mark.skipif(len(BACKENDS) < 2, reason="numba not installed")
+def test_numba_and_python_backends_agree_bit_for_bit():
+    x = noisy(5000, seed=4, spikes=0.02)
+    assert np.array_equal(GyroFilter(100.0, backend="python").filter(x), GyroFilter(100.0, backend="numba").filter(x))
+
+
+@pytest.mark.parametrize("settings", [{}, {"qr_stat": "std"}])
+def test_equals_the_plain_filterpy_and_polyfit_implementation(settings):
+    x = noisy(1500, seed=5, spikes=0.02)
+    ours = GyroFilter(100.0, **settings).filter(x)
+    plain = plain_filter(x, 100.0, use_std=settings.get("qr_stat") == "std")
+    np.testing.assert_allclose(ours, plain, rtol=1e-9, atol=1e-9)
+
+
+def test_output_count_bias_and_rate():
+    x = noisy(1234)
+    f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
+    out = f.filter(x)
+    assert out.shape == ((1234 - 200) // 5, 3)
+    assert f.pending_samples == (1234 - 200) % 5
+    np.testing.assert_allclose(f.bias_dps, x[:200].mean(axis=0))
+    assert f.output_rate_hz == 20.0
+
+
+def test_still_noise_is_reduced_and_a_constant_rate_is_tracked():
+    x = noisy(20000, seed=7)
+    out = GyroFilter(100.0).filter(x)
+    assert np.all(out[50:].std(axis=0) < 0.1 / 2.5)
+    moving = x.copy()
+    moving[2000:] += 20.0
+    f = GyroFilter(100.0)
+    out = f.filter(moving)
+    expected = moving[2000 + 2500 :].mean(axis=0) - f.bias_dps
+    np.testing.assert_allclose(out[500:].mean(axis=0), expected, atol=0.003)
+    np.testing.assert_allclose(expected, 20.0, atol=0.05)
+
+
+def test_gross_errors_are_rejected_and_counted():
+    x = noisy(5200, seed=8)
+    x[1000, 1] += 50.0
+    f = GyroFilter(100.0)
+    out = f.filter(x)
+    assert f.rejected.tolist() == [0, 1, 0]
+    assert np.abs(out[:, 1]).max() < 0.2
+
+
+def test_calibration_refuses_a_moving_sensor_and_retries_when_asked():
+    x = noisy(3000, seed=9)
+    x[50:120, 0] += 5.0  # moved during the first window
+    with pytest.raises(CalibrationError):
+        GyroFilter(100.0).filter(x)
+    f = GyroFilter(100.0, calibration_retry_s=4.0)
+    out = f.filter(x)
+    np.testing.assert_allclose(f.bias_dps, x[200:400].mean(axis=0))
+    assert len(out) == (3000 - 400) // 5
+    with pytest.raises(CalibrationError):
+        stream(GyroFilter(100.0), x)
+
+
+def test_saved_calibration_skips_the_start_up_window(tmp_path):
+    x = noisy(2000, seed=10)
+    f = GyroFilter(100.0)
+    f.filter(x)
+    f.calibration.save(tmp_path / "cal.json")
+    g = GyroFilter(100.0, calibration=tmp_path / "cal.json")
+    assert g.bias_dps == f.bias_dps and not g.calibrating
+    assert len(g.filter(x)) == 2000 // 5
+    assert GyroFilter(100.0, calibration=Calibration.load(tmp_path / "cal.json")).bias_dps == f.bias_dps
+
+
+def test_state_does_not_grow_with_time():
+    f = GyroFilter(100.0, backend="python")
+    for sample in noisy(2000).tolist():
+        f.update(tuple(sample))
+    sample = (0.1, 0.2, 0.3)
+    tracemalloc.start()
+    before = tracemalloc.take_snapshot()
+    for _ in range(20000):
+        f.update(sample)
+    after = tracemalloc.take_snapshot()
+    tracemalloc.stop()
+    grown = sum(s.size_diff for s in after.compare_to(before, "filename") if "gyrofilter" in str(s.traceback))
+    assert grown < 4096
+
+
+@pytest.mark.parametrize(
+    "kwargs,match",
+    [
+        ({"block_len": 0}, "block_len"),
+        ({"outlier_q_dps": -1}, "outlier_q_dps"),
+        ({"qr_window": 1}, "qr_window"),
+        ({"qr_stat": "sigma"}, "qr_stat"),
+        ({"fifo_depth": 2.5}, "fifo_depth"),
+        ({"calibration_s": float("nan")}, "calibration_s"),
+        ({"bogus": 1}, "unknown setting"),
+        ({"preset": "best"}, "unknown preset"),
+    ],
+)
+def test_bad_settings_are_refused_at_construction(kwargs, match):
+    with pytest.raises(SettingsError, match=match):
+        GyroFilter(100.0, **kwargs)
+    with pytest.raises(SettingsError, match="sample_rate_hz"):
+        GyroFilter(0.0)
+
+
+def test_bad_samples_name_the_problem():
+    f = GyroFilter(100.0, calibration_s=0)
+    with pytest.raises(SettingsError, match="shape"):
+        f.filter(np.zeros((10, 2)))
+    x = noisy(20)
+    x[7, 2] = np.nan
+    with pytest.raises(SettingsError, match="row 7"):
+        f.filter(x)
+    for s in x[:7].tolist():
+        f.update(tuple(s))
+    with pytest.raises(SettingsError, match="finite"):
+        for s in x[7:12].tolist():
+            f.update(tuple(s))
