@@ -1,0 +1,208 @@
+"""Allan deviation of a rate series, with confidence intervals.
+
+A gyro's rate samples ``x_k`` (any unit; the deviation comes out in the same unit) taken every
+``tau0 = 1 / sample_rate_hz`` seconds are treated as *frequency* data in the sense of NIST SP
+1065; the integrated angle ``X_j = tau0 * sum_{k<j} x_k`` (``X_0 = 0``, N + 1 points) is the
+*phase*. With cluster size ``m`` (``tau = m tau0``) the overlapping Allan variance is
+(NIST SP 1065, eq. 11, p. 16; paper 000 eq. 2 for the non-overlapping form)::
+
+    sigma^2(tau) = 1 / (2 tau^2 (N - 2m + 1)) * sum_{j=0}^{N-2m} (X_{j+2m} - 2 X_{j+m} + X_j)^2
+
+i.e. half the mean squared difference of adjacent cluster averages, taken at every start
+sample. It is computed from cumulative sums in O(N) per tau, in cache-sized chunks so the extra
+memory is one float64 copy of the input (the cumulative sum) plus a small work buffer.
+
+Confidence intervals (see :func:`confidence_interval`):
+
+* ``"simple"``: paper 000's relative error of the deviation, ``1 / sqrt(2 (N/m - 1))``, shown
+  as ``sigma (1 -+ e)``;
+* ``"chi2"``: NIST SP 1065 section 5.3: ``edf * s^2 / chi2_{p}(edf)`` with the equivalent
+  degrees of freedom (edf) of the overlapping Allan variance for the dominant power-law noise
+  type at that tau (SP 1065 Table 5; Howe, Allan & Barnes 1981).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import GyroFilterError, SettingsError
+
+#: cluster count below which a deviation (and any fit using it) is flagged: paper 002 needs
+#: N/m >= 9 for an error under 25 %.
+MIN_CLUSTERS = 9
+#: default tau spacing (points per decade)
+POINTS_PER_DECADE = 10
+#: work-buffer length for the chunked sums (fits in L2 cache)
+_CHUNK = 1 << 16
+
+
+class AllanInputError(GyroFilterError, ValueError):
+    """The data or the requested cluster times cannot give an Allan deviation."""
+
+
+def _check_rate(sample_rate_hz):
+    try:
+        rate = float(sample_rate_hz)
+    except (TypeError, ValueError):
+        raise SettingsError(
+            f"sample_rate_hz must be a positive number (Hz), got {sample_rate_hz!r}") from None
+    if not math.isfinite(rate) or rate <= 0:
+        raise SettingsError(f"sample_rate_hz must be a positive number (Hz), got {sample_rate_hz!r}")
+    return rate
+
+
+def _check_series(x, name="x"):
+    x = np.asarray(x, dtype=np.float64)
+    if x.ndim != 1:
+        raise AllanInputError(
+            f"{name} must be a 1-D rate series (one axis), got an array of shape {x.shape}; "
+            "pass one column at a time")
+    if x.size < 3:
+        raise AllanInputError(
+            f"{name} has {x.size} samples; an Allan deviation needs at least 3 (two clusters of one "
+            f"sample plus one), and a noise fit needs {MIN_CLUSTERS} clusters per tau")
+    bad = ~np.isfinite(x)
+    if bad.any():
+        first = int(np.argmax(bad))
+        raise AllanInputError(
+            f"{name} contains {int(bad.sum())} NaN/inf value(s), the first at sample {first}; "
+            "the Allan deviation needs evenly spaced finite samples (fill or cut gaps first)")
+    return np.ascontiguousarray(x)
+
+
+def default_cluster_sizes(n_samples, points_per_decade=POINTS_PER_DECADE, min_clusters=MIN_CLUSTERS):
+    """Log-spaced cluster sizes ``m`` from 1 to ``n_samples // min_clusters`` (about
+    ``points_per_decade`` per decade, duplicates removed)."""
+    m_max = int(n_samples // min_clusters)
+    if m_max < 1:
+        raise AllanInputError(
+            f"{n_samples} samples are fewer than {min_clusters} clusters of one sample; "
+            "record longer")
+    if m_max == 1:
+        return np.array([1], dtype=np.int64)
+    n_points = max(2, int(math.ceil(points_per_decade * math.log10(m_max))) + 1)
+    m = np.unique(np.round(np.logspace(0.0, math.log10(m_max), n_points)).astype(np.int64))
+    return m[(m >= 1) & (m <= m_max)]
+
+
+def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
+    """Cluster sizes ``m = round(tau * fs)`` for ``taus_s`` (or the default grid when None).
+
+    Raises :class:`AllanInputError` when a tau is shorter than one sample or so long that the
+    record does not hold two clusters plus one sample (``2 m > N - 1``).
+    """
+    rate = _check_rate(sample_rate_hz)
+    if taus_s is None:
+        return default_cluster_sizes(n_samples)
+    taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
+    if taus.ndim != 1 or taus.size == 0 or not np.all(np.isfinite(taus)):
+        raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {taus_s!r}")
+    m = np.round(taus * rate).astype(np.int64)
+    if np.any(m < 1):
+        raise AllanInputError(
+            f"tau {taus[m < 1].min():g} s is shorter than one sample (1/{rate:g} Hz = {1 / rate:g} s)")
+    m_limit = (n_samples - 1) // 2
+    if np.any(m > m_limit):
+        raise AllanInputError(
+            f"the record ({n_samples} samples = {n_samples / rate:g} s) is too short for tau = "
+            f"{taus[m > m_limit].max():g} s: the longest tau with two clusters is "
+            f"{m_limit / rate:g} s, and {MIN_CLUSTERS} clusters (paper 002) allow up to "
+            f"{(n_samples // MIN_CLUSTERS) / rate:g} s")
+    return m
+
+
+def _phase(x, tau0):
+    """Integrated series X (N + 1 points, X_0 = 0) of the mean-removed rate, in chunks.
+
+    Removing the mean does not change the Allan variance (second differences of X cancel a
+    linear term) but keeps X small, so float64 cancellation stays at the 1e-16 level.
+    """
+    n = x.size
+    mean = float(np.mean(x))
+    phase = np.empty(n + 1, dtype=np.float64)
+    phase[0] = 0.0
+    carry = 0.0
+    for start in range(0, n, _CHUNK):
+        stop = min(n, start + _CHUNK)
+        seg = phase[start + 1:stop + 1]
+        np.subtract(x[start:stop], mean, out=seg)
+        np.cumsum(seg, out=seg)
+        seg += carry
+        carry = float(seg[-1])
+    phase *= tau0
+    return phase
+
+
+def _sum_second_difference_squared(phase, m, stride=1):
+    """sum_j (X_{j+2m} - 2 X_{j+m} + X_j)^2 over j = 0, stride, 2 stride, ... <= len - 1 - 2m,
+    and the number of terms."""
+    n_terms = (phase.size - 1 - 2 * m) // stride + 1
+    if stride != 1:
+        idx = np.arange(n_terms) * stride
+        d = phase[idx + 2 * m] - 2.0 * phase[idx + m] + phase[idx]
+        return float(np.dot(d, d)), n_terms
+    buf = np.empty(min(_CHUNK, n_terms), dtype=np.float64)
+    total = 0.0
+    for start in range(0, n_terms, _CHUNK):
+        stop = min(n_terms, start + _CHUNK)
+        b = buf[:stop - start]
+        # X_{j+2m} - 2 X_{j+m} + X_j, written without temporaries
+        np.subtract(phase[start + 2 * m:stop + 2 * m], phase[start + m:stop + m], out=b)
+        b -= phase[start + m:stop + m]
+        b += phase[start:stop]
+        total += float(np.dot(b, b))
+    return total, n_terms
+
+
+def overlapping_adev(x, sample_rate_hz, taus_s=None):
+    """Overlapping Allan deviation of the 1-D rate series ``x``.
+
+    ``sigma^2(m tau0) = sum_{j=0}^{N-2m} (X_{j+2m} - 2X_{j+m} + X_j)^2 / (2 (m tau0)^2 (N-2m+1))``
+    with ``X`` the integral of ``x`` (NIST SP 1065 eq. 11). Equal to allantools
+    ``oadev(x, rate, data_type="freq", taus)``.
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        Rate samples in any unit; the deviation is in the same unit.
+    sample_rate_hz : float
+        Sampling rate (Hz); ``tau0 = 1 / sample_rate_hz``.
+    taus_s : array_like or None
+        Cluster times (s), rounded to whole samples. None: log-spaced, about 10 per decade, from
+        one sample up to a ninth of the record (so every tau has at least 9 clusters).
+
+    Returns
+    -------
+    tau_s, adev : ndarray
+        The cluster times actually used (``m / sample_rate_hz``) and the deviations.
+    """
+    rate = _check_rate(sample_rate_hz)
+    x = _check_series(x)
+    m = cluster_sizes(x.size, rate, taus_s)
+    phase = _phase(x, 1.0 / rate)
+    adev = np.empty(m.size, dtype=np.float64)
+    for i, mi in enumerate(m):
+        total, n_terms = _sum_second_difference_squared(phase, int(mi))
+        tau = mi / rate
+        adev[i] = math.sqrt(total / (2.0 * n_terms)) / tau
+    return m / rate, adev
+
+
+def adev(x, sample_rate_hz, taus_s=None):
+    """Non-overlapping Allan deviation (paper 000 eq. 2; NIST SP 1065 eq. 7).
+
+    ``sigma^2(tau) = 1 / (2 (K - 1)) sum_k (xbar_{k+1} - xbar_k)^2`` over the ``K = N // m``
+    adjacent cluster averages. Less precise than :func:`overlapping_adev`; kept for the
+    reference values of paper 000 and Stable32.
+    """
+    rate = _check_rate(sample_rate_hz)
+    x = _check_series(x)
+    m = cluster_sizes(x.size, rate, taus_s)
+    phase = _phase(x, 1.0 / rate)
+    out = np.empty(m.size, dtype=np.float64)
+    for i, mi in enumerate(m):
+        total, n_terms = _sum_second_difference_squared(phase, int(mi), stride=int(mi))
+        tau = mi / rate
+        out[i] = math.sqrt(total / (2.0 * n_terms)) / tau
+    return m / rate, out
