@@ -13,7 +13,7 @@ Header lines start with ``#`` and hold ``key: value``; unknown keys are kept. Co
 gz`` are required; ``t`` (s, strictly increasing) and ``temp`` (deg C) are optional; any other
 column is carried along unchanged. Lines starting with ``#`` after the column row are
 annotations (for example a gap note written by ``gyrofilter record``); they are kept in
-:attr:`Recording.notes` and are not samples.
+:attr:`Recording.notes` and are not samples, and neither are blank lines.
 
 Bad input never shifts, drops or invents samples: an empty cell, ``nan``, a short or long row or
 a non-numeric cell raises :class:`RecordingError` naming the file, the line and the reason. The
@@ -269,10 +269,8 @@ def _scan_for_error(body_lines, names, path, first_data):
     n = len(names)
     for i, ln in enumerate(body_lines):
         line = first_data + 1 + i
-        if ln.startswith("#"):
+        if ln.startswith("#") or not ln.strip():
             continue
-        if not ln.strip():
-            raise RecordingError(f"{path}: line {line}: empty line inside the data")
         cells = ln.split(",")
         if len(cells) != n:
             raise RecordingError(f"{path}: line {line}: {len(cells)} values, expected {n} ({','.join(names)})")
@@ -288,10 +286,10 @@ def _scan_for_error(body_lines, names, path, first_data):
 
 
 def _data_line_number(body_lines, row, first_data):
-    """File line number (1-based) of data row ``row`` (0-based), skipping annotation lines."""
+    """File line number (1-based) of data row ``row`` (0-based), skipping notes and blank lines."""
     seen = -1
     for i, ln in enumerate(body_lines):
-        if not ln.startswith("#"):
+        if ln.strip() and not ln.startswith("#"):
             seen += 1
             if seen == row:
                 return first_data + 1 + i

@@ -29,8 +29,12 @@ def plain_filter(samples_dps, sample_rate_hz, calibration_s=2.0, block_len=5, q_
         for k in range(m):
             b = blocks[k, :, a]
             mean = b.mean()
-            keep = np.abs(b - mean) <= q_dps
-            y = (b[keep].mean() if keep.any() else mean) - bias[a]
+            center = mean
+            keep = np.abs(b - center) <= q_dps
+            if not keep.any():  # every sample rejected: re-centre on the median
+                center = np.median(b)
+                keep = np.abs(b - center) <= q_dps
+            y = (b[keep].mean() if keep.any() else center) - bias[a]
             meas.append(y)
             if k == 0:
                 prior, p_prior = 0.0, p0

@@ -37,7 +37,7 @@ def build_parser(command=None):
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module_name, summary) in COMMANDS.items():
         p = sub.add_parser(name, help=summary, description=summary)
-        if command in (None, name):
+        if command == name:
             importlib.import_module(module_name).add_arguments(p)
     return parser
 

@@ -1,0 +1,61 @@
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gyrofilter.cli import main
+from gyrofilter.recording import Recording, read_recording, write_recording
+
+
+def test_replay_without_argument_filters_the_bundled_recording(capsys):
+    assert main(["replay"]) == 0
+    out = capsys.readouterr().out
+    assert "mpu6050_static_100s.csv.gz" in out
+    rows = [ln.split() for ln in out.splitlines() if ln.strip()[:2] in ("x ", "y ", "z ")]
+    assert [r[0] for r in rows] == ["x", "y", "z"]
+    for r in rows:
+        raw_std, filt_std, ratio = float(r[2]), float(r[4]), float(r[5].rstrip("x"))
+        assert ratio == pytest.approx(raw_std / filt_std, rel=0.01) and ratio > 2
+
+
+def test_replay_out_writes_the_filtered_series(tmp_path, capsys):
+    rng = np.random.default_rng(0)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(rng.normal([1, 2, 3], 0.1, (1003, 3)), 100.0))
+    out = tmp_path / "out.csv.gz"
+    assert main(["replay", str(src), "--out", str(out), "--save-calibration", str(tmp_path / "cal.json")]) == 0
+    rec = read_recording(out)
+    assert len(rec) == (1003 - 200) // 5 and rec.sample_rate_hz == 20.0
+    np.testing.assert_allclose(rec.t_s[:2], [2.04, 2.09])  # end of the first blocks after calibration
+    assert "3 trailing sample(s)" in capsys.readouterr().out
+    assert main(["replay", str(src), "--calibration", str(tmp_path / "cal.json")]) == 0
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["replay", "/no/such/file.csv"], "cannot read"),
+        (["replay", "BAD"], "line 5: 2 values, expected 3"),
+        (["replay", "MOVING"], "moved"),
+        (["replay", "--preset", "nope"], "invalid choice"),
+    ],
+)
+def test_bad_input_is_one_line_on_stderr_and_exit_2(tmp_path, args, message):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2\n")
+    rng = np.random.default_rng(1)
+    moving = rng.normal(0, 0.1, (1000, 3))
+    moving[50:150, 1] += np.linspace(0, 30, 100)
+    write_recording(tmp_path / "moving.csv", Recording.from_dps(moving, 100.0))
+    args = [{"BAD": str(bad), "MOVING": str(tmp_path / "moving.csv")}.get(a, a) for a in args]
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", *args], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert message in proc.stderr and "Traceback" not in proc.stderr
+    assert len([ln for ln in proc.stderr.splitlines() if not ln.startswith(("usage:", " "))]) == 1
+
+
+def test_help_everywhere_exits_0():
+    for args in (["--help"], ["replay", "--help"]):
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", *args], capture_output=True, text=True)
+        assert proc.returncode == 0 and "usage" in proc.stdout

@@ -1,0 +1,114 @@
+import gzip
+
+import numpy as np
+import pytest
+
+from gyrofilter.errors import RecordingError
+from gyrofilter.recording import Recording, RecordingWriter, read_recording, write_recording
+
+HEADER = "# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
+
+
+def write(tmp_path, text, name="r.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_reads_the_interfaces_example_with_units_and_extra_columns(tmp_path):
+    path = write(tmp_path, HEADER + "# any_other_key: free text\nt,gx,gy,gz,temp,ax\n0.00,12,-3,40,25.31,0.1\n0.01,15,-1,37,25.31,0.2\n")
+    rec = read_recording(path)
+    assert rec.sample_rate_hz == 100.0 and rec.gyro_unit == "lsb" and len(rec) == 2
+    np.testing.assert_allclose(rec.gyro_dps, np.array([[12, -3, 40], [15, -1, 37]]) / 131)
+    np.testing.assert_allclose(rec.t_s, [0, 0.01])
+    np.testing.assert_allclose(rec.temp_c, [25.31, 25.31])
+    np.testing.assert_allclose(rec.columns["ax"], [0.1, 0.2])
+    assert rec.header["any_other_key"] == "free text" and rec.warnings == []
+
+
+def test_rad_per_s_and_uniform_times(tmp_path):
+    path = write(tmp_path, "# gyrofilter-recording: 1\n# sample_rate_hz: 50\n# gyro_unit: rad/s\ngz,gy,gx\n1,0,0\n0,0,3.14159265358979\n")
+    rec = read_recording(path)
+    np.testing.assert_allclose(rec.gyro_dps[:, 2], [57.29577951308232, 0])
+    np.testing.assert_allclose(rec.gyro_dps[1, 0], 180.0)
+    np.testing.assert_allclose(rec.t_s, [0, 0.02])
+
+
+@pytest.mark.parametrize("name", ["r.csv", "r.csv.gz"])
+def test_write_read_round_trip(tmp_path, name):
+    rng = np.random.default_rng(0)
+    rec = Recording.from_dps(rng.normal(size=(500, 3)), 100.0, temp_c=25 + rng.random(500), extra={"ref_x": rng.normal(size=500)}, header={"sensor": "sim"})
+    write_recording(tmp_path / name, rec)
+    back = read_recording(tmp_path / name)
+    assert back.header["sensor"] == "sim" and list(back.columns) == ["gx", "gy", "gz", "temp", "ref_x"]
+    np.testing.assert_allclose(back.gyro_dps, rec.gyro_dps, rtol=1e-8)
+    np.testing.assert_allclose(back.columns["ref_x"], rec.columns["ref_x"], rtol=1e-8)
+
+
+@pytest.mark.parametrize(
+    "text,match",
+    [
+        ("", "empty file"),
+        ("# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", "missing header key 'gyrofilter-recording'"),
+        ("# gyrofilter-recording: 1\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", "missing header key 'sample_rate_hz'"),
+        ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: deg\ngx,gy,gz\n1,2,3\n", "gyro_unit 'deg'"),
+        ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\ngx,gy,gz\n1,2,3\n", "lsb_per_dps"),
+        ("# gyrofilter-recording: 2\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", "version '2'"),
+        ("# gyrofilter-recording: 1\n# sample_rate_hz: fast\n# gyro_unit: dps\ngx,gy,gz\n", "not a number"),
+        (HEADER + "gx,gy\n1,2\n", "missing column.*gz"),
+        (HEADER + "gx,gy,gz\n1,2,3\n4,5\n6,7,8\n", "line 8: 2 values, expected 3"),
+        (HEADER + "gx,gy,gz\n1,2,3\n4,x5,6\n", "line 8: column 'gy' is not a number: 'x5'"),
+        (HEADER + "gx,gy,gz\n1,2,3\n4,nan,6\n", "line 8: column 'gy' is 'nan'"),
+        (HEADER + "gx,gy,gz\n1,,3\n", "line 7: column 'gy' is empty"),
+        (HEADER + "t,gx,gy,gz\n0,1,2,3\n0.02,1,2,3\n0.01,1,2,3\n", "line 9: t does not increase"),
+    ],
+)
+def test_bad_input_names_file_line_and_reason(tmp_path, text, match):
+    path = write(tmp_path, text)
+    with pytest.raises(RecordingError, match=match) as info:
+        read_recording(path)
+    assert str(path) in str(info.value)
+
+
+def test_a_cut_last_line_is_a_warning_and_the_rest_is_used(tmp_path):
+    rec = read_recording(write(tmp_path, HEADER + "gx,gy,gz\n1,2,3\n4,5,6\n7,8"))
+    assert len(rec) == 2 and "no line end" in rec.warnings[0] and "line 9" in rec.warnings[0]
+
+
+def test_gzip_cut_short_keeps_every_complete_line(tmp_path):
+    body = HEADER + "gx,gy,gz\n" + "".join(f"{i},{i + 1},{i + 2}\n" for i in range(5000))
+    data = gzip.compress(body.encode())
+    path = tmp_path / "cut.csv.gz"
+    path.write_bytes(data[: len(data) * 2 // 3])
+    rec = read_recording(path)
+    assert 100 < len(rec) < 5000
+    np.testing.assert_array_equal(rec.columns["gx"], np.arange(len(rec)))
+    assert any("cut short" in w for w in rec.warnings)
+
+
+def test_writer_flushes_readable_data_before_close_and_keeps_notes(tmp_path):
+    path = tmp_path / "live.csv.gz"
+    w = RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "lsb", "lsb_per_dps": 131}, ["t", "gx", "gy", "gz"], formats=["%.2f", "%d", "%d", "%d"])
+    w.write(np.array([[0.0, 1, 2, 3], [0.01, 4, 5, 6]]))
+    w.note("gap: 3 samples lost before t=0.05 s")
+    w.write(np.array([[0.05, 7, 8, 9]]))
+    w.flush()  # the process could die here: no gzip trailer yet
+    rec = read_recording(path)
+    assert len(rec) == 3 and rec.notes == [(8, "gap: 3 samples lost before t=0.05 s")]
+    assert any("cut short" in x for x in rec.warnings)
+    w.close()
+    assert read_recording(path).warnings == []
+
+
+def test_blank_lines_are_not_samples(tmp_path):
+    rec = read_recording(write(tmp_path, HEADER + "gx,gy,gz\n1,2,3\n\n4,5,6\n"))
+    np.testing.assert_array_equal(rec.columns["gx"], [1, 4])
+
+
+def test_unreadable_and_binary_files(tmp_path):
+    with pytest.raises(RecordingError, match="cannot read"):
+        read_recording(tmp_path / "missing.csv")
+    path = tmp_path / "bin.csv"
+    path.write_bytes(b"\xff\xfe\x00garbage")
+    with pytest.raises(RecordingError, match="not UTF-8"):
+        read_recording(path)
