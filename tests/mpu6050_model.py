@@ -23,6 +23,7 @@ The model (InvenSense RM-MPU-6000A-00 rev 4.2):
   alignment is lost) and INT_STATUS.FIFO_OFLOW_INT (bit 4) is set if INT_ENABLE.FIFO_OFLOW_EN is set
   (the model is strict: no enable, no status bit); INT_STATUS clears when read; USER_CTRL.FIFO_RESET
   empties the FIFO and clears itself;
+* ``reset_nack``: the chip NACKs every transfer (errno 121) while DEVICE_RESET runs;
 * injected errors: ``fail(errno, times)`` makes the next transactions raise ``OSError(errno)``
   before they touch anything; ``fail_fifo_read(errno, consume_bytes)`` makes the next FIFO_R_W read
   consume some bytes and then fail (a transfer stopped part-way); ``error_rate`` with ``rng`` fails
@@ -71,7 +72,7 @@ class MPU6050Model:
     """Register-level MPU-6050 (see module docstring)."""
 
     def __init__(self, clock, *, chip_id=0x68, gyro_lsb=None, gyro_dps=None, temp_c=25.0,
-                 fifo_size=1024, reset_duration_s=0.002, reset_stuck=False, stuck=None,
+                 fifo_size=1024, reset_duration_s=0.002, reset_stuck=False, reset_nack=False, stuck=None,
                  error_rate=0.0, error_errno=_errno.EREMOTEIO, rng=None):
         self.clock = clock
         self.chip_id = chip_id
@@ -83,6 +84,7 @@ class MPU6050Model:
         self.fifo_size = fifo_size
         self.reset_duration_s = reset_duration_s
         self.reset_stuck = reset_stuck
+        self.reset_nack = reset_nack
         self.stuck = dict(stuck or {})
         self.error_rate = error_rate
         self.error_errno = error_errno
@@ -207,6 +209,9 @@ class MPU6050Model:
             del self.fifo[:consume]
             self.injected_errors += 1
             raise OSError(code, os.strerror(code))
+        if self.reset_nack and self.clock.now() < self.reset_until:
+            self.injected_errors += 1
+            raise OSError(_errno.EREMOTEIO, os.strerror(_errno.EREMOTEIO))   # busy resetting: NACK
         if self.error_rate and self.rng.random() < self.error_rate:
             self.injected_errors += 1
             raise OSError(self.error_errno, os.strerror(self.error_errno))

@@ -148,12 +148,24 @@ def test_readback_mismatch_refused(rig, reg, name):
     assert not bus.fds                                         # bus closed after the refusal
 
 
+def test_chip_silent_during_reset_is_waited_for(rig):
+    clock, model, bus = rig(reset_duration_s=0.15, reset_nack=True)
+    src = open_src(clock)                                      # 100 ms sleep, then NACKs until 150 ms
+    assert src.stats["retries"] == model.injected_errors > 0
+    assert model.regs[0x6B] == 0x01
+
+
 def test_reset_that_never_finishes_times_out(rig):
     clock, model, bus = rig(reset_stuck=True)
     t0 = clock.now()
     with pytest.raises(DeviceError, match=r"reset did not finish.*PWR_MGMT_1 \(0x6B\) still reads 0xC0"):
         open_src(clock, reset_timeout_s=0.3)
     assert 0.3 <= clock.now() - t0 < 0.5                       # bounded wait (virtual time)
+    clock, model, bus = rig(reset_stuck=True, reset_nack=True)  # one that never answers again
+    t0 = clock.now()
+    with pytest.raises(DeviceError, match=r"PWR_MGMT_1 \(0x6B\) after repeated attempt\(s\) \(errno 121"):
+        open_src(clock, reset_timeout_s=0.3)
+    assert clock.now() - t0 < 0.5
 
 
 # ------------------------------------------------------------------------------------------ errors
@@ -165,7 +177,7 @@ def test_relatives_named_and_refused_unless_allowed(rig, chip, name):
     clock, model, bus = rig(chip_id=chip)
     with pytest.raises(DeviceError, match=f"{name}.*WHO_AM_I 0x{chip:02X}.*allow_chip=0x{chip:02X}"):
         open_src(clock)
-    src = open_src(clock, allow_chip=chip)
+    src = open_src(clock, allow_chip=chip if chip % 2 else [f"0x{chip:02x}"])   # int or list of strings
     assert src.header["chip_id"] == f"0x{chip:02X}" and name in src.header["sensor"]
     assert src.fifo_size_bytes == 512
     src.close()

@@ -50,6 +50,7 @@ CHIPS = {
     0x71: ("MPU9250", 512, 333.87, 21.0, True),
     0x73: ("MPU9255", 512, 333.87, 21.0, True),
     0x74: ("MPU6515", 512, 333.87, 21.0, True),
+    # clones: FIFO size unknown, assume the smaller 512 bytes so that an overflow is never missed
     0x72: ("MPU6050 clone (WHO_AM_I 0x72, sold as MPU6050/GY-521)", 512, 340.0, 36.53, True),
     0x98: ("ICM-20689 or a clone sold as MPU6050/MPU6500", 512, 326.8, 25.0, True),
     0x12: ("ICM-20602", 512, 326.8, 25.0, True),
@@ -131,6 +132,19 @@ def temperature_c(raw, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):
     return np.asarray(raw, dtype=float) / lsb_per_c + offset_c
 
 
+def _chip_ids(allow_chip):
+    """allow_chip as a set of ids: None -> {}, 0x70 / "0x70" -> {0x70}, a collection -> its ids."""
+    if allow_chip is None or allow_chip is False:
+        return set()
+    if isinstance(allow_chip, (int, str)):
+        allow_chip = [allow_chip]
+    try:
+        return {int(c, 0) if isinstance(c, str) else int(c) for c in allow_chip}
+    except (TypeError, ValueError):
+        raise SettingsError(f"allow_chip={allow_chip!r}: expected a WHO_AM_I value such as 0x70, a list "
+                            f"of them, or True") from None
+
+
 def _bus_name(bus):
     if isinstance(bus, int):
         return f"/dev/i2c-{bus}"
@@ -208,6 +222,8 @@ class MPU6050Source:
         self._layout = frame_layout(self.temperature)
         self._n_words = len(self._layout)
         self.frame_bytes = 2 * self._n_words
+        # FIFO margin: frames that may arrive during one read (10 ms of samples, at least 1)
+        self._margin_frames = max(1, int(np.ceil(self.sample_rate_hz * 0.01)))
         self._owns_bus = isinstance(bus, (int, str))
         self._bus = _open_bus(bus) if self._owns_bus else bus
         self._closed = False
@@ -275,8 +291,7 @@ class MPU6050Source:
         if who == MPU6050_ID:
             return who
         known = CHIPS.get(who)
-        allowed = (allow_chip is True or allow_chip == who
-                   or (isinstance(allow_chip, (list, tuple, set, frozenset)) and who in allow_chip))
+        allowed = allow_chip is True or who in _chip_ids(allow_chip)
         if known is None:
             raise DeviceError(
                 f"chip at {self._where()} answers WHO_AM_I (0x75) = 0x{who:02X}, not 0x68 (MPU6050), "
@@ -304,13 +319,26 @@ class MPU6050Source:
         return bool(has_rdwr and int(funcs) & I2C_FUNC_I2C)
 
     def _wait_for(self, reg, done, what, timeout_s):
-        """Poll ``reg`` until ``done(value)``; DeviceError after ``timeout_s`` (every wait is bounded)."""
+        """Poll ``reg`` until ``done(value)``; DeviceError after ``timeout_s`` (every wait is bounded).
+
+        Transient errors (the chip may not answer while it resets) count as retries and are
+        tolerated until the deadline.
+        """
         deadline = self._clock() + timeout_s
+        value, last_exc = None, None
         while True:
-            value = self._read_byte(reg)
-            if done(value):
-                return value
+            try:
+                value = self._bus.read_byte_data(self.address, reg.address)
+                if done(value):
+                    return value
+            except OSError as exc:
+                if exc.errno not in TRANSIENT_ERRNOS:
+                    raise self._io_error(str(reg), exc, 1) from None
+                self.stats["retries"] += 1
+                last_exc = exc
             if self._clock() >= deadline:
+                if value is None:
+                    raise self._io_error(str(reg), last_exc, "repeated") from None
                 raise DeviceError(f"{what} at {self._where()}: {reg} still reads 0x{value:02X} after "
                                   f"{timeout_s:g} s; power-cycle the sensor")
             self._sleep(0.005)
@@ -319,7 +347,7 @@ class MPU6050Source:
         pm1 = R.PWR_MGMT_1
         # reset (section 4.30), then wait for DEVICE_RESET to clear
         self._write_byte(pm1, pm1.put(0, "DEVICE_RESET", 1))
-        self._sleep(0.05)
+        self._sleep(0.1)   # InvenSense reset sequence: wait 100 ms after DEVICE_RESET
         self._wait_for(pm1, lambda v: not v & pm1.mask("DEVICE_RESET"), "reset did not finish",
                        self.reset_timeout_s)
         self._write_byte(R.SIGNAL_PATH_RESET, 0x07)
@@ -472,8 +500,9 @@ class MPU6050Source:
                 self._gap("FIFO overflow")
                 return empty
             count = self._fifo_count()
-            if count > self.fifo_size_bytes - self.frame_bytes:
-                # full: the next sample overwrites the oldest bytes, alignment is no longer guaranteed
+            if count > self.fifo_size_bytes - self.frame_bytes * self._margin_frames:
+                # (nearly) full: samples arriving while we read would overwrite the oldest bytes
+                # before we get them, and frame alignment would be lost
                 self.stats["overflows"] += 1
                 self._gap("FIFO overflow")
                 return empty
