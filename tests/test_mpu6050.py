@@ -353,6 +353,15 @@ def test_misaligned_count_is_resynchronised(rig):
     assert np.all(np.diff(idx) >= 1)
 
 
+def test_8khz_polls_often_enough_for_the_fifo(rig):
+    clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
+    src = open_src(clock, rate_hz=8000, dlpf="0", address="0x68", temperature=False)
+    assert src.smplrt_div == 0 and src.poll_interval_s == pytest.approx(170 / 8000 / 4)
+    rows, notes = read_for(src, clock, 1.0)
+    assert notes == [] and len(rows) >= 7900
+    np.testing.assert_array_equal(np.diff(index_of(rows)), 1)
+
+
 def test_read_waits_at_most_max_wait(rig):
     clock, model, bus = rig()
     src = open_src(clock, rate_hz=1000)

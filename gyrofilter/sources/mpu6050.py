@@ -132,6 +132,13 @@ def temperature_c(raw, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):
     return np.asarray(raw, dtype=float) / lsb_per_c + offset_c
 
 
+def _as_int(value, name):
+    try:
+        return int(value, 0) if isinstance(value, str) else int(value)
+    except (TypeError, ValueError):
+        raise SettingsError(f"{name}={value!r} is not an integer") from None
+
+
 def _chip_ids(allow_chip):
     """allow_chip as a set of ids: None -> {}, 0x70 / "0x70" -> {0x70}, a collection -> its ids."""
     if allow_chip is None or allow_chip is False:
@@ -192,7 +199,9 @@ class MPU6050Source:
                  allow_chip=None, *, transfer="auto", clock=None, sleep=None, wall_clock=None,
                  poll_interval_s=0.02, max_wait_s=0.1, max_retries=5, retry_backoff_s=0.001,
                  reset_timeout_s=0.5, fifo_bytes=None):
-        # settings are checked before any bus traffic
+        # settings are checked before any bus traffic (strings such as "0x69" or "3" are accepted)
+        address = _as_int(address, "address")
+        dlpf = None if dlpf is None else _as_int(dlpf, "dlpf")
         if address not in (0x68, 0x69):
             raise SettingsError(f"address=0x{int(address):02X}: an MPU6050 answers at 0x68 (AD0 low) "
                                 f"or 0x69 (AD0 high)")
@@ -222,8 +231,6 @@ class MPU6050Source:
         self._layout = frame_layout(self.temperature)
         self._n_words = len(self._layout)
         self.frame_bytes = 2 * self._n_words
-        # FIFO margin: frames that may arrive during one read (10 ms of samples, at least 1)
-        self._margin_frames = max(1, int(np.ceil(self.sample_rate_hz * 0.01)))
         self._owns_bus = isinstance(bus, (int, str))
         self._bus = _open_bus(bus) if self._owns_bus else bus
         self._closed = False
@@ -232,6 +239,11 @@ class MPU6050Source:
             name, chip_fifo, self._temp_lsb_per_c, self._temp_offset_c, _ = CHIPS[self.chip_id]
             self.chip_name = name
             self.fifo_size_bytes = int(fifo_bytes or chip_fifo)
+            capacity = self.fifo_size_bytes // self.frame_bytes          # frames the FIFO holds
+            # poll often enough to read the FIFO at a quarter full; keep a margin of 10 ms of
+            # samples (at most a quarter of the FIFO) for frames that arrive during one read
+            self.poll_interval_s = min(self.poll_interval_s, capacity / self.sample_rate_hz / 4)
+            self._margin_frames = max(1, min(int(np.ceil(self.sample_rate_hz * 0.01)), capacity // 4))
             self.use_rdwr = self._choose_transfer(transfer)
             self._start()
         except BaseException:
