@@ -90,3 +90,53 @@ def test_missing_or_bad_rate(rate):
     with pytest.raises(SettingsError, match="sample_rate_hz"):
         overlapping_adev(np.ones(100), rate)
     assert issubclass(SettingsError, GyroFilterError)
+
+
+# --- confidence intervals -------------------------------------------------------------------
+from gyrofilter.allan import chi2_interval, edf_mixture, edf_oavar, simple_interval  # noqa: E402
+
+
+@pytest.mark.parametrize("alpha", [2, 1, 0, -1, -2])
+@pytest.mark.parametrize("n, m", [(1000, 1), (1000, 7), (100000, 250), (500, 55)])
+def test_edf_matches_allantools_edf_simple(alpha, n, m):
+    ci = pytest.importorskip("allantools.ci")
+    # allantools takes the number of phase points (= samples + 1)
+    assert float(edf_oavar(n, m, alpha)) == pytest.approx(max(ci.edf_simple(n + 1, m, alpha), 1.0), rel=1e-12)
+
+
+def test_white_fm_edf_m1_is_two_thirds_of_n():
+    # Var of the m = 1 overlapping estimate for white noise is 3 sigma^4 / N -> edf = 2N/3
+    assert float(edf_oavar(30000, 1, 0)) == pytest.approx(20000, rel=1e-3)
+
+
+def test_mixture_edf_pure_and_bounded():
+    m = np.array([1, 10, 100])
+    pure = edf_mixture(10000, m, [[1, 1, 1], [0, 0, 0]], [0, -1])
+    np.testing.assert_allclose(pure, edf_oavar(10000, m, 0))
+    mixed = edf_mixture(10000, m, [[1, 1, 1], [1, 1, 1]], [0, -1])
+    assert np.all(mixed <= np.maximum(edf_oavar(10000, m, 0), edf_oavar(10000, m, -1)) + 1e-9)
+    assert np.all(mixed >= np.minimum(edf_oavar(10000, m, 0), edf_oavar(10000, m, -1)) - 1e-9)
+
+
+def test_chi2_interval_matches_scipy_and_covers_white_noise():
+    stats = pytest.importorskip("scipy.stats")
+    low, high = chi2_interval(2.0, 10.0, 0.9)
+    assert low == pytest.approx(20.0 / stats.chi2.ppf(0.95, 10))
+    assert high == pytest.approx(20.0 / stats.chi2.ppf(0.05, 10))
+    # coverage on white noise at a large tau (few clusters): the true AVAR N^2 / tau must fall
+    # inside the 95 % interval in about 95 % of seeds (at least 88 % of 60)
+    fs, n, m = 10.0, 2000, 150
+    hits = 0
+    for seed in range(60):
+        x = np.random.default_rng(seed).normal(0.0, 1.0, n)
+        tau, dev = overlapping_adev(x, fs, [m / fs])
+        lo, hi = chi2_interval(dev ** 2, edf_oavar(n, m, 0), 0.95)
+        truth = 1.0 / fs / tau[0]  # white: sigma^2 = s^2 tau0 / tau
+        hits += bool(lo[0] <= truth <= hi[0])
+    assert hits >= 53
+
+
+def test_simple_interval_paper_000_example():
+    low, high, rel = simple_interval(1.0, 10000, 100)
+    assert float(rel) == pytest.approx(0.0711, abs=5e-5)
+    assert float(high) == pytest.approx(1.0711, abs=5e-5)
