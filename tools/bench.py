@@ -1,0 +1,93 @@
+#!/usr/bin/env python3
+"""Benchmarks, printed side by side with a baseline in one run.
+
+    python tools/bench.py            # every section
+    python tools/bench.py pipeline   # one section (pipeline, allan, mpu6050, serial, simulate, gap)
+
+Pipeline section: streaming ``update()`` and batch ``filter()`` throughput in three-axis samples
+per second, peak memory of ``filter()`` on a 1-hour 100 Hz recording, and the same pipeline
+written the plain way (filterpy ``KalmanFilter`` per block plus ``np.polyfit`` per prediction,
+``tests/plain_filter.py``) as the baseline. Targets on this machine (issue 2): streaming >=
+500 000 samples/s, batch >= 5 000 000 samples/s, >= 30x the plain way. Other sections live in
+``tools/bench_<name>.py`` beside this file. Timings are the best of a few repeats.
+"""
+import importlib
+import os
+import sys
+import time
+import tracemalloc
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path[:0] = [HERE, os.path.join(HERE, "..", "tests")]
+
+from gyrofilter import GyroFilter  # noqa: E402
+from gyrofilter.kalman import compiled_run_blocks  # noqa: E402
+
+RATE_HZ = 100.0
+
+
+def best_of(fn, repeats=3):
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def pipeline():
+    from plain_filter import plain_filter
+
+    rng = np.random.default_rng(0)
+    hour = rng.normal([1.5, -0.7, 3.0], 0.1, (int(3600 * RATE_HZ), 3))
+    stream_in = list(map(tuple, hour[:300_000].tolist()))
+    backends = ["numba", "python"] if compiled_run_blocks() is not None else ["python"]
+    rows = []
+    for backend in backends:
+        GyroFilter(RATE_HZ, backend=backend).filter(hour[:1000])  # load the compiled kernel once
+
+        def run_stream():
+            update = GyroFilter(RATE_HZ, backend=backend).update
+            for s in stream_in:
+                update(s)
+
+        t_stream = best_of(run_stream)
+        t_batch = best_of(lambda: GyroFilter(RATE_HZ, backend=backend).filter(hour))
+        tracemalloc.start()
+        GyroFilter(RATE_HZ, backend=backend).filter(hour)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        rows.append((backend, len(stream_in) / t_stream, len(hour) / t_batch, peak))
+    n_plain = int(60 * RATE_HZ)
+    t_plain = best_of(lambda: plain_filter(hour[:n_plain], RATE_HZ), repeats=1)
+    plain_rate = n_plain / t_plain
+    print("pipeline (three-axis samples per second; 1 h at 100 Hz = 360 000 samples, input 8.6 MB)")
+    print(f"  {'implementation':<34}{'streaming':>12}{'batch':>14}{'batch peak MB':>15}{'vs plain':>10}")
+    for backend, stream_rate, batch_rate, peak in rows:
+        print(f"  {'gyrofilter, kernel ' + backend:<34}{stream_rate:>12,.0f}{batch_rate:>14,.0f}{peak / 1e6:>15.1f}{batch_rate / plain_rate:>9.0f}x")
+    print(f"  {'plain way (filterpy + np.polyfit)':<34}{'':>12}{plain_rate:>14,.0f}{'':>15}{1:>9.0f}x")
+    print("  targets: streaming >= 500,000; batch >= 5,000,000; >= 30x the plain way")
+
+
+SECTIONS = ["pipeline", "allan", "mpu6050", "serial", "simulate", "gap"]
+
+
+def main(argv):
+    chosen = argv or SECTIONS
+    for name in chosen:
+        if name == "pipeline":
+            pipeline()
+        else:
+            try:
+                module = importlib.import_module(f"bench_{name}")
+            except ModuleNotFoundError:
+                print(f"{name}: tools/bench_{name}.py is not there")
+                continue
+            module.main()
+        print()
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
