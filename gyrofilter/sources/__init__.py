@@ -1,0 +1,194 @@
+"""Live sources: an MPU6050 on I2C, a serial stream, a replayed recording, a simulation.
+
+One syntax names every source (``--source SOURCE`` of ``gyrofilter record`` and ``run``)::
+
+    KIND[:ARG][,key=value[,key=value...]][,flag]
+
+    mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,allow_chip=0x70]
+    serial:/dev/ttyUSB0[,baud=115200,unit=lsb,lsb_per_dps=131,rate=100,header_timeout=5]
+    replay:FILE[,realtime][,speed=2]          (or just FILE, a .csv/.csv.gz recording)
+    sim[:MODEL.json][,seed=1][,realtime=0][,duration=60]
+
+A bare ``/dev/tty...`` is a serial port and a bare existing file or ``*.csv``/``*.csv.gz`` name
+is a replay. Numbers may be decimal or ``0x`` hex; flags are ``1/0``, ``yes/no``, ``true/false``
+or the bare key (= true). An unknown key is refused with a message that lists the known ones.
+
+Every opened source follows the same duck-typed protocol (``shared`` briefing):
+
+- ``header``: dict of recording-header keys (``sample_rate_hz``, ``gyro_unit``, ``lsb_per_dps``
+  when the unit is lsb, ``sensor``, ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``,
+  ``start_time_utc``, ...);
+- ``columns``: names of what ``read()`` returns, starting with ``t`` (sample index / sample
+  rate, from the sensor's clock: lost samples show as a jump in ``t``), then ``gx, gy, gz`` in
+  the header's ``gyro_unit``, then optional ``temp`` (deg C);
+- ``read()``: the rows available now, shape (n, len(columns)); waits at most about 0.1 s;
+  shape (0, k) when nothing arrived; raises :class:`gyrofilter.errors.SourceEnded` at the end
+  of a finite source (the exception's text says why it ended);
+- ``pop_notes()``: events since the last call (gaps, restarts), written as annotation lines;
+- ``stats``: counters (``samples``, ``lost_samples``, ``garbage_bytes``, ...);
+- ``close()``.
+
+Device libraries (smbus2, pyserial) are imported only when such a source is opened.
+"""
+from __future__ import annotations
+
+import os
+
+from ..errors import SettingsError
+
+__all__ = ["open_source", "parse_source", "SOURCE_HELP", "KINDS"]
+
+SOURCE_HELP = (
+    "SOURCE is KIND[:ARG][,key=value...]: "
+    "mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,allow_chip=0x70] | "
+    "serial:/dev/ttyUSB0[,baud=115200,unit=lsb,lsb_per_dps=131,rate=100,header_timeout=5] | "
+    "replay:FILE[,realtime][,speed=1] (or just FILE) | "
+    "sim[:MODEL.json][,seed=1,realtime=1,duration=S] (default: an MPU6050-like model)"
+)
+
+
+def _int(text):
+    return int(text, 0)
+
+
+def _float(text):
+    value = float(text)
+    if value != value or value in (float("inf"), float("-inf")):
+        raise ValueError(text)
+    return value
+
+
+def _bool(text):
+    low = text.strip().lower()
+    if low in ("1", "yes", "true", "on", ""):
+        return True
+    if low in ("0", "no", "false", "off"):
+        return False
+    raise ValueError(text)
+
+
+def _unit(text):
+    from ..units import GYRO_UNITS
+
+    if text not in GYRO_UNITS:
+        raise ValueError(text)
+    return text
+
+
+# kind -> (what the positional argument is or None, {key: (parser, keyword name, description)})
+KINDS = {
+    "mpu6050": (None, {
+        "bus": (_int, "bus", "I2C bus number N of /dev/i2c-N"),
+        "addr": (_int, "address", "I2C address, 0x68 or 0x69"),
+        "address": (_int, "address", "same as addr"),
+        "rate": (_float, "rate_hz", "sample rate in Hz"),
+        "range": (_int, "range_dps", "full scale in deg/s: 250, 500, 1000 or 2000"),
+        "dlpf": (_int, "dlpf", "DLPF_CFG 0..6 (CONFIG register bits 2:0)"),
+        "temp": (_bool, "temperature", "read the temperature too (1/0)"),
+        "allow_chip": (_int, "allow_chip", "accept this WHO_AM_I value (a relative or clone)"),
+    }),
+    "serial": ("port", {
+        "baud": (_int, "baudrate", "baud rate"),
+        "unit": (_unit, "gyro_unit", "gyro unit if the device sends no header: dps, rad/s or lsb"),
+        "lsb_per_dps": (_float, "lsb_per_dps", "LSB per deg/s if unit=lsb"),
+        "rate": (_float, "sample_rate_hz", "sample rate in Hz if the device sends no header"),
+        "header_timeout": (_float, "header_timeout_s", "seconds to wait for the device's header line"),
+    }),
+    "replay": ("path", {
+        "realtime": (_bool, "realtime", "deliver samples at the recording's pace"),
+        "speed": (_float, "speed", "pace factor with realtime (2 = twice as fast)"),
+    }),
+    "sim": ("model", {
+        "seed": (_int, "seed", "random seed"),
+        "realtime": (_bool, "realtime", "deliver samples at the model's pace (default 1)"),
+        "duration": (_float, "duration_s", "end after this many seconds of samples"),
+    }),
+}
+_ALIASES = {"mpu": "mpu6050", "simulate": "sim", "simulation": "sim", "file": "replay"}
+
+
+def parse_source(spec: str):
+    """Split a SOURCE text into ``(kind, keyword arguments)`` for the source's opener.
+
+    >>> parse_source("mpu6050:bus=1,addr=0x69,rate=200")
+    ('mpu6050', {'bus': 1, 'address': 105, 'rate_hz': 200.0})
+    >>> parse_source("replay:rec.csv.gz,realtime")
+    ('replay', {'path': 'rec.csv.gz', 'realtime': True})
+    """
+    if not isinstance(spec, str) or not spec.strip():
+        raise SettingsError(f"empty source; {SOURCE_HELP}")
+    spec = spec.strip()
+    head, sep, rest = spec.partition(":")
+    kind = _ALIASES.get(head.lower(), head.lower())
+    if kind not in KINDS:
+        # no known KIND prefix: a bare device or file name
+        first = spec.split(",", 1)[0]
+        if first.startswith("/dev/tty") or first.startswith("/dev/serial"):
+            kind, rest = "serial", spec
+        elif os.path.exists(first) or first.endswith((".csv", ".csv.gz", ".gz")):
+            kind, rest = "replay", spec
+        elif sep:
+            raise SettingsError(
+                f"source {spec!r}: unknown kind {head!r}; expected one of {', '.join(KINDS)} ({SOURCE_HELP})"
+            )
+        else:
+            raise SettingsError(f"source {spec!r}: no such file, and not one of {', '.join(KINDS)} ({SOURCE_HELP})")
+    positional_name, keys = KINDS[kind]
+    kwargs = {}
+    items = [item for item in rest.split(",")] if rest else []
+    for index, item in enumerate(items):
+        item = item.strip()
+        if not item:
+            continue
+        key, eq, value = item.partition("=")
+        key = key.strip().lower()
+        if not eq and index == 0 and positional_name is not None and key not in keys:
+            kwargs[positional_name] = item
+            continue
+        if key not in keys:
+            known = ", ".join(keys)
+            if not eq and positional_name is not None:
+                raise SettingsError(
+                    f"source {spec!r}: {item!r} is not a key of {kind} (known: {known}); "
+                    f"the {positional_name} comes first, right after '{kind}:'"
+                )
+            raise SettingsError(f"source {spec!r}: unknown key {key!r} for {kind} (known: {known})")
+        parser, name, description = keys[key]
+        if not eq and parser is not _bool:
+            raise SettingsError(f"source {spec!r}: key {key!r} needs a value ({key}=..., {description})")
+        try:
+            kwargs[name] = parser(value.strip())
+        except ValueError:
+            raise SettingsError(f"source {spec!r}: bad value {value.strip()!r} for key {key!r} ({description})") from None
+    if kind in ("serial", "replay") and positional_name not in kwargs:
+        raise SettingsError(f"source {spec!r}: {kind} needs a {positional_name} ({SOURCE_HELP})")
+    return kind, kwargs
+
+
+def open_source(spec: str, **defaults):
+    """Open the source named by ``spec`` (see the module docstring).
+
+    ``defaults`` fill keyword arguments the spec does not give, where that kind of source
+    accepts them (for example ``gyro_unit`` and ``sample_rate_hz`` from command-line options for
+    a serial device that sends no header); others are ignored.
+    """
+    kind, kwargs = parse_source(spec)
+    accepted = {name for _, name, _ in KINDS[kind][1].values()}
+    for key, value in defaults.items():
+        if value is not None and key in accepted and key not in kwargs:
+            kwargs[key] = value
+    if kind == "mpu6050":
+        from .mpu6050 import open_mpu6050
+
+        return open_mpu6050(**kwargs)
+    if kind == "serial":
+        from .serial_source import SerialSource
+
+        return SerialSource(**kwargs)
+    if kind == "replay":
+        from .replay import ReplaySource
+
+        return ReplaySource(**kwargs)
+    from .simulated import SimulatedSource
+
+    return SimulatedSource(**kwargs)

@@ -1,0 +1,517 @@
+"""A gyro streamed over a serial port as text lines (``serial:/dev/ttyUSB0,baud=115200``).
+
+Line protocol (``docs/readme_live.md``; ``tools/arduino/gyrofilter_stream`` speaks it)::
+
+    # gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw
+    0,12,-3,40,-1520
+    1,15,-1,37,-1518
+
+- A header line ``# gyrofilter-serial: 1`` followed by ``key=value`` words, sent at start-up
+  and whenever the device receives ``?``. Keys: ``gyro_unit`` (dps, rad/s, lsb),
+  ``lsb_per_dps`` (with lsb), ``sample_rate_hz``; optional ``fields`` (default
+  ``counter,gx,gy,gz`` plus ``temp`` if the lines have five values), ``counter_bits`` (default
+  32: the counter wraps at 2**32), ``temp_unit`` (``c`` or ``mpu6050_raw``: T = raw/340 + 36.53
+  deg C, MPU-6000/6050 register map rev 4.2 section 4.18); any other key (``sensor``,
+  ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header.
+- Then one CSV line per sample, ``\\n`` or ``\\r\\n`` ended. Other lines starting with ``#`` are
+  device messages (passed on as notes).
+- The counter counts samples on the device. A jump of k > 1 means k - 1 samples were lost:
+  ``t`` jumps with it and a gap note is made. A repeated counter is a duplicate (dropped); a
+  backwards jump is a device restart (noted; ``t`` continues).
+
+Without a header, the units come from the source options (``unit=``, ``lsb_per_dps=``,
+``rate=``; ``gyrofilter record --gyro-unit ...``) and the first line is discarded, since the
+port may have been opened in the middle of a line.
+
+Reading is chunked: each ``read()`` takes every byte waiting (waiting at most 0.1 s for the
+first), splits complete lines and converts them all at once with numpy when they are all plain
+CSV; a chunk with anything else goes through a line-by-line parser that counts and skips bad
+lines (partial lines, garbage bytes, non-numeric cells). Nothing in the input makes the reader
+raise except an unreadable first header or a header that changes the units mid-stream. A disconnected port ends the source
+(:class:`SourceEnded` with the reason) after the rows received so far.
+"""
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+from ..errors import DeviceError, SettingsError, SourceEnded
+from ..units import GYRO_UNITS
+
+HEADER_PREFIX = b"# gyrofilter-serial:"
+PROTOCOL_VERSION = "1"
+MAX_WAIT_S = 0.1
+MAX_LINE_BYTES = 256  # a longer run without a line end is garbage
+MAX_DETAILED_NOTES = 20  # bad-line notes per source; later ones are only counted
+TEMP_LSB_PER_C = 340.0  # MPU-6000/6050 register map rev 4.2, section 4.18
+TEMP_OFFSET_C = 36.53
+_PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
+_KNOWN_FIELDS = ("counter", "gx", "gy", "gz", "temp")
+# bytes a plain data chunk may hold: digits, sign, point, comma, line end
+_PLAIN = b"0123456789+-.,\n"  # (bytes.translate(None, _PLAIN) leaves the others)
+# bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
+_TEXT = b"0123456789+-.,eEnaifNAIF \t"
+
+
+def _parse_fields(text, where):
+    fields = [f.strip() for f in text.split(",")]
+    for f in fields:
+        if f not in _KNOWN_FIELDS:
+            raise DeviceError(f"{where}: unknown field {f!r} in fields={text} (known: {', '.join(_KNOWN_FIELDS)})")
+    for f in ("gx", "gy", "gz"):
+        if f not in fields:
+            raise DeviceError(f"{where}: fields={text} lacks {f}")
+    if len(set(fields)) != len(fields):
+        raise DeviceError(f"{where}: fields={text} names a field twice")
+    return fields
+
+
+class LineParser:
+    """Turn the bytes of the line protocol into rows ``t, gx, gy, gz[, temp]``.
+
+    Pure (no I/O): :meth:`feed` takes any bytes (split anywhere) and returns the rows its
+    complete lines made. ``header`` is None until the units are known (from a header line or
+    the constructor). Counters are in :attr:`stats`, events in :attr:`notes`.
+    """
+
+    def __init__(self, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None, *, where="serial"):
+        self.where = where
+        self.stats = {
+            "lines": 0, "samples": 0, "lost_samples": 0, "counter_jumps": 0, "duplicates": 0,
+            "restarts": 0, "partial_lines": 0, "bad_lines": 0, "garbage_bytes": 0,
+            "empty_lines": 0, "device_messages": 0, "headers": 0, "lines_before_header": 0,
+        }
+        self.notes = []
+        self._detailed = 0
+        self._buf = b""
+        self.header = None
+        self.fields = None  # list of names per line once known
+        self._counter_mod = 2 ** 32
+        self._temp_raw = False
+        self._rate = None
+        self._last_counter = None
+        self._last_index = -1
+        self._options = None
+        if gyro_unit is not None or sample_rate_hz is not None or lsb_per_dps is not None:
+            self._options = self._make_units({"gyro_unit": gyro_unit, "lsb_per_dps": lsb_per_dps,
+                                               "sample_rate_hz": sample_rate_hz}, "source options")
+            self._apply(dict(self._options))
+            self._skip_first_line = True
+        else:
+            self._skip_first_line = False
+
+    # ------------------------------------------------------------------ header
+
+    def _make_units(self, values, where):
+        unit = values.get("gyro_unit")
+        if unit is None:
+            raise SettingsError(f"{self.where}: {where}: gyro unit missing (unit=dps|rad/s|lsb)")
+        if unit not in GYRO_UNITS:
+            raise SettingsError(f"{self.where}: {where}: gyro_unit {unit!r} is not one of {', '.join(GYRO_UNITS)}")
+        rate = values.get("sample_rate_hz")
+        if rate is None:
+            raise SettingsError(f"{self.where}: {where}: sample rate missing (rate=HZ)")
+        try:
+            rate = float(rate)
+        except ValueError:
+            raise DeviceError(f"{self.where}: {where}: sample_rate_hz is not a number: {values['sample_rate_hz']!r}") from None
+        if not rate > 0:
+            raise SettingsError(f"{self.where}: {where}: sample_rate_hz must be positive, got {rate}")
+        out = {"sample_rate_hz": _num(rate), "gyro_unit": unit}
+        if unit == "lsb":
+            lsb = values.get("lsb_per_dps")
+            if lsb is None:
+                raise SettingsError(f"{self.where}: {where}: gyro_unit lsb needs lsb_per_dps")
+            try:
+                lsb = float(lsb)
+            except ValueError:
+                raise DeviceError(f"{self.where}: {where}: lsb_per_dps is not a number: {values['lsb_per_dps']!r}") from None
+            if not lsb > 0:
+                raise SettingsError(f"{self.where}: {where}: lsb_per_dps must be positive, got {lsb}")
+            out["lsb_per_dps"] = _num(lsb)
+        return out
+
+    def _apply(self, header):
+        units = {k: header[k] for k in ("sample_rate_hz", "gyro_unit", "lsb_per_dps") if k in header}
+        if self.header is not None:
+            old = {k: self.header[k] for k in ("sample_rate_hz", "gyro_unit", "lsb_per_dps") if k in self.header}
+            if old != units:
+                raise DeviceError(
+                    f"{self.where}: the device's header changed the units mid-stream ({old} -> {units}); "
+                    "start a new recording"
+                )
+        self.header = dict(header)
+        self._rate = float(header["sample_rate_hz"])
+
+    def _header_line(self, line):
+        text = line[len(HEADER_PREFIX):].decode("ascii", "replace").split()
+        if not text or text[0] != PROTOCOL_VERSION:
+            raise DeviceError(f"{self.where}: unsupported serial protocol version {text[:1]} (this reader speaks {PROTOCOL_VERSION})")
+        values = {}
+        for word in text[1:]:
+            key, eq, value = word.partition("=")
+            if not eq:
+                raise DeviceError(f"{self.where}: header word {word!r} is not key=value")
+            values[key] = value
+        self.stats["headers"] += 1
+        where = "header line"
+        if "gyro_unit" not in values and self._options is not None:
+            values = {**self._options, **values}
+        units = self._make_units(values, where)
+        if self._options is not None:
+            for key, value in self._options.items():
+                if key == "gyro_unit":
+                    same = units.get(key) == value
+                else:
+                    same = key in units and float(units[key]) == float(value)
+                if not same:
+                    raise DeviceError(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
+        header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS}
+        header.update(units)
+        if "fields" in values:
+            fields = _parse_fields(values["fields"], self.where)
+            if self.fields is not None and fields != self.fields:
+                raise DeviceError(f"{self.where}: the device's header changed the fields mid-stream ({self.fields} -> {fields})")
+            self.fields = fields
+        if "counter_bits" in values:
+            try:
+                self._counter_mod = 2 ** int(values["counter_bits"])
+            except ValueError:
+                raise DeviceError(f"{self.where}: counter_bits is not an integer: {values['counter_bits']!r}") from None
+        temp_unit = values.get("temp_unit", "c")
+        if temp_unit not in ("c", "mpu6050_raw"):
+            raise DeviceError(f"{self.where}: temp_unit {temp_unit!r} is not c or mpu6050_raw")
+        self._temp_raw = temp_unit == "mpu6050_raw"
+        self._apply(header)  # a repeated header must agree; the counter tells restarts
+        self._skip_first_line = False
+
+    # ------------------------------------------------------------------ lines
+
+    @property
+    def columns(self):
+        if self.fields is None:
+            return None
+        return ["t", "gx", "gy", "gz"] + (["temp"] if "temp" in self.fields else [])
+
+    def _bad(self, line, kind, reason):
+        self.stats[kind] += 1
+        self.stats["garbage_bytes"] += len(line)
+        if self._detailed < MAX_DETAILED_NOTES:
+            self._detailed += 1
+            shown = line[:40].decode("ascii", "backslashreplace")
+            more = "" if self._detailed < MAX_DETAILED_NOTES else " (further bad lines are only counted)"
+            self.notes.append(f"serial: skipped {kind[:-1].replace('_', ' ')} ({reason}): {shown}{more}")
+
+    def feed(self, data: bytes) -> np.ndarray:
+        """Add received bytes; returns the rows of the complete lines, shape (n, len(columns))."""
+        buf = self._buf + data
+        end = buf.rfind(b"\n")
+        if end < 0:
+            if len(buf) > MAX_LINE_BYTES:
+                self._bad(buf, "bad_lines", "no line end")
+                buf = b""
+            self._buf = buf
+            return self._empty()
+        block, self._buf = buf[: end + 1], buf[end + 1 :]
+        if len(self._buf) > MAX_LINE_BYTES:
+            self._bad(self._buf, "bad_lines", "no line end")
+            self._buf = b""
+        if b"\r" in block:
+            block = block.replace(b"\r", b"")
+        rows = self._fast(block)
+        if rows is None:
+            rows = self._slow(block)
+        return rows
+
+    def finish(self):
+        """The connection ended: a line without its end is a cut line (counted, not used)."""
+        if self._buf.strip():
+            self._bad(self._buf, "partial_lines", "cut off at the end of the stream")
+        self._buf = b""
+
+    def _empty(self):
+        cols = self.columns
+        return np.empty((0, len(cols) if cols else 4))
+
+    def _fast(self, block):
+        """All lines plain CSV with the known field count: one numpy conversion."""
+        if self.header is None or self.fields is None or self._skip_first_line or block.translate(None, _PLAIN):
+            return None
+        nf = len(self.fields)
+        raw = np.frombuffer(block, dtype=np.uint8)
+        line_ends = np.flatnonzero(raw == 10)
+        commas = np.cumsum(raw == 44)[line_ends]
+        per_line = np.diff(commas, prepend=0)
+        if not np.all(per_line == nf - 1):
+            return None
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            values = np.fromstring(block.replace(b"\n", b",").decode("ascii"), sep=",")
+        if values.size != len(line_ends) * nf:
+            return None
+        self.stats["lines"] += len(line_ends)
+        return self._rows(values.reshape(len(line_ends), nf))
+
+    def _slow(self, block):
+        """Line by line: headers, device messages, and bad lines counted and skipped."""
+        out = []
+        pending = []
+        for line in block.split(b"\n")[:-1]:
+            self.stats["lines"] += 1
+            if self._skip_first_line:
+                self._skip_first_line = False
+                if line.strip():
+                    self.stats["partial_lines"] += 1
+                    self.notes.append("serial: first line discarded (the port may have opened mid-line)")
+                continue
+            if not line.strip():
+                self.stats["empty_lines"] += 1
+                continue
+            if line.startswith(HEADER_PREFIX):
+                if pending:
+                    out.append(self._rows(np.array(pending)))
+                    pending = []
+                had_header = self.header is not None
+                try:
+                    self._header_line(line)
+                except (DeviceError, SettingsError) as exc:
+                    if not had_header or "mid-stream" in str(exc):
+                        raise
+                    self._bad(line, "bad_lines", f"unreadable repeated header: {exc}")
+                continue
+            if line.startswith(b"#"):
+                self.stats["device_messages"] += 1
+                if self._detailed < MAX_DETAILED_NOTES:
+                    self._detailed += 1
+                    self.notes.append("device: " + line[1:].strip().decode("ascii", "backslashreplace")[:120])
+                continue
+            if self.header is None:
+                self.stats["lines_before_header"] += 1
+                continue
+            if line.translate(None, _TEXT):
+                self._bad(line, "bad_lines", "garbage bytes")
+                continue
+            cells = line.split(b",")
+            if self.fields is None:
+                if len(cells) in (4, 5):
+                    self.fields = ["counter", "gx", "gy", "gz"] + (["temp"] if len(cells) == 5 else [])
+                else:
+                    self._bad(line, "bad_lines", f"{len(cells)} values before the field count is known, expected 4 or 5")
+                    continue
+            nf = len(self.fields)
+            if len(cells) != nf:
+                kind = "partial_lines" if len(cells) < nf else "bad_lines"
+                self._bad(line, kind, f"{len(cells)} values, expected {nf}")
+                continue
+            if any(not c.strip() for c in cells):
+                self._bad(line, "partial_lines", "empty value")
+                continue
+            try:
+                values = [float(c) for c in cells]
+            except ValueError:
+                self._bad(line, "bad_lines", "not a number")
+                continue
+            if not all(v == v and abs(v) != float("inf") for v in values):
+                self._bad(line, "bad_lines", "not a finite number")
+                continue
+            pending.append(values)
+        if pending:
+            out.append(self._rows(np.array(pending)))
+        if not out:
+            return self._empty()
+        return np.concatenate(out) if len(out) > 1 else out[0]
+
+    def _rows(self, values):
+        """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping."""
+        fields = self.fields
+        n = len(values)
+        if "counter" in fields:
+            counter = values[:, fields.index("counter")]
+            ok = (counter == np.round(counter)) & (counter >= 0) & (counter < self._counter_mod)
+            if not ok.all():
+                for v in counter[~ok][:3]:
+                    self._bad(repr(v).encode(), "bad_lines", "counter is not an integer in range")
+                values, counter = values[ok], counter[ok]
+                n = len(values)
+            counter = counter.astype(np.int64)
+            prev = np.empty(n, dtype=np.int64)
+            if n:
+                prev[0] = counter[0] - 1 if self._last_counter is None else self._last_counter
+                prev[1:] = counter[:-1]
+            step = (counter - prev) % self._counter_mod
+            keep = step != 0
+            if not keep.all():
+                self.stats["duplicates"] += int((~keep).sum())
+                values, counter, step = values[keep], counter[keep], step[keep]
+                n = len(values)
+            if n:
+                restart = step >= self._counter_mod // 2
+                jump = (step > 1) & ~restart
+                step = np.where(restart, 1, step)
+                index = self._last_index + np.cumsum(step)
+                for i in np.flatnonzero(jump | restart):
+                    if restart[i]:
+                        self.stats["restarts"] += 1
+                        self.notes.append(f"serial: device counter went back ({int(prev_of(counter, i, self._last_counter))} -> {int(counter[i])}); device restarted? t continues")
+                    else:
+                        lost = int(step[i] - 1)
+                        self.stats["counter_jumps"] += 1
+                        self.stats["lost_samples"] += lost
+                        self.notes.append(f"gap: {lost} samples lost before t={index[i] / self._rate:.6g} s (counter {int(prev_of(counter, i, self._last_counter))} -> {int(counter[i])})")
+                self._last_counter = int(counter[-1])
+                self._last_index = int(index[-1])
+        else:
+            index = self._last_index + 1 + np.arange(n)
+            if n:
+                self._last_index = int(index[-1])
+        if n == 0:
+            return self._empty()
+        rows = np.empty((n, len(self.columns)))
+        rows[:, 0] = index / self._rate
+        for j, name in enumerate(("gx", "gy", "gz")):
+            rows[:, 1 + j] = values[:, fields.index(name)]
+        if "temp" in fields:
+            temp = values[:, fields.index("temp")]
+            rows[:, 4] = temp / TEMP_LSB_PER_C + TEMP_OFFSET_C if self._temp_raw else temp
+        self.stats["samples"] += n
+        return rows
+
+    def pop_notes(self):
+        notes, self.notes = self.notes, []
+        return notes
+
+
+def prev_of(counter, i, last):
+    return counter[i - 1] if i > 0 else last
+
+
+def _num(x):
+    x = float(x)
+    return str(int(x)) if x.is_integer() else repr(x)
+
+
+class SerialSource:
+    """Read the line protocol from a serial port (pyserial, imported here only).
+
+    ``port`` is a device path or a pyserial URL; ``gyro_unit``/``lsb_per_dps``/``sample_rate_hz``
+    are needed only if the device sends no header. Opening waits up to ``header_timeout_s`` for
+    the header and the first data line (asking the device with ``?``).
+    """
+
+    def __init__(self, port, baudrate=115200, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None,
+                 header_timeout_s=5.0, *, serial_port=None, clock=time.monotonic):
+        self.port_name = str(port)
+        self._parser = LineParser(gyro_unit, lsb_per_dps, sample_rate_hz, where=self.port_name)
+        self._ended = None
+        self._disconnected = False
+        self._pending = []
+        if serial_port is None:
+            try:
+                import serial
+            except ImportError:
+                raise DeviceError("pyserial is not installed (pip install pyserial)") from None
+            try:
+                serial_port = serial.serial_for_url(self.port_name, baudrate=int(baudrate), timeout=MAX_WAIT_S)
+            except (serial.SerialException, OSError, ValueError) as exc:
+                raise DeviceError(
+                    f"{self.port_name}: cannot open the serial port ({_one_line(exc)}); check the device name "
+                    "(ls /dev/ttyUSB* /dev/ttyACM*), that no other program holds it, and that you are in the dialout group"
+                ) from None
+        self._port = serial_port
+        self._exceptions = _port_exceptions()
+        try:
+            if self._parser.header is None:
+                try:
+                    self._port.write(b"?")
+                except self._exceptions:
+                    pass
+            deadline = clock() + float(header_timeout_s)
+            while self._parser.header is None or self._parser.fields is None:
+                rows = self._receive()
+                if len(rows):
+                    self._pending.append(rows)
+                if self._ended is not None:
+                    raise DeviceError(f"{self.port_name}: {self._ended} before the stream started")
+                if clock() > deadline:
+                    if self._parser.header is None:
+                        raise DeviceError(
+                            f"{self.port_name}: no '# gyrofilter-serial: 1 ...' header within {header_timeout_s:g} s; "
+                            "give the units as options (unit=lsb,lsb_per_dps=131,rate=100 or --gyro-unit/--lsb-per-dps/--sample-rate) "
+                            "or check the baud rate and the sketch"
+                        )
+                    raise DeviceError(f"{self.port_name}: no data lines within {header_timeout_s:g} s after the header")
+        except BaseException:
+            self._close_port()
+            raise
+        self.header = dict(self._parser.header)
+        self.header.setdefault("sensor", "serial device")
+        self.header["serial_port"] = self.port_name
+        self.header["start_time_utc"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+        self.columns = self._parser.columns
+        self.stats = self._parser.stats
+        self.stats.setdefault("disconnects", 0)
+
+    def _receive(self):
+        """One chunk from the port through the parser; a port error ends the stream."""
+        try:
+            waiting = self._port.in_waiting
+            data = self._port.read(waiting or 1)
+            if data and not waiting:
+                more = self._port.in_waiting
+                if more:
+                    data += self._port.read(more)
+        except self._exceptions as exc:
+            self._ended = f"serial port disconnected ({_one_line(exc)})"
+            self._disconnected = True
+            self._parser.finish()
+            return self._parser._empty()
+        return self._parser.feed(data) if data else self._parser._empty()
+
+    def read(self):
+        """Rows that arrived (waits at most 0.1 s); SourceEnded once the port is gone."""
+        if self._pending:
+            rows = np.concatenate(self._pending)
+            self._pending = []
+            return rows
+        if self._ended is not None:
+            self.stats["disconnects"] = int(self._disconnected)
+            raise SourceEnded(f"{self.port_name}: {self._ended} after {self.stats['samples']} samples; everything received is kept")
+        return self._receive()
+
+    def pop_notes(self):
+        return self._parser.pop_notes()
+
+    def _close_port(self):
+        port, self._port = self._port, None
+        if port is not None:
+            try:
+                port.close()
+            except Exception:  # noqa: BLE001 - closing a vanished port must not mask the real error
+                pass
+
+    def close(self):
+        self._close_port()
+        if self._ended is None:
+            self._ended = "source closed"
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
+def _port_exceptions():
+    try:
+        import serial
+
+        return (serial.SerialException, OSError)
+    except ImportError:
+        return (OSError,)
+
+
+def _one_line(exc):
+    return " ".join(str(exc).split()) or type(exc).__name__
