@@ -303,6 +303,7 @@ class FakeI2CBus:
         self.fds = {}
         self.next_fd = 100000
         self.ioctl_calls = 0
+        self.requests = {}            # ioctl request -> count
         self.bus_bits = 0
         self._undo = []
 
@@ -366,6 +367,7 @@ class FakeI2CBus:
 
     def ioctl(self, fd, request, arg=0, *rest):
         self.ioctl_calls += 1
+        self.requests[request] = self.requests.get(request, 0) + 1
         if request == _smbus2.I2C_FUNCS:
             if fd not in self.fds:
                 raise OSError(_errno.EBADF, os.strerror(_errno.EBADF))

@@ -85,6 +85,14 @@ def test_sample_rate_divider_and_refusal():
     assert [auto_dlpf_cfg(r) for r in (1000, 200, 100, 50, 25, 12.5)] == [0, 2, 3, 4, 5, 6]
 
 
+def test_smbus2_imported_only_when_a_device_is_opened():
+    import subprocess
+    code = ("import sys, gyrofilter, gyrofilter.sources.mpu6050 as m; "
+            "print('smbus2' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
 def test_register_fields_match_datasheet():
     assert R.GYRO_CONFIG.put(0, "FS_SEL", 3) == 0x18           # bits 4:3
     assert R.CONFIG.put(0, "DLPF_CFG", 6) == 0x06              # bits 2:0, not 4:3
@@ -360,6 +368,16 @@ def test_8khz_polls_often_enough_for_the_fifo(rig):
     rows, notes = read_for(src, clock, 1.0)
     assert notes == [] and len(rows) >= 7900
     np.testing.assert_array_equal(np.diff(index_of(rows)), 1)
+
+
+@pytest.mark.parametrize("funcs,rdwr", [(0x0EFF0009, True), (0x0EFF0008, False)])
+def test_auto_transfer_follows_adapter_functionality(rig, funcs, rdwr):
+    import smbus2.smbus2 as s2
+    clock, model, bus = rig(gyro_lsb=indexed_gyro(5000), bus_kwargs={"funcs": funcs})
+    src = open_src(clock)
+    rows, _ = read_for(src, clock, 0.2)
+    assert src.use_rdwr is rdwr and len(rows) > 150
+    assert (bus.requests.get(s2.I2C_RDWR, 0) > 0) is rdwr
 
 
 def test_read_waits_at_most_max_wait(rig):

@@ -46,7 +46,7 @@ __all__ = ["open_mpu6050", "MPU6050Source", "CHIPS", "sample_rate_settings", "au
 # MPU-9250: PS-MPU-9250A-01; MPU-9255 reads 0x73; ICM-20689: DS-000143 (WHO_AM_I 0x98).
 CHIPS = {
     0x68: ("MPU6050", 1024, 340.0, 36.53, True),
-    0x70: ("MPU6500", 512, 333.87, 21.0, True),
+    0x70: ("MPU6500 (also found on boards sold as MPU6050 or MPU9250)", 512, 333.87, 21.0, True),
     0x71: ("MPU9250", 512, 333.87, 21.0, True),
     0x73: ("MPU9255", 512, 333.87, 21.0, True),
     0x74: ("MPU6515", 512, 333.87, 21.0, True),
@@ -326,9 +326,14 @@ class MPU6050Source:
         if transfer == "rdwr":
             if not has_rdwr:
                 raise SettingsError("transfer='rdwr' needs a bus with i2c_rdwr (smbus2.SMBus)")
-            return True
-        funcs = getattr(self._bus, "funcs", 0)
-        return bool(has_rdwr and int(funcs) & I2C_FUNC_I2C)
+        else:
+            funcs = getattr(self._bus, "funcs", 0)
+            if not (has_rdwr and int(funcs) & I2C_FUNC_I2C):
+                return False
+        from smbus2 import i2c_msg  # the message type smbus2's i2c_rdwr expects
+
+        self._i2c_msg = i2c_msg
+        return True
 
     def _wait_for(self, reg, done, what, timeout_s):
         """Poll ``reg`` until ``done(value)``; DeviceError after ``timeout_s`` (every wait is bounded).
@@ -420,7 +425,8 @@ class MPU6050Source:
     def _make_header(self):
         bw = R.DLPF[self.dlpf_cfg][0]
         head = {
-            "sensor": "MPU6050" if self.chip_id == MPU6050_ID else self.chip_name,
+            "sensor": "MPU6050" if self.chip_id == MPU6050_ID else self.chip_name.split(" (")[0],
+            "chip_name": self.chip_name,
             "chip_id": f"0x{self.chip_id:02X}",
             "sample_rate_hz": f"{self.sample_rate_hz:.10g}",
             "gyro_unit": "lsb",
@@ -456,8 +462,7 @@ class MPU6050Source:
         the caller re-reads FIFO_COUNT first, since a failure part-way may have consumed FIFO bytes.
         """
         if self.use_rdwr:
-            from smbus2 import i2c_msg
-
+            i2c_msg = self._i2c_msg
             w = i2c_msg.write(self.address, [R.FIFO_R_W.address])
             r = i2c_msg.read(self.address, n_bytes)
             try:
