@@ -1,0 +1,305 @@
+"""Per-effect generators of the gyro simulator, one class per term of the effect table.
+
+Every generator is *streaming*: it is built once per axis and then asked for consecutive blocks
+of samples with :meth:`next(t_s, temp_c)`; it keeps the state it needs (filter memory, the last
+value of a random walk) between blocks, so the output does not depend on how the run is cut
+into blocks. Each generator draws from its own ``numpy.random.Generator`` and consumes it
+strictly sequentially, which is what makes a chunked run equal to a one-shot run bit for bit.
+
+All outputs are angular rate in deg/s (temperature in deg C); ``t_s`` is the sample time
+``n / f_s`` with ``n`` the absolute sample index, ``f_s`` the sample rate.
+
+Notation: ``f_s`` sample rate (Hz), ``w[n]`` independent standard normal draws, ``φ``
+an AR(1) coefficient. References: IEEE Std 952-1997 annex C (Allan variance of the gyro error
+terms), NIST SP 1065 (Riley 2008) section 5.2 (Allan variance), Kasdin 1995 (discrete
+simulation of coloured noise by filtered white noise).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Allan deviation of flicker (1/f) rate noise in its flat region, in units of B:
+#: σ(τ) = sqrt(2 ln 2 / π) · B ≈ 0.664 B (IEEE Std 952-1997, eq. C.16).
+FLICKER_ADEV_PER_B = math.sqrt(2.0 * math.log(2.0) / math.pi)
+
+
+def _lfilter_ar1(phi, gain, w, state):
+    """y[n] = φ y[n-1] + gain · w[n], starting from y[-1] = state; returns (y, last y)."""
+    from scipy.signal import lfilter
+
+    y, _ = lfilter([gain], [1.0, -phi], w, zi=[phi * state])
+    return y, (y[-1] if len(y) else state)
+
+
+class Constant:
+    """Constant bias: ω(t) = b (deg/s). Deterministic."""
+
+    def __init__(self, value_dps):
+        self.value_dps = float(value_dps)
+
+    def next(self, t_s, temp_c):
+        return np.full(len(t_s), self.value_dps)
+
+
+class WhiteNoise:
+    """Angle random walk: white rate noise with Allan deviation σ(τ) = N / sqrt(τ).
+
+    ω[n] = N · sqrt(f_s) · w[n], so the per-sample standard deviation is N·sqrt(f_s) and the
+    two-sided PSD is N² (deg/s)²/Hz (IEEE Std 952-1997 C.1; N in deg/s/sqrt(Hz) = deg/sqrt(s)).
+
+    With ``lag1`` (the ``colored_noise`` effect) the same white sequence is passed through a
+    first-order low pass, like the MPU6050's digital low-pass filter:
+
+    * ``preserve="arw"`` (default): e[n] = ρ e[n-1] + (1 - ρ) · N sqrt(f_s) w[n]. Unity gain at
+      DC, so N keeps its Allan meaning (σ(τ) → N/sqrt(τ) for τ much longer than the
+      correlation time 1/(f_s ln(1/ρ))) while the per-sample std drops to
+      N sqrt(f_s) sqrt((1 - ρ)/(1 + ρ)). This is what a real low-pass stage does.
+    * ``preserve="std"``: e[n] = ρ e[n-1] + sqrt(1 - ρ²) · N sqrt(f_s) w[n]. The per-sample
+      std stays N sqrt(f_s); the long-τ Allan level rises to N sqrt((1 + ρ)/(1 - ρ)).
+
+    In both, the lag-1 autocorrelation of the noise is ρ = ``lag1``; the process starts in its
+    stationary state.
+    """
+
+    def __init__(self, arw_dps_per_sqrt_hz, sample_rate_hz, rng, lag1=0.0, preserve="arw"):
+        self.sigma_dps = float(arw_dps_per_sqrt_hz) * math.sqrt(sample_rate_hz)
+        self.rng = rng
+        self.lag1 = float(lag1)
+        if preserve == "arw":
+            self.gain = 1.0 - self.lag1
+        else:
+            self.gain = math.sqrt(1.0 - self.lag1**2)
+        self.state = None
+
+    def next(self, t_s, temp_c):
+        n = len(t_s)
+        if self.lag1 == 0.0:
+            return self.sigma_dps * self.rng.standard_normal(n)
+        if self.state is None:
+            # stationary start: Var(e) = gain² σ² / (1 - ρ²)
+            self.state = self.gain * self.sigma_dps / math.sqrt(1.0 - self.lag1**2) * self.rng.standard_normal()
+        y, self.state = _lfilter_ar1(self.lag1, self.gain * self.sigma_dps, self.rng.standard_normal(n), self.state)
+        return y
+
+
+class GaussMarkov:
+    """First-order Gauss-Markov bias: stationary std σ, correlation time T.
+
+    Continuous: dx/dt = -x/T + sqrt(2σ²/T) η(t), autocovariance R(Δt) = σ² exp(-|Δt|/T).
+    Exact discretisation (the sampled process has the same R at the sample times):
+    x[n] = φ x[n-1] + σ sqrt(1 - φ²) w[n], φ = exp(-1 / (f_s T)); x[-1] ~ N(0, σ²) (stationary).
+    (Gelb, Applied Optimal Estimation, table 3.8-1; IEEE Std 952-1997 C.5.)
+    """
+
+    def __init__(self, sigma_dps, tau_s, sample_rate_hz, rng):
+        self.sigma_dps = float(sigma_dps)
+        self.phi = math.exp(-1.0 / (sample_rate_hz * float(tau_s)))
+        self.rng = rng
+        self.state = None
+
+    def next(self, t_s, temp_c):
+        if self.state is None:
+            self.state = self.sigma_dps * self.rng.standard_normal()
+        w = self.rng.standard_normal(len(t_s))
+        y, self.state = _lfilter_ar1(self.phi, self.sigma_dps * math.sqrt(1.0 - self.phi**2), w, self.state)
+        return y
+
+
+def flicker_bank(b_dps, sample_rate_hz, tau_min_s, tau_max_s, per_decade=3.0):
+    """Time constants and per-component std of the Gauss-Markov bank that makes 1/f noise.
+
+    A sum of independent Gauss-Markov processes with log-spaced correlation times
+    T_i = T_min r^i (ratio r = 10^(1/per_decade)) and equal variance q² has the one-sided PSD
+    S(f) = Σ 4 q² T_i / (1 + (2π f T_i)²) ≈ q² / (f ln r) for 1/(2π T_max) << f << 1/(2π T_min)
+    (the sum approximates ∫ dT/(T ln r)). Flicker rate noise S(f) = h₋₁ / f has the flat Allan
+    variance σ² = 2 ln 2 · h₋₁ (NIST SP 1065 table 5); the gyro convention σ = 0.664 B
+    (IEEE Std 952-1997 C.3: S(f) = B²/(π f) one-sided) gives h₋₁ = B²/π, so q² = B² ln r / π.
+
+    Returns (tau_s array, q_dps). The Allan floor is flat (within a few per cent) for
+    about 3 T_min < τ < T_max / 3.
+    """
+    ratio = 10.0 ** (1.0 / per_decade)
+    count = max(1, int(math.ceil(math.log(tau_max_s / tau_min_s) / math.log(ratio) - 1e-9)) + 1)
+    taus_s = tau_min_s * ratio ** np.arange(count)
+    q_dps = float(b_dps) * math.sqrt(math.log(ratio) / math.pi)
+    return taus_s, q_dps
+
+
+class BiasInstability:
+    """Bias instability: flicker (1/f) rate noise with the flat Allan floor σ = 0.664 B.
+
+    Built as a bank of independent Gauss-Markov processes (see :func:`flicker_bank`):
+    x[n] = Σ_i x_i[n], x_i[n] = φ_i x_i[n-1] + q sqrt(1 - φ_i²) w_i[n], φ_i = exp(-1/(f_s T_i)),
+    each started stationary. Memory is one number per component, so it streams.
+    Defaults: T_min = 1/f_s, T_max = the record length, 3 components per decade.
+    """
+
+    def __init__(self, b_dps, sample_rate_hz, rng, tau_min_s, tau_max_s, per_decade=3.0):
+        self.taus_s, self.q_dps = flicker_bank(b_dps, sample_rate_hz, tau_min_s, tau_max_s, per_decade)
+        self.phis = np.exp(-1.0 / (sample_rate_hz * self.taus_s))
+        self.gains = self.q_dps * np.sqrt(1.0 - self.phis**2)
+        self.rng = rng
+        self.state = None
+
+    def next(self, t_s, temp_c):
+        k = len(self.taus_s)
+        if self.state is None:
+            self.state = self.q_dps * self.rng.standard_normal(k)
+        w = self.rng.standard_normal((len(t_s), k))  # row-major: consumed in time order
+        out = np.zeros(len(t_s))
+        for i in range(k):
+            y, self.state[i] = _lfilter_ar1(self.phis[i], self.gains[i], w[:, i], self.state[i])
+            out += y
+        return out
+
+
+class RateRandomWalk:
+    """Rate random walk: the bias integrates white noise; Allan σ(τ) = K sqrt(τ / 3).
+
+    x[n] = x[n-1] + (K / sqrt(f_s)) w[n], x[-1] = 0, so Var(x(t)) = K² t and the Allan
+    deviation read at τ = 3 s equals K (IEEE Std 952-1997 C.4; K in deg/s/sqrt(s)).
+    """
+
+    def __init__(self, k_dps_per_sqrt_s, sample_rate_hz, rng):
+        self.step_dps = float(k_dps_per_sqrt_s) / math.sqrt(sample_rate_hz)
+        self.rng = rng
+        self.state = 0.0
+
+    def next(self, t_s, temp_c):
+        y = self.state + np.cumsum(self.step_dps * self.rng.standard_normal(len(t_s)))
+        if len(y):
+            self.state = y[-1]
+        return y
+
+
+class RateRamp:
+    """Rate ramp: x(t) = R t; Allan σ(τ) = R τ / sqrt(2) (IEEE Std 952-1997 C.6)."""
+
+    def __init__(self, r_dps_per_s):
+        self.r = float(r_dps_per_s)
+
+    def next(self, t_s, temp_c):
+        return self.r * t_s
+
+
+class Sinusoid:
+    """Periodic disturbance: x(t) = A sin(2π f t + φ) with A the peak amplitude."""
+
+    def __init__(self, amplitude_dps, frequency_hz, phase_rad=0.0):
+        self.a, self.f, self.phase = float(amplitude_dps), float(frequency_hz), float(phase_rad)
+
+    def next(self, t_s, temp_c):
+        return self.a * np.sin(2.0 * math.pi * self.f * t_s + self.phase)
+
+
+class TemperatureCoefficient:
+    """Bias proportional to temperature: x(t) = c (T(t) - T_ref).
+
+    T(t) is the true (noise-free) sensor temperature of the model's temperature profile; the
+    recorded ``temp`` column adds the profile's read noise and resolution. T_ref defaults to
+    the profile's temperature at t = 0, so ``bias_dps`` is the bias at the start temperature.
+    """
+
+    def __init__(self, coefficient_dps_per_c, reference_c):
+        self.c, self.ref = float(coefficient_dps_per_c), float(reference_c)
+
+    def next(self, t_s, temp_c):
+        return self.c * (temp_c - self.ref)
+
+
+class BiasStep:
+    """Sudden bias jump: x(t) = s for t >= t_step, else 0."""
+
+    def __init__(self, size_dps, time_s):
+        self.s, self.t0 = float(size_dps), float(time_s)
+
+    def next(self, t_s, temp_c):
+        return np.where(t_s >= self.t0, self.s, 0.0)
+
+
+class Warmup:
+    """Warm-up settling of the bias after power-on: x(t) = a exp(-t / τ) (a signed, at t = 0)."""
+
+    def __init__(self, amplitude_dps, tau_s):
+        self.a, self.tau = float(amplitude_dps), float(tau_s)
+
+    def next(self, t_s, temp_c):
+        return self.a * np.exp(-t_s / self.tau)
+
+
+class Outliers:
+    """Isolated gross errors (paper 001: single wild samples, e.g. -233 among 20-70 LSB).
+
+    Each sample independently carries a spike with probability p = ``rate``; a spike is
+    s · m · exp(σ_ln z) with s = ±1 equally likely, z ~ N(0, 1), so |spike| is log-normal with
+    median m = ``magnitude_dps`` (and log-spread σ_ln = ``spread_ln``, default 0.25). Expected
+    spike count p·N. Spikes are added after the noise and before saturation and quantization.
+    """
+
+    def __init__(self, rate, magnitude_dps, rng_where, rng_size, spread_ln=0.25):
+        self.p, self.m, self.spread = float(rate), float(magnitude_dps), float(spread_ln)
+        self.rng_where, self.rng_size = rng_where, rng_size
+
+    def next(self, t_s, temp_c):
+        out = np.zeros(len(t_s))
+        hit = np.flatnonzero(self.rng_where.random(len(t_s)) < self.p)
+        if hit.size:
+            draws = self.rng_size.standard_normal((hit.size, 2))
+            sign = np.where(draws[:, 0] < 0.0, -1.0, 1.0)
+            out[hit] = sign * self.m * np.exp(self.spread * draws[:, 1])
+        return out
+
+
+class TemperatureProfile:
+    """Sensor temperature (deg C): the true T(t) and the recorded column.
+
+    Exponential kind (default): T(t) = T_end + (T_start - T_end) exp(-t / τ) + A sin(2π t / P)
+    (self-heating after power-on towards T_end with time constant τ; an optional room cycle of
+    amplitude A and period P). Table kind: linear interpolation of given (t_s, temp_c) points,
+    held constant outside them. Recorded: T_rec = round((T + n_c w) / r) r with read noise
+    std n_c and resolution r (MPU6050: 1/340 deg C, datasheet register map 4.18).
+    """
+
+    def __init__(self, spec, rng):
+        self.spec = spec
+        self.rng = rng
+
+    def true_c(self, t_s):
+        s = self.spec
+        if "t_s" in s:
+            return np.interp(t_s, s["t_s"], s["temp_c"])
+        temp = s["end_c"] + (s["start_c"] - s["end_c"]) * np.exp(-t_s / s["tau_s"])
+        if s["cycle_amplitude_c"]:
+            temp = temp + s["cycle_amplitude_c"] * np.sin(2.0 * math.pi * t_s / s["cycle_period_s"])
+        return temp
+
+    def start_c(self):
+        return float(self.true_c(np.zeros(1))[0])
+
+    def recorded_c(self, true_c):
+        s = self.spec
+        rec = true_c + s["noise_c"] * self.rng.standard_normal(len(true_c)) if s["noise_c"] else true_c.copy()
+        if s["resolution_c"]:
+            rec = np.round(rec / s["resolution_c"]) * s["resolution_c"]
+        return rec
+
+
+def ar1_allan_variance(phi, variance, m):
+    """Exact overlapping Allan variance of a stationary discrete AR(1) series at cluster size m.
+
+    For autocovariance R(k) = v φ^|k| and cluster sums S of m samples:
+    Var(S) = v [m + 2 φ (m (1-φ) - (1-φ^m)) / (1-φ)²], Cov(S₁, S₂) = v φ (1-φ^m)² / (1-φ)²,
+    σ²(m) = (Var(S) - Cov(S₁, S₂)) / m² (NIST SP 1065 eq. 11 with ȳ = S/m).
+    Used by the tests as an oracle for the Gauss-Markov and flicker-bank terms.
+    """
+    m = np.asarray(m, dtype=float)
+    phi = float(phi)
+    if phi == 0.0:
+        return variance / m
+    one = 1.0 - phi
+    pm = phi**m
+    var_s = m + 2.0 * phi * (m * one - (1.0 - pm)) / one**2
+    cov = phi * (1.0 - pm) ** 2 / one**2
+    return variance * (var_s - cov) / m**2

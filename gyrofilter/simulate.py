@@ -1,0 +1,432 @@
+"""Gyro simulator: a noise model (JSON dict) in, a recording out.
+
+The model is the shared simulator schema (``shared/interfaces.md`` / the gap report's
+``extended_model``)::
+
+    {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0, "full_scale_dps": 250.0,
+     "temperature": {"start_c": 25.0, "end_c": 32.0, "tau_s": 600.0, "noise_c": 0.02,
+                     "resolution_c": 0.00294},
+     "axes": {"x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009,
+                    "effects": [{"effect": "sinusoid", "frequency_hz": 7.3, "amplitude_dps": 0.05}]},
+              "y": {...}, "z": {...}}}
+
+Per axis and sample n (t = n / f_s), in deg/s:
+
+    ω[n] = b + e[n] + Σ_effects x_k[n]                (b = ``bias_dps``; e = white noise, N sqrt(f_s) w[n],
+                                                       or its low-passed form with ``colored_noise``)
+    ω[n] ← ω[n] + spikes[n]                           (``outliers``)
+    ω[n] ← clip(ω[n], -FS, +FS)                       (``full_scale_dps``: saturation)
+    ω[n] ← round(ω[n] · lsb_per_dps) / lsb_per_dps    (quantization, when ``lsb_per_dps`` is given)
+
+then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb_per_dps)).
+Each effect term is documented, with its equation, in :mod:`gyrofilter.noise_terms`.
+
+Effects and their parameters (names exactly as in the effect table; extras optional):
+
+=================  =========================================  ======================================
+effect             required params                            optional params (default)
+=================  =========================================  ======================================
+bias_instability   b_dps >= 0                                 tau_min_s (1/f_s), tau_max_s (record
+                                                              length), per_decade (3)
+rate_random_walk   k_dps_per_sqrt_s >= 0
+rate_ramp          r_dps_per_s
+gauss_markov       sigma_dps >= 0, tau_s > 0
+sinusoid           frequency_hz >= 0, amplitude_dps >= 0      phase_rad (0)
+temperature        coefficient_dps_per_c                      reference_c (profile temperature at t=0)
+bias_step          time_s >= 0, size_dps
+warmup             amplitude_dps, tau_s > 0
+outliers           rate in [0, 1], magnitude_dps >= 0         spread_ln (0.25)
+colored_noise      lag1 in (-1, 1)                            preserve ("arw" | "std", default "arw")
+=================  =========================================  ======================================
+
+``colored_noise`` low-passes the white noise: with ``preserve="arw"`` (default)
+``arw_dps_per_sqrt_hz`` keeps its Allan meaning (the white level for τ well beyond the filter's
+correlation time, as with the MPU6050's DLPF) and the per-sample std becomes
+N sqrt(f_s) sqrt((1 - lag1)/(1 + lag1)); with ``preserve="std"`` the per-sample std stays
+N sqrt(f_s). See :class:`gyrofilter.noise_terms.WhiteNoise`.
+
+The ``temperature`` key (optional) designs the ``temp`` column and drives the ``temperature``
+effect. Exponential profile: ``start_c``, ``end_c`` (default start_c), ``tau_s`` (600),
+``cycle_amplitude_c`` (0), ``cycle_period_s`` (3600), ``noise_c`` (0), ``resolution_c`` (0 = none;
+MPU6050: 1/340). Or a table: ``t_s`` and ``temp_c`` lists (linear interpolation), plus
+``noise_c``/``resolution_c``.
+
+Randomness: only ``seed`` or ``rng``. Every random term draws from its own stream, derived
+from the root seed and a fixed key (axis, effect name, occurrence), so (1) a run cut into chunks
+equals the one-shot run bit for bit, and (2) adding an effect to a model leaves the other terms'
+random draws unchanged for the same seed (common random numbers: a baseline and its extension
+share their white noise).
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from . import noise_terms as nt
+from .errors import SettingsError
+from .recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, _format_number
+from .units import DEG_PER_RAD, GYRO_UNITS
+
+AXES = ("x", "y", "z")
+DEFAULT_CHUNK_SAMPLES = 65536
+
+# kinds of parameter checks: (test, what is expected)
+_KINDS = {
+    "any": (lambda v: True, "a finite number"),
+    "nonneg": (lambda v: v >= 0.0, "a number >= 0"),
+    "pos": (lambda v: v > 0.0, "a number > 0"),
+    "frac": (lambda v: 0.0 <= v <= 1.0, "a number in [0, 1]"),
+    "lag": (lambda v: -1.0 < v < 1.0, "a number in (-1, 1)"),
+}
+
+#: effect name -> (required {param: kind}, optional {param: (kind, default)}), in table order.
+EFFECTS = {
+    "bias_instability": ({"b_dps": "nonneg"}, {"tau_min_s": ("pos", None), "tau_max_s": ("pos", None), "per_decade": ("pos", 3.0)}),
+    "rate_random_walk": ({"k_dps_per_sqrt_s": "nonneg"}, {}),
+    "rate_ramp": ({"r_dps_per_s": "any"}, {}),
+    "gauss_markov": ({"sigma_dps": "nonneg", "tau_s": "pos"}, {}),
+    "sinusoid": ({"frequency_hz": "nonneg", "amplitude_dps": "nonneg"}, {"phase_rad": ("any", 0.0)}),
+    "temperature": ({"coefficient_dps_per_c": "any"}, {"reference_c": ("any", None)}),
+    "bias_step": ({"time_s": "nonneg", "size_dps": "any"}, {}),
+    "warmup": ({"amplitude_dps": "any", "tau_s": "pos"}, {}),
+    "outliers": ({"rate": "frac", "magnitude_dps": "nonneg"}, {"spread_ln": ("nonneg", 0.25)}),
+    "colored_noise": ({"lag1": "lag"}, {"preserve": ("choice:arw,std", "arw")}),
+}
+_EFFECT_ID = {name: i + 1 for i, name in enumerate(EFFECTS)}  # 0 = white noise; fixed stream keys
+
+_TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", "temperature", "axes"}
+_META_KEYS = {"description", "name", "comment", "notes", "source", "sensor"}
+_AXIS_KEYS = {"bias_dps", "arw_dps_per_sqrt_hz", "effects"}
+_TEMP_EXP = {"start_c": ("any", None), "end_c": ("any", None), "tau_s": ("pos", 600.0),
+             "cycle_amplitude_c": ("nonneg", 0.0), "cycle_period_s": ("pos", 3600.0),
+             "noise_c": ("nonneg", 0.0), "resolution_c": ("nonneg", 0.0)}
+
+
+def _err(where, text):
+    raise SettingsError(f"model: {where}: {text}")
+
+
+def _number(value, where, kind="any"):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        _err(where, f"expected {_KINDS[kind][1]}, got {json.dumps(value)}")
+    value = float(value)
+    if not math.isfinite(value) or not _KINDS[kind][0](value):
+        _err(where, f"expected {_KINDS[kind][1]}, got {value!r}")
+    return value
+
+
+def _is_ignored(key):
+    return isinstance(key, str) and key.startswith("_")
+
+
+def validate_model(model, *, sample_rate_hz=None):
+    """Check a model once and return ``(normalized, warnings)``.
+
+    ``normalized`` is a new dict with every default filled in (floats, all three axes, effect
+    parameters complete); ``warnings`` lists ignored unknown effect parameters. Anything else
+    wrong raises :class:`SettingsError` with one line naming the key path and what was expected,
+    e.g. ``model: axes.z.effects[0] (gauss_markov): missing parameter 'tau_s' (expected a number > 0)``.
+    Keys starting with ``_`` and top-level metadata (description, name, comment, notes, source,
+    sensor) are ignored.
+    """
+    warnings = []
+    if not isinstance(model, dict):
+        _err("top level", f"expected a JSON object, got {type(model).__name__}")
+    for key in model:
+        if key not in _TOP_KEYS and key not in _META_KEYS and not _is_ignored(key):
+            _err(key, f"unknown key (expected {', '.join(sorted(_TOP_KEYS))})")
+    out = {}
+    rate = model.get("sample_rate_hz") if sample_rate_hz is None else sample_rate_hz
+    if rate is None:
+        _err("sample_rate_hz", "missing (expected the sample rate in Hz, > 0; or give --rate)")
+    out["sample_rate_hz"] = _number(rate, "sample_rate_hz", "pos")
+    unit = model.get("gyro_unit", "dps")
+    if unit not in GYRO_UNITS:
+        _err("gyro_unit", f"expected one of {', '.join(GYRO_UNITS)}, got {json.dumps(unit)}")
+    out["gyro_unit"] = unit
+    lsb = model.get("lsb_per_dps")
+    if lsb is None and unit == "lsb":
+        _err("lsb_per_dps", "missing: gyro_unit 'lsb' needs lsb_per_dps (LSB per deg/s, > 0)")
+    out["lsb_per_dps"] = None if lsb is None else _number(lsb, "lsb_per_dps", "pos")
+    fs = model.get("full_scale_dps")
+    out["full_scale_dps"] = None if fs is None else _number(fs, "full_scale_dps", "pos")
+    out["temperature"] = None if model.get("temperature") is None else _validate_temperature(model["temperature"])
+
+    axes = model.get("axes", {})
+    if not isinstance(axes, dict):
+        _err("axes", f"expected an object with keys x, y, z, got {json.dumps(axes)}")
+    for name in axes:
+        if name not in AXES and not _is_ignored(name):
+            _err(f"axes.{name}", "unknown axis (expected x, y or z)")
+    out["axes"] = {}
+    for name in AXES:
+        out["axes"][name] = _validate_axis(axes.get(name, {}), f"axes.{name}", out, warnings)
+    return out, warnings
+
+
+def _validate_temperature(spec):
+    where = "temperature"
+    if not isinstance(spec, dict):
+        _err(where, f"expected an object, got {json.dumps(spec)}")
+    out = {}
+    if "t_s" in spec or "temp_c" in spec:
+        allowed = {"t_s", "temp_c", "noise_c", "resolution_c"}
+        for key in spec:
+            if key not in allowed and not _is_ignored(key):
+                _err(f"{where}.{key}", f"unknown key for a table profile (expected {', '.join(sorted(allowed))})")
+        for key in ("t_s", "temp_c"):
+            if not isinstance(spec.get(key), list) or not spec[key]:
+                _err(f"{where}.{key}", "expected a non-empty list of numbers (table profile needs t_s and temp_c)")
+        t = [_number(v, f"{where}.t_s[{i}]") for i, v in enumerate(spec["t_s"])]
+        temp = [_number(v, f"{where}.temp_c[{i}]") for i, v in enumerate(spec["temp_c"])]
+        if len(t) != len(temp):
+            _err(where, f"t_s has {len(t)} values but temp_c has {len(temp)}")
+        if any(b <= a for a, b in zip(t, t[1:])):
+            _err(f"{where}.t_s", "expected strictly increasing times")
+        out["t_s"], out["temp_c"] = np.array(t), np.array(temp)
+        out["noise_c"] = _number(spec.get("noise_c", 0.0), f"{where}.noise_c", "nonneg")
+        out["resolution_c"] = _number(spec.get("resolution_c", 0.0), f"{where}.resolution_c", "nonneg")
+        return out
+    for key in spec:
+        if key not in _TEMP_EXP and not _is_ignored(key):
+            _err(f"{where}.{key}", f"unknown key (expected {', '.join(_TEMP_EXP)}, or t_s and temp_c for a table)")
+    if "start_c" not in spec:
+        _err(f"{where}.start_c", "missing (expected the temperature at t = 0 in deg C)")
+    for key, (kind, default) in _TEMP_EXP.items():
+        value = spec.get(key, default)
+        out[key] = None if value is None else _number(value, f"{where}.{key}", kind)
+    if out["end_c"] is None:
+        out["end_c"] = out["start_c"]
+    return out
+
+
+def _validate_axis(spec, where, model, warnings):
+    if not isinstance(spec, dict):
+        _err(where, f"expected an object with bias_dps, arw_dps_per_sqrt_hz, effects; got {json.dumps(spec)}")
+    for key in spec:
+        if key not in _AXIS_KEYS and not _is_ignored(key):
+            _err(f"{where}.{key}", f"unknown key (expected {', '.join(sorted(_AXIS_KEYS))})")
+    out = {"bias_dps": _number(spec.get("bias_dps", 0.0), f"{where}.bias_dps"),
+           "arw_dps_per_sqrt_hz": _number(spec.get("arw_dps_per_sqrt_hz", 0.0), f"{where}.arw_dps_per_sqrt_hz", "nonneg"),
+           "effects": []}
+    effects = spec.get("effects", [])
+    if not isinstance(effects, list):
+        _err(f"{where}.effects", f"expected a list of effect objects, got {json.dumps(effects)}")
+    for i, eff in enumerate(effects):
+        out["effects"].append(_validate_effect(eff, f"{where}.effects[{i}]", model, warnings))
+    if sum(e["effect"] == "colored_noise" for e in out["effects"]) > 1:
+        _err(f"{where}.effects", "at most one colored_noise per axis")
+    return out
+
+
+def _validate_effect(eff, where, model, warnings):
+    if not isinstance(eff, dict) or "effect" not in eff:
+        _err(where, f"expected an object with an 'effect' name, got {json.dumps(eff)}")
+    name = eff["effect"]
+    if name not in EFFECTS:
+        _err(f"{where}.effect", f"unknown effect {json.dumps(name)} (expected one of {', '.join(EFFECTS)})")
+    required, optional = EFFECTS[name]
+    label = f"{where} ({name})"
+    out = {"effect": name}
+    for key, kind in required.items():
+        if key not in eff:
+            _err(label, f"missing parameter '{key}' (expected {_KINDS[kind][1]})")
+        out[key] = _number(eff[key], f"{label}.{key}", kind)
+    for key, (kind, default) in optional.items():
+        value = eff.get(key, default)
+        if kind.startswith("choice:"):
+            choices = kind.split(":", 1)[1].split(",")
+            if value not in choices:
+                _err(f"{label}.{key}", f"expected one of {', '.join(choices)}, got {json.dumps(value)}")
+            out[key] = value
+        else:
+            out[key] = None if value is None else _number(value, f"{label}.{key}", kind)
+    for key in eff:
+        if key != "effect" and key not in required and key not in optional and not _is_ignored(key):
+            warnings.append(f"model: {label}: unknown parameter '{key}' ignored")
+    if name == "temperature" and model["temperature"] is None:
+        _err(label, "needs the model's 'temperature' profile (the top-level 'temperature' key)")
+    if name == "sinusoid" and out["frequency_hz"] > model["sample_rate_hz"] / 2.0:
+        warnings.append(f"model: {label}: frequency_hz {out['frequency_hz']:g} is above the Nyquist frequency "
+                        f"{model['sample_rate_hz'] / 2.0:g} Hz and will alias")
+    if name == "bias_instability" and out["tau_min_s"] and out["tau_max_s"] and out["tau_max_s"] < out["tau_min_s"]:
+        _err(f"{label}.tau_max_s", "expected tau_max_s >= tau_min_s")
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# random streams
+
+
+def _root_seed(seed, rng):
+    if seed is not None and rng is not None:
+        raise SettingsError("simulate: give seed or rng, not both")
+    if rng is not None:
+        if not isinstance(rng, np.random.Generator):
+            raise SettingsError(f"simulate: rng must be a numpy.random.Generator, got {type(rng).__name__}")
+        return np.random.SeedSequence(rng.integers(0, 2**63, size=4))
+    if seed is not None:
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise SettingsError(f"simulate: seed must be an integer >= 0, got {seed!r}")
+        return np.random.SeedSequence(int(seed))
+    return np.random.SeedSequence()
+
+
+def _stream(root, *key):
+    """An independent generator for the fixed key (axis index, effect id, occurrence, part)."""
+    return np.random.default_rng(np.random.SeedSequence(root.entropy, spawn_key=tuple(root.spawn_key) + key))
+
+
+# ---------------------------------------------------------------------------------------------
+# simulation
+
+
+def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
+    """(additive terms, noise term, outlier terms) for one axis."""
+    terms = [nt.Constant(spec["bias_dps"])]
+    outliers = []
+    colored = next((e for e in spec["effects"] if e["effect"] == "colored_noise"), None)
+    noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], fs, _stream(root, ax_index, 0, 0, 0),
+                          lag1=colored["lag1"] if colored else 0.0,
+                          preserve=colored["preserve"] if colored else "arw")
+    seen = {}
+    for eff in spec["effects"]:
+        name = eff["effect"]
+        occ = seen[name] = seen.get(name, -1) + 1
+        key = (ax_index, _EFFECT_ID[name], occ)
+        if name == "bias_instability":
+            tau_min = eff["tau_min_s"] or 1.0 / fs
+            tau_max = eff["tau_max_s"] or max(duration_s, tau_min)
+            terms.append(nt.BiasInstability(eff["b_dps"], fs, _stream(root, *key, 0), tau_min, tau_max, eff["per_decade"]))
+        elif name == "rate_random_walk":
+            terms.append(nt.RateRandomWalk(eff["k_dps_per_sqrt_s"], fs, _stream(root, *key, 0)))
+        elif name == "rate_ramp":
+            terms.append(nt.RateRamp(eff["r_dps_per_s"]))
+        elif name == "gauss_markov":
+            terms.append(nt.GaussMarkov(eff["sigma_dps"], eff["tau_s"], fs, _stream(root, *key, 0)))
+        elif name == "sinusoid":
+            terms.append(nt.Sinusoid(eff["amplitude_dps"], eff["frequency_hz"], eff["phase_rad"]))
+        elif name == "temperature":
+            ref = temp_profile.start_c() if eff["reference_c"] is None else eff["reference_c"]
+            terms.append(nt.TemperatureCoefficient(eff["coefficient_dps_per_c"], ref))
+        elif name == "bias_step":
+            terms.append(nt.BiasStep(eff["size_dps"], eff["time_s"]))
+        elif name == "warmup":
+            terms.append(nt.Warmup(eff["amplitude_dps"], eff["tau_s"]))
+        elif name == "outliers":
+            outliers.append(nt.Outliers(eff["rate"], eff["magnitude_dps"], _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
+        # colored_noise is part of the noise term
+    return terms, noise, outliers
+
+
+def sample_count(duration_s, sample_rate_hz):
+    """Number of samples of a run: round(duration · f_s), at least 1."""
+    duration_s = float(duration_s)
+    if not math.isfinite(duration_s) or duration_s <= 0:
+        raise SettingsError(f"simulate: duration must be > 0 s, got {duration_s!r}")
+    return max(1, int(round(duration_s * sample_rate_hz)))
+
+
+def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEFAULT_CHUNK_SAMPLES, rng=None, seed=None,
+                    validated=None):
+    """Simulate in blocks of ``chunk_samples``: yields ``(t_s, gyro, temp_c)`` per block.
+
+    ``t_s`` (n,) seconds, ``gyro`` (n, 3) in the model's ``gyro_unit`` (integers as floats for
+    ``lsb``), ``temp_c`` (n,) or None without a temperature profile. Memory is bounded by the
+    block size (and the flicker bank's ~3 numbers per decade); the concatenated blocks equal
+    :func:`simulate`'s output for the same seed, whatever the block size.
+    """
+    spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
+    chunk_samples = int(chunk_samples)
+    if chunk_samples < 1:
+        raise SettingsError(f"simulate: chunk_samples must be >= 1, got {chunk_samples}")
+    fs = spec["sample_rate_hz"]
+    n_total = sample_count(duration_s, fs)
+    duration_s = n_total / fs
+    root = _root_seed(seed, rng)
+    temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
+    axes = [_axis_terms(i, spec["axes"][a], fs, duration_s, root, temp) for i, a in enumerate(AXES)]
+    full_scale = spec["full_scale_dps"]
+    lsb = spec["lsb_per_dps"]
+    unit = spec["gyro_unit"]
+    for start in range(0, n_total, chunk_samples):
+        n = min(chunk_samples, n_total - start)
+        t_s = np.arange(start, start + n) / fs
+        true_c = temp.true_c(t_s) if temp else None
+        gyro = np.empty((n, 3))
+        for i, (terms, noise, outliers) in enumerate(axes):
+            rate = noise.next(t_s, true_c)
+            for term in terms:
+                rate += term.next(t_s, true_c)
+            for term in outliers:
+                rate += term.next(t_s, true_c)
+            if full_scale is not None:
+                np.clip(rate, -full_scale, full_scale, out=rate)
+            if lsb is not None:
+                rate = np.round(rate * lsb)
+                if unit != "lsb":
+                    rate = rate / lsb
+            if unit == "rad/s":
+                rate = rate / DEG_PER_RAD
+            gyro[:, i] = rate
+        yield t_s, gyro, (temp.recorded_c(true_c) if temp else None)
+
+
+def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, validated=None):
+    """Header for a simulated recording: units, ``sensor: simulated`` and the model as compact JSON."""
+    spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
+    given = dict(model)
+    given["sample_rate_hz"] = spec["sample_rate_hz"]
+    header = {"gyrofilter-recording": FORMAT_VERSION, "sensor": "simulated",
+              "sample_rate_hz": _format_number(spec["sample_rate_hz"]), "gyro_unit": spec["gyro_unit"]}
+    if spec["gyro_unit"] == "lsb":
+        header["lsb_per_dps"] = _format_number(spec["lsb_per_dps"])
+    if spec["full_scale_dps"] is not None:
+        header["full_scale_dps"] = _format_number(spec["full_scale_dps"])
+    header["simulated_duration_s"] = _format_number(sample_count(duration_s, spec["sample_rate_hz"]) / spec["sample_rate_hz"])
+    header["simulated_seed"] = "none" if seed is None else str(int(seed))
+    header["simulated_model"] = json.dumps(given, separators=(",", ":"), sort_keys=False, default=_json_default)
+    return header
+
+
+def _json_default(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def recording_columns(model_or_spec):
+    """Column names of a simulated recording: t, gx, gy, gz (+ temp with a temperature profile)."""
+    has_temp = model_or_spec.get("temperature") is not None
+    return ["t", *GYRO_COLUMNS] + (["temp"] if has_temp else [])
+
+
+def simulate(model: dict, duration_s: float, *, sample_rate_hz=None, rng=None, seed=None,
+             chunk_samples=DEFAULT_CHUNK_SAMPLES) -> Recording:
+    """Simulate ``duration_s`` seconds of ``model`` in memory and return a :class:`Recording`.
+
+    Columns t, gx, gy, gz (model's ``gyro_unit``) and temp (with a temperature profile); the
+    header carries ``sensor: simulated``, ``simulated_model`` (compact JSON) and the seed.
+    ``sample_rate_hz`` overrides the model's rate. Same seed, same numbers.
+    """
+    spec, _ = validate_model(model, sample_rate_hz=sample_rate_hz)
+    parts = list(simulate_chunks(model, duration_s, chunk_samples=chunk_samples, rng=rng, seed=seed, validated=spec))
+    t_s = np.concatenate([p[0] for p in parts])
+    gyro = np.concatenate([p[1] for p in parts])
+    columns = {"t": t_s}
+    for i, name in enumerate(GYRO_COLUMNS):
+        columns[name] = gyro[:, i]
+    if spec["temperature"] is not None:
+        columns["temp"] = np.concatenate([p[2] for p in parts])
+    header = recording_header(model, duration_s, seed=seed, validated=spec)
+    return Recording(columns=columns, header=header)
+
+
+def simulate_dps(model, duration_s, *, sample_rate_hz=None, rng=None, seed=None):
+    """Convenience for analyses: ``(gyro_dps (N, 3), temp_c or None)`` of a run."""
+    rec = simulate(model, duration_s, sample_rate_hz=sample_rate_hz, rng=rng, seed=seed)
+    return rec.gyro_dps, rec.temp_c
