@@ -23,6 +23,8 @@ The model (InvenSense RM-MPU-6000A-00 rev 4.2):
   alignment is lost) and INT_STATUS.FIFO_OFLOW_INT (bit 4) is set if INT_ENABLE.FIFO_OFLOW_EN is set
   (the model is strict: no enable, no status bit); INT_STATUS clears when read; USER_CTRL.FIFO_RESET
   empties the FIFO and clears itself;
+* ``rate_error``: the sample clock runs fast (> 0) or slow by this fraction (the real part is
+  within about +-1 %);
 * ``reset_nack``: the chip NACKs every transfer (errno 121) while DEVICE_RESET runs;
 * injected errors: ``fail(errno, times)`` makes the next transactions raise ``OSError(errno)``
   before they touch anything; ``fail_fifo_read(errno, consume_bytes)`` makes the next FIFO_R_W read
@@ -72,7 +74,7 @@ class MPU6050Model:
     """Register-level MPU-6050 (see module docstring)."""
 
     def __init__(self, clock, *, chip_id=0x68, gyro_lsb=None, gyro_dps=None, temp_c=25.0,
-                 fifo_size=1024, reset_duration_s=0.002, reset_stuck=False, reset_nack=False, stuck=None,
+                 fifo_size=1024, reset_duration_s=0.002, reset_stuck=False, reset_nack=False, stuck=None, rate_error=0.0,
                  error_rate=0.0, error_errno=_errno.EREMOTEIO, rng=None):
         self.clock = clock
         self.chip_id = chip_id
@@ -85,6 +87,7 @@ class MPU6050Model:
         self.reset_duration_s = reset_duration_s
         self.reset_stuck = reset_stuck
         self.reset_nack = reset_nack
+        self.rate_error = rate_error
         self.stuck = dict(stuck or {})
         self.error_rate = error_rate
         self.error_errno = error_errno
@@ -116,7 +119,7 @@ class MPU6050Model:
     def sample_rate_hz(self):
         dlpf = self.regs[CONFIG] & 0x07
         base = 8000.0 if dlpf in (0, 7) else 1000.0
-        return base / (1 + self.regs[SMPLRT_DIV])
+        return base / (1 + self.regs[SMPLRT_DIV]) * (1.0 + self.rate_error)
 
     def _restart_sample_clock(self):
         self._origin = self.clock.now()

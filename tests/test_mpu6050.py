@@ -323,6 +323,18 @@ def test_overflow_reported_with_count_and_jump_in_t(rig, extra_s, exact):
     assert src.stats["overflows"] == 1
 
 
+def test_gap_estimate_does_not_accumulate_clock_drift(rig):
+    """Sensor clock 1 % fast: after 60 s the lost count is still right to +-1 % of the stall."""
+    clock, model, bus = rig(gyro_lsb=indexed_gyro(80_000), rate_error=0.01)
+    src = open_src(clock, rate_hz=1000, temperature=False)
+    before, _ = read_for(src, clock, 60.0)
+    clock.advance(0.5)
+    after, notes = read_for(src, clock, 0.2)
+    true_lost = index_of(after)[0] - index_of(before)[-1] - 1
+    assert len(notes) == 1 and true_lost > 400
+    assert abs(src.stats["lost_samples"] - true_lost) <= 1 + 0.01 * 500   # not 1 % of 60 s = 600
+
+
 def test_overflow_seen_through_count_when_status_was_missed(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
     src = open_src(clock, rate_hz=1000, temperature=False)

@@ -485,8 +485,10 @@ class MPU6050Source:
         """Reset the FIFO after an overflow or lost alignment and record the gap.
 
         Samples lost = round((now - anchor) * rate) - (samples delivered since the anchor), where the
-        anchor is the last FIFO (re)start: an estimate from the host clock at the configured rate
-        (the sensor's own clock is within about +-1 % of nominal, product spec table 6.1).
+        anchor is the last moment the FIFO was known to be drained (the FIFO_COUNT read of the last
+        complete poll, or the last FIFO restart): an estimate from the host clock at the configured
+        rate, uncertain by +-1 sample plus the sensor clock's tolerance (about +-1 % of nominal,
+        product spec table 6.1) over the stall only, since the anchor is at most one poll old.
         """
         now = self._clock()
         produced = int(round((now - self._anchor_time) * self.sample_rate_hz))
@@ -517,6 +519,7 @@ class MPU6050Source:
                 self._gap("FIFO overflow")
                 return empty
             count = self._fifo_count()
+            t_count = self._clock()
             if count > self.fifo_size_bytes - self.frame_bytes * self._margin_frames:
                 # (nearly) full: samples arriving while we read would overwrite the oldest bytes
                 # before we get them, and frame alignment would be lost
@@ -533,6 +536,8 @@ class MPU6050Source:
             buf, exc = self._read_fifo(count)
             rows = self._rows(buf) if buf else empty
             if exc is None:
+                # every sample produced up to the FIFO_COUNT read is now delivered: re-anchor
+                self._anchor_time, self._anchor_index = t_count, self._next_index
                 return rows
             code = exc.errno
             if code in TRANSIENT_ERRNOS and attempt < self.max_retries:
