@@ -1,0 +1,238 @@
+"""gyrofilter record: log a live source to a recording file (format v1) that survives interruptions.
+
+The file gets the source's header (sensor, chip id, full scale, LSB per deg/s, DLPF, sample
+rate, start time, ...), then the samples; gaps and other events of the source become annotation
+lines (``# gap: 37 samples lost before t=12.34 s ...``). Data are flushed (and fsync'ed) at
+least every ``FLUSH_INTERVAL_S``: after a crash or a pulled plug at most that much is lost and
+the file still reads. Ctrl-C (SIGINT) and SIGTERM stop the recording cleanly (exit 0); a second
+signal aborts at once (the file is still readable up to the last flush).
+"""
+import os
+import signal
+import sys
+import time
+
+from ..errors import SourceEnded
+from ..sources import SOURCE_HELP, open_source
+from ..units import GYRO_UNITS
+
+FLUSH_INTERVAL_S = 0.5
+STATUS_INTERVAL_S = 1.0
+EXIT_DISCONNECTED = 1
+# header keys first in this order, the rest as the source gives them
+_HEADER_ORDER = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "sensor", "chip_id", "full_scale_dps",
+                 "dlpf_cfg", "start_time_utc")
+
+
+def add_source_arguments(parser):
+    """--source and the unit options for devices that send no header (shared with ``run``)."""
+    parser.add_argument("--source", required=True, metavar="SOURCE", help=SOURCE_HELP)
+    parser.add_argument("--duration", type=float, metavar="S",
+                        help="stop after S seconds of samples (default: until Ctrl-C, SIGTERM or the end of the source)")
+    parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
+                        help="gyro unit of a serial device that sends no header line")
+    parser.add_argument("--lsb-per-dps", type=float, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
+    parser.add_argument("--sample-rate", type=float, metavar="HZ", dest="sample_rate_hz",
+                        help="sample rate of such a device")
+
+
+def add_arguments(parser):
+    parser.description = (
+        "Record a live source to a recording file (format v1, .csv or .csv.gz). Data are flushed "
+        "at least twice a second; Ctrl-C or SIGTERM ends the file cleanly (exit 0)."
+    )
+    add_source_arguments(parser)
+    parser.add_argument("--out", required=True, metavar="FILE", help="recording to write (.csv, or .csv.gz for gzip)")
+    parser.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
+    parser.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")
+
+
+def open_from_args(args):
+    """Open ``args.source`` with the unit options as defaults."""
+    return open_source(args.source, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
+                       sample_rate_hz=args.sample_rate_hz)
+
+
+class StopSignals:
+    """SIGINT/SIGTERM set a flag that the loop checks (within ~0.1 s, a source's longest wait).
+
+    Stopping between reads, never inside a write, keeps the file consistent (a KeyboardInterrupt
+    raised inside gzip's write could leave a stream whose checksum does not match). A second
+    signal raises KeyboardInterrupt for an immediate exit.
+    """
+
+    NAMES = {signal.SIGINT: "SIGINT (Ctrl-C)", signal.SIGTERM: "SIGTERM"}
+
+    def __init__(self):
+        self.received = None
+        self._old = {}
+
+    def _handler(self, signum, frame):
+        if self.received is not None:
+            raise KeyboardInterrupt
+        self.received = self.NAMES.get(signum, str(signum))
+
+    def __enter__(self):
+        for sig in self.NAMES:
+            self._old[sig] = signal.signal(sig, self._handler)
+        return self
+
+    def __exit__(self, *exc):
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+        return False
+
+
+class Status:
+    """A status line on stderr at most once per ``STATUS_INTERVAL_S``: rate, losses, CPU use."""
+
+    def __init__(self, enabled, nominal_rate_hz, stream=None):
+        self.enabled = enabled
+        self.nominal_rate_hz = nominal_rate_hz
+        self.stream = stream or sys.stderr
+        self.tty = self.stream.isatty()
+        self._wall = time.monotonic()
+        self._cpu = time.process_time()
+        self._samples = 0
+        self._shown = False
+
+    def due(self):
+        return self.enabled and time.monotonic() - self._wall >= STATUS_INTERVAL_S
+
+    def show(self, samples, text):
+        """``samples`` = total so far; ``text`` = the rest of the line."""
+        wall, cpu = time.monotonic(), time.process_time()
+        dt = max(wall - self._wall, 1e-9)
+        rate = (samples - self._samples) / dt
+        cpu_pct = 100.0 * (cpu - self._cpu) / dt
+        self._wall, self._cpu, self._samples = wall, cpu, samples
+        line = f"{rate:7.1f} samples/s (nominal {self.nominal_rate_hz:g}), {text}, CPU {cpu_pct:4.1f}%"
+        if self.tty:
+            self.stream.write("\r" + line + "\x1b[K")
+        else:
+            self.stream.write(line + "\n")
+        self.stream.flush()
+        self._shown = True
+
+    def end(self):
+        if self._shown and self.tty:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def source_summary(stats):
+    """The source's non-zero counters as 'name N' words (samples first)."""
+    return ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in stats.items() if v and k != "samples")
+
+
+def recording_header(source, spec):
+    from .. import __version__
+
+    head = dict(source.header)
+    head.setdefault("start_time_utc", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+    head["live_source"] = spec
+    head["recorded_by"] = f"gyrofilter {__version__} record"
+    ordered = {k: head.pop(k) for k in _HEADER_ORDER if k in head}
+    ordered.update(head)
+    return ordered
+
+
+def _formats(columns, gyro_unit):
+    out = []
+    for c in columns:
+        if c == "t":
+            out.append("%.10g")
+        elif c == "temp":
+            out.append("%.4f")
+        else:
+            out.append("%.9g")
+    return out
+
+
+def run(args):
+    from ..recording import RecordingWriter
+
+    out = args.out
+    if os.path.exists(out) and not args.force:
+        raise FileExistsError(17, "exists (use --force to overwrite)", out)
+    source = open_from_args(args)
+    try:
+        return _record(args, source, RecordingWriter)
+    finally:
+        source.close()
+
+
+def _record(args, source, RecordingWriter):
+    header = recording_header(source, args.source)
+    rate_hz = float(header["sample_rate_hz"])
+    columns = list(source.columns)
+    t_col = columns.index("t") if "t" in columns else None
+    status = Status(args.progress or sys.stderr.isatty(), rate_hz)
+    samples = 0
+    first_t = None
+    last_t = None
+    ended = None
+    wall0 = time.monotonic()
+    with StopSignals() as stop, RecordingWriter(args.out, header, columns, formats=_formats(columns, header["gyro_unit"]),
+                                                flush_interval_s=None) as writer:
+        last_flush = time.monotonic()
+        dirty = False
+        while stop.received is None:
+            try:
+                rows = source.read()
+            except SourceEnded as exc:
+                ended = exc
+                break
+            for text in source.pop_notes():
+                writer.note(text)
+                dirty = True
+            if len(rows) and t_col is not None:
+                if first_t is None:
+                    first_t = float(rows[0, t_col])
+                if args.duration is not None:
+                    keep = rows[:, t_col] - first_t < args.duration - 0.5 / rate_hz
+                    if not keep.all():
+                        rows = rows[keep]
+                        ended = "duration reached"
+                if len(rows):
+                    last_t = float(rows[-1, t_col])
+            elif args.duration is not None and samples + len(rows) >= args.duration * rate_hz:
+                rows = rows[: max(0, int(round(args.duration * rate_hz)) - samples)]
+                ended = "duration reached"
+            if len(rows):
+                writer.write(rows)
+                samples += len(rows)
+                dirty = True
+            now = time.monotonic()
+            if dirty and now - last_flush >= FLUSH_INTERVAL_S:
+                writer.flush()
+                last_flush, dirty = now, False
+            if status.due():
+                lost = source.stats.get("lost_samples", 0)
+                status.show(samples, f"{samples} recorded, {lost} lost")
+            if ended is not None:
+                break
+        status.end()
+        for text in source.pop_notes():
+            writer.note(text)
+        if stop.received is not None:
+            reason = f"stopped by {stop.received}"
+        elif isinstance(ended, SourceEnded):
+            reason = f"source ended: {ended}"
+        else:
+            reason = ended or "stopped"
+        writer.note(f"end: {reason}; {samples} samples; " + (source_summary(source.stats) or "no losses"))
+    duration_s = 0.0 if last_t is None else last_t - first_t + 1.0 / rate_hz
+    if t_col is None:
+        duration_s = samples / rate_hz
+    stats = source.stats
+    print(
+        f"gyrofilter record: {reason}\n"
+        f"  wrote {samples} samples ({duration_s:.2f} s at {rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
+        f"  lost {stats.get('lost_samples', 0)} samples"
+        + (f"; {source_summary(stats)}" if source_summary(stats) else ""),
+        file=sys.stderr,
+    )
+    if isinstance(ended, SourceEnded) and stats.get("disconnects"):
+        return EXIT_DISCONNECTED
+    return 0

@@ -1,0 +1,165 @@
+"""gyrofilter run: filter a live source in real time.
+
+The filtered rates (deg/s, one row per block of the pipeline, ``t`` = time of the block's last
+sample on the sensor's clock) go to stdout, or to ``--out FILE``, as a format-v1 recording
+(so ``gyrofilter run ... > out.csv`` is a readable recording too). A status line on stderr, at
+most once per second, shows the sample rate achieved, lost samples, rejected outliers and the
+CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0).
+"""
+import os
+import sys
+import time
+
+import numpy as np
+
+from ..errors import SourceEnded
+from ..units import to_dps
+from . import common
+from .record import StopSignals, Status, add_source_arguments, open_from_args, source_summary
+
+FLUSH_INTERVAL_S = 0.5
+
+
+def add_arguments(parser):
+    parser.description = (
+        "Filter a live source in real time: filtered rates (deg/s) as CSV (recording format v1) on "
+        "stdout or to --out, a status line on stderr once per second."
+    )
+    add_source_arguments(parser)
+    parser.add_argument("--out", metavar="FILE", help="write the filtered rates to this recording (.csv or .csv.gz) instead of stdout")
+    parser.add_argument("--force", action="store_true", help="overwrite --out FILE if it exists")
+    parser.add_argument("--quiet", action="store_true", help="no status line")
+    common.add_filter_arguments(parser)
+
+
+class _TextOut:
+    """Recording format v1 as text on a stream (stdout), flushed by the caller."""
+
+    def __init__(self, stream, header, columns):
+        self.stream = stream
+        lines = ["# gyrofilter-recording: 1"] + [f"# {k}: {v}" for k, v in header.items()] + [",".join(columns)]
+        self.stream.write("\n".join(lines) + "\n")
+        self.stream.flush()
+
+    def write(self, rows):
+        self.stream.write("".join("%.10g,%.9g,%.9g,%.9g\n" % tuple(r) for r in rows.tolist()))
+
+    def note(self, text):
+        self.stream.write(f"# {text}\n")
+
+    def flush(self):
+        self.stream.flush()
+
+    def close(self):
+        self.flush()
+
+
+def run(args):
+    if args.out and os.path.exists(args.out) and not args.force:
+        raise FileExistsError(17, "exists (use --force to overwrite)", args.out)
+    source = open_from_args(args)
+    try:
+        return _run(args, source)
+    finally:
+        source.close()
+
+
+def _run(args, source):
+    from .. import __version__
+    from ..recording import RecordingWriter
+
+    head = source.header
+    rate_hz = float(head["sample_rate_hz"])
+    unit = head["gyro_unit"]
+    lsb = float(head["lsb_per_dps"]) if unit == "lsb" else None
+    cols = source.columns
+    gyro_idx = [cols.index(c) for c in ("gx", "gy", "gz")]
+    t_idx = cols.index("t")
+    filt = common.make_filter(args, rate_hz)
+    block = filt.settings.block_len
+    out_header = {
+        "sample_rate_hz": f"{filt.output_rate_hz:g}",
+        "gyro_unit": "dps",
+        "description": f"gyrofilter {__version__} run: filtered rates, preset {filt.preset}, block of {block} samples; t = time of the block's last sample",
+        "live_source": args.source,
+    }
+    for key in ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc"):
+        if key in head:
+            out_header[key] = head[key]
+    out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
+    columns = ["t", "gx", "gy", "gz"]
+    if args.out:
+        writer = RecordingWriter(args.out, out_header, columns, formats=["%.10g", "%.9g", "%.9g", "%.9g"], flush_interval_s=None)
+    else:
+        writer = _TextOut(sys.stdout, out_header, columns)
+    status = Status(not args.quiet, rate_hz)
+    t_pending = np.empty(0)  # t of samples fed to the filter but not yet in an output block
+    samples = blocks = 0
+    first_t = None
+    ended = None
+    last_flush = time.monotonic()
+    try:
+        with StopSignals() as stop:
+            while stop.received is None:
+                try:
+                    rows = source.read()
+                except SourceEnded as exc:
+                    ended = exc
+                    break
+                for text in source.pop_notes():
+                    writer.note(text)
+                if len(rows):
+                    if first_t is None:
+                        first_t = float(rows[0, t_idx])
+                    if args.duration is not None:
+                        keep = rows[:, t_idx] - first_t < args.duration - 0.5 / rate_hz
+                        if not keep.all():
+                            rows, ended = rows[keep], "duration reached"
+                    samples += len(rows)
+                    was_calibrating = filt.calibrating
+                    out = filt.filter(to_dps(rows[:, gyro_idx], unit, lsb))
+                    if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
+                        writer.note("calibrated: bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s")
+                    # the M blocks just completed end right before the samples still pending
+                    t_all = np.concatenate([t_pending, rows[:, t_idx]])
+                    pending = 0 if filt.calibrating else filt.pending_samples
+                    if len(out):
+                        start = len(t_all) - pending - len(out) * block
+                        ends = start + block * np.arange(1, len(out) + 1) - 1
+                        writer.write(np.column_stack([t_all[ends], out]))
+                        blocks += len(out)
+                    t_pending = t_all[len(t_all) - pending:] if pending else np.empty(0)
+                now = time.monotonic()
+                if now - last_flush >= FLUSH_INTERVAL_S or not args.out:
+                    writer.flush()
+                    last_flush = now
+                if status.due():
+                    state = "calibrating" if filt.calibrating else f"{blocks} filtered rows"
+                    status.show(samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
+                                         f"rejected outliers {int(filt.rejected.sum())}")
+                if ended is not None:
+                    break
+            status.end()
+            for text in source.pop_notes():
+                writer.note(text)
+    finally:
+        writer.close()
+    if stop.received is not None:
+        reason = f"stopped by {stop.received}"
+    elif isinstance(ended, SourceEnded):
+        reason = f"source ended: {ended}"
+    else:
+        reason = ended or "stopped"
+    common.save_calibration(args, filt)
+    bias = "" if filt.bias_dps is None else " bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s;"
+    print(
+        f"gyrofilter run: {reason}\n"
+        f"  {samples} samples in, {blocks} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
+        f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
+        f"  lost {source.stats.get('lost_samples', 0)} samples"
+        + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else ""),
+        file=sys.stderr,
+    )
+    if isinstance(ended, SourceEnded) and source.stats.get("disconnects"):
+        return 1
+    return 0
