@@ -444,3 +444,56 @@ def test_real_recording_round_trips_through_fifo_and_smbus2(rig):
     lead = 2000 - k0
     np.testing.assert_array_equal(rows[lead:lead + n, 1:4], raw)
     assert notes == [] and np.allclose(np.diff(rows[:, 0]), 0.01)
+
+
+def test_opened_through_the_source_syntax_on_the_real_clock(monkeypatch):
+    """The SOURCE text of record/run reaches open_mpu6050; the model follows the host's clock."""
+    import time
+
+    from gyrofilter.sources import open_source
+
+    class HostClock:
+        now = staticmethod(time.monotonic)
+
+    model = MPU6050Model(HostClock(), gyro_lsb=indexed_gyro(200_000))
+    FakeI2CBus({0x69: model}).install(monkeypatch)
+    src = open_source("mpu6050:bus=1,addr=0x69,rate=200,range=500,dlpf=2,temp=0")
+    try:
+        h = src.header
+        assert (h["i2c_address"], h["sample_rate_hz"], h["lsb_per_dps"], h["dlpf_cfg"]) == \
+            ("0x69", "200", "65.5", "2")
+        assert src.columns == ["t", "gx", "gy", "gz"] and model.regs[0x19] == 4   # 1 kHz / (1 + 4)
+        rows = np.concatenate([src.read() for _ in range(4)])
+        assert len(rows) > 0
+        if not src.pop_notes():              # (a host stall of > 0.85 s would overflow the FIFO)
+            np.testing.assert_array_equal(np.diff(index_of(rows)), 1)
+    finally:
+        src.close()
+
+
+def test_record_command_writes_the_mpu6050_header(monkeypatch, tmp_path):
+    """`gyrofilter record --source mpu6050:...` end to end, the model standing in for the chip."""
+    import time
+
+    from gyrofilter.cli import main
+    from gyrofilter.recording import read_recording
+
+    class HostClock:
+        now = staticmethod(time.monotonic)
+
+    model = MPU6050Model(HostClock(), gyro_lsb=indexed_gyro(200_000), temp_c=28.0)
+    FakeI2CBus({0x68: model}).install(monkeypatch)
+    out = tmp_path / "rec.csv"
+    assert main(["record", "--source", "mpu6050:rate=200,range=1000", "--out", str(out),
+                 "--duration", "0.5"]) == 0
+    rec = read_recording(str(out))
+    for key, value in {"sensor": "MPU6050", "chip_id": "0x68", "gyro_unit": "lsb", "lsb_per_dps": "32.8",
+                       "full_scale_dps": "1000", "sample_rate_hz": "200", "i2c_bus": "/dev/i2c-1",
+                       "i2c_address": "0x68"}.items():
+        assert rec.header[key] == value, key
+    assert "start_time_utc" in rec.header and "dlpf_cfg" in rec.header
+    assert len(rec) > 0 and np.all(np.abs(rec.temp_c - 28.0) <= 0.5 / 340 + 1e-6)
+    rows = np.column_stack([rec.t_s, rec.gyro])
+    if not rec.notes:
+        np.testing.assert_array_equal(np.diff(index_of(rows)), 1)
+        np.testing.assert_allclose(np.diff(rec.t_s), 1 / 200, atol=1e-9)
