@@ -7,7 +7,7 @@ One syntax names every source (``--source SOURCE`` of ``gyrofilter record`` and 
     mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,allow_chip=0x70]
     serial:/dev/ttyUSB0[,baud=115200,unit=lsb,lsb_per_dps=131,rate=100,header_timeout=5]
     replay:FILE[,realtime][,speed=2]          (or just FILE, a .csv/.csv.gz recording)
-    sim[:MODEL.json][,seed=1][,realtime=0][,duration=60]
+    sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]
 
 A bare ``/dev/tty...`` is a serial port and a bare existing file or ``*.csv``/``*.csv.gz`` name
 is a replay. Numbers may be decimal or ``0x`` hex; flags are ``1/0``, ``yes/no``, ``true/false``
@@ -43,7 +43,7 @@ SOURCE_HELP = (
     "mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,allow_chip=0x70] | "
     "serial:/dev/ttyUSB0[,baud=115200,unit=lsb,lsb_per_dps=131,rate=100,header_timeout=5] | "
     "replay:FILE[,realtime][,speed=1] (or just FILE) | "
-    "sim[:MODEL.json][,seed=1,realtime=1,duration=S] (default: an MPU6050-like model)"
+    "sim[:MODEL.json][,seed=1,realtime=1,duration=S,rate=HZ] (default: an MPU6050-like model)"
 )
 
 
@@ -102,6 +102,7 @@ KINDS = {
         "seed": (_int, "seed", "random seed"),
         "realtime": (_bool, "realtime", "deliver samples at the model's pace (default 1)"),
         "duration": (_float, "duration_s", "end after this many seconds of samples"),
+        "rate": (_float, "sample_rate_hz", "sample rate in Hz (overrides the model's)"),
     }),
 }
 _ALIASES = {"mpu": "mpu6050", "simulate": "sim", "simulation": "sim", "file": "replay"}

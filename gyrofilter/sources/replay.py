@@ -19,6 +19,7 @@ from ..recording import read_recording
 
 CHUNK_SAMPLES = 1000  # rows per read() when not paced
 MAX_WAIT_S = 0.1
+POLL_S = 0.02  # paced reads return at most this often (batches, like a device's FIFO poll)
 
 
 class ReplaySource:
@@ -61,6 +62,7 @@ class ReplaySource:
         self._notes = []
         self._t0 = t[0] if n else 0.0
         self._start = None
+        self._last = -math.inf
         self._closed = False
 
     def read(self):
@@ -77,13 +79,14 @@ class ReplaySource:
                 self._start = now
             # rows with (t - t0) / speed <= elapsed are due; wait for the next one at most MAX_WAIT_S
             t_next = (self._data[self._next, 0] - self._t0) / self.speed
-            wait = t_next - (now - self._start)
+            wait = max(t_next - (now - self._start), POLL_S - (now - self._last))
             if wait > 0:
                 self._sleep(min(wait, MAX_WAIT_S))
                 now = self._clock()
             elapsed_t = (now - self._start) * self.speed + self._t0
             stop = int(np.searchsorted(self._data[:, 0], elapsed_t, side="right"))
             stop = max(stop, self._next)
+            self._last = now
         rows = self._data[self._next : stop]
         while self._due and (self._due[0][0] < stop or stop >= n):
             _, lost, text = self._due.pop(0)

@@ -1,0 +1,154 @@
+"""A simulation as a live source (``sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]``).
+
+Samples come from :func:`gyrofilter.simulate.simulate_chunks` (the shared simulator model
+schema; without a model, :data:`DEFAULT_MODEL`, an MPU6050 at rest). By default they are paced
+in real time, so ``record`` and ``run`` behave as with a device; ``realtime=0`` hands them out as
+fast as they are read. The simulator's output does not depend on how it is chunked, so the
+samples equal ``gyrofilter simulate --model MODEL --duration D --seed S`` for the same model,
+seed and duration, whatever the pacing. Without ``seed`` a random one is drawn and written in
+the header (``simulated_seed``), so every run can be repeated. Without ``duration`` the source
+runs for :data:`UNLIMITED_S` (a week).
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+
+from ..errors import SettingsError, SourceEnded
+
+MAX_WAIT_S = 0.1
+POLL_S = 0.02  # paced reads return at most this often (batches, like a device's FIFO poll)
+CHUNK_S = 0.1  # seconds of samples per simulator block
+FAST_CHUNK_SAMPLES = 1000  # rows per read() when not paced
+UNLIMITED_S = 7 * 24 * 3600.0
+
+# MPU6050 at rest, +-250 deg/s (131 LSB per deg/s), 100 Hz, DLPF-free; levels like the real static
+# logs in recordings/ (same as examples/models/mpu6050.json)
+DEFAULT_MODEL = {
+    "description": "MPU6050 at rest, +-250 deg/s range (131 LSB per deg/s), 100 Hz; levels typical of the real static logs",
+    "sample_rate_hz": 100.0,
+    "gyro_unit": "lsb",
+    "lsb_per_dps": 131.0,
+    "full_scale_dps": 250.0,
+    "temperature": {"start_c": 24.0, "end_c": 29.0, "tau_s": 900.0, "noise_c": 0.03, "resolution_c": 1.0 / 340.0},
+    "axes": {
+        "x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009,
+              "effects": [{"effect": "bias_instability", "b_dps": 0.006},
+                          {"effect": "temperature", "coefficient_dps_per_c": 0.02}]},
+        "y": {"bias_dps": 1.2, "arw_dps_per_sqrt_hz": 0.008,
+              "effects": [{"effect": "bias_instability", "b_dps": 0.005},
+                          {"effect": "temperature", "coefficient_dps_per_c": -0.015}]},
+        "z": {"bias_dps": -0.6, "arw_dps_per_sqrt_hz": 0.007,
+              "effects": [{"effect": "bias_instability", "b_dps": 0.004},
+                          {"effect": "temperature", "coefficient_dps_per_c": 0.01}]},
+    },
+}
+
+
+def load_model(model):
+    """``model``: None (default model), a dict, or the path of a JSON file."""
+    if model is None or model == "":
+        return json.loads(json.dumps(DEFAULT_MODEL)), "default MPU6050-like model"
+    if isinstance(model, dict):
+        return model, "model given in code"
+    try:
+        with open(model, encoding="utf-8") as fh:
+            return json.load(fh), str(model)
+    except OSError as exc:
+        raise SettingsError(f"sim: cannot read model {model}: {exc.strerror or exc}") from None
+    except json.JSONDecodeError as exc:
+        raise SettingsError(f"sim: {model}: line {exc.lineno}: not valid JSON ({exc.msg})") from None
+
+
+class SimulatedSource:
+    """Live source backed by the simulator; see the module docstring."""
+
+    def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
+                 clock=time.monotonic, sleep=time.sleep):
+        from ..simulate import recording_columns, recording_header, simulate_chunks, validate_model
+
+        model, self.model_name = load_model(model)
+        spec, self.warnings = validate_model(model, sample_rate_hz=sample_rate_hz)
+        if duration_s is not None and (not math.isfinite(duration_s) or duration_s <= 0):
+            raise SettingsError(f"sim: duration must be > 0 s, got {duration_s!r}")
+        if seed is None:
+            seed = int(np.random.SeedSequence().entropy % (2 ** 31))
+        self.seed = int(seed)
+        self.rate_hz = spec["sample_rate_hz"]
+        self.duration_s = UNLIMITED_S if duration_s is None else float(duration_s)
+        self.realtime = bool(realtime)
+        header = recording_header(model, self.duration_s, seed=self.seed, validated=spec)
+        header.pop("gyrofilter-recording", None)
+        header["sensor"] = "simulated"
+        header["simulated_model_name"] = self.model_name
+        header["start_time_utc"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+        self.header = header
+        self.columns = recording_columns(spec)
+        chunk = max(1, int(round(CHUNK_S * self.rate_hz)))
+        self._chunks = simulate_chunks(model, self.duration_s, chunk_samples=chunk, seed=self.seed, validated=spec)
+        self._buf = np.empty((0, len(self.columns)))
+        self._clock = clock
+        self._sleep = sleep
+        self._start = None
+        self._last = -math.inf
+        self._exhausted = False
+        self._closed = False
+        self.stats = {"samples": 0, "lost_samples": 0}
+
+    def _more(self):
+        """Append the next simulator block to the buffer; False at the end."""
+        try:
+            t_s, gyro, temp_c = next(self._chunks)
+        except StopIteration:
+            self._exhausted = True
+            return False
+        parts = [t_s[:, None], gyro] + ([temp_c[:, None]] if temp_c is not None else [])
+        self._buf = np.concatenate([self._buf, np.hstack(parts)]) if len(self._buf) else np.hstack(parts)
+        return True
+
+    def read(self):
+        if self._closed:
+            raise SourceEnded("simulation closed")
+        if not self.realtime:
+            while len(self._buf) < FAST_CHUNK_SAMPLES and self._more():
+                pass
+            n = min(len(self._buf), FAST_CHUNK_SAMPLES)
+        else:
+            now = self._clock()
+            if self._start is None:
+                self._start = now
+            if not len(self._buf):
+                self._more()
+            if len(self._buf):
+                # sleep until the next sample is due, and at least POLL_S since the last read
+                wait = max(self._buf[0, 0] - (now - self._start), POLL_S - (now - self._last))
+                if wait > 0:
+                    self._sleep(min(wait, MAX_WAIT_S))
+                    now = self._clock()
+            due_t = now - self._start
+            while len(self._buf) and self._buf[-1, 0] <= due_t and self._more():
+                pass
+            n = int(np.searchsorted(self._buf[:, 0], due_t, side="right")) if len(self._buf) else 0
+            self._last = now
+        if n == 0 and not len(self._buf) and self._exhausted:
+            raise SourceEnded(f"end of the simulation ({self.stats['samples']} samples, {self.duration_s:g} s)")
+        rows, self._buf = self._buf[:n], self._buf[n:]
+        self.stats["samples"] += n
+        return rows
+
+    def pop_notes(self):
+        return []
+
+    def close(self):
+        self._closed = True
+        self._chunks.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
