@@ -497,3 +497,9 @@ def test_record_command_writes_the_mpu6050_header(monkeypatch, tmp_path):
     if not rec.notes:
         np.testing.assert_array_equal(np.diff(index_of(rows)), 1)
         np.testing.assert_allclose(np.diff(rec.t_s), 1 / 200, atol=1e-9)
+
+
+def test_chip_that_stays_asleep_is_refused(rig):
+    clock, model, bus = rig(stuck={0x6B: 0x40})              # PWR_MGMT_1 ignores the wake-up write
+    with pytest.raises(DeviceError, match=r"chip did not wake up.*PWR_MGMT_1 \(0x6B\) still reads 0x40"):
+        open_src(clock)

@@ -378,26 +378,24 @@ class MPU6050Source:
         fifo_en = (R.FIFO_EN.mask("XG_FIFO_EN") | R.FIFO_EN.mask("YG_FIFO_EN") | R.FIFO_EN.mask("ZG_FIFO_EN")
                    | (R.FIFO_EN.mask("TEMP_FIFO_EN") if self.temperature else 0))
         writes = [
-            (R.USER_CTRL, 0x00, 0xFF),
-            (R.FIFO_EN, 0x00, 0xFF),
-            (R.SMPLRT_DIV, self.smplrt_div, 0xFF),
-            (R.CONFIG, R.CONFIG.put(0, "DLPF_CFG", self.dlpf_cfg), 0xFF),
-            (R.GYRO_CONFIG, R.GYRO_CONFIG.put(0, "FS_SEL", self.fs_sel), 0xFF),
-            (R.INT_PIN_CFG, 0x00, 0xFF),
-            (R.INT_ENABLE, R.INT_ENABLE.mask("FIFO_OFLOW_EN"), 0xFF),
-            (R.PWR_MGMT_2, 0x00, 0xFF),
-            (R.FIFO_EN, fifo_en, 0xFF),
+            (R.USER_CTRL, 0x00),
+            (R.FIFO_EN, 0x00),
+            (R.SMPLRT_DIV, self.smplrt_div),
+            (R.CONFIG, R.CONFIG.put(0, "DLPF_CFG", self.dlpf_cfg)),
+            (R.GYRO_CONFIG, R.GYRO_CONFIG.put(0, "FS_SEL", self.fs_sel)),
+            (R.INT_PIN_CFG, 0x00),
+            (R.INT_ENABLE, R.INT_ENABLE.mask("FIFO_OFLOW_EN")),
+            (R.PWR_MGMT_2, 0x00),
+            (R.FIFO_EN, fifo_en),
         ]
-        for reg, value, _ in writes:
+        for reg, value in writes:
             self._write_byte(reg, value)
-        final = {}
-        for reg, value, mask in writes:
-            final[reg.address] = (reg, value, mask)
-        final[pm1.address] = (pm1, pm1.put(0, "CLKSEL", R.CLKSEL_PLL_XGYRO), 0xFF)
-        # read every written register back; refuse to start on a mismatch
-        for reg, value, mask in final.values():
+        # read every written register back (its last value); refuse to start on a mismatch
+        final = {reg.address: (reg, value) for reg, value in writes}
+        final[pm1.address] = (pm1, pm1.put(0, "CLKSEL", R.CLKSEL_PLL_XGYRO))
+        for reg, value in final.values():
             got = self._read_byte(reg)
-            if (got & mask) != (value & mask):
+            if got != value:
                 raise DeviceError(
                     f"{self.chip_name} at {self._where()}: register {reg} reads back 0x{got:02X} after "
                     f"writing 0x{value:02X}; refusing to start (bad connection or not an MPU6050)")
@@ -416,7 +414,7 @@ class MPU6050Source:
         got = self._read_byte(uc)
         if not got & uc.mask("FIFO_EN"):
             raise DeviceError(f"{self.chip_name} at {self._where()}: register {uc} reads back 0x{got:02X} "
-                              f"after writing 0x{uc.put(0, 'FIFO_EN', 1):02X}; refusing to start")
+                              f"after writing 0x{uc.put(0, 'FIFO_EN', 1):02X}: the FIFO could not be (re)started")
         self._anchor_time = self._clock()
         self._anchor_index = getattr(self, "_next_index", 0)
         self._next_index = self._anchor_index
