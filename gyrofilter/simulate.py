@@ -27,7 +27,7 @@ Effects and their parameters (names exactly as in the effect table; extras optio
 effect             required params                            optional params (default)
 =================  =========================================  ======================================
 bias_instability   b_dps >= 0                                 tau_min_s (1/f_s), tau_max_s (record
-                                                              length), per_decade (3)
+                                                              length), per_decade (2)
 rate_random_walk   k_dps_per_sqrt_s >= 0
 rate_ramp          r_dps_per_s
 gauss_markov       sigma_dps >= 0, tau_s > 0
@@ -83,7 +83,7 @@ _KINDS = {
 
 #: effect name -> (required {param: kind}, optional {param: (kind, default)}), in table order.
 EFFECTS = {
-    "bias_instability": ({"b_dps": "nonneg"}, {"tau_min_s": ("pos", None), "tau_max_s": ("pos", None), "per_decade": ("pos", 3.0)}),
+    "bias_instability": ({"b_dps": "nonneg"}, {"tau_min_s": ("pos", None), "tau_max_s": ("pos", None), "per_decade": ("pos", 2.0)}),
     "rate_random_walk": ({"k_dps_per_sqrt_s": "nonneg"}, {}),
     "rate_ramp": ({"r_dps_per_s": "any"}, {}),
     "gauss_markov": ({"sigma_dps": "nonneg", "tau_s": "pos"}, {}),

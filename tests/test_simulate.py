@@ -1,0 +1,386 @@
+"""Tests of the gyro simulator: every term has the statistics its docstring claims.
+
+Oracles: closed forms (deterministic terms, AR(1) Allan variance), the Allan deviation of
+gyrofilter.allan (itself tested against allantools), and sample statistics with tolerances
+of several standard errors. All random tests are seeded.
+"""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from gyrofilter import noise_terms as nt
+from gyrofilter.allan import overlapping_adev
+from gyrofilter.errors import SettingsError
+from gyrofilter.recording import read_recording, write_recording
+from gyrofilter.simulate import EFFECTS, simulate, simulate_chunks, validate_model
+from gyrofilter.units import DEG_PER_RAD
+
+
+def model(effects=(), *, fs=100.0, unit="dps", bias=0.0, arw=0.0, axes="xyz", **top):
+    m = {"sample_rate_hz": fs, "gyro_unit": unit, **top, "axes": {}}
+    for a in axes:
+        m["axes"][a] = {"bias_dps": bias, "arw_dps_per_sqrt_hz": arw, "effects": [dict(e) for e in effects]}
+    return m
+
+
+ALL_EFFECTS = [
+    {"effect": "bias_instability", "b_dps": 0.01},
+    {"effect": "rate_random_walk", "k_dps_per_sqrt_s": 0.002},
+    {"effect": "rate_ramp", "r_dps_per_s": 1e-4},
+    {"effect": "gauss_markov", "sigma_dps": 0.02, "tau_s": 5.0},
+    {"effect": "sinusoid", "frequency_hz": 7.3, "amplitude_dps": 0.05, "phase_rad": 0.3},
+    {"effect": "temperature", "coefficient_dps_per_c": 0.01},
+    {"effect": "bias_step", "time_s": 30.0, "size_dps": 0.1},
+    {"effect": "warmup", "amplitude_dps": 0.5, "tau_s": 20.0},
+    {"effect": "outliers", "rate": 0.002, "magnitude_dps": 2.0},
+    {"effect": "colored_noise", "lag1": 0.5},
+]
+TEMP = {"start_c": 25.0, "end_c": 32.0, "tau_s": 60.0, "noise_c": 0.02, "resolution_c": 1 / 340}
+
+
+def full_model(**kw):
+    return model(ALL_EFFECTS, bias=-3.3, arw=0.009, unit="lsb", lsb_per_dps=131.0, full_scale_dps=250.0,
+                 temperature=TEMP, **kw)
+
+
+def test_every_effect_of_the_table_is_supported():
+    assert list(EFFECTS) == ["bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
+                             "temperature", "bias_step", "warmup", "outliers", "colored_noise"]
+    assert {e["effect"] for e in ALL_EFFECTS} == set(EFFECTS)
+
+
+# ---------------------------------------------------------------------------------------------
+# determinism, chunking, header
+
+
+@pytest.mark.parametrize("chunk", [1, 7, 1000])
+def test_chunked_equals_one_shot_bit_for_bit(chunk):
+    m = full_model()
+    duration = 2.0 if chunk == 1 else 61.37
+    one = simulate(m, duration, seed=11, chunk_samples=10**7)
+    parts = list(simulate_chunks(m, duration, seed=11, chunk_samples=chunk))
+    t = np.concatenate([p[0] for p in parts])
+    gyro = np.concatenate([p[1] for p in parts])
+    temp = np.concatenate([p[2] for p in parts])
+    assert np.array_equal(t, one.t_s)
+    assert np.array_equal(gyro, one.gyro)
+    assert np.array_equal(temp, one.temp_c)
+    assert max(len(p[0]) for p in parts) <= chunk
+
+
+def test_same_seed_same_numbers_and_different_seed_differs():
+    m = full_model()
+    a, b, c = (simulate(m, 10.0, seed=s).gyro for s in (5, 5, 6))
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)
+    r1 = simulate(m, 10.0, rng=np.random.default_rng(3)).gyro
+    r2 = simulate(m, 10.0, rng=np.random.default_rng(3)).gyro
+    assert np.array_equal(r1, r2)
+    with pytest.raises(SettingsError, match="seed or rng"):
+        simulate(m, 1.0, seed=1, rng=np.random.default_rng(1))
+
+
+def test_axes_are_independent_draws():
+    rec = simulate(model(arw=0.01), 100.0, seed=1)
+    g = rec.gyro_dps
+    corr = np.corrcoef(g.T)
+    assert np.all(np.abs(corr[np.triu_indices(3, 1)]) < 0.05)  # 10000 samples: se 0.01
+
+
+def test_adding_an_effect_keeps_the_other_draws_common_random_numbers():
+    base = model([{"effect": "gauss_markov", "sigma_dps": 0.1, "tau_s": 1.0}], arw=0.01)
+    ext = json.loads(json.dumps(base))
+    sine = {"effect": "sinusoid", "frequency_hz": 1.5, "amplitude_dps": 0.2}
+    ext["axes"]["y"]["effects"].insert(0, sine)
+    a = simulate(base, 20.0, seed=4)
+    b = simulate(ext, 20.0, seed=4)
+    expected = 0.2 * np.sin(2 * math.pi * 1.5 * a.t_s)
+    assert np.allclose(b.gyro_dps[:, 1] - a.gyro_dps[:, 1], expected, atol=1e-12)
+    assert np.array_equal(a.gyro_dps[:, [0, 2]], b.gyro_dps[:, [0, 2]])
+
+
+def test_header_carries_the_model_and_survives_a_file_round_trip(tmp_path):
+    m = full_model()
+    rec = simulate(m, 5.0, seed=2)
+    assert rec.header["sensor"] == "simulated"
+    assert rec.header["gyro_unit"] == "lsb" and float(rec.header["lsb_per_dps"]) == 131.0
+    assert json.loads(rec.header["simulated_model"]) == json.loads(json.dumps(m))
+    assert rec.header["simulated_seed"] == "2"
+    assert list(rec.columns) == ["t", "gx", "gy", "gz", "temp"]
+    path = tmp_path / "sim.csv.gz"
+    write_recording(path, rec)
+    back = read_recording(path)
+    assert np.array_equal(back.gyro, rec.gyro)
+    assert np.allclose(back.temp_c, rec.temp_c, atol=1e-6)
+    assert json.loads(back.header["simulated_model"])["axes"]["x"]["bias_dps"] == -3.3
+
+
+def test_rate_override_and_sample_count():
+    rec = simulate(model(), 2.5, sample_rate_hz=40.0, seed=0)
+    assert rec.sample_rate_hz == 40.0 and len(rec) == 100
+    assert np.allclose(np.diff(rec.t_s), 1 / 40.0)
+    assert json.loads(rec.header["simulated_model"])["sample_rate_hz"] == 40.0
+
+
+# ---------------------------------------------------------------------------------------------
+# validation
+
+
+@pytest.mark.parametrize("mutate, message", [
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "flicker", "b_dps": 1}), r"axes.x.effects\[0\].effect: unknown effect \"flicker\""),
+    (lambda m: m["axes"]["y"]["effects"].append({"effect": "gauss_markov", "sigma_dps": 1}), r"axes.y.effects\[0\] \(gauss_markov\): missing parameter 'tau_s'"),
+    (lambda m: m["axes"]["z"]["effects"].append({"effect": "gauss_markov", "sigma_dps": 1, "tau_s": -2}), r"tau_s: expected a number > 0, got -2"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "outliers", "rate": 1.5, "magnitude_dps": 1}), r"rate: expected a number in \[0, 1\]"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "sinusoid", "frequency_hz": "7", "amplitude_dps": 1}), r"frequency_hz: expected a number >= 0, got \"7\""),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "colored_noise", "lag1": 1.0}), r"lag1: expected a number in \(-1, 1\)"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "temperature", "coefficient_dps_per_c": 0.1}), r"needs the model's 'temperature' profile"),
+    (lambda m: m["axes"].update(w={}), r"axes.w: unknown axis \(expected x, y or z\)"),
+    (lambda m: m["axes"]["x"].update(bias=1.0), r"axes.x.bias: unknown key"),
+    (lambda m: m["axes"]["x"].update(arw_dps_per_sqrt_hz=-0.1), r"axes.x.arw_dps_per_sqrt_hz: expected a number >= 0"),
+    (lambda m: m.update(gyro_unit="deg"), r"gyro_unit: expected one of dps, rad/s, lsb"),
+    (lambda m: m.update(gyro_unit="lsb"), r"lsb_per_dps: missing"),
+    (lambda m: m.pop("sample_rate_hz"), r"sample_rate_hz: missing"),
+    (lambda m: m.update(full_scale_dps=0), r"full_scale_dps: expected a number > 0"),
+    (lambda m: m.update(temperature={"end_c": 30}), r"temperature.start_c: missing"),
+    (lambda m: m.update(temperature={"t_s": [0, 0], "temp_c": [1, 2]}), r"temperature.t_s: expected strictly increasing"),
+    (lambda m: m.update(samplerate=3), r"samplerate: unknown key"),
+])
+def test_bad_models_raise_one_clear_error(mutate, message):
+    m = model(axes="xyz")
+    mutate(m)
+    with pytest.raises(SettingsError, match=message) as info:
+        validate_model(m)
+    assert "\n" not in str(info.value)
+
+
+def test_unknown_effect_parameter_is_a_warning_and_defaults_are_filled():
+    m = model([{"effect": "sinusoid", "frequency_hz": 1, "amplitude_dps": 1, "amp": 3, "_note": "x"}], axes="x")
+    spec, warnings = validate_model(m)
+    assert warnings == ["model: axes.x.effects[0] (sinusoid): unknown parameter 'amp' ignored"]
+    assert spec["axes"]["x"]["effects"][0]["phase_rad"] == 0.0
+    assert spec["axes"]["y"] == {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []}
+
+
+@pytest.mark.parametrize("duration", [0.0, -1.0, float("nan")])
+def test_bad_duration(duration):
+    with pytest.raises(SettingsError, match="duration"):
+        simulate(model(), duration, seed=0)
+
+
+# ---------------------------------------------------------------------------------------------
+# baseline terms
+
+
+def test_constant_bias_and_white_noise_level():
+    n_arw, fs = 0.01, 100.0
+    rec = simulate(model(bias=1.5, arw=n_arw, fs=fs), 1000.0, seed=7)  # 100000 samples per axis
+    g = rec.gyro_dps
+    sigma = n_arw * math.sqrt(fs)  # per-sample std = N sqrt(fs) = 0.1 deg/s
+    assert np.allclose(g.mean(axis=0), 1.5, atol=5 * sigma / math.sqrt(len(g)))
+    assert np.allclose(g.std(axis=0), sigma, rtol=0.01)  # se of std: 0.22 %
+    for i in range(3):
+        tau, ad = overlapping_adev(g[:, i], fs, taus_s=[0.1, 1.0, 10.0])
+        assert np.allclose(ad * np.sqrt(tau), n_arw, rtol=0.08)  # sigma(tau) = N / sqrt(tau)
+    lag1 = [np.corrcoef(g[:-1, i], g[1:, i])[0, 1] for i in range(3)]
+    assert np.all(np.abs(lag1) < 0.015)
+
+
+def test_quantization_rounds_to_integer_lsb():
+    # noise-free ramp through many LSB: the output is exactly round(rate * lsb_per_dps)
+    m = model([{"effect": "rate_ramp", "r_dps_per_s": 0.013}], bias=-0.4, unit="lsb", lsb_per_dps=131.0)
+    rec = simulate(m, 100.0, seed=0)
+    expected = np.round((-0.4 + 0.013 * rec.t_s) * 131.0)
+    assert np.array_equal(rec.gyro[:, 0], expected)
+    assert np.all(rec.gyro == np.round(rec.gyro))
+    # in deg/s with lsb_per_dps: the same steps, written in deg/s
+    m2 = dict(m, gyro_unit="dps")
+    assert np.allclose(simulate(m2, 100.0, seed=0).gyro[:, 0], expected / 131.0, atol=1e-12)
+
+
+def test_quantization_noise_of_a_noisy_signal():
+    # with noise much larger than one LSB, rounding adds variance LSB^2/12 (Widrow)
+    m = model(arw=0.05, unit="lsb", lsb_per_dps=2.0)  # sigma 0.5 deg/s = 1 LSB
+    g = simulate(m, 1000.0, seed=3).gyro_dps
+    expected = math.sqrt(0.5**2 + (0.5**2) / 12)
+    assert np.allclose(g.std(axis=0), expected, rtol=0.01)
+
+
+def test_saturation_clips_at_full_scale():
+    m = model([{"effect": "sinusoid", "frequency_hz": 0.5, "amplitude_dps": 400.0}], unit="lsb", lsb_per_dps=131.0,
+              full_scale_dps=250.0)
+    rec = simulate(m, 4.0, seed=0)
+    g = rec.gyro[:, 0]
+    assert g.max() == 32750 and g.min() == -32750
+    raw = 400.0 * np.sin(2 * math.pi * 0.5 * rec.t_s)
+    inside = np.abs(raw) < 249.0
+    assert np.array_equal(g[inside], np.round(raw[inside] * 131.0))
+    assert np.all(g[raw > 250.0] == 32750)
+
+
+def test_rad_per_s_output():
+    m = model(bias=10.0, unit="rad/s")
+    rec = simulate(m, 1.0, seed=0)
+    assert np.allclose(rec.gyro, 10.0 / DEG_PER_RAD) and np.allclose(rec.gyro_dps, 10.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# deterministic effects: exact closed forms
+
+
+def test_deterministic_effects_match_their_equations():
+    effects = [
+        {"effect": "rate_ramp", "r_dps_per_s": -0.002},
+        {"effect": "sinusoid", "frequency_hz": 2.0, "amplitude_dps": 0.3, "phase_rad": 1.0},
+        {"effect": "bias_step", "time_s": 12.34, "size_dps": -0.7},
+        {"effect": "warmup", "amplitude_dps": 1.1, "tau_s": 8.0},
+    ]
+    for eff in effects:
+        rec = simulate(model([eff], bias=0.25, axes="z"), 40.0, seed=0)
+        t = rec.t_s
+        expected = {
+            "rate_ramp": -0.002 * t,
+            "sinusoid": 0.3 * np.sin(2 * math.pi * 2.0 * t + 1.0),
+            "bias_step": np.where(t >= 12.34, -0.7, 0.0),
+            "warmup": 1.1 * np.exp(-t / 8.0),
+        }[eff["effect"]]
+        assert np.allclose(rec.gyro_dps[:, 2], 0.25 + expected, atol=1e-12), eff["effect"]
+        assert np.all(rec.gyro_dps[:, :2] == 0.0)
+
+
+def test_rate_ramp_allan_slope():
+    # sigma(tau) = R tau / sqrt(2) (IEEE 952 C.6) for a pure ramp
+    rec = simulate(model([{"effect": "rate_ramp", "r_dps_per_s": 0.001}], axes="x"), 1000.0, seed=0)
+    tau, ad = overlapping_adev(rec.gyro_dps[:, 0], 100.0, taus_s=[1.0, 10.0, 100.0])
+    assert np.allclose(ad, 0.001 * tau / math.sqrt(2), rtol=1e-6)
+
+
+# ---------------------------------------------------------------------------------------------
+# stochastic effects
+
+
+def test_bias_instability_bank_is_flat_at_0664_b_exactly():
+    # exact Allan variance of the Gauss-Markov bank (sum of AR(1) oracles), no sampling error
+    fs, duration, b = 100.0, 3600.0, 0.02
+    taus, q = nt.flicker_bank(b, fs, 1 / fs, duration, 2.0)
+    m = np.unique(np.round(np.logspace(np.log10(0.3 * fs), np.log10(duration * fs / 9), 30)).astype(int))
+    avar = sum(nt.ar1_allan_variance(math.exp(-1 / (fs * T)), q * q, m) for T in taus)
+    ratio = np.sqrt(avar) / (nt.FLICKER_ADEV_PER_B * b)
+    assert np.log10(m[-1] / m[0]) > 3  # 0.3 s .. 400 s
+    assert np.all(np.abs(ratio - 1) < 0.02)
+    assert abs(nt.FLICKER_ADEV_PER_B - 0.664) < 5e-4
+
+
+def test_bias_instability_simulated_allan_floor():
+    # three independent realisations (axes) of pure flicker: the mean Allan deviation is flat at
+    # 0.664 B within 10 % from tau = 1 s to 100 s (2 decades); a single Gauss-Markov is not flat
+    fs, duration, b = 10.0, 20000.0, 0.01
+    rec = simulate(model([{"effect": "bias_instability", "b_dps": b}], fs=fs), duration, seed=21)
+    taus = np.logspace(0, 2, 9)
+    curves = [overlapping_adev(rec.gyro_dps[:, i], fs, taus_s=taus)[1] for i in range(3)]
+    mean = np.mean(curves, axis=0)
+    assert np.all(np.abs(mean / (0.664 * b) - 1) < 0.10), mean / (0.664 * b)
+    slope = np.polyfit(np.log10(taus), np.log10(mean), 1)[0]
+    assert abs(slope) < 0.05
+
+
+def test_gauss_markov_stationary_std_and_correlation_time():
+    sigma, tau, fs = 0.5, 2.0, 50.0
+    rec = simulate(model([{"effect": "gauss_markov", "sigma_dps": sigma, "tau_s": tau}], fs=fs), 4000.0, seed=5)
+    g = rec.gyro_dps
+    assert np.allclose(g.std(axis=0), sigma, rtol=0.06)  # se ~ sqrt(tau / T) = 2 %
+    lag = int(tau * fs)
+    rho = np.mean([np.corrcoef(g[:-lag, i], g[lag:, i])[0, 1] for i in range(3)])
+    assert abs(rho - math.exp(-1)) < 0.03
+    rho1 = np.mean([np.corrcoef(g[:-1, i], g[1:, i])[0, 1] for i in range(3)])
+    assert abs(rho1 - math.exp(-1 / (fs * tau))) < 0.002
+    # the Allan deviation follows the exact AR(1) oracle
+    taus_s, ad = overlapping_adev(g[:, 0], fs, taus_s=[0.2, 2.0, 20.0])
+    oracle = np.sqrt(nt.ar1_allan_variance(math.exp(-1 / (fs * tau)), sigma**2, np.round(taus_s * fs)))
+    assert np.allclose(ad, oracle, rtol=0.12)
+
+
+def test_rate_random_walk_reads_k_at_3_s_with_half_slope():
+    k, fs = 0.01, 10.0
+    rec = simulate(model([{"effect": "rate_random_walk", "k_dps_per_sqrt_s": k}], fs=fs), 6000.0, seed=9)
+    taus = np.array([3.0, 30.0])
+    curves = np.array([overlapping_adev(rec.gyro_dps[:, i], fs, taus_s=taus)[1] for i in range(3)])
+    at3 = curves[:, 0].mean()
+    assert abs(at3 / k - 1) < 0.08
+    slope = np.log10(curves[:, 1] / curves[:, 0]).mean()
+    assert abs(slope - 0.5) < 0.08
+    # starts at the bias: x[-1] = 0
+    assert np.all(np.abs(rec.gyro_dps[0]) < 5 * k / math.sqrt(fs))
+
+
+def test_outliers_rate_magnitude_and_sign():
+    rate, mag = 0.01, 2.0
+    rec = simulate(model([{"effect": "outliers", "rate": rate, "magnitude_dps": mag}], fs=100.0), 1000.0, seed=13)
+    g = rec.gyro_dps
+    spikes = g[g != 0.0]
+    n = g.size  # 300000 samples
+    assert abs(spikes.size - rate * n) < 4 * math.sqrt(rate * n)
+    assert abs(np.median(np.abs(spikes)) / mag - 1) < 0.03
+    assert abs(np.mean(spikes > 0) - 0.5) < 0.04
+    # |spike| is log-normal with log-spread 0.25 (default spread_ln)
+    assert abs(np.log(np.abs(spikes)).std() / 0.25 - 1) < 0.06
+
+
+def test_colored_noise_lag1_and_meaning_of_arw():
+    n_arw, fs, rho = 0.01, 100.0, 0.6
+    eff = [{"effect": "colored_noise", "lag1": rho}]
+    g = simulate(model(eff, arw=n_arw, fs=fs), 2000.0, seed=17).gyro_dps
+    lag1 = np.mean([np.corrcoef(g[:-1, i], g[1:, i])[0, 1] for i in range(3)])
+    assert abs(lag1 - rho) < 0.01
+    # preserve="arw": long-tau Allan deviation is N / sqrt(tau); per-sample std shrinks
+    assert np.allclose(g.std(axis=0), n_arw * math.sqrt(fs) * math.sqrt((1 - rho) / (1 + rho)), rtol=0.02)
+    ad = np.mean([overlapping_adev(g[:, i], fs, taus_s=[10.0])[1][0] for i in range(3)])
+    assert abs(ad * math.sqrt(10.0) / n_arw - 1) < 0.08
+    # preserve="std": per-sample std N sqrt(fs) is kept instead
+    eff_std = [{"effect": "colored_noise", "lag1": rho, "preserve": "std"}]
+    g2 = simulate(model(eff_std, arw=n_arw, fs=fs), 500.0, seed=17).gyro_dps
+    assert np.allclose(g2.std(axis=0), n_arw * math.sqrt(fs), rtol=0.03)
+
+
+# ---------------------------------------------------------------------------------------------
+# temperature
+
+
+def test_temperature_profile_column_noise_and_resolution():
+    spec = {"start_c": 20.0, "end_c": 30.0, "tau_s": 100.0, "noise_c": 0.05, "resolution_c": 1 / 340}
+    rec = simulate(model(temperature=spec, fs=10.0), 1000.0, seed=3)
+    temp = rec.temp_c
+    assert np.allclose(temp * 340, np.round(temp * 340), atol=1e-6)  # MPU6050 steps of 1/340 C
+    true = 30.0 - 10.0 * np.exp(-rec.t_s / 100.0)
+    resid = temp - true
+    assert abs(resid.mean()) < 0.003
+    assert abs(resid.std() / math.sqrt(0.05**2 + (1 / 340) ** 2 / 12) - 1) < 0.03
+
+
+def test_temperature_table_profile_and_cycle():
+    table = {"t_s": [0.0, 10.0, 20.0], "temp_c": [25.0, 35.0, 30.0]}
+    rec = simulate(model(temperature=table), 30.0, seed=0)
+    assert np.allclose(rec.temp_c, np.interp(rec.t_s, table["t_s"], table["temp_c"]))
+    cyc = {"start_c": 25.0, "cycle_amplitude_c": 2.0, "cycle_period_s": 10.0}
+    rec = simulate(model(temperature=cyc), 30.0, seed=0)
+    assert np.allclose(rec.temp_c, 25.0 + 2.0 * np.sin(2 * math.pi * rec.t_s / 10.0))
+
+
+def test_temperature_coefficient_drives_the_bias():
+    spec = {"start_c": 20.0, "end_c": 30.0, "tau_s": 100.0, "noise_c": 0.05, "resolution_c": 1 / 340}
+    c = 0.03
+    eff = [{"effect": "temperature", "coefficient_dps_per_c": c}]
+    rec = simulate(model(eff, bias=1.0, temperature=spec, fs=10.0), 600.0, seed=3)
+    true = 30.0 - 10.0 * np.exp(-rec.t_s / 100.0)
+    assert np.allclose(rec.gyro_dps[:, 0], 1.0 + c * (true - 20.0), atol=1e-12)  # reference = start temperature
+    slope = np.polyfit(rec.temp_c, rec.gyro_dps[:, 0], 1)[0]
+    assert abs(slope / c - 1) < 0.01
+    eff_ref = [{"effect": "temperature", "coefficient_dps_per_c": c, "reference_c": 0.0}]
+    rec0 = simulate(model(eff_ref, temperature=spec, fs=10.0), 10.0, seed=3)
+    assert np.allclose(rec0.gyro_dps[0, 0], c * 20.0)
+
+
+def test_without_temperature_profile_there_is_no_temp_column():
+    assert simulate(model(arw=0.01), 1.0, seed=0).temp_c is None
+    assert list(next(simulate_chunks(model(), 1.0, seed=0))[2:]) == [None]
