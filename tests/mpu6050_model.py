@@ -74,7 +74,8 @@ class MPU6050Model:
     """Register-level MPU-6050 (see module docstring)."""
 
     def __init__(self, clock, *, chip_id=0x68, gyro_lsb=None, gyro_dps=None, temp_c=25.0,
-                 fifo_size=1024, reset_duration_s=0.002, reset_stuck=False, reset_nack=False, stuck=None, rate_error=0.0,
+                 fifo_size=1024, reset_duration_s=0.002, reset_stuck=False, reset_nack=False,
+                 stuck=None, rate_error=0.0,
                  error_rate=0.0, error_errno=_errno.EREMOTEIO, rng=None):
         self.clock = clock
         self.chip_id = chip_id

@@ -155,7 +155,8 @@ def main(argv=None):
     parser.add_argument("--frames", type=int, default=20_000, help="frames per read benchmark")
     args = parser.parse_args(argv)
     rows = measure(args.frames)
-    print("MPU6050 host cost per frame (1 kHz unless stated, gyro + temp; model behind smbus2's ioctl, its time removed)")
+    print("MPU6050 host cost per frame (1 kHz unless stated, gyro + temp; "
+          "model behind smbus2's ioctl, its time removed)")
     print(f"{'approach':<56} {'host us/frame':>13} {'ioctl/frame':>11} {'bus us/frame @400k':>18}  note")
     for name, host, ioctls, bus, note in rows:
         io = "" if ioctls is None else f"{ioctls:.2f}"
