@@ -1,0 +1,116 @@
+"""``gyrofilter simulate``: writes what :func:`simulate` returns; bad input is one line, exit 2."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gyrofilter.cli import main
+from gyrofilter.recording import read_recording
+from gyrofilter.simulate import simulate
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "models"
+
+
+def write_json(path, obj):
+    path.write_text(json.dumps(obj))
+    return str(path)
+
+
+MODEL = {
+    "sample_rate_hz": 50.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0, "full_scale_dps": 250.0,
+    "temperature": {"start_c": 25.0, "end_c": 30.0, "tau_s": 20.0, "noise_c": 0.02, "resolution_c": 1 / 340},
+    "axes": {"x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009,
+                   "effects": [{"effect": "gauss_markov", "sigma_dps": 0.05, "tau_s": 3.0},
+                               {"effect": "temperature", "coefficient_dps_per_c": 0.02}]},
+             "y": {"bias_dps": 1.0, "arw_dps_per_sqrt_hz": 0.01,
+                   "effects": [{"effect": "bias_instability", "b_dps": 0.01}]},
+             "z": {"bias_dps": 0.2, "arw_dps_per_sqrt_hz": 0.008,
+                   "effects": [{"effect": "outliers", "rate": 0.01, "magnitude_dps": 2.0}]}},
+}
+
+
+def test_cli_writes_the_same_numbers_as_simulate_in_small_chunks(tmp_path, capsys):
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    out = tmp_path / "sim.csv.gz"
+    rc = main(["simulate", "--model", model_path, "--duration", "30", "--seed", "8", "--out", str(out), "--chunk", "333"])
+    assert rc == 0
+    assert "1500 samples" in capsys.readouterr().out
+    rec = read_recording(out)
+    ref = simulate(MODEL, 30.0, seed=8)
+    assert np.array_equal(rec.gyro, ref.gyro)
+    assert np.allclose(rec.temp_c, ref.temp_c, atol=1e-5)
+    assert np.allclose(rec.t_s, ref.t_s)
+    assert rec.header["sensor"] == "simulated" and rec.header["simulated_seed"] == "8"
+    assert json.loads(rec.header["simulated_model"])["axes"]["x"]["effects"][0]["tau_s"] == 3.0
+
+
+def test_cli_rate_override_and_plain_csv(tmp_path):
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", "--model", model_path, "--duration", "2", "--rate", "200", "--seed", "1", "--out", str(out)]) == 0
+    rec = read_recording(out)
+    assert rec.sample_rate_hz == 200.0 and len(rec) == 400
+    assert out.read_text().startswith("# gyrofilter-recording: 1\n")
+
+
+def test_cli_accepts_a_gap_report_with_extended_model(tmp_path):
+    report = {"recording": "r.csv", "findings": [], "extended_model": MODEL}
+    model_path = write_json(tmp_path / "gap.json", report)
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", "--model", model_path, "--duration", "1", "--seed", "1", "--out", str(out)]) == 0
+    assert np.array_equal(read_recording(out).gyro, simulate(MODEL, 1.0, seed=1).gyro)
+
+
+@pytest.mark.parametrize("model_text, expected", [
+    ('{"sample_rate_hz": 100, "axes": {"x": {"effects": [{"effect": "gauss_markov", "sigma_dps": 1}]}}}',
+     "axes.x.effects[0] (gauss_markov): missing parameter 'tau_s' (expected a number > 0)"),
+    ('{"sample_rate_hz": 100, "axes": {"q": {}}}', "axes.q: unknown axis (expected x, y or z)"),
+    ('{"sample_rate_hz": 100, "axes": {"x": {"effects": [{"effect": "wobble"}]}}}', 'unknown effect "wobble"'),
+    ('{"sample_rate_hz": 100, "axes": {"x": {"bias_dps": -1, "effects": [{"effect": "warmup", "amplitude_dps": 1, "tau_s": -5}]}}}',
+     "tau_s: expected a number > 0, got -5.0"),
+    ('{"sample_rate_hz": 100, "axes": {', "not valid JSON: line 1 column"),
+    ('[1, 2]', "top level: expected a JSON object"),
+])
+def test_cli_bad_model_is_one_line_naming_the_key(tmp_path, capsys, model_text, expected):
+    path = tmp_path / "bad.json"
+    path.write_text(model_text)
+    rc = main(["simulate", "--model", str(path), "--duration", "1", "--out", str(tmp_path / "o.csv")])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert err.count("\n") == 1 and err.startswith("gyrofilter: error: ")
+    assert str(path) in err and expected in err
+
+
+def test_cli_missing_model_file_and_bad_duration(tmp_path, capsys):
+    assert main(["simulate", "--model", str(tmp_path / "none.json"), "--duration", "1", "--out", str(tmp_path / "o.csv")]) == 2
+    assert "none.json" in capsys.readouterr().err
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    assert main(["simulate", "--model", model_path, "--duration", "-3", "--out", str(tmp_path / "o.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "duration must be > 0" in err and err.count("\n") == 1
+
+
+def test_cli_warns_about_unknown_effect_parameters(tmp_path, capsys):
+    m = json.loads(json.dumps(MODEL))
+    m["axes"]["z"]["effects"].append({"effect": "sinusoid", "frequency_hz": 1.0, "amplitude_dps": 0.1, "evidence": "x"})
+    model_path = write_json(tmp_path / "m.json", m)
+    assert main(["simulate", "--model", model_path, "--duration", "1", "--out", str(tmp_path / "o.csv")]) == 0
+    err = capsys.readouterr().err
+    assert "warning" in err and "unknown parameter 'evidence' ignored" in err
+
+
+@pytest.mark.parametrize("path", sorted(EXAMPLES.glob("*.json")), ids=lambda p: p.stem)
+def test_example_models_run(tmp_path, path):
+    out = tmp_path / "o.csv.gz"
+    assert main(["simulate", "--model", str(path), "--duration", "5", "--seed", "1", "--out", str(out)]) == 0
+    rec = read_recording(out)
+    assert len(rec) == round(5 * rec.sample_rate_hz)
+    assert np.all(np.isfinite(rec.gyro))
+
+
+def test_help_and_entry_point():
+    res = subprocess.run([sys.executable, "-m", "gyrofilter", "simulate", "--help"], capture_output=True, text=True)
+    assert res.returncode == 0 and "--model" in res.stdout and "--seed" in res.stdout
