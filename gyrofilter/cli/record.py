@@ -12,7 +12,7 @@ import signal
 import sys
 import time
 
-from ..errors import SourceEnded
+from ..errors import DeviceError, SourceEnded
 from ..sources import SOURCE_HELP, open_source
 from ..units import GYRO_UNITS
 
@@ -183,6 +183,9 @@ def _record(args, source, RecordingWriter):
             except SourceEnded as exc:
                 ended = exc
                 break
+            except (DeviceError, OSError) as exc:  # the device failed for good: keep what we have
+                ended = DeviceError(f"device error: {' '.join(str(exc).split())}")
+                break
             for text in source.pop_notes():
                 writer.note(text)
                 dirty = True
@@ -219,6 +222,8 @@ def _record(args, source, RecordingWriter):
             reason = f"stopped by {stop.received}"
         elif isinstance(ended, SourceEnded):
             reason = f"source ended: {ended}"
+        elif isinstance(ended, DeviceError):
+            reason = f"stopped: {ended}"
         else:
             reason = ended or "stopped"
         writer.note(f"end: {reason}; {samples} samples; " + (source_summary(source.stats) or "no losses"))
@@ -233,6 +238,6 @@ def _record(args, source, RecordingWriter):
         + (f"; {source_summary(stats)}" if source_summary(stats) else ""),
         file=sys.stderr,
     )
-    if isinstance(ended, SourceEnded) and stats.get("disconnects"):
+    if isinstance(ended, DeviceError) or (isinstance(ended, SourceEnded) and stats.get("disconnects")):
         return EXIT_DISCONNECTED
     return 0

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from ..errors import SourceEnded
+from ..errors import DeviceError, SourceEnded
 from ..units import to_dps
 from . import common
 from .record import StopSignals, Status, add_source_arguments, open_from_args, source_summary
@@ -106,6 +106,9 @@ def _run(args, source):
                 except SourceEnded as exc:
                     ended = exc
                     break
+                except (DeviceError, OSError) as exc:  # the device failed for good: keep what we have
+                    ended = DeviceError(f"device error: {' '.join(str(exc).split())}")
+                    break
                 for text in source.pop_notes():
                     writer.note(text)
                 if len(rows):
@@ -148,6 +151,8 @@ def _run(args, source):
         reason = f"stopped by {stop.received}"
     elif isinstance(ended, SourceEnded):
         reason = f"source ended: {ended}"
+    elif isinstance(ended, DeviceError):
+        reason = f"stopped: {ended}"
     else:
         reason = ended or "stopped"
     common.save_calibration(args, filt)
@@ -160,6 +165,6 @@ def _run(args, source):
         + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else ""),
         file=sys.stderr,
     )
-    if isinstance(ended, SourceEnded) and source.stats.get("disconnects"):
+    if isinstance(ended, DeviceError) or (isinstance(ended, SourceEnded) and source.stats.get("disconnects")):
         return 1
     return 0

@@ -55,6 +55,10 @@ _PLAIN = b"0123456789+-.,\n"  # (bytes.translate(None, _PLAIN) leaves the others
 _TEXT = b"0123456789+-.,eEnaifNAIF \t"
 
 
+class UnitsConflict(DeviceError):
+    """The device's header disagrees with the units already in use (options or an earlier header)."""
+
+
 def _parse_fields(text, where):
     fields = [f.strip() for f in text.split(",")]
     for f in fields:
@@ -138,7 +142,7 @@ class LineParser:
         if self.header is not None:
             old = {k: self.header[k] for k in ("sample_rate_hz", "gyro_unit", "lsb_per_dps") if k in self.header}
             if old != units:
-                raise DeviceError(
+                raise UnitsConflict(
                     f"{self.where}: the device's header changed the units mid-stream ({old} -> {units}); "
                     "start a new recording"
                 )
@@ -167,13 +171,13 @@ class LineParser:
                 else:
                     same = key in units and float(units[key]) == float(value)
                 if not same:
-                    raise DeviceError(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
+                    raise UnitsConflict(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
         header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS}
         header.update(units)
         if "fields" in values:
             fields = _parse_fields(values["fields"], self.where)
             if self.fields is not None and fields != self.fields:
-                raise DeviceError(f"{self.where}: the device's header changed the fields mid-stream ({self.fields} -> {fields})")
+                raise UnitsConflict(f"{self.where}: the device's header changed the fields mid-stream ({self.fields} -> {fields})")
             self.fields = fields
         if "counter_bits" in values:
             try:
@@ -260,12 +264,6 @@ class LineParser:
         pending = []
         for line in block.split(b"\n")[:-1]:
             self.stats["lines"] += 1
-            if self._skip_first_line:
-                self._skip_first_line = False
-                if line.strip():
-                    self.stats["partial_lines"] += 1
-                    self.notes.append("serial: first line discarded (the port may have opened mid-line)")
-                continue
             if not line.strip():
                 self.stats["empty_lines"] += 1
                 continue
@@ -276,8 +274,10 @@ class LineParser:
                 had_header = self.header is not None
                 try:
                     self._header_line(line)
+                except UnitsConflict:
+                    raise
                 except (DeviceError, SettingsError) as exc:
-                    if not had_header or "mid-stream" in str(exc):
+                    if not had_header:
                         raise
                     self._bad(line, "bad_lines", f"unreadable repeated header: {exc}")
                 continue
@@ -289,6 +289,12 @@ class LineParser:
                 continue
             if self.header is None:
                 self.stats["lines_before_header"] += 1
+                continue
+            if self._skip_first_line:
+                self._skip_first_line = False
+                if line.strip():
+                    self.stats["partial_lines"] += 1
+                    self.notes.append("serial: first line discarded (the port may have opened mid-line)")
                 continue
             if line.translate(None, _TEXT):
                 self._bad(line, "bad_lines", "garbage bytes")

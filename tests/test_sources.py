@@ -1,0 +1,365 @@
+"""SOURCE syntax, the replay and simulated sources, the serial line parser, and `gyrofilter run`."""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gyrofilter import GyroFilter
+from gyrofilter.errors import DeviceError, SettingsError, SourceEnded
+from gyrofilter.recording import Recording, read_recording, write_recording
+from gyrofilter.sources import open_source, parse_source
+from gyrofilter.sources.serial_source import LineParser
+
+
+# ----------------------------------------------------------------------------- SOURCE syntax
+
+
+@pytest.mark.parametrize("spec, kind, kwargs", [
+    ("mpu6050", "mpu6050", {}),
+    ("mpu6050:bus=3,addr=0x69,rate=1000,range=500,dlpf=3,temp=0,allow_chip=0x70", "mpu6050",
+     {"bus": 3, "address": 0x69, "rate_hz": 1000.0, "range_dps": 500, "dlpf": 3, "temperature": False, "allow_chip": 0x70}),
+    ("serial:/dev/ttyUSB0,baud=115200", "serial", {"port": "/dev/ttyUSB0", "baudrate": 115200}),
+    ("serial:/dev/ttyACM0,unit=lsb,lsb_per_dps=131,rate=100", "serial",
+     {"port": "/dev/ttyACM0", "gyro_unit": "lsb", "lsb_per_dps": 131.0, "sample_rate_hz": 100.0}),
+    ("/dev/ttyUSB1,baud=9600", "serial", {"port": "/dev/ttyUSB1", "baudrate": 9600}),
+    ("replay:rec.csv.gz,realtime,speed=2", "replay", {"path": "rec.csv.gz", "realtime": True, "speed": 2.0}),
+    ("some/rec.csv", "replay", {"path": "some/rec.csv"}),
+    ("sim", "sim", {}),
+    ("sim:seed=4,realtime=no,duration=10", "sim", {"seed": 4, "realtime": False, "duration_s": 10.0}),
+    ("sim:model.json,seed=1", "sim", {"model": "model.json", "seed": 1}),
+])
+def test_parse_source(spec, kind, kwargs):
+    assert parse_source(spec) == (kind, kwargs)
+
+
+@pytest.mark.parametrize("spec, words", [
+    ("mpu6050:bux=1", ["'bux'", "known: bus"]),
+    ("mpu6050:rate=fast", ["'fast'", "'rate'"]),
+    ("serial:baud=9600", ["needs a port"]),
+    ("serial:/dev/ttyS0,unit=furlong", ["'furlong'", "'unit'"]),
+    ("replay", ["needs a path"]),
+    ("sim:seed", ["'seed' needs a value"]),
+    ("gps:/dev/ttyS0", ["unknown kind 'gps'"]),
+    ("nothing-here", ["no such file"]),
+    ("", ["empty source"]),
+])
+def test_parse_source_errors_name_the_problem(spec, words):
+    with pytest.raises(SettingsError) as info:
+        parse_source(spec)
+    for word in words:
+        assert word in str(info.value)
+
+
+def test_open_source_passes_only_given_keys_to_the_mpu6050_driver(monkeypatch):
+    import gyrofilter.sources.mpu6050 as mpu
+
+    seen = {}
+    monkeypatch.setattr(mpu, "open_mpu6050", lambda **kw: seen.update(kw) or "opened")
+    assert open_source("mpu6050:addr=0x69,dlpf=2", gyro_unit="lsb") == "opened"
+    assert seen == {"address": 0x69, "dlpf": 2}  # gyro_unit is not an MPU6050 option: dropped
+
+
+# ----------------------------------------------------------------------------- replay
+
+
+def _recording(tmp_path, name="rec.csv", n=2500, gap_at=None, gap=0, notes=()):
+    rng = np.random.default_rng(7)
+    gyro = np.round(rng.normal(0, 30, size=(n, 3)))
+    idx = np.arange(n)
+    if gap_at is not None:
+        idx[gap_at:] += gap
+    rec = Recording.from_dps(gyro / 131.0, 100.0, t_s=idx / 100.0, temp_c=25 + idx / 1000.0,
+                             header={"sensor": "MPU6050", "chip_id": "0x68"})
+    rec.notes = list(notes)
+    path = tmp_path / name
+    write_recording(path, rec)
+    return path, read_recording(path)
+
+
+def _drain(source, limit=100000):
+    rows, notes = [], []
+    for _ in range(limit):
+        try:
+            rows.append(source.read())
+        except SourceEnded:
+            break
+        notes += source.pop_notes()
+    else:
+        raise AssertionError("source did not end")
+    return np.concatenate(rows), notes
+
+
+def test_replay_gives_the_file_back_and_reports_its_gap(tmp_path):
+    path, rec = _recording(tmp_path, gap_at=1234, gap=37)
+    src = open_source(str(path))
+    assert src.columns == ["t", "gx", "gy", "gz", "temp"]
+    assert src.header["sensor"] == "MPU6050" and src.header["chip_id"] == "0x68"
+    rows, notes = _drain(src)
+    np.testing.assert_array_equal(rows[:, 0], rec.t_s)
+    np.testing.assert_array_equal(rows[:, 1:4], rec.gyro)
+    np.testing.assert_array_equal(rows[:, 4], rec.temp_c)
+    assert src.stats["lost_samples"] == 37 and src.stats["gaps"] == 1
+    assert notes == [f"gap: 37 samples lost before t={(1234 + 37) / 100:.6g} s (in the replayed file)"]
+    with pytest.raises(SourceEnded):
+        src.read()
+
+
+def test_replay_passes_annotation_notes_on_at_their_row(tmp_path):
+    path = tmp_path / "notes.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 10\n# gyro_unit: dps\n"
+                    "gx,gy,gz\n1,1,1\n2,2,2\n# something happened\n3,3,3\n")
+    src = open_source(f"replay:{path}")
+    first = src.read()
+    assert first.shape == (3, 4) and src.pop_notes() == ["something happened"]
+    from gyrofilter.sources.replay import _note_rows
+
+    assert _note_rows(read_recording(path)) == [(2, "something happened")]
+    np.testing.assert_array_equal(first[:, 0], [0.0, 0.1, 0.2])  # t made from the rate
+
+
+class FakeClock:
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+    def sleep(self, s):
+        assert 0 < s <= 0.1 + 1e-12  # a source never waits longer than 0.1 s per read
+        self.now += s
+
+
+def test_replay_realtime_hands_out_only_the_samples_that_are_due(tmp_path):
+    from gyrofilter.sources.replay import ReplaySource
+
+    path, rec = _recording(tmp_path, n=300)
+    clock = FakeClock()
+    src = ReplaySource(path, realtime=True, speed=2.0, clock=clock, sleep=clock.sleep)
+    got = []
+    while True:
+        try:
+            rows = src.read()
+        except SourceEnded:
+            break
+        assert np.all(rows[:, 0] <= (clock.now - src._start) * 2.0 + 1e-9)  # nothing early
+        got.append(rows)
+        clock.now += 0.013  # the consumer's own work
+    allrows = np.concatenate(got)
+    np.testing.assert_array_equal(allrows[:, 1:4], rec.gyro)  # nothing lost or doubled
+    assert 2.99 / 2 < clock.now - src._start < 3.0 / 2 + 0.2  # 300 samples at 100 Hz, twice as fast
+
+
+# ----------------------------------------------------------------------------- simulation
+
+
+def test_simulated_source_equals_the_simulator_whatever_the_pacing():
+    from gyrofilter.simulate import simulate
+    from gyrofilter.sources.simulated import DEFAULT_MODEL, SimulatedSource
+
+    rec = simulate(DEFAULT_MODEL, 3.0, sample_rate_hz=200.0, seed=11)
+    fast, _ = _drain(open_source("sim:seed=11,duration=3,rate=200,realtime=0"))
+    clock = FakeClock()
+    paced_src = SimulatedSource(seed=11, duration_s=3.0, sample_rate_hz=200.0, clock=clock, sleep=clock.sleep)
+    paced, _ = _drain(paced_src)
+    for rows in (fast, paced):
+        np.testing.assert_array_equal(rows[:, 0], rec.t_s)
+        np.testing.assert_array_equal(rows[:, 1:4], rec.gyro)
+        np.testing.assert_array_equal(rows[:, 4], rec.temp_c)
+    assert paced_src.header["simulated_seed"] == "11" and paced_src.header["gyro_unit"] == "lsb"
+
+
+def test_unseeded_simulation_records_a_seed_that_repeats_it():
+    a = open_source("sim:realtime=0,duration=1")
+    seed = int(a.header["simulated_seed"])
+    b = open_source(f"sim:realtime=0,duration=1,seed={seed}")
+    np.testing.assert_array_equal(_drain(a)[0], _drain(b)[0])
+
+
+def test_simulation_model_errors_are_settings_errors(tmp_path):
+    bad = tmp_path / "m.json"
+    bad.write_text('{"sample_rate_hz": 100, "axes": {"w": {}}}')
+    with pytest.raises(SettingsError, match="axes.w"):
+        open_source(f"sim:{bad}")
+    with pytest.raises(SettingsError, match="cannot read model"):
+        open_source(f"sim:{tmp_path / 'missing.json'}")
+
+
+# ----------------------------------------------------------------------------- serial line parser
+
+HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 sensor=MPU6050\n"
+
+
+def _lines(counters, temp=False):
+    out = b""
+    for c in counters:
+        out += f"{c},{c % 50 - 25},{-c % 7},{3 * c % 11}".encode() + (f",{-1500 + c}".encode() if temp else b"") + b"\n"
+    return out
+
+
+def _expected(counters):
+    c = np.asarray(counters)
+    return np.column_stack([c % 50 - 25, -c % 7, 3 * c % 11]).astype(float)
+
+
+def test_parser_same_rows_however_the_bytes_are_split():
+    data = HEADER + _lines(range(200))
+    whole = LineParser()
+    a = whole.feed(data)
+    rng = np.random.default_rng(3)
+    cuts = np.sort(rng.choice(np.arange(1, len(data)), size=150, replace=False))
+    split = LineParser()
+    parts = [split.feed(bytes(chunk)) for chunk in np.split(np.frombuffer(data, np.uint8), cuts)]
+    b = np.concatenate(parts)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(a[:, 1:4], _expected(range(200)))
+    np.testing.assert_allclose(a[:, 0], np.arange(200) / 100.0)
+    assert whole.header["sensor"] == "MPU6050" and whole.columns == ["t", "gx", "gy", "gz"]
+
+
+def test_parser_fast_and_slow_paths_agree():
+    p = LineParser()
+    p.feed(HEADER + _lines([0]))
+    fast = p.feed(_lines(range(1, 101)))  # plain CSV: the numpy path
+    q = LineParser()
+    q.feed(HEADER + _lines([0]))
+    slow = q.feed(b"# a device message\n" + _lines(range(1, 101)))  # '#' forces the line-by-line path
+    np.testing.assert_array_equal(fast, slow)
+    assert q.stats["device_messages"] == 1 and q.pop_notes() == ["device: a device message"]
+
+
+def test_parser_counts_jumps_duplicates_restarts_and_keeps_t_on_the_sensor_clock():
+    p = LineParser()
+    rows = p.feed(HEADER + _lines([5, 6, 7, 10, 10, 11, 2, 3]))
+    # 10 after 7: 2 lost; the second 10 is a duplicate; 2 after 11: device restart, t continues
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 2, 5, 6, 7, 8])
+    np.testing.assert_array_equal(rows[:, 1:4], _expected([5, 6, 7, 10, 11, 2, 3]))
+    assert (p.stats["lost_samples"], p.stats["counter_jumps"], p.stats["duplicates"], p.stats["restarts"]) == (2, 1, 1, 1)
+    notes = p.pop_notes()
+    assert notes[0] == "gap: 2 samples lost before t=0.05 s (counter 7 -> 10)"
+    assert "restarted" in notes[1]
+
+
+def test_parser_counter_wraps_at_counter_bits():
+    p = LineParser()
+    head = HEADER.replace(b"\n", b" counter_bits=16\n")
+    rows = p.feed(head + _lines([65534, 65535, 0, 1]))
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 2, 3])
+    assert p.stats["lost_samples"] == 0 and p.stats["restarts"] == 0
+
+
+def test_parser_skips_bad_lines_and_never_raises_on_garbage():
+    p = LineParser()
+    rng = np.random.default_rng(5)
+    junk = bytes(rng.integers(0, 256, 3000, dtype=np.uint8))
+    data = (HEADER + _lines(range(10)) + b"10,1,2\n" + b"\xff\xfe\x00zz\n" + b"12,1,,3\n"
+            + b"13,a,b,c\n" + b"14,1,2,3,4,5\n" + b"15,nan,1,1\n" + _lines(range(16, 20)))
+    rows = p.feed(data)
+    np.testing.assert_array_equal(rows[:, 1:4], _expected(list(range(10)) + list(range(16, 20))))
+    s = p.stats
+    assert s["partial_lines"] == 2 and s["bad_lines"] == 4
+    assert s["lost_samples"] == 6  # 10..15 never arrived as good lines
+    p.feed(junk)  # arbitrary bytes: counted, no exception
+    p.feed(b"\n" + _lines([20]))
+    assert p.stats["samples"] == 15
+
+
+def test_parser_temperature_raw_and_celsius():
+    raw = LineParser()
+    rows = raw.feed(HEADER.replace(b"\n", b" fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw\n") + _lines([0, 1], temp=True))
+    np.testing.assert_allclose(rows[:, 4], np.array([-1500, -1499]) / 340.0 + 36.53)
+    c = LineParser()
+    rows = c.feed(HEADER + b"0,1,2,3,25.5\n")
+    assert c.columns == ["t", "gx", "gy", "gz", "temp"] and rows[0, 4] == 25.5
+
+
+def test_parser_units_from_options_drop_the_first_line_and_check_a_later_header():
+    p = LineParser(gyro_unit="dps", sample_rate_hz=50)
+    rows = p.feed(b"3,4.5,1,1\n" + b"0,0.25,0.5,-0.125\n1,1,1,1\n")
+    assert p.stats["partial_lines"] == 1  # the first line may be cut: not used
+    np.testing.assert_array_equal(rows[:, 1:4], [[0.25, 0.5, -0.125], [1, 1, 1]])
+    np.testing.assert_allclose(rows[:, 0], [0, 0.02])
+    with pytest.raises(DeviceError, match="sample_rate_hz"):
+        p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
+
+
+def test_parser_header_changing_units_mid_stream_is_refused():
+    p = LineParser()
+    p.feed(HEADER + _lines([0, 1]))
+    p.feed(HEADER + _lines([0]))  # same header again (device restart): fine
+    assert p.stats["restarts"] == 1
+    with pytest.raises(DeviceError, match="changed the units"):
+        p.feed(HEADER.replace(b"131", b"65.5"))
+    q = LineParser()
+    q.feed(HEADER)
+    q.feed(b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=1\xff1\n")  # garbled repeat: skipped
+    assert q.stats["bad_lines"] == 1
+
+
+def test_parser_first_header_errors():
+    with pytest.raises(DeviceError, match="version"):
+        LineParser().feed(b"# gyrofilter-serial: 2 gyro_unit=dps sample_rate_hz=1\n")
+    with pytest.raises(SettingsError, match="lsb_per_dps"):
+        LineParser().feed(b"# gyrofilter-serial: 1 gyro_unit=lsb sample_rate_hz=100\n")
+
+
+# ----------------------------------------------------------------------------- commands
+
+
+def test_help_does_not_import_device_libraries():
+    code = (
+        "import sys\n"
+        "from gyrofilter.cli import main\n"
+        "for argv in (['--help'], ['record', '--help'], ['run', '--help']):\n"
+        "    try:\n"
+        "        main(argv)\n"
+        "    except SystemExit:\n"
+        "        pass\n"
+        "bad = [m for m in ('serial', 'smbus2') if m in sys.modules]\n"
+        "print('IMPORTED', bad)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert "IMPORTED []" in out.stdout, out.stdout + out.stderr
+    assert "serial:/dev/ttyUSB0" in out.stdout  # the SOURCE syntax is in --help
+
+
+def test_run_on_a_replay_equals_the_batch_filter(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    path, rec = _recording(tmp_path, n=1000)
+    out = tmp_path / "filtered.csv.gz"
+    assert main(["run", "--source", str(path), "--out", str(out), "--quiet"]) == 0
+    got = read_recording(out)
+    want = GyroFilter(100.0, 2.0).filter(rec.gyro_dps)
+    assert len(got) == len(want) == (1000 - 200) // 5
+    np.testing.assert_allclose(got.gyro_dps, want, rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(got.t_s, rec.t_s[200 + 4 :: 5][: len(want)])
+    assert got.sample_rate_hz == 20.0
+    err = capsys.readouterr().err
+    assert "1000 samples in, 160 filtered rows out" in err
+    # stdout is a readable recording too
+    assert main(["run", "--source", str(path), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    stdout_rec = (tmp_path / "stdout.csv")
+    stdout_rec.write_text(text)
+    np.testing.assert_allclose(read_recording(stdout_rec).gyro, got.gyro)
+
+
+def test_run_refuses_to_overwrite_and_reports_bad_sources(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    path, _ = _recording(tmp_path, n=300)
+    out = tmp_path / "exists.csv"
+    out.write_text("keep me")
+    assert main(["run", "--source", str(path), "--out", str(out)]) == 2
+    assert out.read_text() == "keep me"
+    assert main(["run", "--source", "mpu6050:speed=3"]) == 2
+    err = capsys.readouterr().err
+    assert "--force" in err and "unknown key 'speed'" in err
+
+
+def test_parser_with_options_uses_a_header_that_comes_first():
+    p = LineParser(gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=100)
+    rows = p.feed(HEADER + _lines([0, 1]))  # the header is a whole line: nothing is dropped
+    np.testing.assert_array_equal(rows[:, 1:4], _expected([0, 1]))
+    assert p.stats["partial_lines"] == 0 and p.header["sensor"] == "MPU6050"
