@@ -185,6 +185,11 @@ class GyroFilter:
         Returns None while calibrating and between blocks, else the filtered (x, y, z) in deg/s
         for the block this sample completed.
         """
+        try:
+            if len(sample) != 3:
+                raise SettingsError(f"update() takes one sample (gx, gy, gz) in deg/s, got {len(sample)} values")
+        except TypeError:
+            raise SettingsError(f"update() takes one sample (gx, gy, gz) in deg/s, got {sample!r}") from None
         if self._cal_buf is not None:
             self._cal_buf[self._cal_fill] = sample
             self._cal_fill += 1

@@ -163,3 +163,6 @@ def test_bad_samples_name_the_problem():
     with pytest.raises(SettingsError, match="finite"):
         for s in x[7:12].tolist():
             f.update(tuple(s))
+    for bad in [(1.0, 2.0), 3.0, (1, 2, 3, 4)]:
+        with pytest.raises(SettingsError, match="one sample"):
+            f.update(bad)
