@@ -1,0 +1,181 @@
+"""The serial source through pyserial on a real pseudo-terminal (os.openpty()).
+
+A writer thread plays the microcontroller: it answers '?' with the header, then streams lines
+at 1 kHz on its own schedule, with garbage and a cut line injected and some lines split over
+two writes; closing the master end is the cable being pulled.
+"""
+import os
+import select
+import threading
+import time
+import tty
+
+import numpy as np
+import pytest
+
+from gyrofilter.errors import DeviceError, SourceEnded
+from gyrofilter.recording import read_recording
+from gyrofilter.sources import open_source
+
+pytest.importorskip("serial")
+
+HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=1000 sensor=MPU6050 fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw\n"
+RATE_HZ = 1000
+
+
+def line(i):
+    return f"{i},{(i * 7) % 2001 - 1000},{-(i % 300)},{(i * i) % 97 - 48},{-2000 + i % 50}\n".encode()
+
+
+def values(i):
+    i = np.asarray(i)
+    return np.column_stack([(i * 7) % 2001 - 1000, -(i % 300), (i * i) % 97 - 48]).astype(float)
+
+
+class Device(threading.Thread):
+    """Stream ``n`` lines at ``RATE_HZ`` into the master side of a pty, with faults injected."""
+
+    def __init__(self, master, n, *, header=True, wait_for_query=True, garbage_at=(), cut_at=(), split_every=97):
+        super().__init__(daemon=True)
+        self.master, self.n, self.header, self.wait_for_query = master, n, header, wait_for_query
+        self.garbage_at, self.cut_at, self.split_every = set(garbage_at), set(cut_at), split_every
+        self.sent_good = []
+        self.query = b""
+        self.error = None
+        self.rng = np.random.default_rng(1)
+
+    def run(self):
+        try:
+            self._run()
+        except Exception as exc:  # noqa: BLE001 - reported by the test
+            self.error = exc
+        finally:
+            os.close(self.master)
+
+    def _run(self):
+        if self.wait_for_query:
+            ready, _, _ = select.select([self.master], [], [], 10.0)
+            if ready:
+                self.query = os.read(self.master, 16)
+        if self.header:
+            os.write(self.master, HEADER)
+        start = time.monotonic()
+        for i in range(self.n):
+            due = start + i / RATE_HZ
+            delay = due - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            if i in self.garbage_at:
+                junk = bytes(self.rng.integers(0x80, 0x100, 40, dtype=np.uint8)) + b"garbage!" + b"\n"
+                os.write(self.master, junk)
+            data = line(i)
+            if i in self.cut_at:  # the line loses its tail on the wire
+                os.write(self.master, data[: len(data) // 2] + b"\n")
+                continue
+            if self.split_every and i % self.split_every == 0:
+                os.write(self.master, data[:5])
+                time.sleep(0.002)
+                os.write(self.master, data[5:])
+            else:
+                os.write(self.master, data)
+            self.sent_good.append(i)
+        time.sleep(0.05)
+
+
+@pytest.fixture
+def pty_pair():
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    name = os.ttyname(slave)
+    yield master, name
+    os.close(slave)
+
+
+def drain(source, limit_s=60.0):
+    rows = []
+    deadline = time.monotonic() + limit_s
+    with pytest.raises(SourceEnded) as info:
+        while time.monotonic() < deadline:
+            rows.append(source.read())
+        raise AssertionError("the source did not end after the device went away")
+    return np.concatenate(rows), str(info.value)
+
+
+def test_every_good_line_arrives_once_in_order_at_1khz(pty_pair):
+    master, name = pty_pair
+    n = 4000  # 4 s at 1 kHz
+    dev = Device(master, n, garbage_at=(700, 2500), cut_at=(1500,))
+    dev.start()
+    src = open_source(f"serial:{name},baud=115200,header_timeout=10")
+    assert src.header["lsb_per_dps"] == "131" and src.header["sensor"] == "MPU6050"
+    assert src.columns == ["t", "gx", "gy", "gz", "temp"]
+    rows, message = drain(src)
+    dev.join(10)
+    assert dev.error is None and dev.query == b"?"
+    good = np.array(dev.sent_good)
+    assert len(good) == n - 1
+    # every intact line, once, in order; t from the counter (the cut line 1500 is a 1-sample gap)
+    np.testing.assert_array_equal(rows[:, 1:4], values(good))
+    np.testing.assert_allclose(rows[:, 0], good / RATE_HZ)
+    np.testing.assert_allclose(rows[:, 4], (-2000 + good % 50) / 340.0 + 36.53)
+    s = src.stats
+    assert s["samples"] == n - 1 and s["lost_samples"] == 1 and s["counter_jumps"] == 1
+    assert s["partial_lines"] == 1 and s["bad_lines"] >= 2 and s["garbage_bytes"] >= 2 * 48
+    assert s["disconnects"] == 1 and "disconnected" in message and f"after {n - 1} samples" in message
+    notes = src.pop_notes()
+    assert "gap: 1 samples lost before t=1.501 s (counter 1499 -> 1501)" in notes
+    src.close()
+
+
+def test_device_without_header_uses_the_options(pty_pair):
+    master, name = pty_pair
+    dev = Device(master, 1500, header=False, wait_for_query=False, split_every=0)
+    dev.start()
+    src = open_source(f"serial:{name}", gyro_unit="lsb", lsb_per_dps=131.0, sample_rate_hz=1000.0)
+    rows, _ = drain(src)
+    dev.join(10)
+    assert src.header["gyro_unit"] == "lsb" and src.header["lsb_per_dps"] == "131"
+    # lines before the port opened are gone and the first one received is dropped (it may be
+    # cut); from then on every line, in order, consecutive
+    counters = np.round(rows[:, 0] * RATE_HZ).astype(int)
+    first = int(np.flatnonzero((values(np.arange(1500)) == rows[0, 1:4]).all(axis=1))[0])
+    np.testing.assert_array_equal(rows[:, 1:4], values(np.arange(first, 1500)))
+    np.testing.assert_array_equal(counters, np.arange(len(rows)))
+    assert src.stats["lost_samples"] == 0 and len(rows) > 1000
+
+
+def test_no_header_and_no_options_is_a_clear_error(pty_pair):
+    master, name = pty_pair
+    with pytest.raises(DeviceError) as info:
+        open_source(f"serial:{name},header_timeout=0.3")
+    text = str(info.value)
+    assert "no '# gyrofilter-serial: 1 ...' header within 0.3 s" in text and "unit=lsb" in text
+    os.close(master)
+
+
+def test_missing_port_is_a_clear_error(tmp_path):
+    with pytest.raises(DeviceError, match="cannot open the serial port.*dialout"):
+        open_source(f"serial:{tmp_path / 'ttyNONE'}")
+
+
+def test_record_from_serial_keeps_everything_when_the_cable_is_pulled(pty_pair, tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    master, name = pty_pair
+    dev = Device(master, 2000, cut_at=(999,))
+    dev.start()
+    out = tmp_path / "serial.csv.gz"
+    code = main(["record", "--source", f"serial:{name}", "--out", str(out)])
+    dev.join(10)
+    assert code == 1  # the recording ended because the device went away
+    rec = read_recording(out)
+    assert rec.warnings == []  # closed cleanly
+    good = np.array(dev.sent_good)
+    np.testing.assert_array_equal(rec.gyro, values(good))
+    np.testing.assert_allclose(rec.t_s, good / RATE_HZ)
+    texts = [t for _, t in rec.notes]
+    assert any(t.startswith("gap: 1 samples lost before t=1 s") for t in texts)
+    assert texts[-1].startswith("end: source ended:") and "disconnected" in texts[-1]
+    assert rec.header["sensor"] == "MPU6050" and rec.header["serial_port"] == name
+    err = capsys.readouterr().err
+    assert f"wrote {len(good)} samples" in err and "lost 1 samples" in err
