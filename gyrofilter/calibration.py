@@ -117,7 +117,7 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
-                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:g} s"
+                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
             )
     sigma = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
     return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz))

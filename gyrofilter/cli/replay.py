@@ -15,6 +15,7 @@ BUNDLED = "mpu6050_static_100s.csv.gz"
 def add_arguments(parser):
     parser.add_argument("recording", nargs="?", help=f"recording file (format v1, .csv or .csv.gz); default: the bundled {BUNDLED}")
     parser.add_argument("--out", metavar="FILE", help="write the filtered series as a recording (.csv or .csv.gz)")
+    parser.add_argument("--plot", metavar="PNG", help="draw raw and filtered rates per axis (needs matplotlib)")
     parser.add_argument("--realtime", action="store_true", help="pace the filter at the recording's sample rate and print each filtered row as it is produced")
     common.add_filter_arguments(parser)
 
@@ -34,9 +35,17 @@ def run(args):
     raw = gyro[start : start + len(filtered) * filt.settings.block_len]
     common.print_summary(path, rec, filt, raw, filtered)
     common.save_calibration(args, filt)
+    if args.out or args.plot:
+        out_rec = _filtered_recording(path, rec, filt, filtered, start)
     if args.out:
-        write_recording(args.out, _filtered_recording(path, rec, filt, filtered, start))
+        write_recording(args.out, out_rec)
         common.say(f"wrote {len(filtered)} filtered rows to {args.out}")
+    if args.plot:
+        from ..plots import plot_filtered
+
+        bias = np.asarray(filt.bias_dps)
+        plot_filtered(args.plot, rec.t_s, gyro - bias, out_rec.t_s, filtered, title=f"{path} (raw minus start-up bias)")
+        common.say(f"drew {args.plot}")
     return 0
 
 
