@@ -1,0 +1,131 @@
+"""`gyrofilter record` in a subprocess, stopped by SIGINT, SIGTERM and SIGKILL mid-run.
+
+The source is a seeded simulation paced in real time (or a paced replay), so the test knows
+every sample the source delivered; whatever the signal, the file reads back and its samples
+equal the source's from the first one up to the last flush.
+"""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from gyrofilter.errors import RecordingError
+from gyrofilter.recording import Recording, read_recording, write_recording
+from gyrofilter.simulate import simulate
+from gyrofilter.sources.simulated import DEFAULT_MODEL
+
+SIM_SECONDS = 60.0  # the source's own length; the recording is stopped long before
+RATE_HZ = 500.0
+
+
+def start_record(source, out, *extra):
+    cmd = [sys.executable, "-m", "gyrofilter", "record", "--source", source, "--out", str(out), *extra]
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def wait_for_rows(path, rows, proc, timeout_s=30.0):
+    """Wait until the file on disk (flushed data only) holds at least ``rows`` samples."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise AssertionError(f"record exited early ({proc.returncode}): {proc.stderr.read()}")
+        try:
+            if len(read_recording(path)) >= rows:
+                return
+        except (RecordingError, OSError):
+            pass  # not written yet
+        time.sleep(0.1)
+    raise AssertionError(f"{path} did not reach {rows} rows in {timeout_s} s")
+
+
+@pytest.fixture(scope="module")
+def expected():
+    return simulate(DEFAULT_MODEL, SIM_SECONDS, sample_rate_hz=RATE_HZ, seed=21)
+
+
+@pytest.mark.parametrize("sig, name", [(signal.SIGINT, "SIGINT"), (signal.SIGTERM, "SIGTERM"), (signal.SIGKILL, "SIGKILL")])
+@pytest.mark.parametrize("suffix", [".csv.gz", ".csv"])
+def test_record_stopped_by_a_signal_keeps_a_readable_exact_prefix(tmp_path, expected, sig, name, suffix):
+    out = tmp_path / f"rec{suffix}"
+    proc = start_record(f"sim:seed=21,rate={RATE_HZ:g},duration={SIM_SECONDS:g}", out)
+    try:
+        wait_for_rows(out, 300, proc)
+        flushed_before = len(read_recording(out))
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    rec = read_recording(out)
+    n = len(rec)
+    assert n >= flushed_before >= 300  # nothing that had been flushed is lost
+    np.testing.assert_array_equal(rec.gyro, expected.gyro[:n])
+    np.testing.assert_allclose(rec.t_s, expected.t_s[:n], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(rec.temp_c, expected.temp_c[:n], rtol=0, atol=5e-5)  # written with 4 decimals
+    for key in ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "sensor", "start_time_utc", "simulated_seed"):
+        assert key in rec.header
+    if sig == signal.SIGKILL:
+        assert proc.returncode == -signal.SIGKILL
+        # at most the data since the last flush is missing; a cut line/stream is only a warning
+        assert all("interrupted" in w or "cut short" in w for w in rec.warnings)
+    else:
+        assert proc.returncode == 0, err
+        assert rec.warnings == []  # closed cleanly
+        assert rec.notes[-1][1].startswith(f"end: stopped by {name}")
+        assert f"stopped by {name}" in err and f"wrote {n} samples" in err and "lost 0 samples" in err
+
+
+def test_record_duration_and_replay_source(tmp_path):
+    rng = np.random.default_rng(2)
+    n = 1000
+    idx = np.arange(n)
+    idx[600:] += 25  # the replayed file has a gap of 25 samples
+    src_rec = Recording.from_dps(np.round(rng.normal(0, 40, (n, 3))) / 131.0, 200.0, t_s=idx / 200.0)
+    src_path = tmp_path / "src.csv"
+    write_recording(src_path, src_rec)
+    out = tmp_path / "out.csv"
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "record", "--source", f"replay:{src_path}",
+                           "--out", str(out), "--duration", "3.5"], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    rec = read_recording(out)
+    keep = idx / 200.0 < 3.5
+    assert len(rec) == keep.sum() == 675
+    np.testing.assert_allclose(rec.gyro_dps, src_rec.gyro_dps[keep], rtol=1e-8)
+    texts = [t for _, t in rec.notes]
+    assert texts[0] == "gap: 25 samples lost before t=3.125 s (in the replayed file)"
+    assert texts[-1].startswith("end: duration reached")
+    assert "lost 25 samples" in proc.stderr
+    # the file is not overwritten without --force
+    again = subprocess.run([sys.executable, "-m", "gyrofilter", "record", "--source", f"replay:{src_path}",
+                            "--out", str(out)], capture_output=True, text=True, timeout=60)
+    assert again.returncode == 2 and "--force" in again.stderr and "Traceback" not in again.stderr
+    assert len(read_recording(out)) == 675
+
+
+def test_record_paced_replay_killed_mid_run(tmp_path):
+    """A replayed real log, paced 5x: SIGTERM mid-run gives the file's first samples exactly."""
+    src_path = os.path.join(os.path.dirname(__file__), "..", "recordings", "mpu6050_static_100s.csv.gz")
+    if not os.path.exists(src_path):
+        pytest.skip("recordings/mpu6050_static_100s.csv.gz not present")
+    src = read_recording(src_path)
+    out = tmp_path / "replayed.csv.gz"
+    proc = start_record(f"replay:{src_path},realtime,speed=5", out)
+    try:
+        wait_for_rows(out, 200, proc)
+        proc.send_signal(signal.SIGTERM)
+        proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0
+    rec = read_recording(out)
+    n = len(rec)
+    assert 200 <= n < len(src)
+    np.testing.assert_array_equal(rec.gyro, src.gyro[:n])
+    assert rec.header["lsb_per_dps"] == "131" and rec.header["live_source"].startswith("replay:")
