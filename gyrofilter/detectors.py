@@ -1,0 +1,694 @@
+"""Detectors for the model-gap analysis: one statistic per effect of the effect table.
+
+Every detector works on one axis, a 1-D rate series ``x_dps`` (deg/s) sampled at
+``sample_rate_hz``, and returns a :class:`Candidate` (or None): the effect name, its parameter
+estimates in the units of ``shared/interfaces.md`` section 2, the detector's statistic, the
+threshold it had to pass and an evidence sentence. :mod:`gyrofilter.gap` runs the same
+statistic on the baseline simulations to show the simulated spread, and keeps a candidate only
+when the extended model lowers the discrepancy.
+
+The detectors run in a fixed **decision order**, each on the series cleaned of what the earlier
+ones found, because the effects are confusable:
+
+1. ``outliers`` -- isolated spikes. Statistic: the second-difference residual
+   ``r_i = x_i - (x_{i-1} + x_{i+1}) / 2`` (white noise: ``sd(r) = sigma sqrt(3/2)``) against a
+   robust (MAD) scale; a spike is ``|r_i| > k sd(r)`` with ``k`` set so that white Gaussian noise
+   gives 0.001 expected false spikes per axis (``k = Phi^-1(1 - 0.0005 / N)``, about 5.8 for
+   N = 360 000). Paper 001 (gross errors: isolated, much larger than the noise). Found spikes
+   are replaced by their neighbours' mean before the next detectors run.
+2. ``sinusoid`` -- a line in the periodogram. The periodogram ordinate divided by the local
+   noise level (median over a +-5 % frequency band / ln 2) is Exp(1) under any smooth noise
+   spectrum, so the largest of ``M`` ordinates exceeds ``t`` with probability about
+   ``M exp(-t)`` (Fisher's test, the max-periodogram form; Priestley 1981, sec. 6.1.4). The line
+   is fitted by least squares (amplitude, phase) at the refined frequency and subtracted.
+3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
+   high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
+   (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short.
+4. Slow bias effects, on block means ``y_k`` of the cleaned series (at most 2048 blocks):
+   deterministic shapes (``rate_ramp``: LS line; ``bias_step``: two-mean scan; ``warmup``:
+   ``a exp(-t/tau)`` scanned over tau; ``temperature``: regression on the block-mean
+   temperature) are tested by the drop of the residual sum of squares in units of the block
+   white-noise variance (``Delta chi^2``); stochastic spectra (``rate_random_walk``
+   ``S = K^2 / (4 pi^2 f^2 Delta)``, ``bias_instability`` ``S = B^2 / (2 pi f Delta)``,
+   ``gauss_markov`` AR(1)) are tested by the Whittle likelihood ratio on the detrended block
+   means (IEEE Std 952-1997 annex C for the PSD forms; Whittle 1953). Model choice:
+
+   * the best deterministic shape and the best stochastic spectrum are chosen by the
+     BIC-penalised statistic (``stat - k ln n``, k free parameters), so a warm-up with a
+     very long tau loses to a ramp and a Gauss-Markov with tau longer than the record loses
+     to a rate random walk;
+   * a deterministic shape is kept when the stochastic tests on its residual are no longer
+     significant, or when it stays significant against the *fitted* stochastic noise (the
+     variance of its amplitude estimate under that noise, e.g. ``q sum_k (sum_{i>=k} w_i)^2``
+     for a random walk), so a random walk that happens to look like a ramp or a step is called
+     a random walk, and a step on top of a random walk gives both findings.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: expected number of false spikes per axis on white Gaussian noise
+OUTLIER_FALSE_PER_AXIS = 1e-3
+#: minimum number of spikes for an outlier finding
+OUTLIER_MIN_COUNT = 3
+#: false-alarm probability per axis for the periodogram line test
+SINUSOID_ALPHA = 1e-4
+#: z-score (in units of 1/sqrt(N)) the lag-1 autocorrelation must exceed, and the smallest
+#: |lag1| reported (smaller correlations are real but immaterial)
+COLORED_Z = 6.0
+COLORED_MIN_LAG1 = 0.03
+#: Delta chi^2 / 2 Delta log L thresholds of the slow-effect tests (calibrated on baseline
+#: simulations of clean recordings only: white noise + quantization, 10 min to 2 h)
+DETERMINISTIC_THRESHOLD = 36.0
+STOCHASTIC_THRESHOLD = 30.0
+#: z^2 a deterministic shape must reach against the fitted stochastic noise to be kept with it
+JOINT_THRESHOLD = 30.0
+#: number of blocks the slow-effect detectors work on (at most)
+MAX_BLOCKS = 2048
+
+
+@dataclass
+class Candidate:
+    """A departure from the baseline, mapped to an effect of the table."""
+
+    effect: str
+    params: dict
+    statistic: float
+    threshold: float
+    evidence: str
+    statistic_name: str = ""
+    #: model component to subtract from the series (deterministic effects), per sample, or None
+    component: object = None
+    extra: dict = field(default_factory=dict)
+
+
+# ---------------------------------------------------------------------------------------------
+# helpers
+
+
+def robust_sigma(x):
+    """1.4826 MAD (a Gaussian's sigma), falling back to the std when the MAD is 0 (coarse
+    quantization)."""
+    x = np.asarray(x, dtype=float)
+    med = np.median(x)
+    mad = 1.4826 * np.median(np.abs(x - med))
+    if mad > 0:
+        return float(mad)
+    return float(np.std(x))
+
+
+def detrend_line(x):
+    """``x`` minus its least-squares line (closed form, O(N))."""
+    n = x.size
+    t = np.arange(n, dtype=float) - 0.5 * (n - 1)
+    tt = float(np.dot(t, t))
+    slope = float(np.dot(t, x)) / tt if tt > 0 else 0.0
+    return x - x.mean() - slope * t
+
+
+def moving_mean(x, window):
+    """Centred moving mean with window ``window`` samples (edges: shorter windows)."""
+    window = max(1, int(window))
+    c = np.concatenate(([0.0], np.cumsum(x, dtype=float)))
+    n = x.size
+    half = window // 2
+    lo = np.clip(np.arange(n) - half, 0, n)
+    hi = np.clip(np.arange(n) - half + window, 0, n)
+    return (c[hi] - c[lo]) / (hi - lo)
+
+
+def block_means(x, max_blocks=MAX_BLOCKS):
+    """Means of ``n`` consecutive blocks of ``L = ceil(N / max_blocks)`` samples (a trailing
+    partial block is dropped). Returns ``(y, L)``."""
+    n_samples = x.size
+    length = max(1, int(math.ceil(n_samples / max_blocks)))
+    n = n_samples // length
+    y = x[: n * length].reshape(n, length).mean(axis=1)
+    return y, length
+
+
+# ---------------------------------------------------------------------------------------------
+# 1. outliers
+
+
+def outlier_statistic(x):
+    """Spike mask and count: ``|x_i - (x_{i-1}+x_{i+1})/2| > k sd`` and a local maximum.
+
+    Returns ``(mask, k, sd_r)``.
+    """
+    n = x.size
+    mask = np.zeros(n, dtype=bool)
+    if n < 16:
+        return mask, np.inf, 0.0
+    r = np.empty(n)
+    r[1:-1] = x[1:-1] - 0.5 * (x[:-2] + x[2:])
+    r[0] = x[0] - x[1]
+    r[-1] = x[-1] - x[-2]
+    sd_r = robust_sigma(r[1:-1])
+    if sd_r <= 0:
+        return mask, np.inf, 0.0
+    from statistics import NormalDist
+
+    k = NormalDist().inv_cdf(1.0 - 0.5 * OUTLIER_FALSE_PER_AXIS / n)
+    a = np.abs(r)
+    big = a > k * sd_r
+    # a spike at i also moves r at i-1 and i+1 by half its size: keep local maxima only
+    left = np.concatenate(([0.0], a[:-1]))
+    right = np.concatenate((a[1:], [0.0]))
+    mask = big & (a >= left) & (a >= right)
+    return mask, k, sd_r
+
+
+def clean_spikes(x, mask):
+    """Replace masked samples by the mean of their neighbours (the median of the next 2 on
+    each side that are not masked)."""
+    if not mask.any():
+        return x
+    y = x.copy()
+    idx = np.flatnonzero(mask)
+    n = x.size
+    for i in idx:
+        nb = [j for j in (i - 2, i - 1, i + 1, i + 2) if 0 <= j < n and not mask[j]]
+        y[i] = np.median(x[nb]) if nb else np.median(x)
+    return y
+
+
+def detect_outliers(x):
+    """Outlier (spike) candidate: rate = spikes / N, magnitude = median |spike - neighbours|."""
+    mask, k, sd_r = outlier_statistic(x)
+    count = int(mask.sum())
+    if count < OUTLIER_MIN_COUNT:
+        return None, mask
+    cleaned = clean_spikes(x, mask)
+    mags = np.abs(x[mask] - cleaned[mask])
+    rate = count / x.size
+    magnitude = float(np.median(mags))
+    expected = OUTLIER_FALSE_PER_AXIS
+    cand = Candidate(
+        effect="outliers",
+        params={"rate": rate, "magnitude_dps": magnitude},
+        statistic=float(count),
+        threshold=float(OUTLIER_MIN_COUNT),
+        statistic_name="spikes beyond %.1f robust sd of the second difference" % k,
+        evidence=(f"{count} isolated spikes beyond {k:.1f} robust standard deviations of the "
+                  f"second difference (white noise expects {expected:g}); median spike "
+                  f"{magnitude:.3g} deg/s = {magnitude / (sd_r / math.sqrt(1.5)):.1f} noise sd"),
+    )
+    return cand, mask
+
+
+# ---------------------------------------------------------------------------------------------
+# 2. sinusoid
+
+
+def _local_level(power, first_bin, ratio=1.1, min_bins=16):
+    """Local noise level of a periodogram: median over log-spaced bands / ln 2, interpolated
+    in log-log. Bins below ``first_bin`` get the first band's level."""
+    n = power.size
+    edges = [first_bin]
+    while edges[-1] < n:
+        nxt = max(edges[-1] + min_bins, int(edges[-1] * ratio))
+        edges.append(min(nxt, n))
+    if len(edges) > 2 and edges[-1] - edges[-2] < min_bins:
+        edges.pop(-2)
+    centres, levels = [], []
+    for a, b in zip(edges[:-1], edges[1:]):
+        seg = power[a:b]
+        if seg.size == 0:
+            continue
+        centres.append(0.5 * (a + b - 1))
+        levels.append(max(np.median(seg) / math.log(2.0), 1e-300))
+    centres = np.asarray(centres)
+    levels = np.log(np.asarray(levels))
+    bins = np.arange(n, dtype=float)
+    out = np.interp(np.log(np.maximum(bins, 1.0)), np.log(np.maximum(centres, 1.0)), levels)
+    return np.exp(out)
+
+
+def sinusoid_fit(x, fs, f_hz):
+    """Least-squares ``a cos(2 pi f t) + b sin(2 pi f t) + c``; returns (amplitude, phase, fit)."""
+    t = np.arange(x.size) / fs
+    w = 2 * math.pi * f_hz * t
+    c, s = np.cos(w), np.sin(w)
+    a_mat = np.column_stack([c, s, np.ones_like(t)])
+    coef, *_ = np.linalg.lstsq(a_mat, x, rcond=None)
+    amp = math.hypot(coef[0], coef[1])
+    phase = math.atan2(coef[0], coef[1])  # amp sin(w + phase)
+    return amp, phase, coef[0] * c + coef[1] * s
+
+
+def sinusoid_statistic(x, fs):
+    """Largest normalised periodogram ordinate (>= bin 8) and its frequency (Hz).
+
+    Returns ``(stat, f_hz, threshold)``; the series is detrended (LS line) first.
+    """
+    n = x.size
+    if n < 64:
+        return 0.0, float("nan"), float("inf")
+    spec = np.abs(np.fft.rfft(detrend_line(x))) ** 2 / n
+    first = 8
+    if spec.size <= first + 32:
+        return 0.0, float("nan"), float("inf")
+    level = _local_level(spec, first)
+    ratio = spec / level
+    ratio[:first] = 0.0
+    ratio[-1] = 0.0
+    j = int(np.argmax(ratio))
+    m = spec.size - first
+    threshold = math.log(m / SINUSOID_ALPHA)
+    return float(ratio[j]), j * fs / n, threshold
+
+
+def detect_sinusoid(x, fs):
+    """Sinusoid candidate: frequency refined around the peak, amplitude by least squares."""
+    stat, f0, thr = sinusoid_statistic(x, fs)
+    if not stat > thr:
+        return None
+    n = x.size
+    df = fs / n
+    # refine: golden-section search of the LS amplitude within +-1 bin
+    lo, hi = max(f0 - df, df), min(f0 + df, fs / 2)
+    g = (math.sqrt(5) - 1) / 2
+    a, b = lo, hi
+    xc = x - x.mean()
+    # amplitude of a sinusoid at f via the DFT sum (fast, no lstsq)
+    tt = np.arange(n) / fs
+
+    def amp(f):
+        return abs(np.dot(xc, np.exp(-2j * math.pi * f * tt)))
+
+    c1, c2 = b - g * (b - a), a + g * (b - a)
+    f1, f2 = amp(c1), amp(c2)
+    for _ in range(30):
+        if f1 > f2:
+            b, c2, f2 = c2, c1, f1
+            c1 = b - g * (b - a)
+            f1 = amp(c1)
+        else:
+            a, c1, f1 = c1, c2, f2
+            c2 = a + g * (b - a)
+            f2 = amp(c2)
+    f_hz = 0.5 * (a + b)
+    amplitude, phase, fit = sinusoid_fit(x, fs, f_hz)
+    sigma = robust_sigma(np.diff(x)) / math.sqrt(2)
+    return Candidate(
+        effect="sinusoid",
+        params={"frequency_hz": f_hz, "amplitude_dps": amplitude, "phase_rad": phase},
+        statistic=stat,
+        threshold=thr,
+        statistic_name="periodogram peak / local noise level",
+        component=fit,
+        evidence=(f"spectral line at {f_hz:.4g} Hz, {stat:.0f} times the local noise level of the "
+                  f"periodogram (white noise: exceeds {thr:.0f} with probability "
+                  f"{SINUSOID_ALPHA:g}); amplitude {amplitude:.3g} deg/s "
+                  f"({amplitude / sigma:.2f} noise sd)"),
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# 3. colored noise
+
+
+def colored_window(n, fs):
+    """High-pass window (samples) for the lag-1 statistic: 64 samples or 0.5 s."""
+    return int(min(max(64, round(0.5 * fs)), max(8, n // 8)))
+
+
+def lag1_statistic(x, fs):
+    """Lag-1 autocorrelation of ``x - moving_mean(x, W)``; white noise: about -1/W."""
+    n = x.size
+    if n < 32:
+        return 0.0, 0
+    w = colored_window(n, fs)
+    e = x - moving_mean(x, w)
+    den = float(np.dot(e, e))
+    if den <= 0:
+        return 0.0, w
+    return float(np.dot(e[1:], e[:-1]) / den), w
+
+
+def lag1_from_highpassed(r1, window):
+    """Undo the high-pass: for an AR(1) noise of lag-1 ``rho``, removing the moving mean of
+    ``W`` samples removes the variance fraction ``c = (1 + rho) / ((1 - rho) W)`` (the
+    long-run variance over W) from both the variance and the lag-1 covariance, so
+    ``r1 = (rho - c) / (1 - c)``; solved for ``rho`` by fixed-point iteration."""
+    rho = r1
+    for _ in range(50):
+        c = (1 + rho) / (max(1 - rho, 1e-3) * window)
+        c = min(c, 0.9)
+        new = r1 * (1 - c) + c
+        new = float(np.clip(new, -0.99, 0.99))
+        if abs(new - rho) < 1e-7:
+            break
+        rho = new
+    return rho
+
+
+def detect_colored(x, fs):
+    """Colored-noise candidate: ``lag1`` from the high-passed r1 (:func:`lag1_from_highpassed`)."""
+    r1, w = lag1_statistic(x, fs)
+    if w == 0:
+        return None
+    lag1 = lag1_from_highpassed(r1, w)
+    z = lag1 * math.sqrt(x.size)
+    if abs(z) < COLORED_Z or abs(lag1) < COLORED_MIN_LAG1:
+        return None
+    lag1 = float(np.clip(lag1, -0.99, 0.99))
+    return Candidate(
+        effect="colored_noise",
+        params={"lag1": lag1},
+        statistic=abs(z),
+        threshold=COLORED_Z,
+        statistic_name="|lag-1 autocorrelation| in units of 1/sqrt(N)",
+        evidence=(f"lag-1 autocorrelation of the noise {lag1:+.3f} (white noise: 0 +- "
+                  f"{1 / math.sqrt(x.size):.4f}, so {abs(z):.0f} standard errors away)"),
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# 4. slow bias effects on block means
+
+
+def _periodogram(r):
+    n = r.size
+    spec = np.abs(np.fft.rfft(r)) ** 2 / n
+    j = np.arange(spec.size)
+    keep = (j >= 1) & (j < n / 2)
+    return spec[keep], j[keep] * 2 * math.pi / n
+
+
+def _spectrum(model, theta, omega, delta_s):
+    """Component spectrum of a stochastic bias model for block means (sampling delta_s)."""
+    if model == "rate_random_walk":
+        q = theta[0]
+        return q / (4 * np.sin(omega / 2) ** 2)
+    if model == "bias_instability":
+        h = theta[0]
+        return h / omega
+    if model == "gauss_markov":
+        var, phi = theta
+        return var * (1 - phi ** 2) / (1 - 2 * phi * np.cos(omega) + phi ** 2)
+    raise ValueError(model)
+
+
+def _whittle(spec, omega, model, delta_s, s0_start):
+    """Minimise the Whittle negative log-likelihood ``sum log S + I/S`` over the model's
+    parameters and the white level; returns (nll, theta, s0)."""
+    from scipy.optimize import minimize
+
+    low = spec[: max(4, spec.size // 16)].mean()
+
+    def unpack(p):
+        s0 = math.exp(p[0])
+        if model == "gauss_markov":
+            var = math.exp(p[1])
+            phi = 1 / (1 + math.exp(-p[2]))
+            return s0, (var, phi)
+        return s0, (math.exp(p[1]),)
+
+    def nll(p):
+        s0, theta = unpack(p)
+        s = s0 + _spectrum(model, theta, omega, delta_s)
+        return float(np.sum(np.log(s) + spec / s))
+
+    best = None
+    if model == "rate_random_walk":
+        starts = [[math.log(s0_start), math.log(max(low, 1e-30) * 4 * math.sin(omega[1] / 2) ** 2 + 1e-300)]]
+    elif model == "bias_instability":
+        starts = [[math.log(s0_start), math.log(max(low, 1e-30) * omega[2] + 1e-300)]]
+    else:
+        starts = []
+        for phi in (0.5, 0.9, 0.98, 0.995):
+            if phi ** 2 < 1:
+                starts.append([math.log(s0_start), math.log(max(low, s0_start) * 0.1 + 1e-300),
+                               math.log(phi / (1 - phi))])
+    for p0 in starts:
+        res = minimize(nll, np.asarray(p0, dtype=float), method="Nelder-Mead",
+                       options={"xatol": 1e-3, "fatol": 1e-3, "maxiter": 600})
+        if best is None or res.fun < best[0]:
+            best = (res.fun, res.x)
+    s0, theta = unpack(best[1])
+    return best[0], theta, s0
+
+
+STOCHASTIC_MODELS = ("rate_random_walk", "bias_instability", "gauss_markov")
+_N_PARAMS = {"rate_random_walk": 1, "bias_instability": 1, "gauss_markov": 2,
+             "rate_ramp": 1, "temperature": 1, "bias_step": 2, "warmup": 2}
+
+
+def stochastic_fits(y, delta_s):
+    """Whittle fits of each stochastic model to the LS-detrended block means ``y``.
+
+    Returns ``{model: (two_delta_loglik, theta, s0)}`` and the white-only level.
+    """
+    n = y.size
+    spec, omega = _periodogram(detrend_line(y))
+    s0_white = float(spec.mean())
+    nll0 = float(np.sum(np.log(s0_white) + spec / s0_white))
+    s0_hf = float(spec[spec.size // 2:].mean())
+    out = {}
+    for model in STOCHASTIC_MODELS:
+        nll, theta, s0 = _whittle(spec, omega, model, delta_s, s0_hf)
+        out[model] = (max(0.0, 2 * (nll0 - nll)), theta, s0)
+    return out, s0_hf
+
+
+def _stochastic_params(model, theta, delta_s):
+    """Table parameters from the block-mean model parameters."""
+    if model == "rate_random_walk":
+        # q = K^2 delta  (random walk of the rate, increment variance per block)
+        return {"k_dps_per_sqrt_s": math.sqrt(theta[0] / delta_s)}
+    if model == "bias_instability":
+        # S_d(omega) = h / omega = B^2 / (2 pi f delta) with omega = 2 pi f delta -> h = B^2
+        return {"b_dps": math.sqrt(theta[0])}
+    var, phi = theta
+    return {"sigma_dps": math.sqrt(var), "tau_s": -delta_s / math.log(phi)}
+
+
+def _amplitude_variance(w, model, theta, s0):
+    """Variance of ``w^T y`` (``sum w = 0``) under white ``s0`` plus the stochastic model."""
+    var = s0 * float(np.dot(w, w))
+    if model is None:
+        return var
+    if model == "rate_random_walk":
+        # cov(y_i, y_j) = q min(i, j): w^T C w = q sum_k (sum_{i>=k} w_i)^2
+        tail = np.cumsum(w[::-1])[::-1]
+        return var + theta[0] * float(np.dot(tail, tail))
+    # stationary: (1 / M) sum_j S(omega_j) |W(omega_j)|^2 over a padded grid
+    m = 1 << int(math.ceil(math.log2(4 * w.size)))
+    wf = np.abs(np.fft.fft(w, m)) ** 2
+    omega = 2 * math.pi * np.arange(m) / m
+    omega = np.minimum(omega, 2 * math.pi - omega)
+    omega[0] = omega[1] / 2
+    s = _spectrum(model, theta, omega, 1.0)
+    return var + float(np.sum(s * wf) / m)
+
+
+def _deterministic_shapes(y, delta_s, temp_blocks=None):
+    """Best fit of each deterministic shape: ``{effect: (delta_chi2_raw, params, shape_blocks,
+    w)}`` with ``delta_chi2_raw = (w^T y)^2 / (w^T w)`` (divide by the white level) and
+    ``shape_blocks`` the fitted component (mean-free) on the blocks."""
+    n = y.size
+    t = (np.arange(n) + 0.5) * delta_s
+    yc = y - y.mean()
+    out = {}
+
+    def single(g):
+        gc = g - g.mean()
+        gg = float(np.dot(gc, gc))
+        if gg <= 0:
+            return 0.0, 0.0, gc
+        a = float(np.dot(gc, yc)) / gg
+        return a * a * gg, a, gc
+
+    # ramp
+    d, a, gc = single(t)
+    out["rate_ramp"] = (d, {"r_dps_per_s": a}, a * gc, gc / np.dot(gc, gc))
+    # step: two-mean scan over split k (first k blocks vs the rest)
+    if n >= 8:
+        c = np.cumsum(yc)
+        k = np.arange(2, n - 1)
+        s_left = c[k - 1]
+        stat = s_left ** 2 * n / (k * (n - k))
+        i = int(np.argmax(stat))
+        kk = int(k[i])
+        g = (np.arange(n) >= kk).astype(float)
+        d, a, gc = single(g)
+        out["bias_step"] = (d, {"time_s": kk * delta_s, "size_dps": a}, a * gc,
+                            gc / np.dot(gc, gc))
+    # warm-up: a exp(-t / tau) scanned over tau
+    if n >= 8:
+        taus = np.geomspace(max(1.5 * delta_s, 1e-9), max(n * delta_s, 2 * delta_s), 40)
+        best = None
+        for tau in taus:
+            d, a, gc = single(np.exp(-t / tau))
+            if best is None or d > best[0]:
+                best = (d, a, tau, gc)
+        # refine tau (golden search in log tau around the best grid point)
+        lo, hi = math.log(best[2] / 1.3), math.log(best[2] * 1.3)
+        gr = (math.sqrt(5) - 1) / 2
+        f = lambda lt: single(np.exp(-t / math.exp(lt)))[0]
+        a_, b_ = lo, hi
+        c1, c2 = b_ - gr * (b_ - a_), a_ + gr * (b_ - a_)
+        f1, f2 = f(c1), f(c2)
+        for _ in range(20):
+            if f1 > f2:
+                b_, c2, f2 = c2, c1, f1
+                c1 = b_ - gr * (b_ - a_)
+                f1 = f(c1)
+            else:
+                a_, c1, f1 = c1, c2, f2
+                c2 = a_ + gr * (b_ - a_)
+                f2 = f(c2)
+        tau = math.exp(0.5 * (a_ + b_))
+        d, a, gc = single(np.exp(-t / tau))
+        if d < best[0]:
+            d, a, tau, gc = best
+        out["warmup"] = (d, {"amplitude_dps": a, "tau_s": tau}, a * gc, gc / np.dot(gc, gc))
+    if temp_blocks is not None and np.ptp(temp_blocks) > 0:
+        d, a, gc = single(temp_blocks)
+        out["temperature"] = (d, {"coefficient_dps_per_c": a}, a * gc, gc / np.dot(gc, gc))
+    return out
+
+
+def detect_slow(x, fs, temp_c=None):
+    """Slow bias effects of one axis (see the module docstring for the decision rules).
+
+    Returns ``(candidates, stats)``: a list of :class:`Candidate` and the raw statistics
+    (for the simulated-spread comparison): ``{name: value}``.
+    """
+    y, length = block_means(x)
+    n = y.size
+    stats = {}
+    if n < 16:
+        return [], stats
+    delta_s = length / fs
+    temp_blocks = None
+    if temp_c is not None:
+        tb, _ = block_means(np.asarray(temp_c, dtype=float))
+        if tb.size == n and np.ptp(tb) > 0:
+            temp_blocks = tb
+    penalty = math.log(n)
+    sto, s0 = stochastic_fits(y, delta_s)
+    det = _deterministic_shapes(y, delta_s, temp_blocks)
+    for name, (d, *_rest) in det.items():
+        stats[name] = d / s0
+    for name, (d2, *_rest) in sto.items():
+        stats[name] = d2
+
+    def best_of(table, value):
+        items = [(value(v) - _N_PARAMS[k] * penalty, k) for k, v in table.items()]
+        return max(items) if items else (-np.inf, None)
+
+    _, det_name = best_of(det, lambda v: v[0] / s0)
+    _, sto_name = best_of(sto, lambda v: v[0])
+    det_sig = det_name is not None and det[det_name][0] / s0 > DETERMINISTIC_THRESHOLD
+    sto_sig = sto_name is not None and sto[sto_name][0] > STOCHASTIC_THRESHOLD
+
+    findings = []
+    t_blocks = (np.arange(n) + 0.5) * delta_s
+    if det_sig:
+        d, params, shape, w = det[det_name]
+        resid = y - shape
+        sto_r, s0_r = stochastic_fits(resid, delta_s)
+        _, sto_r_name = best_of(sto_r, lambda v: v[0])
+        sto_r_sig = sto_r[sto_r_name][0] > STOCHASTIC_THRESHOLD
+        keep_det = True
+        if sto_r_sig:
+            two_dl, theta, s0_model = sto_r[sto_r_name]
+            var = _amplitude_variance(w, sto_r_name, theta, s0_model)
+            amp = float(np.dot(w, y))
+            z2 = amp * amp / var
+            keep_det = z2 > JOINT_THRESHOLD
+            stats["joint_z2"] = z2
+            # the stochastic model is re-fitted without the shape when the shape is dropped
+            if keep_det:
+                findings.append(_stochastic_candidate(sto_r_name, sto_r[sto_r_name], delta_s, n))
+            else:
+                findings.append(_stochastic_candidate(sto_name, sto[sto_name], delta_s, n))
+        if keep_det:
+            findings.insert(0, _deterministic_candidate(det_name, d / s0, params, x, fs,
+                                                       length, t_blocks, temp_c))
+    elif sto_sig:
+        findings.append(_stochastic_candidate(sto_name, sto[sto_name], delta_s, n))
+    return findings, stats
+
+
+def _stochastic_candidate(name, fit, delta_s, n):
+    two_dl, theta, s0 = fit
+    params = _stochastic_params(name, theta, delta_s)
+    words = {"rate_random_walk": "a 1/f^2 (random-walk) bias spectrum",
+             "bias_instability": "a 1/f (flicker) bias spectrum",
+             "gauss_markov": "an exponentially correlated (Lorentzian) bias spectrum"}[name]
+    return Candidate(
+        effect=name, params=params, statistic=two_dl, threshold=STOCHASTIC_THRESHOLD,
+        statistic_name="2 Delta log-likelihood (Whittle) over white noise",
+        evidence=(f"the spectrum of {n} block means ({delta_s:.3g} s each) rises at low "
+                  f"frequency like {words}: likelihood ratio 2 Delta log L = {two_dl:.0f} over "
+                  f"white noise (threshold {STOCHASTIC_THRESHOLD:.0f})"),
+    )
+
+
+def _refine_step(x, fs, length, time_s):
+    """Sample-level step time: two-mean scan of the raw series within +-2 blocks."""
+    k = int(round(time_s * fs))
+    lo, hi = max(1, k - 2 * length), min(x.size - 1, k + 2 * length)
+    w = max(4 * length, 50)
+    best, best_i = -1.0, k
+    c = np.concatenate(([0.0], np.cumsum(x)))
+    for i in range(lo, hi + 1):
+        a0, b1 = max(0, i - w), min(x.size, i + w)
+        left = (c[i] - c[a0]) / (i - a0)
+        right = (c[b1] - c[i]) / (b1 - i)
+        s = (right - left) ** 2 * (i - a0) * (b1 - i) / (b1 - a0)
+        if s > best:
+            best, best_i = s, i
+    a0, b1 = max(0, best_i - w), min(x.size, best_i + w)
+    return best_i / fs
+
+
+def _deterministic_candidate(name, d, params, x, fs, length, t_blocks, temp_c):
+    params = dict(params)
+    n = x.size
+    t = np.arange(n) / fs
+    if name == "bias_step":
+        ts = _refine_step(x, fs, length, params["time_s"])
+        after = t >= ts
+        params["time_s"] = ts
+        params["size_dps"] = float(x[after].mean() - x[~after].mean()) if after.any() and (~after).any() else params["size_dps"]
+        comp = params["size_dps"] * after
+        what = f"the mean steps by {params['size_dps']:+.3g} deg/s at t = {ts:.1f} s"
+    elif name == "rate_ramp":
+        # LS slope on the full-rate series
+        p = np.polyfit(t, x, 1)
+        params["r_dps_per_s"] = float(p[0])
+        comp = p[0] * t
+        what = f"the bias drifts linearly by {params['r_dps_per_s']:+.3g} deg/s per s"
+    elif name == "warmup":
+        tau = params["tau_s"]
+        g = np.exp(-t / tau)
+        a_mat = np.column_stack([g, np.ones_like(g)])
+        coef, *_ = np.linalg.lstsq(a_mat, x, rcond=None)
+        params["amplitude_dps"] = float(coef[0])
+        comp = coef[0] * g
+        what = (f"the bias settles exponentially: {params['amplitude_dps']:+.3g} deg/s at t = 0, "
+                f"time constant {tau:.3g} s")
+    else:  # temperature
+        tc = np.asarray(temp_c, dtype=float)
+        a_mat = np.column_stack([tc - tc.mean(), np.ones_like(tc)])
+        coef, *_ = np.linalg.lstsq(a_mat, x, rcond=None)
+        params["coefficient_dps_per_c"] = float(coef[0])
+        comp = coef[0] * (tc - tc.mean())
+        what = (f"the bias follows the temperature with {params['coefficient_dps_per_c']:+.3g} "
+                f"deg/s per deg C over {np.ptp(tc):.2f} deg C")
+    params = {k: float(v) for k, v in params.items()}
+    return Candidate(
+        effect=name, params=params, statistic=d, threshold=DETERMINISTIC_THRESHOLD,
+        statistic_name="Delta chi^2 of the block means over a constant bias",
+        component=comp - comp.mean(),
+        evidence=(f"{what}; the fit lowers chi^2 of the block means by {d:.0f} (threshold "
+                  f"{DETERMINISTIC_THRESHOLD:.0f}, white noise: chi^2_1 to chi^2_2 scan)"),
+    )

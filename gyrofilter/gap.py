@@ -1,0 +1,397 @@
+"""Model-gap analysis: what the baseline simulation gets wrong, the cause, and the gain.
+
+``analyse_gap(rec)`` implements ``shared/interfaces.md`` section 2 in five steps:
+
+1. **Baseline fit** per axis (the package's plain simulation): constant bias ``b`` = mean of
+   the rate; white noise of per-sample standard deviation ``sigma`` = the standard deviation of
+   the high-passed rate ``x - moving_mean(x, W)`` (W = max(64 samples, 0.5 s), divided by
+   ``sqrt(1 - 1/W)``, spikes removed), less the quantization variance ``q^2 / 12`` that the
+   simulator adds back (``q = 1 / lsb_per_dps`` for ``gyro_unit: lsb``, else 0);
+   ``arw_dps_per_sqrt_hz = sigma / sqrt(f_s)`` (white noise per sample ``N sqrt(f_s)``,
+   IEEE Std 952-1997 annex C).
+2. **Simulated spread**: the baseline is simulated ``n_sims`` times (seeded; common random
+   numbers with the extended model) with :func:`gyrofilter.simulate.simulate`, and the same
+   features are computed on the measurement and on every run (:func:`features`): the
+   overlapping Allan deviation at log-spaced tau (:func:`gyrofilter.allan.overlapping_adev`),
+   band powers of the periodogram in log-spaced bands, the largest periodogram line over the
+   local noise level, the lag-1 autocorrelation of the high-passed noise and the spike count.
+   Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
+3. **Causes**: :mod:`gyrofilter.detectors` maps departures to effects of the table, in a fixed
+   decision order (outliers, sinusoid, colored noise, slow bias effects; see there for how
+   ramp / random walk / warm-up / Gauss-Markov / bias instability / step / temperature are told
+   apart), each with its own significance threshold, and estimates the parameters.
+4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
+   better; about 1 when the model explains the measurement) is computed against the baseline's
+   runs (``before``) and against runs of the baseline extended by one finding (``after``); a
+   finding is kept only if ``after < before`` (a real gain). The overall figure uses the model
+   extended by every kept finding.
+5. The report: a JSON-ready dict with ``baseline``, ``findings`` (effect, axis, params,
+   evidence, gain), ``extended_model`` (runs in ``gyrofilter simulate``), per-axis feature
+   departures and the discrepancies.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import detectors as det
+from .errors import RecordingError
+
+AXES = ("x", "y", "z")
+METRIC = "mean squared z-score of the Allan deviation, band powers, spectral line, lag-1 and spike count vs model simulations"
+#: minimum samples for any analysis
+MIN_SAMPLES = 256
+#: floors of the feature spreads (log units for log features)
+_LOG_FLOOR = 0.02
+
+
+def default_n_sims(n_samples):
+    """Baseline runs: 24 up to 400 000 samples per axis, fewer for longer records (>= 8)."""
+    return int(max(8, min(24, round(24 * 400_000 / max(n_samples, 1)))))
+
+
+# ---------------------------------------------------------------------------------------------
+# features
+
+
+def feature_taus(n, fs):
+    """Log-spaced cluster times (s), 6 per decade, one sample to a ninth of the record."""
+    m_max = max(1, n // 9)
+    m = np.unique(np.round(np.logspace(0, math.log10(m_max), max(2, int(6 * math.log10(max(m_max, 2))) + 1))).astype(int))
+    return m / fs
+
+
+def feature_bands(n, fs, count=24):
+    """Log-spaced frequency band edges (Hz) from 8 / T to f_s / 2."""
+    f_lo = 8.0 * fs / n
+    f_hi = fs / 2
+    if f_lo >= f_hi:
+        return np.array([0.0, f_hi])
+    return np.geomspace(f_lo, f_hi, count + 1)
+
+
+def features(x, fs, taus_s, bands_hz):
+    """Feature vector of one axis: (log ADEV per tau, log band powers, log line ratio, lag1,
+    log(1 + spikes)). Returns a dict of arrays."""
+    from .allan import overlapping_adev
+
+    n = x.size
+    _, adev = overlapping_adev(x, fs, taus_s)
+    xc = x - x.mean()
+    spec = np.abs(np.fft.rfft(xc)) ** 2 / n
+    f = np.arange(spec.size) * fs / n
+    idx = np.searchsorted(f, bands_hz)
+    bp = np.array([spec[a:b].mean() if b > a else np.nan for a, b in zip(idx[:-1], idx[1:])])
+    line, _, _ = det.sinusoid_statistic(x, fs)
+    r1, _ = det.lag1_statistic(x, fs)
+    mask, _, _ = det.outlier_statistic(x)
+    return {"adev": np.log(np.maximum(adev, 1e-300)), "band": np.log(np.maximum(bp, 1e-300)),
+            "line": np.array([math.log(max(line, 1.0))]), "lag1": np.array([r1]),
+            "spikes": np.array([math.log1p(float(mask.sum()))])}
+
+
+_FLOORS = {"adev": _LOG_FLOOR, "band": _LOG_FLOOR, "line": 0.3, "lag1": None, "spikes": 0.5}
+
+
+def departures(meas, sims, n):
+    """z-scores of the measured features against the simulated runs (dict of arrays)."""
+    out = {}
+    for key, value in meas.items():
+        stack = np.array([s[key] for s in sims])
+        mean = np.nanmean(stack, axis=0)
+        sd = np.nanstd(stack, axis=0, ddof=1) if len(sims) > 1 else np.zeros_like(mean)
+        floor = _FLOORS[key] if _FLOORS[key] is not None else 1.0 / math.sqrt(n)
+        z = (value - mean) / np.maximum(sd, floor)
+        out[key] = (np.where(np.isfinite(z), z, 0.0), mean, sd)
+    return out
+
+
+def discrepancy(deps):
+    """``D = mean z^2`` over all features of one axis (lower is better)."""
+    z = np.concatenate([v[0] for v in deps.values()])
+    return float(np.mean(z ** 2)) if z.size else 0.0
+
+
+# ---------------------------------------------------------------------------------------------
+# baseline
+
+
+def _noise_sigma(x, fs, q_dps):
+    """Per-sample white-noise std of the baseline (see module docstring)."""
+    w = det.colored_window(x.size, fs)
+    e = x - det.moving_mean(x, w)
+    mask, _, _ = det.outlier_statistic(x)
+    if mask.any():
+        e = e[~mask]
+    var = float(np.var(e)) / max(1.0 - 1.0 / w, 0.5)
+    var = max(var - (q_dps ** 2) / 12.0, 0.25 * var)
+    return math.sqrt(var)
+
+
+def baseline_model(rec, gyro_dps=None):
+    """The baseline simulator model (shared schema) fitted to ``rec``."""
+    fs = rec.sample_rate_hz
+    g = rec.gyro_dps if gyro_dps is None else gyro_dps
+    unit = rec.gyro_unit
+    lsb = rec.lsb_per_dps if unit == "lsb" else None
+    q = 1.0 / lsb if lsb else 0.0
+    model = {"sample_rate_hz": fs, "gyro_unit": "lsb" if lsb else "dps"}
+    if lsb:
+        model["lsb_per_dps"] = lsb
+    model["axes"] = {}
+    for i, a in enumerate(AXES):
+        x = g[:, i]
+        sigma = _noise_sigma(x, fs, q)
+        model["axes"][a] = {"bias_dps": float(np.mean(x)),
+                            "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(fs)), "effects": []}
+    return model
+
+
+def _copy_model(model):
+    import copy
+
+    return copy.deepcopy(model)
+
+
+def _temperature_table(rec, max_points=1000):
+    t = rec.t_s - rec.t_s[0] if "t" in rec.columns else np.arange(len(rec)) / rec.sample_rate_hz
+    temp = np.asarray(rec.temp_c, dtype=float)
+    step = max(1, temp.size // max_points)
+    # block means keep the quantized column's level without its read noise
+    n = (temp.size // step) * step
+    tt = t[:n].reshape(-1, step).mean(axis=1) if n else t
+    tc = temp[:n].reshape(-1, step).mean(axis=1) if n else temp
+    return {"t_s": [float(v) for v in tt], "temp_c": [float(v) for v in tc]}
+
+
+def _effect_entry(cand):
+    entry = {"effect": cand.effect}
+    entry.update({k: float(v) for k, v in cand.params.items()})
+    if cand.effect == "colored_noise":
+        entry["preserve"] = "std"
+    if cand.effect == "temperature":
+        entry["reference_c"] = cand.extra.get("reference_c")
+    return entry
+
+
+# ---------------------------------------------------------------------------------------------
+# simulation of features
+
+
+def _sim_features(model, n, fs, seeds, axes_idx, taus, bands):
+    """Features of ``len(seeds)`` runs of ``model`` (list per axis index)."""
+    from .simulate import simulate
+
+    out = {i: [] for i in axes_idx}
+    for s in seeds:
+        rec = simulate(model, n / fs, seed=int(s))
+        g = rec.gyro_dps
+        for i in axes_idx:
+            out[i].append(features(g[:n, i], fs, taus, bands))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# main entry
+
+
+def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None):
+    """Run the gap analysis on a :class:`~gyrofilter.recording.Recording`; returns the report
+    dict of ``shared/interfaces.md`` section 2 (plus ``discrepancy``, ``departures``,
+    ``runtime_s``). ``progress(text)`` is called with short status lines."""
+    t_start = time.perf_counter()
+    say = progress or (lambda text: None)
+    fs = float(rec.sample_rate_hz)
+    if not (math.isfinite(fs) and fs > 0):
+        raise RecordingError(f"{rec.path or 'recording'}: sample_rate_hz must be > 0, got {fs}")
+    g = np.asarray(rec.gyro_dps, dtype=float)
+    n = g.shape[0]
+    report = {"recording": recording_name if recording_name is not None else (rec.path or ""),
+              "sample_rate_hz": fs, "duration_s": n / fs,
+              "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
+                           "axes": {a: {} for a in AXES}},
+              "findings": [], "extended_model": {}, "notes": []}
+    if not np.all(np.isfinite(g)):
+        raise RecordingError(f"{rec.path or 'recording'}: gyro columns hold non-finite values")
+    base = baseline_model(rec, g)
+    report["baseline"]["model"] = base
+    q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None
+    for a in AXES:
+        report["baseline"]["axes"][a] = {"bias_dps": base["axes"][a]["bias_dps"],
+                                         "arw_dps_per_sqrt_hz": base["axes"][a]["arw_dps_per_sqrt_hz"],
+                                         "quantization_dps": q}
+    report["extended_model"] = _copy_model(base)
+    if n < MIN_SAMPLES:
+        report["notes"].append(f"only {n} samples (< {MIN_SAMPLES}): too short to tell anything beyond the baseline")
+        report["runtime_s"] = time.perf_counter() - t_start
+        return report
+    temp = rec.temp_c
+    temp = None if temp is None else np.asarray(temp, dtype=float)
+    if temp is not None and not np.all(np.isfinite(temp)):
+        temp = None
+        report["notes"].append("temp column has non-finite values: temperature not analysed")
+
+    taus = feature_taus(n, fs)
+    bands = feature_bands(n, fs)
+    m = default_n_sims(n) if n_sims is None else int(n_sims)
+    rng = np.random.default_rng(seed)
+    seeds = rng.integers(0, 2**31, size=m)
+
+    say(f"baseline: {m} simulations of {n / fs:.0f} s at {fs:g} Hz")
+    meas_feats = [features(g[:, i], fs, taus, bands) for i in range(3)]
+    sims = _sim_features(base, n, fs, seeds, range(3), taus, bands)
+    deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
+    before = [discrepancy(d) for d in deps]
+    report["departures"] = {a: _departure_summary(deps[i], taus, bands) for i, a in enumerate(AXES)}
+
+    # detectors, per axis, in the decision order
+    say("detectors")
+    candidates = []  # (axis index, Candidate)
+    cleaned = []
+    for i, a in enumerate(AXES):
+        try:
+            cands, xc = _detect_axis(g[:, i].copy(), fs, temp)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
+            report["notes"].append(f"axis {a}: detectors could not run ({exc})")
+            cands, xc = [], g[:, i]
+        cleaned.append(xc)
+        for c in cands:
+            if c.effect == "temperature":
+                c.extra["reference_c"] = float(np.mean(temp))
+            candidates.append((i, c))
+
+    # re-fit white noise on the cleaned series for the extended model
+    ext_axes = {}
+    for i, a in enumerate(AXES):
+        spec = dict(base["axes"][a])
+        if any(ci == i for ci, _ in candidates):
+            spec["arw_dps_per_sqrt_hz"] = float(_noise_sigma(cleaned[i], fs, q or 0.0) / math.sqrt(fs))
+            means = [c for ci, c in candidates if ci == i]
+            spec["bias_dps"] = float(np.mean(cleaned[i]))
+            for c in means:  # deterministic components were fitted mean-free
+                if c.effect == "bias_step":
+                    spec["bias_dps"] -= c.params["size_dps"] * (1 - c.params["time_s"] / (n / fs))
+                elif c.effect == "rate_ramp":
+                    spec["bias_dps"] -= c.params["r_dps_per_s"] * (n / fs) / 2
+                elif c.effect == "warmup":
+                    tau = c.params["tau_s"]
+                    T = n / fs
+                    spec["bias_dps"] -= c.params["amplitude_dps"] * tau / T * (1 - math.exp(-T / tau))
+        spec["effects"] = []
+        ext_axes[a] = spec
+
+    # gain per finding: the axis extended by this finding alone
+    kept = []
+    n_ext = max(6, m // 2)
+    for k, (i, c) in enumerate(candidates):
+        a = AXES[i]
+        say(f"gain of {c.effect} on {a} ({k + 1}/{len(candidates)})")
+        model = _copy_model(base)
+        axis_spec = dict(ext_axes[a])
+        axis_spec["effects"] = [_effect_entry(c)]
+        model["axes"][a] = axis_spec
+        if c.effect == "temperature":
+            model["temperature"] = _temperature_table(rec)
+        try:
+            sims_k = _sim_features(model, n, fs, seeds[:n_ext], [i], taus, bands)[i]
+            after = discrepancy(departures(meas_feats[i], sims_k, n))
+        except (ValueError, FloatingPointError) as exc:
+            report["notes"].append(f"{c.effect} on {a}: extended model could not run ({exc})")
+            continue
+        if not after < before[i]:
+            report["notes"].append(f"{c.effect} on {a} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
+            continue
+        kept.append((i, c, after))
+
+    ext = _copy_model(base)
+    for i, a in enumerate(AXES):
+        effects = [_effect_entry(c) for ci, c, _ in kept if ci == i]
+        if effects:
+            spec = dict(ext_axes[a])
+            spec["effects"] = effects
+            ext["axes"][a] = spec
+    if any(c.effect == "temperature" for _, c, _ in kept):
+        ext["temperature"] = _temperature_table(rec)
+    report["extended_model"] = ext
+
+    for i, c, after in kept:
+        z_info = _strongest(deps[i], taus, bands)
+        report["findings"].append({
+            "effect": c.effect, "axis": AXES[i],
+            "params": {k: float(v) for k, v in c.params.items()},
+            "evidence": c.evidence + (f"; baseline simulations: {z_info}" if z_info else ""),
+            "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": after},
+            "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
+        })
+
+    overall_after = list(before)
+    if kept:
+        say("overall gain of the extended model")
+        axes_with = sorted({i for i, _, _ in kept})
+        sims_e = _sim_features(ext, n, fs, seeds[:n_ext], axes_with, taus, bands)
+        for i in axes_with:
+            overall_after[i] = discrepancy(departures(meas_feats[i], sims_e[i], n))
+    report["discrepancy"] = {"metric": METRIC,
+                             "definition": "D = mean over features of z^2, z = (measured - mean of simulations) / max(sd of simulations, floor)",
+                             "before": {a: before[i] for i, a in enumerate(AXES)},
+                             "after": {a: overall_after[i] for i, a in enumerate(AXES)},
+                             "overall_before": float(np.mean(before)),
+                             "overall_after": float(np.mean(overall_after))}
+    report["n_simulations"] = m
+    if n / fs < 300:
+        report["notes"].append(f"record of {n / fs:.0f} s: slow bias effects (drift, random walk, bias instability) "
+                               "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / fs / 9))
+    report["runtime_s"] = time.perf_counter() - t_start
+    return report
+
+
+def _detect_axis(x, fs, temp):
+    """Run the detectors of one axis in the decision order; returns (candidates, cleaned x)."""
+    cands = []
+    c, mask = det.detect_outliers(x)
+    if c is not None:
+        cands.append(c)
+        x = det.clean_spikes(x, mask)
+    c = det.detect_sinusoid(x, fs)
+    if c is not None:
+        cands.append(c)
+        x = x - c.component
+    c = det.detect_colored(x, fs)
+    if c is not None:
+        cands.append(c)
+    slow, _ = det.detect_slow(x, fs, temp)
+    cands.extend(slow)
+    for s in slow:
+        if s.component is not None:
+            x = x - s.component
+    return cands, x
+
+
+def _departure_summary(deps, taus, bands):
+    z_adev = deps["adev"][0]
+    z_band = deps["band"][0]
+    return {"adev_tau_s": [float(v) for v in taus], "adev_z": [float(v) for v in z_adev],
+            "adev_sim_mean_log": [float(v) for v in deps["adev"][1]],
+            "band_edges_hz": [float(v) for v in bands], "band_z": [float(v) for v in z_band],
+            "line_z": float(deps["line"][0][0]), "lag1_z": float(deps["lag1"][0][0]),
+            "spikes_z": float(deps["spikes"][0][0]), "discrepancy": discrepancy(deps)}
+
+
+def _strongest(deps, taus, bands):
+    """A sentence on where the measurement is furthest outside the simulations' spread."""
+    best = None
+    for key, (z, mean, sd) in deps.items():
+        j = int(np.argmax(np.abs(z)))
+        if best is None or abs(z[j]) > abs(best[1]):
+            best = (key, float(z[j]), j)
+    if best is None or abs(best[1]) < 3:
+        return ""
+    key, z, j = best
+    where = {"adev": lambda: f"Allan deviation at tau = {taus[j]:.3g} s",
+             "band": lambda: f"spectrum band {bands[j]:.3g}-{bands[j + 1]:.3g} Hz",
+             "line": lambda: "largest spectral line",
+             "lag1": lambda: "lag-1 autocorrelation",
+             "spikes": lambda: "spike count"}[key]()
+    return f"largest departure in the {where}, z = {z:+.1f} sd of the simulated spread"

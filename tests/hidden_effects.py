@@ -1,0 +1,175 @@
+"""Generator of recordings with one hidden effect, for the gap-analysis tests and battery.
+
+A *case* is drawn from a seed: an effect of the table (or none), an axis, and parameters over
+realistic MPU6050 ranges, on top of a baseline like a real MPU6050 (131 LSB per deg/s, white
+noise 0.005-0.015 deg/s/sqrt(Hz), biases of a few deg/s, 100 Hz). ``scale`` shrinks every
+effect size (1/3 for the harder set). :func:`check` says whether a gap report names the effect
+on the right axis with its parameters inside the tolerances of :data:`TOLERANCES`.
+
+Sizes (scale = 1), chosen from MPU6050 datasheets and logs (bias drift of tenths of deg/s per
+hour, warm-up of a few tenths of deg/s, DLPF lag-1 0.3-0.8, paper 001's spikes of 1-3 deg/s):
+
+=================  ============================================================================
+bias_instability   b_dps 0.006-0.02
+rate_random_walk   k_dps_per_sqrt_s 0.0008-0.003
+rate_ramp          drift over the record 0.05-0.25 deg/s (either sign)
+gauss_markov       sigma_dps 0.02-0.06, tau_s 10-120
+sinusoid           frequency_hz 0.1-30 (log-uniform), amplitude_dps 0.01-0.04
+temperature        coefficient 0.01-0.04 deg/s/deg C (either sign), warming by 3-8 deg C
+bias_step          time 20-80 % of the record, size 0.03-0.1 deg/s (either sign)
+warmup             amplitude 0.1-0.4 deg/s (either sign), tau_s 30-300
+outliers           rate 2e-4 to 2e-3, magnitude_dps 1-3
+colored_noise      lag1 0.3-0.8
+=================  ============================================================================
+"""
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+
+EFFECTS = ("bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
+           "temperature", "bias_step", "warmup", "outliers", "colored_noise")
+AXES = ("x", "y", "z")
+
+#: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
+#: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
+TOLERANCES = {
+    "bias_instability": {"b_dps": ("rel", 0.5)},
+    "rate_random_walk": {"k_dps_per_sqrt_s": ("rel", 0.5)},
+    "rate_ramp": {"r_dps_per_s": ("rel", 0.3)},
+    "gauss_markov": {"sigma_dps": ("rel", 0.5), "tau_s": ("factor", 2.5)},
+    "sinusoid": {"frequency_hz": ("rel", 0.01), "amplitude_dps": ("rel", 0.25)},
+    "temperature": {"coefficient_dps_per_c": ("rel", 0.3)},
+    "bias_step": {"time_s": ("time", (5.0, 0.02)), "size_dps": ("rel", 0.35)},
+    "warmup": {"amplitude_dps": ("rel", 0.35), "tau_s": ("rel", 0.5)},
+    "outliers": {"rate": ("factor", 1.6), "magnitude_dps": ("rel", 0.35)},
+    "colored_noise": {"lag1": ("abs", 0.1)},
+}
+
+
+def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
+    """Draw one case. ``effect=None`` draws one of EFFECTS or 'none' (probability ``p_clean``,
+    default 1/11); ``effect='none'`` forces a clean case. Returns a dict with the model,
+    duration, hidden effect/axis/params and the simulation seed."""
+    rng = np.random.default_rng(seed)
+    if duration_s is None:
+        duration_s = float(rng.uniform(1800.0, 3600.0))
+    if effect is None:
+        p = 1.0 / 11 if p_clean is None else p_clean
+        effect = "none" if rng.random() < p else EFFECTS[rng.integers(len(EFFECTS))]
+    axis = AXES[rng.integers(3)]
+    model = {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0,
+             "full_scale_dps": 250.0,
+             "axes": {a: {"bias_dps": float(rng.uniform(-5, 5)),
+                          "arw_dps_per_sqrt_hz": float(rng.uniform(0.005, 0.015)), "effects": []}
+                      for a in AXES}}
+    params = {}
+    sign = 1.0 if rng.random() < 0.5 else -1.0
+    T = duration_s
+    if effect == "bias_instability":
+        params = {"b_dps": scale * rng.uniform(0.006, 0.02)}
+    elif effect == "rate_random_walk":
+        params = {"k_dps_per_sqrt_s": scale * rng.uniform(0.0008, 0.003)}
+    elif effect == "rate_ramp":
+        params = {"r_dps_per_s": sign * scale * rng.uniform(0.05, 0.25) / T}
+    elif effect == "gauss_markov":
+        params = {"sigma_dps": scale * rng.uniform(0.02, 0.06), "tau_s": float(rng.uniform(10, 120))}
+    elif effect == "sinusoid":
+        params = {"frequency_hz": float(math.exp(rng.uniform(math.log(0.1), math.log(30.0)))),
+                  "amplitude_dps": scale * rng.uniform(0.01, 0.04),
+                  "phase_rad": float(rng.uniform(0, 2 * math.pi))}
+    elif effect == "temperature":
+        params = {"coefficient_dps_per_c": sign * scale * rng.uniform(0.01, 0.04)}
+    elif effect == "bias_step":
+        params = {"time_s": float(rng.uniform(0.2, 0.8) * T), "size_dps": sign * scale * rng.uniform(0.03, 0.1)}
+    elif effect == "warmup":
+        params = {"amplitude_dps": sign * scale * rng.uniform(0.1, 0.4), "tau_s": float(rng.uniform(30, 300))}
+    elif effect == "outliers":
+        params = {"rate": float(math.exp(rng.uniform(math.log(2e-4), math.log(2e-3)))),
+                  "magnitude_dps": scale * rng.uniform(1.0, 3.0)}
+    elif effect == "colored_noise":
+        params = {"lag1": scale * rng.uniform(0.3, 0.8)}
+    params = {k: float(v) for k, v in params.items()}
+    # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
+    start = float(rng.uniform(22, 28))
+    model["temperature"] = {"start_c": start,
+                            "end_c": start + float(rng.uniform(3, 8) if effect == "temperature" else rng.uniform(0, 1.5)),
+                            "tau_s": float(rng.uniform(300, 900)), "noise_c": 0.01,
+                            "resolution_c": 1.0 / 340.0}
+    if effect != "none":
+        model["axes"][axis]["effects"].append({"effect": effect, **params})
+    return {"seed": int(seed), "effect": effect, "axis": axis if effect != "none" else None,
+            "params": params, "model": model, "duration_s": float(duration_s),
+            "sim_seed": int(rng.integers(2**31))}
+
+
+def simulate_case(case):
+    """The case's recording (in memory)."""
+    from gyrofilter.simulate import simulate
+
+    return simulate(case["model"], case["duration_s"], seed=case["sim_seed"])
+
+
+def hide_in_recording(rec, effect, axis, params, *, seed=0):
+    """Add one effect to a real recording (real noise as the baseline): the effect is simulated
+    alone (no white noise, no bias, no quantization) at the recording's rate and length and
+    added to the rate in deg/s; the result is a deg/s recording with the same temp column."""
+    from gyrofilter.recording import Recording
+    from gyrofilter.simulate import simulate
+
+    fs = rec.sample_rate_hz
+    n = len(rec)
+    model = {"sample_rate_hz": fs, "gyro_unit": "dps",
+             "axes": {a: {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []} for a in AXES}}
+    temp = rec.temp_c
+    if effect == "temperature":
+        if temp is None:
+            raise ValueError("temperature needs a temp column")
+        t = np.arange(n) / fs
+        step = max(1, n // 500)
+        model["temperature"] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
+    model["axes"][axis]["effects"].append({"effect": effect, **params})
+    sim = simulate(model, n / fs, seed=seed)
+    add = sim.gyro_dps[:n]
+    gyro = rec.gyro_dps + add
+    header = {k: v for k, v in rec.header.items() if k not in ("gyro_unit", "lsb_per_dps")}
+    return Recording.from_dps(gyro, fs, temp_c=temp, header=header)
+
+
+def _within(kind, tol, est, true, duration_s):
+    if kind == "rel":
+        return true != 0 and abs(est / true - 1.0) <= tol
+    if kind == "abs":
+        return abs(est - true) <= tol
+    if kind == "factor":
+        return true > 0 and est > 0 and 1.0 / tol <= est / true <= tol
+    if kind == "time":
+        a_s, frac = tol
+        return abs(est - true) <= max(a_s, frac * duration_s)
+    raise ValueError(kind)
+
+
+def check(case, report):
+    """Score a gap report against the case: returns ``(named, in_tolerance, false_findings)``.
+
+    named: the hidden effect is among the findings on the right axis; in_tolerance: and all
+    its listed parameters are within :data:`TOLERANCES`; false_findings: findings other than
+    the hidden one.
+    """
+    findings = report["findings"]
+    hit = [f for f in findings if f["effect"] == case["effect"] and f["axis"] == case["axis"]]
+    others = [f for f in findings if not (f["effect"] == case["effect"] and f["axis"] == case["axis"])]
+    if case["effect"] == "none" or not hit:
+        return False, False, others
+    params = hit[0]["params"]
+    ok = all(_within(kind, tol, float(params[name]), case["params"][name], case["duration_s"])
+             for name, (kind, tol) in TOLERANCES[case["effect"]].items())
+    return True, ok, others
+
+
+def with_scale(case, scale):
+    """Copy of a case with every effect size multiplied by ``scale`` (sizes, not times)."""
+    out = copy.deepcopy(case)
+    return out
