@@ -32,6 +32,7 @@ raise except an unreadable first header or a header that changes the units mid-s
 """
 from __future__ import annotations
 
+import re
 import time
 import warnings
 
@@ -50,7 +51,7 @@ TEMP_OFFSET_C = 36.53
 _PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
 _KNOWN_FIELDS = ("counter", "gx", "gy", "gz", "temp")
 # bytes a plain data chunk may hold: digits, sign, point, comma, line end
-_PLAIN = b"0123456789+-.,\n"  # (bytes.translate(None, _PLAIN) leaves the others)
+_PLAIN_LINES = {}  # field count -> compiled pattern of a block of plain CSV number lines
 # bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
 _TEXT = b"0123456789+-.,eEnaifNAIF \t"
 
@@ -240,23 +241,24 @@ class LineParser:
         return np.empty((0, len(cols) if cols else 4))
 
     def _fast(self, block):
-        """All lines plain CSV with the known field count: one numpy conversion."""
-        if self.header is None or self.fields is None or self._skip_first_line or block.translate(None, _PLAIN):
+        """All lines plain CSV with the known field count: one regular-expression check, one
+        numpy conversion. Anything else (headers, messages, bad lines) returns None."""
+        if self.header is None or self.fields is None or self._skip_first_line:
             return None
         nf = len(self.fields)
-        raw = np.frombuffer(block, dtype=np.uint8)
-        line_ends = np.flatnonzero(raw == 10)
-        commas = np.cumsum(raw == 44)[line_ends]
-        per_line = np.diff(commas, prepend=0)
-        if not np.all(per_line == nf - 1):
+        pattern = _PLAIN_LINES.get(nf)
+        if pattern is None:
+            pattern = _PLAIN_LINES[nf] = re.compile(rb"(?:[-+0-9.]+(?:,[-+0-9.]+){%d}\n)*" % (nf - 1))
+        if pattern.fullmatch(block) is None:
             return None
+        n_lines = block.count(b"\n")
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+            warnings.simplefilter("ignore")  # numpy 1.24 warns (and stops) at a malformed number
             values = np.fromstring(block.replace(b"\n", b",").decode("ascii"), sep=",")
-        if values.size != len(line_ends) * nf:
+        if values.size != n_lines * nf:  # e.g. "1.2.3" or "--4": let the slow path name it
             return None
-        self.stats["lines"] += len(line_ends)
-        return self._rows(values.reshape(len(line_ends), nf))
+        self.stats["lines"] += n_lines
+        return self._rows(values.reshape(n_lines, nf))
 
     def _slow(self, block):
         """Line by line: headers, device messages, and bad lines counted and skipped."""
@@ -329,11 +331,25 @@ class LineParser:
             return self._empty()
         return np.concatenate(out) if len(out) > 1 else out[0]
 
+    def _consecutive(self, counter):
+        """True when the counters continue the last one by exactly 1 each (in range, no wrap)."""
+        first, last = counter[0], counter[-1]
+        if self._last_counter is not None and first != self._last_counter + 1:
+            return False
+        if not (0 <= first and last < self._counter_mod and float(first).is_integer()):
+            return False
+        n = len(counter)
+        return last - first == n - 1 and (n < 3 or bool((np.diff(counter) == 1).all()))
+
     def _rows(self, values):
         """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping."""
         fields = self.fields
         n = len(values)
-        if "counter" in fields:
+        if "counter" in fields and n and self._consecutive(values[:, fields.index("counter")]):
+            index = self._last_index + 1 + np.arange(n)  # the common case: no gap, no duplicate
+            self._last_counter = int(values[-1, fields.index("counter")])
+            self._last_index = int(index[-1])
+        elif "counter" in fields:
             counter = values[:, fields.index("counter")]
             ok = (counter == np.round(counter)) & (counter >= 0) & (counter < self._counter_mod)
             if not ok.all():
