@@ -39,7 +39,9 @@ class Profile:
     name: str
     duration_s: float
     rate_fn: Callable
-    segments: tuple = field(default_factory=tuple)  # ((t0_s, t1_s, label), ...) where the rate changes
+    # ((t0_s, t1_s, label, max_lag_s), ...): where the rate changes, and the largest lag that is
+    # unambiguous there (under half the period of a periodic segment)
+    segments: tuple = field(default_factory=tuple)
     description: str = ""
 
     def rate_dps(self, t_s):
@@ -90,20 +92,20 @@ def _chirp(t):
 PROFILES = {
     "paper001": Profile(
         "paper001", 90.0, _paper001,
-        ((10.0, 20.0, "ramp up"), (30.0, 60.0, "sine 0.2 Hz"), (70.0, 80.0, "ramp down")),
+        ((10.0, 20.0, "ramp up", 3.0), (30.0, 60.0, "sine 0.2 Hz", 2.0), (70.0, 80.0, "ramp down", 3.0)),
         "paper 001 / issue 2 item 6: ramps 0->20->0 deg/s, 0.2 Hz +-10 deg/s sine on 20 deg/s",
     ),
     "sine_1hz": Profile(
-        "sine_1hz", 90.0, _sine_1hz, ((10.0, 80.0, "sine 1 Hz"),),
+        "sine_1hz", 90.0, _sine_1hz, ((10.0, 80.0, "sine 1 Hz", 0.45),),
         "30 deg/s peak sine at 1 Hz from 10 to 80 s",
     ),
     "steps": Profile(
         "steps", 90.0, _steps,
-        tuple((t0 - 1.0, t0 + 2.0, f"step to {lv:g}") for t0, lv in zip(_STEP_TIMES_S, _STEP_LEVELS_DPS)),
+        tuple((t0 - 1.0, t0 + 2.0, f"step to {lv:g}", 3.0) for t0, lv in zip(_STEP_TIMES_S, _STEP_LEVELS_DPS)),
         "rate steps 0, 20, 0, -30, 10, 0, 50, 0 deg/s at 10, 20, 30, 45, 60, 70, 80 s",
     ),
     "chirp": Profile(
-        "chirp", 90.0, _chirp, ((10.0, 45.0, "chirp 0.1-1 Hz"), (45.0, 80.0, "chirp 1-2 Hz")),
+        "chirp", 90.0, _chirp, ((10.0, 45.0, "chirp 0.1-1 Hz", 0.45), (45.0, 80.0, "chirp 1-2 Hz", 0.22)),
         "20 deg/s peak linear chirp 0.1 -> 2 Hz from 10 to 80 s",
     ),
 }

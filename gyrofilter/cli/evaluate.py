@@ -1,0 +1,98 @@
+"""gyrofilter evaluate: one table and one Pareto figure comparing the filters on measured data.
+
+Static std reduction on every static MPU6050 recording, RMSE and worst lag on synthetic
+profiles added to real static noise, RMSE against the optical reference on the BROAD trials;
+see :mod:`gyrofilter.evaluate` for the definitions.
+"""
+import json
+import os
+import sys
+
+import numpy as np
+
+from .. import evaluate as E
+
+
+def add_arguments(parser):
+    parser.add_argument("--out", metavar="DIR", default="evaluation",
+                        help="directory for evaluate_table.md, evaluate.json and evaluate_pareto.png (default: ./evaluation)")
+    parser.add_argument("--recordings", metavar="DIR",
+                        help="directory of recordings (default: ./recordings, else the repository's recordings/)")
+    parser.add_argument("--split", choices=("all", "tune", "holdout"), default="all",
+                        help="evaluate on all data (default), or only the tuning or the held-out part (gyrofilter.evaluate.TUNE_SPLIT)")
+    parser.add_argument("--no-lag", action="store_true", help="skip the lag estimates (faster)")
+    parser.add_argument("--progress", action="store_true", help="report progress on stderr (default: only on a terminal)")
+
+
+def _recordings_dir(arg):
+    if arg:
+        if not os.path.isdir(arg):
+            raise ValueError(f"{arg}: not a directory of recordings")
+        return arg
+    if os.path.isdir("recordings"):
+        return "recordings"
+    repo = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "recordings")
+    if os.path.isdir(repo):
+        return repo
+    raise ValueError("no recordings/ directory here; give --recordings DIR")
+
+
+def run(args):
+    rec_dir = _recordings_dir(args.recordings)
+    show = args.progress or sys.stderr.isatty()
+    progress = (lambda text: print(text, file=sys.stderr, flush=True)) if show else None
+    split = {"all": {}, "tune": E.TUNE_SPLIT, "holdout": E.HOLDOUT_SPLIT}[args.split]
+    ev = E.evaluate(
+        recordings_dir=rec_dir,
+        profiles=split.get("profiles"),
+        with_lag=not args.no_lag,
+        progress=progress,
+        static_names=split.get("static"),
+        broad_names=split.get("broad"),
+    )
+    os.makedirs(args.out, exist_ok=True)
+    table = E.format_table(ev)
+    verdicts = []
+    for name in ev.filters:
+        if name == "paper001":
+            continue
+        ok, fails = E.dominates(ev, name)
+        verdicts.append(f"- {name}: {'dominates paper001' if ok else 'does not dominate: ' + '; '.join(fails[:3]) + (' ...' if len(fails) > 3 else '')}")
+    text = (
+        f"Data: {rec_dir} (split: {args.split}); static: {', '.join(ev.static_names)}; "
+        f"profiles: {', '.join(ev.profiles)}; BROAD: {', '.join(ev.broad_names)}\n\n"
+        "Columns: static std reduction (min over axes and recordings / geometric mean); "
+        "profile RMSE (deg/s) / worst lag; BROAD RMSE vs optical reference (deg/s) in motion / at rest.\n\n"
+        + table
+        + "\n\nPareto dominance over the faithful paper001 (static >= 12.6x on every axis of every static recording, "
+        "RMSE <= paper001 on every profile and BROAD trial):\n"
+        + "\n".join(verdicts)
+        + "\n"
+    )
+    print(text)
+    with open(os.path.join(args.out, "evaluate_table.md"), "w", encoding="utf-8") as fh:
+        fh.write(text)
+    with open(os.path.join(args.out, "evaluate.json"), "w", encoding="utf-8") as fh:
+        json.dump(_as_json(ev), fh, indent=1)
+    png = E.plot_pareto(ev, os.path.join(args.out, "evaluate_pareto.png"))
+    print(f"wrote {os.path.join(args.out, 'evaluate_table.md')}, evaluate.json, {png}", file=sys.stderr)
+    return 0
+
+
+def _as_json(ev):
+    def clean(v):
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple, np.ndarray)):
+            return [clean(x) for x in np.asarray(v).tolist()] if isinstance(v, np.ndarray) else [clean(x) for x in v]
+        if isinstance(v, float) and not np.isfinite(v):
+            return None
+        return v
+
+    return clean({
+        "filters": ev.filters,
+        "families": ev.families,
+        "static_std_reduction": ev.static,
+        "dynamic": ev.dynamic,
+        "broad": ev.broad,
+    })

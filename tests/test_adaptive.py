@@ -1,0 +1,102 @@
+"""Constant-rate hold with CUSUM change detection (gyrofilter.adaptive)."""
+import math
+
+import numpy as np
+import pytest
+
+from gyrofilter.adaptive import ConstantRateHold, block_noise_std, chi2_quantile, cusum_false_alarm_blocks
+from gyrofilter.errors import SettingsError
+
+SIGMA = 0.05  # deg/s, a block mean's noise
+
+
+def test_chi2_quantile_matches_scipy():
+    from scipy.stats import chi2
+
+    for dof in (9, 19, 39):
+        for p in (0.99, 0.999):
+            assert chi2_quantile(p, dof) == pytest.approx(chi2.ppf(p, dof), rel=0.01)
+
+
+def test_siegmund_run_length_by_hand():
+    # (exp(2*0.5*(5 + 1.166)) - 2*0.5*6.166 - 1) / (2*0.25) = 938.1
+    assert cusum_false_alarm_blocks(0.5, 5.0) == pytest.approx(938.1, abs=0.5)
+
+
+def test_holds_white_noise_and_averages_it_down():
+    rng = np.random.default_rng(10)
+    y = rng.normal(scale=SIGMA, size=(20_000, 3))
+    stage = ConstantRateHold([SIGMA] * 3, initial_blocks=40, backend="python")
+    out = stage.run(y, y)
+    # false alarms are rare (about one per 1e5 blocks and side at h = 10) and cost a block or two
+    assert sum(stage.switches) <= 6
+    assert np.mean(out == y) < 1e-3
+    # after max_blocks, an exponential mean with memory 400 blocks: std ~ sigma / sqrt(2 * 400 - 1)
+    quiet = [a for a in range(3) if stage.switches[a] == 0]
+    assert quiet
+    for a in quiet:
+        assert np.std(out[1000:, a]) == pytest.approx(SIGMA / math.sqrt(799), rel=0.25)
+    assert np.all(np.std(out[1000:], axis=0) < SIGMA / 15)
+
+
+def test_step_is_tracked_in_the_same_block_then_held():
+    rng = np.random.default_rng(11)
+    y = rng.normal(scale=SIGMA, size=(300, 3))
+    y[100:, 0] += 1.0  # a 1 deg/s step on x (20 sigma)
+    track = y + 1e-3  # a recognisable tracking output that agrees with the data
+    stage = ConstantRateHold([SIGMA] * 3, initial_blocks=40, backend="python")
+    out = stage.run(y, track)
+    is_track = out == track
+    assert not is_track[99, 0] and is_track[100, 0]  # switched at the step block
+    assert np.all(is_track[100:119, 0])  # tracking until the window (20 blocks) is constant again
+    assert not is_track[-1, 0] and abs(out[-1, 0] - 1.0) < 4 * SIGMA / math.sqrt(20)  # held at the new level
+    assert not is_track[:, 1:].any()  # the other axes never left hold
+
+
+def test_slow_ramp_is_caught_within_a_few_blocks():
+    y = np.zeros((200, 3))
+    y[50:, 2] = 0.1 * np.arange(150)  # 2 deg/s^2 at 20 blocks/s: 0.1 deg/s per block = 2 sigma
+    stage = ConstantRateHold([SIGMA] * 3, initial_blocks=40, backend="python")
+    out = stage.run(y, y)
+    first_track = np.flatnonzero(out[:, 2] == y[:, 2])
+    first_track = first_track[first_track >= 50][0]
+    assert first_track - 50 <= 4
+
+
+def test_streaming_equals_batch_and_numba_equals_python():
+    rng = np.random.default_rng(12)
+    y = rng.normal(scale=SIGMA, size=(3000, 3))
+    y[1000:1500] += np.linspace(0, 20, 500)[:, None]
+    y[1500:] += 20
+    x = y + rng.normal(scale=0.01, size=y.shape)
+    a = ConstantRateHold([SIGMA] * 3, initial_blocks=40, backend="python")
+    streamed = np.array([a.update(y[k], x[k]) for k in range(len(y))])
+    b = ConstantRateHold([SIGMA] * 3, initial_blocks=40, backend="python")
+    batch = np.vstack([b.run(y[:1234], x[:1234]), b.run(y[1234:], x[1234:])])
+    assert np.array_equal(streamed, batch)
+    pytest.importorskip("numba")
+    c = ConstantRateHold([SIGMA] * 3, initial_blocks=40, backend="numba")
+    assert np.allclose(c.run(y, x), batch, rtol=0, atol=1e-12)
+
+
+def test_block_noise_std_white_and_coloured():
+    rng = np.random.default_rng(13)
+    w = rng.normal(scale=0.1, size=(20_000, 3))
+    assert block_noise_std(w, 5) == pytest.approx(np.full(3, 0.1 / math.sqrt(5)), rel=0.05)
+    # AR(1) noise with lag-1 correlation 0.8: block means are much noisier than sigma_w / sqrt(L)
+    c = np.zeros_like(w)
+    for i in range(1, len(w)):
+        c[i] = 0.8 * c[i - 1] + w[i]
+    means = c[: len(c) // 5 * 5].reshape(-1, 5, 3).mean(axis=1).std(axis=0)
+    assert block_noise_std(c, 5) == pytest.approx(means, rel=0.01)
+
+
+def test_bad_settings_raise():
+    with pytest.raises(SettingsError):
+        ConstantRateHold([SIGMA, SIGMA])
+    with pytest.raises(SettingsError):
+        ConstantRateHold([SIGMA] * 3, window_blocks=1)
+    with pytest.raises(SettingsError):
+        ConstantRateHold([SIGMA] * 3, cusum_h=-1)
+    with pytest.raises(SettingsError):
+        ConstantRateHold([SIGMA] * 3, accept_p=0.5)

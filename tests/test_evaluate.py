@@ -1,0 +1,169 @@
+"""Evaluation harness (gyrofilter.evaluate) and the evaluate command."""
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+
+from gyrofilter import evaluate as E
+from gyrofilter.profiles import get_profile
+from gyrofilter.recording import Recording, write_recording
+
+FS = 100.0
+
+
+def test_moving_average_and_lowpass_against_plain_loops():
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(500, 3)) + 2.0
+    out = E.moving_average(5)(x, FS, 1.0)
+    z = x - x[:100].mean(axis=0)
+    expected = np.array([z[max(0, i - 4) : i + 1].mean(axis=0) for i in range(100, 500)])
+    assert out.start == 100 and out.block_len == 1
+    assert np.allclose(out.y_dps, expected)
+    tau = 0.2
+    out = E.first_order_lowpass(tau)(x, FS, 1.0)
+    a = (1 / FS) / (tau + 1 / FS)
+    y = np.zeros(3)
+    ref = []
+    for row in z[100:]:
+        y = y + a * (row - y)
+        ref.append(y)
+    assert np.allclose(out.y_dps, ref)
+
+
+def test_cv_kalman_steady_state_matches_filterpy_time_varying_filter():
+    rng = np.random.default_rng(2)
+    n = 1500
+    t = np.arange(n) / FS
+    x = np.column_stack([10 * np.sin(t), 5 * t, np.zeros(n)]) + rng.normal(scale=0.1, size=(n, 3))
+    x[:100] = rng.normal(scale=0.1, size=(100, 3))  # still during calibration
+    out = E.cv_kalman(1e2)(x, FS, 1.0)
+    bias = x[:100].mean(axis=0)
+    var = np.var(x[:100], axis=0, ddof=1)
+    for a in range(3):
+        kf, _, _, _ = E.cv_kalman_design(FS, var[a], 1e2)
+        kf.x = np.zeros((2, 1))
+        kf.P = np.eye(2) * 1e3
+        ys = []
+        for z in x[100:, a] - bias[a]:
+            kf.predict()
+            kf.update(np.array([[z]]))
+            ys.append(kf.x[0, 0])
+        # identical once the time-varying gain has converged (about 1 s)
+        assert np.allclose(out.y_dps[300:, a], np.array(ys)[300:], atol=1e-6)
+
+
+def test_block_mean_on_noise_free_profile_has_zero_error_and_zero_lag():
+    profile = get_profile("paper001")
+    n = int(90 * FS)
+    seg = [("clean", np.zeros((n, 3)), FS)]
+    spec = E.FilterSpec("block", "baseline", "", E.run_block_mean)
+    d = E.dynamic_metrics(spec, profile, seg)
+    assert d["rmse_dps"] < 1e-12
+    assert all(abs(v) <= 0.001 for v in d["lags_s"].values())
+
+
+def test_a_pure_delay_is_measured_as_that_lag():
+    delay = 23  # samples = 0.23 s
+
+    def delayed(x, fs, cal):
+        bias, c = E.startup_bias(x, fs, cal)
+        z = np.vstack([np.zeros((delay, 3)), x - bias])[: len(x)]
+        return E.FilterOutput(z[c:], 1, c)
+
+    spec = E.FilterSpec("delay", "baseline", "", delayed)
+    n = int(90 * FS)
+    for name in ("paper001", "steps", "sine_1hz"):
+        d = E.dynamic_metrics(spec, name, [("clean", np.zeros((n, 3)), FS)])
+        # a sampled step fixes the delay only to within one sample interval (0.01 s)
+        tol = 0.0101 if name == "steps" else 0.0015
+        for lag in d["lags_s"].values():
+            assert lag == pytest.approx(0.23, abs=tol), name
+        assert d["worst_lag_s"] == pytest.approx(0.23, abs=tol)
+
+
+def test_static_reduction_of_block_mean_is_sqrt_block_len_on_white_noise():
+    rng = np.random.default_rng(3)
+    x = rng.normal(scale=0.1, size=(100_000, 3)) + [1.0, -2.0, 0.5]
+    spec = E.FilterSpec("block", "baseline", "", E.run_block_mean)
+    red = E.static_reduction(spec, x, FS)
+    assert np.allclose(red, math.sqrt(5), rtol=0.02)
+
+
+def test_gyrofilter_rows_are_blocks_after_calibration():
+    rng = np.random.default_rng(4)
+    x = rng.normal(scale=0.1, size=(1234, 3))
+    out = E.gyrofilter_run("paper")(x, FS, 2.0)
+    assert out.start == 200 and out.block_len == 5
+    assert len(out.y_dps) == (1234 - 200) // 5
+
+
+def broad_like_recording(tmp_path, rng):
+    """A synthetic trial: rest 5 s, motion 10 s, rest 5 s; reference = true rate (rad/s)."""
+    fs = 200.0
+    n = int(20 * fs)
+    t = np.arange(n) / fs
+    move = ((t >= 5) & (t < 15)).astype(float)
+    true = np.column_stack([np.sin(t), np.cos(t), t * 0]) * move[:, None]
+    bias = np.array([0.003, -0.002, 0.001])
+    gyro = true + bias + rng.normal(scale=0.001, size=(n, 3))
+    valid = np.ones(n)
+    valid[2000:2100] = 0
+    rec = Recording(
+        columns={"t": t, "gx": gyro[:, 0], "gy": gyro[:, 1], "gz": gyro[:, 2],
+                 "ref_x": true[:, 0] * valid, "ref_y": true[:, 1] * valid, "ref_z": true[:, 2] * valid,
+                 "ref_valid": valid, "movement": move},
+        header={"gyrofilter-recording": "1", "sample_rate_hz": "200", "gyro_unit": "rad/s", "sensor": "synthetic"},
+    )
+    path = tmp_path / "broad_test.csv.gz"
+    write_recording(path, rec)
+    return path
+
+
+def test_broad_metrics_against_reference(tmp_path):
+    rng = np.random.default_rng(5)
+    path = broad_like_recording(tmp_path, rng)
+    rec = E.find_broad_recordings(str(tmp_path))[0]
+    assert rec.path == str(path)
+    raw = E.broad_metrics(E.FilterSpec("raw", "baseline", "", E.run_raw), rec)
+    assert raw["calibration_s"] == pytest.approx(4.0)
+    noise_dps = 0.001 * 180 / math.pi
+    for key in ("rmse_motion_dps", "rmse_rest_dps", "rmse_all_dps"):
+        assert raw[key] == pytest.approx(noise_dps, rel=0.1)
+    # a filter that ignores the motion has the motion's rms as error
+    zero = E.FilterSpec("zero", "baseline", "", lambda x, fs, c: E.FilterOutput(np.zeros((len(x) - int(c * fs), 3)), 1, int(c * fs)))
+    assert E.broad_metrics(zero, rec)["rmse_motion_dps"] > 30
+
+
+def test_pareto_front_and_dominance_rules():
+    pts = [(1.0, 10.0), (2.0, 20.0), (2.0, 5.0), (0.5, 1.0), (3.0, 20.0)]
+    assert E.pareto_front(pts) == [0, 1, 3]
+    ev = E.Evaluation(["paper001", "a", "b"], ["s"], {"paper001": {"s": np.array([3.0, 3, 3])},
+                      "a": {"s": np.array([13.0, 14, 15])}, "b": {"s": np.array([20.0, 12, 30])}},
+                      ["p"], {"paper001": {"p": {"rmse_dps": 1.0}}, "a": {"p": {"rmse_dps": 0.9}}, "b": {"p": {"rmse_dps": 0.5}}},
+                      ["t"], {"paper001": {"t": {"rmse_all_dps": 5.0}}, "a": {"t": {"rmse_all_dps": 5.0}}, "b": {"t": {"rmse_all_dps": 1.0}}})
+    assert E.dominates(ev, "a") == (True, [])
+    ok, fails = E.dominates(ev, "b")
+    assert not ok and "12.00" in fails[0]
+
+
+def test_evaluate_command_writes_table_json_and_figure(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    rng = np.random.default_rng(6)
+    rec_dir = tmp_path / "recordings"
+    rec_dir.mkdir()
+    static = Recording.from_dps(rng.normal(scale=0.1, size=(9100, 3)) + [1.0, 0.5, -0.2], 100.0,
+                                header={"sensor": "MPU6050", "description": "static: synthetic"})
+    write_recording(rec_dir / "mpu6050_static_91s.csv.gz", static)
+    out = tmp_path / "out"
+    code = main(["evaluate", "--recordings", str(rec_dir), "--out", str(out), "--no-lag"])
+    assert code == 0
+    text = (out / "evaluate_table.md").read_text()
+    assert "| paper001 |" in text and "hold + block mean" in text
+    data = json.loads((out / "evaluate.json").read_text())
+    # the block mean reduces white noise by sqrt(5)
+    assert np.allclose(data["static_std_reduction"]["block mean 5"]["mpu6050_static_91s"], math.sqrt(5), rtol=0.1)
+    assert os.path.getsize(out / "evaluate_pareto.png") > 10_000
+    assert main(["evaluate", "--recordings", str(tmp_path / "nope")]) == 2
