@@ -179,3 +179,21 @@ def test_record_from_serial_keeps_everything_when_the_cable_is_pulled(pty_pair, 
     assert rec.header["sensor"] == "MPU6050" and rec.header["serial_port"] == name
     err = capsys.readouterr().err
     assert f"wrote {len(good)} samples" in err and "lost 1 samples" in err
+
+
+@pytest.mark.device
+def test_real_serial_device_streams_clean_lines():
+    """A microcontroller running tools/arduino/gyrofilter_stream on GYROFILTER_SERIAL_PORT
+    (default /dev/ttyACM0; GYROFILTER_SERIAL_BAUD, default 115200). Run: pytest -m device."""
+    port = os.environ.get("GYROFILTER_SERIAL_PORT", "/dev/ttyACM0")
+    baud = int(os.environ.get("GYROFILTER_SERIAL_BAUD", "115200"))
+    with open_source(f"serial:{port},baud={baud},header_timeout=5") as src:
+        rate = float(src.header["sample_rate_hz"])
+        got = []
+        t_end = time.monotonic() + 3.0
+        while time.monotonic() < t_end:
+            got.append(src.read())
+        rows = np.concatenate(got)
+        assert src.stats["lost_samples"] == 0 and src.stats["bad_lines"] == 0
+        assert 0.8 * 3 * rate <= len(rows) <= 1.2 * 3 * rate + 1
+        np.testing.assert_allclose(np.diff(rows[:, 0]), 1.0 / rate)
