@@ -448,7 +448,8 @@ def _fitted_intervals(theta, tau, m, n_samples, used, confidence):
 # --------------------------------------------------------------------------------------------
 
 def local_slopes(tau_s, adev_values, half_window=1):
-    """d log sigma / d log tau at each tau, by a least-squares line over +-half_window points."""
+    """d log sigma / d log tau at each tau, by a least-squares line over +-half_window points
+    (read-offs use +-2: five points, half a decade)."""
     lt, ls = np.log(tau_s), np.log(np.maximum(adev_values, 1e-300))
     n = lt.size
     out = np.full(n, np.nan)
@@ -459,22 +460,34 @@ def local_slopes(tau_s, adev_values, half_window=1):
     return out
 
 
-def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15):
+def _runs(indices, min_run):
+    """The indices that belong to runs of at least ``min_run`` consecutive integers."""
+    if indices.size == 0:
+        return indices
+    breaks = np.flatnonzero(np.diff(indices) != 1) + 1
+    keep = [run for run in np.split(indices, breaks) if run.size >= min_run]
+    return np.concatenate(keep) if keep else indices[:0]
+
+
+def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15, min_run=3):
     """Coefficients read from the slopes of the Allan deviation (papers 000 and 002).
 
     Q, N, K, R: among the taus (with enough clusters) whose local slope is within
     ``slope_tolerance`` of the term's slope (-1, -1/2, +1/2, +1), the one nearest the read-off
-    tau (sqrt(3), 1, 3, sqrt(2) s) is moved along that slope to the read-off tau:
+    tau (sqrt(3), 1, 3, sqrt(2) s) is moved along that slope to the read-off tau (a region is
+    ``min_run`` or more consecutive taus, so that one noisy point at a long tau is not a region):
     ``c = sigma(tau_i) (tau_read / tau_i)^slope`` (e.g. N = sigma(tau_i) sqrt(tau_i), paper 002).
-    B: the minimum of the curve, if the curve is flat there (slope within the tolerance of 0),
+    B: the minimum of the curve, if the curve is flat there (slope within the tolerance of 0
+    over ``min_run`` consecutive taus),
     divided by 0.664 (paper 000; = sqrt(pi / (2 ln 2)) sigma_min, paper 002).
     The interval is the chi-square interval of the point used, moved the same way.
     """
     tau = np.asarray(tau_s, dtype=np.float64)
     dev = np.asarray(adev_values, dtype=np.float64)
-    slopes = local_slopes(tau, dev)
-    out = {}
     idx_all = np.flatnonzero(used)
+    slopes = np.full(tau.size, np.nan)
+    slopes[idx_all] = local_slopes(tau[idx_all], dev[idx_all], half_window=2)
+    out = {}
     for term in TERMS:
         s = TERM_SLOPE[term]
         if term == "bias_instability":
@@ -482,8 +495,9 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15)
                 out[term] = Coefficient(term, None, note="no cluster time with enough clusters")
                 continue
             i = int(idx_all[np.argmin(dev[idx_all])])
-            if abs(slopes[i]) > slope_tolerance or i == idx_all[-1]:
-                upper = dev[i] / FLICKER_FLOOR
+            flat = _runs(idx_all[np.abs(slopes[idx_all]) <= slope_tolerance], min_run)
+            if i not in flat:
+                upper = ci_high[i] / FLICKER_FLOOR
                 out[term] = Coefficient(term, None, upper=upper, tau_s=float(tau[i]),
                                         note=f"not resolved: no flat minimum (the curve still falls at "
                                              f"tau = {tau[i]:g} s, slope {slopes[i]:+.2f}); B <= {upper:.3g} deg/s")
@@ -492,8 +506,10 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15)
                                     ci_high[i] / FLICKER_FLOOR, tau_s=float(tau[i]))
             continue
         region = idx_all[np.abs(slopes[idx_all] - s) <= slope_tolerance]
+        region = _runs(region, min_run)
         if region.size == 0:
-            out[term] = Coefficient(term, None, note=f"not resolved: no region of slope {s:+g}")
+            out[term] = Coefficient(term, None, note=f"not resolved: no region of slope {s:+g} "
+                                                     f"({min_run} or more consecutive taus)")
             continue
         t_read = READ_TAU_S[term]
         i = int(region[np.argmin(np.abs(np.log(tau[region] / t_read)))])

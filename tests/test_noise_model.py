@@ -1,0 +1,280 @@
+"""Tests for gyrofilter.noise_model: model identities, NNLS oracle, seeded round trips on
+simulated noise with known coefficients, unit conversions, bad input, JSON and Kalibr export."""
+import math
+
+import numpy as np
+import pytest
+
+from gyrofilter.allan import AllanInputError
+from gyrofilter.errors import GyroFilterError, SettingsError
+from gyrofilter.noise_model import (FLICKER_FLOOR, TERMS, UNIT_FACTORS, arw_from_white_std, basis,
+                                    characterise, characterise_axis, convert, kalibr_yaml, model_adev,
+                                    nnls_weighted, to_json, white_std_from_arw)
+
+SYMBOL_TERM = {"Q": "quantization", "N": "arw", "B": "bias_instability", "K": "rrw", "R": "rate_ramp"}
+
+
+# --- a minimal noise generator (the tests' own; independent of the package's simulator) -------
+
+def flicker(n, rng):
+    """1/f noise by Kasdin & Walter's fractional differencing (Proc. IEEE 1992): white noise of
+    unit variance convolved with h_0 = 1, h_k = h_{k-1} (alpha/2 + k - 1) / k, alpha = 1, via FFT.
+    Its one-sided PSD is ~ 1 / (pi f) (per sample), so B * flicker has Allan floor 0.664 B."""
+    k = np.arange(1, n)
+    h = np.concatenate([[1.0], np.cumprod((0.5 + k - 1) / k)])
+    size = 1 << int(math.ceil(math.log2(2 * n)))
+    w = rng.normal(0.0, 1.0, n)
+    return np.fft.irfft(np.fft.rfft(h, size) * np.fft.rfft(w, size), size)[:n]
+
+
+def simulate(n, fs, rng, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0):
+    """Rate series (deg/s) with quantization Q (white angle noise of std Q: sigma^2 = 3Q^2/tau^2
+    ... for the angle-difference rate), ARW N, bias instability B, RRW K and ramp R."""
+    x = np.zeros(n)
+    if N:
+        x += rng.normal(0.0, N * math.sqrt(fs), n)          # per-sample std N sqrt(fs)
+    if B:
+        x += B * flicker(n, rng)
+    if K:
+        x += np.cumsum(rng.normal(0.0, K / math.sqrt(fs), n))  # increments K sqrt(tau0)
+    if R:
+        x += R * np.arange(n) / fs
+    if Q:
+        x += np.diff(rng.normal(0.0, Q, n + 1)) * fs        # rate of white angle noise
+    return x
+
+
+# --- model identities -------------------------------------------------------------------------
+
+def test_model_terms_meet_their_read_off_points():
+    # paper 000: sigma = sqrt(3) Q / tau, N / sqrt(tau), 0.664 B, K sqrt(tau/3), R tau / sqrt(2)
+    assert model_adev([2.0, 0, 0, 0, 0], [math.sqrt(3)])[0] == pytest.approx(2.0)
+    assert model_adev([0, 2.0, 0, 0, 0], [1.0])[0] == pytest.approx(2.0)
+    assert model_adev([0, 0, 2.0, 0, 0], [1e-3, 1e3]) == pytest.approx([2.0 * 0.6643, 2.0 * 0.6643], rel=1e-4)
+    assert model_adev([0, 0, 0, 2.0, 0], [3.0])[0] == pytest.approx(2.0)
+    assert model_adev([0, 0, 0, 0, 2.0], [math.sqrt(2)])[0] == pytest.approx(2.0)
+    assert FLICKER_FLOOR == pytest.approx(math.sqrt(2 * math.log(2) / math.pi))
+
+
+def test_generator_levels_match_the_model():
+    # the tests' generator against the model it is meant to produce (one long seed per term)
+    from gyrofilter.allan import overlapping_adev
+    rng = np.random.default_rng(11)
+    tau, dev = overlapping_adev(simulate(400000, 10.0, rng, B=0.01), 10.0, [10.0, 100.0])
+    np.testing.assert_allclose(dev, 0.01 * FLICKER_FLOOR, rtol=0.1)
+    tau, dev = overlapping_adev(simulate(200000, 10.0, rng, Q=0.01), 10.0, [1.0, 10.0])
+    np.testing.assert_allclose(dev, math.sqrt(3) * 0.01 / tau, rtol=0.05)
+
+
+def test_nnls_matches_scipy():
+    optimize = pytest.importorskip("scipy.optimize")
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        a = basis(np.logspace(-2, 3, 30))
+        truth = np.abs(rng.normal(size=5)) * (rng.random(5) < 0.6)
+        y = a @ truth * (1 + 0.2 * rng.normal(size=30))
+        w = rng.uniform(0.5, 2.0, 30) / np.maximum(np.abs(y), 1e-12) ** 2
+        ours = nnls_weighted(a, y, w)
+        sw = np.sqrt(w)
+        scale = np.linalg.norm(a * sw[:, None], axis=0)
+        ref, _ = optimize.nnls(a * sw[:, None] / scale, y * sw)
+        np.testing.assert_allclose(ours, ref / scale, rtol=1e-6, atol=1e-12 * np.max(ref / scale))
+
+
+# --- round trips ---------------------------------------------------------------------------------
+
+CASES = {
+    # name: (samples at 10 Hz, true coefficients)
+    "white": (50000, {"N": 0.05}),
+    "flicker": (131072, {"N": 0.05, "B": 0.01}),
+    "random_walk": (65536, {"N": 0.05, "K": 0.002}),
+    "ramp": (131072, {"N": 0.05, "R": 1e-4}),
+    "quantization": (50000, {"Q": 0.01, "N": 0.01}),
+}
+
+
+def _battery(case, seeds):
+    n, truth = CASES[case]
+    inside = {k: 0 for k in truth}
+    spurious = 0
+    for seed in seeds:
+        r = characterise_axis(simulate(n, 10.0, np.random.default_rng(10_000 + seed), **truth), 10.0)
+        for sym, value in truth.items():
+            c = r.fitted[SYMBOL_TERM[sym]]
+            inside[sym] += bool(c.value is not None and c.low <= value <= c.high)
+        spurious += sum(r.fitted[SYMBOL_TERM[s]].value is not None for s in "QNBKR" if s not in truth)
+    return inside, spurious
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_round_trip_recovers_each_coefficient_inside_its_interval(case):
+    seeds = range(30)
+    inside, spurious = _battery(case, seeds)
+    for sym, hits in inside.items():
+        assert hits >= 27, f"{case}: {sym} inside its 95 % interval in only {hits}/30 seeds"
+    # terms that are absent should rarely be reported as resolved
+    assert spurious <= 4, f"{case}: {spurious} absent terms reported as resolved in 30 seeds"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_round_trip_battery_200_seeds(case):
+    seeds = range(100, 300)
+    inside, spurious = _battery(case, seeds)
+    for sym, hits in inside.items():
+        assert hits >= 180, f"{case}: {sym} inside its interval in {hits}/200 seeds (< 90 %)"
+    assert spurious <= 40
+
+
+def test_short_record_leaves_slow_terms_unresolved():
+    # 100 s of white noise cannot show bias instability, rate random walk or a ramp
+    r = characterise_axis(simulate(10000, 100.0, np.random.default_rng(5), N=0.009), 100.0)
+    assert r.fitted["arw"].value == pytest.approx(0.009, rel=0.03)
+    for term in ("bias_instability", "rrw", "rate_ramp"):
+        c = r.fitted[term]
+        assert c.value is None and c.upper is not None and c.upper > 0
+        assert "not resolved" in c.note
+    assert r.readoff["bias_instability"].value is None  # still falling: no flat minimum
+
+
+def test_read_off_white_noise_gives_n_at_one_second():
+    # paper 002's N = sigma(1 s) sqrt(1 s) with the chi-square interval of that point: on pure
+    # white noise it covers the truth in about 95 % of seeds (>= 26 of 30 here)
+    hits = 0
+    for seed in range(30):
+        r = characterise_axis(simulate(20000, 100.0, np.random.default_rng(seed), N=0.01), 100.0)
+        c = r.readoff["arw"]
+        assert c.tau_s == pytest.approx(1.0, rel=0.15)
+        hits += bool(c.low <= 0.01 <= c.high)
+        assert r.readoff["quantization"].value is None
+    assert hits >= 26
+
+
+def test_fit_covers_bias_instability_more_often_than_the_read_off():
+    # paper 000's B = sigma_min / 0.664 takes the lowest of many noisy points (biased low) and
+    # ignores the white part at the minimum; the fit models both
+    n, truth = CASES["flicker"]
+    fit_hits = ro_hits = 0
+    for seed in range(12):
+        r = characterise_axis(simulate(n, 10.0, np.random.default_rng(seed), **truth), 10.0)
+        f, ro = r.fitted["bias_instability"], r.readoff["bias_instability"]
+        fit_hits += bool(f.value is not None and f.low <= truth["B"] <= f.high)
+        ro_hits += bool(ro.value is not None and ro.low <= truth["B"] <= ro.high)
+    assert fit_hits >= 11
+    assert fit_hits > ro_hits
+
+
+# --- units ----------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("term, unit", sorted(UNIT_FACTORS))
+def test_unit_conversions_round_trip(term, unit):
+    for value in (1e-6, 0.0123, 7.5):
+        there = convert(value, term, unit)
+        assert convert(there, term, unit, to_base=True) == pytest.approx(value, rel=1e-14)
+
+
+def test_unit_conversion_values():
+    assert convert(1.0, "arw", "deg/sqrt(h)") == pytest.approx(60.0)
+    assert convert(0.005, "arw", "deg/sqrt(h)") == pytest.approx(0.3)            # MPU6050 datasheet
+    assert convert(1.0, "bias_instability", "deg/h") == pytest.approx(3600.0)
+    assert convert(1.0, "rrw", "deg/h/sqrt(h)") == pytest.approx(216000.0)
+    assert convert(0.01, "arw", "rad/s/sqrt(Hz)") == pytest.approx(0.01 * math.pi / 180)  # Kalibr
+    assert convert(1.0, "rrw", "rad/s^2/sqrt(Hz)") == pytest.approx(math.pi / 180)
+    assert convert(None, "arw", "deg/sqrt(h)") is None
+    # paper 000's NAV440 ARW 0.174 deg/sqrt(h) = 0.0029 deg/sqrt(s)
+    assert convert(0.174, "arw", "deg/sqrt(h)", to_base=True) == pytest.approx(0.0029)
+    assert white_std_from_arw(arw_from_white_std(0.1, 100.0), 100.0) == pytest.approx(0.1)
+    assert arw_from_white_std(0.1, 100.0) == pytest.approx(0.01)
+    with pytest.raises(SettingsError, match="known"):
+        convert(1.0, "arw", "furlongs")
+
+
+def test_fitted_arw_converts_to_the_per_sample_noise():
+    # discrete-time std sigma_d = N sqrt(fs): the conversion Kalibr users get wrong
+    fs = 200.0
+    x = simulate(100000, fs, np.random.default_rng(9), N=0.004)
+    n_fit = characterise_axis(x, fs).fitted["arw"].value
+    assert white_std_from_arw(n_fit, fs) == pytest.approx(np.std(x), rel=0.02)
+
+
+# --- bad input ------------------------------------------------------------------------------------
+
+def test_constant_axis_is_refused():
+    with pytest.raises(AllanInputError, match="constant"):
+        characterise_axis(np.full(1000, -3.3), 100.0, axis="y")
+
+
+def test_nan_is_refused_with_position():
+    x = np.zeros(1000)
+    x[5] = 1.0
+    x[17] = np.nan
+    with pytest.raises(AllanInputError, match="sample 17"):
+        characterise_axis(x, 100.0)
+
+
+def test_missing_axis_is_refused():
+    with pytest.raises(AllanInputError, match="axis is missing"):
+        characterise(np.random.default_rng(0).normal(size=(1000, 2)), 100.0)
+
+
+def test_missing_rate_is_refused():
+    with pytest.raises(SettingsError, match="sample_rate_hz"):
+        characterise_axis(np.random.default_rng(0).normal(size=1000), None)
+
+
+def test_too_short_for_a_fit():
+    with pytest.raises(AllanInputError, match="too short|fewer than 9"):
+        characterise_axis(np.random.default_rng(0).normal(size=12), 100.0)
+    assert issubclass(AllanInputError, GyroFilterError)
+
+
+def test_taus_with_fewer_than_nine_clusters_are_shown_but_not_fitted():
+    x = simulate(2000, 10.0, np.random.default_rng(2), N=0.05)
+    r = characterise_axis(x, 10.0, taus_s=[0.1, 1.0, 10.0, 50.0, 90.0])  # 90 s: 2 clusters
+    assert r.n_clusters.tolist() == [2000, 200, 20, 4, 2]
+    assert r.fit_used.tolist() == [True, True, True, False, False]
+    assert any("fewer than 9 clusters" in w and "not fitted" in w for w in r.warnings)
+
+
+def test_lowering_min_clusters_says_so():
+    x = simulate(2000, 10.0, np.random.default_rng(2), N=0.05)
+    r = characterise_axis(x, 10.0, taus_s=[0.1, 1.0, 10.0, 50.0], min_clusters=3)
+    assert r.fit_used.all()
+    assert any("as few as 4 clusters" in w for w in r.warnings)
+
+
+# --- export ---------------------------------------------------------------------------------------
+
+def test_json_document_follows_interfaces_section_3():
+    rng = np.random.default_rng(4)
+    g = np.column_stack([simulate(20000, 100.0, rng, N=n) for n in (0.008, 0.01, 0.012)])
+    doc = to_json(characterise(g, 100.0), 100.0)
+    assert doc["sample_rate_hz"] == 100.0
+    assert set(doc["axes"]) == {"x", "y", "z"}
+    for name, truth in zip("xyz", (0.008, 0.01, 0.012)):
+        ax = doc["axes"][name]
+        assert len(ax["tau_s"]) == len(ax["adev_dps"]) > 10
+        coef = ax["coefficients"]
+        assert set(coef) == {"quantization_deg", "arw_dps_per_sqrt_hz", "bias_instability_dps",
+                             "rrw_dps_per_sqrt_s", "rate_ramp_dps_per_s"}
+        arw = coef["arw_dps_per_sqrt_hz"]
+        assert arw["low"] <= arw["value"] <= arw["high"]
+        assert arw["value"] == pytest.approx(truth, rel=0.05)
+        assert coef["rrw_dps_per_sqrt_s"] is None and coef["rate_ramp_dps_per_s"] is None
+        assert ax["details"]["arw_dps_per_sqrt_hz"]["customary"]["unit"] == "deg/sqrt(h)"
+    assert doc["method"]["units"]["arw_dps_per_sqrt_hz"] == "deg/s/sqrt(Hz)"
+
+
+def test_kalibr_yaml_uses_continuous_time_si_units_and_the_largest_axis():
+    rng = np.random.default_rng(6)
+    g = np.column_stack([simulate(20000, 100.0, rng, N=n) for n in (0.008, 0.01, 0.012)])
+    res = characterise(g, 100.0)
+    text = kalibr_yaml(res, 100.0)
+    values = dict(line.split("#")[0].split(":", 1) for line in text.splitlines()
+                  if line and not line.startswith("#"))
+    nd = float(values["gyroscope_noise_density"])
+    assert nd == pytest.approx(max(r.fitted["arw"].value for r in res.values()) * math.pi / 180, rel=1e-6)
+    assert float(values["update_rate"]) == 100.0
+    rw = float(values["gyroscope_random_walk"])
+    assert rw == pytest.approx(max(r.fitted["rrw"].upper for r in res.values()) * math.pi / 180, rel=1e-6)
+    assert "upper bound: K not resolved" in text
