@@ -537,6 +537,8 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
         raise AllanInputError(
             f"axis {axis}: all {x.size} samples equal {x[0]:g} deg/s (constant data): no noise to "
             "characterise (sensor not connected, or a saturated/stuck axis?)")
+    if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
+        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {confidence!r}")
     for t in terms:
         if t not in TERMS:
             raise SettingsError(f"unknown noise term {t!r}; expected some of {', '.join(TERMS)}")

@@ -1,0 +1,111 @@
+"""Tests for `gyrofilter allan`: JSON per interfaces.md section 3, Kalibr YAML, plot, bad input."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from gyrofilter.cli import main
+from gyrofilter.recording import Recording, write_recording
+
+
+def _write(path, gyro_dps, fs=100.0, lsb=True):
+    rec = Recording.from_dps(gyro_dps, fs)
+    if lsb:  # as an MPU6050 at +-250 deg/s writes it: integers at 131 LSB per deg/s
+        from gyrofilter.recording import convert_gyro
+        rec = convert_gyro(rec, "lsb", 131.0)
+        for c in ("gx", "gy", "gz"):
+            rec.columns[c] = np.round(rec.columns[c])
+    write_recording(str(path), rec)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def static_recording(tmp_path_factory):
+    rng = np.random.default_rng(42)
+    arw = np.array([0.008, 0.010, 0.012])            # deg/sqrt(s)
+    n, fs = 30000, 100.0
+    g = np.array([-3.3, 1.1, -0.5]) + rng.normal(size=(n, 3)) * arw * math.sqrt(fs)
+    return _write(tmp_path_factory.mktemp("rec") / "static.csv.gz", g), arw
+
+
+def test_allan_json_kalibr_and_plot(static_recording, tmp_path, capsys):
+    path, arw = static_recording
+    out, yaml, png = tmp_path / "a.json", tmp_path / "imu.yaml", tmp_path / "a.png"
+    assert main(["allan", path, "--json", str(out), "--kalibr", str(yaml), "--plot", str(png)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["sample_rate_hz"] == 100.0
+    for name, truth in zip("xyz", arw):
+        ax = doc["axes"][name]
+        assert ax["tau_s"][0] == pytest.approx(0.01)
+        assert ax["tau_s"][-1] <= 300 / 9 + 1e-9               # at least 9 clusters
+        assert len(ax["adev_dps"]) == len(ax["tau_s"])
+        # sigma(tau) in deg/s: at 0.01 s the per-sample std ~ N sqrt(fs) (quantization adds 1/131/sqrt(12))
+        assert ax["adev_dps"][0] == pytest.approx(math.hypot(truth * 10, 1 / 131 / math.sqrt(12)), rel=0.03)
+        c = ax["coefficients"]
+        assert c["arw_dps_per_sqrt_hz"]["low"] <= c["arw_dps_per_sqrt_hz"]["value"] <= c["arw_dps_per_sqrt_hz"]["high"]
+        assert c["arw_dps_per_sqrt_hz"]["value"] == pytest.approx(truth, rel=0.05)
+        for key in ("bias_instability_dps", "rrw_dps_per_sqrt_s", "rate_ramp_dps_per_s"):
+            assert c[key] is None  # 300 s of white noise cannot resolve them
+            assert ax["details"][key]["upper_bound"] > 0
+    text = yaml.read_text()
+    assert "gyroscope_noise_density:" in text and "rad/s/sqrt(Hz)" in text
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    printed = capsys.readouterr().out
+    assert "deg/sqrt(h)" in printed and "deg/sqrt(s)" in printed and "not resolved" in printed
+
+
+def test_allan_one_axis(static_recording, tmp_path):
+    path, _ = static_recording
+    out = tmp_path / "z.json"
+    assert main(["allan", path, "--axes", "z", "--json", str(out)]) == 0
+    assert list(json.loads(out.read_text())["axes"]) == ["z"]
+
+
+def _assert_one_line_error(capsys, *parts):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("gyrofilter: error:"), err
+    for p in parts:
+        assert p in err[0]
+
+
+def test_constant_axis_is_a_clear_error(tmp_path, capsys):
+    g = np.column_stack([np.random.default_rng(0).normal(size=2000), np.zeros(2000),
+                         np.random.default_rng(1).normal(size=2000)])
+    path = _write(tmp_path / "stuck.csv", g, lsb=False)
+    assert main(["allan", path]) == 2
+    _assert_one_line_error(capsys, "axis y", "constant")
+
+
+def test_too_short_recording_is_a_clear_error(tmp_path, capsys):
+    path = _write(tmp_path / "short.csv", np.random.default_rng(0).normal(size=(12, 3)), lsb=False)
+    assert main(["allan", path]) == 2
+    _assert_one_line_error(capsys, "too short")
+
+
+def test_missing_axis_and_rate_are_clear_errors(tmp_path, capsys):
+    p = tmp_path / "noz.csv"
+    p.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy\n0.1,0.2\n")
+    assert main(["allan", str(p)]) == 2
+    _assert_one_line_error(capsys, "gz")
+    p2 = tmp_path / "norate.csv"
+    p2.write_text("# gyrofilter-recording: 1\n# gyro_unit: dps\ngx,gy,gz\n0.1,0.2,0.3\n")
+    assert main(["allan", str(p2)]) == 2
+    _assert_one_line_error(capsys, "sample_rate_hz")
+
+
+def test_bad_options(static_recording, capsys):
+    path, _ = static_recording
+    assert main(["allan", path, "--axes", "xw"]) == 2
+    _assert_one_line_error(capsys, "--axes")
+    assert main(["allan", path, "--confidence", "1.5"]) == 2
+    _assert_one_line_error(capsys, "confidence")
+    assert main(["allan", str(path) + ".missing"]) == 2
+    capsys.readouterr()
+
+
+def test_help_exits_zero(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["allan", "--help"])
+    assert exc.value.code == 0
+    assert "--kalibr" in capsys.readouterr().out
