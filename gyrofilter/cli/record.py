@@ -137,7 +137,7 @@ def recording_header(source, spec):
     return ordered
 
 
-def _formats(columns, gyro_unit):
+def _formats(columns):
     out = []
     for c in columns:
         if c == "t":
@@ -162,82 +162,110 @@ def run(args):
         source.close()
 
 
+class LiveLoop:
+    """The read loop shared by ``record`` and ``run``: reads ``source`` until a stop signal, its
+    end, a device failure or ``duration_s`` seconds of samples (sensor clock).
+
+    ``with LiveLoop(source, duration_s) as loop: while (step := loop.next()) is not None: ...``
+    where a step is ``(rows, notes)``; afterwards :meth:`reason` says why it stopped.
+    """
+
+    def __init__(self, source, duration_s=None):
+        self.source = source
+        self.duration_s = duration_s
+        self.rate_hz = float(source.header["sample_rate_hz"])
+        self.t_col = source.columns.index("t")
+        self.first_t = self.last_t = None
+        self.samples = 0
+        self.ended = None  # SourceEnded, DeviceError or "duration reached"
+        self._signals = StopSignals()
+
+    def __enter__(self):
+        self._signals.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        return self._signals.__exit__(*exc)
+
+    def next(self):
+        """The next ``(rows, notes)``, or None when the loop is over."""
+        if self._signals.received is not None or self.ended is not None:
+            return None
+        try:
+            rows = self.source.read()
+        except SourceEnded as exc:
+            self.ended = exc
+            return None
+        except (DeviceError, OSError) as exc:  # the device failed for good: keep what we have
+            self.ended = DeviceError(f"device error: {' '.join(str(exc).split())}")
+            return None
+        notes = self.source.pop_notes()
+        if len(rows):
+            t = rows[:, self.t_col]
+            if self.first_t is None:
+                self.first_t = float(t[0])
+            if self.duration_s is not None:
+                keep = t - self.first_t < self.duration_s - 0.5 / self.rate_hz
+                if not keep.all():
+                    rows, self.ended = rows[keep], "duration reached"
+            if len(rows):
+                self.last_t = float(rows[-1, self.t_col])
+                self.samples += len(rows)
+        return rows, notes
+
+    @property
+    def span_s(self):
+        """Sensor time covered, first to last sample plus one sample interval."""
+        return 0.0 if self.last_t is None else self.last_t - self.first_t + 1.0 / self.rate_hz
+
+    def reason(self):
+        if self._signals.received is not None:
+            return f"stopped by {self._signals.received}"
+        if isinstance(self.ended, SourceEnded):
+            return f"source ended: {self.ended}"
+        if isinstance(self.ended, DeviceError):
+            return f"stopped: {self.ended}"
+        return self.ended or "stopped"
+
+    def failed(self):
+        """True when the device went away or failed (exit status 1)."""
+        return isinstance(self.ended, DeviceError) or (
+            isinstance(self.ended, SourceEnded) and bool(self.source.stats.get("disconnects")))
+
+
 def _record(args, source, RecordingWriter):
     header = recording_header(source, args.source)
-    rate_hz = float(header["sample_rate_hz"])
     columns = list(source.columns)
-    t_col = columns.index("t") if "t" in columns else None
-    status = Status(args.progress or sys.stderr.isatty(), rate_hz)
-    samples = 0
-    first_t = None
-    last_t = None
-    ended = None
+    loop = LiveLoop(source, args.duration)
+    status = Status(args.progress or sys.stderr.isatty(), loop.rate_hz)
     wall0 = time.monotonic()
-    with StopSignals() as stop, RecordingWriter(args.out, header, columns, formats=_formats(columns, header["gyro_unit"]),
-                                                flush_interval_s=None) as writer:
+    with loop, RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None) as writer:
         last_flush = time.monotonic()
         dirty = False
-        while stop.received is None:
-            try:
-                rows = source.read()
-            except SourceEnded as exc:
-                ended = exc
-                break
-            except (DeviceError, OSError) as exc:  # the device failed for good: keep what we have
-                ended = DeviceError(f"device error: {' '.join(str(exc).split())}")
-                break
-            for text in source.pop_notes():
+        while (step := loop.next()) is not None:
+            rows, notes = step
+            for text in notes:
                 writer.note(text)
-                dirty = True
-            if len(rows) and t_col is not None:
-                if first_t is None:
-                    first_t = float(rows[0, t_col])
-                if args.duration is not None:
-                    keep = rows[:, t_col] - first_t < args.duration - 0.5 / rate_hz
-                    if not keep.all():
-                        rows = rows[keep]
-                        ended = "duration reached"
-                if len(rows):
-                    last_t = float(rows[-1, t_col])
-            elif args.duration is not None and samples + len(rows) >= args.duration * rate_hz:
-                rows = rows[: max(0, int(round(args.duration * rate_hz)) - samples)]
-                ended = "duration reached"
             if len(rows):
                 writer.write(rows)
-                samples += len(rows)
-                dirty = True
+            dirty = dirty or bool(notes) or bool(len(rows))
             now = time.monotonic()
             if dirty and now - last_flush >= FLUSH_INTERVAL_S:
                 writer.flush()
                 last_flush, dirty = now, False
             if status.due():
-                lost = source.stats.get("lost_samples", 0)
-                status.show(samples, f"{samples} recorded, {lost} lost")
-            if ended is not None:
-                break
+                status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost")
         status.end()
         for text in source.pop_notes():
             writer.note(text)
-        if stop.received is not None:
-            reason = f"stopped by {stop.received}"
-        elif isinstance(ended, SourceEnded):
-            reason = f"source ended: {ended}"
-        elif isinstance(ended, DeviceError):
-            reason = f"stopped: {ended}"
-        else:
-            reason = ended or "stopped"
-        writer.note(f"end: {reason}; {samples} samples; " + (source_summary(source.stats) or "no losses"))
-    duration_s = 0.0 if last_t is None else last_t - first_t + 1.0 / rate_hz
-    if t_col is None:
-        duration_s = samples / rate_hz
+        reason = loop.reason()
+        writer.note(f"end: {reason}; {loop.samples} samples; " + (source_summary(source.stats) or "no losses"))
     stats = source.stats
     print(
         f"gyrofilter record: {reason}\n"
-        f"  wrote {samples} samples ({duration_s:.2f} s at {rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
+        f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
         f"  lost {stats.get('lost_samples', 0)} samples"
         + (f"; {source_summary(stats)}" if source_summary(stats) else ""),
         file=sys.stderr,
     )
-    if isinstance(ended, DeviceError) or (isinstance(ended, SourceEnded) and stats.get("disconnects")):
-        return EXIT_DISCONNECTED
-    return 0
+    return EXIT_DISCONNECTED if loop.failed() else 0

@@ -12,10 +12,9 @@ import time
 
 import numpy as np
 
-from ..errors import DeviceError, SourceEnded
 from ..units import to_dps
 from . import common
-from .record import StopSignals, Status, add_source_arguments, open_from_args, source_summary
+from .record import EXIT_DISCONNECTED, LiveLoop, Status, add_source_arguments, open_from_args, source_summary
 
 FLUSH_INTERVAL_S = 0.5
 
@@ -92,33 +91,18 @@ def _run(args, source):
         writer = RecordingWriter(args.out, out_header, columns, formats=["%.10g", "%.9g", "%.9g", "%.9g"], flush_interval_s=None)
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
+    loop = LiveLoop(source, args.duration)
     status = Status(not args.quiet, rate_hz)
     t_pending = np.empty(0)  # t of samples fed to the filter but not yet in an output block
-    samples = blocks = 0
-    first_t = None
-    ended = None
+    blocks = 0
     last_flush = time.monotonic()
     try:
-        with StopSignals() as stop:
-            while stop.received is None:
-                try:
-                    rows = source.read()
-                except SourceEnded as exc:
-                    ended = exc
-                    break
-                except (DeviceError, OSError) as exc:  # the device failed for good: keep what we have
-                    ended = DeviceError(f"device error: {' '.join(str(exc).split())}")
-                    break
-                for text in source.pop_notes():
+        with loop:
+            while (step := loop.next()) is not None:
+                rows, notes = step
+                for text in notes:
                     writer.note(text)
                 if len(rows):
-                    if first_t is None:
-                        first_t = float(rows[0, t_idx])
-                    if args.duration is not None:
-                        keep = rows[:, t_idx] - first_t < args.duration - 0.5 / rate_hz
-                        if not keep.all():
-                            rows, ended = rows[keep], "duration reached"
-                    samples += len(rows)
                     was_calibrating = filt.calibrating
                     out = filt.filter(to_dps(rows[:, gyro_idx], unit, lsb))
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
@@ -138,33 +122,22 @@ def _run(args, source):
                     last_flush = now
                 if status.due():
                     state = "calibrating" if filt.calibrating else f"{blocks} filtered rows"
-                    status.show(samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
-                                         f"rejected outliers {int(filt.rejected.sum())}")
-                if ended is not None:
-                    break
+                    status.show(loop.samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
+                                              f"rejected outliers {int(filt.rejected.sum())}")
             status.end()
             for text in source.pop_notes():
                 writer.note(text)
     finally:
         writer.close()
-    if stop.received is not None:
-        reason = f"stopped by {stop.received}"
-    elif isinstance(ended, SourceEnded):
-        reason = f"source ended: {ended}"
-    elif isinstance(ended, DeviceError):
-        reason = f"stopped: {ended}"
-    else:
-        reason = ended or "stopped"
+    reason = loop.reason()
     common.save_calibration(args, filt)
     bias = "" if filt.bias_dps is None else " bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s;"
     print(
         f"gyrofilter run: {reason}\n"
-        f"  {samples} samples in, {blocks} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
+        f"  {loop.samples} samples in, {blocks} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
         f"  lost {source.stats.get('lost_samples', 0)} samples"
         + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else ""),
         file=sys.stderr,
     )
-    if isinstance(ended, DeviceError) or (isinstance(ended, SourceEnded) and source.stats.get("disconnects")):
-        return 1
-    return 0
+    return EXIT_DISCONNECTED if loop.failed() else 0

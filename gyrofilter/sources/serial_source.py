@@ -110,33 +110,28 @@ class LineParser:
     # ------------------------------------------------------------------ header
 
     def _make_units(self, values, where):
+        """Checked recording-header units from header words or source options."""
         unit = values.get("gyro_unit")
         if unit is None:
             raise SettingsError(f"{self.where}: {where}: gyro unit missing (unit=dps|rad/s|lsb)")
         if unit not in GYRO_UNITS:
             raise SettingsError(f"{self.where}: {where}: gyro_unit {unit!r} is not one of {', '.join(GYRO_UNITS)}")
-        rate = values.get("sample_rate_hz")
-        if rate is None:
-            raise SettingsError(f"{self.where}: {where}: sample rate missing (rate=HZ)")
-        try:
-            rate = float(rate)
-        except ValueError:
-            raise DeviceError(f"{self.where}: {where}: sample_rate_hz is not a number: {values['sample_rate_hz']!r}") from None
-        if not rate > 0:
-            raise SettingsError(f"{self.where}: {where}: sample_rate_hz must be positive, got {rate}")
-        out = {"sample_rate_hz": _num(rate), "gyro_unit": unit}
+        out = {"sample_rate_hz": self._positive(values, "sample_rate_hz", where, "rate=HZ"), "gyro_unit": unit}
         if unit == "lsb":
-            lsb = values.get("lsb_per_dps")
-            if lsb is None:
-                raise SettingsError(f"{self.where}: {where}: gyro_unit lsb needs lsb_per_dps")
-            try:
-                lsb = float(lsb)
-            except ValueError:
-                raise DeviceError(f"{self.where}: {where}: lsb_per_dps is not a number: {values['lsb_per_dps']!r}") from None
-            if not lsb > 0:
-                raise SettingsError(f"{self.where}: {where}: lsb_per_dps must be positive, got {lsb}")
-            out["lsb_per_dps"] = _num(lsb)
+            out["lsb_per_dps"] = self._positive(values, "lsb_per_dps", where, "gyro_unit lsb needs lsb_per_dps")
         return out
+
+    def _positive(self, values, key, where, hint):
+        """``values[key]`` as a positive number, formatted for the header."""
+        if values.get(key) is None:
+            raise SettingsError(f"{self.where}: {where}: {key} missing ({hint})")
+        try:
+            number = float(values[key])
+        except ValueError:
+            raise DeviceError(f"{self.where}: {where}: {key} is not a number: {values[key]!r}") from None
+        if not number > 0 or number == float("inf"):
+            raise SettingsError(f"{self.where}: {where}: {key} must be a positive number, got {values[key]!r}")
+        return _num(number)
 
     def _apply(self, header):
         units = {k: header[k] for k in ("sample_rate_hz", "gyro_unit", "lsb_per_dps") if k in header}
