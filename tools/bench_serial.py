@@ -103,76 +103,69 @@ def _writer(master, lines, header):
         os.close(master)
 
 
-def pty_costs(n):
-    import serial
+def _on_pty(lines, read_all):
+    """Run ``read_all(port_name) -> lines read`` in a thread while a writer fills the pty.
 
-    rows = {}
-    lines = make_lines(n)
-
-    # SerialSource: chunked reads
+    Returns (reading thread CPU seconds, lines read)."""
     master, slave = os.openpty()
     tty.setraw(slave)
     name = os.ttyname(slave)
     result = {}
 
-    def read_source():
-        src = SerialSource(name, gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=1000)
+    def reader():
         t0 = time.thread_time()
+        result["got"] = read_all(name)
+        result["cpu"] = time.thread_time() - t0
+
+    thread = threading.Thread(target=reader)
+    thread.start()
+    time.sleep(0.3)  # the port is open (and its input flushed) before the data come
+    writer = threading.Thread(target=_writer, args=(master, lines, False))
+    writer.start()
+    writer.join()
+    thread.join()
+    os.close(slave)
+    return result["cpu"], result["got"]
+
+
+def pty_costs(n):
+    import serial
+
+    lines = make_lines(n)
+
+    def chunked(name):
+        src = SerialSource(name, gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=1000)
         got = 0
         try:
             while True:
                 got += len(src.read())
         except SourceEnded:
             pass
-        result["cpu"] = time.thread_time() - t0
-        result["got"] = got
         src.close()
+        return got
 
-    reader = threading.Thread(target=read_source)
-    reader.start()
-    time.sleep(0.3)  # the port is open (and its input flushed) before the data comes
-    writer = threading.Thread(target=_writer, args=(master, lines, False))
-    writer.start()
-    writer.join()
-    reader.join()
-    os.close(slave)
-    rows["SerialSource.read() on a pty (reader thread CPU)"] = (result["cpu"] / max(result["got"], 1) * 1e6, result["got"])
-
-    # baseline: pyserial readline() per line
-    master, slave = os.openpty()
-    tty.setraw(slave)
-    name = os.ttyname(slave)
-    result = {}
-
-    def read_naive():
+    def naive(name):
         port = serial.Serial(name, 115200, timeout=0.1)
-        t0 = time.thread_time()
         got = 0
         try:
             while True:
                 line = port.readline()
-                if not line:
-                    continue
-                try:
-                    [float(x) for x in line.decode().strip().split(",")]
-                    got += 1
-                except ValueError:
-                    pass
+                if line:
+                    try:
+                        [float(x) for x in line.decode().strip().split(",")]
+                        got += 1
+                    except ValueError:
+                        pass
         except (serial.SerialException, OSError):
             pass
-        result["cpu"] = time.thread_time() - t0
-        result["got"] = got
         port.close()
+        return got
 
-    reader = threading.Thread(target=read_naive)
-    reader.start()
-    time.sleep(0.3)
-    writer = threading.Thread(target=_writer, args=(master, lines, False))
-    writer.start()
-    writer.join()
-    reader.join()
-    os.close(slave)
-    rows["baseline: pyserial readline() + split + float on a pty"] = (result["cpu"] / max(result["got"], 1) * 1e6, result["got"])
+    rows = {}
+    for label, fn in (("SerialSource.read() on a pty (reader thread CPU)", chunked),
+                      ("baseline: pyserial readline() + split + float on a pty", naive)):
+        cpu, got = _on_pty(lines, fn)
+        rows[label] = (cpu / max(got, 1) * 1e6, got)
     return rows
 
 
