@@ -1,0 +1,692 @@
+"""ARMA model of a static gyro's bias noise (paper 003, Wang, Lyu and Wu 2016).
+
+Paper 003 takes a static gyro axis minus its constant, a zero-mean series x_t in deg/s, and
+models it as an ARMA(N, M) process (its eq. 1)::
+
+    x_t - phi_1 x_{t-1} - ... - phi_N x_{t-N} = a_t - theta_1 a_{t-1} - ... - theta_M a_{t-M}
+
+with a_t white. Signs are the paper's (and Pandit-Wu's): ``phi`` and ``theta`` here are exactly
+its phi_i and theta_j; statsmodels writes the MA part with ``+``, so its ``maparams`` are
+``-theta``. The procedure implemented here is the paper's section 1:
+
+1. stationarity: augmented Dickey-Fuller (ADF) unit-root test (Hamilton 1994, ch. 17), through
+   ``statsmodels.tsa.stattools.adfuller``; the paper reports -110.18 for its z gyro;
+2. normality: Kolmogorov-Smirnov (on the standardised series) and Jarque-Bera (scipy);
+3. order: the Pandit-Wu ARMA(2n, 2n-1) procedure (Pandit and Wu, *Time Series and System
+   Analysis with Applications*, 1983, ch. 4): fit ARMA(2, 1), ARMA(4, 3), ... and go up while
+   the residual sum of squares still falls significantly, judged by the F statistic::
+
+       F = ((A_1 - A_0) / s) / (A_0 / (N - r))      ~ F(s, N - r)
+
+   (A_0, A_1: RSS of the larger and the smaller model, s: number of extra parameters, r:
+   parameters of the larger model) and by the AIC in the paper's per-sample form
+   ``ln(sigma_a^2) + 2 r / N`` (paper 003 table 3 lists about -10.19). Then the adequate
+   ARMA(2n, 2n-1) is reduced one parameter at a time (drop the last AR or the last MA term)
+   while the reduced model is not significantly worse than ARMA(2n, 2n-1) (same F test);
+   that is how the paper arrives at ARMA(1, 1) from ARMA(2, 1);
+4. adequacy: residual ACF/PACF against the +-1.96/sqrt(N) band and the Ljung-Box Q test.
+
+Estimation is Pandit-Wu's nonlinear least squares on the conditional residuals (conditional
+sum of squares, CSS), a_t = x_t - sum phi_i x_{t-i} + sum theta_j a_{t-j} computed with
+``scipy.signal.lfilter``, minimised by ``scipy.optimize.least_squares`` from a Hannan-Rissanen
+start; stationarity and invertibility are kept by optimising the partial autocorrelations
+(Monahan 1984 / Jones 1980 transform). The tests compare it with statsmodels' exact maximum
+likelihood.
+
+Long series: CSS costs O(N) per evaluation, so a 10-minute 100 Hz log (65 000 samples) is fitted
+at full rate in about a second. Series longer than ``max_samples`` are block-averaged by the
+smallest integer factor k that brings them under the limit, and every result says so
+(``decimation``, ``analysis_rate_hz``). Block averaging keeps the bias model's physical
+parameters (correlation time, bias sigma, white-noise density) but not the per-sample
+ARMA coefficients: those belong to the analysis rate.
+
+The ARMA(1, 1) also maps onto the bias model a Kalman filter needs: ARMA(1, 1) with
+0 < theta <= phi < 1 has the autocovariances of a first-order Gauss-Markov bias b_t =
+phi b_{t-1} + eta_t plus white noise w_t, with (matching lag-0 and lag-1 autocovariances of
+(1 - phi B) x_t)::
+
+    sigma_w^2 = theta sigma_a^2 / phi,   sigma_eta^2 = sigma_a^2 (1 + theta^2) - sigma_w^2 (1 + phi^2)
+
+so tau = -dt / ln(phi), bias sigma = sigma_eta / sqrt(1 - phi^2); for phi -> 1 the bias is a
+random walk with K = sigma_eta sqrt(fs). Paper 003's x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}
+is that limit: sigma_eta = (1 - theta) sigma_a = 0.0006 sigma_a per sample.
+
+scipy and statsmodels are an optional extra (``pip install gyrofilter[stats]``), imported here
+inside the functions that use them.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .errors import GyroFilterError, SettingsError
+
+STATS_HINT = "pip install gyrofilter[stats]"
+DEFAULT_MAX_SAMPLES = 200_000
+DEFAULT_ADF_MAXLAG = 20
+DEFAULT_ALPHA = 0.05
+DEFAULT_MAX_N = 4  # up to ARMA(8, 7)
+WHITENESS_LAGS = 20
+
+
+class StatsUnavailableError(GyroFilterError):
+    """scipy or statsmodels is missing."""
+
+
+def require_stats():
+    """Import scipy and statsmodels, or raise naming the extra that installs them."""
+    try:
+        import scipy  # noqa: F401
+        import statsmodels  # noqa: F401
+    except ImportError as exc:
+        raise StatsUnavailableError(
+            f"ARMA analysis needs scipy and statsmodels ({exc.name} is missing): {STATS_HINT}"
+        ) from None
+
+
+# ---------------------------------------------------------------------------------------------
+# results
+
+
+@dataclass
+class Stationarity:
+    """Augmented Dickey-Fuller test (H0: unit root). Stationary if the statistic is below the 5 % value."""
+
+    adf_statistic: float
+    p_value: float
+    lags_used: int
+    n_obs: int
+    critical_values: dict
+    stationary: bool
+
+
+@dataclass
+class Normality:
+    """Kolmogorov-Smirnov (standardised series vs N(0, 1)) and Jarque-Bera tests (H0: normal)."""
+
+    ks_statistic: float
+    ks_p_value: float
+    ks_critical_5pct: float
+    jb_statistic: float
+    jb_p_value: float
+    jb_critical_5pct: float
+    skewness: float
+    excess_kurtosis: float
+    normal_ks: bool
+    normal_jb: bool
+
+
+@dataclass
+class ArmaFit:
+    """One fitted ARMA(p, q) in the paper's signs: x_t - sum phi x_{t-i} = a_t - sum theta a_{t-j}."""
+
+    p: int
+    q: int
+    phi: list
+    theta: list
+    sigma_a: float  # residual (innovation) std, in the series' unit
+    rss: float
+    n_residuals: int
+    aic: float  # paper-003 per-sample form: ln(sigma_a^2) + 2 (p + q) / N
+    residuals: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def n_params(self) -> int:
+        return self.p + self.q
+
+    @property
+    def order(self):
+        return (self.p, self.q)
+
+    def equation(self, digits=4) -> str:
+        """The model as paper 003 writes it, e.g. ``x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}``."""
+        left = "x_t" + "".join(_term(-c, f"x_{{t-{i + 1}}}", digits) for i, c in enumerate(self.phi))
+        right = "a_t" + "".join(_term(-c, f"a_{{t-{j + 1}}}", digits) for j, c in enumerate(self.theta))
+        return f"{left} = {right}"
+
+    def to_dict(self):
+        return {"p": self.p, "q": self.q, "phi": list(self.phi), "theta": list(self.theta),
+                "sigma_a": self.sigma_a, "rss": self.rss, "n_residuals": self.n_residuals, "aic": self.aic,
+                "equation": self.equation()}
+
+
+@dataclass
+class OrderStep:
+    """One comparison of the order search: ``smaller`` against ``larger`` by the F test."""
+
+    smaller: tuple
+    larger: tuple
+    f_statistic: float
+    f_critical: float
+    significant: bool  # True: the larger model reduces the RSS significantly
+
+
+@dataclass
+class Whiteness:
+    """Residual whiteness: ACF/PACF against +-1.96/sqrt(N), Ljung-Box Q (H0: white)."""
+
+    lags: list
+    acf: list
+    pacf: list
+    band: float
+    outside_band: int  # lags (1..lags) whose |ACF| exceeds the band; ~5 % expected for white noise
+    ljung_box_q: float
+    ljung_box_lag: int
+    ljung_box_p_value: float
+    white: bool
+
+
+@dataclass
+class BiasModel:
+    """Gauss-Markov bias plus white noise equivalent to an ARMA(1, 1) (see the module docstring).
+
+    Rate-independent: the same numbers describe the series at any sample rate.
+    ``tau_s`` is ``inf`` when phi >= 1 (random walk, then ``bias_walk_dps_per_sqrt_s`` holds K).
+    ``valid`` is False when the ARMA(1, 1) has no such decomposition (theta <= 0 or theta > phi).
+    """
+
+    tau_s: float
+    bias_sigma_dps: float
+    bias_walk_dps_per_sqrt_s: float  # sigma_eta * sqrt(fs): the bias drive as a random-walk density
+    white_noise_dps_per_sqrt_hz: float  # angle random walk N of the white part
+    valid: bool
+    note: str = ""
+
+    def discrete(self, sample_rate_hz):
+        """(phi, sigma_eta_dps, sigma_w_dps) of the bias model at ``sample_rate_hz``.
+
+        b_k = phi b_{k-1} + eta_k, eta ~ N(0, sigma_eta^2); measurement white noise sigma_w.
+        """
+        dt = 1.0 / sample_rate_hz
+        sigma_w = self.white_noise_dps_per_sqrt_hz * math.sqrt(sample_rate_hz)
+        if math.isinf(self.tau_s):
+            return 1.0, self.bias_walk_dps_per_sqrt_s * math.sqrt(dt), sigma_w
+        phi = math.exp(-dt / self.tau_s)
+        return phi, self.bias_sigma_dps * math.sqrt(1.0 - phi * phi), sigma_w
+
+
+@dataclass
+class AxisReport:
+    """Everything ``analyze_axis`` found for one axis."""
+
+    axis: str
+    n_samples: int
+    sample_rate_hz: float
+    decimation: int
+    analysis_rate_hz: float
+    mean_dps: float
+    std_dps: float
+    stationarity: Stationarity
+    normality: Normality
+    fits: list  # every ArmaFit tried, in order
+    steps: list  # OrderStep, in order
+    adequate_order: tuple  # the ARMA(2n, 2n-1) the upward search stopped at
+    chosen: ArmaFit
+    arma11: ArmaFit
+    bias_model: BiasModel
+    whiteness: Whiteness
+    notes: list = field(default_factory=list)
+
+    def to_dict(self):
+        return {
+            "axis": self.axis,
+            "n_samples": self.n_samples,
+            "sample_rate_hz": self.sample_rate_hz,
+            "decimation": self.decimation,
+            "analysis_rate_hz": self.analysis_rate_hz,
+            "mean_dps": self.mean_dps,
+            "std_dps": self.std_dps,
+            "stationarity": _plain(asdict(self.stationarity)),
+            "normality": _plain(asdict(self.normality)),
+            "order_search": [_plain(asdict(s)) for s in self.steps],
+            "fits": [f.to_dict() for f in self.fits],
+            "adequate_order": list(self.adequate_order),
+            "chosen": self.chosen.to_dict(),
+            "arma11": self.arma11.to_dict(),
+            "bias_model": _plain(asdict(self.bias_model)),
+            "whiteness": _plain(asdict(self.whiteness)),
+            "notes": list(self.notes),
+        }
+
+
+# ---------------------------------------------------------------------------------------------
+# preparation and tests
+
+
+def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
+    """Zero-mean series for the analysis: ``(series, decimation, analysis_rate_hz, mean)``.
+
+    Paper 003: "static output minus its constant". Longer than ``max_samples``: non-overlapping
+    block means over the smallest factor k with N / k <= max_samples (the tail that does not
+    fill a block is dropped).
+    """
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 1:
+        raise SettingsError(f"series must be 1-D, got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise SettingsError("series holds NaN or infinite values")
+    if not sample_rate_hz > 0:
+        raise SettingsError(f"sample_rate_hz must be positive, got {sample_rate_hz!r}")
+    if max_samples < 100:
+        raise SettingsError(f"max_samples must be at least 100, got {max_samples!r}")
+    k = max(1, math.ceil(len(x) / max_samples))
+    if k > 1:
+        n = (len(x) // k) * k
+        x = x[:n].reshape(-1, k).mean(axis=1)
+    mean = float(x.mean())
+    return x - mean, k, sample_rate_hz / k, mean
+
+
+def adf_test(x, maxlag=DEFAULT_ADF_MAXLAG, alpha=DEFAULT_ALPHA) -> Stationarity:
+    """Augmented Dickey-Fuller test with a constant, lag order by AIC up to ``maxlag``.
+
+    statsmodels' default maxlag (12 (N/100)^(1/4), 60 at N = 65 000) takes ~20 s there for
+    the same verdict, hence the cap.
+    """
+    require_stats()
+    from statsmodels.tsa.stattools import adfuller
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        stat, p, lags, nobs, crit, _ = adfuller(np.asarray(x, float), maxlag=maxlag, regression="c", autolag="AIC")
+    key = f"{int(round(alpha * 100))}%"
+    threshold = crit.get(key, crit["5%"])
+    return Stationarity(float(stat), float(p), int(lags), int(nobs), {k: float(v) for k, v in crit.items()},
+                        bool(stat < threshold))
+
+
+def normality_tests(x, alpha=DEFAULT_ALPHA) -> Normality:
+    """Kolmogorov-Smirnov on (x - mean) / std against N(0, 1), and Jarque-Bera.
+
+    JB = N/6 (S^2 + (K - 3)^2 / 4) ~ chi2(2) (Jarque and Bera 1987). The KS critical value is
+    the asymptotic 1.358 / sqrt(N); with mean and std estimated from the data the KS p-value is
+    conservative (Lilliefors), and on quantised data (MPU6050 LSB steps) KS also sees the steps.
+    """
+    require_stats()
+    from scipy import stats
+
+    x = np.asarray(x, float)
+    z = (x - x.mean()) / x.std(ddof=1)
+    ks = stats.kstest(z, "norm")
+    jb = stats.jarque_bera(x)
+    n = len(x)
+    return Normality(
+        ks_statistic=float(ks.statistic),
+        ks_p_value=float(ks.pvalue),
+        ks_critical_5pct=float(1.358 / math.sqrt(n)),
+        jb_statistic=float(jb.statistic),
+        jb_p_value=float(jb.pvalue),
+        jb_critical_5pct=float(stats.chi2.ppf(1 - alpha, 2)),
+        skewness=float(stats.skew(x)),
+        excess_kurtosis=float(stats.kurtosis(x)),
+        normal_ks=bool(ks.pvalue >= alpha),
+        normal_jb=bool(jb.pvalue >= alpha),
+    )
+
+
+def whiteness(residuals, n_params=0, lags=WHITENESS_LAGS, alpha=DEFAULT_ALPHA) -> Whiteness:
+    """Residual ACF/PACF (lags 1..lags) and the Ljung-Box test at ``lags`` with ``n_params`` df removed.
+
+    Q = N (N + 2) sum_{k=1}^{h} r_k^2 / (N - k) ~ chi2(h - p - q) (Ljung and Box 1978).
+    """
+    require_stats()
+    from statsmodels.stats.diagnostic import acorr_ljungbox
+    from statsmodels.tsa.stattools import acf, pacf
+
+    r = np.asarray(residuals, float)
+    n = len(r)
+    a = acf(r, nlags=lags, fft=True)[1:]
+    pa = pacf(r, nlags=lags, method="ywm")[1:]
+    band = 1.96 / math.sqrt(n)
+    lb = acorr_ljungbox(r, lags=[lags], model_df=n_params)
+    q = float(np.asarray(lb["lb_stat"])[0])
+    p = float(np.asarray(lb["lb_pvalue"])[0])
+    return Whiteness(list(range(1, lags + 1)), [float(v) for v in a], [float(v) for v in pa], band,
+                     int(np.sum(np.abs(a) > band)), q, lags, p, bool(p >= alpha))
+
+
+# ---------------------------------------------------------------------------------------------
+# ARMA estimation (conditional least squares)
+
+
+def pacf_to_coefficients(r):
+    """Coefficients c_1..c_k of a stationary polynomial 1 - sum c_i B^i from partial autocorrelations r_i in (-1, 1).
+
+    Durbin-Levinson step (Monahan 1984): c^(k)_k = r_k, c^(k)_j = c^(k-1)_j - r_k c^(k-1)_{k-j}.
+    """
+    c = np.zeros(0)
+    for rk in np.asarray(r, float):
+        c = np.concatenate([c - rk * c[::-1], [rk]])
+    return c
+
+
+def coefficients_to_pacf(c):
+    """Inverse of :func:`pacf_to_coefficients` (raises ValueError if the polynomial has a root on or inside the unit circle)."""
+    c = np.asarray(c, float).copy()
+    r = np.zeros(len(c))
+    for k in range(len(c), 0, -1):
+        rk = c[k - 1]
+        if not abs(rk) < 1:
+            raise ValueError("not stationary/invertible")
+        r[k - 1] = rk
+        prev = c[: k - 1]
+        c = (prev + rk * prev[::-1]) / (1 - rk * rk)
+    return r
+
+
+def _to_unconstrained(c, limit=0.999):
+    try:
+        r = coefficients_to_pacf(c)
+    except ValueError:
+        r = np.full(len(c), 0.5 if len(c) else 0.0) * np.sign(np.sum(c) or 1.0)
+    return np.arctanh(np.clip(r, -limit, limit))
+
+
+def _from_unconstrained(u):
+    return pacf_to_coefficients(np.tanh(u))
+
+
+def arma_residuals(x, phi, theta):
+    """Conditional residuals a_t = x_t - sum phi_i x_{t-i} + sum theta_j a_{t-j}, zero before t = 0."""
+    from scipy.signal import lfilter
+
+    return lfilter(np.r_[1.0, -np.asarray(phi, float)], np.r_[1.0, -np.asarray(theta, float)], x)
+
+
+def _hannan_rissanen(x, p, q):
+    """Starting values: long AR by least squares, then regress x_t on x_{t-i} and -a_{t-j} (Hannan and Rissanen 1982)."""
+    n = len(x)
+    if q == 0 and p == 0:
+        return np.zeros(0), np.zeros(0)
+    m = min(max(20, 2 * (p + q)), n // 10)
+    if q > 0:
+        X = np.column_stack([x[m - i - 1 : n - i - 1] for i in range(m)])
+        ar_long, *_ = np.linalg.lstsq(X, x[m:], rcond=None)
+        a = np.zeros(n)
+        a[m:] = x[m:] - X @ ar_long
+    start = m + max(p, q) if q > 0 else p
+    cols = [x[start - i - 1 : n - i - 1] for i in range(p)] + [-a[start - j - 1 : n - j - 1] for j in range(q)]
+    coef, *_ = np.linalg.lstsq(np.column_stack(cols), x[start:], rcond=None)
+    return coef[:p], coef[p:]
+
+
+def _transform_jacobian(u, eps=1e-7):
+    """d coefficients / d u of the PACF transform (central differences; k x k, k <= ~8)."""
+    k = len(u)
+    jac = np.zeros((k, k))
+    for i in range(k):
+        d = np.zeros(k)
+        d[i] = eps
+        jac[:, i] = (_from_unconstrained(u + d) - _from_unconstrained(u - d)) / (2 * eps)
+    return jac
+
+
+def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
+    """Least-squares (CSS) fit of ARMA(p, q) to a zero-mean series ``x``; paper-003 signs.
+
+    Minimises sum_{t >= p} a_t^2 over stationary phi and invertible theta (PACF parametrisation)
+    with the analytic Jacobian of the residuals::
+
+        da_t/dphi_i = -x_{t-i} / theta(B),   da_t/dtheta_j = a_{t-j} / theta(B)
+
+    from the best of several starts: ``start`` (phi, theta) if given (e.g. the neighbouring
+    order's fit, zero-padded or truncated), Hannan-Rissanen (for larger models only without a
+    ``start``), and for ARMA(1, 1)-sized models a near-unit-root start
+    (phi_1 = 0.999, theta_1 = 0.99, as paper 003's data need) and a small-coefficient start.
+    """
+    require_stats()
+    from scipy.optimize import least_squares
+    from scipy.signal import lfilter
+
+    x = np.asarray(x, float)
+    if p < 0 or q < 0:
+        raise SettingsError(f"ARMA order must be non-negative, got ({p}, {q})")
+    n = len(x)
+    if n < 10 * (p + q + 1):
+        raise SettingsError(f"series of {n} samples is too short for ARMA({p}, {q})")
+
+    def resid(u):
+        return arma_residuals(x, _from_unconstrained(u[:p]), _from_unconstrained(u[p:]))[p:]
+
+    def jac(u):
+        phi, theta = _from_unconstrained(u[:p]), _from_unconstrained(u[p:])
+        a = arma_residuals(x, phi, theta)
+        den = np.r_[1.0, -theta]
+        xf = lfilter([1.0], den, x)
+        af = lfilter([1.0], den, a)
+        cols = np.empty((n - p, p + q))
+        for i in range(1, p + 1):
+            cols[:, i - 1] = -xf[p - i : n - i]
+        for j in range(1, q + 1):
+            shifted = np.zeros(n)
+            shifted[j:] = af[:-j]
+            cols[:, p + j - 1] = shifted[p:]
+        jt = np.zeros((p + q, p + q))
+        if p:
+            jt[:p, :p] = _transform_jacobian(u[:p])
+        if q:
+            jt[p:, p:] = _transform_jacobian(u[p:])
+        return cols @ jt
+
+    if p + q == 0:
+        best_u = np.zeros(0)
+    else:
+        starts = []
+        if start is None or p + q <= 3:
+            try:
+                phi0, theta0 = _hannan_rissanen(x, p, q)
+                starts.append(np.r_[_to_unconstrained(phi0), _to_unconstrained(theta0)])
+            except np.linalg.LinAlgError:
+                pass
+        if start is not None:
+            phi_s = np.zeros(p)
+            theta_s = np.zeros(q)
+            phi_s[: min(p, len(start[0]))] = np.asarray(start[0], float)[:p]
+            theta_s[: min(q, len(start[1]))] = np.asarray(start[1], float)[:q]
+            starts.append(np.r_[_to_unconstrained(phi_s), _to_unconstrained(theta_s)])
+        if p + q <= 3:
+            near_unit = np.zeros(p + q)
+            if p:
+                near_unit[0] = np.arctanh(0.999)
+            if q:
+                near_unit[p] = np.arctanh(0.99)
+            starts.append(near_unit)
+            starts.append(np.full(p + q, 0.1))
+        best_u, best_cost = None, np.inf
+        for u0 in starts:
+            sol = least_squares(resid, u0, jac=jac, method="trf", x_scale="jac", ftol=1e-7, xtol=1e-7, gtol=1e-7,
+                                max_nfev=50 * (p + q + 1))
+            if sol.cost < best_cost:
+                best_u, best_cost = sol.x, sol.cost
+    phi = _from_unconstrained(best_u[:p])
+    theta = _from_unconstrained(best_u[p:])
+    a = arma_residuals(x, phi, theta)[p:]
+    rss = float(a @ a)
+    m = len(a)
+    sigma2 = rss / m
+    aic = math.log(sigma2) + 2.0 * (p + q) / m
+    return ArmaFit(p, q, [float(v) for v in phi], [float(v) for v in theta], math.sqrt(sigma2), rss, m, aic,
+                   a if keep_residuals else None)
+
+
+def f_test(small: ArmaFit, large: ArmaFit, alpha=DEFAULT_ALPHA) -> OrderStep:
+    """Pandit-Wu F test: does ``large`` reduce the RSS significantly against ``small``?
+
+    F = ((A_1 - A_0) / s) / (A_0 / (N - r)), s = extra parameters, r = parameters of ``large``.
+    """
+    from scipy import stats
+
+    s = large.n_params - small.n_params
+    n = min(small.n_residuals, large.n_residuals)
+    dof = n - large.n_params
+    f = ((small.rss - large.rss) / s) / (large.rss / dof)
+    crit = float(stats.f.ppf(1 - alpha, s, dof))
+    return OrderStep(small.order, large.order, float(f), crit, bool(f > crit))
+
+
+def select_order(x, *, max_n=DEFAULT_MAX_N, alpha=DEFAULT_ALPHA, reduce=True):
+    """Pandit-Wu ARMA(2n, 2n-1) order selection; returns ``(chosen, adequate_order, fits, steps)``.
+
+    Upward: n = 1, 2, ... while ARMA(2n+2, 2n+1) lowers the RSS significantly (F test at
+    ``alpha``) and n < max_n. Then (``reduce``) drop the last AR or MA term while the smaller
+    model is not significantly worse than the adequate ARMA(2n, 2n-1); among the candidates
+    that pass, the one with the smaller RSS is kept; stop when neither passes.
+    """
+    if max_n < 1:
+        raise SettingsError(f"max_n must be at least 1, got {max_n!r}")
+    fits = {}
+    steps = []
+
+    def get(p, q, start=None):
+        if (p, q) not in fits:
+            fits[(p, q)] = fit_arma(x, p, q, start=start)
+        return fits[(p, q)]
+
+    n = 1
+    adequate = get(2, 1)
+    while n < max_n:
+        bigger = get(2 * n + 2, 2 * n + 1, start=(adequate.phi, adequate.theta))
+        step = f_test(adequate, bigger, alpha)
+        steps.append(step)
+        if not step.significant:
+            break
+        n += 1
+        adequate = bigger
+    chosen = adequate
+    if reduce:
+        while True:
+            candidates = []
+            for p, q in ((chosen.p - 1, chosen.q), (chosen.p, chosen.q - 1)):
+                if p < 0 or q < 0:
+                    continue
+                cand = get(p, q, start=(chosen.phi[:p], chosen.theta[:q]))
+                step = f_test(cand, adequate, alpha)
+                steps.append(step)
+                if not step.significant:
+                    candidates.append(cand)
+            if not candidates:
+                break
+            chosen = min(candidates, key=lambda f: f.rss)
+    return chosen, adequate.order, list(fits.values()), steps
+
+
+def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz) -> BiasModel:
+    """Gauss-Markov bias + white noise equivalent to ARMA(1, 1) (module docstring), at ``sample_rate_hz``."""
+    if fit.order != (1, 1):
+        raise SettingsError(f"bias model needs an ARMA(1, 1) fit, got ARMA{fit.order}")
+    phi, theta = fit.phi[0], fit.theta[0]
+    s2a = fit.sigma_a**2
+    fs = float(sample_rate_hz)
+    if not (phi > 0 and 0 < theta <= phi):
+        return BiasModel(math.inf, 0.0, 0.0, fit.sigma_a / math.sqrt(fs), False,
+                         f"phi={phi:.6f}, theta={theta:.6f}: no Gauss-Markov + white decomposition (needs 0 < theta <= phi); treated as white noise")
+    s2w = theta * s2a / phi
+    s2eta = max(0.0, s2a * (1 + theta * theta) - s2w * (1 + phi * phi))
+    walk = math.sqrt(s2eta * fs)
+    arw = math.sqrt(s2w / fs)
+    if phi >= 1.0 - 1e-12:
+        return BiasModel(math.inf, math.inf, walk, arw, True, "phi = 1: random-walk bias")
+    tau = -1.0 / (fs * math.log(phi))
+    return BiasModel(tau, math.sqrt(s2eta / (1 - phi * phi)), walk, arw, True, "")
+
+
+def simulate_arma(phi, theta, sigma_a, n, *, rng=None, seed=None, burn_in=None):
+    """n samples of x_t - sum phi x_{t-i} = a_t - sum theta a_{t-j}, a ~ N(0, sigma_a^2).
+
+    ``burn_in`` samples (default 10 / (1 - max |root|), at most 200 000) are dropped so the
+    series starts stationary.
+    """
+    from scipy.signal import lfilter
+
+    if rng is None:
+        rng = np.random.default_rng(seed)
+    phi = np.asarray(phi, float)
+    theta = np.asarray(theta, float)
+    if burn_in is None:
+        if phi.size:
+            roots = np.abs(np.roots(np.r_[1.0, -phi]))
+            slowest = float(roots.max()) if roots.size else 0.0
+            burn_in = int(min(200_000, 10 / max(1e-6, 1 - slowest))) if slowest < 1 else 0
+        else:
+            burn_in = 0
+    a = rng.normal(0.0, sigma_a, n + burn_in)
+    return lfilter(np.r_[1.0, -theta], np.r_[1.0, -phi], a)[burn_in:]
+
+
+# ---------------------------------------------------------------------------------------------
+# the whole procedure for one axis
+
+
+def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAMPLES, max_n=DEFAULT_MAX_N,
+                 alpha=DEFAULT_ALPHA, adf_maxlag=DEFAULT_ADF_MAXLAG, lags=WHITENESS_LAGS) -> AxisReport:
+    """Paper 003's section 1 for one static axis (deg/s): tests, Pandit-Wu order, whiteness, bias model."""
+    require_stats()
+    x_raw = np.asarray(x_dps, float)
+    series, k, rate, mean = prepare_series(x_raw, sample_rate_hz, max_samples)
+    notes = []
+    if k > 1:
+        notes.append(f"{len(x_raw)} samples block-averaged by {k} to {len(series)} at {rate:.6g} Hz before the analysis "
+                     f"(max_samples={max_samples}); ARMA coefficients are per analysis sample")
+    stat = adf_test(series, maxlag=adf_maxlag, alpha=alpha)
+    norm = normality_tests(series, alpha=alpha)
+    chosen, adequate, fits, steps = select_order(series, max_n=max_n, alpha=alpha)
+    arma11 = next((f for f in fits if f.order == (1, 1)), None) or fit_arma(series, 1, 1)
+    if arma11 not in fits:
+        fits.append(arma11)
+    white = whiteness(chosen.residuals, chosen.n_params, lags=lags, alpha=alpha)
+    bias = bias_model_from_arma11(arma11, rate)
+    if not bias.valid:
+        notes.append(bias.note)
+    return AxisReport(axis, len(x_raw), float(sample_rate_hz), k, rate, mean, float(x_raw.std(ddof=1)), stat, norm,
+                      fits, steps, adequate, chosen, arma11, bias, white, notes)
+
+
+def arma_adev(fit: ArmaFit, n, analysis_rate_hz, *, seeds=(0, 1, 2), taus_s=None):
+    """Mean overlapping Allan deviation of series simulated from ``fit`` (n samples, same rate, several seeds).
+
+    Returns (tau_s, adev): the ADEV this ARMA model implies for a record like the measured one.
+    """
+    from .allan import overlapping_adev
+
+    curves = []
+    tau = None
+    for s in seeds:
+        sim = simulate_arma(fit.phi, fit.theta, fit.sigma_a, n, seed=s)
+        tau, dev = overlapping_adev(sim, analysis_rate_hz, taus_s)
+        curves.append(dev)
+    return tau, np.sqrt(np.mean(np.square(curves), axis=0))
+
+
+def adev_discrepancy(adev_measured, adev_model):
+    """RMS of log10(model / measured) over the taus both define: 0 = identical curves, 0.1 ~ 26 % off."""
+    m = np.asarray(adev_measured, float)
+    s = np.asarray(adev_model, float)
+    ok = np.isfinite(m) & np.isfinite(s) & (m > 0) & (s > 0)
+    return float(np.sqrt(np.mean(np.log10(s[ok] / m[ok]) ** 2)))
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+def _term(c, name, digits):
+    sign = "-" if c < 0 else "+"
+    return f" {sign} {abs(c):.{digits}f} {name}"
+
+
+def _plain(obj):
+    """JSON-ready copy: tuples -> lists, numpy scalars -> floats, inf -> None."""
+    if isinstance(obj, dict):
+        return {k: _plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
