@@ -117,6 +117,9 @@ class Normality:
     excess_kurtosis: float
     normal_ks: bool
     normal_jb: bool
+    ks_dithered_statistic: float = None  # KS after adding uniform dither of one quantisation step
+    ks_dithered_p_value: float = None
+    normal_ks_dithered: bool = None
 
 
 @dataclass
@@ -298,12 +301,14 @@ def adf_test(x, maxlag=DEFAULT_ADF_MAXLAG, alpha=DEFAULT_ALPHA) -> Stationarity:
                         bool(stat < threshold))
 
 
-def normality_tests(x, alpha=DEFAULT_ALPHA) -> Normality:
+def normality_tests(x, alpha=DEFAULT_ALPHA, quantum=None, seed=0) -> Normality:
     """Kolmogorov-Smirnov on (x - mean) / std against N(0, 1), and Jarque-Bera.
 
     JB = N/6 (S^2 + (K - 3)^2 / 4) ~ chi2(2) (Jarque and Bera 1987). The KS critical value is
     the asymptotic 1.358 / sqrt(N); with mean and std estimated from the data the KS p-value is
-    conservative (Lilliefors), and on quantised data (MPU6050 LSB steps) KS also sees the steps.
+    conservative (Lilliefors), and on quantised data (MPU6050 LSB steps) KS also sees the steps:
+    with ``quantum`` (the step, in the series' unit) KS is repeated on x + U(-quantum/2, quantum/2)
+    (seeded dither), which removes the steps but not a non-normal shape.
     """
     require_stats()
     from scipy import stats
@@ -313,7 +318,7 @@ def normality_tests(x, alpha=DEFAULT_ALPHA) -> Normality:
     ks = stats.kstest(z, "norm")
     jb = stats.jarque_bera(x)
     n = len(x)
-    return Normality(
+    result = Normality(
         ks_statistic=float(ks.statistic),
         ks_p_value=float(ks.pvalue),
         ks_critical_5pct=float(1.358 / math.sqrt(n)),
@@ -325,6 +330,13 @@ def normality_tests(x, alpha=DEFAULT_ALPHA) -> Normality:
         normal_ks=bool(ks.pvalue >= alpha),
         normal_jb=bool(jb.pvalue >= alpha),
     )
+    if quantum:
+        xd = x + np.random.default_rng(seed).uniform(-quantum / 2, quantum / 2, n)
+        ksd = stats.kstest((xd - xd.mean()) / xd.std(ddof=1), "norm")
+        result.ks_dithered_statistic = float(ksd.statistic)
+        result.ks_dithered_p_value = float(ksd.pvalue)
+        result.normal_ks_dithered = bool(ksd.pvalue >= alpha)
+    return result
 
 
 def whiteness(residuals, n_params=0, lags=WHITENESS_LAGS, alpha=DEFAULT_ALPHA) -> Whiteness:
@@ -377,7 +389,7 @@ def coefficients_to_pacf(c):
     return r
 
 
-def _to_unconstrained(c, limit=0.999):
+def _to_unconstrained(c, limit=1.0 - 1e-12):
     try:
         r = coefficients_to_pacf(c)
     except ValueError:
@@ -621,8 +633,12 @@ def simulate_arma(phi, theta, sigma_a, n, *, rng=None, seed=None, burn_in=None):
 
 
 def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAMPLES, max_n=DEFAULT_MAX_N,
-                 alpha=DEFAULT_ALPHA, adf_maxlag=DEFAULT_ADF_MAXLAG, lags=WHITENESS_LAGS) -> AxisReport:
-    """Paper 003's section 1 for one static axis (deg/s): tests, Pandit-Wu order, whiteness, bias model."""
+                 alpha=DEFAULT_ALPHA, adf_maxlag=DEFAULT_ADF_MAXLAG, lags=WHITENESS_LAGS, quantum_dps=None) -> AxisReport:
+    """Paper 003's section 1 for one static axis (deg/s): tests, Pandit-Wu order, whiteness, bias model.
+
+    ``quantum_dps``: the recording's quantisation step (1 / lsb_per_dps), for the dithered KS test;
+    ignored when the series is block-averaged.
+    """
     require_stats()
     x_raw = np.asarray(x_dps, float)
     series, k, rate, mean = prepare_series(x_raw, sample_rate_hz, max_samples)
@@ -631,7 +647,7 @@ def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAM
         notes.append(f"{len(x_raw)} samples block-averaged by {k} to {len(series)} at {rate:.6g} Hz before the analysis "
                      f"(max_samples={max_samples}); ARMA coefficients are per analysis sample")
     stat = adf_test(series, maxlag=adf_maxlag, alpha=alpha)
-    norm = normality_tests(series, alpha=alpha)
+    norm = normality_tests(series, alpha=alpha, quantum=quantum_dps if k == 1 else None)
     chosen, adequate, fits, steps = select_order(series, max_n=max_n, alpha=alpha)
     arma11 = next((f for f in fits if f.order == (1, 1)), None) or fit_arma(series, 1, 1)
     if arma11 not in fits:

@@ -189,3 +189,45 @@ def test_bad_input():
         arma.prepare_series(np.array([1.0, np.nan, 2.0] * 100), 100.0)
     with pytest.raises(ValueError, match="too short"):
         arma.fit_arma(np.zeros(20), 2, 1)
+
+
+def test_dithered_ks_separates_quantisation_from_shape():
+    rng = np.random.default_rng(13)
+    step = 1 / 131
+    quantised = np.round(rng.normal(0, 0.08, 40_000) / step) * step
+    res = arma.normality_tests(quantised, quantum=step)
+    assert not res.normal_ks  # the LSB steps alone make KS reject at this N
+    assert res.normal_ks_dithered
+
+
+def test_larger_model_never_fits_worse_than_the_nested_smaller_one():
+    # near-unit-root data like paper 003's: the zero-padded start must carry the smaller fit over
+    rng = np.random.default_rng(14)
+    x = np.cumsum(rng.normal(0, 0.0005, 30_000)) + rng.normal(0, 0.1, 30_000)
+    x = x - x.mean()
+    small = arma.fit_arma(x, 2, 1)
+    large = arma.fit_arma(x, 4, 3, start=(small.phi, small.theta))
+    assert large.rss <= small.rss * (1 + 1e-9)
+
+
+def test_cli_writes_json_and_reports_bad_input(tmp_path, capsys):
+    import json
+
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    rng = np.random.default_rng(15)
+    gyro = np.column_stack([rng.normal(1.0, 0.1, 5_000), rng.normal(0, 0.1, 5_000),
+                            -2.0 + arma.simulate_arma([PHI], [THETA], SIGMA, 5_000, seed=15)])
+    path = tmp_path / "static.csv"
+    write_recording(path, Recording.from_dps(gyro, 100.0))
+    out = tmp_path / "arma.json"
+    assert main(["arma", str(path), "--axis", "z", "--max-n", "1", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "chosen: ARMA(1, 1)" in text
+    data = json.loads(out.read_text())
+    z = data["axes"]["z"]
+    assert z["chosen"]["phi"][0] == pytest.approx(PHI, abs=0.05)
+    assert z["mean_dps"] == pytest.approx(-2.0, abs=0.05)
+    assert main(["arma", str(path), "--start-s", "49.5"]) == 2
+    assert "need at least 200" in capsys.readouterr().err

@@ -1,0 +1,101 @@
+"""gyrofilter arma: paper 003's time-series model of a static recording's bias noise, per axis."""
+import json
+import math
+import sys
+
+
+from ..errors import SettingsError
+from ..recording import read_recording
+from . import common
+
+PAPER_003 = "paper 003 (ADIS16405 z gyro): ADF -110.18; KS and JB reject normality; ARMA(1, 1): x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}"
+
+
+def add_arguments(parser):
+    parser.add_argument("recording", help="a static recording (format v1); the sensor must not move")
+    parser.add_argument("--axis", choices=("x", "y", "z", "all"), default="all", help="axis to analyse (default: all three)")
+    parser.add_argument("--json", metavar="OUT", help="write every number of the analysis to this JSON file")
+    parser.add_argument("--start-s", type=float, default=0.0, help="skip the first seconds (e.g. a warm-up or a move)")
+    parser.add_argument("--end-s", type=float, default=None, help="stop at this time in seconds (default: the end)")
+    parser.add_argument("--max-n", type=int, default=4, help="highest Pandit-Wu order ARMA(2n, 2n-1) tried (default 4: ARMA(8, 7))")
+    parser.add_argument("--max-samples", type=int, default=200_000,
+                        help="longer series are block-averaged to at most this many samples (default 200000)")
+    parser.add_argument("--alpha", type=float, default=0.05, help="significance level of every test (default 0.05)")
+    parser.add_argument("--progress", action="store_true", help="report progress on stderr even when it is not a terminal")
+
+
+def run(args):
+    from .. import arma
+
+    arma.require_stats()
+    if not 0 < args.alpha < 0.5:
+        raise SettingsError(f"--alpha must be in (0, 0.5), got {args.alpha}")
+    rec = read_recording(args.recording)
+    common.print_warnings(rec.warnings)
+    gyro = rec.gyro_dps
+    fs = rec.sample_rate_hz
+    i0 = int(round(args.start_s * fs))
+    i1 = len(gyro) if args.end_s is None else int(round(args.end_s * fs))
+    if i0 < 0 or i1 <= i0 or i1 - i0 < 200:
+        raise SettingsError(f"--start-s/--end-s leave {max(0, i1 - i0)} samples of {len(gyro)}; need at least 200")
+    gyro = gyro[i0:i1]
+    axes = "xyz" if args.axis == "all" else args.axis
+    progress = args.progress or sys.stderr.isatty()
+    quantum = 1.0 / rec.lsb_per_dps if rec.lsb_per_dps else None
+    reports = {}
+    print(f"recording: {args.recording}")
+    print(f"  {len(gyro)} samples at {fs:g} Hz ({len(gyro) / fs:.1f} s) from t = {i0 / fs:g} s, unit {rec.gyro_unit}; each axis minus its mean")
+    for name in axes:
+        if progress:
+            common.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
+        rep = arma.analyze_axis(gyro[:, "xyz".index(name)], fs, axis=name, max_samples=args.max_samples,
+                                max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum)
+        reports[name] = rep
+        _print_axis(rep, args.alpha)
+    print(f"\n{PAPER_003}")
+    if args.json:
+        out = {"recording": args.recording, "sample_rate_hz": fs, "start_s": i0 / fs, "n_samples": len(gyro),
+               "alpha": args.alpha, "axes": {k: v.to_dict() for k, v in reports.items()}}
+        with open(args.json, "w") as fh:
+            json.dump(out, fh, indent=1)
+        common.say(f"wrote {args.json}")
+    return 0
+
+
+def _print_axis(rep, alpha):
+    pct = f"{alpha * 100:g} %"
+    print(f"\naxis {rep.axis}: mean {rep.mean_dps:+.4f} deg/s, std {rep.std_dps:.4f} deg/s")
+    for note in rep.notes:
+        print(f"  note: {note}")
+    s = rep.stationarity
+    print(f"  stationarity (ADF, constant, {s.lags_used} lags): statistic {s.adf_statistic:.2f} "
+          f"(1 % {s.critical_values['1%']:.2f}, 5 % {s.critical_values['5%']:.2f}) -> {'stationary' if s.stationary else 'unit root not rejected'}")
+    n = rep.normality
+    print(f"  normality: KS D = {n.ks_statistic:.4f} (5 % critical {n.ks_critical_5pct:.4f}, p = {n.ks_p_value:.3g}) -> "
+          f"{'normal' if n.normal_ks else 'rejected'}; JB = {n.jb_statistic:.1f} (5 % critical {n.jb_critical_5pct:.2f}, "
+          f"p = {n.jb_p_value:.3g}) -> {'normal' if n.normal_jb else 'rejected'}; skew {n.skewness:+.3f}, excess kurtosis {n.excess_kurtosis:+.3f}")
+    if n.ks_dithered_statistic is not None:
+        print(f"  KS with one LSB of uniform dither (removes the quantisation steps): D = {n.ks_dithered_statistic:.4f}, "
+              f"p = {n.ks_dithered_p_value:.3g} -> {'normal' if n.normal_ks_dithered else 'rejected'}")
+    print("  Pandit-Wu order search (AIC = ln(sigma_a^2) + 2 r / N, sigma_a in deg/s):")
+    print("    model        AIC        sigma_a     RSS")
+    for f in rep.fits:
+        mark = " <- chosen" if f is rep.chosen else (" <- adequate ARMA(2n, 2n-1)" if f.order == rep.adequate_order else "")
+        print(f"    ARMA({f.p},{f.q})  {f.aic:10.5f}  {f.sigma_a:.6f}  {f.rss:.6g}{mark}")
+    print(f"  F tests at {pct} (larger model significantly better?):")
+    for st in rep.steps:
+        print(f"    ARMA{st.smaller} vs ARMA{st.larger}: F = {st.f_statistic:.3f}, critical {st.f_critical:.3f} -> {'yes' if st.significant else 'no'}")
+    print(f"  chosen: ARMA{rep.chosen.order}: {rep.chosen.equation()}   (sigma_a = {rep.chosen.sigma_a:.5f} deg/s)")
+    if rep.chosen.order != (1, 1):
+        print(f"  ARMA(1,1) for comparison with paper 003: {rep.arma11.equation()}")
+    w = rep.whiteness
+    print(f"  residuals: {w.outside_band} of {len(w.lags)} ACF lags outside +-{w.band:.4f}; Ljung-Box Q({w.ljung_box_lag}) = "
+          f"{w.ljung_box_q:.1f}, p = {w.ljung_box_p_value:.3g} -> {'white' if w.white else 'not white'}")
+    b = rep.bias_model
+    if b.valid:
+        tau = "inf (random walk)" if math.isinf(b.tau_s) else f"{b.tau_s:.4g} s"
+        sigma = "-" if math.isinf(b.bias_sigma_dps) else f"{b.bias_sigma_dps:.4g} deg/s"
+        print(f"  bias model from ARMA(1,1): Gauss-Markov tau {tau}, bias sigma {sigma}, drive {b.bias_walk_dps_per_sqrt_s:.4g} deg/s/sqrt(s); "
+              f"white noise {b.white_noise_dps_per_sqrt_hz:.4g} deg/s/sqrt(Hz)")
+    else:
+        print(f"  bias model: {b.note}")
