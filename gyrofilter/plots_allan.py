@@ -31,7 +31,7 @@ def plot_allan(path, results, title=""):
     """Write a PNG with one panel per axis. ``results``: {axis: AxisNoise}."""
     plt = _pyplot()
     n = len(results)
-    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.6), sharey=True, squeeze=False)
+    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.6), squeeze=False)
     for ax, (name, r) in zip(axes[0], results.items()):
         colour = AXIS_COLOURS.get(name, "k")
         ok = r.n_clusters >= 9
@@ -65,6 +65,8 @@ def plot_allan(path, results, title=""):
         ax.set_xlabel("cluster time tau (s)")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=6.5, loc="best")
+        low = np.min(np.where(r.ci_low > 0, r.ci_low, np.min(r.adev[r.adev > 0])))
+        ax.set_ylim(low / 2.0, np.max(r.ci_high) * 1.5)
         ax.set_title(f"axis {name}", fontsize=10)
     axes[0][0].set_ylabel("Allan deviation (deg/s)")
     if title:
