@@ -1,0 +1,102 @@
+"""Temperature compensation of the gyro bias: b(T) = b(T0) + c (T - T0).
+
+A MEMS gyro's zero-rate output moves with die temperature (MPU6050 datasheet, table 6.1: ZRO
+variation over -40..85 C of +-20 deg/s, i.e. up to ~0.16 deg/s/C; individual parts are far
+smaller and nearly linear over a few degrees). The start-up calibration measures the bias at the
+start-up temperature T0; afterwards the bias that is left is, to first order::
+
+    b(T) - b(T0) = c (T - T0)
+
+with c the ``temperature`` effect's ``coefficient_dps_per_c`` of the gap report
+(interfaces.md section 2) or of a simulator model. Compensation subtracts it per sample::
+
+    y = x - c (T - T0)
+
+T0 should be the mean temperature of the calibration window, so that the two corrections do
+not overlap. Pure functions on arrays; :class:`TemperatureCompensator` is the streaming form.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import SettingsError
+
+AXES = ("x", "y", "z")
+
+
+def _coefficients(coefficient_dps_per_c):
+    c = np.broadcast_to(np.asarray(coefficient_dps_per_c, dtype=float), (3,))
+    if not np.all(np.isfinite(c)):
+        raise SettingsError(f"coefficient_dps_per_c must be finite, got {coefficient_dps_per_c!r}")
+    return c
+
+
+def compensate(gyro_dps, temp_c, coefficient_dps_per_c, reference_temp_c):
+    """y = x - c (T - T0) per axis. ``gyro_dps`` (N, 3) or (3,), ``temp_c`` (N,) or scalar, c scalar or 3 values."""
+    x = np.asarray(gyro_dps, dtype=float)
+    t = np.asarray(temp_c, dtype=float)
+    if x.shape[-1:] != (3,):
+        raise SettingsError(f"gyro_dps must have shape (N, 3) or (3,), got {x.shape}")
+    if not np.all(np.isfinite(t)):
+        raise SettingsError("temp_c holds NaN or infinite values")
+    c = _coefficients(coefficient_dps_per_c)
+    return x - c * (t[..., None] - float(reference_temp_c))
+
+
+def coefficients_from_model(model: dict):
+    """(cx, cy, cz) in deg/s/C from a simulator model / gap ``extended_model`` (0 where no temperature effect)."""
+    out = []
+    axes = model.get("axes", {})
+    for name in AXES:
+        c = 0.0
+        for eff in axes.get(name, {}).get("effects", []):
+            if eff.get("effect") == "temperature":
+                c += float(eff["coefficient_dps_per_c"])
+        out.append(c)
+    return tuple(out)
+
+
+def fit_coefficient(gyro_dps, temp_c):
+    """Least-squares slope c per axis of a static record: x = b + c (T - mean T) + noise.
+
+    Returns (c (3,), standard error (3,)). Meaningless unless the temperature actually varied
+    (raises when its spread is below one 0.1 C step).
+    """
+    x = np.asarray(gyro_dps, dtype=float)
+    t = np.asarray(temp_c, dtype=float)
+    if x.ndim != 2 or x.shape[1] != 3 or len(t) != len(x):
+        raise SettingsError(f"need gyro_dps (N, 3) and temp_c (N,), got {x.shape} and {t.shape}")
+    dt = t - t.mean()
+    sxx = float(dt @ dt)
+    if np.ptp(t) < 0.1:
+        raise SettingsError(f"temperature spans only {np.ptp(t):.3f} C; no coefficient can be fitted")
+    c = (dt @ (x - x.mean(axis=0))) / sxx
+    resid = x - x.mean(axis=0) - np.outer(dt, c)
+    se = np.sqrt(resid.var(axis=0, ddof=2) / sxx)
+    return c, se
+
+
+class TemperatureCompensator:
+    """Streaming y = x - c (T - T0). T0 given, or the mean of the first ``calibration_samples`` temperatures.
+
+    While T0 is being learnt the samples pass through with the T0 learnt so far (the same
+    window is the bias calibration, which absorbs the bias at T0).
+    """
+
+    def __init__(self, coefficient_dps_per_c, reference_temp_c=None, calibration_samples=200):
+        self.coefficient_dps_per_c = _coefficients(coefficient_dps_per_c)
+        self.reference_temp_c = None if reference_temp_c is None else float(reference_temp_c)
+        self._n = int(calibration_samples)
+        self._sum = 0.0
+        self._count = 0
+
+    def update(self, sample_dps, temp_c):
+        if self.reference_temp_c is None:
+            self._sum += float(temp_c)
+            self._count += 1
+            t0 = self._sum / self._count
+            if self._count >= self._n:
+                self.reference_temp_c = t0
+        else:
+            t0 = self.reference_temp_c
+        return tuple(float(v) for v in np.asarray(sample_dps, float) - self.coefficient_dps_per_c * (float(temp_c) - t0))

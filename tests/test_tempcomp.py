@@ -1,0 +1,64 @@
+"""Temperature compensation: gain on a simulated warm-up, coefficient fit, model lookup, streaming."""
+import numpy as np
+import pytest
+
+from gyrofilter import tempcomp
+from gyrofilter.errors import SettingsError
+
+FS = 100.0
+C = np.array([0.03, -0.02, 0.01])
+BIAS = np.array([-3.3, 1.1, -0.5])
+
+
+def warmup(seed, duration_s=600.0):
+    """Static sensor warming 25 -> 35 C (tau 120 s, 0.094 C steps like the MPU6050), bias = b + c (T - 25)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(duration_s * FS)) / FS
+    temp = 35.0 - 10.0 * np.exp(-t / 120.0)
+    temp_q = np.round(temp / 0.0941) * 0.0941
+    x = BIAS + np.outer(temp - 25.0, C) + rng.normal(0, 0.1, (len(t), 3))
+    return t, temp_q, x
+
+
+def test_compensation_removes_the_temperature_drift():
+    t, temp, x = warmup(0)
+    n_cal = int(2 * FS)
+    bias0 = x[:n_cal].mean(axis=0)
+    t0 = temp[:n_cal].mean()
+    plain = x - bias0
+    comp = tempcomp.compensate(x, temp, C, t0) - bias0
+    last = slice(-int(60 * FS), None)
+    err_plain = np.abs(plain[last].mean(axis=0))
+    err_comp = np.abs(comp[last].mean(axis=0))
+    # the sensor warmed ~9.9 C: the start-up bias is off by c * 9.9 on each axis
+    assert err_plain == pytest.approx(np.abs(C) * 9.9, rel=0.1)
+    assert np.all(err_comp < 0.02)
+    assert np.all(err_comp < err_plain / 5)
+
+
+def test_fit_coefficient_recovers_c():
+    _, temp, x = warmup(1)
+    c, se = tempcomp.fit_coefficient(x, temp)
+    assert np.allclose(c, C, atol=5 * se.max())
+    assert np.all(se < 0.001)
+    with pytest.raises(SettingsError, match="spans only"):
+        tempcomp.fit_coefficient(x[:10], np.full(10, 25.0))
+
+
+def test_coefficients_from_model():
+    model = {"axes": {"x": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": 0.03}]},
+                      "y": {"effects": [{"effect": "sinusoid", "frequency_hz": 1, "amplitude_dps": 1}]},
+                      "z": {}}}
+    assert tempcomp.coefficients_from_model(model) == (0.03, 0.0, 0.0)
+
+
+def test_by_hand_and_streaming():
+    y = tempcomp.compensate([[1.0, 2.0, 3.0]], [30.0], [0.1, 0.2, 0.3], 25.0)
+    assert np.allclose(y, [[0.5, 1.0, 1.5]])
+    _, temp, x = warmup(2, duration_s=10.0)
+    comp = tempcomp.TemperatureCompensator(C, calibration_samples=200)
+    out = np.array([comp.update(row, tc) for row, tc in zip(x, temp)])
+    assert comp.reference_temp_c == pytest.approx(temp[:200].mean())
+    assert np.allclose(out[200:], tempcomp.compensate(x, temp, C, temp[:200].mean())[200:], atol=1e-12)
+    with pytest.raises(SettingsError):
+        tempcomp.compensate(np.zeros((3, 2)), np.zeros(3), C, 25.0)
