@@ -248,3 +248,26 @@ def block_noise_std(window_dps, block_len):
     sb_blocks = means.std(axis=0, ddof=1)
     sw = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
     return np.maximum(sb_blocks, sw / math.sqrt(L))
+
+
+def make_hold(block_len, *, calibration_window_dps=None, noise_std_dps=None, **options):
+    """The stage as a pipeline would build it after its start-up calibration.
+
+    With the calibration window (n, 3) in deg/s: sigma_b = :func:`block_noise_std` of it, and
+    the stage starts in hold with ``initial_blocks`` = n // block_len (the window passed the
+    stillness check and the bias is removed). With only ``noise_std_dps`` (a calibration loaded
+    from a file): sigma_b = noise_std / sqrt(block_len) and the stage starts in track, since
+    nothing says the sensor is still now. ``options``: the ConstantRateHold settings.
+    """
+    L = int(block_len)
+    if calibration_window_dps is not None:
+        window = np.asarray(calibration_window_dps, dtype=float)
+        sigma_b = block_noise_std(window, L)
+        options.setdefault("initial_blocks", len(window) // L)
+    elif noise_std_dps is not None:
+        sigma_b = np.asarray(noise_std_dps, dtype=float) / math.sqrt(L)
+        options.setdefault("initial_blocks", 0)
+    else:
+        raise SettingsError("make_hold needs the calibration window or the calibration's noise_std_dps")
+    floor = 1e-6  # deg/s: a perfectly constant (simulated) input must not give sigma_b = 0
+    return ConstantRateHold(np.maximum(sigma_b, floor), **options)

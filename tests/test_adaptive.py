@@ -100,3 +100,20 @@ def test_bad_settings_raise():
         ConstantRateHold([SIGMA] * 3, cusum_h=-1)
     with pytest.raises(SettingsError):
         ConstantRateHold([SIGMA] * 3, accept_p=0.5)
+
+
+def test_make_hold_from_window_or_from_a_loaded_calibration():
+    from gyrofilter.adaptive import make_hold
+
+    rng = np.random.default_rng(14)
+    window = rng.normal(scale=0.1, size=(200, 3))
+    stage = make_hold(5, calibration_window_dps=window)
+    assert stage.holding == [True, True, True]
+    assert np.allclose(stage.sigma, block_noise_std(window, 5))
+    loaded = make_hold(5, noise_std_dps=(0.1, 0.2, 0.3))
+    assert loaded.holding == [False, False, False]
+    assert np.allclose(loaded.sigma, np.array([0.1, 0.2, 0.3]) / math.sqrt(5))
+    # a constant (simulated, noise-free) window must not give sigma 0
+    assert np.all(make_hold(5, calibration_window_dps=np.ones((50, 3))).sigma > 0)
+    with pytest.raises(SettingsError):
+        make_hold(5)

@@ -129,7 +129,7 @@ def test_broad_metrics_against_reference(tmp_path):
     raw = E.broad_metrics(E.FilterSpec("raw", "baseline", "", E.run_raw), rec)
     assert raw["calibration_s"] == pytest.approx(4.0)
     noise_dps = 0.001 * 180 / math.pi
-    for key in ("rmse_motion_dps", "rmse_rest_dps", "rmse_all_dps"):
+    for key in ("rmse_motion_dps", "rmse_rest_dps", "rmse_all_dps", "rms_rest_vs_zero_dps"):
         assert raw[key] == pytest.approx(noise_dps, rel=0.1)
     # a filter that ignores the motion has the motion's rms as error
     zero = E.FilterSpec("zero", "baseline", "", lambda x, fs, c: E.FilterOutput(np.zeros((len(x) - int(c * fs), 3)), 1, int(c * fs)))
