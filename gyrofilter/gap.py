@@ -244,7 +244,7 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
     sims = _sim_features(base, n, fs, seeds, range(3), taus, bands)
     deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
     before = [discrepancy(d) for d in deps]
-    report["departures"] = {a: _departure_summary(deps[i], taus, bands) for i, a in enumerate(AXES)}
+    report["departures"] = {a: _departure_summary(deps[i], meas_feats[i], taus, bands) for i, a in enumerate(AXES)}
 
     # detectors, per axis, in the decision order
     say("detectors")
@@ -332,7 +332,14 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
         axes_with = sorted({i for i, _, _ in kept})
         sims_e = _sim_features(ext, n, fs, seeds[:n_ext], axes_with, taus, bands)
         for i in axes_with:
-            overall_after[i] = discrepancy(departures(meas_feats[i], sims_e[i], n))
+            deps_e = departures(meas_feats[i], sims_e[i], n)
+            overall_after[i] = discrepancy(deps_e)
+            summ = report["departures"][AXES[i]]
+            summ["extended_adev_sim_mean_log"] = [float(v) for v in deps_e["adev"][1]]
+            summ["extended_adev_sim_sd_log"] = [float(v) for v in deps_e["adev"][2]]
+            summ["extended_band_sim_mean_log"] = [float(v) for v in deps_e["band"][1]]
+            summ["extended_band_sim_sd_log"] = [float(v) for v in deps_e["band"][2]]
+            summ["extended_discrepancy"] = overall_after[i]
     report["discrepancy"] = {"metric": METRIC,
                              "definition": "D = mean over features of z^2, z = (measured - mean of simulations) / max(sd of simulations, floor)",
                              "before": {a: before[i] for i, a in enumerate(AXES)},
@@ -369,12 +376,16 @@ def _detect_axis(x, fs, temp):
     return cands, x
 
 
-def _departure_summary(deps, taus, bands):
-    z_adev = deps["adev"][0]
-    z_band = deps["band"][0]
-    return {"adev_tau_s": [float(v) for v in taus], "adev_z": [float(v) for v in z_adev],
-            "adev_sim_mean_log": [float(v) for v in deps["adev"][1]],
-            "band_edges_hz": [float(v) for v in bands], "band_z": [float(v) for v in z_band],
+def _departure_summary(deps, meas, taus, bands):
+    """Per-axis departures: z per feature, and the measured and simulated values (natural
+    logs for the Allan deviation in deg/s and the band powers in (deg/s)^2 per bin)."""
+    fl = lambda v: [float(u) for u in v]  # noqa: E731
+    return {"adev_tau_s": fl(taus), "adev_z": fl(deps["adev"][0]),
+            "adev_meas_log": fl(meas["adev"]),
+            "adev_sim_mean_log": fl(deps["adev"][1]), "adev_sim_sd_log": fl(deps["adev"][2]),
+            "band_edges_hz": fl(bands), "band_z": fl(deps["band"][0]),
+            "band_meas_log": fl(meas["band"]),
+            "band_sim_mean_log": fl(deps["band"][1]), "band_sim_sd_log": fl(deps["band"][2]),
             "line_z": float(deps["line"][0][0]), "lag1_z": float(deps["lag1"][0][0]),
             "spikes_z": float(deps["spikes"][0][0]), "discrepancy": discrepancy(deps)}
 

@@ -13,7 +13,7 @@ hour, warm-up of a few tenths of deg/s, DLPF lag-1 0.3-0.8, paper 001's spikes o
 bias_instability   b_dps 0.006-0.02
 rate_random_walk   k_dps_per_sqrt_s 0.0008-0.003
 rate_ramp          drift over the record 0.05-0.25 deg/s (either sign)
-gauss_markov       sigma_dps 0.02-0.06, tau_s 10-120
+gauss_markov       sigma_dps 0.02-0.06, tau_s 10 to min(120, T/15)
 sinusoid           frequency_hz 0.1-30 (log-uniform), amplitude_dps 0.01-0.04
 temperature        coefficient 0.01-0.04 deg/s/deg C (either sign), warming by 3-8 deg C
 bias_step          time 20-80 % of the record, size 0.03-0.1 deg/s (either sign)
@@ -75,7 +75,8 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
     elif effect == "rate_ramp":
         params = {"r_dps_per_s": sign * scale * rng.uniform(0.05, 0.25) / T}
     elif effect == "gauss_markov":
-        params = {"sigma_dps": scale * rng.uniform(0.02, 0.06), "tau_s": float(rng.uniform(10, 120))}
+        # a correlation time the record can resolve: at most a fifteenth of its length
+        params = {"sigma_dps": scale * rng.uniform(0.02, 0.06), "tau_s": float(rng.uniform(10, min(120.0, T / 15)))}
     elif effect == "sinusoid":
         params = {"frequency_hz": float(math.exp(rng.uniform(math.log(0.1), math.log(30.0)))),
                   "amplitude_dps": scale * rng.uniform(0.01, 0.04),
@@ -167,9 +168,3 @@ def check(case, report):
     ok = all(_within(kind, tol, float(params[name]), case["params"][name], case["duration_s"])
              for name, (kind, tol) in TOLERANCES[case["effect"]].items())
     return True, ok, others
-
-
-def with_scale(case, scale):
-    """Copy of a case with every effect size multiplied by ``scale`` (sizes, not times)."""
-    out = copy.deepcopy(case)
-    return out

@@ -1,0 +1,196 @@
+"""Human report of a gap analysis: Markdown plus PNG figures (matplotlib imported lazily).
+
+``write_report(report, rec, out_dir)`` writes ``out_dir/gap_report.md`` and, per axis:
+
+* ``adev_<axis>.png`` -- measured Allan deviation, the baseline simulations' spread (mean +-
+  2 sd of log ADEV) and the extended model's spread;
+* ``spectrum_<axis>.png`` -- band powers of the periodogram, same three;
+* ``temperature_<axis>.png`` -- block-mean rate minus bias against block-mean temperature (when
+  the recording has a ``temp`` column);
+* ``time_<axis>.png`` -- block means of the rate in time with the found deterministic shapes
+  (step, warm-up, ramp, temperature) when the axis has one.
+
+Each finding is listed with its parameters, its evidence sentence and its gain.
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+AXES = ("x", "y", "z")
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _band_centres(edges):
+    e = np.asarray(edges, dtype=float)
+    return np.sqrt(np.maximum(e[:-1], 1e-12) * e[1:])
+
+
+def plot_adev(dep, axis, path):
+    plt = _plt()
+    tau = np.asarray(dep["adev_tau_s"])
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    m, s = np.asarray(dep["adev_sim_mean_log"]), np.asarray(dep["adev_sim_sd_log"])
+    ax.fill_between(tau, np.exp(m - 2 * s), np.exp(m + 2 * s), color="0.8", label="baseline simulations (mean +- 2 sd)")
+    ax.loglog(tau, np.exp(m), color="0.5", lw=1)
+    if "extended_adev_sim_mean_log" in dep:
+        me, se = np.asarray(dep["extended_adev_sim_mean_log"]), np.asarray(dep["extended_adev_sim_sd_log"])
+        ax.fill_between(tau, np.exp(me - 2 * se), np.exp(me + 2 * se), color="tab:green", alpha=0.3,
+                        label="extended model (mean +- 2 sd)")
+    ax.loglog(tau, np.exp(dep["adev_meas_log"]), "k.-", lw=1.2, label="measurement")
+    ax.set_xlabel("tau (s)")
+    ax.set_ylabel("Allan deviation (deg/s)")
+    ax.set_title(f"axis {axis}: Allan deviation")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_spectrum(dep, axis, path):
+    plt = _plt()
+    f = _band_centres(dep["band_edges_hz"])
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    m, s = np.asarray(dep["band_sim_mean_log"]), np.asarray(dep["band_sim_sd_log"])
+    ax.fill_between(f, np.exp(m - 2 * s), np.exp(m + 2 * s), color="0.8", label="baseline simulations (mean +- 2 sd)")
+    if "extended_band_sim_mean_log" in dep:
+        me, se = np.asarray(dep["extended_band_sim_mean_log"]), np.asarray(dep["extended_band_sim_sd_log"])
+        ax.fill_between(f, np.exp(me - 2 * se), np.exp(me + 2 * se), color="tab:green", alpha=0.3,
+                        label="extended model (mean +- 2 sd)")
+    ax.loglog(f, np.exp(dep["band_meas_log"]), "k.-", lw=1.2, label="measurement")
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("mean periodogram in band ((deg/s)^2 per bin)")
+    ax.set_title(f"axis {axis}: spectrum (log-spaced bands)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _blocks(v, n_blocks=600):
+    v = np.asarray(v, dtype=float)
+    length = max(1, v.size // n_blocks)
+    n = v.size // length
+    return v[: n * length].reshape(n, length).mean(axis=1), length
+
+
+def plot_temperature(x, temp, axis, coef, path):
+    plt = _plt()
+    y, _ = _blocks(x - np.mean(x))
+    tb, _ = _blocks(temp)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    ax.plot(tb, y, ".", ms=3, color="k", label="block means of the rate")
+    if coef is not None:
+        tt = np.linspace(tb.min(), tb.max(), 10)
+        ax.plot(tt, coef * (tt - np.mean(temp)), "r-", label=f"fit: {coef:+.3g} deg/s per deg C")
+    ax.set_xlabel("sensor temperature (deg C)")
+    ax.set_ylabel("rate minus mean (deg/s)")
+    ax.set_title(f"axis {axis}: rate against temperature")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_time(x, fs, axis, findings, path):
+    plt = _plt()
+    y, length = _blocks(x)
+    t = (np.arange(y.size) + 0.5) * length / fs
+    fig, ax = plt.subplots(figsize=(7.0, 4.0))
+    ax.plot(t, y, "k-", lw=0.8, label=f"block means ({length / fs:.3g} s)")
+    shape = np.zeros_like(t)
+    for f in findings:
+        p = f["params"]
+        if f["effect"] == "bias_step":
+            shape += p["size_dps"] * (t >= p["time_s"])
+            ax.axvline(p["time_s"], color="r", ls=":", lw=1)
+        elif f["effect"] == "warmup":
+            shape += p["amplitude_dps"] * np.exp(-t / p["tau_s"])
+        elif f["effect"] == "rate_ramp":
+            shape += p["r_dps_per_s"] * t
+    if np.ptp(shape) > 0:
+        shape += np.mean(y) - np.mean(shape)
+        ax.plot(t, shape, "r-", lw=1.5, label="found: " + ", ".join(f["effect"] for f in findings))
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("rate (deg/s)")
+    ax.set_title(f"axis {axis}: rate in time")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _fmt(v):
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def write_report(report, rec, out_dir, *, seed=0):
+    """Write the Markdown report and figures; returns the Markdown path."""
+    os.makedirs(out_dir, exist_ok=True)
+    g = rec.gyro_dps
+    fs = rec.sample_rate_hz
+    temp = rec.temp_c
+    lines = [f"# Model-gap report: {report['recording']}", "",
+             f"{report['duration_s']:.1f} s at {report['sample_rate_hz']:g} Hz; "
+             f"{report.get('n_simulations', 0)} baseline simulations (seed {seed}); "
+             f"runtime {report.get('runtime_s', float('nan')):.1f} s.", "",
+             "## Baseline (constant bias + white noise + quantization)", "",
+             "| axis | bias (deg/s) | ARW (deg/s/sqrt(Hz)) | quantization (deg/s) | discrepancy D before | after |",
+             "|---|---|---|---|---|---|"]
+    disc = report.get("discrepancy", {})
+    for a in AXES:
+        b = report["baseline"]["axes"][a]
+        lines.append(f"| {a} | {_fmt(b.get('bias_dps'))} | {_fmt(b.get('arw_dps_per_sqrt_hz'))} | "
+                     f"{_fmt(b.get('quantization_dps'))} | {_fmt(disc.get('before', {}).get(a))} | "
+                     f"{_fmt(disc.get('after', {}).get(a))} |")
+    lines += ["", f"Discrepancy D: {disc.get('definition', '')} (lower is better; about 1 when the "
+              "model explains the measurement).", "", "## Findings", ""]
+    if not report["findings"]:
+        lines.append("None: the baseline explains the measurement within the simulations' spread.")
+    for f in report["findings"]:
+        params = ", ".join(f"{k} = {_fmt(v)}" for k, v in f["params"].items())
+        lines += [f"- **{f['effect']}** on **{f['axis']}**: {params}.",
+                  f"  Evidence: {f['evidence']}.",
+                  f"  Gain: D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}."]
+    for note in report.get("notes", []):
+        lines.append(f"- note: {note}")
+    lines += ["", "## Figures", ""]
+    deps = report.get("departures", {})
+    for i, a in enumerate(AXES):
+        dep = deps.get(a)
+        if not dep:
+            continue
+        plot_adev(dep, a, os.path.join(out_dir, f"adev_{a}.png"))
+        plot_spectrum(dep, a, os.path.join(out_dir, f"spectrum_{a}.png"))
+        lines += [f"### axis {a}", "", f"![Allan deviation {a}](adev_{a}.png) ![spectrum {a}](spectrum_{a}.png)", ""]
+        fa = [f for f in report["findings"] if f["axis"] == a]
+        if temp is not None and np.ptp(temp) > 0:
+            coef = next((f["params"]["coefficient_dps_per_c"] for f in fa if f["effect"] == "temperature"), None)
+            plot_temperature(g[:, i], temp, a, coef, os.path.join(out_dir, f"temperature_{a}.png"))
+            lines += [f"![rate vs temperature {a}](temperature_{a}.png)", ""]
+        slow = [f for f in fa if f["effect"] in ("bias_step", "warmup", "rate_ramp")]
+        if slow:
+            plot_time(g[:, i], fs, a, slow, os.path.join(out_dir, f"time_{a}.png"))
+            lines += [f"![rate in time {a}](time_{a}.png)", ""]
+    path = os.path.join(out_dir, "gap_report.md")
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return path

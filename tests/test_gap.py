@@ -1,0 +1,213 @@
+"""Gap analysis: hidden effects must be named on the right axis with their parameters within
+tolerance; clean recordings must give no finding; the JSON follows interfaces.md section 2.
+
+The default suite runs one 10-minute case per effect and a few clean cases (fewer
+simulations than the command's default, to stay fast); the large battery is marked slow
+(``pytest -m slow``) and ``tools/gap_battery.py`` prints the rates.
+"""
+import gzip
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gyrofilter import detectors as det
+from gyrofilter.gap import analyse_gap, discrepancy, departures
+from gyrofilter.recording import Recording, read_recording, write_recording
+from gyrofilter.simulate import simulate, validate_model
+
+sys.path.insert(0, os.path.dirname(__file__))
+import hidden_effects as he  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+REAL = os.path.join(ROOT, "recordings", "mpu6050_static_449s.csv.gz")
+SIMS = 10
+
+
+def _run(case):
+    rec = he.simulate_case(case)
+    return analyse_gap(rec, seed=case["seed"], n_sims=SIMS)
+
+
+@pytest.mark.parametrize("effect", he.EFFECTS)
+def test_hidden_effect_is_named_with_parameters(effect):
+    case = he.draw_case(100 + he.EFFECTS.index(effect), effect=effect, duration_s=600.0)
+    report = _run(case)
+    named, in_tol, others = he.check(case, report)
+    got = [(f["effect"], f["axis"], f["params"]) for f in report["findings"]]
+    assert named, f"{effect} on {case['axis']} {case['params']} not named; got {got}"
+    assert in_tol, f"{effect} parameters out of tolerance: true {case['params']}, got {got}"
+    assert not others, f"extra findings {got}"
+    hit = next(f for f in report["findings"] if f["effect"] == effect)
+    assert hit["gain"]["after"] < hit["gain"]["before"]
+
+
+@pytest.mark.parametrize("seed", [7, 8, 9])
+def test_clean_recording_gets_no_findings(seed):
+    case = he.draw_case(seed, effect="none", duration_s=900.0)
+    report = _run(case)
+    assert report["findings"] == [], report["findings"]
+    # the baseline is the right model: its discrepancy is of order 1
+    assert max(report["discrepancy"]["before"].values()) < 4.0
+
+
+def test_baseline_fit_recovers_bias_and_white_noise():
+    model = {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0,
+             "axes": {"x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009, "effects": []},
+                      "y": {"bias_dps": 1.1, "arw_dps_per_sqrt_hz": 0.012, "effects": []},
+                      "z": {"bias_dps": 0.4, "arw_dps_per_sqrt_hz": 0.006, "effects": []}}}
+    rec = simulate(model, 300.0, seed=3)
+    report = analyse_gap(rec, seed=1, n_sims=4)
+    for a, spec in model["axes"].items():
+        got = report["baseline"]["axes"][a]
+        assert abs(got["bias_dps"] - spec["bias_dps"]) < 0.002
+        assert abs(got["arw_dps_per_sqrt_hz"] / spec["arw_dps_per_sqrt_hz"] - 1) < 0.02
+        assert got["quantization_dps"] == pytest.approx(1 / 131.0)
+
+
+def test_ramp_and_random_walk_are_told_apart():
+    """Both raise the long-tau Allan deviation; the decision rules (module docstring of
+    gyrofilter.detectors) must call the ramp a ramp and a random walk a stochastic wander,
+    never a ramp or step. (Whether one 30-minute random-walk path reverts enough to look
+    like Gauss-Markov is a property of the path; the battery measures how often.)"""
+    ramp = he.draw_case(31, effect="rate_ramp", duration_s=1800.0)
+    report = _run(ramp)
+    effects = {f["effect"] for f in report["findings"] if f["axis"] == ramp["axis"]}
+    assert effects == {"rate_ramp"}, report["findings"]
+    for seed in (32, 33):
+        rrw = he.draw_case(seed, effect="rate_random_walk", duration_s=1800.0)
+        report = _run(rrw)
+        effects = {f["effect"] for f in report["findings"] if f["axis"] == rrw["axis"]}
+        assert effects and effects <= {"rate_random_walk", "gauss_markov"}, report["findings"]
+
+
+def test_detectors_on_arrays_have_white_noise_nulls():
+    """Each statistic on pure white noise stays under its threshold (seeded, many draws)."""
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        x = rng.normal(0.0, 0.1, 60_000)
+        assert det.detect_outliers(x)[0] is None
+        assert det.detect_sinusoid(x, 100.0) is None
+        assert det.detect_colored(x, 100.0) is None
+        assert det.detect_slow(x, 100.0)[0] == []
+
+
+def test_lag1_correction_recovers_ar1():
+    rng = np.random.default_rng(2)
+    from scipy.signal import lfilter
+
+    for rho in (0.3, 0.6, 0.85):
+        e = rng.normal(size=200_000)
+        x = lfilter([1.0], [1.0, -rho], e)
+        r1, w = det.lag1_statistic(x, 100.0)
+        assert abs(det.lag1_from_highpassed(r1, w) - rho) < 0.02
+
+
+def test_discrepancy_is_mean_squared_z():
+    meas = {"adev": np.array([1.0, 2.0]), "band": np.array([0.0]), "line": np.array([0.0]),
+            "lag1": np.array([0.0]), "spikes": np.array([0.0])}
+    sims = [{k: v + d for k, v in meas.items()} for d in (-1.0, 1.0)]
+    deps = departures(meas, sims, 100)
+    # mean of sims equals the measurement: every z is 0
+    assert discrepancy(deps) == pytest.approx(0.0)
+    shifted = {k: v + 2 * math.sqrt(2) for k, v in meas.items()}
+    # sd of (-1, +1) with ddof=1 is sqrt(2): z = 2 everywhere, D = 4
+    assert discrepancy(departures(shifted, sims, 100)) == pytest.approx(4.0)
+
+
+@pytest.mark.skipif(not os.path.exists(REAL), reason="real recording not converted yet")
+@pytest.mark.parametrize("effect,params", [
+    ("sinusoid", {"frequency_hz": 3.7, "amplitude_dps": 0.02}),
+    ("bias_step", {"time_s": 250.0, "size_dps": 0.05}),
+    ("outliers", {"rate": 5e-4, "magnitude_dps": 1.5}),
+])
+def test_effect_hidden_in_real_mpu6050_noise(effect, params):
+    rec = read_recording(REAL)
+    clean = analyse_gap(rec, seed=0, n_sims=SIMS)
+    present = {(f["effect"], f["axis"]) for f in clean["findings"]}
+    hidden = he.hide_in_recording(rec, effect, "y", params, seed=4)
+    report = analyse_gap(hidden, seed=0, n_sims=SIMS)
+    case = {"effect": effect, "axis": "y", "params": params, "duration_s": rec.duration_s}
+    named, in_tol, others = he.check(case, report)
+    assert named and in_tol, report["findings"]
+    new = [f for f in others if (f["effect"], f["axis"]) not in present]
+    assert not new, new
+
+
+def test_cli_writes_contract_json_and_report(tmp_path):
+    case = he.draw_case(41, effect="bias_step", duration_s=600.0)
+    rec = he.simulate_case(case)
+    path = tmp_path / "rec.csv.gz"
+    write_recording(str(path), rec)
+    out = tmp_path / "gap.json"
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "gap", str(path), "--json", str(out),
+                           "--report", str(tmp_path / "rep"), "--sims", "6"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    rep = json.loads(out.read_text())
+    for key in ("recording", "sample_rate_hz", "duration_s", "baseline", "findings", "extended_model"):
+        assert key in rep
+    assert rep["recording"] == str(path)
+    assert set(rep["baseline"]["axes"]) == {"x", "y", "z"}
+    assert rep["findings"], rep
+    for f in rep["findings"]:
+        assert f["effect"] in he.EFFECTS and f["axis"] in ("x", "y", "z")
+        assert {"before", "after", "metric"} <= set(f["gain"]) and f["evidence"]
+    spec, _ = validate_model(rep["extended_model"])  # runs in `simulate`
+    assert any(e["effect"] == "bias_step" for e in spec["axes"][case["axis"]]["effects"])
+    md = (tmp_path / "rep" / "gap_report.md").read_text()
+    assert "bias_step" in md and (tmp_path / "rep" / f"time_{case['axis']}.png").exists()
+
+
+def test_cli_bad_input_is_one_line(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n0,1,2\n")
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "gap", str(bad), "--json", str(tmp_path / "o.json")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+
+
+def test_too_short_recording_gives_no_findings_and_a_note():
+    rec = Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (100, 3)), 100.0)
+    report = analyse_gap(rec, n_sims=4)
+    assert report["findings"] == [] and report["notes"]
+
+
+def test_rad_per_s_at_1_hz_runs():
+    """Another gyro: rad/s, 1 Hz, 3 h, with a step on z; the unit must not matter."""
+    model = {"sample_rate_hz": 1.0, "gyro_unit": "rad/s",
+             "axes": {a: {"bias_dps": 0.01, "arw_dps_per_sqrt_hz": 0.002, "effects": []} for a in "xyz"}}
+    model["axes"]["z"]["effects"].append({"effect": "bias_step", "time_s": 4000.0, "size_dps": 0.004})
+    rec = simulate(model, 10800.0, seed=9)
+    report = analyse_gap(rec, seed=2, n_sims=8)
+    got = [(f["effect"], f["axis"]) for f in report["findings"]]
+    assert got == [("bias_step", "z")], report["findings"]
+    step = report["findings"][0]["params"]
+    assert abs(step["time_s"] - 4000.0) < 60 and abs(step["size_dps"] / 0.004 - 1) < 0.3
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scale,duration", [(1.0, None), (1 / 3, 600.0)])
+def test_battery_rates(scale, duration):
+    """Dozens of cases: >= 90 % named in tolerance (scale 1) and <= 5 % clean with findings."""
+    kinds = list(he.EFFECTS) + ["none"]
+    named_ok = n_eff = false_clean = n_clean = 0
+    for k in range(44):
+        effect = kinds[k % len(kinds)]
+        case = he.draw_case(2000 + k, effect=effect, duration_s=duration, scale=scale)
+        report = _run(case)
+        named, ok, others = he.check(case, report)
+        if effect == "none":
+            n_clean += 1
+            false_clean += bool(report["findings"])
+        else:
+            n_eff += 1
+            named_ok += ok
+    assert false_clean <= max(1, 0.05 * n_clean)
+    if scale == 1.0:
+        assert named_ok >= 0.9 * n_eff
