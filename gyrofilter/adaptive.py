@@ -194,6 +194,9 @@ class ConstantRateHold:
         if kernel is None and backend == "numba":
             raise SettingsError("backend='numba' needs numba: pip install 'gyrofilter[fast]'")
         self._kernel = kernel or hold_blocks
+        # the kernel's state arguments, bound once: the arrays are updated in place
+        self._args = (self.sigma, self.ring, self.mean, self.g_pos, self.g_neg, self.ints,
+                      self.kappa, self.h, self.max_blocks, self.chi2_limit, self.agree_z)
         self._y1 = np.zeros((1, 3))
         self._x1 = np.zeros((1, 3))
         self._o1 = np.zeros((1, 3))
@@ -209,8 +212,13 @@ class ConstantRateHold:
         return [int(v) for v in self.ints[SWITCHES : SWITCHES + 3]]
 
     def _call(self, y, x, out):
-        return self._kernel(y, x, out, self.sigma, self.ring, self.mean, self.g_pos, self.g_neg, self.ints,
-                            self.kappa, self.h, self.max_blocks, self.chi2_limit, self.agree_z)
+        return self._kernel(y, x, out, *self._args)
+
+    def step(self, y_dps, x_dps, out_dps):
+        """Fast path for a pipeline: (M, 3) float64 C arrays in, ``out_dps`` (M, 3) written in
+        place (it may be ``x_dps`` or ``y_dps`` itself: each element is read before it is
+        written); no checks, no allocation."""
+        self._kernel(y_dps, x_dps, out_dps, *self._args)
 
     def update(self, y_block_dps, x_track_dps):
         """One block: the block mean y (3,) and the tracking filter's output x (3,) -> output (3,)."""

@@ -117,3 +117,17 @@ def test_make_hold_from_window_or_from_a_loaded_calibration():
     assert np.all(make_hold(5, calibration_window_dps=np.ones((50, 3))).sigma > 0)
     with pytest.raises(SettingsError):
         make_hold(5)
+
+
+def test_step_in_place_equals_run():
+    rng = np.random.default_rng(15)
+    y = rng.normal(scale=SIGMA, size=(500, 3))
+    y[200:] += 3.0
+    a = ConstantRateHold([SIGMA] * 3, initial_blocks=40, backend="python")
+    expected = a.run(y, y)
+    b = ConstantRateHold([SIGMA] * 3, initial_blocks=40, backend="python")
+    out = y.copy()
+    for k in range(len(y)):
+        row = out[k : k + 1]
+        b.step(row, row, row)  # block mean as tracking output, written over itself
+    assert np.array_equal(out, expected)
