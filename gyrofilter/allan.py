@@ -177,16 +177,21 @@ def overlapping_adev(x, sample_rate_hz, taus_s=None):
     tau_s, adev : ndarray
         The cluster times actually used (``m / sample_rate_hz``) and the deviations.
     """
+    return _deviation(x, sample_rate_hz, taus_s, overlapping=True)
+
+
+def _deviation(x, sample_rate_hz, taus_s, overlapping):
+    """sqrt(sum of squared second differences / (2 n_terms)) / tau at every cluster size; the
+    second differences start at every sample (overlapping) or every m-th (non-overlapping)."""
     rate = _check_rate(sample_rate_hz)
     x = _check_series(x)
     m = cluster_sizes(x.size, rate, taus_s)
     phase = _phase(x, 1.0 / rate)
-    adev = np.empty(m.size, dtype=np.float64)
+    out = np.empty(m.size, dtype=np.float64)
     for i, mi in enumerate(m):
-        total, n_terms = _sum_second_difference_squared(phase, int(mi))
-        tau = mi / rate
-        adev[i] = math.sqrt(total / (2.0 * n_terms)) / tau
-    return m / rate, adev
+        total, n_terms = _sum_second_difference_squared(phase, int(mi), stride=1 if overlapping else int(mi))
+        out[i] = math.sqrt(total / (2.0 * n_terms)) / (mi / rate)
+    return m / rate, out
 
 
 def adev(x, sample_rate_hz, taus_s=None):
@@ -196,16 +201,7 @@ def adev(x, sample_rate_hz, taus_s=None):
     adjacent cluster averages. Less precise than :func:`overlapping_adev`; kept for the
     reference values of paper 000 and Stable32.
     """
-    rate = _check_rate(sample_rate_hz)
-    x = _check_series(x)
-    m = cluster_sizes(x.size, rate, taus_s)
-    phase = _phase(x, 1.0 / rate)
-    out = np.empty(m.size, dtype=np.float64)
-    for i, mi in enumerate(m):
-        total, n_terms = _sum_second_difference_squared(phase, int(mi), stride=int(mi))
-        tau = mi / rate
-        out[i] = math.sqrt(total / (2.0 * n_terms)) / tau
-    return m / rate, out
+    return _deviation(x, sample_rate_hz, taus_s, overlapping=False)
 
 
 # --------------------------------------------------------------------------------------------

@@ -62,19 +62,14 @@ def plot_allan(path, results, title=""):
             else:
                 ax.annotate(f"{TERM_SYMBOL[term]} (slope {TERM_SLOPE[term]:+g})", (r.tau_s[i], r.adev[i]),
                             textcoords="offset points", xytext=(4, 6), fontsize=7)
-        ax.set_xlabel("cluster time tau (s)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6.5, loc="best")
+        _label(ax, None, legend_size=6.5)
         low = np.min(np.where(r.ci_low > 0, r.ci_low, np.min(r.adev[r.adev > 0])))
         ax.set_ylim(low / 2.0, np.max(r.ci_high) * 1.5)
         ax.set_title(f"axis {name}", fontsize=10)
     axes[0][0].set_ylabel("Allan deviation (deg/s)")
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_before_after(path, curves, title=""):
@@ -83,12 +78,21 @@ def plot_before_after(path, curves, title=""):
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
     for label, tau, dev, colour, style in curves:
         ax.loglog(tau, dev, style, color=colour, ms=3, label=label)
-    ax.set_xlabel("cluster time tau (s)")
-    ax.set_ylabel("Allan deviation (deg/s)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    _label(ax, "Allan deviation (deg/s)", legend_size=7)
     if title:
         ax.set_title(title, fontsize=9)
+    return _save(plt, fig, path)
+
+
+def _label(ax, ylabel, legend_size):
+    ax.set_xlabel("cluster time tau (s)")
+    if ylabel:
+        ax.set_ylabel(ylabel)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=legend_size, loc="best")
+
+
+def _save(plt, fig, path):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
