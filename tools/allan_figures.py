@@ -39,7 +39,7 @@ def _interval(c, unit, digits=3):
         up = convert(c.upper, c.term, unit)
         return "not resolved" + (f" (< {up:.2g})" if up is not None else "")
     v, lo, hi = (convert(x, c.term, unit) for x in (c.value, c.low, c.high))
-    return f"{v:.{digits}g} [{lo:.{digits - 1}g}, {hi:.{digits - 1}g}]"
+    return f"{v:.{digits}g} [{lo:.{digits}g}, {hi:.{digits}g}]"
 
 
 def main(argv=None):
