@@ -516,18 +516,11 @@ def dominates(ev, candidate, reference="paper001", claim=PAPER_CLAIM_REDUCTION, 
             continue
         if np.min(red) < claim:
             fails.append(f"static {rec}: reduction {np.min(red):.2f} < {claim}")
-    for p, d in ev.dynamic[candidate].items():
-        if profiles is not None and p not in profiles:
-            continue
-        ref = ev.dynamic[reference][p]["rmse_dps"]
-        if d["rmse_dps"] > ref:
-            fails.append(f"profile {p}: RMSE {d['rmse_dps']:.4f} > {ref:.4f}")
-    for trial, d in ev.broad[candidate].items():
-        if broad_only is not None and trial not in broad_only:
-            continue
-        ref = ev.broad[reference][trial]["rmse_all_dps"]
-        if d["rmse_all_dps"] > ref:
-            fails.append(f"BROAD {trial}: RMSE {d['rmse_all_dps']:.4f} > {ref:.4f}")
+    for label, table, key, only in (("profile", ev.dynamic, "rmse_dps", profiles), ("BROAD", ev.broad, "rmse_all_dps", broad_only)):
+        for name, d in table[candidate].items():
+            ref = table[reference][name][key]
+            if (only is None or name in only) and d[key] > ref:
+                fails.append(f"{label} {name}: RMSE {d[key]:.4f} > {ref:.4f}")
     return (not fails), fails
 
 
