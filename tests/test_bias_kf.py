@@ -98,7 +98,8 @@ def test_gauss_markov_bias_relaxes_to_the_calibration_when_unobserved():
     # with tau = 1 s and no rest, the deviation state decays like exp(-t/tau)
     cal = Calibration((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), 200, FS)
     f = BiasKalmanFilter(FS, BiasKFSettings(bias_tau_s=1.0, bias_sigma_dps=0.5), calibration=cal)
-    f._d = np.array([0.2, 0.2, 0.2])  # a learnt deviation
+    for state in f._x:
+        state[1] = 0.2  # a learnt deviation d
     rng = np.random.default_rng(6)
     moving = 30 * np.sin(np.arange(300) / 10.0)[:, None] + rng.normal(0, 0.1, (300, 3))
     f.run(moving)
