@@ -278,3 +278,42 @@ def test_kalibr_yaml_uses_continuous_time_si_units_and_the_largest_axis():
     rw = float(values["gyroscope_random_walk"])
     assert rw == pytest.approx(max(r.fitted["rrw"].upper for r in res.values()) * math.pi / 180, rel=1e-6)
     assert "upper bound: K not resolved" in text
+
+
+# --- covariance model of the Allan variance estimates ---------------------------------------------
+
+@pytest.mark.parametrize("kind, alpha", [("white", 0), ("random_walk", -2)])
+def test_correlation_between_cluster_times_matches_monte_carlo(kind, alpha):
+    from gyrofilter.allan import overlapping_adev
+    from gyrofilter.noise_model import avar_correlation
+    m = np.array([1, 2, 5, 10, 20, 40])
+    est = []
+    for seed in range(400):
+        rng = np.random.default_rng(seed)
+        x = rng.normal(size=8000) if kind == "white" else np.cumsum(rng.normal(size=8000))
+        est.append(overlapping_adev(x, 1.0, m)[1] ** 2)
+    emp = np.corrcoef(np.array(est).T)
+    model = avar_correlation(m[:, None], m[None, :], alpha)
+    # 400 seeds: standard error of a correlation of 0.5 is about 0.04
+    np.testing.assert_allclose(model, emp, atol=0.12)
+    assert np.mean(np.abs(model - emp)) < 0.05
+
+
+def test_discrete_and_continuous_correlation_agree_for_large_m():
+    from gyrofilter.noise_model import _rho_table, avar_correlation
+    for alpha in (0, -1, -2):
+        log_r, rho = _rho_table(alpha)
+        assert avar_correlation(30, 60, alpha) == pytest.approx(np.interp(math.log(2), log_r, rho), abs=0.01)
+        assert avar_correlation(7, 7, alpha) == pytest.approx(1.0)
+
+
+def test_fit_uncertainty_of_n_matches_the_spread_over_seeds():
+    # the stated standard deviation of N^2 (from cov = G C G') against the spread of 60 fits
+    est, sd = [], []
+    for seed in range(60):
+        r = characterise_axis(simulate(20000, 10.0, np.random.default_rng(seed), N=0.05), 10.0)
+        c = r.fitted["arw"]
+        est.append(c.value ** 2)
+        sd.append((c.high ** 2 - c.low ** 2) / (2 * 1.96))
+    ratio = np.std(est, ddof=1) / np.mean(sd)
+    assert 0.75 < ratio < 1.35, ratio
