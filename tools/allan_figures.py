@@ -102,7 +102,8 @@ def main(argv=None):
     out = filt.filter(rec.gyro_dps)
     out_rate = rec.sample_rate_hz / filt.settings.block_len
     curves = []
-    print(f"\n#### Before/after filtering ({name}, GyroFilter preset 'paper', output {out_rate:g} Hz)\n")
+    print(f"\n#### Before/after filtering: {name}, GyroFilter preset 'paper' (output {out_rate:g} Hz); "
+          "std after the calibration window\n")
     print("| axis | raw std (deg/s) | filtered std (deg/s) | ratio | raw ADEV at 1 s | filtered ADEV at 1 s | raw ADEV at 10 s | filtered ADEV at 10 s |")
     print("|---|---|---|---|---|---|---|---|")
     for i, a in enumerate("xyz"):
