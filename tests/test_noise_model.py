@@ -317,3 +317,26 @@ def test_fit_uncertainty_of_n_matches_the_spread_over_seeds():
         sd.append((c.high ** 2 - c.low ** 2) / (2 * 1.96))
     ratio = np.std(est, ddof=1) / np.mean(sd)
     assert 0.75 < ratio < 1.35, ratio
+
+
+def test_round_trip_through_the_package_simulator():
+    # an independent generator: gyrofilter.simulate (bias instability as a Gauss-Markov bank,
+    # its own random streams) with the shared model schema; every coefficient inside its interval
+    simulate_dps = pytest.importorskip("gyrofilter.simulate").simulate_dps
+    model = {"sample_rate_hz": 10.0, "gyro_unit": "dps", "axes": {
+        "x": {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.05,
+              "effects": [{"effect": "bias_instability", "b_dps": 0.01}]},
+        "y": {"bias_dps": 1.0, "arw_dps_per_sqrt_hz": 0.05,
+              "effects": [{"effect": "rate_random_walk", "k_dps_per_sqrt_s": 0.002}]},
+        "z": {"bias_dps": -1.0, "arw_dps_per_sqrt_hz": 0.05,
+              "effects": [{"effect": "rate_ramp", "r_dps_per_s": 1e-4}]}}}
+    truth = [("x", "arw", 0.05), ("x", "bias_instability", 0.01), ("y", "arw", 0.05),
+             ("y", "rrw", 0.002), ("z", "arw", 0.05), ("z", "rate_ramp", 1e-4)]
+    hits = {key: 0 for key in truth}
+    for seed in range(12):
+        g, _ = simulate_dps(model, 13107.2, seed=seed)
+        res = characterise(g, 10.0)
+        for axis, term, value in truth:
+            c = res[axis].fitted[term]
+            hits[(axis, term, value)] += bool(c.value is not None and c.low <= value <= c.high)
+    assert all(h >= 10 for h in hits.values()), hits
