@@ -49,6 +49,7 @@ import math
 import numpy as np
 
 from .errors import SettingsError
+from .jit import choose_kernel
 
 DEFAULTS = {
     "cusum_kappa": 0.5,
@@ -142,19 +143,6 @@ def hold_blocks(y, x, out, sigma, ring, mean, g_pos, g_neg, ints, kappa, h, max_
 _compiled = None
 
 
-def compiled_hold_blocks():
-    """:func:`hold_blocks` compiled by numba (cached), or None when numba is missing."""
-    global _compiled
-    if _compiled is None:
-        try:
-            import numba
-        except ImportError:
-            _compiled = False
-        else:
-            _compiled = numba.njit(cache=True)(hold_blocks)
-    return _compiled or None
-
-
 class ConstantRateHold:
     """The switching stage; see the module docstring. Three axes; fixed-size state.
 
@@ -190,10 +178,7 @@ class ConstantRateHold:
         if initial_blocks > 0:
             self.ints[HOLDING : HOLDING + 3] = 1
             self.ints[COUNT : COUNT + 3] = min(int(initial_blocks), self.max_blocks)
-        kernel = None if backend == "python" else compiled_hold_blocks()
-        if kernel is None and backend == "numba":
-            raise SettingsError("backend='numba' needs numba: pip install 'gyrofilter[fast]'")
-        self._kernel = kernel or hold_blocks
+        self._kernel = choose_kernel(hold_blocks, backend)
         # the kernel's state arguments, bound once: the arrays are updated in place
         self._args = (self.sigma, self.ring, self.mean, self.g_pos, self.g_neg, self.ints,
                       self.kappa, self.h, self.max_blocks, self.chi2_limit, self.agree_z)

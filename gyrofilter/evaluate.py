@@ -213,35 +213,6 @@ def gyrofilter_run(preset="paper", **settings):
     return run
 
 
-def hold_run(preset="paper", hold=None, track="filter", **settings):
-    """GyroFilter + :class:`gyrofilter.adaptive.ConstantRateHold` on its block means.
-
-    The block means are recomputed exactly as the pipeline does (same averaging function, same
-    bias); sigma_b from :func:`gyrofilter.adaptive.block_noise_std` of the calibration window.
-    ``track``: what the stage outputs while the rate changes: "filter" (the GyroFilter output)
-    or "block_mean" (the block means themselves).
-    """
-
-    def run(x_dps, sample_rate_hz, calibration_s):
-        from .adaptive import make_hold
-        from .averaging import average_blocks
-        from .pipeline import GyroFilter
-
-        f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
-        xk = f.filter(x_dps)
-        s = f.settings
-        c = calibration_samples(sample_rate_hz, calibration_s)
-        L = s.block_len
-        m = len(xk)
-        blocks = x_dps[c : c + m * L].reshape(m, L, 3)
-        yk, _, _ = average_blocks(blocks, s.outlier_q_dps)
-        yk = yk - np.asarray(f.bias_dps)
-        stage = make_hold(L, calibration_window_dps=x_dps[:c], **dict(hold or {}))
-        return FilterOutput(stage.run(yk, yk if track == "block_mean" else xk), L, c)
-
-    return run
-
-
 def default_filters():
     """The filters of the comparison table (baselines, the faithful filter, candidates)."""
     return [
@@ -258,11 +229,11 @@ def default_filters():
         FilterSpec("paper, constant fit", "candidate", "GyroFilter(fit_order=0)", gyrofilter_run("paper", fit_order=0)),
         FilterSpec("paper, R calibration", "candidate", "GyroFilter(r_source='calibration')",
                    gyrofilter_run("paper", r_source="calibration")),
-        FilterSpec("recommended preset", "candidate", "GyroFilter(preset='recommended')", gyrofilter_run("recommended")),
-        FilterSpec("paper KF + hold", "candidate", "paper-001 output + constant-rate hold (gyrofilter.adaptive)",
-                   hold_run("paper")),
-        FilterSpec("hold + block mean", "candidate", "constant-rate hold, block means while the rate changes",
-                   hold_run("paper", track="block_mean")),
+        FilterSpec("paper KF + hold", "candidate", "GyroFilter(hold=True): paper-001 output + constant-rate hold",
+                   gyrofilter_run("paper", hold=True)),
+        FilterSpec("recommended preset", "candidate",
+                   "GyroFilter(preset='recommended') = hold=True, tracker='block_mean': constant-rate hold, block means while the rate changes",
+                   gyrofilter_run("recommended")),
     ]
 
 

@@ -28,9 +28,9 @@ Readings of what the paper leaves open (each alternative is a setting of GyroFil
   value r0 (the calibration's white-noise variance / L). Variances are floored at 1e-12 dps^2
   so that a perfectly constant input cannot divide 0 by 0.
 
-:func:`run_blocks` is written in the subset of Python that numba compiles; the streaming
-filter calls it one block at a time and the batch filter once for all blocks, interpreted or
-compiled, so both paths execute the same arithmetic.
+:func:`run_blocks` is written in the subset of Python that numba compiles
+(:mod:`gyrofilter.jit`); the streaming filter calls it one block at a time and the batch filter
+once for all blocks, interpreted or compiled, so both paths execute the same arithmetic.
 """
 import math
 
@@ -127,29 +127,3 @@ def run_blocks(y, out, w_table, fifo, p, qbuf, rbuf, sums, counters, r0, p0, win
             else:
                 counters[Q_COUNT] += 1
     return out
-
-
-_compiled = None
-
-
-def compiled_run_blocks():
-    """:func:`run_blocks` compiled by numba (cached on disk), or None when numba is missing."""
-    global _compiled
-    if _compiled is None:
-        try:
-            import numba
-        except ImportError:
-            _compiled = False
-        else:
-            window_stat = numba.njit(cache=True)(_window_stat)
-            _compiled = numba.njit(cache=True)(_with_stat(window_stat))
-    return _compiled or None
-
-
-def _with_stat(window_stat):
-    """run_blocks with ``_window_stat`` bound to ``window_stat`` (numba needs a jitted callee)."""
-    code = run_blocks.__code__
-    namespace = dict(run_blocks.__globals__, _window_stat=window_stat)
-    import types
-
-    return types.FunctionType(code, namespace, "run_blocks_compiled")

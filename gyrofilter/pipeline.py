@@ -19,6 +19,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from . import kalman
+from .jit import choose_kernel
 from .averaging import average_block, average_blocks
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
@@ -47,7 +48,14 @@ class FilterSettings:
     qr_stat                      variance  "variance" or "std": reading of sigma in eqs 11-12
     r_source                     window    "window" (eq. 12) or "calibration" (fixed R)
     backend                      auto      "auto", "python" or "numba" for the Kalman loop
+    tracker                      kalman    "kalman" (paper 001) or "block_mean" (no filter)
+    hold                         False     constant-rate hold after the tracker (adaptive)
+    hold_h                       10.0      CUSUM threshold of the hold (block-noise units)
+    hold_window                  20        blocks the hold's constancy test looks at
+    hold_max_blocks              400       memory of the held mean (blocks)
     ============================ ========= ===================================================
+
+    ``preset="recommended"`` is ``tracker="block_mean", hold=True`` (see gyrofilter.presets).
 
     On q: paper 001 saw gross errors of more than 200 LSB; one such spike in a block of 5 sits
     4/5 * 200 = 160 LSB from the block mean, while its own example block
@@ -68,6 +76,11 @@ class FilterSettings:
     qr_stat: str = "variance"
     r_source: str = "window"
     backend: str = "auto"
+    tracker: str = "kalman"
+    hold: bool = False
+    hold_h: float = 10.0
+    hold_window: int = 20
+    hold_max_blocks: int = 400
 
     def validate(self):
         def need(cond, name, what):
@@ -90,6 +103,12 @@ class FilterSettings:
         need(self.qr_stat in ("variance", "std"), "qr_stat", "must be 'variance' or 'std'")
         need(self.r_source in ("window", "calibration"), "r_source", "must be 'window' or 'calibration'")
         need(self.backend in ("auto", "python", "numba"), "backend", "must be 'auto', 'python' or 'numba'")
+        need(isinstance(self.hold, bool), "hold", "must be True or False")
+        need(self.tracker in ("kalman", "block_mean"), "tracker", "must be 'kalman' or 'block_mean'")
+        need(isinstance(self.hold_h, (int, float)) and math.isfinite(self.hold_h) and self.hold_h > 0, "hold_h", "must be a number > 0")
+        for name, low in (("hold_window", 2), ("hold_max_blocks", 1)):
+            value = getattr(self, name)
+            need(isinstance(value, int) and not isinstance(value, bool) and value >= low, name, f"must be an integer >= {low}")
 
 
 SETTING_NAMES = tuple(f.name for f in fields(FilterSettings))
@@ -123,7 +142,7 @@ class GyroFilter:
         self.sample_rate_hz = float(sample_rate_hz)
         self.preset = preset
         s = self.settings
-        self._run = self._choose_backend(s.backend)
+        self._run = choose_kernel(kalman.run_blocks, s.backend)
         self._w_table = weight_table(s.fifo_depth, s.fit_order)
         # Kalman state (fixed size)
         width = max(s.qr_window, 1)
@@ -136,6 +155,7 @@ class GyroFilter:
         self._r0 = np.full(3, s.p0_dps2)
         self._y1 = np.zeros((1, 3))
         self._out1 = np.zeros((1, 3))
+        self._hold = None  # constant-rate hold stage (gyrofilter.adaptive), built after calibration
         # the kernel's state arguments, bound once: the arrays are updated in place
         self._kernel_args = (
             self._w_table, self._fifo, self._p, self._qbuf, self._rbuf, self._sums, self._counters,
@@ -155,6 +175,11 @@ class GyroFilter:
         if calibration is not None:
             self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration)
             self._apply_calibration(self.calibration)
+            if s.hold:
+                # a loaded calibration says nothing about stillness now: start tracking
+                self._hold = self._make_hold(noise_std_dps=self.calibration.noise_std_dps)
+        elif s.hold and self._cal_needed == 0:
+            raise SettingsError("setting hold=True needs a start-up calibration (calibration_s > 0) or a loaded calibration")
         elif self._cal_needed > 0:
             self._cal_buf = np.zeros((self._cal_needed, 3))
             self._cal_tries_left = int(s.calibration_retry_s // max(s.calibration_s, 1e-9))
@@ -211,7 +236,7 @@ class GyroFilter:
             if not math.isfinite(mean):
                 raise SettingsError(f"samples must be finite numbers; block {self.blocks_out} holds {values}")
             y1[0, a] = mean - self._bias[a]
-        self._run(y1, self._out1, *self._kernel_args)
+        self._track(y1, self._out1)
         self.blocks_out += 1
         x, y, z = self._out1[0].tolist()
         return (x, y, z)
@@ -251,7 +276,7 @@ class GyroFilter:
             self.fallback_blocks += fallback.sum(axis=0)
             y -= np.asarray(self._bias)
             out = np.empty_like(y)
-            self._run(y, out, *self._kernel_args)
+            self._track(y, out)
             self.blocks_out += n_blocks
             outputs.append(out)
             i += n_blocks * length
@@ -273,17 +298,14 @@ class GyroFilter:
 
     # ------------------------------------------------------------------ internals
 
-    @staticmethod
-    def _choose_backend(backend):
-        if backend == "python":
-            return kalman.run_blocks
-        compiled = kalman.compiled_run_blocks()
-        if compiled is None:
-            if backend == "numba":
-                raise SettingsError("backend='numba' needs numba: pip install 'gyrofilter[fast]'")
-            return kalman.run_blocks
-        return compiled
-
+    def _track(self, y, out):
+        """Block means y (M, 3) -> output (M, 3): the tracker, then the hold stage if enabled."""
+        if self.settings.tracker == "kalman":
+            self._run(y, out, *self._kernel_args)
+        else:
+            out[:] = y
+        if self._hold is not None:
+            self._hold.step(y, out, out)
 
     def _finish_calibration(self):
         s = self.settings
@@ -296,7 +318,17 @@ class GyroFilter:
             self._cal_fill = 0
             return
         self.calibration = cal
+        if s.hold:
+            # the window passed the stillness check: start holding, sigma_b from its block means
+            self._hold = self._make_hold(calibration_window_dps=self._cal_buf)
         self._apply_calibration(cal)
+
+    def _make_hold(self, **source):
+        from .adaptive import make_hold
+
+        s = self.settings
+        return make_hold(s.block_len, cusum_h=s.hold_h, window_blocks=s.hold_window,
+                         max_blocks=s.hold_max_blocks, backend=s.backend, **source)
 
     def _apply_calibration(self, cal):
         self._bias = tuple(float(b) for b in cal.bias_dps)

@@ -161,7 +161,7 @@ def test_evaluate_command_writes_table_json_and_figure(tmp_path, capsys):
     code = main(["evaluate", "--recordings", str(rec_dir), "--out", str(out), "--no-lag"])
     assert code == 0
     text = (out / "evaluate_table.md").read_text()
-    assert "| paper001 |" in text and "hold + block mean" in text
+    assert "| paper001 |" in text and "recommended preset" in text
     data = json.loads((out / "evaluate.json").read_text())
     # the block mean reduces white noise by sqrt(5)
     assert np.allclose(data["static_std_reduction"]["block mean 5"]["mpu6050_static_91s"], math.sqrt(5), rtol=0.1)

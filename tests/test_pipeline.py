@@ -6,10 +6,10 @@ import pytest
 from gyrofilter import GyroFilter
 from gyrofilter.calibration import Calibration
 from gyrofilter.errors import CalibrationError, SettingsError
-from gyrofilter.kalman import compiled_run_blocks
+from gyrofilter.jit import numba_available
 from plain_filter import plain_filter
 
-BACKENDS = ["python"] + (["numba"] if compiled_run_blocks() is not None else [])
+BACKENDS = ["python"] + (["numba"] if numba_available() else [])
 
 
 def noisy(n, seed=0, bias=(1.5, -0.7, 3.0), sigma=0.1, spikes=0.0):
@@ -27,27 +27,53 @@ def stream(filt, x):
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("settings", [{}, {"qr_stat": "std"}, {"qr_window": 0}, {"r_source": "calibration", "fit_order": 1}, {"block_len": 3, "fifo_depth": 4}])
+@pytest.mark.parametrize(
+    "settings",
+    [{}, {"qr_stat": "std"}, {"qr_window": 0}, {"r_source": "calibration", "fit_order": 1}, {"block_len": 3, "fifo_depth": 4},
+     {"preset": "recommended"}, {"hold": True}],
+)
 def test_update_and_filter_give_the_same_numbers(backend, settings):
     x = noisy(3000, spikes=0.02)
+    x[1500:2200] += np.linspace(0, 30, 700)[:, None]  # motion: the hold stage switches
     a = stream(GyroFilter(100.0, backend=backend, **settings), x)
     b = GyroFilter(100.0, backend=backend, **settings).filter(x)
     assert a.shape == b.shape
     assert np.array_equal(a, b)
 
 
-def test_mixed_calls_continue_the_same_state():
+@pytest.mark.parametrize("preset", ["paper", "recommended"])
+def test_mixed_calls_continue_the_same_state(preset):
     x = noisy(4000, seed=2, spikes=0.01)
-    whole = GyroFilter(100.0).filter(x)
-    f = GyroFilter(100.0)
+    whole = GyroFilter(100.0, preset=preset).filter(x)
+    f = GyroFilter(100.0, preset=preset)
     parts = [f.filter(x[:150]), stream(f, x[150:1003]), f.filter(x[1003:2999]), stream(f, x[2999:3001]), f.filter(x[3001:])]
     assert np.array_equal(np.concatenate(parts), whole)
 
 
 @pytest.mark.skipif(len(BACKENDS) < 2, reason="numba not installed")
-def test_numba_and_python_backends_agree_bit_for_bit():
+@pytest.mark.parametrize("preset", ["paper", "recommended"])
+def test_numba_and_python_backends_agree_bit_for_bit(preset):
     x = noisy(5000, seed=4, spikes=0.02)
-    assert np.array_equal(GyroFilter(100.0, backend="python").filter(x), GyroFilter(100.0, backend="numba").filter(x))
+    x[2000:2500] += 15.0
+    python = GyroFilter(100.0, preset=preset, backend="python").filter(x)
+    assert np.array_equal(python, GyroFilter(100.0, preset=preset, backend="numba").filter(x))
+
+
+def test_recommended_holds_at_rest_and_follows_a_step_within_a_block():
+    x = noisy(12000, seed=11)
+    x[8000:] += 10.0  # a step to 10 deg/s at block (8000 - 200) / 5 = 1560
+    f = GyroFilter(100.0, preset="recommended")
+    out = f.filter(x)
+    paper = GyroFilter(100.0).filter(x)
+    rest = slice(100, 1500)
+    assert np.all(out[rest].std(axis=0) < paper[rest].std(axis=0) / 3)
+    np.testing.assert_allclose(out[1561:1565], 10.0, atol=0.2)  # the block after the step
+    np.testing.assert_allclose(out[1700:].mean(axis=0), 10.0, atol=0.02)
+
+
+def test_hold_needs_a_calibration():
+    with pytest.raises(SettingsError, match="hold=True"):
+        GyroFilter(100.0, calibration_s=0, hold=True)
 
 
 @pytest.mark.parametrize("settings", [{}, {"qr_stat": "std"}])

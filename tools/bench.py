@@ -23,7 +23,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path[:0] = [HERE, os.path.join(HERE, "..", "tests")]
 
 from gyrofilter import GyroFilter  # noqa: E402
-from gyrofilter.kalman import compiled_run_blocks  # noqa: E402
+from gyrofilter.jit import numba_available  # noqa: E402
 
 RATE_HZ = 100.0
 
@@ -43,7 +43,7 @@ def pipeline():
     rng = np.random.default_rng(0)
     hour = rng.normal([1.5, -0.7, 3.0], 0.1, (int(3600 * RATE_HZ), 3))
     stream_in = list(map(tuple, hour[:300_000].tolist()))
-    backends = ["numba", "python"] if compiled_run_blocks() is not None else ["python"]
+    backends = ["numba", "python"] if numba_available() else ["python"]
     rows = []
     for backend in backends:
         GyroFilter(RATE_HZ, backend=backend).filter(hour[:1000])  # load the compiled kernel once

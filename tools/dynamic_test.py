@@ -30,7 +30,7 @@ FIGURE_NOISE = "mpu6050_static_449s"
 FILTERS = [
     ("paper001 (faithful)", E.gyrofilter_run("paper")),
     ("recommended preset", E.gyrofilter_run("recommended")),
-    ("hold + block mean", E.hold_run("paper", track="block_mean")),
+    ("recommended preset", E.gyrofilter_run("recommended")),
 ]
 
 

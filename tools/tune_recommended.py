@@ -95,11 +95,11 @@ def main():
     designs = [
         E.FilterSpec("paper001", "paper", "", E.gyrofilter_run("paper")),
         E.FilterSpec("recommended preset", "candidate", "", E.gyrofilter_run("recommended")),
-        E.FilterSpec("hold + paper KF", "candidate", "", E.hold_run("paper")),
-        E.FilterSpec("hold + KF(r_source=calibration)", "candidate", "", E.hold_run("paper", r_source="calibration")),
-        E.FilterSpec("hold + block mean", "candidate", "", E.hold_run("paper", track="block_mean")),
-        E.FilterSpec("hold(h=5) + block mean", "candidate", "", E.hold_run("paper", hold={"cusum_h": 5.0}, track="block_mean")),
-        E.FilterSpec("hold(h=20) + block mean", "candidate", "", E.hold_run("paper", hold={"cusum_h": 20.0}, track="block_mean")),
+        E.FilterSpec("hold + paper KF", "candidate", "", E.gyrofilter_run("paper", hold=True)),
+        E.FilterSpec("hold + KF(r_source=calibration)", "candidate", "", E.gyrofilter_run("paper", hold=True, r_source="calibration")),
+        E.FilterSpec("hold + block mean", "candidate", "", E.gyrofilter_run("paper", hold=True, tracker="block_mean")),
+        E.FilterSpec("hold(h=5) + block mean", "candidate", "", E.gyrofilter_run("paper", hold=True, tracker="block_mean", hold_h=5.0)),
+        E.FilterSpec("hold(h=20) + block mean", "candidate", "", E.gyrofilter_run("paper", hold=True, tracker="block_mean", hold_h=20.0)),
     ]
     ev = run_split(designs, E.TUNE_SPLIT)
     for s in designs:
