@@ -7,7 +7,7 @@ import pytest
 
 from gyrofilter.allan import AllanInputError
 from gyrofilter.errors import GyroFilterError, SettingsError
-from gyrofilter.noise_model import (FLICKER_FLOOR, TERMS, UNIT_FACTORS, arw_from_white_std, basis,
+from gyrofilter.noise_model import (FLICKER_FLOOR, UNIT_FACTORS, arw_from_white_std, basis,
                                     characterise, characterise_axis, convert, kalibr_yaml, model_adev,
                                     nnls_weighted, to_json, white_std_from_arw)
 
