@@ -78,6 +78,11 @@ def run(args):
             base, cust = TERM_UNIT[t], CUSTOMARY_UNIT[t]
             print(f"    {TERM_SYMBOL[t]} {NAMES[t]:<17} {_fmt(c, base):<34} {base:<14} = {_fmt(c, cust):<32} {cust:<14}"
                   f" read-off: {_fmt(ro, base)}")
+        missing = [TERM_SYMBOL[t] for t in ("bias_instability", "rrw", "rate_ramp") if r.fitted[t].value is None]
+        if missing:
+            longest = r.tau_s[r.fit_used][-1]
+            print(f"    ({', '.join(missing)} not resolved: the longest cluster time with {args.min_clusters} clusters is "
+                  f"{longest:.3g} s; slower effects need a longer still recording; the bounds above hold)")
         for w in r.warnings:
             _say(f"gyrofilter: warning: {w}")
     if args.json:
