@@ -201,6 +201,18 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
     """Run the gap analysis on a :class:`~gyrofilter.recording.Recording`; returns the report
     dict of ``shared/interfaces.md`` section 2 (plus ``discrepancy``, ``departures``,
     ``runtime_s``). ``progress(text)`` is called with short status lines."""
+    import warnings
+
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return _analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=recording_name)
+
+
+#: block-mean excursion (deg/s) beyond which a recording is called not static
+STATIC_LIMIT_DPS = 1.0
+
+
+def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
     t_start = time.perf_counter()
     say = progress or (lambda text: None)
     fs = float(rec.sample_rate_hz)
@@ -233,6 +245,14 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
         temp = None
         report["notes"].append("temp column has non-finite values: temperature not analysed")
 
+    for i, a in enumerate(AXES):
+        y, length = det.block_means(g[:, i], 512)
+        excursion = float(np.max(np.abs(y - np.median(y))))
+        white_block = base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(fs / length)
+        if excursion > max(STATIC_LIMIT_DPS, 8 * white_block):
+            report["notes"].append(
+                f"axis {a}: the rate moves by up to {excursion:.3g} deg/s (averages over {length / fs:.2g} s): the recording "
+                "does not look static; the analysis models a still gyro, so its findings describe the motion")
     taus = feature_taus(n, fs)
     bands = feature_bands(n, fs)
     m = default_n_sims(n) if n_sims is None else int(n_sims)
@@ -251,6 +271,10 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
     candidates = []  # (axis index, Candidate)
     cleaned = []
     for i, a in enumerate(AXES):
+        if not np.ptp(g[:, i]) > 0:
+            report["notes"].append(f"axis {a}: constant signal, nothing to analyse")
+            cleaned.append(g[:, i])
+            continue
         try:
             cands, xc = _detect_axis(g[:, i].copy(), fs, temp)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash

@@ -124,11 +124,32 @@ def main(argv=None):
     p.add_argument("--sims", type=int, default=None)
     p.add_argument("--real", nargs="*", default=None, help="hide effects in these real recordings instead")
     p.add_argument("-v", "--verbose", action="store_true")
+    p.add_argument("--out", default=None, help="also write the summary table to this file")
     args = p.parse_args(argv)
-    if args.real:
-        run_real(args)
-    else:
-        run_synthetic(args)
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+
+    class Tee(io.TextIOBase):
+        def write(self, text):
+            sys.__stdout__.write(text)
+            buf.write(text)
+            return len(text)
+
+        def flush(self):
+            sys.__stdout__.flush()
+
+    with contextlib.redirect_stdout(Tee()):
+        if args.real:
+            run_real(args)
+        else:
+            run_synthetic(args)
+    if args.out:
+        cmd = "python tools/gap_battery.py " + " ".join(argv if argv is not None else sys.argv[1:])
+        lines = [ln for ln in buf.getvalue().splitlines() if not ln.startswith(("case ", "  "))]
+        with open(args.out, "w", encoding="utf-8") as fh:
+            fh.write(cmd + "\n" + "\n".join(lines).strip() + "\n")
 
 
 if __name__ == "__main__":
