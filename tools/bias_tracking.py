@@ -36,6 +36,33 @@ RMSE_BLOCK_S = 0.1
 SIM_FS = 100.0
 
 
+def arma_settings(x_rest_dps, fs, fallback: BiasKFSettings):
+    """Settings whose bias model is the ARMA(1, 1) of a still stretch (paper 003 via gyrofilter.arma).
+
+    Per axis; an axis whose ARMA(1, 1) has no Gauss-Markov decomposition keeps the fallback's model.
+    Returns (settings, description).
+    """
+    from gyrofilter import arma
+
+    taus, sigmas, walks, desc = [], [], [], []
+    for i, name in enumerate("xyz"):
+        x = x_rest_dps[:, i] - x_rest_dps[:, i].mean()
+        fit = arma.fit_arma(x, 1, 1)
+        m = arma.bias_model_from_arma11(fit, fs)
+        if m.valid:
+            taus.append(m.tau_s)
+            sigmas.append(0.0 if math.isinf(m.bias_sigma_dps) else m.bias_sigma_dps)
+            walks.append(m.bias_walk_dps_per_sqrt_s)
+            desc.append(f"{name}: phi {fit.phi[0]:.5f}, theta {fit.theta[0]:.5f} -> tau {m.tau_s:.3g} s, drive {m.bias_walk_dps_per_sqrt_s:.2g} deg/s/sqrt(s)")
+        else:
+            taus.append(fallback.bias_tau_s)
+            sigmas.append(fallback.bias_sigma_dps)
+            walks.append(fallback.bias_walk_dps_per_sqrt_s)
+            desc.append(f"{name}: phi {fit.phi[0]:.4f}, theta {fit.theta[0]:.4f}: no bias model, default kept")
+    s = BiasKFSettings(bias_tau_s=tuple(taus), bias_sigma_dps=tuple(sigmas), bias_walk_dps_per_sqrt_s=tuple(walks))
+    return s, "; ".join(desc)
+
+
 def rest_phases(movement):
     """(start, end) index pairs of movement == 0 runs."""
     m = np.asarray(movement) > 0.5
@@ -56,6 +83,10 @@ def broad_trial(path, settings):
     cost_us = (time.perf_counter() - t0) / len(gyro) * 1e6
     b_cal = np.asarray(tr.calibration.bias_dps)
     phases = [p for p in rest_phases(rec.columns["movement"]) if p[1] - p[0] > fs]  # >= 1 s
+    # the same filter with the bias model identified (ARMA(1, 1)) on the trial's first rest phase
+    a0, e0 = phases[0]
+    arma_s, arma_desc = arma_settings(gyro[a0:e0], fs, settings)
+    tr_arma = BiasKalmanFilter(fs, arma_s, calibration_s=CAL_S).run(gyro)
     rows = []
     for k, (a, b) in enumerate(phases[1:], start=2):
         truth = gyro[a:b].mean(axis=0)
@@ -66,6 +97,8 @@ def broad_trial(path, settings):
             "startup": float(np.linalg.norm(b_cal - truth)),
             "kf_start": float(np.linalg.norm(tr.bias_dps[i_start] - truth)),
             "kf_end": float(np.linalg.norm(tr.bias_dps[i_end] - truth)),
+            "arma_start": float(np.linalg.norm(tr_arma.bias_dps[i_start] - truth)),
+            "arma_end": float(np.linalg.norm(tr_arma.bias_dps[i_end] - truth)),
         })
     # rate RMSE against the optical reference, on 0.1 s block means (the differentiated optical
     # reference is too noisy sample by sample); blocks with an occluded row are skipped
@@ -81,7 +114,7 @@ def broad_trial(path, settings):
         for label, mask in (("motion", valid & moving), ("rest", valid & ~moving)):
             out[f"{name}_{label}"] = float(np.sqrt(np.mean(np.sum((yb[mask] - r[mask]) ** 2, axis=1))))
     return {"name": os.path.basename(path).replace(".csv.gz", ""), "fs": fs, "rows": rows, "rmse": out,
-            "trace": tr, "phases": phases, "gyro": gyro, "n_cal": n_cal, "cost_us": cost_us}
+            "trace": tr, "phases": phases, "gyro": gyro, "n_cal": n_cal, "cost_us": cost_us, "arma_desc": arma_desc}
 
 
 def motion_profile(n, fs, rng, motion_s, rest_s, start_rest_s=10.0):
@@ -111,7 +144,7 @@ def sim_model(arw):
             "axes": {"x": axis(-3.3), "y": axis(1.1), "z": axis(-0.5)}}
 
 
-def simulated_run(seed, duration_s, motion_s, rest_s, settings):
+def simulated_run(seed, duration_s, motion_s, rest_s, settings, arma_s=None):
     noisy, _ = simulate_dps(sim_model(0.01), duration_s, seed=seed)
     bias, _ = simulate_dps(sim_model(0.0), duration_s, seed=seed)
     n = len(noisy)
@@ -124,7 +157,11 @@ def simulated_run(seed, duration_s, motion_s, rest_s, settings):
     err_su = np.linalg.norm(np.asarray(tr.calibration.bias_dps) - truth, axis=1)
     rate_err_kf = np.sqrt(np.mean(np.sum((tr.rate_dps - rate[n_cal:]) ** 2, axis=1)))
     rate_err_su = np.sqrt(np.mean(np.sum((x[n_cal:] - np.asarray(tr.calibration.bias_dps) - rate[n_cal:]) ** 2, axis=1)))
-    return {"seed": seed, "t_s": np.arange(n_cal, n) / SIM_FS, "err_kf": err_kf, "err_su": err_su,
+    err_arma = None
+    if arma_s is not None:
+        tr_a = BiasKalmanFilter(SIM_FS, arma_s, calibration_s=CAL_S).run(x)
+        err_arma = np.linalg.norm(tr_a.bias_dps - truth, axis=1)
+    return {"seed": seed, "err_arma": err_arma, "t_s": np.arange(n_cal, n) / SIM_FS, "err_kf": err_kf, "err_su": err_su,
             "still": tr.still, "moving": moving[n_cal:], "rate_kf": rate_err_kf, "rate_su": rate_err_su}
 
 
@@ -143,7 +180,9 @@ def plot(path, sims, broad):
     s = sims[0]
     step = 20
     ax.plot(s["t_s"][::step], s["err_su"][::step], color="tab:red", lw=1, label="start-up calibration only")
-    ax.plot(s["t_s"][::step], s["err_kf"][::step], color="tab:blue", lw=1, label="bias-augmented KF (zero-rate updates at rest)")
+    ax.plot(s["t_s"][::step], s["err_kf"][::step], color="tab:blue", lw=1, label="bias-augmented KF, default bias model (random walk 0.002 deg/s/sqrt(s))")
+    if s["err_arma"] is not None:
+        ax.plot(s["t_s"][::step], s["err_arma"][::step], color="tab:orange", lw=1, label="same KF, bias model from the ARMA(1,1) of a real static MPU6050 log")
     ax.set_ylabel("|bias error| (deg/s)")
     ax.set_xlabel("time (s)")
     ax.set_title(f"simulated {s['t_s'][-1] / 60:.0f}-min recording: warm-up 25->35 C (0.02 deg/s/C), bias random walk, 0.15 deg/s step at 700 s; rests between motion bursts", fontsize=9)
@@ -187,15 +226,20 @@ def main(argv=None):
         print("### BROAD trials (real IMU, optical reference)\n")
         print("Bias error |b_est - b_rest| (norm over 3 axes, mrad/s) at each rest phase after the first; "
               "b_rest = mean gyro over that rest phase. KF at start = before it has seen that rest.\n")
-        print("| trial | rest phase | starts at (s) | length (s) | start-up only | KF at start of rest | KF at end of rest |")
-        print("|---|---|---|---|---|---|---|")
+        print("| trial | rest phase | starts at (s) | length (s) | start-up only | KF at start of rest | KF at end of rest | KF-ARMA at start | KF-ARMA at end |")
+        print("|---|---|---|---|---|---|---|---|---|")
         to_mrad = 1000 / 57.29577951308232
         for p in paths:
             r = broad_trial(p, settings)
             broad.append(r)
             for row in r["rows"]:
                 print(f"| {r['name']} | {row['phase']} | {row['t_s']:.1f} | {row['duration_s']:.1f} | {row['startup'] * to_mrad:.3f} | "
-                      f"{row['kf_start'] * to_mrad:.3f} | {row['kf_end'] * to_mrad:.3f} |")
+                      f"{row['kf_start'] * to_mrad:.3f} | {row['kf_end'] * to_mrad:.3f} | {row['arma_start'] * to_mrad:.3f} | {row['arma_end'] * to_mrad:.3f} |")
+        tot = lambda key: math.sqrt(np.mean([row[key] ** 2 for r in broad for row in r["rows"]])) * to_mrad  # noqa: E731
+        print(f"| **RMS over all rest phases** | | | | {tot('startup'):.3f} | {tot('kf_start'):.3f} | {tot('kf_end'):.3f} | {tot('arma_start'):.3f} | {tot('arma_end'):.3f} |")
+        print("\nKF-ARMA: bias model from the ARMA(1, 1) of each trial's first rest phase (gyrofilter.arma):\n")
+        for r in broad:
+            print(f"- {r['name']}: {r['arma_desc']}")
         print("\nRate RMSE against the optical reference (deg/s, norm over 3 axes, on 0.1 s block means; blocks with occlusion skipped):\n")
         print("| trial | raw - start-up bias, motion | KF rate, motion | raw - start-up bias, rest | KF rate, rest | KF cost (us/sample, this machine) |")
         print("|---|---|---|---|---|---|")
@@ -210,15 +254,23 @@ def main(argv=None):
     duration = 300.0 if args.quick else 1200.0
     seeds = [0] if args.quick else [0, 1]
     sims = []
-    print(f"{duration / 60:.0f} min at {SIM_FS:g} Hz; |bias error| norm over 3 axes (deg/s), after the 2 s calibration.\n")
-    print("| scenario | seed | start-up only: RMS | KF: RMS | start-up only: last 5 min | KF: last 5 min | KF max | rate RMSE raw-startup / KF (deg/s) |")
-    print("|---|---|---|---|---|---|---|---|")
+    static_path = os.path.join(args.recordings, "mpu6050_static_449s.csv.gz")
+    arma_s, arma_desc = None, ""
+    if os.path.exists(static_path):
+        st = read_recording(static_path)
+        arma_s, arma_desc = arma_settings(st.gyro_dps, st.sample_rate_hz, settings)
+    print(f"{duration / 60:.0f} min at {SIM_FS:g} Hz; |bias error| norm over 3 axes (deg/s), after the 2 s calibration. "
+          "KF-ARMA: bias model from the ARMA(1, 1) of the real recording mpu6050_static_449s "
+          f"({arma_desc or 'not available'}).\n")
+    print("| scenario | seed | start-up only: RMS | KF: RMS | KF-ARMA: RMS | start-up only: last 5 min | KF: last 5 min | KF max | rate RMSE raw-startup / KF (deg/s) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for label, motion_s, rest_s in scenarios:
         for seed in seeds:
-            s = simulated_run(seed, duration, motion_s, rest_s, settings)
+            s = simulated_run(seed, duration, motion_s, rest_s, settings, arma_s)
             sims.append(s)
             last = s["t_s"] >= s["t_s"][-1] - 300
-            print(f"| {label} | {seed} | {rms(s['err_su']):.4f} | {rms(s['err_kf']):.4f} | {rms(s['err_su'][last]):.4f} | "
+            ea = "-" if s["err_arma"] is None else f"{rms(s['err_arma']):.4f}"
+            print(f"| {label} | {seed} | {rms(s['err_su']):.4f} | {rms(s['err_kf']):.4f} | {ea} | {rms(s['err_su'][last]):.4f} | "
                   f"{rms(s['err_kf'][last]):.4f} | {s['err_kf'].max():.4f} | {s['rate_su']:.3f} / {s['rate_kf']:.3f} |")
             if args.quick:
                 break
