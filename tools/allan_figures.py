@@ -13,7 +13,8 @@ For every ``recordings/mpu6050_*.csv.gz``:
 
 Then the before/after-filtering figure of paper 001 Fig. 4 on the longest static recording:
 the Allan deviation of the raw rate and of ``gyrofilter.GyroFilter`` output (20 Hz) on one
-plot, ``docs/figures/allan_before_after.png``.
+plot, ``docs/figures/allan_before_after.png`` (preset "paper"), and the same for every other
+preset (``allan_before_after_<preset>.png``).
 """
 import argparse
 import glob
@@ -94,34 +95,45 @@ def main(argv=None):
     print("\nMotion recordings, not characterised (the Allan deviation would measure the motion): "
           + ", ".join(os.path.basename(p) for p, _ in motion))
 
-    # paper 001 Fig. 4: raw vs filtered on the longest static recording
-    name, (rec, res) = max(results_by_file.items(), key=lambda kv: kv[1][0].duration_s)
+    # paper 001 Fig. 4: raw vs filtered on the longest static recording, for every preset
+    from gyrofilter.presets import PRESETS
+
+    name, (rec, _) = max(results_by_file.items(), key=lambda kv: kv[1][0].duration_s)
+    print(f"\n#### Before/after filtering: {name}; std after the calibration window\n")
+    print("| preset | axis | raw std (deg/s) | filtered std (deg/s) | ratio | raw ADEV at 1 s | filtered ADEV at 1 s | raw ADEV at 10 s | filtered ADEV at 10 s |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for preset in PRESETS:
+        fig = os.path.join(args.out, "allan_before_after.png" if preset == "paper" else f"allan_before_after_{preset}.png")
+        before_after(rec, name, preset, fig)
+        print(f"wrote {fig}", file=sys.stderr)
+    return 0
+
+
+def before_after(rec, name, preset, fig):
+    """Raw and GyroFilter(preset) Allan deviation on one plot; prints the table rows."""
     from gyrofilter import GyroFilter
 
-    filt = GyroFilter(sample_rate_hz=rec.sample_rate_hz)
+    filt = GyroFilter(sample_rate_hz=rec.sample_rate_hz, preset=preset)
     out = filt.filter(rec.gyro_dps)
     out_rate = rec.sample_rate_hz / filt.settings.block_len
+    cal = int(round(filt.settings.calibration_s * rec.sample_rate_hz))
     curves = []
-    print(f"\n#### Before/after filtering: {name}, GyroFilter preset 'paper' (output {out_rate:g} Hz); "
-          "std after the calibration window\n")
-    print("| axis | raw std (deg/s) | filtered std (deg/s) | ratio | raw ADEV at 1 s | filtered ADEV at 1 s | raw ADEV at 10 s | filtered ADEV at 10 s |")
-    print("|---|---|---|---|---|---|---|---|")
     for i, a in enumerate("xyz"):
         raw = rec.gyro_dps[:, i]
         t_r, d_r = overlapping_adev(raw, rec.sample_rate_hz)
         t_f, d_f = overlapping_adev(out[:, i], out_rate)
         curves.append((f"{a} raw ({rec.sample_rate_hz:g} Hz)", t_r, d_r, AXIS_COLOURS[a], "o-"))
         curves.append((f"{a} filtered ({out_rate:g} Hz)", t_f, d_f, AXIS_COLOURS[a], "--"))
-        at = lambda t, d, x: float(np.exp(np.interp(np.log(x), np.log(t), np.log(d))))  # noqa: E731
-        cal = int(round(filt.settings.calibration_s * rec.sample_rate_hz))
         s_raw, s_f = np.std(raw[cal:], ddof=1), np.std(out[:, i], ddof=1)
-        print(f"| {a} | {s_raw:.4f} | {s_f:.4f} | {s_raw / s_f:.1f}x | {at(t_r, d_r, 1.0):.2e} | {at(t_f, d_f, 1.0):.2e} | "
-              f"{at(t_r, d_r, 10.0):.2e} | {at(t_f, d_f, 10.0):.2e} |")
-    fig = os.path.join(args.out, "allan_before_after.png")
-    plot_before_after(fig, curves, title=f"{name}: Allan deviation before and after GyroFilter (paper 001 Fig. 4)")
-    print(f"wrote {fig}", file=sys.stderr)
-    return 0
+        print(f"| {preset} | {a} | {s_raw:.4f} | {s_f:.4f} | {s_raw / s_f:.1f}x | {_at(t_r, d_r, 1.0):.2e} | "
+              f"{_at(t_f, d_f, 1.0):.2e} | {_at(t_r, d_r, 10.0):.2e} | {_at(t_f, d_f, 10.0):.2e} |")
+    plot_before_after(fig, curves, title=f"{name}: Allan deviation before and after GyroFilter(preset='{preset}')"
+                      + (" (paper 001 Fig. 4)" if preset == "paper" else ""))
 
+
+def _at(tau, dev, t):
+    """Log-log interpolation of a deviation curve at t."""
+    return float(np.exp(np.interp(np.log(t), np.log(tau), np.log(dev))))
 
 if __name__ == "__main__":
     sys.exit(main())
