@@ -48,7 +48,7 @@ def main():
         streaming = best_of(stream)
         rows.append((engine, len(x) / batch, len(x) / streaming))
     print("bias_kf: 3-axis samples per second (best of 3, 2000 samples)")
-    print(f"  {"kernel":<38}{'run() batch':>14}{'update() stream':>18}")
+    print(f"  {'kernel':<38}{'run() batch':>14}{'update() stream':>18}")
     for name, b, s in rows:
         label = "scalar kernel (default)" if name == "numpy" else "filterpy KalmanFilter x3 (baseline)"
         print(f"  {label:<38}{b:14.0f}{s:18.0f}")
