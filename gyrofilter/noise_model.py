@@ -642,10 +642,14 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
         "deviation": "overlapping Allan deviation of the rate in deg/s (NIST SP 1065 eq. 11)",
         "coefficients": "weighted non-negative least squares of sigma^2 = 3Q^2/tau^2 + N^2/tau + "
                         "(2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2 over taus with >= 9 clusters",
-        "interval": f"{any_axis.confidence:.0%} two-sided: chi-square interval (NIST SP 1065, EDF of "
-                    "Table 5 for the fitted noise mixture) of the best-determining tau, attributed "
-                    "to the term; low/high bound the value",
-        "null": "not resolved by the data (fitted to zero, or interval reaches zero); see details.upper_bound",
+        "interval": f"{any_axis.confidence:.0%} two-sided: chi-square interval with edf = 2 c^2 / var(c^2), "
+                    "var from cov = G C G' of the linear fit (C: Allan-variance covariance from the NIST SP "
+                    "1065 Table 5 EDFs and the Allan transfer function); low/high bound the value",
+        "curve_interval": f"adev_low_dps/adev_high_dps: {any_axis.confidence:.0%} chi-square interval of each "
+                          "point (NIST SP 1065 eq. 41, EDF for the fitted noise mixture); paper000_relative_error: "
+                          "1/sqrt(2 (N/m - 1))",
+        "null": "not resolved by the data (fitted to zero, or within its uncertainty of zero; then dropped "
+                "from the fit); see details.<key>.upper_bound",
         "units": {JSON_KEY[t]: JSON_UNIT[t] for t in TERMS},
     }
     doc["axes"] = {}
