@@ -291,7 +291,16 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
     for i, a in enumerate(AXES):
         spec = dict(base["axes"][a])
         if any(ci == i for ci, _ in candidates):
-            spec["arw_dps_per_sqrt_hz"] = float(_noise_sigma(cleaned[i], fs, q or 0.0) / math.sqrt(fs))
+            sigma = _noise_sigma(cleaned[i], fs, q or 0.0)
+            colored = next((c for ci, c in candidates if ci == i and c.effect == "colored_noise"), None)
+            if colored is not None:
+                # the high-pass of _noise_sigma also removed the variance fraction
+                # c = (1 + rho) / ((1 - rho) W) of a correlated noise (detectors.lag1_from_highpassed)
+                rho = colored.params["lag1"]
+                w = det.colored_window(n, fs)
+                frac = min((1 + rho) / (max(1 - rho, 1e-3) * w), 0.9)
+                sigma *= math.sqrt((1 - 1.0 / w) / (1 - frac))
+            spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(fs))
             means = [c for ci, c in candidates if ci == i]
             spec["bias_dps"] = float(np.mean(cleaned[i]))
             for c in means:  # deterministic components were fitted mean-free
