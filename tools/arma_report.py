@@ -1,6 +1,7 @@
 """Paper 003's ARMA analysis on the real static MPU6050 recordings, and ARMA vs Allan model.
 
-    python tools/arma_report.py [--recordings recordings] [--json docs/arma_results.json] [--seeds 3]
+    python tools/arma_report.py [--recordings recordings] [--json OUT.json] [--seeds 3] [--figure docs/figures/arma_adev.png]
+    python tools/arma_report.py --from-json OUT.json      # tables and figure again, no refit
 
 For every static recording (recordings/mpu6050_static_*.csv.gz) and axis: the ADF statistic,
 normality verdicts (KS raw and with one LSB of dither, JB), the Pandit-Wu order, the chosen
@@ -34,8 +35,19 @@ from gyrofilter.simulate import simulate_dps
 def allan_model_adev(x, fs, lsb_per_dps, seeds, tau):
     """Mean ADEV of the Allan-fitted five-term model, simulated like the recording."""
     res = characterise_axis(x, fs)
-    f = res.fitted
-    val = lambda t: f[t].value or 0.0  # noqa: E731
+    terms = {t: res.fitted[t].value for t in ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")}
+    model = allan_model(terms, fs, lsb_per_dps)
+    curves = []
+    for s in seeds:
+        sim, _ = simulate_dps(model, len(x) / fs, seed=s)
+        sim = sim[: len(x), 0]
+        curves.append(overlapping_adev(sim - sim.mean(), fs, tau)[1])
+    return np.sqrt(np.mean(np.square(curves), axis=0)), terms, model
+
+
+def allan_model(terms, fs, lsb_per_dps):
+    """Simulator model (axis x) of the fitted Allan terms: N white, B flicker, K random walk, R ramp, LSB quantisation."""
+    val = lambda t: terms.get(t) or 0.0  # noqa: E731
     effects = []
     if val("bias_instability") > 0:
         effects.append({"effect": "bias_instability", "b_dps": val("bias_instability")})
@@ -48,22 +60,38 @@ def allan_model_adev(x, fs, lsb_per_dps, seeds, tau):
     if lsb_per_dps:
         model["gyro_unit"] = "lsb"
         model["lsb_per_dps"] = lsb_per_dps
-    curves = []
+    return model
+
+
+def noise_floor(r, seeds=(10, 11, 12)):
+    """Typical discrepancy of ONE simulated record of the Allan model from that model's mean curve:
+    what a perfect model would score against a single measured record of this length."""
+    tau = np.asarray(r["adev"]["tau_s"])
+    mean_curve = np.asarray(r["adev"]["allan_model"])
+    model = allan_model(r["allan_terms"], r["fs"], r.get("lsb_per_dps", 131.0))
+    d = []
     for s in seeds:
-        sim, _ = simulate_dps(model, len(x) / fs, seed=s)
-        sim = sim[: len(x), 0]
-        curves.append(overlapping_adev(sim - sim.mean(), fs, tau)[1])
-    terms = {t: f[t].value for t in ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")}
-    return np.sqrt(np.mean(np.square(curves), axis=0)), terms, model
+        sim, _ = simulate_dps(model, r["n"] / r["fs"], seed=s)
+        sim = sim[: r["n"], 0]
+        d.append(arma.adev_discrepancy(mean_curve, overlapping_adev(sim - sim.mean(), r["fs"], tau)[1]))
+    return float(np.mean(d))
 
 
-def dominant_root(fit, fs):
-    """The AR root nearest the unit circle: (modulus, frequency Hz)."""
-    if not fit.phi:
+def spectral_peak(report_fit, fs, n_freq=4096):
+    """Strongest narrow feature of the fitted ARMA spectrum |theta(e^-iw)|^2 / |phi(e^-iw)|^2:
+    (frequency Hz, peak / median spectral level in dB). Near-cancelling AR/MA root pairs, which
+    high-order fits are full of, give no peak here, unlike the raw AR roots."""
+    phi = np.asarray(report_fit["phi"], float)
+    theta = np.asarray(report_fit["theta"], float)
+    if not phi.size:
         return None
-    roots = np.roots(np.r_[1.0, -np.asarray(fit.phi)])
-    r = roots[np.argmax(np.abs(roots))]
-    return float(abs(r)), float(abs(np.angle(r)) / (2 * math.pi) * fs)
+    w = np.linspace(0, np.pi, n_freq)
+    z = np.exp(-1j * w)
+    num = np.abs(1 - sum(t * z ** (j + 1) for j, t in enumerate(theta))) ** 2 if theta.size else np.ones_like(w)
+    den = np.abs(1 - sum(c * z ** (i + 1) for i, c in enumerate(phi))) ** 2
+    psd = num / den
+    k = int(np.argmax(psd))
+    return float(w[k] / (2 * np.pi) * fs), float(10 * np.log10(psd[k] / np.median(psd)))
 
 
 def main(argv=None):
@@ -72,7 +100,17 @@ def main(argv=None):
     ap.add_argument("--json", default=None, help="write all numbers here")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--max-n", type=int, default=4)
+    ap.add_argument("--figure", default="docs/figures/arma_adev.png")
+    ap.add_argument("--from-json", default=None, help="re-print the tables and redraw the figure from a --json file")
     args = ap.parse_args(argv)
+    if args.from_json:
+        with open(args.from_json) as fh:
+            results = json.load(fh)
+        for r in results:
+            r.setdefault("noise_floor", noise_floor(r))
+        report(results, args.seeds)
+        plot(args.figure, results)
+        return 0
     seeds = list(range(args.seeds))
     paths = sorted(glob.glob(os.path.join(args.recordings, "mpu6050_static_*.csv.gz")))
     if not paths:
@@ -94,9 +132,9 @@ def main(argv=None):
             _, adev_11 = arma.arma_adev(rep.arma11, len(xs), fs, seeds=seeds, taus_s=tau)
             adev_allan, terms, _ = allan_model_adev(xs, fs, rec.lsb_per_dps, seeds, tau)
             results.append({
-                "recording": os.path.basename(p), "axis": ax, "n": len(x), "fs": fs,
+                "recording": os.path.basename(p), "axis": ax, "n": len(x), "fs": fs, "lsb_per_dps": rec.lsb_per_dps,
                 "report": rep.to_dict(),
-                "root": dominant_root(rep.chosen, fs),
+                "peak": spectral_peak(rep.chosen.to_dict(), fs),
                 "adev": {"tau_s": tau.tolist(), "measured": measured.tolist(), "arma_chosen": adev_chosen.tolist(),
                          "arma11": adev_11.tolist(), "allan_model": adev_allan.tolist()},
                 "discrepancy": {"arma_chosen": arma.adev_discrepancy(measured, adev_chosen),
@@ -105,6 +143,53 @@ def main(argv=None):
                 "allan_terms": terms,
             })
 
+    for r in results:
+        r["noise_floor"] = noise_floor(r)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(results, fh, indent=1, default=lambda o: None)
+        print(f"wrote {args.json}", file=sys.stderr)
+    report(results, len(seeds))
+    plot(args.figure, results)
+    return 0
+
+
+def plot(path, results):
+    """Measured ADEV vs the three simulated models, for the longest recording of each source."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [n for n in ("mpu6050_static_449s.csv.gz", "mpu6050_static_655s.csv.gz") if any(r["recording"] == n for r in results)]
+    if not names:
+        return
+    fig, axes = plt.subplots(len(names), 3, figsize=(13, 4 * len(names)), squeeze=False)
+    for row, name in enumerate(names):
+        for col, ax_name in enumerate("xyz"):
+            r = next(r for r in results if r["recording"] == name and r["axis"] == ax_name)
+            a = r["adev"]
+            d = r["discrepancy"]
+            ch = r["report"]["chosen"]
+            ax = axes[row][col]
+            ax.loglog(a["tau_s"], a["measured"], "k.-", lw=1.5, label="measured")
+            ax.loglog(a["tau_s"], a["arma_chosen"], "-", color="tab:blue", label=f"ARMA({ch['p']},{ch['q']}) chosen ({d['arma_chosen']:.3f})")
+            ax.loglog(a["tau_s"], a["arma11"], "--", color="tab:orange", label=f"ARMA(1,1) ({d['arma11']:.3f})")
+            ax.loglog(a["tau_s"], a["allan_model"], ":", color="tab:green", lw=2, label=f"Allan model ({d['allan_model']:.3f})")
+            ax.set_title(f"{name.replace('.csv.gz', '')} {ax_name}", fontsize=9)
+            ax.set_xlabel("tau (s)")
+            ax.set_ylabel("ADEV (deg/s)")
+            ax.grid(alpha=0.3, which="both")
+            ax.legend(fontsize=7)
+    fig.suptitle("Overlapping Allan deviation: measured vs simulated models (RMS log10 discrepancy in brackets)", fontsize=10)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    print(f"figure: {path}", file=sys.stderr)
+
+
+def report(results, n_seeds):
     print("### Paper 003's tests and Pandit-Wu order on the static MPU6050 recordings\n")
     print("| recording | axis | N | ADF (5 % crit. -2.86) | KS raw / dithered | JB | Pandit-Wu: adequate -> chosen | residuals white (Ljung-Box p) | ARMA(1,1) | bias model from ARMA(1,1) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -121,29 +206,27 @@ def main(argv=None):
             bm = f"tau {tau}, drive {b['bias_walk_dps_per_sqrt_s']:.2g} deg/s/sqrt(s)"
         else:
             bm = "none (theta > phi or phi < 0: white noise)"
-        root = f"; AR root {r['root'][0]:.3f} at {r['root'][1]:.1f} Hz" if r["root"] and ch["p"] >= 2 else ""
+        pk = r.get("peak") or spectral_peak(ch, r["fs"])
+        root = f"; spectrum peak {pk[1]:.1f} dB at {pk[0]:.1f} Hz" if pk and ch["p"] + ch["q"] > 2 else ""
         print(f"| {r['recording']} | {r['axis']} | {r['n']} | {d['stationarity']['adf_statistic']:.1f} | "
               f"{v(n['normal_ks'])} / {v(n['normal_ks_dithered']) if n['normal_ks_dithered'] is not None else '-'} | {v(n['normal_jb'])} | "
               f"ARMA{tuple(d['adequate_order'])} -> ARMA({ch['p']},{ch['q']}){root} | {'yes' if w['white'] else 'no'} ({w['ljung_box_p_value']:.2g}) | "
               f"phi {a11['phi'][0]:.4f}, theta {a11['theta'][0]:.4f} | {bm} |")
     print("\nPaper 003 (ADIS16405, z): ADF -110.18; KS and JB reject; ARMA(1,1) phi 1.0000, theta 0.9994.\n")
     print("### Which model reproduces the measured Allan deviation?\n")
-    print(f"RMS over tau of log10(model ADEV / measured ADEV), models simulated like the recording ({len(seeds)} seeds); lower is better.\n")
-    print("| recording | axis | chosen ARMA | ARMA(1,1) | Allan model (Q/N/B/K/R fit) | better |")
-    print("|---|---|---|---|---|---|")
+    print(f"RMS over tau of log10(model ADEV / measured ADEV), models simulated like the recording ({n_seeds} seeds); lower is better.\n")
+    print("| recording | axis | chosen ARMA | ARMA(1,1) | Allan model (Q/N/B/K/R fit) | better | floor: one record of a perfect model |")
+    print("|---|---|---|---|---|---|---|")
     wins = {"arma_chosen": 0, "arma11": 0, "allan_model": 0}
     for r in results:
         dd = r["discrepancy"]
         best = min(dd, key=dd.get)
         wins[best] += 1
         ch = r["report"]["chosen"]
-        print(f"| {r['recording']} | {r['axis']} | {dd['arma_chosen']:.4f} (ARMA({ch['p']},{ch['q']})) | {dd['arma11']:.4f} | {dd['allan_model']:.4f} | {best} |")
+        floor = r.get("noise_floor")
+        print(f"| {r['recording']} | {r['axis']} | {dd['arma_chosen']:.4f} (ARMA({ch['p']},{ch['q']})) | {dd['arma11']:.4f} | {dd['allan_model']:.4f} | {best} | "
+              + ("-" if floor is None else f"{floor:.4f}") + " |")
     print(f"\nbest per axis: {wins}")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(results, fh, indent=1, default=lambda o: None)
-        print(f"wrote {args.json}", file=sys.stderr)
-    return 0
 
 
 if __name__ == "__main__":
