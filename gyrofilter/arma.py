@@ -666,6 +666,9 @@ def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAM
     bias = bias_model_from_arma11(arma11, rate)
     if not bias.valid:
         notes.append(bias.note)
+    elif bias.tau_s < 10.0 / rate:
+        notes.append(f"the ARMA(1,1) correlation time ({bias.tau_s:.3g} s) is under 10 samples: it describes coloured "
+                     "(low-passed) sensor noise rather than a bias process; do not use it as a bias model")
     return AxisReport(axis, len(x_raw), float(sample_rate_hz), k, rate, mean, float(x_raw.std(ddof=1)), stat, norm,
                       fits, steps, adequate, chosen, arma11, bias, white, notes)
 
