@@ -135,7 +135,7 @@ class ArmaFit:
     rss: float
     n_residuals: int
     aic: float  # paper-003 per-sample form: ln(sigma_a^2) + 2 (p + q) / N
-    residuals: np.ndarray = field(repr=False, default=None)
+    residuals: np.ndarray = field(repr=False, default=None, compare=False)
 
     @property
     def n_params(self) -> int:
@@ -660,7 +660,7 @@ def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAM
     norm = normality_tests(series, alpha=alpha, quantum=quantum_dps if k == 1 else None)
     chosen, adequate, fits, steps = select_order(series, max_n=max_n, alpha=alpha)
     arma11 = next((f for f in fits if f.order == (1, 1)), None) or fit_arma(series, 1, 1)
-    if arma11 not in fits:
+    if not any(f is arma11 for f in fits):
         fits.append(arma11)
     white = whiteness(chosen.residuals, chosen.n_params, lags=lags, alpha=alpha)
     bias = bias_model_from_arma11(arma11, rate)
