@@ -261,7 +261,7 @@ def detect_outliers(x):
 def _local_level(power, first_bin, ratio=1.1, min_bins=16):
     """Local noise level of a periodogram: median over log-spaced bands (width ratio 1.1,
     at least 16 bins) / ln 2, interpolated in log-log. Bins below ``first_bin`` get the first
-    band's level. The band medians come from one lexsort (no Python loop over bands)."""
+    band's level. The band medians come from one sort (no Python loop over bands)."""
     n = power.size
     edges = [first_bin]
     while edges[-1] < n:
@@ -272,11 +272,16 @@ def _local_level(power, first_bin, ratio=1.1, min_bins=16):
     edges = np.asarray(edges)
     seg = power[first_bin:edges[-1]]
     band = np.repeat(np.arange(edges.size - 1), np.diff(edges))
-    order = np.lexsort((seg, band))
-    sorted_power = seg[order]
+    # one sort of "band index + power / scale" orders the bins by band, then by power
+    # (log power scaled into [0, 1), so that a strong line does not eat the precision)
+    logp = np.log(np.maximum(seg, 1e-300))
+    lo, span = float(logp.min()), float(np.ptp(logp)) * 1.000001 + 1e-12
+    key = np.sort(band + (logp - lo) / span)
     counts = np.diff(edges)
     starts = edges[:-1] - first_bin
-    med = 0.5 * (sorted_power[starts + (counts - 1) // 2] + sorted_power[starts + counts // 2])
+    lo_i, hi_i = starts + (counts - 1) // 2, starts + counts // 2
+    band_ids = np.arange(edges.size - 1)
+    med = 0.5 * (np.exp(lo + (key[lo_i] - band_ids) * span) + np.exp(lo + (key[hi_i] - band_ids) * span))
     centres = 0.5 * (edges[:-1] + edges[1:] - 1)
     levels = np.log(np.maximum(med / math.log(2.0), 1e-300))
     bins = np.arange(n, dtype=float)
@@ -296,18 +301,20 @@ def sinusoid_fit(x, fs, f_hz):
     return amp, phase, coef[0] * c + coef[1] * s
 
 
-def sinusoid_statistic(x, fs):
+def sinusoid_statistic(x, fs, return_spectrum=False):
     """Largest normalised periodogram ordinate (>= bin 8) and its frequency (Hz).
 
-    Returns ``(stat, f_hz, threshold)``; the series is detrended (LS line) first.
+    Returns ``(stat, f_hz, threshold)`` (plus the periodogram ``|rfft|^2 / N`` of the
+    detrended series with ``return_spectrum``); the series is detrended (LS line) first.
     """
     n = x.size
+    nothing = (0.0, float("nan"), float("inf"))
     if n < 64:
-        return 0.0, float("nan"), float("inf")
+        return nothing + (None,) if return_spectrum else nothing
     spec = np.abs(np.fft.rfft(detrend_line(x))) ** 2 / n
     first = 8
     if spec.size <= first + 32:
-        return 0.0, float("nan"), float("inf")
+        return nothing + (spec,) if return_spectrum else nothing
     level = _local_level(spec, first)
     ratio = spec / level
     ratio[:first] = 0.0
@@ -315,7 +322,8 @@ def sinusoid_statistic(x, fs):
     j = int(np.argmax(ratio))
     m = spec.size - first
     threshold = math.log(m / SINUSOID_ALPHA)
-    return float(ratio[j]), j * fs / n, threshold
+    out = (float(ratio[j]), j * fs / n, threshold)
+    return out + (spec,) if return_spectrum else out
 
 
 def detect_sinusoid(x, fs):

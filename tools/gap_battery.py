@@ -32,7 +32,7 @@ def run_synthetic(args):
     from gyrofilter.gap import analyse_gap
 
     rows = []
-    kinds = list(he.EFFECTS) + ["none"]
+    kinds = args.effects.split(",") if args.effects else list(he.EFFECTS) + ["none"]
     t_all = time.perf_counter()
     for k in range(args.cases):
         effect = kinds[k % len(kinds)]
@@ -123,6 +123,7 @@ def main(argv=None):
     p.add_argument("--duration", type=float, default=None, help="record length in s (default: 30-60 min drawn)")
     p.add_argument("--sims", type=int, default=None)
     p.add_argument("--real", nargs="*", default=None, help="hide effects in these real recordings instead")
+    p.add_argument("--effects", default=None, help="comma-separated effects to cycle through (e.g. none for a clean battery)")
     p.add_argument("-v", "--verbose", action="store_true")
     p.add_argument("--out", default=None, help="also write the summary table to this file")
     args = p.parse_args(argv)
