@@ -21,6 +21,9 @@ def add_arguments(parser):
     parser.add_argument("--max-samples", type=int, default=200_000,
                         help="longer series are block-averaged to at most this many samples (default 200000)")
     parser.add_argument("--alpha", type=float, default=0.05, help="significance level of every test (default 0.05)")
+    parser.add_argument("--criterion", choices=("f", "aic", "bic"), default="bic",
+                        help="what decides each order step: BIC (default; the F test and AIC over-select on simulated ARMA(1,1)), "
+                             "the F test (paper 003's rule) or AIC; all three are printed")
     parser.add_argument("--progress", action="store_true", help="report progress on stderr even when it is not a terminal")
 
 
@@ -49,7 +52,7 @@ def run(args):
         if progress:
             common.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
         rep = arma.analyze_axis(gyro[:, "xyz".index(name)], fs, axis=name, max_samples=args.max_samples,
-                                max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum)
+                                max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum, criterion=args.criterion)
         reports[name] = rep
         _print_axis(rep, args.alpha)
     print(f"\n{PAPER_003}")
@@ -63,6 +66,8 @@ def run(args):
 
 
 def _print_axis(rep, alpha):
+    from .. import arma
+
     pct = f"{alpha * 100:g} %"
     print(f"\naxis {rep.axis}: mean {rep.mean_dps:+.4f} deg/s, std {rep.std_dps:.4f} deg/s")
     for note in rep.notes:
@@ -77,11 +82,12 @@ def _print_axis(rep, alpha):
     if n.ks_dithered_statistic is not None:
         print(f"  KS with one LSB of uniform dither (removes the quantisation steps): D = {n.ks_dithered_statistic:.4f}, "
               f"p = {n.ks_dithered_p_value:.3g} -> {'normal' if n.normal_ks_dithered else 'rejected'}")
-    print("  Pandit-Wu order search (AIC = ln(sigma_a^2) + 2 r / N, sigma_a in deg/s):")
-    print("    model        AIC        sigma_a     RSS")
+    print(f"  Pandit-Wu order search, decided by {rep.criterion.upper()} (AIC = ln(sigma_a^2) + 2 r / N, BIC = ln(sigma_a^2) + r ln N / N, sigma_a in deg/s):")
+    print("    model        AIC         BIC         sigma_a     RSS")
     for f in rep.fits:
         mark = " <- chosen" if f is rep.chosen else (" <- adequate ARMA(2n, 2n-1)" if f.order == rep.adequate_order else "")
-        print(f"    ARMA({f.p},{f.q})  {f.aic:10.5f}  {f.sigma_a:.6f}  {f.rss:.6g}{mark}")
+        bic = arma.information_criterion(f, "bic")
+        print(f"    ARMA({f.p},{f.q})  {f.aic:10.5f}  {bic:10.5f}  {f.sigma_a:.6f}  {f.rss:.6g}{mark}")
     print(f"  F tests at {pct} (larger model significantly better?):")
     for st in rep.steps:
         print(f"    ARMA{st.smaller} vs ARMA{st.larger}: F = {st.f_statistic:.3f}, critical {st.f_critical:.3f} -> {'yes' if st.significant else 'no'}")
