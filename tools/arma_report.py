@@ -63,6 +63,21 @@ def allan_model(terms, fs, lsb_per_dps):
     return model
 
 
+def add_bic(r, recordings, max_n, seeds):
+    """The same Pandit-Wu walk decided by BIC (gyrofilter's default), its whiteness and ADEV."""
+    rec = read_recording(os.path.join(recordings, r["recording"]))
+    x = rec.gyro_dps[:, "xyz".index(r["axis"])]
+    series, _, rate, _ = arma.prepare_series(x, rec.sample_rate_hz)
+    chosen, adequate, _, _ = arma.select_order(series, max_n=max_n, criterion="bic")
+    w = arma.whiteness(chosen.residuals, chosen.n_params)
+    tau = np.asarray(r["adev"]["tau_s"])
+    _, dev = arma.arma_adev(chosen, len(series), rate, seeds=seeds, taus_s=tau)
+    r["bic"] = {"chosen": chosen.to_dict(), "adequate_order": list(adequate), "ljung_box_p_value": w.ljung_box_p_value,
+                "white": w.white, "peak": spectral_peak(chosen.to_dict(), rate)}
+    r["adev"]["arma_bic"] = dev.tolist()
+    r["discrepancy"]["arma_bic"] = arma.adev_discrepancy(np.asarray(r["adev"]["measured"]), dev)
+
+
 def noise_floor(r, seeds=(10, 11, 12)):
     """Typical discrepancy of ONE simulated record of the Allan model from that model's mean curve:
     what a perfect model would score against a single measured record of this length."""
@@ -108,6 +123,11 @@ def main(argv=None):
             results = json.load(fh)
         for r in results:
             r.setdefault("noise_floor", noise_floor(r))
+            if "bic" not in r:
+                add_bic(r, args.recordings, args.max_n, list(range(args.seeds)))
+        if args.json:
+            with open(args.from_json, "w") as fh:
+                json.dump(results, fh, indent=1, default=lambda o: None)
         report(results, args.seeds)
         plot(args.figure, results)
         return 0
@@ -125,7 +145,7 @@ def main(argv=None):
         for i, ax in enumerate("xyz"):
             print(f"{os.path.basename(p)} axis {ax} ...", file=sys.stderr, flush=True)
             x = g[:, i]
-            rep = arma.analyze_axis(x, fs, axis=ax, max_n=args.max_n, quantum_dps=q)
+            rep = arma.analyze_axis(x, fs, axis=ax, max_n=args.max_n, quantum_dps=q, criterion="f")
             xs = x - x.mean()
             tau, measured = overlapping_adev(xs, fs)
             _, adev_chosen = arma.arma_adev(rep.chosen, len(xs), fs, seeds=seeds, taus_s=tau)
@@ -145,6 +165,7 @@ def main(argv=None):
 
     for r in results:
         r["noise_floor"] = noise_floor(r)
+        add_bic(r, args.recordings, args.max_n, seeds)
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(results, fh, indent=1, default=lambda o: None)
@@ -173,7 +194,10 @@ def plot(path, results):
             ch = r["report"]["chosen"]
             ax = axes[row][col]
             ax.loglog(a["tau_s"], a["measured"], "k.-", lw=1.5, label="measured")
-            ax.loglog(a["tau_s"], a["arma_chosen"], "-", color="tab:blue", label=f"ARMA({ch['p']},{ch['q']}) chosen ({d['arma_chosen']:.3f})")
+            ax.loglog(a["tau_s"], a["arma_chosen"], "-", color="tab:blue", label=f"ARMA({ch['p']},{ch['q']}) by F ({d['arma_chosen']:.3f})")
+            if "arma_bic" in a:
+                cb = r["bic"]["chosen"]
+                ax.loglog(a["tau_s"], a["arma_bic"], "-.", color="tab:purple", label=f"ARMA({cb['p']},{cb['q']}) by BIC ({d['arma_bic']:.3f})")
             ax.loglog(a["tau_s"], a["arma11"], "--", color="tab:orange", label=f"ARMA(1,1) ({d['arma11']:.3f})")
             ax.loglog(a["tau_s"], a["allan_model"], ":", color="tab:green", lw=2, label=f"Allan model ({d['allan_model']:.3f})")
             ax.set_title(f"{name.replace('.csv.gz', '')} {ax_name}", fontsize=9)
@@ -189,10 +213,20 @@ def plot(path, results):
     print(f"figure: {path}", file=sys.stderr)
 
 
+def bic_text(r):
+    b = r.get("bic")
+    if not b:
+        return "- | -"
+    c = b["chosen"]
+    pk = b["peak"]
+    peak = f"; peak {pk[1]:.1f} dB at {pk[0]:.1f} Hz" if pk and c["p"] + c["q"] > 2 else ""
+    return f"ARMA({c['p']},{c['q']}){peak} | {'yes' if b['white'] else 'no'} ({b['ljung_box_p_value']:.2g})"
+
+
 def report(results, n_seeds):
     print("### Paper 003's tests and Pandit-Wu order on the static MPU6050 recordings\n")
-    print("| recording | axis | N | ADF (5 % crit. -2.86) | KS raw / dithered | JB | Pandit-Wu: adequate -> chosen | residuals white (Ljung-Box p) | ARMA(1,1) | bias model from ARMA(1,1) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| recording | axis | N | ADF (5 % crit. -2.86) | KS raw / dithered | JB | Pandit-Wu, F rule (paper): adequate -> chosen | white? (Ljung-Box p) | Pandit-Wu, BIC: chosen | white? (p) | ARMA(1,1) | bias model from ARMA(1,1) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     v = lambda ok: "normal" if ok else "rejected"  # noqa: E731
     for r in results:
         d = r["report"]
@@ -211,20 +245,23 @@ def report(results, n_seeds):
         print(f"| {r['recording']} | {r['axis']} | {r['n']} | {d['stationarity']['adf_statistic']:.1f} | "
               f"{v(n['normal_ks'])} / {v(n['normal_ks_dithered']) if n['normal_ks_dithered'] is not None else '-'} | {v(n['normal_jb'])} | "
               f"ARMA{tuple(d['adequate_order'])} -> ARMA({ch['p']},{ch['q']}){root} | {'yes' if w['white'] else 'no'} ({w['ljung_box_p_value']:.2g}) | "
+              f"{bic_text(r)} | "
               f"phi {a11['phi'][0]:.4f}, theta {a11['theta'][0]:.4f} | {bm} |")
     print("\nPaper 003 (ADIS16405, z): ADF -110.18; KS and JB reject; ARMA(1,1) phi 1.0000, theta 0.9994.\n")
     print("### Which model reproduces the measured Allan deviation?\n")
     print(f"RMS over tau of log10(model ADEV / measured ADEV), models simulated like the recording ({n_seeds} seeds); lower is better.\n")
-    print("| recording | axis | chosen ARMA | ARMA(1,1) | Allan model (Q/N/B/K/R fit) | better | floor: one record of a perfect model |")
-    print("|---|---|---|---|---|---|---|")
-    wins = {"arma_chosen": 0, "arma11": 0, "allan_model": 0}
+    print("| recording | axis | ARMA chosen by F (paper) | ARMA chosen by BIC | ARMA(1,1) | Allan model (Q/N/B/K/R fit) | better | floor: one record of a perfect model |")
+    print("|---|---|---|---|---|---|---|---|")
+    wins = {"arma_chosen": 0, "arma_bic": 0, "arma11": 0, "allan_model": 0}
     for r in results:
         dd = r["discrepancy"]
         best = min(dd, key=dd.get)
         wins[best] += 1
         ch = r["report"]["chosen"]
         floor = r.get("noise_floor")
-        print(f"| {r['recording']} | {r['axis']} | {dd['arma_chosen']:.4f} (ARMA({ch['p']},{ch['q']})) | {dd['arma11']:.4f} | {dd['allan_model']:.4f} | {best} | "
+        cb = r.get("bic", {}).get("chosen", {"p": "-", "q": "-"})
+        bic = f"{dd['arma_bic']:.4f} (ARMA({cb['p']},{cb['q']}))" if "arma_bic" in dd else "-"
+        print(f"| {r['recording']} | {r['axis']} | {dd['arma_chosen']:.4f} (ARMA({ch['p']},{ch['q']})) | {bic} | {dd['arma11']:.4f} | {dd['allan_model']:.4f} | {best} | "
               + ("-" if floor is None else f"{floor:.4f}") + " |")
     print(f"\nbest per axis: {wins}")
 
