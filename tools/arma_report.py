@@ -1,7 +1,8 @@
 """Paper 003's ARMA analysis on the real static MPU6050 recordings, and ARMA vs Allan model.
 
-    python tools/arma_report.py [--recordings recordings] [--json OUT.json] [--seeds 3] [--figure docs/figures/arma_adev.png]
+    python tools/arma_report.py [--recordings recordings] [--json OUT.json] [--seeds 12] [--figure docs/figures/arma_adev.png]
     python tools/arma_report.py --from-json OUT.json      # tables and figure again, no refit
+    python tools/arma_report.py --from-json OUT.json --recompute-adev --seeds 12   # model ADEVs over 12 seeds
 
 For every static recording (recordings/mpu6050_static_*.csv.gz) and axis: the ADF statistic,
 normality verdicts (KS raw and with one LSB of dither, JB), the Pandit-Wu order, the chosen
@@ -78,7 +79,35 @@ def add_bic(r, recordings, max_n, seeds):
     r["discrepancy"]["arma_bic"] = arma.adev_discrepancy(np.asarray(r["adev"]["measured"]), dev)
 
 
-def noise_floor(r, seeds=(10, 11, 12)):
+def _fit_from_dict(d):
+    return arma.ArmaFit(d["p"], d["q"], d["phi"], d["theta"], d["sigma_a"], d["rss"], d["n_residuals"], d["aic"])
+
+
+def recompute_adev(r, seeds):
+    """Every model's mean ADEV again over ``seeds`` (no refit), and the discrepancies."""
+    tau = np.asarray(r["adev"]["tau_s"])
+    measured = np.asarray(r["adev"]["measured"])
+    models = {"arma_chosen": r["report"]["chosen"], "arma11": r["report"]["arma11"]}
+    if "bic" in r:
+        models["arma_bic"] = r["bic"]["chosen"]
+    for key, d in models.items():
+        _, dev = arma.arma_adev(_fit_from_dict(d), r["n"], r["fs"], seeds=seeds, taus_s=tau)
+        r["adev"][key] = dev.tolist()
+        r["discrepancy"][key] = arma.adev_discrepancy(measured, dev)
+    model = allan_model(r["allan_terms"], r["fs"], r.get("lsb_per_dps"))
+    curves = []
+    for s in seeds:
+        sim, _ = simulate_dps(model, r["n"] / r["fs"], seed=s)
+        sim = sim[: r["n"], 0]
+        curves.append(overlapping_adev(sim - sim.mean(), r["fs"], tau)[1])
+    dev = np.sqrt(np.mean(np.square(curves), axis=0))
+    r["adev"]["allan_model"] = dev.tolist()
+    r["discrepancy"]["allan_model"] = arma.adev_discrepancy(measured, dev)
+    r.pop("noise_floor", None)
+    r["n_seeds"] = len(seeds)
+
+
+def noise_floor(r, seeds=(100, 101, 102)):
     """Typical discrepancy of ONE simulated record of the Allan model from that model's mean curve:
     what a perfect model would score against a single measured record of this length."""
     tau = np.asarray(r["adev"]["tau_s"])
@@ -113,22 +142,26 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--recordings", default="recordings")
     ap.add_argument("--json", default=None, help="write all numbers here")
-    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--seeds", type=int, default=12)
     ap.add_argument("--max-n", type=int, default=4)
     ap.add_argument("--figure", default="docs/figures/arma_adev.png")
     ap.add_argument("--from-json", default=None, help="re-print the tables and redraw the figure from a --json file")
+    ap.add_argument("--recompute-adev", action="store_true",
+                    help="with --from-json: simulate every model's ADEV again with --seeds seeds (no refit)")
     args = ap.parse_args(argv)
     if args.from_json:
         with open(args.from_json) as fh:
             results = json.load(fh)
         for r in results:
+            if args.recompute_adev:
+                recompute_adev(r, list(range(args.seeds)))
             r.setdefault("noise_floor", noise_floor(r))
             if "bic" not in r:
                 add_bic(r, args.recordings, args.max_n, list(range(args.seeds)))
         if args.json:
             with open(args.from_json, "w") as fh:
                 json.dump(results, fh, indent=1, default=lambda o: None)
-        report(results, args.seeds)
+        report(results, results[0].get("n_seeds", 3))
         plot(args.figure, results)
         return 0
     seeds = list(range(args.seeds))
