@@ -316,28 +316,53 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
         spec["effects"] = []
         ext_axes[a] = spec
 
-    # gain per finding: the axis extended by this finding alone
-    kept = []
+    # gain per finding: the axis extended by this finding alone (the contract's gain); a
+    # finding that shows no gain alone is still kept when the axis has other candidates and
+    # leaving it out of the model with all of them raises the discrepancy (leave-one-out)
     n_ext = max(6, m // 2)
-    for k, (i, c) in enumerate(candidates):
+
+    def axis_discrepancy(i, cands):
         a = AXES[i]
-        say(f"gain of {c.effect} on {a} ({k + 1}/{len(candidates)})")
         model = _copy_model(base)
         axis_spec = dict(ext_axes[a])
-        axis_spec["effects"] = [_effect_entry(c)]
+        axis_spec["effects"] = [_effect_entry(c) for c in cands]
         model["axes"][a] = axis_spec
-        if c.effect == "temperature":
+        if any(c.effect == "temperature" for c in cands):
             model["temperature"] = _temperature_table(rec)
+        sims_k = _sim_features(model, n, fs, seeds[:n_ext], [i], taus, bands)[i]
+        return discrepancy(departures(meas_feats[i], sims_k, n))
+
+    single = {}
+    for k, (i, c) in enumerate(candidates):
+        say(f"gain of {c.effect} on {AXES[i]} ({k + 1}/{len(candidates)})")
         try:
-            sims_k = _sim_features(model, n, fs, seeds[:n_ext], [i], taus, bands)[i]
-            after = discrepancy(departures(meas_feats[i], sims_k, n))
+            single[k] = axis_discrepancy(i, [c])
         except (ValueError, FloatingPointError) as exc:
-            report["notes"].append(f"{c.effect} on {a}: extended model could not run ({exc})")
+            report["notes"].append(f"{c.effect} on {AXES[i]}: extended model could not run ({exc})")
+    kept = []
+    all_d = {}
+    for k, (i, c) in enumerate(candidates):
+        if k not in single:
             continue
-        if not after < before[i]:
-            report["notes"].append(f"{c.effect} on {a} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
+        after = single[k]
+        if after < before[i]:
+            kept.append((i, c, after))
             continue
-        kept.append((i, c, after))
+        others = [c2 for k2, (i2, c2) in enumerate(candidates) if i2 == i and k2 != k and k2 in single]
+        if others:
+            try:
+                if i not in all_d:
+                    all_d[i] = axis_discrepancy(i, others + [c])
+                without = axis_discrepancy(i, others)
+            except (ValueError, FloatingPointError):
+                without = all_d[i] = float("inf")
+            if all_d[i] < without:
+                kept.append((i, c, after))
+                report["notes"].append(
+                    f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "
+                    f"axis's other findings D = {all_d[i]:.3g}, without it {without:.3g}")
+                continue
+        report["notes"].append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
 
     ext = _copy_model(base)
     for i, a in enumerate(AXES):

@@ -131,10 +131,20 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         t = np.arange(n) / fs
         step = max(1, n // 500)
         model["temperature"] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
-    model["axes"][axis]["effects"].append({"effect": effect, **params})
-    sim = simulate(model, n / fs, seed=seed)
-    add = sim.gyro_dps[:n]
-    gyro = rec.gyro_dps + add
+    gyro = rec.gyro_dps.copy()
+    if effect == "colored_noise":
+        # a property of the noise, not an additive term: low-pass the real noise of the axis
+        # with an AR(1) of that lag-1, keeping its variance: y_k = rho y_{k-1} + sqrt(1-rho^2) e_k
+        from scipy.signal import lfilter
+
+        i = AXES.index(axis)
+        rho = float(params["lag1"])
+        dev = gyro[:, i] - gyro[:, i].mean()
+        gyro[:, i] = gyro[:, i].mean() + lfilter([math.sqrt(1 - rho * rho)], [1.0, -rho], dev)
+    else:
+        model["axes"][axis]["effects"].append({"effect": effect, **params})
+        sim = simulate(model, n / fs, seed=seed)
+        gyro = gyro + sim.gyro_dps[:n]
     header = {k: v for k, v in rec.header.items() if k not in ("gyro_unit", "lsb_per_dps")}
     return Recording.from_dps(gyro, fs, temp_c=temp, header=header)
 
