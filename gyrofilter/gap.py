@@ -204,9 +204,24 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
     ``runtime_s``). ``progress(text)`` is called with short status lines."""
     import warnings
 
+    from .errors import GyroFilterError
+
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        return _analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=recording_name)
+        try:
+            return _analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=recording_name)
+        except (GyroFilterError, MemoryError, KeyboardInterrupt):
+            raise
+        except Exception as exc:  # a statistic that cannot run is not the user's error: no findings
+            g = np.asarray(rec.gyro_dps, dtype=float)
+            base = baseline_model(rec, g) if len(g) >= 2 else {}
+            name = recording_name if recording_name is not None else (rec.path or "")
+            return {"recording": name, "sample_rate_hz": float(rec.sample_rate_hz),
+                    "duration_s": len(g) / float(rec.sample_rate_hz),
+                    "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
+                                 "axes": {a: dict(base.get("axes", {}).get(a, {})) for a in AXES}, "model": base},
+                    "findings": [], "extended_model": base,
+                    "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
 
 
 #: block-mean excursion (deg/s) beyond which a recording is called not static

@@ -215,3 +215,15 @@ def test_battery_rates(scale, duration):
     assert false_clean <= max(1, 0.05 * n_clean)
     if scale == 1.0:
         assert named_ok >= 0.9 * n_eff
+
+
+def test_a_statistic_that_cannot_run_gives_no_findings_not_a_crash(monkeypatch):
+    from gyrofilter import gap
+
+    rec = Recording.from_dps(np.random.default_rng(1).normal(0, 0.1, (5000, 3)), 100.0)
+    monkeypatch.setattr(gap.det, "detect_slow", lambda *a, **k: (_ for _ in ()).throw(ValueError("boom")))
+    report = gap.analyse_gap(rec, n_sims=3)
+    assert report["findings"] == [] and any("boom" in n for n in report["notes"])
+    monkeypatch.setattr(gap, "features", lambda *a, **k: 1 / 0)
+    report = gap.analyse_gap(rec, n_sims=3)
+    assert report["findings"] == [] and any("ZeroDivisionError" in n for n in report["notes"])

@@ -147,6 +147,39 @@ by the finding, re-simulated, and the finding is kept only if the discrepancy dr
   exceeds a fifth of the record is reported as a random walk. See `gyrofilter/detectors.py`.
 - A recording shorter than about 5 minutes cannot separate drift, random walk and bias
   instability from white noise beyond tau of a few tens of seconds; the report says so.
+- The analysis models a still gyro. It never crashes on odd input: a constant axis, a
+  recording too short for any statistic, or a moving sensor gives notes (and `findings: []`
+  where nothing can be said); bad input is one line on stderr and exit 2.
+
+Example (`--report` adds a Markdown report with the Allan-deviation, spectrum, temperature and
+time figures, each finding with its evidence sentence):
+
+```
+gyrofilter gap recordings/mpu6050_static_655s.csv.gz --json gap.json --report gap_report/
+```
+
+**Tests that hide an effect.** `tests/hidden_effects.py` draws per case an effect of the table
+(or none), an axis and parameters over realistic MPU6050 ranges at a seed, on an MPU6050-like
+baseline (131 LSB per deg/s, white noise 0.005-0.015 deg/s/sqrt(Hz), biases within +-5 deg/s,
+100 Hz, 30-60 min, a temperature column); `gap` must name the effect on the right axis with its
+parameters within these tolerances, and find nothing on clean cases:
+
+| effect | tolerance |
+|---|---|
+| bias_instability | b_dps +-50 % |
+| rate_random_walk | k_dps_per_sqrt_s +-50 % |
+| rate_ramp | r_dps_per_s +-30 % |
+| gauss_markov | sigma_dps +-50 %, tau_s within a factor 2.5 |
+| sinusoid | frequency_hz +-1 %, amplitude_dps +-25 % |
+| temperature | coefficient_dps_per_c +-30 % |
+| bias_step | time_s +-max(5 s, 2 % of the record), size_dps +-35 % |
+| warmup | amplitude_dps +-35 %, tau_s +-50 % |
+| outliers | rate within a factor 1.6, magnitude_dps +-35 % |
+| colored_noise | lag1 +-0.1 |
+
+`pytest tests/test_gap.py` runs one 10-minute case per effect, clean cases, effects hidden in
+the real 449 s MPU6050 recording, the JSON contract and bad input (about 30 s);
+`pytest -m slow tests/test_gap.py` and `tools/gap_battery.py` run the batteries below.
 """
 
 _TEXT_REAL = """
