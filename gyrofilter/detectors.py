@@ -116,6 +116,24 @@ def robust_sigma(x):
     return float(np.std(x))
 
 
+def golden_max(func, a, b, iterations):
+    """Golden-section search for the maximum of a unimodal ``func`` on ``[a, b]``; returns
+    the midpoint of the final bracket (Kiefer 1953)."""
+    g = (math.sqrt(5) - 1) / 2
+    c1, c2 = b - g * (b - a), a + g * (b - a)
+    f1, f2 = func(c1), func(c2)
+    for _ in range(iterations):
+        if f1 > f2:
+            b, c2, f2 = c2, c1, f1
+            c1 = b - g * (b - a)
+            f1 = func(c1)
+        else:
+            a, c1, f1 = c1, c2, f2
+            c2 = a + g * (b - a)
+            f2 = func(c2)
+    return 0.5 * (a + b)
+
+
 def detrend_line(x):
     """``x`` minus its least-squares line (closed form, O(N))."""
     n = x.size
@@ -335,8 +353,6 @@ def detect_sinusoid(x, fs):
     df = fs / n
     # refine: golden-section search of the LS amplitude within +-1 bin
     lo, hi = max(f0 - df, df), min(f0 + df, fs / 2)
-    g = (math.sqrt(5) - 1) / 2
-    a, b = lo, hi
     xc = x - x.mean()
     # amplitude of a sinusoid at f via the DFT sum (fast, no lstsq)
     tt = np.arange(n) / fs
@@ -344,18 +360,7 @@ def detect_sinusoid(x, fs):
     def amp(f):
         return abs(np.dot(xc, np.exp(-2j * math.pi * f * tt)))
 
-    c1, c2 = b - g * (b - a), a + g * (b - a)
-    f1, f2 = amp(c1), amp(c2)
-    for _ in range(30):
-        if f1 > f2:
-            b, c2, f2 = c2, c1, f1
-            c1 = b - g * (b - a)
-            f1 = amp(c1)
-        else:
-            a, c1, f1 = c1, c2, f2
-            c2 = a + g * (b - a)
-            f2 = amp(c2)
-    f_hz = 0.5 * (a + b)
+    f_hz = golden_max(amp, lo, hi, 30)
     amplitude, phase, fit = sinusoid_fit(x, fs, f_hz)
     sigma = robust_sigma(np.diff(x)) / math.sqrt(2)
     return Candidate(
@@ -673,22 +678,9 @@ def _deterministic_shapes(y, delta_s, temp_blocks=None):
             if best is None or d > best[0]:
                 best = (d, a, tau, gc)
         # refine tau (golden search in log tau around the best grid point)
-        lo, hi = math.log(best[2] / 1.3), math.log(best[2] * 1.3)
-        gr = (math.sqrt(5) - 1) / 2
-        f = lambda lt: single(np.exp(-t / math.exp(lt)))[0]
-        a_, b_ = lo, hi
-        c1, c2 = b_ - gr * (b_ - a_), a_ + gr * (b_ - a_)
-        f1, f2 = f(c1), f(c2)
-        for _ in range(20):
-            if f1 > f2:
-                b_, c2, f2 = c2, c1, f1
-                c1 = b_ - gr * (b_ - a_)
-                f1 = f(c1)
-            else:
-                a_, c1, f1 = c1, c2, f2
-                c2 = a_ + gr * (b_ - a_)
-                f2 = f(c2)
-        tau = math.exp(0.5 * (a_ + b_))
+        log_tau = golden_max(lambda lt: single(np.exp(-t / math.exp(lt)))[0],
+                             math.log(best[2] / 1.3), math.log(best[2] * 1.3), 20)
+        tau = math.exp(log_tau)
         d, a, gc = single(np.exp(-t / tau))
         if d < best[0]:
             d, a, tau, gc = best

@@ -36,47 +36,42 @@ def _band_centres(edges):
     return np.sqrt(np.maximum(e[:-1], 1e-12) * e[1:])
 
 
-def plot_adev(dep, axis, path):
-    plt = _plt()
-    tau = np.asarray(dep["adev_tau_s"])
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    m, s = np.asarray(dep["adev_sim_mean_log"]), np.asarray(dep["adev_sim_sd_log"])
-    ax.fill_between(tau, np.exp(m - 2 * s), np.exp(m + 2 * s), color="0.8", label="baseline simulations (mean +- 2 sd)")
-    ax.loglog(tau, np.exp(m), color="0.5", lw=1)
-    if "extended_adev_sim_mean_log" in dep:
-        me, se = np.asarray(dep["extended_adev_sim_mean_log"]), np.asarray(dep["extended_adev_sim_sd_log"])
-        ax.fill_between(tau, np.exp(me - 2 * se), np.exp(me + 2 * se), color="tab:green", alpha=0.3,
-                        label="extended model (mean +- 2 sd)")
-    ax.loglog(tau, np.exp(dep["adev_meas_log"]), "k.-", lw=1.2, label="measurement")
-    ax.set_xlabel("tau (s)")
-    ax.set_ylabel("Allan deviation (deg/s)")
-    ax.set_title(f"axis {axis}: Allan deviation")
+def _finish(plt, fig, ax, path, xlabel, ylabel, title):
+    """Labels, grid, legend; save as PNG and close."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def _plot_spread(x, dep, key, axis, path, *, xlabel, ylabel, title):
+    """Measurement, baseline simulations' spread and extended model's spread (mean +- 2 sd
+    of the log feature ``key``: 'adev' or 'band')."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    m, s = np.asarray(dep[f"{key}_sim_mean_log"]), np.asarray(dep[f"{key}_sim_sd_log"])
+    ax.fill_between(x, np.exp(m - 2 * s), np.exp(m + 2 * s), color="0.8", label="baseline simulations (mean +- 2 sd)")
+    ax.loglog(x, np.exp(m), color="0.5", lw=1)
+    if f"extended_{key}_sim_mean_log" in dep:
+        me, se = np.asarray(dep[f"extended_{key}_sim_mean_log"]), np.asarray(dep[f"extended_{key}_sim_sd_log"])
+        ax.fill_between(x, np.exp(me - 2 * se), np.exp(me + 2 * se), color="tab:green", alpha=0.3,
+                        label="extended model (mean +- 2 sd)")
+    ax.loglog(x, np.exp(dep[f"{key}_meas_log"]), "k.-", lw=1.2, label="measurement")
+    _finish(plt, fig, ax, path, xlabel, ylabel, f"axis {axis}: {title}")
+
+
+def plot_adev(dep, axis, path):
+    _plot_spread(np.asarray(dep["adev_tau_s"]), dep, "adev", axis, path, xlabel="tau (s)",
+                 ylabel="Allan deviation (deg/s)", title="Allan deviation")
 
 
 def plot_spectrum(dep, axis, path):
-    plt = _plt()
-    f = _band_centres(dep["band_edges_hz"])
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    m, s = np.asarray(dep["band_sim_mean_log"]), np.asarray(dep["band_sim_sd_log"])
-    ax.fill_between(f, np.exp(m - 2 * s), np.exp(m + 2 * s), color="0.8", label="baseline simulations (mean +- 2 sd)")
-    if "extended_band_sim_mean_log" in dep:
-        me, se = np.asarray(dep["extended_band_sim_mean_log"]), np.asarray(dep["extended_band_sim_sd_log"])
-        ax.fill_between(f, np.exp(me - 2 * se), np.exp(me + 2 * se), color="tab:green", alpha=0.3,
-                        label="extended model (mean +- 2 sd)")
-    ax.loglog(f, np.exp(dep["band_meas_log"]), "k.-", lw=1.2, label="measurement")
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("mean periodogram in band ((deg/s)^2 per bin)")
-    ax.set_title(f"axis {axis}: spectrum (log-spaced bands)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _plot_spread(_band_centres(dep["band_edges_hz"]), dep, "band", axis, path, xlabel="frequency (Hz)",
+                 ylabel="mean periodogram in band ((deg/s)^2 per bin)", title="spectrum (log-spaced bands)")
 
 
 def _blocks(v, n_blocks=600):
@@ -95,14 +90,8 @@ def plot_temperature(x, temp, axis, coef, path):
     if coef is not None:
         tt = np.linspace(tb.min(), tb.max(), 10)
         ax.plot(tt, coef * (tt - np.mean(temp)), "r-", label=f"fit: {coef:+.3g} deg/s per deg C")
-    ax.set_xlabel("sensor temperature (deg C)")
-    ax.set_ylabel("rate minus mean (deg/s)")
-    ax.set_title(f"axis {axis}: rate against temperature")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, ax, path, "sensor temperature (deg C)", "rate minus mean (deg/s)",
+            f"axis {axis}: rate against temperature")
 
 
 def plot_time(x, fs, axis, findings, path):
@@ -124,14 +113,7 @@ def plot_time(x, fs, axis, findings, path):
     if np.ptp(shape) > 0:
         shape += np.mean(y) - np.mean(shape)
         ax.plot(t, shape, "r-", lw=1.5, label="found: " + ", ".join(f["effect"] for f in findings))
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("rate (deg/s)")
-    ax.set_title(f"axis {axis}: rate in time")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, ax, path, "time (s)", "rate (deg/s)", f"axis {axis}: rate in time")
 
 
 def _fmt(v):
