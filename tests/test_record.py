@@ -161,3 +161,49 @@ def test_record_from_the_mpu6050_register_model(tmp_path, monkeypatch, capsys):
     np.testing.assert_allclose(rec.t_s - rec.t_s[0], np.arange(1000) / 200.0, atol=1e-9)
     np.testing.assert_allclose(rec.temp_c, 31.0, atol=1 / 340)
     assert "retries 2" in capsys.readouterr().err
+
+
+class _FailingSource:
+    """Delivers 3 reads of 10 rows and a gap note, then fails like an unplugged I2C device."""
+
+    header = {"sample_rate_hz": "100", "gyro_unit": "dps", "sensor": "test"}
+    columns = ["t", "gx", "gy", "gz"]
+
+    def __init__(self):
+        self.reads = 0
+        self.stats = {"samples": 0, "lost_samples": 0, "retries": 4}
+        self.closed = False
+
+    def read(self):
+        from gyrofilter.errors import DeviceError
+
+        if self.reads == 3:
+            raise DeviceError("MPU6050 at /dev/i2c-1 0x68: read failed after 5 retries (errno 121)")
+        k = np.arange(10 * self.reads, 10 * self.reads + 10)
+        self.reads += 1
+        self.stats["samples"] += 10
+        return np.column_stack([k / 100.0, k, -k, k * 0.5])
+
+    def pop_notes(self):
+        return ["gap: 0 samples lost (test note)"] if self.reads == 2 else []
+
+    def close(self):
+        self.closed = True
+
+
+def test_record_keeps_everything_when_the_device_fails(tmp_path, monkeypatch, capsys):
+    import gyrofilter.cli.record as record
+    from gyrofilter.cli import main
+
+    src = _FailingSource()
+    monkeypatch.setattr(record, "open_source", lambda spec, **kw: src)
+    out = tmp_path / "fail.csv"
+    assert main(["record", "--source", "mpu6050", "--out", str(out)]) == 1
+    rec = read_recording(out)
+    assert rec.warnings == [] and src.closed
+    np.testing.assert_array_equal(rec.columns["gx"], np.arange(30))
+    texts = [t for _, t in rec.notes]
+    assert texts[0] == "gap: 0 samples lost (test note)"
+    assert texts[-1].startswith("end: stopped: device error: MPU6050 at /dev/i2c-1 0x68: read failed")
+    err = capsys.readouterr().err
+    assert "wrote 30 samples (0.30 s at 100 Hz" in err and "retries 4" in err
