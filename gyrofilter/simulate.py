@@ -109,12 +109,20 @@ def _err(where, text):
 
 
 def _number(value, where, kind="any"):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        _err(where, f"expected {_KINDS[kind][1]}, got {json.dumps(value)}")
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        _err(where, f"expected {_KINDS[kind][1]}, got {_show(value)}")
     value = float(value)
     if not math.isfinite(value) or not _KINDS[kind][0](value):
         _err(where, f"expected {_KINDS[kind][1]}, got {value!r}")
     return value
+
+
+def _show(value):
+    """JSON text of a bad value for an error message (repr when it is not JSON)."""
+    try:
+        return json.dumps(value)
+    except (TypeError, ValueError):
+        return repr(value)
 
 
 def _is_ignored(key):
@@ -144,7 +152,7 @@ def validate_model(model, *, sample_rate_hz=None):
     out["sample_rate_hz"] = _number(rate, "sample_rate_hz", "pos")
     unit = model.get("gyro_unit", "dps")
     if unit not in GYRO_UNITS:
-        _err("gyro_unit", f"expected one of {', '.join(GYRO_UNITS)}, got {json.dumps(unit)}")
+        _err("gyro_unit", f"expected one of {', '.join(GYRO_UNITS)}, got {_show(unit)}")
     out["gyro_unit"] = unit
     lsb = model.get("lsb_per_dps")
     if lsb is None and unit == "lsb":
@@ -156,7 +164,7 @@ def validate_model(model, *, sample_rate_hz=None):
 
     axes = model.get("axes", {})
     if not isinstance(axes, dict):
-        _err("axes", f"expected an object with keys x, y, z, got {json.dumps(axes)}")
+        _err("axes", f"expected an object with keys x, y, z, got {_show(axes)}")
     for name in axes:
         if name not in AXES and not _is_ignored(name):
             _err(f"axes.{name}", "unknown axis (expected x, y or z)")
@@ -169,7 +177,7 @@ def validate_model(model, *, sample_rate_hz=None):
 def _validate_temperature(spec):
     where = "temperature"
     if not isinstance(spec, dict):
-        _err(where, f"expected an object, got {json.dumps(spec)}")
+        _err(where, f"expected an object, got {_show(spec)}")
     out = {}
     if "t_s" in spec or "temp_c" in spec:
         allowed = {"t_s", "temp_c", "noise_c", "resolution_c"}
@@ -204,7 +212,7 @@ def _validate_temperature(spec):
 
 def _validate_axis(spec, where, model, warnings):
     if not isinstance(spec, dict):
-        _err(where, f"expected an object with bias_dps, arw_dps_per_sqrt_hz, effects; got {json.dumps(spec)}")
+        _err(where, f"expected an object with bias_dps, arw_dps_per_sqrt_hz, effects; got {_show(spec)}")
     for key in spec:
         if key not in _AXIS_KEYS and not _is_ignored(key):
             _err(f"{where}.{key}", f"unknown key (expected {', '.join(sorted(_AXIS_KEYS))})")
@@ -213,7 +221,7 @@ def _validate_axis(spec, where, model, warnings):
            "effects": []}
     effects = spec.get("effects", [])
     if not isinstance(effects, list):
-        _err(f"{where}.effects", f"expected a list of effect objects, got {json.dumps(effects)}")
+        _err(f"{where}.effects", f"expected a list of effect objects, got {_show(effects)}")
     for i, eff in enumerate(effects):
         out["effects"].append(_validate_effect(eff, f"{where}.effects[{i}]", model, warnings))
     if sum(e["effect"] == "colored_noise" for e in out["effects"]) > 1:
@@ -223,10 +231,10 @@ def _validate_axis(spec, where, model, warnings):
 
 def _validate_effect(eff, where, model, warnings):
     if not isinstance(eff, dict) or "effect" not in eff:
-        _err(where, f"expected an object with an 'effect' name, got {json.dumps(eff)}")
+        _err(where, f"expected an object with an 'effect' name, got {_show(eff)}")
     name = eff["effect"]
     if name not in EFFECTS:
-        _err(f"{where}.effect", f"unknown effect {json.dumps(name)} (expected one of {', '.join(EFFECTS)})")
+        _err(f"{where}.effect", f"unknown effect {_show(name)} (expected one of {', '.join(EFFECTS)})")
     required, optional = EFFECTS[name]
     label = f"{where} ({name})"
     out = {"effect": name}
@@ -239,7 +247,7 @@ def _validate_effect(eff, where, model, warnings):
         if kind.startswith("choice:"):
             choices = kind.split(":", 1)[1].split(",")
             if value not in choices:
-                _err(f"{label}.{key}", f"expected one of {', '.join(choices)}, got {json.dumps(value)}")
+                _err(f"{label}.{key}", f"expected one of {', '.join(choices)}, got {_show(value)}")
             out[key] = value
         else:
             out[key] = None if value is None else _number(value, f"{label}.{key}", kind)

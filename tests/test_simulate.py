@@ -384,3 +384,12 @@ def test_temperature_coefficient_drives_the_bias():
 def test_without_temperature_profile_there_is_no_temp_column():
     assert simulate(model(arw=0.01), 1.0, seed=0).temp_c is None
     assert list(next(simulate_chunks(model(), 1.0, seed=0))[2:]) == [None]
+
+
+def test_numpy_scalars_are_accepted_as_parameters():
+    m = model([{"effect": "gauss_markov", "sigma_dps": np.float32(0.1), "tau_s": np.int64(2)}], bias=np.float64(0.5))
+    m["sample_rate_hz"] = np.int64(50)
+    spec, _ = validate_model(m)
+    assert spec["sample_rate_hz"] == 50.0 and spec["axes"]["x"]["effects"][0]["tau_s"] == 2.0
+    with pytest.raises(SettingsError, match=r"sigma_dps: expected a number >= 0, got array"):
+        validate_model(model([{"effect": "gauss_markov", "sigma_dps": np.array([1.0]), "tau_s": 1}]))
