@@ -131,15 +131,16 @@ def main(argv=None):
     import io
 
     buf = io.StringIO()
+    out = sys.stdout  # whatever stdout is now (a caller may have redirected it)
 
     class Tee(io.TextIOBase):
         def write(self, text):
-            sys.__stdout__.write(text)
+            out.write(text)
             buf.write(text)
             return len(text)
 
         def flush(self):
-            sys.__stdout__.flush()
+            out.flush()
 
     with contextlib.redirect_stdout(Tee()):
         if args.real:

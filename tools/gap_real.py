@@ -120,7 +120,7 @@ def main(argv=None):
             with open(bench, encoding="utf-8") as bf:
                 fh.write("\n### Speed\n\nCommand: `python tools/bench_gap.py` (wall clock on the shared "
                          "2-core development machine; load average in the last column)\n\n```\n"
-                         + bf.read().strip() + "\n```\n")
+                         + bf.read().rstrip() + "\n```\n")
     print(f"wrote {out}")
 
 
@@ -189,7 +189,8 @@ numbers):
 - **Spectral lines are the main miss.** The sensor-fusion board (`mpu6050_static_64s_set1`,
   `_123s`, `_655s`, the same MPU6050 logged by a host at about 99.3 Hz) carries a line near
   31.4 Hz on z in all three recordings (and lines near 20 Hz on x and y in the 64 s one); the
-  ImuCalibration board (`_100s`, `_449s`, 100 Hz, DLPF 260 Hz) has one near 38 Hz on y in both.
+  ImuCalibration board (`_100s`, `_449s`, 100 Hz, DLPF 260 Hz) has one near 38 Hz on y in both
+  (and a weak one near 31 Hz on z of the 449 s recording).
   A constant-bias-plus-white-noise model cannot produce them; adding the sinusoid explains
   the 64 s recording almost completely (D 43 -> 1.4 on z). Whether they are vibration of the
   table, an electrical disturbance or an alias of the host's bursty sampling the data cannot
@@ -199,9 +200,12 @@ numbers):
   sinusoid and an AR(1) colored noise halves the discrepancy (87 -> 44 on z of the 655 s
   recording) but does not remove it: the simulator's colored noise puts its power at the
   Nyquist frequency, not in a band at 31 Hz. This is a real limit of the effect table.
-- **Slow bias effects need long records.** Only the 655 s recording resolves one: a flicker
+- **Slow bias effects need long records.** Only the 655 s recording resolves them: a flicker
   (bias-instability) floor on x, B = 0.0052 deg/s (Allan floor 0.0035 deg/s near tau = 10-20 s),
-  which takes that axis from D = 5.3 to 1.5. On y of the 449 s recording a small step
+  which takes that axis from D = 5.2 to 1.5, and a slow drift on y (1.4e-5 deg/s per s, about
+  0.009 deg/s over the record, a small gain: D 0.80 -> 0.74); the temperature column varies by
+  less than half a degree in 0.09 deg C steps, too little to tell a temperature coefficient
+  from a ramp. On y of the 449 s recording a small step
   (-0.009 deg/s) is kept with a modest gain; in 7.5 minutes a step that small cannot be told
   reliably from a slow wander. The 64-123 s recordings are too short to tell drift, random
   walk or bias instability from white noise at all (Allan deviation only up to tau ~ 7-14 s);
