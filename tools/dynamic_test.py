@@ -30,7 +30,6 @@ FIGURE_NOISE = "mpu6050_static_449s"
 FILTERS = [
     ("paper001 (faithful)", E.gyrofilter_run("paper")),
     ("recommended preset", E.gyrofilter_run("recommended")),
-    ("recommended preset", E.gyrofilter_run("recommended")),
 ]
 
 
