@@ -149,6 +149,7 @@ def test_pareto_front_and_dominance_rules():
 
 
 def test_evaluate_command_writes_table_json_and_figure(tmp_path, capsys):
+    pytest.importorskip("matplotlib")  # the command always draws the Pareto figure
     from gyrofilter.cli import main
 
     rng = np.random.default_rng(6)
