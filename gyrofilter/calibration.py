@@ -40,12 +40,17 @@ AXES = ("x", "y", "z")
 
 @dataclass(frozen=True)
 class Calibration:
-    """Result of a start-up calibration: bias and white-noise level per axis (deg/s)."""
+    """Result of a start-up calibration: bias and white-noise level per axis (deg/s).
+
+    ``temp_c`` is the mean temperature of the window (deg C) when temperatures were given: the
+    reference T0 of temperature compensation (gyrofilter.tempcomp), None otherwise.
+    """
 
     bias_dps: tuple
     noise_std_dps: tuple
     samples: int
     sample_rate_hz: float
+    temp_c: float | None = None
 
     def to_json(self) -> str:
         return json.dumps(
@@ -55,6 +60,7 @@ class Calibration:
                 "noise_std_dps": list(self.noise_std_dps),
                 "samples": self.samples,
                 "sample_rate_hz": self.sample_rate_hz,
+                **({} if self.temp_c is None else {"temp_c": self.temp_c}),
                 "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
             },
             indent=2,
@@ -74,12 +80,15 @@ class Calibration:
         try:
             bias = tuple(float(v) for v in data["bias_dps"])
             noise = tuple(float(v) for v in data["noise_std_dps"])
-            cal = cls(bias, noise, int(data["samples"]), float(data["sample_rate_hz"]))
+            temp = None if data.get("temp_c") is None else float(data["temp_c"])
+            cal = cls(bias, noise, int(data["samples"]), float(data["sample_rate_hz"]), temp)
         except (KeyError, TypeError, ValueError) as exc:
             raise CalibrationError(f"{path}: calibration file lacks or mangles {exc}") from None
         if len(bias) != 3 or len(noise) != 3 or not all(map(math.isfinite, bias + noise)):
             raise CalibrationError(f"{path}: bias_dps and noise_std_dps must each hold 3 finite numbers")
-        return cls(bias, noise, cal.samples, cal.sample_rate_hz)
+        if temp is not None and not math.isfinite(temp):
+            raise CalibrationError(f"{path}: temp_c must be a finite number")
+        return cal
 
 
 def stillness_z(window_dps) -> np.ndarray:
@@ -93,11 +102,12 @@ def stillness_z(window_dps) -> np.ndarray:
     return spread / scale
 
 
-def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=20.0) -> Calibration:
+def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=20.0, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
-    ``window_dps`` is (n, 3) in deg/s with n >= 2 * N_SUB_WINDOWS. Raises CalibrationError
-    naming the axis and the statistic when the window is not still.
+    ``window_dps`` is (n, 3) in deg/s with n >= 2 * N_SUB_WINDOWS; ``temp_c`` optionally the
+    window's n temperatures (deg C), whose mean is kept. Raises CalibrationError naming the axis
+    and the statistic when the window is not still.
     """
     x = np.asarray(window_dps, dtype=float)
     if x.ndim != 2 or x.shape[1] != 3:
@@ -120,4 +130,5 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
                 f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
             )
     sigma = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
-    return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz))
+    temp = None if temp_c is None else float(np.mean(temp_c))
+    return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz), temp)

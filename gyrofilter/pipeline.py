@@ -1,6 +1,7 @@
 """The paper-001 real-time pipeline, three axes, streaming and batch.
 
-    raw (deg/s) -> start-up bias calibration -> block averaging with gross-error rejection
+    raw (deg/s) [-> temperature compensation] -> start-up bias calibration
+                -> block averaging with gross-error rejection
                 -> Kalman filter with least-squares-prediction prior -> filtered (deg/s)
 
 Stages: :mod:`gyrofilter.calibration` (001 section 2.1), :mod:`gyrofilter.averaging` (2.2),
@@ -20,7 +21,7 @@ import numpy as np
 
 from . import kalman
 from .jit import choose_kernel
-from .averaging import average_block, average_blocks
+from .averaging import AVERAGERS
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
 from .predictor import weight_table
@@ -41,6 +42,8 @@ class FilterSettings:
     max_bias_dps                 20.0      largest plausible bias (deg/s; MPU6050 datasheet)
     block_len                    5         L, samples per non-sliding block (001: 5)
     outlier_q_dps                1.0       q, gross-error threshold |x_i - mean| (deg/s)
+    outlier_rule                 paper     "paper" (|x_i - mean| > q) or "median_slope"
+                                           (robust line per block; see averaging)
     fifo_depth                   10        posteriors in the LS-prediction FIFO (001: 10)
     fit_order                    2         order of the LS fit (001: 2, quadratic)
     p0_dps2                      1.0       P0, variance of the initial state ((deg/s)^2)
@@ -53,6 +56,9 @@ class FilterSettings:
     hold_h                       10.0      CUSUM threshold of the hold (block-noise units)
     hold_window                  20        blocks the hold's constancy test looks at
     hold_max_blocks              400       memory of the held mean (blocks)
+    temp_coefficient_dps_per_c   0         c per axis (one number or 3): subtract
+                                           c (T - T0), T0 the calibration's mean temperature;
+                                           needs temperatures (see gyrofilter.tempcomp)
     ============================ ========= ===================================================
 
     ``preset="recommended"`` is ``tracker="block_mean", hold=True`` (see gyrofilter.presets).
@@ -81,6 +87,13 @@ class FilterSettings:
     hold_h: float = 10.0
     hold_window: int = 20
     hold_max_blocks: int = 400
+    outlier_rule: str = "paper"
+    temp_coefficient_dps_per_c: object = 0.0
+
+    def temp_coefficients(self):
+        """The temperature coefficients as a tuple of 3 floats (deg/s per deg C)."""
+        c = self.temp_coefficient_dps_per_c
+        return (float(c),) * 3 if isinstance(c, (int, float)) else tuple(float(v) for v in c)
 
     def validate(self):
         def need(cond, name, what):
@@ -105,6 +118,12 @@ class FilterSettings:
         need(self.backend in ("auto", "python", "numba"), "backend", "must be 'auto', 'python' or 'numba'")
         need(isinstance(self.hold, bool), "hold", "must be True or False")
         need(self.tracker in ("kalman", "block_mean"), "tracker", "must be 'kalman' or 'block_mean'")
+        need(self.outlier_rule in AVERAGERS, "outlier_rule", f"must be one of {', '.join(map(repr, AVERAGERS))}")
+        c = self.temp_coefficient_dps_per_c
+        ok = isinstance(c, (int, float)) and not isinstance(c, bool) or (
+            isinstance(c, (tuple, list)) and len(c) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in c))
+        need(ok and all(map(math.isfinite, self.temp_coefficients() if ok else ())), "temp_coefficient_dps_per_c",
+             "must be one finite number or 3 (deg/s per deg C, axes x, y, z)")
         need(isinstance(self.hold_h, (int, float)) and math.isfinite(self.hold_h) and self.hold_h > 0, "hold_h", "must be a number > 0")
         for name, low in (("hold_window", 2), ("hold_max_blocks", 1)):
             value = getattr(self, name)
@@ -143,6 +162,10 @@ class GyroFilter:
         self.preset = preset
         s = self.settings
         self._run = choose_kernel(kalman.run_blocks, s.backend)
+        self._average_one, self._average_many = AVERAGERS[s.outlier_rule]
+        self._temp_coef = s.temp_coefficients()
+        self._temp_on = any(self._temp_coef)
+        self._temp_ref = None  # T0 of the temperature compensation: the calibration's mean temperature
         self._w_table = weight_table(s.fifo_depth, s.fit_order)
         # Kalman state (fixed size)
         width = max(s.qr_window, 1)
@@ -172,6 +195,10 @@ class GyroFilter:
         self._cal_buf = None
         self._cal_fill = 0
         self._cal_tries_left = 0
+        self._cal_temp = None
+        if self._temp_on and calibration is None and self._cal_needed == 0:
+            raise SettingsError("setting temp_coefficient_dps_per_c needs a start-up calibration (calibration_s > 0) "
+                                "or a loaded calibration with temp_c: its mean temperature is the reference T0")
         if calibration is not None:
             self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration)
             self._apply_calibration(self.calibration)
@@ -182,6 +209,7 @@ class GyroFilter:
             raise SettingsError("setting hold=True needs a start-up calibration (calibration_s > 0) or a loaded calibration")
         elif self._cal_needed > 0:
             self._cal_buf = np.zeros((self._cal_needed, 3))
+            self._cal_temp = np.zeros(self._cal_needed) if self._temp_on else None
             self._cal_tries_left = int(s.calibration_retry_s // max(s.calibration_s, 1e-9))
 
     # ------------------------------------------------------------------ public API
@@ -196,6 +224,11 @@ class GyroFilter:
         return self._cal_buf is not None
 
     @property
+    def compensates_temperature(self) -> bool:
+        """True when update() and filter() need temperatures (temp_coefficient_dps_per_c set)."""
+        return self._temp_on
+
+    @property
     def output_rate_hz(self) -> float:
         return self.sample_rate_hz / self.settings.block_len
 
@@ -204,8 +237,8 @@ class GyroFilter:
         """Samples held for a block that is not full yet (they produce output once it is)."""
         return len(self._block)
 
-    def update(self, sample):
-        """Feed one sample (gx, gy, gz) in deg/s.
+    def update(self, sample, temp_c=None):
+        """Feed one sample (gx, gy, gz) in deg/s, and its temperature in deg C when compensating.
 
         Returns None while calibrating and between blocks, else the filtered (x, y, z) in deg/s
         for the block this sample completed.
@@ -215,12 +248,22 @@ class GyroFilter:
                 raise SettingsError(f"update() takes one sample (gx, gy, gz) in deg/s, got {len(sample)} values")
         except TypeError:
             raise SettingsError(f"update() takes one sample (gx, gy, gz) in deg/s, got {sample!r}") from None
+        if self._temp_on:
+            temp_c = _finite_float(temp_c)
+            if temp_c is None:
+                raise SettingsError("temperature compensation is on: update() needs temp_c, a finite temperature "
+                                    "(deg C), with every sample")
         if self._cal_buf is not None:
             self._cal_buf[self._cal_fill] = sample
+            if self._cal_temp is not None:
+                self._cal_temp[self._cal_fill] = temp_c
             self._cal_fill += 1
             if self._cal_fill == self._cal_needed:
                 self._finish_calibration()
             return None
+        if self._temp_on:
+            c, dt = self._temp_coef, temp_c - self._temp_ref
+            sample = (sample[0] - c[0] * dt, sample[1] - c[1] * dt, sample[2] - c[2] * dt)
         block = self._block
         block.append(sample)
         if len(block) < self.settings.block_len:
@@ -229,7 +272,7 @@ class GyroFilter:
         q = self.settings.outlier_q_dps
         y1 = self._y1
         for a, values in enumerate(zip(*block)):
-            mean, rejected, fallback = average_block(values, q)
+            mean, rejected, fallback = self._average_one(values, q)
             if rejected or fallback:
                 self.rejected[a] += rejected
                 self.fallback_blocks[a] += fallback
@@ -241,11 +284,12 @@ class GyroFilter:
         x, y, z = self._out1[0].tolist()
         return (x, y, z)
 
-    def filter(self, samples_dps) -> np.ndarray:
-        """Feed an (N, 3) array in deg/s; returns the filtered blocks it completed, (M, 3).
+    def filter(self, samples_dps, temp_c=None) -> np.ndarray:
+        """Feed an (N, 3) array in deg/s (and N temperatures in deg C when compensating).
 
-        From a new filter, M = (N - calibration samples) // block_len and row k is block k after
-        the calibration. Leftover samples wait in the filter for the next call.
+        Returns the filtered blocks it completed, (M, 3). From a new filter,
+        M = (N - calibration samples) // block_len and row k is block k after the calibration.
+        Leftover samples wait in the filter for the next call.
         """
         x = np.asarray(samples_dps, dtype=float)
         if x.ndim != 2 or x.shape[1] != 3:
@@ -253,25 +297,31 @@ class GyroFilter:
         bad = ~np.isfinite(x).all(axis=1)
         if bad.any():
             raise SettingsError(f"samples_dps row {int(np.flatnonzero(bad)[0])} is not finite: {x[bad][0].tolist()}")
+        temps = self._check_temps(temp_c, len(x))
         outputs = []
         i = 0
         while self._cal_buf is not None and i < len(x):
             take = min(self._cal_needed - self._cal_fill, len(x) - i)
             self._cal_buf[self._cal_fill : self._cal_fill + take] = x[i : i + take]
+            if self._cal_temp is not None:
+                self._cal_temp[self._cal_fill : self._cal_fill + take] = temps[i : i + take]
             self._cal_fill += take
             i += take
             if self._cal_fill == self._cal_needed:
                 self._finish_calibration()
         while self._block and i < len(x):
-            row = self.update(x[i])
+            row = self.update(x[i], None if temps is None else float(temps[i]))
             i += 1
             if row is not None:
                 outputs.append(np.array([row]))
+        if temps is not None and i < len(x):
+            x = x[i:] - np.asarray(self._temp_coef) * (temps[i:, None] - self._temp_ref)
+            i = 0
         length = self.settings.block_len
         n_blocks = (len(x) - i) // length
         if n_blocks:
             blocks = x[i : i + n_blocks * length].reshape(n_blocks, length, 3)
-            y, rejected, fallback = average_blocks(blocks, self.settings.outlier_q_dps)
+            y, rejected, fallback = self._average_many(blocks, self.settings.outlier_q_dps)
             self.rejected += rejected.sum(axis=0)
             self.fallback_blocks += fallback.sum(axis=0)
             y -= np.asarray(self._bias)
@@ -298,6 +348,20 @@ class GyroFilter:
 
     # ------------------------------------------------------------------ internals
 
+    def _check_temps(self, temp_c, n):
+        """The temperatures for filter(): None when not compensating, else n finite values."""
+        if not self._temp_on:
+            return None
+        if temp_c is None:
+            raise SettingsError("temperature compensation is on: filter() needs temp_c, one temperature (deg C) per sample")
+        t = np.asarray(temp_c, dtype=float)
+        if t.shape != (n,):
+            raise SettingsError(f"temp_c must have shape ({n},), one temperature per sample, got {t.shape}")
+        bad = ~np.isfinite(t)
+        if bad.any():
+            raise SettingsError(f"temp_c row {int(np.flatnonzero(bad)[0])} is not finite")
+        return t
+
     def _track(self, y, out):
         """Block means y (M, 3) -> output (M, 3): the tracker, then the hold stage if enabled."""
         if self.settings.tracker == "kalman":
@@ -310,7 +374,8 @@ class GyroFilter:
     def _finish_calibration(self):
         s = self.settings
         try:
-            cal = calibrate(self._cal_buf, self.sample_rate_hz, stillness_threshold=s.stillness_z, max_bias_dps=s.max_bias_dps)
+            cal = calibrate(self._cal_buf, self.sample_rate_hz, stillness_threshold=s.stillness_z,
+                            max_bias_dps=s.max_bias_dps, temp_c=self._cal_temp)
         except CalibrationError:
             if self._cal_tries_left <= 0:
                 raise
@@ -331,9 +396,24 @@ class GyroFilter:
                          max_blocks=s.hold_max_blocks, backend=s.backend, **source)
 
     def _apply_calibration(self, cal):
+        if self._temp_on:
+            if cal.temp_c is None:
+                raise SettingsError("setting temp_coefficient_dps_per_c needs the calibration's temperature (temp_c), "
+                                    "and this calibration has none: calibrate again with temperatures")
+            self._temp_ref = cal.temp_c
         self._bias = tuple(float(b) for b in cal.bias_dps)
         # initial Q and R: the variance of a block mean of the calibration's white noise
         self._r0[:] = [max(n * n / self.settings.block_len, kalman.VAR_FLOOR) for n in cal.noise_std_dps]
         if self.settings.qr_stat == "std":
             np.sqrt(self._r0, out=self._r0)
         self._cal_buf = None
+        self._cal_temp = None
+
+
+def _finite_float(value):
+    """float(value) when it is a finite number, else None."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) else None

@@ -13,7 +13,8 @@ with c the ``temperature`` effect's ``coefficient_dps_per_c`` of the gap report
     y = x - c (T - T0)
 
 T0 should be the mean temperature of the calibration window, so that the two corrections do
-not overlap. Pure functions on arrays; :class:`TemperatureCompensator` is the streaming form.
+not overlap. Pure functions on arrays; the streaming form is built into the pipeline
+(``GyroFilter(..., temp_coefficient_dps_per_c=c)``, ``update(sample, temp_c)``).
 """
 from __future__ import annotations
 
@@ -74,29 +75,3 @@ def fit_coefficient(gyro_dps, temp_c):
     resid = x - x.mean(axis=0) - np.outer(dt, c)
     se = np.sqrt(resid.var(axis=0, ddof=2) / sxx)
     return c, se
-
-
-class TemperatureCompensator:
-    """Streaming y = x - c (T - T0). T0 given, or the mean of the first ``calibration_samples`` temperatures.
-
-    While T0 is being learnt the samples pass through with the T0 learnt so far (the same
-    window is the bias calibration, which absorbs the bias at T0).
-    """
-
-    def __init__(self, coefficient_dps_per_c, reference_temp_c=None, calibration_samples=200):
-        self.coefficient_dps_per_c = _coefficients(coefficient_dps_per_c)
-        self.reference_temp_c = None if reference_temp_c is None else float(reference_temp_c)
-        self._n = int(calibration_samples)
-        self._sum = 0.0
-        self._count = 0
-
-    def update(self, sample_dps, temp_c):
-        if self.reference_temp_c is None:
-            self._sum += float(temp_c)
-            self._count += 1
-            t0 = self._sum / self._count
-            if self._count >= self._n:
-                self.reference_temp_c = t0
-        else:
-            t0 = self.reference_temp_c
-        return tuple(float(v) for v in np.asarray(sample_dps, float) - self.coefficient_dps_per_c * (float(temp_c) - t0))

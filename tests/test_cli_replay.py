@@ -59,3 +59,44 @@ def test_help_everywhere_exits_0():
     for args in (["--help"], ["replay", "--help"]):
         proc = subprocess.run([sys.executable, "-m", "gyrofilter", *args], capture_output=True, text=True)
         assert proc.returncode == 0 and "usage" in proc.stdout
+
+
+def test_set_overrides_a_setting_and_is_recorded_in_the_output(tmp_path):
+    rng = np.random.default_rng(2)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(rng.normal([1, 2, 3], 0.1, (2000, 3)), 100.0))
+    out = tmp_path / "out.csv"
+    assert main(["replay", str(src), "--out", str(out), "--set", "outlier_rule=median_slope", "--set", "block_len=4"]) == 0
+    rec = read_recording(out)
+    assert rec.sample_rate_hz == 25.0 and '"outlier_rule":"median_slope"' in rec.header["filter_settings"]
+    assert main(["replay", str(src), "--set", "outlier_rule=nope"]) == 2
+    assert main(["replay", str(src), "--set", "no_equals"]) == 2
+
+
+def test_temp_model_compensates_a_drift_from_a_gap_report(tmp_path, capsys):
+    import json
+
+    n = 60000
+    rng = np.random.default_rng(3)
+    temp = 30.0 + 12.0 * (1 - np.exp(-np.arange(n) / 15000))
+    coef = [0.0, 0.04, 0.0]
+    gyro = np.array([0.5, -1.0, 2.0]) + np.outer(temp - 30.0, coef) + rng.normal(0, 0.1, (n, 3))
+    src = tmp_path / "warm.csv.gz"
+    write_recording(src, Recording.from_dps(gyro, 100.0, temp_c=temp))
+    report = tmp_path / "gap.json"
+    report.write_text(json.dumps({"findings": [], "extended_model": {"axes": {
+        "y": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": 0.04}]}}}}))
+    late_means = []
+    for extra in ([], ["--temp-model", str(report)]):
+        out = tmp_path / f"out{len(extra)}.csv"
+        assert main(["replay", str(src), "--preset", "recommended", "--out", str(out)] + extra) == 0
+        late_means.append(read_recording(out).gyro_dps[-2000:, 1].mean())
+    # drift left: c (T - T0) ~ 0.45 deg/s; after: the calibration's own error, 0.1 / sqrt(200) = 0.007
+    assert abs(late_means[0]) > 0.4 and abs(late_means[1]) < 0.03
+    # no temp column, or a model without a temperature effect: one clear line
+    write_recording(tmp_path / "cold.csv", Recording.from_dps(gyro[:1000], 100.0))
+    assert main(["replay", str(tmp_path / "cold.csv"), "--temp-model", str(report)]) == 2
+    assert "no temperature" in capsys.readouterr().err
+    report.write_text(json.dumps({"axes": {"x": {"effects": []}}}))
+    assert main(["replay", str(src), "--temp-model", str(report)]) == 2
+    assert "no temperature effect" in capsys.readouterr().err

@@ -1,8 +1,8 @@
-"""Temperature compensation: gain on a simulated warm-up, coefficient fit, model lookup, streaming."""
+"""Temperature compensation: gain on a simulated warm-up, coefficient fit, model lookup, the pipeline."""
 import numpy as np
 import pytest
 
-from gyrofilter import tempcomp
+from gyrofilter import GyroFilter, tempcomp
 from gyrofilter.errors import SettingsError
 
 FS = 100.0
@@ -52,13 +52,13 @@ def test_coefficients_from_model():
     assert tempcomp.coefficients_from_model(model) == (0.03, 0.0, 0.0)
 
 
-def test_by_hand_and_streaming():
+def test_by_hand_and_the_pipeline_applies_the_same_correction():
     y = tempcomp.compensate([[1.0, 2.0, 3.0]], [30.0], [0.1, 0.2, 0.3], 25.0)
     assert np.allclose(y, [[0.5, 1.0, 1.5]])
-    _, temp, x = warmup(2, duration_s=10.0)
-    comp = tempcomp.TemperatureCompensator(C, calibration_samples=200)
-    out = np.array([comp.update(row, tc) for row, tc in zip(x, temp)])
-    assert comp.reference_temp_c == pytest.approx(temp[:200].mean())
-    assert np.allclose(out[200:], tempcomp.compensate(x, temp, C, temp[:200].mean())[200:], atol=1e-12)
+    _, temp, x = warmup(2, duration_s=60.0)
+    # GyroFilter compensates after its calibration window, with T0 = the window's mean temperature
+    inside = GyroFilter(FS, preset="recommended", temp_coefficient_dps_per_c=tuple(C)).filter(x, temp)
+    before = GyroFilter(FS, preset="recommended").filter(tempcomp.compensate(x, temp, C, temp[:200].mean()))
+    assert np.allclose(inside, before, rtol=0, atol=1e-9)
     with pytest.raises(SettingsError):
         tempcomp.compensate(np.zeros((3, 2)), np.zeros(3), C, 25.0)

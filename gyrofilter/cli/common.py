@@ -1,9 +1,11 @@
 """Pieces shared by the commands: filter options, warnings, the summary table."""
+import json
 import sys
 
 import numpy as np
 
-from ..pipeline import GyroFilter
+from ..errors import SettingsError
+from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import PRESETS
 
 
@@ -29,13 +31,57 @@ def warn_about_gaps(rec):
 
 def add_filter_arguments(parser):
     parser.add_argument("--preset", default="paper", choices=sorted(PRESETS), help="filter settings preset (default: paper, the faithful paper-001 pipeline)")
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="override one filter setting (repeatable), e.g. --set outlier_rule=median_slope; "
+                             f"settings: {', '.join(SETTING_NAMES)}")
+    parser.add_argument("--temp-model", metavar="JSON",
+                        help="compensate temperature drift with the coefficients of a gap report or simulator model "
+                             "(needs a temp column / a source with temperature)")
     parser.add_argument("--calibration-s", type=float, default=None, help="start-up calibration window in seconds (default 2; the sensor must be still)")
     parser.add_argument("--calibration", metavar="JSON", help="use a saved calibration instead of calibrating")
     parser.add_argument("--save-calibration", metavar="JSON", help="save the start-up calibration to this file")
 
 
 def make_filter(args, sample_rate_hz):
-    return GyroFilter(sample_rate_hz, args.calibration_s, preset=args.preset, calibration=args.calibration)
+    settings = dict(_parse_setting(text) for text in args.set)
+    if args.temp_model:
+        settings["temp_coefficient_dps_per_c"] = temperature_coefficients(args.temp_model)
+    return GyroFilter(sample_rate_hz, args.calibration_s, preset=args.preset, calibration=args.calibration, **settings)
+
+
+def _parse_setting(text):
+    """'name=value' -> (name, value); the value is read as JSON (numbers, true/false, lists), else kept as text."""
+    name, sep, value = text.partition("=")
+    if not sep or not name:
+        raise SettingsError(f"--set {text!r}: expected NAME=VALUE")
+    try:
+        return name.strip(), json.loads(value)
+    except json.JSONDecodeError:
+        return name.strip(), value
+
+
+def temperature_coefficients(path):
+    """(cx, cy, cz) in deg/s per deg C from a gap report (its extended_model) or a simulator model."""
+    from ..tempcomp import coefficients_from_model
+
+    with open(path, encoding="utf-8") as fh:
+        try:
+            doc = json.load(fh)
+        except json.JSONDecodeError as exc:
+            raise SettingsError(f"{path}: not JSON ({exc.msg} at line {exc.lineno})") from None
+    model = doc.get("extended_model", doc) if isinstance(doc, dict) else None
+    if not isinstance(model, dict) or not isinstance(model.get("axes"), dict):
+        raise SettingsError(f"{path}: neither a gap report (extended_model) nor a simulator model (axes)")
+    coefficients = coefficients_from_model(model)
+    if not any(coefficients):
+        raise SettingsError(f"{path}: the model has no temperature effect, so there is nothing to compensate")
+    return coefficients
+
+
+def check_temperature(filt, available, where):
+    """Refuse a filter that compensates temperature when ``where`` gives no temperatures."""
+    if filt.compensates_temperature and not available:
+        raise SettingsError(f"{where} has no temperature (temp column), which --temp-model needs")
 
 
 def save_calibration(args, filt):

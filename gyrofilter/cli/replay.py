@@ -27,10 +27,12 @@ def run(args):
     common.warn_about_gaps(rec)
     filt = common.make_filter(args, rec.sample_rate_hz)
     gyro = rec.gyro_dps
+    common.check_temperature(filt, rec.temp_c is not None, path)
+    temps = rec.temp_c if filt.compensates_temperature else None
     if args.realtime:
-        filtered = _paced(filt, gyro, rec.sample_rate_hz)
+        filtered = _paced(filt, gyro, rec.sample_rate_hz, temps)
     else:
-        filtered = filt.filter(gyro)
+        filtered = filt.filter(gyro, temps)
     start = len(gyro) - len(filtered) * filt.settings.block_len - filt.pending_samples
     raw = gyro[start : start + len(filtered) * filt.settings.block_len]
     common.print_summary(path, rec, filt, raw, filtered)
@@ -49,16 +51,17 @@ def run(args):
     return 0
 
 
-def _paced(filt, gyro, rate_hz):
+def _paced(filt, gyro, rate_hz, temps):
     """Feed samples one by one at the recording's rate, printing rows as they come."""
     rows = []
     t0 = time.monotonic()
+    temps = [None] * len(gyro) if temps is None else temps.tolist()
     print("t_s,gx_dps,gy_dps,gz_dps", flush=True)
-    for i, sample in enumerate(map(tuple, gyro.tolist())):
+    for i, (sample, temp) in enumerate(zip(map(tuple, gyro.tolist()), temps)):
         delay = t0 + i / rate_hz - time.monotonic()
         if delay > 0:
             time.sleep(delay)
-        row = filt.update(sample)
+        row = filt.update(sample, temp)
         if row is not None:
             rows.append(row)
             print(f"{(i + 1) / rate_hz:.4f},{row[0]:.6f},{row[1]:.6f},{row[2]:.6f}", flush=True)

@@ -75,6 +75,8 @@ def _run(args, source):
     gyro_idx = [cols.index(c) for c in ("gx", "gy", "gz")]
     t_idx = cols.index("t")
     filt = common.make_filter(args, rate_hz)
+    temp_idx = cols.index("temp") if "temp" in cols else None
+    common.check_temperature(filt, temp_idx is not None, f"source {args.source}")
     block = filt.settings.block_len
     out_header = {
         "sample_rate_hz": f"{filt.output_rate_hz:g}",
@@ -104,7 +106,8 @@ def _run(args, source):
                     writer.note(text)
                 if len(rows):
                     was_calibrating = filt.calibrating
-                    out = filt.filter(to_dps(rows[:, gyro_idx], unit, lsb))
+                    temps = rows[:, temp_idx] if filt.compensates_temperature else None
+                    out = filt.filter(to_dps(rows[:, gyro_idx], unit, lsb), temps)
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note("calibrated: bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s")
                     # the M blocks just completed end right before the samples still pending
