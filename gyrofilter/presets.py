@@ -3,7 +3,7 @@
 ``paper`` is the faithful paper-001 pipeline and the default. Explicit keyword arguments
 override a preset.
 
-``recommended`` (measured in ``docs/readme_evaluate.md``, made by ``gyrofilter evaluate``): the
+``recommended`` (measured in ``docs/evaluate.md``, made by ``gyrofilter evaluate``): the
 block means of paper 001's averaging stage, followed by the constant-rate hold of
 :mod:`gyrofilter.adaptive`: while the rate is constant (at rest, or turning steadily) the output
 is the mean of every block since the rate last changed; a CUSUM test on the block means

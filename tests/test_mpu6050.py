@@ -407,7 +407,7 @@ def test_read_waits_at_most_max_wait(rig):
 
 @pytest.mark.device
 def test_real_mpu6050_streams_at_the_configured_rate():
-    """On a Raspberry Pi with an MPU6050 at 0x68 on /dev/i2c-1 (see docs/readme_mpu6050.md)."""
+    """On a Raspberry Pi with an MPU6050 at 0x68 on /dev/i2c-1 (see docs/mpu6050.md)."""
     bus = int(os.environ.get("GYROFILTER_I2C_BUS", "1"))
     address = int(os.environ.get("GYROFILTER_I2C_ADDRESS", "0x68"), 0)
     import time

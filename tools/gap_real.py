@@ -6,7 +6,7 @@ For every static MPU6050 recording in ``recordings/`` runs ``gyrofilter.gap.anal
 (seed 0, the command's defaults), writes ``docs/figures/gap_<name>_{adev,spectrum}_<axis>.png``
 for the axes with findings (and x of the longest recording) and the JSON reports to
 ``docs/gap/<name>.json``, hides each effect of the table in the real noise of the two longest
-recordings (``tools/gap_battery.py --real``) and writes ``docs/readme_gap.md`` with the tables.
+recordings (``tools/gap_battery.py --real``) and writes ``docs/gap.md`` with the tables.
 The synthetic battery tables are read from ``docs/gap/battery_*.txt`` when present (written by
 ``tools/gap_battery.py --out``).
 """
@@ -92,7 +92,7 @@ def main(argv=None):
         with open(f, encoding="utf-8") as fh:
             battery[os.path.basename(f)[8:-4]] = fh.read()
 
-    out = os.path.join(ROOT, "docs", "readme_gap.md")
+    out = os.path.join(ROOT, "docs", "gap.md")
     with open(out, "w", encoding="utf-8") as fh:
         fh.write(_TEXT_HEAD)
         fh.write("\n### The real MPU6050 recordings\n\n")

@@ -1,6 +1,6 @@
 """A gyro streamed over a serial port as text lines (``serial:/dev/ttyUSB0,baud=115200``).
 
-Line protocol (``docs/readme_live.md``; ``tools/arduino/gyrofilter_stream`` speaks it)::
+Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it)::
 
     # gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw
     0,12,-3,40,-1520

@@ -1,6 +1,6 @@
 // gyrofilter_stream: stream an MPU6050's gyro over serial in gyrofilter's line protocol.
 //
-// Protocol (docs/readme_live.md): one header line, sent at start-up and whenever a '?' arrives,
+// Protocol (docs/live.md): one header line, sent at start-up and whenever a '?' arrives,
 //   # gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 ...
 // then one line per sample:  counter,gx,gy,gz,temp  (raw int16 LSB; temp raw, T = raw/340 + 36.53 C).
 // The counter is the sample index on the sensor's clock: samples lost in a FIFO overflow show as
