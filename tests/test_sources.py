@@ -28,6 +28,8 @@ from gyrofilter.sources.serial_source import LineParser
     ("sim", "sim", {}),
     ("sim:seed=4,realtime=no,duration=10", "sim", {"seed": 4, "realtime": False, "duration_s": 10.0}),
     ("sim:model.json,seed=1", "sim", {"model": "model.json", "seed": 1}),
+    ("sim,realtime=0", "sim", {"realtime": False}),          # no ARG: the keys may follow KIND directly
+    ("mpu6050,rate=200", "mpu6050", {"rate_hz": 200.0}),
 ])
 def test_parse_source(spec, kind, kwargs):
     assert parse_source(spec) == (kind, kwargs)

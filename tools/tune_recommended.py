@@ -8,13 +8,15 @@
    split with static std reduction >= 1.5 x 12.6 (margin for unseen recordings), the lowest
    geometric-mean dynamic RMSE.
 2. The switching designs (gyrofilter.adaptive hold with h = 10 from the false-alarm rate) with the
-   paper-001 Kalman output or the block means as the tracking output, on the tune split.
-3. The chosen ones on the HOLDOUT split (ImuCalibration static recordings, profiles sine_1hz +
-   chirp, BROAD 05 + 09): do they still dominate paper001?
-4. The gross-error rule in fast motion: block means with the paper's rule (|x - mean| > q, q = 1),
-   without it, and against a median + slope model with a MAD-scaled threshold; with spikes.
+   paper-001 Kalman output or the block means as the tracking output, on the tune split, next to
+   the best pipeline setting of section 1. The recommended preset is the hold + block-mean design.
+3. The best pipeline setting and the recommended preset on the HOLDOUT split (ImuCalibration static
+   recordings, profiles sine_1hz + chirp, BROAD 05 + 09): do they still dominate paper001?
+4. The gross-error rule in fast motion, all data: the recommended preset with the paper's rule
+   (outlier_rule="paper", |x - mean| > q, q = 1), without rejection (outlier_q_dps=1e9) and with
+   outlier_rule="median_slope"; then the same three on white noise with spikes.
 
-Usage: python tools/tune_recommended.py   (about a minute)
+Usage: python tools/tune_recommended.py   (about 20 s)
 """
 import itertools
 import os
@@ -25,8 +27,6 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
 from gyrofilter import evaluate as E  # noqa: E402
-from gyrofilter.adaptive import make_hold  # noqa: E402
-from gyrofilter.averaging import average_blocks  # noqa: E402
 
 REC_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "recordings")
 MARGIN = 1.5
@@ -45,43 +45,22 @@ def row(ev, name):
             f"RMSE {dyn} | BROAD {broad} | {'DOMINATES' if ok else 'fails: ' + fails[0]}")
 
 
-def grid_specs():
-    specs = [E.FilterSpec("paper001", "paper", "", E.gyrofilter_run("paper"))]
+PAPER = E.FilterSpec("paper001", "paper", "", E.gyrofilter_run("paper"))
+
+
+def grid_settings():
+    """{row name: pipeline settings} of the section-1 grid."""
+    out = {}
     for fo, d, w, stat, q in itertools.product([0, 1, 2], [5, 10, 20, 40], [5, 10, 20, 40], ["variance", "std"], [1.0, 3.0]):
         kw = dict(fit_order=fo, fifo_depth=d, r_source="calibration", qr_window=w, qr_stat=stat, outlier_q_dps=q)
-        specs.append(E.FilterSpec(" ".join(f"{k}={v}" for k, v in kw.items() if k != "r_source"), "candidate", "",
-                                  E.gyrofilter_run("paper", **kw)))
-    return specs
-
-
-def rejection_variant(kind, q=1.0):
-    """Hold + block means whose gross-error rule is `kind`: 'paper', 'none' or 'median-slope'."""
-
-    def means(blocks):
-        if kind == "none":
-            return blocks.mean(axis=1)
-        if kind == "paper":
-            return average_blocks(blocks, q)[0]
-        L = blocks.shape[1]
-        i = np.arange(L) - (L - 1) // 2
-        model = np.median(blocks, axis=1)[:, None, :] + np.median(np.diff(blocks, axis=1), axis=1)[:, None, :] * i[None, :, None]
-        r = np.abs(blocks - model)
-        limit = np.maximum(q, 4 * 1.4826 * np.median(r, axis=1))[:, None, :]
-        return np.where(r <= limit, blocks, model).mean(axis=1)
-
-    def run(x, fs, cal_s):
-        bias, c = E.startup_bias(x, fs, cal_s)
-        L = 5
-        m = (len(x) - c) // L
-        y = means(x[c : c + m * L].reshape(m, L, 3)) - bias
-        return E.FilterOutput(make_hold(L, calibration_window_dps=x[:c]).run(y, y), L, c)
-
-    return run
+        out[" ".join(f"{k}={v}" for k, v in kw.items() if k != "r_source")] = kw
+    return out
 
 
 def main():
     print("== 1. pipeline settings grid on the TUNE split ==")
-    specs = grid_specs()
+    grid = grid_settings()
+    specs = [PAPER] + [E.FilterSpec(name, "candidate", "", E.gyrofilter_run("paper", **kw)) for name, kw in grid.items()]
     ev = run_split(specs, E.TUNE_SPLIT)
     ok = [s.name for s in specs[1:] if E.dominates(ev, s.name)[0] and ev.static_min(s.name) >= MARGIN * E.PAPER_CLAIM_REDUCTION]
     ok.sort(key=lambda n: ev.dynamic_geomean(n))
@@ -92,37 +71,43 @@ def main():
     print(f"chosen by the rule: {chosen}")
 
     print("\n== 2. switching designs on the TUNE split ==")
-    designs = [
-        E.FilterSpec("paper001", "paper", "", E.gyrofilter_run("paper")),
-        E.FilterSpec("recommended preset", "candidate", "", E.gyrofilter_run("recommended")),
+    best = [E.FilterSpec("best pipeline setting (section 1)", "candidate", "", E.gyrofilter_run("paper", **grid[chosen]))] if chosen else []
+    recommended = E.FilterSpec("recommended preset (hold + block mean)", "candidate", "", E.gyrofilter_run("recommended"))
+    designs = [PAPER] + best + [
         E.FilterSpec("hold + paper KF", "candidate", "", E.gyrofilter_run("paper", hold=True)),
         E.FilterSpec("hold + KF(r_source=calibration)", "candidate", "", E.gyrofilter_run("paper", hold=True, r_source="calibration")),
-        E.FilterSpec("hold + block mean", "candidate", "", E.gyrofilter_run("paper", hold=True, tracker="block_mean")),
-        E.FilterSpec("hold(h=5) + block mean", "candidate", "", E.gyrofilter_run("paper", hold=True, tracker="block_mean", hold_h=5.0)),
-        E.FilterSpec("hold(h=20) + block mean", "candidate", "", E.gyrofilter_run("paper", hold=True, tracker="block_mean", hold_h=20.0)),
+        recommended,
+        E.FilterSpec("recommended with hold_h=5", "candidate", "", E.gyrofilter_run("recommended", hold_h=5.0)),
+        E.FilterSpec("recommended with hold_h=20", "candidate", "", E.gyrofilter_run("recommended", hold_h=20.0)),
     ]
     ev = run_split(designs, E.TUNE_SPLIT)
     for s in designs:
         print(row(ev, s.name))
 
-    print("\n== 3. the chosen designs on the HOLDOUT split ==")
-    ev = run_split([designs[0], designs[1], designs[4]], E.HOLDOUT_SPLIT)
-    for name in ("paper001", "recommended preset", "hold + block mean"):
-        print(row(ev, name))
+    print("\n== 3. the best pipeline setting and the recommended preset on the HOLDOUT split ==")
+    chosen_designs = [PAPER] + best + [recommended]
+    ev = run_split(chosen_designs, E.HOLDOUT_SPLIT)
+    for s in chosen_designs:
+        print(row(ev, s.name))
 
-    print("\n== 4. gross-error rule in fast motion (hold + block means), all data ==")
-    variants = [E.FilterSpec(f"rule: {k}", "candidate", "", rejection_variant(k)) for k in ("paper", "none", "median-slope")]
-    ev = E.evaluate([designs[0]] + variants, recordings_dir=REC_DIR, with_lag=False)
-    for s in [designs[0]] + variants:
+    print("\n== 4. gross-error rule in fast motion (recommended preset), all data ==")
+    variants = [
+        E.FilterSpec('recommended, outlier_rule="paper"', "candidate", "", E.gyrofilter_run("recommended", outlier_rule="paper")),
+        E.FilterSpec("recommended, no rejection (q=1e9)", "candidate", "", E.gyrofilter_run("recommended", outlier_q_dps=1e9)),
+        E.FilterSpec('recommended, outlier_rule="median_slope"', "candidate", "",
+                     E.gyrofilter_run("recommended", outlier_rule="median_slope")),
+    ]
+    ev = E.evaluate([PAPER] + variants, recordings_dir=REC_DIR, with_lag=False)
+    for s in [PAPER] + variants:
         print(row(ev, s.name))
     rng = np.random.default_rng(0)
     x = rng.normal(0, 0.1, (60000, 3))
     spikes = rng.random(x.shape) < 0.002
     spikes[:200] = False
     x[spikes] += rng.choice([-1, 1], spikes.sum()) * rng.uniform(1.6, 3.0, spikes.sum())
+    print("white noise 0.1 deg/s + 0.2 % spikes of 1.6-3 deg/s (600 s at 100 Hz), output std per axis:")
     for s in variants:
-        print(f"{s.name:30s} white noise 0.1 deg/s + 0.2 % spikes of 1.6-3 deg/s: output std "
-              f"{np.round(s.run(x, 100.0, 2.0).y_dps.std(axis=0), 4)} deg/s")
+        print(f"  {s.name:42s} {np.round(s.run(x, 100.0, 2.0).y_dps.std(axis=0), 4)} deg/s")
     return 0
 
 

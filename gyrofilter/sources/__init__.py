@@ -115,11 +115,14 @@ def parse_source(spec: str):
     ('mpu6050', {'bus': 1, 'address': 105, 'rate_hz': 200.0})
     >>> parse_source("replay:rec.csv.gz,realtime")
     ('replay', {'path': 'rec.csv.gz', 'realtime': True})
+    >>> parse_source("sim,seed=3")
+    ('sim', {'seed': 3})
     """
     if not isinstance(spec, str) or not spec.strip():
         raise SettingsError(f"empty source; {SOURCE_HELP}")
     spec = spec.strip()
-    head, sep, rest = spec.partition(":")
+    cut = min((i for i in (spec.find(":"), spec.find(",")) if i >= 0), default=len(spec))
+    head, sep, rest = spec[:cut], spec[cut : cut + 1], spec[cut + 1 :]  # KIND ends at the first ':' or ','
     kind = _ALIASES.get(head.lower(), head.lower())
     if kind not in KINDS:
         # no known KIND prefix: a bare device or file name
