@@ -23,7 +23,9 @@ Metrics
   the mean squared difference between the filtered rows and the block-averaged *delayed* truth
   w(t - d) over the segment plus 1 s (grid 10 ms, refined to 1 ms; equivalent
   to maximising the cross-correlation for a pure delay); taken per axis and noise recording,
-  their median per segment; **worst lag** = the largest over the segments. Positive = late.
+  their median per segment; **worst lag** = the largest over the segments. Positive = late,
+  negative = early (a lead: a filter that extrapolates, or, within one sample interval, a
+  sampled step).
   The search is limited per segment (3 s for ramps and steps, under half the period of a sine:
   0.45 s at 1 Hz), where a delayed copy is unambiguous.
 * **BROAD RMSE** (deg/s) against the optical reference rate (:mod:`gyrofilter.reference`,
@@ -234,6 +236,9 @@ def default_filters():
         FilterSpec("recommended preset", "candidate",
                    "GyroFilter(preset='recommended') = hold=True, tracker='block_mean': constant-rate hold, block means while the rate changes",
                    gyrofilter_run("recommended")),
+        FilterSpec("recommended + median_slope", "candidate",
+                   "GyroFilter(preset='recommended', outlier_rule='median_slope'): gross errors judged against a robust line per block",
+                   gyrofilter_run("recommended", outlier_rule="median_slope")),
     ]
 
 
