@@ -8,11 +8,12 @@ KalmanFilter (``engine="filterpy"``, the baseline and the tests' oracle), on 20 
 100 Hz data with rest and motion. Best of 3 repeats. The live budget at 100 Hz is 10 ms per
 sample; a Raspberry Pi is roughly 5-10x slower than this machine.
 """
-import time
 
 import numpy as np
 
 from gyrofilter.bias_kf import BiasKalmanFilter
+
+from bench import best_of  # tools/bench.py, beside this file
 
 FS = 100.0
 
@@ -23,15 +24,6 @@ def data(n=2000, seed=0):
     x = np.array([1.0, -0.5, 0.3]) + rng.normal(0, 0.1, (n, 3))
     x[n // 2 :] += 40 * np.sin(2 * np.pi * 0.5 * t[n // 2 :])[:, None]
     return x
-
-
-def best_of(fn, repeats=3):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main():

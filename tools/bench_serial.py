@@ -31,6 +31,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.p
 from gyrofilter.errors import SourceEnded  # noqa: E402
 from gyrofilter.sources.serial_source import LineParser, SerialSource  # noqa: E402
 
+from bench import best_of  # noqa: E402  (tools/bench.py, beside this file)
+
 HEADER = (b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=1000 "
           b"fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw\n")
 
@@ -39,15 +41,6 @@ def make_lines(n, start=0):
     rng = np.random.default_rng(0)
     g = rng.integers(-2000, 2000, size=(n, 3))
     return [f"{start + i},{g[i, 0]},{g[i, 1]},{g[i, 2]},{-1520 + i % 7}\n".encode() for i in range(n)]
-
-
-def best_of(fn, repeats=3):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def parse_costs(n):
