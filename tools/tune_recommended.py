@@ -14,7 +14,8 @@
    recordings, profiles sine_1hz + chirp, BROAD 05 + 09): do they still dominate paper001?
 4. The gross-error rule in fast motion, all data: the recommended preset with the paper's rule
    (outlier_rule="paper", |x - mean| > q, q = 1), without rejection (outlier_q_dps=1e9) and with
-   outlier_rule="median_slope"; then the same three on white noise with spikes.
+   outlier_rule="median_slope"; then the same three rules on white noise with 0.2 % and 4 % spikes
+   (block means against the spike-free block means, and the recommended preset's output).
 
 Usage: python tools/tune_recommended.py   (about 20 s)
 """
@@ -27,6 +28,7 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
 from gyrofilter import evaluate as E  # noqa: E402
+from gyrofilter.pipeline import GyroFilter  # noqa: E402
 
 REC_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "recordings")
 MARGIN = 1.5
@@ -55,6 +57,25 @@ def grid_settings():
         kw = dict(fit_order=fo, fifo_depth=d, r_source="calibration", qr_window=w, qr_stat=stat, outlier_q_dps=q)
         out[" ".join(f"{k}={v}" for k, v in kw.items() if k != "r_source")] = kw
     return out
+
+
+def spike_test(variants, fraction, seed=0):
+    """White noise 0.1 deg/s, 600 s at 100 Hz, plus spikes of 1.6-3 deg/s (random sign) on ``fraction`` of the
+    samples after the calibration. Per rule: the block means (tracker="block_mean", no hold) against the
+    block means of the same noise without spikes, and the recommended preset's output."""
+    rng = np.random.default_rng(seed)
+    clean = rng.normal(0, 0.1, (60000, 3))
+    spikes = rng.random(clean.shape) < fraction
+    spikes[:200] = False
+    x = clean + spikes * rng.choice([-1, 1], clean.shape) * rng.uniform(1.6, 3.0, clean.shape)
+    ref = GyroFilter(100.0, 2.0, tracker="block_mean", outlier_q_dps=1e9).filter(clean)
+    print(f"white noise 0.1 deg/s + {fraction:.1%} spikes of 1.6-3 deg/s (600 s at 100 Hz; {spikes.sum()} spikes, "
+          f"{ref.size} block means over 3 axes):")
+    for name, kw in variants.items():
+        err = GyroFilter(100.0, 2.0, tracker="block_mean", **kw).filter(x) - ref
+        y = GyroFilter(100.0, 2.0, preset="recommended", **kw).filter(x)
+        print(f"  {name:42s} block means: error rms {np.sqrt(np.mean(err ** 2)):.4f}, off by > 0.5: {(np.abs(err) > 0.5).sum():4d} | "
+              f"recommended output: std {np.round(y.std(axis=0), 4)}, max |y| {np.abs(y).max():.2f} deg/s")
 
 
 def main():
@@ -91,23 +112,17 @@ def main():
         print(row(ev, s.name))
 
     print("\n== 4. gross-error rule in fast motion (recommended preset), all data ==")
-    variants = [
-        E.FilterSpec('recommended, outlier_rule="paper"', "candidate", "", E.gyrofilter_run("recommended", outlier_rule="paper")),
-        E.FilterSpec("recommended, no rejection (q=1e9)", "candidate", "", E.gyrofilter_run("recommended", outlier_q_dps=1e9)),
-        E.FilterSpec('recommended, outlier_rule="median_slope"', "candidate", "",
-                     E.gyrofilter_run("recommended", outlier_rule="median_slope")),
-    ]
-    ev = E.evaluate([PAPER] + variants, recordings_dir=REC_DIR, with_lag=False)
-    for s in [PAPER] + variants:
+    variants = {
+        'recommended, outlier_rule="paper"': dict(outlier_rule="paper"),
+        "recommended, no rejection (q=1e9)": dict(outlier_q_dps=1e9),
+        'recommended, outlier_rule="median_slope"': dict(outlier_rule="median_slope"),
+    }
+    specs = [PAPER] + [E.FilterSpec(name, "candidate", "", E.gyrofilter_run("recommended", **kw)) for name, kw in variants.items()]
+    ev = E.evaluate(specs, recordings_dir=REC_DIR, with_lag=False)
+    for s in specs:
         print(row(ev, s.name))
-    rng = np.random.default_rng(0)
-    x = rng.normal(0, 0.1, (60000, 3))
-    spikes = rng.random(x.shape) < 0.002
-    spikes[:200] = False
-    x[spikes] += rng.choice([-1, 1], spikes.sum()) * rng.uniform(1.6, 3.0, spikes.sum())
-    print("white noise 0.1 deg/s + 0.2 % spikes of 1.6-3 deg/s (600 s at 100 Hz), output std per axis:")
-    for s in variants:
-        print(f"  {s.name:42s} {np.round(s.run(x, 100.0, 2.0).y_dps.std(axis=0), 4)} deg/s")
+    for fraction in (0.002, 0.04):
+        spike_test(variants, fraction)
     return 0
 
 
