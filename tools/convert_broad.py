@@ -111,7 +111,8 @@ def convert(src_dir, out_dir):
         formats = ["%.6f", "%.9g", "%.9g", "%.9g", "%.6g", "%.6g", "%.6g", "%d", "%d"]
         data = np.column_stack([t_s, gyro, ref_cells, valid.astype(int), movement.astype(int)])
         out = os.path.join(out_dir, name)
-        with RecordingWriter(out, header, columns, formats=formats, flush_interval_s=None, fsync=False) as w:
+        with RecordingWriter(out, header, columns, formats=formats, flush_interval_s=None, fsync=False,
+                             compresslevel=9) as w:
             w.write(data)
         rows.append((name, trial, len(t_s), len(t_s) / SAMPLE_RATE_HZ, int((~valid).sum()), before, after))
     return rows

@@ -237,7 +237,7 @@ def convert_imucalibration(src: Path, out: Path, upstream_path, description, sha
 
 def _write(out, header, columns, formats, rows):
     tmp = out.with_name(out.name + ".part.gz")
-    with RecordingWriter(tmp, header, columns, formats=formats, flush_interval_s=None, fsync=False) as w:
+    with RecordingWriter(tmp, header, columns, formats=formats, flush_interval_s=None, fsync=False, compresslevel=9) as w:
         w.write(np.array(rows, dtype=object))
     os.replace(tmp, out)
 
