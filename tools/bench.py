@@ -85,7 +85,7 @@ def main(argv):
             except ModuleNotFoundError:
                 print(f"{name}: tools/bench_{name}.py is not there")
                 continue
-            module.main()
+            module.main([])  # each section with its own defaults
         print()
 
 

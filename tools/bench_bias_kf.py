@@ -26,7 +26,7 @@ def data(n=2000, seed=0):
     return x
 
 
-def main():
+def main(argv=None):  # no options; argv for tools/bench.py
     x = data()
     rows = []
     for engine in ("numpy", "filterpy"):
