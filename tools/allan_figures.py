@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Allan analysis of every MPU6050 recording in recordings/: the README table and figures.
 
-    /work/venv/bin/python tools/allan_figures.py [--out docs/figures] [--recordings recordings]
+    python tools/allan_figures.py [--out docs/figures] [--recordings recordings]
 
 For every ``recordings/mpu6050_*.csv.gz``:
 

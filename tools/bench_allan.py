@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Benchmark of the Allan analysis, printed beside allantools in one run.
 
-    /work/venv/bin/python tools/bench_allan.py [--samples 10000000] [--skip-day]
+    python tools/bench_allan.py [--samples 10000000] [--skip-day]
 
 1. Overlapping Allan deviation of the same 10 million samples at the same taus (the default
    grid: ~10 per decade, 1 sample .. N/9, 59 taus): ``gyrofilter.allan.overlapping_adev``

@@ -1,6 +1,6 @@
 """Host cost per frame of the MPU6050 driver, beside naive baselines (no hardware needed).
 
-Run: /work/venv/bin/python tools/bench_mpu6050.py [--frames N]
+Run: python tools/bench_mpu6050.py [--frames N]
 
 What is timed (wall clock on this machine, per gyro frame = one three-axis sample):
 

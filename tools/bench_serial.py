@@ -1,6 +1,6 @@
 """Host cost per line of the serial reader, beside a naive readline() + split baseline.
 
-Run: /work/venv/bin/python tools/bench_serial.py [--lines N]
+Run: python tools/bench_serial.py [--lines N]
 
 Lines are the protocol's ``counter,gx,gy,gz,temp`` (about 26 bytes, as the Arduino sketch
 sends them). What is timed:

@@ -1,6 +1,6 @@
 """Benchmark of the simulator: seconds and peak memory for a long run, next to a plain baseline.
 
-    /work/venv/bin/python tools/bench_simulate.py [--duration 3600] [--rate 1000] [--skip-file]
+    python tools/bench_simulate.py [--duration 3600] [--rate 1000] [--skip-file]
 
 Cases (each in its own Python process, so peak memory is that process's max RSS):
 
@@ -12,7 +12,7 @@ Cases (each in its own Python process, so peak memory is that process's max RSS)
   generated in blocks and discarded (generation cost only).
 * ``gyrofilter simulate -> .csv.gz``: the command, all effects, streamed to a gzip recording.
 
-Peak memory: ``ru_maxrss`` of the process (includes the interpreter, numpy and scipy).
+Peak memory: ``VmHWM`` of the process (includes the interpreter, numpy and scipy).
 """
 from __future__ import annotations
 
@@ -51,8 +51,13 @@ import json, resource, sys, time
 import numpy as np
 args = json.loads(sys.argv[1])
 """
+# VmHWM is this process image's own peak; ru_maxrss would carry the parent's peak across fork + exec
 _REPORT = """
-print(json.dumps({"seconds": seconds, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, "samples": n}))
+try:
+    peak_kb = next(int(ln.split()[1]) for ln in open("/proc/self/status") if ln.startswith("VmHWM:"))
+except OSError:
+    peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+print(json.dumps({"seconds": seconds, "peak_mb": peak_kb / 1024.0, "samples": n}))
 """
 CASES = {
     "numpy one-shot, baseline (bias + white noise + LSB)": """

@@ -1,6 +1,6 @@
 """Figure: the Allan deviation of each example model's affected axis against the plain baseline.
 
-    /work/venv/bin/python tools/plot_simulate.py [--duration 3600] [--out docs/figures/simulate_effects_allan.png]
+    python tools/plot_simulate.py [--duration 3600] [--out docs/figures/simulate_effects_allan.png]
 
 Each panel simulates examples/models/<effect>.json (MPU6050 baseline + one effect, seed 1) and
 its baseline (the same model without the effect, same seed: common random numbers), and draws
