@@ -48,6 +48,7 @@ import math
 
 import numpy as np
 
+from .calibration import white_noise_std
 from .errors import SettingsError
 from .jit import choose_kernel
 
@@ -230,16 +231,17 @@ def block_noise_std(window_dps, block_len):
     sigma_b = max(std of the means of the window's complete blocks, sigma_w / sqrt(L)), where
     sigma_w = std(first differences) / sqrt(2) is the white-noise level: the first term sees
     correlated noise (a low-pass stage makes block means noisier than sigma_w / sqrt(L)), the
-    second keeps a short window's few blocks from underestimating sigma_b.
+    second keeps a short window's few blocks from underestimating sigma_b. A window of fewer
+    than 2 blocks (a low sample rate) has only the second.
     """
     x = np.asarray(window_dps, dtype=float)
     L = int(block_len)
     m = len(x) // L
+    sw = white_noise_std(x)
     if m < 2:
-        raise SettingsError(f"block_noise_std needs at least 2 blocks of {L} samples, got {len(x)} samples")
+        return sw / math.sqrt(L)
     means = x[: m * L].reshape(m, L, 3).mean(axis=1)
     sb_blocks = means.std(axis=0, ddof=1)
-    sw = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
     return np.maximum(sb_blocks, sw / math.sqrt(L))
 
 

@@ -10,11 +10,13 @@ stillness the window is a constant plus noise. The check, per axis:
 
 1. White-noise level from first differences, insensitive to slow changes:
    sigma = std(x[i+1] - x[i]) / sqrt(2).
-2. Split the window into ``n_sub`` (10) equal sub-windows of m samples and take their means
+2. Split the window into ``n_sub`` = min(10, n // 2) equal sub-windows of m samples and take their means
    m_k. Still, each m_k differs from the overall mean by noise of standard deviation about
    sigma / sqrt(m). The statistic is z = max_k |m_k - mean| / (sigma / sqrt(m)); the window
    is refused when z > ``stillness_z`` (default 6: a still white-noise window exceeds it with a
    probability below 1e-7, while a turn of the board shifts some sub-window mean far more).
+   A window of 3 samples has nothing to compare and is not checked; fewer than 3 cannot
+   measure sigma and are refused (the filters need the noise level).
 3. A constant rotation cannot be told from a bias by a gyro alone; a mean beyond
    ``max_bias_dps`` (default 20 deg/s, the MPU6050 datasheet's initial zero-rate-output
    tolerance) is refused as implausible for a bias.
@@ -91,30 +93,41 @@ class Calibration:
         return cal
 
 
+def white_noise_std(window_dps) -> np.ndarray:
+    """sigma = std(x[i+1] - x[i]) / sqrt(2) per axis of an (n, 3) window; 0 below 3 samples."""
+    x = np.asarray(window_dps, dtype=float)
+    if len(x) < 3:
+        return np.zeros(x.shape[1:])
+    return np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
+
+
 def stillness_z(window_dps) -> np.ndarray:
     """The stillness statistic z per axis (see the module docstring) of an (n, 3) window."""
     x = np.asarray(window_dps, dtype=float)
-    m = len(x) // N_SUB_WINDOWS
-    sigma = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
-    sub_means = x[: m * N_SUB_WINDOWS].reshape(N_SUB_WINDOWS, m, 3).mean(axis=1)
+    n_sub = min(N_SUB_WINDOWS, len(x) // 2)
+    if n_sub < 2:
+        return np.zeros(x.shape[1:])
+    m = len(x) // n_sub
+    sub_means = x[: m * n_sub].reshape(n_sub, m, 3).mean(axis=1)
     spread = np.abs(sub_means - x.mean(axis=0)).max(axis=0)
-    scale = np.maximum(sigma / math.sqrt(m), NOISE_FLOOR_DPS)
+    scale = np.maximum(white_noise_std(x) / math.sqrt(m), NOISE_FLOOR_DPS)
     return spread / scale
 
 
 def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=20.0, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
-    ``window_dps`` is (n, 3) in deg/s with n >= 2 * N_SUB_WINDOWS; ``temp_c`` optionally the
+    ``window_dps`` is (n, 3) in deg/s, n >= 3; ``temp_c`` optionally the
     window's n temperatures (deg C), whose mean is kept. Raises CalibrationError naming the axis
     and the statistic when the window is not still.
     """
     x = np.asarray(window_dps, dtype=float)
     if x.ndim != 2 or x.shape[1] != 3:
         raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")
-    if len(x) < 2 * N_SUB_WINDOWS:
+    if len(x) < 3:
         raise SettingsError(
-            f"calibration needs at least {2 * N_SUB_WINDOWS} samples, got {len(x)}; raise calibration_s"
+            f"calibration needs at least 3 samples to measure the noise, got {len(x)} "
+            f"({len(x) / sample_rate_hz:g} s at {sample_rate_hz:g} Hz); raise calibration_s"
         )
     bias = x.mean(axis=0)
     z = stillness_z(x)
@@ -129,6 +142,6 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
                 f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
             )
-    sigma = np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
+    sigma = white_noise_std(x)
     temp = None if temp_c is None else float(np.mean(temp_c))
     return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz), temp)

@@ -192,6 +192,9 @@ class GyroFilter:
         self.calibration = None
         self._bias = (0.0, 0.0, 0.0)
         self._cal_needed = int(round(s.calibration_s * self.sample_rate_hz))
+        if calibration is None and s.calibration_s > 0 and self._cal_needed < 3:
+            raise SettingsError(f"setting calibration_s={s.calibration_s!r} gives {self._cal_needed} sample(s) at "
+                                f"{self.sample_rate_hz:g} Hz; the calibration needs at least 3 to measure the noise")
         self._cal_buf = None
         self._cal_fill = 0
         self._cal_tries_left = 0

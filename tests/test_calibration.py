@@ -3,6 +3,7 @@ import json
 import numpy as np
 import pytest
 
+from gyrofilter import GyroFilter
 from gyrofilter.calibration import Calibration, calibrate, stillness_z
 from gyrofilter.errors import CalibrationError, SettingsError
 
@@ -43,9 +44,35 @@ def test_a_slow_ramp_is_refused_and_a_constant_spin_beyond_datasheet_bias_too():
         calibrate(still(200, bias=(0, 45.0, 0)), 100.0)
 
 
-def test_too_short_window_is_a_settings_error():
-    with pytest.raises(SettingsError, match="at least 20"):
-        calibrate(still(10), 100.0)
+def test_short_windows_of_low_sample_rates():
+    with pytest.raises(SettingsError, match="at least 3 samples.*2 s at 1 Hz"):
+        calibrate(still(2), 1.0)
+    # 10 samples: 5 sub-windows of 2; a turn that speeds up is still refused
+    x = still(10)
+    assert calibrate(x, 5.0).bias_dps == pytest.approx(tuple(x.mean(axis=0)))
+    x[:, 1] += np.linspace(0, 3.0, 10)
+    with pytest.raises(CalibrationError, match="moved"):
+        calibrate(x, 5.0)
+    # 3 samples (3 s at 1 Hz): the mean and the noise level; too few to compare sub-windows
+    x = still(3)
+    x[2] += 1.0
+    cal = calibrate(x, 1.0)
+    assert cal.samples == 3 and min(cal.noise_std_dps) > 0
+
+
+@pytest.mark.parametrize("preset", ["paper", "recommended"])
+@pytest.mark.parametrize("rate_hz", [1.0, 2.0, 5.0])
+def test_the_filter_runs_at_low_sample_rates(preset, rate_hz):
+    rng = np.random.default_rng(int(rate_hz))
+    x = np.array([0.5, -1.0, 2.0]) + rng.normal(0, 0.1, (600, 3))
+    x[300:] += [10.0, 0.0, 0.0]                       # a turn at 10 deg/s after the first half
+    f = GyroFilter(rate_hz, calibration_s=4.0, preset=preset)
+    y = f.filter(x)
+    n_cal = int(round(4.0 * rate_hz))
+    assert len(y) == (600 - n_cal) // 5 and np.all(np.isfinite(y))
+    assert np.allclose(y[-20:, 0], 10.0, atol=0.5)    # the turn is tracked
+    with pytest.raises(SettingsError, match="at least 3"):
+        GyroFilter(rate_hz, calibration_s=2.0 / rate_hz, preset=preset)
 
 
 def test_save_load_round_trip_and_bad_files(tmp_path):
