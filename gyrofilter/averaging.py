@@ -42,7 +42,6 @@ floating-point numbers; the same holds for the ``median_slope`` pair.
 import numpy as np
 
 MAD_LIMIT = 4 * 1.4826  # median_slope: threshold in robust-sigma units of the residuals
-RULES = ("paper", "median_slope")
 
 
 def average_block(values, q):

@@ -80,6 +80,8 @@ def run_blocks(y, out, w_table, fifo, p, qbuf, rbuf, sums, counters, r0, p0, win
                     q = r0[a]
                 p_prior = p[a] + q
             # measurement noise: statistic of the recent measurements, y_k included
+            # (the R and Q ring updates are written out twice on purpose: a shared helper made
+            # the numba batch path 22 % slower, tools/bench.py pipeline)
             if window > 0 and counters[R_COUNT] == window:
                 old = rbuf[a, counters[R_HEAD]]
                 sums[R_SUM, a] -= old

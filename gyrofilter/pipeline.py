@@ -26,6 +26,7 @@ from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
 from .predictor import weight_table
 from .presets import PRESETS
+from .tempcomp import compensate
 
 
 @dataclass(frozen=True)
@@ -318,7 +319,7 @@ class GyroFilter:
             if row is not None:
                 outputs.append(np.array([row]))
         if temps is not None and i < len(x):
-            x = x[i:] - np.asarray(self._temp_coef) * (temps[i:, None] - self._temp_ref)
+            x = compensate(x[i:], temps[i:], self._temp_coef, self._temp_ref)
             i = 0
         length = self.settings.block_len
         n_blocks = (len(x) - i) // length
