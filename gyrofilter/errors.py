@@ -10,7 +10,7 @@ class GyroFilterError(Exception):
 
 
 class SettingsError(GyroFilterError, ValueError):
-    """A setting is out of range or inconsistent; raised once, at construction."""
+    """A setting or an argument (a sample, an array) is out of range, mis-shaped or inconsistent."""
 
 
 class RecordingError(GyroFilterError, ValueError):

@@ -27,6 +27,7 @@ from .errors import CalibrationError, SettingsError
 from .predictor import weight_table
 from .presets import PRESETS
 from .tempcomp import compensate
+from .units import check_sample_rate_hz
 
 
 @dataclass(frozen=True)
@@ -157,9 +158,7 @@ class GyroFilter:
             chosen["calibration_s"] = calibration_s
         self.settings = FilterSettings(**chosen)
         self.settings.validate()
-        if not (isinstance(sample_rate_hz, (int, float)) and math.isfinite(sample_rate_hz) and sample_rate_hz > 0):
-            raise SettingsError(f"sample_rate_hz must be a positive number, got {sample_rate_hz!r}")
-        self.sample_rate_hz = float(sample_rate_hz)
+        self.sample_rate_hz = check_sample_rate_hz(sample_rate_hz)
         self.preset = preset
         s = self.settings
         self._run = choose_kernel(kalman.run_blocks, s.backend)
@@ -247,11 +246,7 @@ class GyroFilter:
         Returns None while calibrating and between blocks, else the filtered (x, y, z) in deg/s
         for the block this sample completed.
         """
-        try:
-            if len(sample) != 3:
-                raise SettingsError(f"update() takes one sample (gx, gy, gz) in deg/s, got {len(sample)} values")
-        except TypeError:
-            raise SettingsError(f"update() takes one sample (gx, gy, gz) in deg/s, got {sample!r}") from None
+        sample = _sample3(sample)
         if self._temp_on:
             temp_c = _finite_float(temp_c)
             if temp_c is None:
@@ -280,8 +275,6 @@ class GyroFilter:
             if rejected or fallback:
                 self.rejected[a] += rejected
                 self.fallback_blocks[a] += fallback
-            if not math.isfinite(mean):
-                raise SettingsError(f"samples must be finite numbers; block {self.blocks_out} holds {values}")
             y1[0, a] = mean - self._bias[a]
         self._track(y1, self._out1)
         self.blocks_out += 1
@@ -334,7 +327,9 @@ class GyroFilter:
             self.blocks_out += n_blocks
             outputs.append(out)
             i += n_blocks * length
-        self._block = [tuple(row) for row in x[i:].tolist()]
+        # samples that do not complete a block wait for the next call (the block may already
+        # hold samples from update() or an earlier call: those stay, in order)
+        self._block.extend(tuple(row) for row in x[i:].tolist())
         if not outputs:
             return np.empty((0, 3))
         return np.concatenate(outputs)
@@ -412,6 +407,33 @@ class GyroFilter:
             np.sqrt(self._r0, out=self._r0)
         self._cal_buf = None
         self._cal_temp = None
+
+
+def _sample3(sample):
+    """One sample as a tuple of 3 finite floats (deg/s); SettingsError names what is wrong.
+
+    Checked before the sample touches any state, so a bad sample leaves the filter as it was.
+    """
+    try:
+        values = tuple(float(v) for v in sample if isinstance(v, _REAL) and not isinstance(v, _BOOL))
+        ok = len(values) == len(sample) == 3 and all(map(math.isfinite, values))
+    except TypeError:  # not a sequence
+        ok = False
+    if not ok:
+        raise SettingsError(f"update() takes one sample (gx, gy, gz): 3 finite numbers in deg/s, got {_shown(sample)}")
+    return values
+
+
+_REAL = (int, float, np.integer, np.floating)
+_BOOL = (bool, np.bool_)
+
+
+def _shown(value):
+    """A short, plain text of a user's value for an error message."""
+    if isinstance(value, np.ndarray):
+        return f"an array of shape {value.shape}"
+    text = repr(tuple(v.item() if isinstance(v, np.generic) else v for v in value)) if isinstance(value, (tuple, list)) else repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _finite_float(value):

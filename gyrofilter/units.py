@@ -12,6 +12,27 @@ from .errors import SettingsError
 
 DEG_PER_RAD = 180.0 / math.pi
 GYRO_UNITS = ("dps", "rad/s", "lsb")
+MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
+
+
+def check_sample_rate_hz(value, name="sample_rate_hz"):
+    """``value`` as a float when it is a finite rate in (0, MAX_SAMPLE_RATE_HZ] Hz, else SettingsError.
+
+    The one check of a sample rate: a bool, a string, NaN, infinity, zero, a negative number or
+    an implausibly high rate (which would size buffers beyond memory) names ``name`` and the value.
+    """
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+    if ok:
+        value = float(value)
+        ok = math.isfinite(value) and 0 < value <= MAX_SAMPLE_RATE_HZ
+    if not ok:
+        raise SettingsError(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {_plain(value)}")
+    return value
+
+
+def _plain(value):
+    """A value as a user wrote it: numpy scalars without their ``np.float64(...)`` wrapper."""
+    return repr(value.item() if isinstance(value, np.generic) else value)
 
 
 def to_dps(values, unit, lsb_per_dps=None):

@@ -1,0 +1,101 @@
+"""Live sources hand over a few samples per read: any chunking of the input, mixed with update()
+calls, must give the rows of one filter() call over the whole array, bit for bit."""
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from gyrofilter import GyroFilter
+from gyrofilter.presets import PRESETS
+
+RATE_HZ = 100.0
+N = 720  # 2 s of calibration + 520 samples: 104 blocks of 5
+
+
+def _signal(seed, n=N):
+    """Still for the calibration, then a turn with spikes: every stage (rejection, fallback, hold) acts."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / RATE_HZ
+    x = 0.3 + 0.05 * rng.standard_normal((n, 3))
+    moving = t > 3.0
+    x[moving, 0] += 40 * np.sin(2 * np.pi * 0.7 * (t[moving] - 3.0))
+    x[moving, 2] += 12.0
+    spikes = rng.random((n, 3)) < 0.03
+    x[spikes] += rng.choice([-1, 1], spikes.sum()) * rng.uniform(2, 30, spikes.sum())
+    temp = 25 + 0.5 * t / t[-1] + 0.01 * rng.standard_normal(n)
+    return x, temp
+
+
+CASES = [(name, {}) for name in PRESETS] + [
+    ("paper", {"outlier_rule": "median_slope"}),
+    ("recommended", {"outlier_rule": "median_slope"}),
+    ("paper", {"temp_coefficient_dps_per_c": (0.02, -0.01, 0.005)}),
+    ("recommended", {"temp_coefficient_dps_per_c": 0.03}),
+    ("paper", {"block_len": 7, "qr_window": 0}),
+]
+
+
+def _feed(filt, x, temp, plan):
+    """Feed x in the pieces plan gives: ("filter", k) = a filter() call on k samples, ("update", k) = k update() calls."""
+    rows, i = [], 0
+    for how, k in plan:
+        k = min(k, len(x) - i)
+        t = temp[i : i + k] if filt.compensates_temperature else None
+        if how == "filter":
+            rows.extend(filt.filter(x[i : i + k], t))
+        else:
+            for j in range(i, i + k):
+                row = filt.update(tuple(x[j]), None if t is None else t[j - i])
+                if row is not None:
+                    rows.append(np.array(row))
+        i += k
+    assert i == len(x), "the plan must feed every sample"
+    return np.array(rows).reshape(-1, 3)
+
+
+pieces = st.lists(st.tuples(st.sampled_from(["filter", "filter", "update"]), st.integers(1, 23)), min_size=1, max_size=60)
+
+
+@pytest.mark.parametrize("preset,extra", CASES, ids=[f"{p}-{'-'.join(e) or 'defaults'}" for p, e in CASES])
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(plan=pieces, seed=st.integers(0, 2**16))
+def test_any_chunking_equals_one_call(preset, extra, plan, seed):
+    x, temp = _signal(seed)
+    whole = GyroFilter(RATE_HZ, preset=preset, **extra)
+    expected = whole.filter(x, temp if whole.compensates_temperature else None)
+    assert len(expected) == (N - 200) // whole.settings.block_len
+    # repeat the plan until every sample is fed
+    plan = plan * (N // sum(k for _, k in plan) + 1)
+    chunked = GyroFilter(RATE_HZ, preset=preset, **extra)
+    got = _feed(chunked, x, temp, plan)
+    np.testing.assert_array_equal(got, expected)
+    assert chunked.pending_samples == whole.pending_samples
+    assert chunked.rejected.tolist() == whole.rejected.tolist()
+
+
+@pytest.mark.parametrize("size", [1, 2, 3, 4, 6, 7, 12, 13])
+def test_fixed_small_reads_lose_nothing(size):
+    """The live case: a source delivering `size` samples per read (2 per read = MPU6050 at 100 Hz)."""
+    x, _ = _signal(7, n=3000)
+    expected = GyroFilter(RATE_HZ).filter(x)
+    f = GyroFilter(RATE_HZ)
+    got = np.concatenate([f.filter(x[i : i + size]) for i in range(0, len(x), size)])
+    assert len(got) == (3000 - 200) // 5
+    np.testing.assert_array_equal(got, expected)
+
+
+def test_bad_sample_changes_nothing():
+    """A NaN, None or a wrong shape passed to update() raises and leaves the filter as it was."""
+    x, _ = _signal(3)
+    good = GyroFilter(RATE_HZ)
+    bad = GyroFilter(RATE_HZ)
+    rows_good, rows_bad = [], []
+    for i, sample in enumerate(x):
+        if i in (5, 150, 203, 400):  # while calibrating, mid-block and at a block start after it
+            for wrong in ((np.nan, 0.0, 0.0), None, ("a", 0, 0), np.zeros((3, 1)), (1.0, 2.0), (0.0, np.inf, 0.0)):
+                with pytest.raises(ValueError, match="3 finite numbers"):
+                    bad.update(wrong)
+        rows_good.append(good.update(tuple(sample)))
+        rows_bad.append(bad.update(tuple(sample)))
+    assert rows_bad == rows_good
+    assert all(np.isfinite(good.bias_dps)) and bad.bias_dps == good.bias_dps
