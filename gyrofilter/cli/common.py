@@ -1,5 +1,7 @@
-"""Pieces shared by the commands: filter options, warnings, the summary table."""
+"""Pieces shared by the commands: output-file safety, filter options, warnings, the summary table."""
+import contextlib
 import json
+import os
 import sys
 
 import numpy as np
@@ -12,6 +14,53 @@ from ..presets import PRESETS
 def say(text):
     """A message for the user (stderr, so that stdout stays data)."""
     print(text, file=sys.stderr)
+
+
+def add_force_argument(parser):
+    parser.add_argument("--force", action="store_true", help="overwrite output files that exist (an input is never overwritten)")
+
+
+def check_outputs(outputs, inputs=(), force=False):
+    """Refuse, before any work, to write where a user's data would be lost.
+
+    ``outputs`` and ``inputs`` are paths (None entries are skipped). An output that is one of
+    the inputs is refused even with ``force``; an output that exists is refused without it; two
+    outputs naming one file are refused. Raises FileExistsError / SettingsError naming the file.
+    """
+    outputs = [p for p in outputs if p]
+    inputs = [p for p in inputs if p]
+    seen = []
+    for out in outputs:
+        for other in inputs:
+            if _same_file(out, other):
+                raise SettingsError(f"{out}: is an input of this command; write the output to another file")
+        for other in seen:
+            if _same_file(out, other):
+                raise SettingsError(f"{out}: named for two outputs; give each output its own file")
+        seen.append(out)
+        if os.path.lexists(out) and not force:
+            raise FileExistsError(17, "exists (use --force to overwrite)", out)
+
+
+def _same_file(a, b):
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist yet
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+@contextlib.contextmanager
+def replacing(path):
+    """Write a whole file at once: yields a temporary path beside ``path``; on success it replaces
+    ``path``, on any failure it is removed, so a failed command leaves no partial file behind."""
+    folder, name = os.path.split(os.path.abspath(path))
+    tmp = os.path.join(folder, f".partial-{os.getpid()}-{name}")  # same extension: writers choose the format by it
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
 
 
 def print_warnings(warnings):
