@@ -316,8 +316,14 @@ def _rho_table(alpha):
                                       np.linspace(0.0, cut, 3000)[1:]]))
         w = u ** (2.0 * alpha)
         g1, g2 = g(u), g(r * u)
-        rho[i] = np.trapz(g1 * g2 * w, u) / math.sqrt(np.trapz(g1 ** 2 * w, u) * np.trapz(g2 ** 2 * w, u))
+        rho[i] = _trapezoid(g1 * g2 * w, u) / math.sqrt(_trapezoid(g1 ** 2 * w, u) * _trapezoid(g2 ** 2 * w, u))
     return log_r, np.clip(rho, 0.0, 1.0)
+
+
+def _trapezoid(y, x):
+    """Trapezoid rule, sum (x[i+1] - x[i]) (y[i+1] + y[i]) / 2 (numpy's trapz, removed in numpy 2.4,
+    is trapezoid from numpy 2.0 on; written out so that numpy 1.24 and 2.x give the same numbers)."""
+    return float(np.sum(np.diff(x) * (y[1:] + y[:-1])) / 2.0)
 
 
 #: below this cluster size the discrete transfer function is integrated directly
