@@ -189,6 +189,7 @@ class GyroFilter:
         self.rejected = np.zeros(3, dtype=np.int64)
         self.fallback_blocks = np.zeros(3, dtype=np.int64)
         self.blocks_out = 0
+        self.samples_in = 0  # every sample fed to update() or filter(), calibration included
         self.calibration = None
         self._bias = (0.0, 0.0, 0.0)
         self._cal_needed = int(round(s.calibration_s * self.sample_rate_hz))
@@ -240,6 +241,15 @@ class GyroFilter:
         """Samples held for a block that is not full yet (they produce output once it is)."""
         return len(self._block)
 
+    def block_end_indices(self, n_rows) -> np.ndarray:
+        """For the latest ``n_rows`` output rows: the index of each row's last input sample.
+
+        Indices count every sample fed since the start (``samples_in``), calibration included,
+        so ``t_s[block_end_indices(len(rows))]`` time-stamps the rows a call just returned.
+        """
+        last = self.samples_in - self.pending_samples - 1
+        return last - self.settings.block_len * np.arange(n_rows - 1, -1, -1, dtype=np.int64)
+
     def update(self, sample, temp_c=None):
         """Feed one sample (gx, gy, gz) in deg/s, and its temperature in deg C when compensating.
 
@@ -252,6 +262,7 @@ class GyroFilter:
             if temp_c is None:
                 raise SettingsError("temperature compensation is on: update() needs temp_c, a finite temperature "
                                     "(deg C), with every sample")
+        self.samples_in += 1
         if self._cal_buf is not None:
             self._cal_buf[self._cal_fill] = sample
             if self._cal_temp is not None:
@@ -295,6 +306,7 @@ class GyroFilter:
         if bad.any():
             raise SettingsError(f"samples_dps row {int(np.flatnonzero(bad)[0])} is not finite: {x[bad][0].tolist()}")
         temps = self._check_temps(temp_c, len(x))
+        samples_in = self.samples_in + len(x)
         outputs = []
         i = 0
         while self._cal_buf is not None and i < len(x):
@@ -330,6 +342,7 @@ class GyroFilter:
         # samples that do not complete a block wait for the next call (the block may already
         # hold samples from update() or an earlier call: those stay, in order)
         self._block.extend(tuple(row) for row in x[i:].tolist())
+        self.samples_in = samples_in
         if not outputs:
             return np.empty((0, 3))
         return np.concatenate(outputs)

@@ -37,20 +37,23 @@ CASES = [(name, {}) for name in PRESETS] + [
 
 def _feed(filt, x, temp, plan):
     """Feed x in the pieces plan gives: ("filter", k) = a filter() call on k samples, ("update", k) = k update() calls."""
-    rows, i = [], 0
+    rows, ends, i = [], [], 0
     for how, k in plan:
         k = min(k, len(x) - i)
         t = temp[i : i + k] if filt.compensates_temperature else None
         if how == "filter":
-            rows.extend(filt.filter(x[i : i + k], t))
+            out = filt.filter(x[i : i + k], t)
+            rows.extend(out)
+            ends.extend(filt.block_end_indices(len(out)))
         else:
             for j in range(i, i + k):
                 row = filt.update(tuple(x[j]), None if t is None else t[j - i])
                 if row is not None:
                     rows.append(np.array(row))
+                    ends.extend(filt.block_end_indices(1))
         i += k
     assert i == len(x), "the plan must feed every sample"
-    return np.array(rows).reshape(-1, 3)
+    return np.array(rows).reshape(-1, 3), np.array(ends)
 
 
 pieces = st.lists(st.tuples(st.sampled_from(["filter", "filter", "update"]), st.integers(1, 23)), min_size=1, max_size=60)
@@ -67,8 +70,13 @@ def test_any_chunking_equals_one_call(preset, extra, plan, seed):
     # repeat the plan until every sample is fed
     plan = plan * (N // sum(k for _, k in plan) + 1)
     chunked = GyroFilter(RATE_HZ, preset=preset, **extra)
-    got = _feed(chunked, x, temp, plan)
+    got, ends = _feed(chunked, x, temp, plan)
     np.testing.assert_array_equal(got, expected)
+    # each row's last input sample: calibration (200), then blocks of block_len
+    length = whole.settings.block_len
+    np.testing.assert_array_equal(ends, 200 + length * np.arange(len(expected)) + length - 1)
+    np.testing.assert_array_equal(whole.block_end_indices(len(expected)), ends)
+    assert chunked.samples_in == whole.samples_in == N
     assert chunked.pending_samples == whole.pending_samples
     assert chunked.rejected.tolist() == whole.rejected.tolist()
 
