@@ -426,7 +426,12 @@ def _sample3(sample):
     """One sample as a tuple of 3 finite floats (deg/s); SettingsError names what is wrong.
 
     Checked before the sample touches any state, so a bad sample leaves the filter as it was.
+    (v - v == 0 is False exactly for NaN and +-inf.)
     """
+    if type(sample) is tuple and len(sample) == 3:  # the common case, kept cheap
+        x, y, z = sample
+        if type(x) is float and type(y) is float and type(z) is float and x - x == 0 and y - y == 0 and z - z == 0:
+            return sample
     try:
         values = tuple(float(v) for v in sample if isinstance(v, _REAL) and not isinstance(v, _BOOL))
         ok = len(values) == len(sample) == 3 and all(map(math.isfinite, values))
