@@ -65,6 +65,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .errors import GyroFilterError, SettingsError
+from .units import plain
 
 STATS_HINT = "pip install gyrofilter[stats]"
 DEFAULT_MAX_SAMPLES = 200_000
@@ -279,9 +280,9 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
     if not np.all(np.isfinite(x)):
         raise SettingsError("series holds NaN or infinite values")
     if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {sample_rate_hz!r}")
+        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
     if max_samples < 100:
-        raise SettingsError(f"max_samples must be at least 100, got {max_samples!r}")
+        raise SettingsError(f"max_samples must be at least 100, got {plain(max_samples)}")
     k = max(1, math.ceil(len(x) / max_samples))
     if k > 1:
         n = (len(x) // k) * k
@@ -584,7 +585,7 @@ def select_order(x, *, max_n=DEFAULT_MAX_N, alpha=DEFAULT_ALPHA, reduce=True, cr
     rule. The F tests are reported in ``steps`` whatever decides.
     """
     if max_n < 1:
-        raise SettingsError(f"max_n must be at least 1, got {max_n!r}")
+        raise SettingsError(f"max_n must be at least 1, got {plain(max_n)}")
     if criterion not in CRITERIA:
         raise SettingsError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
     fits = {}

@@ -56,7 +56,7 @@ import numpy as np
 from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
 from .errors import SettingsError
-from .units import DEG_PER_RAD
+from .units import DEG_PER_RAD, plain
 
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
 TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
@@ -546,7 +546,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
             f"axis {axis}: all {x.size} samples equal {x[0]:g} deg/s (constant data): no noise to "
             "characterise (sensor not connected, or a saturated/stuck axis?)")
     if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
-        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {confidence!r}")
+        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
     for t in terms:
         if t not in TERMS:
             raise SettingsError(f"unknown noise term {t!r}; expected some of {', '.join(TERMS)}")

@@ -30,6 +30,7 @@ from typing import Callable
 import numpy as np
 
 from .errors import SettingsError
+from .units import plain
 
 
 @dataclass(frozen=True)
@@ -124,7 +125,7 @@ def profile_samples_dps(profile, sample_rate_hz, duration_s=None):
     if isinstance(profile, str):
         profile = get_profile(profile)
     if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {sample_rate_hz!r}")
+        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
     duration_s = profile.duration_s if duration_s is None else float(duration_s)
     n = int(round(duration_s * sample_rate_hz))
     t_s = np.arange(n) / sample_rate_hz

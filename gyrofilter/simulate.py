@@ -67,7 +67,7 @@ import numpy as np
 from . import noise_terms as nt
 from .errors import SettingsError
 from .recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, _format_number
-from .units import DEG_PER_RAD, GYRO_UNITS
+from .units import DEG_PER_RAD, GYRO_UNITS, plain
 
 AXES = ("x", "y", "z")
 DEFAULT_CHUNK_SAMPLES = 65536
@@ -113,7 +113,7 @@ def _number(value, where, kind="any"):
         _err(where, f"expected {_KINDS[kind][1]}, got {_show(value)}")
     value = float(value)
     if not math.isfinite(value) or not _KINDS[kind][0](value):
-        _err(where, f"expected {_KINDS[kind][1]}, got {value!r}")
+        _err(where, f"expected {_KINDS[kind][1]}, got {plain(value)}")
     return value
 
 
@@ -277,7 +277,7 @@ def _root_seed(seed, rng):
         return np.random.SeedSequence(rng.integers(0, 2**63, size=4))
     if seed is not None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise SettingsError(f"simulate: seed must be an integer >= 0, got {seed!r}")
+            raise SettingsError(f"simulate: seed must be an integer >= 0, got {plain(seed)}")
         return np.random.SeedSequence(int(seed))
     return np.random.SeedSequence()
 
@@ -333,7 +333,7 @@ def sample_count(duration_s, sample_rate_hz):
     """Number of samples of a run: round(duration · f_s), at least 1."""
     duration_s = float(duration_s)
     if not math.isfinite(duration_s) or duration_s <= 0:
-        raise SettingsError(f"simulate: duration must be > 0 s, got {duration_s!r}")
+        raise SettingsError(f"simulate: duration must be > 0 s, got {plain(duration_s)}")
     return max(1, int(round(duration_s * sample_rate_hz)))
 
 
