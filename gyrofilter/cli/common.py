@@ -1,8 +1,11 @@
 """Pieces shared by the commands: output-file safety, filter options, warnings, the summary table."""
 import contextlib
 import json
+import math
 import os
+import shutil
 import sys
+import tempfile
 
 import numpy as np
 
@@ -61,6 +64,49 @@ def replacing(path):
     finally:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def replacing_in(folder):
+    """:func:`replacing` for files whose names the writer chooses: yields a temporary folder inside
+    ``folder`` (created if needed); on success every file written there replaces its namesake in
+    ``folder``; on any failure the temporary folder goes, and ``folder`` too if this call made it."""
+    made = not os.path.isdir(folder)
+    os.makedirs(folder, exist_ok=True)
+    tmp = tempfile.mkdtemp(prefix=f".partial-{os.getpid()}-", dir=folder)
+    try:
+        yield tmp
+        for name in sorted(os.listdir(tmp)):
+            os.replace(os.path.join(tmp, name), os.path.join(folder, name))
+    except BaseException:
+        if made:
+            shutil.rmtree(folder, ignore_errors=True)
+        raise
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_json(path, doc):
+    """Write ``doc`` as JSON to ``path`` (no replacing: give it the path :func:`replacing` yields).
+
+    numpy arrays and scalars become lists and numbers; a non-finite number (NaN, +-inf) becomes
+    ``null``, as docs/formats.md states, so the file never holds the non-standard NaN/Infinity tokens.
+    """
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(_json_ready(doc), fh, indent=1, allow_nan=False)
+        fh.write("\n")
+
+
+def _json_ready(value):
+    if isinstance(value, dict):
+        return {str(k): _json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_json_ready(v) for v in (value.tolist() if isinstance(value, np.ndarray) else value)]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
 
 
 def print_warnings(warnings):
