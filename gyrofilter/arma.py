@@ -239,6 +239,7 @@ class AxisReport:
     whiteness: Whiteness
     notes: list = field(default_factory=list)
     criterion: str = DEFAULT_CRITERION
+    warnings: list = field(default_factory=list)  # what scipy/statsmodels warned, summarised (see analyze_axis)
 
     def to_dict(self):
         return {
@@ -260,6 +261,7 @@ class AxisReport:
             "bias_model": _plain(asdict(self.bias_model)),
             "whiteness": _plain(asdict(self.whiteness)),
             "notes": list(self.notes),
+            "warnings": list(self.warnings),
         }
 
 
@@ -682,11 +684,40 @@ def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAM
     """Paper 003's section 1 for one static axis (deg/s): tests, Pandit-Wu order, whiteness, bias model.
 
     ``quantum_dps``: the recording's quantisation step (1 / lsb_per_dps), for the dithered KS test;
-    ignored when the series is block-averaged. ``criterion``: see :func:`select_order`.
+    ignored when the series is block-averaged. ``criterion``: see :func:`select_order`. Warnings
+    of scipy and statsmodels are caught, not printed: ``report.warnings`` summarises them
+    (:func:`summarise_warnings`).
     """
     require_stats()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        report = _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_maxlag, lags,
+                               quantum_dps, criterion)
+    report.warnings = summarise_warnings(caught)
+    return report
+
+
+def summarise_warnings(caught):
+    """Warnings (``warnings.WarningMessage``) as one text per distinct kind and message, with a count.
+
+    scipy and statsmodels warn on hard fits (ConvergenceWarning, RuntimeWarning on a near-singular
+    step, ...); :func:`analyze_axis` collects them instead of letting them print, and a caller
+    decides how to show them: ``["ConvergenceWarning (3x): Maximum Likelihood optimization failed
+    to converge"]``.
+    """
+    counts = {}
+    for w in caught:
+        key = f"{w.category.__name__}: {' '.join(str(w.message).split())}"
+        counts[key] = counts.get(key, 0) + 1
+    return [key if n == 1 else key.replace(":", f" ({n}x):", 1) for key, n in counts.items()]
+
+
+def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_maxlag, lags, quantum_dps, criterion):
     x_raw = np.asarray(x_dps, float)
     series, k, rate, mean = prepare_series(x_raw, sample_rate_hz, max_samples)
+    if np.ptp(x_raw) == 0:
+        raise SettingsError(f"axis {axis}: constant ({mean:g} deg/s) over all {len(x_raw)} samples: "
+                            "no noise to model (is the axis stuck or saturated?)")
     notes = []
     if k > 1:
         notes.append(f"{len(x_raw)} samples block-averaged by {k} to {len(series)} at {rate:.6g} Hz before the analysis "
