@@ -607,10 +607,10 @@ def characterise(gyro_dps, sample_rate_hz, *, axes="xyz", **kwargs):
 
 
 # --------------------------------------------------------------------------------------------
-# Export: the allan JSON (interfaces.md section 3) and Kalibr's imu.yaml
+# Export: the allan JSON (docs/formats.md, section 4) and Kalibr's imu.yaml
 # --------------------------------------------------------------------------------------------
 
-#: JSON key of each coefficient (interfaces.md section 3), in its base unit
+#: JSON key of each coefficient (docs/formats.md, section 4), in its base unit
 JSON_KEY = {"quantization": "quantization_deg", "arw": "arw_dps_per_sqrt_hz",
             "bias_instability": "bias_instability_dps", "rrw": "rrw_dps_per_sqrt_s",
             "rate_ramp": "rate_ramp_dps_per_s"}
@@ -637,7 +637,7 @@ def _details_json(c: Coefficient):
 
 
 def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
-    """The ``gyrofilter allan --json`` document (interfaces.md section 3, plus details)."""
+    """The ``gyrofilter allan --json`` document (docs/formats.md, section 4)."""
     doc = {"sample_rate_hz": float(sample_rate_hz)}
     if recording is not None:
         doc["recording"] = str(recording)

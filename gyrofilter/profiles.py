@@ -5,7 +5,7 @@ still) and is a function of time only, so the truth can be evaluated at any inst
 (the lag estimate of :mod:`gyrofilter.evaluate` uses that). Rates in deg/s on one axis; the
 dynamic test adds the same profile to each axis of a real static recording.
 
-``paper001`` is the test of paper 001 (section 5 of ``shared/seeds/SUMMARY.md``) exactly as
+``paper001`` is the dynamic test of paper 001 (its section 5) exactly as
 issue 2 item 6 states it, 90 s:
 
     w(t) = 0                                 0  <= t < 10

@@ -1,6 +1,6 @@
 """Recording format version 1: reader and writers.
 
-The format (``shared/interfaces.md`` section 1) is CSV text, optionally gzip-compressed::
+The format (docs/formats.md, section 1) is CSV text, optionally gzip-compressed::
 
     # gyrofilter-recording: 1
     # sample_rate_hz: 100

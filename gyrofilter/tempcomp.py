@@ -8,7 +8,7 @@ start-up temperature T0; afterwards the bias that is left is, to first order::
     b(T) - b(T0) = c (T - T0)
 
 with c the ``temperature`` effect's ``coefficient_dps_per_c`` of the gap report
-(interfaces.md section 2) or of a simulator model. Compensation subtracts it per sample::
+(docs/formats.md, section 3) or of a simulator model. Compensation subtracts it per sample::
 
     y = x - c (T - T0)
 

@@ -1,5 +1,5 @@
 """Gap analysis: hidden effects must be named on the right axis with their parameters within
-tolerance; clean recordings must give no finding; the JSON follows interfaces.md section 2.
+tolerance; clean recordings must give no finding; the JSON follows docs/formats.md section 3.
 
 The default suite runs one 10-minute case per effect and a few clean cases (fewer
 simulations than the command's default, to stay fast); the large battery is marked slow
