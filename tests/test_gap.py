@@ -5,7 +5,6 @@ The default suite runs one 10-minute case per effect and a few clean cases (fewe
 simulations than the command's default, to stay fast); the large battery is marked slow
 (``pytest -m slow``) and ``tools/gap_battery.py`` prints the rates.
 """
-import gzip
 import importlib.util
 import json
 import math
