@@ -65,7 +65,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .errors import GyroFilterError, SettingsError
-from .units import plain
+from .units import json_ready, plain
 
 STATS_HINT = "pip install gyrofilter[stats]"
 DEFAULT_MAX_SAMPLES = 200_000
@@ -250,16 +250,16 @@ class AxisReport:
             "analysis_rate_hz": self.analysis_rate_hz,
             "mean_dps": self.mean_dps,
             "std_dps": self.std_dps,
-            "stationarity": _plain(asdict(self.stationarity)),
-            "normality": _plain(asdict(self.normality)),
-            "order_search": [_plain(asdict(s)) for s in self.steps],
+            "stationarity": json_ready(asdict(self.stationarity)),
+            "normality": json_ready(asdict(self.normality)),
+            "order_search": [json_ready(asdict(s)) for s in self.steps],
             "fits": [f.to_dict() for f in self.fits],
             "criterion": self.criterion,
             "adequate_order": list(self.adequate_order),
             "chosen": self.chosen.to_dict(),
             "arma11": self.arma11.to_dict(),
-            "bias_model": _plain(asdict(self.bias_model)),
-            "whiteness": _plain(asdict(self.whiteness)),
+            "bias_model": json_ready(asdict(self.bias_model)),
+            "whiteness": json_ready(asdict(self.whiteness)),
             "notes": list(self.notes),
             "warnings": list(self.warnings),
         }
@@ -769,19 +769,3 @@ def adev_discrepancy(adev_measured, adev_model):
 def _term(c, name, digits):
     sign = "-" if c < 0 else "+"
     return f" {sign} {abs(c):.{digits}f} {name}"
-
-
-def _plain(obj):
-    """JSON-ready copy: tuples -> lists, numpy scalars -> floats, inf -> None."""
-    if isinstance(obj, dict):
-        return {k: _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj

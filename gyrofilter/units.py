@@ -40,6 +40,21 @@ def plain(value):
     return repr(_python(value))
 
 
+def json_ready(value):
+    """``value`` as ``json.dump(..., allow_nan=False)`` takes it: numpy arrays and scalars as lists
+    and numbers, tuples as lists, dict keys as text, and a non-finite number (NaN, +-inf) as None
+    (``null``: the files never hold the non-standard NaN/Infinity tokens; docs/formats.md)."""
+    if isinstance(value, dict):
+        return {str(k): json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, (np.generic, np.ndarray)):
+        return json_ready(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
 def _python(value):
     if isinstance(value, (np.generic, np.ndarray)):
         return value.tolist()

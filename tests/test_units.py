@@ -7,7 +7,7 @@ from gyrofilter.errors import GyroFilterError
 from gyrofilter.recording import parse_recording
 from gyrofilter.reference import body_rate_from_quaternions
 from gyrofilter.tempcomp import compensate
-from gyrofilter.units import check_sample_rate_hz, from_dps, plain, to_dps
+from gyrofilter.units import check_sample_rate_hz, from_dps, json_ready, plain, to_dps
 
 
 def test_plain_writes_numpy_scalars_as_the_numbers_they_hold():
@@ -46,3 +46,11 @@ def test_error_messages_print_numpy_scalars_as_plain_numbers(call, expected):
     with pytest.raises(GyroFilterError) as info:
         call()
     assert expected in str(info.value) and "np." not in str(info.value)
+
+
+def test_json_ready_gives_what_strict_json_takes():
+    import json
+
+    value = {1: (np.float64(np.nan), np.inf, -np.inf), "a": np.arange(2), "b": [np.float32(0.5), np.bool_(True), None, "s"]}
+    text = json.dumps(json_ready(value), allow_nan=False)
+    assert json.loads(text) == {"1": [None, None, None], "a": [0, 1], "b": [0.5, True, None, "s"]}

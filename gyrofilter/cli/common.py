@@ -1,7 +1,6 @@
 """Pieces shared by the commands: output-file safety, filter options, warnings, the summary table."""
 import contextlib
 import json
-import math
 import os
 import shutil
 import sys
@@ -12,6 +11,7 @@ import numpy as np
 from ..errors import SettingsError
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import PRESETS
+from ..units import json_ready
 
 
 def say(text):
@@ -89,24 +89,12 @@ def replacing_in(folder):
 def write_json(path, doc):
     """Write ``doc`` as JSON to ``path`` (no replacing: give it the path :func:`replacing` yields).
 
-    numpy arrays and scalars become lists and numbers; a non-finite number (NaN, +-inf) becomes
-    ``null``, as docs/formats.md states, so the file never holds the non-standard NaN/Infinity tokens.
+    Through :func:`gyrofilter.units.json_ready`: numpy values become plain numbers and lists, a
+    non-finite number becomes ``null``.
     """
     with open(path, "w", encoding="utf-8") as fh:
-        json.dump(_json_ready(doc), fh, indent=1, allow_nan=False)
+        json.dump(json_ready(doc), fh, indent=1, allow_nan=False)
         fh.write("\n")
-
-
-def _json_ready(value):
-    if isinstance(value, dict):
-        return {str(k): _json_ready(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_json_ready(v) for v in (value.tolist() if isinstance(value, np.ndarray) else value)]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 def print_warnings(warnings):
