@@ -50,3 +50,15 @@ def test_check_outputs(tmp_path):
         common.check_outputs([str(tmp_path / "." / "in.csv")], [str(inp)], force=True)
     with pytest.raises(SettingsError, match="two outputs"):
         common.check_outputs([str(new), str(new)], [])
+
+
+def test_replacing_makes_missing_folders_and_removes_them_on_failure(tmp_path):
+    target = tmp_path / "a" / "b" / "out.json"
+    with pytest.raises(RuntimeError), common.replacing(str(target)) as tmp:
+        assert os.path.basename(tmp).endswith("-out.json") and os.path.isdir(tmp_path / "a" / "b")
+        open(tmp, "w").write("half")
+        raise RuntimeError("failed")
+    assert os.listdir(tmp_path) == []
+    with common.replacing(str(target)) as tmp:
+        open(tmp, "w").write("whole")
+    assert target.read_text() == "whole" and os.listdir(target.parent) == ["out.json"]

@@ -54,36 +54,50 @@ def _same_file(a, b):
 
 @contextlib.contextmanager
 def replacing(path):
-    """Write a whole file at once: yields a temporary path beside ``path``; on success it replaces
-    ``path``, on any failure it is removed, so a failed command leaves no partial file behind."""
+    """Write a whole file at once: yields a temporary path beside ``path`` (its folder created if
+    needed); on success it replaces ``path``; on any failure it is removed, with any folder this
+    call created, so a failed command leaves nothing behind."""
     folder, name = os.path.split(os.path.abspath(path))
-    tmp = os.path.join(folder, f".partial-{os.getpid()}-{name}")  # same extension: writers choose the format by it
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+    with _folder(folder):
+        tmp = os.path.join(folder, f".partial-{os.getpid()}-{name}")  # same extension: writers choose the format by it
+        try:
+            yield tmp
+            os.replace(tmp, path)
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
 
 
 @contextlib.contextmanager
 def replacing_in(folder):
     """:func:`replacing` for files whose names the writer chooses: yields a temporary folder inside
     ``folder`` (created if needed); on success every file written there replaces its namesake in
-    ``folder``; on any failure the temporary folder goes, and ``folder`` too if this call made it."""
-    made = not os.path.isdir(folder)
-    os.makedirs(folder, exist_ok=True)
-    tmp = tempfile.mkdtemp(prefix=f".partial-{os.getpid()}-", dir=folder)
+    ``folder``; on any failure the temporary folder goes, with any folder this call created."""
+    with _folder(folder):
+        tmp = tempfile.mkdtemp(prefix=f".partial-{os.getpid()}-", dir=folder)
+        try:
+            yield tmp
+            for name in sorted(os.listdir(tmp)):
+                os.replace(os.path.join(tmp, name), os.path.join(folder, name))
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _folder(folder):
+    """Make ``folder`` and its missing parents; on a failure inside the block, remove what was made."""
+    top = None
+    parent = os.path.abspath(folder)
+    while not os.path.isdir(parent):
+        top, parent = parent, os.path.dirname(parent)
+    if top is not None:
+        os.makedirs(folder)
     try:
-        yield tmp
-        for name in sorted(os.listdir(tmp)):
-            os.replace(os.path.join(tmp, name), os.path.join(folder, name))
+        yield
     except BaseException:
-        if made:
-            shutil.rmtree(folder, ignore_errors=True)
+        if top is not None:
+            shutil.rmtree(top, ignore_errors=True)
         raise
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def write_json(path, doc):

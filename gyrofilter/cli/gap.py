@@ -58,7 +58,6 @@ def run(args):
     progress(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
     report = analyse_gap(rec, seed=args.seed, n_sims=args.sims, progress=progress,
                          recording_name=args.recording)
-    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     with contextlib.ExitStack() as outputs:
         common.write_json(outputs.enter_context(common.replacing(args.json)), report)
         if args.report:
