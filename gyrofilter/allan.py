@@ -98,7 +98,7 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
         return default_cluster_sizes(n_samples)
     taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
     if taus.ndim != 1 or taus.size == 0 or not np.all(np.isfinite(taus)):
-        raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {taus_s!r}")
+        raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {plain(taus_s)}")
     m = np.round(taus * rate).astype(np.int64)
     if np.any(m < 1):
         raise AllanInputError(

@@ -96,7 +96,7 @@ def _show(value):
     try:
         return json.dumps(value)
     except (TypeError, ValueError):
-        return repr(value)
+        return plain(value)
 
 
 def _is_ignored(key):
