@@ -34,8 +34,8 @@ def plain(value):
     """``repr(value)`` for error messages, numpy scalars as the plain number they hold.
 
     numpy 2 writes ``repr(np.float64(14.99))`` as ``np.float64(14.99)``; this gives ``14.99``
-    on numpy 1.24 and 2.x alike; arrays, lists and tuples element by element, and ``'text'`` for
-    a string, as ``repr`` writes it. The one place error messages turn a user's value into text.
+    on numpy 1.24 and 2.x alike; lists and tuples element by element. Anything else (a string, an
+    array) as ``repr`` writes it. The one place error messages turn a user's value into text.
     """
     return repr(_python(value))
 
@@ -56,8 +56,8 @@ def json_ready(value):
 
 
 def _python(value):
-    if isinstance(value, (np.generic, np.ndarray)):
-        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
     if isinstance(value, (list, tuple)):
         return type(value)(_python(v) for v in value)
     return value
