@@ -45,6 +45,12 @@ def check_outputs(outputs, inputs=(), force=False):
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
 
 
+def check_output_folder(folder, option):
+    """Refuse, before any work, an output folder (``option`` DIR) that exists as a file."""
+    if folder and os.path.exists(folder) and not os.path.isdir(folder):
+        raise SettingsError(f"{option} {folder}: is a file; give a folder for the output files")
+
+
 def _same_file(a, b):
     try:
         return os.path.samefile(a, b)

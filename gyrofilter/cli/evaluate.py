@@ -43,6 +43,7 @@ def _recordings_dir(arg):
 def run(args):
     from ..plots import pyplot
 
+    common.check_output_folder(args.out, "--out")
     common.check_outputs([os.path.join(args.out, name) for name in OUTPUT_NAMES], force=args.force)
     rec_dir = _recordings_dir(args.recordings)
     pyplot()  # a missing matplotlib is said now, not after the evaluation

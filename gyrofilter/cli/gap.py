@@ -36,6 +36,7 @@ def run(args):
     from ..recording import read_recording
 
     report_files = [os.path.join(args.report, name) for name in report_file_names()] if args.report else []
+    common.check_output_folder(args.report, "--report")
     common.check_outputs([args.json] + report_files, [args.recording], args.force)
     if args.sims is not None and args.sims < 2:
         raise SettingsError(f"--sims must be >= 2, got {args.sims}")
