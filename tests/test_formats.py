@@ -117,3 +117,16 @@ def test_no_reference_to_the_outside_contract(folder):
         if path.suffix in (".py", ".md", ".json", ".txt") and path.is_file():
             text = path.read_text(encoding="utf-8", errors="replace")
             assert not outside.search(text), f"{path.relative_to(ROOT)} refers to the outside contract"
+
+
+def test_links_to_formats_md_point_at_its_sections():
+    def slug(heading):  # GitHub's anchor of a heading
+        return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+    anchors = {slug(h) for h in re.findall(r"^#+ (.*)$", DOC, re.M)}
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    links = [(page.name, anchor) for page in pages
+             for anchor in re.findall(r"formats\.md#([\w\-]+)", page.read_text(encoding="utf-8"))]
+    assert len(links) >= 8
+    for page, anchor in links:
+        assert anchor in anchors, f"{page}: formats.md#{anchor} is not a heading of docs/formats.md"
