@@ -268,8 +268,10 @@ def _static_recording(tmp_path, n, name="static.csv"):
     (["--end-s", "1"], "--end-s 1 leaves 100 of the 150 samples"),
     (["--start-s", "0.2", "--end-s", "1.2"], "--start-s 0.2 and --end-s 1.2 leave 100 of the 150 samples"),
     (["--start-s", "1", "--end-s", "1"], "--end-s 1 must be after --start-s 1"),
+    (["--max-n", "0"], "--max-n must be at least 1, got 0"),
+    (["--max-samples", "50"], "--max-samples must be at least 100, got 50"),
 ])
-def test_cli_window_errors_name_what_the_user_gave(tmp_path, capsys, options, expected):
+def test_cli_errors_name_the_options_the_user_gave(tmp_path, capsys, options, expected):
     from gyrofilter.cli import main
 
     path = _static_recording(tmp_path, 150, "short.csv")

@@ -38,7 +38,11 @@ def run(args):
     common.check_outputs([args.json], [args.recording], args.force)
     arma.require_stats()
     if not 0 < args.alpha < 0.5:
-        raise SettingsError(f"--alpha must be in (0, 0.5), got {args.alpha}")
+        raise SettingsError(f"--alpha must be in (0, 0.5), got {args.alpha:g}")
+    if args.max_n < 1:
+        raise SettingsError(f"--max-n must be at least 1, got {args.max_n}")
+    if args.max_samples < 100:
+        raise SettingsError(f"--max-samples must be at least 100, got {args.max_samples}")
     rec = read_recording(args.recording)
     common.print_warnings(rec.warnings)
     fs = rec.sample_rate_hz
