@@ -90,7 +90,20 @@ def test_cli_missing_model_file_and_bad_duration(tmp_path, capsys):
     model_path = write_json(tmp_path / "m.json", MODEL)
     assert main(["simulate", "--model", model_path, "--duration", "-3", "--out", str(tmp_path / "o.csv")]) == 2
     err = capsys.readouterr().err
-    assert "duration must be > 0" in err and err.count("\n") == 1
+    assert "--duration must be > 0 s, got -3" in err and err.count("\n") == 1 and model_path not in err
+
+
+@pytest.mark.parametrize("option, expected", [
+    (["--rate", "-5"], "--rate must be a number of Hz in (0, 100000], got -5.0"),
+    (["--seed", "-1"], "--seed must be an integer >= 0, got -1"),
+    (["--chunk", "0"], "--chunk must be at least 1 sample, got 0"),
+])
+def test_cli_bad_options_are_named_not_blamed_on_the_model(tmp_path, capsys, option, expected):
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    assert main(["simulate", "--model", model_path, "--duration", "1", "--out", str(tmp_path / "o.csv")] + option) == 2
+    err = capsys.readouterr().err
+    assert expected in err and model_path not in err and err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.json"]
 
 
 def test_cli_warns_about_unknown_effect_parameters(tmp_path, capsys):

@@ -7,12 +7,14 @@ or is the model itself; the recording is written beside it under a temporary nam
 its place only when complete, so a failed or interrupted run leaves no file behind.
 """
 import json
+import math
 import sys
 import time
 
 import numpy as np
 
 from ..errors import SettingsError
+from ..units import check_sample_rate_hz
 from . import common
 
 
@@ -46,14 +48,20 @@ def run(args):
     from ..simulate import recording_columns, recording_header, sample_count, simulate_chunks, validate_model
 
     common.check_outputs([args.out], [args.model], args.force)
+    if not (math.isfinite(args.duration) and args.duration > 0):
+        raise SettingsError(f"--duration must be > 0 s, got {args.duration:g}")
+    if args.rate is not None:
+        check_sample_rate_hz(args.rate, "--rate")
+    if args.seed is not None and args.seed < 0:
+        raise SettingsError(f"--seed must be an integer >= 0, got {args.seed}")
+    if args.chunk < 1:
+        raise SettingsError(f"--chunk must be at least 1 sample, got {args.chunk}")
     model = load_model(args.model)
     try:
         spec, warnings = validate_model(model, sample_rate_hz=args.rate)
-        if args.seed is not None and args.seed < 0:
-            raise SettingsError(f"--seed must be an integer >= 0, got {args.seed}")
-        n_total = sample_count(args.duration, spec["sample_rate_hz"])
     except SettingsError as exc:
         raise SettingsError(f"{args.model}: {exc}") from None
+    n_total = sample_count(args.duration, spec["sample_rate_hz"])
     for text in warnings:
         common.say(f"gyrofilter: warning: {args.model}: {text}")
     header = recording_header(model, args.duration, seed=args.seed, validated=spec)
