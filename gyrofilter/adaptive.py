@@ -51,6 +51,7 @@ import numpy as np
 from .calibration import white_noise_std
 from .errors import SettingsError
 from .jit import choose_kernel
+from .units import plain
 
 DEFAULTS = {
     "cusum_kappa": 0.5,
@@ -67,7 +68,7 @@ _Z_BY_P = {0.9: 1.2816, 0.95: 1.6449, 0.99: 2.3263, 0.999: 3.0902, 0.9999: 3.719
 def chi2_quantile(p, dof):
     """Wilson-Hilferty approximation of the chi-square quantile: dof (1 - 2/(9 dof) + z sqrt(2/(9 dof)))^3."""
     if p not in _Z_BY_P:
-        raise SettingsError(f"accept_p must be one of {sorted(_Z_BY_P)}, got {p!r}")
+        raise SettingsError(f"accept_p must be one of {sorted(_Z_BY_P)}, got {plain(p)}")
     z = _Z_BY_P[p]
     a = 2.0 / (9.0 * dof)
     return dof * (1.0 - a + z * math.sqrt(a)) ** 3
@@ -156,13 +157,13 @@ class ConstantRateHold:
                  window_blocks=20, max_blocks=400, accept_p=0.999, agree_z=4.0, backend="auto"):
         sigma = np.asarray(sigma_block_dps, dtype=float).reshape(-1)
         if sigma.shape != (3,) or not np.all(np.isfinite(sigma)) or np.any(sigma <= 0):
-            raise SettingsError(f"sigma_block_dps must be 3 positive numbers, got {sigma_block_dps!r}")
+            raise SettingsError(f"sigma_block_dps must be 3 positive numbers, got {plain(sigma_block_dps)}")
         for name, value in (("cusum_kappa", cusum_kappa), ("cusum_h", cusum_h), ("agree_z", agree_z)):
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0):
-                raise SettingsError(f"setting {name}={value!r}: must be a number > 0")
+                raise SettingsError(f"setting {name}={plain(value)}: must be a number > 0")
         for name, value, low in (("window_blocks", window_blocks, 2), ("max_blocks", max_blocks, 1), ("initial_blocks", initial_blocks, 0)):
             if not (isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= low):
-                raise SettingsError(f"setting {name}={value!r}: must be an integer >= {low}")
+                raise SettingsError(f"setting {name}={plain(value)}: must be an integer >= {low}")
         if backend not in ("auto", "python", "numba"):
             raise SettingsError(f"setting backend={backend!r}: must be 'auto', 'python' or 'numba'")
         self.sigma = sigma.copy()

@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from .errors import GyroFilterError, SettingsError
+from .units import plain
 
 #: cluster count below which a deviation (and any fit using it) is flagged: paper 002 needs
 #: N/m >= 9 for an error under 25 %.
@@ -46,9 +47,9 @@ def _check_rate(sample_rate_hz):
         rate = float(sample_rate_hz)
     except (TypeError, ValueError):
         raise SettingsError(
-            f"sample_rate_hz must be a positive number (Hz), got {sample_rate_hz!r}") from None
+            f"sample_rate_hz must be a positive number (Hz), got {plain(sample_rate_hz)}") from None
     if not math.isfinite(rate) or rate <= 0:
-        raise SettingsError(f"sample_rate_hz must be a positive number (Hz), got {sample_rate_hz!r}")
+        raise SettingsError(f"sample_rate_hz must be a positive number (Hz), got {plain(sample_rate_hz)}")
     return rate
 
 
@@ -97,7 +98,7 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
         return default_cluster_sizes(n_samples)
     taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
     if taus.ndim != 1 or taus.size == 0 or not np.all(np.isfinite(taus)):
-        raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {taus_s!r}")
+        raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {plain(taus_s)}")
     m = np.round(taus * rate).astype(np.int64)
     if np.any(m < 1):
         raise AllanInputError(
@@ -248,7 +249,7 @@ def edf_oavar(n_samples, m, alpha):
     elif alpha == -2:
         edf = (n - 2) / m * ((n - 1) ** 2 - 3 * m * (n - 1) + 4 * m ** 2) / (n - 3) ** 2
     else:
-        raise SettingsError(f"alpha must be one of +2, +1, 0, -1, -2 (NIST SP 1065 Table 5), got {alpha!r}")
+        raise SettingsError(f"alpha must be one of +2, +1, 0, -1, -2 (NIST SP 1065 Table 5), got {plain(alpha)}")
     return np.maximum(edf, 1.0)
 
 
@@ -294,7 +295,7 @@ def chi2_interval(avar, edf, confidence=0.95):
         edf s^2 / chi2_{(1+c)/2}(edf)  <=  sigma^2  <=  edf s^2 / chi2_{(1-c)/2}(edf)
     """
     if not 0.0 < confidence < 1.0:
-        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {confidence!r}")
+        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
     avar = np.asarray(avar, dtype=np.float64)
     edf = np.asarray(edf, dtype=np.float64)
     low = edf * avar / chi2_ppf(0.5 + confidence / 2.0, edf)

@@ -65,6 +65,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .errors import GyroFilterError, SettingsError
+from .units import json_ready, plain
 
 STATS_HINT = "pip install gyrofilter[stats]"
 DEFAULT_MAX_SAMPLES = 200_000
@@ -238,6 +239,7 @@ class AxisReport:
     whiteness: Whiteness
     notes: list = field(default_factory=list)
     criterion: str = DEFAULT_CRITERION
+    warnings: list = field(default_factory=list)  # what scipy/statsmodels warned, summarised (see analyze_axis)
 
     def to_dict(self):
         return {
@@ -248,17 +250,18 @@ class AxisReport:
             "analysis_rate_hz": self.analysis_rate_hz,
             "mean_dps": self.mean_dps,
             "std_dps": self.std_dps,
-            "stationarity": _plain(asdict(self.stationarity)),
-            "normality": _plain(asdict(self.normality)),
-            "order_search": [_plain(asdict(s)) for s in self.steps],
+            "stationarity": json_ready(asdict(self.stationarity)),
+            "normality": json_ready(asdict(self.normality)),
+            "order_search": [json_ready(asdict(s)) for s in self.steps],
             "fits": [f.to_dict() for f in self.fits],
             "criterion": self.criterion,
             "adequate_order": list(self.adequate_order),
             "chosen": self.chosen.to_dict(),
             "arma11": self.arma11.to_dict(),
-            "bias_model": _plain(asdict(self.bias_model)),
-            "whiteness": _plain(asdict(self.whiteness)),
+            "bias_model": json_ready(asdict(self.bias_model)),
+            "whiteness": json_ready(asdict(self.whiteness)),
             "notes": list(self.notes),
+            "warnings": list(self.warnings),
         }
 
 
@@ -279,9 +282,9 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
     if not np.all(np.isfinite(x)):
         raise SettingsError("series holds NaN or infinite values")
     if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {sample_rate_hz!r}")
+        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
     if max_samples < 100:
-        raise SettingsError(f"max_samples must be at least 100, got {max_samples!r}")
+        raise SettingsError(f"max_samples must be at least 100, got {plain(max_samples)}")
     k = max(1, math.ceil(len(x) / max_samples))
     if k > 1:
         n = (len(x) // k) * k
@@ -584,7 +587,7 @@ def select_order(x, *, max_n=DEFAULT_MAX_N, alpha=DEFAULT_ALPHA, reduce=True, cr
     rule. The F tests are reported in ``steps`` whatever decides.
     """
     if max_n < 1:
-        raise SettingsError(f"max_n must be at least 1, got {max_n!r}")
+        raise SettingsError(f"max_n must be at least 1, got {plain(max_n)}")
     if criterion not in CRITERIA:
         raise SettingsError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
     fits = {}
@@ -681,11 +684,40 @@ def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAM
     """Paper 003's section 1 for one static axis (deg/s): tests, Pandit-Wu order, whiteness, bias model.
 
     ``quantum_dps``: the recording's quantisation step (1 / lsb_per_dps), for the dithered KS test;
-    ignored when the series is block-averaged. ``criterion``: see :func:`select_order`.
+    ignored when the series is block-averaged. ``criterion``: see :func:`select_order`. Warnings
+    of scipy and statsmodels are caught, not printed: ``report.warnings`` summarises them
+    (:func:`summarise_warnings`).
     """
     require_stats()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        report = _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_maxlag, lags,
+                               quantum_dps, criterion)
+    report.warnings = summarise_warnings(caught)
+    return report
+
+
+def summarise_warnings(caught):
+    """Warnings (``warnings.WarningMessage``) as one text per distinct kind and message, with a count.
+
+    scipy and statsmodels warn on hard fits (ConvergenceWarning, RuntimeWarning on a near-singular
+    step, ...); :func:`analyze_axis` collects them instead of letting them print, and a caller
+    decides how to show them: ``["ConvergenceWarning (3x): Maximum Likelihood optimization failed
+    to converge"]``.
+    """
+    counts = {}
+    for w in caught:
+        key = f"{w.category.__name__}: {' '.join(str(w.message).split())}"
+        counts[key] = counts.get(key, 0) + 1
+    return [key if n == 1 else key.replace(":", f" ({n}x):", 1) for key, n in counts.items()]
+
+
+def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_maxlag, lags, quantum_dps, criterion):
     x_raw = np.asarray(x_dps, float)
     series, k, rate, mean = prepare_series(x_raw, sample_rate_hz, max_samples)
+    if np.ptp(x_raw) == 0:
+        raise SettingsError(f"axis {axis}: constant ({mean:g} deg/s) over all {len(x_raw)} samples: "
+                            "no noise to model (is the axis stuck or saturated?)")
     notes = []
     if k > 1:
         notes.append(f"{len(x_raw)} samples block-averaged by {k} to {len(series)} at {rate:.6g} Hz before the analysis "
@@ -737,19 +769,3 @@ def adev_discrepancy(adev_measured, adev_model):
 def _term(c, name, digits):
     sign = "-" if c < 0 else "+"
     return f" {sign} {abs(c):.{digits}f} {name}"
-
-
-def _plain(obj):
-    """JSON-ready copy: tuples -> lists, numpy scalars -> floats, inf -> None."""
-    if isinstance(obj, dict):
-        return {k: _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj

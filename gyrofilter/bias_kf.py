@@ -49,6 +49,7 @@ import numpy as np
 
 from .calibration import Calibration, calibrate
 from .errors import SettingsError
+from .units import plain
 
 RESUM_EVERY = 10_000  # samples between exact recomputations of the window sums
 
@@ -102,7 +103,7 @@ class BiasKFTrace:
 def _per_axis(value, name):
     arr = np.broadcast_to(np.asarray(value, dtype=float), (3,)).copy()
     if arr.shape != (3,):
-        raise SettingsError(f"{name} must be a number or 3 numbers, got {value!r}")
+        raise SettingsError(f"{name} must be a number or 3 numbers, got {plain(value)}")
     return arr
 
 
@@ -116,7 +117,7 @@ class BiasKalmanFilter:
 
     def __init__(self, sample_rate_hz, settings: BiasKFSettings | None = None, *, calibration: Calibration | None = None, **kw):
         if not sample_rate_hz > 0:
-            raise SettingsError(f"sample_rate_hz must be positive, got {sample_rate_hz!r}")
+            raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
         self.sample_rate_hz = float(sample_rate_hz)
         self.settings = s = replace(settings or BiasKFSettings(), **kw)
         if s.engine not in ("numpy", "filterpy"):
@@ -126,7 +127,7 @@ class BiasKalmanFilter:
         dt = 1.0 / self.sample_rate_hz
         tau = _per_axis(s.bias_tau_s, "bias_tau_s")
         if np.any(tau <= 0):
-            raise SettingsError(f"bias_tau_s must be positive (inf = random walk), got {s.bias_tau_s!r}")
+            raise SettingsError(f"bias_tau_s must be positive (inf = random walk), got {plain(s.bias_tau_s)}")
         finite = np.isfinite(tau)
         # bias transition phi = exp(-dt/tau) and its process noise q_b (Gauss-Markov or random walk)
         self._phi = np.where(finite, np.exp(-dt / np.where(finite, tau, 1.0)), 1.0)

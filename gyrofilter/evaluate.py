@@ -461,6 +461,9 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
     if broad_names is not None:
         broad_recs = [r for r in broad_recs if _stem(r.path) in broad_names]
     segments = noise_segments(static_recs)
+    if profiles and not segments:
+        raise SettingsError(f"{recordings_dir}: no static recording lasts the {NOISE_SEGMENT_S:g} s of noise "
+                            "the synthetic-motion profiles need")
     ev = Evaluation([f.name for f in filters], [_stem(r.path) for r in static_recs], {}, profiles, {},
                     [_stem(r.path) for r in broad_recs], {}, {f.name: f.family for f in filters})
     for spec in filters:
@@ -530,11 +533,9 @@ def format_table(ev):
 
 def plot_pareto(ev, path, reference="paper001"):
     """Static std reduction (geometric mean) against dynamic RMSE (geometric mean over profiles)."""
-    import matplotlib
+    from .plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     pts = [(ev.dynamic_geomean(n), ev.static_geomean(n)) for n in ev.filters]
     front = set(pareto_front(pts))
     fig, ax = plt.subplots(figsize=(8, 5.5))

@@ -1,6 +1,6 @@
 """Model-gap analysis: what the baseline simulation gets wrong, the cause, and the gain.
 
-``analyse_gap(rec)`` implements ``shared/interfaces.md`` section 2 in five steps:
+``analyse_gap(rec)`` writes the gap report of docs/formats.md (section 3) in five steps:
 
 1. **Baseline fit** per axis (the package's plain simulation): constant bias ``b`` = mean of
    the rate; white noise of per-sample standard deviation ``sigma`` = the standard deviation of
@@ -200,7 +200,7 @@ def _sim_features(model, n, fs, seeds, axes_idx, taus, bands):
 
 def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None):
     """Run the gap analysis on a :class:`~gyrofilter.recording.Recording`; returns the report
-    dict of ``shared/interfaces.md`` section 2 (plus ``discrepancy``, ``departures``,
+    dict of docs/formats.md section 3 (with ``discrepancy``, ``departures``,
     ``runtime_s``). ``progress(text)`` is called with short status lines."""
     import warnings
 

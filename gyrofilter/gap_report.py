@@ -14,21 +14,24 @@ Each finding is listed with its parameters, its evidence sentence and its gain.
 """
 from __future__ import annotations
 
-import math
 import os
 
 import numpy as np
 
+from .plots import pyplot as _plt
+
 AXES = ("x", "y", "z")
+REPORT_NAME = "gap_report.md"
+FIGURE_KINDS = ("adev", "spectrum", "temperature", "time")
 
 
-def _plt():
-    import matplotlib
+def report_file_names():
+    """Every file name :func:`write_report` may write (which figures it draws depends on the findings)."""
+    return [REPORT_NAME] + [_figure(kind, a) for kind in FIGURE_KINDS for a in AXES]
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    return plt
+def _figure(kind, axis):
+    return f"{kind}_{axis}.png"
 
 
 def _band_centres(edges):
@@ -160,19 +163,19 @@ def write_report(report, rec, out_dir, *, seed=0):
         dep = deps.get(a)
         if not dep:
             continue
-        plot_adev(dep, a, os.path.join(out_dir, f"adev_{a}.png"))
-        plot_spectrum(dep, a, os.path.join(out_dir, f"spectrum_{a}.png"))
-        lines += [f"### axis {a}", "", f"![Allan deviation {a}](adev_{a}.png) ![spectrum {a}](spectrum_{a}.png)", ""]
+        plot_adev(dep, a, os.path.join(out_dir, _figure("adev", a)))
+        plot_spectrum(dep, a, os.path.join(out_dir, _figure("spectrum", a)))
+        lines += [f"### axis {a}", "", f"![Allan deviation {a}]({_figure('adev', a)}) ![spectrum {a}]({_figure('spectrum', a)})", ""]
         fa = [f for f in report["findings"] if f["axis"] == a]
         if temp is not None and np.ptp(temp) > 0:
             coef = next((f["params"]["coefficient_dps_per_c"] for f in fa if f["effect"] == "temperature"), None)
-            plot_temperature(g[:, i], temp, a, coef, os.path.join(out_dir, f"temperature_{a}.png"))
-            lines += [f"![rate vs temperature {a}](temperature_{a}.png)", ""]
+            plot_temperature(g[:, i], temp, a, coef, os.path.join(out_dir, _figure("temperature", a)))
+            lines += [f"![rate vs temperature {a}]({_figure('temperature', a)})", ""]
         slow = [f for f in fa if f["effect"] in ("bias_step", "warmup", "rate_ramp")]
         if slow:
-            plot_time(g[:, i], fs, a, slow, os.path.join(out_dir, f"time_{a}.png"))
-            lines += [f"![rate in time {a}](time_{a}.png)", ""]
-    path = os.path.join(out_dir, "gap_report.md")
+            plot_time(g[:, i], fs, a, slow, os.path.join(out_dir, _figure("time", a)))
+            lines += [f"![rate in time {a}]({_figure('time', a)})", ""]
+    path = os.path.join(out_dir, REPORT_NAME)
     with open(path, "w", encoding="utf-8") as fh:
         fh.write("\n".join(lines) + "\n")
     return path

@@ -56,7 +56,7 @@ import numpy as np
 from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
 from .errors import SettingsError
-from .units import DEG_PER_RAD
+from .units import DEG_PER_RAD, plain
 
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
 TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
@@ -546,7 +546,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
             f"axis {axis}: all {x.size} samples equal {x[0]:g} deg/s (constant data): no noise to "
             "characterise (sensor not connected, or a saturated/stuck axis?)")
     if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
-        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {confidence!r}")
+        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
     for t in terms:
         if t not in TERMS:
             raise SettingsError(f"unknown noise term {t!r}; expected some of {', '.join(TERMS)}")
@@ -607,10 +607,10 @@ def characterise(gyro_dps, sample_rate_hz, *, axes="xyz", **kwargs):
 
 
 # --------------------------------------------------------------------------------------------
-# Export: the allan JSON (interfaces.md section 3) and Kalibr's imu.yaml
+# Export: the allan JSON (docs/formats.md, section 4) and Kalibr's imu.yaml
 # --------------------------------------------------------------------------------------------
 
-#: JSON key of each coefficient (interfaces.md section 3), in its base unit
+#: JSON key of each coefficient (docs/formats.md, section 4), in its base unit
 JSON_KEY = {"quantization": "quantization_deg", "arw": "arw_dps_per_sqrt_hz",
             "bias_instability": "bias_instability_dps", "rrw": "rrw_dps_per_sqrt_s",
             "rate_ramp": "rate_ramp_dps_per_s"}
@@ -637,7 +637,7 @@ def _details_json(c: Coefficient):
 
 
 def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
-    """The ``gyrofilter allan --json`` document (interfaces.md section 3, plus details)."""
+    """The ``gyrofilter allan --json`` document (docs/formats.md, section 4)."""
     doc = {"sample_rate_hz": float(sample_rate_hz)}
     if recording is not None:
         doc["recording"] = str(recording)

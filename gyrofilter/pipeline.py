@@ -27,7 +27,7 @@ from .errors import CalibrationError, SettingsError
 from .predictor import weight_table
 from .presets import PRESETS
 from .tempcomp import compensate
-from .units import check_sample_rate_hz
+from .units import check_sample_rate_hz, plain
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,7 @@ class FilterSettings:
     def validate(self):
         def need(cond, name, what):
             if not cond:
-                raise SettingsError(f"setting {name}={getattr(self, name)!r}: {what}")
+                raise SettingsError(f"setting {name}={plain(getattr(self, name))}: {what}")
 
         for name in ("calibration_s", "calibration_retry_s", "stillness_z", "max_bias_dps", "outlier_q_dps", "p0_dps2"):
             value = getattr(self, name)
@@ -194,7 +194,7 @@ class GyroFilter:
         self._bias = (0.0, 0.0, 0.0)
         self._cal_needed = int(round(s.calibration_s * self.sample_rate_hz))
         if calibration is None and s.calibration_s > 0 and self._cal_needed < 3:
-            raise SettingsError(f"setting calibration_s={s.calibration_s!r} gives {self._cal_needed} sample(s) at "
+            raise SettingsError(f"setting calibration_s={plain(s.calibration_s)} gives {self._cal_needed} sample(s) at "
                                 f"{self.sample_rate_hz:g} Hz; the calibration needs at least 3 to measure the noise")
         self._cal_buf = None
         self._cal_fill = 0

@@ -5,7 +5,7 @@ still) and is a function of time only, so the truth can be evaluated at any inst
 (the lag estimate of :mod:`gyrofilter.evaluate` uses that). Rates in deg/s on one axis; the
 dynamic test adds the same profile to each axis of a real static recording.
 
-``paper001`` is the test of paper 001 (section 5 of ``shared/seeds/SUMMARY.md``) exactly as
+``paper001`` is the dynamic test of paper 001 (its section 5) exactly as
 issue 2 item 6 states it, 90 s:
 
     w(t) = 0                                 0  <= t < 10
@@ -30,6 +30,7 @@ from typing import Callable
 import numpy as np
 
 from .errors import SettingsError
+from .units import plain
 
 
 @dataclass(frozen=True)
@@ -124,7 +125,7 @@ def profile_samples_dps(profile, sample_rate_hz, duration_s=None):
     if isinstance(profile, str):
         profile = get_profile(profile)
     if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {sample_rate_hz!r}")
+        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
     duration_s = profile.duration_s if duration_s is None else float(duration_s)
     n = int(round(duration_s * sample_rate_hz))
     t_s = np.arange(n) / sample_rate_hz

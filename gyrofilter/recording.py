@@ -1,6 +1,6 @@
 """Recording format version 1: reader and writers.
 
-The format (``shared/interfaces.md`` section 1) is CSV text, optionally gzip-compressed::
+The format (docs/formats.md, section 1) is CSV text, optionally gzip-compressed::
 
     # gyrofilter-recording: 1
     # sample_rate_hz: 100
@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import RecordingError
-from .units import GYRO_UNITS, from_dps, to_dps
+from .units import GYRO_UNITS, from_dps, plain, to_dps
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
@@ -191,7 +191,7 @@ def parse_recording(text: str, path: str = "<text>", warnings=None) -> Recording
         bad = np.flatnonzero(np.diff(columns["t"]) <= 0)
         if bad.size:
             line = _data_line_number(body_lines, int(bad[0]) + 1, first_data)
-            raise RecordingError(f"{path}: line {line}: t does not increase ({columns['t'][bad[0] + 1]!r} after {columns['t'][bad[0]]!r})")
+            raise RecordingError(f"{path}: line {line}: t does not increase ({plain(columns['t'][bad[0] + 1])} after {plain(columns['t'][bad[0]])})")
     return Recording(columns=columns, header=header, path=path, warnings=warnings, notes=notes)
 
 

@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SettingsError
+from .units import plain
 
 
 def quat_multiply(p, q):
@@ -98,9 +99,9 @@ def body_rate_from_quaternions(quat_wxyz, sample_rate_hz, half_span=1):
         raise SettingsError(f"quat_wxyz must have shape (N, 4) (w, x, y, z), got {q.shape}")
     h = int(half_span)
     if h < 1 or h != half_span:
-        raise SettingsError(f"half_span must be a positive integer number of samples, got {half_span!r}")
+        raise SettingsError(f"half_span must be a positive integer number of samples, got {plain(half_span)}")
     if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {sample_rate_hz!r}")
+        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
     n = len(q)
     out = np.full((n, 3), np.nan)
     if n <= 2 * h:

@@ -1,14 +1,8 @@
 """Gyro simulator: a noise model (JSON dict) in, a recording out.
 
-The model is the shared simulator schema (``shared/interfaces.md`` / the gap report's
-``extended_model``)::
-
-    {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0, "full_scale_dps": 250.0,
-     "temperature": {"start_c": 25.0, "end_c": 32.0, "tau_s": 600.0, "noise_c": 0.02,
-                     "resolution_c": 0.00294},
-     "axes": {"x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009,
-                    "effects": [{"effect": "sinusoid", "frequency_hz": 7.3, "amplitude_dps": 0.05}]},
-              "y": {...}, "z": {...}}}
+The model is a JSON object (the gap report's ``extended_model``); its keys, defaults and the
+effect table with every parameter are stated in docs/formats.md (section 2) and checked by
+:func:`validate_model` (``EFFECTS`` below is the table in code).
 
 Per axis and sample n (t = n / f_s), in deg/s:
 
@@ -21,35 +15,15 @@ Per axis and sample n (t = n / f_s), in deg/s:
 then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb_per_dps)).
 Each effect term is documented, with its equation, in :mod:`gyrofilter.noise_terms`.
 
-Effects and their parameters (names exactly as in the effect table; extras optional):
-
-=================  =========================================  ======================================
-effect             required params                            optional params (default)
-=================  =========================================  ======================================
-bias_instability   b_dps >= 0                                 tau_min_s (1/f_s), tau_max_s (record
-                                                              length), per_decade (2)
-rate_random_walk   k_dps_per_sqrt_s >= 0
-rate_ramp          r_dps_per_s
-gauss_markov       sigma_dps >= 0, tau_s > 0
-sinusoid           frequency_hz >= 0, amplitude_dps >= 0      phase_rad (0)
-temperature        coefficient_dps_per_c                      reference_c (profile temperature at t=0)
-bias_step          time_s >= 0, size_dps
-warmup             amplitude_dps, tau_s > 0
-outliers           rate in [0, 1], magnitude_dps >= 0         spread_ln (0.25)
-colored_noise      lag1 in (-1, 1)                            preserve ("arw" | "std", default "arw")
-=================  =========================================  ======================================
-
 ``colored_noise`` low-passes the white noise: with ``preserve="arw"`` (default)
 ``arw_dps_per_sqrt_hz`` keeps its Allan meaning (the white level for τ well beyond the filter's
 correlation time, as with the MPU6050's DLPF) and the per-sample std becomes
 N sqrt(f_s) sqrt((1 - lag1)/(1 + lag1)); with ``preserve="std"`` the per-sample std stays
 N sqrt(f_s). See :class:`gyrofilter.noise_terms.WhiteNoise`.
 
-The ``temperature`` key (optional) designs the ``temp`` column and drives the ``temperature``
-effect. Exponential profile: ``start_c``, ``end_c`` (default start_c), ``tau_s`` (600),
-``cycle_amplitude_c`` (0), ``cycle_period_s`` (3600), ``noise_c`` (0), ``resolution_c`` (0 = none;
-MPU6050: 1/340). Or a table: ``t_s`` and ``temp_c`` lists (linear interpolation), plus
-``noise_c``/``resolution_c``.
+The ``temperature`` key designs the ``temp`` column (an exponential self-heating profile with
+an optional cycle, or a table interpolated linearly; read noise and resolution only on the
+written column) and drives the ``temperature`` effect.
 
 Randomness: only ``seed`` or ``rng``. Every random term draws from its own stream, derived
 from the root seed and a fixed key (axis, effect name, occurrence), so (1) a run cut into chunks
@@ -67,7 +41,7 @@ import numpy as np
 from . import noise_terms as nt
 from .errors import SettingsError
 from .recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, _format_number
-from .units import DEG_PER_RAD, GYRO_UNITS
+from .units import DEG_PER_RAD, GYRO_UNITS, plain
 
 AXES = ("x", "y", "z")
 DEFAULT_CHUNK_SAMPLES = 65536
@@ -113,7 +87,7 @@ def _number(value, where, kind="any"):
         _err(where, f"expected {_KINDS[kind][1]}, got {_show(value)}")
     value = float(value)
     if not math.isfinite(value) or not _KINDS[kind][0](value):
-        _err(where, f"expected {_KINDS[kind][1]}, got {value!r}")
+        _err(where, f"expected {_KINDS[kind][1]}, got {plain(value)}")
     return value
 
 
@@ -122,7 +96,7 @@ def _show(value):
     try:
         return json.dumps(value)
     except (TypeError, ValueError):
-        return repr(value)
+        return plain(value)
 
 
 def _is_ignored(key):
@@ -277,7 +251,7 @@ def _root_seed(seed, rng):
         return np.random.SeedSequence(rng.integers(0, 2**63, size=4))
     if seed is not None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise SettingsError(f"simulate: seed must be an integer >= 0, got {seed!r}")
+            raise SettingsError(f"simulate: seed must be an integer >= 0, got {plain(seed)}")
         return np.random.SeedSequence(int(seed))
     return np.random.SeedSequence()
 
@@ -333,7 +307,7 @@ def sample_count(duration_s, sample_rate_hz):
     """Number of samples of a run: round(duration · f_s), at least 1."""
     duration_s = float(duration_s)
     if not math.isfinite(duration_s) or duration_s <= 0:
-        raise SettingsError(f"simulate: duration must be > 0 s, got {duration_s!r}")
+        raise SettingsError(f"simulate: duration must be > 0 s, got {plain(duration_s)}")
     return max(1, int(round(duration_s * sample_rate_hz)))
 
 

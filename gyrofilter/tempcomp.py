@@ -8,7 +8,7 @@ start-up temperature T0; afterwards the bias that is left is, to first order::
     b(T) - b(T0) = c (T - T0)
 
 with c the ``temperature`` effect's ``coefficient_dps_per_c`` of the gap report
-(interfaces.md section 2) or of a simulator model. Compensation subtracts it per sample::
+(docs/formats.md, section 3) or of a simulator model. Compensation subtracts it per sample::
 
     y = x - c (T - T0)
 
@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SettingsError
+from .units import plain
 
 AXES = ("x", "y", "z")
 
@@ -28,7 +29,7 @@ AXES = ("x", "y", "z")
 def _coefficients(coefficient_dps_per_c):
     c = np.broadcast_to(np.asarray(coefficient_dps_per_c, dtype=float), (3,))
     if not np.all(np.isfinite(c)):
-        raise SettingsError(f"coefficient_dps_per_c must be finite, got {coefficient_dps_per_c!r}")
+        raise SettingsError(f"coefficient_dps_per_c must be finite, got {plain(coefficient_dps_per_c)}")
     return c
 
 

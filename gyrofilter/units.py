@@ -26,13 +26,41 @@ def check_sample_rate_hz(value, name="sample_rate_hz"):
         value = float(value)
         ok = math.isfinite(value) and 0 < value <= MAX_SAMPLE_RATE_HZ
     if not ok:
-        raise SettingsError(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {_plain(value)}")
+        raise SettingsError(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
     return value
 
 
-def _plain(value):
-    """A value as a user wrote it: numpy scalars without their ``np.float64(...)`` wrapper."""
-    return repr(value.item() if isinstance(value, np.generic) else value)
+def plain(value):
+    """``repr(value)`` for error messages, numpy scalars as the plain number they hold.
+
+    numpy 2 writes ``repr(np.float64(14.99))`` as ``np.float64(14.99)``; this gives ``14.99``
+    on numpy 1.24 and 2.x alike; lists and tuples element by element. Anything else (a string, an
+    array) as ``repr`` writes it. The one place error messages turn a user's value into text.
+    """
+    return repr(_python(value))
+
+
+def json_ready(value):
+    """``value`` as ``json.dump(..., allow_nan=False)`` takes it: numpy arrays and scalars as lists
+    and numbers, tuples as lists, dict keys as text, and a non-finite number (NaN, +-inf) as None
+    (``null``: the files never hold the non-standard NaN/Infinity tokens; docs/formats.md)."""
+    if isinstance(value, dict):
+        return {str(k): json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, (np.generic, np.ndarray)):
+        return json_ready(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _python(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return type(value)(_python(v) for v in value)
+    return value
 
 
 def to_dps(values, unit, lsb_per_dps=None):
@@ -44,7 +72,7 @@ def to_dps(values, unit, lsb_per_dps=None):
         return values * DEG_PER_RAD
     if unit == "lsb":
         if not lsb_per_dps or lsb_per_dps <= 0:
-            raise SettingsError(f"gyro_unit 'lsb' needs a positive lsb_per_dps, got {lsb_per_dps!r}")
+            raise SettingsError(f"gyro_unit 'lsb' needs a positive lsb_per_dps, got {plain(lsb_per_dps)}")
         return values / lsb_per_dps
     raise SettingsError(f"unknown gyro unit {unit!r}; expected one of {', '.join(GYRO_UNITS)}")
 
@@ -58,6 +86,6 @@ def from_dps(values_dps, unit, lsb_per_dps=None):
         return values_dps / DEG_PER_RAD
     if unit == "lsb":
         if not lsb_per_dps or lsb_per_dps <= 0:
-            raise SettingsError(f"gyro_unit 'lsb' needs a positive lsb_per_dps, got {lsb_per_dps!r}")
+            raise SettingsError(f"gyro_unit 'lsb' needs a positive lsb_per_dps, got {plain(lsb_per_dps)}")
         return values_dps * lsb_per_dps
     raise SettingsError(f"unknown gyro unit {unit!r}; expected one of {', '.join(GYRO_UNITS)}")

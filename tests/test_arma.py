@@ -250,4 +250,84 @@ def test_cli_writes_json_and_reports_bad_input(tmp_path, capsys):
     assert z["chosen"]["phi"][0] == pytest.approx(PHI, abs=0.05)
     assert z["mean_dps"] == pytest.approx(-2.0, abs=0.05)
     assert main(["arma", str(path), "--start-s", "49.5"]) == 2
-    assert "need at least 200" in capsys.readouterr().err
+    assert "--start-s 49.5 leaves 50 of the 5000 samples (50 s at 100 Hz)" in capsys.readouterr().err
+
+
+def _static_recording(tmp_path, n, name="static.csv"):
+    from gyrofilter.recording import Recording, write_recording
+
+    rng = np.random.default_rng(16)
+    path = tmp_path / name
+    write_recording(path, Recording.from_dps(rng.normal(0.5, 0.1, (n, 3)), 100.0))
+    return str(path)
+
+
+@pytest.mark.parametrize("options, expected", [
+    ([], "short.csv: 150 samples (1.5 s at 100 Hz); the analysis needs at least 200"),
+    (["--start-s", "0.5"], "--start-s 0.5 leaves 100 of the 150 samples"),
+    (["--end-s", "1"], "--end-s 1 leaves 100 of the 150 samples"),
+    (["--start-s", "0.2", "--end-s", "1.2"], "--start-s 0.2 and --end-s 1.2 leave 100 of the 150 samples"),
+    (["--start-s", "1", "--end-s", "1"], "--end-s 1 must be after --start-s 1"),
+    (["--max-n", "0"], "--max-n must be at least 1, got 0"),
+    (["--max-samples", "50"], "--max-samples must be at least 100, got 50"),
+])
+def test_cli_errors_name_the_options_the_user_gave(tmp_path, capsys, options, expected):
+    from gyrofilter.cli import main
+
+    path = _static_recording(tmp_path, 150, "short.csv")
+    assert main(["arma", path] + options) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and expected in err, err
+    if not options:
+        assert "--start-s" not in err and "--end-s" not in err
+
+
+def test_cli_summarises_library_warnings_in_one_line(tmp_path, capsys, monkeypatch):
+    import warnings
+
+    from statsmodels.tools.sm_exceptions import ConvergenceWarning
+
+    from gyrofilter.cli import main
+
+    real = arma.adf_test
+
+    def warning_adf(*args, **kwargs):
+        for _ in range(3):
+            warnings.warn("Maximum Likelihood optimization failed to converge.", ConvergenceWarning)
+        warnings.warn("divide by zero encountered", RuntimeWarning)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(arma, "adf_test", warning_adf)
+    path = _static_recording(tmp_path, 1000)
+    with warnings.catch_warnings(record=True) as leaked:
+        warnings.simplefilter("always")
+        assert main(["arma", path, "--axis", "z", "--max-n", "1"]) == 0
+    assert not leaked, [str(w.message) for w in leaked]
+    err = [line for line in capsys.readouterr().err.splitlines() if "warning" in line.lower()]
+    assert len(err) == 1 and err[0].startswith("gyrofilter: warning: ")
+    assert ("axis z: ConvergenceWarning (3x): Maximum Likelihood optimization failed to converge.; "
+            "RuntimeWarning: divide by zero encountered") in err[0]
+
+
+def test_cli_json_is_never_written_over_data(tmp_path, capsys):
+    import json
+
+    from gyrofilter.cli import main
+
+    path = _static_recording(tmp_path, 1000)
+    text = open(path).read()
+    out = tmp_path / "a.json"
+    out.write_text("keep")
+    args = ["arma", path, "--axis", "x", "--max-n", "1"]
+    assert main(args + ["--json", str(out)]) == 2
+    assert "exists (use --force" in capsys.readouterr().err and out.read_text() == "keep"
+    assert main(args + ["--json", path, "--force"]) == 2
+    assert "is an input" in capsys.readouterr().err and open(path).read() == text
+    assert main(args + ["--json", str(out), "--force"]) == 0
+    doc = json.loads(out.read_text(), parse_constant=lambda token: pytest.fail(f"JSON token {token}"))
+    assert doc["axes"]["x"]["warnings"] == [] and doc["n_samples"] == 1000
+
+
+def test_constant_axis_is_named():
+    with pytest.raises(GyroFilterError, match="axis y: constant .* no noise to model"):
+        arma.analyze_axis(np.full(500, 0.1), 100.0, axis="y")

@@ -1,4 +1,4 @@
-"""Tests for `gyrofilter allan`: JSON per interfaces.md section 3, Kalibr YAML, plot, bad input."""
+"""Tests for `gyrofilter allan`: JSON per docs/formats.md section 4, Kalibr YAML, plot, bad input."""
 import importlib.util
 import json
 import math

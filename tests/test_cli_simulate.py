@@ -90,7 +90,20 @@ def test_cli_missing_model_file_and_bad_duration(tmp_path, capsys):
     model_path = write_json(tmp_path / "m.json", MODEL)
     assert main(["simulate", "--model", model_path, "--duration", "-3", "--out", str(tmp_path / "o.csv")]) == 2
     err = capsys.readouterr().err
-    assert "duration must be > 0" in err and err.count("\n") == 1
+    assert "--duration must be > 0 s, got -3" in err and err.count("\n") == 1 and model_path not in err
+
+
+@pytest.mark.parametrize("option, expected", [
+    (["--rate", "-5"], "--rate must be a number of Hz in (0, 100000], got -5.0"),
+    (["--seed", "-1"], "--seed must be an integer >= 0, got -1"),
+    (["--chunk", "0"], "--chunk must be at least 1 sample, got 0"),
+])
+def test_cli_bad_options_are_named_not_blamed_on_the_model(tmp_path, capsys, option, expected):
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    assert main(["simulate", "--model", model_path, "--duration", "1", "--out", str(tmp_path / "o.csv")] + option) == 2
+    err = capsys.readouterr().err
+    assert expected in err and model_path not in err and err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.json"]
 
 
 def test_cli_warns_about_unknown_effect_parameters(tmp_path, capsys):
@@ -114,3 +127,43 @@ def test_example_models_run(tmp_path, path):
 def test_help_and_entry_point():
     res = subprocess.run([sys.executable, "-m", "gyrofilter", "simulate", "--help"], capture_output=True, text=True)
     assert res.returncode == 0 and "--model" in res.stdout and "--seed" in res.stdout
+
+
+def test_cli_refuses_to_overwrite_and_never_writes_onto_the_model(tmp_path, capsys):
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    model_text = (tmp_path / "m.json").read_text()
+    out = tmp_path / "sim.csv"
+    out.write_text("a user's data\n")
+    assert main(["simulate", "--model", model_path, "--duration", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "exists (use --force to overwrite)" in err and str(out) in err
+    assert out.read_text() == "a user's data\n"
+    for force in ([], ["--force"]):
+        assert main(["simulate", "--model", model_path, "--duration", "1", "--out", model_path] + force) == 2
+        assert "is an input of this command" in capsys.readouterr().err
+        assert (tmp_path / "m.json").read_text() == model_text
+    assert main(["simulate", "--model", model_path, "--duration", "1", "--seed", "2", "--out", str(out), "--force"]) == 0
+    assert len(read_recording(out)) == 50
+
+
+def test_cli_failure_leaves_no_file_and_a_rerun_works(tmp_path, capsys, monkeypatch):
+    import gyrofilter.simulate as sim
+    from gyrofilter.errors import SettingsError
+
+    real = sim.simulate_chunks
+
+    def failing(*args, **kwargs):
+        chunks = real(*args, **kwargs)
+        yield next(chunks)
+        raise SettingsError("simulated failure after the first block")
+
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    out = tmp_path / "sim.csv.gz"
+    argv = ["simulate", "--model", model_path, "--duration", "10", "--chunk", "100", "--seed", "3", "--out", str(out)]
+    monkeypatch.setattr(sim, "simulate_chunks", failing)
+    assert main(argv) == 2
+    assert "simulated failure" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.json"]  # no header-only file, no temporary
+    monkeypatch.setattr(sim, "simulate_chunks", real)
+    assert main(argv) == 0
+    assert np.array_equal(read_recording(out).gyro, simulate(MODEL, 10.0, seed=3).gyro)

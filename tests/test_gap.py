@@ -1,11 +1,10 @@
 """Gap analysis: hidden effects must be named on the right axis with their parameters within
-tolerance; clean recordings must give no finding; the JSON follows interfaces.md section 2.
+tolerance; clean recordings must give no finding; the JSON follows docs/formats.md section 3.
 
 The default suite runs one 10-minute case per effect and a few clean cases (fewer
 simulations than the command's default, to stay fast); the large battery is marked slow
 (``pytest -m slow``) and ``tools/gap_battery.py`` prints the rates.
 """
-import gzip
 import importlib.util
 import json
 import math
@@ -230,3 +229,51 @@ def test_a_statistic_that_cannot_run_gives_no_findings_not_a_crash(monkeypatch):
     monkeypatch.setattr(gap, "features", lambda *a, **k: 1 / 0)
     report = gap.analyse_gap(rec, n_sims=3)
     assert report["findings"] == [] and any("ZeroDivisionError" in n for n in report["notes"])
+
+
+def _short_recording(tmp_path):
+    path = tmp_path / "rec.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (100, 3)), 100.0))
+    return str(path)
+
+
+def test_cli_refuses_existing_outputs_and_never_writes_onto_the_recording(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    rec = _short_recording(tmp_path)
+    rec_text = open(rec).read()
+    out = tmp_path / "gap.json"
+    out.write_text("{}\n")
+    (tmp_path / "rep").mkdir()
+    (tmp_path / "rep" / "adev_y.png").write_text("a user's figure")
+    cases = [(["--json", str(out)], "exists (use --force"),
+             (["--json", str(tmp_path / "new.json"), "--report", str(tmp_path / "rep")], "adev_y.png: exists"),
+             (["--json", rec], "is an input of this command"),
+             (["--json", str(tmp_path / "new.json"), "--report", rec, "--force"], "is a file; give a folder"),
+             (["--json", rec, "--force"], "is an input of this command")]
+    for args, expected in cases:
+        assert main(["gap", rec, "--sims", "4"] + args) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and expected in err, err
+    assert out.read_text() == "{}\n" and open(rec).read() == rec_text
+    assert not (tmp_path / "new.json").exists()
+    assert main(["gap", rec, "--sims", "4", "--json", str(out), "--force"]) == 0
+    text = out.read_text()
+    assert json.loads(text)["findings"] == [] and "NaN" not in text and "Infinity" not in text
+
+
+def test_cli_failure_leaves_no_output(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("matplotlib")
+    import gyrofilter.gap_report as gr
+    from gyrofilter.cli import main
+    from gyrofilter.errors import GyroFilterError
+
+    def failing(report, rec, out_dir, seed=0):
+        (open(os.path.join(out_dir, "gap_report.md"), "w")).close()
+        raise GyroFilterError("simulated failure while drawing")
+
+    monkeypatch.setattr(gr, "write_report", failing)
+    rec = _short_recording(tmp_path)
+    assert main(["gap", rec, "--sims", "4", "--json", str(tmp_path / "g.json"), "--report", str(tmp_path / "rep")]) == 2
+    assert "simulated failure" in capsys.readouterr().err
+    assert sorted(os.listdir(tmp_path)) == ["rec.csv"]

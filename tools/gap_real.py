@@ -16,7 +16,6 @@ import argparse
 import contextlib
 import glob
 import io
-import json
 import os
 import sys
 import time
@@ -37,7 +36,7 @@ def main(argv=None):
     p.add_argument("--hidden-cases", type=int, default=10)
     args = p.parse_args(argv)
 
-    from gyrofilter.cli.gap import _jsonable
+    from gyrofilter.cli.common import write_json
     from gyrofilter.gap import analyse_gap
     from gyrofilter.gap_report import plot_adev, plot_spectrum
     from gyrofilter.recording import read_recording
@@ -56,8 +55,7 @@ def main(argv=None):
         t0 = time.perf_counter()
         rep = analyse_gap(rec, seed=args.seed, recording_name=rel)
         dt = time.perf_counter() - t0
-        with open(os.path.join(jsondir, f"{name}.json"), "w", encoding="utf-8") as fh:
-            json.dump(_jsonable(rep), fh, indent=1)
+        write_json(os.path.join(jsondir, f"{name}.json"), rep)
         if longest is None or rec.duration_s > longest[1]:
             longest = (name, rec.duration_s)
         d = rep["discrepancy"]

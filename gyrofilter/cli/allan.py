@@ -2,7 +2,7 @@
 
 Prints, per axis, the fitted coefficients Q, N, B, K, R with their intervals in deg/s-based and
 customary units, the slope read-offs of papers 000/002 beside them, and what the record is too
-short to resolve. ``--json`` writes the document of interfaces.md section 3, ``--plot`` the
+short to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` the
 log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
 """
 import json

@@ -1,13 +1,17 @@
-"""gyrofilter arma: paper 003's time-series model of a static recording's bias noise, per axis."""
-import json
+"""gyrofilter arma: paper 003's time-series model of a static recording's bias noise, per axis.
+
+Warnings of scipy/statsmodels (hard fits) are summarised in one line on stderr, not printed one
+by one. ``--json`` is refused when it exists (unless ``--force``) or is the recording, before
+any work, and written under a temporary name that takes its place when complete.
+"""
 import math
 import sys
-
 
 from ..errors import SettingsError
 from ..recording import read_recording
 from . import common
 
+MIN_SAMPLES = 200  # fewer leave the tests and the order search without power
 PAPER_003 = "paper 003 (ADIS16405 z gyro): ADF -110.18; KS and JB reject normality; ARMA(1, 1): x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}"
 
 
@@ -15,7 +19,7 @@ def add_arguments(parser):
     parser.add_argument("recording", help="a static recording (format v1); the sensor must not move")
     parser.add_argument("--axis", choices=("x", "y", "z", "all"), default="all", help="axis to analyse (default: all three)")
     parser.add_argument("--json", metavar="OUT", help="write every number of the analysis to this JSON file")
-    parser.add_argument("--start-s", type=float, default=0.0, help="skip the first seconds (e.g. a warm-up or a move)")
+    parser.add_argument("--start-s", type=float, default=None, help="skip the first seconds (e.g. a warm-up or a move; default 0)")
     parser.add_argument("--end-s", type=float, default=None, help="stop at this time in seconds (default: the end)")
     parser.add_argument("--max-n", type=int, default=4, help="highest Pandit-Wu order ARMA(2n, 2n-1) tried (default 4: ARMA(8, 7))")
     parser.add_argument("--max-samples", type=int, default=200_000,
@@ -25,23 +29,25 @@ def add_arguments(parser):
                         help="what decides each order step: BIC (default; the F test and AIC over-select on simulated ARMA(1,1)), "
                              "the F test (paper 003's rule) or AIC; all three are printed")
     parser.add_argument("--progress", action="store_true", help="report progress on stderr even when it is not a terminal")
+    common.add_force_argument(parser)
 
 
 def run(args):
     from .. import arma
 
+    common.check_outputs([args.json], [args.recording], args.force)
     arma.require_stats()
     if not 0 < args.alpha < 0.5:
-        raise SettingsError(f"--alpha must be in (0, 0.5), got {args.alpha}")
+        raise SettingsError(f"--alpha must be in (0, 0.5), got {args.alpha:g}")
+    if args.max_n < 1:
+        raise SettingsError(f"--max-n must be at least 1, got {args.max_n}")
+    if args.max_samples < 100:
+        raise SettingsError(f"--max-samples must be at least 100, got {args.max_samples}")
     rec = read_recording(args.recording)
     common.print_warnings(rec.warnings)
-    gyro = rec.gyro_dps
     fs = rec.sample_rate_hz
-    i0 = int(round(args.start_s * fs))
-    i1 = len(gyro) if args.end_s is None else int(round(args.end_s * fs))
-    if i0 < 0 or i1 <= i0 or i1 - i0 < 200:
-        raise SettingsError(f"--start-s/--end-s leave {max(0, i1 - i0)} samples of {len(gyro)}; need at least 200")
-    gyro = gyro[i0:i1]
+    i0, i1 = _window(args, len(rec), fs)
+    gyro = rec.gyro_dps[i0:i1]
     axes = "xyz" if args.axis == "all" else args.axis
     progress = args.progress or sys.stderr.isatty()
     quantum = 1.0 / rec.lsb_per_dps if rec.lsb_per_dps else None
@@ -56,13 +62,38 @@ def run(args):
         reports[name] = rep
         _print_axis(rep, args.alpha)
     print(f"\n{PAPER_003}")
+    warned = [f"axis {k}: " + "; ".join(v.warnings) for k, v in reports.items() if v.warnings]
+    if warned:
+        common.print_warnings(["scipy/statsmodels warned during the fits (check the results above): " + "; ".join(warned)])
     if args.json:
         out = {"recording": args.recording, "sample_rate_hz": fs, "start_s": i0 / fs, "n_samples": len(gyro),
                "alpha": args.alpha, "axes": {k: v.to_dict() for k, v in reports.items()}}
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=1)
+        with common.replacing(args.json) as tmp:
+            common.write_json(tmp, out)
         common.say(f"wrote {args.json}")
     return 0
+
+
+def _window(args, n, fs):
+    """Sample indices [i0, i1) of --start-s/--end-s; errors name the options the user gave."""
+    if args.start_s is not None and args.start_s < 0:
+        raise SettingsError(f"--start-s must be >= 0 s, got {args.start_s:g}")
+    start_s = args.start_s or 0.0
+    if args.end_s is not None and args.end_s <= start_s:
+        raise SettingsError(f"--end-s {args.end_s:g} must be after " +
+                            (f"--start-s {start_s:g}" if args.start_s is not None else "the start (0 s)"))
+    i0 = int(round(start_s * fs))
+    i1 = n if args.end_s is None else min(n, int(round(args.end_s * fs)))
+    if i1 - i0 >= MIN_SAMPLES:
+        return i0, i1
+    length = f"{n} samples ({n / fs:g} s at {fs:g} Hz)"
+    given = " and ".join(f"--{name.replace('_', '-')} {value:g}" for name, value in
+                         (("start_s", args.start_s), ("end_s", args.end_s)) if value is not None)
+    if not given:
+        raise SettingsError(f"{args.recording}: {length}; the analysis needs at least {MIN_SAMPLES}")
+    verb = "leave" if " and " in given else "leaves"
+    raise SettingsError(f"{given} {verb} {max(0, i1 - i0)} of the {length} of {args.recording}; "
+                        f"the analysis needs at least {MIN_SAMPLES}")
 
 
 def _print_axis(rep, alpha):

@@ -2,13 +2,16 @@
 import contextlib
 import json
 import os
+import shutil
 import sys
+import tempfile
 
 import numpy as np
 
 from ..errors import SettingsError
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import PRESETS
+from ..units import json_ready
 
 
 def say(text):
@@ -42,6 +45,12 @@ def check_outputs(outputs, inputs=(), force=False):
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
 
 
+def check_output_folder(folder, option):
+    """Refuse, before any work, an output folder (``option`` DIR) that exists as a file."""
+    if folder and os.path.exists(folder) and not os.path.isdir(folder):
+        raise SettingsError(f"{option} {folder}: is a file; give a folder for the output files")
+
+
 def _same_file(a, b):
     try:
         return os.path.samefile(a, b)
@@ -51,16 +60,61 @@ def _same_file(a, b):
 
 @contextlib.contextmanager
 def replacing(path):
-    """Write a whole file at once: yields a temporary path beside ``path``; on success it replaces
-    ``path``, on any failure it is removed, so a failed command leaves no partial file behind."""
+    """Write a whole file at once: yields a temporary path beside ``path`` (its folder created if
+    needed); on success it replaces ``path``; on any failure it is removed, with any folder this
+    call created, so a failed command leaves nothing behind."""
     folder, name = os.path.split(os.path.abspath(path))
-    tmp = os.path.join(folder, f".partial-{os.getpid()}-{name}")  # same extension: writers choose the format by it
+    with _folder(folder):
+        tmp = os.path.join(folder, f".partial-{os.getpid()}-{name}")  # same extension: writers choose the format by it
+        try:
+            yield tmp
+            os.replace(tmp, path)
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def replacing_in(folder):
+    """:func:`replacing` for files whose names the writer chooses: yields a temporary folder inside
+    ``folder`` (created if needed); on success every file written there replaces its namesake in
+    ``folder``; on any failure the temporary folder goes, with any folder this call created."""
+    with _folder(folder):
+        tmp = tempfile.mkdtemp(prefix=f".partial-{os.getpid()}-", dir=folder)
+        try:
+            yield tmp
+            for name in sorted(os.listdir(tmp)):
+                os.replace(os.path.join(tmp, name), os.path.join(folder, name))
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _folder(folder):
+    """Make ``folder`` and its missing parents; on a failure inside the block, remove what was made."""
+    top = None
+    parent = os.path.abspath(folder)
+    while not os.path.isdir(parent):
+        top, parent = parent, os.path.dirname(parent)
+    if top is not None:
+        os.makedirs(folder)
     try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+        yield
+    except BaseException:
+        if top is not None:
+            shutil.rmtree(top, ignore_errors=True)
+        raise
+
+
+def write_json(path, doc):
+    """Write ``doc`` as JSON to ``path`` (no replacing: give it the path :func:`replacing` yields).
+
+    Through :func:`gyrofilter.units.json_ready`: numpy values become plain numbers and lists, a
+    non-finite number becomes ``null``.
+    """
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(json_ready(doc), fh, indent=1, allow_nan=False)
+        fh.write("\n")
 
 
 def print_warnings(warnings):

@@ -2,15 +2,17 @@
 
 Static std reduction on every static MPU6050 recording, RMSE and worst lag on synthetic
 profiles added to real static noise, RMSE against the optical reference on the BROAD trials;
-see :mod:`gyrofilter.evaluate` for the definitions.
+see :mod:`gyrofilter.evaluate` for the definitions. The three files in ``--out`` are refused
+when they exist (unless ``--force``), before any work, and are written into a temporary folder
+from which they take their places once all three are written (:func:`common.replacing_in`).
 """
-import json
 import os
 import sys
 
-import numpy as np
-
 from .. import evaluate as E
+from . import common
+
+OUTPUT_NAMES = ("evaluate_table.md", "evaluate.json", "evaluate_pareto.png")
 
 
 def add_arguments(parser):
@@ -22,6 +24,7 @@ def add_arguments(parser):
                         help="evaluate on all data (default), or only the tuning or the held-out part (gyrofilter.evaluate.TUNE_SPLIT)")
     parser.add_argument("--no-lag", action="store_true", help="skip the lag estimates (faster)")
     parser.add_argument("--progress", action="store_true", help="report progress on stderr (default: only on a terminal)")
+    common.add_force_argument(parser)
 
 
 def _recordings_dir(arg):
@@ -38,7 +41,12 @@ def _recordings_dir(arg):
 
 
 def run(args):
+    from ..plots import pyplot
+
+    common.check_output_folder(args.out, "--out")
+    common.check_outputs([os.path.join(args.out, name) for name in OUTPUT_NAMES], force=args.force)
     rec_dir = _recordings_dir(args.recordings)
+    pyplot()  # a missing matplotlib is said now, not after the evaluation
     show = args.progress or sys.stderr.isatty()
     progress = (lambda text: print(text, file=sys.stderr, flush=True)) if show else None
     split = {"all": {}, "tune": E.TUNE_SPLIT, "holdout": E.HOLDOUT_SPLIT}[args.split]
@@ -50,7 +58,6 @@ def run(args):
         static_names=split.get("static"),
         broad_names=split.get("broad"),
     )
-    os.makedirs(args.out, exist_ok=True)
     table = E.format_table(ev)
     verdicts = []
     for name in ev.filters:
@@ -70,29 +77,13 @@ def run(args):
         + "\n"
     )
     print(text)
-    with open(os.path.join(args.out, "evaluate_table.md"), "w", encoding="utf-8") as fh:
-        fh.write(text)
-    with open(os.path.join(args.out, "evaluate.json"), "w", encoding="utf-8") as fh:
-        json.dump(_as_json(ev), fh, indent=1)
-    png = E.plot_pareto(ev, os.path.join(args.out, "evaluate_pareto.png"))
-    print(f"wrote {os.path.join(args.out, 'evaluate_table.md')}, evaluate.json, {png}", file=sys.stderr)
+    doc = {"filters": ev.filters, "families": ev.families, "static_std_reduction": ev.static,
+           "dynamic": ev.dynamic, "broad": ev.broad}
+    table_name, json_name, png_name = OUTPUT_NAMES
+    with common.replacing_in(args.out) as tmp:
+        with open(os.path.join(tmp, table_name), "w", encoding="utf-8") as fh:
+            fh.write(text)
+        common.write_json(os.path.join(tmp, json_name), doc)
+        E.plot_pareto(ev, os.path.join(tmp, png_name))
+    common.say(f"wrote {', '.join(os.path.join(args.out, name) for name in OUTPUT_NAMES)}")
     return 0
-
-
-def _as_json(ev):
-    def clean(v):
-        if isinstance(v, dict):
-            return {k: clean(x) for k, x in v.items()}
-        if isinstance(v, (list, tuple, np.ndarray)):
-            return [clean(x) for x in np.asarray(v).tolist()] if isinstance(v, np.ndarray) else [clean(x) for x in v]
-        if isinstance(v, float) and not np.isfinite(v):
-            return None
-        return v
-
-    return clean({
-        "filters": ev.filters,
-        "families": ev.families,
-        "static_std_reduction": ev.static,
-        "dynamic": ev.dynamic,
-        "broad": ev.broad,
-    })

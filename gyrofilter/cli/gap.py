@@ -2,17 +2,20 @@
 
 Finds what the baseline noise model (constant bias + white noise + quantization) gets wrong
 about a recording, names the cause (an effect of the effect table), extends the model and
-measures the gain; writes the report of ``shared/interfaces.md`` section 2 to OUT.json and,
-with ``--report``, a Markdown report with PNG figures. A one-line summary per finding goes to
-stdout; progress goes to stderr (on a terminal, or with ``--progress``).
+measures the gain; writes the gap report (docs/formats.md) to OUT.json and, with ``--report``,
+a Markdown report with PNG figures. A one-line summary per finding goes to stdout; progress goes
+to stderr (on a terminal, or with ``--progress``).
+
+Outputs that exist are refused unless ``--force``, and an output that is the recording always,
+before any work; all outputs are written under temporary names and take their places together
+when everything is written, so a failed run leaves none of them.
 """
-import json
-import math
+import contextlib
 import os
 import sys
 import time
 
-import numpy as np
+from . import common
 
 
 def add_arguments(parser):
@@ -23,27 +26,18 @@ def add_arguments(parser):
     parser.add_argument("--sims", type=int, default=None, metavar="N",
                         help="baseline simulations (default 24; 12-24 above 200 000 samples per axis)")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
-
-
-def _jsonable(value):
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return [_jsonable(v) for v in value.tolist()]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    common.add_force_argument(parser)
 
 
 def run(args):
     from ..errors import SettingsError
     from ..gap import analyse_gap
+    from ..gap_report import REPORT_NAME, report_file_names, write_report
     from ..recording import read_recording
 
+    report_files = [os.path.join(args.report, name) for name in report_file_names()] if args.report else []
+    common.check_output_folder(args.report, "--report")
+    common.check_outputs([args.json] + report_files, [args.recording], args.force)
     if args.sims is not None and args.sims < 2:
         raise SettingsError(f"--sims must be >= 2, got {args.sims}")
     if args.seed < 0:
@@ -55,23 +49,23 @@ def run(args):
         if show:
             print(f"gap [{time.perf_counter() - t0:5.1f} s] {text}", file=sys.stderr, flush=True)
 
+    if args.report:
+        from ..plots import pyplot
+
+        pyplot()  # a missing matplotlib is said now, not after the analysis
     rec = read_recording(args.recording)
     for text in rec.warnings:
-        print(f"gyrofilter: warning: {text}", file=sys.stderr)
+        common.say(f"gyrofilter: warning: {text}")
     progress(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
     report = analyse_gap(rec, seed=args.seed, n_sims=args.sims, progress=progress,
                          recording_name=args.recording)
-    out_dir = os.path.dirname(os.path.abspath(args.json))
-    os.makedirs(out_dir, exist_ok=True)
-    with open(args.json, "w", encoding="utf-8") as fh:
-        json.dump(_jsonable(report), fh, indent=1)
-        fh.write("\n")
+    with contextlib.ExitStack() as outputs:
+        common.write_json(outputs.enter_context(common.replacing(args.json)), report)
+        if args.report:
+            progress("report")
+            write_report(report, rec, outputs.enter_context(common.replacing_in(args.report)), seed=args.seed)
     if args.report:
-        from ..gap_report import write_report
-
-        progress("report")
-        path = write_report(report, rec, args.report, seed=args.seed)
-        progress(f"wrote {path}")
+        progress(f"wrote {os.path.join(args.report, REPORT_NAME)}")
     d = report.get("discrepancy", {})
     print(f"{args.recording}: {len(report['findings'])} finding(s); discrepancy "
           f"{d.get('overall_before', float('nan')):.3g} -> {d.get('overall_after', float('nan')):.3g} "

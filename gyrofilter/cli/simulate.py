@@ -1,14 +1,21 @@
 """``gyrofilter simulate --model MODEL.json --duration S [--rate HZ] [--seed N] --out FILE``.
 
 Writes a format-v1 recording (gzip when FILE ends in .gz) from a noise model, streaming in
-blocks so that hours at 1 kHz need bounded memory. The model schema is described in
-:mod:`gyrofilter.simulate`; a bad model is reported in one line naming the key.
+blocks so that hours at 1 kHz need bounded memory. The model schema is in docs/formats.md; a bad
+model is reported in one line naming the key. FILE is refused when it exists (unless ``--force``)
+or is the model itself; the recording is written beside it under a temporary name and takes
+its place only when complete, so a failed or interrupted run leaves no file behind.
 """
 import json
+import math
 import sys
 import time
 
+import numpy as np
+
 from ..errors import SettingsError
+from ..units import check_sample_rate_hz
+from . import common
 
 
 def add_arguments(parser):
@@ -20,6 +27,7 @@ def add_arguments(parser):
     parser.add_argument("--out", required=True, metavar="FILE", help="output recording (.csv or .csv.gz)")
     parser.add_argument("--chunk", type=int, default=65536, metavar="N", help="samples per block written (default 65536)")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
+    common.add_force_argument(parser)
 
 
 def load_model(path):
@@ -39,16 +47,23 @@ def run(args):
     from ..recording import GYRO_COLUMNS, RecordingWriter
     from ..simulate import recording_columns, recording_header, sample_count, simulate_chunks, validate_model
 
+    common.check_outputs([args.out], [args.model], args.force)
+    if not (math.isfinite(args.duration) and args.duration > 0):
+        raise SettingsError(f"--duration must be > 0 s, got {args.duration:g}")
+    if args.rate is not None:
+        check_sample_rate_hz(args.rate, "--rate")
+    if args.seed is not None and args.seed < 0:
+        raise SettingsError(f"--seed must be an integer >= 0, got {args.seed}")
+    if args.chunk < 1:
+        raise SettingsError(f"--chunk must be at least 1 sample, got {args.chunk}")
     model = load_model(args.model)
     try:
         spec, warnings = validate_model(model, sample_rate_hz=args.rate)
-        if args.seed is not None and args.seed < 0:
-            raise SettingsError(f"--seed must be an integer >= 0, got {args.seed}")
-        n_total = sample_count(args.duration, spec["sample_rate_hz"])
     except SettingsError as exc:
         raise SettingsError(f"{args.model}: {exc}") from None
+    n_total = sample_count(args.duration, spec["sample_rate_hz"])
     for text in warnings:
-        print(f"gyrofilter: warning: {args.model}: {text}", file=sys.stderr)
+        common.say(f"gyrofilter: warning: {args.model}: {text}")
     header = recording_header(model, args.duration, seed=args.seed, validated=spec)
     columns = recording_columns(spec)
     formats = ["%.10g"] + ["%d" if spec["gyro_unit"] == "lsb" else "%.9g"] * len(GYRO_COLUMNS)
@@ -57,9 +72,8 @@ def run(args):
     show = args.progress or sys.stderr.isatty()
     done = 0
     last = time.monotonic()
-    with RecordingWriter(args.out, header, columns, formats=formats, flush_interval_s=5.0, fsync=False) as writer:
-        import numpy as np
-
+    with common.replacing(args.out) as tmp, \
+            RecordingWriter(tmp, header, columns, formats=formats, flush_interval_s=None, fsync=False) as writer:
         for t_s, gyro, temp_c in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=args.seed,
                                                  validated=spec):
             cols = [t_s[:, None], gyro] + ([temp_c[:, None]] if temp_c is not None else [])

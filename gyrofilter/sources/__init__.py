@@ -13,7 +13,7 @@ A bare ``/dev/tty...`` is a serial port and a bare existing file or ``*.csv``/``
 is a replay. Numbers may be decimal or ``0x`` hex; flags are ``1/0``, ``yes/no``, ``true/false``
 or the bare key (= true). An unknown key is refused with a message that lists the known ones.
 
-Every opened source follows the same duck-typed protocol (``shared`` briefing):
+Every opened source follows the same duck-typed protocol:
 
 - ``header``: dict of recording-header keys (``sample_rate_hz``, ``gyro_unit``, ``lsb_per_dps``
   when the unit is lsb, ``sensor``, ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``,

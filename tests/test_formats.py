@@ -1,0 +1,132 @@
+"""docs/formats.md is the one statement of the formats: its examples must run through the code."""
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gyrofilter.calibration import Calibration
+from gyrofilter.noise_model import JSON_KEY
+from gyrofilter.recording import parse_recording
+from gyrofilter.simulate import EFFECTS, simulate, validate_model
+from gyrofilter.sources import KINDS
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = (ROOT / "docs" / "formats.md").read_text(encoding="utf-8")
+
+
+def section(number):
+    """The text of section ``number`` ("## 3. ...") of docs/formats.md."""
+    match = re.search(rf"^## {number}\. .*?(?=^## |\Z)", DOC, re.M | re.S)
+    assert match, f"docs/formats.md has no section {number}"
+    return match.group(0)
+
+
+def example(number, language):
+    blocks = re.findall(rf"^```{language}\n(.*?)^```", section(number), re.M | re.S)
+    assert blocks, f"section {number} has no ```{language} example"
+    return blocks[0]
+
+
+def table_rows(text):
+    """First cell -> the whole row, for the Markdown table rows of ``text``."""
+    rows = {}
+    for line in text.splitlines():
+        if line.startswith("| ") and not line.startswith("|---"):
+            rows[line.split("|")[1].strip()] = line
+    return rows
+
+
+def test_recording_example_parses():
+    rec = parse_recording(example(1, "text"), "formats.md")
+    assert rec.warnings == []
+    assert rec.sample_rate_hz == 100.0 and rec.gyro_unit == "lsb" and rec.lsb_per_dps == 131.0
+    assert rec.header["any_other_key"] == "free text"
+    assert list(rec.columns) == ["t", "gx", "gy", "gz", "temp"]
+    assert np.allclose(rec.t_s, [0.0, 0.01, 0.04]) and np.allclose(rec.gyro_dps[0], np.array([12, -3, 40]) / 131)
+    assert [text for _, text in rec.notes] == ["gap: 2 samples lost before t=0.04 s"]
+
+
+def test_model_example_validates_and_runs():
+    model = json.loads(example(2, "json"))
+    spec, warnings = validate_model(model)
+    assert warnings == []
+    assert [e["effect"] for a in "xyz" for e in spec["axes"][a]["effects"]] == ["temperature", "sinusoid", "gauss_markov"]
+    rec = simulate(model, 2.0, seed=1)
+    assert len(rec) == 200 and rec.temp_c is not None
+
+
+def test_effect_table_lists_every_effect_with_its_parameters():
+    effects = {name.strip("`"): row for name, row in table_rows(section(2)).items()
+               if name.startswith("`") and row.count("|") == 5}  # the effect table has 4 columns
+    assert set(effects) == set(EFFECTS)
+    for name, (required, optional) in EFFECTS.items():
+        cells = effects[name].split("|")
+        for param in required:
+            assert f"`{param}`" in cells[3], (name, param)
+        for param in optional:
+            assert f"`{param}`" in cells[4], (name, param)
+
+
+def test_gap_example_findings_use_the_effect_table():
+    report = json.loads(example(3, "json"))
+    for key in ("recording", "sample_rate_hz", "duration_s", "baseline", "findings", "extended_model"):
+        assert key in report
+    for finding in report["findings"]:
+        required, optional = EFFECTS[finding["effect"]]
+        assert set(required) <= set(finding["params"]) <= set(required) | set(optional)
+        assert finding["axis"] in "xyz" and {"metric", "before", "after"} <= set(finding["gain"])
+
+
+def test_allan_example_uses_the_coefficient_keys_of_the_code():
+    doc = json.loads(example(4, "json"))
+    for axis in doc["axes"].values():
+        assert set(axis["coefficients"]) == set(JSON_KEY.values())
+        assert len(axis["tau_s"]) == len(axis["adev_dps"])
+    for key in JSON_KEY.values():
+        assert f"`{key}`" in section(4)
+
+
+def test_calibration_example_loads(tmp_path):
+    path = tmp_path / "cal.json"
+    path.write_text(example(5, "json"))
+    cal = Calibration.load(path)
+    assert cal.bias_dps == (-3.2732, 1.1220, -0.5022) and cal.samples == 200 and cal.temp_c == 25.3
+
+
+def test_source_table_names_every_key():
+    rows = list(table_rows(section(6)).values())[1:]  # after the header row
+    for kind, (_, keys) in KINDS.items():
+        row = next((r for r in rows if f"`{kind}" in r), None)
+        assert row is not None, kind
+        for key in keys:
+            assert f"`{key}`" in row, (kind, key)
+
+
+def test_embedding_example_runs(capsys):
+    exec(compile(example(7, "python"), "formats.md section 7", "exec"), {})
+    bias = eval(capsys.readouterr().out)
+    assert np.allclose(bias, [-3.3, 1.1, -0.5], atol=0.05)
+
+
+@pytest.mark.parametrize("folder", ["gyrofilter", "docs", "examples"])
+def test_no_reference_to_the_outside_contract(folder):
+    outside = re.compile(r"interfaces\.md|shared" + "/")
+    for path in (ROOT / folder).rglob("*"):
+        if path.suffix in (".py", ".md", ".json", ".txt") and path.is_file():
+            text = path.read_text(encoding="utf-8", errors="replace")
+            assert not outside.search(text), f"{path.relative_to(ROOT)} refers to the outside contract"
+
+
+def test_links_to_formats_md_point_at_its_sections():
+    def slug(heading):  # GitHub's anchor of a heading
+        return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+    anchors = {slug(h) for h in re.findall(r"^#+ (.*)$", DOC, re.M)}
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    links = [(page.name, anchor) for page in pages
+             for anchor in re.findall(r"formats\.md#([\w\-]+)", page.read_text(encoding="utf-8"))]
+    assert len(links) >= 8
+    for page, anchor in links:
+        assert anchor in anchors, f"{page}: formats.md#{anchor} is not a heading of docs/formats.md"

@@ -1,0 +1,56 @@
+"""Units helpers: conversions, the sample-rate check, and plain numbers in error messages."""
+import numpy as np
+import pytest
+
+from gyrofilter import GyroFilter
+from gyrofilter.errors import GyroFilterError
+from gyrofilter.recording import parse_recording
+from gyrofilter.reference import body_rate_from_quaternions
+from gyrofilter.tempcomp import compensate
+from gyrofilter.units import check_sample_rate_hz, from_dps, json_ready, plain, to_dps
+
+
+def test_plain_writes_numpy_scalars_as_the_numbers_they_hold():
+    assert plain(np.float64(14.99)) == "14.99"
+    assert plain(np.int64(7)) == "7"
+    assert plain(np.float32(0.5)) == "0.5"
+    assert plain((np.float64(1.5), 2)) == "(1.5, 2)"
+    assert plain(np.array([1.0, -2.0])).startswith("array([")  # says it is an array
+    assert plain("abc") == "'abc'" and plain(None) == "None"
+
+
+def test_lsb_round_trip_and_bad_unit():
+    x = np.array([[131.0, -262.0, 0.0]])
+    assert np.allclose(from_dps(to_dps(x, "lsb", 131.0), "lsb", 131.0), x)
+    with pytest.raises(GyroFilterError, match="got -131.0$"):
+        to_dps(x, "lsb", np.float64(-131.0))
+
+
+RECORDING_T_BACKWARDS = """# gyrofilter-recording: 1
+# sample_rate_hz: 100
+# gyro_unit: dps
+t,gx,gy,gz
+15.0,0,0,0
+14.99,0,0,0
+"""
+
+
+@pytest.mark.parametrize("call, expected", [
+    (lambda: parse_recording(RECORDING_T_BACKWARDS), "(14.99 after 15.0)"),
+    (lambda: check_sample_rate_hz(np.float64(-14.99)), "got -14.99"),
+    (lambda: body_rate_from_quaternions(np.ones((4, 4)), 100.0, half_span=np.float64(1.5)), "got 1.5"),
+    (lambda: compensate(np.zeros((2, 3)), np.zeros(2), np.float64(np.nan), 25.0), "got nan"),
+    (lambda: GyroFilter(np.float64(100.0), calibration_s=np.float64(0.01)), "calibration_s=0.01 gives 1"),
+], ids=["recording-t", "sample-rate", "reference", "tempcomp", "pipeline"])
+def test_error_messages_print_numpy_scalars_as_plain_numbers(call, expected):
+    with pytest.raises(GyroFilterError) as info:
+        call()
+    assert expected in str(info.value) and "np." not in str(info.value)
+
+
+def test_json_ready_gives_what_strict_json_takes():
+    import json
+
+    value = {1: (np.float64(np.nan), np.inf, -np.inf), "a": np.arange(2), "b": [np.float32(0.5), np.bool_(True), None, "s"]}
+    text = json.dumps(json_ready(value), allow_nan=False)
+    assert json.loads(text) == {"1": [None, None, None], "a": [0, 1], "b": [0.5, True, None, "s"]}
