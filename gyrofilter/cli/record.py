@@ -12,6 +12,8 @@ import signal
 import sys
 import time
 
+import numpy as np
+
 from ..errors import DeviceError, SourceEnded
 from ..sources import SOURCE_HELP, open_source
 from ..units import GYRO_UNITS
@@ -176,6 +178,7 @@ class LiveLoop:
         self.rate_hz = float(source.header["sample_rate_hz"])
         self.t_col = source.columns.index("t")
         self.first_t = self.last_t = None
+        self._t_end = None  # samples at t >= this are beyond the duration (half a sample of margin)
         self.samples = 0
         self.ended = None  # SourceEnded, DeviceError or "duration reached"
         self._signals = StopSignals()
@@ -204,10 +207,16 @@ class LiveLoop:
             t = rows[:, self.t_col]
             if self.first_t is None:
                 self.first_t = float(t[0])
-            if self.duration_s is not None:
-                keep = t - self.first_t < self.duration_s - 0.5 / self.rate_hz
-                if not keep.all():
-                    rows, self.ended = rows[keep], "duration reached"
+                if self.duration_s is not None:
+                    self._t_end = self.first_t + self.duration_s - 0.5 / self.rate_hz
+            if self._t_end is not None:
+                # cut at the first sample beyond the duration (t never goes back: a prefix, no splice);
+                # when the next sample would be beyond it anyway, stop now instead of waiting for it
+                beyond = np.flatnonzero(t >= self._t_end)
+                if len(beyond):
+                    rows, self.ended = rows[: beyond[0]], "duration reached"
+                elif t[-1] + 1.0 / self.rate_hz >= self._t_end:
+                    self.ended = "duration reached"
             if len(rows):
                 self.last_t = float(rows[-1, self.t_col])
                 self.samples += len(rows)

@@ -95,7 +95,6 @@ def _run(args, source):
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = LiveLoop(source, args.duration)
     status = Status(not args.quiet, rate_hz)
-    t_pending = np.empty(0)  # t of samples fed to the filter but not yet in an output block
     blocks = 0
     last_flush = time.monotonic()
     try:
@@ -110,15 +109,11 @@ def _run(args, source):
                     out = filt.filter(to_dps(rows[:, gyro_idx], unit, lsb), temps)
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note("calibrated: bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s")
-                    # the M blocks just completed end right before the samples still pending
-                    t_all = np.concatenate([t_pending, rows[:, t_idx]])
-                    pending = 0 if filt.calibrating else filt.pending_samples
                     if len(out):
-                        start = len(t_all) - pending - len(out) * block
-                        ends = start + block * np.arange(1, len(out) + 1) - 1
-                        writer.write(np.column_stack([t_all[ends], out]))
+                        # a row comes out when its block's last sample goes in: always one of these rows
+                        ends = filt.block_end_indices(len(out)) - (filt.samples_in - len(rows))
+                        writer.write(np.column_stack([rows[ends, t_idx], out]))
                         blocks += len(out)
-                    t_pending = t_all[len(t_all) - pending:] if pending else np.empty(0)
                 now = time.monotonic()
                 if now - last_flush >= FLUSH_INTERVAL_S or not args.out:
                     writer.flush()
