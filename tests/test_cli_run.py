@@ -1,4 +1,4 @@
-"""`gyrofilter run` end to end at the read sizes of live sources.
+"""`gyrofilter run` end to end at the read sizes of live sources, and what `run`/`record` leave on disk.
 
 A live source hands over a few samples per read (the MPU6050 driver polls its FIFO every 20 ms:
 2 samples at 100 Hz, about 20 at 1 kHz; a serial line a few lines; a paced replay what is due).
@@ -29,7 +29,7 @@ from mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock  # noqa: E402
 
 import gyrofilter.sources.mpu6050 as mpu  # noqa: E402
 from gyrofilter.cli import main  # noqa: E402
-from gyrofilter.recording import read_recording  # noqa: E402
+from gyrofilter.recording import Recording, read_recording, write_recording  # noqa: E402
 
 REAL_OPEN_MPU6050 = mpu.open_mpu6050
 BUNDLED = os.path.join(os.path.dirname(__file__), os.pardir, "gyrofilter", "data", "mpu6050_static_100s.csv.gz")
@@ -217,3 +217,53 @@ def test_run_on_a_paced_replay_writes_the_rows_replay_writes(tmp_path, capsys):
                  "--duration", str(seconds), "--quiet"]) == 0
     assert f"{seconds * 100} samples in" in capsys.readouterr().err
     assert_same_rows(read_recording(out), replayed(tmp_path, recorded, capsys), rows_due(recorded))
+
+
+# ------------------------------------------------------------------------------ files left behind
+
+
+def _still_recording(path, moving=False):
+    rng = np.random.default_rng(11)
+    x = 0.5 + 0.05 * rng.standard_normal((600, 3))
+    if moving:
+        x[100:150, 1] += 30.0  # turned during the start-up calibration
+    write_recording(path, Recording.from_dps(x, 100.0))
+    return path
+
+
+def test_run_that_fails_in_calibration_leaves_no_file_and_a_rerun_works(tmp_path, capsys):
+    out = tmp_path / "filtered.csv"
+    moved = _still_recording(tmp_path / "moved.csv", moving=True)
+    assert main(["run", "--source", str(moved), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "gyrofilter: error:" in err and "Traceback" not in err
+    assert f"removed {out}" in err and not out.exists()
+    still = _still_recording(tmp_path / "still.csv")
+    assert main(["run", "--source", str(still), "--out", str(out), "--quiet"]) == 0  # no --force needed
+    assert len(read_recording(out)) == (600 - 200) // BLOCK
+
+
+def _failing_after_start(monkeypatch):
+    """The model's chip stops answering right after start-up (EIO on every transfer)."""
+    model = install_mpu6050(monkeypatch, 100)
+    opened = mpu.open_mpu6050
+
+    def open_then_fail(**kw):
+        src = opened(**kw)
+        model.fail(errno.EIO, times=src.max_retries + 1)
+        return src
+
+    monkeypatch.setattr(mpu, "open_mpu6050", open_then_fail)
+
+
+@pytest.mark.parametrize("command", [["record"], ["run", "--quiet"]])
+def test_device_failing_before_the_first_sample_leaves_no_file(tmp_path, monkeypatch, capsys, command):
+    out = tmp_path / "out.csv"
+    _failing_after_start(monkeypatch)
+    assert main([*command, "--source", "mpu6050:rate=100", "--out", str(out), "--duration", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "device error" in err and "INT_STATUS (0x3A)" in err and f"removed {out}" in err
+    assert not out.exists()
+    install_mpu6050(monkeypatch, 100)  # the cable fixed: the same command works without --force
+    assert main([*command, "--source", "mpu6050:rate=100", "--out", str(out), "--duration", "3"]) == 0
+    assert len(read_recording(out)) == (300 if command[0] == "record" else 100 // BLOCK)

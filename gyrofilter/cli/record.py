@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import DeviceError, SourceEnded
 from ..sources import SOURCE_HELP, open_source
 from ..units import GYRO_UNITS
+from . import common
 
 FLUSH_INTERVAL_S = 0.5
 STATUS_INTERVAL_S = 1.0
@@ -47,6 +48,19 @@ def add_arguments(parser):
     parser.add_argument("--out", required=True, metavar="FILE", help="recording to write (.csv, or .csv.gz for gzip)")
     parser.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
     parser.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")
+
+
+def close_output(writer, failed):
+    """Close ``writer``; when the command failed before any data row was written, remove its file
+    (header and notes only), so that a re-run is not refused as existing. Returns True if removed."""
+    writer.close()
+    if not failed or writer.rows_written or writer.path is None:
+        return False
+    try:
+        os.unlink(writer.path)
+    except FileNotFoundError:
+        pass
+    return True
 
 
 def open_from_args(args):
@@ -154,9 +168,8 @@ def _formats(columns):
 def run(args):
     from ..recording import RecordingWriter
 
-    out = args.out
-    if os.path.exists(out) and not args.force:
-        raise FileExistsError(17, "exists (use --force to overwrite)", out)
+    if os.path.exists(args.out) and not args.force:
+        raise FileExistsError(17, "exists (use --force to overwrite)", args.out)
     source = open_from_args(args)
     try:
         return _record(args, source, RecordingWriter)
@@ -248,33 +261,41 @@ def _record(args, source, RecordingWriter):
     loop = LiveLoop(source, args.duration)
     status = Status(args.progress or sys.stderr.isatty(), loop.rate_hz)
     wall0 = time.monotonic()
-    with loop, RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None) as writer:
-        last_flush = time.monotonic()
-        dirty = False
-        while (step := loop.next()) is not None:
-            rows, notes = step
-            for text in notes:
+    writer = RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None)
+    try:
+        with loop:
+            last_flush = time.monotonic()
+            dirty = False
+            while (step := loop.next()) is not None:
+                rows, notes = step
+                for text in notes:
+                    writer.note(text)
+                if len(rows):
+                    writer.write(rows)
+                dirty = dirty or bool(notes) or bool(len(rows))
+                now = time.monotonic()
+                if dirty and now - last_flush >= FLUSH_INTERVAL_S:
+                    writer.flush()
+                    last_flush, dirty = now, False
+                if status.due():
+                    status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost")
+            status.end()
+            for text in source.pop_notes():
                 writer.note(text)
-            if len(rows):
-                writer.write(rows)
-            dirty = dirty or bool(notes) or bool(len(rows))
-            now = time.monotonic()
-            if dirty and now - last_flush >= FLUSH_INTERVAL_S:
-                writer.flush()
-                last_flush, dirty = now, False
-            if status.due():
-                status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost")
-        status.end()
-        for text in source.pop_notes():
-            writer.note(text)
-        reason = loop.reason()
-        writer.note(f"end: {reason}; {loop.samples} samples; " + (source_summary(source.stats) or "no losses"))
+            reason = loop.reason()
+            writer.note(f"end: {reason}; {loop.samples} samples; " + (source_summary(source.stats) or "no losses"))
+    except BaseException:
+        if close_output(writer, failed=True):
+            common.say(f"gyrofilter record: removed {args.out}: no sample was recorded")
+        raise
+    removed = close_output(writer, loop.failed())
     stats = source.stats
     print(
         f"gyrofilter record: {reason}\n"
         f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
         f"  lost {stats.get('lost_samples', 0)} samples"
-        + (f"; {source_summary(stats)}" if source_summary(stats) else ""),
+        + (f"; {source_summary(stats)}" if source_summary(stats) else "")
+        + (f"\n  removed {args.out}: no sample was recorded" if removed else ""),
         file=sys.stderr,
     )
     return EXIT_DISCONNECTED if loop.failed() else 0

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..units import to_dps
 from . import common
-from .record import EXIT_DISCONNECTED, LiveLoop, Status, add_source_arguments, open_from_args, source_summary
+from .record import EXIT_DISCONNECTED, LiveLoop, Status, add_source_arguments, close_output, open_from_args, source_summary
 
 FLUSH_INTERVAL_S = 0.5
 
@@ -36,11 +36,14 @@ class _TextOut:
 
     def __init__(self, stream, header, columns):
         self.stream = stream
+        self.path = None  # no file to remove after a failure
+        self.rows_written = 0
         lines = ["# gyrofilter-recording: 1"] + [f"# {k}: {v}" for k, v in header.items()] + [",".join(columns)]
         self.stream.write("\n".join(lines) + "\n")
         self.stream.flush()
 
     def write(self, rows):
+        self.rows_written += len(rows)
         self.stream.write("".join("%.10g,%.9g,%.9g,%.9g\n" % tuple(r) for r in rows.tolist()))
 
     def note(self, text):
@@ -95,7 +98,6 @@ def _run(args, source):
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = LiveLoop(source, args.duration)
     status = Status(not args.quiet, rate_hz)
-    blocks = 0
     last_flush = time.monotonic()
     try:
         with loop:
@@ -113,29 +115,32 @@ def _run(args, source):
                         # a row comes out when its block's last sample goes in: always one of these rows
                         ends = filt.block_end_indices(len(out)) - (filt.samples_in - len(rows))
                         writer.write(np.column_stack([rows[ends, t_idx], out]))
-                        blocks += len(out)
                 now = time.monotonic()
                 if now - last_flush >= FLUSH_INTERVAL_S or not args.out:
                     writer.flush()
                     last_flush = now
                 if status.due():
-                    state = "calibrating" if filt.calibrating else f"{blocks} filtered rows"
+                    state = "calibrating" if filt.calibrating else f"{writer.rows_written} filtered rows"
                     status.show(loop.samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
                                               f"rejected outliers {int(filt.rejected.sum())}")
             status.end()
             for text in source.pop_notes():
                 writer.note(text)
-    finally:
-        writer.close()
+        common.save_calibration(args, filt)
+    except BaseException:
+        if close_output(writer, failed=True):
+            common.say(f"gyrofilter run: removed {args.out}: no filtered row was written")
+        raise
+    removed = close_output(writer, loop.failed())
     reason = loop.reason()
-    common.save_calibration(args, filt)
     bias = "" if filt.bias_dps is None else " bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s;"
     print(
         f"gyrofilter run: {reason}\n"
-        f"  {loop.samples} samples in, {blocks} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
+        f"  {loop.samples} samples in, {writer.rows_written} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
         f"  lost {source.stats.get('lost_samples', 0)} samples"
-        + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else ""),
+        + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else "")
+        + (f"\n  removed {args.out}: no filtered row was written" if removed else ""),
         file=sys.stderr,
     )
     return EXIT_DISCONNECTED if loop.failed() else 0
