@@ -267,3 +267,39 @@ def test_device_failing_before_the_first_sample_leaves_no_file(tmp_path, monkeyp
     install_mpu6050(monkeypatch, 100)  # the cable fixed: the same command works without --force
     assert main([*command, "--source", "mpu6050:rate=100", "--out", str(out), "--duration", "3"]) == 0
     assert len(read_recording(out)) == (300 if command[0] == "record" else 100 // BLOCK)
+
+
+# ------------------------------------------------------------------------------ options
+
+
+@pytest.mark.parametrize("value", ["-1", "0", "nan", "inf"])
+@pytest.mark.parametrize("command", ["record", "run"])
+def test_duration_must_be_positive_and_finite(tmp_path, capsys, command, value):
+    out = tmp_path / "out.csv"
+    still = _still_recording(tmp_path / "still.csv")
+    assert main([command, "--source", str(still), "--out", str(out), f"--duration={value}"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith("gyrofilter: error: --duration") and "positive" in err
+    assert not out.exists()
+
+
+def test_outputs_never_overwrite_an_input_even_with_force(tmp_path, capsys):
+    still = _still_recording(tmp_path / "still.csv")
+    before = still.read_bytes()
+    assert main(["record", "--source", str(still), "--out", str(still), "--force"]) == 2
+    assert main(["run", "--source", f"replay:{still}", "--out", str(still), "--force"]) == 2
+    cal = tmp_path / "cal.json"
+    assert main(["run", "--source", str(still), "--save-calibration", str(cal), "--quiet"]) == 0
+    cal_before = cal.read_bytes()
+    assert main(["run", "--source", str(still), "--calibration", str(cal), "--save-calibration", str(cal),
+                 "--force", "--quiet"]) == 2
+    out = tmp_path / "out.csv"
+    assert main(["run", "--source", str(still), "--out", str(out), "--save-calibration", str(out), "--force"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("is an input of this command") == 3 and "named for two outputs" in err
+    assert still.read_bytes() == before and cal.read_bytes() == cal_before and not out.exists()
+    out.write_text("keep me")  # an existing output: only with --force
+    assert main(["record", "--source", str(still), "--out", str(out)]) == 2
+    assert "exists (use --force to overwrite)" in capsys.readouterr().err and out.read_text() == "keep me"
+    assert main(["record", "--source", str(still), "--out", str(out), "--force"]) == 0
+    assert len(read_recording(out)) == 600

@@ -7,6 +7,7 @@ least every ``FLUSH_INTERVAL_S``: after a crash or a pulled plug at most that mu
 the file still reads. Ctrl-C (SIGINT) and SIGTERM stop the recording cleanly (exit 0); a second
 signal aborts at once (the file is still readable up to the last flush).
 """
+import math
 import os
 import signal
 import sys
@@ -14,8 +15,8 @@ import time
 
 import numpy as np
 
-from ..errors import DeviceError, SourceEnded
-from ..sources import SOURCE_HELP, open_source
+from ..errors import DeviceError, SettingsError, SourceEnded
+from ..sources import SOURCE_HELP, open_source, parse_source
 from ..units import GYRO_UNITS
 from . import common
 
@@ -46,8 +47,20 @@ def add_arguments(parser):
     )
     add_source_arguments(parser)
     parser.add_argument("--out", required=True, metavar="FILE", help="recording to write (.csv, or .csv.gz for gzip)")
-    parser.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
+    common.add_force_argument(parser)
     parser.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")
+
+
+def check_duration(duration_s):
+    """``--duration`` is a positive, finite number of seconds, or not given (None)."""
+    if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0):
+        raise SettingsError(f"--duration {duration_s:g}: must be a positive, finite number of seconds")
+
+
+def source_files(spec):
+    """The files SOURCE reads (a replayed recording, a simulation model, a serial device): never outputs."""
+    _, kwargs = parse_source(spec)
+    return [kwargs.get(key) for key in ("path", "model", "port")]
 
 
 def close_output(writer, failed):
@@ -168,8 +181,8 @@ def _formats(columns):
 def run(args):
     from ..recording import RecordingWriter
 
-    if os.path.exists(args.out) and not args.force:
-        raise FileExistsError(17, "exists (use --force to overwrite)", args.out)
+    check_duration(args.duration)
+    common.check_outputs([args.out], source_files(args.source), args.force)
     source = open_from_args(args)
     try:
         return _record(args, source, RecordingWriter)

@@ -6,7 +6,6 @@ sample on the sensor's clock) go to stdout, or to ``--out FILE``, as a format-v1
 most once per second, shows the sample rate achieved, lost samples, rejected outliers and the
 CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0).
 """
-import os
 import sys
 import time
 
@@ -14,7 +13,8 @@ import numpy as np
 
 from ..units import to_dps
 from . import common
-from .record import EXIT_DISCONNECTED, LiveLoop, Status, add_source_arguments, close_output, open_from_args, source_summary
+from .record import (EXIT_DISCONNECTED, LiveLoop, Status, add_source_arguments, check_duration, close_output,
+                     open_from_args, source_files, source_summary)
 
 FLUSH_INTERVAL_S = 0.5
 
@@ -26,7 +26,7 @@ def add_arguments(parser):
     )
     add_source_arguments(parser)
     parser.add_argument("--out", metavar="FILE", help="write the filtered rates to this recording (.csv or .csv.gz) instead of stdout")
-    parser.add_argument("--force", action="store_true", help="overwrite --out FILE if it exists")
+    common.add_force_argument(parser)
     parser.add_argument("--quiet", action="store_true", help="no status line")
     common.add_filter_arguments(parser)
 
@@ -57,8 +57,9 @@ class _TextOut:
 
 
 def run(args):
-    if args.out and os.path.exists(args.out) and not args.force:
-        raise FileExistsError(17, "exists (use --force to overwrite)", args.out)
+    check_duration(args.duration)
+    common.check_outputs([args.out, args.save_calibration],
+                         source_files(args.source) + [args.calibration, args.temp_model], args.force)
     source = open_from_args(args)
     try:
         return _run(args, source)
