@@ -236,7 +236,7 @@ def test_run_that_fails_in_calibration_leaves_no_file_and_a_rerun_works(tmp_path
     moved = _still_recording(tmp_path / "moved.csv", moving=True)
     assert main(["run", "--source", str(moved), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert "gyrofilter: error:" in err and "Traceback" not in err
+    assert "gyrofilter: error: calibration: the sensor moved" in err and "Traceback" not in err
     assert f"removed {out}" in err and not out.exists()
     still = _still_recording(tmp_path / "still.csv")
     assert main(["run", "--source", str(still), "--out", str(out), "--quiet"]) == 0  # no --force needed
@@ -264,7 +264,7 @@ def test_device_failing_before_the_first_sample_leaves_no_file(tmp_path, monkeyp
     err = capsys.readouterr().err
     assert "device error" in err and "INT_STATUS (0x3A)" in err and f"removed {out}" in err
     assert not out.exists()
-    install_mpu6050(monkeypatch, 100)  # the cable fixed: the same command works without --force
+    install_mpu6050(monkeypatch, 100)  # the cable fixed: a re-run works without --force
     assert main([*command, "--source", "mpu6050:rate=100", "--out", str(out), "--duration", "3"]) == 0
     assert len(read_recording(out)) == (300 if command[0] == "record" else 100 // BLOCK)
 
