@@ -208,15 +208,25 @@ def test_run_on_a_serial_port_writes_the_rows_replay_writes(tmp_path, capsys):
 
 
 def test_run_on_a_paced_replay_writes_the_rows_replay_writes(tmp_path, capsys):
-    """A real MPU6050 log (100 Hz) paced 1.5x: a read every 20 ms of what is due, about 3 samples."""
+    """A real MPU6050 log (100 Hz) with a gap of 25 samples at 4 s (t jumps), paced 1.5x: a read
+    every 20 ms of what is due, about 3 samples; rows after the gap keep the file's t."""
+    real = read_recording(BUNDLED)
+    keep = np.ones(len(real), bool)
+    keep[400:425] = False
+    gapped = tmp_path / "gapped.csv"
+    columns = {"t": real.t_s, **real.columns}  # the file has no t column: its sample times
+    write_recording(gapped, Recording(columns={k: v[keep] for k, v in columns.items()}, header=dict(real.header)))
     seconds = 6
     recorded = tmp_path / "recorded.csv"
-    assert main(["record", "--source", f"replay:{BUNDLED}", "--out", str(recorded), "--duration", str(seconds)]) == 0
+    assert main(["record", "--source", f"replay:{gapped}", "--out", str(recorded), "--duration", str(seconds)]) == 0
     out = tmp_path / "run.csv"
-    assert main(["run", "--source", f"replay:{BUNDLED},realtime,speed=1.5", "--out", str(out),
+    assert main(["run", "--source", f"replay:{gapped},realtime,speed=1.5", "--out", str(out),
                  "--duration", str(seconds), "--quiet"]) == 0
-    assert f"{seconds * 100} samples in" in capsys.readouterr().err
-    assert_same_rows(read_recording(out), replayed(tmp_path, recorded, capsys), rows_due(recorded))
+    err = capsys.readouterr().err
+    assert f"{seconds * 100 - 25} samples in" in err and "lost 25 samples" in err
+    got = read_recording(out)
+    assert_same_rows(got, replayed(tmp_path, recorded, capsys), rows_due(recorded))
+    assert [text for _, text in got.notes][-1] == "gap: 25 samples lost before t=4.25 s (in the replayed file)"
 
 
 # ------------------------------------------------------------------------------ files left behind
