@@ -5,7 +5,9 @@ rate, start time, ...), then the samples; gaps and other events of the source be
 lines (``# gap: 37 samples lost before t=12.34 s ...``). Data are flushed (and fsync'ed) at
 least every ``FLUSH_INTERVAL_S``: after a crash or a pulled plug at most that much is lost and
 the file still reads. Ctrl-C (SIGINT) and SIGTERM stop the recording cleanly (exit 0); a second
-signal aborts at once (the file is still readable up to the last flush).
+signal aborts at once (the file is still readable up to the last flush). A recording that fails
+before its first sample (the device failing, any error) removes its file, so that the same command
+can be run again; the output is never one of the source's files, and overwrites only with --force.
 """
 import math
 import os

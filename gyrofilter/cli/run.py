@@ -4,7 +4,9 @@ The filtered rates (deg/s, one row per block of the pipeline, ``t`` = time of th
 sample on the sensor's clock) go to stdout, or to ``--out FILE``, as a format-v1 recording
 (so ``gyrofilter run ... > out.csv`` is a readable recording too). A status line on stderr, at
 most once per second, shows the sample rate achieved, lost samples, rejected outliers and the
-CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0).
+CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0). A run that fails before its
+first filtered row (the device failing, the calibration refused because the sensor moved, any
+error) removes its --out file, so that the same command can be run again.
 """
 import sys
 import time
