@@ -65,17 +65,18 @@ def source_files(spec):
     return [kwargs.get(key) for key in ("path", "model", "port")]
 
 
-def close_output(writer, failed):
+def close_output(writer, failed, row_name):
     """Close ``writer``; when the command failed before any data row was written, remove its file
-    (header and notes only), so that a re-run is not refused as existing. Returns True if removed."""
+    (header and notes only), so that a re-run is not refused as existing. Returns the line saying
+    so (``row_name``: what a data row is), or "" when the file stays."""
     writer.close()
     if not failed or writer.rows_written or writer.path is None:
-        return False
+        return ""
     try:
         os.unlink(writer.path)
     except FileNotFoundError:
         pass
-    return True
+    return f"removed {writer.path}: no {row_name} was written"
 
 
 def open_from_args(args):
@@ -300,17 +301,17 @@ def _record(args, source, RecordingWriter):
             reason = loop.reason()
             writer.note(f"end: {reason}; {loop.samples} samples; " + (source_summary(source.stats) or "no losses"))
     except BaseException:
-        if close_output(writer, failed=True):
-            common.say(f"gyrofilter record: removed {args.out}: no sample was recorded")
+        if removed := close_output(writer, True, "sample"):
+            common.say(f"gyrofilter record: {removed}")
         raise
-    removed = close_output(writer, loop.failed())
+    removed = close_output(writer, loop.failed(), "sample")
     stats = source.stats
     print(
         f"gyrofilter record: {reason}\n"
         f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
         f"  lost {stats.get('lost_samples', 0)} samples"
         + (f"; {source_summary(stats)}" if source_summary(stats) else "")
-        + (f"\n  removed {args.out}: no sample was recorded" if removed else ""),
+        + (f"\n  {removed}" if removed else ""),
         file=sys.stderr,
     )
     return EXIT_DISCONNECTED if loop.failed() else 0

@@ -131,10 +131,10 @@ def _run(args, source):
                 writer.note(text)
         common.save_calibration(args, filt)
     except BaseException:
-        if close_output(writer, failed=True):
-            common.say(f"gyrofilter run: removed {args.out}: no filtered row was written")
+        if removed := close_output(writer, True, "filtered row"):
+            common.say(f"gyrofilter run: {removed}")
         raise
-    removed = close_output(writer, loop.failed())
+    removed = close_output(writer, loop.failed(), "filtered row")
     reason = loop.reason()
     bias = "" if filt.bias_dps is None else " bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s;"
     print(
@@ -143,7 +143,7 @@ def _run(args, source):
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
         f"  lost {source.stats.get('lost_samples', 0)} samples"
         + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else "")
-        + (f"\n  removed {args.out}: no filtered row was written" if removed else ""),
+        + (f"\n  {removed}" if removed else ""),
         file=sys.stderr,
     )
     return EXIT_DISCONNECTED if loop.failed() else 0
