@@ -51,10 +51,10 @@ def still_then_turning(rate_hz, seconds, seed, still_s=3.0):
     return x
 
 
-def replayed(tmp_path, recording, capsys):
-    """What `gyrofilter replay RECORDING --out` writes, read back."""
+def replayed(tmp_path, recording, capsys, *options):
+    """What `gyrofilter replay RECORDING --out` (with filter ``options``) writes, read back."""
     out = tmp_path / "replayed.csv"
-    assert main(["replay", str(recording), "--out", str(out)]) == 0
+    assert main(["replay", str(recording), "--out", str(out), *options]) == 0
     capsys.readouterr()
     return read_recording(out)
 
@@ -65,10 +65,10 @@ def assert_same_rows(got, want, due):
     np.testing.assert_array_equal(got.gyro_dps, want.gyro_dps)
 
 
-def rows_due(recording):
+def rows_due(recording, calibration_windows=1):
     """Filtered rows due for every sample of ``recording``: whole blocks after the calibration."""
     rec = read_recording(recording)
-    return (len(rec) - int(round(CALIBRATION_S * rec.sample_rate_hz))) // BLOCK
+    return (len(rec) - calibration_windows * int(round(CALIBRATION_S * rec.sample_rate_hz))) // BLOCK
 
 
 def counter(name, err):
@@ -80,7 +80,8 @@ def counter(name, err):
 # ------------------------------------------------------------------------------ MPU6050 over I2C
 
 
-def install_mpu6050(monkeypatch, rate_hz, *, seconds=40.0, seed=5, bus_kwargs=None, driver_kwargs=None, **model_kwargs):
+def install_mpu6050(monkeypatch, rate_hz, *, seconds=40.0, seed=5, bus_kwargs=None, driver_kwargs=None, turn_s=None,
+                    **model_kwargs):
     """A fresh model on a fresh virtual clock at /dev/i2c-1, 0x68; `--source mpu6050:...` opens it.
 
     Each call starts from the same state (errors injected from a seeded generator included), so
@@ -88,10 +89,13 @@ def install_mpu6050(monkeypatch, rate_hz, *, seconds=40.0, seed=5, bus_kwargs=No
     drift against the sample clock like on a real bus. The chip samples at 8 kHz between its
     wake-up and the rate setting, so the FIFO's first sample is a few hundred samples into the
     table: it stays still for that long beyond 3 s. ``driver_kwargs``: options of open_mpu6050
-    that the SOURCE syntax does not reach (a library user's).
+    that the SOURCE syntax does not reach (a library user's). ``turn_s``: (start, end) in the
+    table's time of a turn (y at +30 deg/s) in the still part.
     """
     clock = VirtualClock()
     gyro_dps = still_then_turning(rate_hz, seconds, seed, still_s=3.0 + 600 / rate_hz)
+    if turn_s is not None:
+        gyro_dps[int(turn_s[0] * rate_hz) : int(turn_s[1] * rate_hz), 1] += 30.0
     model = MPU6050Model(clock, gyro_dps=gyro_dps, temp_c=31.0, rng=np.random.default_rng(seed), **model_kwargs)
     FakeI2CBus({0x68: model}, clock=clock, bus_hz=400e3, **(bus_kwargs or {})).install(monkeypatch)
     monkeypatch.setattr(mpu, "open_mpu6050", lambda **kw: REAL_OPEN_MPU6050(
@@ -134,6 +138,23 @@ def test_run_on_the_mpu6050_writes_the_rows_replay_writes(tmp_path, monkeypatch,
     if "error_rate" in model_kwargs:
         assert counter("retries", err) > 0
     assert_same_rows(read_recording(out), replayed(tmp_path, recorded, capsys), rows_due(recorded))
+
+
+def test_run_that_calibrates_again_time_stamps_its_rows_like_replay(tmp_path, monkeypatch, capsys):
+    """The sensor turns during the first 2-s window (its first FIFO sample is table sample 402, at
+    4.02 s); with calibration_retry_s=4 the window is refused and the next one, still, is taken:
+    the rows' t still come from the samples that end their blocks."""
+    source, options = "mpu6050:rate=100,range=500", ["--set", "calibration_retry_s=4"]
+    install_mpu6050(monkeypatch, 100, turn_s=(4.5, 5.0))
+    recorded = tmp_path / "recorded.csv"
+    assert main(["record", "--source", source, "--out", str(recorded), "--duration", "12"]) == 0
+    install_mpu6050(monkeypatch, 100, turn_s=(4.5, 5.0))
+    out = tmp_path / "run.csv"
+    assert main(["run", "--source", source, "--out", str(out), "--duration", "12", "--quiet", *options]) == 0
+    capsys.readouterr()
+    got = read_recording(out)
+    assert_same_rows(got, replayed(tmp_path, recorded, capsys, *options), rows_due(recorded, calibration_windows=2))
+    assert got.t_s[0] == pytest.approx(4.04)  # block 1 after two windows of 200 samples: samples 400-404
 
 
 # ------------------------------------------------------------------------------ serial over a pty
