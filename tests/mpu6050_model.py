@@ -28,7 +28,8 @@ The model (InvenSense RM-MPU-6000A-00 rev 4.2):
 * ``reset_nack``: the chip NACKs every transfer (errno 121) while DEVICE_RESET runs;
 * injected errors: ``fail(errno, times)`` makes the next transactions raise ``OSError(errno)``
   before they touch anything; ``fail_fifo_read(errno, consume_bytes)`` makes the next FIFO_R_W read
-  consume some bytes and then fail (a transfer stopped part-way); ``error_rate`` with ``rng`` fails
+  consume some bytes and then fail (a transfer stopped part-way), optionally after some good FIFO
+  reads (``after_reads``: a later 32-byte block of one SMBus FIFO read fails); ``error_rate`` with ``rng`` fails
   random transactions; ``stuck`` maps registers to values that ignore writes (read-back failures).
 """
 import ctypes
@@ -196,9 +197,10 @@ class MPU6050Model:
         """The next ``times`` transactions raise OSError(errno_value) without touching the model."""
         self.failures += [errno_value] * times
 
-    def fail_fifo_read(self, errno_value, consume_bytes=0):
-        """The next FIFO_R_W read pops ``consume_bytes`` and then raises OSError(errno_value)."""
-        self.fifo_failures.append((errno_value, consume_bytes))
+    def fail_fifo_read(self, errno_value, consume_bytes=0, after_reads=0):
+        """The FIFO_R_W read after the next ``after_reads`` ones pops ``consume_bytes`` and then raises
+        OSError(errno_value)."""
+        self.fifo_failures.append([errno_value, consume_bytes, after_reads])
 
     def check_failure(self, reg, reading):
         """Called by the bus at the start of each transaction touching register ``reg``."""
@@ -207,9 +209,11 @@ class MPU6050Model:
             code = self.failures.pop(0)
             self.injected_errors += 1
             raise OSError(code, os.strerror(code))
-        if reading and reg == FIFO_R_W and self.fifo_failures:
+        if reading and reg == FIFO_R_W and self.fifo_failures and self.fifo_failures[0][2] > 0:
+            self.fifo_failures[0][2] -= 1
+        elif reading and reg == FIFO_R_W and self.fifo_failures:
             self.sync()
-            code, consume = self.fifo_failures.pop(0)
+            code, consume, _ = self.fifo_failures.pop(0)
             del self.fifo[:consume]
             self.injected_errors += 1
             raise OSError(code, os.strerror(code))

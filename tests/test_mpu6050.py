@@ -503,3 +503,21 @@ def test_chip_that_stays_asleep_is_refused(rig):
     clock, model, bus = rig(stuck={0x6B: 0x40})              # PWR_MGMT_1 ignores the wake-up write
     with pytest.raises(DeviceError, match=r"chip did not wake up.*PWR_MGMT_1 \(0x6B\) still reads 0x40"):
         open_src(clock)
+
+
+def test_fatal_error_part_way_through_a_fifo_read_delivers_the_frames_read_before(rig):
+    """The chip vanishes during the 3rd 30-byte block of an SMBus FIFO read: the 10 frames of the
+    first two blocks were read off the chip, so they are delivered; the next read raises."""
+    clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
+    src = open_src(clock, rate_hz=1000, temperature=False, transfer="smbus")
+    a, _ = read_for(src, clock, 0.1)
+    model.fail_fifo_read(errno.ENXIO, after_reads=2)
+    b = src.read()
+    assert len(b) == 10
+    rows = np.concatenate([a, b])
+    np.testing.assert_array_equal(np.diff(index_of(rows)), 1)
+    np.testing.assert_array_equal(rows[:, 0], np.arange(len(rows)) / 1000.0)
+    assert src.stats["samples"] == len(rows)
+    with pytest.raises(DeviceError, match=r"reading/writing FIFO_R_W \(0x74\) after 1 attempt\(s\) \(errno 6"):
+        src.read()
+    src.close()

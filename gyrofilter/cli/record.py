@@ -5,16 +5,22 @@ rate, start time, ...), then the samples; gaps and other events of the source be
 lines (``# gap: 37 samples lost before t=12.34 s ...``). Data are flushed (and fsync'ed) at
 least every ``FLUSH_INTERVAL_S``: after a crash or a pulled plug at most that much is lost and
 the file still reads. Ctrl-C (SIGINT) and SIGTERM stop the recording cleanly (exit 0); a second
-signal aborts at once (the file is still readable up to the last flush).
+signal aborts at once (the file is still readable up to the last flush). A recording that fails
+before its first sample (the device failing, any error) removes its file, so that the same command
+can be run again; the output is never one of the source's files, and overwrites only with --force.
 """
+import math
 import os
 import signal
 import sys
 import time
 
-from ..errors import DeviceError, SourceEnded
-from ..sources import SOURCE_HELP, open_source
+import numpy as np
+
+from ..errors import DeviceError, SettingsError, SourceEnded
+from ..sources import SOURCE_HELP, open_source, parse_source
 from ..units import GYRO_UNITS
+from . import common
 
 FLUSH_INTERVAL_S = 0.5
 STATUS_INTERVAL_S = 1.0
@@ -43,8 +49,34 @@ def add_arguments(parser):
     )
     add_source_arguments(parser)
     parser.add_argument("--out", required=True, metavar="FILE", help="recording to write (.csv, or .csv.gz for gzip)")
-    parser.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
+    common.add_force_argument(parser)
     parser.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")
+
+
+def check_duration(duration_s):
+    """``--duration`` is a positive, finite number of seconds, or not given (None)."""
+    if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0):
+        raise SettingsError(f"--duration {duration_s:g}: must be a positive, finite number of seconds")
+
+
+def source_files(spec):
+    """The files SOURCE reads (a replayed recording, a simulation model, a serial device): never outputs."""
+    _, kwargs = parse_source(spec)
+    return [kwargs.get(key) for key in ("path", "model", "port")]
+
+
+def close_output(writer, failed, row_name):
+    """Close ``writer``; when the command failed before any data row was written, remove its file
+    (header and notes only), so that a re-run is not refused as existing. Returns the line saying
+    so (``row_name``: what a data row is), or "" when the file stays."""
+    writer.close()
+    if not failed or writer.rows_written or writer.path is None:
+        return ""
+    try:
+        os.unlink(writer.path)
+    except FileNotFoundError:
+        pass
+    return f"removed {writer.path}: no {row_name} was written"
 
 
 def open_from_args(args):
@@ -152,9 +184,8 @@ def _formats(columns):
 def run(args):
     from ..recording import RecordingWriter
 
-    out = args.out
-    if os.path.exists(out) and not args.force:
-        raise FileExistsError(17, "exists (use --force to overwrite)", out)
+    check_duration(args.duration)
+    common.check_outputs([args.out], source_files(args.source), args.force)
     source = open_from_args(args)
     try:
         return _record(args, source, RecordingWriter)
@@ -176,6 +207,7 @@ class LiveLoop:
         self.rate_hz = float(source.header["sample_rate_hz"])
         self.t_col = source.columns.index("t")
         self.first_t = self.last_t = None
+        self._t_end = None  # samples at t >= this are beyond the duration (half a sample of margin)
         self.samples = 0
         self.ended = None  # SourceEnded, DeviceError or "duration reached"
         self._signals = StopSignals()
@@ -204,10 +236,16 @@ class LiveLoop:
             t = rows[:, self.t_col]
             if self.first_t is None:
                 self.first_t = float(t[0])
-            if self.duration_s is not None:
-                keep = t - self.first_t < self.duration_s - 0.5 / self.rate_hz
-                if not keep.all():
-                    rows, self.ended = rows[keep], "duration reached"
+                if self.duration_s is not None:
+                    self._t_end = self.first_t + self.duration_s - 0.5 / self.rate_hz
+            if self._t_end is not None:
+                # cut at the first sample beyond the duration (t never goes back: a prefix, no splice);
+                # when the next sample would be beyond it anyway, stop now instead of waiting for it
+                beyond = np.flatnonzero(t >= self._t_end)
+                if len(beyond):
+                    rows, self.ended = rows[: beyond[0]], "duration reached"
+                elif t[-1] + 1.0 / self.rate_hz >= self._t_end:
+                    self.ended = "duration reached"
             if len(rows):
                 self.last_t = float(rows[-1, self.t_col])
                 self.samples += len(rows)
@@ -239,33 +277,41 @@ def _record(args, source, RecordingWriter):
     loop = LiveLoop(source, args.duration)
     status = Status(args.progress or sys.stderr.isatty(), loop.rate_hz)
     wall0 = time.monotonic()
-    with loop, RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None) as writer:
-        last_flush = time.monotonic()
-        dirty = False
-        while (step := loop.next()) is not None:
-            rows, notes = step
-            for text in notes:
+    writer = RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None)
+    try:
+        with loop:
+            last_flush = time.monotonic()
+            dirty = False
+            while (step := loop.next()) is not None:
+                rows, notes = step
+                for text in notes:
+                    writer.note(text)
+                if len(rows):
+                    writer.write(rows)
+                dirty = dirty or bool(notes) or bool(len(rows))
+                now = time.monotonic()
+                if dirty and now - last_flush >= FLUSH_INTERVAL_S:
+                    writer.flush()
+                    last_flush, dirty = now, False
+                if status.due():
+                    status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost")
+            status.end()
+            for text in source.pop_notes():
                 writer.note(text)
-            if len(rows):
-                writer.write(rows)
-            dirty = dirty or bool(notes) or bool(len(rows))
-            now = time.monotonic()
-            if dirty and now - last_flush >= FLUSH_INTERVAL_S:
-                writer.flush()
-                last_flush, dirty = now, False
-            if status.due():
-                status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost")
-        status.end()
-        for text in source.pop_notes():
-            writer.note(text)
-        reason = loop.reason()
-        writer.note(f"end: {reason}; {loop.samples} samples; " + (source_summary(source.stats) or "no losses"))
+            reason = loop.reason()
+            writer.note(f"end: {reason}; {loop.samples} samples; " + (source_summary(source.stats) or "no losses"))
+    except BaseException:
+        if removed := close_output(writer, True, "sample"):
+            common.say(f"gyrofilter record: {removed}")
+        raise
+    removed = close_output(writer, loop.failed(), "sample")
     stats = source.stats
     print(
         f"gyrofilter record: {reason}\n"
         f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
         f"  lost {stats.get('lost_samples', 0)} samples"
-        + (f"; {source_summary(stats)}" if source_summary(stats) else ""),
+        + (f"; {source_summary(stats)}" if source_summary(stats) else "")
+        + (f"\n  {removed}" if removed else ""),
         file=sys.stderr,
     )
     return EXIT_DISCONNECTED if loop.failed() else 0

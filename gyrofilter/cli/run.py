@@ -4,9 +4,10 @@ The filtered rates (deg/s, one row per block of the pipeline, ``t`` = time of th
 sample on the sensor's clock) go to stdout, or to ``--out FILE``, as a format-v1 recording
 (so ``gyrofilter run ... > out.csv`` is a readable recording too). A status line on stderr, at
 most once per second, shows the sample rate achieved, lost samples, rejected outliers and the
-CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0).
+CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0). A run that fails before its
+first filtered row (the device failing, the calibration refused because the sensor moved, any
+error) removes its --out file, so that the same command can be run again.
 """
-import os
 import sys
 import time
 
@@ -14,7 +15,8 @@ import numpy as np
 
 from ..units import to_dps
 from . import common
-from .record import EXIT_DISCONNECTED, LiveLoop, Status, add_source_arguments, open_from_args, source_summary
+from .record import (EXIT_DISCONNECTED, LiveLoop, Status, add_source_arguments, check_duration, close_output,
+                     open_from_args, source_files, source_summary)
 
 FLUSH_INTERVAL_S = 0.5
 
@@ -26,7 +28,7 @@ def add_arguments(parser):
     )
     add_source_arguments(parser)
     parser.add_argument("--out", metavar="FILE", help="write the filtered rates to this recording (.csv or .csv.gz) instead of stdout")
-    parser.add_argument("--force", action="store_true", help="overwrite --out FILE if it exists")
+    common.add_force_argument(parser)
     parser.add_argument("--quiet", action="store_true", help="no status line")
     common.add_filter_arguments(parser)
 
@@ -36,11 +38,14 @@ class _TextOut:
 
     def __init__(self, stream, header, columns):
         self.stream = stream
+        self.path = None  # no file to remove after a failure
+        self.rows_written = 0
         lines = ["# gyrofilter-recording: 1"] + [f"# {k}: {v}" for k, v in header.items()] + [",".join(columns)]
         self.stream.write("\n".join(lines) + "\n")
         self.stream.flush()
 
     def write(self, rows):
+        self.rows_written += len(rows)
         self.stream.write("".join("%.10g,%.9g,%.9g,%.9g\n" % tuple(r) for r in rows.tolist()))
 
     def note(self, text):
@@ -54,8 +59,9 @@ class _TextOut:
 
 
 def run(args):
-    if args.out and os.path.exists(args.out) and not args.force:
-        raise FileExistsError(17, "exists (use --force to overwrite)", args.out)
+    check_duration(args.duration)
+    common.check_outputs([args.out, args.save_calibration],
+                         source_files(args.source) + [args.calibration, args.temp_model], args.force)
     source = open_from_args(args)
     try:
         return _run(args, source)
@@ -95,8 +101,6 @@ def _run(args, source):
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = LiveLoop(source, args.duration)
     status = Status(not args.quiet, rate_hz)
-    t_pending = np.empty(0)  # t of samples fed to the filter but not yet in an output block
-    blocks = 0
     last_flush = time.monotonic()
     try:
         with loop:
@@ -110,37 +114,36 @@ def _run(args, source):
                     out = filt.filter(to_dps(rows[:, gyro_idx], unit, lsb), temps)
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note("calibrated: bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s")
-                    # the M blocks just completed end right before the samples still pending
-                    t_all = np.concatenate([t_pending, rows[:, t_idx]])
-                    pending = 0 if filt.calibrating else filt.pending_samples
                     if len(out):
-                        start = len(t_all) - pending - len(out) * block
-                        ends = start + block * np.arange(1, len(out) + 1) - 1
-                        writer.write(np.column_stack([t_all[ends], out]))
-                        blocks += len(out)
-                    t_pending = t_all[len(t_all) - pending:] if pending else np.empty(0)
+                        # a row comes out when its block's last sample goes in: always one of these rows
+                        ends = filt.block_end_indices(len(out)) - (filt.samples_in - len(rows))
+                        writer.write(np.column_stack([rows[ends, t_idx], out]))
                 now = time.monotonic()
                 if now - last_flush >= FLUSH_INTERVAL_S or not args.out:
                     writer.flush()
                     last_flush = now
                 if status.due():
-                    state = "calibrating" if filt.calibrating else f"{blocks} filtered rows"
+                    state = "calibrating" if filt.calibrating else f"{writer.rows_written} filtered rows"
                     status.show(loop.samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
                                               f"rejected outliers {int(filt.rejected.sum())}")
             status.end()
             for text in source.pop_notes():
                 writer.note(text)
-    finally:
-        writer.close()
+        common.save_calibration(args, filt)
+    except BaseException:
+        if removed := close_output(writer, True, "filtered row"):
+            common.say(f"gyrofilter run: {removed}")
+        raise
+    removed = close_output(writer, loop.failed(), "filtered row")
     reason = loop.reason()
-    common.save_calibration(args, filt)
     bias = "" if filt.bias_dps is None else " bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s;"
     print(
         f"gyrofilter run: {reason}\n"
-        f"  {loop.samples} samples in, {blocks} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
+        f"  {loop.samples} samples in, {writer.rows_written} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
         f"  lost {source.stats.get('lost_samples', 0)} samples"
-        + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else ""),
+        + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else "")
+        + (f"\n  {removed}" if removed else ""),
         file=sys.stderr,
     )
     return EXIT_DISCONNECTED if loop.failed() else 0

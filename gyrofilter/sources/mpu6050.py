@@ -228,6 +228,7 @@ class MPU6050Source:
         self.stats = {"samples": 0, "lost_samples": 0, "retries": 0, "overflows": 0, "resyncs": 0,
                       "polls": 0, "fifo_bytes_read": 0}
         self._notes = []
+        self._failure = None  # a DeviceError that ended a FIFO read part-way, raised by the next read()
         self._layout = frame_layout(self.temperature)
         self._n_words = len(self._layout)
         self.frame_bytes = 2 * self._n_words
@@ -506,6 +507,8 @@ class MPU6050Source:
         re-reading INT_STATUS and FIFO_COUNT; one that fails with EIO (5: may have stopped part-way
         and consumed bytes) resets the FIFO and records a gap, so frames never lose alignment. A
         FIFO_COUNT that is not a whole number of frames also resets the FIFO (recorded as a gap).
+        Any other failure ends the source; frames read before it in the same poll are delivered
+        first (the next read() raises), so nothing read off the chip is dropped.
         """
         self.stats["polls"] += 1
         self._last_poll = self._clock()
@@ -548,7 +551,11 @@ class MPU6050Source:
                 if len(rows):
                     return rows
                 continue
-            raise self._io_error(str(R.FIFO_R_W), exc, attempt + 1)
+            failure = self._io_error(str(R.FIFO_R_W), exc, attempt + 1)
+            if len(rows):  # frames read off the chip before the failure: deliver them, fail on the next read
+                self._failure = failure
+                return rows
+            raise failure
         return empty
 
     def _rows(self, buf):
@@ -574,6 +581,8 @@ class MPU6050Source:
         """Rows available now (shape (n, len(columns))); waits at most ``max_wait_s`` for the first."""
         if self._closed:
             raise DeviceError(f"{self.chip_name} at {self._where()} is closed")
+        if self._failure is not None:
+            raise self._failure
         start = self._clock()
         wait = self._last_poll + self.poll_interval_s - start
         if wait > 0:
