@@ -450,7 +450,7 @@ def _shown(value):
     """A short, plain text of a user's value for an error message."""
     if isinstance(value, np.ndarray):
         return f"an array of shape {value.shape}"
-    text = repr(tuple(v.item() if isinstance(v, np.generic) else v for v in value)) if isinstance(value, (tuple, list)) else repr(value)
+    text = plain(value)
     return text if len(text) <= 80 else text[:77] + "..."
 
 
