@@ -61,8 +61,11 @@ def run(args):
     head, series = read_axes(args.recording, axes)
     common.print_warnings(head.warnings)
     common.warn_about_gaps(head, "the Allan deviation assumes uniform samples")
-    if not args.keep_outliers:
-        refuse_gross_errors(head, series)
+    gross = describe_gross_errors(head, series)
+    if gross and not args.keep_outliers:
+        raise AllanInputError(f"{gross}: fix the data, or rerun with --keep-outliers to analyse them as they are")
+    if gross:
+        common.say(f"gyrofilter: warning: {gross}: analysed as they are (--keep-outliers)")
     fs = head.sample_rate_hz
     duration_s = head.rows / fs
     progress = args.progress or sys.stderr.isatty()
@@ -121,21 +124,19 @@ def read_axes(path, axes):
     return head, {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
 
 
-def refuse_gross_errors(head, series):
-    """Raise AllanInputError naming the first gross error (:func:`gyrofilter.noise_model.gross_errors`)
-    by file, line, axis and value, and how many there are on each axis."""
-    found = {a: gross_errors(x) for a, x in series.items()}
-    found = {a: idx for a, idx in found.items() if idx.size}
+def describe_gross_errors(head, series):
+    """None, or a sentence naming the first gross error (:func:`gyrofilter.noise_model.gross_errors`)
+    by file, line, sample, axis and value, and how many there are on each axis."""
+    found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
     if not found:
-        return
+        return None
     axis = min(found, key=lambda a: found[a][0])
     row = int(found[axis][0])
     counts = ", ".join(f"{a}: {idx.size}" for a, idx in found.items())
-    raise AllanInputError(
-        f"{head.path}: line {head.line_of_row(row)} (sample {row}): {axis} = {series[axis][row]:.6g} deg/s is a gross "
-        f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {GROSS_LIMIT_DPS:g} deg/s), and there "
-        f"are {sum(idx.size for idx in found.values())} such sample(s) ({counts}); the Allan deviation assumes a still "
-        "sensor without them: fix the data, or rerun with --keep-outliers to analyse them as they are")
+    return (f"{head.path}: line {head.line_of_row(row)} (sample {row}): {axis} = {series[axis][row]:.6g} deg/s is a gross "
+            f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {GROSS_LIMIT_DPS:g} deg/s), and "
+            f"there are {sum(idx.size for idx in found.values())} such sample(s) ({counts}); the Allan deviation "
+            "assumes a still sensor without them")
 
 
 def check_finite(result, axis, path):

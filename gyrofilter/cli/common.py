@@ -153,20 +153,20 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None):
     print("  axis   raw mean    raw std   filt mean   filt std  std ratio  rejected")
     raw_std, f_std = raw.std, filtered.std
     for a, name in enumerate("xyz"):
-        defined = f_std[a] > 0 and math.isfinite(raw_std[a] / f_std[a])
-        ratio = f"{raw_std[a] / f_std[a]:8.2f}x" if defined else f"{'n/a':>9}"
+        ratio = _number(raw_std[a] / f_std[a], 8, decimals=2) + "x" if f_std[a] > 0 else f"{'n/a':>9}"
         print(f"  {name}    {_number(raw.mean[a], 9, sign=True)}  {_number(raw_std[a], 9)}  {_number(filtered.mean[a], 9, sign=True)}"
               f"  {_number(f_std[a], 9)}  {ratio}  {int(filt.rejected[a]):8d}")
     print("  (deg/s; raw = the samples after the calibration window that the filter consumed; n/a = undefined)")
 
 
-def _number(value, width, sign=False):
-    """``value`` with 4 decimals, or in 3 significant digits (1.23e+30) when that is wider than
-    ``width``; "n/a" when it is not a finite number."""
+def _number(value, width, sign=False, decimals=4):
+    """``value`` with ``decimals`` decimals, right-aligned in ``width``, or in 3 significant
+    digits (1.23e+30) when that would take more than max(width, 12) characters; "n/a" when it
+    is not a finite number (an undefined mean, std or ratio)."""
     if not math.isfinite(value):
         return f"{'n/a':>{width}}"
     plus = "+" if sign else ""
-    text = f"{value:{plus}.4f}"
+    text = f"{value:{plus}.{decimals}f}"
     if len(text) > max(width, 12):
         text = f"{value:{plus}.3g}"
     return f"{text:>{width}}"
