@@ -277,16 +277,18 @@ def edf_mixture(n_samples, m, shares, alphas):
 
 def chi2_ppf(p, dof):
     """Quantile of the chi-square distribution (scipy when installed, else Wilson-Hilferty:
-    ``k (1 - 2/(9k) + z_p sqrt(2/(9k)))^3``, within 1 % for k >= 3)."""
+    ``k (1 - 2/(9k) + z_p sqrt(2/(9k)))^3``, within 1 % for k >= 3). scipy's ``special.chdtri``
+    (the inverse upper tail: ``chdtri(k, 1 - p)``) is ``stats.chi2.ppf``'s own kernel without
+    the 50 MB that importing ``scipy.stats`` costs."""
     dof = np.asarray(dof, dtype=np.float64)
     try:
-        from scipy.stats import chi2
+        from scipy.special import chdtri
     except ImportError:  # pragma: no cover - scipy is present in the test environment
         from statistics import NormalDist
         z = NormalDist().inv_cdf(p)
         c = 2.0 / (9.0 * dof)
         return dof * np.maximum(1.0 - c + z * np.sqrt(c), 1e-6) ** 3
-    return chi2.ppf(p, dof)
+    return chdtri(dof, 1.0 - p)
 
 
 def chi2_interval(avar, edf, confidence=0.95):

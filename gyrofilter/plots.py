@@ -14,21 +14,22 @@ def pyplot():
     return plt
 
 
-def plot_filtered(path, t_raw_s, raw_dps, t_filtered_s, filtered_dps, *, title="", truth=None):
-    """Three panels (x, y, z): raw samples, filtered blocks and, if given, the true rate.
-
-    ``truth`` is (t_s, rate_dps (N, 3)) or None. Written to ``path`` (PNG).
-    """
+def plot_filtered(path, raw, filtered, *, title=""):
+    """Three panels (x, y, z): raw samples and filtered rows, each given as a min/max
+    :class:`~gyrofilter.streamstats.Envelope` (a band per bucket; a line while a bucket is one
+    sample), so that a day of data draws in bounded memory. Written to ``path`` (PNG)."""
     plt = pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
     for a, ax in enumerate(axes):
-        ax.plot(t_raw_s, raw_dps[:, a], lw=0.5, color="0.65", label="raw")
-        if truth is not None:
-            ax.plot(truth[0], truth[1][:, a], lw=1.2, color="tab:green", label="truth")
-        ax.plot(t_filtered_s, filtered_dps[:, a], lw=1.0, color="tab:blue", label="filtered")
+        for env, color, width, label in ((raw, "0.65", 0.5, "raw"), (filtered, "tab:blue", 1.0, "filtered")):
+            if env.bucket == 1:
+                ax.plot(env.t_s, env.low[:, a], lw=width, color=color, label=label)
+            else:
+                ax.fill_between(env.t_s, env.low[:, a], env.high[:, a], step="post", lw=0, color=color,
+                                alpha=0.8, label=f"{label} (min..max per {env.bucket} samples)")
         ax.set_ylabel(f"{'xyz'[a]} (deg/s)")
         ax.grid(alpha=0.3)
-    axes[0].legend(loc="upper right", ncol=3, fontsize="small")
+    axes[0].legend(loc="upper right", ncol=2, fontsize="small")
     axes[-1].set_xlabel("time (s)")
     if title:
         axes[0].set_title(title)

@@ -19,12 +19,15 @@ Bad input never shifts, drops or invents samples: an empty cell, ``nan``, a shor
 a non-numeric cell raises :class:`RecordingError` naming the file, the line and the reason. The
 one tolerated defect is the one an interrupted recording leaves: a last line without its line
 end, or a gzip stream without its end marker. Those are reported in :attr:`Recording.warnings`
-and every complete line is used.
+and every complete line is used. A UTF-8 byte-order mark before the first line is ignored.
+
+:func:`iter_recording` reads a file in chunks of lines (memory: one chunk, whatever the
+length of the file); :func:`read_recording` collects its chunks into a :class:`Recording`.
 """
 from __future__ import annotations
 
+import bisect
 import gzip
-import io
 import math
 import os
 import time
@@ -33,16 +36,33 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import RecordingError
-from .units import GYRO_UNITS, from_dps, plain, to_dps
+from .errors import RecordingError, SettingsError
+from .units import GYRO_UNITS, from_dps, to_dps
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
 _GZIP_MAGIC = b"\x1f\x8b"
 
 
+class _HeaderFacts:
+    """Sample rate and units as the ``header`` of a recording states them."""
+
+    @property
+    def sample_rate_hz(self) -> float:
+        return float(self.header["sample_rate_hz"])
+
+    @property
+    def gyro_unit(self) -> str:
+        return self.header["gyro_unit"]
+
+    @property
+    def lsb_per_dps(self):
+        value = self.header.get("lsb_per_dps")
+        return None if value is None else float(value)
+
+
 @dataclass
-class Recording:
+class Recording(_HeaderFacts):
     """A recording in memory: every column as in the file, plus the header.
 
     ``columns`` maps each column name to a float array in file order and in the file's units;
@@ -57,19 +77,6 @@ class Recording:
 
     def __len__(self):
         return len(self.columns["gx"])
-
-    @property
-    def sample_rate_hz(self) -> float:
-        return float(self.header["sample_rate_hz"])
-
-    @property
-    def gyro_unit(self) -> str:
-        return self.header["gyro_unit"]
-
-    @property
-    def lsb_per_dps(self):
-        value = self.header.get("lsb_per_dps")
-        return None if value is None else float(value)
 
     @property
     def gyro(self) -> np.ndarray:
@@ -104,9 +111,7 @@ class Recording:
         if gyro_dps.ndim != 2 or gyro_dps.shape[1] != 3:
             raise RecordingError(f"gyro_dps must have shape (N, 3), got {gyro_dps.shape}")
         head = {"gyrofilter-recording": FORMAT_VERSION}
-        head.update(header or {})
-        head.update({"sample_rate_hz": _format_number(float(sample_rate_hz)), "gyro_unit": "dps"})
-        head.pop("lsb_per_dps", None)
+        head.update(dps_header(header or {}, sample_rate_hz))
         columns = {}
         if t_s is not None:
             columns["t"] = np.asarray(t_s, dtype=float)
@@ -122,77 +127,265 @@ class Recording:
         return cls(columns=columns, header=head)
 
 
+def dps_header(header, sample_rate_hz):
+    """``header`` with ``sample_rate_hz`` and ``gyro_unit: dps`` (no ``lsb_per_dps``), for rates in deg/s."""
+    head = dict(header)
+    head.update({"sample_rate_hz": _format_number(float(sample_rate_hz)), "gyro_unit": "dps"})
+    head.pop("lsb_per_dps", None)
+    return head
+
+
 # ---------------------------------------------------------------------------------------------
 # reading
 
+#: most lines per chunk of :func:`iter_recording` (a chunk also ends with each block of text)
+CHUNK_ROWS = 1 << 16
+_READ_BYTES = 1 << 20   # bytes read from the file at a time
+_TEXT_BYTES = 1 << 20   # most decompressed bytes at a time (a block of text: about 36 000 lines of five columns)
+_BOM = b"\xef\xbb\xbf"
+_BLOCK_ROWS = 1 << 19   # rows per block of collect_columns
+
+
+@dataclass
+class RecordingHead(_HeaderFacts):
+    """A recording being read by :func:`iter_recording`: header, column names and path.
+
+    ``warnings`` and ``notes`` (``(line, text)``) grow while the chunks are read, ``rows`` counts
+    the samples read so far and ``t_gaps`` the steps of the ``t`` column longer than 1.5 sample
+    intervals (lost samples). :meth:`line_of_row` gives the file line of a sample read so far.
+    """
+
+    header: dict
+    names: list
+    path: str
+    warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    rows: int = 0
+    t_gaps: int = 0
+    _line_starts: list = field(default_factory=list, repr=False)  # (row, line) where line - row changes
+
+    def column(self, chunk, name):
+        """Column ``name`` of ``chunk`` (a view), or None when the file has no such column."""
+        return chunk[:, self.names.index(name)] if name in self.names else None
+
+    def gyro_dps(self, chunk):
+        """Angular rate of ``chunk``, shape (k, 3), in deg/s."""
+        return to_dps(chunk[:, [self.names.index(c) for c in GYRO_COLUMNS]], self.gyro_unit, self.lsb_per_dps)
+
+    def t_s(self, chunk, first_row):
+        """Times (s) of ``chunk`` whose first sample is sample ``first_row`` of the file: the ``t``
+        column, or ``row / sample_rate_hz``."""
+        t = self.column(chunk, "t")
+        return t if t is not None else np.arange(first_row, first_row + len(chunk)) / self.sample_rate_hz
+
+    def line_of_row(self, row):
+        """File line number (1-based) of sample ``row`` (0-based), for the samples read so far."""
+        k = bisect.bisect_right(self._line_starts, (row, math.inf)) - 1
+        first_row, first_line = self._line_starts[k]
+        return first_line + row - first_row
+
+    def _add_rows(self, lines):
+        """Count the next samples, read from the file lines ``lines`` (increasing ints)."""
+        if not len(lines):
+            return
+        offsets = np.asarray(lines) - np.arange(self.rows, self.rows + len(lines))
+        for k in (0, *(np.flatnonzero(np.diff(offsets)) + 1).tolist()):
+            if not self._line_starts or self.line_of_row(self.rows + k) != lines[k]:
+                self._line_starts.append((self.rows + k, int(lines[k])))
+        self.rows += len(lines)
+
 
 def read_recording(path) -> Recording:
-    """Read a format-v1 recording (``.csv`` or gzip, detected by content) from ``path``."""
+    """Read a format-v1 recording (``.csv`` or gzip, detected by content) from ``path``: the
+    chunks of :func:`iter_recording` gathered by :func:`collect_columns`."""
+    chunks = iter_recording(path)
+    head = next(chunks)
+    columns = collect_columns(head, chunks, head.names)
+    return Recording(columns=columns, header=head.header, path=head.path, warnings=head.warnings, notes=head.notes)
+
+
+def collect_columns(head, chunks, names):
+    """The columns ``names`` of the remaining ``chunks`` of :func:`iter_recording` as one float64
+    array each (file units).
+
+    Values are copied into blocks (16 Ki rows, doubling up to ``_BLOCK_ROWS`` = 4 MB; large
+    blocks are memory mappings of their own, so the many short-lived chunk buffers do not
+    fragment the heap around them) and each column's blocks are joined at the end, one column
+    at a time: the peak is the arrays with their last blocks' spare room, one more column and
+    one chunk.
+    """
+    where = [head.names.index(name) for name in names]
+    blocks = {name: [] for name in names}
+    size = fill = 0
+    for chunk in chunks:
+        pos = 0
+        while pos < len(chunk):
+            if fill == size:  # a new block, twice the last one up to _BLOCK_ROWS
+                size = min(_BLOCK_ROWS, max(1 << 14, 2 * size))
+                for name in names:
+                    blocks[name].append(np.empty(size))
+                fill = 0
+            take = min(size - fill, len(chunk) - pos)
+            for name, i in zip(names, where):
+                blocks[name][-1][fill:fill + take] = chunk[pos:pos + take, i]
+            fill += take
+            pos += take
+    columns = {}
+    for name in names:
+        parts = blocks.pop(name)
+        if parts:
+            parts[-1] = parts[-1][:fill]
+        columns[name] = np.concatenate(parts) if len(parts) > 1 else (parts[0].copy() if parts else np.empty(0))
+    return columns
+
+
+def iter_recording(path, chunk_rows=CHUNK_ROWS):
+    """Read a format-v1 recording in chunks: yields a :class:`RecordingHead` first, then float
+    arrays of shape (k, number of columns), columns in file order and units, k <= ``chunk_rows``.
+
+    The file is read a block (about 1 MB of text) at a time; the complete lines of a block, at
+    most ``chunk_rows`` at a time, are parsed by ``numpy.loadtxt`` on their list; when that fails, or gives fewer rows than lines or non-finite values (annotations, blank lines
+    or a bad line), the chunk's lines are classified one by one, so that annotations are kept
+    and a bad line is named by its file line number and reason (module docstring). A cut last
+    line or a gzip stream without its end marker is added to ``head.warnings`` when the end is
+    reached. A UTF-8 byte-order mark at the start is skipped.
+    """
     path = os.fspath(path)
+    if not (isinstance(chunk_rows, int) and chunk_rows >= 1):
+        raise SettingsError(f"chunk_rows must be a whole number >= 1, got {chunk_rows!r}")
+    warnings = []
+    parts = _line_chunks(path, chunk_rows, warnings)
+    head, first, lines = _read_header(parts, path, warnings)
+    yield head
+    t_col = head.names.index("t") if "t" in head.names else None
+    t_last = None
+    max_step_s = 1.5 / head.sample_rate_hz
+    while True:
+        if lines:
+            data, line_numbers = _parse_chunk(lines, first, head)
+            if len(data):
+                if t_col is not None:
+                    t_last = _check_t(data[:, t_col], t_last, line_numbers, head, max_step_s)
+                head._add_rows(line_numbers)
+                yield data
+        try:
+            first, lines = next(parts)
+        except StopIteration:
+            return
+
+
+def _byte_blocks(path, warnings):
+    """The file's bytes in blocks, gunzipped when it starts with the gzip magic (every member);
+    a gzip stream cut short or damaged ends the data with a warning instead of an error."""
     try:
-        with open(path, "rb") as fh:
-            raw = fh.read()
+        fh = open(path, "rb")
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    warnings = []
-    if raw[:2] == _GZIP_MAGIC:
-        raw = _gunzip_tolerant(path, raw, warnings)
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = raw[: exc.start].count(b"\n") + 1
-        raise RecordingError(f"{path}: line {line}: not UTF-8 text") from None
-    return parse_recording(text, path, warnings)
-
-
-def _gunzip_tolerant(path, raw, warnings):
-    """Decompress every gzip member; a stream cut short keeps what was decompressed."""
-    out = []
-    while raw:
+    with fh:
+        raw = fh.read(_READ_BYTES)
+        if raw[:2] != _GZIP_MAGIC:
+            while raw:
+                yield raw
+                raw = fh.read(_READ_BYTES)
+            return
         d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-        try:
-            out.append(d.decompress(raw))
-        except zlib.error as exc:
-            if not out:
-                raise RecordingError(f"{path}: not a readable gzip file ({exc})") from None
-            warnings.append(f"{path}: gzip data damaged after byte {len(b''.join(out))}; the rest is not used")
-            break
-        if not d.eof:
-            warnings.append(f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it")
-            break
-        raw = d.unused_data
-    return b"".join(out)
+        produced = 0
+        while True:
+            try:
+                out = d.decompress(raw, _TEXT_BYTES)
+            except zlib.error as exc:
+                if not produced:
+                    raise RecordingError(f"{path}: not a readable gzip file ({exc})") from None
+                warnings.append(f"{path}: gzip data damaged after byte {produced}; the rest is not used")
+                return
+            if out:
+                produced += len(out)
+                yield out
+            if d.eof:  # a member ended: another may follow
+                raw = d.unused_data or fh.read(_READ_BYTES)
+                if not raw:
+                    return
+                d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+            elif d.unconsumed_tail:
+                raw = d.unconsumed_tail
+            else:
+                raw = fh.read(_READ_BYTES)
+                if not raw:
+                    warnings.append(f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it")
+                    return
 
 
-def parse_recording(text: str, path: str = "<text>", warnings=None) -> Recording:
-    """Parse the text of a recording; see the module docstring for the rules."""
-    warnings = list(warnings or [])
-    if not text.strip():
+def _without_bom(blocks):
+    """The byte blocks with a UTF-8 byte-order mark at the very start removed."""
+    start = b""
+    for block in blocks:
+        if start is None:
+            yield block
+            continue
+        start += block
+        if len(start) >= len(_BOM):
+            yield start[len(_BOM):] if start.startswith(_BOM) else start
+            start = None
+    if start:
+        yield start[len(_BOM):] if start.startswith(_BOM) else start
+
+
+def _line_chunks(path, chunk_rows, warnings):
+    """(number of the first line, list of at most ``chunk_rows`` lines without their line ends),
+    a block of the file at a time (lines are split at b"\\n" before decoding, which never cuts
+    a UTF-8 character). A last line without its line end is not used (warning), unless it is
+    the file's only line."""
+    pending = b""
+    first = 1  # number of the next line
+    for block in _without_bom(_byte_blocks(path, warnings)):
+        cut = block.rfind(b"\n")
+        if cut < 0:
+            pending += block
+            continue
+        lines = _decode(pending + block[:cut], path, first).split("\n")
+        pending = block[cut + 1:]
+        if len(lines) <= chunk_rows:
+            yield first, lines
+        else:
+            for i in range(0, len(lines), chunk_rows):
+                yield first + i, lines[i:i + chunk_rows]
+        first += len(lines)
+    if pending:
+        if first > 1:
+            warnings.append(f"{path}: line {first}: last line has no line end (recording interrupted?); "
+                            f"it is not used: {pending[:60].decode('utf-8', 'replace')!r}")
+        else:
+            yield first, [_decode(pending, path, first)]
+
+
+def _decode(data, path, first_line):
+    """``data`` (whole lines, the first being line ``first_line``) as text, or RecordingError."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = first_line + data[:exc.start].count(b"\n")
+        raise RecordingError(f"{path}: line {line}: not UTF-8 text") from None
+
+
+def _read_header(parts, path, warnings):
+    """Header and column names from the first lines: (head, number of the next line, the rest
+    of its chunk)."""
+    header_lines = []
+    blank = True  # only blank lines so far
+    for first, lines in parts:
+        for j, ln in enumerate(lines):
+            blank = blank and not ln.strip()
+            if not ln.startswith("#") and not blank:
+                header, _ = _parse_header(header_lines + [ln], path)
+                names = [c.strip() for c in ln.split(",")]
+                _check_columns(names, path, first + j)
+                head = RecordingHead(header=header, names=names, path=path, warnings=warnings)
+                return head, first + j + 1, lines[j + 1:]
+            header_lines.append(ln)
+    if blank:
         raise RecordingError(f"{path}: empty file (expected a '# gyrofilter-recording: 1' header)")
-    lines = text.split("\n")
-    if lines[-1] == "":
-        lines.pop()
-    elif len(lines) > 1:
-        warnings.append(
-            f"{path}: line {len(lines)}: last line has no line end (recording interrupted?); it is not used: {lines[-1][:60]!r}"
-        )
-        lines.pop()
-    header, n_header = _parse_header(lines, path)
-    if n_header >= len(lines):
-        raise RecordingError(f"{path}: line {n_header + 1}: missing the column-name row after the header")
-    names = [c.strip() for c in lines[n_header].split(",")]
-    _check_columns(names, path, n_header + 1)
-    first_data = n_header + 1
-    body_lines = lines[first_data:]
-    notes = [(first_data + 1 + i, ln[1:].strip()) for i, ln in enumerate(body_lines) if ln.startswith("#")]
-    data = _parse_body(body_lines, names, path, first_data)
-    columns = {name: data[:, i] for i, name in enumerate(names)}
-    if "t" in columns and len(columns["t"]) > 1:
-        bad = np.flatnonzero(np.diff(columns["t"]) <= 0)
-        if bad.size:
-            line = _data_line_number(body_lines, int(bad[0]) + 1, first_data)
-            raise RecordingError(f"{path}: line {line}: t does not increase ({plain(columns['t'][bad[0] + 1])} after {plain(columns['t'][bad[0]])})")
-    return Recording(columns=columns, header=header, path=path, warnings=warnings, notes=notes)
+    _parse_header(header_lines, path)
+    raise RecordingError(f"{path}: line {len(header_lines) + 1}: missing the column-name row after the header")
 
 
 def _parse_header(lines, path):
@@ -246,54 +439,79 @@ def _check_columns(names, path, line):
         raise RecordingError(f"{path}: line {line}: duplicate column(s) {', '.join(dupes)}")
 
 
-def _parse_body(body_lines, names, path, first_data):
-    """Fast path through numpy; on any doubt, a line-by-line scan names the bad line."""
-    n = len(names)
-    if not body_lines:
-        return np.empty((0, n))
+def _parse_chunk(lines, first, head):
+    """(data, file line of each row) for ``lines``, the first being file line ``first``.
+
+    Fast path: ``numpy.loadtxt`` on the list of lines, accepted when it gives one finite row per
+    line. Otherwise the lines are classified one by one: ``#`` lines are notes, blank lines are
+    skipped, and the data lines are parsed again (loadtxt, then, if that still fails, line by
+    line so that the first bad line is named).
+    """
+    n = len(head.names)
+    if lines[0].strip() and not lines[0].startswith("#"):
+        data = _loadtxt(lines, n)
+        if data is not None:
+            return data, np.arange(first, first + len(lines))
+    rows, numbers = [], []
+    for j, ln in enumerate(lines):
+        if ln.startswith("#"):
+            head.notes.append((first + j, ln[1:].strip()))
+        elif ln.strip():
+            rows.append(ln)
+            numbers.append(first + j)
+    numbers = np.array(numbers, dtype=np.int64)
+    if not rows:
+        return np.empty((0, n)), numbers
+    data = _loadtxt(rows, n)
+    if data is None:
+        data = np.array([_parse_line(ln, line, head) for ln, line in zip(rows, numbers.tolist())])
+    return data, numbers
+
+
+def _loadtxt(lines, n):
+    """``numpy.loadtxt`` of data lines with n columns, or None unless it gives len(lines) finite rows."""
     try:
-        data = np.loadtxt(io.StringIO("\n".join(body_lines)), delimiter=",", comments="#", ndmin=2, dtype=float)
+        data = np.loadtxt(lines, delimiter=",", comments=None, ndmin=2, dtype=np.float64)
     except ValueError:
-        data = None
-    if data is not None and data.shape[1] == n and np.isfinite(data).all() and len(data) == _count_rows(body_lines):
-        return data
-    _scan_for_error(body_lines, names, path, first_data)
-    raise RecordingError(f"{path}: could not parse the data rows")  # the scan always names the line first
+        return None
+    return data if data.shape == (len(lines), n) and np.isfinite(data).all() else None
 
 
-def _count_rows(body_lines):
-    return sum(1 for ln in body_lines if ln.strip() and not ln.startswith("#"))
+def _parse_line(ln, line, head):
+    """The values of data line ``ln`` (file line ``line``), or RecordingError naming the reason."""
+    path, names = head.path, head.names
+    cells = ln.split(",")
+    if len(cells) != len(names):
+        raise RecordingError(f"{path}: line {line}: {len(cells)} values, expected {len(names)} ({','.join(names)})")
+    values = []
+    for name, cell in zip(names, cells):
+        if not cell.strip():
+            raise RecordingError(f"{path}: line {line}: column {name!r} is empty")
+        try:
+            value = float(cell)
+        except ValueError:
+            raise RecordingError(f"{path}: line {line}: column {name!r} is not a number: {cell.strip()!r}") from None
+        if not math.isfinite(value):
+            raise RecordingError(f"{path}: line {line}: column {name!r} is {cell.strip()!r} (not a finite number)")
+        values.append(value)
+    return values
 
 
-def _scan_for_error(body_lines, names, path, first_data):
-    n = len(names)
-    for i, ln in enumerate(body_lines):
-        line = first_data + 1 + i
-        if ln.startswith("#") or not ln.strip():
-            continue
-        cells = ln.split(",")
-        if len(cells) != n:
-            raise RecordingError(f"{path}: line {line}: {len(cells)} values, expected {n} ({','.join(names)})")
-        for name, cell in zip(names, cells):
-            if not cell.strip():
-                raise RecordingError(f"{path}: line {line}: column {name!r} is empty")
-            try:
-                value = float(cell)
-            except ValueError:
-                raise RecordingError(f"{path}: line {line}: column {name!r} is not a number: {cell.strip()!r}") from None
-            if not math.isfinite(value):
-                raise RecordingError(f"{path}: line {line}: column {name!r} is {cell.strip()!r} (not a finite number)")
-
-
-def _data_line_number(body_lines, row, first_data):
-    """File line number (1-based) of data row ``row`` (0-based), skipping notes and blank lines."""
-    seen = -1
-    for i, ln in enumerate(body_lines):
-        if ln.strip() and not ln.startswith("#"):
-            seen += 1
-            if seen == row:
-                return first_data + 1 + i
-    return first_data + len(body_lines)
+def _check_t(t, t_last, line_numbers, head, max_step_s):
+    """Refuse a ``t`` that does not increase (also across chunks: ``t_last`` ends the previous
+    one); count steps longer than ``max_step_s`` in ``head.t_gaps``. Returns the last t."""
+    if t_last is None:
+        prev, cur, row0 = t[:-1], t[1:], 1
+    else:
+        prev, cur, row0 = np.concatenate(([t_last], t[:-1])), t, 0
+    step = cur - prev
+    bad = np.flatnonzero(step <= 0)
+    if bad.size:
+        k = int(bad[0])
+        raise RecordingError(f"{head.path}: line {line_numbers[k + row0]}: t does not increase "
+                             f"({float(cur[k])!r} after {float(prev[k])!r})")
+    head.t_gaps += int(np.count_nonzero(step > max_step_s))
+    return float(t[-1])
 
 
 # ---------------------------------------------------------------------------------------------

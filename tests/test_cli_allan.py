@@ -111,3 +111,64 @@ def test_help_exits_zero(capsys):
         main(["allan", "--help"])
     assert exc.value.code == 0
     assert "--kalibr" in capsys.readouterr().out
+
+
+def _spiked_bundled(tmp_path, value, rows=(500, 3000, 7000)):
+    """The bundled MPU6050 recording with gy replaced by ``value`` (lsb) on data rows ``rows``;
+    returns (path, file line of the first spike)."""
+    import gzip
+    from importlib import resources
+
+    lines = gzip.decompress((resources.files("gyrofilter") / "data" / "mpu6050_static_100s.csv.gz").read_bytes()).decode().split("\n")
+    names_at = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
+    col = lines[names_at].split(",").index("gy")
+    for r in rows:
+        cells = lines[names_at + 1 + r].split(",")
+        cells[col] = value
+        lines[names_at + 1 + r] = ",".join(cells)
+    path = tmp_path / f"spiked_{value}.csv"
+    path.write_text("\n".join(lines))
+    return str(path), names_at + 2 + rows[0]
+
+
+@pytest.mark.parametrize("value", ["1e30", "1e308"])
+def test_gross_errors_are_refused_by_default_naming_line_value_and_count(tmp_path, capsys, value):
+    path, line = _spiked_bundled(tmp_path, value)
+    outs = [tmp_path / "a.json", tmp_path / "a.yaml"]
+    assert main(["allan", path, "--json", str(outs[0]), "--kalibr", str(outs[1])]) == 2
+    _assert_one_line_error(capsys, path, f"line {line} (sample 500)", f"y = {float(value) / 131:.6g} deg/s",
+                           "3 such sample(s)", "--keep-outliers")
+    assert not any(p.exists() for p in outs)
+
+
+def test_keep_outliers_analyses_them_but_writes_nothing_unless_every_result_is_finite(tmp_path, capsys):
+    path, _ = _spiked_bundled(tmp_path, "1e30")
+    out = tmp_path / "a.json"
+    assert main(["allan", path, "--keep-outliers", "--json", str(out)]) == 0
+    json.loads(out.read_text())  # strict JSON: no NaN/Infinity tokens
+    assert "3 such sample(s)" in capsys.readouterr().err  # kept, but not silently
+    path, _ = _spiked_bundled(tmp_path, "1e308")
+    outs = [tmp_path / "b.json", tmp_path / "b.yaml", tmp_path / "b.png"]
+    args = ["allan", path, "--keep-outliers", "--json", str(outs[0]), "--kalibr", str(outs[1])]
+    args += ["--plot", str(outs[2])] if importlib.util.find_spec("matplotlib") else []
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert [ln for ln in err if "error:" in ln] == [err[-1]] and "warning:" in err[0] and "Traceback" not in err
+    for part in ("axis y", "overflows", "no output written"):
+        assert part in err[-1]
+    assert not any(p.exists() for p in outs) and list(tmp_path.glob(".partial-*")) == []
+
+
+def test_allan_outputs_are_checked_before_any_work(static_recording, tmp_path, capsys):
+    path, _ = static_recording
+    before = open(path, "rb").read()
+    assert main(["allan", path, "--json", path, "--force"]) == 2
+    _assert_one_line_error(capsys, "is an input")
+    assert open(path, "rb").read() == before
+    out = tmp_path / "a.json"
+    out.write_text("keep me")
+    assert main(["allan", path, "--json", str(out)]) == 2
+    _assert_one_line_error(capsys, "exists")
+    assert out.read_text() == "keep me"
+    assert main(["allan", path, "--json", str(out), "--force", "--axes", "x"]) == 0
+    assert list(json.loads(out.read_text())["axes"]) == ["x"]

@@ -100,3 +100,105 @@ def test_temp_model_compensates_a_drift_from_a_gap_report(tmp_path, capsys):
     report.write_text(json.dumps({"axes": {"x": {"effects": []}}}))
     assert main(["replay", str(src), "--temp-model", str(report)]) == 2
     assert "no temperature effect" in capsys.readouterr().err
+
+
+def _data_lines(path):
+    import gzip
+
+    opener = gzip.open if str(path).endswith(".gz") else open
+    with opener(path, "rt") as fh:
+        return [ln for ln in fh if not ln.startswith("#")]
+
+
+@pytest.mark.parametrize("chunk_rows", [7, 1000])
+def test_replay_in_chunks_writes_the_rows_of_the_one_shot_filter(tmp_path, monkeypatch, chunk_rows):
+    """The old replay filtered everything at once: GyroFilter.filter(all samples), rows stamped
+    with the t of each block's last sample; the chunked one must write exactly those rows."""
+    from gyrofilter import GyroFilter
+    from gyrofilter.cli import replay
+
+    rng = np.random.default_rng(7)
+    n = 3003
+    t = np.cumsum(rng.uniform(0.009, 0.011, n))  # irregular t: the stamps must come from the column
+    gyro = np.array([0.5, -1.0, 2.0]) + rng.normal(0, 0.1, (n, 3))
+    gyro[1500:1505, 2] += 30.0  # some spikes for the outlier rejection
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(gyro, 100.0, t_s=t))
+    rec = read_recording(src)
+    filt = GyroFilter(100.0)
+    rows = filt.filter(rec.gyro_dps)
+    expected = tmp_path / "expected.csv"
+    write_recording(expected, Recording.from_dps(rows, 20.0, t_s=rec.t_s[filt.block_end_indices(len(rows))]))
+    monkeypatch.setattr(replay, "CHUNK_ROWS", chunk_rows)
+    out = tmp_path / "out.csv"
+    assert main(["replay", str(src), "--out", str(out)]) == 0
+    assert _data_lines(out) == _data_lines(expected) and len(_data_lines(out)) == len(rows) + 1
+
+
+def test_realtime_rows_carry_the_same_time_stamps_as_out(tmp_path, capsys):
+    rng = np.random.default_rng(8)
+    n = 700
+    src = tmp_path / "fast.csv"
+    write_recording(src, Recording.from_dps(rng.normal(0, 0.1, (n, 3)), 5000.0))  # paced: 0.14 s
+    out = tmp_path / "out.csv"
+    assert main(["replay", str(src), "--realtime", "--calibration-s", "0.02", "--out", str(out)]) == 0
+    printed = [ln for ln in capsys.readouterr().out.splitlines() if ln[:1].isdigit()]
+    stamps = [float(ln.split(",")[0]) for ln in printed]
+    filtered = read_recording(out)
+    assert len(stamps) == len(filtered) == (n - 100) // 5
+    np.testing.assert_allclose(stamps, filtered.t_s, rtol=0, atol=1e-9)
+    assert stamps[0] == pytest.approx(104 / 5000.0)  # samples 100..104 make the first block
+
+
+def test_a_loaded_calibration_is_named_as_such(tmp_path, capsys):
+    rng = np.random.default_rng(9)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(rng.normal([1, 2, 3], 0.1, (1000, 3)), 100.0))
+    cal = tmp_path / "cal.json"
+    assert main(["replay", str(src), "--save-calibration", str(cal)]) == 0
+    assert "start-up calibration, 200 samples" in capsys.readouterr().out
+    assert main(["replay", str(src), "--calibration", str(cal)]) == 0
+    out = capsys.readouterr().out
+    assert f"bias (loaded from {cal})" in out and "start-up calibration" not in out
+
+
+def test_summary_is_readable_for_constant_and_huge_values(tmp_path, capsys):
+    from types import SimpleNamespace
+
+    from gyrofilter.cli.common import print_summary
+    from gyrofilter.streamstats import RunningMoments
+
+    gyro = np.column_stack([np.full(1200, 2.0), np.random.default_rng(10).normal(0, 0.1, 1200), np.full(1200, 3.0)])
+    src = tmp_path / "stuck.csv"
+    write_recording(src, Recording.from_dps(gyro, 100.0))
+    assert main(["replay", str(src)]) == 0  # x and z: 0 deg/s after the bias, raw and filtered std 0
+    rows = {ln.split()[0]: ln for ln in capsys.readouterr().out.splitlines() if ln.strip()[:2] in ("x ", "y ", "z ")}
+    assert "inf" not in "".join(rows.values()) and "n/a" in rows["x"] and "n/a" not in rows["y"]
+    raw, filtered = RunningMoments(3), RunningMoments(3)
+    raw.add(np.array([[1e150, 1e-3, -4e100], [-1e150, 2e-3, 4e100]]))
+    filtered.add(np.array([[1e300, 1e-3, 1.0], [1e300, 1e-3, 1.0]]))
+    head = SimpleNamespace(rows=2, sample_rate_hz=100.0, gyro_unit="dps")
+    filt = SimpleNamespace(calibration=None, preset="paper", output_rate_hz=20.0, pending_samples=0, rejected=np.zeros(3))
+    print_summary("huge.csv", head, filt, raw, filtered)
+    table = capsys.readouterr().out
+    assert max(len(ln) for ln in table.splitlines()) < 100 and "1.41e+150" in table and "+1e+300" in table and "n/a" in table
+
+
+def test_outputs_are_checked_before_any_work(tmp_path, capsys):
+    rng = np.random.default_rng(11)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(rng.normal(0, 0.1, (1000, 3)), 100.0))
+    before = src.read_bytes()
+    for extra in (["--out", str(src)], ["--out", str(src), "--force"], ["--plot", str(src), "--force"]):
+        assert main(["replay", str(src), *extra]) == 2
+        assert "is an input" in capsys.readouterr().err
+    assert src.read_bytes() == before
+    cal = tmp_path / "cal.json"
+    assert main(["replay", str(src), "--save-calibration", str(cal)]) == 0
+    assert main(["replay", str(src), "--calibration", str(cal), "--save-calibration", str(cal), "--force"]) == 2
+    out = tmp_path / "out.csv"
+    out.write_text("keep me")
+    assert main(["replay", str(src), "--out", str(out)]) == 2
+    assert "exists" in capsys.readouterr().err and out.read_text() == "keep me"
+    assert main(["replay", str(src), "--out", str(out), "--force"]) == 0
+    assert len(read_recording(out)) == (1000 - 200) // 5

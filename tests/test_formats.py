@@ -8,7 +8,7 @@ import pytest
 
 from gyrofilter.calibration import Calibration
 from gyrofilter.noise_model import JSON_KEY
-from gyrofilter.recording import parse_recording
+from gyrofilter.recording import read_recording
 from gyrofilter.simulate import EFFECTS, simulate, validate_model
 from gyrofilter.sources import KINDS
 
@@ -38,8 +38,10 @@ def table_rows(text):
     return rows
 
 
-def test_recording_example_parses():
-    rec = parse_recording(example(1, "text"), "formats.md")
+def test_recording_example_parses(tmp_path):
+    path = tmp_path / "formats.csv"
+    path.write_text(example(1, "text"), encoding="utf-8")
+    rec = read_recording(path)
     assert rec.warnings == []
     assert rec.sample_rate_hz == 100.0 and rec.gyro_unit == "lsb" and rec.lsb_per_dps == 131.0
     assert rec.header["any_other_key"] == "free text"

@@ -1,6 +1,7 @@
 """Tests for gyrofilter.noise_model: model identities, NNLS oracle, seeded round trips on
 simulated noise with known coefficients, unit conversions, bad input, JSON and Kalibr export."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -340,3 +341,29 @@ def test_round_trip_through_the_package_simulator():
             c = res[axis].fitted[term]
             hits[(axis, term, value)] += bool(c.value is not None and c.low <= value <= c.high)
     assert all(h >= 10 for h in hits.values()), hits
+
+
+def test_gross_errors_find_spikes_and_absurd_rates_but_not_noise_or_drift():
+    from gyrofilter.noise_model import gross_errors
+
+    rng = np.random.default_rng(12)
+    n = 200_000  # several of the function's blocks
+    t = np.arange(n) / 100.0
+    still = 0.1 * rng.normal(size=n)
+    # real drift: a 5 deg/s warm-up and a 2 deg/s ramp, 50 and 20 noise sigmas, smooth per sample
+    drifting = still + 5.0 * np.exp(-t / 300.0) + 2.0 * t / t[-1]
+    assert gross_errors(still).size == 0 and gross_errors(drifting).size == 0
+    spiked = drifting.copy()
+    where = [0, 65_533, 65_536, 123_457, n - 1]  # block edges and the series' ends
+    spiked[where] += [8.0, -9.0, 30.0, 1e30, -7.0]
+    spiked[150_000:150_002] = 1e308  # a burst beyond any full scale
+    assert gross_errors(spiked).tolist() == sorted(where + [150_000, 150_001])
+
+
+def test_gross_errors_leave_the_still_recordings_alone():
+    from gyrofilter.noise_model import gross_errors
+    from gyrofilter.recording import read_recording
+
+    for path in sorted((Path(__file__).parent.parent / "recordings").glob("mpu6050_static_*.csv.gz")):
+        g = read_recording(path).gyro_dps
+        assert all(gross_errors(g[:, a]).size == 0 for a in range(3)), path

@@ -4,7 +4,7 @@ import pytest
 
 from gyrofilter import GyroFilter
 from gyrofilter.errors import GyroFilterError
-from gyrofilter.recording import parse_recording
+from gyrofilter.recording import read_recording
 from gyrofilter.reference import body_rate_from_quaternions
 from gyrofilter.tempcomp import compensate
 from gyrofilter.units import check_sample_rate_hz, from_dps, json_ready, plain, to_dps
@@ -35,8 +35,18 @@ t,gx,gy,gz
 """
 
 
+def _read_text(text):
+    """read_recording of ``text`` written to a fresh temporary file."""
+    import tempfile
+    from pathlib import Path
+
+    path = Path(tempfile.mkdtemp()) / "rec.csv"
+    path.write_text(text, encoding="utf-8")
+    return read_recording(path)
+
+
 @pytest.mark.parametrize("call, expected", [
-    (lambda: parse_recording(RECORDING_T_BACKWARDS), "(14.99 after 15.0)"),
+    (lambda: _read_text(RECORDING_T_BACKWARDS), "(14.99 after 15.0)"),
     (lambda: check_sample_rate_hz(np.float64(-14.99)), "got -14.99"),
     (lambda: body_rate_from_quaternions(np.ones((4, 4)), 100.0, half_span=np.float64(1.5)), "got 1.5"),
     (lambda: compensate(np.zeros((2, 3)), np.zeros(2), np.float64(np.nan), 25.0), "got nan"),

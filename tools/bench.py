@@ -2,7 +2,7 @@
 """Benchmarks, printed side by side with a baseline in one run.
 
     python tools/bench.py            # every section
-    python tools/bench.py pipeline   # one section (pipeline, allan, mpu6050, serial, simulate, gap, bias_kf)
+    python tools/bench.py pipeline   # one section (pipeline, reader, allan, mpu6050, serial, simulate, gap, bias_kf)
 
 Pipeline section: streaming ``update()`` and batch ``filter()`` throughput in three-axis samples
 per second, peak memory of ``filter()`` on a 1-hour 100 Hz recording, and the same pipeline
@@ -71,7 +71,7 @@ def pipeline():
     print("  targets: streaming >= 500,000; batch >= 5,000,000; >= 30x the plain way")
 
 
-SECTIONS = ["pipeline", "allan", "mpu6050", "serial", "simulate", "gap", "bias_kf"]
+SECTIONS = ["pipeline", "reader", "allan", "mpu6050", "serial", "simulate", "gap", "bias_kf"]
 
 
 def main(argv):

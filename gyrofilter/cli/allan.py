@@ -4,15 +4,24 @@ Prints, per axis, the fitted coefficients Q, N, B, K, R with their intervals in 
 customary units, the slope read-offs of papers 000/002 beside them, and what the record is too
 short to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` the
 log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
+
+The recording is read in chunks into one float64 array per axis. Gross errors (isolated spikes
+far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.noise_model.gross_errors`)
+are refused before any computation unless ``--keep-outliers`` is given; they are never dropped.
+Output files are written only once every result is finite, each whole or not at all.
 """
 import json
 import sys
 
-from ..allan import MIN_CLUSTERS
+import numpy as np
+
+from ..allan import MIN_CLUSTERS, AllanInputError
 from ..errors import SettingsError
-from ..noise_model import (CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, characterise_axis,
-                           convert, kalibr_yaml, to_json)
-from ..recording import read_recording
+from ..noise_model import (CUSTOMARY_UNIT, GROSS_LIMIT_DPS, GROSS_Z, TERM_SYMBOL, TERM_UNIT, TERMS,
+                           characterise_axis, convert, gross_errors, kalibr_yaml, to_json)
+from ..recording import collect_columns, iter_recording
+from ..units import to_dps
+from . import common
 
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
          "rrw": "rate random walk", "rate_ramp": "rate ramp"}
@@ -27,11 +36,11 @@ def add_arguments(parser):
     parser.add_argument("--confidence", type=float, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
     parser.add_argument("--min-clusters", type=int, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
+    parser.add_argument("--keep-outliers", action="store_true",
+                        help=f"analyse the recording even when it has gross errors (spikes of more than {GROSS_Z:g} robust sigmas, "
+                             f"or |rate| > {GROSS_LIMIT_DPS:g} deg/s), which are refused by default")
     parser.add_argument("--progress", action="store_true", help="report progress on stderr")
-
-
-def _say(text):
-    print(text, file=sys.stderr)
+    common.add_force_argument(parser)
 
 
 def _fmt(c, unit):
@@ -48,26 +57,28 @@ def run(args):
         raise SettingsError(f"--axes must be a subset of xyz such as xz, got {args.axes!r}")
     if args.min_clusters < 2:
         raise SettingsError(f"--min-clusters must be at least 2, got {args.min_clusters}")
-    rec = read_recording(args.recording)
-    for w in rec.warnings:
-        _say(f"gyrofilter: warning: {w}")
-    if "t" in rec.columns and len(rec) > 1:
-        import numpy as np
-
-        gaps = int((np.diff(rec.columns["t"]) > 1.5 / rec.sample_rate_hz).sum())
-        if gaps:
-            _say(f"gyrofilter: warning: {args.recording}: t shows {gaps} gap(s); the Allan deviation assumes uniform samples")
-    gyro = rec.gyro_dps
-    fs = rec.sample_rate_hz
+    common.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
+    head, series = read_axes(args.recording, axes)
+    common.print_warnings(head.warnings)
+    common.warn_about_gaps(head, "the Allan deviation assumes uniform samples")
+    gross = describe_gross_errors(head, series)
+    if gross and not args.keep_outliers:
+        raise AllanInputError(f"{gross}: fix the data, or rerun with --keep-outliers to analyse them as they are")
+    if gross:
+        common.say(f"gyrofilter: warning: {gross}: analysed as they are (--keep-outliers)")
+    fs = head.sample_rate_hz
+    duration_s = head.rows / fs
     progress = args.progress or sys.stderr.isatty()
     results = {}
     for a in axes:
         if progress:
-            _say(f"allan: axis {a} ({len(gyro)} samples)...")
-        results[a] = characterise_axis(gyro[:, "xyz".index(a)], fs, axis=a, confidence=args.confidence,
-                                       min_clusters=args.min_clusters)
+            common.say(f"allan: axis {a} ({head.rows} samples)...")
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
+            results[a] = characterise_axis(series.pop(a), fs, axis=a, confidence=args.confidence,
+                                           min_clusters=args.min_clusters)
+        check_finite(results[a], a, args.recording)
     print(f"recording: {args.recording}")
-    print(f"  {len(rec)} samples at {fs:g} Hz ({rec.duration_s:.1f} s); unit {rec.gyro_unit}; "
+    print(f"  {head.rows} samples at {fs:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
     print(f"  coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval]; "
           "read-off = slope method of papers 000/002")
@@ -83,20 +94,58 @@ def run(args):
             longest = r.tau_s[r.fit_used][-1]
             print(f"    ({', '.join(missing)} not resolved: the longest cluster time with {args.min_clusters} clusters is "
                   f"{longest:.3g} s; slower effects need a longer still recording; the bounds above hold)")
-        for w in r.warnings:
-            _say(f"gyrofilter: warning: {w}")
+        common.print_warnings(r.warnings)
+    # every result is finite here; each file appears only when it is complete
     if args.json:
-        doc = to_json(results, fs, recording=args.recording, duration_s=rec.duration_s)
-        with open(args.json, "w", encoding="utf-8") as fh:
-            json.dump(doc, fh, indent=1)
-        _say(f"wrote {args.json}")
+        doc = to_json(results, fs, recording=args.recording, duration_s=duration_s)
+        with common.replacing(args.json) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+            json.dump(doc, fh, indent=1, allow_nan=False)
+        common.say(f"wrote {args.json}")
     if args.kalibr:
-        with open(args.kalibr, "w", encoding="utf-8") as fh:
-            fh.write(kalibr_yaml(results, fs, recording=args.recording))
-        _say(f"wrote {args.kalibr}")
+        text = kalibr_yaml(results, fs, recording=args.recording)
+        with common.replacing(args.kalibr) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        common.say(f"wrote {args.kalibr}")
     if args.plot:
         from ..plots_allan import plot_allan
 
-        plot_allan(args.plot, results, title=f"{args.recording} ({rec.duration_s:.0f} s at {fs:g} Hz)")
-        _say(f"drew {args.plot}")
+        with common.replacing(args.plot) as tmp:
+            plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {fs:g} Hz)")
+        common.say(f"drew {args.plot}")
     return 0
+
+
+def read_axes(path, axes):
+    """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
+    (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array})."""
+    chunks = iter_recording(path)
+    head = next(chunks)
+    columns = collect_columns(head, chunks, [f"g{a}" for a in axes])
+    return head, {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
+
+
+def describe_gross_errors(head, series):
+    """None, or a sentence naming the first gross error (:func:`gyrofilter.noise_model.gross_errors`)
+    by file, line, sample, axis and value, and how many there are on each axis."""
+    found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
+    if not found:
+        return None
+    axis = min(found, key=lambda a: found[a][0])
+    row = int(found[axis][0])
+    counts = ", ".join(f"{a}: {idx.size}" for a, idx in found.items())
+    return (f"{head.path}: line {head.line_of_row(row)} (sample {row}): {axis} = {series[axis][row]:.6g} deg/s is a gross "
+            f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {GROSS_LIMIT_DPS:g} deg/s), and "
+            f"there are {sum(idx.size for idx in found.values())} such sample(s) ({counts}); the Allan deviation "
+            "assumes a still sensor without them")
+
+
+def check_finite(result, axis, path):
+    """Raise AllanInputError unless every number of ``result`` is finite (numbers too large
+    for float64 overflow to inf/NaN)."""
+    arrays = (result.adev, result.ci_low, result.ci_high, result.edf, result.fit_values)
+    values = [v for c in (*result.fitted.values(), *result.readoff.values())
+              for v in (c.value, c.low, c.high, c.upper) if v is not None]
+    if not all(np.isfinite(a).all() for a in arrays) or not np.isfinite(values).all():
+        raise AllanInputError(
+            f"{path}: axis {axis}: the Allan deviation overflows (values too large for float64 arithmetic); "
+            "no output written")

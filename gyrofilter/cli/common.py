@@ -1,12 +1,11 @@
 """Pieces shared by the commands: output-file safety, filter options, warnings, the summary table."""
 import contextlib
 import json
+import math
 import os
 import shutil
 import sys
 import tempfile
-
-import numpy as np
 
 from ..errors import SettingsError
 from ..pipeline import SETTING_NAMES, GyroFilter
@@ -122,14 +121,11 @@ def print_warnings(warnings):
         say(f"gyrofilter: warning: {text}")
 
 
-def warn_about_gaps(rec):
-    """Say so when the t column shows missing samples (the filter assumes uniform sampling)."""
-    if "t" not in rec.columns or len(rec) < 2:
-        return
-    dt = np.diff(rec.columns["t"])
-    gaps = int((dt > 1.5 / rec.sample_rate_hz).sum())
-    if gaps:
-        say(f"gyrofilter: warning: {rec.path}: t shows {gaps} gap(s) longer than 1.5 sample intervals; the filter treats the samples as uniform")
+def warn_about_gaps(head, consequence):
+    """Say so when the t column of a recording read (:class:`~gyrofilter.recording.RecordingHead`)
+    showed missing samples; ``consequence`` says what that means for the command."""
+    if head.t_gaps:
+        say(f"gyrofilter: warning: {head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")
 
 
 def add_filter_arguments(parser):
@@ -193,23 +189,38 @@ def save_calibration(args, filt):
         say(f"saved the calibration to {args.save_calibration}")
 
 
-def print_summary(path, rec, filt, raw, filtered):
-    """The per-axis table: raw and filtered mean/std, std ratio, rejected samples."""
+def print_summary(path, head, filt, raw, filtered, calibration_from=None):
+    """The per-axis table: raw and filtered mean/std (:class:`~gyrofilter.streamstats.RunningMoments`),
+    std ratio, rejected samples. ``calibration_from``: the file the bias was loaded from, if any."""
     print(f"recording: {path}")
-    print(f"  {len(rec)} samples at {rec.sample_rate_hz:g} Hz ({rec.duration_s:.1f} s), unit {rec.gyro_unit}")
+    print(f"  {head.rows} samples at {head.sample_rate_hz:g} Hz ({head.rows / head.sample_rate_hz:.1f} s), unit {head.gyro_unit}")
     cal = filt.calibration
     if cal is not None:
-        print(f"  bias (start-up calibration, {cal.samples} samples): " + ", ".join(f"{b:+.4f}" for b in cal.bias_dps) + " deg/s")
-    print(f"  filter: preset {filt.preset}, {len(filtered)} output rows at {filt.output_rate_hz:g} Hz")
+        source = f"loaded from {calibration_from}" if calibration_from else f"start-up calibration, {cal.samples} samples"
+        print(f"  bias ({source}): " + ", ".join(_number(b, 0, sign=True) for b in cal.bias_dps) + " deg/s")
+    print(f"  filter: preset {filt.preset}, {filtered.count} output rows at {filt.output_rate_hz:g} Hz")
     if filt.pending_samples:
         print(f"  {filt.pending_samples} trailing sample(s) did not fill a block of {filt.settings.block_len} and produced no output")
-    if len(filtered) < 2:
+    if filtered.count < 2:
         print("  too few filtered rows for statistics")
         return
     print("  axis   raw mean    raw std   filt mean   filt std  std ratio  rejected")
-    raw_mean, raw_std = raw.mean(axis=0), raw.std(axis=0, ddof=1)
-    f_mean, f_std = filtered.mean(axis=0), filtered.std(axis=0, ddof=1)
+    raw_std, f_std = raw.std, filtered.std
     for a, name in enumerate("xyz"):
-        ratio = raw_std[a] / f_std[a] if f_std[a] > 0 else float("inf")
-        print(f"  {name}    {raw_mean[a]:+9.4f}  {raw_std[a]:9.4f}  {f_mean[a]:+9.4f}  {f_std[a]:9.4f}  {ratio:8.2f}x  {int(filt.rejected[a]):8d}")
-    print("  (deg/s; raw = the samples after the calibration window that the filter consumed)")
+        ratio = _number(raw_std[a] / f_std[a], 8, decimals=2) + "x" if f_std[a] > 0 else f"{'n/a':>9}"
+        print(f"  {name}    {_number(raw.mean[a], 9, sign=True)}  {_number(raw_std[a], 9)}  {_number(filtered.mean[a], 9, sign=True)}"
+              f"  {_number(f_std[a], 9)}  {ratio}  {int(filt.rejected[a]):8d}")
+    print("  (deg/s; raw = the samples after the calibration window that the filter consumed; n/a = undefined)")
+
+
+def _number(value, width, sign=False, decimals=4):
+    """``value`` with ``decimals`` decimals, right-aligned in ``width``, or in 3 significant
+    digits (1.23e+30) when that would take more than max(width, 12) characters; "n/a" when it
+    is not a finite number (an undefined mean, std or ratio)."""
+    if not math.isfinite(value):
+        return f"{'n/a':>{width}}"
+    plus = "+" if sign else ""
+    text = f"{value:{plus}.{decimals}f}"
+    if len(text) > max(width, 12):
+        text = f"{value:{plus}.3g}"
+    return f"{text:>{width}}"

@@ -1,4 +1,13 @@
-"""gyrofilter replay: filter a recording with the real-time pipeline and summarise it."""
+"""gyrofilter replay: filter a recording with the real-time pipeline and summarise it.
+
+The recording is read, filtered and written a chunk at a time (:func:`gyrofilter.recording.iter_recording`),
+so memory does not grow with its length: the summary's means and standard deviations are
+running ones (:class:`gyrofilter.streamstats.RunningMoments`) and ``--plot`` draws min/max
+envelopes of at most 4000 buckets per series (:class:`gyrofilter.streamstats.Envelope`).
+Every filtered row is time-stamped with the time of its block's last input sample (the
+recording's ``t`` column when it has one), in ``--out`` and on stdout with ``--realtime`` alike.
+"""
+import contextlib
 import json
 import time
 from importlib import resources
@@ -6,78 +15,136 @@ from importlib import resources
 import numpy as np
 
 from ..pipeline import SETTING_NAMES
-from ..recording import Recording, read_recording, write_recording
+from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, iter_recording
+from ..streamstats import Envelope, RunningMoments
 from . import common
 
 BUNDLED = "mpu6050_static_100s.csv.gz"
+OUT_COLUMNS = ["t", "gx", "gy", "gz"]
 
 
 def add_arguments(parser):
     parser.add_argument("recording", nargs="?", help=f"recording file (format v1, .csv or .csv.gz); default: the bundled {BUNDLED}")
     parser.add_argument("--out", metavar="FILE", help="write the filtered series as a recording (.csv or .csv.gz)")
-    parser.add_argument("--plot", metavar="PNG", help="draw raw and filtered rates per axis (needs matplotlib)")
+    parser.add_argument("--plot", metavar="PNG", help="draw raw and filtered rates per axis, as min/max bands on long recordings (needs matplotlib)")
     parser.add_argument("--realtime", action="store_true", help="pace the filter at the recording's sample rate and print each filtered row as it is produced")
     common.add_filter_arguments(parser)
+    common.add_force_argument(parser)
 
 
 def run(args):
     path = args.recording or str(resources.files("gyrofilter") / "data" / BUNDLED)
-    rec = read_recording(path)
-    common.print_warnings(rec.warnings)
-    common.warn_about_gaps(rec)
-    filt = common.make_filter(args, rec.sample_rate_hz)
-    gyro = rec.gyro_dps
-    common.check_temperature(filt, rec.temp_c is not None, path)
-    temps = rec.temp_c if filt.compensates_temperature else None
-    if args.realtime:
-        filtered = _paced(filt, gyro, rec.sample_rate_hz, temps)
-    else:
-        filtered = filt.filter(gyro, temps)
-    start = len(gyro) - len(filtered) * filt.settings.block_len - filt.pending_samples
-    raw = gyro[start : start + len(filtered) * filt.settings.block_len]
-    common.print_summary(path, rec, filt, raw, filtered)
+    common.check_outputs([args.out, args.plot, args.save_calibration], [path, args.calibration, args.temp_model], args.force)
+    chunks = iter_recording(path, chunk_rows=CHUNK_ROWS)
+    head = next(chunks)
+    filt = common.make_filter(args, head.sample_rate_hz)
+    common.check_temperature(filt, "temp" in head.names, path)
+    replay = _Replay(path, head, filt, plot=bool(args.plot))
+    with contextlib.ExitStack() as outputs:
+        if args.out:
+            replay.out_path = outputs.enter_context(common.replacing(args.out))
+            outputs.callback(replay.close)
+        if args.realtime:
+            print("t_s,gx_dps,gy_dps,gz_dps", flush=True)
+        for chunk in chunks:
+            replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in),
+                        head.column(chunk, "temp") if filt.compensates_temperature else None, args.realtime)
+        replay.finish()
+    common.print_warnings(head.warnings)
+    common.warn_about_gaps(head, "the filter treats the samples as uniform")
+    common.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration)
     common.save_calibration(args, filt)
-    if args.out or args.plot:
-        out_rec = _filtered_recording(path, rec, filt, filtered, start)
     if args.out:
-        write_recording(args.out, out_rec)
-        common.say(f"wrote {len(filtered)} filtered rows to {args.out}")
+        common.say(f"wrote {replay.filtered.count} filtered rows to {args.out}")
     if args.plot:
         from ..plots import plot_filtered
 
-        bias = np.asarray(filt.bias_dps)
-        plot_filtered(args.plot, rec.t_s, gyro - bias, out_rec.t_s, filtered, title=f"{path} (raw minus start-up bias)")
+        plot_filtered(args.plot, replay.raw_envelope, replay.filtered_envelope, title=f"{path} (raw minus start-up bias)")
         common.say(f"drew {args.plot}")
     return 0
 
 
-def _paced(filt, gyro, rate_hz, temps):
-    """Feed samples one by one at the recording's rate, printing rows as they come."""
-    rows = []
-    t0 = time.monotonic()
-    temps = [None] * len(gyro) if temps is None else temps.tolist()
-    print("t_s,gx_dps,gy_dps,gz_dps", flush=True)
-    for i, (sample, temp) in enumerate(zip(map(tuple, gyro.tolist()), temps)):
-        delay = t0 + i / rate_hz - time.monotonic()
-        if delay > 0:
-            time.sleep(delay)
-        row = filt.update(sample, temp)
-        if row is not None:
-            rows.append(row)
-            print(f"{(i + 1) / rate_hz:.4f},{row[0]:.6f},{row[1]:.6f},{row[2]:.6f}", flush=True)
-    return np.array(rows).reshape(-1, 3)
+class _Replay:
+    """Feeds chunks to the filter and passes its rows on: to the output file, the running
+    statistics and the plot envelopes. ``raw`` are the samples of the blocks that produced a
+    row (calibration and an unfinished last block left out)."""
 
+    def __init__(self, path, head, filt, plot):
+        self.path, self.head, self.filt = path, head, filt
+        self.raw = RunningMoments(3)
+        self.filtered = RunningMoments(3)
+        self.raw_envelope = Envelope(3) if plot else None
+        self.filtered_envelope = Envelope(3) if plot else None
+        self.out_path = None
+        self._writer = None
+        self._tail = np.empty((0, 3))  # the samples waiting in the filter's unfinished block
+        self._t_tail = np.empty(0)
+        self._wall_start = None
 
-def _filtered_recording(path, rec, filt, filtered, start):
-    """The filtered rows as a recording; t = time of the last sample of each block."""
-    length = filt.settings.block_len
-    t_last = rec.t_s[start + length - 1 :: length][: len(filtered)]
-    header = {
-        "sensor": rec.header.get("sensor", "unknown"),
-        "filtered_from": path,
-        "filter_preset": filt.preset,
-        "filter_settings": json.dumps({k: getattr(filt.settings, k) for k in SETTING_NAMES}, separators=(",", ":")),
-        "bias_dps": json.dumps(list(filt.bias_dps or ())),
-        "t_meaning": "time of the last input sample of each block (s)",
-    }
-    return Recording.from_dps(filtered, filt.output_rate_hz, t_s=t_last, header=header)
+    def feed(self, gyro, t_s, temps, realtime):
+        filt = self.filt
+        start = filt.samples_in
+        if realtime:
+            rows = self._paced(gyro, t_s, temps)
+        else:
+            rows = filt.filter(gyro, temps)
+        ends = filt.block_end_indices(len(rows)) - start
+        window = np.concatenate([self._tail, gyro])
+        t_window = np.concatenate([self._t_tail, t_s])
+        if len(rows):
+            first = len(self._tail) + ends[0] - filt.settings.block_len + 1
+            used = window[first:len(self._tail) + ends[-1] + 1]
+            self.raw.add(used)
+            self.filtered.add(rows)
+            self._write(t_s[ends], rows)
+            if self.raw_envelope is not None:
+                self.raw_envelope.add(t_window[first:len(self._tail) + ends[-1] + 1], used - np.asarray(filt.bias_dps))
+                self.filtered_envelope.add(t_s[ends], rows)
+        keep = filt.pending_samples
+        self._tail, self._t_tail = window[len(window) - keep:].copy(), t_window[len(window) - keep:].copy()
+
+    def _paced(self, gyro, t_s, temps):
+        """Feed samples one by one at the recording's rate, printing rows as they come."""
+        filt = self.filt
+        rows = []
+        if self._wall_start is None:
+            self._wall_start = time.monotonic()
+        start = filt.samples_in
+        rate_hz = filt.sample_rate_hz
+        temps = [None] * len(gyro) if temps is None else temps.tolist()
+        for sample, temp in zip(map(tuple, gyro.tolist()), temps):
+            delay = self._wall_start + filt.samples_in / rate_hz - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            row = filt.update(sample, temp)
+            if row is not None:
+                rows.append(row)
+                t = t_s[filt.block_end_indices(1)[0] - start]
+                print(f"{t:.10g},{row[0]:.6f},{row[1]:.6f},{row[2]:.6f}", flush=True)
+        return np.array(rows).reshape(-1, 3)
+
+    def _write(self, t_s, rows):
+        if self.out_path is None:
+            return
+        if self._writer is None:  # the header names the bias, known once the calibration is done
+            self._writer = RecordingWriter(self.out_path, self._out_header(), OUT_COLUMNS, flush_interval_s=None, fsync=False)
+        self._writer.write(np.column_stack([t_s, rows]))
+
+    def _out_header(self):
+        filt = self.filt
+        return dps_header({
+            "sensor": self.head.header.get("sensor", "unknown"),
+            "filtered_from": self.path,
+            "filter_preset": filt.preset,
+            "filter_settings": json.dumps({k: getattr(filt.settings, k) for k in SETTING_NAMES}, separators=(",", ":")),
+            "bias_dps": json.dumps(list(filt.bias_dps or ())),
+            "t_meaning": "time of the last input sample of each block (s)",
+        }, filt.output_rate_hz)
+
+    def finish(self):
+        """Write the output's header even when no row came out."""
+        self._write(np.empty(0), np.empty((0, 3)))
+
+    def close(self):
+        if self._writer is not None:
+            self._writer.close()

@@ -1,0 +1,117 @@
+"""Summaries of a series that arrives in chunks, in memory that does not grow with its length.
+
+* :class:`RunningMoments`: count, mean and standard deviation per column. Each chunk's own
+  count ``n_b``, mean ``m_b`` and sum of squared deviations ``M2_b`` are merged into the running
+  ones (Chan, Golub & LeVeque 1979, the pairwise update)::
+
+      n = n_a + n_b,  d = m_b - m_a,  m = m_a + d n_b / n,  M2 = M2_a + M2_b + d^2 n_a n_b / n
+
+  so no sum of squares is ever formed: a large mean does not cancel the variance.
+* :class:`Envelope`: the minimum and maximum of every bucket of ``bucket`` consecutive rows,
+  for drawing a long series; when more than ``max_buckets`` buckets exist, neighbouring
+  buckets are merged in pairs and ``bucket`` doubles, so it keeps between ``max_buckets / 2``
+  and ``max_buckets`` buckets whatever the length, and the band drawn from them contains
+  every value.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+class RunningMoments:
+    """Count, mean and sample standard deviation of the rows added so far (per column)."""
+
+    def __init__(self, n_columns):
+        self.count = 0
+        self.mean = np.zeros(n_columns)
+        self._m2 = np.zeros(n_columns)
+
+    def add(self, rows):
+        """Add the rows of an (k, n_columns) array (pairwise update, module docstring)."""
+        rows = np.asarray(rows, dtype=float)
+        n_b = len(rows)
+        if n_b == 0:
+            return
+        mean_b = rows.mean(axis=0)
+        m2_b = ((rows - mean_b) ** 2).sum(axis=0)
+        if self.count == 0:
+            self.count, self.mean, self._m2 = n_b, mean_b, m2_b
+            return
+        n = self.count + n_b
+        delta = mean_b - self.mean
+        self.mean = self.mean + delta * (n_b / n)
+        self._m2 = self._m2 + m2_b + delta ** 2 * (self.count * n_b / n)
+        self.count = n
+
+    @property
+    def std(self):
+        """Sample standard deviation (ddof = 1); NaN with fewer than 2 rows."""
+        if self.count < 2:
+            return np.full_like(self.mean, np.nan)
+        return np.sqrt(self._m2 / (self.count - 1))
+
+
+class Envelope:
+    """Per-bucket minimum and maximum of a long (t, (k, n_columns)) series (module docstring)."""
+
+    def __init__(self, n_columns, max_buckets=4000):
+        if max_buckets < 2 or max_buckets % 2:
+            raise ValueError(f"max_buckets must be an even number >= 2, got {max_buckets!r}")
+        self.max_buckets = max_buckets
+        self.bucket = 1
+        self._t = np.empty(0)      # time of each bucket's first row
+        self._lo = np.empty((0, n_columns))
+        self._hi = np.empty((0, n_columns))
+        self._open = 0             # rows in the last bucket, 0 when it is full
+
+    def add(self, t_s, rows):
+        """Add rows (k, n_columns) with times t_s (k,)."""
+        rows = np.asarray(rows, dtype=float)
+        t_s = np.asarray(t_s, dtype=float)
+        while len(rows):
+            if self._open:  # fill the open last bucket first
+                take = min(self.bucket - self._open, len(rows))
+                self._lo[-1] = np.minimum(self._lo[-1], rows[:take].min(axis=0))
+                self._hi[-1] = np.maximum(self._hi[-1], rows[:take].max(axis=0))
+                self._open = (self._open + take) % self.bucket
+                rows, t_s = rows[take:], t_s[take:]
+                continue
+            whole = len(rows) // self.bucket * self.bucket
+            take = whole if whole else len(rows)
+            starts = np.arange(0, take, self.bucket)
+            self._t = np.concatenate([self._t, t_s[starts]])
+            self._lo = np.concatenate([self._lo, np.minimum.reduceat(rows[:take], starts, axis=0)])
+            self._hi = np.concatenate([self._hi, np.maximum.reduceat(rows[:take], starts, axis=0)])
+            self._open = take % self.bucket
+            rows, t_s = rows[take:], t_s[take:]
+            while len(self._t) > self.max_buckets:
+                self._halve()
+
+    def _halve(self):
+        """Merge buckets in pairs (an odd last bucket stays, open unless it was full)."""
+        n = len(self._t)
+        pairs = n // 2 * 2
+        last_full = self._open == 0
+        lo, hi = self._lo, self._hi
+        self._t = np.concatenate([self._t[:pairs:2], self._t[pairs:]])
+        self._lo = np.concatenate([np.minimum(lo[:pairs:2], lo[1:pairs:2]), lo[pairs:]])
+        self._hi = np.concatenate([np.maximum(hi[:pairs:2], hi[1:pairs:2]), hi[pairs:]])
+        if n % 2:  # the odd bucket holds bucket rows (or fewer): half of a doubled one
+            self._open = self.bucket if last_full else self._open
+        else:
+            self._open = 0 if last_full else self._open + self.bucket
+        self.bucket *= 2
+        self._open %= self.bucket
+
+    @property
+    def t_s(self):
+        """Time of each bucket's first row."""
+        return self._t
+
+    @property
+    def low(self):
+        return self._lo
+
+    @property
+    def high(self):
+        return self._hi
