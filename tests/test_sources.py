@@ -114,10 +114,82 @@ def test_replay_passes_annotation_notes_on_at_their_row(tmp_path):
     src = open_source(f"replay:{path}")
     first = src.read()
     assert first.shape == (3, 4) and src.pop_notes() == ["something happened"]
-    from gyrofilter.sources.replay import _note_rows
-
-    assert _note_rows(read_recording(path)) == [(2, "something happened")]
     np.testing.assert_array_equal(first[:, 0], [0.0, 0.1, 0.2])  # t made from the rate
+
+
+def test_replay_streams_the_same_reads_whatever_the_file_chunking(tmp_path):
+    """Gaps and notes land with the same reads however the file is cut into chunks (1 row, a few, all),
+    and the source holds a chunk, not the file."""
+    import tracemalloc
+
+    from gyrofilter.sources.replay import ReplaySource
+
+    n = 20000
+    idx = np.arange(n)
+    idx[999:] += 5  # a gap before row 999 (the first read's last row) ...
+    idx[1000:] += 2  # ... and one before row 1000 (the second read's first)
+    idx[15321:] += 40
+    gyro = np.round(np.random.default_rng(3).normal(0, 30, size=(n, 3)))
+    lines = [f"{i / 100:.2f},{x:.0f},{y:.0f},{z:.0f},{25 + i / 1000:.3f}" for i, (x, y, z) in zip(idx, gyro)]
+    for row in (n, 7777, 2000, 0):
+        lines.insert(row, f"# {'after the last row' if row == n else f'before row {row}'}")
+    path = tmp_path / "long.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
+                    "t,gx,gy,gz,temp\n" + "\n".join(lines) + "\n")
+
+    def reads(chunk_rows):
+        src = ReplaySource(path, chunk_rows=chunk_rows)
+        out = []
+        while True:
+            try:
+                rows = src.read()
+            except SourceEnded:
+                return out, src.stats
+            out.append((rows, src.pop_notes()))
+
+    whole, stats = reads(10**6)
+    assert [notes for _, notes in whole if notes] == [
+        ["before row 0", "gap: 5 samples lost before t=10.04 s (in the replayed file)"],
+        ["gap: 2 samples lost before t=10.07 s (in the replayed file)"],
+        ["before row 2000"], ["before row 7777"],
+        ["gap: 40 samples lost before t=153.68 s (in the replayed file)"], ["after the last row"]]
+    assert stats["lost_samples"] == 47 and stats["gaps"] == 3
+    np.testing.assert_array_equal(np.concatenate([r for r, _ in whole])[:, 1:4], gyro)
+    for chunk_rows in (1, 3, 7, 1000, 4999):
+        got, got_stats = reads(chunk_rows)
+        assert got_stats == stats and len(got) == len(whole)
+        for (rows, notes), (want_rows, want_notes) in zip(got, whole):
+            np.testing.assert_array_equal(rows, want_rows)
+            assert notes == want_notes
+
+
+def test_replay_source_memory_does_not_grow_with_the_file(tmp_path):
+    """The source holds about one block of the file, whatever its length (the old one held it all)."""
+    import tracemalloc
+
+    from gyrofilter.sources.replay import ReplaySource
+
+    def peak_of_replay(n):
+        path = tmp_path / f"r{n}.csv"
+        body = "\n".join(f"{i / 1000:.3f},{i % 97 - 48},{i % 89 - 44},{i % 83 - 41},25.{i % 1000:03d}" for i in range(n))
+        path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 1000\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
+                        "t,gx,gy,gz,temp\n" + body + "\n")
+        del body
+        tracemalloc.start()
+        src = ReplaySource(path)
+        total = 0
+        while True:
+            try:
+                total += len(src.read())
+            except SourceEnded:
+                break
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        assert total == n
+        return peak
+
+    small, large = peak_of_replay(100_000), peak_of_replay(400_000)
+    assert large < 1.1 * small, f"peak {large} bytes for 400 000 rows vs {small} for 100 000"
 
 
 class FakeClock:

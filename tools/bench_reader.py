@@ -4,7 +4,8 @@
     python tools/bench_reader.py [--file REC.csv.gz] [--repeats 3]
 
 1. Peak resident memory (``ru_maxrss`` of the child process, from ``os.wait4``) and wall time of
-   ``gyrofilter replay FILE`` and ``gyrofilter allan FILE`` on the same recording (below), each in a
+   ``gyrofilter replay FILE``, ``gyrofilter run --source replay:FILE`` and ``gyrofilter allan FILE``
+   on the same recording (below), each in a
    fresh process started by a small interpreter, beside the
    same commands on the bundled 100 s recording (the fixed cost: interpreter, numpy, the Kalman
    kernel or scipy). Target: at most 200 MB for 1 h at 1 kHz.
@@ -14,6 +15,10 @@
    ``iter_recording`` (chunks only) beside ``numpy.loadtxt(path, delimiter=",", skiprows=...)``
    and, when importable, ``pandas.read_csv(path, comment="#")``. Time = best of ``--repeats``.
    Target (issue "The main job as users run it"): the reader at least as fast as numpy.loadtxt.
+3. ``gyrofilter allan FILE --json`` end to end (a fresh process: read, check, deviations, fit,
+   intervals, JSON) beside the same file through ``numpy.loadtxt`` + ``allantools.oadev`` on the
+   three axes at the same cluster times (a fresh process too; deviations only), when allantools
+   is installed. The issue's measurement: 1.33x the baseline's time before the chunked reader.
 """
 import argparse
 import gzip
@@ -106,11 +111,52 @@ def commands(path):
     bundled = str(resources.files("gyrofilter") / "data" / "mpu6050_static_100s.csv.gz")
     print("peak resident memory of the commands (ru_maxrss of a fresh process)")
     print(f"  {'command':<28}{'recording':<30}{'peak MB':>9}{'wall s':>9}")
-    for command in ("replay", "allan"):
+    for command in ("replay", "run", "allan"):
         for label, rec in (("bundled 100 s at 100 Hz", bundled), ("1 h at 1 kHz", path)):
-            peak, wall, code = _peak_of([sys.executable, "-m", "gyrofilter", command, rec])
+            args = ["--source", f"replay:{rec}", "--quiet"] if command == "run" else [rec]
+            peak, wall, code = _peak_of([sys.executable, "-m", "gyrofilter", command, *args])
             print(f"  {'gyrofilter ' + command:<28}{label:<30}{peak:>9.0f}{wall:>9.1f}" + ("" if code == 0 else f"  (exit {code})"))
     print("  target: at most 200 MB for 1 h at 1 kHz (before the chunked reader: replay 1214 MB, allan 1214 MB)")
+
+
+#: the baseline of allan_end_to_end: numpy.loadtxt + allantools.oadev per axis, at given cluster times
+_ALLANTOOLS = """import sys, json, numpy as np, allantools
+path, skip, fs, taus = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), json.loads(sys.argv[4])
+x = np.loadtxt(path, delimiter=",", skiprows=skip, usecols=(1, 2, 3))
+for a in range(3):
+    allantools.oadev(x[:, a], rate=fs, data_type="freq", taus=taus)
+"""
+
+
+def allan_end_to_end(paths, repeats):
+    import json
+
+    try:
+        import allantools  # noqa: F401
+    except ImportError:
+        print("allan end to end: allantools is not installed (pip install allantools); skipped")
+        return
+    from gyrofilter.allan import cluster_sizes
+    from gyrofilter.recording import iter_recording
+
+    print(f"allan end to end, fresh processes, wall s (best of {repeats})")
+    print(f"  {'command':<52}" + "".join(f"{os.path.basename(p):>14}" for p in paths))
+    ours, base = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, path in enumerate(paths):
+            chunks = iter_recording(path)
+            head = next(chunks)
+            rows = sum(len(c) for c in chunks)
+            fs = head.sample_rate_hz
+            taus = (np.asarray(cluster_sizes(rows, fs)) / fs).tolist()
+            out = os.path.join(tmp, f"a{i}.json")
+            ours.append(_best(lambda: subprocess.run([sys.executable, "-m", "gyrofilter", "allan", path, "--json", out, "--force"],
+                                                     check=True, stdout=subprocess.DEVNULL), repeats))
+            base.append(_best(lambda: subprocess.run([sys.executable, "-c", _ALLANTOOLS, path, str(_skiprows(path)), str(fs),
+                                                      json.dumps(taus)], check=True), repeats))
+    print(f"  {'gyrofilter allan --json (every check, fit, intervals)':<52}" + "".join(f"{t:>14.2f}" for t in ours))
+    print(f"  {'numpy.loadtxt + allantools.oadev x 3 (deviations only)':<52}" + "".join(f"{t:>14.2f}" for t in base))
+    print("  gyrofilter allan vs the baseline: " + ", ".join(f"{b / o:.2f}x as fast" for o, b in zip(ours, base)))
 
 
 def main(argv=None):
@@ -128,6 +174,8 @@ def main(argv=None):
         commands(path)
         print()
         readers([path, plain], args.repeats)
+        print()
+        allan_end_to_end([path, plain], args.repeats)
 
 
 if __name__ == "__main__":

@@ -1,21 +1,25 @@
 """A recording file as a live source (``replay:FILE[,realtime][,speed=2]``).
 
-The whole recording is read at open (format v1, see :mod:`gyrofilter.recording`), then handed out
-in chunks: as fast as the reader asks (default), or paced so that the sample with time ``t`` is
-delivered ``t / speed`` seconds after the first ``read()`` (``realtime``). Gaps in the file's
-``t`` column (lost samples) are counted in ``stats["lost_samples"]`` and reported as notes
-at the sample where they occur, like a live device would; annotation lines of the file are
-passed on as notes too.
+The recording (format v1, see :mod:`gyrofilter.recording`) is read in chunks as the reader asks
+for samples, so a replay of hours at 1 kHz needs the memory of one chunk, not of the file. The
+samples are handed out as fast as the reader asks (default), or paced so that the sample with
+time ``t`` is delivered ``t / speed`` seconds after the first ``read()`` (``realtime``). Gaps in
+the file's ``t`` column (lost samples) are counted in ``stats["lost_samples"]`` and reported as
+notes with the read that delivers the sample after the gap, like a live device would;
+annotation lines of the file are passed on as notes before the sample that follows them, and
+the reader's warnings (a recording cut short) as notes when they arise.
 """
 from __future__ import annotations
 
+import bisect
 import math
 import time
 
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
-from ..recording import read_recording
+from ..recording import CHUNK_ROWS, iter_recording
+from ..units import plain
 
 CHUNK_SAMPLES = 1000  # rows per read() when not paced
 MAX_WAIT_S = 0.1
@@ -25,78 +29,125 @@ POLL_S = 0.02  # paced reads return at most this often (batches, like a device's
 class ReplaySource:
     """Replay ``path`` (format v1) as a source; ``realtime`` paces it at ``speed`` x real time."""
 
-    def __init__(self, path, realtime=False, speed=1.0, *, clock=time.monotonic, sleep=time.sleep):
-        if not speed > 0 or not math.isfinite(speed):
-            raise SettingsError(f"replay speed must be a positive number, got {speed!r}")
-        rec = read_recording(path)
+    def __init__(self, path, realtime=False, speed=1.0, *, clock=time.monotonic, sleep=time.sleep, chunk_rows=CHUNK_ROWS):
+        if not isinstance(speed, (int, float)) or not speed > 0 or not math.isfinite(speed):
+            raise SettingsError(f"replay speed must be a positive number, got {plain(speed)}")
+        self._chunks = iter_recording(path, chunk_rows)
+        head = self._head = next(self._chunks)
         self.path = str(path)
-        self.warnings = list(rec.warnings)
         self.realtime = bool(realtime)
         self.speed = float(speed)
         self._clock = clock
         self._sleep = sleep
-        rate = rec.sample_rate_hz
-        n = len(rec)
-        t = np.asarray(rec.t_s, dtype=float)
-        names = ["t", "gx", "gy", "gz"]
-        if rec.temp_c is not None:
-            names.append("temp")
-        names += [c for c in rec.columns if c not in names]
-        cols = {name: (t if name == "t" else rec.columns[name]) for name in names}
+        names = ["t", "gx", "gy", "gz"] + (["temp"] if "temp" in head.names else [])
+        names += [c for c in head.names if c not in names]
         self.columns = names
-        self._data = np.column_stack([cols[c] for c in names]) if n else np.empty((0, len(names)))
-        self.header = {k: v for k, v in rec.header.items() if k != "gyrofilter-recording"}
+        # file column of each output column (t may be made from the rate: -1)
+        self._where = [head.names.index(c) if c in head.names else -1 for c in names]
+        self.header = {k: v for k, v in head.header.items() if k != "gyrofilter-recording"}
         self.header.setdefault("source", f"replay of {self.path}")
         self.stats = {"samples": 0, "lost_samples": 0, "gaps": 0}
-        # notes due before sample i: gaps in t, and the file's own annotation lines
-        self._due = []
-        if n > 1:
-            step = np.rint(np.diff(t) * rate).astype(np.int64)
-            for i in np.flatnonzero(step > 1):
-                lost = int(step[i] - 1)
-                self._due.append((int(i) + 1, lost, f"gap: {lost} samples lost before t={t[i + 1]:.6g} s (in the replayed file)"))
-        for row, text in _note_rows(rec):
-            self._due.append((row, 0, text))
-        self._due.sort(key=lambda item: item[0])
-        self._next = 0
+        self._buf = np.empty((0, len(names)))  # rows read from the file, not yet handed out
+        self._pos = 0
+        self._rows_read = 0  # rows taken from the file so far
+        self._t_last = None  # t of the last row taken from the file
+        self._due = []  # (row before which the note is due, lost samples, text), in row order
+        self._notes_seen = self._warnings_seen = 0
+        self._exhausted = False
         self._notes = []
-        self._t0 = t[0] if n else 0.0
         self._start = None
+        self._t0 = None
         self._last = -math.inf
         self._closed = False
+        self._fill()
+
+    @property
+    def warnings(self):
+        """The reader's warnings so far (a last line cut short, a gzip stream without its end)."""
+        return list(self._head.warnings)
+
+    def _fill(self):
+        """Take the next chunk from the file into the buffer (or mark the file exhausted)."""
+        head = self._head
+        try:
+            chunk = next(self._chunks)
+        except StopIteration:
+            self._exhausted = True
+            chunk = None
+        if chunk is not None:
+            r0 = self._rows_read
+            t = head.t_s(chunk, r0)
+            rows = np.empty((len(chunk), len(self.columns)))
+            for j, i in enumerate(self._where):
+                rows[:, j] = t if i < 0 else chunk[:, i]
+            # gaps in t: a step of more than one sample interval (also across chunks)
+            prev = np.concatenate(([self._t_last], t[:-1])) if self._t_last is not None else t[:-1]
+            cur = t if self._t_last is not None else t[1:]
+            step = np.rint((cur - prev) * head.sample_rate_hz).astype(np.int64)
+            first = r0 if self._t_last is not None else r0 + 1
+            for k in np.flatnonzero(step > 1).tolist():
+                lost = int(step[k] - 1)
+                self._due.append((first + k, lost, f"gap: {lost} samples lost before t={cur[k]:.6g} s (in the replayed file)"))
+            self._t_last = float(t[-1])
+            self._rows_read = r0 + len(chunk)
+            self._buf = np.concatenate([self._buf[self._pos:], rows]) if self._pos < len(self._buf) else rows
+            self._pos = 0
+            lines = range(r0, self._rows_read)
+        else:
+            lines = range(self._rows_read, self._rows_read)
+        # the file's annotation lines read since the last chunk: due before the first row after them
+        for line, text in head.notes[self._notes_seen:]:
+            self._due.append((lines.start + bisect.bisect_left(lines, line, key=head.line_of_row), 0, text))
+        self._notes_seen = len(head.notes)
+        self._due.sort(key=lambda item: item[0])
+        for text in head.warnings[self._warnings_seen:]:
+            self._notes.append(f"warning: {text}")
+        self._warnings_seen = len(head.warnings)
+
+    def _available(self):
+        return len(self._buf) - self._pos
 
     def read(self):
         if self._closed:
             raise SourceEnded(f"replay of {self.path}: source closed")
-        n = len(self._data)
-        if self._next >= n:
-            raise SourceEnded(f"end of {self.path} ({n} samples)")
+        while not self._exhausted and self._available() < CHUNK_SAMPLES:
+            self._fill()
+        if not self._available():
+            if self._due:  # notes after the last sample
+                self._release(math.inf)
+                return self._buf[:0].copy()
+            raise SourceEnded(f"end of {self.path} ({self.stats['samples']} samples)")
+        buf, pos = self._buf, self._pos
         if not self.realtime:
-            stop = min(n, self._next + CHUNK_SAMPLES)
+            stop = pos + min(self._available(), CHUNK_SAMPLES)
         else:
             now = self._clock()
             if self._start is None:
-                self._start = now
+                self._start, self._t0 = now, buf[pos, 0]
             # rows with (t - t0) / speed <= elapsed are due; wait for the next one at most MAX_WAIT_S
-            t_next = (self._data[self._next, 0] - self._t0) / self.speed
+            t_next = (buf[pos, 0] - self._t0) / self.speed
             wait = max(t_next - (now - self._start), POLL_S - (now - self._last))
             if wait > 0:
                 self._sleep(min(wait, MAX_WAIT_S))
                 now = self._clock()
             elapsed_t = (now - self._start) * self.speed + self._t0
-            stop = int(np.searchsorted(self._data[:, 0], elapsed_t, side="right"))
-            stop = max(stop, self._next)
+            stop = max(pos, int(np.searchsorted(buf[pos:, 0], elapsed_t, side="right")) + pos)
             self._last = now
-        rows = self._data[self._next : stop]
-        while self._due and (self._due[0][0] < stop or stop >= n):
+        rows = buf[pos:stop].copy()
+        self._pos = stop
+        first_row = self.stats["samples"]
+        self.stats["samples"] += len(rows)
+        self._release(first_row + len(rows) - 1 if len(rows) else first_row - 1)
+        return rows
+
+    def _release(self, last_row):
+        """Move the notes due before a row up to ``last_row`` (delivered) into the notes."""
+        while self._due and self._due[0][0] <= last_row:
             _, lost, text = self._due.pop(0)
             if lost:
                 self.stats["lost_samples"] += lost
                 self.stats["gaps"] += 1
             self._notes.append(text)
-        self._next = stop
-        self.stats["samples"] += len(rows)
-        return rows.copy()
 
     def pop_notes(self):
         notes, self._notes = self._notes, []
@@ -104,6 +155,7 @@ class ReplaySource:
 
     def close(self):
         self._closed = True
+        self._chunks.close()
 
     def __enter__(self):
         return self
@@ -111,35 +163,3 @@ class ReplaySource:
     def __exit__(self, *exc):
         self.close()
         return False
-
-
-def _note_rows(rec):
-    """(index of the data row the note precedes, text) for the annotation lines of ``rec``.
-
-    Every line after the column-name row is a data row or a note, so a note on file line L,
-    preceded by k other notes, comes before data row L - first_body_line - k.
-    """
-    if not rec.notes:
-        return []
-    n = len(rec)
-    first_body = _first_body_line(rec)
-    if first_body is None:
-        return [(n, text) for _, text in rec.notes]
-    return [(max(0, min(n, line - first_body - k)), text) for k, (line, text) in enumerate(sorted(rec.notes))]
-
-
-def _first_body_line(rec):
-    """1-based file line number of the first line after the column-name row."""
-    import gzip
-
-    try:
-        with open(rec.path, "rb") as fh:
-            magic = fh.read(2)
-        opener = gzip.open if magic == b"\x1f\x8b" else open
-        with opener(rec.path, "rt", encoding="utf-8", errors="replace") as fh:
-            for number, line in enumerate(fh, start=1):
-                if not line.startswith("#"):
-                    return number + 1
-    except (OSError, EOFError):
-        return None
-    return None
