@@ -530,11 +530,9 @@ def format_table(ev):
 
 def plot_pareto(ev, path, reference="paper001"):
     """Static std reduction (geometric mean) against dynamic RMSE (geometric mean over profiles)."""
-    import matplotlib
+    from .plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     pts = [(ev.dynamic_geomean(n), ev.static_geomean(n)) for n in ev.filters]
     front = set(pareto_front(pts))
     fig, ax = plt.subplots(figsize=(8, 5.5))
