@@ -1,9 +1,10 @@
-"""A core install (``pip install gyrofilter``, no extras) runs replay, allan and gap; a command
-that needs an extra stops with one line naming it, not a traceback.
+"""A core install (``pip install gyrofilter``, no extras) runs replay, allan, gap and simulate; a
+command that needs an extra stops with one line naming it, not a traceback.
 
 The commands run in a subprocess with the optional packages made unimportable
 (tests/no_extras/sitecustomize.py), so every configuration checks this without a separate venv.
-scipy is a core dependency (gap's fits and simulations need it) but replay and allan run without it.
+scipy is a core dependency (gap's fits and every simulation need it) but replay and allan run
+without it.
 """
 import os
 import re
@@ -19,6 +20,7 @@ from gyrofilter.extras import EXTRA
 
 BLOCKER = Path(__file__).parent / "no_extras"
 RECORDING = Path(gyrofilter.__file__).parent / "data" / "mpu6050_static_100s.csv.gz"
+MODEL = Path(__file__).parent.parent / "examples" / "models" / "mpu6050.json"
 OPTIONAL = ("matplotlib", "statsmodels", "numba", "allantools")
 
 
@@ -43,7 +45,8 @@ def test_the_blocker_makes_a_package_unimportable(tmp_path):
     (["replay", "--preset", "recommended"], ("scipy",) + OPTIONAL),
     (["allan", str(RECORDING), "--json", "adev.json"], ("scipy",) + OPTIONAL),
     (["gap", str(RECORDING), "--json", "gap.json", "--sims", "6"], OPTIONAL),
-], ids=["replay", "replay-recommended", "allan", "gap"])
+    (["simulate", "--model", str(MODEL), "--duration", "20", "--seed", "1", "--out", "sim.csv.gz"], OPTIONAL),
+], ids=["replay", "replay-recommended", "allan", "gap", "simulate"])
 def test_core_commands_run_without_the_extras(tmp_path, args, blocked):
     out = _run(args, blocked, tmp_path)
     assert out.returncode == 0, out.stderr
