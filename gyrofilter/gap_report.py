@@ -14,7 +14,6 @@ Each finding is listed with its parameters, its evidence sentence and its gain.
 """
 from __future__ import annotations
 
-import math
 import os
 
 import numpy as np
