@@ -53,8 +53,8 @@ so tau = -dt / ln(phi), bias sigma = sigma_eta / sqrt(1 - phi^2); for phi -> 1 t
 random walk with K = sigma_eta sqrt(fs). Paper 003's x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}
 is that limit: sigma_eta = (1 - theta) sigma_a = 0.0006 sigma_a per sample.
 
-scipy and statsmodels are an optional extra (``pip install gyrofilter[stats]``), imported here
-inside the functions that use them.
+statsmodels is the optional ``stats`` extra (``pip install "gyrofilter[stats]"``); it and scipy
+are imported inside the functions that use them.
 """
 from __future__ import annotations
 
@@ -65,9 +65,9 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .errors import GyroFilterError, SettingsError
+from .extras import require
 from .units import json_ready, plain
 
-STATS_HINT = "pip install gyrofilter[stats]"
 DEFAULT_MAX_SAMPLES = 200_000
 DEFAULT_ADF_MAXLAG = 20
 DEFAULT_ALPHA = 0.05
@@ -78,19 +78,9 @@ DEFAULT_CRITERION = "bic"  # see select_order for why not the paper's F rule
 LSQ_METHOD = "lm"  # MINPACK Levenberg-Marquardt: ~5x faster than "trf" here, same or lower RSS
 
 
-class StatsUnavailableError(GyroFilterError):
-    """scipy or statsmodels is missing."""
-
-
 def require_stats():
-    """Import scipy and statsmodels, or raise naming the extra that installs them."""
-    try:
-        import scipy  # noqa: F401
-        import statsmodels  # noqa: F401
-    except ImportError as exc:
-        raise StatsUnavailableError(
-            f"ARMA analysis needs scipy and statsmodels ({exc.name} is missing): {STATS_HINT}"
-        ) from None
+    """Import statsmodels, or raise MissingExtraError naming the extra that installs it."""
+    require("statsmodels", "ARMA analysis")
 
 
 # ---------------------------------------------------------------------------------------------

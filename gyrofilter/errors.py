@@ -21,6 +21,10 @@ class CalibrationError(GyroFilterError):
     """Start-up bias calibration failed (for example the sensor moved while calibrating)."""
 
 
+class MissingExtraError(GyroFilterError):
+    """An optional package is not installed: the message names the extra that installs it."""
+
+
 class DeviceError(GyroFilterError):
     """A sensor or port could not be opened, identified or read."""
 

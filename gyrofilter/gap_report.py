@@ -18,7 +18,7 @@ import os
 
 import numpy as np
 
-from .plots import pyplot as _plt
+from .plots import pyplot
 
 AXES = ("x", "y", "z")
 REPORT_NAME = "gap_report.md"
@@ -54,7 +54,7 @@ def _finish(plt, fig, ax, path, xlabel, ylabel, title):
 def _plot_spread(x, dep, key, axis, path, *, xlabel, ylabel, title):
     """Measurement, baseline simulations' spread and extended model's spread (mean +- 2 sd
     of the log feature ``key``: 'adev' or 'band')."""
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     m, s = np.asarray(dep[f"{key}_sim_mean_log"]), np.asarray(dep[f"{key}_sim_sd_log"])
     ax.fill_between(x, np.exp(m - 2 * s), np.exp(m + 2 * s), color="0.8", label="baseline simulations (mean +- 2 sd)")
@@ -85,7 +85,7 @@ def _blocks(v, n_blocks=600):
 
 
 def plot_temperature(x, temp, axis, coef, path):
-    plt = _plt()
+    plt = pyplot()
     y, _ = _blocks(x - np.mean(x))
     tb, _ = _blocks(temp)
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
@@ -98,7 +98,7 @@ def plot_temperature(x, temp, axis, coef, path):
 
 
 def plot_time(x, fs, axis, findings, path):
-    plt = _plt()
+    plt = pyplot()
     y, length = _blocks(x)
     t = (np.arange(y.size) + 0.5) * length / fs
     fig, ax = plt.subplots(figsize=(7.0, 4.0))

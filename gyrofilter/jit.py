@@ -6,6 +6,7 @@ numba it runs interpreted, with the same arithmetic and so the same numbers.
 import types
 
 from .errors import SettingsError
+from .extras import install_hint
 
 _compiled = {}
 
@@ -24,7 +25,7 @@ def choose_kernel(fn, backend):
         return fn
     if not numba_available():
         if backend == "numba":
-            raise SettingsError("backend='numba' needs numba: pip install 'gyrofilter[fast]'")
+            raise SettingsError(f"backend='numba' needs numba: {install_hint('fast')}")
         return fn
     return _compile(fn)
 

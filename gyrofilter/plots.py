@@ -1,17 +1,11 @@
 """Figures of filtered series (matplotlib, imported only when a figure is drawn)."""
-from .errors import GyroFilterError
+from .extras import require
 
 
 def pyplot():
-    """matplotlib.pyplot with the file-only Agg backend, or a clear error naming the extra."""
-    try:
-        import matplotlib
-    except ImportError:
-        raise GyroFilterError("plots need matplotlib: pip install 'gyrofilter[plot]'") from None
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    """matplotlib.pyplot with the file-only Agg backend, or MissingExtraError naming the extra."""
+    require("matplotlib", "figures").use("Agg")
+    return require("matplotlib.pyplot", "figures")
 
 
 def plot_filtered(path, raw, filtered, *, title=""):

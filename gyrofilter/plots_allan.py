@@ -12,24 +12,16 @@ import math
 import numpy as np
 
 from .noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis
+from .plots import pyplot
 
 AXIS_COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
 TERM_STYLE = {"quantization": ":", "arw": "--", "bias_instability": "-.", "rrw": (0, (5, 2, 1, 2)),
               "rate_ramp": (0, (1, 1))}
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def plot_allan(path, results, title=""):
     """Write a PNG with one panel per axis. ``results``: {axis: AxisNoise}."""
-    plt = _pyplot()
+    plt = pyplot()
     n = len(results)
     fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.6), squeeze=False)
     for ax, (name, r) in zip(axes[0], results.items()):
@@ -74,7 +66,7 @@ def plot_allan(path, results, title=""):
 
 def plot_before_after(path, curves, title=""):
     """``curves``: list of (label, tau_s, adev_dps, colour, linestyle). One log-log axes."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
     for label, tau, dev, colour, style in curves:
         ax.loglog(tau, dev, style, color=colour, ms=3, label=label)

@@ -200,7 +200,7 @@ def test_analyze_axis_on_arma11_data():
 
 def test_missing_statsmodels_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "statsmodels", None)
-    with pytest.raises(GyroFilterError, match=r"pip install gyrofilter\[stats\]"):
+    with pytest.raises(GyroFilterError, match=r'pip install "gyrofilter\[stats\]"'):
         arma.require_stats()
 
 

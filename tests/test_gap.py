@@ -2,8 +2,9 @@
 tolerance; clean recordings must give no finding; the JSON follows docs/formats.md section 3.
 
 The default suite runs one 10-minute case per effect and a few clean cases (fewer
-simulations than the command's default, to stay fast); the large battery is marked slow
-(``pytest -m slow``) and ``tools/gap_battery.py`` prints the rates.
+simulations than the command's default, to stay fast); the large battery, the ramp/random-walk
+pair (30-minute records) and the effects hidden in real noise are marked slow (``pytest -m slow``;
+CI runs them once) and ``tools/gap_battery.py`` prints the rates.
 """
 import importlib.util
 import json
@@ -69,6 +70,7 @@ def test_baseline_fit_recovers_bias_and_white_noise():
         assert got["quantization_dps"] == pytest.approx(1 / 131.0)
 
 
+@pytest.mark.slow
 def test_ramp_and_random_walk_are_told_apart():
     """Both raise the long-tau Allan deviation; the decision rules (module docstring of
     gyrofilter.detectors) must call the ramp a ramp and a random walk a stochastic wander,
@@ -119,6 +121,7 @@ def test_discrepancy_is_mean_squared_z():
     assert discrepancy(departures(shifted, sims, 100)) == pytest.approx(4.0)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not os.path.exists(REAL), reason="real recording not converted yet")
 @pytest.mark.parametrize("effect,params", [
     ("sinusoid", {"frequency_hz": 3.7, "amplitude_dps": 0.02}),
