@@ -210,9 +210,11 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
             return _analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=recording_name)
-        except (GyroFilterError, MemoryError, KeyboardInterrupt):
+        except GyroFilterError:
             raise
-        except Exception as exc:  # a statistic that cannot run is not the user's error: no findings
+        except (ValueError, ArithmeticError) as exc:  # a statistic that cannot run numerically (a singular
+            # fit, a series too short for a spectrum): not the user's error, no findings; any other
+            # exception (ImportError, TypeError, ...) is a bug or a broken install and is raised
             g = np.asarray(rec.gyro_dps, dtype=float)
             base = baseline_model(rec, g) if len(g) >= 2 else {}
             name = recording_name if recording_name is not None else (rec.path or "")

@@ -232,6 +232,11 @@ def test_a_statistic_that_cannot_run_gives_no_findings_not_a_crash(monkeypatch):
     monkeypatch.setattr(gap, "features", lambda *a, **k: 1 / 0)
     report = gap.analyse_gap(rec, n_sims=3)
     assert report["findings"] == [] and any("ZeroDivisionError" in n for n in report["notes"])
+    # a bug or a broken install is not "no findings": it is raised
+    for error in (ImportError("no module named scipy"), TypeError("bug"), KeyError("bug")):
+        monkeypatch.setattr(gap, "features", lambda *a, error=error, **k: (_ for _ in ()).throw(error))
+        with pytest.raises(type(error)):
+            gap.analyse_gap(rec, n_sims=3)
 
 
 def _short_recording(tmp_path):
