@@ -20,4 +20,5 @@ every motion profile and BROAD trial.
 PRESETS = {
     "paper": {},
     "recommended": {"hold": True, "tracker": "block_mean"},
+    "adaptive_kalman": {"kalman_noise": "adaptive", "guard_blocks": 3},
 }
