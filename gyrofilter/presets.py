@@ -15,10 +15,17 @@ grows with the motion, the gain collapses and the extrapolation runs away. Chose
 tune / held-out split (``tools/tune_recommended.py``); on the held-out data it still reduces
 the static std by at least 17x on every axis and has a lower RMSE than the faithful filter on
 every motion profile and BROAD trial.
+
+``adaptive_kalman`` (``tools/tune_adaptive_kalman.py``, ``docs/evaluate.md``): paper 001's Kalman
+filter with its least-squares prior kept and its noise statistics replaced
+(:func:`gyrofilter.kalman.run_blocks_adaptive`: R from the calibration, Q by covariance matching
+of the innovations, the gain kept where the loop is stable, a constant-rate model at rest) and
+the divergence guard on (2 blocks beyond 10 sigma_b: re-seed from the block mean). Every Kalman
+preset but ``paper`` has the guard.
 """
 
 PRESETS = {
     "paper": {},
     "recommended": {"hold": True, "tracker": "block_mean"},
-    "adaptive_kalman": {"kalman_noise": "adaptive", "guard_blocks": 3},
+    "adaptive_kalman": {"kalman_noise": "adaptive", "guard_blocks": 2},
 }

@@ -30,7 +30,7 @@ def stream(filt, x):
 @pytest.mark.parametrize(
     "settings",
     [{}, {"qr_stat": "std"}, {"qr_window": 0}, {"r_source": "calibration", "fit_order": 1}, {"block_len": 3, "fifo_depth": 4},
-     {"preset": "recommended"}, {"hold": True}],
+     {"preset": "recommended"}, {"hold": True}, {"preset": "adaptive_kalman"}, {"guard_blocks": 2}],
 )
 def test_update_and_filter_give_the_same_numbers(backend, settings):
     x = noisy(3000, spikes=0.02)
@@ -41,7 +41,7 @@ def test_update_and_filter_give_the_same_numbers(backend, settings):
     assert np.array_equal(a, b)
 
 
-@pytest.mark.parametrize("preset", ["paper", "recommended"])
+@pytest.mark.parametrize("preset", ["paper", "recommended", "adaptive_kalman"])
 def test_mixed_calls_continue_the_same_state(preset):
     x = noisy(4000, seed=2, spikes=0.01)
     whole = GyroFilter(100.0, preset=preset).filter(x)
@@ -51,7 +51,7 @@ def test_mixed_calls_continue_the_same_state(preset):
 
 
 @pytest.mark.skipif(len(BACKENDS) < 2, reason="numba not installed")
-@pytest.mark.parametrize("preset", ["paper", "recommended"])
+@pytest.mark.parametrize("preset", ["paper", "recommended", "adaptive_kalman"])
 def test_numba_and_python_backends_agree_bit_for_bit(preset):
     x = noisy(5000, seed=4, spikes=0.02)
     x[2000:2500] += 15.0
@@ -167,6 +167,13 @@ def test_state_does_not_grow_with_time():
         ({"calibration_s": float("nan")}, "calibration_s"),
         ({"bogus": 1}, "unknown setting"),
         ({"preset": "best"}, "unknown preset"),
+        ({"kalman_noise": "sage"}, "kalman_noise"),
+        ({"kalman_noise": "adaptive", "gain_min": 0.3}, "unstable .*1.009.* stable above 0.335"),
+        ({"kalman_noise": "adaptive", "gain_min": 1.5}, "gain_min"),
+        ({"innovation_forgetting": 0}, "innovation_forgetting"),
+        ({"prior_var_max_r": -1}, "prior_var_max_r"),
+        ({"guard_blocks": -1}, "guard_blocks"),
+        ({"guard_k_sigma": 0}, "guard_k_sigma"),
     ],
 )
 def test_bad_settings_are_refused_at_construction(kwargs, match):
