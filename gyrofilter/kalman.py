@@ -28,9 +28,17 @@ Readings of what the paper leaves open (each alternative is a setting of GyroFil
   value r0 (the calibration's white-noise variance / L). Variances are floored at 1e-12 dps^2
   so that a perfectly constant input cannot divide 0 by 0.
 
+Paper 001's noise statistics make the gain collapse in motion, and its loop is unstable for
+gains below 0.335 (:func:`gyrofilter.predictor.closed_loop_radius`): it diverges. Two additions,
+both off in preset "paper": the divergence guard (:func:`_guard`, in both kernels) and
+:func:`run_blocks_adaptive`, the same LS prior with R from the calibration, covariance matching of
+the innovations, a gain kept in the stable region and a constant-rate model at rest (preset
+"adaptive_kalman").
+
 :func:`run_blocks` is written in the subset of Python that numba compiles
 (:mod:`gyrofilter.jit`); the streaming filter calls it one block at a time and the batch filter
-once for all blocks, interpreted or compiled, so both paths execute the same arithmetic.
+once for all blocks, interpreted or compiled, so both paths execute the same arithmetic; so is
+:func:`run_blocks_adaptive`.
 """
 import math
 

@@ -25,14 +25,15 @@ from .averaging import AVERAGERS
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
 from .predictor import closed_loop_radius, stable_gain_threshold, weight_table
-from .presets import PRESETS
+from .presets import DEFAULT_PRESET, PRESETS
 from .tempcomp import compensate
 from .units import check_sample_rate_hz, plain
 
 
 @dataclass(frozen=True)
 class FilterSettings:
-    """Settings of :class:`GyroFilter`; the defaults are paper 001's values (preset "paper").
+    """Settings of :class:`GyroFilter`; the defaults are paper 001's values (preset "paper";
+    GyroFilter's default preset is "recommended", see gyrofilter.presets).
 
     ============================ ========= ===================================================
     setting                      default   meaning
@@ -82,8 +83,8 @@ class FilterSettings:
                                            needs temperatures (see gyrofilter.tempcomp)
     ============================ ========= ===================================================
 
-    ``preset="recommended"`` is ``tracker="block_mean", hold=True`` (see gyrofilter.presets).
-    ``preset="adaptive_kalman"`` is ``kalman_noise="adaptive"`` with the guard on.
+    ``preset="hold"`` is ``tracker="block_mean", hold=True``; ``preset="adaptive_kalman"`` (= the
+    default ``"recommended"``) is ``kalman_noise="adaptive"`` with the guard on (gyrofilter.presets).
 
     On q: paper 001 saw gross errors of more than 200 LSB; one such spike in a block of 5 sits
     4/5 * 200 = 160 LSB from the block mean, while its own example block
@@ -177,7 +178,10 @@ SIGMA_B_FLOOR_DPS = 1e-6  # a perfectly constant (simulated) input must not give
 
 
 class GyroFilter:
-    """Paper-001 filter for a three-axis gyro; see the module docstring and FilterSettings.
+    """Paper-001 pipeline for a three-axis gyro; see the module docstring and FilterSettings.
+
+    ``preset``: named settings (gyrofilter.presets); the default "recommended" is the best
+    measured filter, "paper" the faithful reproduction.
 
     >>> f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
     >>> f.update((0.01, -0.02, 0.0)) is None      # calibrating
@@ -187,7 +191,7 @@ class GyroFilter:
     skips the start-up calibration. Explicit keyword settings override the ``preset``.
     """
 
-    def __init__(self, sample_rate_hz, calibration_s=None, *, preset="paper", calibration=None, **settings):
+    def __init__(self, sample_rate_hz, calibration_s=None, *, preset=DEFAULT_PRESET, calibration=None, **settings):
         if preset not in PRESETS:
             raise SettingsError(f"unknown preset {preset!r}; choose one of {', '.join(PRESETS)}")
         unknown = sorted(set(settings) - set(SETTING_NAMES))

@@ -14,7 +14,7 @@ def still(n, seed, sigma=0.05):
 
 def block_means(x, **settings):
     """The block means the Kalman stage sees (same calibration, bias and rejection)."""
-    return GyroFilter(FS, tracker="block_mean", **settings).filter(x)
+    return GyroFilter(FS, preset="paper", tracker="block_mean", **settings).filter(x)
 
 
 def test_adaptive_kalman_averages_at_rest_like_a_running_mean():

@@ -12,7 +12,7 @@
 3. The divergence guard (guard_blocks, guard_k_sigma) on a 3-Hz, 150-deg/s sine on real noise
    (a profile used nowhere else) and on the fast BROAD trials 07 and 09: the paper's filter with
    and without the guard, the adaptive filter with and without it.
-4. paper, the hold (today's recommended) and adaptive_kalman on the TUNE and the HOLDOUT split,
+4. paper, the hold (the recommended preset before adaptive_kalman) and adaptive_kalman on the TUNE and the HOLDOUT split,
    with lags: static min / geo-mean reduction, RMSE / worst lag per profile, BROAD RMSE (all
    valid blocks), and the largest difference to the hold.
 
@@ -95,8 +95,8 @@ def main():
     for gm, a, m, d in itertools.product([0.5, 0.6, 0.8], [0.1, 0.3], [0.0, 4.0, 9.0], [5, 10]):
         kw = dict(gain_min=gm, innovation_forgetting=a, prior_var_max_r=m, fifo_depth=d)
         grid[" ".join(f"{k}={v:g}" for k, v in kw.items())] = kw
-    hold = "hold (recommended today)"
-    specs = [spec(hold, "recommended")] + [spec(n, "adaptive_kalman", **kw) for n, kw in grid.items()]
+    hold = "hold (recommended before)"
+    specs = [spec(hold, "hold")] + [spec(n, "adaptive_kalman", **kw) for n, kw in grid.items()]
     ev = run_split(specs, E.TUNE_SPLIT)
     ok = [s.name for s in specs[1:] if ev.static_min(s.name) >= MARGIN * E.PAPER_CLAIM_REDUCTION
           and excess(ev, s.name, hold)[0] <= 0]
@@ -110,7 +110,7 @@ def main():
     print("\n== 3. divergence guard: 3-Hz 150-deg/s sine on real noise (4 x 90 s), BROAD 07 / 09 ==")
     segments = E.noise_segments(E.find_static_recordings(REC_DIR))
     broad = [r for r in E.find_broad_recordings(REC_DIR) if E._stem(r.path) in ("broad_07_fast", "broad_09_fast_breaks")]
-    guards = [spec("paper", "paper"), spec("hold", "recommended")]
+    guards = [spec("paper", "paper"), spec("hold", "hold")]
     for n, k in ((1, 10.0), (2, 10.0), (3, 10.0), (3, 5.0)):
         guards.append(spec(f"paper + guard_blocks={n} guard_k_sigma={k:g}", "paper", guard_blocks=n, guard_k_sigma=k))
     guards += [spec("adaptive_kalman, guard off", "adaptive_kalman", guard_blocks=0), spec("adaptive_kalman", "adaptive_kalman")]
@@ -120,13 +120,13 @@ def main():
         print(f"  {s.name:44s} 3-Hz sine RMSE {d['rmse_dps']:9.4f} worst lag {d['worst_lag_s'] * 1e3:5.0f} ms | BROAD {b}")
 
     print("\n== 4. paper, hold and adaptive_kalman on both halves (with lags) ==")
-    final = [spec("paper", "paper"), spec("hold (recommended today)", "recommended"), spec("adaptive_kalman", "adaptive_kalman")]
+    final = [spec("paper", "paper"), spec("hold (recommended before)", "hold"), spec("adaptive_kalman", "adaptive_kalman")]
     for label, split in (("TUNE", E.TUNE_SPLIT), ("HOLDOUT", E.HOLDOUT_SPLIT)):
         ev = run_split(final, split, with_lag=True)
         print(f"{label}:")
         for s in final:
             print(line(ev, s.name))
-        print(versus(ev, "adaptive_kalman", "hold (recommended today)"))
+        print(versus(ev, "adaptive_kalman", "hold (recommended before)"))
     return 0
 
 
