@@ -21,6 +21,7 @@ import numpy as np
 
 from . import kalman
 from .jit import choose_kernel
+from .adaptive import DEFAULTS, SIGMA_B_FLOOR_DPS, block_noise_std, chi2_quantile, make_hold
 from .averaging import AVERAGERS
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
@@ -174,7 +175,6 @@ class FilterSettings:
 
 
 SETTING_NAMES = tuple(f.name for f in fields(FilterSettings))
-SIGMA_B_FLOOR_DPS = 1e-6  # a perfectly constant (simulated) input must not give sigma_b = 0
 
 
 class GyroFilter:
@@ -230,8 +230,6 @@ class GyroFilter:
         self._guard_run = np.zeros(6, dtype=np.int64)
         # the kernel's state arguments, bound once: the arrays are updated in place
         if self._adaptive:
-            from .adaptive import DEFAULTS, chi2_quantile
-
             self._rb = np.ones(3)
             self._fstate = np.zeros((3, 3))
             self._istate = np.zeros(kalman.A_INTS, dtype=np.int64)
@@ -461,8 +459,6 @@ class GyroFilter:
             self._cal_fill = 0
             return
         self.calibration = cal
-        from .adaptive import block_noise_std
-
         self._start_kalman(block_noise_std(self._cal_buf, s.block_len), still_blocks=self._cal_needed // s.block_len)
         if s.hold:
             # the window passed the stillness check: start holding, sigma_b from its block means
@@ -494,8 +490,6 @@ class GyroFilter:
         return self._guard_run[kalman.GUARD_RESEEDS : kalman.GUARD_RESEEDS + 3].tolist()
 
     def _make_hold(self, **source):
-        from .adaptive import make_hold
-
         s = self.settings
         return make_hold(s.block_len, cusum_h=s.hold_h, window_blocks=s.hold_window,
                          max_blocks=s.hold_max_blocks, backend=s.backend, **source)
