@@ -62,6 +62,8 @@ DEFAULTS = {
     "agree_z": 4.0,
 }
 
+SIGMA_B_FLOOR_DPS = 1e-6  # a perfectly constant (simulated) input must not give sigma_b = 0
+
 _Z_BY_P = {0.9: 1.2816, 0.95: 1.6449, 0.99: 2.3263, 0.999: 3.0902, 0.9999: 3.7190}
 
 
@@ -265,5 +267,4 @@ def make_hold(block_len, *, calibration_window_dps=None, noise_std_dps=None, **o
         options.setdefault("initial_blocks", 0)
     else:
         raise SettingsError("make_hold needs the calibration window or the calibration's noise_std_dps")
-    floor = 1e-6  # deg/s: a perfectly constant (simulated) input must not give sigma_b = 0
-    return ConstantRateHold(np.maximum(sigma_b, floor), **options)
+    return ConstantRateHold(np.maximum(sigma_b, SIGMA_B_FLOOR_DPS), **options)

@@ -36,7 +36,7 @@ Metrics
   own differentiation noise (1-3 deg/s) dominates, so ``rms_rest_vs_zero_dps`` (the output's rms
   at rest, where the true rate is 0) is reported too.
 
-Held-out split used to tune the recommended preset (:data:`TUNE_SPLIT`): tuned on the
+Held-out split used to tune the hold and adaptive_kalman presets (:data:`TUNE_SPLIT`): tuned on the
 sensor-fusion static recordings (655 s, 123 s, 64 s), the profiles ``paper001`` and ``steps``
 and the BROAD trials 02 and 07; held out: the ImuCalibration static recordings (449 s, 100 s),
 the profiles ``sine_1hz`` and ``chirp``, BROAD 05 and 09 (the trials with rest breaks).
@@ -233,8 +233,12 @@ def default_filters():
                    gyrofilter_run("paper", r_source="calibration")),
         FilterSpec("paper KF + hold", "candidate", "GyroFilter(hold=True): paper-001 output + constant-rate hold",
                    gyrofilter_run("paper", hold=True)),
+        FilterSpec("hold preset", "candidate",
+                   "GyroFilter(preset='hold') = hold=True, tracker='block_mean': constant-rate hold, block means while the rate changes",
+                   gyrofilter_run("hold")),
         FilterSpec("recommended preset", "candidate",
-                   "GyroFilter(preset='recommended') = hold=True, tracker='block_mean': constant-rate hold, block means while the rate changes",
+                   "GyroFilter(preset='recommended') = adaptive_kalman: paper 001's LS prior with adaptive noise statistics, "
+                   "constant-rate model at rest, divergence guard",
                    gyrofilter_run("recommended")),
         FilterSpec("recommended + median_slope", "candidate",
                    "GyroFilter(preset='recommended', outlier_rule='median_slope'): gross errors judged against a robust line per block",

@@ -28,9 +28,17 @@ Readings of what the paper leaves open (each alternative is a setting of GyroFil
   value r0 (the calibration's white-noise variance / L). Variances are floored at 1e-12 dps^2
   so that a perfectly constant input cannot divide 0 by 0.
 
+Paper 001's noise statistics make the gain collapse in motion, and its loop is unstable for
+gains below 0.335 (:func:`gyrofilter.predictor.closed_loop_radius`): it diverges. Two additions,
+both off in preset "paper": the divergence guard (:func:`_guard`, in both kernels) and
+:func:`run_blocks_adaptive`, the same LS prior with R from the calibration, covariance matching of
+the innovations, a gain kept in the stable region and a constant-rate model at rest (preset
+"adaptive_kalman").
+
 :func:`run_blocks` is written in the subset of Python that numba compiles
 (:mod:`gyrofilter.jit`); the streaming filter calls it one block at a time and the batch filter
-once for all blocks, interpreted or compiled, so both paths execute the same arithmetic.
+once for all blocks, interpreted or compiled, so both paths execute the same arithmetic; so is
+:func:`run_blocks_adaptive`.
 """
 import math
 
@@ -53,11 +61,14 @@ def _window_stat(s1, s2, n, use_std):
     return var
 
 
-def run_blocks(y, out, w_table, fifo, p, qbuf, rbuf, sums, counters, r0, p0, window, use_std, r_fixed):
+def run_blocks(y, out, w_table, fifo, p, qbuf, rbuf, sums, counters, r0, p0, window, use_std, r_fixed,
+               guard_sigma, guard_k, guard_n, guard_run):
     """Filter the block means y (M, 3) into out (M, 3), updating the state arrays in place.
 
     State: fifo (3, D) ring of posteriors; p (3,) posterior variance; qbuf, rbuf (3, max(W, 1))
-    rings of differences and measurements; sums (4, 3) running sums; counters (6,) int64.
+    rings of differences and measurements; sums (4, 3) running sums; counters (6,) int64;
+    guard_run (6,) int64: per axis the guard's run length and its re-seed count (guard_n = 0:
+    no guard, the faithful filter; see :func:`_guard`).
     """
     depth = fifo.shape[1]
     for k in range(y.shape[0]):
@@ -101,6 +112,11 @@ def run_blocks(y, out, w_table, fifo, p, qbuf, rbuf, sums, counters, r0, p0, win
             gain = p_prior / (p_prior + r)
             x = prior + gain * (y[k, a] - prior)
             p[a] = (1.0 - gain) * p_prior
+            if guard_n > 0 and _guard(x, ya, a, guard_sigma[a] * guard_k, guard_n, guard_run):
+                x = ya
+                p[a] = r
+                for j in range(depth):
+                    fifo[a, j] = ya
             out[k, a] = x
             fifo[a, head] = x
             # process noise sample for the next step: posterior - prior (eq. 11)
@@ -128,4 +144,174 @@ def run_blocks(y, out, w_table, fifo, p, qbuf, rbuf, sums, counters, r0, p0, win
                 counters[Q_COUNT] = min(counters[Q_COUNT] + 1, window)
             else:
                 counters[Q_COUNT] += 1
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# divergence guard (all Kalman settings but the faithful "paper" preset)
+
+GUARD_RUN, GUARD_RESEEDS = 0, 3  # guard_run[GUARD_RUN + a], guard_run[GUARD_RESEEDS + a]
+
+
+def _guard(x, ya, a, limit, n_blocks, guard_run):
+    """Divergence guard, one axis and block: True when the filter must be re-seeded.
+
+    Counts the blocks in a row with |x_k - y_k| > k sigma_b (``limit`` = k sigma_b, sigma_b the
+    standard deviation of a block mean at rest); after ``n_blocks`` of them the caller re-seeds
+    the filter from the block mean: x_k = y_k, every FIFO slot = y_k (so the next LS prior is
+    y_k), P_k = R. A filter that follows the data is never k sigma_b from it for long; one
+    that diverges (paper 001's filter in fast motion: the gain collapses and the quadratic
+    extrapolation runs away) is.
+    """
+    if abs(x - ya) > limit:
+        guard_run[GUARD_RUN + a] += 1
+    else:
+        guard_run[GUARD_RUN + a] = 0
+    if guard_run[GUARD_RUN + a] >= n_blocks:
+        guard_run[GUARD_RUN + a] = 0
+        guard_run[GUARD_RESEEDS + a] += 1
+        return True
+    return False
+
+
+# ---------------------------------------------------------------------------------------------
+# adaptive Kalman filter (preset "adaptive_kalman"): the paper's LS prior, noise statistics
+# estimated so that the loop stays stable; see run_blocks_adaptive
+
+# rows of the float state fstate (3 rows, one column per axis)
+C_HAT, G_POS, G_NEG = range(3)
+# indices into the int state istate (14,)
+A_COUNT, A_HEAD, R_FILLED, R_RING_HEAD = range(4)
+MODE, SWITCHES = 4, 7  # istate[MODE + a]: 0 = constant-rate model (rest, steady turn), 1 = LS model
+REST, MOTION = 0, 1
+A_INTS = 10
+
+
+def run_blocks_adaptive(y, out, w_table, fifo, p, fstate, istate, ring, r, gain_min, forgetting, prior_var_max,
+                        kappa, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run):
+    """Adaptive Kalman filter over the block means y (M, 3) -> out (M, 3); state updated in place.
+
+    Two models per axis, one of them in use (a two-model switch, the hard-decision limit of an
+    interacting multiple model, Blom & Bar-Shalom 1988), both with C = 1 and the measurement
+    variance R = sigma_b^2 fixed at the block-mean noise of the still calibration window (``r``;
+    never a window that contains motion: paper 001's eq. 12 is what makes its gain collapse):
+
+    constant-rate model (rest, steady turns):
+        x-_k = x_(k-1),  P-_k = P_(k-1)                         (A = 1, Q = 0)
+        K_k = P-_k / (P-_k + R),  x_k = x-_k + K_k (y_k - x-_k),  P_k = max((1 - K_k) P-_k, R / N)
+      from P = R / n this is the running mean of the last n block means (K = 1/(n + 1)), with its
+      memory bounded at N = ``max_blocks`` (an exponential mean beyond): the hold's average.
+    LS model (motion), paper 001 eqs. 4-10 with the noise statistics of covariance matching:
+        x-_k = sum_i w_i x_(k-n+i)                              LS quadratic over the FIFO (eqs. 8-10)
+        nu_k = y_k - x-_k,  C_k = (1 - a) C_(k-1) + a nu_k^2   innovation variance, forgetting a
+        P-_k = max(P_(k-1), C_k - R)                            (Mehra 1970: E nu^2 = P- + R)
+        K_k = max(P-_k / (P-_k + R), K_min),  x_k = x-_k + K_k nu_k,
+        P_k = (1 - K_k)^2 P-_k + K_k^2 R        (Joseph form: right for any gain, also K_min and 1)
+      The innovation of the current block is in C_k (as in the strong tracking filter, Zhou &
+      Frank 1996), so a change of motion opens the gain in the block it appears.
+    measurement-only model (fast motion): when P-_k > m R (m = ``prior_var_max``; 0 = never)
+      the LS prior is not used, K_k = 1 and x_k = y_k. Covariance matching assumes the prior's
+      error is white; in fast motion it is the fit's systematic error (a 1-Hz sine moves too much
+      over the 10 blocks of the FIFO), and a gain of 1 - R / C still leaves a small systematic
+      part of it in the output. m = 4: the prior would carry at most 1/5 of the weight.
+
+    Stability: with a constant gain K the LS loop is x_k = (1 - K) sum_i w_i x_(k-n+i) + K y_k,
+    characteristic polynomial z^n - (1 - K) sum_i w_i z^i; the 10-point quadratic weights have a
+    triple root at z = 1 for K = 0 and the largest root modulus is < 1 only for K > 0.335
+    (:func:`gyrofilter.predictor.closed_loop_radius`). K_min = ``gain_min`` keeps the loop in
+    that region (0.6: radius 0.91, and the loop's white-noise variance gain sum h_j^2 is 0.55,
+    its minimum over K); the constant-rate model is stable for any K in (0, 1].
+
+    Switching (per axis, the tests of :mod:`gyrofilter.adaptive`): constant-rate -> LS when a
+    two-sided CUSUM of d_k = (y_k - x-_k) / sigma_b passes h (drift ``kappa``, Page 1954);
+    LS -> constant-rate when the last W block means are a constant plus white noise
+    ((W - 1) s^2 / R below ``chi2_limit``) and x_k is within ``agree_z`` sigma_b of their mean m:
+    then x_k = m, P_k = R / W. On the switch to the LS model C = P + R.
+
+    Divergence guard: :func:`_guard`; a re-seed also puts the axis in the LS model with C = R.
+
+    State (fixed size): fifo (3, D) posteriors, p (3,), fstate (3, 3) rows C, g+, g-; istate
+    (10,) int64 (FIFO count and head, block-mean ring fill and head, model and switch count per
+    axis); ring (3, W) block means; guard_run (6,) int64.
+    """
+    depth = fifo.shape[1]
+    window = ring.shape[1]
+    for k in range(y.shape[0]):
+        count = istate[A_COUNT]
+        head = istate[A_HEAD]
+        rh = istate[R_RING_HEAD]
+        for a in range(3):
+            ring[a, rh] = y[k, a]
+        istate[R_RING_HEAD] = (rh + 1) % window
+        if istate[R_FILLED] < window:
+            istate[R_FILLED] += 1
+        n = count if count < depth else depth
+        for a in range(3):
+            ya = y[k, a]
+            ra = r[a]
+            sigma = math.sqrt(ra)
+            x = 0.0
+            p_post = 0.0
+            if istate[MODE + a] == REST:
+                prior = fifo[a, (head - 1) % depth] if n > 0 else 0.0
+                d = (ya - prior) / sigma
+                fstate[G_POS, a] = max(0.0, fstate[G_POS, a] + d - kappa)
+                fstate[G_NEG, a] = max(0.0, fstate[G_NEG, a] - d - kappa)
+                if fstate[G_POS, a] > h or fstate[G_NEG, a] > h:
+                    istate[MODE + a] = MOTION
+                    istate[SWITCHES + a] += 1
+                    fstate[G_POS, a] = 0.0
+                    fstate[G_NEG, a] = 0.0
+                    fstate[C_HAT, a] = p[a] + ra
+                else:
+                    p_prior = p[a]
+                    gain = p_prior / (p_prior + ra)
+                    x = prior + gain * (ya - prior)
+                    p_post = (1.0 - gain) * p_prior
+                    if p_post < ra / max_blocks:
+                        p_post = ra / max_blocks
+            if istate[MODE + a] == MOTION:
+                prior = 0.0
+                for j in range(n):
+                    prior += w_table[n - 1, j] * fifo[a, (head - n + j) % depth]
+                nu = ya - prior
+                c = (1.0 - forgetting) * fstate[C_HAT, a] + forgetting * nu * nu
+                fstate[C_HAT, a] = c
+                p_prior = p[a]
+                if c - ra > p_prior:
+                    p_prior = c - ra
+                gain = p_prior / (p_prior + ra)
+                if gain < gain_min:
+                    gain = gain_min
+                if prior_var_max > 0.0 and p_prior > prior_var_max * ra:
+                    gain = 1.0
+                x = prior + gain * nu
+                p_post = (1.0 - gain) * (1.0 - gain) * p_prior + gain * gain * ra
+                if istate[R_FILLED] == window:
+                    m = 0.0
+                    for j in range(window):
+                        m += ring[a, j]
+                    m /= window
+                    ss = 0.0
+                    for j in range(window):
+                        ss += (ring[a, j] - m) * (ring[a, j] - m)
+                    if ss / ra < chi2_limit and abs(x - m) < agree_z * sigma:
+                        istate[MODE + a] = REST
+                        istate[SWITCHES + a] += 1
+                        x = m
+                        p_post = ra / window
+            if guard_n > 0 and _guard(x, ya, a, guard_k * sigma, guard_n, guard_run):
+                x = ya
+                p_post = ra
+                for j in range(depth):
+                    fifo[a, j] = ya
+                istate[MODE + a] = MOTION
+                fstate[C_HAT, a] = ra
+                fstate[G_POS, a] = 0.0
+                fstate[G_NEG, a] = 0.0
+            p[a] = p_post
+            out[k, a] = x
+            fifo[a, head] = x
+        istate[A_HEAD] = (head + 1) % depth
+        istate[A_COUNT] = count + 1 if count < depth else depth
     return out

@@ -21,18 +21,20 @@ import numpy as np
 
 from . import kalman
 from .jit import choose_kernel
+from .adaptive import DEFAULTS, SIGMA_B_FLOOR_DPS, block_noise_std, chi2_quantile, make_hold
 from .averaging import AVERAGERS
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
-from .predictor import weight_table
-from .presets import PRESETS
+from .predictor import closed_loop_radius, stable_gain_threshold, weight_table
+from .presets import DEFAULT_PRESET, PRESETS
 from .tempcomp import compensate
 from .units import check_sample_rate_hz, plain
 
 
 @dataclass(frozen=True)
 class FilterSettings:
-    """Settings of :class:`GyroFilter`; the defaults are paper 001's values (preset "paper").
+    """Settings of :class:`GyroFilter`; the defaults are paper 001's values (preset "paper";
+    GyroFilter's default preset is "recommended", see gyrofilter.presets).
 
     ============================ ========= ===================================================
     setting                      default   meaning
@@ -58,12 +60,32 @@ class FilterSettings:
     hold_h                       10.0      CUSUM threshold of the hold (block-noise units)
     hold_window                  20        blocks the hold's constancy test looks at
     hold_max_blocks              400       memory of the held mean (blocks)
+    kalman_noise                 paper     how the Kalman stage gets Q and R: "paper" (eqs.
+                                           11-12 over qr_window) or "adaptive" (R from the
+                                           calibration, Q by covariance matching, constant-rate
+                                           / LS model switch; kalman.run_blocks_adaptive); the
+                                           switch uses hold_h, hold_window, hold_max_blocks
+    gain_min                     0.6       "adaptive": least Kalman gain K of the LS model; the
+                                           loop must be stable at it (predictor.
+                                           closed_loop_radius < 1: K > 0.335 for 10 points,
+                                           order 2)
+    innovation_forgetting        0.1       "adaptive": a in C_k = (1-a) C_(k-1) + a nu_k^2,
+                                           the innovation variance estimate, in (0, 1]
+    prior_var_max_r              4.0       "adaptive": above this prior variance, in units of
+                                           R, the LS prior is dropped (gain 1); 0 = never
+    guard_blocks                 0         divergence guard: re-seed the Kalman filter from the
+                                           block mean after this many blocks in a row more than
+                                           guard_k_sigma sigma_b from the block means; 0 = off
+                                           (the faithful filter)
+    guard_k_sigma                10.0      the guard's limit in sigma_b, the std of a block mean
+                                           at rest (from the calibration window)
     temp_coefficient_dps_per_c   0         c per axis (one number or 3): subtract
                                            c (T - T0), T0 the calibration's mean temperature;
                                            needs temperatures (see gyrofilter.tempcomp)
     ============================ ========= ===================================================
 
-    ``preset="recommended"`` is ``tracker="block_mean", hold=True`` (see gyrofilter.presets).
+    ``preset="hold"`` is ``tracker="block_mean", hold=True``; ``preset="adaptive_kalman"`` (= the
+    default ``"recommended"``) is ``kalman_noise="adaptive"`` with the guard on (gyrofilter.presets).
 
     On q: paper 001 saw gross errors of more than 200 LSB; one such spike in a block of 5 sits
     4/5 * 200 = 160 LSB from the block mean, while its own example block
@@ -91,6 +113,12 @@ class FilterSettings:
     hold_max_blocks: int = 400
     outlier_rule: str = "paper"
     temp_coefficient_dps_per_c: object = 0.0
+    kalman_noise: str = "paper"
+    gain_min: float = 0.6
+    innovation_forgetting: float = 0.1
+    prior_var_max_r: float = 4.0
+    guard_blocks: int = 0
+    guard_k_sigma: float = 10.0
 
     def temp_coefficients(self):
         """The temperature coefficients as a tuple of 3 floats (deg/s per deg C)."""
@@ -127,16 +155,33 @@ class FilterSettings:
         need(ok and all(map(math.isfinite, self.temp_coefficients() if ok else ())), "temp_coefficient_dps_per_c",
              "must be one finite number or 3 (deg/s per deg C, axes x, y, z)")
         need(isinstance(self.hold_h, (int, float)) and math.isfinite(self.hold_h) and self.hold_h > 0, "hold_h", "must be a number > 0")
-        for name, low in (("hold_window", 2), ("hold_max_blocks", 1)):
+        for name, low in (("hold_window", 2), ("hold_max_blocks", 1), ("guard_blocks", 0)):
             value = getattr(self, name)
             need(isinstance(value, int) and not isinstance(value, bool) and value >= low, name, f"must be an integer >= {low}")
+        need(self.kalman_noise in ("paper", "adaptive"), "kalman_noise", "must be 'paper' or 'adaptive'")
+        for name in ("gain_min", "innovation_forgetting", "prior_var_max_r", "guard_k_sigma"):
+            value = getattr(self, name)
+            need(isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value), name,
+                 "must be a finite number")
+        need(0 < self.innovation_forgetting <= 1, "innovation_forgetting", "must be in (0, 1]")
+        need(self.guard_k_sigma > 0, "guard_k_sigma", "must be > 0 (block-noise units)")
+        need(self.prior_var_max_r >= 0, "prior_var_max_r", "must be >= 0 (units of R; 0 = no limit)")
+        need(0 < self.gain_min <= 1, "gain_min", "must be in (0, 1]")
+        if self.kalman_noise == "adaptive":
+            radius = closed_loop_radius(self.fifo_depth, self.fit_order, self.gain_min)
+            need(radius < 1, "gain_min", f"leaves the LS loop unstable (largest root modulus {radius:.3f} with "
+                 f"fifo_depth={self.fifo_depth}, fit_order={self.fit_order}; stable above "
+                 f"{stable_gain_threshold(self.fifo_depth, self.fit_order):.3f})")
 
 
 SETTING_NAMES = tuple(f.name for f in fields(FilterSettings))
 
 
 class GyroFilter:
-    """Paper-001 filter for a three-axis gyro; see the module docstring and FilterSettings.
+    """Paper-001 pipeline for a three-axis gyro; see the module docstring and FilterSettings.
+
+    ``preset``: named settings (gyrofilter.presets); the default "recommended" is the best
+    measured filter, "paper" the faithful reproduction.
 
     >>> f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
     >>> f.update((0.01, -0.02, 0.0)) is None      # calibrating
@@ -146,7 +191,7 @@ class GyroFilter:
     skips the start-up calibration. Explicit keyword settings override the ``preset``.
     """
 
-    def __init__(self, sample_rate_hz, calibration_s=None, *, preset="paper", calibration=None, **settings):
+    def __init__(self, sample_rate_hz, calibration_s=None, *, preset=DEFAULT_PRESET, calibration=None, **settings):
         if preset not in PRESETS:
             raise SettingsError(f"unknown preset {preset!r}; choose one of {', '.join(PRESETS)}")
         unknown = sorted(set(settings) - set(SETTING_NAMES))
@@ -161,7 +206,8 @@ class GyroFilter:
         self.sample_rate_hz = check_sample_rate_hz(sample_rate_hz)
         self.preset = preset
         s = self.settings
-        self._run = choose_kernel(kalman.run_blocks, s.backend)
+        self._adaptive = s.kalman_noise == "adaptive"
+        self._run = choose_kernel(kalman.run_blocks_adaptive if self._adaptive else kalman.run_blocks, s.backend)
         self._average_one, self._average_many = AVERAGERS[s.outlier_rule]
         self._temp_coef = s.temp_coefficients()
         self._temp_on = any(self._temp_coef)
@@ -179,11 +225,27 @@ class GyroFilter:
         self._y1 = np.zeros((1, 3))
         self._out1 = np.zeros((1, 3))
         self._hold = None  # constant-rate hold stage (gyrofilter.adaptive), built after calibration
+        # divergence guard and the adaptive filter's R: sigma_b, the std of a block mean at rest
+        self._sigma_b = np.ones(3)
+        self._guard_run = np.zeros(6, dtype=np.int64)
         # the kernel's state arguments, bound once: the arrays are updated in place
-        self._kernel_args = (
-            self._w_table, self._fifo, self._p, self._qbuf, self._rbuf, self._sums, self._counters,
-            self._r0, s.p0_dps2, s.qr_window, s.qr_stat == "std", s.r_source == "calibration",
-        )
+        if self._adaptive:
+            self._rb = np.ones(3)
+            self._fstate = np.zeros((3, 3))
+            self._istate = np.zeros(kalman.A_INTS, dtype=np.int64)
+            self._ring = np.zeros((3, s.hold_window))
+            self._kernel_args = (
+                self._w_table, self._fifo, self._p, self._fstate, self._istate, self._ring, self._rb,
+                float(s.gain_min), float(s.innovation_forgetting), float(s.prior_var_max_r), DEFAULTS["cusum_kappa"], float(s.hold_h),
+                chi2_quantile(DEFAULTS["accept_p"], s.hold_window - 1), DEFAULTS["agree_z"], s.hold_max_blocks,
+                float(s.guard_k_sigma), s.guard_blocks, self._guard_run,
+            )
+        else:
+            self._kernel_args = (
+                self._w_table, self._fifo, self._p, self._qbuf, self._rbuf, self._sums, self._counters,
+                self._r0, s.p0_dps2, s.qr_window, s.qr_stat == "std", s.r_source == "calibration",
+                self._sigma_b, float(s.guard_k_sigma), s.guard_blocks, self._guard_run,
+            )
         # block and calibration state
         self._block = []
         self.rejected = np.zeros(3, dtype=np.int64)
@@ -206,6 +268,7 @@ class GyroFilter:
         if calibration is not None:
             self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration)
             self._apply_calibration(self.calibration)
+            self._start_kalman(np.asarray(self.calibration.noise_std_dps, dtype=float) / math.sqrt(s.block_len), still_blocks=0)
             if s.hold:
                 # a loaded calibration says nothing about stillness now: start tracking
                 self._hold = self._make_hold(noise_std_dps=self.calibration.noise_std_dps)
@@ -356,6 +419,7 @@ class GyroFilter:
             "blocks_out": self.blocks_out,
             "rejected": self.rejected.tolist(),
             "fallback_blocks": self.fallback_blocks.tolist(),
+            "guard_reseeds": self.guard_reseeds,
         }
 
     # ------------------------------------------------------------------ internals
@@ -395,14 +459,37 @@ class GyroFilter:
             self._cal_fill = 0
             return
         self.calibration = cal
+        self._start_kalman(block_noise_std(self._cal_buf, s.block_len), still_blocks=self._cal_needed // s.block_len)
         if s.hold:
             # the window passed the stillness check: start holding, sigma_b from its block means
             self._hold = self._make_hold(calibration_window_dps=self._cal_buf)
         self._apply_calibration(cal)
 
-    def _make_hold(self, **source):
-        from .adaptive import make_hold
+    def _start_kalman(self, sigma_b_dps, still_blocks):
+        """sigma_b (3,) for the guard and the adaptive filter's R = sigma_b^2; the adaptive filter
+        starts in its constant-rate model with P = R / n after n still calibration blocks (the
+        bias is removed: x = 0), else in its LS model with P = P0 (a loaded calibration says
+        nothing about stillness now)."""
+        s = self.settings
+        self._sigma_b[:] = np.maximum(sigma_b_dps, SIGMA_B_FLOOR_DPS)
+        if not self._adaptive:
+            return
+        self._rb[:] = self._sigma_b**2
+        if still_blocks > 0:
+            self._istate[kalman.A_COUNT] = s.fifo_depth
+            self._istate[kalman.MODE : kalman.MODE + 3] = kalman.REST
+            self._p[:] = self._rb / min(still_blocks, s.hold_max_blocks)
+        else:
+            self._istate[kalman.MODE : kalman.MODE + 3] = kalman.MOTION
+            self._p[:] = s.p0_dps2
+            self._fstate[kalman.C_HAT] = s.p0_dps2 + self._rb
 
+    @property
+    def guard_reseeds(self):
+        """Per axis: how often the divergence guard re-seeded the Kalman filter."""
+        return self._guard_run[kalman.GUARD_RESEEDS : kalman.GUARD_RESEEDS + 3].tolist()
+
+    def _make_hold(self, **source):
         s = self.settings
         return make_hold(s.block_len, cusum_h=s.hold_h, window_blocks=s.hold_window,
                          max_blocks=s.hold_max_blocks, backend=s.backend, **source)

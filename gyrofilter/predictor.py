@@ -40,3 +40,35 @@ def weight_table(depth: int, order: int) -> np.ndarray:
     for k in range(1, depth + 1):
         table[k - 1, :k] = extrapolation_weights(k, order)
     return table
+
+
+def closed_loop_radius(depth: int, order: int, gain: float) -> float:
+    """Largest root modulus of the Kalman loop x_k = (1 - K) sum_i w_i x_(k-n+i) + K y_k, n = depth.
+
+    Characteristic polynomial z^n - (1 - K) sum_i w_i z^i (w oldest first, i = 0..n-1); the loop
+    is stable for a constant gain K when the radius is < 1. With the 10-point quadratic
+    weights: 1.048 at K = 0.1, 1.009 at 0.3, 0.982 at 0.4, 0.950 at 0.5, 0.914 at 0.6, 0.871 at
+    0.7; the threshold is K = 0.335 (:func:`stable_gain_threshold`). At K = 0 the quadratic fit
+    has a triple root at z = 1 (it continues any quadratic forever).
+    """
+    w = extrapolation_weights(depth, order)
+    coeffs = np.zeros(depth + 1)
+    coeffs[0] = 1.0
+    coeffs[1:] = -(1.0 - gain) * w[::-1]
+    return float(np.max(np.abs(np.roots(coeffs))))
+
+
+def stable_gain_threshold(depth: int, order: int, tol: float = 1e-6) -> float:
+    """Smallest constant gain K in [0, 1] above which the loop of :func:`closed_loop_radius` is
+    stable (bisection; assumes the radius falls with K, as it does for the LS weights); 0 if
+    it is stable for every K."""
+    if closed_loop_radius(depth, order, 0.0) < 1.0:
+        return 0.0
+    lo, hi = 0.0, 1.0
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        if closed_loop_radius(depth, order, mid) < 1.0:
+            hi = mid
+        else:
+            lo = mid
+    return hi

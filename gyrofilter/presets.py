@@ -1,23 +1,37 @@
 """Named settings for :class:`gyrofilter.GyroFilter` (``preset=``).
 
-``paper`` is the faithful paper-001 pipeline and the default. Explicit keyword arguments
-override a preset.
+:data:`DEFAULT_PRESET` is ``recommended``, the best measured filter, used by ``GyroFilter(fs)``,
+``gyrofilter replay`` and ``gyrofilter run`` when no preset is named. Explicit keyword arguments
+override a preset. All presets are measured in ``docs/evaluate.md``.
 
-``recommended`` (measured in ``docs/evaluate.md``, made by ``gyrofilter evaluate``): the
-block means of paper 001's averaging stage, followed by the constant-rate hold of
+``paper`` is the faithful paper-001 pipeline (the defaults of ``FilterSettings``), without a
+divergence guard: it reproduces the paper, including its divergence in fast motion.
+
+``hold``: the block means of paper 001's averaging stage, followed by the constant-rate hold of
 :mod:`gyrofilter.adaptive`: while the rate is constant (at rest, or turning steadily) the output
 is the mean of every block since the rate last changed; a CUSUM test on the block means
 switches to the block means themselves within a block of a change, and a chi-square test on the
-last 20 blocks switches back. The paper's Kalman filter is not used: with its quadratic
-extrapolation (white-noise gain sum(w^2) = 1.38) it keeps a third of the block-mean noise at
-rest, and in motion its measurement variance R (the variance of the last 10 block means)
-grows with the motion, the gain collapses and the extrapolation runs away. Chosen on a
-tune / held-out split (``tools/tune_recommended.py``); on the held-out data it still reduces
-the static std by at least 17x on every axis and has a lower RMSE than the faithful filter on
-every motion profile and BROAD trial.
+last 20 blocks switches back. No Kalman stage. Chosen on a tune / held-out split
+(``tools/tune_recommended.py``); it was the recommended preset before ``adaptive_kalman``.
+
+``adaptive_kalman`` (``tools/tune_adaptive_kalman.py``): paper 001's Kalman filter with its
+least-squares prior over the FIFO of posteriors kept and its noise statistics replaced
+(:func:`gyrofilter.kalman.run_blocks_adaptive`: R from the calibration, the prior variance by
+covariance matching of the innovations, the gain kept where the loop is stable, a constant-rate
+model at rest, the prior dropped when it is far worse than the measurement) and the divergence
+guard on (2 blocks beyond 10 sigma_b: re-seed from the block mean). Every Kalman preset but
+``paper`` has the guard.
+
+``recommended`` is ``adaptive_kalman``: on both halves of the split it reduces the static std at
+least as much as the hold (>= 17.7x on every axis of the held-out recordings), and its RMSE is no
+higher than the hold's on every profile and BROAD trial, lower on the slow ``paper001`` profile.
 """
 
 PRESETS = {
     "paper": {},
-    "recommended": {"hold": True, "tracker": "block_mean"},
+    "hold": {"hold": True, "tracker": "block_mean"},
+    "adaptive_kalman": {"kalman_noise": "adaptive", "guard_blocks": 2},
 }
+PRESETS["recommended"] = PRESETS["adaptive_kalman"]
+
+DEFAULT_PRESET = "recommended"

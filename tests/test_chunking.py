@@ -85,8 +85,8 @@ def test_any_chunking_equals_one_call(preset, extra, plan, seed):
 def test_fixed_small_reads_lose_nothing(size):
     """The live case: a source delivering `size` samples per read (2 per read = MPU6050 at 100 Hz)."""
     x, _ = _signal(7, n=3000)
-    expected = GyroFilter(RATE_HZ).filter(x)
-    f = GyroFilter(RATE_HZ)
+    expected = GyroFilter(RATE_HZ, preset="paper").filter(x)
+    f = GyroFilter(RATE_HZ, preset="paper")
     got = np.concatenate([f.filter(x[i : i + size]) for i in range(0, len(x), size)])
     assert len(got) == (3000 - 200) // 5
     np.testing.assert_array_equal(got, expected)
@@ -95,8 +95,8 @@ def test_fixed_small_reads_lose_nothing(size):
 def test_bad_sample_changes_nothing():
     """A NaN, None or a wrong shape passed to update() raises and leaves the filter as it was."""
     x, _ = _signal(3)
-    good = GyroFilter(RATE_HZ)
-    bad = GyroFilter(RATE_HZ)
+    good = GyroFilter(RATE_HZ, preset="paper")
+    bad = GyroFilter(RATE_HZ, preset="paper")
     rows_good, rows_bad = [], []
     for i, sample in enumerate(x):
         if i in (5, 150, 203, 400):  # while calibrating, mid-block and at a block start after it

@@ -16,7 +16,8 @@ def test_replay_without_argument_filters_the_bundled_recording(capsys):
     assert [r[0] for r in rows] == ["x", "y", "z"]
     for r in rows:
         raw_std, filt_std, ratio = float(r[2]), float(r[4]), float(r[5].rstrip("x"))
-        assert ratio == pytest.approx(raw_std / filt_std, rel=0.01) and ratio > 2
+        half = 0.5e-4  # the stds are printed with 4 decimals: the ratio lies within their rounding
+        assert (raw_std - half) / (filt_std + half) <= ratio <= (raw_std + half) / (filt_std - half) and ratio > 2
 
 
 def test_replay_out_writes_the_filtered_series(tmp_path, capsys):

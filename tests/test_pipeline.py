@@ -30,18 +30,19 @@ def stream(filt, x):
 @pytest.mark.parametrize(
     "settings",
     [{}, {"qr_stat": "std"}, {"qr_window": 0}, {"r_source": "calibration", "fit_order": 1}, {"block_len": 3, "fifo_depth": 4},
-     {"preset": "recommended"}, {"hold": True}],
+     {"preset": "recommended"}, {"hold": True}, {"preset": "adaptive_kalman"}, {"guard_blocks": 2}],
 )
 def test_update_and_filter_give_the_same_numbers(backend, settings):
     x = noisy(3000, spikes=0.02)
     x[1500:2200] += np.linspace(0, 30, 700)[:, None]  # motion: the hold stage switches
+    settings = {"preset": "paper", **settings}
     a = stream(GyroFilter(100.0, backend=backend, **settings), x)
     b = GyroFilter(100.0, backend=backend, **settings).filter(x)
     assert a.shape == b.shape
     assert np.array_equal(a, b)
 
 
-@pytest.mark.parametrize("preset", ["paper", "recommended"])
+@pytest.mark.parametrize("preset", ["paper", "recommended", "adaptive_kalman"])
 def test_mixed_calls_continue_the_same_state(preset):
     x = noisy(4000, seed=2, spikes=0.01)
     whole = GyroFilter(100.0, preset=preset).filter(x)
@@ -51,7 +52,7 @@ def test_mixed_calls_continue_the_same_state(preset):
 
 
 @pytest.mark.skipif(len(BACKENDS) < 2, reason="numba not installed")
-@pytest.mark.parametrize("preset", ["paper", "recommended"])
+@pytest.mark.parametrize("preset", ["paper", "recommended", "adaptive_kalman"])
 def test_numba_and_python_backends_agree_bit_for_bit(preset):
     x = noisy(5000, seed=4, spikes=0.02)
     x[2000:2500] += 15.0
@@ -64,7 +65,7 @@ def test_recommended_holds_at_rest_and_follows_a_step_within_a_block():
     x[8000:] += 10.0  # a step to 10 deg/s at block (8000 - 200) / 5 = 1560
     f = GyroFilter(100.0, preset="recommended")
     out = f.filter(x)
-    paper = GyroFilter(100.0).filter(x)
+    paper = GyroFilter(100.0, preset="paper").filter(x)
     rest = slice(100, 1500)
     assert np.all(out[rest].std(axis=0) < paper[rest].std(axis=0) / 3)
     np.testing.assert_allclose(out[1561:1565], 10.0, atol=0.2)  # the block after the step
@@ -73,21 +74,21 @@ def test_recommended_holds_at_rest_and_follows_a_step_within_a_block():
 
 def test_hold_needs_a_calibration():
     with pytest.raises(SettingsError, match="hold=True"):
-        GyroFilter(100.0, calibration_s=0, hold=True)
+        GyroFilter(100.0, preset="paper", calibration_s=0, hold=True)
 
 
 @pytest.mark.parametrize("settings", [{}, {"qr_stat": "std"}])
 def test_equals_the_plain_filterpy_and_polyfit_implementation(settings):
     x = noisy(1500, seed=5, spikes=0.02)
     x[700:1500:97, 1] += 40.0  # spikes beyond L*q: the median fallback
-    ours = GyroFilter(100.0, **settings).filter(x)
+    ours = GyroFilter(100.0, preset="paper", **settings).filter(x)
     plain = plain_filter(x, 100.0, use_std=settings.get("qr_stat") == "std")
     np.testing.assert_allclose(ours, plain, rtol=1e-9, atol=1e-9)
 
 
 def test_output_count_bias_and_rate():
     x = noisy(1234)
-    f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
+    f = GyroFilter(sample_rate_hz=100.0, preset="paper", calibration_s=2.0)
     out = f.filter(x)
     assert out.shape == ((1234 - 200) // 5, 3)
     assert f.pending_samples == (1234 - 200) % 5
@@ -97,11 +98,11 @@ def test_output_count_bias_and_rate():
 
 def test_still_noise_is_reduced_and_a_constant_rate_is_tracked():
     x = noisy(20000, seed=7)
-    out = GyroFilter(100.0).filter(x)
+    out = GyroFilter(100.0, preset="paper").filter(x)
     assert np.all(out[50:].std(axis=0) < 0.1 / 2.5)
     moving = x.copy()
     moving[2000:] += 20.0
-    f = GyroFilter(100.0)
+    f = GyroFilter(100.0, preset="paper")
     out = f.filter(moving)
     expected = moving[2000 + 2500 :].mean(axis=0) - f.bias_dps
     np.testing.assert_allclose(out[500:].mean(axis=0), expected, atol=0.003)
@@ -111,7 +112,7 @@ def test_still_noise_is_reduced_and_a_constant_rate_is_tracked():
 def test_gross_errors_are_rejected_and_counted():
     x = noisy(5200, seed=8)
     x[1000, 1] += 50.0
-    f = GyroFilter(100.0)
+    f = GyroFilter(100.0, preset="paper")
     out = f.filter(x)
     assert f.rejected.tolist() == [0, 1, 0]
     assert np.abs(out[:, 1]).max() < 0.2
@@ -121,28 +122,28 @@ def test_calibration_refuses_a_moving_sensor_and_retries_when_asked():
     x = noisy(3000, seed=9)
     x[50:120, 0] += 5.0  # moved during the first window
     with pytest.raises(CalibrationError):
-        GyroFilter(100.0).filter(x)
-    f = GyroFilter(100.0, calibration_retry_s=4.0)
+        GyroFilter(100.0, preset="paper").filter(x)
+    f = GyroFilter(100.0, preset="paper", calibration_retry_s=4.0)
     out = f.filter(x)
     np.testing.assert_allclose(f.bias_dps, x[200:400].mean(axis=0))
     assert len(out) == (3000 - 400) // 5
     with pytest.raises(CalibrationError):
-        stream(GyroFilter(100.0), x)
+        stream(GyroFilter(100.0, preset="paper"), x)
 
 
 def test_saved_calibration_skips_the_start_up_window(tmp_path):
     x = noisy(2000, seed=10)
-    f = GyroFilter(100.0)
+    f = GyroFilter(100.0, preset="paper")
     f.filter(x)
     f.calibration.save(tmp_path / "cal.json")
-    g = GyroFilter(100.0, calibration=tmp_path / "cal.json")
+    g = GyroFilter(100.0, preset="paper", calibration=tmp_path / "cal.json")
     assert g.bias_dps == f.bias_dps and not g.calibrating
     assert len(g.filter(x)) == 2000 // 5
-    assert GyroFilter(100.0, calibration=Calibration.load(tmp_path / "cal.json")).bias_dps == f.bias_dps
+    assert GyroFilter(100.0, preset="paper", calibration=Calibration.load(tmp_path / "cal.json")).bias_dps == f.bias_dps
 
 
 def test_state_does_not_grow_with_time():
-    f = GyroFilter(100.0, backend="python")
+    f = GyroFilter(100.0, preset="paper", backend="python")
     for sample in noisy(2000).tolist():
         f.update(tuple(sample))
     sample = (0.1, 0.2, 0.3)
@@ -167,17 +168,24 @@ def test_state_does_not_grow_with_time():
         ({"calibration_s": float("nan")}, "calibration_s"),
         ({"bogus": 1}, "unknown setting"),
         ({"preset": "best"}, "unknown preset"),
+        ({"kalman_noise": "sage"}, "kalman_noise"),
+        ({"kalman_noise": "adaptive", "gain_min": 0.3}, "unstable .*1.009.* stable above 0.335"),
+        ({"kalman_noise": "adaptive", "gain_min": 1.5}, "gain_min"),
+        ({"innovation_forgetting": 0}, "innovation_forgetting"),
+        ({"prior_var_max_r": -1}, "prior_var_max_r"),
+        ({"guard_blocks": -1}, "guard_blocks"),
+        ({"guard_k_sigma": 0}, "guard_k_sigma"),
     ],
 )
 def test_bad_settings_are_refused_at_construction(kwargs, match):
     with pytest.raises(SettingsError, match=match):
-        GyroFilter(100.0, **kwargs)
+        GyroFilter(100.0, **{"preset": "paper", **kwargs})
     with pytest.raises(SettingsError, match="sample_rate_hz"):
         GyroFilter(0.0)
 
 
 def test_bad_samples_name_the_problem():
-    f = GyroFilter(100.0, calibration_s=0)
+    f = GyroFilter(100.0, preset="paper", calibration_s=0)
     with pytest.raises(SettingsError, match="shape"):
         f.filter(np.zeros((10, 2)))
     x = noisy(20)

@@ -102,22 +102,22 @@ def test_temperature_compensation_removes_a_known_drift():
 
 def test_temperature_compensation_streams_like_the_batch_and_saves_t0(tmp_path):
     x, temps = warming(5000, (0.03, 0.01, -0.02), seed=1)
-    f = GyroFilter(FS, temp_coefficient_dps_per_c=(0.03, 0.01, -0.02))
+    f = GyroFilter(FS, preset="paper", temp_coefficient_dps_per_c=(0.03, 0.01, -0.02))
     whole = f.filter(x, temps)
-    parts = GyroFilter(FS, temp_coefficient_dps_per_c=(0.03, 0.01, -0.02))
+    parts = GyroFilter(FS, preset="paper", temp_coefficient_dps_per_c=(0.03, 0.01, -0.02))
     pieces = [parts.filter(x[:333], temps[:333]), stream(parts, x[333:1001], temps[333:1001]), parts.filter(x[1001:], temps[1001:])]
     assert np.array_equal(np.concatenate(pieces), whole)
     assert f.calibration.temp_c == pytest.approx(temps[:200].mean())
     path = tmp_path / "cal.json"
     f.calibration.save(path)
-    loaded = GyroFilter(FS, calibration=path, temp_coefficient_dps_per_c=(0.03, 0.01, -0.02))
+    loaded = GyroFilter(FS, preset="paper", calibration=path, temp_coefficient_dps_per_c=(0.03, 0.01, -0.02))
     assert loaded.calibration.temp_c == f.calibration.temp_c
     assert np.array_equal(loaded.filter(x[200:], temps[200:]), whole)
 
 
 def test_temperature_compensation_refuses_missing_temperatures():
     x, temps = warming(1000, (0.01, 0.01, 0.01))
-    f = GyroFilter(FS, temp_coefficient_dps_per_c=0.01)
+    f = GyroFilter(FS, preset="paper", temp_coefficient_dps_per_c=0.01)
     with pytest.raises(SettingsError, match="needs temp_c"):
         f.filter(x)
     with pytest.raises(SettingsError, match="shape"):
@@ -130,14 +130,14 @@ def test_temperature_compensation_refuses_missing_temperatures():
         f.update((0.0, 0.0, 0.0))
     no_temp = Calibration((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), 200, FS)
     with pytest.raises(SettingsError, match="has none"):
-        GyroFilter(FS, calibration=no_temp, temp_coefficient_dps_per_c=0.01)
+        GyroFilter(FS, preset="paper", calibration=no_temp, temp_coefficient_dps_per_c=0.01)
     with pytest.raises(SettingsError, match="needs a start-up calibration"):
-        GyroFilter(FS, calibration_s=0, temp_coefficient_dps_per_c=0.01)
+        GyroFilter(FS, preset="paper", calibration_s=0, temp_coefficient_dps_per_c=0.01)
     for bad_coef in ((0.1, 0.2), "0.1", (0.1, float("inf"), 0.0), True):
         with pytest.raises(SettingsError, match="temp_coefficient_dps_per_c"):
-            GyroFilter(FS, temp_coefficient_dps_per_c=bad_coef)
+            GyroFilter(FS, preset="paper", temp_coefficient_dps_per_c=bad_coef)
     # without compensation the temperatures are not needed, and not used
-    assert np.array_equal(GyroFilter(FS).filter(x), GyroFilter(FS).filter(x, temps))
+    assert np.array_equal(GyroFilter(FS, preset="paper").filter(x), GyroFilter(FS, preset="paper").filter(x, temps))
 
 
 def test_coefficients_come_from_a_gap_or_simulator_model():

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.errors import SettingsError
-from gyrofilter.predictor import extrapolation_weights, weight_table
+from gyrofilter.predictor import closed_loop_radius, extrapolation_weights, stable_gain_threshold, weight_table
 
 
 @pytest.mark.parametrize("n,order", [(1, 2), (2, 2), (3, 2), (5, 1), (10, 2), (10, 0), (7, 3)])
@@ -31,3 +31,30 @@ def test_weight_table_rows_match_and_bad_args():
         assert not table[k - 1, k:].any()
     with pytest.raises(SettingsError):
         extrapolation_weights(0, 2)
+
+
+def _loop_growth(gain, steps=400):
+    """|x| after ``steps`` of the constant-gain loop x_k = (1 - K) sum w_i x_(k-10+i) + K y_k, y = 0,
+    started from a unit impulse: the oracle for the root modulus (grows as radius^steps)."""
+    w = extrapolation_weights(10, 2)
+    x = np.zeros(steps + 10)
+    x[9] = 1.0
+    for k in range(10, steps + 10):
+        x[k] = (1.0 - gain) * (w @ x[k - 10 : k])
+    return np.abs(x[-10:]).max()
+
+
+@pytest.mark.parametrize("gain,radius", [(0.1, 1.048), (0.3, 1.009), (0.5, 0.950), (0.6, 0.914), (0.7, 0.871)])
+def test_closed_loop_radius_of_the_quadratic_prior(gain, radius):
+    r = closed_loop_radius(10, 2, gain)
+    assert r == pytest.approx(radius, abs=1e-3)
+    # a direct simulation of the loop grows or decays at that rate
+    assert np.log(_loop_growth(gain, 800) / _loop_growth(gain, 400)) / 400 == pytest.approx(np.log(r), abs=2e-3)
+
+
+def test_stable_gain_threshold():
+    k = stable_gain_threshold(10, 2)
+    assert k == pytest.approx(0.335, abs=1e-3)
+    assert closed_loop_radius(10, 2, k - 1e-3) > 1 > closed_loop_radius(10, 2, k + 1e-3)
+    # the quadratic extrapolation alone (K = 0) continues any quadratic: a triple root at z = 1
+    assert closed_loop_radius(10, 2, 0.0) == pytest.approx(1.0, abs=1e-4)

@@ -404,7 +404,7 @@ def test_run_on_a_replay_equals_the_batch_filter(tmp_path, capsys):
     out = tmp_path / "filtered.csv.gz"
     assert main(["run", "--source", str(path), "--out", str(out), "--quiet"]) == 0
     got = read_recording(out)
-    want = GyroFilter(100.0, 2.0).filter(rec.gyro_dps)
+    want = GyroFilter(100.0, 2.0).filter(rec.gyro_dps)  # run and the library have the same default preset
     assert len(got) == len(want) == (1000 - 200) // 5
     np.testing.assert_allclose(got.gyro_dps, want, rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(got.t_s, rec.t_s[200 + 4 :: 5][: len(want)])

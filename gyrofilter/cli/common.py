@@ -9,7 +9,7 @@ import tempfile
 
 from ..errors import SettingsError
 from ..pipeline import SETTING_NAMES, GyroFilter
-from ..presets import PRESETS
+from ..presets import DEFAULT_PRESET, PRESETS
 from ..units import json_ready
 
 
@@ -129,7 +129,9 @@ def warn_about_gaps(head, consequence):
 
 
 def add_filter_arguments(parser):
-    parser.add_argument("--preset", default="paper", choices=sorted(PRESETS), help="filter settings preset (default: paper, the faithful paper-001 pipeline)")
+    parser.add_argument("--preset", default=DEFAULT_PRESET, choices=sorted(PRESETS),
+                        help=f"filter settings preset (default: {DEFAULT_PRESET}, the best measured filter; "
+                             "paper: the faithful paper-001 pipeline)")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="override one filter setting (repeatable), e.g. --set outlier_rule=median_slope; "
                              f"settings: {', '.join(SETTING_NAMES)}")

@@ -1,0 +1,38 @@
+"""The presets: the default is the best measured one on the held-out half of the evaluation."""
+import os
+
+import numpy as np
+import pytest
+
+from gyrofilter import GyroFilter
+from gyrofilter import evaluate as E
+from gyrofilter.presets import DEFAULT_PRESET, PRESETS
+
+REC_DIR = os.path.join(os.path.dirname(__file__), "..", "recordings")
+
+
+def test_the_default_preset_is_recommended_and_recommended_is_adaptive_kalman():
+    assert DEFAULT_PRESET == "recommended"
+    assert GyroFilter(100.0).settings == GyroFilter(100.0, preset="adaptive_kalman").settings
+    assert GyroFilter(100.0, preset="paper").settings.guard_blocks == 0  # the faithful filter has no guard
+    for name in PRESETS:
+        s = GyroFilter(100.0, preset=name).settings
+        if name != "paper" and s.tracker == "kalman":
+            assert s.guard_blocks > 0, f"Kalman preset {name} without a divergence guard"
+
+
+def test_the_default_is_no_worse_than_any_other_preset_on_the_held_out_half():
+    split = E.HOLDOUT_SPLIT
+    specs = [E.FilterSpec(name, "candidate", "", E.gyrofilter_run(name)) for name in PRESETS]
+    ev = E.evaluate(specs, recordings_dir=REC_DIR, static_names=split["static"], profiles=split["profiles"],
+                    broad_names=split["broad"], with_lag=False)
+    assert sorted(ev.static) == sorted(PRESETS) and len(ev.broad_names) == 2 and len(ev.profiles) == 2
+    best = DEFAULT_PRESET
+    for other in PRESETS:
+        for rec, reduction in ev.static[best].items():
+            assert np.min(reduction) >= E.PAPER_CLAIM_REDUCTION
+            assert np.min(reduction) >= np.min(ev.static[other][rec]), (other, rec)
+        for p, d in ev.dynamic[best].items():
+            assert d["rmse_dps"] <= ev.dynamic[other][p]["rmse_dps"], (other, p)
+        for b, d in ev.broad[best].items():
+            assert d["rmse_all_dps"] <= ev.broad[other][b]["rmse_all_dps"], (other, b)
