@@ -362,7 +362,10 @@ class GyroFilter:
         M = (N - calibration samples) // block_len and row k is block k after the calibration.
         Leftover samples wait in the filter for the next call.
         """
-        x = np.asarray(samples_dps, dtype=float)
+        x = np.asarray(samples_dps)
+        if x.dtype.kind not in "iuf":  # numbers only, as update() takes them (no strings, bools or objects)
+            raise SettingsError(f"samples_dps must be numbers in deg/s, got an array of {x.dtype}")
+        x = x.astype(float, copy=False)
         if x.ndim != 2 or x.shape[1] != 3:
             raise SettingsError(f"samples_dps must have shape (N, 3), got {x.shape}")
         bad = ~np.isfinite(x).all(axis=1)

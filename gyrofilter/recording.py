@@ -431,12 +431,12 @@ def _header_float(header, key, path):
 def _check_columns(names, path, line):
     if any(not n for n in names):
         raise RecordingError(f"{path}: line {line}: empty column name in {','.join(names)!r}")
-    missing = [c for c in GYRO_COLUMNS if c not in names]
-    if missing:
-        raise RecordingError(f"{path}: line {line}: missing column(s) {', '.join(missing)} (have {', '.join(names)})")
     dupes = sorted({n for n in names if names.count(n) > 1})
     if dupes:
         raise RecordingError(f"{path}: line {line}: duplicate column(s) {', '.join(dupes)}")
+    missing = [c for c in GYRO_COLUMNS if c not in names]
+    if missing:
+        raise RecordingError(f"{path}: line {line}: missing column(s) {', '.join(missing)} (have {', '.join(names)})")
 
 
 def _parse_chunk(lines, first, head):

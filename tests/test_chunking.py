@@ -92,6 +92,15 @@ def test_fixed_small_reads_lose_nothing(size):
     np.testing.assert_array_equal(got, expected)
 
 
+@pytest.mark.parametrize("bad", [np.array([["a", "b", "c"]] * 10), [["1", "2", "3"]] * 10,
+                                 np.zeros((10, 3), dtype=object), np.zeros((10, 3), dtype=bool)])
+def test_filter_takes_numbers_only_as_update_does(bad):
+    f = GyroFilter(RATE_HZ)
+    with pytest.raises(ValueError, match="must be numbers in deg/s"):
+        f.filter(bad)
+    assert f.samples_in == 0
+
+
 def test_bad_sample_changes_nothing():
     """A NaN, None or a wrong shape passed to update() raises and leaves the filter as it was."""
     x, _ = _signal(3)

@@ -167,3 +167,29 @@ def test_cli_failure_leaves_no_file_and_a_rerun_works(tmp_path, capsys, monkeypa
     monkeypatch.setattr(sim, "simulate_chunks", real)
     assert main(argv) == 0
     assert np.array_equal(read_recording(out).gyro, simulate(MODEL, 10.0, seed=3).gyro)
+
+
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])
+def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatch, signame):
+    """kill or a closed terminal stops the command as Ctrl-C does: clean-up runs, nothing is left."""
+    import os
+    import signal
+
+    import gyrofilter.simulate as sim
+
+    before = signal.getsignal(getattr(signal, signame))
+    real = sim.simulate_chunks
+
+    def chunks_then_killed(*args, **kwargs):
+        for i, chunk in enumerate(real(*args, **kwargs)):
+            if i == 2:
+                os.kill(os.getpid(), getattr(signal, signame))
+            yield chunk
+
+    monkeypatch.setattr(sim, "simulate_chunks", chunks_then_killed)
+    model = Path(__file__).resolve().parents[1] / "examples" / "models" / "mpu6050.json"
+    out = tmp_path / "long.csv.gz"
+    assert main(["simulate", "--model", str(model), "--duration", "3600", "--out", str(out), "--chunk", "1000"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+    assert signal.getsignal(getattr(signal, signame)) is before  # main() leaves the process's handlers as they were

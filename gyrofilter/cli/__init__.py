@@ -9,7 +9,9 @@ line on stderr and a non-zero exit code; a traceback is a bug.
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 
 from ..errors import GyroFilterError
 
@@ -42,7 +44,25 @@ def build_parser(command=None):
     return parser
 
 
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
 def main(argv=None):
+    # SIGTERM and SIGHUP stop a command like Ctrl-C does, so its clean-up (no partial output
+    # file) runs; record and run handle them themselves while their read loop runs
+    signals = [getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n)]
+    if threading.current_thread() is not threading.main_thread():
+        signals = []
+    saved = [(s, signal.signal(s, _interrupt)) for s in signals]
+    try:
+        return _main(argv)
+    finally:
+        for s, handler in saved:
+            signal.signal(s, handler)
+
+
+def _main(argv):
     argv = sys.argv[1:] if argv is None else list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     if command not in COMMANDS:

@@ -135,8 +135,8 @@ def describe_gross_errors(head, series):
     counts = ", ".join(f"{a}: {idx.size}" for a, idx in found.items())
     return (f"{head.path}: line {head.line_of_row(row)} (sample {row}): {axis} = {series[axis][row]:.6g} deg/s is a gross "
             f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {GROSS_LIMIT_DPS:g} deg/s), and "
-            f"there are {sum(idx.size for idx in found.values())} such sample(s) ({counts}); the Allan deviation "
-            "assumes a still sensor without them")
+            f"{sum(idx.size for idx in found.values())} such sample(s) in all ({counts}); the Allan deviation "
+            "assumes a still sensor without spikes (if the sensor moved, record it at rest)")
 
 
 def check_finite(result, axis, path):
