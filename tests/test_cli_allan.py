@@ -172,3 +172,12 @@ def test_allan_outputs_are_checked_before_any_work(static_recording, tmp_path, c
     assert out.read_text() == "keep me"
     assert main(["allan", path, "--json", str(out), "--force", "--axes", "x"]) == 0
     assert list(json.loads(out.read_text())["axes"]) == ["x"]
+
+
+def test_arma_refuses_gross_errors_too_naming_the_file_line(tmp_path, capsys):
+    """arma models still-sensor noise as allan does: a 1e30 spike is refused, not modelled (it gave
+    sigma_a = 7.6e25 deg/s, exit 0); the line counts from the file even with --start-s."""
+    pytest.importorskip("statsmodels")
+    path, line = _spiked_bundled(tmp_path, "1e30")
+    assert main(["arma", path, "--axis", "y", "--start-s", "1"]) == 2
+    _assert_one_line_error(capsys, path, f"line {line} (sample 500)", "3 such sample(s)", "--keep-outliers")

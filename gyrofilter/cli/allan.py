@@ -17,10 +17,7 @@ import numpy as np
 
 from ..allan import MIN_CLUSTERS, AllanInputError
 from ..errors import SettingsError
-from ..noise_model import (CUSTOMARY_UNIT, GROSS_LIMIT_DPS, GROSS_Z, TERM_SYMBOL, TERM_UNIT, TERMS,
-                           characterise_axis, convert, gross_errors, kalibr_yaml, to_json)
-from ..recording import collect_columns, iter_recording
-from ..units import to_dps
+from ..noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, characterise_axis, convert, kalibr_yaml, to_json
 from . import common
 
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
@@ -36,9 +33,7 @@ def add_arguments(parser):
     parser.add_argument("--confidence", type=float, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
     parser.add_argument("--min-clusters", type=int, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
-    parser.add_argument("--keep-outliers", action="store_true",
-                        help=f"analyse the recording even when it has gross errors (spikes of more than {GROSS_Z:g} robust sigmas, "
-                             f"or |rate| > {GROSS_LIMIT_DPS:g} deg/s), which are refused by default")
+    common.add_keep_outliers_argument(parser)
     parser.add_argument("--progress", action="store_true", help="report progress on stderr")
     common.add_force_argument(parser)
 
@@ -58,14 +53,10 @@ def run(args):
     if args.min_clusters < 2:
         raise SettingsError(f"--min-clusters must be at least 2, got {args.min_clusters}")
     common.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
-    head, series = read_axes(args.recording, axes)
+    head, series = common.read_axes(args.recording, axes)
     common.print_warnings(head.warnings)
     common.warn_about_gaps(head, "the Allan deviation assumes uniform samples")
-    gross = describe_gross_errors(head, series)
-    if gross and not args.keep_outliers:
-        raise AllanInputError(f"{gross}: fix the data, or rerun with --keep-outliers to analyse them as they are")
-    if gross:
-        common.say(f"gyrofilter: warning: {gross}: analysed as they are (--keep-outliers)")
+    common.refuse_gross_errors(head, series, args.keep_outliers)
     fs = head.sample_rate_hz
     duration_s = head.rows / fs
     progress = args.progress or sys.stderr.isatty()
@@ -113,30 +104,6 @@ def run(args):
             plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {fs:g} Hz)")
         common.say(f"drew {args.plot}")
     return 0
-
-
-def read_axes(path, axes):
-    """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
-    (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array})."""
-    chunks = iter_recording(path)
-    head = next(chunks)
-    columns = collect_columns(head, chunks, [f"g{a}" for a in axes])
-    return head, {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
-
-
-def describe_gross_errors(head, series):
-    """None, or a sentence naming the first gross error (:func:`gyrofilter.noise_model.gross_errors`)
-    by file, line, sample, axis and value, and how many there are on each axis."""
-    found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
-    if not found:
-        return None
-    axis = min(found, key=lambda a: found[a][0])
-    row = int(found[axis][0])
-    counts = ", ".join(f"{a}: {idx.size}" for a, idx in found.items())
-    return (f"{head.path}: line {head.line_of_row(row)} (sample {row}): {axis} = {series[axis][row]:.6g} deg/s is a gross "
-            f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {GROSS_LIMIT_DPS:g} deg/s), and "
-            f"{sum(idx.size for idx in found.values())} such sample(s) in all ({counts}); the Allan deviation "
-            "assumes a still sensor without spikes (if the sensor moved, record it at rest)")
 
 
 def check_finite(result, axis, path):

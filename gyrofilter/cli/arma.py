@@ -1,14 +1,14 @@
 """gyrofilter arma: paper 003's time-series model of a static recording's bias noise, per axis.
 
-Warnings of scipy/statsmodels (hard fits) are summarised in one line on stderr, not printed one
-by one. ``--json`` is refused when it exists (unless ``--force``) or is the recording, before
+Gross errors (spikes far beyond the noise) are refused before any fit, as ``allan`` refuses them
+(``--keep-outliers`` analyses them anyway). Warnings of scipy/statsmodels (hard fits) are
+summarised in one line on stderr, not printed one by one. ``--json`` is refused when it exists (unless ``--force``) or is the recording, before
 any work, and written under a temporary name that takes its place when complete.
 """
 import math
 import sys
 
 from ..errors import SettingsError
-from ..recording import read_recording
 from . import common
 
 MIN_SAMPLES = 200  # fewer leave the tests and the order search without power
@@ -29,6 +29,7 @@ def add_arguments(parser):
                         help="what decides each order step: BIC (default; the F test and AIC over-select on simulated ARMA(1,1)), "
                              "the F test (paper 003's rule) or AIC; all three are printed")
     parser.add_argument("--progress", action="store_true", help="report progress on stderr even when it is not a terminal")
+    common.add_keep_outliers_argument(parser)
     common.add_force_argument(parser)
 
 
@@ -43,21 +44,23 @@ def run(args):
         raise SettingsError(f"--max-n must be at least 1, got {args.max_n}")
     if args.max_samples < 100:
         raise SettingsError(f"--max-samples must be at least 100, got {args.max_samples}")
-    rec = read_recording(args.recording)
-    common.print_warnings(rec.warnings)
-    fs = rec.sample_rate_hz
-    i0, i1 = _window(args, len(rec), fs)
-    gyro = rec.gyro_dps[i0:i1]
     axes = "xyz" if args.axis == "all" else args.axis
+    head, series = common.read_axes(args.recording, axes)
+    common.print_warnings(head.warnings)
+    fs = head.sample_rate_hz
+    i0, i1 = _window(args, head.rows, fs)
+    series = {a: x[i0:i1] for a, x in series.items()}
+    common.refuse_gross_errors(head, series, args.keep_outliers, first_row=i0)
     progress = args.progress or sys.stderr.isatty()
-    quantum = 1.0 / rec.lsb_per_dps if rec.lsb_per_dps else None
+    quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
+    n = i1 - i0
     reports = {}
     print(f"recording: {args.recording}")
-    print(f"  {len(gyro)} samples at {fs:g} Hz ({len(gyro) / fs:.1f} s) from t = {i0 / fs:g} s, unit {rec.gyro_unit}; each axis minus its mean")
+    print(f"  {n} samples at {fs:g} Hz ({n / fs:.1f} s) from t = {i0 / fs:g} s, unit {head.gyro_unit}; each axis minus its mean")
     for name in axes:
         if progress:
             common.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
-        rep = arma.analyze_axis(gyro[:, "xyz".index(name)], fs, axis=name, max_samples=args.max_samples,
+        rep = arma.analyze_axis(series[name], fs, axis=name, max_samples=args.max_samples,
                                 max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum, criterion=args.criterion)
         reports[name] = rep
         _print_axis(rep, args.alpha)
@@ -66,7 +69,7 @@ def run(args):
     if warned:
         common.print_warnings(["scipy/statsmodels warned during the fits (check the results above): " + "; ".join(warned)])
     if args.json:
-        out = {"recording": args.recording, "sample_rate_hz": fs, "start_s": i0 / fs, "n_samples": len(gyro),
+        out = {"recording": args.recording, "sample_rate_hz": fs, "start_s": i0 / fs, "n_samples": n,
                "alpha": args.alpha, "axes": {k: v.to_dict() for k, v in reports.items()}}
         with common.replacing(args.json) as tmp:
             common.write_json(tmp, out)
