@@ -64,7 +64,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .errors import GyroFilterError, SettingsError
+from .errors import SettingsError
 from .extras import require
 from .units import json_ready, plain
 

@@ -2,7 +2,6 @@
 import os
 
 import numpy as np
-import pytest
 
 from gyrofilter import GyroFilter
 from gyrofilter import evaluate as E

@@ -120,7 +120,6 @@ def test_replay_passes_annotation_notes_on_at_their_row(tmp_path):
 def test_replay_streams_the_same_reads_whatever_the_file_chunking(tmp_path):
     """Gaps and notes land with the same reads however the file is cut into chunks (1 row, a few, all),
     and the source holds a chunk, not the file."""
-    import tracemalloc
 
     from gyrofilter.sources.replay import ReplaySource
 

@@ -90,18 +90,21 @@ class _Replay:
             rows = filt.filter(gyro, temps)
         ends = filt.block_end_indices(len(rows)) - start
         window = np.concatenate([self._tail, gyro])
-        t_window = np.concatenate([self._t_tail, t_s])
+        plotting = self.raw_envelope is not None
+        t_window = np.concatenate([self._t_tail, t_s]) if plotting else None
         if len(rows):
             first = len(self._tail) + ends[0] - filt.settings.block_len + 1
             used = window[first:len(self._tail) + ends[-1] + 1]
             self.raw.add(used)
             self.filtered.add(rows)
             self._write(t_s[ends], rows)
-            if self.raw_envelope is not None:
+            if plotting:
                 self.raw_envelope.add(t_window[first:len(self._tail) + ends[-1] + 1], used - np.asarray(filt.bias_dps))
                 self.filtered_envelope.add(t_s[ends], rows)
         keep = filt.pending_samples
-        self._tail, self._t_tail = window[len(window) - keep:].copy(), t_window[len(window) - keep:].copy()
+        self._tail = window[len(window) - keep:].copy()
+        if plotting:
+            self._t_tail = t_window[len(window) - keep:].copy()
 
     def _paced(self, gyro, t_s, temps):
         """Feed samples one by one at the recording's rate, printing rows as they come."""
