@@ -8,6 +8,7 @@ Conventions: angular rate in deg/s (names end in ``_dps``), time in s (``_s``), 
 """
 from .errors import GyroFilterError
 from .pipeline import GyroFilter
+from .smoother import Smoother, smooth
 
 __version__ = "0.1.0"
-__all__ = ["GyroFilter", "GyroFilterError", "__version__"]
+__all__ = ["GyroFilter", "GyroFilterError", "Smoother", "__version__", "smooth"]

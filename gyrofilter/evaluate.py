@@ -88,7 +88,7 @@ class FilterOutput:
 @dataclass
 class FilterSpec:
     name: str
-    family: str  # "baseline", "paper" or "candidate"
+    family: str  # "baseline", "paper", "candidate" or "offline" (not real time: the smoother)
     description: str
     run: Callable = field(repr=False)
 
@@ -215,6 +215,22 @@ def gyrofilter_run(preset="paper", **settings):
     return run
 
 
+def gyrofilter_smooth(preset="recommended", **settings):
+    """The offline forward-backward smoother :func:`gyrofilter.smoother.smooth` (same rows as
+    :func:`gyrofilter_run`)."""
+
+    def run(x_dps, sample_rate_hz, calibration_s):
+        from .pipeline import GyroFilter
+        from .smoother import Smoother
+
+        f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
+        smoother = Smoother(f)
+        f.filter(x_dps)
+        return FilterOutput(smoother.smooth(), f.settings.block_len, calibration_samples(sample_rate_hz, calibration_s))
+
+    return run
+
+
 def default_filters():
     """The filters of the comparison table (baselines, the faithful filter, candidates)."""
     return [
@@ -240,6 +256,9 @@ def default_filters():
                    "GyroFilter(preset='recommended') = adaptive_kalman: paper 001's LS prior with adaptive noise statistics, "
                    "constant-rate model at rest, divergence guard",
                    gyrofilter_run("recommended")),
+        FilterSpec("recommended, smoothed (offline)", "offline",
+                   "gyrofilter.smooth(): forward-backward smoother over the recommended filter, each row from the "
+                   "whole recording (not real time)", gyrofilter_smooth("recommended")),
         FilterSpec("recommended + median_slope", "candidate",
                    "GyroFilter(preset='recommended', outlier_rule='median_slope'): gross errors judged against a robust line per block",
                    gyrofilter_run("recommended", outlier_rule="median_slope")),
@@ -543,7 +562,7 @@ def plot_pareto(ev, path, reference="paper001"):
     pts = [(ev.dynamic_geomean(n), ev.static_geomean(n)) for n in ev.filters]
     front = set(pareto_front(pts))
     fig, ax = plt.subplots(figsize=(8, 5.5))
-    colors = {"baseline": "tab:gray", "paper": "tab:red", "candidate": "tab:blue"}
+    colors = {"baseline": "tab:gray", "paper": "tab:red", "candidate": "tab:blue", "offline": "tab:green"}
     fam = ev.families
     for i, (name, (e, r)) in enumerate(zip(ev.filters, pts)):
         c = colors.get(fam.get(name, "candidate"), "tab:blue")

@@ -42,6 +42,8 @@ once for all blocks, interpreted or compiled, so both paths execute the same ari
 """
 import math
 
+import numpy as np
+
 VAR_FLOOR = 1e-12
 
 # indices into the integer state vector
@@ -185,10 +187,13 @@ A_COUNT, A_HEAD, R_FILLED, R_RING_HEAD = range(4)
 MODE, SWITCHES = 4, 7  # istate[MODE + a]: 0 = constant-rate model (rest, steady turn), 1 = LS model
 REST, MOTION = 0, 1
 A_INTS = 10
+# fields of the trace, trace[k, field, axis]: the posterior variance, the prior and its variance
+POST_VAR, PRIOR, PRIOR_VAR = range(3)
+NO_TRACE = np.empty((0, 3, 3))
 
 
 def run_blocks_adaptive(y, out, w_table, fifo, p, fstate, istate, ring, r, gain_min, forgetting, prior_var_max,
-                        kappa, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run):
+                        kappa, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run, trace):
     """Adaptive Kalman filter over the block means y (M, 3) -> out (M, 3); state updated in place.
 
     Two models per axis, one of them in use (a two-model switch, the hard-decision limit of an
@@ -233,7 +238,12 @@ def run_blocks_adaptive(y, out, w_table, fifo, p, fstate, istate, ring, r, gain_
     State (fixed size): fifo (3, D) posteriors, p (3,), fstate (3, 3) rows C, g+, g-; istate
     (10,) int64 (FIFO count and head, block-mean ring fill and head, model and switch count per
     axis); ring (3, W) block means; guard_run (6,) int64.
+
+    ``trace``: (M, 3, 3) to be filled with trace[k, POST_VAR | PRIOR | PRIOR_VAR, axis] (P_k,
+    x-_k, P-_k of the model in use; for the forward-backward smoother,
+    :mod:`gyrofilter.smoother`), or :data:`NO_TRACE` (no rows: nothing written).
     """
+    tracing = trace.shape[0] > 0
     depth = fifo.shape[1]
     window = ring.shape[1]
     for k in range(y.shape[0]):
@@ -252,6 +262,8 @@ def run_blocks_adaptive(y, out, w_table, fifo, p, fstate, istate, ring, r, gain_
             sigma = math.sqrt(ra)
             x = 0.0
             p_post = 0.0
+            prior = 0.0
+            p_prior = 0.0
             if istate[MODE + a] == REST:
                 prior = fifo[a, (head - 1) % depth] if n > 0 else 0.0
                 d = (ya - prior) / sigma
@@ -312,6 +324,69 @@ def run_blocks_adaptive(y, out, w_table, fifo, p, fstate, istate, ring, r, gain_
             p[a] = p_post
             out[k, a] = x
             fifo[a, head] = x
+            if tracing:
+                trace[k, POST_VAR, a] = p_post
+                trace[k, PRIOR, a] = prior
+                trace[k, PRIOR_VAR, a] = p_prior
         istate[A_HEAD] = (head + 1) % depth
         istate[A_COUNT] = count + 1 if count < depth else depth
     return out
+
+
+class AdaptiveKalman:
+    """The adaptive Kalman stage for three axes: :func:`run_blocks_adaptive` with its state.
+
+    ``settings`` is a :class:`gyrofilter.pipeline.FilterSettings`. The state has a fixed size
+    (see :func:`run_blocks_adaptive`) and is updated in place by :meth:`run`; :meth:`start`
+    sets R and the starting model once sigma_b, the standard deviation of a block mean at rest,
+    is known. The forward-backward smoother runs a second instance over the reversed block
+    means (:mod:`gyrofilter.smoother`).
+    """
+
+    def __init__(self, settings):
+        from .adaptive import DEFAULTS, chi2_quantile
+        from .jit import choose_kernel
+        from .predictor import weight_table
+
+        s = settings
+        self.settings = s
+        self.fifo = np.zeros((3, s.fifo_depth))
+        self.p = np.zeros(3)
+        self.fstate = np.zeros((3, 3))
+        self.istate = np.zeros(A_INTS, dtype=np.int64)
+        self.ring = np.zeros((3, s.hold_window))
+        self.r_dps2 = np.ones(3)
+        self.guard_run = np.zeros(6, dtype=np.int64)
+        self._kernel = choose_kernel(run_blocks_adaptive, s.backend)
+        # bound once: the arrays are updated in place
+        self._args = (
+            weight_table(s.fifo_depth, s.fit_order), self.fifo, self.p, self.fstate, self.istate, self.ring, self.r_dps2,
+            float(s.gain_min), float(s.innovation_forgetting), float(s.prior_var_max_r), DEFAULTS["cusum_kappa"],
+            float(s.hold_h), chi2_quantile(DEFAULTS["accept_p"], s.hold_window - 1), DEFAULTS["agree_z"],
+            s.hold_max_blocks, float(s.guard_k_sigma), s.guard_blocks, self.guard_run,
+        )
+
+    def start(self, sigma_b_dps, still_blocks):
+        """R = sigma_b^2 per axis. After n = ``still_blocks`` still blocks (the calibration's,
+        bias removed: x = 0) start in the constant-rate model with P = R / min(n, N), the mean of
+        n zeros; with n = 0 (nothing known of the motion now) in the LS model with P = P0 and
+        C = P0 + R."""
+        s = self.settings
+        self.r_dps2[:] = np.asarray(sigma_b_dps, dtype=float) ** 2
+        if still_blocks > 0:
+            self.istate[A_COUNT] = s.fifo_depth
+            self.istate[MODE : MODE + 3] = REST
+            self.p[:] = self.r_dps2 / min(still_blocks, s.hold_max_blocks)
+        else:
+            self.istate[MODE : MODE + 3] = MOTION
+            self.p[:] = s.p0_dps2
+            self.fstate[C_HAT] = s.p0_dps2 + self.r_dps2
+
+    def run(self, y, out, trace=NO_TRACE):
+        """Block means y (M, 3) -> out (M, 3); ``trace`` as in :func:`run_blocks_adaptive`."""
+        self._kernel(y, out, *self._args, trace)
+
+    @property
+    def switches(self):
+        """Per axis: how often the filter changed between its constant-rate and LS models."""
+        return self.istate[SWITCHES : SWITCHES + 3].tolist()

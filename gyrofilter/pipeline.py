@@ -21,7 +21,7 @@ import numpy as np
 
 from . import kalman
 from .jit import choose_kernel
-from .adaptive import DEFAULTS, SIGMA_B_FLOOR_DPS, block_noise_std, chi2_quantile, make_hold
+from .adaptive import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
@@ -207,44 +207,29 @@ class GyroFilter:
         self.preset = preset
         s = self.settings
         self._adaptive = s.kalman_noise == "adaptive"
-        self._run = choose_kernel(kalman.run_blocks_adaptive if self._adaptive else kalman.run_blocks, s.backend)
         self._average_one, self._average_many = AVERAGERS[s.outlier_rule]
         self._temp_coef = s.temp_coefficients()
         self._temp_on = any(self._temp_coef)
         self._temp_ref = None  # T0 of the temperature compensation: the calibration's mean temperature
-        self._w_table = weight_table(s.fifo_depth, s.fit_order)
-        # Kalman state (fixed size)
-        width = max(s.qr_window, 1)
-        self._fifo = np.zeros((3, s.fifo_depth))
-        self._p = np.zeros(3)
-        self._qbuf = np.zeros((3, width))
-        self._rbuf = np.zeros((3, width))
-        self._sums = np.zeros((4, 3))
-        self._counters = np.zeros(6, dtype=np.int64)
-        self._r0 = np.full(3, s.p0_dps2)
         self._y1 = np.zeros((1, 3))
         self._out1 = np.zeros((1, 3))
         self._hold = None  # constant-rate hold stage (gyrofilter.adaptive), built after calibration
-        # divergence guard and the adaptive filter's R: sigma_b, the std of a block mean at rest
+        # divergence guard: sigma_b, the std of a block mean at rest (the adaptive filter's R too)
         self._sigma_b = np.ones(3)
-        self._guard_run = np.zeros(6, dtype=np.int64)
-        # the kernel's state arguments, bound once: the arrays are updated in place
+        self.block_log = None  # a gyrofilter.smoother.BlockLog while a Smoother records this filter
+        # Kalman state (fixed size); the kernel's arguments are bound once, updated in place
         if self._adaptive:
-            self._rb = np.ones(3)
-            self._fstate = np.zeros((3, 3))
-            self._istate = np.zeros(kalman.A_INTS, dtype=np.int64)
-            self._ring = np.zeros((3, s.hold_window))
-            self._kernel_args = (
-                self._w_table, self._fifo, self._p, self._fstate, self._istate, self._ring, self._rb,
-                float(s.gain_min), float(s.innovation_forgetting), float(s.prior_var_max_r), DEFAULTS["cusum_kappa"], float(s.hold_h),
-                chi2_quantile(DEFAULTS["accept_p"], s.hold_window - 1), DEFAULTS["agree_z"], s.hold_max_blocks,
-                float(s.guard_k_sigma), s.guard_blocks, self._guard_run,
-            )
+            self._akf = kalman.AdaptiveKalman(s)
+            self._guard_run = self._akf.guard_run
         else:
+            width = max(s.qr_window, 1)
+            self._r0 = np.full(3, s.p0_dps2)
+            self._guard_run = np.zeros(6, dtype=np.int64)
+            self._run = choose_kernel(kalman.run_blocks, s.backend)
             self._kernel_args = (
-                self._w_table, self._fifo, self._p, self._qbuf, self._rbuf, self._sums, self._counters,
-                self._r0, s.p0_dps2, s.qr_window, s.qr_stat == "std", s.r_source == "calibration",
-                self._sigma_b, float(s.guard_k_sigma), s.guard_blocks, self._guard_run,
+                weight_table(s.fifo_depth, s.fit_order), np.zeros((3, s.fifo_depth)), np.zeros(3), np.zeros((3, width)), np.zeros((3, width)),
+                np.zeros((4, 3)), np.zeros(6, dtype=np.int64), self._r0, s.p0_dps2, s.qr_window, s.qr_stat == "std",
+                s.r_source == "calibration", self._sigma_b, float(s.guard_k_sigma), s.guard_blocks, self._guard_run,
             )
         # block and calibration state
         self._block = []
@@ -443,10 +428,16 @@ class GyroFilter:
 
     def _track(self, y, out):
         """Block means y (M, 3) -> output (M, 3): the tracker, then the hold stage if enabled."""
-        if self.settings.tracker == "kalman":
-            self._run(y, out, *self._kernel_args)
-        else:
+        if self.settings.tracker != "kalman":
             out[:] = y
+        elif not self._adaptive:
+            self._run(y, out, *self._kernel_args)
+        elif self.block_log is None:
+            self._akf.run(y, out)
+        else:
+            trace = np.empty((len(y), 3, 3))
+            self._akf.run(y, out, trace)
+            self.block_log.append(y, out, trace)
         if self._hold is not None:
             self._hold.step(y, out, out)
 
@@ -469,23 +460,11 @@ class GyroFilter:
         self._apply_calibration(cal)
 
     def _start_kalman(self, sigma_b_dps, still_blocks):
-        """sigma_b (3,) for the guard and the adaptive filter's R = sigma_b^2; the adaptive filter
-        starts in its constant-rate model with P = R / n after n still calibration blocks (the
-        bias is removed: x = 0), else in its LS model with P = P0 (a loaded calibration says
-        nothing about stillness now)."""
-        s = self.settings
+        """sigma_b (3,) for the guard and the adaptive filter's R = sigma_b^2 (see
+        kalman.AdaptiveKalman.start: after n still calibration blocks it starts at rest)."""
         self._sigma_b[:] = np.maximum(sigma_b_dps, SIGMA_B_FLOOR_DPS)
-        if not self._adaptive:
-            return
-        self._rb[:] = self._sigma_b**2
-        if still_blocks > 0:
-            self._istate[kalman.A_COUNT] = s.fifo_depth
-            self._istate[kalman.MODE : kalman.MODE + 3] = kalman.REST
-            self._p[:] = self._rb / min(still_blocks, s.hold_max_blocks)
-        else:
-            self._istate[kalman.MODE : kalman.MODE + 3] = kalman.MOTION
-            self._p[:] = s.p0_dps2
-            self._fstate[kalman.C_HAT] = s.p0_dps2 + self._rb
+        if self._adaptive:
+            self._akf.start(self._sigma_b, still_blocks)
 
     @property
     def guard_reseeds(self):
@@ -504,10 +483,10 @@ class GyroFilter:
                                     "and this calibration has none: calibrate again with temperatures")
             self._temp_ref = cal.temp_c
         self._bias = tuple(float(b) for b in cal.bias_dps)
-        # initial Q and R: the variance of a block mean of the calibration's white noise
-        self._r0[:] = [max(n * n / self.settings.block_len, kalman.VAR_FLOOR) for n in cal.noise_std_dps]
-        if self.settings.qr_stat == "std":
-            np.sqrt(self._r0, out=self._r0)
+        if not self._adaptive:  # paper 001's initial Q and R: the variance of a block mean of the calibration's white noise
+            self._r0[:] = [max(n * n / self.settings.block_len, kalman.VAR_FLOOR) for n in cal.noise_std_dps]
+            if self.settings.qr_stat == "std":
+                np.sqrt(self._r0, out=self._r0)
         self._cal_buf = None
         self._cal_temp = None
 

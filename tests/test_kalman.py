@@ -25,7 +25,7 @@ def test_adaptive_kalman_averages_at_rest_like_a_running_mean():
     y = block_means(x)
     n0 = CAL // 5
     expected = np.cumsum(y, axis=0) / (n0 + np.arange(1, len(y) + 1))[:, None]
-    assert f._istate[kalman.SWITCHES : kalman.SWITCHES + 3].tolist() == [0, 0, 0]
+    assert f._akf.switches == [0, 0, 0]
     np.testing.assert_allclose(out, expected, rtol=0, atol=1e-12)
     # far less noise than the block means (which the hold would also average)
     assert np.all(out[50:].std(axis=0) < y.std(axis=0) / 5)
@@ -70,8 +70,8 @@ def test_the_adaptive_filter_recovers_by_itself_and_its_guard_reseeds():
     # with the mean of the last 20 block means in that very block
     f = GyroFilter(FS, preset="adaptive_kalman", guard_blocks=0, backend="python")
     f.filter(x[: CAL + 5 * 30])
-    f._fifo[0, :] = np.roll(1e3 * np.arange(10.0) ** 2, f._istate[kalman.A_HEAD])
-    f._istate[kalman.MODE] = kalman.MOTION
+    f._akf.fifo[0, :] = np.roll(1e3 * np.arange(10.0) ** 2, f._akf.istate[kalman.A_HEAD])
+    f._akf.istate[kalman.MODE] = kalman.MOTION
     out = f.filter(x[CAL + 5 * 30 :])
     assert out[0, 0] == pytest.approx(y[11:31, 0].mean(), abs=1e-12)
     assert np.all(np.abs(out[:, 0] - y[30:, 0]) < 0.1)

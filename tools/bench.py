@@ -6,7 +6,7 @@
 
 Pipeline section: streaming ``update()`` and batch ``filter()`` throughput in three-axis samples
 per second for the presets "paper" and "recommended" (also in motion) and each Kalman kernel
-(numba, Python), peak memory of ``filter()`` on a 1-hour 100 Hz recording, and the same pipeline
+(numba, Python), the offline smoother ``gyrofilter.smooth`` (batch only), peak memory of ``filter()`` on a 1-hour 100 Hz recording, and the same pipeline
 written the plain way (filterpy ``KalmanFilter`` per block plus ``np.polyfit`` per prediction,
 ``tests/plain_filter.py``) as the baseline. Targets on this machine (issue 2): streaming >=
 500 000 samples/s, batch >= 5 000 000 samples/s, >= 30x the plain way (numba kernel); the
@@ -25,7 +25,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path[:0] = [HERE, os.path.join(HERE, "..", "tests")]
 
-from gyrofilter import GyroFilter  # noqa: E402
+from gyrofilter import GyroFilter, smooth  # noqa: E402
 from gyrofilter.jit import numba_available  # noqa: E402
 
 RATE_HZ = 100.0
@@ -71,13 +71,21 @@ def pipeline():
         tracemalloc.stop()
         label = f"{preset}{', in motion' if data is moving else ''}, kernel {backend}"
         rows.append((label, len(stream_in) / t_stream, len(data) / t_batch, peak))
+        if preset == "recommended" and data is moving:  # the offline smoother: forward, backward, combination
+            t_smooth = best_of(lambda: smooth(data, RATE_HZ, backend=backend))
+            tracemalloc.start()
+            smooth(data, RATE_HZ, backend=backend)
+            peak = tracemalloc.get_traced_memory()[1]
+            tracemalloc.stop()
+            rows.append((f"smooth(), in motion, kernel {backend}", float("nan"), len(data) / t_smooth, peak))
     n_plain = int(60 * RATE_HZ)
     t_plain = best_of(lambda: plain_filter(hour[:n_plain], RATE_HZ), repeats=1)
     plain_rate = n_plain / t_plain
     print("pipeline (three-axis samples per second; 1 h at 100 Hz = 360 000 samples, input 8.6 MB)")
     print(f"  {'implementation':<44}{'streaming':>12}{'batch':>14}{'batch peak MB':>15}{'vs plain':>10}")
     for label, stream_rate, batch_rate, peak in rows:
-        print(f"  {label:<44}{stream_rate:>12,.0f}{batch_rate:>14,.0f}{peak / 1e6:>15.1f}{batch_rate / plain_rate:>9.0f}x")
+        stream = f"{stream_rate:>12,.0f}" if stream_rate == stream_rate else f"{'(offline)':>12}"
+        print(f"  {label:<44}{stream}{batch_rate:>14,.0f}{peak / 1e6:>15.1f}{batch_rate / plain_rate:>9.0f}x")
     print(f"  {'plain way (filterpy + np.polyfit)':<44}{'':>12}{plain_rate:>14,.0f}{'':>15}{1:>9.0f}x")
     print("  targets: streaming >= 500,000; batch >= 5,000,000; >= 30x the plain way (numba); Python kernel >= 50,000")
 

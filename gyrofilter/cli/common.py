@@ -191,16 +191,18 @@ def save_calibration(args, filt):
         say(f"saved the calibration to {args.save_calibration}")
 
 
-def print_summary(path, head, filt, raw, filtered, calibration_from=None):
+def print_summary(path, head, filt, raw, filtered, calibration_from=None, smoothed=False):
     """The per-axis table: raw and filtered mean/std (:class:`~gyrofilter.streamstats.RunningMoments`),
-    std ratio, rejected samples. ``calibration_from``: the file the bias was loaded from, if any."""
+    std ratio, rejected samples. ``calibration_from``: the file the bias was loaded from, if any;
+    ``smoothed``: the rows are the forward-backward smoother's."""
     print(f"recording: {path}")
     print(f"  {head.rows} samples at {head.sample_rate_hz:g} Hz ({head.rows / head.sample_rate_hz:.1f} s), unit {head.gyro_unit}")
     cal = filt.calibration
     if cal is not None:
         source = f"loaded from {calibration_from}" if calibration_from else f"start-up calibration, {cal.samples} samples"
         print(f"  bias ({source}): " + ", ".join(_number(b, 0, sign=True) for b in cal.bias_dps) + " deg/s")
-    print(f"  filter: preset {filt.preset}, {filtered.count} output rows at {filt.output_rate_hz:g} Hz")
+    how = ", smoothed forward-backward" if smoothed else ""
+    print(f"  filter: preset {filt.preset}{how}, {filtered.count} output rows at {filt.output_rate_hz:g} Hz")
     if filt.pending_samples:
         print(f"  {filt.pending_samples} trailing sample(s) did not fill a block of {filt.settings.block_len} and produced no output")
     if filtered.count < 2:

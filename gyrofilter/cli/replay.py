@@ -6,6 +6,10 @@ running ones (:class:`gyrofilter.streamstats.RunningMoments`) and ``--plot`` dra
 envelopes of at most 4000 buckets per series (:class:`gyrofilter.streamstats.Envelope`).
 Every filtered row is time-stamped with the time of its block's last input sample (the
 recording's ``t`` column when it has one), in ``--out`` and on stdout with ``--realtime`` alike.
+
+``--smooth`` replaces the real-time output by the forward-backward smoother
+(:mod:`gyrofilter.smoother`): the same rows, each estimated from the whole recording. It keeps
+the block means of the recording in memory (15 floats per block) and writes once the end is read.
 """
 import contextlib
 import json
@@ -14,8 +18,10 @@ from importlib import resources
 
 import numpy as np
 
+from ..errors import SettingsError
 from ..pipeline import SETTING_NAMES
 from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, iter_recording
+from ..smoother import Smoother
 from ..streamstats import Envelope, RunningMoments
 from . import common
 
@@ -28,6 +34,9 @@ def add_arguments(parser):
     parser.add_argument("--out", metavar="FILE", help="write the filtered series as a recording (.csv or .csv.gz)")
     parser.add_argument("--plot", metavar="PNG", help="draw raw and filtered rates per axis, as min/max bands on long recordings (needs matplotlib)")
     parser.add_argument("--realtime", action="store_true", help="pace the filter at the recording's sample rate and print each filtered row as it is produced")
+    parser.add_argument("--smooth", action="store_true",
+                        help="offline: smooth with the forward-backward smoother over the adaptive Kalman filter "
+                             "(each row from the whole recording; presets recommended and adaptive_kalman)")
     common.add_filter_arguments(parser)
     common.add_force_argument(parser)
 
@@ -35,11 +44,13 @@ def add_arguments(parser):
 def run(args):
     path = args.recording or str(resources.files("gyrofilter") / "data" / BUNDLED)
     common.check_outputs([args.out, args.plot, args.save_calibration], [path, args.calibration, args.temp_model], args.force)
+    if args.smooth and args.realtime:
+        raise SettingsError("--smooth needs the whole recording before the first row; it cannot run with --realtime")
     chunks = iter_recording(path, chunk_rows=CHUNK_ROWS)
     head = next(chunks)
     filt = common.make_filter(args, head.sample_rate_hz)
     common.check_temperature(filt, "temp" in head.names, path)
-    replay = _Replay(path, head, filt, plot=bool(args.plot))
+    replay = _Replay(path, head, filt, plot=bool(args.plot), smoother=Smoother(filt) if args.smooth else None)
     with contextlib.ExitStack() as outputs:
         if args.out:
             replay.out_path = outputs.enter_context(common.replacing(args.out))
@@ -52,7 +63,7 @@ def run(args):
         replay.finish()
     common.print_warnings(head.warnings)
     common.warn_about_gaps(head, "the filter treats the samples as uniform")
-    common.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration)
+    common.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
     common.save_calibration(args, filt)
     if args.out:
         common.say(f"wrote {replay.filtered.count} filtered rows to {args.out}")
@@ -67,10 +78,12 @@ def run(args):
 class _Replay:
     """Feeds chunks to the filter and passes its rows on: to the output file, the running
     statistics and the plot envelopes. ``raw`` are the samples of the blocks that produced a
-    row (calibration and an unfinished last block left out)."""
+    row (calibration and an unfinished last block left out). With a ``smoother`` the rows are
+    passed on by :meth:`finish`, smoothed, with the time stamps collected on the way."""
 
-    def __init__(self, path, head, filt, plot):
-        self.path, self.head, self.filt = path, head, filt
+    def __init__(self, path, head, filt, plot, smoother=None):
+        self.path, self.head, self.filt, self.smoother = path, head, filt, smoother
+        self._row_times = []
         self.raw = RunningMoments(3)
         self.filtered = RunningMoments(3)
         self.raw_envelope = Envelope(3) if plot else None
@@ -96,11 +109,12 @@ class _Replay:
             first = len(self._tail) + ends[0] - filt.settings.block_len + 1
             used = window[first:len(self._tail) + ends[-1] + 1]
             self.raw.add(used)
-            self.filtered.add(rows)
-            self._write(t_s[ends], rows)
             if plotting:
                 self.raw_envelope.add(t_window[first:len(self._tail) + ends[-1] + 1], used - np.asarray(filt.bias_dps))
-                self.filtered_envelope.add(t_s[ends], rows)
+            if self.smoother is None:
+                self._pass_on(t_s[ends], rows)
+            else:
+                self._row_times.append(t_s[ends])
         keep = filt.pending_samples
         self._tail = window[len(window) - keep:].copy()
         if plotting:
@@ -126,6 +140,12 @@ class _Replay:
                 print(f"{t:.10g},{row[0]:.6f},{row[1]:.6f},{row[2]:.6f}", flush=True)
         return np.array(rows).reshape(-1, 3)
 
+    def _pass_on(self, t_s, rows):
+        self.filtered.add(rows)
+        self._write(t_s, rows)
+        if self.filtered_envelope is not None:
+            self.filtered_envelope.add(t_s, rows)
+
     def _write(self, t_s, rows):
         if self.out_path is None:
             return
@@ -139,13 +159,17 @@ class _Replay:
             "sensor": self.head.header.get("sensor", "unknown"),
             "filtered_from": self.path,
             "filter_preset": filt.preset,
+            **({"smoothed": "forward-backward (two-filter) smoother over the whole recording"} if self.smoother else {}),
             "filter_settings": json.dumps({k: getattr(filt.settings, k) for k in SETTING_NAMES}, separators=(",", ":")),
             "bias_dps": json.dumps(list(filt.bias_dps or ())),
             "t_meaning": "time of the last input sample of each block (s)",
         }, filt.output_rate_hz)
 
     def finish(self):
-        """Write the output's header even when no row came out."""
+        """Smooth and pass on the rows (with a smoother); write the output's header even when no
+        row came out."""
+        if self.smoother is not None and self._row_times:
+            self._pass_on(np.concatenate(self._row_times), self.smoother.smooth())
         self._write(np.empty(0), np.empty((0, 3)))
 
     def close(self):
