@@ -190,11 +190,17 @@ A_INTS = 10
 # fields of the trace, trace[k, field, axis]: the posterior variance, the prior and its variance
 POST_VAR, PRIOR, PRIOR_VAR = range(3)
 NO_TRACE = np.empty((0, 3, 3))
+NO_USED = np.empty((0, 3), dtype=np.int64)
 
 
-def run_blocks_adaptive(y, out, w_table, fifo, p, fstate, istate, ring, r, gain_min, forgetting, prior_var_max,
-                        kappa, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run, trace):
+def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring, r, gain_min, forgetting, prior_var_max,
+                        kappa, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run, trace, used):
     """Adaptive Kalman filter over the block means y (M, 3) -> out (M, 3); state updated in place.
+
+    Measurement per block and axis: y[k, a] while the axis is in the constant-rate model at the
+    start of block k, ``y_motion[k, a]`` while it is in the LS model (the block means of two
+    gross-error rules, ``outlier_rule="by_model"``; pass y twice for one rule). ``used``: (M, 3)
+    int64 to receive that model per block and axis (REST / MOTION), or :data:`NO_USED`.
 
     Two models per axis, one of them in use (a two-model switch, the hard-decision limit of an
     interacting multiple model, Blom & Bar-Shalom 1988), both with C = 1 and the measurement
@@ -244,6 +250,7 @@ def run_blocks_adaptive(y, out, w_table, fifo, p, fstate, istate, ring, r, gain_
     :mod:`gyrofilter.smoother`), or :data:`NO_TRACE` (no rows: nothing written).
     """
     tracing = trace.shape[0] > 0
+    telling = used.shape[0] > 0
     depth = fifo.shape[1]
     window = ring.shape[1]
     for k in range(y.shape[0]):
@@ -251,13 +258,15 @@ def run_blocks_adaptive(y, out, w_table, fifo, p, fstate, istate, ring, r, gain_
         head = istate[A_HEAD]
         rh = istate[R_RING_HEAD]
         for a in range(3):
-            ring[a, rh] = y[k, a]
+            ring[a, rh] = y[k, a] if istate[MODE + a] == REST else y_motion[k, a]
+            if telling:
+                used[k, a] = istate[MODE + a]
         istate[R_RING_HEAD] = (rh + 1) % window
         if istate[R_FILLED] < window:
             istate[R_FILLED] += 1
         n = count if count < depth else depth
         for a in range(3):
-            ya = y[k, a]
+            ya = ring[a, rh]
             ra = r[a]
             sigma = math.sqrt(ra)
             x = 0.0
@@ -382,9 +391,14 @@ class AdaptiveKalman:
             self.p[:] = s.p0_dps2
             self.fstate[C_HAT] = s.p0_dps2 + self.r_dps2
 
-    def run(self, y, out, trace=NO_TRACE):
-        """Block means y (M, 3) -> out (M, 3); ``trace`` as in :func:`run_blocks_adaptive`."""
-        self._kernel(y, out, *self._args, trace)
+    def run(self, y, out, trace=NO_TRACE, y_motion=None, used=NO_USED):
+        """Block means y (M, 3) -> out (M, 3); ``trace``, ``y_motion`` (default: y) and ``used`` as
+        in :func:`run_blocks_adaptive`."""
+        self._kernel(y, y if y_motion is None else y_motion, out, *self._args, trace, used)
+
+    def modes(self):
+        """Per axis: the model the next block starts in (REST or MOTION)."""
+        return self.istate[MODE : MODE + 3]
 
     @property
     def switches(self):

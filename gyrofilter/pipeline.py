@@ -46,8 +46,10 @@ class FilterSettings:
     max_bias_dps                 20.0      largest plausible bias (deg/s; MPU6050 datasheet)
     block_len                    5         L, samples per non-sliding block (001: 5)
     outlier_q_dps                1.0       q, gross-error threshold |x_i - mean| (deg/s)
-    outlier_rule                 paper     "paper" (|x_i - mean| > q) or "median_slope"
-                                           (robust line per block; see averaging)
+    outlier_rule                 paper     "paper" (|x_i - mean| > q), "median_slope" (robust
+                                           line per block; see averaging) or "by_model"
+                                           (paper in the adaptive filter's constant-rate
+                                           model, median_slope in its LS model)
     fifo_depth                   10        posteriors in the LS-prediction FIFO (001: 10)
     fit_order                    2         order of the LS fit (001: 2, quadratic)
     p0_dps2                      1.0       P0, variance of the initial state ((deg/s)^2)
@@ -148,7 +150,10 @@ class FilterSettings:
         need(self.backend in ("auto", "python", "numba"), "backend", "must be 'auto', 'python' or 'numba'")
         need(isinstance(self.hold, bool), "hold", "must be True or False")
         need(self.tracker in ("kalman", "block_mean"), "tracker", "must be 'kalman' or 'block_mean'")
-        need(self.outlier_rule in AVERAGERS, "outlier_rule", f"must be one of {', '.join(map(repr, AVERAGERS))}")
+        rules = (*AVERAGERS, "by_model")
+        need(self.outlier_rule in rules, "outlier_rule", f"must be one of {', '.join(map(repr, rules))}")
+        need(self.outlier_rule != "by_model" or (self.kalman_noise == "adaptive" and self.tracker == "kalman"), "outlier_rule",
+             "'by_model' follows the adaptive Kalman filter's model: it needs kalman_noise='adaptive' and tracker='kalman'")
         c = self.temp_coefficient_dps_per_c
         ok = isinstance(c, (int, float)) and not isinstance(c, bool) or (
             isinstance(c, (tuple, list)) and len(c) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in c))
@@ -207,7 +212,10 @@ class GyroFilter:
         self.preset = preset
         s = self.settings
         self._adaptive = s.kalman_noise == "adaptive"
-        self._average_one, self._average_many = AVERAGERS[s.outlier_rule]
+        # by_model: paper 001's rule in the constant-rate model, median_slope in the LS model
+        self._by_model = s.outlier_rule == "by_model"
+        self._average_one, self._average_many = AVERAGERS["paper" if self._by_model else s.outlier_rule]
+        self._average_motion_one, self._average_motion_many = AVERAGERS["median_slope"]
         self._temp_coef = s.temp_coefficients()
         self._temp_on = any(self._temp_coef)
         self._temp_ref = None  # T0 of the temperature compensation: the calibration's mean temperature
@@ -329,8 +337,10 @@ class GyroFilter:
         self._block = []
         q = self.settings.outlier_q_dps
         y1 = self._y1
+        modes = self._akf.modes() if self._by_model else None
         for a, values in enumerate(zip(*block)):
-            mean, rejected, fallback = self._average_one(values, q)
+            average = self._average_one if modes is None or modes[a] == kalman.REST else self._average_motion_one
+            mean, rejected, fallback = average(values, q)
             if rejected or fallback:
                 self.rejected[a] += rejected
                 self.fallback_blocks[a] += fallback
@@ -381,12 +391,22 @@ class GyroFilter:
         n_blocks = (len(x) - i) // length
         if n_blocks:
             blocks = x[i : i + n_blocks * length].reshape(n_blocks, length, 3)
-            y, rejected, fallback = self._average_many(blocks, self.settings.outlier_q_dps)
-            self.rejected += rejected.sum(axis=0)
-            self.fallback_blocks += fallback.sum(axis=0)
+            q = self.settings.outlier_q_dps
+            y, rejected, fallback = self._average_many(blocks, q)
             y -= np.asarray(self._bias)
             out = np.empty_like(y)
-            self._track(y, out)
+            if self._by_model:  # both rules' block means; the kernel takes one by its model, and says which
+                y_motion, rejected_motion, _ = self._average_motion_many(blocks, q)
+                y_motion -= np.asarray(self._bias)
+                used = np.empty((n_blocks, 3), dtype=np.int64)
+                self._track(y, out, y_motion, used)
+                motion = used == kalman.MOTION
+                rejected = np.where(motion, rejected_motion, rejected)
+                fallback = fallback & ~motion
+            else:
+                self._track(y, out)
+            self.rejected += rejected.sum(axis=0)
+            self.fallback_blocks += fallback.sum(axis=0)
             self.blocks_out += n_blocks
             outputs.append(out)
             i += n_blocks * length
@@ -426,18 +446,19 @@ class GyroFilter:
             raise SettingsError(f"temp_c row {int(np.flatnonzero(bad)[0])} is not finite")
         return t
 
-    def _track(self, y, out):
-        """Block means y (M, 3) -> output (M, 3): the tracker, then the hold stage if enabled."""
+    def _track(self, y, out, y_motion=None, used=kalman.NO_USED):
+        """Block means y (M, 3) -> output (M, 3): the tracker, then the hold stage if enabled.
+        ``y_motion``, ``used``: the adaptive filter's (kalman.run_blocks_adaptive)."""
         if self.settings.tracker != "kalman":
             out[:] = y
         elif not self._adaptive:
             self._run(y, out, *self._kernel_args)
         elif self.block_log is None:
-            self._akf.run(y, out)
+            self._akf.run(y, out, kalman.NO_TRACE, y_motion, used)
         else:
             trace = np.empty((len(y), 3, 3))
-            self._akf.run(y, out, trace)
-            self.block_log.append(y, out, trace)
+            self._akf.run(y, out, trace, y_motion, used)
+            self.block_log.append(y, y if y_motion is None else y_motion, out, trace)
         if self._hold is not None:
             self._hold.step(y, out, out)
 

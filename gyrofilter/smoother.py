@@ -26,8 +26,8 @@ side); in motion the forward filter's lag and the backward filter's lead cancel 
 
 The backward filter starts in the LS model with P = P0 (nothing is known of the motion at the
 end of a recording), as the forward one does after a loaded calibration. Memory: the block means
-and the forward results of the whole recording, 15 floats per block (about 86 MB per hour at
-1 kHz, 9 MB at 100 Hz), and as much again during the backward pass.
+and the forward results of the whole recording, 18 floats per block (about 104 MB per hour at
+1 kHz, 10 MB at 100 Hz), and half as much again during the backward pass.
 """
 from __future__ import annotations
 
@@ -39,26 +39,24 @@ from .presets import DEFAULT_PRESET
 
 
 class BlockLog:
-    """What a forward filter handed its adaptive Kalman stage: the block means y (M, 3), the
-    posteriors x (M, 3) and the trace (M, 3, 3) of :func:`gyrofilter.kalman.run_blocks_adaptive`,
-    kept in the chunks the filter ran (joined once, by :meth:`arrays`)."""
+    """What a forward filter handed its adaptive Kalman stage: the block means y and y_motion
+    (M, 3; see :func:`gyrofilter.kalman.run_blocks_adaptive`), the posteriors x (M, 3) and the
+    trace (M, 3, 3), kept in the chunks the filter ran (joined once, by :meth:`arrays`)."""
 
     def __init__(self):
-        self._y, self._x, self._trace = [], [], []
+        self._chunks = ([], [], [], [])
 
-    def append(self, y, x, trace):
-        self._y.append(np.array(y))
-        self._x.append(np.array(x))
-        self._trace.append(trace)
+    def append(self, y, y_motion, x, trace):
+        for chunks, values in zip(self._chunks, (y, y_motion, x, trace)):
+            chunks.append(np.array(values))
 
     def arrays(self):
-        """(y, x, trace) of every block so far, joined into single arrays."""
-        if not self._y:
-            return np.empty((0, 3)), np.empty((0, 3)), np.empty((0, 3, 3))
-        for chunks in (self._y, self._x, self._trace):
-            joined = np.concatenate(chunks)
-            chunks[:] = [joined]
-        return self._y[0], self._x[0], self._trace[0]
+        """(y, y_motion, x, trace) of every block so far, joined into single arrays."""
+        if not self._chunks[0]:
+            return np.empty((0, 3)), np.empty((0, 3)), np.empty((0, 3)), np.empty((0, 3, 3))
+        for chunks in self._chunks:
+            chunks[:] = [np.concatenate(chunks)]
+        return tuple(chunks[0] for chunks in self._chunks)
 
 
 class Smoother:
@@ -91,13 +89,13 @@ class Smoother:
 
     def smooth(self) -> np.ndarray:
         """The smoothed rates (M, 3), deg/s, of the M blocks the filter has produced."""
-        y, x_f, trace_f = self.log.arrays()
+        y, y_motion, x_f, trace_f = self.log.arrays()
         if not len(y):
             return np.empty((0, 3))
         backward = kalman.AdaptiveKalman(self.filter.settings)
         backward.start(np.sqrt(self.filter._akf.r_dps2), still_blocks=0)
         trace_b = np.empty_like(trace_f)
-        backward.run(np.ascontiguousarray(y[::-1]), np.empty_like(y), trace_b)
+        backward.run(np.ascontiguousarray(y[::-1]), np.empty_like(y), trace_b, np.ascontiguousarray(y_motion[::-1]))
         return combine(x_f, trace_f[:, kalman.POST_VAR], trace_b[::-1, kalman.PRIOR], trace_b[::-1, kalman.PRIOR_VAR])
 
 

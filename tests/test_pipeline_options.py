@@ -17,6 +17,43 @@ def stream(filt, x, temps=None):
     return np.array([r for r in rows if r is not None]).reshape(-1, 3)
 
 
+# ---------------------------------------------------------------- by_model (the adaptive filter's rule)
+
+
+def test_by_model_keeps_the_paper_rule_at_rest_and_the_median_slope_rule_in_motion():
+    rng = np.random.default_rng(11)
+    cal, rest, moving = 200, 1000, 2000
+    x = rng.normal(0.0, 0.05, (cal + rest + moving, 3))
+    spikes = cal + rng.choice(rest, 40, replace=False)
+    x[spikes, 0] += 3.0  # gross errors at rest
+    t = np.arange(moving) / FS
+    truth = 30.0 * np.sin(2 * np.pi * 1.0 * t)  # a 1-Hz sine: the rate changes by ~4 deg/s within a block
+    x[cal + rest :, 1] += truth
+    by_model = GyroFilter(FS, preset="adaptive_kalman", backend="python")
+    paper_rule = GyroFilter(FS, preset="adaptive_kalman", outlier_rule="paper", backend="python")
+    out_m, out_p = by_model.filter(x), paper_rule.filter(x)
+    m_rest = rest // 5
+    # at rest: the same numbers as the paper's rule (the filter stays in its constant-rate model)
+    np.testing.assert_array_equal(out_m[:m_rest], out_p[:m_rest])
+    assert by_model.rejected[0] == paper_rule.rejected[0] >= 35
+    # in motion: the paper's rule rejects real samples and biases the block means, by_model does not
+    blocks = truth[: 5 * ((moving) // 5)].reshape(-1, 5).mean(axis=1)
+    err = lambda out: np.sqrt(np.mean((out[m_rest + 10 :, 1] - blocks[10:]) ** 2))  # noqa: E731
+    assert err(out_m) < 0.5 * err(out_p)
+    assert by_model.rejected[1] < 0.1 * paper_rule.rejected[1]
+    # streaming gives the same rows and counts
+    f = GyroFilter(FS, preset="adaptive_kalman", backend="python")
+    np.testing.assert_array_equal(stream(f, x), out_m)
+    assert f.rejected.tolist() == by_model.rejected.tolist()
+    assert f.fallback_blocks.tolist() == by_model.fallback_blocks.tolist()
+
+
+def test_by_model_needs_the_adaptive_kalman_filter():
+    for kw in ({"preset": "paper"}, {"preset": "hold"}, {"preset": "adaptive_kalman", "tracker": "block_mean"}):
+        with pytest.raises(SettingsError, match="by_model"):
+            GyroFilter(FS, outlier_rule="by_model", **kw)
+
+
 # ---------------------------------------------------------------- median_slope
 
 

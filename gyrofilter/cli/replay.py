@@ -9,7 +9,7 @@ recording's ``t`` column when it has one), in ``--out`` and on stdout with ``--r
 
 ``--smooth`` replaces the real-time output by the forward-backward smoother
 (:mod:`gyrofilter.smoother`): the same rows, each estimated from the whole recording. It keeps
-the block means of the recording in memory (15 floats per block) and writes once the end is read.
+the block means of the recording in memory (18 floats per block) and writes once the end is read.
 """
 import contextlib
 import json
