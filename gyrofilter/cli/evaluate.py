@@ -69,7 +69,7 @@ def run(args):
         f"Data: {rec_dir} (split: {args.split}); static: {', '.join(ev.static_names)}; "
         f"profiles: {', '.join(ev.profiles)}; BROAD: {', '.join(ev.broad_names)}\n\n"
         "Columns: static std reduction (min over axes and recordings / geometric mean); "
-        "profile RMSE (deg/s) / worst lag; BROAD RMSE vs optical reference (deg/s) in motion / at rest.\n\n"
+        "profile RMSE (deg/s) / worst lag; BROAD RMSE vs optical reference (deg/s) in motion / at rest / lag behind the reference.\n\n"
         + table
         + "\n\nPareto dominance over the faithful paper001 (static >= 12.6x on every axis of every static recording, "
         "RMSE <= paper001 on every profile and BROAD trial):\n"
