@@ -261,9 +261,9 @@ def default_filters():
         FilterSpec("recommended, smoothed (offline)", "offline",
                    "gyrofilter.smooth(): forward-backward smoother over the recommended filter, each row from the "
                    "whole recording (not real time)", gyrofilter_smooth("recommended")),
-        FilterSpec("recommended + median_slope", "candidate",
-                   "GyroFilter(preset='recommended', outlier_rule='median_slope'): gross errors judged against a robust line per block",
-                   gyrofilter_run("recommended", outlier_rule="median_slope")),
+        FilterSpec("recommended, paper's rule", "candidate",
+                   "GyroFilter(preset='recommended', outlier_rule='paper'): paper 001's gross-error rule in motion too",
+                   gyrofilter_run("recommended", outlier_rule="paper")),
     ]
 
 
@@ -575,27 +575,42 @@ def format_table(ev):
 
 
 def plot_pareto(ev, path, reference="paper001"):
-    """Static std reduction (geometric mean) against dynamic RMSE (geometric mean over profiles)."""
+    """Static std reduction (geometric mean) against dynamic RMSE (geometric mean over profiles).
+
+    The Pareto front is drawn through the real-time filters; offline ones (the smoother) are
+    stars beside it. Labels that would overlap are moved down, one line at a time."""
     from .plots import pyplot
 
     plt = pyplot()
     pts = [(ev.dynamic_geomean(n), ev.static_geomean(n)) for n in ev.filters]
-    front = set(pareto_front(pts))
-    fig, ax = plt.subplots(figsize=(8, 5.5))
-    colors = {"baseline": "tab:gray", "paper": "tab:red", "candidate": "tab:blue", "offline": "tab:green"}
     fam = ev.families
-    for i, (name, (e, r)) in enumerate(zip(ev.filters, pts)):
-        c = colors.get(fam.get(name, "candidate"), "tab:blue")
-        ax.scatter([e], [r], color=c, s=60 if i in front else 30, edgecolor="k" if i in front else "none", zorder=3)
-        ax.annotate(name, (e, r), textcoords="offset points", xytext=(5, 3), fontsize=8)
+    realtime = [i for i, n in enumerate(ev.filters) if fam.get(n) != "offline"]
+    front = {realtime[j] for j in pareto_front([pts[i] for i in realtime])}
+    fig, ax = plt.subplots(figsize=(9, 6))
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    colors = {"baseline": "tab:gray", "paper": "tab:red", "candidate": "tab:blue", "offline": "tab:green"}
+    for i, (e, r) in enumerate(pts):
+        family = fam.get(ev.filters[i], "candidate")
+        ax.scatter([e], [r], color=colors.get(family, "tab:blue"), marker="*" if family == "offline" else "o",
+                   s=120 if family == "offline" else (60 if i in front else 30),
+                   edgecolor="k" if i in front else "none", zorder=3)
+    fig.canvas.draw()
+    placed = []  # label boxes in display pixels
+    for i in sorted(range(len(pts)), key=lambda i: (-pts[i][1], pts[i][0])):
+        x_px, y_px = ax.transData.transform(pts[i])
+        width, height = 5.5 * len(ev.filters[i]), 11.0
+        dy = 3.0
+        while any(abs(x_px + 5 - bx) < max(width, bw) and abs(y_px + dy - by) < height for bx, by, bw in placed):
+            dy -= height
+        placed.append((x_px + 5, y_px + dy, width))
+        ax.annotate(ev.filters[i], pts[i], textcoords="offset points", xytext=(5, dy * 72 / fig.dpi), fontsize=8)
     fr = sorted(pts[i] for i in front)
-    ax.plot([p[0] for p in fr], [p[1] for p in fr], "k--", lw=0.8, zorder=2, label="Pareto front")
+    ax.plot([p[0] for p in fr], [p[1] for p in fr], "k--", lw=0.8, zorder=2, label="Pareto front (real-time filters)")
     ax.axhline(PAPER_CLAIM_REDUCTION, color="tab:red", lw=0.8, ls=":", label="paper 001 claim 12.6x")
     if reference in ev.filters:
         e0, _ = pts[ev.filters.index(reference)]
         ax.axvline(e0, color="tab:red", lw=0.8, ls="-.", label="paper001 dynamic RMSE")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
     ax.set_xlabel("dynamic RMSE, geometric mean over profiles (deg/s)  - lower is better")
     ax.set_ylabel("static std reduction, geometric mean (x)  - higher is better")
     ax.set_title("Noise reduction vs tracking error (real MPU6050 noise)")
