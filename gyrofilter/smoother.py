@@ -26,8 +26,9 @@ side); in motion the forward filter's lag and the backward filter's lead cancel 
 
 The backward filter starts in the LS model with P = P0 (nothing is known of the motion at the
 end of a recording), as the forward one does after a loaded calibration. Memory: the block means
-and the forward results of the whole recording, 18 floats per block (about 104 MB per hour at
-1 kHz, 10 MB at 100 Hz), and half as much again during the backward pass.
+and the forward results of the whole recording, 12 floats per block (about 69 MB per hour at
+1 kHz, 7 MB at 100 Hz), and as much again for the smoothed rows; the backward pass runs in
+chunks of :data:`BACKWARD_CHUNK` blocks.
 """
 from __future__ import annotations
 
@@ -37,25 +38,29 @@ from . import kalman
 from .errors import SettingsError
 from .presets import DEFAULT_PRESET
 
+#: blocks per call of the backward filter (its memory: 15 floats per block of the chunk)
+BACKWARD_CHUNK = 65536
+
 
 class BlockLog:
-    """What a forward filter handed its adaptive Kalman stage: the block means y and y_motion
-    (M, 3; see :func:`gyrofilter.kalman.run_blocks_adaptive`), the posteriors x (M, 3) and the
-    trace (M, 3, 3), kept in the chunks the filter ran (joined once, by :meth:`arrays`)."""
+    """What a forward filter handed its adaptive Kalman stage and got back: the block means y and
+    y_motion (M, 3; see :func:`gyrofilter.kalman.run_blocks_adaptive`), the posteriors x and
+    their variances P (M, 3), kept in the chunks the filter ran (joined by :meth:`arrays`)."""
 
     def __init__(self):
         self._chunks = ([], [], [], [])
 
     def append(self, y, y_motion, x, trace):
-        for chunks, values in zip(self._chunks, (y, y_motion, x, trace)):
+        """One call of the kernel: its inputs, outputs and trace (M, 3, 3)."""
+        for chunks, values in zip(self._chunks, (y, y_motion, x, trace[:, kalman.POST_VAR])):
             chunks.append(np.array(values))
 
     def arrays(self):
-        """(y, y_motion, x, trace) of every block so far, joined into single arrays."""
+        """(y, y_motion, x, P) of every block so far, each joined into one array."""
         if not self._chunks[0]:
-            return np.empty((0, 3)), np.empty((0, 3)), np.empty((0, 3)), np.empty((0, 3, 3))
+            return tuple(np.empty((0, 3)) for _ in self._chunks)
         for chunks in self._chunks:
-            chunks[:] = [np.concatenate(chunks)]
+            chunks[:] = [np.concatenate(chunks)]  # one array at a time: the chunks go as it is made
         return tuple(chunks[0] for chunks in self._chunks)
 
 
@@ -88,15 +93,23 @@ class Smoother:
         filt.block_log = self.log
 
     def smooth(self) -> np.ndarray:
-        """The smoothed rates (M, 3), deg/s, of the M blocks the filter has produced."""
-        y, y_motion, x_f, trace_f = self.log.arrays()
-        if not len(y):
-            return np.empty((0, 3))
+        """The smoothed rates (M, 3), deg/s, of the M blocks the filter has produced.
+
+        The backward filter runs over the reversed block means ``BACKWARD_CHUNK`` blocks at a
+        time, each chunk combined with the forward results as it comes, so the backward pass
+        adds a fixed amount of memory."""
+        y, y_motion, x_f, p_f = self.log.arrays()
         backward = kalman.AdaptiveKalman(self.filter.settings)
         backward.start(np.sqrt(self.filter._akf.r_dps2), still_blocks=0)
-        trace_b = np.empty_like(trace_f)
-        backward.run(np.ascontiguousarray(y[::-1]), np.empty_like(y), trace_b, np.ascontiguousarray(y_motion[::-1]))
-        return combine(x_f, trace_f[:, kalman.POST_VAR], trace_b[::-1, kalman.PRIOR], trace_b[::-1, kalman.PRIOR_VAR])
+        smoothed = np.empty_like(x_f)
+        for end in range(len(y), 0, -BACKWARD_CHUNK):
+            start = max(end - BACKWARD_CHUNK, 0)
+            rows = slice(start, end)
+            trace = np.empty((end - start, 3, 3))
+            backward.run(y[rows][::-1].copy(), np.empty((end - start, 3)), trace, y_motion[rows][::-1].copy())
+            trace = trace[::-1]
+            smoothed[rows] = combine(x_f[rows], p_f[rows], trace[:, kalman.PRIOR], trace[:, kalman.PRIOR_VAR])
+        return smoothed
 
 
 def combine(x_f, p_f, x_b, p_b):

@@ -6,6 +6,7 @@ from gyrofilter import GyroFilter
 from gyrofilter.errors import SettingsError
 from gyrofilter.profiles import get_profile
 from gyrofilter.recording import read_recording
+from gyrofilter import smoother
 from gyrofilter.smoother import Smoother, combine, smooth
 
 FS = 100.0
@@ -35,7 +36,7 @@ def test_at_rest_every_block_gets_the_mean_of_the_whole_rest_phase(seed):
     np.testing.assert_allclose(out[: m - 20], np.broadcast_to(expected, (m - 20, 3)), rtol=0, atol=1e-12)
 
 
-def test_chunks_and_backends_give_the_same_smoothed_rows():
+def test_chunks_and_backends_give_the_same_smoothed_rows(monkeypatch):
     rng = np.random.default_rng(7)
     t = np.arange(CAL + 5 * 400) / FS
     x = still(len(t), 8) + get_profile("paper001").rate_dps(t * 4)[:, None]
@@ -52,6 +53,9 @@ def test_chunks_and_backends_give_the_same_smoothed_rows():
         i += n
     np.testing.assert_allclose(s.smooth(), whole, rtol=0, atol=1e-12)
     assert len(whole) == (len(x) - CAL) // 5
+    # the backward pass in chunks of any size: the same numbers
+    monkeypatch.setattr(smoother, "BACKWARD_CHUNK", 7)
+    np.testing.assert_array_equal(smooth(x, FS, backend="python"), whole)
 
 
 def test_the_smoother_is_closer_to_the_truth_than_the_real_time_filter():

@@ -118,7 +118,7 @@ def commands(path):
             name = " ".join(["gyrofilter", command, *extra])
             print(f"  {name:<28}{label:<30}{peak:>9.0f}{wall:>9.1f}" + ("" if code == 0 else f"  (exit {code})"))
     print("  target: at most 200 MB for 1 h at 1 kHz (before the chunked reader: replay 1214 MB, allan 1214 MB);")
-    print("  replay --smooth keeps every block of the recording (18 floats per block: 104 MB per hour at 1 kHz)")
+    print("  replay --smooth keeps every block of the recording (15 floats per block: 86 MB per hour at 1 kHz)")
 
 
 #: the baseline of allan_end_to_end: numpy.loadtxt + allantools.oadev per axis, at given cluster times

@@ -9,7 +9,7 @@ recording's ``t`` column when it has one), in ``--out`` and on stdout with ``--r
 
 ``--smooth`` replaces the real-time output by the forward-backward smoother
 (:mod:`gyrofilter.smoother`): the same rows, each estimated from the whole recording. It keeps
-the block means of the recording in memory (18 floats per block) and writes once the end is read.
+the block means of the recording in memory (12 floats per block, and 3 for the output) and writes once the end is read.
 """
 import contextlib
 import json
@@ -169,7 +169,9 @@ class _Replay:
         """Smooth and pass on the rows (with a smoother); write the output's header even when no
         row came out."""
         if self.smoother is not None and self._row_times:
-            self._pass_on(np.concatenate(self._row_times), self.smoother.smooth())
+            t_s, rows = np.concatenate(self._row_times), self.smoother.smooth()
+            for start in range(0, len(rows), CHUNK_ROWS):  # formatted a chunk at a time, as without --smooth
+                self._pass_on(t_s[start:start + CHUNK_ROWS], rows[start:start + CHUNK_ROWS])
         self._write(np.empty(0), np.empty((0, 3)))
 
     def close(self):
