@@ -116,16 +116,22 @@ def write_json(path, doc):
         fh.write("\n")
 
 
+def say_warning(text):
+    """A warning for the user: one line on stderr, "gyrofilter: warning: <text>"."""
+    say(f"gyrofilter: warning: {text}")
+
+
 def print_warnings(warnings):
     for text in warnings:
-        say(f"gyrofilter: warning: {text}")
+        say_warning(text)
 
 
-def warn_about_gaps(head, consequence):
-    """Say so when the t column of a recording read (:class:`~gyrofilter.recording.RecordingHead`)
-    showed missing samples; ``consequence`` says what that means for the command."""
+def warn_about_gaps(head, consequence, warn=say_warning):
+    """Warn (``warn(text)``) when the t column of a recording read
+    (:class:`~gyrofilter.recording.RecordingHead`) showed missing samples; ``consequence`` says
+    what that means for the command."""
     if head.t_gaps:
-        say(f"gyrofilter: warning: {head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")
+        warn(f"{head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")
 
 
 def add_filter_arguments(parser):
@@ -251,11 +257,11 @@ def add_keep_outliers_argument(parser):
                              f"sigmas, or |rate| > {GROSS_LIMIT_DPS:g} deg/s), which are refused by default")
 
 
-def refuse_gross_errors(head, series, keep, first_row=0):
+def refuse_gross_errors(head, series, keep, first_row=0, warn=say_warning):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
-    (:func:`gyrofilter.noise_model.gross_errors`); with ``keep`` only warn. Samples are never dropped.
-    ``series`` start at the file's sample ``first_row``."""
+    (:func:`gyrofilter.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
+    Samples are never dropped. ``series`` start at the file's sample ``first_row``."""
     from ..errors import RecordingError
     from ..noise_model import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
 
@@ -272,4 +278,4 @@ def refuse_gross_errors(head, series, keep, first_row=0):
             "sensor without spikes (if the sensor moved, record it at rest)")
     if not keep:
         raise RecordingError(f"{text}: fix the data, or rerun with --keep-outliers to analyse them as they are")
-    say(f"gyrofilter: warning: {text}: analysed as they are (--keep-outliers)")
+    warn(f"{text}: analysed as they are (--keep-outliers)")
