@@ -17,15 +17,18 @@ import numpy as np
 
 from ..allan import MIN_CLUSTERS, AllanInputError
 from ..errors import SettingsError
+from ..fleet import FleetSettings
 from ..noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, characterise_axis, convert, kalibr_yaml, to_json
-from . import common
+from . import batch, common
 
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
          "rrw": "rate random walk", "rate_ramp": "rate ramp"}
 
 
 def add_arguments(parser):
-    parser.add_argument("recording", help="recording file (format v1, .csv or .csv.gz), sensor still")
+    parser.add_argument("recordings", nargs="+", metavar="RECORDING",
+                        help="recording file (format v1, .csv or .csv.gz), sensor still; several files or globs "
+                             "with --out-dir")
     parser.add_argument("--json", metavar="OUT", help="write the deviation curves and coefficients as JSON")
     parser.add_argument("--plot", metavar="OUT.png", help="draw the Allan deviation per axis (needs matplotlib)")
     parser.add_argument("--kalibr", metavar="OUT.yaml", help="write Kalibr imu.yaml gyroscope noise entries")
@@ -35,6 +38,7 @@ def add_arguments(parser):
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
     common.add_keep_outliers_argument(parser)
     parser.add_argument("--progress", action="store_true", help="report progress on stderr")
+    batch.add_arguments(parser)
     common.add_force_argument(parser)
 
 
@@ -54,6 +58,13 @@ def run(args):
         raise SettingsError(f"--min-clusters must be at least 2, got {args.min_clusters}")
     if not 0.0 < args.confidence < 1.0:
         raise SettingsError(f"--confidence must be between 0 and 1 (e.g. 0.95), got {args.confidence:g}")
+    paths = batch.expand(args.recordings)
+    if args.out_dir is not None:
+        batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])
+        settings = FleetSettings("allan", axes=axes, confidence=args.confidence, min_clusters=args.min_clusters,
+                                 keep_outliers=args.keep_outliers)
+        return batch.run(args, settings, paths)
+    args.recording = batch.single(args, paths)
     common.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
     progress = common.say if args.progress or sys.stderr.isatty() else None
     head, results = characterise_recording(args.recording, axes=axes, confidence=args.confidence,
@@ -100,7 +111,7 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
     """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
 
     The one path from a file to its Allan results, for one recording and for a fleet
-    (``--out-dir``). The reader's warnings, missing samples and gross errors kept with
+    (:mod:`gyrofilter.fleet`). The reader's warnings, missing samples and gross errors kept with
     ``keep_outliers`` go to ``warn(text)`` as they are found; gross errors otherwise raise
     RecordingError, and a result that is not finite raises AllanInputError (both name the file).
     ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings stay in
