@@ -92,10 +92,12 @@ def run(args):
         common.print_warnings(r.warnings)
     # every result is finite here; each file appears only when it is complete
     if args.json:
-        write_json_document(args.json, to_json(results, fs, recording=args.recording, duration_s=duration_s))
+        with common.replacing(args.json) as tmp:
+            write_json_document(tmp, to_json(results, fs, recording=args.recording, duration_s=duration_s))
         common.say(f"wrote {args.json}")
     if args.kalibr:
-        write_text(args.kalibr, kalibr_yaml(results, fs, recording=args.recording))
+        with common.replacing(args.kalibr) as tmp:
+            write_text(tmp, kalibr_yaml(results, fs, recording=args.recording))
         common.say(f"wrote {args.kalibr}")
     if args.plot:
         from ..plots_allan import plot_allan
@@ -134,14 +136,15 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
 
 
 def write_json_document(path, doc):
-    """Write the Allan document ``doc`` (:func:`gyrofilter.noise_model.to_json`) to ``path``, whole."""
-    with common.replacing(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+    """Write the Allan document ``doc`` (:func:`gyrofilter.noise_model.to_json`) to ``path`` (no
+    replacing: give it the path :func:`common.replacing` yields)."""
+    with open(path, "w", encoding="utf-8") as fh:
         json.dump(doc, fh, indent=1, allow_nan=False)
 
 
 def write_text(path, text):
-    """Write ``text`` to ``path``, whole."""
-    with common.replacing(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+    """Write ``text`` to ``path`` (no replacing: give it the path :func:`common.replacing` yields)."""
+    with open(path, "w", encoding="utf-8") as fh:
         fh.write(text)
 
 

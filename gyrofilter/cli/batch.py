@@ -75,12 +75,12 @@ def refuse_single_file_outputs(args, options):
 
 
 def report_files(command):
-    """The report files of one recording: (suffix, key of the result, writer); a fleet run of
-    ``command`` writes each as DIR/NAME<suffix>."""
+    """The report files of one recording: (suffix, key of the result, writer of a path and the
+    value); a fleet run of ``command`` writes each as DIR/NAME<suffix>."""
     from .allan import write_json_document, write_text
 
     allan = [(".allan.json", "allan", write_json_document), (".imu.yaml", "kalibr", write_text)]
-    return ([(".gap.json", "gap", _write_gap)] if command == "gap" else []) + allan
+    return ([(".gap.json", "gap", common.write_json)] if command == "gap" else []) + allan
 
 
 def run(args, settings, paths):
@@ -119,10 +119,12 @@ def run(args, settings, paths):
         for done, (k, result) in enumerate(stream, 1):
             i = todo[k]
             results[i] = result
-            for suffix, key, write in files:
-                if result[key] is not None:
-                    write(os.path.join(args.out_dir, names[i] + suffix), result[key])
-                    written += 1
+            with contextlib.ExitStack() as reports:  # a recording's reports take their places together
+                for suffix, key, write in files:
+                    if result[key] is not None:
+                        write(reports.enter_context(common.replacing(os.path.join(args.out_dir, names[i] + suffix))),
+                              result[key])
+                        written += 1
             if show:
                 state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
                          else f"FAILED: {result['error']}")
@@ -135,11 +137,6 @@ def run(args, settings, paths):
     with common.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
         fh.write(fleet.fleet_markdown(rows, stats, title=title))
     return _summary(rows, fleet_files, written, time.perf_counter() - t0)
-
-
-def _write_gap(path, report):
-    with common.replacing(path) as tmp:
-        common.write_json(tmp, report)
 
 
 def _summary(rows, fleet_files, written, elapsed_s):
