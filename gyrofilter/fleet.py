@@ -38,6 +38,7 @@ with fewer, no unit is flagged on it and :func:`flag_units` says so in its stati
 """
 from __future__ import annotations
 
+import collections
 import contextlib
 import dataclasses
 import math
@@ -174,7 +175,7 @@ def unit_names(paths):
     depth = [1] * len(paths)
     while True:
         names = ["-".join(p[-d:-1] + [s]) for p, s, d in zip(parts, stems, depth)]
-        clash = {n for n in names if names.count(n) > 1}
+        clash = {n for n, count in collections.Counter(names).items() if count > 1}
         if not clash:
             return names
         for i, n in enumerate(names):

@@ -29,17 +29,15 @@ def check_outputs(outputs, inputs=(), force=False):
     the inputs is refused even with ``force``; an output that exists is refused without it; two
     outputs naming one file are refused. Raises FileExistsError / SettingsError naming the file.
     """
-    outputs = [p for p in outputs if p]
-    inputs = [p for p in inputs if p]
-    seen = []
-    for out in outputs:
-        for other in inputs:
-            if _same_file(out, other):
-                raise SettingsError(f"{out}: is an input of this command; write the output to another file")
-        for other in seen:
-            if _same_file(out, other):
-                raise SettingsError(f"{out}: named for two outputs; give each output its own file")
-        seen.append(out)
+    inputs = {_file_key(p) for p in inputs if p}
+    seen = set()
+    for out in (p for p in outputs if p):
+        key = _file_key(out)
+        if key in inputs:
+            raise SettingsError(f"{out}: is an input of this command; write the output to another file")
+        if key in seen:
+            raise SettingsError(f"{out}: named for two outputs; give each output its own file")
+        seen.add(key)
         if os.path.lexists(out) and not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
 
@@ -50,11 +48,15 @@ def check_output_folder(folder, option):
         raise SettingsError(f"{option} {folder}: is a file; give a folder for the output files")
 
 
-def _same_file(a, b):
+def _file_key(path):
+    """What names one file: device and inode of a file that exists (links and bind mounts
+    included), else the path with its symbolic links resolved. Keys, not pairwise
+    comparisons, so that a fleet's thousands of outputs are checked in linear time."""
     try:
-        return os.path.samefile(a, b)
-    except OSError:  # one of them does not exist yet
-        return os.path.realpath(a) == os.path.realpath(b)
+        st = os.stat(path)
+    except OSError:  # does not exist yet
+        return os.path.realpath(path)
+    return (st.st_dev, st.st_ino)
 
 
 @contextlib.contextmanager
