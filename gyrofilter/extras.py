@@ -1,7 +1,8 @@
 """Optional packages (the extras in pyproject.toml): import one, or raise naming the extra.
 
 A core install (``pip install gyrofilter``) runs ``replay``, ``record``, ``run``, ``allan``,
-``simulate`` and ``gap``; figures, the numba kernels and ``arma`` need an extra. Library code
+``simulate`` and ``gap`` (with ``--out-dir``, on local worker processes too); figures, the numba
+kernels, ``arma`` and a Dask cluster (``--scheduler``) need an extra. Library code
 imports an optional package through :func:`require`, inside the function that uses it.
 """
 import importlib
@@ -9,7 +10,7 @@ import importlib
 from .errors import MissingExtraError
 
 #: top-level module -> the extra that installs it (tests check this against the package metadata)
-EXTRA = {"matplotlib": "plot", "numba": "fast", "statsmodels": "stats"}
+EXTRA = {"matplotlib": "plot", "numba": "fast", "statsmodels": "stats", "dask": "cluster"}
 
 
 def install_hint(extra):

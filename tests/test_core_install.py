@@ -21,7 +21,7 @@ from gyrofilter.extras import EXTRA
 BLOCKER = Path(__file__).parent / "no_extras"
 RECORDING = Path(gyrofilter.__file__).parent / "data" / "mpu6050_static_100s.csv.gz"
 MODEL = Path(__file__).parent.parent / "examples" / "models" / "mpu6050.json"
-OPTIONAL = ("matplotlib", "statsmodels", "numba", "allantools")
+OPTIONAL = ("matplotlib", "statsmodels", "numba", "allantools", "dask", "distributed")
 
 
 def _run(args, blocked, cwd):
@@ -46,7 +46,8 @@ def test_the_blocker_makes_a_package_unimportable(tmp_path):
     (["allan", str(RECORDING), "--json", "adev.json"], ("scipy",) + OPTIONAL),
     (["gap", str(RECORDING), "--json", "gap.json", "--sims", "6"], OPTIONAL),
     (["simulate", "--model", str(MODEL), "--duration", "20", "--seed", "1", "--out", "sim.csv.gz"], OPTIONAL),
-], ids=["replay", "replay-recommended", "allan", "gap", "simulate"])
+    (["gap", str(RECORDING), "--out-dir", "fleet", "--sims", "6", "--jobs", "2"], OPTIONAL),
+], ids=["replay", "replay-recommended", "allan", "gap", "simulate", "fleet"])
 def test_core_commands_run_without_the_extras(tmp_path, args, blocked):
     out = _run(args, blocked, tmp_path)
     assert out.returncode == 0, out.stderr
@@ -60,7 +61,8 @@ def test_core_commands_run_without_the_extras(tmp_path, args, blocked):
     (["allan", str(RECORDING), "--plot", "out.png"], "matplotlib"),
     (["arma", str(RECORDING), "--axis", "z"], "statsmodels"),
     (["replay", "--set", "backend=numba"], "numba"),
-], ids=["replay-plot", "allan-plot", "arma", "numba-backend"])
+    (["allan", str(RECORDING), "--out-dir", "fleet", "--scheduler", "tcp://127.0.0.1:9"], "dask"),
+], ids=["replay-plot", "allan-plot", "arma", "numba-backend", "fleet-scheduler"])
 def test_a_command_that_needs_an_extra_names_it_in_one_line(tmp_path, args, package):
     out = _run(args, OPTIONAL, tmp_path)
     assert out.returncode == 2

@@ -132,3 +132,15 @@ def test_links_to_formats_md_point_at_its_sections():
     assert len(links) >= 8
     for page, anchor in links:
         assert anchor in anchors, f"{page}: formats.md#{anchor} is not a heading of docs/formats.md"
+
+
+def test_fleet_table_example_has_the_columns_of_the_code():
+    import csv
+
+    from gyrofilter.fleet import COLUMNS
+
+    rows = list(csv.reader(example(9, "text").splitlines()))
+    assert rows[0] == list(COLUMNS)
+    assert all(len(r) == len(COLUMNS) for r in rows[1:]) and len(rows) == 3
+    documented = " ".join(table_rows(section(9)))
+    assert all(c in documented or c.rsplit("_", 1)[0] in documented for c in COLUMNS)

@@ -84,11 +84,12 @@ def _main(argv):
         os.dup2(devnull, sys.stdout.fileno())
         return 0
     except (GyroFilterError, OSError, ValueError) as exc:
-        print(f"gyrofilter: error: {_one_line(exc)}", file=sys.stderr)
+        print(f"gyrofilter: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
 
-def _one_line(exc):
+def one_line(exc):
+    """An exception as one line: "FILE: reason" for an OSError that names a file, else its text."""
     if isinstance(exc, OSError) and exc.filename:
         text = f"{exc.filename}: {exc.strerror or exc}"
     else:

@@ -17,15 +17,18 @@ import numpy as np
 
 from ..allan import MIN_CLUSTERS, AllanInputError
 from ..errors import SettingsError
+from ..fleet import FleetSettings
 from ..noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, characterise_axis, convert, kalibr_yaml, to_json
-from . import common
+from . import batch, common
 
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
          "rrw": "rate random walk", "rate_ramp": "rate ramp"}
 
 
 def add_arguments(parser):
-    parser.add_argument("recording", help="recording file (format v1, .csv or .csv.gz), sensor still")
+    parser.add_argument("recordings", nargs="+", metavar="RECORDING",
+                        help="recording file (format v1, .csv or .csv.gz), sensor still; several files or globs "
+                             "with --out-dir")
     parser.add_argument("--json", metavar="OUT", help="write the deviation curves and coefficients as JSON")
     parser.add_argument("--plot", metavar="OUT.png", help="draw the Allan deviation per axis (needs matplotlib)")
     parser.add_argument("--kalibr", metavar="OUT.yaml", help="write Kalibr imu.yaml gyroscope noise entries")
@@ -35,6 +38,7 @@ def add_arguments(parser):
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
     common.add_keep_outliers_argument(parser)
     parser.add_argument("--progress", action="store_true", help="report progress on stderr")
+    batch.add_arguments(parser)
     common.add_force_argument(parser)
 
 
@@ -52,22 +56,22 @@ def run(args):
         raise SettingsError(f"--axes must be a subset of xyz such as xz, got {args.axes!r}")
     if args.min_clusters < 2:
         raise SettingsError(f"--min-clusters must be at least 2, got {args.min_clusters}")
+    if not 0.0 < args.confidence < 1.0:
+        raise SettingsError(f"--confidence must be between 0 and 1 (e.g. 0.95), got {args.confidence:g}")
+    paths = batch.expand(args.recordings)
+    if args.out_dir is not None:
+        batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])
+        settings = FleetSettings("allan", axes=axes, confidence=args.confidence, min_clusters=args.min_clusters,
+                                 keep_outliers=args.keep_outliers)
+        return batch.run(args, settings, paths)
+    args.recording = batch.single(args, paths)
     common.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
-    head, series = common.read_axes(args.recording, axes)
-    common.print_warnings(head.warnings)
-    common.warn_about_gaps(head, "the Allan deviation assumes uniform samples")
-    common.refuse_gross_errors(head, series, args.keep_outliers)
+    progress = common.say if args.progress or sys.stderr.isatty() else None
+    head, results = characterise_recording(args.recording, axes=axes, confidence=args.confidence,
+                                           min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
+                                           progress=progress)
     fs = head.sample_rate_hz
     duration_s = head.rows / fs
-    progress = args.progress or sys.stderr.isatty()
-    results = {}
-    for a in axes:
-        if progress:
-            common.say(f"allan: axis {a} ({head.rows} samples)...")
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
-            results[a] = characterise_axis(series.pop(a), fs, axis=a, confidence=args.confidence,
-                                           min_clusters=args.min_clusters)
-        check_finite(results[a], a, args.recording)
     print(f"recording: {args.recording}")
     print(f"  {head.rows} samples at {fs:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
@@ -88,14 +92,12 @@ def run(args):
         common.print_warnings(r.warnings)
     # every result is finite here; each file appears only when it is complete
     if args.json:
-        doc = to_json(results, fs, recording=args.recording, duration_s=duration_s)
-        with common.replacing(args.json) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-            json.dump(doc, fh, indent=1, allow_nan=False)
+        with common.replacing(args.json) as tmp:
+            write_json_document(tmp, to_json(results, fs, recording=args.recording, duration_s=duration_s))
         common.say(f"wrote {args.json}")
     if args.kalibr:
-        text = kalibr_yaml(results, fs, recording=args.recording)
-        with common.replacing(args.kalibr) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-            fh.write(text)
+        with common.replacing(args.kalibr) as tmp:
+            write_text(tmp, kalibr_yaml(results, fs, recording=args.recording))
         common.say(f"wrote {args.kalibr}")
     if args.plot:
         from ..plots_allan import plot_allan
@@ -104,6 +106,46 @@ def run(args):
             plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {fs:g} Hz)")
         common.say(f"drew {args.plot}")
     return 0
+
+
+def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False,
+                           warn=common.say_warning, progress=None):
+    """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
+
+    The one path from a file to its Allan results, for one recording and for a fleet
+    (:mod:`gyrofilter.fleet`). The reader's warnings, missing samples and gross errors kept with
+    ``keep_outliers`` go to ``warn(text)`` as they are found; gross errors otherwise raise
+    RecordingError, and a result that is not finite raises AllanInputError (both name the file).
+    ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings stay in
+    their results (``AxisNoise.warnings``).
+    """
+    head, series = common.read_axes(path, axes)
+    for text in head.warnings:
+        warn(text)
+    common.warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
+    common.refuse_gross_errors(head, series, keep_outliers, warn=warn)
+    results = {}
+    for a in axes:
+        if progress:
+            progress(f"allan: axis {a} ({head.rows} samples)...")
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
+            results[a] = characterise_axis(series.pop(a), head.sample_rate_hz, axis=a, confidence=confidence,
+                                           min_clusters=min_clusters)
+        check_finite(results[a], a, path)
+    return head, results
+
+
+def write_json_document(path, doc):
+    """Write the Allan document ``doc`` (:func:`gyrofilter.noise_model.to_json`) to ``path`` (no
+    replacing: give it the path :func:`common.replacing` yields)."""
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(doc, fh, indent=1, allow_nan=False)
+
+
+def write_text(path, text):
+    """Write ``text`` to ``path`` (no replacing: give it the path :func:`common.replacing` yields)."""
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
 
 
 def check_finite(result, axis, path):

@@ -29,17 +29,15 @@ def check_outputs(outputs, inputs=(), force=False):
     the inputs is refused even with ``force``; an output that exists is refused without it; two
     outputs naming one file are refused. Raises FileExistsError / SettingsError naming the file.
     """
-    outputs = [p for p in outputs if p]
-    inputs = [p for p in inputs if p]
-    seen = []
-    for out in outputs:
-        for other in inputs:
-            if _same_file(out, other):
-                raise SettingsError(f"{out}: is an input of this command; write the output to another file")
-        for other in seen:
-            if _same_file(out, other):
-                raise SettingsError(f"{out}: named for two outputs; give each output its own file")
-        seen.append(out)
+    inputs = {_file_key(p) for p in inputs if p}
+    seen = set()
+    for out in (p for p in outputs if p):
+        key = _file_key(out)
+        if key in inputs:
+            raise SettingsError(f"{out}: is an input of this command; write the output to another file")
+        if key in seen:
+            raise SettingsError(f"{out}: named for two outputs; give each output its own file")
+        seen.add(key)
         if os.path.lexists(out) and not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
 
@@ -50,11 +48,15 @@ def check_output_folder(folder, option):
         raise SettingsError(f"{option} {folder}: is a file; give a folder for the output files")
 
 
-def _same_file(a, b):
+def _file_key(path):
+    """What names one file: device and inode of a file that exists (links and bind mounts
+    included), else the path with its symbolic links resolved. Keys, not pairwise
+    comparisons, so that a fleet's thousands of outputs are checked in linear time."""
     try:
-        return os.path.samefile(a, b)
-    except OSError:  # one of them does not exist yet
-        return os.path.realpath(a) == os.path.realpath(b)
+        st = os.stat(path)
+    except OSError:  # does not exist yet
+        return os.path.realpath(path)
+    return (st.st_dev, st.st_ino)
 
 
 @contextlib.contextmanager
@@ -116,16 +118,22 @@ def write_json(path, doc):
         fh.write("\n")
 
 
+def say_warning(text):
+    """A warning for the user: one line on stderr, "gyrofilter: warning: <text>"."""
+    say(f"gyrofilter: warning: {text}")
+
+
 def print_warnings(warnings):
     for text in warnings:
-        say(f"gyrofilter: warning: {text}")
+        say_warning(text)
 
 
-def warn_about_gaps(head, consequence):
-    """Say so when the t column of a recording read (:class:`~gyrofilter.recording.RecordingHead`)
-    showed missing samples; ``consequence`` says what that means for the command."""
+def warn_about_gaps(head, consequence, warn=say_warning):
+    """Warn (``warn(text)``) when the t column of a recording read
+    (:class:`~gyrofilter.recording.RecordingHead`) showed missing samples; ``consequence`` says
+    what that means for the command."""
     if head.t_gaps:
-        say(f"gyrofilter: warning: {head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")
+        warn(f"{head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")
 
 
 def add_filter_arguments(parser):
@@ -253,11 +261,11 @@ def add_keep_outliers_argument(parser):
                              f"sigmas, or |rate| > {GROSS_LIMIT_DPS:g} deg/s), which are refused by default")
 
 
-def refuse_gross_errors(head, series, keep, first_row=0):
+def refuse_gross_errors(head, series, keep, first_row=0, warn=say_warning):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
-    (:func:`gyrofilter.noise_model.gross_errors`); with ``keep`` only warn. Samples are never dropped.
-    ``series`` start at the file's sample ``first_row``."""
+    (:func:`gyrofilter.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
+    Samples are never dropped. ``series`` start at the file's sample ``first_row``."""
     from ..errors import RecordingError
     from ..noise_model import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
 
@@ -274,4 +282,4 @@ def refuse_gross_errors(head, series, keep, first_row=0):
             "sensor without spikes (if the sensor moved, record it at rest)")
     if not keep:
         raise RecordingError(f"{text}: fix the data, or rerun with --keep-outliers to analyse them as they are")
-    say(f"gyrofilter: warning: {text}: analysed as they are (--keep-outliers)")
+    warn(f"{text}: analysed as they are (--keep-outliers)")

@@ -1,0 +1,155 @@
+"""Many recordings in one ``gyrofilter allan`` or ``gyrofilter gap`` command (``--out-dir``).
+
+The shared command-line part of a fleet run (the work itself is :mod:`gyrofilter.fleet`):
+expand the paths and globs, check every output before any work, run the files on local worker
+processes (``--jobs``) or a Dask cluster (``--scheduler``), write each recording's reports as
+it finishes, show progress over the files, then write ``fleet.csv`` and ``fleet.md`` and print
+the units that stand out. Exit 0 when every recording was analysed, 1 when some failed (their
+rows say why), 2 for bad input before any work.
+"""
+import contextlib
+import glob
+import os
+import sys
+import time
+
+from ..errors import SettingsError
+from . import common
+
+FLEET_CSV = "fleet.csv"
+FLEET_MD = "fleet.md"
+EXIT_SOME_FAILED = 1
+
+
+def add_arguments(parser):
+    parser.add_argument("--out-dir", metavar="DIR",
+                        help="a fleet run: one report per recording in DIR, named after it, plus fleet.csv and "
+                             "fleet.md (needed for more than one recording)")
+    parser.add_argument("--jobs", type=int, default=None, metavar="N",
+                        help="with --out-dir: recordings analysed at once on this machine (default: all cores; "
+                             "each worker holds one recording in memory)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="with --out-dir: run on the Dask cluster whose scheduler is at ADDRESS "
+                             "(tcp://host:8786; needs the [cluster] extra)")
+
+
+def expand(patterns):
+    """The recordings named by ``patterns``, in order: a path as given, or, for a pattern with
+    ``*``, ``?`` or ``[`` that is not itself a file, the files it matches (sorted; ``**`` spans
+    folders). A pattern that matches nothing stays, so that its row says so. A file named twice
+    is taken once."""
+    paths, seen = [], set()
+    for pattern in patterns:
+        matches = [pattern]
+        if glob.has_magic(pattern) and not os.path.exists(pattern):
+            matches = sorted(glob.glob(pattern, recursive=True)) or [pattern]
+        for path in matches:
+            key = os.path.realpath(path)
+            if key not in seen:
+                seen.add(key)
+                paths.append(path)
+    return paths
+
+
+def single(args, paths):
+    """The one recording of a single-file run; refuses several recordings, a glob that matches
+    nothing, and ``--jobs`` or ``--scheduler`` without ``--out-dir``."""
+    if len(paths) > 1:
+        raise SettingsError(f"{len(paths)} recordings: give --out-dir DIR for one report per recording "
+                            "plus the fleet table (fleet.csv, fleet.md)")
+    for option in ("jobs", "scheduler"):
+        if getattr(args, option) is not None:
+            raise SettingsError(f"--{option} works on a fleet: give --out-dir DIR")
+    path = paths[0]
+    if glob.has_magic(path) and not os.path.exists(path):
+        raise SettingsError(f"{path}: no file matches")
+    return path
+
+
+def refuse_single_file_outputs(args, options):
+    """Refuse the single-file output options (``--json`` ...) with ``--out-dir``."""
+    for option in options:
+        if getattr(args, option.lstrip("-").replace("-", "_")):
+            raise SettingsError(f"{option} names one file; with --out-dir each recording's reports are written "
+                                "to DIR, named after the recording")
+
+
+def report_files(command):
+    """The report files of one recording: (suffix, key of the result, writer of a path and the
+    value); a fleet run of ``command`` writes each as DIR/NAME<suffix>."""
+    from .allan import write_json_document, write_text
+
+    allan = [(".allan.json", "allan", write_json_document), (".imu.yaml", "kalibr", write_text)]
+    return ([(".gap.json", "gap", common.write_json)] if command == "gap" else []) + allan
+
+
+def run(args, settings, paths):
+    """Run the fleet (the module docstring); returns the exit code."""
+    from .. import fleet
+
+    if args.jobs is not None and args.jobs < 1:
+        raise SettingsError(f"--jobs must be at least 1, got {args.jobs}")
+    if args.jobs is not None and args.scheduler:
+        raise SettingsError("--jobs and --scheduler: give one (the cluster's workers set the parallelism)")
+    common.check_output_folder(args.out_dir, "--out-dir")
+    names = fleet.unit_names(paths)
+    files = report_files(settings.command)
+    outputs = [os.path.join(args.out_dir, name + suffix) for name in names for suffix, _, _ in files]
+    fleet_files = [os.path.join(args.out_dir, FLEET_CSV), os.path.join(args.out_dir, FLEET_MD)]
+    common.check_outputs(outputs + fleet_files, paths, args.force)
+    results = [fleet.failed(p, "no file matches") if glob.has_magic(p) and not os.path.exists(p) else None
+               for p in paths]
+    todo = [i for i, r in enumerate(results) if r is None]
+    if args.scheduler:
+        where = f"the Dask cluster at {args.scheduler}"
+        stream = fleet.run_dask([paths[i] for i in todo], settings, args.scheduler)
+    else:
+        jobs = max(1, min(args.jobs or fleet.default_jobs(), len(todo)))
+        where = f"{jobs} worker process(es)"
+        stream = fleet.run_local([paths[i] for i in todo], settings, jobs)
+    show = args.progress or sys.stderr.isatty()
+    t0 = time.perf_counter()
+    if show:
+        common.say(f"{settings.command}: {len(todo)} recording(s) on {where}")
+        for r in results:
+            if r is not None:
+                common.say(f"{settings.command}: FAILED: {r['error']}")
+    written = 0
+    with contextlib.closing(stream):
+        for done, (k, result) in enumerate(stream, 1):
+            i = todo[k]
+            results[i] = result
+            with contextlib.ExitStack() as reports:  # a recording's reports take their places together
+                for suffix, key, write in files:
+                    if result[key] is not None:
+                        write(reports.enter_context(common.replacing(os.path.join(args.out_dir, names[i] + suffix))),
+                              result[key])
+                        written += 1
+            if show:
+                state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
+                         else f"FAILED: {result['error']}")
+                common.say(f"{settings.command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}")
+    rows = fleet.fleet_rows(names, results)
+    stats = fleet.flag_units(rows)
+    title = f"Fleet: gyrofilter {settings.command}, {len(paths)} recordings"
+    with common.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+        fh.write(fleet.fleet_csv(rows))
+    with common.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(fleet.fleet_markdown(rows, stats, title=title))
+    return _summary(rows, fleet_files, written, time.perf_counter() - t0)
+
+
+def _summary(rows, fleet_files, written, elapsed_s):
+    """Print the fleet's outcome on stdout; the exit code."""
+    failed = [r for r in rows if r["status"] == "failed"]
+    units = len({r["unit"] for r in rows})
+    flagged = [r for r in rows if r["flags"]]
+    print(f"fleet: {units} recording(s), {units - len(failed)} analysed, {len(failed)} failed, "
+          f"{len({r['unit'] for r in flagged})} stand(s) out ({elapsed_s:.1f} s)")
+    for r in failed:
+        print(f"  failed: {r['reason']}")
+    for r in flagged:
+        for f in r["flags"]:
+            print(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
+    common.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report(s)")
+    return EXIT_SOME_FAILED if failed else 0
