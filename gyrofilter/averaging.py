@@ -29,6 +29,12 @@ through the block instead of with its mean::
     r_i = |x_i - m_i|,  limit = max(q, 4 * 1.4826 * median(r))
     output = (1/L) * sum_i (x_i if r_i <= limit else m_i)
 
+``outlier_rule="by_model"`` (the adaptive Kalman filter's rule) uses paper 001's rule while an
+axis is in the filter's constant-rate model and, in its least-squares model, the block mean when
+the paper's rule would keep every sample and ``median_slope`` when it would cut one
+(:func:`average_block_line_if_cut`): the robust line is needed only where the rate moves more
+than q within the block, and costs nothing elsewhere.
+
 A single spike moves neither median (c is taken after removing the slope: on a ramp the plain
 median of x shifts by a whole step when a spike reorders the block), so the spike is replaced
 by the line's value; the threshold
@@ -145,6 +151,32 @@ def average_blocks_median_slope(blocks, q):
         total += np.where(ok, blocks[:, i], lines[i])
         replaced += ~ok
     return total / n, replaced, np.zeros(center.shape, dtype=bool)
+
+
+def average_block_line_if_cut(values, q):
+    """The motion rule of ``outlier_rule="by_model"``: the block mean when paper 001's rule keeps
+    every sample, else :func:`average_block_median_slope`. Returns (output, number rejected or
+    replaced, False)."""
+    mean, rejected, _ = average_block(values, q)
+    if not rejected:
+        return mean, 0, False
+    return average_block_median_slope(values, q)
+
+
+def average_blocks_line_if_cut(blocks, q, paper=None):
+    """Vectorised :func:`average_block_line_if_cut`; ``paper``: the result of
+    :func:`average_blocks` on the same blocks, if already computed. The robust line is computed
+    only for the blocks the paper's rule cuts."""
+    blocks = np.asarray(blocks, dtype=float)
+    out, rejected, _ = average_blocks(blocks, q) if paper is None else paper
+    cut = rejected > 0
+    out, rejected = out.copy(), rejected.copy()
+    rows = np.flatnonzero(cut.reshape(len(cut), -1).any(axis=1))
+    if rows.size:
+        line, replaced, _ = average_blocks_median_slope(blocks[rows], q)
+        out[rows] = np.where(cut[rows], line, out[rows])
+        rejected[rows] = np.where(cut[rows], replaced, rejected[rows])
+    return out, rejected, np.zeros(out.shape, dtype=bool)
 
 
 AVERAGERS = {

@@ -397,8 +397,8 @@ class AdaptiveKalman:
         self._kernel(y, y if y_motion is None else y_motion, out, *self._args, trace, used)
 
     def modes(self):
-        """Per axis: the model the next block starts in (REST or MOTION)."""
-        return self.istate[MODE : MODE + 3]
+        """Per axis: the model the next block starts in (REST or MOTION), a list of 3 ints."""
+        return self.istate[MODE : MODE + 3].tolist()
 
     @property
     def switches(self):

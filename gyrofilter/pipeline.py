@@ -22,7 +22,7 @@ import numpy as np
 from . import kalman
 from .jit import choose_kernel
 from .adaptive import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
-from .averaging import AVERAGERS
+from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
 from .predictor import closed_loop_radius, stable_gain_threshold, weight_table
@@ -215,7 +215,6 @@ class GyroFilter:
         # by_model: paper 001's rule in the constant-rate model, median_slope in the LS model
         self._by_model = s.outlier_rule == "by_model"
         self._average_one, self._average_many = AVERAGERS["paper" if self._by_model else s.outlier_rule]
-        self._average_motion_one, self._average_motion_many = AVERAGERS["median_slope"]
         self._temp_coef = s.temp_coefficients()
         self._temp_on = any(self._temp_coef)
         self._temp_ref = None  # T0 of the temperature compensation: the calibration's mean temperature
@@ -337,9 +336,9 @@ class GyroFilter:
         self._block = []
         q = self.settings.outlier_q_dps
         y1 = self._y1
-        modes = self._akf.modes() if self._by_model else None
+        modes = self._akf.modes() if self._by_model else NO_MODES
         for a, values in enumerate(zip(*block)):
-            average = self._average_one if modes is None or modes[a] == kalman.REST else self._average_motion_one
+            average = self._average_one if modes[a] == kalman.REST else average_block_line_if_cut
             mean, rejected, fallback = average(values, q)
             if rejected or fallback:
                 self.rejected[a] += rejected
@@ -392,18 +391,20 @@ class GyroFilter:
         if n_blocks:
             blocks = x[i : i + n_blocks * length].reshape(n_blocks, length, 3)
             q = self.settings.outlier_q_dps
-            y, rejected, fallback = self._average_many(blocks, q)
-            y -= np.asarray(self._bias)
+            y, rejected, fallback = paper = self._average_many(blocks, q)
+            bias = np.asarray(self._bias)
             out = np.empty_like(y)
             if self._by_model:  # both rules' block means; the kernel takes one by its model, and says which
-                y_motion, rejected_motion, _ = self._average_motion_many(blocks, q)
-                y_motion -= np.asarray(self._bias)
+                y_motion, rejected_motion, _ = average_blocks_line_if_cut(blocks, q, paper)
+                y -= bias
+                y_motion -= bias
                 used = np.empty((n_blocks, 3), dtype=np.int64)
                 self._track(y, out, y_motion, used)
                 motion = used == kalman.MOTION
                 rejected = np.where(motion, rejected_motion, rejected)
                 fallback = fallback & ~motion
             else:
+                y -= bias
                 self._track(y, out)
             self.rejected += rejected.sum(axis=0)
             self.fallback_blocks += fallback.sum(axis=0)
@@ -510,6 +511,9 @@ class GyroFilter:
                 np.sqrt(self._r0, out=self._r0)
         self._cal_buf = None
         self._cal_temp = None
+
+
+NO_MODES = (kalman.REST,) * 3  # update() without outlier_rule="by_model": every axis averaged by its one rule
 
 
 def _sample3(sample):

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from gyrofilter import GyroFilter
-from gyrofilter.averaging import average_block_median_slope, average_blocks, average_blocks_median_slope
+from gyrofilter.averaging import (average_block_line_if_cut, average_block_median_slope, average_blocks,
+                                  average_blocks_line_if_cut, average_blocks_median_slope)
 from gyrofilter.calibration import Calibration
 from gyrofilter.errors import SettingsError
 from gyrofilter.tempcomp import coefficients_from_model
@@ -46,6 +47,24 @@ def test_by_model_keeps_the_paper_rule_at_rest_and_the_median_slope_rule_in_moti
     np.testing.assert_array_equal(stream(f, x), out_m)
     assert f.rejected.tolist() == by_model.rejected.tolist()
     assert f.fallback_blocks.tolist() == by_model.fallback_blocks.tolist()
+
+
+def test_the_motion_rule_is_the_mean_unless_the_paper_rule_cuts_and_its_two_paths_agree():
+    rng = np.random.default_rng(5)
+    blocks = rng.normal(0.0, 0.1, (600, 5, 3)) + np.cumsum(rng.normal(0.0, 0.6, (600, 5, 3)), axis=1)
+    blocks[::13, 2, 0] += 4.0  # spikes
+    out, replaced, fallback = average_blocks_line_if_cut(blocks, 1.0)
+    paper, rejected, _ = average_blocks(blocks, 1.0)
+    line, line_replaced, _ = average_blocks_median_slope(blocks, 1.0)
+    cut = rejected > 0
+    assert 0.2 < cut.mean() < 0.9 and not fallback.any()
+    np.testing.assert_array_equal(out[~cut], paper[~cut])
+    np.testing.assert_array_equal(out[cut], line[cut])
+    np.testing.assert_array_equal(replaced, np.where(cut, line_replaced, 0))
+    for k in range(0, 600, 7):
+        for a in range(3):
+            value, n, _ = average_block_line_if_cut(blocks[k, :, a].tolist(), 1.0)
+            assert value == out[k, a] and n == replaced[k, a]
 
 
 def test_by_model_needs_the_adaptive_kalman_filter():
