@@ -54,6 +54,7 @@ ones found, because the effects are confusable:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -371,17 +372,42 @@ def sinusoid_fit(x, fs, f_hz):
     return amp, phase, coef[0] * c + coef[1] * s
 
 
+@functools.lru_cache(maxsize=64)
+def periodogram_length(n):
+    """The number of samples the periodogram uses: the largest ``N' <= n`` whose prime factors
+    are all at most 11, the radices numpy's FFT (pocketfft) runs natively. A length with a
+    large prime factor goes through Bluestein's algorithm, measured 24 times slower (333 269
+    samples: 350 ms, 332 750 = 2 5^3 11^3: 15 ms, machine loaded); dropping the last ``n - N'`` samples costs at most 1.6 %
+    of the record from 10^4 samples on (0.8 % from 10^5, 3.8 % at 256)."""
+    best = 1
+    p11 = 1
+    while p11 <= n:
+        p7 = p11
+        while p7 <= n:
+            p5 = p7
+            while p5 <= n:
+                p3 = p5
+                while p3 <= n:
+                    best = max(best, p3 << ((n // p3).bit_length() - 1))
+                    p3 *= 3
+                p5 *= 5
+            p7 *= 7
+        p11 *= 11
+    return best
+
+
 def sinusoid_statistic(x, fs, return_spectrum=False):
     """Largest normalised periodogram ordinate (>= bin 8) and its frequency (Hz).
 
     Returns ``(stat, f_hz, threshold)`` (plus the periodogram ``|rfft|^2 / N`` of the
-    detrended series with ``return_spectrum``); the series is detrended (LS line) first.
+    detrended series with ``return_spectrum``); the periodogram is that of the first
+    :func:`periodogram_length` samples, detrended (LS line) first.
     """
-    n = x.size
     nothing = (0.0, float("nan"), float("inf"))
-    if n < 64:
+    if x.size < 64:
         return nothing + (None,) if return_spectrum else nothing
-    f = np.fft.rfft(detrend_line(x))
+    n = periodogram_length(x.size)
+    f = np.fft.rfft(detrend_line(x[:n]))
     spec = np.square(f.real)
     spec += np.square(f.imag)
     del f
@@ -405,9 +431,8 @@ def detect_sinusoid(x, fs):
     stat, f0, thr = sinusoid_statistic(x, fs)
     if not stat > thr:
         return None
-    n = x.size
-    df = fs / n
-    # refine: golden-section search of the LS amplitude within +-1 bin
+    df = fs / periodogram_length(x.size)
+    # refine: golden-section search of the LS amplitude within +-1 bin of the periodogram
     lo, hi = max(f0 - df, df), min(f0 + df, fs / 2)
     f_hz = golden_max(_dft_amplitude(x - x.mean(), fs, f0), lo, hi, 30)
     amplitude, phase, fit = sinusoid_fit(x, fs, f_hz)

@@ -121,12 +121,12 @@ _ADEV_CHUNK = 1 << 15
 def features(x, fs, taus_s, bands_hz):
     """Feature vector of one axis: (log ADEV per tau (:func:`feature_adev`), log band powers,
     log line ratio, lag1, log(1 + spikes)). Returns a dict of arrays."""
-    n = x.size
     adev = feature_adev(x, fs, taus_s)
     line, _, _, spec = det.sinusoid_statistic(x, fs, return_spectrum=True)
+    n_p = det.periodogram_length(x.size)  # the samples the periodogram uses
     if spec is None:
-        spec = np.abs(np.fft.rfft(det.detrend_line(x))) ** 2 / n
-    idx = _first_bins(bands_hz, spec.size, n, fs)
+        spec = np.abs(np.fft.rfft(det.detrend_line(x[:n_p]))) ** 2 / n_p
+    idx = _first_bins(bands_hz, spec.size, n_p, fs)
     bp = np.array([spec[a:b].mean() if b > a else np.nan for a, b in zip(idx[:-1], idx[1:])])
     r1, _ = det.lag1_statistic(x, fs)
     mask, _, _ = det.outlier_statistic(x)

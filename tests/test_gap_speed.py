@@ -130,3 +130,17 @@ def test_progress_gives_fraction_and_time_left_and_the_extended_model_reuses_the
     (finding,) = report["findings"]
     # one finding on z: the extended model's z is the model of that finding's gain
     assert report["discrepancy"]["after"]["z"] == finding["gain"]["after"]
+
+
+def test_periodogram_length_is_the_largest_11_smooth_length():
+    def smooth(v):
+        for p in (2, 3, 5, 7, 11):
+            while v % p == 0:
+                v //= p
+        return v == 1
+
+    for n in list(range(64, 3000)) + [333_269, 1_000_003, 3_599_999]:
+        got = det.periodogram_length(n)
+        assert got <= n and smooth(got), n
+        assert not any(smooth(v) for v in range(got + 1, n + 1)), n
+    assert det.periodogram_length(333_269) == 332_750  # 2 5^3 11^3
