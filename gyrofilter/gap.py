@@ -73,24 +73,78 @@ def feature_bands(n, fs, count=24):
     return np.geomspace(f_lo, f_hi, count + 1)
 
 
-def features(x, fs, taus_s, bands_hz):
-    """Feature vector of one axis: (log ADEV per tau, log band powers, log line ratio, lag1,
-    log(1 + spikes)). Returns a dict of arrays."""
-    from .allan import overlapping_adev
+#: the Allan feature starts a second difference every max(1, m // ADEV_STARTS) samples
+ADEV_STARTS = 8
 
+
+def feature_adev(x, fs, taus_s):
+    """Overlapping Allan deviation with the second differences started every
+    ``s = max(1, m // 8)`` samples instead of every sample:
+
+    ``sigma^2(m tau0) = sum_{j = 0, s, 2s, ... <= N - 2m} (X_{j+2m} - 2 X_{j+m} + X_j)^2 /
+    (2 (m tau0)^2 K)``, ``X`` the integral of the mean-removed rate, ``K`` the number of terms
+    (NIST SP 1065 eq. 11 on a subset of its start points). The expectation is that of the
+    fully overlapping estimator; neighbouring second differences overlap in all but ``s`` of
+    ``2m`` samples, so keeping 8 per cluster length loses almost nothing: on white noise and on
+    a random walk (300 runs of 60 000 samples, m = 1 to 6666) the spread of log sigma was
+    within 2 % of the fully overlapping one. The cost falls from one pass over the record per
+    tau to about 9 passes for all taus together (the record length no longer multiplies the
+    number of taus). The measurement and its simulations use the same estimator."""
     n = x.size
-    _, adev = overlapping_adev(x, fs, taus_s)
+    phase = np.empty(n + 1)
+    phase[0] = 0.0
+    np.subtract(x, float(np.mean(x)), out=phase[1:])
+    np.cumsum(phase[1:], out=phase[1:])
+    phase /= fs
+    m_all = np.round(np.asarray(taus_s, dtype=float) * fs).astype(np.int64)
+    out = np.empty(m_all.size)
+    buf = np.empty(_ADEV_CHUNK)
+    for i, m in enumerate(m_all):
+        m = int(m)
+        step = max(1, m // ADEV_STARTS)
+        k = (n - 2 * m) // step + 1
+        total = 0.0
+        for a in range(0, k, _ADEV_CHUNK):  # in chunks, into one buffer: no N-long temporaries
+            b = min(k, a + _ADEV_CHUNK)
+            d = buf[:b - a]
+            np.multiply(phase[m + a * step:m + (b - 1) * step + 1:step], -2.0, out=d)
+            d += phase[2 * m + a * step:2 * m + (b - 1) * step + 1:step]
+            d += phase[a * step:(b - 1) * step + 1:step]
+            total += float(det.dot(d, d))
+        out[i] = math.sqrt(total / (2.0 * k)) / (m / fs)
+    return out
+
+
+_ADEV_CHUNK = 1 << 15
+
+
+def features(x, fs, taus_s, bands_hz):
+    """Feature vector of one axis: (log ADEV per tau (:func:`feature_adev`), log band powers,
+    log line ratio, lag1, log(1 + spikes)). Returns a dict of arrays."""
+    adev = feature_adev(x, fs, taus_s)
     line, _, _, spec = det.sinusoid_statistic(x, fs, return_spectrum=True)
+    n_p = det.periodogram_length(x.size)  # the samples the periodogram uses
     if spec is None:
-        spec = np.abs(np.fft.rfft(det.detrend_line(x))) ** 2 / n
-    f = np.arange(spec.size) * fs / n
-    idx = np.searchsorted(f, bands_hz)
+        spec = np.abs(np.fft.rfft(det.detrend_line(x[:n_p]))) ** 2 / n_p
+    idx = _first_bins(bands_hz, spec.size, n_p, fs)
     bp = np.array([spec[a:b].mean() if b > a else np.nan for a, b in zip(idx[:-1], idx[1:])])
     r1, _ = det.lag1_statistic(x, fs)
     mask, _, _ = det.outlier_statistic(x)
     return {"adev": np.log(np.maximum(adev, 1e-300)), "band": np.log(np.maximum(bp, 1e-300)),
             "line": np.array([math.log(max(line, 1.0))]), "lag1": np.array([r1]),
             "spikes": np.array([math.log1p(float(mask.sum()))])}
+
+
+def _first_bins(freqs_hz, size, n, fs):
+    """For each frequency, the first periodogram bin ``j`` (of ``size``) with
+    ``j f_s / N >= f``: ``searchsorted(arange(size) f_s / N, f)`` without the array."""
+    idx = np.clip(np.ceil(np.asarray(freqs_hz, dtype=float) * n / fs).astype(np.int64), 0, size)
+    for i, f in enumerate(np.asarray(freqs_hz, dtype=float)):  # settle float rounding at the edge
+        while idx[i] > 0 and (idx[i] - 1) * fs / n >= f:
+            idx[i] -= 1
+        while idx[i] < size and idx[i] * fs / n < f:
+            idx[i] += 1
+    return idx
 
 
 _FLOORS = {"adev": _LOG_FLOOR, "band": _LOG_FLOOR, "line": 0.3, "lag1": None, "spikes": 0.5}
@@ -132,9 +186,9 @@ def _noise_sigma(x, fs, q_dps):
 
 
 def baseline_model(rec, gyro_dps=None):
-    """The baseline simulator model (shared schema) fitted to ``rec``."""
+    """The baseline simulator model (shared schema) fitted to ``rec`` (or to the (N, 3) rates
+    ``gyro_dps``)."""
     fs = rec.sample_rate_hz
-    g = rec.gyro_dps if gyro_dps is None else gyro_dps
     unit = rec.gyro_unit
     lsb = rec.lsb_per_dps if unit == "lsb" else None
     q = 1.0 / lsb if lsb else 0.0
@@ -143,7 +197,7 @@ def baseline_model(rec, gyro_dps=None):
         model["lsb_per_dps"] = lsb
     model["axes"] = {}
     for i, a in enumerate(AXES):
-        x = g[:, i]
+        x = _axis_dps(rec, i) if gyro_dps is None else gyro_dps[:, i]
         sigma = _noise_sigma(x, fs, q)
         model["axes"][a] = {"bias_dps": float(np.mean(x)),
                             "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(fs)), "effects": []}
@@ -181,16 +235,52 @@ def _effect_entry(cand):
 # simulation of features
 
 
-def _sim_features(model, n, fs, seeds, axes_idx, taus, bands):
-    """Features of ``len(seeds)`` runs of ``model`` (list per axis index)."""
-    from .simulate import simulate
+def _simulate_axis(spec, n, fs, seed, axis):
+    """One run of one axis of the validated model ``spec``: ``n`` samples in deg/s, filled
+    block by block (:func:`gyrofilter.simulate.simulate_axis_dps`; the same numbers as that
+    axis of a full :func:`~gyrofilter.simulate.simulate` run with this seed)."""
+    from .simulate import simulate_axis_dps
 
+    x = np.empty(n)
+    pos = 0
+    for block in simulate_axis_dps(spec, n / fs, axis, seed=int(seed), validated=spec):
+        k = min(block.size, n - pos)
+        x[pos:pos + k] = block[:k]
+        pos += k
+    return x[:pos]
+
+
+class _Progress:
+    """Status lines for a step of ``total`` units of work: the fraction done and the time
+    left, ``left = elapsed (total - done) / done``, at most one line per ``every_s`` seconds
+    (and the last)."""
+
+    def __init__(self, say, label, total, every_s=2.0):
+        self.say, self.label, self.total, self.every_s = say, label, total, every_s
+        self.t0 = self.last = time.perf_counter()
+
+    def step(self, done):
+        now = time.perf_counter()
+        if self.say is None or (now - self.last < self.every_s and done < self.total):
+            return
+        self.last = now
+        left = (now - self.t0) * (self.total - done) / max(done, 1)
+        self.say(f"{self.label}: {done}/{self.total} ({100 * done / self.total:.0f} %, about {left:.0f} s left)")
+
+
+def _sim_features(model, n, fs, seeds, axes_idx, taus, bands, say=None, label="simulations"):
+    """Features of ``len(seeds)`` runs of ``model`` (list per axis index). Each run simulates
+    only the axes asked for, one at a time, so memory holds one axis of one run."""
+    from .simulate import validate_model
+
+    spec, _ = validate_model(model)
+    axes_idx = list(axes_idx)
     out = {i: [] for i in axes_idx}
-    for s in seeds:
-        rec = simulate(model, n / fs, seed=int(s))
-        g = rec.gyro_dps
-        for i in axes_idx:
-            out[i].append(features(g[:n, i], fs, taus, bands))
+    bar = _Progress(say, label, len(seeds) * len(axes_idx))
+    for k, s in enumerate(seeds):
+        for j, i in enumerate(axes_idx):
+            out[i].append(features(_simulate_axis(spec, n, fs, s, i), fs, taus, bands))
+            bar.step(k * len(axes_idx) + j + 1)
     return out
 
 
@@ -230,22 +320,30 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
 STATIC_LIMIT_DPS = 1.0
 
 
+def _axis_dps(rec, i):
+    """Axis ``i`` of ``rec.gyro_dps``, converted from its column when asked (the column
+    itself for ``gyro_unit: dps``): the analysis never holds the three axes in deg/s at once."""
+    from .recording import GYRO_COLUMNS
+    from .units import to_dps
+
+    return to_dps(rec.columns[GYRO_COLUMNS[i]], rec.gyro_unit, rec.lsb_per_dps)
+
+
 def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
     t_start = time.perf_counter()
     say = progress or (lambda text: None)
     fs = float(rec.sample_rate_hz)
     if not (math.isfinite(fs) and fs > 0):
         raise RecordingError(f"{rec.path or 'recording'}: sample_rate_hz must be > 0, got {fs}")
-    g = np.asarray(rec.gyro_dps, dtype=float)
-    n = g.shape[0]
+    n = len(rec)
     report = {"recording": recording_name if recording_name is not None else (rec.path or ""),
               "sample_rate_hz": fs, "duration_s": n / fs,
               "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
                            "axes": {a: {} for a in AXES}},
               "findings": [], "extended_model": {}, "notes": []}
-    if not np.all(np.isfinite(g)):
+    if not all(np.all(np.isfinite(_axis_dps(rec, i))) for i in range(3)):
         raise RecordingError(f"{rec.path or 'recording'}: gyro columns hold non-finite values")
-    base = baseline_model(rec, g)
+    base = baseline_model(rec)
     report["baseline"]["model"] = base
     q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None
     for a in AXES:
@@ -264,7 +362,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
         report["notes"].append("temp column has non-finite values: temperature not analysed")
 
     for i, a in enumerate(AXES):
-        y, length = det.block_means(g[:, i], 512)
+        y, length = det.block_means(_axis_dps(rec, i), 512)
         excursion = float(np.max(np.abs(y - np.median(y))))
         white_block = base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(fs / length)
         if excursion > max(STATIC_LIMIT_DPS, 8 * white_block):
@@ -278,121 +376,108 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
     seeds = rng.integers(0, 2**31, size=m)
 
     say(f"baseline: {m} simulations of {n / fs:.0f} s at {fs:g} Hz")
-    meas_feats = [features(g[:, i], fs, taus, bands) for i in range(3)]
-    sims = _sim_features(base, n, fs, seeds, range(3), taus, bands)
+    meas_feats = [features(_axis_dps(rec, i), fs, taus, bands) for i in range(3)]
+    sims = _sim_features(base, n, fs, seeds, range(3), taus, bands, say, "baseline simulations (runs x axes)")
     deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
+    del sims
     before = [discrepancy(d) for d in deps]
     report["departures"] = {a: _departure_summary(deps[i], meas_feats[i], taus, bands) for i, a in enumerate(AXES)}
 
-    # detectors, per axis, in the decision order
-    say("detectors")
+    # detectors, per axis, in the decision order; the extended model's white noise and bias
+    # are re-fitted on the series cleaned of the axis's findings
     candidates = []  # (axis index, Candidate)
-    cleaned = []
+    ext_axes = {}
     for i, a in enumerate(AXES):
-        if not np.ptp(g[:, i]) > 0:
+        say(f"detectors on {a}")
+        x = _axis_dps(rec, i)
+        if not np.ptp(x) > 0:
             report["notes"].append(f"axis {a}: constant signal, nothing to analyse")
-            cleaned.append(g[:, i])
+            ext_axes[a] = dict(base["axes"][a], effects=[])
             continue
         try:
-            cands, xc = _detect_axis(g[:, i].copy(), fs, temp)
+            cands, xc = _detect_axis(x, fs, temp)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             report["notes"].append(f"axis {a}: detectors could not run ({exc})")
-            cands, xc = [], g[:, i]
-        cleaned.append(xc)
+            cands, xc = [], x
         for c in cands:
+            c.component = None  # subtracted in xc; not kept (N samples each)
             if c.effect == "temperature":
                 c.extra["reference_c"] = float(np.mean(temp))
             candidates.append((i, c))
-
-    # re-fit white noise on the cleaned series for the extended model
-    ext_axes = {}
-    for i, a in enumerate(AXES):
-        spec = dict(base["axes"][a])
-        if any(ci == i for ci, _ in candidates):
-            sigma = _noise_sigma(cleaned[i], fs, q or 0.0)
-            colored = next((c for ci, c in candidates if ci == i and c.effect == "colored_noise"), None)
-            if colored is not None:
-                # the high-pass of _noise_sigma also removed the variance fraction
-                # c = (1 + rho) / ((1 - rho) W) of a correlated noise (detectors.lag1_from_highpassed)
-                rho = colored.params["lag1"]
-                w = det.colored_window(n, fs)
-                frac = min((1 + rho) / (max(1 - rho, 1e-3) * w), 0.9)
-                sigma *= math.sqrt((1 - 1.0 / w) / (1 - frac))
-            spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(fs))
-            means = [c for ci, c in candidates if ci == i]
-            spec["bias_dps"] = float(np.mean(cleaned[i]))
-            for c in means:  # deterministic components were fitted mean-free
-                if c.effect == "bias_step":
-                    spec["bias_dps"] -= c.params["size_dps"] * (1 - c.params["time_s"] / (n / fs))
-                elif c.effect == "rate_ramp":
-                    spec["bias_dps"] -= c.params["r_dps_per_s"] * (n / fs) / 2
-                elif c.effect == "warmup":
-                    tau = c.params["tau_s"]
-                    T = n / fs
-                    spec["bias_dps"] -= c.params["amplitude_dps"] * tau / T * (1 - math.exp(-T / tau))
-        spec["effects"] = []
-        ext_axes[a] = spec
+        ext_axes[a] = _extended_axis(base["axes"][a], cands, xc, fs, q)
+        del x, xc
 
     # gain per finding: the axis extended by this finding alone (the contract's gain); a
     # finding that shows no gain alone is still kept when the axis has other candidates and
-    # leaving it out of the model with all of them raises the discrepancy (leave-one-out)
+    # leaving it out of the model with all of them raises the discrepancy (leave-one-out).
+    # The departures of an axis depend only on that axis's model (its random streams are its
+    # own), so they are computed once per set of findings and reused.
     n_ext = max(6, m // 2)
+    axis_deps_cache = {}
 
-    def axis_discrepancy(i, cands):
-        a = AXES[i]
-        model = _copy_model(base)
-        axis_spec = dict(ext_axes[a])
-        axis_spec["effects"] = [_effect_entry(c) for c in cands]
-        model["axes"][a] = axis_spec
-        if any(c.effect == "temperature" for c in cands):
-            model["temperature"] = _temperature_table(rec)
-        sims_k = _sim_features(model, n, fs, seeds[:n_ext], [i], taus, bands)[i]
-        return discrepancy(departures(meas_feats[i], sims_k, n))
+    def axis_deps(i, ks, label):
+        key = (i, tuple(sorted(ks)))
+        if key not in axis_deps_cache:
+            a = AXES[i]
+            cands = [candidates[k][1] for k in key[1]]
+            model = _copy_model(base)
+            axis_spec = dict(ext_axes[a])
+            axis_spec["effects"] = [_effect_entry(c) for c in cands]
+            model["axes"][a] = axis_spec
+            if any(c.effect == "temperature" for c in cands):
+                model["temperature"] = _temperature_table(rec)
+            sims_k = _sim_features(model, n, fs, seeds[:n_ext], [i], taus, bands, say, label)[i]
+            axis_deps_cache[key] = departures(meas_feats[i], sims_k, n)
+        return axis_deps_cache[key]
+
+    def axis_discrepancy(i, ks, label):
+        return discrepancy(axis_deps(i, ks, label))
 
     single = {}
     for k, (i, c) in enumerate(candidates):
-        say(f"gain of {c.effect} on {AXES[i]} ({k + 1}/{len(candidates)})")
+        label = f"gain of {c.effect} on {AXES[i]} ({k + 1}/{len(candidates)})"
+        say(label)
         try:
-            single[k] = axis_discrepancy(i, [c])
+            single[k] = axis_discrepancy(i, [k], label)
         except (ValueError, FloatingPointError) as exc:
             report["notes"].append(f"{c.effect} on {AXES[i]}: extended model could not run ({exc})")
     kept = []
-    all_d = {}
     for k, (i, c) in enumerate(candidates):
         if k not in single:
             continue
         after = single[k]
         if after < before[i]:
-            kept.append((i, c, after))
+            kept.append((k, i, c, after))
             continue
-        others = [c2 for k2, (i2, c2) in enumerate(candidates) if i2 == i and k2 != k and k2 in single]
+        others = [k2 for k2, (i2, _) in enumerate(candidates) if i2 == i and k2 != k and k2 in single]
         if others:
+            label = f"{c.effect} on {AXES[i]} with and without the axis's other findings"
+            say(label)
             try:
-                if i not in all_d:
-                    all_d[i] = axis_discrepancy(i, others + [c])
-                without = axis_discrepancy(i, others)
+                with_all = axis_discrepancy(i, others + [k], label)
+                without = axis_discrepancy(i, others, label)
             except (ValueError, FloatingPointError):
-                without = all_d[i] = float("inf")
-            if all_d[i] < without:
-                kept.append((i, c, after))
+                with_all = without = float("inf")
+            if with_all < without:
+                kept.append((k, i, c, after))
                 report["notes"].append(
                     f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "
-                    f"axis's other findings D = {all_d[i]:.3g}, without it {without:.3g}")
+                    f"axis's other findings D = {with_all:.3g}, without it {without:.3g}")
                 continue
         report["notes"].append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
 
     ext = _copy_model(base)
     for i, a in enumerate(AXES):
-        effects = [_effect_entry(c) for ci, c, _ in kept if ci == i]
+        effects = [_effect_entry(c) for _, ci, c, _ in kept if ci == i]
         if effects:
             spec = dict(ext_axes[a])
             spec["effects"] = effects
             ext["axes"][a] = spec
-    if any(c.effect == "temperature" for _, c, _ in kept):
+    if any(c.effect == "temperature" for _, _, c, _ in kept):
         ext["temperature"] = _temperature_table(rec)
     report["extended_model"] = ext
 
-    for i, c, after in kept:
+    for _, i, c, after in kept:
         z_info = _strongest(deps[i], taus, bands)
         report["findings"].append({
             "effect": c.effect, "axis": AXES[i],
@@ -405,10 +490,8 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
     overall_after = list(before)
     if kept:
         say("overall gain of the extended model")
-        axes_with = sorted({i for i, _, _ in kept})
-        sims_e = _sim_features(ext, n, fs, seeds[:n_ext], axes_with, taus, bands)
-        for i in axes_with:
-            deps_e = departures(meas_feats[i], sims_e[i], n)
+        for i in sorted({i for _, i, _, _ in kept}):
+            deps_e = axis_deps(i, [k for k, ci, _, _ in kept if ci == i], f"extended model on {AXES[i]}")
             overall_after[i] = discrepancy(deps_e)
             summ = report["departures"][AXES[i]]
             summ["extended_adev_sim_mean_log"] = [float(v) for v in deps_e["adev"][1]]
@@ -428,6 +511,39 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
                                "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / fs / 9))
     report["runtime_s"] = time.perf_counter() - t_start
     return report
+
+
+def _extended_axis(base_axis, cands, xc, fs, q):
+    """The extended model's axis spec before its effects: white noise re-fitted on the
+    series ``xc`` cleaned of the findings ``cands`` (corrected for the colored noise's
+    high-pass loss), and the bias of the cleaned series less the mean of the deterministic
+    components that were fitted mean-free. Without findings, the baseline's axis."""
+    spec = dict(base_axis)
+    spec["effects"] = []
+    if not cands:
+        return spec
+    n = xc.size
+    sigma = _noise_sigma(xc, fs, q or 0.0)
+    colored = next((c for c in cands if c.effect == "colored_noise"), None)
+    if colored is not None:
+        # the high-pass of _noise_sigma also removed the variance fraction
+        # c = (1 + rho) / ((1 - rho) W) of a correlated noise (detectors.lag1_from_highpassed)
+        rho = colored.params["lag1"]
+        w = det.colored_window(n, fs)
+        frac = min((1 + rho) / (max(1 - rho, 1e-3) * w), 0.9)
+        sigma *= math.sqrt((1 - 1.0 / w) / (1 - frac))
+    spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(fs))
+    spec["bias_dps"] = float(np.mean(xc))
+    T = n / fs
+    for c in cands:  # deterministic components were fitted mean-free
+        if c.effect == "bias_step":
+            spec["bias_dps"] -= c.params["size_dps"] * (1 - c.params["time_s"] / T)
+        elif c.effect == "rate_ramp":
+            spec["bias_dps"] -= c.params["r_dps_per_s"] * T / 2
+        elif c.effect == "warmup":
+            tau = c.params["tau_s"]
+            spec["bias_dps"] -= c.params["amplitude_dps"] * tau / T * (1 - math.exp(-T / tau))
+    return spec
 
 
 def _detect_axis(x, fs, temp):

@@ -330,30 +330,57 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
     root = _root_seed(seed, rng)
     temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
     axes = [_axis_terms(i, spec["axes"][a], fs, duration_s, root, temp) for i, a in enumerate(AXES)]
-    full_scale = spec["full_scale_dps"]
-    lsb = spec["lsb_per_dps"]
-    unit = spec["gyro_unit"]
     for start in range(0, n_total, chunk_samples):
         n = min(chunk_samples, n_total - start)
         t_s = np.arange(start, start + n) / fs
         true_c = temp.true_c(t_s) if temp else None
         gyro = np.empty((n, 3))
-        for i, (terms, noise, outliers) in enumerate(axes):
-            rate = noise.next(t_s, true_c)
-            for term in terms:
-                rate += term.next(t_s, true_c)
-            for term in outliers:
-                rate += term.next(t_s, true_c)
-            if full_scale is not None:
-                np.clip(rate, -full_scale, full_scale, out=rate)
-            if lsb is not None:
-                rate = np.round(rate * lsb)
-                if unit != "lsb":
-                    rate = rate / lsb
-            if unit == "rad/s":
-                rate = rate / DEG_PER_RAD
-            gyro[:, i] = rate
+        for i, terms in enumerate(axes):
+            gyro[:, i] = _axis_rate(terms, t_s, true_c, spec)
         yield t_s, gyro, (temp.recorded_c(true_c) if temp else None)
+
+
+def _axis_rate(axis_terms, t_s, true_c, spec):
+    """One block of one axis in the model's ``gyro_unit``: the sum of the terms, saturation,
+    quantization and the unit (the equations of the module docstring)."""
+    terms, noise, outliers = axis_terms
+    rate = noise.next(t_s, true_c)
+    for term in terms:
+        rate += term.next(t_s, true_c)
+    for term in outliers:
+        rate += term.next(t_s, true_c)
+    if spec["full_scale_dps"] is not None:
+        np.clip(rate, -spec["full_scale_dps"], spec["full_scale_dps"], out=rate)
+    lsb = spec["lsb_per_dps"]
+    if lsb is not None:
+        rate = np.round(rate * lsb)
+        if spec["gyro_unit"] != "lsb":
+            rate = rate / lsb
+    if spec["gyro_unit"] == "rad/s":
+        rate = rate / DEG_PER_RAD
+    return rate
+
+
+def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAULT_CHUNK_SAMPLES, validated=None):
+    """One axis of :func:`simulate` in deg/s, block by block: yields 1-D arrays of at most
+    ``chunk_samples`` samples whose concatenation equals ``simulate(model, duration_s,
+    seed=seed).gyro_dps[:, axis]`` bit for bit (every random term draws from its own stream,
+    keyed by the axis, so the other axes need not be generated). For analyses that simulate
+    one axis many times (:mod:`gyrofilter.gap`): no time column, no other axes, memory bounded
+    by the block."""
+    from .units import to_dps
+
+    spec = validated if validated is not None else validate_model(model)[0]
+    fs = spec["sample_rate_hz"]
+    n_total = sample_count(duration_s, fs)
+    root = _root_seed(seed, None)
+    temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
+    axis = int(axis)
+    terms = _axis_terms(axis, spec["axes"][AXES[axis]], fs, n_total / fs, root, temp)
+    for start in range(0, n_total, int(chunk_samples)):
+        t_s = np.arange(start, min(start + int(chunk_samples), n_total)) / fs
+        rate = _axis_rate(terms, t_s, temp.true_c(t_s) if temp else None, spec)
+        yield to_dps(rate, spec["gyro_unit"], spec["lsb_per_dps"])
 
 
 def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, validated=None):

@@ -1,51 +1,103 @@
-"""Speed of the gap analysis on hours of 100 Hz data.
+"""Time and peak memory of the gap analysis against the record length, with effects and clean.
 
-    python tools/bench_gap.py [--hours 1 2] [--rate 100]
+    python tools/bench_gap.py [--records 10m@100 1h@100 3h@100 24h@100 1h@1000] [--sims N]
 
-Simulates an MPU6050-like recording (131 LSB per deg/s, a warm-up on x, a sinusoid on z) of the
-given lengths and times ``gyrofilter.gap.analyse_gap`` with the command's defaults, side by
-side with a baseline: one overlapping Allan deviation of the three axes
-(``gyrofilter.allan.overlapping_adev``, default taus), the least any Allan-based analysis does.
-Wall-clock times on a shared machine; the load average is printed with them.
+For each record (length@rate in Hz) simulates an MPU6050-like recording (131 LSB per deg/s)
+twice: **with effects** (x: warm-up and colored noise; y: bias instability and spikes; z: a
+sinusoid) and **clean** (bias, white noise and quantization only), and runs
+``gyrofilter.gap.analyse_gap`` with the command's defaults on each, every run in a fresh Python
+process, side by side with a baseline in the same process: one overlapping Allan deviation of the
+three axes (``gyrofilter.allan.overlapping_adev``, default taus), the least any Allan-based
+analysis does. Printed per run: wall-clock seconds, the process's peak resident memory (MB;
+``resource.getrusage``, the simulated record in memory included, as when ``gyrofilter gap``
+has read a file) and the memory of the record alone, the findings, and the 1-minute load
+average of this shared machine at the end of the run.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import os
-import time
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+EFFECTS = {"x": [{"effect": "warmup", "amplitude_dps": 0.2, "tau_s": 300.0},
+                 {"effect": "colored_noise", "lag1": 0.2}],
+           "y": [{"effect": "bias_instability", "b_dps": 0.004},
+                 {"effect": "outliers", "rate": 2e-5, "magnitude_dps": 1.5}],
+           "z": [{"effect": "sinusoid", "frequency_hz": 7.3, "amplitude_dps": 0.02}]}
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--hours", type=float, nargs="*", default=[1.0, 2.0])
-    p.add_argument("--rate", type=float, default=100.0)
-    args = p.parse_args(argv)
+def model(rate_hz, effects):
+    axes = {"x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009},
+            "y": {"bias_dps": 1.1, "arw_dps_per_sqrt_hz": 0.012},
+            "z": {"bias_dps": 0.4, "arw_dps_per_sqrt_hz": 0.008}}
+    for a, spec in axes.items():
+        spec["effects"] = list(EFFECTS[a]) if effects else []
+    return {"sample_rate_hz": rate_hz, "gyro_unit": "lsb", "lsb_per_dps": 131.0, "axes": axes}
+
+
+def child(spec):
+    """One run in this (fresh) process; prints one JSON line."""
+    import resource
+    import time
 
     from gyrofilter.allan import overlapping_adev
     from gyrofilter.gap import analyse_gap
     from gyrofilter.simulate import simulate
 
-    model = {"sample_rate_hz": args.rate, "gyro_unit": "lsb", "lsb_per_dps": 131.0,
-             "axes": {"x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009,
-                            "effects": [{"effect": "warmup", "amplitude_dps": 0.2, "tau_s": 300.0}]},
-                      "y": {"bias_dps": 1.1, "arw_dps_per_sqrt_hz": 0.012, "effects": []},
-                      "z": {"bias_dps": 0.4, "arw_dps_per_sqrt_hz": 0.008,
-                            "effects": [{"effect": "sinusoid", "frequency_hz": 7.3, "amplitude_dps": 0.02}]}}}
-    print(f"{'record':>14s} {'samples/axis':>13s} {'gap (s)':>9s} {'baseline ADEV x3 (s)':>21s} "
-          f"{'findings':>30s}  load")
-    for hours in args.hours:
-        rec = simulate(model, hours * 3600.0, seed=1)
-        g = rec.gyro_dps
-        t0 = time.perf_counter()
-        for i in range(3):
-            overlapping_adev(g[:, i], args.rate)
-        t_adev = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        rep = analyse_gap(rec, seed=0)
-        t_gap = time.perf_counter() - t0
-        found = ",".join(f"{f['axis']}:{f['effect']}" for f in rep["findings"])
-        load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-        print(f"{hours:10.1f} h {len(rec):13d} {t_gap:9.1f} {t_adev:21.2f} {found:>30s}  {load:.1f}")
+    rec = simulate(spec["model"], spec["duration_s"], seed=1)
+    record_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    g = rec.gyro_dps
+    t0 = time.perf_counter()
+    for i in range(3):
+        overlapping_adev(g[:, i], spec["model"]["sample_rate_hz"])
+    t_adev = time.perf_counter() - t0
+    del g
+    t0 = time.perf_counter()
+    rep = analyse_gap(rec, seed=0, n_sims=spec["sims"])
+    t_gap = time.perf_counter() - t0
+    print(json.dumps({"gap_s": t_gap, "adev_s": t_adev, "record_mb": record_mb,
+                      "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                      "findings": ",".join(f"{f['axis']}:{f['effect']}" for f in rep["findings"]) or "-",
+                      "load": os.getloadavg()[0], "samples": len(rec)}))
+
+
+def parse_record(text):
+    length, _, rate = text.partition("@")
+    unit = {"m": 60.0, "h": 3600.0, "s": 1.0}[length[-1]]
+    return float(length[:-1]) * unit, float(rate or 100.0)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--records", nargs="*", default=["10m@100", "1h@100", "3h@100", "24h@100", "1h@1000"],
+                   help="LENGTH@RATE, LENGTH with unit s, m or h, RATE in Hz")
+    p.add_argument("--sims", type=int, default=None, help="baseline simulations (default: the command's)")
+    p.add_argument("--child", default=None, help=argparse.SUPPRESS)
+    args = p.parse_args(argv)
+    if args.child:
+        child(json.loads(args.child))
+        return
+
+    print(f"{'record':>14s} {'samples/axis':>12s} | {'with effects: gap s':>19s} {'peak MB':>8s} {'record MB':>9s} "
+          f"{'findings':<60s} | {'clean: gap s':>12s} {'peak MB':>8s} {'findings':<10s} | {'ADEV x3 s':>9s} {'load':>5s}",
+          flush=True)
+    for text in args.records:
+        duration_s, rate = parse_record(text)
+        out = {}
+        for kind in ("effects", "clean"):
+            spec = {"model": model(rate, kind == "effects"), "duration_s": duration_s, "sims": args.sims}
+            proc = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", json.dumps(spec)],
+                                  capture_output=True, text=True, check=True)
+            out[kind] = json.loads(proc.stdout.strip().splitlines()[-1])
+        e, c = out["effects"], out["clean"]
+        label = f"{text.split('@')[0]} @ {rate:g} Hz"
+        print(f"{label:>14s} {e['samples']:12d} | {e['gap_s']:19.1f} {e['peak_mb']:8.0f} {e['record_mb']:9.0f} "
+              f"{e['findings']:<60s} | {c['gap_s']:12.1f} {c['peak_mb']:8.0f} {c['findings']:<10s} | "
+              f"{e['adev_s']:9.2f} {max(e['load'], c['load']):5.1f}", flush=True)
 
 
 if __name__ == "__main__":

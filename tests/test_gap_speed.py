@@ -1,0 +1,146 @@
+"""The pieces that make the gap analysis linear in the record length and bounded in memory
+give the numbers of the plain computations they replace (seeded; no timings here: speed and
+memory are printed by ``tools/bench_gap.py``)."""
+import math
+import re
+
+import numpy as np
+import pytest
+
+from gyrofilter import detectors as det
+from gyrofilter import gap
+from gyrofilter.allan import overlapping_adev
+from gyrofilter.simulate import simulate, simulate_axis_dps
+
+MODEL = {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0,
+         "temperature": {"start_c": 25.0, "end_c": 31.0, "tau_s": 200.0, "noise_c": 0.01},
+         "axes": {"x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009,
+                        "effects": [{"effect": "warmup", "amplitude_dps": 0.2, "tau_s": 30.0},
+                                    {"effect": "colored_noise", "lag1": 0.3}]},
+                  "y": {"bias_dps": 1.1, "arw_dps_per_sqrt_hz": 0.012,
+                        "effects": [{"effect": "bias_instability", "b_dps": 0.004},
+                                    {"effect": "outliers", "rate": 1e-3, "magnitude_dps": 1.5}]},
+                  "z": {"bias_dps": 0.4, "arw_dps_per_sqrt_hz": 0.008,
+                        "effects": [{"effect": "temperature", "coefficient_dps_per_c": 0.01},
+                                    {"effect": "sinusoid", "frequency_hz": 7.3, "amplitude_dps": 0.02}]}}}
+
+
+@pytest.mark.parametrize("unit", ["lsb", "dps", "rad/s"])
+def test_one_axis_simulation_equals_that_axis_of_the_full_run(unit):
+    model = dict(MODEL, gyro_unit=unit)
+    full = simulate(model, 250.0, seed=5).gyro_dps
+    for i in range(3):
+        blocks = list(simulate_axis_dps(model, 250.0, i, seed=5, chunk_samples=4096))
+        assert max(b.size for b in blocks) == 4096
+        assert np.array_equal(np.concatenate(blocks), full[:, i])
+
+
+def _strided_adev(x, fs, taus):
+    """NIST SP 1065 eq. 11 over the start points j = 0, s, 2s, ... (s = max(1, m // 8)), by
+    fancy indexing."""
+    phase = np.concatenate(([0.0], np.cumsum(x - x.mean()))) / fs
+    out = []
+    for m in np.round(np.asarray(taus) * fs).astype(int):
+        j = np.arange(0, x.size - 2 * m + 1, max(1, m // 8))
+        d = phase[j + 2 * m] - 2 * phase[j + m] + phase[j]
+        out.append(math.sqrt(np.mean(d ** 2) / 2) / (m / fs))
+    return np.array(out)
+
+
+def test_feature_adev_is_the_strided_overlapping_estimator():
+    rng = np.random.default_rng(3)
+    x = rng.normal(0.5, 0.1, 100_003) + np.cumsum(rng.normal(0, 1e-4, 100_003))
+    taus = gap.feature_taus(x.size, 100.0)
+    got = gap.feature_adev(x, 100.0, taus)
+    assert np.allclose(got, _strided_adev(x, 100.0, taus), rtol=1e-9, atol=0)
+    m = np.round(taus * 100.0).astype(int)
+    small = m < gap.ADEV_STARTS  # every start point: the fully overlapping estimator
+    assert small.sum() >= 4
+    assert np.allclose(got[small], overlapping_adev(x, 100.0, taus[small])[1], rtol=1e-9, atol=0)
+    # fewer start points for long taus: the same expectation, close on one record
+    assert np.allclose(got, overlapping_adev(x, 100.0, taus)[1], rtol=0.15, atol=0)
+
+
+def test_dft_amplitude_equals_the_direct_sum_near_the_peak():
+    rng = np.random.default_rng(4)
+    n, fs, f0 = 300_007, 100.0, 7.31
+    t = np.arange(n) / fs
+    x = rng.normal(0, 0.1, n) + 0.02 * np.sin(2 * math.pi * f0 * t + 0.4)
+    xc = x - x.mean()
+    amp = det._dft_amplitude(xc, fs, f0)
+    for f in (f0, f0 + 0.6 * fs / n, f0 - fs / n):
+        direct = abs(np.sum(xc * np.exp(-2j * math.pi * f * t)))
+        assert amp(f) == pytest.approx(direct, rel=1e-8)
+
+
+def test_moving_mean_and_spike_mask_equal_their_index_formulas():
+    rng = np.random.default_rng(6)
+    for n in (40, 1000, 65_537):
+        x = rng.normal(0, 0.1, n)
+        for w in (1, 4, 5, 64, n + 3):
+            c = np.concatenate(([0.0], np.cumsum(x)))
+            lo = np.clip(np.arange(n) - w // 2, 0, n)
+            hi = np.clip(np.arange(n) - w // 2 + w, 0, n)
+            assert np.allclose(det.moving_mean(x, w), (c[hi] - c[lo]) / (hi - lo), rtol=0, atol=1e-12)
+        x[rng.integers(0, n, 8)] += 3.0
+        x[0] += 3.0
+        r = np.empty(n)
+        r[1:-1] = x[1:-1] - 0.5 * (x[:-2] + x[2:])
+        r[0], r[-1] = x[0] - x[1], x[-1] - x[-2]
+        mask, k, sd_r = det.outlier_statistic(x)
+        a = np.abs(r)
+        left, right = np.concatenate(([0.0], a[:-1])), np.concatenate((a[1:], [0.0]))
+        assert mask.any() and np.array_equal(mask, (a > k * sd_r) & (a >= left) & (a >= right))
+
+
+def test_least_squares_and_detrend_equal_lstsq():
+    rng = np.random.default_rng(8)
+    n = 50_001
+    t = np.arange(n) / 100.0
+    g = np.exp(-t / 60.0)
+    x = 0.3 * g + 0.01 * t + rng.normal(0, 0.1, n)
+    coef = det._least_squares([g, t - t.mean()], x)
+    ref, *_ = np.linalg.lstsq(np.column_stack([g, t - t.mean(), np.ones(n)]), x, rcond=None)
+    assert np.allclose(coef, ref, rtol=1e-9, atol=1e-12)
+    line = np.polyval(np.polyfit(t, x, 1), t)
+    assert np.allclose(det.detrend_line(x), x - line, rtol=0, atol=1e-10)
+
+
+def test_band_edges_find_the_bins_of_searchsorted():
+    rng = np.random.default_rng(9)
+    for _ in range(200):
+        n = int(rng.integers(300, 3_000_000))
+        fs = float(rng.choice([1.0, 99.3171, 100.0, 1000.0]))
+        size = n // 2 + 1
+        freqs = np.concatenate([gap.feature_bands(n, fs), np.arange(0, size, size // 7 + 1) * fs / n])
+        assert np.array_equal(gap._first_bins(freqs, size, n, fs), np.searchsorted(np.arange(size) * fs / n, freqs))
+
+
+def test_progress_gives_fraction_and_time_left_and_the_extended_model_reuses_the_gain_runs():
+    model = {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0,
+             "axes": {"x": {"bias_dps": 0.1, "arw_dps_per_sqrt_hz": 0.01, "effects": []},
+                      "y": {"bias_dps": 0.2, "arw_dps_per_sqrt_hz": 0.01, "effects": []},
+                      "z": {"bias_dps": 0.3, "arw_dps_per_sqrt_hz": 0.01,
+                            "effects": [{"effect": "sinusoid", "frequency_hz": 3.3, "amplitude_dps": 0.03}]}}}
+    lines = []
+    report = gap.analyse_gap(simulate(model, 600.0, seed=2), seed=1, n_sims=6, progress=lines.append)
+    steps = [s for s in lines if re.search(r": \d+/\d+ \(\d+ %, about \d+ s left\)$", s)]
+    assert any(s.startswith("baseline simulations") and "18/18 (100 %" in s for s in steps), lines
+    assert any(s.startswith("gain of sinusoid on z") for s in steps), lines
+    (finding,) = report["findings"]
+    # one finding on z: the extended model's z is the model of that finding's gain
+    assert report["discrepancy"]["after"]["z"] == finding["gain"]["after"]
+
+
+def test_periodogram_length_is_the_largest_11_smooth_length():
+    def smooth(v):
+        for p in (2, 3, 5, 7, 11):
+            while v % p == 0:
+                v //= p
+        return v == 1
+
+    for n in list(range(64, 3000)) + [333_269, 1_000_003, 3_599_999]:
+        got = det.periodogram_length(n)
+        assert got <= n and smooth(got), n
+        assert not any(smooth(v) for v in range(got + 1, n + 1)), n
+    assert det.periodogram_length(333_269) == 332_750  # 2 5^3 11^3
