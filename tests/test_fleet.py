@@ -86,9 +86,10 @@ def test_a_clean_fleet_has_no_flags(tmp_path):
 # ------------------------------------------------------------------------------ the rules alone
 
 
-def _row(unit, axis="x", n=0.01, n_rel=0.01, b=None, b_upper=0.002, findings=()):
+def _row(unit, axis="x", n=0.01, n_rel=0.01, b=None, b_upper=0.002, findings=(), d_before=None):
     row = dict.fromkeys(fleet.COLUMNS)
     row.update(unit=unit, axis=axis, status="ok", flags=[], findings=list(findings),
+               d_before=d_before if d_before is not None else (5.0 if findings else 1.0),
                arw_dps_per_sqrt_hz=n, arw_dps_per_sqrt_hz_low=n * (1 - n_rel), arw_dps_per_sqrt_hz_high=n * (1 + n_rel),
                bias_instability_dps=b, bias_instability_dps_upper=None if b else b_upper)
     if b:
@@ -127,6 +128,12 @@ def test_a_finding_most_units_share_is_not_flagged_and_a_rare_one_is():
     rows += [_row("u3", axis="z"), _row("u4", axis="z", findings=[line])]
     fleet.flag_units(rows)
     assert [(r["unit"], [f["what"] for f in r["flags"]]) for r in rows if r["flags"]] == [("u2", ["bias_step"])]
+    # a rare finding where the baseline already explains the axis (D below RARE_MIN_D) is no flag
+    rows[2] = _row("u2", axis="z", findings=[line, step], d_before=fleet.RARE_MIN_D * 0.99)
+    for r in rows:
+        r["flags"] = []
+    fleet.flag_units(rows)
+    assert not any(r["flags"] for r in rows)
 
 
 # ------------------------------------------------------------------------------ names and inputs
