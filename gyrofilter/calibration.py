@@ -77,6 +77,8 @@ class Calibration:
         try:
             with open(path, encoding="utf-8") as fh:
                 data = json.load(fh)
+        except OSError as exc:
+            raise CalibrationError(f"{path}: cannot read the calibration file ({exc.strerror or exc})") from None
         except json.JSONDecodeError as exc:
             raise CalibrationError(f"{path}: not a calibration JSON file ({exc.msg} at line {exc.lineno})") from None
         try:
@@ -140,7 +142,9 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
-                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
+                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s, "
+                f"or use a saved calibration of this sensor (GyroFilter(calibration=...), --calibration FILE from "
+                f"--save-calibration on a still recording)"
             )
     sigma = white_noise_std(x)
     temp = None if temp_c is None else float(np.mean(temp_c))

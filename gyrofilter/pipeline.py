@@ -153,7 +153,9 @@ class FilterSettings:
         rules = (*AVERAGERS, "by_model")
         need(self.outlier_rule in rules, "outlier_rule", f"must be one of {', '.join(map(repr, rules))}")
         need(self.outlier_rule != "by_model" or (self.kalman_noise == "adaptive" and self.tracker == "kalman"), "outlier_rule",
-             "'by_model' follows the adaptive Kalman filter's model: it needs kalman_noise='adaptive' and tracker='kalman'")
+             "'by_model' follows the adaptive Kalman filter's model: it needs kalman_noise='adaptive' and "
+             "tracker='kalman'; with another filter choose the rule too, e.g. outlier_rule='paper' "
+             "(--set outlier_rule=paper)")
         c = self.temp_coefficient_dps_per_c
         ok = isinstance(c, (int, float)) and not isinstance(c, bool) or (
             isinstance(c, (tuple, list)) and len(c) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in c))
@@ -219,6 +221,7 @@ class GyroFilter:
         self._temp_on = any(self._temp_coef)
         self._temp_ref = None  # T0 of the temperature compensation: the calibration's mean temperature
         self._y1 = np.zeros((1, 3))
+        self._y1_motion = np.zeros((1, 3))  # outlier_rule="by_model": the motion rule's block mean
         self._out1 = np.zeros((1, 3))
         self._hold = None  # constant-rate hold stage (gyrofilter.adaptive), built after calibration
         # divergence guard: sigma_b, the std of a block mean at rest (the adaptive filter's R too)
@@ -337,14 +340,24 @@ class GyroFilter:
         q = self.settings.outlier_q_dps
         y1 = self._y1
         modes = self._akf.modes() if self._by_model else NO_MODES
+        both = self._by_model and self.block_log is not None  # a smoother's backward pass needs both rules' means
+        y1_motion = self._y1_motion
         for a, values in enumerate(zip(*block)):
-            average = self._average_one if modes[a] == kalman.REST else average_block_line_if_cut
-            mean, rejected, fallback = average(values, q)
+            motion = modes[a] != kalman.REST
+            if motion or both:
+                motion_mean, motion_rejected, _ = average_block_line_if_cut(values, q)
+            if not motion or both:
+                mean, rejected, fallback = self._average_one(values, q)
+            if motion:
+                rejected, fallback = motion_rejected, False
+                if not both:
+                    mean = motion_mean
             if rejected or fallback:
                 self.rejected[a] += rejected
                 self.fallback_blocks[a] += fallback
             y1[0, a] = mean - self._bias[a]
-        self._track(y1, self._out1)
+            y1_motion[0, a] = (motion_mean if motion or both else mean) - self._bias[a]
+        self._track(y1, self._out1, y1_motion if self._by_model else None)
         self.blocks_out += 1
         x, y, z = self._out1[0].tolist()
         return (x, y, z)

@@ -1,4 +1,6 @@
 """Figures of filtered series (matplotlib, imported only when a figure is drawn)."""
+import os
+
 from .extras import require
 
 
@@ -6,6 +8,21 @@ def pyplot():
     """matplotlib.pyplot with the file-only Agg backend, or MissingExtraError naming the extra."""
     require("matplotlib", "figures").use("Agg")
     return require("matplotlib.pyplot", "figures")
+
+
+def check_figure_path(path, option="--plot"):
+    """Refuse, before any work, a figure file whose extension matplotlib cannot write
+    (SettingsError naming the formats it can); matplotlib missing is said here too."""
+    from .errors import SettingsError
+
+    pyplot()
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    ext = os.path.splitext(path)[1].lstrip(".").lower()
+    if ext not in formats:
+        raise SettingsError(f"{option} {path}: matplotlib cannot write {'.' + ext if ext else 'a file without an extension'}; "
+                            f"use one of {', '.join('.' + f for f in sorted(formats))}")
 
 
 def plot_filtered(path, raw, filtered, *, title=""):

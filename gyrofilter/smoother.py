@@ -80,6 +80,12 @@ class Smoother:
     """
 
     def __init__(self, filt):
+        from .pipeline import GyroFilter
+
+        if not isinstance(filt, GyroFilter):
+            raise SettingsError(f"Smoother needs a GyroFilter, got {type(filt).__name__}")
+        if filt.block_log is not None:
+            raise SettingsError("this filter already has a Smoother; use that one")
         s = filt.settings
         if s.tracker != "kalman" or s.kalman_noise != "adaptive" or s.hold:
             raise SettingsError(f"smoothing needs the adaptive Kalman filter (preset 'recommended' or 'adaptive_kalman'), "

@@ -86,3 +86,8 @@ def test_save_load_round_trip_and_bad_files(tmp_path):
     path.write_text(json.dumps({"bias_dps": [1, 2], "noise_std_dps": [1, 1, 1], "samples": 3, "sample_rate_hz": 100}))
     with pytest.raises(CalibrationError, match="3 finite numbers"):
         Calibration.load(path)
+
+
+def test_a_missing_calibration_file_is_a_calibration_error_naming_it(tmp_path):
+    with pytest.raises(CalibrationError, match=r"nofile\.json: cannot read the calibration file"):
+        Calibration.load(tmp_path / "nofile.json")

@@ -20,7 +20,7 @@ def _signal(seed, n=N):
     moving = t > 3.0
     x[moving, 0] += 40 * np.sin(2 * np.pi * 0.7 * (t[moving] - 3.0))
     x[moving, 2] += 12.0
-    spikes = rng.random((n, 3)) < 0.03
+    spikes = (rng.random((n, 3)) < 0.03) & (t >= 2.0)[:, None]  # none in the calibration window, which must pass as still
     x[spikes] += rng.choice([-1, 1], spikes.sum()) * rng.uniform(2, 30, spikes.sum())
     temp = 25 + 0.5 * t / t[-1] + 0.01 * rng.standard_normal(n)
     return x, temp

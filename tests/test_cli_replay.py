@@ -203,3 +203,12 @@ def test_outputs_are_checked_before_any_work(tmp_path, capsys):
     assert "exists" in capsys.readouterr().err and out.read_text() == "keep me"
     assert main(["replay", str(src), "--out", str(out), "--force"]) == 0
     assert len(read_recording(out)) == (1000 - 200) // 5
+
+
+def test_a_figure_format_matplotlib_cannot_write_is_refused_before_any_work(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "late.csv"
+    assert main(["replay", "--plot", str(tmp_path / "o.jpg2"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "matplotlib cannot write .jpg2" in err and ".png" in err
+    assert not out.exists()

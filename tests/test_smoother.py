@@ -82,6 +82,23 @@ def test_the_smoother_is_closer_to_the_truth_than_the_real_time_filter():
     assert np.all(sq_s.mean(axis=(0, 1)) < sq_rt.mean(axis=(0, 1)))
 
 
+@pytest.mark.parametrize("seed", [1, 2])
+def test_a_filter_fed_sample_by_sample_smooths_as_one_call(seed):
+    # fast motion with spikes: the rule by model uses both gross-error rules, and the backward
+    # pass needs both rules' block means whichever the forward filter took
+    rng = np.random.default_rng(seed)
+    t = np.arange(CAL + 5 * 600) / FS
+    x = still(len(t), seed) + np.where(t > 3, 60 * np.sin(2 * np.pi * 1.3 * t), 0.0)[:, None]
+    spikes = rng.random(x.shape) < 0.02
+    x[spikes] += rng.choice([-1, 1], spikes.sum()) * rng.uniform(2, 20, spikes.sum())
+    whole = smooth(x, FS, backend="python")
+    f = GyroFilter(FS, backend="python")
+    s = Smoother(f)
+    rows = [f.update(sample) for sample in x]
+    np.testing.assert_array_equal(np.array([r for r in rows if r is not None]), GyroFilter(FS, backend="python").filter(x))
+    np.testing.assert_array_equal(s.smooth(), whole)
+
+
 def test_combine_is_the_inverse_variance_mean():
     np.testing.assert_allclose(combine(np.array([1.0]), np.array([1.0]), np.array([3.0]), np.array([3.0])), [1.5])
     np.testing.assert_allclose(combine(np.array([2.0]), np.array([0.5]), np.array([-4.0]), np.array([0.5])), [-1.0])
@@ -97,6 +114,10 @@ def test_the_smoother_needs_the_adaptive_kalman_filter_attached_from_the_start()
         Smoother(f)
     f = GyroFilter(FS)
     assert Smoother(f).smooth().shape == (0, 3)
+    with pytest.raises(SettingsError, match="already has a Smoother"):
+        Smoother(f)
+    with pytest.raises(SettingsError, match="needs a GyroFilter, got str"):
+        Smoother("abc")
 
 
 def test_replay_smooth_writes_the_smoothed_rows_with_the_real_time_rows_times(tmp_path, capsys):

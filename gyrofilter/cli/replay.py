@@ -44,6 +44,10 @@ def add_arguments(parser):
 def run(args):
     path = args.recording or str(resources.files("gyrofilter") / "data" / BUNDLED)
     common.check_outputs([args.out, args.plot, args.save_calibration], [path, args.calibration, args.temp_model], args.force)
+    if args.plot:
+        from ..plots import check_figure_path
+
+        check_figure_path(args.plot)
     if args.smooth and args.realtime:
         raise SettingsError("--smooth needs the whole recording before the first row; it cannot run with --realtime")
     chunks = iter_recording(path, chunk_rows=CHUNK_ROWS)
