@@ -155,7 +155,7 @@ def _allan_part(path, settings, result):
                                            keep_outliers=settings.keep_outliers, warn=warn)
     fs = head.sample_rate_hz
     for axis, r in results.items():
-        result["warnings"].extend(f"axis {axis}: {text}" for text in r.warnings)
+        result["warnings"].extend(text if text.startswith("axis ") else f"axis {axis}: {text}" for text in r.warnings)
     result["allan"] = to_json(results, fs, recording=path, duration_s=head.rows / fs)
     result["kalibr"] = kalibr_yaml(results, fs, recording=path)
     result["sample_rate_hz"], result["duration_s"] = fs, head.rows / fs
@@ -325,7 +325,9 @@ def fleet_rows(names, results):
         gap = res["gap"]
         axes = [a for a in AXES if a in allan_axes or gap is not None]
         for axis in axes:
-            row = dict(base, axis=axis, flags=[])
+            # the recording's warnings, and of the per-axis ones ("axis x: ...") only this axis's
+            row = dict(base, axis=axis, flags=[],
+                       warnings=[w for w in base["warnings"] if not w.startswith("axis ") or w.startswith(f"axis {axis}:")])
             if axis in allan_axes:
                 details = allan_axes[axis]["details"]
                 for term in COEFFICIENTS:

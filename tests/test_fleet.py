@@ -218,7 +218,7 @@ def test_two_worker_processes_give_the_results_of_one(small_fleet, one_worker, t
     assert _table(tmp_path) == _table(one_worker)
     assert _reports(tmp_path) == _reports(one_worker)
     err = capsys.readouterr().err
-    assert "gap: 4 recording(s) on 2 worker process(es)" in err and "gap [4/4, " in err  # progress over the files
+    assert "gap: 4 recording(s); 4 on 2 worker process(es)" in err and "gap [4/4, " in err  # progress over the files
 
 
 def test_a_dask_cluster_of_two_workers_gives_the_results_of_one_worker(small_fleet, one_worker, tmp_path, capsys):
@@ -283,3 +283,12 @@ def test_existing_outputs_are_refused_before_any_work(small_fleet, tmp_path, cap
     assert sorted(os.listdir(out)) == ["unit1.allan.json"]
     assert main(["allan", small_fleet[0], small_fleet[1], "--out-dir", str(out), "--force", "--jobs", "1"]) == 0
     assert (out / "unit1.allan.json").read_text() != "keep"
+
+
+def test_a_rows_warnings_are_the_recordings_and_its_own_axis():
+    res = {"recording": "r.csv", "error": None, "warnings": ["r.csv: 2 samples lost", "axis z: few clusters"],
+           "sample_rate_hz": 100.0, "duration_s": 60.0, "runtime_s": 1.0, "allan": None,
+           "gap": {"findings": [], "discrepancy": {}}}
+    rows = fleet.fleet_rows(["r"], [res])
+    assert {r["axis"]: r["warnings"] for r in rows} == {
+        "x": ["r.csv: 2 samples lost"], "y": ["r.csv: 2 samples lost"], "z": ["r.csv: 2 samples lost", "axis z: few clusters"]}

@@ -110,7 +110,9 @@ def run(args, settings, paths):
     show = args.progress or sys.stderr.isatty()
     t0 = time.perf_counter()
     if show:
-        common.say(f"{settings.command}: {len(todo)} recording(s) on {where}")
+        unmatched = len(paths) - len(todo)
+        common.say(f"{settings.command}: {len(paths)} recording(s)" + (f", {unmatched} matching no file" if unmatched else "")
+                   + f"; {len(todo)} on {where}")
         for r in results:
             if r is not None:
                 common.say(f"{settings.command}: FAILED: {r['error']}")
