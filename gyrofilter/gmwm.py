@@ -237,3 +237,18 @@ def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0):
             for terms in itertools.combinations(OPTIONAL_TERMS, r):
                 fits.append(fit_model(wv, terms, k_gm, starts=starts, seed=seed))
     return min(fits, key=lambda f: f.criterion), fits
+
+
+def simulated_wv(model, axis, n_samples, *, seeds=(0, 1, 2, 3), min_edf=2.0):
+    """Mean Haar wavelet variance of ``axis`` (0, 1, 2) of a simulator model over ``seeds`` runs
+    of ``n_samples`` samples: the model's curve where no closed form covers every effect."""
+    from .simulate import simulate_axis_dps, validate_model
+
+    spec = validate_model(model)[0]
+    fs = spec["sample_rate_hz"]
+    runs = []
+    for seed in seeds:
+        x = np.concatenate(list(simulate_axis_dps(spec, n_samples / fs, axis, seed=int(seed), validated=spec)))
+        runs.append(haar_wv(x, fs, min_edf=min_edf))
+    return WaveletVariance(fs, runs[0].n_samples, runs[0].tau_s, np.mean([r.wv_dps2 for r in runs], axis=0),
+                           runs[0].edf)
