@@ -113,3 +113,29 @@ def test_compare_tool_rows_on_a_simulated_record():
         assert all(np.isfinite(r[k]) for k in ("dist_baseline", "dist_extended", "dist_nnls", "dist_gmwm"))
     assert len(rows[2]["gmwm"].gauss_markov) == 1
     assert rows[2]["dist_gmwm"] < rows[2]["dist_baseline"]
+
+
+def _tool(name):
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    return tool
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_band_estimate_recovers_a_simulated_narrowband_line(seed):
+    tool = _tool("gap_narrowband")
+    model = {"sample_rate_hz": FS, "axes": {"z": {"arw_dps_per_sqrt_hz": 0.02, "effects": [
+        {"effect": "narrowband", "center_hz": 20.0, "bandwidth_hz": 1.0, "rms_dps": 0.1}]}}}
+    x = simulate(model, 1800.0, seed=seed).gyro_dps[:, 2]
+    band = tool.band_estimate(x, FS)
+    assert abs(band["center_hz"] - 20.0) < 0.1
+    assert abs(band["bandwidth_hz"] / 1.0 - 1) < 0.25
+    assert abs(band["rms_dps"] / 0.1 - 1) < 0.15
+    with_line = tool.with_narrowband({"sample_rate_hz": FS, "axes": {"z": {"arw_dps_per_sqrt_hz": 0.03}}}, "z", band)
+    assert with_line["axes"]["z"]["effects"][0]["effect"] == "narrowband"
+    assert with_line["axes"]["z"]["arw_dps_per_sqrt_hz"] < 0.03
