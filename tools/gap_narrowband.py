@@ -22,7 +22,8 @@ import math
 def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, background_hz=10.0, smooth_bins=15):
     """Centre, half-power full width and rms of the strongest band of a rate series.
 
-    One-sided Welch PSD S(f) (Hann, ``nperseg``); background b(f) = running median of S over
+    One-sided Welch PSD S(f) (Hann, segments of ``nperseg`` samples, fewer when the record holds
+    less than 16 of them: the largest power of 2 up to N / 16); background b(f) = running median of S over
     ±``background_hz``; excess e = S - b, and ē its moving average over ``smooth_bins`` bins
     (the Welch bins are noisy). The peak is the bin of largest ē / b; the band is the contiguous
     run of bins around it with ē > ē_peak / 2 (its width is the half-power full width), the
@@ -36,7 +37,8 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, background_hz=10.0, sm
     from scipy.signal import welch
 
     x = np.asarray(x_dps, dtype=float)
-    f, s = welch(x - x.mean(), fs=sample_rate_hz, nperseg=min(nperseg, x.size))
+    seg = int(min(nperseg, 2 ** int(math.log2(max(x.size // 16, 16)))))
+    f, s = welch(x - x.mean(), fs=sample_rate_hz, nperseg=seg)
     df = f[1] - f[0]
     width = max(3, int(round(2 * background_hz / df)) | 1)
     back = median_filter(s, size=width, mode="nearest")
