@@ -139,3 +139,18 @@ def test_band_estimate_recovers_a_simulated_narrowband_line(seed):
     with_line = tool.with_narrowband({"sample_rate_hz": FS, "axes": {"z": {"arw_dps_per_sqrt_hz": 0.03}}}, "z", band)
     assert with_line["axes"]["z"]["effects"][0]["effect"] == "narrowband"
     assert with_line["axes"]["z"]["arw_dps_per_sqrt_hz"] < 0.03
+
+
+def test_colored_lag1_is_resolved_so_noise_plus_line_have_the_measured_lag1():
+    """The model of with_narrowband(..., lag1=r) simulates with lag-1 autocorrelation r."""
+    tool = _tool("gap_narrowband")
+    band = {"center_hz": 20.0, "bandwidth_hz": 1.0, "rms_dps": 0.1}
+    base = {"sample_rate_hz": FS, "axes": {"z": {"arw_dps_per_sqrt_hz": 0.02,
+                                                 "effects": [{"effect": "colored_noise", "lag1": 0.3}]}}}
+    model = tool.with_narrowband(base, "z", band, 0.02, lag1=0.15)
+    rho = model["axes"]["z"]["effects"][0]["lag1"]
+    assert rho != 0.3
+    x = simulate(model, 600.0, seed=3).gyro_dps[:, 2]
+    xc = x - x.mean()
+    r1 = np.einsum("i,i->", xc[1:], xc[:-1]) / np.einsum("i,i->", xc, xc)
+    assert abs(r1 - 0.15) < 0.02
