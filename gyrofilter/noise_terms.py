@@ -107,6 +107,97 @@ class GaussMarkov:
         return y
 
 
+def _state_covariance(b, a):
+    """Stationary covariance P of the lfilter state (transposed direct form II), unit white input.
+
+    With a₀ = 1 and k = max(len(a), len(b)) - 1, the state z (k numbers) of
+    y[n] = b₀ w[n] + z₀[n] evolves as z[n+1] = A z[n] + g w[n], A[i, 0] = -a_{i+1},
+    A[i, i+1] = 1, g_i = b_{i+1} - a_{i+1} b₀ (scipy.signal.lfilter's recursion). For a stable
+    filter P solves the discrete Lyapunov equation P = A P Aᵀ + g gᵀ.
+    """
+    from scipy.linalg import solve_discrete_lyapunov
+
+    k = max(len(a), len(b)) - 1
+    a = np.r_[a, np.zeros(k + 1 - len(a))]
+    b = np.r_[b, np.zeros(k + 1 - len(b))]
+    trans = np.zeros((k, k))
+    trans[:, 0] = -a[1:]
+    trans[np.arange(k - 1), np.arange(1, k)] = 1.0
+    drive = b[1:] - a[1:] * b[0]
+    return solve_discrete_lyapunov(trans, np.outer(drive, drive))
+
+
+def filter_variance(b, a):
+    """Stationary variance of y = (B(z)/A(z)) w for unit white w: b₀² + P₀₀ (P of
+    :func:`_state_covariance`), i.e. Σ h[n]² of the impulse response."""
+    b = np.asarray(b, dtype=float)
+    if max(len(a), len(b)) == 1:
+        return float(b[0] ** 2)
+    return float(b[0] ** 2 + _state_covariance(b, a)[0, 0])
+
+
+class FilteredNoise:
+    """Stationary coloured noise y = (B(z)/A(z)) w: white normal draws through a rational filter.
+
+    y[n] = Σ_j b_j w[n-j] - Σ_{i≥1} a_i y[n-i] (a₀ = 1; Kasdin 1995, filtered white noise), the
+    filter state started from its stationary law N(0, P) (:func:`_state_covariance`), so every sample
+    has the stationary variance; streams block by block with the lfilter state. Two-sided PSD
+    S(f) = |B(e^{-jω})|² / |A(e^{-jω})|² / f_s ((deg/s)²/Hz), ω = 2π f / f_s. The ``narrowband``
+    and ``arma`` effects are built on it.
+    """
+
+    def __init__(self, b, a, rng):
+        self.b = np.asarray(b, dtype=float)
+        self.a = np.asarray(a, dtype=float)
+        self.rng = rng
+        self.state = None
+
+    def next(self, t_s, temp_c):
+        from scipy.signal import lfilter
+
+        if len(self.a) == 1 and len(self.b) == 1:
+            return self.b[0] * self.rng.standard_normal(len(t_s))
+        if self.state is None:  # z ~ N(0, P): stationary from the first sample, no burn-in
+            vals, vecs = np.linalg.eigh(_state_covariance(self.b, self.a))
+            self.state = vecs @ (np.sqrt(np.clip(vals, 0.0, None)) * self.rng.standard_normal(len(vals)))
+        y, self.state = lfilter(self.b, self.a, self.rng.standard_normal(len(t_s)), zi=self.state)
+        return y
+
+
+def narrowband_filter(rms_dps, center_hz, bandwidth_hz, sample_rate_hz):
+    """(b, a) of the ``narrowband`` effect: a spectral line of given centre, width and rms.
+
+    A two-pole resonator (AR(2)) y[n] = 2 r cos θ y[n-1] - r² y[n-2] + g w[n] with
+    θ = 2π f₀ / f_s and r = exp(-π B / f_s): its poles r e^{±jθ} are the sampled poles
+    -πB ± j2πf₀ of a continuous resonator whose peak has the half-power full width B (Hz)
+    (Oppenheim & Schafer, Discrete-Time Signal Processing, 3rd ed., sec. 5.3.2; exact as
+    B << f₀). The gain g sets the stationary std to ``rms_dps``: for an AR(2) with
+    φ₁ = 2 r cos θ, φ₂ = -r², Var y = g² (1 - φ₂) / ((1 + φ₂)((1 - φ₂)² - φ₁²))
+    (Box & Jenkins, Time Series Analysis, eq. 3.2.28).
+    """
+    theta = 2.0 * math.pi * float(center_hz) / sample_rate_hz
+    r = math.exp(-math.pi * float(bandwidth_hz) / sample_rate_hz)
+    phi1, phi2 = 2.0 * r * math.cos(theta), -r * r
+    unit_var = (1.0 - phi2) / ((1.0 + phi2) * ((1.0 - phi2) ** 2 - phi1**2))
+    return np.array([float(rms_dps) / math.sqrt(unit_var)]), np.array([1.0, -phi1, -phi2])
+
+
+def arma_filter(phi, theta, sigma_a_dps):
+    """(b, a) of the ``arma`` effect in the signs of :mod:`gyrofilter.arma` (paper 003):
+    x[n] - Σ φ_i x[n-i] = a[n] - Σ θ_j a[n-j], a ~ N(0, σ_a²), so A(z) = 1 - Σ φ_i z⁻ⁱ and
+    B(z) = σ_a (1 - Σ θ_j z⁻ʲ) (Box & Jenkins, eq. 3.4.1)."""
+    b = float(sigma_a_dps) * np.r_[1.0, -np.asarray(theta, dtype=float)]
+    return b, np.r_[1.0, -np.asarray(phi, dtype=float)]
+
+
+def filter_psd(b, a, f_hz, sample_rate_hz):
+    """Two-sided PSD |B(e^{-jω})|² / |A(e^{-jω})|² / f_s of :class:`FilteredNoise`, ω = 2πf/f_s."""
+    z = np.exp(-2j * math.pi * np.asarray(f_hz, dtype=float) / sample_rate_hz)
+    num = np.polyval(np.asarray(b)[::-1], z)
+    den = np.polyval(np.asarray(a)[::-1], z)
+    return np.abs(num) ** 2 / np.abs(den) ** 2 / sample_rate_hz
+
+
 def flicker_bank(b_dps, sample_rate_hz, tau_min_s, tau_max_s, per_decade=2.0):
     """Time constants and per-component std of the Gauss-Markov bank that makes 1/f noise.
 

@@ -67,6 +67,8 @@ EFFECTS = {
     "warmup": ({"amplitude_dps": "any", "tau_s": "pos"}, {}),
     "outliers": ({"rate": "frac", "magnitude_dps": "nonneg"}, {"spread_ln": ("nonneg", 0.25)}),
     "colored_noise": ({"lag1": "lag"}, {"preserve": ("choice:arw,std", "arw")}),
+    "narrowband": ({"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {}),
+    "arma": ({"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])}),
 }
 _EFFECT_ID = {name: i + 1 for i, name in enumerate(EFFECTS)}  # 0 = white noise; fixed stream keys
 
@@ -223,6 +225,10 @@ def _validate_effect(eff, where, model, warnings):
             if value not in choices:
                 _err(f"{label}.{key}", f"expected one of {', '.join(choices)}, got {_show(value)}")
             out[key] = value
+        elif kind == "coefs":
+            if not isinstance(value, (list, tuple)):
+                _err(f"{label}.{key}", f"expected a list of numbers, got {_show(value)}")
+            out[key] = [_number(v, f"{label}.{key}[{i}]") for i, v in enumerate(value)]
         else:
             out[key] = None if value is None else _number(value, f"{label}.{key}", kind)
     for key in eff:
@@ -233,6 +239,11 @@ def _validate_effect(eff, where, model, warnings):
     if name == "sinusoid" and out["frequency_hz"] > model["sample_rate_hz"] / 2.0:
         warnings.append(f"model: {label}: frequency_hz {out['frequency_hz']:g} is above the Nyquist frequency "
                         f"{model['sample_rate_hz'] / 2.0:g} Hz and will alias")
+    if name == "narrowband" and out["center_hz"] >= model["sample_rate_hz"] / 2.0:
+        _err(f"{label}.center_hz", f"expected a frequency below the Nyquist frequency {model['sample_rate_hz'] / 2.0:g} Hz, "
+                                   f"got {out['center_hz']:g}")
+    if name == "arma" and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:
+        _err(f"{label}.phi", "expected a stationary AR part (every root of z^p - phi_1 z^(p-1) - ... - phi_p inside the unit circle)")
     if name == "bias_instability" and out["tau_min_s"] and out["tau_max_s"] and out["tau_max_s"] < out["tau_min_s"]:
         _err(f"{label}.tau_max_s", "expected tau_max_s >= tau_min_s")
     return out
@@ -297,6 +308,12 @@ def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
             terms.append(nt.BiasStep(eff["size_dps"], eff["time_s"]))
         elif name == "warmup":
             terms.append(nt.Warmup(eff["amplitude_dps"], eff["tau_s"]))
+        elif name == "narrowband":
+            b, a = nt.narrowband_filter(eff["rms_dps"], eff["center_hz"], eff["bandwidth_hz"], fs)
+            terms.append(nt.FilteredNoise(b, a, _stream(root, *key, 0)))
+        elif name == "arma":
+            b, a = nt.arma_filter(eff["phi"], eff["theta"], eff["sigma_a_dps"])
+            terms.append(nt.FilteredNoise(b, a, _stream(root, *key, 0)))
         elif name == "outliers":
             outliers.append(nt.Outliers(eff["rate"], eff["magnitude_dps"], _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
         # colored_noise is part of the noise term

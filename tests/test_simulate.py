@@ -36,6 +36,8 @@ ALL_EFFECTS = [
     {"effect": "warmup", "amplitude_dps": 0.5, "tau_s": 20.0},
     {"effect": "outliers", "rate": 0.002, "magnitude_dps": 2.0},
     {"effect": "colored_noise", "lag1": 0.5},
+    {"effect": "narrowband", "center_hz": 33.0, "bandwidth_hz": 2.0, "rms_dps": 0.03},
+    {"effect": "arma", "sigma_a_dps": 0.01, "phi": [1.2, -0.5], "theta": [0.3]},
 ]
 TEMP = {"start_c": 25.0, "end_c": 32.0, "tau_s": 60.0, "noise_c": 0.02, "resolution_c": 1 / 340}
 
@@ -47,7 +49,7 @@ def full_model(**kw):
 
 def test_every_effect_of_the_table_is_supported():
     assert list(EFFECTS) == ["bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
-                             "temperature", "bias_step", "warmup", "outliers", "colored_noise"]
+                             "temperature", "bias_step", "warmup", "outliers", "colored_noise", "narrowband", "arma"]
     assert {e["effect"] for e in ALL_EFFECTS} == set(EFFECTS)
 
 

@@ -1,0 +1,156 @@
+"""GMWM-style composite fit (gyrofilter.gmwm): the wavelet variance, its closed forms, recovery of
+simulated composite processes (seeded, several seeds) and the comparison with the Allan NNLS fit."""
+import math
+
+import numpy as np
+import pytest
+
+from gyrofilter import gmwm
+from gyrofilter.allan import overlapping_adev
+from gyrofilter.noise_model import characterise_axis
+from gyrofilter.simulate import simulate
+
+FS = 100.0
+
+
+def series(effects, arw, duration_s, seed, fs=FS):
+    m = {"sample_rate_hz": fs, "axes": {"z": {"arw_dps_per_sqrt_hz": arw, "effects": effects}}}
+    return simulate(m, duration_s, seed=seed).gyro_dps[:, 2]
+
+
+def test_wavelet_variance_is_half_the_allan_variance_at_dyadic_scales():
+    x = series([], 0.01, 300.0, seed=1)
+    wv = gmwm.haar_wv(x, FS)
+    assert np.array_equal(wv.m, 2 ** np.arange(wv.m.size))
+    _, adev = overlapping_adev(x, FS, wv.tau_s)
+    assert np.allclose(wv.wv_dps2, adev**2 / 2)
+    assert np.allclose(wv.edf, np.maximum((x.size - 2 * wv.m + 1) / (2 * wv.m), 1))
+    assert wv.edf[-1] >= 2.0
+
+
+@pytest.mark.parametrize("effect, closed_form", [
+    ({"effect": "rate_random_walk", "k_dps_per_sqrt_s": 0.01}, lambda tau: gmwm.wv_rrw(tau, 0.01, FS)),
+    ({"effect": "gauss_markov", "sigma_dps": 0.05, "tau_s": 0.3}, lambda tau: gmwm.wv_gauss_markov(tau, 0.05, 0.3, FS)),
+    ({"effect": "rate_ramp", "r_dps_per_s": 0.002}, lambda tau: gmwm.wv_ramp(tau, 0.002)),
+])
+def test_closed_forms_match_simulated_terms(effect, closed_form):
+    """Mean over seeds of the measured wavelet variance against the term's closed form, at scales
+    with many degrees of freedom (the white-noise form is tested by the fits below)."""
+    runs = np.array([gmwm.haar_wv(series([effect], 0.0, 200.0, seed=s), FS).wv_dps2 for s in range(8)])
+    wv = gmwm.haar_wv(series([effect], 0.0, 200.0, seed=0), FS)
+    keep = wv.edf >= 50
+    ratio = runs.mean(axis=0)[keep] / closed_form(wv.tau_s[keep])
+    assert np.all(np.abs(ratio - 1) < 0.2), ratio
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_recovers_white_gauss_markov_and_random_walk(seed):
+    arw, sigma, tau, k = 0.01, 0.005, 20.0, 2e-4
+    x = series([{"effect": "gauss_markov", "sigma_dps": sigma, "tau_s": tau},
+                {"effect": "rate_random_walk", "k_dps_per_sqrt_s": k}], arw, 7200.0, seed)
+    best, _ = gmwm.select_model(gmwm.haar_wv(x, FS), starts=3)
+    assert best.name == "WN+RW+1GM", best.to_dict()
+    assert abs(best.arw_dps_per_sqrt_hz / arw - 1) < 0.03
+    (s_hat, t_hat), = best.gauss_markov
+    assert abs(s_hat / sigma - 1) < 0.3 and abs(math.log(t_hat / tau)) < math.log(1.6)
+    assert abs(best.rrw_dps_per_sqrt_s / k - 1) < 0.4
+
+
+@pytest.mark.parametrize("seed", [4, 5])
+def test_two_gauss_markov_terms_are_told_apart(seed):
+    effects = [{"effect": "gauss_markov", "sigma_dps": 0.02, "tau_s": 0.5},
+               {"effect": "gauss_markov", "sigma_dps": 0.004, "tau_s": 60.0}]
+    best, _ = gmwm.select_model(gmwm.haar_wv(series(effects, 0.005, 7200.0, seed), FS), starts=3)
+    assert len(best.gauss_markov) == 2, best.to_dict()
+    (s1, t1), (s2, t2) = best.gauss_markov
+    assert abs(s1 / 0.02 - 1) < 0.2 and abs(math.log(t1 / 0.5)) < math.log(1.5)
+    assert abs(s2 / 0.004 - 1) < 0.4 and abs(math.log(t2 / 60.0)) < math.log(2.0)
+
+
+def test_white_noise_alone_selects_white_noise():
+    best, fits = gmwm.select_model(gmwm.haar_wv(series([], 0.01, 1800.0, seed=6), FS), starts=3)
+    assert best.name == "WN", best.to_dict()
+    assert len(fits) == 8 * (gmwm.MAX_GM + 1)
+
+
+def test_beats_the_allan_nnls_fit_where_a_gauss_markov_bump_is_present():
+    """The five-term Allan fit (Q, N, B, K, R) cannot bend round a Gauss-Markov bump; the
+    composite fit can: its weighted distance to the measured curve is much smaller."""
+    x = series([{"effect": "gauss_markov", "sigma_dps": 0.01, "tau_s": 10.0}], 0.005, 3600.0, seed=7)
+    wv = gmwm.haar_wv(x, FS)
+    best, _ = gmwm.select_model(wv, starts=3)
+    nnls = characterise_axis(x, FS)
+    d_gmwm = gmwm.wv_distance(wv, best.wv(wv.tau_s))
+    d_nnls = gmwm.wv_distance(wv, nnls.model_adev(wv.tau_s) ** 2 / 2)
+    assert d_gmwm < 3.0
+    assert d_nnls > 5 * d_gmwm, (d_gmwm, d_nnls)
+
+
+def test_simulated_wv_of_a_model_is_its_closed_form():
+    model = {"sample_rate_hz": FS, "axes": {"y": {"arw_dps_per_sqrt_hz": 0.01,
+                                                  "effects": [{"effect": "gauss_markov", "sigma_dps": 0.02, "tau_s": 2.0}]}}}
+    wv = gmwm.simulated_wv(model, 1, 60_000, seeds=range(6))
+    theory = gmwm.wv_white(wv.tau_s, 0.01) + gmwm.wv_gauss_markov(wv.tau_s, 0.02, 2.0, FS)
+    keep = wv.edf >= 50
+    assert np.all(np.abs(wv.wv_dps2[keep] / theory[keep] - 1) < 0.15)
+
+
+def test_compare_tool_rows_on_a_simulated_record():
+    """tools/gmwm_compare.py's stage on a short simulated record with a Gauss-Markov bias on z:
+    every distance is a finite number and the composite fit finds the Gauss-Markov term."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "tools" / "gmwm_compare.py"
+    spec = importlib.util.spec_from_file_location("gmwm_compare", path)
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    model = {"sample_rate_hz": FS, "axes": {a: {"arw_dps_per_sqrt_hz": 0.01} for a in "xyz"}}
+    model["axes"]["z"]["effects"] = [{"effect": "gauss_markov", "sigma_dps": 0.02, "tau_s": 3.0}]
+    rows = tool.compare_record(simulate(model, 600.0, seed=9), sims=2)
+    assert [r["axis"] for r in rows] == ["x", "y", "z"]
+    for r in rows:
+        assert all(np.isfinite(r[k]) for k in ("dist_baseline", "dist_extended", "dist_nnls", "dist_gmwm"))
+    assert len(rows[2]["gmwm"].gauss_markov) == 1
+    assert rows[2]["dist_gmwm"] < rows[2]["dist_baseline"]
+
+
+def _tool(name):
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    return tool
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_band_estimate_recovers_a_simulated_narrowband_line(seed):
+    tool = _tool("gap_narrowband")
+    model = {"sample_rate_hz": FS, "axes": {"z": {"arw_dps_per_sqrt_hz": 0.02, "effects": [
+        {"effect": "narrowband", "center_hz": 20.0, "bandwidth_hz": 1.0, "rms_dps": 0.1}]}}}
+    x = simulate(model, 1800.0, seed=seed).gyro_dps[:, 2]
+    band = tool.band_estimate(x, FS)
+    assert abs(band["center_hz"] - 20.0) < 0.1
+    assert abs(band["bandwidth_hz"] / 1.0 - 1) < 0.25
+    assert abs(band["rms_dps"] / 0.1 - 1) < 0.15
+    with_line = tool.with_narrowband({"sample_rate_hz": FS, "axes": {"z": {"arw_dps_per_sqrt_hz": 0.03}}}, "z", band)
+    assert with_line["axes"]["z"]["effects"][0]["effect"] == "narrowband"
+    assert with_line["axes"]["z"]["arw_dps_per_sqrt_hz"] < 0.03
+
+
+def test_colored_lag1_is_resolved_so_noise_plus_line_have_the_measured_lag1():
+    """The model of with_narrowband(..., lag1=r) simulates with lag-1 autocorrelation r."""
+    tool = _tool("gap_narrowband")
+    band = {"center_hz": 20.0, "bandwidth_hz": 1.0, "rms_dps": 0.1}
+    base = {"sample_rate_hz": FS, "axes": {"z": {"arw_dps_per_sqrt_hz": 0.02,
+                                                 "effects": [{"effect": "colored_noise", "lag1": 0.3}]}}}
+    model = tool.with_narrowband(base, "z", band, 0.02, lag1=0.15)
+    rho = model["axes"]["z"]["effects"][0]["lag1"]
+    assert rho != 0.3
+    x = simulate(model, 600.0, seed=3).gyro_dps[:, 2]
+    xc = x - x.mean()
+    r1 = np.einsum("i,i->", xc[1:], xc[:-1]) / np.einsum("i,i->", xc, xc)
+    assert abs(r1 - 0.15) < 0.02

@@ -1,0 +1,173 @@
+"""Does a spectral line with a width close the gap on an axis? D of the gap's extended model with
+and without a ``narrowband`` term estimated from the spectrum.
+
+    python tools/gap_narrowband.py RECORDING AXIS [--seed 0] [--sims 12]
+
+Runs ``analyse_gap`` on RECORDING, estimates the strongest band of AXIS (x, y or z) from the Welch
+PSD (:func:`band_estimate`) and prints the gap's discrepancy D (docs/gap.md) against the recording,
+from the same simulation seeds, of: the extended model; the extended model plus the band as a
+``narrowband`` effect, white noise reduced to keep the per-sample variance (N'² = N² - rms² / f_s);
+and the same with the white level read off the Allan deviation at τ = 1 s (N = σ(1 s), IEEE Std
+952-1997 C.1) and a ``colored_noise`` term switched to ``preserve: arw`` (so N is the long-τ level);
+and that with the colored noise's lag1 re-solved so that noise plus line have the measured lag-1
+autocorrelation (:func:`with_narrowband`).
+The gap's detectors do not propose ``narrowband`` themselves (issue 12); this measures what it
+would buy.
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import math
+
+
+def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, background_hz=10.0, smooth_bins=15):
+    """Centre, half-power full width and rms of the strongest band of a rate series.
+
+    One-sided Welch PSD S(f) (Hann, segments of ``nperseg`` samples, fewer when the record holds
+    less than 16 of them: the largest power of 2 up to N / 16); background b(f) = running median of S over
+    ±``background_hz``; excess e = S - b, and ē its moving average over ``smooth_bins`` bins
+    (the Welch bins are noisy). The peak is the bin of largest ē / b; the band is the contiguous
+    run of bins around it with ē > ē_peak / 2 (its width is the half-power full width), the
+    centre the e-weighted mean frequency of that run, and rms² = Σ e Δf over the contiguous run
+    with ē > 0 (the line's variance: a one-sided PSD integrates to the variance).
+    Returns a dict with ``center_hz``, ``bandwidth_hz``, ``rms_dps`` and ``peak_ratio``
+    (1 + ē / b at the peak).
+    """
+    import numpy as np
+    from scipy.ndimage import median_filter, uniform_filter1d
+    from scipy.signal import welch
+
+    x = np.asarray(x_dps, dtype=float)
+    seg = int(min(nperseg, 2 ** int(math.log2(max(x.size // 16, 16)))))
+    f, s = welch(x - x.mean(), fs=sample_rate_hz, nperseg=seg)
+    df = f[1] - f[0]
+    width = max(3, int(round(2 * background_hz / df)) | 1)
+    back = median_filter(s, size=width, mode="nearest")
+    excess = s - back
+    smooth = uniform_filter1d(excess, smooth_bins, mode="nearest")
+    ratio = 1.0 + smooth / np.maximum(back, 1e-300)
+    ratio[0] = 0.0
+    k = int(np.argmax(ratio))
+
+    def run(mask):
+        lo = hi = k
+        while lo > 0 and mask[lo - 1]:
+            lo -= 1
+        while hi < mask.size - 1 and mask[hi + 1]:
+            hi += 1
+        return lo, hi
+
+    lo, hi = run(smooth > smooth[k] / 2.0)
+    w = excess[lo:hi + 1]
+    centre = float(np.einsum("i,i->", w, f[lo:hi + 1]) / w.sum())
+    plo, phi = run(smooth > 0.0)
+    rms = math.sqrt(float(excess[plo:phi + 1].sum()) * df)
+    return {"center_hz": centre, "bandwidth_hz": float((hi - lo + 1) * df), "rms_dps": rms, "peak_ratio": float(ratio[k])}
+
+
+def with_narrowband(model, axis, band, arw_dps_per_sqrt_hz=None, lag1=None):
+    """A copy of ``model`` with the band added to ``axis`` as a ``narrowband`` effect. White noise:
+    without ``arw_dps_per_sqrt_hz`` reduced to keep the per-sample variance (N'² = N² - rms² / f_s,
+    floor 0); with it, set to it and any ``colored_noise`` of the axis switched to ``preserve: arw``.
+    With ``lag1`` (the measured lag-1 autocorrelation) as well, the colored noise's ρ is re-solved
+    so that the sum of the colored noise and the line has that lag-1 autocorrelation:
+    r₁ (v_c + rms²) = ρ v_c + r_L rms², v_c = N² f_s (1 - ρ)/(1 + ρ) (the ``preserve: arw``
+    variance), r_L = φ₁ / (1 - φ₂) the line's lag-1 autocorrelation (AR(2), Box & Jenkins eq. 3.2.26)."""
+    out = copy.deepcopy(model)
+    spec = out["axes"][axis]
+    fs = out["sample_rate_hz"]
+    if arw_dps_per_sqrt_hz is None:
+        spec["arw_dps_per_sqrt_hz"] = math.sqrt(max(spec["arw_dps_per_sqrt_hz"] ** 2 - band["rms_dps"] ** 2 / fs, 0.0))
+    else:
+        spec["arw_dps_per_sqrt_hz"] = float(arw_dps_per_sqrt_hz)
+        for eff in spec.get("effects", []):
+            if eff["effect"] == "colored_noise":
+                eff["preserve"] = "arw"
+                if lag1 is not None:
+                    eff["lag1"] = _colored_lag1(lag1, arw_dps_per_sqrt_hz, fs, band, eff["lag1"])
+    spec.setdefault("effects", []).append({"effect": "narrowband", "center_hz": band["center_hz"],
+                                           "bandwidth_hz": band["bandwidth_hz"], "rms_dps": band["rms_dps"]})
+    return out
+
+
+def _colored_lag1(r1, arw_dps_per_sqrt_hz, fs, band, current):
+    """ρ of :func:`with_narrowband`'s lag-1 equation (``current`` when it has no root in (-0.99, 0.99))."""
+    from scipy.optimize import brentq
+
+    from gyrofilter.noise_terms import narrowband_filter
+
+    _, a = narrowband_filter(band["rms_dps"], band["center_hz"], band["bandwidth_hz"], fs)
+    r_line = -a[1] / (1.0 + a[2])
+    v_line = band["rms_dps"] ** 2
+
+    def excess(rho):
+        v_c = arw_dps_per_sqrt_hz**2 * fs * (1.0 - rho) / (1.0 + rho)
+        return rho * v_c + r_line * v_line - r1 * (v_c + v_line)
+
+    lo, hi = -0.99, 0.99
+    if excess(lo) * excess(hi) > 0:
+        return current
+    return float(brentq(excess, lo, hi))
+
+
+def axis_discrepancy(x_dps, sample_rate_hz, models, axis_index, seeds):
+    """The gap's D (:func:`gyrofilter.gap.discrepancy`) of each model's axis against ``x_dps``,
+    every model simulated with the same ``seeds``. Returns a list of floats."""
+    import numpy as np
+
+    from gyrofilter import gap
+    from gyrofilter.simulate import simulate_axis_dps, validate_model
+
+    n = x_dps.size
+    taus, bands = gap.feature_taus(n, sample_rate_hz), gap.feature_bands(n, sample_rate_hz)
+    meas = gap.features(x_dps, sample_rate_hz, taus, bands)
+    out = []
+    for model in models:
+        spec = validate_model(model)[0]
+        sims = [gap.features(np.concatenate(list(simulate_axis_dps(spec, n / sample_rate_hz, axis_index, seed=int(s),
+                                                                   validated=spec)))[:n], sample_rate_hz, taus, bands)
+                for s in seeds]
+        out.append(gap.discrepancy(gap.departures(meas, sims, n)))
+    return out
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("recording")
+    p.add_argument("axis", choices=["x", "y", "z"])
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--sims", type=int, default=12)
+    args = p.parse_args(argv)
+
+    import numpy as np
+
+    from gyrofilter.allan import overlapping_adev
+    from gyrofilter.gap import analyse_gap
+    from gyrofilter.recording import read_recording
+
+    rec = read_recording(args.recording)
+    i = "xyz".index(args.axis)
+    rep = analyse_gap(rec, seed=args.seed)
+    x = np.asarray(rec.gyro_dps[:, i], dtype=float)
+    band = band_estimate(x, rec.sample_rate_hz)
+    ext = rep["extended_model"]
+    seeds = range(5000 + args.seed, 5000 + args.seed + args.sims)
+    n_1s = float(overlapping_adev(x, rec.sample_rate_hz, [1.0])[1][0])
+    xc = x - x.mean()
+    r1 = float(np.einsum("i,i->", xc[1:], xc[:-1]) / np.einsum("i,i->", xc, xc))
+    models = [ext, with_narrowband(ext, args.axis, band), with_narrowband(ext, args.axis, band, n_1s),
+              with_narrowband(ext, args.axis, band, n_1s, r1)]
+    d_ext, d_nb, d_nb_arw, d_nb_lag = axis_discrepancy(x, rec.sample_rate_hz, models, i, seeds)
+    print(f"{args.recording} {args.axis}: gap D {rep['discrepancy']['before'][args.axis]:.2f} -> "
+          f"{rep['discrepancy']['after'][args.axis]:.2f} (findings: "
+          f"{', '.join(f['effect'] for f in rep['findings'] if f['axis'] == args.axis) or 'none'})")
+    print(f"band: centre {band['center_hz']:.2f} Hz, half-power width {band['bandwidth_hz']:.2f} Hz, "
+          f"rms {band['rms_dps']:.4g} deg/s, peak {band['peak_ratio']:.1f} x background")
+    print(f"D with {args.sims} simulations: extended {d_ext:.2f}; + narrowband {d_nb:.2f}; "
+          f"+ narrowband with N = sigma(1 s) = {n_1s:.4g} deg/s/sqrt(Hz) {d_nb_arw:.2f}; "
+          f"and the colored noise's lag1 re-solved for the measured {r1:.3f}: {d_nb_lag:.2f}")
+
+
+if __name__ == "__main__":
+    main()
