@@ -153,11 +153,12 @@ def average_blocks_median_slope(blocks, q):
     return total / n, replaced, np.zeros(center.shape, dtype=bool)
 
 
-def average_block_line_if_cut(values, q):
+def average_block_line_if_cut(values, q, paper=None):
     """The motion rule of ``outlier_rule="by_model"``: the block mean when paper 001's rule keeps
-    every sample, else :func:`average_block_median_slope`. Returns (output, number rejected or
-    replaced, False)."""
-    mean, rejected, _ = average_block(values, q)
+    every sample, else :func:`average_block_median_slope`. ``paper``: the result of
+    :func:`average_block` on the same values, if already computed. Returns (output, number
+    rejected or replaced, False)."""
+    mean, rejected, _ = average_block(values, q) if paper is None else paper
     if not rejected:
         return mean, 0, False
     return average_block_median_slope(values, q)

@@ -339,25 +339,19 @@ class GyroFilter:
         self._block = []
         q = self.settings.outlier_q_dps
         y1 = self._y1
-        modes = self._akf.modes() if self._by_model else NO_MODES
-        both = self._by_model and self.block_log is not None  # a smoother's backward pass needs both rules' means
-        y1_motion = self._y1_motion
+        modes = self._akf.modes() if self._by_model else None
         for a, values in enumerate(zip(*block)):
-            motion = modes[a] != kalman.REST
-            if motion or both:
-                motion_mean, motion_rejected, _ = average_block_line_if_cut(values, q)
-            if not motion or both:
-                mean, rejected, fallback = self._average_one(values, q)
-            if motion:
-                rejected, fallback = motion_rejected, False
-                if not both:
-                    mean = motion_mean
+            paper = mean, rejected, fallback = self._average_one(values, q)
+            if self._by_model:  # both rules' block means: the kernel takes one by its model (a smoother logs both)
+                motion_mean, motion_rejected, _ = average_block_line_if_cut(values, q, paper)
+                self._y1_motion[0, a] = motion_mean - self._bias[a]
+                if modes[a] != kalman.REST:
+                    rejected, fallback = motion_rejected, False
             if rejected or fallback:
                 self.rejected[a] += rejected
                 self.fallback_blocks[a] += fallback
             y1[0, a] = mean - self._bias[a]
-            y1_motion[0, a] = (motion_mean if motion or both else mean) - self._bias[a]
-        self._track(y1, self._out1, y1_motion if self._by_model else None)
+        self._track(y1, self._out1, self._y1_motion if self._by_model else None)
         self.blocks_out += 1
         x, y, z = self._out1[0].tolist()
         return (x, y, z)
@@ -524,9 +518,6 @@ class GyroFilter:
                 np.sqrt(self._r0, out=self._r0)
         self._cal_buf = None
         self._cal_temp = None
-
-
-NO_MODES = (kalman.REST,) * 3  # update() without outlier_rule="by_model": every axis averaged by its one rule
 
 
 def _sample3(sample):

@@ -181,3 +181,12 @@ def test_arma_refuses_gross_errors_too_naming_the_file_line(tmp_path, capsys):
     path, line = _spiked_bundled(tmp_path, "1e30")
     assert main(["arma", path, "--axis", "y", "--start-s", "1"]) == 2
     _assert_one_line_error(capsys, path, f"line {line} (sample 500)", "3 such sample(s)", "--keep-outliers")
+
+
+def test_a_plot_format_matplotlib_cannot_write_is_refused_before_any_work(static_recording, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    path, _ = static_recording
+    out = tmp_path / "a.json"
+    assert main(["allan", path, "--json", str(out), "--plot", str(tmp_path / "a.jpg2")]) == 2
+    assert "matplotlib cannot write .jpg2" in capsys.readouterr().err
+    assert not out.exists()

@@ -66,6 +66,10 @@ def run(args):
         return batch.run(args, settings, paths)
     args.recording = batch.single(args, paths)
     common.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
+    if args.plot:
+        from ..plots import check_figure_path
+
+        check_figure_path(args.plot)
     progress = common.say if args.progress or sys.stderr.isatty() else None
     head, results = characterise_recording(args.recording, axes=axes, confidence=args.confidence,
                                            min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
