@@ -7,14 +7,13 @@ the same samples: same count, same numbers, same time stamps. What a source deli
 recorded with `gyrofilter record` from the same deterministic source and then replayed.
 
 Real parts: the MPU6050 driver through smbus2's own code with only its ioctl replaced by the
-register-level model (tests/mpu6050_model.py) on a virtual clock; pyserial on a real
+register-level model (gyrofilter/sources/mpu6050_model.py) on a virtual clock; pyserial on a real
 pseudo-terminal; the replay source paced by the host's clock.
 """
 import errno
 import os
 import re
 import select
-import sys
 import threading
 import time
 import tty
@@ -23,16 +22,16 @@ import numpy as np
 import pytest
 from smbus2 import I2cFunc
 
-sys.path.insert(0, os.path.dirname(__file__))
 
-from mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock  # noqa: E402
+from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock
 
 import gyrofilter.sources.mpu6050 as mpu  # noqa: E402
 from gyrofilter.cli import main  # noqa: E402
 from gyrofilter.recording import Recording, read_recording, write_recording  # noqa: E402
+from support import REPO
 
 REAL_OPEN_MPU6050 = mpu.open_mpu6050
-BUNDLED = os.path.join(os.path.dirname(__file__), os.pardir, "gyrofilter", "data", "mpu6050_static_100s.csv.gz")
+BUNDLED = str(REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz")
 BLOCK = 5
 CALIBRATION_S = 2.0
 

@@ -2,7 +2,6 @@
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,8 +9,9 @@ import pytest
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
 from gyrofilter.simulate import simulate
+from support import REPO
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "models"
+EXAMPLES = REPO / "examples" / "models"
 
 
 def write_json(path, obj):
@@ -187,7 +187,7 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
             yield chunk
 
     monkeypatch.setattr(sim, "simulate_chunks", chunks_then_killed)
-    model = Path(__file__).resolve().parents[1] / "examples" / "models" / "mpu6050.json"
+    model = REPO / "examples" / "models" / "mpu6050.json"
     out = tmp_path / "long.csv.gz"
     assert main(["simulate", "--model", str(model), "--duration", "3600", "--out", str(out), "--chunk", "1000"]) == 130
     assert "interrupted" in capsys.readouterr().err

@@ -1,7 +1,6 @@
 """docs/formats.md is the one statement of the formats: its examples must run through the code."""
 import json
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,8 +10,9 @@ from gyrofilter.noise_model import JSON_KEY
 from gyrofilter.recording import read_recording
 from gyrofilter.simulate import EFFECTS, simulate, validate_model
 from gyrofilter.sources import KINDS
+from support import REPO
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO
 DOC = (ROOT / "docs" / "formats.md").read_text(encoding="utf-8")
 
 

@@ -21,11 +21,10 @@ from gyrofilter.gap import analyse_gap, discrepancy, departures
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.simulate import simulate, validate_model
 
-sys.path.insert(0, os.path.dirname(__file__))
-import hidden_effects as he  # noqa: E402
+import gyrofilter.hidden_effects as he
+from support import RECORDINGS
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-REAL = os.path.join(ROOT, "recordings", "mpu6050_static_449s.csv.gz")
+REAL = str(RECORDINGS / "mpu6050_static_449s.csv.gz")
 SIMS = 10
 
 

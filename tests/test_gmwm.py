@@ -9,6 +9,7 @@ from gyrofilter import gmwm
 from gyrofilter.allan import overlapping_adev
 from gyrofilter.noise_model import characterise_axis
 from gyrofilter.simulate import simulate
+from support import REPO
 
 FS = 100.0
 
@@ -99,9 +100,8 @@ def test_compare_tool_rows_on_a_simulated_record():
     """tools/gmwm_compare.py's stage on a short simulated record with a Gauss-Markov bias on z:
     every distance is a finite number and the composite fit finds the Gauss-Markov term."""
     import importlib.util
-    from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "tools" / "gmwm_compare.py"
+    path = REPO / "tools" / "gmwm_compare.py"
     spec = importlib.util.spec_from_file_location("gmwm_compare", path)
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
@@ -117,9 +117,8 @@ def test_compare_tool_rows_on_a_simulated_record():
 
 def _tool(name):
     import importlib.util
-    from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "tools" / f"{name}.py"
+    path = REPO / "tools" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)

@@ -1,6 +1,6 @@
 """MPU-6050 driver through smbus2's real code; only os.open/os.close and smbus2's ioctl are fakes.
 
-The register-level model (tests/mpu6050_model.py) runs on a virtual clock shared with the driver,
+The register-level model (gyrofilter/sources/mpu6050_model.py) runs on a virtual clock shared with the driver,
 so sample timing is deterministic and no test depends on the host's speed.
 """
 import errno
@@ -10,15 +10,15 @@ import sys
 import numpy as np
 import pytest
 
-sys.path.insert(0, os.path.dirname(__file__))
 
-from mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock, samples_from_recording  # noqa: E402
+from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock, samples_from_recording
 
-from gyrofilter.errors import DeviceError, SettingsError  # noqa: E402
-from gyrofilter.recording import Recording  # noqa: E402
-from gyrofilter.sources import mpu6050_registers as R  # noqa: E402
-from gyrofilter.sources.mpu6050 import (  # noqa: E402
+from gyrofilter.errors import DeviceError, SettingsError
+from gyrofilter.recording import Recording
+from gyrofilter.sources import mpu6050_registers as R
+from gyrofilter.sources.mpu6050 import (
     auto_dlpf_cfg, decode_fifo, open_mpu6050, sample_rate_settings)
+from support import RECORDINGS
 
 
 def indexed_gyro(n):
@@ -424,7 +424,7 @@ def test_real_mpu6050_streams_at_the_configured_rate():
         assert 0.0 < np.median(rows[:, 4]) < 60.0         # plausible temperature, deg C
 
 
-REAL = os.path.join(os.path.dirname(__file__), os.pardir, "recordings", "mpu6050_multipose_102s.csv.gz")
+REAL = str(RECORDINGS / "mpu6050_multipose_102s.csv.gz")
 
 
 @pytest.mark.skipif(not os.path.exists(REAL), reason="real recording not converted yet")

@@ -1,7 +1,6 @@
 """Tests for gyrofilter.noise_model: model identities, NNLS oracle, seeded round trips on
 simulated noise with known coefficients, unit conversions, bad input, JSON and Kalibr export."""
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +10,7 @@ from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.noise_model import (FLICKER_FLOOR, UNIT_FACTORS, arw_from_white_std, basis,
                                     characterise, characterise_axis, convert, kalibr_yaml, model_adev,
                                     nnls_weighted, to_json, white_std_from_arw)
+from support import RECORDINGS
 
 SYMBOL_TERM = {"Q": "quantization", "N": "arw", "B": "bias_instability", "K": "rrw", "R": "rate_ramp"}
 
@@ -364,6 +364,6 @@ def test_gross_errors_leave_the_still_recordings_alone():
     from gyrofilter.noise_model import gross_errors
     from gyrofilter.recording import read_recording
 
-    for path in sorted((Path(__file__).parent.parent / "recordings").glob("mpu6050_static_*.csv.gz")):
+    for path in sorted(RECORDINGS.glob("mpu6050_static_*.csv.gz")):
         g = read_recording(path).gyro_dps
         assert all(gross_errors(g[:, a]).size == 0 for a in range(3)), path

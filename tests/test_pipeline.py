@@ -7,7 +7,8 @@ from gyrofilter import GyroFilter
 from gyrofilter.calibration import Calibration
 from gyrofilter.errors import CalibrationError, SettingsError
 from gyrofilter.jit import numba_available
-from plain_filter import plain_filter
+from gyrofilter.plain_filter import plain_filter
+from support import stream
 
 BACKENDS = ["python"] + (["numba"] if numba_available() else [])
 
@@ -19,11 +20,6 @@ def noisy(n, seed=0, bias=(1.5, -0.7, 3.0), sigma=0.1, spikes=0.0):
         hit = rng.random((n, 3)) < spikes
         x[hit] += rng.choice([-2.5, 2.5], hit.sum())
     return x
-
-
-def stream(filt, x):
-    rows = [filt.update(tuple(s)) for s in x.tolist()]
-    return np.array([r for r in rows if r is not None]).reshape(-1, 3)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

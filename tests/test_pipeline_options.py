@@ -8,14 +8,9 @@ from gyrofilter.averaging import (average_block_line_if_cut, average_block_media
 from gyrofilter.calibration import Calibration
 from gyrofilter.errors import SettingsError
 from gyrofilter.tempcomp import coefficients_from_model
+from support import stream
 
 FS = 100.0
-
-
-def stream(filt, x, temps=None):
-    temps = [None] * len(x) if temps is None else temps.tolist()
-    rows = [filt.update(tuple(s), t) for s, t in zip(x.tolist(), temps)]
-    return np.array([r for r in rows if r is not None]).reshape(-1, 3)
 
 
 # ---------------------------------------------------------------- by_model (the adaptive filter's rule)

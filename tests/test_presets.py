@@ -1,13 +1,13 @@
 """The presets: the default is the best measured one on the held-out half of the evaluation."""
-import os
 
 import numpy as np
 
 from gyrofilter import GyroFilter
 from gyrofilter import evaluate as E
 from gyrofilter.presets import DEFAULT_PRESET, PRESETS
+from support import RECORDINGS
 
-REC_DIR = os.path.join(os.path.dirname(__file__), "..", "recordings")
+REC_DIR = str(RECORDINGS)
 
 
 def test_the_default_preset_is_recommended_and_recommended_is_adaptive_kalman():

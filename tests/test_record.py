@@ -17,6 +17,7 @@ from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.simulate import simulate
 from gyrofilter.sources.simulated import DEFAULT_MODEL
+from support import RECORDINGS
 
 SIM_SECONDS = 60.0  # the source's own length; the recording is stopped long before
 RATE_HZ = 500.0
@@ -109,7 +110,7 @@ def test_record_duration_and_replay_source(tmp_path):
 
 def test_record_paced_replay_killed_mid_run(tmp_path):
     """A replayed real log, paced 5x: SIGTERM mid-run gives the file's first samples exactly."""
-    src_path = os.path.join(os.path.dirname(__file__), "..", "recordings", "mpu6050_static_100s.csv.gz")
+    src_path = str(RECORDINGS / "mpu6050_static_100s.csv.gz")
     if not os.path.exists(src_path):
         pytest.skip("recordings/mpu6050_static_100s.csv.gz not present")
     src = read_recording(src_path)
@@ -135,8 +136,7 @@ def test_record_from_the_mpu6050_register_model(tmp_path, monkeypatch, capsys):
     """`record --source mpu6050:...` through the real driver and smbus2, with the register-level
     model behind smbus2's ioctl: the header carries what an analysis needs, and the samples are
     the model's, contiguous (nothing lost or doubled), on the sensor's clock."""
-    sys.path.insert(0, os.path.dirname(__file__))
-    from mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock
+    from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock
 
     import gyrofilter.sources.mpu6050 as mpu
     from gyrofilter.cli import main

@@ -8,16 +8,13 @@ from __future__ import annotations
 
 import importlib.util
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gyrofilter.recording import read_recording
+from support import REPO, RECORDINGS, SHARED_DATA
 
-REPO = Path(__file__).resolve().parent.parent
-RECORDINGS = REPO / "recordings"
-SHARED_DATA = REPO.parent / "shared" / "data"
 
 # name: (rows, source csv under ../shared/data, gyro mean deg/s or None, gyro std deg/s)
 # numbers from SOURCE.md (3 decimals; std of the motion files to 0.1 / 0.01 as written there)

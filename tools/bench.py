@@ -8,25 +8,22 @@ Pipeline section: streaming ``update()`` and batch ``filter()`` throughput in th
 per second for the presets "paper" and "recommended" (also in motion) and each Kalman kernel
 (numba, Python), the offline smoother ``gyrofilter.smooth`` (batch only), peak memory of ``filter()`` on a 1-hour 100 Hz recording, and the same pipeline
 written the plain way (filterpy ``KalmanFilter`` per block plus ``np.polyfit`` per prediction,
-``tests/plain_filter.py``) as the baseline. Targets on this machine (issue 2): streaming >=
+``gyrofilter/plain_filter.py``) as the baseline. Targets on this machine (issue 2): streaming >=
 500 000 samples/s, batch >= 5 000 000 samples/s, >= 30x the plain way (numba kernel); the
 Python kernel >= 50 000 samples/s. Other sections live in
 ``tools/bench_<name>.py`` beside this file. Timings are the best of a few repeats.
 """
 import importlib
 import itertools
-import os
 import sys
 import time
 import tracemalloc
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path[:0] = [HERE, os.path.join(HERE, "..", "tests")]
+from gyrofilter import GyroFilter, smooth
+from gyrofilter.jit import numba_available
 
-from gyrofilter import GyroFilter, smooth  # noqa: E402
-from gyrofilter.jit import numba_available  # noqa: E402
 
 RATE_HZ = 100.0
 # the faithful filter and the default (adaptive_kalman), at rest and in motion; the default with
@@ -45,7 +42,7 @@ def best_of(fn, repeats=3):
 
 
 def pipeline():
-    from plain_filter import plain_filter
+    from gyrofilter.plain_filter import plain_filter
 
     rng = np.random.default_rng(0)
     hour = rng.normal([1.5, -0.7, 3.0], 0.1, (int(3600 * RATE_HZ), 3))

@@ -8,7 +8,7 @@ What is timed (wall clock on this machine, per gyro frame = one three-axis sampl
   a per-frame ``struct.unpack`` loop building the same rows;
 * read: ``source.read()`` end to end through smbus2's real code (INT_STATUS + FIFO_COUNT + FIFO
   data per poll, 20 frames per poll at 1 kHz) with the register-level model of
-  tests/mpu6050_model.py behind smbus2's ``ioctl``; the time spent inside the fake ioctl (the
+  gyrofilter/sources/mpu6050_model.py behind smbus2's ``ioctl``; the time spent inside the fake ioctl (the
   model, standing in for the kernel) is measured and subtracted, so "host" is driver + smbus2;
 * baselines through the same smbus2 + model: one ``read_byte_data`` per gyro register (6 per
   sample, the naive loop), and one 6-byte ``read_i2c_block_data`` of GYRO_XOUT_H per sample.
@@ -19,18 +19,16 @@ far below for 1 kHz reading. On a Raspberry Pi the per-call ioctl also costs ker
 which this machine cannot measure; the bus-time column bounds it from below.
 """
 import argparse
-import os
 import struct
 import sys
 import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "tests"))
 
-from mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock  # noqa: E402
+from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock
 
-from gyrofilter.sources.mpu6050 import open_mpu6050  # noqa: E402
+from gyrofilter.sources.mpu6050 import open_mpu6050
 
 SCL_HZ = 400e3
 

@@ -26,12 +26,11 @@ import tty
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir))
 
-from gyrofilter.errors import SourceEnded  # noqa: E402
-from gyrofilter.sources.serial_source import LineParser, SerialSource  # noqa: E402
+from gyrofilter.errors import SourceEnded
+from gyrofilter.sources.serial_source import LineParser, SerialSource
 
-from bench import best_of  # noqa: E402  (tools/bench.py, beside this file)
+from bench import best_of  # tools/bench.py, beside this file
 
 HEADER = (b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=1000 "
           b"fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw\n")

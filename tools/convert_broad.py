@@ -37,10 +37,9 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from gyrofilter.recording import RecordingWriter  # noqa: E402
-from gyrofilter.reference import body_rate_from_quaternions, estimate_time_offset_s  # noqa: E402
+from gyrofilter.recording import RecordingWriter
+from gyrofilter.reference import body_rate_from_quaternions, estimate_time_offset_s
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_SRC = os.path.normpath(os.path.join(HERE, "..", "..", "shared", "data", "broad_omc_reference"))

@@ -24,10 +24,9 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from gyrofilter import evaluate as E  # noqa: E402
-from gyrofilter.profiles import get_profile  # noqa: E402
+from gyrofilter import evaluate as E
+from gyrofilter.profiles import get_profile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 FIGURE_NOISE = "mpu6050_static_449s"

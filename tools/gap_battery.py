@@ -15,17 +15,14 @@ not counted as extra).
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from collections import defaultdict
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tests"))
+import gyrofilter.hidden_effects as he
 
-import hidden_effects as he  # noqa: E402
 
 
 def run_synthetic(args):

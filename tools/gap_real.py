@@ -17,13 +17,10 @@ import contextlib
 import glob
 import io
 import os
-import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-sys.path.insert(0, os.path.join(ROOT, "tests"))
-sys.path.insert(0, HERE)
 
 
 def _fmt_params(params):
@@ -109,7 +106,7 @@ def main(argv=None):
         fh.write("\n### Effects hidden in real MPU6050 noise\n\n")
         fh.write("Command: `python tools/gap_battery.py --real " + " ".join(os.path.relpath(q, ROOT) for q in by_len)
                  + f" --cases {args.hidden_cases}` (each effect of the table added, at the sizes of "
-                 "`tests/hidden_effects.py`, to one axis of the real recording; findings the untouched "
+                 "`gyrofilter/hidden_effects.py`, to one axis of the real recording; findings the untouched "
                  "recording already has are not counted as extra).\n\n```\n" + hidden.strip() + "\n```\n")
         for key, text in battery.items():
             fh.write(f"\n### Synthetic battery: {key}\n\n```\n{text.strip()}\n```\n")
@@ -171,7 +168,7 @@ time figures, each finding with its evidence sentence):
 gyrofilter gap recordings/mpu6050_static_655s.csv.gz --json gap.json --report gap_report/
 ```
 
-**Tests that hide an effect.** `tests/hidden_effects.py` draws per case an effect of the table
+**Tests that hide an effect.** `gyrofilter/hidden_effects.py` draws per case an effect of the table
 (or none), an axis and parameters over realistic MPU6050 ranges at a seed, on an MPU6050-like
 baseline (131 LSB per deg/s, white noise 0.005-0.015 deg/s/sqrt(Hz), biases within +-5 deg/s,
 100 Hz, 30-60 min, a temperature column); `gap` must name the effect on the right axis with its

@@ -25,11 +25,10 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from gyrofilter import evaluate as E  # noqa: E402
-from gyrofilter.predictor import closed_loop_radius, extrapolation_weights, stable_gain_threshold  # noqa: E402
-from gyrofilter.profiles import Profile  # noqa: E402
+from gyrofilter import evaluate as E
+from gyrofilter.predictor import closed_loop_radius, extrapolation_weights, stable_gain_threshold
+from gyrofilter.profiles import Profile
 
 REC_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "recordings")
 MARGIN = 1.5

@@ -27,10 +27,9 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from gyrofilter import evaluate as E  # noqa: E402
-from gyrofilter.pipeline import GyroFilter  # noqa: E402
+from gyrofilter import evaluate as E
+from gyrofilter.pipeline import GyroFilter
 
 REC_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "recordings")
 MARGIN = 1.5

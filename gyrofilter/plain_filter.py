@@ -8,6 +8,15 @@ from filterpy.kalman import KalmanFilter
 
 
 def plain_filter(samples_dps, sample_rate_hz, calibration_s=2.0, block_len=5, q_dps=1.0, depth=10, order=2, p0=1.0, window=10, use_std=False):
+    """Paper 001's preset="paper" pipeline on ``samples_dps`` (N, 3) deg/s sampled at ``sample_rate_hz``.
+
+    ``calibration_s`` of still start-up data give the bias; blocks of ``block_len`` samples are
+    averaged over the samples within ``q_dps`` deg/s of the block mean (of the median where
+    none is); a Kalman filter per axis predicts with a degree-``order`` least-squares
+    fit over the last ``depth`` posteriors, starts from P = ``p0``, and takes Q and R as the
+    variance (standard deviation with ``use_std``) of the last ``window`` values.
+    Returns the (M, 3) filtered block rates in deg/s, one row per block after calibration.
+    """
     x = np.asarray(samples_dps, dtype=float)
     n_cal = int(round(calibration_s * sample_rate_hz))
     cal = x[:n_cal]

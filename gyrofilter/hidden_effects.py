@@ -24,7 +24,6 @@ colored_noise      lag1 0.3-0.8
 """
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np

@@ -1,0 +1,23 @@
+"""What the tests share: paths, and feeding a filter sample by sample as a live source does.
+
+Helpers that tools need too live in the package: the plain-way oracle in
+``gyrofilter.plain_filter``, the hidden-effect battery in ``gyrofilter.hidden_effects`` and the
+register-level MPU6050 model in ``gyrofilter.sources.mpu6050_model``.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+RECORDINGS = REPO / "recordings"
+SHARED_DATA = REPO.parent / "shared" / "data"  # real recordings beside the repo; tests skip without
+
+
+def stream(filt, x, temps=None):
+    """Feed ``x`` (N, 3) deg/s to ``filt.update`` one sample at a time (with ``temps`` deg C if
+    given) and return the (M, 3) rows it emitted."""
+    temps = [None] * len(x) if temps is None else np.asarray(temps).tolist()
+    rows = [filt.update(tuple(s), t) for s, t in zip(np.asarray(x).tolist(), temps)]
+    return np.array([r for r in rows if r is not None]).reshape(-1, 3)
