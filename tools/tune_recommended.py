@@ -69,11 +69,11 @@ def spike_test(variants, fraction, seed=0):
     spikes = rng.random(clean.shape) < fraction
     spikes[:200] = False
     x = clean + spikes * rng.choice([-1, 1], clean.shape) * rng.uniform(1.6, 3.0, clean.shape)
-    ref = GyroFilter(100.0, 2.0, tracker="block_mean", outlier_q_dps=1e9).filter(clean)
+    ref = GyroFilter(100.0, 2.0, preset="paper", tracker="block_mean", outlier_q_dps=1e9).filter(clean)
     print(f"white noise 0.1 deg/s + {fraction:.1%} spikes of 1.6-3 deg/s (600 s at 100 Hz; spikes per axis {spikes.sum(axis=0)}, "
           f"{ref.size} block means over 3 axes):")
     for name, kw in variants.items():
-        err = GyroFilter(100.0, 2.0, tracker="block_mean", **kw).filter(x) - ref
+        err = GyroFilter(100.0, 2.0, preset="paper", tracker="block_mean", **kw).filter(x) - ref
         f = GyroFilter(100.0, 2.0, preset="hold", **kw)
         y = f.filter(x)
         print(f"  {name:42s} block means: error rms {np.sqrt(np.mean(err ** 2)):.4f}, off by > 0.5: {(np.abs(err) > 0.5).sum():4d}, "
