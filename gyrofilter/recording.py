@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .closable import Closable
 from .errors import RecordingError, SettingsError
 from .units import GYRO_UNITS, from_dps, to_dps
 
@@ -61,12 +62,38 @@ class _HeaderFacts:
         return None if value is None else float(value)
 
 
+class Note(tuple):
+    """An annotation line of a recording (docs/formats.md, section 1).
+
+    It unpacks and compares as the pair ``(line, text)`` (file line number, text after the
+    ``#``), and ``row`` is the index of the sample that follows it (the number of samples
+    before it), so that a reader can put it back at its place among the samples.
+    """
+
+    def __new__(cls, line, text, row):
+        note = super().__new__(cls, (line, text))
+        note.row = row
+        return note
+
+    def __getnewargs__(self):
+        return (*self, self.row)
+
+    @property
+    def line(self):
+        return self[0]
+
+    @property
+    def text(self):
+        return self[1]
+
+
 @dataclass
 class Recording(_HeaderFacts):
     """A recording in memory: every column as in the file, plus the header.
 
     ``columns`` maps each column name to a float array in file order and in the file's units;
-    use :attr:`gyro_dps` for the rates in deg/s whatever the file's ``gyro_unit``.
+    use :attr:`gyro_dps` for the rates in deg/s whatever the file's ``gyro_unit``. ``notes`` are
+    the annotation lines, each a :class:`Note` (``(line, text)`` with the sample ``row`` it precedes).
     """
 
     columns: dict
@@ -130,7 +157,7 @@ class Recording(_HeaderFacts):
 def dps_header(header, sample_rate_hz):
     """``header`` with ``sample_rate_hz`` and ``gyro_unit: dps`` (no ``lsb_per_dps``), for rates in deg/s."""
     head = dict(header)
-    head.update({"sample_rate_hz": _format_number(float(sample_rate_hz)), "gyro_unit": "dps"})
+    head.update({"sample_rate_hz": format_number(float(sample_rate_hz)), "gyro_unit": "dps"})
     head.pop("lsb_per_dps", None)
     return head
 
@@ -150,7 +177,7 @@ _BLOCK_ROWS = 1 << 19   # rows per block of collect_columns
 class RecordingHead(_HeaderFacts):
     """A recording being read by :func:`iter_recording`: header, column names and path.
 
-    ``warnings`` and ``notes`` (``(line, text)``) grow while the chunks are read, ``rows`` counts
+    ``warnings`` and ``notes`` (:class:`Note`: ``(line, text)`` and ``row``) grow while the chunks are read, ``rows`` counts
     the samples read so far and ``t_gaps`` the steps of the ``t`` column longer than 1.5 sample
     intervals (lost samples). :meth:`line_of_row` gives the file line of a sample read so far.
     """
@@ -455,7 +482,7 @@ def _parse_chunk(lines, first, head):
     rows, numbers = [], []
     for j, ln in enumerate(lines):
         if ln.startswith("#"):
-            head.notes.append((first + j, ln[1:].strip()))
+            head.notes.append(Note(first + j, ln[1:].strip(), head.rows + len(rows)))
         elif ln.strip():
             rows.append(ln)
             numbers.append(first + j)
@@ -518,7 +545,8 @@ def _check_t(t, t_last, line_numbers, head, max_step_s):
 # writing
 
 
-def _format_number(x):
+def format_number(x):
+    """``x`` as header text that reads back to the same float: ``100`` for 100.0, else ``repr``."""
     return repr(int(x)) if float(x).is_integer() and abs(x) < 1e15 else repr(float(x))
 
 
@@ -542,7 +570,7 @@ def write_recording(path, rec: Recording, *, compresslevel=6):
             writer.note(text)
 
 
-class RecordingWriter:
+class RecordingWriter(Closable):
     """Append rows to a recording, flushing at least every ``flush_interval_s`` seconds.
 
     Made for logging from a live source: after a crash or a pulled plug at most the last
@@ -615,20 +643,11 @@ class RecordingWriter:
                 pass  # pipes and some special files cannot be synced; the flush above still happened
         self._last_flush = time.monotonic()
 
-    def close(self):
-        if self._raw.closed:
-            return
+    def _close(self):
         if self._gz is not None:
             self._gz.close()
         self._raw.flush()
         self._raw.close()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
 
 
 def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:
@@ -639,7 +658,7 @@ def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:
         columns[name] = gyro[:, i]
     header = dict(rec.header, gyro_unit=unit)
     if unit == "lsb":
-        header["lsb_per_dps"] = _format_number(lsb_per_dps)
+        header["lsb_per_dps"] = format_number(lsb_per_dps)
     else:
         header.pop("lsb_per_dps", None)
     return Recording(columns=columns, header=header, path=rec.path, warnings=list(rec.warnings), notes=list(rec.notes))

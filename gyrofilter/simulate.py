@@ -40,7 +40,7 @@ import numpy as np
 
 from . import noise_terms as nt
 from .errors import SettingsError
-from .recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, _format_number
+from .recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, format_number
 from .units import DEG_PER_RAD, GYRO_UNITS, plain
 
 AXES = ("x", "y", "z")
@@ -406,12 +406,12 @@ def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, valid
     given = dict(model)
     given["sample_rate_hz"] = spec["sample_rate_hz"]
     header = {"gyrofilter-recording": FORMAT_VERSION, "sensor": "simulated",
-              "sample_rate_hz": _format_number(spec["sample_rate_hz"]), "gyro_unit": spec["gyro_unit"]}
+              "sample_rate_hz": format_number(spec["sample_rate_hz"]), "gyro_unit": spec["gyro_unit"]}
     if spec["gyro_unit"] == "lsb":
-        header["lsb_per_dps"] = _format_number(spec["lsb_per_dps"])
+        header["lsb_per_dps"] = format_number(spec["lsb_per_dps"])
     if spec["full_scale_dps"] is not None:
-        header["full_scale_dps"] = _format_number(spec["full_scale_dps"])
-    header["simulated_duration_s"] = _format_number(sample_count(duration_s, spec["sample_rate_hz"]) / spec["sample_rate_hz"])
+        header["full_scale_dps"] = format_number(spec["full_scale_dps"])
+    header["simulated_duration_s"] = format_number(sample_count(duration_s, spec["sample_rate_hz"]) / spec["sample_rate_hz"])
     header["simulated_seed"] = "none" if seed is None else str(int(seed))
     header["simulated_model"] = json.dumps(given, separators=(",", ":"), sort_keys=False, default=_json_default)
     return header

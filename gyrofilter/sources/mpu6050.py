@@ -36,6 +36,7 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError
 from . import mpu6050_registers as R
+from .base import Source
 
 __all__ = ["open_mpu6050", "MPU6050Source", "CHIPS", "sample_rate_settings", "auto_dlpf_cfg",
            "decode_fifo", "frame_layout", "temperature_c"]
@@ -187,13 +188,15 @@ def _open_bus(bus):
         raise DeviceError(f"cannot open I2C bus {name}: {exc.strerror or exc} (errno {exc.errno})") from None
 
 
-class MPU6050Source:
+class MPU6050Source(Source):
     """A configured MPU-6050 streaming gyro (and temperature) samples from its FIFO.
 
     Use :func:`open_mpu6050`; the constructor does all the bus traffic of start-up.
     ``read()`` returns rows ``[t, gx, gy, gz(, temp)]``: t in seconds from the sensor's sample
-    index, gyro in LSB (``header["lsb_per_dps"]`` LSB per deg/s), temp in deg C.
+    index, gyro in LSB (``lsb_per_dps`` LSB per deg/s), temp in deg C.
     """
+
+    gyro_unit = "lsb"
 
     def __init__(self, bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, temperature=True,
                  allow_chip=None, *, transfer="auto", clock=None, sleep=None, wall_clock=None,
@@ -234,7 +237,6 @@ class MPU6050Source:
         self.frame_bytes = 2 * self._n_words
         self._owns_bus = isinstance(bus, (int, str))
         self._bus = _open_bus(bus) if self._owns_bus else bus
-        self._closed = False
         try:
             self.chip_id = self._identify(allow_chip)
             name, chip_fifo, self._temp_lsb_per_c, self._temp_offset_c, _ = CHIPS[self.chip_id]
@@ -428,7 +430,7 @@ class MPU6050Source:
             "chip_name": self.chip_name,
             "chip_id": f"0x{self.chip_id:02X}",
             "sample_rate_hz": f"{self.sample_rate_hz:.10g}",
-            "gyro_unit": "lsb",
+            "gyro_unit": self.gyro_unit,
             "lsb_per_dps": f"{self.lsb_per_dps:g}",
             "full_scale_dps": f"{self.full_scale_dps:g}",
             "dlpf_cfg": str(self.dlpf_cfg),
@@ -596,11 +598,6 @@ class MPU6050Source:
                 return rows
             self._sleep(min(self.poll_interval_s, left))
 
-    def pop_notes(self):
-        """Events since the last call (gaps), as one-line strings."""
-        notes, self._notes = self._notes, []
-        return notes
-
     def _close_bus(self):
         if self._owns_bus and self._bus is not None:
             try:
@@ -608,11 +605,8 @@ class MPU6050Source:
             except OSError:
                 pass
 
-    def close(self):
+    def _close(self):
         """Stop the FIFO, put the chip to sleep (best effort) and close the bus if we opened it."""
-        if self._closed:
-            return
-        self._closed = True
         try:
             self._bus.write_byte_data(self.address, R.USER_CTRL.address, 0x00)
             self._bus.write_byte_data(self.address, R.PWR_MGMT_1.address,
@@ -620,12 +614,6 @@ class MPU6050Source:
         except OSError:
             pass
         self._close_bus()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
 
 def open_mpu6050(bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, temperature=True,

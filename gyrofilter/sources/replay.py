@@ -11,7 +11,6 @@ the reader's warnings (a recording cut short) as notes when they arise.
 """
 from __future__ import annotations
 
-import bisect
 import math
 import time
 
@@ -20,13 +19,14 @@ import numpy as np
 from ..errors import SettingsError, SourceEnded
 from ..recording import CHUNK_ROWS, iter_recording
 from ..units import plain
+from .base import Source
 
 CHUNK_SAMPLES = 1000  # rows per read() when not paced
 MAX_WAIT_S = 0.1
 POLL_S = 0.02  # paced reads return at most this often (batches, like a device's FIFO poll)
 
 
-class ReplaySource:
+class ReplaySource(Source):
     """Replay ``path`` (format v1) as a source; ``realtime`` paces it at ``speed`` x real time."""
 
     def __init__(self, path, realtime=False, speed=1.0, *, clock=time.monotonic, sleep=time.sleep, chunk_rows=CHUNK_ROWS):
@@ -46,6 +46,7 @@ class ReplaySource:
         self._where = [head.names.index(c) if c in head.names else -1 for c in names]
         self.header = {k: v for k, v in head.header.items() if k != "gyrofilter-recording"}
         self.header.setdefault("source", f"replay of {self.path}")
+        self.sample_rate_hz, self.gyro_unit, self.lsb_per_dps = head.sample_rate_hz, head.gyro_unit, head.lsb_per_dps
         self.stats = {"samples": 0, "lost_samples": 0, "gaps": 0}
         self._buf = np.empty((0, len(names)))  # rows read from the file, not yet handed out
         self._pos = 0
@@ -58,7 +59,6 @@ class ReplaySource:
         self._start = None
         self._t0 = None
         self._last = -math.inf
-        self._closed = False
         self._fill()
 
     @property
@@ -92,12 +92,9 @@ class ReplaySource:
             self._rows_read = r0 + len(chunk)
             self._buf = np.concatenate([self._buf[self._pos:], rows]) if self._pos < len(self._buf) else rows
             self._pos = 0
-            lines = range(r0, self._rows_read)
-        else:
-            lines = range(self._rows_read, self._rows_read)
-        # the file's annotation lines read since the last chunk: due before the first row after them
-        for line, text in head.notes[self._notes_seen:]:
-            self._due.append((lines.start + bisect.bisect_left(lines, line, key=head.line_of_row), 0, text))
+        # the file's annotation lines read since the last chunk: due before the sample that follows them
+        for note in head.notes[self._notes_seen:]:
+            self._due.append((note.row, 0, note.text))
         self._notes_seen = len(head.notes)
         self._due.sort(key=lambda item: item[0])
         for text in head.warnings[self._warnings_seen:]:
@@ -149,17 +146,5 @@ class ReplaySource:
                 self.stats["gaps"] += 1
             self._notes.append(text)
 
-    def pop_notes(self):
-        notes, self._notes = self._notes, []
-        return notes
-
-    def close(self):
-        self._closed = True
+    def _close(self):
         self._chunks.close()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False

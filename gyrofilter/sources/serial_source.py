@@ -40,6 +40,7 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError, SourceEnded
 from ..units import GYRO_UNITS
+from .base import Source
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
 PROTOCOL_VERSION = "1"
@@ -78,7 +79,8 @@ class LineParser:
 
     Pure (no I/O): :meth:`feed` takes any bytes (split anywhere) and returns the rows its
     complete lines made. ``header`` is None until the units are known (from a header line or
-    the constructor). Counters are in :attr:`stats`, events in :attr:`notes`.
+    the constructor), and so is ``sample_rate_hz`` (float). Counters are in :attr:`stats`,
+    events in :attr:`notes`.
     """
 
     def __init__(self, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None, *, where="serial"):
@@ -95,7 +97,7 @@ class LineParser:
         self.fields = None  # list of names per line once known
         self._counter_mod = 2 ** 32
         self._temp_raw = False
-        self._rate = None
+        self.sample_rate_hz = None
         self._last_counter = None
         self._last_index = -1
         self._options = None
@@ -143,7 +145,7 @@ class LineParser:
                     "start a new recording"
                 )
         self.header = dict(header)
-        self._rate = float(header["sample_rate_hz"])
+        self.sample_rate_hz = float(header["sample_rate_hz"])
 
     def _header_line(self, line):
         text = line[len(HEADER_PREFIX):].decode("ascii", "replace").split()
@@ -376,7 +378,7 @@ class LineParser:
                         lost = int(step[i] - 1)
                         self.stats["counter_jumps"] += 1
                         self.stats["lost_samples"] += lost
-                        self.notes.append(f"gap: {lost} samples lost before t={index[i] / self._rate:.6g} s (counter {int(prev_of(counter, i, self._last_counter))} -> {int(counter[i])})")
+                        self.notes.append(f"gap: {lost} samples lost before t={index[i] / self.sample_rate_hz:.6g} s (counter {int(prev_of(counter, i, self._last_counter))} -> {int(counter[i])})")
                 self._last_counter = int(counter[-1])
                 self._last_index = int(index[-1])
         else:
@@ -386,7 +388,7 @@ class LineParser:
         if n == 0:
             return self._empty()
         rows = np.empty((n, len(self.columns)))
-        rows[:, 0] = index / self._rate
+        rows[:, 0] = index / self.sample_rate_hz
         for j, name in enumerate(("gx", "gy", "gz")):
             rows[:, 1 + j] = values[:, fields.index(name)]
         if "temp" in fields:
@@ -409,7 +411,7 @@ def _num(x):
     return str(int(x)) if x.is_integer() else repr(x)
 
 
-class SerialSource:
+class SerialSource(Source):
     """Read the line protocol from a serial port (pyserial, imported here only).
 
     ``port`` is a device path or a pyserial URL; ``gyro_unit``/``lsb_per_dps``/``sample_rate_hz``
@@ -463,6 +465,9 @@ class SerialSource:
             self._close_port()
             raise
         self.header = dict(self._parser.header)
+        self.sample_rate_hz = self._parser.sample_rate_hz
+        self.gyro_unit = self.header["gyro_unit"]
+        self.lsb_per_dps = float(self.header["lsb_per_dps"]) if self.gyro_unit == "lsb" else None
         self.header.setdefault("sensor", "serial device")
         self.header["serial_port"] = self.port_name
         self.header["start_time_utc"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
@@ -498,6 +503,7 @@ class SerialSource:
         return self._receive()
 
     def pop_notes(self):
+        """Events since the last call (gaps, restarts, skipped lines, device messages)."""
         return self._parser.pop_notes()
 
     def _close_port(self):
@@ -508,17 +514,10 @@ class SerialSource:
             except Exception:  # noqa: BLE001 - closing a vanished port must not mask the real error
                 pass
 
-    def close(self):
+    def _close(self):
         self._close_port()
         if self._ended is None:
             self._ended = "source closed"
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
 
 
 def _port_exceptions():

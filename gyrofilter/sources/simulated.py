@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
+from .base import Source
 
 MAX_WAIT_S = 0.1
 POLL_S = 0.02  # paced reads return at most this often (batches, like a device's FIFO poll)
@@ -63,7 +64,7 @@ def load_model(model):
         raise SettingsError(f"sim: {model}: line {exc.lineno}: not valid JSON ({exc.msg})") from None
 
 
-class SimulatedSource:
+class SimulatedSource(Source):
     """Live source backed by the simulator; see the module docstring."""
 
     def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
@@ -77,7 +78,8 @@ class SimulatedSource:
         if seed is None:
             seed = int(np.random.SeedSequence().entropy % (2 ** 31))
         self.seed = int(seed)
-        self.rate_hz = spec["sample_rate_hz"]
+        self.sample_rate_hz, self.gyro_unit = spec["sample_rate_hz"], spec["gyro_unit"]
+        self.lsb_per_dps = spec["lsb_per_dps"] if self.gyro_unit == "lsb" else None
         self.duration_s = UNLIMITED_S if duration_s is None else float(duration_s)
         self.realtime = bool(realtime)
         header = recording_header(model, self.duration_s, seed=self.seed, validated=spec)
@@ -87,7 +89,7 @@ class SimulatedSource:
         header["start_time_utc"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
         self.header = header
         self.columns = recording_columns(spec)
-        chunk = max(1, int(round(CHUNK_S * self.rate_hz)))
+        chunk = max(1, int(round(CHUNK_S * self.sample_rate_hz)))
         self._chunks = simulate_chunks(model, self.duration_s, chunk_samples=chunk, seed=self.seed, validated=spec)
         self._buf = np.empty((0, len(self.columns)))
         self._clock = clock
@@ -95,7 +97,7 @@ class SimulatedSource:
         self._start = None
         self._last = -math.inf
         self._exhausted = False
-        self._closed = False
+        self._notes = []  # a simulation has no events
         self.stats = {"samples": 0, "lost_samples": 0}
 
     def _more(self):
@@ -139,16 +141,5 @@ class SimulatedSource:
         self.stats["samples"] += n
         return rows
 
-    def pop_notes(self):
-        return []
-
-    def close(self):
-        self._closed = True
+    def _close(self):
         self._chunks.close()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
