@@ -167,6 +167,7 @@ class _FailingSource:
     """Delivers 3 reads of 10 rows and a gap note, then fails like an unplugged I2C device."""
 
     header = {"sample_rate_hz": "100", "gyro_unit": "dps", "sensor": "test"}
+    sample_rate_hz, gyro_unit, lsb_per_dps = 100.0, "dps", None
     columns = ["t", "gx", "gy", "gz"]
 
     def __init__(self):
@@ -192,11 +193,11 @@ class _FailingSource:
 
 
 def test_record_keeps_everything_when_the_device_fails(tmp_path, monkeypatch, capsys):
-    import gyrofilter.cli.record as record
+    import gyrofilter.cli.live as live
     from gyrofilter.cli import main
 
     src = _FailingSource()
-    monkeypatch.setattr(record, "open_source", lambda spec, **kw: src)
+    monkeypatch.setattr(live, "open_source", lambda spec, **kw: src)
     out = tmp_path / "fail.csv"
     assert main(["record", "--source", "mpu6050", "--out", str(out)]) == 1
     rec = read_recording(out)

@@ -9,37 +9,15 @@ signal aborts at once (the file is still readable up to the last flush). A recor
 before its first sample (the device failing, any error) removes its file, so that the same command
 can be run again; the output is never one of the source's files, and overwrites only with --force.
 """
-import math
-import os
-import signal
 import sys
 import time
 
-import numpy as np
-
-from ..errors import DeviceError, SettingsError, SourceEnded
-from ..sources import SOURCE_HELP, open_source, parse_source
-from ..units import GYRO_UNITS
-from . import common
+from . import common, live
 
 FLUSH_INTERVAL_S = 0.5
-STATUS_INTERVAL_S = 1.0
-EXIT_DISCONNECTED = 1
 # header keys first in this order, the rest as the source gives them
 _HEADER_ORDER = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "sensor", "chip_id", "full_scale_dps",
                  "dlpf_cfg", "start_time_utc")
-
-
-def add_source_arguments(parser):
-    """--source and the unit options for devices that send no header (shared with ``run``)."""
-    parser.add_argument("--source", required=True, metavar="SOURCE", help=SOURCE_HELP)
-    parser.add_argument("--duration", type=float, metavar="S",
-                        help="stop after S seconds of samples (default: until Ctrl-C, SIGTERM or the end of the source)")
-    parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
-                        help="gyro unit of a serial device that sends no header line")
-    parser.add_argument("--lsb-per-dps", type=float, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
-    parser.add_argument("--sample-rate", type=float, metavar="HZ", dest="sample_rate_hz",
-                        help="sample rate of such a device")
 
 
 def add_arguments(parser):
@@ -47,114 +25,10 @@ def add_arguments(parser):
         "Record a live source to a recording file (format v1, .csv or .csv.gz). Data are flushed "
         "at least twice a second; Ctrl-C or SIGTERM ends the file cleanly (exit 0)."
     )
-    add_source_arguments(parser)
+    live.add_source_arguments(parser)
     parser.add_argument("--out", required=True, metavar="FILE", help="recording to write (.csv, or .csv.gz for gzip)")
     common.add_force_argument(parser)
     parser.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")
-
-
-def check_duration(duration_s):
-    """``--duration`` is a positive, finite number of seconds, or not given (None)."""
-    if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0):
-        raise SettingsError(f"--duration {duration_s:g}: must be a positive, finite number of seconds")
-
-
-def source_files(spec):
-    """The files SOURCE reads (a replayed recording, a simulation model, a serial device): never outputs."""
-    _, kwargs = parse_source(spec)
-    return [kwargs.get(key) for key in ("path", "model", "port")]
-
-
-def close_output(writer, failed, row_name):
-    """Close ``writer``; when the command failed before any data row was written, remove its file
-    (header and notes only), so that a re-run is not refused as existing. Returns the line saying
-    so (``row_name``: what a data row is), or "" when the file stays."""
-    writer.close()
-    if not failed or writer.rows_written or writer.path is None:
-        return ""
-    try:
-        os.unlink(writer.path)
-    except FileNotFoundError:
-        pass
-    return f"removed {writer.path}: no {row_name} was written"
-
-
-def open_from_args(args):
-    """Open ``args.source`` with the unit options as defaults."""
-    return open_source(args.source, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
-                       sample_rate_hz=args.sample_rate_hz)
-
-
-class StopSignals:
-    """SIGINT/SIGTERM set a flag that the loop checks (within ~0.1 s, a source's longest wait).
-
-    Stopping between reads, never inside a write, keeps the file consistent (a KeyboardInterrupt
-    raised inside gzip's write could leave a stream whose checksum does not match). A second
-    signal raises KeyboardInterrupt for an immediate exit.
-    """
-
-    NAMES = {signal.SIGINT: "SIGINT (Ctrl-C)", signal.SIGTERM: "SIGTERM"}
-
-    def __init__(self):
-        self.received = None
-        self._old = {}
-
-    def _handler(self, signum, frame):
-        if self.received is not None:
-            raise KeyboardInterrupt
-        self.received = self.NAMES.get(signum, str(signum))
-
-    def __enter__(self):
-        for sig in self.NAMES:
-            self._old[sig] = signal.signal(sig, self._handler)
-        return self
-
-    def __exit__(self, *exc):
-        for sig, old in self._old.items():
-            signal.signal(sig, old)
-        return False
-
-
-class Status:
-    """A status line on stderr at most once per ``STATUS_INTERVAL_S``: rate, losses, CPU use."""
-
-    def __init__(self, enabled, nominal_rate_hz, stream=None):
-        self.enabled = enabled
-        self.nominal_rate_hz = nominal_rate_hz
-        self.stream = stream or sys.stderr
-        self.tty = self.stream.isatty()
-        self._wall = time.monotonic()
-        self._cpu = time.process_time()
-        self._samples = 0
-        self._shown = False
-
-    def due(self):
-        return self.enabled and time.monotonic() - self._wall >= STATUS_INTERVAL_S
-
-    def show(self, samples, text):
-        """``samples`` = total so far; ``text`` = the rest of the line."""
-        wall, cpu = time.monotonic(), time.process_time()
-        dt = max(wall - self._wall, 1e-9)
-        rate = (samples - self._samples) / dt
-        cpu_pct = 100.0 * (cpu - self._cpu) / dt
-        self._wall, self._cpu, self._samples = wall, cpu, samples
-        line = f"{rate:7.1f} samples/s (nominal {self.nominal_rate_hz:g}), {text}, CPU {cpu_pct:4.1f}%"
-        if self.tty:
-            self.stream.write("\r" + line + "\x1b[K")
-        else:
-            self.stream.write(line + "\n")
-        self.stream.flush()
-        self._shown = True
-
-    def end(self):
-        if self._shown and self.tty:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def source_summary(stats):
-    """The source's non-zero counters as 'name N' words (samples first)."""
-    return ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in stats.items() if v and k != "samples")
 
 
 def recording_header(source, spec):
@@ -184,98 +58,20 @@ def _formats(columns):
 def run(args):
     from ..recording import RecordingWriter
 
-    check_duration(args.duration)
-    common.check_outputs([args.out], source_files(args.source), args.force)
-    source = open_from_args(args)
+    live.check_duration(args.duration)
+    common.check_outputs([args.out], live.source_files(args.source), args.force)
+    source = live.open_from_args(args)
     try:
         return _record(args, source, RecordingWriter)
     finally:
         source.close()
 
 
-class LiveLoop:
-    """The read loop shared by ``record`` and ``run``: reads ``source`` until a stop signal, its
-    end, a device failure or ``duration_s`` seconds of samples (sensor clock).
-
-    ``with LiveLoop(source, duration_s) as loop: while (step := loop.next()) is not None: ...``
-    where a step is ``(rows, notes)``; afterwards :meth:`reason` says why it stopped.
-    """
-
-    def __init__(self, source, duration_s=None):
-        self.source = source
-        self.duration_s = duration_s
-        self.rate_hz = float(source.header["sample_rate_hz"])
-        self.t_col = source.columns.index("t")
-        self.first_t = self.last_t = None
-        self._t_end = None  # samples at t >= this are beyond the duration (half a sample of margin)
-        self.samples = 0
-        self.ended = None  # SourceEnded, DeviceError or "duration reached"
-        self._signals = StopSignals()
-
-    def __enter__(self):
-        self._signals.__enter__()
-        return self
-
-    def __exit__(self, *exc):
-        return self._signals.__exit__(*exc)
-
-    def next(self):
-        """The next ``(rows, notes)``, or None when the loop is over."""
-        if self._signals.received is not None or self.ended is not None:
-            return None
-        try:
-            rows = self.source.read()
-        except SourceEnded as exc:
-            self.ended = exc
-            return None
-        except (DeviceError, OSError) as exc:  # the device failed for good: keep what we have
-            self.ended = DeviceError(f"device error: {' '.join(str(exc).split())}")
-            return None
-        notes = self.source.pop_notes()
-        if len(rows):
-            t = rows[:, self.t_col]
-            if self.first_t is None:
-                self.first_t = float(t[0])
-                if self.duration_s is not None:
-                    self._t_end = self.first_t + self.duration_s - 0.5 / self.rate_hz
-            if self._t_end is not None:
-                # cut at the first sample beyond the duration (t never goes back: a prefix, no splice);
-                # when the next sample would be beyond it anyway, stop now instead of waiting for it
-                beyond = np.flatnonzero(t >= self._t_end)
-                if len(beyond):
-                    rows, self.ended = rows[: beyond[0]], "duration reached"
-                elif t[-1] + 1.0 / self.rate_hz >= self._t_end:
-                    self.ended = "duration reached"
-            if len(rows):
-                self.last_t = float(rows[-1, self.t_col])
-                self.samples += len(rows)
-        return rows, notes
-
-    @property
-    def span_s(self):
-        """Sensor time covered, first to last sample plus one sample interval."""
-        return 0.0 if self.last_t is None else self.last_t - self.first_t + 1.0 / self.rate_hz
-
-    def reason(self):
-        if self._signals.received is not None:
-            return f"stopped by {self._signals.received}"
-        if isinstance(self.ended, SourceEnded):
-            return f"source ended: {self.ended}"
-        if isinstance(self.ended, DeviceError):
-            return f"stopped: {self.ended}"
-        return self.ended or "stopped"
-
-    def failed(self):
-        """True when the device went away or failed (exit status 1)."""
-        return isinstance(self.ended, DeviceError) or (
-            isinstance(self.ended, SourceEnded) and bool(self.source.stats.get("disconnects")))
-
-
 def _record(args, source, RecordingWriter):
     header = recording_header(source, args.source)
     columns = list(source.columns)
-    loop = LiveLoop(source, args.duration)
-    status = Status(args.progress or sys.stderr.isatty(), loop.rate_hz)
+    loop = live.LiveLoop(source, args.duration)
+    status = live.Status(args.progress or sys.stderr.isatty(), loop.sample_rate_hz)
     wall0 = time.monotonic()
     writer = RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None)
     try:
@@ -299,19 +95,19 @@ def _record(args, source, RecordingWriter):
             for text in source.pop_notes():
                 writer.note(text)
             reason = loop.reason()
-            writer.note(f"end: {reason}; {loop.samples} samples; " + (source_summary(source.stats) or "no losses"))
+            writer.note(f"end: {reason}; {loop.samples} samples; " + (live.source_summary(source.stats) or "no losses"))
     except BaseException:
-        if removed := close_output(writer, True, "sample"):
+        if removed := live.close_output(writer, True, "sample"):
             common.say(f"gyrofilter record: {removed}")
         raise
-    removed = close_output(writer, loop.failed(), "sample")
+    removed = live.close_output(writer, loop.failed(), "sample")
     stats = source.stats
     print(
         f"gyrofilter record: {reason}\n"
-        f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
+        f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.sample_rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
         f"  lost {stats.get('lost_samples', 0)} samples"
-        + (f"; {source_summary(stats)}" if source_summary(stats) else "")
+        + (f"; {live.source_summary(stats)}" if live.source_summary(stats) else "")
         + (f"\n  {removed}" if removed else ""),
         file=sys.stderr,
     )
-    return EXIT_DISCONNECTED if loop.failed() else 0
+    return live.EXIT_DISCONNECTED if loop.failed() else 0

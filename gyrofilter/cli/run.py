@@ -13,10 +13,7 @@ import time
 
 import numpy as np
 
-from ..units import to_dps
-from . import common
-from .record import (EXIT_DISCONNECTED, LiveLoop, Status, add_source_arguments, check_duration, close_output,
-                     open_from_args, source_files, source_summary)
+from . import common, live
 
 FLUSH_INTERVAL_S = 0.5
 
@@ -26,7 +23,7 @@ def add_arguments(parser):
         "Filter a live source in real time: filtered rates (deg/s) as CSV (recording format v1) on "
         "stdout or to --out, a status line on stderr once per second."
     )
-    add_source_arguments(parser)
+    live.add_source_arguments(parser)
     parser.add_argument("--out", metavar="FILE", help="write the filtered rates to this recording (.csv or .csv.gz) instead of stdout")
     common.add_force_argument(parser)
     parser.add_argument("--quiet", action="store_true", help="no status line")
@@ -59,10 +56,10 @@ class _TextOut:
 
 
 def run(args):
-    check_duration(args.duration)
+    live.check_duration(args.duration)
     common.check_outputs([args.out, args.save_calibration],
-                         source_files(args.source) + [args.calibration, args.temp_model], args.force)
-    source = open_from_args(args)
+                         live.source_files(args.source) + [args.calibration, args.temp_model], args.force)
+    source = live.open_from_args(args)
     try:
         return _run(args, source)
     finally:
@@ -74,13 +71,9 @@ def _run(args, source):
     from ..recording import RecordingWriter
 
     head = source.header
-    rate_hz = float(head["sample_rate_hz"])
-    unit = head["gyro_unit"]
-    lsb = float(head["lsb_per_dps"]) if unit == "lsb" else None
     cols = source.columns
-    gyro_idx = [cols.index(c) for c in ("gx", "gy", "gz")]
     t_idx = cols.index("t")
-    filt = common.make_filter(args, rate_hz)
+    filt = common.make_filter(args, source.sample_rate_hz)
     temp_idx = cols.index("temp") if "temp" in cols else None
     common.check_temperature(filt, temp_idx is not None, f"source {args.source}")
     block = filt.settings.block_len
@@ -99,8 +92,8 @@ def _run(args, source):
         writer = RecordingWriter(args.out, out_header, columns, formats=["%.10g", "%.9g", "%.9g", "%.9g"], flush_interval_s=None)
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
-    loop = LiveLoop(source, args.duration)
-    status = Status(not args.quiet, rate_hz)
+    loop = live.LiveLoop(source, args.duration)
+    status = live.Status(not args.quiet, source.sample_rate_hz)
     last_flush = time.monotonic()
     try:
         with loop:
@@ -111,7 +104,7 @@ def _run(args, source):
                 if len(rows):
                     was_calibrating = filt.calibrating
                     temps = rows[:, temp_idx] if filt.compensates_temperature else None
-                    out = filt.filter(to_dps(rows[:, gyro_idx], unit, lsb), temps)
+                    out = filt.filter(source.gyro_dps(rows), temps)
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note("calibrated: bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s")
                     if len(out):
@@ -131,10 +124,10 @@ def _run(args, source):
                 writer.note(text)
         common.save_calibration(args, filt)
     except BaseException:
-        if removed := close_output(writer, True, "filtered row"):
+        if removed := live.close_output(writer, True, "filtered row"):
             common.say(f"gyrofilter run: {removed}")
         raise
-    removed = close_output(writer, loop.failed(), "filtered row")
+    removed = live.close_output(writer, loop.failed(), "filtered row")
     reason = loop.reason()
     bias = "" if filt.bias_dps is None else " bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s;"
     print(
@@ -142,8 +135,8 @@ def _run(args, source):
         f"  {loop.samples} samples in, {writer.rows_written} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
         f"  lost {source.stats.get('lost_samples', 0)} samples"
-        + (f"; {source_summary(source.stats)}" if source_summary(source.stats) else "")
+        + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else "")
         + (f"\n  {removed}" if removed else ""),
         file=sys.stderr,
     )
-    return EXIT_DISCONNECTED if loop.failed() else 0
+    return live.EXIT_DISCONNECTED if loop.failed() else 0
