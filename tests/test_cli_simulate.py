@@ -193,3 +193,20 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
     assert "interrupted" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
     assert signal.getsignal(getattr(signal, signame)) is before  # main() leaves the process's handlers as they were
+
+
+def test_one_model_file_works_for_simulate_the_sim_source_and_temp_model(tmp_path, capsys):
+    """The same file (a gap report here) through the one loader: simulate --model, sim:FILE and
+    sim:model=FILE give the same samples; --temp-model takes it too."""
+    gap_report = REPO / "docs" / "gap" / "mpu6050_static_100s.json"
+    mine = write_json(tmp_path / "gap.json", {"recording": "r.csv", "findings": [], "extended_model": MODEL})
+    for path in (str(gap_report), mine):
+        sim = tmp_path / "sim.csv"
+        assert main(["simulate", "--model", path, "--duration", "2", "--seed", "3", "--out", str(sim), "--force"]) == 0
+        expected = read_recording(sim).gyro
+        for spec in (f"sim:{path}", f"sim:model={path}"):
+            out = tmp_path / "rec.csv"
+            assert main(["record", "--source", spec + ",seed=3,duration=2,realtime=0", "--out", str(out), "--force"]) == 0
+            np.testing.assert_array_equal(read_recording(out).gyro, expected)
+    assert main(["replay", str(sim), "--temp-model", mine]) == 0
+    assert "unknown key" not in capsys.readouterr().err

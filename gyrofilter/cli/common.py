@@ -171,14 +171,10 @@ def _parse_setting(text):
 
 def temperature_coefficients(path):
     """(cx, cy, cz) in deg/s per deg C from a gap report (its extended_model) or a simulator model."""
+    from ..simulate import load_model
     from ..tempcomp import coefficients_from_model
 
-    with open(path, encoding="utf-8") as fh:
-        try:
-            doc = json.load(fh)
-        except json.JSONDecodeError as exc:
-            raise SettingsError(f"{path}: not JSON ({exc.msg} at line {exc.lineno})") from None
-    model = doc.get("extended_model", doc) if isinstance(doc, dict) else None
+    model = load_model(path)
     if not isinstance(model, dict) or not isinstance(model.get("axes"), dict):
         raise SettingsError(f"{path}: neither a gap report (extended_model) nor a simulator model (axes)")
     coefficients = coefficients_from_model(model)

@@ -6,7 +6,6 @@ model is reported in one line naming the key. FILE is refused when it exists (un
 or is the model itself; the recording is written beside it under a temporary name and takes
 its place only when complete, so a failed or interrupted run leaves no file behind.
 """
-import json
 import math
 import sys
 import time
@@ -30,22 +29,9 @@ def add_arguments(parser):
     common.add_force_argument(parser)
 
 
-def load_model(path):
-    """Read a model JSON file; a model nested under 'extended_model' (a gap report) is accepted."""
-    with open(path, encoding="utf-8") as fh:
-        text = fh.read()
-    try:
-        model = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise SettingsError(f"{path}: not valid JSON: line {exc.lineno} column {exc.colno}: {exc.msg}") from None
-    if isinstance(model, dict) and "axes" not in model and isinstance(model.get("extended_model"), dict):
-        model = model["extended_model"]
-    return model
-
-
 def run(args):
     from ..recording import GYRO_COLUMNS, RecordingWriter
-    from ..simulate import recording_columns, recording_header, sample_count, simulate_chunks, validate_model
+    from ..simulate import load_model, recording_columns, recording_header, sample_count, simulate_chunks, validate_model
 
     common.check_outputs([args.out], [args.model], args.force)
     if not (math.isfinite(args.duration) and args.duration > 0):

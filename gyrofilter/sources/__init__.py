@@ -99,6 +99,7 @@ KINDS = {
         "speed": (_float, "speed", "pace factor with realtime (2 = twice as fast)"),
     }),
     "sim": ("model", {
+        "model": (str, "model", "the simulator model (JSON file; a gap report's extended_model is used)"),
         "seed": (_int, "seed", "random seed"),
         "realtime": (_bool, "realtime", "deliver samples at the model's pace (default 1)"),
         "duration": (_float, "duration_s", "end after this many seconds of samples"),

@@ -49,30 +49,23 @@ DEFAULT_MODEL = {
 }
 
 
-def load_model(model):
-    """``model``: None (default model), a dict, or the path of a JSON file."""
-    if model is None or model == "":
-        return json.loads(json.dumps(DEFAULT_MODEL)), "default MPU6050-like model"
-    if isinstance(model, dict):
-        return model, "model given in code"
-    try:
-        with open(model, encoding="utf-8") as fh:
-            return json.load(fh), str(model)
-    except OSError as exc:
-        raise SettingsError(f"sim: cannot read model {model}: {exc.strerror or exc}") from None
-    except json.JSONDecodeError as exc:
-        raise SettingsError(f"sim: {model}: line {exc.lineno}: not valid JSON ({exc.msg})") from None
-
-
 class SimulatedSource(Source):
     """Live source backed by the simulator; see the module docstring."""
 
     def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
                  clock=time.monotonic, sleep=time.sleep):
-        from ..simulate import recording_columns, recording_header, simulate_chunks, validate_model
+        from ..simulate import load_model, recording_columns, recording_header, simulate_chunks, validate_model
 
-        model, self.model_name = load_model(model)
-        spec, self.warnings = validate_model(model, sample_rate_hz=sample_rate_hz)
+        if model is None or model == "":
+            model, self.model_name = json.loads(json.dumps(DEFAULT_MODEL)), "default MPU6050-like model"
+        elif isinstance(model, dict):
+            self.model_name = "model given in code"
+        else:
+            model, self.model_name = load_model(model), str(model)
+        try:
+            spec, self.warnings = validate_model(model, sample_rate_hz=sample_rate_hz)
+        except SettingsError as exc:
+            raise SettingsError(f"sim: {self.model_name}: {exc}") from None
         if duration_s is not None and (not math.isfinite(duration_s) or duration_s <= 0):
             raise SettingsError(f"sim: duration must be > 0 s, got {duration_s!r}")
         if seed is None:
