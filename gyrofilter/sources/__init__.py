@@ -7,15 +7,18 @@ One syntax names every source (``--source SOURCE`` of ``gyrofilter record`` and 
     mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,allow_chip=0x70]
     serial:/dev/ttyUSB0[,baud=115200,unit=lsb,lsb_per_dps=131,rate=100,header_timeout=5]
     replay:FILE[,realtime][,speed=2]          (or just FILE, a .csv/.csv.gz recording)
-    sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]
+    sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]   (or sim:model=MODEL.json,...)
 
 A bare ``/dev/tty...`` is a serial port and a bare existing file or ``*.csv``/``*.csv.gz`` name
 is a replay. Numbers may be decimal or ``0x`` hex; flags are ``1/0``, ``yes/no``, ``true/false``
 or the bare key (= true). An unknown key is refused with a message that lists the known ones.
 
-Every opened source follows the same duck-typed protocol:
+Every opened source is a :class:`gyrofilter.sources.base.Source`:
 
-- ``header``: dict of recording-header keys (``sample_rate_hz``, ``gyro_unit``, ``lsb_per_dps``
+- ``sample_rate_hz`` (float), ``gyro_unit`` (``dps``, ``rad/s`` or ``lsb``) and ``lsb_per_dps``
+  (float with ``lsb``, else None): the units of ``read()``'s rows, as numbers; ``gyro_dps(rows)``
+  converts the rows' gyro columns to deg/s;
+- ``header``: dict of recording-header keys (text, for the file) (``sample_rate_hz``, ``gyro_unit``, ``lsb_per_dps``
   when the unit is lsb, ``sensor``, ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``,
   ``start_time_utc``, ...);
 - ``columns``: names of what ``read()`` returns, starting with ``t`` (sample index / sample
@@ -26,7 +29,7 @@ Every opened source follows the same duck-typed protocol:
   of a finite source (the exception's text says why it ended);
 - ``pop_notes()``: events since the last call (gaps, restarts), written as annotation lines;
 - ``stats``: counters (``samples``, ``lost_samples``, ``garbage_bytes``, ...);
-- ``close()``.
+- ``close()`` (also ``with source: ...``).
 
 Device libraries (smbus2, pyserial) are imported only when such a source is opened.
 """
