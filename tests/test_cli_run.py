@@ -333,3 +333,24 @@ def test_outputs_never_overwrite_an_input_even_with_force(tmp_path, capsys):
     assert "exists (use --force to overwrite)" in capsys.readouterr().err and out.read_text() == "keep me"
     assert main(["record", "--source", str(still), "--out", str(out), "--force"]) == 0
     assert len(read_recording(out)) == 600
+
+
+def test_run_on_a_simulation_records_its_seed(tmp_path, capsys):
+    out = tmp_path / "run.csv"
+    assert main(["run", "--source", "sim:realtime=0,duration=4", "--out", str(out), "--quiet"]) == 0
+    head = read_recording(out).header
+    seed = int(head["simulated_seed"])
+    again = tmp_path / "again.csv"
+    assert main(["run", "--source", f"sim:realtime=0,duration=4,seed={seed}", "--out", str(again), "--quiet"]) == 0
+    np.testing.assert_array_equal(read_recording(again).gyro, read_recording(out).gyro)
+
+
+def test_run_on_a_cut_gzip_replay_warns_on_stderr(tmp_path, capsys):
+    data = open(BUNDLED, "rb").read()
+    cut = tmp_path / "cut.csv.gz"
+    cut.write_bytes(data[: len(data) // 2])
+    out = tmp_path / "run.csv"
+    assert main(["run", "--source", f"replay:{cut}", "--out", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    inside = [text for _, text in read_recording(out).notes if text.startswith("warning: ")]
+    assert inside and all(f"gyrofilter: {text}" in err for text in inside)

@@ -17,7 +17,7 @@ from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.simulate import simulate
 from gyrofilter.sources.simulated import DEFAULT_MODEL
-from support import RECORDINGS
+from support import RECORDINGS, REPO
 
 SIM_SECONDS = 60.0  # the source's own length; the recording is stopped long before
 RATE_HZ = 500.0
@@ -208,3 +208,27 @@ def test_record_keeps_everything_when_the_device_fails(tmp_path, monkeypatch, ca
     assert texts[-1].startswith("end: stopped: device error: MPU6050 at /dev/i2c-1 0x68: read failed")
     err = capsys.readouterr().err
     assert "wrote 30 samples (0.30 s at 100 Hz" in err and "retries 4" in err
+
+
+def test_record_of_a_simulation_with_duration_equals_simulate(tmp_path, capsys):
+    """sim without duration= and record --duration D: the samples, temperatures and header of
+    simulate --duration D (the model's terms depend on the run's length)."""
+    from gyrofilter.cli import main
+
+    model = str(REPO / "examples" / "models" / "mpu6050.json")
+    sim, out = tmp_path / "sim.csv", tmp_path / "rec.csv"
+    assert main(["simulate", "--model", model, "--duration", "3", "--seed", "5", "--out", str(sim)]) == 0
+    assert main(["record", "--source", f"sim:{model},seed=5,realtime=0", "--duration", "3", "--out", str(out)]) == 0
+    a, b = read_recording(sim), read_recording(out)
+    np.testing.assert_array_equal(b.columns["t"], a.columns["t"])
+    np.testing.assert_array_equal(b.gyro, a.gyro)
+    np.testing.assert_array_equal(b.temp_c, a.temp_c)
+    assert b.header["simulated_duration_s"] == a.header["simulated_duration_s"] == "3"
+
+
+def test_record_creates_missing_folders(tmp_path):
+    from gyrofilter.cli import main
+
+    out = tmp_path / "new" / "folder" / "rec.csv.gz"
+    assert main(["record", "--source", "sim:seed=1,realtime=0,duration=1", "--out", str(out)]) == 0
+    assert len(read_recording(out)) == 100

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError, SourceEnded
 from ..sources import SOURCE_HELP, open_source, parse_source
+from ..sources.base import WARNING_PREFIX
 from ..units import GYRO_UNITS
 
 STATUS_INTERVAL_S = 1.0
@@ -57,9 +58,15 @@ def close_output(writer, failed, row_name):
 
 
 def open_from_args(args):
-    """Open ``args.source`` with the unit options as defaults."""
+    """Open ``args.source`` with the unit options and ``--duration`` as defaults (a simulation
+    then runs for that duration, so that it equals ``simulate --duration``)."""
     return open_source(args.source, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
-                       sample_rate_hz=args.sample_rate_hz)
+                       sample_rate_hz=args.sample_rate_hz, duration_s=args.duration)
+
+
+def create_folder_of(path):
+    """Make the folder ``path`` goes into, with its missing parents."""
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
 
 
 class StopSignals:
@@ -172,7 +179,7 @@ class LiveLoop:
         except (DeviceError, OSError) as exc:  # the device failed for good: keep what we have
             self.ended = DeviceError(f"device error: {' '.join(str(exc).split())}")
             return None
-        notes = self.source.pop_notes()
+        notes = self.pop_notes()
         if len(rows):
             t = rows[:, self.t_col]
             if self.first_t is None:
@@ -191,6 +198,15 @@ class LiveLoop:
                 self.last_t = float(rows[-1, self.t_col])
                 self.samples += len(rows)
         return rows, notes
+
+    def pop_notes(self):
+        """The source's notes; its warnings (a replayed file cut short) also go to stderr, since
+        they are otherwise seen only inside the output."""
+        notes = self.source.pop_notes()
+        for text in notes:
+            if text.startswith(WARNING_PREFIX):
+                print(f"gyrofilter: {text}", file=sys.stderr)
+        return notes
 
     @property
     def span_s(self):

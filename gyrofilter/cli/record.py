@@ -49,7 +49,7 @@ def _formats(columns):
         if c == "t":
             out.append("%.10g")
         elif c == "temp":
-            out.append("%.4f")
+            out.append("%.7g")  # as simulate writes it
         else:
             out.append("%.9g")
     return out
@@ -62,6 +62,7 @@ def run(args):
     common.check_outputs([args.out], live.source_files(args.source), args.force)
     source = live.open_from_args(args)
     try:
+        live.create_folder_of(args.out)
         return _record(args, source, RecordingWriter)
     finally:
         source.close()
@@ -92,7 +93,7 @@ def _record(args, source, RecordingWriter):
                 if status.due():
                     status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost")
             status.end()
-            for text in source.pop_notes():
+            for text in loop.pop_notes():
                 writer.note(text)
             reason = loop.reason()
             writer.note(f"end: {reason}; {loop.samples} samples; " + (live.source_summary(source.stats) or "no losses"))

@@ -83,12 +83,14 @@ def _run(args, source):
         "description": f"gyrofilter {__version__} run: filtered rates, preset {filt.preset}, block of {block} samples; t = time of the block's last sample",
         "live_source": args.source,
     }
-    for key in ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc"):
+    for key in ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc",
+                "simulated_seed", "simulated_duration_s", "simulated_model"):
         if key in head:
             out_header[key] = head[key]
     out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
     columns = ["t", "gx", "gy", "gz"]
     if args.out:
+        live.create_folder_of(args.out)
         writer = RecordingWriter(args.out, out_header, columns, formats=["%.10g", "%.9g", "%.9g", "%.9g"], flush_interval_s=None)
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
@@ -120,7 +122,7 @@ def _run(args, source):
                     status.show(loop.samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
                                               f"rejected outliers {int(filt.rejected.sum())}")
             status.end()
-            for text in source.pop_notes():
+            for text in loop.pop_notes():
                 writer.note(text)
         common.save_calibration(args, filt)
     except BaseException:

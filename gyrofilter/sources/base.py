@@ -5,6 +5,8 @@ from ..closable import Closable
 from ..recording import GYRO_COLUMNS
 from ..units import to_dps
 
+WARNING_PREFIX = "warning: "  # starts a note that is a warning (a replayed file cut short)
+
 
 class Source(Closable):
     """A live source (see :mod:`gyrofilter.sources` for the protocol).

@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import SettingsError, SourceEnded
 from ..recording import CHUNK_ROWS, iter_recording
 from ..units import plain
-from .base import Source
+from .base import WARNING_PREFIX, Source
 
 CHUNK_SAMPLES = 1000  # rows per read() when not paced
 MAX_WAIT_S = 0.1
@@ -98,7 +98,7 @@ class ReplaySource(Source):
         self._notes_seen = len(head.notes)
         self._due.sort(key=lambda item: item[0])
         for text in head.warnings[self._warnings_seen:]:
-            self._notes.append(f"warning: {text}")
+            self._notes.append(WARNING_PREFIX + text)
         self._warnings_seen = len(head.warnings)
 
     def _available(self):
