@@ -289,16 +289,54 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
     max_step_s = 1.5 / head.sample_rate_hz
     while True:
         if lines:
-            data, line_numbers = _parse_chunk(lines, first, head)
-            if len(data):
-                if t_col is not None:
+            try:
+                data, line_numbers = _parse_chunk(lines, first, head)
+                if len(data) and t_col is not None:
                     t_last = _check_t(data[:, t_col], t_last, line_numbers, head, max_step_s)
+            except RecordingError as exc:
+                raise _blame_gzip_damage(path, exc) from None
+            if len(data):
                 head._add_rows(line_numbers)
                 yield data
         try:
             first, lines = next(parts)
         except StopIteration:
             return
+        except RecordingError as exc:
+            raise _blame_gzip_damage(path, exc) from None
+
+
+def _blame_gzip_damage(path, exc):
+    """``exc`` (a bad line), or, when ``path`` is a gzip file whose data are damaged (its
+    checksum or its compressed blocks wrong), an error saying so: the bad line is then text
+    the damage made, not what was written."""
+    damage = _gzip_damage(path)
+    if damage is None:
+        return exc
+    return RecordingError(f"{path}: damaged gzip data ({damage}); the text read from it is garbage from that "
+                          f"point, first noticed at {str(exc).removeprefix(path + ': ')}")
+
+
+def _gzip_damage(path):
+    """The error decompressing the whole gzip file ``path`` (every member) meets, or None (not
+    gzip, intact, or only cut short as an interrupted recording leaves it)."""
+    with open(path, "rb") as fh:
+        raw = fh.read(_READ_BYTES)
+        if raw[:2] != _GZIP_MAGIC:
+            return None
+        d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+        while raw:
+            try:
+                d.decompress(raw)
+            except zlib.error as exc:
+                return str(exc)
+            if d.eof and d.unused_data:
+                raw, d = d.unused_data, zlib.decompressobj(16 + zlib.MAX_WBITS)
+            else:
+                raw = fh.read(_READ_BYTES)
+                if d.eof and raw:
+                    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+    return None
 
 
 def _byte_blocks(path, warnings):

@@ -216,3 +216,40 @@ def test_reader_memory_is_a_small_multiple_of_the_arrays(tmp_path):
         tracemalloc.stop()
     assert len(back) == n
     assert peak < 3.5 * n * 5 * 8
+
+
+def test_damaged_gzip_data_are_named_as_such_not_as_a_bad_line(tmp_path):
+    """Bytes changed inside a gzip recording make garbage text before the checksum fails: the
+    error names the file and the damaged gzip data, not a short line."""
+    rng = np.random.default_rng(5)
+    rec = Recording.from_dps(np.round(rng.normal(0, 300, (60_000, 3))), 100.0, t_s=np.arange(60_000) / 100.0)
+    good = tmp_path / "good.csv.gz"
+    write_recording(good, rec)
+    data = good.read_bytes()
+    named = 0
+    for k in range(6):
+        bad = tmp_path / f"bad{k}.csv.gz"
+        damaged = bytearray(data)
+        pos = len(data) // 10 * (k + 1)
+        damaged[pos:pos + 8] = bytes(b ^ 0xFF for b in damaged[pos:pos + 8])
+        bad.write_bytes(bytes(damaged))
+        try:
+            back = read_recording(bad)
+        except RecordingError as exc:
+            assert str(exc).startswith(f"{bad}: damaged gzip data") or "not a readable gzip file" in str(exc), exc
+            named += "damaged gzip data" in str(exc)
+        else:  # zlib itself saw the damage: the data before it, with a warning
+            assert any("gzip data damaged" in w for w in back.warnings)
+    assert named >= 1
+
+
+@pytest.mark.parametrize("chunk_rows", [1, 7, 1 << 16])
+def test_notes_know_the_sample_they_precede(tmp_path, chunk_rows):
+    body = [f"{i / 100:.2f},{i},0,0" for i in range(20)]
+    body[5:5] = ["# a"]
+    body[12:12] = ["", "# b", "# c"]
+    body.append("# end")
+    path, _ = _lines_file(tmp_path, body, "n.csv")
+    head, _ = _read_chunked(path, chunk_rows)
+    assert [(note.text, note.row) for note in head.notes] == [("a", 5), ("b", 11), ("c", 11), ("end", 20)]
+    assert [(note.text, note.row) for note in read_recording(path).notes] == [("a", 5), ("b", 11), ("c", 11), ("end", 20)]
