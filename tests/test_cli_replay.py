@@ -212,3 +212,17 @@ def test_a_figure_format_matplotlib_cannot_write_is_refused_before_any_work(tmp_
     err = capsys.readouterr().err
     assert "matplotlib cannot write .jpg2" in err and ".png" in err
     assert not out.exists()
+
+
+def test_out_takes_any_name_as_its_help_says(tmp_path, capsys):
+    """--out o.txt writes plain CSV text (gzip only for .gz), and the help of every command that
+    writes a recording says so instead of promising .csv/.csv.gz."""
+    out = tmp_path / "o.txt"
+    assert main(["replay", "--out", str(out)]) == 0
+    assert out.read_bytes().startswith(b"# gyrofilter-recording: 1") and len(read_recording(out)) > 0
+    capsys.readouterr()
+    for command in ("replay", "record", "run", "simulate"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        assert "compressed with gzip when the name ends in .gz" in text, command

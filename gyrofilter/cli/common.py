@@ -13,6 +13,10 @@ from ..presets import DEFAULT_PRESET, PRESETS
 from ..units import json_ready
 
 
+#: what --out FILE of a recording takes: any name, the format is CSV text (docs/formats.md, section 1)
+RECORDING_FILE_HELP = "recording format v1: CSV text, compressed with gzip when the name ends in .gz, e.g. out.csv or out.csv.gz"
+
+
 def say(text):
     """A message for the user (stderr, so that stdout stays data)."""
     print(text, file=sys.stderr)

@@ -23,7 +23,7 @@ def add_arguments(parser):
     parser.add_argument("--duration", required=True, type=float, metavar="S", help="length of the recording in seconds")
     parser.add_argument("--rate", type=float, default=None, metavar="HZ", help="sample rate in Hz (overrides the model's)")
     parser.add_argument("--seed", type=int, default=None, metavar="N", help="random seed (same seed, same recording)")
-    parser.add_argument("--out", required=True, metavar="FILE", help="output recording (.csv or .csv.gz)")
+    parser.add_argument("--out", required=True, metavar="FILE", help="output recording (" + common.RECORDING_FILE_HELP + ")")
     parser.add_argument("--chunk", type=int, default=65536, metavar="N", help="samples per block written (default 65536)")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     common.add_force_argument(parser)
