@@ -226,3 +226,37 @@ def test_out_takes_any_name_as_its_help_says(tmp_path, capsys):
             main([command, "--help"])
         text = " ".join(capsys.readouterr().out.split())
         assert "compressed with gzip when the name ends in .gz" in text, command
+
+
+def _paced_source(tmp_path, n, rate_hz):
+    rng = np.random.default_rng(8)
+    src = tmp_path / "paced.csv"
+    write_recording(src, Recording.from_dps(rng.normal(0, 0.1, (n, 3)), rate_hz))
+    return src
+
+
+def test_realtime_stdout_is_a_recording(tmp_path, capsys):
+    src = _paced_source(tmp_path, 700, 5000.0)
+    out = tmp_path / "out.csv"
+    assert main(["replay", str(src), "--realtime", "--calibration-s", "0.02", "--out", str(out)]) == 0
+    printed = tmp_path / "stdout.csv"
+    printed.write_text(capsys.readouterr().out)
+    got, filtered = read_recording(printed), read_recording(out)
+    assert got.gyro_unit == "dps" and got.sample_rate_hz == filtered.sample_rate_hz == 1000.0
+    np.testing.assert_allclose(got.t_s, filtered.t_s, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(got.gyro, filtered.gyro, rtol=0, atol=5e-7)  # 6 decimals on stdout
+
+
+def test_realtime_into_head_still_writes_the_whole_out_file(tmp_path):
+    """`replay --realtime --out F | head`: the reader goes away; F is complete, the exit clean."""
+    src = _paced_source(tmp_path, 4000, 1000.0)  # 4 s paced
+    out = tmp_path / "out.csv"
+    proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "replay", str(src), "--realtime", "--calibration-s", "0.2", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    for _ in range(20):  # the header and a few rows, then the pipe is closed like `head` does
+        proc.stdout.readline()
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err
+    assert len(read_recording(out)) == (4000 - 200) // 5

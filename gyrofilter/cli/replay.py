@@ -5,7 +5,9 @@ so memory does not grow with its length: the summary's means and standard deviat
 running ones (:class:`gyrofilter.streamstats.RunningMoments`) and ``--plot`` draws min/max
 envelopes of at most 4000 buckets per series (:class:`gyrofilter.streamstats.Envelope`).
 Every filtered row is time-stamped with the time of its block's last input sample (the
-recording's ``t`` column when it has one), in ``--out`` and on stdout with ``--realtime`` alike.
+recording's ``t`` column when it has one), in ``--out`` and on stdout with ``--realtime`` alike;
+stdout is then a format-v1 recording (the summary goes to stderr), and when its reader goes
+away (``| head``) the rest is filtered without pacing, so that ``--out`` is still complete.
 
 ``--smooth`` replaces the real-time output by the forward-backward smoother
 (:mod:`gyrofilter.smoother`): the same rows, each estimated from the whole recording. It keeps
@@ -13,6 +15,8 @@ the block means of the recording in memory (12 floats per block, and 3 for the o
 """
 import contextlib
 import json
+import os
+import sys
 import time
 from importlib import resources
 
@@ -20,7 +24,7 @@ import numpy as np
 
 from ..errors import SettingsError
 from ..pipeline import SETTING_NAMES
-from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, iter_recording
+from ..recording import CHUNK_ROWS, FORMAT_VERSION, RecordingWriter, dps_header, iter_recording
 from ..smoother import Smoother
 from ..streamstats import Envelope, RunningMoments
 from . import common
@@ -33,7 +37,8 @@ def add_arguments(parser):
     parser.add_argument("recording", nargs="?", help=f"recording file (format v1, .csv or .csv.gz); default: the bundled {BUNDLED}")
     parser.add_argument("--out", metavar="FILE", help="write the filtered series as a recording (" + common.RECORDING_FILE_HELP + ")")
     parser.add_argument("--plot", metavar="PNG", help="draw raw and filtered rates per axis, as min/max bands on long recordings (needs matplotlib)")
-    parser.add_argument("--realtime", action="store_true", help="pace the filter at the recording's sample rate and print each filtered row as it is produced")
+    parser.add_argument("--realtime", action="store_true", help="pace the filter at the recording's sample rate and print each filtered row as it is produced "
+                                                                    "(stdout is then a recording, format v1; the summary goes to stderr)")
     parser.add_argument("--smooth", action="store_true",
                         help="offline: smooth with the forward-backward smoother over the adaptive Kalman filter "
                              "(each row from the whole recording; presets recommended and adaptive_kalman)")
@@ -59,15 +64,18 @@ def run(args):
         if args.out:
             replay.out_path = outputs.enter_context(common.replacing(args.out))
             outputs.callback(replay.close)
-        if args.realtime:
-            print("t_s,gx_dps,gy_dps,gz_dps", flush=True)
+        if args.realtime:  # stdout is a recording (format v1) too
+            lines = [f"# gyrofilter-recording: {FORMAT_VERSION}"]
+            lines += [f"# {k}: {v}" for k, v in replay.stdout_header().items()] + [",".join(OUT_COLUMNS)]
+            replay.print_rows("\n".join(lines))
         for chunk in chunks:
             replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in),
                         head.column(chunk, "temp") if filt.compensates_temperature else None, args.realtime)
         replay.finish()
     common.print_warnings(head.warnings)
     common.warn_about_gaps(head, "the filter treats the samples as uniform")
-    common.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
+    with contextlib.redirect_stdout(sys.stderr) if args.realtime else contextlib.nullcontext():  # stdout has the rows
+        common.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
     common.save_calibration(args, filt)
     if args.out:
         common.say(f"wrote {replay.filtered.count} filtered rows to {args.out}")
@@ -97,6 +105,7 @@ class _Replay:
         self._tail = np.empty((0, 3))  # the samples waiting in the filter's unfinished block
         self._t_tail = np.empty(0)
         self._wall_start = None
+        self.stdout_open = True  # False once the reader of --realtime's rows went away (| head)
 
     def feed(self, gyro, t_s, temps, realtime):
         filt = self.filt
@@ -135,14 +144,27 @@ class _Replay:
         temps = [None] * len(gyro) if temps is None else temps.tolist()
         for sample, temp in zip(map(tuple, gyro.tolist()), temps):
             delay = self._wall_start + filt.samples_in / rate_hz - time.monotonic()
-            if delay > 0:
+            if delay > 0 and self.stdout_open:
                 time.sleep(delay)
             row = filt.update(sample, temp)
             if row is not None:
                 rows.append(row)
                 t = t_s[filt.block_end_indices(1)[0] - start]
-                print(f"{t:.10g},{row[0]:.6f},{row[1]:.6f},{row[2]:.6f}", flush=True)
+                self.print_rows(f"{t:.10g},{row[0]:.6f},{row[1]:.6f},{row[2]:.6f}")
         return np.array(rows).reshape(-1, 3)
+
+    def print_rows(self, text):
+        """Print ``text`` on stdout at once; when its reader went away (``| head``), stop printing
+        and pacing, and finish the rest (the --out file, the summary) without them."""
+        if not self.stdout_open:
+            return
+        try:
+            print(text, flush=True)
+        except BrokenPipeError:
+            self.stdout_open = False
+            devnull = os.open(os.devnull, os.O_WRONLY)  # what is left in stdout's buffer goes nowhere, silently
+            os.dup2(devnull, sys.stdout.fileno())
+            os.close(devnull)
 
     def _pass_on(self, t_s, rows):
         self.filtered.add(rows)
@@ -168,6 +190,10 @@ class _Replay:
             "bias_dps": json.dumps(list(filt.bias_dps or ())),
             "t_meaning": "time of the last input sample of each block (s)",
         }, filt.output_rate_hz)
+
+    def stdout_header(self):
+        """The header of the --out file but the bias, which is known only once the calibration is done."""
+        return {k: v for k, v in self._out_header().items() if k != "bias_dps"}
 
     def finish(self):
         """Smooth and pass on the rows (with a smoother); write the output's header even when no
