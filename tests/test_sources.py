@@ -436,3 +436,26 @@ def test_parser_with_options_uses_a_header_that_comes_first():
     rows = p.feed(HEADER + _lines([0, 1]))  # the header is a whole line: nothing is dropped
     np.testing.assert_array_equal(rows[:, 1:4], _expected([0, 1]))
     assert p.stats["partial_lines"] == 0 and p.header["sensor"] == "MPU6050"
+
+
+def test_sources_state_their_units_as_numbers_and_close_once(tmp_path):
+    """The Source base: sample_rate_hz, gyro_unit, lsb_per_dps as attributes (the numbers, not
+    header text), gyro_dps converts like Recording.gyro_dps, close() twice and `with` are safe."""
+    from gyrofilter.sources.base import Source
+
+    path = tmp_path / "lsb.csv"
+    rec = Recording(columns={"gx": np.arange(10.0), "gy": -np.arange(10.0), "gz": np.zeros(10)},
+                    header={"gyrofilter-recording": "1", "sample_rate_hz": "142.857142857142861",
+                            "gyro_unit": "lsb", "lsb_per_dps": "65.5"})
+    write_recording(path, rec)
+    back = read_recording(path)
+    for spec in (f"replay:{path}", "sim:realtime=0,duration=1,seed=2"):
+        with open_source(spec) as src:
+            assert isinstance(src, Source) and isinstance(src.sample_rate_hz, float)
+            assert src.gyro_unit == src.header["gyro_unit"] == "lsb" and src.lsb_per_dps in (65.5, 131.0)
+            rows = src.read()
+            np.testing.assert_array_equal(src.gyro_dps(rows), rows[:, 1:4] / src.lsb_per_dps)
+        src.close()  # closed already: nothing happens
+        with pytest.raises(SourceEnded):
+            src.read()
+    assert open_source(f"replay:{path}").sample_rate_hz == back.sample_rate_hz == 1000.0 / 7
