@@ -342,6 +342,47 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
     return out
 
 
+class PaperKalman:
+    """Paper 001's Kalman stage for three axes: :func:`run_blocks` with its state.
+
+    ``settings`` is a :class:`gyrofilter.pipeline.FilterSettings`; ``sigma_b_dps`` (3,) is the
+    standard deviation of a block mean at rest (deg/s) that the divergence guard measures in,
+    an array the caller keeps and may update in place. The state has a fixed size (see
+    :func:`run_blocks`) and is updated in place by :meth:`run`; :meth:`start` sets the initial
+    Q and R once the calibration's noise is known.
+    """
+
+    def __init__(self, settings, sigma_b_dps):
+        from .jit import choose_kernel
+        from .predictor import weight_table
+
+        s = settings
+        self.settings = s
+        width = max(s.qr_window, 1)
+        self.r0 = np.full(3, s.p0_dps2)
+        self.guard_run = np.zeros(6, dtype=np.int64)
+        self._kernel = choose_kernel(run_blocks, s.backend)
+        # bound once: the arrays are updated in place
+        self._args = (
+            weight_table(s.fifo_depth, s.fit_order), np.zeros((3, s.fifo_depth)), np.zeros(3), np.zeros((3, width)), np.zeros((3, width)),
+            np.zeros((4, 3)), np.zeros(6, dtype=np.int64), self.r0, s.p0_dps2, s.qr_window, s.qr_stat == "std",
+            s.r_source == "calibration", sigma_b_dps, float(s.guard_k_sigma), s.guard_blocks, self.guard_run,
+        )
+
+    def start(self, noise_std_dps):
+        """Initial Q and R (paper 001): the variance of a block mean of the calibration's white
+        noise, r0 = max(sigma^2 / L, VAR_FLOOR) per axis (``noise_std_dps``: sigma per axis,
+        deg/s; L = block_len); its square root with ``qr_stat="std"``."""
+        s = self.settings
+        self.r0[:] = [max(n * n / s.block_len, VAR_FLOOR) for n in noise_std_dps]
+        if s.qr_stat == "std":
+            np.sqrt(self.r0, out=self.r0)
+
+    def run(self, y, out):
+        """Block means y (M, 3) -> out (M, 3) (deg/s), the state updated in place."""
+        self._kernel(y, out, *self._args)
+
+
 class AdaptiveKalman:
     """The adaptive Kalman stage for three axes: :func:`run_blocks_adaptive` with its state.
 

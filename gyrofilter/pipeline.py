@@ -20,12 +20,11 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from . import kalman
-from .jit import choose_kernel
 from .adaptive import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
-from .predictor import closed_loop_radius, stable_gain_threshold, weight_table
+from .predictor import closed_loop_radius, stable_gain_threshold
 from .presets import DEFAULT_PRESET, PRESETS
 from .tempcomp import compensate
 from .units import check_sample_rate_hz, plain
@@ -232,15 +231,8 @@ class GyroFilter:
             self._akf = kalman.AdaptiveKalman(s)
             self._guard_run = self._akf.guard_run
         else:
-            width = max(s.qr_window, 1)
-            self._r0 = np.full(3, s.p0_dps2)
-            self._guard_run = np.zeros(6, dtype=np.int64)
-            self._run = choose_kernel(kalman.run_blocks, s.backend)
-            self._kernel_args = (
-                weight_table(s.fifo_depth, s.fit_order), np.zeros((3, s.fifo_depth)), np.zeros(3), np.zeros((3, width)), np.zeros((3, width)),
-                np.zeros((4, 3)), np.zeros(6, dtype=np.int64), self._r0, s.p0_dps2, s.qr_window, s.qr_stat == "std",
-                s.r_source == "calibration", self._sigma_b, float(s.guard_k_sigma), s.guard_blocks, self._guard_run,
-            )
+            self._pkf = kalman.PaperKalman(s, self._sigma_b)
+            self._guard_run = self._pkf.guard_run
         # block and calibration state
         self._block = []
         self.rejected = np.zeros(3, dtype=np.int64)
@@ -460,7 +452,7 @@ class GyroFilter:
         if self.settings.tracker != "kalman":
             out[:] = y
         elif not self._adaptive:
-            self._run(y, out, *self._kernel_args)
+            self._pkf.run(y, out)
         elif self.block_log is None:
             self._akf.run(y, out, kalman.NO_TRACE, y_motion, used)
         else:
@@ -513,9 +505,7 @@ class GyroFilter:
             self._temp_ref = cal.temp_c
         self._bias = tuple(float(b) for b in cal.bias_dps)
         if not self._adaptive:  # paper 001's initial Q and R: the variance of a block mean of the calibration's white noise
-            self._r0[:] = [max(n * n / self.settings.block_len, kalman.VAR_FLOOR) for n in cal.noise_std_dps]
-            if self.settings.qr_stat == "std":
-                np.sqrt(self._r0, out=self._r0)
+            self._pkf.start(cal.noise_std_dps)
         self._cal_buf = None
         self._cal_temp = None
 
