@@ -212,7 +212,7 @@ def gyrofilter_run(preset="paper", **settings):
 
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
         y = f.filter(x_dps)
-        return FilterOutput(y, f.settings.block_len, calibration_samples(sample_rate_hz, calibration_s))
+        return FilterOutput(y, f.settings.block_len, f.first_block_index)
 
     return run
 
@@ -228,7 +228,7 @@ def gyrofilter_smooth(preset="recommended", **settings):
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
         smoother = Smoother(f)
         f.filter(x_dps)
-        return FilterOutput(smoother.smooth(), f.settings.block_len, calibration_samples(sample_rate_hz, calibration_s))
+        return FilterOutput(smoother.smooth(), f.settings.block_len, f.first_block_index)
 
     return run
 

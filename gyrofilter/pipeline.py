@@ -291,11 +291,25 @@ class GyroFilter:
         """Samples held for a block that is not full yet (they produce output once it is)."""
         return len(self._block)
 
+    @property
+    def first_block_index(self):
+        """Index of the first input sample of output row 0, or None while calibrating.
+
+        Output row k (counted from the first row the filter gave) is the block of input samples
+        ``first_block_index + k L .. first_block_index + (k + 1) L - 1`` (L = ``settings.block_len``),
+        indices counting every sample fed since the start (``samples_in``), calibration included:
+        the samples before it are the calibration window (and the windows a retry refused).
+        """
+        if self.calibrating:
+            return None
+        return self.samples_in - self.pending_samples - self.blocks_out * self.settings.block_len
+
     def block_end_indices(self, n_rows) -> np.ndarray:
         """For the latest ``n_rows`` output rows: the index of each row's last input sample.
 
         Indices count every sample fed since the start (``samples_in``), calibration included,
-        so ``t_s[block_end_indices(len(rows))]`` time-stamps the rows a call just returned.
+        so ``t_s[block_end_indices(len(rows))]`` time-stamps the rows a call just returned (see
+        :meth:`filter_timed`, which does this for one call).
         """
         last = self.samples_in - self.pending_samples - 1
         return last - self.settings.block_len * np.arange(n_rows - 1, -1, -1, dtype=np.int64)
@@ -417,6 +431,21 @@ class GyroFilter:
         if not outputs:
             return np.empty((0, 3))
         return np.concatenate(outputs)
+
+    def filter_timed(self, samples_dps, t_s, temp_c=None):
+        """:meth:`filter` with time stamps: returns ``(t_rows_s, rows)``.
+
+        ``t_s`` (N,) are the times of the N samples (s, any origin); ``rows`` (M, 3) are what
+        ``filter(samples_dps, temp_c)`` returns and ``t_rows_s`` (M,) the time of each row's
+        block's last input sample. A row comes out when that sample goes in, so it is always one
+        of this call's samples, whatever the chunking.
+        """
+        x = np.asarray(samples_dps)
+        t = np.asarray(t_s, dtype=float)
+        if x.ndim and t.shape != x.shape[:1]:
+            raise SettingsError(f"t_s must have shape ({len(x)},), one time per sample, got {t.shape}")
+        rows = self.filter(x, temp_c)
+        return t[self.block_end_indices(len(rows)) - (self.samples_in - len(x))], rows
 
     def state_dict(self) -> dict:
         """The settings and counters worth reporting (plain Python values)."""
