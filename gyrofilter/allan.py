@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from .errors import GyroFilterError, SettingsError
-from .units import plain
+from .units import check_sample_rate_hz, plain
 
 #: cluster count below which a deviation (and any fit using it) is flagged: paper 002 needs
 #: N/m >= 9 for an error under 25 %.
@@ -40,17 +40,6 @@ _CHUNK = 1 << 16
 
 class AllanInputError(GyroFilterError, ValueError):
     """The data or the requested cluster times cannot give an Allan deviation."""
-
-
-def _check_rate(sample_rate_hz):
-    try:
-        rate = float(sample_rate_hz)
-    except (TypeError, ValueError):
-        raise SettingsError(
-            f"sample_rate_hz must be a positive number (Hz), got {plain(sample_rate_hz)}") from None
-    if not math.isfinite(rate) or rate <= 0:
-        raise SettingsError(f"sample_rate_hz must be a positive number (Hz), got {plain(sample_rate_hz)}")
-    return rate
 
 
 def _check_series(x, name="x"):
@@ -93,7 +82,7 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
     Raises :class:`AllanInputError` when a tau is shorter than one sample or so long that the
     record does not hold two clusters plus one sample (``2 m > N - 1``).
     """
-    rate = _check_rate(sample_rate_hz)
+    rate = check_sample_rate_hz(sample_rate_hz)
     if taus_s is None:
         return default_cluster_sizes(n_samples)
     taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
@@ -191,7 +180,7 @@ def overlapping_adev(x, sample_rate_hz, taus_s=None):
 def _deviation(x, sample_rate_hz, taus_s, overlapping):
     """sqrt(sum of squared second differences / (2 n_terms)) / tau at every cluster size; the
     second differences start at every sample (overlapping) or every m-th (non-overlapping)."""
-    rate = _check_rate(sample_rate_hz)
+    rate = check_sample_rate_hz(sample_rate_hz)
     x = _check_series(x)
     m = cluster_sizes(x.size, rate, taus_s)
     phase = _phase(x, 1.0 / rate)

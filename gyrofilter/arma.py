@@ -66,7 +66,7 @@ import numpy as np
 
 from .errors import SettingsError
 from .extras import require
-from .units import json_ready, plain
+from .units import check_sample_rate_hz, json_ready, plain
 
 DEFAULT_MAX_SAMPLES = 200_000
 DEFAULT_ADF_MAXLAG = 20
@@ -271,8 +271,7 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
         raise SettingsError(f"series must be 1-D, got shape {x.shape}")
     if not np.all(np.isfinite(x)):
         raise SettingsError("series holds NaN or infinite values")
-    if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
+    check_sample_rate_hz(sample_rate_hz)
     if max_samples < 100:
         raise SettingsError(f"max_samples must be at least 100, got {plain(max_samples)}")
     k = max(1, math.ceil(len(x) / max_samples))

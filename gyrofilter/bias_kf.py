@@ -49,7 +49,7 @@ import numpy as np
 
 from .calibration import Calibration, calibrate
 from .errors import SettingsError
-from .units import plain
+from .units import check_sample_rate_hz, plain
 
 RESUM_EVERY = 10_000  # samples between exact recomputations of the window sums
 
@@ -116,9 +116,7 @@ class BiasKalmanFilter:
     """
 
     def __init__(self, sample_rate_hz, settings: BiasKFSettings | None = None, *, calibration: Calibration | None = None, **kw):
-        if not sample_rate_hz > 0:
-            raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
-        self.sample_rate_hz = float(sample_rate_hz)
+        self.sample_rate_hz = check_sample_rate_hz(sample_rate_hz)
         self.settings = s = replace(settings or BiasKFSettings(), **kw)
         if s.engine not in ("numpy", "filterpy"):
             raise SettingsError(f"engine must be 'numpy' or 'filterpy', got {s.engine!r}")

@@ -38,6 +38,7 @@ import numpy as np
 
 from . import detectors as det
 from .errors import RecordingError
+from .units import check_sample_rate_hz
 
 AXES = ("x", "y", "z")
 METRIC = "mean squared z-score of the Allan deviation, band powers, spectral line, lag-1 and spike count vs model simulations"
@@ -332,9 +333,7 @@ def _axis_dps(rec, i):
 def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
     t_start = time.perf_counter()
     say = progress or (lambda text: None)
-    fs = float(rec.sample_rate_hz)
-    if not (math.isfinite(fs) and fs > 0):
-        raise RecordingError(f"{rec.path or 'recording'}: sample_rate_hz must be > 0, got {fs}")
+    fs = check_sample_rate_hz(rec.sample_rate_hz, f"{rec.path or 'recording'}: sample_rate_hz", RecordingError)
     n = len(rec)
     report = {"recording": recording_name if recording_name is not None else (rec.path or ""),
               "sample_rate_hz": fs, "duration_s": n / fs,

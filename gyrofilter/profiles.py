@@ -30,7 +30,7 @@ from typing import Callable
 import numpy as np
 
 from .errors import SettingsError
-from .units import plain
+from .units import check_sample_rate_hz
 
 
 @dataclass(frozen=True)
@@ -124,8 +124,7 @@ def profile_samples_dps(profile, sample_rate_hz, duration_s=None):
     """The truth sampled at t_i = i / fs, i = 0 .. N-1, N = round(duration * fs): (t_s, rate_dps)."""
     if isinstance(profile, str):
         profile = get_profile(profile)
-    if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
+    sample_rate_hz = check_sample_rate_hz(sample_rate_hz)
     duration_s = profile.duration_s if duration_s is None else float(duration_s)
     n = int(round(duration_s * sample_rate_hz))
     t_s = np.arange(n) / sample_rate_hz

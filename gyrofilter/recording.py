@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import RecordingError, SettingsError
-from .units import GYRO_UNITS, from_dps, to_dps
+from .units import GYRO_UNITS, check_sample_rate_hz, from_dps, to_dps
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
@@ -407,9 +407,7 @@ def _parse_header(lines, path):
     for key in ("sample_rate_hz", "gyro_unit"):
         if key not in header:
             raise RecordingError(f"{path}: missing header key {key!r}")
-    rate = _header_float(header, "sample_rate_hz", path)
-    if not rate > 0 or not math.isfinite(rate):
-        raise RecordingError(f"{path}: sample_rate_hz must be a positive number, got {header['sample_rate_hz']!r}")
+    rate = check_sample_rate_hz(_header_float(header, "sample_rate_hz", path), f"{path}: sample_rate_hz", RecordingError)
     if header["gyro_unit"] not in GYRO_UNITS:
         raise RecordingError(f"{path}: gyro_unit {header['gyro_unit']!r} is not one of {', '.join(GYRO_UNITS)}")
     if header["gyro_unit"] == "lsb":

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SettingsError
-from .units import plain
+from .units import check_sample_rate_hz, plain
 
 
 def quat_multiply(p, q):
@@ -100,8 +100,7 @@ def body_rate_from_quaternions(quat_wxyz, sample_rate_hz, half_span=1):
     h = int(half_span)
     if h < 1 or h != half_span:
         raise SettingsError(f"half_span must be a positive integer number of samples, got {plain(half_span)}")
-    if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
+    check_sample_rate_hz(sample_rate_hz)
     n = len(q)
     out = np.full((n, 3), np.nan)
     if n <= 2 * h:

@@ -41,7 +41,7 @@ import numpy as np
 from . import noise_terms as nt
 from .errors import SettingsError
 from .recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, _format_number
-from .units import DEG_PER_RAD, GYRO_UNITS, plain
+from .units import DEG_PER_RAD, GYRO_UNITS, check_sample_rate_hz, plain
 
 AXES = ("x", "y", "z")
 DEFAULT_CHUNK_SAMPLES = 65536
@@ -124,8 +124,8 @@ def validate_model(model, *, sample_rate_hz=None):
     out = {}
     rate = model.get("sample_rate_hz") if sample_rate_hz is None else sample_rate_hz
     if rate is None:
-        _err("sample_rate_hz", "missing (expected the sample rate in Hz, > 0; or give --rate)")
-    out["sample_rate_hz"] = _number(rate, "sample_rate_hz", "pos")
+        _err("sample_rate_hz", "missing (expected the sample rate in Hz, > 0; or give --sample-rate-hz)")
+    out["sample_rate_hz"] = check_sample_rate_hz(rate, "model: sample_rate_hz")
     unit = model.get("gyro_unit", "dps")
     if unit not in GYRO_UNITS:
         _err("gyro_unit", f"expected one of {', '.join(GYRO_UNITS)}, got {_show(unit)}")

@@ -15,18 +15,21 @@ GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
 
 
-def check_sample_rate_hz(value, name="sample_rate_hz"):
-    """``value`` as a float when it is a finite rate in (0, MAX_SAMPLE_RATE_HZ] Hz, else SettingsError.
+def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
+    """``value`` as a float when it is a finite rate in (0, MAX_SAMPLE_RATE_HZ] Hz, else ``error``.
 
-    The one check of a sample rate: a bool, a string, NaN, infinity, zero, a negative number or
-    an implausibly high rate (which would size buffers beyond memory) names ``name`` and the value.
+    The one check of a sample rate, used by every module that takes one: a bool, a string, NaN,
+    infinity, zero, a negative number or an implausibly high rate (which would size buffers
+    beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
+    :class:`~gyrofilter.errors.RecordingError` for a file's header) with a message that names
+    ``name`` (the keyword, option or header key, with its file if any) and the value.
     """
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     if ok:
         value = float(value)
         ok = math.isfinite(value) and 0 < value <= MAX_SAMPLE_RATE_HZ
     if not ok:
-        raise SettingsError(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
+        raise error(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
     return value
 
 

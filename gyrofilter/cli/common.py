@@ -1,4 +1,5 @@
 """Pieces shared by the commands: output-file safety, filter options, warnings, the summary table."""
+import argparse
 import contextlib
 import json
 import math
@@ -16,6 +17,22 @@ from ..units import json_ready
 def say(text):
     """A message for the user (stderr, so that stdout stays data)."""
     print(text, file=sys.stderr)
+
+
+def add_sample_rate_argument(parser, *old_spellings, help):
+    """``--sample-rate-hz HZ``, the commands' one spelling of a sample rate, with ``old_spellings``
+    (e.g. ``--rate``) kept as aliases: ``args.sample_rate_hz`` holds the rate (Hz, None when not
+    given), ``args.sample_rate_hz_option`` the spelling used, so a message names what was typed."""
+    parser.add_argument("--sample-rate-hz", *old_spellings, type=float, default=None, metavar="HZ", dest="sample_rate_hz",
+                        action=_SpellingKept, help=help)
+
+
+class _SpellingKept(argparse.Action):
+    """Stores the value, and in ``<dest>_option`` the option string the user typed."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        setattr(namespace, self.dest + "_option", option_string)
 
 
 def add_force_argument(parser):

@@ -38,8 +38,7 @@ def add_source_arguments(parser):
     parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
                         help="gyro unit of a serial device that sends no header line")
     parser.add_argument("--lsb-per-dps", type=float, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
-    parser.add_argument("--sample-rate", type=float, metavar="HZ", dest="sample_rate_hz",
-                        help="sample rate of such a device")
+    common.add_sample_rate_argument(parser, "--sample-rate", help="sample rate of such a device (old spelling --sample-rate)")
 
 
 def add_arguments(parser):
