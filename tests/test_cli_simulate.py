@@ -56,6 +56,16 @@ def test_cli_rate_override_and_plain_csv(tmp_path):
     assert out.read_text().startswith("# gyrofilter-recording: 1\n")
 
 
+@pytest.mark.parametrize("spelling", ["--sample-rate-hz", "--rate"])
+def test_cli_sample_rate_spelling_and_its_old_alias(tmp_path, capsys, spelling):
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "50", "--out", str(out)]) == 0
+    assert read_recording(out).sample_rate_hz == 50.0
+    assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "inf", "--out", str(tmp_path / "o.csv")]) == 2
+    assert f"{spelling} must be a number of Hz in (0, 100000], got inf" in capsys.readouterr().err
+
+
 def test_cli_accepts_a_gap_report_with_extended_model(tmp_path):
     report = {"recording": "r.csv", "findings": [], "extended_model": MODEL}
     model_path = write_json(tmp_path / "gap.json", report)
