@@ -34,10 +34,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import CalibrationError, SettingsError
+from .units import AXES
 
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
-AXES = ("x", "y", "z")
 
 
 @dataclass(frozen=True)

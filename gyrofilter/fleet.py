@@ -52,9 +52,8 @@ import time
 import numpy as np
 
 from .allan import MIN_CLUSTERS
+from .units import AXES
 
-#: the axes a fleet row can have
-AXES = ("x", "y", "z")
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
 COEFFICIENTS = ("arw", "bias_instability", "rrw", "rate_ramp")
 #: modified z-score beyond which a unit stands out (Iglewicz & Hoaglin 1993)

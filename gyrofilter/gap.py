@@ -38,9 +38,8 @@ import numpy as np
 
 from . import detectors as det
 from .errors import RecordingError
-from .units import check_sample_rate_hz
+from .units import AXES, check_sample_rate_hz
 
-AXES = ("x", "y", "z")
 METRIC = "mean squared z-score of the Allan deviation, band powers, spectral line, lag-1 and spike count vs model simulations"
 #: minimum samples for any analysis
 MIN_SAMPLES = 256

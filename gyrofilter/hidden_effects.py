@@ -28,9 +28,10 @@ import math
 
 import numpy as np
 
+from .units import AXES
+
 EFFECTS = ("bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
            "temperature", "bias_step", "warmup", "outliers", "colored_noise")
-AXES = ("x", "y", "z")
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)

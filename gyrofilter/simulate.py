@@ -41,9 +41,8 @@ import numpy as np
 from . import noise_terms as nt
 from .errors import SettingsError
 from .recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, _format_number
-from .units import DEG_PER_RAD, GYRO_UNITS, check_sample_rate_hz, plain
+from .units import AXES, DEG_PER_RAD, GYRO_UNITS, check_sample_rate_hz, plain
 
-AXES = ("x", "y", "z")
 DEFAULT_CHUNK_SAMPLES = 65536
 
 # kinds of parameter checks: (test, what is expected)

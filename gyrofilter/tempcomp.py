@@ -21,9 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SettingsError
-from .units import plain
-
-AXES = ("x", "y", "z")
+from .units import AXES, plain
 
 
 def _coefficients(coefficient_dps_per_c):

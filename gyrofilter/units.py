@@ -11,6 +11,7 @@ import numpy as np
 from .errors import SettingsError
 
 DEG_PER_RAD = 180.0 / math.pi
+AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
 

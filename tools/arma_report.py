@@ -209,10 +209,9 @@ def main(argv=None):
 
 def plot(path, results):
     """Measured ADEV vs the three simulated models, for the longest recording of each source."""
-    import matplotlib
+    from gyrofilter.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     names = [n for n in ("mpu6050_static_449s.csv.gz", "mpu6050_static_655s.csv.gz") if any(r["recording"] == n for r in results)]
     if not names:

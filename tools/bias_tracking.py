@@ -170,10 +170,9 @@ def rms(a):
 
 
 def plot(path, sims, broad):
-    import matplotlib
+    from gyrofilter.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(2, 1, figsize=(10, 7.5))
     ax = axes[0]

@@ -86,10 +86,9 @@ def dynamic_table(static_recs):
 
 
 def figure(static_recs, path):
-    import matplotlib
+    from gyrofilter.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     rec = next((r for r in static_recs if E._stem(r.path) == FIGURE_NOISE), static_recs[0])
     name, noise, fs = E.noise_segments([rec])[0]

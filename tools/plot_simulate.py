@@ -36,10 +36,9 @@ def main(argv=None):
     parser.add_argument("--out", default=str(ROOT / "docs" / "figures" / "simulate_effects_allan.png"))
     args = parser.parse_args(argv)
 
-    import matplotlib
+    from gyrofilter.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     from gyrofilter.allan import overlapping_adev
     from gyrofilter.simulate import simulate
