@@ -110,6 +110,10 @@ def _per_axis(value, name):
 class BiasKalmanFilter:
     """Rate + bias Kalman filter per axis with zero-rate updates at detected rest.
 
+    ``sample_rate_hz``: input sample rate (Hz); ``settings``: a :class:`BiasKFSettings` (default:
+    its defaults), with any of its fields overridden by keyword (``**kw``); ``calibration``: a
+    :class:`~gyrofilter.calibration.Calibration` that skips the start-up calibration.
+
     >>> f = BiasKalmanFilter(100.0)              # 2 s start-up calibration, then online bias
     >>> y = f.update((gx, gy, gz))               # None while calibrating, else rates (deg/s)
     >>> f.bias_dps                               # current bias estimate, 3-tuple (deg/s)
@@ -189,16 +193,20 @@ class BiasKalmanFilter:
 
     @property
     def bias_std_dps(self):
+        """Standard deviation of the bias estimate per axis (deg/s), or None while calibrating."""
         if self.calibration is None:
             return None
         return tuple(float(v) for v in np.sqrt(self._pdd_now()))
 
     @property
     def still(self) -> bool:
+        """The rest detector's state after the last sample (with its hysteresis): True at rest;
+        a zero-rate update is applied when the sample also passes the gate on every axis."""
         return self._still
 
     def update(self, sample_dps):
-        """One sample (gx, gy, gz) in deg/s -> None while calibrating, else the rate estimate (3-tuple)."""
+        """One sample ``sample_dps`` (gx, gy, gz) in deg/s -> None while calibrating, else the rate
+        estimate (3-tuple, deg/s)."""
         z = np.asarray(sample_dps, dtype=float).reshape(3)
         if self.calibration is None:
             self._cal_buffer.append(z)
@@ -213,7 +221,8 @@ class BiasKalmanFilter:
         return tuple(float(v) for v in rate)
 
     def run(self, samples_dps) -> BiasKFTrace:
-        """Batch: (N, 3) deg/s -> per-sample trace after the calibration window (same numbers as update)."""
+        """Batch: ``samples_dps`` (N, 3) deg/s -> per-sample trace after the calibration window (same
+        numbers as update)."""
         x = np.asarray(samples_dps, dtype=float)
         if x.ndim != 2 or x.shape[1] != 3:
             raise SettingsError(f"samples must have shape (N, 3), got {x.shape}")
@@ -232,7 +241,7 @@ class BiasKalmanFilter:
                            np.array(stds).reshape(shape), np.array(still, dtype=bool), self.calibration)
 
     def filter(self, samples_dps) -> np.ndarray:
-        """Batch: (N, 3) deg/s -> (N - calibration samples, 3) rate estimates."""
+        """Batch: ``samples_dps`` (N, 3) deg/s -> (N - calibration samples, 3) rate estimates (deg/s)."""
         return self.run(samples_dps).rate_dps
 
     # -- kernel ---------------------------------------------------------------------------

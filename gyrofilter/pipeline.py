@@ -127,6 +127,8 @@ class FilterSettings:
         return (float(c),) * 3 if isinstance(c, (int, float)) else tuple(float(v) for v in c)
 
     def validate(self):
+        """Check every setting; SettingsError names the first bad one, its value and what is expected."""
+
         def need(cond, name, what):
             if not cond:
                 raise SettingsError(f"setting {name}={plain(getattr(self, name))}: {what}")
@@ -186,15 +188,25 @@ SETTING_NAMES = tuple(f.name for f in fields(FilterSettings))
 class GyroFilter:
     """Paper-001 pipeline for a three-axis gyro; see the module docstring and FilterSettings.
 
-    ``preset``: named settings (gyrofilter.presets); the default "recommended" is the best
-    measured filter, "paper" the faithful reproduction.
+    Parameters
+    ----------
+    sample_rate_hz : float
+        Input sample rate (Hz), finite and > 0 (:func:`gyrofilter.units.check_sample_rate_hz`).
+    calibration_s : float, optional
+        Length of the start-up bias calibration (s); None keeps the preset's (2 s).
+    preset : str
+        Named settings (:mod:`gyrofilter.presets`); the default "recommended" is the best
+        measured filter, "paper" the faithful reproduction.
+    calibration : Calibration or str, optional
+        A :class:`~gyrofilter.calibration.Calibration` or the path of a saved one: skips the
+        start-up calibration.
+    **settings
+        Any :class:`FilterSettings` field (units in its table); explicit keyword settings
+        override the ``preset``.
 
     >>> f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
     >>> f.update((0.01, -0.02, 0.0)) is None      # calibrating
     True
-
-    ``calibration`` (a :class:`~gyrofilter.calibration.Calibration` or the path of a saved one)
-    skips the start-up calibration. Explicit keyword settings override the ``preset``.
     """
 
     def __init__(self, sample_rate_hz, calibration_s=None, *, preset=DEFAULT_PRESET, calibration=None, **settings):
@@ -275,6 +287,7 @@ class GyroFilter:
 
     @property
     def calibrating(self) -> bool:
+        """True while the start-up calibration still collects samples (no output yet)."""
         return self._cal_buf is not None
 
     @property
@@ -284,6 +297,7 @@ class GyroFilter:
 
     @property
     def output_rate_hz(self) -> float:
+        """Rate of the output rows (Hz): ``sample_rate_hz / block_len``."""
         return self.sample_rate_hz / self.settings.block_len
 
     @property
@@ -315,8 +329,10 @@ class GyroFilter:
         return last - self.settings.block_len * np.arange(n_rows - 1, -1, -1, dtype=np.int64)
 
     def update(self, sample, temp_c=None):
-        """Feed one sample (gx, gy, gz) in deg/s, and its temperature in deg C when compensating.
+        """Feed one sample and return the filtered block it completed, if any.
 
+        ``sample``: (gx, gy, gz), 3 finite numbers in deg/s. ``temp_c``: the sample's temperature
+        (deg C), required when compensating (``compensates_temperature``), else ignored.
         Returns None while calibrating and between blocks, else the filtered (x, y, z) in deg/s
         for the block this sample completed.
         """
@@ -363,7 +379,8 @@ class GyroFilter:
         return (x, y, z)
 
     def filter(self, samples_dps, temp_c=None) -> np.ndarray:
-        """Feed an (N, 3) array in deg/s (and N temperatures in deg C when compensating).
+        """Feed ``samples_dps``, an (N, 3) array in deg/s, and ``temp_c``, N temperatures in deg C
+        (required when compensating, else ignored).
 
         Returns the filtered blocks it completed, (M, 3). From a new filter,
         M = (N - calibration samples) // block_len and row k is block k after the calibration.

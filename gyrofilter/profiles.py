@@ -121,7 +121,11 @@ def get_profile(name) -> Profile:
 
 
 def profile_samples_dps(profile, sample_rate_hz, duration_s=None):
-    """The truth sampled at t_i = i / fs, i = 0 .. N-1, N = round(duration * fs): (t_s, rate_dps)."""
+    """The truth sampled at t_i = i / fs, i = 0 .. N-1, N = round(duration * fs): (t_s, rate_dps).
+
+    ``profile``: a :class:`Profile` or the name of one (:data:`PROFILES`); ``sample_rate_hz``: fs
+    (Hz); ``duration_s``: the duration (s), default the profile's.
+    """
     if isinstance(profile, str):
         profile = get_profile(profile)
     sample_rate_hz = check_sample_rate_hz(sample_rate_hz)

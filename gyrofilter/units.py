@@ -68,7 +68,8 @@ def _python(value):
 
 
 def to_dps(values, unit, lsb_per_dps=None):
-    """Convert angular rate ``values`` from ``unit`` ('dps', 'rad/s' or 'lsb') to deg/s."""
+    """Convert angular rate ``values`` from ``unit`` ('dps', 'rad/s' or 'lsb') to deg/s;
+    ``lsb_per_dps`` (LSB per deg/s, > 0) is needed for 'lsb'."""
     values = np.asarray(values, dtype=float)
     if unit == "dps":
         return values
@@ -82,7 +83,8 @@ def to_dps(values, unit, lsb_per_dps=None):
 
 
 def from_dps(values_dps, unit, lsb_per_dps=None):
-    """Inverse of :func:`to_dps` (no rounding: 'lsb' values come back as floats)."""
+    """Inverse of :func:`to_dps`: ``values_dps`` (deg/s) in ``unit``, with ``lsb_per_dps`` for
+    'lsb' (no rounding: 'lsb' values come back as floats)."""
     values_dps = np.asarray(values_dps, dtype=float)
     if unit == "dps":
         return values_dps
