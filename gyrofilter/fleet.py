@@ -162,7 +162,7 @@ def _allan_part(path, settings, result):
 
 def failed(path, reason):
     """The result of a file whose work never ran or never returned (a glob that matched nothing,
-    a worker that died): its ``error`` names the file and ``reason``."""
+    a worker that died): its ``error`` names the file ``path`` and ``reason``."""
     return {"recording": path, "error": f"{path}: {reason}", "warnings": [], "sample_rate_hz": None, "duration_s": None,
             "allan": None, "kalibr": None, "gap": None, "runtime_s": None}
 
@@ -171,7 +171,7 @@ def failed(path, reason):
 
 
 def unit_names(paths):
-    """A distinct name per recording for its reports and its rows: the file name without
+    """A distinct name per recording of ``paths`` for its reports and its rows: the file name without
     ``.gz`` and ``.csv``; recordings whose names clash take as many parent folders as tell them
     apart, joined by ``-`` (``robot1/imu.csv``, ``robot2/imu.csv`` -> ``robot1-imu``,
     ``robot2-imu``). Raises SettingsError when no number of folders does."""
@@ -210,7 +210,7 @@ def default_jobs():
 
 
 def run_local(paths, settings, jobs):
-    """Yield ``(index, result)`` of :func:`analyse_recording` for each of ``paths`` as it
+    """Yield ``(index, result)`` of :func:`analyse_recording` (with ``settings``) for each of ``paths`` as it
     finishes, in ``jobs`` worker processes (:class:`~concurrent.futures.ProcessPoolExecutor`).
 
     ``jobs=1`` runs in one worker process too: every backend computes with one thread per
@@ -265,7 +265,7 @@ def _ignore_interrupts():
 
 
 def run_dask(paths, settings, address):
-    """Yield ``(index, result)`` of :func:`analyse_recording` for each of ``paths`` as it
+    """Yield ``(index, result)`` of :func:`analyse_recording` (with ``settings``) for each of ``paths`` as it
     finishes on the Dask distributed cluster whose scheduler is at ``address``
     (``dask.distributed.Client.map``). The workers read the files at the same paths, so the
     paths must name the same files on every worker (a shared file system). A file whose task
@@ -306,7 +306,8 @@ COLUMNS = (["unit", "recording", "axis", "status", "reason", "sample_rate_hz", "
 
 
 def fleet_rows(names, results):
-    """One row (a dict over :data:`COLUMNS`) per recording and axis, in the order given; a
+    """One row (a dict over :data:`COLUMNS`) per recording and axis of ``results`` (those of
+    :func:`analyse_recording`, named by ``names``, e.g. :func:`unit_names`), in the order given; a
     failed recording has one row with ``status`` "failed", its ``reason`` and no axis. Numbers
     are floats or None (not resolved, not analysed)."""
     from .noise_model import JSON_KEY
@@ -397,7 +398,7 @@ def flag_units(rows):
 
 
 def finding_text(finding):
-    """``effect(param=value, ...)`` with 4 significant digits."""
+    """``effect(param=value, ...)`` of a gap report's ``finding`` (a dict), with 4 significant digits."""
     params = ", ".join(f"{k}={v:.4g}" for k, v in finding["params"].items())
     return f"{finding['effect']}({params})"
 
@@ -414,7 +415,7 @@ def _cell(value):
 
 
 def fleet_csv(rows):
-    """fleet.csv: a header of :data:`COLUMNS` and one line per row; numbers in full precision
+    """fleet.csv: a header of :data:`COLUMNS` and one line per row of ``rows`` (:func:`fleet_rows`); numbers in full precision
     (Python's shortest round-trip form), empty cells for None, lists joined by "; "."""
     import csv
     import io
@@ -435,8 +436,9 @@ def _coef_md(row, key):
 
 
 def fleet_markdown(rows, stats, *, title):
-    """fleet.md: the units that stand out, the failed files, a row per recording and axis, and
-    the fleet statistics with the rules."""
+    """fleet.md, headed ``title``: the units that stand out, the failed files, a row per
+    recording and axis (``rows``, :func:`fleet_rows`), and the fleet statistics ``stats``
+    (what :func:`flag_units` returns) with the rules."""
     from .noise_model import JSON_KEY, TERM_SYMBOL, TERM_UNIT
 
     units = list(dict.fromkeys(r["unit"] for r in rows))

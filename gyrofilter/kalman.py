@@ -65,7 +65,14 @@ def _window_stat(s1, s2, n, use_std):
 
 def run_blocks(y, out, w_table, fifo, p, qbuf, rbuf, sums, counters, r0, p0, window, use_std, r_fixed,
                guard_sigma, guard_k, guard_n, guard_run):
-    """Filter the block means y (M, 3) into out (M, 3), updating the state arrays in place.
+    """Filter the block means y (M, 3) into out (M, 3), deg/s, updating the state arrays in place.
+
+    Settings: ``w_table`` the LS extrapolation weights (:func:`gyrofilter.predictor.weight_table`);
+    ``r0`` (3,) the initial Q and R ((deg/s)^2, or deg/s with ``use_std``); ``p0`` P0
+    ((deg/s)^2); ``window`` W of eqs. 11-12 (0 = all); ``use_std``: sigma is the standard
+    deviation (``qr_stat="std"``); ``r_fixed``: R stays r0 (``r_source="calibration"``);
+    ``guard_sigma`` (3,) sigma_b (deg/s), ``guard_k`` and ``guard_n``: the guard's limit in
+    sigma_b and its run length (:func:`_guard`).
 
     State: fifo (3, D) ring of posteriors; p (3,) posterior variance; qbuf, rbuf (3, max(W, 1))
     rings of differences and measurements; sums (4, 3) running sums; counters (6,) int64;
@@ -239,7 +246,9 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
     ((W - 1) s^2 / R below ``chi2_limit``) and x_k is within ``agree_z`` sigma_b of their mean m:
     then x_k = m, P_k = R / W. On the switch to the LS model C = P + R.
 
-    Divergence guard: :func:`_guard`; a re-seed also puts the axis in the LS model with C = R.
+    Divergence guard: :func:`_guard` (limit ``guard_k`` sigma_b, run length ``guard_n``; 0 = off);
+    a re-seed also puts the axis in the LS model with C = R. ``w_table``: the LS extrapolation
+    weights (:func:`gyrofilter.predictor.weight_table`).
 
     State (fixed size): fifo (3, D) posteriors, p (3,), fstate (3, 3) rows C, g+, g-; istate
     (10,) int64 (FIFO count and head, block-mean ring fill and head, model and switch count per
@@ -417,7 +426,7 @@ class AdaptiveKalman:
         )
 
     def start(self, sigma_b_dps, still_blocks):
-        """R = sigma_b^2 per axis. After n = ``still_blocks`` still blocks (the calibration's,
+        """R = sigma_b^2 per axis (sigma_b = ``sigma_b_dps``, deg/s). After n = ``still_blocks`` still blocks (the calibration's,
         bias removed: x = 0) start in the constant-rate model with P = R / min(n, N), the mean of
         n zeros; with n = 0 (nothing known of the motion now) in the LS model with P = P0 and
         C = P0 + R."""
