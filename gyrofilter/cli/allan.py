@@ -28,7 +28,7 @@ NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_insta
 def add_arguments(parser):
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
                         help="recording file (format v1, .csv or .csv.gz), sensor still; several files or globs "
-                             "with --out-dir")
+                             "with --fleet")
     parser.add_argument("--json", metavar="OUT", help="write the deviation curves and coefficients as JSON")
     parser.add_argument("--plot", metavar="OUT.png", help="draw the Allan deviation per axis (needs matplotlib)")
     parser.add_argument("--kalibr", metavar="OUT.yaml", help="write Kalibr imu.yaml gyroscope noise entries")
@@ -59,7 +59,7 @@ def run(args):
     if not 0.0 < args.confidence < 1.0:
         raise SettingsError(f"--confidence must be between 0 and 1 (e.g. 0.95), got {args.confidence:g}")
     paths = batch.expand(args.recordings)
-    if args.out_dir is not None:
+    if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])
         settings = FleetSettings("allan", axes=axes, confidence=args.confidence, min_clusters=args.min_clusters,
                                  keep_outliers=args.keep_outliers)
