@@ -1,5 +1,5 @@
 """A fleet run (``allan``/``gap`` with ``--fleet DIR``): the same results on every backend, a
-failing file in its own row, and the flags catching a unit with a hidden defect (gyrofilter/fleet.py).
+failing file in its own row, and the flags catching a unit with a hidden defect (gyrofilter/analysis/fleet.py).
 """
 import csv
 import json
@@ -9,11 +9,11 @@ import re
 import numpy as np
 import pytest
 
-from gyrofilter import fleet
+from gyrofilter.analysis import fleet
 from gyrofilter.cli import main
 from gyrofilter.cli.batch import expand
 from gyrofilter.recording import write_recording
-from gyrofilter.simulate import simulate
+from gyrofilter.sim.simulate import simulate
 
 #: per-axis white noise of the simulated units (the 449-s MPU6050 recording), deg/s/sqrt(Hz)
 NOMINAL_ARW = {"x": 0.0075, "y": 0.011, "z": 0.0093}

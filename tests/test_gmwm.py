@@ -1,14 +1,14 @@
-"""GMWM-style composite fit (gyrofilter.gmwm): the wavelet variance, its closed forms, recovery of
+"""GMWM-style composite fit (gyrofilter.analysis.gmwm): the wavelet variance, its closed forms, recovery of
 simulated composite processes (seeded, several seeds) and the comparison with the Allan NNLS fit."""
 import math
 
 import numpy as np
 import pytest
 
-from gyrofilter import gmwm
-from gyrofilter.allan import overlapping_adev
-from gyrofilter.noise_model import characterise_axis
-from gyrofilter.simulate import simulate
+from gyrofilter.analysis import gmwm
+from gyrofilter.analysis.allan import overlapping_adev
+from gyrofilter.analysis.noise_model import characterise_axis
+from gyrofilter.sim.simulate import simulate
 from support import REPO
 
 FS = 100.0

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from gyrofilter import GyroFilter
-from gyrofilter import evaluate as E
+from gyrofilter.evaluation import evaluate as E
 from gyrofilter.presets import DEFAULT_PRESET, PRESETS
 from support import RECORDINGS
 

@@ -15,7 +15,7 @@ import pytest
 
 from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, read_recording, write_recording
-from gyrofilter.simulate import simulate
+from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources.simulated import DEFAULT_MODEL
 from support import RECORDINGS
 

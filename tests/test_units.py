@@ -5,7 +5,7 @@ import pytest
 from gyrofilter import GyroFilter
 from gyrofilter.errors import GyroFilterError
 from gyrofilter.recording import read_recording
-from gyrofilter.reference import body_rate_from_quaternions
+from gyrofilter.evaluation.reference import body_rate_from_quaternions
 from gyrofilter.tempcomp import compensate
 from gyrofilter.units import check_sample_rate_hz, from_dps, json_ready, plain, to_dps
 

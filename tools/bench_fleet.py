@@ -39,7 +39,7 @@ def unit_model(rng):
 def make_fleet(folder, files, hours):
     """The recordings (written unless there already)."""
     from gyrofilter.recording import write_recording
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
 
     rng = np.random.default_rng(14)
     paths = []
@@ -82,7 +82,7 @@ def main(argv=None):
     p.add_argument("--no-dask", action="store_true", help="skip the LocalCluster run")
     args = p.parse_args(argv)
 
-    from gyrofilter.fleet import default_jobs
+    from gyrofilter.analysis.fleet import default_jobs
 
     cores = default_jobs()
     with tempfile.TemporaryDirectory() as tmp:

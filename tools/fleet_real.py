@@ -34,7 +34,7 @@ def main(argv=None):
     args = p.parse_args(argv)
 
     from gyrofilter.recording import write_recording
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
 
     rng = np.random.default_rng(args.seed)
     bad, axis = int(rng.integers(args.units)), "xyz"[rng.integers(3)]

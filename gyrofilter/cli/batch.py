@@ -1,6 +1,6 @@
 """Many recordings in one ``gyrofilter allan`` or ``gyrofilter gap`` command (``--fleet DIR``).
 
-The shared command-line part of a fleet run (the work itself is :mod:`gyrofilter.fleet`):
+The shared command-line part of a fleet run (the work itself is :mod:`gyrofilter.analysis.fleet`):
 expand the paths and globs, check every output before any work, run the files on local worker
 processes (``--jobs``) or a Dask cluster (``--scheduler``), write each recording's reports as
 it finishes, show progress over the files, then write ``fleet.csv`` and ``fleet.md`` and print
@@ -85,7 +85,7 @@ def report_files(command):
 
 def run(args, settings, paths):
     """Run the fleet (the module docstring); returns the exit code."""
-    from .. import fleet
+    from ..analysis import fleet
 
     if args.jobs is not None and args.jobs < 1:
         raise SettingsError(f"--jobs must be at least 1, got {args.jobs}")

@@ -33,9 +33,9 @@ def add_arguments(parser):
 
 def run(args):
     from ..errors import SettingsError
-    from ..fleet import FleetSettings
-    from ..gap import analyse_gap
-    from ..gap_report import REPORT_NAME, report_file_names, write_report
+    from ..analysis.fleet import FleetSettings
+    from ..analysis.gap import analyse_gap
+    from ..analysis.gap_report import REPORT_NAME, report_file_names, write_report
     from ..recording import read_recording
 
     if args.sims is not None and args.sims < 2:

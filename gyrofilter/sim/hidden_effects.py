@@ -107,7 +107,7 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
 
 def simulate_case(case):
     """The case's recording (in memory)."""
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
 
     return simulate(case["model"], case["duration_s"], seed=case["sim_seed"])
 
@@ -117,7 +117,7 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     alone (no white noise, no bias, no quantization) at the recording's rate and length and
     added to the rate in deg/s; the result is a deg/s recording with the same temp column."""
     from gyrofilter.recording import Recording
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
 
     fs = rec.sample_rate_hz
     n = len(rec)

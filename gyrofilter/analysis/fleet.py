@@ -110,7 +110,7 @@ def analyse_recording(path, settings):
     short for two cluster times) leaves ``allan`` None with the reason in ``warnings``, and the
     gap report stands.
     """
-    from .cli import one_line
+    from ..cli import one_line
 
     t0 = time.perf_counter()
     result = {"recording": path, "error": None, "warnings": [], "sample_rate_hz": None, "duration_s": None,
@@ -135,7 +135,7 @@ def analyse_recording(path, settings):
 
 def _gap_report(path, settings, warnings):
     from .gap import analyse_gap
-    from .recording import read_recording
+    from ..recording import read_recording
 
     rec = read_recording(path)
     warnings.extend(rec.warnings)
@@ -143,7 +143,7 @@ def _gap_report(path, settings, warnings):
 
 
 def _allan_part(path, settings, result):
-    from .cli.allan import characterise_recording
+    from ..cli.allan import characterise_recording
     from .noise_model import kalibr_yaml, to_json
 
     def warn(text):
@@ -176,7 +176,7 @@ def unit_names(paths):
     ``.gz`` and ``.csv``; recordings whose names clash take as many parent folders as tell them
     apart, joined by ``-`` (``robot1/imu.csv``, ``robot2/imu.csv`` -> ``robot1-imu``,
     ``robot2-imu``). Raises SettingsError when no number of folders does."""
-    from .errors import SettingsError
+    from ..errors import SettingsError
 
     parts = [os.path.abspath(p).split(os.sep) for p in paths]
     stems = [_stem(p[-1]) for p in parts]
@@ -286,8 +286,8 @@ def run_dask(paths, settings, address):
 
 def _distributed():
     """``dask.distributed``, or MissingExtraError naming the ``[cluster]`` extra."""
-    from .errors import MissingExtraError
-    from .extras import install_hint, require
+    from ..errors import MissingExtraError
+    from ..extras import install_hint, require
 
     require("dask", "--scheduler (a Dask cluster)")
     try:

@@ -18,7 +18,7 @@ import os
 
 import numpy as np
 
-from .plots import pyplot
+from ..plots import pyplot
 
 AXES = ("x", "y", "z")
 REPORT_NAME = "gap_report.md"
