@@ -8,7 +8,7 @@ import pytest
 
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
-from gyrofilter.simulate import simulate
+from gyrofilter.sim.simulate import simulate
 from support import REPO
 
 EXAMPLES = REPO / "examples" / "models"
@@ -157,7 +157,7 @@ def test_cli_refuses_to_overwrite_and_never_writes_onto_the_model(tmp_path, caps
 
 
 def test_cli_failure_leaves_no_file_and_a_rerun_works(tmp_path, capsys, monkeypatch):
-    import gyrofilter.simulate as sim
+    import gyrofilter.sim.simulate as sim
     from gyrofilter.errors import SettingsError
 
     real = sim.simulate_chunks
@@ -185,7 +185,7 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
     import os
     import signal
 
-    import gyrofilter.simulate as sim
+    import gyrofilter.sim.simulate as sim
 
     before = signal.getsignal(getattr(signal, signame))
     real = sim.simulate_chunks

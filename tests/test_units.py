@@ -5,7 +5,7 @@ import pytest
 from gyrofilter import GyroFilter
 from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.recording import read_recording
-from gyrofilter.reference import body_rate_from_quaternions
+from gyrofilter.evaluation.reference import body_rate_from_quaternions
 from gyrofilter.tempcomp import compensate
 from gyrofilter.units import check_sample_rate_hz, from_dps, json_ready, plain, to_dps
 
@@ -78,11 +78,11 @@ def test_check_sample_rate_hz_refuses_with_one_wording_naming_the_value(value, s
 
 def _sample_rate_takers():
     """Every module that takes a sample rate, called with ``rate`` (what each checks first)."""
-    from gyrofilter.allan import overlapping_adev
-    from gyrofilter.arma import prepare_series
-    from gyrofilter.bias_kf import BiasKalmanFilter
-    from gyrofilter.profiles import profile_samples_dps
-    from gyrofilter.simulate import validate_model
+    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.analysis.arma import prepare_series
+    from gyrofilter.analysis.bias_kf import BiasKalmanFilter
+    from gyrofilter.sim.profiles import profile_samples_dps
+    from gyrofilter.sim.simulate import validate_model
     from gyrofilter.sources.mpu6050 import sample_rate_settings
 
     header = "# gyrofilter-recording: 1\n# sample_rate_hz: {}\n# gyro_unit: dps\ngx,gy,gz\n0,0,0\n"

@@ -40,8 +40,8 @@ def main(argv=None):
 
     plt = pyplot()
 
-    from gyrofilter.allan import overlapping_adev
-    from gyrofilter.simulate import simulate
+    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.sim.simulate import simulate
 
     fig, axes = plt.subplots(2, 5, figsize=(18, 7.5), sharex=True)
     for ax, name in zip(axes.ravel(), EFFECTS):

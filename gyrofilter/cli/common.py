@@ -271,7 +271,7 @@ def read_axes(path, axes):
 
 
 def add_keep_outliers_argument(parser):
-    from ..noise_model import GROSS_LIMIT_DPS, GROSS_Z
+    from ..analysis.noise_model import GROSS_LIMIT_DPS, GROSS_Z
 
     parser.add_argument("--keep-outliers", action="store_true",
                         help=f"analyse the recording even when it has gross errors (spikes of more than {GROSS_Z:g} robust "
@@ -281,10 +281,10 @@ def add_keep_outliers_argument(parser):
 def refuse_gross_errors(head, series, keep, first_row=0, warn=say_warning):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
-    (:func:`gyrofilter.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
+    (:func:`gyrofilter.analysis.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
     Samples are never dropped. ``series`` start at the file's sample ``first_row``."""
     from ..errors import RecordingError
-    from ..noise_model import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
+    from ..analysis.noise_model import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
 
     found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
     if not found:

@@ -45,7 +45,7 @@ def load_model(path):
 
 def run(args):
     from ..recording import GYRO_COLUMNS, RecordingWriter
-    from ..simulate import recording_columns, recording_header, sample_count, simulate_chunks, validate_model
+    from ..sim.simulate import recording_columns, recording_header, sample_count, simulate_chunks, validate_model
 
     common.check_outputs([args.out], [args.model], args.force)
     if not (math.isfinite(args.duration) and args.duration > 0):

@@ -18,8 +18,8 @@ import os
 
 import numpy as np
 
-from .plots import pyplot
-from .units import AXES
+from ..plots import pyplot
+from ..units import AXES
 
 REPORT_NAME = "gap_report.md"
 FIGURE_KINDS = ("adev", "spectrum", "temperature", "time")

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from .noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis
-from .plots import pyplot
+from ..plots import pyplot
 
 AXIS_COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
 TERM_STYLE = {"quantization": ":", "arw": "--", "bias_instability": "-.", "rrw": (0, (5, 2, 1, 2)),

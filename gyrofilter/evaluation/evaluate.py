@@ -17,7 +17,7 @@ Metrics
   by std(y_k) over the filtered rows (paper 001's before/after std ratio, table in section 4).
   Evaluated on every static MPU6050 recording in ``recordings/``.
 * **dynamic RMSE** (deg/s): sqrt(mean over rows and axes of (y_k - truth_k)^2) for a profile of
-  :mod:`gyrofilter.profiles` added to each axis of 90 s of a real static recording (the first
+  :mod:`gyrofilter.sim.profiles` added to each axis of 90 s of a real static recording (the first
   90 s of every static recording at least 90 s long; RMSE pooled over them).
 * **lag** (s): for each segment of a profile where the rate changes, the shift d that minimises
   the mean squared difference between the filtered rows and the block-averaged *delayed* truth
@@ -28,7 +28,7 @@ Metrics
   sampled step).
   The search is limited per segment (3 s for ramps and steps, under half the period of a sine:
   0.45 s at 1 Hz), where a delayed copy is unambiguous.
-* **BROAD RMSE** (deg/s) against the optical reference rate (:mod:`gyrofilter.reference`,
+* **BROAD RMSE** (deg/s) against the optical reference rate (:mod:`gyrofilter.evaluation.reference`,
   block-averaged over the same samples; blocks with a missing reference sample are left out),
   bias calibrated on the first rest phase (its first ``rest - 1`` s), split into blocks entirely
   in motion, entirely at rest (after calibration, and more than 1.5 s from a change of the
@@ -53,9 +53,9 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import SettingsError
-from .profiles import PROFILES, get_profile
-from .recording import read_recording
+from ..errors import SettingsError
+from ..sim.profiles import PROFILES, get_profile
+from ..recording import read_recording
 from .reference import block_mean_masked, reference_from_recording
 
 DEFAULT_CALIBRATION_S = 2.0
@@ -222,7 +222,7 @@ def gyrofilter_run(preset="paper", **settings):
     ``first_block_index``."""
 
     def run(x_dps, sample_rate_hz, calibration_s):
-        from .pipeline import GyroFilter
+        from ..pipeline import GyroFilter
 
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
         y = f.filter(x_dps)
@@ -236,8 +236,8 @@ def gyrofilter_smooth(preset="recommended", **settings):
     ``settings`` (same rows as :func:`gyrofilter_run`); returns the filter's ``run``."""
 
     def run(x_dps, sample_rate_hz, calibration_s):
-        from .pipeline import GyroFilter
-        from .smoother import Smoother
+        from ..pipeline import GyroFilter
+        from ..smoother import Smoother
 
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
         smoother = Smoother(f)
@@ -528,7 +528,7 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
     """Run every filter on every data set; returns an :class:`Evaluation`.
 
     ``filters``: FilterSpecs (default :func:`default_filters`); ``recordings_dir``: the folder
-    of recordings; ``profiles``: names of :mod:`gyrofilter.profiles` (default all);
+    of recordings; ``profiles``: names of :mod:`gyrofilter.sim.profiles` (default all);
     ``with_lag``: estimate lags; ``static_names``, ``broad_names``: only these recordings (file
     stems; default all); ``progress``: optional callable(str) told what runs (the CLI prints it
     on stderr).
@@ -623,7 +623,7 @@ def plot_pareto(ev, path, reference="paper001"):
 
     The Pareto front is drawn through the real-time filters; offline ones (the smoother) are
     stars beside it. Labels that would overlap are moved down, one line at a time."""
-    from .plots import pyplot
+    from ..plots import pyplot
 
     plt = pyplot()
     pts = [(ev.dynamic_geomean(n), ev.static_geomean(n)) for n in ev.filters]

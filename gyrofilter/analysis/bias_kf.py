@@ -14,7 +14,7 @@ start-up calibration b0 (deg/s). Per sample (dt = 1/fs)::
     0   = r_k + v0,             v0 ~ N(0, sigma0^2)   only while still (zero-rate update)
 
 phi = exp(-dt / tau) and q_b = bias_sigma^2 (1 - phi^2), or phi = 1 and q_b = K^2 dt for a
-random-walk bias (tau = inf). These come from the ARMA(1, 1) of :mod:`gyrofilter.arma`
+random-walk bias (tau = inf). These come from the ARMA(1, 1) of :mod:`gyrofilter.analysis.arma`
 (:meth:`BiasKFSettings.from_bias_model`) or from settings. sigma is the white-noise level
 measured during the start-up calibration (first differences, :mod:`gyrofilter.calibration`).
 
@@ -47,9 +47,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .calibration import Calibration, calibrate
-from .errors import SettingsError
-from .units import check_sample_rate_hz, plain
+from ..calibration import Calibration, calibrate
+from ..errors import SettingsError
+from ..units import check_sample_rate_hz, plain
 
 RESUM_EVERY = 10_000  # samples between exact recomputations of the window sums
 
@@ -75,7 +75,7 @@ class BiasKFSettings:
 
     @classmethod
     def from_bias_model(cls, model, **overrides):
-        """Settings whose bias model is ``model`` (a :class:`gyrofilter.arma.BiasModel`, or per-axis list of them)."""
+        """Settings whose bias model is ``model`` (a :class:`gyrofilter.analysis.arma.BiasModel`, or per-axis list of them)."""
         models = model if isinstance(model, (list, tuple)) else [model] * 3
         taus = [m.tau_s for m in models]
         if any(not m.valid for m in models):

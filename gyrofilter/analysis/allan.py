@@ -26,8 +26,8 @@ import math
 
 import numpy as np
 
-from .errors import GyroFilterError, SettingsError
-from .units import check_sample_rate_hz, plain
+from ..errors import GyroFilterError, SettingsError
+from ..units import check_sample_rate_hz, plain
 
 #: cluster count below which a deviation (and any fit using it) is flagged: paper 002 needs
 #: N/m >= 9 for an error under 25 %.

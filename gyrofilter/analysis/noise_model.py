@@ -32,7 +32,7 @@ Uncertainty of a fitted coefficient (two-sided, at ``confidence``, default 95 %)
 linear in the Allan variances on its active set, ``theta = G y`` with ``G = (A' W A)^-1 A' W``,
 so ``cov(theta) = G C G'``. ``C`` (:func:`avar_covariance`) has the standard deviations of the
 NIST SP 1065 Table 5 EDF for each noise type, summed over the fitted mixture (conservative, see
-:func:`gyrofilter.allan.edf_mixture`), and the correlations between cluster times from the
+:func:`gyrofilter.analysis.allan.edf_mixture`), and the correlations between cluster times from the
 Allan transfer function (:func:`avar_correlation`). The interval is the chi-square interval with
 ``edf = 2 theta_j^2 / var_j`` (Satterthwaite). The round-trip tests check that it covers the true
 coefficient in at least 90 % of simulated records (measured: 92-100 %).
@@ -55,8 +55,8 @@ import numpy as np
 
 from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
-from .errors import SettingsError
-from .units import DEG_PER_RAD, plain
+from ..errors import SettingsError
+from ..units import DEG_PER_RAD, plain
 
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
 TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
@@ -560,7 +560,7 @@ def gross_errors(x_dps, *, z=GROSS_Z, limit_dps=GROSS_LIMIT_DPS):
     A sample is one when ``|x_i| > limit_dps`` (beyond any MEMS full scale), or when its
     second-difference residual ``r_i = x_i - (x_{i-1} + x_{i+1}) / 2`` (``x_0 - x_1`` and
     ``x_{N-1} - x_{N-2}`` at the ends) exceeds ``z`` robust sigmas of ``r``
-    (:func:`gyrofilter.detectors.robust_sigma`, 1.4826 MAD) and ``|r_i|`` is not smaller than its
+    (:func:`gyrofilter.analysis.detectors.robust_sigma`, 1.4826 MAD) and ``|r_i|`` is not smaller than its
     neighbours' (a spike moves their residuals by half its size, so of two spikes side by side only
     the larger may be found), and neither neighbour is beyond ``limit_dps``. A bias drift, smooth over three samples, leaves ``r`` alone, so only
     isolated jumps count; sensor motion does show up. The

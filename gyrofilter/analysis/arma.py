@@ -64,9 +64,9 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .errors import SettingsError
-from .extras import require
-from .units import check_sample_rate_hz, json_ready, plain
+from ..errors import SettingsError
+from ..extras import require
+from ..units import check_sample_rate_hz, json_ready, plain
 
 DEFAULT_MAX_SAMPLES = 200_000
 DEFAULT_ADF_MAXLAG = 20
