@@ -68,7 +68,9 @@ _Z_BY_P = {0.9: 1.2816, 0.95: 1.6449, 0.99: 2.3263, 0.999: 3.0902, 0.9999: 3.719
 
 
 def chi2_quantile(p, dof):
-    """Wilson-Hilferty approximation of the chi-square quantile: dof (1 - 2/(9 dof) + z sqrt(2/(9 dof)))^3."""
+    """Wilson-Hilferty approximation of the chi-square quantile of probability ``p`` (one of
+    0.9, 0.95, 0.99, 0.999, 0.9999; z its normal quantile) with ``dof`` degrees of freedom:
+    dof (1 - 2/(9 dof) + z sqrt(2/(9 dof)))^3."""
     if p not in _Z_BY_P:
         raise SettingsError(f"accept_p must be one of {sorted(_Z_BY_P)}, got {plain(p)}")
     z = _Z_BY_P[p]
@@ -77,7 +79,8 @@ def chi2_quantile(p, dof):
 
 
 def cusum_false_alarm_blocks(kappa, h):
-    """Siegmund's approximation of the one-sided CUSUM's average run length on N(0, 1) data."""
+    """Siegmund's approximation of the one-sided CUSUM's average run length (blocks) on N(0, 1)
+    data, for allowance ``kappa`` and threshold ``h`` (noise units; module docstring)."""
     b = h + 1.166
     return (math.exp(2 * kappa * b) - 2 * kappa * b - 1) / (2 * kappa * kappa)
 
@@ -87,7 +90,11 @@ FILLED, HEAD, HOLDING, COUNT, SWITCHES = 0, 1, 2, 5, 8
 
 
 def hold_blocks(y, x, out, sigma, ring, mean, g_pos, g_neg, ints, kappa, h, max_blocks, chi2_limit, agree_z):
-    """The stage over M blocks: y (M, 3) block means, x (M, 3) tracking outputs -> out (M, 3).
+    """The stage over M blocks: y (M, 3) block means, x (M, 3) tracking outputs -> out (M, 3), deg/s.
+
+    ``sigma``: sigma_b per axis (deg/s); ``kappa``, ``h``: the CUSUM's allowance and threshold;
+    ``max_blocks``: memory of the held mean; ``chi2_limit``: the constancy test's chi-square
+    quantile; ``agree_z``: the agreement limit (standard errors); see the module docstring.
 
     State arrays are updated in place (ring (3, W) of block means, mean, g_pos, g_neg (3,),
     ints (11,) int64: filled, head, holding[3], count[3], switches[3]). Written in the subset of
@@ -151,7 +158,11 @@ class ConstantRateHold:
     """The switching stage; see the module docstring. Three axes; fixed-size state.
 
     ``sigma_block_dps``: standard deviation of a block mean at rest per axis (deg/s), e.g.
-    :func:`block_noise_std` of the calibration window. ``backend``: "auto" (numba when
+    :func:`block_noise_std` of the calibration window. ``initial_blocks``: n at start (start in
+    hold with m = 0; 0 = start in track); ``cusum_kappa``, ``cusum_h``: the CUSUM's kappa and h
+    (noise units); ``window_blocks``: W of the constancy test; ``max_blocks``: memory of the held
+    mean (blocks); ``accept_p``: the constancy test's probability; ``agree_z``: its agreement
+    limit (standard errors); see the module docstring. ``backend``: "auto" (numba when
     installed), "python" or "numba".
     """
 
@@ -210,14 +221,16 @@ class ConstantRateHold:
         self._kernel(y_dps, x_dps, out_dps, *self._args)
 
     def update(self, y_block_dps, x_track_dps):
-        """One block: the block mean y (3,) and the tracking filter's output x (3,) -> output (3,)."""
+        """One block: the block mean y = ``y_block_dps`` (3,) and the tracking filter's output
+        x = ``x_track_dps`` (3,), deg/s -> output (3,), deg/s."""
         self._y1[0] = y_block_dps
         self._x1[0] = x_track_dps
         self._call(self._y1, self._x1, self._o1)
         return tuple(self._o1[0].tolist())
 
     def run(self, y_blocks_dps, x_track_dps):
-        """Batch form: (M, 3) block means and (M, 3) tracking outputs -> (M, 3); same numbers as update()."""
+        """Batch form: ``y_blocks_dps`` (M, 3) block means and ``x_track_dps`` (M, 3) tracking
+        outputs, deg/s -> (M, 3); same numbers as update()."""
         y = np.ascontiguousarray(y_blocks_dps, dtype=float)
         x = np.ascontiguousarray(x_track_dps, dtype=float)
         if y.shape != x.shape or y.ndim != 2 or y.shape[1] != 3:
@@ -229,7 +242,8 @@ class ConstantRateHold:
 
 
 def block_noise_std(window_dps, block_len):
-    """Standard deviation of a block mean at rest, per axis, from a still (n, 3) window.
+    """Standard deviation of a block mean at rest (deg/s), per axis, from ``window_dps``, a still
+    (n, 3) window in deg/s, for blocks of L = ``block_len`` samples.
 
     sigma_b = max(std of the means of the window's complete blocks, sigma_w / sqrt(L)), where
     sigma_w = std(first differences) / sqrt(2) is the white-noise level: the first term sees
@@ -251,7 +265,8 @@ def block_noise_std(window_dps, block_len):
 def make_hold(block_len, *, calibration_window_dps=None, noise_std_dps=None, **options):
     """The stage as a pipeline would build it after its start-up calibration.
 
-    With the calibration window (n, 3) in deg/s: sigma_b = :func:`block_noise_std` of it, and
+    With ``calibration_window_dps``, the calibration window (n, 3) in deg/s: sigma_b =
+    :func:`block_noise_std` of it, and
     the stage starts in hold with ``initial_blocks`` = n // block_len (the window passed the
     stillness check and the bias is removed). With only ``noise_std_dps`` (a calibration loaded
     from a file): sigma_b = noise_std / sqrt(block_len) and the stage starts in track, since

@@ -51,7 +51,8 @@ MAD_LIMIT = 4 * 1.4826  # median_slope: threshold in robust-sigma units of the r
 
 
 def average_block(values, q):
-    """Average one block (a sequence of floats). Returns (output, number rejected, fallback)."""
+    """Average one block ``values`` (a sequence of floats, deg/s) with gross-error threshold ``q``
+    (deg/s; module docstring). Returns (output, number rejected, fallback)."""
     total = 0.0
     for v in values:
         total += v
@@ -80,7 +81,8 @@ def _median(values):
 
 
 def average_blocks(blocks, q):
-    """Vectorised :func:`average_block` over the first axis of ``blocks`` (M, L[, ...]).
+    """Vectorised :func:`average_block` over the first axis of ``blocks`` (M, L[, ...]), deg/s,
+    threshold ``q`` (deg/s).
 
     Returns (outputs (M[, ...]), rejected counts (M[, ...]), fallback mask (M[, ...])).
     """
@@ -114,7 +116,8 @@ def _kept(blocks, center, q):
 
 
 def average_block_median_slope(values, q):
-    """Average one block with the ``median_slope`` rule. Returns (output, number replaced, False)."""
+    """Average one block ``values`` (deg/s) with the ``median_slope`` rule, threshold ``q`` (deg/s).
+    Returns (output, number replaced, False)."""
     n = len(values)
     slope = _median([(values[j] - values[i]) / (j - i) for i in range(n) for j in range(i + 1, n)]) if n > 1 else 0.0
     offsets = [slope * (i - (n - 1) / 2) for i in range(n)]
@@ -134,7 +137,8 @@ def average_block_median_slope(values, q):
 
 
 def average_blocks_median_slope(blocks, q):
-    """Vectorised :func:`average_block_median_slope` over the first axis of ``blocks`` (M, L[, ...])."""
+    """Vectorised :func:`average_block_median_slope` over the first axis of ``blocks`` (M, L[, ...]),
+    threshold ``q`` (deg/s)."""
     blocks = np.asarray(blocks, dtype=float)
     n = blocks.shape[1]
     pairs = [(blocks[:, j] - blocks[:, i]) / (j - i) for i in range(n) for j in range(i + 1, n)]
@@ -155,7 +159,7 @@ def average_blocks_median_slope(blocks, q):
 
 def average_block_line_if_cut(values, q, paper=None):
     """The motion rule of ``outlier_rule="by_model"``: the block mean when paper 001's rule keeps
-    every sample, else :func:`average_block_median_slope`. ``paper``: the result of
+    every sample, else :func:`average_block_median_slope`, threshold ``q`` (deg/s). ``paper``: the result of
     :func:`average_block` on the same values, if already computed. Returns (output, number
     rejected or replaced, False)."""
     mean, rejected, _ = average_block(values, q) if paper is None else paper
@@ -165,7 +169,7 @@ def average_block_line_if_cut(values, q, paper=None):
 
 
 def average_blocks_line_if_cut(blocks, q, paper=None):
-    """Vectorised :func:`average_block_line_if_cut`; ``paper``: the result of
+    """Vectorised :func:`average_block_line_if_cut` (threshold ``q``, deg/s); ``paper``: the result of
     :func:`average_blocks` on the same blocks, if already computed. The robust line is computed
     only for the blocks the paper's rule cuts."""
     blocks = np.asarray(blocks, dtype=float)

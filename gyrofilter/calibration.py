@@ -34,10 +34,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import CalibrationError, SettingsError
+from .units import AXES
 
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
-AXES = ("x", "y", "z")
 
 
 @dataclass(frozen=True)
@@ -55,6 +55,7 @@ class Calibration:
     temp_c: float | None = None
 
     def to_json(self) -> str:
+        """The calibration as JSON text (docs/formats.md, section 5)."""
         return json.dumps(
             {
                 "gyrofilter-calibration": 1,
@@ -69,11 +70,14 @@ class Calibration:
         )
 
     def save(self, path):
+        """Write :meth:`to_json` to the file ``path``."""
         with open(path, "w", encoding="utf-8") as fh:
             fh.write(self.to_json() + "\n")
 
     @classmethod
     def load(cls, path) -> "Calibration":
+        """Read a calibration saved by :meth:`save` from the file ``path``; CalibrationError
+        names the file and what is wrong."""
         try:
             with open(path, encoding="utf-8") as fh:
                 data = json.load(fh)
@@ -96,7 +100,8 @@ class Calibration:
 
 
 def white_noise_std(window_dps) -> np.ndarray:
-    """sigma = std(x[i+1] - x[i]) / sqrt(2) per axis of an (n, 3) window; 0 below 3 samples."""
+    """sigma = std(x[i+1] - x[i]) / sqrt(2) per axis (deg/s) of ``window_dps``, an (n, 3) window
+    in deg/s; 0 below 3 samples."""
     x = np.asarray(window_dps, dtype=float)
     if len(x) < 3:
         return np.zeros(x.shape[1:])
@@ -104,7 +109,8 @@ def white_noise_std(window_dps) -> np.ndarray:
 
 
 def stillness_z(window_dps) -> np.ndarray:
-    """The stillness statistic z per axis (see the module docstring) of an (n, 3) window."""
+    """The stillness statistic z per axis (noise units; see the module docstring) of
+    ``window_dps``, an (n, 3) window in deg/s."""
     x = np.asarray(window_dps, dtype=float)
     n_sub = min(N_SUB_WINDOWS, len(x) // 2)
     if n_sub < 2:
@@ -119,9 +125,11 @@ def stillness_z(window_dps) -> np.ndarray:
 def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=20.0, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
-    ``window_dps`` is (n, 3) in deg/s, n >= 3; ``temp_c`` optionally the
-    window's n temperatures (deg C), whose mean is kept. Raises CalibrationError naming the axis
-    and the statistic when the window is not still.
+    ``window_dps`` is (n, 3) in deg/s, n >= 3, sampled at ``sample_rate_hz`` (Hz);
+    ``stillness_threshold``: the largest stillness statistic z accepted (noise units, see
+    :func:`stillness_z`); ``max_bias_dps``: the largest plausible bias (deg/s); ``temp_c``
+    optionally the window's n temperatures (deg C), whose mean is kept. Raises CalibrationError
+    naming the axis and the statistic when the window is not still.
     """
     x = np.asarray(window_dps, dtype=float)
     if x.ndim != 2 or x.shape[1] != 3:

@@ -1,7 +1,7 @@
 """Optional packages (the extras in pyproject.toml): import one, or raise naming the extra.
 
 A core install (``pip install gyrofilter``) runs ``replay``, ``record``, ``run``, ``allan``,
-``simulate`` and ``gap`` (with ``--out-dir``, on local worker processes too); figures, the numba
+``simulate`` and ``gap`` (with ``--fleet``, on local worker processes too); figures, the numba
 kernels, ``arma`` and a Dask cluster (``--scheduler``) need an extra. Library code
 imports an optional package through :func:`require`, inside the function that uses it.
 """

@@ -65,7 +65,14 @@ def _window_stat(s1, s2, n, use_std):
 
 def run_blocks(y, out, w_table, fifo, p, qbuf, rbuf, sums, counters, r0, p0, window, use_std, r_fixed,
                guard_sigma, guard_k, guard_n, guard_run):
-    """Filter the block means y (M, 3) into out (M, 3), updating the state arrays in place.
+    """Filter the block means y (M, 3) into out (M, 3), deg/s, updating the state arrays in place.
+
+    Settings: ``w_table`` the LS extrapolation weights (:func:`gyrofilter.predictor.weight_table`);
+    ``r0`` (3,) the initial Q and R ((deg/s)^2, or deg/s with ``use_std``); ``p0`` P0
+    ((deg/s)^2); ``window`` W of eqs. 11-12 (0 = all); ``use_std``: sigma is the standard
+    deviation (``qr_stat="std"``); ``r_fixed``: R stays r0 (``r_source="calibration"``);
+    ``guard_sigma`` (3,) sigma_b (deg/s), ``guard_k`` and ``guard_n``: the guard's limit in
+    sigma_b and its run length (:func:`_guard`).
 
     State: fifo (3, D) ring of posteriors; p (3,) posterior variance; qbuf, rbuf (3, max(W, 1))
     rings of differences and measurements; sums (4, 3) running sums; counters (6,) int64;
@@ -239,7 +246,9 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
     ((W - 1) s^2 / R below ``chi2_limit``) and x_k is within ``agree_z`` sigma_b of their mean m:
     then x_k = m, P_k = R / W. On the switch to the LS model C = P + R.
 
-    Divergence guard: :func:`_guard`; a re-seed also puts the axis in the LS model with C = R.
+    Divergence guard: :func:`_guard` (limit ``guard_k`` sigma_b, run length ``guard_n``; 0 = off);
+    a re-seed also puts the axis in the LS model with C = R. ``w_table``: the LS extrapolation
+    weights (:func:`gyrofilter.predictor.weight_table`).
 
     State (fixed size): fifo (3, D) posteriors, p (3,), fstate (3, 3) rows C, g+, g-; istate
     (10,) int64 (FIFO count and head, block-mean ring fill and head, model and switch count per
@@ -342,6 +351,47 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
     return out
 
 
+class PaperKalman:
+    """Paper 001's Kalman stage for three axes: :func:`run_blocks` with its state.
+
+    ``settings`` is a :class:`gyrofilter.pipeline.FilterSettings`; ``sigma_b_dps`` (3,) is the
+    standard deviation of a block mean at rest (deg/s) that the divergence guard measures in,
+    an array the caller keeps and may update in place. The state has a fixed size (see
+    :func:`run_blocks`) and is updated in place by :meth:`run`; :meth:`start` sets the initial
+    Q and R once the calibration's noise is known.
+    """
+
+    def __init__(self, settings, sigma_b_dps):
+        from .jit import choose_kernel
+        from .predictor import weight_table
+
+        s = settings
+        self.settings = s
+        width = max(s.qr_window, 1)
+        self.r0 = np.full(3, s.p0_dps2)
+        self.guard_run = np.zeros(6, dtype=np.int64)
+        self._kernel = choose_kernel(run_blocks, s.backend)
+        # bound once: the arrays are updated in place
+        self._args = (
+            weight_table(s.fifo_depth, s.fit_order), np.zeros((3, s.fifo_depth)), np.zeros(3), np.zeros((3, width)), np.zeros((3, width)),
+            np.zeros((4, 3)), np.zeros(6, dtype=np.int64), self.r0, s.p0_dps2, s.qr_window, s.qr_stat == "std",
+            s.r_source == "calibration", sigma_b_dps, float(s.guard_k_sigma), s.guard_blocks, self.guard_run,
+        )
+
+    def start(self, noise_std_dps):
+        """Initial Q and R (paper 001): the variance of a block mean of the calibration's white
+        noise, r0 = max(sigma^2 / L, VAR_FLOOR) per axis (``noise_std_dps``: sigma per axis,
+        deg/s; L = block_len); its square root with ``qr_stat="std"``."""
+        s = self.settings
+        self.r0[:] = [max(n * n / s.block_len, VAR_FLOOR) for n in noise_std_dps]
+        if s.qr_stat == "std":
+            np.sqrt(self.r0, out=self.r0)
+
+    def run(self, y, out):
+        """Block means y (M, 3) -> out (M, 3) (deg/s), the state updated in place."""
+        self._kernel(y, out, *self._args)
+
+
 class AdaptiveKalman:
     """The adaptive Kalman stage for three axes: :func:`run_blocks_adaptive` with its state.
 
@@ -376,7 +426,7 @@ class AdaptiveKalman:
         )
 
     def start(self, sigma_b_dps, still_blocks):
-        """R = sigma_b^2 per axis. After n = ``still_blocks`` still blocks (the calibration's,
+        """R = sigma_b^2 per axis (sigma_b = ``sigma_b_dps``, deg/s). After n = ``still_blocks`` still blocks (the calibration's,
         bias removed: x = 0) start in the constant-rate model with P = R / min(n, N), the mean of
         n zeros; with n = 0 (nothing known of the motion now) in the LS model with P = P0 and
         C = P0 + R."""

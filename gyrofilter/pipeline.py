@@ -20,12 +20,11 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from . import kalman
-from .jit import choose_kernel
 from .adaptive import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
 from .calibration import Calibration, calibrate
 from .errors import CalibrationError, SettingsError
-from .predictor import closed_loop_radius, stable_gain_threshold, weight_table
+from .predictor import closed_loop_radius, stable_gain_threshold
 from .presets import DEFAULT_PRESET, PRESETS
 from .tempcomp import compensate
 from .units import check_sample_rate_hz, plain
@@ -128,6 +127,8 @@ class FilterSettings:
         return (float(c),) * 3 if isinstance(c, (int, float)) else tuple(float(v) for v in c)
 
     def validate(self):
+        """Check every setting; SettingsError names the first bad one, its value and what is expected."""
+
         def need(cond, name, what):
             if not cond:
                 raise SettingsError(f"setting {name}={plain(getattr(self, name))}: {what}")
@@ -187,15 +188,25 @@ SETTING_NAMES = tuple(f.name for f in fields(FilterSettings))
 class GyroFilter:
     """Paper-001 pipeline for a three-axis gyro; see the module docstring and FilterSettings.
 
-    ``preset``: named settings (gyrofilter.presets); the default "recommended" is the best
-    measured filter, "paper" the faithful reproduction.
+    Parameters
+    ----------
+    sample_rate_hz : float
+        Input sample rate (Hz), finite and > 0 (:func:`gyrofilter.units.check_sample_rate_hz`).
+    calibration_s : float, optional
+        Length of the start-up bias calibration (s); None keeps the preset's (2 s).
+    preset : str
+        Named settings (:mod:`gyrofilter.presets`); the default "recommended" is the best
+        measured filter, "paper" the faithful reproduction.
+    calibration : Calibration or str, optional
+        A :class:`~gyrofilter.calibration.Calibration` or the path of a saved one: skips the
+        start-up calibration.
+    **settings
+        Any :class:`FilterSettings` field (units in its table); explicit keyword settings
+        override the ``preset``.
 
     >>> f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
     >>> f.update((0.01, -0.02, 0.0)) is None      # calibrating
     True
-
-    ``calibration`` (a :class:`~gyrofilter.calibration.Calibration` or the path of a saved one)
-    skips the start-up calibration. Explicit keyword settings override the ``preset``.
     """
 
     def __init__(self, sample_rate_hz, calibration_s=None, *, preset=DEFAULT_PRESET, calibration=None, **settings):
@@ -232,15 +243,8 @@ class GyroFilter:
             self._akf = kalman.AdaptiveKalman(s)
             self._guard_run = self._akf.guard_run
         else:
-            width = max(s.qr_window, 1)
-            self._r0 = np.full(3, s.p0_dps2)
-            self._guard_run = np.zeros(6, dtype=np.int64)
-            self._run = choose_kernel(kalman.run_blocks, s.backend)
-            self._kernel_args = (
-                weight_table(s.fifo_depth, s.fit_order), np.zeros((3, s.fifo_depth)), np.zeros(3), np.zeros((3, width)), np.zeros((3, width)),
-                np.zeros((4, 3)), np.zeros(6, dtype=np.int64), self._r0, s.p0_dps2, s.qr_window, s.qr_stat == "std",
-                s.r_source == "calibration", self._sigma_b, float(s.guard_k_sigma), s.guard_blocks, self._guard_run,
-            )
+            self._pkf = kalman.PaperKalman(s, self._sigma_b)
+            self._guard_run = self._pkf.guard_run
         # block and calibration state
         self._block = []
         self.rejected = np.zeros(3, dtype=np.int64)
@@ -283,6 +287,7 @@ class GyroFilter:
 
     @property
     def calibrating(self) -> bool:
+        """True while the start-up calibration still collects samples (no output yet)."""
         return self._cal_buf is not None
 
     @property
@@ -292,6 +297,7 @@ class GyroFilter:
 
     @property
     def output_rate_hz(self) -> float:
+        """Rate of the output rows (Hz): ``sample_rate_hz / block_len``."""
         return self.sample_rate_hz / self.settings.block_len
 
     @property
@@ -299,18 +305,34 @@ class GyroFilter:
         """Samples held for a block that is not full yet (they produce output once it is)."""
         return len(self._block)
 
+    @property
+    def first_block_index(self):
+        """Index of the first input sample of output row 0, or None while calibrating.
+
+        Output row k (counted from the first row the filter gave) is the block of input samples
+        ``first_block_index + k L .. first_block_index + (k + 1) L - 1`` (L = ``settings.block_len``),
+        indices counting every sample fed since the start (``samples_in``), calibration included:
+        the samples before it are the calibration window (and the windows a retry refused).
+        """
+        if self.calibrating:
+            return None
+        return self.samples_in - self.pending_samples - self.blocks_out * self.settings.block_len
+
     def block_end_indices(self, n_rows) -> np.ndarray:
         """For the latest ``n_rows`` output rows: the index of each row's last input sample.
 
         Indices count every sample fed since the start (``samples_in``), calibration included,
-        so ``t_s[block_end_indices(len(rows))]`` time-stamps the rows a call just returned.
+        so ``t_s[block_end_indices(len(rows))]`` time-stamps the rows a call just returned (see
+        :meth:`filter_timed`, which does this for one call).
         """
         last = self.samples_in - self.pending_samples - 1
         return last - self.settings.block_len * np.arange(n_rows - 1, -1, -1, dtype=np.int64)
 
     def update(self, sample, temp_c=None):
-        """Feed one sample (gx, gy, gz) in deg/s, and its temperature in deg C when compensating.
+        """Feed one sample and return the filtered block it completed, if any.
 
+        ``sample``: (gx, gy, gz), 3 finite numbers in deg/s. ``temp_c``: the sample's temperature
+        (deg C), required when compensating (``compensates_temperature``), else ignored.
         Returns None while calibrating and between blocks, else the filtered (x, y, z) in deg/s
         for the block this sample completed.
         """
@@ -357,7 +379,8 @@ class GyroFilter:
         return (x, y, z)
 
     def filter(self, samples_dps, temp_c=None) -> np.ndarray:
-        """Feed an (N, 3) array in deg/s (and N temperatures in deg C when compensating).
+        """Feed ``samples_dps``, an (N, 3) array in deg/s, and ``temp_c``, N temperatures in deg C
+        (required when compensating, else ignored).
 
         Returns the filtered blocks it completed, (M, 3). From a new filter,
         M = (N - calibration samples) // block_len and row k is block k after the calibration.
@@ -426,6 +449,21 @@ class GyroFilter:
             return np.empty((0, 3))
         return np.concatenate(outputs)
 
+    def filter_timed(self, samples_dps, t_s, temp_c=None):
+        """:meth:`filter` with time stamps: returns ``(t_rows_s, rows)``.
+
+        ``t_s`` (N,) are the times of the N samples (s, any origin); ``rows`` (M, 3) are what
+        ``filter(samples_dps, temp_c)`` returns and ``t_rows_s`` (M,) the time of each row's
+        block's last input sample. A row comes out when that sample goes in, so it is always one
+        of this call's samples, whatever the chunking.
+        """
+        x = np.asarray(samples_dps)
+        t = np.asarray(t_s, dtype=float)
+        if x.ndim and t.shape != x.shape[:1]:
+            raise SettingsError(f"t_s must have shape ({len(x)},), one time per sample, got {t.shape}")
+        rows = self.filter(x, temp_c)
+        return t[self.block_end_indices(len(rows)) - (self.samples_in - len(x))], rows
+
     def state_dict(self) -> dict:
         """The settings and counters worth reporting (plain Python values)."""
         return {
@@ -460,7 +498,7 @@ class GyroFilter:
         if self.settings.tracker != "kalman":
             out[:] = y
         elif not self._adaptive:
-            self._run(y, out, *self._kernel_args)
+            self._pkf.run(y, out)
         elif self.block_log is None:
             self._akf.run(y, out, kalman.NO_TRACE, y_motion, used)
         else:
@@ -513,9 +551,7 @@ class GyroFilter:
             self._temp_ref = cal.temp_c
         self._bias = tuple(float(b) for b in cal.bias_dps)
         if not self._adaptive:  # paper 001's initial Q and R: the variance of a block mean of the calibration's white noise
-            self._r0[:] = [max(n * n / self.settings.block_len, kalman.VAR_FLOOR) for n in cal.noise_std_dps]
-            if self.settings.qr_stat == "std":
-                np.sqrt(self._r0, out=self._r0)
+            self._pkf.start(cal.noise_std_dps)
         self._cal_buf = None
         self._cal_temp = None
 

@@ -11,8 +11,9 @@ def pyplot():
 
 
 def check_figure_path(path, option="--plot"):
-    """Refuse, before any work, a figure file whose extension matplotlib cannot write
-    (SettingsError naming the formats it can); matplotlib missing is said here too."""
+    """Refuse, before any work, a figure file ``path`` whose extension matplotlib cannot write
+    (SettingsError naming ``option``, the command-line option that gave it, and the formats it
+    can); matplotlib missing is said here too."""
     from .errors import SettingsError
 
     pyplot()
@@ -28,7 +29,8 @@ def check_figure_path(path, option="--plot"):
 def plot_filtered(path, raw, filtered, *, title=""):
     """Three panels (x, y, z): raw samples and filtered rows, each given as a min/max
     :class:`~gyrofilter.streamstats.Envelope` (a band per bucket; a line while a bucket is one
-    sample), so that a day of data draws in bounded memory. Written to ``path`` (PNG)."""
+    sample), so that a day of data draws in bounded memory; time in s, rates in deg/s, headed
+    ``title``. Written to ``path`` (PNG)."""
     plt = pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
     for a, ax in enumerate(axes):

@@ -35,7 +35,9 @@ def extrapolation_weights(n: int, order: int) -> np.ndarray:
 
 
 def weight_table(depth: int, order: int) -> np.ndarray:
-    """Row k-1 holds the weights for k points (k = 1..depth), zero-padded on the right."""
+    """The LS extrapolation weights of a fit of ``order`` (0 constant, 1 linear, 2 quadratic) to
+    the last k posteriors: row k-1 holds those for k points (k = 1..``depth``), zero-padded on
+    the right."""
     table = np.zeros((depth, depth))
     for k in range(1, depth + 1):
         table[k - 1, :k] = extrapolation_weights(k, order)
@@ -44,6 +46,9 @@ def weight_table(depth: int, order: int) -> np.ndarray:
 
 def closed_loop_radius(depth: int, order: int, gain: float) -> float:
     """Largest root modulus of the Kalman loop x_k = (1 - K) sum_i w_i x_(k-n+i) + K y_k, n = depth.
+
+    ``depth``: n, the FIFO depth; ``order``: the LS fit's order (w = :func:`weight_table`);
+    ``gain``: K, constant.
 
     Characteristic polynomial z^n - (1 - K) sum_i w_i z^i (w oldest first, i = 0..n-1); the loop
     is stable for a constant gain K when the radius is < 1. With the 10-point quadratic
@@ -60,8 +65,8 @@ def closed_loop_radius(depth: int, order: int, gain: float) -> float:
 
 def stable_gain_threshold(depth: int, order: int, tol: float = 1e-6) -> float:
     """Smallest constant gain K in [0, 1] above which the loop of :func:`closed_loop_radius` is
-    stable (bisection; assumes the radius falls with K, as it does for the LS weights); 0 if
-    it is stable for every K."""
+    stable for ``depth`` points and a fit of ``order`` (bisection to within ``tol``; assumes the
+    radius falls with K, as it does for the LS weights); 0 if it is stable for every K."""
     if closed_loop_radius(depth, order, 0.0) < 1.0:
         return 0.0
     lo, hi = 0.0, 1.0

@@ -38,7 +38,7 @@ import numpy as np
 
 from .closable import Closable
 from .errors import RecordingError, SettingsError
-from .units import GYRO_UNITS, from_dps, to_dps
+from .units import GYRO_UNITS, check_sample_rate_hz, from_dps, to_dps
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
@@ -129,11 +129,14 @@ class Recording(_HeaderFacts):
 
     @property
     def duration_s(self) -> float:
+        """Number of samples / ``sample_rate_hz`` (s)."""
         return len(self) / self.sample_rate_hz
 
     @classmethod
     def from_dps(cls, gyro_dps, sample_rate_hz, *, t_s=None, temp_c=None, extra=None, header=None):
-        """Build an in-memory recording with ``gyro_unit: dps`` from an (N, 3) array."""
+        """Build an in-memory recording with ``gyro_unit: dps`` from ``gyro_dps``, an (N, 3) array
+        in deg/s, at ``sample_rate_hz`` (Hz); optional ``t_s`` (N,) times (s), ``temp_c`` (N,)
+        temperatures (deg C), ``extra`` further columns (name -> (N,) array) and ``header`` keys."""
         gyro_dps = np.asarray(gyro_dps, dtype=float)
         if gyro_dps.ndim != 2 or gyro_dps.shape[1] != 3:
             raise RecordingError(f"gyro_dps must have shape (N, 3), got {gyro_dps.shape}")
@@ -233,7 +236,7 @@ def read_recording(path) -> Recording:
 
 def collect_columns(head, chunks, names):
     """The columns ``names`` of the remaining ``chunks`` of :func:`iter_recording` as one float64
-    array each (file units).
+    array each (file units); ``head`` is the :class:`RecordingHead` it yielded first.
 
     Values are copied into blocks (16 Ki rows, doubling up to ``_BLOCK_ROWS`` = 4 MB; large
     blocks are memory mappings of their own, so the many short-lived chunk buffers do not
@@ -267,7 +270,7 @@ def collect_columns(head, chunks, names):
 
 
 def iter_recording(path, chunk_rows=CHUNK_ROWS):
-    """Read a format-v1 recording in chunks: yields a :class:`RecordingHead` first, then float
+    """Read the format-v1 recording at ``path`` in chunks: yields a :class:`RecordingHead` first, then float
     arrays of shape (k, number of columns), columns in file order and units, k <= ``chunk_rows``.
 
     The file is read a block (about 1 MB of text) at a time; the complete lines of a block, at
@@ -472,9 +475,7 @@ def _parse_header(lines, path):
     for key in ("sample_rate_hz", "gyro_unit"):
         if key not in header:
             raise RecordingError(f"{path}: missing header key {key!r}")
-    rate = _header_float(header, "sample_rate_hz", path)
-    if not rate > 0 or not math.isfinite(rate):
-        raise RecordingError(f"{path}: sample_rate_hz must be a positive number, got {header['sample_rate_hz']!r}")
+    rate = check_sample_rate_hz(_header_float(header, "sample_rate_hz", path), f"{path}: sample_rate_hz", RecordingError)
     if header["gyro_unit"] not in GYRO_UNITS:
         raise RecordingError(f"{path}: gyro_unit {header['gyro_unit']!r} is not one of {', '.join(GYRO_UNITS)}")
     if header["gyro_unit"] == "lsb":
@@ -689,7 +690,8 @@ class RecordingWriter(Closable):
 
 
 def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:
-    """A copy of ``rec`` with the gyro columns expressed in ``unit`` (other columns unchanged)."""
+    """A copy of ``rec`` with the gyro columns expressed in ``unit`` (other columns unchanged);
+    ``lsb_per_dps`` (LSB per deg/s) is needed for 'lsb'."""
     gyro = from_dps(rec.gyro_dps, unit, lsb_per_dps)
     columns = dict(rec.columns)
     for i, name in enumerate(GYRO_COLUMNS):

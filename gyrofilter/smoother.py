@@ -73,6 +73,7 @@ class Smoother:
     >>> rows = f.filter(samples_dps)          # doctest: +SKIP
     >>> smoothed = s.smooth()                 # doctest: +SKIP  (same rows, smoothed)
 
+    ``filt``: the :class:`gyrofilter.GyroFilter` to smooth, before its first sample.
     The filter is fed as usual (``update()`` or ``filter()``, in chunks of any size);
     :meth:`smooth` returns one row per output row the filter produced so far, in deg/s. It
     needs the adaptive Kalman stage (``kalman_noise="adaptive"``: presets ``recommended`` and
@@ -120,7 +121,8 @@ class Smoother:
 
 def combine(x_f, p_f, x_b, p_b):
     """Two-filter combination (Fraser & Potter 1969): the inverse-variance weighted mean of the
-    forward posterior (x_f, P_f) and the backward prior (x_b, P_b), elementwise."""
+    forward posterior (``x_f`` deg/s, variance ``p_f`` (deg/s)^2) and the backward prior (``x_b``,
+    ``p_b``), elementwise: x = w x_f + (1 - w) x_b, w = p_b / (p_f + p_b)."""
     w = p_b / (p_f + p_b)
     return w * x_f + (1.0 - w) * x_b
 
@@ -131,7 +133,9 @@ def smooth(samples_dps, sample_rate_hz, calibration_s=None, *, temp_c=None, pres
 
     The rows are those of ``GyroFilter(sample_rate_hz, calibration_s, preset=..., **settings)
     .filter(samples_dps)`` (one per complete block after the calibration), smoothed by
-    :class:`Smoother`. Arguments as for :class:`gyrofilter.GyroFilter` and its ``filter``.
+    :class:`Smoother`. ``sample_rate_hz`` (Hz), ``calibration_s`` (s), ``preset``,
+    ``calibration`` and ``settings`` as for :class:`gyrofilter.GyroFilter`; ``temp_c``: N
+    temperatures (deg C) when the settings compensate temperature, as for its ``filter``.
     """
     from .pipeline import GyroFilter
 

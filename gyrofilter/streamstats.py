@@ -19,7 +19,8 @@ import numpy as np
 
 
 class RunningMoments:
-    """Count, mean and sample standard deviation of the rows added so far (per column)."""
+    """Count, mean and sample standard deviation of the rows added so far (per column of
+    ``n_columns``)."""
 
     def __init__(self, n_columns):
         self.count = 0
@@ -52,7 +53,8 @@ class RunningMoments:
 
 
 class Envelope:
-    """Per-bucket minimum and maximum of a long (t, (k, n_columns)) series (module docstring)."""
+    """Per-bucket minimum and maximum of a long (t, (k, n_columns)) series (module docstring), in
+    at most ``max_buckets`` buckets (an even number >= 2)."""
 
     def __init__(self, n_columns, max_buckets=4000):
         if max_buckets < 2 or max_buckets % 2:
@@ -105,13 +107,15 @@ class Envelope:
 
     @property
     def t_s(self):
-        """Time of each bucket's first row."""
+        """Time of each bucket's first row (s)."""
         return self._t
 
     @property
     def low(self):
+        """Per-bucket minimum, (buckets, n_columns)."""
         return self._lo
 
     @property
     def high(self):
+        """Per-bucket maximum, (buckets, n_columns)."""
         return self._hi

@@ -21,9 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SettingsError
-from .units import plain
-
-AXES = ("x", "y", "z")
+from .units import AXES, plain
 
 
 def _coefficients(coefficient_dps_per_c):
@@ -34,7 +32,11 @@ def _coefficients(coefficient_dps_per_c):
 
 
 def compensate(gyro_dps, temp_c, coefficient_dps_per_c, reference_temp_c):
-    """y = x - c (T - T0) per axis. ``gyro_dps`` (N, 3) or (3,), ``temp_c`` (N,) or scalar, c scalar or 3 values."""
+    """y = x - c (T - T0) per axis, in deg/s.
+
+    ``gyro_dps``: x, (N, 3) or (3,) in deg/s; ``temp_c``: T, (N,) or a scalar, deg C;
+    ``coefficient_dps_per_c``: c, one value or 3 (deg/s per deg C); ``reference_temp_c``: T0 (deg C).
+    """
     x = np.asarray(gyro_dps, dtype=float)
     t = np.asarray(temp_c, dtype=float)
     if x.shape[-1:] != (3,):
@@ -61,7 +63,7 @@ def coefficients_from_model(model: dict):
 def fit_coefficient(gyro_dps, temp_c):
     """Least-squares slope c per axis of a static record: x = b + c (T - mean T) + noise.
 
-    Returns (c (3,), standard error (3,)). Meaningless unless the temperature actually varied
+    ``gyro_dps``: x, (N, 3) in deg/s; ``temp_c``: T, (N,) in deg C. Returns (c (3,), standard error (3,)). Meaningless unless the temperature actually varied
     (raises when its spread is below one 0.1 C step).
     """
     x = np.asarray(gyro_dps, dtype=float)

@@ -11,22 +11,26 @@ import numpy as np
 from .errors import SettingsError
 
 DEG_PER_RAD = 180.0 / math.pi
+AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
 
 
-def check_sample_rate_hz(value, name="sample_rate_hz"):
-    """``value`` as a float when it is a finite rate in (0, MAX_SAMPLE_RATE_HZ] Hz, else SettingsError.
+def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
+    """``value`` as a float when it is a finite rate in (0, MAX_SAMPLE_RATE_HZ] Hz, else ``error``.
 
-    The one check of a sample rate: a bool, a string, NaN, infinity, zero, a negative number or
-    an implausibly high rate (which would size buffers beyond memory) names ``name`` and the value.
+    The one check of a sample rate, used by every module that takes one: a bool, a string, NaN,
+    infinity, zero, a negative number or an implausibly high rate (which would size buffers
+    beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
+    :class:`~gyrofilter.errors.RecordingError` for a file's header) with a message that names
+    ``name`` (the keyword, option or header key, with its file if any) and the value.
     """
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     if ok:
         value = float(value)
         ok = math.isfinite(value) and 0 < value <= MAX_SAMPLE_RATE_HZ
     if not ok:
-        raise SettingsError(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
+        raise error(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
     return value
 
 
@@ -64,7 +68,8 @@ def _python(value):
 
 
 def to_dps(values, unit, lsb_per_dps=None):
-    """Convert angular rate ``values`` from ``unit`` ('dps', 'rad/s' or 'lsb') to deg/s."""
+    """Convert angular rate ``values`` from ``unit`` ('dps', 'rad/s' or 'lsb') to deg/s;
+    ``lsb_per_dps`` (LSB per deg/s, > 0) is needed for 'lsb'."""
     values = np.asarray(values, dtype=float)
     if unit == "dps":
         return values
@@ -78,7 +83,8 @@ def to_dps(values, unit, lsb_per_dps=None):
 
 
 def from_dps(values_dps, unit, lsb_per_dps=None):
-    """Inverse of :func:`to_dps` (no rounding: 'lsb' values come back as floats)."""
+    """Inverse of :func:`to_dps`: ``values_dps`` (deg/s) in ``unit``, with ``lsb_per_dps`` for
+    'lsb' (no rounding: 'lsb' values come back as floats)."""
     values_dps = np.asarray(values_dps, dtype=float)
     if unit == "dps":
         return values_dps

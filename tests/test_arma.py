@@ -8,7 +8,7 @@ import pytest
 pytest.importorskip("statsmodels")
 pytest.importorskip("scipy")
 
-from gyrofilter import arma  # noqa: E402
+from gyrofilter.analysis import arma  # noqa: E402
 from gyrofilter.errors import GyroFilterError  # noqa: E402
 
 PHI, THETA, SIGMA = 0.9, 0.5, 0.1

@@ -116,3 +116,40 @@ def test_bad_sample_changes_nothing():
         rows_bad.append(bad.update(tuple(sample)))
     assert rows_bad == rows_good
     assert all(np.isfinite(good.bias_dps)) and bad.bias_dps == good.bias_dps
+
+
+@pytest.mark.parametrize("size", [1, 3, 5, 7, 64, N])
+def test_filter_timed_stamps_each_row_with_its_blocks_last_sample(size):
+    """t of row k = t of input sample 200 + (k + 1) L - 1, whatever the chunking (uneven times, so
+    an off-by-one sample shows)."""
+    x, _ = _signal(3)
+    t_s = np.cumsum(np.linspace(0.009, 0.011, N))
+    f = GyroFilter(RATE_HZ, preset="paper")
+    assert f.first_block_index is None
+    got_t, got = [], []
+    for i in range(0, N, size):
+        t_rows, rows = f.filter_timed(x[i : i + size], t_s[i : i + size])
+        assert len(t_rows) == len(rows)
+        got_t.extend(t_rows)
+        got.extend(rows)
+    np.testing.assert_array_equal(np.array(got), GyroFilter(RATE_HZ, preset="paper").filter(x))
+    np.testing.assert_array_equal(got_t, t_s[200 + 5 * np.arange(len(got)) + 4])
+    assert f.first_block_index == 200
+
+
+def test_first_block_index_follows_a_calibration_retry():
+    """A first window that moved is refused: the blocks start after the second window (400)."""
+    x = 0.3 + 0.05 * np.random.default_rng(5).standard_normal((1000, 3))
+    x[50:60] += 50.0  # a jolt in the first calibration window
+    f = GyroFilter(RATE_HZ, preset="paper", calibration_retry_s=4.0)
+    rows = f.filter(x[:700])
+    assert f.first_block_index == 400 and len(rows) == 60
+    np.testing.assert_array_equal(f.block_end_indices(len(rows)), 400 + 5 * np.arange(60) + 4)
+
+
+def test_filter_timed_refuses_times_of_another_length_before_filtering():
+    x, _ = _signal(1)
+    f = GyroFilter(RATE_HZ)
+    with pytest.raises(ValueError, match=r"t_s must have shape \(720,\)"):
+        f.filter_timed(x, np.arange(719.0))
+    assert f.samples_in == 0

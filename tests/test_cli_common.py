@@ -62,3 +62,13 @@ def test_replacing_makes_missing_folders_and_removes_them_on_failure(tmp_path):
     with common.replacing(str(target)) as tmp:
         open(tmp, "w").write("whole")
     assert target.read_text() == "whole" and os.listdir(target.parent) == ["out.json"]
+
+
+@pytest.mark.parametrize("command, old", [("record", "--sample-rate"), ("run", "--sample-rate"), ("simulate", "--rate")])
+def test_sample_rate_option_has_one_spelling_and_keeps_the_old_one(command, old):
+    from gyrofilter.cli import build_parser
+
+    for spelling in ("--sample-rate-hz", old):
+        extra = ["--model", "m.json", "--duration", "1", "--out", "o.csv"] if command == "simulate" else ["--source", "sim", "--out", "o.csv"]
+        args = build_parser(command).parse_args([command, *extra, spelling, "250"])
+        assert args.sample_rate_hz == 250.0 and args.sample_rate_hz_option == spelling

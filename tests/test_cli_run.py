@@ -227,6 +227,7 @@ def test_run_on_a_serial_port_writes_the_rows_replay_writes(tmp_path, capsys):
 # ------------------------------------------------------------------------------ paced replay
 
 
+@pytest.mark.slow
 def test_run_on_a_paced_replay_writes_the_rows_replay_writes(tmp_path, capsys):
     """A real MPU6050 log (100 Hz) with a gap of 25 samples at 4 s (t jumps), paced 1.5x: a read
     every 20 ms of what is due, about 3 samples; rows after the gap keep the file's t."""

@@ -8,7 +8,7 @@ import pytest
 
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
-from gyrofilter.simulate import simulate
+from gyrofilter.sim.simulate import simulate
 from support import REPO
 
 EXAMPLES = REPO / "examples" / "models"
@@ -54,6 +54,16 @@ def test_cli_rate_override_and_plain_csv(tmp_path):
     rec = read_recording(out)
     assert rec.sample_rate_hz == 200.0 and len(rec) == 400
     assert out.read_text().startswith("# gyrofilter-recording: 1\n")
+
+
+@pytest.mark.parametrize("spelling", ["--sample-rate-hz", "--rate"])
+def test_cli_sample_rate_spelling_and_its_old_alias(tmp_path, capsys, spelling):
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "50", "--out", str(out)]) == 0
+    assert read_recording(out).sample_rate_hz == 50.0
+    assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "inf", "--out", str(tmp_path / "o.csv")]) == 2
+    assert f"{spelling} must be a number of Hz in (0, 100000], got inf" in capsys.readouterr().err
 
 
 def test_cli_accepts_a_gap_report_with_extended_model(tmp_path):
@@ -147,7 +157,7 @@ def test_cli_refuses_to_overwrite_and_never_writes_onto_the_model(tmp_path, caps
 
 
 def test_cli_failure_leaves_no_file_and_a_rerun_works(tmp_path, capsys, monkeypatch):
-    import gyrofilter.simulate as sim
+    import gyrofilter.sim.simulate as sim
     from gyrofilter.errors import SettingsError
 
     real = sim.simulate_chunks
@@ -175,7 +185,7 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
     import os
     import signal
 
-    import gyrofilter.simulate as sim
+    import gyrofilter.sim.simulate as sim
 
     before = signal.getsignal(getattr(signal, signame))
     real = sim.simulate_chunks

@@ -47,7 +47,7 @@ def test_the_blocker_makes_a_package_unimportable(tmp_path):
     (["allan", str(RECORDING), "--json", "adev.json"], ("scipy",) + OPTIONAL),
     (["gap", str(RECORDING), "--json", "gap.json", "--sims", "6"], OPTIONAL),
     (["simulate", "--model", str(MODEL), "--duration", "20", "--seed", "1", "--out", "sim.csv.gz"], OPTIONAL),
-    (["gap", str(RECORDING), "--out-dir", "fleet", "--sims", "6", "--jobs", "2"], OPTIONAL),
+    (["gap", str(RECORDING), "--fleet", "fleet", "--sims", "6", "--jobs", "2"], OPTIONAL),
 ], ids=["replay", "replay-recommended", "allan", "gap", "simulate", "fleet"])
 def test_core_commands_run_without_the_extras(tmp_path, args, blocked):
     out = _run(args, blocked, tmp_path)
@@ -62,7 +62,7 @@ def test_core_commands_run_without_the_extras(tmp_path, args, blocked):
     (["allan", str(RECORDING), "--plot", "out.png"], "matplotlib"),
     (["arma", str(RECORDING), "--axis", "z"], "statsmodels"),
     (["replay", "--set", "backend=numba"], "numba"),
-    (["allan", str(RECORDING), "--out-dir", "fleet", "--scheduler", "tcp://127.0.0.1:9"], "dask"),
+    (["allan", str(RECORDING), "--fleet", "fleet", "--scheduler", "tcp://127.0.0.1:9"], "dask"),
 ], ids=["replay-plot", "allan-plot", "arma", "numba-backend", "fleet-scheduler"])
 def test_a_command_that_needs_an_extra_names_it_in_one_line(tmp_path, args, package):
     out = _run(args, OPTIONAL, tmp_path)

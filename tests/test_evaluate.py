@@ -1,4 +1,4 @@
-"""Evaluation harness (gyrofilter.evaluate) and the evaluate command."""
+"""Evaluation harness (gyrofilter.evaluation.evaluate) and the evaluate command."""
 import json
 import math
 import os
@@ -6,8 +6,8 @@ import os
 import numpy as np
 import pytest
 
-from gyrofilter import evaluate as E
-from gyrofilter.profiles import get_profile
+from gyrofilter.evaluation import evaluate as E
+from gyrofilter.sim.profiles import get_profile
 from gyrofilter.recording import Recording, write_recording
 
 FS = 100.0
@@ -148,6 +148,7 @@ def test_pareto_front_and_dominance_rules():
     assert not ok and "12.00" in fails[0]
 
 
+@pytest.mark.slow
 def test_evaluate_command_writes_table_json_and_figure(tmp_path, capsys):
     pytest.importorskip("matplotlib")  # the command always draws the Pareto figure
     from gyrofilter.cli import main
@@ -170,9 +171,10 @@ def test_evaluate_command_writes_table_json_and_figure(tmp_path, capsys):
     assert main(["evaluate", "--recordings", str(tmp_path / "nope")]) == 2
 
 
+@pytest.mark.slow
 def test_evaluate_command_refuses_existing_outputs_and_a_failure_leaves_none(tmp_path, capsys, monkeypatch):
     pytest.importorskip("matplotlib")
-    from gyrofilter import evaluate as E
+    from gyrofilter.evaluation import evaluate as E
     from gyrofilter.cli import main
 
     out = tmp_path / "out"

@@ -1,18 +1,19 @@
-"""A fleet run (``allan``/``gap`` with ``--out-dir``): the same results on every backend, a
-failing file in its own row, and the flags catching a unit with a hidden defect (gyrofilter/fleet.py).
+"""A fleet run (``allan``/``gap`` with ``--fleet DIR``): the same results on every backend, a
+failing file in its own row, and the flags catching a unit with a hidden defect (gyrofilter/analysis/fleet.py).
 """
 import csv
 import json
 import os
+import re
 
 import numpy as np
 import pytest
 
-from gyrofilter import fleet
+from gyrofilter.analysis import fleet
 from gyrofilter.cli import main
 from gyrofilter.cli.batch import expand
 from gyrofilter.recording import write_recording
-from gyrofilter.simulate import simulate
+from gyrofilter.sim.simulate import simulate
 
 #: per-axis white noise of the simulated units (the 449-s MPU6050 recording), deg/s/sqrt(Hz)
 NOMINAL_ARW = {"x": 0.0075, "y": 0.011, "z": 0.0093}
@@ -50,7 +51,7 @@ def flagged(paths, settings):
     names = fleet.unit_names(paths)
     rows = fleet.fleet_rows(names, [fleet.analyse_recording(p, settings) for p in paths])
     fleet.flag_units(rows)
-    return {(r["unit"], r["axis"]): r["flags"] for r in rows if r["flags"]}
+    return {(r["unit"], r["axis"]): r["flag"] for r in rows if r["flag"]}
 
 
 def _check_only_the_defect(found, bad, axis, what):
@@ -58,7 +59,7 @@ def _check_only_the_defect(found, bad, axis, what):
     assert [f["what"] for f in found[(f"unit{bad:02d}", axis)]] == [what]
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3, pytest.param(4, marks=pytest.mark.slow), pytest.param(5, marks=pytest.mark.slow),
+@pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow), pytest.param(3, marks=pytest.mark.slow), pytest.param(4, marks=pytest.mark.slow), pytest.param(5, marks=pytest.mark.slow),
                                   pytest.param(6, marks=pytest.mark.slow), pytest.param(7, marks=pytest.mark.slow)])
 def test_the_unit_with_a_larger_b_and_only_it_is_flagged(tmp_path, seed):
     paths, bad, axis = write_fleet(tmp_path, seed, "b")
@@ -67,7 +68,7 @@ def test_the_unit_with_a_larger_b_and_only_it_is_flagged(tmp_path, seed):
     assert found[(f"unit{bad:02d}", axis)][0]["direction"] == "high"
 
 
-@pytest.mark.parametrize("seed", [11, pytest.param(12, marks=pytest.mark.slow), pytest.param(13, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("seed", [pytest.param(11, marks=pytest.mark.slow), pytest.param(12, marks=pytest.mark.slow), pytest.param(13, marks=pytest.mark.slow)])
 def test_the_unit_with_a_spectral_line_and_only_it_is_flagged(tmp_path, seed):
     paths, bad, axis = write_fleet(tmp_path, seed, "line", duration_s=300.0)
     found = flagged(paths, fleet.FleetSettings("gap", sims=12))
@@ -88,7 +89,7 @@ def test_a_clean_fleet_has_no_flags(tmp_path):
 
 def _row(unit, axis="x", n=0.01, n_rel=0.01, b=None, b_upper=0.002, findings=(), d_before=None):
     row = dict.fromkeys(fleet.COLUMNS)
-    row.update(unit=unit, axis=axis, status="ok", flags=[], findings=list(findings),
+    row.update(unit=unit, axis=axis, status="ok", flag=[], findings=list(findings),
                d_before=d_before if d_before is not None else (5.0 if findings else 1.0),
                arw_dps_per_sqrt_hz=n, arw_dps_per_sqrt_hz_low=n * (1 - n_rel), arw_dps_per_sqrt_hz_high=n * (1 + n_rel),
                bias_instability_dps=b, bias_instability_dps_upper=None if b else b_upper)
@@ -101,23 +102,23 @@ def test_flag_rule_high_and_low_n_against_median_and_mad():
     ns = [0.0100, 0.0104, 0.0097, 0.0102, 0.0099, 0.0180, 0.0050]
     rows = [_row(f"u{i}", n=n) for i, n in enumerate(ns)]
     stats = fleet.flag_units(rows)
-    assert [(r["unit"], f["what"], f["direction"]) for r in rows for f in r["flags"]] == [("u5", "N", "high"), ("u6", "N", "low")]
+    assert [(r["unit"], f["what"], f["direction"]) for r in rows for f in r["flag"]] == [("u5", "N", "high"), ("u6", "N", "low")]
     entry = next(s for s in stats if s["axis"] == "x" and s["what"] == "N")
     assert entry["median"] == pytest.approx(0.0100)
     assert entry["spread"] == fleet.MIN_SPREAD_LN  # these units agree within 10 %: the floor holds
     # the near end of the interval decides: the same 0.0180 with a +-45 % interval is not flagged
     rows = [_row(f"u{i}", n=n, n_rel=0.45 if i == 5 else 0.01) for i, n in enumerate(ns)]
     fleet.flag_units(rows)
-    assert [r["unit"] for r in rows if r["flags"]] == ["u6"]
+    assert [r["unit"] for r in rows if r["flag"]] == ["u6"]
 
 
 def test_an_unresolved_b_is_never_flagged_and_too_few_units_are_not_compared():
     rows = [_row(f"u{i}", b_upper=u) for i, u in enumerate([0.002, 0.0021, 0.0019, 0.0022, 0.05])]
     fleet.flag_units(rows)
-    assert not any(r["flags"] for r in rows)  # an upper bound says only "at most"
+    assert not any(r["flag"] for r in rows)  # an upper bound says only "at most"
     rows = [_row(f"u{i}", n=n, b=b, b_upper=0.002) for i, (n, b) in enumerate([(0.01, None), (0.0101, None), (0.1, 0.05)])]
     stats = fleet.flag_units(rows)
-    assert not any(r["flags"] for r in rows)
+    assert not any(r["flag"] for r in rows)
     assert all(not s["compared"] for s in stats if s["axis"] == "x")
 
 
@@ -127,13 +128,13 @@ def test_a_finding_most_units_share_is_not_flagged_and_a_rare_one_is():
     rows = [_row(f"u{i}", axis="z", findings=[line] + ([step] if i == 2 else [])) for i in range(3)]
     rows += [_row("u3", axis="z"), _row("u4", axis="z", findings=[line])]
     fleet.flag_units(rows)
-    assert [(r["unit"], [f["what"] for f in r["flags"]]) for r in rows if r["flags"]] == [("u2", ["bias_step"])]
+    assert [(r["unit"], [f["what"] for f in r["flag"]]) for r in rows if r["flag"]] == [("u2", ["bias_step"])]
     # a rare finding where the baseline already explains the axis (D below RARE_MIN_D) is no flag
     rows[2] = _row("u2", axis="z", findings=[line, step], d_before=fleet.RARE_MIN_D * 0.99)
     for r in rows:
-        r["flags"] = []
+        r["flag"] = []
     fleet.flag_units(rows)
-    assert not any(r["flags"] for r in rows)
+    assert not any(r["flag"] for r in rows)
 
 
 # ------------------------------------------------------------------------------ names and inputs
@@ -198,7 +199,7 @@ GAP_ARGS = ["--sims", "4", "--progress"]
 def one_worker(small_fleet, tmp_path_factory):
     """The fleet's gap run with --jobs 1: the reference of the other backends."""
     out = tmp_path_factory.mktemp("jobs1")
-    assert main(["gap", *small_fleet, *GAP_ARGS, "--out-dir", str(out), "--jobs", "1"]) == 1  # 1: a file failed
+    assert main(["gap", *small_fleet, *GAP_ARGS, "--fleet", str(out), "--jobs", "1"]) == 0  # 0 although a file failed
     return out
 
 
@@ -209,12 +210,12 @@ def _top(small_fleet):
 
 def test_the_table_has_a_row_per_recording_and_axis_in_input_order(small_fleet, one_worker):
     assert [(r["unit"], r["axis"], r["status"]) for r in _table(one_worker)] == \
-        [(f"{_top(small_fleet)}-unit0", a, "ok") for a in "xyz"] + [("unit1", a, "ok") for a in "xyz"] + [("broken", "", "failed")] + \
+        [(f"{_top(small_fleet)}-unit0", a, "ok") for a in "xyz"] + [("unit1", a, "ok") for a in "xyz"] + [("broken", "", f"{small_fleet[2]}: line 6: column 'gy' is not a number: 'x'")] + \
         [("sub-unit0", a, "ok") for a in "xyz"]
 
 
 def test_two_worker_processes_give_the_results_of_one(small_fleet, one_worker, tmp_path, capsys):
-    assert main(["gap", *small_fleet, *GAP_ARGS, "--out-dir", str(tmp_path), "--jobs", "2"]) == 1
+    assert main(["gap", *small_fleet, *GAP_ARGS, "--out-dir", str(tmp_path), "--jobs", "2"]) == 0  # --out-dir: the first spelling
     assert _table(tmp_path) == _table(one_worker)
     assert _reports(tmp_path) == _reports(one_worker)
     err = capsys.readouterr().err
@@ -224,8 +225,8 @@ def test_two_worker_processes_give_the_results_of_one(small_fleet, one_worker, t
 def test_a_dask_cluster_of_two_workers_gives_the_results_of_one_worker(small_fleet, one_worker, tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-        assert main(["gap", *small_fleet, *GAP_ARGS, "--out-dir", str(tmp_path), "--scheduler",
-                     cluster.scheduler_address]) == 1
+        assert main(["gap", *small_fleet, *GAP_ARGS, "--fleet", str(tmp_path), "--scheduler",
+                     cluster.scheduler_address]) == 0
     assert _table(tmp_path) == _table(one_worker)
     assert _reports(tmp_path) == _reports(one_worker)
     assert f"on the Dask cluster at {cluster.scheduler_address}" in capsys.readouterr().err
@@ -234,10 +235,10 @@ def test_a_dask_cluster_of_two_workers_gives_the_results_of_one_worker(small_fle
 def test_a_failing_file_is_its_own_row_and_the_rest_go_on(small_fleet, tmp_path, capsys):
     missing = str(tmp_path / "missing.csv")
     out = tmp_path / "out"
-    assert main(["allan", *small_fleet, missing, str(tmp_path / "nothing*.csv"), "--out-dir", str(out), "--jobs", "2"]) == 1
+    assert main(["allan", *small_fleet, missing, str(tmp_path / "nothing*.csv"), "--fleet", str(out), "--jobs", "2"]) == 0
     stdout = capsys.readouterr().out
     rows = _table(out)
-    failed = {r["recording"]: r["reason"] for r in rows if r["status"] == "failed"}
+    failed = {r["recording"]: r["status"] for r in rows if r["status"] != "ok"}
     assert failed == {small_fleet[2]: f"{small_fleet[2]}: line 6: column 'gy' is not a number: 'x'",
                       missing: f"{missing}: cannot read: No such file or directory",
                       str(tmp_path / "nothing*.csv"): f"{tmp_path / 'nothing*.csv'}: no file matches"}
@@ -250,21 +251,21 @@ def test_a_failing_file_is_its_own_row_and_the_rest_go_on(small_fleet, tmp_path,
 
 def test_fleet_reports_equal_the_single_file_commands(small_fleet, tmp_path):
     assert main(["allan", small_fleet[0], "--json", str(tmp_path / "one.json"), "--kalibr", str(tmp_path / "one.yaml")]) == 0
-    assert main(["allan", small_fleet[0], small_fleet[1], "--out-dir", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    assert main(["allan", small_fleet[0], small_fleet[1], "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
     assert (tmp_path / "f" / "unit0.allan.json").read_bytes() == (tmp_path / "one.json").read_bytes()
     assert (tmp_path / "f" / "unit0.imu.yaml").read_bytes() == (tmp_path / "one.yaml").read_bytes()
 
 
 @pytest.mark.parametrize("args,message", [
-    (["allan", "A", "B"], "2 recordings: give --out-dir DIR"),
-    (["allan", "A", "--jobs", "2"], "--jobs works on a fleet: give --out-dir DIR"),
+    (["allan", "A", "B"], "2 recordings: give --fleet DIR"),
+    (["allan", "A", "--jobs", "2"], "--jobs works on a fleet: give --fleet DIR"),
     (["gap", "A", "--scheduler", "tcp://127.0.0.1:1"], "--scheduler works on a fleet"),
-    (["gap", "A"], "--json OUT.json is required (or --out-dir DIR"),
-    (["allan", "A", "B", "--out-dir", "OUT", "--json", "x.json"], "--json names one file"),
-    (["gap", "A", "B", "--out-dir", "OUT", "--report", "rep"], "--report names one file"),
-    (["allan", "A", "B", "--out-dir", "OUT", "--jobs", "0"], "--jobs must be at least 1"),
-    (["allan", "A", "--out-dir", "A"], "is a file; give a folder"),
-    (["allan", "A", "B", "--out-dir", "OUT", "--jobs", "2", "--scheduler", "tcp://127.0.0.1:1"], "give one"),
+    (["gap", "A"], "--json OUT.json is required (or --fleet DIR"),
+    (["allan", "A", "B", "--fleet", "OUT", "--json", "x.json"], "--json names one file"),
+    (["gap", "A", "B", "--fleet", "OUT", "--report", "rep"], "--report names one file"),
+    (["allan", "A", "B", "--fleet", "OUT", "--jobs", "0"], "--jobs must be at least 1"),
+    (["allan", "A", "--fleet", "A"], "is a file; give a folder"),
+    (["allan", "A", "B", "--fleet", "OUT", "--jobs", "2", "--scheduler", "tcp://127.0.0.1:1"], "give one"),
 ])
 def test_bad_fleet_options_are_one_line_before_any_work(small_fleet, tmp_path, capsys, args, message):
     names = {"A": small_fleet[0], "B": small_fleet[1], "OUT": str(tmp_path / "out")}
@@ -278,10 +279,10 @@ def test_existing_outputs_are_refused_before_any_work(small_fleet, tmp_path, cap
     out = tmp_path / "out"
     out.mkdir()
     (out / "unit1.allan.json").write_text("keep")
-    assert main(["allan", small_fleet[0], small_fleet[1], "--out-dir", str(out)]) == 2
+    assert main(["allan", small_fleet[0], small_fleet[1], "--fleet", str(out)]) == 2
     assert "unit1.allan.json: exists (use --force" in capsys.readouterr().err
     assert sorted(os.listdir(out)) == ["unit1.allan.json"]
-    assert main(["allan", small_fleet[0], small_fleet[1], "--out-dir", str(out), "--force", "--jobs", "1"]) == 0
+    assert main(["allan", small_fleet[0], small_fleet[1], "--fleet", str(out), "--force", "--jobs", "1"]) == 0
     assert (out / "unit1.allan.json").read_text() != "keep"
 
 
@@ -292,3 +293,18 @@ def test_a_rows_warnings_are_the_recordings_and_its_own_axis():
     rows = fleet.fleet_rows(["r"], [res])
     assert {r["axis"]: r["warnings"] for r in rows} == {
         "x": ["r.csv: 2 samples lost"], "y": ["r.csv: 2 samples lost"], "z": ["r.csv: 2 samples lost", "axis z: few clusters"]}
+
+
+def test_findings_cell_is_effect_param_value_items_in_full_precision():
+    findings = [{"effect": "sinusoid", "axis": "z", "params": {"frequency_hz": 7.3, "amplitude_dps": 0.051234567891}},
+                {"effect": "bias_step", "axis": "z", "params": {"time_s": 120.0, "size_dps": -0.04}}]
+    items = [re.fullmatch(r"([a-z_]+):([a-z_]+)=(.+)", item).groups() for item in fleet.findings_cell(findings).split(";")]
+    assert [(e, k, float(v)) for e, k, v in items] == [("sinusoid", "frequency_hz", 7.3), ("sinusoid", "amplitude_dps", 0.051234567891),
+                                                      ("bias_step", "time_s", 120.0), ("bias_step", "size_dps", -0.04)]
+    assert fleet.findings_cell([]) == ""
+
+
+def test_a_fleet_where_no_file_could_be_analysed_exits_2_with_its_table(tmp_path, capsys):
+    missing = [str(tmp_path / "a.csv"), str(tmp_path / "b.csv")]
+    assert main(["allan", *missing, "--fleet", str(tmp_path / "out"), "--jobs", "1"]) == 2
+    assert [r["status"] for r in _table(tmp_path / "out")] == [f"{m}: cannot read: No such file or directory" for m in missing]

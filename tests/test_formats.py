@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from gyrofilter.calibration import Calibration
-from gyrofilter.noise_model import JSON_KEY
+from gyrofilter.analysis.noise_model import JSON_KEY
 from gyrofilter.recording import read_recording
-from gyrofilter.simulate import EFFECTS, simulate, validate_model
+from gyrofilter.sim.simulate import EFFECTS, simulate, validate_model
 from gyrofilter.sources import KINDS
 from support import REPO
 
@@ -137,7 +137,7 @@ def test_links_to_formats_md_point_at_its_sections():
 def test_fleet_table_example_has_the_columns_of_the_code():
     import csv
 
-    from gyrofilter.fleet import COLUMNS
+    from gyrofilter.analysis.fleet import COLUMNS
 
     rows = list(csv.reader(example(9, "text").splitlines()))
     assert rows[0] == list(COLUMNS)

@@ -16,12 +16,12 @@ import sys
 import numpy as np
 import pytest
 
-from gyrofilter import detectors as det
-from gyrofilter.gap import analyse_gap, discrepancy, departures
+from gyrofilter.analysis import detectors as det
+from gyrofilter.analysis.gap import analyse_gap, discrepancy, departures
 from gyrofilter.recording import Recording, read_recording, write_recording
-from gyrofilter.simulate import simulate, validate_model
+from gyrofilter.sim.simulate import simulate, validate_model
 
-import gyrofilter.hidden_effects as he
+import gyrofilter.sim.hidden_effects as he
 from support import RECORDINGS
 
 REAL = str(RECORDINGS / "mpu6050_static_449s.csv.gz")
@@ -72,7 +72,7 @@ def test_baseline_fit_recovers_bias_and_white_noise():
 @pytest.mark.slow
 def test_ramp_and_random_walk_are_told_apart():
     """Both raise the long-tau Allan deviation; the decision rules (module docstring of
-    gyrofilter.detectors) must call the ramp a ramp and a random walk a stochastic wander,
+    gyrofilter.analysis.detectors) must call the ramp a ramp and a random walk a stochastic wander,
     never a ramp or step. (Whether one 30-minute random-walk path reverts enough to look
     like Gauss-Markov is a property of the path; the battery measures how often.)"""
     ramp = he.draw_case(31, effect="rate_ramp", duration_s=1800.0)
@@ -222,7 +222,7 @@ def test_battery_rates(scale, duration):
 
 
 def test_a_statistic_that_cannot_run_gives_no_findings_not_a_crash(monkeypatch):
-    from gyrofilter import gap
+    from gyrofilter.analysis import gap
 
     rec = Recording.from_dps(np.random.default_rng(1).normal(0, 0.1, (5000, 3)), 100.0)
     monkeypatch.setattr(gap.det, "detect_slow", lambda *a, **k: (_ for _ in ()).throw(ValueError("boom")))
@@ -271,7 +271,7 @@ def test_cli_refuses_existing_outputs_and_never_writes_onto_the_recording(tmp_pa
 
 def test_cli_failure_leaves_no_output(tmp_path, capsys, monkeypatch):
     pytest.importorskip("matplotlib")
-    import gyrofilter.gap_report as gr
+    import gyrofilter.analysis.gap_report as gr
     from gyrofilter.cli import main
     from gyrofilter.errors import GyroFilterError
 

@@ -7,10 +7,10 @@ import re
 import numpy as np
 import pytest
 
-from gyrofilter import detectors as det
-from gyrofilter import gap
-from gyrofilter.allan import overlapping_adev
-from gyrofilter.simulate import simulate, simulate_axis_dps
+from gyrofilter.analysis import detectors as det
+from gyrofilter.analysis import gap
+from gyrofilter.analysis.allan import overlapping_adev
+from gyrofilter.sim.simulate import simulate, simulate_axis_dps
 
 MODEL = {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0,
          "temperature": {"start_c": 25.0, "end_c": 31.0, "tau_s": 200.0, "noise_c": 0.01},

@@ -1,14 +1,14 @@
-"""GMWM-style composite fit (gyrofilter.gmwm): the wavelet variance, its closed forms, recovery of
+"""GMWM-style composite fit (gyrofilter.analysis.gmwm): the wavelet variance, its closed forms, recovery of
 simulated composite processes (seeded, several seeds) and the comparison with the Allan NNLS fit."""
 import math
 
 import numpy as np
 import pytest
 
-from gyrofilter import gmwm
-from gyrofilter.allan import overlapping_adev
-from gyrofilter.noise_model import characterise_axis
-from gyrofilter.simulate import simulate
+from gyrofilter.analysis import gmwm
+from gyrofilter.analysis.allan import overlapping_adev
+from gyrofilter.analysis.noise_model import characterise_axis
+from gyrofilter.sim.simulate import simulate
 from support import REPO
 
 FS = 100.0
@@ -44,7 +44,7 @@ def test_closed_forms_match_simulated_terms(effect, closed_form):
     assert np.all(np.abs(ratio - 1) < 0.2), ratio
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow), pytest.param(3, marks=pytest.mark.slow)])
 def test_recovers_white_gauss_markov_and_random_walk(seed):
     arw, sigma, tau, k = 0.01, 0.005, 20.0, 2e-4
     x = series([{"effect": "gauss_markov", "sigma_dps": sigma, "tau_s": tau},
@@ -57,7 +57,7 @@ def test_recovers_white_gauss_markov_and_random_walk(seed):
     assert abs(best.rrw_dps_per_sqrt_s / k - 1) < 0.4
 
 
-@pytest.mark.parametrize("seed", [4, 5])
+@pytest.mark.parametrize("seed", [4, pytest.param(5, marks=pytest.mark.slow)])
 def test_two_gauss_markov_terms_are_told_apart(seed):
     effects = [{"effect": "gauss_markov", "sigma_dps": 0.02, "tau_s": 0.5},
                {"effect": "gauss_markov", "sigma_dps": 0.004, "tau_s": 60.0}]
@@ -96,6 +96,7 @@ def test_simulated_wv_of_a_model_is_its_closed_form():
     assert np.all(np.abs(wv.wv_dps2[keep] / theory[keep] - 1) < 0.15)
 
 
+@pytest.mark.slow
 def test_compare_tool_rows_on_a_simulated_record():
     """tools/gmwm_compare.py's stage on a short simulated record with a Gauss-Markov bias on z:
     every distance is a finite number and the composite fit finds the Gauss-Markov term."""

@@ -1,9 +1,10 @@
 """The presets: the default is the best measured one on the held-out half of the evaluation."""
 
 import numpy as np
+import pytest
 
 from gyrofilter import GyroFilter
-from gyrofilter import evaluate as E
+from gyrofilter.evaluation import evaluate as E
 from gyrofilter.presets import DEFAULT_PRESET, PRESETS
 from support import RECORDINGS
 
@@ -20,6 +21,7 @@ def test_the_default_preset_is_recommended_and_recommended_is_adaptive_kalman():
             assert s.guard_blocks > 0, f"Kalman preset {name} without a divergence guard"
 
 
+@pytest.mark.slow
 def test_the_default_is_no_worse_than_any_other_preset_on_the_held_out_half():
     split = E.HOLDOUT_SPLIT
     specs = [E.FilterSpec(name, "candidate", "", E.gyrofilter_run(name)) for name in PRESETS]

@@ -1,11 +1,11 @@
-"""Synthetic motion profiles (gyrofilter.profiles)."""
+"""Synthetic motion profiles (gyrofilter.sim.profiles)."""
 import math
 
 import numpy as np
 import pytest
 
 from gyrofilter.errors import SettingsError
-from gyrofilter.profiles import PROFILES, get_profile, profile_samples_dps
+from gyrofilter.sim.profiles import PROFILES, get_profile, profile_samples_dps
 
 
 def test_paper001_profile_values_by_hand():

@@ -15,7 +15,7 @@ import pytest
 
 from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, read_recording, write_recording
-from gyrofilter.simulate import simulate
+from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources.simulated import DEFAULT_MODEL
 from support import RECORDINGS, REPO
 
@@ -48,8 +48,11 @@ def expected():
     return simulate(DEFAULT_MODEL, SIM_SECONDS, sample_rate_hz=RATE_HZ, seed=21)
 
 
-@pytest.mark.parametrize("sig, name", [(signal.SIGINT, "SIGINT"), (signal.SIGTERM, "SIGTERM"), (signal.SIGKILL, "SIGKILL")])
-@pytest.mark.parametrize("suffix", [".csv.gz", ".csv"])
+@pytest.mark.parametrize("sig, name, suffix", [
+    (signal.SIGINT, "SIGINT", ".csv.gz"), (signal.SIGKILL, "SIGKILL", ".csv"),  # the other four pairs are slow
+    *(pytest.param(sig, name, suffix, marks=pytest.mark.slow) for sig, name, suffix in [
+        (signal.SIGTERM, "SIGTERM", ".csv.gz"), (signal.SIGKILL, "SIGKILL", ".csv.gz"),
+        (signal.SIGINT, "SIGINT", ".csv"), (signal.SIGTERM, "SIGTERM", ".csv")])])
 def test_record_stopped_by_a_signal_keeps_a_readable_exact_prefix(tmp_path, expected, sig, name, suffix):
     out = tmp_path / f"rec{suffix}"
     proc = start_record(f"sim:seed=21,rate={RATE_HZ:g},duration={SIM_SECONDS:g}", out)

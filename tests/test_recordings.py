@@ -162,6 +162,7 @@ def _converter():
     return module
 
 
+@pytest.mark.slow
 @needs_shared
 def test_converter_reproduces_the_shipped_files_byte_for_byte(tmp_path, capsys):
     assert _converter().main(["--shared", str(SHARED_DATA.parent), "--out", str(tmp_path)]) == 0

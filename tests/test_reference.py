@@ -1,4 +1,4 @@
-"""Reference angular rate from quaternions (gyrofilter.reference)."""
+"""Reference angular rate from quaternions (gyrofilter.evaluation.reference)."""
 import math
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import Recording
-from gyrofilter.reference import (
+from gyrofilter.evaluation.reference import (
     block_mean_masked,
     body_rate_from_quaternions,
     estimate_time_offset_s,

@@ -1,7 +1,7 @@
 """Tests of the gyro simulator: every term has the statistics its docstring claims.
 
 Oracles: closed forms (deterministic terms, AR(1) Allan variance), the Allan deviation of
-gyrofilter.allan (itself tested against allantools), and sample statistics with tolerances
+gyrofilter.analysis.allan (itself tested against allantools), and sample statistics with tolerances
 of several standard errors. All random tests are seeded.
 """
 import json
@@ -10,11 +10,11 @@ import math
 import numpy as np
 import pytest
 
-from gyrofilter import noise_terms as nt
-from gyrofilter.allan import overlapping_adev
+from gyrofilter.sim import noise_terms as nt
+from gyrofilter.analysis.allan import overlapping_adev
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording, write_recording
-from gyrofilter.simulate import EFFECTS, simulate, simulate_chunks, validate_model
+from gyrofilter.sim.simulate import EFFECTS, simulate, simulate_chunks, validate_model
 from gyrofilter.units import DEG_PER_RAD
 
 

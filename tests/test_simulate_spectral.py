@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from scipy.signal import welch
 
-from gyrofilter import noise_terms as nt
-from gyrofilter.allan import overlapping_adev
+from gyrofilter.sim import noise_terms as nt
+from gyrofilter.analysis.allan import overlapping_adev
 from gyrofilter.errors import SettingsError
-from gyrofilter.simulate import simulate, validate_model
+from gyrofilter.sim.simulate import simulate, validate_model
 
 
 def one_axis(effects, fs=200.0, arw=0.0):

@@ -4,7 +4,7 @@ import pytest
 
 from gyrofilter import GyroFilter
 from gyrofilter.errors import SettingsError
-from gyrofilter.profiles import get_profile
+from gyrofilter.sim.profiles import get_profile
 from gyrofilter.recording import read_recording
 from gyrofilter import smoother
 from gyrofilter.smoother import Smoother, combine, smooth

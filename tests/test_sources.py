@@ -227,7 +227,7 @@ def test_replay_realtime_hands_out_only_the_samples_that_are_due(tmp_path):
 
 
 def test_simulated_source_equals_the_simulator_whatever_the_pacing():
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
     from gyrofilter.sources.simulated import DEFAULT_MODEL, SimulatedSource
 
     rec = simulate(DEFAULT_MODEL, 3.0, sample_rate_hz=200.0, seed=11)

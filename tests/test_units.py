@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 from gyrofilter import GyroFilter
-from gyrofilter.errors import GyroFilterError
+from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.recording import read_recording
-from gyrofilter.reference import body_rate_from_quaternions
+from gyrofilter.evaluation.reference import body_rate_from_quaternions
 from gyrofilter.tempcomp import compensate
 from gyrofilter.units import check_sample_rate_hz, from_dps, json_ready, plain, to_dps
 
@@ -64,3 +64,43 @@ def test_json_ready_gives_what_strict_json_takes():
     value = {1: (np.float64(np.nan), np.inf, -np.inf), "a": np.arange(2), "b": [np.float32(0.5), np.bool_(True), None, "s"]}
     text = json.dumps(json_ready(value), allow_nan=False)
     assert json.loads(text) == {"1": [None, None, None], "a": [0, 1], "b": [0.5, True, None, "s"]}
+
+
+@pytest.mark.parametrize("value, shown", [(float("inf"), "inf"), (-float("inf"), "-inf"), (float("nan"), "nan"), (0, "0.0"),
+                                          (0.0, "0.0"), (-100.0, "-100.0"), (np.float64(-2.5), "-2.5"), ("100", "'100'"),
+                                          (True, "True"), (1e6, "1000000.0")])
+def test_check_sample_rate_hz_refuses_with_one_wording_naming_the_value(value, shown):
+    with pytest.raises(SettingsError) as info:
+        check_sample_rate_hz(value, "--sample-rate-hz")
+    assert str(info.value) == f"--sample-rate-hz must be a number of Hz in (0, 100000], got {shown}"
+    assert check_sample_rate_hz(np.int64(100)) == 100.0 and type(check_sample_rate_hz(8000)) is float
+
+
+def _sample_rate_takers():
+    """Every module that takes a sample rate, called with ``rate`` (what each checks first)."""
+    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.analysis.arma import prepare_series
+    from gyrofilter.analysis.bias_kf import BiasKalmanFilter
+    from gyrofilter.sim.profiles import profile_samples_dps
+    from gyrofilter.sim.simulate import validate_model
+    from gyrofilter.sources.mpu6050 import sample_rate_settings
+
+    header = "# gyrofilter-recording: 1\n# sample_rate_hz: {}\n# gyro_unit: dps\ngx,gy,gz\n0,0,0\n"
+    return {
+        "pipeline": lambda rate: GyroFilter(rate),
+        "recording": lambda rate: _read_text(header.format(rate)),
+        "allan": lambda rate: overlapping_adev(np.ones(100), rate),
+        "arma": lambda rate: prepare_series(np.zeros(200), rate),
+        "bias_kf": lambda rate: BiasKalmanFilter(rate),
+        "profiles": lambda rate: profile_samples_dps("steps", rate),
+        "reference": lambda rate: body_rate_from_quaternions(np.tile([1.0, 0, 0, 0], (5, 1)), rate),
+        "simulate": lambda rate: validate_model({"sample_rate_hz": rate}),
+        "mpu6050": lambda rate: sample_rate_settings(rate, 3),
+    }
+
+
+@pytest.mark.parametrize("where", list(_sample_rate_takers()))
+@pytest.mark.parametrize("rate", [float("inf"), float("nan"), 0.0, -1.0])
+def test_every_sample_rate_taker_refuses_it_with_the_one_check(where, rate):
+    with pytest.raises(GyroFilterError, match=r"rate_hz must be a number of Hz in \(0, 100000\], got " + str(rate)):
+        _sample_rate_takers()[where](rate)

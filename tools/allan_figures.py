@@ -26,9 +26,9 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
-from gyrofilter.allan import overlapping_adev  # noqa: E402
-from gyrofilter.noise_model import characterise, convert  # noqa: E402
-from gyrofilter.plots_allan import AXIS_COLOURS, plot_allan, plot_before_after  # noqa: E402
+from gyrofilter.analysis.allan import overlapping_adev  # noqa: E402
+from gyrofilter.analysis.noise_model import characterise, convert  # noqa: E402
+from gyrofilter.analysis.plots_allan import AXIS_COLOURS, plot_allan, plot_before_after  # noqa: E402
 from gyrofilter.recording import read_recording  # noqa: E402
 
 DATASHEET_ARW_DPS_PER_SQRT_HZ = 0.005  # MPU-6000/6050 Product Specification rev 3.4, table 6.1

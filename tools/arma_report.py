@@ -10,8 +10,8 @@ model and the ARMA(1, 1) next to paper 003's x_t - 1.0000 x_{t-1} = a_t - 0.9994
 
 Then which model reproduces the measured overlapping Allan deviation better: the chosen ARMA
 and the ARMA(1, 1), simulated (same length and rate, several seeds, RMS of the deviations), and
-the Allan-based noise model (gyrofilter.noise_model fit: Q/N/B/K/R), simulated through
-gyrofilter.simulate (white noise N, bias instability B, rate random walk K, rate ramp R,
+the Allan-based noise model (gyrofilter.analysis.noise_model fit: Q/N/B/K/R), simulated through
+gyrofilter.sim.simulate (white noise N, bias instability B, rate random walk K, rate ramp R,
 quantisation 1/131 deg/s) over the same seeds. Discrepancy = RMS over tau of
 log10(model ADEV / measured ADEV) (0.01 ~ 2.3 % off).
 """
@@ -25,11 +25,11 @@ import sys
 
 import numpy as np
 
-from gyrofilter import arma
-from gyrofilter.allan import overlapping_adev
-from gyrofilter.noise_model import characterise_axis
+from gyrofilter.analysis import arma
+from gyrofilter.analysis.allan import overlapping_adev
+from gyrofilter.analysis.noise_model import characterise_axis
 from gyrofilter.recording import read_recording
-from gyrofilter.simulate import simulate_dps
+from gyrofilter.sim.simulate import simulate_dps
 
 
 def allan_model_adev(x, fs, lsb_per_dps, seeds, tau):
@@ -209,10 +209,9 @@ def main(argv=None):
 
 def plot(path, results):
     """Measured ADEV vs the three simulated models, for the longest recording of each source."""
-    import matplotlib
+    from gyrofilter.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     names = [n for n in ("mpu6050_static_449s.csv.gz", "mpu6050_static_655s.csv.gz") if any(r["recording"] == n for r in results)]
     if not names:

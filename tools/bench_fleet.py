@@ -4,7 +4,7 @@
 
 Simulates ``--files`` MPU6050-like units of ``--hours`` at 100 Hz (131 LSB per deg/s, white noise
 log-normal around the 449-s recording's, 8 % unit-to-unit; seeded, so ``--data DIR`` can keep and
-reuse them), then times ``gyrofilter COMMAND FILES --out-dir OUT`` end to end in a fresh process
+reuse them), then times ``gyrofilter COMMAND FILES --fleet OUT`` end to end in a fresh process
 (reading, analysis, reports, fleet table): with ``--jobs 1``, with ``--jobs`` = the cores, and with
 ``--scheduler`` on a ``dask.distributed.LocalCluster`` of one single-threaded worker per core
 (started before the clock, its start-up printed apart; needs the ``[cluster]`` extra). Prints
@@ -39,7 +39,7 @@ def unit_model(rng):
 def make_fleet(folder, files, hours):
     """The recordings (written unless there already)."""
     from gyrofilter.recording import write_recording
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
 
     rng = np.random.default_rng(14)
     paths = []
@@ -82,7 +82,7 @@ def main(argv=None):
     p.add_argument("--no-dask", action="store_true", help="skip the LocalCluster run")
     args = p.parse_args(argv)
 
-    from gyrofilter.fleet import default_jobs
+    from gyrofilter.analysis.fleet import default_jobs
 
     cores = default_jobs()
     with tempfile.TemporaryDirectory() as tmp:
@@ -111,7 +111,7 @@ def main(argv=None):
                 best = None
                 for repeat in range(args.repeat):  # the best of the repeats: the least disturbed by other work
                     out = os.path.join(tmp, f"out{len(tables)}_{repeat}")
-                    wall, cpu_s, peak_mb = timed(base + extra + ["--out-dir", out], out + ".log")
+                    wall, cpu_s, peak_mb = timed(base + extra + ["--fleet", out], out + ".log")
                     best = min(best or (wall, cpu_s, peak_mb, out), (wall, cpu_s, peak_mb, out))
                 wall, cpu_s, peak_mb, out = best
                 first = first or wall

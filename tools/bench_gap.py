@@ -5,9 +5,9 @@
 For each record (length@rate in Hz) simulates an MPU6050-like recording (131 LSB per deg/s)
 twice: **with effects** (x: warm-up and colored noise; y: bias instability and spikes; z: a
 sinusoid) and **clean** (bias, white noise and quantization only), and runs
-``gyrofilter.gap.analyse_gap`` with the command's defaults on each, every run in a fresh Python
+``gyrofilter.analysis.gap.analyse_gap`` with the command's defaults on each, every run in a fresh Python
 process, side by side with a baseline in the same process: one overlapping Allan deviation of the
-three axes (``gyrofilter.allan.overlapping_adev``, default taus), the least any Allan-based
+three axes (``gyrofilter.analysis.allan.overlapping_adev``, default taus), the least any Allan-based
 analysis does. Printed per run: wall-clock seconds, the process's peak resident memory (MB;
 ``resource.getrusage``, the simulated record in memory included, as when ``gyrofilter gap``
 has read a file) and the memory of the record alone, the findings, and the 1-minute load
@@ -44,9 +44,9 @@ def child(spec):
     import resource
     import time
 
-    from gyrofilter.allan import overlapping_adev
-    from gyrofilter.gap import analyse_gap
-    from gyrofilter.simulate import simulate
+    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.sim.simulate import simulate
 
     rec = simulate(spec["model"], spec["duration_s"], seed=1)
     record_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

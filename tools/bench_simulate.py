@@ -68,14 +68,14 @@ g = np.round((np.array([-3.3, -3.3, -3.3]) + 0.009 * np.sqrt(fs) * rng.standard_
 seconds = time.perf_counter() - t0
 """,
     "simulate_chunks, baseline model": """
-from gyrofilter.simulate import simulate_chunks
+from gyrofilter.sim.simulate import simulate_chunks
 t0 = time.perf_counter(); n = 0
 for t, g, temp in simulate_chunks(args["model_base"], args["duration"], seed=1):
     n += len(t)
 seconds = time.perf_counter() - t0
 """,
     "simulate_chunks, all effects": """
-from gyrofilter.simulate import simulate_chunks
+from gyrofilter.sim.simulate import simulate_chunks
 t0 = time.perf_counter(); n = 0
 for t, g, temp in simulate_chunks(args["model_all"], args["duration"], seed=1):
     n += len(t)

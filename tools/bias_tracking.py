@@ -8,7 +8,7 @@
    the start-up calibration (first 2 s) and the filter's estimate at the *start* of the phase
    (before it has seen that rest: a prediction) and at its end. Also the RMSE of the rate output
    against the optical reference rate, in motion and at rest.
-2. Simulated long recordings (gyrofilter.simulate, MPU6050-like white noise 0.1 deg/s per
+2. Simulated long recordings (gyrofilter.sim.simulate, MPU6050-like white noise 0.1 deg/s per
    sample at 100 Hz) whose bias drifts: warm-up 25 -> 35 C with 0.02 deg/s/C, a bias random walk
    (K = 0.002 deg/s/sqrt(s)) and a 0.15 deg/s bias step, plus hand-like motion with rest breaks.
    The true bias is the same model simulated without white noise (the simulator's per-term
@@ -27,9 +27,9 @@ import time
 
 import numpy as np
 
-from gyrofilter.bias_kf import BiasKalmanFilter, BiasKFSettings
+from gyrofilter.analysis.bias_kf import BiasKalmanFilter, BiasKFSettings
 from gyrofilter.recording import read_recording
-from gyrofilter.simulate import simulate_dps
+from gyrofilter.sim.simulate import simulate_dps
 
 CAL_S = 2.0
 RMSE_BLOCK_S = 0.1
@@ -37,12 +37,12 @@ SIM_FS = 100.0
 
 
 def arma_settings(x_rest_dps, fs, fallback: BiasKFSettings):
-    """Settings whose bias model is the ARMA(1, 1) of a still stretch (paper 003 via gyrofilter.arma).
+    """Settings whose bias model is the ARMA(1, 1) of a still stretch (paper 003 via gyrofilter.analysis.arma).
 
     Per axis; an axis whose ARMA(1, 1) has no Gauss-Markov decomposition keeps the fallback's model.
     Returns (settings, description).
     """
-    from gyrofilter import arma
+    from gyrofilter.analysis import arma
 
     taus, sigmas, walks, desc = [], [], [], []
     for i, name in enumerate("xyz"):
@@ -74,7 +74,7 @@ def broad_trial(path, settings):
     rec = read_recording(path)
     fs = rec.sample_rate_hz
     gyro = rec.gyro_dps
-    from gyrofilter.reference import reference_from_recording
+    from gyrofilter.evaluation.reference import reference_from_recording
 
     ref = reference_from_recording(rec)
     n_cal = int(round(CAL_S * fs))
@@ -102,7 +102,7 @@ def broad_trial(path, settings):
         })
     # rate RMSE against the optical reference, on 0.1 s block means (the differentiated optical
     # reference is too noisy sample by sample); blocks with an occluded row are skipped
-    from gyrofilter.reference import block_mean_masked
+    from gyrofilter.evaluation.reference import block_mean_masked
 
     L = max(1, int(round(RMSE_BLOCK_S * fs)))
     r = block_mean_masked(ref[n_cal:], L)
@@ -170,10 +170,9 @@ def rms(a):
 
 
 def plot(path, sims, broad):
-    import matplotlib
+    from gyrofilter.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(2, 1, figsize=(10, 7.5))
     ax = axes[0]
@@ -237,7 +236,7 @@ def main(argv=None):
                       f"{row['kf_start'] * to_mrad:.3f} | {row['kf_end'] * to_mrad:.3f} | {row['arma_start'] * to_mrad:.3f} | {row['arma_end'] * to_mrad:.3f} |")
         tot = lambda key: math.sqrt(np.mean([row[key] ** 2 for r in broad for row in r["rows"]])) * to_mrad  # noqa: E731
         print(f"| **RMS over all rest phases** | | | | {tot('startup'):.3f} | {tot('kf_start'):.3f} | {tot('kf_end'):.3f} | {tot('arma_start'):.3f} | {tot('arma_end'):.3f} |")
-        print("\nKF-ARMA: bias model from the ARMA(1, 1) of each trial's first rest phase (gyrofilter.arma):\n")
+        print("\nKF-ARMA: bias model from the ARMA(1, 1) of each trial's first rest phase (gyrofilter.analysis.arma):\n")
         for r in broad:
             print(f"- {r['name']}: {r['arma_desc']}")
         print("\nRate RMSE against the optical reference (deg/s, norm over 3 axes, on 0.1 s block means; blocks with occlusion skipped):\n")

@@ -8,11 +8,11 @@ Output: recordings/broad_<trial>.csv.gz with columns
 - gx, gy, gz: the IMU gyro, unchanged (rad/s, 285.714 Hz = 2000/7 Hz; t = index / fs as upstream).
 - ref_x, ref_y, ref_z: body-frame reference rate in rad/s derived from the optical quaternions by
   the central difference omega_k = rotvec(q_{k-h}^-1 q_{k+h}) fs / (2h), h = 2
-  (:func:`gyrofilter.reference.body_rate_from_quaternions`), delayed by REF_SHIFT_SAMPLES = 1
+  (:func:`gyrofilter.evaluation.reference.body_rate_from_quaternions`), delayed by REF_SHIFT_SAMPLES = 1
   sample so that it lines up with the gyro (see below).
 - ref_valid: 1 where the reference is derivable; 0 where an occlusion (NaN quaternion) lies
   within the difference span or at the ends. Format v1 forbids NaN cells, so the ref_* cells of
-  those rows hold 0 and must be ignored (``gyrofilter.reference.reference_from_recording`` turns
+  those rows hold 0 and must be ignored (``gyrofilter.evaluation.reference.reference_from_recording`` turns
   them back into NaN). No sample is interpolated.
 - movement: upstream flag, 1 during the movement phase, 0 at rest.
 
@@ -39,7 +39,7 @@ import numpy as np
 
 
 from gyrofilter.recording import RecordingWriter
-from gyrofilter.reference import body_rate_from_quaternions, estimate_time_offset_s
+from gyrofilter.evaluation.reference import body_rate_from_quaternions, estimate_time_offset_s
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_SRC = os.path.normpath(os.path.join(HERE, "..", "..", "shared", "data", "broad_omc_reference"))

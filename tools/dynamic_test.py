@@ -6,10 +6,10 @@ Static: per static MPU6050 recording in recordings/ and per axis, std of the raw
 claims 11.5x and 12.6x).
 
 Dynamic (paper 001, section 5): the first 90 s of a real static recording plus the synthetic
-profile of issue 2 item 6 (gyrofilter.profiles "paper001") on every axis; RMSE of the filtered
+profile of issue 2 item 6 (gyrofilter.sim.profiles "paper001") on every axis; RMSE of the filtered
 rows against the truth averaged over the same block of 5 samples, and the worst lag (the shift
 that best aligns a delayed truth with the output over each ramp and the sine, the largest of
-them; gyrofilter.evaluate). Figure: raw, truth and filtered for the x axis of
+them; gyrofilter.evaluation.evaluate). Figure: raw, truth and filtered for the x axis of
 mpu6050_static_449s -> docs/figures/dynamic_paper001.png.
 
 Why the paper's ratio is larger (a hypothesis, tested): the same static table with paper-like
@@ -25,8 +25,8 @@ import sys
 import numpy as np
 
 
-from gyrofilter import evaluate as E
-from gyrofilter.profiles import get_profile
+from gyrofilter.evaluation import evaluate as E
+from gyrofilter.sim.profiles import get_profile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 FIGURE_NOISE = "mpu6050_static_449s"
@@ -86,10 +86,9 @@ def dynamic_table(static_recs):
 
 
 def figure(static_recs, path):
-    import matplotlib
+    from gyrofilter.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     rec = next((r for r in static_recs if E._stem(r.path) == FIGURE_NOISE), static_recs[0])
     name, noise, fs = E.noise_segments([rec])[0]

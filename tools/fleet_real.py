@@ -8,7 +8,7 @@ within +-5 deg/s), one of them, drawn from the seed, with a defect drawn from th
 bias instability B of 0.004-0.01 deg/s or a spectral line of 0.02-0.05 deg/s at 2-45 Hz, on a
 drawn axis. Then runs, and prints with its output::
 
-    gyrofilter gap recordings/mpu6050_static_*.csv.gz OUT/sim/*.csv.gz --out-dir OUT/report
+    gyrofilter gap recordings/mpu6050_static_*.csv.gz OUT/sim/*.csv.gz --fleet OUT/report
 
 The defect is printed only after the run.
 """
@@ -34,7 +34,7 @@ def main(argv=None):
     args = p.parse_args(argv)
 
     from gyrofilter.recording import write_recording
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
 
     rng = np.random.default_rng(args.seed)
     bad, axis = int(rng.integers(args.units)), "xyz"[rng.integers(3)]
@@ -54,7 +54,7 @@ def main(argv=None):
         write_recording(os.path.join(sim, f"sim{u:02d}.csv.gz"), simulate(model, 600.0, seed=args.seed * 100 + u))
     os.chdir(REPO)
     inputs = ["recordings/mpu6050_static_*.csv.gz", os.path.relpath(os.path.join(sim, "*.csv.gz"))]
-    cmd = ["gyrofilter", "gap", *inputs, "--out-dir", os.path.relpath(os.path.join(args.out, "report")), "--force"]
+    cmd = ["gyrofilter", "gap", *inputs, "--fleet", os.path.relpath(os.path.join(args.out, "report")), "--force"]
     if args.jobs:
         cmd += ["--jobs", str(args.jobs)]
     print("$ " + " ".join(f"'{c}'" if "*" in c else c for c in cmd), flush=True)

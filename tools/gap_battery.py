@@ -5,7 +5,7 @@
 
 Draws ``--cases`` cases with :func:`tests.hidden_effects.draw_case` (seeds ``seed .. seed +
 cases - 1``; every effect of the table equally often, plus clean cases), runs
-:func:`gyrofilter.gap.analyse_gap` on each and prints per effect: cases, named on the right
+:func:`gyrofilter.analysis.gap.analyse_gap` on each and prints per effect: cases, named on the right
 axis, named with parameters within tolerance, and extra findings; for clean cases the fraction
 with any finding. ``--scale 0.333 --duration 600`` is the harder set (effects a third of the
 size, 10-minute recordings). ``--real FILE`` hides the effects in real static recordings
@@ -21,12 +21,12 @@ from collections import defaultdict
 
 import numpy as np
 
-import gyrofilter.hidden_effects as he
+import gyrofilter.sim.hidden_effects as he
 
 
 
 def run_synthetic(args):
-    from gyrofilter.gap import analyse_gap
+    from gyrofilter.analysis.gap import analyse_gap
 
     rows = []
     kinds = args.effects.split(",") if args.effects else list(he.EFFECTS) + ["none"]
@@ -50,7 +50,7 @@ def run_synthetic(args):
 
 
 def run_real(args):
-    from gyrofilter.gap import analyse_gap
+    from gyrofilter.analysis.gap import analyse_gap
     from gyrofilter.recording import read_recording
 
     rows = []

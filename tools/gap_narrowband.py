@@ -95,7 +95,7 @@ def _colored_lag1(r1, arw_dps_per_sqrt_hz, fs, band, current):
     """ρ of :func:`with_narrowband`'s lag-1 equation (``current`` when it has no root in (-0.99, 0.99))."""
     from scipy.optimize import brentq
 
-    from gyrofilter.noise_terms import narrowband_filter
+    from gyrofilter.sim.noise_terms import narrowband_filter
 
     _, a = narrowband_filter(band["rms_dps"], band["center_hz"], band["bandwidth_hz"], fs)
     r_line = -a[1] / (1.0 + a[2])
@@ -112,12 +112,12 @@ def _colored_lag1(r1, arw_dps_per_sqrt_hz, fs, band, current):
 
 
 def axis_discrepancy(x_dps, sample_rate_hz, models, axis_index, seeds):
-    """The gap's D (:func:`gyrofilter.gap.discrepancy`) of each model's axis against ``x_dps``,
+    """The gap's D (:func:`gyrofilter.analysis.gap.discrepancy`) of each model's axis against ``x_dps``,
     every model simulated with the same ``seeds``. Returns a list of floats."""
     import numpy as np
 
-    from gyrofilter import gap
-    from gyrofilter.simulate import simulate_axis_dps, validate_model
+    from gyrofilter.analysis import gap
+    from gyrofilter.sim.simulate import simulate_axis_dps, validate_model
 
     n = x_dps.size
     taus, bands = gap.feature_taus(n, sample_rate_hz), gap.feature_bands(n, sample_rate_hz)
@@ -142,8 +142,8 @@ def main(argv=None):
 
     import numpy as np
 
-    from gyrofilter.allan import overlapping_adev
-    from gyrofilter.gap import analyse_gap
+    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.analysis.gap import analyse_gap
     from gyrofilter.recording import read_recording
 
     rec = read_recording(args.recording)

@@ -2,7 +2,7 @@
 
     python tools/gap_real.py [--seed 0] [--hidden-cases 10]
 
-For every static MPU6050 recording in ``recordings/`` runs ``gyrofilter.gap.analyse_gap``
+For every static MPU6050 recording in ``recordings/`` runs ``gyrofilter.analysis.gap.analyse_gap``
 (seed 0, the command's defaults), writes ``docs/figures/gap_<name>_{adev,spectrum}_<axis>.png``
 for the axes with findings (and x of the longest recording) and the JSON reports to
 ``docs/gap/<name>.json``, hides each effect of the table in the real noise of the two longest
@@ -34,8 +34,8 @@ def main(argv=None):
     args = p.parse_args(argv)
 
     from gyrofilter.cli.common import write_json
-    from gyrofilter.gap import analyse_gap
-    from gyrofilter.gap_report import plot_adev, plot_spectrum
+    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.analysis.gap_report import plot_adev, plot_spectrum
     from gyrofilter.recording import read_recording
 
     figdir = os.path.join(ROOT, "docs", "figures")
@@ -106,7 +106,7 @@ def main(argv=None):
         fh.write("\n### Effects hidden in real MPU6050 noise\n\n")
         fh.write("Command: `python tools/gap_battery.py --real " + " ".join(os.path.relpath(q, ROOT) for q in by_len)
                  + f" --cases {args.hidden_cases}` (each effect of the table added, at the sizes of "
-                 "`gyrofilter/hidden_effects.py`, to one axis of the real recording; findings the untouched "
+                 "`gyrofilter/sim/hidden_effects.py`, to one axis of the real recording; findings the untouched "
                  "recording already has are not counted as extra).\n\n```\n" + hidden.strip() + "\n```\n")
         for key, text in battery.items():
             fh.write(f"\n### Synthetic battery: {key}\n\n```\n{text.strip()}\n```\n")
@@ -140,7 +140,7 @@ by the finding, re-simulated, and the finding is kept only if the discrepancy dr
   stochastic spectra by the Whittle likelihood; a shape is kept only if it also beats the
   exact (Kalman-filter) likelihood of a random walk or Gauss-Markov wander on the same data;
   an extra parameter must buy 6 in 2 Delta log L; a Gauss-Markov process whose time constant
-  exceeds a fifth of the record is reported as a random walk. See `gyrofilter/detectors.py`.
+  exceeds a fifth of the record is reported as a random walk. See `gyrofilter/analysis/detectors.py`.
 - A recording shorter than about 5 minutes cannot separate drift, random walk and bias
   instability from white noise beyond tau of a few tens of seconds; the report says so.
 - The analysis models a still gyro. It never crashes on odd input: a constant axis, a
@@ -149,7 +149,7 @@ by the finding, re-simulated, and the finding is kept only if the discrepancy dr
 - **Speed and memory.** Every statistic is a pass over the record or its periodogram, so the
   time grows with the record length N (N log N for the one FFT per axis and run) and the
   memory holds the recording plus about a dozen arrays of one axis: each simulated run is made
-  one axis at a time, block by block (`gyrofilter.simulate.simulate_axis_dps`, the same numbers
+  one axis at a time, block by block (`gyrofilter.sim.simulate.simulate_axis_dps`, the same numbers
   as that axis of a full run), and only for the axes a step needs (a finding's gain re-simulates
   its own axis). The Allan-deviation feature starts a second difference every max(1, m/8)
   samples instead of every sample (same expectation, spread within 2 % of the fully
@@ -168,7 +168,7 @@ time figures, each finding with its evidence sentence):
 gyrofilter gap recordings/mpu6050_static_655s.csv.gz --json gap.json --report gap_report/
 ```
 
-**Tests that hide an effect.** `gyrofilter/hidden_effects.py` draws per case an effect of the table
+**Tests that hide an effect.** `gyrofilter/sim/hidden_effects.py` draws per case an effect of the table
 (or none), an axis and parameters over realistic MPU6050 ranges at a seed, on an MPU6050-like
 baseline (131 LSB per deg/s, white noise 0.005-0.015 deg/s/sqrt(Hz), biases within +-5 deg/s,
 100 Hz, 30-60 min, a temperature column); `gap` must name the effect on the right axis with its

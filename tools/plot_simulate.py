@@ -36,13 +36,12 @@ def main(argv=None):
     parser.add_argument("--out", default=str(ROOT / "docs" / "figures" / "simulate_effects_allan.png"))
     args = parser.parse_args(argv)
 
-    import matplotlib
+    from gyrofilter.plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
-    from gyrofilter.allan import overlapping_adev
-    from gyrofilter.simulate import simulate
+    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.sim.simulate import simulate
 
     fig, axes = plt.subplots(2, 5, figsize=(18, 7.5), sharex=True)
     for ax, name in zip(axes.ravel(), EFFECTS):

@@ -2,7 +2,7 @@
 
     python tools/tempcomp_gain.py [--recordings recordings] [--seeds 3]
 
-1. Simulated static MPU6050-like recordings (gyrofilter.simulate: white noise 0.0094
+1. Simulated static MPU6050-like recordings (gyrofilter.sim.simulate: white noise 0.0094
    deg/s/sqrt(Hz), 1/131 deg/s quantisation, 100 Hz) that warm up 25 -> 35 C (tau 600 s,
    MPU6050 temperature resolution 1/340 C) with a bias temperature coefficient of
    (0.02, -0.015, 0.01) deg/s/C, 20 min. GyroFilter (2 s start-up calibration; presets "paper"
@@ -23,7 +23,7 @@ import numpy as np
 
 from gyrofilter import GyroFilter
 from gyrofilter.recording import read_recording
-from gyrofilter.simulate import simulate_dps
+from gyrofilter.sim.simulate import simulate_dps
 from gyrofilter.tempcomp import fit_coefficient
 
 C_DPS_PER_C = (0.02, -0.015, 0.01)

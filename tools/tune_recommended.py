@@ -3,7 +3,7 @@
 
 1. Grid over the pipeline's own settings (fit_order, fifo_depth, qr_window, qr_stat, outlier_q_dps,
    with r_source="calibration"; r_source="window" diverges in motion) on the TUNE split of
-   gyrofilter.evaluate (sensor-fusion static recordings, profiles paper001 + steps, BROAD 02 + 07).
+   gyrofilter.evaluation.evaluate (sensor-fusion static recordings, profiles paper001 + steps, BROAD 02 + 07).
    Rule fixed before looking at held-out data: among settings that dominate paper001 on the tune
    split with static std reduction >= 1.5 x 12.6 (margin for unseen recordings), the lowest
    geometric-mean dynamic RMSE.
@@ -28,7 +28,7 @@ import sys
 import numpy as np
 
 
-from gyrofilter import evaluate as E
+from gyrofilter.evaluation import evaluate as E
 from gyrofilter.pipeline import GyroFilter
 
 REC_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "recordings")

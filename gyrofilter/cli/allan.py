@@ -6,7 +6,7 @@ short to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--p
 log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
 
 The recording is read in chunks into one float64 array per axis. Gross errors (isolated spikes
-far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.noise_model.gross_errors`)
+far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise_model.gross_errors`)
 are refused before any computation unless ``--keep-outliers`` is given; they are never dropped.
 Output files are written only once every result is finite, each whole or not at all.
 """
@@ -15,10 +15,10 @@ import sys
 
 import numpy as np
 
-from ..allan import MIN_CLUSTERS, AllanInputError
+from ..analysis.allan import MIN_CLUSTERS, AllanInputError
 from ..errors import SettingsError
-from ..fleet import FleetSettings
-from ..noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, characterise_axis, convert, kalibr_yaml, to_json
+from ..analysis.fleet import FleetSettings
+from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, characterise_axis, convert, kalibr_yaml, to_json
 from . import batch, common
 
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
@@ -28,7 +28,7 @@ NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_insta
 def add_arguments(parser):
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
                         help="recording file (format v1, .csv or .csv.gz), sensor still; several files or globs "
-                             "with --out-dir")
+                             "with --fleet")
     parser.add_argument("--json", metavar="OUT", help="write the deviation curves and coefficients as JSON")
     parser.add_argument("--plot", metavar="OUT.png", help="draw the Allan deviation per axis (needs matplotlib)")
     parser.add_argument("--kalibr", metavar="OUT.yaml", help="write Kalibr imu.yaml gyroscope noise entries")
@@ -59,7 +59,7 @@ def run(args):
     if not 0.0 < args.confidence < 1.0:
         raise SettingsError(f"--confidence must be between 0 and 1 (e.g. 0.95), got {args.confidence:g}")
     paths = batch.expand(args.recordings)
-    if args.out_dir is not None:
+    if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])
         settings = FleetSettings("allan", axes=axes, confidence=args.confidence, min_clusters=args.min_clusters,
                                  keep_outliers=args.keep_outliers)
@@ -104,7 +104,7 @@ def run(args):
             write_text(tmp, kalibr_yaml(results, fs, recording=args.recording))
         common.say(f"wrote {args.kalibr}")
     if args.plot:
-        from ..plots_allan import plot_allan
+        from ..analysis.plots_allan import plot_allan
 
         with common.replacing(args.plot) as tmp:
             plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {fs:g} Hz)")
@@ -117,7 +117,7 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
     """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
 
     The one path from a file to its Allan results, for one recording and for a fleet
-    (:mod:`gyrofilter.fleet`). The reader's warnings, missing samples and gross errors kept with
+    (:mod:`gyrofilter.analysis.fleet`). The reader's warnings, missing samples and gross errors kept with
     ``keep_outliers`` go to ``warn(text)`` as they are found; gross errors otherwise raise
     RecordingError, and a result that is not finite raises AllanInputError (both name the file).
     ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings stay in
@@ -140,7 +140,7 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
 
 
 def write_json_document(path, doc):
-    """Write the Allan document ``doc`` (:func:`gyrofilter.noise_model.to_json`) to ``path`` (no
+    """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise_model.to_json`) to ``path`` (no
     replacing: give it the path :func:`common.replacing` yields)."""
     with open(path, "w", encoding="utf-8") as fh:
         json.dump(doc, fh, indent=1, allow_nan=False)

@@ -34,7 +34,7 @@ def add_arguments(parser):
 
 
 def run(args):
-    from .. import arma
+    from ..analysis import arma
 
     common.check_outputs([args.json], [args.recording], args.force)
     arma.require_stats()
@@ -100,7 +100,7 @@ def _window(args, n, fs):
 
 
 def _print_axis(rep, alpha):
-    from .. import arma
+    from ..analysis import arma
 
     pct = f"{alpha * 100:g} %"
     print(f"\naxis {rep.axis}: mean {rep.mean_dps:+.4f} deg/s, std {rep.std_dps:.4f} deg/s")

@@ -1,11 +1,11 @@
-"""Many recordings in one ``gyrofilter allan`` or ``gyrofilter gap`` command (``--out-dir``).
+"""Many recordings in one ``gyrofilter allan`` or ``gyrofilter gap`` command (``--fleet DIR``).
 
-The shared command-line part of a fleet run (the work itself is :mod:`gyrofilter.fleet`):
+The shared command-line part of a fleet run (the work itself is :mod:`gyrofilter.analysis.fleet`):
 expand the paths and globs, check every output before any work, run the files on local worker
 processes (``--jobs``) or a Dask cluster (``--scheduler``), write each recording's reports as
 it finishes, show progress over the files, then write ``fleet.csv`` and ``fleet.md`` and print
-the units that stand out. Exit 0 when every recording was analysed, 1 when some failed (their
-rows say why), 2 for bad input before any work.
+the units that stand out. Exit 0 when the command ran, even if some files failed (their rows
+say why); 2 when nothing could be done (bad input before any work, or no recording analysed).
 """
 import contextlib
 import glob
@@ -18,18 +18,18 @@ from . import common
 
 FLEET_CSV = "fleet.csv"
 FLEET_MD = "fleet.md"
-EXIT_SOME_FAILED = 1
+EXIT_NOTHING_DONE = 2
 
 
 def add_arguments(parser):
-    parser.add_argument("--out-dir", metavar="DIR",
+    parser.add_argument("--fleet", "--out-dir", dest="fleet", metavar="DIR",
                         help="a fleet run: one report per recording in DIR, named after it, plus fleet.csv and "
                              "fleet.md (needed for more than one recording)")
     parser.add_argument("--jobs", type=int, default=None, metavar="N",
-                        help="with --out-dir: recordings analysed at once on this machine (default: all cores; "
+                        help="with --fleet: recordings analysed at once on this machine (default: all cores; "
                              "each worker holds one recording in memory)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="with --out-dir: run on the Dask cluster whose scheduler is at ADDRESS "
+                        help="with --fleet: run on the Dask cluster whose scheduler is at ADDRESS "
                              "(tcp://host:8786; needs the [cluster] extra)")
 
 
@@ -53,13 +53,13 @@ def expand(patterns):
 
 def single(args, paths):
     """The one recording of a single-file run; refuses several recordings, a glob that matches
-    nothing, and ``--jobs`` or ``--scheduler`` without ``--out-dir``."""
+    nothing, and ``--jobs`` or ``--scheduler`` without ``--fleet``."""
     if len(paths) > 1:
-        raise SettingsError(f"{len(paths)} recordings: give --out-dir DIR for one report per recording "
+        raise SettingsError(f"{len(paths)} recordings: give --fleet DIR for one report per recording "
                             "plus the fleet table (fleet.csv, fleet.md)")
     for option in ("jobs", "scheduler"):
         if getattr(args, option) is not None:
-            raise SettingsError(f"--{option} works on a fleet: give --out-dir DIR")
+            raise SettingsError(f"--{option} works on a fleet: give --fleet DIR")
     path = paths[0]
     if glob.has_magic(path) and not os.path.exists(path):
         raise SettingsError(f"{path}: no file matches")
@@ -67,10 +67,10 @@ def single(args, paths):
 
 
 def refuse_single_file_outputs(args, options):
-    """Refuse the single-file output options (``--json`` ...) with ``--out-dir``."""
+    """Refuse the single-file output options (``--json`` ...) with ``--fleet``."""
     for option in options:
         if getattr(args, option.lstrip("-").replace("-", "_")):
-            raise SettingsError(f"{option} names one file; with --out-dir each recording's reports are written "
+            raise SettingsError(f"{option} names one file; with --fleet each recording's reports are written "
                                 "to DIR, named after the recording")
 
 
@@ -85,17 +85,17 @@ def report_files(command):
 
 def run(args, settings, paths):
     """Run the fleet (the module docstring); returns the exit code."""
-    from .. import fleet
+    from ..analysis import fleet
 
     if args.jobs is not None and args.jobs < 1:
         raise SettingsError(f"--jobs must be at least 1, got {args.jobs}")
     if args.jobs is not None and args.scheduler:
         raise SettingsError("--jobs and --scheduler: give one (the cluster's workers set the parallelism)")
-    common.check_output_folder(args.out_dir, "--out-dir")
+    common.check_output_folder(args.fleet, "--fleet")
     names = fleet.unit_names(paths)
     files = report_files(settings.command)
-    outputs = [os.path.join(args.out_dir, name + suffix) for name in names for suffix, _, _ in files]
-    fleet_files = [os.path.join(args.out_dir, FLEET_CSV), os.path.join(args.out_dir, FLEET_MD)]
+    outputs = [os.path.join(args.fleet, name + suffix) for name in names for suffix, _, _ in files]
+    fleet_files = [os.path.join(args.fleet, FLEET_CSV), os.path.join(args.fleet, FLEET_MD)]
     common.check_outputs(outputs + fleet_files, paths, args.force)
     results = [fleet.failed(p, "no file matches") if glob.has_magic(p) and not os.path.exists(p) else None
                for p in paths]
@@ -124,7 +124,7 @@ def run(args, settings, paths):
             with contextlib.ExitStack() as reports:  # a recording's reports take their places together
                 for suffix, key, write in files:
                     if result[key] is not None:
-                        write(reports.enter_context(common.replacing(os.path.join(args.out_dir, names[i] + suffix))),
+                        write(reports.enter_context(common.replacing(os.path.join(args.fleet, names[i] + suffix))),
                               result[key])
                         written += 1
             if show:
@@ -143,15 +143,15 @@ def run(args, settings, paths):
 
 def _summary(rows, fleet_files, written, elapsed_s):
     """Print the fleet's outcome on stdout; the exit code."""
-    failed = [r for r in rows if r["status"] == "failed"]
+    failed = [r for r in rows if r["status"] != "ok"]
     units = len({r["unit"] for r in rows})
-    flagged = [r for r in rows if r["flags"]]
+    flagged = [r for r in rows if r["flag"]]
     print(f"fleet: {units} recording(s), {units - len(failed)} analysed, {len(failed)} failed, "
           f"{len({r['unit'] for r in flagged})} stand(s) out ({elapsed_s:.1f} s)")
     for r in failed:
-        print(f"  failed: {r['reason']}")
+        print(f"  failed: {r['status']}")
     for r in flagged:
-        for f in r["flags"]:
+        for f in r["flag"]:
             print(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
     common.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report(s)")
-    return EXIT_SOME_FAILED if failed else 0
+    return EXIT_NOTHING_DONE if len(failed) == units else 0

@@ -1,4 +1,5 @@
 """Pieces shared by the commands: output-file safety, filter options, warnings, the summary table."""
+import argparse
 import contextlib
 import json
 import math
@@ -10,7 +11,7 @@ import tempfile
 from ..errors import SettingsError
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import DEFAULT_PRESET, PRESETS
-from ..units import json_ready
+from ..units import AXES, json_ready
 
 
 #: what --out FILE of a recording takes: any name, the format is CSV text (docs/formats.md, section 1)
@@ -20,6 +21,22 @@ RECORDING_FILE_HELP = "recording format v1: CSV text, compressed with gzip when 
 def say(text):
     """A message for the user (stderr, so that stdout stays data)."""
     print(text, file=sys.stderr)
+
+
+def add_sample_rate_argument(parser, *old_spellings, help):
+    """``--sample-rate-hz HZ``, the commands' one spelling of a sample rate, with ``old_spellings``
+    (e.g. ``--rate``) kept as aliases: ``args.sample_rate_hz`` holds the rate (Hz, None when not
+    given), ``args.sample_rate_hz_option`` the spelling used, so a message names what was typed."""
+    parser.add_argument("--sample-rate-hz", *old_spellings, type=float, default=None, metavar="HZ", dest="sample_rate_hz",
+                        action=_SpellingKept, help=help)
+
+
+class _SpellingKept(argparse.Action):
+    """Stores the value, and in ``<dest>_option`` the option string the user typed."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        setattr(namespace, self.dest + "_option", option_string)
 
 
 def add_force_argument(parser):
@@ -175,7 +192,7 @@ def _parse_setting(text):
 
 def temperature_coefficients(path):
     """(cx, cy, cz) in deg/s per deg C from a gap report (its extended_model) or a simulator model."""
-    from ..simulate import load_model
+    from ..sim.simulate import load_model
     from ..tempcomp import coefficients_from_model
 
     model = load_model(path)
@@ -218,7 +235,7 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None, smooth
         return
     print("  axis   raw mean    raw std   filt mean   filt std  std ratio  rejected")
     raw_std, f_std = raw.std, filtered.std
-    for a, name in enumerate("xyz"):
+    for a, name in enumerate(AXES):
         ratio = _number(raw_std[a] / f_std[a], 8, decimals=2) + "x" if f_std[a] > 0 else f"{'n/a':>9}"
         print(f"  {name}    {_number(raw.mean[a], 9, sign=True)}  {_number(raw_std[a], 9)}  {_number(filtered.mean[a], 9, sign=True)}"
               f"  {_number(f_std[a], 9)}  {ratio}  {int(filt.rejected[a]):8d}")
@@ -254,7 +271,7 @@ def read_axes(path, axes):
 
 
 def add_keep_outliers_argument(parser):
-    from ..noise_model import GROSS_LIMIT_DPS, GROSS_Z
+    from ..analysis.noise_model import GROSS_LIMIT_DPS, GROSS_Z
 
     parser.add_argument("--keep-outliers", action="store_true",
                         help=f"analyse the recording even when it has gross errors (spikes of more than {GROSS_Z:g} robust "
@@ -264,10 +281,10 @@ def add_keep_outliers_argument(parser):
 def refuse_gross_errors(head, series, keep, first_row=0, warn=say_warning):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
-    (:func:`gyrofilter.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
+    (:func:`gyrofilter.analysis.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
     Samples are never dropped. ``series`` start at the file's sample ``first_row``."""
     from ..errors import RecordingError
-    from ..noise_model import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
+    from ..analysis.noise_model import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
 
     found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
     if not found:

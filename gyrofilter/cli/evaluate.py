@@ -2,14 +2,14 @@
 
 Static std reduction on every static MPU6050 recording, RMSE and worst lag on synthetic
 profiles added to real static noise, RMSE against the optical reference on the BROAD trials;
-see :mod:`gyrofilter.evaluate` for the definitions. The three files in ``--out`` are refused
+see :mod:`gyrofilter.evaluation.evaluate` for the definitions. The three files in ``--out`` are refused
 when they exist (unless ``--force``), before any work, and are written into a temporary folder
 from which they take their places once all three are written (:func:`common.replacing_in`).
 """
 import os
 import sys
 
-from .. import evaluate as E
+from ..evaluation import evaluate as E
 from . import common
 
 OUTPUT_NAMES = ("evaluate_table.md", "evaluate.json", "evaluate_pareto.png")
@@ -21,7 +21,7 @@ def add_arguments(parser):
     parser.add_argument("--recordings", metavar="DIR",
                         help="directory of recordings (default: ./recordings, else the repository's recordings/)")
     parser.add_argument("--split", choices=("all", "tune", "holdout"), default="all",
-                        help="evaluate on all data (default), or only the tuning or the held-out part (gyrofilter.evaluate.TUNE_SPLIT)")
+                        help="evaluate on all data (default), or only the tuning or the held-out part (gyrofilter.evaluation.evaluate.TUNE_SPLIT)")
     parser.add_argument("--no-lag", action="store_true", help="skip the lag estimates (faster)")
     parser.add_argument("--progress", action="store_true", help="report progress on stderr (default: only on a terminal)")
     common.add_force_argument(parser)

@@ -20,8 +20,8 @@ from . import batch, common
 
 def add_arguments(parser):
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
-                        help="recording file (format v1, .csv or .csv.gz); several files or globs with --out-dir")
-    parser.add_argument("--json", metavar="OUT.json", help="write the gap report (JSON) here (required without --out-dir)")
+                        help="recording file (format v1, .csv or .csv.gz); several files or globs with --fleet")
+    parser.add_argument("--json", metavar="OUT.json", help="write the gap report (JSON) here (required without --fleet)")
     parser.add_argument("--report", metavar="DIR", default=None, help="also write a Markdown report with PNG figures to DIR")
     parser.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the simulations (default 0)")
     parser.add_argument("--sims", type=int, default=None, metavar="N",
@@ -33,9 +33,9 @@ def add_arguments(parser):
 
 def run(args):
     from ..errors import SettingsError
-    from ..fleet import FleetSettings
-    from ..gap import analyse_gap
-    from ..gap_report import REPORT_NAME, report_file_names, write_report
+    from ..analysis.fleet import FleetSettings
+    from ..analysis.gap import analyse_gap
+    from ..analysis.gap_report import REPORT_NAME, report_file_names, write_report
     from ..recording import read_recording
 
     if args.sims is not None and args.sims < 2:
@@ -43,12 +43,12 @@ def run(args):
     if args.seed < 0:
         raise SettingsError(f"--seed must be >= 0, got {args.seed}")
     paths = batch.expand(args.recordings)
-    if args.out_dir is not None:
+    if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--report"])
         return batch.run(args, FleetSettings("gap", seed=args.seed, sims=args.sims), paths)
     args.recording = batch.single(args, paths)
     if args.json is None:
-        raise SettingsError("--json OUT.json is required (or --out-dir DIR for several recordings)")
+        raise SettingsError("--json OUT.json is required (or --fleet DIR for several recordings)")
     report_files = [os.path.join(args.report, name) for name in report_file_names()] if args.report else []
     common.check_output_folder(args.report, "--report")
     common.check_outputs([args.json] + report_files, [args.recording], args.force)

@@ -14,6 +14,7 @@ from ..errors import DeviceError, SettingsError, SourceEnded
 from ..sources import SOURCE_HELP, open_source, parse_source
 from ..sources.base import WARNING_PREFIX
 from ..units import GYRO_UNITS
+from . import common
 
 STATUS_INTERVAL_S = 1.0
 EXIT_DISCONNECTED = 1
@@ -27,8 +28,7 @@ def add_source_arguments(parser):
     parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
                         help="gyro unit of a serial device that sends no header line")
     parser.add_argument("--lsb-per-dps", type=float, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
-    parser.add_argument("--sample-rate", type=float, metavar="HZ", dest="sample_rate_hz",
-                        help="sample rate of such a device")
+    common.add_sample_rate_argument(parser, "--sample-rate", help="sample rate of such a device (old spelling --sample-rate)")
 
 
 def check_duration(duration_s):

@@ -109,49 +109,48 @@ class _Replay:
 
     def feed(self, gyro, t_s, temps, realtime):
         filt = self.filt
-        start = filt.samples_in
         if realtime:
-            rows = self._paced(gyro, t_s, temps)
+            t_rows, rows = self._paced(gyro, t_s, temps)
         else:
-            rows = filt.filter(gyro, temps)
-        ends = filt.block_end_indices(len(rows)) - start
+            t_rows, rows = filt.filter_timed(gyro, t_s, temps)
         window = np.concatenate([self._tail, gyro])
         plotting = self.raw_envelope is not None
         t_window = np.concatenate([self._t_tail, t_s]) if plotting else None
+        keep = filt.pending_samples
         if len(rows):
-            first = len(self._tail) + ends[0] - filt.settings.block_len + 1
-            used = window[first:len(self._tail) + ends[-1] + 1]
+            # the rows' blocks: the len(rows) * block_len samples before those still pending
+            used_at = slice(len(window) - keep - len(rows) * filt.settings.block_len, len(window) - keep)
+            used = window[used_at]
             self.raw.add(used)
             if plotting:
-                self.raw_envelope.add(t_window[first:len(self._tail) + ends[-1] + 1], used - np.asarray(filt.bias_dps))
+                self.raw_envelope.add(t_window[used_at], used - np.asarray(filt.bias_dps))
             if self.smoother is None:
-                self._pass_on(t_s[ends], rows)
+                self._pass_on(t_rows, rows)
             else:
-                self._row_times.append(t_s[ends])
-        keep = filt.pending_samples
+                self._row_times.append(t_rows)
         self._tail = window[len(window) - keep:].copy()
         if plotting:
             self._t_tail = t_window[len(window) - keep:].copy()
 
     def _paced(self, gyro, t_s, temps):
-        """Feed samples one by one at the recording's rate, printing rows as they come."""
+        """Feed samples one by one at the recording's rate, printing rows as they come:
+        (t_rows_s, rows) as :meth:`GyroFilter.filter_timed` returns them."""
         filt = self.filt
-        rows = []
+        rows, t_rows = [], []
         if self._wall_start is None:
             self._wall_start = time.monotonic()
-        start = filt.samples_in
         rate_hz = filt.sample_rate_hz
         temps = [None] * len(gyro) if temps is None else temps.tolist()
-        for sample, temp in zip(map(tuple, gyro.tolist()), temps):
+        for sample, temp, t in zip(map(tuple, gyro.tolist()), temps, t_s.tolist()):
             delay = self._wall_start + filt.samples_in / rate_hz - time.monotonic()
             if delay > 0 and self.stdout_open:
                 time.sleep(delay)
             row = filt.update(sample, temp)
-            if row is not None:
+            if row is not None:  # a row comes out when its block's last sample, this one, goes in
                 rows.append(row)
-                t = t_s[filt.block_end_indices(1)[0] - start]
+                t_rows.append(t)
                 self.print_rows(f"{t:.10g},{row[0]:.6f},{row[1]:.6f},{row[2]:.6f}")
-        return np.array(rows).reshape(-1, 3)
+        return np.array(t_rows, dtype=float), np.array(rows).reshape(-1, 3)
 
     def print_rows(self, text):
         """Print ``text`` on stdout at once; when its reader went away (``| head``), stop printing

@@ -106,13 +106,11 @@ def _run(args, source):
                 if len(rows):
                     was_calibrating = filt.calibrating
                     temps = rows[:, temp_idx] if filt.compensates_temperature else None
-                    out = filt.filter(source.gyro_dps(rows), temps)
+                    t_out, out = filt.filter_timed(source.gyro_dps(rows), rows[:, t_idx], temps)
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note("calibrated: bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s")
                     if len(out):
-                        # a row comes out when its block's last sample goes in: always one of these rows
-                        ends = filt.block_end_indices(len(out)) - (filt.samples_in - len(rows))
-                        writer.write(np.column_stack([rows[ends, t_idx], out]))
+                        writer.write(np.column_stack([t_out, out]))
                 now = time.monotonic()
                 if now - last_flush >= FLUSH_INTERVAL_S or not args.out:
                     writer.flush()

@@ -1,4 +1,4 @@
-"""``gyrofilter simulate --model MODEL.json --duration S [--rate HZ] [--seed N] --out FILE``.
+"""``gyrofilter simulate --model MODEL.json --duration S [--sample-rate-hz HZ] [--seed N] --out FILE``.
 
 Writes a format-v1 recording (gzip when FILE ends in .gz) from a noise model, streaming in
 blocks so that hours at 1 kHz need bounded memory. The model schema is in docs/formats.md; a bad
@@ -21,7 +21,7 @@ def add_arguments(parser):
     parser.add_argument("--model", required=True, metavar="MODEL.json",
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json)")
     parser.add_argument("--duration", required=True, type=float, metavar="S", help="length of the recording in seconds")
-    parser.add_argument("--rate", type=float, default=None, metavar="HZ", help="sample rate in Hz (overrides the model's)")
+    common.add_sample_rate_argument(parser, "--rate", help="sample rate in Hz (overrides the model's; old spelling --rate)")
     parser.add_argument("--seed", type=int, default=None, metavar="N", help="random seed (same seed, same recording)")
     parser.add_argument("--out", required=True, metavar="FILE", help="output recording (" + common.RECORDING_FILE_HELP + ")")
     parser.add_argument("--chunk", type=int, default=65536, metavar="N", help="samples per block written (default 65536)")
@@ -31,20 +31,20 @@ def add_arguments(parser):
 
 def run(args):
     from ..recording import GYRO_COLUMNS, RecordingWriter
-    from ..simulate import load_model, recording_columns, recording_header, sample_count, simulate_chunks, validate_model
+    from ..sim.simulate import load_model, recording_columns, recording_header, sample_count, simulate_chunks, validate_model
 
     common.check_outputs([args.out], [args.model], args.force)
     if not (math.isfinite(args.duration) and args.duration > 0):
         raise SettingsError(f"--duration must be > 0 s, got {args.duration:g}")
-    if args.rate is not None:
-        check_sample_rate_hz(args.rate, "--rate")
+    if args.sample_rate_hz is not None:
+        check_sample_rate_hz(args.sample_rate_hz, args.sample_rate_hz_option)
     if args.seed is not None and args.seed < 0:
         raise SettingsError(f"--seed must be an integer >= 0, got {args.seed}")
     if args.chunk < 1:
         raise SettingsError(f"--chunk must be at least 1 sample, got {args.chunk}")
     model = load_model(args.model)
     try:
-        spec, warnings = validate_model(model, sample_rate_hz=args.rate)
+        spec, warnings = validate_model(model, sample_rate_hz=args.sample_rate_hz)
     except SettingsError as exc:
         raise SettingsError(f"{args.model}: {exc}") from None
     n_total = sample_count(args.duration, spec["sample_rate_hz"])

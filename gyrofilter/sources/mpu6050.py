@@ -36,6 +36,7 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError
 from . import mpu6050_registers as R
+from ..units import check_sample_rate_hz
 from .base import Source
 
 __all__ = ["open_mpu6050", "MPU6050Source", "CHIPS", "sample_rate_settings", "auto_dlpf_cfg",
@@ -99,12 +100,7 @@ def sample_rate_settings(rate_hz, dlpf_cfg):
     if dlpf_cfg not in R.DLPF:
         raise SettingsError(f"dlpf={dlpf_cfg!r}: CONFIG.DLPF_CFG (bits 2:0) takes 0..7")
     base_hz = R.DLPF[dlpf_cfg][2]
-    try:
-        rate_hz = float(rate_hz)
-    except (TypeError, ValueError):
-        raise SettingsError(f"rate_hz={rate_hz!r} is not a number") from None
-    if not rate_hz > 0:
-        raise SettingsError(f"rate_hz={rate_hz!r} must be positive")
+    rate_hz = check_sample_rate_hz(rate_hz, "rate_hz")
     div_f = base_hz / rate_hz - 1.0
     div = int(round(div_f))
     if 0 <= div <= 255 and abs(base_hz / (1 + div) - rate_hz) <= 1e-6 * rate_hz:

@@ -457,7 +457,7 @@ class SerialSource(Source):
                     if self._parser.header is None:
                         raise DeviceError(
                             f"{self.port_name}: no '# gyrofilter-serial: 1 ...' header within {header_timeout_s:g} s; "
-                            "give the units as options (unit=lsb,lsb_per_dps=131,rate=100 or --gyro-unit/--lsb-per-dps/--sample-rate) "
+                            "give the units as options (unit=lsb,lsb_per_dps=131,rate=100 or --gyro-unit/--lsb-per-dps/--sample-rate-hz) "
                             "or check the baud rate and the sketch"
                         )
                     raise DeviceError(f"{self.port_name}: no data lines within {header_timeout_s:g} s after the header")

@@ -1,6 +1,6 @@
 """A simulation as a live source (``sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]``).
 
-Samples come from :func:`gyrofilter.simulate.simulate_chunks` (the shared simulator model
+Samples come from :func:`gyrofilter.sim.simulate.simulate_chunks` (the shared simulator model
 schema; without a model, :data:`DEFAULT_MODEL`, an MPU6050 at rest). By default they are paced
 in real time, so ``record`` and ``run`` behave as with a device; ``realtime=0`` hands them out as
 fast as they are read. The simulator's output does not depend on how it is chunked, so the
@@ -54,7 +54,7 @@ class SimulatedSource(Source):
 
     def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
                  clock=time.monotonic, sleep=time.sleep):
-        from ..simulate import load_model, recording_columns, recording_header, simulate_chunks, validate_model
+        from ..sim.simulate import load_model, recording_columns, recording_header, simulate_chunks, validate_model
 
         if model is None or model == "":
             model, self.model_name = json.loads(json.dumps(DEFAULT_MODEL)), "default MPU6050-like model"

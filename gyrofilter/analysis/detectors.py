@@ -3,7 +3,7 @@
 Every detector works on one axis, a 1-D rate series ``x_dps`` (deg/s) sampled at
 ``sample_rate_hz``, and returns a :class:`Candidate` (or None): the effect name, its parameter
 estimates in the units of the effect table (docs/formats.md, section 2), the detector's statistic, the
-threshold it had to pass and an evidence sentence. :mod:`gyrofilter.gap` runs the same
+threshold it had to pass and an evidence sentence. :mod:`gyrofilter.analysis.gap` runs the same
 statistic on the baseline simulations to show the simulated spread, and keeps a candidate only
 when the extended model lowers the discrepancy.
 

@@ -18,9 +18,9 @@ import os
 
 import numpy as np
 
-from .plots import pyplot
+from ..plots import pyplot
+from ..units import AXES
 
-AXES = ("x", "y", "z")
 REPORT_NAME = "gap_report.md"
 FIGURE_KINDS = ("adev", "spectrum", "temperature", "time")
 

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from .noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis
-from .plots import pyplot
+from ..plots import pyplot
 
 AXIS_COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
 TERM_STYLE = {"quantization": ":", "arw": "--", "bias_instability": "-.", "rrw": (0, (5, 2, 1, 2)),
@@ -20,7 +20,8 @@ TERM_STYLE = {"quantization": ":", "arw": "--", "bias_instability": "-.", "rrw":
 
 
 def plot_allan(path, results, title=""):
-    """Write a PNG with one panel per axis. ``results``: {axis: AxisNoise}."""
+    """Write the figure file ``path`` (PNG) with one panel per axis, headed ``title``.
+    ``results``: {axis: AxisNoise}."""
     plt = pyplot()
     n = len(results)
     fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.6), squeeze=False)
@@ -65,7 +66,8 @@ def plot_allan(path, results, title=""):
 
 
 def plot_before_after(path, curves, title=""):
-    """``curves``: list of (label, tau_s, adev_dps, colour, linestyle). One log-log axes."""
+    """Write the figure file ``path`` (PNG), headed ``title``: one log-log axes of ``curves``, a
+    list of (label, tau_s, adev_dps, colour, linestyle)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
     for label, tau, dev, colour, style in curves:

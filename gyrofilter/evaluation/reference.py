@@ -33,8 +33,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import SettingsError
-from .units import plain
+from ..errors import SettingsError
+from ..units import check_sample_rate_hz, plain
 
 
 def quat_multiply(p, q):
@@ -55,7 +55,7 @@ def quat_multiply(p, q):
 
 
 def quat_conjugate(q):
-    """Conjugate (the inverse of a unit quaternion), w, x, y, z order."""
+    """Conjugate of quaternions ``q`` (..., 4), w, x, y, z order (the inverse of a unit quaternion)."""
     q = np.asarray(q, dtype=float)
     return q * np.array([1.0, -1.0, -1.0, -1.0])
 
@@ -88,7 +88,8 @@ def rotvec_from_quat(q):
 
 
 def body_rate_from_quaternions(quat_wxyz, sample_rate_hz, half_span=1):
-    """Body-frame angular rate (rad/s), shape (N, 3), from quaternions (N, 4) by equation (2).
+    """Body-frame angular rate (rad/s), shape (N, 3), from quaternions ``quat_wxyz`` (N, 4; w, x,
+    y, z) sampled at ``sample_rate_hz`` (Hz), by equation (2).
 
     ``half_span`` h >= 1 samples: central difference over 2h sample intervals (see the module
     docstring). Row k is NaN when any quaternion in [k-h, k+h] is missing or k is within h of an
@@ -100,8 +101,7 @@ def body_rate_from_quaternions(quat_wxyz, sample_rate_hz, half_span=1):
     h = int(half_span)
     if h < 1 or h != half_span:
         raise SettingsError(f"half_span must be a positive integer number of samples, got {plain(half_span)}")
-    if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
+    check_sample_rate_hz(sample_rate_hz)
     n = len(q)
     out = np.full((n, 3), np.nan)
     if n <= 2 * h:
@@ -122,7 +122,8 @@ def body_rate_from_quaternions(quat_wxyz, sample_rate_hz, half_span=1):
 
 
 def block_mean_masked(values, block_len, start=0, n_blocks=None):
-    """Means of non-overlapping blocks ``values[start + k L : start + (k+1) L]`` along axis 0.
+    """Means of non-overlapping blocks ``values[start + k L : start + (k+1) L]`` along axis 0
+    (L = ``block_len`` samples; ``start``: index of the first block's first sample).
 
     A block containing any NaN gives NaN (no partial blocks, nothing invented). Returns
     (n_blocks, ...) with n_blocks = (len - start) // L unless given.
@@ -140,6 +141,7 @@ def block_mean_masked(values, block_len, start=0, n_blocks=None):
 def estimate_time_offset_s(gyro, reference, sample_rate_hz, max_lag_s=0.1, mask=None):
     """Delay of ``reference`` relative to ``gyro`` (s) by normalised cross-correlation.
 
+    ``gyro`` and ``reference``: (N, 3) rates in one unit, sampled at ``sample_rate_hz`` (Hz).
     For integer lags l in [-m, m] (m = max_lag_s * fs), the correlation
     c(l) = sum_axes sum_i g_i r_{i+l} / sqrt(sum g_i^2 sum r_{i+l}^2) is taken over the pairs where
     both are finite (and ``mask`` is true at i, if given); the peak is refined by a parabola
@@ -185,12 +187,13 @@ def estimate_time_offset_s(gyro, reference, sample_rate_hz, max_lag_s=0.1, mask=
 
 
 def reference_from_recording(rec):
-    """Reference rate (N, 3) in deg/s from a recording's ``ref_x, ref_y, ref_z`` columns.
+    """Reference rate (N, 3) in deg/s from the ``ref_x, ref_y, ref_z`` columns of ``rec`` (a
+    :class:`~gyrofilter.recording.Recording`).
 
     The columns are in the recording's ``gyro_unit``; where a ``ref_valid`` column is 0 the
     reference could not be derived (occlusion) and the rows come back as NaN.
     """
-    from .units import to_dps
+    from ..units import to_dps
 
     missing = [c for c in ("ref_x", "ref_y", "ref_z") if c not in rec.columns]
     if missing:

@@ -52,9 +52,8 @@ import time
 import numpy as np
 
 from .allan import MIN_CLUSTERS
+from ..units import AXES
 
-#: the axes a fleet row can have
-AXES = ("x", "y", "z")
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
 COEFFICIENTS = ("arw", "bias_instability", "rrw", "rate_ramp")
 #: modified z-score beyond which a unit stands out (Iglewicz & Hoaglin 1993)
@@ -110,7 +109,7 @@ def analyse_recording(path, settings):
     short for two cluster times) leaves ``allan`` None with the reason in ``warnings``, and the
     gap report stands.
     """
-    from .cli import one_line
+    from ..cli import one_line
 
     t0 = time.perf_counter()
     result = {"recording": path, "error": None, "warnings": [], "sample_rate_hz": None, "duration_s": None,
@@ -135,7 +134,7 @@ def analyse_recording(path, settings):
 
 def _gap_report(path, settings, warnings):
     from .gap import analyse_gap
-    from .recording import read_recording
+    from ..recording import read_recording
 
     rec = read_recording(path)
     warnings.extend(rec.warnings)
@@ -143,7 +142,7 @@ def _gap_report(path, settings, warnings):
 
 
 def _allan_part(path, settings, result):
-    from .cli.allan import characterise_recording
+    from ..cli.allan import characterise_recording
     from .noise_model import kalibr_yaml, to_json
 
     def warn(text):
@@ -163,7 +162,7 @@ def _allan_part(path, settings, result):
 
 def failed(path, reason):
     """The result of a file whose work never ran or never returned (a glob that matched nothing,
-    a worker that died): its ``error`` names the file and ``reason``."""
+    a worker that died): its ``error`` names the file ``path`` and ``reason``."""
     return {"recording": path, "error": f"{path}: {reason}", "warnings": [], "sample_rate_hz": None, "duration_s": None,
             "allan": None, "kalibr": None, "gap": None, "runtime_s": None}
 
@@ -172,11 +171,11 @@ def failed(path, reason):
 
 
 def unit_names(paths):
-    """A distinct name per recording for its reports and its rows: the file name without
+    """A distinct name per recording of ``paths`` for its reports and its rows: the file name without
     ``.gz`` and ``.csv``; recordings whose names clash take as many parent folders as tell them
     apart, joined by ``-`` (``robot1/imu.csv``, ``robot2/imu.csv`` -> ``robot1-imu``,
     ``robot2-imu``). Raises SettingsError when no number of folders does."""
-    from .errors import SettingsError
+    from ..errors import SettingsError
 
     parts = [os.path.abspath(p).split(os.sep) for p in paths]
     stems = [_stem(p[-1]) for p in parts]
@@ -211,7 +210,7 @@ def default_jobs():
 
 
 def run_local(paths, settings, jobs):
-    """Yield ``(index, result)`` of :func:`analyse_recording` for each of ``paths`` as it
+    """Yield ``(index, result)`` of :func:`analyse_recording` (with ``settings``) for each of ``paths`` as it
     finishes, in ``jobs`` worker processes (:class:`~concurrent.futures.ProcessPoolExecutor`).
 
     ``jobs=1`` runs in one worker process too: every backend computes with one thread per
@@ -266,7 +265,7 @@ def _ignore_interrupts():
 
 
 def run_dask(paths, settings, address):
-    """Yield ``(index, result)`` of :func:`analyse_recording` for each of ``paths`` as it
+    """Yield ``(index, result)`` of :func:`analyse_recording` (with ``settings``) for each of ``paths`` as it
     finishes on the Dask distributed cluster whose scheduler is at ``address``
     (``dask.distributed.Client.map``). The workers read the files at the same paths, so the
     paths must name the same files on every worker (a shared file system). A file whose task
@@ -286,8 +285,8 @@ def run_dask(paths, settings, address):
 
 def _distributed():
     """``dask.distributed``, or MissingExtraError naming the ``[cluster]`` extra."""
-    from .errors import MissingExtraError
-    from .extras import install_hint, require
+    from ..errors import MissingExtraError
+    from ..extras import install_hint, require
 
     require("dask", "--scheduler (a Dask cluster)")
     try:
@@ -300,24 +299,26 @@ def _distributed():
 # ------------------------------------------------------------------------------------ the table
 
 #: the columns of fleet.csv, in order (docs/formats.md, section 9)
-COLUMNS = (["unit", "recording", "axis", "status", "reason", "sample_rate_hz", "duration_s"]
-           + [f"{key}{end}" for key in ("arw_dps_per_sqrt_hz", "bias_instability_dps", "rrw_dps_per_sqrt_s",
-                                        "rate_ramp_dps_per_s") for end in ("", "_low", "_high", "_upper")]
-           + ["findings", "d_before", "d_after", "runtime_s", "flags", "warnings"])
+COLUMNS = (["unit", "recording", "axis", "status", "sample_rate_hz", "duration_s"]
+           + [f"{key}{end}" for key in ("quantization_deg", "arw_dps_per_sqrt_hz", "bias_instability_dps",
+                                        "rrw_dps_per_sqrt_s", "rate_ramp_dps_per_s")
+              for end in ("", "_low", "_high", "_upper")]
+           + ["findings", "d_before", "d_after", "runtime_s", "flag", "warnings"])
 
 
 def fleet_rows(names, results):
-    """One row (a dict over :data:`COLUMNS`) per recording and axis, in the order given; a
-    failed recording has one row with ``status`` "failed", its ``reason`` and no axis. Numbers
+    """One row (a dict over :data:`COLUMNS`) per recording and axis of ``results`` (those of
+    :func:`analyse_recording`, named by ``names``, e.g. :func:`unit_names`), in the order given; a
+    failed recording has one row whose ``status`` is the one-line reason, and no axis. Numbers
     are floats or None (not resolved, not analysed)."""
     from .noise_model import JSON_KEY
 
     rows = []
     for name, res in zip(names, results):
         base = dict.fromkeys(COLUMNS)
-        base.update(unit=name, recording=res["recording"], status="ok" if res["error"] is None else "failed",
-                    reason=res["error"], sample_rate_hz=res["sample_rate_hz"], duration_s=res["duration_s"],
-                    runtime_s=res["runtime_s"], warnings=list(res["warnings"]), flags=[])
+        base.update(unit=name, recording=res["recording"], status="ok" if res["error"] is None else res["error"],
+                    sample_rate_hz=res["sample_rate_hz"], duration_s=res["duration_s"],
+                    runtime_s=res["runtime_s"], warnings=list(res["warnings"]), flag=[])
         if res["error"] is not None:
             rows.append(base)
             continue
@@ -326,11 +327,11 @@ def fleet_rows(names, results):
         axes = [a for a in AXES if a in allan_axes or gap is not None]
         for axis in axes:
             # the recording's warnings, and of the per-axis ones ("axis x: ...") only this axis's
-            row = dict(base, axis=axis, flags=[],
+            row = dict(base, axis=axis, flag=[],
                        warnings=[w for w in base["warnings"] if not w.startswith("axis ") or w.startswith(f"axis {axis}:")])
             if axis in allan_axes:
                 details = allan_axes[axis]["details"]
-                for term in COEFFICIENTS:
+                for term in ("quantization",) + COEFFICIENTS:
                     key = JSON_KEY[term]
                     d = details[key]
                     row[key], row[f"{key}_low"], row[f"{key}_high"] = d["value"], d["low"], d["high"]
@@ -346,7 +347,7 @@ def fleet_rows(names, results):
 
 def flag_units(rows):
     """Mark the rows of units that stand out (module docstring: the rules). Adds to each row's
-    ``flags`` a dict per flag (``kind``: "coefficient" or "finding", ``what``, ``direction``,
+    ``flag`` a dict per flag (``kind``: "coefficient" or "finding", ``what``, ``direction``,
     ``z`` or ``share``, ``text``) and returns the fleet statistics: a list of dicts per axis and
     quantity (``units``: how many had a number; ``median``/``spread`` of the log levels, or
     ``having`` for findings; ``compared``: False when too few units)."""
@@ -374,7 +375,7 @@ def flag_units(rows):
                 low = (median - math.log(r[f"{key}_high"])) / spread
                 for direction, z in (("high", high), ("low", low)):
                     if z > FLAG_Z and (direction == "high" or term == "arw"):
-                        r["flags"].append({
+                        r["flag"].append({
                             "kind": "coefficient", "what": TERM_SYMBOL[term], "direction": direction, "z": z,
                             "text": f"{TERM_SYMBOL[term]} {direction}: {r[key]:.3g} [{r[f'{key}_low']:.3g}, "
                                     f"{r[f'{key}_high']:.3g}] {TERM_UNIT[term]} against the fleet's median "
@@ -391,16 +392,22 @@ def flag_units(rows):
                 for r in having:
                     if r["d_before"] is None or r["d_before"] < RARE_MIN_D:
                         continue
-                    r["flags"].append({"kind": "finding", "what": effect, "direction": "rare", "share": share,
+                    r["flag"].append({"kind": "finding", "what": effect, "direction": "rare", "share": share,
                                        "text": f"{effect} on {axis}, a finding {len(having)} of {len(analysed)} "
                                                f"units have (limit: fewer than {RARE_SHARE:.0%})"})
     return stats
 
 
 def finding_text(finding):
-    """``effect(param=value, ...)`` with 4 significant digits."""
+    """``effect(param=value, ...)`` of a gap report's ``finding`` (a dict), with 4 significant digits (fleet.md)."""
     params = ", ".join(f"{k}={v:.4g}" for k, v in finding["params"].items())
     return f"{finding['effect']}({params})"
+
+
+def findings_cell(findings):
+    """fleet.csv's ``findings``: ``effect:param=value`` per parameter, joined by ``;``, numbers in
+    full precision (empty for none)."""
+    return ";".join(f"{f['effect']}:{k}={_cell(v)}" for f in findings for k, v in f["params"].items())
 
 
 def _cell(value):
@@ -409,14 +416,14 @@ def _cell(value):
     if isinstance(value, float):
         return repr(value)
     if isinstance(value, list):
-        return "; ".join(finding_text(v) if isinstance(v, dict) and "params" in v
-                         else v["text"] if isinstance(v, dict) else str(v) for v in value)
+        return "; ".join(v["text"] if isinstance(v, dict) else str(v) for v in value)
     return str(value)
 
 
 def fleet_csv(rows):
-    """fleet.csv: a header of :data:`COLUMNS` and one line per row; numbers in full precision
-    (Python's shortest round-trip form), empty cells for None, lists joined by "; "."""
+    """fleet.csv: a header of :data:`COLUMNS` and one line per row of ``rows`` (:func:`fleet_rows`);
+    numbers in full precision (Python's shortest round-trip form), empty cells for None, findings
+    as :func:`findings_cell`, other lists (flags, warnings) joined by "; "."""
     import csv
     import io
 
@@ -424,7 +431,8 @@ def fleet_csv(rows):
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(COLUMNS)
     for row in rows:
-        writer.writerow([_cell(row[c]) for c in COLUMNS])
+        writer.writerow([findings_cell(row[c]) if c == "findings" and row[c] is not None else _cell(row[c])
+                         for c in COLUMNS])
     return out.getvalue()
 
 
@@ -436,24 +444,25 @@ def _coef_md(row, key):
 
 
 def fleet_markdown(rows, stats, *, title):
-    """fleet.md: the units that stand out, the failed files, a row per recording and axis, and
-    the fleet statistics with the rules."""
+    """fleet.md, headed ``title``: the units that stand out, the failed files, a row per
+    recording and axis (``rows``, :func:`fleet_rows`), and the fleet statistics ``stats``
+    (what :func:`flag_units` returns) with the rules."""
     from .noise_model import JSON_KEY, TERM_SYMBOL, TERM_UNIT
 
     units = list(dict.fromkeys(r["unit"] for r in rows))
-    failed_rows = [r for r in rows if r["status"] == "failed"]
-    flagged = [r for r in rows if r["flags"]]
+    failed_rows = [r for r in rows if r["status"] != "ok"]
+    flagged = [r for r in rows if r["flag"]]
     lines = [f"# {title}", "",
              (f"{len(units)} recordings: {len(units) - len(failed_rows)} analysed, {len(failed_rows)} failed; "
               f"{len({r['unit'] for r in flagged})} stand out."), "", "## Units that stand out", ""]
     if flagged:
         lines += ["| unit | axis | why |", "|---|---|---|"]
-        lines += [f"| {r['unit']} | {r['axis']} | {f['text']} |" for r in flagged for f in r["flags"]]
+        lines += [f"| {r['unit']} | {r['axis']} | {f['text']} |" for r in flagged for f in r["flag"]]
     else:
         lines.append("None.")
     if failed_rows:
         lines += ["", "## Failed", "", "| unit | recording | reason |", "|---|---|---|"]
-        lines += [f"| {r['unit']} | `{r['recording']}` | {r['reason']} |" for r in failed_rows]
+        lines += [f"| {r['unit']} | `{r['recording']}` | {r['status']} |" for r in failed_rows]
     keys = [JSON_KEY[t] for t in COEFFICIENTS]
     head = " | ".join(f"{TERM_SYMBOL[t]} ({TERM_UNIT[t]})" for t in COEFFICIENTS)
     lines += ["", "## Per recording and axis", "",
@@ -466,7 +475,7 @@ def fleet_markdown(rows, stats, *, title):
             continue
         d = "" if r["d_before"] is None else f"{r['d_before']:.3g} -> {r['d_after']:.3g}"
         findings = "" if r["findings"] is None else ("; ".join(finding_text(f) for f in r["findings"]) or "none")
-        flags = ", ".join(f"{f['what']} {f['direction']}" for f in r["flags"])
+        flags = ", ".join(f"{f['what']} {f['direction']}" for f in r["flag"])
         lines.append(f"| {r['unit']} | {r['axis']} | " + " | ".join(_coef_md(r, k) for k in keys)
                      + f" | {findings} | {d} | {r['runtime_s']:.1f} | {flags} |")
     lines += ["", "## Fleet statistics", "",

@@ -13,13 +13,13 @@ Per axis and sample n (t = n / f_s), in deg/s:
     ω[n] ← round(ω[n] · lsb_per_dps) / lsb_per_dps    (quantization, when ``lsb_per_dps`` is given)
 
 then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb_per_dps)).
-Each effect term is documented, with its equation, in :mod:`gyrofilter.noise_terms`.
+Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`.
 
 ``colored_noise`` low-passes the white noise: with ``preserve="arw"`` (default)
 ``arw_dps_per_sqrt_hz`` keeps its Allan meaning (the white level for τ well beyond the filter's
 correlation time, as with the MPU6050's DLPF) and the per-sample std becomes
 N sqrt(f_s) sqrt((1 - lag1)/(1 + lag1)); with ``preserve="std"`` the per-sample std stays
-N sqrt(f_s). See :class:`gyrofilter.noise_terms.WhiteNoise`.
+N sqrt(f_s). See :class:`gyrofilter.sim.noise_terms.WhiteNoise`.
 
 The ``temperature`` key designs the ``temp`` column (an exponential self-heating profile with
 an optional cycle, or a table interpolated linearly; read noise and resolution only on the
@@ -39,11 +39,10 @@ import math
 import numpy as np
 
 from . import noise_terms as nt
-from .errors import SettingsError
-from .recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, format_number
-from .units import DEG_PER_RAD, GYRO_UNITS, plain
+from ..errors import SettingsError
+from ..recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, format_number
+from ..units import AXES, DEG_PER_RAD, GYRO_UNITS, check_sample_rate_hz, plain
 
-AXES = ("x", "y", "z")
 DEFAULT_CHUNK_SAMPLES = 65536
 
 # kinds of parameter checks: (test, what is expected)
@@ -124,8 +123,8 @@ def validate_model(model, *, sample_rate_hz=None):
     out = {}
     rate = model.get("sample_rate_hz") if sample_rate_hz is None else sample_rate_hz
     if rate is None:
-        _err("sample_rate_hz", "missing (expected the sample rate in Hz, > 0; or give --rate)")
-    out["sample_rate_hz"] = _number(rate, "sample_rate_hz", "pos")
+        _err("sample_rate_hz", "missing (expected the sample rate in Hz, > 0; or give --sample-rate-hz)")
+    out["sample_rate_hz"] = check_sample_rate_hz(rate, "model: sample_rate_hz")
     unit = model.get("gyro_unit", "dps")
     if unit not in GYRO_UNITS:
         _err("gyro_unit", f"expected one of {', '.join(GYRO_UNITS)}, got {_show(unit)}")
@@ -383,9 +382,9 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     ``chunk_samples`` samples whose concatenation equals ``simulate(model, duration_s,
     seed=seed).gyro_dps[:, axis]`` bit for bit (every random term draws from its own stream,
     keyed by the axis, so the other axes need not be generated). For analyses that simulate
-    one axis many times (:mod:`gyrofilter.gap`): no time column, no other axes, memory bounded
+    one axis many times (:mod:`gyrofilter.analysis.gap`): no time column, no other axes, memory bounded
     by the block."""
-    from .units import to_dps
+    from ..units import to_dps
 
     spec = validated if validated is not None else validate_model(model)[0]
     fs = spec["sample_rate_hz"]

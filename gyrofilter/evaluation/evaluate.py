@@ -17,7 +17,7 @@ Metrics
   by std(y_k) over the filtered rows (paper 001's before/after std ratio, table in section 4).
   Evaluated on every static MPU6050 recording in ``recordings/``.
 * **dynamic RMSE** (deg/s): sqrt(mean over rows and axes of (y_k - truth_k)^2) for a profile of
-  :mod:`gyrofilter.profiles` added to each axis of 90 s of a real static recording (the first
+  :mod:`gyrofilter.sim.profiles` added to each axis of 90 s of a real static recording (the first
   90 s of every static recording at least 90 s long; RMSE pooled over them).
 * **lag** (s): for each segment of a profile where the rate changes, the shift d that minimises
   the mean squared difference between the filtered rows and the block-averaged *delayed* truth
@@ -28,7 +28,7 @@ Metrics
   sampled step).
   The search is limited per segment (3 s for ramps and steps, under half the period of a sine:
   0.45 s at 1 Hz), where a delayed copy is unambiguous.
-* **BROAD RMSE** (deg/s) against the optical reference rate (:mod:`gyrofilter.reference`,
+* **BROAD RMSE** (deg/s) against the optical reference rate (:mod:`gyrofilter.evaluation.reference`,
   block-averaged over the same samples; blocks with a missing reference sample are left out),
   bias calibrated on the first rest phase (its first ``rest - 1`` s), split into blocks entirely
   in motion, entirely at rest (after calibration, and more than 1.5 s from a change of the
@@ -53,9 +53,9 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import SettingsError
-from .profiles import PROFILES, get_profile
-from .recording import read_recording
+from ..errors import SettingsError
+from ..sim.profiles import PROFILES, get_profile
+from ..recording import read_recording
 from .reference import block_mean_masked, reference_from_recording
 
 DEFAULT_CALIBRATION_S = 2.0
@@ -89,6 +89,9 @@ class FilterOutput:
 
 @dataclass
 class FilterSpec:
+    """A filter of the comparison: its ``name``, ``family``, a one-line ``description`` and
+    ``run(samples_dps, sample_rate_hz, calibration_s) -> FilterOutput`` (module docstring)."""
+
     name: str
     family: str  # "baseline", "paper", "candidate" or "offline" (not real time: the smoother)
     description: str
@@ -96,11 +99,13 @@ class FilterSpec:
 
 
 def calibration_samples(sample_rate_hz, calibration_s):
+    """Samples in the calibration window: round(``calibration_s`` (s) * ``sample_rate_hz`` (Hz))."""
     return int(round(calibration_s * sample_rate_hz))
 
 
 def startup_bias(x_dps, sample_rate_hz, calibration_s):
-    """Bias = mean of the first calibration_s seconds (paper 001, 2.1): (bias (3,), samples)."""
+    """Bias = mean of the first ``calibration_s`` seconds of ``x_dps`` ((N, 3), deg/s, sampled at
+    ``sample_rate_hz``, Hz) (paper 001, 2.1): (bias (3,) in deg/s, samples)."""
     c = calibration_samples(sample_rate_hz, calibration_s)
     if c < 1 or c > len(x_dps):
         raise SettingsError(f"calibration of {calibration_s} s needs 1..{len(x_dps)} samples, got {c}")
@@ -108,12 +113,16 @@ def startup_bias(x_dps, sample_rate_hz, calibration_s):
 
 
 def run_raw(x_dps, sample_rate_hz, calibration_s):
+    """The samples ``x_dps`` ((N, 3), deg/s, at ``sample_rate_hz``, Hz) after the calibration,
+    minus its bias (:func:`startup_bias` over ``calibration_s``, s): one row per sample."""
     bias, c = startup_bias(x_dps, sample_rate_hz, calibration_s)
     return FilterOutput(x_dps[c:] - bias, 1, c)
 
 
 def run_block_mean(x_dps, sample_rate_hz, calibration_s, block_len=5):
-    """Plain mean of non-sliding blocks of L samples (paper 001, 2.2 without the rejection)."""
+    """Plain mean of non-sliding blocks of L = ``block_len`` samples (paper 001, 2.2 without the
+    rejection) of ``x_dps`` ((N, 3), deg/s, at ``sample_rate_hz``, Hz) after the calibration
+    window of ``calibration_s`` (s), its bias removed."""
     bias, c = startup_bias(x_dps, sample_rate_hz, calibration_s)
     return FilterOutput(block_mean_masked(x_dps - bias, block_len, start=c), block_len, c)
 
@@ -134,7 +143,8 @@ def moving_average(width):
 
 
 def first_order_lowpass(tau_s):
-    """y_i = y_(i-1) + a (x_i - y_(i-1)), a = dt / (tau + dt) (RC low-pass, backward Euler), y = 0 at start."""
+    """y_i = y_(i-1) + a (x_i - y_(i-1)), a = dt / (tau + dt) (RC low-pass, backward Euler), y = 0 at
+    start; tau = ``tau_s`` (s). Returns the filter's ``run`` (module docstring)."""
 
     def run(x_dps, sample_rate_hz, calibration_s):
         from scipy.signal import lfilter
@@ -149,7 +159,8 @@ def first_order_lowpass(tau_s):
 
 
 def cv_kalman_design(sample_rate_hz, r_dps2, q_spectral_density, order=2):
-    """A filterpy constant-velocity (order 2) or constant-acceleration (3) Kalman filter, one axis.
+    """A filterpy constant-velocity (``order`` 2) or constant-acceleration (3) Kalman filter, one
+    axis, at ``sample_rate_hz`` (Hz).
 
     State (rate, rate', ...), F the kinematic transition, H = [1, 0, ...], R = r_dps2 (the sample
     noise variance), Q = filterpy ``Q_continuous_white_noise(order, dt, q_spectral_density)``
@@ -180,7 +191,8 @@ def cv_kalman_design(sample_rate_hz, r_dps2, q_spectral_density, order=2):
 
 
 def cv_kalman(q_spectral_density, order=2):
-    """Steady-state filterpy CV (CA) Kalman filter per axis at the input rate, R from calibration.
+    """Steady-state filterpy CV (CA) Kalman filter per axis at the input rate, R from calibration;
+    ``q_spectral_density`` and ``order`` as for :func:`cv_kalman_design`. Returns the filter's ``run``.
 
     The run applies the filter's steady-state gain (the time-varying filter converges within
     about a second of the start, which falls in the still phase after calibration); the test
@@ -205,30 +217,32 @@ def cv_kalman(q_spectral_density, order=2):
 
 
 def gyrofilter_run(preset="paper", **settings):
-    """The package pipeline :class:`gyrofilter.GyroFilter` (batch ``filter``)."""
+    """The package pipeline :class:`gyrofilter.GyroFilter` (batch ``filter``) with ``preset`` and
+    ``settings``; returns the filter's ``run``, whose rows start at the filter's
+    ``first_block_index``."""
 
     def run(x_dps, sample_rate_hz, calibration_s):
-        from .pipeline import GyroFilter
+        from ..pipeline import GyroFilter
 
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
         y = f.filter(x_dps)
-        return FilterOutput(y, f.settings.block_len, calibration_samples(sample_rate_hz, calibration_s))
+        return FilterOutput(y, f.settings.block_len, f.first_block_index)
 
     return run
 
 
 def gyrofilter_smooth(preset="recommended", **settings):
-    """The offline forward-backward smoother :func:`gyrofilter.smoother.smooth` (same rows as
-    :func:`gyrofilter_run`)."""
+    """The offline forward-backward smoother :func:`gyrofilter.smoother.smooth` with ``preset`` and
+    ``settings`` (same rows as :func:`gyrofilter_run`); returns the filter's ``run``."""
 
     def run(x_dps, sample_rate_hz, calibration_s):
-        from .pipeline import GyroFilter
-        from .smoother import Smoother
+        from ..pipeline import GyroFilter
+        from ..smoother import Smoother
 
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
         smoother = Smoother(f)
         f.filter(x_dps)
-        return FilterOutput(smoother.smooth(), f.settings.block_len, calibration_samples(sample_rate_hz, calibration_s))
+        return FilterOutput(smoother.smooth(), f.settings.block_len, f.first_block_index)
 
     return run
 
@@ -280,8 +294,8 @@ def _stem(path):
 
 
 def find_static_recordings(recordings_dir):
-    """Real static MPU6050 recordings: sensor MPU6050 and a description starting with 'static'
-    (or, without a description, 'static' in the file name)."""
+    """Real static MPU6050 recordings in the folder ``recordings_dir``: sensor MPU6050 and a
+    description starting with 'static' (or, without a description, 'static' in the file name)."""
     out = []
     for path in sorted(glob.glob(os.path.join(recordings_dir, "*.csv*"))):
         rec = read_recording(path)
@@ -294,6 +308,7 @@ def find_static_recordings(recordings_dir):
 
 
 def find_broad_recordings(recordings_dir):
+    """The BROAD trials (``broad_*.csv*``, with optical reference) in the folder ``recordings_dir``, read."""
     return [read_recording(p) for p in sorted(glob.glob(os.path.join(recordings_dir, "broad_*.csv*")))]
 
 
@@ -302,14 +317,18 @@ def find_broad_recordings(recordings_dir):
 
 
 def static_reduction(spec, x_dps, sample_rate_hz, calibration_s=DEFAULT_CALIBRATION_S):
-    """Per-axis std(raw after calibration, bias removed) / std(filtered)."""
+    """Per-axis std(raw after calibration, bias removed) / std(filtered) of the filter ``spec``
+    (a FilterSpec) run on ``x_dps`` ((N, 3), deg/s, at ``sample_rate_hz``, Hz) with a
+    calibration of ``calibration_s`` (s)."""
     out = spec.run(x_dps, sample_rate_hz, calibration_s)
     raw_std = np.std(x_dps[out.start :], axis=0)
     return raw_std / np.std(out.y_dps, axis=0)
 
 
 def truth_blocks(rate_fn, sample_rate_hz, n_samples, out, shift_s=0.0):
-    """Truth w(t_i - shift) at t_i = i / fs averaged over each output row's samples, (M,)."""
+    """Truth w(t_i - shift) at t_i = i / fs averaged over each output row's samples, (M,) in deg/s:
+    w = ``rate_fn`` (of t in s), fs = ``sample_rate_hz`` (Hz), shift = ``shift_s`` (s), i < ``n_samples``;
+    the rows are those of ``out`` (a FilterOutput)."""
     t = np.arange(n_samples) / sample_rate_hz
     w = rate_fn(t - shift_s)
     m = len(out.y_dps)
@@ -317,13 +336,17 @@ def truth_blocks(rate_fn, sample_rate_hz, n_samples, out, shift_s=0.0):
 
 
 def row_times_s(out, sample_rate_hz):
-    """Centre time of each row's samples."""
+    """Centre time (s) of the samples of each row of ``out`` (a FilterOutput) at ``sample_rate_hz`` (Hz)."""
     k = np.arange(len(out.y_dps))
     return (out.start + k * out.block_len + (out.block_len - 1) / 2.0) / sample_rate_hz
 
 
 def segment_lag_s(y, rate_fn, sample_rate_hz, n_samples, out, t0, t1, tail_s=1.0, max_lag_s=3.0):
     """Shift d (s) minimising mean (y - block-averaged w(t - d))^2 over rows in [t0, t1 + tail].
+
+    ``y``: the rows of ``out`` (a FilterOutput) on one axis (deg/s); w = ``rate_fn`` (truth, of t
+    in s) sampled at ``sample_rate_hz`` (Hz) for ``n_samples``; t0, t1 (s): the segment; tail =
+    ``tail_s`` (s).
 
     d is searched in [-min(0.3, max_lag_s), max_lag_s] on a 10 ms grid, then refined to 1 ms; a
     result at the upper end means "at least max_lag_s" (or no delayed copy of the truth fits).
@@ -351,7 +374,8 @@ def segment_lag_s(y, rate_fn, sample_rate_hz, n_samples, out, t0, t1, tail_s=1.0
 
 
 def noise_segments(static_recs, duration_s=NOISE_SEGMENT_S, names=None):
-    """(name, x_dps (n, 3), fs): the first ``duration_s`` of each static recording long enough."""
+    """(name, x_dps (n, 3), fs): the first ``duration_s`` (s) of each recording of ``static_recs``
+    long enough (only those named in ``names``, when given)."""
     segs = []
     for rec in static_recs:
         name = _stem(rec.path or "")
@@ -364,7 +388,9 @@ def noise_segments(static_recs, duration_s=NOISE_SEGMENT_S, names=None):
 
 
 def dynamic_metrics(spec, profile, segments, calibration_s=DEFAULT_CALIBRATION_S, with_lag=True):
-    """RMSE (pooled over noise segments and axes) and per-segment lags for one profile."""
+    """RMSE (deg/s, pooled over noise segments and axes) and per-segment lags (s) of the filter
+    ``spec`` for one ``profile`` added to the noise ``segments`` (:func:`noise_segments`), with a
+    calibration of ``calibration_s`` (s); lags only ``with_lag``."""
     profile = get_profile(profile) if isinstance(profile, str) else profile
     sq_sum = 0.0
     count = 0
@@ -394,7 +420,8 @@ REST_GUARD_S = 1.5
 
 
 def broad_calibration_s(rec):
-    """First rest phase minus 1 s (the movement flag switches on up to ~1 s after motion starts)."""
+    """Calibration length (s) for the BROAD trial ``rec``: its first rest phase minus 1 s (the
+    movement flag switches on up to ~1 s after motion starts)."""
     move = np.asarray(rec.columns["movement"])
     first = int(np.flatnonzero(move == 1)[0])
     return max(first / rec.sample_rate_hz - 1.0, 1.0)
@@ -414,7 +441,8 @@ def _rest_mask(move, sample_rate_hz, guard_s=REST_GUARD_S):
 
 
 def reference_lag_s(out, ref_dps, sample_rate_hz, max_lag_s=0.3):
-    """Lag (s) of the filtered rows behind the reference rate (N, 3): per axis the shift of
+    """Lag (s) of the filtered rows of ``out`` behind the reference rate ``ref_dps`` (N, 3), deg/s,
+    sampled at ``sample_rate_hz`` (Hz), searched up to ``max_lag_s`` (s): per axis the shift of
     :func:`segment_lag_s` over the whole record (the reference linearly interpolated over its
     missing samples), the median over the axes."""
     t = np.arange(len(ref_dps)) / sample_rate_hz
@@ -431,7 +459,8 @@ def reference_lag_s(out, ref_dps, sample_rate_hz, max_lag_s=0.3):
 
 
 def broad_metrics(spec, rec):
-    """RMSE (deg/s) of a filter against the optical reference: motion, rest, all valid blocks.
+    """RMSE (deg/s) of the filter ``spec`` against the optical reference of the BROAD trial ``rec``:
+    motion, rest, all valid blocks.
 
     motion: blocks entirely flagged as movement; rest: blocks entirely at rest and more than
     REST_GUARD_S from a flag change; all: every block with a complete reference.
@@ -465,6 +494,9 @@ def broad_metrics(spec, rec):
 
 @dataclass
 class Evaluation:
+    """What :func:`evaluate` measured, per filter name: static reductions, dynamic RMSE and lags
+    (per profile), BROAD RMSE (per trial)."""
+
     filters: list
     static_names: list
     static: dict  # filter -> {recording: (3,) reductions}
@@ -475,14 +507,18 @@ class Evaluation:
     families: dict = field(default_factory=dict)  # filter -> family
 
     def static_min(self, name, only=None):
+        """The smallest static std reduction of filter ``name`` over axes and recordings (those in
+        ``only``, when given); NaN when there is none."""
         vals = [v for rec, v in self.static[name].items() if only is None or rec in only]
         return float(np.min(vals)) if vals else float("nan")
 
     def static_geomean(self, name, only=None):
+        """Geometric mean of the static std reductions of filter ``name`` (recordings in ``only``)."""
         vals = np.concatenate([v for rec, v in self.static[name].items() if only is None or rec in only])
         return float(np.exp(np.mean(np.log(vals))))
 
     def dynamic_geomean(self, name, only=None):
+        """Geometric mean of the dynamic RMSE (deg/s) of filter ``name`` over profiles (those in ``only``)."""
         vals = [d["rmse_dps"] for p, d in self.dynamic[name].items() if only is None or p in only]
         return float(np.exp(np.mean(np.log(vals))))
 
@@ -491,7 +527,11 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
              static_names=None, broad_names=None):
     """Run every filter on every data set; returns an :class:`Evaluation`.
 
-    ``progress``: optional callable(str) told what runs (the CLI prints it on stderr).
+    ``filters``: FilterSpecs (default :func:`default_filters`); ``recordings_dir``: the folder
+    of recordings; ``profiles``: names of :mod:`gyrofilter.sim.profiles` (default all);
+    ``with_lag``: estimate lags; ``static_names``, ``broad_names``: only these recordings (file
+    stems; default all); ``progress``: optional callable(str) told what runs (the CLI prints it
+    on stderr).
     """
     filters = default_filters() if filters is None else filters
     profiles = list(PROFILES) if profiles is None else list(profiles)
@@ -526,7 +566,9 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
 
 def dominates(ev, candidate, reference="paper001", claim=PAPER_CLAIM_REDUCTION, static_only=None,
               profiles=None, broad_only=None):
-    """Does ``candidate`` Pareto-dominate ``reference``? Returns (bool, list of reasons it fails).
+    """Does ``candidate`` Pareto-dominate ``reference`` in the :class:`Evaluation` ``ev``? Returns
+    (bool, list of reasons it fails). ``static_only``, ``profiles``, ``broad_only``: consider only
+    these static recordings, profiles and BROAD trials (default all).
 
     Criteria (issue 5): static std reduction >= ``claim`` on every axis of every static
     recording considered, and dynamic RMSE <= the reference's on every profile and every BROAD
@@ -556,7 +598,7 @@ def pareto_front(points):
 
 
 def format_table(ev):
-    """One Markdown table: a row per filter."""
+    """One Markdown table of the :class:`Evaluation` ``ev``: a row per filter."""
     head = ["filter", "static reduction min / geo-mean"]
     head += [f"{p} RMSE / worst lag" for p in ev.profiles]
     head += [f"{b} RMSE motion / rest / lag" for b in ev.broad_names]
@@ -575,11 +617,13 @@ def format_table(ev):
 
 
 def plot_pareto(ev, path, reference="paper001"):
-    """Static std reduction (geometric mean) against dynamic RMSE (geometric mean over profiles).
+    """Static std reduction (geometric mean) against dynamic RMSE (geometric mean over profiles)
+    of the :class:`Evaluation` ``ev``, drawn to the figure file ``path``; ``reference``: the
+    filter the others are compared with.
 
     The Pareto front is drawn through the real-time filters; offline ones (the smoother) are
     stars beside it. Labels that would overlap are moved down, one line at a time."""
-    from .plots import pyplot
+    from ..plots import pyplot
 
     plt = pyplot()
     pts = [(ev.dynamic_geomean(n), ev.static_geomean(n)) for n in ev.filters]

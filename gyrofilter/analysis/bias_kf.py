@@ -14,7 +14,7 @@ start-up calibration b0 (deg/s). Per sample (dt = 1/fs)::
     0   = r_k + v0,             v0 ~ N(0, sigma0^2)   only while still (zero-rate update)
 
 phi = exp(-dt / tau) and q_b = bias_sigma^2 (1 - phi^2), or phi = 1 and q_b = K^2 dt for a
-random-walk bias (tau = inf). These come from the ARMA(1, 1) of :mod:`gyrofilter.arma`
+random-walk bias (tau = inf). These come from the ARMA(1, 1) of :mod:`gyrofilter.analysis.arma`
 (:meth:`BiasKFSettings.from_bias_model`) or from settings. sigma is the white-noise level
 measured during the start-up calibration (first differences, :mod:`gyrofilter.calibration`).
 
@@ -47,9 +47,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .calibration import Calibration, calibrate
-from .errors import SettingsError
-from .units import plain
+from ..calibration import Calibration, calibrate
+from ..errors import SettingsError
+from ..units import check_sample_rate_hz, plain
 
 RESUM_EVERY = 10_000  # samples between exact recomputations of the window sums
 
@@ -75,7 +75,7 @@ class BiasKFSettings:
 
     @classmethod
     def from_bias_model(cls, model, **overrides):
-        """Settings whose bias model is ``model`` (a :class:`gyrofilter.arma.BiasModel`, or per-axis list of them)."""
+        """Settings whose bias model is ``model`` (a :class:`gyrofilter.analysis.arma.BiasModel`, or per-axis list of them)."""
         models = model if isinstance(model, (list, tuple)) else [model] * 3
         taus = [m.tau_s for m in models]
         if any(not m.valid for m in models):
@@ -110,15 +110,17 @@ def _per_axis(value, name):
 class BiasKalmanFilter:
     """Rate + bias Kalman filter per axis with zero-rate updates at detected rest.
 
+    ``sample_rate_hz``: input sample rate (Hz); ``settings``: a :class:`BiasKFSettings` (default:
+    its defaults), with any of its fields overridden by keyword (``**kw``); ``calibration``: a
+    :class:`~gyrofilter.calibration.Calibration` that skips the start-up calibration.
+
     >>> f = BiasKalmanFilter(100.0)              # 2 s start-up calibration, then online bias
     >>> y = f.update((gx, gy, gz))               # None while calibrating, else rates (deg/s)
     >>> f.bias_dps                               # current bias estimate, 3-tuple (deg/s)
     """
 
     def __init__(self, sample_rate_hz, settings: BiasKFSettings | None = None, *, calibration: Calibration | None = None, **kw):
-        if not sample_rate_hz > 0:
-            raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
-        self.sample_rate_hz = float(sample_rate_hz)
+        self.sample_rate_hz = check_sample_rate_hz(sample_rate_hz)
         self.settings = s = replace(settings or BiasKFSettings(), **kw)
         if s.engine not in ("numpy", "filterpy"):
             raise SettingsError(f"engine must be 'numpy' or 'filterpy', got {s.engine!r}")
@@ -191,16 +193,20 @@ class BiasKalmanFilter:
 
     @property
     def bias_std_dps(self):
+        """Standard deviation of the bias estimate per axis (deg/s), or None while calibrating."""
         if self.calibration is None:
             return None
         return tuple(float(v) for v in np.sqrt(self._pdd_now()))
 
     @property
     def still(self) -> bool:
+        """The rest detector's state after the last sample (with its hysteresis): True at rest;
+        a zero-rate update is applied when the sample also passes the gate on every axis."""
         return self._still
 
     def update(self, sample_dps):
-        """One sample (gx, gy, gz) in deg/s -> None while calibrating, else the rate estimate (3-tuple)."""
+        """One sample ``sample_dps`` (gx, gy, gz) in deg/s -> None while calibrating, else the rate
+        estimate (3-tuple, deg/s)."""
         z = np.asarray(sample_dps, dtype=float).reshape(3)
         if self.calibration is None:
             self._cal_buffer.append(z)
@@ -215,7 +221,8 @@ class BiasKalmanFilter:
         return tuple(float(v) for v in rate)
 
     def run(self, samples_dps) -> BiasKFTrace:
-        """Batch: (N, 3) deg/s -> per-sample trace after the calibration window (same numbers as update)."""
+        """Batch: ``samples_dps`` (N, 3) deg/s -> per-sample trace after the calibration window (same
+        numbers as update)."""
         x = np.asarray(samples_dps, dtype=float)
         if x.ndim != 2 or x.shape[1] != 3:
             raise SettingsError(f"samples must have shape (N, 3), got {x.shape}")
@@ -234,7 +241,7 @@ class BiasKalmanFilter:
                            np.array(stds).reshape(shape), np.array(still, dtype=bool), self.calibration)
 
     def filter(self, samples_dps) -> np.ndarray:
-        """Batch: (N, 3) deg/s -> (N - calibration samples, 3) rate estimates."""
+        """Batch: ``samples_dps`` (N, 3) deg/s -> (N - calibration samples, 3) rate estimates (deg/s)."""
         return self.run(samples_dps).rate_dps
 
     # -- kernel ---------------------------------------------------------------------------

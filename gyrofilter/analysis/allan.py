@@ -26,8 +26,8 @@ import math
 
 import numpy as np
 
-from .errors import GyroFilterError, SettingsError
-from .units import plain
+from ..errors import GyroFilterError, SettingsError
+from ..units import check_sample_rate_hz, plain
 
 #: cluster count below which a deviation (and any fit using it) is flagged: paper 002 needs
 #: N/m >= 9 for an error under 25 %.
@@ -40,17 +40,6 @@ _CHUNK = 1 << 16
 
 class AllanInputError(GyroFilterError, ValueError):
     """The data or the requested cluster times cannot give an Allan deviation."""
-
-
-def _check_rate(sample_rate_hz):
-    try:
-        rate = float(sample_rate_hz)
-    except (TypeError, ValueError):
-        raise SettingsError(
-            f"sample_rate_hz must be a positive number (Hz), got {plain(sample_rate_hz)}") from None
-    if not math.isfinite(rate) or rate <= 0:
-        raise SettingsError(f"sample_rate_hz must be a positive number (Hz), got {plain(sample_rate_hz)}")
-    return rate
 
 
 def _check_series(x, name="x"):
@@ -88,12 +77,13 @@ def default_cluster_sizes(n_samples, points_per_decade=POINTS_PER_DECADE, min_cl
 
 
 def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
-    """Cluster sizes ``m = round(tau * fs)`` for ``taus_s`` (or the default grid when None).
+    """Cluster sizes ``m = round(tau * fs)`` for ``taus_s`` (s; or the default grid when None),
+    for ``n_samples`` samples at ``sample_rate_hz`` (fs, Hz).
 
     Raises :class:`AllanInputError` when a tau is shorter than one sample or so long that the
     record does not hold two clusters plus one sample (``2 m > N - 1``).
     """
-    rate = _check_rate(sample_rate_hz)
+    rate = check_sample_rate_hz(sample_rate_hz)
     if taus_s is None:
         return default_cluster_sizes(n_samples)
     taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
@@ -191,7 +181,7 @@ def overlapping_adev(x, sample_rate_hz, taus_s=None):
 def _deviation(x, sample_rate_hz, taus_s, overlapping):
     """sqrt(sum of squared second differences / (2 n_terms)) / tau at every cluster size; the
     second differences start at every sample (overlapping) or every m-th (non-overlapping)."""
-    rate = _check_rate(sample_rate_hz)
+    rate = check_sample_rate_hz(sample_rate_hz)
     x = _check_series(x)
     m = cluster_sizes(x.size, rate, taus_s)
     phase = _phase(x, 1.0 / rate)
@@ -207,7 +197,8 @@ def adev(x, sample_rate_hz, taus_s=None):
 
     ``sigma^2(tau) = 1 / (2 (K - 1)) sum_k (xbar_{k+1} - xbar_k)^2`` over the ``K = N // m``
     adjacent cluster averages. Less precise than :func:`overlapping_adev`; kept for the
-    reference values of paper 000 and Stable32.
+    reference values of paper 000 and Stable32. ``x``, ``sample_rate_hz`` (Hz) and ``taus_s`` (s)
+    as for :func:`overlapping_adev`; returns what it returns.
     """
     return _deviation(x, sample_rate_hz, taus_s, overlapping=False)
 
@@ -224,7 +215,8 @@ ALPHA = {"white_pm": 2, "flicker_pm": 1, "white_fm": 0, "flicker_fm": -1, "rando
 
 
 def n_clusters(n_samples, m):
-    """Number of non-overlapping clusters ``N // m`` (paper 000's K = N/n; paper 002 wants >= 9)."""
+    """Number of non-overlapping clusters ``N // m`` of ``n_samples`` (N) samples at cluster size
+    ``m`` (paper 000's K = N/n; paper 002 wants >= 9)."""
     return np.asarray(n_samples // np.asarray(m, dtype=np.int64), dtype=np.int64)
 
 
@@ -263,7 +255,9 @@ def edf_oavar(n_samples, m, alpha):
 def edf_mixture(n_samples, m, shares, alphas):
     """EDF of the overlapping Allan variance of a sum of independent power-law noises.
 
-    ``shares[k, i]`` is noise k's part of the Allan variance at ``m[i]`` (any scale). The
+    ``n_samples``: N; ``m``: cluster sizes; ``alphas[k]``: noise k's power-law exponent
+    (S(f) ~ f^alpha, as for :func:`edf_oavar`); ``shares[k, i]`` is noise k's part of the Allan
+    variance at ``m[i]`` (any scale). The
     standard deviation of a sum of estimates is at most the sum of their standard deviations
     (Cauchy-Schwarz; the cross terms of the quadratic estimator are non-negative), so with
     ``sd_k = share_k sqrt(2 / edf_k)``::
@@ -283,7 +277,7 @@ def edf_mixture(n_samples, m, shares, alphas):
 
 
 def chi2_ppf(p, dof):
-    """Quantile of the chi-square distribution (scipy when installed, else Wilson-Hilferty:
+    """Quantile ``p`` of the chi-square distribution with ``dof`` degrees of freedom (scipy when installed, else Wilson-Hilferty:
     ``k (1 - 2/(9k) + z_p sqrt(2/(9k)))^3``, within 1 % for k >= 3). scipy's ``special.chdtri``
     (the inverse upper tail: ``chdtri(k, 1 - p)``) is ``stats.chi2.ppf``'s own kernel without
     the 50 MB that importing ``scipy.stats`` costs."""
@@ -302,6 +296,9 @@ def chi2_interval(avar, edf, confidence=0.95):
     """Two-sided interval for the Allan *variance* (NIST SP 1065 eq. 41, p. 42)::
 
         edf s^2 / chi2_{(1+c)/2}(edf)  <=  sigma^2  <=  edf s^2 / chi2_{(1-c)/2}(edf)
+
+    ``avar``: s^2, the estimates ((deg/s)^2); ``edf``: their degrees of freedom; ``confidence``:
+    c, in (0, 1). Returns (low, high).
     """
     if not 0.0 < confidence < 1.0:
         raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
@@ -314,7 +311,8 @@ def chi2_interval(avar, edf, confidence=0.95):
 
 def simple_interval(adev_values, n_samples, m):
     """Paper 000's one-sigma bound on the *deviation*: ``sigma (1 -+ 1/sqrt(2 (N/m - 1)))``
-    (N = 10000, m = 100 -> 7.11 %). Returns (low, high, relative_error); low is clipped at 0."""
+    (N = 10000, m = 100 -> 7.11 %), sigma = ``adev_values`` (deg/s), N = ``n_samples``, m the
+    cluster sizes. Returns (low, high, relative_error); low is clipped at 0."""
     ratio = np.asarray(n_samples / np.asarray(m, dtype=np.float64))
     with np.errstate(divide="ignore"):
         rel = 1.0 / np.sqrt(2.0 * np.maximum(ratio - 1.0, 0.0))

@@ -32,7 +32,7 @@ Uncertainty of a fitted coefficient (two-sided, at ``confidence``, default 95 %)
 linear in the Allan variances on its active set, ``theta = G y`` with ``G = (A' W A)^-1 A' W``,
 so ``cov(theta) = G C G'``. ``C`` (:func:`avar_covariance`) has the standard deviations of the
 NIST SP 1065 Table 5 EDF for each noise type, summed over the fitted mixture (conservative, see
-:func:`gyrofilter.allan.edf_mixture`), and the correlations between cluster times from the
+:func:`gyrofilter.analysis.allan.edf_mixture`), and the correlations between cluster times from the
 Allan transfer function (:func:`avar_correlation`). The interval is the chi-square interval with
 ``edf = 2 theta_j^2 / var_j`` (Satterthwaite). The round-trip tests check that it covers the true
 coefficient in at least 90 % of simulated records (measured: 92-100 %).
@@ -55,8 +55,8 @@ import numpy as np
 
 from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
-from .errors import SettingsError
-from .units import DEG_PER_RAD, plain
+from ..errors import SettingsError
+from ..units import DEG_PER_RAD, plain
 
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
 TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
@@ -74,14 +74,16 @@ FLICKER_FLOOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
 
 def basis(tau_s):
-    """Columns of the model matrix: ``[3/tau^2, 1/tau, 2 ln2/pi, tau/3, tau^2/2]`` (shape (n, 5))."""
+    """Columns of the model matrix at the cluster times ``tau_s`` (n,) in s:
+    ``[3/tau^2, 1/tau, 2 ln2/pi, tau/3, tau^2/2]`` (shape (n, 5))."""
     tau = np.asarray(tau_s, dtype=np.float64)
     return np.column_stack([3.0 / tau ** 2, 1.0 / tau, np.full_like(tau, 2.0 * math.log(2.0) / math.pi),
                             tau / 3.0, tau ** 2 / 2.0])
 
 
 def model_adev(coefficients, tau_s):
-    """sqrt of the five-term model for ``coefficients`` = (Q, N, B, K, R) (None counts as 0)."""
+    """sqrt of the five-term model (deg/s) at ``tau_s`` (s) for ``coefficients`` = (Q, N, B, K, R)
+    in their base units (TERM_UNIT; None counts as 0)."""
     c = np.array([0.0 if v is None else float(v) for v in coefficients])
     return np.sqrt(basis(tau_s) @ c ** 2)
 
@@ -115,7 +117,7 @@ CUSTOMARY_UNIT = {"quantization": "arcsec", "arw": "deg/sqrt(h)", "bias_instabil
 
 
 def convert(value, term, unit, to_base=False):
-    """Convert a coefficient of ``term`` from its base unit (TERM_UNIT) to ``unit``, or back
+    """Convert ``value``, a coefficient of ``term``, from its base unit (TERM_UNIT) to ``unit``, or back
     with ``to_base=True``. Raises SettingsError for an unknown (term, unit) pair."""
     try:
         factor = UNIT_FACTORS[(term, unit)]
@@ -134,7 +136,8 @@ def arw_from_white_std(std_dps, sample_rate_hz):
 
 
 def white_std_from_arw(arw_dps_per_sqrt_hz, sample_rate_hz):
-    """Per-sample standard deviation (deg/s) of white rate noise of density N: ``N sqrt(fs)``."""
+    """Per-sample standard deviation (deg/s) of white rate noise of density N =
+    ``arw_dps_per_sqrt_hz`` (deg/s/sqrt(Hz)) sampled at fs = ``sample_rate_hz`` (Hz): ``N sqrt(fs)``."""
     return arw_dps_per_sqrt_hz * math.sqrt(sample_rate_hz)
 
 
@@ -162,13 +165,16 @@ class Coefficient:
 
     @property
     def unit(self):
+        """The coefficient's base unit (TERM_UNIT)."""
         return TERM_UNIT[self.term]
 
     @property
     def resolved(self):
+        """True when a value was estimated (else only ``upper`` bounds it)."""
         return self.value is not None
 
     def to_dict(self, unit=None):
+        """value, low, high in ``unit`` (default: the base unit) and the unit's name, as a dict."""
         unit = unit or self.unit
         return {"value": convert(self.value, self.term, unit), "low": convert(self.low, self.term, unit),
                 "high": convert(self.high, self.term, unit), "unit": unit}
@@ -196,6 +202,7 @@ class AxisNoise:
     warnings: list = field(default_factory=list)
 
     def model_adev(self, tau_s=None):
+        """The fitted model's Allan deviation (deg/s) at ``tau_s`` (s; default: the measured taus)."""
         return model_adev(self.fit_values, self.tau_s if tau_s is None else tau_s)
 
     def fit_consistency(self):
@@ -210,7 +217,8 @@ class AxisNoise:
 # --------------------------------------------------------------------------------------------
 
 def nnls_weighted(a, y, w, allowed=None):
-    """min sum_i w_i (y_i - (A theta)_i)^2 subject to theta >= 0.
+    """min sum_i w_i (y_i - (A theta)_i)^2 subject to theta >= 0 (``a``: A, ``y``, ``w``: weights;
+    ``allowed``: the indices of the columns that may be nonzero, default all).
 
     With five unknowns the 2^5 active sets are enumerated: the NNLS optimum is the
     unconstrained least-squares solution on its own support, so the best feasible subset
@@ -248,6 +256,10 @@ def _term_shares(theta_sq, tau):
 def fit(tau_s, adev_values, m, n_samples, *, terms=TERMS, min_clusters=MIN_CLUSTERS,
         confidence=0.95, iterations=6):
     """Weighted NNLS fit of the five-term model; returns (theta_squared, used_mask, edf, warnings).
+
+    ``tau_s`` (s), ``adev_values`` (deg/s) and ``m`` (cluster sizes) describe the measured curve
+    of ``n_samples`` samples; ``terms``: the terms to fit (of Q, N, B, K, R); ``confidence``: of
+    the intervals; ``iterations``: reweighting passes (the weights come from the fitted model).
 
     ``theta_squared`` are Q^2, N^2, B^2, K^2, R^2. Taus with fewer than ``min_clusters``
     clusters are left out; if ``min_clusters`` < 9 the warnings say so.
@@ -367,7 +379,7 @@ def avar_correlation(m1, m2, alpha):
 
 
 def avar_covariance(tau_s, m, n_samples, theta_sq):
-    """Approximate covariance matrix of the Allan variance estimates at ``m`` for the noise
+    """Approximate covariance matrix of the Allan variance estimates at ``m`` (cluster sizes; ``tau_s`` the cluster times, s; ``n_samples`` samples) for the noise
     mixture ``theta_sq`` (Q^2 ... R^2): standard deviations from the SP 1065 EDF of each term,
     summed (conservative), and correlations from :func:`avar_correlation`, averaged over the
     terms with weights sqrt(sd_ki sd_kj)."""
@@ -456,7 +468,7 @@ def _fitted_intervals(theta, tau, m, n_samples, used, confidence):
 # --------------------------------------------------------------------------------------------
 
 def local_slopes(tau_s, adev_values, half_window=1):
-    """d log sigma / d log tau at each tau, by a least-squares line over +-half_window points
+    """d log sigma / d log tau at each tau of ``tau_s`` (s) for the deviations ``adev_values``, by a least-squares line over +-half_window points
     (read-offs use +-2: five points, half a decade)."""
     lt, ls = np.log(tau_s), np.log(np.maximum(adev_values, 1e-300))
     n = lt.size
@@ -479,6 +491,9 @@ def _runs(indices, min_run):
 
 def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15, min_run=3):
     """Coefficients read from the slopes of the Allan deviation (papers 000 and 002).
+
+    ``tau_s`` (s), ``adev_values`` and its interval ``ci_low``, ``ci_high`` (deg/s): the curve;
+    ``used``: the taus with enough clusters.
 
     Q, N, K, R: among the taus (with enough clusters) whose local slope is within
     ``slope_tolerance`` of the term's slope (-1, -1/2, +1/2, +1), the one nearest the read-off
@@ -545,7 +560,7 @@ def gross_errors(x_dps, *, z=GROSS_Z, limit_dps=GROSS_LIMIT_DPS):
     A sample is one when ``|x_i| > limit_dps`` (beyond any MEMS full scale), or when its
     second-difference residual ``r_i = x_i - (x_{i-1} + x_{i+1}) / 2`` (``x_0 - x_1`` and
     ``x_{N-1} - x_{N-2}`` at the ends) exceeds ``z`` robust sigmas of ``r``
-    (:func:`gyrofilter.detectors.robust_sigma`, 1.4826 MAD) and ``|r_i|`` is not smaller than its
+    (:func:`gyrofilter.analysis.detectors.robust_sigma`, 1.4826 MAD) and ``|r_i|`` is not smaller than its
     neighbours' (a spike moves their residuals by half its size, so of two spikes side by side only
     the larger may be found), and neither neighbour is beyond ``limit_dps``. A bias drift, smooth over three samples, leaves ``r`` alone, so only
     isolated jumps count; sensor motion does show up. The
@@ -586,7 +601,9 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
                       confidence=0.95, terms=TERMS, axis="x"):
     """Overlapping Allan deviation, intervals and both coefficient estimates for one axis.
 
-    ``x_dps``: 1-D rate series in deg/s. Raises :class:`AllanInputError` for constant data
+    ``x_dps``: 1-D rate series in deg/s, sampled at ``sample_rate_hz`` (Hz); ``taus_s``: the
+    cluster times (s; default grid); ``min_clusters``: fewest clusters a fitted tau needs;
+    ``confidence``: of the intervals; ``terms``: the terms fitted; ``axis``: its name. Raises :class:`AllanInputError` for constant data
     (nothing to characterise), NaN, or a record too short for a fit.
     """
     x = np.asarray(x_dps, dtype=np.float64)
@@ -646,8 +663,9 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
 
 
 def characterise(gyro_dps, sample_rate_hz, *, axes="xyz", **kwargs):
-    """:func:`characterise_axis` for each column of ``gyro_dps`` (shape (N, 3), deg/s);
-    returns {axis name: AxisNoise}."""
+    """:func:`characterise_axis` for each column of ``gyro_dps`` (shape (N, 3), deg/s) at
+    ``sample_rate_hz`` (Hz) named in ``axes`` (a subset of "xyz"); ``kwargs`` go to
+    :func:`characterise_axis`; returns {axis name: AxisNoise}."""
     g = np.asarray(gyro_dps, dtype=np.float64)
     if g.ndim != 2 or g.shape[1] != len(axes):
         got = g.shape if g.ndim else "a scalar"
@@ -688,7 +706,9 @@ def _details_json(c: Coefficient):
 
 
 def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
-    """The ``gyrofilter allan --json`` document (docs/formats.md, section 4)."""
+    """The ``gyrofilter allan --json`` document (docs/formats.md, section 4) of ``results``
+    ({axis name: AxisNoise}, from :func:`characterise`) for a record at ``sample_rate_hz`` (Hz);
+    ``recording`` (its name) and ``duration_s`` (s) are written when given."""
     doc = {"sample_rate_hz": float(sample_rate_hz)}
     if recording is not None:
         doc["recording"] = str(recording)
@@ -728,7 +748,8 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
 def kalibr_values(r: AxisNoise):
     """Kalibr's continuous-time ``gyroscope_noise_density`` (rad/s/sqrt(Hz)) = N and
     ``gyroscope_random_walk`` (rad/s^2/sqrt(Hz)) = K for one axis. When K is not resolved its
-    upper bound is used (stated in ``random_walk_is_upper_bound``); B is *not* K."""
+    upper bound is used (stated in ``random_walk_is_upper_bound``); B is *not* K. ``r``: the
+    axis's AxisNoise."""
     n = r.fitted["arw"]
     k = r.fitted["rrw"]
     nd = n.value if n.value is not None else n.upper
@@ -743,7 +764,8 @@ def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0"):
     """Kalibr ``imu.yaml`` gyroscope entries: the largest value over the axes (Kalibr takes one
     number for all three), continuous time, SI units. Accelerometer lines are not written (this
     package characterises the gyro only); Kalibr needs them, so fill them in from your own
-    accelerometer analysis."""
+    accelerometer analysis. ``results``, ``sample_rate_hz`` (Hz) and ``recording`` as for
+    :func:`to_json`; ``rostopic``: the IMU topic written."""
     per_axis = {a: kalibr_values(r) for a, r in results.items()}
     nd = max(v["gyroscope_noise_density"] for v in per_axis.values())
     rw = max(v["gyroscope_random_walk"] for v in per_axis.values())

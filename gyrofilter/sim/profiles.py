@@ -2,7 +2,7 @@
 
 Every profile starts with at least 10 s at rest (the start-up calibration needs the sensor
 still) and is a function of time only, so the truth can be evaluated at any instant, also shifted
-(the lag estimate of :mod:`gyrofilter.evaluate` uses that). Rates in deg/s on one axis; the
+(the lag estimate of :mod:`gyrofilter.evaluation.evaluate` uses that). Rates in deg/s on one axis; the
 dynamic test adds the same profile to each axis of a real static recording.
 
 ``paper001`` is the dynamic test of paper 001 (its section 5) exactly as
@@ -29,8 +29,8 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import SettingsError
-from .units import plain
+from ..errors import SettingsError
+from ..units import check_sample_rate_hz
 
 
 @dataclass(frozen=True)
@@ -121,11 +121,14 @@ def get_profile(name) -> Profile:
 
 
 def profile_samples_dps(profile, sample_rate_hz, duration_s=None):
-    """The truth sampled at t_i = i / fs, i = 0 .. N-1, N = round(duration * fs): (t_s, rate_dps)."""
+    """The truth sampled at t_i = i / fs, i = 0 .. N-1, N = round(duration * fs): (t_s, rate_dps).
+
+    ``profile``: a :class:`Profile` or the name of one (:data:`PROFILES`); ``sample_rate_hz``: fs
+    (Hz); ``duration_s``: the duration (s), default the profile's.
+    """
     if isinstance(profile, str):
         profile = get_profile(profile)
-    if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
+    sample_rate_hz = check_sample_rate_hz(sample_rate_hz)
     duration_s = profile.duration_s if duration_s is None else float(duration_s)
     n = int(round(duration_s * sample_rate_hz))
     t_s = np.arange(n) / sample_rate_hz

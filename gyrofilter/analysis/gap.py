@@ -10,13 +10,13 @@
    ``arw_dps_per_sqrt_hz = sigma / sqrt(f_s)`` (white noise per sample ``N sqrt(f_s)``,
    IEEE Std 952-1997 annex C).
 2. **Simulated spread**: the baseline is simulated ``n_sims`` times (seeded; common random
-   numbers with the extended model) with :func:`gyrofilter.simulate.simulate`, and the same
+   numbers with the extended model) with :func:`gyrofilter.sim.simulate.simulate`, and the same
    features are computed on the measurement and on every run (:func:`features`): the
-   overlapping Allan deviation at log-spaced tau (:func:`gyrofilter.allan.overlapping_adev`),
+   overlapping Allan deviation at log-spaced tau (:func:`gyrofilter.analysis.allan.overlapping_adev`),
    band powers of the periodogram in log-spaced bands, the largest periodogram line over the
    local noise level, the lag-1 autocorrelation of the high-passed noise and the spike count.
    Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
-3. **Causes**: :mod:`gyrofilter.detectors` maps departures to effects of the table, in a fixed
+3. **Causes**: :mod:`gyrofilter.analysis.detectors` maps departures to effects of the table, in a fixed
    decision order (outliers, sinusoid, colored noise, slow bias effects; see there for how
    ramp / random walk / warm-up / Gauss-Markov / bias instability / step / temperature are told
    apart), each with its own significance threshold, and estimates the parameters.
@@ -37,9 +37,9 @@ import time
 import numpy as np
 
 from . import detectors as det
-from .errors import RecordingError
+from ..errors import RecordingError
+from ..units import AXES, check_sample_rate_hz
 
-AXES = ("x", "y", "z")
 METRIC = "mean squared z-score of the Allan deviation, band powers, spectral line, lag-1 and spike count vs model simulations"
 #: minimum samples for any analysis
 MIN_SAMPLES = 256
@@ -237,9 +237,9 @@ def _effect_entry(cand):
 
 def _simulate_axis(spec, n, fs, seed, axis):
     """One run of one axis of the validated model ``spec``: ``n`` samples in deg/s, filled
-    block by block (:func:`gyrofilter.simulate.simulate_axis_dps`; the same numbers as that
-    axis of a full :func:`~gyrofilter.simulate.simulate` run with this seed)."""
-    from .simulate import simulate_axis_dps
+    block by block (:func:`gyrofilter.sim.simulate.simulate_axis_dps`; the same numbers as that
+    axis of a full :func:`~gyrofilter.sim.simulate.simulate` run with this seed)."""
+    from ..sim.simulate import simulate_axis_dps
 
     x = np.empty(n)
     pos = 0
@@ -271,7 +271,7 @@ class _Progress:
 def _sim_features(model, n, fs, seeds, axes_idx, taus, bands, say=None, label="simulations"):
     """Features of ``len(seeds)`` runs of ``model`` (list per axis index). Each run simulates
     only the axes asked for, one at a time, so memory holds one axis of one run."""
-    from .simulate import validate_model
+    from ..sim.simulate import validate_model
 
     spec, _ = validate_model(model)
     axes_idx = list(axes_idx)
@@ -294,7 +294,7 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
     ``runtime_s``). ``progress(text)`` is called with short status lines."""
     import warnings
 
-    from .errors import GyroFilterError
+    from ..errors import GyroFilterError
 
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -323,8 +323,8 @@ STATIC_LIMIT_DPS = 1.0
 def _axis_dps(rec, i):
     """Axis ``i`` of ``rec.gyro_dps``, converted from its column when asked (the column
     itself for ``gyro_unit: dps``): the analysis never holds the three axes in deg/s at once."""
-    from .recording import GYRO_COLUMNS
-    from .units import to_dps
+    from ..recording import GYRO_COLUMNS
+    from ..units import to_dps
 
     return to_dps(rec.columns[GYRO_COLUMNS[i]], rec.gyro_unit, rec.lsb_per_dps)
 
@@ -332,9 +332,7 @@ def _axis_dps(rec, i):
 def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
     t_start = time.perf_counter()
     say = progress or (lambda text: None)
-    fs = float(rec.sample_rate_hz)
-    if not (math.isfinite(fs) and fs > 0):
-        raise RecordingError(f"{rec.path or 'recording'}: sample_rate_hz must be > 0, got {fs}")
+    fs = check_sample_rate_hz(rec.sample_rate_hz, f"{rec.path or 'recording'}: sample_rate_hz", RecordingError)
     n = len(rec)
     report = {"recording": recording_name if recording_name is not None else (rec.path or ""),
               "sample_rate_hz": fs, "duration_s": n / fs,

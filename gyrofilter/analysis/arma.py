@@ -64,9 +64,9 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .errors import SettingsError
-from .extras import require
-from .units import json_ready, plain
+from ..errors import SettingsError
+from ..extras import require
+from ..units import check_sample_rate_hz, json_ready, plain
 
 DEFAULT_MAX_SAMPLES = 200_000
 DEFAULT_ADF_MAXLAG = 20
@@ -134,19 +134,22 @@ class ArmaFit:
 
     @property
     def n_params(self) -> int:
+        """p + q, the number of ARMA coefficients."""
         return self.p + self.q
 
     @property
     def order(self):
+        """(p, q)."""
         return (self.p, self.q)
 
     def equation(self, digits=4) -> str:
-        """The model as paper 003 writes it, e.g. ``x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}``."""
+        """The model as paper 003 writes it with ``digits`` decimals, e.g. ``x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}``."""
         left = "x_t" + "".join(_term(-c, f"x_{{t-{i + 1}}}", digits) for i, c in enumerate(self.phi))
         right = "a_t" + "".join(_term(-c, f"a_{{t-{j + 1}}}", digits) for j, c in enumerate(self.theta))
         return f"{left} = {right}"
 
     def to_dict(self):
+        """The fit as plain data (the ``arma --json`` document's fit entries)."""
         return {"p": self.p, "q": self.q, "phi": list(self.phi), "theta": list(self.theta),
                 "sigma_a": self.sigma_a, "rss": self.rss, "n_residuals": self.n_residuals, "aic": self.aic,
                 "equation": self.equation()}
@@ -232,6 +235,7 @@ class AxisReport:
     warnings: list = field(default_factory=list)  # what scipy/statsmodels warned, summarised (see analyze_axis)
 
     def to_dict(self):
+        """The report as plain data (the ``arma --json`` document's axis entry)."""
         return {
             "axis": self.axis,
             "n_samples": self.n_samples,
@@ -260,7 +264,8 @@ class AxisReport:
 
 
 def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
-    """Zero-mean series for the analysis: ``(series, decimation, analysis_rate_hz, mean)``.
+    """Zero-mean series for the analysis: ``(series, decimation, analysis_rate_hz, mean)``, from
+    ``x`` (1-D, deg/s) sampled at ``sample_rate_hz`` (Hz).
 
     Paper 003: "static output minus its constant". Longer than ``max_samples``: non-overlapping
     block means over the smallest factor k with N / k <= max_samples (the tail that does not
@@ -271,8 +276,7 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
         raise SettingsError(f"series must be 1-D, got shape {x.shape}")
     if not np.all(np.isfinite(x)):
         raise SettingsError("series holds NaN or infinite values")
-    if not sample_rate_hz > 0:
-        raise SettingsError(f"sample_rate_hz must be positive, got {plain(sample_rate_hz)}")
+    check_sample_rate_hz(sample_rate_hz)
     if max_samples < 100:
         raise SettingsError(f"max_samples must be at least 100, got {plain(max_samples)}")
     k = max(1, math.ceil(len(x) / max_samples))
@@ -284,7 +288,8 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
 
 
 def adf_test(x, maxlag=DEFAULT_ADF_MAXLAG, alpha=DEFAULT_ALPHA) -> Stationarity:
-    """Augmented Dickey-Fuller test with a constant, lag order by AIC up to ``maxlag``.
+    """Augmented Dickey-Fuller test of the series ``x`` with a constant, lag order by AIC up to
+    ``maxlag``, at significance ``alpha``.
 
     statsmodels' default maxlag (12 (N/100)^(1/4), 60 at N = 65 000) takes ~20 s there for
     the same verdict, hence the cap.
@@ -308,7 +313,8 @@ def normality_tests(x, alpha=DEFAULT_ALPHA, quantum=None, seed=0) -> Normality:
     the asymptotic 1.358 / sqrt(N); with mean and std estimated from the data the KS p-value is
     conservative (Lilliefors), and on quantised data (MPU6050 LSB steps) KS also sees the steps:
     with ``quantum`` (the step, in the series' unit) KS is repeated on x + U(-quantum/2, quantum/2)
-    (seeded dither), which removes the steps but not a non-normal shape.
+    (seeded dither, ``seed``), which removes the steps but not a non-normal shape. ``alpha``:
+    the significance level.
     """
     require_stats()
     from scipy import stats
@@ -340,7 +346,8 @@ def normality_tests(x, alpha=DEFAULT_ALPHA, quantum=None, seed=0) -> Normality:
 
 
 def whiteness(residuals, n_params=0, lags=WHITENESS_LAGS, alpha=DEFAULT_ALPHA) -> Whiteness:
-    """Residual ACF/PACF (lags 1..lags) and the Ljung-Box test at ``lags`` with ``n_params`` df removed.
+    """ACF/PACF of ``residuals`` (lags 1..lags) and the Ljung-Box test at ``lags`` with ``n_params``
+    df removed, at significance ``alpha``.
 
     Q = N (N + 2) sum_{k=1}^{h} r_k^2 / (N - k) ~ chi2(h - p - q) (Ljung and Box 1978).
     """
@@ -365,7 +372,7 @@ def whiteness(residuals, n_params=0, lags=WHITENESS_LAGS, alpha=DEFAULT_ALPHA) -
 
 
 def pacf_to_coefficients(r):
-    """Coefficients c_1..c_k of a stationary polynomial 1 - sum c_i B^i from partial autocorrelations r_i in (-1, 1).
+    """Coefficients c_1..c_k of a stationary polynomial 1 - sum c_i B^i from partial autocorrelations ``r`` (r_i in (-1, 1)).
 
     Durbin-Levinson step (Monahan 1984): c^(k)_k = r_k, c^(k)_j = c^(k-1)_j - r_k c^(k-1)_{k-j}.
     """
@@ -376,7 +383,8 @@ def pacf_to_coefficients(r):
 
 
 def coefficients_to_pacf(c):
-    """Inverse of :func:`pacf_to_coefficients` (raises ValueError if the polynomial has a root on or inside the unit circle)."""
+    """Inverse of :func:`pacf_to_coefficients`: the partial autocorrelations of the coefficients ``c``
+    (raises ValueError if the polynomial has a root on or inside the unit circle)."""
     c = np.asarray(c, float).copy()
     r = np.zeros(len(c))
     for k in range(len(c), 0, -1):
@@ -413,7 +421,8 @@ def _from_unconstrained(u):
 
 
 def arma_residuals(x, phi, theta):
-    """Conditional residuals a_t = x_t - sum phi_i x_{t-i} + sum theta_j a_{t-j}, zero before t = 0."""
+    """Conditional residuals a_t = x_t - sum phi_i x_{t-i} + sum theta_j a_{t-j}, zero before t = 0,
+    of the series ``x`` for the coefficients ``phi`` and ``theta``."""
     from scipy.signal import lfilter
 
     return lfilter(np.r_[1.0, -np.asarray(phi, float)], np.r_[1.0, -np.asarray(theta, float)], x)
@@ -448,7 +457,8 @@ def _transform_jacobian(u, eps=1e-7):
 
 
 def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
-    """Least-squares (CSS) fit of ARMA(p, q) to a zero-mean series ``x``; paper-003 signs.
+    """Least-squares (CSS) fit of ARMA(p, q) to a zero-mean series ``x``; paper-003 signs. With
+    ``keep_residuals`` the fit keeps its residual series.
 
     Minimises sum_{t >= p} a_t^2 over stationary phi and invertible theta (PACF parametrisation)
     with the analytic Jacobian of the residuals::
@@ -536,7 +546,8 @@ def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
 def f_test(small: ArmaFit, large: ArmaFit, alpha=DEFAULT_ALPHA) -> OrderStep:
     """Pandit-Wu F test: does ``large`` reduce the RSS significantly against ``small``?
 
-    F = ((A_1 - A_0) / s) / (A_0 / (N - r)), s = extra parameters, r = parameters of ``large``.
+    F = ((A_1 - A_0) / s) / (A_0 / (N - r)), s = extra parameters, r = parameters of ``large``;
+    significance ``alpha``.
     """
     from scipy import stats
 
@@ -551,14 +562,16 @@ def f_test(small: ArmaFit, large: ArmaFit, alpha=DEFAULT_ALPHA) -> OrderStep:
 
 
 def information_criterion(fit: ArmaFit, criterion="aic") -> float:
-    """Per-sample information criterion: ln(sigma_a^2) + c r / N, c = 2 (AIC, paper 003's form) or ln N (BIC)."""
+    """Per-sample information criterion of ``fit``: ln(sigma_a^2) + c r / N, c = 2 (``criterion``
+    "aic", paper 003's form) or ln N ("bic")."""
     n = fit.n_residuals
     c = 2.0 if criterion == "aic" else math.log(n)
     return math.log(fit.rss / n) + c * fit.n_params / n
 
 
 def select_order(x, *, max_n=DEFAULT_MAX_N, alpha=DEFAULT_ALPHA, reduce=True, criterion=DEFAULT_CRITERION):
-    """Pandit-Wu ARMA(2n, 2n-1) order selection; returns ``(chosen, adequate_order, fits, steps)``.
+    """Pandit-Wu ARMA(2n, 2n-1) order selection for the zero-mean series ``x``; returns
+    ``(chosen, adequate_order, fits, steps)``.
 
     ``criterion="f"`` (paper 003 / Pandit-Wu): go up n = 1, 2, ... while ARMA(2n+2, 2n+1)
     lowers the RSS significantly (F test at ``alpha``) and n < max_n. Then (``reduce``) drop the
@@ -622,7 +635,7 @@ def select_order(x, *, max_n=DEFAULT_MAX_N, alpha=DEFAULT_ALPHA, reduce=True, cr
 
 
 def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz) -> BiasModel:
-    """Gauss-Markov bias + white noise equivalent to ARMA(1, 1) (module docstring), at ``sample_rate_hz``."""
+    """Gauss-Markov bias + white noise equivalent to the ARMA(1, 1) ``fit`` (module docstring), at ``sample_rate_hz`` (Hz)."""
     if fit.order != (1, 1):
         raise SettingsError(f"bias model needs an ARMA(1, 1) fit, got ARMA{fit.order}")
     phi, theta = fit.phi[0], fit.theta[0]
@@ -645,7 +658,7 @@ def simulate_arma(phi, theta, sigma_a, n, *, rng=None, seed=None, burn_in=None):
     """n samples of x_t - sum phi x_{t-i} = a_t - sum theta a_{t-j}, a ~ N(0, sigma_a^2).
 
     ``burn_in`` samples (default 10 / (1 - max |root|), at most 200 000) are dropped so the
-    series starts stationary.
+    series starts stationary. Randomness from ``rng`` (a numpy Generator) or ``seed``.
     """
     from scipy.signal import lfilter
 
@@ -673,6 +686,10 @@ def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAM
                  criterion=DEFAULT_CRITERION) -> AxisReport:
     """Paper 003's section 1 for one static axis (deg/s): tests, Pandit-Wu order, whiteness, bias model.
 
+    ``x_dps``: the axis's series (deg/s) at ``sample_rate_hz`` (Hz); ``max_samples``: see
+    :func:`prepare_series`; ``max_n``, ``alpha``: see :func:`select_order`; ``adf_maxlag``: see
+    :func:`adf_test`; ``lags``: see :func:`whiteness`.
+
     ``quantum_dps``: the recording's quantisation step (1 / lsb_per_dps), for the dithered KS test;
     ignored when the series is block-averaged. ``criterion``: see :func:`select_order`. Warnings
     of scipy and statsmodels are caught, not printed: ``report.warnings`` summarises them
@@ -688,7 +705,7 @@ def analyze_axis(x_dps, sample_rate_hz, *, axis="z", max_samples=DEFAULT_MAX_SAM
 
 
 def summarise_warnings(caught):
-    """Warnings (``warnings.WarningMessage``) as one text per distinct kind and message, with a count.
+    """The ``caught`` warnings (``warnings.WarningMessage``) as one text per distinct kind and message, with a count.
 
     scipy and statsmodels warn on hard fits (ConvergenceWarning, RuntimeWarning on a near-singular
     step, ...); :func:`analyze_axis` collects them instead of letting them print, and a caller
@@ -730,7 +747,8 @@ def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_ma
 
 
 def arma_adev(fit: ArmaFit, n, analysis_rate_hz, *, seeds=(0, 1, 2), taus_s=None):
-    """Mean overlapping Allan deviation of series simulated from ``fit`` (n samples, same rate, several seeds).
+    """Mean overlapping Allan deviation of series simulated from ``fit`` (n samples at
+    ``analysis_rate_hz``, Hz, one per seed of ``seeds``), at ``taus_s`` (s; default grid).
 
     Returns (tau_s, adev): the ADEV this ARMA model implies for a record like the measured one.
     """
@@ -746,7 +764,8 @@ def arma_adev(fit: ArmaFit, n, analysis_rate_hz, *, seeds=(0, 1, 2), taus_s=None
 
 
 def adev_discrepancy(adev_measured, adev_model):
-    """RMS of log10(model / measured) over the taus both define: 0 = identical curves, 0.1 ~ 26 % off."""
+    """RMS of log10(model / measured) over the taus both define (``adev_model``, ``adev_measured``:
+    deviations at the same taus): 0 = identical curves, 0.1 ~ 26 % off."""
     m = np.asarray(adev_measured, float)
     s = np.asarray(adev_model, float)
     ok = np.isfinite(m) & np.isfinite(s) & (m > 0) & (s > 0)

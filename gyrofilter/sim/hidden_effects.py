@@ -28,9 +28,10 @@ import math
 
 import numpy as np
 
+from ..units import AXES
+
 EFFECTS = ("bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
            "temperature", "bias_step", "warmup", "outliers", "colored_noise")
-AXES = ("x", "y", "z")
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
@@ -107,7 +108,7 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
 
 def simulate_case(case):
     """The case's recording (in memory)."""
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
 
     return simulate(case["model"], case["duration_s"], seed=case["sim_seed"])
 
@@ -117,7 +118,7 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     alone (no white noise, no bias, no quantization) at the recording's rate and length and
     added to the rate in deg/s; the result is a deg/s recording with the same temp column."""
     from gyrofilter.recording import Recording
-    from gyrofilter.simulate import simulate
+    from gyrofilter.sim.simulate import simulate
 
     fs = rec.sample_rate_hz
     n = len(rec)

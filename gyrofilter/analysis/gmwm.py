@@ -5,7 +5,7 @@ Wavelet variance. The Haar MODWT wavelet variance at scale τ is half the overla
 variance at averaging time τ: ν²(τ) = σ²_A(τ) / 2 (Percival & Guttorp 1994, "Long-memory
 processes, the Allan variance and wavelets", eq. 9; Percival & Walden 2000, "Wavelet Methods
 for Time Series Analysis", sec. 8.6). It is estimated at the dyadic scales τ_j = 2^j / f_s
-(j = 0, 1, ...) from the overlapping Allan variance (:func:`gyrofilter.allan.overlapping_adev`,
+(j = 0, 1, ...) from the overlapping Allan variance (:func:`gyrofilter.analysis.allan.overlapping_adev`,
 the same M_j = N - 2^{j+1} + 1 differences as the unbiased MODWT estimator), and its
 uncertainty from the equivalent degrees of freedom η_j = max(M_j / 2^{j+1}, 1)
 (Percival & Walden 2000, eq. 313c, "η₃"; the choice of R's gmwm/wv for its intervals):
@@ -19,7 +19,7 @@ Theoretical wavelet variances of the terms (m = τ f_s samples; AVAR/2 of each):
   2013, table 1: γ² (τ_j² + 2) / (12 τ_j) with τ_j = 2m samples and γ = K/√f_s)
 * drift (rate ramp) R (deg/s²):                ν² = R² τ² / 4
 * Gauss-Markov, stationary std σ, correlation time T, exact for the sampled AR(1)
-  φ = exp(-1/(f_s T)): half of :func:`gyrofilter.noise_terms.ar1_allan_variance`
+  φ = exp(-1/(f_s T)): half of :func:`gyrofilter.sim.noise_terms.ar1_allan_variance`
   (equivalent to Guerrier et al. 2013, table 1, and Zhang 2008).
 
 Fit (Guerrier, Skaloud, Stebler & Victoria-Feser 2013, "Wavelet-variance-based estimation for
@@ -111,7 +111,7 @@ def wv_ramp(tau_s, r_dps_per_s2):
 
 def wv_gauss_markov(tau_s, sigma_dps, corr_time_s, sample_rate_hz):
     """ν² of a sampled Gauss-Markov process (AR(1), φ = exp(-1/(f_s T))): exact, AVAR/2."""
-    from .noise_terms import ar1_allan_variance
+    from ..sim.noise_terms import ar1_allan_variance
 
     phi = math.exp(-1.0 / (sample_rate_hz * corr_time_s))
     return 0.5 * ar1_allan_variance(phi, sigma_dps**2, np.asarray(tau_s) * sample_rate_hz)
@@ -242,7 +242,7 @@ def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0):
 def simulated_wv(model, axis, n_samples, *, seeds=(0, 1, 2, 3), min_edf=2.0):
     """Mean Haar wavelet variance of ``axis`` (0, 1, 2) of a simulator model over ``seeds`` runs
     of ``n_samples`` samples: the model's curve where no closed form covers every effect."""
-    from .simulate import simulate_axis_dps, validate_model
+    from ..sim.simulate import simulate_axis_dps, validate_model
 
     spec = validate_model(model)[0]
     fs = spec["sample_rate_hz"]
