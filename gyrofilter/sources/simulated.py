@@ -6,8 +6,8 @@ in real time, so ``record`` and ``run`` behave as with a device; ``realtime=0`` 
 fast as they are read. The simulator's output does not depend on how it is chunked, so the
 samples equal ``gyrofilter simulate --model MODEL --duration D --seed S`` for the same model,
 seed and duration, whatever the pacing. Without ``seed`` a random one is drawn and written in
-the header (``simulated_seed``), so every run can be repeated. Without ``duration`` the source
-runs for :data:`UNLIMITED_S` (a week).
+the header (``simulated_seed``), so every run can be repeated. Without ``duration`` (``record``
+and ``run`` give their ``--duration``) the source runs for :data:`UNLIMITED_S` (a week).
 """
 from __future__ import annotations
 
