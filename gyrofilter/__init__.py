@@ -6,9 +6,12 @@ Conventions: angular rate in deg/s (names end in ``_dps``), time in s (``_s``), 
     >>> from gyrofilter import GyroFilter
     >>> f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
 """
+from . import moved
 from .errors import GyroFilterError
 from .pipeline import GyroFilter
 from .smoother import Smoother, smooth
+
+moved.install()  # gyrofilter.allan, gyrofilter.gap, ...: the paths of 0.1's flat layout
 
 __version__ = "0.1.0"
 __all__ = ["GyroFilter", "GyroFilterError", "Smoother", "__version__", "smooth"]
