@@ -31,3 +31,12 @@ class DeviceError(GyroFilterError):
 
 class SourceEnded(Exception):
     """A finite source (replay file, simulation, closed port) has delivered its last sample."""
+
+
+def one_line(exc):
+    """An exception as one line: "FILE: reason" for an OSError that names a file, else its text."""
+    if isinstance(exc, OSError) and exc.filename:
+        text = f"{exc.filename}: {exc.strerror or exc}"
+    else:
+        text = str(exc) or type(exc).__name__
+    return " ".join(text.split())

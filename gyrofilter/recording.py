@@ -475,7 +475,7 @@ def _parse_header(lines, path):
     for key in ("sample_rate_hz", "gyro_unit"):
         if key not in header:
             raise RecordingError(f"{path}: missing header key {key!r}")
-    rate = check_sample_rate_hz(_header_float(header, "sample_rate_hz", path), f"{path}: sample_rate_hz", RecordingError)
+    check_sample_rate_hz(_header_float(header, "sample_rate_hz", path), f"{path}: sample_rate_hz", RecordingError)
     if header["gyro_unit"] not in GYRO_UNITS:
         raise RecordingError(f"{path}: gyro_unit {header['gyro_unit']!r} is not one of {', '.join(GYRO_UNITS)}")
     if header["gyro_unit"] == "lsb":
@@ -702,3 +702,11 @@ def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:
     else:
         header.pop("lsb_per_dps", None)
     return Recording(columns=columns, header=header, path=rec.path, warnings=list(rec.warnings), notes=list(rec.notes))
+
+
+def warn_about_gaps(head, consequence, warn):
+    """Warn (``warn(text)``) when the t column of a recording read
+    (:class:`~gyrofilter.recording.RecordingHead`) showed missing samples; ``consequence`` says
+    what that means for the command."""
+    if head.t_gaps:
+        warn(f"{head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")

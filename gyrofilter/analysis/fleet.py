@@ -109,7 +109,7 @@ def analyse_recording(path, settings):
     short for two cluster times) leaves ``allan`` None with the reason in ``warnings``, and the
     gap report stands.
     """
-    from ..cli import one_line
+    from ..errors import one_line
 
     t0 = time.perf_counter()
     result = {"recording": path, "error": None, "warnings": [], "sample_rate_hz": None, "duration_s": None,
@@ -142,7 +142,7 @@ def _gap_report(path, settings, warnings):
 
 
 def _allan_part(path, settings, result):
-    from ..cli.allan import characterise_recording
+    from .still import characterise_recording
     from .noise_model import kalibr_yaml, to_json
 
     def warn(text):

@@ -13,7 +13,7 @@ import signal
 import sys
 import threading
 
-from ..errors import GyroFilterError
+from ..errors import GyroFilterError, one_line
 
 # command name -> (module, one-line summary)
 COMMANDS = {
@@ -86,12 +86,3 @@ def _main(argv):
     except (GyroFilterError, OSError, ValueError) as exc:
         print(f"gyrofilter: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
-
-
-def one_line(exc):
-    """An exception as one line: "FILE: reason" for an OSError that names a file, else its text."""
-    if isinstance(exc, OSError) and exc.filename:
-        text = f"{exc.filename}: {exc.strerror or exc}"
-    else:
-        text = str(exc) or type(exc).__name__
-    return " ".join(text.split())

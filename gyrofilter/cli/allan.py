@@ -13,12 +13,12 @@ Output files are written only once every result is finite, each whole or not at 
 import json
 import sys
 
-import numpy as np
 
-from ..analysis.allan import MIN_CLUSTERS, AllanInputError
+from ..analysis.allan import MIN_CLUSTERS
+from ..analysis.still import characterise_recording
 from ..errors import SettingsError
 from ..analysis.fleet import FleetSettings
-from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, characterise_axis, convert, kalibr_yaml, to_json
+from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert, kalibr_yaml, to_json
 from . import batch, common
 
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
@@ -73,7 +73,7 @@ def run(args):
     progress = common.say if args.progress or sys.stderr.isatty() else None
     head, results = characterise_recording(args.recording, axes=axes, confidence=args.confidence,
                                            min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
-                                           progress=progress)
+                                           warn=common.say_warning, progress=progress)
     fs = head.sample_rate_hz
     duration_s = head.rows / fs
     print(f"recording: {args.recording}")
@@ -112,33 +112,6 @@ def run(args):
     return 0
 
 
-def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False,
-                           warn=common.say_warning, progress=None):
-    """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
-
-    The one path from a file to its Allan results, for one recording and for a fleet
-    (:mod:`gyrofilter.analysis.fleet`). The reader's warnings, missing samples and gross errors kept with
-    ``keep_outliers`` go to ``warn(text)`` as they are found; gross errors otherwise raise
-    RecordingError, and a result that is not finite raises AllanInputError (both name the file).
-    ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings stay in
-    their results (``AxisNoise.warnings``).
-    """
-    head, series = common.read_axes(path, axes)
-    for text in head.warnings:
-        warn(text)
-    common.warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
-    common.refuse_gross_errors(head, series, keep_outliers, warn=warn)
-    results = {}
-    for a in axes:
-        if progress:
-            progress(f"allan: axis {a} ({head.rows} samples)...")
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
-            results[a] = characterise_axis(series.pop(a), head.sample_rate_hz, axis=a, confidence=confidence,
-                                           min_clusters=min_clusters)
-        check_finite(results[a], a, path)
-    return head, results
-
-
 def write_json_document(path, doc):
     """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise_model.to_json`) to ``path`` (no
     replacing: give it the path :func:`common.replacing` yields)."""
@@ -150,15 +123,3 @@ def write_text(path, text):
     """Write ``text`` to ``path`` (no replacing: give it the path :func:`common.replacing` yields)."""
     with open(path, "w", encoding="utf-8") as fh:
         fh.write(text)
-
-
-def check_finite(result, axis, path):
-    """Raise AllanInputError unless every number of ``result`` is finite (numbers too large
-    for float64 overflow to inf/NaN)."""
-    arrays = (result.adev, result.ci_low, result.ci_high, result.edf, result.fit_values)
-    values = [v for c in (*result.fitted.values(), *result.readoff.values())
-              for v in (c.value, c.low, c.high, c.upper) if v is not None]
-    if not all(np.isfinite(a).all() for a in arrays) or not np.isfinite(values).all():
-        raise AllanInputError(
-            f"{path}: axis {axis}: the Allan deviation overflows (values too large for float64 arithmetic); "
-            "no output written")

@@ -8,6 +8,7 @@ any work, and written under a temporary name that takes its place when complete.
 import math
 import sys
 
+from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
 from . import common
 
@@ -45,12 +46,12 @@ def run(args):
     if args.max_samples < 100:
         raise SettingsError(f"--max-samples must be at least 100, got {args.max_samples}")
     axes = "xyz" if args.axis == "all" else args.axis
-    head, series = common.read_axes(args.recording, axes)
+    head, series = read_axes(args.recording, axes)
     common.print_warnings(head.warnings)
     fs = head.sample_rate_hz
     i0, i1 = _window(args, head.rows, fs)
     series = {a: x[i0:i1] for a, x in series.items()}
-    common.refuse_gross_errors(head, series, args.keep_outliers, first_row=i0)
+    refuse_gross_errors(head, series, args.keep_outliers, warn=common.say_warning, first_row=i0)
     progress = args.progress or sys.stderr.isatty()
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0

@@ -149,14 +149,6 @@ def print_warnings(warnings):
         say_warning(text)
 
 
-def warn_about_gaps(head, consequence, warn=say_warning):
-    """Warn (``warn(text)``) when the t column of a recording read
-    (:class:`~gyrofilter.recording.RecordingHead`) showed missing samples; ``consequence`` says
-    what that means for the command."""
-    if head.t_gaps:
-        warn(f"{head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")
-
-
 def add_filter_arguments(parser):
     parser.add_argument("--preset", default=DEFAULT_PRESET, choices=sorted(PRESETS),
                         help=f"filter settings preset (default: {DEFAULT_PRESET}, the best measured filter; "
@@ -258,45 +250,9 @@ def _number(value, width, sign=False, decimals=4):
 # ---------------------------------------------------------------------------- still-sensor analyses
 
 
-def read_axes(path, axes):
-    """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
-    (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array})."""
-    from ..recording import collect_columns, iter_recording
-    from ..units import to_dps
-
-    chunks = iter_recording(path)
-    head = next(chunks)
-    columns = collect_columns(head, chunks, [f"g{a}" for a in axes])
-    return head, {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
-
-
 def add_keep_outliers_argument(parser):
     from ..analysis.noise_model import GROSS_LIMIT_DPS, GROSS_Z
 
     parser.add_argument("--keep-outliers", action="store_true",
                         help=f"analyse the recording even when it has gross errors (spikes of more than {GROSS_Z:g} robust "
                              f"sigmas, or |rate| > {GROSS_LIMIT_DPS:g} deg/s), which are refused by default")
-
-
-def refuse_gross_errors(head, series, keep, first_row=0, warn=say_warning):
-    """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
-    by file, line, sample, axis and value and counting them per axis
-    (:func:`gyrofilter.analysis.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
-    Samples are never dropped. ``series`` start at the file's sample ``first_row``."""
-    from ..errors import RecordingError
-    from ..analysis.noise_model import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
-
-    found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
-    if not found:
-        return
-    axis = min(found, key=lambda a: found[a][0])
-    row = int(found[axis][0])
-    counts = ", ".join(f"{a}: {idx.size}" for a, idx in found.items())
-    text = (f"{head.path}: line {head.line_of_row(first_row + row)} (sample {first_row + row}): {axis} = "
-            f"{series[axis][row]:.6g} deg/s is a gross "
-            f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {GROSS_LIMIT_DPS:g} deg/s), and "
-            f"{sum(idx.size for idx in found.values())} such sample(s) in all ({counts}); the analysis assumes a still "
-            "sensor without spikes (if the sensor moved, record it at rest)")
-    if not keep:
-        raise RecordingError(f"{text}: fix the data, or rerun with --keep-outliers to analyse them as they are")
-    warn(f"{text}: analysed as they are (--keep-outliers)")

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import SettingsError
 from ..pipeline import SETTING_NAMES
-from ..recording import CHUNK_ROWS, FORMAT_VERSION, RecordingWriter, dps_header, iter_recording
+from ..recording import CHUNK_ROWS, FORMAT_VERSION, RecordingWriter, dps_header, iter_recording, warn_about_gaps
 from ..smoother import Smoother
 from ..streamstats import Envelope, RunningMoments
 from . import common
@@ -73,7 +73,7 @@ def run(args):
                         head.column(chunk, "temp") if filt.compensates_temperature else None, args.realtime)
         replay.finish()
     common.print_warnings(head.warnings)
-    common.warn_about_gaps(head, "the filter treats the samples as uniform")
+    warn_about_gaps(head, "the filter treats the samples as uniform", common.say_warning)
     with contextlib.redirect_stdout(sys.stderr) if args.realtime else contextlib.nullcontext():  # stdout has the rows
         common.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
     common.save_calibration(args, filt)

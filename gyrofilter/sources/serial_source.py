@@ -38,7 +38,7 @@ import warnings
 
 import numpy as np
 
-from ..errors import DeviceError, SettingsError, SourceEnded
+from ..errors import DeviceError, SettingsError, SourceEnded, one_line
 from ..units import GYRO_UNITS
 from .base import Source
 
@@ -435,7 +435,7 @@ class SerialSource(Source):
                 serial_port = serial.serial_for_url(self.port_name, baudrate=int(baudrate), timeout=MAX_WAIT_S)
             except (serial.SerialException, OSError, ValueError) as exc:
                 raise DeviceError(
-                    f"{self.port_name}: cannot open the serial port ({_one_line(exc)}); check the device name "
+                    f"{self.port_name}: cannot open the serial port ({one_line(exc)}); check the device name "
                     "(ls /dev/ttyUSB* /dev/ttyACM*), that no other program holds it, and that you are in the dialout group"
                 ) from None
         self._port = serial_port
@@ -485,7 +485,7 @@ class SerialSource(Source):
                 if more:
                     data += self._port.read(more)
         except self._exceptions as exc:
-            self._ended = f"serial port disconnected ({_one_line(exc)})"
+            self._ended = f"serial port disconnected ({one_line(exc)})"
             self._disconnected = True
             self._parser.finish()
             return self._parser._empty()
@@ -529,5 +529,3 @@ def _port_exceptions():
         return (OSError,)
 
 
-def _one_line(exc):
-    return " ".join(str(exc).split()) or type(exc).__name__

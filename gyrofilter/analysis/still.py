@@ -1,0 +1,84 @@
+"""A still sensor's recording, from the file to its noise coefficients: read the axes, warn about
+missing samples, refuse gross errors, characterise each axis (papers 000, 002: the Allan
+deviation and its coefficients, :mod:`gyrofilter.analysis.noise_model`).
+
+The one path from a file to the Allan results of ``gyrofilter allan``, ``gyrofilter arma`` and
+a fleet run (:mod:`gyrofilter.analysis.fleet`). Warnings go to the caller's ``warn(text)``;
+nothing here prints.
+"""
+import numpy as np
+
+from ..errors import RecordingError
+from ..recording import collect_columns, iter_recording, warn_about_gaps
+from ..units import to_dps
+from .allan import MIN_CLUSTERS, AllanInputError
+from .noise_model import GROSS_LIMIT_DPS, GROSS_Z, characterise_axis, gross_errors
+
+
+def read_axes(path, axes):
+    """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
+    (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array})."""
+    chunks = iter_recording(path)
+    head = next(chunks)
+    columns = collect_columns(head, chunks, [f"g{a}" for a in axes])
+    return head, {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
+
+
+def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
+    """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
+    by file, line, sample, axis and value and counting them per axis
+    (:func:`~gyrofilter.analysis.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
+    Samples are never dropped. ``series`` start at the file's sample ``first_row``."""
+    found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
+    if not found:
+        return
+    axis = min(found, key=lambda a: found[a][0])
+    row = int(found[axis][0])
+    counts = ", ".join(f"{a}: {idx.size}" for a, idx in found.items())
+    text = (f"{head.path}: line {head.line_of_row(first_row + row)} (sample {first_row + row}): {axis} = "
+            f"{series[axis][row]:.6g} deg/s is a gross "
+            f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {GROSS_LIMIT_DPS:g} deg/s), and "
+            f"{sum(idx.size for idx in found.values())} such sample(s) in all ({counts}); the analysis assumes a still "
+            "sensor without spikes (if the sensor moved, record it at rest)")
+    if not keep:
+        raise RecordingError(f"{text}: fix the data, or rerun with --keep-outliers to analyse them as they are")
+    warn(f"{text}: analysed as they are (--keep-outliers)")
+
+
+def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
+                           progress=None):
+    """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
+
+    The one path from a file to its Allan results, for one recording and for a fleet
+    (:mod:`gyrofilter.analysis.fleet`). The reader's warnings, missing samples and gross errors kept with
+    ``keep_outliers`` go to ``warn(text)`` as they are found; gross errors otherwise raise
+    RecordingError, and a result that is not finite raises AllanInputError (both name the file).
+    ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings stay in
+    their results (``AxisNoise.warnings``).
+    """
+    head, series = read_axes(path, axes)
+    for text in head.warnings:
+        warn(text)
+    warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
+    refuse_gross_errors(head, series, keep_outliers, warn=warn)
+    results = {}
+    for a in axes:
+        if progress:
+            progress(f"allan: axis {a} ({head.rows} samples)...")
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
+            results[a] = characterise_axis(series.pop(a), head.sample_rate_hz, axis=a, confidence=confidence,
+                                           min_clusters=min_clusters)
+        check_finite(results[a], a, path)
+    return head, results
+
+
+def check_finite(result, axis, path):
+    """Raise AllanInputError unless every number of ``result`` is finite (numbers too large
+    for float64 overflow to inf/NaN)."""
+    arrays = (result.adev, result.ci_low, result.ci_high, result.edf, result.fit_values)
+    values = [v for c in (*result.fitted.values(), *result.readoff.values())
+              for v in (c.value, c.low, c.high, c.upper) if v is not None]
+    if not all(np.isfinite(a).all() for a in arrays) or not np.isfinite(values).all():
+        raise AllanInputError(
+            f"{path}: axis {axis}: the Allan deviation overflows (values too large for float64 arithmetic); "
+            "no output written")
