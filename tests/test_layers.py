@@ -11,8 +11,11 @@ ALLOWED = {"core": set(), "sim": {"core"}, "analysis": {"core", "sim"}, "evaluat
 
 
 def part_of(dotted):
-    """'gyrofilter.analysis.gap' -> 'analysis'; a module at the package's root -> 'core'."""
+    """'gyrofilter.analysis.gap' -> 'analysis'; ``python -m gyrofilter`` (__main__) -> 'cli'; a
+    module at the package's root -> 'core'."""
     parts = dotted.split(".")
+    if parts[1:] == ["__main__"]:
+        return "cli"
     return parts[1] if len(parts) >= 2 and parts[1] in ALLOWED else "core"
 
 
@@ -25,7 +28,7 @@ def imports_of(path, root):
         if isinstance(node, ast.ImportFrom):
             base = here[: len(here) - node.level + 1] if node.level else []
             module = ".".join(base + ([node.module] if node.module else []))
-            out += [f"{module}.{a.name}" for a in node.names] if not node.module else [module]
+            out += [f"{module}.{a.name}" for a in node.names]
         elif isinstance(node, ast.Import):
             out += [a.name for a in node.names]
     return [m for m in out if m.split(".")[0] == "gyrofilter"]
