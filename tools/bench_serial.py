@@ -47,24 +47,17 @@ def parse_costs(n):
     rows = {}
     for per_chunk in (100, 10):
         chunks = [b"".join(lines[i:i + per_chunk]) for i in range(0, n, per_chunk)]
-        slow_chunks = [b"# m\n" + c for c in chunks]
+        slow_chunks = [b"# m\n" + c for c in chunks]  # a '#' line forces the line-by-line path
 
-        def fast():
+        def feed_all(pieces):
             p = LineParser()
             p.feed(HEADER)
-            for c in chunks:
+            for c in pieces:
                 p.feed(c)
             assert p.stats["samples"] == n
 
-        def slow():
-            p = LineParser()
-            p.feed(HEADER)
-            for c in slow_chunks:
-                p.feed(c)
-            assert p.stats["samples"] == n
-
-        rows[f"LineParser, {per_chunk} lines/chunk, numpy path"] = best_of(fast) / n * 1e6
-        rows[f"LineParser, {per_chunk} lines/chunk, line-by-line path"] = best_of(slow) / n * 1e6
+        rows[f"LineParser, {per_chunk} lines/chunk, numpy path"] = best_of(lambda: feed_all(chunks)) / n * 1e6
+        rows[f"LineParser, {per_chunk} lines/chunk, line-by-line path"] = best_of(lambda: feed_all(slow_chunks)) / n * 1e6
     data = b"".join(lines)
 
     def naive():
