@@ -30,6 +30,10 @@ from .tempcomp import compensate
 from .units import check_sample_rate_hz, plain
 
 
+#: longest start-up still window (s): its samples are held until it ends
+MAX_CALIBRATION_S = 3600.0
+
+
 @dataclass(frozen=True)
 class FilterSettings:
     """Settings of :class:`GyroFilter`; the defaults are paper 001's values (preset "paper";
@@ -38,7 +42,8 @@ class FilterSettings:
     ============================ ========= ===================================================
     setting                      default   meaning
     ============================ ========= ===================================================
-    calibration_s                2.0       start-up still window for the bias (s); 0 = none
+    calibration_s                2.0       start-up still window for the bias (s), <= 3600; 0 = none (refused
+                                           where the filter needs it, unless loaded)
     calibration_retry_s          0.0       keep trying new windows for this long (s) when the
                                            sensor moved; 0 = raise at once
     stillness_z                  6.0       stillness limit (noise units, see calibration)
@@ -136,7 +141,8 @@ class FilterSettings:
         for name in ("calibration_s", "calibration_retry_s", "stillness_z", "max_bias_dps", "outlier_q_dps", "p0_dps2"):
             value = getattr(self, name)
             need(isinstance(value, (int, float)) and math.isfinite(value), name, "must be a finite number")
-        need(self.calibration_s >= 0, "calibration_s", "must be >= 0 seconds")
+        need(0 <= self.calibration_s <= MAX_CALIBRATION_S, "calibration_s",
+             f"must be between 0 and {MAX_CALIBRATION_S:g} seconds (the still window is held in memory)")
         need(self.calibration_retry_s >= 0, "calibration_retry_s", "must be >= 0 seconds")
         need(self.stillness_z > 0, "stillness_z", "must be > 0")
         need(self.max_bias_dps > 0, "max_bias_dps", "must be > 0 deg/s")
@@ -273,6 +279,10 @@ class GyroFilter:
                 self._hold = self._make_hold(noise_std_dps=self.calibration.noise_std_dps)
         elif s.hold and self._cal_needed == 0:
             raise SettingsError("setting hold=True needs a start-up calibration (calibration_s > 0) or a loaded calibration")
+        elif s.tracker == "kalman" and s.kalman_noise == "adaptive" and self._cal_needed == 0:
+            raise SettingsError("setting kalman_noise='adaptive' needs a start-up calibration (calibration_s > 0) or a "
+                                "loaded calibration: the still window's noise and bias start its model (without them it "
+                                "carries the uncorrected bias for about a minute)")
         elif self._cal_needed > 0:
             self._cal_buf = np.zeros((self._cal_needed, 3))
             self._cal_temp = np.zeros(self._cal_needed) if self._temp_on else None

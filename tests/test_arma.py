@@ -10,6 +10,7 @@ pytest.importorskip("scipy")
 
 from gyrofilter.analysis import arma  # noqa: E402
 from gyrofilter.errors import GyroFilterError  # noqa: E402
+from support import RECORDINGS  # noqa: E402
 
 PHI, THETA, SIGMA = 0.9, 0.5, 0.1
 
@@ -331,3 +332,13 @@ def test_cli_json_is_never_written_over_data(tmp_path, capsys):
 def test_constant_axis_is_named():
     with pytest.raises(GyroFilterError, match="axis y: constant .* no noise to model"):
         arma.analyze_axis(np.full(500, 0.1), 100.0, axis="y")
+
+
+@pytest.mark.parametrize("option", ["--start-s", "--end-s"])
+@pytest.mark.parametrize("value", ["inf", "nan"])
+def test_cli_a_non_finite_window_is_one_line_naming_the_option(capsys, option, value):
+    from gyrofilter.cli import main
+
+    assert main(["arma", str(RECORDINGS / "mpu6050_static_64s_set1.csv.gz"), option, value]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{option} must be a finite number of seconds" in err[0], err

@@ -73,6 +73,22 @@ def test_hold_needs_a_calibration():
         GyroFilter(100.0, preset="paper", calibration_s=0, hold=True)
 
 
+@pytest.mark.parametrize("preset", ["recommended", "adaptive_kalman"])
+def test_the_adaptive_filter_needs_a_calibration_and_works_with_a_loaded_one(preset):
+    with pytest.raises(SettingsError, match="kalman_noise='adaptive' needs a start-up calibration"):
+        GyroFilter(100.0, preset=preset, calibration_s=0)
+    still = noisy(1200, seed=4)
+    first = GyroFilter(100.0, preset=preset)
+    first.filter(still[:200])
+    assert GyroFilter(100.0, preset=preset, calibration_s=0, calibration=first.calibration).filter(still[200:]).shape == (200, 3)
+
+
+@pytest.mark.parametrize("calibration_s", [1e308, 3600.5, float("inf")])
+def test_an_impossible_calibration_window_is_a_settings_error(calibration_s):
+    with pytest.raises(SettingsError, match="calibration_s"):
+        GyroFilter(1000.0, calibration_s=calibration_s)
+
+
 @pytest.mark.parametrize("settings", [{}, {"qr_stat": "std"}])
 def test_equals_the_plain_filterpy_and_polyfit_implementation(settings):
     x = noisy(1500, seed=5, spikes=0.02)

@@ -80,6 +80,9 @@ def run(args):
 
 def _window(args, n, fs):
     """Sample indices [i0, i1) of --start-s/--end-s; errors name the options the user gave."""
+    for option, value in (("--start-s", args.start_s), ("--end-s", args.end_s)):
+        if value is not None and not math.isfinite(value):
+            raise SettingsError(f"{option} must be a finite number of seconds, got {value:g}")
     if args.start_s is not None and args.start_s < 0:
         raise SettingsError(f"--start-s must be >= 0 s, got {args.start_s:g}")
     start_s = args.start_s or 0.0
