@@ -260,3 +260,17 @@ def test_realtime_into_head_still_writes_the_whole_out_file(tmp_path):
     assert proc.wait(timeout=60) == 0, err
     assert "Traceback" not in err and "BrokenPipe" not in err
     assert len(read_recording(out)) == (4000 - 200) // 5
+
+
+@pytest.mark.parametrize("rows, args, message", [
+    ("", [], "no samples (the file has a header only)"),
+    ("".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(150)), [], "end inside the start-up calibration window (2 s)"),
+])
+def test_nothing_to_filter_is_an_error_and_writes_nothing(tmp_path, capsys, rows, args, message):
+    path = tmp_path / "short.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n" + rows)
+    out = tmp_path / "out.csv"
+    assert main(["replay", str(path), "--out", str(out), *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and str(path) in err[0], err
+    assert not out.exists()

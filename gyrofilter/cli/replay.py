@@ -22,7 +22,7 @@ from importlib import resources
 
 import numpy as np
 
-from ..errors import SettingsError
+from ..errors import RecordingError, SettingsError
 from ..pipeline import SETTING_NAMES
 from ..recording import CHUNK_ROWS, FORMAT_VERSION, RecordingWriter, dps_header, iter_recording, warn_about_gaps
 from ..smoother import Smoother
@@ -71,6 +71,7 @@ def run(args):
         for chunk in chunks:
             replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in),
                         head.column(chunk, "temp") if filt.compensates_temperature else None, args.realtime)
+        _refuse_nothing_filtered(path, head, filt)
         replay.finish()
     common.print_warnings(head.warnings)
     warn_about_gaps(head, "the filter treats the samples as uniform", common.say_warning)
@@ -85,6 +86,18 @@ def run(args):
         plot_filtered(args.plot, replay.raw_envelope, replay.filtered_envelope, title=f"{path} (raw minus start-up bias)")
         common.say(f"drew {args.plot}")
     return 0
+
+
+def _refuse_nothing_filtered(path, head, filt):
+    """A recording without samples, or one that ends inside the start-up calibration window,
+    has nothing to filter: an error (no output is kept), not an empty result."""
+    if filt.samples_in == 0:
+        raise RecordingError(f"{path}: no samples (the file has a header only); nothing to filter")
+    if filt.calibrating:
+        needed_s = filt.settings.calibration_s
+        raise RecordingError(f"{path}: its {filt.samples_in} samples ({filt.samples_in / head.sample_rate_hz:.2f} s) end "
+                             f"inside the start-up calibration window ({needed_s:g} s); nothing filtered: give a "
+                             "shorter --calibration-s or a saved calibration (--calibration FILE)")
 
 
 class _Replay:
