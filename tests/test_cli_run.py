@@ -355,3 +355,12 @@ def test_run_on_a_cut_gzip_replay_warns_on_stderr(tmp_path, capsys):
     err = capsys.readouterr().err
     inside = [text for _, text in read_recording(out).notes if text.startswith("warning: ")]
     assert inside and all(f"gyrofilter: {text}" in err for text in inside)
+
+
+def test_run_that_stops_inside_the_calibration_says_nothing_was_filtered(tmp_path, capsys):
+    path = tmp_path / "short.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n"
+                    + "".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(50)))
+    assert main(["run", "--source", f"replay:{path}", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "50 samples in, 0 filtered rows out" in err and "nothing filtered: it stopped inside the start-up calibration window (2 s)" in err

@@ -136,7 +136,9 @@ def _run(args, source):
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
         f"  lost {source.stats.get('lost_samples', 0)} samples"
         + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else "")
-        + (f"\n  {removed}" if removed else ""),
+        + (f"\n  {removed}" if removed else "")
+        + ("\n  nothing filtered: it stopped inside the start-up calibration window "
+           f"({filt.settings.calibration_s:g} s)" if filt.calibrating else ""),
         file=sys.stderr,
     )
     return live.EXIT_DISCONNECTED if loop.failed() else 0
