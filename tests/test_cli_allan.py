@@ -190,3 +190,10 @@ def test_a_plot_format_matplotlib_cannot_write_is_refused_before_any_work(static
     assert main(["allan", path, "--json", str(out), "--plot", str(tmp_path / "a.jpg2")]) == 2
     assert "matplotlib cannot write .jpg2" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_header_only_recording_is_one_line_naming_the_file(tmp_path, capsys):
+    path = tmp_path / "empty.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n")
+    assert main(["allan", str(path)]) == 2
+    _assert_one_line_error(capsys, str(path), "no samples (the file has a header only)")

@@ -274,3 +274,11 @@ def test_nothing_to_filter_is_an_error_and_writes_nothing(tmp_path, capsys, rows
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0] and str(path) in err[0], err
     assert not out.exists()
+
+
+def test_an_output_below_a_file_is_refused_naming_the_file(tmp_path, capsys):
+    (tmp_path / "cal.json").write_text("{}")
+    out = tmp_path / "cal.json" / "sub" / "x.csv"
+    assert main(["replay", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"gyrofilter: error: {out}: {tmp_path / 'cal.json'} is a file, not a folder"]

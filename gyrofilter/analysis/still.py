@@ -21,6 +21,8 @@ def read_axes(path, axes):
     chunks = iter_recording(path)
     head = next(chunks)
     columns = collect_columns(head, chunks, [f"g{a}" for a in axes])
+    if head.rows == 0:
+        raise RecordingError(f"{path}: no samples (the file has a header only)")
     return head, {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
 
 

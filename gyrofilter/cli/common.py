@@ -59,6 +59,11 @@ def check_outputs(outputs, inputs=(), force=False):
         if key in seen:
             raise SettingsError(f"{out}: named for two outputs; give each output its own file")
         seen.add(key)
+        parent = os.path.dirname(os.path.abspath(out))
+        while not os.path.isdir(parent):
+            if os.path.lexists(parent):
+                raise SettingsError(f"{out}: {parent} is a file, not a folder")
+            parent = os.path.dirname(parent)
         if os.path.lexists(out) and not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
 
