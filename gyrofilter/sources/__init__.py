@@ -115,6 +115,13 @@ _ALIASES = {"mpu": "mpu6050", "simulate": "sim", "simulation": "sim", "file": "r
 def parse_source(spec: str):
     """Split a SOURCE text into ``(kind, keyword arguments)`` for the source's opener.
 
+    ``spec``: the SOURCE text (``KIND[:ARG][,key=value...]``, a bare ``/dev/tty...`` port or a
+    bare recording file name; see the module docstring). Returns ``(kind, kwargs)``: ``kind`` is
+    one of :data:`KINDS` (aliases such as ``mpu`` or ``file`` resolved) and ``kwargs`` maps the
+    opener's keyword names (``address``, ``rate_hz``, ``path``, ...) to parsed values, in the
+    units of the :data:`KINDS` table (rates in Hz, ranges in deg/s, times in s). Nothing is
+    opened. Raises :class:`gyrofilter.errors.SettingsError` naming the bad kind, key or value.
+
     >>> parse_source("mpu6050:bus=1,addr=0x69,rate=200")
     ('mpu6050', {'bus': 1, 'address': 105, 'rate_hz': 200.0})
     >>> parse_source("replay:rec.csv.gz,realtime")
@@ -176,9 +183,14 @@ def parse_source(spec: str):
 def open_source(spec: str, **defaults):
     """Open the source named by ``spec`` (see the module docstring).
 
-    ``defaults`` fill keyword arguments the spec does not give, where that kind of source
-    accepts them (for example ``gyro_unit`` and ``sample_rate_hz`` from command-line options for
-    a serial device that sends no header); others are ignored.
+    ``spec``: the SOURCE text, parsed by :func:`parse_source`. ``defaults`` fill keyword
+    arguments the spec does not give, where that kind of source accepts them (for example
+    ``gyro_unit`` and ``sample_rate_hz`` (Hz) from command-line options for a serial device that
+    sends no header); others, and ``None`` values, are ignored.
+
+    Returns the opened :class:`gyrofilter.sources.base.Source` (an MPU6050Source, SerialSource,
+    ReplaySource or SimulatedSource); close it, or use it in a ``with`` block. Raises
+    :class:`gyrofilter.errors.SettingsError` for a bad spec.
     """
     kind, kwargs = parse_source(spec)
     accepted = {name for _, name, _ in KINDS[kind][1].values()}

@@ -93,9 +93,12 @@ def auto_dlpf_cfg(rate_hz):
 def sample_rate_settings(rate_hz, dlpf_cfg):
     """Return (SMPLRT_DIV, actual rate Hz, gyro output rate Hz) for a requested rate.
 
+    ``rate_hz``: the requested sample rate (Hz, finite and > 0); ``dlpf_cfg``: CONFIG.DLPF_CFG
+    0..7, which sets the gyro output rate.
+
     rate = gyro_output_rate / (1 + SMPLRT_DIV), gyro_output_rate = 8 kHz when DLPF_CFG is 0 or 7,
     else 1 kHz (register map section 4.2). A rate that no divider 0..255 reaches exactly is refused
-    with the nearest reachable rates in the message.
+    (SettingsError) with the nearest reachable rates in the message.
     """
     if dlpf_cfg not in R.DLPF:
         raise SettingsError(f"dlpf={dlpf_cfg!r}: CONFIG.DLPF_CFG (bits 2:0) takes 0..7")
@@ -115,17 +118,31 @@ def sample_rate_settings(rate_hz, dlpf_cfg):
 
 
 def frame_layout(temperature):
-    """Names of the 16-bit words in one FIFO frame, in FIFO order (register order, section 4.6)."""
+    """Names of the 16-bit words in one FIFO frame, in FIFO order (register order, section 4.6).
+
+    ``temperature``: True when TEMP_OUT is in the FIFO. Returns a tuple of names:
+    ``("temp", "gx", "gy", "gz")`` or ``("gx", "gy", "gz")``.
+    """
     return (("temp",) if temperature else ()) + ("gx", "gy", "gz")
 
 
 def decode_fifo(buf, n_words):
-    """Decode whole FIFO frames: big-endian 16-bit two's complement -> int16 array (frames, n_words)."""
+    """Decode whole FIFO frames: big-endian 16-bit two's complement -> int16 array (frames, n_words).
+
+    ``buf``: the bytes read from FIFO_R_W, a whole number of frames of ``2 * n_words`` bytes;
+    ``n_words``: 16-bit words per frame (``len(frame_layout(...))``). Returns raw values in LSB
+    (gyro) or TEMP_OUT counts, one row per frame, columns in :func:`frame_layout` order.
+    """
     return np.frombuffer(bytes(buf), dtype=">i2").reshape(-1, n_words)
 
 
 def temperature_c(raw, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):
-    """T / degC = TEMP_OUT / 340 + 36.53 (register map section 4.18)."""
+    """T / degC = TEMP_OUT / 340 + 36.53 (register map section 4.18).
+
+    ``raw``: TEMP_OUT (LSB, scalar or array); ``lsb_per_c``: LSB per deg C (340 for an MPU-6050);
+    ``offset_c``: temperature at TEMP_OUT = 0 (deg C; 36.53). Relatives use their own pair
+    (:data:`CHIPS`). Returns the temperature in deg C as floats, the shape of ``raw``.
+    """
     return np.asarray(raw, dtype=float) / lsb_per_c + offset_c
 
 
@@ -190,6 +207,51 @@ class MPU6050Source(Source):
     Use :func:`open_mpu6050`; the constructor does all the bus traffic of start-up.
     ``read()`` returns rows ``[t, gx, gy, gz(, temp)]``: t in seconds from the sensor's sample
     index, gyro in LSB (``lsb_per_dps`` LSB per deg/s), temp in deg C.
+
+    Parameters
+    ----------
+    bus : int, str or bus object
+        I2C bus number N (``/dev/i2c-N``) or device path, opened with smbus2 and closed with the
+        source; or an smbus2-like bus object, used as is and not closed.
+    address : int or str
+        I2C address, 0x68 (AD0 low) or 0x69 (AD0 high); ``"0x69"`` is accepted.
+    rate_hz : float
+        Requested sample rate (Hz); must be exactly ``gyro_output_rate / (1 + SMPLRT_DIV)``
+        (:func:`sample_rate_settings`), else SettingsError names the nearest reachable rates.
+    range_dps : float
+        Full scale (deg/s): 250, 500, 1000 or 2000 (131, 65.5, 32.8, 16.4 LSB per deg/s).
+    dlpf : int, optional
+        CONFIG.DLPF_CFG 0..7; None picks the widest bandwidth below ``rate_hz / 2``
+        (:func:`auto_dlpf_cfg`).
+    temperature : bool
+        Put TEMP_OUT in the FIFO and a ``temp`` column (deg C) in the rows.
+    allow_chip : int, str, collection or True, optional
+        WHO_AM_I values accepted besides 0x68 (known relatives and clones of :data:`CHIPS`
+        only); True accepts any usable one; None accepts only an MPU-6050.
+    transfer : str
+        How the FIFO is read: ``"smbus"`` (I2C-block reads of at most 32 bytes), ``"rdwr"`` (one
+        combined I2C_RDWR transfer; needs a bus with ``i2c_rdwr``) or ``"auto"`` (rdwr when the
+        adapter supports plain I2C messages).
+    clock, sleep, wall_clock : callable, optional
+        Injected time functions (test seams): monotonic clock (s), sleep(s) and wall clock
+        (s since the epoch, for ``start_time_utc``); default ``time.monotonic``, ``time.sleep``
+        and ``time.time``.
+    poll_interval_s : float
+        Longest time between FIFO polls (s); lowered to a quarter of the time the FIFO takes to
+        fill at ``rate_hz``.
+    max_wait_s : float
+        Longest time one ``read()`` waits for the first row (s).
+    max_retries : int
+        Retries of a bus transaction failing with EIO or EREMOTEIO before DeviceError.
+    retry_backoff_s : float
+        First back-off (s) between retries; doubles on each retry (1, 2, 4, ... ms by default).
+    reset_timeout_s : float
+        Longest wait (s) for the device reset, wake-up and each FIFO reset to finish.
+    fifo_bytes : int, optional
+        FIFO size (bytes) overriding the chip's from :data:`CHIPS` (1024 for an MPU-6050).
+
+    Raises SettingsError for a bad setting (before any bus traffic) and
+    :class:`gyrofilter.errors.DeviceError` when the chip cannot be identified or configured.
     """
 
     gyro_unit = "lsb"
@@ -576,7 +638,12 @@ class MPU6050Source(Source):
         return np.empty((0, 4 + self.temperature))
 
     def read(self):
-        """Rows available now (shape (n, len(columns))); waits at most ``max_wait_s`` for the first."""
+        """Rows available now (shape (n, len(columns))); waits at most ``max_wait_s`` for the first.
+
+        Rows are ``[t, gx, gy, gz(, temp)]``: t (s) = sample index / ``sample_rate_hz``, gyro in
+        LSB, temp in deg C; shape (0, len(columns)) when nothing arrived. Raises DeviceError when
+        the source is closed or the bus failed (after delivering the rows read before the failure).
+        """
         if self._closed:
             raise DeviceError(f"{self.chip_name} at {self._where()} is closed")
         if self._failure is not None:
@@ -625,7 +692,8 @@ def open_mpu6050(bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, tem
     collection of ids, or True lets named relatives (MPU6500, MPU9250, ...) through.
 
     Options (keyword only): transfer ('auto', 'smbus', 'rdwr'), clock/sleep/wall_clock (injected
-    time functions), poll_interval_s (0.02), max_wait_s (0.1), max_retries (5), retry_backoff_s
-    (0.001), reset_timeout_s (0.5), fifo_bytes (FIFO size override).
+    time functions), poll_interval_s (0.02 s), max_wait_s (0.1 s), max_retries (5), retry_backoff_s
+    (0.001 s), reset_timeout_s (0.5 s), fifo_bytes (FIFO size override, bytes); see
+    :class:`MPU6050Source` for each. Returns the started :class:`MPU6050Source`.
     """
     return MPU6050Source(bus, address, rate_hz, range_dps, dlpf, temperature, allow_chip, **options)

@@ -53,26 +53,67 @@ LSB_PER_DPS = {0: 131.0, 1: 65.5, 2: 32.8, 3: 16.4}
 
 
 class VirtualClock:
-    """Monotonic virtual time in seconds: ``now()``, ``sleep(dt)`` advances it, ``advance(dt)``."""
+    """Monotonic virtual time in seconds: ``now()``, ``sleep(dt)`` advances it, ``advance(dt)``.
+
+    ``start_s``: the initial time (s). Pass ``now`` and ``sleep`` as the driver's ``clock`` and
+    ``sleep`` (and the model's ``clock``) so that tests run in no real time; ``slept_s`` totals
+    the time slept (s).
+    """
 
     def __init__(self, start_s=1000.0):
         self.t = float(start_s)
         self.slept_s = 0.0
 
     def now(self):
+        """The virtual time (s)."""
         return self.t
 
     def sleep(self, dt):
+        """Advance the time by ``dt`` seconds (ignored if <= 0) and add it to ``slept_s``."""
         if dt > 0:
             self.t += dt
             self.slept_s += dt
 
     def advance(self, dt):
+        """Advance the time by ``dt`` seconds without counting it as sleep (time spent elsewhere)."""
         self.t += dt
 
 
 class MPU6050Model:
-    """Register-level MPU-6050 (see module docstring)."""
+    """Register-level MPU-6050 (see module docstring).
+
+    Parameters
+    ----------
+    clock : VirtualClock
+        The time base (anything with ``now()`` in s); the sample clock follows it.
+    chip_id : int
+        WHO_AM_I value (0x68 for an MPU-6050; 0x70, 0x72, ... for relatives and clones).
+    gyro_lsb : array (N, 3), optional
+        Raw gyro output (LSB) of samples 0..N-1, repeated; used as is whatever FS_SEL.
+    gyro_dps : array (N, 3), optional
+        Angular rate (deg/s), scaled by the configured FS_SEL (131/65.5/32.8/16.4 LSB per deg/s),
+        rounded and clipped to int16. Neither given: zeros.
+    temp_c : float or array (N,)
+        Die temperature (deg C), written as TEMP_OUT = round((T - 36.53) * 340).
+    fifo_size : int
+        FIFO capacity (bytes).
+    reset_duration_s : float
+        Time (s) DEVICE_RESET takes (the bit reads 1 and writes are ignored meanwhile).
+    reset_stuck : bool
+        DEVICE_RESET never finishes.
+    reset_nack : bool
+        Every transfer fails with EREMOTEIO (121) while the reset runs.
+    stuck : dict, optional
+        Register address -> value that reads back whatever is written (read-back failures).
+    rate_error : float
+        Fractional sample-clock error: the rate is nominal * (1 + ``rate_error``).
+    error_rate : float
+        Probability (0..1) that a transaction fails with ``error_errno``, drawn from ``rng``.
+    error_errno : int
+        errno of those random failures (default EREMOTEIO, 121).
+    rng : numpy.random.Generator, optional
+        Random generator of the failures (default ``default_rng(0)``).
+    """
 
     def __init__(self, clock, *, chip_id=0x68, gyro_lsb=None, gyro_dps=None, temp_c=25.0,
                  fifo_size=1024, reset_duration_s=0.002, reset_stuck=False, reset_nack=False,
@@ -116,9 +157,12 @@ class MPU6050Model:
         self._restart_sample_clock()
 
     def awake(self):
+        """True when no reset is running and PWR_MGMT_1.SLEEP is clear (the sample clock runs)."""
         return self.clock.now() >= self.reset_until and not self.regs[PWR_MGMT_1] & 0x40
 
     def sample_rate_hz(self):
+        """Current sample rate (Hz): gyro output rate (8 kHz for DLPF_CFG 0/7, else 1 kHz) /
+        (1 + SMPLRT_DIV), times (1 + ``rate_error``)."""
         dlpf = self.regs[CONFIG] & 0x07
         base = 8000.0 if dlpf in (0, 7) else 1000.0
         return base / (1 + self.regs[SMPLRT_DIV]) * (1.0 + self.rate_error)
@@ -203,7 +247,11 @@ class MPU6050Model:
         self.fifo_failures.append([errno_value, consume_bytes, after_reads])
 
     def check_failure(self, reg, reading):
-        """Called by the bus at the start of each transaction touching register ``reg``."""
+        """Called by the bus at the start of each transaction touching register ``reg``.
+
+        ``reg``: register address (None for a quick command); ``reading``: True for a read.
+        Raises OSError for a queued, NACKed (during reset) or random failure; returns None.
+        """
         self.transactions += 1
         if self.failures:
             code = self.failures.pop(0)
@@ -225,7 +273,10 @@ class MPU6050Model:
             raise OSError(self.error_errno, os.strerror(self.error_errno))
 
     def read(self, reg, length):
-        """Burst read of ``length`` bytes starting at ``reg``."""
+        """Burst read of ``length`` bytes starting at register address ``reg``; returns bytes.
+
+        The pointer auto-increments except at FIFO_R_W, which pops FIFO bytes (0xFF when empty).
+        """
         self.sync()
         out = bytearray()
         for _ in range(length):
@@ -256,7 +307,8 @@ class MPU6050Model:
         return self.regs[reg]
 
     def write(self, reg, data):
-        """Burst write of ``data`` starting at ``reg``."""
+        """Burst write of ``data`` (byte values) starting at register address ``reg``; read-only
+        and stuck registers ignore it, as does everything while a reset runs."""
         self.sync()
         for value in data:
             self._write_one(reg, value & 0xFF)
@@ -294,7 +346,11 @@ class FakeI2CBus:
     permission). absent_errno: errno for a transaction to an address nobody answers (121 on a
     Raspberry Pi, 6 on some adapters). busy: addresses a kernel driver owns (I2C_SLAVE -> EBUSY).
     funcs: the adapter functionality mask (default: plain I2C + SMBus emulation, like i2c-bcm2835).
-    bus_hz: if given, each transaction advances ``clock`` by its bit time at that SCL frequency.
+    bus_hz: if given, each transaction advances ``clock`` by its bit time at that SCL frequency
+    (Hz). path: the bus device path it answers for. clock: the :class:`VirtualClock` to advance.
+
+    Use as ``with FakeI2CBus({0x68: model}): MPU6050Source(1, ...)`` or with pytest's
+    ``monkeypatch`` (:meth:`install`); then smbus2 really runs, down to its ioctl calls.
     """
 
     def __init__(self, devices, *, path="/dev/i2c-1", open_errno=None, absent_errno=_errno.EREMOTEIO,
@@ -318,7 +374,11 @@ class FakeI2CBus:
     # ------------------------------------------------------------------ OS boundary
 
     def install(self, monkeypatch=None):
-        """Replace os.open/os.close (for this bus path only) and smbus2's ioctl; return self."""
+        """Replace os.open/os.close (for this bus path only) and smbus2's ioctl; return self.
+
+        ``monkeypatch``: a pytest ``monkeypatch`` fixture, which then undoes the patches itself;
+        without it the originals are kept for :meth:`uninstall`.
+        """
         real_open, real_close = os.open, os.close
 
         def fake_open(path, flags, *args, **kwargs):
@@ -347,6 +407,7 @@ class FakeI2CBus:
         return self
 
     def uninstall(self):
+        """Restore what :meth:`install` replaced (without ``monkeypatch``); safe to call twice."""
         while self._undo:
             obj, name, value = self._undo.pop()
             setattr(obj, name, value)
@@ -374,6 +435,12 @@ class FakeI2CBus:
             self.clock.advance(bits / self.bus_hz)
 
     def ioctl(self, fd, request, arg=0, *rest):
+        """smbus2's ``ioctl`` as i2c-dev answers it: I2C_FUNCS (``funcs``), I2C_SLAVE(_FORCE)
+        (selects the address; EBUSY for ``busy`` ones), I2C_SMBUS and I2C_RDWR (act on the
+        model). ``fd``: a descriptor from the patched ``os.open``; ``request``: the ioctl number;
+        ``arg``: smbus2's ctypes structure or the address. Returns 0; raises OSError as the
+        kernel would (EBADF, EINVAL, ENOTTY, the absent-device errno, injected errors).
+        """
         self.ioctl_calls += 1
         self.requests[request] = self.requests.get(request, 0) + 1
         if request == _smbus2.I2C_FUNCS:
@@ -466,5 +533,10 @@ class FakeI2CBus:
 
 
 def samples_from_recording(rec, lsb_per_dps):
-    """Raw gyro LSB (N, 3) for the model from a :class:`gyrofilter.recording.Recording`."""
+    """Raw gyro LSB (N, 3) for the model from a :class:`gyrofilter.recording.Recording`.
+
+    ``rec``: the recording (its ``gyro_dps``, deg/s); ``lsb_per_dps``: the scale of the range
+    the driver will set (131 for +-250 deg/s). Returns int64 LSB, rounded and clipped to int16,
+    to pass as ``MPU6050Model(gyro_lsb=...)``.
+    """
     return np.clip(np.round(rec.gyro_dps * lsb_per_dps), -32768, 32767).astype(np.int64)

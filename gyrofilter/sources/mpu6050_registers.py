@@ -36,6 +36,8 @@ class Register:
         return (value & ~(width_mask << lo) & 0xFF) | (field_value << lo)
 
     def mask(self, field_name):
+        """The bits of field ``field_name`` set, the others clear (e.g. ``FIFO_OFLOW_INT`` of
+        INT_STATUS, bit 4 -> 0x10); ``value & mask`` tests or isolates the field in place."""
         hi, lo = self.fields[field_name]
         return ((1 << (hi - lo + 1)) - 1) << lo
 

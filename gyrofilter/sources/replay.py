@@ -27,7 +27,26 @@ POLL_S = 0.02  # paced reads return at most this often (batches, like a device's
 
 
 class ReplaySource(Source):
-    """Replay ``path`` (format v1) as a source; ``realtime`` paces it at ``speed`` x real time."""
+    """Replay ``path`` (format v1) as a source; ``realtime`` paces it at ``speed`` x real time.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The recording (``.csv`` or ``.csv.gz``, :mod:`gyrofilter.recording` format v1).
+    realtime : bool
+        Pace the samples: the sample with time ``t`` (s) is delivered ``(t - t0) / speed``
+        seconds after the first ``read()``; False hands them out as fast as they are read.
+    speed : float
+        Pace factor with ``realtime`` (> 0, finite; 2 = twice as fast as recorded).
+    clock, sleep : callable
+        Monotonic clock (s) and sleep(s) for the pacing (test seams).
+    chunk_rows : int
+        Rows read from the file at a time (memory bound; does not change the output).
+
+    ``columns`` are ``t, gx, gy, gz`` (+ ``temp``) then the file's other columns; units, rate
+    and header are the file's. SettingsError for a bad ``speed``; the reader's errors for a bad
+    file.
+    """
 
     def __init__(self, path, realtime=False, speed=1.0, *, clock=time.monotonic, sleep=time.sleep, chunk_rows=CHUNK_ROWS):
         if not isinstance(speed, (int, float)) or not speed > 0 or not math.isfinite(speed):
@@ -105,6 +124,13 @@ class ReplaySource(Source):
         return len(self._buf) - self._pos
 
     def read(self):
+        """Next rows of the file, shape (n, len(columns)): t (s), gyro in the file's
+        ``gyro_unit``, then the file's other columns (``temp`` in deg C).
+
+        Up to :data:`CHUNK_SAMPLES` rows when not paced; with ``realtime`` the rows due by now,
+        waiting at most :data:`MAX_WAIT_S` (0.1 s). May return no rows when only notes are due.
+        Raises :class:`gyrofilter.errors.SourceEnded` at the end of the file or once closed.
+        """
         if self._closed:
             raise SourceEnded(f"replay of {self.path}: source closed")
         while not self._exhausted and self._available() < CHUNK_SAMPLES:

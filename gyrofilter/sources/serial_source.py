@@ -81,6 +81,21 @@ class LineParser:
     complete lines made. ``header`` is None until the units are known (from a header line or
     the constructor), and so is ``sample_rate_hz`` (float). Counters are in :attr:`stats`,
     events in :attr:`notes`.
+
+    Parameters
+    ----------
+    gyro_unit : str, optional
+        Unit of the gyro fields when the device sends no header: ``dps``, ``rad/s`` or ``lsb``.
+    lsb_per_dps : float, optional
+        LSB per deg/s, needed with ``gyro_unit="lsb"``.
+    sample_rate_hz : float, optional
+        The device's sample rate (Hz), > 0: ``t = sample index / sample_rate_hz``.
+    where : str
+        Name used in messages and notes (the port name).
+
+    Giving any of the three units makes them the source options: a header line must then agree
+    with them (else :class:`UnitsConflict`), and the first line is discarded. SettingsError
+    when an option is missing or not positive.
     """
 
     def __init__(self, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None, *, where="serial"):
@@ -193,6 +208,8 @@ class LineParser:
 
     @property
     def columns(self):
+        """Names of the row columns, ``["t", "gx", "gy", "gz"]`` plus ``"temp"`` (deg C) when the
+        lines carry it; None until the fields are known (from a header or the first data line)."""
         if self.fields is None:
             return None
         return ["t", "gx", "gy", "gz"] + (["temp"] if "temp" in self.fields else [])
@@ -207,7 +224,15 @@ class LineParser:
             self.notes.append(f"serial: skipped {kind[:-1].replace('_', ' ')} ({reason}): {shown}{more}")
 
     def feed(self, data: bytes) -> np.ndarray:
-        """Add received bytes; returns the rows of the complete lines, shape (n, len(columns))."""
+        """Add received bytes; returns the rows of the complete lines, shape (n, len(columns)).
+
+        ``data``: bytes as received, split anywhere (an incomplete last line is kept for the next
+        call). Rows are ``t, gx, gy, gz[, temp]``: t (s) from the device's sample counter and
+        ``sample_rate_hz``, gyro in the header's ``gyro_unit``, temp in deg C (converted from
+        TEMP_OUT with ``temp_unit=mpu6050_raw``). Raises DeviceError only for an unreadable header
+        and :class:`UnitsConflict` for a header that changes the units; bad lines are counted in
+        :attr:`stats` and noted.
+        """
         buf = self._buf + data
         end = buf.rfind(b"\n")
         if end < 0:
@@ -398,11 +423,15 @@ class LineParser:
         return rows
 
     def pop_notes(self):
+        """Events since the last call (gaps, restarts, skipped lines, device messages), as a list
+        of one-line strings; empties :attr:`notes`."""
         notes, self.notes = self.notes, []
         return notes
 
 
 def prev_of(counter, i, last):
+    """The counter value before ``counter[i]``: ``counter[i - 1]``, or ``last`` (the last counter
+    of the previous chunk) for ``i == 0``."""
     return counter[i - 1] if i > 0 else last
 
 
@@ -417,6 +446,28 @@ class SerialSource(Source):
     ``port`` is a device path or a pyserial URL; ``gyro_unit``/``lsb_per_dps``/``sample_rate_hz``
     are needed only if the device sends no header. Opening waits up to ``header_timeout_s`` for
     the header and the first data line (asking the device with ``?``).
+
+    Parameters
+    ----------
+    port : str
+        Serial device (``/dev/ttyUSB0``) or pyserial URL (``loop://``, ``socket://...``).
+    baudrate : int
+        Baud rate (bit/s).
+    gyro_unit : str, optional
+        Gyro unit if the device sends no header: ``dps``, ``rad/s`` or ``lsb``.
+    lsb_per_dps : float, optional
+        LSB per deg/s, with ``gyro_unit="lsb"``.
+    sample_rate_hz : float, optional
+        Sample rate (Hz) if the device sends no header.
+    header_timeout_s : float
+        Longest wait (s) for the header and the first data line; DeviceError after it.
+    serial_port : object, optional
+        An open pyserial-like port (``read``, ``write``, ``in_waiting``, ``close``) used instead
+        of opening ``port`` (test seam).
+    clock : callable
+        Monotonic clock (s) for the header deadline (test seam).
+
+    ``read()`` returns rows ``[t, gx, gy, gz(, temp)]`` (see :meth:`LineParser.feed`).
     """
 
     def __init__(self, port, baudrate=115200, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None,
@@ -492,7 +543,12 @@ class SerialSource(Source):
         return self._parser.feed(data) if data else self._parser._empty()
 
     def read(self):
-        """Rows that arrived (waits at most 0.1 s); SourceEnded once the port is gone."""
+        """Rows that arrived (waits at most 0.1 s); SourceEnded once the port is gone.
+
+        Returns an array of shape (n, len(columns)): t (s), gyro in ``gyro_unit``, temp (deg C);
+        shape (0, len(columns)) when nothing arrived. After a disconnect (or ``close()``) the rows
+        received so far come first, then :class:`gyrofilter.errors.SourceEnded` saying why.
+        """
         if self._pending:
             rows = np.concatenate(self._pending)
             self._pending = []

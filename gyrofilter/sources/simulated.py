@@ -50,7 +50,28 @@ DEFAULT_MODEL = {
 
 
 class SimulatedSource(Source):
-    """Live source backed by the simulator; see the module docstring."""
+    """Live source backed by the simulator; see the module docstring.
+
+    Parameters
+    ----------
+    model : dict or str, optional
+        The simulator model (:func:`gyrofilter.sim.simulate.validate_model` schema) or the path
+        of its JSON file (a gap report's ``extended_model`` is used); None or ``""``:
+        :data:`DEFAULT_MODEL`.
+    seed : int, optional
+        Random seed; None draws one and writes it in the header (``simulated_seed``).
+    realtime : bool
+        Pace the samples: the sample with time ``t`` (s) is delivered ``t`` seconds after the
+        first ``read()``; False hands them out as fast as they are read.
+    duration_s : float, optional
+        Seconds of samples before the source ends (> 0); None runs for :data:`UNLIMITED_S`.
+    sample_rate_hz : float, optional
+        Sample rate (Hz), overriding the model's.
+    clock, sleep : callable
+        Monotonic clock (s) and sleep(s) for the pacing (test seams).
+
+    SettingsError names the model for an invalid model or duration.
+    """
 
     def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
                  clock=time.monotonic, sleep=time.sleep):
@@ -105,6 +126,13 @@ class SimulatedSource(Source):
         return True
 
     def read(self):
+        """Next simulated rows, shape (n, len(columns)): t (s), gyro in the model's ``gyro_unit``
+        (deg/s, rad/s or LSB), then ``temp`` (deg C) when the model has a temperature.
+
+        Up to :data:`FAST_CHUNK_SAMPLES` rows when not paced; with ``realtime`` the rows due by
+        now, waiting at most :data:`MAX_WAIT_S` (0.1 s). Raises
+        :class:`gyrofilter.errors.SourceEnded` after ``duration_s`` of samples or once closed.
+        """
         if self._closed:
             raise SourceEnded("simulation closed")
         if not self.realtime:
