@@ -22,15 +22,18 @@ class MovedModuleFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     """Finds ``gyrofilter.<old>`` for each old name of :data:`MOVED` and loads the new module."""
 
     def find_spec(self, fullname, path=None, target=None):
+        """A spec loaded by this finder for ``gyrofilter.<old name>`` of :data:`MOVED`, else None."""
         package, _, name = fullname.rpartition(".")
         if package == __package__ and name in MOVED:
             return importlib.util.spec_from_loader(fullname, self)
         return None
 
     def create_module(self, spec):
+        """None: the import system makes a plain placeholder module for ``spec``."""
         return None  # a placeholder; exec_module puts the real module in its place
 
     def exec_module(self, module):
+        """Import the module's new name and put it into ``sys.modules`` under the old name."""
         real = importlib.import_module(f"{__package__}.{MOVED[module.__name__.rpartition('.')[2]]}")
         sys.modules[module.__name__] = real  # the import system returns what sys.modules holds
 

@@ -50,14 +50,17 @@ class _HeaderFacts:
 
     @property
     def sample_rate_hz(self) -> float:
+        """The header's ``sample_rate_hz`` as a float (Hz)."""
         return float(self.header["sample_rate_hz"])
 
     @property
     def gyro_unit(self) -> str:
+        """The header's ``gyro_unit``: ``dps``, ``rad/s`` or ``lsb`` (the gyro columns' unit)."""
         return self.header["gyro_unit"]
 
     @property
     def lsb_per_dps(self):
+        """The header's ``lsb_per_dps`` as a float (LSB per deg/s), or None when absent."""
         value = self.header.get("lsb_per_dps")
         return None if value is None else float(value)
 
@@ -80,10 +83,12 @@ class Note(tuple):
 
     @property
     def line(self):
+        """File line number (1-based) of the annotation."""
         return self[0]
 
     @property
     def text(self):
+        """The annotation's text, after the ``#`` and its blank."""
         return self[1]
 
 
@@ -619,6 +624,28 @@ class RecordingWriter(Closable):
     the version line. ``compresslevel`` (1-9) applies to ``.gz`` files: 6, gzip's own default,
     wrote 1 h of 100-Hz three-axis noise in 1.5 s against 3.7 s for Python's default 9, for 1 %
     more bytes.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to create (overwritten); gzip-compressed when the name ends in ``.gz``.
+    header : dict
+        Header keys -> text values; needs ``sample_rate_hz`` (Hz) and ``gyro_unit`` (``dps``,
+        ``rad/s`` or ``lsb``), and ``lsb_per_dps`` (LSB per deg/s) with ``lsb``. A
+        ``gyrofilter-recording`` key is dropped (the version line is written first).
+    columns : sequence of str
+        Column names, which must include ``gx, gy, gz`` (``t`` in s and ``temp`` in deg C
+        optional).
+    formats : sequence of str, optional
+        A %-format per column (default ``%.10g`` for ``t``, ``%.9g`` for the others).
+    flush_interval_s : float or None
+        Longest time (s) between flushes while writing; None flushes only at the end.
+    fsync : bool
+        Also ``os.fsync`` at each flush (the data reach the disk, not just the OS).
+    compresslevel : int
+        gzip level 1-9 for ``.gz`` files.
+
+    RecordingError for a bad header or column list.
     """
 
     def __init__(self, path, header: dict, columns, *, formats=None, flush_interval_s=1.0, fsync=True,
@@ -707,6 +734,11 @@ def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:
 def warn_about_gaps(head, consequence, warn):
     """Warn (``warn(text)``) when the t column of a recording read
     (:class:`~gyrofilter.recording.RecordingHead`) showed missing samples; ``consequence`` says
-    what that means for the command."""
+    what that means for the command.
+
+    ``head``: the :class:`RecordingHead` after its chunks were read (its ``t_gaps`` counts the
+    steps of ``t`` longer than 1.5 sample intervals); ``consequence``: text appended to the
+    warning; ``warn``: a callable taking one line of text. Returns None; warns at most once.
+    """
     if head.t_gaps:
         warn(f"{head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")

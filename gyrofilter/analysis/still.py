@@ -17,7 +17,14 @@ from .noise_model import GROSS_LIMIT_DPS, GROSS_Z, characterise_axis, gross_erro
 
 def read_axes(path, axes):
     """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
-    (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array})."""
+    (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array}).
+
+    ``path``: a format-v1 recording (``.csv`` or ``.csv.gz``); ``axes``: axis letters, e.g.
+    ``"xyz"`` or ``"z"`` (columns ``gx``...). ``head`` is the
+    :class:`~gyrofilter.recording.RecordingHead` after the whole file was read (its warnings,
+    notes, ``t_gaps`` and ``sample_rate_hz`` in Hz); the arrays are converted from the file's
+    ``gyro_unit``. RecordingError for a bad file or one without samples.
+    """
     chunks = iter_recording(path)
     head = next(chunks)
     columns = collect_columns(head, chunks, [f"g{a}" for a in axes])
@@ -30,7 +37,14 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
     (:func:`~gyrofilter.analysis.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
-    Samples are never dropped. ``series`` start at the file's sample ``first_row``."""
+    Samples are never dropped. ``series`` start at the file's sample ``first_row``.
+
+    ``head``: the file's :class:`~gyrofilter.recording.RecordingHead` (for its path and line
+    numbers); ``series``: axis letter -> rates (deg/s); ``keep``: True to warn instead of
+    refusing (``--keep-outliers``); ``first_row``: file sample index (0-based) of ``series[...][0]``.
+    A gross error is a spike beyond ``GROSS_Z`` robust sigmas or beyond ``GROSS_LIMIT_DPS``
+    (deg/s). Returns None; raises RecordingError when refusing.
+    """
     found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
     if not found:
         return
@@ -57,6 +71,13 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
     RecordingError, and a result that is not finite raises AllanInputError (both name the file).
     ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings stay in
     their results (``AxisNoise.warnings``).
+
+    ``path``: the recording; ``axes``: axis letters (``"xyz"``); ``confidence``: level of the
+    Allan deviation's confidence intervals (0..1, 0.95 = 95 %); ``min_clusters``: fewest
+    clusters an averaging time tau needs to be used; ``keep_outliers``: analyse gross errors
+    instead of refusing. Each :class:`~gyrofilter.analysis.noise_model.AxisNoise` holds the
+    Allan deviation (deg/s) against tau (s) and the fitted coefficients (N in deg/sqrt(s) = deg/s/sqrt(Hz),
+    B in deg/s, K in deg/s/sqrt(s); :mod:`gyrofilter.analysis.noise_model`).
     """
     head, series = read_axes(path, axes)
     for text in head.warnings:
@@ -76,7 +97,11 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
 
 def check_finite(result, axis, path):
     """Raise AllanInputError unless every number of ``result`` is finite (numbers too large
-    for float64 overflow to inf/NaN)."""
+    for float64 overflow to inf/NaN).
+
+    ``result``: one axis's AxisNoise; ``axis``: its letter and ``path`` the file, both for the
+    message. Returns None when all is finite.
+    """
     arrays = (result.adev, result.ci_low, result.ci_high, result.edf, result.fit_values)
     values = [v for c in (*result.fitted.values(), *result.readoff.values())
               for v in (c.value, c.low, c.high, c.upper) if v is not None]
