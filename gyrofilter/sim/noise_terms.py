@@ -9,6 +9,13 @@ strictly sequentially, which is what makes a chunked run equal to a one-shot run
 All outputs are angular rate in deg/s (temperature in deg C); ``t_s`` is the sample time
 ``n / f_s`` with ``n`` the absolute sample index, ``f_s`` the sample rate.
 
+The ``next`` protocol, shared by every term class: ``next(t_s, temp_c)`` takes ``t_s``, the
+(n,) sample times (s) of the next block, consecutive with the previous block's, and
+``temp_c``, the (n,) true sensor temperatures (deg C) at those times or None without a
+temperature profile (only :class:`TemperatureCoefficient` uses it); it returns a new (n,)
+float array, the term's contribution to the rate (deg/s), and advances the term's state and
+random stream. Terms that are random take ``rng``, a ``numpy.random.Generator`` of their own.
+
 Notation: ``f_s`` sample rate (Hz), ``w[n]`` independent standard normal draws, ``φ``
 an AR(1) coefficient. References: IEEE Std 952-1997 annex C (Allan variance of the gyro error
 terms), NIST SP 1065 (Riley 2008) section 5.2 (Allan variance), Kasdin 1995 (discrete
@@ -34,12 +41,16 @@ def _lfilter_ar1(phi, gain, w, state):
 
 
 class Constant:
-    """Constant bias: ω(t) = b (deg/s). Deterministic."""
+    """Constant bias: ω(t) = b (deg/s). Deterministic.
+
+    ``value_dps``: b (deg/s), the axis's ``bias_dps``.
+    """
 
     def __init__(self, value_dps):
         self.value_dps = float(value_dps)
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         return np.full(len(t_s), self.value_dps)
 
 
@@ -61,6 +72,11 @@ class WhiteNoise:
 
     In both, the lag-1 autocorrelation of the noise is ρ = ``lag1``; the process starts in its
     stationary state.
+
+    ``arw_dps_per_sqrt_hz``: N (deg/s/sqrt(Hz)); ``sample_rate_hz``: f_s (Hz); ``rng``: the
+    term's generator; ``lag1``: ρ in (-1, 1), 0 for white noise; ``preserve``: ``"arw"`` or
+    ``"std"`` (any other value acts as ``"std"``; :func:`~gyrofilter.sim.simulate.validate_model`
+    admits only these two).
     """
 
     def __init__(self, arw_dps_per_sqrt_hz, sample_rate_hz, rng, lag1=0.0, preserve="arw"):
@@ -74,6 +90,7 @@ class WhiteNoise:
         self.state = None
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         n = len(t_s)
         if self.lag1 == 0.0:
             return self.sigma_dps * self.rng.standard_normal(n)
@@ -91,6 +108,9 @@ class GaussMarkov:
     Exact discretisation (the sampled process has the same R at the sample times):
     x[n] = φ x[n-1] + σ sqrt(1 - φ²) w[n], φ = exp(-1 / (f_s T)); x[-1] ~ N(0, σ²) (stationary).
     (Gelb, Applied Optimal Estimation, table 3.8-1; IEEE Std 952-1997 C.5.)
+
+    ``sigma_dps``: σ (deg/s); ``tau_s``: T (s), > 0; ``sample_rate_hz``: f_s (Hz); ``rng``: the
+    term's generator.
     """
 
     def __init__(self, sigma_dps, tau_s, sample_rate_hz, rng):
@@ -100,6 +120,7 @@ class GaussMarkov:
         self.state = None
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         if self.state is None:
             self.state = self.sigma_dps * self.rng.standard_normal()
         w = self.rng.standard_normal(len(t_s))
@@ -129,7 +150,11 @@ def _state_covariance(b, a):
 
 def filter_variance(b, a):
     """Stationary variance of y = (B(z)/A(z)) w for unit white w: b₀² + P₀₀ (P of
-    :func:`_state_covariance`), i.e. Σ h[n]² of the impulse response."""
+    :func:`_state_covariance`), i.e. Σ h[n]² of the impulse response.
+
+    ``b``, ``a``: numerator and denominator coefficients in z⁻¹ (a₀ = 1, stable A). Returns
+    the variance in the square of ``b``'s unit ((deg/s)² when ``b`` is in deg/s).
+    """
     b = np.asarray(b, dtype=float)
     if max(len(a), len(b)) == 1:
         return float(b[0] ** 2)
@@ -144,6 +169,10 @@ class FilteredNoise:
     has the stationary variance; streams block by block with the lfilter state. Two-sided PSD
     S(f) = |B(e^{-jω})|² / |A(e^{-jω})|² / f_s ((deg/s)²/Hz), ω = 2π f / f_s. The ``narrowband``
     and ``arma`` effects are built on it.
+
+    ``b``: numerator coefficients (deg/s: they scale the unit-variance draws); ``a``:
+    denominator coefficients (a₀ = 1, stable); ``rng``: the term's generator.
+    :func:`narrowband_filter` and :func:`arma_filter` make (b, a).
     """
 
     def __init__(self, b, a, rng):
@@ -153,6 +182,7 @@ class FilteredNoise:
         self.state = None
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         from scipy.signal import lfilter
 
         if len(self.a) == 1 and len(self.b) == 1:
@@ -174,6 +204,10 @@ def narrowband_filter(rms_dps, center_hz, bandwidth_hz, sample_rate_hz):
     B << f₀). The gain g sets the stationary std to ``rms_dps``: for an AR(2) with
     φ₁ = 2 r cos θ, φ₂ = -r², Var y = g² (1 - φ₂) / ((1 + φ₂)((1 - φ₂)² - φ₁²))
     (Box & Jenkins, Time Series Analysis, eq. 3.2.28).
+
+    ``rms_dps``: stationary std of the line (deg/s); ``center_hz``: f₀ (Hz), below f_s / 2;
+    ``bandwidth_hz``: B (Hz), > 0; ``sample_rate_hz``: f_s (Hz). Returns (b, a) as arrays
+    for :class:`FilteredNoise` (b in deg/s).
     """
     theta = 2.0 * math.pi * float(center_hz) / sample_rate_hz
     r = math.exp(-math.pi * float(bandwidth_hz) / sample_rate_hz)
@@ -185,13 +219,22 @@ def narrowband_filter(rms_dps, center_hz, bandwidth_hz, sample_rate_hz):
 def arma_filter(phi, theta, sigma_a_dps):
     """(b, a) of the ``arma`` effect in the signs of :mod:`gyrofilter.analysis.arma` (paper 003):
     x[n] - Σ φ_i x[n-i] = a[n] - Σ θ_j a[n-j], a ~ N(0, σ_a²), so A(z) = 1 - Σ φ_i z⁻ⁱ and
-    B(z) = σ_a (1 - Σ θ_j z⁻ʲ) (Box & Jenkins, eq. 3.4.1)."""
+    B(z) = σ_a (1 - Σ θ_j z⁻ʲ) (Box & Jenkins, eq. 3.4.1).
+
+    ``phi``: AR coefficients φ_1..φ_p (stationary); ``theta``: MA coefficients θ_1..θ_q;
+    ``sigma_a_dps``: σ_a, the std of the innovations a[n] (deg/s). Returns (b, a) as arrays for
+    :class:`FilteredNoise`.
+    """
     b = float(sigma_a_dps) * np.r_[1.0, -np.asarray(theta, dtype=float)]
     return b, np.r_[1.0, -np.asarray(phi, dtype=float)]
 
 
 def filter_psd(b, a, f_hz, sample_rate_hz):
-    """Two-sided PSD |B(e^{-jω})|² / |A(e^{-jω})|² / f_s of :class:`FilteredNoise`, ω = 2πf/f_s."""
+    """Two-sided PSD |B(e^{-jω})|² / |A(e^{-jω})|² / f_s of :class:`FilteredNoise`, ω = 2πf/f_s.
+
+    ``b``, ``a``: the filter (b in deg/s); ``f_hz``: frequencies (Hz, scalar or array);
+    ``sample_rate_hz``: f_s (Hz). Returns the PSD in (deg/s)²/Hz, the shape of ``f_hz``.
+    """
     z = np.exp(-2j * math.pi * np.asarray(f_hz, dtype=float) / sample_rate_hz)
     num = np.polyval(np.asarray(b)[::-1], z)
     den = np.polyval(np.asarray(a)[::-1], z)
@@ -210,6 +253,10 @@ def flicker_bank(b_dps, sample_rate_hz, tau_min_s, tau_max_s, per_decade=2.0):
 
     Returns (tau_s array, q_dps). The Allan floor is flat (within a few per cent) for
     about 3 T_min < τ < T_max / 3.
+
+    ``b_dps``: B (deg/s); ``sample_rate_hz``: f_s (Hz; not used by the bank itself);
+    ``tau_min_s``, ``tau_max_s``: T_min and T_max (s), > 0; ``per_decade``: components per decade
+    of T. ``tau_s`` are the T_i (s) and ``q_dps`` the std q (deg/s) of each component.
     """
     ratio = 10.0 ** (1.0 / per_decade)
     count = max(1, int(math.ceil(math.log(tau_max_s / tau_min_s) / math.log(ratio) - 1e-9)) + 1)
@@ -226,6 +273,9 @@ class BiasInstability:
     each started stationary. Memory is one number per component, so it streams.
     Defaults: T_min = 1/f_s, T_max = the record length, 2 components per decade (the Allan
     floor is then flat within 1 % from ~0.2 s to T_max / 9, and within 6 % from 3/f_s).
+
+    ``b_dps``: B (deg/s); ``sample_rate_hz``: f_s (Hz); ``rng``: the term's generator;
+    ``tau_min_s``, ``tau_max_s``: T_min and T_max (s); ``per_decade``: components per decade.
     """
 
     def __init__(self, b_dps, sample_rate_hz, rng, tau_min_s, tau_max_s, per_decade=2.0):
@@ -236,6 +286,7 @@ class BiasInstability:
         self.state = None
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         k = len(self.taus_s)
         if self.state is None:
             self.state = self.q_dps * self.rng.standard_normal(k)
@@ -252,6 +303,9 @@ class RateRandomWalk:
 
     x[n] = x[n-1] + (K / sqrt(f_s)) w[n], x[-1] = 0, so Var(x(t)) = K² t and the Allan
     deviation read at τ = 3 s equals K (IEEE Std 952-1997 C.4; K in deg/s/sqrt(s)).
+
+    ``k_dps_per_sqrt_s``: K (deg/s/sqrt(s)); ``sample_rate_hz``: f_s (Hz); ``rng``: the term's
+    generator.
     """
 
     def __init__(self, k_dps_per_sqrt_s, sample_rate_hz, rng):
@@ -260,6 +314,7 @@ class RateRandomWalk:
         self.state = 0.0
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         y = self.state + np.cumsum(self.step_dps * self.rng.standard_normal(len(t_s)))
         if len(y):
             self.state = y[-1]
@@ -267,22 +322,30 @@ class RateRandomWalk:
 
 
 class RateRamp:
-    """Rate ramp: x(t) = R t; Allan σ(τ) = R τ / sqrt(2) (IEEE Std 952-1997 C.6)."""
+    """Rate ramp: x(t) = R t; Allan σ(τ) = R τ / sqrt(2) (IEEE Std 952-1997 C.6).
+
+    ``r_dps_per_s``: R (deg/s per s), signed.
+    """
 
     def __init__(self, r_dps_per_s):
         self.r = float(r_dps_per_s)
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         return self.r * t_s
 
 
 class Sinusoid:
-    """Periodic disturbance: x(t) = A sin(2π f t + φ) with A the peak amplitude."""
+    """Periodic disturbance: x(t) = A sin(2π f t + φ) with A the peak amplitude.
+
+    ``amplitude_dps``: A (deg/s); ``frequency_hz``: f (Hz); ``phase_rad``: φ (rad).
+    """
 
     def __init__(self, amplitude_dps, frequency_hz, phase_rad=0.0):
         self.a, self.f, self.phase = float(amplitude_dps), float(frequency_hz), float(phase_rad)
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         return self.a * np.sin(2.0 * math.pi * self.f * t_s + self.phase)
 
 
@@ -292,32 +355,44 @@ class TemperatureCoefficient:
     T(t) is the true (noise-free) sensor temperature of the model's temperature profile; the
     recorded ``temp`` column adds the profile's read noise and resolution. T_ref defaults to
     the profile's temperature at t = 0, so ``bias_dps`` is the bias at the start temperature.
+
+    ``coefficient_dps_per_c``: c (deg/s per deg C), signed; ``reference_c``: T_ref (deg C).
+    Its ``next`` needs ``temp_c``.
     """
 
     def __init__(self, coefficient_dps_per_c, reference_c):
         self.c, self.ref = float(coefficient_dps_per_c), float(reference_c)
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         return self.c * (temp_c - self.ref)
 
 
 class BiasStep:
-    """Sudden bias jump: x(t) = s for t >= t_step, else 0."""
+    """Sudden bias jump: x(t) = s for t >= t_step, else 0.
+
+    ``size_dps``: s (deg/s), signed; ``time_s``: t_step (s).
+    """
 
     def __init__(self, size_dps, time_s):
         self.s, self.t0 = float(size_dps), float(time_s)
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         return np.where(t_s >= self.t0, self.s, 0.0)
 
 
 class Warmup:
-    """Warm-up settling of the bias after power-on: x(t) = a exp(-t / τ) (a signed, at t = 0)."""
+    """Warm-up settling of the bias after power-on: x(t) = a exp(-t / τ) (a signed, at t = 0).
+
+    ``amplitude_dps``: a (deg/s); ``tau_s``: τ (s), > 0.
+    """
 
     def __init__(self, amplitude_dps, tau_s):
         self.a, self.tau = float(amplitude_dps), float(tau_s)
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         return self.a * np.exp(-t_s / self.tau)
 
 
@@ -328,6 +403,10 @@ class Outliers:
     s · m · exp(σ_ln z) with s = ±1 equally likely, z ~ N(0, 1), so |spike| is log-normal with
     median m = ``magnitude_dps`` (and log-spread σ_ln = ``spread_ln``, default 0.25). Expected
     spike count p·N. Spikes are added after the noise and before saturation and quantization.
+
+    ``rate``: p, probability per sample (0..1); ``magnitude_dps``: m (deg/s); ``rng_where``:
+    generator of the spike positions, ``rng_size``: of their signs and sizes (two streams, so
+    the positions do not depend on the sizes); ``spread_ln``: σ_ln (natural-log units).
     """
 
     def __init__(self, rate, magnitude_dps, rng_where, rng_size, spread_ln=0.25):
@@ -335,6 +414,7 @@ class Outliers:
         self.rng_where, self.rng_size = rng_where, rng_size
 
     def next(self, t_s, temp_c):
+        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
         out = np.zeros(len(t_s))
         hit = np.flatnonzero(self.rng_where.random(len(t_s)) < self.p)
         if hit.size:
@@ -352,6 +432,11 @@ class TemperatureProfile:
     amplitude A and period P). Table kind: linear interpolation of given (t_s, temp_c) points,
     held constant outside them. Recorded: T_rec = round((T + n_c w) / r) r with read noise
     std n_c and resolution r (MPU6050: 1/340 deg C, datasheet register map 4.18).
+
+    ``spec``: the validated ``temperature`` object of the model
+    (:func:`~gyrofilter.sim.simulate.validate_model`: ``start_c``, ``end_c`` in deg C, ``tau_s``,
+    ``cycle_period_s`` in s, ``cycle_amplitude_c``, ``noise_c``, ``resolution_c`` in deg C; or
+    ``t_s`` (s) and ``temp_c`` (deg C) arrays); ``rng``: generator of the read noise.
     """
 
     def __init__(self, spec, rng):
@@ -359,6 +444,7 @@ class TemperatureProfile:
         self.rng = rng
 
     def true_c(self, t_s):
+        """True temperature T(t) (deg C) at times ``t_s`` (s, array); deterministic."""
         s = self.spec
         if "t_s" in s:
             return np.interp(t_s, s["t_s"], s["temp_c"])
@@ -368,9 +454,12 @@ class TemperatureProfile:
         return temp
 
     def start_c(self):
+        """T(0) (deg C), the default reference of :class:`TemperatureCoefficient`."""
         return float(self.true_c(np.zeros(1))[0])
 
     def recorded_c(self, true_c):
+        """The ``temp`` column (deg C) for true temperatures ``true_c`` (deg C, array): read noise
+        added and rounded to the resolution; draws ``len(true_c)`` numbers when ``noise_c`` > 0."""
         s = self.spec
         rec = true_c + s["noise_c"] * self.rng.standard_normal(len(true_c)) if s["noise_c"] else true_c.copy()
         if s["resolution_c"]:
@@ -385,6 +474,10 @@ def ar1_allan_variance(phi, variance, m):
     Var(S) = v [m + 2 φ (m (1-φ) - (1-φ^m)) / (1-φ)²], Cov(S₁, S₂) = v φ (1-φ^m)² / (1-φ)²,
     σ²(m) = (Var(S) - Cov(S₁, S₂)) / m² (NIST SP 1065 eq. 11 with ȳ = S/m).
     Used by the tests as an oracle for the Gauss-Markov and flicker-bank terms.
+
+    ``phi``: φ, the lag-1 coefficient (|φ| < 1); ``variance``: v, the series' variance
+    ((deg/s)²); ``m``: cluster size(s) in samples (τ = m / f_s). Returns σ²(m) in (deg/s)², the
+    shape of ``m``.
     """
     m = np.asarray(m, dtype=float)
     phi = float(phi)

@@ -113,6 +113,12 @@ def validate_model(model, *, sample_rate_hz=None):
     e.g. ``model: axes.z.effects[0] (gauss_markov): missing parameter 'tau_s' (expected a number > 0)``.
     Keys starting with ``_`` and top-level metadata (description, name, comment, notes, source,
     sensor) are ignored.
+
+    ``model``: the model dict (docs/formats.md, section 2; e.g. from :func:`load_model`);
+    ``sample_rate_hz``: sample rate (Hz) overriding the model's. In ``normalized`` the units are
+    the keys' own: ``sample_rate_hz`` Hz, ``lsb_per_dps`` LSB per deg/s (or None),
+    ``full_scale_dps`` deg/s (or None), per axis ``bias_dps`` deg/s and ``arw_dps_per_sqrt_hz``
+    deg/s/sqrt(Hz), temperatures deg C and times s (the ``temperature`` profile's lists as arrays).
     """
     warnings = []
     if not isinstance(model, dict):
@@ -320,7 +326,11 @@ def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
 
 
 def sample_count(duration_s, sample_rate_hz):
-    """Number of samples of a run: round(duration · f_s), at least 1."""
+    """Number of samples of a run: round(duration · f_s), at least 1.
+
+    ``duration_s``: run length (s), finite and > 0 (else SettingsError); ``sample_rate_hz``:
+    f_s (Hz). Returns an int.
+    """
     duration_s = float(duration_s)
     if not math.isfinite(duration_s) or duration_s <= 0:
         raise SettingsError(f"simulate: duration must be > 0 s, got {plain(duration_s)}")
@@ -335,6 +345,13 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
     ``lsb``), ``temp_c`` (n,) or None without a temperature profile. Memory is bounded by the
     block size (and the flicker bank's ~3 numbers per decade); the concatenated blocks equal
     :func:`simulate`'s output for the same seed, whatever the block size.
+
+    ``model``: the model dict (:func:`validate_model`); ``duration_s``: run length (s), rounded
+    to whole samples (:func:`sample_count`); ``sample_rate_hz``: rate (Hz) overriding the
+    model's; ``chunk_samples``: samples per block (>= 1); ``seed`` (int >= 0) or ``rng`` (a
+    ``numpy.random.Generator``), not both; neither draws fresh entropy; ``validated``: the
+    ``normalized`` dict of :func:`validate_model` when the caller already has it (then
+    ``sample_rate_hz`` is not used). A generator: nothing is computed until iterated.
     """
     spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
     chunk_samples = int(chunk_samples)
@@ -383,7 +400,13 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     seed=seed).gyro_dps[:, axis]`` bit for bit (every random term draws from its own stream,
     keyed by the axis, so the other axes need not be generated). For analyses that simulate
     one axis many times (:mod:`gyrofilter.analysis.gap`): no time column, no other axes, memory bounded
-    by the block."""
+    by the block.
+
+    ``model``: the model dict; ``duration_s``: run length (s); ``axis``: 0, 1 or 2 (x, y, z);
+    ``seed``: int >= 0 (None: fresh entropy); ``chunk_samples``: samples per block;
+    ``validated``: the already validated model (:func:`validate_model`), if at hand. The rates
+    are the model's output converted to deg/s, so quantization and saturation are kept.
+    """
     from ..units import to_dps
 
     spec = validated if validated is not None else validate_model(model)[0]
@@ -400,7 +423,16 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
 
 
 def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, validated=None):
-    """Header for a simulated recording: units, ``sensor: simulated`` and the model as compact JSON."""
+    """Header for a simulated recording: units, ``sensor: simulated`` and the model as compact JSON.
+
+    ``model``: the model as given (written back as ``simulated_model``, with the rate used);
+    ``duration_s``: the run length (s; written as ``simulated_duration_s``, rounded to whole
+    samples); ``sample_rate_hz``: rate (Hz) overriding the model's; ``seed``: written as
+    ``simulated_seed`` (``none`` when None); ``validated``: the validated model, if at hand.
+    Returns a dict of text values (``sample_rate_hz`` in Hz, ``gyro_unit``, ``lsb_per_dps`` with
+    ``lsb``, ``full_scale_dps`` in deg/s when the model has one) for
+    :class:`~gyrofilter.recording.RecordingWriter`.
+    """
     spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
     given = dict(model)
     given["sample_rate_hz"] = spec["sample_rate_hz"]
@@ -425,7 +457,11 @@ def _json_default(value):
 
 
 def recording_columns(model_or_spec):
-    """Column names of a simulated recording: t, gx, gy, gz (+ temp with a temperature profile)."""
+    """Column names of a simulated recording: t, gx, gy, gz (+ temp with a temperature profile).
+
+    ``model_or_spec``: the model dict or its validated form. Returns a list of names: ``t`` in
+    s, the gyro columns in the model's ``gyro_unit``, ``temp`` in deg C.
+    """
     has_temp = model_or_spec.get("temperature") is not None
     return ["t", *GYRO_COLUMNS] + (["temp"] if has_temp else [])
 
@@ -437,6 +473,12 @@ def simulate(model: dict, duration_s: float, *, sample_rate_hz=None, rng=None, s
     Columns t, gx, gy, gz (model's ``gyro_unit``) and temp (with a temperature profile); the
     header carries ``sensor: simulated``, ``simulated_model`` (compact JSON) and the seed.
     ``sample_rate_hz`` overrides the model's rate. Same seed, same numbers.
+
+    ``model``: the model dict (:func:`validate_model`); ``duration_s``: run length (s), rounded
+    to whole samples; ``sample_rate_hz``: Hz; ``seed`` (int >= 0) or ``rng``
+    (``numpy.random.Generator``), not both (neither: fresh entropy, and the header's
+    ``simulated_seed`` is ``none``); ``chunk_samples``: block size of the computation (does not
+    change the numbers). Memory: the whole run (use :func:`simulate_chunks` for long ones).
     """
     spec, _ = validate_model(model, sample_rate_hz=sample_rate_hz)
     parts = list(simulate_chunks(model, duration_s, chunk_samples=chunk_samples, rng=rng, seed=seed, validated=spec))
@@ -452,7 +494,12 @@ def simulate(model: dict, duration_s: float, *, sample_rate_hz=None, rng=None, s
 
 
 def simulate_dps(model, duration_s, *, sample_rate_hz=None, rng=None, seed=None):
-    """Convenience for analyses: ``(gyro_dps (N, 3), temp_c or None)`` of a run."""
+    """Convenience for analyses: ``(gyro_dps (N, 3), temp_c or None)`` of a run.
+
+    Same parameters as :func:`simulate` (``duration_s`` in s, ``sample_rate_hz`` in Hz, ``seed``
+    or ``rng``). Returns the rates in deg/s whatever the model's ``gyro_unit`` (after its
+    quantization and saturation) and the recorded temperature (deg C) or None.
+    """
     rec = simulate(model, duration_s, sample_rate_hz=sample_rate_hz, rng=rng, seed=seed)
     return rec.gyro_dps, rec.temp_c
 

@@ -229,9 +229,9 @@ class LineParser:
         ``data``: bytes as received, split anywhere (an incomplete last line is kept for the next
         call). Rows are ``t, gx, gy, gz[, temp]``: t (s) from the device's sample counter and
         ``sample_rate_hz``, gyro in the header's ``gyro_unit``, temp in deg C (converted from
-        TEMP_OUT with ``temp_unit=mpu6050_raw``). Raises DeviceError only for an unreadable header
-        and :class:`UnitsConflict` for a header that changes the units; bad lines are counted in
-        :attr:`stats` and noted.
+        TEMP_OUT with ``temp_unit=mpu6050_raw``). Raises only for a header line: DeviceError or
+        SettingsError when it is unreadable or lacks a unit, :class:`UnitsConflict` when it
+        changes the units; bad data lines are counted in :attr:`stats` and noted.
         """
         buf = self._buf + data
         end = buf.rfind(b"\n")
