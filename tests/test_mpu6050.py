@@ -182,12 +182,14 @@ def test_reset_that_never_finishes_times_out(rig):
 @pytest.mark.parametrize("chip,name", [(0x70, "MPU6500"), (0x71, "MPU9250"), (0x73, "MPU9255"),
                                        (0x72, "clone"), (0x98, "ICM-20689")])
 def test_relatives_named_and_refused_unless_allowed(rig, chip, name):
-    clock, model, bus = rig(chip_id=chip)
+    clock, model, bus = rig(chip_id=chip, temp_c=31.0)
     with pytest.raises(DeviceError, match=f"{name}.*WHO_AM_I 0x{chip:02X}.*allow_chip=0x{chip:02X}"):
         open_src(clock)
     src = open_src(clock, allow_chip=chip if chip % 2 else [f"0x{chip:02x}"])   # int or list of strings
     assert src.header["chip_id"] == f"0x{chip:02X}" and name in src.header["sensor"]
     assert src.fifo_size_bytes == 512
+    rows, _ = read_for(src, clock, 0.05)
+    np.testing.assert_allclose(rows[:, 4], 31.0, atol=0.01)  # the chip's own temperature scale, both ends
     src.close()
 
 

@@ -41,6 +41,13 @@ import numpy as np
 
 import smbus2.smbus2 as _smbus2
 
+#: WHO_AM_I -> (TEMP_OUT LSB per deg C, deg C at TEMP_OUT 0), from the datasheets, written here
+#: apart from the driver's table so that a wrong scale there is caught: MPU-6050 (RM-MPU-6000A
+#: 4.18), MPU-6500 family (PS-MPU-6500A-01), ICM-206xx/MPU6886 (DS-000143 and kin)
+TEMP_SCALE = {0x68: (340.0, 36.53), 0x72: (340.0, 36.53),
+              0x70: (333.87, 21.0), 0x71: (333.87, 21.0), 0x73: (333.87, 21.0), 0x74: (333.87, 21.0),
+              0x98: (326.8, 25.0), 0x12: (326.8, 25.0), 0x11: (326.8, 25.0), 0xAF: (326.8, 25.0), 0x19: (326.8, 25.0)}
+
 # register addresses (kept literal here, independent of the driver's map, so a wrong address in
 # the driver's table shows up as a test failure)
 SMPLRT_DIV, CONFIG, GYRO_CONFIG, FIFO_EN = 0x19, 0x1A, 0x1B, 0x23
@@ -94,7 +101,8 @@ class MPU6050Model:
         Angular rate (deg/s), scaled by the configured FS_SEL (131/65.5/32.8/16.4 LSB per deg/s),
         rounded and clipped to int16. Neither given: zeros.
     temp_c : float or array (N,)
-        Die temperature (deg C), written as TEMP_OUT = round((T - 36.53) * 340).
+        Die temperature (deg C), written as TEMP_OUT = round((T - offset) * LSB per deg C) with the
+        chip's own scale (:data:`TEMP_SCALE`; MPU6050: offset 36.53, 340 LSB per deg C).
     fifo_size : int
         FIFO capacity (bytes).
     reset_duration_s : float
@@ -190,7 +198,8 @@ class MPU6050Model:
             lsb = LSB_PER_DPS[(self.regs[GYRO_CONFIG] >> 3) & 3]
             g = np.round(self.gyro_dps[k % len(self.gyro_dps)] * lsb).astype(np.int64)
         g = np.clip(g, -32768, 32767)
-        t = np.round((self.temp_c[k % len(self.temp_c)] - 36.53) * 340.0).astype(np.int64)
+        lsb_per_c, offset_c = TEMP_SCALE.get(self.chip_id, TEMP_SCALE[0x68])  # the chip's own TEMP_OUT scale
+        t = np.round((self.temp_c[k % len(self.temp_c)] - offset_c) * lsb_per_c).astype(np.int64)
         return g, np.clip(t, -32768, 32767)
 
     def sync(self):
