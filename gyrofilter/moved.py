@@ -41,4 +41,4 @@ class MovedModuleFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 def install():
     """Put the finder on ``sys.meta_path`` once (``import gyrofilter`` does)."""
     if not any(isinstance(f, MovedModuleFinder) for f in sys.meta_path):
-        sys.meta_path.append(MovedModuleFinder())
+        sys.meta_path.insert(0, MovedModuleFinder())  # before path finders: a stale copy cannot shadow it
