@@ -22,6 +22,12 @@ ones found, because the effects are confusable:
    spectrum, so the largest of ``M`` ordinates exceeds ``t`` with probability about
    ``M exp(-t)`` (Fisher's test, the max-periodogram form; Priestley 1981, sec. 6.1.4). The line
    is fitted by least squares (amplitude, phase) at the refined frequency and subtracted.
+2b. ``narrowband`` -- a band of noise with a resolved width (a resonance): the Welch PSD over a
+   running-median background (±min(f_s / 10, 10 Hz)), the peak excess in units of its sampling error
+   ``(R - 1) sqrt(K)`` (K Welch segments; Welch 1967), centre, half-power width and rms refined
+   by a least-squares fit of the effect's own AR(2) resonator PSD (:func:`band_estimate`). Runs
+   on the series with the sinusoid removed; a band cannot be subtracted (it is noise), so the
+   later detectors see it, and the colored noise's lag-1 is corrected for it.
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short.
@@ -499,6 +505,8 @@ def _dft_amplitude(xc, fs, f0):
 #: ``(R - 1) sqrt(K)``) a band must exceed; on white and AR(1) noise (lag1 -0.7 to 0.7,
 #: 12 000 to 10^6 samples at 100 Hz, 80 runs) its largest value was 1.5
 NARROWBAND_THRESHOLD = 4.0
+#: half-width (Hz) of the running-median background of :func:`band_estimate` (at most f_s / 10)
+BAND_BACKGROUND_HZ = 10.0
 
 
 def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=True):
@@ -506,7 +514,7 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
 
     One-sided Welch PSD S(f) (Hann, 50 % overlap, segments of ``nperseg`` samples, fewer when
     the record holds less than 16 of them: the largest power of 2 up to N / 16; Welch 1967);
-    background b(f) = running median of S over ±f_s / 10; excess e = S - b, and ē its moving
+    background b(f) = running median of S over ±W, W = min(f_s / 10, 10 Hz); excess e = S - b, and ē its moving
     average over ``smooth_bins`` bins (the Welch bins are noisy). The peak is the bin of largest
     R = 1 + ē / b among the bins whose whole background window lies inside (0, f_s / 2) (at the
     edges the median of a sloped spectrum is biased); the band is the contiguous run of bins
@@ -525,7 +533,7 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     seg = int(min(nperseg, 2 ** int(math.log2(max(x.size // 16, 16)))))
     f, s = welch(x - x.mean(), fs=sample_rate_hz, nperseg=seg)
     df = f[1] - f[0]
-    background_hz = sample_rate_hz / 10.0
+    background_hz = min(sample_rate_hz / 10.0, BAND_BACKGROUND_HZ)
     width = max(3, int(round(2 * background_hz / df)) | 1)
     back = median_filter(s, size=width, mode="nearest")
     excess = s - back

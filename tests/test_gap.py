@@ -180,6 +180,17 @@ def test_cli_bad_input_is_one_line(tmp_path):
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
 
 
+def test_header_only_recording_is_a_clear_error_not_nan(tmp_path):
+    empty = tmp_path / "empty.csv"
+    empty.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n")
+    out = tmp_path / "o.json"
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "gap", str(empty), "--json", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "data rows" in proc.stderr and "nan" not in proc.stdout + proc.stderr
+    assert not out.exists()
+
+
 def test_too_short_recording_gives_no_findings_and_a_note():
     rec = Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (100, 3)), 100.0)
     report = analyse_gap(rec, n_sims=4)
