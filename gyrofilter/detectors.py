@@ -614,9 +614,9 @@ def detect_narrowband(x, fs):
     the background at one bin has a relative sampling error of about 1 / sqrt(K) (chi-square
     with about 2K degrees of freedom; Welch 1967), and smoothing only lowers it; the threshold
     :data:`NARROWBAND_THRESHOLD` sits well above its largest value on white and AR(1) noise.
-    Runs after the sinusoid detector, so a pure line is already subtracted; a band whose width
-    is at the estimator's resolution (``resolution_hz``) is reported with that width as an
-    upper bound (the evidence says so)."""
+    Runs after the sinusoid detector, so a pure line is already subtracted; the evidence says
+    whether the fitted width exceeds the estimator's resolution (``resolution_hz``) by half
+    again, i.e. whether the width is resolved."""
     if x.size < 4096 or fs <= 0:
         return None
     band = band_estimate(x, fs)
@@ -631,7 +631,7 @@ def detect_narrowband(x, fs):
         threshold=NARROWBAND_THRESHOLD,
         statistic_name="Welch band excess over the running-median background, in sampling errors",
         evidence=(f"a band of noise at {band['center_hz']:.4g} Hz, half-power width {band['bandwidth_hz']:.3g} Hz "
-                  + ("(resolved: a pure line shows " if resolved else "(at the resolution, an upper bound: a pure line shows ")
+                  + ("(resolved: the Welch resolution is " if resolved else "(not resolved: the Welch resolution is ")
                   + f"{band['resolution_hz']:.2g} Hz), rms {band['rms_dps']:.3g} deg/s; its peak is "
                   f"{band['peak_ratio']:.2g} times the background PSD ({stat:.0f} sampling errors, threshold "
                   f"{NARROWBAND_THRESHOLD:g})"),
