@@ -146,7 +146,7 @@ distance against a GMWM-style fit): [gap_closure.md](gap_closure.md).
   stochastic spectra by the Whittle likelihood; a shape is kept only if it also beats the
   exact (Kalman-filter) likelihood of a random walk or Gauss-Markov wander on the same data;
   an extra parameter must buy 6 in 2 Delta log L; a Gauss-Markov process whose time constant
-  exceeds a fifth of the record is reported as a random walk. See `gyrofilter/detectors.py`.
+  exceeds a fifth of the record is reported as a random walk. See `gyrofilter/detectors/` (one module per detector).
 - A recording shorter than about 5 minutes cannot separate drift, random walk and bias
   instability from white noise beyond tau of a few tens of seconds; the report says so.
 - The analysis models a still gyro. It never crashes on odd input: a constant axis, a
