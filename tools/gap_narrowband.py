@@ -4,15 +4,15 @@ and without a ``narrowband`` term estimated from the spectrum.
     python tools/gap_narrowband.py RECORDING AXIS [--seed 0] [--sims 12]
 
 Runs ``analyse_gap`` on RECORDING, estimates the strongest band of AXIS (x, y or z) from the Welch
-PSD (:func:`band_estimate`) and prints the gap's discrepancy D (docs/gap.md) against the recording,
+PSD (:func:`gyrofilter.analysis.detectors.band_estimate`) and prints the gap's discrepancy D (docs/gap.md) against the recording,
 from the same simulation seeds, of: the extended model; the extended model plus the band as a
 ``narrowband`` effect, white noise reduced to keep the per-sample variance (N'² = N² - rms² / f_s);
 and the same with the white level read off the Allan deviation at τ = 1 s (N = σ(1 s), IEEE Std
 952-1997 C.1) and a ``colored_noise`` term switched to ``preserve: arw`` (so N is the long-τ level);
 and that with the colored noise's lag1 re-solved so that noise plus line have the measured lag-1
 autocorrelation (:func:`with_narrowband`).
-The gap's detectors do not propose ``narrowband`` themselves (issue 12); this measures what it
-would buy.
+The gap now proposes ``narrowband`` itself (:func:`gyrofilter.analysis.detectors.detect_narrowband`); this
+tool measures the steps one by one.
 """
 from __future__ import annotations
 
@@ -20,50 +20,7 @@ import argparse
 import copy
 import math
 
-
-def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, background_hz=10.0, smooth_bins=15):
-    """Centre, half-power full width and rms of the strongest band of a rate series.
-
-    One-sided Welch PSD S(f) (Hann, segments of ``nperseg`` samples, fewer when the record holds
-    less than 16 of them: the largest power of 2 up to N / 16); background b(f) = running median of S over
-    ±``background_hz``; excess e = S - b, and ē its moving average over ``smooth_bins`` bins
-    (the Welch bins are noisy). The peak is the bin of largest ē / b; the band is the contiguous
-    run of bins around it with ē > ē_peak / 2 (its width is the half-power full width), the
-    centre the e-weighted mean frequency of that run, and rms² = Σ e Δf over the contiguous run
-    with ē > 0 (the line's variance: a one-sided PSD integrates to the variance).
-    Returns a dict with ``center_hz``, ``bandwidth_hz``, ``rms_dps`` and ``peak_ratio``
-    (1 + ē / b at the peak).
-    """
-    import numpy as np
-    from scipy.ndimage import median_filter, uniform_filter1d
-    from scipy.signal import welch
-
-    x = np.asarray(x_dps, dtype=float)
-    seg = int(min(nperseg, 2 ** int(math.log2(max(x.size // 16, 16)))))
-    f, s = welch(x - x.mean(), fs=sample_rate_hz, nperseg=seg)
-    df = f[1] - f[0]
-    width = max(3, int(round(2 * background_hz / df)) | 1)
-    back = median_filter(s, size=width, mode="nearest")
-    excess = s - back
-    smooth = uniform_filter1d(excess, smooth_bins, mode="nearest")
-    ratio = 1.0 + smooth / np.maximum(back, 1e-300)
-    ratio[0] = 0.0
-    k = int(np.argmax(ratio))
-
-    def run(mask):
-        lo = hi = k
-        while lo > 0 and mask[lo - 1]:
-            lo -= 1
-        while hi < mask.size - 1 and mask[hi + 1]:
-            hi += 1
-        return lo, hi
-
-    lo, hi = run(smooth > smooth[k] / 2.0)
-    w = excess[lo:hi + 1]
-    centre = float(np.einsum("i,i->", w, f[lo:hi + 1]) / w.sum())
-    plo, phi = run(smooth > 0.0)
-    rms = math.sqrt(float(excess[plo:phi + 1].sum()) * df)
-    return {"center_hz": centre, "bandwidth_hz": float((hi - lo + 1) * df), "rms_dps": rms, "peak_ratio": float(ratio[k])}
+from gyrofilter.analysis.detectors import band_estimate, narrowband_lag1
 
 
 def with_narrowband(model, axis, band, arw_dps_per_sqrt_hz=None, lag1=None):
@@ -95,10 +52,7 @@ def _colored_lag1(r1, arw_dps_per_sqrt_hz, fs, band, current):
     """ρ of :func:`with_narrowband`'s lag-1 equation (``current`` when it has no root in (-0.99, 0.99))."""
     from scipy.optimize import brentq
 
-    from gyrofilter.sim.noise_terms import narrowband_filter
-
-    _, a = narrowband_filter(band["rms_dps"], band["center_hz"], band["bandwidth_hz"], fs)
-    r_line = -a[1] / (1.0 + a[2])
+    r_line = narrowband_lag1(band["center_hz"], band["bandwidth_hz"], fs)
     v_line = band["rms_dps"] ** 2
 
     def excess(rho):

@@ -17,14 +17,25 @@
    local noise level, the lag-1 autocorrelation of the high-passed noise and the spike count.
    Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
 3. **Causes**: :mod:`gyrofilter.analysis.detectors` maps departures to effects of the table, in a fixed
-   decision order (outliers, sinusoid, colored noise, slow bias effects; see there for how
-   ramp / random walk / warm-up / Gauss-Markov / bias instability / step / temperature are told
-   apart), each with its own significance threshold, and estimates the parameters.
+   decision order (outliers, sinusoid, narrow-band noise, colored noise, slow bias effects; see
+   there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
+   temperature are told apart), each with its own significance threshold, and estimates the
+   parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
+   and its lag-1 correlation out of the colored noise's (:func:`detectors.lag1_without_band`).
 4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
    better; about 1 when the model explains the measurement) is computed against the baseline's
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a
    finding is kept only if ``after < before`` (a real gain). The overall figure uses the model
-   extended by every kept finding.
+   extended by every kept finding. Where an axis's D after is still above
+   :data:`COMPOSITE_MIN_D`, a **composite stochastic part** is tried: a GMWM-style fit
+   (:mod:`gyrofilter.analysis.gmwm`; Guerrier et al. 2013) of white noise, an optional rate random walk
+   and 0-3 Gauss-Markov terms to the Haar wavelet variance of the series cleaned of the
+   deterministic findings, at tau >= max(1 s, 16 samples) (shorter scales belong to the colored
+   noise and the bands), the model chosen by Q + 2p (not WVIC). Its terms replace the axis's
+   slow stochastic findings (and its colored noise, if that is better without it), its N
+   becomes the white level (the colored noise then keeps the long-tau level, ``preserve:
+   arw``), and the replacement is kept only if D falls below :data:`COMPOSITE_MIN_GAIN` times
+   its value.
 5. The report: a JSON-ready dict with ``baseline``, ``findings`` (effect, axis, params,
    evidence, gain), ``extended_model`` (runs in ``gyrofilter simulate``), per-axis feature
    departures and the discrepancies.
@@ -221,11 +232,14 @@ def _temperature_table(rec, max_points=1000):
     return {"t_s": [float(v) for v in tt], "temp_c": [float(v) for v in tc]}
 
 
-def _effect_entry(cand):
+def _effect_entry(cand, preserve="std"):
+    """The effect-table entry of a finding; a colored noise keeps the per-sample std of the
+    axis's white noise (``preserve="std"``) or, in a composite model whose white level N comes
+    from the wavelet-variance fit, its long-tau level (``"arw"``)."""
     entry = {"effect": cand.effect}
     entry.update({k: float(v) for k, v in cand.params.items()})
     if cand.effect == "colored_noise":
-        entry["preserve"] = "std"
+        entry["preserve"] = preserve
     if cand.effect == "temperature":
         entry["reference_c"] = cand.extra.get("reference_c")
     return entry
@@ -330,153 +344,277 @@ def _axis_dps(rec, i):
 
 
 def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
+    """The five steps of the module docstring, one function each, on a shared :class:`_GapRun`."""
     t_start = time.perf_counter()
-    say = progress or (lambda text: None)
-    fs = check_sample_rate_hz(rec.sample_rate_hz, f"{rec.path or 'recording'}: sample_rate_hz", RecordingError)
-    n = len(rec)
-    report = {"recording": recording_name if recording_name is not None else (rec.path or ""),
-              "sample_rate_hz": fs, "duration_s": n / fs,
-              "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
-                           "axes": {a: {} for a in AXES}},
-              "findings": [], "extended_model": {}, "notes": []}
-    if not all(np.all(np.isfinite(_axis_dps(rec, i))) for i in range(3)):
-        raise RecordingError(f"{rec.path or 'recording'}: gyro columns hold non-finite values")
-    base = baseline_model(rec)
-    report["baseline"]["model"] = base
-    q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None
-    for a in AXES:
-        report["baseline"]["axes"][a] = {"bias_dps": base["axes"][a]["bias_dps"],
-                                         "arw_dps_per_sqrt_hz": base["axes"][a]["arw_dps_per_sqrt_hz"],
-                                         "quantization_dps": q}
-    report["extended_model"] = _copy_model(base)
-    if n < MIN_SAMPLES:
-        report["notes"].append(f"only {n} samples (< {MIN_SAMPLES}): too short to tell anything beyond the baseline")
-        report["runtime_s"] = time.perf_counter() - t_start
-        return report
-    temp = rec.temp_c
-    temp = None if temp is None else np.asarray(temp, dtype=float)
-    if temp is not None and not np.all(np.isfinite(temp)):
-        temp = None
-        report["notes"].append("temp column has non-finite values: temperature not analysed")
+    run = _GapRun(rec, seed=seed, n_sims=n_sims, say=progress or (lambda text: None), recording_name=recording_name)
+    if run.n >= MIN_SAMPLES:
+        _baseline_spread(run)       # 2.
+        _detect(run)                # 3.
+        _keep_findings(run)         # 4., gain per finding
+        _composite_step(run)        # 4., composite stochastic part where D stays high
+        _write_findings(run)        # 5.
+    run.report["runtime_s"] = time.perf_counter() - t_start
+    return run.report
 
+
+class _GapRun:
+    """One gap analysis: the recording, the baseline fit (step 1, done here), the simulation
+    seeds and features, the candidates and the per-axis departures of every model tried
+    (computed once per set of findings: an axis's departures depend only on that axis's model,
+    whose random streams are its own)."""
+
+    def __init__(self, rec, *, seed, n_sims, say, recording_name):
+        where = rec.path or "recording"
+        fs = check_sample_rate_hz(rec.sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
+        n = len(rec)
+        if n < 2:
+            raise RecordingError(f"{where}: {n} sample(s) after the header: a gap analysis needs data rows")
+        self.rec, self.fs, self.n, self.say = rec, fs, n, say
+        self.report = report = {
+            "recording": recording_name if recording_name is not None else (rec.path or ""),
+            "sample_rate_hz": fs, "duration_s": n / fs,
+            "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
+                         "axes": {a: {} for a in AXES}},
+            "findings": [], "extended_model": {}, "notes": []}
+        if not all(np.all(np.isfinite(_axis_dps(rec, i))) for i in range(3)):
+            raise RecordingError(f"{where}: gyro columns hold non-finite values")
+        self.base = base = baseline_model(rec)
+        report["baseline"]["model"] = base
+        self.q = q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None
+        for a in AXES:
+            report["baseline"]["axes"][a] = {"bias_dps": base["axes"][a]["bias_dps"],
+                                             "arw_dps_per_sqrt_hz": base["axes"][a]["arw_dps_per_sqrt_hz"],
+                                             "quantization_dps": q}
+        report["extended_model"] = _copy_model(base)
+        if n < MIN_SAMPLES:
+            report["notes"].append(f"only {n} samples (< {MIN_SAMPLES}): too short to tell anything beyond the baseline")
+            return
+        temp = rec.temp_c
+        self.temp = None if temp is None else np.asarray(temp, dtype=float)
+        if self.temp is not None and not np.all(np.isfinite(self.temp)):
+            self.temp = None
+            report["notes"].append("temp column has non-finite values: temperature not analysed")
+        _static_notes(self)
+        self.taus = feature_taus(n, fs)
+        self.bands = feature_bands(n, fs)
+        self.m = default_n_sims(n) if n_sims is None else int(n_sims)
+        self.seeds = np.random.default_rng(seed).integers(0, 2**31, size=self.m)
+        self.n_ext = max(6, self.m // 2)
+        self.candidates = []  # (axis index, Candidate)
+        self.ext_axes = {}  # axis name -> the extended axis spec before its effects
+        self.composite_axes = {}  # axis name -> the same with the composite fit's white level
+        self.wvs = [None, None, None]  # wavelet variance of each cleaned axis at the composite's scales
+        self.kept = []  # (candidate index, axis index, Candidate, D of the axis with it alone)
+        self.resolve_lag1 = [False, False, False]  # composite model: colored lag1 from _composite_lag1
+        self._deps_cache = {}
+
+    def axis_spec(self, i, ks):
+        """Axis ``i``'s spec extended by the candidates ``ks`` (the composite's white level and
+        ``preserve: arw`` when one of them belongs to a composite model)."""
+        a = AXES[i]
+        cands = [self.candidates[k][1] for k in ks]
+        composite = any(c.extra.get("composite") for c in cands)
+        spec = dict(self.composite_axes[a] if composite else self.ext_axes[a])
+        spec["effects"] = [_effect_entry(c, preserve="arw" if composite else "std") for c in cands]
+        if composite and self.resolve_lag1[i]:
+            for entry in spec["effects"]:
+                if entry["effect"] == "colored_noise":
+                    entry["lag1"] = _composite_lag1(self.ext_axes[a], spec, self.fs)
+        return spec
+
+    def axis_deps(self, i, ks, label):
+        """Departures of the measured axis ``i`` from ``n_ext`` runs of the baseline with axis
+        ``i`` extended by the candidates ``ks``."""
+        key = (i, tuple(sorted(ks)), self.resolve_lag1[i])
+        if key not in self._deps_cache:
+            model = _copy_model(self.base)
+            model["axes"][AXES[i]] = self.axis_spec(i, key[1])
+            if any(self.candidates[k][1].effect == "temperature" for k in key[1]):
+                model["temperature"] = _temperature_table(self.rec)
+            sims_k = _sim_features(model, self.n, self.fs, self.seeds[:self.n_ext], [i], self.taus, self.bands,
+                                   self.say, label)[i]
+            self._deps_cache[key] = departures(self.meas_feats[i], sims_k, self.n)
+        return self._deps_cache[key]
+
+    def axis_discrepancy(self, i, ks, label):
+        return discrepancy(self.axis_deps(i, ks, label))
+
+    def kept_on(self, i):
+        return [k for k, ci, _, _ in self.kept if ci == i]
+
+
+def _static_notes(run):
+    """A note per axis whose block means move more than a still gyro's would."""
     for i, a in enumerate(AXES):
-        y, length = det.block_means(_axis_dps(rec, i), 512)
+        y, length = det.block_means(_axis_dps(run.rec, i), 512)
         excursion = float(np.max(np.abs(y - np.median(y))))
-        white_block = base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(fs / length)
+        white_block = run.base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(run.fs / length)
         if excursion > max(STATIC_LIMIT_DPS, 8 * white_block):
-            report["notes"].append(
-                f"axis {a}: the rate moves by up to {excursion:.3g} deg/s (averages over {length / fs:.2g} s): the recording "
+            run.report["notes"].append(
+                f"axis {a}: the rate moves by up to {excursion:.3g} deg/s (averages over {length / run.fs:.2g} s): the recording "
                 "does not look static; the analysis models a still gyro, so its findings describe the motion")
-    taus = feature_taus(n, fs)
-    bands = feature_bands(n, fs)
-    m = default_n_sims(n) if n_sims is None else int(n_sims)
-    rng = np.random.default_rng(seed)
-    seeds = rng.integers(0, 2**31, size=m)
 
-    say(f"baseline: {m} simulations of {n / fs:.0f} s at {fs:g} Hz")
-    meas_feats = [features(_axis_dps(rec, i), fs, taus, bands) for i in range(3)]
-    sims = _sim_features(base, n, fs, seeds, range(3), taus, bands, say, "baseline simulations (runs x axes)")
-    deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
+
+def _baseline_spread(run):
+    """Step 2: features of the measurement and of ``m`` baseline runs; departures and D before."""
+    n, fs = run.n, run.fs
+    run.say(f"baseline: {run.m} simulations of {n / fs:.0f} s at {fs:g} Hz")
+    run.meas_feats = [features(_axis_dps(run.rec, i), fs, run.taus, run.bands) for i in range(3)]
+    sims = _sim_features(run.base, n, fs, run.seeds, range(3), run.taus, run.bands, run.say,
+                         "baseline simulations (runs x axes)")
+    run.deps = [departures(run.meas_feats[i], sims[i], n) for i in range(3)]
     del sims
-    before = [discrepancy(d) for d in deps]
-    report["departures"] = {a: _departure_summary(deps[i], meas_feats[i], taus, bands) for i, a in enumerate(AXES)}
+    run.before = [discrepancy(d) for d in run.deps]
+    run.report["departures"] = {a: _departure_summary(run.deps[i], run.meas_feats[i], run.taus, run.bands)
+                                for i, a in enumerate(AXES)}
 
-    # detectors, per axis, in the decision order; the extended model's white noise and bias
-    # are re-fitted on the series cleaned of the axis's findings
-    candidates = []  # (axis index, Candidate)
-    ext_axes = {}
+
+def _detect(run):
+    """Step 3: the detectors per axis, in the decision order; the extended model's white noise
+    and bias re-fitted on the series cleaned of the axis's findings, and that series' wavelet
+    variance kept for the composite step."""
     for i, a in enumerate(AXES):
-        say(f"detectors on {a}")
-        x = _axis_dps(rec, i)
+        run.say(f"detectors on {a}")
+        x = _axis_dps(run.rec, i)
         if not np.ptp(x) > 0:
-            report["notes"].append(f"axis {a}: constant signal, nothing to analyse")
-            ext_axes[a] = dict(base["axes"][a], effects=[])
+            run.report["notes"].append(f"axis {a}: constant signal, nothing to analyse")
+            run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
             continue
         try:
-            cands, xc = _detect_axis(x, fs, temp)
+            cands, xc = _detect_axis(x, run.fs, run.temp)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
-            report["notes"].append(f"axis {a}: detectors could not run ({exc})")
+            run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
             cands, xc = [], x
         for c in cands:
             c.component = None  # subtracted in xc; not kept (N samples each)
             if c.effect == "temperature":
-                c.extra["reference_c"] = float(np.mean(temp))
-            candidates.append((i, c))
-        ext_axes[a] = _extended_axis(base["axes"][a], cands, xc, fs, q)
+                c.extra["reference_c"] = float(np.mean(run.temp))
+            run.candidates.append((i, c))
+        run.ext_axes[a] = _extended_axis(run.base["axes"][a], cands, xc, run.fs, run.q)
+        run.wvs[i] = _slow_wavelet_variance(xc, run.fs)
         del x, xc
 
-    # gain per finding: the axis extended by this finding alone (the contract's gain); a
-    # finding that shows no gain alone is still kept when the axis has other candidates and
-    # leaving it out of the model with all of them raises the discrepancy (leave-one-out).
-    # The departures of an axis depend only on that axis's model (its random streams are its
-    # own), so they are computed once per set of findings and reused.
-    n_ext = max(6, m // 2)
-    axis_deps_cache = {}
 
-    def axis_deps(i, ks, label):
-        key = (i, tuple(sorted(ks)))
-        if key not in axis_deps_cache:
-            a = AXES[i]
-            cands = [candidates[k][1] for k in key[1]]
-            model = _copy_model(base)
-            axis_spec = dict(ext_axes[a])
-            axis_spec["effects"] = [_effect_entry(c) for c in cands]
-            model["axes"][a] = axis_spec
-            if any(c.effect == "temperature" for c in cands):
-                model["temperature"] = _temperature_table(rec)
-            sims_k = _sim_features(model, n, fs, seeds[:n_ext], [i], taus, bands, say, label)[i]
-            axis_deps_cache[key] = departures(meas_feats[i], sims_k, n)
-        return axis_deps_cache[key]
-
-    def axis_discrepancy(i, ks, label):
-        return discrepancy(axis_deps(i, ks, label))
-
-    single = {}
-    for k, (i, c) in enumerate(candidates):
-        label = f"gain of {c.effect} on {AXES[i]} ({k + 1}/{len(candidates)})"
-        say(label)
+def _keep_findings(run):
+    """Step 4: gain per finding, the axis extended by this finding alone (the contract's gain);
+    a finding that shows no gain alone is still kept when the axis has other candidates and
+    leaving it out of the model with all of them raises the discrepancy (leave-one-out). Then D
+    of each axis extended by all its kept findings."""
+    cands, before, notes = run.candidates, run.before, run.report["notes"]
+    run.single = single = {}
+    for k, (i, c) in enumerate(cands):
+        label = f"gain of {c.effect} on {AXES[i]} ({k + 1}/{len(cands)})"
+        run.say(label)
         try:
-            single[k] = axis_discrepancy(i, [k], label)
+            single[k] = run.axis_discrepancy(i, [k], label)
         except (ValueError, FloatingPointError) as exc:
-            report["notes"].append(f"{c.effect} on {AXES[i]}: extended model could not run ({exc})")
-    kept = []
-    for k, (i, c) in enumerate(candidates):
+            notes.append(f"{c.effect} on {AXES[i]}: extended model could not run ({exc})")
+    for k, (i, c) in enumerate(cands):
         if k not in single:
             continue
         after = single[k]
         if after < before[i]:
-            kept.append((k, i, c, after))
+            run.kept.append((k, i, c, after))
             continue
-        others = [k2 for k2, (i2, _) in enumerate(candidates) if i2 == i and k2 != k and k2 in single]
+        others = [k2 for k2, (i2, _) in enumerate(cands) if i2 == i and k2 != k and k2 in single]
         if others:
             label = f"{c.effect} on {AXES[i]} with and without the axis's other findings"
-            say(label)
+            run.say(label)
             try:
-                with_all = axis_discrepancy(i, others + [k], label)
-                without = axis_discrepancy(i, others, label)
+                with_all = run.axis_discrepancy(i, others + [k], label)
+                without = run.axis_discrepancy(i, others, label)
             except (ValueError, FloatingPointError):
                 with_all = without = float("inf")
             if with_all < without:
-                kept.append((k, i, c, after))
-                report["notes"].append(
-                    f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "
-                    f"axis's other findings D = {with_all:.3g}, without it {without:.3g}")
+                run.kept.append((k, i, c, after))
+                notes.append(f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "
+                             f"axis's other findings D = {with_all:.3g}, without it {without:.3g}")
                 continue
-        report["notes"].append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
+        notes.append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
+    run.after = list(before)
+    if run.kept:
+        run.say("overall gain of the extended model")
+        for i in sorted({i for _, i, _, _ in run.kept}):
+            run.after[i] = run.axis_discrepancy(i, run.kept_on(i), f"extended model on {AXES[i]}")
 
-    ext = _copy_model(base)
+
+def _composite_step(run):
+    """Step 4, continued: where an extended axis is still far outside the null band (D above
+    :data:`COMPOSITE_MIN_D`), a composite stochastic part (:func:`_composite_candidates`)
+    replaces the axis's slow stochastic findings, and its colored noise if that is better
+    without it, when D falls below :data:`COMPOSITE_MIN_GAIN` times its value."""
+    cands, notes = run.candidates, run.report["notes"]
     for i, a in enumerate(AXES):
-        effects = [_effect_entry(c) for _, ci, c, _ in kept if ci == i]
-        if effects:
-            spec = dict(ext_axes[a])
-            spec["effects"] = effects
-            ext["axes"][a] = spec
-    if any(c.effect == "temperature" for _, _, c, _ in kept):
-        ext["temperature"] = _temperature_table(rec)
-    report["extended_model"] = ext
+        if run.after[i] <= COMPOSITE_MIN_D or run.wvs[i] is None:
+            continue
+        run.say(f"composite stochastic fit on {a}")
+        fit, comp = _composite_candidates(run.wvs[i], run.fs)
+        if not comp:
+            continue
+        keep_k = [k for k, ci, c, _ in run.kept if ci == i and c.effect not in det.STOCHASTIC_MODELS]
+        first = len(cands)
+        cands.extend((i, c) for c in comp)
+        comp_k = list(range(first, len(cands)))
+        for k in keep_k:  # the axis's other findings join the composite model
+            cands[k][1].extra["composite"] = True
+        run.composite_axes[a] = dict(run.ext_axes[a], arw_dps_per_sqrt_hz=fit.arw_dps_per_sqrt_hz)
+        d_comp = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
+        colored_k = [k for k in keep_k if cands[k][1].effect == "colored_noise"]
+        if colored_k:
+            # the colored noise with its lag1 re-solved to keep the per-sample variance as well
+            run.resolve_lag1[i] = True
+            d_alt = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
+            if d_alt < d_comp:
+                d_comp = d_alt
+            else:
+                run.resolve_lag1[i] = False
+            # a fast Gauss-Markov term of the composite may be what the colored noise stood for
+            d_alt = run.axis_discrepancy(i, [k for k in keep_k if k not in colored_k] + comp_k, f"composite model on {a}")
+            if d_alt < d_comp:
+                d_comp = d_alt
+                cands[colored_k[0]][1].extra.pop("composite")
+                keep_k = [k for k in keep_k if k not in colored_k]
+                notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the "
+                             "correlation without it")
+        if d_comp < COMPOSITE_MIN_GAIN * run.after[i]:
+            single_k = {k: run.axis_discrepancy(i, [k], f"gain of the composite's {cands[k][1].effect} on {a}")
+                        for k in comp_k}
+            notes.append(
+                f"axis {a}: the composite stochastic fit ({fit.name}, chosen by Q + 2p on the wavelet variance at "
+                f"tau >= {run.wvs[i].tau_s[0]:.3g} s) lowers D from {run.after[i]:.3g} to {d_comp:.3g}; it replaces the "
+                "axis's slow stochastic findings")
+            for k in comp_k:
+                cands[k][1].statistic = run.after[i] / d_comp
+            if run.resolve_lag1[i] and colored_k and colored_k[0] in keep_k:
+                colored = cands[colored_k[0]][1]
+                colored.params["lag1"] = _composite_lag1(run.ext_axes[a], run.composite_axes[a], run.fs)
+                colored.evidence += ("; in the composite model its lag1 is re-solved to keep both the per-sample "
+                                     "variance and the composite fit's white level")
+            run.kept = [row for row in run.kept if row[1] != i] + \
+                [(k, i, cands[k][1], run.single[k]) for k in keep_k] + [(k, i, cands[k][1], single_k[k]) for k in comp_k]
+            run.after[i] = d_comp
+        else:
+            run.resolve_lag1[i] = False
+            for k in keep_k:
+                cands[k][1].extra.pop("composite")
+            notes.append(f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
+                         f"({run.after[i]:.3g} -> {d_comp:.3g}); not used")
 
+
+def _write_findings(run):
+    """Step 5: the extended model, the findings with evidence and gain, the extended model's
+    spread in the departure summaries, and the discrepancies."""
+    report, kept, before = run.report, run.kept, run.before
+    ext = _copy_model(run.base)
+    for i, a in enumerate(AXES):
+        ks = run.kept_on(i)
+        if ks:
+            ext["axes"][a] = run.axis_spec(i, ks)
+    if any(c.effect == "temperature" for _, _, c, _ in kept):
+        ext["temperature"] = _temperature_table(run.rec)
+    report["extended_model"] = ext
     for _, i, c, after in kept:
-        z_info = _strongest(deps[i], taus, bands)
+        z_info = _strongest(run.deps[i], run.taus, run.bands)
         report["findings"].append({
             "effect": c.effect, "axis": AXES[i],
             "params": {k: float(v) for k, v in c.params.items()},
@@ -484,31 +622,83 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
             "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": after},
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
         })
-
-    overall_after = list(before)
-    if kept:
-        say("overall gain of the extended model")
-        for i in sorted({i for _, i, _, _ in kept}):
-            deps_e = axis_deps(i, [k for k, ci, _, _ in kept if ci == i], f"extended model on {AXES[i]}")
-            overall_after[i] = discrepancy(deps_e)
-            summ = report["departures"][AXES[i]]
-            summ["extended_adev_sim_mean_log"] = [float(v) for v in deps_e["adev"][1]]
-            summ["extended_adev_sim_sd_log"] = [float(v) for v in deps_e["adev"][2]]
-            summ["extended_band_sim_mean_log"] = [float(v) for v in deps_e["band"][1]]
-            summ["extended_band_sim_sd_log"] = [float(v) for v in deps_e["band"][2]]
-            summ["extended_discrepancy"] = overall_after[i]
+    for i in sorted({i for _, i, _, _ in kept}):
+        deps_e = run.axis_deps(i, run.kept_on(i), f"extended model on {AXES[i]}")
+        summ = report["departures"][AXES[i]]
+        summ["extended_adev_sim_mean_log"] = [float(v) for v in deps_e["adev"][1]]
+        summ["extended_adev_sim_sd_log"] = [float(v) for v in deps_e["adev"][2]]
+        summ["extended_band_sim_mean_log"] = [float(v) for v in deps_e["band"][1]]
+        summ["extended_band_sim_sd_log"] = [float(v) for v in deps_e["band"][2]]
+        summ["extended_discrepancy"] = run.after[i]
     report["discrepancy"] = {"metric": METRIC,
                              "definition": "D = mean over features of z^2, z = (measured - mean of simulations) / max(sd of simulations, floor)",
                              "before": {a: before[i] for i, a in enumerate(AXES)},
-                             "after": {a: overall_after[i] for i, a in enumerate(AXES)},
+                             "after": {a: run.after[i] for i, a in enumerate(AXES)},
                              "overall_before": float(np.mean(before)),
-                             "overall_after": float(np.mean(overall_after))}
-    report["n_simulations"] = m
+                             "overall_after": float(np.mean(run.after))}
+    report["n_simulations"] = run.m
+    n, fs = run.n, run.fs
     if n / fs < 300:
         report["notes"].append(f"record of {n / fs:.0f} s: slow bias effects (drift, random walk, bias instability) "
                                "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / fs / 9))
-    report["runtime_s"] = time.perf_counter() - t_start
-    return report
+
+
+#: D above which an extended axis is tried with a composite stochastic part (the null band's
+#: 95th percentile is below 2 on clean records, docs/gap.md), and the factor it must lower D by
+COMPOSITE_MIN_D = 3.0
+COMPOSITE_MIN_GAIN = 0.8
+#: the composite fit uses the wavelet variance at tau >= max(1 s, 16 samples): shorter scales
+#: carry the colored noise's low-pass shape and the narrow bands, which have their own terms
+COMPOSITE_MIN_TAU_S = 1.0
+_COMPOSITE_STATISTIC = "D of the extended axis without the composite stochastic part / D with it"
+
+
+def _slow_wavelet_variance(xc, fs):
+    """Haar wavelet variance (:func:`gyrofilter.analysis.gmwm.haar_wv`) of the cleaned series at the
+    dyadic scales tau >= max(:data:`COMPOSITE_MIN_TAU_S`, 16 / f_s); None when fewer than 4."""
+    from . import gmwm
+
+    m_min = max(16, int(math.ceil(COMPOSITE_MIN_TAU_S * fs)))
+    if (xc.size - 2 * m_min * 8 + 1) / (2.0 * m_min * 8) < 2.0:
+        return None
+    wv = gmwm.haar_wv(xc, fs, min_m=m_min)
+    return wv if wv.tau_s.size >= 4 else None
+
+
+def _composite_candidates(wv, fs):
+    """GMWM-style composite fit (:func:`gyrofilter.analysis.gmwm.select_model`, Guerrier et al. 2013) of
+    white noise + optionally a rate random walk + 0..3 Gauss-Markov terms to ``wv``, the model
+    chosen by Q + 2p (not WVIC: see gyrofilter.analysis.gmwm). Returns ``(fit, candidates)``: one
+    ``gauss_markov`` per Gauss-Markov term and a ``rate_random_walk`` if the fit has one, marked
+    ``extra["composite"]``; the fit's N is the composite model's white level."""
+    from . import gmwm
+
+    fit, _ = gmwm.select_model(wv, terms_allowed=("rrw",), starts=3, seed=0)
+    out = []
+    evidence = (f"composite fit {fit.name} to the Haar wavelet variance at tau = {wv.tau_s[0]:.3g}-{wv.tau_s[-1]:.3g} s "
+                f"(weighted objective Q = {fit.objective:.3g} over {wv.tau_s.size} scales, model chosen by Q + 2p)")
+    for sigma_dps, tau_s in fit.gauss_markov:
+        out.append(det.Candidate(effect="gauss_markov", params={"sigma_dps": sigma_dps, "tau_s": tau_s},
+                                 statistic=0.0, threshold=1.0 / COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
+                                 evidence=f"Gauss-Markov term (sigma {sigma_dps:.3g} deg/s, tau {tau_s:.3g} s) of a " + evidence,
+                                 extra={"composite": True}))
+    if fit.rrw_dps_per_sqrt_s is not None:
+        out.append(det.Candidate(effect="rate_random_walk", params={"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s},
+                                 statistic=0.0, threshold=1.0 / COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
+                                 evidence=f"random-walk term (K {fit.rrw_dps_per_sqrt_s:.3g} deg/s/sqrt(s)) of a " + evidence,
+                                 extra={"composite": True}))
+    return fit, out
+
+
+def _composite_lag1(ext_axis, composite_axis, fs):
+    """The colored noise's lag-1 in a composite model: with ``preserve: arw`` an AR(1) of lag-1
+    rho and long-tau level N has the per-sample variance N^2 f_s (1 - rho) / (1 + rho), so
+    rho = (N^2 f_s - s^2) / (N^2 f_s + s^2) keeps both the composite fit's N and the per-sample
+    variance s^2 of the extended axis's colored noise (its ``preserve: std`` level); the short
+    scales of the wavelet variance depend on s^2, the long ones on N."""
+    v_long = composite_axis["arw_dps_per_sqrt_hz"] ** 2 * fs
+    v_sample = ext_axis["arw_dps_per_sqrt_hz"] ** 2 * fs
+    return float(np.clip((v_long - v_sample) / (v_long + v_sample), -0.99, 0.99))
 
 
 def _extended_axis(base_axis, cands, xc, fs, q):
@@ -522,6 +712,9 @@ def _extended_axis(base_axis, cands, xc, fs, q):
         return spec
     n = xc.size
     sigma = _noise_sigma(xc, fs, q or 0.0)
+    for c in cands:  # narrow bands (above the high-pass) are noise of their own: N'^2 = N^2 - rms^2
+        if c.effect == "narrowband":
+            sigma = math.sqrt(max(sigma**2 - c.params["rms_dps"] ** 2, 0.05 * sigma**2))
     colored = next((c for c in cands if c.effect == "colored_noise"), None)
     if colored is not None:
         # the high-pass of _noise_sigma also removed the variance fraction
@@ -555,7 +748,18 @@ def _detect_axis(x, fs, temp):
     if c is not None:
         cands.append(c)
         x = x - c.component
+    band = det.detect_narrowband(x, fs)
+    if band is not None:
+        cands.append(band)
     c = det.detect_colored(x, fs)
+    if c is not None and band is not None:
+        # the band brings its own lag-1 correlation: the colored noise's is what is left
+        lag1 = det.lag1_without_band(c.params["lag1"], _noise_sigma(x, fs, 0.0) ** 2, band.params, fs)
+        if lag1 is None or abs(lag1) < det.COLORED_MIN_LAG1:
+            c = None
+        else:
+            c.evidence += f"; {lag1:+.3f} once the narrow band's own correlation is taken out"
+            c.params["lag1"] = lag1
     if c is not None:
         cands.append(c)
     slow, _ = det.detect_slow(x, fs, temp)

@@ -67,16 +67,17 @@ class WaveletVariance:
         return self.wv_dps2 * np.sqrt(2.0 / self.edf)
 
 
-def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0):
+def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1):
     """Haar wavelet variance ν̂²(τ_j) = σ̂²_A(τ_j) / 2 at τ_j = 2^j / f_s, with η_j (module docstring).
 
-    Scales stop where η_j = (N - 2m + 1) / (2m) falls below ``min_edf``.
+    Scales start at the first 2^j >= ``min_m`` samples and stop where η_j = (N - 2m + 1) / (2m)
+    falls below ``min_edf``.
     """
     from .allan import overlapping_adev
 
     n = int(np.asarray(x_dps).size)
     m = []
-    j = 0
+    j = max(0, int(math.ceil(math.log2(max(min_m, 1)))))
     while (n - 2 * 2**j + 1) / (2.0 * 2**j) >= min_edf:
         m.append(2**j)
         j += 1
@@ -228,13 +229,14 @@ def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
     return out
 
 
-def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0):
-    """Fit every model (white noise + any subset of quantization, rrw, ramp + 0..``max_gm``
-    Gauss-Markov terms) and return ``(best, all_fits)``, best by the smallest Q + 2p."""
+def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0, terms_allowed=OPTIONAL_TERMS):
+    """Fit every model (white noise + any subset of ``terms_allowed`` (of quantization, rrw,
+    ramp) + 0..``max_gm`` Gauss-Markov terms) and return ``(best, all_fits)``, best by the
+    smallest Q + 2p."""
     fits = []
     for k_gm in range(max_gm + 1):
-        for r in range(len(OPTIONAL_TERMS) + 1):
-            for terms in itertools.combinations(OPTIONAL_TERMS, r):
+        for r in range(len(terms_allowed) + 1):
+            for terms in itertools.combinations(terms_allowed, r):
                 fits.append(fit_model(wv, terms, k_gm, starts=starts, seed=seed))
     return min(fits, key=lambda f: f.criterion), fits
 

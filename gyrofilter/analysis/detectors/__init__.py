@@ -1,0 +1,119 @@
+"""Detectors for the model-gap analysis: one statistic per effect of the effect table.
+
+Every detector works on one axis, a 1-D rate series ``x_dps`` (deg/s) sampled at
+``sample_rate_hz``, and returns a :class:`Candidate` (or None): the effect name, its parameter
+estimates in the units of the effect table (docs/formats.md, section 2), the detector's statistic, the
+threshold it had to pass and an evidence sentence. :mod:`gyrofilter.analysis.gap` runs the same
+statistic on the baseline simulations to show the simulated spread, and keeps a candidate only
+when the extended model lowers the discrepancy.
+
+The detectors run in a fixed **decision order**, each on the series cleaned of what the earlier
+ones found, because the effects are confusable:
+
+1. ``outliers`` -- isolated spikes. Statistic: the second-difference residual
+   ``r_i = x_i - (x_{i-1} + x_{i+1}) / 2`` (white noise: ``sd(r) = sigma sqrt(3/2)``) against a
+   robust (MAD) scale; a spike is ``|r_i| > k sd(r)`` with ``k`` set so that white Gaussian noise
+   gives 0.05 expected false spikes per axis (``k = Phi^-1(1 - 0.025 / N)``, about 5.0 for
+   N = 360 000), and a finding needs at least 3 spikes (white noise: probability 2e-5).
+   Paper 001 (gross errors: isolated, much larger than the noise). Found spikes are replaced
+   by their neighbours' median before the next detectors run.
+2. ``sinusoid`` -- a line in the periodogram. The periodogram ordinate divided by the local
+   noise level (median over a +-5 % frequency band / ln 2) is Exp(1) under any smooth noise
+   spectrum, so the largest of ``M`` ordinates exceeds ``t`` with probability about
+   ``M exp(-t)`` (Fisher's test, the max-periodogram form; Priestley 1981, sec. 6.1.4). The line
+   is fitted by least squares (amplitude, phase) at the refined frequency and subtracted.
+2b. ``narrowband`` -- a band of noise with a resolved width (a resonance): the Welch PSD over a
+   running-median background (±min(f_s / 10, 10 Hz)), the peak excess in units of its sampling error
+   ``(R - 1) sqrt(K)`` (K Welch segments; Welch 1967), centre, half-power width and rms refined
+   by a least-squares fit of the effect's own AR(2) resonator PSD (:func:`band_estimate`). Runs
+   on the series with the sinusoid removed; a band cannot be subtracted (it is noise), so the
+   later detectors see it, and the colored noise's lag-1 is corrected for it.
+3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
+   high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
+   (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short.
+4. Slow bias effects, on block means ``y_k`` of the cleaned series (at most 2048 blocks of
+   ``Delta`` seconds): deterministic shapes (``rate_ramp``: LS line; ``bias_step``: two-mean
+   scan; ``warmup``: ``a exp(-t/tau)`` scanned over tau; ``temperature``: regression on the
+   block-mean temperature) are scored by the drop of the residual sum of squares in units of
+   the block white-noise variance (``Delta chi^2``); stochastic spectra
+   (``rate_random_walk`` ``S = K^2 / (4 pi^2 f^2 Delta)``, ``bias_instability``
+   ``S = B^2 / (2 pi f Delta)``, ``gauss_markov`` AR(1); IEEE Std 952-1997 annex C for the
+   PSD forms) by the Whittle likelihood ratio over white noise (Whittle 1953) on the
+   LS-detrended block means, the random walk's expected periodogram taking the detrend into
+   account (:func:`_detrended_shapes`). Decision rules, in order:
+
+   * the best deterministic shape is the largest ``Delta chi^2 - k ln n`` (k free
+     parameters: BIC), so a warm-up with a very long tau loses to a ramp;
+   * the best stochastic spectrum is the largest ``2 Delta log L - 6 k``: an extra parameter
+     (Gauss-Markov's tau) must buy 6 (likelihood-ratio test at about 1.4 %), and a
+     Gauss-Markov process whose tau exceeds a fifth of the record is a random walk as far as
+     the data can tell;
+   * a shape above its threshold is tested against the stochastic spectra of its residual:
+     if one is still significant, the shape is kept only if its amplitude is significant
+     against that fitted noise (the variance of the amplitude estimate under it, e.g.
+     ``q sum_k (sum_{i>=k} w_i)^2`` for a random walk), giving both findings; otherwise the
+     shape must also beat the *exact* Kalman-filter likelihood of a random-walk and of a
+     Gauss-Markov wander on the same (undetrended) block means, so a wander that happens to
+     look like a ramp or a step is called a wander;
+   * with no shape, the best stochastic spectrum is reported if above its threshold.
+
+The package holds one module per concern: ``common`` (thresholds, :class:`Candidate`, helpers),
+``outliers``, ``sinusoid``, ``narrowband``, ``colored`` and ``slow``; every name is importable from
+``gyrofilter.analysis.detectors`` as before.
+"""
+from .common import (  # noqa: F401
+    COLORED_MIN_LAG1,
+    COLORED_Z,
+    Candidate,
+    DETERMINISTIC_THRESHOLD,
+    JOINT_THRESHOLD,
+    MAX_BLOCKS,
+    OUTLIER_FALSE_PER_AXIS,
+    OUTLIER_MIN_COUNT,
+    SINUSOID_ALPHA,
+    STOCHASTIC_PENALTY,
+    STOCHASTIC_THRESHOLD,
+    block_means,
+    detrend_line,
+    dot,
+    golden_max,
+    moving_mean,
+    robust_sigma,
+)
+from .outliers import (  # noqa: F401
+    OUTLIER_SPREAD_LN,
+    clean_spikes,
+    detect_outliers,
+    outlier_statistic,
+)
+from .sinusoid import (  # noqa: F401
+    DFT_BLOCKS,
+    _dft_amplitude,
+    _least_squares,
+    detect_sinusoid,
+    periodogram_length,
+    sinusoid_fit,
+    sinusoid_statistic,
+)
+from .narrowband import (  # noqa: F401
+    BAND_BACKGROUND_HZ,
+    NARROWBAND_THRESHOLD,
+    band_estimate,
+    detect_narrowband,
+    lag1_without_band,
+    narrowband_lag1,
+)
+from .colored import (  # noqa: F401
+    colored_window,
+    detect_colored,
+    lag1_from_highpassed,
+    lag1_statistic,
+)
+from .slow import (  # noqa: F401
+    EXACT_GM_MARGIN,
+    PERIODOGRAM,
+    STOCHASTIC_MODELS,
+    detect_slow,
+    exact_stochastic_gain,
+    stochastic_fits,
+)

@@ -1,0 +1,169 @@
+"""Does the gap's loop close on real records? D before and after extension against the null band
+of clean simulated records of the same length and rate, and the extended model's wavelet-variance
+distance against a GMWM-style composite fit.
+
+    python tools/gap_closure.py [--null-seeds 20] [--seed 0] [--only SUBSTRING] [--no-distance]
+
+Records: the long ADIS16405 records (``../shared/data/adis16405_long``, skipped when absent; licence
+CC BY-NC-SA, never copied into the repo), the static MPU6050 logs and the longest rest phase of
+each BROAD trial (``recordings/``; movement flag 0, less 1.5 s at both ends, the guard of
+``gyrofilter.evaluation.evaluate``). Per record and axis:
+
+* D before -> after: the gap's discrepancy (docs/gap.md) against the baseline and the extended model;
+* the null band: the 95th percentile of D after, pooled over the three axes of ``--null-seeds``
+  clean records simulated from the record's own baseline model (bias, white noise, quantisation),
+  same length and rate, each analysed by ``analyse_gap`` like the record (a clean record's
+  findings, if any, count in its D after as they would for a real one); "in" when D after is at
+  or below it;
+* where it is not: the feature that departs most from the extended model's simulations (the Allan
+  deviation at one tau or one band power; z in units of the simulated spread);
+* with the distance columns: the weighted distance (1/J) Σ_j (ν̂²_j - ν²_j)² / Var(ν̂²_j) of the
+  extended model's Haar wavelet variance (mean of 4 simulations) and of the GMWM-style fit
+  (``gyrofilter.analysis.gmwm.select_model``, all dyadic scales) to the measured one (docs/gap.md).
+
+Prints a Markdown table; the null bands take most of the time (about 20 gap runs per record).
+"""
+from __future__ import annotations
+
+import argparse
+import glob
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+ADIS_DIR = os.path.join(os.path.dirname(ROOT), "shared", "data", "adis16405_long")
+
+
+def records(only=None, adis_dir=ADIS_DIR):
+    """(name, Recording) of the records compared, in table order: the ADIS16405 records in
+    ``adis_dir``, the shipped MPU6050 logs and the BROAD rest phases."""
+    import numpy as np
+
+    from gyrofilter.evaluation.evaluate import REST_GUARD_S
+    from gyrofilter.recording import Recording, read_recording
+
+    out = []
+    for path in sorted(glob.glob(os.path.join(adis_dir, "*.csv.gz"))) + \
+            sorted(glob.glob(os.path.join(ROOT, "recordings", "mpu6050_static_*.csv.gz"))):
+        out.append((os.path.basename(path).replace(".csv.gz", ""), path))
+    for path in sorted(glob.glob(os.path.join(ROOT, "recordings", "broad_*.csv.gz"))):
+        out.append((os.path.basename(path).replace(".csv.gz", "") + " rest", path))
+    for name, path in out:
+        if only is not None and only not in name:
+            continue
+        rec = read_recording(path)
+        if name.endswith(" rest"):
+            rec = rest_phase(rec, REST_GUARD_S, Recording, np)
+        yield name, rec
+
+
+def rest_phase(rec, guard_s, recording_cls, np):
+    """The longest run of ``movement == 0`` less ``guard_s`` at both ends, as a Recording."""
+    still = np.asarray(rec.columns["movement"]) < 0.5
+    edges = np.flatnonzero(np.diff(np.r_[0, still.astype(int), 0]))
+    a, b = max(zip(edges[::2], edges[1::2]), key=lambda p: p[1] - p[0])
+    g = int(round(guard_s * rec.sample_rate_hz))
+    cols = {k: np.asarray(v)[a + g:b - g] for k, v in rec.columns.items()}
+    return recording_cls(columns=cols, header=dict(rec.header), path=rec.path)
+
+
+def null_band(base_model, n, fs, seeds, *, q=0.95):
+    """The ``q`` quantile of D after over the three axes of clean records simulated from
+    ``base_model`` (``len(seeds)`` runs of ``n`` samples at ``fs``), each analysed by ``analyse_gap``."""
+    import numpy as np
+
+    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.sim.simulate import simulate
+
+    values = []
+    for s in seeds:
+        rec = simulate(base_model, n / fs, seed=int(s))
+        rep = analyse_gap(rec, seed=int(s))
+        values += list(rep["discrepancy"]["after"].values())
+    return float(np.quantile(values, q)), values
+
+
+def worst_feature(summary):
+    """Sentence on the Allan-deviation tau or band power furthest outside the extended model's
+    simulations (from the report's departure summary of one axis)."""
+    import numpy as np
+
+    from gyrofilter.analysis.gap import _LOG_FLOOR
+
+    best = None
+    for key, where in (("adev", "adev_tau_s"), ("band", "band_edges_hz")):
+        mean = summary.get(f"extended_{key}_sim_mean_log")
+        if mean is None:
+            mean, sd = summary[f"{key}_sim_mean_log"], summary[f"{key}_sim_sd_log"]
+        else:
+            sd = summary[f"extended_{key}_sim_sd_log"]
+        z = (np.asarray(summary[f"{key}_meas_log"]) - np.asarray(mean)) / np.maximum(sd, _LOG_FLOOR)
+        z = np.where(np.isfinite(z), z, 0.0)
+        j = int(np.argmax(np.abs(z)))
+        if best is None or abs(z[j]) > abs(best[2]):
+            pos = summary[where]
+            label = (f"ADEV at {pos[j]:.3g} s" if key == "adev" else f"band {pos[j]:.3g}-{pos[j + 1]:.3g} Hz")
+            best = (key, label, float(z[j]))
+    return f"{best[1]} (z {best[2]:+.1f})"
+
+
+def distances(rec, rep, seed):
+    """Per axis (distance of the extended model, distance of the GMWM-style fit, its name)."""
+    import numpy as np
+
+    from gyrofilter.analysis import gmwm
+
+    out = []
+    gyro = rec.gyro_dps
+    for i in range(3):
+        x = np.asarray(gyro[:, i], dtype=float)
+        wv = gmwm.haar_wv(x, rec.sample_rate_hz)
+        ext = gmwm.simulated_wv(rep["extended_model"], i, x.size, seeds=tuple(range(1000 + seed, 1004 + seed)))
+        best, _ = gmwm.select_model(wv, starts=3, seed=seed)
+        out.append((gmwm.wv_distance(wv, ext.wv_dps2), gmwm.wv_distance(wv, best.wv(wv.tau_s)), best.name))
+    return out
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--null-seeds", type=int, default=20, help="clean records per null band (default 20)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--only", default=None, help="only records whose name contains this")
+    p.add_argument("--no-distance", action="store_true", help="skip the wavelet-variance distances")
+    p.add_argument("--adis", default=ADIS_DIR, metavar="DIR",
+                   help="folder of the ADIS16405 records (*.csv.gz, recording format v1; not shipped, licence "
+                        "CC BY-NC-SA); default: ../shared/data/adis16405_long beside the repository")
+    args = p.parse_args(argv)
+
+    from gyrofilter.analysis.gap import analyse_gap
+
+    if not glob.glob(os.path.join(args.adis, "*.csv.gz")):
+        print(f"note: {args.adis} absent, ADIS16405 records skipped", file=sys.stderr)
+    head = "| record | axis | D before -> after | null band (95 %) | closed | findings | still departs |"
+    rule = "|---|---|---|---|---|---|---|"
+    if not args.no_distance:
+        head += " WV distance: extended / GMWM-style (model) |"
+        rule += "---|"
+    print(head)
+    print(rule)
+    for name, rec in records(args.only, args.adis):
+        rep = analyse_gap(rec, seed=args.seed, recording_name=name)
+        n, fs = len(rec), rec.sample_rate_hz
+        seeds = range(9000 + args.seed, 9000 + args.seed + args.null_seeds)
+        band, _ = null_band(rep["baseline"]["model"], n, fs, seeds)
+        dist = None if args.no_distance else distances(rec, rep, args.seed)
+        for i, a in enumerate("xyz"):
+            before, after = rep["discrepancy"]["before"][a], rep["discrepancy"]["after"][a]
+            found = ", ".join(f["effect"] for f in rep["findings"] if f["axis"] == a) or "-"
+            closed = after <= band
+            row = (f"| `{name}` ({n / fs:.0f} s at {fs:.4g} Hz) | {a} | {before:.2f} -> {after:.2f} | {band:.2f} | "
+                   f"{'yes' if closed else 'no'} | {found} | {'' if closed else worst_feature(rep['departures'][a])} |")
+            if dist is not None:
+                row += f" {dist[i][0]:.3g} / {dist[i][1]:.3g} ({dist[i][2]}) |"
+            print(row, flush=True)
+        print(f"  ({name}: gap {rep['runtime_s']:.0f} s)", file=sys.stderr, flush=True)
+
+
+if __name__ == "__main__":
+    main()
