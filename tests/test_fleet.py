@@ -214,6 +214,7 @@ def test_the_table_has_a_row_per_recording_and_axis_in_input_order(small_fleet, 
         [("sub-unit0", a, "ok") for a in "xyz"]
 
 
+@pytest.mark.slow
 def test_two_worker_processes_give_the_results_of_one(small_fleet, one_worker, tmp_path, capsys):
     assert main(["gap", *small_fleet, *GAP_ARGS, "--out-dir", str(tmp_path), "--jobs", "2"]) == 0  # --out-dir: the first spelling
     assert _table(tmp_path) == _table(one_worker)

@@ -57,7 +57,7 @@ def test_recovers_white_gauss_markov_and_random_walk(seed):
     assert abs(best.rrw_dps_per_sqrt_s / k - 1) < 0.4
 
 
-@pytest.mark.parametrize("seed", [4, pytest.param(5, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("seed", [pytest.param(4, marks=pytest.mark.slow), pytest.param(5, marks=pytest.mark.slow)])
 def test_two_gauss_markov_terms_are_told_apart(seed):
     effects = [{"effect": "gauss_markov", "sigma_dps": 0.02, "tau_s": 0.5},
                {"effect": "gauss_markov", "sigma_dps": 0.004, "tau_s": 60.0}]
@@ -74,6 +74,7 @@ def test_white_noise_alone_selects_white_noise():
     assert len(fits) == 8 * (gmwm.MAX_GM + 1)
 
 
+@pytest.mark.slow
 def test_beats_the_allan_nnls_fit_where_a_gauss_markov_bump_is_present():
     """The five-term Allan fit (Q, N, B, K, R) cannot bend round a Gauss-Markov bump; the
     composite fit can: its weighted distance to the measured curve is much smaller."""
