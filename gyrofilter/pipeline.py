@@ -267,9 +267,17 @@ class GyroFilter:
         self._cal_fill = 0
         self._cal_tries_left = 0
         self._cal_temp = None
-        if self._temp_on and calibration is None and self._cal_needed == 0:
-            raise SettingsError("setting temp_coefficient_dps_per_c needs a start-up calibration (calibration_s > 0) "
-                                "or a loaded calibration with temp_c: its mean temperature is the reference T0")
+        if calibration is None and self._cal_needed == 0:
+            # settings that need the bias, noise or temperature of a still start-up window
+            for needed, setting, why in (
+                    (self._temp_on, "temp_coefficient_dps_per_c",
+                     "or a loaded calibration with temp_c: its mean temperature is the reference T0"),
+                    (s.hold, "hold=True", "or a loaded calibration"),
+                    (s.tracker == "kalman" and s.kalman_noise == "adaptive", "kalman_noise='adaptive'",
+                     "or a loaded calibration: the still window's noise and bias start its model (without them it "
+                     "carries the uncorrected bias for about a minute)")):
+                if needed:
+                    raise SettingsError(f"setting {setting} needs a start-up calibration (calibration_s > 0) {why}")
         if calibration is not None:
             self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration)
             self._apply_calibration(self.calibration)
@@ -277,12 +285,6 @@ class GyroFilter:
             if s.hold:
                 # a loaded calibration says nothing about stillness now: start tracking
                 self._hold = self._make_hold(noise_std_dps=self.calibration.noise_std_dps)
-        elif s.hold and self._cal_needed == 0:
-            raise SettingsError("setting hold=True needs a start-up calibration (calibration_s > 0) or a loaded calibration")
-        elif s.tracker == "kalman" and s.kalman_noise == "adaptive" and self._cal_needed == 0:
-            raise SettingsError("setting kalman_noise='adaptive' needs a start-up calibration (calibration_s > 0) or a "
-                                "loaded calibration: the still window's noise and bias start its model (without them it "
-                                "carries the uncorrected bias for about a minute)")
         elif self._cal_needed > 0:
             self._cal_buf = np.zeros((self._cal_needed, 3))
             self._cal_temp = np.zeros(self._cal_needed) if self._temp_on else None
