@@ -95,15 +95,29 @@ def test_moving_mean_and_spike_mask_equal_their_index_formulas():
 
 def test_least_squares_and_detrend_equal_lstsq():
     rng = np.random.default_rng(8)
-    n = 50_001
+    n = 2 * det.CHUNK_SAMPLES + 12_345  # the normal equations are summed over three pieces
     t = np.arange(n) / 100.0
     g = np.exp(-t / 60.0)
     x = 0.3 * g + 0.01 * t + rng.normal(0, 0.1, n)
-    coef = det._least_squares([g, t - t.mean()], x)
+    columns = lambda lo, hi: (g[lo:hi], t[lo:hi] - t.mean())  # noqa: E731
+    coef = det._least_squares(columns, x)
     ref, *_ = np.linalg.lstsq(np.column_stack([g, t - t.mean(), np.ones(n)]), x, rcond=None)
     assert np.allclose(coef, ref, rtol=1e-9, atol=1e-12)
+    assert np.allclose(det.fitted(columns, coef[:2], n), coef[0] * g + coef[1] * (t - t.mean()), rtol=0, atol=1e-12)
     line = np.polyval(np.polyfit(t, x, 1), t)
     assert np.allclose(det.detrend_line(x), x - line, rtol=0, atol=1e-10)
+
+
+def test_sinusoid_fit_in_pieces_equals_the_full_fit():
+    rng = np.random.default_rng(10)
+    n, fs, f_hz = 3 * det.CHUNK_SAMPLES - 7, 100.0, 7.31
+    w = np.arange(n) * (2 * math.pi * f_hz / fs)
+    x = 0.02 * np.sin(w + 0.4) + 0.3 + rng.normal(0, 0.05, n)
+    amp, phase, fit = det.sinusoid_fit(x, fs, f_hz)
+    (a, b, c), *_ = np.linalg.lstsq(np.column_stack([np.cos(w), np.sin(w), np.ones(n)]), x, rcond=None)
+    assert math.isclose(amp, math.hypot(a, b), rel_tol=1e-9)
+    assert math.isclose(phase, math.atan2(a, b), rel_tol=1e-9)
+    assert np.allclose(fit, a * np.cos(w) + b * np.sin(w), rtol=0, atol=1e-12)
 
 
 def test_band_edges_find_the_bins_of_searchsorted():

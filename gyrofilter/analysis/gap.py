@@ -486,7 +486,6 @@ def _detect(run):
             run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
             cands, xc = [], x
         for c in cands:
-            c.component = None  # subtracted in xc; not kept (N samples each)
             if c.effect == "temperature":
                 c.extra["reference_c"] = float(np.mean(run.temp))
             run.candidates.append((i, c))
@@ -738,16 +737,20 @@ def _extended_axis(base_axis, cands, xc, fs, q):
 
 
 def _detect_axis(x, fs, temp):
-    """Run the detectors of one axis in the decision order; returns (candidates, cleaned x)."""
+    """Run the detectors of one axis in the decision order; returns (candidates, cleaned x).
+    Each finding's component is subtracted from a private copy of ``x`` and then dropped, so
+    the axis costs two series of memory besides the detectors' own."""
     cands = []
     c, mask = det.detect_outliers(x)
     if c is not None:
         cands.append(c)
-        x = det.clean_spikes(x, mask)
+        x = det.clean_spikes(x, mask)  # a copy
+    del mask
+    owned = bool(cands)
     c = det.detect_sinusoid(x, fs)
     if c is not None:
         cands.append(c)
-        x = x - c.component
+        x, owned = _subtract_component(x, c, owned), True
     band = det.detect_narrowband(x, fs)
     if band is not None:
         cands.append(band)
@@ -766,8 +769,19 @@ def _detect_axis(x, fs, temp):
     cands.extend(slow)
     for s in slow:
         if s.component is not None:
-            x = x - s.component
+            x, owned = _subtract_component(x, s, owned), True
     return cands, x
+
+
+def _subtract_component(x, cand, owned):
+    """``x`` less the candidate's component, in place when ``x`` is the axis's own copy
+    (``owned``); the component is dropped (it is N samples)."""
+    if owned:
+        x -= cand.component
+    else:
+        x = x - cand.component
+    cand.component = None
+    return x
 
 
 def _departure_summary(deps, meas, taus, bands):

@@ -87,10 +87,12 @@ from .outliers import (  # noqa: F401
     outlier_statistic,
 )
 from .sinusoid import (  # noqa: F401
+    CHUNK_SAMPLES,
     DFT_BLOCKS,
     _dft_amplitude,
     _least_squares,
     detect_sinusoid,
+    fitted,
     periodogram_length,
     sinusoid_fit,
     sinusoid_statistic,

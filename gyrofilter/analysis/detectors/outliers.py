@@ -92,8 +92,9 @@ def detect_outliers(x):
     cleaned = clean_spikes(x, mask)
     mags = np.abs(x[mask] - cleaned[mask])
     thr = k * sd_r
-    r_abs = np.abs(x[1:-1] - 0.5 * (x[:-2] + x[2:]))
-    observed = float(np.mean(np.log(r_abs[mask[1:-1]]))) if mask[1:-1].any() else float(np.log(np.median(mags)))
+    inner = np.flatnonzero(mask[1:-1]) + 1  # |second difference| at the spikes with two neighbours
+    r_abs = np.abs(x[inner] - 0.5 * (x[inner - 1] + x[inner + 1]))
+    observed = float(np.mean(np.log(r_abs))) if inner.size else float(np.log(np.median(mags)))
     lo, hi = math.log(0.3 * thr), math.log(max(100 * thr, 10 * float(np.max(mags))))
     for _ in range(40):
         mid = 0.5 * (lo + hi)

@@ -50,34 +50,67 @@ def _local_level(power, first_bin, ratio=1.1, min_bins=16):
     return np.exp(out, out=out)
 
 
+#: samples per pass of :func:`_least_squares` and :func:`fitted`: the columns of a fit are made a
+#: piece at a time, so a fit of a day at 100 Hz needs a few MB besides the record
+CHUNK_SAMPLES = 1 << 16
+
+
 def _least_squares(columns, x):
     """Coefficients of the least-squares fit of ``x`` by the given columns (and a constant,
     the last coefficient), from the normal equations ``G beta = A^T x`` with the Gram matrix
     ``G = A^T A`` summed by :func:`dot` (no N-row BLAS / LAPACK call; well conditioned for the
-    few smooth columns used here)."""
-    cols = list(columns)
-    k = len(cols) + 1
-    gram = np.empty((k, k))
-    rhs = np.empty(k)
+    few smooth columns used here). ``columns(lo, hi)`` returns the columns' values at samples
+    ``lo .. hi - 1``; they are made and summed :data:`CHUNK_SAMPLES` at a time."""
     n = x.size
-    for i, ci in enumerate(cols):
-        for j in range(i, len(cols)):
-            gram[i, j] = gram[j, i] = dot(ci, cols[j])
-        gram[i, -1] = gram[-1, i] = ci.sum()
-        rhs[i] = dot(ci, x)
+    gram = rhs = None
+    for lo in range(0, n, CHUNK_SAMPLES):
+        hi = min(n, lo + CHUNK_SAMPLES)
+        cols = list(columns(lo, hi))
+        xs = x[lo:hi]
+        if gram is None:
+            k = len(cols) + 1
+            gram, rhs = np.zeros((k, k)), np.zeros(k)
+        for i, ci in enumerate(cols):
+            for j in range(i, len(cols)):
+                gram[i, j] += dot(ci, cols[j])
+            gram[i, -1] += ci.sum()
+            rhs[i] += dot(ci, xs)
+        rhs[-1] += xs.sum()
     gram[-1, -1] = n
-    rhs[-1] = x.sum()
+    gram = np.triu(gram) + np.triu(gram, 1).T
     return np.linalg.solve(gram, rhs)
+
+
+def fitted(columns, coef, n):
+    """``sum_k coef_k column_k`` at samples ``0 .. n - 1`` (the fit without its constant), the
+    columns made :data:`CHUNK_SAMPLES` at a time by ``columns(lo, hi)`` as in :func:`_least_squares`."""
+    out = np.empty(n)
+    for lo in range(0, n, CHUNK_SAMPLES):
+        hi = min(n, lo + CHUNK_SAMPLES)
+        part = out[lo:hi]
+        part[:] = 0.0
+        for c, col in zip(coef, columns(lo, hi)):
+            part += c * col
+    return out
+
+
+def _sine_columns(fs, f_hz):
+    """Columns ``cos(2 pi f n / f_s)`` and ``sin(2 pi f n / f_s)`` at samples ``lo .. hi - 1``."""
+    k = 2 * math.pi * f_hz / fs
+
+    def columns(lo, hi):
+        w = np.arange(lo, hi) * k
+        return np.cos(w), np.sin(w)
+    return columns
 
 
 def sinusoid_fit(x, fs, f_hz):
     """Least-squares ``a cos(2 pi f t) + b sin(2 pi f t) + c``; returns (amplitude, phase, fit)."""
-    w = np.arange(x.size) * (2 * math.pi * f_hz / fs)
-    c, s = np.cos(w), np.sin(w)
-    coef = _least_squares([c, s], x)
+    columns = _sine_columns(fs, f_hz)
+    coef = _least_squares(columns, x)
     amp = math.hypot(coef[0], coef[1])
     phase = math.atan2(coef[0], coef[1])  # amp sin(w + phase)
-    return amp, phase, coef[0] * c + coef[1] * s
+    return amp, phase, fitted(columns, coef[:2], x.size)
 
 
 @functools.lru_cache(maxsize=64)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from .common import Candidate, DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, STOCHASTIC_PENALTY, STOCHASTIC_THRESHOLD, block_means, detrend_line, golden_max
-from .sinusoid import _least_squares
+from .sinusoid import _least_squares, fitted
 
 
 # ---------------------------------------------------------------------------------------------
@@ -465,60 +465,83 @@ def _stochastic_candidate(name, fit, delta_s, n):
 
 
 def _refine_step(x, fs, length, time_s):
-    """Sample-level step time: two-mean scan of the raw series within +-2 blocks."""
+    """Sample-level step time: two-mean scan of the raw series within +-2 blocks (the cumulative
+    sum only over the samples the scan's windows reach)."""
     k = int(round(time_s * fs))
     lo, hi = max(1, k - 2 * length), min(x.size - 1, k + 2 * length)
     w = max(4 * length, 50)
+    base, top = max(0, lo - w), min(x.size, hi + w)
+    c = np.concatenate(([0.0], np.cumsum(x[base:top])))  # c[i - base] = sum of x[base:i]
     best, best_i = -1.0, k
-    c = np.concatenate(([0.0], np.cumsum(x)))
     for i in range(lo, hi + 1):
         a0, b1 = max(0, i - w), min(x.size, i + w)
-        left = (c[i] - c[a0]) / (i - a0)
-        right = (c[b1] - c[i]) / (b1 - i)
+        left = (c[i - base] - c[a0 - base]) / (i - a0)
+        right = (c[b1 - base] - c[i - base]) / (b1 - i)
         s = (right - left) ** 2 * (i - a0) * (b1 - i) / (b1 - a0)
         if s > best:
             best, best_i = s, i
-    a0, b1 = max(0, best_i - w), min(x.size, best_i + w)
     return best_i / fs
 
 
+def _first_sample_at(time_s, fs, n):
+    """The first sample index ``i`` in ``0 .. n`` with ``i / fs >= time_s`` (n when none)."""
+    i = min(max(0, int(math.floor(time_s * fs)) - 2), n)
+    while i < n and i / fs < time_s:
+        i += 1
+    return i
+
+
 def _deterministic_candidate(name, d, params, x, fs, length, t_blocks, temp_c):
+    """The candidate of a deterministic shape, its parameters re-fitted on the full-rate series
+    ``x`` (deg/s, ``fs`` Hz) and its component (zero mean) made a piece at a time
+    (:func:`gyrofilter.analysis.detectors.sinusoid.fitted`): one series of memory."""
     params = dict(params)
     n = x.size
-    t = np.arange(n) / fs
     if name == "bias_step":
         ts = _refine_step(x, fs, length, params["time_s"])
-        after = t >= ts
+        first = _first_sample_at(ts, fs, n)  # the first sample with t = i / fs >= ts
         params["time_s"] = ts
-        params["size_dps"] = float(x[after].mean() - x[~after].mean()) if after.any() and (~after).any() else params["size_dps"]
-        comp = params["size_dps"] * after
+        if 0 < first < n:
+            params["size_dps"] = float(x[first:].mean() - x[:first].mean())
+        comp = np.zeros(n)
+        comp[first:] = params["size_dps"]
         what = f"the mean steps by {params['size_dps']:+.3g} deg/s at t = {ts:.1f} s"
-    elif name == "rate_ramp":
-        # LS slope on the full-rate series
-        slope = float(_least_squares([t - t.mean()], x)[0])
-        params["r_dps_per_s"] = slope
-        comp = slope * t
-        what = f"the bias drifts linearly by {params['r_dps_per_s']:+.3g} deg/s per s"
-    elif name == "warmup":
-        tau = params["tau_s"]
-        g = np.exp(-t / tau)
-        coef = _least_squares([g], x)
-        params["amplitude_dps"] = float(coef[0])
-        comp = coef[0] * g
-        what = (f"the bias settles exponentially: {params['amplitude_dps']:+.3g} deg/s at t = 0, "
-                f"time constant {tau:.3g} s")
-    else:  # temperature
-        tc = np.asarray(temp_c, dtype=float)
-        coef = _least_squares([tc - tc.mean()], x)
-        params["coefficient_dps_per_c"] = float(coef[0])
-        comp = coef[0] * (tc - tc.mean())
-        what = (f"the bias follows the temperature with {params['coefficient_dps_per_c']:+.3g} "
-                f"deg/s per deg C over {np.ptp(tc):.2f} deg C")
+    else:
+        if name == "rate_ramp":
+            t_mean = 0.5 * (n - 1) / fs
+
+            def columns(lo, hi):
+                return (np.arange(lo, hi) / fs - t_mean,)
+        elif name == "warmup":
+            tau = params["tau_s"]
+
+            def columns(lo, hi):
+                return (np.exp(-(np.arange(lo, hi) / fs) / tau),)
+        else:  # temperature
+            tc = np.asarray(temp_c, dtype=float)
+            tc_mean = float(tc.mean())
+
+            def columns(lo, hi):
+                return (tc[lo:hi] - tc_mean,)
+        coef = _least_squares(columns, x)
+        comp = fitted(columns, coef[:1], n)
+        if name == "rate_ramp":
+            params["r_dps_per_s"] = float(coef[0])
+            what = f"the bias drifts linearly by {params['r_dps_per_s']:+.3g} deg/s per s"
+        elif name == "warmup":
+            params["amplitude_dps"] = float(coef[0])
+            what = (f"the bias settles exponentially: {params['amplitude_dps']:+.3g} deg/s at t = 0, "
+                    f"time constant {tau:.3g} s")
+        else:
+            params["coefficient_dps_per_c"] = float(coef[0])
+            what = (f"the bias follows the temperature with {params['coefficient_dps_per_c']:+.3g} "
+                    f"deg/s per deg C over {np.ptp(tc):.2f} deg C")
+    comp -= comp.mean()
     params = {k: float(v) for k, v in params.items()}
     return Candidate(
         effect=name, params=params, statistic=d, threshold=DETERMINISTIC_THRESHOLD,
         statistic_name="Delta chi^2 of the block means over a constant bias",
-        component=comp - comp.mean(),
+        component=comp,
         evidence=(f"{what}; the fit lowers chi^2 of the block means by {d:.0f} (threshold "
                   f"{DETERMINISTIC_THRESHOLD:.0f}, white noise: chi^2_1 to chi^2_2 scan)"),
     )
