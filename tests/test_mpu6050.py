@@ -75,7 +75,11 @@ def test_decode_big_endian_twos_complement_extremes():
 def test_sample_rate_divider_and_refusal():
     assert sample_rate_settings(100, 3) == (9, 100.0, 1000.0)      # 1 kHz / (1 + 9)
     assert sample_rate_settings(1000, 0) == (7, 1000.0, 8000.0)    # 8 kHz / (1 + 7)
-    assert sample_rate_settings(8000, 7) == (0, 8000.0, 8000.0)
+    assert sample_rate_settings(8000, 0) == (0, 8000.0, 8000.0)
+    with pytest.raises(SettingsError, match="DLPF_CFG 7 is reserved"):
+        sample_rate_settings(8000, 7)
+    with pytest.raises(SettingsError, match="takes 0..6"):
+        sample_rate_settings(100, 8)
     assert sample_rate_settings(1000 / 3, 1)[0] == 2
     with pytest.raises(SettingsError, match=r"333.333 Hz \(SMPLRT_DIV=2\) or 250 Hz \(SMPLRT_DIV=3\)"):
         sample_rate_settings(300, 1)

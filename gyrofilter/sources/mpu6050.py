@@ -12,7 +12,7 @@ register map; PS-MPU-6000A-00 rev 3.4, product specification):
   with a timeout on every wait;
 * sets full scale (GYRO_CONFIG.FS_SEL bits 4:3: 250/500/1000/2000 deg/s = 131/65.5/32.8/16.4 LSB per
   deg/s), digital low-pass filter (CONFIG.DLPF_CFG bits 2:0) and sample rate
-  ``rate = gyro output rate / (1 + SMPLRT_DIV)`` with a gyro output rate of 8 kHz for DLPF_CFG 0 or 7
+  ``rate = gyro output rate / (1 + SMPLRT_DIV)`` with a gyro output rate of 8 kHz for DLPF_CFG 0
   and 1 kHz otherwise (section 4.2); every written register is read back before data are trusted;
 * reads the FIFO (section 4.6: gyro X, Y, Z and optionally TEMP, written in register order, so TEMP
   comes first): FIFO_COUNT (0x72/0x73) then whole frames, big-endian 16-bit two's complement;
@@ -94,14 +94,17 @@ def sample_rate_settings(rate_hz, dlpf_cfg):
     """Return (SMPLRT_DIV, actual rate Hz, gyro output rate Hz) for a requested rate.
 
     ``rate_hz``: the requested sample rate (Hz, finite and > 0); ``dlpf_cfg``: CONFIG.DLPF_CFG
-    0..7, which sets the gyro output rate.
+    0..6, which sets the gyro output rate (7 is reserved in the register map, section 4.3, and refused).
 
-    rate = gyro_output_rate / (1 + SMPLRT_DIV), gyro_output_rate = 8 kHz when DLPF_CFG is 0 or 7,
+    rate = gyro_output_rate / (1 + SMPLRT_DIV), gyro_output_rate = 8 kHz when DLPF_CFG is 0,
     else 1 kHz (register map section 4.2). A rate that no divider 0..255 reaches exactly is refused
     (SettingsError) with the nearest reachable rates in the message.
     """
+    if dlpf_cfg == 7:
+        raise SettingsError("dlpf=7: CONFIG.DLPF_CFG 7 is reserved in the MPU-6050 register map (section 4.3); "
+                            "use 0 for the 8-kHz gyro output rate (256-Hz bandwidth)")
     if dlpf_cfg not in R.DLPF:
-        raise SettingsError(f"dlpf={dlpf_cfg!r}: CONFIG.DLPF_CFG (bits 2:0) takes 0..7")
+        raise SettingsError(f"dlpf={dlpf_cfg!r}: CONFIG.DLPF_CFG (bits 2:0) takes 0..6 (or none for automatic)")
     base_hz = R.DLPF[dlpf_cfg][2]
     rate_hz = check_sample_rate_hz(rate_hz, "rate_hz")
     div_f = base_hz / rate_hz - 1.0
@@ -221,7 +224,7 @@ class MPU6050Source(Source):
     range_dps : float
         Full scale (deg/s): 250, 500, 1000 or 2000 (131, 65.5, 32.8, 16.4 LSB per deg/s).
     dlpf : int, optional
-        CONFIG.DLPF_CFG 0..7; None picks the widest bandwidth below ``rate_hz / 2``
+        CONFIG.DLPF_CFG 0..6 (7 is reserved and refused); None picks the widest bandwidth below ``rate_hz / 2``
         (:func:`auto_dlpf_cfg`).
     temperature : bool
         Put TEMP_OUT in the FIFO and a ``temp`` column (deg C) in the rows.
@@ -269,8 +272,6 @@ class MPU6050Source(Source):
         self.fs_sel, self.lsb_per_dps = lsb_per_dps_for(range_dps)
         self.full_scale_dps = R.GYRO_FULL_SCALE[self.fs_sel][0]
         self.dlpf_cfg = auto_dlpf_cfg(float(rate_hz)) if dlpf is None else dlpf
-        if self.dlpf_cfg not in R.DLPF:
-            raise SettingsError(f"dlpf={dlpf!r}: CONFIG.DLPF_CFG (bits 2:0) takes 0..7 (or None: automatic)")
         self.smplrt_div, self.sample_rate_hz, self.gyro_output_rate_hz = sample_rate_settings(
             rate_hz, self.dlpf_cfg)
         if transfer not in ("auto", "smbus", "rdwr"):
@@ -492,7 +493,7 @@ class MPU6050Source(Source):
             "lsb_per_dps": f"{self.lsb_per_dps:g}",
             "full_scale_dps": f"{self.full_scale_dps:g}",
             "dlpf_cfg": str(self.dlpf_cfg),
-            "dlpf_bandwidth_hz": "none" if bw is None else f"{bw:g}",
+            "dlpf_bandwidth_hz": f"{bw:g}",
             "smplrt_div": str(self.smplrt_div),
             "gyro_output_rate_hz": f"{self.gyro_output_rate_hz:g}",
             "clock_source": "PLL, X gyro reference (CLKSEL=1)",
@@ -685,8 +686,8 @@ def open_mpu6050(bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, tem
 
     bus: I2C bus number (``/dev/i2c-N``), a device path, or an smbus2-like bus object (not closed
     by the source). address: 0x68 (AD0 low) or 0x69 (AD0 high). rate_hz: sample rate, exactly
-    ``gyro_output_rate / (1 + SMPLRT_DIV)`` (8 kHz for DLPF_CFG 0/7, else 1 kHz). range_dps: full
-    scale 250/500/1000/2000 deg/s (131/65.5/32.8/16.4 LSB per deg/s). dlpf: CONFIG.DLPF_CFG 0..7,
+    ``gyro_output_rate / (1 + SMPLRT_DIV)`` (8 kHz for DLPF_CFG 0, else 1 kHz). range_dps: full
+    scale 250/500/1000/2000 deg/s (131/65.5/32.8/16.4 LSB per deg/s). dlpf: CONFIG.DLPF_CFG 0..6 (7 is reserved),
     None picks the widest bandwidth below rate_hz/2. temperature: put TEMP_OUT in the FIFO and a
     ``temp`` column (deg C) in the rows. allow_chip: None accepts only WHO_AM_I 0x68; a chip id, a
     collection of ids, or True lets named relatives (MPU6500, MPU9250, ...) through.
