@@ -13,7 +13,7 @@ import pytest
 
 from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock, samples_from_recording
 
-from gyrofilter.errors import DeviceError, SettingsError
+from gyrofilter.errors import DeviceError, SettingsError, SourceEnded
 from gyrofilter.recording import Recording
 from gyrofilter.sources import mpu6050_registers as R
 from gyrofilter.sources.mpu6050 import (
@@ -527,3 +527,5 @@ def test_fatal_error_part_way_through_a_fifo_read_delivers_the_frames_read_befor
     with pytest.raises(DeviceError, match=r"reading/writing FIFO_R_W \(0x74\) after 1 attempt\(s\) \(errno 6"):
         src.read()
     src.close()
+    with pytest.raises(SourceEnded, match="source closed"):  # as the other sources say it
+        src.read()

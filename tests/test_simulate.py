@@ -72,6 +72,16 @@ def test_chunked_equals_one_shot_bit_for_bit(chunk):
     assert max(len(p[0]) for p in parts) <= chunk
 
 
+@pytest.mark.parametrize("chunk", [0, -5])
+def test_a_block_size_below_one_sample_is_refused(chunk):
+    from gyrofilter.sim.simulate import simulate_axis_dps
+
+    for blocks in (simulate_chunks(full_model(), 1.0, seed=1, chunk_samples=chunk),
+                   simulate_axis_dps(full_model(), 1.0, 0, seed=1, chunk_samples=chunk)):
+        with pytest.raises(SettingsError, match="chunk_samples must be >= 1"):
+            next(blocks)
+
+
 def test_same_seed_same_numbers_and_different_seed_differs():
     m = full_model()
     a, b, c = (simulate(m, 10.0, seed=s).gyro for s in (5, 5, 6))

@@ -337,6 +337,14 @@ def sample_count(duration_s, sample_rate_hz):
     return max(1, int(round(duration_s * sample_rate_hz)))
 
 
+def _check_chunk_samples(chunk_samples):
+    """``chunk_samples`` as an int >= 1, else SettingsError."""
+    chunk_samples = int(chunk_samples)
+    if chunk_samples < 1:
+        raise SettingsError(f"simulate: chunk_samples must be >= 1, got {chunk_samples}")
+    return chunk_samples
+
+
 def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEFAULT_CHUNK_SAMPLES, rng=None, seed=None,
                     validated=None):
     """Simulate in blocks of ``chunk_samples``: yields ``(t_s, gyro, temp_c)`` per block.
@@ -354,9 +362,7 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
     ``sample_rate_hz`` is not used). A generator: nothing is computed until iterated.
     """
     spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
-    chunk_samples = int(chunk_samples)
-    if chunk_samples < 1:
-        raise SettingsError(f"simulate: chunk_samples must be >= 1, got {chunk_samples}")
+    chunk_samples = _check_chunk_samples(chunk_samples)
     fs = spec["sample_rate_hz"]
     n_total = sample_count(duration_s, fs)
     duration_s = n_total / fs
@@ -410,14 +416,15 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     from ..units import to_dps
 
     spec = validated if validated is not None else validate_model(model)[0]
+    chunk_samples = _check_chunk_samples(chunk_samples)
     fs = spec["sample_rate_hz"]
     n_total = sample_count(duration_s, fs)
     root = _root_seed(seed, None)
     temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
     axis = int(axis)
     terms = _axis_terms(axis, spec["axes"][AXES[axis]], fs, n_total / fs, root, temp)
-    for start in range(0, n_total, int(chunk_samples)):
-        t_s = np.arange(start, min(start + int(chunk_samples), n_total)) / fs
+    for start in range(0, n_total, chunk_samples):
+        t_s = np.arange(start, min(start + chunk_samples, n_total)) / fs
         rate = _axis_rate(terms, t_s, temp.true_c(t_s) if temp else None, spec)
         yield to_dps(rate, spec["gyro_unit"], spec["lsb_per_dps"])
 

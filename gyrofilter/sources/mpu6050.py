@@ -34,7 +34,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from ..errors import DeviceError, SettingsError
+from ..errors import DeviceError, SettingsError, SourceEnded
 from . import mpu6050_registers as R
 from ..units import check_sample_rate_hz
 from .base import Source
@@ -643,10 +643,11 @@ class MPU6050Source(Source):
 
         Rows are ``[t, gx, gy, gz(, temp)]``: t (s) = sample index / ``sample_rate_hz``, gyro in
         LSB, temp in deg C; shape (0, len(columns)) when nothing arrived. Raises DeviceError when
-        the source is closed or the bus failed (after delivering the rows read before the failure).
+        the bus failed (after delivering the rows read before the failure) and
+        :class:`gyrofilter.errors.SourceEnded` once closed, as every source does.
         """
         if self._closed:
-            raise DeviceError(f"{self.chip_name} at {self._where()} is closed")
+            raise SourceEnded(f"{self.chip_name} at {self._where()}: source closed")
         if self._failure is not None:
             raise self._failure
         start = self._clock()
