@@ -18,13 +18,55 @@ from .common import Candidate, dot
 NARROWBAND_THRESHOLD = 4.0
 #: half-width (Hz) of the running-median background of :func:`band_estimate` (at most f_s / 10)
 BAND_BACKGROUND_HZ = 10.0
+#: samples of the input :func:`welch_psd` transforms at once (its working memory is a few times
+#: this many float64 values, about 8 MB, whatever the record's length)
+WELCH_BATCH_SAMPLES = 1 << 18
+
+
+def welch_psd(x, sample_rate_hz, nperseg):
+    """One-sided Welch PSD of ``x`` (Welch 1967), equal to ``scipy.signal.welch(x - x.mean(),
+    fs=sample_rate_hz, nperseg=nperseg)`` (periodic Hann window, 50 % overlap, each segment's
+    mean removed, density scaling S = 2 |X|² / (f_s Σ w²), the DC and Nyquist bins not doubled,
+    the mean over the K = (N - nperseg // 2) // (nperseg - nperseg // 2) segments) but built over
+    batches of about :data:`WELCH_BATCH_SAMPLES` samples, so its memory beyond the input is
+    bounded (scipy's holds about five arrays of the input's size). Returns ``(f, S, K)``."""
+    from scipy.signal import get_window
+
+    x = np.asarray(x, dtype=float)
+    seg = int(nperseg)
+    step = seg - seg // 2
+    n_seg = (x.size - seg // 2) // step if x.ndim == 1 else 0
+    if seg < 2 or n_seg < 1:
+        raise ValueError(f"welch_psd: needs a 1-D series of at least nperseg = {seg} samples, got shape {x.shape}")
+    win = get_window("hann", seg)
+    scale = 1.0 / (sample_rate_hz * float(np.sum(win * win)))
+    mean = float(np.mean(x))
+    per_batch = max(1, WELCH_BATCH_SAMPLES // seg)
+    acc = np.zeros(seg // 2 + 1)
+    for first in range(0, n_seg, per_batch):
+        count = min(per_batch, n_seg - first)
+        start = first * step
+        piece = x[start:start + (count - 1) * step + seg] - mean
+        segs = np.lib.stride_tricks.as_strided(piece, shape=(count, seg),
+                                               strides=(step * piece.strides[0], piece.strides[0]))
+        segs = segs - segs.mean(axis=1, keepdims=True)
+        segs *= win
+        spec = np.fft.rfft(segs, axis=1)
+        del segs
+        acc += np.sum(spec.real ** 2 + spec.imag ** 2, axis=0)
+        del spec
+    psd = acc * (scale / n_seg)
+    psd[1:-1 if seg % 2 == 0 else None] *= 2.0
+    f = np.fft.rfftfreq(seg, 1.0 / sample_rate_hz)
+    return f, psd, n_seg
 
 
 def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=True):
     """Centre, half-power full width and rms of the strongest band of a rate series.
 
     One-sided Welch PSD S(f) (Hann, 50 % overlap, segments of ``nperseg`` samples, fewer when
-    the record holds less than 16 of them: the largest power of 2 up to N / 16; Welch 1967);
+    the record holds less than 16 of them: the largest power of 2 up to N / 16; Welch 1967;
+    :func:`welch_psd`, in bounded memory);
     background b(f) = running median of S over ±W, W = min(f_s / 10, 10 Hz); excess e = S - b, and ē its moving
     average over ``smooth_bins`` bins (the Welch bins are noisy). The peak is the bin of largest
     R = 1 + ē / b among the bins whose whole background window lies inside (0, f_s / 2) (at the
@@ -38,11 +80,10 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     the centre, width and rms are then refined by :func:`_resonator_fit`.
     """
     from scipy.ndimage import median_filter, uniform_filter1d
-    from scipy.signal import welch
 
     x = np.asarray(x_dps, dtype=float)
     seg = int(min(nperseg, 2 ** int(math.log2(max(x.size // 16, 16)))))
-    f, s = welch(x - x.mean(), fs=sample_rate_hz, nperseg=seg)
+    f, s, n_seg = welch_psd(x, sample_rate_hz, seg)
     df = f[1] - f[0]
     background_hz = min(sample_rate_hz / 10.0, BAND_BACKGROUND_HZ)
     width = max(3, int(round(2 * background_hz / df)) | 1)
@@ -69,7 +110,7 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     rms = math.sqrt(max(float(excess[plo:phi + 1].sum()), 0.0) * df)
     out = {"center_hz": centre, "bandwidth_hz": float((hi - lo + 1) * df), "rms_dps": rms,
            "peak_ratio": float(ratio[k]), "resolution_hz": float(smooth_bins * df),
-           "segments": int(max(1, (x.size - seg) // (seg // 2) + 1))}
+           "segments": int(n_seg)}
     if fit and rms > 0:
         out.update(_resonator_fit(f, s, out, sample_rate_hz))
     return out
