@@ -55,3 +55,46 @@ def test_detect_narrowband_on_recordings_is_unchanged_by_the_batched_psd(name, m
         # ~1e-4 relative when its input changes in the last bits (measured on all shipped logs)
         for key, value in ref.params.items():
             assert math.isclose(got.params[key], value, rel_tol=2e-3), (name, axis, key)
+
+
+def _band_record(seed, n, fs, center_hz, bandwidth_hz, peak_over_white):
+    """White noise (sd 1) plus a resonator band whose peak PSD is ``peak_over_white`` times the
+    white level: one-sided peak of a resonator of rms σ_L and width B is about 2 σ_L² / (π B)."""
+    from scipy.signal import lfilter
+
+    from gyrofilter.sim.noise_terms import narrowband_filter
+
+    rng = np.random.default_rng(seed)
+    white_psd = 2.0 / fs
+    rms = math.sqrt(peak_over_white * white_psd * math.pi * bandwidth_hz / 2.0)
+    b, a = narrowband_filter(rms, center_hz, bandwidth_hz, fs)
+    return rng.normal(size=n) + lfilter(b, a, rng.normal(size=n + 2000))[2000:], rms
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_broad_band_in_a_short_fast_record_is_named(seed):
+    # issue 12: the BROAD rest phases (27-37 s at 285.7 Hz, Welch segments of 256-512 samples)
+    # hold a band about 7 Hz wide that a 15-bin smoothing (8 Hz) and a 10-Hz background window missed
+    rng = np.random.default_rng(100 + seed)
+    fs = 285.7
+    n = int(rng.integers(7700, 10600))
+    center, width, peak = rng.uniform(25.0, 110.0), rng.uniform(4.0, 8.0), rng.uniform(1.5, 2.5)
+    x, rms = _band_record(seed, n, fs, center, width, peak)
+    cand = nb.detect_narrowband(x, fs)
+    assert cand is not None, (center, width, peak)
+    assert abs(cand.params["center_hz"] - center) < max(1.0, width / 2), (cand.params, center)
+    assert 0.5 < cand.params["rms_dps"] / rms < 2.0, (cand.params, rms)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_clean_records_of_all_lengths_and_rates_name_no_band(seed):
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(200 + seed)
+    for n in (4096, 7700, 30_000, 200_000):
+        for fs in (99.37, 285.7):
+            rho = rng.uniform(-0.7, 0.7)
+            x = lfilter([1.0], [1.0, -rho], rng.normal(size=n)) + 0.3 * rng.normal(size=n)
+            band = nb.band_estimate(x, fs, fit=False)
+            stat = (band["peak_ratio"] - 1.0) * math.sqrt(band["segments"])
+            assert stat < 0.65 * nb.NARROWBAND_THRESHOLD, (n, fs, rho, stat)

@@ -13,11 +13,18 @@ from .common import Candidate, dot
 # 2b. narrow-band noise (a spectral line with a resolved width)
 
 #: the band statistic (peak excess over the background in units of its sampling error,
-#: ``(R - 1) sqrt(K)``) a band must exceed; on white and AR(1) noise (lag1 -0.7 to 0.7,
-#: 12 000 to 10^6 samples at 100 Hz, 80 runs) its largest value was 1.5
+#: ``(R - 1) sqrt(K)``) a band must exceed; on white and AR(1) noise (white + 0.3 white, lag1
+#: -0.7 to 0.7, 4096 to 10^6 samples at 99.37, 100 and 285.7 Hz, 240 runs, issue 12) its
+#: largest value was 2.16 (at 4096 samples and 285.7 Hz; 1.5-1.7 from 7 500 samples up), its
+#: 99th percentile 1.71
 NARROWBAND_THRESHOLD = 4.0
-#: half-width (Hz) of the running-median background of :func:`band_estimate` (at most f_s / 10)
-BAND_BACKGROUND_HZ = 10.0
+#: half-width (Hz) of the running-median background of :func:`band_estimate` (at most f_s / 10,
+#: so 10 Hz at 100 Hz; 20 Hz since issue 12, where a 7-Hz band at 285.7 Hz filled half of a ±10-Hz window)
+BAND_BACKGROUND_HZ = 20.0
+#: the widest (Hz) the moving average of :func:`band_estimate`'s excess may span (fewer than
+#: ``smooth_bins`` bins, at least 5, when the Welch bins are coarse: records shorter than 16
+#: segments of 8192 at a high rate; 15 bins of 0.56 Hz spanned 8 Hz on the BROAD rest phases)
+BAND_SMOOTH_MAX_HZ = 5.0
 #: samples of the input :func:`welch_psd` transforms at once (its working memory is a few times
 #: this many float64 values, about 8 MB, whatever the record's length)
 WELCH_BATCH_SAMPLES = 1 << 18
@@ -67,8 +74,9 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     One-sided Welch PSD S(f) (Hann, 50 % overlap, segments of ``nperseg`` samples, fewer when
     the record holds less than 16 of them: the largest power of 2 up to N / 16; Welch 1967;
     :func:`welch_psd`, in bounded memory);
-    background b(f) = running median of S over ±W, W = min(f_s / 10, 10 Hz); excess e = S - b, and ē its moving
-    average over ``smooth_bins`` bins (the Welch bins are noisy). The peak is the bin of largest
+    background b(f) = running median of S over ±W, W = min(f_s / 10, :data:`BAND_BACKGROUND_HZ`);
+    excess e = S - b, and ē its moving average over ``smooth_bins`` bins (the Welch bins are
+    noisy), fewer (odd, at least 5) where those would span more than :data:`BAND_SMOOTH_MAX_HZ`. The peak is the bin of largest
     R = 1 + ē / b among the bins whose whole background window lies inside (0, f_s / 2) (at the
     edges the median of a sloped spectrum is biased); the band is the contiguous run of bins
     around it with ē > ē_peak / 2 (its width is the half-power full width, at least about
@@ -85,6 +93,7 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     seg = int(min(nperseg, 2 ** int(math.log2(max(x.size // 16, 16)))))
     f, s, n_seg = welch_psd(x, sample_rate_hz, seg)
     df = f[1] - f[0]
+    smooth_bins = int(max(5, min(smooth_bins, (int(BAND_SMOOTH_MAX_HZ / df) - 1) | 1)))
     background_hz = min(sample_rate_hz / 10.0, BAND_BACKGROUND_HZ)
     width = max(3, int(round(2 * background_hz / df)) | 1)
     back = median_filter(s, size=width, mode="nearest")
