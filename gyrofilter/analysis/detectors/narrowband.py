@@ -16,7 +16,9 @@ from .common import Candidate, dot
 #: ``(R - 1) sqrt(K)``) a band must exceed; on white and AR(1) noise (white + 0.3 white, lag1
 #: -0.7 to 0.7, 4096 to 10^6 samples at 99.37, 100 and 285.7 Hz, 240 runs, issue 12) its
 #: largest value was 2.16 (at 4096 samples and 285.7 Hz; 1.5-1.7 from 7 500 samples up), its
-#: 99th percentile 1.71
+#: 99th percentile 1.73; on 400 more of 4096-12 000 samples 2.31 (2.29 within W of f_s / 2);
+#: at the Nyquist edge of AR(1) lag1 -0.7 (a PSD peaking at f_s / 2) 2.2 on 10^6 and 2.4 on
+#: 8.64 * 10^6 samples at 100 Hz
 NARROWBAND_THRESHOLD = 4.0
 #: half-width (Hz) of the running-median background of :func:`band_estimate` (at most f_s / 10,
 #: so 10 Hz at 100 Hz; 20 Hz since issue 12, where a 7-Hz band at 285.7 Hz filled half of a ±10-Hz window)
@@ -25,6 +27,8 @@ BAND_BACKGROUND_HZ = 20.0
 #: ``smooth_bins`` bins, at least 5, when the Welch bins are coarse: records shorter than 16
 #: segments of 8192 at a high rate; 15 bins of 0.56 Hz spanned 8 Hz on the BROAD rest phases)
 BAND_SMOOTH_MAX_HZ = 5.0
+#: half-width (Hz) the background window of :func:`band_estimate` narrows to at the Nyquist frequency
+BAND_EDGE_HZ = 2.5
 #: samples of the input :func:`welch_psd` transforms at once (its working memory is a few times
 #: this many float64 values, about 8 MB, whatever the record's length)
 WELCH_BATCH_SAMPLES = 1 << 18
@@ -77,8 +81,10 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     background b(f) = running median of S over ±W, W = min(f_s / 10, :data:`BAND_BACKGROUND_HZ`);
     excess e = S - b, and ē its moving average over ``smooth_bins`` bins (the Welch bins are
     noisy), fewer (odd, at least 5) where those would span more than :data:`BAND_SMOOTH_MAX_HZ`. The peak is the bin of largest
-    R = 1 + ē / b among the bins whose whole background window lies inside (0, f_s / 2) (at the
-    edges the median of a sloped spectrum is biased); the band is the contiguous run of bins
+    R = 1 + ē / b among the bins above W (near 0 the median of a spectrum rising to 0 Hz is
+    biased); within W of f_s / 2 the window narrows to the bins left and is mirrored about
+    f_s / 2 for the last :data:`BAND_EDGE_HZ` (:func:`_edge_background`; the Nyquist bin,
+    which the one-sided PSD does not double, is doubled first, and ē is mirrored there too); the band is the contiguous run of bins
     around it with ē > ē_peak / 2 (its width is the half-power full width, at least about
     ``smooth_bins`` bins: a pure line shows that width), the centre the e-weighted mean
     frequency of that run, and rms² = Σ e Δf over the contiguous run with ē > 0 (a one-sided
@@ -96,11 +102,16 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     smooth_bins = int(max(5, min(smooth_bins, (int(BAND_SMOOTH_MAX_HZ / df) - 1) | 1)))
     background_hz = min(sample_rate_hz / 10.0, BAND_BACKGROUND_HZ)
     width = max(3, int(round(2 * background_hz / df)) | 1)
+    s_fit = s
+    if seg % 2 == 0:
+        s = s.copy()
+        s[-1] *= 2.0  # the one-sided Nyquist bin is not doubled: make S continuous there
     back = median_filter(s, size=width, mode="nearest")
+    back[-(width // 2):] = _edge_background(s, width // 2, max(4, int(round(BAND_EDGE_HZ / df))))
     excess = s - back
-    smooth = uniform_filter1d(excess, smooth_bins, mode="nearest")
+    smooth = uniform_filter1d(excess, smooth_bins, mode="mirror")
     ratio = 1.0 + smooth / np.maximum(back, 1e-300)
-    ratio[(f < background_hz) | (f > sample_rate_hz / 2 - background_hz)] = 0.0
+    ratio[f < background_hz] = 0.0
     k = int(np.argmax(ratio))
 
     def run(mask):
@@ -121,7 +132,24 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
            "peak_ratio": float(ratio[k]), "resolution_hz": float(smooth_bins * df),
            "segments": int(n_seg)}
     if fit and rms > 0:
-        out.update(_resonator_fit(f, s, out, sample_rate_hz))
+        out.update(_resonator_fit(f, s_fit, out, sample_rate_hz))
+    return out
+
+
+def _edge_background(s, half, edge_half):
+    """Running median of ``s`` for its last ``half`` bins, whose ±``half`` window would pass the
+    Nyquist bin: the window narrows to the bins left, ±max(d, ``edge_half``) at d bins from the
+    top, and the bins beyond the top are mirrored about it (the PSD of a sampled series is even
+    about f_s / 2). A centred window gives the spectrum's own value wherever it is monotone;
+    the mirrored part is at most ±``edge_half`` bins, so the bias of a spectrum that peaks at
+    f_s / 2 (an AR(1) with negative lag1) is that of a median over ``edge_half`` bins."""
+    top = s.size - 1
+    out = np.empty(half)
+    for j in range(top - half + 1, top + 1):
+        h = max(top - j, edge_half)
+        idx = np.arange(j - h, j + h + 1)
+        idx = np.where(idx > top, 2 * top - idx, idx)
+        out[j - (top - half + 1)] = np.median(s[idx])
     return out
 
 
