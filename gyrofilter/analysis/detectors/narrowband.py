@@ -27,7 +27,9 @@ BAND_BACKGROUND_HZ = 20.0
 #: ``smooth_bins`` bins, at least 5, when the Welch bins are coarse: records shorter than 16
 #: segments of 8192 at a high rate; 15 bins of 0.56 Hz spanned 8 Hz on the BROAD rest phases)
 BAND_SMOOTH_MAX_HZ = 5.0
-#: half-width (Hz) the background window of :func:`band_estimate` narrows to at the Nyquist frequency
+#: half-width (Hz) the background window of :func:`band_estimate` narrows to at the Nyquist
+#: frequency, at most f_s / 40 (a spectrum's rise to f_s / 2, as AR(1) noise of negative lag1 has,
+#: scales with f_s; at 10-50 Hz a 2.5-Hz edge window named it as a band)
 BAND_EDGE_HZ = 2.5
 #: samples of the input :func:`welch_psd` transforms at once (its working memory is a few times
 #: this many float64 values, about 8 MB, whatever the record's length)
@@ -80,13 +82,13 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     :func:`welch_psd`, in bounded memory);
     background b(f) = running median of S over ±W, W = min(f_s / 10, :data:`BAND_BACKGROUND_HZ`);
     excess e = S - b, and ē its moving average over ``smooth_bins`` bins (the Welch bins are
-    noisy), fewer (odd, at least 5) where those would span more than :data:`BAND_SMOOTH_MAX_HZ`. The peak is the bin of largest
-    R = 1 + ē / b among the bins above W (near 0 the median of a spectrum rising to 0 Hz is
+    noisy), fewer (odd, at least 5) where those would span more than :data:`BAND_SMOOTH_MAX_HZ`.
+    The peak is the bin of largest R = 1 + ē / b among the bins above W (near 0 the median of a spectrum rising to 0 Hz is
     biased); within W of f_s / 2 the window narrows to the bins left and is mirrored about
-    f_s / 2 for the last :data:`BAND_EDGE_HZ` (:func:`_edge_background`; the Nyquist bin,
-    which the one-sided PSD does not double, is doubled first, and ē is mirrored there too); the band is the contiguous run of bins
-    around it with ē > ē_peak / 2 (its width is the half-power full width, at least about
-    ``smooth_bins`` bins: a pure line shows that width), the centre the e-weighted mean
+    f_s / 2 for the last min(:data:`BAND_EDGE_HZ`, f_s / 40) (:func:`_edge_background`; the
+    Nyquist bin, which the one-sided PSD does not double, is doubled first, and ē is mirrored
+    there too); the band is the contiguous run of bins around it with ē > ē_peak / 2 (its
+    width is the half-power full width, at least about ``smooth_bins`` bins: a pure line shows that width), the centre the e-weighted mean
     frequency of that run, and rms² = Σ e Δf over the contiguous run with ē > 0 (a one-sided
     PSD integrates to the variance). Returns a dict with ``center_hz``, ``bandwidth_hz``,
     ``rms_dps``, ``peak_ratio`` (R at the peak), ``resolution_hz`` (the width a pure line
@@ -107,7 +109,9 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
         s = s.copy()
         s[-1] *= 2.0  # the one-sided Nyquist bin is not doubled: make S continuous there
     back = median_filter(s, size=width, mode="nearest")
-    back[-(width // 2):] = _edge_background(s, width // 2, max(4, int(round(BAND_EDGE_HZ / df))))
+    half = min(width // 2, s.size - 1)
+    edge_hz = min(BAND_EDGE_HZ, sample_rate_hz / 40.0)
+    back[s.size - half:] = _edge_background(s, half, min(half, max(4, int(round(edge_hz / df)))))
     excess = s - back
     smooth = uniform_filter1d(excess, smooth_bins, mode="mirror")
     ratio = 1.0 + smooth / np.maximum(back, 1e-300)
@@ -140,7 +144,7 @@ def _edge_background(s, half, edge_half):
     """Running median of ``s`` for its last ``half`` bins, whose ±``half`` window would pass the
     Nyquist bin: the window narrows to the bins left, ±max(d, ``edge_half``) at d bins from the
     top, and the bins beyond the top are mirrored about it (the PSD of a sampled series is even
-    about f_s / 2). A centred window gives the spectrum's own value wherever it is monotone;
+    about f_s / 2; ``edge_half`` is at most ``half``). A centred window gives the spectrum's own value wherever it is monotone;
     the mirrored part is at most ±``edge_half`` bins, so the bias of a spectrum that peaks at
     f_s / 2 (an AR(1) with negative lag1) is that of a median over ``edge_half`` bins."""
     top = s.size - 1
@@ -148,7 +152,7 @@ def _edge_background(s, half, edge_half):
     for j in range(top - half + 1, top + 1):
         h = max(top - j, edge_half)
         idx = np.arange(j - h, j + h + 1)
-        idx = np.where(idx > top, 2 * top - idx, idx)
+        idx = np.abs(np.where(idx > top, 2 * top - idx, idx))  # mirrored about f_s / 2 (and 0 Hz)
         out[j - (top - half + 1)] = np.median(s[idx])
     return out
 
