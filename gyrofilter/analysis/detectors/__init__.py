@@ -23,7 +23,8 @@ ones found, because the effects are confusable:
    ``M exp(-t)`` (Fisher's test, the max-periodogram form; Priestley 1981, sec. 6.1.4). The line
    is fitted by least squares (amplitude, phase) at the refined frequency and subtracted.
 2b. ``narrowband`` -- a band of noise with a resolved width (a resonance): the Welch PSD over a
-   running-median background (±min(f_s / 10, 10 Hz)), the peak excess in units of its sampling error
+   running-median background (±min(f_s / 10, 20 Hz), narrowed and mirrored at f_s / 2, so the
+   search reaches the Nyquist frequency), the peak excess in units of its sampling error
    ``(R - 1) sqrt(K)`` (K Welch segments; Welch 1967), centre, half-power width and rms refined
    by a least-squares fit of the effect's own AR(2) resonator PSD (:func:`band_estimate`). Runs
    on the series with the sinusoid removed; a band cannot be subtracted (it is noise), so the
