@@ -50,11 +50,18 @@ def clean_spikes(x, mask):
         return x
     y = x.copy()
     idx = np.flatnonzero(mask)
-    n = x.size
-    for i in idx:
-        nb = [j for j in (i - 2, i - 1, i + 1, i + 2) if 0 <= j < n and not mask[j]]
-        y[i] = np.median(x[nb]) if nb else np.median(x)
+    y[idx] = _replacements(x, mask, idx)
     return y
+
+
+def _replacements(x, mask, idx):
+    """The values :func:`clean_spikes` puts at the masked samples ``idx``."""
+    n = x.size
+    out = np.empty(idx.size)
+    for k, i in enumerate(idx):
+        nb = [j for j in (i - 2, i - 1, i + 1, i + 2) if 0 <= j < n and not mask[j]]
+        out[k] = np.median(x[nb]) if nb else np.median(x)
+    return out
 
 
 #: log-spread of the spike magnitudes assumed when correcting for spikes below the threshold
@@ -89,8 +96,8 @@ def detect_outliers(x):
     count = int(mask.sum())
     if count < OUTLIER_MIN_COUNT:
         return None, mask
-    cleaned = clean_spikes(x, mask)
-    mags = np.abs(x[mask] - cleaned[mask])
+    idx = np.flatnonzero(mask)
+    mags = np.abs(x[idx] - _replacements(x, mask, idx))  # the spikes' sizes, as clean_spikes removes them
     thr = k * sd_r
     inner = np.flatnonzero(mask[1:-1]) + 1  # |second difference| at the spikes with two neighbours
     r_abs = np.abs(x[inner] - 0.5 * (x[inner - 1] + x[inner + 1]))

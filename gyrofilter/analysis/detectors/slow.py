@@ -367,7 +367,6 @@ def detect_slow(x, fs, temp_c=None):
     sto_sig = sto_name is not None and sto[sto_name][0] > STOCHASTIC_THRESHOLD
 
     findings = []
-    t_blocks = (np.arange(n) + 0.5) * delta_s
     if det_sig:
         d, params, shape, w = det[det_name]
         resid = y - shape
@@ -418,7 +417,7 @@ def detect_slow(x, fs, temp_c=None):
                     findings.append(_stochastic_candidate(name, exact[name], group_delta, m))
         if keep_det:
             findings.insert(0, _deterministic_candidate(det_name, d / s0, params, x, fs,
-                                                       length, t_blocks, temp_c))
+                                                       length, temp_c))
     elif sto_sig:
         findings.append(_rw_or_gm(sto_name, sto, y, delta_s))
     return findings, stats
@@ -491,7 +490,7 @@ def _first_sample_at(time_s, fs, n):
     return i
 
 
-def _deterministic_candidate(name, d, params, x, fs, length, t_blocks, temp_c):
+def _deterministic_candidate(name, d, params, x, fs, length, temp_c):
     """The candidate of a deterministic shape, its parameters re-fitted on the full-rate series
     ``x`` (deg/s, ``fs`` Hz) and its component (zero mean) made a piece at a time
     (:func:`gyrofilter.analysis.detectors.sinusoid.fitted`): one series of memory."""
