@@ -105,7 +105,33 @@ def test_lag1_correction_recovers_ar1():
         e = rng.normal(size=200_000)
         x = lfilter([1.0], [1.0, -rho], e)
         r1, w = det.lag1_statistic(x, 100.0)
-        assert abs(det.lag1_from_highpassed(r1, w) - rho) < 0.02
+        assert abs(det.lags_from_highpassed(r1, None, w)[0] - rho) < 0.02
+        assert abs(r1 - rho) > 0.02  # the high-pass moved it: the correction is what recovers rho
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_colored_noise_tells_a_two_tap_average_from_a_low_pass(seed):
+    """A first-order ARMA drawn at random (an AR(1), an MA(1) or a mix), with a slow random walk on
+    top: detect_colored reports lag2 exactly when the noise is not an AR(1), both lags within 0.02."""
+    from gyrofilter.sim import noise_terms as nt
+    from gyrofilter.sim.simulate import simulate
+
+    rng = np.random.default_rng(seed)
+    kind = ("ar1", "ma1", "arma")[seed % 3]
+    phi = 0.0 if kind == "ma1" else float(rng.uniform(0.2, 0.7))
+    mu = 0.0 if kind == "ar1" else float(rng.uniform(0.3, 0.8)) * (1 if kind == "ma1" else -1)
+    lag1 = (1 + phi * mu) * (phi + mu) / (1 + 2 * phi * mu + mu * mu)
+    lag2 = phi * lag1
+    assert nt.arma11_from_lags(lag1, lag2) == pytest.approx((phi, mu), abs=1e-9)
+    eff = {"effect": "colored_noise", "lag1": lag1, "lag2": lag2}
+    model = {"sample_rate_hz": 100.0, "axes": {"x": {"bias_dps": 0.5, "arw_dps_per_sqrt_hz": 0.01, "effects": [
+        eff, {"effect": "rate_random_walk", "k_dps_per_sqrt_s": 2e-4}]}}}
+    x = simulate(model, 3000.0, seed=seed).gyro_dps[:, 0].astype(float)
+    c = det.detect_colored(x, 100.0)
+    assert c is not None and abs(c.params["lag1"] - lag1) < 0.02
+    assert ("lag2" in c.params) == (kind != "ar1")
+    if kind != "ar1":
+        assert abs(c.params["lag2"] - lag2) < 0.02
 
 
 def test_discrepancy_is_mean_squared_z():

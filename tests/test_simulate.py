@@ -147,6 +147,10 @@ def test_rate_override_and_sample_count():
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "outliers", "rate": 1.5, "magnitude_dps": 1}), r"rate: expected a number in \[0, 1\]"),
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "sinusoid", "frequency_hz": "7", "amplitude_dps": 1}), r"frequency_hz: expected a number >= 0, got \"7\""),
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "colored_noise", "lag1": 1.0}), r"lag1: expected a number in \(-1, 1\)"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "colored_noise", "lag1": 0.6, "lag2": 0.0}),
+     r"\(colored_noise\).lag2: no first-order ARMA noise has lag-1 autocorrelation 0.6 and lag-2 0"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "colored_noise", "lag1": 0.2, "lag2": 0.3}),
+     r"lag2: no first-order ARMA noise .* \(expected \|lag2\| < \|lag1\|"),
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "temperature", "coefficient_dps_per_c": 0.1}), r"needs the model's 'temperature' profile"),
     (lambda m: m["axes"].update(w={}), r"axes.w: unknown axis \(expected x, y or z\)"),
     (lambda m: m["axes"]["x"].update(bias=1.0), r"axes.x.bias: unknown key"),
@@ -353,6 +357,33 @@ def test_colored_noise_lag1_and_meaning_of_arw():
     eff_std = [{"effect": "colored_noise", "lag1": rho, "preserve": "std"}]
     g2 = simulate(model(eff_std, arw=n_arw, fs=fs), 500.0, seed=17).gyro_dps
     assert np.allclose(g2.std(axis=0), n_arw * math.sqrt(fs), rtol=0.03)
+
+
+
+@pytest.mark.parametrize("lag1, lag2", [(0.2, 0.0), (0.45, 0.05), (-0.3, 0.05), (0.5, 0.4)])
+def test_colored_noise_with_lag2_is_the_first_order_arma_of_both_autocorrelations(lag1, lag2):
+    from gyrofilter.sim.noise_terms import arma11_from_lags
+
+    n_arw, fs = 0.01, 100.0
+    phi, _ = arma11_from_lags(lag1, lag2)
+    eff = [{"effect": "colored_noise", "lag1": lag1, "lag2": lag2}]
+    m = model(eff, arw=n_arw, fs=fs)
+    g = simulate(m, 3000.0, seed=5).gyro_dps
+    x = g - g.mean(axis=0)
+    acf = [np.mean(np.sum(x[k:] * x[:-k], axis=0) / np.sum(x * x, axis=0)) for k in (1, 2, 3)]
+    assert acf[0] == pytest.approx(lag1, abs=0.01)
+    assert acf[1] == pytest.approx(lag2, abs=0.01)
+    assert acf[2] == pytest.approx(phi * lag2, abs=0.01)  # rho_3 = phi rho_2: first order beyond lag 1
+    # preserve="arw": long-tau Allan deviation N / sqrt(tau)
+    ad = np.mean([overlapping_adev(g[:, i], fs, taus_s=[10.0])[1][0] for i in range(3)])
+    assert abs(ad * math.sqrt(10.0) / n_arw - 1) < 0.08
+    # preserve="std": the per-sample std N sqrt(f_s)
+    g2 = simulate(model([dict(eff[0], preserve="std")], arw=n_arw, fs=fs), 500.0, seed=5).gyro_dps
+    assert np.allclose(g2.std(axis=0), n_arw * math.sqrt(fs), rtol=0.03)
+    # streamed in blocks of 7 samples: the same run bit for bit
+    parts = list(simulate_chunks(m, 20.0, seed=5, chunk_samples=7))
+    one = simulate(m, 20.0, seed=5, chunk_samples=10**7)
+    assert np.array_equal(np.concatenate([p[1] for p in parts]), one.gyro_dps)
 
 
 # ---------------------------------------------------------------------------------------------

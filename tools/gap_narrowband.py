@@ -20,7 +20,7 @@ import argparse
 import copy
 import math
 
-from gyrofilter.analysis.detectors import band_estimate, narrowband_lag1
+from gyrofilter.analysis.detectors import band_estimate, narrowband_lags
 
 
 def with_narrowband(model, axis, band, arw_dps_per_sqrt_hz=None, lag1=None):
@@ -52,7 +52,7 @@ def _colored_lag1(r1, arw_dps_per_sqrt_hz, fs, band, current):
     """ρ of :func:`with_narrowband`'s lag-1 equation (``current`` when it has no root in (-0.99, 0.99))."""
     from scipy.optimize import brentq
 
-    r_line = narrowband_lag1(band["center_hz"], band["bandwidth_hz"], fs)
+    r_line = narrowband_lags(band["center_hz"], band["bandwidth_hz"], fs)[0]
     v_line = band["rms_dps"] ** 2
 
     def excess(rho):

@@ -21,7 +21,7 @@
    there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
    temperature are told apart), each with its own significance threshold, and estimates the
    parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
-   and its lag-1 correlation out of the colored noise's (:func:`detectors.lag1_without_band`).
+   and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_without_band`).
 4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
    better; about 1 when the model explains the measurement) is computed against the baseline's
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a
@@ -560,13 +560,14 @@ def _composite_step(run):
         d_comp = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
         colored_k = [k for k in keep_k if cands[k][1].effect == "colored_noise"]
         if colored_k:
-            # the colored noise with its lag1 re-solved to keep the per-sample variance as well
-            run.resolve_lag1[i] = True
-            d_alt = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
-            if d_alt < d_comp:
-                d_comp = d_alt
-            else:
-                run.resolve_lag1[i] = False
+            if "lag2" not in cands[colored_k[0]][1].params:
+                # the low pass with its lag1 re-solved to keep the per-sample variance as well
+                run.resolve_lag1[i] = True
+                d_alt = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
+                if d_alt < d_comp:
+                    d_comp = d_alt
+                else:
+                    run.resolve_lag1[i] = False
             # a fast Gauss-Markov term of the composite may be what the colored noise stood for
             d_alt = run.axis_discrepancy(i, [k for k in keep_k if k not in colored_k] + comp_k, f"composite model on {a}")
             if d_alt < d_comp:
@@ -690,8 +691,9 @@ def _composite_candidates(wv, fs):
 
 
 def _composite_lag1(ext_axis, composite_axis, fs):
-    """The colored noise's lag-1 in a composite model: with ``preserve: arw`` an AR(1) of lag-1
-    rho and long-tau level N has the per-sample variance N^2 f_s (1 - rho) / (1 + rho), so
+    """The colored noise's lag-1 in a composite model (a low pass: no ``lag2``): with
+    ``preserve: arw`` an AR(1) of lag-1 rho and long-tau level N has the per-sample variance
+    N^2 f_s (1 - rho) / (1 + rho), so
     rho = (N^2 f_s - s^2) / (N^2 f_s + s^2) keeps both the composite fit's N and the per-sample
     variance s^2 of the extended axis's colored noise (its ``preserve: std`` level); the short
     scales of the wavelet variance depend on s^2, the long ones on N."""
@@ -716,11 +718,10 @@ def _extended_axis(base_axis, cands, xc, fs, q):
             sigma = math.sqrt(max(sigma**2 - c.params["rms_dps"] ** 2, 0.05 * sigma**2))
     colored = next((c for c in cands if c.effect == "colored_noise"), None)
     if colored is not None:
-        # the high-pass of _noise_sigma also removed the variance fraction
-        # c = (1 + rho) / ((1 - rho) W) of a correlated noise (detectors.lag1_from_highpassed)
-        rho = colored.params["lag1"]
+        # the high-pass of _noise_sigma also removed the variance fraction c = L / W of a
+        # correlated noise (L its long-run ratio; detectors.lags_from_highpassed)
         w = det.colored_window(n, fs)
-        frac = min((1 + rho) / (max(1 - rho, 1e-3) * w), 0.9)
+        frac = min(det.long_run_ratio(colored.params["lag1"], colored.params.get("lag2")) / w, 0.9)
         sigma *= math.sqrt((1 - 1.0 / w) / (1 - frac))
     spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(fs))
     spec["bias_dps"] = float(np.mean(xc))
@@ -754,15 +755,7 @@ def _detect_axis(x, fs, temp):
     band = det.detect_narrowband(x, fs)
     if band is not None:
         cands.append(band)
-    c = det.detect_colored(x, fs)
-    if c is not None and band is not None:
-        # the band brings its own lag-1 correlation: the colored noise's is what is left
-        lag1 = det.lag1_without_band(c.params["lag1"], _noise_sigma(x, fs, 0.0) ** 2, band.params, fs)
-        if lag1 is None or abs(lag1) < det.COLORED_MIN_LAG1:
-            c = None
-        else:
-            c.evidence += f"; {lag1:+.3f} once the narrow band's own correlation is taken out"
-            c.params["lag1"] = lag1
+    c = det.detect_colored(x, fs, band)
     if c is not None:
         cands.append(c)
     slow, _ = det.detect_slow(x, fs, temp)

@@ -168,7 +168,7 @@ class FilteredNoise:
     filter state started from its stationary law N(0, P) (:func:`_state_covariance`), so every sample
     has the stationary variance; streams block by block with the lfilter state. Two-sided PSD
     S(f) = |B(e^{-jω})|² / |A(e^{-jω})|² / f_s ((deg/s)²/Hz), ω = 2π f / f_s. The ``narrowband``
-    and ``arma`` effects are built on it.
+    and ``arma`` effects, and ``colored_noise`` with ``lag2``, are built on it.
 
     ``b``: numerator coefficients (deg/s: they scale the unit-variance draws); ``a``:
     denominator coefficients (a₀ = 1, stable); ``rng``: the term's generator.
@@ -192,6 +192,62 @@ class FilteredNoise:
             self.state = vecs @ (np.sqrt(np.clip(vals, 0.0, None)) * self.rng.standard_normal(len(vals)))
         y, self.state = lfilter(self.b, self.a, self.rng.standard_normal(len(t_s)), zi=self.state)
         return y
+
+
+def arma11_from_lags(lag1, lag2):
+    """(φ, μ) of the first-order ARMA e[n] = φ e[n-1] + a[n] + μ a[n-1] whose lag-1 and lag-2
+    autocorrelations are ``lag1`` (ρ₁) and ``lag2`` (ρ₂); None when there is none.
+
+    For this process ρ₁ = (1 + φμ)(φ + μ) / (1 + 2φμ + μ²) and ρ_k = φ ρ_{k-1} for k >= 2
+    (Box, Jenkins & Reinsel, Time Series Analysis, sec. 3.4.3, with their θ = -μ). So φ = ρ₂ / ρ₁,
+    and μ is the invertible (|μ| < 1) root of (ρ₁ - φ) μ² + (2φρ₁ - 1 - φ²) μ + (ρ₁ - φ) = 0,
+    whose two roots are μ and 1/μ. ρ₂ = ρ₁² gives μ = 0 (an AR(1)), ρ₂ = 0 an MA(1) (|ρ₁| < 1/2);
+    ρ₁ = ρ₂ = 0 is white noise. A pair exists only for |ρ₂| < |ρ₁| and
+    1 + φ² - 2φρ₁ > 2 |ρ₁ - φ| (real roots of modulus other than 1).
+    """
+    lag1, lag2 = float(lag1), float(lag2)
+    if lag1 == 0.0:
+        return (0.0, 0.0) if lag2 == 0.0 else None
+    phi = lag2 / lag1
+    if not abs(phi) < 1.0:
+        return None
+    c, b = lag1 - phi, 2.0 * phi * lag1 - 1.0 - phi * phi
+    if c == 0.0:
+        return phi, 0.0
+    disc = b * b - 4.0 * c * c
+    if not disc > 0.0:
+        return None
+    return phi, (-b - math.sqrt(disc)) / (2.0 * c)
+
+
+def arma11_long_run_ratio(phi, mu):
+    """Spectrum at zero frequency over the variance of the first-order ARMA of
+    :func:`arma11_from_lags`, 1 + 2 Σ_k ρ_k = (1 + μ)² (1 - φ²) / ((1 - φ)² (1 + 2φμ + μ²));
+    (1 + φ) / (1 - φ) for an AR(1). The Allan variance of the noise tends to this ratio times
+    that of white noise of the same variance at τ much longer than its correlation."""
+    return (1.0 + mu) ** 2 * (1.0 - phi * phi) / ((1.0 - phi) ** 2 * (1.0 + 2.0 * phi * mu + mu * mu))
+
+
+def colored_noise_filter(arw_dps_per_sqrt_hz, sample_rate_hz, lag1, lag2, preserve="arw"):
+    """(b, a) of the ``colored_noise`` effect given ``lag2``: the white noise N sqrt(f_s) w[n]
+    through the first-order ARMA of :func:`arma11_from_lags`,
+    e[n] = φ e[n-1] + g N sqrt(f_s) (w[n] + μ w[n-1]), for :class:`FilteredNoise`.
+
+    ``preserve="arw"``: g = (1 - φ) / (1 + μ), unity gain at DC, so N keeps its Allan meaning at
+    long τ (as :class:`WhiteNoise` with ``lag1`` alone); ``"std"``: g = sqrt((1 - φ²) / (1 + 2φμ
+    + μ²)), the per-sample std stays N sqrt(f_s). Raises ValueError when no first-order ARMA has
+    these autocorrelations.
+    """
+    pair = arma11_from_lags(lag1, lag2)
+    if pair is None:
+        raise ValueError(f"no first-order ARMA noise has lag-1 autocorrelation {lag1:g} and lag-2 {lag2:g}")
+    phi, mu = pair
+    if preserve == "arw":
+        gain = (1.0 - phi) / (1.0 + mu)
+    else:
+        gain = math.sqrt((1.0 - phi * phi) / (1.0 + 2.0 * phi * mu + mu * mu))
+    sigma = float(arw_dps_per_sqrt_hz) * math.sqrt(sample_rate_hz) * gain
+    return np.array([sigma, sigma * mu]), np.array([1.0, -phi])
 
 
 def narrowband_filter(rms_dps, center_hz, bandwidth_hz, sample_rate_hz):

@@ -19,7 +19,10 @@ Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise
 ``arw_dps_per_sqrt_hz`` keeps its Allan meaning (the white level for τ well beyond the filter's
 correlation time, as with the MPU6050's DLPF) and the per-sample std becomes
 N sqrt(f_s) sqrt((1 - lag1)/(1 + lag1)); with ``preserve="std"`` the per-sample std stays
-N sqrt(f_s). See :class:`gyrofilter.sim.noise_terms.WhiteNoise`.
+N sqrt(f_s). See :class:`gyrofilter.sim.noise_terms.WhiteNoise`. With ``lag2`` (the lag-2
+autocorrelation; default lag1², the first-order low pass) the filter is the first-order ARMA with
+both autocorrelations (:func:`gyrofilter.sim.noise_terms.colored_noise_filter`): ``lag2 = 0`` is a
+two-tap average, the fast noise of the ADIS16405.
 
 The ``temperature`` key designs the ``temp`` column (an exponential self-heating profile with
 an optional cycle, or a table interpolated linearly; read noise and resolution only on the
@@ -65,7 +68,7 @@ EFFECTS = {
     "bias_step": ({"time_s": "nonneg", "size_dps": "any"}, {}),
     "warmup": ({"amplitude_dps": "any", "tau_s": "pos"}, {}),
     "outliers": ({"rate": "frac", "magnitude_dps": "nonneg"}, {"spread_ln": ("nonneg", 0.25)}),
-    "colored_noise": ({"lag1": "lag"}, {"preserve": ("choice:arw,std", "arw")}),
+    "colored_noise": ({"lag1": "lag"}, {"lag2": ("lag", None), "preserve": ("choice:arw,std", "arw")}),
     "narrowband": ({"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {}),
     "arma": ({"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])}),
 }
@@ -249,6 +252,9 @@ def _validate_effect(eff, where, model, warnings):
                                    f"got {out['center_hz']:g}")
     if name == "arma" and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:
         _err(f"{label}.phi", "expected a stationary AR part (every root of z^p - phi_1 z^(p-1) - ... - phi_p inside the unit circle)")
+    if name == "colored_noise" and out["lag2"] is not None and nt.arma11_from_lags(out["lag1"], out["lag2"]) is None:
+        _err(f"{label}.lag2", f"no first-order ARMA noise has lag-1 autocorrelation {out['lag1']:g} and lag-2 "
+                              f"{out['lag2']:g} (expected |lag2| < |lag1| and 1 + p^2 - 2 p lag1 > 2 |lag1 - p|, p = lag2 / lag1)")
     if name == "bias_instability" and out["tau_min_s"] and out["tau_max_s"] and out["tau_max_s"] < out["tau_min_s"]:
         _err(f"{label}.tau_max_s", "expected tau_max_s >= tau_min_s")
     return out
@@ -286,9 +292,14 @@ def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
     terms = [nt.Constant(spec["bias_dps"])]
     outliers = []
     colored = next((e for e in spec["effects"] if e["effect"] == "colored_noise"), None)
-    noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], fs, _stream(root, ax_index, 0, 0, 0),
-                          lag1=colored["lag1"] if colored else 0.0,
-                          preserve=colored["preserve"] if colored else "arw")
+    if colored is not None and colored["lag2"] is not None:
+        noise = nt.FilteredNoise(*nt.colored_noise_filter(spec["arw_dps_per_sqrt_hz"], fs, colored["lag1"],
+                                                          colored["lag2"], colored["preserve"]),
+                                 _stream(root, ax_index, 0, 0, 0))
+    else:
+        noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], fs, _stream(root, ax_index, 0, 0, 0),
+                              lag1=colored["lag1"] if colored else 0.0,
+                              preserve=colored["preserve"] if colored else "arw")
     seen = {}
     for eff in spec["effects"]:
         name = eff["effect"]

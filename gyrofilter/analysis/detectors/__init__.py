@@ -31,7 +31,10 @@ ones found, because the effects are confusable:
    later detectors see it, and the colored noise's lag-1 is corrected for it.
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
-   (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short.
+   (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
+   tells a first-order low pass (AR(1): ``rho_2 = rho_1^2``) from other short correlations (a
+   two-tap average: ``rho_2 = 0``); where they differ the finding carries ``lag2`` and the noise
+   is the first-order ARMA with both autocorrelations.
 4. Slow bias effects, on block means ``y_k`` of the cleaned series (at most 2048 blocks of
    ``Delta`` seconds): deterministic shapes (``rate_ramp``: LS line; ``bias_step``: two-mean
    scan; ``warmup``: ``a exp(-t/tau)`` scanned over tau; ``temperature``: regression on the
@@ -64,6 +67,7 @@ The package holds one module per concern: ``common`` (thresholds, :class:`Candid
 """
 from .common import (  # noqa: F401
     COLORED_MIN_LAG1,
+    COLORED_MIN_LAG2_GAP,
     COLORED_Z,
     Candidate,
     DETERMINISTIC_THRESHOLD,
@@ -103,14 +107,15 @@ from .narrowband import (  # noqa: F401
     NARROWBAND_THRESHOLD,
     band_estimate,
     detect_narrowband,
-    lag1_without_band,
-    narrowband_lag1,
+    lags_without_band,
+    narrowband_lags,
 )
 from .colored import (  # noqa: F401
     colored_window,
     detect_colored,
-    lag1_from_highpassed,
     lag1_statistic,
+    lags_from_highpassed,
+    long_run_ratio,
 )
 from .slow import (  # noqa: F401
     EXACT_GM_MARGIN,

@@ -1,4 +1,4 @@
-"""Detector 3, ``colored_noise``: the lag-1 autocorrelation of the high-passed noise (see :mod:`gyrofilter.analysis.detectors`)."""
+"""Detector 3, ``colored_noise``: the lag-1 and lag-2 autocorrelations of the high-passed noise (see :mod:`gyrofilter.analysis.detectors`)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from .common import COLORED_MIN_LAG1, COLORED_Z, Candidate, dot, moving_mean
+from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate, dot, moving_mean
 
 
 # ---------------------------------------------------------------------------------------------
@@ -18,53 +18,109 @@ def colored_window(n, fs):
     return int(min(max(64, round(0.5 * fs)), max(8, n // 8)))
 
 
-def lag1_statistic(x, fs):
-    """Lag-1 autocorrelation of ``x - moving_mean(x, W)``; white noise: about -1/W."""
-    n = x.size
-    if n < 32:
-        return 0.0, 0
-    w = colored_window(n, fs)
+def _highpassed(x, fs):
+    """``(x - moving_mean(x, W), W)``, W of :func:`colored_window`."""
+    w = colored_window(x.size, fs)
     e = moving_mean(x, w)
     np.subtract(x, e, out=e)
+    return e, w
+
+
+def lag1_statistic(x, fs):
+    """Lag-1 autocorrelation of ``x - moving_mean(x, W)``; white noise: about -1/W."""
+    if x.size < 32:
+        return 0.0, 0
+    e, w = _highpassed(x, fs)
     den = float(dot(e, e))
     if den <= 0:
         return 0.0, w
     return float(dot(e[1:], e[:-1]) / den), w
 
 
-def lag1_from_highpassed(r1, window):
-    """Undo the high-pass: for an AR(1) noise of lag-1 ``rho``, removing the moving mean of
-    ``W`` samples removes the variance fraction ``c = (1 + rho) / ((1 - rho) W)`` (the
-    long-run variance over W) from both the variance and the lag-1 covariance, so
-    ``r1 = (rho - c) / (1 - c)``; solved for ``rho`` by fixed-point iteration."""
-    rho = r1
+def long_run_ratio(lag1, lag2=None):
+    """Spectrum at zero over the variance, 1 + 2 Σ_k ρ_k, of the colored noise with these
+    autocorrelations (``lag2`` None: the AR(1), (1 + ρ₁) / (1 - ρ₁));
+    :func:`gyrofilter.sim.noise_terms.arma11_long_run_ratio`."""
+    from ...sim.noise_terms import arma11_from_lags, arma11_long_run_ratio
+
+    pair = None if lag2 is None else arma11_from_lags(lag1, lag2)
+    phi, mu = pair if pair is not None else (lag1, 0.0)
+    return arma11_long_run_ratio(phi, mu)
+
+
+def lags_from_highpassed(r1, r2, window):
+    """Undo the high-pass: removing the moving mean of ``W`` samples removes the variance
+    fraction ``c = L / W`` (L = :func:`long_run_ratio`, the long-run variance over W) from the
+    variance and from the lag-k covariances alike (k << W), so ``r_k = (rho_k - c) / (1 - c)``;
+    solved for (rho_1, rho_2) by fixed-point iteration (``r2`` None: rho_1 alone, of an AR(1))."""
+    rho1, rho2 = r1, r2
     for _ in range(50):
-        c = (1 + rho) / (max(1 - rho, 1e-3) * window)
-        c = min(c, 0.9)
-        new = r1 * (1 - c) + c
-        new = float(np.clip(new, -0.99, 0.99))
-        if abs(new - rho) < 1e-7:
+        c = min(long_run_ratio(float(np.clip(rho1, -0.99, 0.99)), rho2) / window, 0.9)
+        new1 = float(np.clip(r1 * (1 - c) + c, -0.99, 0.99))
+        new2 = None if r2 is None else float(np.clip(r2 * (1 - c) + c, -0.99, 0.99))
+        done = abs(new1 - rho1) < 1e-7 and (r2 is None or abs(new2 - rho2) < 1e-7)
+        rho1, rho2 = new1, new2
+        if done:
             break
-        rho = new
-    return rho
+    return rho1, rho2
 
 
-def detect_colored(x, fs):
-    """Colored-noise candidate: ``lag1`` from the high-passed r1 (:func:`lag1_from_highpassed`)."""
-    r1, w = lag1_statistic(x, fs)
-    if w == 0:
+def detect_colored(x, fs, band=None):
+    """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
+    pass) from the high-passed r1, r2 (:func:`lags_from_highpassed`), less the correlation of a
+    ``narrowband`` candidate ``band`` still in ``x`` (:func:`lags_without_band`).
+
+    ``lag2`` is reported when it departs from ``lag1²``, the AR(1)'s, by :data:`COLORED_Z`
+    standard errors, sqrt((1 + 2ρ² - 3ρ⁴) / N) (Bartlett's variance of r₂ for an AR(1) of
+    lag-1 ρ; Box, Jenkins & Reinsel, eq. 2.1.13), and by at least :data:`COLORED_MIN_LAG2_GAP`,
+    and a first-order ARMA has the pair (:func:`gyrofilter.sim.noise_terms.arma11_from_lags`)."""
+    from ...sim.noise_terms import arma11_from_lags
+
+    n = x.size
+    if n < 32:
         return None
-    lag1 = lag1_from_highpassed(r1, w)
-    z = lag1 * math.sqrt(x.size)
+    e, w = _highpassed(x, fs)
+    den = float(dot(e, e))
+    if den <= 0:
+        return None
+    r1, r2 = float(dot(e[1:], e[:-1]) / den), float(dot(e[2:], e[:-2]) / den)
+    del e
+    var = den / n / max(1.0 - 1.0 / w, 0.5)
+    lags = _colored_lags(r1, r2, w, band, var, fs)
+    if lags is None:
+        return None
+    lag1, lag2 = lags["lag1"], lags["lag2"]
+    gap2 = lag2 - lag1 * lag1
+    se2 = math.sqrt((1 + 2 * lag1**2 - 3 * lag1**4) / n)
+    arma = abs(gap2) >= max(COLORED_Z * se2, COLORED_MIN_LAG2_GAP) and arma11_from_lags(lag1, lag2) is not None
+    if not arma:  # the AR(1): lag1 with the AR(1)'s own high-pass correction
+        lag1 = _colored_lags(r1, None, w, band, var, fs)["lag1"]
+    z = lag1 * math.sqrt(n)
     if abs(z) < COLORED_Z or abs(lag1) < COLORED_MIN_LAG1:
         return None
-    lag1 = float(np.clip(lag1, -0.99, 0.99))
+    evidence = f"lag-1 autocorrelation of the noise {lag1:+.3f}"
+    if band is not None:
+        evidence += " once the narrow band's own correlation is taken out"
+    evidence += f" (white noise: 0 +- {1 / math.sqrt(n):.4f}, so {abs(z):.0f} standard errors away)"
+    if arma:
+        evidence += (f"; lag-2 {lag2:+.3f}, not the {lag1 * lag1:.3f} of a first-order low pass "
+                     f"({abs(gap2) / se2:.0f} standard errors): a first-order ARMA noise")
     return Candidate(
         effect="colored_noise",
-        params={"lag1": lag1},
+        params={"lag1": lag1, "lag2": lag2} if arma else {"lag1": lag1},
         statistic=abs(z),
         threshold=COLORED_Z,
         statistic_name="|lag-1 autocorrelation| in units of 1/sqrt(N)",
-        evidence=(f"lag-1 autocorrelation of the noise {lag1:+.3f} (white noise: 0 +- "
-                  f"{1 / math.sqrt(x.size):.4f}, so {abs(z):.0f} standard errors away)"),
+        evidence=evidence,
     )
+
+
+def _colored_lags(r1, r2, window, band, var_total, fs):
+    """{"lag1", "lag2"} of the colored noise from the high-passed r1, r2 (``r2`` None: the
+    AR(1)'s lag1 alone): :func:`lags_from_highpassed`, then :func:`lags_without_band` when a
+    ``band`` candidate is in the series; None when the band holds nearly all the variance."""
+    from .narrowband import lags_without_band
+
+    lag1, lag2 = lags_from_highpassed(r1, r2, window)
+    lags = {"lag1": lag1} if lag2 is None else {"lag1": lag1, "lag2": lag2}
+    return lags if band is None else lags_without_band(lags, var_total, band.params, fs)

@@ -231,23 +231,28 @@ def detect_narrowband(x, fs):
     )
 
 
-def narrowband_lag1(center_hz, bandwidth_hz, fs):
-    """Lag-1 autocorrelation of the ``narrowband`` effect's AR(2) resonator,
-    r₁ = φ₁ / (1 - φ₂) (Box & Jenkins, eq. 3.2.26), φ₁ = 2 r cos θ, φ₂ = -r²
-    (:func:`gyrofilter.sim.noise_terms.narrowband_filter`)."""
+def narrowband_lags(center_hz, bandwidth_hz, fs):
+    """Lag-1 and lag-2 autocorrelations of the ``narrowband`` effect's AR(2) resonator,
+    r₁ = φ₁ / (1 - φ₂), r₂ = φ₁ r₁ + φ₂ (Yule-Walker; Box & Jenkins, eq. 3.2.26),
+    φ₁ = 2 r cos θ, φ₂ = -r² (:func:`gyrofilter.sim.noise_terms.narrowband_filter`)."""
     theta = 2.0 * math.pi * center_hz / fs
     r = math.exp(-math.pi * bandwidth_hz / fs)
-    return 2.0 * r * math.cos(theta) / (1.0 + r * r)
+    phi1, phi2 = 2.0 * r * math.cos(theta), -r * r
+    r1 = phi1 / (1.0 - phi2)
+    return r1, phi1 * r1 + phi2
 
 
-def lag1_without_band(lag1, var_total, band_params, fs):
-    """The colored noise's lag-1 once a band is taken out: the measured ``lag1`` is that of the
-    sum (variance ``var_total``), r₁ (v_c + v_L) = ρ v_c + r_L v_L with v_L = rms², v_c =
-    var_total - v_L and r_L = :func:`narrowband_lag1`, so ρ = (r₁ var_total - r_L v_L) / v_c,
-    clipped to ±0.99 (None when the band holds nearly all the variance)."""
+def lags_without_band(lags, var_total, band_params, fs):
+    """The colored noise's lags once a band is taken out: each measured lag-k autocorrelation
+    is that of the sum (variance ``var_total``), r_k (v_c + v_L) = ρ_k v_c + r_{L,k} v_L with
+    v_L = rms², v_c = var_total - v_L and r_{L,k} of :func:`narrowband_lags`, so
+    ρ_k = (r_k var_total - r_{L,k} v_L) / v_c, clipped to ±0.99. ``lags``: {"lag1": r₁,
+    optionally "lag2": r₂}; returns the same keys, or None when the band holds nearly all the
+    variance."""
+
     v_line = band_params["rms_dps"] ** 2
     v_c = var_total - v_line
     if not v_c > 0.05 * var_total:
         return None
-    r_line = narrowband_lag1(band_params["center_hz"], band_params["bandwidth_hz"], fs)
-    return float(np.clip((lag1 * var_total - r_line * v_line) / v_c, -0.99, 0.99))
+    r_line = dict(zip(("lag1", "lag2"), narrowband_lags(band_params["center_hz"], band_params["bandwidth_hz"], fs)))
+    return {k: float(np.clip((r * var_total - r_line[k] * v_line) / v_c, -0.99, 0.99)) for k, r in lags.items()}
