@@ -405,7 +405,7 @@ class _GapRun:
         self.composite_axes = {}  # axis name -> the same with the composite fit's white level
         self.wvs = [None, None, None]  # wavelet variance of each cleaned axis at the composite's scales
         self.kept = []  # (candidate index, axis index, Candidate, D of the axis with it alone)
-        self.resolve_lag1 = [False, False, False]  # composite model: colored lag1 from _composite_lag1
+        self.resolved_lags = [None, None, None]  # composite model: the colored noise's lags from _composite_lags
         self._deps_cache = {}
 
     def axis_spec(self, i, ks):
@@ -416,16 +416,16 @@ class _GapRun:
         composite = any(c.extra.get("composite") for c in cands)
         spec = dict(self.composite_axes[a] if composite else self.ext_axes[a])
         spec["effects"] = [_effect_entry(c, preserve="arw" if composite else "std") for c in cands]
-        if composite and self.resolve_lag1[i]:
+        if composite and self.resolved_lags[i]:
             for entry in spec["effects"]:
                 if entry["effect"] == "colored_noise":
-                    entry["lag1"] = _composite_lag1(self.ext_axes[a], spec, self.fs)
+                    entry.update(self.resolved_lags[i])
         return spec
 
     def axis_deps(self, i, ks, label):
         """Departures of the measured axis ``i`` from ``n_ext`` runs of the baseline with axis
         ``i`` extended by the candidates ``ks``."""
-        key = (i, tuple(sorted(ks)), self.resolve_lag1[i])
+        key = (i, tuple(sorted(ks)), tuple(sorted((self.resolved_lags[i] or {}).items())))
         if key not in self._deps_cache:
             model = _copy_model(self.base)
             model["axes"][AXES[i]] = self.axis_spec(i, key[1])
@@ -560,14 +560,15 @@ def _composite_step(run):
         d_comp = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
         colored_k = [k for k in keep_k if cands[k][1].effect == "colored_noise"]
         if colored_k:
-            if "lag2" not in cands[colored_k[0]][1].params:
-                # the low pass with its lag1 re-solved to keep the per-sample variance as well
-                run.resolve_lag1[i] = True
+            # the colored noise re-solved to keep the per-sample variance as well
+            run.resolved_lags[i] = _composite_lags(run.ext_axes[a], run.composite_axes[a], run.fs,
+                                                   cands[colored_k[0]][1].params)
+            if run.resolved_lags[i] is not None:
                 d_alt = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
                 if d_alt < d_comp:
                     d_comp = d_alt
                 else:
-                    run.resolve_lag1[i] = False
+                    run.resolved_lags[i] = None
             # a fast Gauss-Markov term of the composite may be what the colored noise stood for
             d_alt = run.axis_discrepancy(i, [k for k in keep_k if k not in colored_k] + comp_k, f"composite model on {a}")
             if d_alt < d_comp:
@@ -585,16 +586,16 @@ def _composite_step(run):
                 "axis's slow stochastic findings")
             for k in comp_k:
                 cands[k][1].statistic = run.after[i] / d_comp
-            if run.resolve_lag1[i] and colored_k and colored_k[0] in keep_k:
+            if run.resolved_lags[i] and colored_k and colored_k[0] in keep_k:
                 colored = cands[colored_k[0]][1]
-                colored.params["lag1"] = _composite_lag1(run.ext_axes[a], run.composite_axes[a], run.fs)
-                colored.evidence += ("; in the composite model its lag1 is re-solved to keep both the per-sample "
+                colored.params.update(run.resolved_lags[i])
+                colored.evidence += ("; in the composite model its lags are re-solved to keep both the per-sample "
                                      "variance and the composite fit's white level")
             run.kept = [row for row in run.kept if row[1] != i] + \
                 [(k, i, cands[k][1], run.single[k]) for k in keep_k] + [(k, i, cands[k][1], single_k[k]) for k in comp_k]
             run.after[i] = d_comp
         else:
-            run.resolve_lag1[i] = False
+            run.resolved_lags[i] = None
             for k in keep_k:
                 cands[k][1].extra.pop("composite")
             notes.append(f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
@@ -644,8 +645,9 @@ def _write_findings(run):
 
 
 #: D above which an extended axis is tried with a composite stochastic part (the null band's
-#: 95th percentile is below 2 on clean records, docs/gap.md), and the factor it must lower D by
-COMPOSITE_MIN_D = 3.0
+#: 95th percentile is 1.07-1.96 on clean records of 27 s to 2.8 h, docs/gap_closure.md), and the
+#: factor it must lower D by
+COMPOSITE_MIN_D = 2.0
 COMPOSITE_MIN_GAIN = 0.8
 #: the composite fit uses the wavelet variance at tau >= max(1 s, 16 samples): shorter scales
 #: carry the colored noise's low-pass shape and the narrow bands, which have their own terms
@@ -690,16 +692,24 @@ def _composite_candidates(wv, fs):
     return fit, out
 
 
-def _composite_lag1(ext_axis, composite_axis, fs):
-    """The colored noise's lag-1 in a composite model (a low pass: no ``lag2``): with
-    ``preserve: arw`` an AR(1) of lag-1 rho and long-tau level N has the per-sample variance
-    N^2 f_s (1 - rho) / (1 + rho), so
-    rho = (N^2 f_s - s^2) / (N^2 f_s + s^2) keeps both the composite fit's N and the per-sample
-    variance s^2 of the extended axis's colored noise (its ``preserve: std`` level); the short
-    scales of the wavelet variance depend on s^2, the long ones on N."""
-    v_long = composite_axis["arw_dps_per_sqrt_hz"] ** 2 * fs
-    v_sample = ext_axis["arw_dps_per_sqrt_hz"] ** 2 * fs
-    return float(np.clip((v_long - v_sample) / (v_long + v_sample), -0.99, 0.99))
+def _composite_lags(ext_axis, composite_axis, fs, lags):
+    """The colored noise's lags in a composite model, re-solved so that with ``preserve: arw``
+    it keeps both the composite fit's long-tau level N and the per-sample variance s^2 of the
+    extended axis's colored noise (its ``preserve: std`` level): the short scales of the wavelet
+    variance depend on s^2, the long ones on N, so its long-run ratio (1 + 2 sum rho_k) must be
+    L = N^2 f_s / s^2. A low pass (``lags`` without ``lag2``) stays one: the AR(1) of ratio L
+    has rho = (L - 1) / (L + 1). A first-order ARMA keeps its measured lag1 as well and moves
+    its pole (:func:`gyrofilter.sim.noise_terms.arma11_for_lag1_and_ratio`). None when no such
+    noise exists."""
+    from ..sim import noise_terms as nt
+
+    ratio = composite_axis["arw_dps_per_sqrt_hz"] ** 2 / ext_axis["arw_dps_per_sqrt_hz"] ** 2
+    if "lag2" not in lags:
+        return {"lag1": float(np.clip((ratio - 1.0) / (ratio + 1.0), -0.99, 0.99))}
+    pair = nt.arma11_for_lag1_and_ratio(lags["lag1"], ratio, near_phi=lags["lag2"] / lags["lag1"])
+    if pair is None:
+        return None
+    return dict(zip(("lag1", "lag2"), (float(v) for v in nt.arma11_lags(*pair))))
 
 
 def _extended_axis(base_axis, cands, xc, fs, q):

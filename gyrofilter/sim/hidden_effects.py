@@ -7,7 +7,8 @@ effect size (1/3 for the harder set). :func:`check` says whether a gap report na
 on the right axis with its parameters inside the tolerances of :data:`TOLERANCES`.
 
 Sizes (scale = 1), chosen from MPU6050 datasheets and logs (bias drift of tenths of deg/s per
-hour, warm-up of a few tenths of deg/s, DLPF lag-1 0.3-0.8, paper 001's spikes of 1-3 deg/s):
+hour, warm-up of a few tenths of deg/s, DLPF lag-1 0.3-0.8, the ADIS16405's two-tap average of
+lag-1 0.17-0.20 and lag-2 about 0, paper 001's spikes of 1-3 deg/s):
 
 =================  ============================================================================
 bias_instability   b_dps 0.006-0.02
@@ -19,7 +20,8 @@ temperature        coefficient 0.01-0.04 deg/s/deg C (either sign), warming by 3
 bias_step          time 20-80 % of the record, size 0.03-0.1 deg/s (either sign)
 warmup             amplitude 0.1-0.4 deg/s (either sign), tau_s 30-300
 outliers           rate 2e-4 to 2e-3, magnitude_dps 1-3
-colored_noise      lag1 0.3-0.8
+colored_noise      half the cases a low pass, lag1 0.3-0.8; half a first-order ARMA, lag1 0.15-0.35
+                   and lag2 = p lag1 with p -0.2 to 0.2
 =================  ============================================================================
 """
 from __future__ import annotations
@@ -45,7 +47,7 @@ TOLERANCES = {
     "bias_step": {"time_s": ("time", (5.0, 0.02)), "size_dps": ("rel", 0.35)},
     "warmup": {"amplitude_dps": ("rel", 0.35), "tau_s": ("rel", 0.5)},
     "outliers": {"rate": ("factor", 1.6), "magnitude_dps": ("rel", 0.35)},
-    "colored_noise": {"lag1": ("abs", 0.1)},
+    "colored_noise": {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
 }
 
 
@@ -91,7 +93,11 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
         params = {"rate": float(math.exp(rng.uniform(math.log(2e-4), math.log(2e-3)))),
                   "magnitude_dps": scale * rng.uniform(1.0, 3.0)}
     elif effect == "colored_noise":
-        params = {"lag1": scale * rng.uniform(0.3, 0.8)}
+        if rng.uniform() < 0.5:
+            params = {"lag1": scale * rng.uniform(0.3, 0.8)}
+        else:
+            lag1 = scale * rng.uniform(0.15, 0.35)
+            params = {"lag1": lag1, "lag2": lag1 * rng.uniform(-0.2, 0.2)}
     params = {k: float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))
@@ -133,14 +139,20 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         model["temperature"] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
     gyro = rec.gyro_dps.copy()
     if effect == "colored_noise":
-        # a property of the noise, not an additive term: low-pass the real noise of the axis
-        # with an AR(1) of that lag-1, keeping its variance: y_k = rho y_{k-1} + sqrt(1-rho^2) e_k
+        # a property of the noise, not an additive term: filter the real noise of the axis by
+        # the colored noise's own filter, keeping its variance (preserve "std")
         from scipy.signal import lfilter
+
+        from .noise_terms import colored_noise_filter
 
         i = AXES.index(axis)
         rho = float(params["lag1"])
+        if "lag2" in params:
+            b, a = colored_noise_filter(1.0, 1.0, rho, params["lag2"], preserve="std")
+        else:  # y_k = rho y_{k-1} + sqrt(1 - rho^2) e_k
+            b, a = [math.sqrt(1 - rho * rho)], [1.0, -rho]
         dev = gyro[:, i] - gyro[:, i].mean()
-        gyro[:, i] = gyro[:, i].mean() + lfilter([math.sqrt(1 - rho * rho)], [1.0, -rho], dev)
+        gyro[:, i] = gyro[:, i].mean() + lfilter(b, a, dev)
     else:
         model["axes"][axis]["effects"].append({"effect": effect, **params})
         sim = simulate(model, n / fs, seed=seed)
@@ -162,12 +174,20 @@ def _within(kind, tol, est, true, duration_s):
     raise ValueError(kind)
 
 
+def _value(params, name):
+    """``params[name]``, or the simulator's default of an optional parameter (lag2: lag1²)."""
+    if name == "lag2" and name not in params:
+        return float(params["lag1"]) ** 2
+    return float(params[name])
+
+
 def check(case, report):
     """Score a gap report against the case: returns ``(named, in_tolerance, false_findings)``.
 
     named: the hidden effect is among the findings on the right axis; in_tolerance: and all
-    its listed parameters are within :data:`TOLERANCES`; false_findings: findings other than
-    the hidden one.
+    its listed parameters are within :data:`TOLERANCES` (an optional one compared at its
+    default where absent: ``colored_noise``'s ``lag2`` is lag1² then); false_findings: findings
+    other than the hidden one.
     """
     findings = report["findings"]
     hit = [f for f in findings if f["effect"] == case["effect"] and f["axis"] == case["axis"]]
@@ -175,6 +195,6 @@ def check(case, report):
     if case["effect"] == "none" or not hit:
         return False, False, others
     params = hit[0]["params"]
-    ok = all(_within(kind, tol, float(params[name]), case["params"][name], case["duration_s"])
+    ok = all(_within(kind, tol, _value(params, name), _value(case["params"], name), case["duration_s"])
              for name, (kind, tol) in TOLERANCES[case["effect"]].items())
     return True, ok, others

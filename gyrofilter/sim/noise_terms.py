@@ -228,6 +228,36 @@ def arma11_long_run_ratio(phi, mu):
     return (1.0 + mu) ** 2 * (1.0 - phi * phi) / ((1.0 - phi) ** 2 * (1.0 + 2.0 * phi * mu + mu * mu))
 
 
+def arma11_lags(phi, mu):
+    """(ρ₁, ρ₂) of the first-order ARMA of :func:`arma11_from_lags`:
+    ρ₁ = (1 + φμ)(φ + μ) / (1 + 2φμ + μ²), ρ₂ = φ ρ₁."""
+    rho1 = (1.0 + phi * mu) * (phi + mu) / (1.0 + 2.0 * phi * mu + mu * mu)
+    return rho1, phi * rho1
+
+
+def arma11_for_lag1_and_ratio(lag1, ratio, near_phi=0.0):
+    """The first-order ARMA (φ, μ) with lag-1 autocorrelation ``lag1`` and long-run ratio
+    ``ratio`` (:func:`arma11_long_run_ratio`), the root nearest ``near_phi``; None when there is
+    none. Along ρ₁ = lag1, μ is a function of φ (:func:`arma11_from_lags` with ρ₂ = φ ρ₁); the
+    ratio is scanned over φ in (-0.99, 0.99) and each sign change of L(φ) - ratio refined by
+    Brent's method."""
+    from scipy.optimize import brentq
+
+    def excess(phi):
+        pair = arma11_from_lags(lag1, phi * lag1)
+        return None if pair is None else arma11_long_run_ratio(*pair) - ratio
+
+    grid = np.linspace(-0.99, 0.99, 397)
+    vals = [excess(p) for p in grid]
+    roots = [brentq(excess, grid[j], grid[j + 1]) for j in range(grid.size - 1)
+             if vals[j] is not None and vals[j + 1] is not None and vals[j] * vals[j + 1] <= 0.0
+             and all(excess(p) is not None for p in np.linspace(grid[j], grid[j + 1], 5))]
+    if not roots:
+        return None
+    phi = min(roots, key=lambda r: abs(r - near_phi))
+    return arma11_from_lags(lag1, phi * lag1)
+
+
 def colored_noise_filter(arw_dps_per_sqrt_hz, sample_rate_hz, lag1, lag2, preserve="arw"):
     """(b, a) of the ``colored_noise`` effect given ``lag2``: the white noise N sqrt(f_s) w[n]
     through the first-order ARMA of :func:`arma11_from_lags`,
