@@ -386,6 +386,19 @@ def test_colored_noise_with_lag2_is_the_first_order_arma_of_both_autocorrelation
     assert np.array_equal(np.concatenate([p[1] for p in parts]), one.gyro_dps)
 
 
+
+@pytest.mark.parametrize("lag1, ratio", [(0.196, 1.42), (0.196, 1.30), (0.3, 3.0), (-0.2, 0.5)])
+def test_first_order_arma_with_a_given_lag1_and_long_run_ratio(lag1, ratio):
+    from gyrofilter.sim import noise_terms as nt
+
+    phi, mu = nt.arma11_for_lag1_and_ratio(lag1, ratio)
+    assert nt.arma11_lags(phi, mu)[0] == pytest.approx(lag1, abs=1e-9)
+    assert nt.arma11_long_run_ratio(phi, mu) == pytest.approx(ratio, rel=1e-9)
+    assert abs(phi) < 1 and abs(mu) < 1
+    # the ratio against a direct sum of the autocorrelations, 1 + 2 sum_k rho_k (rho_k = phi^(k-1) rho_1)
+    assert 1 + 2 * lag1 / (1 - phi) == pytest.approx(ratio, rel=1e-9)
+
+
 # ---------------------------------------------------------------------------------------------
 # temperature
 

@@ -34,8 +34,8 @@
    noise and the bands), the model chosen by Q + 2p (not WVIC). Its terms replace the axis's
    slow stochastic findings (and its colored noise, if that is better without it), its N
    becomes the white level (the colored noise then keeps the long-tau level, ``preserve:
-   arw``), and the replacement is kept only if D falls below :data:`COMPOSITE_MIN_GAIN` times
-   its value.
+   arw``, and, if D is lower so, the per-sample variance too: :func:`_composite_lags`), and
+   the replacement is kept only if D falls below :data:`COMPOSITE_MIN_GAIN` times its value.
 5. The report: a JSON-ready dict with ``baseline``, ``findings`` (effect, axis, params,
    evidence, gain), ``extended_model`` (runs in ``gyrofilter simulate``), per-axis feature
    departures and the discrepancies.

@@ -33,7 +33,7 @@ ones found, because the effects are confusable:
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
    tells a first-order low pass (AR(1): ``rho_2 = rho_1^2``) from other short correlations (a
-   two-tap average: ``rho_2 = 0``); where they differ the finding carries ``lag2`` and the noise
+   two-tap average: ``rho_2 = 0``); where it is clearly lower the finding carries ``lag2`` and the noise
    is the first-order ARMA with both autocorrelations.
 4. Slow bias effects, on block means ``y_k`` of the cleaned series (at most 2048 blocks of
    ``Delta`` seconds): deterministic shapes (``rate_ramp``: LS line; ``bias_step``: two-mean

@@ -70,10 +70,14 @@ def detect_colored(x, fs, band=None):
     pass) from the high-passed r1, r2 (:func:`lags_from_highpassed`), less the correlation of a
     ``narrowband`` candidate ``band`` still in ``x`` (:func:`lags_without_band`).
 
-    ``lag2`` is reported when it departs from ``lag1²``, the AR(1)'s, by :data:`COLORED_Z`
+    ``lag2`` is reported when it falls below ``lag1²``, the AR(1)'s, by :data:`COLORED_Z`
     standard errors, sqrt((1 + 2ρ² - 3ρ⁴) / N) (Bartlett's variance of r₂ for an AR(1) of
     lag-1 ρ; Box, Jenkins & Reinsel, eq. 2.1.13), and by at least :data:`COLORED_MIN_LAG2_GAP`,
-    and a first-order ARMA has the pair (:func:`gyrofilter.sim.noise_terms.arma11_from_lags`)."""
+    and a first-order ARMA has the pair (:func:`gyrofilter.sim.noise_terms.arma11_from_lags`):
+    a correlation that dies faster than a low pass's (a two-tap average, a decimation filter).
+    One that dies slower is a slow process the slow detectors name (a flicker floor gives
+    lag2 close to lag1), and the high-pass correction, which holds for correlation times well
+    below W, would inflate it."""
     from ...sim.noise_terms import arma11_from_lags
 
     n = x.size
@@ -85,6 +89,9 @@ def detect_colored(x, fs, band=None):
         return None
     r1, r2 = float(dot(e[1:], e[:-1]) / den), float(dot(e[2:], e[:-2]) / den)
     del e
+    z = lags_from_highpassed(r1, None, w)[0] * math.sqrt(n)  # the correlation of the noise as measured
+    if abs(z) < COLORED_Z:
+        return None
     var = den / n / max(1.0 - 1.0 / w, 0.5)
     lags = _colored_lags(r1, r2, w, band, var, fs)
     if lags is None:
@@ -92,19 +99,18 @@ def detect_colored(x, fs, band=None):
     lag1, lag2 = lags["lag1"], lags["lag2"]
     gap2 = lag2 - lag1 * lag1
     se2 = math.sqrt((1 + 2 * lag1**2 - 3 * lag1**4) / n)
-    arma = abs(gap2) >= max(COLORED_Z * se2, COLORED_MIN_LAG2_GAP) and arma11_from_lags(lag1, lag2) is not None
+    arma = -gap2 >= max(COLORED_Z * se2, COLORED_MIN_LAG2_GAP) and arma11_from_lags(lag1, lag2) is not None
     if not arma:  # the AR(1): lag1 with the AR(1)'s own high-pass correction
         lag1 = _colored_lags(r1, None, w, band, var, fs)["lag1"]
-    z = lag1 * math.sqrt(n)
-    if abs(z) < COLORED_Z or abs(lag1) < COLORED_MIN_LAG1:
+    if abs(lag1) < COLORED_MIN_LAG1:
         return None
     evidence = f"lag-1 autocorrelation of the noise {lag1:+.3f}"
     if band is not None:
         evidence += " once the narrow band's own correlation is taken out"
-    evidence += f" (white noise: 0 +- {1 / math.sqrt(n):.4f}, so {abs(z):.0f} standard errors away)"
+    evidence += f" (white noise: 0 +- {1 / math.sqrt(n):.4f}; as measured {abs(z):.0f} standard errors away)"
     if arma:
-        evidence += (f"; lag-2 {lag2:+.3f}, not the {lag1 * lag1:.3f} of a first-order low pass "
-                     f"({abs(gap2) / se2:.0f} standard errors): a first-order ARMA noise")
+        evidence += (f"; lag-2 {lag2:+.3f}, below the {lag1 * lag1:.3f} of a first-order low pass "
+                     f"by {-gap2 / se2:.0f} standard errors: a first-order ARMA noise")
     return Candidate(
         effect="colored_noise",
         params={"lag1": lag1, "lag2": lag2} if arma else {"lag1": lag1},

@@ -20,7 +20,7 @@ SINUSOID_ALPHA = 1e-4
 COLORED_Z = 6.0
 COLORED_MIN_LAG1 = 0.03
 #: the colored noise's lag-2 is reported (a first-order ARMA instead of the low pass) when it
-#: departs from lag1^2 (the AR(1) value) by COLORED_Z standard errors and by at least this much
+#: falls below lag1^2 (the AR(1) value) by COLORED_Z standard errors and by at least this much
 COLORED_MIN_LAG2_GAP = 0.01
 #: Delta chi^2 / 2 Delta log L thresholds of the slow-effect tests, set from clean recordings
 #: only (white noise + quantization + a temperature column, 10 and 40 min, 60 runs): the
