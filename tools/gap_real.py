@@ -132,9 +132,9 @@ detector per effect, run in a fixed decision order (spikes, spectral lines, narr
 noise, colored noise, then the slow bias effects on block means), with its parameters
 estimated; the model is extended by the finding, re-simulated, and the finding is kept only if
 the discrepancy drops. The colored noise is a first-order low pass (AR(1), its lag-1
-autocorrelation `lag1`) unless its lag-2 autocorrelation departs from lag1², then the
-first-order ARMA with both (`lag2`; the ADIS16405's fast noise is a two-tap average, lag2 about
-0). Where an axis still departs clearly (D > 2 after extension), a composite
+autocorrelation `lag1`) unless its lag-2 autocorrelation falls clearly below lag1² (a
+correlation that dies faster than a low pass's), then the first-order ARMA with both (`lag2`;
+the ADIS16405's fast noise is a two-tap average, lag2 about 0). Where an axis still departs clearly (D > 2 after extension), a composite
 stochastic part (a GMWM-style fit of white noise, random walk and up to three Gauss-Markov
 terms to the wavelet variance at tau >= 1 s, `gyrofilter.analysis.gmwm`) replaces the axis's slow
 stochastic findings if it lowers D by a fifth or more. Whether the loop closes on real records
