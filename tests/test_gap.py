@@ -380,3 +380,26 @@ def test_two_gauss_markov_terms_are_found_by_the_composite_fit(seed):
         assert abs(sigma / sigma_true - 1) < 0.5, (gm, terms)
     assert all(f["axis"] == axis for f in report["findings"]), got
     assert any("composite stochastic fit" in note for note in report["notes"])
+
+
+@pytest.mark.parametrize("key, j, z, says", [
+    ("band", 5, +4.5, "spectrum band 20-30 Hz departs most (z = +4.5 sd of the extended model's simulations); "
+                      "the measurement holds more power there than the model (fast scales"),
+    ("band", 0, -5.6, "spectrum band 0.08-0.13 Hz departs most (z = -5.6 sd of the extended model's simulations); "
+                      "the model puts too much power there (slow scales"),
+    ("adev", 2, -3.1, "Allan deviation at tau = 0.1 s departs most (z = -3.1 sd of the extended model's simulations); "
+                      "the model puts too much power there (fast scales"),
+    ("line", 0, +9.0, "largest spectral line departs most (z = +9.0 sd of the extended model's simulations); "
+                      "a spectral line the model lacks"),
+])
+def test_an_axis_that_does_not_close_gets_a_note_naming_the_feature(key, j, z, says):
+    from gyrofilter.analysis.gap import OUTSIDE_NULL_D, _still_departs
+
+    taus = np.array([0.01, 0.03, 0.1, 1.0, 10.0, 100.0])
+    bands = np.array([0.08, 0.13, 1.0, 3.0, 10.0, 20.0, 30.0])
+    deps = {k: (np.full(size, 0.5), None, None) for k, size in
+            (("adev", taus.size), ("band", bands.size - 1), ("line", 1), ("lag1", 1), ("spikes", 1))}
+    deps[key][0][j] = z
+    note = _still_departs("z", 4.85, deps, taus, bands)
+    assert note.startswith(f"axis z: after extension D = 4.85, above {OUTSIDE_NULL_D:g}")
+    assert says in note
