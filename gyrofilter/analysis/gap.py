@@ -21,7 +21,7 @@
    there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
    temperature are told apart), each with its own significance threshold, and estimates the
    parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
-   and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_without_band`).
+   and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_from_highpassed`).
 4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
    better; about 1 when the model explains the measurement) is computed against the baseline's
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a

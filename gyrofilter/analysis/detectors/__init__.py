@@ -107,7 +107,6 @@ from .narrowband import (  # noqa: F401
     NARROWBAND_THRESHOLD,
     band_estimate,
     detect_narrowband,
-    lags_without_band,
     narrowband_lags,
 )
 from .colored import (  # noqa: F401

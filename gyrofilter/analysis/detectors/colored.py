@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from .narrowband import narrowband_lags
 from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate, dot, moving_mean
 
 
@@ -48,16 +49,28 @@ def long_run_ratio(lag1, lag2=None):
     return arma11_long_run_ratio(phi, mu)
 
 
-def lags_from_highpassed(r1, r2, window):
-    """Undo the high-pass: removing the moving mean of ``W`` samples removes the variance
-    fraction ``c = L / W`` (L = :func:`long_run_ratio`, the long-run variance over W) from the
-    variance and from the lag-k covariances alike (k << W), so ``r_k = (rho_k - c) / (1 - c)``;
-    solved for (rho_1, rho_2) by fixed-point iteration (``r2`` None: rho_1 alone, of an AR(1))."""
+def lags_from_highpassed(r1, r2, window, band_lags=None, band_share=0.0):
+    """Undo the high-pass, and take out a band's share: the colored noise's (rho_1, rho_2) from
+    the lag-1 and lag-2 autocorrelations r1, r2 of the high-passed series (``r2`` None: rho_1
+    alone, of an AR(1)).
+
+    Removing the moving mean of ``W`` samples removes the colored noise's long-run variance over
+    W, ``c v_c`` with ``c = L / W`` (L = :func:`long_run_ratio`), from its variance and from its
+    lag-k covariances alike (k << W); a band (``band_lags`` = its (r_L1, r_L2),
+    :func:`narrowband_lags`; ``band_share`` = v_L / V, its variance over that of the high-passed
+    series) has no power at zero and loses nothing. So, in units of the high-passed variance V,
+    r_k = rho_k v_c + r_Lk v_L - c v_c with v_c = (1 - v_L) / (1 - c), and
+    rho_k = (r_k - r_Lk v_L) / v_c + c; solved by fixed-point iteration. Without a band,
+    ``r_k = (rho_k - c) / (1 - c)``. Returns None when the band holds nearly all the variance."""
+    r_l = band_lags if band_lags is not None else (0.0, 0.0)
+    if not band_share < 0.95:
+        return None
     rho1, rho2 = r1, r2
     for _ in range(50):
         c = min(long_run_ratio(float(np.clip(rho1, -0.99, 0.99)), rho2) / window, 0.9)
-        new1 = float(np.clip(r1 * (1 - c) + c, -0.99, 0.99))
-        new2 = None if r2 is None else float(np.clip(r2 * (1 - c) + c, -0.99, 0.99))
+        v_c = (1.0 - band_share) / (1.0 - c)
+        new1 = float(np.clip((r1 - r_l[0] * band_share) / v_c + c, -0.99, 0.99))
+        new2 = None if r2 is None else float(np.clip((r2 - r_l[1] * band_share) / v_c + c, -0.99, 0.99))
         done = abs(new1 - rho1) < 1e-7 and (r2 is None or abs(new2 - rho2) < 1e-7)
         rho1, rho2 = new1, new2
         if done:
@@ -67,8 +80,8 @@ def lags_from_highpassed(r1, r2, window):
 
 def detect_colored(x, fs, band=None):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
-    pass) from the high-passed r1, r2 (:func:`lags_from_highpassed`), less the correlation of a
-    ``narrowband`` candidate ``band`` still in ``x`` (:func:`lags_without_band`).
+    pass) from the high-passed r1, r2, less the correlation of a ``narrowband`` candidate
+    ``band`` still in ``x`` (:func:`lags_from_highpassed`).
 
     ``lag2`` is reported when it falls below ``lag1²``, the AR(1)'s, by :data:`COLORED_Z`
     standard errors, sqrt((1 + 2ρ² - 3ρ⁴) / N) (Bartlett's variance of r₂ for an AR(1) of
@@ -92,16 +105,19 @@ def detect_colored(x, fs, band=None):
     z = lags_from_highpassed(r1, None, w)[0] * math.sqrt(n)  # the correlation of the noise as measured
     if abs(z) < COLORED_Z:
         return None
-    var = den / n / max(1.0 - 1.0 / w, 0.5)
-    lags = _colored_lags(r1, r2, w, band, var, fs)
+    band_lags, band_share = None, 0.0
+    if band is not None:  # the band brings its own correlation: the colored noise's is what is left
+        band_lags = narrowband_lags(band.params["center_hz"], band.params["bandwidth_hz"], fs)
+        band_share = band.params["rms_dps"] ** 2 / (den / n)
+    lags = lags_from_highpassed(r1, r2, w, band_lags, band_share)
     if lags is None:
         return None
-    lag1, lag2 = lags["lag1"], lags["lag2"]
+    lag1, lag2 = lags
     gap2 = lag2 - lag1 * lag1
     se2 = math.sqrt((1 + 2 * lag1**2 - 3 * lag1**4) / n)
     arma = -gap2 >= max(COLORED_Z * se2, COLORED_MIN_LAG2_GAP) and arma11_from_lags(lag1, lag2) is not None
     if not arma:  # the AR(1): lag1 with the AR(1)'s own high-pass correction
-        lag1 = _colored_lags(r1, None, w, band, var, fs)["lag1"]
+        lag1, _ = lags_from_highpassed(r1, None, w, band_lags, band_share)
     if abs(lag1) < COLORED_MIN_LAG1:
         return None
     evidence = f"lag-1 autocorrelation of the noise {lag1:+.3f}"
@@ -120,13 +136,3 @@ def detect_colored(x, fs, band=None):
         evidence=evidence,
     )
 
-
-def _colored_lags(r1, r2, window, band, var_total, fs):
-    """{"lag1", "lag2"} of the colored noise from the high-passed r1, r2 (``r2`` None: the
-    AR(1)'s lag1 alone): :func:`lags_from_highpassed`, then :func:`lags_without_band` when a
-    ``band`` candidate is in the series; None when the band holds nearly all the variance."""
-    from .narrowband import lags_without_band
-
-    lag1, lag2 = lags_from_highpassed(r1, r2, window)
-    lags = {"lag1": lag1} if lag2 is None else {"lag1": lag1, "lag2": lag2}
-    return lags if band is None else lags_without_band(lags, var_total, band.params, fs)

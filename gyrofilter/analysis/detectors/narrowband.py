@@ -240,19 +240,3 @@ def narrowband_lags(center_hz, bandwidth_hz, fs):
     phi1, phi2 = 2.0 * r * math.cos(theta), -r * r
     r1 = phi1 / (1.0 - phi2)
     return r1, phi1 * r1 + phi2
-
-
-def lags_without_band(lags, var_total, band_params, fs):
-    """The colored noise's lags once a band is taken out: each measured lag-k autocorrelation
-    is that of the sum (variance ``var_total``), r_k (v_c + v_L) = ρ_k v_c + r_{L,k} v_L with
-    v_L = rms², v_c = var_total - v_L and r_{L,k} of :func:`narrowband_lags`, so
-    ρ_k = (r_k var_total - r_{L,k} v_L) / v_c, clipped to ±0.99. ``lags``: {"lag1": r₁,
-    optionally "lag2": r₂}; returns the same keys, or None when the band holds nearly all the
-    variance."""
-
-    v_line = band_params["rms_dps"] ** 2
-    v_c = var_total - v_line
-    if not v_c > 0.05 * var_total:
-        return None
-    r_line = dict(zip(("lag1", "lag2"), narrowband_lags(band_params["center_hz"], band_params["bandwidth_hz"], fs)))
-    return {k: float(np.clip((r * var_total - r_line[k] * v_line) / v_c, -0.99, 0.99)) for k, r in lags.items()}
