@@ -76,13 +76,13 @@ def test_constant_axis_is_a_clear_error(tmp_path, capsys):
                          np.random.default_rng(1).normal(size=2000)])
     path = _write(tmp_path / "stuck.csv", g, lsb=False)
     assert main(["allan", path]) == 2
-    _assert_one_line_error(capsys, "axis y", "constant")
+    _assert_one_line_error(capsys, "stuck.csv: axis y", "constant")
 
 
 def test_too_short_recording_is_a_clear_error(tmp_path, capsys):
     path = _write(tmp_path / "short.csv", np.random.default_rng(0).normal(size=(12, 3)), lsb=False)
     assert main(["allan", path]) == 2
-    _assert_one_line_error(capsys, "too short")
+    _assert_one_line_error(capsys, "short.csv", "too short")
 
 
 def test_missing_axis_and_rate_are_clear_errors(tmp_path, capsys):

@@ -72,3 +72,18 @@ def test_sample_rate_option_has_one_spelling_and_keeps_the_old_one(command, old)
         extra = ["--model", "m.json", "--duration", "1", "--out", "o.csv"] if command == "simulate" else ["--source", "sim", "--out", "o.csv"]
         args = build_parser(command).parse_args([command, *extra, spelling, "250"])
         assert args.sample_rate_hz == 250.0 and args.sample_rate_hz_option == spelling
+
+
+def test_an_error_writing_the_temporary_file_names_the_users_path(tmp_path):
+    """The user gave ``out.csv``; an OSError on the hidden temporary file must name ``out.csv``."""
+    path = str(tmp_path / "out.csv")
+    with pytest.raises(OSError) as err:
+        with common.replacing(path) as tmp:
+            open(os.path.join(tmp, "cannot", "exist"), "w")  # tmp is a file path: ENOTDIR / ENOENT
+    assert err.value.filename == os.path.join(path, "cannot", "exist")
+    assert ".partial-" not in str(err.value)
+    folder = str(tmp_path / "rep")
+    with pytest.raises(OSError) as err:
+        with common.replacing_in(folder) as tmp:
+            open(os.path.join(tmp, "no", "fig.png"), "w")
+    assert err.value.filename == os.path.join(folder, "no", "fig.png")

@@ -47,6 +47,19 @@ def test_cli_writes_the_same_numbers_as_simulate_in_small_chunks(tmp_path, capsy
     assert json.loads(rec.header["simulated_model"])["axes"]["x"]["effects"][0]["tau_s"] == 3.0
 
 
+def test_cli_without_a_seed_draws_one_and_writes_it_so_the_run_can_be_repeated(tmp_path):
+    model_path = write_json(tmp_path / "m.json", MODEL)
+    a, b, again = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "again.csv"
+    for out in (a, b):
+        assert main(["simulate", "--model", model_path, "--duration", "5", "--out", str(out)]) == 0
+    ra, rb = read_recording(a), read_recording(b)
+    assert ra.header["simulated_seed"] != rb.header["simulated_seed"]
+    assert not np.array_equal(ra.gyro, rb.gyro)
+    seed = ra.header["simulated_seed"]
+    assert main(["simulate", "--model", model_path, "--duration", "5", "--seed", seed, "--out", str(again)]) == 0
+    assert np.array_equal(read_recording(again).gyro, ra.gyro)
+
+
 def test_cli_rate_override_and_plain_csv(tmp_path):
     model_path = write_json(tmp_path / "m.json", MODEL)
     out = tmp_path / "sim.csv"

@@ -224,6 +224,16 @@ def test_too_short_recording_gives_no_findings_and_a_note():
     assert report["findings"] == [] and report["notes"]
 
 
+def test_cli_on_a_too_short_recording_says_so_and_prints_no_nan(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    path = tmp_path / "short.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (10, 3)), 100.0))
+    assert main(["gap", str(path), "--json", str(tmp_path / "o.json")]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out and "no discrepancy computed (see the notes)" in out and "note:" in out
+
+
 def test_rad_per_s_at_1_hz_runs():
     """Another gyro: rad/s, 1 Hz, 3 h, with a step on z; the unit must not matter."""
     model = {"sample_rate_hz": 1.0, "gyro_unit": "rad/s",

@@ -15,6 +15,7 @@ not counted as extra).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from collections import defaultdict
@@ -60,7 +61,7 @@ def run_real(args):
         rec = read_recording(path)
         base_rep = analyse_gap(rec, seed=args.seed, n_sims=args.sims)
         present = {(f["effect"], f["axis"]) for f in base_rep["findings"]}
-        print(f"{path}: untouched recording -> {sorted(present)}", flush=True)
+        print(f"{os.path.basename(path)}: untouched recording -> {sorted(present)}", flush=True)
         for j in range(args.cases):
             effect = he.EFFECTS[(k + j) % len(he.EFFECTS)]
             if effect == "temperature" and (rec.temp_c is None or np.ptp(rec.temp_c) < 0.3):

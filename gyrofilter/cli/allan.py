@@ -14,7 +14,7 @@ import json
 import sys
 
 
-from ..analysis.allan import MIN_CLUSTERS
+from ..analysis.allan import MIN_CLUSTERS, AllanInputError
 from ..analysis.still import characterise_recording
 from ..errors import SettingsError
 from ..analysis.fleet import FleetSettings
@@ -71,9 +71,12 @@ def run(args):
 
         check_figure_path(args.plot)
     progress = common.say if args.progress or sys.stderr.isatty() else None
-    head, results = characterise_recording(args.recording, axes=axes, confidence=args.confidence,
-                                           min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
-                                           warn=common.say_warning, progress=progress)
+    try:
+        head, results = characterise_recording(args.recording, axes=axes, confidence=args.confidence,
+                                               min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
+                                               warn=common.say_warning, progress=progress)
+    except AllanInputError as exc:  # the data of this file: name it
+        raise AllanInputError(f"{args.recording}: {exc}") from None
     fs = head.sample_rate_hz
     duration_s = head.rows / fs
     print(f"recording: {args.recording}")

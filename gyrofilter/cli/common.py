@@ -94,8 +94,9 @@ def replacing(path):
     with _folder(folder):
         tmp = os.path.join(folder, f".partial-{os.getpid()}-{name}")  # same extension: writers choose the format by it
         try:
-            yield tmp
-            os.replace(tmp, path)
+            with _naming(tmp, path):
+                yield tmp
+                os.replace(tmp, path)
         finally:
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(tmp)
@@ -109,11 +110,23 @@ def replacing_in(folder):
     with _folder(folder):
         tmp = tempfile.mkdtemp(prefix=f".partial-{os.getpid()}-", dir=folder)
         try:
-            yield tmp
-            for name in sorted(os.listdir(tmp)):
-                os.replace(os.path.join(tmp, name), os.path.join(folder, name))
+            with _naming(tmp, folder):
+                yield tmp
+                for name in sorted(os.listdir(tmp)):
+                    os.replace(os.path.join(tmp, name), os.path.join(folder, name))
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _naming(tmp, path):
+    """An OSError about the temporary ``tmp`` (or a file in it) names the user's ``path`` instead."""
+    try:
+        yield
+    except OSError as exc:
+        if isinstance(exc.filename, str) and exc.filename.startswith(tmp):
+            raise OSError(exc.errno, exc.strerror, path + exc.filename[len(tmp):]) from None
+        raise
 
 
 @contextlib.contextmanager

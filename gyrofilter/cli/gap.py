@@ -76,9 +76,10 @@ def run(args):
             write_report(report, rec, outputs.enter_context(common.replacing_in(args.report)), seed=args.seed)
     if args.report:
         progress(f"wrote {os.path.join(args.report, REPORT_NAME)}")
-    d = report.get("discrepancy", {})
-    print(f"{args.recording}: {len(report['findings'])} finding(s); discrepancy "
-          f"{d.get('overall_before', float('nan')):.3g} -> {d.get('overall_after', float('nan')):.3g} "
+    d = report.get("discrepancy")
+    gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}" if d else
+            "no discrepancy computed (see the notes)")
+    print(f"{args.recording}: {len(report['findings'])} finding(s); {gain} "
           f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
     for f in report["findings"]:
         params = ", ".join(f"{k}={v:.4g}" for k, v in f["params"].items())

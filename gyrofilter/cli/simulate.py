@@ -22,7 +22,8 @@ def add_arguments(parser):
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json)")
     parser.add_argument("--duration", required=True, type=float, metavar="S", help="length of the recording in seconds")
     common.add_sample_rate_argument(parser, "--rate", help="sample rate in Hz (overrides the model's; old spelling --rate)")
-    parser.add_argument("--seed", type=int, default=None, metavar="N", help="random seed (same seed, same recording)")
+    parser.add_argument("--seed", type=int, default=None, metavar="N", help="random seed (same seed, same recording; default: one drawn at random and written "
+                             "in the header, simulated_seed, so the run can be repeated)")
     parser.add_argument("--out", required=True, metavar="FILE", help="output recording (" + common.RECORDING_FILE_HELP + ")")
     parser.add_argument("--chunk", type=int, default=65536, metavar="N", help="samples per block written (default 65536)")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
@@ -31,7 +32,8 @@ def add_arguments(parser):
 
 def run(args):
     from ..recording import GYRO_COLUMNS, RecordingWriter
-    from ..sim.simulate import load_model, recording_columns, recording_header, sample_count, simulate_chunks, validate_model
+    from ..sim.simulate import (draw_seed, load_model, recording_columns, recording_header, sample_count,
+                                simulate_chunks, validate_model)
 
     common.check_outputs([args.out], [args.model], args.force)
     if not (math.isfinite(args.duration) and args.duration > 0):
@@ -50,7 +52,8 @@ def run(args):
     n_total = sample_count(args.duration, spec["sample_rate_hz"])
     for text in warnings:
         common.say(f"gyrofilter: warning: {args.model}: {text}")
-    header = recording_header(model, args.duration, seed=args.seed, validated=spec)
+    seed = draw_seed() if args.seed is None else args.seed
+    header = recording_header(model, args.duration, seed=seed, validated=spec)
     columns = recording_columns(spec)
     formats = ["%.10g"] + ["%d" if spec["gyro_unit"] == "lsb" else "%.9g"] * len(GYRO_COLUMNS)
     if "temp" in columns:
@@ -60,7 +63,7 @@ def run(args):
     last = time.monotonic()
     with common.replacing(args.out) as tmp, \
             RecordingWriter(tmp, header, columns, formats=formats, flush_interval_s=None, fsync=False) as writer:
-        for t_s, gyro, temp_c in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=args.seed,
+        for t_s, gyro, temp_c in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=seed,
                                                  validated=spec):
             cols = [t_s[:, None], gyro] + ([temp_c[:, None]] if temp_c is not None else [])
             writer.write(np.hstack(cols))

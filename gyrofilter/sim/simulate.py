@@ -440,6 +440,12 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
         yield to_dps(rate, spec["gyro_unit"], spec["lsb_per_dps"])
 
 
+def draw_seed():
+    """A fresh random seed in [0, 2^31) from the OS entropy, for a run without one: written in the
+    header (``simulated_seed``) so that the run can be repeated."""
+    return int(np.random.SeedSequence().entropy % (2 ** 31))
+
+
 def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, validated=None):
     """Header for a simulated recording: units, ``sensor: simulated`` and the model as compact JSON.
 
