@@ -563,8 +563,7 @@ def _composite_step(run):
         colored_k = [k for k in keep_k if cands[k][1].effect == "colored_noise"]
         if colored_k:
             # the colored noise re-solved to keep the per-sample variance as well
-            run.resolved_lags[i] = _composite_lags(run.ext_axes[a], run.composite_axes[a], run.fs,
-                                                   cands[colored_k[0]][1].params)
+            run.resolved_lags[i] = _composite_lags(run.ext_axes[a], run.composite_axes[a], cands[colored_k[0]][1].params)
             if run.resolved_lags[i] is not None:
                 d_alt = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
                 if d_alt < d_comp:
@@ -699,7 +698,7 @@ def _composite_candidates(wv, fs):
     return fit, out
 
 
-def _composite_lags(ext_axis, composite_axis, fs, lags):
+def _composite_lags(ext_axis, composite_axis, lags):
     """The colored noise's lags in a composite model, re-solved so that with ``preserve: arw``
     it keeps both the composite fit's long-tau level N and the per-sample variance s^2 of the
     extended axis's colored noise (its ``preserve: std`` level): the short scales of the wavelet

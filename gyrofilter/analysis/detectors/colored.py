@@ -135,4 +135,3 @@ def detect_colored(x, fs, band=None):
         statistic_name="|lag-1 autocorrelation| in units of 1/sqrt(N)",
         evidence=evidence,
     )
-
