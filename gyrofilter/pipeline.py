@@ -287,7 +287,7 @@ class GyroFilter:
                 self._hold = self._make_hold(noise_std_dps=self.calibration.noise_std_dps)
         elif self._cal_needed > 0:
             self._cal_buf = np.zeros((self._cal_needed, 3))
-            self._cal_temp = np.zeros(self._cal_needed) if self._temp_on else None
+            self._cal_temp = np.full(self._cal_needed, np.nan)  # NaN: a sample without a temperature
             self._cal_tries_left = int(s.calibration_retry_s // max(s.calibration_s, 1e-9))
 
     # ------------------------------------------------------------------ public API
@@ -344,7 +344,9 @@ class GyroFilter:
         """Feed one sample and return the filtered block it completed, if any.
 
         ``sample``: (gx, gy, gz), 3 finite numbers in deg/s. ``temp_c``: the sample's temperature
-        (deg C), required when compensating (``compensates_temperature``), else ignored.
+        (deg C), required when compensating (``compensates_temperature``); otherwise used only
+        while calibrating, so that the calibration keeps the window's mean temperature
+        (``Calibration.temp_c``, for a later run that compensates) when every sample had one.
         Returns None while calibrating and between blocks, else the filtered (x, y, z) in deg/s
         for the block this sample completed.
         """
@@ -357,8 +359,8 @@ class GyroFilter:
         self.samples_in += 1
         if self._cal_buf is not None:
             self._cal_buf[self._cal_fill] = sample
-            if self._cal_temp is not None:
-                self._cal_temp[self._cal_fill] = temp_c
+            temp = _finite_float(temp_c)
+            self._cal_temp[self._cal_fill] = math.nan if temp is None else temp
             self._cal_fill += 1
             if self._cal_fill == self._cal_needed:
                 self._finish_calibration()
@@ -392,7 +394,7 @@ class GyroFilter:
 
     def filter(self, samples_dps, temp_c=None) -> np.ndarray:
         """Feed ``samples_dps``, an (N, 3) array in deg/s, and ``temp_c``, N temperatures in deg C
-        (required when compensating, else ignored).
+        (required when compensating; otherwise used only while calibrating, as in :meth:`update`).
 
         Returns the filtered blocks it completed, (M, 3). From a new filter,
         M = (N - calibration samples) // block_len and row k is block k after the calibration.
@@ -414,8 +416,7 @@ class GyroFilter:
         while self._cal_buf is not None and i < len(x):
             take = min(self._cal_needed - self._cal_fill, len(x) - i)
             self._cal_buf[self._cal_fill : self._cal_fill + take] = x[i : i + take]
-            if self._cal_temp is not None:
-                self._cal_temp[self._cal_fill : self._cal_fill + take] = temps[i : i + take]
+            self._cal_temp[self._cal_fill : self._cal_fill + take] = math.nan if temps is None else temps[i : i + take]
             self._cal_fill += take
             i += take
             if self._cal_fill == self._cal_needed:
@@ -425,7 +426,7 @@ class GyroFilter:
             i += 1
             if row is not None:
                 outputs.append(np.array([row]))
-        if temps is not None and i < len(x):
+        if self._temp_on and i < len(x):
             x = compensate(x[i:], temps[i:], self._temp_coef, self._temp_ref)
             i = 0
         length = self.settings.block_len
@@ -491,17 +492,20 @@ class GyroFilter:
     # ------------------------------------------------------------------ internals
 
     def _check_temps(self, temp_c, n):
-        """The temperatures for filter(): None when not compensating, else n finite values."""
-        if not self._temp_on:
-            return None
+        """The temperatures for filter(): n values (deg C), or None when none are given; all
+        finite when compensating, else a NaN only keeps the calibration from keeping a temperature."""
         if temp_c is None:
-            raise SettingsError("temperature compensation is on: filter() needs temp_c, one temperature (deg C) per sample")
-        t = np.asarray(temp_c, dtype=float)
+            if self._temp_on:
+                raise SettingsError("temperature compensation is on: filter() needs temp_c, one temperature (deg C) per sample")
+            return None
+        try:
+            t = np.asarray(temp_c, dtype=float)
+        except (TypeError, ValueError) as e:
+            raise SettingsError(f"temp_c must be numbers in deg C: {e}") from None
         if t.shape != (n,):
             raise SettingsError(f"temp_c must have shape ({n},), one temperature per sample, got {t.shape}")
-        bad = ~np.isfinite(t)
-        if bad.any():
-            raise SettingsError(f"temp_c row {int(np.flatnonzero(bad)[0])} is not finite")
+        if self._temp_on and not np.isfinite(t).all():
+            raise SettingsError(f"temp_c row {int(np.flatnonzero(~np.isfinite(t))[0])} is not finite")
         return t
 
     def _track(self, y, out, y_motion=None, used=kalman.NO_USED):
@@ -523,8 +527,9 @@ class GyroFilter:
     def _finish_calibration(self):
         s = self.settings
         try:
+            temps = self._cal_temp if np.isfinite(self._cal_temp).all() else None
             cal = calibrate(self._cal_buf, self.sample_rate_hz, stillness_threshold=s.stillness_z,
-                            max_bias_dps=s.max_bias_dps, temp_c=self._cal_temp)
+                            max_bias_dps=s.max_bias_dps, temp_c=temps)
         except CalibrationError:
             if self._cal_tries_left <= 0:
                 raise
@@ -559,7 +564,8 @@ class GyroFilter:
         if self._temp_on:
             if cal.temp_c is None:
                 raise SettingsError("setting temp_coefficient_dps_per_c needs the calibration's temperature (temp_c), "
-                                    "and this calibration has none: calibrate again with temperatures")
+                                    "and this calibration has none (its samples came without temperatures): "
+                                    "calibrate again from a source with temperatures")
             self._temp_ref = cal.temp_c
         self._bias = tuple(float(b) for b in cal.bias_dps)
         if not self._adaptive:  # paper 001's initial Q and R: the variance of a block mean of the calibration's white noise

@@ -103,6 +103,27 @@ def test_temp_model_compensates_a_drift_from_a_gap_report(tmp_path, capsys):
     assert "no temperature effect" in capsys.readouterr().err
 
 
+def test_a_calibration_saved_without_temp_model_serves_a_later_temp_model_run(tmp_path, capsys):
+    import json
+
+    rng = np.random.default_rng(4)
+    temp = 30.0 + 0.001 * np.arange(3000)
+    src = tmp_path / "warm.csv"
+    write_recording(src, Recording.from_dps(rng.normal([0.5, -1.0, 2.0], 0.1, (3000, 3)), 100.0, temp_c=temp))
+    cal = tmp_path / "cal.json"
+    assert main(["replay", str(src), "--save-calibration", str(cal)]) == 0
+    assert json.loads(cal.read_text())["temp_c"] == pytest.approx(temp[:200].mean())
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps({"axes": {"y": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": 0.04}]}}}))
+    assert main(["replay", str(src), "--calibration", str(cal), "--temp-model", str(model)]) == 0
+    capsys.readouterr()
+    # from a recording without temperatures the saved calibration has none, and the later run says why
+    write_recording(tmp_path / "cold.csv", Recording.from_dps(rng.normal(0, 0.1, (1000, 3)), 100.0))
+    assert main(["replay", str(tmp_path / "cold.csv"), "--save-calibration", str(tmp_path / "cold.json")]) == 0
+    assert main(["replay", str(src), "--calibration", str(tmp_path / "cold.json"), "--temp-model", str(model)]) == 2
+    assert "came without temperatures" in capsys.readouterr().err
+
+
 def _data_lines(path):
     import gzip
 

@@ -191,6 +191,44 @@ def test_temperature_compensation_refuses_missing_temperatures():
     assert np.array_equal(GyroFilter(FS, preset="paper").filter(x), GyroFilter(FS, preset="paper").filter(x, temps))
 
 
+def test_a_calibration_without_compensation_keeps_the_windows_temperature_when_given():
+    """A calibration saved from a source with temperatures can serve a later compensated run."""
+    x, temps = warming(1000, (0.0, 0.0, 0.0), seed=2)
+    f = GyroFilter(FS, preset="paper")
+    f.filter(x[:150], temps[:150])
+    stream(f, x[150:400], temps[150:400])
+    assert f.calibration.temp_c == pytest.approx(temps[:200].mean())
+    later = GyroFilter(FS, preset="paper", calibration=f.calibration, temp_coefficient_dps_per_c=0.01)
+    assert later.calibration.temp_c == f.calibration.temp_c
+    # a window with any sample lacking a temperature keeps none (no invented T0)
+    for feed in ("no temps in one call", "nan", "update without"):
+        g = GyroFilter(FS, preset="paper")
+        if feed == "no temps in one call":
+            g.filter(x[:100], temps[:100])
+            g.filter(x[100:400])
+        elif feed == "nan":
+            bad = temps.copy()
+            bad[123] = np.nan
+            g.filter(x[:400], bad[:400])
+        else:
+            g.filter(x[:50], temps[:50])
+            g.update(tuple(x[50]))
+            g.filter(x[51:400], temps[51:400])
+        assert g.calibration is not None and g.calibration.temp_c is None, feed
+    # a retried window keeps the temperatures of the window that passed
+    moved = x.copy()
+    moved[:200] += np.linspace(0, 30, 200)[:, None]
+    r = GyroFilter(FS, preset="paper", calibration_retry_s=5.0)
+    r.filter(moved[:300], temps[:300])
+    r.filter(moved[300:], None)
+    assert r.calibration is not None and r.calibration.temp_c is None
+    r2 = GyroFilter(FS, preset="paper", calibration_retry_s=5.0)
+    r2.filter(moved[:600], temps[:600])
+    assert r2.calibration.temp_c == pytest.approx(temps[200:400].mean())
+    with pytest.raises(SettingsError, match="shape"):
+        GyroFilter(FS, preset="paper").filter(x, temps[:-1])
+
+
 def test_coefficients_come_from_a_gap_or_simulator_model():
     model = {"axes": {"x": {"effects": [{"effect": "white_noise", "arw_dps_per_sqrt_hz": 0.01},
                                         {"effect": "temperature", "coefficient_dps_per_c": 0.02}]},

@@ -105,7 +105,7 @@ def _run(args, source):
                     writer.note(text)
                 if len(rows):
                     was_calibrating = filt.calibrating
-                    temps = rows[:, temp_idx] if filt.compensates_temperature else None
+                    temps = None if temp_idx is None else rows[:, temp_idx]
                     t_out, out = filt.filter_timed(source.gyro_dps(rows), rows[:, t_idx], temps)
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note("calibrated: bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s")
