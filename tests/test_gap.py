@@ -191,6 +191,13 @@ def test_cli_writes_contract_json_and_report(tmp_path):
         assert f["effect"] in he.EFFECTS and f["axis"] in ("x", "y", "z")
         assert {"before", "after", "metric"} <= set(f["gain"]) and f["evidence"]
     spec, _ = validate_model(rep["extended_model"])  # runs in `simulate`
+    # the console: per axis D before -> after with all its findings, then each finding's own gain
+    d = rep["discrepancy"]
+    for axis in "xyz":
+        n = sum(f["axis"] == axis for f in rep["findings"])
+        tail = f" -> {d['after'][axis]:.3g} with {n} finding" if n else ", no finding"
+        assert f"  {axis}: D {d['before'][axis]:.3g}{tail}" in proc.stdout, proc.stdout
+    assert proc.stdout.count("; alone D ") == len(rep["findings"])
     assert any(e["effect"] == "bias_step" for e in spec["axes"][case["axis"]]["effects"])
     if not report:
         return  # the report needs the plot extra

@@ -79,11 +79,23 @@ def run(args):
     d = report.get("discrepancy")
     gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}" if d else
             "no discrepancy computed (see the notes)")
-    print(f"{args.recording}: {len(report['findings'])} finding(s); {gain} "
+    print(f"{args.recording}: {_count(len(report['findings']), 'finding')}; {gain} "
           f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
-    for f in report["findings"]:
-        params = ", ".join(f"{k}={v:.4g}" for k, v in f["params"].items())
-        print(f"  {f['axis']}: {f['effect']} ({params}); D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}")
+    for axis in "xyz":
+        found = [f for f in report["findings"] if f["axis"] == axis]
+        if d:
+            before, after = d["before"][axis], d["after"][axis]
+            print(f"  {axis}: D {before:.3g}" + (f" -> {after:.3g} with {_count(len(found), 'finding')}" if found else ", no finding"))
+        for f in found:
+            params = ", ".join(f"{k}={v:.4g}" for k, v in f["params"].items())
+            print(f"    {f['effect']} ({params}); alone D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}")
     for note in report.get("notes", []):
         print(f"  note: {note}")
+    if d:
+        print("  (D: mean squared z-score of the record's features against the model's simulations; about 1 where "
+              "the model explains the record)")
     return 0
+
+
+def _count(n, noun):
+    return f"{n} {noun}" + ("" if n == 1 else "s")
