@@ -275,11 +275,13 @@ class GyroFilter:
                     (s.hold, "hold=True", "or a loaded calibration"),
                     (s.tracker == "kalman" and s.kalman_noise == "adaptive", "kalman_noise='adaptive'",
                      "or a loaded calibration: the still window's noise and bias start its model (without them it "
-                     "carries the uncorrected bias for about a minute)")):
+                     "carries the uncorrected bias for about a minute); preset 'paper' runs without one")):
                 if needed:
                     raise SettingsError(f"setting {setting} needs a start-up calibration (calibration_s > 0) {why}")
         if calibration is not None:
             self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration)
+            _check_calibration_rate(self.calibration, self.sample_rate_hz,
+                                    "the calibration" if isinstance(calibration, Calibration) else f"calibration {calibration}")
             self._apply_calibration(self.calibration)
             self._start_kalman(np.asarray(self.calibration.noise_std_dps, dtype=float) / math.sqrt(s.block_len), still_blocks=0)
             if s.hold:
@@ -572,6 +574,19 @@ class GyroFilter:
             self._pkf.start(cal.noise_std_dps)
         self._cal_buf = None
         self._cal_temp = None
+
+
+#: largest relative difference between a loaded calibration's sample rate and the filter's
+CALIBRATION_RATE_TOLERANCE = 0.05
+
+
+def _check_calibration_rate(cal, sample_rate_hz, name):
+    """Refuse a calibration made at another sample rate: its per-sample noise (which starts Q, R
+    and the guard) scales with sqrt(f_s) for white noise, and the sensor's low-pass filter
+    differs with the rate. Within 5 % (a logger's rate drifts around its nominal one) it stands."""
+    if abs(cal.sample_rate_hz - sample_rate_hz) > CALIBRATION_RATE_TOLERANCE * sample_rate_hz:
+        raise SettingsError(f"{name} was made at {cal.sample_rate_hz:g} Hz and this filter runs at "
+                            f"{sample_rate_hz:g} Hz: its noise level does not hold at another rate; calibrate at this rate")
 
 
 def _sample3(sample):

@@ -1,3 +1,4 @@
+import json
 import subprocess
 import sys
 
@@ -122,6 +123,72 @@ def test_a_calibration_saved_without_temp_model_serves_a_later_temp_model_run(tm
     assert main(["replay", str(tmp_path / "cold.csv"), "--save-calibration", str(tmp_path / "cold.json")]) == 0
     assert main(["replay", str(src), "--calibration", str(tmp_path / "cold.json"), "--temp-model", str(model)]) == 2
     assert "came without temperatures" in capsys.readouterr().err
+
+
+def test_set_takes_calibration_s_and_lists_and_refuses_what_has_its_own_option(tmp_path, capsys):
+    rng = np.random.default_rng(12)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(rng.normal([1, 2, 3], 0.1, (1000, 3)), 100.0, temp_c=np.full(1000, 30.0)))
+    outs = []
+    for extra in (["--set", "calibration_s=1"], ["--calibration-s", "1"]):
+        outs.append(tmp_path / f"o{len(outs)}.csv")
+        assert main(["replay", str(src), "--out", str(outs[-1]), *extra]) == 0
+    assert _data_lines(outs[0]) == _data_lines(outs[1]) and len(read_recording(outs[0])) == (1000 - 100) // 5
+    out = tmp_path / "t.csv"
+    assert main(["replay", str(src), "--out", str(out), "--set", "temp_coefficient_dps_per_c=0.01,0.02,0"]) == 0
+    assert '"temp_coefficient_dps_per_c":[0.01,0.02,0]' in read_recording(out).header["filter_settings"]
+    capsys.readouterr()
+    cal = tmp_path / "cal.json"
+    assert main(["replay", str(src), "--save-calibration", str(cal)]) == 0
+    for extra, message in ((["--set", "calibration_s=1", "--calibration-s", "2"], "both given"),
+                           (["--set", "sample_rate_hz=50"], "comes from the recording"),
+                           (["--set", "calibration=x.json"], "use --calibration JSON"),
+                           (["--set", "calibration_s=abc"], "calibration_s='abc'"),
+                           (["--calibration", str(cal), "--calibration-s", "1"], "give one of them")):
+        capsys.readouterr()
+        assert main(["replay", str(src), *extra]) == 2, extra
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err, (extra, err)
+
+
+def test_a_calibration_from_another_sample_rate_is_refused(tmp_path, capsys):
+    rng = np.random.default_rng(13)
+    fast, slow = tmp_path / "fast.csv", tmp_path / "slow.csv"
+    write_recording(fast, Recording.from_dps(rng.normal(0, 0.1, (3000, 3)), 1000.0))
+    write_recording(slow, Recording.from_dps(rng.normal(0, 0.1, (1000, 3)), 100.0))
+    cal = tmp_path / "cal.json"
+    assert main(["replay", str(fast), "--save-calibration", str(cal)]) == 0
+    capsys.readouterr()
+    assert main(["replay", str(slow), "--calibration", str(cal)]) == 2
+    assert f"calibration {cal} was made at 1000 Hz and this filter runs at 100 Hz" in capsys.readouterr().err
+    write_recording(tmp_path / "near.csv", Recording.from_dps(rng.normal(0, 0.1, (3000, 3)), 1030.0))
+    assert main(["replay", str(tmp_path / "near.csv"), "--calibration", str(cal)]) == 0  # within 5 %
+
+
+def test_all_outputs_land_together_or_none_does(tmp_path, capsys, monkeypatch):
+    """--out, --plot and --save-calibration go through one commit: missing folders are made for
+    each, and a failure in the last of them leaves none behind."""
+    pytest.importorskip("matplotlib")
+    import gyrofilter.plots
+
+    rng = np.random.default_rng(14)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(rng.normal(0, 0.1, (1000, 3)), 100.0))
+    out, plot, cal = tmp_path / "a" / "o.csv", tmp_path / "b" / "p.png", tmp_path / "c" / "d" / "cal.json"
+    assert main(["replay", str(src), "--out", str(out), "--plot", str(plot), "--save-calibration", str(cal)]) == 0
+    assert len(read_recording(out)) == 160 and plot.stat().st_size > 0 and "bias_dps" in cal.read_text()
+
+    def broken(path, *args, **kwargs):
+        raise OSError(28, "No space left on device", path)
+
+    monkeypatch.setattr(gyrofilter.plots, "plot_filtered", broken)
+    out2, plot2 = tmp_path / "e" / "o.csv", tmp_path / "f" / "p.png"
+    assert main(["replay", str(src), "--out", str(out2), "--plot", str(plot2)]) == 2
+    err = capsys.readouterr().err
+    assert f"{plot2}: No space left on device" in err, err
+    assert not (tmp_path / "e").exists() and not (tmp_path / "f").exists()
+    assert main(["replay", str(src), "--out", ""]) == 2 and "empty" in capsys.readouterr().err
+    assert main(["replay", str(src), "--out", str(tmp_path / "a")]) == 2 and "is a folder" in capsys.readouterr().err
 
 
 def _data_lines(path):
@@ -265,7 +332,9 @@ def test_realtime_stdout_is_a_recording(tmp_path, capsys):
     got, filtered = read_recording(printed), read_recording(out)
     assert got.gyro_unit == "dps" and got.sample_rate_hz == filtered.sample_rate_hz == 1000.0
     np.testing.assert_allclose(got.t_s, filtered.t_s, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(got.gyro, filtered.gyro, rtol=0, atol=5e-7)  # 6 decimals on stdout
+    np.testing.assert_array_equal(got.gyro, filtered.gyro)  # the same 9 significant digits as --out
+    bias = json.loads(filtered.header["bias_dps"])
+    assert f"# calibrated: bias {bias[0]:+.4f}, {bias[1]:+.4f}, {bias[2]:+.4f} deg/s" in printed.read_text()
 
 
 def test_realtime_into_head_still_writes_the_whole_out_file(tmp_path):

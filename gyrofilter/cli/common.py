@@ -18,6 +18,15 @@ from ..units import AXES, json_ready
 RECORDING_FILE_HELP = "recording format v1: CSV text, compressed with gzip when the name ends in .gz, e.g. out.csv or out.csv.gz"
 
 
+#: a filtered row (t, gx, gy, gz) as text: run's output and replay --realtime's stdout
+ROW_FORMAT = "%.10g,%.9g,%.9g,%.9g"
+
+
+def calibrated_note(bias_dps):
+    """The note a live output gets when the start-up calibration is done (its header cannot have the bias)."""
+    return "calibrated: bias " + ", ".join(f"{b:+.4f}" for b in bias_dps) + " deg/s"
+
+
 def say(text):
     """A message for the user (stderr, so that stdout stays data)."""
     print(text, file=sys.stderr)
@@ -52,7 +61,11 @@ def check_outputs(outputs, inputs=(), force=False):
     """
     inputs = {_file_key(p) for p in inputs if p}
     seen = set()
-    for out in (p for p in outputs if p):
+    for out in (p for p in outputs if p is not None):
+        if not out:
+            raise SettingsError("an output file name is empty")
+        if os.path.isdir(out):
+            raise SettingsError(f"{out}: is a folder; give a file name for the output")
         key = _file_key(out)
         if key in inputs:
             raise SettingsError(f"{out}: is an input of this command; write the output to another file")
@@ -183,21 +196,39 @@ def add_filter_arguments(parser):
 
 
 def make_filter(args, sample_rate_hz):
+    """The GyroFilter of the filter options; ``--set calibration_s=S`` is ``--calibration-s S``."""
     settings = dict(_parse_setting(text) for text in args.set)
+    calibration_s = args.calibration_s
+    if "calibration_s" in settings:
+        if calibration_s is not None:
+            raise SettingsError("--set calibration_s and --calibration-s both given; give one")
+        calibration_s = settings.pop("calibration_s")
+    if calibration_s is not None and args.calibration:
+        raise SettingsError(f"--calibration {args.calibration} replaces the start-up calibration, so a calibration "
+                            "window (--calibration-s) has nothing to do; give one of them")
     if args.temp_model:
         settings["temp_coefficient_dps_per_c"] = temperature_coefficients(args.temp_model)
-    return GyroFilter(sample_rate_hz, args.calibration_s, preset=args.preset, calibration=args.calibration, **settings)
+    return GyroFilter(sample_rate_hz, calibration_s, preset=args.preset, calibration=args.calibration, **settings)
+
+
+#: what --set cannot set, and where it comes from instead
+_NOT_SETTINGS = {"sample_rate_hz": "the sample rate comes from the recording or source (--sample-rate-hz where a command takes one)",
+                 "calibration": "use --calibration JSON"}
 
 
 def _parse_setting(text):
-    """'name=value' -> (name, value); the value is read as JSON (numbers, true/false, lists), else kept as text."""
+    """'name=value' -> (name, value); the value is read as JSON (numbers, true/false, lists), else
+    kept as text; numbers separated by commas (0.01,0.02,0) are a list."""
     name, sep, value = text.partition("=")
+    name = name.strip()
     if not sep or not name:
         raise SettingsError(f"--set {text!r}: expected NAME=VALUE")
-    try:
-        return name.strip(), json.loads(value)
-    except json.JSONDecodeError:
-        return name.strip(), value
+    if name in _NOT_SETTINGS:
+        raise SettingsError(f"--set {name}: not a filter setting; {_NOT_SETTINGS[name]}")
+    for candidate in (value, f"[{value}]" if "," in value else None):
+        with contextlib.suppress(json.JSONDecodeError, TypeError):
+            return name, json.loads(candidate)
+    return name, value
 
 
 def temperature_coefficients(path):
@@ -220,10 +251,14 @@ def check_temperature(filt, available, where):
         raise SettingsError(f"{where} has no temperature (temp column), which --temp-model needs")
 
 
-def save_calibration(args, filt):
-    if args.save_calibration and filt.calibration is not None:
-        filt.calibration.save(args.save_calibration)
-        say(f"saved the calibration to {args.save_calibration}")
+def save_calibration(path, filt, outputs):
+    """Write ``filt``'s calibration to ``path`` (``--save-calibration``) through :func:`replacing`
+    entered on the ExitStack ``outputs``, so that it lands with the command's other outputs or
+    not at all. Returns whether there was one to save."""
+    if not path or filt.calibration is None:
+        return False
+    filt.calibration.save(outputs.enter_context(replacing(path)))
+    return True
 
 
 def print_summary(path, head, filt, raw, filtered, calibration_from=None, smoothed=False):
@@ -249,7 +284,8 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None, smooth
         ratio = _number(raw_std[a] / f_std[a], 8, decimals=2) + "x" if f_std[a] > 0 else f"{'n/a':>9}"
         print(f"  {name}    {_number(raw.mean[a], 9, sign=True)}  {_number(raw_std[a], 9)}  {_number(filtered.mean[a], 9, sign=True)}"
               f"  {_number(f_std[a], 9)}  {ratio}  {int(filt.rejected[a]):8d}")
-    print("  (deg/s; raw = the samples after the calibration window that the filter consumed; n/a = undefined)")
+    print("  (deg/s; raw = the samples after the calibration window that the filter consumed, bias included;\n"
+          "   filt = the filtered rows, bias removed; n/a = undefined)")
 
 
 def _number(value, width, sign=False, decimals=4):

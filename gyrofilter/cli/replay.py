@@ -73,17 +73,23 @@ def run(args):
                         head.column(chunk, "temp") if "temp" in head.names else None, args.realtime)
         _refuse_nothing_filtered(path, head, filt)
         replay.finish()
+        replay.close()
+        # every output goes through replacing(): all land when the command succeeds, none when it fails
+        if args.plot:
+            from ..plots import plot_filtered
+
+            plot_filtered(outputs.enter_context(common.replacing(args.plot)), replay.raw_envelope, replay.filtered_envelope,
+                          title=f"{path} (raw minus start-up bias)")
+        saved = common.save_calibration(args.save_calibration, filt, outputs)
     common.print_warnings(head.warnings)
     warn_about_gaps(head, "the filter treats the samples as uniform", common.say_warning)
     with contextlib.redirect_stdout(sys.stderr) if args.realtime else contextlib.nullcontext():  # stdout has the rows
         common.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
-    common.save_calibration(args, filt)
+    if saved:
+        common.say(f"saved the calibration to {args.save_calibration}")
     if args.out:
         common.say(f"wrote {replay.filtered.count} filtered rows to {args.out}")
     if args.plot:
-        from ..plots import plot_filtered
-
-        plot_filtered(args.plot, replay.raw_envelope, replay.filtered_envelope, title=f"{path} (raw minus start-up bias)")
         common.say(f"drew {args.plot}")
     return 0
 
@@ -158,11 +164,14 @@ class _Replay:
             delay = self._wall_start + filt.samples_in / rate_hz - time.monotonic()
             if delay > 0 and self.stdout_open:
                 time.sleep(delay)
+            calibrating = filt.calibrating
             row = filt.update(sample, temp)
+            if calibrating and not filt.calibrating:  # the bias the --out header has, as run notes it
+                self.print_rows(f"# {common.calibrated_note(filt.bias_dps)}")
             if row is not None:  # a row comes out when its block's last sample, this one, goes in
                 rows.append(row)
                 t_rows.append(t)
-                self.print_rows(f"{t:.10g},{row[0]:.6f},{row[1]:.6f},{row[2]:.6f}")
+                self.print_rows(common.ROW_FORMAT % (t, *row))
         return np.array(t_rows, dtype=float), np.array(rows).reshape(-1, 3)
 
     def print_rows(self, text):

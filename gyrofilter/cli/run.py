@@ -8,6 +8,7 @@ CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0). A run that fa
 first filtered row (the device failing, the calibration refused because the sensor moved, any
 error) removes its --out file, so that the same command can be run again.
 """
+import contextlib
 import sys
 import time
 
@@ -43,7 +44,7 @@ class _TextOut:
 
     def write(self, rows):
         self.rows_written += len(rows)
-        self.stream.write("".join("%.10g,%.9g,%.9g,%.9g\n" % tuple(r) for r in rows.tolist()))
+        self.stream.write("".join(common.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
 
     def note(self, text):
         self.stream.write(f"# {text}\n")
@@ -91,7 +92,7 @@ def _run(args, source):
     columns = ["t", "gx", "gy", "gz"]
     if args.out:
         live.create_folder_of(args.out)
-        writer = RecordingWriter(args.out, out_header, columns, formats=["%.10g", "%.9g", "%.9g", "%.9g"], flush_interval_s=None)
+        writer = RecordingWriter(args.out, out_header, columns, formats=common.ROW_FORMAT.split(","), flush_interval_s=None)
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = live.LiveLoop(source, args.duration)
@@ -108,7 +109,7 @@ def _run(args, source):
                     temps = None if temp_idx is None else rows[:, temp_idx]
                     t_out, out = filt.filter_timed(source.gyro_dps(rows), rows[:, t_idx], temps)
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
-                        writer.note("calibrated: bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s")
+                        writer.note(common.calibrated_note(filt.bias_dps))
                     if len(out):
                         writer.write(np.column_stack([t_out, out]))
                 now = time.monotonic()
@@ -122,7 +123,10 @@ def _run(args, source):
             status.end()
             for text in loop.pop_notes():
                 writer.note(text)
-        common.save_calibration(args, filt)
+        with contextlib.ExitStack() as outputs:  # the live output stays even if this fails: its rows are the data
+            saved = common.save_calibration(args.save_calibration, filt, outputs)
+        if saved:
+            common.say(f"saved the calibration to {args.save_calibration}")
     except BaseException:
         if removed := live.close_output(writer, True, "filtered row"):
             common.say(f"gyrofilter run: {removed}")
