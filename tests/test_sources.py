@@ -249,6 +249,24 @@ def test_unseeded_simulation_records_a_seed_that_repeats_it():
     np.testing.assert_array_equal(_drain(a)[0], _drain(b)[0])
 
 
+@pytest.mark.parametrize("spec, words", [
+    ("mpu6050:rate=0", ["source 'mpu6050:rate=0': rate must be", "(0, 100000]"]),
+    ("mpu6050:bus=1,range=300", ["range=300 is not an MPU6050 full scale"]),
+    ("sim:seed=-1", ["source 'sim:seed=-1'", "seed must be an integer >= 0"]),
+    ("sim,rate=-3", ["source 'sim,rate=-3'", "rate must be"]),
+    ("serial:/dev/null,baud=-5", ["baud rate must be a whole number > 0", "got -5"]),
+])
+def test_an_openers_error_names_the_source_and_its_keys(spec, words):
+    """A value the parser accepts but the source refuses is told in the SOURCE text's terms,
+    before any device is touched (no dialout advice for a bad baud rate)."""
+    with pytest.raises(SettingsError) as info:
+        open_source(spec)
+    text = str(info.value)
+    for word in words:
+        assert word in text, text
+    assert "rate_hz" not in text and "range_dps" not in text and "dialout" not in text
+
+
 def test_simulation_model_errors_are_settings_errors(tmp_path):
     bad = tmp_path / "m.json"
     bad.write_text('{"sample_rate_hz": 100, "axes": {"w": {}}}')

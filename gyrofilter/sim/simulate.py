@@ -272,10 +272,15 @@ def _root_seed(seed, rng):
             raise SettingsError(f"simulate: rng must be a numpy.random.Generator, got {type(rng).__name__}")
         return np.random.SeedSequence(rng.integers(0, 2**63, size=4))
     if seed is not None:
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise SettingsError(f"simulate: seed must be an integer >= 0, got {plain(seed)}")
-        return np.random.SeedSequence(int(seed))
+        return np.random.SeedSequence(check_seed(seed))
     return np.random.SeedSequence()
+
+
+def check_seed(seed):
+    """``seed`` as an int, or SettingsError: a seed is an integer >= 0 (numpy's SeedSequence)."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise SettingsError(f"simulate: seed must be an integer >= 0, got {plain(seed)}")
+    return int(seed)
 
 
 def _stream(root, *key):

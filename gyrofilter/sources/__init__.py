@@ -36,6 +36,7 @@ Device libraries (smbus2, pyserial) are imported only when such a source is open
 from __future__ import annotations
 
 import os
+import re
 
 from ..errors import SettingsError
 
@@ -197,6 +198,22 @@ def open_source(spec: str, **defaults):
     for key, value in defaults.items():
         if value is not None and key in accepted and key not in kwargs:
             kwargs[key] = value
+    try:
+        return _open(kind, kwargs)
+    except SettingsError as exc:
+        raise SettingsError(_in_source_terms(str(exc), spec.strip(), kind)) from None
+
+
+def _in_source_terms(message, spec, kind):
+    """An opener's SettingsError in the terms of the SOURCE text: prefixed with it, and the
+    keyword names of the keys it gives replaced by those keys (``rate_hz`` -> ``rate``)."""
+    for key, (_, name, _) in KINDS[kind][1].items():
+        if name != key and re.search(rf"(^|[,:])\s*{key}\s*=", spec, re.IGNORECASE):
+            message = re.sub(rf"\b{name}\b", key, message)
+    return message if message.startswith("source ") else f"source {spec!r}: {message}"
+
+
+def _open(kind, kwargs):
     if kind == "mpu6050":
         from .mpu6050 import open_mpu6050
 

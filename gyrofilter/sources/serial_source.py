@@ -32,6 +32,7 @@ raise except an unreadable first header or a header that changes the units mid-s
 """
 from __future__ import annotations
 
+import numbers
 import re
 import time
 import warnings
@@ -473,6 +474,8 @@ class SerialSource(Source):
     def __init__(self, port, baudrate=115200, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None,
                  header_timeout_s=5.0, *, serial_port=None, clock=time.monotonic):
         self.port_name = str(port)
+        if isinstance(baudrate, bool) or not isinstance(baudrate, numbers.Integral) or baudrate <= 0:
+            raise SettingsError(f"{self.port_name}: baud rate must be a whole number > 0 (bits per second, e.g. 115200), got {baudrate!r}")
         self._parser = LineParser(gyro_unit, lsb_per_dps, sample_rate_hz, where=self.port_name)
         self._ended = None
         self._disconnected = False

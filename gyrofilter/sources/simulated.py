@@ -75,8 +75,8 @@ class SimulatedSource(Source):
 
     def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
                  clock=time.monotonic, sleep=time.sleep):
-        from ..sim.simulate import (draw_seed, load_model, recording_columns, recording_header, simulate_chunks,
-                                    validate_model)
+        from ..sim.simulate import (check_seed, draw_seed, load_model, recording_columns, recording_header,
+                                    simulate_chunks, validate_model)
 
         if model is None or model == "":
             model, self.model_name = json.loads(json.dumps(DEFAULT_MODEL)), "default MPU6050-like model"
@@ -90,9 +90,7 @@ class SimulatedSource(Source):
             raise SettingsError(f"sim: {self.model_name}: {exc}") from None
         if duration_s is not None and (not math.isfinite(duration_s) or duration_s <= 0):
             raise SettingsError(f"sim: duration must be > 0 s, got {duration_s!r}")
-        if seed is None:
-            seed = draw_seed()
-        self.seed = int(seed)
+        self.seed = draw_seed() if seed is None else check_seed(seed)
         self.sample_rate_hz, self.gyro_unit = spec["sample_rate_hz"], spec["gyro_unit"]
         self.lsb_per_dps = spec["lsb_per_dps"] if self.gyro_unit == "lsb" else None
         self.duration_s = UNLIMITED_S if duration_s is None else float(duration_s)
