@@ -235,3 +235,30 @@ def test_record_creates_missing_folders(tmp_path):
     out = tmp_path / "new" / "folder" / "rec.csv.gz"
     assert main(["record", "--source", "sim:seed=1,realtime=0,duration=1", "--out", str(out)]) == 0
     assert len(read_recording(out)) == 100
+
+
+def test_quiet_keeps_the_status_line_off_a_terminal(tmp_path):
+    """The status line shows on a terminal (a real pseudo-terminal here) unless --quiet."""
+    seen = {}
+    for extra in ([], ["--quiet"]):
+        primary, secondary = os.openpty()
+        out = tmp_path / f"rec{len(extra)}.csv"
+        cmd = [sys.executable, "-m", "gyrofilter", "record", "--source", "sim:realtime=1,seed=1,rate=200",
+               "--duration", "2.5", "--out", str(out), *extra]
+        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=secondary, timeout=60)
+        os.close(secondary)
+        chunks = []
+        while True:
+            try:
+                data = os.read(primary, 4096)
+            except OSError:  # EIO: the terminal's other end is closed and drained
+                break
+            if not data:
+                break
+            chunks.append(data)
+        os.close(primary)
+        assert proc.returncode == 0
+        seen[bool(extra)] = b"".join(chunks).decode(errors="replace")
+        assert len(read_recording(out)) == 500
+    assert "samples/s (nominal 200)" in seen[False]
+    assert "samples/s" not in seen[True]

@@ -28,7 +28,9 @@ def add_arguments(parser):
     live.add_source_arguments(parser)
     parser.add_argument("--out", required=True, metavar="FILE", help="recording to write (" + common.RECORDING_FILE_HELP + ")")
     common.add_force_argument(parser)
-    parser.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")
+    shown = parser.add_mutually_exclusive_group()
+    shown.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")
+    shown.add_argument("--quiet", action="store_true", help="no status line, even on a terminal (as run --quiet)")
 
 
 def recording_header(source, spec):
@@ -72,7 +74,7 @@ def _record(args, source, RecordingWriter):
     header = recording_header(source, args.source)
     columns = list(source.columns)
     loop = live.LiveLoop(source, args.duration)
-    status = live.Status(args.progress or sys.stderr.isatty(), loop.sample_rate_hz)
+    status = live.Status(args.progress or (sys.stderr.isatty() and not args.quiet), loop.sample_rate_hz)
     wall0 = time.monotonic()
     writer = RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None)
     try:
