@@ -197,3 +197,33 @@ def test_a_header_only_recording_is_one_line_naming_the_file(tmp_path, capsys):
     path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n")
     assert main(["allan", str(path)]) == 2
     _assert_one_line_error(capsys, str(path), "no samples (the file has a header only)")
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_moving_axis_is_analysed_with_a_warning_and_a_still_one_without(tmp_path, capsys, seed):
+    """allan (like gap) says when an axis moves: a slow turn of a drawn size on a drawn axis is
+    named, the still axes and the bundled static logs are not."""
+    rng = np.random.default_rng(seed)
+    n, fs = 6000, 100.0
+    g = np.array([-3.3, 1.1, -0.5]) + rng.normal(0, 0.1, (n, 3))
+    axis = int(rng.integers(3))
+    amplitude = float(rng.uniform(3.0, 40.0))
+    g[:, axis] += amplitude * np.sin(2 * np.pi * rng.uniform(0.05, 0.5) * np.arange(n) / fs)
+    path = _write(tmp_path / "moving.csv", g)
+    assert main(["allan", path]) == 0
+    err = capsys.readouterr().err
+    for i, a in enumerate("xyz"):
+        assert (f"axis {a}: the rate moves by up to" in err) == (i == axis), err
+    assert "does not look static" in err
+
+
+def test_the_bundled_static_logs_look_static():
+    from gyrofilter.analysis.still import not_static, read_axes
+    from support import RECORDINGS
+
+    for path in sorted(RECORDINGS.glob("mpu6050_static_*.csv.gz")):
+        head, series = read_axes(str(path), "xyz")
+        for a, x in series.items():
+            assert not_static(x, head.sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2)) is None, (path.name, a)
+    head, series = read_axes(str(RECORDINGS / "mpu6050_rotate_z_24s.csv.gz"), "z")
+    assert "does not look static" in not_static(series["z"], head.sample_rate_hz, 0.1)

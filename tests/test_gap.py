@@ -420,3 +420,13 @@ def test_an_axis_that_does_not_close_gets_a_note_naming_the_feature(key, j, z, s
     note = _still_departs("z", 4.85, deps, taus, bands)
     assert note.startswith(f"axis z: after extension D = 4.85, above {OUTSIDE_NULL_D:g}")
     assert says in note
+
+
+def test_a_moving_axis_gets_a_note_and_the_still_ones_none():
+    rng = np.random.default_rng(31)
+    n, fs = 30000, 100.0
+    g = np.array([-3.3, 1.1, -0.5]) + rng.normal(0, 0.1, (n, 3))
+    g[:, 1] += 12.0 * np.sin(2 * np.pi * 0.1 * np.arange(n) / fs)
+    report = analyse_gap(Recording.from_dps(g, fs), seed=0, n_sims=4)
+    moving = [note for note in report["notes"] if "does not look static" in note]
+    assert len(moving) == 1 and moving[0].startswith("axis y: the rate moves by up to"), report["notes"]

@@ -332,10 +332,6 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
                     "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
 
 
-#: block-mean excursion (deg/s) beyond which a recording is called not static
-STATIC_LIMIT_DPS = 1.0
-
-
 def _axis_dps(rec, i):
     """Axis ``i`` of ``rec.gyro_dps``, converted from its column when asked (the column
     itself for ``gyro_unit: dps``): the analysis never holds the three axes in deg/s at once."""
@@ -447,14 +443,12 @@ class _GapRun:
 
 def _static_notes(run):
     """A note per axis whose block means move more than a still gyro's would."""
+    from .still import not_static
+
     for i, a in enumerate(AXES):
-        y, length = det.block_means(_axis_dps(run.rec, i), 512)
-        excursion = float(np.max(np.abs(y - np.median(y))))
-        white_block = run.base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(run.fs / length)
-        if excursion > max(STATIC_LIMIT_DPS, 8 * white_block):
-            run.report["notes"].append(
-                f"axis {a}: the rate moves by up to {excursion:.3g} deg/s (averages over {length / run.fs:.2g} s): the recording "
-                "does not look static; the analysis models a still gyro, so its findings describe the motion")
+        moved = not_static(_axis_dps(run.rec, i), run.fs, run.base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(run.fs))
+        if moved:
+            run.report["notes"].append(f"axis {a}: {moved}; the analysis models a still gyro, so its findings describe the motion")
 
 
 def _baseline_spread(run):

@@ -6,13 +6,39 @@ The one path from a file to the Allan results of ``gyrofilter allan``, ``gyrofil
 a fleet run (:mod:`gyrofilter.analysis.fleet`). Warnings go to the caller's ``warn(text)``;
 nothing here prints.
 """
+import math
+
 import numpy as np
 
 from ..errors import RecordingError
 from ..recording import collect_columns, iter_recording, warn_about_gaps
 from ..units import to_dps
 from .allan import MIN_CLUSTERS, AllanInputError
+from .detectors.common import block_means
 from .noise_model import GROSS_LIMIT_DPS, GROSS_Z, characterise_axis, gross_errors
+
+#: block-mean excursion (deg/s) beyond which a recording is called not static
+STATIC_LIMIT_DPS = 1.0
+#: the block means of the stillness check: at most this many blocks over the record
+STATIC_BLOCKS = 512
+
+
+def not_static(x_dps, sample_rate_hz, white_std_dps):
+    """Why a still gyro's record ``x_dps`` (deg/s) looks moved, or None when it looks still.
+
+    The means of at most 512 consecutive blocks of L samples; the largest distance of one
+    from their median is the excursion. A still gyro's block means scatter by its white noise
+    sigma / sqrt(L) (``white_std_dps``: the per-sample sigma, deg/s) plus slow bias wander;
+    more than max(1 deg/s, 8 sigma / sqrt(L)) is motion (or a bias far beyond any MEMS gyro's
+    instability)."""
+    y, length = block_means(np.asarray(x_dps, dtype=float), STATIC_BLOCKS)
+    if y.size == 0:
+        return None
+    excursion = float(np.max(np.abs(y - np.median(y))))
+    if excursion <= max(STATIC_LIMIT_DPS, 8 * white_std_dps / math.sqrt(length)):
+        return None
+    return (f"the rate moves by up to {excursion:.3g} deg/s (averages over {length / sample_rate_hz:.2g} s): "
+            "the recording does not look static")
 
 
 def read_axes(path, axes):
@@ -84,6 +110,13 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
         warn(text)
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
+    for a in axes:
+        x = series[a]
+        with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: check_finite says so
+            moved = not_static(x, head.sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0)
+        if moved:
+            warn(f"{path}: axis {a}: {moved}; the Allan deviation of a moving gyro describes the motion, "
+                 "not the sensor's noise")
     results = {}
     for a in axes:
         if progress:
