@@ -85,18 +85,33 @@ class Calibration:
             raise CalibrationError(f"{path}: cannot read the calibration file ({exc.strerror or exc})") from None
         except json.JSONDecodeError as exc:
             raise CalibrationError(f"{path}: not a calibration JSON file ({exc.msg} at line {exc.lineno})") from None
-        try:
-            bias = tuple(float(v) for v in data["bias_dps"])
-            noise = tuple(float(v) for v in data["noise_std_dps"])
-            temp = None if data.get("temp_c") is None else float(data["temp_c"])
-            cal = cls(bias, noise, int(data["samples"]), float(data["sample_rate_hz"]), temp)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise CalibrationError(f"{path}: calibration file lacks or mangles {exc}") from None
-        if len(bias) != 3 or len(noise) != 3 or not all(map(math.isfinite, bias + noise)):
-            raise CalibrationError(f"{path}: bias_dps and noise_std_dps must each hold 3 finite numbers")
-        if temp is not None and not math.isfinite(temp):
-            raise CalibrationError(f"{path}: temp_c must be a finite number")
-        return cal
+        except UnicodeDecodeError:
+            raise CalibrationError(f"{path}: not a calibration JSON file (not UTF-8 text)") from None
+        if not isinstance(data, dict):
+            raise CalibrationError(f"{path}: not a calibration JSON file (expected an object with bias_dps, noise_std_dps, ...)")
+        missing = [k for k in ("bias_dps", "noise_std_dps", "samples", "sample_rate_hz") if k not in data]
+        if missing:
+            raise CalibrationError(f"{path}: the calibration lacks {', '.join(missing)}")
+
+        def numbers(key, count, bound=""):
+            """data[key] as ``count`` finite numbers; ``bound``: ">= 0", "> 0" or "" (any)."""
+            value = data[key]
+            items = value if isinstance(value, list) else [value]
+            ok = (len(items) == count and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items)
+                  and all(math.isfinite(v) and {"": True, ">= 0": v >= 0, "> 0": v > 0}[bound] for v in items))
+            if not ok:
+                what = f"{count} finite numbers" if count > 1 else "a finite number"
+                raise CalibrationError(f"{path}: {key} must be {what}{' ' + bound if bound else ''}, got {json.dumps(value)}")
+            return tuple(float(v) for v in items)
+
+        bias = numbers("bias_dps", 3)
+        noise = numbers("noise_std_dps", 3, ">= 0")
+        samples, = numbers("samples", 1, "> 0")
+        if samples != int(samples):
+            raise CalibrationError(f"{path}: samples must be a whole number, got {json.dumps(data['samples'])}")
+        rate, = numbers("sample_rate_hz", 1, "> 0")
+        temp = None if data.get("temp_c") is None else numbers("temp_c", 1)[0]
+        return cls(bias, noise, int(samples), rate, temp)
 
 
 def white_noise_std(window_dps) -> np.ndarray:

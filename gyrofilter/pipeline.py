@@ -586,7 +586,8 @@ def _check_calibration_rate(cal, sample_rate_hz, name):
     differs with the rate. Within 5 % (a logger's rate drifts around its nominal one) it stands."""
     if abs(cal.sample_rate_hz - sample_rate_hz) > CALIBRATION_RATE_TOLERANCE * sample_rate_hz:
         raise SettingsError(f"{name} was made at {cal.sample_rate_hz:g} Hz and this filter runs at "
-                            f"{sample_rate_hz:g} Hz: its noise level does not hold at another rate; calibrate at this rate")
+                            f"{sample_rate_hz:g} Hz, more than {CALIBRATION_RATE_TOLERANCE:.0%} apart: its noise level "
+                            "does not hold at another rate; calibrate at this rate")
 
 
 def _sample3(sample):

@@ -86,6 +86,23 @@ def test_save_load_round_trip_and_bad_files(tmp_path):
     path.write_text(json.dumps({"bias_dps": [1, 2], "noise_std_dps": [1, 1, 1], "samples": 3, "sample_rate_hz": 100}))
     with pytest.raises(CalibrationError, match="3 finite numbers"):
         Calibration.load(path)
+    good = {"bias_dps": [1, 2, 3], "noise_std_dps": [0.1, 0.1, 0.1], "samples": 200, "sample_rate_hz": 100}
+    for bad, message in (([], "expected an object"), ({**good, "sample_rate_hz": "abc"}, 'sample_rate_hz must be a finite number > 0, got "abc"'),
+                         ({**good, "noise_std_dps": [0.1, -0.1, 0.1]}, "noise_std_dps must be 3 finite numbers >= 0"),
+                         ({**good, "bias_dps": [1, "x", 3]}, "bias_dps must be 3 finite numbers, got"),
+                         ({**good, "samples": 2.5}, "samples must be a whole number"),
+                         ({**good, "sample_rate_hz": 0}, "sample_rate_hz must be a finite number > 0, got 0"),
+                         ({k: v for k, v in good.items() if k != "samples"}, "lacks samples"),
+                         ({**good, "temp_c": "warm"}, "temp_c must be a finite number")):
+        path.write_text(json.dumps(bad))
+        with pytest.raises(CalibrationError) as info:
+            Calibration.load(path)
+        assert str(info.value).startswith(f"{path}: ") and message in str(info.value), (bad, str(info.value))
+    path.write_bytes(b"\x1f\x8b\x08binary")
+    with pytest.raises(CalibrationError, match="not UTF-8 text"):
+        Calibration.load(path)
+    path.write_text(json.dumps(good))
+    assert Calibration.load(path) == Calibration((1.0, 2.0, 3.0), (0.1, 0.1, 0.1), 200, 100.0)
 
 
 def test_a_missing_calibration_file_is_a_calibration_error_naming_it(tmp_path):

@@ -137,6 +137,11 @@ def test_set_takes_calibration_s_and_lists_and_refuses_what_has_its_own_option(t
     out = tmp_path / "t.csv"
     assert main(["replay", str(src), "--out", str(out), "--set", "temp_coefficient_dps_per_c=0.01,0.02,0"]) == 0
     assert '"temp_coefficient_dps_per_c":[0.01,0.02,0]' in read_recording(out).header["filter_settings"]
+    assert main(["replay", str(src), "--preset", "paper", "--calibration-s", "0"]) == 0
+    assert "no calibration, so no bias removed" in capsys.readouterr().out
+    for spelling in ("True", "true"):  # Python's spelling, as the settings' errors print it, and JSON's
+        assert main(["replay", str(src), "--out", str(out), "--force", "--set", f"hold={spelling}"]) == 0
+        assert '"hold":true' in read_recording(out).header["filter_settings"]
     capsys.readouterr()
     cal = tmp_path / "cal.json"
     assert main(["replay", str(src), "--save-calibration", str(cal)]) == 0
@@ -144,7 +149,11 @@ def test_set_takes_calibration_s_and_lists_and_refuses_what_has_its_own_option(t
                            (["--set", "sample_rate_hz=50"], "comes from the recording"),
                            (["--set", "calibration=x.json"], "use --calibration JSON"),
                            (["--set", "calibration_s=abc"], "calibration_s='abc'"),
-                           (["--calibration", str(cal), "--calibration-s", "1"], "give one of them")):
+                           (["--calibration", str(cal), "--calibration-s", "1"], "give one of them"),
+                           (["--calibration", str(cal), "--set", "calibration_s=1"], "--set calibration_s"),
+                           (["--set", "temp_coefficient_dps_per_c=0.01", "--temp-model", str(cal)], "both give the temperature"),
+                           (["--preset", "paper", "--calibration-s", "0", "--save-calibration", str(tmp_path / "c0.json")],
+                            "no calibration to save")):
         capsys.readouterr()
         assert main(["replay", str(src), *extra]) == 2, extra
         err = capsys.readouterr().err

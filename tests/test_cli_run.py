@@ -361,6 +361,12 @@ def test_run_that_stops_inside_the_calibration_says_nothing_was_filtered(tmp_pat
     path = tmp_path / "short.csv"
     path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n"
                     + "".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(50)))
-    assert main(["run", "--source", f"replay:{path}", "--quiet"]) == 0
+    assert main(["run", "--source", f"replay:{path}", "--quiet"]) == 2  # as replay: an error, nothing filtered
     err = capsys.readouterr().err
     assert "50 samples in, 0 filtered rows out" in err and "nothing filtered: it stopped inside the start-up calibration window (2 s)" in err
+    out = tmp_path / "out.csv"
+    assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out)]) == 2
+    assert not out.exists() and f"removed {out}: no filtered row was written" in capsys.readouterr().err
+    assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out), "--save-calibration", str(tmp_path / "c.json")]) == 2
+    err = capsys.readouterr().err
+    assert "no calibration to save" in err and not out.exists() and not (tmp_path / "c.json").exists()

@@ -255,6 +255,7 @@ def test_unseeded_simulation_records_a_seed_that_repeats_it():
     ("sim:seed=-1", ["source 'sim:seed=-1'", "seed must be an integer >= 0"]),
     ("sim,rate=-3", ["source 'sim,rate=-3'", "rate must be"]),
     ("serial:/dev/null,baud=-5", ["baud rate must be a whole number > 0", "got -5"]),
+    ("serial:/dev/null,header_timeout=-1", ["header_timeout must be a number of seconds in (0, 3600]", "got -1.0"]),
 ])
 def test_an_openers_error_names_the_source_and_its_keys(spec, words):
     """A value the parser accepts but the source refuses is told in the SOURCE text's terms,

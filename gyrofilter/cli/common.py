@@ -205,10 +205,17 @@ def make_filter(args, sample_rate_hz):
         calibration_s = settings.pop("calibration_s")
     if calibration_s is not None and args.calibration:
         raise SettingsError(f"--calibration {args.calibration} replaces the start-up calibration, so a calibration "
-                            "window (--calibration-s) has nothing to do; give one of them")
+                            "window (--calibration-s or --set calibration_s) has nothing to do; give one of them")
     if args.temp_model:
+        if "temp_coefficient_dps_per_c" in settings:
+            raise SettingsError("--temp-model and --set temp_coefficient_dps_per_c both give the temperature "
+                                "coefficients; give one")
         settings["temp_coefficient_dps_per_c"] = temperature_coefficients(args.temp_model)
-    return GyroFilter(sample_rate_hz, calibration_s, preset=args.preset, calibration=args.calibration, **settings)
+    filt = GyroFilter(sample_rate_hz, calibration_s, preset=args.preset, calibration=args.calibration, **settings)
+    if args.save_calibration and filt.calibration is None and filt.settings.calibration_s == 0:
+        raise SettingsError(f"--save-calibration {args.save_calibration}: a calibration window of 0 s makes no "
+                            "calibration to save")
+    return filt
 
 
 #: what --set cannot set, and where it comes from instead
@@ -225,6 +232,8 @@ def _parse_setting(text):
         raise SettingsError(f"--set {text!r}: expected NAME=VALUE")
     if name in _NOT_SETTINGS:
         raise SettingsError(f"--set {name}: not a filter setting; {_NOT_SETTINGS[name]}")
+    if value.strip() in ("True", "False"):  # Python's spelling of a bool, as the settings' errors print it
+        return name, value.strip() == "True"
     for candidate in (value, f"[{value}]" if "," in value else None):
         with contextlib.suppress(json.JSONDecodeError, TypeError):
             return name, json.loads(candidate)
@@ -248,15 +257,20 @@ def temperature_coefficients(path):
 def check_temperature(filt, available, where):
     """Refuse a filter that compensates temperature when ``where`` gives no temperatures."""
     if filt.compensates_temperature and not available:
-        raise SettingsError(f"{where} has no temperature (temp column), which --temp-model needs")
+        raise SettingsError(f"{where} has no temperature (temp column), which temperature compensation "
+                            "(--temp-model or --set temp_coefficient_dps_per_c) needs")
 
 
 def save_calibration(path, filt, outputs):
     """Write ``filt``'s calibration to ``path`` (``--save-calibration``) through :func:`replacing`
     entered on the ExitStack ``outputs``, so that it lands with the command's other outputs or
-    not at all. Returns whether there was one to save."""
-    if not path or filt.calibration is None:
+    not at all. Returns whether it was asked for; SettingsError when there is none to save
+    (the data ended inside the start-up window)."""
+    if not path:
         return False
+    if filt.calibration is None:
+        raise SettingsError(f"--save-calibration {path}: the data ended inside the start-up calibration window, "
+                            "so there is no calibration to save")
     filt.calibration.save(outputs.enter_context(replacing(path)))
     return True
 
@@ -284,8 +298,9 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None, smooth
         ratio = _number(raw_std[a] / f_std[a], 8, decimals=2) + "x" if f_std[a] > 0 else f"{'n/a':>9}"
         print(f"  {name}    {_number(raw.mean[a], 9, sign=True)}  {_number(raw_std[a], 9)}  {_number(filtered.mean[a], 9, sign=True)}"
               f"  {_number(f_std[a], 9)}  {ratio}  {int(filt.rejected[a]):8d}")
+    removed = "bias removed" if cal is not None else "no calibration, so no bias removed"
     print("  (deg/s; raw = the samples after the calibration window that the filter consumed, bias included;\n"
-          "   filt = the filtered rows, bias removed; n/a = undefined)")
+          f"   filt = the filtered rows, {removed}; n/a = undefined)")
 
 
 def _number(value, width, sign=False, decimals=4):

@@ -74,8 +74,7 @@ def run(args):
         if args.report:
             progress("report")
             write_report(report, rec, outputs.enter_context(common.replacing_in(args.report)), seed=args.seed)
-    if args.report:
-        progress(f"wrote {os.path.join(args.report, REPORT_NAME)}")
+    common.say(f"wrote {args.json}" + (f" and {os.path.join(args.report, REPORT_NAME)}" if args.report else ""))
     d = report.get("discrepancy")
     gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}" if d else
             "no discrepancy computed (see the notes)")

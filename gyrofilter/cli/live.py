@@ -214,13 +214,18 @@ class LiveLoop:
         return 0.0 if self.last_t is None else self.last_t - self.first_t + 1.0 / self.sample_rate_hz
 
     def reason(self):
-        if self._signals.received is not None:
+        if self.interrupted:
             return f"stopped by {self._signals.received}"
         if isinstance(self.ended, SourceEnded):
             return f"source ended: {self.ended}"
         if isinstance(self.ended, DeviceError):
             return f"stopped: {self.ended}"
         return self.ended or "stopped"
+
+    @property
+    def interrupted(self):
+        """True when a signal (Ctrl-C, SIGTERM) stopped the loop."""
+        return self._signals.received is not None
 
     def failed(self):
         """True when the device went away or failed (exit status 1)."""

@@ -131,7 +131,8 @@ def _run(args, source):
         if removed := live.close_output(writer, True, "filtered row"):
             common.say(f"gyrofilter run: {removed}")
         raise
-    removed = live.close_output(writer, loop.failed(), "filtered row")
+    nothing = filt.calibrating  # it stopped inside the start-up window: an output without rows goes
+    removed = live.close_output(writer, loop.failed() or nothing, "filtered row")
     reason = loop.reason()
     bias = "" if filt.bias_dps is None else " bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s;"
     print(
@@ -142,7 +143,10 @@ def _run(args, source):
         + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else "")
         + (f"\n  {removed}" if removed else "")
         + ("\n  nothing filtered: it stopped inside the start-up calibration window "
-           f"({filt.settings.calibration_s:g} s)" if filt.calibrating else ""),
+           f"({filt.settings.calibration_s:g} s)" if nothing else ""),
         file=sys.stderr,
     )
-    return live.EXIT_DISCONNECTED if loop.failed() else 0
+    if loop.failed():
+        return live.EXIT_DISCONNECTED
+    # a source that ended by itself before the first row is an error, as in replay; a user's stop is not
+    return 2 if nothing and not loop.interrupted else 0

@@ -75,5 +75,5 @@ def run(args):
     if show:
         print(file=sys.stderr)
     print(f"wrote {args.out}: {n_total} samples at {spec['sample_rate_hz']:g} Hz ({n_total / spec['sample_rate_hz']:g} s), "
-          f"gyro_unit {spec['gyro_unit']}")
+          f"gyro_unit {spec['gyro_unit']}, seed {seed}")
     return 0

@@ -476,6 +476,8 @@ class SerialSource(Source):
         self.port_name = str(port)
         if isinstance(baudrate, bool) or not isinstance(baudrate, numbers.Integral) or baudrate <= 0:
             raise SettingsError(f"{self.port_name}: baud rate must be a whole number > 0 (bits per second, e.g. 115200), got {baudrate!r}")
+        if not (isinstance(header_timeout_s, (int, float)) and 0 < header_timeout_s <= 3600):
+            raise SettingsError(f"{self.port_name}: header_timeout must be a number of seconds in (0, 3600], got {header_timeout_s!r}")
         self._parser = LineParser(gyro_unit, lsb_per_dps, sample_rate_hz, where=self.port_name)
         self._ended = None
         self._disconnected = False
