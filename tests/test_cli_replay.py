@@ -116,8 +116,10 @@ def test_a_calibration_saved_without_temp_model_serves_a_later_temp_model_run(tm
     assert json.loads(cal.read_text())["temp_c"] == pytest.approx(temp[:200].mean())
     model = tmp_path / "model.json"
     model.write_text(json.dumps({"axes": {"y": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": 0.04}]}}}))
-    assert main(["replay", str(src), "--calibration", str(cal), "--temp-model", str(model)]) == 0
-    capsys.readouterr()
+    out = tmp_path / "comp.csv"
+    assert main(["replay", str(src), "--calibration", str(cal), "--temp-model", str(model), "--out", str(out)]) == 0
+    assert "temperature compensated (0, 0.04, 0 deg/s/degC)" in capsys.readouterr().out
+    assert read_recording(out).header["calibration_from"] == str(cal)
     # from a recording without temperatures the saved calibration has none, and the later run says why
     write_recording(tmp_path / "cold.csv", Recording.from_dps(rng.normal(0, 0.1, (1000, 3)), 100.0))
     assert main(["replay", str(tmp_path / "cold.csv"), "--save-calibration", str(tmp_path / "cold.json")]) == 0
@@ -276,7 +278,8 @@ def test_summary_is_readable_for_constant_and_huge_values(tmp_path, capsys):
     raw.add(np.array([[1e150, 1e-3, -4e100], [-1e150, 2e-3, 4e100]]))
     filtered.add(np.array([[1e300, 1e-3, 1.0], [1e300, 1e-3, 1.0]]))
     head = SimpleNamespace(rows=2, sample_rate_hz=100.0, gyro_unit="dps")
-    filt = SimpleNamespace(calibration=None, preset="paper", output_rate_hz=20.0, pending_samples=0, rejected=np.zeros(3))
+    filt = SimpleNamespace(calibration=None, preset="paper", output_rate_hz=20.0, pending_samples=0, rejected=np.zeros(3),
+                           compensates_temperature=False)
     print_summary("huge.csv", head, filt, raw, filtered)
     table = capsys.readouterr().out
     assert max(len(ln) for ln in table.splitlines()) < 100 and "1.41e+150" in table and "+1e+300" in table and "n/a" in table

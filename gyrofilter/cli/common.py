@@ -286,6 +286,8 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None, smooth
         source = f"loaded from {calibration_from}" if calibration_from else f"start-up calibration, {cal.samples} samples"
         print(f"  bias ({source}): " + ", ".join(_number(b, 0, sign=True) for b in cal.bias_dps) + " deg/s")
     how = ", smoothed forward-backward" if smoothed else ""
+    if filt.compensates_temperature:
+        how += ", temperature compensated (" + ", ".join(f"{c:g}" for c in filt.settings.temp_coefficients()) + " deg/s/degC)"
     print(f"  filter: preset {filt.preset}{how}, {filtered.count} output rows at {filt.output_rate_hz:g} Hz")
     if filt.pending_samples:
         print(f"  {filt.pending_samples} trailing sample(s) did not fill a block of {filt.settings.block_len} and produced no output")

@@ -59,7 +59,8 @@ def run(args):
     head = next(chunks)
     filt = common.make_filter(args, head.sample_rate_hz)
     common.check_temperature(filt, "temp" in head.names, path)
-    replay = _Replay(path, head, filt, plot=bool(args.plot), smoother=Smoother(filt) if args.smooth else None)
+    replay = _Replay(path, head, filt, plot=bool(args.plot), smoother=Smoother(filt) if args.smooth else None,
+                     calibration_from=args.calibration)
     with contextlib.ExitStack() as outputs:
         if args.out:
             replay.out_path = outputs.enter_context(common.replacing(args.out))
@@ -112,8 +113,9 @@ class _Replay:
     row (calibration and an unfinished last block left out). With a ``smoother`` the rows are
     passed on by :meth:`finish`, smoothed, with the time stamps collected on the way."""
 
-    def __init__(self, path, head, filt, plot, smoother=None):
+    def __init__(self, path, head, filt, plot, smoother=None, calibration_from=None):
         self.path, self.head, self.filt, self.smoother = path, head, filt, smoother
+        self.calibration_from = calibration_from
         self._row_times = []
         self.raw = RunningMoments(3)
         self.filtered = RunningMoments(3)
@@ -209,6 +211,7 @@ class _Replay:
             **({"smoothed": "forward-backward (two-filter) smoother over the whole recording"} if self.smoother else {}),
             "filter_settings": json.dumps({k: getattr(filt.settings, k) for k in SETTING_NAMES}, separators=(",", ":")),
             "bias_dps": json.dumps(list(filt.bias_dps or ())),
+            **({"calibration_from": self.calibration_from} if self.calibration_from else {}),
             "t_meaning": "time of the last input sample of each block (s)",
         }, filt.output_rate_hz)
 
