@@ -69,7 +69,7 @@ def run(args):
 
 def _run(args, source):
     from .. import __version__
-    from ..recording import RecordingWriter
+    from ..recording import RecordingWriter, dps_header
 
     head = source.header
     cols = source.columns
@@ -78,12 +78,10 @@ def _run(args, source):
     temp_idx = cols.index("temp") if "temp" in cols else None
     common.check_temperature(filt, temp_idx is not None, f"source {args.source}")
     block = filt.settings.block_len
-    out_header = {
-        "sample_rate_hz": f"{filt.output_rate_hz:g}",
-        "gyro_unit": "dps",
+    out_header = dps_header({
         "description": f"gyrofilter {__version__} run: filtered rates, preset {filt.preset}, block of {block} samples; t = time of the block's last sample",
         "live_source": args.source,
-    }
+    }, filt.output_rate_hz)
     for key in ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc",
                 "simulated_seed", "simulated_duration_s", "simulated_model"):
         if key in head:
