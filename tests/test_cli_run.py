@@ -370,3 +370,14 @@ def test_run_that_stops_inside_the_calibration_says_nothing_was_filtered(tmp_pat
     assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out), "--save-calibration", str(tmp_path / "c.json")]) == 2
     err = capsys.readouterr().err
     assert "no calibration to save" in err and not out.exists() and not (tmp_path / "c.json").exists()
+
+
+def test_run_and_replay_write_the_same_output_rate(tmp_path, capsys):
+    """A rate that is not a round number (99.3171 / 5) is written exactly by both commands."""
+    src = tmp_path / "odd.csv"
+    write_recording(src, Recording.from_dps(np.random.default_rng(5).normal(0, 0.1, (600, 3)), 99.3171))
+    outs = {name: tmp_path / f"{name}.csv" for name in ("run", "replay")}
+    assert main(["run", "--source", f"replay:{src}", "--quiet", "--out", str(outs["run"])]) == 0
+    assert main(["replay", str(src), "--out", str(outs["replay"])]) == 0
+    rates = {name: read_recording(path).sample_rate_hz for name, path in outs.items()}
+    assert rates["run"] == rates["replay"] == 99.3171 / 5
