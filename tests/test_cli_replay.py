@@ -198,7 +198,10 @@ def test_all_outputs_land_together_or_none_does(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err
     assert f"{plot2}: No space left on device" in err, err
     assert not (tmp_path / "e").exists() and not (tmp_path / "f").exists()
-    assert main(["replay", str(src), "--out", ""]) == 2 and "empty" in capsys.readouterr().err
+    for option in ("--out", "--plot", "--save-calibration"):  # argparse names the option
+        with pytest.raises(SystemExit) as info:
+            main(["replay", str(src), option, ""])
+        assert info.value.code == 2 and f"argument {option}: an empty name" in capsys.readouterr().err
     assert main(["replay", str(src), "--out", str(tmp_path / "a")]) == 2 and "is a folder" in capsys.readouterr().err
 
 

@@ -29,9 +29,9 @@ def add_arguments(parser):
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
                         help="recording file (format v1, .csv or .csv.gz), sensor still; several files or globs "
                              "with --fleet")
-    parser.add_argument("--json", metavar="OUT", help="write the deviation curves and coefficients as JSON")
-    parser.add_argument("--plot", metavar="OUT.png", help="draw the Allan deviation per axis (needs matplotlib)")
-    parser.add_argument("--kalibr", metavar="OUT.yaml", help="write Kalibr imu.yaml gyroscope noise entries")
+    parser.add_argument("--json", metavar="OUT", type=common.file_name, help="write the deviation curves and coefficients as JSON")
+    parser.add_argument("--plot", metavar="OUT.png", type=common.file_name, help="draw the Allan deviation per axis (needs matplotlib)")
+    parser.add_argument("--kalibr", metavar="OUT.yaml", type=common.file_name, help="write Kalibr imu.yaml gyroscope noise entries")
     parser.add_argument("--axes", default="xyz", help="axes to analyse, a subset of xyz (default xyz)")
     parser.add_argument("--confidence", type=float, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
     parser.add_argument("--min-clusters", type=int, default=MIN_CLUSTERS,

@@ -19,7 +19,7 @@ PAPER_003 = "paper 003 (ADIS16405 z gyro): ADF -110.18; KS and JB reject normali
 def add_arguments(parser):
     parser.add_argument("recording", help="a static recording (format v1); the sensor must not move")
     parser.add_argument("--axis", choices=("x", "y", "z", "all"), default="all", help="axis to analyse (default: all three)")
-    parser.add_argument("--json", metavar="OUT", help="write every number of the analysis to this JSON file")
+    parser.add_argument("--json", metavar="OUT", type=common.file_name, help="write every number of the analysis to this JSON file")
     parser.add_argument("--start-s", type=float, default=None, help="skip the first seconds (e.g. a warm-up or a move; default 0)")
     parser.add_argument("--end-s", type=float, default=None, help="stop at this time in seconds (default: the end)")
     parser.add_argument("--max-n", type=int, default=4, help="highest Pandit-Wu order ARMA(2n, 2n-1) tried (default 4: ARMA(8, 7))")

@@ -22,7 +22,7 @@ EXIT_NOTHING_DONE = 2
 
 
 def add_arguments(parser):
-    parser.add_argument("--fleet", "--out-dir", dest="fleet", metavar="DIR",
+    parser.add_argument("--fleet", "--out-dir", dest="fleet", metavar="DIR", type=common.file_name,
                         help="a fleet run: one report per recording in DIR, named after it, plus fleet.csv and "
                              "fleet.md (needed for more than one recording)")
     parser.add_argument("--jobs", type=int, default=None, metavar="N",

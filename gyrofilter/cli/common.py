@@ -48,6 +48,13 @@ class _SpellingKept(argparse.Action):
         setattr(namespace, self.dest + "_option", option_string)
 
 
+def file_name(text):
+    """argparse type of an output option: any name but an empty one (the error names the option)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty name; give a file or folder name")
+    return text
+
+
 def add_force_argument(parser):
     parser.add_argument("--force", action="store_true", help="overwrite output files that exist (an input is never overwritten)")
 
@@ -61,9 +68,7 @@ def check_outputs(outputs, inputs=(), force=False):
     """
     inputs = {_file_key(p) for p in inputs if p}
     seen = set()
-    for out in (p for p in outputs if p is not None):
-        if not out:
-            raise SettingsError("an output file name is empty")
+    for out in (p for p in outputs if p):
         if os.path.isdir(out):
             raise SettingsError(f"{out}: is a folder; give a file name for the output")
         key = _file_key(out)
@@ -192,7 +197,7 @@ def add_filter_arguments(parser):
                              "(needs a temp column / a source with temperature)")
     parser.add_argument("--calibration-s", type=float, default=None, help="start-up calibration window in seconds (default 2; the sensor must be still)")
     parser.add_argument("--calibration", metavar="JSON", help="use a saved calibration instead of calibrating")
-    parser.add_argument("--save-calibration", metavar="JSON", help="save the start-up calibration to this file")
+    parser.add_argument("--save-calibration", metavar="JSON", type=file_name, help="save the start-up calibration to this file")
 
 
 def make_filter(args, sample_rate_hz):

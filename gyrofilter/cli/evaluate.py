@@ -16,7 +16,7 @@ OUTPUT_NAMES = ("evaluate_table.md", "evaluate.json", "evaluate_pareto.png")
 
 
 def add_arguments(parser):
-    parser.add_argument("--out", metavar="DIR", default="evaluation",
+    parser.add_argument("--out", metavar="DIR", type=common.file_name, default="evaluation",
                         help="directory for evaluate_table.md, evaluate.json and evaluate_pareto.png (default: ./evaluation)")
     parser.add_argument("--recordings", metavar="DIR",
                         help="directory of recordings (default: ./recordings, else the repository's recordings/)")

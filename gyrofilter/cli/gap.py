@@ -21,8 +21,8 @@ from . import batch, common
 def add_arguments(parser):
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
                         help="recording file (format v1, .csv or .csv.gz); several files or globs with --fleet")
-    parser.add_argument("--json", metavar="OUT.json", help="write the gap report (JSON) here (required without --fleet)")
-    parser.add_argument("--report", metavar="DIR", default=None, help="also write a Markdown report with PNG figures to DIR")
+    parser.add_argument("--json", metavar="OUT.json", type=common.file_name, help="write the gap report (JSON) here (required without --fleet)")
+    parser.add_argument("--report", metavar="DIR", type=common.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
     parser.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the simulations (default 0)")
     parser.add_argument("--sims", type=int, default=None, metavar="N",
                         help="baseline simulations (default 24; 12-24 above 200 000 samples per axis)")

@@ -26,7 +26,7 @@ def add_arguments(parser):
         "at least twice a second; Ctrl-C or SIGTERM ends the file cleanly (exit 0)."
     )
     live.add_source_arguments(parser)
-    parser.add_argument("--out", required=True, metavar="FILE", help="recording to write (" + common.RECORDING_FILE_HELP + ")")
+    parser.add_argument("--out", required=True, metavar="FILE", type=common.file_name, help="recording to write (" + common.RECORDING_FILE_HELP + ")")
     common.add_force_argument(parser)
     shown = parser.add_mutually_exclusive_group()
     shown.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")

@@ -35,8 +35,8 @@ OUT_COLUMNS = ["t", "gx", "gy", "gz"]
 
 def add_arguments(parser):
     parser.add_argument("recording", nargs="?", help=f"recording file (format v1, .csv or .csv.gz); default: the bundled {BUNDLED}")
-    parser.add_argument("--out", metavar="FILE", help="write the filtered series as a recording (" + common.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--plot", metavar="PNG", help="draw raw and filtered rates per axis, as min/max bands on long recordings (needs matplotlib)")
+    parser.add_argument("--out", metavar="FILE", type=common.file_name, help="write the filtered series as a recording (" + common.RECORDING_FILE_HELP + ")")
+    parser.add_argument("--plot", metavar="PNG", type=common.file_name, help="draw raw and filtered rates per axis, as min/max bands on long recordings (needs matplotlib)")
     parser.add_argument("--realtime", action="store_true", help="pace the filter at the recording's sample rate and print each filtered row as it is produced "
                                                                     "(stdout is then a recording, format v1; the summary goes to stderr)")
     parser.add_argument("--smooth", action="store_true",

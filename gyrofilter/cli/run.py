@@ -25,7 +25,7 @@ def add_arguments(parser):
         "stdout or to --out, a status line on stderr once per second."
     )
     live.add_source_arguments(parser)
-    parser.add_argument("--out", metavar="FILE", help="write the filtered rates to this recording (" + common.RECORDING_FILE_HELP + ") instead of stdout")
+    parser.add_argument("--out", metavar="FILE", type=common.file_name, help="write the filtered rates to this recording (" + common.RECORDING_FILE_HELP + ") instead of stdout")
     common.add_force_argument(parser)
     parser.add_argument("--quiet", action="store_true", help="no status line")
     common.add_filter_arguments(parser)

@@ -25,7 +25,7 @@ def add_arguments(parser):
     parser.add_argument("--seed", type=int, default=None, metavar="N",
                         help="random seed (same seed, same recording; default: one drawn at random and written in the "
                              "header, simulated_seed, so the run can be repeated)")
-    parser.add_argument("--out", required=True, metavar="FILE", help="output recording (" + common.RECORDING_FILE_HELP + ")")
+    parser.add_argument("--out", required=True, metavar="FILE", type=common.file_name, help="output recording (" + common.RECORDING_FILE_HELP + ")")
     parser.add_argument("--chunk", type=int, default=65536, metavar="N", help="samples per block written (default 65536)")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     common.add_force_argument(parser)
