@@ -40,14 +40,14 @@ def _feed(filt, x, temp, plan):
     rows, ends, i = [], [], 0
     for how, k in plan:
         k = min(k, len(x) - i)
-        t = temp[i : i + k] if filt.compensates_temperature else None
+        t = temp[i : i + k]  # always: without compensation the calibration keeps their mean
         if how == "filter":
             out = filt.filter(x[i : i + k], t)
             rows.extend(out)
             ends.extend(filt.block_end_indices(len(out)))
         else:
             for j in range(i, i + k):
-                row = filt.update(tuple(x[j]), None if t is None else t[j - i])
+                row = filt.update(tuple(x[j]), t[j - i])
                 if row is not None:
                     rows.append(np.array(row))
                     ends.extend(filt.block_end_indices(1))
@@ -65,7 +65,7 @@ pieces = st.lists(st.tuples(st.sampled_from(["filter", "filter", "update"]), st.
 def test_any_chunking_equals_one_call(preset, extra, plan, seed):
     x, temp = _signal(seed)
     whole = GyroFilter(RATE_HZ, preset=preset, **extra)
-    expected = whole.filter(x, temp if whole.compensates_temperature else None)
+    expected = whole.filter(x, temp)
     assert len(expected) == (N - 200) // whole.settings.block_len
     # repeat the plan until every sample is fed
     plan = plan * (N // sum(k for _, k in plan) + 1)
@@ -79,6 +79,7 @@ def test_any_chunking_equals_one_call(preset, extra, plan, seed):
     assert chunked.samples_in == whole.samples_in == N
     assert chunked.pending_samples == whole.pending_samples
     assert chunked.rejected.tolist() == whole.rejected.tolist()
+    assert chunked.calibration.temp_c == whole.calibration.temp_c == pytest.approx(temp[:200].mean())
 
 
 @pytest.mark.parametrize("size", [1, 2, 3, 4, 6, 7, 12, 13])
