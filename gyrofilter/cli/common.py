@@ -22,9 +22,14 @@ RECORDING_FILE_HELP = "recording format v1: CSV text, compressed with gzip when 
 ROW_FORMAT = "%.10g,%.9g,%.9g,%.9g"
 
 
+def bias_text(bias_dps):
+    """The start-up bias as the commands print it: "+0.1234, -0.5678, +0.0012 deg/s"."""
+    return ", ".join(f"{b:+.4f}" for b in bias_dps) + " deg/s"
+
+
 def calibrated_note(bias_dps):
     """The note a live output gets when the start-up calibration is done (its header cannot have the bias)."""
-    return "calibrated: bias " + ", ".join(f"{b:+.4f}" for b in bias_dps) + " deg/s"
+    return "calibrated: bias " + bias_text(bias_dps)
 
 
 def say(text):

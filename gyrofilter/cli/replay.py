@@ -71,7 +71,7 @@ def run(args):
             replay.print_rows("\n".join(lines))
         for chunk in chunks:
             replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in),
-                        head.column(chunk, "temp") if "temp" in head.names else None, args.realtime)
+                        head.column(chunk, "temp"), args.realtime)
         _refuse_nothing_filtered(path, head, filt)
         replay.finish()
         replay.close()

@@ -132,7 +132,7 @@ def _run(args, source):
     nothing = filt.calibrating  # it stopped inside the start-up window: an output without rows goes
     removed = live.close_output(writer, loop.failed() or nothing, "filtered row")
     reason = loop.reason()
-    bias = "" if filt.bias_dps is None else " bias " + ", ".join(f"{b:+.4f}" for b in filt.bias_dps) + " deg/s;"
+    bias = "" if filt.bias_dps is None else f" bias {common.bias_text(filt.bias_dps)};"
     print(
         f"gyrofilter run: {reason}\n"
         f"  {loop.samples} samples in, {writer.rows_written} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
