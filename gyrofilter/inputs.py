@@ -1,0 +1,159 @@
+"""What every reader of user input shares: one reader of numbers and one loader of JSON files.
+
+The rules (docs/formats.md, section 8):
+
+- **Numbers** in text (a recording's header, a ``--set`` value, a SOURCE string) are plain
+  decimal syntax: an optional sign, digits with at most one decimal point, an optional exponent
+  (``12``, ``-0.5``, ``1e-3``, ``.5``). Python's extras are refused: ``0.0_1`` (underscores),
+  ``nan``, ``inf``, ``0x10``, and text longer than :data:`MAX_NUMBER_CHARS`. Every number is
+  finite, and where the caller gives bounds, inside them.
+- **Numbers** in JSON or from Python code (a calibration file, a model, ``update()``) are an int
+  or a float, never a bool, finite (an int too large for a float is refused, not an
+  OverflowError), and inside the caller's bounds.
+- **JSON files** are read at most :data:`MAX_JSON_BYTES` bytes (a larger file or an endless
+  one such as ``/dev/zero`` is refused), must be UTF-8, may nest at most :data:`MAX_JSON_DEPTH`
+  levels, and hold no ``NaN``/``Infinity`` tokens.
+- **Quoting** user text in an error: at most :data:`MAX_QUOTE_CHARS` characters (:func:`quote`).
+"""
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import numpy as np
+
+from .errors import SettingsError
+
+MAX_NUMBER_CHARS = 64
+MAX_JSON_BYTES = 16 * 1024 * 1024
+MAX_JSON_DEPTH = 32
+MAX_QUOTE_CHARS = 80
+
+_DECIMAL = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def quote(text, limit=MAX_QUOTE_CHARS):
+    """``repr(text)`` of at most ``limit`` characters of ``text`` (``...`` and the full length after
+    a cut), for error messages that show what a user wrote."""
+    text = str(text)
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit]!r}... ({len(text)} characters)"
+
+
+def _bounds_text(low, high, low_open, high_open):
+    if low is not None and high is not None:
+        return f"in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+    if low is not None:
+        return f"{'>' if low_open else '>='} {low:g}"
+    return f"{'<' if high_open else '<='} {high:g}"
+
+
+def check_number(value, what, *, low=None, high=None, low_open=False, high_open=False, integer=False,
+                 error=SettingsError):
+    """``value`` (from JSON or Python code) as a float (an int when ``integer``), or ``error`` whose
+    message names ``what``: a bool, a string, None, NaN, +-inf, an int beyond a float's range, a
+    fraction where ``integer`` is asked for, or a value outside [low, high] (open ends with
+    ``low_open``/``high_open``) is refused."""
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+    number = math.nan
+    if ok:
+        try:
+            number = float(value)
+        except OverflowError:
+            ok = False
+    if ok and not math.isfinite(number):
+        ok = False
+    if not ok:
+        shown = quote(value) if isinstance(value, str) else _short(value)
+        raise error(f"{what} must be a finite number{' (a whole number)' if integer else ''}, got {shown}")
+    if integer and not number.is_integer():
+        raise error(f"{what} must be a whole number, got {_short(value)}")
+    below = low is not None and (number <= low if low_open else number < low)
+    above = high is not None and (number >= high if high_open else number > high)
+    if below or above:
+        raise error(f"{what} must be {_bounds_text(low, high, low_open, high_open)}, got {_short(value)}")
+    return int(number) if integer else number
+
+
+def _short(value):
+    """A value for a message, long ints and floats included, at most MAX_QUOTE_CHARS characters."""
+    if isinstance(value, (np.generic,)):
+        value = value.item()
+    text = repr(value)
+    return text if len(text) <= MAX_QUOTE_CHARS else f"{text[:MAX_QUOTE_CHARS]}... ({len(text)} characters)"
+
+
+def parse_number(text, what, *, error=SettingsError, **bounds):
+    """``text`` in plain decimal syntax as a float (see the module's rules), or ``error`` naming
+    ``what``; ``bounds`` as :func:`check_number` takes them (``low``, ``high``, ``integer`` ...)."""
+    stripped = str(text).strip()
+    if len(stripped) > MAX_NUMBER_CHARS or not _DECIMAL.fullmatch(stripped):
+        raise error(f"{what} must be a plain decimal number (like 12, -0.5 or 1e-3), got {quote(text)}")
+    number = float(stripped)
+    if not math.isfinite(number):
+        raise error(f"{what} must be a finite number, got {quote(text)}")
+    return check_number(number, what, error=error, **bounds)
+
+
+def is_plain_number(text) -> bool:
+    """Whether ``text`` is a number in plain decimal syntax (no bounds checked)."""
+    stripped = str(text).strip()
+    return len(stripped) <= MAX_NUMBER_CHARS and _DECIMAL.fullmatch(stripped) is not None
+
+
+def _refuse_constant(name):
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def parse_json(text, what, error=SettingsError):
+    """The JSON document ``text`` (str), or ``error`` naming ``what``: invalid JSON, ``NaN``/
+    ``Infinity`` tokens, or nesting deeper than :data:`MAX_JSON_DEPTH`."""
+    try:
+        doc = json.loads(text, parse_constant=_refuse_constant)
+    except json.JSONDecodeError as exc:
+        raise error(f"{what}: not valid JSON: line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+    except RecursionError:
+        raise error(f"{what}: JSON nested more than {MAX_JSON_DEPTH} levels deep") from None
+    except ValueError as exc:  # NaN/Infinity, or an integer of more digits than Python converts
+        raise error(f"{what}: not valid JSON: {' '.join(str(exc).split())[:MAX_QUOTE_CHARS]}") from None
+    if _depth(doc) > MAX_JSON_DEPTH:
+        raise error(f"{what}: JSON nested more than {MAX_JSON_DEPTH} levels deep")
+    return doc
+
+
+def _depth(doc):
+    """Nesting depth of a parsed JSON document (a scalar is 0), without recursion."""
+    deepest, stack = 0, [(doc, 0)]
+    while stack:
+        node, level = stack.pop()
+        if isinstance(node, dict):
+            node = node.values()
+        elif not isinstance(node, list):
+            continue
+        level += 1
+        deepest = max(deepest, level)
+        if deepest > MAX_JSON_DEPTH:
+            return deepest
+        stack.extend((child, level) for child in node)
+    return deepest
+
+
+def load_json(path, what, error=SettingsError):
+    """The JSON document in the file ``path``, or ``error`` whose message starts with the path and
+    names ``what`` (e.g. "calibration", "model"): unreadable, larger than :data:`MAX_JSON_BYTES`
+    (read no further, so an endless file such as /dev/zero ends at once), not UTF-8, or refused
+    by :func:`parse_json`. The one loader of the JSON files a user hands to gyrofilter."""
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_JSON_BYTES + 1)
+    except OSError as exc:
+        raise error(f"{path}: cannot read the {what} file: {exc.strerror or exc}") from None
+    if len(data) > MAX_JSON_BYTES:
+        raise error(f"{path}: not a {what} file: larger than {MAX_JSON_BYTES // (1024 * 1024)} MiB")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise error(f"{path}: not a {what} file: not UTF-8 text") from None
+    return parse_json(text, f"{path}", error)
