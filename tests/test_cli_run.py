@@ -268,7 +268,7 @@ def test_run_that_fails_in_calibration_leaves_no_file_and_a_rerun_works(tmp_path
     assert main(["run", "--source", str(moved), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert "gyrofilter: error: calibration: the sensor moved" in err and "Traceback" not in err
-    assert f"removed {out}" in err and not out.exists()
+    assert f"{out}: not written, no filtered row was kept" in err and not out.exists()
     still = _still_recording(tmp_path / "still.csv")
     assert main(["run", "--source", str(still), "--out", str(out), "--quiet"]) == 0  # no --force needed
     assert len(read_recording(out)) == (600 - 200) // BLOCK
@@ -293,7 +293,7 @@ def test_device_failing_before_the_first_sample_leaves_no_file(tmp_path, monkeyp
     _failing_after_start(monkeypatch)
     assert main([*command, "--source", "mpu6050:rate=100", "--out", str(out), "--duration", "1"]) == 1
     err = capsys.readouterr().err
-    assert "device error" in err and "INT_STATUS (0x3A)" in err and f"removed {out}" in err
+    assert "device error" in err and "INT_STATUS (0x3A)" in err and f"{out}: not written, no " in err
     assert not out.exists()
     install_mpu6050(monkeypatch, 100)  # the cable fixed: a re-run works without --force
     assert main([*command, "--source", "mpu6050:rate=100", "--out", str(out), "--duration", "3"]) == 0
@@ -366,7 +366,7 @@ def test_run_that_stops_inside_the_calibration_says_nothing_was_filtered(tmp_pat
     assert "50 samples in, 0 filtered rows out" in err and "nothing filtered: it stopped inside the start-up calibration window (2 s)" in err
     out = tmp_path / "out.csv"
     assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out)]) == 2
-    assert not out.exists() and f"removed {out}: no filtered row was written" in capsys.readouterr().err
+    assert not out.exists() and f"{out}: not written, no filtered row was kept" in capsys.readouterr().err
     assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out), "--save-calibration", str(tmp_path / "c.json")]) == 2
     err = capsys.readouterr().err
     assert "no calibration to save" in err and not out.exists() and not (tmp_path / "c.json").exists()
