@@ -4,10 +4,9 @@ The rules (docs/formats.md, section 8):
 
 - **Numbers** in text (a recording's header, a ``--set`` value, a SOURCE string) are plain
   decimal syntax: an optional sign, ASCII digits with at most one decimal point, an optional
-  exponent (``12``, ``-0.5``, ``1e-3``, ``.5``). Python's extras are refused: ``0.0_1`` (underscores),
-  other scripts' digits (``١٢``),
-  ``nan``, ``inf``, ``0x10``, and text longer than :data:`MAX_NUMBER_CHARS`. Every number is
-  finite, and where the caller gives bounds, inside them.
+  exponent (``12``, ``-0.5``, ``1e-3``, ``.5``). Python's extras are refused: ``0.0_1``
+  (underscores), other scripts' digits (``١٢``), ``nan``, ``inf``, ``0x10``, and text longer than
+  :data:`MAX_NUMBER_CHARS`. Every number is finite, and where the caller gives bounds, inside them.
 - **Numbers** in JSON or from Python code (a calibration file, a model, ``update()``) are an int
   or a float, never a bool, finite (an int too large for a float is refused, not an
   OverflowError), and inside the caller's bounds.
