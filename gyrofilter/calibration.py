@@ -18,11 +18,13 @@ stillness the window is a constant plus noise. The check, per axis:
    A window of 3 samples has nothing to compare and is not checked; fewer than 3 cannot
    measure sigma and are refused (the filters need the noise level).
 3. A constant rotation cannot be told from a bias by a gyro alone; a mean beyond
-   ``max_bias_dps`` (default 20 deg/s, the MPU6050 datasheet's initial zero-rate-output
-   tolerance) is refused as implausible for a bias.
+   ``max_bias_dps`` (default :data:`MAX_BIAS_DPS`, 20 deg/s, the MPU6050 datasheet's initial
+   zero-rate-output tolerance) is refused as implausible for a bias; so is a noise level sigma
+   beyond :data:`MAX_NOISE_STD_DPS` and a mean temperature outside ``units.TEMP_RANGE_C``.
 
 The accepted calibration can be saved to and loaded from a small JSON file so that a device
 can skip re-learning (the bias changes between power-ups, so reuse it only for the same run).
+A loaded file is held to the limits of a start-up calibration (:meth:`Calibration.load`).
 """
 from __future__ import annotations
 
@@ -34,10 +36,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import CalibrationError, SettingsError
-from .units import AXES
+from .inputs import check_number, load_json, quote
+from .units import AXES, TEMP_RANGE_C, check_sample_rate_hz
 
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
+MAX_BIAS_DPS = 20.0  # the largest plausible bias (deg/s): the MPU6050's initial zero-rate-output tolerance
+#: the largest plausible white-noise level (deg/s) of a still sensor, as large as the largest bias: the
+#: MPU6050's rate noise is 0.005 deg/s/sqrt(Hz), 0.45 deg/s at its top rate of 8 kHz
+MAX_NOISE_STD_DPS = 20.0
+MIN_SAMPLES = 3  # fewer samples cannot measure the noise
+#: the most samples a calibration window holds: 1e9, beyond an hour (pipeline.MAX_CALIBRATION_S) at
+#: the highest sample rate (units.MAX_SAMPLE_RATE_HZ), 3.6e8
+MAX_SAMPLES = 10**9
 
 
 @dataclass(frozen=True)
@@ -75,43 +86,40 @@ class Calibration:
             fh.write(self.to_json() + "\n")
 
     @classmethod
-    def load(cls, path) -> "Calibration":
-        """Read a calibration saved by :meth:`save` from the file ``path``; CalibrationError
-        names the file and what is wrong."""
-        try:
-            with open(path, encoding="utf-8") as fh:
-                data = json.load(fh)
-        except OSError as exc:
-            raise CalibrationError(f"{path}: cannot read the calibration file ({exc.strerror or exc})") from None
-        except json.JSONDecodeError as exc:
-            raise CalibrationError(f"{path}: not a calibration JSON file ({exc.msg} at line {exc.lineno})") from None
-        except UnicodeDecodeError:
-            raise CalibrationError(f"{path}: not a calibration JSON file (not UTF-8 text)") from None
+    def load(cls, path, *, max_bias_dps=MAX_BIAS_DPS) -> "Calibration":
+        """Read a calibration saved by :meth:`save` from the file ``path`` (through
+        :func:`gyrofilter.inputs.load_json`); CalibrationError names the file, the key and what
+        is wrong.
+
+        Every field is held to the limits of a start-up calibration (:func:`calibrate`):
+        ``bias_dps`` 3 numbers in [-max_bias_dps, max_bias_dps] (the pipeline passes its setting),
+        ``noise_std_dps`` 3 numbers in [0, MAX_NOISE_STD_DPS], ``samples`` a whole number in
+        [MIN_SAMPLES, MAX_SAMPLES], ``sample_rate_hz`` as :func:`gyrofilter.units.check_sample_rate_hz`
+        takes it, ``temp_c`` (optional, null for none) in ``TEMP_RANGE_C``."""
+        data = load_json(path, "calibration", CalibrationError)
         if not isinstance(data, dict):
             raise CalibrationError(f"{path}: not a calibration JSON file (expected an object with bias_dps, noise_std_dps, ...)")
         missing = [k for k in ("bias_dps", "noise_std_dps", "samples", "sample_rate_hz") if k not in data]
         if missing:
             raise CalibrationError(f"{path}: the calibration lacks {', '.join(missing)}")
 
-        def numbers(key, count, bound=""):
-            """data[key] as ``count`` finite numbers; ``bound``: ">= 0", "> 0" or "" (any)."""
-            value = data[key]
-            items = value if isinstance(value, list) else [value]
-            ok = (len(items) == count and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items)
-                  and all(math.isfinite(v) and {"": True, ">= 0": v >= 0, "> 0": v > 0}[bound] for v in items))
-            if not ok:
-                what = f"{count} finite numbers" if count > 1 else "a finite number"
-                raise CalibrationError(f"{path}: {key} must be {what}{' ' + bound if bound else ''}, got {json.dumps(value)}")
-            return tuple(float(v) for v in items)
+        def number(key, **bounds):
+            return check_number(data[key], f"{path}: {key}", error=CalibrationError, **bounds)
 
-        bias = numbers("bias_dps", 3)
-        noise = numbers("noise_std_dps", 3, ">= 0")
-        samples, = numbers("samples", 1, "> 0")
-        if samples != int(samples):
-            raise CalibrationError(f"{path}: samples must be a whole number, got {json.dumps(data['samples'])}")
-        rate, = numbers("sample_rate_hz", 1, "> 0")
-        temp = None if data.get("temp_c") is None else numbers("temp_c", 1)[0]
-        return cls(bias, noise, int(samples), rate, temp)
+        def triple(key, **bounds):
+            value = data[key]
+            if not isinstance(value, list) or len(value) != len(AXES):
+                raise CalibrationError(f"{path}: {key} must be a list of 3 numbers (x, y, z), got {quote(json.dumps(value))}")
+            return tuple(check_number(v, f"{path}: {key} {axis}", error=CalibrationError, **bounds)
+                         for axis, v in zip(AXES, value))
+
+        bias = triple("bias_dps", low=-max_bias_dps, high=max_bias_dps)
+        noise = triple("noise_std_dps", low=0.0, high=MAX_NOISE_STD_DPS)
+        samples = number("samples", low=MIN_SAMPLES, high=MAX_SAMPLES, integer=True)
+        rate = check_sample_rate_hz(number("sample_rate_hz"), f"{path}: sample_rate_hz", CalibrationError)
+        low_c, high_c = TEMP_RANGE_C
+        temp = None if data.get("temp_c") is None else number("temp_c", low=low_c, high=high_c)
+        return cls(bias, noise, samples, rate, temp)
 
 
 def white_noise_std(window_dps) -> np.ndarray:
@@ -137,10 +145,10 @@ def stillness_z(window_dps) -> np.ndarray:
     return spread / scale
 
 
-def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=20.0, temp_c=None) -> Calibration:
+def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=MAX_BIAS_DPS, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
-    ``window_dps`` is (n, 3) in deg/s, n >= 3, sampled at ``sample_rate_hz`` (Hz);
+    ``window_dps`` is (n, 3) in deg/s, n >= MIN_SAMPLES (3), sampled at ``sample_rate_hz`` (Hz);
     ``stillness_threshold``: the largest stillness statistic z accepted (noise units, see
     :func:`stillness_z`); ``max_bias_dps``: the largest plausible bias (deg/s); ``temp_c``
     optionally the window's n temperatures (deg C), whose mean is kept. Raises CalibrationError
@@ -149,13 +157,14 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     x = np.asarray(window_dps, dtype=float)
     if x.ndim != 2 or x.shape[1] != 3:
         raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")
-    if len(x) < 3:
+    if len(x) < MIN_SAMPLES:
         raise SettingsError(
-            f"calibration needs at least 3 samples to measure the noise, got {len(x)} "
+            f"calibration needs at least {MIN_SAMPLES} samples to measure the noise, got {len(x)} "
             f"({len(x) / sample_rate_hz:g} s at {sample_rate_hz:g} Hz); raise calibration_s"
         )
     bias = x.mean(axis=0)
     z = stillness_z(x)
+    sigma = white_noise_std(x)
     for i, axis in enumerate(AXES):
         if abs(bias[i]) > max_bias_dps:
             raise CalibrationError(
@@ -169,6 +178,12 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
                 f"or use a saved calibration of this sensor (GyroFilter(calibration=...), --calibration FILE from "
                 f"--save-calibration on a still recording)"
             )
-    sigma = white_noise_std(x)
-    temp = None if temp_c is None else float(np.mean(temp_c))
+        if sigma[i] > MAX_NOISE_STD_DPS:
+            raise CalibrationError(
+                f"calibration: axis {axis} has a noise of {sigma[i]:.3g} deg/s, beyond the {MAX_NOISE_STD_DPS:g} deg/s "
+                "plausible for a still sensor"
+            )
+    low_c, high_c = TEMP_RANGE_C
+    temp = None if temp_c is None else check_number(
+        float(np.mean(temp_c)), "calibration: the mean temperature (deg C)", low=low_c, high=high_c, error=CalibrationError)
     return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz), temp)

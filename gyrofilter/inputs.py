@@ -3,10 +3,10 @@
 The rules (docs/formats.md, section 8):
 
 - **Numbers** in text (a recording's header, a ``--set`` value, a SOURCE string) are plain
-  decimal syntax: an optional sign, digits with at most one decimal point, an optional exponent
-  (``12``, ``-0.5``, ``1e-3``, ``.5``). Python's extras are refused: ``0.0_1`` (underscores),
-  ``nan``, ``inf``, ``0x10``, and text longer than :data:`MAX_NUMBER_CHARS`. Every number is
-  finite, and where the caller gives bounds, inside them.
+  decimal syntax: an optional sign, ASCII digits with at most one decimal point, an optional
+  exponent (``12``, ``-0.5``, ``1e-3``, ``.5``). Python's extras are refused: ``0.0_1``
+  (underscores), other scripts' digits (``١٢``), ``nan``, ``inf``, ``0x10``, and text longer than
+  :data:`MAX_NUMBER_CHARS`. Every number is finite, and where the caller gives bounds, inside them.
 - **Numbers** in JSON or from Python code (a calibration file, a model, ``update()``) are an int
   or a float, never a bool, finite (an int too large for a float is refused, not an
   OverflowError), and inside the caller's bounds.
@@ -30,7 +30,7 @@ MAX_JSON_BYTES = 16 * 1024 * 1024
 MAX_JSON_DEPTH = 32
 MAX_QUOTE_CHARS = 80
 
-_DECIMAL = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # ASCII digits only: float() takes others
 
 
 def quote(text, limit=MAX_QUOTE_CHARS):

@@ -22,7 +22,7 @@ import numpy as np
 from . import kalman
 from .adaptive import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
-from .calibration import Calibration, calibrate
+from .calibration import MAX_BIAS_DPS, Calibration, calibrate
 from .errors import CalibrationError, SettingsError
 from .predictor import closed_loop_radius, stable_gain_threshold
 from .presets import DEFAULT_PRESET, PRESETS
@@ -102,7 +102,7 @@ class FilterSettings:
     calibration_s: float = 2.0
     calibration_retry_s: float = 0.0
     stillness_z: float = 6.0
-    max_bias_dps: float = 20.0
+    max_bias_dps: float = MAX_BIAS_DPS
     block_len: int = 5
     outlier_q_dps: float = 1.0
     fifo_depth: int = 10
@@ -279,7 +279,7 @@ class GyroFilter:
                 if needed:
                     raise SettingsError(f"setting {setting} needs a start-up calibration (calibration_s > 0) {why}")
         if calibration is not None:
-            self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration)
+            self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration, max_bias_dps=s.max_bias_dps)
             _check_calibration_rate(self.calibration, self.sample_rate_hz,
                                     "the calibration" if isinstance(calibration, Calibration) else f"calibration {calibration}")
             self._apply_calibration(self.calibration)

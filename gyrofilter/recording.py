@@ -27,6 +27,8 @@ length of the file); :func:`read_recording` collects its chunks into a :class:`R
 from __future__ import annotations
 
 import bisect
+import contextlib
+import errno
 import gzip
 import math
 import os
@@ -620,7 +622,10 @@ class RecordingWriter(Closable):
     Made for logging from a live source: after a crash or a pulled plug at most the last
     interval is lost, and the file still reads (the reader accepts a cut last line and a gzip
     stream without its end marker). ``close()`` (or leaving the ``with`` block, also on
-    KeyboardInterrupt) ends the file cleanly. Header keys are written in the order given, after
+    KeyboardInterrupt) ends the file cleanly. A write or flush that fails (an OSError: disk full,
+    file size limit) sets ``write_failed``; ``close()`` then cuts the file back to its last
+    complete flush, so that it keeps whole lines and reads, ``rows_flushed`` rows of them, and
+    writes nothing more. Header keys are written in the order given, after
     the version line. ``compresslevel`` (1-9) applies to ``.gz`` files: 6, gzip's own default,
     wrote 1 h of 100-Hz three-axis noise in 1.5 s against 3.7 s for Python's default 9, for 1 %
     more bytes.
@@ -670,6 +675,9 @@ class RecordingWriter(Closable):
                                  compresslevel=compresslevel) if self.path.endswith(".gz") else None
         self._last_flush = time.monotonic()
         self.rows_written = 0
+        self.rows_flushed = 0  # the rows in the file at the last flush: what a failed write keeps
+        self._flushed_bytes = 0  # the file's size then (None when it cannot be told: a pipe)
+        self.write_failed = False
         lines = [f"# gyrofilter-recording: {FORMAT_VERSION}"]
         lines += [f"# {k}: {v}" for k, v in head.items()]
         lines.append(",".join(self.columns))
@@ -678,7 +686,19 @@ class RecordingWriter(Closable):
 
     def _emit(self, text):
         data = text.encode("utf-8")
-        (self._gz or self._raw).write(data)
+        with self._failing():
+            (self._gz or self._raw).write(data)
+
+    @contextlib.contextmanager
+    def _failing(self):
+        """Refuse to write after a failed write; note a new failure (``write_failed``)."""
+        if self.write_failed:
+            raise OSError(errno.EIO, "an earlier write failed", self.path)
+        try:
+            yield
+        except OSError:
+            self.write_failed = True
+            raise
 
     def write(self, rows):
         """Append rows, shape (n, number of columns), in the columns' order."""
@@ -699,9 +719,12 @@ class RecordingWriter(Closable):
 
     def flush(self):
         """Push everything written so far to the disk, readable even if the process dies now."""
-        if self._gz is not None:
-            self._gz.flush(zlib.Z_SYNC_FLUSH)
-        self._raw.flush()
+        with self._failing():
+            if self._gz is not None:
+                self._gz.flush(zlib.Z_SYNC_FLUSH)
+            self._raw.flush()
+        self.rows_flushed = self.rows_written
+        self._flushed_bytes = self._raw.tell() if self._raw.seekable() else None
         if self._fsync:
             try:
                 os.fsync(self._raw.fileno())
@@ -710,10 +733,28 @@ class RecordingWriter(Closable):
         self._last_flush = time.monotonic()
 
     def _close(self):
+        if self.write_failed:
+            self._cut_to_last_flush()
+            return
         if self._gz is not None:
             self._gz.close()
         self._raw.flush()
         self._raw.close()
+        self.rows_flushed = self.rows_written
+
+    def _cut_to_last_flush(self):
+        """After a failed write: close without writing more, and cut what the failed write and the
+        closing left beyond the last flush (a cut line, a broken gzip block)."""
+        fd = os.dup(self._raw.fileno())
+        try:
+            for closing in (self._gz, self._raw):
+                if closing is not None:
+                    with contextlib.suppress(OSError):  # whatever it writes is cut below
+                        closing.close()
+            if self._flushed_bytes is not None:
+                os.ftruncate(fd, self._flushed_bytes)
+        finally:
+            os.close(fd)
 
 
 def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:

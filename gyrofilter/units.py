@@ -14,6 +14,9 @@ DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
+#: the plausible temperatures (deg C) of a gyro's die, ends included: beyond any MEMS part (the
+#: MPU6050's TEMP_OUT register spans -60 to +133 deg C)
+TEMP_RANGE_C = (-100.0, 200.0)
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):

@@ -81,17 +81,17 @@ def test_save_load_round_trip_and_bad_files(tmp_path):
     cal.save(path)
     assert Calibration.load(path) == cal
     path.write_text("{not json")
-    with pytest.raises(CalibrationError, match="not a calibration JSON"):
+    with pytest.raises(CalibrationError, match="not valid JSON"):
         Calibration.load(path)
     path.write_text(json.dumps({"bias_dps": [1, 2], "noise_std_dps": [1, 1, 1], "samples": 3, "sample_rate_hz": 100}))
-    with pytest.raises(CalibrationError, match="3 finite numbers"):
+    with pytest.raises(CalibrationError, match="bias_dps must be a list of 3 numbers"):
         Calibration.load(path)
     good = {"bias_dps": [1, 2, 3], "noise_std_dps": [0.1, 0.1, 0.1], "samples": 200, "sample_rate_hz": 100}
-    for bad, message in (([], "expected an object"), ({**good, "sample_rate_hz": "abc"}, 'sample_rate_hz must be a finite number > 0, got "abc"'),
-                         ({**good, "noise_std_dps": [0.1, -0.1, 0.1]}, "noise_std_dps must be 3 finite numbers >= 0"),
-                         ({**good, "bias_dps": [1, "x", 3]}, "bias_dps must be 3 finite numbers, got"),
+    for bad, message in (([], "expected an object"), ({**good, "sample_rate_hz": "abc"}, "sample_rate_hz must be a finite number, got 'abc'"),
+                         ({**good, "noise_std_dps": [0.1, -0.1, 0.1]}, "noise_std_dps y must be in [0, 20], got -0.1"),
+                         ({**good, "bias_dps": [1, "x", 3]}, "bias_dps y must be a finite number, got 'x'"),
                          ({**good, "samples": 2.5}, "samples must be a whole number"),
-                         ({**good, "sample_rate_hz": 0}, "sample_rate_hz must be a finite number > 0, got 0"),
+                         ({**good, "sample_rate_hz": 0}, "sample_rate_hz must be a number of Hz in (0, 100000], got 0.0"),
                          ({k: v for k, v in good.items() if k != "samples"}, "lacks samples"),
                          ({**good, "temp_c": "warm"}, "temp_c must be a finite number")):
         path.write_text(json.dumps(bad))
@@ -108,3 +108,77 @@ def test_save_load_round_trip_and_bad_files(tmp_path):
 def test_a_missing_calibration_file_is_a_calibration_error_naming_it(tmp_path):
     with pytest.raises(CalibrationError, match=r"nofile\.json: cannot read the calibration file"):
         Calibration.load(tmp_path / "nofile.json")
+
+
+GOOD = {"bias_dps": [1, 2, 3], "noise_std_dps": [0.1, 0.1, 0.1], "samples": 200, "sample_rate_hz": 100, "temp_c": 25.0}
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("bias_dps", [1000, 0, 0], "bias_dps x must be in [-20, 20], got 1000"),
+    ("bias_dps", [0, -20.5, 0], "bias_dps y must be in [-20, 20], got -20.5"),
+    ("noise_std_dps", [0.1, 0.1, 1e300], "noise_std_dps z must be in [0, 20], got 1e+300"),
+    ("samples", 0, "samples must be in [3, 1e+09], got 0"),
+    ("samples", 2, "samples must be in [3, 1e+09], got 2"),
+    ("samples", 10**10, "samples must be in [3, 1e+09]"),
+    ("samples", True, "samples must be a finite number (a whole number), got True"),
+    ("sample_rate_hz", 1e9, "sample_rate_hz must be a number of Hz in (0, 100000]"),
+    ("temp_c", 1e6, "temp_c must be in [-100, 200], got 1000000.0"),
+    ("temp_c", -273.5, "temp_c must be in [-100, 200]"),
+    ("bias_dps", 1, "bias_dps must be a list of 3 numbers (x, y, z), got '1'"),
+])
+def test_a_loaded_calibration_is_held_to_the_limits_of_a_start_up_one(tmp_path, key, value, message):
+    # the values above were accepted before issue 22 (a bias of 1000 deg/s, a noise of 1e300)
+    path = tmp_path / "cal.json"
+    path.write_text(json.dumps({**GOOD, key: value}))
+    with pytest.raises(CalibrationError) as info:
+        Calibration.load(path)
+    assert str(info.value).startswith(f"{path}: {key}") and message in str(info.value), str(info.value)
+
+
+def test_the_limits_are_closed_and_a_good_file_at_them_loads(tmp_path):
+    path = tmp_path / "cal.json"
+    path.write_text(json.dumps({"bias_dps": [20, -20, 0], "noise_std_dps": [0, 20, 0.1], "samples": 3,
+                                "sample_rate_hz": 100000, "temp_c": -100}))
+    assert Calibration.load(path) == Calibration((20.0, -20.0, 0.0), (0.0, 20.0, 0.1), 3, 100000.0, -100.0)
+
+
+@pytest.mark.parametrize("text, message", [
+    ('{"bias_dps": [1, 2, 3], "noise_std_dps": [0.1, 0.1, 0.1], "samples": 200, "sample_rate_hz": 1' + "0" * 400 + "}",
+     "sample_rate_hz must be a finite number"),  # was an OverflowError
+    ('{"bias_dps": [1' + "0" * 400 + ', 2, 3], "noise_std_dps": [0.1, 0.1, 0.1], "samples": 200, "sample_rate_hz": 100}',
+     "bias_dps x must be a finite number"),
+    ('{"bias_dps": [NaN, 2, 3], "noise_std_dps": [0.1, 0.1, 0.1], "samples": 200, "sample_rate_hz": 100}',
+     "NaN is not a JSON number"),
+    ("[" * 200_000 + "]" * 200_000, "nested more than 32 levels"),  # was a RecursionError
+])
+def test_numbers_json_cannot_hold_and_deep_nesting_are_refused_naming_the_file(tmp_path, text, message):
+    path = tmp_path / "cal.json"
+    path.write_text(text)
+    with pytest.raises(CalibrationError) as info:
+        Calibration.load(path)
+    assert str(info.value).startswith(f"{path}: ") and message in str(info.value) and len(str(info.value)) < 300
+
+
+def test_an_endless_file_is_refused_instead_of_read_forever():
+    with pytest.raises(CalibrationError, match="/dev/zero: not a calibration file: larger than 16 MiB"):
+        Calibration.load("/dev/zero")
+
+
+def test_a_raised_max_bias_setting_loads_the_calibration_it_made(tmp_path):
+    # the start-up calibration and a loaded one share one bias limit: the filter's max_bias_dps
+    f = GyroFilter(100.0, calibration_s=2.0, preset="paper", max_bias_dps=50.0)
+    f.filter(still(400, bias=(30.0, 0.0, 0.0)))
+    f.calibration.save(tmp_path / "cal.json")
+    assert GyroFilter(100.0, preset="paper", calibration=tmp_path / "cal.json", max_bias_dps=50.0).bias_dps == f.bias_dps
+    with pytest.raises(CalibrationError, match="bias_dps x must be in"):
+        GyroFilter(100.0, preset="paper", calibration=tmp_path / "cal.json")
+
+
+def test_the_start_up_calibration_refuses_what_a_loaded_one_would():
+    # y alternates +-a: its differences are +-2a, so sigma = std(diff) / sqrt(2) = sqrt(2) a = 25 deg/s
+    window = still(2000)
+    window[:, 1] = np.where(np.arange(2000) % 2, 1.0, -1.0) * 25.0 / np.sqrt(2)
+    with pytest.raises(CalibrationError, match="axis y has a noise of 25 deg/s, beyond the 20 deg/s"):
+        calibrate(window, 100.0)
+    with pytest.raises(CalibrationError, match=r"mean temperature \(deg C\) must be in \[-100, 200\], got 1000.0"):
+        calibrate(still(200), 100.0, temp_c=np.full(200, 1000.0))

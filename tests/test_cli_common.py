@@ -1,6 +1,9 @@
 """cli.common: output safety (check_outputs, replacing, replacing_in) and strict JSON."""
 import json
 import os
+import stat
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -87,3 +90,103 @@ def test_an_error_writing_the_temporary_file_names_the_users_path(tmp_path):
         with common.replacing_in(folder) as tmp:
             open(os.path.join(tmp, "no", "fig.png"), "w")
     assert err.value.filename == os.path.join(folder, "no", "fig.png")
+
+
+# ------------------------------------------------------------------------------ only regular files are replaced
+
+
+def _special_file(tmp_path, kind):
+    """A path in ``tmp_path`` that exists as ``kind``, something other than a regular file."""
+    path = tmp_path / f"{kind}.csv"
+    if kind == "symlink":
+        (tmp_path / "target.csv").write_text("the link's target")
+        path.symlink_to(tmp_path / "target.csv")
+    elif kind == "dangling symlink":
+        path.symlink_to(tmp_path / "nowhere.csv")
+    elif kind == "FIFO":
+        os.mkfifo(path)
+    else:  # a copy of /dev/null, char device 1, 3
+        if os.geteuid() != 0:
+            pytest.skip("making a device node needs root")
+        try:
+            os.mknod(path, stat.S_IFCHR | 0o666, os.makedev(1, 3))
+        except PermissionError:
+            pytest.skip("making a device node needs CAP_MKNOD")
+    return path
+
+
+SPECIAL = ["symlink", "dangling symlink", "FIFO", "device"]
+
+
+@pytest.mark.parametrize("force", [False, True])
+@pytest.mark.parametrize("kind", SPECIAL)
+def test_check_outputs_replaces_only_regular_files(tmp_path, kind, force):
+    """Issue 22 (23): --force replaced symlinks and device nodes (as root, --out /dev/null --force
+    made /dev/null a regular file)."""
+    path = _special_file(tmp_path, kind)
+    expected = "is a symbolic link" if "symlink" in kind else "is not a regular file (a device, FIFO or socket)"
+    with pytest.raises(SettingsError) as info:
+        common.check_outputs([str(path)], force=force)
+    assert str(info.value).startswith(f"{path}: {expected}; outputs replace only regular files")
+
+
+@pytest.mark.parametrize("kind", SPECIAL)
+def test_no_command_replaces_a_symlink_a_fifo_or_a_device(tmp_path, capsys, kind):
+    from gyrofilter.cli import main
+
+    path = _special_file(tmp_path, kind)
+    model = os.path.join(os.path.dirname(__file__), os.pardir, "examples", "models", "mpu6050.json")
+    for argv in (["simulate", "--model", model, "--duration", "1", "--out", str(path), "--force"],
+                 ["record", "--source", "sim:realtime=0,duration=1", "--out", str(path), "--force"],
+                 ["run", "--source", "sim:realtime=0,duration=3", "--out", str(path), "--force", "--quiet"]):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith(f"gyrofilter: error: {path}: is "), err
+    assert not stat.S_ISREG(os.lstat(path).st_mode)
+    if kind == "symlink":
+        assert (tmp_path / "target.csv").read_text() == "the link's target"
+
+
+# ------------------------------------------------------------------------------ stale partial files
+
+
+def _dead_pid():
+    """The pid of a process that has ended (and been reaped)."""
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def test_stale_partials_of_dead_processes_go_at_the_next_write_to_their_folder(tmp_path):
+    """Issue 22 (26): a SIGKILL left .partial-PID-* files that nothing removed."""
+    dead = _dead_pid()
+    stale_file = tmp_path / f".partial-{dead}-old.csv"
+    stale_file.write_text("half")
+    stale_folder = tmp_path / f".partial-{dead}-k3j4h5g6"  # what replacing_in makes
+    stale_folder.mkdir()
+    (stale_folder / "fig.png").write_text("half")
+    kept = [tmp_path / f".partial-{os.getpid()}-mine.csv",  # this process: alive
+            tmp_path / ".partial-1-init.csv",  # pid 1 runs
+            tmp_path / ".partial-0-group.csv",  # 0 is no process of its own
+            tmp_path / f".partial-{dead}x-other.csv", tmp_path / f"partial-{dead}-other.csv",  # not the pattern
+            tmp_path / f".partial-{dead}-"]
+    for path in kept:
+        path.write_text("not mine to remove")
+    with common.replacing(str(tmp_path / "new.json")) as tmp:
+        open(tmp, "w").write("{}")
+    assert not stale_file.exists() and not stale_folder.exists()
+    assert all(path.read_text() == "not mine to remove" for path in kept)
+    assert (tmp_path / "new.json").read_text() == "{}"
+
+
+@pytest.mark.parametrize("command", ["record", "simulate"])
+def test_a_command_writing_to_a_folder_removes_its_stale_partials(tmp_path, command):
+    from gyrofilter.cli import main
+
+    stale = tmp_path / f".partial-{_dead_pid()}-killed.csv"
+    stale.write_text("# gyrofilter-recording: 1\n")
+    model = os.path.join(os.path.dirname(__file__), os.pardir, "examples", "models", "mpu6050.json")
+    argv = {"record": ["record", "--source", "sim:realtime=0,duration=1", "--out", str(tmp_path / "out.csv")],
+            "simulate": ["simulate", "--model", model, "--duration", "1", "--out", str(tmp_path / "out.csv")]}[command]
+    assert main(argv) == 0
+    assert sorted(os.listdir(tmp_path)) == ["out.csv"]

@@ -268,7 +268,7 @@ def test_run_that_fails_in_calibration_leaves_no_file_and_a_rerun_works(tmp_path
     assert main(["run", "--source", str(moved), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert "gyrofilter: error: calibration: the sensor moved" in err and "Traceback" not in err
-    assert f"removed {out}" in err and not out.exists()
+    assert f"{out}: not written, no filtered row was kept" in err and not out.exists()
     still = _still_recording(tmp_path / "still.csv")
     assert main(["run", "--source", str(still), "--out", str(out), "--quiet"]) == 0  # no --force needed
     assert len(read_recording(out)) == (600 - 200) // BLOCK
@@ -293,7 +293,7 @@ def test_device_failing_before_the_first_sample_leaves_no_file(tmp_path, monkeyp
     _failing_after_start(monkeypatch)
     assert main([*command, "--source", "mpu6050:rate=100", "--out", str(out), "--duration", "1"]) == 1
     err = capsys.readouterr().err
-    assert "device error" in err and "INT_STATUS (0x3A)" in err and f"removed {out}" in err
+    assert "device error" in err and "INT_STATUS (0x3A)" in err and f"{out}: not written, no " in err
     assert not out.exists()
     install_mpu6050(monkeypatch, 100)  # the cable fixed: a re-run works without --force
     assert main([*command, "--source", "mpu6050:rate=100", "--out", str(out), "--duration", "3"]) == 0
@@ -366,7 +366,7 @@ def test_run_that_stops_inside_the_calibration_says_nothing_was_filtered(tmp_pat
     assert "50 samples in, 0 filtered rows out" in err and "nothing filtered: it stopped inside the start-up calibration window (2 s)" in err
     out = tmp_path / "out.csv"
     assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out)]) == 2
-    assert not out.exists() and f"removed {out}: no filtered row was written" in capsys.readouterr().err
+    assert not out.exists() and f"{out}: not written, no filtered row was kept" in capsys.readouterr().err
     assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out), "--save-calibration", str(tmp_path / "c.json")]) == 2
     err = capsys.readouterr().err
     assert "no calibration to save" in err and not out.exists() and not (tmp_path / "c.json").exists()
@@ -381,3 +381,54 @@ def test_run_and_replay_write_the_same_output_rate(tmp_path, capsys):
     assert main(["replay", str(src), "--out", str(outs["replay"])]) == 0
     rates = {name: read_recording(path).sample_rate_hz for name, path in outs.items()}
     assert rates["run"] == rates["replay"] == 99.3171 / 5
+
+
+# ------------------------------------------------------------------------------ an existing --out survives
+
+
+@pytest.mark.parametrize("command, source, code, says", [
+    (["run", "--quiet"], lambda tmp: _still_recording(tmp / "moved.csv", moving=True), 2, "the sensor moved"),
+    (["run", "--quiet"], lambda tmp: _still_recording(tmp / "still.csv"), 2, "nothing filtered"),  # ends inside the calibration
+    (["run", "--quiet"], None, 1, "device error"),
+    (["record"], None, 1, "device error"),
+])
+def test_a_failure_before_the_first_row_leaves_an_existing_output_as_it_was(tmp_path, monkeypatch, capsys, command,
+                                                                           source, code, says):
+    """Issue 22 (5): run/record --out X --force that failed before their first row deleted X."""
+    out = tmp_path / "out.csv"
+    out.write_text("keep me")
+    if source is None:
+        _failing_after_start(monkeypatch)
+        spec = "mpu6050:rate=100"
+    else:
+        spec = str(source(tmp_path))
+    extra = ["--calibration-s", "10"] if says == "nothing filtered" else []  # the still recording lasts 6 s
+    assert main([*command, "--source", spec, "--out", str(out), "--force", *extra]) == code
+    assert out.read_text() == "keep me"
+    err = capsys.readouterr().err
+    assert says in err and f"{out}: not written, no " in err and "Traceback" not in err
+    assert not [name for name in os.listdir(tmp_path) if name.startswith(".partial-")]
+
+
+def test_an_output_takes_its_name_at_the_first_flush_with_a_row(tmp_path, monkeypatch):
+    """While record runs, the file reads under its own name once a sample is flushed; before that an
+    existing file still holds its old data."""
+    import gyrofilter.cli.live as live
+
+    out = tmp_path / "out.csv"
+    out.write_text("keep me")
+    seen = []
+    flush = live.LiveOutput.flush
+
+    def spy(self):
+        seen.append((self.rows_written, out.read_bytes()[:7]))
+        flush(self)
+        seen.append((self.rows_written, len(read_recording(out)) if self.rows_written else out.read_text()))
+
+    monkeypatch.setattr(live.LiveOutput, "flush", spy)
+    monkeypatch.setattr("gyrofilter.cli.record.FLUSH_INTERVAL_S", 0.0)  # a flush after every read
+    still = _still_recording(tmp_path / "still.csv")
+    assert main(["record", "--source", f"replay:{still}", "--out", str(out), "--force"]) == 0
+    assert seen[0] == (seen[0][0], b"keep me") and seen[0][0] > 0
+    assert seen[1] == (seen[0][0], seen[0][0])  # the rows flushed, readable under the user's name
+    assert len(read_recording(out)) == 600

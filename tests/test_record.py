@@ -5,6 +5,8 @@ every sample the source delivered; whatever the signal, the file reads back and 
 equal the source's from the first one up to the last flush.
 """
 import os
+import re
+import resource
 import signal
 import subprocess
 import sys
@@ -82,6 +84,37 @@ def test_record_stopped_by_a_signal_keeps_a_readable_exact_prefix(tmp_path, expe
         assert rec.warnings == []  # closed cleanly
         assert rec.notes[-1][1].startswith(f"end: stopped by {name}")
         assert f"stopped by {name}" in err and f"wrote {n} samples" in err and "lost 0 samples" in err
+
+
+def _file_size_limit(limit_bytes):
+    """preexec_fn: files of this process may grow to ``limit_bytes`` (a write beyond fails with EFBIG)."""
+    def limit():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit_bytes, limit_bytes))
+    return limit
+
+
+@pytest.mark.parametrize("suffix, limit_bytes", [(".csv", 30_000), (".csv.gz", 12_000)])
+def test_record_that_cannot_write_keeps_the_flushed_samples_and_says_how_many(tmp_path, expected, suffix, limit_bytes):
+    """Issue 22 (6): a write error (here the file size limit) deleted the samples already written."""
+    out = tmp_path / f"rec{suffix}"
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "record", "--source",
+                           f"sim:seed=21,rate={RATE_HZ:g},duration={SIM_SECONDS:g}", "--out", str(out)],
+                          capture_output=True, text=True, timeout=60, preexec_fn=_file_size_limit(limit_bytes))
+    assert proc.returncode == 2
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    kept = re.fullmatch(rf"gyrofilter: error: {re.escape(str(out))}: File too large; kept the first (\d+) samples", lines[0])
+    assert kept, lines[0]
+    n = int(kept.group(1))
+    rec = read_recording(out)
+    assert len(rec) == n > 0 and os.path.getsize(out) <= limit_bytes
+    np.testing.assert_array_equal(rec.gyro, expected.gyro[:n])
+    if suffix == ".csv":
+        assert rec.warnings == [] and out.read_bytes().endswith(b"\n")  # whole lines only
+    else:
+        assert all("interrupted" in w or "cut short" in w for w in rec.warnings)  # a gzip stream without its end
+    assert os.listdir(tmp_path) == [out.name]
 
 
 def test_record_duration_and_replay_source(tmp_path):

@@ -273,7 +273,7 @@ def test_simulation_model_errors_are_settings_errors(tmp_path):
     bad.write_text('{"sample_rate_hz": 100, "axes": {"w": {}}}')
     with pytest.raises(SettingsError, match="axes.w"):
         open_source(f"sim:{bad}")
-    with pytest.raises(SettingsError, match="cannot read model"):
+    with pytest.raises(SettingsError, match="cannot read the model file"):
         open_source(f"sim:{tmp_path / 'missing.json'}")
 
 

@@ -4,7 +4,9 @@ import contextlib
 import json
 import math
 import os
+import re
 import shutil
+import stat
 import sys
 import tempfile
 
@@ -68,8 +70,10 @@ def check_outputs(outputs, inputs=(), force=False):
     """Refuse, before any work, to write where a user's data would be lost.
 
     ``outputs`` and ``inputs`` are paths (None entries are skipped). An output that is one of
-    the inputs is refused even with ``force``; an output that exists is refused without it; two
-    outputs naming one file are refused. Raises FileExistsError / SettingsError naming the file.
+    the inputs is refused even with ``force``; so is one that exists as anything but a regular
+    file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
+    replaced. An output that exists is refused without ``force``; two outputs naming one file are
+    refused. Raises FileExistsError / SettingsError naming the file.
     """
     inputs = {_file_key(p) for p in inputs if p}
     seen = set()
@@ -87,7 +91,16 @@ def check_outputs(outputs, inputs=(), force=False):
             if os.path.lexists(parent):
                 raise SettingsError(f"{out}: {parent} is a file, not a folder")
             parent = os.path.dirname(parent)
-        if os.path.lexists(out) and not force:
+        if not os.path.lexists(out):
+            continue
+        mode = os.lstat(out).st_mode
+        if stat.S_ISLNK(mode):
+            raise SettingsError(f"{out}: is a symbolic link; outputs replace only regular files: "
+                                "name the file it points to, or another")
+        if not stat.S_ISREG(mode):
+            raise SettingsError(f"{out}: is not a regular file (a device, FIFO or socket); "
+                                "outputs replace only regular files")
+        if not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
 
 
@@ -113,9 +126,8 @@ def replacing(path):
     """Write a whole file at once: yields a temporary path beside ``path`` (its folder created if
     needed); on success it replaces ``path``; on any failure it is removed, with any folder this
     call created, so a failed command leaves nothing behind."""
-    folder, name = os.path.split(os.path.abspath(path))
-    with _folder(folder):
-        tmp = os.path.join(folder, f".partial-{os.getpid()}-{name}")  # same extension: writers choose the format by it
+    tmp = partial_path(path)
+    with _folder(os.path.dirname(tmp)):
         try:
             with _naming(tmp, path):
                 yield tmp
@@ -131,7 +143,7 @@ def replacing_in(folder):
     ``folder`` (created if needed); on success every file written there replaces its namesake in
     ``folder``; on any failure the temporary folder goes, with any folder this call created."""
     with _folder(folder):
-        tmp = tempfile.mkdtemp(prefix=f".partial-{os.getpid()}-", dir=folder)
+        tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{os.getpid()}-", dir=folder)
         try:
             with _naming(tmp, folder):
                 yield tmp
@@ -152,15 +164,67 @@ def _naming(tmp, path):
         raise
 
 
+def partial_path(path):
+    """The temporary name beside ``path`` under which a file is written until it may take its
+    own name: ``.partial-PID-NAME`` in the same folder, so that the rename is atomic and the
+    extension, by which writers choose the format, is kept. A process killed before the rename
+    leaves it behind; :func:`remove_stale_partials` removes it later."""
+    folder, name = os.path.split(os.path.abspath(path))
+    return os.path.join(folder, f"{_PARTIAL_PREFIX}{os.getpid()}-{name}")
+
+
+_PARTIAL_PREFIX = ".partial-"
+_PARTIAL = re.compile(re.escape(_PARTIAL_PREFIX) + r"([0-9]+)-.+", re.DOTALL)  # what partial_path and replacing_in make
+_swept = set()  # folders whose stale partials this process removed already
+
+
+def remove_stale_partials(folder):
+    """Remove from ``folder`` the temporary files and folders (``.partial-PID-...``, see
+    :func:`partial_path`) of processes that died before renaming them (SIGKILL, a power cut):
+    only names of that exact pattern whose PID runs no process (``os.kill(pid, 0)`` answers
+    ProcessLookupError); a live process's, another user's included, are never touched. Once per
+    folder and process, so that a batch writing thousands of files lists its folder once."""
+    folder = os.path.abspath(folder)
+    if folder in _swept:
+        return
+    _swept.add(folder)
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(folder):
+            match = _PARTIAL.fullmatch(entry.name)
+            if not match or _process_runs(int(match.group(1))):
+                continue
+            if entry.is_dir(follow_symlinks=False):
+                shutil.rmtree(entry.path, ignore_errors=True)
+            elif entry.is_file(follow_symlinks=False):
+                with contextlib.suppress(OSError):
+                    os.unlink(entry.path)
+
+
+def _process_runs(pid):
+    """Whether the process ``pid`` may exist (True when it cannot be told)."""
+    if pid <= 0:
+        return True  # not a process of its own: 0 and below name process groups
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (OSError, OverflowError):  # PermissionError: it runs as another user; a pid beyond the OS's range
+        return True
+    return True
+
+
 @contextlib.contextmanager
 def _folder(folder):
-    """Make ``folder`` and its missing parents; on a failure inside the block, remove what was made."""
+    """Make ``folder`` and its missing parents; on a failure inside the block, remove what was
+    made. An existing folder first loses its stale partial files (:func:`remove_stale_partials`)."""
     top = None
     parent = os.path.abspath(folder)
     while not os.path.isdir(parent):
         top, parent = parent, os.path.dirname(parent)
     if top is not None:
         os.makedirs(folder)
+    else:
+        remove_stale_partials(folder)
     try:
         yield
     except BaseException:

@@ -1,7 +1,9 @@
 """The live loop that ``record`` and ``run`` share: the SOURCE options, opening the source,
 reading it until a stop signal, its end, a device failure or ``--duration``, the status line on
-stderr and the summary words, and removing an output that got no data.
+stderr and the summary words, and the ``--out`` recording, which takes its name at its first
+data row (:class:`LiveOutput`).
 """
+import contextlib
 import math
 import os
 import signal
@@ -43,18 +45,94 @@ def source_files(spec):
     return [kwargs.get(key) for key in ("path", "model", "port")]
 
 
-def close_output(writer, failed, row_name):
-    """Close ``writer``; when the command failed before any data row was written, remove its file
-    (header and notes only), so that a re-run is not refused as existing. Returns the line saying
-    so (``row_name``: what a data row is), or "" when the file stays."""
-    writer.close()
-    if not failed or writer.rows_written or writer.path is None:
-        return ""
-    try:
-        os.unlink(writer.path)
-    except FileNotFoundError:
-        pass
-    return f"removed {writer.path}: no {row_name} was written"
+class LiveOutput:
+    """The ``--out`` recording of ``record`` and ``run``, written while the loop runs.
+
+    It is written under a temporary name beside ``path`` (:func:`common.partial_path`) and takes
+    its own name (``os.replace``, atomic) at the first flush that holds a data row, or when the
+    command ends without failing. So an interrupted recording reads under its name, and a file
+    that exists (``--force``) is left as it was by any failure before the first row (a bad
+    source, a refused calibration, a device failing): the temporary file goes instead. A failed
+    write (disk full, file size limit) keeps the file as it was at its last flush, whole lines
+    that read (:class:`~gyrofilter.recording.RecordingWriter`). ``row_name``: what a data row
+    is, for the messages ("sample", "filtered row").
+    """
+
+    def __init__(self, path, header, columns, formats, row_name):
+        from ..recording import RecordingWriter
+
+        self.path = path
+        self.row_name = row_name
+        self.published = False
+        folder = os.path.dirname(os.path.abspath(path))
+        os.makedirs(folder, exist_ok=True)
+        common.remove_stale_partials(folder)
+        self._tmp = common.partial_path(path)
+        try:
+            self._writer = RecordingWriter(self._tmp, header, columns, formats=formats, flush_interval_s=None)
+        except OSError as exc:  # named by the user's name, not the temporary one
+            _remove(self._tmp)
+            raise OSError(exc.errno, exc.strerror, path) from None
+        except BaseException:
+            _remove(self._tmp)
+            raise
+
+    @property
+    def rows_written(self):
+        return self._writer.rows_written
+
+    @property
+    def write_failed(self):
+        return self._writer.write_failed
+
+    def write(self, rows):
+        self._writer.write(rows)
+
+    def note(self, text):
+        self._writer.note(text)
+
+    def flush(self):
+        self._writer.flush()
+        if not self.published and self._writer.rows_flushed:
+            self._publish()
+
+    def _publish(self):
+        os.replace(self._tmp, self.path)
+        self.published = True
+
+    def close(self, failed):
+        """Close the file; after a failure (``failed``) keep it only when it holds a data row.
+        Returns what the user must be told about the file (for "PATH: ..."), else ""."""
+        self._writer.close()
+        kept = self._writer.rows_flushed
+        if failed and not kept:
+            if not self.published:
+                _remove(self._tmp)
+                return f"not written, no {self.row_name} was kept"
+        elif not self.published:
+            try:
+                self._publish()
+            except BaseException:
+                _remove(self._tmp)
+                raise
+        return f"kept the first {kept} {self.row_name}s" if self.write_failed else ""
+
+
+def _remove(path):
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(path)
+
+
+def close_after_failure(output, exc, command):
+    """Close ``output`` (a :class:`LiveOutput`, or run's stdout) after ``exc`` stopped ``command``.
+    A failed write of the output (an OSError) is raised again as the command's one error line,
+    saying what the file kept; otherwise what the failure left goes on stderr and the caller
+    raises ``exc``."""
+    line = output.close(failed=True)
+    if output.write_failed and isinstance(exc, OSError):
+        raise OSError(exc.errno, f"{exc.strerror or exc}; {line}", output.path) from None
+    if line:
+        common.say(f"{command}: {output.path}: {line}")
 
 
 def open_from_args(args):
@@ -62,11 +140,6 @@ def open_from_args(args):
     then runs for that duration, so that it equals ``simulate --duration``)."""
     return open_source(args.source, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
                        sample_rate_hz=args.sample_rate_hz, duration_s=args.duration)
-
-
-def create_folder_of(path):
-    """Make the folder ``path`` goes into, with its missing parents."""
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
 
 
 class StopSignals:

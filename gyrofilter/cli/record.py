@@ -5,9 +5,12 @@ rate, start time, ...), then the samples; gaps and other events of the source be
 lines (``# gap: 37 samples lost before t=12.34 s ...``). Data are flushed (and fsync'ed) at
 least every ``FLUSH_INTERVAL_S``: after a crash or a pulled plug at most that much is lost and
 the file still reads. Ctrl-C (SIGINT) and SIGTERM stop the recording cleanly (exit 0); a second
-signal aborts at once (the file is still readable up to the last flush). A recording that fails
-before its first sample (the device failing, any error) removes its file, so that the same command
-can be run again; the output is never one of the source's files, and overwrites only with --force.
+signal aborts at once (the file is still readable up to the last flush). The file takes its name
+at its first flush with a sample (:class:`~gyrofilter.cli.live.LiveOutput`): a recording that fails
+before its first sample (the device failing, any error) leaves no file and an existing one (--force)
+as it was, so that the same command can be run again; a failed write (disk full, file size limit)
+keeps the samples of the last flush, a file that reads, and exits with status 2 saying how many.
+The output is never one of the source's files, and overwrites only a regular file, only with --force.
 """
 import sys
 import time
@@ -58,25 +61,22 @@ def _formats(columns):
 
 
 def run(args):
-    from ..recording import RecordingWriter
-
     live.check_duration(args.duration)
     common.check_outputs([args.out], live.source_files(args.source), args.force)
     source = live.open_from_args(args)
     try:
-        live.create_folder_of(args.out)
-        return _record(args, source, RecordingWriter)
+        return _record(args, source)
     finally:
         source.close()
 
 
-def _record(args, source, RecordingWriter):
+def _record(args, source):
     header = recording_header(source, args.source)
     columns = list(source.columns)
     loop = live.LiveLoop(source, args.duration)
     status = live.Status(args.progress or (sys.stderr.isatty() and not args.quiet), loop.sample_rate_hz)
     wall0 = time.monotonic()
-    writer = RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None)
+    writer = live.LiveOutput(args.out, header, columns, _formats(columns), "sample")
     try:
         with loop:
             last_flush = time.monotonic()
@@ -99,18 +99,17 @@ def _record(args, source, RecordingWriter):
                 writer.note(text)
             reason = loop.reason()
             writer.note(f"end: {reason}; {loop.samples} samples; " + (live.source_summary(source.stats) or "no losses"))
-    except BaseException:
-        if removed := live.close_output(writer, True, "sample"):
-            common.say(f"gyrofilter record: {removed}")
+    except BaseException as exc:
+        live.close_after_failure(writer, exc, "gyrofilter record")
         raise
-    removed = live.close_output(writer, loop.failed(), "sample")
+    left = writer.close(loop.failed())
     stats = source.stats
     print(
         f"gyrofilter record: {reason}\n"
         f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.sample_rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
         f"  lost {stats.get('lost_samples', 0)} samples"
         + (f"; {live.source_summary(stats)}" if live.source_summary(stats) else "")
-        + (f"\n  {removed}" if removed else ""),
+        + (f"\n  {args.out}: {left}" if left else ""),
         file=sys.stderr,
     )
     return live.EXIT_DISCONNECTED if loop.failed() else 0

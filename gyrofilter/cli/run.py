@@ -4,9 +4,10 @@ The filtered rates (deg/s, one row per block of the pipeline, ``t`` = time of th
 sample on the sensor's clock) go to stdout, or to ``--out FILE``, as a format-v1 recording
 (so ``gyrofilter run ... > out.csv`` is a readable recording too). A status line on stderr, at
 most once per second, shows the sample rate achieved, lost samples, rejected outliers and the
-CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0). A run that fails before its
-first filtered row (the device failing, the calibration refused because the sensor moved, any
-error) removes its --out file, so that the same command can be run again.
+CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0). The --out file takes its name
+at its first flush with a filtered row (:class:`~gyrofilter.cli.live.LiveOutput`): a run that fails
+before it (the device failing, the calibration refused because the sensor moved, any error) leaves
+no file and an existing one (--force) as it was, so that the same command can be run again.
 """
 import contextlib
 import sys
@@ -34,9 +35,11 @@ def add_arguments(parser):
 class _TextOut:
     """Recording format v1 as text on a stream (stdout), flushed by the caller."""
 
+    path = None  # no file to keep or remove after a failure
+    write_failed = False  # an error writing stdout ends the command as it is
+
     def __init__(self, stream, header, columns):
         self.stream = stream
-        self.path = None  # no file to remove after a failure
         self.rows_written = 0
         lines = ["# gyrofilter-recording: 1"] + [f"# {k}: {v}" for k, v in header.items()] + [",".join(columns)]
         self.stream.write("\n".join(lines) + "\n")
@@ -52,8 +55,9 @@ class _TextOut:
     def flush(self):
         self.stream.flush()
 
-    def close(self):
+    def close(self, failed):
         self.flush()
+        return ""
 
 
 def run(args):
@@ -69,7 +73,7 @@ def run(args):
 
 def _run(args, source):
     from .. import __version__
-    from ..recording import RecordingWriter, dps_header
+    from ..recording import dps_header
 
     head = source.header
     cols = source.columns
@@ -89,8 +93,7 @@ def _run(args, source):
     out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
     columns = ["t", "gx", "gy", "gz"]
     if args.out:
-        live.create_folder_of(args.out)
-        writer = RecordingWriter(args.out, out_header, columns, formats=common.ROW_FORMAT.split(","), flush_interval_s=None)
+        writer = live.LiveOutput(args.out, out_header, columns, common.ROW_FORMAT.split(","), "filtered row")
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = live.LiveLoop(source, args.duration)
@@ -125,12 +128,11 @@ def _run(args, source):
             saved = common.save_calibration(args.save_calibration, filt, outputs)
         if saved:
             common.say(f"saved the calibration to {args.save_calibration}")
-    except BaseException:
-        if removed := live.close_output(writer, True, "filtered row"):
-            common.say(f"gyrofilter run: {removed}")
+    except BaseException as exc:
+        live.close_after_failure(writer, exc, "gyrofilter run")
         raise
     nothing = filt.calibrating  # it stopped inside the start-up window: an output without rows goes
-    removed = live.close_output(writer, loop.failed() or nothing, "filtered row")
+    left = writer.close(loop.failed() or nothing)
     reason = loop.reason()
     bias = "" if filt.bias_dps is None else f" bias {common.bias_text(filt.bias_dps)};"
     print(
@@ -139,7 +141,7 @@ def _run(args, source):
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
         f"  lost {source.stats.get('lost_samples', 0)} samples"
         + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else "")
-        + (f"\n  {removed}" if removed else "")
+        + (f"\n  {args.out}: {left}" if left else "")
         + ("\n  nothing filtered: it stopped inside the start-up calibration window "
            f"({filt.settings.calibration_s:g} s)" if nothing else ""),
         file=sys.stderr,

@@ -537,18 +537,11 @@ def load_model(path):
     """The simulator model (docs/formats.md, section 2) in the JSON file ``path``, unchecked
     (:func:`validate_model` checks it). A gap report (section 3) is accepted: its
     ``extended_model`` is the model. The one reader of model files (``simulate --model``, the
-    ``sim:MODEL.json`` source, ``--temp-model``); its errors name the file."""
-    try:
-        with open(path, encoding="utf-8") as fh:
-            text = fh.read()
-    except OSError as exc:
-        raise SettingsError(f"{path}: cannot read model: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise SettingsError(f"{path}: not a model: not UTF-8 text") from None
-    try:
-        model = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise SettingsError(f"{path}: not valid JSON: line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+    ``sim:MODEL.json`` source, ``--temp-model``); its errors name the file. Read through
+    :func:`gyrofilter.inputs.load_json` (size cap, UTF-8, nesting depth, no NaN tokens)."""
+    from ..inputs import load_json
+
+    model = load_json(path, "model")
     if isinstance(model, dict) and "axes" not in model and isinstance(model.get("extended_model"), dict):
         model = model["extended_model"]
     return model

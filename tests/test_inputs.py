@@ -1,0 +1,195 @@
+"""gyrofilter.inputs: the one reader of numbers in text and JSON values, the one JSON loader, quote()."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from gyrofilter import inputs
+from gyrofilter.errors import CalibrationError, SettingsError
+from gyrofilter.inputs import (MAX_JSON_DEPTH, MAX_NUMBER_CHARS, MAX_QUOTE_CHARS, check_number, is_plain_number,
+                               load_json, parse_json, parse_number, quote)
+
+
+# ------------------------------------------------------------------------------ numbers in text
+
+
+@pytest.mark.parametrize("text, value", [
+    ("12", 12.0), ("-0.5", -0.5), ("+3", 3.0), ("1e-3", 1e-3), ("1E+2", 100.0), (".5", 0.5), ("5.", 5.0),
+    (" 7 ", 7.0), ("\t-2.5e1\n", -25.0), ("0", 0.0), ("-0", 0.0), ("1e-400", 0.0), ("9" * MAX_NUMBER_CHARS, 1e64),
+])
+def test_plain_decimal_numbers_are_read(text, value):
+    assert parse_number(text, "x") == pytest.approx(value, rel=1e-15) and is_plain_number(text)
+
+
+@pytest.mark.parametrize("text", [
+    "0.0_1", "1_000", "nan", "NaN", "inf", "-inf", "Infinity", "infinity", "0x10", "0b1", "0o7", "1e", "e3", ".", "",
+    " ", "+", "-", "1.2.3", "--1", "+-1", "1,5", "1 2", "1e2.5", "1j", "\u0661\u0662", "\uff11\uff12", "12\u0661",
+    "9" * (MAX_NUMBER_CHARS + 1), "True",
+])
+def test_anything_else_is_refused_as_not_plain_decimal(text):
+    assert not is_plain_number(text)
+    with pytest.raises(SettingsError, match=r"^--gain must be a plain decimal number \(like 12, -0.5 or 1e-3\), got "):
+        parse_number(text, "--gain")
+
+
+def test_a_number_beyond_a_float_is_refused_as_not_finite():
+    with pytest.raises(SettingsError, match=r"^x must be a finite number, got '1e400'$"):
+        parse_number("1e400", "x")
+    with pytest.raises(SettingsError, match="must be a finite number"):
+        parse_number("-1e309", "x")
+
+
+def test_parse_number_raises_the_callers_error_class():
+    with pytest.raises(CalibrationError):
+        parse_number("abc", "x", error=CalibrationError)
+    with pytest.raises(CalibrationError):
+        parse_number("5", "x", high=1, error=CalibrationError)
+
+
+@pytest.mark.parametrize("bounds, accepted, refused, shown", [
+    (dict(low=0), [0, 1e300], [-1e-300, -1], ">= 0"),
+    (dict(low=0, low_open=True), [1e-300, 5], [0, -1], "> 0"),
+    (dict(high=10), [10, -1e300], [10.000001], "<= 10"),
+    (dict(high=10, high_open=True), [9.999999], [10, 11], "< 10"),
+    (dict(low=-1, high=1), [-1, 0, 1], [-1.5, 1.5], "in [-1, 1]"),
+    (dict(low=-1, high=1, low_open=True, high_open=True), [-0.999, 0.999], [-1, 1], "in (-1, 1)"),
+    (dict(low=0, high=1, high_open=True), [0, 0.5], [1], "in [0, 1)"),
+])
+def test_bounds_are_closed_unless_said_open(bounds, accepted, refused, shown):
+    for value in accepted:
+        assert check_number(value, "x", **bounds) == value
+        assert parse_number(repr(float(value)), "x", **bounds) == value
+    for value in refused:
+        with pytest.raises(SettingsError) as info:
+            check_number(value, "x", **bounds)
+        assert str(info.value).startswith(f"x must be {shown}, got "), str(info.value)
+        with pytest.raises(SettingsError, match="^x must be "):
+            parse_number(repr(float(value)), "x", **bounds)
+
+
+def test_integer_asks_for_a_whole_number_and_returns_an_int():
+    assert parse_number("12", "n", integer=True) == 12 and isinstance(parse_number("12", "n", integer=True), int)
+    assert check_number(3.0, "n", integer=True) == 3 and isinstance(check_number(3.0, "n", integer=True), int)
+    assert check_number(np.int64(7), "n", integer=True) == 7
+    for value in (2.5, 1e-9, -0.5):
+        with pytest.raises(SettingsError, match=r"^n must be a whole number, got "):
+            check_number(value, "n", integer=True)
+    with pytest.raises(SettingsError, match=r"^n must be a whole number, got '2.5'$|^n must be a whole number, got 2.5$"):
+        parse_number("2.5", "n", integer=True)
+
+
+# ------------------------------------------------------------------------------ numbers from JSON or Python
+
+
+@pytest.mark.parametrize("value", [1, -2.5, 0, np.float32(1.5), np.float64(-3.0), np.int64(4), np.uint8(200), 2**1023, 1e308])
+def test_ints_and_floats_are_numbers(value):
+    result = check_number(value, "x")
+    assert isinstance(result, float) and result == float(value)
+
+
+@pytest.mark.parametrize("value, shown", [
+    (True, "True"), (False, "False"), (np.bool_(True), "True"), (None, "None"), ("3", "'3'"), ([1], "[1]"),
+    ({"a": 1}, "{'a': 1}"), (math.nan, "nan"), (math.inf, "inf"), (-math.inf, "-inf"), (np.float64("nan"), "nan"),
+    (10**400, "1" + "0" * (MAX_QUOTE_CHARS - 1)), (-(10**400), "-1"), (2**1024, "1797693"), (1j, "1j"),
+])
+def test_anything_but_a_finite_int_or_float_is_refused_without_overflow(value, shown):
+    with pytest.raises(SettingsError) as info:
+        check_number(value, "key")
+    text = str(info.value)
+    assert text.startswith(f"key must be a finite number, got {shown}") and "\n" not in text, text
+    assert len(text) <= 200  # a 400-digit int is cut, its length given
+    if isinstance(value, int) and abs(value) > 10**300:
+        assert "characters)" in text
+
+
+def test_a_long_string_value_is_quoted_cut():
+    with pytest.raises(SettingsError) as info:
+        check_number("x" * 10_000, "key")
+    assert str(info.value) == f"key must be a finite number, got {'x' * MAX_QUOTE_CHARS!r}... (10000 characters)"
+
+
+# ------------------------------------------------------------------------------ JSON text
+
+
+@pytest.mark.parametrize("token", ["NaN", "Infinity", "-Infinity"])
+def test_nan_and_infinity_tokens_are_refused(token):
+    assert json.loads(f'{{"a": [1, {token}]}}')  # Python's json takes them
+    with pytest.raises(SettingsError, match=rf"^doc: not valid JSON: {token} is not a JSON number$"):
+        parse_json(f'{{"a": [1, {token}]}}', "doc")
+
+
+def _nested(depth, opener="[", closer="]"):
+    return opener * depth + closer * depth
+
+
+def test_nesting_of_32_levels_is_read_and_33_is_refused():
+    assert parse_json(_nested(MAX_JSON_DEPTH), "doc") == json.loads(_nested(MAX_JSON_DEPTH))
+    with pytest.raises(SettingsError, match=f"^doc: JSON nested more than {MAX_JSON_DEPTH} levels deep$"):
+        parse_json(_nested(MAX_JSON_DEPTH + 1), "doc")
+    mixed = '{"a": ' * 16 + "[" * 16 + "1" + "]" * 16 + "}" * 16  # objects and lists count alike
+    assert inputs._depth(parse_json(mixed, "doc")) == 32
+    with pytest.raises(SettingsError, match="nested more than 32"):
+        parse_json('{"a": ' * 17 + "[" * 16 + "1" + "]" * 16 + "}" * 17, "doc")
+    assert inputs._depth(parse_json("[[], [[[]]], 1]", "doc")) == 4 and inputs._depth(parse_json("5", "doc")) == 0
+
+
+def test_nesting_beyond_the_recursion_limit_is_refused_not_a_recursion_error():
+    with pytest.raises(SettingsError, match="nested more than 32 levels deep"):
+        parse_json(_nested(200_000), "doc")
+    with pytest.raises(SettingsError, match="nested more than 32 levels deep"):
+        parse_json('{"a": ' * 200_000 + "1" + "}" * 200_000, "doc")
+
+
+def test_invalid_json_and_an_integer_of_too_many_digits_are_one_line():
+    with pytest.raises(SettingsError, match=r"^doc: not valid JSON: line 2 column 1: Expecting value$"):
+        parse_json("[1,\n]", "doc")
+    with pytest.raises(SettingsError) as info:
+        parse_json("1" + "0" * 5000, "doc")  # beyond Python's 4300-digit int conversion limit
+    assert str(info.value).startswith("doc: not valid JSON: ") and len(str(info.value)) <= 120
+    assert parse_json("1" + "0" * 400, "doc") == 10**400  # valid JSON: check_number refuses it where a number is read
+
+
+# ------------------------------------------------------------------------------ JSON files
+
+
+def test_load_json_reads_a_file_and_names_it_in_every_error(tmp_path):
+    path = tmp_path / "m.json"
+    path.write_text('{"a": [1, 2.5, "x", null, true]}', encoding="utf-8")
+    assert load_json(path, "model") == {"a": [1, 2.5, "x", None, True]}
+    path.write_bytes(b'{"a": "\xff"}')
+    with pytest.raises(SettingsError, match=rf"^{path}: not a model file: not UTF-8 text$"):
+        load_json(path, "model")
+    path.write_text("{", encoding="utf-8")
+    with pytest.raises(CalibrationError, match=rf"^{path}: not valid JSON: line 1 column 2"):
+        load_json(path, "calibration", CalibrationError)
+    with pytest.raises(SettingsError, match=rf"^{tmp_path / 'none.json'}: cannot read the model file: No such file"):
+        load_json(tmp_path / "none.json", "model")
+    with pytest.raises(SettingsError, match=rf"^{tmp_path}: cannot read the model file: Is a directory"):
+        load_json(tmp_path, "model")
+
+
+def test_the_size_cap_counts_bytes_and_is_inclusive(tmp_path, monkeypatch):
+    monkeypatch.setattr(inputs, "MAX_JSON_BYTES", 2 * 1024 * 1024)
+    path = tmp_path / "big.json"
+    text = '["' + "x" * (inputs.MAX_JSON_BYTES - 4) + '"]'
+    path.write_text(text)
+    assert len(path.read_bytes()) == inputs.MAX_JSON_BYTES and load_json(path, "model") == ["x" * (inputs.MAX_JSON_BYTES - 4)]
+    path.write_text(text + " ")
+    with pytest.raises(SettingsError, match=rf"^{path}: not a model file: larger than 2 MiB$"):
+        load_json(path, "model")
+
+
+def test_an_endless_file_ends_at_the_cap():
+    with pytest.raises(SettingsError, match="^/dev/zero: not a model file: larger than 16 MiB$"):
+        load_json("/dev/zero", "model")
+
+
+# ------------------------------------------------------------------------------ quote
+
+
+def test_quote_cuts_at_the_limit_and_gives_the_length():
+    assert quote("a" * MAX_QUOTE_CHARS) == repr("a" * MAX_QUOTE_CHARS)
+    assert quote("a" * (MAX_QUOTE_CHARS + 1)) == f"{'a' * MAX_QUOTE_CHARS!r}... ({MAX_QUOTE_CHARS + 1} characters)"
+    assert quote("two\nlines") == "'two\\nlines'"  # one line, whatever the text
+    assert quote(12) == "'12'" and quote("abc", limit=2) == "'ab'... (3 characters)"
