@@ -14,6 +14,12 @@ DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
+#: largest |angular rate| a sample may have (deg/s): 50x the MPU6050's widest full scale (2000 deg/s)
+#: and 7x the widest MEMS gyros' (about 14 000 deg/s); it keeps every square the filters take finite
+MAX_RATE_DPS = 100_000.0
+#: the temperatures (deg C) a sample may carry: absolute zero to far above any silicon sensor's
+#: range (the MPU6050's register spans -60..133 deg C)
+MIN_TEMP_C, MAX_TEMP_C = -273.15, 500.0
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):

@@ -150,7 +150,7 @@ def test_set_takes_calibration_s_and_lists_and_refuses_what_has_its_own_option(t
     for extra, message in ((["--set", "calibration_s=1", "--calibration-s", "2"], "both given"),
                            (["--set", "sample_rate_hz=50"], "comes from the recording"),
                            (["--set", "calibration=x.json"], "use --calibration JSON"),
-                           (["--set", "calibration_s=abc"], "calibration_s='abc'"),
+                           (["--set", "calibration_s=abc"], "setting calibration_s must be a finite number, got 'abc'"),
                            (["--calibration", str(cal), "--calibration-s", "1"], "give one of them"),
                            (["--calibration", str(cal), "--set", "calibration_s=1"], "--set calibration_s"),
                            (["--set", "temp_coefficient_dps_per_c=0.01", "--temp-model", str(cal)], "both give the temperature"),
