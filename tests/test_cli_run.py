@@ -381,3 +381,14 @@ def test_run_and_replay_write_the_same_output_rate(tmp_path, capsys):
     assert main(["replay", str(src), "--out", str(outs["replay"])]) == 0
     rates = {name: read_recording(path).sample_rate_hz for name, path in outs.items()}
     assert rates["run"] == rates["replay"] == 99.3171 / 5
+
+
+def test_run_refuses_a_sample_beyond_the_filters_range_naming_the_source_and_sample(tmp_path, capsys):
+    x = np.random.default_rng(22).normal(0, 0.1, (1000, 3))
+    x[700, 2] = -1e300
+    src, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    write_recording(src, Recording.from_dps(x, 100.0))
+    assert main(["run", "--source", str(src), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert f"gyrofilter: error: source {src}: sample 700: gz (deg/s) must be in [-100000, 100000], got -1e+300" in err
+    assert "Traceback" not in err and not out.exists()
