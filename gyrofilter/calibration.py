@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import CalibrationError, SettingsError
-from .units import AXES
+from .units import AXES, check_rates_dps
 
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
@@ -140,7 +140,8 @@ def stillness_z(window_dps) -> np.ndarray:
 def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=20.0, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
-    ``window_dps`` is (n, 3) in deg/s, n >= 3, sampled at ``sample_rate_hz`` (Hz);
+    ``window_dps`` is (n, 3) in deg/s, n >= 3, each finite and within +-MAX_RATE_DPS
+    (:func:`gyrofilter.units.check_rates_dps`), sampled at ``sample_rate_hz`` (Hz);
     ``stillness_threshold``: the largest stillness statistic z accepted (noise units, see
     :func:`stillness_z`); ``max_bias_dps``: the largest plausible bias (deg/s); ``temp_c``
     optionally the window's n temperatures (deg C), whose mean is kept. Raises CalibrationError
@@ -149,6 +150,7 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     x = np.asarray(window_dps, dtype=float)
     if x.ndim != 2 or x.shape[1] != 3:
         raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")
+    check_rates_dps(x, "calibration window")  # a NaN would make a NaN bias that passes every test
     if len(x) < 3:
         raise SettingsError(
             f"calibration needs at least 3 samples to measure the noise, got {len(x)} "

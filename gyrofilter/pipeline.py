@@ -29,7 +29,7 @@ from .inputs import check_number
 from .predictor import closed_loop_radius, stable_gain_threshold
 from .presets import DEFAULT_PRESET, PRESETS
 from .tempcomp import compensate
-from .units import AXES, MAX_RATE_DPS, MAX_TEMP_C, MIN_TEMP_C, check_sample_rate_hz, plain
+from .units import AXES, MAX_RATE_DPS, MAX_TEMP_C, MIN_TEMP_C, check_rates_dps, check_sample_rate_hz, plain
 
 
 #: longest start-up still window (s): its samples are held until it ends
@@ -667,12 +667,7 @@ def _samples(samples_dps):
     x = _numbers(samples_dps, "samples_dps", "deg/s")
     if x.ndim != 2 or x.shape[1] != 3:
         raise SampleError(f"samples_dps must have shape (N, 3), got {x.shape}")
-    ok = np.abs(x) <= MAX_RATE_DPS  # False for NaN
-    if not ok.all():
-        row, axis = (int(i[0]) for i in np.nonzero(~ok))
-        check_number(float(x[row, axis]), f"g{AXES[axis]} (deg/s)", low=-MAX_RATE_DPS, high=MAX_RATE_DPS,
-                     error=partial(SampleError, row=row, where=f"samples_dps row {row}"))
-    return x
+    return check_rates_dps(x, "samples_dps")
 
 
 def _numbers(values, name, unit):

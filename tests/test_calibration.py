@@ -108,3 +108,15 @@ def test_save_load_round_trip_and_bad_files(tmp_path):
 def test_a_missing_calibration_file_is_a_calibration_error_naming_it(tmp_path):
     with pytest.raises(CalibrationError, match=r"nofile\.json: cannot read the calibration file"):
         Calibration.load(tmp_path / "nofile.json")
+
+
+def test_a_window_with_a_non_finite_or_absurd_sample_is_refused_not_averaged():
+    """calibrate() of a window with one NaN returned a NaN bias (NaN passes every comparison);
+    1e300 an absurd one. Both are refused, naming the row and axis."""
+    window = np.random.default_rng(4).normal(0, 0.05, (200, 3))
+    for value, got in ((np.nan, "must be a finite number, got nan"), (1e300, "must be in [-100000, 100000], got 1e+300")):
+        bad = window.copy()
+        bad[17, 2] = value
+        with pytest.raises(SettingsError) as info:
+            calibrate(bad, 100.0)
+        assert str(info.value) == f"calibration window row 17: gz (deg/s) {got}"
