@@ -32,8 +32,10 @@ from .tempcomp import compensate
 from .units import AXES, MAX_RATE_DPS, MAX_TEMP_C, MIN_TEMP_C, check_rates_dps, check_sample_rate_hz, plain
 
 
-#: longest start-up still window (s): its samples are held until it ends
+#: longest start-up still window (s), and most samples in it (an hour at 1 kHz, 115 MB with the
+#: temperatures): its samples are held until it ends
 MAX_CALIBRATION_S = 3600.0
+MAX_CALIBRATION_SAMPLES = 3_600_000
 #: largest |temperature coefficient| (deg/s per deg C): 60x the MPU6050's (its zero-rate output
 #: moves at most 20 deg/s over -40..85 deg C, 0.16 deg/s per deg C)
 MAX_TEMP_COEFFICIENT_DPS_PER_C = 10.0
@@ -73,7 +75,8 @@ class FilterSettings:
     ============================ ========= ===================================================
     setting                      default   meaning
     ============================ ========= ===================================================
-    calibration_s                2.0       start-up still window for the bias (s), <= 3600; 0 = none (refused
+    calibration_s                2.0       start-up still window for the bias (s), <= 3600 and
+                                           <= 3.6 million samples; 0 = none (refused
                                            where the filter needs it, unless loaded)
     calibration_retry_s          0.0       keep trying new windows for this long (s) when the
                                            sensor moved; 0 = raise at once
@@ -284,6 +287,10 @@ class GyroFilter:
         if calibration is None and s.calibration_s > 0 and self._cal_needed < 3:
             raise SettingsError(f"setting calibration_s={plain(s.calibration_s)} gives {self._cal_needed} sample(s) at "
                                 f"{self.sample_rate_hz:g} Hz; the calibration needs at least 3 to measure the noise")
+        if calibration is None and self._cal_needed > MAX_CALIBRATION_SAMPLES:
+            raise SettingsError(f"setting calibration_s={plain(s.calibration_s)} gives {self._cal_needed} samples at "
+                                f"{self.sample_rate_hz:g} Hz; the still window is held in memory: at most "
+                                f"{MAX_CALIBRATION_SAMPLES} samples ({MAX_CALIBRATION_SAMPLES / self.sample_rate_hz:g} s)")
         self._cal_buf = None
         self._cal_fill = 0
         self._cal_tries_left = 0
@@ -433,7 +440,10 @@ class GyroFilter:
         refused, no retry left) drops that window; the samples of this call after it are not
         used, and the next sample given starts a new window.
         """
-        x = _samples(samples_dps)
+        return self._filter(_samples(samples_dps), temp_c)
+
+    def _filter(self, x, temp_c):
+        """:meth:`filter` of the checked samples ``x`` (:func:`_samples`)."""
         temps = self._check_temps(temp_c, len(x))
         samples_in = self.samples_in + len(x)
         outputs = []
@@ -494,13 +504,18 @@ class GyroFilter:
         ``t_s`` (N,) are the times of the N samples (s, any origin); ``rows`` (M, 3) are what
         ``filter(samples_dps, temp_c)`` returns and ``t_rows_s`` (M,) the time of each row's
         block's last input sample. A row comes out when that sample goes in, so it is always one
-        of this call's samples, whatever the chunking.
+        of this call's samples, whatever the chunking. Times must be finite (SampleError names
+        the first that is not, and the filter is left as it was).
         """
-        x = np.asarray(samples_dps)
-        t = np.asarray(t_s, dtype=float)
-        if x.ndim and t.shape != x.shape[:1]:
-            raise SettingsError(f"t_s must have shape ({len(x)},), one time per sample, got {t.shape}")
-        rows = self.filter(x, temp_c)
+        x = _samples(samples_dps)
+        t = _numbers(t_s, "t_s", "s")
+        if t.shape != (len(x),):
+            raise SampleError(f"t_s must have shape ({len(x)},), one time per sample, got {t.shape}")
+        finite = np.isfinite(t)
+        if not finite.all():
+            row = int(np.flatnonzero(~finite)[0])
+            raise SampleError(f"t_s must be finite (s), got {t[row]!r}", row, f"t_s row {row}")
+        rows = self._filter(x, temp_c)
         return t[self.block_end_indices(len(rows)) - (self.samples_in - len(x))], rows
 
     def state_dict(self) -> dict:

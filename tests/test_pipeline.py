@@ -335,3 +335,26 @@ def test_after_a_refused_calibration_the_next_samples_start_a_new_window():
         rows = stream(f, still) if feed == "update" else f.filter(still)
         assert np.array_equal(rows, GyroFilter(100.0, preset="paper").filter(still))
         assert f.first_block_index == 600 and f.samples_in == 1400  # 2 refused windows, then 2 s of calibration
+
+
+def test_the_calibration_window_held_in_memory_is_bounded_in_samples():
+    """An hour at 100 kHz was accepted: a lazily allocated 8.6 GB window, filled sample by sample."""
+    from gyrofilter.pipeline import MAX_CALIBRATION_SAMPLES
+
+    with pytest.raises(SettingsError, match="setting calibration_s=3600.0 gives 360000000 samples at 100000 Hz; "
+                                            "the still window is held in memory: at most 3600000 samples"):
+        GyroFilter(100_000.0, calibration_s=3600.0)
+    assert GyroFilter(1000.0, calibration_s=MAX_CALIBRATION_SAMPLES / 1000.0).calibrating
+
+
+def test_filter_timed_refuses_times_that_are_not_finite():
+    f = GyroFilter(100.0, preset="paper")
+    t = np.arange(300) / 100.0
+    t[250] = np.nan
+    with pytest.raises(SettingsError, match="t_s row 250: t_s must be finite"):
+        f.filter_timed(noisy(300), t)
+    assert f.samples_in == 0
+    with pytest.raises(SettingsError, match="t_s must have shape"):
+        f.filter_timed(noisy(300), t[:10])
+    with pytest.raises(SettingsError, match="samples_dps must be an array of numbers"):
+        f.filter_timed([[1.0, 2.0, 3.0], [1.0]], t[:2])
