@@ -37,7 +37,7 @@ import numpy as np
 
 from .errors import CalibrationError, SettingsError
 from .inputs import check_number, load_json, quote
-from .units import AXES, TEMP_RANGE_C, check_sample_rate_hz
+from .units import AXES, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
 
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
@@ -85,41 +85,46 @@ class Calibration:
         with open(path, "w", encoding="utf-8") as fh:
             fh.write(self.to_json() + "\n")
 
-    @classmethod
-    def load(cls, path, *, max_bias_dps=MAX_BIAS_DPS) -> "Calibration":
-        """Read a calibration saved by :meth:`save` from the file ``path`` (through
-        :func:`gyrofilter.inputs.load_json`); CalibrationError names the file, the key and what
-        is wrong.
-
-        Every field is held to the limits of a start-up calibration (:func:`calibrate`):
+    def checked(self, where, *, max_bias_dps=MAX_BIAS_DPS) -> "Calibration":
+        """This calibration with plain float/int fields, held to the limits of a start-up calibration
+        (:func:`calibrate`), or CalibrationError whose message starts with ``where`` and names the key:
         ``bias_dps`` 3 numbers in [-max_bias_dps, max_bias_dps] (the pipeline passes its setting),
         ``noise_std_dps`` 3 numbers in [0, MAX_NOISE_STD_DPS], ``samples`` a whole number in
         [MIN_SAMPLES, MAX_SAMPLES], ``sample_rate_hz`` as :func:`gyrofilter.units.check_sample_rate_hz`
-        takes it, ``temp_c`` (optional, null for none) in ``TEMP_RANGE_C``."""
+        takes it, ``temp_c`` None or in ``units.TEMP_RANGE_C``. The one check of a calibration,
+        loaded (:meth:`load`) or given in code (``GyroFilter(calibration=...)``)."""
+        def number(key, value, **bounds):
+            return check_number(value, f"{where}: {key}", error=CalibrationError, **bounds)
+
+        def triple(key, values, **bounds):
+            if not isinstance(values, (list, tuple, np.ndarray)) or len(values) != len(AXES):
+                shown = quote(json.dumps(values)) if isinstance(values, (int, float, str, dict)) else plain(values)
+                raise CalibrationError(f"{where}: {key} must be a list of 3 numbers (x, y, z), got {shown}")
+            return tuple(number(f"{key} {axis}", v, **bounds) for axis, v in zip(AXES, values))
+
+        low_c, high_c = TEMP_RANGE_C
+        return Calibration(
+            triple("bias_dps", self.bias_dps, low=-max_bias_dps, high=max_bias_dps),
+            triple("noise_std_dps", self.noise_std_dps, low=0.0, high=MAX_NOISE_STD_DPS),
+            number("samples", self.samples, low=MIN_SAMPLES, high=MAX_SAMPLES, integer=True),
+            check_sample_rate_hz(number("sample_rate_hz", self.sample_rate_hz), f"{where}: sample_rate_hz",
+                                 CalibrationError),
+            None if self.temp_c is None else number("temp_c", self.temp_c, low=low_c, high=high_c),
+        )
+
+    @classmethod
+    def load(cls, path, *, max_bias_dps=MAX_BIAS_DPS) -> "Calibration":
+        """Read a calibration saved by :meth:`save` from the file ``path`` (through
+        :func:`gyrofilter.inputs.load_json`), held to the limits of :meth:`checked`;
+        CalibrationError names the file, the key and what is wrong."""
         data = load_json(path, "calibration", CalibrationError)
         if not isinstance(data, dict):
             raise CalibrationError(f"{path}: not a calibration JSON file (expected an object with bias_dps, noise_std_dps, ...)")
         missing = [k for k in ("bias_dps", "noise_std_dps", "samples", "sample_rate_hz") if k not in data]
         if missing:
             raise CalibrationError(f"{path}: the calibration lacks {', '.join(missing)}")
-
-        def number(key, **bounds):
-            return check_number(data[key], f"{path}: {key}", error=CalibrationError, **bounds)
-
-        def triple(key, **bounds):
-            value = data[key]
-            if not isinstance(value, list) or len(value) != len(AXES):
-                raise CalibrationError(f"{path}: {key} must be a list of 3 numbers (x, y, z), got {quote(json.dumps(value))}")
-            return tuple(check_number(v, f"{path}: {key} {axis}", error=CalibrationError, **bounds)
-                         for axis, v in zip(AXES, value))
-
-        bias = triple("bias_dps", low=-max_bias_dps, high=max_bias_dps)
-        noise = triple("noise_std_dps", low=0.0, high=MAX_NOISE_STD_DPS)
-        samples = number("samples", low=MIN_SAMPLES, high=MAX_SAMPLES, integer=True)
-        rate = check_sample_rate_hz(number("sample_rate_hz"), f"{path}: sample_rate_hz", CalibrationError)
-        low_c, high_c = TEMP_RANGE_C
-        temp = None if data.get("temp_c") is None else number("temp_c", low=low_c, high=high_c)
-        return cls(bias, noise, samples, rate, temp)
+        fields = (data["bias_dps"], data["noise_std_dps"], data["samples"], data["sample_rate_hz"], data.get("temp_c"))
+        return cls(*fields).checked(path, max_bias_dps=max_bias_dps)
 
 
 def white_noise_std(window_dps) -> np.ndarray:
@@ -148,7 +153,8 @@ def stillness_z(window_dps) -> np.ndarray:
 def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=MAX_BIAS_DPS, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
-    ``window_dps`` is (n, 3) in deg/s, n >= MIN_SAMPLES (3), sampled at ``sample_rate_hz`` (Hz);
+    ``window_dps`` is (n, 3) in deg/s, n >= MIN_SAMPLES (3), each finite and within +-MAX_RATE_DPS
+    (:func:`gyrofilter.units.check_rates_dps`), sampled at ``sample_rate_hz`` (Hz);
     ``stillness_threshold``: the largest stillness statistic z accepted (noise units, see
     :func:`stillness_z`); ``max_bias_dps``: the largest plausible bias (deg/s); ``temp_c``
     optionally the window's n temperatures (deg C), whose mean is kept. Raises CalibrationError
@@ -157,6 +163,7 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     x = np.asarray(window_dps, dtype=float)
     if x.ndim != 2 or x.shape[1] != 3:
         raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")
+    check_rates_dps(x, "calibration window")  # a NaN would make a NaN bias that passes every test
     if len(x) < MIN_SAMPLES:
         raise SettingsError(
             f"calibration needs at least {MIN_SAMPLES} samples to measure the noise, got {len(x)} "

@@ -13,6 +13,18 @@ class SettingsError(GyroFilterError, ValueError):
     """A setting or an argument (a sample, an array) is out of range, mis-shaped or inconsistent."""
 
 
+class SampleError(SettingsError):
+    """A sample (or its temperature) refused by ``GyroFilter.update()`` / ``filter()``, which leave
+    the filter as it was. ``row``: its index in the call's samples (0 for ``update()``), so that
+    the caller's own index of it is ``filter.samples_in + row``; ``reason``: the message without
+    the row, for a caller that names the file and line instead."""
+
+    def __init__(self, reason, row=0, where="sample"):
+        super().__init__(f"{where}: {reason}")
+        self.row = row
+        self.reason = reason
+
+
 class RecordingError(GyroFilterError, ValueError):
     """A recording file is malformed: the message names the file, the line and the reason."""
 

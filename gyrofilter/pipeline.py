@@ -15,7 +15,8 @@ The state has a fixed size: nothing grows per sample, so a filter can run for da
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
+from functools import partial
 
 import numpy as np
 
@@ -23,15 +24,47 @@ from . import kalman
 from .adaptive import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
 from .calibration import MAX_BIAS_DPS, Calibration, calibrate
-from .errors import CalibrationError, SettingsError
+from .errors import CalibrationError, SampleError, SettingsError
+from .inputs import check_number
 from .predictor import closed_loop_radius, stable_gain_threshold
 from .presets import DEFAULT_PRESET, PRESETS
 from .tempcomp import compensate
-from .units import check_sample_rate_hz, plain
+from .units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
 
 
-#: longest start-up still window (s): its samples are held until it ends
+#: longest start-up still window (s), and most samples in it (an hour at 1 kHz, 115 MB with the
+#: temperatures): its samples are held until it ends
 MAX_CALIBRATION_S = 3600.0
+MAX_CALIBRATION_SAMPLES = 3_600_000
+#: largest |temperature coefficient| (deg/s per deg C): 60x the MPU6050's (its zero-rate output
+#: moves at most 20 deg/s over -40..85 deg C, 0.16 deg/s per deg C)
+MAX_TEMP_COEFFICIENT_DPS_PER_C = 10.0
+
+#: The range of every numeric setting (the bounds :func:`gyrofilter.inputs.check_number` takes).
+#: Every size and count has an upper bound, so that no setting asks for more memory or time
+#: than a Pi has (a block is held in memory, the rings are fifo_depth, qr_window and hold_window
+#: long, and median_slope compares every pair of a block's samples); rates and variances stay
+#: within MAX_RATE_DPS (its square), so that every square the filters take stays finite.
+SETTING_RANGES = {
+    "calibration_s": dict(low=0, high=MAX_CALIBRATION_S),
+    "calibration_retry_s": dict(low=0, high=86_400.0),
+    "stillness_z": dict(low=0, low_open=True, high=1e6),
+    "max_bias_dps": dict(low=0, low_open=True, high=MAX_RATE_DPS),
+    "block_len": dict(low=1, high=100, integer=True),
+    "outlier_q_dps": dict(low=0, low_open=True, high=MAX_RATE_DPS),
+    "fifo_depth": dict(low=1, high=100, integer=True),
+    "fit_order": dict(low=0, high=10, integer=True),
+    "p0_dps2": dict(low=0, low_open=True, high=MAX_RATE_DPS ** 2),
+    "qr_window": dict(low=0, high=10_000, integer=True),
+    "hold_h": dict(low=0, low_open=True, high=1e6),
+    "hold_window": dict(low=2, high=1_000, integer=True),
+    "hold_max_blocks": dict(low=1, high=10 ** 9, integer=True),
+    "gain_min": dict(low=0, low_open=True, high=1),
+    "innovation_forgetting": dict(low=0, low_open=True, high=1),
+    "prior_var_max_r": dict(low=0, high=1e6),
+    "guard_blocks": dict(low=0, high=10 ** 6, integer=True),
+    "guard_k_sigma": dict(low=0, low_open=True, high=1e6),
+}
 
 
 @dataclass(frozen=True)
@@ -42,7 +75,8 @@ class FilterSettings:
     ============================ ========= ===================================================
     setting                      default   meaning
     ============================ ========= ===================================================
-    calibration_s                2.0       start-up still window for the bias (s), <= 3600; 0 = none (refused
+    calibration_s                2.0       start-up still window for the bias (s), <= 3600 and
+                                           <= 3.6 million samples; 0 = none (refused
                                            where the filter needs it, unless loaded)
     calibration_retry_s          0.0       keep trying new windows for this long (s) when the
                                            sensor moved; 0 = raise at once
@@ -90,6 +124,9 @@ class FilterSettings:
                                            needs temperatures (see gyrofilter.tempcomp)
     ============================ ========= ===================================================
 
+    Every number must lie in its range in :data:`SETTING_RANGES` (a bool is not a number), the
+    temperature coefficients within +-:data:`MAX_TEMP_COEFFICIENT_DPS_PER_C`.
+
     ``preset="hold"`` is ``tracker="block_mean", hold=True``; ``preset="adaptive_kalman"`` (= the
     default ``"recommended"``) is ``kalman_noise="adaptive"`` with the guard on (gyrofilter.presets).
 
@@ -131,26 +168,24 @@ class FilterSettings:
         c = self.temp_coefficient_dps_per_c
         return (float(c),) * 3 if isinstance(c, (int, float)) else tuple(float(v) for v in c)
 
-    def validate(self):
-        """Check every setting; SettingsError names the first bad one, its value and what is expected."""
+    def validate(self) -> "FilterSettings":
+        """Check every setting and return them with the numbers as plain Python ints and floats
+        (an integer setting may be given as 5.0); SettingsError names the first bad one, its value
+        and what is expected. Numbers must lie in :data:`SETTING_RANGES` (never a bool, NaN or
+        infinity: :func:`gyrofilter.inputs.check_number`)."""
 
         def need(cond, name, what):
             if not cond:
-                raise SettingsError(f"setting {name}={plain(getattr(self, name))}: {what}")
+                raise SettingsError(f"setting {name}={_shown(getattr(self, name))}: {what}")
 
-        for name in ("calibration_s", "calibration_retry_s", "stillness_z", "max_bias_dps", "outlier_q_dps", "p0_dps2"):
-            value = getattr(self, name)
-            need(isinstance(value, (int, float)) and math.isfinite(value), name, "must be a finite number")
-        need(0 <= self.calibration_s <= MAX_CALIBRATION_S, "calibration_s",
-             f"must be between 0 and {MAX_CALIBRATION_S:g} seconds (the still window is held in memory)")
-        need(self.calibration_retry_s >= 0, "calibration_retry_s", "must be >= 0 seconds")
-        need(self.stillness_z > 0, "stillness_z", "must be > 0")
-        need(self.max_bias_dps > 0, "max_bias_dps", "must be > 0 deg/s")
-        need(self.outlier_q_dps > 0, "outlier_q_dps", "must be > 0 deg/s")
-        need(self.p0_dps2 > 0, "p0_dps2", "must be > 0 (deg/s)^2")
-        for name, low in (("block_len", 1), ("fifo_depth", 1), ("fit_order", 0), ("qr_window", 0)):
-            value = getattr(self, name)
-            need(isinstance(value, int) and not isinstance(value, bool) and value >= low, name, f"must be an integer >= {low}")
+        numbers = {name: check_number(getattr(self, name), f"setting {name}", **bounds)
+                   for name, bounds in SETTING_RANGES.items()}
+        checked = replace(self, **numbers)
+        checked._validate_choices(need)
+        return checked
+
+    def _validate_choices(self, need):
+        """The checks beyond the ranges: the named choices and the settings that depend on each other."""
         need(self.qr_window != 1, "qr_window", "must be 0 (all) or >= 2: a variance needs two values")
         need(self.qr_stat in ("variance", "std"), "qr_stat", "must be 'variance' or 'std'")
         need(self.r_source in ("window", "calibration"), "r_source", "must be 'window' or 'calibration'")
@@ -159,28 +194,18 @@ class FilterSettings:
         need(self.tracker in ("kalman", "block_mean"), "tracker", "must be 'kalman' or 'block_mean'")
         rules = (*AVERAGERS, "by_model")
         need(self.outlier_rule in rules, "outlier_rule", f"must be one of {', '.join(map(repr, rules))}")
+        need(self.kalman_noise in ("paper", "adaptive"), "kalman_noise", "must be 'paper' or 'adaptive'")
         need(self.outlier_rule != "by_model" or (self.kalman_noise == "adaptive" and self.tracker == "kalman"), "outlier_rule",
              "'by_model' follows the adaptive Kalman filter's model: it needs kalman_noise='adaptive' and "
              "tracker='kalman'; with another filter choose the rule too, e.g. outlier_rule='paper' "
              "(--set outlier_rule=paper)")
         c = self.temp_coefficient_dps_per_c
-        ok = isinstance(c, (int, float)) and not isinstance(c, bool) or (
-            isinstance(c, (tuple, list)) and len(c) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in c))
-        need(ok and all(map(math.isfinite, self.temp_coefficients() if ok else ())), "temp_coefficient_dps_per_c",
-             "must be one finite number or 3 (deg/s per deg C, axes x, y, z)")
-        need(isinstance(self.hold_h, (int, float)) and math.isfinite(self.hold_h) and self.hold_h > 0, "hold_h", "must be a number > 0")
-        for name, low in (("hold_window", 2), ("hold_max_blocks", 1), ("guard_blocks", 0)):
-            value = getattr(self, name)
-            need(isinstance(value, int) and not isinstance(value, bool) and value >= low, name, f"must be an integer >= {low}")
-        need(self.kalman_noise in ("paper", "adaptive"), "kalman_noise", "must be 'paper' or 'adaptive'")
-        for name in ("gain_min", "innovation_forgetting", "prior_var_max_r", "guard_k_sigma"):
-            value = getattr(self, name)
-            need(isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value), name,
-                 "must be a finite number")
-        need(0 < self.innovation_forgetting <= 1, "innovation_forgetting", "must be in (0, 1]")
-        need(self.guard_k_sigma > 0, "guard_k_sigma", "must be > 0 (block-noise units)")
-        need(self.prior_var_max_r >= 0, "prior_var_max_r", "must be >= 0 (units of R; 0 = no limit)")
-        need(0 < self.gain_min <= 1, "gain_min", "must be in (0, 1]")
+        several = isinstance(c, (tuple, list))
+        items = c if several else (c,)
+        need(len(items) == (3 if several else 1)
+             and all(_is_number(v) and abs(v) <= MAX_TEMP_COEFFICIENT_DPS_PER_C for v in items),
+             "temp_coefficient_dps_per_c",
+             f"must be one number or 3 (deg/s per deg C, axes x, y, z), each within +-{MAX_TEMP_COEFFICIENT_DPS_PER_C:g}")
         if self.kalman_noise == "adaptive":
             radius = closed_loop_radius(self.fifo_depth, self.fit_order, self.gain_min)
             need(radius < 1, "gain_min", f"leaves the LS loop unstable (largest root modulus {radius:.3f} with "
@@ -216,8 +241,8 @@ class GyroFilter:
     """
 
     def __init__(self, sample_rate_hz, calibration_s=None, *, preset=DEFAULT_PRESET, calibration=None, **settings):
-        if preset not in PRESETS:
-            raise SettingsError(f"unknown preset {preset!r}; choose one of {', '.join(PRESETS)}")
+        if not isinstance(preset, str) or preset not in PRESETS:
+            raise SettingsError(f"unknown preset {_shown(preset)}; choose one of {', '.join(PRESETS)}")
         unknown = sorted(set(settings) - set(SETTING_NAMES))
         if unknown:
             raise SettingsError(f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(SETTING_NAMES)}")
@@ -225,8 +250,7 @@ class GyroFilter:
         chosen.update(settings)
         if calibration_s is not None:
             chosen["calibration_s"] = calibration_s
-        self.settings = FilterSettings(**chosen)
-        self.settings.validate()
+        self.settings = FilterSettings(**chosen).validate()
         self.sample_rate_hz = check_sample_rate_hz(sample_rate_hz)
         self.preset = preset
         s = self.settings
@@ -263,6 +287,10 @@ class GyroFilter:
         if calibration is None and s.calibration_s > 0 and self._cal_needed < 3:
             raise SettingsError(f"setting calibration_s={plain(s.calibration_s)} gives {self._cal_needed} sample(s) at "
                                 f"{self.sample_rate_hz:g} Hz; the calibration needs at least 3 to measure the noise")
+        if calibration is None and self._cal_needed > MAX_CALIBRATION_SAMPLES:
+            raise SettingsError(f"setting calibration_s={plain(s.calibration_s)} gives {self._cal_needed} samples at "
+                                f"{self.sample_rate_hz:g} Hz; the still window is held in memory: at most "
+                                f"{MAX_CALIBRATION_SAMPLES} samples ({MAX_CALIBRATION_SAMPLES / self.sample_rate_hz:g} s)")
         self._cal_buf = None
         self._cal_fill = 0
         self._cal_tries_left = 0
@@ -279,7 +307,10 @@ class GyroFilter:
                 if needed:
                     raise SettingsError(f"setting {setting} needs a start-up calibration (calibration_s > 0) {why}")
         if calibration is not None:
-            self.calibration = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration, max_bias_dps=s.max_bias_dps)
+            if isinstance(calibration, Calibration):
+                self.calibration = calibration.checked("the calibration", max_bias_dps=s.max_bias_dps)
+            else:
+                self.calibration = Calibration.load(calibration, max_bias_dps=s.max_bias_dps)
             _check_calibration_rate(self.calibration, self.sample_rate_hz,
                                     "the calibration" if isinstance(calibration, Calibration) else f"calibration {calibration}")
             self._apply_calibration(self.calibration)
@@ -345,24 +376,27 @@ class GyroFilter:
     def update(self, sample, temp_c=None):
         """Feed one sample and return the filtered block it completed, if any.
 
-        ``sample``: (gx, gy, gz), 3 finite numbers in deg/s. ``temp_c``: the sample's temperature
-        (deg C), required when compensating (``compensates_temperature``); otherwise used only
-        while calibrating, so that the calibration keeps the window's mean temperature
+        ``sample``: (gx, gy, gz), a tuple, list or array of 3 numbers in deg/s, each finite and
+        within +-:data:`~gyrofilter.units.MAX_RATE_DPS`. ``temp_c``: the sample's temperature
+        (deg C, within TEMP_RANGE_C of gyrofilter.units; None or NaN for none),
+        required when compensating (``compensates_temperature``); otherwise used only while
+        calibrating, so that the calibration keeps the window's mean temperature
         (``Calibration.temp_c``, for a later run that compensates) when every sample had one.
         Returns None while calibrating and between blocks, else the filtered (x, y, z) in deg/s
         for the block this sample completed.
+
+        A refused sample or temperature raises :class:`~gyrofilter.errors.SampleError` (a
+        SettingsError) before it touches the filter: the filter is as if it had not been sent.
+        A start-up window that fails its check raises CalibrationError once no retry is left
+        (``calibration_retry_s``); that window is dropped, and the next sample starts a new one.
         """
         sample = _sample3(sample)
-        if self._temp_on:
-            temp_c = _finite_float(temp_c)
-            if temp_c is None:
-                raise SettingsError("temperature compensation is on: update() needs temp_c, a finite temperature "
-                                    "(deg C), with every sample")
+        if temp_c is not None or self._temp_on:
+            temp_c = _temperature(temp_c, self._temp_on, "update()")
         self.samples_in += 1
         if self._cal_buf is not None:
             self._cal_buf[self._cal_fill] = sample
-            temp = _finite_float(temp_c)
-            self._cal_temp[self._cal_fill] = math.nan if temp is None else temp
+            self._cal_temp[self._cal_fill] = math.nan if temp_c is None else temp_c
             self._cal_fill += 1
             if self._cal_fill == self._cal_needed:
                 self._finish_calibration()
@@ -401,16 +435,17 @@ class GyroFilter:
         Returns the filtered blocks it completed, (M, 3). From a new filter,
         M = (N - calibration samples) // block_len and row k is block k after the calibration.
         Leftover samples wait in the filter for the next call.
+
+        The samples are checked as :meth:`update` checks one, all before any is used: the first
+        refused sample or temperature raises :class:`~gyrofilter.errors.SampleError` naming its
+        row (``.row``) and leaves the filter as it was. A CalibrationError (the start-up window
+        refused, no retry left) drops that window; the samples of this call after it are not
+        used, and the next sample given starts a new window.
         """
-        x = np.asarray(samples_dps)
-        if x.dtype.kind not in "iuf":  # numbers only, as update() takes them (no strings, bools or objects)
-            raise SettingsError(f"samples_dps must be numbers in deg/s, got an array of {x.dtype}")
-        x = x.astype(float, copy=False)
-        if x.ndim != 2 or x.shape[1] != 3:
-            raise SettingsError(f"samples_dps must have shape (N, 3), got {x.shape}")
-        bad = ~np.isfinite(x).all(axis=1)
-        if bad.any():
-            raise SettingsError(f"samples_dps row {int(np.flatnonzero(bad)[0])} is not finite: {x[bad][0].tolist()}")
+        return self._filter(_samples(samples_dps), temp_c)
+
+    def _filter(self, x, temp_c):
+        """:meth:`filter` of the checked samples ``x`` (:func:`_samples`)."""
         temps = self._check_temps(temp_c, len(x))
         samples_in = self.samples_in + len(x)
         outputs = []
@@ -422,6 +457,7 @@ class GyroFilter:
             self._cal_fill += take
             i += take
             if self._cal_fill == self._cal_needed:
+                self.samples_in = samples_in - len(x) + i  # counted before a refused window raises
                 self._finish_calibration()
         while self._block and i < len(x):
             row = self.update(x[i], None if temps is None else float(temps[i]))
@@ -470,13 +506,18 @@ class GyroFilter:
         ``t_s`` (N,) are the times of the N samples (s, any origin); ``rows`` (M, 3) are what
         ``filter(samples_dps, temp_c)`` returns and ``t_rows_s`` (M,) the time of each row's
         block's last input sample. A row comes out when that sample goes in, so it is always one
-        of this call's samples, whatever the chunking.
+        of this call's samples, whatever the chunking. Times must be finite (SampleError names
+        the first that is not, and the filter is left as it was).
         """
-        x = np.asarray(samples_dps)
-        t = np.asarray(t_s, dtype=float)
-        if x.ndim and t.shape != x.shape[:1]:
-            raise SettingsError(f"t_s must have shape ({len(x)},), one time per sample, got {t.shape}")
-        rows = self.filter(x, temp_c)
+        x = _samples(samples_dps)
+        t = _numbers(t_s, "t_s", "s")
+        if t.shape != (len(x),):
+            raise SampleError(f"t_s must have shape ({len(x)},), one time per sample, got {t.shape}")
+        finite = np.isfinite(t)
+        if not finite.all():
+            row = int(np.flatnonzero(~finite)[0])
+            raise SampleError(f"t_s must be finite (s), got {t[row]!r}", row, f"t_s row {row}")
+        rows = self._filter(x, temp_c)
         return t[self.block_end_indices(len(rows)) - (self.samples_in - len(x))], rows
 
     def state_dict(self) -> dict:
@@ -494,20 +535,22 @@ class GyroFilter:
     # ------------------------------------------------------------------ internals
 
     def _check_temps(self, temp_c, n):
-        """The temperatures for filter(): n values (deg C), or None when none are given; all
-        finite when compensating, else a NaN only keeps the calibration from keeping a temperature."""
+        """The temperatures for filter(): n values (deg C), or None when none are given. Each is
+        within TEMP_RANGE_C or NaN (none), which only keeps the calibration from
+        keeping a temperature and is refused when compensating (as :meth:`update` does)."""
         if temp_c is None:
             if self._temp_on:
-                raise SettingsError("temperature compensation is on: filter() needs temp_c, one temperature (deg C) per sample")
+                raise SampleError("temperature compensation is on: filter() needs temp_c, one temperature (deg C) per sample")
             return None
-        try:
-            t = np.asarray(temp_c, dtype=float)
-        except (TypeError, ValueError) as e:
-            raise SettingsError(f"temp_c must be numbers in deg C: {e}") from None
+        t = _numbers(temp_c, "temp_c", "deg C")
         if t.shape != (n,):
-            raise SettingsError(f"temp_c must have shape ({n},), one temperature per sample, got {t.shape}")
-        if self._temp_on and not np.isfinite(t).all():
-            raise SettingsError(f"temp_c row {int(np.flatnonzero(~np.isfinite(t))[0])} is not finite")
+            raise SampleError(f"temp_c must have shape ({n},), one temperature per sample, got {t.shape}")
+        ok = (t >= TEMP_RANGE_C[0]) & (t <= TEMP_RANGE_C[1])
+        if not self._temp_on:
+            ok |= np.isnan(t)
+        if not ok.all():
+            row = int(np.flatnonzero(~ok)[0])
+            _temperature(float(t[row]), self._temp_on, f"temp_c row {row}", row)
         return t
 
     def _track(self, y, out, y_motion=None, used=kalman.NO_USED):
@@ -533,10 +576,10 @@ class GyroFilter:
             cal = calibrate(self._cal_buf, self.sample_rate_hz, stillness_threshold=s.stillness_z,
                             max_bias_dps=s.max_bias_dps, temp_c=temps)
         except CalibrationError:
+            self._cal_fill = 0  # the window is dropped: the next sample starts a new one
             if self._cal_tries_left <= 0:
                 raise
             self._cal_tries_left -= 1
-            self._cal_fill = 0
             return
         self.calibration = cal
         self._start_kalman(block_noise_std(self._cal_buf, s.block_len), still_blocks=self._cal_needed // s.block_len)
@@ -591,27 +634,73 @@ def _check_calibration_rate(cal, sample_rate_hz, name):
 
 
 def _sample3(sample):
-    """One sample as a tuple of 3 finite floats (deg/s); SettingsError names what is wrong.
+    """One sample for update() as a tuple of 3 floats (deg/s); SampleError names what is wrong.
 
-    Checked before the sample touches any state, so a bad sample leaves the filter as it was.
-    (v - v == 0 is False exactly for NaN and +-inf.)
+    A sample is a tuple, list or array of shape (3,) of numbers (no bools, no set or dict: they
+    have no order), each finite and within +-MAX_RATE_DPS (:func:`gyrofilter.inputs.check_number`).
+    Checked before the sample touches any state, so a refused sample leaves the filter as it was.
     """
-    if type(sample) is tuple and len(sample) == 3:  # the common case, kept cheap
+    if type(sample) is tuple and len(sample) == 3:  # the common case, kept cheap (NaN fails every comparison)
         x, y, z = sample
-        if type(x) is float and type(y) is float and type(z) is float and x - x == 0 and y - y == 0 and z - z == 0:
+        m = MAX_RATE_DPS
+        if type(x) is float and type(y) is float and type(z) is float and -m <= x <= m and -m <= y <= m and -m <= z <= m:
             return sample
-    try:
-        values = tuple(float(v) for v in sample if isinstance(v, _REAL) and not isinstance(v, _BOOL))
-        ok = len(values) == len(sample) == 3 and all(map(math.isfinite, values))
-    except TypeError:  # not a sequence
-        ok = False
-    if not ok:
-        raise SettingsError(f"update() takes one sample (gx, gy, gz): 3 finite numbers in deg/s, got {_shown(sample)}")
-    return values
+    if isinstance(sample, np.ndarray) and sample.shape == (3,) or isinstance(sample, (tuple, list)) and len(sample) == 3:
+        x, y, z = sample.tolist() if isinstance(sample, np.ndarray) else sample
+        m = MAX_RATE_DPS
+        if (type(x) in _PLAIN and type(y) in _PLAIN and type(z) in _PLAIN  # ints, numpy numbers, a list or an array row
+                and -m <= x <= m and -m <= y <= m and -m <= z <= m):
+            return float(x), float(y), float(z)
+        error = partial(SampleError, where=_UPDATE_TAKES)  # any other or refused: check_number says why
+        return tuple(check_number(v, f"g{axis} (deg/s)", low=-MAX_RATE_DPS, high=MAX_RATE_DPS, error=error)
+                     for axis, v in zip(AXES, sample))
+    raise SampleError(f"got {_shown(sample)}", where=_UPDATE_TAKES)
+
+
+_UPDATE_TAKES = f"update() takes one sample (gx, gy, gz): 3 finite numbers in deg/s within +-{MAX_RATE_DPS:g}"
 
 
 _REAL = (int, float, np.integer, np.floating)
 _BOOL = (bool, np.bool_)
+_PLAIN = frozenset((int, float, np.float64, np.float32, np.int64, np.int32))  # update()'s quick check
+
+
+def _samples(samples_dps):
+    """The samples for filter(): an (N, 3) float array, each finite and within +-MAX_RATE_DPS
+    (deg/s), checked in one pass; SampleError names the first refused row (``.row``)."""
+    x = _numbers(samples_dps, "samples_dps", "deg/s")
+    if x.ndim != 2 or x.shape[1] != 3:
+        raise SampleError(f"samples_dps must have shape (N, 3), got {x.shape}")
+    return check_rates_dps(x, "samples_dps")
+
+
+def _numbers(values, name, unit):
+    """``values`` as a float array when they are numbers (ints or floats: no strings, bools,
+    objects or ragged lists), else SampleError naming ``name``."""
+    try:
+        x = np.asarray(values)
+    except (ValueError, TypeError):  # a ragged list
+        raise SampleError(f"{name} must be an array of numbers in {unit}, got {_shown(values)}") from None
+    if x.dtype.kind not in "iuf":
+        raise SampleError(f"{name} must be numbers in {unit}, got an array of {x.dtype}")
+    return x.astype(float, copy=False)
+
+
+def _temperature(value, required, where, row=0):
+    """A sample's temperature as a float in TEMP_RANGE_C (deg C), or NaN when it has
+    none (None or NaN), which ``required`` (compensating) refuses; SampleError says why."""
+    if value is None or isinstance(value, (float, np.floating)) and math.isnan(value):
+        if required:
+            raise SampleError("temperature compensation is on: it needs temp_c, a temperature (deg C), with every sample",
+                              row, where)
+        return math.nan
+    return check_number(value, "temp_c (deg C)", low=TEMP_RANGE_C[0], high=TEMP_RANGE_C[1],
+                        error=partial(SampleError, row=row, where=where))
+
+
+def _is_number(value):
+    """Whether ``value`` is an int or float (numpy's too), not a bool."""
+    return isinstance(value, _REAL) and not isinstance(value, _BOOL)
 
 
 def _shown(value):
@@ -620,12 +709,3 @@ def _shown(value):
         return f"an array of shape {value.shape}"
     text = plain(value)
     return text if len(text) <= 80 else text[:77] + "..."
-
-
-def _finite_float(value):
-    """float(value) when it is a finite number, else None."""
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        return None
-    return value if math.isfinite(value) else None

@@ -5,18 +5,22 @@ seconds (``_s``), rates in hertz (``_hz``), temperatures in degrees Celsius (``_
 Arrays of three-axis samples have shape (N, 3), columns x, y, z.
 """
 import math
+from functools import partial
 
 import numpy as np
 
-from .errors import SettingsError
+from .errors import SampleError, SettingsError
 
 DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
-#: the plausible temperatures (deg C) of a gyro's die, ends included: beyond any MEMS part (the
-#: MPU6050's TEMP_OUT register spans -60 to +133 deg C)
+#: the plausible temperatures (deg C) of a gyro's die, ends included, for a sample and a calibration:
+#: beyond any MEMS part (the MPU6050's TEMP_OUT register spans -60 to +133 deg C)
 TEMP_RANGE_C = (-100.0, 200.0)
+#: largest |angular rate| a sample may have (deg/s): 50x the MPU6050's widest full scale (2000 deg/s)
+#: and 7x the widest MEMS gyros' (about 14 000 deg/s); it keeps every square the filters take finite
+MAX_RATE_DPS = 100_000.0
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
@@ -35,6 +39,21 @@ def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
     if not ok:
         raise error(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
     return value
+
+
+def check_rates_dps(x, what):
+    """``x``, an (N, 3) float array of rates in deg/s, when every value is finite and within
+    +-MAX_RATE_DPS (one vectorised pass); else :class:`~gyrofilter.errors.SampleError` naming the
+    first refused value by row (``.row``) and axis, e.g. "samples_dps row 7: gz (deg/s) must be in
+    [-100000, 100000], got 1e+300" (``what`` = "samples_dps")."""
+    from .inputs import check_number
+
+    ok = np.abs(x) <= MAX_RATE_DPS  # False for NaN
+    if not ok.all():
+        row, axis = (int(i[0]) for i in np.nonzero(~ok))
+        check_number(float(x[row, axis]), f"g{AXES[axis]} (deg/s)", low=-MAX_RATE_DPS, high=MAX_RATE_DPS,
+                     error=partial(SampleError, row=row, where=f"{what} row {row}"))
+    return x
 
 
 def plain(value):

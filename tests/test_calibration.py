@@ -182,3 +182,15 @@ def test_the_start_up_calibration_refuses_what_a_loaded_one_would():
         calibrate(window, 100.0)
     with pytest.raises(CalibrationError, match=r"mean temperature \(deg C\) must be in \[-100, 200\], got 1000.0"):
         calibrate(still(200), 100.0, temp_c=np.full(200, 1000.0))
+
+
+def test_a_window_with_a_non_finite_or_absurd_sample_is_refused_not_averaged():
+    """calibrate() of a window with one NaN returned a NaN bias (NaN passes every comparison);
+    1e300 an absurd one. Both are refused, naming the row and axis."""
+    window = np.random.default_rng(4).normal(0, 0.05, (200, 3))
+    for value, got in ((np.nan, "must be a finite number, got nan"), (1e300, "must be in [-100000, 100000], got 1e+300")):
+        bad = window.copy()
+        bad[17, 2] = value
+        with pytest.raises(SettingsError) as info:
+            calibrate(bad, 100.0)
+        assert str(info.value) == f"calibration window row 17: gz (deg/s) {got}"

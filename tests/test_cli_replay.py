@@ -150,7 +150,7 @@ def test_set_takes_calibration_s_and_lists_and_refuses_what_has_its_own_option(t
     for extra, message in ((["--set", "calibration_s=1", "--calibration-s", "2"], "both given"),
                            (["--set", "sample_rate_hz=50"], "comes from the recording"),
                            (["--set", "calibration=x.json"], "use --calibration JSON"),
-                           (["--set", "calibration_s=abc"], "calibration_s='abc'"),
+                           (["--set", "calibration_s=abc"], "setting calibration_s must be a finite number, got 'abc'"),
                            (["--calibration", str(cal), "--calibration-s", "1"], "give one of them"),
                            (["--calibration", str(cal), "--set", "calibration_s=1"], "--set calibration_s"),
                            (["--set", "temp_coefficient_dps_per_c=0.01", "--temp-model", str(cal)], "both give the temperature"),
@@ -387,3 +387,34 @@ def test_an_output_below_a_file_is_refused_naming_the_file(tmp_path, capsys):
     assert main(["replay", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"gyrofilter: error: {out}: {tmp_path / 'cal.json'} is a file, not a folder"]
+
+
+@pytest.mark.parametrize("realtime", [[], ["--realtime"]])
+def test_a_sample_beyond_the_filters_range_is_refused_naming_the_line(tmp_path, capsys, realtime):
+    """A finite but absurd sample (1e300 deg/s) made every later row inf and replay exited 0."""
+    rng = np.random.default_rng(22)
+    x = rng.normal(0, 0.1, (1000, 3))
+    x[700, 1] = 1e300
+    src, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    write_recording(src, Recording.from_dps(x, 100.0))
+    line = next(i for i, text in enumerate(src.read_text().splitlines(), 1) if "e+300" in text)
+    assert main(["replay", str(src), "--out", str(out), *realtime]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"gyrofilter: error: {src}: line {line}: gy (deg/s) must be in [-100000, 100000], got 1e+300"
+    assert not out.exists()
+
+
+def test_set_refuses_a_repeated_key_bools_for_numbers_and_huge_numbers(tmp_path, capsys):
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(np.random.default_rng(3).normal(0, 0.1, (500, 3)), 100.0))
+    for extra, message in (
+            (["--set", "block_len=4", "--set", "block_len=5"], "--set block_len: given twice"),
+            (["--set", "stillness_z=true"], "setting stillness_z must be a finite number, got True"),
+            (["--set", "block_len=" + "9" * 400], "setting block_len must be a finite number (a whole number), got 999"),
+            (["--set", "fifo_depth=1e12"], "setting fifo_depth must be in [1, 100], got 1000000000000.0"),
+            (["--set", "stillness_z=NaN"], "setting stillness_z must be a finite number, got 'NaN'"),
+            (["--set", "calibration_s=null"], "--set calibration_s=null: every setting needs a value"),
+            (["--set", "blok_len=5"], "not a filter setting; did you mean block_len?")):
+        assert main(["replay", str(src), *extra]) == 2, extra
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err, (extra, err)

@@ -432,3 +432,14 @@ def test_an_output_takes_its_name_at_the_first_flush_with_a_row(tmp_path, monkey
     assert seen[0] == (seen[0][0], b"keep me") and seen[0][0] > 0
     assert seen[1] == (seen[0][0], seen[0][0])  # the rows flushed, readable under the user's name
     assert len(read_recording(out)) == 600
+
+
+def test_run_refuses_a_sample_beyond_the_filters_range_naming_the_source_and_sample(tmp_path, capsys):
+    x = np.random.default_rng(22).normal(0, 0.1, (1000, 3))
+    x[700, 2] = -1e300
+    src, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    write_recording(src, Recording.from_dps(x, 100.0))
+    assert main(["run", "--source", str(src), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert f"gyrofilter: error: source {src}: sample 700: gz (deg/s) must be in [-100000, 100000], got -1e+300" in err
+    assert "Traceback" not in err and not out.exists()

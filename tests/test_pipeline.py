@@ -1,3 +1,4 @@
+import re
 import tracemalloc
 
 import numpy as np
@@ -212,3 +213,148 @@ def test_bad_samples_name_the_problem():
     for bad in [(1.0, 2.0), 3.0, (1, 2, 3, 4)]:
         with pytest.raises(SettingsError, match="one sample"):
             f.update(bad)
+
+
+# ---------------------------------------------------------------------------------- issue 22 (part C)
+
+
+def test_a_sample_beyond_max_rate_is_refused_before_it_poisons_the_filter():
+    """A finite but absurd sample (1e300 deg/s) used to reach the Kalman filter's squares: a block of
+    them made every later row NaN/inf. Now update() and filter() refuse it, naming it (filter: its
+    row), and the filter goes on as if it had never been sent."""
+    from gyrofilter.errors import SampleError
+    from gyrofilter.units import MAX_RATE_DPS
+
+    x = noisy(1000)
+    for preset in ("paper", "recommended"):
+        bad = x.copy()
+        bad[600:605] = 1e300  # a whole block of them: the averaging stage's median cannot hide it
+        f = GyroFilter(100.0, preset=preset)
+        with pytest.raises(SampleError, match=r"samples_dps row 600: gx \(deg/s\) must be in \[-100000, 100000\], got 1e\+300") as info:
+            f.filter(bad)
+        assert info.value.row == 600 and f.samples_in == 0
+        g = GyroFilter(100.0, preset=preset)
+        rows = [g.update(tuple(s)) for s in x[:600].tolist()]
+        for sample in ((1e300, 0.0, 0.0), (0.0, -MAX_RATE_DPS * 1.0001, 0.0), (0.0, 0.0, 10 ** 400)):
+            with pytest.raises(SampleError, match="update\\(\\) takes one sample .* within \\+-100000"):
+                g.update(sample)
+        rows += [g.update(tuple(s)) for s in x[600:].tolist()]
+        assert np.array_equal(np.array([r for r in rows if r is not None]), f.filter(x))
+    edge = GyroFilter(100.0, preset="paper", calibration_s=0)
+    assert np.isfinite(edge.filter(np.full((50, 3), MAX_RATE_DPS) * [1, -1, 1])).all()  # the bound itself is a sample
+
+
+@pytest.mark.parametrize("sample", [{1.0, 2.0, 3.0}, {0: 1.0, 1: 2.0, 2: 3.0}, {"x": 1.0, "y": 2.0, "z": 3.0}, "1,2", (True, 0.0, 0.0),
+                                    np.zeros(3, dtype=bool), ("1", 2.0, 3.0), iter((1.0, 2.0, 3.0)), np.zeros((1, 3))])
+def test_update_takes_a_sequence_of_three_numbers_only(sample):
+    """A set or a dict has no order of axes (a set of 3 numbers was used as x, y, z in whatever
+    order it iterated, a dict's keys as the sample); bools, text and iterators are no samples either."""
+    f = GyroFilter(100.0, preset="paper", calibration_s=0)
+    with pytest.raises(SettingsError, match="update\\(\\) takes one sample"):
+        f.update(sample)
+    assert f.samples_in == 0
+    assert f.update([1, 2, 3]) is None and f.update(np.array([1.0, 2.0, 3.0], dtype=np.float32)) is None
+    assert f.samples_in == 2
+
+
+def test_temperatures_out_of_range_are_refused():
+    """temp_c = 10**400 raised OverflowError, 1e300 made the calibration's temperature inf."""
+    from gyrofilter.errors import SampleError
+
+    f = GyroFilter(100.0, preset="paper")
+    for temp in (10 ** 400, 1e300, -300.0, float("inf"), "30"):
+        with pytest.raises(SampleError, match="temp_c"):
+            f.update((0.0, 0.0, 0.0), temp)
+    temps = np.full(300, 25.0)
+    temps[150] = 1e300
+    with pytest.raises(SampleError, match="temp_c row 150") as info:
+        f.filter(noisy(300), temps)
+    assert info.value.row == 150 and f.samples_in == 0
+    temps[150] = np.nan  # NaN is "no temperature": the calibration then keeps none
+    f.filter(noisy(300), temps)
+    assert f.calibration.temp_c is None
+
+
+def test_a_given_calibration_with_absurd_numbers_is_refused():
+    good = dict(bias_dps=(0.1, 0.2, 0.3), noise_std_dps=(0.1, 0.1, 0.1), samples=200, sample_rate_hz=100.0)
+    for change, name in (({"bias_dps": (1e300, 0.0, 0.0)}, "bias_dps x"), ({"noise_std_dps": (0.1, 1e200, 0.1)}, "noise_std_dps y"),
+                         ({"temp_c": 1e300}, "temp_c"), ({"bias_dps": (0.0, 0.0)}, "bias_dps")):
+        with pytest.raises(CalibrationError, match=f"the calibration: {name}"):
+            GyroFilter(100.0, calibration=Calibration(**{**good, **change}))
+    assert np.isfinite(GyroFilter(100.0, calibration=Calibration(**good)).filter(noisy(100))).all()
+
+
+@pytest.mark.parametrize("name", ["block_len", "fifo_depth", "fit_order", "qr_window", "hold_window", "hold_max_blocks",
+                                  "guard_blocks"])
+def test_every_size_setting_has_an_upper_bound(name):
+    """fifo_depth, hold_window = 1e12 ended in MemoryError; qr_window = 1e12 in a 24-TB lazily
+    allocated ring. Each size or count now has a range, and the message gives it."""
+    from gyrofilter.pipeline import SETTING_RANGES
+
+    high = SETTING_RANGES[name]["high"]
+    low = SETTING_RANGES[name]["low"]
+    with pytest.raises(SettingsError, match=re.escape(f"setting {name} must be in [{low}, {high:g}], got 1000000000000")):
+        GyroFilter(100.0, preset="paper", **{name: 10 ** 12})
+    settings = {name: high, **({"kalman_noise": "adaptive"} if name == "hold_window" else {})}
+    assert GyroFilter(100.0, preset="paper", **settings).settings.__getattribute__(name) == high
+
+
+@pytest.mark.parametrize("value", [True, False, float("nan"), float("inf"), -float("inf"), 1e300, 10 ** 400, None, "1"])
+def test_numeric_settings_refuse_bools_non_finite_and_huge_values(value):
+    """stillness_z=True was used as 1; NaN, inf, 1e300 or 10**400 (OverflowError) in a setting."""
+    from gyrofilter.pipeline import SETTING_RANGES
+
+    for name in SETTING_RANGES:
+        if value is None and name == "calibration_s":  # GyroFilter's calibration_s=None: the preset's
+            continue
+        with pytest.raises(SettingsError, match=f"setting {name} must be"):
+            GyroFilter(100.0, preset="paper", **{name: value})
+
+
+def test_an_integer_setting_may_be_written_as_a_whole_float():
+    f = GyroFilter(100.0, preset="paper", block_len=4.0, fifo_depth=np.int64(8))
+    assert type(f.settings.block_len) is int and type(f.settings.fifo_depth) is int
+    assert len(f.filter(noisy(400))) == (400 - 200) // 4
+
+
+def test_after_a_refused_calibration_the_next_samples_start_a_new_window():
+    """update() after a CalibrationError raised IndexError (the full window was never emptied). Now
+    the refused window is dropped and the next samples calibrate again, as a new filter would."""
+    still = noisy(1000, seed=5)
+    moving = noisy(200, seed=6) + np.linspace(0, 10, 200)[:, None]
+    for feed in ("update", "filter"):
+        f = GyroFilter(100.0, preset="paper")
+        with pytest.raises(CalibrationError, match="moved"):
+            if feed == "update":
+                stream(f, moving)
+            else:
+                f.filter(np.concatenate([moving, still[:50]]))  # the samples after the refused window are dropped
+        assert f.calibrating and f.samples_in == 200
+        with pytest.raises(CalibrationError, match="moved"):  # every refused window raises: a live caller can keep trying
+            stream(f, moving)
+        rows = stream(f, still) if feed == "update" else f.filter(still)
+        assert np.array_equal(rows, GyroFilter(100.0, preset="paper").filter(still))
+        assert f.first_block_index == 600 and f.samples_in == 1400  # 2 refused windows, then 2 s of calibration
+
+
+def test_the_calibration_window_held_in_memory_is_bounded_in_samples():
+    """An hour at 100 kHz was accepted: a lazily allocated 8.6 GB window, filled sample by sample."""
+    from gyrofilter.pipeline import MAX_CALIBRATION_SAMPLES
+
+    with pytest.raises(SettingsError, match="setting calibration_s=3600.0 gives 360000000 samples at 100000 Hz; "
+                                            "the still window is held in memory: at most 3600000 samples"):
+        GyroFilter(100_000.0, calibration_s=3600.0)
+    assert GyroFilter(1000.0, calibration_s=MAX_CALIBRATION_SAMPLES / 1000.0).calibrating
+
+
+def test_filter_timed_refuses_times_that_are_not_finite():
+    f = GyroFilter(100.0, preset="paper")
+    t = np.arange(300) / 100.0
+    t[250] = np.nan
+    with pytest.raises(SettingsError, match="t_s row 250: t_s must be finite"):
+        f.filter_timed(noisy(300), t)
+    assert f.samples_in == 0
+    with pytest.raises(SettingsError, match="t_s must have shape"):
+        f.filter_timed(noisy(300), t[:10])
+    with pytest.raises(SettingsError, match="samples_dps must be an array of numbers"):
+        f.filter_timed([[1.0, 2.0, 3.0], [1.0]], t[:2])

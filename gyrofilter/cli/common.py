@@ -1,6 +1,7 @@
 """Pieces shared by the commands: output-file safety, filter options, warnings, the summary table."""
 import argparse
 import contextlib
+import difflib
 import json
 import math
 import os
@@ -11,6 +12,7 @@ import sys
 import tempfile
 
 from ..errors import SettingsError
+from ..inputs import parse_json, quote
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import DEFAULT_PRESET, PRESETS
 from ..units import AXES, json_ready
@@ -270,8 +272,14 @@ def add_filter_arguments(parser):
 
 
 def make_filter(args, sample_rate_hz):
-    """The GyroFilter of the filter options; ``--set calibration_s=S`` is ``--calibration-s S``."""
-    settings = dict(_parse_setting(text) for text in args.set)
+    """The GyroFilter of the filter options; ``--set calibration_s=S`` is ``--calibration-s S``.
+    A setting given twice with --set is refused, naming it."""
+    settings = {}
+    for text in args.set:
+        name, value = _parse_setting(text)
+        if name in settings:
+            raise SettingsError(f"--set {name}: given twice; give each setting once")
+        settings[name] = value
     calibration_s = args.calibration_s
     if "calibration_s" in settings:
         if calibration_s is not None:
@@ -298,19 +306,31 @@ _NOT_SETTINGS = {"sample_rate_hz": "the sample rate comes from the recording or 
 
 
 def _parse_setting(text):
-    """'name=value' -> (name, value); the value is read as JSON (numbers, true/false, lists), else
-    kept as text; numbers separated by commas (0.01,0.02,0) are a list."""
+    """'name=value' -> (name, value); NAME must be a filter setting (``SETTING_NAMES``). The value is
+    read as JSON (numbers, true/false, lists; :func:`gyrofilter.inputs.parse_json`, so no NaN or
+    Infinity tokens and no deep nesting), else kept as text; numbers separated by commas
+    (0.01,0.02,0) are a list; Python's True/False are bools; null is refused. Whether the value
+    fits the setting (its type and range) is GyroFilter's check, whose error names the setting."""
     name, sep, value = text.partition("=")
     name = name.strip()
     if not sep or not name:
-        raise SettingsError(f"--set {text!r}: expected NAME=VALUE")
+        raise SettingsError(f"--set {quote(text)}: expected NAME=VALUE")
     if name in _NOT_SETTINGS:
         raise SettingsError(f"--set {name}: not a filter setting; {_NOT_SETTINGS[name]}")
+    if name not in SETTING_NAMES:
+        close = difflib.get_close_matches(name, SETTING_NAMES, n=1)
+        raise SettingsError(f"--set {quote(name)}: not a filter setting{f'; did you mean {close[0]}?' if close else ''} "
+                            "(--help lists them)")
     if value.strip() in ("True", "False"):  # Python's spelling of a bool, as the settings' errors print it
         return name, value.strip() == "True"
-    for candidate in (value, f"[{value}]" if "," in value else None):
-        with contextlib.suppress(json.JSONDecodeError, TypeError):
-            return name, json.loads(candidate)
+    for candidate in (value, f"[{value}]") if "," in value else (value,):
+        try:
+            parsed = parse_json(candidate, f"--set {name}")
+        except SettingsError:  # not JSON: text
+            continue
+        if parsed is None:
+            raise SettingsError(f"--set {name}=null: every setting needs a value")
+        return name, parsed
     return name, value
 
 

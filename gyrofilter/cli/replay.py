@@ -22,7 +22,7 @@ from importlib import resources
 
 import numpy as np
 
-from ..errors import RecordingError, SettingsError
+from ..errors import RecordingError, SampleError, SettingsError
 from ..pipeline import SETTING_NAMES
 from ..recording import CHUNK_ROWS, FORMAT_VERSION, RecordingWriter, dps_header, iter_recording, warn_about_gaps
 from ..smoother import Smoother
@@ -70,8 +70,11 @@ def run(args):
             lines += [f"# {k}: {v}" for k, v in replay.stdout_header().items()] + [",".join(OUT_COLUMNS)]
             replay.print_rows("\n".join(lines))
         for chunk in chunks:
-            replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in),
-                        head.column(chunk, "temp"), args.realtime)
+            try:
+                replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in),
+                            head.column(chunk, "temp"), args.realtime)
+            except SampleError as exc:  # the filter refused a sample (beyond its range): name the file's line
+                raise RecordingError(f"{path}: line {head.line_of_row(filt.samples_in + exc.row)}: {exc.reason}") from None
         _refuse_nothing_filtered(path, head, filt)
         replay.finish()
         replay.close()

@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from ..errors import SampleError, SettingsError
 from . import common, live
 
 FLUSH_INTERVAL_S = 0.5
@@ -108,7 +109,10 @@ def _run(args, source):
                 if len(rows):
                     was_calibrating = filt.calibrating
                     temps = None if temp_idx is None else rows[:, temp_idx]
-                    t_out, out = filt.filter_timed(source.gyro_dps(rows), rows[:, t_idx], temps)
+                    try:
+                        t_out, out = filt.filter_timed(source.gyro_dps(rows), rows[:, t_idx], temps)
+                    except SampleError as exc:  # a sample beyond the filter's range: name the source and the sample
+                        raise SettingsError(f"source {args.source}: sample {filt.samples_in + exc.row}: {exc.reason}") from None
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note(common.calibrated_note(filt.bias_dps))
                     if len(out):
