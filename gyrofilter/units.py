@@ -9,11 +9,13 @@ import math
 import numpy as np
 
 from .errors import SettingsError
+from .inputs import check_number
 
 DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
+MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
@@ -32,6 +34,13 @@ def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
     if not ok:
         raise error(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
     return value
+
+
+def check_duration_s(value, name="duration_s", error=SettingsError):
+    """``value`` as a float when it is a duration in (0, MAX_DURATION_S] s, else ``error`` naming
+    ``name``: the one check of a run's length (``--duration``, ``simulate``'s duration), so that
+    a sample count stays a finite whole number."""
+    return check_number(value, name, low=0.0, low_open=True, high=MAX_DURATION_S, error=error)
 
 
 def plain(value):
