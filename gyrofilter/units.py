@@ -9,30 +9,36 @@ import math
 import numpy as np
 
 from .errors import SettingsError
-from .inputs import check_number
+from .inputs import MAX_QUOTE_CHARS, check_number
 
 DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
+MIN_SAMPLE_RATE_HZ = 1e-3  # one sample per 1000 s: below it a sample interval (and any tau) overflows first
 MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
-    """``value`` as a float when it is a finite rate in (0, MAX_SAMPLE_RATE_HZ] Hz, else ``error``.
+    """``value`` as a float when it is a finite rate in [MIN_SAMPLE_RATE_HZ, MAX_SAMPLE_RATE_HZ] Hz,
+    else ``error``.
 
     The one check of a sample rate, used by every module that takes one: a bool, a string, NaN,
-    infinity, zero, a negative number or an implausibly high rate (which would size buffers
-    beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
+    infinity, zero, a negative number, a rate so low that 1/rate overflows (1e-320) or an
+    implausibly high rate (which would size buffers beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
     :class:`~gyrofilter.errors.RecordingError` for a file's header) with a message that names
     ``name`` (the keyword, option or header key, with its file if any) and the value.
     """
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     if ok:
-        value = float(value)
-        ok = math.isfinite(value) and 0 < value <= MAX_SAMPLE_RATE_HZ
+        try:
+            value = float(value)
+        except OverflowError:  # an int beyond a float's range
+            ok = False
+        else:
+            ok = math.isfinite(value) and MIN_SAMPLE_RATE_HZ <= value <= MAX_SAMPLE_RATE_HZ
     if not ok:
-        raise error(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
+        raise error(f"{name} must be a number of Hz in [{MIN_SAMPLE_RATE_HZ:g}, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
     return value
 
 
@@ -48,9 +54,11 @@ def plain(value):
 
     numpy 2 writes ``repr(np.float64(14.99))`` as ``np.float64(14.99)``; this gives ``14.99``
     on numpy 1.24 and 2.x alike; lists and tuples element by element. Anything else (a string, an
-    array) as ``repr`` writes it. The one place error messages turn a user's value into text.
+    array) as ``repr`` writes it, cut to MAX_QUOTE_CHARS characters (with the full length) when
+    longer. The one place error messages turn a user's value into text.
     """
-    return repr(_python(value))
+    text = repr(_python(value))
+    return text if len(text) <= MAX_QUOTE_CHARS else f"{text[:MAX_QUOTE_CHARS]}... ({len(text)} characters)"
 
 
 def json_ready(value):

@@ -143,13 +143,14 @@ def _number(value, where, kind="any"):
     return number
 
 
-def _show(value):
-    """JSON text of a bad value for an error message (repr when it is not JSON)."""
+def _show(value, limit=MAX_QUOTE_CHARS):
+    """JSON text of a bad value for an error message (repr when it is not JSON), cut to ``limit``
+    characters (with the full length) when longer."""
     try:
         text = json.dumps(value)
     except (TypeError, ValueError):
         text = plain(value)
-    return text if len(text) <= MAX_QUOTE_CHARS else f"{text[:MAX_QUOTE_CHARS]}... ({len(text)} characters)"
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
 
 def _is_ignored(key):
@@ -166,7 +167,8 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     Keys starting with ``_`` and top-level metadata (description, name, comment, notes, source,
     sensor) are ignored.
 
-    Every number is bounded, so that no model makes a non-finite or absurd signal: by its
+    Every number is bounded, so that no model makes a non-finite or absurd signal: the sample
+    rate by :func:`~gyrofilter.units.check_sample_rate_hz`; others by its
     key's unit (:func:`_limits`: rates |x| <= :data:`MAX_RATE_DPS` deg/s, the same for deg/s per s,
     per sqrt(s), per sqrt(Hz) and per deg C; times |t| <= :data:`MAX_TIME_S`, time constants and
     periods in [:data:`MIN_TIME_CONSTANT_S`, :data:`MAX_TIME_S`] s; frequencies <= the highest
@@ -284,8 +286,8 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     if not isinstance(eff, dict) or "effect" not in eff:
         _err(where, f"expected an object with an 'effect' name, got {_show(eff)}")
     name = eff["effect"]
-    if name not in EFFECTS:
-        _err(f"{where}.effect", f"unknown effect {_show(name)} (expected one of {', '.join(EFFECTS)})")
+    if not isinstance(name, str) or name not in EFFECTS:
+        _err(f"{where}.effect", f"unknown effect {_show(name, 40)} (expected one of {', '.join(EFFECTS)})")
     required, optional = EFFECTS[name]
     label = f"{where} ({name})"
     out = {"effect": name}
