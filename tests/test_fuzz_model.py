@@ -10,6 +10,7 @@ naming the option, never a traceback.
 import copy
 import glob
 import json
+import math
 
 import numpy as np
 import pytest
@@ -21,6 +22,7 @@ from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording, write_recording
 from gyrofilter.sim.simulate import simulate, validate_model
 from gyrofilter.sources.simulated import DEFAULT_MODEL
+from gyrofilter.tempcomp import coefficients_from_model
 from support import REPO
 
 MODELS = [json.load(open(p)) for p in sorted(glob.glob(str(REPO / "examples" / "models" / "*.json")))]
@@ -73,6 +75,11 @@ def mutated_models(draw):
 
 
 def _check_model(model, tmp_path):
+    try:  # --temp-model reads the same documents for their coefficients
+        spec, _ = validate_model(model, coefficients_only=True)
+        assert all(math.isfinite(c) for c in coefficients_from_model(spec))
+    except SettingsError as exc:
+        assert str(exc).startswith("model: ") and "\n" not in str(exc) and len(str(exc)) <= 300, str(exc)
     try:
         spec, _ = validate_model(model)
     except SettingsError as exc:

@@ -252,11 +252,11 @@ def _validate_temperature(spec):
     for key in spec:
         if key not in _TEMP_EXP and not _is_ignored(key):
             _err(f"{where}.{key}", f"unknown key (expected {', '.join(_TEMP_EXP)}, or t_s and temp_c for a table)")
-    if "start_c" not in spec:
+    if spec.get("start_c") is None:
         _err(f"{where}.start_c", "missing (expected the temperature at t = 0 in deg C)")
     for key, (kind, default) in _TEMP_EXP.items():
         value = spec.get(key, default)
-        out[key] = None if value is None else _number(value, f"{where}.{key}", kind)
+        out[key] = None if value is None and default is None else _number(value, f"{where}.{key}", kind)
     if out["end_c"] is None:
         out["end_c"] = out["start_c"]
     return out
@@ -307,8 +307,8 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
                 _err(f"{label}.{key}", f"expected a list of numbers, got {_show(value)}")
             _check_length(value, f"{label}.{key}", MAX_ARMA_COEFFICIENTS, "coefficients")
             out[key] = [_number(v, f"{label}.{key}[{i}]") for i, v in enumerate(value)]
-        else:
-            out[key] = None if value is None else _number(value, f"{label}.{key}", kind)
+        else:  # null stands for "not given" only where the default is derived (None)
+            out[key] = None if value is None and default is None else _number(value, f"{label}.{key}", kind)
     for key in eff:
         if key != "effect" and key not in required and key not in optional and not _is_ignored(key):
             warnings.append(f"model: {label}: unknown parameter '{key}' ignored")
