@@ -10,6 +10,7 @@ from functools import partial
 import numpy as np
 
 from .errors import SampleError, SettingsError
+from .inputs import MAX_QUOTE_CHARS, check_number
 
 DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
@@ -21,23 +22,30 @@ TEMP_RANGE_C = (-100.0, 200.0)
 #: largest |angular rate| a sample may have (deg/s): 50x the MPU6050's widest full scale (2000 deg/s)
 #: and 7x the widest MEMS gyros' (about 14 000 deg/s); it keeps every square the filters take finite
 MAX_RATE_DPS = 100_000.0
+MIN_SAMPLE_RATE_HZ = 1e-3  # one sample per 1000 s: below it a sample interval (and any tau) overflows first
+MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
-    """``value`` as a float when it is a finite rate in (0, MAX_SAMPLE_RATE_HZ] Hz, else ``error``.
+    """``value`` as a float when it is a finite rate in [MIN_SAMPLE_RATE_HZ, MAX_SAMPLE_RATE_HZ] Hz,
+    else ``error``.
 
     The one check of a sample rate, used by every module that takes one: a bool, a string, NaN,
-    infinity, zero, a negative number or an implausibly high rate (which would size buffers
-    beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
+    infinity, zero, a negative number, a rate so low that 1/rate overflows (1e-320) or an
+    implausibly high rate (which would size buffers beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
     :class:`~gyrofilter.errors.RecordingError` for a file's header) with a message that names
     ``name`` (the keyword, option or header key, with its file if any) and the value.
     """
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     if ok:
-        value = float(value)
-        ok = math.isfinite(value) and 0 < value <= MAX_SAMPLE_RATE_HZ
+        try:
+            value = float(value)
+        except OverflowError:  # an int beyond a float's range
+            ok = False
+        else:
+            ok = math.isfinite(value) and MIN_SAMPLE_RATE_HZ <= value <= MAX_SAMPLE_RATE_HZ
     if not ok:
-        raise error(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
+        raise error(f"{name} must be a number of Hz in [{MIN_SAMPLE_RATE_HZ:g}, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
     return value
 
 
@@ -46,8 +54,6 @@ def check_rates_dps(x, what):
     +-MAX_RATE_DPS (one vectorised pass); else :class:`~gyrofilter.errors.SampleError` naming the
     first refused value by row (``.row``) and axis, e.g. "samples_dps row 7: gz (deg/s) must be in
     [-100000, 100000], got 1e+300" (``what`` = "samples_dps")."""
-    from .inputs import check_number
-
     ok = np.abs(x) <= MAX_RATE_DPS  # False for NaN
     if not ok.all():
         row, axis = (int(i[0]) for i in np.nonzero(~ok))
@@ -56,14 +62,23 @@ def check_rates_dps(x, what):
     return x
 
 
+def check_duration_s(value, name="duration_s", error=SettingsError):
+    """``value`` as a float when it is a duration in (0, MAX_DURATION_S] s, else ``error`` naming
+    ``name``: the one check of a run's length (``--duration``, ``simulate``'s duration), so that
+    a sample count stays a finite whole number."""
+    return check_number(value, name, low=0.0, low_open=True, high=MAX_DURATION_S, error=error)
+
+
 def plain(value):
     """``repr(value)`` for error messages, numpy scalars as the plain number they hold.
 
     numpy 2 writes ``repr(np.float64(14.99))`` as ``np.float64(14.99)``; this gives ``14.99``
     on numpy 1.24 and 2.x alike; lists and tuples element by element. Anything else (a string, an
-    array) as ``repr`` writes it. The one place error messages turn a user's value into text.
+    array) as ``repr`` writes it, cut to MAX_QUOTE_CHARS characters (with the full length) when
+    longer. The one place error messages turn a user's value into text.
     """
-    return repr(_python(value))
+    text = repr(_python(value))
+    return text if len(text) <= MAX_QUOTE_CHARS else f"{text[:MAX_QUOTE_CHARS]}... ({len(text)} characters)"
 
 
 def json_ready(value):

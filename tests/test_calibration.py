@@ -91,7 +91,7 @@ def test_save_load_round_trip_and_bad_files(tmp_path):
                          ({**good, "noise_std_dps": [0.1, -0.1, 0.1]}, "noise_std_dps y must be in [0, 20], got -0.1"),
                          ({**good, "bias_dps": [1, "x", 3]}, "bias_dps y must be a finite number, got 'x'"),
                          ({**good, "samples": 2.5}, "samples must be a whole number"),
-                         ({**good, "sample_rate_hz": 0}, "sample_rate_hz must be a number of Hz in (0, 100000], got 0.0"),
+                         ({**good, "sample_rate_hz": 0}, "sample_rate_hz must be a number of Hz in [0.001, 100000], got 0.0"),
                          ({k: v for k, v in good.items() if k != "samples"}, "lacks samples"),
                          ({**good, "temp_c": "warm"}, "temp_c must be a finite number")):
         path.write_text(json.dumps(bad))
@@ -121,7 +121,7 @@ GOOD = {"bias_dps": [1, 2, 3], "noise_std_dps": [0.1, 0.1, 0.1], "samples": 200,
     ("samples", 2, "samples must be in [3, 1e+09], got 2"),
     ("samples", 10**10, "samples must be in [3, 1e+09]"),
     ("samples", True, "samples must be a finite number (a whole number), got True"),
-    ("sample_rate_hz", 1e9, "sample_rate_hz must be a number of Hz in (0, 100000]"),
+    ("sample_rate_hz", 1e9, "sample_rate_hz must be a number of Hz in [0.001, 100000]"),
     ("temp_c", 1e6, "temp_c must be in [-100, 200], got 1000000.0"),
     ("temp_c", -273.5, "temp_c must be in [-100, 200]"),
     ("bias_dps", 1, "bias_dps must be a list of 3 numbers (x, y, z), got '1'"),

@@ -76,7 +76,7 @@ def test_cli_sample_rate_spelling_and_its_old_alias(tmp_path, capsys, spelling):
     assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "50", "--out", str(out)]) == 0
     assert read_recording(out).sample_rate_hz == 50.0
     assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "inf", "--out", str(tmp_path / "o.csv")]) == 2
-    assert f"{spelling} must be a number of Hz in (0, 100000], got inf" in capsys.readouterr().err
+    assert f"{spelling} must be a number of Hz in [0.001, 100000], got inf" in capsys.readouterr().err
 
 
 def test_cli_accepts_a_gap_report_with_extended_model(tmp_path):
@@ -113,13 +113,19 @@ def test_cli_missing_model_file_and_bad_duration(tmp_path, capsys):
     model_path = write_json(tmp_path / "m.json", MODEL)
     assert main(["simulate", "--model", model_path, "--duration", "-3", "--out", str(tmp_path / "o.csv")]) == 2
     err = capsys.readouterr().err
-    assert "--duration must be > 0 s, got -3" in err and err.count("\n") == 1 and model_path not in err
+    assert "--duration must be in (0, 1e+09], got -3.0" in err and err.count("\n") == 1 and model_path not in err
 
 
 @pytest.mark.parametrize("option, expected", [
-    (["--rate", "-5"], "--rate must be a number of Hz in (0, 100000], got -5.0"),
-    (["--seed", "-1"], "--seed must be an integer >= 0, got -1"),
+    (["--rate", "-5"], "--rate must be a number of Hz in [0.001, 100000], got -5.0"),
+    (["--rate", "1e-320"], "--rate must be a number of Hz in [0.001, 100000], got 1e-320"),
+    (["--seed", "-1"], "--seed must be an integer in [0, 2^63 - 1], got -1"),
+    (["--seed", str(10**30)], "--seed must be an integer in [0, 2^63 - 1], got an integer of 31 digits"),
     (["--chunk", "0"], "--chunk must be at least 1 sample, got 0"),
+    (["--chunk", "2000000"], "--chunk must be at most 1048576 samples, got 2000000"),
+    # issue 22: a duration that overflowed the sample count, and one of more samples than a file can hold
+    (["--duration", "1e308"], "--duration must be in (0, 1e+09], got 1e+308"),
+    (["--duration", "1e8"], "--duration 1e+08 s at 50 Hz is 5e+09 samples; simulate writes at most 1e+09"),
 ])
 def test_cli_bad_options_are_named_not_blamed_on_the_model(tmp_path, capsys, option, expected):
     model_path = write_json(tmp_path / "m.json", MODEL)

@@ -30,7 +30,9 @@ SIMS = 10
 
 def _run(case):
     rec = he.simulate_case(case)
-    return analyse_gap(rec, seed=case["seed"], n_sims=SIMS)
+    report = analyse_gap(rec, seed=case["seed"], n_sims=SIMS)
+    validate_model(report["extended_model"])  # the model a gap report writes stays inside the simulator's bounds
+    return report
 
 
 @pytest.mark.parametrize("effect", he.EFFECTS)

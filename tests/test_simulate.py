@@ -179,10 +179,89 @@ def test_unknown_effect_parameter_is_a_warning_and_defaults_are_filled():
     assert spec["axes"]["y"] == {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []}
 
 
-@pytest.mark.parametrize("duration", [0.0, -1.0, float("nan")])
+@pytest.mark.parametrize("duration", [0.0, -1.0, float("nan"), 1e308, 1e10])
 def test_bad_duration(duration):
     with pytest.raises(SettingsError, match="duration"):
         simulate(model(), duration, seed=0)
+
+
+def test_a_duration_beyond_the_bound_is_refused_not_an_overflow():
+    """Issue 22 (15): 1e308 s made round(duration * rate) an OverflowError; durations are at most 1e9 s."""
+    from gyrofilter.sim.simulate import sample_count
+    from gyrofilter.sources.simulated import SimulatedSource
+
+    with pytest.raises(SettingsError, match=r"duration_s must be in \(0, 1e\+09\], got 1e\+308"):
+        sample_count(1e308, 100.0)
+    assert sample_count(1e9, 100.0) == 10**11
+    with pytest.raises(SettingsError, match=r"must be in \(0, 1e\+09\]"):
+        SimulatedSource(None, seed=1, realtime=False, duration_s=1e308)
+
+
+@pytest.mark.parametrize("effect, message", [
+    # each made inf or nan in the recording, a ZeroDivisionError or an OverflowError before issue 22 (9)
+    ({"effect": "sinusoid", "frequency_hz": 1, "amplitude_dps": 1e308}, r"\(sinusoid\).amplitude_dps: expected a number <= 100000, got 1e\+308"),
+    ({"effect": "warmup", "amplitude_dps": -1e307, "tau_s": 1}, r"\(warmup\).amplitude_dps: expected a number >= -100000"),
+    ({"effect": "outliers", "rate": 1, "magnitude_dps": 1, "spread_ln": 1000}, r"\(outliers\).spread_ln: expected a number <= 5"),
+    ({"effect": "gauss_markov", "sigma_dps": 1, "tau_s": 5e-324}, r"\(gauss_markov\).tau_s: expected a number >= 1e-06 s"),
+    ({"effect": "narrowband", "center_hz": 10, "bandwidth_hz": 1e-300, "rms_dps": 1},
+     r"\(narrowband\).bandwidth_hz: expected a width in \[1e-07, 100\] Hz"),
+    ({"effect": "bias_instability", "b_dps": 0.01, "per_decade": 1e-5}, r"\(bias_instability\).per_decade: expected a number >= 0.1"),
+    ({"effect": "bias_instability", "b_dps": 0.01, "tau_max_s": 1e300}, r"\(bias_instability\).tau_max_s: expected a number <= 1e\+09 s"),
+    ({"effect": "bias_step", "time_s": 10**400, "size_dps": 1}, r"\(bias_step\).time_s: expected a number >= 0, got 1000000000.*\(401 characters\)"),
+    ({"effect": "temperature", "coefficient_dps_per_c": 1.0, "reference_c": -300}, r"\(temperature\).reference_c: expected a number >= -100 deg C"),
+    ({"effect": "sinusoid", "frequency_hz": 1e6, "amplitude_dps": 1}, r"\(sinusoid\).frequency_hz: expected a number <= 100000 Hz"),
+])
+def test_model_numbers_are_bounded_so_no_signal_is_infinite(effect, message):
+    m = model([effect], axes="x", temperature={"start_c": 25.0})
+    with pytest.raises(SettingsError, match=message) as info:
+        validate_model(m)
+    assert str(info.value).startswith("model: axes.x.effects[0] (") and len(str(info.value)) < 300
+
+
+@pytest.mark.parametrize("mutate, message", [
+    # issue 22 (19): 3000 AR coefficients took over a minute for 2 s; a million flicker components 24 GB
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "arma", "sigma_a_dps": 0.1, "phi": [0.0] * 3000}),
+     r"^model: axes.x.effects\[0\] \(arma\).phi: at most 20 coefficients, got 3000$"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "arma", "sigma_a_dps": 0.1, "theta": [0.1] * 21}),
+     r"\(arma\).theta: at most 20 coefficients, got 21$"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "bias_instability", "b_dps": 0.01, "per_decade": 1e9}),
+     r"\(bias_instability\).per_decade: expected a number <= 10, got 1e\+09"),
+    (lambda m: m["axes"]["y"]["effects"].extend([{"effect": "rate_ramp", "r_dps_per_s": 0.0}] * 101),
+     r"^model: axes.y.effects: at most 100 effects, got 101$"),
+    (lambda m: m.update(temperature={"t_s": list(range(100_001)), "temp_c": [25.0] * 100_001}),
+     r"^model: temperature.t_s: at most 100000 points, got 100001$"),
+    (lambda m: m.update(lsb_per_dps=1e-9), r"^model: lsb_per_dps: expected a number >= 0.001, got 1e-09$"),
+    # null where the default is a number was taken as None and crashed the simulation (found by tests/test_fuzz_model.py)
+    (lambda m: m.update(temperature={"start_c": None, "end_c": 30.0}), r"^model: temperature.start_c: missing"),
+    (lambda m: m.update(temperature={"start_c": 25.0, "tau_s": None}), r"^model: temperature.tau_s: expected a number > 0, got null$"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "bias_instability", "b_dps": 0.01, "per_decade": None}),
+     r"\(bias_instability\).per_decade: expected a number > 0, got null$"),
+])
+def test_model_sizes_are_bounded_naming_the_key(mutate, message):
+    m = model(axes="xyz")
+    mutate(m)
+    with pytest.raises(SettingsError, match=message):
+        validate_model(m)
+
+
+def test_the_largest_allowed_models_simulate_finite():
+    """At the bounds (the largest rates, 100 effects, 20 stationary AR coefficients, the widest
+    flicker bank) the signal stays finite, and quickly: nothing absurd passes validate_model."""
+    big = [{"effect": "sinusoid", "frequency_hz": 1, "amplitude_dps": 1e5}] * 50 + [
+        {"effect": "rate_ramp", "r_dps_per_s": 1e5}, {"effect": "warmup", "amplitude_dps": -1e5, "tau_s": 1e-6},
+        {"effect": "arma", "sigma_a_dps": 1e5, "phi": [0.0] * 19 + [0.9], "theta": [1e6] * 20},
+        {"effect": "bias_instability", "b_dps": 1e5, "tau_min_s": 1e-6, "tau_max_s": 1e9, "per_decade": 10},
+        {"effect": "outliers", "rate": 1, "magnitude_dps": 1e5, "spread_ln": 5},
+        {"effect": "narrowband", "center_hz": 49.9, "bandwidth_hz": 2e-7, "rms_dps": 1e5}]
+    rec = simulate(model(big, arw=1e5, bias=1e5, axes="x"), 2.0, seed=3)
+    assert np.isfinite(rec.gyro).all() and np.abs(rec.gyro).max() > 1e5
+
+
+def test_a_non_finite_rate_is_refused_as_the_last_guard(monkeypatch):
+    """Should a term ever give inf or nan, the simulator raises instead of writing it (issue 22, 9)."""
+    monkeypatch.setattr(nt.RateRamp, "next", lambda self, t_s, temp_c: np.where(t_s > 0.5, np.inf, 0.0))
+    with pytest.raises(SettingsError, match=r"^simulate: the model gives a non-finite rate at t = 0.51 s$"):
+        simulate(model([{"effect": "rate_ramp", "r_dps_per_s": 1.0}], axes="x"), 2.0, seed=0)
 
 
 # ---------------------------------------------------------------------------------------------

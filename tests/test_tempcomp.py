@@ -52,6 +52,42 @@ def test_coefficients_from_model():
     assert tempcomp.coefficients_from_model(model) == (0.03, 0.0, 0.0)
 
 
+@pytest.mark.parametrize("doc, message", [
+    # issue 22 (10): true was taken as 1.0, "0.02" and rate -5 accepted, null and a missing coefficient a traceback
+    ({"axes": {"x": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": True}]}}},
+     "(temperature).coefficient_dps_per_c: expected a finite number, got true"),
+    ({"axes": {"x": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": "0.02"}]}}},
+     "(temperature).coefficient_dps_per_c: expected a finite number, got \"0.02\""),
+    ({"axes": {"x": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": None}]}}},
+     "(temperature).coefficient_dps_per_c: expected a finite number, got null"),
+    ({"axes": {"x": {"effects": [{"effect": "temperature"}]}}}, "(temperature): missing parameter 'coefficient_dps_per_c'"),
+    ({"sample_rate_hz": -5, "axes": {"x": {}}}, "model: sample_rate_hz must be a number of Hz"),
+    ({"gyro_unit": "furlongs", "axes": {"x": {}}}, "model: gyro_unit: expected one of dps, rad/s, lsb, got \"furlongs\""),
+    ({"axes": {"x": {"effects": "str"}}}, "model: axes.x.effects: expected a list of effect objects, got \"str\""),
+    ({"axes": {"x": []}}, "model: axes.x: expected an object"),
+    ({"axes": {"x": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": 1e9}]}}},
+     "(temperature).coefficient_dps_per_c: expected a number <= 100000"),
+])
+def test_temp_model_goes_through_the_model_validator(tmp_path, capsys, doc, message):
+    import json
+
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    src = tmp_path / "warm.csv"
+    write_recording(src, Recording.from_dps(np.full((500, 3), 0.1), FS, temp_c=np.linspace(25.0, 26.0, 500)))
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(doc))
+    assert main(["replay", str(src), "--temp-model", str(model), "--out", str(tmp_path / "out.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{model}: " in err and message in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.json", "warm.csv"]
+    # a good one without a sample rate or a temperature profile is taken (only its coefficients are used)
+    model.write_text(json.dumps({"axes": {"y": {"effects": [{"effect": "temperature", "coefficient_dps_per_c": 0.04}]}}}))
+    assert main(["replay", str(src), "--temp-model", str(model), "--out", str(tmp_path / "out.csv")]) == 0
+    assert "temperature compensated (0, 0.04, 0 deg/s/degC)" in capsys.readouterr().out
+
+
 def test_by_hand_and_the_pipeline_applies_the_same_correction():
     y = tempcomp.compensate([[1.0, 2.0, 3.0]], [30.0], [0.1, 0.2, 0.3], 25.0)
     assert np.allclose(y, [[0.5, 1.0, 1.5]])

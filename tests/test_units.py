@@ -68,11 +68,12 @@ def test_json_ready_gives_what_strict_json_takes():
 
 @pytest.mark.parametrize("value, shown", [(float("inf"), "inf"), (-float("inf"), "-inf"), (float("nan"), "nan"), (0, "0.0"),
                                           (0.0, "0.0"), (-100.0, "-100.0"), (np.float64(-2.5), "-2.5"), ("100", "'100'"),
-                                          (True, "True"), (1e6, "1000000.0")])
+                                          (True, "True"), (1e6, "1000000.0"), (1e-320, "1e-320"), (0.0009, "0.0009"),
+                                          (10**400, f"{str(10**400)[:80]}... (401 characters)")])
 def test_check_sample_rate_hz_refuses_with_one_wording_naming_the_value(value, shown):
     with pytest.raises(SettingsError) as info:
         check_sample_rate_hz(value, "--sample-rate-hz")
-    assert str(info.value) == f"--sample-rate-hz must be a number of Hz in (0, 100000], got {shown}"
+    assert str(info.value) == f"--sample-rate-hz must be a number of Hz in [0.001, 100000], got {shown}"
     assert check_sample_rate_hz(np.int64(100)) == 100.0 and type(check_sample_rate_hz(8000)) is float
 
 
@@ -100,7 +101,7 @@ def _sample_rate_takers():
 
 
 @pytest.mark.parametrize("where", list(_sample_rate_takers()))
-@pytest.mark.parametrize("rate", [float("inf"), float("nan"), 0.0, -1.0])
+@pytest.mark.parametrize("rate", [float("inf"), float("nan"), 0.0, -1.0, 1e-320])
 def test_every_sample_rate_taker_refuses_it_with_the_one_check(where, rate):
-    with pytest.raises(GyroFilterError, match=r"rate_hz must be a number of Hz in \(0, 100000\], got " + str(rate)):
+    with pytest.raises(GyroFilterError, match=r"rate_hz must be a number of Hz in \[0.001, 100000\], got " + str(rate)):
         _sample_rate_takers()[where](rate)

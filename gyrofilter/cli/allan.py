@@ -21,6 +21,8 @@ from ..analysis.fleet import FleetSettings
 from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert, kalibr_yaml, to_json
 from . import batch, common
 
+MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
+
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
          "rrw": "rate random walk", "rate_ramp": "rate ramp"}
 
@@ -54,8 +56,8 @@ def run(args):
     axes = args.axes
     if not axes or any(a not in "xyz" for a in axes) or len(set(axes)) != len(axes):
         raise SettingsError(f"--axes must be a subset of xyz such as xz, got {args.axes!r}")
-    if args.min_clusters < 2:
-        raise SettingsError(f"--min-clusters must be at least 2, got {args.min_clusters}")
+    if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
+        raise SettingsError(f"--min-clusters must be in [2, {MAX_MIN_CLUSTERS}], got {args.min_clusters}")
     if not 0.0 < args.confidence < 1.0:
         raise SettingsError(f"--confidence must be between 0 and 1 (e.g. 0.95), got {args.confidence:g}")
     paths = batch.expand(args.recordings)

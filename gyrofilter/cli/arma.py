@@ -10,9 +10,12 @@ import sys
 
 from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
+from ..units import MAX_DURATION_S
 from . import common
 
 MIN_SAMPLES = 200  # fewer leave the tests and the order search without power
+MAX_MAX_N = 10  # ARMA(20, 19): the longest model the simulator takes (20 coefficients each side)
+MAX_MAX_SAMPLES = 10**8  # samples fitted; ARMA fits of more take hours and gain nothing
 PAPER_003 = "paper 003 (ADIS16405 z gyro): ADF -110.18; KS and JB reject normality; ARMA(1, 1): x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}"
 
 
@@ -43,8 +46,12 @@ def run(args):
         raise SettingsError(f"--alpha must be in (0, 0.5), got {args.alpha:g}")
     if args.max_n < 1:
         raise SettingsError(f"--max-n must be at least 1, got {args.max_n}")
+    if args.max_n > MAX_MAX_N:
+        raise SettingsError(f"--max-n must be at most {MAX_MAX_N} (ARMA({2 * MAX_MAX_N}, {2 * MAX_MAX_N - 1})), got {args.max_n}")
     if args.max_samples < 100:
         raise SettingsError(f"--max-samples must be at least 100, got {args.max_samples}")
+    if args.max_samples > MAX_MAX_SAMPLES:
+        raise SettingsError(f"--max-samples must be at most {MAX_MAX_SAMPLES}, got {args.max_samples}")
     axes = "xyz" if args.axis == "all" else args.axis
     head, series = read_axes(args.recording, axes)
     common.print_warnings(head.warnings)
@@ -81,8 +88,8 @@ def run(args):
 def _window(args, n, fs):
     """Sample indices [i0, i1) of --start-s/--end-s; errors name the options the user gave."""
     for option, value in (("--start-s", args.start_s), ("--end-s", args.end_s)):
-        if value is not None and not math.isfinite(value):
-            raise SettingsError(f"{option} must be a finite number of seconds, got {value:g}")
+        if value is not None and not abs(value) <= MAX_DURATION_S:
+            raise SettingsError(f"{option} must be a finite number of seconds, at most {MAX_DURATION_S:g}, got {value:g}")
     if args.start_s is not None and args.start_s < 0:
         raise SettingsError(f"--start-s must be >= 0 s, got {args.start_s:g}")
     start_s = args.start_s or 0.0

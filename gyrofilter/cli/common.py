@@ -64,6 +64,16 @@ def file_name(text):
     return text
 
 
+MAX_SEED = 2**63 - 1
+
+
+def check_seed(seed, option="--seed"):
+    """A ``--seed`` is an integer in [0, MAX_SEED] (type=int makes it an integer), else SettingsError."""
+    if not 0 <= seed <= MAX_SEED:
+        shown = seed if abs(seed) < 10**20 else f"an integer of {len(str(abs(seed)))} digits"
+        raise SettingsError(f"{option} must be an integer in [0, 2^63 - 1], got {shown}")
+
+
 def add_force_argument(parser):
     parser.add_argument("--force", action="store_true", help="overwrite output files that exist (an input is never overwritten)")
 
@@ -335,14 +345,20 @@ def _parse_setting(text):
 
 
 def temperature_coefficients(path):
-    """(cx, cy, cz) in deg/s per deg C from a gap report (its extended_model) or a simulator model."""
-    from ..sim.simulate import load_model
+    """(cx, cy, cz) in deg/s per deg C from a gap report (its extended_model) or a simulator model,
+    checked by the simulator's :func:`~gyrofilter.sim.simulate.validate_model` (for its numbers
+    only: the sample rate and the temperature profile may be missing)."""
+    from ..sim.simulate import load_model, validate_model
     from ..tempcomp import coefficients_from_model
 
     model = load_model(path)
     if not isinstance(model, dict) or not isinstance(model.get("axes"), dict):
         raise SettingsError(f"{path}: neither a gap report (extended_model) nor a simulator model (axes)")
-    coefficients = coefficients_from_model(model)
+    try:
+        spec, _ = validate_model(model, coefficients_only=True)
+    except SettingsError as exc:
+        raise SettingsError(f"{path}: {exc}") from None
+    coefficients = coefficients_from_model(spec)
     if not any(coefficients):
         raise SettingsError(f"{path}: the model has no temperature effect, so there is nothing to compensate")
     return coefficients

@@ -12,10 +12,10 @@ import time
 
 import numpy as np
 
-from ..errors import DeviceError, SettingsError, SourceEnded
+from ..errors import DeviceError, SourceEnded
 from ..sources import SOURCE_HELP, open_source, parse_source
 from ..sources.base import WARNING_PREFIX
-from ..units import GYRO_UNITS
+from ..units import GYRO_UNITS, check_duration_s
 from . import common
 
 STATUS_INTERVAL_S = 1.0
@@ -34,9 +34,10 @@ def add_source_arguments(parser):
 
 
 def check_duration(duration_s):
-    """``--duration`` is a positive, finite number of seconds, or not given (None)."""
-    if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0):
-        raise SettingsError(f"--duration {duration_s:g}: must be a positive, finite number of seconds")
+    """``--duration`` is a number of seconds in (0, MAX_DURATION_S] (:func:`~gyrofilter.units.check_duration_s`),
+    or not given (None)."""
+    if duration_s is not None:
+        check_duration_s(duration_s, "--duration")
 
 
 def source_files(spec):

@@ -6,27 +6,29 @@ model is reported in one line naming the key. FILE is refused when it exists (un
 or is the model itself; the recording is written beside it under a temporary name and takes
 its place only when complete, so a failed or interrupted run leaves no file behind.
 """
-import math
 import sys
 import time
 
 import numpy as np
 
 from ..errors import SettingsError
-from ..units import check_sample_rate_hz
+from ..units import MAX_DURATION_S, check_duration_s, check_sample_rate_hz
 from . import common
+
+MAX_SAMPLES = 10**9  # a file of about 40 GB: more is no recording anyone can use
+MAX_CHUNK = 2**20  # samples per block; the flicker bank draws (block x components) numbers at once
 
 
 def add_arguments(parser):
     parser.add_argument("--model", required=True, metavar="MODEL.json",
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json)")
-    parser.add_argument("--duration", required=True, type=float, metavar="S", help="length of the recording in seconds")
+    parser.add_argument("--duration", required=True, type=float, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
     common.add_sample_rate_argument(parser, "--rate", help="sample rate in Hz (overrides the model's; old spelling --rate)")
     parser.add_argument("--seed", type=int, default=None, metavar="N",
                         help="random seed (same seed, same recording; default: one drawn at random and written in the "
                              "header, simulated_seed, so the run can be repeated)")
     parser.add_argument("--out", required=True, metavar="FILE", type=common.file_name, help="output recording (" + common.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--chunk", type=int, default=65536, metavar="N", help="samples per block written (default 65536)")
+    parser.add_argument("--chunk", type=int, default=65536, metavar="N", help=f"samples per block written (default 65536, at most {MAX_CHUNK})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     common.add_force_argument(parser)
 
@@ -37,20 +39,24 @@ def run(args):
                                 simulate_chunks, validate_model)
 
     common.check_outputs([args.out], [args.model], args.force)
-    if not (math.isfinite(args.duration) and args.duration > 0):
-        raise SettingsError(f"--duration must be > 0 s, got {args.duration:g}")
+    check_duration_s(args.duration, "--duration")
     if args.sample_rate_hz is not None:
         check_sample_rate_hz(args.sample_rate_hz, args.sample_rate_hz_option)
-    if args.seed is not None and args.seed < 0:
-        raise SettingsError(f"--seed must be an integer >= 0, got {args.seed}")
+    if args.seed is not None:
+        common.check_seed(args.seed)
     if args.chunk < 1:
         raise SettingsError(f"--chunk must be at least 1 sample, got {args.chunk}")
+    if args.chunk > MAX_CHUNK:
+        raise SettingsError(f"--chunk must be at most {MAX_CHUNK} samples, got {args.chunk}")
     model = load_model(args.model)
     try:
         spec, warnings = validate_model(model, sample_rate_hz=args.sample_rate_hz)
     except SettingsError as exc:
         raise SettingsError(f"{args.model}: {exc}") from None
     n_total = sample_count(args.duration, spec["sample_rate_hz"])
+    if n_total > MAX_SAMPLES:
+        raise SettingsError(f"--duration {args.duration:g} s at {spec['sample_rate_hz']:g} Hz is {n_total:.3g} samples; "
+                            f"simulate writes at most {MAX_SAMPLES:.0e}")
     for text in warnings:
         common.say(f"gyrofilter: warning: {args.model}: {text}")
     seed = draw_seed() if args.seed is None else args.seed
