@@ -14,23 +14,28 @@ DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
+#: one sample per 1000 s: far below any gyro's output (the MPU6050's slowest is 1 kHz / 256 = 3.9 Hz)
+#: and below any filter's output rate from it, while 1 / rate and the Allan cluster times stay ordinary
+#: floats (a rate of 1e-300 Hz ended in a failed SVD deep in the fit)
+MIN_SAMPLE_RATE_HZ = 0.001
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
-    """``value`` as a float when it is a finite rate in (0, MAX_SAMPLE_RATE_HZ] Hz, else ``error``.
+    """``value`` as a float when it is a rate in [MIN_SAMPLE_RATE_HZ, MAX_SAMPLE_RATE_HZ] Hz, else ``error``.
 
     The one check of a sample rate, used by every module that takes one: a bool, a string, NaN,
-    infinity, zero, a negative number or an implausibly high rate (which would size buffers
-    beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
+    infinity, zero, a negative number, an implausibly low rate (0.001 Hz: 1 / rate overflows
+    the analyses long before zero) or an implausibly high one (which would size buffers beyond
+    memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
     :class:`~gyrofilter.errors.RecordingError` for a file's header) with a message that names
     ``name`` (the keyword, option or header key, with its file if any) and the value.
     """
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     if ok:
         value = float(value)
-        ok = math.isfinite(value) and 0 < value <= MAX_SAMPLE_RATE_HZ
+        ok = MIN_SAMPLE_RATE_HZ <= value <= MAX_SAMPLE_RATE_HZ  # False for NaN too
     if not ok:
-        raise error(f"{name} must be a number of Hz in (0, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
+        raise error(f"{name} must be a number of Hz in [{MIN_SAMPLE_RATE_HZ:g}, {MAX_SAMPLE_RATE_HZ:g}], got {plain(value)}")
     return value
 
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from gyrofilter.cli import main
-from gyrofilter.recording import Recording, read_recording, write_recording
+from gyrofilter.cli.common import ROW_FORMATS
+from gyrofilter.recording import Recording, RecordingWriter, dps_header, read_recording, write_recording
 
 
 def test_replay_without_argument_filters_the_bundled_recording(capsys):
@@ -231,7 +232,8 @@ def test_replay_in_chunks_writes_the_rows_of_the_one_shot_filter(tmp_path, monke
     filt = GyroFilter(100.0)
     rows = filt.filter(rec.gyro_dps)
     expected = tmp_path / "expected.csv"
-    write_recording(expected, Recording.from_dps(rows, 20.0, t_s=rec.t_s[filt.block_end_indices(len(rows))]))
+    with RecordingWriter(expected, dps_header({}, 20.0), ["t", "gx", "gy", "gz"], formats=ROW_FORMATS) as writer:
+        writer.write(np.column_stack([rec.t_s[filt.block_end_indices(len(rows))], rows]))
     monkeypatch.setattr(replay, "CHUNK_ROWS", chunk_rows)
     out = tmp_path / "out.csv"
     assert main(["replay", str(src), "--out", str(out)]) == 0

@@ -76,7 +76,7 @@ def test_cli_sample_rate_spelling_and_its_old_alias(tmp_path, capsys, spelling):
     assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "50", "--out", str(out)]) == 0
     assert read_recording(out).sample_rate_hz == 50.0
     assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "inf", "--out", str(tmp_path / "o.csv")]) == 2
-    assert f"{spelling} must be a number of Hz in (0, 100000], got inf" in capsys.readouterr().err
+    assert f"{spelling} must be a number of Hz in [0.001, 100000], got inf" in capsys.readouterr().err
 
 
 def test_cli_accepts_a_gap_report_with_extended_model(tmp_path):
@@ -117,7 +117,7 @@ def test_cli_missing_model_file_and_bad_duration(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("option, expected", [
-    (["--rate", "-5"], "--rate must be a number of Hz in (0, 100000], got -5.0"),
+    (["--rate", "-5"], "--rate must be a number of Hz in [0.001, 100000], got -5.0"),
     (["--seed", "-1"], "--seed must be an integer >= 0, got -1"),
     (["--chunk", "0"], "--chunk must be at least 1 sample, got 0"),
 ])

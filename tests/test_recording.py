@@ -54,7 +54,7 @@ def test_write_read_round_trip(tmp_path, name):
         ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: deg\ngx,gy,gz\n1,2,3\n", "gyro_unit 'deg'"),
         ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\ngx,gy,gz\n1,2,3\n", "lsb_per_dps"),
         ("# gyrofilter-recording: 2\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", "version '2'"),
-        ("# gyrofilter-recording: 1\n# sample_rate_hz: fast\n# gyro_unit: dps\ngx,gy,gz\n", "not a number"),
+        ("# gyrofilter-recording: 1\n# sample_rate_hz: fast\n# gyro_unit: dps\ngx,gy,gz\n", "sample_rate_hz must be a plain decimal number"),
         (HEADER + "gx,gy\n1,2\n", "missing column.*gz"),
         (HEADER + "gx,gy,gz\n1,2,3\n4,5\n6,7,8\n", "line 8: 2 values, expected 3"),
         (HEADER + "gx,gy,gz\n1,2,3\n4,x5,6\n", "line 8: column 'gy' is not a number: 'x5'"),

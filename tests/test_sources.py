@@ -250,7 +250,7 @@ def test_unseeded_simulation_records_a_seed_that_repeats_it():
 
 
 @pytest.mark.parametrize("spec, words", [
-    ("mpu6050:rate=0", ["source 'mpu6050:rate=0': rate must be", "(0, 100000]"]),
+    ("mpu6050:rate=0", ["source 'mpu6050:rate=0': rate must be", "[0.001, 100000]"]),
     ("mpu6050:bus=1,range=300", ["range=300 is not an MPU6050 full scale"]),
     ("sim:seed=-1", ["source 'sim:seed=-1'", "seed must be an integer >= 0"]),
     ("sim,rate=-3", ["source 'sim,rate=-3'", "rate must be"]),

@@ -45,18 +45,6 @@ def recording_header(source, spec):
     return ordered
 
 
-def _formats(columns):
-    out = []
-    for c in columns:
-        if c == "t":
-            out.append("%.10g")
-        elif c == "temp":
-            out.append("%.7g")  # as simulate writes it
-        else:
-            out.append("%.9g")
-    return out
-
-
 def run(args):
     from ..recording import RecordingWriter
 
@@ -76,7 +64,7 @@ def _record(args, source, RecordingWriter):
     loop = live.LiveLoop(source, args.duration)
     status = live.Status(args.progress or (sys.stderr.isatty() and not args.quiet), loop.sample_rate_hz)
     wall0 = time.monotonic()
-    writer = RecordingWriter(args.out, header, columns, formats=_formats(columns), flush_interval_s=None)
+    writer = RecordingWriter(args.out, header, columns, flush_interval_s=None)  # every value exactly as the source gave it
     try:
         with loop:
             last_flush = time.monotonic()

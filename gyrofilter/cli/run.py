@@ -14,6 +14,7 @@ import time
 
 import numpy as np
 
+from ..recording import header_text, note_text
 from . import common, live
 
 FLUSH_INTERVAL_S = 0.5
@@ -38,8 +39,7 @@ class _TextOut:
         self.stream = stream
         self.path = None  # no file to remove after a failure
         self.rows_written = 0
-        lines = ["# gyrofilter-recording: 1"] + [f"# {k}: {v}" for k, v in header.items()] + [",".join(columns)]
-        self.stream.write("\n".join(lines) + "\n")
+        self.stream.write(header_text(header, columns, "stdout"))
         self.stream.flush()
 
     def write(self, rows):
@@ -47,7 +47,7 @@ class _TextOut:
         self.stream.write("".join(common.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
 
     def note(self, text):
-        self.stream.write(f"# {text}\n")
+        self.stream.write(f"# {note_text(text)}\n")
 
     def flush(self):
         self.stream.flush()
@@ -90,7 +90,7 @@ def _run(args, source):
     columns = ["t", "gx", "gy", "gz"]
     if args.out:
         live.create_folder_of(args.out)
-        writer = RecordingWriter(args.out, out_header, columns, formats=common.ROW_FORMAT.split(","), flush_interval_s=None)
+        writer = RecordingWriter(args.out, out_header, columns, formats=common.ROW_FORMATS, flush_interval_s=None)
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = live.LiveLoop(source, args.duration)
