@@ -388,18 +388,15 @@ def _gunzip(fh, raw, path, warnings):
     checksum or length that does not match (the text may look fine: a changed digit in a
     stored block), or bytes after a member that are not another member."""
     d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-    produced = 0
+    produced = 0  # bytes of text so far
     while True:
         try:
             out = d.decompress(raw, _TEXT_BYTES)
             if not raw and not out and not d.eof:  # the file ended: what zlib still holds, then the verdict
                 out = d.flush()
         except zlib.error as exc:
-            if not produced:
-                error = _GzipDamage(f"{path}: not a readable gzip file ({exc})")
-            else:
-                error = _GzipDamage(f"{path}: damaged gzip data after {produced} bytes of text ({exc}); "
-                                    "nothing read from it is trusted")
+            error = _GzipDamage(f"{path}: damaged gzip data ({exc}) after {produced} bytes of text; "
+                                "nothing read from it is trusted")
             error.zlib_error = str(exc)
             raise error from None
         if out:
