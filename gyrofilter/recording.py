@@ -9,17 +9,26 @@ The format (docs/formats.md, section 1) is CSV text, optionally gzip-compressed:
     t,gx,gy,gz,temp
     0.00,12,-3,40,25.31
 
-Header lines start with ``#`` and hold ``key: value``; unknown keys are kept. Columns ``gx, gy,
-gz`` are required; ``t`` (s, strictly increasing) and ``temp`` (deg C) are optional; any other
-column is carried along unchanged. Lines starting with ``#`` after the column row are
-annotations (for example a gap note written by ``gyrofilter record``); they are kept in
-:attr:`Recording.notes` and are not samples, and neither are blank lines.
+Header lines start with ``#`` and hold ``key: value``, each key once; unknown keys are kept;
+numbers are plain decimal text (:func:`~gyrofilter.inputs.parse_number`). Columns ``gx, gy,
+gz`` are required; ``t`` (s, strictly increasing, its typical step ``1 / sample_rate_hz`` within
+5 %) and ``temp`` (deg C) are optional; any other column is carried along unchanged. Lines
+starting with ``#`` after the column row are annotations (for example a gap note written by
+``gyrofilter record``); they are kept in :attr:`Recording.notes` and are not samples, and
+neither are blank lines. No line is longer than :data:`MAX_LINE_BYTES`.
 
-Bad input never shifts, drops or invents samples: an empty cell, ``nan``, a short or long row or
-a non-numeric cell raises :class:`RecordingError` naming the file, the line and the reason. The
-one tolerated defect is the one an interrupted recording leaves: a last line without its line
-end, or a gzip stream without its end marker. Those are reported in :attr:`Recording.warnings`
-and every complete line is used. A UTF-8 byte-order mark before the first line is ignored.
+Bad input never shifts, drops or invents samples: an empty cell, ``nan``, a short or long row, a
+cell that is not a plain decimal number (``0.0_1``), damaged gzip data (a failed checksum too)
+raise :class:`RecordingError` naming the file, the line and the reason (user text quoted
+short). The one tolerated defect is the one an interrupted recording leaves: a last line
+without its line end, or a gzip stream that ends before its end marker. Those are reported in
+:attr:`Recording.warnings` and every complete line is used. A UTF-8 byte-order mark before the
+first line is ignored.
+
+The writers (:class:`RecordingWriter`, :func:`write_recording`) write only what reads back:
+one header writer (:func:`header_text`) checked by the reader's own checks, finite values only,
+``t`` and raw data exactly (the shortest text of each float), header values and annotations on
+one line.
 
 :func:`iter_recording` reads a file in chunks of lines (memory: one chunk, whatever the
 length of the file); :func:`read_recording` collects its chunks into a :class:`Recording`.
