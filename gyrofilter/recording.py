@@ -338,7 +338,12 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
 
 
 class _GzipDamage(RecordingError):
-    """Damaged gzip data: what was read from them cannot be trusted."""
+    """Damaged gzip data: what was read from them cannot be trusted. ``reason``: what zlib said."""
+
+    def __init__(self, path, reason, produced):
+        super().__init__(f"{path}: damaged gzip data ({reason}) after {produced} bytes of text; "
+                         "nothing read from it is trusted")
+        self.reason = reason
 
 
 def _blame_gzip_damage(path, exc):
@@ -351,7 +356,7 @@ def _blame_gzip_damage(path, exc):
     if damage is None:
         return exc
     where = str(exc).removeprefix(path + ": ").partition(": ")[0]
-    return _GzipDamage(f"{path}: damaged gzip data ({damage}); the text read from it is garbage (first noticed at {where})")
+    return RecordingError(f"{path}: damaged gzip data ({damage}); the text read from it is garbage (first noticed at {where})")
 
 
 def _gzip_damage(path):
@@ -365,7 +370,7 @@ def _gzip_damage(path):
                 for _ in _gunzip(fh, raw, path, []):
                     pass
     except _GzipDamage as exc:
-        return exc.zlib_error
+        return exc.reason
     except OSError:
         pass
     return None
@@ -395,7 +400,7 @@ def _gunzip(fh, raw, path, warnings):
     A stream that ends before its end marker (an interrupted recording) ends the text with a
     warning. Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a
     checksum or length that does not match (the text may look fine: a changed digit in a
-    stored block), or bytes after a member that are not another member."""
+    stored block), or bytes after a member that do not start another member."""
     d = zlib.decompressobj(16 + zlib.MAX_WBITS)
     produced = 0  # bytes of text so far
     while True:
@@ -404,10 +409,7 @@ def _gunzip(fh, raw, path, warnings):
             if not raw and not out and not d.eof:  # the file ended: what zlib still holds, then the verdict
                 out = d.flush()
         except zlib.error as exc:
-            error = _GzipDamage(f"{path}: damaged gzip data ({exc}) after {produced} bytes of text; "
-                                "nothing read from it is trusted")
-            error.zlib_error = str(exc)
-            raise error from None
+            raise _GzipDamage(path, str(exc), produced) from None
         if out:
             produced += len(out)
             yield out
@@ -415,6 +417,8 @@ def _gunzip(fh, raw, path, warnings):
             raw = d.unused_data or fh.read(_READ_BYTES)
             if not raw:
                 return
+            if raw[:2] != _GZIP_MAGIC and not _GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
+                raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
             d = zlib.decompressobj(16 + zlib.MAX_WBITS)
         elif d.unconsumed_tail:
             raw = d.unconsumed_tail
