@@ -627,22 +627,18 @@ def _parse_line(ln, line, head):
         text = cell.strip()
         if not text:
             raise RecordingError(f"{path}: line {line}: column {quote(name)} is empty")
-        value = float(text) if is_plain_number(text) else _python_float(text)
+        plain = is_plain_number(text)
+        try:
+            value = float(text)
+        except ValueError:
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is not a number: {quote(text)}") from None
         if not math.isfinite(value):
             raise RecordingError(f"{path}: line {line}: column {quote(name)} is {quote(text)} (not a finite number)")
-        if not is_plain_number(text):
-            raise RecordingError(f"{path}: line {line}: column {quote(name)} is not a number: {quote(text)} "
-                                 "(plain decimal syntax, like 12, -0.5 or 1e-3)")
+        if not plain:  # Python's extras: 0.0_1, other scripts' digits
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is not a plain decimal number "
+                                 f"(like 12, -0.5 or 1e-3): {quote(text)}")
         values.append(value)
     return values
-
-
-def _python_float(text):
-    """``float(text)``, 0.0 for what Python does not read either (the caller refuses both)."""
-    try:
-        return float(text)
-    except ValueError:
-        return 0.0
 
 
 #: the steps of ``t`` whose median is compared with ``1 / sample_rate_hz`` (the file's first ones)
