@@ -852,15 +852,20 @@ class RecordingWriter(Closable):
 
     def write(self, rows):
         """Append rows, shape (n, number of columns), in the columns' order; RecordingError (and
-        none of them written) when one holds NaN or +-inf."""
-        rows = np.asarray(rows, dtype=float)
+        none of them written) when one holds NaN or +-inf. The cells of an object array (text a
+        converter formatted itself, say) go through their formats as they are, once checked as numbers."""
+        rows = np.asarray(rows)
         if rows.size == 0:
             return
         if rows.ndim != 2 or rows.shape[1] != len(self.columns):
             raise RecordingError(f"{self.path}: rows must have shape (n, {len(self.columns)}), got {rows.shape}")
-        _check_finite(rows, self.columns, self.path)
-        fmt = ",".join(f if f is not None else _exact_format(rows[:, i]) for i, f in enumerate(self._formats)) + "\n"
-        self._emit("".join(fmt % tuple(r) for r in rows.tolist()))
+        try:
+            values = rows.astype(float)
+        except (TypeError, ValueError):
+            raise RecordingError(f"{self.path}: rows to write must hold numbers") from None
+        _check_finite(values, self.columns, self.path)
+        fmt = ",".join(f if f is not None else _exact_format(values[:, i]) for i, f in enumerate(self._formats)) + "\n"
+        self._emit("".join(fmt % tuple(r) for r in (rows if rows.dtype == object else values).tolist()))
         self.rows_written += len(rows)
         if self._flush_interval_s is not None and time.monotonic() - self._last_flush >= self._flush_interval_s:
             self.flush()
