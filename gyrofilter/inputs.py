@@ -30,16 +30,20 @@ MAX_JSON_BYTES = 16 * 1024 * 1024
 MAX_JSON_DEPTH = 32
 MAX_QUOTE_CHARS = 80
 
-_DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # ASCII digits only: float() takes others
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # [0-9]: \d takes any script's digits
 
 
 def quote(text, limit=MAX_QUOTE_CHARS):
-    """``repr(text)`` of at most ``limit`` characters of ``text`` (``...`` and the full length after
-    a cut), for error messages that show what a user wrote."""
+    """``repr(text)`` cut to at most ``limit`` characters inside its quotes (``...`` and the full
+    length after a cut), for error messages that show what a user wrote. The cut counts the
+    repr, whose escapes (``\\x00``) are longer than the characters they stand for."""
     text = str(text)
-    if len(text) <= limit:
+    if len(repr(text)) <= limit + 2:
         return repr(text)
-    return f"{text[:limit]!r}... ({len(text)} characters)"
+    keep = min(len(text), limit)
+    while len(repr(text[:keep])) > limit + 2:
+        keep -= 1
+    return f"{text[:keep]!r}... ({len(text)} characters)"
 
 
 def _bounds_text(low, high, low_open, high_open):

@@ -9,17 +9,26 @@ The format (docs/formats.md, section 1) is CSV text, optionally gzip-compressed:
     t,gx,gy,gz,temp
     0.00,12,-3,40,25.31
 
-Header lines start with ``#`` and hold ``key: value``; unknown keys are kept. Columns ``gx, gy,
-gz`` are required; ``t`` (s, strictly increasing) and ``temp`` (deg C) are optional; any other
-column is carried along unchanged. Lines starting with ``#`` after the column row are
-annotations (for example a gap note written by ``gyrofilter record``); they are kept in
-:attr:`Recording.notes` and are not samples, and neither are blank lines.
+Header lines start with ``#`` and hold ``key: value``, each key once; unknown keys are kept;
+numbers are plain decimal text (:func:`~gyrofilter.inputs.parse_number`). Columns ``gx, gy,
+gz`` are required; ``t`` (s, strictly increasing, its typical step ``1 / sample_rate_hz`` within
+5 %) and ``temp`` (deg C) are optional; any other column is carried along unchanged. Lines
+starting with ``#`` after the column row are annotations (for example a gap note written by
+``gyrofilter record``); they are kept in :attr:`Recording.notes` and are not samples, and
+neither are blank lines. No line is longer than :data:`MAX_LINE_BYTES`.
 
-Bad input never shifts, drops or invents samples: an empty cell, ``nan``, a short or long row or
-a non-numeric cell raises :class:`RecordingError` naming the file, the line and the reason. The
-one tolerated defect is the one an interrupted recording leaves: a last line without its line
-end, or a gzip stream without its end marker. Those are reported in :attr:`Recording.warnings`
-and every complete line is used. A UTF-8 byte-order mark before the first line is ignored.
+Bad input never shifts, drops or invents samples: an empty cell, ``nan``, a short or long row, a
+cell that is not a plain decimal number (``0.0_1``), damaged gzip data (a failed checksum too)
+raise :class:`RecordingError` naming the file, the line and the reason (user text quoted
+short). The one tolerated defect is the one an interrupted recording leaves: a last line
+without its line end, or a gzip stream that ends before its end marker. Those are reported in
+:attr:`Recording.warnings` and every complete line is used. A UTF-8 byte-order mark before the
+first line is ignored.
+
+The writers (:class:`RecordingWriter`, :func:`write_recording`) write only what reads back:
+one header writer (:func:`header_text`) checked by the reader's own checks, finite values only,
+``t`` and raw data exactly (the shortest text of each float), header values and annotations on
+one line.
 
 :func:`iter_recording` reads a file in chunks of lines (memory: one chunk, whatever the
 length of the file); :func:`read_recording` collects its chunks into a :class:`Recording`.
@@ -32,6 +41,7 @@ import errno
 import gzip
 import math
 import os
+import re
 import time
 import zlib
 from dataclasses import dataclass, field
@@ -40,6 +50,7 @@ import numpy as np
 
 from .closable import Closable
 from .errors import RecordingError, SettingsError
+from .inputs import MAX_QUOTE_CHARS, is_plain_number, parse_number, quote
 from .units import GYRO_UNITS, check_sample_rate_hz, from_dps, to_dps
 
 FORMAT_VERSION = "1"
@@ -181,6 +192,14 @@ _READ_BYTES = 1 << 20   # bytes read from the file at a time
 _TEXT_BYTES = 1 << 20   # most decompressed bytes at a time (a block of text: about 36 000 lines of five columns)
 _BOM = b"\xef\xbb\xbf"
 _BLOCK_ROWS = 1 << 19   # rows per block of collect_columns
+#: longest line (bytes, without its line end) of a recording: a data row is about 100 bytes, a
+#: header line holding a model or the filter settings as JSON a few KB. A longer line is refused
+#: once that many bytes are read (a gzip bomb of one endless line, /dev/zero): memory stays one
+#: block of text. Equal to the block size, so a line inside a block is never longer.
+MAX_LINE_BYTES = _TEXT_BYTES
+#: most lines before the column-name row (the header, with its blank ``#`` lines); together they
+#: hold at most MAX_LINE_BYTES bytes as well
+MAX_HEADER_LINES = 1000
 
 
 @dataclass
@@ -285,24 +304,26 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
     or a bad line), the chunk's lines are classified one by one, so that annotations are kept
     and a bad line is named by its file line number and reason (module docstring). A cut last
     line or a gzip stream without its end marker is added to ``head.warnings`` when the end is
-    reached. A UTF-8 byte-order mark at the start is skipped.
+    reached. A UTF-8 byte-order mark at the start is skipped. The ``t`` column is checked as
+    :class:`_TimeCheck` says (increasing, its typical step agreeing with ``sample_rate_hz``).
     """
     path = os.fspath(path)
     if not (isinstance(chunk_rows, int) and chunk_rows >= 1):
         raise SettingsError(f"chunk_rows must be a whole number >= 1, got {chunk_rows!r}")
     warnings = []
     parts = _line_chunks(path, chunk_rows, warnings)
-    head, first, lines = _read_header(parts, path, warnings)
+    try:
+        head, first, lines = _read_header(parts, path, warnings)
+    except RecordingError as exc:
+        raise _blame_gzip_damage(path, exc) from None
     yield head
-    t_col = head.names.index("t") if "t" in head.names else None
-    t_last = None
-    max_step_s = 1.5 / head.sample_rate_hz
+    times = _TimeCheck(head) if "t" in head.names else None
     while True:
         if lines:
             try:
                 data, line_numbers = _parse_chunk(lines, first, head)
-                if len(data) and t_col is not None:
-                    t_last = _check_t(data[:, t_col], t_last, line_numbers, head, max_step_s)
+                if len(data) and times is not None:
+                    times.add(head.column(data, "t"), line_numbers)
             except RecordingError as exc:
                 raise _blame_gzip_damage(path, exc) from None
             if len(data):
@@ -311,83 +332,103 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
         try:
             first, lines = next(parts)
         except StopIteration:
+            if times is not None:
+                times.check_rate()
             return
         except RecordingError as exc:
             raise _blame_gzip_damage(path, exc) from None
+
+
+class _GzipDamage(RecordingError):
+    """Damaged gzip data: what was read from them cannot be trusted. ``reason``: what zlib said."""
+
+    def __init__(self, path, reason, produced):
+        super().__init__(f"{path}: damaged gzip data ({reason}) after {produced} bytes of text; "
+                         "nothing read from it is trusted")
+        self.reason = reason
 
 
 def _blame_gzip_damage(path, exc):
     """``exc`` (a bad line), or, when ``path`` is a gzip file whose data are damaged (its
     checksum or its compressed blocks wrong), an error saying so: the bad line is then text
     the damage made, not what was written."""
+    if isinstance(exc, _GzipDamage):
+        return exc
     damage = _gzip_damage(path)
     if damage is None:
         return exc
-    return RecordingError(f"{path}: damaged gzip data ({damage}); the text read from it is garbage from that "
-                          f"point, first noticed at {str(exc).removeprefix(path + ': ')}")
+    where = str(exc).removeprefix(path + ": ").partition(": ")[0]
+    return RecordingError(f"{path}: damaged gzip data ({damage}); the text read from it is garbage (first noticed at {where})")
 
 
 def _gzip_damage(path):
-    """The error decompressing the whole gzip file ``path`` (every member) meets, or None (not
-    gzip, intact, or only cut short as an interrupted recording leaves it)."""
-    with open(path, "rb") as fh:
-        raw = fh.read(_READ_BYTES)
-        if raw[:2] != _GZIP_MAGIC:
-            return None
-        d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-        while raw:
-            try:
-                d.decompress(raw)
-            except zlib.error as exc:
-                return str(exc)
-            if d.eof and d.unused_data:
-                raw, d = d.unused_data, zlib.decompressobj(16 + zlib.MAX_WBITS)
-            else:
-                raw = fh.read(_READ_BYTES)
-                if d.eof and raw:
-                    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+    """The zlib error decompressing the whole gzip file ``path`` (every member) meets, or None
+    (not gzip, intact, or only cut short as an interrupted recording leaves it). Memory: one
+    block at a time, as when reading."""
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read(_READ_BYTES)
+            if raw[:2] == _GZIP_MAGIC:
+                for _ in _gunzip(fh, raw, path, []):
+                    pass
+    except _GzipDamage as exc:
+        return exc.reason
+    except OSError:
+        pass
     return None
 
 
 def _byte_blocks(path, warnings):
-    """The file's bytes in blocks, gunzipped when it starts with the gzip magic (every member);
-    a gzip stream cut short or damaged ends the data with a warning instead of an error."""
+    """The file's bytes in blocks of at most ``_READ_BYTES``, gunzipped (:func:`_gunzip`) when it
+    starts with the gzip magic."""
     try:
         fh = open(path, "rb")
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
     with fh:
         raw = fh.read(_READ_BYTES)
-        if raw[:2] != _GZIP_MAGIC:
-            while raw:
-                yield raw
-                raw = fh.read(_READ_BYTES)
+        if raw[:2] == _GZIP_MAGIC:
+            yield from _gunzip(fh, raw, path, warnings)
             return
-        d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-        produced = 0
-        while True:
-            try:
-                out = d.decompress(raw, _TEXT_BYTES)
-            except zlib.error as exc:
-                if not produced:
-                    raise RecordingError(f"{path}: not a readable gzip file ({exc})") from None
-                warnings.append(f"{path}: gzip data damaged after byte {produced}; the rest is not used")
+        while raw:
+            yield raw
+            raw = fh.read(_READ_BYTES)
+
+
+def _gunzip(fh, raw, path, warnings):
+    """The text of the gzip file ``fh`` (``raw``: its first bytes, already read), every member,
+    in blocks of at most ``_TEXT_BYTES`` (a gzip bomb never holds more).
+
+    A stream that ends before its end marker (an interrupted recording) ends the text with a
+    warning. Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a
+    checksum or length that does not match (the text may look fine: a changed digit in a
+    stored block), or bytes after a member that do not start another member."""
+    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+    produced = 0  # bytes of text so far
+    while True:
+        try:
+            out = d.decompress(raw, _TEXT_BYTES)
+            if not raw and not out and not d.eof:  # the file ended: what zlib still holds, then the verdict
+                out = d.flush()
+        except zlib.error as exc:
+            raise _GzipDamage(path, str(exc), produced) from None
+        if out:
+            produced += len(out)
+            yield out
+        if d.eof:  # a member ended: another may follow
+            raw = d.unused_data or fh.read(_READ_BYTES)
+            if not raw:
                 return
-            if out:
-                produced += len(out)
-                yield out
-            if d.eof:  # a member ended: another may follow
-                raw = d.unused_data or fh.read(_READ_BYTES)
-                if not raw:
-                    return
-                d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-            elif d.unconsumed_tail:
-                raw = d.unconsumed_tail
-            else:
-                raw = fh.read(_READ_BYTES)
-                if not raw:
-                    warnings.append(f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it")
-                    return
+            if raw[:2] != _GZIP_MAGIC and not _GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
+                raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
+            d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+        elif d.unconsumed_tail:
+            raw = d.unconsumed_tail
+        elif raw or out:
+            raw = fh.read(_READ_BYTES)
+        else:
+            warnings.append(f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it")
+            return
 
 
 def _without_bom(blocks):
@@ -409,11 +450,17 @@ def _line_chunks(path, chunk_rows, warnings):
     """(number of the first line, list of at most ``chunk_rows`` lines without their line ends),
     a block of the file at a time (lines are split at b"\\n" before decoding, which never cuts
     a UTF-8 character). A last line without its line end is not used (warning), unless it is
-    the file's only line."""
+    the file's only line. A line longer than :data:`MAX_LINE_BYTES` is an error as soon as
+    that many bytes are read (a line inside a block is shorter than the block, at most as
+    long as the limit: only the line that the blocks so far have not ended needs a check)."""
     pending = b""
     first = 1  # number of the next line
     for block in _without_bom(_byte_blocks(path, warnings)):
         cut = block.rfind(b"\n")
+        open_bytes = len(pending) + (len(block) if cut < 0 else block.find(b"\n"))  # of the line not yet ended
+        if open_bytes > MAX_LINE_BYTES:
+            raise RecordingError(f"{path}: line {first}: longer than {MAX_LINE_BYTES} bytes, not a line of a recording "
+                                 f"(it starts {quote((pending + block)[:MAX_QUOTE_CHARS].decode('utf-8', 'replace'))})")
         if cut < 0:
             pending += block
             continue
@@ -428,7 +475,7 @@ def _line_chunks(path, chunk_rows, warnings):
     if pending:
         if first > 1:
             warnings.append(f"{path}: line {first}: last line has no line end (recording interrupted?); "
-                            f"it is not used: {pending[:60].decode('utf-8', 'replace')!r}")
+                            f"it is not used: {quote(pending[:60].decode('utf-8', 'replace'))}")
         else:
             yield first, [_decode(pending, path, first)]
 
@@ -444,19 +491,24 @@ def _decode(data, path, first_line):
 
 def _read_header(parts, path, warnings):
     """Header and column names from the first lines: (head, number of the next line, the rest
-    of its chunk)."""
+    of its chunk). The lines before the column row may be at most :data:`MAX_HEADER_LINES`."""
     header_lines = []
+    size = 0  # characters of the header lines
     blank = True  # only blank lines so far
     for first, lines in parts:
         for j, ln in enumerate(lines):
             blank = blank and not ln.strip()
             if not ln.startswith("#") and not blank:
-                header, _ = _parse_header(header_lines + [ln], path)
+                header = _parse_header(header_lines, path)
                 names = [c.strip() for c in ln.split(",")]
-                _check_columns(names, path, first + j)
+                _check_columns(names, f"{path}: line {first + j}")
                 head = RecordingHead(header=header, names=names, path=path, warnings=warnings)
                 return head, first + j + 1, lines[j + 1:]
             header_lines.append(ln)
+            size += len(ln) + 1
+            if len(header_lines) > MAX_HEADER_LINES or size > MAX_LINE_BYTES:
+                raise RecordingError(f"{path}: line {first + j}: no column-name row within {MAX_HEADER_LINES} lines "
+                                     f"or {MAX_LINE_BYTES} bytes of header; not a recording")
     if blank:
         raise RecordingError(f"{path}: empty file (expected a '# gyrofilter-recording: 1' header)")
     _parse_header(header_lines, path)
@@ -464,61 +516,75 @@ def _read_header(parts, path, warnings):
 
 
 def _parse_header(lines, path):
-    header = {}
-    i = 0
-    while i < len(lines) and lines[i].startswith("#"):
-        body = lines[i][1:].strip()
-        if body:
-            key, sep, value = body.partition(":")
-            if not sep:
-                raise RecordingError(f"{path}: line {i + 1}: header line is not 'key: value': {lines[i]!r}")
-            header[key.strip()] = value.strip()
-        i += 1
+    """The header (key -> value text) of a file's first ``lines`` (its ``#`` lines, line 1 first),
+    checked by :func:`_check_header`; a line that is not ``key: value`` or repeats a key is an
+    error naming its line."""
+    header, line_of = {}, {}
+    for i, ln in enumerate(lines):
+        if not ln.startswith("#"):
+            break
+        body = ln[1:].strip()
+        if not body:
+            continue
+        key, sep, value = body.partition(":")
+        key = key.strip()
+        if not sep or not key:
+            raise RecordingError(f"{path}: line {i + 1}: header line is not 'key: value': {quote(ln)}")
+        if key in header:
+            raise RecordingError(f"{path}: line {i + 1}: header key {quote(key)} repeated (first on line {line_of[key]})")
+        header[key], line_of[key] = value.strip(), i + 1
+    _check_header(header, path)
+    return header
+
+
+def _check_header(header, where):
+    """Refuse a header (key -> value text) that is not one of format v1, with RecordingError
+    naming ``where`` (the file): the version, the required keys, ``sample_rate_hz`` a plain
+    decimal number (:func:`~gyrofilter.inputs.parse_number`) checked by
+    :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
+    ``lsb_per_dps`` a positive number with ``lsb``. The one check of a header: the reader's and
+    the writers' (:func:`header_text`)."""
     version = header.get("gyrofilter-recording")
     if version is None:
-        raise RecordingError(f"{path}: line 1: missing header key 'gyrofilter-recording' (is this a gyrofilter recording?)")
+        raise RecordingError(f"{where}: line 1: missing header key 'gyrofilter-recording' (is this a gyrofilter recording?)")
     if version != FORMAT_VERSION:
-        raise RecordingError(f"{path}: unsupported recording version {version!r} (this gyrofilter reads version {FORMAT_VERSION})")
+        raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
     for key in ("sample_rate_hz", "gyro_unit"):
         if key not in header:
-            raise RecordingError(f"{path}: missing header key {key!r}")
-    check_sample_rate_hz(_header_float(header, "sample_rate_hz", path), f"{path}: sample_rate_hz", RecordingError)
+            raise RecordingError(f"{where}: missing header key {key!r}")
+    rate_hz = parse_number(header["sample_rate_hz"], f"{where}: sample_rate_hz", error=RecordingError)
+    check_sample_rate_hz(rate_hz, f"{where}: sample_rate_hz", RecordingError)
     if header["gyro_unit"] not in GYRO_UNITS:
-        raise RecordingError(f"{path}: gyro_unit {header['gyro_unit']!r} is not one of {', '.join(GYRO_UNITS)}")
+        raise RecordingError(f"{where}: gyro_unit {quote(header['gyro_unit'])} is not one of {', '.join(GYRO_UNITS)}")
     if header["gyro_unit"] == "lsb":
         if "lsb_per_dps" not in header:
-            raise RecordingError(f"{path}: gyro_unit is lsb but header key 'lsb_per_dps' is missing")
-        lsb = _header_float(header, "lsb_per_dps", path)
-        if not lsb > 0 or not math.isfinite(lsb):
-            raise RecordingError(f"{path}: lsb_per_dps must be a positive number, got {header['lsb_per_dps']!r}")
-    return header, i
+            raise RecordingError(f"{where}: gyro_unit is lsb but header key 'lsb_per_dps' is missing")
+        parse_number(header["lsb_per_dps"], f"{where}: lsb_per_dps", low=0, low_open=True, error=RecordingError)
 
 
-def _header_float(header, key, path):
-    try:
-        return float(header[key])
-    except ValueError:
-        raise RecordingError(f"{path}: header key {key!r} is not a number: {header[key]!r}") from None
-
-
-def _check_columns(names, path, line):
+def _check_columns(names, where):
+    """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated or
+    lack ``gx, gy, gz``; ``where`` is the file and line."""
     if any(not n for n in names):
-        raise RecordingError(f"{path}: line {line}: empty column name in {','.join(names)!r}")
-    dupes = sorted({n for n in names if names.count(n) > 1})
+        raise RecordingError(f"{where}: empty column name in {quote(','.join(names))}")
+    seen = set()
+    dupes = sorted({n for n in names if n in seen or seen.add(n)})
     if dupes:
-        raise RecordingError(f"{path}: line {line}: duplicate column(s) {', '.join(dupes)}")
-    missing = [c for c in GYRO_COLUMNS if c not in names]
+        raise RecordingError(f"{where}: duplicate column(s) {quote(', '.join(dupes))}")
+    missing = [c for c in GYRO_COLUMNS if c not in seen]
     if missing:
-        raise RecordingError(f"{path}: line {line}: missing column(s) {', '.join(missing)} (have {', '.join(names)})")
+        raise RecordingError(f"{where}: missing column(s) {', '.join(missing)} (have {quote(', '.join(names))})")
 
 
 def _parse_chunk(lines, first, head):
     """(data, file line of each row) for ``lines``, the first being file line ``first``.
 
     Fast path: ``numpy.loadtxt`` on the list of lines, accepted when it gives one finite row per
-    line. Otherwise the lines are classified one by one: ``#`` lines are notes, blank lines are
-    skipped, and the data lines are parsed again (loadtxt, then, if that still fails, line by
-    line so that the first bad line is named).
+    line. (Its parser, numpy >= 1.23, reads a finite number only in plain decimal syntax, as
+    :func:`~gyrofilter.inputs.parse_number` does: ``0.0_1``, ``0x1``, ``1d5`` fail it.) Otherwise
+    the lines are classified one by one: ``#`` lines are notes, blank lines are skipped, and the
+    data lines are parsed again (loadtxt, then, if that still fails, line by line so that the
+    first bad line is named).
     """
     n = len(head.names)
     if lines[0].strip() and not lines[0].startswith("#"):
@@ -551,40 +617,95 @@ def _loadtxt(lines, n):
 
 
 def _parse_line(ln, line, head):
-    """The values of data line ``ln`` (file line ``line``), or RecordingError naming the reason."""
+    """The values of data line ``ln`` (file line ``line``), or RecordingError naming the reason:
+    each cell a finite number in plain decimal syntax (:func:`~gyrofilter.inputs.is_plain_number`)."""
     path, names = head.path, head.names
     cells = ln.split(",")
     if len(cells) != len(names):
-        raise RecordingError(f"{path}: line {line}: {len(cells)} values, expected {len(names)} ({','.join(names)})")
+        raise RecordingError(f"{path}: line {line}: {len(cells)} values, expected {len(names)} "
+                             f"({quote(','.join(names))})")
     values = []
     for name, cell in zip(names, cells):
-        if not cell.strip():
-            raise RecordingError(f"{path}: line {line}: column {name!r} is empty")
+        text = cell.strip()
+        if not text:
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is empty")
+        plain = is_plain_number(text)
         try:
-            value = float(cell)
+            value = float(text)
         except ValueError:
-            raise RecordingError(f"{path}: line {line}: column {name!r} is not a number: {cell.strip()!r}") from None
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is not a number: {quote(text)}") from None
         if not math.isfinite(value):
-            raise RecordingError(f"{path}: line {line}: column {name!r} is {cell.strip()!r} (not a finite number)")
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is {quote(text)} (not a finite number)")
+        if not plain:  # Python's extras: 0.0_1, other scripts' digits
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is not a plain decimal number "
+                                 f"(like 12, -0.5 or 1e-3): {quote(text)}")
         values.append(value)
     return values
 
 
-def _check_t(t, t_last, line_numbers, head, max_step_s):
-    """Refuse a ``t`` that does not increase (also across chunks: ``t_last`` ends the previous
-    one); count steps longer than ``max_step_s`` in ``head.t_gaps``. Returns the last t."""
-    if t_last is None:
-        prev, cur, row0 = t[:-1], t[1:], 1
-    else:
-        prev, cur, row0 = np.concatenate(([t_last], t[:-1])), t, 0
-    step = cur - prev
-    bad = np.flatnonzero(step <= 0)
-    if bad.size:
-        k = int(bad[0])
-        raise RecordingError(f"{head.path}: line {line_numbers[k + row0]}: t does not increase "
-                             f"({float(cur[k])!r} after {float(prev[k])!r})")
-    head.t_gaps += int(np.count_nonzero(step > max_step_s))
-    return float(t[-1])
+#: the steps of ``t`` whose median is compared with ``1 / sample_rate_hz`` (the file's first ones)
+RATE_CHECK_STEPS = 1000
+#: largest relative difference between the typical step of ``t`` and ``1 / sample_rate_hz``; the
+#: same 5 % as a calibration's rate (``pipeline.CALIBRATION_RATE_TOLERANCE``): a logger's clock
+#: drifts around its nominal rate, not further
+RATE_TOLERANCE = 0.05
+
+
+class _TimeCheck:
+    """The checks of a recording's ``t`` column, chunk by chunk (:meth:`add`), cheap and vectorised:
+
+    - ``t`` increases strictly, also across chunks;
+    - steps longer than 1.5 sample intervals are counted in ``head.t_gaps`` (lost samples: legal);
+    - the typical step, the lower median of the first :data:`RATE_CHECK_STEPS` steps (all of a
+      shorter file; checked once they are read, or at the end), is ``1 / sample_rate_hz``
+      within :data:`RATE_TOLERANCE`, in both directions: a ``t`` that runs faster or slower
+      than the header says would make every time constant and Allan cluster time wrong. Gaps
+      lengthen some steps, not the median, unless they are most of the steps.
+    """
+
+    def __init__(self, head):
+        self.head = head
+        self.max_step_s = 1.5 / head.sample_rate_hz
+        self.t_last = None
+        self.steps = []  # the first steps, until the rate is checked (None after)
+        self.first_line = None  # file line of the first sample
+
+    def add(self, t, line_numbers):
+        """Check the times ``t`` of a chunk, read from the file lines ``line_numbers``."""
+        head = self.head
+        if self.t_last is None:
+            prev, cur, row0 = t[:-1], t[1:], 1
+            self.first_line = int(line_numbers[0])
+        else:
+            prev, cur, row0 = np.concatenate(([self.t_last], t[:-1])), t, 0
+        step = cur - prev
+        bad = np.flatnonzero(step <= 0)
+        if bad.size:
+            k = int(bad[0])
+            raise RecordingError(f"{head.path}: line {line_numbers[k + row0]}: t does not increase "
+                                 f"({float(cur[k])!r} after {float(prev[k])!r})")
+        head.t_gaps += int(np.count_nonzero(step > self.max_step_s))
+        self.t_last = float(t[-1])
+        if self.steps is not None:
+            self.steps.append(step[:RATE_CHECK_STEPS])
+            if sum(map(len, self.steps)) >= RATE_CHECK_STEPS:
+                self.check_rate()
+
+    def check_rate(self):
+        """Refuse a typical step of ``t`` more than :data:`RATE_TOLERANCE` away from ``1 / sample_rate_hz``."""
+        steps = np.concatenate(self.steps)[:RATE_CHECK_STEPS] if self.steps else np.empty(0)
+        self.steps = None
+        if not len(steps):  # one sample: no step
+            return
+        typical_s = float(np.partition(steps, (len(steps) - 1) // 2)[(len(steps) - 1) // 2])
+        expected_s = 1.0 / self.head.sample_rate_hz
+        if abs(typical_s - expected_s) > RATE_TOLERANCE * expected_s:
+            head = self.head
+            raise RecordingError(
+                f"{head.path}: t steps by {typical_s:.6g} s (median of its first {len(steps)} steps from line "
+                f"{self.first_line}), "
+                f"but sample_rate_hz {head.sample_rate_hz:g} means {expected_s:.6g} s: more than "
+                f"{RATE_TOLERANCE:.0%} apart (is sample_rate_hz or t wrong?)")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -596,24 +717,77 @@ def format_number(x):
     return repr(int(x)) if float(x).is_integer() and abs(x) < 1e15 else repr(float(x))
 
 
-def _column_format(name, values, unit):
-    if name == "t":
-        return "%.10g"
-    if name in GYRO_COLUMNS and unit == "lsb" and np.all(np.asarray(values) == np.round(values)):
-        return "%d"
-    return "%.9g"
+#: %-format of a value written exactly: ``str`` of a float (a numpy scalar too) is the shortest
+#: text that reads back to the same float
+EXACT_FORMAT = "%s"
+#: %-format of the filtered rates that ``run`` and ``replay`` write: 9 significant digits, on purpose
+#: (far below the filter's noise; the raw data they come from are written exactly)
+FILTERED_FORMAT = "%.9g"
+_INTEGER_LIMIT = 2.0 ** 53  # integral floats below it are written as integers (exact, short)
+#: control characters (line ends, tabs, ...), which header values and annotations never hold
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def one_line_text(text):
+    """``text`` as a header value or an annotation holds it: each control character (a line end,
+    a tab, ...) written as its escape (``\\n``), spaces at both ends dropped; that is what the
+    reader reads back."""
+    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), str(text)).strip()
+
+
+def header_text(header, columns, where):
+    """The start of a recording as text: the version line, ``# key: value`` for each item of
+    ``header`` in order (a ``gyrofilter-recording`` key is dropped), the column-name row.
+
+    The one writer of recording headers (files, and stdout of ``run`` and ``replay --realtime``).
+    Values are written as :func:`one_line_text` makes them. RecordingError naming ``where`` (the
+    output) for what would not read back as written: a key that is empty, holds ``:``, spaces or
+    control characters; a column name that is empty, holds ``,``, spaces or control characters
+    (or the first one starting with ``#``); a line longer than :data:`MAX_LINE_BYTES`; and
+    everything the reader refuses (:func:`_check_header`, :func:`_check_columns`: the same checks).
+    """
+    head = {"gyrofilter-recording": FORMAT_VERSION}
+    for key, value in header.items():
+        if key == "gyrofilter-recording":
+            continue
+        if not isinstance(key, str) or not key or _CONTROL.search(key) or ":" in key or key.split() != [key]:
+            raise RecordingError(f"{where}: header key {quote(key)} is not a name (no ':', spaces or control characters)")
+        head[key] = one_line_text(value)
+    _check_header(head, where)
+    columns = list(columns)
+    for i, name in enumerate(columns):
+        if (not isinstance(name, str) or _CONTROL.search(name) or "," in name or name.split() != [name]
+                or (i == 0 and name.startswith("#"))):
+            raise RecordingError(f"{where}: column name {quote(name)} is not a name (no ',', spaces or control characters)")
+    _check_columns(columns, where)
+    lines = [f"# {k}: {v}" for k, v in head.items()] + [",".join(columns)]
+    for ln in lines:
+        if len(ln.encode("utf-8")) > MAX_LINE_BYTES:
+            raise RecordingError(f"{where}: header line {quote(ln)} is longer than {MAX_LINE_BYTES} bytes")
+    return "\n".join(lines) + "\n"
 
 
 def write_recording(path, rec: Recording, *, compresslevel=6):
-    """Write ``rec`` to ``path`` (gzip at ``compresslevel`` when the name ends in ``.gz``), whole, in one go."""
+    """Write ``rec`` to ``path`` (gzip at ``compresslevel`` when the name ends in ``.gz``), whole, in
+    one go: every value exactly (it reads back as the same float), the notes after the data.
+    The header and the values are checked before the file is created (:class:`RecordingWriter`)."""
     names = list(rec.columns)
     data = np.column_stack([rec.columns[c] for c in names]) if names else np.empty((0, 0))
-    formats = [_column_format(c, rec.columns[c], rec.gyro_unit) for c in names]
-    with RecordingWriter(path, rec.header, names, formats=formats, flush_interval_s=None,
-                         compresslevel=compresslevel) as writer:
+    _check_finite(data, names, path)
+    header_text(rec.header, names, path)
+    with RecordingWriter(path, rec.header, names, flush_interval_s=None, compresslevel=compresslevel) as writer:
         writer.write(data)
         for line, text in rec.notes:
             writer.note(text)
+
+
+def _check_finite(rows, columns, where):
+    """Refuse rows (n, len(columns)) holding NaN or +-inf, naming the first: a recording holds finite numbers."""
+    bad = np.argwhere(~np.isfinite(rows))
+    if bad.size:
+        row, col = (int(i) for i in bad[0])
+        raise RecordingError(f"{where}: column {quote(columns[col])} of row {row + 1} of the rows to write is "
+                             f"{float(rows[row, col])!r}; a recording holds finite numbers only (those rows not written)")
 
 
 class RecordingWriter(Closable):
@@ -625,49 +799,51 @@ class RecordingWriter(Closable):
     KeyboardInterrupt) ends the file cleanly. A write or flush that fails (an OSError: disk full,
     file size limit) sets ``write_failed``; ``close()`` then cuts the file back to its last
     complete flush, so that it keeps whole lines and reads, ``rows_flushed`` rows of them, and
-    writes nothing more. Header keys are written in the order given, after
-    the version line. ``compresslevel`` (1-9) applies to ``.gz`` files: 6, gzip's own default,
+    writes nothing more. Header keys are written in the order given, after the version line
+    (:func:`header_text`). ``compresslevel`` (1-9) applies to ``.gz`` files: 6, gzip's own default,
     wrote 1 h of 100-Hz three-axis noise in 1.5 s against 3.7 s for Python's default 9, for 1 %
     more bytes.
+
+    Everything written reads back: the header is checked as the reader checks it before the
+    file is created, rows holding NaN or +-inf are refused before any of them is written, and
+    annotations are kept on one line.
 
     Parameters
     ----------
     path : str or path-like
         The file to create (overwritten); gzip-compressed when the name ends in ``.gz``.
     header : dict
-        Header keys -> text values; needs ``sample_rate_hz`` (Hz) and ``gyro_unit`` (``dps``,
+        Header keys -> values (written as text); needs ``sample_rate_hz`` (Hz) and ``gyro_unit`` (``dps``,
         ``rad/s`` or ``lsb``), and ``lsb_per_dps`` (LSB per deg/s) with ``lsb``. A
         ``gyrofilter-recording`` key is dropped (the version line is written first).
     columns : sequence of str
         Column names, which must include ``gx, gy, gz`` (``t`` in s and ``temp`` in deg C
         optional).
-    formats : sequence of str, optional
-        A %-format per column (default ``%.10g`` for ``t``, ``%.9g`` for the others).
+    formats : sequence of str or None, optional
+        A %-format per column, or None for exact: the shortest text that reads back to the same
+        float, integers without a decimal point (chosen per column for each :meth:`write`).
+        Default: every column exact.
     flush_interval_s : float or None
         Longest time (s) between flushes while writing; None flushes only at the end.
     fsync : bool
         Also ``os.fsync`` at each flush (the data reach the disk, not just the OS).
     compresslevel : int
         gzip level 1-9 for ``.gz`` files.
+    name : str, optional
+        The file as messages name it (default ``path``; a writer to a temporary file names the user's).
 
-    RecordingError for a bad header or column list.
+    RecordingError for a bad header, column list or value.
     """
 
     def __init__(self, path, header: dict, columns, *, formats=None, flush_interval_s=1.0, fsync=True,
-                 compresslevel=6):
+                 compresslevel=6, name=None):
         self.path = os.fspath(path)
+        self.name = self.path if name is None else os.fspath(name)
         self.columns = list(columns)
-        _check_columns(self.columns, self.path, "(columns given to the writer)")
-        head = dict(header)
-        head.pop("gyrofilter-recording", None)
-        for key in ("sample_rate_hz", "gyro_unit"):
-            if key not in head:
-                raise RecordingError(f"{self.path}: writer header needs {key!r}")
-        if head["gyro_unit"] == "lsb" and "lsb_per_dps" not in head:
-            raise RecordingError(f"{self.path}: writer header needs 'lsb_per_dps' for gyro_unit lsb")
-        if formats is None:
-            formats = ["%.10g" if c == "t" else "%.9g" for c in self.columns]
-        self._row_format = ",".join(formats) + "\n"
+        text = header_text(header, self.columns, self.name)
+        self._formats = list(formats) if formats is not None else [None] * len(self.columns)
+        if len(self._formats) != len(self.columns):
+            raise RecordingError(f"{self.name}: {len(self._formats)} formats for {len(self.columns)} columns")
         self._flush_interval_s = flush_interval_s
         self._fsync = fsync
         self._raw = open(self.path, "wb")
@@ -678,10 +854,7 @@ class RecordingWriter(Closable):
         self.rows_flushed = 0  # the rows in the file at the last flush: what a failed write keeps
         self._flushed_bytes = 0  # the file's size then (None when it cannot be told: a pipe)
         self.write_failed = False
-        lines = [f"# gyrofilter-recording: {FORMAT_VERSION}"]
-        lines += [f"# {k}: {v}" for k, v in head.items()]
-        lines.append(",".join(self.columns))
-        self._emit("\n".join(lines) + "\n")
+        self._emit(text)
         self.flush()
 
     def _emit(self, text):
@@ -693,7 +866,7 @@ class RecordingWriter(Closable):
     def _failing(self):
         """Refuse to write after a failed write; note a new failure (``write_failed``)."""
         if self.write_failed:
-            raise OSError(errno.EIO, "an earlier write failed", self.path)
+            raise OSError(errno.EIO, "an earlier write failed", self.name)
         try:
             yield
         except OSError:
@@ -701,21 +874,29 @@ class RecordingWriter(Closable):
             raise
 
     def write(self, rows):
-        """Append rows, shape (n, number of columns), in the columns' order."""
+        """Append rows, shape (n, number of columns), in the columns' order; RecordingError (and
+        none of them written) when one holds NaN or +-inf. The cells of an object array (text a
+        converter formatted itself, say) go through their formats as they are, once checked as numbers."""
         rows = np.asarray(rows)
         if rows.size == 0:
             return
         if rows.ndim != 2 or rows.shape[1] != len(self.columns):
-            raise RecordingError(f"{self.path}: rows must have shape (n, {len(self.columns)}), got {rows.shape}")
-        fmt = self._row_format
-        self._emit("".join(fmt % tuple(r) for r in rows.tolist()))
+            raise RecordingError(f"{self.name}: rows must have shape (n, {len(self.columns)}), got {rows.shape}")
+        try:
+            values = rows.astype(float)
+        except (TypeError, ValueError):
+            raise RecordingError(f"{self.name}: rows to write must hold numbers") from None
+        _check_finite(values, self.columns, self.name)
+        fmt = ",".join(f if f is not None else _exact_format(values[:, i]) for i, f in enumerate(self._formats)) + "\n"
+        self._emit("".join(fmt % tuple(r) for r in (rows if rows.dtype == object else values).tolist()))
         self.rows_written += len(rows)
         if self._flush_interval_s is not None and time.monotonic() - self._last_flush >= self._flush_interval_s:
             self.flush()
 
     def note(self, text):
-        """Write an annotation line (``# text``) between data rows, for example a gap."""
-        self._emit(f"# {text}\n")
+        """Write an annotation line (``# text``, on one line: :func:`one_line_text`) between data
+        rows, for example a gap; a text longer than :data:`MAX_NOTE_CHARS` is cut there."""
+        self._emit(f"# {note_text(text)}\n")
 
     def flush(self):
         """Push everything written so far to the disk, readable even if the process dies now."""
@@ -755,6 +936,22 @@ class RecordingWriter(Closable):
                 os.ftruncate(fd, self._flushed_bytes)
         finally:
             os.close(fd)
+
+
+#: longest annotation text a writer writes (characters; a gap note is about 60)
+MAX_NOTE_CHARS = 4000
+
+
+def note_text(text):
+    """``text`` as an annotation line holds it: on one line (:func:`one_line_text`), cut at :data:`MAX_NOTE_CHARS`."""
+    text = one_line_text(text)
+    return text if len(text) <= MAX_NOTE_CHARS else f"{text[:MAX_NOTE_CHARS]}... (cut: {len(text)} characters)"
+
+
+def _exact_format(values):
+    """The exact format of a column's ``values`` (finite): ``%d`` when all are integers below 2^53
+    in size (no decimal point), else :data:`EXACT_FORMAT`."""
+    return "%d" if np.all((values == np.round(values)) & (np.abs(values) < _INTEGER_LIMIT)) else EXACT_FORMAT
 
 
 def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:

@@ -22,17 +22,20 @@ TEMP_RANGE_C = (-100.0, 200.0)
 #: largest |angular rate| a sample may have (deg/s): 50x the MPU6050's widest full scale (2000 deg/s)
 #: and 7x the widest MEMS gyros' (about 14 000 deg/s); it keeps every square the filters take finite
 MAX_RATE_DPS = 100_000.0
-MIN_SAMPLE_RATE_HZ = 1e-3  # one sample per 1000 s: below it a sample interval (and any tau) overflows first
+#: one sample per 1000 s: far below any gyro's output (the MPU6050's slowest is 1 kHz / 256 = 3.9 Hz)
+#: and below any filter's output rate from it, while 1 / rate and the Allan cluster times stay ordinary
+#: floats (a rate of 1e-300 Hz ended in a failed SVD deep in the fit)
+MIN_SAMPLE_RATE_HZ = 0.001
 MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
-    """``value`` as a float when it is a finite rate in [MIN_SAMPLE_RATE_HZ, MAX_SAMPLE_RATE_HZ] Hz,
-    else ``error``.
+    """``value`` as a float when it is a rate in [MIN_SAMPLE_RATE_HZ, MAX_SAMPLE_RATE_HZ] Hz, else ``error``.
 
     The one check of a sample rate, used by every module that takes one: a bool, a string, NaN,
-    infinity, zero, a negative number, a rate so low that 1/rate overflows (1e-320) or an
-    implausibly high rate (which would size buffers beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
+    infinity, zero, a negative number, an int beyond a float's range, an implausibly low rate
+    (0.001 Hz: 1 / rate overflows the analyses long before zero) or an implausibly high one (which
+    would size buffers beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
     :class:`~gyrofilter.errors.RecordingError` for a file's header) with a message that names
     ``name`` (the keyword, option or header key, with its file if any) and the value.
     """

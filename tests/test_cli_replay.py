@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from gyrofilter.cli import main
-from gyrofilter.recording import Recording, read_recording, write_recording
+from gyrofilter.cli.common import ROW_FORMATS
+from gyrofilter.recording import Recording, RecordingWriter, dps_header, read_recording, write_recording
 
 
 def test_replay_without_argument_filters_the_bundled_recording(capsys):
@@ -231,7 +232,8 @@ def test_replay_in_chunks_writes_the_rows_of_the_one_shot_filter(tmp_path, monke
     filt = GyroFilter(100.0)
     rows = filt.filter(rec.gyro_dps)
     expected = tmp_path / "expected.csv"
-    write_recording(expected, Recording.from_dps(rows, 20.0, t_s=rec.t_s[filt.block_end_indices(len(rows))]))
+    with RecordingWriter(expected, dps_header({}, 20.0), ["t", "gx", "gy", "gz"], formats=ROW_FORMATS) as writer:
+        writer.write(np.column_stack([rec.t_s[filt.block_end_indices(len(rows))], rows]))
     monkeypatch.setattr(replay, "CHUNK_ROWS", chunk_rows)
     out = tmp_path / "out.csv"
     assert main(["replay", str(src), "--out", str(out)]) == 0
@@ -418,3 +420,49 @@ def test_set_refuses_a_repeated_key_bools_for_numbers_and_huge_numbers(tmp_path,
         assert main(["replay", str(src), *extra]) == 2, extra
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and message in err, (extra, err)
+
+
+# --- issue 22: what the commands write reads back ----------------------------------------------
+
+def _clock_recording(tmp_path, n=1500, rate_hz=100.0):
+    """A recording stamped with a clock (t = 1.7e9 s + k / rate): 10 digits made every stamp one value."""
+    rng = np.random.default_rng(22)
+    src = tmp_path / "clock.csv"
+    t = 1.7e9 + np.arange(n) / rate_hz
+    write_recording(src, Recording.from_dps(rng.normal(0, 0.1, (n, 3)), rate_hz, t_s=t))
+    return src, t
+
+
+@pytest.mark.parametrize("command", ["replay", "run", "record"])
+def test_clock_time_stamps_survive_every_command_that_writes_a_recording(tmp_path, command):
+    src, t = _clock_recording(tmp_path)
+    out = tmp_path / "out.csv.gz"
+    args = {"replay": ["replay", str(src)], "run": ["run", "--source", f"replay:{src}", "--quiet"],
+            "record": ["record", "--source", f"replay:{src}", "--quiet"]}[command]
+    assert main([*args, "--out", str(out)]) == 0
+    back = read_recording(out).t_s
+    if command == "record":
+        np.testing.assert_array_equal(back, t)
+    else:  # one row per block of 5: the t of its last sample
+        assert len(back) > 250
+        np.testing.assert_array_equal(back, t[4::5][len(t[4::5]) - len(back):])
+
+
+def test_a_newline_in_the_input_path_leaves_the_output_readable(tmp_path):
+    src, _ = _clock_recording(tmp_path)
+    odd = tmp_path / "in\nput.csv"
+    odd.write_bytes(src.read_bytes())
+    out = tmp_path / "out.csv"
+    assert main(["replay", str(odd), "--out", str(out)]) == 0
+    assert read_recording(out).header["filtered_from"] == str(odd).replace("\n", "\\n")
+    recorded = tmp_path / "rec.csv"
+    assert main(["record", "--source", f"replay:{odd}", "--out", str(recorded), "--quiet"]) == 0
+    assert read_recording(recorded).header["source"] == f"replay of {odd}".replace("\n", "\\n")
+
+
+def test_replaying_dev_zero_ends_at_once_with_one_line(tmp_path):
+    out = tmp_path / "out.csv"
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "replay", "/dev/zero", "--out", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "/dev/zero: line 1: longer than" in proc.stderr
+    assert len(proc.stderr) < 300 and not out.exists()

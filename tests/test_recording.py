@@ -54,7 +54,7 @@ def test_write_read_round_trip(tmp_path, name):
         ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: deg\ngx,gy,gz\n1,2,3\n", "gyro_unit 'deg'"),
         ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\ngx,gy,gz\n1,2,3\n", "lsb_per_dps"),
         ("# gyrofilter-recording: 2\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", "version '2'"),
-        ("# gyrofilter-recording: 1\n# sample_rate_hz: fast\n# gyro_unit: dps\ngx,gy,gz\n", "not a number"),
+        ("# gyrofilter-recording: 1\n# sample_rate_hz: fast\n# gyro_unit: dps\ngx,gy,gz\n", "sample_rate_hz must be a plain decimal number"),
         (HEADER + "gx,gy\n1,2\n", "missing column.*gz"),
         (HEADER + "gx,gy,gz\n1,2,3\n4,5\n6,7,8\n", "line 8: 2 values, expected 3"),
         (HEADER + "gx,gy,gz\n1,2,3\n4,x5,6\n", "line 8: column 'gy' is not a number: 'x5'"),
@@ -220,7 +220,8 @@ def test_reader_memory_is_a_small_multiple_of_the_arrays(tmp_path):
 
 def test_damaged_gzip_data_are_named_as_such_not_as_a_bad_line(tmp_path):
     """Bytes changed inside a gzip recording make garbage text before the checksum fails: the
-    error names the file and the damaged gzip data, not a short line."""
+    error names the file and the damaged gzip data, not a short line. (Where zlib itself saw the
+    damage, the data before it were used with a warning: now an error too, issue 22.)"""
     rng = np.random.default_rng(5)
     rec = Recording.from_dps(np.round(rng.normal(0, 300, (60_000, 3))), 100.0, t_s=np.arange(60_000) / 100.0)
     good = tmp_path / "good.csv.gz"
@@ -233,13 +234,10 @@ def test_damaged_gzip_data_are_named_as_such_not_as_a_bad_line(tmp_path):
         pos = len(data) // 10 * (k + 1)
         damaged[pos:pos + 8] = bytes(b ^ 0xFF for b in damaged[pos:pos + 8])
         bad.write_bytes(bytes(damaged))
-        try:
-            back = read_recording(bad)
-        except RecordingError as exc:
-            assert str(exc).startswith(f"{bad}: damaged gzip data") or "not a readable gzip file" in str(exc), exc
-            named += "damaged gzip data" in str(exc)
-        else:  # zlib itself saw the damage: the data before it, with a warning
-            assert any("gzip data damaged" in w for w in back.warnings)
+        with pytest.raises(RecordingError) as info:
+            read_recording(bad)
+        assert str(info.value).startswith(f"{bad}: damaged gzip data"), info.value
+        named += "garbage" in str(info.value)  # noticed as a bad line first
     assert named >= 1
 
 
@@ -253,3 +251,197 @@ def test_notes_know_the_sample_they_precede(tmp_path, chunk_rows):
     head, _ = _read_chunked(path, chunk_rows)
     assert [(note.text, note.row) for note in head.notes] == [("a", 5), ("b", 11), ("c", 11), ("end", 20)]
     assert [(note.text, note.row) for note in read_recording(path).notes] == [("a", 5), ("b", 11), ("c", 11), ("end", 20)]
+
+
+# --- issue 22: nothing silently wrong (the format's reader and writers) --------------------------
+
+def _dps_file(tmp_path, body, header="", name="r.csv", rate_hz=100):
+    path = tmp_path / name
+    text = f"# gyrofilter-recording: 1\n# sample_rate_hz: {rate_hz}\n# gyro_unit: dps\n{header}t,gx,gy,gz\n{body}"
+    path.write_bytes(gzip.compress(text.encode(), compresslevel=0) if name.endswith(".gz") else text.encode())
+    return path
+
+
+@pytest.mark.parametrize("name", ["r.csv", "r.csv.gz"])
+def test_clock_time_stamps_and_every_value_round_trip_exactly(tmp_path, name):
+    """t of a clock (1.7e9 s + 1-ms steps) was written with 10 digits: every stamp one value."""
+    rng = np.random.default_rng(22)
+    n = 3000
+    t = 1.7e9 + np.arange(n) / 1000.0
+    rec = Recording.from_dps(rng.normal(0, 1, (n, 3)), 1000.0, t_s=t, temp_c=25 + rng.random(n),
+                             extra={"count": np.arange(n) * 3.0 - 7})
+    write_recording(tmp_path / name, rec)
+    back = read_recording(tmp_path / name)
+    assert len(np.unique(back.t_s)) == n
+    for column in rec.columns:
+        np.testing.assert_array_equal(back.columns[column], rec.columns[column])
+
+
+def test_a_gzip_whose_checksum_fails_is_an_error_not_a_wrong_value(tmp_path):
+    """Stored blocks (level 0) with a digit changed near the start decode to plausible text; only
+    the CRC at the end tells. It was a warning and a wrong value (exit 0)."""
+    body = "".join(f"{i / 100:.2f},{i % 7},1,2\n" for i in range(3000))
+    path = _dps_file(tmp_path, body, name="r.csv.gz")
+    data = bytearray(path.read_bytes())
+    pos = data.index(b"0.01,1,1,2")
+    data[pos + 5] = ord("9")  # gx of the second sample: 1 -> 9
+    path.write_bytes(bytes(data))
+    with pytest.raises(RecordingError, match="damaged gzip data") as info:
+        read_recording(path)
+    assert str(info.value).startswith(f"{path}: ") and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("what", ["trailing garbage", "corrupt deflate"])
+def test_any_damaged_gzip_data_are_an_error(tmp_path, what):
+    body = "".join(f"{i / 100:.2f},{i % 7},1,2\n" for i in range(30000))
+    path = _dps_file(tmp_path, "", name="r.csv.gz")
+    text = gzip.decompress(path.read_bytes()) + body.encode()
+    data = bytearray(gzip.compress(text))
+    if what == "trailing garbage":
+        data += b"not gzip"
+    else:
+        data[len(data) // 2] ^= 0x55
+    path.write_bytes(bytes(data))
+    with pytest.raises(RecordingError, match=f"{path}: damaged gzip data"):
+        read_recording(path)
+
+
+def test_a_gzip_cut_short_is_still_a_warning_and_a_prefix(tmp_path):
+    body = "".join(f"{i / 100:.2f},{i},1,2\n" for i in range(3000))
+    path = _dps_file(tmp_path, body, name="r.csv.gz")
+    path.write_bytes(path.read_bytes()[:-20])
+    rec = read_recording(path)
+    np.testing.assert_array_equal(rec.columns["gx"], np.arange(len(rec)))
+    assert 2000 < len(rec) < 3000 and any("cut short" in w for w in rec.warnings)
+
+
+@pytest.mark.parametrize("key", ["gyro_unit", "sample_rate_hz", "sensor"])
+def test_a_repeated_header_key_is_refused_naming_its_line(tmp_path, key):
+    value = {"gyro_unit": "rad/s", "sample_rate_hz": "50", "sensor": "b"}[key]
+    path = _dps_file(tmp_path, "0,1,2,3\n", header=f"# sensor: a\n# {key}: {value}\n")
+    with pytest.raises(RecordingError, match=f"{path}: line 5: header key '{key}' repeated \\(first on line [234]\\)"):
+        read_recording(path)
+
+
+@pytest.mark.parametrize("step_s", [0.001, 0.0094, 0.0106, 0.1])
+def test_t_that_disagrees_with_the_sample_rate_is_refused_both_ways(tmp_path, step_s):
+    """A 100-Hz header with 1-ms steps of t read silently (Allan taus 10x off)."""
+    body = "".join(f"{i * step_s!r},0,0,0\n" for i in range(50))
+    path = _dps_file(tmp_path, body)
+    with pytest.raises(RecordingError, match=f"{path}: t steps by {step_s:g} s .*sample_rate_hz 100 means 0.01 s"):
+        read_recording(path)
+
+
+@pytest.mark.parametrize("chunk_rows", [1, 64, 1 << 16])
+def test_t_with_gaps_and_jitter_within_5_percent_still_reads(tmp_path, chunk_rows):
+    rng = np.random.default_rng(4)
+    steps = rng.uniform(0.0096, 0.0104, 5000)
+    steps[rng.choice(5000, 1500, replace=False)] *= 3  # 30 % of the steps lost two samples
+    t = np.cumsum(steps)
+    rec = Recording.from_dps(np.zeros((5000, 3)), 100.0, t_s=t)
+    write_recording(tmp_path / "gaps.csv", rec)
+    head, data = _read_chunked(tmp_path / "gaps.csv", chunk_rows)
+    np.testing.assert_array_equal(data[:, 0], t)
+    assert head.t_gaps == 1500
+
+
+def test_writers_refuse_non_finite_values_before_anything_lands(tmp_path):
+    rec = Recording.from_dps(np.array([[1.0, 2.0, 3.0], [1e308, np.inf, 0.0]]), 100.0)
+    with pytest.raises(RecordingError, match=r"column 'gy' of row 2 .* is inf; a recording holds finite numbers only"):
+        write_recording(tmp_path / "inf.csv", rec)
+    assert not (tmp_path / "inf.csv").exists()
+    path = tmp_path / "live.csv"
+    with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "dps"}, ["gx", "gy", "gz"]) as writer:
+        writer.write(np.array([[1.0, 2.0, 3.0]]))
+        with pytest.raises(RecordingError, match="column 'gz' of row 1 .* is nan"):
+            writer.write(np.array([[4.0, 5.0, np.nan], [7.0, 8.0, 9.0]]))
+    assert read_recording(path).columns["gx"].tolist() == [1.0]
+
+
+def test_a_gzip_bomb_of_one_long_line_is_refused_in_bounded_memory(tmp_path):
+    """204 KB of gzip made one 200 MB line: 1.3 GB of memory and the whole line in the error."""
+    import tracemalloc
+    import zlib
+
+    from gyrofilter.recording import MAX_LINE_BYTES
+
+    path = tmp_path / "bomb.csv.gz"
+    z = zlib.compressobj(9, zlib.DEFLATED, 16 + zlib.MAX_WBITS)
+    parts = [z.compress(b"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n")]
+    parts += [z.compress(b"1" * (1 << 20)) for _ in range(32)]
+    path.write_bytes(b"".join(parts) + z.compress(b",2,3\n") + z.flush())
+    tracemalloc.start()
+    try:
+        with pytest.raises(RecordingError) as info:
+            read_recording(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    text = str(info.value)
+    assert text.startswith(f"{path}: line 6: longer than {MAX_LINE_BYTES} bytes") and len(text) < 300, text
+    assert peak < 8 * MAX_LINE_BYTES
+
+
+def test_dev_zero_ends_at_once_with_an_error():
+    with pytest.raises(RecordingError, match="/dev/zero: line 1: longer than"):
+        read_recording("/dev/zero")
+
+
+@pytest.mark.parametrize("value", ["a\nb", "tab\there", "cr\r", "nul\x00", "sep\u2028", " spaces "])
+def test_header_values_with_control_characters_read_back_as_written(tmp_path, value):
+    path = tmp_path / "h.csv"
+    with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "dps", "source": value, "sensor": "x"},
+                         ["gx", "gy", "gz"]) as writer:
+        writer.write(np.ones((2, 3)))
+        writer.note(f"warning: {value}")
+    rec = read_recording(path)
+    from gyrofilter.recording import one_line_text
+
+    assert rec.header["source"] == one_line_text(value) and rec.header["sensor"] == "x" and len(rec) == 2
+    assert "\\" in rec.header["source"] or value == " spaces "
+    assert [n.text for n in rec.notes] == [one_line_text(f"warning: {value}")]
+
+
+@pytest.mark.parametrize("header, match", [
+    ({"sample_rate_hz": "1e9", "gyro_unit": "dps"}, r"sample_rate_hz must be a number of Hz in \[0.001, 100000\], got 1000000000.0"),
+    ({"sample_rate_hz": "100", "gyro_unit": "dps", "sample_rate_hz:": "5"}, "header key 'sample_rate_hz:' is not a name"),
+    ({"sample_rate_hz": "100", "gyro_unit": "dps", "my key": "5"}, "header key 'my key' is not a name"),
+    ({"sample_rate_hz": "1_00", "gyro_unit": "dps"}, "sample_rate_hz must be a plain decimal number"),
+    ({"sample_rate_hz": "100", "gyro_unit": "lsb", "lsb_per_dps": "-131"}, "lsb_per_dps must be > 0"),
+    ({"sample_rate_hz": "100", "gyro_unit": "dps", "simulated_model": "x" * (1 << 21)}, "longer than 1048576 bytes"),
+])
+def test_the_writer_refuses_what_the_reader_would_refuse_before_creating_the_file(tmp_path, header, match):
+    path = tmp_path / "w.csv"
+    with pytest.raises(RecordingError, match=match) as info:
+        RecordingWriter(path, header, ["t", "gx", "gy", "gz"])
+    assert not path.exists() and len(str(info.value)) < 300
+
+
+@pytest.mark.parametrize("cell", ["0.0_1", "1_000", "0x1", "1d5", "\u0661", "infinity", "1e999", "--1", "1e5e3"])
+@pytest.mark.parametrize("with_note", [False, True])
+def test_cells_are_plain_decimal_numbers(tmp_path, cell, with_note):
+    """Python's float() reads 0.0_1 as 0.01 and the Arabic-Indic one as 1: the per-line
+    fallback (taken when a chunk holds a note) read them."""
+    body = ("# a note\n" if with_note else "") + f"0,1,{cell},3\n0.01,1,2,3\n"
+    path = _dps_file(tmp_path, body)
+    with pytest.raises(RecordingError, match=f"{path}: line [56]: column 'gy' is "):
+        read_recording(path)
+
+
+@pytest.mark.parametrize("rate", ["1e-300", "0.0009"])
+def test_a_header_rate_below_0_001_hz_is_refused(tmp_path, rate):
+    path = _dps_file(tmp_path, "", rate_hz=rate).with_suffix(".csv")
+    with pytest.raises(RecordingError, match=r"sample_rate_hz must be a number of Hz in \[0.001, 100000\]"):
+        read_recording(path)
+
+
+def test_long_values_in_errors_are_quoted_short(tmp_path):
+    path = _dps_file(tmp_path, "0,1,2,3\n", header="# " + "d" * 5000 + "\n")
+    with pytest.raises(RecordingError, match="line 4: header line is not 'key: value'") as info:
+        read_recording(path)
+    assert len(str(info.value)) < 300 and "5002 characters" in str(info.value)
+    path = tmp_path / "cols.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n" + ",".join(f"c{i}" for i in range(3000)) + "\n")
+    with pytest.raises(RecordingError, match="missing column") as info:
+        read_recording(path)
+    assert len(str(info.value)) < 300

@@ -1,4 +1,6 @@
 """Units helpers: conversions, the sample-rate check, and plain numbers in error messages."""
+import math
+
 import numpy as np
 import pytest
 
@@ -7,7 +9,7 @@ from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.recording import read_recording
 from gyrofilter.evaluation.reference import body_rate_from_quaternions
 from gyrofilter.tempcomp import compensate
-from gyrofilter.units import check_sample_rate_hz, from_dps, json_ready, plain, to_dps
+from gyrofilter.units import MIN_SAMPLE_RATE_HZ, check_sample_rate_hz, from_dps, json_ready, plain, to_dps
 
 
 def test_plain_writes_numpy_scalars_as_the_numbers_they_hold():
@@ -101,7 +103,17 @@ def _sample_rate_takers():
 
 
 @pytest.mark.parametrize("where", list(_sample_rate_takers()))
-@pytest.mark.parametrize("rate", [float("inf"), float("nan"), 0.0, -1.0, 1e-320])
+@pytest.mark.parametrize("rate", [float("inf"), float("nan"), 0.0, -1.0, 1e-300, 1e-320, 0.000999])
 def test_every_sample_rate_taker_refuses_it_with_the_one_check(where, rate):
-    with pytest.raises(GyroFilterError, match=r"rate_hz must be a number of Hz in \[0.001, 100000\], got " + str(rate)):
+    """One wording everywhere; a recording's header is text, whose inf and nan are refused by the
+    one reader of numbers in text (inputs.parse_number) before the rate is checked."""
+    if where == "recording" and not math.isfinite(rate):
+        expected = f"sample_rate_hz must be a plain decimal number .*, got '{rate}'"
+    else:
+        expected = r"rate_hz must be a number of Hz in \[0.001, 100000\], got " + str(rate)
+    with pytest.raises(GyroFilterError, match=expected):
         _sample_rate_takers()[where](rate)
+
+
+def test_the_lowest_sample_rate_is_accepted():
+    assert check_sample_rate_hz(MIN_SAMPLE_RATE_HZ) == 0.001

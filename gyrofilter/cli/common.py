@@ -15,6 +15,7 @@ from ..errors import SettingsError
 from ..inputs import parse_json, quote
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import DEFAULT_PRESET, PRESETS
+from ..recording import EXACT_FORMAT, FILTERED_FORMAT
 from ..units import AXES, json_ready
 
 
@@ -22,8 +23,10 @@ from ..units import AXES, json_ready
 RECORDING_FILE_HELP = "recording format v1: CSV text, compressed with gzip when the name ends in .gz, e.g. out.csv or out.csv.gz"
 
 
-#: a filtered row (t, gx, gy, gz) as text: run's output and replay --realtime's stdout
-ROW_FORMAT = "%.10g,%.9g,%.9g,%.9g"
+#: the formats of a filtered row (t, gx, gy, gz): t exactly, the rates with 9 significant digits
+ROW_FORMATS = [EXACT_FORMAT] + [FILTERED_FORMAT] * 3
+#: a filtered row as text: run's output and replay --realtime's stdout
+ROW_FORMAT = ",".join(ROW_FORMATS)
 
 
 def bias_text(bias_dps):

@@ -70,7 +70,7 @@ class LiveOutput:
         common.remove_stale_partials(folder)
         self._tmp = common.partial_path(path)
         try:
-            self._writer = RecordingWriter(self._tmp, header, columns, formats=formats, flush_interval_s=None)
+            self._writer = RecordingWriter(self._tmp, header, columns, formats=formats, flush_interval_s=None, name=path)
         except OSError as exc:  # named by the user's name, not the temporary one
             _remove(self._tmp)
             raise OSError(exc.errno, exc.strerror, path) from None

@@ -48,18 +48,6 @@ def recording_header(source, spec):
     return ordered
 
 
-def _formats(columns):
-    out = []
-    for c in columns:
-        if c == "t":
-            out.append("%.10g")
-        elif c == "temp":
-            out.append("%.7g")  # as simulate writes it
-        else:
-            out.append("%.9g")
-    return out
-
-
 def run(args):
     live.check_duration(args.duration)
     common.check_outputs([args.out], live.source_files(args.source), args.force)
@@ -76,7 +64,7 @@ def _record(args, source):
     loop = live.LiveLoop(source, args.duration)
     status = live.Status(args.progress or (sys.stderr.isatty() and not args.quiet), loop.sample_rate_hz)
     wall0 = time.monotonic()
-    writer = live.LiveOutput(args.out, header, columns, _formats(columns), "sample")
+    writer = live.LiveOutput(args.out, header, columns, None, "sample")  # every value exactly as the source gave it
     try:
         with loop:
             last_flush = time.monotonic()

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import RecordingError, SampleError, SettingsError
 from ..pipeline import SETTING_NAMES
-from ..recording import CHUNK_ROWS, FORMAT_VERSION, RecordingWriter, dps_header, iter_recording, warn_about_gaps
+from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
 from ..smoother import Smoother
 from ..streamstats import Envelope, RunningMoments
 from . import common
@@ -66,9 +66,7 @@ def run(args):
             replay.out_path = outputs.enter_context(common.replacing(args.out))
             outputs.callback(replay.close)
         if args.realtime:  # stdout is a recording (format v1) too
-            lines = [f"# gyrofilter-recording: {FORMAT_VERSION}"]
-            lines += [f"# {k}: {v}" for k, v in replay.stdout_header().items()] + [",".join(OUT_COLUMNS)]
-            replay.print_rows("\n".join(lines))
+            replay.print_rows(header_text(replay.stdout_header(), OUT_COLUMNS, "stdout").rstrip("\n"))
         for chunk in chunks:
             try:
                 replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in),
@@ -202,7 +200,8 @@ class _Replay:
         if self.out_path is None:
             return
         if self._writer is None:  # the header names the bias, known once the calibration is done
-            self._writer = RecordingWriter(self.out_path, self._out_header(), OUT_COLUMNS, flush_interval_s=None, fsync=False)
+            self._writer = RecordingWriter(self.out_path, self._out_header(), OUT_COLUMNS, formats=common.ROW_FORMATS,
+                                           flush_interval_s=None, fsync=False)
         self._writer.write(np.column_stack([t_s, rows]))
 
     def _out_header(self):

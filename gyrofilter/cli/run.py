@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from ..errors import SampleError, SettingsError
+from ..recording import header_text, note_text
 from . import common, live
 
 FLUSH_INTERVAL_S = 0.5
@@ -42,8 +43,7 @@ class _TextOut:
     def __init__(self, stream, header, columns):
         self.stream = stream
         self.rows_written = 0
-        lines = ["# gyrofilter-recording: 1"] + [f"# {k}: {v}" for k, v in header.items()] + [",".join(columns)]
-        self.stream.write("\n".join(lines) + "\n")
+        self.stream.write(header_text(header, columns, "stdout"))
         self.stream.flush()
 
     def write(self, rows):
@@ -51,7 +51,7 @@ class _TextOut:
         self.stream.write("".join(common.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
 
     def note(self, text):
-        self.stream.write(f"# {text}\n")
+        self.stream.write(f"# {note_text(text)}\n")
 
     def flush(self):
         self.stream.flush()
@@ -94,7 +94,7 @@ def _run(args, source):
     out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
     columns = ["t", "gx", "gy", "gz"]
     if args.out:
-        writer = live.LiveOutput(args.out, out_header, columns, common.ROW_FORMAT.split(","), "filtered row")
+        writer = live.LiveOutput(args.out, out_header, columns, common.ROW_FORMATS, "filtered row")
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = live.LiveLoop(source, args.duration)

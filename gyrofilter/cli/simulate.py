@@ -34,7 +34,7 @@ def add_arguments(parser):
 
 
 def run(args):
-    from ..recording import GYRO_COLUMNS, RecordingWriter
+    from ..recording import RecordingWriter
     from ..sim.simulate import (draw_seed, load_model, recording_columns, recording_header, sample_count,
                                 simulate_chunks, validate_model)
 
@@ -62,14 +62,11 @@ def run(args):
     seed = draw_seed() if args.seed is None else args.seed
     header = recording_header(model, args.duration, seed=seed, validated=spec)
     columns = recording_columns(spec)
-    formats = ["%.10g"] + ["%d" if spec["gyro_unit"] == "lsb" else "%.9g"] * len(GYRO_COLUMNS)
-    if "temp" in columns:
-        formats.append("%.7g")
     show = args.progress or sys.stderr.isatty()
     done = 0
     last = time.monotonic()
     with common.replacing(args.out) as tmp, \
-            RecordingWriter(tmp, header, columns, formats=formats, flush_interval_s=None, fsync=False) as writer:
+            RecordingWriter(tmp, header, columns, flush_interval_s=None, fsync=False) as writer:
         for t_s, gyro, temp_c in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=seed,
                                                  validated=spec):
             cols = [t_s[:, None], gyro] + ([temp_c[:, None]] if temp_c is not None else [])
