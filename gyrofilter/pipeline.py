@@ -29,7 +29,7 @@ from .inputs import check_number
 from .predictor import closed_loop_radius, stable_gain_threshold
 from .presets import DEFAULT_PRESET, PRESETS
 from .tempcomp import compensate
-from .units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
+from .units import AXES, MAX_RATE_DPS, RATE_TOLERANCE, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
 
 
 #: longest start-up still window (s), and most samples in it (an hour at 1 kHz, 115 MB with the
@@ -619,17 +619,13 @@ class GyroFilter:
         self._cal_temp = None
 
 
-#: largest relative difference between a loaded calibration's sample rate and the filter's
-CALIBRATION_RATE_TOLERANCE = 0.05
-
-
 def _check_calibration_rate(cal, sample_rate_hz, name):
     """Refuse a calibration made at another sample rate: its per-sample noise (which starts Q, R
     and the guard) scales with sqrt(f_s) for white noise, and the sensor's low-pass filter
     differs with the rate. Within 5 % (a logger's rate drifts around its nominal one) it stands."""
-    if abs(cal.sample_rate_hz - sample_rate_hz) > CALIBRATION_RATE_TOLERANCE * sample_rate_hz:
+    if abs(cal.sample_rate_hz - sample_rate_hz) > RATE_TOLERANCE * sample_rate_hz:
         raise SettingsError(f"{name} was made at {cal.sample_rate_hz:g} Hz and this filter runs at "
-                            f"{sample_rate_hz:g} Hz, more than {CALIBRATION_RATE_TOLERANCE:.0%} apart: its noise level "
+                            f"{sample_rate_hz:g} Hz, more than {RATE_TOLERANCE:.0%} apart: its noise level "
                             "does not hold at another rate; calibrate at this rate")
 
 

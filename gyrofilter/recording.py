@@ -51,7 +51,7 @@ import numpy as np
 from .closable import Closable
 from .errors import RecordingError, SettingsError
 from .inputs import MAX_QUOTE_CHARS, is_plain_number, parse_number, quote
-from .units import GYRO_UNITS, check_sample_rate_hz, from_dps, to_dps
+from .units import GYRO_UNITS, RATE_TOLERANCE, check_sample_rate_hz, from_dps, to_dps
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
@@ -645,10 +645,6 @@ def _parse_line(ln, line, head):
 
 #: the steps of ``t`` whose median is compared with ``1 / sample_rate_hz`` (the file's first ones)
 RATE_CHECK_STEPS = 1000
-#: largest relative difference between the typical step of ``t`` and ``1 / sample_rate_hz``; the
-#: same 5 % as a calibration's rate (``pipeline.CALIBRATION_RATE_TOLERANCE``): a logger's clock
-#: drifts around its nominal rate, not further
-RATE_TOLERANCE = 0.05
 
 
 class _TimeCheck:

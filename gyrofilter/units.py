@@ -26,6 +26,10 @@ MAX_RATE_DPS = 100_000.0
 #: and below any filter's output rate from it, while 1 / rate and the Allan cluster times stay ordinary
 #: floats (a rate of 1e-300 Hz ended in a failed SVD deep in the fit)
 MIN_SAMPLE_RATE_HZ = 0.001
+#: largest relative difference between two statements of one sample rate: a recording's header and
+#: the steps of its t, a saved calibration's and the filter's (a clock drifts around its nominal
+#: rate by well under 1 %, not further)
+RATE_TOLERANCE = 0.05
 MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
 
 

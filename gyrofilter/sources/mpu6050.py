@@ -35,6 +35,7 @@ from datetime import datetime, timezone
 import numpy as np
 
 from ..errors import DeviceError, SettingsError, SourceEnded
+from ..recording import format_number
 from . import mpu6050_registers as R
 from ..units import check_sample_rate_hz
 from .base import Source
@@ -488,7 +489,7 @@ class MPU6050Source(Source):
             "sensor": "MPU6050" if self.chip_id == MPU6050_ID else self.chip_name.split(" (")[0],
             "chip_name": self.chip_name,
             "chip_id": f"0x{self.chip_id:02X}",
-            "sample_rate_hz": f"{self.sample_rate_hz:.10g}",
+            "sample_rate_hz": format_number(self.sample_rate_hz),
             "gyro_unit": self.gyro_unit,
             "lsb_per_dps": f"{self.lsb_per_dps:g}",
             "full_scale_dps": f"{self.full_scale_dps:g}",
