@@ -51,7 +51,7 @@ import numpy as np
 from .closable import Closable
 from .errors import RecordingError, SettingsError
 from .inputs import MAX_QUOTE_CHARS, is_plain_number, parse_number, quote
-from .units import GYRO_UNITS, RATE_TOLERANCE, check_sample_rate_hz, from_dps, to_dps
+from .units import GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_sample_rate_hz, from_dps, to_dps
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
@@ -322,6 +322,7 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
         if lines:
             try:
                 data, line_numbers = _parse_chunk(lines, first, head)
+                _check_rates(data, line_numbers, head)
                 if len(data) and times is not None:
                     times.add(head.column(data, "t"), line_numbers)
             except RecordingError as exc:
@@ -337,6 +338,19 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
             return
         except RecordingError as exc:
             raise _blame_gzip_damage(path, exc) from None
+
+
+def _check_rates(data, line_numbers, head):
+    """Refuse a gyro value beyond +-MAX_RATE_DPS once in deg/s (1e308 rad/s, a tiny lsb_per_dps):
+    no gyro reads it, and it would overflow every analysis (one vectorised pass per chunk)."""
+    with np.errstate(over="ignore"):
+        ok = np.abs(head.gyro_dps(data)) <= MAX_RATE_DPS
+    if not ok.all():
+        row, axis = (int(i[0]) for i in np.nonzero(~ok))
+        name = GYRO_COLUMNS[axis]
+        raise RecordingError(f"{head.path}: line {line_numbers[row]}: column {name!r} is "
+                             f"{format_number(data[row, head.names.index(name)])} {head.gyro_unit}, beyond the "
+                             f"+-{MAX_RATE_DPS:g} deg/s any gyro reads")
 
 
 class _GzipDamage(RecordingError):

@@ -392,17 +392,23 @@ def test_an_output_below_a_file_is_refused_naming_the_file(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("realtime", [[], ["--realtime"]])
-def test_a_sample_beyond_the_filters_range_is_refused_naming_the_line(tmp_path, capsys, realtime):
+@pytest.mark.parametrize("column, value, reason", [
+    ("gy", 1e300, "column 'gy' is 1e+300 dps, beyond the +-100000 deg/s any gyro reads"),  # the reader's refusal
+    ("temp", 1e6, "temp_c (deg C) must be in [-100, 200], got 1000000.0"),  # the filter's, mapped to the line
+])
+def test_a_sample_beyond_the_filters_range_is_refused_naming_the_line(tmp_path, capsys, realtime, column, value, reason):
     """A finite but absurd sample (1e300 deg/s) made every later row inf and replay exited 0."""
     rng = np.random.default_rng(22)
     x = rng.normal(0, 0.1, (1000, 3))
-    x[700, 1] = 1e300
+    temp = np.full(1000, 25.0)
+    (x[:, 1] if column == "gy" else temp)[700] = value
     src, out = tmp_path / "in.csv", tmp_path / "out.csv"
-    write_recording(src, Recording.from_dps(x, 100.0))
-    line = next(i for i, text in enumerate(src.read_text().splitlines(), 1) if "e+300" in text)
+    write_recording(src, Recording.from_dps(x, 100.0, temp_c=temp))
+    names_at = next(i for i, text in enumerate(src.read_text().splitlines(), 1) if not text.startswith("#"))
+    line = names_at + 1 + 700
     assert main(["replay", str(src), "--out", str(out), *realtime]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == f"gyrofilter: error: {src}: line {line}: gy (deg/s) must be in [-100000, 100000], got 1e+300"
+    assert err == f"gyrofilter: error: {src}: line {line}: {reason}"
     assert not out.exists()
 
 

@@ -437,10 +437,11 @@ def test_an_output_takes_its_name_at_the_first_flush_with_a_row(tmp_path, monkey
 
 def test_run_refuses_a_sample_beyond_the_filters_range_naming_the_source_and_sample(tmp_path, capsys):
     x = np.random.default_rng(22).normal(0, 0.1, (1000, 3))
-    x[700, 2] = -1e300
+    temp = np.full(1000, 25.0)
+    temp[700] = -300.0  # the reader refuses an absurd rate itself; an absurd temperature reaches the filter
     src, out = tmp_path / "in.csv", tmp_path / "out.csv"
-    write_recording(src, Recording.from_dps(x, 100.0))
+    write_recording(src, Recording.from_dps(x, 100.0, temp_c=temp))
     assert main(["run", "--source", str(src), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert f"gyrofilter: error: source {src}: sample 700: gz (deg/s) must be in [-100000, 100000], got -1e+300" in err
+    assert f"gyrofilter: error: source {src}: sample 700: temp_c (deg C) must be in [-100, 200], got -300.0" in err
     assert "Traceback" not in err and not out.exists()

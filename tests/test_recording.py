@@ -1,4 +1,5 @@
 import gzip
+import re
 
 import numpy as np
 import pytest
@@ -445,3 +446,16 @@ def test_long_values_in_errors_are_quoted_short(tmp_path):
     with pytest.raises(RecordingError, match="missing column") as info:
         read_recording(path)
     assert len(str(info.value)) < 300
+
+
+@pytest.mark.parametrize("unit, extra, cell", [("rad/s", "", "1e308"), ("dps", "", "-100000.5"),
+                                               ("lsb", "# lsb_per_dps: 1e-6\n", "1")])
+def test_a_rate_no_gyro_reads_is_refused_naming_its_line(tmp_path, unit, extra, cell):
+    """1e308 rad/s read as inf deg/s (an overflow warning, then inf in every analysis); the reader
+    refuses any value beyond +-MAX_RATE_DPS once in deg/s, naming the line."""
+    path = tmp_path / "r.csv"
+    rows = "".join(f"0.001,0.002,{cell if i == 7 else '0.003'}\n" for i in range(20))
+    path.write_text(f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: {unit}\n{extra}gx,gy,gz\n{rows}")
+    line = 5 + bool(extra) + 7
+    with pytest.raises(RecordingError, match=rf"line {line}: column 'gz' is .* {re.escape(unit)}, beyond the \+-100000 deg/s"):
+        read_recording(path)

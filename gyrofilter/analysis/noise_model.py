@@ -56,7 +56,7 @@ import numpy as np
 from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
 from ..errors import SettingsError
-from ..units import DEG_PER_RAD, plain
+from ..units import DEG_PER_RAD, MAX_RATE_DPS, plain
 
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
 TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
@@ -546,8 +546,8 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15,
 # One axis, three axes
 # --------------------------------------------------------------------------------------------
 
-#: a rate beyond this (deg/s) is no gyro reading: 25 times the widest MEMS full scale (+-4000 deg/s)
-GROSS_LIMIT_DPS = 1e5
+#: a rate beyond this (deg/s) is no gyro reading (units.MAX_RATE_DPS)
+GROSS_LIMIT_DPS = MAX_RATE_DPS
 #: gross-error threshold on the second-difference residual, in its robust sigmas; the still
 #: MPU6050 recordings in recordings/ and simulated hours at 100 Hz and 1 kHz reach 6 at most
 GROSS_Z = 50.0
