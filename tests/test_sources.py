@@ -53,6 +53,35 @@ def test_parse_source_errors_name_the_problem(spec, words):
         assert word in str(info.value)
 
 
+@pytest.mark.parametrize("spec, words", [
+    ("sim,seed=1,seed=2", ["key 'seed' repeats key 'seed'"]),
+    ("mpu6050:addr=0x68,address=0x69", ["key 'address' repeats key 'addr'"]),
+    ("sim:m.json,model=n.json", ["key 'model' repeats the model"]),
+    ("sim,model=", ["key 'model' has an empty value"]),
+    ("replay:r.csv,realtime=", ["key 'realtime' has an empty value"]),
+    ("sim,rate=1_000", ["key 'rate' must be a plain decimal number", "'1_000'"]),
+    ("sim,duration=nan", ["key 'duration' must be a plain decimal number", "'nan'"]),
+    ("sim,duration=1e400", ["key 'duration' must be a finite number"]),
+    ("sim,seed=0b101", ["key 'seed' must be a plain decimal number"]),
+    ("sim,seed=1.5", ["key 'seed' must be a whole number"]),
+    ("sim,seed=" + "9" * 5000, ["key 'seed' must be a plain decimal number", "(5000 characters)"]),
+    ("mpu6050:bus=-1", ["key 'bus' must be in [0, 65535]"]),
+    ("mpu6050:addr=0x1000", ["key 'addr' must be in [0, 127]"]),
+    ("mpu6050:allow_chip=0x123456789", ["key 'allow_chip' must be a plain decimal number"]),
+    ("mpu6050:temp=maybe", ["key 'temp' must be 1/0, yes/no"]),
+    ("x" * 500 + ":a", ["unknown kind", "(500 characters)"]),
+])
+def test_parse_source_refuses_repeated_empty_and_unplain_values_in_one_short_line(spec, words):
+    """Issue 22: a repeated key used to win silently, ``model=`` to open the default model,
+    ``1_000`` or 5000 digits to be read by int()/float(); every refusal is one line of at most
+    300 characters that names the key."""
+    with pytest.raises(SettingsError) as info:
+        parse_source(spec)
+    text = str(info.value)
+    assert all(word in text for word in words), text
+    assert len(text) <= 300 and "\n" not in text
+
+
 def test_open_source_passes_only_given_keys_to_the_mpu6050_driver(monkeypatch):
     import gyrofilter.sources.mpu6050 as mpu
 
