@@ -193,7 +193,10 @@ def parse_source(spec: str):
             raise SettingsError(f"{where}: key {key!r} needs a value ({key}=..., {description})")
         if eq and not value:
             raise SettingsError(f"{where}: key {key!r} has an empty value ({key}=..., {description})")
-        kwargs[name] = parser(value, f"key {key!r}") if eq else True
+        try:
+            kwargs[name] = parser(value, f"key {key!r}") if eq else True
+        except SettingsError as exc:
+            raise SettingsError(f"{where}: {exc}") from None
         given[name] = f"key {key!r}"
     if kind in ("serial", "replay") and positional_name not in kwargs:
         raise SettingsError(f"{where}: {kind} needs a {positional_name} ({_SYNTAX})")

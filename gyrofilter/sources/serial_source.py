@@ -282,7 +282,7 @@ class LineParser:
         """
         if self._overlong:  # the tail of a line refused as too long: up to its line end
             end = data.find(b"\n")
-            self.stats["garbage_bytes"] += len(data) if end < 0 else end + 1
+            self.stats["garbage_bytes"] += len(data) if end < 0 else end
             if end < 0:
                 return self._empty()
             data, self._overlong = data[end + 1:], False
@@ -296,7 +296,7 @@ class LineParser:
                 rows = self._slow(block)
         if len(self._buf) > MAX_LINE_BYTES:  # already too long for a line: refused, whatever follows
             self.stats["lines"] += 1
-            self._bad(self._buf, "bad_lines", f"no line end within {MAX_LINE_BYTES} bytes")
+            self._bad(self._buf, "bad_lines", f"longer than {MAX_LINE_BYTES} bytes")
             self._buf, self._overlong = b"", True
         return rows
 
