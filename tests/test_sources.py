@@ -411,6 +411,23 @@ def test_parser_gap_arithmetic_at_32_counter_bits_and_a_refused_repeated_header(
     assert _reconciles(p)
 
 
+def test_parser_a_malformed_number_in_a_plain_chunk_is_one_refused_line():
+    """numpy 2.4 raises ValueError where numpy 1.24 stopped reading at "--4" (a ValueError
+    traceback from the serial stream before; found by tests/test_fuzz_sources.py)."""
+    p = LineParser()
+    p.feed(HEADER + _lines([0]))
+    rows = p.feed(_lines([1]) + b"--4,0,0,0\n" + _lines([2]))
+    np.testing.assert_array_equal(rows[:, 1:4], _expected([1, 2]))
+    assert p.stats["bad_lines"] == 1 and _reconciles(p)
+
+
+def test_parser_never_hands_out_an_infinite_t():
+    p = LineParser()
+    p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=1e-300\n" + _lines([0]))
+    with pytest.raises(DeviceError, match="sample 2147483647 at 1e-300 Hz is beyond any finite time"):
+        p.feed(_lines([2 ** 31 - 1]))
+
+
 def test_parser_counts_reconcile_whatever_the_lines():
     p = LineParser()
     data = (b"junk before the header\n" + HEADER + b"\r\n" + _lines(range(5)) + b"# note\n" + b"x" * 300

@@ -72,9 +72,10 @@ _PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
 _KNOWN_FIELDS = ("counter", "gx", "gy", "gz", "temp")
 _HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
 _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
-# a cell of the numpy path: a plain decimal without exponent, at most 50 characters, so that
-# a line of 5 cells and its "\r" stays within MAX_LINE_BYTES and every cell passes is_plain_number
-_PLAIN_CELL = rb"[-+]?(?:[0-9]{1,24}(?:\.[0-9]{0,24})?|\.[0-9]{1,24})"
+# a cell of the numpy path: signs, digits and points, at most 50 of them, so that a line of 5
+# cells and its "\r" stays within MAX_LINE_BYTES, and a cell numpy reads whole ("1.2.3", "+-4" it
+# does not, and the line-by-line path names them) is a plain decimal of a finite value
+_PLAIN_CELL = rb"[-+0-9.]{1,50}"
 _PLAIN_LINES = {}  # field count -> compiled pattern of a block of plain CSV number lines
 # bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
 _TEXT = b"0123456789+-.,eEnaifNAIF \t"
@@ -277,8 +278,9 @@ class LineParser:
         ``sample_rate_hz``, gyro in the header's ``gyro_unit``, temp in deg C (converted from
         TEMP_OUT with ``temp_unit=mpu6050_raw``). Raises only for a header line: DeviceError or
         SettingsError when the first one is unreadable or lacks a unit, :class:`UnitsConflict`
-        when one changes the units; other lines are counted in :attr:`stats` (the module
-        docstring) and the bad ones noted.
+        when one changes the units (and DeviceError when a tiny ``sample_rate_hz`` and the
+        counter's jumps carry ``t`` beyond a float); other lines are counted in :attr:`stats`
+        (the module docstring) and the bad ones noted.
         """
         if self._overlong:  # the tail of a line refused as too long: up to its line end
             end = data.find(b"\n")
@@ -326,9 +328,12 @@ class LineParser:
         n_lines = block.count(b"\n")
         if b"\r" in block:
             block = block.replace(b"\r", b"")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # numpy 1.24 warns (and stops) at a malformed number
-            values = np.fromstring(block.replace(b"\n", b",").decode("ascii"), sep=",")
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # numpy 1.24 warns (and stops) at a malformed number
+                values = np.fromstring(block.replace(b"\n", b",").decode("ascii"), sep=",")
+        except ValueError:  # numpy 2.4 raises there instead
+            return None
         if values.size != n_lines * nf:  # e.g. "--4": let the slow path name it
             return None
         self.stats["lines"] += n_lines
@@ -380,7 +385,7 @@ class LineParser:
             if line.translate(None, _TEXT):
                 self._bad(line, "bad_lines", "garbage bytes")
                 continue
-            cells = line.split(b",")
+            cells = line.decode("ascii").split(",")  # ASCII: the bytes were checked above
             if self.fields is None:
                 if len(cells) in (4, 5):
                     self.fields = ["counter", "gx", "gy", "gz"] + (["temp"] if len(cells) == 5 else [])
@@ -395,11 +400,11 @@ class LineParser:
             if any(not c.strip() for c in cells):
                 self._bad(line, "partial_lines", "empty value")
                 continue
-            if not all(is_plain_number(c.decode("ascii")) for c in cells):
+            if not all(map(is_plain_number, cells)):
                 self._bad(line, "bad_lines", "not a plain decimal number")
                 continue
-            values = [float(c) for c in cells]
-            if not all(math.isfinite(v) for v in values):
+            values = list(map(float, cells))
+            if not all(map(math.isfinite, values)):
                 self._bad(line, "bad_lines", "not a finite number")
                 continue
             pending.append(values)
@@ -455,6 +460,7 @@ class LineParser:
                 jump = (step > 1) & ~restart
                 step = np.where(restart, 1, step)
                 index = self._last_index + np.cumsum(step)
+                t = self._times(index)
                 for i in np.flatnonzero(jump | restart):
                     if restart[i]:
                         self.stats["restarts"] += 1
@@ -463,7 +469,7 @@ class LineParser:
                         lost = int(step[i] - 1)
                         self.stats["counter_jumps"] += 1
                         self.stats["lost_samples"] += lost
-                        self.notes.append(f"gap: {lost} samples lost before t={index[i] / self.sample_rate_hz:.6g} s (counter {int(prev[i])} -> {int(counter[i])})")
+                        self.notes.append(f"gap: {lost} samples lost before t={t[i]:.6g} s (counter {int(prev[i])} -> {int(counter[i])})")
                 self._last_counter = int(counter[-1])
                 self._last_index = int(index[-1])
         else:
@@ -473,7 +479,7 @@ class LineParser:
         if n == 0:
             return self._empty()
         rows = np.empty((n, len(self.columns)))
-        rows[:, 0] = index / self.sample_rate_hz
+        rows[:, 0] = self._times(index)
         for j, name in enumerate(("gx", "gy", "gz")):
             rows[:, 1 + j] = values[:, fields.index(name)]
         if "temp" in fields:
@@ -481,6 +487,16 @@ class LineParser:
             rows[:, 4] = temp / TEMP_LSB_PER_C + TEMP_OFFSET_C if self._temp_raw else temp
         self.stats["samples"] += n
         return rows
+
+    def _times(self, index):
+        """t (s) of the sample indices ``index`` (increasing); DeviceError when a tiny
+        ``sample_rate_hz`` and the counter's jumps carry t beyond a float."""
+        with np.errstate(over="ignore"):
+            t = index / self.sample_rate_hz
+        if not math.isfinite(t[-1]):
+            raise DeviceError(f"{self.where}: sample {int(index[-1])} at {self.sample_rate_hz:g} Hz is beyond any "
+                              "finite time; check the header's sample_rate_hz")
+        return t
 
     def pop_notes(self):
         """Events since the last call (gaps, restarts, skipped lines, device messages), as a list
