@@ -1,10 +1,19 @@
 """A fleet run (``allan``/``gap`` with ``--fleet DIR``): the same results on every backend, a
 failing file in its own row, and the flags catching a unit with a hidden defect (gyrofilter/analysis/fleet.py).
 """
+import contextlib
 import csv
+import http.server
 import json
 import os
 import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -309,3 +318,114 @@ def test_a_fleet_where_no_file_could_be_analysed_exits_2_with_its_table(tmp_path
     missing = [str(tmp_path / "a.csv"), str(tmp_path / "b.csv")]
     assert main(["allan", *missing, "--fleet", str(tmp_path / "out"), "--jobs", "1"]) == 2
     assert [r["status"] for r in _table(tmp_path / "out")] == [f"{m}: cannot read: No such file or directory" for m in missing]
+
+
+# ------------------------------------------------------------------ a --scheduler that is no Dask scheduler
+
+
+class _AnswersAtOnce(http.server.BaseHTTPRequestHandler):
+    """An HTTP server that answers every connection at once with 400 (as servers do to bytes that
+    are no HTTP request); Dask would read its first 8 bytes as a frame length of 3 EiB."""
+
+    def handle(self):
+        self.wfile.write(b"HTTP/1.0 400 Bad Request\r\nContent-Length: 0\r\n\r\n")
+
+
+@contextlib.contextmanager
+def _server(kind):
+    """A loopback server in a thread (port 0): ``http`` answers like an HTTP server, ``silent``
+    accepts connections and never says a word. Yields its tcp:// address."""
+    if kind == "http":
+        server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), _AnswersAtOnce)
+        threading.Thread(target=server.serve_forever, daemon=True).start()
+        try:
+            yield f"tcp://127.0.0.1:{server.server_address[1]}"
+        finally:
+            server.shutdown()
+            server.server_close()
+        return
+    listener = socket.create_server(("127.0.0.1", 0))
+    held = []
+
+    def accept():
+        with contextlib.suppress(OSError):
+            while True:
+                held.append(listener.accept()[0])
+
+    threading.Thread(target=accept, daemon=True).start()
+    try:
+        yield f"tcp://127.0.0.1:{listener.getsockname()[1]}"
+    finally:
+        listener.close()
+        for conn in held:
+            conn.close()
+
+
+@pytest.mark.parametrize("kind, reason", [("http", "it answered in another protocol"), ("silent", "no answer within 1 s")])
+def test_dask_scheduler_address_that_is_no_dask_scheduler_is_one_line(small_fleet, tmp_path, capsys, monkeypatch, kind, reason):
+    """Issue 22 (16, 21): an HTTP server used to end in a MemoryError ("3.07 EiB"), a server that
+    never answers in a hang of minutes; both are one line, within the scheduler timeout."""
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(fleet, "SCHEDULER_TIMEOUT_S", 1.0)
+    out = tmp_path / "out"
+    with _server(kind) as address:
+        assert main(["allan", *small_fleet[:2], "--fleet", str(out), "--scheduler", address]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"gyrofilter: error: --scheduler '{address}': no Dask scheduler answered there ({reason})"]
+    assert not out.exists()
+
+
+# ------------------------------------------------------------------ local workers end with their parent
+
+
+def _children(pid):
+    """Pids of the processes whose parent is ``pid`` (from /proc)."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            with contextlib.suppress(OSError):
+                with open(f"/proc/{entry}/stat") as fh:
+                    fields = fh.read().rsplit(")", 1)[1].split()
+                if int(fields[1]) == pid and fields[0] != "Z":
+                    found.append(int(entry))
+    return found
+
+
+def _alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="reads /proc")
+def test_local_workers_end_when_the_fleet_run_is_killed(tmp_path):
+    """Issue 22 (22): SIGKILL of ``gap ... --fleet DIR --jobs 2`` used to leave its worker
+    processes running (they finished their file, then waited for work for ever)."""
+    source = os.path.join(os.path.dirname(__file__), "..", "recordings", "mpu6050_static_655s.csv.gz")
+    paths = []
+    for i in range(6):
+        paths.append(str(tmp_path / f"unit{i}.csv.gz"))
+        shutil.copyfile(source, paths[-1])
+    run = subprocess.Popen([sys.executable, "-m", "gyrofilter", "gap", *paths, "--fleet", str(tmp_path / "out"),
+                            "--jobs", "2"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 60
+        while len(workers := _children(run.pid)) < 2 and run.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        time.sleep(3.0)  # the workers started, imported gyrofilter and took a file each
+        assert run.poll() is None and len(workers) >= 2, "the fleet run ended before it could be killed"
+        run.kill()
+        run.wait()
+        deadline = time.monotonic() + 10
+        while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        left = [w for w in workers if _alive(w)]
+    finally:
+        run.kill()
+        run.wait()
+    for w in left:  # on a failure: end what the test started
+        with contextlib.suppress(OSError):
+            os.kill(w, signal.SIGKILL)
+    assert not left, f"worker processes {left} outlived the killed fleet run"

@@ -53,6 +53,35 @@ def test_parse_source_errors_name_the_problem(spec, words):
         assert word in str(info.value)
 
 
+@pytest.mark.parametrize("spec, words", [
+    ("sim,seed=1,seed=2", ["key 'seed' repeats key 'seed'"]),
+    ("mpu6050:addr=0x68,address=0x69", ["key 'address' repeats key 'addr'"]),
+    ("sim:m.json,model=n.json", ["key 'model' repeats the model"]),
+    ("sim,model=", ["key 'model' has an empty value"]),
+    ("replay:r.csv,realtime=", ["key 'realtime' has an empty value"]),
+    ("sim,rate=1_000", ["key 'rate' must be a plain decimal number", "'1_000'"]),
+    ("sim,duration=nan", ["key 'duration' must be a plain decimal number", "'nan'"]),
+    ("sim,duration=1e400", ["key 'duration' must be a finite number"]),
+    ("sim,seed=0b101", ["key 'seed' must be a plain decimal number"]),
+    ("sim,seed=1.5", ["key 'seed' must be a whole number"]),
+    ("sim,seed=" + "9" * 5000, ["key 'seed' must be a plain decimal number", "(5000 characters)"]),
+    ("mpu6050:bus=-1", ["key 'bus' must be in [0, 65535]"]),
+    ("mpu6050:addr=0x1000", ["key 'addr' must be in [0, 127]"]),
+    ("mpu6050:allow_chip=0x123456789", ["key 'allow_chip' must be a plain decimal number"]),
+    ("mpu6050:temp=maybe", ["key 'temp' must be 1/0, yes/no"]),
+    ("x" * 500 + ":a", ["unknown kind", "(500 characters)"]),
+])
+def test_parse_source_refuses_repeated_empty_and_unplain_values_in_one_short_line(spec, words):
+    """Issue 22: a repeated key used to win silently, ``model=`` to open the default model,
+    ``1_000`` or 5000 digits to be read by int()/float(); every refusal is one line of at most
+    300 characters that names the key."""
+    with pytest.raises(SettingsError) as info:
+        parse_source(spec)
+    text = str(info.value)
+    assert all(word in text for word in words), text
+    assert text.startswith("source '") and len(text) <= 300 and "\n" not in text
+
+
 def test_open_source_passes_only_given_keys_to_the_mpu6050_driver(monkeypatch):
     import gyrofilter.sources.mpu6050 as mpu
 
@@ -254,8 +283,9 @@ def test_unseeded_simulation_records_a_seed_that_repeats_it():
     ("mpu6050:bus=1,range=300", ["range=300 is not an MPU6050 full scale"]),
     ("sim:seed=-1", ["source 'sim:seed=-1'", "seed must be an integer >= 0"]),
     ("sim,rate=-3", ["source 'sim,rate=-3'", "rate must be"]),
-    ("serial:/dev/null,baud=-5", ["baud rate must be a whole number > 0", "got -5"]),
-    ("serial:/dev/null,header_timeout=-1", ["header_timeout must be a number of seconds in (0, 3600]", "got -1.0"]),
+    ("serial:/dev/null,baud=-5", ["baud rate (bit/s, e.g. 115200) must be in [50, 1.2e+07]", "got -5"]),
+    ("serial:/dev/null,baud=100000000", ["baud rate (bit/s, e.g. 115200) must be in [50, 1.2e+07]", "got 100000000"]),
+    ("serial:/dev/null,header_timeout=-1", ["header_timeout (s) must be in (0, 3600]", "got -1.0"]),
 ])
 def test_an_openers_error_names_the_source_and_its_keys(spec, words):
     """A value the parser accepts but the source refuses is told in the SOURCE text's terms,
@@ -338,6 +368,77 @@ def test_parser_counter_wraps_at_counter_bits():
     rows = p.feed(head + _lines([65534, 65535, 0, 1]))
     np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 2, 3])
     assert p.stats["lost_samples"] == 0 and p.stats["restarts"] == 0
+
+
+def _reconciles(parser):
+    """Every line received is a delivered sample or counted as something else, exactly once."""
+    from gyrofilter.sources.serial_source import LINE_OUTCOMES
+
+    return parser.stats["lines"] == sum(parser.stats[k] for k in LINE_OUTCOMES)
+
+
+def test_parser_refuses_and_counts_every_line_whose_counter_is_not_an_integer_in_range():
+    """Issue 22 (7): negative, fractional and too large counters each refuse their line, counted;
+    the original counted three of them at most and reconciled nothing."""
+    p = LineParser()
+    counters = [0, 1, -1, -1, -1, -1, 2, 2.5, 4294967296, -7, 3]
+    rows = p.feed(HEADER + b"".join(f"{c},1,2,3\n".encode() for c in counters))
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 2, 3])
+    assert p.stats["bad_lines"] == 7 and p.stats["samples"] == 4 and p.stats["lines"] == 12
+    assert _reconciles(p)
+    assert any("counter is not an integer in [0, 4294967296)" in n for n in p.pop_notes())
+
+
+@pytest.mark.parametrize("bits", ["-3", "0", "7", "33", "64", "100000", "16.5", "x", "1e400", "0x10"])
+def test_parser_refuses_a_header_whose_counter_bits_is_not_an_integer_in_8_to_32(bits):
+    """Issue 22 (7, 11): counter_bits=-3 used to drop every line, 64 or 100000 to end in an
+    OverflowError at the first gap; now the header is refused, naming the key and the value."""
+    p = LineParser()
+    with pytest.raises(DeviceError, match="counter_bits must be") as info:
+        p.feed(HEADER.replace(b"\n", f" counter_bits={bits}\n".encode()) + _lines([0, 1, 5]))
+    assert bits.lstrip("-")[:2] in str(info.value) and "\n" not in str(info.value)
+
+
+def test_parser_gap_arithmetic_at_32_counter_bits_and_a_refused_repeated_header():
+    """The widest counter: a wrap and a gap near 2**32 count exactly (no overflow); a repeated
+    header with counter_bits=64 is one refused line, and the counter keeps its 32 bits."""
+    p = LineParser()
+    top = 2 ** 32
+    rows = p.feed(HEADER.replace(b"\n", b" counter_bits=32\n") + _lines([top - 3, top - 1, 1])
+                  + HEADER.replace(b"\n", b" counter_bits=64\n") + _lines([2, 0]))
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 2, 4, 5, 6])
+    assert (p.stats["lost_samples"], p.stats["counter_jumps"], p.stats["restarts"], p.stats["bad_lines"]) == (2, 2, 1, 1)
+    assert _reconciles(p)
+
+
+def test_parser_a_malformed_number_in_a_plain_chunk_is_one_refused_line():
+    """numpy 2.4 raises ValueError where numpy 1.24 stopped reading at "--4" (a ValueError
+    traceback from the serial stream before; found by tests/test_fuzz_sources.py)."""
+    p = LineParser()
+    p.feed(HEADER + _lines([0]))
+    rows = p.feed(_lines([1]) + b"--4,0,0,0\n" + _lines([2]))
+    np.testing.assert_array_equal(rows[:, 1:4], _expected([1, 2]))
+    assert p.stats["bad_lines"] == 1 and _reconciles(p)
+
+
+def test_parser_never_hands_out_an_infinite_t():
+    p = LineParser()
+    p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=1e-300\n" + _lines([0]))
+    with pytest.raises(DeviceError, match="sample 2147483647 at 1e-300 Hz is beyond any finite time"):
+        p.feed(_lines([2 ** 31 - 1]))
+
+
+def test_parser_counts_reconcile_whatever_the_lines():
+    p = LineParser()
+    data = (b"junk before the header\n" + HEADER + b"\r\n" + _lines(range(5)) + b"# note\n" + b"x" * 300
+            + b"\n" + b"5,1,2\n" + _lines([5, 5, 9]) + b"1,2,3,4,5,6\n" + b"7,1,2,3")
+    for i in range(0, len(data), 7):
+        p.feed(data[i:i + 7])
+    p.finish()
+    s = p.stats
+    assert (s["samples"], s["duplicates"], s["bad_lines"], s["partial_lines"], s["lost_samples"]) == (7, 1, 2, 2, 3)
+    assert (s["lines_before_header"], s["headers"], s["empty_lines"], s["device_messages"]) == (1, 1, 1, 1)
+    assert s["lines"] == 16 and _reconciles(p)
 
 
 def test_parser_skips_bad_lines_and_never_raises_on_garbage():

@@ -47,6 +47,7 @@ import dataclasses
 import math
 import os
 import signal
+import threading
 import time
 
 import numpy as np
@@ -74,6 +75,11 @@ RARE_MIN_D = 3.0
 #: environment of local worker processes: one thread per numeric library, as many workers as cores
 #: (two workers with a BLAS thread pool each on 2 cores: 1.8x slower); a value set already is kept
 WORKER_ENVIRONMENT = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+#: longest wait (s) for a Dask scheduler to answer (``--scheduler``): the connection and Dask's
+#: handshake, which Dask itself would wait for without end
+SCHEDULER_TIMEOUT_S = 10.0
+#: how often (s) a local worker process checks that the process that started it is still there
+PARENT_POLL_S = 0.5
 #: exceptions that make a file's row "failed": the same as the command line's one-line errors,
 #: and running out of memory (a worker with too large a file)
 FILE_ERRORS = (OSError, ValueError, MemoryError)
@@ -218,14 +224,15 @@ def run_local(paths, settings, jobs):
     multi-threaded BLAS sums in another order and the last bits of some results would depend on
     where they ran. A worker that dies (killed, out of memory) fails the files it had, with that
     reason. When the caller stops (Ctrl-C, an error) the workers are ended at once, not after
-    their current file."""
+    their current file; when the calling process dies (SIGKILL), each worker ends by itself within
+    :data:`PARENT_POLL_S` seconds (:func:`_worker_init`)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
     from concurrent.futures.process import BrokenProcessPool
 
     # fresh processes (not forks of this one and its thread pools) that start with WORKER_ENVIRONMENT
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_ignore_interrupts)
+                               initializer=_worker_init, initargs=(os.getpid(),))
     try:
         with _worker_environment():  # the workers start during the first submits
             futures = {pool.submit(analyse_recording, path, settings): i for i, path in enumerate(paths)}
@@ -259,19 +266,72 @@ def _worker_environment():
             os.environ.pop(key, None)
 
 
-def _ignore_interrupts():
-    """Worker processes leave Ctrl-C to the parent, which ends them (:func:`run_local`)."""
+def _worker_init(parent_pid):
+    """Set up a local worker process: Ctrl-C is left to the parent, which ends the workers
+    (:func:`run_local`), and a daemon thread ends the worker at once (``os._exit``) when the
+    parent ``parent_pid`` is gone: a killed parent cannot end its workers, which would otherwise
+    finish their file and then wait for work for ever. The check, every :data:`PARENT_POLL_S`
+    seconds, compares ``os.getppid()`` with ``parent_pid`` (an orphan is adopted by another
+    process), which works wherever Python runs."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_exit_with_parent, args=(parent_pid,), name="gyrofilter-parent-watch",
+                     daemon=True).start()
 
 
-def run_dask(paths, settings, address):
-    """Yield ``(index, result)`` of :func:`analyse_recording` (with ``settings``) for each of ``paths`` as it
-    finishes on the Dask distributed cluster whose scheduler is at ``address``
-    (``dask.distributed.Client.map``). The workers read the files at the same paths, so the
-    paths must name the same files on every worker (a shared file system). A file whose task
-    killed its workers (Dask's ``KilledWorker``) fails with that reason."""
+def _exit_with_parent(parent_pid):
+    while os.getppid() == parent_pid:
+        time.sleep(PARENT_POLL_S)
+    os._exit(1)
+
+
+def run_dask(paths, settings, address, timeout_s=None):
+    """Connect to the Dask distributed cluster whose scheduler is at ``address``, then return an
+    iterator that yields ``(index, result)`` of :func:`analyse_recording` (with ``settings``) for
+    each of ``paths`` as it finishes there (``dask.distributed.Client.map``). The workers read the
+    files at the same paths, so the paths must name the same files on every worker (a shared file
+    system). A file whose task killed its workers (Dask's ``KilledWorker``) fails with that reason.
+
+    SettingsError, before any work, when no Dask scheduler answers at ``address`` within
+    ``timeout_s`` seconds (default :data:`SCHEDULER_TIMEOUT_S`): nothing listening, a server of
+    another protocol (an HTTP server), one that never answers, a malformed address."""
     distributed = _distributed()
-    with distributed.Client(address) as client:
+    client = _connect(distributed, address, SCHEDULER_TIMEOUT_S if timeout_s is None else timeout_s)
+    return _dask_results(distributed, client, paths, settings)
+
+
+def _connect(distributed, address, timeout_s):
+    """A ``distributed.Client`` of the scheduler at ``address``, or SettingsError in one line.
+
+    Dask's own connect waits for the peer's handshake without a time limit and sizes its buffer
+    from the peer's first 8 bytes (an HTTP server's make 3 EiB: MemoryError), so the handshake is
+    first tried alone, under ``timeout_s`` seconds; only a peer that completes it gets a Client."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    from ..errors import SettingsError, one_line
+    from ..inputs import quote
+
+    async def handshake():
+        comm = await asyncio.wait_for(connect(address, timeout=timeout_s), timeout_s)
+        await comm.close()
+
+    try:
+        asyncio.run(handshake())
+        return distributed.Client(address, timeout=timeout_s)
+    except Exception as exc:  # noqa: BLE001 - whatever the comm layer raises, no scheduler is there
+        if isinstance(exc, (TimeoutError, asyncio.TimeoutError)):
+            reason = f"no answer within {timeout_s:g} s"
+        elif isinstance(exc, MemoryError):
+            reason = "it answered in another protocol"
+        else:
+            reason = one_line(exc)[:120]
+        raise SettingsError(f"--scheduler {quote(address)}: no Dask scheduler answered there ({reason})") from None
+
+
+def _dask_results(distributed, client, paths, settings):
+    """The results of ``paths`` on ``client``'s cluster as they finish (:func:`run_dask`); closes the client."""
+    with client:
         futures = client.map(analyse_recording, paths, settings=settings, pure=False)
         index = {future.key: i for i, future in enumerate(futures)}
         for future in distributed.as_completed(futures):

@@ -10,8 +10,12 @@ One syntax names every source (``--source SOURCE`` of ``gyrofilter record`` and 
     sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]   (or sim:model=MODEL.json,...)
 
 A bare ``/dev/tty...`` is a serial port and a bare existing file or ``*.csv``/``*.csv.gz`` name
-is a replay. Numbers may be decimal or ``0x`` hex; flags are ``1/0``, ``yes/no``, ``true/false``
-or the bare key (= true). An unknown key is refused with a message that lists the known ones.
+is a replay. Numbers are plain decimals (``gyrofilter.inputs.parse_number``: ``12``, ``0.5``,
+``1e3``; no ``nan``, ``inf`` or ``1_000``), whole numbers (``bus``, ``addr``, ``seed``, ...) also
+``0x`` hex of at most 8 digits; flags are ``1/0``, ``yes/no``, ``true/false``, ``on/off`` or the
+bare key (= true). An unknown key, a key given twice (``addr`` and ``address`` are one key; so are
+``sim``'s model and ``model=``), a ``key=`` without a value and a number out of its range are
+refused with one line that names the key.
 
 Every opened source is a :class:`gyrofilter.sources.base.Source`:
 
@@ -39,6 +43,7 @@ import os
 import re
 
 from ..errors import SettingsError
+from ..inputs import check_number, parse_number, quote
 
 __all__ = ["open_source", "parse_source", "SOURCE_HELP", "KINDS"]
 
@@ -51,48 +56,61 @@ SOURCE_HELP = (
 )
 
 
-def _int(text):
-    return int(text, 0)
+MAX_HEX_DIGITS = 8
 
 
-def _float(text):
-    value = float(text)
-    if value != value or value in (float("inf"), float("-inf")):
-        raise ValueError(text)
-    return value
+def _int(low=None, high=None):
+    """A parser of a whole number (plain decimal, or ``0x`` hex of at most 8 digits) in [low, high]."""
+    def parse(text, what):
+        if re.fullmatch(r"0[xX][0-9a-fA-F]{1,%d}" % MAX_HEX_DIGITS, text):
+            return check_number(int(text, 16), what, low=low, high=high, integer=True)
+        return parse_number(text, what, low=low, high=high, integer=True)
+    return parse
 
 
-def _bool(text):
-    low = text.strip().lower()
-    if low in ("1", "yes", "true", "on", ""):
+def _float(text, what):
+    return parse_number(text, what)
+
+
+def _bool(text, what):
+    low = text.lower()
+    if low in ("1", "yes", "true", "on"):
         return True
     if low in ("0", "no", "false", "off"):
         return False
-    raise ValueError(text)
+    raise SettingsError(f"{what} must be 1/0, yes/no, true/false or on/off, got {quote(text, 40)}")
 
 
-def _unit(text):
+def _unit(text, what):
     from ..units import GYRO_UNITS
 
     if text not in GYRO_UNITS:
-        raise ValueError(text)
+        raise SettingsError(f"{what} must be one of {', '.join(GYRO_UNITS)}, got {quote(text, 40)}")
     return text
 
 
-# kind -> (what the positional argument is or None, {key: (parser, keyword name, description)})
+def _text(text, what):
+    return text
+
+
+# kind -> (what the positional argument is or None, {key: (parser, keyword name, description)}).
+# A parser takes (value text, what to call it in a message) and raises SettingsError. Numbers are
+# plain decimals (gyrofilter.inputs.parse_number; whole numbers also 0x hex); the openers check
+# the ranges of what they take (rates, baud, timeouts, seeds, durations), the bounds here are the
+# ones no opener checks.
 KINDS = {
     "mpu6050": (None, {
-        "bus": (_int, "bus", "I2C bus number N of /dev/i2c-N"),
-        "addr": (_int, "address", "I2C address, 0x68 or 0x69"),
-        "address": (_int, "address", "same as addr"),
+        "bus": (_int(0, 65535), "bus", "I2C bus number N of /dev/i2c-N"),
+        "addr": (_int(0, 0x7F), "address", "I2C address, 0x68 or 0x69"),
+        "address": (_int(0, 0x7F), "address", "same as addr"),
         "rate": (_float, "rate_hz", "sample rate in Hz"),
-        "range": (_int, "range_dps", "full scale in deg/s: 250, 500, 1000 or 2000"),
-        "dlpf": (_int, "dlpf", "DLPF_CFG 0..6 (CONFIG register bits 2:0)"),
+        "range": (_int(), "range_dps", "full scale in deg/s: 250, 500, 1000 or 2000"),
+        "dlpf": (_int(0, 7), "dlpf", "DLPF_CFG 0..6 (CONFIG register bits 2:0)"),
         "temp": (_bool, "temperature", "read the temperature too (1/0)"),
-        "allow_chip": (_int, "allow_chip", "accept this WHO_AM_I value (a relative or clone)"),
+        "allow_chip": (_int(0, 0xFF), "allow_chip", "accept this WHO_AM_I value (a relative or clone)"),
     }),
     "serial": ("port", {
-        "baud": (_int, "baudrate", "baud rate"),
+        "baud": (_int(), "baudrate", "baud rate"),
         "unit": (_unit, "gyro_unit", "gyro unit if the device sends no header: dps, rad/s or lsb"),
         "lsb_per_dps": (_float, "lsb_per_dps", "LSB per deg/s if unit=lsb"),
         "rate": (_float, "sample_rate_hz", "sample rate in Hz if the device sends no header"),
@@ -103,13 +121,14 @@ KINDS = {
         "speed": (_float, "speed", "pace factor with realtime (2 = twice as fast)"),
     }),
     "sim": ("model", {
-        "model": (str, "model", "the simulator model (JSON file; a gap report's extended_model is used)"),
-        "seed": (_int, "seed", "random seed"),
+        "model": (_text, "model", "the simulator model (JSON file; a gap report's extended_model is used)"),
+        "seed": (_int(), "seed", "random seed"),
         "realtime": (_bool, "realtime", "deliver samples at the model's pace (default 1)"),
         "duration": (_float, "duration_s", "end after this many seconds of samples"),
         "rate": (_float, "sample_rate_hz", "sample rate in Hz (overrides the model's)"),
     }),
 }
+_SYNTAX = "SOURCE is KIND[:ARG][,key=value...], KIND one of mpu6050, serial, replay, sim"
 _ALIASES = {"mpu": "mpu6050", "simulate": "sim", "simulation": "sim", "file": "replay"}
 
 
@@ -131,8 +150,9 @@ def parse_source(spec: str):
     ('sim', {'seed': 3})
     """
     if not isinstance(spec, str) or not spec.strip():
-        raise SettingsError(f"empty source; {SOURCE_HELP}")
+        raise SettingsError(f"empty source ({_SYNTAX})")
     spec = spec.strip()
+    where = f"source {quote(spec)}"
     cut = min((i for i in (spec.find(":"), spec.find(",")) if i >= 0), default=len(spec))
     head, sep, rest = spec[:cut], spec[cut : cut + 1], spec[cut + 1 :]  # KIND ends at the first ':' or ','
     kind = _ALIASES.get(head.lower(), head.lower())
@@ -144,40 +164,42 @@ def parse_source(spec: str):
         elif os.path.exists(first) or first.endswith((".csv", ".csv.gz", ".gz")):
             kind, rest = "replay", spec
         elif sep:
-            raise SettingsError(
-                f"source {spec!r}: unknown kind {head!r}; expected one of {', '.join(KINDS)} ({SOURCE_HELP})"
-            )
+            raise SettingsError(f"{where}: unknown kind {quote(head, 40)} ({_SYNTAX})")
         else:
-            raise SettingsError(f"source {spec!r}: no such file, and not one of {', '.join(KINDS)} ({SOURCE_HELP})")
+            raise SettingsError(f"{where}: no such file, and not a kind ({_SYNTAX})")
     positional_name, keys = KINDS[kind]
     kwargs = {}
-    items = [item for item in rest.split(",")] if rest else []
-    for index, item in enumerate(items):
+    given = {}  # keyword name -> the key (or the positional) that gave it
+    for index, item in enumerate(rest.split(",") if rest else []):
         item = item.strip()
         if not item:
             continue
         key, eq, value = item.partition("=")
-        key = key.strip().lower()
+        key, value = key.strip().lower(), value.strip()
         if not eq and index == 0 and positional_name is not None and key not in keys:
             kwargs[positional_name] = item
+            given[positional_name] = f"the {positional_name}"
             continue
         if key not in keys:
             known = ", ".join(keys)
             if not eq and positional_name is not None:
-                raise SettingsError(
-                    f"source {spec!r}: {item!r} is not a key of {kind} (known: {known}); "
-                    f"the {positional_name} comes first, right after '{kind}:'"
-                )
-            raise SettingsError(f"source {spec!r}: unknown key {key!r} for {kind} (known: {known})")
+                raise SettingsError(f"{where}: {quote(item, 40)} is not a key of {kind} (known: {known}); "
+                                    f"the {positional_name} comes first, right after '{kind}:'")
+            raise SettingsError(f"{where}: unknown key {quote(key, 40)} for {kind} (known: {known})")
         parser, name, description = keys[key]
+        if name in given:
+            raise SettingsError(f"{where}: key {key!r} repeats {given[name]}: give it once")
         if not eq and parser is not _bool:
-            raise SettingsError(f"source {spec!r}: key {key!r} needs a value ({key}=..., {description})")
+            raise SettingsError(f"{where}: key {key!r} needs a value ({key}=..., {description})")
+        if eq and not value:
+            raise SettingsError(f"{where}: key {key!r} has an empty value ({key}=..., {description})")
         try:
-            kwargs[name] = parser(value.strip())
-        except ValueError:
-            raise SettingsError(f"source {spec!r}: bad value {value.strip()!r} for key {key!r} ({description})") from None
+            kwargs[name] = parser(value, f"key {key!r}") if eq else True
+        except SettingsError as exc:
+            raise SettingsError(f"{where}: {exc}") from None
+        given[name] = f"key {key!r}"
     if kind in ("serial", "replay") and positional_name not in kwargs:
-        raise SettingsError(f"source {spec!r}: {kind} needs a {positional_name} ({SOURCE_HELP})")
+        raise SettingsError(f"{where}: {kind} needs a {positional_name} ({_SYNTAX})")
     return kind, kwargs
 
 
@@ -210,7 +232,7 @@ def _in_source_terms(message, spec, kind):
     for key, (_, name, _) in KINDS[kind][1].items():
         if name != key and re.search(rf"(^|[,:])\s*{key}\s*=", spec, re.IGNORECASE):
             message = re.sub(rf"\b{name}\b", key, message)
-    return message if message.startswith("source ") else f"source {spec!r}: {message}"
+    return message if message.startswith("source ") else f"source {quote(spec)}: {message}"
 
 
 def _open(kind, kwargs):

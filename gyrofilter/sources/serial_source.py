@@ -9,15 +9,24 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
 - A header line ``# gyrofilter-serial: 1`` followed by ``key=value`` words, sent at start-up
   and whenever the device receives ``?``. Keys: ``gyro_unit`` (dps, rad/s, lsb),
   ``lsb_per_dps`` (with lsb), ``sample_rate_hz``; optional ``fields`` (default
-  ``counter,gx,gy,gz`` plus ``temp`` if the lines have five values), ``counter_bits`` (default
-  32: the counter wraps at 2**32), ``temp_unit`` (``c`` or ``mpu6050_raw``: T = raw/340 + 36.53
+  ``counter,gx,gy,gz`` plus ``temp`` if the lines have five values), ``counter_bits`` (an
+  integer in [8, 32], default 32: the counter wraps at 2**counter_bits), ``temp_unit`` (``c`` or ``mpu6050_raw``: T = raw/340 + 36.53
   deg C, MPU-6000/6050 register map rev 4.2 section 4.18); any other key (``sensor``,
-  ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header.
+  ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header. The header
+  line is printable ASCII; keys are names (letters, digits, ``_``), each given once, each with a
+  value; numbers are plain decimals (:func:`gyrofilter.inputs.parse_number`), ``sample_rate_hz``
+  in (0, 100000] Hz, ``lsb_per_dps`` > 0.
 - Then one CSV line per sample, ``\\n`` or ``\\r\\n`` ended. Other lines starting with ``#`` are
   device messages (passed on as notes).
-- The counter counts samples on the device. A jump of k > 1 means k - 1 samples were lost:
-  ``t`` jumps with it and a gap note is made. A repeated counter is a duplicate (dropped); a
-  backwards jump is a device restart (noted; ``t`` continues).
+- The counter counts samples on the device: an integer in [0, 2**counter_bits). A jump of
+  1 < k < 2**(counter_bits - 1) (modulo the wrap) means k - 1 samples were lost: ``t`` jumps with it
+  and a gap note is made. A repeated counter is a duplicate (dropped, counted); a backwards jump
+  is a device restart (noted; ``t`` continues). A counter that is not such an integer (negative,
+  fractional, too large) refuses its line (counted in ``bad_lines``).
+- Every line received is counted in ``stats["lines"]`` and in exactly one of
+  :data:`LINE_OUTCOMES`: a sample delivered as a row (``samples``) or a line that is not one
+  (a duplicate, a refused line, a header, ...). A run of more than :data:`MAX_LINE_BYTES` bytes
+  without a line end is one refused line, however the bytes arrive.
 
 Without a header, the units come from the source options (``unit=``, ``lsb_per_dps=``,
 ``rate=``; ``gyrofilter record --gyro-unit ...``) and the first line is discarded, since the
@@ -26,13 +35,14 @@ port may have been opened in the middle of a line.
 Reading is chunked: each ``read()`` takes every byte waiting (waiting at most 0.1 s for the
 first), splits complete lines and converts them all at once with numpy when they are all plain
 CSV; a chunk with anything else goes through a line-by-line parser that counts and skips bad
-lines (partial lines, garbage bytes, non-numeric cells). Nothing in the input makes the reader
-raise except an unreadable first header or a header that changes the units mid-stream. A disconnected port ends the source
+lines (partial lines, garbage bytes, cells that are not plain decimal numbers). Nothing in the
+input makes the reader raise except an unreadable first header or a header that changes the
+units mid-stream. The rows do not depend on how the bytes are split into reads. A disconnected port ends the source
 (:class:`SourceEnded` with the reason) after the rows received so far.
 """
 from __future__ import annotations
 
-import numbers
+import math
 import re
 import time
 import warnings
@@ -40,19 +50,32 @@ import warnings
 import numpy as np
 
 from ..errors import DeviceError, SettingsError, SourceEnded, one_line
-from ..units import GYRO_UNITS
+from ..inputs import check_number, is_plain_number, parse_number, quote
+from ..units import GYRO_UNITS, check_sample_rate_hz
 from .base import Source
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
 PROTOCOL_VERSION = "1"
 MAX_WAIT_S = 0.1
-MAX_LINE_BYTES = 256  # a longer run without a line end is garbage
+MAX_LINE_BYTES = 256  # a longer line (bytes before its "\n") is refused
 MAX_DETAILED_NOTES = 20  # bad-line notes per source; later ones are only counted
 TEMP_LSB_PER_C = 340.0  # MPU-6000/6050 register map rev 4.2, section 4.18
 TEMP_OFFSET_C = 36.53
+COUNTER_BITS = (8, 32)  # the counter_bits a header may give: a byte counter up to a 32-bit one
+DEFAULT_COUNTER_BITS = 32
+MIN_BAUD, MAX_BAUD = 50, 12_000_000  # bit/s: the slowest standard rate to the fastest USB-serial chips
+MAX_HEADER_TIMEOUT_S = 3600.0
+#: every line received (``stats["lines"]``) is counted in exactly one of these
+LINE_OUTCOMES = ("samples", "duplicates", "partial_lines", "bad_lines", "empty_lines", "device_messages",
+                 "headers", "lines_before_header")
 _PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
 _KNOWN_FIELDS = ("counter", "gx", "gy", "gz", "temp")
-# bytes a plain data chunk may hold: digits, sign, point, comma, line end
+_HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
+_PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
+# a cell of the numpy path: signs, digits and points, at most 50 of them, so that a line of 5
+# cells and its "\r" stays within MAX_LINE_BYTES, and a cell numpy reads whole ("1.2.3", "+-4" it
+# does not, and the line-by-line path names them) is a plain decimal of a finite value
+_PLAIN_CELL = rb"[-+0-9.]{1,50}"
 _PLAIN_LINES = {}  # field count -> compiled pattern of a block of plain CSV number lines
 # bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
 _TEXT = b"0123456789+-.,eEnaifNAIF \t"
@@ -79,24 +102,25 @@ class LineParser:
     """Turn the bytes of the line protocol into rows ``t, gx, gy, gz[, temp]``.
 
     Pure (no I/O): :meth:`feed` takes any bytes (split anywhere) and returns the rows its
-    complete lines made. ``header`` is None until the units are known (from a header line or
-    the constructor), and so is ``sample_rate_hz`` (float). Counters are in :attr:`stats`,
-    events in :attr:`notes`.
+    complete lines made; the rows and the counts do not depend on the split. ``header`` is None
+    until the units are known (from a header line or the constructor), and so is
+    ``sample_rate_hz`` (float). Counters are in :attr:`stats` (each line in ``lines`` and in one
+    of :data:`LINE_OUTCOMES`; ``lost_samples`` from the counter's jumps), events in :attr:`notes`.
 
     Parameters
     ----------
     gyro_unit : str, optional
         Unit of the gyro fields when the device sends no header: ``dps``, ``rad/s`` or ``lsb``.
     lsb_per_dps : float, optional
-        LSB per deg/s, needed with ``gyro_unit="lsb"``.
+        LSB per deg/s (> 0), needed with ``gyro_unit="lsb"``.
     sample_rate_hz : float, optional
-        The device's sample rate (Hz), > 0: ``t = sample index / sample_rate_hz``.
+        The device's sample rate (Hz), in (0, 100000]: ``t = sample index / sample_rate_hz``.
     where : str
         Name used in messages and notes (the port name).
 
     Giving any of the three units makes them the source options: a header line must then agree
     with them (else :class:`UnitsConflict`), and the first line is discarded. SettingsError
-    when an option is missing or not positive.
+    when an option is missing or out of range.
     """
 
     def __init__(self, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None, *, where="serial"):
@@ -109,9 +133,10 @@ class LineParser:
         self.notes = []
         self._detailed = 0
         self._buf = b""
+        self._overlong = False  # the bytes up to the next line end belong to a line already refused
         self.header = None
         self.fields = None  # list of names per line once known
-        self._counter_mod = 2 ** 32
+        self._counter_mod = 2 ** DEFAULT_COUNTER_BITS
         self._temp_raw = False
         self.sample_rate_hz = None
         self._last_counter = None
@@ -128,27 +153,32 @@ class LineParser:
     # ------------------------------------------------------------------ header
 
     def _make_units(self, values, where):
-        """Checked recording-header units from header words or source options."""
+        """Checked recording-header units from header words (text: DeviceError for a bad value)
+        or source options (numbers: SettingsError)."""
         unit = values.get("gyro_unit")
         if unit is None:
             raise SettingsError(f"{self.where}: {where}: gyro unit missing (unit=dps|rad/s|lsb)")
         if unit not in GYRO_UNITS:
-            raise SettingsError(f"{self.where}: {where}: gyro_unit {unit!r} is not one of {', '.join(GYRO_UNITS)}")
+            raise SettingsError(f"{self.where}: {where}: gyro_unit {quote(unit)} is not one of {', '.join(GYRO_UNITS)}")
         out = {"sample_rate_hz": self._positive(values, "sample_rate_hz", where, "rate=HZ"), "gyro_unit": unit}
         if unit == "lsb":
             out["lsb_per_dps"] = self._positive(values, "lsb_per_dps", where, "gyro_unit lsb needs lsb_per_dps")
         return out
 
     def _positive(self, values, key, where, hint):
-        """``values[key]`` as a positive number, formatted for the header."""
-        if values.get(key) is None:
+        """``values[key]`` (header text or an option's number) as a positive number, formatted for
+        the header; a sample rate within :func:`gyrofilter.units.check_sample_rate_hz`'s range."""
+        value = values.get(key)
+        if value is None:
             raise SettingsError(f"{self.where}: {where}: {key} missing ({hint})")
-        try:
-            number = float(values[key])
-        except ValueError:
-            raise DeviceError(f"{self.where}: {where}: {key} is not a number: {values[key]!r}") from None
-        if not number > 0 or number == float("inf"):
-            raise SettingsError(f"{self.where}: {where}: {key} must be a positive number, got {values[key]!r}")
+        what = f"{self.where}: {where}: {key}"
+        error = DeviceError if isinstance(value, str) else SettingsError
+        number = (parse_number(value, what, error=error) if isinstance(value, str)
+                  else check_number(value, what, error=error))
+        if key == "sample_rate_hz":
+            number = check_sample_rate_hz(number, what, error)
+        else:
+            number = check_number(number, what, low=0, low_open=True, error=error)
         return _num(number)
 
     def _apply(self, header):
@@ -163,17 +193,29 @@ class LineParser:
         self.header = dict(header)
         self.sample_rate_hz = float(header["sample_rate_hz"])
 
-    def _header_line(self, line):
-        text = line[len(HEADER_PREFIX):].decode("ascii", "replace").split()
+    def _header_words(self, line):
+        """The ``key=value`` words of a header line as a dict; DeviceError for anything else."""
+        if line.translate(None, _PRINTABLE):
+            raise DeviceError(f"{self.where}: the header line holds bytes that are not printable ASCII")
+        text = line[len(HEADER_PREFIX):].decode("ascii").split()
         if not text or text[0] != PROTOCOL_VERSION:
-            raise DeviceError(f"{self.where}: unsupported serial protocol version {text[:1]} (this reader speaks {PROTOCOL_VERSION})")
+            raise DeviceError(f"{self.where}: unsupported serial protocol version {quote(text[0] if text else '', 20)} "
+                              f"(this reader speaks {PROTOCOL_VERSION})")
         values = {}
         for word in text[1:]:
             key, eq, value = word.partition("=")
-            if not eq:
-                raise DeviceError(f"{self.where}: header word {word!r} is not key=value")
+            if not eq or not _HEADER_KEY.fullmatch(key) or not value:
+                raise DeviceError(f"{self.where}: header word {quote(word, 40)} is not key=value "
+                                  "(a key of letters, digits and _, a value)")
+            if key in values:
+                raise DeviceError(f"{self.where}: the header gives {key} twice")
             values[key] = value
-        self.stats["headers"] += 1
+        return values
+
+    def _header_line(self, line):
+        """Read a header line and apply it, all or nothing: DeviceError/SettingsError (nothing
+        changed) when it is unreadable, :class:`UnitsConflict` when it changes the units."""
+        values = self._header_words(line)
         where = "header line"
         if "gyro_unit" not in values and self._options is not None:
             values = {**self._options, **values}
@@ -188,21 +230,22 @@ class LineParser:
                     raise UnitsConflict(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
         header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS}
         header.update(units)
+        fields = self.fields
         if "fields" in values:
             fields = _parse_fields(values["fields"], self.where)
             if self.fields is not None and fields != self.fields:
                 raise UnitsConflict(f"{self.where}: the device's header changed the fields mid-stream ({self.fields} -> {fields})")
-            self.fields = fields
+        counter_mod = self._counter_mod
         if "counter_bits" in values:
-            try:
-                self._counter_mod = 2 ** int(values["counter_bits"])
-            except ValueError:
-                raise DeviceError(f"{self.where}: counter_bits is not an integer: {values['counter_bits']!r}") from None
+            low, high = COUNTER_BITS
+            bits = parse_number(values["counter_bits"], f"{self.where}: header line: counter_bits",
+                                low=low, high=high, integer=True, error=DeviceError)
+            counter_mod = 2 ** bits
         temp_unit = values.get("temp_unit", "c")
         if temp_unit not in ("c", "mpu6050_raw"):
-            raise DeviceError(f"{self.where}: temp_unit {temp_unit!r} is not c or mpu6050_raw")
-        self._temp_raw = temp_unit == "mpu6050_raw"
+            raise DeviceError(f"{self.where}: temp_unit {quote(temp_unit, 40)} is not c or mpu6050_raw")
         self._apply(header)  # a repeated header must agree; the counter tells restarts
+        self.fields, self._counter_mod, self._temp_raw = fields, counter_mod, temp_unit == "mpu6050_raw"
         self._skip_first_line = False
 
     # ------------------------------------------------------------------ lines
@@ -215,14 +258,17 @@ class LineParser:
             return None
         return ["t", "gx", "gy", "gz"] + (["temp"] if "temp" in self.fields else [])
 
-    def _bad(self, line, kind, reason):
-        self.stats[kind] += 1
-        self.stats["garbage_bytes"] += len(line)
+    def _bad(self, shown, kind, reason, *, count=1, garbage_bytes=None):
+        """Count ``count`` refused lines as ``kind`` (``bad_lines`` or ``partial_lines``) and their
+        bytes (default: ``len(shown)``); the first :data:`MAX_DETAILED_NOTES` get a note."""
+        self.stats[kind] += count
+        self.stats["garbage_bytes"] += len(shown) if garbage_bytes is None else garbage_bytes
         if self._detailed < MAX_DETAILED_NOTES:
             self._detailed += 1
-            shown = line[:40].decode("ascii", "backslashreplace")
+            text = shown[:40].decode("ascii", "backslashreplace")
             more = "" if self._detailed < MAX_DETAILED_NOTES else " (further bad lines are only counted)"
-            self.notes.append(f"serial: skipped {kind[:-1].replace('_', ' ')} ({reason}): {shown}{more}")
+            many = f"{count} lines, the first " if count > 1 else ""
+            self.notes.append(f"serial: skipped {many}{kind[:-1].replace('_', ' ')} ({reason}): {text}{more}")
 
     def feed(self, data: bytes) -> np.ndarray:
         """Add received bytes; returns the rows of the complete lines, shape (n, len(columns)).
@@ -231,54 +277,64 @@ class LineParser:
         call). Rows are ``t, gx, gy, gz[, temp]``: t (s) from the device's sample counter and
         ``sample_rate_hz``, gyro in the header's ``gyro_unit``, temp in deg C (converted from
         TEMP_OUT with ``temp_unit=mpu6050_raw``). Raises only for a header line: DeviceError or
-        SettingsError when it is unreadable or lacks a unit, :class:`UnitsConflict` when it
-        changes the units; bad data lines are counted in :attr:`stats` and noted.
+        SettingsError when the first one is unreadable or lacks a unit, :class:`UnitsConflict`
+        when one changes the units (and DeviceError when a tiny ``sample_rate_hz`` and the
+        counter's jumps carry ``t`` beyond a float); other lines are counted in :attr:`stats`
+        (the module docstring) and the bad ones noted.
         """
+        if self._overlong:  # the tail of a line refused as too long: up to its line end
+            end = data.find(b"\n")
+            self.stats["garbage_bytes"] += len(data) if end < 0 else end
+            if end < 0:
+                return self._empty()
+            data, self._overlong = data[end + 1:], False
         buf = self._buf + data
         end = buf.rfind(b"\n")
-        if end < 0:
-            if len(buf) > MAX_LINE_BYTES:
-                self._bad(buf, "bad_lines", "no line end")
-                buf = b""
-            self._buf = buf
-            return self._empty()
         block, self._buf = buf[: end + 1], buf[end + 1 :]
-        if len(self._buf) > MAX_LINE_BYTES:
-            self._bad(self._buf, "bad_lines", "no line end")
-            self._buf = b""
-        if b"\r" in block:
-            block = block.replace(b"\r", b"")
-        rows = self._fast(block)
-        if rows is None:
-            rows = self._slow(block)
+        rows = self._empty()
+        if block:
+            rows = self._fast(block)
+            if rows is None:
+                rows = self._slow(block)
+        if len(self._buf) > MAX_LINE_BYTES:  # already too long for a line: refused, whatever follows
+            self.stats["lines"] += 1
+            self._bad(self._buf, "bad_lines", f"longer than {MAX_LINE_BYTES} bytes")
+            self._buf, self._overlong = b"", True
         return rows
 
     def finish(self):
         """The connection ended: a line without its end is a cut line (counted, not used)."""
-        if self._buf.strip():
+        if self._buf:
+            self.stats["lines"] += 1
             self._bad(self._buf, "partial_lines", "cut off at the end of the stream")
-        self._buf = b""
+        self._buf, self._overlong = b"", False
 
     def _empty(self):
         cols = self.columns
         return np.empty((0, len(cols) if cols else 4))
 
     def _fast(self, block):
-        """All lines plain CSV with the known field count: one regular-expression check, one
-        numpy conversion. Anything else (headers, messages, bad lines) returns None."""
+        """All lines plain CSV with the known field count (cells of :data:`_PLAIN_CELL`, which the
+        line-by-line path reads alike): one regular-expression check, one numpy conversion.
+        Anything else (headers, messages, bad lines) returns None."""
         if self.header is None or self.fields is None or self._skip_first_line:
             return None
         nf = len(self.fields)
         pattern = _PLAIN_LINES.get(nf)
         if pattern is None:
-            pattern = _PLAIN_LINES[nf] = re.compile(rb"(?:[-+0-9.]+(?:,[-+0-9.]+){%d}\n)*" % (nf - 1))
+            pattern = _PLAIN_LINES[nf] = re.compile(rb"(?:%s(?:,%s){%d}\r?\n)*" % (_PLAIN_CELL, _PLAIN_CELL, nf - 1))
         if pattern.fullmatch(block) is None:
             return None
         n_lines = block.count(b"\n")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # numpy 1.24 warns (and stops) at a malformed number
-            values = np.fromstring(block.replace(b"\n", b",").decode("ascii"), sep=",")
-        if values.size != n_lines * nf:  # e.g. "1.2.3" or "--4": let the slow path name it
+        if b"\r" in block:
+            block = block.replace(b"\r", b"")
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # numpy 1.24 warns (and stops) at a malformed number
+                values = np.fromstring(block.replace(b"\n", b",").decode("ascii"), sep=",")
+        except ValueError:  # numpy 2.4 raises there instead
+            return None
+        if values.size != n_lines * nf:  # e.g. "--4": let the slow path name it
             return None
         self.stats["lines"] += n_lines
         return self._rows(values.reshape(n_lines, nf))
@@ -289,6 +345,11 @@ class LineParser:
         pending = []
         for line in block.split(b"\n")[:-1]:
             self.stats["lines"] += 1
+            if len(line) > MAX_LINE_BYTES:
+                self._bad(line, "bad_lines", f"longer than {MAX_LINE_BYTES} bytes")
+                continue
+            if line.endswith(b"\r"):
+                line = line[:-1]
             if not line.strip():
                 self.stats["empty_lines"] += 1
                 continue
@@ -296,15 +357,16 @@ class LineParser:
                 if pending:
                     out.append(self._rows(np.array(pending)))
                     pending = []
-                had_header = self.header is not None
                 try:
                     self._header_line(line)
                 except UnitsConflict:
                     raise
                 except (DeviceError, SettingsError) as exc:
-                    if not had_header:
+                    if self.header is None:
                         raise
                     self._bad(line, "bad_lines", f"unreadable repeated header: {exc}")
+                    continue
+                self.stats["headers"] += 1
                 continue
             if line.startswith(b"#"):
                 self.stats["device_messages"] += 1
@@ -317,14 +379,13 @@ class LineParser:
                 continue
             if self._skip_first_line:
                 self._skip_first_line = False
-                if line.strip():
-                    self.stats["partial_lines"] += 1
-                    self.notes.append("serial: first line discarded (the port may have opened mid-line)")
+                self.stats["partial_lines"] += 1
+                self.notes.append("serial: first line discarded (the port may have opened mid-line)")
                 continue
             if line.translate(None, _TEXT):
                 self._bad(line, "bad_lines", "garbage bytes")
                 continue
-            cells = line.split(b",")
+            cells = line.decode("ascii").split(",")  # ASCII: the bytes were checked above
             if self.fields is None:
                 if len(cells) in (4, 5):
                     self.fields = ["counter", "gx", "gy", "gz"] + (["temp"] if len(cells) == 5 else [])
@@ -339,12 +400,11 @@ class LineParser:
             if any(not c.strip() for c in cells):
                 self._bad(line, "partial_lines", "empty value")
                 continue
-            try:
-                values = [float(c) for c in cells]
-            except ValueError:
-                self._bad(line, "bad_lines", "not a number")
+            if not all(map(is_plain_number, cells)):
+                self._bad(line, "bad_lines", "not a plain decimal number")
                 continue
-            if not all(v == v and abs(v) != float("inf") for v in values):
+            values = list(map(float, cells))
+            if not all(map(math.isfinite, values)):
                 self._bad(line, "bad_lines", "not a finite number")
                 continue
             pending.append(values)
@@ -365,7 +425,10 @@ class LineParser:
         return last - first == n - 1 and (n < 3 or bool((np.diff(counter) == 1).all()))
 
     def _rows(self, values):
-        """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping."""
+        """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping.
+
+        A counter that is not an integer in [0, 2**counter_bits) refuses its line (``bad_lines``).
+        Counters are at most 2**32 and the sample index an int64, so no step overflows."""
         fields = self.fields
         n = len(values)
         if "counter" in fields and n and self._consecutive(values[:, fields.index("counter")]):
@@ -376,8 +439,9 @@ class LineParser:
             counter = values[:, fields.index("counter")]
             ok = (counter == np.round(counter)) & (counter >= 0) & (counter < self._counter_mod)
             if not ok.all():
-                for v in counter[~ok][:3]:
-                    self._bad(repr(v).encode(), "bad_lines", "counter is not an integer in range")
+                bad = counter[~ok]
+                self._bad(repr(float(bad[0])).encode(), "bad_lines",
+                          f"counter is not an integer in [0, {self._counter_mod})", count=len(bad), garbage_bytes=0)
                 values, counter = values[ok], counter[ok]
                 n = len(values)
             counter = counter.astype(np.int64)
@@ -389,22 +453,23 @@ class LineParser:
             keep = step != 0
             if not keep.all():
                 self.stats["duplicates"] += int((~keep).sum())
-                values, counter, step = values[keep], counter[keep], step[keep]
+                values, counter, prev, step = values[keep], counter[keep], prev[keep], step[keep]
                 n = len(values)
             if n:
                 restart = step >= self._counter_mod // 2
                 jump = (step > 1) & ~restart
                 step = np.where(restart, 1, step)
                 index = self._last_index + np.cumsum(step)
+                t = self._times(index)
                 for i in np.flatnonzero(jump | restart):
                     if restart[i]:
                         self.stats["restarts"] += 1
-                        self.notes.append(f"serial: device counter went back ({int(prev_of(counter, i, self._last_counter))} -> {int(counter[i])}); device restarted? t continues")
+                        self.notes.append(f"serial: device counter went back ({int(prev[i])} -> {int(counter[i])}); device restarted? t continues")
                     else:
                         lost = int(step[i] - 1)
                         self.stats["counter_jumps"] += 1
                         self.stats["lost_samples"] += lost
-                        self.notes.append(f"gap: {lost} samples lost before t={index[i] / self.sample_rate_hz:.6g} s (counter {int(prev_of(counter, i, self._last_counter))} -> {int(counter[i])})")
+                        self.notes.append(f"gap: {lost} samples lost before t={t[i]:.6g} s (counter {int(prev[i])} -> {int(counter[i])})")
                 self._last_counter = int(counter[-1])
                 self._last_index = int(index[-1])
         else:
@@ -414,7 +479,7 @@ class LineParser:
         if n == 0:
             return self._empty()
         rows = np.empty((n, len(self.columns)))
-        rows[:, 0] = index / self.sample_rate_hz
+        rows[:, 0] = self._times(index)
         for j, name in enumerate(("gx", "gy", "gz")):
             rows[:, 1 + j] = values[:, fields.index(name)]
         if "temp" in fields:
@@ -423,17 +488,21 @@ class LineParser:
         self.stats["samples"] += n
         return rows
 
+    def _times(self, index):
+        """t (s) of the sample indices ``index`` (increasing); DeviceError when a tiny
+        ``sample_rate_hz`` and the counter's jumps carry t beyond a float."""
+        with np.errstate(over="ignore"):
+            t = index / self.sample_rate_hz
+        if not math.isfinite(t[-1]):
+            raise DeviceError(f"{self.where}: sample {int(index[-1])} at {self.sample_rate_hz:g} Hz is beyond any "
+                              "finite time; check the header's sample_rate_hz")
+        return t
+
     def pop_notes(self):
         """Events since the last call (gaps, restarts, skipped lines, device messages), as a list
         of one-line strings; empties :attr:`notes`."""
         notes, self.notes = self.notes, []
         return notes
-
-
-def prev_of(counter, i, last):
-    """The counter value before ``counter[i]``: ``counter[i - 1]``, or ``last`` (the last counter
-    of the previous chunk) for ``i == 0``."""
-    return counter[i - 1] if i > 0 else last
 
 
 def _num(x):
@@ -453,7 +522,7 @@ class SerialSource(Source):
     port : str
         Serial device (``/dev/ttyUSB0``) or pyserial URL (``loop://``, ``socket://...``).
     baudrate : int
-        Baud rate (bit/s).
+        Baud rate (bit/s), a whole number in [MIN_BAUD, MAX_BAUD] (50 .. 12000000).
     gyro_unit : str, optional
         Gyro unit if the device sends no header: ``dps``, ``rad/s`` or ``lsb``.
     lsb_per_dps : float, optional
@@ -461,7 +530,7 @@ class SerialSource(Source):
     sample_rate_hz : float, optional
         Sample rate (Hz) if the device sends no header.
     header_timeout_s : float
-        Longest wait (s) for the header and the first data line; DeviceError after it.
+        Longest wait (s) for the header and the first data line, in (0, 3600]; DeviceError after it.
     serial_port : object, optional
         An open pyserial-like port (``read``, ``write``, ``in_waiting``, ``close``) used instead
         of opening ``port`` (test seam).
@@ -474,10 +543,10 @@ class SerialSource(Source):
     def __init__(self, port, baudrate=115200, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None,
                  header_timeout_s=5.0, *, serial_port=None, clock=time.monotonic):
         self.port_name = str(port)
-        if isinstance(baudrate, bool) or not isinstance(baudrate, numbers.Integral) or baudrate <= 0:
-            raise SettingsError(f"{self.port_name}: baud rate must be a whole number > 0 (bits per second, e.g. 115200), got {baudrate!r}")
-        if not (isinstance(header_timeout_s, (int, float)) and 0 < header_timeout_s <= 3600):
-            raise SettingsError(f"{self.port_name}: header_timeout must be a number of seconds in (0, 3600], got {header_timeout_s!r}")
+        baudrate = check_number(baudrate, f"{self.port_name}: baud rate (bit/s, e.g. 115200)", low=MIN_BAUD,
+                                high=MAX_BAUD, integer=True)
+        header_timeout_s = check_number(header_timeout_s, f"{self.port_name}: header_timeout (s)", low=0,
+                                        low_open=True, high=MAX_HEADER_TIMEOUT_S)
         self._parser = LineParser(gyro_unit, lsb_per_dps, sample_rate_hz, where=self.port_name)
         self._ended = None
         self._disconnected = False
