@@ -322,7 +322,7 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
         if lines:
             try:
                 data, line_numbers = _parse_chunk(lines, first, head)
-                _check_rates(data, line_numbers, head)
+                _check_rates(data, head, lambda row: f"line {line_numbers[row]}")
                 if len(data) and times is not None:
                     times.add(head.column(data, "t"), line_numbers)
             except RecordingError as exc:
@@ -340,15 +340,17 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
             raise _blame_gzip_damage(path, exc) from None
 
 
-def _check_rates(data, line_numbers, head):
+def _check_rates(data, head, where):
     """Refuse a gyro value beyond +-MAX_RATE_DPS once in deg/s (1e308 rad/s, a tiny lsb_per_dps):
-    no gyro reads it, and it would overflow every analysis (one vectorised pass per chunk)."""
+    no gyro reads it, and it would overflow every analysis. One vectorised pass over ``data``, a
+    chunk in ``head``'s columns and units; ``where(row)`` names a row ("line 12"). The reader and
+    the writers share it, so that nothing is written that would not read back."""
     with np.errstate(over="ignore"):
         ok = np.abs(head.gyro_dps(data)) <= MAX_RATE_DPS
     if not ok.all():
         row, axis = (int(i[0]) for i in np.nonzero(~ok))
         name = GYRO_COLUMNS[axis]
-        raise RecordingError(f"{head.path}: line {line_numbers[row]}: column {name!r} is "
+        raise RecordingError(f"{head.path}: {where(row)}: column {name!r} is "
                              f"{format_number(data[row, head.names.index(name)])} {head.gyro_unit}, beyond the "
                              f"+-{MAX_RATE_DPS:g} deg/s any gyro reads")
 
@@ -785,6 +787,9 @@ def write_recording(path, rec: Recording, *, compresslevel=6):
     data = np.column_stack([rec.columns[c] for c in names]) if names else np.empty((0, 0))
     _check_finite(data, names, path)
     header_text(rec.header, names, path)
+    if len(data):
+        _check_rates(data, RecordingHead(header=rec.header, names=names, path=os.fspath(path)),
+                     lambda row: f"row {row + 1} of the rows to write")
     with RecordingWriter(path, rec.header, names, flush_interval_s=None, compresslevel=compresslevel) as writer:
         writer.write(data)
         for line, text in rec.notes:
@@ -851,6 +856,7 @@ class RecordingWriter(Closable):
         self.name = self.path if name is None else os.fspath(name)
         self.columns = list(columns)
         text = header_text(header, self.columns, self.name)
+        self._head = RecordingHead(header={k: str(v) for k, v in header.items()}, names=self.columns, path=self.name)
         self._formats = list(formats) if formats is not None else [None] * len(self.columns)
         if len(self._formats) != len(self.columns):
             raise RecordingError(f"{self.name}: {len(self._formats)} formats for {len(self.columns)} columns")
@@ -897,6 +903,7 @@ class RecordingWriter(Closable):
         except (TypeError, ValueError):
             raise RecordingError(f"{self.name}: rows to write must hold numbers") from None
         _check_finite(values, self.columns, self.name)
+        _check_rates(values, self._head, lambda row: f"row {row + 1} of the rows to write")
         fmt = ",".join(f if f is not None else _exact_format(values[:, i]) for i, f in enumerate(self._formats)) + "\n"
         self._emit("".join(fmt % tuple(r) for r in (rows if rows.dtype == object else values).tolist()))
         self.rows_written += len(rows)

@@ -30,6 +30,7 @@ from hypothesis import strategies as st
 from gyrofilter.cli import main
 from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, one_line_text, read_recording, write_recording
+from gyrofilter.units import MAX_RATE_DPS
 
 FAST = settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 SLOW = settings(max_examples=2000, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
@@ -47,6 +48,7 @@ def _check_refusal(exc, path):
 # --- 1. what write_recording writes reads back exactly ------------------------------------------
 
 finite = st.floats(allow_nan=False, allow_infinity=False)
+rates = st.floats(-MAX_RATE_DPS, MAX_RATE_DPS)  # what a gyro reads (deg/s): the reader refuses more
 header_text = st.text(st.characters(codec="utf-8", exclude_categories=["Cs"]), max_size=40)
 
 
@@ -54,7 +56,7 @@ header_text = st.text(st.characters(codec="utf-8", exclude_categories=["Cs"]), m
 def recordings(draw):
     n = draw(st.integers(0, 40))
     rate_hz = draw(st.sampled_from([0.001, 1.0, 100.0, 285.7142857142857, 1000.0, 8000.0]))
-    gyro = np.array(draw(st.lists(st.tuples(finite, finite, finite), min_size=n, max_size=n)), dtype=float).reshape(n, 3)
+    gyro = np.array(draw(st.lists(st.tuples(rates, rates, rates), min_size=n, max_size=n)), dtype=float).reshape(n, 3)
     t_s = None
     if draw(st.booleans()):
         t0 = draw(st.floats(-1e9, 2e9))
@@ -138,7 +140,7 @@ def texts(draw, valid=False):
         if kind == "blank":
             lines.append(draw(st.sampled_from(["", " ", "\t"])))
             continue
-        values = draw(st.lists(finite, min_size=3, max_size=3))
+        values = draw(st.lists(rates if valid else finite, min_size=3, max_size=3))
         cells = [_cell(v, draw(st.sampled_from(["repr", "g17", "blanks", "plus", "upper"]))) for v in values]
         if kind == "python":
             cells[draw(st.integers(0, 2))] = draw(st.sampled_from(PYTHON_ONLY))
@@ -162,6 +164,8 @@ def texts(draw, valid=False):
         rows = rows[:-1]
     if broken is None and any(kind in ("python", "short") for _, kind in rows):
         broken = "cell"
+    if broken is None and any(abs(v) > MAX_RATE_DPS for r, _ in rows for v in r.values()):
+        broken = "beyond a gyro's rates"
     expected = np.array([[r[c] for c in ("gx", "gy", "gz")] for r, _ in rows]).reshape(-1, 3)
     return text, expected, broken, cut_last
 

@@ -359,6 +359,20 @@ def test_writers_refuse_non_finite_values_before_anything_lands(tmp_path):
     assert read_recording(path).columns["gx"].tolist() == [1.0]
 
 
+def test_writers_refuse_rates_the_reader_would_refuse(tmp_path):
+    """What is written reads back: a rate beyond +-MAX_RATE_DPS in deg/s is refused by the writers too."""
+    rec = Recording.from_dps(np.array([[1.0, 2.0, 3.0], [0.0, -100000.5, 0.0]]), 100.0)
+    with pytest.raises(RecordingError, match=r"row 2 of the rows to write: column 'gy' is -100000.5 dps, beyond"):
+        write_recording(tmp_path / "big.csv", rec)
+    assert not (tmp_path / "big.csv").exists()
+    path = tmp_path / "live.csv"
+    with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "lsb", "lsb_per_dps": 0.25}, ["gx", "gy", "gz"]) as writer:
+        writer.write(np.array([[1.0, 2.0, 25000.0]]))  # 100 000 deg/s: the bound itself
+        with pytest.raises(RecordingError, match="row 1 of the rows to write: column 'gz' is 25001 lsb, beyond"):
+            writer.write(np.array([[4.0, 5.0, 25001.0], [7.0, 8.0, 9.0]]))
+    assert read_recording(path).columns["gz"].tolist() == [25000.0]
+
+
 def test_a_gzip_bomb_of_one_long_line_is_refused_in_bounded_memory(tmp_path):
     """204 KB of gzip made one 200 MB line: 1.3 GB of memory and the whole line in the error."""
     import tracemalloc
