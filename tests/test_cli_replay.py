@@ -403,7 +403,14 @@ def test_a_sample_beyond_the_filters_range_is_refused_naming_the_line(tmp_path, 
     temp = np.full(1000, 25.0)
     (x[:, 1] if column == "gy" else temp)[700] = value
     src, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    x[700, 1] = min(x[700, 1], 1.0)  # the writer refuses what the reader would: written by hand below
     write_recording(src, Recording.from_dps(x, 100.0, temp_c=temp))
+    if column == "gy":
+        lines = src.read_text().splitlines()
+        cells = lines[-300].split(",")
+        cells[1] = "1e+300"  # gx,gy,gz,temp
+        lines[-300] = ",".join(cells)
+        src.write_text("\n".join(lines) + "\n")
     names_at = next(i for i, text in enumerate(src.read_text().splitlines(), 1) if not text.startswith("#"))
     line = names_at + 1 + 700
     assert main(["replay", str(src), "--out", str(out), *realtime]) == 2

@@ -422,10 +422,13 @@ def test_parser_a_malformed_number_in_a_plain_chunk_is_one_refused_line():
 
 
 def test_parser_never_hands_out_an_infinite_t():
+    """A rate of 1e-300 Hz made t = counter / rate infinite; the one rate check refuses it."""
     p = LineParser()
-    p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=1e-300\n" + _lines([0]))
-    with pytest.raises(DeviceError, match="sample 2147483647 at 1e-300 Hz is beyond any finite time"):
-        p.feed(_lines([2 ** 31 - 1]))
+    with pytest.raises(DeviceError, match=r"sample_rate_hz must be a number of Hz in \[0.001, 100000\], got 1e-300"):
+        p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=1e-300\n" + _lines([0]))
+    p = LineParser()
+    p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=0.001\n" + _lines([0]))
+    assert p.feed(_lines([2 ** 31 - 1]))[-1, 0] == (2 ** 31 - 1) / 0.001  # the largest jump: finite
 
 
 def test_parser_counts_reconcile_whatever_the_lines():

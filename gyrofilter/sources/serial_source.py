@@ -460,7 +460,7 @@ class LineParser:
                 jump = (step > 1) & ~restart
                 step = np.where(restart, 1, step)
                 index = self._last_index + np.cumsum(step)
-                t = self._times(index)
+                t = index / self.sample_rate_hz
                 for i in np.flatnonzero(jump | restart):
                     if restart[i]:
                         self.stats["restarts"] += 1
@@ -479,7 +479,7 @@ class LineParser:
         if n == 0:
             return self._empty()
         rows = np.empty((n, len(self.columns)))
-        rows[:, 0] = self._times(index)
+        rows[:, 0] = index / self.sample_rate_hz  # finite: a rate >= MIN_SAMPLE_RATE_HZ, an int64 index
         for j, name in enumerate(("gx", "gy", "gz")):
             rows[:, 1 + j] = values[:, fields.index(name)]
         if "temp" in fields:
@@ -487,16 +487,6 @@ class LineParser:
             rows[:, 4] = temp / TEMP_LSB_PER_C + TEMP_OFFSET_C if self._temp_raw else temp
         self.stats["samples"] += n
         return rows
-
-    def _times(self, index):
-        """t (s) of the sample indices ``index`` (increasing); DeviceError when a tiny
-        ``sample_rate_hz`` and the counter's jumps carry t beyond a float."""
-        with np.errstate(over="ignore"):
-            t = index / self.sample_rate_hz
-        if not math.isfinite(t[-1]):
-            raise DeviceError(f"{self.where}: sample {int(index[-1])} at {self.sample_rate_hz:g} Hz is beyond any "
-                              "finite time; check the header's sample_rate_hz")
-        return t
 
     def pop_notes(self):
         """Events since the last call (gaps, restarts, skipped lines, device messages), as a list
