@@ -144,3 +144,52 @@ def test_fleet_table_example_has_the_columns_of_the_code():
     assert all(len(r) == len(COLUMNS) for r in rows[1:]) and len(rows) == 3
     documented = " ".join(table_rows(section(9)))
     assert all(c in documented or c.rsplit("_", 1)[0] in documented for c in COLUMNS)
+
+
+def setting_ranges_table():
+    """The table of the filter settings' ranges that section 8 shows, from pipeline.SETTING_RANGES."""
+    from gyrofilter.pipeline import SETTING_RANGES
+
+    def number(x):
+        return f"{x:g}" if abs(x) < 1e6 else f"{x:.0e}".replace("e+0", "e").replace("e+", "e")
+
+    lines = ["| setting | range |", "|---|---|"]
+    for name, r in SETTING_RANGES.items():
+        low = f"{'(' if r.get('low_open') else '['}{number(r['low'])}"
+        high = f"{number(r['high'])}{')' if r.get('high_open') else ']'}"
+        lines.append(f"| `{name}` | {low}, {high}{' whole' if r.get('integer') else ''} |")
+    return "\n".join(lines)
+
+
+def test_section_8_states_every_settings_range_as_the_code_holds_it():
+    assert setting_ranges_table() in section(8)
+
+
+@pytest.mark.parametrize("row, value", [
+    ("any sample rate", lambda u: f"[{u.MIN_SAMPLE_RATE_HZ:g}, {u.MAX_SAMPLE_RATE_HZ:g}] Hz"),
+    ("a gyro sample", lambda u: f"±{u.MAX_RATE_DPS:g}"),
+    ("a temperature", lambda u: f"[{u.TEMP_RANGE_C[0]:g}, {u.TEMP_RANGE_C[1]:g}] °C"),
+    ("a header's rate", lambda u: f"{u.RATE_TOLERANCE * 100:g} %"),
+    ("a duration", lambda u: "(0, 10⁹] s" if u.MAX_DURATION_S == 1e9 else "changed"),
+])
+def test_section_8_states_the_bounds_the_code_holds(row, value):
+    from gyrofilter import units
+
+    line = next(ln for ln in section(8).splitlines() if ln.startswith(f"| {row}"))
+    assert value(units).replace("-", "−") in line, (value(units), line)
+
+
+def test_section_8_states_the_sizes_the_code_holds():
+    from gyrofilter import inputs, recording
+    from gyrofilter.analysis import fleet
+    from gyrofilter.sim import simulate
+    from gyrofilter.sources import serial_source
+
+    text = section(8)
+    assert recording.MAX_LINE_BYTES == 2 ** 20 and "| a recording's line (data or header) | 1 MiB |" in text
+    assert recording.MAX_HEADER_LINES == 1000 and "| 1000 lines, 1 MiB |" in text
+    assert f"| a serial line | {serial_source.MAX_LINE_BYTES} bytes |" in text
+    assert inputs.MAX_JSON_BYTES == 16 * 2 ** 20 and f"| 16 MiB, {inputs.MAX_JSON_DEPTH} levels |" in text
+    assert (f"| {simulate.MAX_EFFECTS_PER_AXIS}; {simulate.MAX_ARMA_COEFFICIENTS}; {simulate.MAX_TABLE_POINTS} |"
+            in text)
+    assert f"| {fleet.SCHEDULER_TIMEOUT_S:g} s |" in text
