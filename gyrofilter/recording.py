@@ -560,14 +560,14 @@ def _check_header(header, where):
     :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
     ``lsb_per_dps`` a positive number with ``lsb``. The one check of a header: the reader's and
     the writers' (:func:`header_text`)."""
-    version = header.get("gyrofilter-recording")
-    if version is None:
-        raise RecordingError(f"{where}: line 1: missing header key 'gyrofilter-recording' (is this a gyrofilter recording?)")
+    missing = [key for key in ("gyrofilter-recording", "sample_rate_hz", "gyro_unit") if key not in header]
+    if missing:
+        raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
+                             "'# gyrofilter-recording: 1', '# sample_rate_hz: RATE', '# gyro_unit: dps|rad/s|lsb' "
+                             "lines (docs/formats.md, section 1)")
+    version = header["gyrofilter-recording"]
     if version != FORMAT_VERSION:
         raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
-    for key in ("sample_rate_hz", "gyro_unit"):
-        if key not in header:
-            raise RecordingError(f"{where}: missing header key {key!r}")
     rate_hz = parse_number(header["sample_rate_hz"], f"{where}: sample_rate_hz", error=RecordingError)
     check_sample_rate_hz(rate_hz, f"{where}: sample_rate_hz", RecordingError)
     if header["gyro_unit"] not in GYRO_UNITS:
@@ -578,9 +578,16 @@ def _check_header(header, where):
         parse_number(header["lsb_per_dps"], f"{where}: lsb_per_dps", low=0, low_open=True, error=RecordingError)
 
 
+#: column names that look like time stamps but are not ``t``: refused, so that a user's own file
+#: with a "time" column is not read as uniform samples at the header's rate with its times ignored
+TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s", "t_s", "seconds", "secs", "sec",
+                             "stamp", "stamps"})
+
+
 def _check_columns(names, where):
-    """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated or
-    lack ``gx, gy, gz``; ``where`` is the file and line."""
+    """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
+    lack ``gx, gy, gz`` or look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
+    case: ``T`` too); ``where`` is the file and line."""
     if any(not n for n in names):
         raise RecordingError(f"{where}: empty column name in {quote(','.join(names))}")
     seen = set()
@@ -589,7 +596,14 @@ def _check_columns(names, where):
         raise RecordingError(f"{where}: duplicate column(s) {quote(', '.join(dupes))}")
     missing = [c for c in GYRO_COLUMNS if c not in seen]
     if missing:
-        raise RecordingError(f"{where}: missing column(s) {', '.join(missing)} (have {quote(', '.join(names))})")
+        hint = ("; columns are separated by commas" if len(names) == 1 and any(c in names[0] for c in ";\t ") else
+                "; names are lower case" if all(c.upper() in map(str.upper, names) for c in missing) else "")
+        raise RecordingError(f"{where}: missing column(s) {', '.join(missing)} (have {quote(', '.join(names))}){hint}")
+    times = [n for n in names if n.lower() in TIME_LIKE_NAMES or n == "T"]
+    if times:
+        raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
+                             "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
+                             "it as an extra column")
 
 
 def _parse_chunk(lines, first, head):

@@ -73,7 +73,8 @@ def test_set_overrides_a_setting_and_is_recorded_in_the_output(tmp_path):
     rec = read_recording(out)
     assert rec.sample_rate_hz == 25.0 and '"outlier_rule":"median_slope"' in rec.header["filter_settings"]
     assert main(["replay", str(src), "--set", "outlier_rule=nope"]) == 2
-    assert main(["replay", str(src), "--set", "no_equals"]) == 2
+    with pytest.raises(SystemExit, match="2"):  # argparse's own refusal: argument --set: expected NAME=VALUE
+        main(["replay", str(src), "--set", "no_equals"])
 
 
 def test_temp_model_compensates_a_drift_from_a_gap_report(tmp_path, capsys):
@@ -479,3 +480,11 @@ def test_replaying_dev_zero_ends_at_once_with_one_line(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "/dev/zero: line 1: longer than" in proc.stderr
     assert len(proc.stderr) < 300 and not out.exists()
+
+
+def test_set_with_a_space_instead_of_an_equals_sign_is_told_so(capsys):
+    """--set block_len 5 read 5 as the recording's name: '5: cannot read: No such file or directory'."""
+    with pytest.raises(SystemExit) as info:
+        main(["replay", "--set", "block_len", "5"])
+    err = capsys.readouterr().err
+    assert info.value.code == 2 and "argument --set: expected NAME=VALUE (e.g. block_len=5), got 'block_len'" in err

@@ -50,8 +50,8 @@ def test_write_read_round_trip(tmp_path, name):
     "text,match",
     [
         ("", "empty file"),
-        ("# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", "missing header key 'gyrofilter-recording'"),
-        ("# gyrofilter-recording: 1\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", "missing header key 'sample_rate_hz'"),
+        ("# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", r"missing header key\(s\) 'gyrofilter-recording'"),
+        ("# gyrofilter-recording: 1\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", r"missing header key\(s\) 'sample_rate_hz'"),
         ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: deg\ngx,gy,gz\n1,2,3\n", "gyro_unit 'deg'"),
         ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\ngx,gy,gz\n1,2,3\n", "lsb_per_dps"),
         ("# gyrofilter-recording: 2\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,3\n", "version '2'"),
@@ -473,3 +473,25 @@ def test_a_rate_no_gyro_reads_is_refused_naming_its_line(tmp_path, unit, extra, 
     line = 5 + bool(extra) + 7
     with pytest.raises(RecordingError, match=rf"line {line}: column 'gz' is .* {re.escape(unit)}, beyond the \+-100000 deg/s"):
         read_recording(path)
+
+
+def test_a_users_own_csv_is_told_what_a_recording_needs_in_one_go(tmp_path):
+    """A spreadsheet export (time,gx,gy,gz, no header) was told one missing key per try, and once
+    the keys were there its 'time' column was carried along unused: uniform samples at the header's
+    rate, wrong times and taus without a word."""
+    path = tmp_path / "sheet.csv"
+    path.write_text("time,gx,gy,gz\n0.00,1,2,3\n0.02,1,2,3\n")
+    with pytest.raises(RecordingError, match=r"missing header key\(s\) 'gyrofilter-recording', 'sample_rate_hz', "
+                                             r"'gyro_unit'; a recording starts with '# gyrofilter-recording: 1'"):
+        read_recording(path)
+    header = "# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n"
+    for names, message in (("time,gx,gy,gz", r"column 'time' looks like time stamps, .* named 't'"),
+                           ("gx,gy,gz,Timestamp", r"column 'Timestamp' looks like time stamps"),
+                           ("T,gx,gy,gz", r"column 'T' looks like time stamps"),
+                           ("t,GX,GY,GZ", r"missing column\(s\) gx, gy, gz .*; names are lower case"),
+                           ("t;gx;gy;gz", r"missing column\(s\) gx, gy, gz .*; columns are separated by commas")):
+        path.write_text(header + names + "\n" + "0.00,1,2,3\n")
+        with pytest.raises(RecordingError, match=message):
+            read_recording(path)
+    path.write_text(header + "t,gx,gy,gz,ref_time_offset\n0.00,1,2,3,4\n")  # a name that merely contains 'time' is kept
+    assert read_recording(path).columns["ref_time_offset"].tolist() == [4.0]

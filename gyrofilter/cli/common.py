@@ -273,7 +273,7 @@ def add_filter_arguments(parser):
     parser.add_argument("--preset", default=DEFAULT_PRESET, choices=sorted(PRESETS),
                         help=f"filter settings preset (default: {DEFAULT_PRESET}, the best measured filter; "
                              "paper: the faithful paper-001 pipeline)")
-    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", type=setting_text,
                         help="override one filter setting (repeatable), e.g. --set outlier_rule=median_slope; "
                              f"settings: {', '.join(SETTING_NAMES)}")
     parser.add_argument("--temp-model", metavar="JSON",
@@ -318,16 +318,32 @@ _NOT_SETTINGS = {"sample_rate_hz": "the sample rate comes from the recording or 
                  "calibration": "use --calibration JSON"}
 
 
+def _split_setting(text):
+    """'name=value' -> (name, value text), or SettingsError: the one check of --set's shape."""
+    name, sep, value = text.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise SettingsError(f"--set {quote(text)}: expected NAME=VALUE")
+    return name, value
+
+
+def setting_text(text):
+    """argparse type of --set: NAME=VALUE, so that ``--set block_len 5`` is told so (it read 5 as
+    the recording's name)."""
+    try:
+        _split_setting(text)
+    except SettingsError:
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE (e.g. block_len=5), got {quote(text)}") from None
+    return text
+
+
 def _parse_setting(text):
     """'name=value' -> (name, value); NAME must be a filter setting (``SETTING_NAMES``). The value is
     read as JSON (numbers, true/false, lists; :func:`gyrofilter.inputs.parse_json`, so no NaN or
     Infinity tokens and no deep nesting), else kept as text; numbers separated by commas
     (0.01,0.02,0) are a list; Python's True/False are bools; null is refused. Whether the value
     fits the setting (its type and range) is GyroFilter's check, whose error names the setting."""
-    name, sep, value = text.partition("=")
-    name = name.strip()
-    if not sep or not name:
-        raise SettingsError(f"--set {quote(text)}: expected NAME=VALUE")
+    name, value = _split_setting(text)
     if name in _NOT_SETTINGS:
         raise SettingsError(f"--set {name}: not a filter setting; {_NOT_SETTINGS[name]}")
     if name not in SETTING_NAMES:
