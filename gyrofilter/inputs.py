@@ -12,13 +12,14 @@ The rules (docs/formats.md, section 8):
   OverflowError), and inside the caller's bounds.
 - **JSON files** are read at most :data:`MAX_JSON_BYTES` bytes (a larger file or an endless
   one such as ``/dev/zero`` is refused), must be UTF-8, may nest at most :data:`MAX_JSON_DEPTH`
-  levels, and hold no ``NaN``/``Infinity`` tokens.
+  levels, and hold no ``NaN``/``Infinity`` tokens and no key twice in one object.
 - **Quoting** user text in an error: at most :data:`MAX_QUOTE_CHARS` characters (:func:`quote`).
 """
 from __future__ import annotations
 
 import json
 import math
+import os
 import re
 
 import numpy as np
@@ -30,6 +31,7 @@ MAX_JSON_BYTES = 16 * 1024 * 1024
 MAX_JSON_DEPTH = 32
 MAX_QUOTE_CHARS = 80
 
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 _DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # [0-9]: \d takes any script's digits
 
 
@@ -59,7 +61,7 @@ def check_number(value, what, *, low=None, high=None, low_open=False, high_open=
     """``value`` (from JSON or Python code) as a float (an int when ``integer``), or ``error`` whose
     message names ``what``: a bool, a string, None, NaN, +-inf, an int beyond a float's range, a
     fraction where ``integer`` is asked for, or a value outside [low, high] (open ends with
-    ``low_open``/``high_open``) is refused."""
+    ``low_open``/``high_open``) is refused. An int stays that int (exact beyond 2**53: a seed)."""
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     number = math.nan
     if ok:
@@ -74,11 +76,13 @@ def check_number(value, what, *, low=None, high=None, low_open=False, high_open=
         raise error(f"{what} must be a finite number{' (a whole number)' if integer else ''}, got {shown}")
     if integer and not number.is_integer():
         raise error(f"{what} must be a whole number, got {_short(value)}")
+    if integer:
+        number = int(value) if isinstance(value, (int, np.integer)) else int(number)
     below = low is not None and (number <= low if low_open else number < low)
     above = high is not None and (number >= high if high_open else number > high)
     if below or above:
         raise error(f"{what} must be {_bounds_text(low, high, low_open, high_open)}, got {_short(value)}")
-    return int(number) if integer else number
+    return number
 
 
 def _short(value):
@@ -98,6 +102,8 @@ def parse_number(text, what, *, error=SettingsError, **bounds):
     number = float(stripped)
     if not math.isfinite(number):
         raise error(f"{what} must be a finite number, got {quote(text)}")
+    if bounds.get("integer") and _INTEGER.fullmatch(stripped):
+        number = int(stripped)  # exact: float() rounds 9007199254740993 to ...992
     return check_number(number, what, error=error, **bounds)
 
 
@@ -111,16 +117,28 @@ def _refuse_constant(name):
     raise ValueError(f"{name} is not a JSON number")
 
 
+def _unique_keys(pairs):
+    """An object's pairs as a dict, or ValueError for a key given twice (json keeps the last one
+    silently: a second bias_dps would win unseen)."""
+    doc = {}
+    for key, value in pairs:
+        if key in doc:
+            raise ValueError(f"key {quote(key)} given twice")
+        doc[key] = value
+    return doc
+
+
 def parse_json(text, what, error=SettingsError):
     """The JSON document ``text`` (str), or ``error`` naming ``what``: invalid JSON, ``NaN``/
-    ``Infinity`` tokens, or nesting deeper than :data:`MAX_JSON_DEPTH`."""
+    ``Infinity`` tokens, a key given twice in one object, or nesting deeper than
+    :data:`MAX_JSON_DEPTH`."""
     try:
-        doc = json.loads(text, parse_constant=_refuse_constant)
+        doc = json.loads(text, parse_constant=_refuse_constant, object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as exc:
         raise error(f"{what}: not valid JSON: line {exc.lineno} column {exc.colno}: {exc.msg}") from None
     except RecursionError:
         raise error(f"{what}: JSON nested more than {MAX_JSON_DEPTH} levels deep") from None
-    except ValueError as exc:  # NaN/Infinity, or an integer of more digits than Python converts
+    except ValueError as exc:  # NaN/Infinity, a repeated key, an integer of more digits than Python converts
         raise error(f"{what}: not valid JSON: {' '.join(str(exc).split())[:MAX_QUOTE_CHARS]}") from None
     if _depth(doc) > MAX_JSON_DEPTH:
         raise error(f"{what}: JSON nested more than {MAX_JSON_DEPTH} levels deep")
@@ -148,7 +166,11 @@ def load_json(path, what, error=SettingsError):
     """The JSON document in the file ``path``, or ``error`` whose message starts with the path and
     names ``what`` (e.g. "calibration", "model"): unreadable, larger than :data:`MAX_JSON_BYTES`
     (read no further, so an endless file such as /dev/zero ends at once), not UTF-8, or refused
-    by :func:`parse_json`. The one loader of the JSON files a user hands to gyrofilter."""
+    by :func:`parse_json`. ``path`` is a file name (str, bytes or os.PathLike): an int would be
+    taken by open() as a file descriptor, and closed. The one loader of the JSON files a user
+    hands to gyrofilter."""
+    if not isinstance(path, (str, bytes, os.PathLike)):
+        raise error(f"the {what} must be a file name, got {_short(path)}")
     try:
         with open(path, "rb") as fh:
             data = fh.read(MAX_JSON_BYTES + 1)

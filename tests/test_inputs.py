@@ -193,3 +193,33 @@ def test_quote_cuts_at_the_limit_and_gives_the_length():
     assert quote("a" * (MAX_QUOTE_CHARS + 1)) == f"{'a' * MAX_QUOTE_CHARS!r}... ({MAX_QUOTE_CHARS + 1} characters)"
     assert quote("two\nlines") == "'two\\nlines'"  # one line, whatever the text
     assert quote(12) == "'12'" and quote("abc", limit=2) == "'ab'... (3 characters)"
+
+
+def test_a_whole_number_in_text_is_read_exactly():
+    """parse_number(integer=True) went through float: seed=9007199254740993 became ...992."""
+    assert parse_number("9007199254740993", "seed", integer=True, low=0) == 9007199254740993
+    assert parse_number("-3", "n", integer=True) == -3 and isinstance(parse_number("-3", "n", integer=True), int)
+    assert parse_number("1e3", "n", integer=True) == 1000
+    assert check_number(2 ** 63 - 1, "seed", integer=True, high=2 ** 63 - 1) == 2 ** 63 - 1
+    with pytest.raises(SettingsError, match=r"seed must be <= 9.22337e\+18, got 9223372036854775808"):
+        check_number(2 ** 63, "seed", integer=True, high=2 ** 63 - 1)
+
+
+def test_a_key_given_twice_in_a_json_object_is_refused():
+    """json.loads keeps the last of two equal keys: a second bias_dps was used unseen."""
+    with pytest.raises(SettingsError, match="doc: not valid JSON: key 'bias_dps' given twice"):
+        parse_json('{"bias_dps": [0, 0, 0], "x": {"a": 1}, "bias_dps": [10, 10, 10]}', "doc")
+    with pytest.raises(SettingsError, match="key 'a' given twice"):
+        parse_json('[{"a": 1, "a": 1}]', "doc")
+    assert parse_json('[{"a": 1}, {"a": 2}]', "doc") == [{"a": 1}, {"a": 2}]
+
+
+@pytest.mark.parametrize("path", [2, 0, True, {"bias_dps": [0, 0, 0]}, None, 1.5])
+def test_load_json_takes_only_a_file_name(path):
+    """An int was taken by open() as a file descriptor and closed (calibration=2 closed stderr)."""
+    import os
+
+    before = os.fstat(2)
+    with pytest.raises(SettingsError, match="the model must be a file name, got"):
+        load_json(path, "model")
+    assert os.fstat(2) == before

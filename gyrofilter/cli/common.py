@@ -67,16 +67,6 @@ def file_name(text):
     return text
 
 
-MAX_SEED = 2**63 - 1
-
-
-def check_seed(seed, option="--seed"):
-    """A ``--seed`` is an integer in [0, MAX_SEED] (type=int makes it an integer), else SettingsError."""
-    if not 0 <= seed <= MAX_SEED:
-        shown = seed if abs(seed) < 10**20 else f"an integer of {len(str(abs(seed)))} digits"
-        raise SettingsError(f"{option} must be an integer in [0, 2^63 - 1], got {shown}")
-
-
 def add_force_argument(parser):
     parser.add_argument("--force", action="store_true", help="overwrite output files that exist (an input is never overwritten)")
 

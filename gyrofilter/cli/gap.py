@@ -15,6 +15,7 @@ import os
 import sys
 import time
 
+from ..sim.simulate import check_seed
 from . import batch, common
 
 MAX_SIMS = 1000  # baseline simulations; the default is 12-24, and the spread is known to +-3 % from 1000
@@ -42,7 +43,7 @@ def run(args):
 
     if args.sims is not None and not 2 <= args.sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {args.sims}")
-    common.check_seed(args.seed)
+    check_seed(args.seed, "--seed")
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--report"])

@@ -12,6 +12,7 @@ import time
 import numpy as np
 
 from ..errors import SettingsError
+from ..sim.simulate import check_seed
 from ..units import MAX_DURATION_S, check_duration_s, check_sample_rate_hz
 from . import common
 
@@ -43,7 +44,7 @@ def run(args):
     if args.sample_rate_hz is not None:
         check_sample_rate_hz(args.sample_rate_hz, args.sample_rate_hz_option)
     if args.seed is not None:
-        common.check_seed(args.seed)
+        check_seed(args.seed, "--seed")
     if args.chunk < 1:
         raise SettingsError(f"--chunk must be at least 1 sample, got {args.chunk}")
     if args.chunk > MAX_CHUNK:

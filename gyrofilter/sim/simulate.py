@@ -359,10 +359,18 @@ def _root_seed(seed, rng):
     return np.random.SeedSequence()
 
 
-def check_seed(seed):
-    """``seed`` as an int, or SettingsError: a seed is an integer >= 0 (numpy's SeedSequence)."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise SettingsError(f"simulate: seed must be an integer >= 0, got {plain(seed)}")
+#: the largest seed: a signed 64-bit integer, which every tool that repeats a run can hold
+MAX_SEED = 2**63 - 1
+
+
+def check_seed(seed, name="simulate: seed"):
+    """``seed`` as an int, or SettingsError naming ``name``: a seed is an integer in [0, MAX_SEED]
+    (numpy's SeedSequence takes any integer >= 0; the bound keeps it one that reads back). The
+    one check of a seed: the library's, the ``sim`` source's and the ``--seed`` options'."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed <= MAX_SEED:
+        shown = plain(seed) if not isinstance(seed, (int, np.integer)) or abs(seed) < 10**20 else \
+            f"an integer of {len(str(abs(int(seed))))} digits"
+        raise SettingsError(f"{name} must be an integer in [0, 2^63 - 1], got {shown}")
     return int(seed)
 
 
