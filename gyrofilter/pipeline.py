@@ -14,6 +14,7 @@ The state has a fixed size: nothing grows per sample, so a filter can run for da
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import asdict, dataclass, fields, replace
 from functools import partial
@@ -239,6 +240,11 @@ class GyroFilter:
     >>> f.update((0.01, -0.02, 0.0)) is None      # calibrating
     True
     """
+
+    def __copy__(self):
+        """A whole copy (as ``copy.deepcopy``): the state is arrays a shallow copy would share, so
+        feeding the copy would change the original's later rows."""
+        return copy.deepcopy(self)
 
     def __init__(self, sample_rate_hz, calibration_s=None, *, preset=DEFAULT_PRESET, calibration=None, **settings):
         if not isinstance(preset, str) or preset not in PRESETS:

@@ -358,3 +358,17 @@ def test_filter_timed_refuses_times_that_are_not_finite():
         f.filter_timed(noisy(300), t[:10])
     with pytest.raises(SettingsError, match="samples_dps must be an array of numbers"):
         f.filter_timed([[1.0, 2.0, 3.0], [1.0]], t[:2])
+
+
+def test_a_copy_of_a_filter_mid_stream_is_independent_of_it():
+    """copy.copy shared the filter's arrays: feeding the copy changed the original's later rows."""
+    import copy
+
+    x = noisy(2000)
+    reference = GyroFilter(100.0)
+    want = reference.filter(x)
+    f = GyroFilter(100.0)
+    first = f.filter(x[:1000])
+    twin = copy.copy(f)
+    twin.filter(np.random.default_rng(9).normal(5.0, 1.0, (500, 3)))
+    np.testing.assert_array_equal(np.vstack([first, f.filter(x[1000:])]), want)

@@ -15,6 +15,7 @@ import time
 import numpy as np
 import pytest
 
+from gyrofilter.cli import main
 from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.sim.simulate import simulate
@@ -295,3 +296,22 @@ def test_quiet_keeps_the_status_line_off_a_terminal(tmp_path):
         assert len(read_recording(out)) == 500
     assert "samples/s (nominal 200)" in seen[False]
     assert "samples/s" not in seen[True]
+
+
+def test_record_of_a_replay_keeps_every_note_at_its_row_and_adds_no_gap_note_twice(tmp_path):
+    """The replay source handed a read's notes out with rows up to 1000 past them, so record wrote
+    them early (a note before row 10 came before row 0), and each re-recording added another copy
+    of the file's own gap note."""
+    t = np.arange(3000) / 100.0
+    t[1500:] += 0.05  # 5 samples lost before row 1500
+    rows = "".join(f"{ti!r},1,2,{k}\n" + ("# marker before row 10\n" if k == 9 else "") for k, ti in enumerate(t.tolist()))
+    src = tmp_path / "in.csv"
+    src.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n" + rows)
+    for generation in (1, 2):
+        out = tmp_path / f"gen{generation}.csv"
+        assert main(["record", "--source", f"replay:{src}", "--out", str(out), "--quiet"]) == 0
+        rec = read_recording(out)
+        notes = {text.split(" (")[0]: note.row for note in rec.notes for text in [note.text] if not text.startswith("end:")}
+        assert notes == {"marker before row 10": 10, "gap: 5 samples lost before t=15.05 s": 1500}, rec.notes
+        np.testing.assert_array_equal(rec.t_s, t)
+        src = out

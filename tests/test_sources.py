@@ -141,9 +141,11 @@ def test_replay_passes_annotation_notes_on_at_their_row(tmp_path):
     path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 10\n# gyro_unit: dps\n"
                     "gx,gy,gz\n1,1,1\n2,2,2\n# something happened\n3,3,3\n")
     src = open_source(f"replay:{path}")
-    first = src.read()
-    assert first.shape == (3, 4) and src.pop_notes() == ["something happened"]
-    np.testing.assert_array_equal(first[:, 0], [0.0, 0.1, 0.2])  # t made from the rate
+    first = src.read()  # no read runs past a note: it stops before the row the note precedes
+    assert first.shape == (2, 4) and src.pop_notes() == []
+    np.testing.assert_array_equal(first[:, 0], [0.0, 0.1])  # t made from the rate
+    assert src.read().shape == (0, 4) and src.pop_notes() == ["something happened"]  # the note, then its row
+    np.testing.assert_array_equal(src.read(), [[0.2, 3, 3, 3]])
 
 
 def test_replay_streams_the_same_reads_whatever_the_file_chunking(tmp_path):
@@ -177,10 +179,16 @@ def test_replay_streams_the_same_reads_whatever_the_file_chunking(tmp_path):
 
     whole, stats = reads(10**6)
     assert [notes for _, notes in whole if notes] == [
-        ["before row 0", "gap: 5 samples lost before t=10.04 s (in the replayed file)"],
+        ["before row 0"], ["gap: 5 samples lost before t=10.04 s (in the replayed file)"],
         ["gap: 2 samples lost before t=10.07 s (in the replayed file)"],
         ["before row 2000"], ["before row 7777"],
         ["gap: 40 samples lost before t=153.68 s (in the replayed file)"], ["after the last row"]]
+    # each note goes out with the read that starts at the row it precedes (record writes it before them)
+    at, placed = 0, []
+    for rows, notes in whole:
+        placed += [at] * len(notes)
+        at += len(rows)
+    assert placed == [0, 999, 1000, 2000, 7777, 15321, n]
     assert stats["lost_samples"] == 47 and stats["gaps"] == 3
     np.testing.assert_array_equal(np.concatenate([r for r, _ in whole])[:, 1:4], gyro)
     for chunk_rows in (1, 3, 7, 1000, 4999):

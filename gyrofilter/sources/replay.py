@@ -5,9 +5,12 @@ for samples, so a replay of hours at 1 kHz needs the memory of one chunk, not of
 samples are handed out as fast as the reader asks (default), or paced so that the sample with
 time ``t`` is delivered ``t / speed`` seconds after the first ``read()`` (``realtime``). Gaps in
 the file's ``t`` column (lost samples) are counted in ``stats["lost_samples"]`` and reported as
-notes with the read that delivers the sample after the gap, like a live device would;
-annotation lines of the file are passed on as notes before the sample that follows them, and
-the reader's warnings (a recording cut short) as notes when they arise.
+notes, like a live device would; annotation lines of the file are passed on as notes, and the
+reader's warnings (a recording cut short) as notes when they arise. A note is handed out with
+the read whose first row is the sample it precedes, and no read runs past a note, so that a
+recording of the replay (``record``, which writes a read's notes before its rows) keeps every
+note at its place. A gap the file already notes (a ``gap:`` line before that sample) is counted
+but not noted again, so a recording of a recording does not repeat it.
 """
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ import time
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
-from ..recording import CHUNK_ROWS, iter_recording
+from ..recording import CHUNK_ROWS, format_number, iter_recording
 from ..units import plain
 from .base import WARNING_PREFIX, Source
 
@@ -104,9 +107,11 @@ class ReplaySource(Source):
             cur = t if self._t_last is not None else t[1:]
             step = np.rint((cur - prev) * head.sample_rate_hz).astype(np.int64)
             first = r0 if self._t_last is not None else r0 + 1
+            noted = {note.row for note in head.notes[self._notes_seen:] if note.text.startswith("gap:")}
             for k in np.flatnonzero(step > 1).tolist():
                 lost = int(step[k] - 1)
-                self._due.append((first + k, lost, f"gap: {lost} samples lost before t={cur[k]:.6g} s (in the replayed file)"))
+                text = f"gap: {lost} samples lost before t={format_number(cur[k])} s (in the replayed file)"
+                self._due.append((first + k, lost, None if first + k in noted else text))
             self._t_last = float(t[-1])
             self._rows_read = r0 + len(chunk)
             self._buf = np.concatenate([self._buf[self._pos:], rows]) if self._pos < len(self._buf) else rows
@@ -140,6 +145,10 @@ class ReplaySource(Source):
                 self._release(math.inf)
                 return self._buf[:0].copy()
             raise SourceEnded(f"end of {self.path} ({self.stats['samples']} samples)")
+        first_row = self.stats["samples"]
+        if self._due and self._due[0][0] <= first_row:  # notes due before the next row: hand them out first
+            self._release(first_row)
+            return self._buf[:0].copy()
         buf, pos = self._buf, self._pos
         if not self.realtime:
             stop = pos + min(self._available(), CHUNK_SAMPLES)
@@ -156,21 +165,23 @@ class ReplaySource(Source):
             elapsed_t = (now - self._start) * self.speed + self._t0
             stop = max(pos, int(np.searchsorted(buf[pos:, 0], elapsed_t, side="right")) + pos)
             self._last = now
+        if self._due:  # no read runs past a note: it goes out with the read that starts at its row
+            stop = min(stop, pos + self._due[0][0] - first_row)
         rows = buf[pos:stop].copy()
         self._pos = stop
-        first_row = self.stats["samples"]
         self.stats["samples"] += len(rows)
-        self._release(first_row + len(rows) - 1 if len(rows) else first_row - 1)
         return rows
 
-    def _release(self, last_row):
-        """Move the notes due before a row up to ``last_row`` (delivered) into the notes."""
-        while self._due and self._due[0][0] <= last_row:
+    def _release(self, row):
+        """Move the notes due before rows up to ``row`` (the next to deliver) into the notes,
+        counting their lost samples."""
+        while self._due and self._due[0][0] <= row:
             _, lost, text = self._due.pop(0)
             if lost:
                 self.stats["lost_samples"] += lost
                 self.stats["gaps"] += 1
-            self._notes.append(text)
+            if text is not None:
+                self._notes.append(text)
 
     def _close(self):
         self._chunks.close()
