@@ -6,8 +6,9 @@ samples are handed out as fast as the reader asks (default), or paced so that th
 time ``t`` is delivered ``t / speed`` seconds after the first ``read()`` (``realtime``). Gaps in
 the file's ``t`` column (lost samples) are counted in ``stats["lost_samples"]`` and reported as
 notes with the read that delivers the sample after the gap, like a live device would;
-annotation lines of the file are passed on as notes before the sample that follows them, and
-the reader's warnings (a recording cut short) as notes when they arise.
+annotation lines of the file are passed on as notes before the sample that follows them (but
+for its ``# end: ...`` note: how that recording ended is not how the replay ends), and the
+reader's warnings (a recording cut short) as notes when they arise.
 """
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ import time
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
-from ..recording import CHUNK_ROWS, iter_recording
+from ..recording import CHUNK_ROWS, END_NOTE, iter_recording
 from ..units import plain
 from .base import WARNING_PREFIX, Source
 
@@ -111,9 +112,11 @@ class ReplaySource(Source):
             self._rows_read = r0 + len(chunk)
             self._buf = np.concatenate([self._buf[self._pos:], rows]) if self._pos < len(self._buf) else rows
             self._pos = 0
-        # the file's annotation lines read since the last chunk: due before the sample that follows them
+        # the file's annotation lines read since the last chunk: due before the sample that follows them;
+        # its end note says how that recording ended, not this replay (whose reader notes its own end)
         for note in head.notes[self._notes_seen:]:
-            self._due.append((note.row, 0, note.text))
+            if not note.text.startswith(END_NOTE):
+                self._due.append((note.row, 0, note.text))
         self._notes_seen = len(head.notes)
         self._due.sort(key=lambda item: item[0])
         for text in head.warnings[self._warnings_seen:]:
