@@ -55,6 +55,9 @@ from .units import GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_sample_rate_h
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
+#: the start of the annotation with which ``record`` and ``run`` end their output (``# end: why; ...``):
+#: how that output ended, so a replay of the file does not pass it on as its own
+END_NOTE = "end: "
 _GZIP_MAGIC = b"\x1f\x8b"
 
 

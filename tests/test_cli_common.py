@@ -190,3 +190,24 @@ def test_a_command_writing_to_a_folder_removes_its_stale_partials(tmp_path, comm
             "simulate": ["simulate", "--model", model, "--duration", "1", "--out", str(tmp_path / "out.csv")]}[command]
     assert main(argv) == 0
     assert sorted(os.listdir(tmp_path)) == ["out.csv"]
+
+
+@pytest.mark.parametrize("argv, usage, said", [
+    (["replay", "REC", "--ot", "x.csv"], "usage: gyrofilter replay ", "unrecognized arguments: --ot x.csv; did you mean --out?"),
+    (["allan", "REC", "--jsno=a.json"], "usage: gyrofilter allan ", "unrecognized arguments: --jsno=a.json; did you mean --json?"),
+    (["replay", "REC", "--sample-rat", "3", "--outt", "x"], "usage: gyrofilter replay ", "; did you mean --out?"),
+    (["replay", "REC", "-q"], "usage: gyrofilter replay ", "unrecognized arguments: -q"),
+    (["--bogus"], "usage: gyrofilter [-h] COMMAND", "unrecognized arguments: --bogus"),
+])
+def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, usage, said, capsys):
+    """Issue 23: a mistyped option of a command printed the top-level usage with no hint."""
+    from gyrofilter.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(usage) and said in err
+    errors = [ln for ln in err.splitlines() if not ln.startswith(("usage:", " "))]
+    assert len(errors) == 1 and errors[0].endswith(said)
+    assert ("did you mean" in err) == ("did you mean" in said)

@@ -488,3 +488,24 @@ def test_set_with_a_space_instead_of_an_equals_sign_is_told_so(capsys):
         main(["replay", "--set", "block_len", "5"])
     err = capsys.readouterr().err
     assert info.value.code == 2 and "argument --set: expected NAME=VALUE (e.g. block_len=5), got 'block_len'" in err
+
+
+@pytest.mark.parametrize("options", [[], ["--smooth"], ["--calibration-s", "0.5"]])
+def test_replaying_a_filtered_output_is_refused_naming_where_it_came_from(tmp_path, capsys, options):
+    """Issue 23: replay of a file replay --out wrote (header filtered_from) failed as "the sensor
+    moved" (its rows are bias-removed block means): refused by name, before any output; allan on
+    it stays legitimate (the noise of the output)."""
+    rng = np.random.default_rng(3)
+    src = tmp_path / "in.csv"
+    write_recording(src, Recording.from_dps(rng.normal([1, 2, 3], 0.1, (3000, 3)), 100.0))
+    filtered = tmp_path / "filtered.csv"
+    assert main(["replay", str(src), "--out", str(filtered)]) == 0
+    capsys.readouterr()
+    out = tmp_path / "twice.csv"
+    assert main(["replay", str(filtered), "--out", str(out), *options]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == (
+        f"gyrofilter: error: {filtered} is a filtered output of gyrofilter (filtered_from: '{src}'), not a sensor's "
+        "samples; filter the raw recording it came from\n")
+    assert not out.exists()
+    assert main(["allan", str(filtered)]) == 0

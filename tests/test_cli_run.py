@@ -247,7 +247,7 @@ def test_run_on_a_paced_replay_writes_the_rows_replay_writes(tmp_path, capsys):
     assert f"{seconds * 100 - 25} samples in" in err and "lost 25 samples" in err
     got = read_recording(out)
     assert_same_rows(got, replayed(tmp_path, recorded, capsys), rows_due(recorded))
-    assert [text for _, text in got.notes][-1] == "gap: 25 samples lost before t=4.25 s (in the replayed file)"
+    assert [text for _, text in got.notes][-2] == "gap: 25 samples lost before t=4.25 s (in the replayed file)"
 
 
 # ------------------------------------------------------------------------------ files left behind
@@ -445,3 +445,43 @@ def test_run_refuses_a_sample_beyond_the_filters_range_naming_the_source_and_sam
     err = capsys.readouterr().err
     assert f"gyrofilter: error: source {src}: sample 700: temp_c (deg C) must be in [-100, 200], got -300.0" in err
     assert "Traceback" not in err and not out.exists()
+
+
+# ------------------------------------------------------------------------------ what the output says of itself
+
+
+def test_run_writes_its_own_end_note_not_the_replayed_files(tmp_path, capsys):
+    """Issue 23: run on a replay of a file that record --duration made copied the file's
+    "# end: duration reached" into its output, as if the run had ended so; it wrote no end of its own."""
+    recorded = tmp_path / "recorded.csv"
+    assert main(["record", "--source", f"replay:{_still_recording(tmp_path / 'still.csv')}", "--out", str(recorded),
+                 "--duration", "5"]) == 0
+    assert [text for _, text in read_recording(recorded).notes][-1].startswith("end: duration reached")
+    out = tmp_path / "run.csv"
+    assert main(["run", "--source", f"replay:{recorded}", "--out", str(out), "--quiet"]) == 0
+    notes = [text for _, text in read_recording(out).notes]
+    assert [text for text in notes if text.startswith("end:")] == [notes[-1]]
+    assert notes[-1].startswith(f"end: source ended: end of {recorded} (500 samples); 500 samples in, 60 filtered rows out")
+    # record of that replay: its own end note only, too
+    again = tmp_path / "again.csv"
+    assert main(["record", "--source", f"replay:{recorded}", "--out", str(again)]) == 0
+    notes = [text for _, text in read_recording(again).notes]
+    assert [text for text in notes if text.startswith("end:")] == [notes[-1]] and "source ended" in notes[-1]
+
+
+def test_run_refuses_to_filter_a_filtered_output_and_its_own_output_says_it_is_one(tmp_path, capsys):
+    """Issue 23: a filtered output (header filtered_from) replayed through the filter failed as
+    "the sensor moved"; it is refused by name, from run and from replay, before any output."""
+    still = _still_recording(tmp_path / "still.csv")
+    filtered = tmp_path / "filtered.csv"
+    assert main(["run", "--source", str(still), "--out", str(filtered), "--quiet"]) == 0
+    assert read_recording(filtered).header["filtered_from"] == str(still)
+    capsys.readouterr()
+    out = tmp_path / "twice.csv"
+    for argv in (["run", "--source", f"replay:{filtered}", "--out", str(out), "--quiet"],
+                 ["replay", str(filtered), "--out", str(out)]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "Traceback" not in err, err
+        assert f"{filtered} is a filtered output of gyrofilter (filtered_from: '{still}')" in err
+        assert "filter the raw recording it came from" in err and not out.exists()

@@ -429,3 +429,19 @@ def test_local_workers_end_when_the_fleet_run_is_killed(tmp_path):
         with contextlib.suppress(OSError):
             os.kill(w, signal.SIGKILL)
     assert not left, f"worker processes {left} outlived the killed fleet run"
+
+
+def test_an_allan_fleets_markdown_has_no_gap_columns_and_a_gap_fleets_has(small_fleet, one_worker, tmp_path, capsys):
+    """Issue 23: fleet.md of allan --fleet had the gap's findings and D columns, always empty;
+    fleet.csv keeps its fixed columns (docs/formats.md section 9)."""
+    assert main(["allan", *small_fleet, "--fleet", str(tmp_path), "--jobs", "1"]) == 0
+    for folder, gap in ((tmp_path, False), (one_worker, True)):
+        text = (folder / "fleet.md").read_text()
+        table = text.split("## Per recording and axis")[1].split("## Fleet statistics")[0]
+        head = next(ln for ln in table.splitlines() if ln.startswith("| unit |"))
+        rows = [ln for ln in table.splitlines() if ln.startswith("| ") and ln != head]
+        assert ("findings" in head and "D before" in head) == gap, head
+        assert len(rows) == 9 and all(ln.count("|") == head.count("|") for ln in rows)
+        assert ("gap analysis" in table) == gap
+        with open(folder / "fleet.csv", encoding="utf-8", newline="") as fh:
+            assert next(csv.reader(fh)) == list(fleet.COLUMNS)

@@ -505,8 +505,9 @@ def _coef_md(row, key):
 
 def fleet_markdown(rows, stats, *, title):
     """fleet.md, headed ``title``: the units that stand out, the failed files, a row per
-    recording and axis (``rows``, :func:`fleet_rows`), and the fleet statistics ``stats``
-    (what :func:`flag_units` returns) with the rules."""
+    recording and axis (``rows``, :func:`fleet_rows`; the gap's findings and D columns only
+    when some row has gap results), and the fleet statistics ``stats`` (what
+    :func:`flag_units` returns) with the rules."""
     from .noise_model import JSON_KEY, TERM_SYMBOL, TERM_UNIT
 
     units = list(dict.fromkeys(r["unit"] for r in rows))
@@ -525,19 +526,23 @@ def fleet_markdown(rows, stats, *, title):
         lines += [f"| {r['unit']} | `{r['recording']}` | {r['status']} |" for r in failed_rows]
     keys = [JSON_KEY[t] for t in COEFFICIENTS]
     head = " | ".join(f"{TERM_SYMBOL[t]} ({TERM_UNIT[t]})" for t in COEFFICIENTS)
+    # the gap's columns only when the gap ran (a gap fleet); an allan fleet has none to show
+    gap = any(r["findings"] is not None for r in rows if r["status"] == "ok")
     lines += ["", "## Per recording and axis", "",
-              ("Fit and 95 % interval, or < the upper bound when the record does not resolve the term; "
-               "findings of the gap analysis; D = discrepancy against the baseline before and after the findings."), "",
-              f"| unit | axis | {head} | findings | D before -> after | runtime (s) | flags |",
-              "|---|---|" + "---|" * len(keys) + "---|---|---|---|"]
+              "Fit and 95 % interval, or < the upper bound when the record does not resolve the term"
+              + ("; findings of the gap analysis; D = discrepancy against the baseline before and after the findings."
+                 if gap else "."), "",
+              f"| unit | axis | {head} |" + (" findings | D before -> after |" if gap else "") + " runtime (s) | flags |",
+              "|---|---|" + "---|" * (len(keys) + 2 * gap) + "---|---|"]
     for r in rows:
         if r["status"] != "ok":
             continue
-        d = "" if r["d_before"] is None else f"{r['d_before']:.3g} -> {r['d_after']:.3g}"
-        findings = "" if r["findings"] is None else ("; ".join(finding_text(f) for f in r["findings"]) or "none")
-        flags = ", ".join(f"{f['what']} {f['direction']}" for f in r["flag"])
-        lines.append(f"| {r['unit']} | {r['axis']} | " + " | ".join(_coef_md(r, k) for k in keys)
-                     + f" | {findings} | {d} | {r['runtime_s']:.1f} | {flags} |")
+        cells = [_coef_md(r, k) for k in keys]
+        if gap:
+            cells.append("" if r["findings"] is None else ("; ".join(finding_text(f) for f in r["findings"]) or "none"))
+            cells.append("" if r["d_before"] is None else f"{r['d_before']:.3g} -> {r['d_after']:.3g}")
+        cells += [f"{r['runtime_s']:.1f}", ", ".join(f"{f['what']} {f['direction']}" for f in r["flag"])]
+        lines.append(f"| {r['unit']} | {r['axis']} | " + " | ".join(cells) + " |")
     lines += ["", "## Fleet statistics", "",
               (f"Coefficients: median m over the units of the level (fit, or upper bound when not resolved) and "
                f"spread s = max({MAD_TO_SD} MAD, {MIN_SPREAD_LN:g}) of its natural log; a unit is flagged when the "

@@ -43,6 +43,12 @@ and the fit repeated, so that they cannot bias the others. Its upper bound is st
 (``upper``), for example to fill Kalibr's ``gyroscope_random_walk`` honestly.
 
 The read-off intervals are the chi-square interval of the point read (NIST SP 1065 eq. 41).
+
+The two estimates answer different questions. A read-off is the whole curve at one tau, and
+every term adds to sigma^2 there, so (up to the curve's own scatter) it is at least the term it
+names (e.g. N^2 / tau <= sigma^2(tau) gives N <= sigma(tau) sqrt(tau); 0.44 B^2 <= sigma_min^2).
+The fit separates the terms. So a read-off can give a number where the fit does not resolve
+the term: that number is an upper estimate of the term, not a value of it.
 """
 from __future__ import annotations
 
@@ -503,7 +509,9 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15,
     B: the minimum of the curve, if the curve is flat there (slope within the tolerance of 0
     over ``min_run`` consecutive taus),
     divided by 0.664 (paper 000; = sqrt(pi / (2 ln 2)) sigma_min, paper 002).
-    The interval is the chi-square interval of the point used, moved the same way.
+    The interval is the chi-square interval of the point used, moved the same way. Each value
+    holds the other terms' share of the curve at its tau: an upper estimate of its term
+    (module docstring), another estimator than :func:`fit`.
     """
     tau = np.asarray(tau_s, dtype=np.float64)
     dev = np.asarray(adev_values, dtype=np.float64)
@@ -526,7 +534,8 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15,
                                              f"tau = {tau[i]:g} s, slope {slopes[i]:+.2f}); B <= {upper:.3g} deg/s")
                 continue
             out[term] = Coefficient(term, dev[i] / FLICKER_FLOOR, ci_low[i] / FLICKER_FLOOR,
-                                    ci_high[i] / FLICKER_FLOOR, tau_s=float(tau[i]))
+                                    ci_high[i] / FLICKER_FLOOR, tau_s=float(tau[i]),
+                                    note=f"flat minimum at tau = {tau[i]:g} s (local slope {slopes[i]:+.2f}) / 0.664")
             continue
         region = idx_all[np.abs(slopes[idx_all] - s) <= slope_tolerance]
         region = _runs(region, min_run)
@@ -727,6 +736,8 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
                           "1/sqrt(2 (N/m - 1))",
         "null": "not resolved by the data (fitted to zero, or within its uncertainty of zero; then dropped "
                 "from the fit); see details.<key>.upper_bound",
+        "readoff": "slope read-offs of papers 000/002 (readoff.<key>): the curve at one tau, where every term adds "
+                   "to it, so each is an upper estimate of its term; another estimator than the fit, for comparison",
         "units": {JSON_KEY[t]: JSON_UNIT[t] for t in TERMS},
     }
     doc["axes"] = {}

@@ -95,8 +95,9 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
     (:mod:`gyrofilter.analysis.fleet`). The reader's warnings, missing samples and gross errors kept with
     ``keep_outliers`` go to ``warn(text)`` as they are found; gross errors otherwise raise
     RecordingError, and a result that is not finite raises AllanInputError (both name the file).
-    ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings stay in
-    their results (``AxisNoise.warnings``).
+    ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings (a record
+    that does not look static, :func:`not_static`; a poor fit) stay in their results
+    (``AxisNoise.warnings``, the JSON document's ``warnings``).
 
     ``path``: the recording; ``axes``: axis letters (``"xyz"``); ``confidence``: level of the
     Allan deviation's confidence intervals (0..1, 0.95 = 95 %); ``min_clusters``: fewest
@@ -110,21 +111,20 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
         warn(text)
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
-    for a in axes:
-        x = series[a]
-        with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: check_finite says so
-            moved = not_static(x, head.sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0)
-        if moved:
-            warn(f"{path}: axis {a}: {moved}; the Allan deviation of a moving gyro describes the motion, "
-                 "not the sensor's noise")
     results = {}
     for a in axes:
+        x = series.pop(a)
+        with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: check_finite says so
+            moved = not_static(x, head.sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0)
         if progress:
             progress(f"allan: axis {a} ({head.rows} samples)...")
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
-            results[a] = characterise_axis(series.pop(a), head.sample_rate_hz, axis=a, confidence=confidence,
+            results[a] = characterise_axis(x, head.sample_rate_hz, axis=a, confidence=confidence,
                                            min_clusters=min_clusters)
         check_finite(results[a], a, path)
+        if moved:
+            results[a].warnings.insert(0, f"axis {a}: {moved}; the Allan deviation of a moving gyro describes the "
+                                          "motion, not the sensor's noise")
     return head, results
 
 

@@ -7,6 +7,7 @@ Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors and Ctrl-
 line on stderr and a non-zero exit code; a traceback is a bug.
 """
 import argparse
+import difflib
 import importlib
 import os
 import signal
@@ -31,14 +32,41 @@ EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 
 
+class _Parser(argparse.ArgumentParser):
+    """The top-level parser. Arguments a command does not know are that command's error: its
+    usage line and "unrecognized arguments: ...", with "did you mean --out?" for an option
+    close to one of its own (argparse would report them with the top-level usage)."""
+
+    def parse_args(self, args=None, namespace=None):
+        args, extras = self.parse_known_args(args, namespace)
+        if extras:
+            command = self.commands.get(getattr(args, "command", None), self)
+            command.error(f"unrecognized arguments: {' '.join(extras)}{did_you_mean(command, extras)}")
+        return args
+
+
+def did_you_mean(parser, extras):
+    """"; did you mean --out?" for the unknown option among ``extras`` (words of argv) that is
+    closest to an option of ``parser`` (difflib ratio >= 0.6 without the dashes), else ""."""
+    known = {s.lstrip("-"): s for action in parser._actions for s in action.option_strings if s.startswith("--")}
+    best = (0.6, "")
+    for word in extras:
+        if word.startswith("-"):
+            typed = word.split("=", 1)[0].lstrip("-")
+            for name, option in known.items():
+                best = max(best, (difflib.SequenceMatcher(None, typed, name).ratio(), option))
+    return f"; did you mean {best[1]}?" if best[1] else ""
+
+
 def build_parser(command=None):
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="gyrofilter",
         description="Real-time filtering and error analysis for low-cost MEMS gyroscopes (MPU6050).",
     )
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=argparse.ArgumentParser)
+    parser.commands = {}
     for name, (module_name, summary) in COMMANDS.items():
-        p = sub.add_parser(name, help=summary, description=summary)
+        p = parser.commands[name] = sub.add_parser(name, help=summary, description=summary)
         if command == name:
             importlib.import_module(module_name).add_arguments(p)
     return parser

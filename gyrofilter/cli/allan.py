@@ -1,8 +1,9 @@
 """gyrofilter allan: overlapping Allan deviation and noise coefficients of a recording.
 
 Prints, per axis, the fitted coefficients Q, N, B, K, R with their intervals in deg/s-based and
-customary units, the slope read-offs of papers 000/002 beside them, and what the record is too
-short to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` the
+customary units, the slope read-offs of papers 000/002 beside them (another estimator: an upper
+estimate of each term, said so where the fit resolves none), and what the record is too short
+to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` the
 log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
 
 The recording is read in chunks into one float64 array per axis. Gross errors (isolated spikes
@@ -52,6 +53,22 @@ def _fmt(c, unit):
     return f"{v:.4g} [{lo:.3g}, {hi:.3g}]"
 
 
+def readoff_only(r):
+    """One sentence per term of the axis result ``r`` (an AxisNoise) that the fit does not
+    resolve but the slope read-off gives a number for: the two are different estimators, and
+    the read-off (the curve at one tau, every term included) bounds the term from above."""
+    out = []
+    for t in TERMS:
+        c, ro = r.fitted[t], r.readoff[t]
+        if c.value is None and ro.value is not None:
+            unit, sym = TERM_UNIT[t], TERM_SYMBOL[t]
+            bound = f" (< {c.upper:.3g} {unit})" if c.upper is not None else ""
+            out.append(f"{sym}: the fit does not resolve it{bound}; the slope read-off {ro.value:.3g} {unit} is the "
+                       f"curve at tau = {ro.tau_s:.3g} s, where the other terms add to {sym}: an upper estimate, "
+                       f"not a value of {sym}")
+    return out
+
+
 def run(args):
     axes = args.axes
     if not axes or any(a not in "xyz" for a in axes) or len(set(axes)) != len(axes):
@@ -84,15 +101,18 @@ def run(args):
     print(f"recording: {args.recording}")
     print(f"  {head.rows} samples at {fs:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
-    print(f"  coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval]; "
-          "read-off = slope method of papers 000/002")
+    print(f"  coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval]")
+    print("  slope read-off: the slope method of papers 000/002, another estimator, for comparison: the curve at one "
+          "tau, which every term adds to, so an upper estimate of its term")
     for a, r in results.items():
         print(f"  axis {a}:")
         for t in TERMS:
             c, ro = r.fitted[t], r.readoff[t]
             base, cust = TERM_UNIT[t], CUSTOMARY_UNIT[t]
             print(f"    {TERM_SYMBOL[t]} {NAMES[t]:<17} {_fmt(c, base):<34} {base:<14} = {_fmt(c, cust):<32} {cust:<14}"
-                  f" read-off: {_fmt(ro, base)}")
+                  f" slope read-off: {_fmt(ro, base)}")
+        for line in readoff_only(r):
+            print(f"    ({line})")
         missing = [TERM_SYMBOL[t] for t in ("bias_instability", "rrw", "rate_ramp") if r.fitted[t].value is None]
         if missing:
             longest = r.tau_s[r.fit_used][-1]

@@ -11,7 +11,7 @@ import stat
 import sys
 import tempfile
 
-from ..errors import SettingsError
+from ..errors import RecordingError, SettingsError
 from ..inputs import parse_json, quote
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import DEFAULT_PRESET, PRESETS
@@ -371,6 +371,19 @@ def temperature_coefficients(path):
     if not any(coefficients):
         raise SettingsError(f"{path}: the model has no temperature effect, so there is nothing to compensate")
     return coefficients
+
+
+def refuse_filtered_output(header, where):
+    """Refuse to filter a filter's output: a recording whose ``header`` (a dict) has
+    ``filtered_from`` (written by ``replay --out`` and ``run``) holds bias-removed block means at
+    the output rate, not a sensor's samples, so the start-up calibration would call the sensor
+    moved, or a second filter would average the averages. ``where`` names the file or source.
+    The raw recording it came from is what to filter (``allan`` and ``gap`` take either: the
+    noise of the output is a fair question). RecordingError; None for a raw recording."""
+    if "filtered_from" in header:
+        raise RecordingError(f"{where} is a filtered output of gyrofilter (filtered_from: "
+                             f"{quote(header['filtered_from'])}), not a sensor's samples; filter the raw recording "
+                             "it came from")
 
 
 def check_temperature(filt, available, where):

@@ -15,6 +15,7 @@ The output is never one of the source's files, and overwrites only a regular fil
 import sys
 import time
 
+from ..recording import END_NOTE
 from . import common, live
 
 FLUSH_INTERVAL_S = 0.5
@@ -86,7 +87,7 @@ def _record(args, source):
             for text in loop.pop_notes():
                 writer.note(text)
             reason = loop.reason()
-            writer.note(f"end: {reason}; {loop.samples} samples; " + (live.source_summary(source.stats) or "no losses"))
+            writer.note(f"{END_NOTE}{reason}; {loop.samples} samples; " + (live.source_summary(source.stats) or "no losses"))
     except BaseException as exc:
         live.close_after_failure(writer, exc, "gyrofilter record")
         raise

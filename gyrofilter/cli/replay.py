@@ -57,6 +57,7 @@ def run(args):
         raise SettingsError("--smooth needs the whole recording before the first row; it cannot run with --realtime")
     chunks = iter_recording(path, chunk_rows=CHUNK_ROWS)
     head = next(chunks)
+    common.refuse_filtered_output(head.header, path)
     filt = common.make_filter(args, head.sample_rate_hz)
     common.check_temperature(filt, "temp" in head.names, path)
     replay = _Replay(path, head, filt, plot=bool(args.plot), smoother=Smoother(filt) if args.smooth else None,

@@ -2,7 +2,9 @@
 
 The filtered rates (deg/s, one row per block of the pipeline, ``t`` = time of the block's last
 sample on the sensor's clock) go to stdout, or to ``--out FILE``, as a format-v1 recording
-(so ``gyrofilter run ... > out.csv`` is a readable recording too). A status line on stderr, at
+(so ``gyrofilter run ... > out.csv`` is a readable recording too), whose header names the SOURCE
+as ``filtered_from`` (so ``replay`` refuses to filter it again) and whose last line is the
+note ``# end: why; N samples in, M filtered rows out``. A status line on stderr, at
 most once per second, shows the sample rate achieved, lost samples, rejected outliers and the
 CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0). The --out file takes its name
 at its first flush with a filtered row (:class:`~gyrofilter.cli.live.LiveOutput`): a run that fails
@@ -16,7 +18,7 @@ import time
 import numpy as np
 
 from ..errors import SampleError, SettingsError
-from ..recording import header_text, note_text
+from ..recording import END_NOTE, header_text, note_text
 from . import common, live
 
 FLUSH_INTERVAL_S = 0.5
@@ -77,6 +79,7 @@ def _run(args, source):
     from ..recording import dps_header
 
     head = source.header
+    common.refuse_filtered_output(head, f"source {args.source}")
     cols = source.columns
     t_idx = cols.index("t")
     filt = common.make_filter(args, source.sample_rate_hz)
@@ -86,6 +89,7 @@ def _run(args, source):
     out_header = dps_header({
         "description": f"gyrofilter {__version__} run: filtered rates, preset {filt.preset}, block of {block} samples; t = time of the block's last sample",
         "live_source": args.source,
+        "filtered_from": args.source,
     }, filt.output_rate_hz)
     for key in ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc",
                 "simulated_seed", "simulated_duration_s", "simulated_model"):
@@ -128,6 +132,7 @@ def _run(args, source):
             status.end()
             for text in loop.pop_notes():
                 writer.note(text)
+            writer.note(f"{END_NOTE}{loop.reason()}; {loop.samples} samples in, {writer.rows_written} filtered rows out")
         with contextlib.ExitStack() as outputs:  # the live output stays even if this fails: its rows are the data
             saved = common.save_calibration(args.save_calibration, filt, outputs)
         if saved:

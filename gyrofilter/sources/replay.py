@@ -5,7 +5,8 @@ for samples, so a replay of hours at 1 kHz needs the memory of one chunk, not of
 samples are handed out as fast as the reader asks (default), or paced so that the sample with
 time ``t`` is delivered ``t / speed`` seconds after the first ``read()`` (``realtime``). Gaps in
 the file's ``t`` column (lost samples) are counted in ``stats["lost_samples"]`` and reported as
-notes, like a live device would; annotation lines of the file are passed on as notes, and the
+notes, like a live device would; annotation lines of the file are passed on as notes (but for
+its ``# end: ...`` note: how that recording ended is not how the replay ends), and the
 reader's warnings (a recording cut short) as notes when they arise. A note is handed out with
 the read whose first row is the sample it precedes, and no read runs past a note, so that a
 recording of the replay (``record``, which writes a read's notes before its rows) keeps every
@@ -20,7 +21,7 @@ import time
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
-from ..recording import CHUNK_ROWS, format_number, iter_recording
+from ..recording import CHUNK_ROWS, END_NOTE, format_number, iter_recording
 from ..units import plain
 from .base import WARNING_PREFIX, Source
 
@@ -116,9 +117,11 @@ class ReplaySource(Source):
             self._rows_read = r0 + len(chunk)
             self._buf = np.concatenate([self._buf[self._pos:], rows]) if self._pos < len(self._buf) else rows
             self._pos = 0
-        # the file's annotation lines read since the last chunk: due before the sample that follows them
+        # the file's annotation lines read since the last chunk: due before the sample that follows them;
+        # its end note says how that recording ended, not this replay (whose reader notes its own end)
         for note in head.notes[self._notes_seen:]:
-            self._due.append((note.row, 0, note.text))
+            if not note.text.startswith(END_NOTE):
+                self._due.append((note.row, 0, note.text))
         self._notes_seen = len(head.notes)
         self._due.sort(key=lambda item: item[0])
         for text in head.warnings[self._warnings_seen:]:
