@@ -4,6 +4,7 @@ import os
 import stat
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -157,21 +158,36 @@ def _dead_pid():
     return proc.pid
 
 
+def _stale(path, age_s=common.STALE_AFTER_S + 60):
+    """Make ``path`` look untouched for ``age_s`` seconds."""
+    old = time.time() - age_s
+    os.utime(path, (old, old))
+    return path
+
+
 def test_stale_partials_of_dead_processes_go_at_the_next_write_to_their_folder(tmp_path):
-    """Issue 22 (26): a SIGKILL left .partial-PID-* files that nothing removed."""
-    dead = _dead_pid()
-    stale_file = tmp_path / f".partial-{dead}-old.csv"
+    """Issue 22 (26): a SIGKILL left .partial-PID-* files that nothing removed. Only this host's,
+    of a dead process, untouched for STALE_AFTER_S, go: a shared folder holds other machines'."""
+    dead, host = _dead_pid(), common._HOST
+    stale_file = tmp_path / f".partial-{dead}.{host}-old.csv"
     stale_file.write_text("half")
-    stale_folder = tmp_path / f".partial-{dead}-k3j4h5g6"  # what replacing_in makes
+    stale_folder = tmp_path / f".partial-{dead}.{host}-k3j4h5g6"  # what replacing_in makes
     stale_folder.mkdir()
     (stale_folder / "fig.png").write_text("half")
-    kept = [tmp_path / f".partial-{os.getpid()}-mine.csv",  # this process: alive
-            tmp_path / ".partial-1-init.csv",  # pid 1 runs
-            tmp_path / ".partial-0-group.csv",  # 0 is no process of its own
-            tmp_path / f".partial-{dead}x-other.csv", tmp_path / f"partial-{dead}-other.csv",  # not the pattern
-            tmp_path / f".partial-{dead}-"]
+    _stale(stale_file), _stale(stale_folder)
+    kept = [tmp_path / f".partial-{os.getpid()}.{host}-mine.csv",  # this process: alive
+            tmp_path / f".partial-1.{host}-init.csv",  # pid 1 runs
+            tmp_path / f".partial-0.{host}-group.csv",  # 0 is no process of its own
+            tmp_path / f".partial-{dead}.another_host-theirs.csv",  # another machine's (NFS): its pid means nothing here
+            tmp_path / f".partial-{dead}-old_style.csv",  # no host: not the pattern
+            tmp_path / f".partial-{dead}x.{host}-other.csv", tmp_path / f"partial-{dead}.{host}-other.csv",
+            tmp_path / f".partial-{dead}.{host}-"]
     for path in kept:
         path.write_text("not mine to remove")
+        _stale(path)
+    recent = tmp_path / f".partial-{dead}.{host}-recent.csv"  # a pid namespace's live writer looks dead: too fresh
+    recent.write_text("not mine to remove")
+    kept.append(recent)
     with common.replacing(str(tmp_path / "new.json")) as tmp:
         open(tmp, "w").write("{}")
     assert not stale_file.exists() and not stale_folder.exists()
@@ -183,13 +199,37 @@ def test_stale_partials_of_dead_processes_go_at_the_next_write_to_their_folder(t
 def test_a_command_writing_to_a_folder_removes_its_stale_partials(tmp_path, command):
     from gyrofilter.cli import main
 
-    stale = tmp_path / f".partial-{_dead_pid()}-killed.csv"
+    stale = tmp_path / f".partial-{_dead_pid()}.{common._HOST}-killed.csv"
     stale.write_text("# gyrofilter-recording: 1\n")
+    _stale(stale)
     model = os.path.join(os.path.dirname(__file__), os.pardir, "examples", "models", "mpu6050.json")
     argv = {"record": ["record", "--source", "sim:realtime=0,duration=1", "--out", str(tmp_path / "out.csv")],
             "simulate": ["simulate", "--model", model, "--duration", "1", "--out", str(tmp_path / "out.csv")]}[command]
     assert main(argv) == 0
     assert sorted(os.listdir(tmp_path)) == ["out.csv"]
+
+
+def test_an_output_that_appears_while_the_command_runs_is_not_replaced(tmp_path):
+    """The no-overwrite check ran only before the work: a file made at the output's name meanwhile
+    (two record runs, the user) was silently replaced when the output landed."""
+    out = tmp_path / "out.json"
+    common.check_outputs([str(out)])
+    with pytest.raises(FileExistsError, match="appeared while this command ran"):
+        with common.replacing(str(out)) as tmp:
+            open(tmp, "w").write("mine")
+            out.write_text("theirs")  # appears meanwhile
+    assert out.read_text() == "theirs" and os.listdir(tmp_path) == ["out.json"]
+    common.check_outputs([str(out)], force=True)  # --force replaces the file it was shown, not another
+    with common.replacing(str(out)) as tmp:
+        open(tmp, "w").write("mine")
+    assert out.read_text() == "mine"
+    common.check_outputs([str(out)], force=True)
+    with pytest.raises(FileExistsError, match="appeared while this command ran"):
+        with common.replacing(str(out)) as tmp:
+            open(tmp, "w").write("third")
+            os.unlink(out)
+            out.write_text("theirs again")  # another file at the name: not the one --force was given for
+    assert out.read_text() == "theirs again"
 
 
 @pytest.mark.parametrize("argv, usage, said", [

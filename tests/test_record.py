@@ -315,3 +315,38 @@ def test_record_of_a_replay_keeps_every_note_at_its_row_and_adds_no_gap_note_twi
         assert notes == {"marker before row 10": 10, "gap: 5 samples lost before t=15.05 s": 1500}, rec.notes
         np.testing.assert_array_equal(rec.t_s, t)
         src = out
+
+
+def test_a_source_failing_midway_says_in_its_one_error_line_what_the_recording_kept(tmp_path, monkeypatch, capsys):
+    """record --force of a replay with a bad line far in exited 2 with only the input's error,
+    its output already holding the rows before it: the one error line now says so."""
+    monkeypatch.setattr("gyrofilter.cli.record.FLUSH_INTERVAL_S", 0.0)
+    n = 70000  # the bad line lies beyond the reader's first chunk
+    lines = [f"{k % 7},1,2" for k in range(n)]
+    lines[n - 5] = "1,x,2"
+    src = tmp_path / "bad.csv"
+    src.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n" + "\n".join(lines) + "\n")
+    out = tmp_path / "out.csv"
+    out.write_text("old")
+    assert main(["record", "--source", f"replay:{src}", "--out", str(out), "--force", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    kept = len(read_recording(out))
+    assert len(err) == 1 and f"line {n - 5 + 5}: column 'gy' is not a number" in err[0], err
+    assert err[0].endswith(f"{out}: kept the first {kept} samples") and 0 < kept < n - 5
+
+
+def test_a_recording_replaced_by_another_command_while_it_runs_is_told(tmp_path):
+    """record kept writing to a file another command had replaced (--force): it said 'wrote N
+    samples to live.csv' while live.csv held the other command's data."""
+    from gyrofilter.cli import live
+
+    out = tmp_path / "live.csv"
+    writer = live.LiveOutput(str(out), {"sample_rate_hz": 100, "gyro_unit": "dps"}, ["gx", "gy", "gz"], None, "sample")
+    writer.write(np.ones((10, 3)))
+    writer.flush()  # published under its name
+    other = tmp_path / "other.csv"
+    write_recording(other, Recording.from_dps(np.zeros((3, 3)), 100.0))
+    os.replace(other, out)
+    with pytest.raises(FileExistsError, match="was replaced by another program while this command wrote it: its 10 samples"):
+        writer.close(failed=False)
+    assert len(read_recording(out)) == 3

@@ -7,9 +7,11 @@ import math
 import os
 import re
 import shutil
+import socket
 import stat
 import sys
 import tempfile
+import time
 
 from ..errors import RecordingError, SettingsError
 from ..inputs import parse_json, quote
@@ -107,6 +109,45 @@ def check_outputs(outputs, inputs=(), force=False):
                                 "outputs replace only regular files")
         if not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
+        _replaceable.add(_identity(os.lstat(out)))
+
+
+#: the files check_outputs let --force replace (:func:`_identity`): any other file found at an
+#: output's name when it lands appeared while the command ran, and is not replaced
+_replaceable = set()
+
+
+def _identity(st):
+    """What tells one state of a file from another: device, inode (reused at once after a delete),
+    modification time and size."""
+    return st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size
+
+
+def commit(tmp, path):
+    """Give the finished temporary file ``tmp`` the name ``path``: replace the file there only when
+    :func:`check_outputs` let ``--force`` replace that very file; a file that appeared meanwhile
+    (another command, the user) is left as it is: FileExistsError. The check and the rename are
+    one step (``os.link`` fails on an existing name) where the file system has hard links."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        st = None
+    if st is not None and _identity(st) in _replaceable:
+        os.replace(tmp, path)
+        return
+    if st is None:
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            pass
+        except OSError:  # no hard links here (vfat): the look above has to do
+            os.replace(tmp, path)
+            return
+        else:
+            os.unlink(tmp)
+            return
+    raise FileExistsError(17, "appeared while this command ran and is left as it is (rerun with --force to "
+                              "overwrite)", path)
 
 
 def check_output_folder(folder, option):
@@ -136,7 +177,7 @@ def replacing(path):
         try:
             with _naming(tmp, path):
                 yield tmp
-                os.replace(tmp, path)
+                commit(tmp, path)
         finally:
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(tmp)
@@ -148,12 +189,12 @@ def replacing_in(folder):
     ``folder`` (created if needed); on success every file written there replaces its namesake in
     ``folder``; on any failure the temporary folder goes, with any folder this call created."""
     with _folder(folder):
-        tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{os.getpid()}-", dir=folder)
+        tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{_OWNER}-", dir=folder)
         try:
             with _naming(tmp, folder):
                 yield tmp
                 for name in sorted(os.listdir(tmp)):
-                    os.replace(os.path.join(tmp, name), os.path.join(folder, name))
+                    commit(os.path.join(tmp, name), os.path.join(folder, name))
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
 
@@ -171,23 +212,32 @@ def _naming(tmp, path):
 
 def partial_path(path):
     """The temporary name beside ``path`` under which a file is written until it may take its
-    own name: ``.partial-PID-NAME`` in the same folder, so that the rename is atomic and the
+    own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
     extension, by which writers choose the format, is kept. A process killed before the rename
     leaves it behind; :func:`remove_stale_partials` removes it later."""
     folder, name = os.path.split(os.path.abspath(path))
-    return os.path.join(folder, f"{_PARTIAL_PREFIX}{os.getpid()}-{name}")
+    return os.path.join(folder, f"{_PARTIAL_PREFIX}{_OWNER}-{name}")
 
 
 _PARTIAL_PREFIX = ".partial-"
-_PARTIAL = re.compile(re.escape(_PARTIAL_PREFIX) + r"([0-9]+)-.+", re.DOTALL)  # what partial_path and replacing_in make
+#: the host in a partial name: a folder shared over the network (a fleet's reports on NFS) holds
+#: other machines' partials, whose process numbers mean nothing here
+_HOST = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname()) or "host"
+_OWNER = f"{os.getpid()}.{_HOST}"
+# what partial_path and replacing_in make: the process number and the host
+_PARTIAL = re.compile(re.escape(_PARTIAL_PREFIX) + r"([0-9]+)\.([A-Za-z0-9_]+)-.+", re.DOTALL)
+#: a partial untouched for this long (s) may be stale: record and run flush every 0.5 s, and the
+#: other commands write theirs at the end, in seconds
+STALE_AFTER_S = 600.0
 _swept = set()  # folders whose stale partials this process removed already
 
 
 def remove_stale_partials(folder):
     """Remove from ``folder`` the temporary files and folders (``.partial-PID-...``, see
     :func:`partial_path`) of processes that died before renaming them (SIGKILL, a power cut):
-    only names of that exact pattern whose PID runs no process (``os.kill(pid, 0)`` answers
-    ProcessLookupError); a live process's, another user's included, are never touched. Once per
+    only names of that exact pattern made on this host, untouched for :data:`STALE_AFTER_S`, whose
+    PID runs no process (``os.kill(pid, 0)`` answers ProcessLookupError); a live process's,
+    another user's or another machine's are never touched. Once per
     folder and process, so that a batch writing thousands of files lists its folder once."""
     folder = os.path.abspath(folder)
     if folder in _swept:
@@ -196,7 +246,8 @@ def remove_stale_partials(folder):
     with contextlib.suppress(OSError):
         for entry in os.scandir(folder):
             match = _PARTIAL.fullmatch(entry.name)
-            if not match or _process_runs(int(match.group(1))):
+            if (not match or match.group(2) != _HOST or _process_runs(int(match.group(1)))
+                    or time.time() - entry.stat(follow_symlinks=False).st_mtime < STALE_AFTER_S):
                 continue
             if entry.is_dir(follow_symlinks=False):
                 shutil.rmtree(entry.path, ignore_errors=True)

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from ..errors import DeviceError, SourceEnded
+from ..errors import DeviceError, GyroFilterError, SourceEnded, one_line
 from ..sources import SOURCE_HELP, open_source, parse_source
 from ..sources.base import WARNING_PREFIX
 from ..units import GYRO_UNITS, check_duration_s
@@ -98,8 +98,9 @@ class LiveOutput:
             self._publish()
 
     def _publish(self):
-        os.replace(self._tmp, self.path)
+        common.commit(self._tmp, self.path)
         self.published = True
+        self._inode = os.stat(self.path).st_ino
 
     def close(self, failed):
         """Close the file; after a failure (``failed``) keep it only when it holds a data row.
@@ -116,7 +117,18 @@ class LiveOutput:
             except BaseException:
                 _remove(self._tmp)
                 raise
-        return f"kept the first {kept} {self.row_name}s" if self.write_failed else ""
+        elif _inode(self.path) != self._inode:  # another command replaced it (--force): our rows went with it
+            raise FileExistsError(17, f"was replaced by another program while this command wrote it: its "
+                                      f"{kept} {self.row_name}s are not in it", self.path)
+        return f"kept the first {kept} {self.row_name}s" if failed else ""
+
+
+def _inode(path):
+    """The inode of ``path``, or None when there is no file."""
+    try:
+        return os.stat(path).st_ino
+    except OSError:
+        return None
 
 
 def _remove(path):
@@ -132,6 +144,8 @@ def close_after_failure(output, exc, command):
     line = output.close(failed=True)
     if output.write_failed and isinstance(exc, OSError):
         raise OSError(exc.errno, f"{exc.strerror or exc}; {line}", output.path) from None
+    if line and isinstance(exc, GyroFilterError):  # one error line that also says what the file kept
+        raise GyroFilterError(f"{one_line(exc)}; {output.path}: {line}") from None
     if line:
         common.say(f"{command}: {output.path}: {line}")
 
