@@ -111,7 +111,8 @@ class Recording(_HeaderFacts):
 
     ``columns`` maps each column name to a float array in file order and in the file's units;
     use :attr:`gyro_dps` for the rates in deg/s whatever the file's ``gyro_unit``. ``notes`` are
-    the annotation lines, each a :class:`Note` (``(line, text)`` with the sample ``row`` it precedes).
+    the annotation lines, each a :class:`Note` (``(line, text)`` with the sample ``row`` it precedes);
+    ``t_gaps`` the steps of a file's ``t`` longer than 1.5 sample intervals (:func:`warn_about_gaps`).
     """
 
     columns: dict
@@ -119,6 +120,7 @@ class Recording(_HeaderFacts):
     path: str | None = None
     warnings: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    t_gaps: int = 0
 
     def __len__(self):
         return len(self.columns["gx"])
@@ -257,7 +259,8 @@ def read_recording(path) -> Recording:
     chunks = iter_recording(path)
     head = next(chunks)
     columns = collect_columns(head, chunks, head.names)
-    return Recording(columns=columns, header=head.header, path=head.path, warnings=head.warnings, notes=head.notes)
+    return Recording(columns=columns, header=head.header, path=head.path, warnings=head.warnings, notes=head.notes,
+                     t_gaps=head.t_gaps)
 
 
 def collect_columns(head, chunks, names):
@@ -1055,7 +1058,8 @@ def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     else:
         header.pop("lsb_per_dps", None)
-    return Recording(columns=columns, header=header, path=rec.path, warnings=list(rec.warnings), notes=list(rec.notes))
+    return Recording(columns=columns, header=header, path=rec.path, warnings=list(rec.warnings), notes=list(rec.notes),
+                     t_gaps=rec.t_gaps)
 
 
 def warn_about_gaps(head, consequence, warn):
@@ -1063,8 +1067,8 @@ def warn_about_gaps(head, consequence, warn):
     (:class:`~gyrofilter.recording.RecordingHead`) showed missing samples; ``consequence`` says
     what that means for the command.
 
-    ``head``: the :class:`RecordingHead` after its chunks were read (its ``t_gaps`` counts the
-    steps of ``t`` longer than 1.5 sample intervals); ``consequence``: text appended to the
+    ``head``: the :class:`RecordingHead` after its chunks were read, or a :class:`Recording`
+    (its ``t_gaps`` counts the steps of ``t`` longer than 1.5 sample intervals); ``consequence``: text appended to the
     warning; ``warn``: a callable taking one line of text. Returns None; warns at most once.
     """
     if head.t_gaps:
