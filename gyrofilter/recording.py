@@ -51,7 +51,7 @@ import numpy as np
 from .closable import Closable
 from .errors import RecordingError, SettingsError
 from .inputs import MAX_QUOTE_CHARS, is_plain_number, parse_number, quote
-from .units import GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_sample_rate_hz, from_dps, to_dps
+from .units import GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_sample_rate_hz, from_dps, to_dps, utf8_text
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
@@ -793,9 +793,10 @@ _CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 def one_line_text(text):
     """``text`` as a header value or an annotation holds it: each control character (a line end,
-    a tab, ...) written as its escape (``\\n``), spaces at both ends dropped; that is what the
-    reader reads back."""
-    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), str(text)).strip()
+    a tab, ...) written as its escape (``\\n``), and each lone surrogate (a file name that is not
+    UTF-8) as :func:`~gyrofilter.units.utf8_text` writes it (``\\udcff``), spaces at both ends
+    dropped; that is what the reader reads back."""
+    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), utf8_text(str(text))).strip()
 
 
 def header_text(header, columns, where):
