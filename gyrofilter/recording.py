@@ -51,7 +51,7 @@ import numpy as np
 from .closable import Closable
 from .errors import RecordingError, SettingsError
 from .inputs import MAX_QUOTE_CHARS, is_plain_number, parse_number, quote
-from .units import GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_sample_rate_hz, from_dps, to_dps
+from .units import GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_sample_rate_hz, from_dps, to_dps, utf8_text
 
 FORMAT_VERSION = "1"
 GYRO_COLUMNS = ("gx", "gy", "gz")
@@ -114,7 +114,8 @@ class Recording(_HeaderFacts):
 
     ``columns`` maps each column name to a float array in file order and in the file's units;
     use :attr:`gyro_dps` for the rates in deg/s whatever the file's ``gyro_unit``. ``notes`` are
-    the annotation lines, each a :class:`Note` (``(line, text)`` with the sample ``row`` it precedes).
+    the annotation lines, each a :class:`Note` (``(line, text)`` with the sample ``row`` it precedes);
+    ``t_gaps`` the steps of a file's ``t`` longer than 1.5 sample intervals (:func:`warn_about_gaps`).
     """
 
     columns: dict
@@ -122,6 +123,7 @@ class Recording(_HeaderFacts):
     path: str | None = None
     warnings: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    t_gaps: int = 0
 
     def __len__(self):
         return len(self.columns["gx"])
@@ -260,7 +262,8 @@ def read_recording(path) -> Recording:
     chunks = iter_recording(path)
     head = next(chunks)
     columns = collect_columns(head, chunks, head.names)
-    return Recording(columns=columns, header=head.header, path=head.path, warnings=head.warnings, notes=head.notes)
+    return Recording(columns=columns, header=head.header, path=head.path, warnings=head.warnings, notes=head.notes,
+                     t_gaps=head.t_gaps)
 
 
 def collect_columns(head, chunks, names):
@@ -327,7 +330,7 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
                 data, line_numbers = _parse_chunk(lines, first, head)
                 _check_rates(data, head, lambda row: f"line {line_numbers[row]}")
                 if len(data) and times is not None:
-                    times.add(head.column(data, "t"), line_numbers)
+                    times.add(head.column(data, "t"), lambda row: f"line {line_numbers[row]}")
             except RecordingError as exc:
                 raise _blame_gzip_damage(path, exc) from None
             if len(data):
@@ -337,7 +340,7 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
             first, lines = next(parts)
         except StopIteration:
             if times is not None:
-                times.check_rate()
+                times.finish()
             return
         except RecordingError as exc:
             raise _blame_gzip_damage(path, exc) from None
@@ -676,65 +679,99 @@ def _parse_line(ln, line, head):
     return values
 
 
-#: the steps of ``t`` whose median is compared with ``1 / sample_rate_hz`` (the file's first ones)
+#: the number of consecutive steps of ``t`` in each window whose median is compared with ``1 / sample_rate_hz``
 RATE_CHECK_STEPS = 1000
 
 
 class _TimeCheck:
-    """The checks of a recording's ``t`` column, chunk by chunk (:meth:`add`), cheap and vectorised:
+    """The checks of a recording's ``t`` column, chunk by chunk (:meth:`add`), cheap and vectorised;
+    the reader and the writer share them, so that what is written reads back:
 
     - ``t`` increases strictly, also across chunks;
     - steps longer than 1.5 sample intervals are counted in ``head.t_gaps`` (lost samples: legal);
-    - the typical step, the lower median of the first :data:`RATE_CHECK_STEPS` steps (all of a
-      shorter file; checked once they are read, or at the end), is ``1 / sample_rate_hz``
-      within :data:`RATE_TOLERANCE`, in both directions: a ``t`` that runs faster or slower
-      than the header says would make every time constant and Allan cluster time wrong. Gaps
-      lengthen some steps, not the median, unless they are most of the steps.
+    - the typical step of every window of :data:`RATE_CHECK_STEPS` consecutive steps (the 1st to
+      the 1000th, the 1001st to the 2000th, ...), their lower median, is ``1 / sample_rate_hz``
+      within :data:`RATE_TOLERANCE`, in both directions: a ``t`` that runs faster or slower than
+      the header says, anywhere in the file, would make every time constant and Allan cluster
+      time wrong. Gaps lengthen some steps, not the median, unless they are most of a window's
+      steps. A file with fewer steps than one window has its median of all steps checked at
+      the end (:meth:`finish`); the steps after the last whole window of a longer file are not.
+
+    ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
+    advice a refusal ends with (the writer says why its rows would come out so).
     """
 
-    def __init__(self, head):
+    def __init__(self, head, why="is sample_rate_hz or t wrong, or were most samples lost here?"):
         self.head = head
+        self.why = why
         self.max_step_s = 1.5 / head.sample_rate_hz
         self.t_last = None
-        self.steps = []  # the first steps, until the rate is checked (None after)
-        self.first_line = None  # file line of the first sample
+        self.last_where = None  # where the last sample of the previous chunk is
+        self.pending = np.empty(0)  # the steps after the last whole window
+        self.pending_where = None  # where the first of them starts
+        self.windows = 0  # the whole windows checked
 
-    def add(self, t, line_numbers):
-        """Check the times ``t`` of a chunk, read from the file lines ``line_numbers``."""
+    def add(self, t, where):
+        """Check the times ``t`` of a chunk; ``where(i)`` names its row ``i`` ("line 12")."""
         head = self.head
         if self.t_last is None:
             prev, cur, row0 = t[:-1], t[1:], 1
-            self.first_line = int(line_numbers[0])
         else:
             prev, cur, row0 = np.concatenate(([self.t_last], t[:-1])), t, 0
         step = cur - prev
         bad = np.flatnonzero(step <= 0)
         if bad.size:
             k = int(bad[0])
-            raise RecordingError(f"{head.path}: line {line_numbers[k + row0]}: t does not increase "
+            raise RecordingError(f"{head.path}: {where(k + row0)}: t does not increase "
                                  f"({float(cur[k])!r} after {float(prev[k])!r})")
         head.t_gaps += int(np.count_nonzero(step > self.max_step_s))
-        self.t_last = float(t[-1])
-        if self.steps is not None:
-            self.steps.append(step[:RATE_CHECK_STEPS])
-            if sum(map(len, self.steps)) >= RATE_CHECK_STEPS:
-                self.check_rate()
 
-    def check_rate(self):
-        """Refuse a typical step of ``t`` more than :data:`RATE_TOLERANCE` away from ``1 / sample_rate_hz``."""
-        steps = np.concatenate(self.steps)[:RATE_CHECK_STEPS] if self.steps else np.empty(0)
-        self.steps = None
-        if not len(steps):  # one sample: no step
-            return
-        typical_s = float(np.partition(steps, (len(steps) - 1) // 2)[(len(steps) - 1) // 2])
+        def step_start(i):  # where the sample a step of this chunk starts from is
+            return where(i + row0 - 1) if i + row0 >= 1 else self.last_where
+
+        if len(self.pending) == 0 and len(step):
+            self.pending_where = step_start(0)
+        steps = np.concatenate((self.pending, step))
+        whole = len(steps) // RATE_CHECK_STEPS * RATE_CHECK_STEPS
+        if whole:
+            medians = _lower_medians(steps[:whole].reshape(-1, RATE_CHECK_STEPS))
+            wrong = np.flatnonzero(self._off(medians))
+            if wrong.size:
+                j = int(wrong[0])
+                start = j * RATE_CHECK_STEPS - len(self.pending)
+                self._refuse(float(medians[j]), RATE_CHECK_STEPS, self.pending_where if start < 0 else step_start(start),
+                             first=self.windows + j == 0)
+            self.windows += len(medians)
+            if whole < len(steps):
+                self.pending_where = step_start(whole - len(self.pending))
+        self.pending = steps[whole:]
+        self.t_last = float(t[-1])
+        self.last_where = where(len(t) - 1)
+
+    def finish(self):
+        """At the end: a file shorter than one window has the median of all its steps checked."""
+        if self.windows == 0 and len(self.pending):
+            median = float(_lower_medians(self.pending[None, :])[0])
+            if self._off(median):
+                self._refuse(median, len(self.pending), self.pending_where, first=True)
+
+    def _off(self, typical_s):
         expected_s = 1.0 / self.head.sample_rate_hz
-        if abs(typical_s - expected_s) > RATE_TOLERANCE * expected_s:
-            head = self.head
-            raise RecordingError(
-                f"{head.path}: t steps by {typical_s:.6g} s (median of its first {len(steps)} steps from line "
-                f"{self.first_line}), "
-                f"but sample_rate_hz {head.sample_rate_hz:g} means {expected_s:.6g} s: more than "
-                f"{RATE_TOLERANCE:.0%} apart (is sample_rate_hz or t wrong?)")
+        return np.abs(typical_s - expected_s) > RATE_TOLERANCE * expected_s
+
+    def _refuse(self, typical_s, n, start, first):
+        head = self.head
+        which = "its first" if first else "the"
+        raise RecordingError(
+            f"{head.path}: t steps by {typical_s:.6g} s (median of {which} {n} steps from {start}), "
+            f"but sample_rate_hz {head.sample_rate_hz:g} means {1.0 / head.sample_rate_hz:.6g} s: more than "
+            f"{RATE_TOLERANCE:.0%} apart ({self.why})")
+
+
+def _lower_medians(windows):
+    """The lower median of each row of ``windows`` (2-D)."""
+    k = (windows.shape[1] - 1) // 2
+    return np.partition(windows, k, axis=1)[:, k]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -759,9 +796,10 @@ _CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 def one_line_text(text):
     """``text`` as a header value or an annotation holds it: each control character (a line end,
-    a tab, ...) written as its escape (``\\n``), spaces at both ends dropped; that is what the
-    reader reads back."""
-    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), str(text)).strip()
+    a tab, ...) written as its escape (``\\n``), and each lone surrogate (a file name that is not
+    UTF-8) as :func:`~gyrofilter.units.utf8_text` writes it (``\\udcff``), spaces at both ends
+    dropped; that is what the reader reads back."""
+    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), utf8_text(str(text))).strip()
 
 
 def header_text(header, columns, where):
@@ -799,18 +837,26 @@ def header_text(header, columns, where):
 def write_recording(path, rec: Recording, *, compresslevel=6):
     """Write ``rec`` to ``path`` (gzip at ``compresslevel`` when the name ends in ``.gz``), whole, in
     one go: every value exactly (it reads back as the same float), the notes after the data.
-    The header and the values are checked before the file is created (:class:`RecordingWriter`)."""
+    The header, the values and ``t`` are checked before the file is created (:class:`RecordingWriter`)."""
     names = list(rec.columns)
     data = np.column_stack([rec.columns[c] for c in names]) if names else np.empty((0, 0))
     _check_finite(data, names, path)
     header_text(rec.header, names, path)
     if len(data):
-        _check_rates(data, RecordingHead(header=rec.header, names=names, path=os.fspath(path)),
-                     lambda row: f"row {row + 1} of the rows to write")
+        head = RecordingHead(header=rec.header, names=names, path=os.fspath(path))
+        _check_rates(data, head, lambda row: f"row {row + 1} of the rows to write")
+        if "t" in names:
+            times = _TimeCheck(head, _NOT_WRITTEN)
+            times.add(head.column(data, "t"), lambda row: f"row {row + 1} of the output")
+            times.finish()
     with RecordingWriter(path, rec.header, names, flush_interval_s=None, compresslevel=compresslevel) as writer:
         writer.write(data)
         for line, text in rec.notes:
             writer.note(text)
+
+
+#: what a writer's refusal of its ``t`` column says by default
+_NOT_WRITTEN = "not written: it would not read back"
 
 
 def _check_finite(rows, columns, where):
@@ -863,17 +909,24 @@ class RecordingWriter(Closable):
         gzip level 1-9 for ``.gz`` files.
     name : str, optional
         The file as messages name it (default ``path``; a writer to a temporary file names the user's).
+    t_advice : str, optional
+        What a refusal of the ``t`` column ends with: why the writer's rows could come out so
+        (default: "not written: it would not read back").
 
-    RecordingError for a bad header, column list or value.
+    RecordingError for a bad header, column list or value, and for a ``t`` column the reader
+    would refuse (:class:`_TimeCheck`, rows named "row N of the output"): a window refused as
+    :meth:`write` completes it (its chunk not written), a file shorter than one window by
+    :meth:`close` (the file is complete; a caller writing through a temporary file drops it).
     """
 
     def __init__(self, path, header: dict, columns, *, formats=None, flush_interval_s=1.0, fsync=True,
-                 compresslevel=6, name=None):
+                 compresslevel=6, name=None, t_advice=None):
         self.path = os.fspath(path)
         self.name = self.path if name is None else os.fspath(name)
         self.columns = list(columns)
         text = header_text(header, self.columns, self.name)
         self._head = RecordingHead(header={k: str(v) for k, v in header.items()}, names=self.columns, path=self.name)
+        self._times = _TimeCheck(self._head, t_advice or _NOT_WRITTEN) if "t" in self.columns else None
         self._formats = list(formats) if formats is not None else [None] * len(self.columns)
         if len(self._formats) != len(self.columns):
             raise RecordingError(f"{self.name}: {len(self._formats)} formats for {len(self.columns)} columns")
@@ -921,6 +974,8 @@ class RecordingWriter(Closable):
             raise RecordingError(f"{self.name}: rows to write must hold numbers") from None
         _check_finite(values, self.columns, self.name)
         _check_rates(values, self._head, lambda row: f"row {row + 1} of the rows to write")
+        if self._times is not None:
+            self._times.add(self._head.column(values, "t"), lambda row: f"row {self.rows_written + row + 1} of the output")
         fmt = ",".join(f if f is not None else _exact_format(values[:, i]) for i, f in enumerate(self._formats)) + "\n"
         self._emit("".join(fmt % tuple(r) for r in (rows if rows.dtype == object else values).tolist()))
         self.rows_written += len(rows)
@@ -947,6 +1002,11 @@ class RecordingWriter(Closable):
                 pass  # pipes and some special files cannot be synced; the flush above still happened
         self._last_flush = time.monotonic()
 
+    def __exit__(self, exc_type, *exc):
+        if exc_type is not None:  # the exception stands: no refusal of a short t at the close
+            self._times = None
+        return super().__exit__(exc_type, *exc)
+
     def _close(self):
         if self.write_failed:
             self._cut_to_last_flush()
@@ -956,6 +1016,8 @@ class RecordingWriter(Closable):
         self._raw.flush()
         self._raw.close()
         self.rows_flushed = self.rows_written
+        if self._times is not None:
+            self._times.finish()
 
     def _cut_to_last_flush(self):
         """After a failed write: close without writing more, and cut what the failed write and the
@@ -1000,7 +1062,8 @@ def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     else:
         header.pop("lsb_per_dps", None)
-    return Recording(columns=columns, header=header, path=rec.path, warnings=list(rec.warnings), notes=list(rec.notes))
+    return Recording(columns=columns, header=header, path=rec.path, warnings=list(rec.warnings), notes=list(rec.notes),
+                     t_gaps=rec.t_gaps)
 
 
 def warn_about_gaps(head, consequence, warn):
@@ -1008,8 +1071,8 @@ def warn_about_gaps(head, consequence, warn):
     (:class:`~gyrofilter.recording.RecordingHead`) showed missing samples; ``consequence`` says
     what that means for the command.
 
-    ``head``: the :class:`RecordingHead` after its chunks were read (its ``t_gaps`` counts the
-    steps of ``t`` longer than 1.5 sample intervals); ``consequence``: text appended to the
+    ``head``: the :class:`RecordingHead` after its chunks were read, or a :class:`Recording`
+    (its ``t_gaps`` counts the steps of ``t`` longer than 1.5 sample intervals); ``consequence``: text appended to the
     warning; ``warn``: a callable taking one line of text. Returns None; warns at most once.
     """
     if head.t_gaps:

@@ -88,12 +88,26 @@ def plain(value):
     return text if len(text) <= MAX_QUOTE_CHARS else f"{text[:MAX_QUOTE_CHARS]}... ({len(text)} characters)"
 
 
+def utf8_text(text):
+    """``text`` as a file holds it (UTF-8): each lone surrogate, which ``os.fsdecode`` makes of a
+    file name's byte that is not UTF-8 (b"\\xff" -> "\\udcff"), written as its escape, the six
+    characters ``\\udcff``, which read back as written; any other text unchanged."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
+    return text
+
+
 def json_ready(value):
     """``value`` as ``json.dump(..., allow_nan=False)`` takes it: numpy arrays and scalars as lists
-    and numbers, tuples as lists, dict keys as text, and a non-finite number (NaN, +-inf) as None
-    (``null``: the files never hold the non-standard NaN/Infinity tokens; docs/formats.md)."""
+    and numbers, tuples as lists, dict keys as text, text as :func:`utf8_text` makes it, and a
+    non-finite number (NaN, +-inf) as None (``null``: the files never hold the non-standard
+    NaN/Infinity tokens; docs/formats.md)."""
     if isinstance(value, dict):
-        return {str(k): json_ready(v) for k, v in value.items()}
+        return {utf8_text(str(k)): json_ready(v) for k, v in value.items()}
+    if isinstance(value, str):
+        return utf8_text(value)
     if isinstance(value, (list, tuple)):
         return [json_ready(v) for v in value]
     if isinstance(value, (np.generic, np.ndarray)):

@@ -342,3 +342,31 @@ def test_cli_a_non_finite_window_is_one_line_naming_the_option(capsys, option, v
     assert main(["arma", str(RECORDINGS / "mpu6050_static_64s_set1.csv.gz"), option, value]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{option} must be a finite number of seconds" in err[0], err
+
+
+def test_cli_selects_the_window_by_t_and_warns_about_gaps(tmp_path, capsys):
+    """Case 1-3: with lost samples, --start-s 20 took sample 20 * rate (t near 25 s here), the
+    printed and JSON durations came from the count, and nothing said the samples were not uniform."""
+    import json
+
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    rng = np.random.default_rng(17)
+    steps = np.where(np.arange(5999) % 4 == 3, 0.02, 0.01)  # a sample lost after every third
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    path = tmp_path / "gaps.csv"
+    write_recording(path, Recording.from_dps(rng.normal(0.5, 0.1, (6000, 3)), 100.0, t_s=t))
+    out = tmp_path / "a.json"
+    assert main(["arma", str(path), "--axis", "x", "--max-n", "1", "--start-s", "20", "--end-s", "60",
+                 "--json", str(out)]) == 0
+    first, last = int(np.searchsorted(t, 20.0 - 0.005)), int(np.searchsorted(t, 60.0 - 0.005))
+    assert t[first] == pytest.approx(20.0) and first == 1600  # not sample 2000 (t = 25 s)
+    doc = json.loads(out.read_text())
+    assert doc["n_samples"] == last - first and doc["start_s"] == pytest.approx(20.0)
+    assert doc["duration_s"] == pytest.approx(t[last - 1] - t[first] + 0.01)
+    captured = capsys.readouterr()
+    assert f"{last - first} samples at 100 Hz (40.0 s) from 20 s after the first sample" in captured.out
+    err = captured.err.splitlines()
+    assert any(line.startswith(f"gyrofilter: warning: {path}: t shows 1499 gap(s)") and "ARMA" in line
+               and "not meaningful" in line for line in err), err

@@ -251,3 +251,48 @@ def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, 
     errors = [ln for ln in err.splitlines() if not ln.startswith(("usage:", " "))]
     assert len(errors) == 1 and errors[0].endswith(said)
     assert ("did you mean" in err) == ("did you mean" in said)
+
+
+def _file_named_by_bytes(tmp_path, name=b"\xff.csv"):
+    """A recording under a file name that is not UTF-8 (legal on Linux), and the name as Python
+    gets it from argv: os.fsdecode, the byte 0xff as the lone surrogate '\\udcff'."""
+    from gyrofilter.recording import Recording, write_recording
+
+    path = os.fsdecode(os.path.join(os.fsencode(tmp_path), name))
+    write_recording(path, Recording.from_dps(np.random.default_rng(3).normal(0, 0.05, (6000, 3)), 100.0))
+    assert os.path.exists(os.path.join(os.fsencode(tmp_path), name))
+    return path
+
+
+def test_a_file_name_that_is_not_utf8_is_written_escaped_in_every_output(tmp_path, monkeypatch):
+    """The name in a header value, a JSON document, a Kalibr file and the fleet table crashed
+    after all the work ("'utf-8' codec can't encode character '\\udcff'"): it is written escaped,
+    \\udcff, as the control characters are, and reads back as written. (The summaries on stdout
+    print the name too: stdout here escapes what it cannot encode, as stderr always does.)"""
+    import io
+
+    from gyrofilter.cli import main
+    from gyrofilter.recording import read_recording
+
+    monkeypatch.setattr(sys, "stdout", io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="backslashreplace"))
+    src = _file_named_by_bytes(tmp_path)
+    escaped = src.replace("\udcff", "\\udcff")
+    out = tmp_path / "out.csv"
+    assert main(["replay", src, "--out", str(out)]) == 0
+    assert read_recording(out).header["filtered_from"] == escaped
+    assert main(["allan", src, "--json", str(tmp_path / "a.json")]) == 0
+    assert json.loads((tmp_path / "a.json").read_text(encoding="utf-8"))["recording"] == escaped
+    other = _file_named_by_bytes(tmp_path, b"plain.csv")
+    assert main(["allan", src, other, "--fleet", str(tmp_path / "fleet"), "--jobs", "1"]) == 0
+    table = (tmp_path / "fleet" / "fleet.csv").read_text(encoding="utf-8").splitlines()
+    assert len(table) == 7 and table[1].startswith("\\udcff,") and f",{escaped}," in table[1]
+    assert f"# recording: {escaped}" in (tmp_path / "fleet" / "\udcff.imu.yaml").read_text(encoding="utf-8")
+    assert "| \\udcff | x |" in (tmp_path / "fleet" / "fleet.md").read_text(encoding="utf-8")
+
+
+def test_utf8_text_escapes_lone_surrogates_only():
+    from gyrofilter.units import json_ready, utf8_text
+
+    assert utf8_text("b\udcffc\ud800.csv") == "b\\udcffc\\ud800.csv"
+    assert utf8_text("ü ✓ \\udcff") == "ü ✓ \\udcff"  # any other text unchanged
+    assert json_ready({"\udcff": ["\udcfe", 1.0]}) == {"\\udcff": ["\\udcfe", 1.0]}

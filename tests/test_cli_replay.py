@@ -509,3 +509,21 @@ def test_replaying_a_filtered_output_is_refused_naming_where_it_came_from(tmp_pa
         "samples; filter the raw recording it came from\n")
     assert not out.exists()
     assert main(["allan", str(filtered)]) == 0
+
+
+def test_an_output_whose_t_would_not_read_back_is_refused_and_nothing_is_written(tmp_path, capsys):
+    """Case 1-1: a legal input with samples lost in 40 % of its steps (the median step is the
+    rate's) gave rows whose t steps by more than 1 / output rate in most blocks: replay wrote,
+    exit 0, an --out that the reader refused."""
+    rng = np.random.default_rng(5)
+    steps = np.where(rng.random(19999) < 0.4, 0.02, 0.01)
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    src = tmp_path / "gaps.csv"
+    write_recording(src, Recording.from_dps(rng.normal(0, 0.05, (20000, 3)), 100.0, t_s=t))
+    assert len(read_recording(src)) == 20000  # the input reads: its gaps are legal
+    out = tmp_path / "out.csv"
+    assert main(["replay", str(src), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"gyrofilter: error: {out}: t steps by ") and len(err[0]) - len(str(out)) <= 250, err
+    assert "sample_rate_hz 20 means 0.05 s" in err[0] and "lost samples in most filter blocks" in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["gaps.csv"]

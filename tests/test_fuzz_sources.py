@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from gyrofilter.errors import DeviceError, GyroFilterError, SettingsError
 from gyrofilter.sources import KINDS, open_source, parse_source
 from gyrofilter.sources.serial_source import LINE_OUTCOMES, MAX_LINE_BYTES, LineParser
+from gyrofilter.units import MAX_RATE_DPS
 
 FAST = settings(max_examples=100, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -89,6 +90,9 @@ def model(lines, tail, fields, bits, temp_raw):
             continue
         values = dict(zip(fields, map(float, cells)))
         if not all(math.isfinite(v) for v in values.values()):
+            stats["bad_lines"] += 1
+            continue
+        if any(abs(values[g] / 131) > MAX_RATE_DPS for g in ("gx", "gy", "gz")):  # lsb_per_dps=131
             stats["bad_lines"] += 1
             continue
         step = 1

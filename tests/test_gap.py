@@ -432,3 +432,16 @@ def test_a_moving_axis_gets_a_note_and_the_still_ones_none():
     report = analyse_gap(Recording.from_dps(g, fs), seed=0, n_sims=4)
     moving = [note for note in report["notes"] if "does not look static" in note]
     assert len(moving) == 1 and moving[0].startswith("axis y: the rate moves by up to"), report["notes"]
+
+
+def test_cli_warns_that_lost_samples_make_the_analysis_not_meaningful(tmp_path, capsys):
+    """Case 1-3: gap ignored t and said nothing about lost samples (allan and replay warn)."""
+    from gyrofilter.cli import main
+
+    t = np.concatenate(([0.0], np.cumsum(np.where(np.arange(299) % 5 == 4, 0.02, 0.01))))
+    path = tmp_path / "gaps.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (300, 3)), 100.0, t_s=t))
+    assert main(["gap", str(path), "--sims", "2", "--json", str(tmp_path / "g.json")]) == 0
+    err = capsys.readouterr().err
+    assert f"gyrofilter: warning: {path}: t shows 59 gap(s) longer than 1.5 sample intervals; the gap analysis" in err
+    assert read_recording(path).t_gaps == 59

@@ -346,6 +346,63 @@ def test_t_with_gaps_and_jitter_within_5_percent_still_reads(tmp_path, chunk_row
     assert head.t_gaps == 1500
 
 
+def _t_body(steps_s):
+    """Data lines of a recording whose t has the steps ``steps_s`` (gyro values all 0)."""
+    t = np.concatenate(([0.0], np.cumsum(steps_s)))
+    return "".join(f"{v!r},0,0,0\n" for v in t.tolist())
+
+
+@pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
+@pytest.mark.parametrize("late_step_s", [pytest.param(0.001, id="t runs 10x fast"), pytest.param(0.02, id="every other sample lost")])
+def test_t_is_checked_against_the_rate_in_every_window_not_only_the_first(tmp_path, chunk_rows, late_step_s):
+    """Only the first 1000 steps were checked: a t that ran 10x fast, or lost most samples, from
+    step 2300 on read silently with the header's rate. Windows are steps 1-1000, 1001-2000, ...;
+    the third (mostly late steps) starts at sample 2000, file line 2005."""
+    steps = np.full(4000, 0.01)
+    steps[2300:] = late_step_s
+    path = _dps_file(tmp_path, _t_body(steps))
+    with pytest.raises(RecordingError, match=re.escape(
+            f"{path}: t steps by {late_step_s:g} s (median of the 1000 steps from line 2005), but sample_rate_hz "
+            "100 means 0.01 s: more than 5% apart (is sample_rate_hz or t wrong, or were most samples lost here?)")):
+        _read_chunked(path, chunk_rows)
+
+
+@pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
+def test_the_steps_after_the_last_whole_window_and_a_short_file_are_checked_as_before(tmp_path, chunk_rows):
+    """A file longer than a window: its tail shorter than one is not checked (gaps there are
+    legal); a file shorter than a window: the median of all its steps is."""
+    steps = np.full(2500, 0.01)
+    steps[2100:] = 0.001  # 400 fast steps after the second whole window
+    head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
+    assert len(data) == 2501
+    with pytest.raises(RecordingError, match=r"t steps by 0.001 s \(median of its first 999 steps from line 5\)"):
+        _read_chunked(_dps_file(tmp_path, _t_body(np.full(999, 0.001)), name="short.csv"), chunk_rows)
+
+
+def test_writers_refuse_a_t_the_reader_would_refuse(tmp_path):
+    """What is written reads back: a t whose steps disagree with sample_rate_hz in some window."""
+    steps = np.full(2999, 0.01)
+    steps[1400:] = 0.03
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    rec = Recording.from_dps(np.zeros((3000, 3)), 100.0, t_s=t)
+    with pytest.raises(RecordingError, match=r"late.csv: t steps by 0.03 s \(median of the 1000 steps from row 1001 of "
+                                             r"the output\), .* \(not written: it would not read back\)"):
+        write_recording(tmp_path / "late.csv", rec)
+    assert not (tmp_path / "late.csv").exists()
+    path = tmp_path / "live.csv"
+    with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "dps"}, ["t", "gx", "gy", "gz"], name="mine.csv",
+                         t_advice="lost in blocks") as writer:
+        writer.write(np.column_stack([t[:1200], np.zeros((1200, 3))]))
+        with pytest.raises(RecordingError, match=r"^mine.csv: t steps by 0.03 s \(median of the 1000 steps from row 1001 "
+                                                 r"of the output\), .*\(lost in blocks\)$"):
+            writer.write(np.column_stack([t[1200:], np.zeros((1800, 3))]))
+    assert len(read_recording(path)) == 1200
+    short = RecordingWriter(tmp_path / "short.csv", {"sample_rate_hz": 100, "gyro_unit": "dps"}, ["t", "gx", "gy", "gz"])
+    short.write(np.column_stack([np.arange(50) * 0.03, np.zeros((50, 3))]))
+    with pytest.raises(RecordingError, match=r"t steps by 0.03 s \(median of its first 49 steps from row 1 of the output\)"):
+        short.close()
+
+
 def test_writers_refuse_non_finite_values_before_anything_lands(tmp_path):
     rec = Recording.from_dps(np.array([[1.0, 2.0, 3.0], [1e308, np.inf, 0.0]]), 100.0)
     with pytest.raises(RecordingError, match=r"column 'gy' of row 2 .* is inf; a recording holds finite numbers only"):

@@ -23,8 +23,9 @@ HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=1
 RATE_HZ = 1000
 
 
-def line(i):
-    return f"{i},{(i * 7) % 2001 - 1000},{-(i % 300)},{(i * i) % 97 - 48},{-2000 + i % 50}\n".encode()
+def line(i, gx=None):
+    gx = (i * 7) % 2001 - 1000 if gx is None else gx
+    return f"{i},{gx},{-(i % 300)},{(i * i) % 97 - 48},{-2000 + i % 50}\n".encode()
 
 
 def values(i):
@@ -35,10 +36,11 @@ def values(i):
 class Device(threading.Thread):
     """Stream ``n`` lines at ``RATE_HZ`` into the master side of a pty, with faults injected."""
 
-    def __init__(self, master, n, *, header=True, wait_for_query=True, garbage_at=(), cut_at=(), split_every=97):
+    def __init__(self, master, n, *, header=True, wait_for_query=True, garbage_at=(), cut_at=(), split_every=97, beyond_at=()):
         super().__init__(daemon=True)
         self.master, self.n, self.header, self.wait_for_query = master, n, header, wait_for_query
         self.garbage_at, self.cut_at, self.split_every = set(garbage_at), set(cut_at), split_every
+        self.beyond_at = set(beyond_at)  # these lines carry gx = 2**31 LSB (16 million deg/s): a corrupt value
         self.sent_good = []
         self.query = b""
         self.error = None
@@ -69,6 +71,9 @@ class Device(threading.Thread):
                 junk = bytes(self.rng.integers(0x80, 0x100, 40, dtype=np.uint8)) + b"garbage!" + b"\n"
                 os.write(self.master, junk)
             data = line(i)
+            if i in self.beyond_at:
+                os.write(self.master, line(i, gx=2 ** 31))
+                continue
             if i in self.cut_at:  # the line loses its tail on the wire
                 os.write(self.master, data[: len(data) // 2] + b"\n")
                 continue
@@ -179,6 +184,28 @@ def test_record_from_serial_keeps_everything_when_the_cable_is_pulled(pty_pair, 
     assert rec.header["sensor"] == "MPU6050" and rec.header["serial_port"] == name
     err = capsys.readouterr().err
     assert f"wrote {len(good)} samples" in err and "lost 1 samples" in err
+
+
+def test_record_from_serial_skips_a_value_beyond_the_range_and_goes_on(pty_pair, tmp_path, capsys):
+    """One corrupt line with a value beyond +-100000 deg/s ended the whole recording (exit 2,
+    no end note, every later line lost); it is a bad line like any other: skipped, counted."""
+    from gyrofilter.cli import main
+
+    master, name = pty_pair
+    dev = Device(master, 600, beyond_at=(300,), split_every=0)
+    dev.start()
+    out = tmp_path / "serial.csv"
+    code = main(["record", "--source", f"serial:{name}", "--out", str(out)])
+    dev.join(10)
+    assert code == 1 and dev.error is None  # ended by the device going away, not by the corrupt line
+    rec = read_recording(out)
+    good = np.array(dev.sent_good)
+    assert len(good) == 599 and 300 not in good
+    np.testing.assert_array_equal(rec.gyro, values(good))
+    texts = [t for _, t in rec.notes]
+    assert any("bad line (a gyro value beyond +-100000 deg/s): 300,2147483648," in t for t in texts), texts
+    assert texts[-1].startswith("end: source ended:")
+    capsys.readouterr()
 
 
 @pytest.mark.device

@@ -469,6 +469,25 @@ def test_parser_skips_bad_lines_and_never_raises_on_garbage():
     assert p.stats["samples"] == 15
 
 
+@pytest.mark.parametrize("header, beyond, edge", [
+    (HEADER, b"13100001", b"13100000"),  # lsb at 131 LSB per deg/s: 100000.0076 and 100000 deg/s
+    (b"# gyrofilter-serial: 1 gyro_unit=rad/s sample_rate_hz=100\n", b"1e308", b"1745.3"),  # overflows deg/s
+    (b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n", b"-200000", b"-100000"),
+])
+def test_parser_refuses_a_line_beyond_the_rate_range_like_any_bad_line(header, beyond, edge):
+    """One value beyond +-100000 deg/s went on as a sample and the recording's writer refused it,
+    ending the whole recording (hostile 5-3); it is a corrupt line: counted, noted, skipped, in
+    the fast path (all plain CSV) and the line-by-line one alike."""
+    for extra in (b"", b"# a device message\n"):  # the second chunk goes line by line
+        p = LineParser()
+        p.feed(header + _lines(range(3)))
+        rows = p.feed(extra + b"3,1," + beyond + b",2\n" + b"4,0,0," + edge + b"\n" + _lines(range(5, 8)))
+        np.testing.assert_array_equal(rows[:, 0], np.array([4, 5, 6, 7]) / 100)  # t from the counter: 3 is a lost sample
+        assert rows[0, 3] == float(edge)
+        assert p.stats["bad_lines"] == 1 and p.stats["lost_samples"] == 1 and _reconciles(p)
+        assert any("bad line (a gyro value beyond +-100000 deg/s): 3,1," in note for note in p.pop_notes())
+
+
 def test_parser_temperature_raw_and_celsius():
     raw = LineParser()
     rows = raw.feed(HEADER.replace(b"\n", b" fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw\n") + _lines([0, 1], temp=True))

@@ -53,7 +53,7 @@ import time
 import numpy as np
 
 from .allan import MIN_CLUSTERS
-from ..units import AXES
+from ..units import AXES, utf8_text
 
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
 COEFFICIENTS = ("arw", "bias_instability", "rrw", "rate_ramp")
@@ -483,7 +483,8 @@ def _cell(value):
 def fleet_csv(rows):
     """fleet.csv: a header of :data:`COLUMNS` and one line per row of ``rows`` (:func:`fleet_rows`);
     numbers in full precision (Python's shortest round-trip form), empty cells for None, findings
-    as :func:`findings_cell`, other lists (flags, warnings) joined by "; "."""
+    as :func:`findings_cell`, other lists (flags, warnings) joined by "; "; text as
+    :func:`~gyrofilter.units.utf8_text` writes it."""
     import csv
     import io
 
@@ -493,7 +494,7 @@ def fleet_csv(rows):
     for row in rows:
         writer.writerow([findings_cell(row[c]) if c == "findings" and row[c] is not None else _cell(row[c])
                          for c in COLUMNS])
-    return out.getvalue()
+    return utf8_text(out.getvalue())  # names and reasons hold file names, which may not be UTF-8
 
 
 def _coef_md(row, key):
@@ -559,4 +560,4 @@ def fleet_markdown(rows, stats, *, title):
             lines.append(f"| {s['axis']} | {s['what']} | {s['units']} | {s['median']:.3g} | {s['spread']:.3g} |")
         else:
             lines.append(f"| {s['axis']} | {s['what']} | {s['units']} | | {s['having']} |")
-    return "\n".join(lines) + "\n"
+    return utf8_text("\n".join(lines) + "\n")  # names and reasons hold file names, which may not be UTF-8

@@ -19,7 +19,7 @@ import os
 import numpy as np
 
 from ..plots import pyplot
-from ..units import AXES
+from ..units import AXES, utf8_text
 
 REPORT_NAME = "gap_report.md"
 FIGURE_KINDS = ("adev", "spectrum", "temperature", "time")
@@ -177,5 +177,5 @@ def write_report(report, rec, out_dir, *, seed=0):
             lines += [f"![rate in time {a}]({_figure('time', a)})", ""]
     path = os.path.join(out_dir, REPORT_NAME)
     with open(path, "w", encoding="utf-8") as fh:
-        fh.write("\n".join(lines) + "\n")
+        fh.write(utf8_text("\n".join(lines) + "\n"))  # the recording's name may be a file name that is not UTF-8
     return path

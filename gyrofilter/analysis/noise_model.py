@@ -62,7 +62,7 @@ import numpy as np
 from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
 from ..errors import SettingsError
-from ..units import DEG_PER_RAD, MAX_RATE_DPS, plain
+from ..units import DEG_PER_RAD, MAX_RATE_DPS, plain, utf8_text
 
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
 TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
@@ -720,7 +720,7 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
     ``recording`` (its name) and ``duration_s`` (s) are written when given."""
     doc = {"sample_rate_hz": float(sample_rate_hz)}
     if recording is not None:
-        doc["recording"] = str(recording)
+        doc["recording"] = utf8_text(str(recording))
     if duration_s is not None:
         doc["duration_s"] = float(duration_s)
     any_axis = next(iter(results.values()))
@@ -781,7 +781,7 @@ def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0"):
     nd = max(v["gyroscope_noise_density"] for v in per_axis.values())
     rw = max(v["gyroscope_random_walk"] for v in per_axis.values())
     lines = ["# Kalibr IMU noise model (gyroscope), written by gyrofilter allan",
-             f"# recording: {recording}" if recording else "# recording: (array)",
+             f"# recording: {utf8_text(str(recording))}" if recording else "# recording: (array)",
              "# continuous-time densities; the maximum over the axes is used:"]
     for a, v in per_axis.items():
         lines.append(f"#   {a}: noise_density {v['gyroscope_noise_density']:.6e} rad/s/sqrt(Hz)"

@@ -41,9 +41,10 @@ def not_static(x_dps, sample_rate_hz, white_std_dps):
             "the recording does not look static")
 
 
-def read_axes(path, axes):
+def read_axes(path, axes, with_t=False):
     """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
-    (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array}).
+    (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array}), and with
+    ``with_t`` (head, {axis: array}, t): the ``t`` column (s), or None when the file has none.
 
     ``path``: a format-v1 recording (``.csv`` or ``.csv.gz``); ``axes``: axis letters, e.g.
     ``"xyz"`` or ``"z"`` (columns ``gx``...). ``head`` is the
@@ -53,10 +54,12 @@ def read_axes(path, axes):
     """
     chunks = iter_recording(path)
     head = next(chunks)
-    columns = collect_columns(head, chunks, [f"g{a}" for a in axes])
+    times = ["t"] if with_t and "t" in head.names else []
+    columns = collect_columns(head, chunks, [f"g{a}" for a in axes] + times)
     if head.rows == 0:
         raise RecordingError(f"{path}: no samples (the file has a header only)")
-    return head, {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
+    series = {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
+    return (head, series, columns.get("t")) if with_t else (head, series)
 
 
 def refuse_gross_errors(head, series, keep, *, warn, first_row=0):

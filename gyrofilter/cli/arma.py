@@ -8,8 +8,11 @@ any work, and written under a temporary name that takes its place when complete.
 import math
 import sys
 
+import numpy as np
+
 from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
+from ..recording import warn_about_gaps
 from ..units import MAX_DURATION_S
 from . import common
 
@@ -53,18 +56,22 @@ def run(args):
     if args.max_samples > MAX_MAX_SAMPLES:
         raise SettingsError(f"--max-samples must be at most {MAX_MAX_SAMPLES}, got {args.max_samples}")
     axes = "xyz" if args.axis == "all" else args.axis
-    head, series = read_axes(args.recording, axes)
+    head, series, t_s = read_axes(args.recording, axes, with_t=True)
     common.print_warnings(head.warnings)
+    warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful",
+                    common.say_warning)
     fs = head.sample_rate_hz
-    i0, i1 = _window(args, head.rows, fs)
+    i0, i1 = _window(args, head.rows, fs, t_s)
     series = {a: x[i0:i1] for a, x in series.items()}
     refuse_gross_errors(head, series, args.keep_outliers, warn=common.say_warning, first_row=i0)
     progress = args.progress or sys.stderr.isatty()
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0
+    start_s, span_s = _start_s(i0, fs, t_s), _span_s(i0, i1, fs, t_s)
     reports = {}
     print(f"recording: {args.recording}")
-    print(f"  {n} samples at {fs:g} Hz ({n / fs:.1f} s) from t = {i0 / fs:g} s, unit {head.gyro_unit}; each axis minus its mean")
+    print(f"  {n} samples at {fs:g} Hz ({span_s:.1f} s) from {start_s:g} s after the first sample, unit {head.gyro_unit}; "
+          "each axis minus its mean")
     for name in axes:
         if progress:
             common.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
@@ -77,7 +84,7 @@ def run(args):
     if warned:
         common.print_warnings(["scipy/statsmodels warned during the fits (check the results above): " + "; ".join(warned)])
     if args.json:
-        out = {"recording": args.recording, "sample_rate_hz": fs, "start_s": i0 / fs, "n_samples": n,
+        out = {"recording": args.recording, "sample_rate_hz": fs, "start_s": start_s, "duration_s": span_s, "n_samples": n,
                "alpha": args.alpha, "axes": {k: v.to_dict() for k, v in reports.items()}}
         with common.replacing(args.json) as tmp:
             common.write_json(tmp, out)
@@ -85,8 +92,11 @@ def run(args):
     return 0
 
 
-def _window(args, n, fs):
-    """Sample indices [i0, i1) of --start-s/--end-s; errors name the options the user gave."""
+def _window(args, n, fs, t_s=None):
+    """Sample indices [i0, i1) of --start-s/--end-s, in seconds after the first sample: by the
+    ``t`` column when the file has one (``t_s``: the samples from the first at or after the time
+    minus half an interval, so that a uniform ``t`` selects as the count does), else by the count
+    (sample i at i / ``fs``); errors name the options the user gave."""
     for option, value in (("--start-s", args.start_s), ("--end-s", args.end_s)):
         if value is not None and not abs(value) <= MAX_DURATION_S:
             raise SettingsError(f"{option} must be a finite number of seconds, at most {MAX_DURATION_S:g}, got {value:g}")
@@ -96,11 +106,16 @@ def _window(args, n, fs):
     if args.end_s is not None and args.end_s <= start_s:
         raise SettingsError(f"--end-s {args.end_s:g} must be after " +
                             (f"--start-s {start_s:g}" if args.start_s is not None else "the start (0 s)"))
-    i0 = int(round(start_s * fs))
-    i1 = n if args.end_s is None else min(n, int(round(args.end_s * fs)))
+    if t_s is None:
+        i0 = int(round(start_s * fs))
+        i1 = n if args.end_s is None else min(n, int(round(args.end_s * fs)))
+    else:
+        after_s = t_s - t_s[0]
+        i0 = int(np.searchsorted(after_s, start_s - 0.5 / fs))
+        i1 = n if args.end_s is None else int(np.searchsorted(after_s, args.end_s - 0.5 / fs))
     if i1 - i0 >= MIN_SAMPLES:
         return i0, i1
-    length = f"{n} samples ({n / fs:g} s at {fs:g} Hz)"
+    length = f"{n} samples ({_span_s(0, n, fs, t_s):g} s at {fs:g} Hz)"
     given = " and ".join(f"--{name.replace('_', '-')} {value:g}" for name, value in
                          (("start_s", args.start_s), ("end_s", args.end_s)) if value is not None)
     if not given:
@@ -108,6 +123,17 @@ def _window(args, n, fs):
     verb = "leave" if " and " in given else "leaves"
     raise SettingsError(f"{given} {verb} {max(0, i1 - i0)} of the {length} of {args.recording}; "
                         f"the analysis needs at least {MIN_SAMPLES}")
+
+
+def _start_s(i0, fs, t_s):
+    """When sample ``i0`` was taken, in seconds after the first (by ``t_s`` when the file has it)."""
+    return i0 / fs if t_s is None else float(t_s[i0] - t_s[0])
+
+
+def _span_s(i0, i1, fs, t_s):
+    """The time samples [i0, i1) span (s), one interval per sample: by ``t_s`` when the file has it
+    (lost samples lengthen it), else the count over ``fs``."""
+    return (i1 - i0) / fs if t_s is None else float(t_s[i1 - 1] - t_s[i0]) + 1.0 / fs
 
 
 def _print_axis(rep, alpha):

@@ -39,7 +39,7 @@ def run(args):
     from ..analysis.fleet import FleetSettings
     from ..analysis.gap import analyse_gap
     from ..analysis.gap_report import REPORT_NAME, report_file_names, write_report
-    from ..recording import read_recording
+    from ..recording import read_recording, warn_about_gaps
 
     if args.sims is not None and not 2 <= args.sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {args.sims}")
@@ -68,6 +68,8 @@ def run(args):
     rec = read_recording(args.recording)
     for text in rec.warnings:
         common.say(f"gyrofilter: warning: {text}")
+    warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful",
+                    common.say_warning)
     progress(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
     report = analyse_gap(rec, seed=args.seed, n_sims=args.sims, progress=progress,
                          recording_name=args.recording)

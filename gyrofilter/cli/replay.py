@@ -64,7 +64,7 @@ def run(args):
                      calibration_from=args.calibration)
     with contextlib.ExitStack() as outputs:
         if args.out:
-            replay.out_path = outputs.enter_context(common.replacing(args.out))
+            replay.out_path, replay.out_name = outputs.enter_context(common.replacing(args.out)), args.out
             outputs.callback(replay.close)
         if args.realtime:  # stdout is a recording (format v1) too
             replay.print_rows(header_text(replay.stdout_header(), OUT_COLUMNS, "stdout").rstrip("\n"))
@@ -109,6 +109,11 @@ def _refuse_nothing_filtered(path, head, filt):
                              "shorter --calibration-s or a saved calibration (--calibration FILE)")
 
 
+#: why replay's rows can have a t the reader refuses while the input's reads: a row's t is its
+#: block's last sample's, so samples lost in most blocks lengthen most of the rows' steps
+_LOST_IN_BLOCKS = "the input lost samples in most filter blocks here; not written, it would not read back"
+
+
 class _Replay:
     """Feeds chunks to the filter and passes its rows on: to the output file, the running
     statistics and the plot envelopes. ``raw`` are the samples of the blocks that produced a
@@ -123,7 +128,8 @@ class _Replay:
         self.filtered = RunningMoments(3)
         self.raw_envelope = Envelope(3) if plot else None
         self.filtered_envelope = Envelope(3) if plot else None
-        self.out_path = None
+        self.out_path = None  # the temporary file written, for the user's out_name
+        self.out_name = None
         self._writer = None
         self._tail = np.empty((0, 3))  # the samples waiting in the filter's unfinished block
         self._t_tail = np.empty(0)
@@ -202,7 +208,7 @@ class _Replay:
             return
         if self._writer is None:  # the header names the bias, known once the calibration is done
             self._writer = RecordingWriter(self.out_path, self._out_header(), OUT_COLUMNS, formats=common.ROW_FORMATS,
-                                           flush_interval_s=None, fsync=False)
+                                           flush_interval_s=None, fsync=False, name=self.out_name, t_advice=_LOST_IN_BLOCKS)
         self._writer.write(np.column_stack([t_s, rows]))
 
     def _out_header(self):

@@ -22,7 +22,9 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
   1 < k < 2**(counter_bits - 1) (modulo the wrap) means k - 1 samples were lost: ``t`` jumps with it
   and a gap note is made. A repeated counter is a duplicate (dropped, counted); a backwards jump
   is a device restart (noted; ``t`` continues). A counter that is not such an integer (negative,
-  fractional, too large) refuses its line (counted in ``bad_lines``).
+  fractional, too large) refuses its line (counted in ``bad_lines``), and so does a gyro value
+  beyond +-``units.MAX_RATE_DPS`` (100000 deg/s) once converted to deg/s: no gyro reads it, and
+  the recording would refuse it (a corrupt line must not end a recording).
 - Every line received is counted in ``stats["lines"]`` and in exactly one of
   :data:`LINE_OUTCOMES`: a sample delivered as a row (``samples``) or a line that is not one
   (a duplicate, a refused line, a header, ...). A run of more than :data:`MAX_LINE_BYTES` bytes
@@ -51,7 +53,7 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError, SourceEnded, one_line
 from ..inputs import check_number, is_plain_number, parse_number, quote
-from ..units import GYRO_UNITS, check_sample_rate_hz
+from ..units import GYRO_UNITS, MAX_RATE_DPS, check_sample_rate_hz, to_dps
 from .base import Source
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
@@ -192,6 +194,7 @@ class LineParser:
                 )
         self.header = dict(header)
         self.sample_rate_hz = float(header["sample_rate_hz"])
+        self._lsb_per_dps = float(header["lsb_per_dps"]) if "lsb_per_dps" in header else None
 
     def _header_words(self, line):
         """The ``key=value`` words of a header line as a dict; DeviceError for anything else."""
@@ -427,9 +430,11 @@ class LineParser:
     def _rows(self, values):
         """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping.
 
-        A counter that is not an integer in [0, 2**counter_bits) refuses its line (``bad_lines``).
-        Counters are at most 2**32 and the sample index an int64, so no step overflows."""
+        A gyro value beyond +-MAX_RATE_DPS in deg/s, or a counter that is not an integer in
+        [0, 2**counter_bits), refuses its line (``bad_lines``). Counters are at most 2**32 and the
+        sample index an int64, so no step overflows."""
         fields = self.fields
+        values = self._refuse_beyond_range(values)
         n = len(values)
         if "counter" in fields and n and self._consecutive(values[:, fields.index("counter")]):
             index = self._last_index + 1 + np.arange(n)  # the common case: no gap, no duplicate
@@ -487,6 +492,20 @@ class LineParser:
             rows[:, 4] = temp / TEMP_LSB_PER_C + TEMP_OFFSET_C if self._temp_raw else temp
         self.stats["samples"] += n
         return rows
+
+    def _refuse_beyond_range(self, values):
+        """``values`` (per line, fields order) without the lines holding a gyro value beyond
+        +-MAX_RATE_DPS once in deg/s (counted in ``bad_lines``, the first noted): one vectorised
+        check per chunk."""
+        gyro = values[:, [self.fields.index(name) for name in ("gx", "gy", "gz")]]
+        with np.errstate(over="ignore"):  # 1e308 rad/s: inf deg/s, refused
+            ok = (np.abs(to_dps(gyro, self.header["gyro_unit"], self._lsb_per_dps)) <= MAX_RATE_DPS).all(axis=1)
+        if ok.all():
+            return values
+        shown = ",".join(map(_num, values[np.argmin(ok)])).encode()
+        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s", count=int(np.count_nonzero(~ok)),
+                  garbage_bytes=0)
+        return values[ok]
 
     def pop_notes(self):
         """Events since the last call (gaps, restarts, skipped lines, device messages), as a list
@@ -621,6 +640,20 @@ class SerialSource(Source):
             self.stats["disconnects"] = int(self._disconnected)
             raise SourceEnded(f"{self.port_name}: {self._ended} after {self.stats['samples']} samples; everything received is kept")
         return self._receive()
+
+    def _refuse_beyond_range(self, values):
+        """``values`` (per line, fields order) without the lines holding a gyro value beyond
+        +-MAX_RATE_DPS once in deg/s (counted in ``bad_lines``, the first noted): one vectorised
+        check per chunk."""
+        gyro = values[:, [self.fields.index(name) for name in ("gx", "gy", "gz")]]
+        with np.errstate(over="ignore"):  # 1e308 rad/s: inf deg/s, refused
+            ok = (np.abs(to_dps(gyro, self.header["gyro_unit"], self._lsb_per_dps)) <= MAX_RATE_DPS).all(axis=1)
+        if ok.all():
+            return values
+        shown = ",".join(map(_num, values[np.argmin(ok)])).encode()
+        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s", count=int(np.count_nonzero(~ok)),
+                  garbage_bytes=0)
+        return values[ok]
 
     def pop_notes(self):
         """Events since the last call (gaps, restarts, skipped lines, device messages)."""
