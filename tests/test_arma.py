@@ -342,3 +342,18 @@ def test_cli_a_non_finite_window_is_one_line_naming_the_option(capsys, option, v
     assert main(["arma", str(RECORDINGS / "mpu6050_static_64s_set1.csv.gz"), option, value]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{option} must be a finite number of seconds" in err[0], err
+
+
+@pytest.mark.parametrize("noise", [1e-120, 1e-300])
+def test_noise_below_the_floor_is_refused_naming_the_axis(noise):
+    """A series of 1e-300 deg/s ended in "math domain error" (its residual variance underflowed to 0)."""
+    x = np.random.default_rng(4).normal(size=2000) * noise
+    with pytest.raises(GyroFilterError, match=r"axis x: the standard deviation is below 1e-100 deg/s"):
+        arma.analyze_axis(x, 100.0, axis="x")
+
+
+def test_an_exactly_predictable_series_is_refused_naming_the_axis():
+    """+-1 alternating data: an ARMA model predicts it with residual variance 0 ("math domain error")."""
+    x = (-1.0) ** np.arange(2000)
+    with pytest.raises(GyroFilterError, match=r"axis z: ARMA\(\d, \d\) predicts the series exactly"):
+        arma.analyze_axis(x, 100.0, axis="z")

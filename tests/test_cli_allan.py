@@ -224,3 +224,26 @@ def test_the_bundled_static_logs_look_static():
             assert not_static(x, head.sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2)) is None, (path.name, a)
     head, series = read_axes(str(RECORDINGS / "mpu6050_rotate_z_24s.csv.gz"), "z")
     assert "does not look static" in not_static(series["z"], head.sample_rate_hz, 0.1)
+
+
+@pytest.mark.parametrize("command", ["allan", "arma"])
+@pytest.mark.parametrize("kind", ["tiny", "alternating"])
+def test_numerically_degenerate_recordings_end_in_a_result_or_one_line_naming_the_file(tmp_path, capsys, command, kind):
+    """Legal recordings that ended in "SVD did not converge" (allan) or "math domain error" (arma)
+    without the file (issue 22, hostile case 3-1): noise of 1e-300 deg/s is refused naming the
+    file and the floor; +-1 alternating data give an Allan result, and arma refuses them."""
+    if command == "arma":
+        pytest.importorskip("statsmodels")
+    n = 3000
+    g = (np.random.default_rng(0).normal(size=(n, 3)) * 1e-300 if kind == "tiny"
+         else np.tile(((-1.0) ** np.arange(n))[:, None], 3))
+    path = _write(tmp_path / f"{kind}.csv", g, lsb=False)
+    code = main([command, path, "--json", str(tmp_path / "out.json")])
+    if command == "allan" and kind == "alternating":
+        assert code == 0
+        assert "Infinity" not in (tmp_path / "out.json").read_text() and "NaN" not in (tmp_path / "out.json").read_text()
+        return
+    assert code == 2
+    why = "below 1e-100 deg/s" if kind == "tiny" else "predicts the series exactly"
+    _assert_one_line_error(capsys, f"{kind}.csv: axis x: ", why)
+    assert not (tmp_path / "out.json").exists()

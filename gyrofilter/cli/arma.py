@@ -68,8 +68,11 @@ def run(args):
     for name in axes:
         if progress:
             common.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
-        rep = arma.analyze_axis(series[name], fs, axis=name, max_samples=args.max_samples,
-                                max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum, criterion=args.criterion)
+        try:
+            rep = arma.analyze_axis(series[name], fs, axis=name, max_samples=args.max_samples,
+                                    max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum, criterion=args.criterion)
+        except SettingsError as exc:  # what the data of this file cannot give: name it (the options are checked above)
+            raise SettingsError(f"{args.recording}: {exc}") from None
         reports[name] = rep
         _print_axis(rep, args.alpha)
     print(f"\n{PAPER_003}")
