@@ -368,8 +368,11 @@ class GyroFilter:
 
         Indices count every sample fed since the start (``samples_in``), calibration included,
         so ``t_s[block_end_indices(len(rows))]`` time-stamps the rows a call just returned (see
-        :meth:`filter_timed`, which does this for one call).
+        :meth:`filter_timed`, which does this for one call). ``n_rows`` is a whole number from 0 to
+        the rows output so far (``blocks_out``), else SettingsError.
         """
+        n_rows = check_number(n_rows, f"n_rows of block_end_indices (the filter has output {self.blocks_out} rows)",
+                              low=0, high=self.blocks_out, integer=True)
         last = self.samples_in - self.pending_samples - 1
         return last - self.settings.block_len * np.arange(n_rows - 1, -1, -1, dtype=np.int64)
 
