@@ -106,6 +106,24 @@ def test_bad_options(static_recording, capsys):
     capsys.readouterr()
 
 
+@pytest.mark.parametrize("confidence", ["0.5", "0.9999"])
+def test_confidence_at_the_ends_of_its_range_gives_finite_intervals(static_recording, tmp_path, confidence):
+    path, _ = static_recording
+    out = tmp_path / "c.json"
+    assert main(["allan", path, "--axes", "z", "--confidence", confidence, "--json", str(out)]) == 0
+    z = json.loads(out.read_text())["axes"]["z"]
+    assert all(0 < lo < hi for lo, hi in zip(z["adev_low_dps"], z["adev_high_dps"]))
+
+
+@pytest.mark.parametrize("confidence", ["0.4999", "0.99991", "0.9999999999999999", "nan"])
+def test_confidence_outside_its_range_is_one_line_naming_the_range(static_recording, capsys, confidence):
+    """0.9999999999999999 passed the check (0, 1) and failed inside the intervals with a message of
+    Python's statistics module (issue 22, hostile case 3-2)."""
+    path, _ = static_recording
+    assert main(["allan", path, "--axes", "z", "--confidence", confidence]) == 2
+    _assert_one_line_error(capsys, "--confidence must be in [0.5, 0.9999]", confidence)
+
+
 def test_help_exits_zero(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["allan", "--help"])

@@ -58,8 +58,8 @@ def run(args):
         raise SettingsError(f"--axes must be a subset of xyz such as xz, got {args.axes!r}")
     if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
         raise SettingsError(f"--min-clusters must be in [2, {MAX_MIN_CLUSTERS}], got {args.min_clusters}")
-    if not 0.0 < args.confidence < 1.0:
-        raise SettingsError(f"--confidence must be between 0 and 1 (e.g. 0.95), got {args.confidence:g}")
+    if not 0.5 <= args.confidence <= 0.9999:  # every value inside works (0.9999999999999999 failed in the intervals)
+        raise SettingsError(f"--confidence must be in [0.5, 0.9999] (e.g. 0.95), got {args.confidence!r}")
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])
