@@ -15,6 +15,7 @@ The state has a fixed size: nothing grows per sample, so a filter can run for da
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import asdict, dataclass, fields, replace
 from functools import partial
 
@@ -246,6 +247,7 @@ class GyroFilter:
         unknown = sorted(set(settings) - set(SETTING_NAMES))
         if unknown:
             raise SettingsError(f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(SETTING_NAMES)}")
+        _check_calibration_argument(calibration, calibration_s)
         chosen = dict(PRESETS[preset])
         chosen.update(settings)
         if calibration_s is not None:
@@ -620,6 +622,21 @@ class GyroFilter:
             self._pkf.start(cal.noise_std_dps)
         self._cal_buf = None
         self._cal_temp = None
+
+
+def _check_calibration_argument(calibration, calibration_s):
+    """``calibration=`` is None, a Calibration or the path of a saved one (str or os.PathLike: an
+    int would be read as a file descriptor, and closed), and comes without an explicit
+    ``calibration_s`` (it replaces the start-up calibration); else SettingsError."""
+    if calibration is None:
+        return
+    if not isinstance(calibration, (Calibration, str, os.PathLike)):
+        raise SettingsError(f"calibration must be a Calibration or the path of a saved one (str or os.PathLike), "
+                            f"got {type(calibration).__name__}")
+    if calibration_s is not None:
+        shown = "the calibration" if isinstance(calibration, Calibration) else f"calibration {calibration}"
+        raise SettingsError(f"{shown} replaces the start-up calibration, so a calibration window "
+                            f"(calibration_s={_shown(calibration_s)}) has nothing to do; give one of them")
 
 
 def _check_calibration_rate(cal, sample_rate_hz, name):

@@ -286,7 +286,8 @@ def add_filter_arguments(parser):
 
 def make_filter(args, sample_rate_hz):
     """The GyroFilter of the filter options; ``--set calibration_s=S`` is ``--calibration-s S``.
-    A setting given twice with --set is refused, naming it."""
+    A setting given twice with --set is refused, naming it; GyroFilter refuses --calibration with
+    a calibration window."""
     settings = {}
     for text in args.set:
         name, value = _parse_setting(text)
@@ -298,9 +299,6 @@ def make_filter(args, sample_rate_hz):
         if calibration_s is not None:
             raise SettingsError("--set calibration_s and --calibration-s both given; give one")
         calibration_s = settings.pop("calibration_s")
-    if calibration_s is not None and args.calibration:
-        raise SettingsError(f"--calibration {args.calibration} replaces the start-up calibration, so a calibration "
-                            "window (--calibration-s or --set calibration_s) has nothing to do; give one of them")
     if args.temp_model:
         if "temp_coefficient_dps_per_c" in settings:
             raise SettingsError("--temp-model and --set temp_coefficient_dps_per_c both give the temperature "
