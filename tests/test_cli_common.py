@@ -92,6 +92,21 @@ def test_an_error_writing_the_temporary_file_names_the_users_path(tmp_path):
     assert err.value.filename == os.path.join(folder, "no", "fig.png")
 
 
+def test_a_writers_refusal_inside_replacing_names_the_users_path_in_the_same_class(tmp_path):
+    """A recording writer refusing a value named ``.partial-PID-out.csv`` (issue 22, hostile 5-1)."""
+    from gyrofilter.errors import RecordingError
+    from gyrofilter.recording import Recording, write_recording
+
+    for path, opened in ((str(tmp_path / "out.csv"), common.replacing), (str(tmp_path / "rep"), common.replacing_in)):
+        rec = Recording.from_dps(np.array([[0.0, 0.0, 0.0], [2e5, 0.0, 0.0]]), 100.0)
+        with pytest.raises(RecordingError) as err:
+            with opened(path) as tmp:
+                write_recording(tmp if opened is common.replacing else os.path.join(tmp, "a.csv"), rec)
+        assert ".partial-" not in str(err.value)
+        assert str(err.value).startswith(path if opened is common.replacing else os.path.join(path, "a.csv"))
+        assert not os.path.exists(path)
+
+
 # ------------------------------------------------------------------------------ only regular files are replaced
 
 

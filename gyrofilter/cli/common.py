@@ -11,7 +11,7 @@ import stat
 import sys
 import tempfile
 
-from ..errors import SettingsError
+from ..errors import GyroFilterError, SettingsError
 from ..inputs import parse_json, quote
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import DEFAULT_PRESET, PRESETS
@@ -170,12 +170,16 @@ def replacing_in(folder):
 
 @contextlib.contextmanager
 def _naming(tmp, path):
-    """An OSError about the temporary ``tmp`` (or a file in it) names the user's ``path`` instead."""
+    """An error about the temporary ``tmp`` (or a file in it) names the user's ``path`` instead:
+    an OSError's file name, and the text of a GyroFilterError (a writer's refusal, same class)."""
     try:
         yield
     except OSError as exc:
         if isinstance(exc.filename, str) and exc.filename.startswith(tmp):
             raise OSError(exc.errno, exc.strerror, path + exc.filename[len(tmp):]) from None
+        raise
+    except GyroFilterError as exc:
+        exc.args = tuple(a.replace(tmp, path) if isinstance(a, str) else a for a in exc.args)
         raise
 
 
