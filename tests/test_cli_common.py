@@ -53,6 +53,21 @@ def test_check_outputs(tmp_path):
         common.check_outputs([str(tmp_path / "." / "in.csv")], [str(inp)], force=True)
     with pytest.raises(SettingsError, match="two outputs"):
         common.check_outputs([str(new), str(new)], [])
+    with pytest.raises(SettingsError, match=r"newdir/: ends in /, so it names a folder"):  # hostile 5-13
+        common.check_outputs([str(tmp_path / "newdir") + "/"], [])
+
+
+def test_an_output_named_as_a_folder_that_does_not_exist_is_refused_before_any_work(tmp_path, capsys):
+    """``--out newdir/`` failed only after the work, with "Not a directory" (issue 22, hostile 5-13)."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    src = str(tmp_path / "in.csv")
+    write_recording(src, Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
+    assert main(["replay", src, "--out", str(tmp_path / "newdir") + "/"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "newdir/: ends in /, so it names a folder" in err[0], err
+    assert sorted(os.listdir(tmp_path)) == ["in.csv"]
 
 
 def test_replacing_makes_missing_folders_and_removes_them_on_failure(tmp_path):

@@ -85,7 +85,8 @@ def check_outputs(outputs, inputs=(), force=False):
     """Refuse, before any work, to write where a user's data would be lost.
 
     ``outputs`` and ``inputs`` are paths (None entries are skipped). An output that is one of
-    the inputs is refused even with ``force``; so is one that exists as anything but a regular
+    the inputs is refused even with ``force``, and so is a name ending in a path separator (a
+    folder's, existing or not); so is one that exists as anything but a regular
     file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
     replaced. An output that exists is refused without ``force``; two outputs naming one file are
     refused. Raises FileExistsError / SettingsError naming the file.
@@ -95,6 +96,8 @@ def check_outputs(outputs, inputs=(), force=False):
     for out in (p for p in outputs if p):
         if os.path.isdir(out):
             raise SettingsError(f"{out}: is a folder; give a file name for the output")
+        if out.endswith(tuple(filter(None, (os.sep, os.altsep)))):
+            raise SettingsError(f"{out}: ends in {out[-1]}, so it names a folder; give a file name for the output")
         key = _file_key(out)
         if key in inputs:
             raise SettingsError(f"{out}: is an input of this command; write the output to another file")
