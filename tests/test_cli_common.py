@@ -10,6 +10,7 @@ import pytest
 
 from gyrofilter.cli import common
 from gyrofilter.errors import SettingsError
+from support import REPO
 
 
 def _strict(text):
@@ -220,3 +221,50 @@ def test_a_command_writing_to_a_folder_removes_its_stale_partials(tmp_path, comm
             "simulate": ["simulate", "--model", model, "--duration", "1", "--out", str(tmp_path / "out.csv")]}[command]
     assert main(argv) == 0
     assert sorted(os.listdir(tmp_path)) == ["out.csv"]
+
+
+# ------------------------------------------------------------------------------ numbers on the command line
+
+@pytest.mark.parametrize("text", ["١_٠", "1_0", "٣", "0x10", "nan", "inf", "-inf", "1e400", "1d5", ".", "", "1j"])
+def test_numeric_option_types_take_plain_decimal_numbers_only(text):
+    """argparse's float/int took Python's extras (``--duration ١_٠`` was 10 s) that every other
+    reader of numbers refuses (issue 22, hostile 5-6)."""
+    import argparse
+
+    for kind in (common.decimal, common.whole_number):
+        with pytest.raises(argparse.ArgumentTypeError, match=r"^must be a (plain decimal|finite) number"):
+            kind(text)
+
+
+def test_numeric_option_types_read_plain_numbers_exactly():
+    import argparse
+
+    assert common.decimal(" 5") == 5.0 and common.decimal("-1e-3") == -0.001 and common.decimal(".5") == 0.5
+    assert common.whole_number("9007199254740993") == 9007199254740993  # beyond 2^53: every digit kept
+    assert common.whole_number("1e3") == 1000 and common.whole_number("-1") == -1 and common.whole_number("+7") == 7
+    assert common.whole_number(str(10**30)) == 10**30  # --seed's own check names it
+    with pytest.raises(argparse.ArgumentTypeError, match="must be a whole number, got 1.5"):
+        common.whole_number("1.5")
+
+
+def test_every_numeric_option_of_every_command_uses_the_plain_number_types():
+    from gyrofilter.cli import COMMANDS, build_parser
+
+    checked = 0
+    for name in COMMANDS:
+        sub = next(a for a in build_parser(name)._actions if a.dest == "command").choices[name]
+        for action in sub._actions:
+            assert action.type not in (float, int), (name, action.option_strings)
+            checked += action.type in (common.decimal, common.whole_number)
+    assert checked >= 19  # the options of 2026-12: --duration, --seed, --jobs, --confidence, ...
+
+
+def test_a_number_in_another_script_is_refused_before_any_work(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    out = tmp_path / "o.csv"
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "--model", str(REPO / "examples" / "models" / "mpu6050.json"), "--duration", "١_٠", "--out", str(out)])
+    assert exc.value.code == 2
+    assert "argument --duration: must be a plain decimal number (like 12, -0.5 or 1e-3), got '١_٠'" in capsys.readouterr().err
+    assert not out.exists()

@@ -35,8 +35,8 @@ def add_arguments(parser):
     parser.add_argument("--plot", metavar="OUT.png", type=common.file_name, help="draw the Allan deviation per axis (needs matplotlib)")
     parser.add_argument("--kalibr", metavar="OUT.yaml", type=common.file_name, help="write Kalibr imu.yaml gyroscope noise entries")
     parser.add_argument("--axes", default="xyz", help="axes to analyse, a subset of xyz (default xyz)")
-    parser.add_argument("--confidence", type=float, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
-    parser.add_argument("--min-clusters", type=int, default=MIN_CLUSTERS,
+    parser.add_argument("--confidence", type=common.decimal, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
+    parser.add_argument("--min-clusters", type=common.whole_number, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
     common.add_keep_outliers_argument(parser)
     parser.add_argument("--progress", action="store_true", help="report progress on stderr")

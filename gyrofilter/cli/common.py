@@ -12,7 +12,7 @@ import sys
 import tempfile
 
 from ..errors import GyroFilterError, SettingsError
-from ..inputs import parse_json, quote
+from ..inputs import parse_json, parse_number, quote
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import DEFAULT_PRESET, PRESETS
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT
@@ -48,7 +48,7 @@ def add_sample_rate_argument(parser, *old_spellings, help):
     """``--sample-rate-hz HZ``, the commands' one spelling of a sample rate, with ``old_spellings``
     (e.g. ``--rate``) kept as aliases: ``args.sample_rate_hz`` holds the rate (Hz, None when not
     given), ``args.sample_rate_hz_option`` the spelling used, so a message names what was typed."""
-    parser.add_argument("--sample-rate-hz", *old_spellings, type=float, default=None, metavar="HZ", dest="sample_rate_hz",
+    parser.add_argument("--sample-rate-hz", *old_spellings, type=decimal, default=None, metavar="HZ", dest="sample_rate_hz",
                         action=_SpellingKept, help=help)
 
 
@@ -58,6 +58,27 @@ class _SpellingKept(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         setattr(namespace, self.dest, values)
         setattr(namespace, self.dest + "_option", option_string)
+
+
+def decimal(text):
+    """argparse type of a numeric option: a plain decimal number (:func:`gyrofilter.inputs.parse_number`:
+    no ``1_0``, other scripts' digits, ``nan``, ``inf`` or hex), as a float; the option's own range
+    is checked where it is used."""
+    try:
+        return parse_number(text, "")
+    except SettingsError as exc:
+        raise argparse.ArgumentTypeError(str(exc).strip()) from None
+
+
+def whole_number(text):
+    """argparse type of a count or seed: a plain decimal whole number (``12``, ``1e3``, ``5.0``), as
+    an int, exact when written in digits (a seed beyond 2^53 keeps every digit)."""
+    try:
+        number = parse_number(text, "", integer=True)
+    except SettingsError as exc:
+        raise argparse.ArgumentTypeError(str(exc).strip()) from None
+    digits = text.strip()
+    return int(digits) if digits.lstrip("+-").isdigit() else number
 
 
 def file_name(text):
@@ -71,7 +92,7 @@ MAX_SEED = 2**63 - 1
 
 
 def check_seed(seed, option="--seed"):
-    """A ``--seed`` is an integer in [0, MAX_SEED] (type=int makes it an integer), else SettingsError."""
+    """A ``--seed`` is an integer in [0, MAX_SEED] (type=whole_number makes it an integer), else SettingsError."""
     if not 0 <= seed <= MAX_SEED:
         shown = seed if abs(seed) < 10**20 else f"an integer of {len(str(abs(seed)))} digits"
         raise SettingsError(f"{option} must be an integer in [0, 2^63 - 1], got {shown}")
@@ -286,7 +307,7 @@ def add_filter_arguments(parser):
     parser.add_argument("--temp-model", metavar="JSON",
                         help="compensate temperature drift with the coefficients of a gap report or simulator model "
                              "(needs a temp column / a source with temperature)")
-    parser.add_argument("--calibration-s", type=float, default=None, help="start-up calibration window in seconds (default 2; the sensor must be still)")
+    parser.add_argument("--calibration-s", type=decimal, default=None, help="start-up calibration window in seconds (default 2; the sensor must be still)")
     parser.add_argument("--calibration", metavar="JSON", help="use a saved calibration instead of calibrating")
     parser.add_argument("--save-calibration", metavar="JSON", type=file_name, help="save the start-up calibration to this file")
 
