@@ -456,6 +456,12 @@ def _transform_jacobian(u, eps=1e-7):
     return jac
 
 
+#: a fit whose residual variance is below this fraction of the series' own (sigma_a below 1e-6 of
+#: its spread) predicts the series exactly: a deterministic signal (an alternating or sinusoidal
+#: one), not noise; a sensor's innovations are within a few decades of its spread
+EXACT_FIT_RATIO = 1e-12
+
+
 def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
     """Least-squares (CSS) fit of ARMA(p, q) to a zero-mean series ``x``; paper-003 signs. With
     ``keep_residuals`` the fit keeps its residual series.
@@ -469,6 +475,7 @@ def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
     order's fit; its partial autocorrelations zero-padded or truncated, so a larger model starts
     exactly at the smaller fit), Hannan-Rissanen, and for ARMA(1, 1)-sized models a near-unit-root start
     (phi_1 = 0.999, theta_1 = 0.99, as paper 003's data need) and a small-coefficient start.
+    A fit that predicts the series exactly (:data:`EXACT_FIT_RATIO`) raises SettingsError.
     """
     require_stats()
     from scipy.optimize import least_squares
@@ -538,9 +545,11 @@ def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
     rss = float(a @ a)
     m = len(a)
     sigma2 = rss / m
-    if not sigma2 > 0:
-        raise SettingsError(f"ARMA({p}, {q}) predicts the series exactly (residual variance 0): "
-                            "the data are deterministic, with no noise for an ARMA model")
+    spread2 = float(x @ x) / n
+    if not sigma2 > EXACT_FIT_RATIO * spread2:
+        raise SettingsError(f"ARMA({p}, {q}) predicts the series exactly (residual variance {sigma2:.2g}, "
+                            f"{sigma2 / spread2:.1g} of the series'): the data are deterministic, with no noise "
+                            "for an ARMA model")
     aic = math.log(sigma2) + 2.0 * (p + q) / m
     return ArmaFit(p, q, [float(v) for v in phi], [float(v) for v in theta], math.sqrt(sigma2), rss, m, aic,
                    a if keep_residuals else None)
