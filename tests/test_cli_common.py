@@ -245,6 +245,10 @@ def test_numeric_option_types_read_plain_numbers_exactly():
     assert common.whole_number(str(10**30)) == 10**30  # --seed's own check names it
     with pytest.raises(argparse.ArgumentTypeError, match="must be a whole number, got 1.5"):
         common.whole_number("1.5")
+    with pytest.raises(argparse.ArgumentTypeError, match=r"^must be in \[-9.0072e\+15, 9.0072e\+15\], got 1e\+308$"):
+        common.whole_number("1e308")  # not a 309-digit count in a message
+    with pytest.raises(argparse.ArgumentTypeError, match="plain decimal"):
+        common.whole_number("+-5")
 
 
 def test_every_numeric_option_of_every_command_uses_the_plain_number_types():

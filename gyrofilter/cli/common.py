@@ -71,14 +71,16 @@ def decimal(text):
 
 
 def whole_number(text):
-    """argparse type of a count or seed: a plain decimal whole number (``12``, ``1e3``, ``5.0``), as
-    an int, exact when written in digits (a seed beyond 2^53 keeps every digit)."""
+    """argparse type of a count or seed: a plain decimal whole number, as an int. Written in digits
+    it is exact (a seed beyond 2^53 keeps every digit); in another form (``1e3``, ``5.0``) it is
+    within +-2^53, the whole numbers a float holds exactly (``1e308`` is no count)."""
     try:
-        number = parse_number(text, "", integer=True)
+        if text.strip().lstrip("+-").isdigit():
+            parse_number(text, "")  # the syntax and length rules ("+-5", 65 digits)
+            return int(text)
+        return parse_number(text, "", integer=True, low=-2.0**53, high=2.0**53)
     except SettingsError as exc:
         raise argparse.ArgumentTypeError(str(exc).strip()) from None
-    digits = text.strip()
-    return int(digits) if digits.lstrip("+-").isdigit() else number
 
 
 def file_name(text):
