@@ -115,11 +115,16 @@ class Calibration:
     @classmethod
     def load(cls, path, *, max_bias_dps=MAX_BIAS_DPS) -> "Calibration":
         """Read a calibration saved by :meth:`save` from the file ``path`` (through
-        :func:`gyrofilter.inputs.load_json`), held to the limits of :meth:`checked`;
+        :func:`gyrofilter.inputs.load_json`): its ``gyrofilter-calibration`` key, when present, is
+        the integer 1 (the only version); the fields are held to the limits of :meth:`checked`;
         CalibrationError names the file, the key and what is wrong."""
         data = load_json(path, "calibration", CalibrationError)
         if not isinstance(data, dict):
             raise CalibrationError(f"{path}: not a calibration JSON file (expected an object with bias_dps, noise_std_dps, ...)")
+        version = data.get("gyrofilter-calibration", 1)
+        if type(version) is not int or version != 1:  # 1.0 and true are not 1 either
+            raise CalibrationError(f"{path}: gyrofilter-calibration version {quote(json.dumps(version))} is not "
+                                   "supported; this gyrofilter reads version 1")
         missing = [k for k in ("bias_dps", "noise_std_dps", "samples", "sample_rate_hz") if k not in data]
         if missing:
             raise CalibrationError(f"{path}: the calibration lacks {', '.join(missing)}")

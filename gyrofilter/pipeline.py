@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 from dataclasses import asdict, dataclass, fields, replace
 from functools import partial
 
@@ -252,6 +253,7 @@ class GyroFilter:
         unknown = sorted(set(settings) - set(SETTING_NAMES))
         if unknown:
             raise SettingsError(f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(SETTING_NAMES)}")
+        _check_calibration_argument(calibration, calibration_s)
         chosen = dict(PRESETS[preset])
         chosen.update(settings)
         if calibration_s is not None:
@@ -374,8 +376,11 @@ class GyroFilter:
 
         Indices count every sample fed since the start (``samples_in``), calibration included,
         so ``t_s[block_end_indices(len(rows))]`` time-stamps the rows a call just returned (see
-        :meth:`filter_timed`, which does this for one call).
+        :meth:`filter_timed`, which does this for one call). ``n_rows`` is a whole number from 0 to
+        the rows output so far (``blocks_out``), else SettingsError.
         """
+        n_rows = check_number(n_rows, f"n_rows of block_end_indices (the filter has output {self.blocks_out} rows)",
+                              low=0, high=self.blocks_out, integer=True)
         last = self.samples_in - self.pending_samples - 1
         return last - self.settings.block_len * np.arange(n_rows - 1, -1, -1, dtype=np.int64)
 
@@ -623,6 +628,21 @@ class GyroFilter:
             self._pkf.start(cal.noise_std_dps)
         self._cal_buf = None
         self._cal_temp = None
+
+
+def _check_calibration_argument(calibration, calibration_s):
+    """``calibration=`` is None, a Calibration or the path of a saved one (str or os.PathLike: an
+    int would be read as a file descriptor, and closed), and comes without an explicit
+    ``calibration_s`` (it replaces the start-up calibration); else SettingsError."""
+    if calibration is None:
+        return
+    if not isinstance(calibration, (Calibration, str, os.PathLike)):
+        raise SettingsError(f"calibration must be a Calibration or the path of a saved one (str or os.PathLike), "
+                            f"got {type(calibration).__name__}")
+    if calibration_s is not None:
+        shown = "the calibration" if isinstance(calibration, Calibration) else f"calibration {calibration}"
+        raise SettingsError(f"{shown} replaces the start-up calibration, so a calibration window "
+                            f"(calibration_s={_shown(calibration_s)}) has nothing to do; give one of them")
 
 
 def _check_calibration_rate(cal, sample_rate_hz, name):

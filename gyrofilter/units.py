@@ -22,6 +22,10 @@ TEMP_RANGE_C = (-100.0, 200.0)
 #: largest |angular rate| a sample may have (deg/s): 50x the MPU6050's widest full scale (2000 deg/s)
 #: and 7x the widest MEMS gyros' (about 14 000 deg/s); it keeps every square the filters take finite
 MAX_RATE_DPS = 100_000.0
+#: smallest noise (deg/s) the analyses take: an axis whose Allan deviation (allan) or standard deviation
+#: (arma) stays below it is refused. No gyro is that quiet (a unit error?), and the fits' fourth
+#: powers of it stay normal float64 numbers (a noise of 1e-300 deg/s ended in a failed SVD)
+MIN_NOISE_DPS = 1e-100
 #: one sample per 1000 s: far below any gyro's output (the MPU6050's slowest is 1 kHz / 256 = 3.9 Hz)
 #: and below any filter's output rate from it, while 1 / rate and the Allan cluster times stay ordinary
 #: floats (a rate of 1e-300 Hz ended in a failed SVD deep in the fit)

@@ -339,9 +339,15 @@ def test_constant_axis_is_named():
 def test_cli_a_non_finite_window_is_one_line_naming_the_option(capsys, option, value):
     from gyrofilter.cli import main
 
-    assert main(["arma", str(RECORDINGS / "mpu6050_static_64s_set1.csv.gz"), option, value]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and f"{option} must be a finite number of seconds" in err[0], err
+    # since issue 22 the option's type refuses inf and nan, no plain decimal numbers, as argparse
+    # errors (exit 2; SystemExit while argparse prints its usage too)
+    try:
+        code = main(["arma", str(RECORDINGS / "mpu6050_static_64s_set1.csv.gz"), option, value])
+    except SystemExit as exc:
+        code = exc.code
+    assert code == 2
+    assert f"argument {option}: must be a plain decimal number (like 12, -0.5 or 1e-3), got '{value}'" in capsys.readouterr().err
+
 
 
 def test_cli_selects_the_window_by_t_and_warns_about_gaps(tmp_path, capsys):
@@ -370,3 +376,20 @@ def test_cli_selects_the_window_by_t_and_warns_about_gaps(tmp_path, capsys):
     err = captured.err.splitlines()
     assert any(line.startswith(f"gyrofilter: warning: {path}: t shows 1499 gap(s)") and "ARMA" in line
                and "not meaningful" in line for line in err), err
+
+
+@pytest.mark.parametrize("noise", [1e-120, 1e-300])
+def test_noise_below_the_floor_is_refused_naming_the_axis(noise):
+    """A series of 1e-300 deg/s ended in "math domain error" (its residual variance underflowed to 0)."""
+    x = np.random.default_rng(4).normal(size=2000) * noise
+    with pytest.raises(GyroFilterError, match=r"axis x: the standard deviation is below 1e-100 deg/s"):
+        arma.analyze_axis(x, 100.0, axis="x")
+
+
+@pytest.mark.parametrize("signal", ["alternating", "sinusoid"])
+def test_an_exactly_predictable_series_is_refused_naming_the_axis(signal):
+    """+-1 alternating data: an ARMA model predicted it with residual variance 0 ("math domain error"),
+    or, depending on rounding, 1e-22 (a meaningless model, exit 0)."""
+    x = (-1.0) ** np.arange(2000) if signal == "alternating" else np.sin(0.3 * np.arange(2000))
+    with pytest.raises(GyroFilterError, match=r"axis z: ARMA\(\d, \d\) predicts the series exactly"):
+        arma.analyze_axis(x, 100.0, axis="z")

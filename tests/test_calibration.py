@@ -105,6 +105,19 @@ def test_save_load_round_trip_and_bad_files(tmp_path):
     assert Calibration.load(path) == Calibration((1.0, 2.0, 3.0), (0.1, 0.1, 0.1), 200, 100.0)
 
 
+@pytest.mark.parametrize("version", [2, 0, 1.0, True, "1", None])
+def test_a_calibration_version_other_than_1_is_refused_naming_it(tmp_path, version):
+    """A "gyrofilter-calibration": 2 file (a future version) was read as version 1 (issue 22, hostile 5-10)."""
+    path = tmp_path / "cal.json"
+    path.write_text(json.dumps({"gyrofilter-calibration": version, **GOOD}))
+    with pytest.raises(CalibrationError) as info:
+        Calibration.load(path)
+    assert str(info.value) == (f"{path}: gyrofilter-calibration version {json.dumps(version)!r} is not supported; "
+                               "this gyrofilter reads version 1")
+    path.write_text(json.dumps({"gyrofilter-calibration": 1, **GOOD}))
+    assert Calibration.load(path).samples == 200
+
+
 def test_a_missing_calibration_file_is_a_calibration_error_naming_it(tmp_path):
     with pytest.raises(CalibrationError, match=r"nofile\.json: cannot read the calibration file"):
         Calibration.load(tmp_path / "nofile.json")

@@ -148,6 +148,20 @@ def test_first_block_index_follows_a_calibration_retry():
     np.testing.assert_array_equal(f.block_end_indices(len(rows)), 400 + 5 * np.arange(60) + 4)
 
 
+@pytest.mark.parametrize("n_rows", [61, 10**6, -1, 2.5, True, "3", None])
+def test_block_end_indices_takes_only_a_whole_number_up_to_the_rows_output(n_rows):
+    """It invented rows before the first (10**6 gave negative indices) and took 2.5, True and -1
+    (issue 22, hostile case 1-6): only 0 <= n_rows <= blocks_out is answered."""
+    from gyrofilter.errors import SettingsError
+
+    f = GyroFilter(RATE_HZ, preset="paper")
+    rows = f.filter(0.3 + 0.05 * np.random.default_rng(2).standard_normal((500, 3)))
+    assert len(rows) == f.blocks_out == 60
+    with pytest.raises(SettingsError, match=r"n_rows of block_end_indices .* must be (in \[0, 60\]|a)"):
+        f.block_end_indices(n_rows)
+    assert f.block_end_indices(np.int64(60))[0] == 200 + 4 and f.block_end_indices(0).size == 0
+
+
 def test_filter_timed_refuses_times_of_another_length_before_filtering():
     x, _ = _signal(1)
     f = GyroFilter(RATE_HZ)

@@ -106,6 +106,24 @@ def test_bad_options(static_recording, capsys):
     capsys.readouterr()
 
 
+@pytest.mark.parametrize("confidence", ["0.5", "0.9999"])
+def test_confidence_at_the_ends_of_its_range_gives_finite_intervals(static_recording, tmp_path, confidence):
+    path, _ = static_recording
+    out = tmp_path / "c.json"
+    assert main(["allan", path, "--axes", "z", "--confidence", confidence, "--json", str(out)]) == 0
+    z = json.loads(out.read_text())["axes"]["z"]
+    assert all(0 < lo < hi for lo, hi in zip(z["adev_low_dps"], z["adev_high_dps"]))
+
+
+@pytest.mark.parametrize("confidence", ["0.4999", "0.99991", "0.9999999999999999", "0", "1"])
+def test_confidence_outside_its_range_is_one_line_naming_the_range(static_recording, capsys, confidence):
+    """0.9999999999999999 passed the check (0, 1) and failed inside the intervals with a message of
+    Python's statistics module (issue 22, hostile case 3-2)."""
+    path, _ = static_recording
+    assert main(["allan", path, "--axes", "z", "--confidence", confidence]) == 2
+    _assert_one_line_error(capsys, "--confidence must be in [0.5, 0.9999]", confidence)
+
+
 def test_help_exits_zero(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["allan", "--help"])
@@ -265,3 +283,26 @@ def test_the_moving_warning_is_in_the_json_warnings_of_its_axis_only(tmp_path, c
     warnings = {a: ax["warnings"] for a, ax in json.loads(out.read_text())["axes"].items()}
     assert [a for a, w in warnings.items() if any("does not look static" in text for text in w)] == ["y"]
     assert any(w.startswith("axis y: the rate moves by up to") for w in warnings["y"])
+
+
+@pytest.mark.parametrize("command", ["allan", "arma"])
+@pytest.mark.parametrize("kind", ["tiny", "alternating"])
+def test_numerically_degenerate_recordings_end_in_a_result_or_one_line_naming_the_file(tmp_path, capsys, command, kind):
+    """Legal recordings that ended in "SVD did not converge" (allan) or "math domain error" (arma)
+    without the file (issue 22, hostile case 3-1): noise of 1e-300 deg/s is refused naming the
+    file and the floor; +-1 alternating data give an Allan result, and arma refuses them."""
+    if command == "arma":
+        pytest.importorskip("statsmodels")
+    n = 3000
+    g = (np.random.default_rng(0).normal(size=(n, 3)) * 1e-300 if kind == "tiny"
+         else np.tile(((-1.0) ** np.arange(n))[:, None], 3))
+    path = _write(tmp_path / f"{kind}.csv", g, lsb=False)
+    code = main([command, path, "--json", str(tmp_path / "out.json")])
+    if command == "allan" and kind == "alternating":
+        assert code == 0
+        assert "Infinity" not in (tmp_path / "out.json").read_text() and "NaN" not in (tmp_path / "out.json").read_text()
+        return
+    assert code == 2
+    why = "below 1e-100 deg/s" if kind == "tiny" else "predicts the series exactly"
+    _assert_one_line_error(capsys, f"{kind}.csv: axis x: ", why)
+    assert not (tmp_path / "out.json").exists()

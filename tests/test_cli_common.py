@@ -11,6 +11,7 @@ import pytest
 
 from gyrofilter.cli import common
 from gyrofilter.errors import SettingsError
+from support import REPO
 
 
 def _strict(text):
@@ -54,6 +55,21 @@ def test_check_outputs(tmp_path):
         common.check_outputs([str(tmp_path / "." / "in.csv")], [str(inp)], force=True)
     with pytest.raises(SettingsError, match="two outputs"):
         common.check_outputs([str(new), str(new)], [])
+    with pytest.raises(SettingsError, match=r"newdir/: ends in /, so it names a folder"):  # hostile 5-13
+        common.check_outputs([str(tmp_path / "newdir") + "/"], [])
+
+
+def test_an_output_named_as_a_folder_that_does_not_exist_is_refused_before_any_work(tmp_path, capsys):
+    """``--out newdir/`` failed only after the work, with "Not a directory" (issue 22, hostile 5-13)."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    src = str(tmp_path / "in.csv")
+    write_recording(src, Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
+    assert main(["replay", src, "--out", str(tmp_path / "newdir") + "/"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "newdir/: ends in /, so it names a folder" in err[0], err
+    assert sorted(os.listdir(tmp_path)) == ["in.csv"]
 
 
 def test_replacing_makes_missing_folders_and_removes_them_on_failure(tmp_path):
@@ -91,6 +107,21 @@ def test_an_error_writing_the_temporary_file_names_the_users_path(tmp_path):
         with common.replacing_in(folder) as tmp:
             open(os.path.join(tmp, "no", "fig.png"), "w")
     assert err.value.filename == os.path.join(folder, "no", "fig.png")
+
+
+def test_a_writers_refusal_inside_replacing_names_the_users_path_in_the_same_class(tmp_path):
+    """A recording writer refusing a value named ``.partial-PID-out.csv`` (issue 22, hostile 5-1)."""
+    from gyrofilter.errors import RecordingError
+    from gyrofilter.recording import Recording, write_recording
+
+    for path, opened in ((str(tmp_path / "out.csv"), common.replacing), (str(tmp_path / "rep"), common.replacing_in)):
+        rec = Recording.from_dps(np.array([[0.0, 0.0, 0.0], [2e5, 0.0, 0.0]]), 100.0)
+        with pytest.raises(RecordingError) as err:
+            with opened(path) as tmp:
+                write_recording(tmp if opened is common.replacing else os.path.join(tmp, "a.csv"), rec)
+        assert ".partial-" not in str(err.value)
+        assert str(err.value).startswith(path if opened is common.replacing else os.path.join(path, "a.csv"))
+        assert not os.path.exists(path)
 
 
 # ------------------------------------------------------------------------------ only regular files are replaced
@@ -296,3 +327,56 @@ def test_utf8_text_escapes_lone_surrogates_only():
     assert utf8_text("b\udcffc\ud800.csv") == "b\\udcffc\\ud800.csv"
     assert utf8_text("ü ✓ \\udcff") == "ü ✓ \\udcff"  # any other text unchanged
     assert json_ready({"\udcff": ["\udcfe", 1.0]}) == {"\\udcff": ["\\udcfe", 1.0]}
+
+
+# ------------------------------------------------------------------------------ numbers on the command line
+
+@pytest.mark.parametrize("text", ["١_٠", "1_0", "٣", "0x10", "nan", "inf", "-inf", "1e400", "1d5", ".", "", "1j"])
+def test_numeric_option_types_take_plain_decimal_numbers_only(text):
+    """argparse's float/int took Python's extras (``--duration ١_٠`` was 10 s) that every other
+    reader of numbers refuses (issue 22, hostile 5-6)."""
+    import argparse
+
+    for kind in (common.decimal, common.whole_number):
+        with pytest.raises(argparse.ArgumentTypeError, match=r"^must be a (plain decimal|finite) number"):
+            kind(text)
+
+
+def test_numeric_option_types_read_plain_numbers_exactly():
+    import argparse
+
+    assert common.decimal(" 5") == 5.0 and common.decimal("-1e-3") == -0.001 and common.decimal(".5") == 0.5
+    assert common.whole_number("9007199254740993") == 9007199254740993  # beyond 2^53: every digit kept
+    assert common.whole_number("1e3") == 1000 and common.whole_number("-1") == -1 and common.whole_number("+7") == 7
+    assert common.whole_number(str(10**30)) == 10**30  # --seed's own check names it
+    with pytest.raises(argparse.ArgumentTypeError, match="must be a whole number, got 1.5"):
+        common.whole_number("1.5")
+    with pytest.raises(argparse.ArgumentTypeError, match=r"^must be in \[-9.0072e\+15, 9.0072e\+15\], got 1e\+308$"):
+        common.whole_number("1e308")  # not a 309-digit count in a message
+    with pytest.raises(argparse.ArgumentTypeError, match="plain decimal"):
+        common.whole_number("+-5")
+
+
+def test_every_numeric_option_of_every_command_uses_the_plain_number_types():
+    from gyrofilter.cli import COMMANDS, build_parser
+
+    checked = 0
+    for name in COMMANDS:
+        sub = next(a for a in build_parser(name)._actions if a.dest == "command").choices[name]
+        for action in sub._actions:
+            assert action.type not in (float, int), (name, action.option_strings)
+            checked += action.type in (common.decimal, common.whole_number)
+    assert checked >= 19  # the options of 2026-12: --duration, --seed, --jobs, --confidence, ...
+
+
+def test_a_number_in_another_script_is_refused_before_any_work(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    out = tmp_path / "o.csv"
+    try:  # SystemExit while argparse prints its usage too
+        code = main(["simulate", "--model", str(REPO / "examples" / "models" / "mpu6050.json"), "--duration", "١_٠", "--out", str(out)])
+    except SystemExit as exc:
+        code = exc.code
+    assert code == 2
+    assert "argument --duration: must be a plain decimal number (like 12, -0.5 or 1e-3), got '١_٠'" in capsys.readouterr().err
+    assert not out.exists()

@@ -154,7 +154,8 @@ def test_set_takes_calibration_s_and_lists_and_refuses_what_has_its_own_option(t
                            (["--set", "calibration=x.json"], "use --calibration JSON"),
                            (["--set", "calibration_s=abc"], "setting calibration_s must be a finite number, got 'abc'"),
                            (["--calibration", str(cal), "--calibration-s", "1"], "give one of them"),
-                           (["--calibration", str(cal), "--set", "calibration_s=1"], "--set calibration_s"),
+                           # GyroFilter's own check now (issue 22): it names the value, not the option
+                           (["--calibration", str(cal), "--set", "calibration_s=1"], "(calibration_s=1) has nothing to do"),
                            (["--set", "temp_coefficient_dps_per_c=0.01", "--temp-model", str(cal)], "both give the temperature"),
                            (["--preset", "paper", "--calibration-s", "0", "--save-calibration", str(tmp_path / "c0.json")],
                             "no calibration to save")):

@@ -233,6 +233,15 @@ def test_too_short_recording_gives_no_findings_and_a_note():
     assert report["findings"] == [] and report["notes"]
 
 
+def test_noise_below_the_floor_is_a_note_saying_so():
+    """Noise of 1e-300 deg/s gave the note "detectors could not run (math domain error)" (hostile 3-1)."""
+    g = np.random.default_rng(0).normal(0, 0.1, (3000, 3))
+    g[:, 1] *= 1e-299
+    report = analyse_gap(Recording.from_dps(g, 100.0), n_sims=2)
+    assert "axis y: noise below 1e-100 deg/s (too small for the detectors in float64), nothing to analyse" in report["notes"]
+    assert not any("could not run" in n for n in report["notes"])
+
+
 def test_cli_on_a_too_short_recording_says_so_and_prints_no_nan(tmp_path, capsys):
     from gyrofilter.cli import main
 

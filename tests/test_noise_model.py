@@ -368,3 +368,39 @@ def test_gross_errors_leave_the_still_recordings_alone():
     for path in sorted(RECORDINGS.glob("mpu6050_static_*.csv.gz")):
         g = read_recording(path).gyro_dps
         assert all(gross_errors(g[:, a]).size == 0 for a in range(3)), path
+
+
+@pytest.mark.parametrize("exponent", [-3, 40, 90])
+def test_the_fit_is_scale_free_down_to_the_noise_floor(exponent):
+    """The same noise times 10^-k gives the same coefficients times 10^-k: the fit's weights
+    (1 / Allan variance^2) overflowed below deviations of 1e-75 deg/s (a failed SVD), and its
+    covariances silently lost the intervals below that (issue 22, hostile case 3-1)."""
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=6000) + 0.01 * np.cumsum(rng.normal(size=6000))
+    ref = characterise_axis(x, 100.0)
+    scale = 10.0 ** -exponent
+    got = characterise_axis(x * scale, 100.0)
+    np.testing.assert_allclose(got.adev / scale, ref.adev, rtol=1e-9)
+    np.testing.assert_allclose(got.ci_low / scale, ref.ci_low, rtol=1e-9)
+    for term, c in ref.fitted.items():
+        g = got.fitted[term]
+        assert (g.value is None) == (c.value is None), term
+        for mine, theirs in ((g.value, c.value), (g.low, c.low), (g.high, c.high), (g.upper, c.upper)):
+            assert (mine is None and theirs is None) or math.isclose(mine / scale, theirs, rel_tol=1e-6), term
+
+
+@pytest.mark.parametrize("noise", [1e-120, 1e-300, 5e-320])
+def test_noise_below_the_floor_is_refused_naming_the_axis(noise):
+    x = np.random.default_rng(3).normal(size=3000) * noise
+    with pytest.raises(AllanInputError, match=r"axis y: the Allan deviation is below 1e-100 deg/s"):
+        characterise_axis(x, 100.0, axis="y")
+
+
+def test_deviations_exactly_zero_give_a_result_not_a_failed_svd():
+    """+-1 alternating data: the Allan deviation is exactly 0 at every even cluster size, which
+    made the fit's weights infinite (issue 22, hostile case 3-1); now every term is unresolved."""
+    x = (-1.0) ** np.arange(5000)
+    res = characterise_axis(x, 100.0)
+    assert np.all(res.adev[1::2][:2] == 0) and res.adev[0] == pytest.approx(math.sqrt(2))
+    assert all(c.value is None for c in res.fitted.values())
+    assert np.all(np.isfinite(res.ci_low)) and np.all(np.isfinite(res.ci_high)) and np.all(np.isfinite(res.edf))

@@ -1,3 +1,4 @@
+import os
 import re
 import tracemalloc
 
@@ -81,7 +82,8 @@ def test_the_adaptive_filter_needs_a_calibration_and_works_with_a_loaded_one(pre
     still = noisy(1200, seed=4)
     first = GyroFilter(100.0, preset=preset)
     first.filter(still[:200])
-    assert GyroFilter(100.0, preset=preset, calibration_s=0, calibration=first.calibration).filter(still[200:]).shape == (200, 3)
+    # a loaded calibration with calibration_s=0 is refused since issue 22 (it has nothing to do): none given
+    assert GyroFilter(100.0, preset=preset, calibration=first.calibration).filter(still[200:]).shape == (200, 3)
 
 
 @pytest.mark.parametrize("calibration_s", [1e308, 3600.5, float("inf")])
@@ -153,6 +155,28 @@ def test_saved_calibration_skips_the_start_up_window(tmp_path):
     assert g.bias_dps == f.bias_dps and not g.calibrating
     assert len(g.filter(x)) == 2000 // 5
     assert GyroFilter(100.0, preset="paper", calibration=Calibration.load(tmp_path / "cal.json")).bias_dps == f.bias_dps
+
+
+@pytest.mark.parametrize("bad", [2, True, 2.5, b"cal.json", {"bias_dps": [0, 0, 0]}, ["cal.json"]])
+def test_calibration_is_a_calibration_or_a_path_and_nothing_else(tmp_path, bad):
+    """An int was read as a file descriptor and closed (calibration=2 closed stderr), a dict raised
+    TypeError (issue 22, hostile cases 2-1 and 3-4): SettingsError naming the type, no fd touched."""
+    with pytest.raises(SettingsError, match=rf"calibration must be a Calibration or the path of a saved one .*got {type(bad).__name__}"):
+        GyroFilter(100.0, calibration=bad)
+    os.fstat(2)  # stderr is still open
+
+
+@pytest.mark.parametrize("calibration_s", [0, 2.0])
+def test_a_loaded_calibration_with_a_calibration_window_is_refused(tmp_path, calibration_s):
+    """The CLI refused --calibration with --calibration-s; the library took both (hostile kind 5)."""
+    f = GyroFilter(100.0, preset="paper")
+    f.filter(noisy(400, seed=3))
+    f.calibration.save(tmp_path / "cal.json")
+    for given, shown in ((tmp_path / "cal.json", f"calibration {tmp_path / 'cal.json'}"), (f.calibration, "the calibration")):
+        with pytest.raises(SettingsError, match=rf"^{re.escape(shown)} replaces the start-up calibration, so a calibration "
+                                                rf"window \(calibration_s={calibration_s:g}(\.0)?\) has nothing to do; give one of them"):
+            GyroFilter(100.0, calibration_s, preset="paper", calibration=given)
+    assert GyroFilter(100.0, preset="paper", calibration=str(tmp_path / "cal.json")).bias_dps == f.bias_dps
 
 
 def test_state_does_not_grow_with_time():

@@ -53,6 +53,7 @@ def expected():
 
 @pytest.mark.parametrize("sig, name, suffix", [
     (signal.SIGINT, "SIGINT", ".csv.gz"), (signal.SIGKILL, "SIGKILL", ".csv"),  # the other four pairs are slow
+    (signal.SIGHUP, "SIGHUP", ".csv"),  # a dropped SSH session: exit 130 without the end note (issue 22, hostile 5-11)
     *(pytest.param(sig, name, suffix, marks=pytest.mark.slow) for sig, name, suffix in [
         (signal.SIGTERM, "SIGTERM", ".csv.gz"), (signal.SIGKILL, "SIGKILL", ".csv.gz"),
         (signal.SIGINT, "SIGINT", ".csv"), (signal.SIGTERM, "SIGTERM", ".csv")])])

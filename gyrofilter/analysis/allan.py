@@ -272,7 +272,7 @@ def edf_mixture(n_samples, m, shares, alphas):
     for share, alpha in zip(shares, alphas):
         sd += share * np.sqrt(2.0 / edf_oavar(n_samples, m, alpha))
     with np.errstate(divide="ignore", invalid="ignore"):
-        edf = np.where(sd > 0, 2.0 * total ** 2 / np.where(sd > 0, sd, 1.0) ** 2, 1.0)
+        edf = np.where(sd > 0, 2.0 * (total / np.where(sd > 0, sd, 1.0)) ** 2, 1.0)  # a ratio: any scale
     return np.maximum(edf, 1.0)
 
 

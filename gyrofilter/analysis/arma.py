@@ -66,7 +66,7 @@ import numpy as np
 
 from ..errors import SettingsError
 from ..extras import require
-from ..units import check_sample_rate_hz, json_ready, plain
+from ..units import MIN_NOISE_DPS, check_sample_rate_hz, json_ready, plain
 
 DEFAULT_MAX_SAMPLES = 200_000
 DEFAULT_ADF_MAXLAG = 20
@@ -456,6 +456,12 @@ def _transform_jacobian(u, eps=1e-7):
     return jac
 
 
+#: a fit whose residual variance is below this fraction of the series' own (sigma_a below 1e-6 of
+#: its spread) predicts the series exactly: a deterministic signal (an alternating or sinusoidal
+#: one), not noise; a sensor's innovations are within a few decades of its spread
+EXACT_FIT_RATIO = 1e-12
+
+
 def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
     """Least-squares (CSS) fit of ARMA(p, q) to a zero-mean series ``x``; paper-003 signs. With
     ``keep_residuals`` the fit keeps its residual series.
@@ -469,6 +475,7 @@ def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
     order's fit; its partial autocorrelations zero-padded or truncated, so a larger model starts
     exactly at the smaller fit), Hannan-Rissanen, and for ARMA(1, 1)-sized models a near-unit-root start
     (phi_1 = 0.999, theta_1 = 0.99, as paper 003's data need) and a small-coefficient start.
+    A fit that predicts the series exactly (:data:`EXACT_FIT_RATIO`) raises SettingsError.
     """
     require_stats()
     from scipy.optimize import least_squares
@@ -538,6 +545,11 @@ def fit_arma(x, p, q, *, start=None, keep_residuals=True) -> ArmaFit:
     rss = float(a @ a)
     m = len(a)
     sigma2 = rss / m
+    spread2 = float(x @ x) / n
+    if not sigma2 > EXACT_FIT_RATIO * spread2:
+        raise SettingsError(f"ARMA({p}, {q}) predicts the series exactly (residual variance {sigma2:.2g}, "
+                            f"{sigma2 / spread2:.1g} of the series'): the data are deterministic, with no noise "
+                            "for an ARMA model")
     aic = math.log(sigma2) + 2.0 * (p + q) / m
     return ArmaFit(p, q, [float(v) for v in phi], [float(v) for v in theta], math.sqrt(sigma2), rss, m, aic,
                    a if keep_residuals else None)
@@ -725,14 +737,21 @@ def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_ma
     if np.ptp(x_raw) == 0:
         raise SettingsError(f"axis {axis}: constant ({mean:g} deg/s) over all {len(x_raw)} samples: "
                             "no noise to model (is the axis stuck or saturated?)")
+    spread = float(np.std(series))
+    if not spread >= MIN_NOISE_DPS:
+        raise SettingsError(f"axis {axis}: the standard deviation is below {MIN_NOISE_DPS:g} deg/s ({spread:.3g}): too "
+                            "small a noise for the fits in float64; are the rates in deg/s?")
     notes = []
     if k > 1:
         notes.append(f"{len(x_raw)} samples block-averaged by {k} to {len(series)} at {rate:.6g} Hz before the analysis "
                      f"(max_samples={max_samples}); ARMA coefficients are per analysis sample")
     stat = adf_test(series, maxlag=adf_maxlag, alpha=alpha)
     norm = normality_tests(series, alpha=alpha, quantum=quantum_dps if k == 1 else None)
-    chosen, adequate, fits, steps = select_order(series, max_n=max_n, alpha=alpha, criterion=criterion)
-    arma11 = next((f for f in fits if f.order == (1, 1)), None) or fit_arma(series, 1, 1)
+    try:
+        chosen, adequate, fits, steps = select_order(series, max_n=max_n, alpha=alpha, criterion=criterion)
+        arma11 = next((f for f in fits if f.order == (1, 1)), None) or fit_arma(series, 1, 1)
+    except SettingsError as exc:  # the data fit exactly: name the axis
+        raise SettingsError(f"axis {axis}: {exc}") from None
     if not any(f is arma11 for f in fits):
         fits.append(arma11)
     white = whiteness(chosen.residuals, chosen.n_params, lags=lags, alpha=alpha)

@@ -51,7 +51,7 @@ import numpy as np
 
 from . import detectors as det
 from ..errors import RecordingError
-from ..units import AXES, check_sample_rate_hz
+from ..units import AXES, MIN_NOISE_DPS, check_sample_rate_hz
 
 METRIC = "mean squared z-score of the Allan deviation, band powers, spectral line, lag-1 and spike count vs model simulations"
 #: minimum samples for any analysis
@@ -472,8 +472,11 @@ def _detect(run):
     for i, a in enumerate(AXES):
         run.say(f"detectors on {a}")
         x = _axis_dps(run.rec, i)
-        if not np.ptp(x) > 0:
-            run.report["notes"].append(f"axis {a}: constant signal, nothing to analyse")
+        idle = ("constant signal" if not np.ptp(x) > 0 else
+                f"noise below {MIN_NOISE_DPS:g} deg/s (too small for the detectors in float64)"
+                if not np.std(x) >= MIN_NOISE_DPS else None)
+        if idle:
+            run.report["notes"].append(f"axis {a}: {idle}, nothing to analyse")
             run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
             continue
         try:

@@ -62,7 +62,7 @@ import numpy as np
 from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
 from ..errors import SettingsError
-from ..units import DEG_PER_RAD, MAX_RATE_DPS, plain, utf8_text
+from ..units import DEG_PER_RAD, MAX_RATE_DPS, MIN_NOISE_DPS, plain, utf8_text
 
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
 TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
@@ -259,6 +259,10 @@ def _term_shares(theta_sq, tau):
     return (basis(tau) * theta_sq).T  # (5, n)
 
 
+#: the smallest variance, relative to the largest, that the fit's weights take as it is
+_WEIGHT_FLOOR = 1e-100
+
+
 def fit(tau_s, adev_values, m, n_samples, *, terms=TERMS, min_clusters=MIN_CLUSTERS,
         confidence=0.95, iterations=6):
     """Weighted NNLS fit of the five-term model; returns (theta_squared, used_mask, edf, warnings).
@@ -285,20 +289,24 @@ def fit(tau_s, adev_values, m, n_samples, *, terms=TERMS, min_clusters=MIN_CLUST
             "the record is too short for a noise fit")
     allowed = [TERMS.index(t) for t in terms]
     a = basis(tau[used])
-    y = avar[used]
+    # in units of the largest variance, floored at _WEIGHT_FLOOR of it: the weights edf / (2 y^2)
+    # neither overflow for tiny deviations nor become infinite where a deviation is exactly 0
+    # (data alternating +-1 have zero deviation at every even cluster size)
+    unit = float(np.max(avar[used]))
+    y = avar[used] / unit
     edf = edf_oavar(n_samples, m[used], 0)
-    weight_ref = np.maximum(y, np.max(y) * 1e-300)
+    weight_ref = np.maximum(y, _WEIGHT_FLOOR)
     theta = np.zeros(5)
     for _ in range(iterations):
         w = edf / (2.0 * weight_ref ** 2)
-        theta = nnls_weighted(a, y, w, allowed)
+        theta = nnls_weighted(a, y, w / np.max(w), allowed)
         mod = a @ theta
         if not np.all(mod > 0):
             break
         shares = _term_shares(theta, tau[used])
         edf = edf_mixture(n_samples, m[used], shares, [TERM_ALPHA[t] for t in TERMS])
-        weight_ref = mod
-    return theta, used, edf, warnings
+        weight_ref = np.maximum(mod, _WEIGHT_FLOOR)
+    return theta * unit, used, edf, warnings
 
 
 @functools.lru_cache(maxsize=None)
@@ -420,12 +428,21 @@ def _fitted_intervals(theta, tau, m, n_samples, used, confidence):
     quantile of ``confidence``); its interval is the chi-square interval with
     ``edf_j = 2 theta_j^2 / var_j`` (Satterthwaite), which stays positive and is skewed like the
     Allan variance itself. Terms fitted to zero get the upper bound ``z sd_j`` of a fit with the
-    term forced in.
+    term forced in; a fit that is zero for every term has no covariance, hence no bounds.
+    Variances are computed in units of the largest fitted one, so any deviation a float holds works.
     """
     from statistics import NormalDist
+    if not np.any(theta > 0):  # e.g. data whose deviation is exactly 0 at some cluster times
+        return {term: Coefficient(term, None, note="not resolved: the fit is 0 for every term, so it gives no bound")
+                for term in TERMS}
     z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
     tau_u, m_u = tau[used], m[used]
     a = basis(tau_u)
+    # variances in units of the largest fitted one (their squares below stay normal floats);
+    # a coefficient is sqrt(theta), so it is sqrt(theta in units) * root
+    var_unit = float(np.max(theta)) or 1.0
+    root = math.sqrt(var_unit)
+    theta = theta / var_unit
     sd, cov_y = avar_covariance(tau_u, m_u, n_samples, theta)
     w = 1.0 / sd ** 2
     active = theta > 0
@@ -443,7 +460,7 @@ def _fitted_intervals(theta, tau, m, n_samples, used, confidence):
                 g = _gain(a, w, forced)
                 pos = int(np.sum(forced[:j]))  # row of term j among the forced-in terms
                 var = float((g @ cov_y @ g.T)[pos, pos])
-                upper = math.sqrt(z * math.sqrt(max(var, 0.0)))
+                upper = math.sqrt(z * math.sqrt(max(var, 0.0))) * root
             except np.linalg.LinAlgError:
                 upper = None
             note = f"not resolved: {sym} is not needed to fit the data (fitted to 0 or not significant)"
@@ -454,17 +471,17 @@ def _fitted_intervals(theta, tau, m, n_samples, used, confidence):
         var = max(float(cov[j, j]), 1e-300)
         sdj = math.sqrt(var)
         c2 = float(theta[j])
-        upper = math.sqrt(c2 + z * sdj)
+        upper = math.sqrt(c2 + z * sdj) * root
         if c2 - z * sdj <= 0:
             out[term] = Coefficient(term, None, upper=upper, z_score=c2 / sdj,
-                                    note=f"not resolved: {sym} = {math.sqrt(c2):.3g} {unit} is within the "
+                                    note=f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the "
                                          f"{confidence:.0%} uncertainty of zero; upper bound {upper:.3g}")
             continue
         edf = 2.0 * c2 ** 2 / var
         lo, hi = chi2_interval(c2, edf, confidence)
         # the tau where this term's share of the model is largest: where it is read
         share = a[:, j] * c2 / (a @ theta)
-        out[term] = Coefficient(term, math.sqrt(c2), math.sqrt(float(lo)), math.sqrt(float(hi)),
+        out[term] = Coefficient(term, math.sqrt(c2) * root, math.sqrt(float(lo)) * root, math.sqrt(float(hi)) * root,
                                 tau_s=float(tau_u[int(np.argmax(share))]), z_score=c2 / sdj)
     return out
 
@@ -631,6 +648,10 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
         tau, dev = overlapping_adev(x, sample_rate_hz, taus_s)
     except AllanInputError as exc:
         raise AllanInputError(f"axis {axis}: {exc}") from None
+    if not np.max(dev) >= MIN_NOISE_DPS:
+        raise AllanInputError(
+            f"axis {axis}: the Allan deviation is below {MIN_NOISE_DPS:g} deg/s at every cluster time (largest "
+            f"{np.max(dev):.3g}): too small a noise for the fit in float64; are the rates in deg/s?")
     n = x.size
     m = cluster_sizes(n, sample_rate_hz, tau)
     # fit, then drop the least significant unresolved term and refit until every fitted term is
@@ -650,8 +671,8 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     # chi-square interval of every tau, EDF from the fitted noise mixture
     shares = _term_shares(theta, tau)
     edf = edf_mixture(n, m, shares, [TERM_ALPHA[t] for t in TERMS])
-    lo, hi = chi2_interval(dev ** 2, edf, confidence)
-    ci_low, ci_high = np.sqrt(lo), np.sqrt(hi)
+    lo, hi = chi2_interval(1.0, edf, confidence)  # relative, so that no square of a deviation underflows
+    ci_low, ci_high = dev * np.sqrt(lo), dev * np.sqrt(hi)
     _, _, rel = simple_interval(dev, n, m)
     readoff = read_off(tau, dev, ci_low, ci_high, used)
     k = n_clusters(n, m)

@@ -36,8 +36,8 @@ def add_arguments(parser):
     parser.add_argument("--plot", metavar="OUT.png", type=common.file_name, help="draw the Allan deviation per axis (needs matplotlib)")
     parser.add_argument("--kalibr", metavar="OUT.yaml", type=common.file_name, help="write Kalibr imu.yaml gyroscope noise entries")
     parser.add_argument("--axes", default="xyz", help="axes to analyse, a subset of xyz (default xyz)")
-    parser.add_argument("--confidence", type=float, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
-    parser.add_argument("--min-clusters", type=int, default=MIN_CLUSTERS,
+    parser.add_argument("--confidence", type=common.decimal, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
+    parser.add_argument("--min-clusters", type=common.whole_number, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
     common.add_keep_outliers_argument(parser)
     parser.add_argument("--progress", action="store_true", help="report progress on stderr")
@@ -75,8 +75,8 @@ def run(args):
         raise SettingsError(f"--axes must be a subset of xyz such as xz, got {args.axes!r}")
     if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
         raise SettingsError(f"--min-clusters must be in [2, {MAX_MIN_CLUSTERS}], got {args.min_clusters}")
-    if not 0.0 < args.confidence < 1.0:
-        raise SettingsError(f"--confidence must be between 0 and 1 (e.g. 0.95), got {args.confidence:g}")
+    if not 0.5 <= args.confidence <= 0.9999:  # every value inside works (0.9999999999999999 failed in the intervals)
+        raise SettingsError(f"--confidence must be in [0.5, 0.9999] (e.g. 0.95), got {args.confidence!r}")
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])

@@ -26,12 +26,12 @@ def add_arguments(parser):
     parser.add_argument("recording", help="a static recording (format v1); the sensor must not move")
     parser.add_argument("--axis", choices=("x", "y", "z", "all"), default="all", help="axis to analyse (default: all three)")
     parser.add_argument("--json", metavar="OUT", type=common.file_name, help="write every number of the analysis to this JSON file")
-    parser.add_argument("--start-s", type=float, default=None, help="skip the first seconds (e.g. a warm-up or a move; default 0)")
-    parser.add_argument("--end-s", type=float, default=None, help="stop at this time in seconds (default: the end)")
-    parser.add_argument("--max-n", type=int, default=4, help="highest Pandit-Wu order ARMA(2n, 2n-1) tried (default 4: ARMA(8, 7))")
-    parser.add_argument("--max-samples", type=int, default=200_000,
+    parser.add_argument("--start-s", type=common.decimal, default=None, help="skip the first seconds (e.g. a warm-up or a move; default 0)")
+    parser.add_argument("--end-s", type=common.decimal, default=None, help="stop at this time in seconds (default: the end)")
+    parser.add_argument("--max-n", type=common.whole_number, default=4, help="highest Pandit-Wu order ARMA(2n, 2n-1) tried (default 4: ARMA(8, 7))")
+    parser.add_argument("--max-samples", type=common.whole_number, default=200_000,
                         help="longer series are block-averaged to at most this many samples (default 200000)")
-    parser.add_argument("--alpha", type=float, default=0.05, help="significance level of every test (default 0.05)")
+    parser.add_argument("--alpha", type=common.decimal, default=0.05, help="significance level of every test (default 0.05)")
     parser.add_argument("--criterion", choices=("f", "aic", "bic"), default="bic",
                         help="what decides each order step: BIC (default; the F test and AIC over-select on simulated ARMA(1,1)), "
                              "the F test (paper 003's rule) or AIC; all three are printed")
@@ -75,8 +75,11 @@ def run(args):
     for name in axes:
         if progress:
             common.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
-        rep = arma.analyze_axis(series[name], fs, axis=name, max_samples=args.max_samples,
-                                max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum, criterion=args.criterion)
+        try:
+            rep = arma.analyze_axis(series[name], fs, axis=name, max_samples=args.max_samples,
+                                    max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum, criterion=args.criterion)
+        except SettingsError as exc:  # what the data of this file cannot give: name it (the options are checked above)
+            raise SettingsError(f"{args.recording}: {exc}") from None
         reports[name] = rep
         _print_axis(rep, args.alpha)
     print(f"\n{PAPER_003}")

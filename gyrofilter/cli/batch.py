@@ -25,7 +25,7 @@ def add_arguments(parser):
     parser.add_argument("--fleet", "--out-dir", dest="fleet", metavar="DIR", type=common.file_name,
                         help="a fleet run: one report per recording in DIR, named after it, plus fleet.csv and "
                              "fleet.md (needed for more than one recording)")
-    parser.add_argument("--jobs", type=int, default=None, metavar="N",
+    parser.add_argument("--jobs", type=common.whole_number, default=None, metavar="N",
                         help="with --fleet: recordings analysed at once on this machine (default: all cores; "
                              "each worker holds one recording in memory)")
     parser.add_argument("--scheduler", metavar="ADDRESS",

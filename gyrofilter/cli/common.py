@@ -13,8 +13,8 @@ import sys
 import tempfile
 import time
 
-from ..errors import RecordingError, SettingsError
-from ..inputs import parse_json, quote
+from ..errors import GyroFilterError, RecordingError, SettingsError
+from ..inputs import parse_json, parse_number, quote
 from ..pipeline import SETTING_NAMES, GyroFilter
 from ..presets import DEFAULT_PRESET, PRESETS
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT
@@ -50,7 +50,7 @@ def add_sample_rate_argument(parser, *old_spellings, help):
     """``--sample-rate-hz HZ``, the commands' one spelling of a sample rate, with ``old_spellings``
     (e.g. ``--rate``) kept as aliases: ``args.sample_rate_hz`` holds the rate (Hz, None when not
     given), ``args.sample_rate_hz_option`` the spelling used, so a message names what was typed."""
-    parser.add_argument("--sample-rate-hz", *old_spellings, type=float, default=None, metavar="HZ", dest="sample_rate_hz",
+    parser.add_argument("--sample-rate-hz", *old_spellings, type=decimal, default=None, metavar="HZ", dest="sample_rate_hz",
                         action=_SpellingKept, help=help)
 
 
@@ -60,6 +60,29 @@ class _SpellingKept(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         setattr(namespace, self.dest, values)
         setattr(namespace, self.dest + "_option", option_string)
+
+
+def decimal(text):
+    """argparse type of a numeric option: a plain decimal number (:func:`gyrofilter.inputs.parse_number`:
+    no ``1_0``, other scripts' digits, ``nan``, ``inf`` or hex), as a float; the option's own range
+    is checked where it is used."""
+    try:
+        return parse_number(text, "")
+    except SettingsError as exc:
+        raise argparse.ArgumentTypeError(str(exc).strip()) from None
+
+
+def whole_number(text):
+    """argparse type of a count or seed: a plain decimal whole number, as an int. Written in digits
+    it is exact (a seed beyond 2^53 keeps every digit); in another form (``1e3``, ``5.0``) it is
+    within +-2^53, the whole numbers a float holds exactly (``1e308`` is no count)."""
+    try:
+        if text.strip().lstrip("+-").isdigit():
+            parse_number(text, "")  # the syntax and length rules ("+-5", 65 digits)
+            return int(text)
+        return parse_number(text, "", integer=True, low=-2.0**53, high=2.0**53)
+    except SettingsError as exc:
+        raise argparse.ArgumentTypeError(str(exc).strip()) from None
 
 
 def file_name(text):
@@ -77,7 +100,8 @@ def check_outputs(outputs, inputs=(), force=False):
     """Refuse, before any work, to write where a user's data would be lost.
 
     ``outputs`` and ``inputs`` are paths (None entries are skipped). An output that is one of
-    the inputs is refused even with ``force``; so is one that exists as anything but a regular
+    the inputs is refused even with ``force``, and so is a name ending in a path separator (a
+    folder's, existing or not); so is one that exists as anything but a regular
     file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
     replaced. An output that exists is refused without ``force``; two outputs naming one file are
     refused. Raises FileExistsError / SettingsError naming the file.
@@ -87,6 +111,8 @@ def check_outputs(outputs, inputs=(), force=False):
     for out in (p for p in outputs if p):
         if os.path.isdir(out):
             raise SettingsError(f"{out}: is a folder; give a file name for the output")
+        if out.endswith(tuple(filter(None, (os.sep, os.altsep)))):
+            raise SettingsError(f"{out}: ends in {out[-1]}, so it names a folder; give a file name for the output")
         key = _file_key(out)
         if key in inputs:
             raise SettingsError(f"{out}: is an input of this command; write the output to another file")
@@ -201,12 +227,16 @@ def replacing_in(folder):
 
 @contextlib.contextmanager
 def _naming(tmp, path):
-    """An OSError about the temporary ``tmp`` (or a file in it) names the user's ``path`` instead."""
+    """An error about the temporary ``tmp`` (or a file in it) names the user's ``path`` instead:
+    an OSError's file name, and the text of a GyroFilterError (a writer's refusal, same class)."""
     try:
         yield
     except OSError as exc:
         if isinstance(exc.filename, str) and exc.filename.startswith(tmp):
             raise OSError(exc.errno, exc.strerror, path + exc.filename[len(tmp):]) from None
+        raise
+    except GyroFilterError as exc:
+        exc.args = tuple(a.replace(tmp, path) if isinstance(a, str) else a for a in exc.args)
         raise
 
 
@@ -320,14 +350,15 @@ def add_filter_arguments(parser):
     parser.add_argument("--temp-model", metavar="JSON",
                         help="compensate temperature drift with the coefficients of a gap report or simulator model "
                              "(needs a temp column / a source with temperature)")
-    parser.add_argument("--calibration-s", type=float, default=None, help="start-up calibration window in seconds (default 2; the sensor must be still)")
+    parser.add_argument("--calibration-s", type=decimal, default=None, help="start-up calibration window in seconds (default 2; the sensor must be still)")
     parser.add_argument("--calibration", metavar="JSON", help="use a saved calibration instead of calibrating")
     parser.add_argument("--save-calibration", metavar="JSON", type=file_name, help="save the start-up calibration to this file")
 
 
 def make_filter(args, sample_rate_hz):
     """The GyroFilter of the filter options; ``--set calibration_s=S`` is ``--calibration-s S``.
-    A setting given twice with --set is refused, naming it."""
+    A setting given twice with --set is refused, naming it; GyroFilter refuses --calibration with
+    a calibration window."""
     settings = {}
     for text in args.set:
         name, value = _parse_setting(text)
@@ -339,9 +370,6 @@ def make_filter(args, sample_rate_hz):
         if calibration_s is not None:
             raise SettingsError("--set calibration_s and --calibration-s both given; give one")
         calibration_s = settings.pop("calibration_s")
-    if calibration_s is not None and args.calibration:
-        raise SettingsError(f"--calibration {args.calibration} replaces the start-up calibration, so a calibration "
-                            "window (--calibration-s or --set calibration_s) has nothing to do; give one of them")
     if args.temp_model:
         if "temp_coefficient_dps_per_c" in settings:
             raise SettingsError("--temp-model and --set temp_coefficient_dps_per_c both give the temperature "

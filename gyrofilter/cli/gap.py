@@ -26,8 +26,8 @@ def add_arguments(parser):
                         help="recording file (format v1, .csv or .csv.gz); several files or globs with --fleet")
     parser.add_argument("--json", metavar="OUT.json", type=common.file_name, help="write the gap report (JSON) here (required without --fleet)")
     parser.add_argument("--report", metavar="DIR", type=common.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
-    parser.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the simulations (default 0)")
-    parser.add_argument("--sims", type=int, default=None, metavar="N",
+    parser.add_argument("--seed", type=common.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
+    parser.add_argument("--sims", type=common.whole_number, default=None, metavar="N",
                         help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; 2 to {MAX_SIMS})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     batch.add_arguments(parser)

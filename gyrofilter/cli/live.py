@@ -25,11 +25,11 @@ EXIT_DISCONNECTED = 1
 def add_source_arguments(parser):
     """--source and the unit options for devices that send no header (``record`` and ``run``)."""
     parser.add_argument("--source", required=True, metavar="SOURCE", help=SOURCE_HELP)
-    parser.add_argument("--duration", type=float, metavar="S",
-                        help="stop after S seconds of samples (default: until Ctrl-C, SIGTERM or the end of the source)")
+    parser.add_argument("--duration", type=common.decimal, metavar="S",
+                        help="stop after S seconds of samples (default: until Ctrl-C, SIGTERM, SIGHUP or the end of the source)")
     parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
                         help="gyro unit of a serial device that sends no header line")
-    parser.add_argument("--lsb-per-dps", type=float, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
+    parser.add_argument("--lsb-per-dps", type=common.decimal, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
     common.add_sample_rate_argument(parser, "--sample-rate", help="sample rate of such a device (old spelling --sample-rate)")
 
 
@@ -158,14 +158,16 @@ def open_from_args(args):
 
 
 class StopSignals:
-    """SIGINT/SIGTERM set a flag that the loop checks (within ~0.1 s, a source's longest wait).
+    """SIGINT/SIGTERM/SIGHUP set a flag that the loop checks (within ~0.1 s, a source's longest wait).
+    SIGHUP is what a dropped SSH session sends: it ends the file as cleanly as Ctrl-C.
 
     Stopping between reads, never inside a write, keeps the file consistent (a KeyboardInterrupt
     raised inside gzip's write could leave a stream whose checksum does not match). A second
     signal raises KeyboardInterrupt for an immediate exit.
     """
 
-    NAMES = {signal.SIGINT: "SIGINT (Ctrl-C)", signal.SIGTERM: "SIGTERM"}
+    NAMES = {signal.SIGINT: "SIGINT (Ctrl-C)", signal.SIGTERM: "SIGTERM",
+             **({signal.SIGHUP: "SIGHUP (hang-up)"} if hasattr(signal, "SIGHUP") else {})}
 
     def __init__(self):
         self.received = None

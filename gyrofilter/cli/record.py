@@ -4,7 +4,7 @@ The file gets the source's header (sensor, chip id, full scale, LSB per deg/s, D
 rate, start time, ...), then the samples; gaps and other events of the source become annotation
 lines (``# gap: 37 samples lost before t=12.34 s ...``). Data are flushed (and fsync'ed) at
 least every ``FLUSH_INTERVAL_S``: after a crash or a pulled plug at most that much is lost and
-the file still reads. Ctrl-C (SIGINT) and SIGTERM stop the recording cleanly (exit 0); a second
+the file still reads. Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the recording cleanly (exit 0); a second
 signal aborts at once (the file is still readable up to the last flush). The file takes its name
 at its first flush with a sample (:class:`~gyrofilter.cli.live.LiveOutput`): a recording that fails
 before its first sample (the device failing, any error) leaves no file and an existing one (--force)
@@ -27,7 +27,7 @@ _HEADER_ORDER = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "sensor", "chip_i
 def add_arguments(parser):
     parser.description = (
         "Record a live source to a recording file (format v1, .csv or .csv.gz). Data are flushed "
-        "at least twice a second; Ctrl-C or SIGTERM ends the file cleanly (exit 0)."
+        "at least twice a second; Ctrl-C, SIGTERM or SIGHUP ends the file cleanly (exit 0)."
     )
     live.add_source_arguments(parser)
     parser.add_argument("--out", required=True, metavar="FILE", type=common.file_name, help="recording to write (" + common.RECORDING_FILE_HELP + ")")

@@ -6,7 +6,7 @@ sample on the sensor's clock) go to stdout, or to ``--out FILE``, as a format-v1
 as ``filtered_from`` (so ``replay`` refuses to filter it again) and whose last line is the
 note ``# end: why; N samples in, M filtered rows out``. A status line on stderr, at
 most once per second, shows the sample rate achieved, lost samples, rejected outliers and the
-CPU use of this process. Ctrl-C or SIGTERM stops cleanly (exit 0). The --out file takes its name
+CPU use of this process. Ctrl-C, SIGTERM or SIGHUP stops cleanly (exit 0). The --out file takes its name
 at its first flush with a filtered row (:class:`~gyrofilter.cli.live.LiveOutput`): a run that fails
 before it (the device failing, the calibration refused because the sensor moved, any error) leaves
 no file and an existing one (--force) as it was, so that the same command can be run again.

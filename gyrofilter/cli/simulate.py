@@ -23,13 +23,13 @@ MAX_CHUNK = 2**20  # samples per block; the flicker bank draws (block x componen
 def add_arguments(parser):
     parser.add_argument("--model", required=True, metavar="MODEL.json",
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json)")
-    parser.add_argument("--duration", required=True, type=float, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
+    parser.add_argument("--duration", required=True, type=common.decimal, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
     common.add_sample_rate_argument(parser, "--rate", help="sample rate in Hz (overrides the model's; old spelling --rate)")
-    parser.add_argument("--seed", type=int, default=None, metavar="N",
+    parser.add_argument("--seed", type=common.whole_number, default=None, metavar="N",
                         help="random seed (same seed, same recording; default: one drawn at random and written in the "
                              "header, simulated_seed, so the run can be repeated)")
     parser.add_argument("--out", required=True, metavar="FILE", type=common.file_name, help="output recording (" + common.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--chunk", type=int, default=65536, metavar="N", help=f"samples per block written (default 65536, at most {MAX_CHUNK})")
+    parser.add_argument("--chunk", type=common.whole_number, default=65536, metavar="N", help=f"samples per block written (default 65536, at most {MAX_CHUNK})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     common.add_force_argument(parser)
 
