@@ -263,24 +263,25 @@ def test_an_output_that_appears_while_the_command_runs_is_not_replaced(tmp_path)
     assert out.read_text() == "theirs again"
 
 
-@pytest.mark.parametrize("argv, usage, said", [
-    (["replay", "REC", "--ot", "x.csv"], "usage: gyrofilter replay ", "unrecognized arguments: --ot x.csv; did you mean --out?"),
-    (["allan", "REC", "--jsno=a.json"], "usage: gyrofilter allan ", "unrecognized arguments: --jsno=a.json; did you mean --json?"),
-    (["replay", "REC", "--sample-rat", "3", "--outt", "x"], "usage: gyrofilter replay ", "; did you mean --out?"),
-    (["replay", "REC", "-q"], "usage: gyrofilter replay ", "unrecognized arguments: -q"),
-    (["--bogus"], "usage: gyrofilter [-h] COMMAND", "unrecognized arguments: --bogus"),
+@pytest.mark.parametrize("argv, prog, said", [
+    (["replay", "REC", "--ot", "x.csv"], "gyrofilter replay", "unrecognized arguments: --ot x.csv; did you mean --out?"),
+    (["allan", "REC", "--jsno=a.json"], "gyrofilter allan", "unrecognized arguments: --jsno=a.json; did you mean --json?"),
+    (["replay", "REC", "--sample-rat", "3", "--outt", "x"], "gyrofilter replay", "; did you mean --out?"),
+    (["replay", "REC", "-q"], "gyrofilter replay", "unrecognized arguments: -q"),
+    (["--bogus"], "gyrofilter", "unrecognized arguments: --bogus"),
+    (["simulate", "--duration", "x"], "gyrofilter simulate", "argument --duration: must be a plain decimal number"),
 ])
-def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, usage, said, capsys):
-    """Issue 23: a mistyped option of a command printed the top-level usage with no hint."""
+def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, prog, said, capsys):
+    """Issue 23: a mistyped option of a command printed the top-level usage with no hint; issue
+    22: every refusal is one line (argparse printed its usage text first), pointing at --help."""
     from gyrofilter.cli import main
 
     with pytest.raises(SystemExit) as stop:
         main(argv)
     assert stop.value.code == 2
     err = capsys.readouterr().err
-    assert err.startswith(usage) and said in err
-    errors = [ln for ln in err.splitlines() if not ln.startswith(("usage:", " "))]
-    assert len(errors) == 1 and errors[0].endswith(said)
+    assert err.count("\n") == 1 and err.startswith(f"{prog}: error: ") and said in err
+    assert err.rstrip().endswith(f"(see {prog} --help)")
     assert ("did you mean" in err) == ("did you mean" in said)
 
 
@@ -380,3 +381,13 @@ def test_a_number_in_another_script_is_refused_before_any_work(tmp_path, capsys)
     assert code == 2
     assert "argument --duration: must be a plain decimal number (like 12, -0.5 or 1e-3), got '١_٠'" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_summary_naming_a_file_that_is_not_utf8_prints_under_a_utf8_locale(tmp_path):
+    """Under a UTF-8 locale (a Pi's en_GB.UTF-8) stdout is strict: the summary's file name, with
+    the lone surrogate os.fsdecode makes of byte 0xff, crashed after the work was done."""
+    path = _file_named_by_bytes(tmp_path)
+    env = {**os.environ, "LC_ALL": "C.UTF-8", "PYTHONIOENCODING": ""}
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "replay", os.fsencode(path)], capture_output=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert b"\\udcff.csv" in proc.stdout + proc.stderr and b"Traceback" not in proc.stderr

@@ -32,9 +32,17 @@ EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 
 
-class _Parser(argparse.ArgumentParser):
-    """The top-level parser. Arguments a command does not know are that command's error: its
-    usage line and "unrecognized arguments: ...", with "did you mean --out?" for an option
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse, with a refusal in one line (what every refusal of gyrofilter is) that says where
+    the usage is, instead of the usage text and then the error."""
+
+    def error(self, message):
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+
+
+class _Parser(_OneLineParser):
+    """The top-level parser. Arguments a command does not know are that command's error:
+    "unrecognized arguments: ...", with "did you mean --out?" for an option
     close to one of its own (argparse would report them with the top-level usage)."""
 
     def parse_args(self, args=None, namespace=None):
@@ -63,7 +71,7 @@ def build_parser(command=None):
         prog="gyrofilter",
         description="Real-time filtering and error analysis for low-cost MEMS gyroscopes (MPU6050).",
     )
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=argparse.ArgumentParser)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_OneLineParser)
     parser.commands = {}
     for name, (module_name, summary) in COMMANDS.items():
         p = parser.commands[name] = sub.add_parser(name, help=summary, description=summary)
@@ -91,6 +99,9 @@ def main(argv=None):
 
 
 def _main(argv):
+    for stream in (sys.stdout, sys.stderr):  # a file name that is not UTF-8 prints escaped, not as a crash
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     argv = sys.argv[1:] if argv is None else list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     if command not in COMMANDS:
