@@ -641,20 +641,6 @@ class SerialSource(Source):
             raise SourceEnded(f"{self.port_name}: {self._ended} after {self.stats['samples']} samples; everything received is kept")
         return self._receive()
 
-    def _refuse_beyond_range(self, values):
-        """``values`` (per line, fields order) without the lines holding a gyro value beyond
-        +-MAX_RATE_DPS once in deg/s (counted in ``bad_lines``, the first noted): one vectorised
-        check per chunk."""
-        gyro = values[:, [self.fields.index(name) for name in ("gx", "gy", "gz")]]
-        with np.errstate(over="ignore"):  # 1e308 rad/s: inf deg/s, refused
-            ok = (np.abs(to_dps(gyro, self.header["gyro_unit"], self._lsb_per_dps)) <= MAX_RATE_DPS).all(axis=1)
-        if ok.all():
-            return values
-        shown = ",".join(map(_num, values[np.argmin(ok)])).encode()
-        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s", count=int(np.count_nonzero(~ok)),
-                  garbage_bytes=0)
-        return values[ok]
-
     def pop_notes(self):
         """Events since the last call (gaps, restarts, skipped lines, device messages)."""
         return self._parser.pop_notes()
