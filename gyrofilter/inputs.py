@@ -102,8 +102,11 @@ def parse_number(text, what, *, error=SettingsError, **bounds):
     number = float(stripped)
     if not math.isfinite(number):
         raise error(f"{what} must be a finite number, got {quote(text)}")
-    if bounds.get("integer") and _INTEGER.fullmatch(stripped):
-        number = int(stripped)  # exact: float() rounds 9007199254740993 to ...992
+    if bounds.get("integer"):
+        if _INTEGER.fullmatch(stripped):
+            number = int(stripped)  # exact: float() rounds 9007199254740993 to ...992
+        elif abs(number) >= 2.0**53:  # 9007199254740993.0 or 9.007199254740993e15 was rounded already
+            raise error(f"{what} must be written in digits when it is 2^53 or more, got {quote(text)}")
     return check_number(number, what, error=error, **bounds)
 
 

@@ -223,3 +223,12 @@ def test_load_json_takes_only_a_file_name(path):
     with pytest.raises(SettingsError, match="the model must be a file name, got"):
         load_json(path, "model")
     assert os.fstat(2) == before
+
+
+@pytest.mark.parametrize("text", ["9007199254740993.0", "9.007199254740993e15", "1e18"])
+def test_a_whole_number_of_2_53_or_more_must_be_written_in_digits(text):
+    """9007199254740993.0 went through float to ...992 and was taken as a seed."""
+    with pytest.raises(SettingsError, match="must be written in digits when it is 2\\^53 or more"):
+        parse_number(text, "seed", integer=True)
+    assert parse_number(text.split(".")[0].split("e")[0] if text[0] == "9" and "e" not in text else "1" + "0" * 18,
+                        "seed", integer=True) > 2 ** 53

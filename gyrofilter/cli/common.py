@@ -73,14 +73,11 @@ def decimal(text):
 
 
 def whole_number(text):
-    """argparse type of a count or seed: a plain decimal whole number, as an int. Written in digits
-    it is exact (a seed beyond 2^53 keeps every digit); in another form (``1e3``, ``5.0``) it is
-    within +-2^53, the whole numbers a float holds exactly (``1e308`` is no count)."""
+    """argparse type of a count or seed: a plain decimal whole number, as an int, exact
+    (:func:`gyrofilter.inputs.parse_number`: digits keep every digit of a seed beyond 2^53;
+    another form, ``1e3`` or ``5.0``, must stay below 2^53, the whole numbers a float holds)."""
     try:
-        if text.strip().lstrip("+-").isdigit():
-            parse_number(text, "")  # the syntax and length rules ("+-5", 65 digits)
-            return int(text)
-        return parse_number(text, "", integer=True, low=-2.0**53, high=2.0**53)
+        return parse_number(text, "", integer=True)
     except SettingsError as exc:
         raise argparse.ArgumentTypeError(str(exc).strip()) from None
 
