@@ -689,13 +689,15 @@ class _TimeCheck:
 
     - ``t`` increases strictly, also across chunks;
     - steps longer than 1.5 sample intervals are counted in ``head.t_gaps`` (lost samples: legal);
-    - the typical step of every window of :data:`RATE_CHECK_STEPS` consecutive steps (the 1st to
-      the 1000th, the 1001st to the 2000th, ...), their lower median, is ``1 / sample_rate_hz``
-      within :data:`RATE_TOLERANCE`, in both directions: a ``t`` that runs faster or slower than
-      the header says, anywhere in the file, would make every time constant and Allan cluster
-      time wrong. Gaps lengthen some steps, not the median, unless they are most of a window's
-      steps. A file with fewer steps than one window has its median of all steps checked at
-      the end (:meth:`finish`); the steps after the last whole window of a longer file are not.
+    - the typical step of every window of :data:`RATE_CHECK_STEPS` consecutive steps, their lower
+      median, is ``1 / sample_rate_hz`` within :data:`RATE_TOLERANCE`, in both directions: a ``t``
+      that runs faster or slower than the header says, anywhere in the file, would make every
+      time constant and Allan cluster time wrong. The windows start every half window (steps
+      1-1000, 501-1500, 1001-2000, ...), so a stretch at the wrong rate as long as a window is
+      caught wherever it lies; at the end, the steps after the last whole window are checked
+      when there are half a window of them, and a file shorter than one window on all its steps
+      (:meth:`finish`). Gaps lengthen some steps, not the median, unless they are most of a
+      window's steps.
 
     ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
     advice a refusal ends with (the writer says why its rows would come out so).
@@ -707,9 +709,7 @@ class _TimeCheck:
         self.max_step_s = 1.5 / head.sample_rate_hz
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
-        self.pending = np.empty(0)  # the steps after the last whole window
-        self.pending_where = None  # where the first of them starts
-        self.windows = 0  # the whole windows checked
+        self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
 
     def add(self, t, where):
         """Check the times ``t`` of a chunk; ``where(i)`` names its row ``i`` ("line 12")."""
@@ -725,35 +725,27 @@ class _TimeCheck:
             raise RecordingError(f"{head.path}: {where(k + row0)}: t does not increase "
                                  f"({float(cur[k])!r} after {float(prev[k])!r})")
         head.t_gaps += int(np.count_nonzero(step > self.max_step_s))
+        last_where = self.last_where
 
         def step_start(i):  # where the sample a step of this chunk starts from is
-            return where(i + row0 - 1) if i + row0 >= 1 else self.last_where
+            return where(i + row0 - 1) if i + row0 >= 1 else last_where
 
-        if len(self.pending) == 0 and len(step):
-            self.pending_where = step_start(0)
-        steps = np.concatenate((self.pending, step))
-        whole = len(steps) // RATE_CHECK_STEPS * RATE_CHECK_STEPS
-        if whole:
-            medians = _lower_medians(steps[:whole].reshape(-1, RATE_CHECK_STEPS))
-            wrong = np.flatnonzero(self._off(medians))
-            if wrong.size:
-                j = int(wrong[0])
-                start = j * RATE_CHECK_STEPS - len(self.pending)
-                self._refuse(float(medians[j]), RATE_CHECK_STEPS, self.pending_where if start < 0 else step_start(start),
-                             first=self.windows + j == 0)
-            self.windows += len(medians)
-            if whole < len(steps):
-                self.pending_where = step_start(whole - len(self.pending))
-        self.pending = steps[whole:]
+        for phase in self.phases:
+            phase.add(step, step_start, self)
         self.t_last = float(t[-1])
         self.last_where = where(len(t) - 1)
 
     def finish(self):
-        """At the end: a file shorter than one window has the median of all its steps checked."""
-        if self.windows == 0 and len(self.pending):
-            median = float(_lower_medians(self.pending[None, :])[0])
-            if self._off(median):
-                self._refuse(median, len(self.pending), self.pending_where, first=True)
+        """At the end: the steps after the last whole window, when half a window or more (all of
+        them in a file shorter than one window)."""
+        whole_file = self.phases[0].windows == 0
+        for phase in self.phases:
+            if len(phase.pending) and (whole_file or len(phase.pending) >= RATE_CHECK_STEPS // 2):
+                median = float(_lower_medians(phase.pending[None, :])[0])
+                if self._off(median):
+                    self._refuse(median, len(phase.pending), phase.pending_where, first=whole_file)
+            if whole_file:
+                break
 
     def _off(self, typical_s):
         expected_s = 1.0 / self.head.sample_rate_hz
@@ -766,6 +758,38 @@ class _TimeCheck:
             f"{head.path}: t steps by {typical_s:.6g} s (median of {which} {n} steps from {start}), "
             f"but sample_rate_hz {head.sample_rate_hz:g} means {1.0 / head.sample_rate_hz:.6g} s: more than "
             f"{RATE_TOLERANCE:.0%} apart ({self.why})")
+
+
+class _WindowPhase:
+    """The whole windows of :data:`RATE_CHECK_STEPS` steps that start ``skip`` steps into the file."""
+
+    def __init__(self, skip):
+        self.skip = skip  # steps still to pass before the first window
+        self.pending = np.empty(0)  # the steps after the last whole window
+        self.pending_where = None  # where the first of them starts
+        self.windows = 0  # the whole windows checked
+
+    def add(self, step, step_start, check):
+        first = min(self.skip, len(step))
+        self.skip -= first
+        step = step[first:]
+        if len(self.pending) == 0 and len(step):
+            self.pending_where = step_start(first)
+        steps = np.concatenate((self.pending, step))
+        whole = len(steps) // RATE_CHECK_STEPS * RATE_CHECK_STEPS
+        if whole:
+            medians = _lower_medians(steps[:whole].reshape(-1, RATE_CHECK_STEPS))
+            wrong = np.flatnonzero(check._off(medians))
+            if wrong.size:
+                j = int(wrong[0])
+                start = j * RATE_CHECK_STEPS - len(self.pending)
+                check._refuse(float(medians[j]), RATE_CHECK_STEPS,
+                              self.pending_where if start < 0 else step_start(first + start),
+                              first=self.windows + j == 0 and self.skip == 0 and first == 0)
+            self.windows += len(medians)
+            if whole < len(steps):
+                self.pending_where = step_start(first + whole - len(self.pending))
+        self.pending = steps[whole:]
 
 
 def _lower_medians(windows):

@@ -369,14 +369,27 @@ def test_t_is_checked_against_the_rate_in_every_window_not_only_the_first(tmp_pa
 
 @pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
 def test_the_steps_after_the_last_whole_window_and_a_short_file_are_checked_as_before(tmp_path, chunk_rows):
-    """A file longer than a window: its tail shorter than one is not checked (gaps there are
-    legal); a file shorter than a window: the median of all its steps is."""
+    """A file longer than a window: a minority of odd steps in its tail reads (gaps there are
+    legal), a majority of the last half window or more does not; a file shorter than a window:
+    the median of all its steps is checked."""
     steps = np.full(2500, 0.01)
-    steps[2100:] = 0.001  # 400 fast steps after the second whole window
+    steps[2300:] = 0.001  # 200 fast steps: a minority of every window and of the tail
     head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
     assert len(data) == 2501
+    steps[2100:] = 0.001  # 400 of the last 500 steps: the tail runs at another rate (was read before)
+    with pytest.raises(RecordingError, match=r"t steps by 0.001 s \(median of the 500 steps from line 2005\)"):
+        _read_chunked(_dps_file(tmp_path, _t_body(steps), name="tail.csv"), chunk_rows)
     with pytest.raises(RecordingError, match=r"t steps by 0.001 s \(median of its first 999 steps from line 5\)"):
         _read_chunked(_dps_file(tmp_path, _t_body(np.full(999, 0.001)), name="short.csv"), chunk_rows)
+
+
+@pytest.mark.parametrize("runs", [[(1000, 0.01), (999, 0.001)], [(501, 0.01), (998, 0.001), (1501, 0.01)]])
+def test_a_stretch_at_another_rate_as_long_as_a_window_is_caught_wherever_it_lies(tmp_path, runs):
+    """Fixed windows 1-1000, 1001-2000 missed 998 fast steps straddling their border, and a fast
+    tail of 999 steps: half a file at 10x the header's rate read without a word."""
+    steps = np.concatenate([np.full(n, step) for n, step in runs])
+    with pytest.raises(RecordingError, match=r"t steps by 0.001 s"):
+        _read_chunked(_dps_file(tmp_path, _t_body(steps)), 1 << 16)
 
 
 def test_writers_refuse_a_t_the_reader_would_refuse(tmp_path):
