@@ -393,3 +393,19 @@ def test_a_summary_naming_a_file_that_is_not_utf8_prints_under_a_utf8_locale(tmp
     proc = subprocess.run([sys.executable, "-m", "gyrofilter", "replay", os.fsencode(path)], capture_output=True, env=env)
     assert proc.returncode == 0, proc.stderr
     assert b"\\udcff.csv" in proc.stdout + proc.stderr and b"Traceback" not in proc.stderr
+
+
+def test_outputs_land_together_or_none_when_one_name_was_taken_meanwhile(tmp_path):
+    """gap --json --report and replay --out --plot --save-calibration landed the outputs committed
+    before the one whose name another file had taken meanwhile, then exited 2."""
+    import contextlib
+
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    common.check_outputs([str(a), str(b)])
+    with pytest.raises(FileExistsError, match="appeared while this command ran"):
+        with contextlib.ExitStack() as outputs:
+            for path in (a, b):  # b lands first (an ExitStack exits in reverse)
+                open(outputs.enter_context(common.replacing(str(path))), "w").write("mine")
+            a.write_text("theirs")  # the name of the one that would land last is taken
+    assert a.read_text() == "theirs" and not b.exists()
+    assert sorted(os.listdir(tmp_path)) == ["a.json"]

@@ -146,11 +146,31 @@ def _identity(st):
     return st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size
 
 
+#: the outputs whose temporary files wait to land (:func:`replacing`): every commit checks them
+#: all first, so that a command's outputs land together or none of them does
+_pending = []
+
+
+def _may_land(path):
+    """FileExistsError when a file at ``path`` is not one --force may replace (it appeared while
+    the command ran)."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return
+    if _identity(st) not in _replaceable:
+        raise FileExistsError(17, "appeared while this command ran and is left as it is (rerun with --force to "
+                                  "overwrite)", path)
+
+
 def commit(tmp, path):
     """Give the finished temporary file ``tmp`` the name ``path``: replace the file there only when
     :func:`check_outputs` let ``--force`` replace that very file; a file that appeared meanwhile
-    (another command, the user) is left as it is: FileExistsError. The check and the rename are
-    one step (``os.link`` fails on an existing name) where the file system has hard links."""
+    (another command, the user) is left as it is: FileExistsError, raised before any of the
+    command's pending outputs lands. The check and the rename are one step (``os.link`` fails on
+    an existing name) where the file system has hard links."""
+    for other in _pending:
+        _may_land(other)
     try:
         st = os.lstat(path)
     except FileNotFoundError:
@@ -197,11 +217,13 @@ def replacing(path):
     call created, so a failed command leaves nothing behind."""
     tmp = partial_path(path)
     with _folder(os.path.dirname(tmp)):
+        _pending.append(path)
         try:
             with _naming(tmp, path):
                 yield tmp
                 commit(tmp, path)
         finally:
+            _pending.remove(path)
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(tmp)
 
@@ -216,7 +238,10 @@ def replacing_in(folder):
         try:
             with _naming(tmp, folder):
                 yield tmp
-                for name in sorted(os.listdir(tmp)):
+                names = sorted(os.listdir(tmp))
+                for name in names:  # all may land, or none does
+                    _may_land(os.path.join(folder, name))
+                for name in names:
                     commit(os.path.join(tmp, name), os.path.join(folder, name))
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
