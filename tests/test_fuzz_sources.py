@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 from gyrofilter.errors import DeviceError, GyroFilterError, SettingsError
 from gyrofilter.sources import KINDS, open_source, parse_source
 from gyrofilter.sources.serial_source import LINE_OUTCOMES, MAX_LINE_BYTES, LineParser
-from gyrofilter.units import MAX_RATE_DPS
+from gyrofilter.units import MAX_RATE_DPS, TEMP_RANGE_C
 
 FAST = settings(max_examples=100, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -92,7 +92,9 @@ def model(lines, tail, fields, bits, temp_raw):
         if not all(math.isfinite(v) for v in values.values()):
             stats["bad_lines"] += 1
             continue
-        if any(abs(values[g] / 131) > MAX_RATE_DPS for g in ("gx", "gy", "gz")):  # lsb_per_dps=131
+        if (any(abs(values[g] / 131) > MAX_RATE_DPS for g in ("gx", "gy", "gz"))  # lsb_per_dps=131
+                or not TEMP_RANGE_C[0] <= (values.get("temp", 25.0) / 340.0 + 36.53 if temp_raw and "temp" in values
+                                           else values.get("temp", 25.0)) <= TEMP_RANGE_C[1]):
             stats["bad_lines"] += 1
             continue
         step = 1

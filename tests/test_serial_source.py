@@ -23,9 +23,12 @@ HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=1
 RATE_HZ = 1000
 
 
-def line(i, gx=None):
+def line(i, gx=None, raw_temp=True):
+    """Line i of the device: its temperature as the MPU6050's raw register (what HEADER says), or
+    in deg C (a device without a header: the reader takes deg C, and refuses -2000 as absurd)."""
     gx = (i * 7) % 2001 - 1000 if gx is None else gx
-    return f"{i},{gx},{-(i % 300)},{(i * i) % 97 - 48},{-2000 + i % 50}\n".encode()
+    temp = -2000 + i % 50 if raw_temp else 25 + (i % 50) / 100
+    return f"{i},{gx},{-(i % 300)},{(i * i) % 97 - 48},{temp}\n".encode()
 
 
 def values(i):
@@ -70,7 +73,7 @@ class Device(threading.Thread):
             if i in self.garbage_at:
                 junk = bytes(self.rng.integers(0x80, 0x100, 40, dtype=np.uint8)) + b"garbage!" + b"\n"
                 os.write(self.master, junk)
-            data = line(i)
+            data = line(i, raw_temp=self.header)
             if i in self.beyond_at:
                 os.write(self.master, line(i, gx=2 ** 31))
                 continue
@@ -203,7 +206,7 @@ def test_record_from_serial_skips_a_value_beyond_the_range_and_goes_on(pty_pair,
     assert len(good) == 599 and 300 not in good
     np.testing.assert_array_equal(rec.gyro, values(good))
     texts = [t for _, t in rec.notes]
-    assert any("bad line (a gyro value beyond +-100000 deg/s): 300,2147483648," in t for t in texts), texts
+    assert any("bad line (a gyro value beyond +-100000 deg/s or a temperature outside [-100, 200] deg C): 300,2147483648," in t for t in texts), texts
     assert texts[-1].startswith("end: source ended:")
     capsys.readouterr()
 

@@ -485,7 +485,17 @@ def test_parser_refuses_a_line_beyond_the_rate_range_like_any_bad_line(header, b
         np.testing.assert_array_equal(rows[:, 0], np.array([4, 5, 6, 7]) / 100)  # t from the counter: 3 is a lost sample
         assert rows[0, 3] == float(edge)
         assert p.stats["bad_lines"] == 1 and p.stats["lost_samples"] == 1 and _reconciles(p)
-        assert any("bad line (a gyro value beyond +-100000 deg/s): 3,1," in note for note in p.pop_notes())
+        assert any("bad line (a gyro value beyond +-100000 deg/s or a temperature outside [-100, 200] deg C): 3,1,"
+                   in note for note in p.pop_notes())
+
+
+def test_parser_refuses_a_line_with_a_temperature_out_of_range_like_any_bad_line():
+    """A temperature of 1e300 went on as a sample: record wrote it (replay then stopped at that
+    line) and run stopped on it; it is a corrupt line, counted and skipped."""
+    p = LineParser()
+    rows = p.feed(HEADER + b"0,1,2,3,25.5\n1,1,2,3,1e300\n2,1,2,3,-150\n3,1,2,3,26\n")
+    np.testing.assert_array_equal(rows[:, 4], [25.5, 26.0])
+    assert p.stats["bad_lines"] == 2 and p.stats["lost_samples"] == 2 and _reconciles(p)
 
 
 def test_parser_temperature_raw_and_celsius():

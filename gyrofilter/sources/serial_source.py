@@ -53,7 +53,7 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError, SourceEnded, one_line
 from ..inputs import check_number, is_plain_number, parse_number, quote
-from ..units import GYRO_UNITS, MAX_RATE_DPS, check_sample_rate_hz, to_dps
+from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
 from .base import Source
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
@@ -430,7 +430,7 @@ class LineParser:
     def _rows(self, values):
         """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping.
 
-        A gyro value beyond +-MAX_RATE_DPS in deg/s, or a counter that is not an integer in
+        A gyro value beyond +-MAX_RATE_DPS in deg/s, a temperature outside TEMP_RANGE_C, or a counter that is not an integer in
         [0, 2**counter_bits), refuses its line (``bad_lines``). Counters are at most 2**32 and the
         sample index an int64, so no step overflows."""
         fields = self.fields
@@ -495,16 +495,21 @@ class LineParser:
 
     def _refuse_beyond_range(self, values):
         """``values`` (per line, fields order) without the lines holding a gyro value beyond
-        +-MAX_RATE_DPS once in deg/s (counted in ``bad_lines``, the first noted): one vectorised
-        check per chunk."""
+        +-MAX_RATE_DPS once in deg/s or a temperature outside TEMP_RANGE_C once in deg C (counted
+        in ``bad_lines``, the first noted): one vectorised check per chunk. A glitched line then
+        costs one sample, not the recording (the writers and the filter refuse such values)."""
         gyro = values[:, [self.fields.index(name) for name in ("gx", "gy", "gz")]]
         with np.errstate(over="ignore"):  # 1e308 rad/s: inf deg/s, refused
             ok = (np.abs(to_dps(gyro, self.header["gyro_unit"], self._lsb_per_dps)) <= MAX_RATE_DPS).all(axis=1)
+            if "temp" in self.fields:
+                temp = values[:, self.fields.index("temp")]
+                temp_c = temp / TEMP_LSB_PER_C + TEMP_OFFSET_C if self._temp_raw else temp
+                ok &= (temp_c >= TEMP_RANGE_C[0]) & (temp_c <= TEMP_RANGE_C[1])
         if ok.all():
             return values
         shown = ",".join(map(_num, values[np.argmin(ok)])).encode()
-        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s", count=int(np.count_nonzero(~ok)),
-                  garbage_bytes=0)
+        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s or a temperature outside "
+                  f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C", count=int(np.count_nonzero(~ok)), garbage_bytes=0)
         return values[ok]
 
     def pop_notes(self):
