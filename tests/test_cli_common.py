@@ -245,7 +245,7 @@ def test_an_output_that_appears_while_the_command_runs_is_not_replaced(tmp_path)
     (two record runs, the user) was silently replaced when the output landed."""
     out = tmp_path / "out.json"
     common.check_outputs([str(out)])
-    with pytest.raises(FileExistsError, match="appeared while this command ran"):
+    with pytest.raises(FileExistsError, match="appeared or changed while this command ran"):
         with common.replacing(str(out)) as tmp:
             open(tmp, "w").write("mine")
             out.write_text("theirs")  # appears meanwhile
@@ -255,7 +255,7 @@ def test_an_output_that_appears_while_the_command_runs_is_not_replaced(tmp_path)
         open(tmp, "w").write("mine")
     assert out.read_text() == "mine"
     common.check_outputs([str(out)], force=True)
-    with pytest.raises(FileExistsError, match="appeared while this command ran"):
+    with pytest.raises(FileExistsError, match="appeared or changed while this command ran"):
         with common.replacing(str(out)) as tmp:
             open(tmp, "w").write("third")
             os.unlink(out)
@@ -402,7 +402,7 @@ def test_outputs_land_together_or_none_when_one_name_was_taken_meanwhile(tmp_pat
 
     a, b = tmp_path / "a.json", tmp_path / "b.json"
     common.check_outputs([str(a), str(b)])
-    with pytest.raises(FileExistsError, match="appeared while this command ran"):
+    with pytest.raises(FileExistsError, match="appeared or changed while this command ran"):
         with contextlib.ExitStack() as outputs:
             for path in (a, b):  # b lands first (an ExitStack exits in reverse)
                 open(outputs.enter_context(common.replacing(str(path))), "w").write("mine")

@@ -159,7 +159,7 @@ def _may_land(path):
     except FileNotFoundError:
         return
     if _identity(st) not in _replaceable:
-        raise FileExistsError(17, "appeared while this command ran and is left as it is (rerun with --force to "
+        raise FileExistsError(17, "appeared or changed while this command ran and is left as it is (rerun with --force to "
                                   "overwrite)", path)
 
 
@@ -171,26 +171,19 @@ def commit(tmp, path):
     an existing name) where the file system has hard links."""
     for other in _pending:
         _may_land(other)
-    try:
-        st = os.lstat(path)
-    except FileNotFoundError:
-        st = None
-    if st is not None and _identity(st) in _replaceable:
+    _may_land(path)
+    if os.path.lexists(path):  # the very file --force was given for
         os.replace(tmp, path)
         return
-    if st is None:
-        try:
-            os.link(tmp, path)
-        except FileExistsError:
-            pass
-        except OSError:  # no hard links here (vfat): the look above has to do
-            os.replace(tmp, path)
-            return
-        else:
-            os.unlink(tmp)
-            return
-    raise FileExistsError(17, "appeared while this command ran and is left as it is (rerun with --force to "
-                              "overwrite)", path)
+    try:
+        os.link(tmp, path)
+    except FileExistsError:  # it appeared between the look and the link
+        _may_land(path)
+        raise
+    except OSError:  # no hard links here (vfat): the look above has to do
+        os.replace(tmp, path)
+    else:
+        os.unlink(tmp)
 
 
 def check_output_folder(folder, option):
