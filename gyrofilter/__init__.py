@@ -6,12 +6,9 @@ Conventions: angular rate in deg/s (names end in ``_dps``), time in s (``_s``), 
     >>> from gyrofilter import GyroFilter
     >>> f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
 """
-from . import moved
 from .errors import GyroFilterError
-from .pipeline import GyroFilter
-from .smoother import Smoother, smooth
+from .filter.pipeline import GyroFilter
+from .filter.smoother import Smoother, smooth
 
-moved.install()  # gyrofilter.analysis.allan, gyrofilter.analysis.gap, ...: the paths of 0.1's flat layout
-
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 __all__ = ["GyroFilter", "GyroFilterError", "Smoother", "__version__", "smooth"]

@@ -1,10 +1,10 @@
-"""Constant-rate hold with CUSUM change detection (gyrofilter.adaptive)."""
+"""Constant-rate hold with CUSUM change detection (gyrofilter.filter.hold)."""
 import math
 
 import numpy as np
 import pytest
 
-from gyrofilter.adaptive import ConstantRateHold, block_noise_std, chi2_quantile, cusum_false_alarm_blocks
+from gyrofilter.filter.hold import ConstantRateHold, block_noise_std, chi2_quantile, cusum_false_alarm_blocks
 from gyrofilter.errors import SettingsError
 
 SIGMA = 0.05  # deg/s, a block mean's noise
@@ -103,7 +103,7 @@ def test_bad_settings_raise():
 
 
 def test_make_hold_from_window_or_from_a_loaded_calibration():
-    from gyrofilter.adaptive import make_hold
+    from gyrofilter.filter.hold import make_hold
 
     rng = np.random.default_rng(14)
     window = rng.normal(scale=0.1, size=(200, 3))

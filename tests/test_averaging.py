@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from gyrofilter.averaging import average_block, average_blocks
+from gyrofilter.filter.averaging import average_block, average_blocks
 
 PAPER_RAW = [67, 49, 55, -233, 21, 17, 23, 63]  # paper 001 section 1.2, raw LSB
 

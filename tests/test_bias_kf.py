@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.analysis.bias_kf import BiasKalmanFilter, BiasKFSettings
-from gyrofilter.calibration import Calibration
+from gyrofilter.filter.calibration import Calibration
 from gyrofilter.errors import SettingsError
 
 FS = 100.0

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from gyrofilter import GyroFilter
-from gyrofilter.calibration import Calibration, calibrate, stillness_z
+from gyrofilter.filter.calibration import Calibration, calibrate, stillness_z
 from gyrofilter.errors import CalibrationError, SettingsError
 
 

@@ -6,7 +6,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gyrofilter import GyroFilter
-from gyrofilter.presets import PRESETS
+from gyrofilter.filter.presets import PRESETS
 
 RATE_HZ = 100.0
 N = 720  # 2 s of calibration + 520 samples: 104 blocks of 5

@@ -5,7 +5,7 @@ import re
 import numpy as np
 import pytest
 
-from gyrofilter.calibration import Calibration
+from gyrofilter.filter.calibration import Calibration
 from gyrofilter.analysis.noise_model import JSON_KEY
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.simulate import EFFECTS, simulate, validate_model
@@ -148,7 +148,7 @@ def test_fleet_table_example_has_the_columns_of_the_code():
 
 def setting_ranges_table():
     """The table of the filter settings' ranges that section 8 shows, from pipeline.SETTING_RANGES."""
-    from gyrofilter.pipeline import SETTING_RANGES
+    from gyrofilter.filter.pipeline import SETTING_RANGES
 
     def number(x):
         return f"{x:g}" if abs(x) < 1e6 else f"{x:.0e}".replace("e+0", "e").replace("e+", "e")

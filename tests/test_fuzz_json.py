@@ -22,7 +22,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gyrofilter.calibration import MAX_BIAS_DPS, MAX_NOISE_STD_DPS, Calibration
+from gyrofilter.filter.calibration import MAX_BIAS_DPS, MAX_NOISE_STD_DPS, Calibration
 from gyrofilter.cli import main
 from gyrofilter.errors import CalibrationError, GyroFilterError
 from gyrofilter.recording import Recording, read_recording, write_recording

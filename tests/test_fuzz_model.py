@@ -22,7 +22,7 @@ from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording, write_recording
 from gyrofilter.sim.simulate import simulate, validate_model
 from gyrofilter.sources.simulated import DEFAULT_MODEL
-from gyrofilter.tempcomp import coefficients_from_model
+from gyrofilter.filter.tempcomp import coefficients_from_model
 from support import REPO
 
 MODELS = [json.load(open(p)) for p in sorted(glob.glob(str(REPO / "examples" / "models" / "*.json")))]

@@ -26,13 +26,13 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from gyrofilter import GyroFilter
-from gyrofilter.calibration import MAX_NOISE_STD_DPS, Calibration
+from gyrofilter.filter.calibration import MAX_NOISE_STD_DPS, Calibration
 from gyrofilter.cli import main
 from gyrofilter.cli.common import make_filter
 from gyrofilter.errors import CalibrationError, SettingsError
-from gyrofilter.jit import numba_available
-from gyrofilter.pipeline import SETTING_NAMES, SETTING_RANGES
-from gyrofilter.presets import PRESETS
+from gyrofilter.filter.jit import numba_available
+from gyrofilter.filter.pipeline import SETTING_NAMES, SETTING_RANGES
+from gyrofilter.filter.presets import PRESETS
 from gyrofilter.units import MAX_RATE_DPS, TEMP_RANGE_C
 
 BACKENDS = ["python"] + (["numba"] if numba_available() else [])

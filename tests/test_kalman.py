@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from gyrofilter import GyroFilter, kalman
+from gyrofilter import GyroFilter
+from gyrofilter.filter import adaptive_kalman, kalman
 
 FS = 100.0
 CAL = 200  # 2 s of calibration at 100 Hz
@@ -70,8 +71,8 @@ def test_the_adaptive_filter_recovers_by_itself_and_its_guard_reseeds():
     # with the mean of the last 20 block means in that very block
     f = GyroFilter(FS, preset="adaptive_kalman", guard_blocks=0, backend="python")
     f.filter(x[: CAL + 5 * 30])
-    f._akf.fifo[0, :] = np.roll(1e3 * np.arange(10.0) ** 2, f._akf.istate[kalman.A_HEAD])
-    f._akf.istate[kalman.MODE] = kalman.MOTION
+    f._akf.fifo[0, :] = np.roll(1e3 * np.arange(10.0) ** 2, f._akf.istate[adaptive_kalman.A_HEAD])
+    f._akf.istate[adaptive_kalman.MODE] = adaptive_kalman.MOTION
     out = f.filter(x[CAL + 5 * 30 :])
     assert out[0, 0] == pytest.approx(y[11:31, 0].mean(), abs=1e-12)
     assert np.all(np.abs(out[:, 0] - y[30:, 0]) < 0.1)

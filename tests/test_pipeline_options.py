@@ -3,11 +3,11 @@ import numpy as np
 import pytest
 
 from gyrofilter import GyroFilter
-from gyrofilter.averaging import (average_block_line_if_cut, average_block_median_slope, average_blocks,
+from gyrofilter.filter.averaging import (average_block_line_if_cut, average_block_median_slope, average_blocks,
                                   average_blocks_line_if_cut, average_blocks_median_slope)
-from gyrofilter.calibration import Calibration
+from gyrofilter.filter.calibration import Calibration
 from gyrofilter.errors import SettingsError
-from gyrofilter.tempcomp import coefficients_from_model
+from gyrofilter.filter.tempcomp import coefficients_from_model
 from support import stream
 
 FS = 100.0

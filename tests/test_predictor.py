@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.errors import SettingsError
-from gyrofilter.predictor import closed_loop_radius, extrapolation_weights, stable_gain_threshold, weight_table
+from gyrofilter.filter.predictor import closed_loop_radius, extrapolation_weights, stable_gain_threshold, weight_table
 
 
 @pytest.mark.parametrize("n,order", [(1, 2), (2, 2), (3, 2), (5, 1), (10, 2), (10, 0), (7, 3)])

@@ -5,7 +5,7 @@ import pytest
 
 from gyrofilter import GyroFilter
 from gyrofilter.evaluation import evaluate as E
-from gyrofilter.presets import DEFAULT_PRESET, PRESETS
+from gyrofilter.filter.presets import DEFAULT_PRESET, PRESETS
 from support import RECORDINGS
 
 REC_DIR = str(RECORDINGS)

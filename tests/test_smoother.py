@@ -1,4 +1,4 @@
-"""The forward-backward smoother (gyrofilter.smoother) and ``gyrofilter replay --smooth``."""
+"""The forward-backward smoother (gyrofilter.filter.smoother) and ``gyrofilter replay --smooth``."""
 import numpy as np
 import pytest
 
@@ -6,8 +6,8 @@ from gyrofilter import GyroFilter
 from gyrofilter.errors import SettingsError
 from gyrofilter.sim.profiles import get_profile
 from gyrofilter.recording import read_recording
-from gyrofilter import smoother
-from gyrofilter.smoother import Smoother, combine, smooth
+from gyrofilter.filter import smoother
+from gyrofilter.filter.smoother import Smoother, combine, smooth
 
 FS = 100.0
 CAL = 200  # 2 s of calibration at 100 Hz

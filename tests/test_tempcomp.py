@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from gyrofilter import GyroFilter, tempcomp
+from gyrofilter import GyroFilter
+from gyrofilter.filter import tempcomp
 from gyrofilter.errors import SettingsError
 
 FS = 100.0

@@ -8,7 +8,7 @@ from gyrofilter import GyroFilter
 from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.recording import read_recording
 from gyrofilter.evaluation.reference import body_rate_from_quaternions
-from gyrofilter.tempcomp import compensate
+from gyrofilter.filter.tempcomp import compensate
 from gyrofilter.units import MIN_SAMPLE_RATE_HZ, check_sample_rate_hz, from_dps, json_ready, plain, to_dps
 
 

@@ -96,7 +96,7 @@ def main(argv=None):
           + ", ".join(os.path.basename(p) for p, _ in motion))
 
     # paper 001 Fig. 4: raw vs filtered on the longest static recording, for every preset
-    from gyrofilter.presets import PRESETS
+    from gyrofilter.filter.presets import PRESETS
 
     name, (rec, _) = max(results_by_file.items(), key=lambda kv: kv[1][0].duration_s)
     print(f"\n#### Before/after filtering: {name}; std after the calibration window\n")

@@ -8,7 +8,7 @@ Pipeline section: streaming ``update()`` and batch ``filter()`` throughput in th
 per second for the presets "paper" and "recommended" (also in motion) and each Kalman kernel
 (numba, Python), the offline smoother ``gyrofilter.smooth`` (batch only), peak memory of ``filter()`` on a 1-hour 100 Hz recording, and the same pipeline
 written the plain way (filterpy ``KalmanFilter`` per block plus ``np.polyfit`` per prediction,
-``gyrofilter/plain_filter.py``) as the baseline. Targets on this machine (issue 2): streaming >=
+``tests/support/plain_filter.py``) as the baseline. Targets on this machine (issue 2): streaming >=
 500 000 samples/s, batch >= 5 000 000 samples/s, >= 30x the plain way (numba kernel); the
 Python kernel >= 50 000 samples/s. Other sections live in
 ``tools/bench_<name>.py`` beside this file. Timings are the best of a few repeats.
@@ -18,11 +18,12 @@ import itertools
 import sys
 import time
 import tracemalloc
+from pathlib import Path
 
 import numpy as np
 
 from gyrofilter import GyroFilter, smooth
-from gyrofilter.jit import numba_available
+from gyrofilter.filter.jit import numba_available
 
 
 RATE_HZ = 100.0
@@ -42,7 +43,8 @@ def best_of(fn, repeats=3):
 
 
 def pipeline():
-    from gyrofilter.plain_filter import plain_filter
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the test oracle
+    from support.plain_filter import plain_filter
 
     rng = np.random.default_rng(0)
     hour = rng.normal([1.5, -0.7, 3.0], 0.1, (int(3600 * RATE_HZ), 3))

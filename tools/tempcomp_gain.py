@@ -24,7 +24,7 @@ import numpy as np
 from gyrofilter import GyroFilter
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.simulate import simulate_dps
-from gyrofilter.tempcomp import fit_coefficient
+from gyrofilter.filter.tempcomp import fit_coefficient
 
 C_DPS_PER_C = (0.02, -0.015, 0.01)
 CAL_S = 2.0

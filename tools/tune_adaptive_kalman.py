@@ -27,7 +27,7 @@ import numpy as np
 
 
 from gyrofilter.evaluation import evaluate as E
-from gyrofilter.predictor import closed_loop_radius, extrapolation_weights, stable_gain_threshold
+from gyrofilter.filter.predictor import closed_loop_radius, extrapolation_weights, stable_gain_threshold
 from gyrofilter.sim.profiles import Profile
 
 REC_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "recordings")

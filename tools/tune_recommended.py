@@ -7,7 +7,7 @@
    Rule fixed before looking at held-out data: among settings that dominate paper001 on the tune
    split with static std reduction >= 1.5 x 12.6 (margin for unseen recordings), the lowest
    geometric-mean dynamic RMSE.
-2. The switching designs (gyrofilter.adaptive hold with h = 10 from the false-alarm rate) with the
+2. The switching designs (gyrofilter.filter.hold hold with h = 10 from the false-alarm rate) with the
    paper-001 Kalman output or the block means as the tracking output, on the tune split, next to
    the best pipeline setting of section 1. The recommended preset was the hold + block-mean design
    (preset "hold" now; "recommended" in this script's output means it: since adaptive_kalman
@@ -29,7 +29,7 @@ import numpy as np
 
 
 from gyrofilter.evaluation import evaluate as E
-from gyrofilter.pipeline import GyroFilter
+from gyrofilter.filter.pipeline import GyroFilter
 
 REC_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "recordings")
 MARGIN = 1.5

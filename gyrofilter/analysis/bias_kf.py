@@ -16,7 +16,7 @@ start-up calibration b0 (deg/s). Per sample (dt = 1/fs)::
 phi = exp(-dt / tau) and q_b = bias_sigma^2 (1 - phi^2), or phi = 1 and q_b = K^2 dt for a
 random-walk bias (tau = inf). These come from the ARMA(1, 1) of :mod:`gyrofilter.analysis.arma`
 (:meth:`BiasKFSettings.from_bias_model`) or from settings. sigma is the white-noise level
-measured during the start-up calibration (first differences, :mod:`gyrofilter.calibration`).
+measured during the start-up calibration (first differences, :mod:`gyrofilter.filter.calibration`).
 
 Stillness is judged from the data: over the last ``still_window_s`` of raw samples, per axis,
 the variance s^2 and the mean m. Still is entered when for every axis s^2 < enter * sigma^2 and
@@ -47,7 +47,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..calibration import Calibration, calibrate
+from ..filter.calibration import Calibration, calibrate
 from ..errors import SettingsError
 from ..units import check_sample_rate_hz, plain
 
@@ -112,7 +112,7 @@ class BiasKalmanFilter:
 
     ``sample_rate_hz``: input sample rate (Hz); ``settings``: a :class:`BiasKFSettings` (default:
     its defaults), with any of its fields overridden by keyword (``**kw``); ``calibration``: a
-    :class:`~gyrofilter.calibration.Calibration` that skips the start-up calibration.
+    :class:`~gyrofilter.filter.calibration.Calibration` that skips the start-up calibration.
 
     >>> f = BiasKalmanFilter(100.0)              # 2 s start-up calibration, then online bias
     >>> y = f.update((gx, gy, gz))               # None while calibrating, else rates (deg/s)

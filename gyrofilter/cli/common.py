@@ -15,8 +15,8 @@ import time
 
 from ..errors import GyroFilterError, RecordingError, SettingsError
 from ..inputs import parse_json, parse_number, quote
-from ..pipeline import SETTING_NAMES, GyroFilter
-from ..presets import DEFAULT_PRESET, PRESETS
+from ..filter.pipeline import SETTING_NAMES, GyroFilter
+from ..filter.presets import DEFAULT_PRESET, PRESETS
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT
 from ..units import AXES, json_ready
 
@@ -452,7 +452,7 @@ def temperature_coefficients(path):
     checked by the simulator's :func:`~gyrofilter.sim.simulate.validate_model` (for its numbers
     only: the sample rate and the temperature profile may be missing)."""
     from ..sim.simulate import load_model, validate_model
-    from ..tempcomp import coefficients_from_model
+    from ..filter.tempcomp import coefficients_from_model
 
     model = load_model(path)
     if not isinstance(model, dict) or not isinstance(model.get("axes"), dict):

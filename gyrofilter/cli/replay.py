@@ -10,7 +10,7 @@ stdout is then a format-v1 recording (the summary goes to stderr), and when its 
 away (``| head``) the rest is filtered without pacing, so that ``--out`` is still complete.
 
 ``--smooth`` replaces the real-time output by the forward-backward smoother
-(:mod:`gyrofilter.smoother`): the same rows, each estimated from the whole recording. It keeps
+(:mod:`gyrofilter.filter.smoother`): the same rows, each estimated from the whole recording. It keeps
 the block means of the recording in memory (12 floats per block, and 3 for the output) and writes once the end is read.
 """
 import contextlib
@@ -23,9 +23,9 @@ from importlib import resources
 import numpy as np
 
 from ..errors import RecordingError, SampleError, SettingsError
-from ..pipeline import SETTING_NAMES
+from ..filter.pipeline import SETTING_NAMES
 from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
-from ..smoother import Smoother
+from ..filter.smoother import Smoother
 from ..streamstats import Envelope, RunningMoments
 from . import common
 

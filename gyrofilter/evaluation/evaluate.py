@@ -222,7 +222,7 @@ def gyrofilter_run(preset="paper", **settings):
     ``first_block_index``."""
 
     def run(x_dps, sample_rate_hz, calibration_s):
-        from ..pipeline import GyroFilter
+        from ..filter.pipeline import GyroFilter
 
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
         y = f.filter(x_dps)
@@ -232,12 +232,12 @@ def gyrofilter_run(preset="paper", **settings):
 
 
 def gyrofilter_smooth(preset="recommended", **settings):
-    """The offline forward-backward smoother :func:`gyrofilter.smoother.smooth` with ``preset`` and
+    """The offline forward-backward smoother :func:`gyrofilter.filter.smoother.smooth` with ``preset`` and
     ``settings`` (same rows as :func:`gyrofilter_run`); returns the filter's ``run``."""
 
     def run(x_dps, sample_rate_hz, calibration_s):
-        from ..pipeline import GyroFilter
-        from ..smoother import Smoother
+        from ..filter.pipeline import GyroFilter
+        from ..filter.smoother import Smoother
 
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
         smoother = Smoother(f)

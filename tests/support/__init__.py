@@ -1,7 +1,7 @@
 """What the tests share: paths, and feeding a filter sample by sample as a live source does.
 
-Helpers that tools need too live in the package: the plain-way oracle in
-``gyrofilter.plain_filter``, the hidden-effect battery in ``gyrofilter.sim.hidden_effects`` and the
+``plain_filter`` is the plain-way oracle of the paper's filter (``tools/bench.py`` uses it as its
+baseline). Helpers that tools need too live in the package: the hidden-effect battery in ``gyrofilter.sim.hidden_effects`` and the
 register-level MPU6050 model in ``gyrofilter.sources.mpu6050_model``.
 """
 from __future__ import annotations

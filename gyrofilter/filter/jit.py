@@ -5,8 +5,8 @@ numba it runs interpreted, with the same arithmetic and so the same numbers.
 """
 import types
 
-from .errors import SettingsError
-from .extras import install_hint
+from ..errors import SettingsError
+from ..extras import install_hint
 
 _compiled = {}
 
@@ -31,7 +31,8 @@ def choose_kernel(fn, backend):
 
 
 def _compile(fn):
-    """njit(cache=True) of ``fn``, with the module-level helpers it calls compiled and bound."""
+    """njit(cache=True) of ``fn``, with the plain functions of this package (gyrofilter.filter) that
+    it calls compiled and bound."""
     if fn not in _compiled:
         import numba
 
@@ -39,7 +40,7 @@ def _compile(fn):
         helpers = {
             name: _compile(namespace[name])
             for name in fn.__code__.co_names
-            if isinstance(namespace.get(name), types.FunctionType) and namespace[name].__module__ == fn.__module__
+            if isinstance(namespace.get(name), types.FunctionType) and namespace[name].__module__.startswith(f"{__package__}.")
         }
         target = fn
         if helpers:

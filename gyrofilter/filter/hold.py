@@ -49,9 +49,9 @@ import math
 import numpy as np
 
 from .calibration import white_noise_std
-from .errors import SettingsError
+from ..errors import SettingsError
 from .jit import choose_kernel
-from .units import plain
+from ..units import plain
 
 DEFAULTS = {
     "cusum_kappa": 0.5,

@@ -2,7 +2,7 @@
 
 The real-time filter estimates the rate of block k from blocks 0..k only. With the whole
 recording at hand, the blocks after k help too: the smoother runs the same filter
-(:class:`gyrofilter.kalman.AdaptiveKalman`, the settings of ``preset="adaptive_kalman"``) a
+(:class:`gyrofilter.filter.adaptive_kalman.AdaptiveKalman`, the settings of ``preset="adaptive_kalman"``) a
 second time over the reversed block means, and combines, per block and axis, the forward
 posterior with the backward *prior* (the backward filter's prediction of block k from blocks
 k+1..M-1, which has not seen y_k, so no measurement is counted twice):
@@ -34,8 +34,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kalman
-from .errors import SettingsError
+from . import adaptive_kalman, kalman
+from ..errors import SettingsError
 from .presets import DEFAULT_PRESET
 
 #: blocks per call of the backward filter (its memory: 15 floats per block of the chunk)
@@ -44,7 +44,7 @@ BACKWARD_CHUNK = 65536
 
 class BlockLog:
     """What a forward filter handed its adaptive Kalman stage and got back: the block means y and
-    y_motion (M, 3; see :func:`gyrofilter.kalman.run_blocks_adaptive`), the posteriors x and
+    y_motion (M, 3; see :func:`gyrofilter.filter.adaptive_kalman.run_blocks_adaptive`), the posteriors x and
     their variances P (M, 3), kept in the chunks the filter ran (joined by :meth:`arrays`)."""
 
     def __init__(self):
@@ -52,7 +52,7 @@ class BlockLog:
 
     def append(self, y, y_motion, x, trace):
         """One call of the kernel: its inputs, outputs and trace (M, 3, 3)."""
-        for chunks, values in zip(self._chunks, (y, y_motion, x, trace[:, kalman.POST_VAR])):
+        for chunks, values in zip(self._chunks, (y, y_motion, x, trace[:, adaptive_kalman.POST_VAR])):
             chunks.append(np.array(values))
 
     def arrays(self):
@@ -106,7 +106,7 @@ class Smoother:
         time, each chunk combined with the forward results as it comes, so the backward pass
         adds a fixed amount of memory."""
         y, y_motion, x_f, p_f = self.log.arrays()
-        backward = kalman.AdaptiveKalman(self.filter.settings)
+        backward = adaptive_kalman.AdaptiveKalman(self.filter.settings)
         backward.start(np.sqrt(self.filter._akf.r_dps2), still_blocks=0)
         smoothed = np.empty_like(x_f)
         for end in range(len(y), 0, -BACKWARD_CHUNK):
@@ -115,7 +115,7 @@ class Smoother:
             trace = np.empty((end - start, 3, 3))
             backward.run(y[rows][::-1].copy(), np.empty((end - start, 3)), trace, y_motion[rows][::-1].copy())
             trace = trace[::-1]
-            smoothed[rows] = combine(x_f[rows], p_f[rows], trace[:, kalman.PRIOR], trace[:, kalman.PRIOR_VAR])
+            smoothed[rows] = combine(x_f[rows], p_f[rows], trace[:, adaptive_kalman.PRIOR], trace[:, adaptive_kalman.PRIOR_VAR])
         return smoothed
 
 

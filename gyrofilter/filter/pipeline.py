@@ -4,8 +4,8 @@
                 -> block averaging with gross-error rejection
                 -> Kalman filter with least-squares-prediction prior -> filtered (deg/s)
 
-Stages: :mod:`gyrofilter.calibration` (001 section 2.1), :mod:`gyrofilter.averaging` (2.2),
-:mod:`gyrofilter.predictor` and :mod:`gyrofilter.kalman` (2.3). Output: one row per block of
+Stages: :mod:`gyrofilter.filter.calibration` (001 section 2.1), :mod:`gyrofilter.filter.averaging` (2.2),
+:mod:`gyrofilter.filter.predictor` and :mod:`gyrofilter.filter.kalman` (2.3). Output: one row per block of
 ``block_len`` samples, at ``sample_rate_hz / block_len``.
 
 ``update()`` (one sample at a time) and ``filter()`` (an array) share the state and the
@@ -22,16 +22,16 @@ from functools import partial
 
 import numpy as np
 
-from . import kalman
-from .adaptive import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
+from . import adaptive_kalman, kalman
+from .hold import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
 from .calibration import MAX_BIAS_DPS, Calibration, calibrate
-from .errors import CalibrationError, SampleError, SettingsError
-from .inputs import check_number
+from ..errors import CalibrationError, SampleError, SettingsError
+from ..inputs import check_number
 from .predictor import closed_loop_radius, stable_gain_threshold
 from .presets import DEFAULT_PRESET, PRESETS
 from .tempcomp import compensate
-from .units import AXES, MAX_RATE_DPS, RATE_TOLERANCE, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
+from ..units import AXES, MAX_RATE_DPS, RATE_TOLERANCE, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
 
 
 #: longest start-up still window (s), and most samples in it (an hour at 1 kHz, 115 MB with the
@@ -72,7 +72,7 @@ SETTING_RANGES = {
 @dataclass(frozen=True)
 class FilterSettings:
     """Settings of :class:`GyroFilter`; the defaults are paper 001's values (preset "paper";
-    GyroFilter's default preset is "recommended", see gyrofilter.presets).
+    GyroFilter's default preset is "recommended", see gyrofilter.filter.presets).
 
     ============================ ========= ===================================================
     setting                      default   meaning
@@ -105,7 +105,7 @@ class FilterSettings:
     kalman_noise                 paper     how the Kalman stage gets Q and R: "paper" (eqs.
                                            11-12 over qr_window) or "adaptive" (R from the
                                            calibration, Q by covariance matching, constant-rate
-                                           / LS model switch; kalman.run_blocks_adaptive); the
+                                           / LS model switch; adaptive_kalman.run_blocks_adaptive); the
                                            switch uses hold_h, hold_window, hold_max_blocks
     gain_min                     0.6       "adaptive": least Kalman gain K of the LS model; the
                                            loop must be stable at it (predictor.
@@ -123,14 +123,14 @@ class FilterSettings:
                                            at rest (from the calibration window)
     temp_coefficient_dps_per_c   0         c per axis (one number or 3): subtract
                                            c (T - T0), T0 the calibration's mean temperature;
-                                           needs temperatures (see gyrofilter.tempcomp)
+                                           needs temperatures (see gyrofilter.filter.tempcomp)
     ============================ ========= ===================================================
 
     Every number must lie in its range in :data:`SETTING_RANGES` (a bool is not a number), the
     temperature coefficients within +-:data:`MAX_TEMP_COEFFICIENT_DPS_PER_C`.
 
     ``preset="hold"`` is ``tracker="block_mean", hold=True``; ``preset="adaptive_kalman"`` (= the
-    default ``"recommended"``) is ``kalman_noise="adaptive"`` with the guard on (gyrofilter.presets).
+    default ``"recommended"``) is ``kalman_noise="adaptive"`` with the guard on (gyrofilter.filter.presets).
 
     On q: paper 001 saw gross errors of more than 200 LSB; one such spike in a block of 5 sits
     4/5 * 200 = 160 LSB from the block mean, while its own example block
@@ -228,10 +228,10 @@ class GyroFilter:
     calibration_s : float, optional
         Length of the start-up bias calibration (s); None keeps the preset's (2 s).
     preset : str
-        Named settings (:mod:`gyrofilter.presets`); the default "recommended" is the best
+        Named settings (:mod:`gyrofilter.filter.presets`); the default "recommended" is the best
         measured filter, "paper" the faithful reproduction.
     calibration : Calibration or str, optional
-        A :class:`~gyrofilter.calibration.Calibration` or the path of a saved one: skips the
+        A :class:`~gyrofilter.filter.calibration.Calibration` or the path of a saved one: skips the
         start-up calibration.
     **settings
         Any :class:`FilterSettings` field (units in its table); explicit keyword settings
@@ -272,13 +272,13 @@ class GyroFilter:
         self._y1 = np.zeros((1, 3))
         self._y1_motion = np.zeros((1, 3))  # outlier_rule="by_model": the motion rule's block mean
         self._out1 = np.zeros((1, 3))
-        self._hold = None  # constant-rate hold stage (gyrofilter.adaptive), built after calibration
+        self._hold = None  # constant-rate hold stage (gyrofilter.filter.hold), built after calibration
         # divergence guard: sigma_b, the std of a block mean at rest (the adaptive filter's R too)
         self._sigma_b = np.ones(3)
-        self.block_log = None  # a gyrofilter.smoother.BlockLog while a Smoother records this filter
+        self.block_log = None  # a gyrofilter.filter.smoother.BlockLog while a Smoother records this filter
         # Kalman state (fixed size); the kernel's arguments are bound once, updated in place
         if self._adaptive:
-            self._akf = kalman.AdaptiveKalman(s)
+            self._akf = adaptive_kalman.AdaptiveKalman(s)
             self._guard_run = self._akf.guard_run
         else:
             self._pkf = kalman.PaperKalman(s, self._sigma_b)
@@ -428,7 +428,7 @@ class GyroFilter:
             if self._by_model:  # both rules' block means: the kernel takes one by its model (a smoother logs both)
                 motion_mean, motion_rejected, _ = average_block_line_if_cut(values, q, paper)
                 self._y1_motion[0, a] = motion_mean - self._bias[a]
-                if modes[a] != kalman.REST:
+                if modes[a] != adaptive_kalman.REST:
                     rejected, fallback = motion_rejected, False
             if rejected or fallback:
                 self.rejected[a] += rejected
@@ -492,7 +492,7 @@ class GyroFilter:
                 y_motion -= bias
                 used = np.empty((n_blocks, 3), dtype=np.int64)
                 self._track(y, out, y_motion, used)
-                motion = used == kalman.MOTION
+                motion = used == adaptive_kalman.MOTION
                 rejected = np.where(motion, rejected_motion, rejected)
                 fallback = fallback & ~motion
             else:
@@ -564,15 +564,15 @@ class GyroFilter:
             _temperature(float(t[row]), self._temp_on, f"temp_c row {row}", row)
         return t
 
-    def _track(self, y, out, y_motion=None, used=kalman.NO_USED):
+    def _track(self, y, out, y_motion=None, used=adaptive_kalman.NO_USED):
         """Block means y (M, 3) -> output (M, 3): the tracker, then the hold stage if enabled.
-        ``y_motion``, ``used``: the adaptive filter's (kalman.run_blocks_adaptive)."""
+        ``y_motion``, ``used``: the adaptive filter's (adaptive_kalman.run_blocks_adaptive)."""
         if self.settings.tracker != "kalman":
             out[:] = y
         elif not self._adaptive:
             self._pkf.run(y, out)
         elif self.block_log is None:
-            self._akf.run(y, out, kalman.NO_TRACE, y_motion, used)
+            self._akf.run(y, out, adaptive_kalman.NO_TRACE, y_motion, used)
         else:
             trace = np.empty((len(y), 3, 3))
             self._akf.run(y, out, trace, y_motion, used)
@@ -601,7 +601,7 @@ class GyroFilter:
 
     def _start_kalman(self, sigma_b_dps, still_blocks):
         """sigma_b (3,) for the guard and the adaptive filter's R = sigma_b^2 (see
-        kalman.AdaptiveKalman.start: after n still calibration blocks it starts at rest)."""
+        adaptive_kalman.AdaptiveKalman.start: after n still calibration blocks it starts at rest)."""
         self._sigma_b[:] = np.maximum(sigma_b_dps, SIGMA_B_FLOOR_DPS)
         if self._adaptive:
             self._akf.start(self._sigma_b, still_blocks)

@@ -35,9 +35,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import CalibrationError, SettingsError
-from .inputs import check_number, load_json, quote
-from .units import AXES, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
+from ..errors import CalibrationError, SettingsError
+from ..inputs import check_number, load_json, quote
+from ..units import AXES, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
 
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
@@ -56,7 +56,7 @@ class Calibration:
     """Result of a start-up calibration: bias and white-noise level per axis (deg/s).
 
     ``temp_c`` is the mean temperature of the window (deg C) when temperatures were given: the
-    reference T0 of temperature compensation (gyrofilter.tempcomp), None otherwise.
+    reference T0 of temperature compensation (gyrofilter.filter.tempcomp), None otherwise.
     """
 
     bias_dps: tuple

@@ -8,7 +8,7 @@ override a preset. All presets are measured in ``docs/evaluate.md``.
 divergence guard: it reproduces the paper, including its divergence in fast motion.
 
 ``hold``: the block means of paper 001's averaging stage, followed by the constant-rate hold of
-:mod:`gyrofilter.adaptive`: while the rate is constant (at rest, or turning steadily) the output
+:mod:`gyrofilter.filter.hold`: while the rate is constant (at rest, or turning steadily) the output
 is the mean of every block since the rate last changed; a CUSUM test on the block means
 switches to the block means themselves within a block of a change, and a chi-square test on the
 last 20 blocks switches back. No Kalman stage. Chosen on a tune / held-out split
@@ -16,7 +16,7 @@ last 20 blocks switches back. No Kalman stage. Chosen on a tune / held-out split
 
 ``adaptive_kalman`` (``tools/tune_adaptive_kalman.py``): paper 001's Kalman filter with its
 least-squares prior over the FIFO of posteriors kept and its noise statistics replaced
-(:func:`gyrofilter.kalman.run_blocks_adaptive`: R from the calibration, the prior variance by
+(:func:`gyrofilter.filter.adaptive_kalman.run_blocks_adaptive`: R from the calibration, the prior variance by
 covariance matching of the innovations, the gain kept where the loop is stable, a constant-rate
 model at rest, the prior dropped when it is far worse than the measurement), the divergence
 guard on (2 blocks beyond 10 sigma_b: re-seed from the block mean), and the gross-error rule

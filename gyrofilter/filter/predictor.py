@@ -15,7 +15,7 @@ Time units cancel: the weights do not depend on the sample rate.
 """
 import numpy as np
 
-from .errors import SettingsError
+from ..errors import SettingsError
 
 
 def extrapolation_weights(n: int, order: int) -> np.ndarray:

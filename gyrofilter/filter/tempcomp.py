@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import SettingsError
-from .units import AXES, plain
+from ..errors import SettingsError
+from ..units import AXES, plain
 
 
 def _coefficients(coefficient_dps_per_c):
