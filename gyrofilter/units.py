@@ -14,6 +14,7 @@ from .inputs import MAX_QUOTE_CHARS, check_number
 
 DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
+MAD_TO_SIGMA = 1.4826  # sigma = 1.4826 MAD for Gaussian data (1 / Phi^-1(3/4); Hampel 1974)
 GYRO_UNITS = ("dps", "rad/s", "lsb")
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
 #: the plausible temperatures (deg C) of a gyro's die, ends included, for a sample and a calibration:

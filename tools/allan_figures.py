@@ -27,6 +27,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
 from gyrofilter.analysis.allan import overlapping_adev  # noqa: E402
+from gyrofilter.filter.calibration import calibration_samples  # noqa: E402
 from gyrofilter.analysis.noise_model import characterise, convert  # noqa: E402
 from gyrofilter.analysis.plots_allan import AXIS_COLOURS, plot_allan, plot_before_after  # noqa: E402
 from gyrofilter.recording import read_recording  # noqa: E402
@@ -116,7 +117,7 @@ def before_after(rec, name, preset, fig):
     filt = GyroFilter(sample_rate_hz=rec.sample_rate_hz, preset=preset)
     out = filt.filter(rec.gyro_dps)
     out_rate = rec.sample_rate_hz / filt.settings.block_len
-    cal = int(round(filt.settings.calibration_s * rec.sample_rate_hz))
+    cal = calibration_samples(rec.sample_rate_hz, filt.settings.calibration_s)
     curves = []
     for i, a in enumerate("xyz"):
         raw = rec.gyro_dps[:, i]

@@ -47,7 +47,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..filter.calibration import Calibration, calibrate
+from ..filter.calibration import Calibration, calibrate, calibration_samples
 from ..errors import SettingsError
 from ..units import check_sample_rate_hz, plain
 
@@ -139,7 +139,7 @@ class BiasKalmanFilter:
         self._q_r = np.full(3, s.rate_walk_dps_per_sqrt_s**2 * dt)
         self._r0 = s.zero_rate_std_dps**2
         self._window = max(2, int(round(s.still_window_s * self.sample_rate_hz)))
-        self._n_cal = int(round(s.calibration_s * self.sample_rate_hz))
+        self._n_cal = calibration_samples(self.sample_rate_hz, s.calibration_s)
         self._cal_buffer = []
         self._ring = np.zeros((self._window, 3))
         self._ring_count = 0

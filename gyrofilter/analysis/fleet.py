@@ -53,14 +53,13 @@ import time
 import numpy as np
 
 from .allan import MIN_CLUSTERS
-from ..units import AXES, utf8_text
+from ..units import AXES, MAD_TO_SIGMA, utf8_text
 
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
 COEFFICIENTS = ("arw", "bias_instability", "rrw", "rate_ramp")
 #: modified z-score beyond which a unit stands out (Iglewicz & Hoaglin 1993)
 FLAG_Z = 3.5
 #: MAD -> standard deviation for normal data: 1 / Phi^-1(3/4)
-MAD_TO_SD = 1.4826
 #: least spread s of the log levels (10 %): the unit-to-unit spread assumed at least
 MIN_SPREAD_LN = 0.1
 #: fewest units with a number for a comparison (the unit and 3 peers)
@@ -426,7 +425,7 @@ def flag_units(rows):
             if not entry["compared"]:
                 continue
             median = float(np.median(levels))
-            spread = max(MAD_TO_SD * float(np.median(np.abs(levels - median))), MIN_SPREAD_LN)
+            spread = max(MAD_TO_SIGMA * float(np.median(np.abs(levels - median))), MIN_SPREAD_LN)
             entry.update(median=math.exp(median), spread=spread)
             for r in have:
                 if r[key] is None:
@@ -546,7 +545,7 @@ def fleet_markdown(rows, stats, *, title):
         lines.append(f"| {r['unit']} | {r['axis']} | " + " | ".join(cells) + " |")
     lines += ["", "## Fleet statistics", "",
               (f"Coefficients: median m over the units of the level (fit, or upper bound when not resolved) and "
-               f"spread s = max({MAD_TO_SD} MAD, {MIN_SPREAD_LN:g}) of its natural log; a unit is flagged when the "
+               f"spread s = max({MAD_TO_SIGMA} MAD, {MIN_SPREAD_LN:g}) of its natural log; a unit is flagged when the "
                f"near end of its interval lies more than {FLAG_Z:g} s from m (N high or low; B, K, R high). "
                f"Findings: flagged when fewer than {RARE_SHARE:.0%} of the units analysed have them and the "
                f"unit's D before the extension is at least {RARE_MIN_D:g}. "

@@ -4,7 +4,7 @@ Every filter is a function ``run(samples_dps (N, 3), sample_rate_hz, calibration
 FilterOutput``. Row k of ``FilterOutput.y_dps`` describes the input samples
 ``start + k L .. start + (k+1) L - 1`` (L = ``block_len``: 5 for the paper-001 pipeline and the
 block average, 1 for filters at the input rate); ``start`` is the number of calibration samples,
-round(calibration_s * fs). All filters remove the same start-up bias: the mean of the
+round(calibration_s * sample_rate_hz) (:func:`gyrofilter.filter.calibration.calibration_samples`). All filters remove the same start-up bias: the mean of the
 calibration window (paper 001, 2.1).
 
 Alignment: a filtered row is compared with the truth *averaged over the same L samples* (the
@@ -54,6 +54,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import SettingsError
+from ..filter.calibration import calibration_samples
 from ..sim.profiles import PROFILES, get_profile
 from ..recording import read_recording
 from .reference import block_mean_masked, reference_from_recording
@@ -96,11 +97,6 @@ class FilterSpec:
     family: str  # "baseline", "paper", "candidate" or "offline" (not real time: the smoother)
     description: str
     run: Callable = field(repr=False)
-
-
-def calibration_samples(sample_rate_hz, calibration_s):
-    """Samples in the calibration window: round(``calibration_s`` (s) * ``sample_rate_hz`` (Hz))."""
-    return int(round(calibration_s * sample_rate_hz))
 
 
 def startup_bias(x_dps, sample_rate_hz, calibration_s):

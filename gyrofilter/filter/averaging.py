@@ -47,7 +47,9 @@ floating-point numbers; the same holds for the ``median_slope`` pair.
 """
 import numpy as np
 
-MAD_LIMIT = 4 * 1.4826  # median_slope: threshold in robust-sigma units of the residuals
+from ..units import MAD_TO_SIGMA
+
+MAD_LIMIT = 4 * MAD_TO_SIGMA  # median_slope: threshold in robust-sigma units of the residuals
 
 
 def average_block(values, q):

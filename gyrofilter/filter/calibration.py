@@ -39,6 +39,12 @@ from ..errors import CalibrationError, SettingsError
 from ..inputs import check_number, load_json, quote
 from ..units import AXES, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
 
+
+def calibration_samples(sample_rate_hz, calibration_s):
+    """Samples in the calibration window: round(``calibration_s`` (s) * ``sample_rate_hz`` (Hz))
+    (paper 001 section 2.1: the first seconds of the still sensor give the bias)."""
+    return int(round(calibration_s * sample_rate_hz))
+
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
 MAX_BIAS_DPS = 20.0  # the largest plausible bias (deg/s): the MPU6050's initial zero-rate-output tolerance

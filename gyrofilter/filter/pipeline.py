@@ -25,7 +25,7 @@ import numpy as np
 from . import adaptive_kalman, kalman
 from .hold import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
-from .calibration import MAX_BIAS_DPS, Calibration, calibrate
+from .calibration import MAX_BIAS_DPS, Calibration, calibrate, calibration_samples
 from ..errors import CalibrationError, SampleError, SettingsError
 from ..inputs import check_number
 from .predictor import closed_loop_radius, stable_gain_threshold
@@ -291,7 +291,7 @@ class GyroFilter:
         self.samples_in = 0  # every sample fed to update() or filter(), calibration included
         self.calibration = None
         self._bias = (0.0, 0.0, 0.0)
-        self._cal_needed = int(round(s.calibration_s * self.sample_rate_hz))
+        self._cal_needed = calibration_samples(self.sample_rate_hz, s.calibration_s)
         if calibration is None and s.calibration_s > 0 and self._cal_needed < 3:
             raise SettingsError(f"setting calibration_s={plain(s.calibration_s)} gives {self._cal_needed} sample(s) at "
                                 f"{self.sample_rate_hz:g} Hz; the calibration needs at least 3 to measure the noise")

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...units import MAD_TO_SIGMA
 
 #: expected number of false spikes per axis on white Gaussian noise (with at least
 #: OUTLIER_MIN_COUNT spikes required: P(Poisson(0.05) >= 3) = 2e-5 per axis)
@@ -62,7 +63,7 @@ def robust_sigma(x):
     if x.size > 200_000:  # a strided subsample is plenty for a scale estimate
         x = x[:: int(math.ceil(x.size / 100_000))]
     med = np.median(x)
-    mad = 1.4826 * np.median(np.abs(x - med))
+    mad = MAD_TO_SIGMA * np.median(np.abs(x - med))
     if mad > 0:
         return float(mad)
     return float(np.std(x))
