@@ -1,19 +1,42 @@
 """cli.options: the numeric types of the options (plain decimal numbers, whole numbers) and the
 one spelling of a sample rate."""
+import os
+
 import pytest
 
 from gyrofilter.cli import options
+from gyrofilter.errors import SettingsError
 from support import REPO
 
 
-@pytest.mark.parametrize("command, old", [("record", "--sample-rate"), ("run", "--sample-rate"), ("simulate", "--rate")])
-def test_sample_rate_option_has_one_spelling_and_keeps_the_old_one(command, old):
+@pytest.mark.parametrize("command", ["record", "run", "simulate"])
+def test_sample_rate_option_has_one_spelling(command):
+    """Issue 23: --sample-rate-hz is the one spelling; --rate (simulate) and --sample-rate (record,
+    run) are gone (test_cli: typing them is refused, naming --sample-rate-hz)."""
     from gyrofilter.cli import build_parser
 
-    for spelling in ("--sample-rate-hz", old):
-        extra = ["--model", "m.json", "--duration", "1", "--out", "o.csv"] if command == "simulate" else ["--source", "sim", "--out", "o.csv"]
-        args = build_parser(command).parse_args([command, *extra, spelling, "250"])
-        assert args.sample_rate_hz == 250.0 and args.sample_rate_hz_option == spelling
+    parser = build_parser(command)
+    extra = ["--model", "m.json", "--duration", "1", "--out", "o.csv"] if command == "simulate" else ["--source", "sim", "--out", "o.csv"]
+    args = parser.parse_args([command, *extra, options.SAMPLE_RATE_OPTION, "250"])
+    assert args.sample_rate_hz == 250.0 and options.sample_rate_hz(args) == 250.0
+    spellings = [s for a in parser.commands[command]._actions for s in a.option_strings if "rate" in s]
+    assert spellings == ["--sample-rate-hz"] == [options.SAMPLE_RATE_OPTION]
+    assert options.sample_rate_hz(parser.parse_args([command, *extra])) is None
+
+
+def test_a_bad_sample_rate_is_refused_naming_the_option_for_a_live_source_too(tmp_path, capsys):
+    """record and run named the source's keyword (sample_rate_hz) for --sample-rate-hz 0; the
+    option is checked where it is read, with the one check of a sample rate."""
+    from gyrofilter.cli import main
+
+    with pytest.raises(SettingsError, match=r"^--sample-rate-hz must be a number of Hz in \[0.001, 100000\], got 0.0$"):
+        options.sample_rate_hz(type("Args", (), {"sample_rate_hz": 0.0}))
+    for command in ("record", "run"):
+        argv = [command, "--source", "sim:realtime=0,duration=1", "--sample-rate-hz", "0", "--out", str(tmp_path / "o.csv")]
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err == "gyrofilter: error: --sample-rate-hz must be a number of Hz in [0.001, 100000], got 0.0\n", err
+    assert os.listdir(tmp_path) == []
 
 
 

@@ -4,26 +4,27 @@ import argparse
 
 from ..errors import SettingsError
 from ..inputs import parse_number
+from ..units import check_sample_rate_hz
 
 
 #: what --out FILE of a recording takes: any name, the format is CSV text (docs/formats.md, section 1)
 RECORDING_FILE_HELP = "recording format v1: CSV text, compressed with gzip when the name ends in .gz, e.g. out.csv or out.csv.gz"
 
 
-def add_sample_rate_argument(parser, *old_spellings, help):
-    """``--sample-rate-hz HZ``, the commands' one spelling of a sample rate, with ``old_spellings``
-    (e.g. ``--rate``) kept as aliases: ``args.sample_rate_hz`` holds the rate (Hz, None when not
-    given), ``args.sample_rate_hz_option`` the spelling used, so a message names what was typed."""
-    parser.add_argument("--sample-rate-hz", *old_spellings, type=decimal, default=None, metavar="HZ", dest="sample_rate_hz",
-                        action=_SpellingKept, help=help)
+#: the one spelling of a sample rate on the command line (0.2.0 removed ``--rate`` and ``--sample-rate``)
+SAMPLE_RATE_OPTION = "--sample-rate-hz"
 
 
-class _SpellingKept(argparse.Action):
-    """Stores the value, and in ``<dest>_option`` the option string the user typed."""
+def add_sample_rate_argument(parser, *, help):
+    """:data:`SAMPLE_RATE_OPTION` HZ: ``args.sample_rate_hz`` holds the rate as typed (Hz, None when
+    not given); :func:`sample_rate_hz` checks it."""
+    parser.add_argument(SAMPLE_RATE_OPTION, type=decimal, default=None, metavar="HZ", dest="sample_rate_hz", help=help)
 
-    def __call__(self, parser, namespace, values, option_string=None):
-        setattr(namespace, self.dest, values)
-        setattr(namespace, self.dest + "_option", option_string)
+
+def sample_rate_hz(args):
+    """The rate of :data:`SAMPLE_RATE_OPTION` (Hz), checked by :func:`gyrofilter.units.check_sample_rate_hz`
+    with a message that names the option; None when it was not given."""
+    return None if args.sample_rate_hz is None else check_sample_rate_hz(args.sample_rate_hz, SAMPLE_RATE_OPTION)
 
 
 def decimal(text):

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import SettingsError
 from ..sim.simulate import check_seed
-from ..units import MAX_DURATION_S, check_duration_s, check_sample_rate_hz
+from ..units import MAX_DURATION_S, check_duration_s
 from . import console, options, outputs
 
 MAX_SAMPLES = 10**9  # a file of about 40 GB: more is no recording anyone can use
@@ -24,7 +24,7 @@ def add_arguments(parser):
     parser.add_argument("--model", required=True, metavar="MODEL.json",
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json)")
     parser.add_argument("--duration", required=True, type=options.decimal, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
-    options.add_sample_rate_argument(parser, "--rate", help="sample rate in Hz (overrides the model's; old spelling --rate)")
+    options.add_sample_rate_argument(parser, help="sample rate in Hz (overrides the model's)")
     parser.add_argument("--seed", type=options.whole_number, default=None, metavar="N",
                         help="random seed (same seed, same recording; default: one drawn at random and written in the "
                              "header, simulated_seed, so the run can be repeated)")
@@ -41,8 +41,7 @@ def run(args):
 
     outputs.check_outputs([args.out], [args.model], args.force)
     check_duration_s(args.duration, "--duration")
-    if args.sample_rate_hz is not None:
-        check_sample_rate_hz(args.sample_rate_hz, args.sample_rate_hz_option)
+    sample_rate_hz = options.sample_rate_hz(args)
     if args.seed is not None:
         check_seed(args.seed, "--seed")
     if args.chunk < 1:
@@ -51,7 +50,7 @@ def run(args):
         raise SettingsError(f"--chunk must be at most {MAX_CHUNK} samples, got {args.chunk}")
     model = load_model(args.model)
     try:
-        spec, warnings = validate_model(model, sample_rate_hz=args.sample_rate_hz)
+        spec, warnings = validate_model(model, sample_rate_hz=sample_rate_hz)
     except SettingsError as exc:
         raise SettingsError(f"{args.model}: {exc}") from None
     n_total = sample_count(args.duration, spec["sample_rate_hz"])
