@@ -13,12 +13,13 @@ Output files are written only once every result is finite, each whole or not at 
 """
 import sys
 
-
 from ..analysis.allan import MIN_CLUSTERS, AllanInputError
-from ..analysis.still import characterise_recording
-from ..errors import SettingsError
 from ..analysis.fleet import FleetSettings
 from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert, kalibr_yaml, to_json
+from ..analysis.plots_allan import plot_allan
+from ..analysis.still import characterise_recording
+from ..errors import SettingsError
+from ..plots import check_figure_path
 from . import batch, console, options, outputs, still
 
 MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
@@ -85,8 +86,6 @@ def run(args):
     args.recording = batch.single(args, paths)
     outputs.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
     if args.plot:
-        from ..plots import check_figure_path
-
         check_figure_path(args.plot)
     progress = console.say if args.progress or sys.stderr.isatty() else None
     try:
@@ -128,8 +127,6 @@ def run(args):
             outputs.write_text(tmp, kalibr_yaml(results, fs, recording=args.recording))
         console.say(f"wrote {args.kalibr}")
     if args.plot:
-        from ..analysis.plots_allan import plot_allan
-
         with outputs.replacing(args.plot) as tmp:
             plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {fs:g} Hz)")
         console.say(f"drew {args.plot}")

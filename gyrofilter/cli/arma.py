@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 
+from ..analysis import arma
 from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
 from ..recording import warn_about_gaps
@@ -41,8 +42,6 @@ def add_arguments(parser):
 
 
 def run(args):
-    from ..analysis import arma
-
     outputs.check_outputs([args.json], [args.recording], args.force)
     arma.require_stats()
     if not 0 < args.alpha < 0.5:
@@ -140,8 +139,6 @@ def _span_s(i0, i1, fs, t_s):
 
 
 def _print_axis(rep, alpha):
-    from ..analysis import arma
-
     pct = f"{alpha * 100:g} %"
     print(f"\naxis {rep.axis}: mean {rep.mean_dps:+.4f} deg/s, std {rep.std_dps:.4f} deg/s")
     for note in rep.notes:

@@ -13,6 +13,7 @@ import os
 import sys
 import time
 
+from ..analysis import fleet
 from ..errors import SettingsError
 from . import console, options, outputs
 
@@ -83,8 +84,6 @@ def report_files(command):
 
 def run(args, settings, paths):
     """Run the fleet (the module docstring); returns the exit code."""
-    from ..analysis import fleet
-
     if args.jobs is not None and args.jobs < 1:
         raise SettingsError(f"--jobs must be at least 1, got {args.jobs}")
     if args.jobs is not None and args.scheduler:

@@ -10,6 +10,7 @@ import os
 import sys
 
 from ..evaluation import evaluate as E
+from ..plots import pyplot
 from . import console, options, outputs
 
 OUTPUT_NAMES = ("evaluate_table.md", "evaluate.json", "evaluate_pareto.png")
@@ -41,8 +42,6 @@ def _recordings_dir(arg):
 
 
 def run(args):
-    from ..plots import pyplot
-
     outputs.check_output_folder(args.out, "--out")
     outputs.check_outputs([os.path.join(args.out, name) for name in OUTPUT_NAMES], force=args.force)
     rec_dir = _recordings_dir(args.recordings)

@@ -8,8 +8,10 @@ import difflib
 from ..errors import RecordingError, SettingsError
 from ..filter.pipeline import SETTING_NAMES, GyroFilter
 from ..filter.presets import DEFAULT_PRESET, PRESETS
+from ..filter.tempcomp import coefficients_from_model
 from ..inputs import parse_json, quote
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT
+from ..sim.simulate import load_model, validate_model
 from .console import bias_text
 from .options import decimal, file_name
 from .outputs import replacing
@@ -122,9 +124,6 @@ def temperature_coefficients(path):
     """(cx, cy, cz) in deg/s per deg C from a gap report (its extended_model) or a simulator model,
     checked by the simulator's :func:`~gyrofilter.sim.simulate.validate_model` (for its numbers
     only: the sample rate and the temperature profile may be missing)."""
-    from ..sim.simulate import load_model, validate_model
-    from ..filter.tempcomp import coefficients_from_model
-
     model = load_model(path)
     if not isinstance(model, dict) or not isinstance(model.get("axes"), dict):
         raise SettingsError(f"{path}: neither a gap report (extended_model) nor a simulator model (axes)")

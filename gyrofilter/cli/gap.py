@@ -15,6 +15,12 @@ import os
 import sys
 import time
 
+from ..analysis.fleet import FleetSettings
+from ..analysis.gap import analyse_gap
+from ..analysis.gap_report import REPORT_NAME, report_file_names, write_report
+from ..errors import SettingsError
+from ..plots import pyplot
+from ..recording import read_recording, warn_about_gaps
 from ..sim.simulate import check_seed
 from . import batch, console, options, outputs
 
@@ -35,12 +41,6 @@ def add_arguments(parser):
 
 
 def run(args):
-    from ..errors import SettingsError
-    from ..analysis.fleet import FleetSettings
-    from ..analysis.gap import analyse_gap
-    from ..analysis.gap_report import REPORT_NAME, report_file_names, write_report
-    from ..recording import read_recording, warn_about_gaps
-
     if args.sims is not None and not 2 <= args.sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {args.sims}")
     check_seed(args.seed, "--seed")
@@ -62,8 +62,6 @@ def run(args):
             print(f"gap [{time.perf_counter() - t0:5.1f} s] {text}", file=sys.stderr, flush=True)
 
     if args.report:
-        from ..plots import pyplot
-
         pyplot()  # a missing matplotlib is said now, not after the analysis
     rec = read_recording(args.recording)
     console.print_warnings(rec.warnings)

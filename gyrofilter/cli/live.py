@@ -12,6 +12,7 @@ import time
 import numpy as np
 
 from ..errors import DeviceError, GyroFilterError, SourceEnded, one_line
+from ..recording import RecordingWriter
 from ..sources import SOURCE_HELP, open_source, parse_source
 from ..sources.base import WARNING_PREFIX
 from ..units import GYRO_UNITS, check_duration_s
@@ -59,8 +60,6 @@ class LiveOutput:
     """
 
     def __init__(self, path, header, columns, formats, row_name):
-        from ..recording import RecordingWriter
-
         self.path = path
         self.row_name = row_name
         self.published = False

@@ -15,6 +15,7 @@ The output is never one of the source's files, and overwrites only a regular fil
 import sys
 import time
 
+from .. import __version__
 from ..recording import END_NOTE
 from . import live, options, outputs
 
@@ -38,8 +39,6 @@ def add_arguments(parser):
 
 
 def recording_header(source, spec):
-    from .. import __version__
-
     head = dict(source.header)
     head.setdefault("start_time_utc", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
     head["live_source"] = spec

@@ -24,8 +24,9 @@ import numpy as np
 
 from ..errors import RecordingError, SampleError, SettingsError
 from ..filter.pipeline import SETTING_NAMES
-from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
 from ..filter.smoother import Smoother
+from ..plots import check_figure_path, plot_filtered
+from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
 from . import console, filtering, options, outputs
 
@@ -50,8 +51,6 @@ def run(args):
     path = args.recording or str(resources.files("gyrofilter") / "data" / BUNDLED)
     outputs.check_outputs([args.out, args.plot, args.save_calibration], [path, args.calibration, args.temp_model], args.force)
     if args.plot:
-        from ..plots import check_figure_path
-
         check_figure_path(args.plot)
     if args.smooth and args.realtime:
         raise SettingsError("--smooth needs the whole recording before the first row; it cannot run with --realtime")
@@ -79,8 +78,6 @@ def run(args):
         replay.close()
         # every output goes through replacing(): all land when the command succeeds, none when it fails
         if args.plot:
-            from ..plots import plot_filtered
-
             plot_filtered(files.enter_context(outputs.replacing(args.plot)), replay.raw_envelope, replay.filtered_envelope,
                           title=f"{path} (raw minus start-up bias)")
         saved = filtering.save_calibration(args.save_calibration, filt, files)

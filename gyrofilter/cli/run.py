@@ -17,8 +17,9 @@ import time
 
 import numpy as np
 
+from .. import __version__
 from ..errors import SampleError, SettingsError
-from ..recording import END_NOTE, header_text, note_text
+from ..recording import END_NOTE, dps_header, header_text, note_text
 from . import console, filtering, live, options, outputs
 
 FLUSH_INTERVAL_S = 0.5
@@ -75,9 +76,6 @@ def run(args):
 
 
 def _run(args, source):
-    from .. import __version__
-    from ..recording import dps_header
-
     head = source.header
     filtering.refuse_filtered_output(head, f"source {args.source}")
     cols = source.columns

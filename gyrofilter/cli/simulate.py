@@ -12,7 +12,9 @@ import time
 import numpy as np
 
 from ..errors import SettingsError
-from ..sim.simulate import check_seed
+from ..recording import RecordingWriter
+from ..sim.simulate import (check_seed, draw_seed, load_model, recording_columns, recording_header, sample_count,
+                            simulate_chunks, validate_model)
 from ..units import MAX_DURATION_S, check_duration_s
 from . import console, options, outputs
 
@@ -35,10 +37,6 @@ def add_arguments(parser):
 
 
 def run(args):
-    from ..recording import RecordingWriter
-    from ..sim.simulate import (draw_seed, load_model, recording_columns, recording_header, sample_count,
-                                simulate_chunks, validate_model)
-
     outputs.check_outputs([args.out], [args.model], args.force)
     check_duration_s(args.duration, "--duration")
     sample_rate_hz = options.sample_rate_hz(args)
