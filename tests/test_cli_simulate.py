@@ -188,10 +188,10 @@ def test_cli_refuses_to_overwrite_and_never_writes_onto_the_model(tmp_path, caps
 
 
 def test_cli_failure_leaves_no_file_and_a_rerun_works(tmp_path, capsys, monkeypatch):
-    import gyrofilter.sim.simulate as sim
+    import gyrofilter.cli.simulate as command
     from gyrofilter.errors import SettingsError
 
-    real = sim.simulate_chunks
+    real = command.simulate_chunks
 
     def failing(*args, **kwargs):
         chunks = real(*args, **kwargs)
@@ -201,11 +201,11 @@ def test_cli_failure_leaves_no_file_and_a_rerun_works(tmp_path, capsys, monkeypa
     model_path = write_json(tmp_path / "m.json", MODEL)
     out = tmp_path / "sim.csv.gz"
     argv = ["simulate", "--model", model_path, "--duration", "10", "--chunk", "100", "--seed", "3", "--out", str(out)]
-    monkeypatch.setattr(sim, "simulate_chunks", failing)
+    monkeypatch.setattr(command, "simulate_chunks", failing)
     assert main(argv) == 2
     assert "simulated failure" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.json"]  # no header-only file, no temporary
-    monkeypatch.setattr(sim, "simulate_chunks", real)
+    monkeypatch.setattr(command, "simulate_chunks", real)
     assert main(argv) == 0
     assert np.array_equal(read_recording(out).gyro, simulate(MODEL, 10.0, seed=3).gyro)
 
@@ -216,10 +216,10 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
     import os
     import signal
 
-    import gyrofilter.sim.simulate as sim
+    import gyrofilter.cli.simulate as command
 
     before = signal.getsignal(getattr(signal, signame))
-    real = sim.simulate_chunks
+    real = command.simulate_chunks
 
     def chunks_then_killed(*args, **kwargs):
         for i, chunk in enumerate(real(*args, **kwargs)):
@@ -227,7 +227,7 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
                 os.kill(os.getpid(), getattr(signal, signame))
             yield chunk
 
-    monkeypatch.setattr(sim, "simulate_chunks", chunks_then_killed)
+    monkeypatch.setattr(command, "simulate_chunks", chunks_then_killed)
     model = REPO / "examples" / "models" / "mpu6050.json"
     out = tmp_path / "long.csv.gz"
     assert main(["simulate", "--model", str(model), "--duration", "3600", "--out", str(out), "--chunk", "1000"]) == 130

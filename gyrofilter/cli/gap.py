@@ -17,7 +17,7 @@ import time
 
 from ..analysis.fleet import FleetSettings
 from ..analysis.gap import analyse_gap
-from ..analysis.gap_report import REPORT_NAME, report_file_names, write_report
+from ..analysis import gap_report
 from ..errors import SettingsError
 from ..plots import pyplot
 from ..recording import read_recording, warn_about_gaps
@@ -51,7 +51,7 @@ def run(args):
     args.recording = batch.single(args, paths)
     if args.json is None:
         raise SettingsError("--json OUT.json is required (or --fleet DIR for several recordings)")
-    report_files = [os.path.join(args.report, name) for name in report_file_names()] if args.report else []
+    report_files = [os.path.join(args.report, name) for name in gap_report.report_file_names()] if args.report else []
     outputs.check_output_folder(args.report, "--report")
     outputs.check_outputs([args.json] + report_files, [args.recording], args.force)
     show = args.progress or sys.stderr.isatty()
@@ -74,8 +74,8 @@ def run(args):
         outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
         if args.report:
             progress("report")
-            write_report(report, rec, files.enter_context(outputs.replacing_in(args.report)), seed=args.seed)
-    console.say(f"wrote {args.json}" + (f" and {os.path.join(args.report, REPORT_NAME)}" if args.report else ""))
+            gap_report.write_report(report, rec, files.enter_context(outputs.replacing_in(args.report)), seed=args.seed)
+    console.say(f"wrote {args.json}" + (f" and {os.path.join(args.report, gap_report.REPORT_NAME)}" if args.report else ""))
     d = report.get("discrepancy")
     gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}" if d else
             "no discrepancy computed (see the notes)")

@@ -22,10 +22,10 @@ from importlib import resources
 
 import numpy as np
 
+from .. import plots
 from ..errors import RecordingError, SampleError, SettingsError
 from ..filter.pipeline import SETTING_NAMES
 from ..filter.smoother import Smoother
-from ..plots import check_figure_path, plot_filtered
 from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
 from . import console, filtering, options, outputs
@@ -51,7 +51,7 @@ def run(args):
     path = args.recording or str(resources.files("gyrofilter") / "data" / BUNDLED)
     outputs.check_outputs([args.out, args.plot, args.save_calibration], [path, args.calibration, args.temp_model], args.force)
     if args.plot:
-        check_figure_path(args.plot)
+        plots.check_figure_path(args.plot)
     if args.smooth and args.realtime:
         raise SettingsError("--smooth needs the whole recording before the first row; it cannot run with --realtime")
     chunks = iter_recording(path, chunk_rows=CHUNK_ROWS)
@@ -78,7 +78,7 @@ def run(args):
         replay.close()
         # every output goes through replacing(): all land when the command succeeds, none when it fails
         if args.plot:
-            plot_filtered(files.enter_context(outputs.replacing(args.plot)), replay.raw_envelope, replay.filtered_envelope,
+            plots.plot_filtered(files.enter_context(outputs.replacing(args.plot)), replay.raw_envelope, replay.filtered_envelope,
                           title=f"{path} (raw minus start-up bias)")
         saved = filtering.save_calibration(args.save_calibration, filt, files)
     console.print_warnings(head.warnings)
