@@ -20,9 +20,11 @@ from ..analysis.plots_allan import plot_allan
 from ..analysis.still import characterise_recording
 from ..errors import SettingsError
 from ..plots import check_figure_path
+from ..units import AXES
 from . import batch, console, options, outputs, still
 
 MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
+ALL_AXES = "".join(AXES)  # --axes as one word: xyz
 
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
          "rrw": "rate random walk", "rate_ramp": "rate ramp"}
@@ -35,7 +37,7 @@ def add_arguments(parser):
     parser.add_argument("--json", metavar="OUT", type=options.file_name, help="write the deviation curves and coefficients as JSON")
     parser.add_argument("--plot", metavar="OUT.png", type=options.file_name, help="draw the Allan deviation per axis (needs matplotlib)")
     parser.add_argument("--kalibr", metavar="OUT.yaml", type=options.file_name, help="write Kalibr imu.yaml gyroscope noise entries")
-    parser.add_argument("--axes", default="xyz", help="axes to analyse, a subset of xyz (default xyz)")
+    parser.add_argument("--axes", default=ALL_AXES, help=f"axes to analyse, a subset of {ALL_AXES} (default {ALL_AXES})")
     parser.add_argument("--confidence", type=options.decimal, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
     parser.add_argument("--min-clusters", type=options.whole_number, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
@@ -71,8 +73,8 @@ def readoff_only(r):
 
 def run(args):
     axes = args.axes
-    if not axes or any(a not in "xyz" for a in axes) or len(set(axes)) != len(axes):
-        raise SettingsError(f"--axes must be a subset of xyz such as xz, got {args.axes!r}")
+    if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
+        raise SettingsError(f"--axes must be a subset of {ALL_AXES} such as xz, got {args.axes!r}")
     if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
         raise SettingsError(f"--min-clusters must be in [2, {MAX_MIN_CLUSTERS}], got {args.min_clusters}")
     if not 0.5 <= args.confidence <= 0.9999:  # every value inside works (0.9999999999999999 failed in the intervals)
@@ -94,10 +96,10 @@ def run(args):
                                                warn=console.say_warning, progress=progress)
     except AllanInputError as exc:  # the data of this file: name it
         raise AllanInputError(f"{args.recording}: {exc}") from None
-    fs = head.sample_rate_hz
-    duration_s = head.rows / fs
+    sample_rate_hz = head.sample_rate_hz
+    duration_s = head.rows / sample_rate_hz
     print(f"recording: {args.recording}")
-    print(f"  {head.rows} samples at {fs:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
+    print(f"  {head.rows} samples at {sample_rate_hz:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
     print(f"  coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval]")
     print("  slope read-off: the slope method of papers 000/002, another estimator, for comparison: the curve at one "
@@ -120,14 +122,14 @@ def run(args):
     # every result is finite here; each file appears only when it is complete
     if args.json:
         with outputs.replacing(args.json) as tmp:
-            outputs.write_json_document(tmp, to_json(results, fs, recording=args.recording, duration_s=duration_s))
+            outputs.write_json_document(tmp, to_json(results, sample_rate_hz, recording=args.recording, duration_s=duration_s))
         console.say(f"wrote {args.json}")
     if args.kalibr:
         with outputs.replacing(args.kalibr) as tmp:
-            outputs.write_text(tmp, kalibr_yaml(results, fs, recording=args.recording))
+            outputs.write_text(tmp, kalibr_yaml(results, sample_rate_hz, recording=args.recording))
         console.say(f"wrote {args.kalibr}")
     if args.plot:
         with outputs.replacing(args.plot) as tmp:
-            plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {fs:g} Hz)")
+            plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {sample_rate_hz:g} Hz)")
         console.say(f"drew {args.plot}")
     return 0

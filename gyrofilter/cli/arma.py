@@ -14,7 +14,7 @@ from ..analysis import arma
 from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
 from ..recording import warn_about_gaps
-from ..units import MAX_DURATION_S
+from ..units import AXES, MAX_DURATION_S
 from . import console, options, outputs, still
 
 MIN_SAMPLES = 200  # fewer leave the tests and the order search without power
@@ -25,7 +25,7 @@ PAPER_003 = "paper 003 (ADIS16405 z gyro): ADF -110.18; KS and JB reject normali
 
 def add_arguments(parser):
     parser.add_argument("recording", help="a static recording (format v1); the sensor must not move")
-    parser.add_argument("--axis", choices=("x", "y", "z", "all"), default="all", help="axis to analyse (default: all three)")
+    parser.add_argument("--axis", choices=(*AXES, "all"), default="all", help="axis to analyse (default: all three)")
     parser.add_argument("--json", metavar="OUT", type=options.file_name, help="write every number of the analysis to this JSON file")
     parser.add_argument("--start-s", type=options.decimal, default=None, help="skip the first seconds (e.g. a warm-up or a move; default 0)")
     parser.add_argument("--end-s", type=options.decimal, default=None, help="stop at this time in seconds (default: the end)")
@@ -54,7 +54,7 @@ def run(args):
         raise SettingsError(f"--max-samples must be at least 100, got {args.max_samples}")
     if args.max_samples > MAX_MAX_SAMPLES:
         raise SettingsError(f"--max-samples must be at most {MAX_MAX_SAMPLES}, got {args.max_samples}")
-    axes = "xyz" if args.axis == "all" else args.axis
+    axes = AXES if args.axis == "all" else (args.axis,)
     head, series, t_s = read_axes(args.recording, axes, with_t=True)
     console.print_warnings(head.warnings)
     warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful",

@@ -22,6 +22,7 @@ from ..errors import SettingsError
 from ..plots import pyplot
 from ..recording import read_recording, warn_about_gaps
 from ..sim.simulate import check_seed
+from ..units import AXES
 from . import batch, console, options, outputs
 
 MAX_SIMS = 1000  # baseline simulations; the default is 12-24, and the spread is known to +-3 % from 1000
@@ -81,7 +82,7 @@ def run(args):
             "no discrepancy computed (see the notes)")
     print(f"{args.recording}: {_count(len(report['findings']), 'finding')}; {gain} "
           f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
-    for axis in "xyz":
+    for axis in AXES:
         found = [f for f in report["findings"] if f["axis"] == axis]
         if d:
             before, after = d["before"][axis], d["after"][axis]

@@ -189,11 +189,12 @@ class StopSignals:
 
 
 class Status:
-    """A status line on stderr at most once per ``STATUS_INTERVAL_S``: rate, losses, CPU use."""
+    """A status line on stderr at most once per ``STATUS_INTERVAL_S``: the rate achieved beside the
+    source's nominal ``sample_rate_hz``, losses, CPU use."""
 
-    def __init__(self, enabled, nominal_rate_hz, stream=None):
+    def __init__(self, enabled, sample_rate_hz, stream=None):
         self.enabled = enabled
-        self.nominal_rate_hz = nominal_rate_hz
+        self.sample_rate_hz = sample_rate_hz
         self.stream = stream or sys.stderr
         self.tty = self.stream.isatty()
         self._wall = time.monotonic()
@@ -211,7 +212,7 @@ class Status:
         rate = (samples - self._samples) / dt
         cpu_pct = 100.0 * (cpu - self._cpu) / dt
         self._wall, self._cpu, self._samples = wall, cpu, samples
-        line = f"{rate:7.1f} samples/s (nominal {self.nominal_rate_hz:g}), {text}, CPU {cpu_pct:4.1f}%"
+        line = f"{rate:7.1f} samples/s (nominal {self.sample_rate_hz:g}), {text}, CPU {cpu_pct:4.1f}%"
         if self.tty:
             self.stream.write("\r" + line + "\x1b[K")
         else:

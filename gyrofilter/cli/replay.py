@@ -165,10 +165,10 @@ class _Replay:
         rows, t_rows = [], []
         if self._wall_start is None:
             self._wall_start = time.monotonic()
-        rate_hz = filt.sample_rate_hz
+        sample_rate_hz = filt.sample_rate_hz
         temps = [None] * len(gyro) if temps is None else temps.tolist()
         for sample, temp, t in zip(map(tuple, gyro.tolist()), temps, t_s.tolist()):
-            delay = self._wall_start + filt.samples_in / rate_hz - time.monotonic()
+            delay = self._wall_start + filt.samples_in / sample_rate_hz - time.monotonic()
             if delay > 0 and self.stdout_open:
                 time.sleep(delay)
             calibrating = filt.calibrating
