@@ -3,6 +3,10 @@
 Each subcommand lives in its own module ``gyrofilter.cli.<name>`` with two functions:
 ``add_arguments(parser)`` and ``run(args) -> int``. Modules are imported only when their
 command runs (or for ``--help``), so ``gyrofilter replay`` does not import the analysis code.
+What several commands share has a module of its own: ``outputs`` (output files), ``options``
+(option types, ``--sample-rate-hz``), ``console`` (messages, the summary table), ``filtering``
+(the filter options of replay and run), ``still`` (``--keep-outliers``), ``batch`` (fleet runs)
+and ``live`` (the read loop of record and run).
 Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors and Ctrl-C become one
 line on stderr and a non-zero exit code; a traceback is a bug.
 """
