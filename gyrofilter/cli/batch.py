@@ -109,7 +109,7 @@ def run(args, settings, paths):
     if show:
         unmatched = len(paths) - len(todo)
         console.say(f"{settings.command}: {len(paths)} recording(s)" + (f", {unmatched} matching no file" if unmatched else "")
-                   + f"; {len(todo)} on {where}")
+                    + f"; {len(todo)} on {where}")
         for r in results:
             if r is not None:
                 console.say(f"{settings.command}: FAILED: {r['error']}")

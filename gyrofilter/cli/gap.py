@@ -15,9 +15,9 @@ import os
 import sys
 import time
 
+from ..analysis import gap_report
 from ..analysis.fleet import FleetSettings
 from ..analysis.gap import analyse_gap
-from ..analysis import gap_report
 from ..errors import SettingsError
 from ..plots import pyplot
 from ..recording import read_recording, warn_about_gaps

@@ -67,7 +67,7 @@ class _TextOut:
 def run(args):
     live.check_duration(args.duration)
     outputs.check_outputs([args.out, args.save_calibration],
-                         live.source_files(args.source) + [args.calibration, args.temp_model], args.force)
+                          live.source_files(args.source) + [args.calibration, args.temp_model], args.force)
     source = live.open_from_args(args)
     try:
         return _run(args, source)
