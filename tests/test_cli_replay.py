@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.cli import main
-from gyrofilter.cli.common import ROW_FORMATS
+from gyrofilter.cli.filtering import ROW_FORMATS
 from gyrofilter.recording import Recording, RecordingWriter, dps_header, read_recording, write_recording
 
 
@@ -272,7 +272,7 @@ def test_a_loaded_calibration_is_named_as_such(tmp_path, capsys):
 def test_summary_is_readable_for_constant_and_huge_values(tmp_path, capsys):
     from types import SimpleNamespace
 
-    from gyrofilter.cli.common import print_summary
+    from gyrofilter.cli.console import print_summary
     from gyrofilter.streamstats import RunningMoments
 
     gyro = np.column_stack([np.full(1200, 2.0), np.random.default_rng(10).normal(0, 0.1, 1200), np.full(1200, 3.0)])

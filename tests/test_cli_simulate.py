@@ -63,27 +63,32 @@ def test_cli_without_a_seed_draws_one_and_writes_it_so_the_run_can_be_repeated(t
 def test_cli_rate_override_and_plain_csv(tmp_path):
     model_path = write_json(tmp_path / "m.json", MODEL)
     out = tmp_path / "sim.csv"
-    assert main(["simulate", "--model", model_path, "--duration", "2", "--rate", "200", "--seed", "1", "--out", str(out)]) == 0
+    assert main(["simulate", "--model", model_path, "--duration", "2", "--sample-rate-hz", "200", "--seed", "1", "--out", str(out)]) == 0
     rec = read_recording(out)
     assert rec.sample_rate_hz == 200.0 and len(rec) == 400
     assert out.read_text().startswith("# gyrofilter-recording: 1\n")
 
 
-@pytest.mark.parametrize("spelling", ["--sample-rate-hz", "--rate"])
-def test_cli_sample_rate_spelling_and_its_old_alias(tmp_path, capsys, spelling):
+def test_cli_sample_rate_spelling_and_the_removed_alias(tmp_path, capsys):
     model_path = write_json(tmp_path / "m.json", MODEL)
     out = tmp_path / "sim.csv"
-    assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "50", "--out", str(out)]) == 0
+    assert main(["simulate", "--model", model_path, "--duration", "1", "--sample-rate-hz", "50", "--out", str(out)]) == 0
     assert read_recording(out).sample_rate_hz == 50.0
-    assert main(["simulate", "--model", model_path, "--duration", "1", spelling, "1e-9", "--out", str(tmp_path / "o.csv")]) == 2
-    assert f"{spelling} must be a number of Hz in [0.001, 100000], got 1e-09" in capsys.readouterr().err
-    # inf is no plain decimal number: the option's type refuses it (issue 22), naming both spellings
+    assert main(["simulate", "--model", model_path, "--duration", "1", "--sample-rate-hz", "1e-9", "--out", str(tmp_path / "o.csv")]) == 2
+    assert "--sample-rate-hz must be a number of Hz in [0.001, 100000], got 1e-09" in capsys.readouterr().err
+    # inf is no plain decimal number: the option's type refuses it (issue 22), naming the option
     try:  # SystemExit while argparse prints its usage too
-        code = main(["simulate", "--model", model_path, "--duration", "1", spelling, "inf", "--out", str(tmp_path / "o.csv")])
+        code = main(["simulate", "--model", model_path, "--duration", "1", "--sample-rate-hz", "inf", "--out", str(tmp_path / "o.csv")])
     except SystemExit as exc:
         code = exc.code
     assert code == 2
-    assert "argument --sample-rate-hz/--rate: must be a plain decimal number" in capsys.readouterr().err
+    assert "argument --sample-rate-hz: must be a plain decimal number" in capsys.readouterr().err
+    # --rate, the alias until 0.2.0, is refused before any work, naming the one spelling
+    with pytest.raises(SystemExit) as stop:
+        main(["simulate", "--model", model_path, "--duration", "1", "--rate", "50", "--out", str(tmp_path / "o.csv")])
+    assert stop.value.code == 2
+    assert "unrecognized arguments: --rate 50; did you mean --sample-rate-hz?" in capsys.readouterr().err
+    assert not (tmp_path / "o.csv").exists()
 
 
 def test_cli_accepts_a_gap_report_with_extended_model(tmp_path):
@@ -124,8 +129,8 @@ def test_cli_missing_model_file_and_bad_duration(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("option, expected", [
-    (["--rate", "-5"], "--rate must be a number of Hz in [0.001, 100000], got -5.0"),
-    (["--rate", "1e-320"], "--rate must be a number of Hz in [0.001, 100000], got 1e-320"),
+    (["--sample-rate-hz", "-5"], "--sample-rate-hz must be a number of Hz in [0.001, 100000], got -5.0"),
+    (["--sample-rate-hz", "1e-320"], "--sample-rate-hz must be a number of Hz in [0.001, 100000], got 1e-320"),
     (["--seed", "-1"], "--seed must be an integer in [0, 2^63 - 1], got -1"),
     (["--seed", str(10**30)], "--seed must be an integer in [0, 2^63 - 1], got an integer of 31 digits"),
     (["--chunk", "0"], "--chunk must be at least 1 sample, got 0"),
@@ -183,10 +188,10 @@ def test_cli_refuses_to_overwrite_and_never_writes_onto_the_model(tmp_path, caps
 
 
 def test_cli_failure_leaves_no_file_and_a_rerun_works(tmp_path, capsys, monkeypatch):
-    import gyrofilter.sim.simulate as sim
+    import gyrofilter.cli.simulate as command
     from gyrofilter.errors import SettingsError
 
-    real = sim.simulate_chunks
+    real = command.simulate_chunks
 
     def failing(*args, **kwargs):
         chunks = real(*args, **kwargs)
@@ -196,11 +201,11 @@ def test_cli_failure_leaves_no_file_and_a_rerun_works(tmp_path, capsys, monkeypa
     model_path = write_json(tmp_path / "m.json", MODEL)
     out = tmp_path / "sim.csv.gz"
     argv = ["simulate", "--model", model_path, "--duration", "10", "--chunk", "100", "--seed", "3", "--out", str(out)]
-    monkeypatch.setattr(sim, "simulate_chunks", failing)
+    monkeypatch.setattr(command, "simulate_chunks", failing)
     assert main(argv) == 2
     assert "simulated failure" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.json"]  # no header-only file, no temporary
-    monkeypatch.setattr(sim, "simulate_chunks", real)
+    monkeypatch.setattr(command, "simulate_chunks", real)
     assert main(argv) == 0
     assert np.array_equal(read_recording(out).gyro, simulate(MODEL, 10.0, seed=3).gyro)
 
@@ -211,10 +216,10 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
     import os
     import signal
 
-    import gyrofilter.sim.simulate as sim
+    import gyrofilter.cli.simulate as command
 
     before = signal.getsignal(getattr(signal, signame))
-    real = sim.simulate_chunks
+    real = command.simulate_chunks
 
     def chunks_then_killed(*args, **kwargs):
         for i, chunk in enumerate(real(*args, **kwargs)):
@@ -222,7 +227,7 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
                 os.kill(os.getpid(), getattr(signal, signame))
             yield chunk
 
-    monkeypatch.setattr(sim, "simulate_chunks", chunks_then_killed)
+    monkeypatch.setattr(command, "simulate_chunks", chunks_then_killed)
     model = REPO / "examples" / "models" / "mpu6050.json"
     out = tmp_path / "long.csv.gz"
     assert main(["simulate", "--model", str(model), "--duration", "3600", "--out", str(out), "--chunk", "1000"]) == 130

@@ -28,7 +28,7 @@ from hypothesis.extra import numpy as hnp
 from gyrofilter import GyroFilter
 from gyrofilter.filter.calibration import MAX_NOISE_STD_DPS, Calibration
 from gyrofilter.cli import main
-from gyrofilter.cli.common import make_filter
+from gyrofilter.cli.filtering import make_filter
 from gyrofilter.errors import CalibrationError, SettingsError
 from gyrofilter.filter.jit import numba_available
 from gyrofilter.filter.pipeline import SETTING_NAMES, SETTING_RANGES

@@ -56,7 +56,7 @@ def _skiprows(path):
 def _make_file(folder):
     path = os.path.join(folder, "h1k.csv.gz")
     subprocess.run([sys.executable, "-m", "gyrofilter", "simulate", "--model", MODEL, "--duration", "3600",
-                    "--rate", "1000", "--out", path], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                    "--sample-rate-hz", "1000", "--out", path], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return path
 
 

@@ -33,7 +33,7 @@ def main(argv=None):
     p.add_argument("--hidden-cases", type=int, default=10)
     args = p.parse_args(argv)
 
-    from gyrofilter.cli.common import write_json
+    from gyrofilter.cli.outputs import write_json
     from gyrofilter.analysis.gap import analyse_gap
     from gyrofilter.analysis.gap_report import plot_adev, plot_spectrum
     from gyrofilter.recording import read_recording

@@ -3,6 +3,10 @@
 Each subcommand lives in its own module ``gyrofilter.cli.<name>`` with two functions:
 ``add_arguments(parser)`` and ``run(args) -> int``. Modules are imported only when their
 command runs (or for ``--help``), so ``gyrofilter replay`` does not import the analysis code.
+What several commands share has a module of its own: ``outputs`` (output files), ``options``
+(option types, ``--sample-rate-hz``), ``console`` (messages, the summary table), ``filtering``
+(the filter options of replay and run), ``still`` (``--keep-outliers``), ``batch`` (fleet runs)
+and ``live`` (the read loop of record and run).
 Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors and Ctrl-C become one
 line on stderr and a non-zero exit code; a traceback is a bug.
 """
@@ -34,7 +38,13 @@ EXIT_INTERRUPTED = 130
 
 class _OneLineParser(argparse.ArgumentParser):
     """argparse, with a refusal in one line (what every refusal of gyrofilter is) that says where
-    the usage is, instead of the usage text and then the error."""
+    the usage is, instead of the usage text and then the error. An option is taken only as spelled
+    in full: each has one spelling, and a removed one is refused, not read as the prefix of
+    another (``--sample-rate`` of ``--sample-rate-hz``)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
@@ -55,14 +65,18 @@ class _Parser(_OneLineParser):
 
 def did_you_mean(parser, extras):
     """"; did you mean --out?" for the unknown option among ``extras`` (words of argv) that is
-    closest to an option of ``parser`` (difflib ratio >= 0.6 without the dashes), else ""."""
+    closest to an option of ``parser`` (difflib ratio without the dashes), else "". An option
+    qualifies when the ratio is at least 0.6 or when its words (split at "-") hold every word
+    typed, as a removed spelling's do: ``--rate`` -> ``--sample-rate-hz``."""
     known = {s.lstrip("-"): s for action in parser._actions for s in action.option_strings if s.startswith("--")}
-    best = (0.6, "")
+    best = (0.0, "")
     for word in extras:
         if word.startswith("-"):
             typed = word.split("=", 1)[0].lstrip("-")
             for name, option in known.items():
-                best = max(best, (difflib.SequenceMatcher(None, typed, name).ratio(), option))
+                ratio = difflib.SequenceMatcher(None, typed, name).ratio()
+                if ratio >= 0.6 or set(typed.split("-")) <= set(name.split("-")):
+                    best = max(best, (ratio, option))
     return f"; did you mean {best[1]}?" if best[1] else ""
 
 

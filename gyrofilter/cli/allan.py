@@ -11,18 +11,20 @@ far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.ana
 are refused before any computation unless ``--keep-outliers`` is given; they are never dropped.
 Output files are written only once every result is finite, each whole or not at all.
 """
-import json
 import sys
 
-
 from ..analysis.allan import MIN_CLUSTERS, AllanInputError
-from ..analysis.still import characterise_recording
-from ..errors import SettingsError
 from ..analysis.fleet import FleetSettings
 from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert, kalibr_yaml, to_json
-from . import batch, common
+from ..analysis.plots_allan import plot_allan
+from ..analysis.still import characterise_recording
+from ..errors import SettingsError
+from ..plots import check_figure_path
+from ..units import AXES
+from . import batch, console, options, outputs, still
 
 MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
+ALL_AXES = "".join(AXES)  # --axes as one word: xyz
 
 NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
          "rrw": "rate random walk", "rate_ramp": "rate ramp"}
@@ -32,17 +34,17 @@ def add_arguments(parser):
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
                         help="recording file (format v1, .csv or .csv.gz), sensor still; several files or globs "
                              "with --fleet")
-    parser.add_argument("--json", metavar="OUT", type=common.file_name, help="write the deviation curves and coefficients as JSON")
-    parser.add_argument("--plot", metavar="OUT.png", type=common.file_name, help="draw the Allan deviation per axis (needs matplotlib)")
-    parser.add_argument("--kalibr", metavar="OUT.yaml", type=common.file_name, help="write Kalibr imu.yaml gyroscope noise entries")
-    parser.add_argument("--axes", default="xyz", help="axes to analyse, a subset of xyz (default xyz)")
-    parser.add_argument("--confidence", type=common.decimal, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
-    parser.add_argument("--min-clusters", type=common.whole_number, default=MIN_CLUSTERS,
+    parser.add_argument("--json", metavar="OUT", type=options.file_name, help="write the deviation curves and coefficients as JSON")
+    parser.add_argument("--plot", metavar="OUT.png", type=options.file_name, help="draw the Allan deviation per axis (needs matplotlib)")
+    parser.add_argument("--kalibr", metavar="OUT.yaml", type=options.file_name, help="write Kalibr imu.yaml gyroscope noise entries")
+    parser.add_argument("--axes", default=ALL_AXES, help=f"axes to analyse, a subset of {ALL_AXES} (default {ALL_AXES})")
+    parser.add_argument("--confidence", type=options.decimal, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
+    parser.add_argument("--min-clusters", type=options.whole_number, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
-    common.add_keep_outliers_argument(parser)
+    still.add_keep_outliers_argument(parser)
     parser.add_argument("--progress", action="store_true", help="report progress on stderr")
     batch.add_arguments(parser)
-    common.add_force_argument(parser)
+    options.add_force_argument(parser)
 
 
 def _fmt(c, unit):
@@ -71,8 +73,8 @@ def readoff_only(r):
 
 def run(args):
     axes = args.axes
-    if not axes or any(a not in "xyz" for a in axes) or len(set(axes)) != len(axes):
-        raise SettingsError(f"--axes must be a subset of xyz such as xz, got {args.axes!r}")
+    if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
+        raise SettingsError(f"--axes must be a subset of {ALL_AXES} such as xz, got {args.axes!r}")
     if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
         raise SettingsError(f"--min-clusters must be in [2, {MAX_MIN_CLUSTERS}], got {args.min_clusters}")
     if not 0.5 <= args.confidence <= 0.9999:  # every value inside works (0.9999999999999999 failed in the intervals)
@@ -84,22 +86,20 @@ def run(args):
                                  keep_outliers=args.keep_outliers)
         return batch.run(args, settings, paths)
     args.recording = batch.single(args, paths)
-    common.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
+    outputs.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
     if args.plot:
-        from ..plots import check_figure_path
-
         check_figure_path(args.plot)
-    progress = common.say if args.progress or sys.stderr.isatty() else None
+    progress = console.say if args.progress or sys.stderr.isatty() else None
     try:
         head, results = characterise_recording(args.recording, axes=axes, confidence=args.confidence,
                                                min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
-                                               warn=common.say_warning, progress=progress)
+                                               warn=console.say_warning, progress=progress)
     except AllanInputError as exc:  # the data of this file: name it
         raise AllanInputError(f"{args.recording}: {exc}") from None
-    fs = head.sample_rate_hz
-    duration_s = head.rows / fs
+    sample_rate_hz = head.sample_rate_hz
+    duration_s = head.rows / sample_rate_hz
     print(f"recording: {args.recording}")
-    print(f"  {head.rows} samples at {fs:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
+    print(f"  {head.rows} samples at {sample_rate_hz:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
     print(f"  coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval]")
     print("  slope read-off: the slope method of papers 000/002, another estimator, for comparison: the curve at one "
@@ -118,33 +118,18 @@ def run(args):
             longest = r.tau_s[r.fit_used][-1]
             print(f"    ({', '.join(missing)} not resolved: the longest cluster time with {args.min_clusters} clusters is "
                   f"{longest:.3g} s; slower effects need a longer still recording; the bounds above hold)")
-        common.print_warnings(r.warnings)
+        console.print_warnings(r.warnings)
     # every result is finite here; each file appears only when it is complete
     if args.json:
-        with common.replacing(args.json) as tmp:
-            write_json_document(tmp, to_json(results, fs, recording=args.recording, duration_s=duration_s))
-        common.say(f"wrote {args.json}")
+        with outputs.replacing(args.json) as tmp:
+            outputs.write_json_document(tmp, to_json(results, sample_rate_hz, recording=args.recording, duration_s=duration_s))
+        console.say(f"wrote {args.json}")
     if args.kalibr:
-        with common.replacing(args.kalibr) as tmp:
-            write_text(tmp, kalibr_yaml(results, fs, recording=args.recording))
-        common.say(f"wrote {args.kalibr}")
+        with outputs.replacing(args.kalibr) as tmp:
+            outputs.write_text(tmp, kalibr_yaml(results, sample_rate_hz, recording=args.recording))
+        console.say(f"wrote {args.kalibr}")
     if args.plot:
-        from ..analysis.plots_allan import plot_allan
-
-        with common.replacing(args.plot) as tmp:
-            plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {fs:g} Hz)")
-        common.say(f"drew {args.plot}")
+        with outputs.replacing(args.plot) as tmp:
+            plot_allan(tmp, results, title=f"{args.recording} ({duration_s:.0f} s at {sample_rate_hz:g} Hz)")
+        console.say(f"drew {args.plot}")
     return 0
-
-
-def write_json_document(path, doc):
-    """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise_model.to_json`) to ``path`` (no
-    replacing: give it the path :func:`common.replacing` yields)."""
-    with open(path, "w", encoding="utf-8") as fh:
-        json.dump(doc, fh, indent=1, allow_nan=False)
-
-
-def write_text(path, text):
-    """Write ``text`` to ``path`` (no replacing: give it the path :func:`common.replacing` yields)."""
-    with open(path, "w", encoding="utf-8") as fh:
-        fh.write(text)

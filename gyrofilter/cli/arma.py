@@ -10,11 +10,12 @@ import sys
 
 import numpy as np
 
+from ..analysis import arma
 from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
 from ..recording import warn_about_gaps
-from ..units import MAX_DURATION_S
-from . import common
+from ..units import AXES, MAX_DURATION_S
+from . import console, options, outputs, still
 
 MIN_SAMPLES = 200  # fewer leave the tests and the order search without power
 MAX_MAX_N = 10  # ARMA(20, 19): the longest model the simulator takes (20 coefficients each side)
@@ -24,26 +25,24 @@ PAPER_003 = "paper 003 (ADIS16405 z gyro): ADF -110.18; KS and JB reject normali
 
 def add_arguments(parser):
     parser.add_argument("recording", help="a static recording (format v1); the sensor must not move")
-    parser.add_argument("--axis", choices=("x", "y", "z", "all"), default="all", help="axis to analyse (default: all three)")
-    parser.add_argument("--json", metavar="OUT", type=common.file_name, help="write every number of the analysis to this JSON file")
-    parser.add_argument("--start-s", type=common.decimal, default=None, help="skip the first seconds (e.g. a warm-up or a move; default 0)")
-    parser.add_argument("--end-s", type=common.decimal, default=None, help="stop at this time in seconds (default: the end)")
-    parser.add_argument("--max-n", type=common.whole_number, default=4, help="highest Pandit-Wu order ARMA(2n, 2n-1) tried (default 4: ARMA(8, 7))")
-    parser.add_argument("--max-samples", type=common.whole_number, default=200_000,
+    parser.add_argument("--axis", choices=(*AXES, "all"), default="all", help="axis to analyse (default: all three)")
+    parser.add_argument("--json", metavar="OUT", type=options.file_name, help="write every number of the analysis to this JSON file")
+    parser.add_argument("--start-s", type=options.decimal, default=None, help="skip the first seconds (e.g. a warm-up or a move; default 0)")
+    parser.add_argument("--end-s", type=options.decimal, default=None, help="stop at this time in seconds (default: the end)")
+    parser.add_argument("--max-n", type=options.whole_number, default=4, help="highest Pandit-Wu order ARMA(2n, 2n-1) tried (default 4: ARMA(8, 7))")
+    parser.add_argument("--max-samples", type=options.whole_number, default=200_000,
                         help="longer series are block-averaged to at most this many samples (default 200000)")
-    parser.add_argument("--alpha", type=common.decimal, default=0.05, help="significance level of every test (default 0.05)")
+    parser.add_argument("--alpha", type=options.decimal, default=0.05, help="significance level of every test (default 0.05)")
     parser.add_argument("--criterion", choices=("f", "aic", "bic"), default="bic",
                         help="what decides each order step: BIC (default; the F test and AIC over-select on simulated ARMA(1,1)), "
                              "the F test (paper 003's rule) or AIC; all three are printed")
     parser.add_argument("--progress", action="store_true", help="report progress on stderr even when it is not a terminal")
-    common.add_keep_outliers_argument(parser)
-    common.add_force_argument(parser)
+    still.add_keep_outliers_argument(parser)
+    options.add_force_argument(parser)
 
 
 def run(args):
-    from ..analysis import arma
-
-    common.check_outputs([args.json], [args.recording], args.force)
+    outputs.check_outputs([args.json], [args.recording], args.force)
     arma.require_stats()
     if not 0 < args.alpha < 0.5:
         raise SettingsError(f"--alpha must be in (0, 0.5), got {args.alpha:g}")
@@ -55,15 +54,15 @@ def run(args):
         raise SettingsError(f"--max-samples must be at least 100, got {args.max_samples}")
     if args.max_samples > MAX_MAX_SAMPLES:
         raise SettingsError(f"--max-samples must be at most {MAX_MAX_SAMPLES}, got {args.max_samples}")
-    axes = "xyz" if args.axis == "all" else args.axis
+    axes = AXES if args.axis == "all" else (args.axis,)
     head, series, t_s = read_axes(args.recording, axes, with_t=True)
-    common.print_warnings(head.warnings)
+    console.print_warnings(head.warnings)
     warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful",
-                    common.say_warning)
+                    console.say_warning)
     fs = head.sample_rate_hz
     i0, i1 = _window(args, head.rows, fs, t_s)
     series = {a: x[i0:i1] for a, x in series.items()}
-    refuse_gross_errors(head, series, args.keep_outliers, warn=common.say_warning, first_row=i0)
+    refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
     progress = args.progress or sys.stderr.isatty()
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0
@@ -74,7 +73,7 @@ def run(args):
           "each axis minus its mean")
     for name in axes:
         if progress:
-            common.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
+            console.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
         try:
             rep = arma.analyze_axis(series[name], fs, axis=name, max_samples=args.max_samples,
                                     max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum, criterion=args.criterion)
@@ -85,13 +84,13 @@ def run(args):
     print(f"\n{PAPER_003}")
     warned = [f"axis {k}: " + "; ".join(v.warnings) for k, v in reports.items() if v.warnings]
     if warned:
-        common.print_warnings(["scipy/statsmodels warned during the fits (check the results above): " + "; ".join(warned)])
+        console.print_warnings(["scipy/statsmodels warned during the fits (check the results above): " + "; ".join(warned)])
     if args.json:
         out = {"recording": args.recording, "sample_rate_hz": fs, "start_s": start_s, "duration_s": span_s, "n_samples": n,
                "alpha": args.alpha, "axes": {k: v.to_dict() for k, v in reports.items()}}
-        with common.replacing(args.json) as tmp:
-            common.write_json(tmp, out)
-        common.say(f"wrote {args.json}")
+        with outputs.replacing(args.json) as tmp:
+            outputs.write_json(tmp, out)
+        console.say(f"wrote {args.json}")
     return 0
 
 
@@ -140,8 +139,6 @@ def _span_s(i0, i1, fs, t_s):
 
 
 def _print_axis(rep, alpha):
-    from ..analysis import arma
-
     pct = f"{alpha * 100:g} %"
     print(f"\naxis {rep.axis}: mean {rep.mean_dps:+.4f} deg/s, std {rep.std_dps:.4f} deg/s")
     for note in rep.notes:

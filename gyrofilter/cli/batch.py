@@ -13,8 +13,9 @@ import os
 import sys
 import time
 
+from ..analysis import fleet
 from ..errors import SettingsError
-from . import common
+from . import console, options, outputs
 
 FLEET_CSV = "fleet.csv"
 FLEET_MD = "fleet.md"
@@ -22,10 +23,10 @@ EXIT_NOTHING_DONE = 2
 
 
 def add_arguments(parser):
-    parser.add_argument("--fleet", "--out-dir", dest="fleet", metavar="DIR", type=common.file_name,
+    parser.add_argument("--fleet", "--out-dir", dest="fleet", metavar="DIR", type=options.file_name,
                         help="a fleet run: one report per recording in DIR, named after it, plus fleet.csv and "
                              "fleet.md (needed for more than one recording)")
-    parser.add_argument("--jobs", type=common.whole_number, default=None, metavar="N",
+    parser.add_argument("--jobs", type=options.whole_number, default=None, metavar="N",
                         help="with --fleet: recordings analysed at once on this machine (default: all cores; "
                              "each worker holds one recording in memory)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
@@ -66,9 +67,9 @@ def single(args, paths):
     return path
 
 
-def refuse_single_file_outputs(args, options):
+def refuse_single_file_outputs(args, option_names):
     """Refuse the single-file output options (``--json`` ...) with ``--fleet``."""
-    for option in options:
+    for option in option_names:
         if getattr(args, option.lstrip("-").replace("-", "_")):
             raise SettingsError(f"{option} names one file; with --fleet each recording's reports are written "
                                 "to DIR, named after the recording")
@@ -77,26 +78,22 @@ def refuse_single_file_outputs(args, options):
 def report_files(command):
     """The report files of one recording: (suffix, key of the result, writer of a path and the
     value); a fleet run of ``command`` writes each as DIR/NAME<suffix>."""
-    from .allan import write_json_document, write_text
-
-    allan = [(".allan.json", "allan", write_json_document), (".imu.yaml", "kalibr", write_text)]
-    return ([(".gap.json", "gap", common.write_json)] if command == "gap" else []) + allan
+    allan = [(".allan.json", "allan", outputs.write_json_document), (".imu.yaml", "kalibr", outputs.write_text)]
+    return ([(".gap.json", "gap", outputs.write_json)] if command == "gap" else []) + allan
 
 
 def run(args, settings, paths):
     """Run the fleet (the module docstring); returns the exit code."""
-    from ..analysis import fleet
-
     if args.jobs is not None and args.jobs < 1:
         raise SettingsError(f"--jobs must be at least 1, got {args.jobs}")
     if args.jobs is not None and args.scheduler:
         raise SettingsError("--jobs and --scheduler: give one (the cluster's workers set the parallelism)")
-    common.check_output_folder(args.fleet, "--fleet")
+    outputs.check_output_folder(args.fleet, "--fleet")
     names = fleet.unit_names(paths)
     files = report_files(settings.command)
-    outputs = [os.path.join(args.fleet, name + suffix) for name in names for suffix, _, _ in files]
+    report_paths = [os.path.join(args.fleet, name + suffix) for name in names for suffix, _, _ in files]
     fleet_files = [os.path.join(args.fleet, FLEET_CSV), os.path.join(args.fleet, FLEET_MD)]
-    common.check_outputs(outputs + fleet_files, paths, args.force)
+    outputs.check_outputs(report_paths + fleet_files, paths, args.force)
     results = [fleet.failed(p, "no file matches") if glob.has_magic(p) and not os.path.exists(p) else None
                for p in paths]
     todo = [i for i, r in enumerate(results) if r is None]
@@ -111,11 +108,11 @@ def run(args, settings, paths):
     t0 = time.perf_counter()
     if show:
         unmatched = len(paths) - len(todo)
-        common.say(f"{settings.command}: {len(paths)} recording(s)" + (f", {unmatched} matching no file" if unmatched else "")
-                   + f"; {len(todo)} on {where}")
+        console.say(f"{settings.command}: {len(paths)} recording(s)" + (f", {unmatched} matching no file" if unmatched else "")
+                    + f"; {len(todo)} on {where}")
         for r in results:
             if r is not None:
-                common.say(f"{settings.command}: FAILED: {r['error']}")
+                console.say(f"{settings.command}: FAILED: {r['error']}")
     written = 0
     with contextlib.closing(stream):
         for done, (k, result) in enumerate(stream, 1):
@@ -124,19 +121,19 @@ def run(args, settings, paths):
             with contextlib.ExitStack() as reports:  # a recording's reports take their places together
                 for suffix, key, write in files:
                     if result[key] is not None:
-                        write(reports.enter_context(common.replacing(os.path.join(args.fleet, names[i] + suffix))),
+                        write(reports.enter_context(outputs.replacing(os.path.join(args.fleet, names[i] + suffix))),
                               result[key])
                         written += 1
             if show:
                 state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
                          else f"FAILED: {result['error']}")
-                common.say(f"{settings.command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}")
+                console.say(f"{settings.command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}")
     rows = fleet.fleet_rows(names, results)
     stats = fleet.flag_units(rows)
     title = f"Fleet: gyrofilter {settings.command}, {len(paths)} recordings"
-    with common.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+    with outputs.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
         fh.write(fleet.fleet_csv(rows))
-    with common.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+    with outputs.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
         fh.write(fleet.fleet_markdown(rows, stats, title=title))
     return _summary(rows, fleet_files, written, time.perf_counter() - t0)
 
@@ -153,5 +150,5 @@ def _summary(rows, fleet_files, written, elapsed_s):
     for r in flagged:
         for f in r["flag"]:
             print(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
-    common.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report(s)")
+    console.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report(s)")
     return EXIT_NOTHING_DONE if len(failed) == units else 0

@@ -4,19 +4,20 @@ Static std reduction on every static MPU6050 recording, RMSE and worst lag on sy
 profiles added to real static noise, RMSE against the optical reference on the BROAD trials;
 see :mod:`gyrofilter.evaluation.evaluate` for the definitions. The three files in ``--out`` are refused
 when they exist (unless ``--force``), before any work, and are written into a temporary folder
-from which they take their places once all three are written (:func:`common.replacing_in`).
+from which they take their places once all three are written (:func:`outputs.replacing_in`).
 """
 import os
 import sys
 
 from ..evaluation import evaluate as E
-from . import common
+from ..plots import pyplot
+from . import console, options, outputs
 
 OUTPUT_NAMES = ("evaluate_table.md", "evaluate.json", "evaluate_pareto.png")
 
 
 def add_arguments(parser):
-    parser.add_argument("--out", metavar="DIR", type=common.file_name, default="evaluation",
+    parser.add_argument("--out", metavar="DIR", type=options.file_name, default="evaluation",
                         help="directory for evaluate_table.md, evaluate.json and evaluate_pareto.png (default: ./evaluation)")
     parser.add_argument("--recordings", metavar="DIR",
                         help="directory of recordings (default: ./recordings, else the repository's recordings/)")
@@ -24,7 +25,7 @@ def add_arguments(parser):
                         help="evaluate on all data (default), or only the tuning or the held-out part (gyrofilter.evaluation.evaluate.TUNE_SPLIT)")
     parser.add_argument("--no-lag", action="store_true", help="skip the lag estimates (faster)")
     parser.add_argument("--progress", action="store_true", help="report progress on stderr (default: only on a terminal)")
-    common.add_force_argument(parser)
+    options.add_force_argument(parser)
 
 
 def _recordings_dir(arg):
@@ -41,10 +42,8 @@ def _recordings_dir(arg):
 
 
 def run(args):
-    from ..plots import pyplot
-
-    common.check_output_folder(args.out, "--out")
-    common.check_outputs([os.path.join(args.out, name) for name in OUTPUT_NAMES], force=args.force)
+    outputs.check_output_folder(args.out, "--out")
+    outputs.check_outputs([os.path.join(args.out, name) for name in OUTPUT_NAMES], force=args.force)
     rec_dir = _recordings_dir(args.recordings)
     pyplot()  # a missing matplotlib is said now, not after the evaluation
     show = args.progress or sys.stderr.isatty()
@@ -80,10 +79,10 @@ def run(args):
     doc = {"filters": ev.filters, "families": ev.families, "static_std_reduction": ev.static,
            "dynamic": ev.dynamic, "broad": ev.broad}
     table_name, json_name, png_name = OUTPUT_NAMES
-    with common.replacing_in(args.out) as tmp:
+    with outputs.replacing_in(args.out) as tmp:
         with open(os.path.join(tmp, table_name), "w", encoding="utf-8") as fh:
             fh.write(text)
-        common.write_json(os.path.join(tmp, json_name), doc)
+        outputs.write_json(os.path.join(tmp, json_name), doc)
         E.plot_pareto(ev, os.path.join(tmp, png_name))
-    common.say(f"wrote {', '.join(os.path.join(args.out, name) for name in OUTPUT_NAMES)}")
+    console.say(f"wrote {', '.join(os.path.join(args.out, name) for name in OUTPUT_NAMES)}")
     return 0

@@ -15,8 +15,15 @@ import os
 import sys
 import time
 
+from ..analysis import gap_report
+from ..analysis.fleet import FleetSettings
+from ..analysis.gap import analyse_gap
+from ..errors import SettingsError
+from ..plots import pyplot
+from ..recording import read_recording, warn_about_gaps
 from ..sim.simulate import check_seed
-from . import batch, common
+from ..units import AXES
+from . import batch, console, options, outputs
 
 MAX_SIMS = 1000  # baseline simulations; the default is 12-24, and the spread is known to +-3 % from 1000
 
@@ -24,23 +31,17 @@ MAX_SIMS = 1000  # baseline simulations; the default is 12-24, and the spread is
 def add_arguments(parser):
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
                         help="recording file (format v1, .csv or .csv.gz); several files or globs with --fleet")
-    parser.add_argument("--json", metavar="OUT.json", type=common.file_name, help="write the gap report (JSON) here (required without --fleet)")
-    parser.add_argument("--report", metavar="DIR", type=common.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
-    parser.add_argument("--seed", type=common.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
-    parser.add_argument("--sims", type=common.whole_number, default=None, metavar="N",
+    parser.add_argument("--json", metavar="OUT.json", type=options.file_name, help="write the gap report (JSON) here (required without --fleet)")
+    parser.add_argument("--report", metavar="DIR", type=options.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
+    parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
+    parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; 2 to {MAX_SIMS})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     batch.add_arguments(parser)
-    common.add_force_argument(parser)
+    options.add_force_argument(parser)
 
 
 def run(args):
-    from ..errors import SettingsError
-    from ..analysis.fleet import FleetSettings
-    from ..analysis.gap import analyse_gap
-    from ..analysis.gap_report import REPORT_NAME, report_file_names, write_report
-    from ..recording import read_recording, warn_about_gaps
-
     if args.sims is not None and not 2 <= args.sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {args.sims}")
     check_seed(args.seed, "--seed")
@@ -51,9 +52,9 @@ def run(args):
     args.recording = batch.single(args, paths)
     if args.json is None:
         raise SettingsError("--json OUT.json is required (or --fleet DIR for several recordings)")
-    report_files = [os.path.join(args.report, name) for name in report_file_names()] if args.report else []
-    common.check_output_folder(args.report, "--report")
-    common.check_outputs([args.json] + report_files, [args.recording], args.force)
+    report_files = [os.path.join(args.report, name) for name in gap_report.report_file_names()] if args.report else []
+    outputs.check_output_folder(args.report, "--report")
+    outputs.check_outputs([args.json] + report_files, [args.recording], args.force)
     show = args.progress or sys.stderr.isatty()
     t0 = time.perf_counter()
 
@@ -62,29 +63,26 @@ def run(args):
             print(f"gap [{time.perf_counter() - t0:5.1f} s] {text}", file=sys.stderr, flush=True)
 
     if args.report:
-        from ..plots import pyplot
-
         pyplot()  # a missing matplotlib is said now, not after the analysis
     rec = read_recording(args.recording)
-    for text in rec.warnings:
-        common.say(f"gyrofilter: warning: {text}")
+    console.print_warnings(rec.warnings)
     warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful",
-                    common.say_warning)
+                    console.say_warning)
     progress(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
     report = analyse_gap(rec, seed=args.seed, n_sims=args.sims, progress=progress,
                          recording_name=args.recording)
-    with contextlib.ExitStack() as outputs:
-        common.write_json(outputs.enter_context(common.replacing(args.json)), report)
+    with contextlib.ExitStack() as files:
+        outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
         if args.report:
             progress("report")
-            write_report(report, rec, outputs.enter_context(common.replacing_in(args.report)), seed=args.seed)
-    common.say(f"wrote {args.json}" + (f" and {os.path.join(args.report, REPORT_NAME)}" if args.report else ""))
+            gap_report.write_report(report, rec, files.enter_context(outputs.replacing_in(args.report)), seed=args.seed)
+    console.say(f"wrote {args.json}" + (f" and {os.path.join(args.report, gap_report.REPORT_NAME)}" if args.report else ""))
     d = report.get("discrepancy")
     gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}" if d else
             "no discrepancy computed (see the notes)")
     print(f"{args.recording}: {_count(len(report['findings']), 'finding')}; {gain} "
           f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
-    for axis in "xyz":
+    for axis in AXES:
         found = [f for f in report["findings"] if f["axis"] == axis]
         if d:
             before, after = d["before"][axis], d["after"][axis]

@@ -4,7 +4,6 @@ stderr and the summary words, and the ``--out`` recording, which takes its name 
 data row (:class:`LiveOutput`).
 """
 import contextlib
-import math
 import os
 import signal
 import sys
@@ -13,10 +12,11 @@ import time
 import numpy as np
 
 from ..errors import DeviceError, GyroFilterError, SourceEnded, one_line
+from ..recording import RecordingWriter
 from ..sources import SOURCE_HELP, open_source, parse_source
 from ..sources.base import WARNING_PREFIX
 from ..units import GYRO_UNITS, check_duration_s
-from . import common
+from . import console, options, outputs
 
 STATUS_INTERVAL_S = 1.0
 EXIT_DISCONNECTED = 1
@@ -25,12 +25,12 @@ EXIT_DISCONNECTED = 1
 def add_source_arguments(parser):
     """--source and the unit options for devices that send no header (``record`` and ``run``)."""
     parser.add_argument("--source", required=True, metavar="SOURCE", help=SOURCE_HELP)
-    parser.add_argument("--duration", type=common.decimal, metavar="S",
+    parser.add_argument("--duration", type=options.decimal, metavar="S",
                         help="stop after S seconds of samples (default: until Ctrl-C, SIGTERM, SIGHUP or the end of the source)")
     parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
                         help="gyro unit of a serial device that sends no header line")
-    parser.add_argument("--lsb-per-dps", type=common.decimal, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
-    common.add_sample_rate_argument(parser, "--sample-rate", help="sample rate of such a device (old spelling --sample-rate)")
+    parser.add_argument("--lsb-per-dps", type=options.decimal, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
+    options.add_sample_rate_argument(parser, help="sample rate of such a device")
 
 
 def check_duration(duration_s):
@@ -49,7 +49,7 @@ def source_files(spec):
 class LiveOutput:
     """The ``--out`` recording of ``record`` and ``run``, written while the loop runs.
 
-    It is written under a temporary name beside ``path`` (:func:`common.partial_path`) and takes
+    It is written under a temporary name beside ``path`` (:func:`outputs.partial_path`) and takes
     its own name (``os.replace``, atomic) at the first flush that holds a data row, or when the
     command ends without failing. So an interrupted recording reads under its name, and a file
     that exists (``--force``) is left as it was by any failure before the first row (a bad
@@ -60,15 +60,13 @@ class LiveOutput:
     """
 
     def __init__(self, path, header, columns, formats, row_name):
-        from ..recording import RecordingWriter
-
         self.path = path
         self.row_name = row_name
         self.published = False
         folder = os.path.dirname(os.path.abspath(path))
         os.makedirs(folder, exist_ok=True)
-        common.remove_stale_partials(folder)
-        self._tmp = common.partial_path(path)
+        outputs.remove_stale_partials(folder)
+        self._tmp = outputs.partial_path(path)
         try:
             self._writer = RecordingWriter(self._tmp, header, columns, formats=formats, flush_interval_s=None, name=path)
         except OSError as exc:  # named by the user's name, not the temporary one
@@ -98,7 +96,7 @@ class LiveOutput:
             self._publish()
 
     def _publish(self):
-        common.commit(self._tmp, self.path)
+        outputs.commit(self._tmp, self.path)
         self.published = True
         self._inode = os.stat(self.path).st_ino
 
@@ -147,14 +145,15 @@ def close_after_failure(output, exc, command):
     if line and isinstance(exc, GyroFilterError):  # one error line that also says what the file kept
         raise GyroFilterError(f"{one_line(exc)}; {output.path}: {line}") from None
     if line:
-        common.say(f"{command}: {output.path}: {line}")
+        console.say(f"{command}: {output.path}: {line}")
 
 
 def open_from_args(args):
     """Open ``args.source`` with the unit options and ``--duration`` as defaults (a simulation
-    then runs for that duration, so that it equals ``simulate --duration``)."""
+    then runs for that duration, so that it equals ``simulate --duration``); a bad
+    ``--sample-rate-hz`` is refused naming the option, whichever source it was meant for."""
     return open_source(args.source, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
-                       sample_rate_hz=args.sample_rate_hz, duration_s=args.duration)
+                       sample_rate_hz=options.sample_rate_hz(args), duration_s=args.duration)
 
 
 class StopSignals:
@@ -190,11 +189,12 @@ class StopSignals:
 
 
 class Status:
-    """A status line on stderr at most once per ``STATUS_INTERVAL_S``: rate, losses, CPU use."""
+    """A status line on stderr at most once per ``STATUS_INTERVAL_S``: the rate achieved beside the
+    source's nominal ``sample_rate_hz``, losses, CPU use."""
 
-    def __init__(self, enabled, nominal_rate_hz, stream=None):
+    def __init__(self, enabled, sample_rate_hz, stream=None):
         self.enabled = enabled
-        self.nominal_rate_hz = nominal_rate_hz
+        self.sample_rate_hz = sample_rate_hz
         self.stream = stream or sys.stderr
         self.tty = self.stream.isatty()
         self._wall = time.monotonic()
@@ -212,7 +212,7 @@ class Status:
         rate = (samples - self._samples) / dt
         cpu_pct = 100.0 * (cpu - self._cpu) / dt
         self._wall, self._cpu, self._samples = wall, cpu, samples
-        line = f"{rate:7.1f} samples/s (nominal {self.nominal_rate_hz:g}), {text}, CPU {cpu_pct:4.1f}%"
+        line = f"{rate:7.1f} samples/s (nominal {self.sample_rate_hz:g}), {text}, CPU {cpu_pct:4.1f}%"
         if self.tty:
             self.stream.write("\r" + line + "\x1b[K")
         else:

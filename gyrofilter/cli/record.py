@@ -15,8 +15,9 @@ The output is never one of the source's files, and overwrites only a regular fil
 import sys
 import time
 
+from .. import __version__
 from ..recording import END_NOTE
-from . import common, live
+from . import live, options, outputs
 
 FLUSH_INTERVAL_S = 0.5
 # header keys first in this order, the rest as the source gives them
@@ -30,16 +31,14 @@ def add_arguments(parser):
         "at least twice a second; Ctrl-C, SIGTERM or SIGHUP ends the file cleanly (exit 0)."
     )
     live.add_source_arguments(parser)
-    parser.add_argument("--out", required=True, metavar="FILE", type=common.file_name, help="recording to write (" + common.RECORDING_FILE_HELP + ")")
-    common.add_force_argument(parser)
+    parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name, help="recording to write (" + options.RECORDING_FILE_HELP + ")")
+    options.add_force_argument(parser)
     shown = parser.add_mutually_exclusive_group()
     shown.add_argument("--progress", action="store_true", help="status line on stderr every second even when stderr is not a terminal")
     shown.add_argument("--quiet", action="store_true", help="no status line, even on a terminal (as run --quiet)")
 
 
 def recording_header(source, spec):
-    from .. import __version__
-
     head = dict(source.header)
     head.setdefault("start_time_utc", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
     head["live_source"] = spec
@@ -51,7 +50,7 @@ def recording_header(source, spec):
 
 def run(args):
     live.check_duration(args.duration)
-    common.check_outputs([args.out], live.source_files(args.source), args.force)
+    outputs.check_outputs([args.out], live.source_files(args.source), args.force)
     source = live.open_from_args(args)
     try:
         return _record(args, source)

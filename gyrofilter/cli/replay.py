@@ -22,12 +22,13 @@ from importlib import resources
 
 import numpy as np
 
+from .. import plots
 from ..errors import RecordingError, SampleError, SettingsError
 from ..filter.pipeline import SETTING_NAMES
-from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
 from ..filter.smoother import Smoother
+from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
-from . import common
+from . import console, filtering, options, outputs
 
 BUNDLED = "mpu6050_static_100s.csv.gz"
 OUT_COLUMNS = ["t", "gx", "gy", "gz"]
@@ -35,37 +36,35 @@ OUT_COLUMNS = ["t", "gx", "gy", "gz"]
 
 def add_arguments(parser):
     parser.add_argument("recording", nargs="?", help=f"recording file (format v1, .csv or .csv.gz); default: the bundled {BUNDLED}")
-    parser.add_argument("--out", metavar="FILE", type=common.file_name, help="write the filtered series as a recording (" + common.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--plot", metavar="PNG", type=common.file_name, help="draw raw and filtered rates per axis, as min/max bands on long recordings (needs matplotlib)")
+    parser.add_argument("--out", metavar="FILE", type=options.file_name, help="write the filtered series as a recording (" + options.RECORDING_FILE_HELP + ")")
+    parser.add_argument("--plot", metavar="PNG", type=options.file_name, help="draw raw and filtered rates per axis, as min/max bands on long recordings (needs matplotlib)")
     parser.add_argument("--realtime", action="store_true", help="pace the filter at the recording's sample rate and print each filtered row as it is produced "
                                                                     "(stdout is then a recording, format v1; the summary goes to stderr)")
     parser.add_argument("--smooth", action="store_true",
                         help="offline: smooth with the forward-backward smoother over the adaptive Kalman filter "
                              "(each row from the whole recording; presets recommended and adaptive_kalman)")
-    common.add_filter_arguments(parser)
-    common.add_force_argument(parser)
+    filtering.add_filter_arguments(parser)
+    options.add_force_argument(parser)
 
 
 def run(args):
     path = args.recording or str(resources.files("gyrofilter") / "data" / BUNDLED)
-    common.check_outputs([args.out, args.plot, args.save_calibration], [path, args.calibration, args.temp_model], args.force)
+    outputs.check_outputs([args.out, args.plot, args.save_calibration], [path, args.calibration, args.temp_model], args.force)
     if args.plot:
-        from ..plots import check_figure_path
-
-        check_figure_path(args.plot)
+        plots.check_figure_path(args.plot)
     if args.smooth and args.realtime:
         raise SettingsError("--smooth needs the whole recording before the first row; it cannot run with --realtime")
     chunks = iter_recording(path, chunk_rows=CHUNK_ROWS)
     head = next(chunks)
-    common.refuse_filtered_output(head.header, path)
-    filt = common.make_filter(args, head.sample_rate_hz)
-    common.check_temperature(filt, "temp" in head.names, path)
+    filtering.refuse_filtered_output(head.header, path)
+    filt = filtering.make_filter(args, head.sample_rate_hz)
+    filtering.check_temperature(filt, "temp" in head.names, path)
     replay = _Replay(path, head, filt, plot=bool(args.plot), smoother=Smoother(filt) if args.smooth else None,
                      calibration_from=args.calibration)
-    with contextlib.ExitStack() as outputs:
+    with contextlib.ExitStack() as files:
         if args.out:
-            replay.out_path, replay.out_name = outputs.enter_context(common.replacing(args.out)), args.out
-            outputs.callback(replay.close)
+            replay.out_path, replay.out_name = files.enter_context(outputs.replacing(args.out)), args.out
+            files.callback(replay.close)
         if args.realtime:  # stdout is a recording (format v1) too
             replay.print_rows(header_text(replay.stdout_header(), OUT_COLUMNS, "stdout").rstrip("\n"))
         for chunk in chunks:
@@ -79,21 +78,19 @@ def run(args):
         replay.close()
         # every output goes through replacing(): all land when the command succeeds, none when it fails
         if args.plot:
-            from ..plots import plot_filtered
-
-            plot_filtered(outputs.enter_context(common.replacing(args.plot)), replay.raw_envelope, replay.filtered_envelope,
-                          title=f"{path} (raw minus start-up bias)")
-        saved = common.save_calibration(args.save_calibration, filt, outputs)
-    common.print_warnings(head.warnings)
-    warn_about_gaps(head, "the filter treats the samples as uniform", common.say_warning)
+            plots.plot_filtered(files.enter_context(outputs.replacing(args.plot)), replay.raw_envelope,
+                                replay.filtered_envelope, title=f"{path} (raw minus start-up bias)")
+        saved = filtering.save_calibration(args.save_calibration, filt, files)
+    console.print_warnings(head.warnings)
+    warn_about_gaps(head, "the filter treats the samples as uniform", console.say_warning)
     with contextlib.redirect_stdout(sys.stderr) if args.realtime else contextlib.nullcontext():  # stdout has the rows
-        common.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
+        console.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
     if saved:
-        common.say(f"saved the calibration to {args.save_calibration}")
+        console.say(f"saved the calibration to {args.save_calibration}")
     if args.out:
-        common.say(f"wrote {replay.filtered.count} filtered rows to {args.out}")
+        console.say(f"wrote {replay.filtered.count} filtered rows to {args.out}")
     if args.plot:
-        common.say(f"drew {args.plot}")
+        console.say(f"drew {args.plot}")
     return 0
 
 
@@ -168,20 +165,20 @@ class _Replay:
         rows, t_rows = [], []
         if self._wall_start is None:
             self._wall_start = time.monotonic()
-        rate_hz = filt.sample_rate_hz
+        sample_rate_hz = filt.sample_rate_hz
         temps = [None] * len(gyro) if temps is None else temps.tolist()
         for sample, temp, t in zip(map(tuple, gyro.tolist()), temps, t_s.tolist()):
-            delay = self._wall_start + filt.samples_in / rate_hz - time.monotonic()
+            delay = self._wall_start + filt.samples_in / sample_rate_hz - time.monotonic()
             if delay > 0 and self.stdout_open:
                 time.sleep(delay)
             calibrating = filt.calibrating
             row = filt.update(sample, temp)
             if calibrating and not filt.calibrating:  # the bias the --out header has, as run notes it
-                self.print_rows(f"# {common.calibrated_note(filt.bias_dps)}")
+                self.print_rows(f"# {filtering.calibrated_note(filt.bias_dps)}")
             if row is not None:  # a row comes out when its block's last sample, this one, goes in
                 rows.append(row)
                 t_rows.append(t)
-                self.print_rows(common.ROW_FORMAT % (t, *row))
+                self.print_rows(filtering.ROW_FORMAT % (t, *row))
         return np.array(t_rows, dtype=float), np.array(rows).reshape(-1, 3)
 
     def print_rows(self, text):
@@ -207,7 +204,7 @@ class _Replay:
         if self.out_path is None:
             return
         if self._writer is None:  # the header names the bias, known once the calibration is done
-            self._writer = RecordingWriter(self.out_path, self._out_header(), OUT_COLUMNS, formats=common.ROW_FORMATS,
+            self._writer = RecordingWriter(self.out_path, self._out_header(), OUT_COLUMNS, formats=filtering.ROW_FORMATS,
                                            flush_interval_s=None, fsync=False, name=self.out_name, t_advice=_LOST_IN_BLOCKS)
         self._writer.write(np.column_stack([t_s, rows]))
 

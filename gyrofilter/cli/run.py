@@ -17,9 +17,10 @@ import time
 
 import numpy as np
 
+from .. import __version__
 from ..errors import SampleError, SettingsError
-from ..recording import END_NOTE, header_text, note_text
-from . import common, live
+from ..recording import END_NOTE, dps_header, header_text, note_text
+from . import console, filtering, live, options, outputs
 
 FLUSH_INTERVAL_S = 0.5
 
@@ -30,10 +31,10 @@ def add_arguments(parser):
         "stdout or to --out, a status line on stderr once per second."
     )
     live.add_source_arguments(parser)
-    parser.add_argument("--out", metavar="FILE", type=common.file_name, help="write the filtered rates to this recording (" + common.RECORDING_FILE_HELP + ") instead of stdout")
-    common.add_force_argument(parser)
+    parser.add_argument("--out", metavar="FILE", type=options.file_name, help="write the filtered rates to this recording (" + options.RECORDING_FILE_HELP + ") instead of stdout")
+    options.add_force_argument(parser)
     parser.add_argument("--quiet", action="store_true", help="no status line")
-    common.add_filter_arguments(parser)
+    filtering.add_filter_arguments(parser)
 
 
 class _TextOut:
@@ -50,7 +51,7 @@ class _TextOut:
 
     def write(self, rows):
         self.rows_written += len(rows)
-        self.stream.write("".join(common.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
+        self.stream.write("".join(filtering.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
 
     def note(self, text):
         self.stream.write(f"# {note_text(text)}\n")
@@ -65,8 +66,8 @@ class _TextOut:
 
 def run(args):
     live.check_duration(args.duration)
-    common.check_outputs([args.out, args.save_calibration],
-                         live.source_files(args.source) + [args.calibration, args.temp_model], args.force)
+    outputs.check_outputs([args.out, args.save_calibration],
+                          live.source_files(args.source) + [args.calibration, args.temp_model], args.force)
     source = live.open_from_args(args)
     try:
         return _run(args, source)
@@ -75,16 +76,13 @@ def run(args):
 
 
 def _run(args, source):
-    from .. import __version__
-    from ..recording import dps_header
-
     head = source.header
-    common.refuse_filtered_output(head, f"source {args.source}")
+    filtering.refuse_filtered_output(head, f"source {args.source}")
     cols = source.columns
     t_idx = cols.index("t")
-    filt = common.make_filter(args, source.sample_rate_hz)
+    filt = filtering.make_filter(args, source.sample_rate_hz)
     temp_idx = cols.index("temp") if "temp" in cols else None
-    common.check_temperature(filt, temp_idx is not None, f"source {args.source}")
+    filtering.check_temperature(filt, temp_idx is not None, f"source {args.source}")
     block = filt.settings.block_len
     out_header = dps_header({
         "description": f"gyrofilter {__version__} run: filtered rates, preset {filt.preset}, block of {block} samples; t = time of the block's last sample",
@@ -98,7 +96,7 @@ def _run(args, source):
     out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
     columns = ["t", "gx", "gy", "gz"]
     if args.out:
-        writer = live.LiveOutput(args.out, out_header, columns, common.ROW_FORMATS, "filtered row")
+        writer = live.LiveOutput(args.out, out_header, columns, filtering.ROW_FORMATS, "filtered row")
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = live.LiveLoop(source, args.duration)
@@ -118,7 +116,7 @@ def _run(args, source):
                     except SampleError as exc:  # a sample beyond the filter's range: name the source and the sample
                         raise SettingsError(f"source {args.source}: sample {filt.samples_in + exc.row}: {exc.reason}") from None
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
-                        writer.note(common.calibrated_note(filt.bias_dps))
+                        writer.note(filtering.calibrated_note(filt.bias_dps))
                     if len(out):
                         writer.write(np.column_stack([t_out, out]))
                 now = time.monotonic()
@@ -133,17 +131,17 @@ def _run(args, source):
             for text in loop.pop_notes():
                 writer.note(text)
             writer.note(f"{END_NOTE}{loop.reason()}; {loop.samples} samples in, {writer.rows_written} filtered rows out")
-        with contextlib.ExitStack() as outputs:  # the live output stays even if this fails: its rows are the data
-            saved = common.save_calibration(args.save_calibration, filt, outputs)
+        with contextlib.ExitStack() as files:  # the live output stays even if this fails: its rows are the data
+            saved = filtering.save_calibration(args.save_calibration, filt, files)
         if saved:
-            common.say(f"saved the calibration to {args.save_calibration}")
+            console.say(f"saved the calibration to {args.save_calibration}")
     except BaseException as exc:
         live.close_after_failure(writer, exc, "gyrofilter run")
         raise
     nothing = filt.calibrating  # it stopped inside the start-up window: an output without rows goes
     left = writer.close(loop.failed() or nothing)
     reason = loop.reason()
-    bias = "" if filt.bias_dps is None else f" bias {common.bias_text(filt.bias_dps)};"
+    bias = "" if filt.bias_dps is None else f" bias {console.bias_text(filt.bias_dps)};"
     print(
         f"gyrofilter run: {reason}\n"
         f"  {loop.samples} samples in, {writer.rows_written} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "

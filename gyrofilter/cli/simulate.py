@@ -12,9 +12,11 @@ import time
 import numpy as np
 
 from ..errors import SettingsError
-from ..sim.simulate import check_seed
-from ..units import MAX_DURATION_S, check_duration_s, check_sample_rate_hz
-from . import common
+from ..recording import RecordingWriter
+from ..sim.simulate import (check_seed, draw_seed, load_model, recording_columns, recording_header, sample_count,
+                            simulate_chunks, validate_model)
+from ..units import MAX_DURATION_S, check_duration_s
+from . import console, options, outputs
 
 MAX_SAMPLES = 10**9  # a file of about 40 GB: more is no recording anyone can use
 MAX_CHUNK = 2**20  # samples per block; the flicker bank draws (block x components) numbers at once
@@ -23,26 +25,21 @@ MAX_CHUNK = 2**20  # samples per block; the flicker bank draws (block x componen
 def add_arguments(parser):
     parser.add_argument("--model", required=True, metavar="MODEL.json",
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json)")
-    parser.add_argument("--duration", required=True, type=common.decimal, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
-    common.add_sample_rate_argument(parser, "--rate", help="sample rate in Hz (overrides the model's; old spelling --rate)")
-    parser.add_argument("--seed", type=common.whole_number, default=None, metavar="N",
+    parser.add_argument("--duration", required=True, type=options.decimal, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
+    options.add_sample_rate_argument(parser, help="sample rate in Hz (overrides the model's)")
+    parser.add_argument("--seed", type=options.whole_number, default=None, metavar="N",
                         help="random seed (same seed, same recording; default: one drawn at random and written in the "
                              "header, simulated_seed, so the run can be repeated)")
-    parser.add_argument("--out", required=True, metavar="FILE", type=common.file_name, help="output recording (" + common.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--chunk", type=common.whole_number, default=65536, metavar="N", help=f"samples per block written (default 65536, at most {MAX_CHUNK})")
+    parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name, help="output recording (" + options.RECORDING_FILE_HELP + ")")
+    parser.add_argument("--chunk", type=options.whole_number, default=65536, metavar="N", help=f"samples per block written (default 65536, at most {MAX_CHUNK})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
-    common.add_force_argument(parser)
+    options.add_force_argument(parser)
 
 
 def run(args):
-    from ..recording import RecordingWriter
-    from ..sim.simulate import (draw_seed, load_model, recording_columns, recording_header, sample_count,
-                                simulate_chunks, validate_model)
-
-    common.check_outputs([args.out], [args.model], args.force)
+    outputs.check_outputs([args.out], [args.model], args.force)
     check_duration_s(args.duration, "--duration")
-    if args.sample_rate_hz is not None:
-        check_sample_rate_hz(args.sample_rate_hz, args.sample_rate_hz_option)
+    sample_rate_hz = options.sample_rate_hz(args)
     if args.seed is not None:
         check_seed(args.seed, "--seed")
     if args.chunk < 1:
@@ -51,7 +48,7 @@ def run(args):
         raise SettingsError(f"--chunk must be at most {MAX_CHUNK} samples, got {args.chunk}")
     model = load_model(args.model)
     try:
-        spec, warnings = validate_model(model, sample_rate_hz=args.sample_rate_hz)
+        spec, warnings = validate_model(model, sample_rate_hz=sample_rate_hz)
     except SettingsError as exc:
         raise SettingsError(f"{args.model}: {exc}") from None
     n_total = sample_count(args.duration, spec["sample_rate_hz"])
@@ -59,14 +56,14 @@ def run(args):
         raise SettingsError(f"--duration {args.duration:g} s at {spec['sample_rate_hz']:g} Hz is {n_total:.3g} samples; "
                             f"simulate writes at most {MAX_SAMPLES:.0e}")
     for text in warnings:
-        common.say(f"gyrofilter: warning: {args.model}: {text}")
+        console.say_warning(f"{args.model}: {text}")
     seed = draw_seed() if args.seed is None else args.seed
     header = recording_header(model, args.duration, seed=seed, validated=spec)
     columns = recording_columns(spec)
     show = args.progress or sys.stderr.isatty()
     done = 0
     last = time.monotonic()
-    with common.replacing(args.out) as tmp, \
+    with outputs.replacing(args.out) as tmp, \
             RecordingWriter(tmp, header, columns, flush_interval_s=None, fsync=False) as writer:
         for t_s, gyro, temp_c in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=seed,
                                                  validated=spec):

@@ -1,4 +1,5 @@
-"""What the tests share: paths, and feeding a filter sample by sample as a live source does.
+"""What the tests share: paths, feeding a filter sample by sample as a live source does, and a
+recording under a file name that is not UTF-8.
 
 ``plain_filter`` is the plain-way oracle of the paper's filter (``tools/bench.py`` uses it as its
 baseline). Helpers that tools need too live in the package: the hidden-effect battery in ``gyrofilter.sim.hidden_effects`` and the
@@ -6,9 +7,12 @@ register-level MPU6050 model in ``gyrofilter.sources.mpu6050_model``.
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
+
+from gyrofilter.recording import Recording, write_recording
 
 REPO = Path(__file__).resolve().parents[2]
 RECORDINGS = REPO / "recordings"
@@ -21,3 +25,12 @@ def stream(filt, x, temps=None):
     temps = [None] * len(x) if temps is None else np.asarray(temps).tolist()
     rows = [filt.update(tuple(s), t) for s, t in zip(np.asarray(x).tolist(), temps)]
     return np.array([r for r in rows if r is not None]).reshape(-1, 3)
+
+
+def file_named_by_bytes(tmp_path, name=b"\xff.csv"):
+    """A recording under a file name that is not UTF-8 (legal on Linux), and the name as Python
+    gets it from argv: os.fsdecode, the byte 0xff as the lone surrogate '\\udcff'."""
+    path = os.fsdecode(os.path.join(os.fsencode(tmp_path), name))
+    write_recording(path, Recording.from_dps(np.random.default_rng(3).normal(0, 0.05, (6000, 3)), 100.0))
+    assert os.path.exists(os.path.join(os.fsencode(tmp_path), name))
+    return path

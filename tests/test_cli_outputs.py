@@ -1,4 +1,5 @@
-"""cli.common: output safety (check_outputs, replacing, replacing_in) and strict JSON."""
+"""cli.outputs: output safety (check_outputs, replacing, replacing_in, commit, stale partials) and
+the report writers (strict JSON)."""
 import json
 import os
 import stat
@@ -9,9 +10,9 @@ import time
 import numpy as np
 import pytest
 
-from gyrofilter.cli import common
+from gyrofilter.cli import outputs
 from gyrofilter.errors import SettingsError
-from support import REPO
+from support import file_named_by_bytes
 
 
 def _strict(text):
@@ -23,22 +24,22 @@ def _strict(text):
 
 def test_write_json_makes_numpy_plain_and_non_finite_null(tmp_path):
     path = tmp_path / "a.json"
-    common.write_json(path, {"a": np.float64(np.nan), "b": [np.inf, -np.inf, np.float32(0.5)], "c": np.arange(2),
+    outputs.write_json(path, {"a": np.float64(np.nan), "b": [np.inf, -np.inf, np.float32(0.5)], "c": np.arange(2),
                              "d": (np.int64(3), True, None, "s")})
     assert _strict(path.read_text()) == {"a": None, "b": [None, None, 0.5], "c": [0, 1], "d": [3, True, None, "s"]}
 
 
 def test_replacing_in_moves_files_on_success_and_leaves_nothing_on_failure(tmp_path):
     folder = tmp_path / "out"
-    with common.replacing_in(str(folder)) as tmp:
+    with outputs.replacing_in(str(folder)) as tmp:
         (open(os.path.join(tmp, "a.png"), "w")).write("new")
         assert not (folder / "a.png").exists()
     assert sorted(os.listdir(folder)) == ["a.png"] and (folder / "a.png").read_text() == "new"
-    with pytest.raises(RuntimeError), common.replacing_in(str(folder)) as tmp:
+    with pytest.raises(RuntimeError), outputs.replacing_in(str(folder)) as tmp:
         (open(os.path.join(tmp, "a.png"), "w")).write("half")
         raise RuntimeError("failed")
     assert sorted(os.listdir(folder)) == ["a.png"] and (folder / "a.png").read_text() == "new"
-    with pytest.raises(RuntimeError), common.replacing_in(str(tmp_path / "made")) as tmp:
+    with pytest.raises(RuntimeError), outputs.replacing_in(str(tmp_path / "made")) as tmp:
         raise RuntimeError("failed")
     assert not (tmp_path / "made").exists()
 
@@ -47,16 +48,16 @@ def test_check_outputs(tmp_path):
     existing, new, inp = tmp_path / "e.json", tmp_path / "n.json", tmp_path / "in.csv"
     existing.write_text("x")
     inp.write_text("x")
-    common.check_outputs([str(new), None], [str(inp)])
-    common.check_outputs([str(existing)], [str(inp)], force=True)
+    outputs.check_outputs([str(new), None], [str(inp)])
+    outputs.check_outputs([str(existing)], [str(inp)], force=True)
     with pytest.raises(FileExistsError):
-        common.check_outputs([str(existing)], [str(inp)])
+        outputs.check_outputs([str(existing)], [str(inp)])
     with pytest.raises(SettingsError, match="is an input"):
-        common.check_outputs([str(tmp_path / "." / "in.csv")], [str(inp)], force=True)
+        outputs.check_outputs([str(tmp_path / "." / "in.csv")], [str(inp)], force=True)
     with pytest.raises(SettingsError, match="two outputs"):
-        common.check_outputs([str(new), str(new)], [])
+        outputs.check_outputs([str(new), str(new)], [])
     with pytest.raises(SettingsError, match=r"newdir/: ends in /, so it names a folder"):  # hostile 5-13
-        common.check_outputs([str(tmp_path / "newdir") + "/"], [])
+        outputs.check_outputs([str(tmp_path / "newdir") + "/"], [])
 
 
 def test_an_output_named_as_a_folder_that_does_not_exist_is_refused_before_any_work(tmp_path, capsys):
@@ -74,37 +75,27 @@ def test_an_output_named_as_a_folder_that_does_not_exist_is_refused_before_any_w
 
 def test_replacing_makes_missing_folders_and_removes_them_on_failure(tmp_path):
     target = tmp_path / "a" / "b" / "out.json"
-    with pytest.raises(RuntimeError), common.replacing(str(target)) as tmp:
+    with pytest.raises(RuntimeError), outputs.replacing(str(target)) as tmp:
         assert os.path.basename(tmp).endswith("-out.json") and os.path.isdir(tmp_path / "a" / "b")
         open(tmp, "w").write("half")
         raise RuntimeError("failed")
     assert os.listdir(tmp_path) == []
-    with common.replacing(str(target)) as tmp:
+    with outputs.replacing(str(target)) as tmp:
         open(tmp, "w").write("whole")
     assert target.read_text() == "whole" and os.listdir(target.parent) == ["out.json"]
-
-
-@pytest.mark.parametrize("command, old", [("record", "--sample-rate"), ("run", "--sample-rate"), ("simulate", "--rate")])
-def test_sample_rate_option_has_one_spelling_and_keeps_the_old_one(command, old):
-    from gyrofilter.cli import build_parser
-
-    for spelling in ("--sample-rate-hz", old):
-        extra = ["--model", "m.json", "--duration", "1", "--out", "o.csv"] if command == "simulate" else ["--source", "sim", "--out", "o.csv"]
-        args = build_parser(command).parse_args([command, *extra, spelling, "250"])
-        assert args.sample_rate_hz == 250.0 and args.sample_rate_hz_option == spelling
 
 
 def test_an_error_writing_the_temporary_file_names_the_users_path(tmp_path):
     """The user gave ``out.csv``; an OSError on the hidden temporary file must name ``out.csv``."""
     path = str(tmp_path / "out.csv")
     with pytest.raises(OSError) as err:
-        with common.replacing(path) as tmp:
+        with outputs.replacing(path) as tmp:
             open(os.path.join(tmp, "cannot", "exist"), "w")  # tmp is a file path: ENOTDIR / ENOENT
     assert err.value.filename == os.path.join(path, "cannot", "exist")
     assert ".partial-" not in str(err.value)
     folder = str(tmp_path / "rep")
     with pytest.raises(OSError) as err:
-        with common.replacing_in(folder) as tmp:
+        with outputs.replacing_in(folder) as tmp:
             open(os.path.join(tmp, "no", "fig.png"), "w")
     assert err.value.filename == os.path.join(folder, "no", "fig.png")
 
@@ -114,13 +105,13 @@ def test_a_writers_refusal_inside_replacing_names_the_users_path_in_the_same_cla
     from gyrofilter.errors import RecordingError
     from gyrofilter.recording import Recording, write_recording
 
-    for path, opened in ((str(tmp_path / "out.csv"), common.replacing), (str(tmp_path / "rep"), common.replacing_in)):
+    for path, opened in ((str(tmp_path / "out.csv"), outputs.replacing), (str(tmp_path / "rep"), outputs.replacing_in)):
         rec = Recording.from_dps(np.array([[0.0, 0.0, 0.0], [2e5, 0.0, 0.0]]), 100.0)
         with pytest.raises(RecordingError) as err:
             with opened(path) as tmp:
-                write_recording(tmp if opened is common.replacing else os.path.join(tmp, "a.csv"), rec)
+                write_recording(tmp if opened is outputs.replacing else os.path.join(tmp, "a.csv"), rec)
         assert ".partial-" not in str(err.value)
-        assert str(err.value).startswith(path if opened is common.replacing else os.path.join(path, "a.csv"))
+        assert str(err.value).startswith(path if opened is outputs.replacing else os.path.join(path, "a.csv"))
         assert not os.path.exists(path)
 
 
@@ -158,7 +149,7 @@ def test_check_outputs_replaces_only_regular_files(tmp_path, kind, force):
     path = _special_file(tmp_path, kind)
     expected = "is a symbolic link" if "symlink" in kind else "is not a regular file (a device, FIFO or socket)"
     with pytest.raises(SettingsError) as info:
-        common.check_outputs([str(path)], force=force)
+        outputs.check_outputs([str(path)], force=force)
     assert str(info.value).startswith(f"{path}: {expected}; outputs replace only regular files")
 
 
@@ -189,7 +180,7 @@ def _dead_pid():
     return proc.pid
 
 
-def _stale(path, age_s=common.STALE_AFTER_S + 60):
+def _stale(path, age_s=outputs.STALE_AFTER_S + 60):
     """Make ``path`` look untouched for ``age_s`` seconds."""
     old = time.time() - age_s
     os.utime(path, (old, old))
@@ -199,7 +190,7 @@ def _stale(path, age_s=common.STALE_AFTER_S + 60):
 def test_stale_partials_of_dead_processes_go_at_the_next_write_to_their_folder(tmp_path):
     """Issue 22 (26): a SIGKILL left .partial-PID-* files that nothing removed. Only this host's,
     of a dead process, untouched for STALE_AFTER_S, go: a shared folder holds other machines'."""
-    dead, host = _dead_pid(), common._HOST
+    dead, host = _dead_pid(), outputs._HOST
     stale_file = tmp_path / f".partial-{dead}.{host}-old.csv"
     stale_file.write_text("half")
     stale_folder = tmp_path / f".partial-{dead}.{host}-k3j4h5g6"  # what replacing_in makes
@@ -219,7 +210,7 @@ def test_stale_partials_of_dead_processes_go_at_the_next_write_to_their_folder(t
     recent = tmp_path / f".partial-{dead}.{host}-recent.csv"  # a pid namespace's live writer looks dead: too fresh
     recent.write_text("not mine to remove")
     kept.append(recent)
-    with common.replacing(str(tmp_path / "new.json")) as tmp:
+    with outputs.replacing(str(tmp_path / "new.json")) as tmp:
         open(tmp, "w").write("{}")
     assert not stale_file.exists() and not stale_folder.exists()
     assert all(path.read_text() == "not mine to remove" for path in kept)
@@ -230,7 +221,7 @@ def test_stale_partials_of_dead_processes_go_at_the_next_write_to_their_folder(t
 def test_a_command_writing_to_a_folder_removes_its_stale_partials(tmp_path, command):
     from gyrofilter.cli import main
 
-    stale = tmp_path / f".partial-{_dead_pid()}.{common._HOST}-killed.csv"
+    stale = tmp_path / f".partial-{_dead_pid()}.{outputs._HOST}-killed.csv"
     stale.write_text("# gyrofilter-recording: 1\n")
     _stale(stale)
     model = os.path.join(os.path.dirname(__file__), os.pardir, "examples", "models", "mpu6050.json")
@@ -244,56 +235,23 @@ def test_an_output_that_appears_while_the_command_runs_is_not_replaced(tmp_path)
     """The no-overwrite check ran only before the work: a file made at the output's name meanwhile
     (two record runs, the user) was silently replaced when the output landed."""
     out = tmp_path / "out.json"
-    common.check_outputs([str(out)])
+    outputs.check_outputs([str(out)])
     with pytest.raises(FileExistsError, match="appeared or changed while this command ran"):
-        with common.replacing(str(out)) as tmp:
+        with outputs.replacing(str(out)) as tmp:
             open(tmp, "w").write("mine")
             out.write_text("theirs")  # appears meanwhile
     assert out.read_text() == "theirs" and os.listdir(tmp_path) == ["out.json"]
-    common.check_outputs([str(out)], force=True)  # --force replaces the file it was shown, not another
-    with common.replacing(str(out)) as tmp:
+    outputs.check_outputs([str(out)], force=True)  # --force replaces the file it was shown, not another
+    with outputs.replacing(str(out)) as tmp:
         open(tmp, "w").write("mine")
     assert out.read_text() == "mine"
-    common.check_outputs([str(out)], force=True)
+    outputs.check_outputs([str(out)], force=True)
     with pytest.raises(FileExistsError, match="appeared or changed while this command ran"):
-        with common.replacing(str(out)) as tmp:
+        with outputs.replacing(str(out)) as tmp:
             open(tmp, "w").write("third")
             os.unlink(out)
             out.write_text("theirs again")  # another file at the name: not the one --force was given for
     assert out.read_text() == "theirs again"
-
-
-@pytest.mark.parametrize("argv, prog, said", [
-    (["replay", "REC", "--ot", "x.csv"], "gyrofilter replay", "unrecognized arguments: --ot x.csv; did you mean --out?"),
-    (["allan", "REC", "--jsno=a.json"], "gyrofilter allan", "unrecognized arguments: --jsno=a.json; did you mean --json?"),
-    (["replay", "REC", "--sample-rat", "3", "--outt", "x"], "gyrofilter replay", "; did you mean --out?"),
-    (["replay", "REC", "-q"], "gyrofilter replay", "unrecognized arguments: -q"),
-    (["--bogus"], "gyrofilter", "unrecognized arguments: --bogus"),
-    (["simulate", "--duration", "x"], "gyrofilter simulate", "argument --duration: must be a plain decimal number"),
-])
-def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, prog, said, capsys):
-    """Issue 23: a mistyped option of a command printed the top-level usage with no hint; issue
-    22: every refusal is one line (argparse printed its usage text first), pointing at --help."""
-    from gyrofilter.cli import main
-
-    with pytest.raises(SystemExit) as stop:
-        main(argv)
-    assert stop.value.code == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith(f"{prog}: error: ") and said in err
-    assert err.rstrip().endswith(f"(see {prog} --help)")
-    assert ("did you mean" in err) == ("did you mean" in said)
-
-
-def _file_named_by_bytes(tmp_path, name=b"\xff.csv"):
-    """A recording under a file name that is not UTF-8 (legal on Linux), and the name as Python
-    gets it from argv: os.fsdecode, the byte 0xff as the lone surrogate '\\udcff'."""
-    from gyrofilter.recording import Recording, write_recording
-
-    path = os.fsdecode(os.path.join(os.fsencode(tmp_path), name))
-    write_recording(path, Recording.from_dps(np.random.default_rng(3).normal(0, 0.05, (6000, 3)), 100.0))
-    assert os.path.exists(os.path.join(os.fsencode(tmp_path), name))
-    return path
 
 
 def test_a_file_name_that_is_not_utf8_is_written_escaped_in_every_output(tmp_path, monkeypatch):
@@ -307,14 +265,14 @@ def test_a_file_name_that_is_not_utf8_is_written_escaped_in_every_output(tmp_pat
     from gyrofilter.recording import read_recording
 
     monkeypatch.setattr(sys, "stdout", io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="backslashreplace"))
-    src = _file_named_by_bytes(tmp_path)
+    src = file_named_by_bytes(tmp_path)
     escaped = src.replace("\udcff", "\\udcff")
     out = tmp_path / "out.csv"
     assert main(["replay", src, "--out", str(out)]) == 0
     assert read_recording(out).header["filtered_from"] == escaped
     assert main(["allan", src, "--json", str(tmp_path / "a.json")]) == 0
     assert json.loads((tmp_path / "a.json").read_text(encoding="utf-8"))["recording"] == escaped
-    other = _file_named_by_bytes(tmp_path, b"plain.csv")
+    other = file_named_by_bytes(tmp_path, b"plain.csv")
     assert main(["allan", src, other, "--fleet", str(tmp_path / "fleet"), "--jobs", "1"]) == 0
     table = (tmp_path / "fleet" / "fleet.csv").read_text(encoding="utf-8").splitlines()
     assert len(table) == 7 and table[1].startswith("\\udcff,") and f",{escaped}," in table[1]
@@ -330,82 +288,17 @@ def test_utf8_text_escapes_lone_surrogates_only():
     assert json_ready({"\udcff": ["\udcfe", 1.0]}) == {"\\udcff": ["\\udcfe", 1.0]}
 
 
-# ------------------------------------------------------------------------------ numbers on the command line
-
-@pytest.mark.parametrize("text", ["١_٠", "1_0", "٣", "0x10", "nan", "inf", "-inf", "1e400", "1d5", ".", "", "1j"])
-def test_numeric_option_types_take_plain_decimal_numbers_only(text):
-    """argparse's float/int took Python's extras (``--duration ١_٠`` was 10 s) that every other
-    reader of numbers refuses (issue 22, hostile 5-6)."""
-    import argparse
-
-    for kind in (common.decimal, common.whole_number):
-        with pytest.raises(argparse.ArgumentTypeError, match=r"^must be a (plain decimal|finite) number"):
-            kind(text)
-
-
-def test_numeric_option_types_read_plain_numbers_exactly():
-    import argparse
-
-    assert common.decimal(" 5") == 5.0 and common.decimal("-1e-3") == -0.001 and common.decimal(".5") == 0.5
-    assert common.whole_number("9007199254740993") == 9007199254740993  # beyond 2^53: every digit kept
-    assert common.whole_number("1e3") == 1000 and common.whole_number("-1") == -1 and common.whole_number("+7") == 7
-    assert common.whole_number(str(10**30)) == 10**30  # --seed's own check names it
-    with pytest.raises(argparse.ArgumentTypeError, match="must be a whole number, got 1.5"):
-        common.whole_number("1.5")
-    with pytest.raises(argparse.ArgumentTypeError, match=r"^must be written in digits when it is 2\^53 or more, got '1e308'$"):
-        common.whole_number("1e308")  # not a 309-digit count in a message
-    with pytest.raises(argparse.ArgumentTypeError, match="written in digits"):
-        common.whole_number("9007199254740993.0")  # rounded to ...992 before any check could see it
-    with pytest.raises(argparse.ArgumentTypeError, match="plain decimal"):
-        common.whole_number("+-5")
-
-
-def test_every_numeric_option_of_every_command_uses_the_plain_number_types():
-    from gyrofilter.cli import COMMANDS, build_parser
-
-    checked = 0
-    for name in COMMANDS:
-        sub = next(a for a in build_parser(name)._actions if a.dest == "command").choices[name]
-        for action in sub._actions:
-            assert action.type not in (float, int), (name, action.option_strings)
-            checked += action.type in (common.decimal, common.whole_number)
-    assert checked >= 19  # the options of 2026-12: --duration, --seed, --jobs, --confidence, ...
-
-
-def test_a_number_in_another_script_is_refused_before_any_work(tmp_path, capsys):
-    from gyrofilter.cli import main
-
-    out = tmp_path / "o.csv"
-    try:  # SystemExit while argparse prints its usage too
-        code = main(["simulate", "--model", str(REPO / "examples" / "models" / "mpu6050.json"), "--duration", "١_٠", "--out", str(out)])
-    except SystemExit as exc:
-        code = exc.code
-    assert code == 2
-    assert "argument --duration: must be a plain decimal number (like 12, -0.5 or 1e-3), got '١_٠'" in capsys.readouterr().err
-    assert not out.exists()
-
-
-def test_a_summary_naming_a_file_that_is_not_utf8_prints_under_a_utf8_locale(tmp_path):
-    """Under a UTF-8 locale (a Pi's en_GB.UTF-8) stdout is strict: the summary's file name, with
-    the lone surrogate os.fsdecode makes of byte 0xff, crashed after the work was done."""
-    path = _file_named_by_bytes(tmp_path)
-    env = {**os.environ, "LC_ALL": "C.UTF-8", "PYTHONIOENCODING": ""}
-    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "replay", os.fsencode(path)], capture_output=True, env=env)
-    assert proc.returncode == 0, proc.stderr
-    assert b"\\udcff.csv" in proc.stdout + proc.stderr and b"Traceback" not in proc.stderr
-
-
 def test_outputs_land_together_or_none_when_one_name_was_taken_meanwhile(tmp_path):
     """gap --json --report and replay --out --plot --save-calibration landed the outputs committed
     before the one whose name another file had taken meanwhile, then exited 2."""
     import contextlib
 
     a, b = tmp_path / "a.json", tmp_path / "b.json"
-    common.check_outputs([str(a), str(b)])
+    outputs.check_outputs([str(a), str(b)])
     with pytest.raises(FileExistsError, match="appeared or changed while this command ran"):
-        with contextlib.ExitStack() as outputs:
+        with contextlib.ExitStack() as files:
             for path in (a, b):  # b lands first (an ExitStack exits in reverse)
-                open(outputs.enter_context(common.replacing(str(path))), "w").write("mine")
+                open(files.enter_context(outputs.replacing(str(path))), "w").write("mine")
             a.write_text("theirs")  # the name of the one that would land last is taken
     assert a.read_text() == "theirs" and not b.exists()
     assert sorted(os.listdir(tmp_path)) == ["a.json"]

@@ -1,0 +1,69 @@
+"""What the commands tell the user on the console: messages and warnings on stderr (stdout stays
+data), the start-up bias as printed, and the summary table of a filtered recording."""
+import math
+import sys
+
+from ..units import AXES
+
+
+def say(text):
+    """A message for the user (stderr, so that stdout stays data)."""
+    print(text, file=sys.stderr)
+
+
+def say_warning(text):
+    """A warning for the user: one line on stderr, "gyrofilter: warning: <text>"."""
+    say(f"gyrofilter: warning: {text}")
+
+
+def print_warnings(warnings):
+    for text in warnings:
+        say_warning(text)
+
+
+def bias_text(bias_dps):
+    """The start-up bias as the commands print it: "+0.1234, -0.5678, +0.0012 deg/s"."""
+    return ", ".join(f"{b:+.4f}" for b in bias_dps) + " deg/s"
+
+
+def print_summary(path, head, filt, raw, filtered, calibration_from=None, smoothed=False):
+    """The per-axis table: raw and filtered mean/std (:class:`~gyrofilter.streamstats.RunningMoments`),
+    std ratio, rejected samples. ``calibration_from``: the file the bias was loaded from, if any;
+    ``smoothed``: the rows are the forward-backward smoother's."""
+    print(f"recording: {path}")
+    print(f"  {head.rows} samples at {head.sample_rate_hz:g} Hz ({head.rows / head.sample_rate_hz:.1f} s), unit {head.gyro_unit}")
+    cal = filt.calibration
+    if cal is not None:
+        source = f"loaded from {calibration_from}" if calibration_from else f"start-up calibration, {cal.samples} samples"
+        print(f"  bias ({source}): " + ", ".join(_number(b, 0, sign=True) for b in cal.bias_dps) + " deg/s")
+    how = ", smoothed forward-backward" if smoothed else ""
+    if filt.compensates_temperature:
+        how += ", temperature compensated (" + ", ".join(f"{c:g}" for c in filt.settings.temp_coefficients()) + " deg/s/degC)"
+    print(f"  filter: preset {filt.preset}{how}, {filtered.count} output rows at {filt.output_rate_hz:g} Hz")
+    if filt.pending_samples:
+        print(f"  {filt.pending_samples} trailing sample(s) did not fill a block of {filt.settings.block_len} and produced no output")
+    if filtered.count < 2:
+        print("  too few filtered rows for statistics")
+        return
+    print("  axis   raw mean    raw std   filt mean   filt std  std ratio  rejected")
+    raw_std, f_std = raw.std, filtered.std
+    for a, name in enumerate(AXES):
+        ratio = _number(raw_std[a] / f_std[a], 8, decimals=2) + "x" if f_std[a] > 0 else f"{'n/a':>9}"
+        print(f"  {name}    {_number(raw.mean[a], 9, sign=True)}  {_number(raw_std[a], 9)}  {_number(filtered.mean[a], 9, sign=True)}"
+              f"  {_number(f_std[a], 9)}  {ratio}  {int(filt.rejected[a]):8d}")
+    removed = "bias removed" if cal is not None else "no calibration, so no bias removed"
+    print("  (deg/s; raw = the samples after the calibration window that the filter consumed, bias included;\n"
+          f"   filt = the filtered rows, {removed}; n/a = undefined)")
+
+
+def _number(value, width, sign=False, decimals=4):
+    """``value`` with ``decimals`` decimals, right-aligned in ``width``, or in 3 significant
+    digits (1.23e+30) when that would take more than max(width, 12) characters; "n/a" when it
+    is not a finite number (an undefined mean, std or ratio)."""
+    if not math.isfinite(value):
+        return f"{'n/a':>{width}}"
+    plus = "+" if sign else ""
+    text = f"{value:{plus}.{decimals}f}"
+    if len(text) > max(width, 12):
+        text = f"{value:{plus}.3g}"
+    return f"{text:>{width}}"

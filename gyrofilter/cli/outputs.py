@@ -1,0 +1,282 @@
+"""Output files that never cost a user's data: the checks before any work (:func:`check_outputs`),
+files written under a temporary name that take their own name only when whole (:func:`replacing`,
+:func:`replacing_in`, :func:`commit`), the clean-up of what killed processes left
+(:func:`remove_stale_partials`), and the writers of the JSON and text reports."""
+import contextlib
+import json
+import os
+import re
+import shutil
+import socket
+import stat
+import tempfile
+import time
+
+from ..errors import GyroFilterError, SettingsError
+from ..units import json_ready
+
+
+def check_outputs(outputs, inputs=(), force=False):
+    """Refuse, before any work, to write where a user's data would be lost.
+
+    ``outputs`` and ``inputs`` are paths (None entries are skipped). An output that is one of
+    the inputs is refused even with ``force``, and so is a name ending in a path separator (a
+    folder's, existing or not); so is one that exists as anything but a regular
+    file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
+    replaced. An output that exists is refused without ``force``; two outputs naming one file are
+    refused. Raises FileExistsError / SettingsError naming the file.
+    """
+    inputs = {_file_key(p) for p in inputs if p}
+    seen = set()
+    for out in (p for p in outputs if p):
+        if os.path.isdir(out):
+            raise SettingsError(f"{out}: is a folder; give a file name for the output")
+        if out.endswith(tuple(filter(None, (os.sep, os.altsep)))):
+            raise SettingsError(f"{out}: ends in {out[-1]}, so it names a folder; give a file name for the output")
+        key = _file_key(out)
+        if key in inputs:
+            raise SettingsError(f"{out}: is an input of this command; write the output to another file")
+        if key in seen:
+            raise SettingsError(f"{out}: named for two outputs; give each output its own file")
+        seen.add(key)
+        parent = os.path.dirname(os.path.abspath(out))
+        while not os.path.isdir(parent):
+            if os.path.lexists(parent):
+                raise SettingsError(f"{out}: {parent} is a file, not a folder")
+            parent = os.path.dirname(parent)
+        if not os.path.lexists(out):
+            continue
+        mode = os.lstat(out).st_mode
+        if stat.S_ISLNK(mode):
+            raise SettingsError(f"{out}: is a symbolic link; outputs replace only regular files: "
+                                "name the file it points to, or another")
+        if not stat.S_ISREG(mode):
+            raise SettingsError(f"{out}: is not a regular file (a device, FIFO or socket); "
+                                "outputs replace only regular files")
+        if not force:
+            raise FileExistsError(17, "exists (use --force to overwrite)", out)
+        _replaceable.add(_identity(os.lstat(out)))
+
+
+#: the files check_outputs let --force replace (:func:`_identity`): any other file found at an
+#: output's name when it lands appeared while the command ran, and is not replaced
+_replaceable = set()
+
+
+def _identity(st):
+    """What tells one state of a file from another: device, inode (reused at once after a delete),
+    modification time and size."""
+    return st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size
+
+
+#: the outputs whose temporary files wait to land (:func:`replacing`): every commit checks them
+#: all first, so that a command's outputs land together or none of them does
+_pending = []
+
+
+def _may_land(path):
+    """FileExistsError when a file at ``path`` is not one --force may replace (it appeared while
+    the command ran)."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return
+    if _identity(st) not in _replaceable:
+        raise FileExistsError(17, "appeared or changed while this command ran and is left as it is (rerun with --force to "
+                                  "overwrite)", path)
+
+
+def commit(tmp, path):
+    """Give the finished temporary file ``tmp`` the name ``path``: replace the file there only when
+    :func:`check_outputs` let ``--force`` replace that very file; a file that appeared meanwhile
+    (another command, the user) is left as it is: FileExistsError, raised before any of the
+    command's pending outputs lands. The check and the rename are one step (``os.link`` fails on
+    an existing name) where the file system has hard links."""
+    for other in _pending:
+        _may_land(other)
+    _may_land(path)
+    if os.path.lexists(path):  # the very file --force was given for
+        os.replace(tmp, path)
+        return
+    try:
+        os.link(tmp, path)
+    except FileExistsError:  # it appeared between the look and the link
+        _may_land(path)
+        raise
+    except OSError:  # no hard links here (vfat): the look above has to do
+        os.replace(tmp, path)
+    else:
+        os.unlink(tmp)
+
+
+def check_output_folder(folder, option):
+    """Refuse, before any work, an output folder (``option`` DIR) that exists as a file."""
+    if folder and os.path.exists(folder) and not os.path.isdir(folder):
+        raise SettingsError(f"{option} {folder}: is a file; give a folder for the output files")
+
+
+def _file_key(path):
+    """What names one file: device and inode of a file that exists (links and bind mounts
+    included), else the path with its symbolic links resolved. Keys, not pairwise
+    comparisons, so that a fleet's thousands of outputs are checked in linear time."""
+    try:
+        st = os.stat(path)
+    except OSError:  # does not exist yet
+        return os.path.realpath(path)
+    return (st.st_dev, st.st_ino)
+
+
+@contextlib.contextmanager
+def replacing(path):
+    """Write a whole file at once: yields a temporary path beside ``path`` (its folder created if
+    needed); on success it replaces ``path``; on any failure it is removed, with any folder this
+    call created, so a failed command leaves nothing behind."""
+    tmp = partial_path(path)
+    with _folder(os.path.dirname(tmp)):
+        _pending.append(path)
+        try:
+            with _naming(tmp, path):
+                yield tmp
+                commit(tmp, path)
+        finally:
+            _pending.remove(path)
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def replacing_in(folder):
+    """:func:`replacing` for files whose names the writer chooses: yields a temporary folder inside
+    ``folder`` (created if needed); on success every file written there replaces its namesake in
+    ``folder``; on any failure the temporary folder goes, with any folder this call created."""
+    with _folder(folder):
+        tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{_OWNER}-", dir=folder)
+        try:
+            with _naming(tmp, folder):
+                yield tmp
+                names = sorted(os.listdir(tmp))
+                for name in names:  # all may land, or none does
+                    _may_land(os.path.join(folder, name))
+                for name in names:
+                    commit(os.path.join(tmp, name), os.path.join(folder, name))
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _naming(tmp, path):
+    """An error about the temporary ``tmp`` (or a file in it) names the user's ``path`` instead:
+    an OSError's file name, and the text of a GyroFilterError (a writer's refusal, same class)."""
+    try:
+        yield
+    except OSError as exc:
+        if isinstance(exc.filename, str) and exc.filename.startswith(tmp):
+            raise OSError(exc.errno, exc.strerror, path + exc.filename[len(tmp):]) from None
+        raise
+    except GyroFilterError as exc:
+        exc.args = tuple(a.replace(tmp, path) if isinstance(a, str) else a for a in exc.args)
+        raise
+
+
+def partial_path(path):
+    """The temporary name beside ``path`` under which a file is written until it may take its
+    own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
+    extension, by which writers choose the format, is kept. A process killed before the rename
+    leaves it behind; :func:`remove_stale_partials` removes it later."""
+    folder, name = os.path.split(os.path.abspath(path))
+    return os.path.join(folder, f"{_PARTIAL_PREFIX}{_OWNER}-{name}")
+
+
+_PARTIAL_PREFIX = ".partial-"
+#: the host in a partial name: a folder shared over the network (a fleet's reports on NFS) holds
+#: other machines' partials, whose process numbers mean nothing here
+_HOST = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname()) or "host"
+_OWNER = f"{os.getpid()}.{_HOST}"
+# what partial_path and replacing_in make: the process number and the host
+_PARTIAL = re.compile(re.escape(_PARTIAL_PREFIX) + r"([0-9]+)\.([A-Za-z0-9_]+)-.+", re.DOTALL)
+#: a partial untouched for this long (s) may be stale: record and run flush every 0.5 s, and the
+#: other commands write theirs at the end, in seconds
+STALE_AFTER_S = 600.0
+_swept = set()  # folders whose stale partials this process removed already
+
+
+def remove_stale_partials(folder):
+    """Remove from ``folder`` the temporary files and folders (``.partial-PID-...``, see
+    :func:`partial_path`) of processes that died before renaming them (SIGKILL, a power cut):
+    only names of that exact pattern made on this host, untouched for :data:`STALE_AFTER_S`, whose
+    PID runs no process (``os.kill(pid, 0)`` answers ProcessLookupError); a live process's,
+    another user's or another machine's are never touched. Once per
+    folder and process, so that a batch writing thousands of files lists its folder once."""
+    folder = os.path.abspath(folder)
+    if folder in _swept:
+        return
+    _swept.add(folder)
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(folder):
+            match = _PARTIAL.fullmatch(entry.name)
+            if (not match or match.group(2) != _HOST or _process_runs(int(match.group(1)))
+                    or time.time() - entry.stat(follow_symlinks=False).st_mtime < STALE_AFTER_S):
+                continue
+            if entry.is_dir(follow_symlinks=False):
+                shutil.rmtree(entry.path, ignore_errors=True)
+            elif entry.is_file(follow_symlinks=False):
+                with contextlib.suppress(OSError):
+                    os.unlink(entry.path)
+
+
+def _process_runs(pid):
+    """Whether the process ``pid`` may exist (True when it cannot be told)."""
+    if pid <= 0:
+        return True  # not a process of its own: 0 and below name process groups
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (OSError, OverflowError):  # PermissionError: it runs as another user; a pid beyond the OS's range
+        return True
+    return True
+
+
+@contextlib.contextmanager
+def _folder(folder):
+    """Make ``folder`` and its missing parents; on a failure inside the block, remove what was
+    made. An existing folder first loses its stale partial files (:func:`remove_stale_partials`)."""
+    top = None
+    parent = os.path.abspath(folder)
+    while not os.path.isdir(parent):
+        top, parent = parent, os.path.dirname(parent)
+    if top is not None:
+        os.makedirs(folder)
+    else:
+        remove_stale_partials(folder)
+    try:
+        yield
+    except BaseException:
+        if top is not None:
+            shutil.rmtree(top, ignore_errors=True)
+        raise
+
+
+def write_json(path, doc):
+    """Write ``doc`` as JSON to ``path`` (no replacing: give it the path :func:`replacing` yields).
+
+    Through :func:`gyrofilter.units.json_ready`: numpy values become plain numbers and lists, a
+    non-finite number becomes ``null``.
+    """
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(json_ready(doc), fh, indent=1, allow_nan=False)
+        fh.write("\n")
+
+
+
+def write_json_document(path, doc):
+    """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise_model.to_json`) to ``path`` (no
+    replacing: give it the path :func:`replacing` yields)."""
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(doc, fh, indent=1, allow_nan=False)
+
+
+def write_text(path, text):
+    """Write ``text`` to ``path`` (no replacing: give it the path :func:`replacing` yields)."""
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)

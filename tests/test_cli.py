@@ -1,0 +1,74 @@
+"""cli (the ``gyrofilter`` command): one-line refusals of unknown options with the closest
+option, and output that survives a file name that is not UTF-8."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+from support import file_named_by_bytes
+
+
+@pytest.mark.parametrize("argv, prog, said", [
+    (["replay", "REC", "--ot", "x.csv"], "gyrofilter replay", "unrecognized arguments: --ot x.csv; did you mean --out?"),
+    (["allan", "REC", "--jsno=a.json"], "gyrofilter allan", "unrecognized arguments: --jsno=a.json; did you mean --json?"),
+    (["replay", "REC", "--sample-rat", "3", "--outt", "x"], "gyrofilter replay", "; did you mean --out?"),
+    (["replay", "REC", "-q"], "gyrofilter replay", "unrecognized arguments: -q"),
+    (["--bogus"], "gyrofilter", "unrecognized arguments: --bogus"),
+    (["simulate", "--duration", "x"], "gyrofilter simulate", "argument --duration: must be a plain decimal number"),
+])
+def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, prog, said, capsys):
+    """Issue 23: a mistyped option of a command printed the top-level usage with no hint; issue
+    22: every refusal is one line (argparse printed its usage text first), pointing at --help."""
+    from gyrofilter.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"{prog}: error: ") and said in err
+    assert err.rstrip().endswith(f"(see {prog} --help)")
+    assert ("did you mean" in err) == ("did you mean" in said)
+
+
+@pytest.mark.parametrize("argv", [
+    ["simulate", "--model", "m.json", "--duration", "1", "--out", "o.csv", "--rate", "250"],
+    ["simulate", "--model", "m.json", "--duration", "1", "--out", "o.csv", "--rate=250"],
+    ["record", "--source", "sim", "--out", "o.csv", "--sample-rate", "250"],
+    ["run", "--source", "sim", "--sample-rate=250"],
+    ["run", "--source", "sim", "--sample-rate-h", "250"],  # an option is never taken by a prefix of it
+])
+def test_a_removed_spelling_of_the_sample_rate_is_refused_naming_the_one_spelling(argv, capsys):
+    """Issue 23: --rate and --sample-rate, aliases of --sample-rate-hz until 0.2.0, are refused in
+    one line that names the one spelling (--sample-rate would have passed as its abbreviation)."""
+    from gyrofilter.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    typed = " ".join(argv[argv.index(next(a for a in argv if "rate" in a)):])
+    assert err == (f"gyrofilter {argv[0]}: error: unrecognized arguments: {typed}; did you mean --sample-rate-hz? "
+                   f"(see gyrofilter {argv[0]} --help)\n")
+
+
+def test_did_you_mean_takes_the_closest_option_or_one_whose_words_hold_the_typed_ones():
+    from gyrofilter.cli import build_parser, did_you_mean
+
+    simulate = build_parser("simulate").commands["simulate"]
+    assert did_you_mean(simulate, ["--rate", "5"]) == "; did you mean --sample-rate-hz?"
+    assert did_you_mean(simulate, ["--sed", "5"]) == "; did you mean --seed?"
+    assert did_you_mean(simulate, ["--hz"]) == "; did you mean --sample-rate-hz?"
+    assert did_you_mean(simulate, ["--bogus", "-q", "5", "--"]) == ""
+    gap = build_parser("gap").commands["gap"]
+    assert did_you_mean(gap, ["--rate"]) == ""  # no option of gap has the word
+
+
+def test_a_summary_naming_a_file_that_is_not_utf8_prints_under_a_utf8_locale(tmp_path):
+    """Under a UTF-8 locale (a Pi's en_GB.UTF-8) stdout is strict: the summary's file name, with
+    the lone surrogate os.fsdecode makes of byte 0xff, crashed after the work was done."""
+    path = file_named_by_bytes(tmp_path)
+    env = {**os.environ, "LC_ALL": "C.UTF-8", "PYTHONIOENCODING": ""}
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "replay", os.fsencode(path)], capture_output=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert b"\\udcff.csv" in proc.stdout + proc.stderr and b"Traceback" not in proc.stderr
