@@ -26,7 +26,8 @@ from gyrofilter.filter.calibration import MAX_BIAS_DPS, MAX_NOISE_STD_DPS, Calib
 from gyrofilter.cli import main
 from gyrofilter.errors import CalibrationError, GyroFilterError
 from gyrofilter.recording import Recording, read_recording, write_recording
-from gyrofilter.sim.simulate import load_model, simulate, validate_model
+from gyrofilter.sim.model import load_model, validate_model
+from gyrofilter.sim.simulate import simulate
 from gyrofilter.units import TEMP_RANGE_C
 from support import REPO
 

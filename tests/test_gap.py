@@ -19,7 +19,8 @@ import pytest
 from gyrofilter.analysis import detectors as det
 from gyrofilter.analysis.gap import analyse_gap, discrepancy, departures
 from gyrofilter.recording import Recording, read_recording, write_recording
-from gyrofilter.sim.simulate import simulate, validate_model
+from gyrofilter.sim.model import validate_model
+from gyrofilter.sim.simulate import simulate
 
 import gyrofilter.sim.hidden_effects as he
 from support import RECORDINGS

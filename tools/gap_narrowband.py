@@ -71,7 +71,8 @@ def axis_discrepancy(x_dps, sample_rate_hz, models, axis_index, seeds):
     import numpy as np
 
     from gyrofilter.analysis import gap
-    from gyrofilter.sim.simulate import simulate_axis_dps, validate_model
+    from gyrofilter.sim.model import validate_model
+    from gyrofilter.sim.simulate import simulate_axis_dps
 
     n = x_dps.size
     taus, bands = gap.feature_taus(n, sample_rate_hz), gap.feature_bands(n, sample_rate_hz)

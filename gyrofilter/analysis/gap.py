@@ -287,7 +287,7 @@ class _Progress:
 def _sim_features(model, n, fs, seeds, axes_idx, taus, bands, say=None, label="simulations"):
     """Features of ``len(seeds)`` runs of ``model`` (list per axis index). Each run simulates
     only the axes asked for, one at a time, so memory holds one axis of one run."""
-    from ..sim.simulate import validate_model
+    from ..sim.model import validate_model
 
     spec, _ = validate_model(model)
     axes_idx = list(axes_idx)

@@ -244,7 +244,8 @@ def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0, terms_
 def simulated_wv(model, axis, n_samples, *, seeds=(0, 1, 2, 3), min_edf=2.0):
     """Mean Haar wavelet variance of ``axis`` (0, 1, 2) of a simulator model over ``seeds`` runs
     of ``n_samples`` samples: the model's curve where no closed form covers every effect."""
-    from ..sim.simulate import simulate_axis_dps, validate_model
+    from ..sim.model import validate_model
+    from ..sim.simulate import simulate_axis_dps
 
     spec = validate_model(model)[0]
     fs = spec["sample_rate_hz"]

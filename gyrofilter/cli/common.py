@@ -449,9 +449,9 @@ def _parse_setting(text):
 
 def temperature_coefficients(path):
     """(cx, cy, cz) in deg/s per deg C from a gap report (its extended_model) or a simulator model,
-    checked by the simulator's :func:`~gyrofilter.sim.simulate.validate_model` (for its numbers
+    checked by the simulator's :func:`~gyrofilter.sim.model.validate_model` (for its numbers
     only: the sample rate and the temperature profile may be missing)."""
-    from ..sim.simulate import load_model, validate_model
+    from ..sim.model import load_model, validate_model
     from ..filter.tempcomp import coefficients_from_model
 
     model = load_model(path)

@@ -36,8 +36,8 @@ def add_arguments(parser):
 
 def run(args):
     from ..recording import RecordingWriter
-    from ..sim.simulate import (draw_seed, load_model, recording_columns, recording_header, sample_count,
-                                simulate_chunks, validate_model)
+    from ..sim.model import load_model, validate_model
+    from ..sim.simulate import draw_seed, recording_columns, recording_header, sample_count, simulate_chunks
 
     common.check_outputs([args.out], [args.model], args.force)
     check_duration_s(args.duration, "--duration")

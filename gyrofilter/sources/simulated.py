@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
+from ..sim.model import load_model, validate_model
 from .base import Source
 
 MAX_WAIT_S = 0.1
@@ -55,7 +56,7 @@ class SimulatedSource(Source):
     Parameters
     ----------
     model : dict or str, optional
-        The simulator model (:func:`gyrofilter.sim.simulate.validate_model` schema) or the path
+        The simulator model (:func:`gyrofilter.sim.model.validate_model` schema) or the path
         of its JSON file (a gap report's ``extended_model`` is used); None or ``""``:
         :data:`DEFAULT_MODEL`.
     seed : int, optional
@@ -75,8 +76,7 @@ class SimulatedSource(Source):
 
     def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
                  clock=time.monotonic, sleep=time.sleep):
-        from ..sim.simulate import (check_seed, draw_seed, load_model, recording_columns, recording_header,
-                                    simulate_chunks, validate_model)
+        from ..sim.simulate import check_seed, draw_seed, recording_columns, recording_header, simulate_chunks
 
         if model is None or model == "":
             model, self.model_name = json.loads(json.dumps(DEFAULT_MODEL)), "default MPU6050-like model"
