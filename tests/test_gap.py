@@ -422,7 +422,8 @@ def test_two_gauss_markov_terms_are_found_by_the_composite_fit(seed):
                       "a spectral line the model lacks"),
 ])
 def test_an_axis_that_does_not_close_gets_a_note_naming_the_feature(key, j, z, says):
-    from gyrofilter.analysis.gap import OUTSIDE_NULL_D, _still_departs
+    from gyrofilter.analysis.detectors import OUTSIDE_NULL_D
+    from gyrofilter.analysis.gap import _still_departs
 
     taus = np.array([0.01, 0.03, 0.1, 1.0, 10.0, 100.0])
     bands = np.array([0.08, 0.13, 1.0, 3.0, 10.0, 20.0, 30.0])

@@ -27,7 +27,7 @@
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a
    finding is kept only if ``after < before`` (a real gain). The overall figure uses the model
    extended by every kept finding. Where an axis's D after is still above
-   :data:`OUTSIDE_NULL_D`, a **composite stochastic part** is tried: a GMWM-style fit
+   :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`, a **composite stochastic part** is tried: a GMWM-style fit
    (:mod:`gyrofilter.analysis.gmwm`; Guerrier et al. 2013) of white noise, an optional rate random walk
    and 0-3 Gauss-Markov terms to the Haar wavelet variance of the series cleaned of the
    deterministic findings, at tau >= max(1 s, 16 samples) (shorter scales belong to the colored
@@ -35,11 +35,11 @@
    slow stochastic findings (and its colored noise, if that is better without it), its N
    becomes the white level (the colored noise then keeps the long-tau level, ``preserve:
    arw``, and, if D is lower so, the per-sample variance too: :func:`_composite_lags`), and
-   the replacement is kept only if D falls below :data:`COMPOSITE_MIN_GAIN` times its value.
+   the replacement is kept only if D falls below :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value.
 5. The report: a JSON-ready dict with ``baseline``, ``findings`` (effect, axis, params,
    evidence, gain), ``extended_model`` (runs in ``gyrofilter simulate``), per-axis feature
    departures and the discrepancies; where an axis's D after is still above
-   :data:`OUTSIDE_NULL_D`, a note names the feature that departs most from the extended model
+   :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`, a note names the feature that departs most from the extended model
    and what its sign says (:func:`_still_departs`).
 """
 from __future__ import annotations
@@ -538,12 +538,12 @@ def _keep_findings(run):
 
 def _composite_step(run):
     """Step 4, continued: where an extended axis is still far outside the null band (D above
-    :data:`OUTSIDE_NULL_D`), a composite stochastic part (:func:`_composite_candidates`)
+    :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`), a composite stochastic part (:func:`_composite_candidates`)
     replaces the axis's slow stochastic findings, and its colored noise if that is better
-    without it, when D falls below :data:`COMPOSITE_MIN_GAIN` times its value."""
+    without it, when D falls below :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value."""
     cands, notes = run.candidates, run.report["notes"]
     for i, a in enumerate(AXES):
-        if run.after[i] <= OUTSIDE_NULL_D or run.wvs[i] is None:
+        if run.after[i] <= det.OUTSIDE_NULL_D or run.wvs[i] is None:
             continue
         run.say(f"composite stochastic fit on {a}")
         fit, comp = _composite_candidates(run.wvs[i], run.fs)
@@ -575,7 +575,7 @@ def _composite_step(run):
                 keep_k = [k for k in keep_k if k not in colored_k]
                 notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the "
                              "correlation without it")
-        if d_comp < COMPOSITE_MIN_GAIN * run.after[i]:
+        if d_comp < det.COMPOSITE_MIN_GAIN * run.after[i]:
             single_k = {k: run.axis_discrepancy(i, [k], f"gain of the composite's {cands[k][1].effect} on {a}")
                         for k in comp_k}
             notes.append(
@@ -622,7 +622,7 @@ def _write_findings(run):
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
         })
     for i in range(3):
-        if run.after[i] > OUTSIDE_NULL_D:
+        if run.after[i] > det.OUTSIDE_NULL_D:
             deps_e = run.axis_deps(i, run.kept_on(i), f"extended model on {AXES[i]}") if run.kept_on(i) else run.deps[i]
             report["notes"].append(_still_departs(AXES[i], run.after[i], deps_e, run.taus, run.bands))
     for i in sorted({i for _, i, _, _ in kept}):
@@ -646,12 +646,6 @@ def _write_findings(run):
                                "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / fs / 9))
 
 
-#: D above which an axis is clearly outside the null band (its 95th percentile is 1.06-1.96 on
-#: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
-#: composite stochastic part, and the report says which feature still departs
-OUTSIDE_NULL_D = 2.0
-#: the factor a composite stochastic part must lower D by
-COMPOSITE_MIN_GAIN = 0.8
 #: the composite fit uses the wavelet variance at tau >= max(1 s, 16 samples): shorter scales
 #: carry the colored noise's low-pass shape and the narrow bands, which have their own terms
 COMPOSITE_MIN_TAU_S = 1.0
@@ -684,12 +678,12 @@ def _composite_candidates(wv, fs):
                 f"(weighted objective Q = {fit.objective:.3g} over {wv.tau_s.size} scales, model chosen by Q + 2p)")
     for sigma_dps, tau_s in fit.gauss_markov:
         out.append(det.Candidate(effect="gauss_markov", params={"sigma_dps": sigma_dps, "tau_s": tau_s},
-                                 statistic=0.0, threshold=1.0 / COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
+                                 statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"Gauss-Markov term (sigma {sigma_dps:.3g} deg/s, tau {tau_s:.3g} s) of a " + evidence,
                                  extra={"composite": True}))
     if fit.rrw_dps_per_sqrt_s is not None:
         out.append(det.Candidate(effect="rate_random_walk", params={"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s},
-                                 statistic=0.0, threshold=1.0 / COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
+                                 statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"random-walk term (K {fit.rrw_dps_per_sqrt_s:.3g} deg/s/sqrt(s)) of a " + evidence,
                                  extra={"composite": True}))
     return fit, out
@@ -821,22 +815,23 @@ def _furthest(deps, taus, bands):
 
 
 def _strongest(deps, taus, bands):
-    """A sentence on where the measurement is furthest outside the simulations' spread ("" below 3 sd)."""
+    """A sentence on where the measurement is furthest outside the simulations' spread ("" below
+    :data:`~gyrofilter.analysis.detectors.REPORTED_DEPARTURE_Z` sd)."""
     _, z, _, where = _furthest(deps, taus, bands)
-    if abs(z) < 3:
+    if abs(z) < det.REPORTED_DEPARTURE_Z:
         return ""
     return f"largest departure in the {where}, z = {z:+.1f} sd of the simulated spread"
 
 
 def _still_departs(axis, d_after, deps, taus, bands):
-    """The note on an axis whose D after extension is above :data:`OUTSIDE_NULL_D`: the feature
+    """The note on an axis whose D after extension is above :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`: the feature
     furthest outside the extended model's simulations, and what its sign says. For the Allan
     deviation and the band powers, fast (tau < 1 s or above 1 Hz: the white, colored and band
     noise) or slow scales (the bias terms); above the simulations, more power than the model
     holds there (an effect the table lacks or too weak to name), below, a fitted term too strong
     at that scale."""
     key, z, j, where = _furthest(deps, taus, bands)
-    text = (f"axis {axis}: after extension D = {d_after:.3g}, above {OUTSIDE_NULL_D:g} (clean records of 27 s "
+    text = (f"axis {axis}: after extension D = {d_after:.3g}, above {det.OUTSIDE_NULL_D:g} (clean records of 27 s "
             f"to 2.8 h stay below it in 95 % of runs): the model does not close here. The {where} departs most "
             f"(z = {z:+.1f} sd of the extended model's simulations)")
     if key in ("adev", "band"):

@@ -6,20 +6,12 @@ import math
 
 import numpy as np
 
-from .common import Candidate, dot
+from .common import NARROWBAND_THRESHOLD, Candidate, dot
 
 
 # ---------------------------------------------------------------------------------------------
 # 2b. narrow-band noise (a spectral line with a resolved width)
 
-#: the band statistic (peak excess over the background in units of its sampling error,
-#: ``(R - 1) sqrt(K)``) a band must exceed; on white and AR(1) noise (white + 0.3 white, lag1
-#: -0.7 to 0.7, 4096 to 10^6 samples at 99.37, 100 and 285.7 Hz, 240 runs, issue 12) its
-#: largest value was 2.16 (at 4096 samples and 285.7 Hz; 1.5-1.7 from 7 500 samples up), its
-#: 99th percentile 1.73; on 400 more of 4096-12 000 samples 2.31 (2.29 within W of f_s / 2);
-#: at the Nyquist edge of AR(1) lag1 -0.7 (a PSD peaking at f_s / 2) 2.2 on 10^6 and 2.4 on
-#: 8.64 * 10^6 samples at 100 Hz
-NARROWBAND_THRESHOLD = 4.0
 #: half-width (Hz) of the running-median background of :func:`band_estimate` (at most f_s / 10,
 #: so 10 Hz at 100 Hz; 20 Hz since issue 12, where a 7-Hz band at 285.7 Hz filled half of a ±10-Hz window)
 BAND_BACKGROUND_HZ = 20.0

@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 
-from .common import Candidate, DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, STOCHASTIC_PENALTY, STOCHASTIC_THRESHOLD, block_means, detrend_line, golden_max
+from .common import (DETERMINISTIC_THRESHOLD, EXACT_GM_MARGIN, GM_MAX_TAU_DIVISOR, JOINT_THRESHOLD, STOCHASTIC_PENALTY,
+                     STOCHASTIC_THRESHOLD, Candidate, block_means, detrend_line, golden_max)
 from .sinusoid import _least_squares, fitted
 
 
@@ -352,7 +353,7 @@ def detect_slow(x, fs, temp_c=None):
         # longer than a fifth of the record is a random walk as far as the data can tell
         items = []
         for k, v in table.items():
-            if k == "gauss_markov" and -delta_s / math.log(min(max(v[1][1], 1e-12), 1 - 1e-12)) > n * delta_s / 5:
+            if k == "gauss_markov" and -delta_s / math.log(min(max(v[1][1], 1e-12), 1 - 1e-12)) > n * delta_s / GM_MAX_TAU_DIVISOR:
                 continue
             items.append((v[0] - _N_PARAMS[k] * STOCHASTIC_PENALTY, k))
         return max(items) if items else (-np.inf, None)
@@ -423,10 +424,6 @@ def detect_slow(x, fs, temp_c=None):
     return findings, stats
 
 
-#: 2 Delta log L (exact likelihood) a Gauss-Markov process must gain over a random walk
-EXACT_GM_MARGIN = 8.0
-
-
 def _rw_or_gm(name, table, y, delta_s):
     """Random walk or Gauss-Markov: decided on the exact (Kalman) likelihoods of the block
     means (at most 512), which keep the low-frequency information the detrended Whittle fit
@@ -443,7 +440,7 @@ def _rw_or_gm(name, table, y, delta_s):
     exact = exact_stochastic_gain(yg, sto_g, delta_s * group)
     gm = exact["gauss_markov"]
     tau = _stochastic_params("gauss_markov", gm[1], delta_s * group)["tau_s"]
-    if gm[0] - exact["rate_random_walk"][0] > EXACT_GM_MARGIN and tau < n * delta_s / 5:
+    if gm[0] - exact["rate_random_walk"][0] > EXACT_GM_MARGIN and tau < n * delta_s / GM_MAX_TAU_DIVISOR:
         return _stochastic_candidate("gauss_markov", gm, delta_s * group, m)
     return _stochastic_candidate("rate_random_walk", table["rate_random_walk"], delta_s, n)
 
