@@ -89,7 +89,7 @@ def worst_feature(summary):
     simulations (from the report's departure summary of one axis)."""
     import numpy as np
 
-    from gyrofilter.analysis.gap import _LOG_FLOOR
+    from gyrofilter.analysis.gap_features import _LOG_FLOOR
 
     best = None
     for key, where in (("adev", "adev_tau_s"), ("band", "band_edges_hz")):
