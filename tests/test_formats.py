@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.filter.calibration import Calibration
-from gyrofilter.analysis.noise_model import JSON_KEY
+from gyrofilter.analysis.noise_export import JSON_KEY
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.model import EFFECTS, validate_model
 from gyrofilter.sim.simulate import simulate

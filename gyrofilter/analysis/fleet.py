@@ -148,7 +148,7 @@ def _gap_report(path, settings, warnings):
 
 def _allan_part(path, settings, result):
     from .still import characterise_recording
-    from .noise_model import kalibr_yaml, to_json
+    from .noise_export import kalibr_yaml, to_json
 
     def warn(text):
         if text not in result["warnings"]:  # the gap part read the same file and said it already
@@ -370,7 +370,7 @@ def fleet_rows(names, results):
     :func:`analyse_recording`, named by ``names``, e.g. :func:`unit_names`), in the order given; a
     failed recording has one row whose ``status`` is the one-line reason, and no axis. Numbers
     are floats or None (not resolved, not analysed)."""
-    from .noise_model import JSON_KEY
+    from .noise_export import JSON_KEY
 
     rows = []
     for name, res in zip(names, results):
@@ -410,7 +410,8 @@ def flag_units(rows):
     ``z`` or ``share``, ``text``) and returns the fleet statistics: a list of dicts per axis and
     quantity (``units``: how many had a number; ``median``/``spread`` of the log levels, or
     ``having`` for findings; ``compared``: False when too few units)."""
-    from .noise_model import JSON_KEY, TERM_SYMBOL, TERM_UNIT
+    from .noise_export import JSON_KEY
+    from .noise_model import TERM_SYMBOL, TERM_UNIT
 
     stats = []
     ok = [r for r in rows if r["status"] == "ok"]
@@ -508,7 +509,8 @@ def fleet_markdown(rows, stats, *, title):
     recording and axis (``rows``, :func:`fleet_rows`; the gap's findings and D columns only
     when some row has gap results), and the fleet statistics ``stats`` (what
     :func:`flag_units` returns) with the rules."""
-    from .noise_model import JSON_KEY, TERM_SYMBOL, TERM_UNIT
+    from .noise_export import JSON_KEY
+    from .noise_model import TERM_SYMBOL, TERM_UNIT
 
     units = list(dict.fromkeys(r["unit"] for r in rows))
     failed_rows = [r for r in rows if r["status"] != "ok"]

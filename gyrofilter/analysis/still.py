@@ -1,6 +1,6 @@
 """A still sensor's recording, from the file to its noise coefficients: read the axes, warn about
 missing samples, refuse gross errors, characterise each axis (papers 000, 002: the Allan
-deviation and its coefficients, :mod:`gyrofilter.analysis.noise_model`).
+deviation and its coefficients, :mod:`gyrofilter.analysis.noise_fit`).
 
 The one path from a file to the Allan results of ``gyrofilter allan``, ``gyrofilter arma`` and
 a fleet run (:mod:`gyrofilter.analysis.fleet`). Warnings go to the caller's ``warn(text)``;
@@ -15,7 +15,8 @@ from ..recording import collect_columns, iter_recording, warn_about_gaps
 from ..units import to_dps
 from .allan import MIN_CLUSTERS, AllanInputError
 from .detectors.common import block_means
-from .noise_model import GROSS_LIMIT_DPS, GROSS_Z, characterise_axis, gross_errors
+from .noise_fit import characterise_axis
+from .noise_screen import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
 
 #: block-mean excursion (deg/s) beyond which a recording is called not static
 STATIC_LIMIT_DPS = 1.0
@@ -65,7 +66,7 @@ def read_axes(path, axes, with_t=False):
 def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
-    (:func:`~gyrofilter.analysis.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
+    (:func:`~gyrofilter.analysis.noise_screen.gross_errors`); with ``keep`` only warn (``warn(text)``).
     Samples are never dropped. ``series`` start at the file's sample ``first_row``.
 
     ``head``: the file's :class:`~gyrofilter.recording.RecordingHead` (for its path and line

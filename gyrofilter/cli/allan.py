@@ -7,7 +7,7 @@ to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` 
 log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
 
 The recording is read in chunks into one float64 array per axis. Gross errors (isolated spikes
-far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise_model.gross_errors`)
+far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise_screen.gross_errors`)
 are refused before any computation unless ``--keep-outliers`` is given; they are never dropped.
 Output files are written only once every result is finite, each whole or not at all.
 """
@@ -19,7 +19,8 @@ from ..analysis.allan import MIN_CLUSTERS, AllanInputError
 from ..analysis.still import characterise_recording
 from ..errors import SettingsError
 from ..analysis.fleet import FleetSettings
-from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert, kalibr_yaml, to_json
+from ..analysis.noise_export import kalibr_yaml, to_json
+from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert
 from . import batch, common
 
 MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
@@ -138,7 +139,7 @@ def run(args):
 
 
 def write_json_document(path, doc):
-    """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise_model.to_json`) to ``path`` (no
+    """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise_export.to_json`) to ``path`` (no
     replacing: give it the path :func:`common.replacing` yields)."""
     with open(path, "w", encoding="utf-8") as fh:
         json.dump(doc, fh, indent=1, allow_nan=False)

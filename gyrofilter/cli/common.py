@@ -548,7 +548,7 @@ def _number(value, width, sign=False, decimals=4):
 
 
 def add_keep_outliers_argument(parser):
-    from ..analysis.noise_model import GROSS_LIMIT_DPS, GROSS_Z
+    from ..analysis.noise_screen import GROSS_LIMIT_DPS, GROSS_Z
 
     parser.add_argument("--keep-outliers", action="store_true",
                         help=f"analyse the recording even when it has gross errors (spikes of more than {GROSS_Z:g} robust "
