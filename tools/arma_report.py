@@ -25,7 +25,7 @@ import sys
 
 import numpy as np
 
-from gyrofilter.analysis import arma
+from gyrofilter.analysis import arma, arma_checks, arma_fit
 from gyrofilter.analysis.allan import overlapping_adev
 from gyrofilter.analysis.noise_fit import characterise_axis
 from gyrofilter.recording import read_recording
@@ -69,7 +69,7 @@ def add_bic(r, recordings, max_n, seeds):
     x = rec.gyro_dps[:, "xyz".index(r["axis"])]
     series, _, rate, _ = arma.prepare_series(x, rec.sample_rate_hz)
     chosen, adequate, _, _ = arma.select_order(series, max_n=max_n, criterion="bic")
-    w = arma.whiteness(chosen.residuals, chosen.n_params)
+    w = arma_checks.whiteness(chosen.residuals, chosen.n_params)
     tau = np.asarray(r["adev"]["tau_s"])
     _, dev = arma.arma_adev(chosen, len(series), rate, seeds=seeds, taus_s=tau)
     r["bic"] = {"chosen": chosen.to_dict(), "adequate_order": list(adequate), "ljung_box_p_value": w.ljung_box_p_value,
@@ -79,7 +79,7 @@ def add_bic(r, recordings, max_n, seeds):
 
 
 def _fit_from_dict(d):
-    return arma.ArmaFit(d["p"], d["q"], d["phi"], d["theta"], d["sigma_a"], d["rss"], d["n_residuals"], d["aic"])
+    return arma_fit.ArmaFit(d["p"], d["q"], d["phi"], d["theta"], d["sigma_a"], d["rss"], d["n_residuals"], d["aic"])
 
 
 def recompute_adev(r, seeds):
