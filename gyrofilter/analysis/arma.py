@@ -295,17 +295,17 @@ def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz) -> BiasModel:
         raise SettingsError(f"bias model needs an ARMA(1, 1) fit, got ARMA{fit.order}")
     phi, theta = fit.phi[0], fit.theta[0]
     s2a = fit.sigma_a**2
-    fs = float(sample_rate_hz)
+    sample_rate_hz = float(sample_rate_hz)
     if not (phi > 0 and 0 < theta <= phi):
-        return BiasModel(math.inf, 0.0, 0.0, fit.sigma_a / math.sqrt(fs), False,
+        return BiasModel(math.inf, 0.0, 0.0, fit.sigma_a / math.sqrt(sample_rate_hz), False,
                          f"phi={phi:.6f}, theta={theta:.6f}: no Gauss-Markov + white decomposition (needs 0 < theta <= phi); treated as white noise")
     s2w = theta * s2a / phi
     s2eta = max(0.0, s2a * (1 + theta * theta) - s2w * (1 + phi * phi))
-    walk = math.sqrt(s2eta * fs)
-    arw = math.sqrt(s2w / fs)
+    walk = math.sqrt(s2eta * sample_rate_hz)
+    arw = math.sqrt(s2w / sample_rate_hz)
     if phi >= 1.0 - 1e-12:
         return BiasModel(math.inf, math.inf, walk, arw, True, "phi = 1: random-walk bias")
-    tau = -1.0 / (fs * math.log(phi))
+    tau = -1.0 / (sample_rate_hz * math.log(phi))
     return BiasModel(tau, math.sqrt(s2eta / (1 - phi * phi)), walk, arw, True, "")
 
 

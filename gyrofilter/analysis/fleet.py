@@ -157,12 +157,12 @@ def _allan_part(path, settings, result):
     head, results = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
                                            min_clusters=settings.min_clusters,
                                            keep_outliers=settings.keep_outliers, warn=warn)
-    fs = head.sample_rate_hz
+    sample_rate_hz = head.sample_rate_hz
     for axis, r in results.items():
         result["warnings"].extend(text if text.startswith("axis ") else f"axis {axis}: {text}" for text in r.warnings)
-    result["allan"] = to_json(results, fs, recording=path, duration_s=head.rows / fs)
-    result["kalibr"] = kalibr_yaml(results, fs, recording=path)
-    result["sample_rate_hz"], result["duration_s"] = fs, head.rows / fs
+    result["allan"] = to_json(results, sample_rate_hz, recording=path, duration_s=head.rows / sample_rate_hz)
+    result["kalibr"] = kalibr_yaml(results, sample_rate_hz, recording=path)
+    result["sample_rate_hz"], result["duration_s"] = sample_rate_hz, head.rows / sample_rate_hz
 
 
 def failed(path, reason):

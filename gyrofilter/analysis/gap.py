@@ -103,14 +103,14 @@ class _GapRun:
 
     def __init__(self, rec, *, seed, n_sims, say, recording_name):
         where = rec.path or "recording"
-        fs = check_sample_rate_hz(rec.sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
+        sample_rate_hz = check_sample_rate_hz(rec.sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
         n = len(rec)
         if n < 2:
             raise RecordingError(f"{where}: {n} sample(s) after the header: a gap analysis needs data rows")
-        self.rec, self.fs, self.n, self.say = rec, fs, n, say
+        self.rec, self.sample_rate_hz, self.n, self.say = rec, sample_rate_hz, n, say
         self.report = report = {
             "recording": recording_name if recording_name is not None else (rec.path or ""),
-            "sample_rate_hz": fs, "duration_s": n / fs,
+            "sample_rate_hz": sample_rate_hz, "duration_s": n / sample_rate_hz,
             "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
                          "axes": {a: {} for a in AXES}},
             "findings": [], "extended_model": {}, "notes": []}
@@ -133,8 +133,8 @@ class _GapRun:
             self.temp = None
             report["notes"].append("temp column has non-finite values: temperature not analysed")
         _static_notes(self)
-        self.taus = feature_taus(n, fs)
-        self.bands = feature_bands(n, fs)
+        self.taus = feature_taus(n, sample_rate_hz)
+        self.bands = feature_bands(n, sample_rate_hz)
         self.m = default_n_sims(n) if n_sims is None else int(n_sims)
         self.seeds = np.random.default_rng(seed).integers(0, 2**31, size=self.m)
         self.n_ext = max(6, self.m // 2)
@@ -169,8 +169,8 @@ class _GapRun:
             model["axes"][AXES[i]] = self.axis_spec(i, key[1])
             if any(self.candidates[k][1].effect == "temperature" for k in key[1]):
                 model["temperature"] = temperature_table(self.rec)
-            sims_k = sim_features(model, self.n, self.fs, self.seeds[:self.n_ext], [i], self.taus, self.bands,
-                                   self.say, label)[i]
+            sims_k = sim_features(model, self.n, self.sample_rate_hz, self.seeds[:self.n_ext], [i], self.taus,
+                                  self.bands, self.say, label)[i]
             self._deps_cache[key] = departures(self.meas_feats[i], sims_k, self.n)
         return self._deps_cache[key]
 
@@ -184,18 +184,19 @@ class _GapRun:
 def _static_notes(run):
     """A note per axis whose block means move more than a still gyro's would."""
     for i, a in enumerate(AXES):
-        moved = not_static(axis_dps(run.rec, i), run.fs, run.base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(run.fs))
+        white_std_dps = run.base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(run.sample_rate_hz)
+        moved = not_static(axis_dps(run.rec, i), run.sample_rate_hz, white_std_dps)
         if moved:
             run.report["notes"].append(f"axis {a}: {moved}; the analysis models a still gyro, so its findings describe the motion")
 
 
 def _baseline_spread(run):
     """Step 2: features of the measurement and of ``m`` baseline runs; departures and D before."""
-    n, fs = run.n, run.fs
-    run.say(f"baseline: {run.m} simulations of {n / fs:.0f} s at {fs:g} Hz")
-    run.meas_feats = [features(axis_dps(run.rec, i), fs, run.taus, run.bands) for i in range(3)]
-    sims = sim_features(run.base, n, fs, run.seeds, range(3), run.taus, run.bands, run.say,
-                         "baseline simulations (runs x axes)")
+    n, sample_rate_hz = run.n, run.sample_rate_hz
+    run.say(f"baseline: {run.m} simulations of {n / sample_rate_hz:.0f} s at {sample_rate_hz:g} Hz")
+    run.meas_feats = [features(axis_dps(run.rec, i), sample_rate_hz, run.taus, run.bands) for i in range(3)]
+    sims = sim_features(run.base, n, sample_rate_hz, run.seeds, range(3), run.taus, run.bands, run.say,
+                        "baseline simulations (runs x axes)")
     run.deps = [departures(run.meas_feats[i], sims[i], n) for i in range(3)]
     del sims
     run.before = [discrepancy(d) for d in run.deps]
@@ -218,7 +219,7 @@ def _detect(run):
             run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
             continue
         try:
-            cands, xc = _detect_axis(x, run.fs, run.temp)
+            cands, xc = _detect_axis(x, run.sample_rate_hz, run.temp)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
             cands, xc = [], x
@@ -226,12 +227,12 @@ def _detect(run):
             if c.effect == "temperature":
                 c.extra["reference_c"] = float(np.mean(run.temp))
             run.candidates.append((i, c))
-        run.ext_axes[a] = extended_axis(run.base["axes"][a], cands, xc, run.fs, run.q)
-        run.wvs[i] = slow_wavelet_variance(xc, run.fs)
+        run.ext_axes[a] = extended_axis(run.base["axes"][a], cands, xc, run.sample_rate_hz, run.q)
+        run.wvs[i] = slow_wavelet_variance(xc, run.sample_rate_hz)
         del x, xc
 
 
-def _detect_axis(x, fs, temp):
+def _detect_axis(x, sample_rate_hz, temp):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x).
     Each finding's component is subtracted from a private copy of ``x`` and then dropped, so
     the axis costs two series of memory besides the detectors' own."""
@@ -242,17 +243,17 @@ def _detect_axis(x, fs, temp):
         x = det.clean_spikes(x, mask)  # a copy
     del mask
     owned = bool(cands)
-    c = det.detect_sinusoid(x, fs)
+    c = det.detect_sinusoid(x, sample_rate_hz)
     if c is not None:
         cands.append(c)
         x, owned = _subtract_component(x, c, owned), True
-    band = det.detect_narrowband(x, fs)
+    band = det.detect_narrowband(x, sample_rate_hz)
     if band is not None:
         cands.append(band)
-    c = det.detect_colored(x, fs, band)
+    c = det.detect_colored(x, sample_rate_hz, band)
     if c is not None:
         cands.append(c)
-    slow, _ = det.detect_slow(x, fs, temp)
+    slow, _ = det.detect_slow(x, sample_rate_hz, temp)
     cands.extend(slow)
     for s in slow:
         if s.component is not None:
@@ -354,7 +355,7 @@ def _write_findings(run):
                              "overall_before": float(np.mean(before)),
                              "overall_after": float(np.mean(run.after))}
     report["n_simulations"] = run.m
-    n, fs = run.n, run.fs
-    if n / fs < 300:
-        report["notes"].append(f"record of {n / fs:.0f} s: slow bias effects (drift, random walk, bias instability) "
-                               "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / fs / 9))
+    n, sample_rate_hz = run.n, run.sample_rate_hz
+    if n / sample_rate_hz < 300:
+        report["notes"].append(f"record of {n / sample_rate_hz:.0f} s: slow bias effects (drift, random walk, bias instability) "
+                               "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / sample_rate_hz / 9))

@@ -42,9 +42,9 @@ def axis_dps(rec, i):
     return to_dps(rec.columns[GYRO_COLUMNS[i]], rec.gyro_unit, rec.lsb_per_dps)
 
 
-def noise_sigma(x, fs, q_dps):
+def noise_sigma(x, sample_rate_hz, q_dps):
     """Per-sample white-noise std of the baseline (see module docstring)."""
-    w = det.colored_window(x.size, fs)
+    w = det.colored_window(x.size, sample_rate_hz)
     e = x - det.moving_mean(x, w)
     mask, _, _ = det.outlier_statistic(x)
     if mask.any():
@@ -57,23 +57,23 @@ def noise_sigma(x, fs, q_dps):
 def baseline_model(rec, gyro_dps=None):
     """The baseline simulator model (shared schema) fitted to ``rec`` (or to the (N, 3) rates
     ``gyro_dps``)."""
-    fs = rec.sample_rate_hz
+    sample_rate_hz = rec.sample_rate_hz
     unit = rec.gyro_unit
     lsb = rec.lsb_per_dps if unit == "lsb" else None
     q = 1.0 / lsb if lsb else 0.0
-    model = {"sample_rate_hz": fs, "gyro_unit": "lsb" if lsb else "dps"}
+    model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "lsb" if lsb else "dps"}
     if lsb:
         model["lsb_per_dps"] = lsb
     model["axes"] = {}
     for i, a in enumerate(AXES):
         x = axis_dps(rec, i) if gyro_dps is None else gyro_dps[:, i]
-        sigma = noise_sigma(x, fs, q)
+        sigma = noise_sigma(x, sample_rate_hz, q)
         model["axes"][a] = {"bias_dps": float(np.mean(x)),
-                            "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(fs)), "effects": []}
+                            "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(sample_rate_hz)), "effects": []}
     return model
 
 
-def extended_axis(base_axis, cands, xc, fs, q):
+def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
     """The extended model's axis spec before its effects: white noise re-fitted on the
     series ``xc`` cleaned of the findings ``cands`` (corrected for the colored noise's
     high-pass loss), and the bias of the cleaned series less the mean of the deterministic
@@ -83,7 +83,7 @@ def extended_axis(base_axis, cands, xc, fs, q):
     if not cands:
         return spec
     n = xc.size
-    sigma = noise_sigma(xc, fs, q or 0.0)
+    sigma = noise_sigma(xc, sample_rate_hz, q or 0.0)
     for c in cands:  # narrow bands (above the high-pass) are noise of their own: N'^2 = N^2 - rms^2
         if c.effect == "narrowband":
             sigma = math.sqrt(max(sigma**2 - c.params["rms_dps"] ** 2, 0.05 * sigma**2))
@@ -91,12 +91,12 @@ def extended_axis(base_axis, cands, xc, fs, q):
     if colored is not None:
         # the high-pass of noise_sigma also removed the variance fraction c = L / W of a
         # correlated noise (L its long-run ratio; detectors.lags_from_highpassed)
-        w = det.colored_window(n, fs)
+        w = det.colored_window(n, sample_rate_hz)
         frac = min(det.long_run_ratio(colored.params["lag1"], colored.params.get("lag2")) / w, 0.9)
         sigma *= math.sqrt((1 - 1.0 / w) / (1 - frac))
-    spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(fs))
+    spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(sample_rate_hz))
     spec["bias_dps"] = float(np.mean(xc))
-    T = n / fs
+    T = n / sample_rate_hz
     for c in cands:  # deterministic components were fitted mean-free
         if c.effect == "bias_step":
             spec["bias_dps"] -= c.params["size_dps"] * (1 - c.params["time_s"] / T)
@@ -136,13 +136,13 @@ def effect_entry(cand, preserve="std"):
 # simulated features
 
 
-def _simulate_axis(spec, n, fs, seed, axis):
+def _simulate_axis(spec, n, sample_rate_hz, seed, axis):
     """One run of one axis of the validated model ``spec``: ``n`` samples in deg/s, filled
     block by block (:func:`gyrofilter.sim.simulate.simulate_axis_dps`; the same numbers as that
     axis of a full :func:`~gyrofilter.sim.simulate.simulate` run with this seed)."""
     x = np.empty(n)
     pos = 0
-    for block in simulate_axis_dps(spec, n / fs, axis, seed=int(seed), validated=spec):
+    for block in simulate_axis_dps(spec, n / sample_rate_hz, axis, seed=int(seed), validated=spec):
         k = min(block.size, n - pos)
         x[pos:pos + k] = block[:k]
         pos += k
@@ -167,7 +167,7 @@ class _Progress:
         self.say(f"{self.label}: {done}/{self.total} ({100 * done / self.total:.0f} %, about {left:.0f} s left)")
 
 
-def sim_features(model, n, fs, seeds, axes_idx, taus, bands, say=None, label="simulations"):
+def sim_features(model, n, sample_rate_hz, seeds, axes_idx, taus, bands, say=None, label="simulations"):
     """Features of ``len(seeds)`` runs of ``model`` (list per axis index). Each run simulates
     only the axes asked for, one at a time, so memory holds one axis of one run."""
     spec, _ = validate_model(model)
@@ -176,6 +176,6 @@ def sim_features(model, n, fs, seeds, axes_idx, taus, bands, say=None, label="si
     bar = _Progress(say, label, len(seeds) * len(axes_idx))
     for k, s in enumerate(seeds):
         for j, i in enumerate(axes_idx):
-            out[i].append(features(_simulate_axis(spec, n, fs, s, i), fs, taus, bands))
+            out[i].append(features(_simulate_axis(spec, n, sample_rate_hz, s, i), sample_rate_hz, taus, bands))
             bar.step(k * len(axes_idx) + j + 1)
     return out

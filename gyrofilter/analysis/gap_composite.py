@@ -38,7 +38,7 @@ def composite_step(run):
         if run.after[i] <= det.OUTSIDE_NULL_D or run.wvs[i] is None:
             continue
         run.say(f"composite stochastic fit on {a}")
-        fit, comp = _composite_candidates(run.wvs[i], run.fs)
+        fit, comp = _composite_candidates(run.wvs[i], run.sample_rate_hz)
         if not comp:
             continue
         keep_k = [k for k, ci, c, _ in run.kept if ci == i and c.effect not in det.STOCHASTIC_MODELS]
@@ -92,17 +92,17 @@ def composite_step(run):
                          f"({run.after[i]:.3g} -> {d_comp:.3g}); not used")
 
 
-def slow_wavelet_variance(xc, fs):
+def slow_wavelet_variance(xc, sample_rate_hz):
     """Haar wavelet variance (:func:`gyrofilter.analysis.gmwm.haar_wv`) of the cleaned series at the
     dyadic scales tau >= max(:data:`COMPOSITE_MIN_TAU_S`, 16 / f_s); None when fewer than 4."""
-    m_min = max(16, int(math.ceil(COMPOSITE_MIN_TAU_S * fs)))
+    m_min = max(16, int(math.ceil(COMPOSITE_MIN_TAU_S * sample_rate_hz)))
     if (xc.size - 2 * m_min * 8 + 1) / (2.0 * m_min * 8) < 2.0:
         return None
-    wv = gmwm.haar_wv(xc, fs, min_m=m_min)
+    wv = gmwm.haar_wv(xc, sample_rate_hz, min_m=m_min)
     return wv if wv.tau_s.size >= 4 else None
 
 
-def _composite_candidates(wv, fs):
+def _composite_candidates(wv, sample_rate_hz):
     """GMWM-style composite fit (:func:`gyrofilter.analysis.gmwm.select_model`, Guerrier et al. 2013) of
     white noise + optionally a rate random walk + 0..3 Gauss-Markov terms to ``wv``, the model
     chosen by Q + 2p (not WVIC: see gyrofilter.analysis.gmwm). Returns ``(fit, candidates)``: one

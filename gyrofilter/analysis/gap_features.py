@@ -26,17 +26,17 @@ _LOG_FLOOR = 0.02
 # features
 
 
-def feature_taus(n, fs):
+def feature_taus(n, sample_rate_hz):
     """Log-spaced cluster times (s), 6 per decade, one sample to a ninth of the record."""
     m_max = max(1, n // 9)
     m = np.unique(np.round(np.logspace(0, math.log10(m_max), max(2, int(6 * math.log10(max(m_max, 2))) + 1))).astype(int))
-    return m / fs
+    return m / sample_rate_hz
 
 
-def feature_bands(n, fs, count=24):
+def feature_bands(n, sample_rate_hz, count=24):
     """Log-spaced frequency band edges (Hz) from 8 / T to f_s / 2."""
-    f_lo = 8.0 * fs / n
-    f_hi = fs / 2
+    f_lo = 8.0 * sample_rate_hz / n
+    f_hi = sample_rate_hz / 2
     if f_lo >= f_hi:
         return np.array([0.0, f_hi])
     return np.geomspace(f_lo, f_hi, count + 1)
@@ -46,7 +46,7 @@ def feature_bands(n, fs, count=24):
 ADEV_STARTS = 8
 
 
-def feature_adev(x, fs, taus_s):
+def feature_adev(x, sample_rate_hz, taus_s):
     """Overlapping Allan deviation with the second differences started every
     ``s = max(1, m // 8)`` samples instead of every sample:
 
@@ -64,8 +64,8 @@ def feature_adev(x, fs, taus_s):
     phase[0] = 0.0
     np.subtract(x, float(np.mean(x)), out=phase[1:])
     np.cumsum(phase[1:], out=phase[1:])
-    phase /= fs
-    m_all = np.round(np.asarray(taus_s, dtype=float) * fs).astype(np.int64)
+    phase /= sample_rate_hz
+    m_all = np.round(np.asarray(taus_s, dtype=float) * sample_rate_hz).astype(np.int64)
     out = np.empty(m_all.size)
     buf = np.empty(_ADEV_CHUNK)
     for i, m in enumerate(m_all):
@@ -80,38 +80,38 @@ def feature_adev(x, fs, taus_s):
             d += phase[2 * m + a * step:2 * m + (b - 1) * step + 1:step]
             d += phase[a * step:(b - 1) * step + 1:step]
             total += float(det.dot(d, d))
-        out[i] = math.sqrt(total / (2.0 * k)) / (m / fs)
+        out[i] = math.sqrt(total / (2.0 * k)) / (m / sample_rate_hz)
     return out
 
 
 _ADEV_CHUNK = 1 << 15
 
 
-def features(x, fs, taus_s, bands_hz):
+def features(x, sample_rate_hz, taus_s, bands_hz):
     """Feature vector of one axis: (log ADEV per tau (:func:`feature_adev`), log band powers,
     log line ratio, lag1, log(1 + spikes)). Returns a dict of arrays."""
-    adev = feature_adev(x, fs, taus_s)
-    line, _, _, spec = det.sinusoid_statistic(x, fs, return_spectrum=True)
+    adev = feature_adev(x, sample_rate_hz, taus_s)
+    line, _, _, spec = det.sinusoid_statistic(x, sample_rate_hz, return_spectrum=True)
     n_p = det.periodogram_length(x.size)  # the samples the periodogram uses
     if spec is None:
         spec = np.abs(np.fft.rfft(det.detrend_line(x[:n_p]))) ** 2 / n_p
-    idx = _first_bins(bands_hz, spec.size, n_p, fs)
+    idx = _first_bins(bands_hz, spec.size, n_p, sample_rate_hz)
     bp = np.array([spec[a:b].mean() if b > a else np.nan for a, b in zip(idx[:-1], idx[1:])])
-    r1, _ = det.lag1_statistic(x, fs)
+    r1, _ = det.lag1_statistic(x, sample_rate_hz)
     mask, _, _ = det.outlier_statistic(x)
     return {"adev": np.log(np.maximum(adev, 1e-300)), "band": np.log(np.maximum(bp, 1e-300)),
             "line": np.array([math.log(max(line, 1.0))]), "lag1": np.array([r1]),
             "spikes": np.array([math.log1p(float(mask.sum()))])}
 
 
-def _first_bins(freqs_hz, size, n, fs):
+def _first_bins(freqs_hz, size, n, sample_rate_hz):
     """For each frequency, the first periodogram bin ``j`` (of ``size``) with
     ``j f_s / N >= f``: ``searchsorted(arange(size) f_s / N, f)`` without the array."""
-    idx = np.clip(np.ceil(np.asarray(freqs_hz, dtype=float) * n / fs).astype(np.int64), 0, size)
+    idx = np.clip(np.ceil(np.asarray(freqs_hz, dtype=float) * n / sample_rate_hz).astype(np.int64), 0, size)
     for i, f in enumerate(np.asarray(freqs_hz, dtype=float)):  # settle float rounding at the edge
-        while idx[i] > 0 and (idx[i] - 1) * fs / n >= f:
+        while idx[i] > 0 and (idx[i] - 1) * sample_rate_hz / n >= f:
             idx[i] -= 1
-        while idx[i] < size and idx[i] * fs / n < f:
+        while idx[i] < size and idx[i] * sample_rate_hz / n < f:
             idx[i] += 1
     return idx
 

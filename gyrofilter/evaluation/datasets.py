@@ -40,7 +40,7 @@ def find_broad_recordings(recordings_dir):
 
 
 def noise_segments(static_recs, duration_s=NOISE_SEGMENT_S, names=None):
-    """(name, x_dps (n, 3), fs): the first ``duration_s`` (s) of each recording of ``static_recs``
+    """(name, x_dps (n, 3), sample_rate_hz): the first ``duration_s`` (s) of each recording of ``static_recs``
     long enough (only those named in ``names``, when given)."""
     segs = []
     for rec in static_recs:

@@ -113,21 +113,22 @@ def dynamic_metrics(spec, profile, segments, calibration_s=DEFAULT_CALIBRATION_S
     count = 0
     lags = {seg[2]: [] for seg in profile.segments}
     runs = []
-    for name, noise, fs in segments:
+    for name, noise, sample_rate_hz in segments:
         n = len(noise)
-        t = np.arange(n) / fs
+        t = np.arange(n) / sample_rate_hz
         truth = profile.rate_dps(t)
         x = noise + truth[:, None]
-        out = spec.run(x, fs, calibration_s)
-        tb = truth_blocks(profile.rate_dps, fs, n, out)
+        out = spec.run(x, sample_rate_hz, calibration_s)
+        tb = truth_blocks(profile.rate_dps, sample_rate_hz, n, out)
         err = out.y_dps - tb[:, None]
         sq_sum += float(np.sum(err**2))
         count += err.size
-        runs.append((name, fs, out, tb))
+        runs.append((name, sample_rate_hz, out, tb))
         if with_lag:
             for t0, t1, label, max_lag in profile.segments:
                 for a in range(3):
-                    lags[label].append(segment_lag_s(out.y_dps[:, a], profile.rate_dps, fs, n, out, t0, t1, max_lag_s=max_lag))
+                    lags[label].append(segment_lag_s(out.y_dps[:, a], profile.rate_dps, sample_rate_hz, n, out, t0, t1,
+                                                     max_lag_s=max_lag))
     seg_lags = {label: float(np.nanmedian(v)) if v else float("nan") for label, v in lags.items()}
     worst = max(seg_lags.values()) if with_lag and seg_lags else float("nan")
     return {"rmse_dps": math.sqrt(sq_sum / count), "lags_s": seg_lags, "worst_lag_s": worst, "runs": runs}
@@ -186,13 +187,13 @@ def broad_metrics(spec, rec):
     motion: blocks entirely flagged as movement; rest: blocks entirely at rest and more than
     REST_GUARD_S from a flag change; all: every block with a complete reference.
     """
-    fs = rec.sample_rate_hz
+    sample_rate_hz = rec.sample_rate_hz
     cal_s = broad_calibration_s(rec)
     x = rec.gyro_dps
     ref = reference_from_recording(rec)
     move = np.asarray(rec.columns["movement"], dtype=float)
-    rest_s = _rest_mask(move, fs).astype(float)
-    out = spec.run(x, fs, cal_s)
+    rest_s = _rest_mask(move, sample_rate_hz).astype(float)
+    out = spec.run(x, sample_rate_hz, cal_s)
     m = len(out.y_dps)
     ref_b = block_mean_masked(ref, out.block_len, start=out.start, n_blocks=m)
     move_b = block_mean_masked(move, out.block_len, start=out.start, n_blocks=m)
@@ -204,6 +205,6 @@ def broad_metrics(spec, rec):
         res[f"rmse_{key}_dps"] = float(np.sqrt(np.mean(err[sel] ** 2))) if sel.any() else float("nan")
     # at rest the optical reference's differentiation noise dominates; the rate there is 0
     res["rms_rest_vs_zero_dps"] = float(np.sqrt(np.mean(out.y_dps[rest_b] ** 2))) if rest_b.any() else float("nan")
-    res["lag_s"] = reference_lag_s(out, ref, fs)
+    res["lag_s"] = reference_lag_s(out, ref, sample_rate_hz)
     res["calibration_s"] = cal_s
     return res

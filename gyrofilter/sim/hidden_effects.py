@@ -126,15 +126,15 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     from gyrofilter.recording import Recording
     from gyrofilter.sim.simulate import simulate
 
-    fs = rec.sample_rate_hz
+    sample_rate_hz = rec.sample_rate_hz
     n = len(rec)
-    model = {"sample_rate_hz": fs, "gyro_unit": "dps",
+    model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",
              "axes": {a: {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []} for a in AXES}}
     temp = rec.temp_c
     if effect == "temperature":
         if temp is None:
             raise ValueError("temperature needs a temp column")
-        t = np.arange(n) / fs
+        t = np.arange(n) / sample_rate_hz
         step = max(1, n // 500)
         model["temperature"] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
     gyro = rec.gyro_dps.copy()
@@ -155,10 +155,10 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         gyro[:, i] = gyro[:, i].mean() + lfilter(b, a, dev)
     else:
         model["axes"][axis]["effects"].append({"effect": effect, **params})
-        sim = simulate(model, n / fs, seed=seed)
+        sim = simulate(model, n / sample_rate_hz, seed=seed)
         gyro = gyro + sim.gyro_dps[:n]
     header = {k: v for k, v in rec.header.items() if k not in ("gyro_unit", "lsb_per_dps")}
-    return Recording.from_dps(gyro, fs, temp_c=temp, header=header)
+    return Recording.from_dps(gyro, sample_rate_hz, temp_c=temp, header=header)
 
 
 def _within(kind, tol, est, true, duration_s):

@@ -179,8 +179,8 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     if lsb is None and unit == "lsb":
         _err("lsb_per_dps", "missing: gyro_unit 'lsb' needs lsb_per_dps (LSB per deg/s, > 0)")
     out["lsb_per_dps"] = None if lsb is None else _number(lsb, "lsb_per_dps", "pos")
-    fs = model.get("full_scale_dps")
-    out["full_scale_dps"] = None if fs is None else _number(fs, "full_scale_dps", "pos")
+    full_scale_dps = model.get("full_scale_dps")
+    out["full_scale_dps"] = None if full_scale_dps is None else _number(full_scale_dps, "full_scale_dps", "pos")
     out["temperature"] = None if model.get("temperature") is None else _validate_temperature(model["temperature"])
 
     axes = model.get("axes", {})

@@ -90,17 +90,17 @@ def _stream(root, *key):
 # simulation
 
 
-def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
+def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
     """(additive terms, noise term, outlier terms) for one axis."""
     terms = [nt.Constant(spec["bias_dps"])]
     outliers = []
     colored = next((e for e in spec["effects"] if e["effect"] == "colored_noise"), None)
     if colored is not None and colored["lag2"] is not None:
-        noise = nt.FilteredNoise(*nt.colored_noise_filter(spec["arw_dps_per_sqrt_hz"], fs, colored["lag1"],
+        noise = nt.FilteredNoise(*nt.colored_noise_filter(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, colored["lag1"],
                                                           colored["lag2"], colored["preserve"]),
                                  _stream(root, ax_index, 0, 0, 0))
     else:
-        noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], fs, _stream(root, ax_index, 0, 0, 0),
+        noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, _stream(root, ax_index, 0, 0, 0),
                               lag1=colored["lag1"] if colored else 0.0,
                               preserve=colored["preserve"] if colored else "arw")
     seen = {}
@@ -109,15 +109,16 @@ def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
         occ = seen[name] = seen.get(name, -1) + 1
         key = (ax_index, _EFFECT_ID[name], occ)
         if name == "bias_instability":
-            tau_min = eff["tau_min_s"] or 1.0 / fs
+            tau_min = eff["tau_min_s"] or 1.0 / sample_rate_hz
             tau_max = eff["tau_max_s"] or max(duration_s, tau_min)
-            terms.append(nt.BiasInstability(eff["b_dps"], fs, _stream(root, *key, 0), tau_min, tau_max, eff["per_decade"]))
+            terms.append(nt.BiasInstability(eff["b_dps"], sample_rate_hz, _stream(root, *key, 0), tau_min, tau_max,
+                                            eff["per_decade"]))
         elif name == "rate_random_walk":
-            terms.append(nt.RateRandomWalk(eff["k_dps_per_sqrt_s"], fs, _stream(root, *key, 0)))
+            terms.append(nt.RateRandomWalk(eff["k_dps_per_sqrt_s"], sample_rate_hz, _stream(root, *key, 0)))
         elif name == "rate_ramp":
             terms.append(nt.RateRamp(eff["r_dps_per_s"]))
         elif name == "gauss_markov":
-            terms.append(nt.GaussMarkov(eff["sigma_dps"], eff["tau_s"], fs, _stream(root, *key, 0)))
+            terms.append(nt.GaussMarkov(eff["sigma_dps"], eff["tau_s"], sample_rate_hz, _stream(root, *key, 0)))
         elif name == "sinusoid":
             terms.append(nt.Sinusoid(eff["amplitude_dps"], eff["frequency_hz"], eff["phase_rad"]))
         elif name == "temperature":
@@ -128,7 +129,7 @@ def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
         elif name == "warmup":
             terms.append(nt.Warmup(eff["amplitude_dps"], eff["tau_s"]))
         elif name == "narrowband":
-            b, a = nt.narrowband_filter(eff["rms_dps"], eff["center_hz"], eff["bandwidth_hz"], fs)
+            b, a = nt.narrowband_filter(eff["rms_dps"], eff["center_hz"], eff["bandwidth_hz"], sample_rate_hz)
             terms.append(nt.FilteredNoise(b, a, _stream(root, *key, 0)))
         elif name == "arma":
             b, a = nt.arma_filter(eff["phi"], eff["theta"], eff["sigma_a_dps"])
@@ -175,15 +176,15 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
     """
     spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
     chunk_samples = _check_chunk_samples(chunk_samples)
-    fs = spec["sample_rate_hz"]
-    n_total = sample_count(duration_s, fs)
-    duration_s = n_total / fs
+    sample_rate_hz = spec["sample_rate_hz"]
+    n_total = sample_count(duration_s, sample_rate_hz)
+    duration_s = n_total / sample_rate_hz
     root = _root_seed(seed, rng)
     temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
-    axes = [_axis_terms(i, spec["axes"][a], fs, duration_s, root, temp) for i, a in enumerate(AXES)]
+    axes = [_axis_terms(i, spec["axes"][a], sample_rate_hz, duration_s, root, temp) for i, a in enumerate(AXES)]
     for start in range(0, n_total, chunk_samples):
         n = min(chunk_samples, n_total - start)
-        t_s = np.arange(start, start + n) / fs
+        t_s = np.arange(start, start + n) / sample_rate_hz
         true_c = temp.true_c(t_s) if temp else None
         gyro = np.empty((n, 3))
         for i, terms in enumerate(axes):
@@ -229,14 +230,14 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     """
     spec = validated if validated is not None else validate_model(model)[0]
     chunk_samples = _check_chunk_samples(chunk_samples)
-    fs = spec["sample_rate_hz"]
-    n_total = sample_count(duration_s, fs)
+    sample_rate_hz = spec["sample_rate_hz"]
+    n_total = sample_count(duration_s, sample_rate_hz)
     root = _root_seed(seed, None)
     temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
     axis = int(axis)
-    terms = _axis_terms(axis, spec["axes"][AXES[axis]], fs, n_total / fs, root, temp)
+    terms = _axis_terms(axis, spec["axes"][AXES[axis]], sample_rate_hz, n_total / sample_rate_hz, root, temp)
     for start in range(0, n_total, chunk_samples):
-        t_s = np.arange(start, min(start + chunk_samples, n_total)) / fs
+        t_s = np.arange(start, min(start + chunk_samples, n_total)) / sample_rate_hz
         rate = _axis_rate(terms, t_s, temp.true_c(t_s) if temp else None, spec)
         yield to_dps(rate, spec["gyro_unit"], spec["lsb_per_dps"])
 

@@ -14,24 +14,24 @@ from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate
 # 3. colored noise
 
 
-def colored_window(n, fs):
+def colored_window(n, sample_rate_hz):
     """High-pass window (samples) for the lag-1 statistic: 64 samples or 0.5 s."""
-    return int(min(max(64, round(0.5 * fs)), max(8, n // 8)))
+    return int(min(max(64, round(0.5 * sample_rate_hz)), max(8, n // 8)))
 
 
-def _highpassed(x, fs):
+def _highpassed(x, sample_rate_hz):
     """``(x - moving_mean(x, W), W)``, W of :func:`colored_window`."""
-    w = colored_window(x.size, fs)
+    w = colored_window(x.size, sample_rate_hz)
     e = moving_mean(x, w)
     np.subtract(x, e, out=e)
     return e, w
 
 
-def lag1_statistic(x, fs):
+def lag1_statistic(x, sample_rate_hz):
     """Lag-1 autocorrelation of ``x - moving_mean(x, W)``; white noise: about -1/W."""
     if x.size < 32:
         return 0.0, 0
-    e, w = _highpassed(x, fs)
+    e, w = _highpassed(x, sample_rate_hz)
     den = float(dot(e, e))
     if den <= 0:
         return 0.0, w
@@ -78,7 +78,7 @@ def lags_from_highpassed(r1, r2, window, band_lags=None, band_share=0.0):
     return rho1, rho2
 
 
-def detect_colored(x, fs, band=None):
+def detect_colored(x, sample_rate_hz, band=None):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
     pass) from the high-passed r1, r2, less the correlation of a ``narrowband`` candidate
     ``band`` still in ``x`` (:func:`lags_from_highpassed`).
@@ -96,7 +96,7 @@ def detect_colored(x, fs, band=None):
     n = x.size
     if n < 32:
         return None
-    e, w = _highpassed(x, fs)
+    e, w = _highpassed(x, sample_rate_hz)
     den = float(dot(e, e))
     if den <= 0:
         return None
@@ -107,7 +107,7 @@ def detect_colored(x, fs, band=None):
         return None
     band_lags, band_share = None, 0.0
     if band is not None:  # the band brings its own correlation: the colored noise's is what is left
-        band_lags = narrowband_lags(band.params["center_hz"], band.params["bandwidth_hz"], fs)
+        band_lags = narrowband_lags(band.params["center_hz"], band.params["bandwidth_hz"], sample_rate_hz)
         band_share = band.params["rms_dps"] ** 2 / (den / n)
     lags = lags_from_highpassed(r1, r2, w, band_lags, band_share)
     if lags is None:
