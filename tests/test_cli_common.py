@@ -11,7 +11,7 @@ import pytest
 
 from gyrofilter.cli import common
 from gyrofilter.errors import SettingsError
-from support import REPO
+from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 
 
 def _strict(text):
@@ -167,7 +167,7 @@ def test_no_command_replaces_a_symlink_a_fifo_or_a_device(tmp_path, capsys, kind
     from gyrofilter.cli import main
 
     path = _special_file(tmp_path, kind)
-    model = os.path.join(os.path.dirname(__file__), os.pardir, "examples", "models", "mpu6050.json")
+    model = str(DEFAULT_MODEL_PATH)
     for argv in (["simulate", "--model", model, "--duration", "1", "--out", str(path), "--force"],
                  ["record", "--source", "sim:realtime=0,duration=1", "--out", str(path), "--force"],
                  ["run", "--source", "sim:realtime=0,duration=3", "--out", str(path), "--force", "--quiet"]):
@@ -233,7 +233,7 @@ def test_a_command_writing_to_a_folder_removes_its_stale_partials(tmp_path, comm
     stale = tmp_path / f".partial-{_dead_pid()}.{common._HOST}-killed.csv"
     stale.write_text("# gyrofilter-recording: 1\n")
     _stale(stale)
-    model = os.path.join(os.path.dirname(__file__), os.pardir, "examples", "models", "mpu6050.json")
+    model = str(DEFAULT_MODEL_PATH)
     argv = {"record": ["record", "--source", "sim:realtime=0,duration=1", "--out", str(tmp_path / "out.csv")],
             "simulate": ["simulate", "--model", model, "--duration", "1", "--out", str(tmp_path / "out.csv")]}[command]
     assert main(argv) == 0
@@ -377,7 +377,7 @@ def test_a_number_in_another_script_is_refused_before_any_work(tmp_path, capsys)
 
     out = tmp_path / "o.csv"
     try:  # SystemExit while argparse prints its usage too
-        code = main(["simulate", "--model", str(REPO / "examples" / "models" / "mpu6050.json"), "--duration", "١_٠", "--out", str(out)])
+        code = main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "١_٠", "--out", str(out)])
     except SystemExit as exc:
         code = exc.code
     assert code == 2
