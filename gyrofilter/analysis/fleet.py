@@ -94,7 +94,7 @@ class FleetSettings:
     """
 
     command: str
-    axes: str = "xyz"
+    axes: tuple | str = AXES  # axis letters, in order: all three, or e.g. "xz" from the command line
     confidence: float = 0.95
     min_clusters: int = MIN_CLUSTERS
     keep_outliers: bool = False

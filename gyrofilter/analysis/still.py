@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import collect_columns, iter_recording, warn_about_gaps
-from ..units import to_dps
+from ..units import AXES, to_dps
 from .allan import MIN_CLUSTERS, AllanInputError
 from .detectors.common import block_means
 from .noise_fit import characterise_axis
@@ -48,7 +48,7 @@ def read_axes(path, axes, with_t=False):
     ``with_t`` (head, {axis: array}, t): the ``t`` column (s), or None when the file has none.
 
     ``path``: a format-v1 recording (``.csv`` or ``.csv.gz``); ``axes``: axis letters, e.g.
-    ``"xyz"`` or ``"z"`` (columns ``gx``...). ``head`` is the
+    :data:`~gyrofilter.units.AXES` or ``"z"`` (columns ``gx``...). ``head`` is the
     :class:`~gyrofilter.recording.RecordingHead` after the whole file was read (its warnings,
     notes, ``t_gaps`` and ``sample_rate_hz`` in Hz); the arrays are converted from the file's
     ``gyro_unit``. RecordingError for a bad file or one without samples.
@@ -91,7 +91,7 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
     warn(f"{text}: analysed as they are (--keep-outliers)")
 
 
-def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
+def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
                            progress=None):
     """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
 
@@ -103,7 +103,7 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
     that does not look static, :func:`not_static`; a poor fit) stay in their results
     (``AxisNoise.warnings``, the JSON document's ``warnings``).
 
-    ``path``: the recording; ``axes``: axis letters (``"xyz"``); ``confidence``: level of the
+    ``path``: the recording; ``axes``: axis letters (default all, :data:`~gyrofilter.units.AXES`); ``confidence``: level of the
     Allan deviation's confidence intervals (0..1, 0.95 = 95 %); ``min_clusters``: fewest
     clusters an averaging time tau needs to be used; ``keep_outliers``: analyse gross errors
     instead of refusing. Each :class:`~gyrofilter.analysis.noise_model.AxisNoise` holds the
