@@ -43,6 +43,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .allan import overlapping_adev
+from ..sim.model import validate_model
+from ..sim.noise_terms import ar1_allan_variance
+from ..sim.simulate import simulate_axis_dps
+
 OPTIONAL_TERMS = ("quantization", "rrw", "ramp")
 MAX_GM = 3
 
@@ -73,8 +78,6 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1):
     Scales start at the first 2^j >= ``min_m`` samples and stop where η_j = (N - 2m + 1) / (2m)
     falls below ``min_edf``.
     """
-    from .allan import overlapping_adev
-
     n = int(np.asarray(x_dps).size)
     m = []
     j = max(0, int(math.ceil(math.log2(max(min_m, 1)))))
@@ -112,8 +115,6 @@ def wv_ramp(tau_s, r_dps_per_s2):
 
 def wv_gauss_markov(tau_s, sigma_dps, corr_time_s, sample_rate_hz):
     """ν² of a sampled Gauss-Markov process (AR(1), φ = exp(-1/(f_s T))): exact, AVAR/2."""
-    from ..sim.noise_terms import ar1_allan_variance
-
     phi = math.exp(-1.0 / (sample_rate_hz * corr_time_s))
     return 0.5 * ar1_allan_variance(phi, sigma_dps**2, np.asarray(tau_s) * sample_rate_hz)
 
@@ -244,9 +245,6 @@ def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0, terms_
 def simulated_wv(model, axis, n_samples, *, seeds=(0, 1, 2, 3), min_edf=2.0):
     """Mean Haar wavelet variance of ``axis`` (0, 1, 2) of a simulator model over ``seeds`` runs
     of ``n_samples`` samples: the model's curve where no closed form covers every effect."""
-    from ..sim.model import validate_model
-    from ..sim.simulate import simulate_axis_dps
-
     spec = validate_model(model)[0]
     sample_rate_hz = spec["sample_rate_hz"]
     runs = []

@@ -6,8 +6,9 @@ import math
 
 import numpy as np
 
-from .narrowband import narrowband_lags
 from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate, dot, moving_mean
+from .narrowband import narrowband_lags
+from ...sim.noise_terms import arma11_from_lags, arma11_long_run_ratio
 
 
 # ---------------------------------------------------------------------------------------------
@@ -42,8 +43,6 @@ def long_run_ratio(lag1, lag2=None):
     """Spectrum at zero over the variance, 1 + 2 Σ_k ρ_k, of the colored noise with these
     autocorrelations (``lag2`` None: the AR(1), (1 + ρ₁) / (1 - ρ₁));
     :func:`gyrofilter.sim.noise_terms.arma11_long_run_ratio`."""
-    from ...sim.noise_terms import arma11_from_lags, arma11_long_run_ratio
-
     pair = None if lag2 is None else arma11_from_lags(lag1, lag2)
     phi, mu = pair if pair is not None else (lag1, 0.0)
     return arma11_long_run_ratio(phi, mu)
@@ -91,8 +90,6 @@ def detect_colored(x, sample_rate_hz, band=None):
     One that dies slower is a slow process the slow detectors name (a flicker floor gives
     lag2 close to lag1), and the high-pass correction, which holds for correlation times well
     below W, would inflate it."""
-    from ...sim.noise_terms import arma11_from_lags
-
     n = x.size
     if n < 32:
         return None

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from .common import NARROWBAND_THRESHOLD, Candidate, dot
+from ...sim.noise_terms import filter_psd, narrowband_filter
 from ...units import check_sample_rate_hz
 
 
@@ -159,8 +160,6 @@ def _resonator_fit(f, s, band, sample_rate_hz):
     kept only if it fits better. The resonator's Lorentzian tails hold power outside the
     half-power run that the nonparametric rms misses."""
     from scipy.optimize import least_squares
-
-    from ...sim.noise_terms import filter_psd, narrowband_filter
 
     c0, b0w, rms0 = band["center_hz"], band["bandwidth_hz"], band["rms_dps"]
     half = max(5.0 * b0w, 1.0)
