@@ -8,7 +8,7 @@ import pytest
 pytest.importorskip("statsmodels")
 pytest.importorskip("scipy")
 
-from gyrofilter.analysis import arma  # noqa: E402
+from gyrofilter.analysis import arma, arma_checks, arma_fit  # noqa: E402
 from gyrofilter.errors import GyroFilterError  # noqa: E402
 from support import RECORDINGS  # noqa: E402
 
@@ -17,8 +17,8 @@ PHI, THETA, SIGMA = 0.9, 0.5, 0.1
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
 def test_recovers_simulated_arma11(seed):
-    x = arma.simulate_arma([PHI], [THETA], SIGMA, 20_000, seed=seed)
-    fit = arma.fit_arma(x - x.mean(), 1, 1)
+    x = arma_fit.simulate_arma([PHI], [THETA], SIGMA, 20_000, seed=seed)
+    fit = arma_fit.fit_arma(x - x.mean(), 1, 1)
     # standard errors at N = 20 000: phi ~0.004, theta ~0.008; tolerances ~5 sigma
     assert abs(fit.phi[0] - PHI) < 0.02
     assert abs(fit.theta[0] - THETA) < 0.04
@@ -28,9 +28,9 @@ def test_recovers_simulated_arma11(seed):
 def test_css_agrees_with_statsmodels_mle():
     from statsmodels.tsa.arima.model import ARIMA
 
-    x = arma.simulate_arma([0.7], [-0.3], 1.0, 5_000, seed=11)
+    x = arma_fit.simulate_arma([0.7], [-0.3], 1.0, 5_000, seed=11)
     x = x - x.mean()
-    fit = arma.fit_arma(x, 1, 1)
+    fit = arma_fit.fit_arma(x, 1, 1)
     res = ARIMA(x, order=(1, 0, 1), trend="n").fit()
     # statsmodels writes the MA part with "+": its maparams are -theta
     assert fit.phi[0] == pytest.approx(res.arparams[0], abs=0.01)
@@ -41,18 +41,18 @@ def test_css_agrees_with_statsmodels_mle():
 def test_residuals_follow_the_paper_sign_convention():
     # x_t - 0.5 x_{t-1} = a_t - 0.25 a_{t-1}, by hand for three steps
     x = np.array([1.0, 2.0, 0.0])
-    a = arma.arma_residuals(x, [0.5], [0.25])
+    a = arma_fit.arma_residuals(x, [0.5], [0.25])
     a0 = 1.0
     a1 = 2.0 - 0.5 * 1.0 + 0.25 * a0
     a2 = 0.0 - 0.5 * 2.0 + 0.25 * a1
     assert np.allclose(a, [a0, a1, a2])
-    fit = arma.ArmaFit(1, 1, [1.0], [0.9994], 1.0, 0.0, 1, 0.0)
+    fit = arma_fit.ArmaFit(1, 1, [1.0], [0.9994], 1.0, 0.0, 1, 0.0)
     assert fit.equation() == "x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}"
 
 
 @pytest.mark.parametrize("seed", [100, 101, 102, 103])
 def test_pandit_wu_selects_arma11_on_arma11_data(seed):
-    x = arma.simulate_arma([PHI], [THETA], SIGMA, 20_000, seed=seed)
+    x = arma_fit.simulate_arma([PHI], [THETA], SIGMA, 20_000, seed=seed)
     chosen, adequate, fits, steps = arma.select_order(x - x.mean(), max_n=2)  # BIC decides
     assert adequate == (2, 1)
     assert chosen.order == (1, 1)
@@ -64,7 +64,7 @@ def test_pandit_wu_f_rule_of_paper_003(seed):
     # With the paper's F rule each step runs at a nominal 5 %, but an over-fitted ARMA's extra
     # parameters are unidentified and F goes up far more often (seed 100 does: F = 2.80 > 2.37;
     # the slow battery measures the rate); these seeds check the F path itself.
-    x = arma.simulate_arma([PHI], [THETA], SIGMA, 20_000, seed=seed)
+    x = arma_fit.simulate_arma([PHI], [THETA], SIGMA, 20_000, seed=seed)
     chosen, adequate, fits, steps = arma.select_order(x - x.mean(), max_n=2, criterion="f")
     assert adequate == (2, 1)
     assert chosen.order == (1, 1)
@@ -75,7 +75,7 @@ def test_pandit_wu_f_rule_of_paper_003(seed):
 def test_pandit_wu_selection_rates():
     hits = {"f": 0, "bic": 0}
     for seed in range(200, 220):
-        x = arma.simulate_arma([PHI], [THETA], SIGMA, 10_000, seed=seed)
+        x = arma_fit.simulate_arma([PHI], [THETA], SIGMA, 10_000, seed=seed)
         for crit in hits:
             chosen, _, _, _ = arma.select_order(x - x.mean(), max_n=2, criterion=crit)
             hits[crit] += chosen.order == (1, 1)
@@ -84,7 +84,7 @@ def test_pandit_wu_selection_rates():
 
 
 def test_information_criteria_by_hand():
-    fit = arma.ArmaFit(1, 1, [0.5], [0.1], 1.0, rss=200.0, n_residuals=100, aic=0.0)
+    fit = arma_fit.ArmaFit(1, 1, [0.5], [0.1], 1.0, rss=200.0, n_residuals=100, aic=0.0)
     assert arma.information_criterion(fit, "aic") == pytest.approx(math.log(2.0) + 2 * 2 / 100)
     assert arma.information_criterion(fit, "bic") == pytest.approx(math.log(2.0) + 2 * math.log(100) / 100)
     with pytest.raises(ValueError, match="criterion"):
@@ -95,7 +95,7 @@ def test_information_criteria_by_hand():
 def test_pandit_wu_selects_ar2_on_ar2_data(seed):
     # (seed 5 is an F false alarm: ARMA(2, 1) beats AR(2) with F = 6.7, statsmodels' exact
     # likelihood-ratio statistic agrees: 6.68)
-    x = arma.simulate_arma([0.5, 0.3], [], 1.0, 20_000, seed=seed)
+    x = arma_fit.simulate_arma([0.5, 0.3], [], 1.0, 20_000, seed=seed)
     for crit in ("f", "bic"):
         chosen, adequate, _, _ = arma.select_order(x - x.mean(), max_n=2, criterion=crit)
         assert chosen.order == (2, 0)
@@ -103,8 +103,8 @@ def test_pandit_wu_selects_ar2_on_ar2_data(seed):
 
 
 def test_f_test_by_hand():
-    small = arma.ArmaFit(1, 1, [0.5], [0.1], 1.0, rss=110.0, n_residuals=1002, aic=0.0)
-    large = arma.ArmaFit(2, 1, [0.5, 0.1], [0.1], 1.0, rss=100.0, n_residuals=1002, aic=0.0)
+    small = arma_fit.ArmaFit(1, 1, [0.5], [0.1], 1.0, rss=110.0, n_residuals=1002, aic=0.0)
+    large = arma_fit.ArmaFit(2, 1, [0.5, 0.1], [0.1], 1.0, rss=100.0, n_residuals=1002, aic=0.0)
     step = arma.f_test(small, large)
     # F = ((110 - 100) / 1) / (100 / (1002 - 3)) = 99.9
     assert step.f_statistic == pytest.approx(99.9)
@@ -118,27 +118,27 @@ def test_adf_verdicts():
     rng = np.random.default_rng(3)
     white = rng.normal(size=5_000)
     walk = np.cumsum(rng.normal(size=5_000))
-    assert arma.adf_test(white).stationary
-    assert arma.adf_test(white).adf_statistic < -20
-    assert not arma.adf_test(walk).stationary
+    assert arma_checks.adf_test(white).stationary
+    assert arma_checks.adf_test(white).adf_statistic < -20
+    assert not arma_checks.adf_test(walk).stationary
 
 
 def test_normality_verdicts():
     rng = np.random.default_rng(4)
-    gauss = arma.normality_tests(rng.normal(size=5_000))
+    gauss = arma_checks.normality_tests(rng.normal(size=5_000))
     assert gauss.normal_ks and gauss.normal_jb
-    laplace = arma.normality_tests(rng.laplace(size=5_000))
+    laplace = arma_checks.normality_tests(rng.laplace(size=5_000))
     assert not laplace.normal_ks and not laplace.normal_jb
     assert laplace.excess_kurtosis > 2  # Laplace: 3
     assert laplace.jb_statistic > laplace.jb_critical_5pct
 
 
 def test_whiteness_verdicts():
-    x = arma.simulate_arma([0.6], [], 1.0, 5_000, seed=8)
+    x = arma_fit.simulate_arma([0.6], [], 1.0, 5_000, seed=8)
     x = x - x.mean()
-    good = arma.fit_arma(x, 1, 0)
-    assert arma.whiteness(good.residuals, 1).white
-    coloured = arma.whiteness(x, 0)
+    good = arma_fit.fit_arma(x, 1, 0)
+    assert arma_checks.whiteness(good.residuals, 1).white
+    coloured = arma_checks.whiteness(x, 0)
     assert not coloured.white
     assert coloured.acf[0] == pytest.approx(0.6, abs=0.05)
     assert coloured.outside_band >= 3
@@ -147,15 +147,15 @@ def test_whiteness_verdicts():
 def test_pacf_transform_round_trip():
     rng = np.random.default_rng(9)
     r = rng.uniform(-0.95, 0.95, 5)
-    c = arma.pacf_to_coefficients(r)
+    c = arma_fit.pacf_to_coefficients(r)
     assert np.all(np.abs(np.roots(np.r_[1.0, -c])) < 1)  # stationary
-    assert np.allclose(arma.coefficients_to_pacf(c), r)
+    assert np.allclose(arma_fit.coefficients_to_pacf(c), r)
     with pytest.raises(ValueError):
-        arma.coefficients_to_pacf([1.2])
+        arma_fit.coefficients_to_pacf([1.2])
 
 
 def test_bias_model_of_papers_arma11_is_a_random_walk():
-    fit = arma.ArmaFit(1, 1, [1.0], [0.9994], 2.0, 0.0, 1, 0.0)
+    fit = arma_fit.ArmaFit(1, 1, [1.0], [0.9994], 2.0, 0.0, 1, 0.0)
     model = arma.bias_model_from_arma11(fit, 100.0)
     assert model.valid and math.isinf(model.tau_s)
     # sigma_eta = (1 - theta) sigma_a per sample, sigma_w^2 = theta sigma_a^2
@@ -172,7 +172,7 @@ def test_bias_model_recovers_gauss_markov_plus_white():
 
     bias = lfilter([1.0], [1.0, -phi], rng.normal(0, sigma_b * math.sqrt(1 - phi**2), n))
     x = bias + rng.normal(0, sigma_w, n)
-    model = arma.bias_model_from_arma11(arma.fit_arma(x - x.mean(), 1, 1), fs)
+    model = arma.bias_model_from_arma11(arma_fit.fit_arma(x - x.mean(), 1, 1), fs)
     assert model.valid
     assert model.tau_s == pytest.approx(tau, rel=0.3)
     assert model.bias_sigma_dps == pytest.approx(sigma_b, rel=0.2)
@@ -188,7 +188,7 @@ def test_block_averaging_of_long_series_is_reported():
 
 
 def test_analyze_axis_on_arma11_data():
-    x = 3.0 + arma.simulate_arma([PHI], [THETA], SIGMA, 20_000, seed=21)
+    x = 3.0 + arma_fit.simulate_arma([PHI], [THETA], SIGMA, 20_000, seed=21)
     rep = arma.analyze_axis(x, 100.0, axis="z", max_n=2)
     assert rep.mean_dps == pytest.approx(3.0, abs=0.02)
     assert rep.stationarity.stationary
@@ -202,21 +202,21 @@ def test_analyze_axis_on_arma11_data():
 def test_missing_statsmodels_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "statsmodels", None)
     with pytest.raises(GyroFilterError, match=r'pip install "gyrofilter\[stats\]"'):
-        arma.require_stats()
+        arma_fit.require_stats()
 
 
 def test_bad_input():
     with pytest.raises(ValueError, match="NaN"):
         arma.prepare_series(np.array([1.0, np.nan, 2.0] * 100), 100.0)
     with pytest.raises(ValueError, match="too short"):
-        arma.fit_arma(np.zeros(20), 2, 1)
+        arma_fit.fit_arma(np.zeros(20), 2, 1)
 
 
 def test_dithered_ks_separates_quantisation_from_shape():
     rng = np.random.default_rng(13)
     step = 1 / 131
     quantised = np.round(rng.normal(0, 0.08, 40_000) / step) * step
-    res = arma.normality_tests(quantised, quantum=step)
+    res = arma_checks.normality_tests(quantised, quantum=step)
     assert not res.normal_ks  # the LSB steps alone make KS reject at this N
     assert res.normal_ks_dithered
 
@@ -226,8 +226,8 @@ def test_larger_model_never_fits_worse_than_the_nested_smaller_one():
     rng = np.random.default_rng(14)
     x = np.cumsum(rng.normal(0, 0.0005, 30_000)) + rng.normal(0, 0.1, 30_000)
     x = x - x.mean()
-    small = arma.fit_arma(x, 2, 1)
-    large = arma.fit_arma(x, 4, 3, start=(small.phi, small.theta))
+    small = arma_fit.fit_arma(x, 2, 1)
+    large = arma_fit.fit_arma(x, 4, 3, start=(small.phi, small.theta))
     assert large.rss <= small.rss * (1 + 1e-9)
 
 
@@ -239,7 +239,7 @@ def test_cli_writes_json_and_reports_bad_input(tmp_path, capsys):
 
     rng = np.random.default_rng(15)
     gyro = np.column_stack([rng.normal(1.0, 0.1, 5_000), rng.normal(0, 0.1, 5_000),
-                            -2.0 + arma.simulate_arma([PHI], [THETA], SIGMA, 5_000, seed=15)])
+                            -2.0 + arma_fit.simulate_arma([PHI], [THETA], SIGMA, 5_000, seed=15)])
     path = tmp_path / "static.csv"
     write_recording(path, Recording.from_dps(gyro, 100.0))
     out = tmp_path / "arma.json"
@@ -290,7 +290,7 @@ def test_cli_summarises_library_warnings_in_one_line(tmp_path, capsys, monkeypat
 
     from gyrofilter.cli import main
 
-    real = arma.adf_test
+    real = arma_checks.adf_test
 
     def warning_adf(*args, **kwargs):
         for _ in range(3):

@@ -6,6 +6,7 @@ import pytest
 
 from gyrofilter.cli import options
 from gyrofilter.errors import SettingsError
+from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 from support import REPO
 
 
@@ -85,7 +86,7 @@ def test_a_number_in_another_script_is_refused_before_any_work(tmp_path, capsys)
 
     out = tmp_path / "o.csv"
     try:  # SystemExit while argparse prints its usage too
-        code = main(["simulate", "--model", str(REPO / "examples" / "models" / "mpu6050.json"), "--duration", "١_٠", "--out", str(out)])
+        code = main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "١_٠", "--out", str(out)])
     except SystemExit as exc:
         code = exc.code
     assert code == 2

@@ -13,6 +13,7 @@ import pytest
 from gyrofilter.cli import outputs
 from gyrofilter.errors import SettingsError
 from support import file_named_by_bytes
+from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 
 
 def _strict(text):
@@ -158,7 +159,7 @@ def test_no_command_replaces_a_symlink_a_fifo_or_a_device(tmp_path, capsys, kind
     from gyrofilter.cli import main
 
     path = _special_file(tmp_path, kind)
-    model = os.path.join(os.path.dirname(__file__), os.pardir, "examples", "models", "mpu6050.json")
+    model = str(DEFAULT_MODEL_PATH)
     for argv in (["simulate", "--model", model, "--duration", "1", "--out", str(path), "--force"],
                  ["record", "--source", "sim:realtime=0,duration=1", "--out", str(path), "--force"],
                  ["run", "--source", "sim:realtime=0,duration=3", "--out", str(path), "--force", "--quiet"]):
@@ -224,7 +225,7 @@ def test_a_command_writing_to_a_folder_removes_its_stale_partials(tmp_path, comm
     stale = tmp_path / f".partial-{_dead_pid()}.{outputs._HOST}-killed.csv"
     stale.write_text("# gyrofilter-recording: 1\n")
     _stale(stale)
-    model = os.path.join(os.path.dirname(__file__), os.pardir, "examples", "models", "mpu6050.json")
+    model = str(DEFAULT_MODEL_PATH)
     argv = {"record": ["record", "--source", "sim:realtime=0,duration=1", "--out", str(tmp_path / "out.csv")],
             "simulate": ["simulate", "--model", model, "--duration", "1", "--out", str(tmp_path / "out.csv")]}[command]
     assert main(argv) == 0

@@ -2,6 +2,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ import pytest
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.simulate import simulate
+from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 from support import REPO
 
 EXAMPLES = REPO / "examples" / "models"
@@ -156,7 +158,7 @@ def test_cli_warns_about_unknown_effect_parameters(tmp_path, capsys):
     assert "warning" in err and "unknown parameter 'evidence' ignored" in err
 
 
-@pytest.mark.parametrize("path", sorted(EXAMPLES.glob("*.json")), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", sorted(EXAMPLES.glob("*.json")) + [Path(str(DEFAULT_MODEL_PATH))], ids=lambda p: p.stem)
 def test_example_models_run(tmp_path, path):
     out = tmp_path / "o.csv.gz"
     assert main(["simulate", "--model", str(path), "--duration", "5", "--seed", "1", "--out", str(out)]) == 0
@@ -228,7 +230,7 @@ def test_a_killed_simulation_leaves_no_partial_file(tmp_path, capsys, monkeypatc
             yield chunk
 
     monkeypatch.setattr(command, "simulate_chunks", chunks_then_killed)
-    model = REPO / "examples" / "models" / "mpu6050.json"
+    model = DEFAULT_MODEL_PATH
     out = tmp_path / "long.csv.gz"
     assert main(["simulate", "--model", str(model), "--duration", "3600", "--out", str(out), "--chunk", "1000"]) == 130
     assert "interrupted" in capsys.readouterr().err

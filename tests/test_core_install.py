@@ -17,11 +17,10 @@ import pytest
 
 import gyrofilter
 from gyrofilter.extras import EXTRA
-from support import REPO
 
 BLOCKER = Path(__file__).parent / "no_extras"
 RECORDING = Path(gyrofilter.__file__).parent / "data" / "mpu6050_static_100s.csv.gz"
-MODEL = REPO / "examples" / "models" / "mpu6050.json"
+MODEL = Path(gyrofilter.__file__).parent / "data" / "mpu6050_model.json"
 OPTIONAL = ("matplotlib", "statsmodels", "numba", "allantools", "dask", "distributed")
 
 

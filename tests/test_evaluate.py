@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from gyrofilter.evaluation import evaluate as E
+from gyrofilter.evaluation import datasets as D, evaluate as E, filters as F, metrics as M
 from gyrofilter.sim.profiles import get_profile
 from gyrofilter.recording import Recording, write_recording
 
@@ -16,13 +16,13 @@ FS = 100.0
 def test_moving_average_and_lowpass_against_plain_loops():
     rng = np.random.default_rng(1)
     x = rng.normal(size=(500, 3)) + 2.0
-    out = E.moving_average(5)(x, FS, 1.0)
+    out = F.moving_average(5)(x, FS, 1.0)
     z = x - x[:100].mean(axis=0)
     expected = np.array([z[max(0, i - 4) : i + 1].mean(axis=0) for i in range(100, 500)])
     assert out.start == 100 and out.block_len == 1
     assert np.allclose(out.y_dps, expected)
     tau = 0.2
-    out = E.first_order_lowpass(tau)(x, FS, 1.0)
+    out = F.first_order_lowpass(tau)(x, FS, 1.0)
     a = (1 / FS) / (tau + 1 / FS)
     y = np.zeros(3)
     ref = []
@@ -38,11 +38,11 @@ def test_cv_kalman_steady_state_matches_filterpy_time_varying_filter():
     t = np.arange(n) / FS
     x = np.column_stack([10 * np.sin(t), 5 * t, np.zeros(n)]) + rng.normal(scale=0.1, size=(n, 3))
     x[:100] = rng.normal(scale=0.1, size=(100, 3))  # still during calibration
-    out = E.cv_kalman(1e2)(x, FS, 1.0)
+    out = F.cv_kalman(1e2)(x, FS, 1.0)
     bias = x[:100].mean(axis=0)
     var = np.var(x[:100], axis=0, ddof=1)
     for a in range(3):
-        kf, _, _, _ = E.cv_kalman_design(FS, var[a], 1e2)
+        kf, _, _, _ = F.cv_kalman_design(FS, var[a], 1e2)
         kf.x = np.zeros((2, 1))
         kf.P = np.eye(2) * 1e3
         ys = []
@@ -58,8 +58,8 @@ def test_block_mean_on_noise_free_profile_has_zero_error_and_zero_lag():
     profile = get_profile("paper001")
     n = int(90 * FS)
     seg = [("clean", np.zeros((n, 3)), FS)]
-    spec = E.FilterSpec("block", "baseline", "", E.run_block_mean)
-    d = E.dynamic_metrics(spec, profile, seg)
+    spec = F.FilterSpec("block", "baseline", "", F.run_block_mean)
+    d = M.dynamic_metrics(spec, profile, seg)
     assert d["rmse_dps"] < 1e-12
     assert all(abs(v) <= 0.001 for v in d["lags_s"].values())
 
@@ -68,14 +68,14 @@ def test_a_pure_delay_is_measured_as_that_lag():
     delay = 23  # samples = 0.23 s
 
     def delayed(x, fs, cal):
-        bias, c = E.startup_bias(x, fs, cal)
+        bias, c = F.startup_bias(x, fs, cal)
         z = np.vstack([np.zeros((delay, 3)), x - bias])[: len(x)]
-        return E.FilterOutput(z[c:], 1, c)
+        return F.FilterOutput(z[c:], 1, c)
 
-    spec = E.FilterSpec("delay", "baseline", "", delayed)
+    spec = F.FilterSpec("delay", "baseline", "", delayed)
     n = int(90 * FS)
     for name in ("paper001", "steps", "sine_1hz"):
-        d = E.dynamic_metrics(spec, name, [("clean", np.zeros((n, 3)), FS)])
+        d = M.dynamic_metrics(spec, name, [("clean", np.zeros((n, 3)), FS)])
         # a sampled step fixes the delay only to within one sample interval (0.01 s)
         tol = 0.0101 if name == "steps" else 0.0015
         for lag in d["lags_s"].values():
@@ -86,15 +86,15 @@ def test_a_pure_delay_is_measured_as_that_lag():
 def test_static_reduction_of_block_mean_is_sqrt_block_len_on_white_noise():
     rng = np.random.default_rng(3)
     x = rng.normal(scale=0.1, size=(100_000, 3)) + [1.0, -2.0, 0.5]
-    spec = E.FilterSpec("block", "baseline", "", E.run_block_mean)
-    red = E.static_reduction(spec, x, FS)
+    spec = F.FilterSpec("block", "baseline", "", F.run_block_mean)
+    red = M.static_reduction(spec, x, FS)
     assert np.allclose(red, math.sqrt(5), rtol=0.02)
 
 
 def test_gyrofilter_rows_are_blocks_after_calibration():
     rng = np.random.default_rng(4)
     x = rng.normal(scale=0.1, size=(1234, 3))
-    out = E.gyrofilter_run("paper")(x, FS, 2.0)
+    out = F.gyrofilter_run("paper")(x, FS, 2.0)
     assert out.start == 200 and out.block_len == 5
     assert len(out.y_dps) == (1234 - 200) // 5
 
@@ -124,16 +124,16 @@ def broad_like_recording(tmp_path, rng):
 def test_broad_metrics_against_reference(tmp_path):
     rng = np.random.default_rng(5)
     path = broad_like_recording(tmp_path, rng)
-    rec = E.find_broad_recordings(str(tmp_path))[0]
+    rec = D.find_broad_recordings(str(tmp_path))[0]
     assert rec.path == str(path)
-    raw = E.broad_metrics(E.FilterSpec("raw", "baseline", "", E.run_raw), rec)
+    raw = M.broad_metrics(F.FilterSpec("raw", "baseline", "", F.run_raw), rec)
     assert raw["calibration_s"] == pytest.approx(4.0)
     noise_dps = 0.001 * 180 / math.pi
     for key in ("rmse_motion_dps", "rmse_rest_dps", "rmse_all_dps", "rms_rest_vs_zero_dps"):
         assert raw[key] == pytest.approx(noise_dps, rel=0.1)
     # a filter that ignores the motion has the motion's rms as error
-    zero = E.FilterSpec("zero", "baseline", "", lambda x, fs, c: E.FilterOutput(np.zeros((len(x) - int(c * fs), 3)), 1, int(c * fs)))
-    assert E.broad_metrics(zero, rec)["rmse_motion_dps"] > 30
+    zero = F.FilterSpec("zero", "baseline", "", lambda x, fs, c: F.FilterOutput(np.zeros((len(x) - int(c * fs), 3)), 1, int(c * fs)))
+    assert M.broad_metrics(zero, rec)["rmse_motion_dps"] > 30
 
 
 def test_pareto_front_and_dominance_rules():
@@ -176,6 +176,7 @@ def test_evaluate_command_refuses_existing_outputs_and_a_failure_leaves_none(tmp
     pytest.importorskip("matplotlib")
     from gyrofilter.evaluation import evaluate as E
     from gyrofilter.cli import main
+    from gyrofilter.errors import SettingsError
 
     out = tmp_path / "out"
     out.mkdir()
@@ -187,7 +188,7 @@ def test_evaluate_command_refuses_existing_outputs_and_a_failure_leaves_none(tmp
     assert os.listdir(out) == ["evaluate.json"] and (out / "evaluate.json").read_text() == "a user's results"
 
     def failing(ev, path, reference="paper001"):
-        raise E.SettingsError("simulated failure while drawing")
+        raise SettingsError("simulated failure while drawing")
 
     rng = np.random.default_rng(7)
     rec_dir = tmp_path / "recordings"

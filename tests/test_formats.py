@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from gyrofilter.filter.calibration import Calibration
-from gyrofilter.analysis.noise_model import JSON_KEY
+from gyrofilter.analysis.noise_export import JSON_KEY
 from gyrofilter.recording import read_recording
-from gyrofilter.sim.simulate import EFFECTS, simulate, validate_model
+from gyrofilter.sim.model import EFFECTS, validate_model
+from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources import KINDS
 from support import REPO
 
@@ -182,7 +183,7 @@ def test_section_8_states_the_bounds_the_code_holds(row, value):
 def test_section_8_states_the_sizes_the_code_holds():
     from gyrofilter import inputs, recording
     from gyrofilter.analysis import fleet
-    from gyrofilter.sim import simulate
+    from gyrofilter.sim import model
     from gyrofilter.sources import serial_source
 
     text = section(8)
@@ -190,6 +191,6 @@ def test_section_8_states_the_sizes_the_code_holds():
     assert recording.MAX_HEADER_LINES == 1000 and "| 1000 lines, 1 MiB |" in text
     assert f"| a serial line | {serial_source.MAX_LINE_BYTES} bytes |" in text
     assert inputs.MAX_JSON_BYTES == 16 * 2 ** 20 and f"| 16 MiB, {inputs.MAX_JSON_DEPTH} levels |" in text
-    assert (f"| {simulate.MAX_EFFECTS_PER_AXIS}; {simulate.MAX_ARMA_COEFFICIENTS}; {simulate.MAX_TABLE_POINTS} |"
+    assert (f"| {model.MAX_EFFECTS_PER_AXIS}; {model.MAX_ARMA_COEFFICIENTS}; {model.MAX_TABLE_POINTS} |"
             in text)
     assert f"| {fleet.SCHEDULER_TIMEOUT_S:g} s |" in text

@@ -2,7 +2,7 @@
 
 Documents are drawn by hypothesis: any JSON (nested objects and lists, huge integers, floats,
 strings, booleans, null), deep nesting and NaN/Infinity tokens, and mutations of a valid
-calibration and of examples/models/mpu6050.json (a key deleted, a value of another type, huge,
+calibration and of the package's model gyrofilter/data/mpu6050_model.json (a key deleted, a value of another type, huge,
 negative, tiny or non-finite numbers, long strings). The property, for ``Calibration.load``,
 ``load_model`` + ``validate_model`` and the commands (``replay REC --calibration F --out O``,
 ``simulate --model F --duration 1 --out O``): either a result whose values read back equal, or
@@ -16,6 +16,7 @@ import json
 import math
 import os
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,11 +27,12 @@ from gyrofilter.filter.calibration import MAX_BIAS_DPS, MAX_NOISE_STD_DPS, Calib
 from gyrofilter.cli import main
 from gyrofilter.errors import CalibrationError, GyroFilterError
 from gyrofilter.recording import Recording, read_recording, write_recording
-from gyrofilter.sim.simulate import load_model, simulate, validate_model
+from gyrofilter.sim.model import load_model, validate_model
+from gyrofilter.sim.simulate import simulate
+from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 from gyrofilter.units import TEMP_RANGE_C
-from support import REPO
 
-MODEL_FILE = REPO / "examples" / "models" / "mpu6050.json"
+MODEL_FILE = Path(str(DEFAULT_MODEL_PATH))
 MODEL = json.loads(MODEL_FILE.read_text())
 CALIBRATION = {"gyrofilter-calibration": 1, "bias_dps": [0.5, -1.25, 0.0], "noise_std_dps": [0.05, 0.06, 0.07],
                "samples": 200, "sample_rate_hz": 100.0, "temp_c": 25.5, "created_utc": "2026-11-26T00:00:00+00:00"}

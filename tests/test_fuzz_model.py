@@ -20,7 +20,8 @@ from hypothesis import strategies as st
 from gyrofilter.cli import main
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording, write_recording
-from gyrofilter.sim.simulate import simulate, validate_model
+from gyrofilter.sim.model import validate_model
+from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources.simulated import DEFAULT_MODEL
 from gyrofilter.filter.tempcomp import coefficients_from_model
 from support import REPO

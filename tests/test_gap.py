@@ -17,9 +17,11 @@ import numpy as np
 import pytest
 
 from gyrofilter.analysis import detectors as det
-from gyrofilter.analysis.gap import analyse_gap, discrepancy, departures
+from gyrofilter.analysis.gap import analyse_gap
+from gyrofilter.analysis.gap_features import departures, discrepancy
 from gyrofilter.recording import Recording, read_recording, write_recording
-from gyrofilter.sim.simulate import simulate, validate_model
+from gyrofilter.sim.model import validate_model
+from gyrofilter.sim.simulate import simulate
 
 import gyrofilter.sim.hidden_effects as he
 from support import RECORDINGS
@@ -421,14 +423,15 @@ def test_two_gauss_markov_terms_are_found_by_the_composite_fit(seed):
                       "a spectral line the model lacks"),
 ])
 def test_an_axis_that_does_not_close_gets_a_note_naming_the_feature(key, j, z, says):
-    from gyrofilter.analysis.gap import OUTSIDE_NULL_D, _still_departs
+    from gyrofilter.analysis.detectors import OUTSIDE_NULL_D
+    from gyrofilter.analysis.gap_features import still_departs
 
     taus = np.array([0.01, 0.03, 0.1, 1.0, 10.0, 100.0])
     bands = np.array([0.08, 0.13, 1.0, 3.0, 10.0, 20.0, 30.0])
     deps = {k: (np.full(size, 0.5), None, None) for k, size in
             (("adev", taus.size), ("band", bands.size - 1), ("line", 1), ("lag1", 1), ("spikes", 1))}
     deps[key][0][j] = z
-    note = _still_departs("z", 4.85, deps, taus, bands)
+    note = still_departs("z", 4.85, deps, taus, bands)
     assert note.startswith(f"axis z: after extension D = 4.85, above {OUTSIDE_NULL_D:g}")
     assert says in note
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.analysis import detectors as det
-from gyrofilter.analysis import gap
+from gyrofilter.analysis import gap, gap_features
 from gyrofilter.analysis.allan import overlapping_adev
 from gyrofilter.sim.simulate import simulate, simulate_axis_dps
 
@@ -50,11 +50,11 @@ def _strided_adev(x, fs, taus):
 def test_feature_adev_is_the_strided_overlapping_estimator():
     rng = np.random.default_rng(3)
     x = rng.normal(0.5, 0.1, 100_003) + np.cumsum(rng.normal(0, 1e-4, 100_003))
-    taus = gap.feature_taus(x.size, 100.0)
-    got = gap.feature_adev(x, 100.0, taus)
+    taus = gap_features.feature_taus(x.size, 100.0)
+    got = gap_features.feature_adev(x, 100.0, taus)
     assert np.allclose(got, _strided_adev(x, 100.0, taus), rtol=1e-9, atol=0)
     m = np.round(taus * 100.0).astype(int)
-    small = m < gap.ADEV_STARTS  # every start point: the fully overlapping estimator
+    small = m < gap_features.ADEV_STARTS  # every start point: the fully overlapping estimator
     assert small.sum() >= 4
     assert np.allclose(got[small], overlapping_adev(x, 100.0, taus[small])[1], rtol=1e-9, atol=0)
     # fewer start points for long taus: the same expectation, close on one record
@@ -126,8 +126,8 @@ def test_band_edges_find_the_bins_of_searchsorted():
         n = int(rng.integers(300, 3_000_000))
         fs = float(rng.choice([1.0, 99.3171, 100.0, 1000.0]))
         size = n // 2 + 1
-        freqs = np.concatenate([gap.feature_bands(n, fs), np.arange(0, size, size // 7 + 1) * fs / n])
-        assert np.array_equal(gap._first_bins(freqs, size, n, fs), np.searchsorted(np.arange(size) * fs / n, freqs))
+        freqs = np.concatenate([gap_features.feature_bands(n, fs), np.arange(0, size, size // 7 + 1) * fs / n])
+        assert np.array_equal(gap_features._first_bins(freqs, size, n, fs), np.searchsorted(np.arange(size) * fs / n, freqs))
 
 
 def test_progress_gives_fraction_and_time_left_and_the_extended_model_reuses_the_gain_runs():

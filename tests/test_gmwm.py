@@ -7,7 +7,7 @@ import pytest
 
 from gyrofilter.analysis import gmwm
 from gyrofilter.analysis.allan import overlapping_adev
-from gyrofilter.analysis.noise_model import characterise_axis
+from gyrofilter.analysis.noise_fit import characterise_axis
 from gyrofilter.sim.simulate import simulate
 from support import REPO
 

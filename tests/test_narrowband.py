@@ -5,7 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from gyrofilter.analysis.detectors import NARROWBAND_THRESHOLD
 from gyrofilter.analysis.detectors import narrowband as nb
+from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording
 from support import RECORDINGS
 
@@ -97,7 +99,7 @@ def test_clean_records_of_all_lengths_and_rates_name_no_band(seed):
             x = lfilter([1.0], [1.0, -rho], rng.normal(size=n)) + 0.3 * rng.normal(size=n)
             band = nb.band_estimate(x, fs, fit=False)
             stat = (band["peak_ratio"] - 1.0) * math.sqrt(band["segments"])
-            assert stat < 0.65 * nb.NARROWBAND_THRESHOLD, (n, fs, rho, stat)
+            assert stat < 0.65 * NARROWBAND_THRESHOLD, (n, fs, rho, stat)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -127,4 +129,11 @@ def test_an_ar1_spectrum_rising_to_the_nyquist_frequency_is_not_a_band():
         x = lfilter([1.0], [1.0, 0.7], rng.normal(size=n))
         band = nb.band_estimate(x, fs, fit=False)
         stat = (band["peak_ratio"] - 1.0) * math.sqrt(band["segments"])
-        assert stat < 0.65 * nb.NARROWBAND_THRESHOLD, (n, fs, stat, band["center_hz"])
+        assert stat < 0.65 * NARROWBAND_THRESHOLD, (n, fs, stat, band["center_hz"])
+
+
+@pytest.mark.parametrize("rate", [0.0, -100.0, float("nan"), True])
+def test_a_rate_that_is_no_rate_is_refused_by_the_one_check(rate):
+    x = np.random.default_rng(1).normal(size=5000)
+    with pytest.raises(SettingsError, match="sample_rate_hz must be a number of Hz"):
+        nb.detect_narrowband(x, rate)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from gyrofilter import GyroFilter
-from gyrofilter.evaluation import evaluate as E
+from gyrofilter.evaluation import evaluate as E, filters as F
 from gyrofilter.filter.presets import DEFAULT_PRESET, PRESETS
 from support import RECORDINGS
 
@@ -24,7 +24,7 @@ def test_the_default_preset_is_recommended_and_recommended_is_adaptive_kalman():
 @pytest.mark.slow
 def test_the_default_is_no_worse_than_any_other_preset_on_the_held_out_half():
     split = E.HOLDOUT_SPLIT
-    specs = [E.FilterSpec(name, "candidate", "", E.gyrofilter_run(name)) for name in PRESETS]
+    specs = [F.FilterSpec(name, "candidate", "", F.gyrofilter_run(name)) for name in PRESETS]
     ev = E.evaluate(specs, recordings_dir=REC_DIR, static_names=split["static"], profiles=split["profiles"],
                     broad_names=split["broad"], with_lag=False)
     assert sorted(ev.static) == sorted(PRESETS) and len(ev.broad_names) == 2 and len(ev.profiles) == 2

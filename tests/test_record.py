@@ -19,8 +19,8 @@ from gyrofilter.cli import main
 from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.sim.simulate import simulate
-from gyrofilter.sources.simulated import DEFAULT_MODEL
-from support import RECORDINGS, REPO
+from gyrofilter.sources.simulated import DEFAULT_MODEL, DEFAULT_MODEL_PATH
+from support import RECORDINGS
 
 SIM_SECONDS = 60.0  # the source's own length; the recording is stopped long before
 RATE_HZ = 500.0
@@ -253,7 +253,7 @@ def test_record_of_a_simulation_with_duration_equals_simulate(tmp_path, capsys):
     simulate --duration D (the model's terms depend on the run's length)."""
     from gyrofilter.cli import main
 
-    model = str(REPO / "examples" / "models" / "mpu6050.json")
+    model = str(DEFAULT_MODEL_PATH)
     sim, out = tmp_path / "sim.csv", tmp_path / "rec.csv"
     assert main(["simulate", "--model", model, "--duration", "3", "--seed", "5", "--out", str(sim)]) == 0
     assert main(["record", "--source", f"sim:{model},seed=5,realtime=0", "--duration", "3", "--out", str(out)]) == 0

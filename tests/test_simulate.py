@@ -14,7 +14,8 @@ from gyrofilter.sim import noise_terms as nt
 from gyrofilter.analysis.allan import overlapping_adev
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording, write_recording
-from gyrofilter.sim.simulate import EFFECTS, simulate, simulate_chunks, validate_model
+from gyrofilter.sim.model import EFFECTS, validate_model
+from gyrofilter.sim.simulate import simulate, simulate_chunks
 from gyrofilter.units import DEG_PER_RAD
 
 

@@ -13,7 +13,8 @@ from scipy.signal import welch
 from gyrofilter.sim import noise_terms as nt
 from gyrofilter.analysis.allan import overlapping_adev
 from gyrofilter.errors import SettingsError
-from gyrofilter.sim.simulate import simulate, validate_model
+from gyrofilter.sim.model import validate_model
+from gyrofilter.sim.simulate import simulate
 
 
 def one_axis(effects, fs=200.0, arw=0.0):

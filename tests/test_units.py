@@ -85,7 +85,7 @@ def _sample_rate_takers():
     from gyrofilter.analysis.arma import prepare_series
     from gyrofilter.analysis.bias_kf import BiasKalmanFilter
     from gyrofilter.sim.profiles import profile_samples_dps
-    from gyrofilter.sim.simulate import validate_model
+    from gyrofilter.sim.model import validate_model
     from gyrofilter.sources.mpu6050 import sample_rate_settings
 
     header = "# gyrofilter-recording: 1\n# sample_rate_hz: {}\n# gyro_unit: dps\ngx,gy,gz\n0,0,0\n"

@@ -28,7 +28,8 @@ ROOT = os.path.dirname(HERE)
 
 from gyrofilter.analysis.allan import overlapping_adev  # noqa: E402
 from gyrofilter.filter.calibration import calibration_samples  # noqa: E402
-from gyrofilter.analysis.noise_model import characterise, convert  # noqa: E402
+from gyrofilter.analysis.noise_fit import characterise  # noqa: E402
+from gyrofilter.analysis.noise_model import convert  # noqa: E402
 from gyrofilter.analysis.plots_allan import AXIS_COLOURS, plot_allan, plot_before_after  # noqa: E402
 from gyrofilter.recording import read_recording  # noqa: E402
 

@@ -10,7 +10,7 @@ model and the ARMA(1, 1) next to paper 003's x_t - 1.0000 x_{t-1} = a_t - 0.9994
 
 Then which model reproduces the measured overlapping Allan deviation better: the chosen ARMA
 and the ARMA(1, 1), simulated (same length and rate, several seeds, RMS of the deviations), and
-the Allan-based noise model (gyrofilter.analysis.noise_model fit: Q/N/B/K/R), simulated through
+the Allan-based noise model (gyrofilter.analysis.noise_fit: Q/N/B/K/R), simulated through
 gyrofilter.sim.simulate (white noise N, bias instability B, rate random walk K, rate ramp R,
 quantisation 1/131 deg/s) over the same seeds. Discrepancy = RMS over tau of
 log10(model ADEV / measured ADEV) (0.01 ~ 2.3 % off).
@@ -25,9 +25,9 @@ import sys
 
 import numpy as np
 
-from gyrofilter.analysis import arma
+from gyrofilter.analysis import arma, arma_checks, arma_fit
 from gyrofilter.analysis.allan import overlapping_adev
-from gyrofilter.analysis.noise_model import characterise_axis
+from gyrofilter.analysis.noise_fit import characterise_axis
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.simulate import simulate_dps
 
@@ -69,7 +69,7 @@ def add_bic(r, recordings, max_n, seeds):
     x = rec.gyro_dps[:, "xyz".index(r["axis"])]
     series, _, rate, _ = arma.prepare_series(x, rec.sample_rate_hz)
     chosen, adequate, _, _ = arma.select_order(series, max_n=max_n, criterion="bic")
-    w = arma.whiteness(chosen.residuals, chosen.n_params)
+    w = arma_checks.whiteness(chosen.residuals, chosen.n_params)
     tau = np.asarray(r["adev"]["tau_s"])
     _, dev = arma.arma_adev(chosen, len(series), rate, seeds=seeds, taus_s=tau)
     r["bic"] = {"chosen": chosen.to_dict(), "adequate_order": list(adequate), "ljung_box_p_value": w.ljung_box_p_value,
@@ -79,7 +79,7 @@ def add_bic(r, recordings, max_n, seeds):
 
 
 def _fit_from_dict(d):
-    return arma.ArmaFit(d["p"], d["q"], d["phi"], d["theta"], d["sigma_a"], d["rss"], d["n_residuals"], d["aic"])
+    return arma_fit.ArmaFit(d["p"], d["q"], d["phi"], d["theta"], d["sigma_a"], d["rss"], d["n_residuals"], d["aic"])
 
 
 def recompute_adev(r, seeds):

@@ -10,7 +10,7 @@
    also as a multiple of the input array (80 MB). The largest relative difference of the two
    results is printed as a check. Targets (issue 4): >= 2x faster, peak < 3x the input.
 2. A 24-hour 100 Hz three-axis recording (8.64 million samples per axis, white noise + rate
-   random walk + bias): ``gyrofilter.analysis.noise_model.characterise`` (deviation, EDF intervals, NNLS
+   random walk + bias): ``gyrofilter.analysis.noise_fit.characterise`` (deviation, EDF intervals, NNLS
    fit with covariance, read-offs) wall time. Target: well under a minute.
 3. With ``--day-file``: the same day written as an MPU6050-style .csv.gz recording (lsb) and the
    command ``gyrofilter allan FILE --json OUT`` timed end to end in a fresh process (reading the
@@ -68,7 +68,7 @@ def oadev_vs_allantools(n_samples):
 
 
 def day_characterisation():
-    from gyrofilter.analysis.noise_model import characterise
+    from gyrofilter.analysis.noise_fit import characterise
 
     fs, n = 100.0, 24 * 3600 * 100
     rng = np.random.default_rng(1)

@@ -9,7 +9,7 @@
    fresh process started by a small interpreter, beside the
    same commands on the bundled 100 s recording (the fixed cost: interpreter, numpy, the Kalman
    kernel or scipy). Target: at most 200 MB for 1 h at 1 kHz.
-2. Reading a recording (default: 1 h at 1 kHz simulated from examples/models/mpu6050.json,
+2. Reading a recording (default: 1 h at 1 kHz simulated from gyrofilter/data/mpu6050_model.json,
    3.6 million rows of t, gx, gy, gz, temp; written to a temporary folder, about 20 s), as .csv.gz
    and as plain .csv: ``gyrofilter.recording.read_recording`` (whole arrays, every check) and
    ``iter_recording`` (chunks only) beside ``numpy.loadtxt(path, delimiter=",", skiprows=...)``
@@ -31,7 +31,7 @@ import time
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-MODEL = os.path.join(HERE, "..", "examples", "models", "mpu6050.json")
+MODEL = os.path.join(HERE, "..", "gyrofilter", "data", "mpu6050_model.json")
 
 
 def _best(fn, repeats):

@@ -42,12 +42,12 @@ def arma_settings(x_rest_dps, fs, fallback: BiasKFSettings):
     Per axis; an axis whose ARMA(1, 1) has no Gauss-Markov decomposition keeps the fallback's model.
     Returns (settings, description).
     """
-    from gyrofilter.analysis import arma
+    from gyrofilter.analysis import arma, arma_fit
 
     taus, sigmas, walks, desc = [], [], [], []
     for i, name in enumerate("xyz"):
         x = x_rest_dps[:, i] - x_rest_dps[:, i].mean()
-        fit = arma.fit_arma(x, 1, 1)
+        fit = arma_fit.fit_arma(x, 1, 1)
         m = arma.bias_model_from_arma11(fit, fs)
         if m.valid:
             taus.append(m.tau_s)

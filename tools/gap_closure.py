@@ -7,7 +7,7 @@ distance against a GMWM-style composite fit.
 Records: the long ADIS16405 records (``../shared/data/adis16405_long``, skipped when absent; licence
 CC BY-NC-SA, never copied into the repo), the static MPU6050 logs and the longest rest phase of
 each BROAD trial (``recordings/``; movement flag 0, less 1.5 s at both ends, the guard of
-``gyrofilter.evaluation.evaluate``). Per record and axis:
+``gyrofilter.evaluation.metrics``). Per record and axis:
 
 * D before -> after: the gap's discrepancy (docs/gap.md) against the baseline and the extended model;
 * the null band: the 95th percentile of D after, pooled over the three axes of ``--null-seeds``
@@ -40,7 +40,7 @@ def records(only=None, adis_dir=ADIS_DIR):
     ``adis_dir``, the shipped MPU6050 logs and the BROAD rest phases."""
     import numpy as np
 
-    from gyrofilter.evaluation.evaluate import REST_GUARD_S
+    from gyrofilter.evaluation.metrics import REST_GUARD_S
     from gyrofilter.recording import Recording, read_recording
 
     out = []
@@ -89,7 +89,7 @@ def worst_feature(summary):
     simulations (from the report's departure summary of one axis)."""
     import numpy as np
 
-    from gyrofilter.analysis.gap import _LOG_FLOOR
+    from gyrofilter.analysis.gap_features import _LOG_FLOOR
 
     best = None
     for key, where in (("adev", "adev_tau_s"), ("band", "band_edges_hz")):

@@ -66,23 +66,24 @@ def _colored_lag1(r1, arw_dps_per_sqrt_hz, fs, band, current):
 
 
 def axis_discrepancy(x_dps, sample_rate_hz, models, axis_index, seeds):
-    """The gap's D (:func:`gyrofilter.analysis.gap.discrepancy`) of each model's axis against ``x_dps``,
+    """The gap's D (:func:`gyrofilter.analysis.gap_features.discrepancy`) of each model's axis against ``x_dps``,
     every model simulated with the same ``seeds``. Returns a list of floats."""
     import numpy as np
 
-    from gyrofilter.analysis import gap
-    from gyrofilter.sim.simulate import simulate_axis_dps, validate_model
+    from gyrofilter.analysis import gap_features
+    from gyrofilter.sim.model import validate_model
+    from gyrofilter.sim.simulate import simulate_axis_dps
 
     n = x_dps.size
-    taus, bands = gap.feature_taus(n, sample_rate_hz), gap.feature_bands(n, sample_rate_hz)
-    meas = gap.features(x_dps, sample_rate_hz, taus, bands)
+    taus, bands = gap_features.feature_taus(n, sample_rate_hz), gap_features.feature_bands(n, sample_rate_hz)
+    meas = gap_features.features(x_dps, sample_rate_hz, taus, bands)
     out = []
     for model in models:
         spec = validate_model(model)[0]
-        sims = [gap.features(np.concatenate(list(simulate_axis_dps(spec, n / sample_rate_hz, axis_index, seed=int(s),
+        sims = [gap_features.features(np.concatenate(list(simulate_axis_dps(spec, n / sample_rate_hz, axis_index, seed=int(s),
                                                                    validated=spec)))[:n], sample_rate_hz, taus, bands)
                 for s in seeds]
-        out.append(gap.discrepancy(gap.departures(meas, sims, n)))
+        out.append(gap_features.discrepancy(gap_features.departures(meas, sims, n)))
     return out
 
 

@@ -9,7 +9,7 @@ weighted distance (1/J) Σ_j (ν̂²_j - ν²_j)² / Var(ν̂²_j) to the curves
 
 * the gap's baseline (bias + white noise + quantisation) and extended model (``analyse_gap``;
   their curves are the mean over ``--sims`` simulations),
-* the five-term Allan NNLS fit (``gyrofilter.analysis.noise_model``: Q, N, B, K, R),
+* the five-term Allan NNLS fit (``gyrofilter.analysis.noise_fit``: Q, N, B, K, R),
 * the GMWM-style composite fit (``gyrofilter.analysis.gmwm.select_model``).
 
 About 1 means the model is within the sampling error at every dyadic scale. Prints a Markdown table.
@@ -40,7 +40,7 @@ def compare_record(rec, *, seed=0, sims=4, name=None):
 
     from gyrofilter.analysis import gmwm
     from gyrofilter.analysis.gap import analyse_gap
-    from gyrofilter.analysis.noise_model import characterise_axis
+    from gyrofilter.analysis.noise_fit import characterise_axis
 
     t0 = time.perf_counter()
     rep = analyse_gap(rec, seed=seed, recording_name=name)

@@ -26,7 +26,7 @@ import sys
 import numpy as np
 
 
-from gyrofilter.evaluation import evaluate as E
+from gyrofilter.evaluation import datasets as D, evaluate as E, filters as F, metrics as M
 from gyrofilter.filter.predictor import closed_loop_radius, extrapolation_weights, stable_gain_threshold
 from gyrofilter.sim.profiles import Profile
 
@@ -53,7 +53,7 @@ SINE_3HZ = Profile("sine_3hz_150", 90.0, _sine_3hz, ((10.0, 80.0, "sine 3 Hz", 0
 
 
 def spec(name, preset, **kw):
-    return E.FilterSpec(name, "candidate", "", E.gyrofilter_run(preset, **kw))
+    return F.FilterSpec(name, "candidate", "", F.gyrofilter_run(preset, **kw))
 
 
 def run_split(specs, split, with_lag=False):
@@ -107,15 +107,15 @@ def main():
     print(f"chosen by the rule: {ok[0] if ok else None}")
 
     print("\n== 3. divergence guard: 3-Hz 150-deg/s sine on real noise (4 x 90 s), BROAD 07 / 09 ==")
-    segments = E.noise_segments(E.find_static_recordings(REC_DIR))
-    broad = [r for r in E.find_broad_recordings(REC_DIR) if E._stem(r.path) in ("broad_07_fast", "broad_09_fast_breaks")]
+    segments = D.noise_segments(D.find_static_recordings(REC_DIR))
+    broad = [r for r in D.find_broad_recordings(REC_DIR) if D.stem(r.path) in ("broad_07_fast", "broad_09_fast_breaks")]
     guards = [spec("paper", "paper"), spec("hold", "hold")]
     for n, k in ((1, 10.0), (2, 10.0), (3, 10.0), (3, 5.0)):
         guards.append(spec(f"paper + guard_blocks={n} guard_k_sigma={k:g}", "paper", guard_blocks=n, guard_k_sigma=k))
     guards += [spec("adaptive_kalman, guard off", "adaptive_kalman", guard_blocks=0), spec("adaptive_kalman", "adaptive_kalman")]
     for s in guards:
-        d = E.dynamic_metrics(s, SINE_3HZ, segments)
-        b = " ".join(f"{E._stem(r.path)[6:8]} {E.broad_metrics(s, r)['rmse_all_dps']:.4f}" for r in broad)
+        d = M.dynamic_metrics(s, SINE_3HZ, segments)
+        b = " ".join(f"{D.stem(r.path)[6:8]} {M.broad_metrics(s, r)['rmse_all_dps']:.4f}" for r in broad)
         print(f"  {s.name:44s} 3-Hz sine RMSE {d['rmse_dps']:9.4f} worst lag {d['worst_lag_s'] * 1e3:5.0f} ms | BROAD {b}")
 
     print("\n== 4. paper, hold and adaptive_kalman on both halves (with lags) ==")

@@ -28,7 +28,7 @@ import sys
 import numpy as np
 
 
-from gyrofilter.evaluation import evaluate as E
+from gyrofilter.evaluation import evaluate as E, filters as F
 from gyrofilter.filter.pipeline import GyroFilter
 
 REC_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "recordings")
@@ -48,7 +48,7 @@ def row(ev, name):
             f"RMSE {dyn} | BROAD {broad} | {'DOMINATES' if ok else 'fails: ' + fails[0]}")
 
 
-PAPER = E.FilterSpec("paper001", "paper", "", E.gyrofilter_run("paper"))
+PAPER = F.FilterSpec("paper001", "paper", "", F.gyrofilter_run("paper"))
 
 
 def grid_settings():
@@ -83,7 +83,7 @@ def spike_test(variants, fraction, seed=0):
 def main():
     print("== 1. pipeline settings grid on the TUNE split ==")
     grid = grid_settings()
-    specs = [PAPER] + [E.FilterSpec(name, "candidate", "", E.gyrofilter_run("paper", **kw)) for name, kw in grid.items()]
+    specs = [PAPER] + [F.FilterSpec(name, "candidate", "", F.gyrofilter_run("paper", **kw)) for name, kw in grid.items()]
     ev = run_split(specs, E.TUNE_SPLIT)
     ok = [s.name for s in specs[1:] if E.dominates(ev, s.name)[0] and ev.static_min(s.name) >= MARGIN * E.PAPER_CLAIM_REDUCTION]
     ok.sort(key=lambda n: ev.dynamic_geomean(n))
@@ -94,14 +94,14 @@ def main():
     print(f"chosen by the rule: {chosen}")
 
     print("\n== 2. switching designs on the TUNE split ==")
-    best = [E.FilterSpec("best pipeline setting (section 1)", "candidate", "", E.gyrofilter_run("paper", **grid[chosen]))] if chosen else []
-    recommended = E.FilterSpec("recommended preset (hold + block mean)", "candidate", "", E.gyrofilter_run("hold"))
+    best = [F.FilterSpec("best pipeline setting (section 1)", "candidate", "", F.gyrofilter_run("paper", **grid[chosen]))] if chosen else []
+    recommended = F.FilterSpec("recommended preset (hold + block mean)", "candidate", "", F.gyrofilter_run("hold"))
     designs = [PAPER] + best + [
-        E.FilterSpec("hold + paper KF", "candidate", "", E.gyrofilter_run("paper", hold=True)),
-        E.FilterSpec("hold + KF(r_source=calibration)", "candidate", "", E.gyrofilter_run("paper", hold=True, r_source="calibration")),
+        F.FilterSpec("hold + paper KF", "candidate", "", F.gyrofilter_run("paper", hold=True)),
+        F.FilterSpec("hold + KF(r_source=calibration)", "candidate", "", F.gyrofilter_run("paper", hold=True, r_source="calibration")),
         recommended,
-        E.FilterSpec("recommended with hold_h=5", "candidate", "", E.gyrofilter_run("hold", hold_h=5.0)),
-        E.FilterSpec("recommended with hold_h=20", "candidate", "", E.gyrofilter_run("hold", hold_h=20.0)),
+        F.FilterSpec("recommended with hold_h=5", "candidate", "", F.gyrofilter_run("hold", hold_h=5.0)),
+        F.FilterSpec("recommended with hold_h=20", "candidate", "", F.gyrofilter_run("hold", hold_h=20.0)),
     ]
     ev = run_split(designs, E.TUNE_SPLIT)
     for s in designs:
@@ -119,7 +119,7 @@ def main():
         "recommended, no rejection (q=1e9)": dict(outlier_q_dps=1e9),
         'recommended, outlier_rule="median_slope"': dict(outlier_rule="median_slope"),
     }
-    specs = [PAPER] + [E.FilterSpec(name, "candidate", "", E.gyrofilter_run("hold", **kw)) for name, kw in variants.items()]
+    specs = [PAPER] + [F.FilterSpec(name, "candidate", "", F.gyrofilter_run("hold", **kw)) for name, kw in variants.items()]
     ev = E.evaluate(specs, recordings_dir=REC_DIR, with_lag=False)
     for s in specs:
         print(row(ev, s.name))

@@ -23,6 +23,7 @@ Confidence intervals (see :func:`confidence_interval`):
 from __future__ import annotations
 
 import math
+from statistics import NormalDist
 
 import numpy as np
 
@@ -285,7 +286,6 @@ def chi2_ppf(p, dof):
     try:
         from scipy.special import chdtri
     except ImportError:  # pragma: no cover - scipy is present in the test environment
-        from statistics import NormalDist
         z = NormalDist().inv_cdf(p)
         c = 2.0 / (9.0 * dof)
         return dof * np.maximum(1.0 - c + z * np.sqrt(c), 1e-6) ** 3

@@ -41,25 +41,38 @@ with fewer, no unit is flagged on it and :func:`flag_units` says so in its stati
 """
 from __future__ import annotations
 
+import asyncio
 import collections
 import contextlib
+import csv
 import dataclasses
+import io
 import math
+import multiprocessing
 import os
 import signal
 import threading
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
 from .allan import MIN_CLUSTERS
+from .gap import analyse_gap
+from .noise_export import JSON_KEY, kalibr_yaml, to_json
+from .noise_model import TERM_SYMBOL, TERM_UNIT, TERMS
+from .still import characterise_recording
+from ..errors import MissingExtraError, SettingsError, one_line
+from ..extras import install_hint, require
+from ..inputs import quote
+from ..recording import read_recording
 from ..units import AXES, MAD_TO_SIGMA, utf8_text
 
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
 COEFFICIENTS = ("arw", "bias_instability", "rrw", "rate_ramp")
 #: modified z-score beyond which a unit stands out (Iglewicz & Hoaglin 1993)
 FLAG_Z = 3.5
-#: MAD -> standard deviation for normal data: 1 / Phi^-1(3/4)
 #: least spread s of the log levels (10 %): the unit-to-unit spread assumed at least
 MIN_SPREAD_LN = 0.1
 #: fewest units with a number for a comparison (the unit and 3 peers)
@@ -94,7 +107,7 @@ class FleetSettings:
     """
 
     command: str
-    axes: str = "xyz"
+    axes: tuple | str = AXES  # axis letters, in order: all three, or e.g. "xz" from the command line
     confidence: float = 0.95
     min_clusters: int = MIN_CLUSTERS
     keep_outliers: bool = False
@@ -114,8 +127,6 @@ def analyse_recording(path, settings):
     short for two cluster times) leaves ``allan`` None with the reason in ``warnings``, and the
     gap report stands.
     """
-    from ..errors import one_line
-
     t0 = time.perf_counter()
     result = {"recording": path, "error": None, "warnings": [], "sample_rate_hz": None, "duration_s": None,
               "allan": None, "kalibr": None, "gap": None}
@@ -138,18 +149,12 @@ def analyse_recording(path, settings):
 
 
 def _gap_report(path, settings, warnings):
-    from .gap import analyse_gap
-    from ..recording import read_recording
-
     rec = read_recording(path)
     warnings.extend(rec.warnings)
     return analyse_gap(rec, seed=settings.seed, n_sims=settings.sims, recording_name=path)
 
 
 def _allan_part(path, settings, result):
-    from .still import characterise_recording
-    from .noise_model import kalibr_yaml, to_json
-
     def warn(text):
         if text not in result["warnings"]:  # the gap part read the same file and said it already
             result["warnings"].append(text)
@@ -157,12 +162,12 @@ def _allan_part(path, settings, result):
     head, results = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
                                            min_clusters=settings.min_clusters,
                                            keep_outliers=settings.keep_outliers, warn=warn)
-    fs = head.sample_rate_hz
+    sample_rate_hz = head.sample_rate_hz
     for axis, r in results.items():
         result["warnings"].extend(text if text.startswith("axis ") else f"axis {axis}: {text}" for text in r.warnings)
-    result["allan"] = to_json(results, fs, recording=path, duration_s=head.rows / fs)
-    result["kalibr"] = kalibr_yaml(results, fs, recording=path)
-    result["sample_rate_hz"], result["duration_s"] = fs, head.rows / fs
+    result["allan"] = to_json(results, sample_rate_hz, recording=path, duration_s=head.rows / sample_rate_hz)
+    result["kalibr"] = kalibr_yaml(results, sample_rate_hz, recording=path)
+    result["sample_rate_hz"], result["duration_s"] = sample_rate_hz, head.rows / sample_rate_hz
 
 
 def failed(path, reason):
@@ -180,8 +185,6 @@ def unit_names(paths):
     ``.gz`` and ``.csv``; recordings whose names clash take as many parent folders as tell them
     apart, joined by ``-`` (``robot1/imu.csv``, ``robot2/imu.csv`` -> ``robot1-imu``,
     ``robot2-imu``). Raises SettingsError when no number of folders does."""
-    from ..errors import SettingsError
-
     parts = [os.path.abspath(p).split(os.sep) for p in paths]
     stems = [_stem(p[-1]) for p in parts]
     depth = [1] * len(paths)
@@ -225,10 +228,6 @@ def run_local(paths, settings, jobs):
     reason. When the caller stops (Ctrl-C, an error) the workers are ended at once, not after
     their current file; when the calling process dies (SIGKILL), each worker ends by itself within
     :data:`PARENT_POLL_S` seconds (:func:`_worker_init`)."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    from concurrent.futures.process import BrokenProcessPool
-
     # fresh processes (not forks of this one and its thread pools) that start with WORKER_ENVIRONMENT
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
                                initializer=_worker_init, initargs=(os.getpid(),))
@@ -304,12 +303,7 @@ def _connect(distributed, address, timeout_s):
     Dask's own connect waits for the peer's handshake without a time limit and sizes its buffer
     from the peer's first 8 bytes (an HTTP server's make 3 EiB: MemoryError), so the handshake is
     first tried alone, under ``timeout_s`` seconds; only a peer that completes it gets a Client."""
-    import asyncio
-
     from distributed.comm import connect
-
-    from ..errors import SettingsError, one_line
-    from ..inputs import quote
 
     async def handshake():
         comm = await asyncio.wait_for(connect(address, timeout=timeout_s), timeout_s)
@@ -344,9 +338,6 @@ def _dask_results(distributed, client, paths, settings):
 
 def _distributed():
     """``dask.distributed``, or MissingExtraError naming the ``[cluster]`` extra."""
-    from ..errors import MissingExtraError
-    from ..extras import install_hint, require
-
     require("dask", "--scheduler (a Dask cluster)")
     try:
         import dask.distributed
@@ -359,9 +350,7 @@ def _distributed():
 
 #: the columns of fleet.csv, in order (docs/formats.md, section 9)
 COLUMNS = (["unit", "recording", "axis", "status", "sample_rate_hz", "duration_s"]
-           + [f"{key}{end}" for key in ("quantization_deg", "arw_dps_per_sqrt_hz", "bias_instability_dps",
-                                        "rrw_dps_per_sqrt_s", "rate_ramp_dps_per_s")
-              for end in ("", "_low", "_high", "_upper")]
+           + [f"{JSON_KEY[term]}{end}" for term in TERMS for end in ("", "_low", "_high", "_upper")]
            + ["findings", "d_before", "d_after", "runtime_s", "flag", "warnings"])
 
 
@@ -370,8 +359,6 @@ def fleet_rows(names, results):
     :func:`analyse_recording`, named by ``names``, e.g. :func:`unit_names`), in the order given; a
     failed recording has one row whose ``status`` is the one-line reason, and no axis. Numbers
     are floats or None (not resolved, not analysed)."""
-    from .noise_model import JSON_KEY
-
     rows = []
     for name, res in zip(names, results):
         base = dict.fromkeys(COLUMNS)
@@ -410,8 +397,6 @@ def flag_units(rows):
     ``z`` or ``share``, ``text``) and returns the fleet statistics: a list of dicts per axis and
     quantity (``units``: how many had a number; ``median``/``spread`` of the log levels, or
     ``having`` for findings; ``compared``: False when too few units)."""
-    from .noise_model import JSON_KEY, TERM_SYMBOL, TERM_UNIT
-
     stats = []
     ok = [r for r in rows if r["status"] == "ok"]
     for axis in AXES:
@@ -484,9 +469,6 @@ def fleet_csv(rows):
     numbers in full precision (Python's shortest round-trip form), empty cells for None, findings
     as :func:`findings_cell`, other lists (flags, warnings) joined by "; "; text as
     :func:`~gyrofilter.units.utf8_text` writes it."""
-    import csv
-    import io
-
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(COLUMNS)
@@ -508,8 +490,6 @@ def fleet_markdown(rows, stats, *, title):
     recording and axis (``rows``, :func:`fleet_rows`; the gap's findings and D columns only
     when some row has gap results), and the fleet statistics ``stats`` (what
     :func:`flag_units` returns) with the rules."""
-    from .noise_model import JSON_KEY, TERM_SYMBOL, TERM_UNIT
-
     units = list(dict.fromkeys(r["unit"] for r in rows))
     failed_rows = [r for r in rows if r["status"] != "ok"]
     flagged = [r for r in rows if r["flag"]]

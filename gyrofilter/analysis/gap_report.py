@@ -97,12 +97,12 @@ def plot_temperature(x, temp, axis, coef, path):
             f"axis {axis}: rate against temperature")
 
 
-def plot_time(x, fs, axis, findings, path):
+def plot_time(x, sample_rate_hz, axis, findings, path):
     plt = pyplot()
     y, length = _blocks(x)
-    t = (np.arange(y.size) + 0.5) * length / fs
+    t = (np.arange(y.size) + 0.5) * length / sample_rate_hz
     fig, ax = plt.subplots(figsize=(7.0, 4.0))
-    ax.plot(t, y, "k-", lw=0.8, label=f"block means ({length / fs:.3g} s)")
+    ax.plot(t, y, "k-", lw=0.8, label=f"block means ({length / sample_rate_hz:.3g} s)")
     shape = np.zeros_like(t)
     for f in findings:
         p = f["params"]
@@ -131,7 +131,7 @@ def write_report(report, rec, out_dir, *, seed=0):
     """Write the Markdown report and figures; returns the Markdown path."""
     os.makedirs(out_dir, exist_ok=True)
     g = rec.gyro_dps
-    fs = rec.sample_rate_hz
+    sample_rate_hz = rec.sample_rate_hz
     temp = rec.temp_c
     lines = [f"# Model-gap report: {report['recording']}", "",
              f"{report['duration_s']:.1f} s at {report['sample_rate_hz']:g} Hz; "
@@ -173,7 +173,7 @@ def write_report(report, rec, out_dir, *, seed=0):
             lines += [f"![rate vs temperature {a}]({_figure('temperature', a)})", ""]
         slow = [f for f in fa if f["effect"] in ("bias_step", "warmup", "rate_ramp")]
         if slow:
-            plot_time(g[:, i], fs, a, slow, os.path.join(out_dir, _figure("time", a)))
+            plot_time(g[:, i], sample_rate_hz, a, slow, os.path.join(out_dir, _figure("time", a)))
             lines += [f"![rate in time {a}]({_figure('time', a)})", ""]
     path = os.path.join(out_dir, REPORT_NAME)
     with open(path, "w", encoding="utf-8") as fh:

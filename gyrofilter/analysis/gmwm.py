@@ -43,6 +43,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .allan import overlapping_adev
+from ..sim.model import validate_model
+from ..sim.noise_terms import ar1_allan_variance
+from ..sim.simulate import simulate_axis_dps
+
 OPTIONAL_TERMS = ("quantization", "rrw", "ramp")
 MAX_GM = 3
 
@@ -73,8 +78,6 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1):
     Scales start at the first 2^j >= ``min_m`` samples and stop where η_j = (N - 2m + 1) / (2m)
     falls below ``min_edf``.
     """
-    from .allan import overlapping_adev
-
     n = int(np.asarray(x_dps).size)
     m = []
     j = max(0, int(math.ceil(math.log2(max(min_m, 1)))))
@@ -112,8 +115,6 @@ def wv_ramp(tau_s, r_dps_per_s2):
 
 def wv_gauss_markov(tau_s, sigma_dps, corr_time_s, sample_rate_hz):
     """ν² of a sampled Gauss-Markov process (AR(1), φ = exp(-1/(f_s T))): exact, AVAR/2."""
-    from ..sim.noise_terms import ar1_allan_variance
-
     phi = math.exp(-1.0 / (sample_rate_hz * corr_time_s))
     return 0.5 * ar1_allan_variance(phi, sigma_dps**2, np.asarray(tau_s) * sample_rate_hz)
 
@@ -142,16 +143,16 @@ class GmwmFit:
 
     def wv(self, tau_s):
         """The model's wavelet variance ν²(τ) ((deg/s)²): the sum of its terms' closed forms."""
-        fs = self.sample_rate_hz
+        sample_rate_hz = self.sample_rate_hz
         out = wv_white(tau_s, self.arw_dps_per_sqrt_hz)
         if self.quantization_deg is not None:
             out = out + wv_quantization(tau_s, self.quantization_deg)
         if self.rrw_dps_per_sqrt_s is not None:
-            out = out + wv_rrw(tau_s, self.rrw_dps_per_sqrt_s, fs)
+            out = out + wv_rrw(tau_s, self.rrw_dps_per_sqrt_s, sample_rate_hz)
         if self.ramp_dps_per_s2 is not None:
             out = out + wv_ramp(tau_s, self.ramp_dps_per_s2)
         for sigma_dps, tau_gm_s in self.gauss_markov:
-            out = out + wv_gauss_markov(tau_s, sigma_dps, tau_gm_s, fs)
+            out = out + wv_gauss_markov(tau_s, sigma_dps, tau_gm_s, sample_rate_hz)
         return out
 
     def to_dict(self):
@@ -170,7 +171,7 @@ def wv_distance(wv: WaveletVariance, model_wv_dps2):
     return float(np.mean(r**2))
 
 
-def _unpack(theta, terms, k_gm, fs):
+def _unpack(theta, terms, k_gm, sample_rate_hz):
     """Log-parameters -> GmwmFit fields (variances and correlation times are exp of theta)."""
     values = iter(np.exp(theta))
     out = {"arw_dps_per_sqrt_hz": math.sqrt(next(values))}
@@ -180,7 +181,7 @@ def _unpack(theta, terms, k_gm, fs):
                 math.sqrt(next(values))
     gm = [(math.sqrt(next(values)), float(next(values))) for _ in range(k_gm)]
     out["gauss_markov"] = sorted(gm, key=lambda p: p[1])
-    return GmwmFit(sample_rate_hz=fs, **out)
+    return GmwmFit(sample_rate_hz=sample_rate_hz, **out)
 
 
 def _starts(wv: WaveletVariance, terms, k_gm, rng, count):
@@ -204,12 +205,12 @@ def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
     Gauss-Markov terms to ``wv``: weighted least squares on log-parameters (module docstring)."""
     from scipy.optimize import least_squares
 
-    fs = wv.sample_rate_hz
+    sample_rate_hz = wv.sample_rate_hz
     rng = np.random.default_rng(seed)
-    lo_t, hi_t = math.log(0.5 / fs), math.log(wv.tau_s[-1] * 100.0)
+    lo_t, hi_t = math.log(0.5 / sample_rate_hz), math.log(wv.tau_s[-1] * 100.0)
 
     def residuals(theta):
-        return (wv.wv_dps2 - _unpack(theta, terms, k_gm, fs).wv(wv.tau_s)) / wv.sd_dps2
+        return (wv.wv_dps2 - _unpack(theta, terms, k_gm, sample_rate_hz).wv(wv.tau_s)) / wv.sd_dps2
 
     n_par = 1 + len(terms) + 2 * k_gm
     lower = np.full(n_par, -200.0)
@@ -222,7 +223,7 @@ def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
                             x_scale=1.0, max_nfev=400 * n_par)
         if best is None or res.cost < best.cost:
             best = res
-    out = _unpack(best.x, terms, k_gm, fs)
+    out = _unpack(best.x, terms, k_gm, sample_rate_hz)
     out.objective = float(2.0 * best.cost)
     out.n_params = n_par
     out.criterion = out.objective + 2.0 * n_par
@@ -244,13 +245,11 @@ def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0, terms_
 def simulated_wv(model, axis, n_samples, *, seeds=(0, 1, 2, 3), min_edf=2.0):
     """Mean Haar wavelet variance of ``axis`` (0, 1, 2) of a simulator model over ``seeds`` runs
     of ``n_samples`` samples: the model's curve where no closed form covers every effect."""
-    from ..sim.simulate import simulate_axis_dps, validate_model
-
     spec = validate_model(model)[0]
-    fs = spec["sample_rate_hz"]
+    sample_rate_hz = spec["sample_rate_hz"]
     runs = []
     for seed in seeds:
-        x = np.concatenate(list(simulate_axis_dps(spec, n_samples / fs, axis, seed=int(seed), validated=spec)))
-        runs.append(haar_wv(x, fs, min_edf=min_edf))
-    return WaveletVariance(fs, runs[0].n_samples, runs[0].tau_s, np.mean([r.wv_dps2 for r in runs], axis=0),
+        x = np.concatenate(list(simulate_axis_dps(spec, n_samples / sample_rate_hz, axis, seed=int(seed), validated=spec)))
+        runs.append(haar_wv(x, sample_rate_hz, min_edf=min_edf))
+    return WaveletVariance(sample_rate_hz, runs[0].n_samples, runs[0].tau_s, np.mean([r.wv_dps2 for r in runs], axis=0),
                            runs[0].edf)

@@ -1,6 +1,6 @@
 """A still sensor's recording, from the file to its noise coefficients: read the axes, warn about
 missing samples, refuse gross errors, characterise each axis (papers 000, 002: the Allan
-deviation and its coefficients, :mod:`gyrofilter.analysis.noise_model`).
+deviation and its coefficients, :mod:`gyrofilter.analysis.noise_fit`).
 
 The one path from a file to the Allan results of ``gyrofilter allan``, ``gyrofilter arma`` and
 a fleet run (:mod:`gyrofilter.analysis.fleet`). Warnings go to the caller's ``warn(text)``;
@@ -12,10 +12,11 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import collect_columns, iter_recording, warn_about_gaps
-from ..units import to_dps
+from ..units import AXES, to_dps
 from .allan import MIN_CLUSTERS, AllanInputError
 from .detectors.common import block_means
-from .noise_model import GROSS_LIMIT_DPS, GROSS_Z, characterise_axis, gross_errors
+from .noise_fit import characterise_axis
+from .noise_screen import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
 
 #: block-mean excursion (deg/s) beyond which a recording is called not static
 STATIC_LIMIT_DPS = 1.0
@@ -47,7 +48,7 @@ def read_axes(path, axes, with_t=False):
     ``with_t`` (head, {axis: array}, t): the ``t`` column (s), or None when the file has none.
 
     ``path``: a format-v1 recording (``.csv`` or ``.csv.gz``); ``axes``: axis letters, e.g.
-    ``"xyz"`` or ``"z"`` (columns ``gx``...). ``head`` is the
+    :data:`~gyrofilter.units.AXES` or ``"z"`` (columns ``gx``...). ``head`` is the
     :class:`~gyrofilter.recording.RecordingHead` after the whole file was read (its warnings,
     notes, ``t_gaps`` and ``sample_rate_hz`` in Hz); the arrays are converted from the file's
     ``gyro_unit``. RecordingError for a bad file or one without samples.
@@ -65,7 +66,7 @@ def read_axes(path, axes, with_t=False):
 def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
-    (:func:`~gyrofilter.analysis.noise_model.gross_errors`); with ``keep`` only warn (``warn(text)``).
+    (:func:`~gyrofilter.analysis.noise_screen.gross_errors`); with ``keep`` only warn (``warn(text)``).
     Samples are never dropped. ``series`` start at the file's sample ``first_row``.
 
     ``head``: the file's :class:`~gyrofilter.recording.RecordingHead` (for its path and line
@@ -90,7 +91,7 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
     warn(f"{text}: analysed as they are (--keep-outliers)")
 
 
-def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
+def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
                            progress=None):
     """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
 
@@ -102,7 +103,7 @@ def characterise_recording(path, *, axes="xyz", confidence=0.95, min_clusters=MI
     that does not look static, :func:`not_static`; a poor fit) stay in their results
     (``AxisNoise.warnings``, the JSON document's ``warnings``).
 
-    ``path``: the recording; ``axes``: axis letters (``"xyz"``); ``confidence``: level of the
+    ``path``: the recording; ``axes``: axis letters (default all, :data:`~gyrofilter.units.AXES`); ``confidence``: level of the
     Allan deviation's confidence intervals (0..1, 0.95 = 95 %); ``min_clusters``: fewest
     clusters an averaging time tau needs to be used; ``keep_outliers``: analyse gross errors
     instead of refusing. Each :class:`~gyrofilter.analysis.noise_model.AxisNoise` holds the

@@ -7,7 +7,7 @@ to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` 
 log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
 
 The recording is read in chunks into one float64 array per axis. Gross errors (isolated spikes
-far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise_model.gross_errors`)
+far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise_screen.gross_errors`)
 are refused before any computation unless ``--keep-outliers`` is given; they are never dropped.
 Output files are written only once every result is finite, each whole or not at all.
 """
@@ -15,7 +15,8 @@ import sys
 
 from ..analysis.allan import MIN_CLUSTERS, AllanInputError
 from ..analysis.fleet import FleetSettings
-from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert, kalibr_yaml, to_json
+from ..analysis.noise_export import kalibr_yaml, to_json
+from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert
 from ..analysis.plots_allan import plot_allan
 from ..analysis.still import characterise_recording
 from ..errors import SettingsError

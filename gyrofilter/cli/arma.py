@@ -94,11 +94,11 @@ def run(args):
     return 0
 
 
-def _window(args, n, fs, t_s=None):
+def _window(args, n, sample_rate_hz, t_s=None):
     """Sample indices [i0, i1) of --start-s/--end-s, in seconds after the first sample: by the
     ``t`` column when the file has one (``t_s``: the samples from the first at or after the time
     minus half an interval, so that a uniform ``t`` selects as the count does), else by the count
-    (sample i at i / ``fs``); errors name the options the user gave."""
+    (sample i at i / ``sample_rate_hz``); errors name the options the user gave."""
     for option, value in (("--start-s", args.start_s), ("--end-s", args.end_s)):
         if value is not None and not abs(value) <= MAX_DURATION_S:
             raise SettingsError(f"{option} must be a finite number of seconds, at most {MAX_DURATION_S:g}, got {value:g}")
@@ -109,15 +109,15 @@ def _window(args, n, fs, t_s=None):
         raise SettingsError(f"--end-s {args.end_s:g} must be after " +
                             (f"--start-s {start_s:g}" if args.start_s is not None else "the start (0 s)"))
     if t_s is None:
-        i0 = int(round(start_s * fs))
-        i1 = n if args.end_s is None else min(n, int(round(args.end_s * fs)))
+        i0 = int(round(start_s * sample_rate_hz))
+        i1 = n if args.end_s is None else min(n, int(round(args.end_s * sample_rate_hz)))
     else:
         after_s = t_s - t_s[0]
-        i0 = int(np.searchsorted(after_s, start_s - 0.5 / fs))
-        i1 = n if args.end_s is None else int(np.searchsorted(after_s, args.end_s - 0.5 / fs))
+        i0 = int(np.searchsorted(after_s, start_s - 0.5 / sample_rate_hz))
+        i1 = n if args.end_s is None else int(np.searchsorted(after_s, args.end_s - 0.5 / sample_rate_hz))
     if i1 - i0 >= MIN_SAMPLES:
         return i0, i1
-    length = f"{n} samples ({_span_s(0, n, fs, t_s):g} s at {fs:g} Hz)"
+    length = f"{n} samples ({_span_s(0, n, sample_rate_hz, t_s):g} s at {sample_rate_hz:g} Hz)"
     given = " and ".join(f"--{name.replace('_', '-')} {value:g}" for name, value in
                          (("start_s", args.start_s), ("end_s", args.end_s)) if value is not None)
     if not given:
@@ -127,15 +127,15 @@ def _window(args, n, fs, t_s=None):
                         f"the analysis needs at least {MIN_SAMPLES}")
 
 
-def _start_s(i0, fs, t_s):
+def _start_s(i0, sample_rate_hz, t_s):
     """When sample ``i0`` was taken, in seconds after the first (by ``t_s`` when the file has it)."""
-    return i0 / fs if t_s is None else float(t_s[i0] - t_s[0])
+    return i0 / sample_rate_hz if t_s is None else float(t_s[i0] - t_s[0])
 
 
-def _span_s(i0, i1, fs, t_s):
+def _span_s(i0, i1, sample_rate_hz, t_s):
     """The time samples [i0, i1) span (s), one interval per sample: by ``t_s`` when the file has it
-    (lost samples lengthen it), else the count over ``fs``."""
-    return (i1 - i0) / fs if t_s is None else float(t_s[i1 - 1] - t_s[i0]) + 1.0 / fs
+    (lost samples lengthen it), else the count over ``sample_rate_hz``."""
+    return (i1 - i0) / sample_rate_hz if t_s is None else float(t_s[i1 - 1] - t_s[i0]) + 1.0 / sample_rate_hz
 
 
 def _print_axis(rep, alpha):

@@ -11,7 +11,7 @@ from ..filter.presets import DEFAULT_PRESET, PRESETS
 from ..filter.tempcomp import coefficients_from_model
 from ..inputs import parse_json, quote
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT
-from ..sim.simulate import load_model, validate_model
+from ..sim.model import load_model, validate_model
 from .console import bias_text
 from .options import decimal, file_name
 from .outputs import replacing
@@ -122,7 +122,7 @@ def _parse_setting(text):
 
 def temperature_coefficients(path):
     """(cx, cy, cz) in deg/s per deg C from a gap report (its extended_model) or a simulator model,
-    checked by the simulator's :func:`~gyrofilter.sim.simulate.validate_model` (for its numbers
+    checked by the simulator's :func:`~gyrofilter.sim.model.validate_model` (for its numbers
     only: the sample rate and the temperature profile may be missing)."""
     model = load_model(path)
     if not isinstance(model, dict) or not isinstance(model.get("axes"), dict):

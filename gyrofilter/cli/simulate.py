@@ -13,8 +13,8 @@ import numpy as np
 
 from ..errors import SettingsError
 from ..recording import RecordingWriter
-from ..sim.simulate import (check_seed, draw_seed, load_model, recording_columns, recording_header, sample_count,
-                            simulate_chunks, validate_model)
+from ..sim.model import load_model, validate_model
+from ..sim.simulate import check_seed, draw_seed, recording_columns, recording_header, sample_count, simulate_chunks
 from ..units import MAX_DURATION_S, check_duration_s
 from . import console, options, outputs
 

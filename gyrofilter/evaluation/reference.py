@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SettingsError
-from ..units import check_sample_rate_hz, plain
+from ..units import check_sample_rate_hz, plain, to_dps
 
 
 def quat_multiply(p, q):
@@ -193,8 +193,6 @@ def reference_from_recording(rec):
     The columns are in the recording's ``gyro_unit``; where a ``ref_valid`` column is 0 the
     reference could not be derived (occlusion) and the rows come back as NaN.
     """
-    from ..units import to_dps
-
     missing = [c for c in ("ref_x", "ref_y", "ref_z") if c not in rec.columns]
     if missing:
         raise SettingsError(f"{rec.path}: no reference-rate column(s) {', '.join(missing)}")

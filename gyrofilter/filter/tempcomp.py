@@ -50,7 +50,7 @@ def compensate(gyro_dps, temp_c, coefficient_dps_per_c, reference_temp_c):
 def coefficients_from_model(model: dict):
     """(cx, cy, cz) in deg/s/C from a simulator model / gap ``extended_model`` (0 where no temperature effect):
     the sum of each axis's ``temperature`` effects. Reads ``model`` as it is: check it first (the command
-    line's ``--temp-model`` goes through :func:`gyrofilter.sim.simulate.validate_model`)."""
+    line's ``--temp-model`` goes through :func:`gyrofilter.sim.model.validate_model`)."""
     out = []
     axes = model.get("axes", {})
     for name in AXES:

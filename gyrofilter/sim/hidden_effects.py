@@ -30,6 +30,9 @@ import math
 
 import numpy as np
 
+from .noise_terms import colored_noise_filter
+from .simulate import simulate
+from ..recording import Recording
 from ..units import AXES
 
 EFFECTS = ("bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
@@ -114,8 +117,6 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
 
 def simulate_case(case):
     """The case's recording (in memory)."""
-    from gyrofilter.sim.simulate import simulate
-
     return simulate(case["model"], case["duration_s"], seed=case["sim_seed"])
 
 
@@ -123,18 +124,15 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     """Add one effect to a real recording (real noise as the baseline): the effect is simulated
     alone (no white noise, no bias, no quantization) at the recording's rate and length and
     added to the rate in deg/s; the result is a deg/s recording with the same temp column."""
-    from gyrofilter.recording import Recording
-    from gyrofilter.sim.simulate import simulate
-
-    fs = rec.sample_rate_hz
+    sample_rate_hz = rec.sample_rate_hz
     n = len(rec)
-    model = {"sample_rate_hz": fs, "gyro_unit": "dps",
+    model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",
              "axes": {a: {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []} for a in AXES}}
     temp = rec.temp_c
     if effect == "temperature":
         if temp is None:
             raise ValueError("temperature needs a temp column")
-        t = np.arange(n) / fs
+        t = np.arange(n) / sample_rate_hz
         step = max(1, n // 500)
         model["temperature"] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
     gyro = rec.gyro_dps.copy()
@@ -142,8 +140,6 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         # a property of the noise, not an additive term: filter the real noise of the axis by
         # the colored noise's own filter, keeping its variance (preserve "std")
         from scipy.signal import lfilter
-
-        from .noise_terms import colored_noise_filter
 
         i = AXES.index(axis)
         rho = float(params["lag1"])
@@ -155,10 +151,10 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         gyro[:, i] = gyro[:, i].mean() + lfilter(b, a, dev)
     else:
         model["axes"][axis]["effects"].append({"effect": effect, **params})
-        sim = simulate(model, n / fs, seed=seed)
+        sim = simulate(model, n / sample_rate_hz, seed=seed)
         gyro = gyro + sim.gyro_dps[:n]
     header = {k: v for k, v in rec.header.items() if k not in ("gyro_unit", "lsb_per_dps")}
-    return Recording.from_dps(gyro, fs, temp_c=temp, header=header)
+    return Recording.from_dps(gyro, sample_rate_hz, temp_c=temp, header=header)
 
 
 def _within(kind, tol, est, true, duration_s):

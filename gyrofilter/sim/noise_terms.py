@@ -75,7 +75,7 @@ class WhiteNoise:
 
     ``arw_dps_per_sqrt_hz``: N (deg/s/sqrt(Hz)); ``sample_rate_hz``: f_s (Hz); ``rng``: the
     term's generator; ``lag1``: ρ in (-1, 1), 0 for white noise; ``preserve``: ``"arw"`` or
-    ``"std"`` (any other value acts as ``"std"``; :func:`~gyrofilter.sim.simulate.validate_model`
+    ``"std"`` (any other value acts as ``"std"``; :func:`~gyrofilter.sim.model.validate_model`
     admits only these two).
     """
 
@@ -520,7 +520,7 @@ class TemperatureProfile:
     std n_c and resolution r (MPU6050: 1/340 deg C, datasheet register map 4.18).
 
     ``spec``: the validated ``temperature`` object of the model
-    (:func:`~gyrofilter.sim.simulate.validate_model`: ``start_c``, ``end_c`` in deg C, ``tau_s``,
+    (:func:`~gyrofilter.sim.model.validate_model`: ``start_c``, ``end_c`` in deg C, ``tau_s``,
     ``cycle_period_s`` in s, ``cycle_amplitude_c``, ``noise_c``, ``resolution_c`` in deg C; or
     ``t_s`` (s) and ``temp_c`` (deg C) arrays); ``rng``: generator of the read noise.
     """

@@ -2,7 +2,7 @@
 
 Every profile starts with at least 10 s at rest (the start-up calibration needs the sensor
 still) and is a function of time only, so the truth can be evaluated at any instant, also shifted
-(the lag estimate of :mod:`gyrofilter.evaluation.evaluate` uses that). Rates in deg/s on one axis; the
+(the lag estimate of :mod:`gyrofilter.evaluation.metrics` uses that). Rates in deg/s on one axis; the
 dynamic test adds the same profile to each axis of a real static recording.
 
 ``paper001`` is the dynamic test of paper 001 (its section 5) exactly as

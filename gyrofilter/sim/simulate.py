@@ -2,7 +2,7 @@
 
 The model is a JSON object (the gap report's ``extended_model``); its keys, defaults and the
 effect table with every parameter are stated in docs/formats.md (section 2) and checked by
-:func:`validate_model` (``EFFECTS`` below is the table in code).
+:func:`gyrofilter.sim.model.validate_model` (``EFFECTS`` there is the table in code).
 
 Per axis and sample n (t = n / f_s), in deg/s:
 
@@ -37,310 +37,17 @@ share their white noise).
 from __future__ import annotations
 
 import json
-import math
-import re
 
 import numpy as np
 
 from . import noise_terms as nt
+from .model import EFFECTS, validate_model
 from ..errors import SettingsError
-from ..inputs import MAX_QUOTE_CHARS, quote
 from ..recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, format_number
-from ..units import (AXES, DEG_PER_RAD, GYRO_UNITS, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_duration_s,
-                     check_sample_rate_hz, plain)
+from ..units import AXES, DEG_PER_RAD, check_duration_s, plain, to_dps
 
 DEFAULT_CHUNK_SAMPLES = 65536
-
-# Bounds of every model number, so that no model gives a non-finite or absurd signal. A number is
-# bounded by its key's unit (the suffix of its name) and then checked by its kind below; every
-# rate-like number (_dps, and deg/s per s, per sqrt(s), per sqrt(Hz), per deg C) by units.MAX_RATE_DPS.
-MAX_TIME_S = 1e9  # times and time constants (s): about 32 years
-MIN_TIME_CONSTANT_S = 1e-6  # time constants and periods (s): far below any sample period
-MAX_PHASE_RAD = 1000.0
-MIN_RESOLUTION_C = 1e-6  # a temperature's quantization step: a finer one (5e-324) made the rounding infinite
-MAX_FREQUENCY_HZ = MAX_SAMPLE_RATE_HZ
-MIN_BANDWIDTH_PER_RATE = 1e-9  # narrowband: bandwidth_hz >= this times the sample rate (a resonator off the unit circle)
-MAX_EFFECTS_PER_AXIS = 100
-MAX_ARMA_COEFFICIENTS = 20  # each of phi and theta; `gyrofilter arma --max-n 10` fits ARMA(20, 19)
-MAX_TABLE_POINTS = 100_000  # a temperature table's t_s and temp_c
-#: bounds of the numbers whose key carries no unit, by key
-_NAMED_LIMITS = {"lsb_per_dps": (1e-3, 1e9), "per_decade": (0.1, 10.0), "spread_ln": (0.0, 5.0),
-                 "phi": (-1e6, 1e6), "theta": (-1e6, 1e6)}
-
-# kinds of parameter checks: (test, what is expected)
-_KINDS = {
-    "any": (lambda v: True, "a finite number"),
-    "nonneg": (lambda v: v >= 0.0, "a number >= 0"),
-    "pos": (lambda v: v > 0.0, "a number > 0"),
-    "frac": (lambda v: 0.0 <= v <= 1.0, "a number in [0, 1]"),
-    "lag": (lambda v: -1.0 < v < 1.0, "a number in (-1, 1)"),
-    "step": (lambda v: v == 0.0 or v >= MIN_RESOLUTION_C, f"0 (none) or a number >= {MIN_RESOLUTION_C:g}"),
-}
-
-#: effect name -> (required {param: kind}, optional {param: (kind, default)}), in table order.
-EFFECTS = {
-    "bias_instability": ({"b_dps": "nonneg"}, {"tau_min_s": ("pos", None), "tau_max_s": ("pos", None), "per_decade": ("pos", 2.0)}),
-    "rate_random_walk": ({"k_dps_per_sqrt_s": "nonneg"}, {}),
-    "rate_ramp": ({"r_dps_per_s": "any"}, {}),
-    "gauss_markov": ({"sigma_dps": "nonneg", "tau_s": "pos"}, {}),
-    "sinusoid": ({"frequency_hz": "nonneg", "amplitude_dps": "nonneg"}, {"phase_rad": ("any", 0.0)}),
-    "temperature": ({"coefficient_dps_per_c": "any"}, {"reference_c": ("any", None)}),
-    "bias_step": ({"time_s": "nonneg", "size_dps": "any"}, {}),
-    "warmup": ({"amplitude_dps": "any", "tau_s": "pos"}, {}),
-    "outliers": ({"rate": "frac", "magnitude_dps": "nonneg"}, {"spread_ln": ("nonneg", 0.25)}),
-    "colored_noise": ({"lag1": "lag"}, {"lag2": ("lag", None), "preserve": ("choice:arw,std", "arw")}),
-    "narrowband": ({"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {}),
-    "arma": ({"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])}),
-}
 _EFFECT_ID = {name: i + 1 for i, name in enumerate(EFFECTS)}  # 0 = white noise; fixed stream keys
-
-_TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", "temperature", "axes"}
-_META_KEYS = {"description", "name", "comment", "notes", "source", "sensor"}
-_AXIS_KEYS = {"bias_dps", "arw_dps_per_sqrt_hz", "effects"}
-_TEMP_EXP = {"start_c": ("any", None), "end_c": ("any", None), "tau_s": ("pos", 600.0),
-             "cycle_amplitude_c": ("nonneg", 0.0), "cycle_period_s": ("pos", 3600.0),
-             "noise_c": ("nonneg", 0.0), "resolution_c": ("step", 0.0)}
-
-
-def _err(where, text):
-    """SettingsError naming the key path ``where``, quoted when a user's key makes it unprintable or long."""
-    raise SettingsError(f"model: {where if where.isprintable() and len(where) <= 120 else quote(where)}: {text}")
-
-
-def _limits(key, kind):
-    """(lowest, highest, unit) of the model number named ``key`` (a key of the model; list
-    entries take their list's key): by the unit its name ends in, else :data:`_NAMED_LIMITS`."""
-    if key in _NAMED_LIMITS:
-        return (*_NAMED_LIMITS[key], "")
-    if "_dps" in key:
-        return -MAX_RATE_DPS, MAX_RATE_DPS, ""
-    if key.endswith("_s"):
-        return (MIN_TIME_CONSTANT_S if kind == "pos" else -MAX_TIME_S), MAX_TIME_S, " s"
-    if key.endswith("_hz"):
-        return 0.0, MAX_FREQUENCY_HZ, " Hz"
-    if key.endswith("_c"):
-        return (*TEMP_RANGE_C, " deg C")  # temperatures, and temperature spreads up to the high end
-    if key.endswith("_rad"):
-        return -MAX_PHASE_RAD, MAX_PHASE_RAD, " rad"
-    return -math.inf, math.inf, ""  # rate, lag1, lag2: their kind bounds them
-
-
-def _number(value, where, kind="any"):
-    """``value`` as a float, or SettingsError naming ``where``: a number (not a bool) of the kind
-    ``kind`` (:data:`_KINDS`) inside the limits of its key (:func:`_limits`)."""
-    number = math.nan
-    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)):
-        try:
-            number = float(value)
-        except OverflowError:  # an int beyond a float's range
-            pass
-    if math.isnan(number) and not isinstance(value, (float, np.floating)):
-        _err(where, f"expected {_KINDS[kind][1]}, got {_show(value)}")
-    if not math.isfinite(number) or not _KINDS[kind][0](number):
-        _err(where, f"expected {_KINDS[kind][1]}, got {plain(number)}")
-    low, high, unit = _limits(re.sub(r"\[\d+\]$", "", where.rsplit(".", 1)[-1]), kind)
-    if number > high:
-        _err(where, f"expected a number <= {high:g}{unit}, got {number:g}")
-    if number < low:
-        _err(where, f"expected a number >= {low:g}{unit}, got {number:g}")
-    return number
-
-
-def _show(value, limit=MAX_QUOTE_CHARS):
-    """JSON text of a bad value for an error message (repr when it is not JSON), cut to ``limit``
-    characters (with the full length) when longer."""
-    try:
-        text = json.dumps(value)
-    except (TypeError, ValueError):
-        text = plain(value)
-    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
-
-
-def _is_ignored(key):
-    return isinstance(key, str) and key.startswith("_")
-
-
-def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
-    """Check a model once and return ``(normalized, warnings)``.
-
-    ``normalized`` is a new dict with every default filled in (floats, all three axes, effect
-    parameters complete); ``warnings`` lists ignored unknown effect parameters. Anything else
-    wrong raises :class:`SettingsError` with one line naming the key path and what was expected,
-    e.g. ``model: axes.z.effects[0] (gauss_markov): missing parameter 'tau_s' (expected a number > 0)``.
-    Keys starting with ``_`` and top-level metadata (description, name, comment, notes, source,
-    sensor) are ignored.
-
-    Every number is bounded, so that no model makes a non-finite or absurd signal: the sample
-    rate by :func:`~gyrofilter.units.check_sample_rate_hz`; others by its
-    key's unit (:func:`_limits`: rates |x| <= :data:`MAX_RATE_DPS` deg/s, the same for deg/s per s,
-    per sqrt(s), per sqrt(Hz) and per deg C; times |t| <= :data:`MAX_TIME_S`, time constants and
-    periods in [:data:`MIN_TIME_CONSTANT_S`, :data:`MAX_TIME_S`] s; frequencies <= the highest
-    sample rate; temperatures in ``units.TEMP_RANGE_C``; phases |p| <= :data:`MAX_PHASE_RAD`;
-    ``lsb_per_dps``, ``per_decade``, ``spread_ln`` and the ARMA coefficients by
-    :data:`_NAMED_LIMITS`), a narrowband line's width in [:data:`MIN_BANDWIDTH_PER_RATE` f_s, f_s]
-    and its centre below Nyquist; and every list: at most :data:`MAX_EFFECTS_PER_AXIS` effects
-    per axis, :data:`MAX_ARMA_COEFFICIENTS` coefficients each in ``phi`` and ``theta``,
-    :data:`MAX_TABLE_POINTS` points in a temperature table.
-
-    ``model``: the model dict (docs/formats.md, section 2; e.g. from :func:`load_model`);
-    ``sample_rate_hz``: sample rate (Hz) overriding the model's. In ``normalized`` the units are
-    the keys' own: ``sample_rate_hz`` Hz, ``lsb_per_dps`` LSB per deg/s (or None),
-    ``full_scale_dps`` deg/s (or None), per axis ``bias_dps`` deg/s and ``arw_dps_per_sqrt_hz``
-    deg/s/sqrt(Hz), temperatures deg C and times s (the ``temperature`` profile's lists as arrays).
-
-    ``coefficients_only``: the model is read for its numbers, not simulated (``--temp-model``
-    takes its temperature coefficients): the sample rate and the temperature profile may then be
-    missing (``sample_rate_hz`` None, and the checks that need the rate are skipped); every
-    value that is there is checked all the same.
-    """
-    warnings = []
-    if not isinstance(model, dict):
-        _err("top level", f"expected a JSON object, got {type(model).__name__}")
-    for key in model:
-        if key not in _TOP_KEYS and key not in _META_KEYS and not _is_ignored(key):
-            _err(key, f"unknown key (expected {', '.join(sorted(_TOP_KEYS))})")
-    out = {}
-    rate = model.get("sample_rate_hz") if sample_rate_hz is None else sample_rate_hz
-    if rate is None and not coefficients_only:
-        _err("sample_rate_hz", "missing (expected the sample rate in Hz, > 0; or give --sample-rate-hz)")
-    out["sample_rate_hz"] = None if rate is None else check_sample_rate_hz(rate, "model: sample_rate_hz")
-    unit = model.get("gyro_unit", "dps")
-    if unit not in GYRO_UNITS:
-        _err("gyro_unit", f"expected one of {', '.join(GYRO_UNITS)}, got {_show(unit)}")
-    out["gyro_unit"] = unit
-    lsb = model.get("lsb_per_dps")
-    if lsb is None and unit == "lsb":
-        _err("lsb_per_dps", "missing: gyro_unit 'lsb' needs lsb_per_dps (LSB per deg/s, > 0)")
-    out["lsb_per_dps"] = None if lsb is None else _number(lsb, "lsb_per_dps", "pos")
-    fs = model.get("full_scale_dps")
-    out["full_scale_dps"] = None if fs is None else _number(fs, "full_scale_dps", "pos")
-    out["temperature"] = None if model.get("temperature") is None else _validate_temperature(model["temperature"])
-
-    axes = model.get("axes", {})
-    if not isinstance(axes, dict):
-        _err("axes", f"expected an object with keys x, y, z, got {_show(axes)}")
-    for name in axes:
-        if name not in AXES and not _is_ignored(name):
-            _err(f"axes.{name}", "unknown axis (expected x, y or z)")
-    out["axes"] = {}
-    for name in AXES:
-        out["axes"][name] = _validate_axis(axes.get(name, {}), f"axes.{name}", out, warnings, coefficients_only)
-    return out, warnings
-
-
-def _validate_temperature(spec):
-    where = "temperature"
-    if not isinstance(spec, dict):
-        _err(where, f"expected an object, got {_show(spec)}")
-    out = {}
-    if "t_s" in spec or "temp_c" in spec:
-        allowed = {"t_s", "temp_c", "noise_c", "resolution_c"}
-        for key in spec:
-            if key not in allowed and not _is_ignored(key):
-                _err(f"{where}.{key}", f"unknown key for a table profile (expected {', '.join(sorted(allowed))})")
-        for key in ("t_s", "temp_c"):
-            if not isinstance(spec.get(key), list) or not spec[key]:
-                _err(f"{where}.{key}", "expected a non-empty list of numbers (table profile needs t_s and temp_c)")
-            _check_length(spec[key], f"{where}.{key}", MAX_TABLE_POINTS, "points")
-        t = [_number(v, f"{where}.t_s[{i}]") for i, v in enumerate(spec["t_s"])]
-        temp = [_number(v, f"{where}.temp_c[{i}]") for i, v in enumerate(spec["temp_c"])]
-        if len(t) != len(temp):
-            _err(where, f"t_s has {len(t)} values but temp_c has {len(temp)}")
-        if any(b <= a for a, b in zip(t, t[1:])):
-            _err(f"{where}.t_s", "expected strictly increasing times")
-        out["t_s"], out["temp_c"] = np.array(t), np.array(temp)
-        out["noise_c"] = _number(spec.get("noise_c", 0.0), f"{where}.noise_c", "nonneg")
-        out["resolution_c"] = _number(spec.get("resolution_c", 0.0), f"{where}.resolution_c", "step")
-        return out
-    for key in spec:
-        if key not in _TEMP_EXP and not _is_ignored(key):
-            _err(f"{where}.{key}", f"unknown key (expected {', '.join(_TEMP_EXP)}, or t_s and temp_c for a table)")
-    if spec.get("start_c") is None:
-        _err(f"{where}.start_c", "missing (expected the temperature at t = 0 in deg C)")
-    for key, (kind, default) in _TEMP_EXP.items():
-        value = spec.get(key, default)
-        out[key] = None if value is None and default is None else _number(value, f"{where}.{key}", kind)
-    if out["end_c"] is None:
-        out["end_c"] = out["start_c"]
-    return out
-
-
-def _validate_axis(spec, where, model, warnings, coefficients_only):
-    if not isinstance(spec, dict):
-        _err(where, f"expected an object with bias_dps, arw_dps_per_sqrt_hz, effects; got {_show(spec)}")
-    for key in spec:
-        if key not in _AXIS_KEYS and not _is_ignored(key):
-            _err(f"{where}.{key}", f"unknown key (expected {', '.join(sorted(_AXIS_KEYS))})")
-    out = {"bias_dps": _number(spec.get("bias_dps", 0.0), f"{where}.bias_dps"),
-           "arw_dps_per_sqrt_hz": _number(spec.get("arw_dps_per_sqrt_hz", 0.0), f"{where}.arw_dps_per_sqrt_hz", "nonneg"),
-           "effects": []}
-    effects = spec.get("effects", [])
-    if not isinstance(effects, list):
-        _err(f"{where}.effects", f"expected a list of effect objects, got {_show(effects)}")
-    _check_length(effects, f"{where}.effects", MAX_EFFECTS_PER_AXIS, "effects")
-    for i, eff in enumerate(effects):
-        out["effects"].append(_validate_effect(eff, f"{where}.effects[{i}]", model, warnings, coefficients_only))
-    if sum(e["effect"] == "colored_noise" for e in out["effects"]) > 1:
-        _err(f"{where}.effects", "at most one colored_noise per axis")
-    return out
-
-
-def _validate_effect(eff, where, model, warnings, coefficients_only):
-    if not isinstance(eff, dict) or "effect" not in eff:
-        _err(where, f"expected an object with an 'effect' name, got {_show(eff)}")
-    name = eff["effect"]
-    if not isinstance(name, str) or name not in EFFECTS:
-        _err(f"{where}.effect", f"unknown effect {_show(name, 40)} (expected one of {', '.join(EFFECTS)})")
-    required, optional = EFFECTS[name]
-    label = f"{where} ({name})"
-    out = {"effect": name}
-    for key, kind in required.items():
-        if key not in eff:
-            _err(label, f"missing parameter '{key}' (expected {_KINDS[kind][1]})")
-        out[key] = _number(eff[key], f"{label}.{key}", kind)
-    for key, (kind, default) in optional.items():
-        value = eff.get(key, default)
-        if kind.startswith("choice:"):
-            choices = kind.split(":", 1)[1].split(",")
-            if value not in choices:
-                _err(f"{label}.{key}", f"expected one of {', '.join(choices)}, got {_show(value)}")
-            out[key] = value
-        elif kind == "coefs":
-            if not isinstance(value, (list, tuple)):
-                _err(f"{label}.{key}", f"expected a list of numbers, got {_show(value)}")
-            _check_length(value, f"{label}.{key}", MAX_ARMA_COEFFICIENTS, "coefficients")
-            out[key] = [_number(v, f"{label}.{key}[{i}]") for i, v in enumerate(value)]
-        else:  # null stands for "not given" only where the default is derived (None)
-            out[key] = None if value is None and default is None else _number(value, f"{label}.{key}", kind)
-    for key in eff:
-        if key != "effect" and key not in required and key not in optional and not _is_ignored(key):
-            warnings.append(f"model: {label}: unknown parameter '{key}' ignored")
-    if name == "temperature" and model["temperature"] is None and not coefficients_only:
-        _err(label, "needs the model's 'temperature' profile (the top-level 'temperature' key)")
-    rate = model["sample_rate_hz"]
-    if name == "sinusoid" and rate is not None and out["frequency_hz"] > rate / 2.0:
-        warnings.append(f"model: {label}: frequency_hz {out['frequency_hz']:g} is above the Nyquist frequency "
-                        f"{rate / 2.0:g} Hz and will alias")
-    if name == "narrowband" and rate is not None:
-        if out["center_hz"] >= rate / 2.0:
-            _err(f"{label}.center_hz", f"expected a frequency below the Nyquist frequency {rate / 2.0:g} Hz, "
-                                       f"got {out['center_hz']:g}")
-        if not MIN_BANDWIDTH_PER_RATE * rate <= out["bandwidth_hz"] <= rate:
-            _err(f"{label}.bandwidth_hz", f"expected a width in [{MIN_BANDWIDTH_PER_RATE * rate:g}, {rate:g}] Hz "
-                                          f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")
-    if name == "arma" and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:
-        _err(f"{label}.phi", "expected a stationary AR part (every root of z^p - phi_1 z^(p-1) - ... - phi_p inside the unit circle)")
-    if name == "colored_noise" and out["lag2"] is not None and nt.arma11_from_lags(out["lag1"], out["lag2"]) is None:
-        _err(f"{label}.lag2", f"no first-order ARMA noise has lag-1 autocorrelation {out['lag1']:g} and lag-2 "
-                              f"{out['lag2']:g} (expected |lag2| < |lag1| and 1 + p^2 - 2 p lag1 > 2 |lag1 - p|, p = lag2 / lag1)")
-    if name == "bias_instability" and out["tau_min_s"] and out["tau_max_s"] and out["tau_max_s"] < out["tau_min_s"]:
-        _err(f"{label}.tau_max_s", "expected tau_max_s >= tau_min_s")
-    return out
-
-
-def _check_length(values, where, most, what):
-    if len(values) > most:
-        _err(where, f"at most {most} {what}, got {len(values)}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -383,17 +90,17 @@ def _stream(root, *key):
 # simulation
 
 
-def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
+def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
     """(additive terms, noise term, outlier terms) for one axis."""
     terms = [nt.Constant(spec["bias_dps"])]
     outliers = []
     colored = next((e for e in spec["effects"] if e["effect"] == "colored_noise"), None)
     if colored is not None and colored["lag2"] is not None:
-        noise = nt.FilteredNoise(*nt.colored_noise_filter(spec["arw_dps_per_sqrt_hz"], fs, colored["lag1"],
+        noise = nt.FilteredNoise(*nt.colored_noise_filter(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, colored["lag1"],
                                                           colored["lag2"], colored["preserve"]),
                                  _stream(root, ax_index, 0, 0, 0))
     else:
-        noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], fs, _stream(root, ax_index, 0, 0, 0),
+        noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, _stream(root, ax_index, 0, 0, 0),
                               lag1=colored["lag1"] if colored else 0.0,
                               preserve=colored["preserve"] if colored else "arw")
     seen = {}
@@ -402,15 +109,16 @@ def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
         occ = seen[name] = seen.get(name, -1) + 1
         key = (ax_index, _EFFECT_ID[name], occ)
         if name == "bias_instability":
-            tau_min = eff["tau_min_s"] or 1.0 / fs
+            tau_min = eff["tau_min_s"] or 1.0 / sample_rate_hz
             tau_max = eff["tau_max_s"] or max(duration_s, tau_min)
-            terms.append(nt.BiasInstability(eff["b_dps"], fs, _stream(root, *key, 0), tau_min, tau_max, eff["per_decade"]))
+            terms.append(nt.BiasInstability(eff["b_dps"], sample_rate_hz, _stream(root, *key, 0), tau_min, tau_max,
+                                            eff["per_decade"]))
         elif name == "rate_random_walk":
-            terms.append(nt.RateRandomWalk(eff["k_dps_per_sqrt_s"], fs, _stream(root, *key, 0)))
+            terms.append(nt.RateRandomWalk(eff["k_dps_per_sqrt_s"], sample_rate_hz, _stream(root, *key, 0)))
         elif name == "rate_ramp":
             terms.append(nt.RateRamp(eff["r_dps_per_s"]))
         elif name == "gauss_markov":
-            terms.append(nt.GaussMarkov(eff["sigma_dps"], eff["tau_s"], fs, _stream(root, *key, 0)))
+            terms.append(nt.GaussMarkov(eff["sigma_dps"], eff["tau_s"], sample_rate_hz, _stream(root, *key, 0)))
         elif name == "sinusoid":
             terms.append(nt.Sinusoid(eff["amplitude_dps"], eff["frequency_hz"], eff["phase_rad"]))
         elif name == "temperature":
@@ -421,7 +129,7 @@ def _axis_terms(ax_index, spec, fs, duration_s, root, temp_profile):
         elif name == "warmup":
             terms.append(nt.Warmup(eff["amplitude_dps"], eff["tau_s"]))
         elif name == "narrowband":
-            b, a = nt.narrowband_filter(eff["rms_dps"], eff["center_hz"], eff["bandwidth_hz"], fs)
+            b, a = nt.narrowband_filter(eff["rms_dps"], eff["center_hz"], eff["bandwidth_hz"], sample_rate_hz)
             terms.append(nt.FilteredNoise(b, a, _stream(root, *key, 0)))
         elif name == "arma":
             b, a = nt.arma_filter(eff["phi"], eff["theta"], eff["sigma_a_dps"])
@@ -468,15 +176,15 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
     """
     spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
     chunk_samples = _check_chunk_samples(chunk_samples)
-    fs = spec["sample_rate_hz"]
-    n_total = sample_count(duration_s, fs)
-    duration_s = n_total / fs
+    sample_rate_hz = spec["sample_rate_hz"]
+    n_total = sample_count(duration_s, sample_rate_hz)
+    duration_s = n_total / sample_rate_hz
     root = _root_seed(seed, rng)
     temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
-    axes = [_axis_terms(i, spec["axes"][a], fs, duration_s, root, temp) for i, a in enumerate(AXES)]
+    axes = [_axis_terms(i, spec["axes"][a], sample_rate_hz, duration_s, root, temp) for i, a in enumerate(AXES)]
     for start in range(0, n_total, chunk_samples):
         n = min(chunk_samples, n_total - start)
-        t_s = np.arange(start, start + n) / fs
+        t_s = np.arange(start, start + n) / sample_rate_hz
         true_c = temp.true_c(t_s) if temp else None
         gyro = np.empty((n, 3))
         for i, terms in enumerate(axes):
@@ -520,18 +228,16 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     ``validated``: the already validated model (:func:`validate_model`), if at hand. The rates
     are the model's output converted to deg/s, so quantization and saturation are kept.
     """
-    from ..units import to_dps
-
     spec = validated if validated is not None else validate_model(model)[0]
     chunk_samples = _check_chunk_samples(chunk_samples)
-    fs = spec["sample_rate_hz"]
-    n_total = sample_count(duration_s, fs)
+    sample_rate_hz = spec["sample_rate_hz"]
+    n_total = sample_count(duration_s, sample_rate_hz)
     root = _root_seed(seed, None)
     temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
     axis = int(axis)
-    terms = _axis_terms(axis, spec["axes"][AXES[axis]], fs, n_total / fs, root, temp)
+    terms = _axis_terms(axis, spec["axes"][AXES[axis]], sample_rate_hz, n_total / sample_rate_hz, root, temp)
     for start in range(0, n_total, chunk_samples):
-        t_s = np.arange(start, min(start + chunk_samples, n_total)) / fs
+        t_s = np.arange(start, min(start + chunk_samples, n_total)) / sample_rate_hz
         rate = _axis_rate(terms, t_s, temp.true_c(t_s) if temp else None, spec)
         yield to_dps(rate, spec["gyro_unit"], spec["lsb_per_dps"])
 
@@ -622,17 +328,3 @@ def simulate_dps(model, duration_s, *, sample_rate_hz=None, rng=None, seed=None)
     """
     rec = simulate(model, duration_s, sample_rate_hz=sample_rate_hz, rng=rng, seed=seed)
     return rec.gyro_dps, rec.temp_c
-
-
-def load_model(path):
-    """The simulator model (docs/formats.md, section 2) in the JSON file ``path``, unchecked
-    (:func:`validate_model` checks it). A gap report (section 3) is accepted: its
-    ``extended_model`` is the model. The one reader of model files (``simulate --model``, the
-    ``sim:MODEL.json`` source, ``--temp-model``); its errors name the file. Read through
-    :func:`gyrofilter.inputs.load_json` (size cap, UTF-8, nesting depth, no NaN tokens)."""
-    from ..inputs import load_json
-
-    model = load_json(path, "model")
-    if isinstance(model, dict) and "axes" not in model and isinstance(model.get("extended_model"), dict):
-        model = model["extended_model"]
-    return model

@@ -1,9 +1,9 @@
 """A simulation as a live source (``sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]``).
 
 Samples come from :func:`gyrofilter.sim.simulate.simulate_chunks` (the shared simulator model
-schema; without a model, :data:`DEFAULT_MODEL`, an MPU6050 at rest). By default they are paced
-in real time, so ``record`` and ``run`` behave as with a device; ``realtime=0`` hands them out as
-fast as they are read. The simulator's output does not depend on how it is chunked, so the
+schema; without a model, :data:`DEFAULT_MODEL`, an MPU6050 at rest, read from
+``gyrofilter/data/mpu6050_model.json``). By default they are paced in real time, so ``record``
+and ``run`` behave as with a device; ``realtime=0`` hands them out as fast as they are read. The simulator's output does not depend on how it is chunked, so the
 samples equal ``gyrofilter simulate --model MODEL --duration D --seed S`` for the same model,
 seed and duration, whatever the pacing. Without ``seed`` a random one is drawn and written in
 the header (``simulated_seed``), so every run can be repeated. Without ``duration`` (``record``
@@ -14,10 +14,12 @@ from __future__ import annotations
 import json
 import math
 import time
+from importlib import resources
 
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
+from ..sim.model import load_model, validate_model
 from .base import Source
 
 MAX_WAIT_S = 0.1
@@ -26,27 +28,10 @@ CHUNK_S = 0.1  # seconds of samples per simulator block
 FAST_CHUNK_SAMPLES = 1000  # rows per read() when not paced
 UNLIMITED_S = 7 * 24 * 3600.0
 
-# MPU6050 at rest, +-250 deg/s (131 LSB per deg/s), 100 Hz, DLPF-free; levels like the real static
-# logs in recordings/ (same as examples/models/mpu6050.json)
-DEFAULT_MODEL = {
-    "description": "MPU6050 at rest, +-250 deg/s range (131 LSB per deg/s), 100 Hz; levels typical of the real static logs",
-    "sample_rate_hz": 100.0,
-    "gyro_unit": "lsb",
-    "lsb_per_dps": 131.0,
-    "full_scale_dps": 250.0,
-    "temperature": {"start_c": 24.0, "end_c": 29.0, "tau_s": 900.0, "noise_c": 0.03, "resolution_c": 1.0 / 340.0},
-    "axes": {
-        "x": {"bias_dps": -3.3, "arw_dps_per_sqrt_hz": 0.009,
-              "effects": [{"effect": "bias_instability", "b_dps": 0.006},
-                          {"effect": "temperature", "coefficient_dps_per_c": 0.02}]},
-        "y": {"bias_dps": 1.2, "arw_dps_per_sqrt_hz": 0.008,
-              "effects": [{"effect": "bias_instability", "b_dps": 0.005},
-                          {"effect": "temperature", "coefficient_dps_per_c": -0.015}]},
-        "z": {"bias_dps": -0.6, "arw_dps_per_sqrt_hz": 0.007,
-              "effects": [{"effect": "bias_instability", "b_dps": 0.004},
-                          {"effect": "temperature", "coefficient_dps_per_c": 0.01}]},
-    },
-}
+#: the model of a source given none: an MPU6050 at rest, +-250 deg/s (131 LSB per deg/s), 100 Hz,
+#: DLPF-free, levels as measured in recordings/mpu6050_static_449s.csv.gz; the package's one copy
+DEFAULT_MODEL_PATH = resources.files("gyrofilter") / "data" / "mpu6050_model.json"
+DEFAULT_MODEL = load_model(str(DEFAULT_MODEL_PATH))
 
 
 class SimulatedSource(Source):
@@ -55,7 +40,7 @@ class SimulatedSource(Source):
     Parameters
     ----------
     model : dict or str, optional
-        The simulator model (:func:`gyrofilter.sim.simulate.validate_model` schema) or the path
+        The simulator model (:func:`gyrofilter.sim.model.validate_model` schema) or the path
         of its JSON file (a gap report's ``extended_model`` is used); None or ``""``:
         :data:`DEFAULT_MODEL`.
     seed : int, optional
@@ -75,8 +60,7 @@ class SimulatedSource(Source):
 
     def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
                  clock=time.monotonic, sleep=time.sleep):
-        from ..sim.simulate import (check_seed, draw_seed, load_model, recording_columns, recording_header,
-                                    simulate_chunks, validate_model)
+        from ..sim.simulate import check_seed, draw_seed, recording_columns, recording_header, simulate_chunks
 
         if model is None or model == "":
             model, self.model_name = json.loads(json.dumps(DEFAULT_MODEL)), "default MPU6050-like model"

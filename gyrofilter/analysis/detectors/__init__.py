@@ -61,20 +61,26 @@ ones found, because the effects are confusable:
      look like a ramp or a step is called a wander;
    * with no shape, the best stochastic spectrum is reported if above its threshold.
 
-The package holds one module per concern: ``common`` (thresholds, :class:`Candidate`, helpers),
-``outliers``, ``sinusoid``, ``narrowband``, ``colored`` and ``slow``; every name is importable from
-``gyrofilter.analysis.detectors`` as before.
+The package holds one module per concern: ``common`` (every threshold of the gap analysis,
+:class:`Candidate`, helpers), ``outliers``, ``sinusoid``, ``narrowband``, ``colored`` and
+``slow``; every name is importable from ``gyrofilter.analysis.detectors`` as before.
 """
 from .common import (  # noqa: F401
     COLORED_MIN_LAG1,
     COLORED_MIN_LAG2_GAP,
     COLORED_Z,
+    COMPOSITE_MIN_GAIN,
     Candidate,
     DETERMINISTIC_THRESHOLD,
+    EXACT_GM_MARGIN,
+    GM_MAX_TAU_DIVISOR,
     JOINT_THRESHOLD,
     MAX_BLOCKS,
+    NARROWBAND_THRESHOLD,
     OUTLIER_FALSE_PER_AXIS,
     OUTLIER_MIN_COUNT,
+    OUTSIDE_NULL_D,
+    REPORTED_DEPARTURE_Z,
     SINUSOID_ALPHA,
     STOCHASTIC_PENALTY,
     STOCHASTIC_THRESHOLD,
@@ -104,7 +110,6 @@ from .sinusoid import (  # noqa: F401
 )
 from .narrowband import (  # noqa: F401
     BAND_BACKGROUND_HZ,
-    NARROWBAND_THRESHOLD,
     band_estimate,
     detect_narrowband,
     narrowband_lags,
@@ -117,7 +122,6 @@ from .colored import (  # noqa: F401
     long_run_ratio,
 )
 from .slow import (  # noqa: F401
-    EXACT_GM_MARGIN,
     PERIODOGRAM,
     STOCHASTIC_MODELS,
     detect_slow,

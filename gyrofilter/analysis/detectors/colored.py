@@ -6,32 +6,33 @@ import math
 
 import numpy as np
 
-from .narrowband import narrowband_lags
 from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate, dot, moving_mean
+from .narrowband import narrowband_lags
+from ...sim.noise_terms import arma11_from_lags, arma11_long_run_ratio
 
 
 # ---------------------------------------------------------------------------------------------
 # 3. colored noise
 
 
-def colored_window(n, fs):
+def colored_window(n, sample_rate_hz):
     """High-pass window (samples) for the lag-1 statistic: 64 samples or 0.5 s."""
-    return int(min(max(64, round(0.5 * fs)), max(8, n // 8)))
+    return int(min(max(64, round(0.5 * sample_rate_hz)), max(8, n // 8)))
 
 
-def _highpassed(x, fs):
+def _highpassed(x, sample_rate_hz):
     """``(x - moving_mean(x, W), W)``, W of :func:`colored_window`."""
-    w = colored_window(x.size, fs)
+    w = colored_window(x.size, sample_rate_hz)
     e = moving_mean(x, w)
     np.subtract(x, e, out=e)
     return e, w
 
 
-def lag1_statistic(x, fs):
+def lag1_statistic(x, sample_rate_hz):
     """Lag-1 autocorrelation of ``x - moving_mean(x, W)``; white noise: about -1/W."""
     if x.size < 32:
         return 0.0, 0
-    e, w = _highpassed(x, fs)
+    e, w = _highpassed(x, sample_rate_hz)
     den = float(dot(e, e))
     if den <= 0:
         return 0.0, w
@@ -42,8 +43,6 @@ def long_run_ratio(lag1, lag2=None):
     """Spectrum at zero over the variance, 1 + 2 Σ_k ρ_k, of the colored noise with these
     autocorrelations (``lag2`` None: the AR(1), (1 + ρ₁) / (1 - ρ₁));
     :func:`gyrofilter.sim.noise_terms.arma11_long_run_ratio`."""
-    from ...sim.noise_terms import arma11_from_lags, arma11_long_run_ratio
-
     pair = None if lag2 is None else arma11_from_lags(lag1, lag2)
     phi, mu = pair if pair is not None else (lag1, 0.0)
     return arma11_long_run_ratio(phi, mu)
@@ -78,7 +77,7 @@ def lags_from_highpassed(r1, r2, window, band_lags=None, band_share=0.0):
     return rho1, rho2
 
 
-def detect_colored(x, fs, band=None):
+def detect_colored(x, sample_rate_hz, band=None):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
     pass) from the high-passed r1, r2, less the correlation of a ``narrowband`` candidate
     ``band`` still in ``x`` (:func:`lags_from_highpassed`).
@@ -91,12 +90,10 @@ def detect_colored(x, fs, band=None):
     One that dies slower is a slow process the slow detectors name (a flicker floor gives
     lag2 close to lag1), and the high-pass correction, which holds for correlation times well
     below W, would inflate it."""
-    from ...sim.noise_terms import arma11_from_lags
-
     n = x.size
     if n < 32:
         return None
-    e, w = _highpassed(x, fs)
+    e, w = _highpassed(x, sample_rate_hz)
     den = float(dot(e, e))
     if den <= 0:
         return None
@@ -107,7 +104,7 @@ def detect_colored(x, fs, band=None):
         return None
     band_lags, band_share = None, 0.0
     if band is not None:  # the band brings its own correlation: the colored noise's is what is left
-        band_lags = narrowband_lags(band.params["center_hz"], band.params["bandwidth_hz"], fs)
+        band_lags = narrowband_lags(band.params["center_hz"], band.params["bandwidth_hz"], sample_rate_hz)
         band_share = band.params["rms_dps"] ** 2 / (den / n)
     lags = lags_from_highpassed(r1, r2, w, band_lags, band_share)
     if lags is None:

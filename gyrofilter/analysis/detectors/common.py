@@ -1,4 +1,5 @@
-"""Shared by the detectors: the thresholds, :class:`Candidate` and the series helpers."""
+"""Shared by the detectors: every threshold of the gap analysis (the detectors' significance
+levels and the gap's decision rules), :class:`Candidate` and the series helpers."""
 
 from __future__ import annotations
 
@@ -33,6 +34,28 @@ STOCHASTIC_THRESHOLD = 16.0
 STOCHASTIC_PENALTY = 6.0
 #: z^2 a deterministic shape must reach against the fitted stochastic noise to be kept with it
 JOINT_THRESHOLD = 25.0
+#: 2 Delta log L (exact likelihood) a Gauss-Markov process must gain over a random walk
+EXACT_GM_MARGIN = 8.0
+#: a Gauss-Markov process whose tau exceeds the record length over this is a random walk as far
+#: as the data can tell
+GM_MAX_TAU_DIVISOR = 5
+#: the band statistic (peak excess over the background in units of its sampling error,
+#: ``(R - 1) sqrt(K)``) a band must exceed; on white and AR(1) noise (white + 0.3 white, lag1
+#: -0.7 to 0.7, 4096 to 10^6 samples at 99.37, 100 and 285.7 Hz, 240 runs, issue 12) its
+#: largest value was 2.16 (at 4096 samples and 285.7 Hz; 1.5-1.7 from 7 500 samples up), its
+#: 99th percentile 1.73; on 400 more of 4096-12 000 samples 2.31 (2.29 within W of f_s / 2);
+#: at the Nyquist edge of AR(1) lag1 -0.7 (a PSD peaking at f_s / 2) 2.2 on 10^6 and 2.4 on
+#: 8.64 * 10^6 samples at 100 Hz
+NARROWBAND_THRESHOLD = 4.0
+#: D above which an axis is clearly outside the null band (its 95th percentile is 1.06-1.96 on
+#: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
+#: composite stochastic part, and the report says which feature still departs
+OUTSIDE_NULL_D = 2.0
+#: the factor a composite stochastic part must lower D by
+COMPOSITE_MIN_GAIN = 0.8
+#: a finding's evidence names the feature furthest outside the baseline simulations' spread when
+#: it is at least this many standard deviations of that spread away
+REPORTED_DEPARTURE_Z = 3
 #: number of blocks the slow-effect detectors work on (at most)
 MAX_BLOCKS = 2048
 

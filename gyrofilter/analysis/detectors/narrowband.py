@@ -6,20 +6,14 @@ import math
 
 import numpy as np
 
-from .common import Candidate, dot
+from .common import NARROWBAND_THRESHOLD, Candidate, dot
+from ...sim.noise_terms import filter_psd, narrowband_filter
+from ...units import check_sample_rate_hz
 
 
 # ---------------------------------------------------------------------------------------------
 # 2b. narrow-band noise (a spectral line with a resolved width)
 
-#: the band statistic (peak excess over the background in units of its sampling error,
-#: ``(R - 1) sqrt(K)``) a band must exceed; on white and AR(1) noise (white + 0.3 white, lag1
-#: -0.7 to 0.7, 4096 to 10^6 samples at 99.37, 100 and 285.7 Hz, 240 runs, issue 12) its
-#: largest value was 2.16 (at 4096 samples and 285.7 Hz; 1.5-1.7 from 7 500 samples up), its
-#: 99th percentile 1.73; on 400 more of 4096-12 000 samples 2.31 (2.29 within W of f_s / 2);
-#: at the Nyquist edge of AR(1) lag1 -0.7 (a PSD peaking at f_s / 2) 2.2 on 10^6 and 2.4 on
-#: 8.64 * 10^6 samples at 100 Hz
-NARROWBAND_THRESHOLD = 4.0
 #: half-width (Hz) of the running-median background of :func:`band_estimate` (at most f_s / 10,
 #: so 10 Hz at 100 Hz; 20 Hz since issue 12, where a 7-Hz band at 285.7 Hz filled half of a ±10-Hz window)
 BAND_BACKGROUND_HZ = 20.0
@@ -157,7 +151,7 @@ def _edge_background(s, half, edge_half):
     return out
 
 
-def _resonator_fit(f, s, band, fs):
+def _resonator_fit(f, s, band, sample_rate_hz):
     """Refine centre, width and rms by fitting the ``narrowband`` effect's own PSD (the AR(2)
     resonator of :func:`gyrofilter.sim.noise_terms.narrowband_filter`, one-sided 2 |B|² / |A|² / f_s)
     on a local linear background, ``S(f) = b0 + b1 (f - f_c) + S_L(f; f_c, B, rms)``, to the Welch
@@ -167,11 +161,9 @@ def _resonator_fit(f, s, band, fs):
     half-power run that the nonparametric rms misses."""
     from scipy.optimize import least_squares
 
-    from ...sim.noise_terms import filter_psd, narrowband_filter
-
     c0, b0w, rms0 = band["center_hz"], band["bandwidth_hz"], band["rms_dps"]
     half = max(5.0 * b0w, 1.0)
-    sel = (f >= max(c0 - half, f[1])) & (f <= min(c0 + half, fs / 2 - f[1]))
+    sel = (f >= max(c0 - half, f[1])) & (f <= min(c0 + half, sample_rate_hz / 2 - f[1]))
     if sel.sum() < 8:
         return {}
     fw, logs = f[sel], np.log(np.maximum(s[sel], 1e-300))
@@ -180,15 +172,15 @@ def _resonator_fit(f, s, band, fs):
 
     def model(p):
         centre, bw, rms, level, slope = p[0], math.exp(p[1]), math.exp(p[2]), math.exp(p[3]), p[4]
-        b, a = narrowband_filter(rms, centre, bw, fs)
-        line = 2.0 * filter_psd(b, a, fw, fs)
+        b, a = narrowband_filter(rms, centre, bw, sample_rate_hz)
+        line = 2.0 * filter_psd(b, a, fw, sample_rate_hz)
         return np.log(np.maximum(level * (1.0 + slope * (fw - centre)) + line, 1e-300))
 
     def resid(p):
         return model(p) - logs
 
     lower = [c0 - half / 2, math.log(b0w / 20), start[2] - 3, start[3] - 5, -1.0 / half]
-    upper = [c0 + half / 2, math.log(min(4 * b0w, fs / 4)), start[2] + 3, start[3] + 5, 1.0 / half]
+    upper = [c0 + half / 2, math.log(min(4 * b0w, sample_rate_hz / 4)), start[2] + 3, start[3] + 5, 1.0 / half]
     try:
         res = least_squares(resid, np.clip(start, np.add(lower, 1e-9), np.subtract(upper, 1e-9)),
                             bounds=(lower, upper), max_nfev=200)
@@ -199,7 +191,7 @@ def _resonator_fit(f, s, band, fs):
     return {"center_hz": float(res.x[0]), "bandwidth_hz": float(math.exp(res.x[1])), "rms_dps": float(math.exp(res.x[2]))}
 
 
-def detect_narrowband(x, fs):
+def detect_narrowband(x, sample_rate_hz):
     """Narrow-band noise candidate (the ``narrowband`` effect: centre, half-power width, rms)
     from :func:`band_estimate`.
 
@@ -209,10 +201,12 @@ def detect_narrowband(x, fs):
     :data:`NARROWBAND_THRESHOLD` sits well above its largest value on white and AR(1) noise.
     Runs after the sinusoid detector, so a pure line is already subtracted; the evidence says
     whether the fitted width exceeds the estimator's resolution (``resolution_hz``) by half
-    again, i.e. whether the width is resolved."""
-    if x.size < 4096 or fs <= 0:
+    again, i.e. whether the width is resolved. A sample rate that is no rate raises SettingsError
+    (:func:`~gyrofilter.units.check_sample_rate_hz`)."""
+    check_sample_rate_hz(sample_rate_hz)
+    if x.size < 4096:
         return None
-    band = band_estimate(x, fs)
+    band = band_estimate(x, sample_rate_hz)
     stat = (band["peak_ratio"] - 1.0) * math.sqrt(band["segments"])
     if not stat > NARROWBAND_THRESHOLD or band["rms_dps"] <= 0:
         return None
@@ -231,12 +225,12 @@ def detect_narrowband(x, fs):
     )
 
 
-def narrowband_lags(center_hz, bandwidth_hz, fs):
+def narrowband_lags(center_hz, bandwidth_hz, sample_rate_hz):
     """Lag-1 and lag-2 autocorrelations of the ``narrowband`` effect's AR(2) resonator,
     r₁ = φ₁ / (1 - φ₂), r₂ = φ₁ r₁ + φ₂ (Yule-Walker; Box & Jenkins, eq. 3.2.26),
     φ₁ = 2 r cos θ, φ₂ = -r² (:func:`gyrofilter.sim.noise_terms.narrowband_filter`)."""
-    theta = 2.0 * math.pi * center_hz / fs
-    r = math.exp(-math.pi * bandwidth_hz / fs)
+    theta = 2.0 * math.pi * center_hz / sample_rate_hz
+    r = math.exp(-math.pi * bandwidth_hz / sample_rate_hz)
     phi1, phi2 = 2.0 * r * math.cos(theta), -r * r
     r1 = phi1 / (1.0 - phi2)
     return r1, phi1 * r1 + phi2

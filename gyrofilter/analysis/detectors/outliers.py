@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from statistics import NormalDist
 
 import numpy as np
 
@@ -31,8 +32,6 @@ def outlier_statistic(x):
     sd_r = robust_sigma(a[1:-1])
     if sd_r <= 0:
         return mask, np.inf, 0.0
-    from statistics import NormalDist
-
     k = NormalDist().inv_cdf(1.0 - 0.5 * OUTLIER_FALSE_PER_AXIS / n)
     np.abs(a, out=a)
     big = np.flatnonzero(a > k * sd_r)
@@ -73,8 +72,6 @@ def _spike_model(m_dps, sd_r, thr):
     """Detection probability and mean log|r| of detected spikes for spikes
     ``|s| = m exp(0.25 z)`` seen through the second-difference noise ``N(0, sd_r^2)``
     (64 x 64 quantile grid)."""
-    from statistics import NormalDist
-
     q = np.array([NormalDist().inv_cdf((i + 0.5) / 64) for i in range(64)])
     s = m_dps * np.exp(OUTLIER_SPREAD_LN * q)[:, None]
     r = np.abs(s + sd_r * q[None, :])

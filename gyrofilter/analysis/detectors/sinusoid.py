@@ -94,9 +94,9 @@ def fitted(columns, coef, n):
     return out
 
 
-def _sine_columns(fs, f_hz):
+def _sine_columns(sample_rate_hz, f_hz):
     """Columns ``cos(2 pi f n / f_s)`` and ``sin(2 pi f n / f_s)`` at samples ``lo .. hi - 1``."""
-    k = 2 * math.pi * f_hz / fs
+    k = 2 * math.pi * f_hz / sample_rate_hz
 
     def columns(lo, hi):
         w = np.arange(lo, hi) * k
@@ -104,9 +104,9 @@ def _sine_columns(fs, f_hz):
     return columns
 
 
-def sinusoid_fit(x, fs, f_hz):
+def sinusoid_fit(x, sample_rate_hz, f_hz):
     """Least-squares ``a cos(2 pi f t) + b sin(2 pi f t) + c``; returns (amplitude, phase, fit)."""
-    columns = _sine_columns(fs, f_hz)
+    columns = _sine_columns(sample_rate_hz, f_hz)
     coef = _least_squares(columns, x)
     amp = math.hypot(coef[0], coef[1])
     phase = math.atan2(coef[0], coef[1])  # amp sin(w + phase)
@@ -137,7 +137,7 @@ def periodogram_length(n):
     return best
 
 
-def sinusoid_statistic(x, fs, return_spectrum=False):
+def sinusoid_statistic(x, sample_rate_hz, return_spectrum=False):
     """Largest normalised periodogram ordinate (>= bin 8) and its frequency (Hz).
 
     Returns ``(stat, f_hz, threshold)`` (plus the periodogram ``|rfft|^2 / N`` of the
@@ -163,20 +163,20 @@ def sinusoid_statistic(x, fs, return_spectrum=False):
     j = int(np.argmax(ratio))
     m = spec.size - first
     threshold = math.log(m / SINUSOID_ALPHA)
-    out = (float(ratio[j]), j * fs / n, threshold)
+    out = (float(ratio[j]), j * sample_rate_hz / n, threshold)
     return out + (spec,) if return_spectrum else out
 
 
-def detect_sinusoid(x, fs):
+def detect_sinusoid(x, sample_rate_hz):
     """Sinusoid candidate: frequency refined around the peak, amplitude by least squares."""
-    stat, f0, thr = sinusoid_statistic(x, fs)
+    stat, f0, thr = sinusoid_statistic(x, sample_rate_hz)
     if not stat > thr:
         return None
-    df = fs / periodogram_length(x.size)
+    df = sample_rate_hz / periodogram_length(x.size)
     # refine: golden-section search of the LS amplitude within +-1 bin of the periodogram
-    lo, hi = max(f0 - df, df), min(f0 + df, fs / 2)
-    f_hz = golden_max(_dft_amplitude(x - x.mean(), fs, f0), lo, hi, 30)
-    amplitude, phase, fit = sinusoid_fit(x, fs, f_hz)
+    lo, hi = max(f0 - df, df), min(f0 + df, sample_rate_hz / 2)
+    f_hz = golden_max(_dft_amplitude(x - x.mean(), sample_rate_hz, f0), lo, hi, 30)
+    amplitude, phase, fit = sinusoid_fit(x, sample_rate_hz, f_hz)
     sigma = robust_sigma(np.diff(x)) / math.sqrt(2)
     return Candidate(
         effect="sinusoid",
@@ -196,7 +196,7 @@ def detect_sinusoid(x, fs):
 DFT_BLOCKS = 4096
 
 
-def _dft_amplitude(xc, fs, f0):
+def _dft_amplitude(xc, sample_rate_hz, f0):
     """``|X(f)| = |sum_n x_n exp(-2 pi i f n / f_s)|`` for ``f`` near ``f0``, in O(blocks) per
     call after one O(N) pass.
 
@@ -214,7 +214,7 @@ def _dft_amplitude(xc, fs, f0):
     step = max(1, (1 << 16) // b) * b  # whole blocks per pass, about 65536 samples: bounded memory
     for a in range(0, n, step):
         seg = xc[a:a + step]
-        w = np.arange(a, a + seg.size) * (-2 * math.pi * f0 / fs)
+        w = np.arange(a, a + seg.size) * (-2 * math.pi * f0 / sample_rate_hz)
         z = np.zeros(-(-seg.size // b) * b, dtype=complex)
         z.real[:seg.size] = np.cos(w) * seg
         z.imag[:seg.size] = np.sin(w) * seg
@@ -226,7 +226,7 @@ def _dft_amplitude(xc, fs, f0):
     starts = np.arange(m) * float(b)
 
     def amp(f):
-        theta = 2 * math.pi * (f - f0) / fs
+        theta = 2 * math.pi * (f - f0) / sample_rate_hz
         inner = moments[0] - 1j * theta * moments[1] - 0.5 * theta * theta * moments[2]
         return abs(np.sum(np.exp(-1j * theta * starts) * inner))
 

@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 
-from .common import Candidate, DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, STOCHASTIC_PENALTY, STOCHASTIC_THRESHOLD, block_means, detrend_line, golden_max
+from .common import (DETERMINISTIC_THRESHOLD, EXACT_GM_MARGIN, GM_MAX_TAU_DIVISOR, JOINT_THRESHOLD, STOCHASTIC_PENALTY,
+                     STOCHASTIC_THRESHOLD, Candidate, block_means, detrend_line, golden_max)
 from .sinusoid import _least_squares, fitted
 
 
@@ -321,7 +322,7 @@ def exact_stochastic_gain(y, sto, delta_s):
     return out
 
 
-def detect_slow(x, fs, temp_c=None):
+def detect_slow(x, sample_rate_hz, temp_c=None):
     """Slow bias effects of one axis (see the module docstring for the decision rules).
 
     Returns ``(candidates, stats)``: a list of :class:`Candidate` and the raw statistics
@@ -332,7 +333,7 @@ def detect_slow(x, fs, temp_c=None):
     stats = {}
     if n < 16:
         return [], stats
-    delta_s = length / fs
+    delta_s = length / sample_rate_hz
     temp_blocks = None
     if temp_c is not None:
         tb, _ = block_means(np.asarray(temp_c, dtype=float))
@@ -352,7 +353,7 @@ def detect_slow(x, fs, temp_c=None):
         # longer than a fifth of the record is a random walk as far as the data can tell
         items = []
         for k, v in table.items():
-            if k == "gauss_markov" and -delta_s / math.log(min(max(v[1][1], 1e-12), 1 - 1e-12)) > n * delta_s / 5:
+            if k == "gauss_markov" and -delta_s / math.log(min(max(v[1][1], 1e-12), 1 - 1e-12)) > n * delta_s / GM_MAX_TAU_DIVISOR:
                 continue
             items.append((v[0] - _N_PARAMS[k] * STOCHASTIC_PENALTY, k))
         return max(items) if items else (-np.inf, None)
@@ -416,15 +417,11 @@ def detect_slow(x, fs, temp_c=None):
                 else:
                     findings.append(_stochastic_candidate(name, exact[name], group_delta, m))
         if keep_det:
-            findings.insert(0, _deterministic_candidate(det_name, d / s0, params, x, fs,
+            findings.insert(0, _deterministic_candidate(det_name, d / s0, params, x, sample_rate_hz,
                                                        length, temp_c))
     elif sto_sig:
         findings.append(_rw_or_gm(sto_name, sto, y, delta_s))
     return findings, stats
-
-
-#: 2 Delta log L (exact likelihood) a Gauss-Markov process must gain over a random walk
-EXACT_GM_MARGIN = 8.0
 
 
 def _rw_or_gm(name, table, y, delta_s):
@@ -443,7 +440,7 @@ def _rw_or_gm(name, table, y, delta_s):
     exact = exact_stochastic_gain(yg, sto_g, delta_s * group)
     gm = exact["gauss_markov"]
     tau = _stochastic_params("gauss_markov", gm[1], delta_s * group)["tau_s"]
-    if gm[0] - exact["rate_random_walk"][0] > EXACT_GM_MARGIN and tau < n * delta_s / 5:
+    if gm[0] - exact["rate_random_walk"][0] > EXACT_GM_MARGIN and tau < n * delta_s / GM_MAX_TAU_DIVISOR:
         return _stochastic_candidate("gauss_markov", gm, delta_s * group, m)
     return _stochastic_candidate("rate_random_walk", table["rate_random_walk"], delta_s, n)
 
@@ -463,10 +460,10 @@ def _stochastic_candidate(name, fit, delta_s, n):
     )
 
 
-def _refine_step(x, fs, length, time_s):
+def _refine_step(x, sample_rate_hz, length, time_s):
     """Sample-level step time: two-mean scan of the raw series within +-2 blocks (the cumulative
     sum only over the samples the scan's windows reach)."""
-    k = int(round(time_s * fs))
+    k = int(round(time_s * sample_rate_hz))
     lo, hi = max(1, k - 2 * length), min(x.size - 1, k + 2 * length)
     w = max(4 * length, 50)
     base, top = max(0, lo - w), min(x.size, hi + w)
@@ -479,26 +476,26 @@ def _refine_step(x, fs, length, time_s):
         s = (right - left) ** 2 * (i - a0) * (b1 - i) / (b1 - a0)
         if s > best:
             best, best_i = s, i
-    return best_i / fs
+    return best_i / sample_rate_hz
 
 
-def _first_sample_at(time_s, fs, n):
-    """The first sample index ``i`` in ``0 .. n`` with ``i / fs >= time_s`` (n when none)."""
-    i = min(max(0, int(math.floor(time_s * fs)) - 2), n)
-    while i < n and i / fs < time_s:
+def _first_sample_at(time_s, sample_rate_hz, n):
+    """The first sample index ``i`` in ``0 .. n`` with ``i / sample_rate_hz >= time_s`` (n when none)."""
+    i = min(max(0, int(math.floor(time_s * sample_rate_hz)) - 2), n)
+    while i < n and i / sample_rate_hz < time_s:
         i += 1
     return i
 
 
-def _deterministic_candidate(name, d, params, x, fs, length, temp_c):
+def _deterministic_candidate(name, d, params, x, sample_rate_hz, length, temp_c):
     """The candidate of a deterministic shape, its parameters re-fitted on the full-rate series
-    ``x`` (deg/s, ``fs`` Hz) and its component (zero mean) made a piece at a time
+    ``x`` (deg/s, at ``sample_rate_hz`` Hz) and its component (zero mean) made a piece at a time
     (:func:`gyrofilter.analysis.detectors.sinusoid.fitted`): one series of memory."""
     params = dict(params)
     n = x.size
     if name == "bias_step":
-        ts = _refine_step(x, fs, length, params["time_s"])
-        first = _first_sample_at(ts, fs, n)  # the first sample with t = i / fs >= ts
+        ts = _refine_step(x, sample_rate_hz, length, params["time_s"])
+        first = _first_sample_at(ts, sample_rate_hz, n)  # the first sample with t = i / sample_rate_hz >= ts
         params["time_s"] = ts
         if 0 < first < n:
             params["size_dps"] = float(x[first:].mean() - x[:first].mean())
@@ -507,15 +504,15 @@ def _deterministic_candidate(name, d, params, x, fs, length, temp_c):
         what = f"the mean steps by {params['size_dps']:+.3g} deg/s at t = {ts:.1f} s"
     else:
         if name == "rate_ramp":
-            t_mean = 0.5 * (n - 1) / fs
+            t_mean = 0.5 * (n - 1) / sample_rate_hz
 
             def columns(lo, hi):
-                return (np.arange(lo, hi) / fs - t_mean,)
+                return (np.arange(lo, hi) / sample_rate_hz - t_mean,)
         elif name == "warmup":
             tau = params["tau_s"]
 
             def columns(lo, hi):
-                return (np.exp(-(np.arange(lo, hi) / fs) / tau),)
+                return (np.exp(-(np.arange(lo, hi) / sample_rate_hz) / tau),)
         else:  # temperature
             tc = np.asarray(temp_c, dtype=float)
             tc_mean = float(tc.mean())

@@ -1,0 +1,181 @@
+"""The models of the gap analysis (:mod:`gyrofilter.analysis.gap`, steps 1 and 2) and their
+simulated features.
+
+The baseline fit per axis (:func:`baseline_model`): constant bias ``b`` = mean of the rate;
+white noise of per-sample standard deviation ``sigma`` = the standard deviation of the
+high-passed rate ``x - moving_mean(x, W)`` (W = max(64 samples, 0.5 s), divided by
+``sqrt(1 - 1/W)``, spikes removed), less the quantization variance ``q^2 / 12`` that the
+simulator adds back (``q = 1 / lsb_per_dps`` for ``gyro_unit: lsb``, else 0);
+``arw_dps_per_sqrt_hz = sigma / sqrt(f_s)`` (white noise per sample ``N sqrt(f_s)``, IEEE Std
+952-1997 annex C). The extended model's axis is re-fitted the same way on the series cleaned of
+its findings (:func:`extended_axis`); a finding enters the model as an entry of the effect table
+(:func:`effect_entry`). The models are simulated one axis of one seeded run at a time
+(:func:`sim_features`), the features computed on each run.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import detectors as det
+from .gap_features import features
+from ..recording import GYRO_COLUMNS
+from ..sim.model import validate_model
+from ..sim.simulate import simulate_axis_dps
+from ..units import AXES, to_dps
+
+# ---------------------------------------------------------------------------------------------
+# the models
+
+
+def default_n_sims(n_samples):
+    """Baseline runs: 24 up to 200 000 samples per axis, then fewer (at least 12) so that
+    hours of data stay fast; the spread of a feature is estimated to about +-20 % from 12 runs."""
+    return int(max(12, min(24, round(24 * 200_000 / max(n_samples, 1)))))
+
+
+def axis_dps(rec, i):
+    """Axis ``i`` of ``rec.gyro_dps``, converted from its column when asked (the column
+    itself for ``gyro_unit: dps``): the analysis never holds the three axes in deg/s at once."""
+    return to_dps(rec.columns[GYRO_COLUMNS[i]], rec.gyro_unit, rec.lsb_per_dps)
+
+
+def noise_sigma(x, sample_rate_hz, q_dps):
+    """Per-sample white-noise std of the baseline (see module docstring)."""
+    w = det.colored_window(x.size, sample_rate_hz)
+    e = x - det.moving_mean(x, w)
+    mask, _, _ = det.outlier_statistic(x)
+    if mask.any():
+        e = e[~mask]
+    var = float(np.var(e)) / max(1.0 - 1.0 / w, 0.5)
+    var = max(var - (q_dps ** 2) / 12.0, 0.25 * var)
+    return math.sqrt(var)
+
+
+def baseline_model(rec, gyro_dps=None):
+    """The baseline simulator model (shared schema) fitted to ``rec`` (or to the (N, 3) rates
+    ``gyro_dps``)."""
+    sample_rate_hz = rec.sample_rate_hz
+    unit = rec.gyro_unit
+    lsb = rec.lsb_per_dps if unit == "lsb" else None
+    q = 1.0 / lsb if lsb else 0.0
+    model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "lsb" if lsb else "dps"}
+    if lsb:
+        model["lsb_per_dps"] = lsb
+    model["axes"] = {}
+    for i, a in enumerate(AXES):
+        x = axis_dps(rec, i) if gyro_dps is None else gyro_dps[:, i]
+        sigma = noise_sigma(x, sample_rate_hz, q)
+        model["axes"][a] = {"bias_dps": float(np.mean(x)),
+                            "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(sample_rate_hz)), "effects": []}
+    return model
+
+
+def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
+    """The extended model's axis spec before its effects: white noise re-fitted on the
+    series ``xc`` cleaned of the findings ``cands`` (corrected for the colored noise's
+    high-pass loss), and the bias of the cleaned series less the mean of the deterministic
+    components that were fitted mean-free. Without findings, the baseline's axis."""
+    spec = dict(base_axis)
+    spec["effects"] = []
+    if not cands:
+        return spec
+    n = xc.size
+    sigma = noise_sigma(xc, sample_rate_hz, q or 0.0)
+    for c in cands:  # narrow bands (above the high-pass) are noise of their own: N'^2 = N^2 - rms^2
+        if c.effect == "narrowband":
+            sigma = math.sqrt(max(sigma**2 - c.params["rms_dps"] ** 2, 0.05 * sigma**2))
+    colored = next((c for c in cands if c.effect == "colored_noise"), None)
+    if colored is not None:
+        # the high-pass of noise_sigma also removed the variance fraction c = L / W of a
+        # correlated noise (L its long-run ratio; detectors.lags_from_highpassed)
+        w = det.colored_window(n, sample_rate_hz)
+        frac = min(det.long_run_ratio(colored.params["lag1"], colored.params.get("lag2")) / w, 0.9)
+        sigma *= math.sqrt((1 - 1.0 / w) / (1 - frac))
+    spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(sample_rate_hz))
+    spec["bias_dps"] = float(np.mean(xc))
+    T = n / sample_rate_hz
+    for c in cands:  # deterministic components were fitted mean-free
+        if c.effect == "bias_step":
+            spec["bias_dps"] -= c.params["size_dps"] * (1 - c.params["time_s"] / T)
+        elif c.effect == "rate_ramp":
+            spec["bias_dps"] -= c.params["r_dps_per_s"] * T / 2
+        elif c.effect == "warmup":
+            tau = c.params["tau_s"]
+            spec["bias_dps"] -= c.params["amplitude_dps"] * tau / T * (1 - math.exp(-T / tau))
+    return spec
+
+
+def temperature_table(rec, max_points=1000):
+    t = rec.t_s - rec.t_s[0] if "t" in rec.columns else np.arange(len(rec)) / rec.sample_rate_hz
+    temp = np.asarray(rec.temp_c, dtype=float)
+    step = max(1, temp.size // max_points)
+    # block means keep the quantized column's level without its read noise
+    n = (temp.size // step) * step
+    tt = t[:n].reshape(-1, step).mean(axis=1) if n else t
+    tc = temp[:n].reshape(-1, step).mean(axis=1) if n else temp
+    return {"t_s": [float(v) for v in tt], "temp_c": [float(v) for v in tc]}
+
+
+def effect_entry(cand, preserve="std"):
+    """The effect-table entry of a finding; a colored noise keeps the per-sample std of the
+    axis's white noise (``preserve="std"``) or, in a composite model whose white level N comes
+    from the wavelet-variance fit, its long-tau level (``"arw"``)."""
+    entry = {"effect": cand.effect}
+    entry.update({k: float(v) for k, v in cand.params.items()})
+    if cand.effect == "colored_noise":
+        entry["preserve"] = preserve
+    if cand.effect == "temperature":
+        entry["reference_c"] = cand.extra.get("reference_c")
+    return entry
+
+
+# ---------------------------------------------------------------------------------------------
+# simulated features
+
+
+def _simulate_axis(spec, n, sample_rate_hz, seed, axis):
+    """One run of one axis of the validated model ``spec``: ``n`` samples in deg/s, filled
+    block by block (:func:`gyrofilter.sim.simulate.simulate_axis_dps`; the same numbers as that
+    axis of a full :func:`~gyrofilter.sim.simulate.simulate` run with this seed)."""
+    x = np.empty(n)
+    pos = 0
+    for block in simulate_axis_dps(spec, n / sample_rate_hz, axis, seed=int(seed), validated=spec):
+        k = min(block.size, n - pos)
+        x[pos:pos + k] = block[:k]
+        pos += k
+    return x[:pos]
+
+
+class _Progress:
+    """Status lines for a step of ``total`` units of work: the fraction done and the time
+    left, ``left = elapsed (total - done) / done``, at most one line per ``every_s`` seconds
+    (and the last)."""
+
+    def __init__(self, say, label, total, every_s=2.0):
+        self.say, self.label, self.total, self.every_s = say, label, total, every_s
+        self.t0 = self.last = time.perf_counter()
+
+    def step(self, done):
+        now = time.perf_counter()
+        if self.say is None or (now - self.last < self.every_s and done < self.total):
+            return
+        self.last = now
+        left = (now - self.t0) * (self.total - done) / max(done, 1)
+        self.say(f"{self.label}: {done}/{self.total} ({100 * done / self.total:.0f} %, about {left:.0f} s left)")
+
+
+def sim_features(model, n, sample_rate_hz, seeds, axes_idx, taus, bands, say=None, label="simulations"):
+    """Features of ``len(seeds)`` runs of ``model`` (list per axis index). Each run simulates
+    only the axes asked for, one at a time, so memory holds one axis of one run."""
+    spec, _ = validate_model(model)
+    axes_idx = list(axes_idx)
+    out = {i: [] for i in axes_idx}
+    bar = _Progress(say, label, len(seeds) * len(axes_idx))
+    for k, s in enumerate(seeds):
+        for j, i in enumerate(axes_idx):
+            out[i].append(features(_simulate_axis(spec, n, sample_rate_hz, s, i), sample_rate_hz, taus, bands))
+            bar.step(k * len(axes_idx) + j + 1)
+    return out

@@ -1,0 +1,143 @@
+"""The composite stochastic part of the gap analysis (:mod:`gyrofilter.analysis.gap`, step 4).
+
+Where an extended axis's D stays above :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`,
+a GMWM-style fit (:mod:`gyrofilter.analysis.gmwm`; Guerrier et al. 2013) of white noise, an
+optional rate random walk and 0-3 Gauss-Markov terms to the Haar wavelet variance of the series
+cleaned of the deterministic findings, at tau >= max(1 s, 16 samples) (shorter scales belong to
+the colored noise and the bands), the model chosen by Q + 2p (not WVIC), replaces the axis's
+slow stochastic findings (and its colored noise, if that is better without it); its N becomes
+the white level (the colored noise then keeps the long-tau level, ``preserve: arw``, and, if D
+is lower so, the per-sample variance too: :func:`_composite_lags`). The replacement is kept
+only if D falls below :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import detectors as det
+from . import gmwm
+from ..sim import noise_terms as nt
+from ..units import AXES
+
+#: the composite fit uses the wavelet variance at tau >= max(1 s, 16 samples): shorter scales
+#: carry the colored noise's low-pass shape and the narrow bands, which have their own terms
+COMPOSITE_MIN_TAU_S = 1.0
+_COMPOSITE_STATISTIC = "D of the extended axis without the composite stochastic part / D with it"
+
+
+def composite_step(run):
+    """Step 4, continued, on the gap analysis ``run``: where an extended axis is still far
+    outside the null band (D above :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`), a
+    composite stochastic part (:func:`_composite_candidates`) replaces the axis's slow
+    stochastic findings, and its colored noise if that is better without it, when D falls below
+    :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value."""
+    cands, notes = run.candidates, run.report["notes"]
+    for i, a in enumerate(AXES):
+        if run.after[i] <= det.OUTSIDE_NULL_D or run.wvs[i] is None:
+            continue
+        run.say(f"composite stochastic fit on {a}")
+        fit, comp = _composite_candidates(run.wvs[i], run.sample_rate_hz)
+        if not comp:
+            continue
+        keep_k = [k for k, ci, c, _ in run.kept if ci == i and c.effect not in det.STOCHASTIC_MODELS]
+        first = len(cands)
+        cands.extend((i, c) for c in comp)
+        comp_k = list(range(first, len(cands)))
+        for k in keep_k:  # the axis's other findings join the composite model
+            cands[k][1].extra["composite"] = True
+        run.composite_axes[a] = dict(run.ext_axes[a], arw_dps_per_sqrt_hz=fit.arw_dps_per_sqrt_hz)
+        d_comp = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
+        colored_k = [k for k in keep_k if cands[k][1].effect == "colored_noise"]
+        if colored_k:
+            # the colored noise re-solved to keep the per-sample variance as well
+            run.resolved_lags[i] = _composite_lags(run.ext_axes[a], run.composite_axes[a], cands[colored_k[0]][1].params)
+            if run.resolved_lags[i] is not None:
+                d_alt = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
+                if d_alt < d_comp:
+                    d_comp = d_alt
+                else:
+                    run.resolved_lags[i] = None
+            # a fast Gauss-Markov term of the composite may be what the colored noise stood for
+            d_alt = run.axis_discrepancy(i, [k for k in keep_k if k not in colored_k] + comp_k, f"composite model on {a}")
+            if d_alt < d_comp:
+                d_comp = d_alt
+                cands[colored_k[0]][1].extra.pop("composite")
+                keep_k = [k for k in keep_k if k not in colored_k]
+                notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the "
+                             "correlation without it")
+        if d_comp < det.COMPOSITE_MIN_GAIN * run.after[i]:
+            single_k = {k: run.axis_discrepancy(i, [k], f"gain of the composite's {cands[k][1].effect} on {a}")
+                        for k in comp_k}
+            notes.append(
+                f"axis {a}: the composite stochastic fit ({fit.name}, chosen by Q + 2p on the wavelet variance at "
+                f"tau >= {run.wvs[i].tau_s[0]:.3g} s) lowers D from {run.after[i]:.3g} to {d_comp:.3g}; it replaces the "
+                "axis's slow stochastic findings")
+            for k in comp_k:
+                cands[k][1].statistic = run.after[i] / d_comp
+            if run.resolved_lags[i] and colored_k and colored_k[0] in keep_k:
+                colored = cands[colored_k[0]][1]
+                colored.params.update(run.resolved_lags[i])
+                colored.evidence += ("; in the composite model its lags are re-solved to keep both the per-sample "
+                                     "variance and the composite fit's white level")
+            run.kept = [row for row in run.kept if row[1] != i] + \
+                [(k, i, cands[k][1], run.single[k]) for k in keep_k] + [(k, i, cands[k][1], single_k[k]) for k in comp_k]
+            run.after[i] = d_comp
+        else:
+            run.resolved_lags[i] = None
+            for k in keep_k:
+                cands[k][1].extra.pop("composite")
+            notes.append(f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
+                         f"({run.after[i]:.3g} -> {d_comp:.3g}); not used")
+
+
+def slow_wavelet_variance(xc, sample_rate_hz):
+    """Haar wavelet variance (:func:`gyrofilter.analysis.gmwm.haar_wv`) of the cleaned series at the
+    dyadic scales tau >= max(:data:`COMPOSITE_MIN_TAU_S`, 16 / f_s); None when fewer than 4."""
+    m_min = max(16, int(math.ceil(COMPOSITE_MIN_TAU_S * sample_rate_hz)))
+    if (xc.size - 2 * m_min * 8 + 1) / (2.0 * m_min * 8) < 2.0:
+        return None
+    wv = gmwm.haar_wv(xc, sample_rate_hz, min_m=m_min)
+    return wv if wv.tau_s.size >= 4 else None
+
+
+def _composite_candidates(wv, sample_rate_hz):
+    """GMWM-style composite fit (:func:`gyrofilter.analysis.gmwm.select_model`, Guerrier et al. 2013) of
+    white noise + optionally a rate random walk + 0..3 Gauss-Markov terms to ``wv``, the model
+    chosen by Q + 2p (not WVIC: see gyrofilter.analysis.gmwm). Returns ``(fit, candidates)``: one
+    ``gauss_markov`` per Gauss-Markov term and a ``rate_random_walk`` if the fit has one, marked
+    ``extra["composite"]``; the fit's N is the composite model's white level."""
+    fit, _ = gmwm.select_model(wv, terms_allowed=("rrw",), starts=3, seed=0)
+    out = []
+    evidence = (f"composite fit {fit.name} to the Haar wavelet variance at tau = {wv.tau_s[0]:.3g}-{wv.tau_s[-1]:.3g} s "
+                f"(weighted objective Q = {fit.objective:.3g} over {wv.tau_s.size} scales, model chosen by Q + 2p)")
+    for sigma_dps, tau_s in fit.gauss_markov:
+        out.append(det.Candidate(effect="gauss_markov", params={"sigma_dps": sigma_dps, "tau_s": tau_s},
+                                 statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
+                                 evidence=f"Gauss-Markov term (sigma {sigma_dps:.3g} deg/s, tau {tau_s:.3g} s) of a " + evidence,
+                                 extra={"composite": True}))
+    if fit.rrw_dps_per_sqrt_s is not None:
+        out.append(det.Candidate(effect="rate_random_walk", params={"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s},
+                                 statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
+                                 evidence=f"random-walk term (K {fit.rrw_dps_per_sqrt_s:.3g} deg/s/sqrt(s)) of a " + evidence,
+                                 extra={"composite": True}))
+    return fit, out
+
+
+def _composite_lags(ext_axis, composite_axis, lags):
+    """The colored noise's lags in a composite model, re-solved so that with ``preserve: arw``
+    it keeps both the composite fit's long-tau level N and the per-sample variance s^2 of the
+    extended axis's colored noise (its ``preserve: std`` level): the short scales of the wavelet
+    variance depend on s^2, the long ones on N, so its long-run ratio (1 + 2 sum rho_k) must be
+    L = N^2 f_s / s^2. A low pass (``lags`` without ``lag2``) stays one: the AR(1) of ratio L
+    has rho = (L - 1) / (L + 1). A first-order ARMA keeps its measured lag1 as well and moves
+    its pole (:func:`gyrofilter.sim.noise_terms.arma11_for_lag1_and_ratio`). None when no such
+    noise exists."""
+    ratio = composite_axis["arw_dps_per_sqrt_hz"] ** 2 / ext_axis["arw_dps_per_sqrt_hz"] ** 2
+    if "lag2" not in lags:
+        return {"lag1": float(np.clip((ratio - 1.0) / (ratio + 1.0), -0.99, 0.99))}
+    pair = nt.arma11_for_lag1_and_ratio(lags["lag1"], ratio, near_phi=lags["lag2"] / lags["lag1"])
+    if pair is None:
+        return None
+    return dict(zip(("lag1", "lag2"), (float(v) for v in nt.arma11_lags(*pair))))

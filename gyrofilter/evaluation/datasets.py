@@ -1,0 +1,53 @@
+"""The data sets of the comparison (:mod:`gyrofilter.evaluation.evaluate`): the real static MPU6050
+recordings, the BROAD trials with their optical reference, and the static noise segments the
+synthetic motion is added to.
+"""
+from __future__ import annotations
+
+import glob
+import os
+
+from ..recording import read_recording
+
+NOISE_SEGMENT_S = 90.0
+
+
+def stem(path):
+    name = os.path.basename(path)
+    for ext in (".csv.gz", ".csv"):
+        if name.endswith(ext):
+            return name[: -len(ext)]
+    return name
+
+
+def find_static_recordings(recordings_dir):
+    """Real static MPU6050 recordings in the folder ``recordings_dir``: sensor MPU6050 and a
+    description starting with 'static' (or, without a description, 'static' in the file name)."""
+    out = []
+    for path in sorted(glob.glob(os.path.join(recordings_dir, "*.csv*"))):
+        rec = read_recording(path)
+        if "mpu6050" not in rec.header.get("sensor", "").lower():
+            continue
+        desc = rec.header.get("description", "").strip().lower()
+        if desc.startswith("static") or (not desc and "static" in os.path.basename(path).lower()):
+            out.append(rec)
+    return out
+
+
+def find_broad_recordings(recordings_dir):
+    """The BROAD trials (``broad_*.csv*``, with optical reference) in the folder ``recordings_dir``, read."""
+    return [read_recording(p) for p in sorted(glob.glob(os.path.join(recordings_dir, "broad_*.csv*")))]
+
+
+def noise_segments(static_recs, duration_s=NOISE_SEGMENT_S, names=None):
+    """(name, x_dps (n, 3), sample_rate_hz): the first ``duration_s`` (s) of each recording of ``static_recs``
+    long enough (only those named in ``names``, when given)."""
+    segs = []
+    for rec in static_recs:
+        name = stem(rec.path or "")
+        if names is not None and name not in names:
+            continue
+        n = int(round(duration_s * rec.sample_rate_hz))
+        if len(rec) >= n:
+            segs.append((name, rec.gyro_dps[:n], rec.sample_rate_hz))
+    return segs
