@@ -147,8 +147,8 @@ def test_fleet_table_example_has_the_columns_of_the_code():
 
 
 def setting_ranges_table():
-    """The table of the filter settings' ranges that section 8 shows, from pipeline.SETTING_RANGES."""
-    from gyrofilter.filter.pipeline import SETTING_RANGES
+    """The table of the filter settings' ranges that section 8 shows, from settings.SETTING_RANGES."""
+    from gyrofilter.filter.settings import SETTING_RANGES
 
     def number(x):
         return f"{x:g}" if abs(x) < 1e6 else f"{x:.0e}".replace("e+0", "e").replace("e+", "e")

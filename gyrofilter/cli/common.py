@@ -15,7 +15,8 @@ import time
 
 from ..errors import GyroFilterError, RecordingError, SettingsError
 from ..inputs import parse_json, parse_number, quote
-from ..filter.pipeline import SETTING_NAMES, GyroFilter
+from ..filter.pipeline import GyroFilter
+from ..filter.settings import SETTING_NAMES
 from ..filter.presets import DEFAULT_PRESET, PRESETS
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT
 from ..units import AXES, json_ready

@@ -23,7 +23,7 @@ from importlib import resources
 import numpy as np
 
 from ..errors import RecordingError, SampleError, SettingsError
-from ..filter.pipeline import SETTING_NAMES
+from ..filter.settings import SETTING_NAMES
 from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
 from ..filter.smoother import Smoother
 from ..streamstats import Envelope, RunningMoments
