@@ -183,12 +183,12 @@ def test_section_8_states_the_sizes_the_code_holds():
     from gyrofilter import inputs, recording
     from gyrofilter.analysis import fleet
     from gyrofilter.sim import simulate
-    from gyrofilter.sources import serial_source
+    from gyrofilter.sources import serial_protocol
 
     text = section(8)
     assert recording.MAX_LINE_BYTES == 2 ** 20 and "| a recording's line (data or header) | 1 MiB |" in text
     assert recording.MAX_HEADER_LINES == 1000 and "| 1000 lines, 1 MiB |" in text
-    assert f"| a serial line | {serial_source.MAX_LINE_BYTES} bytes |" in text
+    assert f"| a serial line | {serial_protocol.MAX_LINE_BYTES} bytes |" in text
     assert inputs.MAX_JSON_BYTES == 16 * 2 ** 20 and f"| 16 MiB, {inputs.MAX_JSON_DEPTH} levels |" in text
     assert (f"| {simulate.MAX_EFFECTS_PER_AXIS}; {simulate.MAX_ARMA_COEFFICIENTS}; {simulate.MAX_TABLE_POINTS} |"
             in text)

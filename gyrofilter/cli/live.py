@@ -30,7 +30,7 @@ def add_source_arguments(parser):
     parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
                         help="gyro unit of a serial device that sends no header line")
     parser.add_argument("--lsb-per-dps", type=common.decimal, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
-    common.add_sample_rate_argument(parser, "--sample-rate", help="sample rate of such a device (old spelling --sample-rate)")
+    common.add_sample_rate_argument(parser, "--sample-rate", help="sample rate (Hz) of an mpu6050, a simulation or a serial device that sends no header (old spelling --sample-rate)")
 
 
 def check_duration(duration_s):
@@ -152,8 +152,11 @@ def close_after_failure(output, exc, command):
 
 def open_from_args(args):
     """Open ``args.source`` with the unit options and ``--duration`` as defaults (a simulation
-    then runs for that duration, so that it equals ``simulate --duration``)."""
-    return open_source(args.source, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
+    then runs for that duration, so that it equals ``simulate --duration``); a unit option the
+    source cannot take, or that its SOURCE text gives too, is refused naming the option."""
+    options = {"gyro_unit": "--gyro-unit", "lsb_per_dps": "--lsb-per-dps",
+               "sample_rate_hz": getattr(args, "sample_rate_hz_option", "--sample-rate-hz")}
+    return open_source(args.source, options=options, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
                        sample_rate_hz=args.sample_rate_hz, duration_s=args.duration)
 
 
