@@ -10,6 +10,7 @@ import numpy as np
 
 from .averaging import AVERAGERS
 from .calibration import MAX_BIAS_DPS
+from .hold import DEFAULTS as HOLD_DEFAULTS
 from ..errors import SettingsError
 from ..inputs import check_number
 from .predictor import closed_loop_radius, stable_gain_threshold
@@ -135,9 +136,9 @@ class FilterSettings:
     backend: str = "auto"
     tracker: str = "kalman"
     hold: bool = False
-    hold_h: float = 10.0
-    hold_window: int = 20
-    hold_max_blocks: int = 400
+    hold_h: float = HOLD_DEFAULTS["cusum_h"]
+    hold_window: int = HOLD_DEFAULTS["window_blocks"]
+    hold_max_blocks: int = HOLD_DEFAULTS["max_blocks"]
     outlier_rule: str = "paper"
     temp_coefficient_dps_per_c: object = 0.0
     kalman_noise: str = "paper"
