@@ -53,6 +53,11 @@ def note_text(text):
     return text if len(text) <= MAX_NOTE_CHARS else f"{text[:MAX_NOTE_CHARS]}... (cut: {len(text)} characters)"
 
 
+def note_line(text):
+    """The annotation line of ``text`` as a writer writes it: ``# `` and :func:`note_text`, line end included."""
+    return f"# {note_text(text)}\n"
+
+
 def format_number(x):
     """``x`` as header text that reads back to the same float: ``100`` for 100.0, else ``repr``."""
     return repr(int(x)) if float(x).is_integer() and abs(x) < 1e15 else repr(float(x))

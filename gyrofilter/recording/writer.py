@@ -21,7 +21,7 @@ from ..errors import RecordingError
 from ..inputs import quote
 from .checks import TimeCheck, check_rates
 from .content import Recording, RecordingHead
-from .header import header_text, note_text
+from .header import header_text, note_line
 
 #: %-format of a value written exactly: ``str`` of a float (a numpy scalar too) is the shortest
 #: text that reads back to the same float
@@ -181,7 +181,7 @@ class RecordingWriter(Closable):
     def note(self, text):
         """Write an annotation line (``# text``, on one line: :func:`one_line_text`) between data
         rows, for example a gap; a text longer than :data:`~gyrofilter.recording.header.MAX_NOTE_CHARS` is cut there."""
-        self._emit(f"# {note_text(text)}\n")
+        self._emit(note_line(text))
 
     def flush(self):
         """Push everything written so far to the disk, readable even if the process dies now."""

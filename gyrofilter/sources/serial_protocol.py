@@ -158,7 +158,9 @@ class LineParser:
         if unit not in GYRO_UNITS:
             raise SettingsError(f"{self.where}: {where}: gyro_unit {quote(unit)} is not one of {', '.join(GYRO_UNITS)}")
         sample_rate_hz = self._positive(values, "sample_rate_hz", where, "rate=HZ")
-        lsb_per_dps = self._positive(values, "lsb_per_dps", where, "gyro_unit lsb needs lsb_per_dps") if unit == "lsb" else None
+        lsb_per_dps = None
+        if unit == "lsb":
+            lsb_per_dps = self._positive(values, "lsb_per_dps", where, "gyro_unit lsb needs lsb_per_dps")
         return units_header(sample_rate_hz, unit, lsb_per_dps)
 
     def _positive(self, values, key, where, hint):
