@@ -81,7 +81,7 @@ class Recording(_HeaderFacts):
     t_gaps: int = 0
 
     def __len__(self):
-        return len(self.columns["gx"])
+        return len(self.columns[GYRO_COLUMNS[0]])
 
     @property
     def gyro(self) -> np.ndarray:
