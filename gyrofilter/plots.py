@@ -1,7 +1,9 @@
 """Figures of filtered series (matplotlib, imported only when a figure is drawn)."""
 import os
 
+from .errors import SettingsError
 from .extras import require
+from .units import AXES
 
 
 def pyplot():
@@ -14,8 +16,6 @@ def check_figure_path(path, option="--plot"):
     """Refuse, before any work, a figure file ``path`` whose extension matplotlib cannot write
     (SettingsError naming ``option``, the command-line option that gave it, and the formats it
     can); matplotlib missing is said here too."""
-    from .errors import SettingsError
-
     pyplot()
     from matplotlib.backend_bases import FigureCanvasBase
 
@@ -40,7 +40,7 @@ def plot_filtered(path, raw, filtered, *, title=""):
             else:
                 ax.fill_between(env.t_s, env.low[:, a], env.high[:, a], step="post", lw=0, color=color,
                                 alpha=0.8, label=f"{label} (min..max per {env.bucket} samples)")
-        ax.set_ylabel(f"{'xyz'[a]} (deg/s)")
+        ax.set_ylabel(f"{AXES[a]} (deg/s)")
         ax.grid(alpha=0.3)
     axes[0].legend(loc="upper right", ncol=2, fontsize="small")
     axes[-1].set_xlabel("time (s)")

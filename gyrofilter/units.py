@@ -93,6 +93,12 @@ def plain(value):
     return text if len(text) <= MAX_QUOTE_CHARS else f"{text[:MAX_QUOTE_CHARS]}... ({len(text)} characters)"
 
 
+def shown(value):
+    """:func:`plain`, but an array by its shape (``an array of shape (4,)``): a user's value that
+    may be an array of samples, as an error message shows it."""
+    return f"an array of shape {value.shape}" if isinstance(value, np.ndarray) else plain(value)
+
+
 def utf8_text(text):
     """``text`` as a file holds it (UTF-8): each lone surrogate, which ``os.fsdecode`` makes of a
     file name's byte that is not UTF-8 (b"\\xff" -> "\\udcff"), written as its escape, the six

@@ -148,8 +148,8 @@ def test_fleet_table_example_has_the_columns_of_the_code():
 
 
 def setting_ranges_table():
-    """The table of the filter settings' ranges that section 8 shows, from pipeline.SETTING_RANGES."""
-    from gyrofilter.filter.pipeline import SETTING_RANGES
+    """The table of the filter settings' ranges that section 8 shows, from settings.SETTING_RANGES."""
+    from gyrofilter.filter.settings import SETTING_RANGES
 
     def number(x):
         return f"{x:g}" if abs(x) < 1e6 else f"{x:.0e}".replace("e+0", "e").replace("e+", "e")
@@ -184,12 +184,12 @@ def test_section_8_states_the_sizes_the_code_holds():
     from gyrofilter import inputs, recording
     from gyrofilter.analysis import fleet
     from gyrofilter.sim import model
-    from gyrofilter.sources import serial_source
+    from gyrofilter.sources import serial_protocol
 
     text = section(8)
     assert recording.MAX_LINE_BYTES == 2 ** 20 and "| a recording's line (data or header) | 1 MiB |" in text
     assert recording.MAX_HEADER_LINES == 1000 and "| 1000 lines, 1 MiB |" in text
-    assert f"| a serial line | {serial_source.MAX_LINE_BYTES} bytes |" in text
+    assert f"| a serial line | {serial_protocol.MAX_LINE_BYTES} bytes |" in text
     assert inputs.MAX_JSON_BYTES == 16 * 2 ** 20 and f"| 16 MiB, {inputs.MAX_JSON_DEPTH} levels |" in text
     assert (f"| {model.MAX_EFFECTS_PER_AXIS}; {model.MAX_ARMA_COEFFICIENTS}; {model.MAX_TABLE_POINTS} |"
             in text)

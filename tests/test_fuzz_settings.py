@@ -31,7 +31,7 @@ from gyrofilter.cli import main
 from gyrofilter.cli.filtering import make_filter
 from gyrofilter.errors import CalibrationError, SettingsError
 from gyrofilter.filter.jit import numba_available
-from gyrofilter.filter.pipeline import SETTING_NAMES, SETTING_RANGES
+from gyrofilter.filter.settings import SETTING_NAMES, SETTING_RANGES
 from gyrofilter.filter.presets import PRESETS
 from gyrofilter.units import MAX_RATE_DPS, TEMP_RANGE_C
 

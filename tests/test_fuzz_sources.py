@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 from gyrofilter.errors import DeviceError, GyroFilterError, SettingsError
 from gyrofilter.sources import KINDS, open_source, parse_source
-from gyrofilter.sources.serial_source import LINE_OUTCOMES, MAX_LINE_BYTES, LineParser
+from gyrofilter.sources.serial_protocol import LINE_OUTCOMES, MAX_LINE_BYTES, LineParser
 from gyrofilter.units import MAX_RATE_DPS, TEMP_RANGE_C
 
 FAST = settings(max_examples=100, deadline=None, derandomize=True,

@@ -16,8 +16,8 @@ from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualCl
 from gyrofilter.errors import DeviceError, SettingsError, SourceEnded
 from gyrofilter.recording import Recording
 from gyrofilter.sources import mpu6050_registers as R
-from gyrofilter.sources.mpu6050 import (
-    auto_dlpf_cfg, decode_fifo, open_mpu6050, sample_rate_settings)
+from gyrofilter.sources.mpu6050 import open_mpu6050
+from gyrofilter.sources.mpu6050_chip import auto_dlpf_cfg, decode_fifo, sample_rate_settings
 from support import RECORDINGS
 
 
@@ -50,7 +50,7 @@ def rig(monkeypatch):
 
 
 def open_src(clock, **kwargs):
-    kwargs.setdefault("rate_hz", 1000)
+    kwargs.setdefault("sample_rate_hz", 1000)
     return open_mpu6050(clock=clock.now, sleep=clock.sleep, wall_clock=lambda: 1.7e9, **kwargs)
 
 
@@ -122,7 +122,7 @@ def test_bad_settings_refused_before_bus_traffic(rig):
                                                    (1000, 0x10, "32.8"), (2000, 0x18, "16.4")])
 def test_configuration_written_and_header(rig, range_dps, fs_bits, lsb):
     clock, model, bus = rig()
-    src = open_src(clock, rate_hz=100, range_dps=range_dps, dlpf=3)
+    src = open_src(clock, sample_rate_hz=100, range_dps=range_dps, dlpf=3)
     regs = model.regs
     assert regs[0x6B] == 0x01                     # awake, CLKSEL = 1 (PLL, X gyro)
     assert regs[0x1B] == fs_bits
@@ -144,7 +144,7 @@ def test_chip_starts_asleep_and_is_reset_first(rig):
     clock, model, bus = rig()
     model.regs[0x1B] = 0x18                       # leftover state from an earlier program
     model.regs[0x6B] = 0x00
-    src = open_src(clock, rate_hz=100, range_dps=250)
+    src = open_src(clock, sample_rate_hz=100, range_dps=250)
     assert model.regs[0x1B] == 0x00               # DEVICE_RESET cleared it, then 250 dps written
     assert src.header["lsb_per_dps"] == "131"
     fresh = MPU6050Model(VirtualClock())
@@ -156,7 +156,7 @@ def test_chip_starts_asleep_and_is_reset_first(rig):
 def test_readback_mismatch_refused(rig, reg, name):
     clock, model, bus = rig(stuck={reg: 0x00})
     with pytest.raises(DeviceError, match=f"register {name} reads back 0x00"):
-        open_src(clock, rate_hz=125, range_dps=2000, dlpf=1)   # every one of these is nonzero
+        open_src(clock, sample_rate_hz=125, range_dps=2000, dlpf=1)   # every one of these is nonzero
     assert not bus.fds                                         # bus closed after the refusal
 
 
@@ -255,7 +255,7 @@ def test_many_fifo_reads_nothing_lost_or_duplicated(rig, transfer):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(n + 10_000), temp_c=np.linspace(20, 40, n + 10_000),
                             error_rate=0.01, error_errno=errno.EREMOTEIO, rng=np.random.default_rng(7),
                             bus_kwargs={"bus_hz": 400e3})
-    src = open_src(clock, rate_hz=1000, transfer=transfer)
+    src = open_src(clock, sample_rate_hz=1000, transfer=transfer)
     rows, notes = read_for(src, clock, n / 1000)
     idx = index_of(rows)
     k0 = idx[0]
@@ -280,7 +280,7 @@ def test_decoded_rates_equal_model_rates_from_a_recording(rig):
                            np.full(n, 600.0)])           # z beyond +-500: clipped by the sensor
     rec = Recording.from_dps(dps, 200.0)
     clock, model, bus = rig(gyro_dps=rec.gyro_dps, temp_c=31.0)
-    src = open_src(clock, rate_hz=200, range_dps=500, temperature=False)
+    src = open_src(clock, sample_rate_hz=200, range_dps=500, temperature=False)
     assert src.columns == ["t", "gx", "gy", "gz"]
     rows, _ = read_for(src, clock, 5.0)
     # first FIFO sample is model sample k0: find it from x, y (continuous values)
@@ -297,7 +297,7 @@ def test_decoded_rates_equal_model_rates_from_a_recording(rig):
 def test_extremes_through_the_fifo(rig):
     g = np.array([[-32768, 32767, 0], [32767, -32768, -1], [1, -1, 12345]])
     clock, model, bus = rig(gyro_lsb=np.tile(g, (400, 1)))
-    src = open_src(clock, rate_hz=1000, transfer="smbus")
+    src = open_src(clock, sample_rate_hz=1000, transfer="smbus")
     rows, _ = read_for(src, clock, 0.3)
     got = {tuple(r) for r in rows[:, 1:4].astype(int)}
     assert got == {tuple(r) for r in g}
@@ -306,7 +306,7 @@ def test_extremes_through_the_fifo(rig):
 @pytest.mark.parametrize("extra_s,exact", [(0.5, True), (0.5004, False)])
 def test_overflow_reported_with_count_and_jump_in_t(rig, extra_s, exact):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, rate_hz=1000, temperature=False)     # 6-byte frames: 170 fit in 1024 bytes
+    src = open_src(clock, sample_rate_hz=1000, temperature=False)     # 6-byte frames: 170 fit in 1024 bytes
     before, _ = read_for(src, clock, 0.2)
     clock.advance(extra_s)                                     # the host stalls: > 170 ms of samples
     after, notes = read_for(src, clock, 0.3)
@@ -332,7 +332,7 @@ def test_overflow_reported_with_count_and_jump_in_t(rig, extra_s, exact):
 def test_gap_estimate_does_not_accumulate_clock_drift(rig):
     """Sensor clock 1 % fast: after 60 s the lost count is still right to +-1 % of the stall."""
     clock, model, bus = rig(gyro_lsb=indexed_gyro(80_000), rate_error=0.01)
-    src = open_src(clock, rate_hz=1000, temperature=False)
+    src = open_src(clock, sample_rate_hz=1000, temperature=False)
     before, _ = read_for(src, clock, 60.0)
     clock.advance(0.5)
     after, notes = read_for(src, clock, 0.2)
@@ -343,7 +343,7 @@ def test_gap_estimate_does_not_accumulate_clock_drift(rig):
 
 def test_overflow_seen_through_count_when_status_was_missed(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, rate_hz=1000, temperature=False)
+    src = open_src(clock, sample_rate_hz=1000, temperature=False)
     read_for(src, clock, 0.1)
     clock.advance(0.169)                          # 169-ish frames: FIFO nearly full, no overflow yet
     model.regs[0x38] = 0                          # no status bit from the chip
@@ -355,7 +355,7 @@ def test_overflow_seen_through_count_when_status_was_missed(rig):
 
 def test_fifo_read_failing_part_way_resets_fifo_and_keeps_alignment(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, rate_hz=1000, temperature=False, transfer="rdwr")
+    src = open_src(clock, sample_rate_hz=1000, temperature=False, transfer="rdwr")
     a, _ = read_for(src, clock, 0.1)
     model.fail_fifo_read(errno.EIO, consume_bytes=9)         # stopped part-way: 1.5 frames gone
     b, notes = read_for(src, clock, 0.2)
@@ -369,7 +369,7 @@ def test_fifo_read_failing_part_way_resets_fifo_and_keeps_alignment(rig):
 
 def test_misaligned_count_is_resynchronised(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, rate_hz=1000, temperature=False, transfer="rdwr")
+    src = open_src(clock, sample_rate_hz=1000, temperature=False, transfer="rdwr")
     a, _ = read_for(src, clock, 0.1)
     model.fail_fifo_read(errno.EREMOTEIO, consume_bytes=3)   # a NACK that still ate 3 bytes
     b, notes = read_for(src, clock, 0.2)
@@ -381,7 +381,7 @@ def test_misaligned_count_is_resynchronised(rig):
 
 def test_8khz_polls_often_enough_for_the_fifo(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, rate_hz=8000, dlpf="0", address="0x68", temperature=False)
+    src = open_src(clock, sample_rate_hz=8000, dlpf="0", address="0x68", temperature=False)
     assert src.smplrt_div == 0 and src.poll_interval_s == pytest.approx(170 / 8000 / 4)
     rows, notes = read_for(src, clock, 1.0)
     assert notes == [] and len(rows) >= 7900
@@ -400,7 +400,7 @@ def test_auto_transfer_follows_adapter_functionality(rig, funcs, rdwr):
 
 def test_read_waits_at_most_max_wait(rig):
     clock, model, bus = rig()
-    src = open_src(clock, rate_hz=1000)
+    src = open_src(clock, sample_rate_hz=1000)
     model.regs[0x6A] = 0                          # FIFO stopped behind the driver's back: no data
     t0 = clock.now()
     rows = src.read()
@@ -417,7 +417,7 @@ def test_real_mpu6050_streams_at_the_configured_rate():
     bus = int(os.environ.get("GYROFILTER_I2C_BUS", "1"))
     address = int(os.environ.get("GYROFILTER_I2C_ADDRESS", "0x68"), 0)
     import time
-    with open_mpu6050(bus=bus, address=address, rate_hz=1000, range_dps=250) as src:
+    with open_mpu6050(bus=bus, address=address, sample_rate_hz=1000, range_dps=250) as src:
         got = []
         t_end = time.monotonic() + 3.0
         while time.monotonic() < t_end:
@@ -444,7 +444,7 @@ def test_real_recording_round_trips_through_fifo_and_smbus2(rig):
     n = len(raw)
     ramp = np.column_stack([np.arange(n) % 65536 - 32768, np.zeros(n, int), np.zeros(n, int)])
     clock, model, bus = rig(gyro_lsb=np.concatenate([ramp[:2000], raw]))   # lead-in to find k0
-    src = open_src(clock, rate_hz=100, range_dps=250, transfer="smbus")
+    src = open_src(clock, sample_rate_hz=100, range_dps=250, transfer="smbus")
     rows, notes = read_for(src, clock, (2000 + n) / 100 + 1)
     k0 = int(rows[0, 1]) + 32768                                # lead-in encodes the index
     lead = 2000 - k0
@@ -515,7 +515,7 @@ def test_fatal_error_part_way_through_a_fifo_read_delivers_the_frames_read_befor
     """The chip vanishes during the 3rd 30-byte block of an SMBus FIFO read: the 10 frames of the
     first two blocks were read off the chip, so they are delivered; the next read raises."""
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, rate_hz=1000, temperature=False, transfer="smbus")
+    src = open_src(clock, sample_rate_hz=1000, temperature=False, transfer="smbus")
     a, _ = read_for(src, clock, 0.1)
     model.fail_fifo_read(errno.ENXIO, after_reads=2)
     b = src.read()
@@ -529,3 +529,87 @@ def test_fatal_error_part_way_through_a_fifo_read_delivers_the_frames_read_befor
     src.close()
     with pytest.raises(SourceEnded, match="source closed"):  # as the other sources say it
         src.read()
+
+
+# ------------------------------------------------------------------------------------------ --sample-rate-hz
+
+
+def _virtual_mpu6050(monkeypatch, seconds=6.0, sample_rate_hz=200):
+    """A still model at /dev/i2c-1, 0x68, on a virtual clock that the driver opened by a command shares."""
+    import gyrofilter.sources.mpu6050 as mpu
+
+    clock = VirtualClock()
+    rng = np.random.default_rng(3)
+    model = MPU6050Model(clock, gyro_dps=rng.normal(0.0, 0.05, (int(seconds * sample_rate_hz) + 2000, 3)), temp_c=30.0,
+                         rng=rng)
+    FakeI2CBus({0x68: model}, clock=clock).install(monkeypatch)
+    monkeypatch.setattr(mpu, "open_mpu6050", lambda **kw: open_mpu6050(clock=clock.now, sleep=clock.sleep,
+                                                                        wall_clock=lambda: 1.7e9, **kw))
+    return model
+
+
+def test_record_and_run_set_the_mpu6050_rate_from_the_option(monkeypatch, tmp_path, capsys):
+    """Issue 23: the driver's keyword was rate_hz, so `--sample-rate-hz 200` was silently dropped and
+    the chip sampled at its default 100 Hz. Now it sets SMPLRT_DIV (1 kHz / (1 + 4) = 200 Hz)."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import read_recording
+
+    model = _virtual_mpu6050(monkeypatch)
+    rec_path = tmp_path / "rec.csv"
+    assert main(["record", "--source", "mpu6050", "--sample-rate-hz", "200", "--out", str(rec_path), "--duration", "3"]) == 0
+    assert model.regs[0x19] == 4 and model.sample_rate_hz() == 200.0
+    rec = read_recording(rec_path)
+    assert rec.header["sample_rate_hz"] == "200" and len(rec) == 600
+    np.testing.assert_allclose(np.diff(rec.t_s), 1 / 200)
+
+    model = _virtual_mpu6050(monkeypatch)
+    out = tmp_path / "run.csv"
+    assert main(["run", "--source", "mpu6050,range=500", "--sample-rate-hz", "200", "--out", str(out), "--duration", "6",
+                 "--quiet", "--preset", "paper"]) == 0
+    assert model.regs[0x19] == 4
+    filtered = read_recording(out)
+    assert filtered.header["input_sample_rate_hz"] == "200" and filtered.sample_rate_hz == 40.0
+    assert len(filtered) == (6 - 2) * 200 // 5  # after the 2-s calibration, blocks of 5
+    capsys.readouterr()
+
+
+def test_a_rate_the_mpu6050_cannot_reach_from_the_option_names_the_option(monkeypatch, tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    _virtual_mpu6050(monkeypatch)
+    assert main(["record", "--source", "mpu6050", "--sample-rate-hz", "300", "--out", str(tmp_path / "r.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--sample-rate-hz=300 is not reachable" in err
+    assert "rate_hz" not in err.replace("--sample-rate-hz", "")  # the option, not the keyword
+    assert not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.parametrize("command", ["record", "run"])
+@pytest.mark.parametrize("source, options, words", [
+    ("replay:{rec}", ["--sample-rate-hz", "200"], ["--sample-rate-hz does not apply to source 'replay:",
+                                                  "header gives its sample rate and units"]),
+    ("{rec}", ["--sample-rate-hz", "200"], ["--sample-rate-hz does not apply to source"]),
+    ("replay:{rec}", ["--gyro-unit", "dps"], ["--gyro-unit does not apply"]),
+    ("mpu6050", ["--gyro-unit", "dps"], ["--gyro-unit does not apply to source 'mpu6050'", "range="]),
+    ("mpu6050", ["--lsb-per-dps", "131"], ["--lsb-per-dps does not apply to source 'mpu6050'"]),
+    ("sim", ["--gyro-unit", "lsb"], ["--gyro-unit does not apply to source 'sim'", "model gives the units"]),
+    ("mpu6050:rate=100", ["--sample-rate-hz", "200"], ["--sample-rate-hz and the key 'rate' of source "
+                                                       "'mpu6050:rate=100' give the same setting: give it once"]),
+    ("sim,rate=100", ["--sample-rate-hz", "100"], ["the key 'rate'", "give it once"]),
+])
+def test_an_option_the_source_cannot_take_is_refused_naming_it(monkeypatch, tmp_path, capsys, command, source, options,
+                                                              words):
+    """record and run alike: a unit option a source does not take (a replayed file's header rules,
+    an MPU6050 reads LSB) or that its SOURCE text gives too is one line naming it, not ignored."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    model = _virtual_mpu6050(monkeypatch)
+    rec = tmp_path / "in.csv"
+    write_recording(rec, Recording.from_dps(np.zeros((500, 3)), 100.0))
+    out = tmp_path / "out.csv"
+    argv = [command, "--source", source.format(rec=rec), *options, "--out", str(out), "--duration", "1"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and all(word in err for word in words), err
+    assert not out.exists() and model.regs[0x6B] == 0x40  # nothing written, the chip never woken

@@ -313,7 +313,7 @@ def test_a_given_calibration_with_absurd_numbers_is_refused():
 def test_every_size_setting_has_an_upper_bound(name):
     """fifo_depth, hold_window = 1e12 ended in MemoryError; qr_window = 1e12 in a 24-TB lazily
     allocated ring. Each size or count now has a range, and the message gives it."""
-    from gyrofilter.filter.pipeline import SETTING_RANGES
+    from gyrofilter.filter.settings import SETTING_RANGES
 
     high = SETTING_RANGES[name]["high"]
     low = SETTING_RANGES[name]["low"]
@@ -326,7 +326,7 @@ def test_every_size_setting_has_an_upper_bound(name):
 @pytest.mark.parametrize("value", [True, False, float("nan"), float("inf"), -float("inf"), 1e300, 10 ** 400, None, "1"])
 def test_numeric_settings_refuse_bools_non_finite_and_huge_values(value):
     """stillness_z=True was used as 1; NaN, inf, 1e300 or 10**400 (OverflowError) in a setting."""
-    from gyrofilter.filter.pipeline import SETTING_RANGES
+    from gyrofilter.filter.settings import SETTING_RANGES
 
     for name in SETTING_RANGES:
         if value is None and name == "calibration_s":  # GyroFilter's calibration_s=None: the preset's
@@ -363,7 +363,7 @@ def test_after_a_refused_calibration_the_next_samples_start_a_new_window():
 
 def test_the_calibration_window_held_in_memory_is_bounded_in_samples():
     """An hour at 100 kHz was accepted: a lazily allocated 8.6 GB window, filled sample by sample."""
-    from gyrofilter.filter.pipeline import MAX_CALIBRATION_SAMPLES
+    from gyrofilter.filter.settings import MAX_CALIBRATION_SAMPLES
 
     with pytest.raises(SettingsError, match="setting calibration_s=3600.0 gives 360000000 samples at 100000 Hz; "
                                             "the still window is held in memory: at most 3600000 samples"):

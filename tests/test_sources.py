@@ -9,7 +9,7 @@ from gyrofilter import GyroFilter
 from gyrofilter.errors import DeviceError, SettingsError, SourceEnded
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.sources import open_source, parse_source
-from gyrofilter.sources.serial_source import LineParser
+from gyrofilter.sources.serial_protocol import LineParser
 
 
 # ----------------------------------------------------------------------------- SOURCE syntax
@@ -18,7 +18,7 @@ from gyrofilter.sources.serial_source import LineParser
 @pytest.mark.parametrize("spec, kind, kwargs", [
     ("mpu6050", "mpu6050", {}),
     ("mpu6050:bus=3,addr=0x69,rate=1000,range=500,dlpf=3,temp=0,allow_chip=0x70", "mpu6050",
-     {"bus": 3, "address": 0x69, "rate_hz": 1000.0, "range_dps": 500, "dlpf": 3, "temperature": False, "allow_chip": 0x70}),
+     {"bus": 3, "address": 0x69, "sample_rate_hz": 1000.0, "range_dps": 500, "dlpf": 3, "temperature": False, "allow_chip": 0x70}),
     ("serial:/dev/ttyUSB0,baud=115200", "serial", {"port": "/dev/ttyUSB0", "baudrate": 115200}),
     ("serial:/dev/ttyACM0,unit=lsb,lsb_per_dps=131,rate=100", "serial",
      {"port": "/dev/ttyACM0", "gyro_unit": "lsb", "lsb_per_dps": 131.0, "sample_rate_hz": 100.0}),
@@ -29,7 +29,7 @@ from gyrofilter.sources.serial_source import LineParser
     ("sim:seed=4,realtime=no,duration=10", "sim", {"seed": 4, "realtime": False, "duration_s": 10.0}),
     ("sim:model.json,seed=1", "sim", {"model": "model.json", "seed": 1}),
     ("sim,realtime=0", "sim", {"realtime": False}),          # no ARG: the keys may follow KIND directly
-    ("mpu6050,rate=200", "mpu6050", {"rate_hz": 200.0}),
+    ("mpu6050,rate=200", "mpu6050", {"sample_rate_hz": 200.0}),
 ])
 def test_parse_source(spec, kind, kwargs):
     assert parse_source(spec) == (kind, kwargs)
@@ -381,7 +381,7 @@ def test_parser_counter_wraps_at_counter_bits():
 
 def _reconciles(parser):
     """Every line received is a delivered sample or counted as something else, exactly once."""
-    from gyrofilter.sources.serial_source import LINE_OUTCOMES
+    from gyrofilter.sources.serial_protocol import LINE_OUTCOMES
 
     return parser.stats["lines"] == sum(parser.stats[k] for k in LINE_OUTCOMES)
 

@@ -48,7 +48,7 @@ class _TimedBus(FakeI2CBus):
             self.inside_s += time.perf_counter() - t0
 
 
-def _rig(n_frames, rate_hz=1000):
+def _rig(n_frames, sample_rate_hz=1000):
     clock = VirtualClock()
     k = np.arange(n_frames + 20_000)
     gyro = np.column_stack([k % 65536 - 32768, (k * 3) % 65536 - 32768, (k * 7) % 65536 - 32768])
@@ -61,7 +61,7 @@ def bench_decode(n_frames=20, repeat=2000):
     """Per-frame cost of decoding ``n_frames`` 8-byte frames (temp + gyro), numpy vs struct loop."""
     clock, model, bus = _rig(100)
     with bus:
-        src = open_mpu6050(rate_hz=1000, clock=clock.now, sleep=clock.sleep)
+        src = open_mpu6050(sample_rate_hz=1000, clock=clock.now, sleep=clock.sleep)
     rng = np.random.default_rng(0)
     buf = rng.integers(0, 256, 8 * n_frames, dtype=np.uint8).tobytes()
     t0 = time.perf_counter()
@@ -71,11 +71,11 @@ def bench_decode(n_frames=20, repeat=2000):
 
     unpack = struct.Struct(">4h").unpack_from
 
-    def naive(buf, start_index, rate_hz=1000.0):
+    def naive(buf, start_index, sample_rate_hz=1000.0):
         rows = []
         for i in range(len(buf) // 8):
             temp, gx, gy, gz = unpack(buf, 8 * i)
-            rows.append([(start_index + i) / rate_hz, gx, gy, gz, temp / 340.0 + 36.53])
+            rows.append([(start_index + i) / sample_rate_hz, gx, gy, gz, temp / 340.0 + 36.53])
         return np.array(rows)
 
     t0 = time.perf_counter()
@@ -85,11 +85,11 @@ def bench_decode(n_frames=20, repeat=2000):
     return driver_s, naive_s
 
 
-def bench_read(n_frames, transfer, rate_hz=1000):
+def bench_read(n_frames, transfer, sample_rate_hz=1000):
     """Per-frame host cost of source.read() through smbus2 + model; returns a dict."""
     clock, model, bus = _rig(n_frames)
     with bus:
-        src = open_mpu6050(rate_hz=rate_hz, temperature=True, transfer=transfer, clock=clock.now,
+        src = open_mpu6050(sample_rate_hz=sample_rate_hz, temperature=True, transfer=transfer, clock=clock.now,
                            sleep=clock.sleep)
         bus.inside_s, bus.bus_bits, bus.ioctl_calls = 0.0, 0, 0
         got = 0
@@ -109,7 +109,7 @@ def bench_naive(n_frames, per_register):
 
     clock, model, bus = _rig(n_frames)
     with bus:
-        src = open_mpu6050(rate_hz=1000, clock=clock.now, sleep=clock.sleep)
+        src = open_mpu6050(sample_rate_hz=1000, clock=clock.now, sleep=clock.sleep)
         dev = smbus2.SMBus(1)
         bus.inside_s, bus.bus_bits, bus.ioctl_calls = 0.0, 0, 0
         out = np.empty((n_frames, 3))
@@ -138,7 +138,7 @@ def measure(n_frames=20_000):
         r = bench_read(n_frames, transfer)
         rows.append((f"driver read(), FIFO via {'I2C_RDWR' if transfer == 'rdwr' else '<=32-byte SMBus blocks'}",
                      r["host_us"], r["ioctls"], r["bus_us"], f"lost {r['lost']}"))
-    r = bench_read(min(n_frames, 5000), "rdwr", rate_hz=100)
+    r = bench_read(min(n_frames, 5000), "rdwr", sample_rate_hz=100)
     rows.append(("driver read() at 100 Hz (2 frames per poll), I2C_RDWR", r["host_us"], r["ioctls"],
                  r["bus_us"], f"lost {r['lost']}"))
     for per_register, name in ((True, "6 x read_byte_data per sample"),

@@ -6,7 +6,8 @@ import argparse
 import difflib
 
 from ..errors import RecordingError, SettingsError
-from ..filter.pipeline import SETTING_NAMES, GyroFilter
+from ..filter.pipeline import GyroFilter
+from ..filter.settings import SETTING_NAMES
 from ..filter.presets import DEFAULT_PRESET, PRESETS
 from ..filter.tempcomp import coefficients_from_model
 from ..inputs import parse_json, quote

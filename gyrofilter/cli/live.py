@@ -30,7 +30,7 @@ def add_source_arguments(parser):
     parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
                         help="gyro unit of a serial device that sends no header line")
     parser.add_argument("--lsb-per-dps", type=options.decimal, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
-    options.add_sample_rate_argument(parser, help="sample rate of such a device")
+    options.add_sample_rate_argument(parser, help="sample rate (Hz) of an mpu6050, a simulation or a serial device that sends no header")
 
 
 def check_duration(duration_s):
@@ -151,8 +151,10 @@ def close_after_failure(output, exc, command):
 def open_from_args(args):
     """Open ``args.source`` with the unit options and ``--duration`` as defaults (a simulation
     then runs for that duration, so that it equals ``simulate --duration``); a bad
-    ``--sample-rate-hz`` is refused naming the option, whichever source it was meant for."""
-    return open_source(args.source, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
+    ``--sample-rate-hz`` is refused naming the option, whichever source it was meant for; a unit
+    option the source cannot take, or that its SOURCE text gives too, is refused naming the option."""
+    named = {"gyro_unit": "--gyro-unit", "lsb_per_dps": "--lsb-per-dps", "sample_rate_hz": options.SAMPLE_RATE_OPTION}
+    return open_source(args.source, options=named, gyro_unit=args.gyro_unit, lsb_per_dps=args.lsb_per_dps,
                        sample_rate_hz=options.sample_rate_hz(args), duration_s=args.duration)
 
 

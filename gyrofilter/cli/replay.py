@@ -24,14 +24,14 @@ import numpy as np
 
 from .. import plots
 from ..errors import RecordingError, SampleError, SettingsError
-from ..filter.pipeline import SETTING_NAMES
+from ..filter.settings import SETTING_NAMES
 from ..filter.smoother import Smoother
-from ..recording import CHUNK_ROWS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
+from ..recording import CHUNK_ROWS, COLUMNS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
 from . import console, filtering, options, outputs
 
 BUNDLED = "mpu6050_static_100s.csv.gz"
-OUT_COLUMNS = ["t", "gx", "gy", "gz"]
+OUT_COLUMNS = list(COLUMNS)
 
 
 def add_arguments(parser):

@@ -19,7 +19,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import SampleError, SettingsError
-from ..recording import END_NOTE, dps_header, header_text, note_text
+from ..recording import COLUMNS, END_NOTE, dps_header, header_text, note_line
 from . import console, filtering, live, options, outputs
 
 FLUSH_INTERVAL_S = 0.5
@@ -54,7 +54,7 @@ class _TextOut:
         self.stream.write("".join(filtering.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
 
     def note(self, text):
-        self.stream.write(f"# {note_text(text)}\n")
+        self.stream.write(note_line(text))
 
     def flush(self):
         self.stream.flush()
@@ -94,7 +94,7 @@ def _run(args, source):
         if key in head:
             out_header[key] = head[key]
     out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
-    columns = ["t", "gx", "gy", "gz"]
+    columns = list(COLUMNS)
     if args.out:
         writer = live.LiveOutput(args.out, out_header, columns, filtering.ROW_FORMATS, "filtered row")
     else:

@@ -9,7 +9,9 @@
     tempcomp         temperature compensation of the bias
     smoother         the offline forward-backward smoother
     presets          the named settings; "recommended" is the default
-    pipeline         GyroFilter: the stages in order, its settings and their checks
+    settings         FilterSettings: every setting, its default, its range and their check
+    samples          the checks of the samples, times and temperatures the filter is fed
+    pipeline         GyroFilter: the stages in order
     jit              optional numba compilation of the per-block kernels
 
 ``from gyrofilter import GyroFilter`` is the way in; this package is for those who need a stage.

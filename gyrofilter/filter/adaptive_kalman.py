@@ -184,7 +184,7 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
 class AdaptiveKalman:
     """The adaptive Kalman stage for three axes: :func:`run_blocks_adaptive` with its state.
 
-    ``settings`` is a :class:`gyrofilter.filter.pipeline.FilterSettings`. The state has a fixed size
+    ``settings`` is a :class:`gyrofilter.filter.settings.FilterSettings`. The state has a fixed size
     (see :func:`run_blocks_adaptive`) and is updated in place by :meth:`run`; :meth:`start`
     sets R and the starting model once sigma_b, the standard deviation of a block mean at rest,
     is known. The forward-backward smoother runs a second instance over the reversed block

@@ -52,7 +52,7 @@ MAX_BIAS_DPS = 20.0  # the largest plausible bias (deg/s): the MPU6050's initial
 #: MPU6050's rate noise is 0.005 deg/s/sqrt(Hz), 0.45 deg/s at its top rate of 8 kHz
 MAX_NOISE_STD_DPS = 20.0
 MIN_SAMPLES = 3  # fewer samples cannot measure the noise
-#: the most samples a calibration window holds: 1e9, beyond an hour (pipeline.MAX_CALIBRATION_S) at
+#: the most samples a calibration window holds: 1e9, beyond an hour (settings.MAX_CALIBRATION_S) at
 #: the highest sample rate (units.MAX_SAMPLE_RATE_HZ), 3.6e8
 MAX_SAMPLES = 10**9
 

@@ -53,6 +53,8 @@ from ..errors import SettingsError
 from .jit import choose_kernel
 from ..units import plain
 
+#: the stage's settings by default, the one statement of them (FilterSettings' hold_h, hold_window
+#: and hold_max_blocks take theirs from here, and the adaptive Kalman filter's switch the rest)
 DEFAULTS = {
     "cusum_kappa": 0.5,
     "cusum_h": 10.0,
@@ -166,8 +168,10 @@ class ConstantRateHold:
     installed), "python" or "numba".
     """
 
-    def __init__(self, sigma_block_dps, *, initial_blocks=0, cusum_kappa=0.5, cusum_h=10.0,
-                 window_blocks=20, max_blocks=400, accept_p=0.999, agree_z=4.0, backend="auto"):
+    def __init__(self, sigma_block_dps, *, initial_blocks=0, cusum_kappa=DEFAULTS["cusum_kappa"],
+                 cusum_h=DEFAULTS["cusum_h"], window_blocks=DEFAULTS["window_blocks"],
+                 max_blocks=DEFAULTS["max_blocks"], accept_p=DEFAULTS["accept_p"], agree_z=DEFAULTS["agree_z"],
+                 backend="auto"):
         sigma = np.asarray(sigma_block_dps, dtype=float).reshape(-1)
         if sigma.shape != (3,) or not np.all(np.isfinite(sigma)) or np.any(sigma <= 0):
             raise SettingsError(f"sigma_block_dps must be 3 positive numbers, got {plain(sigma_block_dps)}")

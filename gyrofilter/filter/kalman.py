@@ -188,7 +188,7 @@ def guard(x, ya, a, limit, n_blocks, guard_run):
 class PaperKalman:
     """Paper 001's Kalman stage for three axes: :func:`run_blocks` with its state.
 
-    ``settings`` is a :class:`gyrofilter.filter.pipeline.FilterSettings`; ``sigma_b_dps`` (3,) is the
+    ``settings`` is a :class:`gyrofilter.filter.settings.FilterSettings`; ``sigma_b_dps`` (3,) is the
     standard deviation of a block mean at rest (deg/s) that the divergence guard measures in,
     an array the caller keeps and may update in place. The state has a fixed size (see
     :func:`run_blocks`) and is updated in place by :meth:`run`; :meth:`start` sets the initial

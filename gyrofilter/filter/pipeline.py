@@ -17,205 +17,21 @@ from __future__ import annotations
 import copy
 import math
 import os
-from dataclasses import asdict, dataclass, fields, replace
-from functools import partial
+from dataclasses import asdict
 
 import numpy as np
 
 from . import adaptive_kalman, kalman
 from .hold import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
-from .calibration import MAX_BIAS_DPS, Calibration, calibrate, calibration_samples
+from .calibration import Calibration, calibrate, calibration_samples
 from ..errors import CalibrationError, SampleError, SettingsError
 from ..inputs import check_number
-from .predictor import closed_loop_radius, stable_gain_threshold
 from .presets import DEFAULT_PRESET, PRESETS
+from .samples import as_numbers, check_sample, check_samples, check_temperature
+from .settings import MAX_CALIBRATION_SAMPLES, SETTING_NAMES, FilterSettings
 from .tempcomp import compensate
-from ..units import AXES, MAX_RATE_DPS, RATE_TOLERANCE, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
-
-
-#: longest start-up still window (s), and most samples in it (an hour at 1 kHz, 115 MB with the
-#: temperatures): its samples are held until it ends
-MAX_CALIBRATION_S = 3600.0
-MAX_CALIBRATION_SAMPLES = 3_600_000
-#: largest |temperature coefficient| (deg/s per deg C): 60x the MPU6050's (its zero-rate output
-#: moves at most 20 deg/s over -40..85 deg C, 0.16 deg/s per deg C)
-MAX_TEMP_COEFFICIENT_DPS_PER_C = 10.0
-
-#: The range of every numeric setting (the bounds :func:`gyrofilter.inputs.check_number` takes).
-#: Every size and count has an upper bound, so that no setting asks for more memory or time
-#: than a Pi has (a block is held in memory, the rings are fifo_depth, qr_window and hold_window
-#: long, and median_slope compares every pair of a block's samples); rates and variances stay
-#: within MAX_RATE_DPS (its square), so that every square the filters take stays finite.
-SETTING_RANGES = {
-    "calibration_s": dict(low=0, high=MAX_CALIBRATION_S),
-    "calibration_retry_s": dict(low=0, high=86_400.0),
-    "stillness_z": dict(low=0, low_open=True, high=1e6),
-    "max_bias_dps": dict(low=0, low_open=True, high=MAX_RATE_DPS),
-    "block_len": dict(low=1, high=100, integer=True),
-    "outlier_q_dps": dict(low=0, low_open=True, high=MAX_RATE_DPS),
-    "fifo_depth": dict(low=1, high=100, integer=True),
-    "fit_order": dict(low=0, high=10, integer=True),
-    "p0_dps2": dict(low=0, low_open=True, high=MAX_RATE_DPS ** 2),
-    "qr_window": dict(low=0, high=10_000, integer=True),
-    "hold_h": dict(low=0, low_open=True, high=1e6),
-    "hold_window": dict(low=2, high=1_000, integer=True),
-    "hold_max_blocks": dict(low=1, high=10 ** 9, integer=True),
-    "gain_min": dict(low=0, low_open=True, high=1),
-    "innovation_forgetting": dict(low=0, low_open=True, high=1),
-    "prior_var_max_r": dict(low=0, high=1e6),
-    "guard_blocks": dict(low=0, high=10 ** 6, integer=True),
-    "guard_k_sigma": dict(low=0, low_open=True, high=1e6),
-}
-
-
-@dataclass(frozen=True)
-class FilterSettings:
-    """Settings of :class:`GyroFilter`; the defaults are paper 001's values (preset "paper";
-    GyroFilter's default preset is "recommended", see gyrofilter.filter.presets).
-
-    ============================ ========= ===================================================
-    setting                      default   meaning
-    ============================ ========= ===================================================
-    calibration_s                2.0       start-up still window for the bias (s), <= 3600 and
-                                           <= 3.6 million samples; 0 = none (refused
-                                           where the filter needs it, unless loaded)
-    calibration_retry_s          0.0       keep trying new windows for this long (s) when the
-                                           sensor moved; 0 = raise at once
-    stillness_z                  6.0       stillness limit (noise units, see calibration)
-    max_bias_dps                 20.0      largest plausible bias (deg/s; MPU6050 datasheet)
-    block_len                    5         L, samples per non-sliding block (001: 5)
-    outlier_q_dps                1.0       q, gross-error threshold |x_i - mean| (deg/s)
-    outlier_rule                 paper     "paper" (|x_i - mean| > q), "median_slope" (robust
-                                           line per block; see averaging) or "by_model"
-                                           (paper in the adaptive filter's constant-rate
-                                           model, median_slope in its LS model)
-    fifo_depth                   10        posteriors in the LS-prediction FIFO (001: 10)
-    fit_order                    2         order of the LS fit (001: 2, quadratic)
-    p0_dps2                      1.0       P0, variance of the initial state ((deg/s)^2)
-    qr_window                    10        blocks over which Q and R are computed; 0 = all
-    qr_stat                      variance  "variance" or "std": reading of sigma in eqs 11-12
-    r_source                     window    "window" (eq. 12) or "calibration" (fixed R)
-    backend                      auto      "auto", "python" or "numba" for the Kalman loop
-    tracker                      kalman    "kalman" (paper 001) or "block_mean" (no filter)
-    hold                         False     constant-rate hold after the tracker (adaptive)
-    hold_h                       10.0      CUSUM threshold of the hold (block-noise units)
-    hold_window                  20        blocks the hold's constancy test looks at
-    hold_max_blocks              400       memory of the held mean (blocks)
-    kalman_noise                 paper     how the Kalman stage gets Q and R: "paper" (eqs.
-                                           11-12 over qr_window) or "adaptive" (R from the
-                                           calibration, Q by covariance matching, constant-rate
-                                           / LS model switch; adaptive_kalman.run_blocks_adaptive); the
-                                           switch uses hold_h, hold_window, hold_max_blocks
-    gain_min                     0.6       "adaptive": least Kalman gain K of the LS model; the
-                                           loop must be stable at it (predictor.
-                                           closed_loop_radius < 1: K > 0.335 for 10 points,
-                                           order 2)
-    innovation_forgetting        0.1       "adaptive": a in C_k = (1-a) C_(k-1) + a nu_k^2,
-                                           the innovation variance estimate, in (0, 1]
-    prior_var_max_r              4.0       "adaptive": above this prior variance, in units of
-                                           R, the LS prior is dropped (gain 1); 0 = never
-    guard_blocks                 0         divergence guard: re-seed the Kalman filter from the
-                                           block mean after this many blocks in a row more than
-                                           guard_k_sigma sigma_b from the block means; 0 = off
-                                           (the faithful filter)
-    guard_k_sigma                10.0      the guard's limit in sigma_b, the std of a block mean
-                                           at rest (from the calibration window)
-    temp_coefficient_dps_per_c   0         c per axis (one number or 3): subtract
-                                           c (T - T0), T0 the calibration's mean temperature;
-                                           needs temperatures (see gyrofilter.filter.tempcomp)
-    ============================ ========= ===================================================
-
-    Every number must lie in its range in :data:`SETTING_RANGES` (a bool is not a number), the
-    temperature coefficients within +-:data:`MAX_TEMP_COEFFICIENT_DPS_PER_C`.
-
-    ``preset="hold"`` is ``tracker="block_mean", hold=True``; ``preset="adaptive_kalman"`` (= the
-    default ``"recommended"``) is ``kalman_noise="adaptive"`` with the guard on (gyrofilter.filter.presets).
-
-    On q: paper 001 saw gross errors of more than 200 LSB; one such spike in a block of 5 sits
-    4/5 * 200 = 160 LSB from the block mean, while its own example block
-    (67, 49, 55, -233, 21) puts normal samples up to 75 LSB from the mean. q = 1 deg/s
-    (131 LSB at +-250 deg/s) separates the two.
-    """
-
-    calibration_s: float = 2.0
-    calibration_retry_s: float = 0.0
-    stillness_z: float = 6.0
-    max_bias_dps: float = MAX_BIAS_DPS
-    block_len: int = 5
-    outlier_q_dps: float = 1.0
-    fifo_depth: int = 10
-    fit_order: int = 2
-    p0_dps2: float = 1.0
-    qr_window: int = 10
-    qr_stat: str = "variance"
-    r_source: str = "window"
-    backend: str = "auto"
-    tracker: str = "kalman"
-    hold: bool = False
-    hold_h: float = 10.0
-    hold_window: int = 20
-    hold_max_blocks: int = 400
-    outlier_rule: str = "paper"
-    temp_coefficient_dps_per_c: object = 0.0
-    kalman_noise: str = "paper"
-    gain_min: float = 0.6
-    innovation_forgetting: float = 0.1
-    prior_var_max_r: float = 4.0
-    guard_blocks: int = 0
-    guard_k_sigma: float = 10.0
-
-    def temp_coefficients(self):
-        """The temperature coefficients as a tuple of 3 floats (deg/s per deg C)."""
-        c = self.temp_coefficient_dps_per_c
-        return (float(c),) * 3 if isinstance(c, (int, float)) else tuple(float(v) for v in c)
-
-    def validate(self) -> "FilterSettings":
-        """Check every setting and return them with the numbers as plain Python ints and floats
-        (an integer setting may be given as 5.0); SettingsError names the first bad one, its value
-        and what is expected. Numbers must lie in :data:`SETTING_RANGES` (never a bool, NaN or
-        infinity: :func:`gyrofilter.inputs.check_number`)."""
-
-        def need(cond, name, what):
-            if not cond:
-                raise SettingsError(f"setting {name}={_shown(getattr(self, name))}: {what}")
-
-        numbers = {name: check_number(getattr(self, name), f"setting {name}", **bounds)
-                   for name, bounds in SETTING_RANGES.items()}
-        checked = replace(self, **numbers)
-        checked._validate_choices(need)
-        return checked
-
-    def _validate_choices(self, need):
-        """The checks beyond the ranges: the named choices and the settings that depend on each other."""
-        need(self.qr_window != 1, "qr_window", "must be 0 (all) or >= 2: a variance needs two values")
-        need(self.qr_stat in ("variance", "std"), "qr_stat", "must be 'variance' or 'std'")
-        need(self.r_source in ("window", "calibration"), "r_source", "must be 'window' or 'calibration'")
-        need(self.backend in ("auto", "python", "numba"), "backend", "must be 'auto', 'python' or 'numba'")
-        need(isinstance(self.hold, bool), "hold", "must be True or False")
-        need(self.tracker in ("kalman", "block_mean"), "tracker", "must be 'kalman' or 'block_mean'")
-        rules = (*AVERAGERS, "by_model")
-        need(self.outlier_rule in rules, "outlier_rule", f"must be one of {', '.join(map(repr, rules))}")
-        need(self.kalman_noise in ("paper", "adaptive"), "kalman_noise", "must be 'paper' or 'adaptive'")
-        need(self.outlier_rule != "by_model" or (self.kalman_noise == "adaptive" and self.tracker == "kalman"), "outlier_rule",
-             "'by_model' follows the adaptive Kalman filter's model: it needs kalman_noise='adaptive' and "
-             "tracker='kalman'; with another filter choose the rule too, e.g. outlier_rule='paper' "
-             "(--set outlier_rule=paper)")
-        c = self.temp_coefficient_dps_per_c
-        several = isinstance(c, (tuple, list))
-        items = c if several else (c,)
-        need(len(items) == (3 if several else 1)
-             and all(_is_number(v) and abs(v) <= MAX_TEMP_COEFFICIENT_DPS_PER_C for v in items),
-             "temp_coefficient_dps_per_c",
-             f"must be one number or 3 (deg/s per deg C, axes x, y, z), each within +-{MAX_TEMP_COEFFICIENT_DPS_PER_C:g}")
-        if self.kalman_noise == "adaptive":
-            radius = closed_loop_radius(self.fifo_depth, self.fit_order, self.gain_min)
-            need(radius < 1, "gain_min", f"leaves the LS loop unstable (largest root modulus {radius:.3f} with "
-                 f"fifo_depth={self.fifo_depth}, fit_order={self.fit_order}; stable above "
-                 f"{stable_gain_threshold(self.fifo_depth, self.fit_order):.3f})")
-
-
-SETTING_NAMES = tuple(f.name for f in fields(FilterSettings))
+from ..units import RATE_TOLERANCE, TEMP_RANGE_C, check_sample_rate_hz, plain, shown
 
 
 class GyroFilter:
@@ -249,7 +65,7 @@ class GyroFilter:
 
     def __init__(self, sample_rate_hz, calibration_s=None, *, preset=DEFAULT_PRESET, calibration=None, **settings):
         if not isinstance(preset, str) or preset not in PRESETS:
-            raise SettingsError(f"unknown preset {_shown(preset)}; choose one of {', '.join(PRESETS)}")
+            raise SettingsError(f"unknown preset {shown(preset)}; choose one of {', '.join(PRESETS)}")
         unknown = sorted(set(settings) - set(SETTING_NAMES))
         if unknown:
             raise SettingsError(f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(SETTING_NAMES)}")
@@ -401,9 +217,9 @@ class GyroFilter:
         A start-up window that fails its check raises CalibrationError once no retry is left
         (``calibration_retry_s``); that window is dropped, and the next sample starts a new one.
         """
-        sample = _sample3(sample)
+        sample = check_sample(sample)
         if temp_c is not None or self._temp_on:
-            temp_c = _temperature(temp_c, self._temp_on, "update()")
+            temp_c = check_temperature(temp_c, self._temp_on, "update()")
         self.samples_in += 1
         if self._cal_buf is not None:
             self._cal_buf[self._cal_fill] = sample
@@ -453,10 +269,10 @@ class GyroFilter:
         refused, no retry left) drops that window; the samples of this call after it are not
         used, and the next sample given starts a new window.
         """
-        return self._filter(_samples(samples_dps), temp_c)
+        return self._filter(check_samples(samples_dps), temp_c)
 
     def _filter(self, x, temp_c):
-        """:meth:`filter` of the checked samples ``x`` (:func:`_samples`)."""
+        """:meth:`filter` of the checked samples ``x`` (:func:`check_samples`)."""
         temps = self._check_temps(temp_c, len(x))
         samples_in = self.samples_in + len(x)
         outputs = []
@@ -520,8 +336,8 @@ class GyroFilter:
         of this call's samples, whatever the chunking. Times must be finite (SampleError names
         the first that is not, and the filter is left as it was).
         """
-        x = _samples(samples_dps)
-        t = _numbers(t_s, "t_s", "s")
+        x = check_samples(samples_dps)
+        t = as_numbers(t_s, "t_s", "s")
         if t.shape != (len(x),):
             raise SampleError(f"t_s must have shape ({len(x)},), one time per sample, got {t.shape}")
         finite = np.isfinite(t)
@@ -553,7 +369,7 @@ class GyroFilter:
             if self._temp_on:
                 raise SampleError("temperature compensation is on: filter() needs temp_c, one temperature (deg C) per sample")
             return None
-        t = _numbers(temp_c, "temp_c", "deg C")
+        t = as_numbers(temp_c, "temp_c", "deg C")
         if t.shape != (n,):
             raise SampleError(f"temp_c must have shape ({n},), one temperature per sample, got {t.shape}")
         ok = (t >= TEMP_RANGE_C[0]) & (t <= TEMP_RANGE_C[1])
@@ -561,7 +377,7 @@ class GyroFilter:
             ok |= np.isnan(t)
         if not ok.all():
             row = int(np.flatnonzero(~ok)[0])
-            _temperature(float(t[row]), self._temp_on, f"temp_c row {row}", row)
+            check_temperature(float(t[row]), self._temp_on, f"temp_c row {row}", row)
         return t
 
     def _track(self, y, out, y_motion=None, used=adaptive_kalman.NO_USED):
@@ -640,9 +456,9 @@ def _check_calibration_argument(calibration, calibration_s):
         raise SettingsError(f"calibration must be a Calibration or the path of a saved one (str or os.PathLike), "
                             f"got {type(calibration).__name__}")
     if calibration_s is not None:
-        shown = "the calibration" if isinstance(calibration, Calibration) else f"calibration {calibration}"
-        raise SettingsError(f"{shown} replaces the start-up calibration, so a calibration window "
-                            f"(calibration_s={_shown(calibration_s)}) has nothing to do; give one of them")
+        named = "the calibration" if isinstance(calibration, Calibration) else f"calibration {calibration}"
+        raise SettingsError(f"{named} replaces the start-up calibration, so a calibration window "
+                            f"(calibration_s={shown(calibration_s)}) has nothing to do; give one of them")
 
 
 def _check_calibration_rate(cal, sample_rate_hz, name):
@@ -653,81 +469,3 @@ def _check_calibration_rate(cal, sample_rate_hz, name):
         raise SettingsError(f"{name} was made at {cal.sample_rate_hz:g} Hz and this filter runs at "
                             f"{sample_rate_hz:g} Hz, more than {RATE_TOLERANCE:.0%} apart: its noise level "
                             "does not hold at another rate; calibrate at this rate")
-
-
-def _sample3(sample):
-    """One sample for update() as a tuple of 3 floats (deg/s); SampleError names what is wrong.
-
-    A sample is a tuple, list or array of shape (3,) of numbers (no bools, no set or dict: they
-    have no order), each finite and within +-MAX_RATE_DPS (:func:`gyrofilter.inputs.check_number`).
-    Checked before the sample touches any state, so a refused sample leaves the filter as it was.
-    """
-    if type(sample) is tuple and len(sample) == 3:  # the common case, kept cheap (NaN fails every comparison)
-        x, y, z = sample
-        m = MAX_RATE_DPS
-        if type(x) is float and type(y) is float and type(z) is float and -m <= x <= m and -m <= y <= m and -m <= z <= m:
-            return sample
-    if isinstance(sample, np.ndarray) and sample.shape == (3,) or isinstance(sample, (tuple, list)) and len(sample) == 3:
-        x, y, z = sample.tolist() if isinstance(sample, np.ndarray) else sample
-        m = MAX_RATE_DPS
-        if (type(x) in _PLAIN and type(y) in _PLAIN and type(z) in _PLAIN  # ints, numpy numbers, a list or an array row
-                and -m <= x <= m and -m <= y <= m and -m <= z <= m):
-            return float(x), float(y), float(z)
-        error = partial(SampleError, where=_UPDATE_TAKES)  # any other or refused: check_number says why
-        return tuple(check_number(v, f"g{axis} (deg/s)", low=-MAX_RATE_DPS, high=MAX_RATE_DPS, error=error)
-                     for axis, v in zip(AXES, sample))
-    raise SampleError(f"got {_shown(sample)}", where=_UPDATE_TAKES)
-
-
-_UPDATE_TAKES = f"update() takes one sample (gx, gy, gz): 3 finite numbers in deg/s within +-{MAX_RATE_DPS:g}"
-
-
-_REAL = (int, float, np.integer, np.floating)
-_BOOL = (bool, np.bool_)
-_PLAIN = frozenset((int, float, np.float64, np.float32, np.int64, np.int32))  # update()'s quick check
-
-
-def _samples(samples_dps):
-    """The samples for filter(): an (N, 3) float array, each finite and within +-MAX_RATE_DPS
-    (deg/s), checked in one pass; SampleError names the first refused row (``.row``)."""
-    x = _numbers(samples_dps, "samples_dps", "deg/s")
-    if x.ndim != 2 or x.shape[1] != 3:
-        raise SampleError(f"samples_dps must have shape (N, 3), got {x.shape}")
-    return check_rates_dps(x, "samples_dps")
-
-
-def _numbers(values, name, unit):
-    """``values`` as a float array when they are numbers (ints or floats: no strings, bools,
-    objects or ragged lists), else SampleError naming ``name``."""
-    try:
-        x = np.asarray(values)
-    except (ValueError, TypeError):  # a ragged list
-        raise SampleError(f"{name} must be an array of numbers in {unit}, got {_shown(values)}") from None
-    if x.dtype.kind not in "iuf":
-        raise SampleError(f"{name} must be numbers in {unit}, got an array of {x.dtype}")
-    return x.astype(float, copy=False)
-
-
-def _temperature(value, required, where, row=0):
-    """A sample's temperature as a float in TEMP_RANGE_C (deg C), or NaN when it has
-    none (None or NaN), which ``required`` (compensating) refuses; SampleError says why."""
-    if value is None or isinstance(value, (float, np.floating)) and math.isnan(value):
-        if required:
-            raise SampleError("temperature compensation is on: it needs temp_c, a temperature (deg C), with every sample",
-                              row, where)
-        return math.nan
-    return check_number(value, "temp_c (deg C)", low=TEMP_RANGE_C[0], high=TEMP_RANGE_C[1],
-                        error=partial(SampleError, row=row, where=where))
-
-
-def _is_number(value):
-    """Whether ``value`` is an int or float (numpy's too), not a bool."""
-    return isinstance(value, _REAL) and not isinstance(value, _BOOL)
-
-
-def _shown(value):
-    """A short, plain text of a user's value for an error message."""
-    if isinstance(value, np.ndarray):
-        return f"an array of shape {value.shape}"
-    text = plain(value)
-    return text if len(text) <= 80 else text[:77] + "..."

@@ -1,6 +1,6 @@
 """Named settings for :class:`gyrofilter.GyroFilter` (``preset=``).
 
-:data:`DEFAULT_PRESET` is ``recommended``, the best measured filter, used by ``GyroFilter(fs)``,
+:data:`DEFAULT_PRESET` is ``recommended``, the best measured filter, used by ``GyroFilter(sample_rate_hz)``,
 ``gyrofilter replay`` and ``gyrofilter run`` when no preset is named. Explicit keyword arguments
 override a preset. All presets are measured in ``docs/evaluate.md``.
 

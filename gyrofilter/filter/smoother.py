@@ -36,6 +36,7 @@ import numpy as np
 
 from . import adaptive_kalman, kalman
 from ..errors import SettingsError
+from .pipeline import GyroFilter
 from .presets import DEFAULT_PRESET
 
 #: blocks per call of the backward filter (its memory: 15 floats per block of the chunk)
@@ -81,8 +82,6 @@ class Smoother:
     """
 
     def __init__(self, filt):
-        from .pipeline import GyroFilter
-
         if not isinstance(filt, GyroFilter):
             raise SettingsError(f"Smoother needs a GyroFilter, got {type(filt).__name__}")
         if filt.block_log is not None:
@@ -137,8 +136,6 @@ def smooth(samples_dps, sample_rate_hz, calibration_s=None, *, temp_c=None, pres
     ``calibration`` and ``settings`` as for :class:`gyrofilter.GyroFilter`; ``temp_c``: N
     temperatures (deg C) when the settings compensate temperature, as for its ``filter``.
     """
-    from .pipeline import GyroFilter
-
     filt = GyroFilter(sample_rate_hz, calibration_s, preset=preset, calibration=calibration, **settings)
     smoother = Smoother(filt)
     filt.filter(samples_dps, temp_c)

@@ -44,6 +44,11 @@ import re
 
 from ..errors import SettingsError
 from ..inputs import check_number, parse_number, quote
+from ..units import GYRO_UNITS
+from . import mpu6050
+from .replay import ReplaySource
+from .serial_source import SerialSource
+from .simulated import SimulatedSource
 
 __all__ = ["open_source", "parse_source", "SOURCE_HELP", "KINDS"]
 
@@ -82,8 +87,6 @@ def _bool(text, what):
 
 
 def _unit(text, what):
-    from ..units import GYRO_UNITS
-
     if text not in GYRO_UNITS:
         raise SettingsError(f"{what} must be one of {', '.join(GYRO_UNITS)}, got {quote(text, 40)}")
     return text
@@ -103,7 +106,7 @@ KINDS = {
         "bus": (_int(0, 65535), "bus", "I2C bus number N of /dev/i2c-N"),
         "addr": (_int(0, 0x7F), "address", "I2C address, 0x68 or 0x69"),
         "address": (_int(0, 0x7F), "address", "same as addr"),
-        "rate": (_float, "rate_hz", "sample rate in Hz"),
+        "rate": (_float, "sample_rate_hz", "sample rate in Hz"),
         "range": (_int(), "range_dps", "full scale in deg/s: 250, 500, 1000 or 2000"),
         "dlpf": (_int(0, 7), "dlpf", "DLPF_CFG 0..6 (CONFIG register bits 2:0)"),
         "temp": (_bool, "temperature", "read the temperature too (1/0)"),
@@ -138,12 +141,12 @@ def parse_source(spec: str):
     ``spec``: the SOURCE text (``KIND[:ARG][,key=value...]``, a bare ``/dev/tty...`` port or a
     bare recording file name; see the module docstring). Returns ``(kind, kwargs)``: ``kind`` is
     one of :data:`KINDS` (aliases such as ``mpu`` or ``file`` resolved) and ``kwargs`` maps the
-    opener's keyword names (``address``, ``rate_hz``, ``path``, ...) to parsed values, in the
+    opener's keyword names (``address``, ``sample_rate_hz``, ``path``, ...) to parsed values, in the
     units of the :data:`KINDS` table (rates in Hz, ranges in deg/s, times in s). Nothing is
     opened. Raises :class:`gyrofilter.errors.SettingsError` naming the bad kind, key or value.
 
     >>> parse_source("mpu6050:bus=1,addr=0x69,rate=200")
-    ('mpu6050', {'bus': 1, 'address': 105, 'rate_hz': 200.0})
+    ('mpu6050', {'bus': 1, 'address': 105, 'sample_rate_hz': 200.0})
     >>> parse_source("replay:rec.csv.gz,realtime")
     ('replay', {'path': 'rec.csv.gz', 'realtime': True})
     >>> parse_source("sim,seed=3")
@@ -203,51 +206,69 @@ def parse_source(spec: str):
     return kind, kwargs
 
 
-def open_source(spec: str, **defaults):
+#: why a kind of source takes no unit or rate from a command-line option (see :func:`open_source`)
+_OWN_UNITS = {
+    "mpu6050": "an MPU6050 reads in LSB, range= sets the LSB per deg/s",
+    "replay": "a replayed recording's header gives its sample rate and units",
+    "sim": "the simulator model gives the units",
+}
+
+
+def open_source(spec: str, *, options=None, **defaults):
     """Open the source named by ``spec`` (see the module docstring).
 
     ``spec``: the SOURCE text, parsed by :func:`parse_source`. ``defaults`` fill keyword
     arguments the spec does not give, where that kind of source accepts them (for example
     ``gyro_unit`` and ``sample_rate_hz`` (Hz) from command-line options for a serial device that
-    sends no header); others, and ``None`` values, are ignored.
+    sends no header); others, and ``None`` values, are ignored. ``options`` names the
+    command-line option that gave a default (keyword name -> option, e.g. ``{"sample_rate_hz":
+    "--sample-rate-hz"}``): such a default is refused instead of ignored, with one line naming
+    the option, when this kind of source cannot take it (an MPU6050's unit, a replayed file's
+    rate: its header rules) or when the spec gives it too; an opener's refusal of its value names
+    the option.
 
     Returns the opened :class:`gyrofilter.sources.base.Source` (an MPU6050Source, SerialSource,
     ReplaySource or SimulatedSource); close it, or use it in a ``with`` block. Raises
     :class:`gyrofilter.errors.SettingsError` for a bad spec.
     """
     kind, kwargs = parse_source(spec)
-    accepted = {name for _, name, _ in KINDS[kind][1].values()}
-    for key, value in defaults.items():
-        if value is not None and key in accepted and key not in kwargs:
-            kwargs[key] = value
+    spec = spec.strip()
+    keys = {name: key for key, (_, name, _) in reversed(KINDS[kind][1].items())}  # keyword -> its (first) key
+    named = {name: key for name, key in keys.items() if re.search(rf"(^|[,:])\s*{key}\s*=", spec, re.IGNORECASE)}
+    for name, value in defaults.items():
+        if value is None:
+            continue
+        option = (options or {}).get(name)
+        if option is not None and name not in keys:
+            raise SettingsError(f"{option} does not apply to source {quote(spec)}: {_OWN_UNITS[kind]}; drop the option")
+        if option is not None and name in kwargs:
+            raise SettingsError(f"{option} and the key {keys[name]!r} of source {quote(spec)} give the same "
+                                "setting: give it once")
+        if name in keys and name not in kwargs:
+            kwargs[name] = value
+            if option is not None:
+                named[name] = option
     try:
         return _open(kind, kwargs)
     except SettingsError as exc:
-        raise SettingsError(_in_source_terms(str(exc), spec.strip(), kind)) from None
+        raise SettingsError(_in_source_terms(str(exc), spec, named)) from None
 
 
-def _in_source_terms(message, spec, kind):
-    """An opener's SettingsError in the terms of the SOURCE text: prefixed with it, and the
-    keyword names of the keys it gives replaced by those keys (``rate_hz`` -> ``rate``)."""
-    for key, (_, name, _) in KINDS[kind][1].items():
-        if name != key and re.search(rf"(^|[,:])\s*{key}\s*=", spec, re.IGNORECASE):
+def _in_source_terms(message, spec, named):
+    """An opener's SettingsError in the terms of the SOURCE text and the options: prefixed with
+    the text, and each keyword name in ``named`` replaced by the key or option that gave it
+    (``sample_rate_hz`` -> ``rate`` or ``--sample-rate-hz``)."""
+    for name, key in named.items():
+        if name != key:
             message = re.sub(rf"\b{name}\b", key, message)
     return message if message.startswith("source ") else f"source {quote(spec)}: {message}"
 
 
 def _open(kind, kwargs):
     if kind == "mpu6050":
-        from .mpu6050 import open_mpu6050
-
-        return open_mpu6050(**kwargs)
+        return mpu6050.open_mpu6050(**kwargs)
     if kind == "serial":
-        from .serial_source import SerialSource
-
         return SerialSource(**kwargs)
     if kind == "replay":
-        from .replay import ReplaySource
-
         return ReplaySource(**kwargs)
-    from .simulated import SimulatedSource
-
     return SimulatedSource(**kwargs)

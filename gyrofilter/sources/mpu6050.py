@@ -24,6 +24,10 @@ register map; PS-MPU-6000A-00 rev 3.4, product specification):
 
 Temperature: T / degC = TEMP_OUT / 340 + 36.53 (section 4.18).
 
+This module holds the source (the bus traffic); what the chip is and how its settings and frames
+are computed, without the bus, is in :mod:`gyrofilter.sources.mpu6050_chip`, the register map in
+:mod:`gyrofilter.sources.mpu6050_registers`.
+
 smbus2 is imported only when a bus is opened by number or path; a bus object can be injected
 instead (anything with smbus2's ``read_byte_data``, ``write_byte_data``, ``read_i2c_block_data``
 and, optionally, ``i2c_rdwr``).
@@ -35,119 +39,17 @@ from datetime import datetime, timezone
 import numpy as np
 
 from ..errors import DeviceError, SettingsError, SourceEnded
-from ..recording import format_number
+from ..recording import COLUMNS, units_header
 from . import mpu6050_registers as R
-from ..units import check_sample_rate_hz
 from .base import Source
+from .mpu6050_chip import (CHIPS, MPU6050_ID, auto_dlpf_cfg, chip_ids, decode_fifo, frame_layout, lsb_per_dps_for,
+                           sample_rate_settings, temperature_c)
 
-__all__ = ["open_mpu6050", "MPU6050Source", "CHIPS", "sample_rate_settings", "auto_dlpf_cfg",
-           "decode_fifo", "frame_layout", "temperature_c"]
-
-# WHO_AM_I value -> (name, FIFO bytes, temperature LSB per degC, temperature offset degC, usable)
-# "usable" = shares the MPU-6050 gyro/FIFO registers, so allow_chip may let it through.
-# MPU-6500 family: PS-MPU-6500A-01 (FIFO 512 bytes, T = TEMP_OUT/333.87 + 21);
-# MPU-9250: PS-MPU-9250A-01; MPU-9255 reads 0x73; ICM-20689: DS-000143 (WHO_AM_I 0x98).
-CHIPS = {
-    0x68: ("MPU6050", 1024, 340.0, 36.53, True),
-    0x70: ("MPU6500 (also found on boards sold as MPU6050 or MPU9250)", 512, 333.87, 21.0, True),
-    0x71: ("MPU9250", 512, 333.87, 21.0, True),
-    0x73: ("MPU9255", 512, 333.87, 21.0, True),
-    0x74: ("MPU6515", 512, 333.87, 21.0, True),
-    # clones: FIFO size unknown, assume the smaller 512 bytes so that an overflow is never missed
-    0x72: ("MPU6050 clone (WHO_AM_I 0x72, sold as MPU6050/GY-521)", 512, 340.0, 36.53, True),
-    0x98: ("ICM-20689 or a clone sold as MPU6050/MPU6500", 512, 326.8, 25.0, True),
-    0x12: ("ICM-20602", 512, 326.8, 25.0, True),
-    0x11: ("ICM-20600", 512, 326.8, 25.0, True),
-    0xAF: ("ICM-20608", 512, 326.8, 25.0, True),
-    0x19: ("MPU6886", 512, 326.8, 25.0, True),
-    0x47: ("ICM-42688-P (different register map)", 0, 1.0, 0.0, False),
-    0x42: ("ICM-42605 (different register map)", 0, 1.0, 0.0, False),
-}
-MPU6050_ID = 0x68
+__all__ = ["open_mpu6050", "MPU6050Source"]
 
 TRANSIENT_ERRNOS = (_errno.EIO, _errno.EREMOTEIO)  # 5, 121
 I2C_BLOCK_MAX = 32          # SMBus I2C-block transfers carry at most 32 bytes
 I2C_FUNC_I2C = 0x00000001   # adapter supports plain I2C messages (I2C_RDWR)
-
-
-def lsb_per_dps_for(range_dps):
-    """Return (FS_SEL, LSB per deg/s) for a full scale of ``range_dps`` (250, 500, 1000 or 2000)."""
-    for fs_sel, (full_scale, lsb) in R.GYRO_FULL_SCALE.items():
-        if float(range_dps) == full_scale:
-            return fs_sel, lsb
-    raise SettingsError(f"range_dps={range_dps!r} is not an MPU6050 full scale; expected one of "
-                        f"{', '.join(str(v[0]) for v in R.GYRO_FULL_SCALE.values())} (deg/s)")
-
-
-def auto_dlpf_cfg(rate_hz):
-    """Widest DLPF bandwidth below the Nyquist frequency ``rate_hz / 2`` (DLPF_CFG 0..6).
-
-    Table from register map section 4.3 (gyro bandwidth 256, 188, 98, 42, 20, 10, 5 Hz).
-    Falls back to DLPF_CFG 6 (5 Hz) for rates below 10 Hz.
-    """
-    for cfg in range(0, 7):
-        if R.DLPF[cfg][0] < rate_hz / 2.0:
-            return cfg
-    return 6
-
-
-def sample_rate_settings(rate_hz, dlpf_cfg):
-    """Return (SMPLRT_DIV, actual rate Hz, gyro output rate Hz) for a requested rate.
-
-    ``rate_hz``: the requested sample rate (Hz, finite and > 0); ``dlpf_cfg``: CONFIG.DLPF_CFG
-    0..6, which sets the gyro output rate (7 is reserved in the register map, section 4.3, and refused).
-
-    rate = gyro_output_rate / (1 + SMPLRT_DIV), gyro_output_rate = 8 kHz when DLPF_CFG is 0,
-    else 1 kHz (register map section 4.2). A rate that no divider 0..255 reaches exactly is refused
-    (SettingsError) with the nearest reachable rates in the message.
-    """
-    if dlpf_cfg == 7:
-        raise SettingsError("dlpf=7: CONFIG.DLPF_CFG 7 is reserved in the MPU-6050 register map (section 4.3); "
-                            "use 0 for the 8-kHz gyro output rate (256-Hz bandwidth)")
-    if dlpf_cfg not in R.DLPF:
-        raise SettingsError(f"dlpf={dlpf_cfg!r}: CONFIG.DLPF_CFG (bits 2:0) takes 0..6 (or none for automatic)")
-    base_hz = R.DLPF[dlpf_cfg][2]
-    rate_hz = check_sample_rate_hz(rate_hz, "rate_hz")
-    div_f = base_hz / rate_hz - 1.0
-    div = int(round(div_f))
-    if 0 <= div <= 255 and abs(base_hz / (1 + div) - rate_hz) <= 1e-6 * rate_hz:
-        return div, base_hz / (1 + div), base_hz
-    lo = min(255, max(0, int(np.floor(div_f))))
-    hi = min(255, max(0, lo + 1))
-    near = sorted({base_hz / (1 + d) for d in (lo, hi)}, reverse=True)
-    near_txt = " or ".join(f"{r:g} Hz (SMPLRT_DIV={int(round(base_hz / r - 1))})" for r in near)
-    raise SettingsError(
-        f"rate_hz={rate_hz:g} is not reachable with DLPF_CFG={dlpf_cfg}: the MPU6050 samples at "
-        f"{base_hz:g} Hz / (1 + SMPLRT_DIV), SMPLRT_DIV 0..255; nearest: {near_txt}")
-
-
-def frame_layout(temperature):
-    """Names of the 16-bit words in one FIFO frame, in FIFO order (register order, section 4.6).
-
-    ``temperature``: True when TEMP_OUT is in the FIFO. Returns a tuple of names:
-    ``("temp", "gx", "gy", "gz")`` or ``("gx", "gy", "gz")``.
-    """
-    return (("temp",) if temperature else ()) + ("gx", "gy", "gz")
-
-
-def decode_fifo(buf, n_words):
-    """Decode whole FIFO frames: big-endian 16-bit two's complement -> int16 array (frames, n_words).
-
-    ``buf``: the bytes read from FIFO_R_W, a whole number of frames of ``2 * n_words`` bytes;
-    ``n_words``: 16-bit words per frame (``len(frame_layout(...))``). Returns raw values in LSB
-    (gyro) or TEMP_OUT counts, one row per frame, columns in :func:`frame_layout` order.
-    """
-    return np.frombuffer(bytes(buf), dtype=">i2").reshape(-1, n_words)
-
-
-def temperature_c(raw, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):
-    """T / degC = TEMP_OUT / 340 + 36.53 (register map section 4.18).
-
-    ``raw``: TEMP_OUT (LSB, scalar or array); ``lsb_per_c``: LSB per deg C (340 for an MPU-6050);
-    ``offset_c``: temperature at TEMP_OUT = 0 (deg C; 36.53). Relatives use their own pair
-    (:data:`CHIPS`). Returns the temperature in deg C as floats, the shape of ``raw``.
-    """
-    return np.asarray(raw, dtype=float) / lsb_per_c + offset_c
 
 
 def _as_int(value, name):
@@ -155,19 +57,6 @@ def _as_int(value, name):
         return int(value, 0) if isinstance(value, str) else int(value)
     except (TypeError, ValueError):
         raise SettingsError(f"{name}={value!r} is not an integer") from None
-
-
-def _chip_ids(allow_chip):
-    """allow_chip as a set of ids: None -> {}, 0x70 / "0x70" -> {0x70}, a collection -> its ids."""
-    if allow_chip is None or allow_chip is False:
-        return set()
-    if isinstance(allow_chip, (int, str)):
-        allow_chip = [allow_chip]
-    try:
-        return {int(c, 0) if isinstance(c, str) else int(c) for c in allow_chip}
-    except (TypeError, ValueError):
-        raise SettingsError(f"allow_chip={allow_chip!r}: expected a WHO_AM_I value such as 0x70, a list "
-                            f"of them, or True") from None
 
 
 def _bus_name(bus):
@@ -219,13 +108,13 @@ class MPU6050Source(Source):
         source; or an smbus2-like bus object, used as is and not closed.
     address : int or str
         I2C address, 0x68 (AD0 low) or 0x69 (AD0 high); ``"0x69"`` is accepted.
-    rate_hz : float
+    sample_rate_hz : float
         Requested sample rate (Hz); must be exactly ``gyro_output_rate / (1 + SMPLRT_DIV)``
         (:func:`sample_rate_settings`), else SettingsError names the nearest reachable rates.
     range_dps : float
         Full scale (deg/s): 250, 500, 1000 or 2000 (131, 65.5, 32.8, 16.4 LSB per deg/s).
     dlpf : int, optional
-        CONFIG.DLPF_CFG 0..6 (7 is reserved and refused); None picks the widest bandwidth below ``rate_hz / 2``
+        CONFIG.DLPF_CFG 0..6 (7 is reserved and refused); None picks the widest bandwidth below ``sample_rate_hz / 2``
         (:func:`auto_dlpf_cfg`).
     temperature : bool
         Put TEMP_OUT in the FIFO and a ``temp`` column (deg C) in the rows.
@@ -242,7 +131,7 @@ class MPU6050Source(Source):
         and ``time.time``.
     poll_interval_s : float
         Longest time between FIFO polls (s); lowered to a quarter of the time the FIFO takes to
-        fill at ``rate_hz``.
+        fill at ``sample_rate_hz``.
     max_wait_s : float
         Longest time one ``read()`` waits for the first row (s).
     max_retries : int
@@ -260,7 +149,7 @@ class MPU6050Source(Source):
 
     gyro_unit = "lsb"
 
-    def __init__(self, bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, temperature=True,
+    def __init__(self, bus=1, address=0x68, sample_rate_hz=100, range_dps=250, dlpf=None, temperature=True,
                  allow_chip=None, *, transfer="auto", clock=None, sleep=None, wall_clock=None,
                  poll_interval_s=0.02, max_wait_s=0.1, max_retries=5, retry_backoff_s=0.001,
                  reset_timeout_s=0.5, fifo_bytes=None):
@@ -272,9 +161,9 @@ class MPU6050Source(Source):
                                 f"or 0x69 (AD0 high)")
         self.fs_sel, self.lsb_per_dps = lsb_per_dps_for(range_dps)
         self.full_scale_dps = R.GYRO_FULL_SCALE[self.fs_sel][0]
-        self.dlpf_cfg = auto_dlpf_cfg(float(rate_hz)) if dlpf is None else dlpf
+        self.dlpf_cfg = auto_dlpf_cfg(float(sample_rate_hz)) if dlpf is None else dlpf
         self.smplrt_div, self.sample_rate_hz, self.gyro_output_rate_hz = sample_rate_settings(
-            rate_hz, self.dlpf_cfg)
+            sample_rate_hz, self.dlpf_cfg)
         if transfer not in ("auto", "smbus", "rdwr"):
             raise SettingsError(f"transfer={transfer!r}: expected 'auto', 'smbus' or 'rdwr'")
         self.temperature = bool(temperature)
@@ -312,7 +201,7 @@ class MPU6050Source(Source):
         except BaseException:
             self._close_bus()
             raise
-        self.columns = ["t", "gx", "gy", "gz"] + (["temp"] if self.temperature else [])
+        self.columns = [*COLUMNS] + (["temp"] if self.temperature else [])
         self.header = self._make_header()
 
     # ---------------------------------------------------------------- bus access with retries
@@ -366,7 +255,7 @@ class MPU6050Source(Source):
         if who == MPU6050_ID:
             return who
         known = CHIPS.get(who)
-        allowed = allow_chip is True or who in _chip_ids(allow_chip)
+        allowed = allow_chip is True or who in chip_ids(allow_chip)
         if known is None:
             raise DeviceError(
                 f"chip at {self._where()} answers WHO_AM_I (0x75) = 0x{who:02X}, not 0x68 (MPU6050), "
@@ -489,9 +378,7 @@ class MPU6050Source(Source):
             "sensor": "MPU6050" if self.chip_id == MPU6050_ID else self.chip_name.split(" (")[0],
             "chip_name": self.chip_name,
             "chip_id": f"0x{self.chip_id:02X}",
-            "sample_rate_hz": format_number(self.sample_rate_hz),
-            "gyro_unit": self.gyro_unit,
-            "lsb_per_dps": f"{self.lsb_per_dps:g}",
+            **units_header(self.sample_rate_hz, self.gyro_unit, self.lsb_per_dps),
             "full_scale_dps": f"{self.full_scale_dps:g}",
             "dlpf_cfg": str(self.dlpf_cfg),
             "dlpf_bandwidth_hz": f"{bw:g}",
@@ -682,15 +569,15 @@ class MPU6050Source(Source):
         self._close_bus()
 
 
-def open_mpu6050(bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, temperature=True,
+def open_mpu6050(bus=1, address=0x68, sample_rate_hz=100, range_dps=250, dlpf=None, temperature=True,
                  allow_chip=None, **options):
     """Open, identify, reset and configure an MPU-6050; return a live source reading its FIFO.
 
     bus: I2C bus number (``/dev/i2c-N``), a device path, or an smbus2-like bus object (not closed
-    by the source). address: 0x68 (AD0 low) or 0x69 (AD0 high). rate_hz: sample rate, exactly
+    by the source). address: 0x68 (AD0 low) or 0x69 (AD0 high). sample_rate_hz: sample rate, exactly
     ``gyro_output_rate / (1 + SMPLRT_DIV)`` (8 kHz for DLPF_CFG 0, else 1 kHz). range_dps: full
     scale 250/500/1000/2000 deg/s (131/65.5/32.8/16.4 LSB per deg/s). dlpf: CONFIG.DLPF_CFG 0..6 (7 is reserved),
-    None picks the widest bandwidth below rate_hz/2. temperature: put TEMP_OUT in the FIFO and a
+    None picks the widest bandwidth below sample_rate_hz/2. temperature: put TEMP_OUT in the FIFO and a
     ``temp`` column (deg C) in the rows. allow_chip: None accepts only WHO_AM_I 0x68; a chip id, a
     collection of ids, or True lets named relatives (MPU6500, MPU9250, ...) through.
 
@@ -699,4 +586,4 @@ def open_mpu6050(bus=1, address=0x68, rate_hz=100, range_dps=250, dlpf=None, tem
     (0.001 s), reset_timeout_s (0.5 s), fifo_bytes (FIFO size override, bytes); see
     :class:`MPU6050Source` for each. Returns the started :class:`MPU6050Source`.
     """
-    return MPU6050Source(bus, address, rate_hz, range_dps, dlpf, temperature, allow_chip, **options)
+    return MPU6050Source(bus, address, sample_rate_hz, range_dps, dlpf, temperature, allow_chip, **options)

@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
-from ..recording import CHUNK_ROWS, END_NOTE, format_number, iter_recording
+from ..recording import CHUNK_ROWS, COLUMNS, END_NOTE, VERSION_KEY, format_number, iter_recording
 from ..units import plain
 from .base import WARNING_PREFIX, Source
 
@@ -62,12 +62,12 @@ class ReplaySource(Source):
         self.speed = float(speed)
         self._clock = clock
         self._sleep = sleep
-        names = ["t", "gx", "gy", "gz"] + (["temp"] if "temp" in head.names else [])
+        names = [*COLUMNS] + (["temp"] if "temp" in head.names else [])
         names += [c for c in head.names if c not in names]
         self.columns = names
         # file column of each output column (t may be made from the rate: -1)
         self._where = [head.names.index(c) if c in head.names else -1 for c in names]
-        self.header = {k: v for k, v in head.header.items() if k != "gyrofilter-recording"}
+        self.header = {k: v for k, v in head.header.items() if k != VERSION_KEY}
         self.header.setdefault("source", f"replay of {self.path}")
         self.sample_rate_hz, self.gyro_unit, self.lsb_per_dps = head.sample_rate_hz, head.gyro_unit, head.lsb_per_dps
         self.stats = {"samples": 0, "lost_samples": 0, "gaps": 0}

@@ -19,7 +19,9 @@ from importlib import resources
 import numpy as np
 
 from ..errors import SettingsError, SourceEnded
+from ..recording import VERSION_KEY
 from ..sim.model import load_model, validate_model
+from ..sim.simulate import check_seed, draw_seed, recording_columns, recording_header, simulate_chunks
 from .base import Source
 
 MAX_WAIT_S = 0.1
@@ -60,8 +62,6 @@ class SimulatedSource(Source):
 
     def __init__(self, model=None, seed=None, realtime=True, duration_s=None, sample_rate_hz=None, *,
                  clock=time.monotonic, sleep=time.sleep):
-        from ..sim.simulate import check_seed, draw_seed, recording_columns, recording_header, simulate_chunks
-
         if model is None or model == "":
             model, self.model_name = json.loads(json.dumps(DEFAULT_MODEL)), "default MPU6050-like model"
         elif isinstance(model, dict):
@@ -80,7 +80,7 @@ class SimulatedSource(Source):
         self.duration_s = UNLIMITED_S if duration_s is None else float(duration_s)
         self.realtime = bool(realtime)
         header = recording_header(model, self.duration_s, seed=self.seed, validated=spec)
-        header.pop("gyrofilter-recording", None)
+        header.pop(VERSION_KEY, None)
         header["sensor"] = "simulated"
         header["simulated_model_name"] = self.model_name
         header["start_time_utc"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())

@@ -1,0 +1,146 @@
+"""The checks of a recording's data that the reader and the writers share, so that nothing is
+written that would not read back: every gyro value within +-MAX_RATE_DPS once in deg/s
+(:func:`check_rates`), and the ``t`` column increasing with its typical step agreeing with
+``sample_rate_hz`` in every window (:class:`TimeCheck`). Both are vectorised, chunk by chunk.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import RecordingError
+from ..units import MAX_RATE_DPS, RATE_TOLERANCE
+from .header import GYRO_COLUMNS, format_number
+
+
+def check_rates(data, head, where):
+    """Refuse a gyro value beyond +-MAX_RATE_DPS once in deg/s (1e308 rad/s, a tiny lsb_per_dps):
+    no gyro reads it, and it would overflow every analysis. One vectorised pass over ``data``, a
+    chunk in ``head``'s columns and units; ``where(row)`` names a row ("line 12"). The reader and
+    the writers share it, so that nothing is written that would not read back."""
+    with np.errstate(over="ignore"):
+        ok = np.abs(head.gyro_dps(data)) <= MAX_RATE_DPS
+    if not ok.all():
+        row, axis = (int(i[0]) for i in np.nonzero(~ok))
+        name = GYRO_COLUMNS[axis]
+        raise RecordingError(f"{head.path}: {where(row)}: column {name!r} is "
+                             f"{format_number(data[row, head.names.index(name)])} {head.gyro_unit}, beyond the "
+                             f"+-{MAX_RATE_DPS:g} deg/s any gyro reads")
+
+
+#: the number of consecutive steps of ``t`` in each window whose median is compared with ``1 / sample_rate_hz``
+RATE_CHECK_STEPS = 1000
+
+
+class TimeCheck:
+    """The checks of a recording's ``t`` column, chunk by chunk (:meth:`add`), cheap and vectorised;
+    the reader and the writer share them, so that what is written reads back:
+
+    - ``t`` increases strictly, also across chunks;
+    - steps longer than 1.5 sample intervals are counted in ``head.t_gaps`` (lost samples: legal);
+    - the typical step of every window of :data:`RATE_CHECK_STEPS` consecutive steps, their lower
+      median, is ``1 / sample_rate_hz`` within :data:`~gyrofilter.units.RATE_TOLERANCE`, in both directions: a ``t``
+      that runs faster or slower than the header says, anywhere in the file, would make every
+      time constant and Allan cluster time wrong. The windows start every half window (steps
+      1-1000, 501-1500, 1001-2000, ...), so a stretch at the wrong rate as long as a window is
+      caught wherever it lies; at the end, the steps after the last whole window are checked
+      when there are half a window of them, and a file shorter than one window on all its steps
+      (:meth:`finish`). Gaps lengthen some steps, not the median, unless they are most of a
+      window's steps.
+
+    ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
+    advice a refusal ends with (the writer says why its rows would come out so).
+    """
+
+    def __init__(self, head, why="is sample_rate_hz or t wrong, or were most samples lost here?"):
+        self.head = head
+        self.why = why
+        self.max_step_s = 1.5 / head.sample_rate_hz
+        self.t_last = None
+        self.last_where = None  # where the last sample of the previous chunk is
+        self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
+
+    def add(self, t, where):
+        """Check the times ``t`` of a chunk; ``where(i)`` names its row ``i`` ("line 12")."""
+        head = self.head
+        if self.t_last is None:
+            prev, cur, row0 = t[:-1], t[1:], 1
+        else:
+            prev, cur, row0 = np.concatenate(([self.t_last], t[:-1])), t, 0
+        step = cur - prev
+        bad = np.flatnonzero(step <= 0)
+        if bad.size:
+            k = int(bad[0])
+            raise RecordingError(f"{head.path}: {where(k + row0)}: t does not increase "
+                                 f"({float(cur[k])!r} after {float(prev[k])!r})")
+        head.t_gaps += int(np.count_nonzero(step > self.max_step_s))
+        last_where = self.last_where
+
+        def step_start(i):  # where the sample a step of this chunk starts from is
+            return where(i + row0 - 1) if i + row0 >= 1 else last_where
+
+        for phase in self.phases:
+            phase.add(step, step_start, self)
+        self.t_last = float(t[-1])
+        self.last_where = where(len(t) - 1)
+
+    def finish(self):
+        """At the end: the steps after the last whole window, when half a window or more (all of
+        them in a file shorter than one window)."""
+        whole_file = self.phases[0].windows == 0
+        for phase in self.phases:
+            if len(phase.pending) and (whole_file or len(phase.pending) >= RATE_CHECK_STEPS // 2):
+                median = float(_lower_medians(phase.pending[None, :])[0])
+                if self._off(median):
+                    self._refuse(median, len(phase.pending), phase.pending_where, first=whole_file)
+            if whole_file:
+                break
+
+    def _off(self, typical_s):
+        expected_s = 1.0 / self.head.sample_rate_hz
+        return np.abs(typical_s - expected_s) > RATE_TOLERANCE * expected_s
+
+    def _refuse(self, typical_s, n, start, first):
+        head = self.head
+        which = "its first" if first else "the"
+        raise RecordingError(
+            f"{head.path}: t steps by {typical_s:.6g} s (median of {which} {n} steps from {start}), "
+            f"but sample_rate_hz {head.sample_rate_hz:g} means {1.0 / head.sample_rate_hz:.6g} s: more than "
+            f"{RATE_TOLERANCE:.0%} apart ({self.why})")
+
+
+class _WindowPhase:
+    """The whole windows of :data:`RATE_CHECK_STEPS` steps that start ``skip`` steps into the file."""
+
+    def __init__(self, skip):
+        self.skip = skip  # steps still to pass before the first window
+        self.pending = np.empty(0)  # the steps after the last whole window
+        self.pending_where = None  # where the first of them starts
+        self.windows = 0  # the whole windows checked
+
+    def add(self, step, step_start, check):
+        first = min(self.skip, len(step))
+        self.skip -= first
+        step = step[first:]
+        if len(self.pending) == 0 and len(step):
+            self.pending_where = step_start(first)
+        steps = np.concatenate((self.pending, step))
+        whole = len(steps) // RATE_CHECK_STEPS * RATE_CHECK_STEPS
+        if whole:
+            medians = _lower_medians(steps[:whole].reshape(-1, RATE_CHECK_STEPS))
+            wrong = np.flatnonzero(check._off(medians))
+            if wrong.size:
+                j = int(wrong[0])
+                start = j * RATE_CHECK_STEPS - len(self.pending)
+                check._refuse(float(medians[j]), RATE_CHECK_STEPS,
+                              self.pending_where if start < 0 else step_start(first + start),
+                              first=self.windows + j == 0 and self.skip == 0 and first == 0)
+            self.windows += len(medians)
+            if whole < len(steps):
+                self.pending_where = step_start(first + whole - len(self.pending))
+        self.pending = steps[whole:]
+
+
+def _lower_medians(windows):
+    """The lower median of each row of ``windows`` (2-D)."""
+    k = (windows.shape[1] - 1) // 2
+    return np.partition(windows, k, axis=1)[:, k]

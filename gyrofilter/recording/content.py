@@ -1,0 +1,213 @@
+"""What a recording holds once read: :class:`Recording` (every column in memory, and the
+header), :class:`RecordingHead` (a recording being read chunk by chunk by
+:func:`~gyrofilter.recording.reader.iter_recording`) and :class:`Note` (an annotation line and
+its place among the samples); :func:`convert_gyro` and :func:`warn_about_gaps` work on them.
+"""
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import RecordingError
+from ..units import from_dps, to_dps
+from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, dps_header, format_number
+
+
+class _HeaderFacts:
+    """Sample rate and units as the ``header`` of a recording states them."""
+
+    @property
+    def sample_rate_hz(self) -> float:
+        """The header's ``sample_rate_hz`` as a float (Hz)."""
+        return float(self.header["sample_rate_hz"])
+
+    @property
+    def gyro_unit(self) -> str:
+        """The header's ``gyro_unit``: ``dps``, ``rad/s`` or ``lsb`` (the gyro columns' unit)."""
+        return self.header["gyro_unit"]
+
+    @property
+    def lsb_per_dps(self):
+        """The header's ``lsb_per_dps`` as a float (LSB per deg/s), or None when absent."""
+        value = self.header.get("lsb_per_dps")
+        return None if value is None else float(value)
+
+
+class Note(tuple):
+    """An annotation line of a recording (docs/formats.md, section 1).
+
+    It unpacks and compares as the pair ``(line, text)`` (file line number, text after the
+    ``#``), and ``row`` is the index of the sample that follows it (the number of samples
+    before it), so that a reader can put it back at its place among the samples.
+    """
+
+    def __new__(cls, line, text, row):
+        note = super().__new__(cls, (line, text))
+        note.row = row
+        return note
+
+    def __getnewargs__(self):
+        return (*self, self.row)
+
+    @property
+    def line(self):
+        """File line number (1-based) of the annotation."""
+        return self[0]
+
+    @property
+    def text(self):
+        """The annotation's text, after the ``#`` and its blank."""
+        return self[1]
+
+
+@dataclass
+class Recording(_HeaderFacts):
+    """A recording in memory: every column as in the file, plus the header.
+
+    ``columns`` maps each column name to a float array in file order and in the file's units;
+    use :attr:`gyro_dps` for the rates in deg/s whatever the file's ``gyro_unit``. ``notes`` are
+    the annotation lines, each a :class:`Note` (``(line, text)`` with the sample ``row`` it precedes);
+    ``t_gaps`` the steps of a file's ``t`` longer than 1.5 sample intervals (:func:`warn_about_gaps`).
+    """
+
+    columns: dict
+    header: dict
+    path: str | None = None
+    warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    t_gaps: int = 0
+
+    def __len__(self):
+        return len(self.columns[GYRO_COLUMNS[0]])
+
+    @property
+    def gyro(self) -> np.ndarray:
+        """Angular rate, shape (N, 3), in the file's ``gyro_unit``."""
+        return np.column_stack([self.columns[c] for c in GYRO_COLUMNS])
+
+    @property
+    def gyro_dps(self) -> np.ndarray:
+        """Angular rate, shape (N, 3), in deg/s."""
+        return to_dps(self.gyro, self.gyro_unit, self.lsb_per_dps)
+
+    @property
+    def t_s(self):
+        """Sample times in seconds: the ``t`` column, or uniform times from the sample rate."""
+        if "t" in self.columns:
+            return self.columns["t"]
+        return np.arange(len(self)) / self.sample_rate_hz
+
+    @property
+    def temp_c(self):
+        """Sensor temperature in deg C, or None without a ``temp`` column."""
+        return self.columns.get("temp")
+
+    @property
+    def duration_s(self) -> float:
+        """Number of samples / ``sample_rate_hz`` (s)."""
+        return len(self) / self.sample_rate_hz
+
+    @classmethod
+    def from_dps(cls, gyro_dps, sample_rate_hz, *, t_s=None, temp_c=None, extra=None, header=None):
+        """Build an in-memory recording with ``gyro_unit: dps`` from ``gyro_dps``, an (N, 3) array
+        in deg/s, at ``sample_rate_hz`` (Hz); optional ``t_s`` (N,) times (s), ``temp_c`` (N,)
+        temperatures (deg C), ``extra`` further columns (name -> (N,) array) and ``header`` keys."""
+        gyro_dps = np.asarray(gyro_dps, dtype=float)
+        if gyro_dps.ndim != 2 or gyro_dps.shape[1] != 3:
+            raise RecordingError(f"gyro_dps must have shape (N, 3), got {gyro_dps.shape}")
+        head = {VERSION_KEY: FORMAT_VERSION}
+        head.update(dps_header(header or {}, sample_rate_hz))
+        columns = {}
+        if t_s is not None:
+            columns["t"] = np.asarray(t_s, dtype=float)
+        for i, name in enumerate(GYRO_COLUMNS):
+            columns[name] = gyro_dps[:, i].copy()
+        if temp_c is not None:
+            columns["temp"] = np.asarray(temp_c, dtype=float)
+        for name, values in (extra or {}).items():
+            columns[name] = np.asarray(values, dtype=float)
+        for name, values in columns.items():
+            if len(values) != len(gyro_dps):
+                raise RecordingError(f"column {name!r} has {len(values)} values, gyro has {len(gyro_dps)}")
+        return cls(columns=columns, header=head)
+
+
+@dataclass
+class RecordingHead(_HeaderFacts):
+    """A recording being read by :func:`~gyrofilter.recording.iter_recording`: header, column names and path.
+
+    ``warnings`` and ``notes`` (:class:`Note`: ``(line, text)`` and ``row``) grow while the chunks are read, ``rows`` counts
+    the samples read so far and ``t_gaps`` the steps of the ``t`` column longer than 1.5 sample
+    intervals (lost samples). :meth:`line_of_row` gives the file line of a sample read so far.
+    """
+
+    header: dict
+    names: list
+    path: str
+    warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    rows: int = 0
+    t_gaps: int = 0
+    _line_starts: list = field(default_factory=list, repr=False)  # (row, line) where line - row changes
+
+    def column(self, chunk, name):
+        """Column ``name`` of ``chunk`` (a view), or None when the file has no such column."""
+        return chunk[:, self.names.index(name)] if name in self.names else None
+
+    def gyro_dps(self, chunk):
+        """Angular rate of ``chunk``, shape (k, 3), in deg/s."""
+        return to_dps(chunk[:, [self.names.index(c) for c in GYRO_COLUMNS]], self.gyro_unit, self.lsb_per_dps)
+
+    def t_s(self, chunk, first_row):
+        """Times (s) of ``chunk`` whose first sample is sample ``first_row`` of the file: the ``t``
+        column, or ``row / sample_rate_hz``."""
+        t = self.column(chunk, "t")
+        return t if t is not None else np.arange(first_row, first_row + len(chunk)) / self.sample_rate_hz
+
+    def line_of_row(self, row):
+        """File line number (1-based) of sample ``row`` (0-based), for the samples read so far."""
+        k = bisect.bisect_right(self._line_starts, (row, math.inf)) - 1
+        first_row, first_line = self._line_starts[k]
+        return first_line + row - first_row
+
+    def _add_rows(self, lines):
+        """Count the next samples, read from the file lines ``lines`` (increasing ints)."""
+        if not len(lines):
+            return
+        offsets = np.asarray(lines) - np.arange(self.rows, self.rows + len(lines))
+        for k in (0, *(np.flatnonzero(np.diff(offsets)) + 1).tolist()):
+            if not self._line_starts or self.line_of_row(self.rows + k) != lines[k]:
+                self._line_starts.append((self.rows + k, int(lines[k])))
+        self.rows += len(lines)
+
+
+def convert_gyro(rec: Recording, unit: str, lsb_per_dps=None) -> Recording:
+    """A copy of ``rec`` with the gyro columns expressed in ``unit`` (other columns unchanged);
+    ``lsb_per_dps`` (LSB per deg/s) is needed for 'lsb'."""
+    gyro = from_dps(rec.gyro_dps, unit, lsb_per_dps)
+    columns = dict(rec.columns)
+    for i, name in enumerate(GYRO_COLUMNS):
+        columns[name] = gyro[:, i]
+    header = dict(rec.header, gyro_unit=unit)
+    if unit == "lsb":
+        header["lsb_per_dps"] = format_number(lsb_per_dps)
+    else:
+        header.pop("lsb_per_dps", None)
+    return Recording(columns=columns, header=header, path=rec.path, warnings=list(rec.warnings), notes=list(rec.notes),
+                     t_gaps=rec.t_gaps)
+
+
+def warn_about_gaps(head, consequence, warn):
+    """Warn (``warn(text)``) when the t column of a recording read
+    (:class:`~gyrofilter.recording.RecordingHead`) showed missing samples; ``consequence`` says
+    what that means for the command.
+
+    ``head``: the :class:`RecordingHead` after its chunks were read, or a :class:`Recording`
+    (its ``t_gaps`` counts the steps of ``t`` longer than 1.5 sample intervals); ``consequence``: text appended to the
+    warning; ``warn``: a callable taking one line of text. Returns None; warns at most once.
+    """
+    if head.t_gaps:
+        warn(f"{head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")

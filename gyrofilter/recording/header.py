@@ -1,0 +1,166 @@
+"""The header of a recording (format v1, docs/formats.md section 1): its keys and their rules,
+the column names, and the one writer of a header as text (:func:`header_text`), which runs the
+reader's own checks (:func:`check_header`, :func:`check_columns`) so that what is written reads
+back. Also the text rules of header values and annotations (one line each) and of numbers in
+the header (:func:`format_number`).
+"""
+from __future__ import annotations
+
+import re
+
+from ..errors import RecordingError
+from ..inputs import parse_number, quote
+from ..units import AXES, GYRO_UNITS, check_sample_rate_hz, utf8_text
+
+#: the first header key of every recording; its value is the format version
+VERSION_KEY = "gyrofilter-recording"
+FORMAT_VERSION = "1"
+#: the gyro columns every recording has, in the order of :data:`~gyrofilter.units.AXES`
+GYRO_COLUMNS = tuple(f"g{axis}" for axis in AXES)
+#: the columns every gyrofilter source and output starts with: time (s), then the gyro columns
+COLUMNS = ("t", *GYRO_COLUMNS)
+#: the start of the annotation with which ``record`` and ``run`` end their output (``# end: why; ...``):
+#: how that output ended, so a replay of the file does not pass it on as its own
+END_NOTE = "end: "
+#: longest line (bytes, without its line end) of a recording: a data row is about 100 bytes, a
+#: header line holding a model or the filter settings as JSON a few KB. A longer line is refused
+#: once that many bytes are read (a gzip bomb of one endless line, /dev/zero): the reader holds
+#: one block of text of this size at a time, so a line inside a block is never longer.
+MAX_LINE_BYTES = 1 << 20
+#: most lines before the column-name row (the header, with its blank ``#`` lines); together they
+#: hold at most MAX_LINE_BYTES bytes as well
+MAX_HEADER_LINES = 1000
+
+#: control characters (line ends, tabs, ...), which header values and annotations never hold
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def one_line_text(text):
+    """``text`` as a header value or an annotation holds it: each control character (a line end,
+    a tab, ...) written as its escape (``\\n``), and each lone surrogate (a file name that is not
+    UTF-8) as :func:`~gyrofilter.units.utf8_text` writes it (``\\udcff``), spaces at both ends
+    dropped; that is what the reader reads back."""
+    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), utf8_text(str(text))).strip()
+
+
+#: longest annotation text a writer writes (characters; a gap note is about 60)
+MAX_NOTE_CHARS = 4000
+
+
+def note_text(text):
+    """``text`` as an annotation line holds it: on one line (:func:`one_line_text`), cut at :data:`MAX_NOTE_CHARS`."""
+    text = one_line_text(text)
+    return text if len(text) <= MAX_NOTE_CHARS else f"{text[:MAX_NOTE_CHARS]}... (cut: {len(text)} characters)"
+
+
+def note_line(text):
+    """The annotation line of ``text`` as a writer writes it: ``# `` and :func:`note_text`, line end included."""
+    return f"# {note_text(text)}\n"
+
+
+def format_number(x):
+    """``x`` as header text that reads back to the same float: ``100`` for 100.0, else ``repr``."""
+    return repr(int(x)) if float(x).is_integer() and abs(x) < 1e15 else repr(float(x))
+
+
+def units_header(sample_rate_hz, gyro_unit, lsb_per_dps=None):
+    """The header keys that state a recording's units, as text (:func:`format_number`):
+    ``sample_rate_hz`` (Hz), ``gyro_unit`` (``dps``, ``rad/s`` or ``lsb``) and, with ``lsb``,
+    ``lsb_per_dps`` (LSB per deg/s)."""
+    head = {"sample_rate_hz": format_number(float(sample_rate_hz)), "gyro_unit": gyro_unit}
+    if gyro_unit == "lsb":
+        head["lsb_per_dps"] = format_number(float(lsb_per_dps))
+    return head
+
+
+def dps_header(header, sample_rate_hz):
+    """``header`` with ``sample_rate_hz`` and ``gyro_unit: dps`` (no ``lsb_per_dps``), for rates in deg/s."""
+    head = dict(header)
+    head.update(units_header(sample_rate_hz, "dps"))
+    head.pop("lsb_per_dps", None)
+    return head
+
+
+def header_text(header, columns, where):
+    """The start of a recording as text: the version line, ``# key: value`` for each item of
+    ``header`` in order (a ``gyrofilter-recording`` key is dropped), the column-name row.
+
+    The one writer of recording headers (files, and stdout of ``run`` and ``replay --realtime``).
+    Values are written as :func:`one_line_text` makes them. RecordingError naming ``where`` (the
+    output) for what would not read back as written: a key that is empty, holds ``:``, spaces or
+    control characters; a column name that is empty, holds ``,``, spaces or control characters
+    (or the first one starting with ``#``); a line longer than :data:`MAX_LINE_BYTES`; and
+    everything the reader refuses (:func:`check_header`, :func:`check_columns`: the same checks).
+    """
+    head = {VERSION_KEY: FORMAT_VERSION}
+    for key, value in header.items():
+        if key == VERSION_KEY:
+            continue
+        if not isinstance(key, str) or not key or _CONTROL.search(key) or ":" in key or key.split() != [key]:
+            raise RecordingError(f"{where}: header key {quote(key)} is not a name (no ':', spaces or control characters)")
+        head[key] = one_line_text(value)
+    check_header(head, where)
+    columns = list(columns)
+    for i, name in enumerate(columns):
+        if (not isinstance(name, str) or _CONTROL.search(name) or "," in name or name.split() != [name]
+                or (i == 0 and name.startswith("#"))):
+            raise RecordingError(f"{where}: column name {quote(name)} is not a name (no ',', spaces or control characters)")
+    check_columns(columns, where)
+    lines = [f"# {k}: {v}" for k, v in head.items()] + [",".join(columns)]
+    for ln in lines:
+        if len(ln.encode("utf-8")) > MAX_LINE_BYTES:
+            raise RecordingError(f"{where}: header line {quote(ln)} is longer than {MAX_LINE_BYTES} bytes")
+    return "\n".join(lines) + "\n"
+
+
+def check_header(header, where):
+    """Refuse a header (key -> value text) that is not one of format v1, with RecordingError
+    naming ``where`` (the file): the version, the required keys, ``sample_rate_hz`` a plain
+    decimal number (:func:`~gyrofilter.inputs.parse_number`) checked by
+    :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
+    ``lsb_per_dps`` a positive number with ``lsb``. The one check of a header: the reader's and
+    the writers' (:func:`header_text`)."""
+    missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
+    if missing:
+        raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
+                             "'# gyrofilter-recording: 1', '# sample_rate_hz: RATE', '# gyro_unit: dps|rad/s|lsb' "
+                             "lines (docs/formats.md, section 1)")
+    version = header[VERSION_KEY]
+    if version != FORMAT_VERSION:
+        raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
+    sample_rate_hz = parse_number(header["sample_rate_hz"], f"{where}: sample_rate_hz", error=RecordingError)
+    check_sample_rate_hz(sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
+    if header["gyro_unit"] not in GYRO_UNITS:
+        raise RecordingError(f"{where}: gyro_unit {quote(header['gyro_unit'])} is not one of {', '.join(GYRO_UNITS)}")
+    if header["gyro_unit"] == "lsb":
+        if "lsb_per_dps" not in header:
+            raise RecordingError(f"{where}: gyro_unit is lsb but header key 'lsb_per_dps' is missing")
+        parse_number(header["lsb_per_dps"], f"{where}: lsb_per_dps", low=0, low_open=True, error=RecordingError)
+
+
+#: column names that look like time stamps but are not ``t``: refused, so that a user's own file
+#: with a "time" column is not read as uniform samples at the header's rate with its times ignored
+TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s", "t_s", "seconds", "secs", "sec",
+                             "stamp", "stamps"})
+
+
+def check_columns(names, where):
+    """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
+    lack ``gx, gy, gz`` or look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
+    case: ``T`` too); ``where`` is the file and line."""
+    if any(not n for n in names):
+        raise RecordingError(f"{where}: empty column name in {quote(','.join(names))}")
+    seen = set()
+    dupes = sorted({n for n in names if n in seen or seen.add(n)})
+    if dupes:
+        raise RecordingError(f"{where}: duplicate column(s) {quote(', '.join(dupes))}")
+    missing = [c for c in GYRO_COLUMNS if c not in seen]
+    if missing:
+        hint = ("; columns are separated by commas" if len(names) == 1 and any(c in names[0] for c in ";\t ") else
+                "; names are lower case" if all(c.upper() in map(str.upper, names) for c in missing) else "")
+        raise RecordingError(f"{where}: missing column(s) {', '.join(missing)} (have {quote(', '.join(names))}){hint}")
+    times = [n for n in names if n.lower() in TIME_LIKE_NAMES or n == "T"]
+    if times:
+        raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
+                             "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
+                             "it as an extra column")

@@ -1,0 +1,170 @@
+"""A recording file as lines of text, a block at a time: the bytes read (gunzipped when the file
+starts with the gzip magic, every member), a UTF-8 byte-order mark dropped, split into lines at
+``\\n`` and decoded. Memory: one block, whatever the file; a line longer than
+:data:`~gyrofilter.recording.header.MAX_LINE_BYTES` is refused as soon as that many bytes are
+read. Damaged gzip data are an error; a stream cut short (an interrupted recording) is a warning.
+"""
+from __future__ import annotations
+
+import zlib
+
+from ..errors import RecordingError
+from ..inputs import MAX_QUOTE_CHARS, quote
+from .header import MAX_LINE_BYTES
+
+_READ_BYTES = 1 << 20   # bytes read from the file at a time
+#: most decompressed bytes at a time (a block of text: about 36 000 lines of five columns); the
+#: longest line, so that only the line the blocks so far have not ended needs a length check
+_TEXT_BYTES = MAX_LINE_BYTES
+_BOM = b"\xef\xbb\xbf"
+_GZIP_MAGIC = b"\x1f\x8b"
+
+
+class _GzipDamage(RecordingError):
+    """Damaged gzip data: what was read from them cannot be trusted. ``reason``: what zlib said."""
+
+    def __init__(self, path, reason, produced):
+        super().__init__(f"{path}: damaged gzip data ({reason}) after {produced} bytes of text; "
+                         "nothing read from it is trusted")
+        self.reason = reason
+
+
+def blame_gzip_damage(path, exc):
+    """``exc`` (a bad line), or, when ``path`` is a gzip file whose data are damaged (its
+    checksum or its compressed blocks wrong), an error saying so: the bad line is then text
+    the damage made, not what was written."""
+    if isinstance(exc, _GzipDamage):
+        return exc
+    damage = _gzip_damage(path)
+    if damage is None:
+        return exc
+    where = str(exc).removeprefix(path + ": ").partition(": ")[0]
+    return RecordingError(f"{path}: damaged gzip data ({damage}); the text read from it is garbage (first noticed at {where})")
+
+
+def _gzip_damage(path):
+    """The zlib error decompressing the whole gzip file ``path`` (every member) meets, or None
+    (not gzip, intact, or only cut short as an interrupted recording leaves it). Memory: one
+    block at a time, as when reading."""
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read(_READ_BYTES)
+            if raw[:2] == _GZIP_MAGIC:
+                for _ in _gunzip(fh, raw, path, []):
+                    pass
+    except _GzipDamage as exc:
+        return exc.reason
+    except OSError:
+        pass
+    return None
+
+
+def _byte_blocks(path, warnings):
+    """The file's bytes in blocks of at most ``_READ_BYTES``, gunzipped (:func:`_gunzip`) when it
+    starts with the gzip magic."""
+    try:
+        fh = open(path, "rb")
+    except OSError as exc:
+        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    with fh:
+        raw = fh.read(_READ_BYTES)
+        if raw[:2] == _GZIP_MAGIC:
+            yield from _gunzip(fh, raw, path, warnings)
+            return
+        while raw:
+            yield raw
+            raw = fh.read(_READ_BYTES)
+
+
+def _gunzip(fh, raw, path, warnings):
+    """The text of the gzip file ``fh`` (``raw``: its first bytes, already read), every member,
+    in blocks of at most ``_TEXT_BYTES`` (a gzip bomb never holds more).
+
+    A stream that ends before its end marker (an interrupted recording) ends the text with a
+    warning. Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a
+    checksum or length that does not match (the text may look fine: a changed digit in a
+    stored block), or bytes after a member that do not start another member."""
+    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+    produced = 0  # bytes of text so far
+    while True:
+        try:
+            out = d.decompress(raw, _TEXT_BYTES)
+            if not raw and not out and not d.eof:  # the file ended: what zlib still holds, then the verdict
+                out = d.flush()
+        except zlib.error as exc:
+            raise _GzipDamage(path, str(exc), produced) from None
+        if out:
+            produced += len(out)
+            yield out
+        if d.eof:  # a member ended: another may follow
+            raw = d.unused_data or fh.read(_READ_BYTES)
+            if not raw:
+                return
+            if raw[:2] != _GZIP_MAGIC and not _GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
+                raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
+            d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+        elif d.unconsumed_tail:
+            raw = d.unconsumed_tail
+        elif raw or out:
+            raw = fh.read(_READ_BYTES)
+        else:
+            warnings.append(f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it")
+            return
+
+
+def _without_bom(blocks):
+    """The byte blocks with a UTF-8 byte-order mark at the very start removed."""
+    start = b""
+    for block in blocks:
+        if start is None:
+            yield block
+            continue
+        start += block
+        if len(start) >= len(_BOM):
+            yield start[len(_BOM):] if start.startswith(_BOM) else start
+            start = None
+    if start:
+        yield start[len(_BOM):] if start.startswith(_BOM) else start
+
+
+def line_chunks(path, chunk_rows, warnings):
+    """(number of the first line, list of at most ``chunk_rows`` lines without their line ends),
+    a block of the file at a time (lines are split at b"\\n" before decoding, which never cuts
+    a UTF-8 character). A last line without its line end is not used (warning), unless it is
+    the file's only line. A line longer than :data:`MAX_LINE_BYTES` is an error as soon as
+    that many bytes are read (a line inside a block is shorter than the block, at most as
+    long as the limit: only the line that the blocks so far have not ended needs a check)."""
+    pending = b""
+    first = 1  # number of the next line
+    for block in _without_bom(_byte_blocks(path, warnings)):
+        cut = block.rfind(b"\n")
+        open_bytes = len(pending) + (len(block) if cut < 0 else block.find(b"\n"))  # of the line not yet ended
+        if open_bytes > MAX_LINE_BYTES:
+            raise RecordingError(f"{path}: line {first}: longer than {MAX_LINE_BYTES} bytes, not a line of a recording "
+                                 f"(it starts {quote((pending + block)[:MAX_QUOTE_CHARS].decode('utf-8', 'replace'))})")
+        if cut < 0:
+            pending += block
+            continue
+        lines = _decode(pending + block[:cut], path, first).split("\n")
+        pending = block[cut + 1:]
+        if len(lines) <= chunk_rows:
+            yield first, lines
+        else:
+            for i in range(0, len(lines), chunk_rows):
+                yield first + i, lines[i:i + chunk_rows]
+        first += len(lines)
+    if pending:
+        if first > 1:
+            warnings.append(f"{path}: line {first}: last line has no line end (recording interrupted?); "
+                            f"it is not used: {quote(pending[:60].decode('utf-8', 'replace'))}")
+        else:
+            yield first, [_decode(pending, path, first)]
+
+
+def _decode(data, path, first_line):
+    """``data`` (whole lines, the first being line ``first_line``) as text, or RecordingError."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = first_line + data[:exc.start].count(b"\n")
+        raise RecordingError(f"{path}: line {line}: not UTF-8 text") from None

@@ -1,0 +1,227 @@
+"""The reader of recording format v1: :func:`iter_recording` reads a file in chunks of lines
+(memory: one chunk, whatever the length of the file); :func:`read_recording` collects its chunks
+into a :class:`~gyrofilter.recording.content.Recording`. Every line is checked (module
+:mod:`gyrofilter.recording` says what is refused and what is tolerated).
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from ..errors import RecordingError, SettingsError
+from ..inputs import is_plain_number, quote
+from .checks import TimeCheck, check_rates
+from .content import Note, Recording, RecordingHead
+from .header import MAX_HEADER_LINES, MAX_LINE_BYTES, check_columns, check_header
+from .lines import blame_gzip_damage, line_chunks
+
+#: most lines per chunk of :func:`iter_recording` (a chunk also ends with each block of text)
+CHUNK_ROWS = 1 << 16
+_BLOCK_ROWS = 1 << 19   # rows per block of collect_columns
+
+
+def read_recording(path) -> Recording:
+    """Read a format-v1 recording (``.csv`` or gzip, detected by content) from ``path``: the
+    chunks of :func:`iter_recording` gathered by :func:`collect_columns`."""
+    chunks = iter_recording(path)
+    head = next(chunks)
+    columns = collect_columns(head, chunks, head.names)
+    return Recording(columns=columns, header=head.header, path=head.path, warnings=head.warnings, notes=head.notes,
+                     t_gaps=head.t_gaps)
+
+
+def collect_columns(head, chunks, names):
+    """The columns ``names`` of the remaining ``chunks`` of :func:`iter_recording` as one float64
+    array each (file units); ``head`` is the :class:`RecordingHead` it yielded first.
+
+    Values are copied into blocks (16 Ki rows, doubling up to ``_BLOCK_ROWS`` = 4 MB; large
+    blocks are memory mappings of their own, so the many short-lived chunk buffers do not
+    fragment the heap around them) and each column's blocks are joined at the end, one column
+    at a time: the peak is the arrays with their last blocks' spare room, one more column and
+    one chunk.
+    """
+    where = [head.names.index(name) for name in names]
+    blocks = {name: [] for name in names}
+    size = fill = 0
+    for chunk in chunks:
+        pos = 0
+        while pos < len(chunk):
+            if fill == size:  # a new block, twice the last one up to _BLOCK_ROWS
+                size = min(_BLOCK_ROWS, max(1 << 14, 2 * size))
+                for name in names:
+                    blocks[name].append(np.empty(size))
+                fill = 0
+            take = min(size - fill, len(chunk) - pos)
+            for name, i in zip(names, where):
+                blocks[name][-1][fill:fill + take] = chunk[pos:pos + take, i]
+            fill += take
+            pos += take
+    columns = {}
+    for name in names:
+        parts = blocks.pop(name)
+        if parts:
+            parts[-1] = parts[-1][:fill]
+        columns[name] = np.concatenate(parts) if len(parts) > 1 else (parts[0].copy() if parts else np.empty(0))
+    return columns
+
+
+def iter_recording(path, chunk_rows=CHUNK_ROWS):
+    """Read the format-v1 recording at ``path`` in chunks: yields a :class:`RecordingHead` first, then float
+    arrays of shape (k, number of columns), columns in file order and units, k <= ``chunk_rows``.
+
+    The file is read a block (about 1 MB of text) at a time; the complete lines of a block, at
+    most ``chunk_rows`` at a time, are parsed by ``numpy.loadtxt`` on their list; when that fails, or gives fewer rows than lines or non-finite values (annotations, blank lines
+    or a bad line), the chunk's lines are classified one by one, so that annotations are kept
+    and a bad line is named by its file line number and reason (:mod:`gyrofilter.recording`). A cut last
+    line or a gzip stream without its end marker is added to ``head.warnings`` when the end is
+    reached. A UTF-8 byte-order mark at the start is skipped. The ``t`` column is checked as
+    :class:`TimeCheck` says (increasing, its typical step agreeing with ``sample_rate_hz``).
+    """
+    path = os.fspath(path)
+    if not (isinstance(chunk_rows, int) and chunk_rows >= 1):
+        raise SettingsError(f"chunk_rows must be a whole number >= 1, got {chunk_rows!r}")
+    warnings = []
+    parts = line_chunks(path, chunk_rows, warnings)
+    try:
+        head, first, lines = _read_header(parts, path, warnings)
+    except RecordingError as exc:
+        raise blame_gzip_damage(path, exc) from None
+    yield head
+    times = TimeCheck(head) if "t" in head.names else None
+    while True:
+        if lines:
+            try:
+                data, line_numbers = _parse_chunk(lines, first, head)
+                check_rates(data, head, lambda row: f"line {line_numbers[row]}")
+                if len(data) and times is not None:
+                    times.add(head.column(data, "t"), lambda row: f"line {line_numbers[row]}")
+            except RecordingError as exc:
+                raise blame_gzip_damage(path, exc) from None
+            if len(data):
+                head._add_rows(line_numbers)
+                yield data
+        try:
+            first, lines = next(parts)
+        except StopIteration:
+            if times is not None:
+                times.finish()
+            return
+        except RecordingError as exc:
+            raise blame_gzip_damage(path, exc) from None
+
+
+def _read_header(parts, path, warnings):
+    """Header and column names from the first lines: (head, number of the next line, the rest
+    of its chunk). The lines before the column row may be at most :data:`MAX_HEADER_LINES`."""
+    header_lines = []
+    size = 0  # characters of the header lines
+    blank = True  # only blank lines so far
+    for first, lines in parts:
+        for j, ln in enumerate(lines):
+            blank = blank and not ln.strip()
+            if not ln.startswith("#") and not blank:
+                header = _parse_header(header_lines, path)
+                names = [c.strip() for c in ln.split(",")]
+                check_columns(names, f"{path}: line {first + j}")
+                head = RecordingHead(header=header, names=names, path=path, warnings=warnings)
+                return head, first + j + 1, lines[j + 1:]
+            header_lines.append(ln)
+            size += len(ln) + 1
+            if len(header_lines) > MAX_HEADER_LINES or size > MAX_LINE_BYTES:
+                raise RecordingError(f"{path}: line {first + j}: no column-name row within {MAX_HEADER_LINES} lines "
+                                     f"or {MAX_LINE_BYTES} bytes of header; not a recording")
+    if blank:
+        raise RecordingError(f"{path}: empty file (expected a '# gyrofilter-recording: 1' header)")
+    _parse_header(header_lines, path)
+    raise RecordingError(f"{path}: line {len(header_lines) + 1}: missing the column-name row after the header")
+
+
+def _parse_header(lines, path):
+    """The header (key -> value text) of a file's first ``lines`` (its ``#`` lines, line 1 first),
+    checked by :func:`check_header`; a line that is not ``key: value`` or repeats a key is an
+    error naming its line."""
+    header, line_of = {}, {}
+    for i, ln in enumerate(lines):
+        if not ln.startswith("#"):
+            break
+        body = ln[1:].strip()
+        if not body:
+            continue
+        key, sep, value = body.partition(":")
+        key = key.strip()
+        if not sep or not key:
+            raise RecordingError(f"{path}: line {i + 1}: header line is not 'key: value': {quote(ln)}")
+        if key in header:
+            raise RecordingError(f"{path}: line {i + 1}: header key {quote(key)} repeated (first on line {line_of[key]})")
+        header[key], line_of[key] = value.strip(), i + 1
+    check_header(header, path)
+    return header
+
+
+def _parse_chunk(lines, first, head):
+    """(data, file line of each row) for ``lines``, the first being file line ``first``.
+
+    Fast path: ``numpy.loadtxt`` on the list of lines, accepted when it gives one finite row per
+    line. (Its parser, numpy >= 1.23, reads a finite number only in plain decimal syntax, as
+    :func:`~gyrofilter.inputs.parse_number` does: ``0.0_1``, ``0x1``, ``1d5`` fail it.) Otherwise
+    the lines are classified one by one: ``#`` lines are notes, blank lines are skipped, and the
+    data lines are parsed again (loadtxt, then, if that still fails, line by line so that the
+    first bad line is named).
+    """
+    n = len(head.names)
+    if lines[0].strip() and not lines[0].startswith("#"):
+        data = _loadtxt(lines, n)
+        if data is not None:
+            return data, np.arange(first, first + len(lines))
+    rows, numbers = [], []
+    for j, ln in enumerate(lines):
+        if ln.startswith("#"):
+            head.notes.append(Note(first + j, ln[1:].strip(), head.rows + len(rows)))
+        elif ln.strip():
+            rows.append(ln)
+            numbers.append(first + j)
+    numbers = np.array(numbers, dtype=np.int64)
+    if not rows:
+        return np.empty((0, n)), numbers
+    data = _loadtxt(rows, n)
+    if data is None:
+        data = np.array([_parse_line(ln, line, head) for ln, line in zip(rows, numbers.tolist())])
+    return data, numbers
+
+
+def _loadtxt(lines, n):
+    """``numpy.loadtxt`` of data lines with n columns, or None unless it gives len(lines) finite rows."""
+    try:
+        data = np.loadtxt(lines, delimiter=",", comments=None, ndmin=2, dtype=np.float64)
+    except ValueError:
+        return None
+    return data if data.shape == (len(lines), n) and np.isfinite(data).all() else None
+
+
+def _parse_line(ln, line, head):
+    """The values of data line ``ln`` (file line ``line``), or RecordingError naming the reason:
+    each cell a finite number in plain decimal syntax (:func:`~gyrofilter.inputs.is_plain_number`)."""
+    path, names = head.path, head.names
+    cells = ln.split(",")
+    if len(cells) != len(names):
+        raise RecordingError(f"{path}: line {line}: {len(cells)} values, expected {len(names)} "
+                             f"({quote(','.join(names))})")
+    values = []
+    for name, cell in zip(names, cells):
+        text = cell.strip()
+        if not text:
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is empty")
+        plain = is_plain_number(text)
+        try:
+            value = float(text)
+        except ValueError:
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is not a number: {quote(text)}") from None
+        if not math.isfinite(value):
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is {quote(text)} (not a finite number)")
+        if not plain:  # Python's extras: 0.0_1, other scripts' digits
+            raise RecordingError(f"{path}: line {line}: column {quote(name)} is not a plain decimal number "
+                                 f"(like 12, -0.5 or 1e-3): {quote(text)}")
+        values.append(value)
+    return values

@@ -1,0 +1,515 @@
+"""The line protocol of a gyro streamed over a serial port (``serial:/dev/ttyUSB0,baud=115200``),
+and :class:`LineParser`, which turns its bytes into rows (pure: no I/O; the port is
+:mod:`gyrofilter.sources.serial_source`).
+
+Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it)::
+
+    # gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw
+    0,12,-3,40,-1520
+    1,15,-1,37,-1518
+
+- A header line ``# gyrofilter-serial: 1`` followed by ``key=value`` words, sent at start-up
+  and whenever the device receives ``?``. Keys: ``gyro_unit`` (dps, rad/s, lsb),
+  ``lsb_per_dps`` (with lsb), ``sample_rate_hz``; optional ``fields`` (default
+  ``counter,gx,gy,gz`` plus ``temp`` if the lines have five values), ``counter_bits`` (an
+  integer in [8, 32], default 32: the counter wraps at 2**counter_bits), ``temp_unit`` (``c`` or ``mpu6050_raw``: T = raw/340 + 36.53
+  deg C, MPU-6000/6050 register map rev 4.2 section 4.18); any other key (``sensor``,
+  ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header. The header
+  line is printable ASCII; keys are names (letters, digits, ``_``), each given once, each with a
+  value; numbers are plain decimals (:func:`gyrofilter.inputs.parse_number`), ``sample_rate_hz``
+  in (0, 100000] Hz, ``lsb_per_dps`` > 0.
+- Then one CSV line per sample, ``\\n`` or ``\\r\\n`` ended. Other lines starting with ``#`` are
+  device messages (passed on as notes).
+- The counter counts samples on the device: an integer in [0, 2**counter_bits). A jump of
+  1 < k < 2**(counter_bits - 1) (modulo the wrap) means k - 1 samples were lost: ``t`` jumps with it
+  and a gap note is made. A repeated counter is a duplicate (dropped, counted); a backwards jump
+  is a device restart (noted; ``t`` continues). A counter that is not such an integer (negative,
+  fractional, too large) refuses its line (counted in ``bad_lines``), and so does a gyro value
+  beyond +-``units.MAX_RATE_DPS`` (100000 deg/s) once converted to deg/s: no gyro reads it, and
+  the recording would refuse it (a corrupt line must not end a recording).
+- Every line received is counted in ``stats["lines"]`` and in exactly one of
+  :data:`LINE_OUTCOMES`: a sample delivered as a row (``samples``) or a line that is not one
+  (a duplicate, a refused line, a header, ...). A run of more than :data:`MAX_LINE_BYTES` bytes
+  without a line end is one refused line, however the bytes arrive.
+
+Without a header, the units come from the source options (``unit=``, ``lsb_per_dps=``,
+``rate=``; ``gyrofilter record --gyro-unit ...``) and the first line is discarded, since the
+port may have been opened in the middle of a line.
+
+The parser splits each chunk of bytes into complete lines and converts them all at once with
+numpy when they are all plain CSV; a chunk with anything else goes through a line-by-line parser
+that counts and skips bad lines (partial lines, garbage bytes, cells that are not plain decimal
+numbers). Nothing in the input makes it raise except an unreadable first header or a header that
+changes the units mid-stream. The rows do not depend on how the bytes are split into chunks.
+"""
+from __future__ import annotations
+
+import math
+import re
+import warnings
+
+import numpy as np
+
+from ..errors import DeviceError, SettingsError
+from ..inputs import check_number, is_plain_number, parse_number, quote
+from ..recording import COLUMNS, GYRO_COLUMNS, format_number, units_header
+from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
+from .mpu6050_chip import temperature_c
+
+HEADER_PREFIX = b"# gyrofilter-serial:"
+PROTOCOL_VERSION = "1"
+MAX_LINE_BYTES = 256  # a longer line (bytes before its "\n") is refused
+MAX_DETAILED_NOTES = 20  # bad-line notes per source; later ones are only counted
+COUNTER_BITS = (8, 32)  # the counter_bits a header may give: a byte counter up to a 32-bit one
+DEFAULT_COUNTER_BITS = 32
+#: every line received (``stats["lines"]``) is counted in exactly one of these
+LINE_OUTCOMES = ("samples", "duplicates", "partial_lines", "bad_lines", "empty_lines", "device_messages",
+                 "headers", "lines_before_header")
+_PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
+_KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp")
+_HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
+_PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
+# a cell of the numpy path: signs, digits and points, at most 50 of them, so that a line of 5
+# cells and its "\r" stays within MAX_LINE_BYTES, and a cell numpy reads whole ("1.2.3", "+-4" it
+# does not, and the line-by-line path names them) is a plain decimal of a finite value
+_PLAIN_CELL = rb"[-+0-9.]{1,50}"
+_PLAIN_LINES = {}  # field count -> compiled pattern of a block of plain CSV number lines
+# bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
+_TEXT = b"0123456789+-.,eEnaifNAIF \t"
+
+
+class UnitsConflict(DeviceError):
+    """The device's header disagrees with the units already in use (options or an earlier header)."""
+
+
+def _parse_fields(text, where):
+    fields = [f.strip() for f in text.split(",")]
+    for f in fields:
+        if f not in _KNOWN_FIELDS:
+            raise DeviceError(f"{where}: unknown field {f!r} in fields={text} (known: {', '.join(_KNOWN_FIELDS)})")
+    for f in GYRO_COLUMNS:
+        if f not in fields:
+            raise DeviceError(f"{where}: fields={text} lacks {f}")
+    if len(set(fields)) != len(fields):
+        raise DeviceError(f"{where}: fields={text} names a field twice")
+    return fields
+
+
+class LineParser:
+    """Turn the bytes of the line protocol into rows ``t, gx, gy, gz[, temp]``.
+
+    Pure (no I/O): :meth:`feed` takes any bytes (split anywhere) and returns the rows its
+    complete lines made; the rows and the counts do not depend on the split. ``header`` is None
+    until the units are known (from a header line or the constructor), and so is
+    ``sample_rate_hz`` (float). Counters are in :attr:`stats` (each line in ``lines`` and in one
+    of :data:`LINE_OUTCOMES`; ``lost_samples`` from the counter's jumps), events in :attr:`notes`.
+
+    Parameters
+    ----------
+    gyro_unit : str, optional
+        Unit of the gyro fields when the device sends no header: ``dps``, ``rad/s`` or ``lsb``.
+    lsb_per_dps : float, optional
+        LSB per deg/s (> 0), needed with ``gyro_unit="lsb"``.
+    sample_rate_hz : float, optional
+        The device's sample rate (Hz), in (0, 100000]: ``t = sample index / sample_rate_hz``.
+    where : str
+        Name used in messages and notes (the port name).
+
+    Giving any of the three units makes them the source options: a header line must then agree
+    with them (else :class:`UnitsConflict`), and the first line is discarded. SettingsError
+    when an option is missing or out of range.
+    """
+
+    def __init__(self, gyro_unit=None, lsb_per_dps=None, sample_rate_hz=None, *, where="serial"):
+        self.where = where
+        self.stats = {
+            "lines": 0, "samples": 0, "lost_samples": 0, "counter_jumps": 0, "duplicates": 0,
+            "restarts": 0, "partial_lines": 0, "bad_lines": 0, "garbage_bytes": 0,
+            "empty_lines": 0, "device_messages": 0, "headers": 0, "lines_before_header": 0,
+        }
+        self.notes = []
+        self._detailed = 0
+        self._buf = b""
+        self._overlong = False  # the bytes up to the next line end belong to a line already refused
+        self.header = None
+        self.fields = None  # list of names per line once known
+        self._counter_mod = 2 ** DEFAULT_COUNTER_BITS
+        self._temp_raw = False
+        self.sample_rate_hz = None
+        self._last_counter = None
+        self._last_index = -1
+        self._options = None
+        if gyro_unit is not None or sample_rate_hz is not None or lsb_per_dps is not None:
+            self._options = self._make_units({"gyro_unit": gyro_unit, "lsb_per_dps": lsb_per_dps,
+                                               "sample_rate_hz": sample_rate_hz}, "source options")
+            self._apply(dict(self._options))
+            self._skip_first_line = True
+        else:
+            self._skip_first_line = False
+
+    # ------------------------------------------------------------------ header
+
+    def _make_units(self, values, where):
+        """Checked recording-header units from header words (text: DeviceError for a bad value)
+        or source options (numbers: SettingsError)."""
+        unit = values.get("gyro_unit")
+        if unit is None:
+            raise SettingsError(f"{self.where}: {where}: gyro unit missing (unit=dps|rad/s|lsb)")
+        if unit not in GYRO_UNITS:
+            raise SettingsError(f"{self.where}: {where}: gyro_unit {quote(unit)} is not one of {', '.join(GYRO_UNITS)}")
+        sample_rate_hz = self._positive(values, "sample_rate_hz", where, "rate=HZ")
+        lsb_per_dps = None
+        if unit == "lsb":
+            lsb_per_dps = self._positive(values, "lsb_per_dps", where, "gyro_unit lsb needs lsb_per_dps")
+        return units_header(sample_rate_hz, unit, lsb_per_dps)
+
+    def _positive(self, values, key, where, hint):
+        """``values[key]`` (header text or an option's number) as a positive number (a float); a
+        sample rate within :func:`gyrofilter.units.check_sample_rate_hz`'s range."""
+        value = values.get(key)
+        if value is None:
+            raise SettingsError(f"{self.where}: {where}: {key} missing ({hint})")
+        what = f"{self.where}: {where}: {key}"
+        error = DeviceError if isinstance(value, str) else SettingsError
+        number = (parse_number(value, what, error=error) if isinstance(value, str)
+                  else check_number(value, what, error=error))
+        if key == "sample_rate_hz":
+            number = check_sample_rate_hz(number, what, error)
+        else:
+            number = check_number(number, what, low=0, low_open=True, error=error)
+        return float(number)
+
+    def _apply(self, header):
+        units = {k: header[k] for k in ("sample_rate_hz", "gyro_unit", "lsb_per_dps") if k in header}
+        if self.header is not None:
+            old = {k: self.header[k] for k in ("sample_rate_hz", "gyro_unit", "lsb_per_dps") if k in self.header}
+            if old != units:
+                raise UnitsConflict(
+                    f"{self.where}: the device's header changed the units mid-stream ({old} -> {units}); "
+                    "start a new recording"
+                )
+        self.header = dict(header)
+        self.sample_rate_hz = float(header["sample_rate_hz"])
+        self._lsb_per_dps = float(header["lsb_per_dps"]) if "lsb_per_dps" in header else None
+
+    def _header_words(self, line):
+        """The ``key=value`` words of a header line as a dict; DeviceError for anything else."""
+        if line.translate(None, _PRINTABLE):
+            raise DeviceError(f"{self.where}: the header line holds bytes that are not printable ASCII")
+        text = line[len(HEADER_PREFIX):].decode("ascii").split()
+        if not text or text[0] != PROTOCOL_VERSION:
+            raise DeviceError(f"{self.where}: unsupported serial protocol version {quote(text[0] if text else '', 20)} "
+                              f"(this reader speaks {PROTOCOL_VERSION})")
+        values = {}
+        for word in text[1:]:
+            key, eq, value = word.partition("=")
+            if not eq or not _HEADER_KEY.fullmatch(key) or not value:
+                raise DeviceError(f"{self.where}: header word {quote(word, 40)} is not key=value "
+                                  "(a key of letters, digits and _, a value)")
+            if key in values:
+                raise DeviceError(f"{self.where}: the header gives {key} twice")
+            values[key] = value
+        return values
+
+    def _header_line(self, line):
+        """Read a header line and apply it, all or nothing: DeviceError/SettingsError (nothing
+        changed) when it is unreadable, :class:`UnitsConflict` when it changes the units."""
+        values = self._header_words(line)
+        where = "header line"
+        if "gyro_unit" not in values and self._options is not None:
+            values = {**self._options, **values}
+        units = self._make_units(values, where)
+        if self._options is not None:
+            for key, value in self._options.items():
+                if key == "gyro_unit":
+                    same = units.get(key) == value
+                else:
+                    same = key in units and float(units[key]) == float(value)
+                if not same:
+                    raise UnitsConflict(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
+        header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS}
+        header.update(units)
+        fields = self.fields
+        if "fields" in values:
+            fields = _parse_fields(values["fields"], self.where)
+            if self.fields is not None and fields != self.fields:
+                raise UnitsConflict(f"{self.where}: the device's header changed the fields mid-stream ({self.fields} -> {fields})")
+        counter_mod = self._counter_mod
+        if "counter_bits" in values:
+            low, high = COUNTER_BITS
+            bits = parse_number(values["counter_bits"], f"{self.where}: header line: counter_bits",
+                                low=low, high=high, integer=True, error=DeviceError)
+            counter_mod = 2 ** bits
+        temp_unit = values.get("temp_unit", "c")
+        if temp_unit not in ("c", "mpu6050_raw"):
+            raise DeviceError(f"{self.where}: temp_unit {quote(temp_unit, 40)} is not c or mpu6050_raw")
+        self._apply(header)  # a repeated header must agree; the counter tells restarts
+        self.fields, self._counter_mod, self._temp_raw = fields, counter_mod, temp_unit == "mpu6050_raw"
+        self._skip_first_line = False
+
+    # ------------------------------------------------------------------ lines
+
+    @property
+    def columns(self):
+        """Names of the row columns, ``["t", "gx", "gy", "gz"]`` plus ``"temp"`` (deg C) when the
+        lines carry it; None until the fields are known (from a header or the first data line)."""
+        if self.fields is None:
+            return None
+        return [*COLUMNS] + (["temp"] if "temp" in self.fields else [])
+
+    def _bad(self, shown, kind, reason, *, count=1, garbage_bytes=None):
+        """Count ``count`` refused lines as ``kind`` (``bad_lines`` or ``partial_lines``) and their
+        bytes (default: ``len(shown)``); the first :data:`MAX_DETAILED_NOTES` get a note."""
+        self.stats[kind] += count
+        self.stats["garbage_bytes"] += len(shown) if garbage_bytes is None else garbage_bytes
+        if self._detailed < MAX_DETAILED_NOTES:
+            self._detailed += 1
+            text = shown[:40].decode("ascii", "backslashreplace")
+            more = "" if self._detailed < MAX_DETAILED_NOTES else " (further bad lines are only counted)"
+            many = f"{count} lines, the first " if count > 1 else ""
+            self.notes.append(f"serial: skipped {many}{kind[:-1].replace('_', ' ')} ({reason}): {text}{more}")
+
+    def feed(self, data: bytes) -> np.ndarray:
+        """Add received bytes; returns the rows of the complete lines, shape (n, len(columns)).
+
+        ``data``: bytes as received, split anywhere (an incomplete last line is kept for the next
+        call). Rows are ``t, gx, gy, gz[, temp]``: t (s) from the device's sample counter and
+        ``sample_rate_hz``, gyro in the header's ``gyro_unit``, temp in deg C (converted from
+        TEMP_OUT with ``temp_unit=mpu6050_raw``). Raises only for a header line: DeviceError or
+        SettingsError when the first one is unreadable or lacks a unit, :class:`UnitsConflict`
+        when one changes the units (and DeviceError when a tiny ``sample_rate_hz`` and the
+        counter's jumps carry ``t`` beyond a float); other lines are counted in :attr:`stats`
+        (the module docstring) and the bad ones noted.
+        """
+        if self._overlong:  # the tail of a line refused as too long: up to its line end
+            end = data.find(b"\n")
+            self.stats["garbage_bytes"] += len(data) if end < 0 else end
+            if end < 0:
+                return self._empty()
+            data, self._overlong = data[end + 1:], False
+        buf = self._buf + data
+        end = buf.rfind(b"\n")
+        block, self._buf = buf[: end + 1], buf[end + 1 :]
+        rows = self._empty()
+        if block:
+            rows = self._fast(block)
+            if rows is None:
+                rows = self._slow(block)
+        if len(self._buf) > MAX_LINE_BYTES:  # already too long for a line: refused, whatever follows
+            self.stats["lines"] += 1
+            self._bad(self._buf, "bad_lines", f"longer than {MAX_LINE_BYTES} bytes")
+            self._buf, self._overlong = b"", True
+        return rows
+
+    def finish(self):
+        """The connection ended: a line without its end is a cut line (counted, not used)."""
+        if self._buf:
+            self.stats["lines"] += 1
+            self._bad(self._buf, "partial_lines", "cut off at the end of the stream")
+        self._buf, self._overlong = b"", False
+
+    def _empty(self):
+        cols = self.columns
+        return np.empty((0, len(cols) if cols else 4))
+
+    def _fast(self, block):
+        """All lines plain CSV with the known field count (cells of :data:`_PLAIN_CELL`, which the
+        line-by-line path reads alike): one regular-expression check, one numpy conversion.
+        Anything else (headers, messages, bad lines) returns None."""
+        if self.header is None or self.fields is None or self._skip_first_line:
+            return None
+        nf = len(self.fields)
+        pattern = _PLAIN_LINES.get(nf)
+        if pattern is None:
+            pattern = _PLAIN_LINES[nf] = re.compile(rb"(?:%s(?:,%s){%d}\r?\n)*" % (_PLAIN_CELL, _PLAIN_CELL, nf - 1))
+        if pattern.fullmatch(block) is None:
+            return None
+        n_lines = block.count(b"\n")
+        if b"\r" in block:
+            block = block.replace(b"\r", b"")
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # numpy 1.24 warns (and stops) at a malformed number
+                values = np.fromstring(block.replace(b"\n", b",").decode("ascii"), sep=",")
+        except ValueError:  # numpy 2.4 raises there instead
+            return None
+        if values.size != n_lines * nf:  # e.g. "--4": let the slow path name it
+            return None
+        self.stats["lines"] += n_lines
+        return self._rows(values.reshape(n_lines, nf))
+
+    def _slow(self, block):
+        """Line by line: headers, device messages, and bad lines counted and skipped."""
+        out = []
+        pending = []
+        for line in block.split(b"\n")[:-1]:
+            self.stats["lines"] += 1
+            if len(line) > MAX_LINE_BYTES:
+                self._bad(line, "bad_lines", f"longer than {MAX_LINE_BYTES} bytes")
+                continue
+            if line.endswith(b"\r"):
+                line = line[:-1]
+            if not line.strip():
+                self.stats["empty_lines"] += 1
+                continue
+            if line.startswith(HEADER_PREFIX):
+                if pending:
+                    out.append(self._rows(np.array(pending)))
+                    pending = []
+                try:
+                    self._header_line(line)
+                except UnitsConflict:
+                    raise
+                except (DeviceError, SettingsError) as exc:
+                    if self.header is None:
+                        raise
+                    self._bad(line, "bad_lines", f"unreadable repeated header: {exc}")
+                    continue
+                self.stats["headers"] += 1
+                continue
+            if line.startswith(b"#"):
+                self.stats["device_messages"] += 1
+                if self._detailed < MAX_DETAILED_NOTES:
+                    self._detailed += 1
+                    self.notes.append("device: " + line[1:].strip().decode("ascii", "backslashreplace")[:120])
+                continue
+            if self.header is None:
+                self.stats["lines_before_header"] += 1
+                continue
+            if self._skip_first_line:
+                self._skip_first_line = False
+                self.stats["partial_lines"] += 1
+                self.notes.append("serial: first line discarded (the port may have opened mid-line)")
+                continue
+            if line.translate(None, _TEXT):
+                self._bad(line, "bad_lines", "garbage bytes")
+                continue
+            cells = line.decode("ascii").split(",")  # ASCII: the bytes were checked above
+            if self.fields is None:
+                if len(cells) in (4, 5):
+                    self.fields = ["counter", *GYRO_COLUMNS] + (["temp"] if len(cells) == 5 else [])
+                else:
+                    self._bad(line, "bad_lines", f"{len(cells)} values before the field count is known, expected 4 or 5")
+                    continue
+            nf = len(self.fields)
+            if len(cells) != nf:
+                kind = "partial_lines" if len(cells) < nf else "bad_lines"
+                self._bad(line, kind, f"{len(cells)} values, expected {nf}")
+                continue
+            if any(not c.strip() for c in cells):
+                self._bad(line, "partial_lines", "empty value")
+                continue
+            if not all(map(is_plain_number, cells)):
+                self._bad(line, "bad_lines", "not a plain decimal number")
+                continue
+            values = list(map(float, cells))
+            if not all(map(math.isfinite, values)):
+                self._bad(line, "bad_lines", "not a finite number")
+                continue
+            pending.append(values)
+        if pending:
+            out.append(self._rows(np.array(pending)))
+        if not out:
+            return self._empty()
+        return np.concatenate(out) if len(out) > 1 else out[0]
+
+    def _consecutive(self, counter):
+        """True when the counters continue the last one by exactly 1 each (in range, no wrap)."""
+        first, last = counter[0], counter[-1]
+        if self._last_counter is not None and first != self._last_counter + 1:
+            return False
+        if not (0 <= first and last < self._counter_mod and float(first).is_integer()):
+            return False
+        n = len(counter)
+        return last - first == n - 1 and (n < 3 or bool((np.diff(counter) == 1).all()))
+
+    def _rows(self, values):
+        """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping.
+
+        A gyro value beyond +-MAX_RATE_DPS in deg/s, a temperature outside TEMP_RANGE_C, or a counter that is not an integer in
+        [0, 2**counter_bits), refuses its line (``bad_lines``). Counters are at most 2**32 and the
+        sample index an int64, so no step overflows."""
+        fields = self.fields
+        values = self._refuse_beyond_range(values)
+        n = len(values)
+        if "counter" in fields and n and self._consecutive(values[:, fields.index("counter")]):
+            index = self._last_index + 1 + np.arange(n)  # the common case: no gap, no duplicate
+            self._last_counter = int(values[-1, fields.index("counter")])
+            self._last_index = int(index[-1])
+        elif "counter" in fields:
+            counter = values[:, fields.index("counter")]
+            ok = (counter == np.round(counter)) & (counter >= 0) & (counter < self._counter_mod)
+            if not ok.all():
+                bad = counter[~ok]
+                self._bad(repr(float(bad[0])).encode(), "bad_lines",
+                          f"counter is not an integer in [0, {self._counter_mod})", count=len(bad), garbage_bytes=0)
+                values, counter = values[ok], counter[ok]
+                n = len(values)
+            counter = counter.astype(np.int64)
+            prev = np.empty(n, dtype=np.int64)
+            if n:
+                prev[0] = counter[0] - 1 if self._last_counter is None else self._last_counter
+                prev[1:] = counter[:-1]
+            step = (counter - prev) % self._counter_mod
+            keep = step != 0
+            if not keep.all():
+                self.stats["duplicates"] += int((~keep).sum())
+                values, counter, prev, step = values[keep], counter[keep], prev[keep], step[keep]
+                n = len(values)
+            if n:
+                restart = step >= self._counter_mod // 2
+                jump = (step > 1) & ~restart
+                step = np.where(restart, 1, step)
+                index = self._last_index + np.cumsum(step)
+                t = index / self.sample_rate_hz
+                for i in np.flatnonzero(jump | restart):
+                    if restart[i]:
+                        self.stats["restarts"] += 1
+                        self.notes.append(f"serial: device counter went back ({int(prev[i])} -> {int(counter[i])}); device restarted? t continues")
+                    else:
+                        lost = int(step[i] - 1)
+                        self.stats["counter_jumps"] += 1
+                        self.stats["lost_samples"] += lost
+                        self.notes.append(f"gap: {lost} samples lost before t={t[i]:.6g} s (counter {int(prev[i])} -> {int(counter[i])})")
+                self._last_counter = int(counter[-1])
+                self._last_index = int(index[-1])
+        else:
+            index = self._last_index + 1 + np.arange(n)
+            if n:
+                self._last_index = int(index[-1])
+        if n == 0:
+            return self._empty()
+        rows = np.empty((n, len(self.columns)))
+        rows[:, 0] = index / self.sample_rate_hz  # finite: a rate >= MIN_SAMPLE_RATE_HZ, an int64 index
+        for j, name in enumerate(GYRO_COLUMNS):
+            rows[:, 1 + j] = values[:, fields.index(name)]
+        if "temp" in fields:
+            temp = values[:, fields.index("temp")]
+            rows[:, 4] = temperature_c(temp) if self._temp_raw else temp
+        self.stats["samples"] += n
+        return rows
+
+    def _refuse_beyond_range(self, values):
+        """``values`` (per line, fields order) without the lines holding a gyro value beyond
+        +-MAX_RATE_DPS once in deg/s or a temperature outside TEMP_RANGE_C once in deg C (counted
+        in ``bad_lines``, the first noted): one vectorised check per chunk. A glitched line then
+        costs one sample, not the recording (the writers and the filter refuse such values)."""
+        gyro = values[:, [self.fields.index(name) for name in GYRO_COLUMNS]]
+        with np.errstate(over="ignore"):  # 1e308 rad/s: inf deg/s, refused
+            ok = (np.abs(to_dps(gyro, self.header["gyro_unit"], self._lsb_per_dps)) <= MAX_RATE_DPS).all(axis=1)
+            if "temp" in self.fields:
+                temp = values[:, self.fields.index("temp")]
+                temp_c = temperature_c(temp) if self._temp_raw else temp
+                ok &= (temp_c >= TEMP_RANGE_C[0]) & (temp_c <= TEMP_RANGE_C[1])
+        if ok.all():
+            return values
+        shown = ",".join(map(format_number, values[np.argmin(ok)])).encode()
+        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s or a temperature outside "
+                  f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C", count=int(np.count_nonzero(~ok)), garbage_bytes=0)
+        return values[ok]
+
+    def pop_notes(self):
+        """Events since the last call (gaps, restarts, skipped lines, device messages), as a list
+        of one-line strings; empties :attr:`notes`."""
+        notes, self.notes = self.notes, []
+        return notes
