@@ -8,9 +8,9 @@ import pytest
 pytest.importorskip("statsmodels")
 pytest.importorskip("scipy")
 
+
 from gyrofilter.analysis import arma, arma_checks, arma_fit  # noqa: E402
 from gyrofilter.errors import GyroFilterError  # noqa: E402
-from support import RECORDINGS  # noqa: E402
 
 PHI, THETA, SIGMA = 0.9, 0.5, 0.1
 
@@ -231,151 +231,9 @@ def test_larger_model_never_fits_worse_than_the_nested_smaller_one():
     assert large.rss <= small.rss * (1 + 1e-9)
 
 
-def test_cli_writes_json_and_reports_bad_input(tmp_path, capsys):
-    import json
-
-    from gyrofilter.cli import main
-    from gyrofilter.recording import Recording, write_recording
-
-    rng = np.random.default_rng(15)
-    gyro = np.column_stack([rng.normal(1.0, 0.1, 5_000), rng.normal(0, 0.1, 5_000),
-                            -2.0 + arma_fit.simulate_arma([PHI], [THETA], SIGMA, 5_000, seed=15)])
-    path = tmp_path / "static.csv"
-    write_recording(path, Recording.from_dps(gyro, 100.0))
-    out = tmp_path / "arma.json"
-    assert main(["arma", str(path), "--axis", "z", "--max-n", "1", "--json", str(out)]) == 0
-    text = capsys.readouterr().out
-    assert "chosen: ARMA(1, 1)" in text
-    data = json.loads(out.read_text())
-    z = data["axes"]["z"]
-    assert z["chosen"]["phi"][0] == pytest.approx(PHI, abs=0.05)
-    assert z["mean_dps"] == pytest.approx(-2.0, abs=0.05)
-    assert main(["arma", str(path), "--start-s", "49.5"]) == 2
-    assert "--start-s 49.5 leaves 50 of the 5000 samples (50 s at 100 Hz)" in capsys.readouterr().err
-
-
-def _static_recording(tmp_path, n, name="static.csv"):
-    from gyrofilter.recording import Recording, write_recording
-
-    rng = np.random.default_rng(16)
-    path = tmp_path / name
-    write_recording(path, Recording.from_dps(rng.normal(0.5, 0.1, (n, 3)), 100.0))
-    return str(path)
-
-
-@pytest.mark.parametrize("options, expected", [
-    ([], "short.csv: 150 samples (1.5 s at 100 Hz); the analysis needs at least 200"),
-    (["--start-s", "0.5"], "--start-s 0.5 leaves 100 of the 150 samples"),
-    (["--end-s", "1"], "--end-s 1 leaves 100 of the 150 samples"),
-    (["--start-s", "0.2", "--end-s", "1.2"], "--start-s 0.2 and --end-s 1.2 leave 100 of the 150 samples"),
-    (["--start-s", "1", "--end-s", "1"], "--end-s 1 must be after --start-s 1"),
-    (["--max-n", "0"], "--max-n must be at least 1, got 0"),
-    (["--max-samples", "50"], "--max-samples must be at least 100, got 50"),
-])
-def test_cli_errors_name_the_options_the_user_gave(tmp_path, capsys, options, expected):
-    from gyrofilter.cli import main
-
-    path = _static_recording(tmp_path, 150, "short.csv")
-    assert main(["arma", path] + options) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and expected in err, err
-    if not options:
-        assert "--start-s" not in err and "--end-s" not in err
-
-
-def test_cli_summarises_library_warnings_in_one_line(tmp_path, capsys, monkeypatch):
-    import warnings
-
-    from statsmodels.tools.sm_exceptions import ConvergenceWarning
-
-    from gyrofilter.cli import main
-
-    real = arma_checks.adf_test
-
-    def warning_adf(*args, **kwargs):
-        for _ in range(3):
-            warnings.warn("Maximum Likelihood optimization failed to converge.", ConvergenceWarning)
-        warnings.warn("divide by zero encountered", RuntimeWarning)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(arma, "adf_test", warning_adf)
-    path = _static_recording(tmp_path, 1000)
-    with warnings.catch_warnings(record=True) as leaked:
-        warnings.simplefilter("always")
-        assert main(["arma", path, "--axis", "z", "--max-n", "1"]) == 0
-    assert not leaked, [str(w.message) for w in leaked]
-    err = [line for line in capsys.readouterr().err.splitlines() if "warning" in line.lower()]
-    assert len(err) == 1 and err[0].startswith("gyrofilter: warning: ")
-    assert ("axis z: ConvergenceWarning (3x): Maximum Likelihood optimization failed to converge.; "
-            "RuntimeWarning: divide by zero encountered") in err[0]
-
-
-def test_cli_json_is_never_written_over_data(tmp_path, capsys):
-    import json
-
-    from gyrofilter.cli import main
-
-    path = _static_recording(tmp_path, 1000)
-    text = open(path).read()
-    out = tmp_path / "a.json"
-    out.write_text("keep")
-    args = ["arma", path, "--axis", "x", "--max-n", "1"]
-    assert main(args + ["--json", str(out)]) == 2
-    assert "exists (use --force" in capsys.readouterr().err and out.read_text() == "keep"
-    assert main(args + ["--json", path, "--force"]) == 2
-    assert "is an input" in capsys.readouterr().err and open(path).read() == text
-    assert main(args + ["--json", str(out), "--force"]) == 0
-    doc = json.loads(out.read_text(), parse_constant=lambda token: pytest.fail(f"JSON token {token}"))
-    assert doc["axes"]["x"]["warnings"] == [] and doc["n_samples"] == 1000
-
-
 def test_constant_axis_is_named():
     with pytest.raises(GyroFilterError, match="axis y: constant .* no noise to model"):
         arma.analyze_axis(np.full(500, 0.1), 100.0, axis="y")
-
-
-@pytest.mark.parametrize("option", ["--start-s", "--end-s"])
-@pytest.mark.parametrize("value", ["inf", "nan"])
-def test_cli_a_non_finite_window_is_one_line_naming_the_option(capsys, option, value):
-    from gyrofilter.cli import main
-
-    # since issue 22 the option's type refuses inf and nan, no plain decimal numbers, as argparse
-    # errors (exit 2; SystemExit while argparse prints its usage too)
-    try:
-        code = main(["arma", str(RECORDINGS / "mpu6050_static_64s_set1.csv.gz"), option, value])
-    except SystemExit as exc:
-        code = exc.code
-    assert code == 2
-    assert f"argument {option}: must be a plain decimal number (like 12, -0.5 or 1e-3), got '{value}'" in capsys.readouterr().err
-
-
-
-def test_cli_selects_the_window_by_t_and_warns_about_gaps(tmp_path, capsys):
-    """Case 1-3: with lost samples, --start-s 20 took sample 20 * rate (t near 25 s here), the
-    printed and JSON durations came from the count, and nothing said the samples were not uniform."""
-    import json
-
-    from gyrofilter.cli import main
-    from gyrofilter.recording import Recording, write_recording
-
-    rng = np.random.default_rng(17)
-    steps = np.where(np.arange(5999) % 4 == 3, 0.02, 0.01)  # a sample lost after every third
-    t = np.concatenate(([0.0], np.cumsum(steps)))
-    path = tmp_path / "gaps.csv"
-    write_recording(path, Recording.from_dps(rng.normal(0.5, 0.1, (6000, 3)), 100.0, t_s=t))
-    out = tmp_path / "a.json"
-    assert main(["arma", str(path), "--axis", "x", "--max-n", "1", "--start-s", "20", "--end-s", "60",
-                 "--json", str(out)]) == 0
-    first, last = int(np.searchsorted(t, 20.0 - 0.005)), int(np.searchsorted(t, 60.0 - 0.005))
-    assert t[first] == pytest.approx(20.0) and first == 1600  # not sample 2000 (t = 25 s)
-    doc = json.loads(out.read_text())
-    assert doc["n_samples"] == last - first and doc["start_s"] == pytest.approx(20.0)
-    assert doc["duration_s"] == pytest.approx(t[last - 1] - t[first] + 0.01)
-    captured = capsys.readouterr()
-    assert f"{last - first} samples at 100 Hz (40.0 s) from 20 s after the first sample" in captured.out
-    err = captured.err.splitlines()
-    assert any(line.startswith(f"gyrofilter: warning: {path}: t shows 1499 gap(s)") and "ARMA" in line
-               and "not meaningful" in line for line in err), err
 
 
 @pytest.mark.parametrize("noise", [1e-120, 1e-300])

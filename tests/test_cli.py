@@ -72,3 +72,20 @@ def test_a_summary_naming_a_file_that_is_not_utf8_prints_under_a_utf8_locale(tmp
     proc = subprocess.run([sys.executable, "-m", "gyrofilter", "replay", os.fsencode(path)], capture_output=True, env=env)
     assert proc.returncode == 0, proc.stderr
     assert b"\\udcff.csv" in proc.stdout + proc.stderr and b"Traceback" not in proc.stderr
+
+
+def test_help_does_not_import_device_libraries():
+    code = (
+        "import sys\n"
+        "from gyrofilter.cli import main\n"
+        "for argv in (['--help'], ['record', '--help'], ['run', '--help']):\n"
+        "    try:\n"
+        "        main(argv)\n"
+        "    except SystemExit:\n"
+        "        pass\n"
+        "bad = [m for m in ('serial', 'smbus2') if m in sys.modules]\n"
+        "print('IMPORTED', bad)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert "IMPORTED []" in out.stdout, out.stdout + out.stderr
+    assert "serial:/dev/ttyUSB0" in out.stdout  # the SOURCE syntax is in --help

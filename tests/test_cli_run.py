@@ -26,9 +26,10 @@ from smbus2 import I2cFunc
 from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock
 
 import gyrofilter.sources.mpu6050 as mpu  # noqa: E402
+from gyrofilter import GyroFilter  # noqa: E402
 from gyrofilter.cli import main  # noqa: E402
 from gyrofilter.recording import Recording, read_recording, write_recording  # noqa: E402
-from support import REPO
+from support import REPO, lsb_recording
 
 REAL_OPEN_MPU6050 = mpu.open_mpu6050
 BUNDLED = str(REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz")
@@ -491,3 +492,38 @@ def test_run_refuses_to_filter_a_filtered_output_and_its_own_output_says_it_is_o
         assert err.count("\n") == 1 and "Traceback" not in err, err
         assert f"{filtered} is a filtered output of gyrofilter (filtered_from: '{still}')" in err
         assert "filter the raw recording it came from" in err and not out.exists()
+
+
+def test_run_on_a_replay_equals_the_batch_filter(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    path, rec = lsb_recording(tmp_path, n=1000)
+    out = tmp_path / "filtered.csv.gz"
+    assert main(["run", "--source", str(path), "--out", str(out), "--quiet"]) == 0
+    got = read_recording(out)
+    want = GyroFilter(100.0, 2.0).filter(rec.gyro_dps)  # run and the library have the same default preset
+    assert len(got) == len(want) == (1000 - 200) // 5
+    np.testing.assert_allclose(got.gyro_dps, want, rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(got.t_s, rec.t_s[200 + 4 :: 5][: len(want)])
+    assert got.sample_rate_hz == 20.0
+    err = capsys.readouterr().err
+    assert "1000 samples in, 160 filtered rows out" in err
+    # stdout is a readable recording too
+    assert main(["run", "--source", str(path), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    stdout_rec = (tmp_path / "stdout.csv")
+    stdout_rec.write_text(text)
+    np.testing.assert_allclose(read_recording(stdout_rec).gyro, got.gyro)
+
+
+def test_run_refuses_to_overwrite_and_reports_bad_sources(tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    path, _ = lsb_recording(tmp_path, n=300)
+    out = tmp_path / "exists.csv"
+    out.write_text("keep me")
+    assert main(["run", "--source", str(path), "--out", str(out)]) == 2
+    assert out.read_text() == "keep me"
+    assert main(["run", "--source", "mpu6050:speed=3"]) == 2
+    err = capsys.readouterr().err
+    assert "--force" in err and "unknown key 'speed'" in err

@@ -1,14 +1,15 @@
 """Evaluation harness (gyrofilter.evaluation.evaluate) and the evaluate command."""
-import json
 import math
-import os
 
 import numpy as np
 import pytest
 
-from gyrofilter.evaluation import datasets as D, evaluate as E, filters as F, metrics as M
-from gyrofilter.sim.profiles import get_profile
+from gyrofilter.evaluation import datasets as D
+from gyrofilter.evaluation import evaluate as E
+from gyrofilter.evaluation import filters as F
+from gyrofilter.evaluation import metrics as M
 from gyrofilter.recording import Recording, write_recording
+from gyrofilter.sim.profiles import get_profile
 
 FS = 100.0
 
@@ -148,61 +149,3 @@ def test_pareto_front_and_dominance_rules():
     assert not ok and "12.00" in fails[0]
 
 
-@pytest.mark.slow
-def test_evaluate_command_writes_table_json_and_figure(tmp_path, capsys):
-    pytest.importorskip("matplotlib")  # the command always draws the Pareto figure
-    from gyrofilter.cli import main
-
-    rng = np.random.default_rng(6)
-    rec_dir = tmp_path / "recordings"
-    rec_dir.mkdir()
-    static = Recording.from_dps(rng.normal(scale=0.1, size=(9100, 3)) + [1.0, 0.5, -0.2], 100.0,
-                                header={"sensor": "MPU6050", "description": "static: synthetic"})
-    write_recording(rec_dir / "mpu6050_static_91s.csv.gz", static)
-    out = tmp_path / "out"
-    code = main(["evaluate", "--recordings", str(rec_dir), "--out", str(out), "--no-lag"])
-    assert code == 0
-    text = (out / "evaluate_table.md").read_text()
-    assert "| paper001 |" in text and "recommended preset" in text
-    data = json.loads((out / "evaluate.json").read_text())
-    # the block mean reduces white noise by sqrt(5)
-    assert np.allclose(data["static_std_reduction"]["block mean 5"]["mpu6050_static_91s"], math.sqrt(5), rtol=0.1)
-    assert os.path.getsize(out / "evaluate_pareto.png") > 10_000
-    assert main(["evaluate", "--recordings", str(tmp_path / "nope")]) == 2
-
-
-@pytest.mark.slow
-def test_evaluate_command_refuses_existing_outputs_and_a_failure_leaves_none(tmp_path, capsys, monkeypatch):
-    pytest.importorskip("matplotlib")
-    from gyrofilter.evaluation import evaluate as E
-    from gyrofilter.cli import main
-    from gyrofilter.errors import SettingsError
-
-    out = tmp_path / "out"
-    out.mkdir()
-    (out / "evaluate.json").write_text("a user's results")
-    argv = ["evaluate", "--recordings", str(tmp_path / "none"), "--out", str(out)]
-    assert main(argv) == 2  # refused before the recordings are even looked for
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "evaluate.json: exists (use --force" in err
-    assert os.listdir(out) == ["evaluate.json"] and (out / "evaluate.json").read_text() == "a user's results"
-
-    def failing(ev, path, reference="paper001"):
-        raise SettingsError("simulated failure while drawing")
-
-    rng = np.random.default_rng(7)
-    rec_dir = tmp_path / "recordings"
-    rec_dir.mkdir()
-    short = rec_dir / "mpu6050_static_30s.csv.gz"
-    header = {"sensor": "MPU6050", "description": "static: synthetic"}
-    write_recording(short, Recording.from_dps(rng.normal(scale=0.1, size=(3000, 3)), 100.0, header=header))
-    fresh = tmp_path / "fresh"
-    assert main(["evaluate", "--recordings", str(rec_dir), "--out", str(fresh), "--no-lag"]) == 2
-    assert "no static recording lasts the 90 s" in capsys.readouterr().err  # was a ZeroDivisionError
-    short.unlink()
-    write_recording(rec_dir / "mpu6050_static_91s.csv.gz",
-                    Recording.from_dps(rng.normal(scale=0.1, size=(9100, 3)), 100.0, header=header))
-    monkeypatch.setattr(E, "plot_pareto", failing)
-    assert main(["evaluate", "--recordings", str(rec_dir), "--out", str(fresh), "--no-lag"]) == 2
-    assert "simulated failure" in capsys.readouterr().err
-    assert not fresh.exists()  # no table or JSON without the figure, and no empty folder

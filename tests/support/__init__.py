@@ -34,3 +34,22 @@ def file_named_by_bytes(tmp_path, name=b"\xff.csv"):
     write_recording(path, Recording.from_dps(np.random.default_rng(3).normal(0, 0.05, (6000, 3)), 100.0))
     assert os.path.exists(os.path.join(os.fsencode(tmp_path), name))
     return path
+
+
+def lsb_recording(tmp_path, name="rec.csv", n=2500, gap_at=None, gap=0, notes=()):
+    """An MPU6050-like recording at 100 Hz written to ``tmp_path / name``: whole LSB values (131
+    LSB per deg/s, seeded), a temperature ramp, ``gap`` samples missing from row ``gap_at`` on,
+    annotation ``notes``. Returns (path, the recording as read back)."""
+    from gyrofilter.recording import Recording, read_recording, write_recording
+
+    rng = np.random.default_rng(7)
+    gyro = np.round(rng.normal(0, 30, size=(n, 3)))
+    idx = np.arange(n)
+    if gap_at is not None:
+        idx[gap_at:] += gap
+    rec = Recording.from_dps(gyro / 131.0, 100.0, t_s=idx / 100.0, temp_c=25 + idx / 1000.0,
+                             header={"sensor": "MPU6050", "chip_id": "0x68"})
+    rec.notes = list(notes)
+    path = tmp_path / name
+    write_recording(path, rec)
+    return path, read_recording(path)

@@ -1,0 +1,231 @@
+"""The serial line protocol (gyrofilter.sources.serial_protocol.LineParser): rows however the bytes are
+split, the counter arithmetic, the refused lines and the counts that reconcile."""
+import numpy as np
+import pytest
+from gyrofilter.errors import DeviceError, SettingsError
+from gyrofilter.sources.serial_protocol import LineParser
+
+HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 sensor=MPU6050\n"
+
+
+def _lines(counters, temp=False):
+    out = b""
+    for c in counters:
+        out += f"{c},{c % 50 - 25},{-c % 7},{3 * c % 11}".encode() + (f",{-1500 + c}".encode() if temp else b"") + b"\n"
+    return out
+
+
+def _expected(counters):
+    c = np.asarray(counters)
+    return np.column_stack([c % 50 - 25, -c % 7, 3 * c % 11]).astype(float)
+
+
+def test_parser_same_rows_however_the_bytes_are_split():
+    data = HEADER + _lines(range(200))
+    whole = LineParser()
+    a = whole.feed(data)
+    rng = np.random.default_rng(3)
+    cuts = np.sort(rng.choice(np.arange(1, len(data)), size=150, replace=False))
+    split = LineParser()
+    parts = [split.feed(bytes(chunk)) for chunk in np.split(np.frombuffer(data, np.uint8), cuts)]
+    b = np.concatenate(parts)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(a[:, 1:4], _expected(range(200)))
+    np.testing.assert_allclose(a[:, 0], np.arange(200) / 100.0)
+    assert whole.header["sensor"] == "MPU6050" and whole.columns == ["t", "gx", "gy", "gz"]
+
+
+def test_parser_fast_and_slow_paths_agree():
+    p = LineParser()
+    p.feed(HEADER + _lines([0]))
+    fast = p.feed(_lines(range(1, 101)))  # plain CSV: the numpy path
+    q = LineParser()
+    q.feed(HEADER + _lines([0]))
+    slow = q.feed(b"# a device message\n" + _lines(range(1, 101)))  # '#' forces the line-by-line path
+    np.testing.assert_array_equal(fast, slow)
+    assert q.stats["device_messages"] == 1 and q.pop_notes() == ["device: a device message"]
+
+
+def test_parser_counts_jumps_duplicates_restarts_and_keeps_t_on_the_sensor_clock():
+    p = LineParser()
+    rows = p.feed(HEADER + _lines([5, 6, 7, 10, 10, 11, 2, 3]))
+    # 10 after 7: 2 lost; the second 10 is a duplicate; 2 after 11: device restart, t continues
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 2, 5, 6, 7, 8])
+    np.testing.assert_array_equal(rows[:, 1:4], _expected([5, 6, 7, 10, 11, 2, 3]))
+    assert (p.stats["lost_samples"], p.stats["counter_jumps"], p.stats["duplicates"], p.stats["restarts"]) == (2, 1, 1, 1)
+    notes = p.pop_notes()
+    assert notes[0] == "gap: 2 samples lost before t=0.05 s (counter 7 -> 10)"
+    assert "restarted" in notes[1]
+
+
+def test_parser_counter_wraps_at_counter_bits():
+    p = LineParser()
+    head = HEADER.replace(b"\n", b" counter_bits=16\n")
+    rows = p.feed(head + _lines([65534, 65535, 0, 1]))
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 2, 3])
+    assert p.stats["lost_samples"] == 0 and p.stats["restarts"] == 0
+
+
+def _reconciles(parser):
+    """Every line received is a delivered sample or counted as something else, exactly once."""
+    from gyrofilter.sources.serial_protocol import LINE_OUTCOMES
+
+    return parser.stats["lines"] == sum(parser.stats[k] for k in LINE_OUTCOMES)
+
+
+def test_parser_refuses_and_counts_every_line_whose_counter_is_not_an_integer_in_range():
+    """Issue 22 (7): negative, fractional and too large counters each refuse their line, counted;
+    the original counted three of them at most and reconciled nothing."""
+    p = LineParser()
+    counters = [0, 1, -1, -1, -1, -1, 2, 2.5, 4294967296, -7, 3]
+    rows = p.feed(HEADER + b"".join(f"{c},1,2,3\n".encode() for c in counters))
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 2, 3])
+    assert p.stats["bad_lines"] == 7 and p.stats["samples"] == 4 and p.stats["lines"] == 12
+    assert _reconciles(p)
+    assert any("counter is not an integer in [0, 4294967296)" in n for n in p.pop_notes())
+
+
+@pytest.mark.parametrize("bits", ["-3", "0", "7", "33", "64", "100000", "16.5", "x", "1e400", "0x10"])
+def test_parser_refuses_a_header_whose_counter_bits_is_not_an_integer_in_8_to_32(bits):
+    """Issue 22 (7, 11): counter_bits=-3 used to drop every line, 64 or 100000 to end in an
+    OverflowError at the first gap; now the header is refused, naming the key and the value."""
+    p = LineParser()
+    with pytest.raises(DeviceError, match="counter_bits must be") as info:
+        p.feed(HEADER.replace(b"\n", f" counter_bits={bits}\n".encode()) + _lines([0, 1, 5]))
+    assert bits.lstrip("-")[:2] in str(info.value) and "\n" not in str(info.value)
+
+
+def test_parser_gap_arithmetic_at_32_counter_bits_and_a_refused_repeated_header():
+    """The widest counter: a wrap and a gap near 2**32 count exactly (no overflow); a repeated
+    header with counter_bits=64 is one refused line, and the counter keeps its 32 bits."""
+    p = LineParser()
+    top = 2 ** 32
+    rows = p.feed(HEADER.replace(b"\n", b" counter_bits=32\n") + _lines([top - 3, top - 1, 1])
+                  + HEADER.replace(b"\n", b" counter_bits=64\n") + _lines([2, 0]))
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 2, 4, 5, 6])
+    assert (p.stats["lost_samples"], p.stats["counter_jumps"], p.stats["restarts"], p.stats["bad_lines"]) == (2, 2, 1, 1)
+    assert _reconciles(p)
+
+
+def test_parser_a_malformed_number_in_a_plain_chunk_is_one_refused_line():
+    """numpy 2.4 raises ValueError where numpy 1.24 stopped reading at "--4" (a ValueError
+    traceback from the serial stream before; found by tests/test_fuzz_sources.py)."""
+    p = LineParser()
+    p.feed(HEADER + _lines([0]))
+    rows = p.feed(_lines([1]) + b"--4,0,0,0\n" + _lines([2]))
+    np.testing.assert_array_equal(rows[:, 1:4], _expected([1, 2]))
+    assert p.stats["bad_lines"] == 1 and _reconciles(p)
+
+
+def test_parser_never_hands_out_an_infinite_t():
+    """A rate of 1e-300 Hz made t = counter / rate infinite; the one rate check refuses it."""
+    p = LineParser()
+    with pytest.raises(DeviceError, match=r"sample_rate_hz must be a number of Hz in \[0.001, 100000\], got 1e-300"):
+        p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=1e-300\n" + _lines([0]))
+    p = LineParser()
+    p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=0.001\n" + _lines([0]))
+    assert p.feed(_lines([2 ** 31 - 1]))[-1, 0] == (2 ** 31 - 1) / 0.001  # the largest jump: finite
+
+
+def test_parser_counts_reconcile_whatever_the_lines():
+    p = LineParser()
+    data = (b"junk before the header\n" + HEADER + b"\r\n" + _lines(range(5)) + b"# note\n" + b"x" * 300
+            + b"\n" + b"5,1,2\n" + _lines([5, 5, 9]) + b"1,2,3,4,5,6\n" + b"7,1,2,3")
+    for i in range(0, len(data), 7):
+        p.feed(data[i:i + 7])
+    p.finish()
+    s = p.stats
+    assert (s["samples"], s["duplicates"], s["bad_lines"], s["partial_lines"], s["lost_samples"]) == (7, 1, 2, 2, 3)
+    assert (s["lines_before_header"], s["headers"], s["empty_lines"], s["device_messages"]) == (1, 1, 1, 1)
+    assert s["lines"] == 16 and _reconciles(p)
+
+
+def test_parser_skips_bad_lines_and_never_raises_on_garbage():
+    p = LineParser()
+    rng = np.random.default_rng(5)
+    junk = bytes(rng.integers(0, 256, 3000, dtype=np.uint8))
+    data = (HEADER + _lines(range(10)) + b"10,1,2\n" + b"\xff\xfe\x00zz\n" + b"12,1,,3\n"
+            + b"13,a,b,c\n" + b"14,1,2,3,4,5\n" + b"15,nan,1,1\n" + _lines(range(16, 20)))
+    rows = p.feed(data)
+    np.testing.assert_array_equal(rows[:, 1:4], _expected(list(range(10)) + list(range(16, 20))))
+    s = p.stats
+    assert s["partial_lines"] == 2 and s["bad_lines"] == 4
+    assert s["lost_samples"] == 6  # 10..15 never arrived as good lines
+    p.feed(junk)  # arbitrary bytes: counted, no exception
+    p.feed(b"\n" + _lines([20]))
+    assert p.stats["samples"] == 15
+
+
+@pytest.mark.parametrize("header, beyond, edge", [
+    (HEADER, b"13100001", b"13100000"),  # lsb at 131 LSB per deg/s: 100000.0076 and 100000 deg/s
+    (b"# gyrofilter-serial: 1 gyro_unit=rad/s sample_rate_hz=100\n", b"1e308", b"1745.3"),  # overflows deg/s
+    (b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n", b"-200000", b"-100000"),
+])
+def test_parser_refuses_a_line_beyond_the_rate_range_like_any_bad_line(header, beyond, edge):
+    """One value beyond +-100000 deg/s went on as a sample and the recording's writer refused it,
+    ending the whole recording (hostile 5-3); it is a corrupt line: counted, noted, skipped, in
+    the fast path (all plain CSV) and the line-by-line one alike."""
+    for extra in (b"", b"# a device message\n"):  # the second chunk goes line by line
+        p = LineParser()
+        p.feed(header + _lines(range(3)))
+        rows = p.feed(extra + b"3,1," + beyond + b",2\n" + b"4,0,0," + edge + b"\n" + _lines(range(5, 8)))
+        np.testing.assert_array_equal(rows[:, 0], np.array([4, 5, 6, 7]) / 100)  # t from the counter: 3 is a lost sample
+        assert rows[0, 3] == float(edge)
+        assert p.stats["bad_lines"] == 1 and p.stats["lost_samples"] == 1 and _reconciles(p)
+        assert any("bad line (a gyro value beyond +-100000 deg/s or a temperature outside [-100, 200] deg C): 3,1,"
+                   in note for note in p.pop_notes())
+
+
+def test_parser_refuses_a_line_with_a_temperature_out_of_range_like_any_bad_line():
+    """A temperature of 1e300 went on as a sample: record wrote it (replay then stopped at that
+    line) and run stopped on it; it is a corrupt line, counted and skipped."""
+    p = LineParser()
+    rows = p.feed(HEADER + b"0,1,2,3,25.5\n1,1,2,3,1e300\n2,1,2,3,-150\n3,1,2,3,26\n")
+    np.testing.assert_array_equal(rows[:, 4], [25.5, 26.0])
+    assert p.stats["bad_lines"] == 2 and p.stats["lost_samples"] == 2 and _reconciles(p)
+
+
+def test_parser_temperature_raw_and_celsius():
+    raw = LineParser()
+    rows = raw.feed(HEADER.replace(b"\n", b" fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw\n") + _lines([0, 1], temp=True))
+    np.testing.assert_allclose(rows[:, 4], np.array([-1500, -1499]) / 340.0 + 36.53)
+    c = LineParser()
+    rows = c.feed(HEADER + b"0,1,2,3,25.5\n")
+    assert c.columns == ["t", "gx", "gy", "gz", "temp"] and rows[0, 4] == 25.5
+
+
+def test_parser_units_from_options_drop_the_first_line_and_check_a_later_header():
+    p = LineParser(gyro_unit="dps", sample_rate_hz=50)
+    rows = p.feed(b"3,4.5,1,1\n" + b"0,0.25,0.5,-0.125\n1,1,1,1\n")
+    assert p.stats["partial_lines"] == 1  # the first line may be cut: not used
+    np.testing.assert_array_equal(rows[:, 1:4], [[0.25, 0.5, -0.125], [1, 1, 1]])
+    np.testing.assert_allclose(rows[:, 0], [0, 0.02])
+    with pytest.raises(DeviceError, match="sample_rate_hz"):
+        p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
+
+
+def test_parser_header_changing_units_mid_stream_is_refused():
+    p = LineParser()
+    p.feed(HEADER + _lines([0, 1]))
+    p.feed(HEADER + _lines([0]))  # same header again (device restart): fine
+    assert p.stats["restarts"] == 1
+    with pytest.raises(DeviceError, match="changed the units"):
+        p.feed(HEADER.replace(b"131", b"65.5"))
+    q = LineParser()
+    q.feed(HEADER)
+    q.feed(b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=1\xff1\n")  # garbled repeat: skipped
+    assert q.stats["bad_lines"] == 1
+
+
+def test_parser_first_header_errors():
+    with pytest.raises(DeviceError, match="version"):
+        LineParser().feed(b"# gyrofilter-serial: 2 gyro_unit=dps sample_rate_hz=1\n")
+    with pytest.raises(SettingsError, match="lsb_per_dps"):
+        LineParser().feed(b"# gyrofilter-serial: 1 gyro_unit=lsb sample_rate_hz=100\n")
+
+
+def test_parser_with_options_uses_a_header_that_comes_first():
+    p = LineParser(gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=100)
+    rows = p.feed(HEADER + _lines([0, 1]))  # the header is a whole line: nothing is dropped
+    np.testing.assert_array_equal(rows[:, 1:4], _expected([0, 1]))
+    assert p.stats["partial_lines"] == 0 and p.header["sensor"] == "MPU6050"
