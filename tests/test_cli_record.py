@@ -321,7 +321,7 @@ def test_record_of_a_replay_keeps_every_note_at_its_row_and_adds_no_gap_note_twi
 def test_a_source_failing_midway_says_in_its_one_error_line_what_the_recording_kept(tmp_path, monkeypatch, capsys):
     """record --force of a replay with a bad line far in exited 2 with only the input's error,
     its output already holding the rows before it: the one error line now says so."""
-    monkeypatch.setattr("gyrofilter.cli.record.FLUSH_INTERVAL_S", 0.0)
+    monkeypatch.setattr("gyrofilter.cli.live.FLUSH_INTERVAL_S", 0.0)
     n = 70000  # the bad line lies beyond the reader's first chunk
     lines = [f"{k % 7},1,2" for k in range(n)]
     lines[n - 5] = "1,x,2"

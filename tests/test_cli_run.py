@@ -434,7 +434,7 @@ def test_an_output_takes_its_name_at_the_first_flush_with_a_row(tmp_path, monkey
         seen.append((self.rows_written, len(read_recording(out)) if self.rows_written else out.read_text()))
 
     monkeypatch.setattr(live.LiveOutput, "flush", spy)
-    monkeypatch.setattr("gyrofilter.cli.record.FLUSH_INTERVAL_S", 0.0)  # a flush after every read
+    monkeypatch.setattr("gyrofilter.cli.live.FLUSH_INTERVAL_S", 0.0)  # a flush after every read
     still = _still_recording(tmp_path / "still.csv")
     assert main(["record", "--source", f"replay:{still}", "--out", str(out), "--force"]) == 0
     assert seen[0] == (seen[0][0], b"keep me") and seen[0][0] > 0

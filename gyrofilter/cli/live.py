@@ -19,6 +19,7 @@ from ..units import GYRO_UNITS, check_duration_s
 from . import console, options, outputs
 
 STATUS_INTERVAL_S = 1.0
+FLUSH_INTERVAL_S = 0.5  # the --out recording is flushed at least this often: what a crash can lose
 EXIT_DISCONNECTED = 1
 
 

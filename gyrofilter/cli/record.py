@@ -3,7 +3,7 @@
 The file gets the source's header (sensor, chip id, full scale, LSB per deg/s, DLPF, sample
 rate, start time, ...), then the samples; gaps and other events of the source become annotation
 lines (``# gap: 37 samples lost before t=12.34 s ...``). Data are flushed (and fsync'ed) at
-least every ``FLUSH_INTERVAL_S``: after a crash or a pulled plug at most that much is lost and
+least every ``live.FLUSH_INTERVAL_S``: after a crash or a pulled plug at most that much is lost and
 the file still reads. Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the recording cleanly (exit 0); a second
 signal aborts at once (the file is still readable up to the last flush). The file takes its name
 at its first flush with a sample (:class:`~gyrofilter.cli.live.LiveOutput`): a recording that fails
@@ -19,7 +19,6 @@ from .. import __version__
 from ..recording import END_NOTE
 from . import live, options, outputs
 
-FLUSH_INTERVAL_S = 0.5
 # header keys first in this order, the rest as the source gives them
 _HEADER_ORDER = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "sensor", "chip_id", "full_scale_dps",
                  "dlpf_cfg", "start_time_utc")
@@ -77,7 +76,7 @@ def _record(args, source):
                     writer.write(rows)
                 dirty = dirty or bool(notes) or bool(len(rows))
                 now = time.monotonic()
-                if dirty and now - last_flush >= FLUSH_INTERVAL_S:
+                if dirty and now - last_flush >= live.FLUSH_INTERVAL_S:
                     writer.flush()
                     last_flush, dirty = now, False
                 if status.due():

@@ -26,7 +26,7 @@ from .. import plots
 from ..errors import RecordingError, SampleError, SettingsError
 from ..filter.settings import SETTING_NAMES
 from ..filter.smoother import Smoother
-from ..recording import CHUNK_ROWS, COLUMNS, RecordingWriter, dps_header, header_text, iter_recording, warn_about_gaps
+from ..recording import CHUNK_ROWS, COLUMNS, RecordingWriter, dps_header, header_text, iter_recording, note_line, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
 from . import console, filtering, options, outputs
 
@@ -174,7 +174,7 @@ class _Replay:
             calibrating = filt.calibrating
             row = filt.update(sample, temp)
             if calibrating and not filt.calibrating:  # the bias the --out header has, as run notes it
-                self.print_rows(f"# {filtering.calibrated_note(filt.bias_dps)}")
+                self.print_rows(note_line(filtering.calibrated_note(filt.bias_dps)).rstrip("\n"))
             if row is not None:  # a row comes out when its block's last sample, this one, goes in
                 rows.append(row)
                 t_rows.append(t)

@@ -22,7 +22,6 @@ from ..errors import SampleError, SettingsError
 from ..recording import COLUMNS, END_NOTE, dps_header, header_text, note_line
 from . import console, filtering, live, options, outputs
 
-FLUSH_INTERVAL_S = 0.5
 
 
 def add_arguments(parser):
@@ -120,7 +119,7 @@ def _run(args, source):
                     if len(out):
                         writer.write(np.column_stack([t_out, out]))
                 now = time.monotonic()
-                if now - last_flush >= FLUSH_INTERVAL_S or not args.out:
+                if now - last_flush >= live.FLUSH_INTERVAL_S or not args.out:
                     writer.flush()
                     last_flush = now
                 if status.due():

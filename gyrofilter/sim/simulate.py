@@ -43,7 +43,7 @@ import numpy as np
 from . import noise_terms as nt
 from .model import EFFECTS, validate_model
 from ..errors import SettingsError
-from ..recording import FORMAT_VERSION, GYRO_COLUMNS, Recording, format_number
+from ..recording import COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, Recording, format_number, units_header
 from ..units import AXES, DEG_PER_RAD, check_duration_s, plain, to_dps
 
 DEFAULT_CHUNK_SAMPLES = 65536
@@ -262,10 +262,8 @@ def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, valid
     spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
     given = dict(model)
     given["sample_rate_hz"] = spec["sample_rate_hz"]
-    header = {"gyrofilter-recording": FORMAT_VERSION, "sensor": "simulated",
-              "sample_rate_hz": format_number(spec["sample_rate_hz"]), "gyro_unit": spec["gyro_unit"]}
-    if spec["gyro_unit"] == "lsb":
-        header["lsb_per_dps"] = format_number(spec["lsb_per_dps"])
+    header = {VERSION_KEY: FORMAT_VERSION, "sensor": "simulated",
+              **units_header(spec["sample_rate_hz"], spec["gyro_unit"], spec.get("lsb_per_dps"))}
     if spec["full_scale_dps"] is not None:
         header["full_scale_dps"] = format_number(spec["full_scale_dps"])
     header["simulated_duration_s"] = format_number(sample_count(duration_s, spec["sample_rate_hz"]) / spec["sample_rate_hz"])
@@ -289,7 +287,7 @@ def recording_columns(model_or_spec):
     s, the gyro columns in the model's ``gyro_unit``, ``temp`` in deg C.
     """
     has_temp = model_or_spec.get("temperature") is not None
-    return ["t", *GYRO_COLUMNS] + (["temp"] if has_temp else [])
+    return list(COLUMNS) + (["temp"] if has_temp else [])
 
 
 def simulate(model: dict, duration_s: float, *, sample_rate_hz=None, rng=None, seed=None,
