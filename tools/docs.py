@@ -577,7 +577,7 @@ def fleet_real():
     out = ROOT / "out" / "fleet_real"
     printed = tool("fleet_real.py", "--jobs", "2", "--out", "out/fleet_real", prompt=False)
     summary = (out / "report" / "fleet.md").read_text(encoding="utf-8")
-    table = re.search(r"^\| unit \| axis \|.*?(?=\n\n|\Z)", summary, re.M | re.S).group(0)
+    table = re.search(r"^\| unit \| axis \| N .*?(?=\n\n|\Z)", summary, re.M | re.S).group(0)
     return fence("$ python tools/fleet_real.py --jobs 2\n" + printed) + "\n\nThe table of `fleet.md`:\n\n" + table
 
 
