@@ -48,9 +48,19 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from gyrofilter.analysis.gap import analyse_gap
+from gyrofilter.evaluation import evaluate as E
+from gyrofilter.filter.pipeline import SETTING_RANGES, FilterSettings
+from gyrofilter.filter.presets import DEFAULT_PRESET, PRESETS
+from gyrofilter.recording import read_recording
+
 ROOT = Path(__file__).resolve().parents[1]
 TOOLS = ROOT / "tools"
 sys.path.insert(0, str(TOOLS))  # the other tools, imported by name
+
+import allan_figures  # noqa: E402
+import dynamic_test  # noqa: E402
+import gap_real  # noqa: E402
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 DATA = ROOT.parent / "shared" / "data"  # the real data sets beside the repository (--data)
 MARK = re.compile(r"^<!-- docs\.py: ([\w-]+) -->\n(.*?)^<!-- /docs\.py: \1 -->$", re.M | re.S)
@@ -168,8 +178,6 @@ def replay_bundled():
 def settings_meanings():
     """{setting: (default as the docstring writes it, meaning)} from the table in the docstring of
     FilterSettings, the one statement of what each setting means."""
-    from gyrofilter.filter.pipeline import FilterSettings
-
     lines = FilterSettings.__doc__.splitlines()
     rules = [i for i, ln in enumerate(lines) if ln.strip().startswith("====")]
     starts = [m.start() for m in re.finditer(r"=+", lines[rules[0]])]
@@ -190,8 +198,6 @@ def _value(v):
 
 @block("settings", "docs/settings.md", "the fields and the docstring of `gyrofilter.filter.pipeline.FilterSettings`")
 def settings_table():
-    from gyrofilter.filter.pipeline import FilterSettings
-
     meanings = settings_meanings()
     fields = dataclasses.fields(FilterSettings)
     if set(meanings) != {f.name for f in fields}:
@@ -207,8 +213,6 @@ def settings_table():
 
 @block("presets", "docs/settings.md", "`gyrofilter.filter.presets.PRESETS`")
 def presets_table():
-    from gyrofilter.filter.presets import DEFAULT_PRESET, PRESETS
-
     rows = ["| preset | its settings (the others keep the defaults above) |", "|---|---|"]
     for name, settings in PRESETS.items():
         same = next((other for other, s in PRESETS.items() if s is settings and other != name), None)
@@ -226,8 +230,6 @@ def _range_number(x):
 
 @block("setting-ranges", "docs/formats.md", "`gyrofilter.filter.pipeline.SETTING_RANGES`")
 def setting_ranges_table():
-    from gyrofilter.filter.pipeline import SETTING_RANGES
-
     lines = ["| setting | range |", "|---|---|"]
     for name, r in SETTING_RANGES.items():
         low = f"{'(' if r.get('low_open') else '['}{_range_number(r['low'])}"
@@ -245,9 +247,6 @@ HOLDOUT_DIR = EVALUATE_DIR / "holdout"
 
 def _evaluate_check(folder):
     """Static std reductions of two filters on one recording, recomputed, against the committed JSON."""
-    from gyrofilter.evaluation import evaluate as E
-    from gyrofilter.recording import read_recording
-
     doc = json.loads((folder / "evaluate.json").read_text(encoding="utf-8"))
     rec = read_recording(ROOT / "recordings" / "mpu6050_static_100s.csv.gz")
     specs = {s.name: s for s in E.default_filters()}
@@ -373,8 +372,6 @@ def evaluate_broad():
 
 
 def _static_recordings():
-    from gyrofilter.evaluation import evaluate as E
-
     return E.find_static_recordings(str(ROOT / "recordings"))
 
 
@@ -384,26 +381,20 @@ def _rows_in(body, table):
 
 
 @block("dynamic-static", "docs/results.md", "tools/dynamic_test.py (first table)", slow=True,
-       check=lambda body: _rows_in(body, __import__("dynamic_test").static_table(_static_recordings()[:1])))
+       check=lambda body: _rows_in(body, dynamic_test.static_table(_static_recordings()[:1])))
 def dynamic_static():
-    import dynamic_test
-
     return dynamic_test.static_table(_static_recordings())
 
 
 @block("dynamic-spikes", "docs/results.md", "tools/dynamic_test.py (second table)", slow=True,
-       check=lambda body: _rows_in(body, __import__("dynamic_test").static_table(_static_recordings()[:1], spikes=True)))
+       check=lambda body: _rows_in(body, dynamic_test.static_table(_static_recordings()[:1], spikes=True)))
 def dynamic_spikes():
-    import dynamic_test
-
     return dynamic_test.static_table(_static_recordings(), spikes=True)
 
 
 @block("dynamic-profile", "docs/results.md", "tools/dynamic_test.py (third table and docs/figures/dynamic_paper001.png)",
        slow=True)
 def dynamic_profile():
-    import dynamic_test
-
     recs = _static_recordings()
     dynamic_test.figure(recs, str(ROOT / "docs" / "figures" / "dynamic_paper001.png"))
     return dynamic_test.dynamic_table(recs)
@@ -429,25 +420,22 @@ def make_allan_figures():
 
 
 def _allan():
-    import allan_figures
-
-    static, motion = allan_figures.recordings(str(ROOT / "recordings"))
-    return allan_figures, static, motion
+    return allan_figures.recordings(str(ROOT / "recordings"))
 
 
 @block("allan-real", "docs/allan.md", "tools/allan_figures.py (the tables; the figures: `python tools/allan_figures.py`)")
 def allan_real():
-    af, static, motion = _allan()
-    return af.tables(af.characterised(static), [name for name, _ in motion])
+    static, motion = _allan()
+    return allan_figures.tables(allan_figures.characterised(static), [name for name, _ in motion])
 
 
 @block("allan-before-after", "docs/allan.md", "tools/allan_figures.py (before/after table)")
 def allan_before_after():
-    af, static, _ = _allan()
-    name, rec = af.longest(static)
+    static, _ = _allan()
+    name, rec = allan_figures.longest(static)
     return (f"{name} ({rec.duration_s:.0f} s at {rec.sample_rate_hz:g} Hz; output every 5 samples, "
             f"{rec.sample_rate_hz / 5:.2f} Hz); std after the calibration window:\n\n"
-            + af.before_after_table(rec, ("paper", "hold", "recommended")))
+            + allan_figures.before_after_table(rec, ("paper", "hold", "recommended")))
 
 
 @block("bench-allan", "docs/allan.md", "tools/bench_allan.py --day-file", slow=True)
@@ -459,18 +447,8 @@ def bench_allan():
 # docs/gap.md and docs/gap_closure.md
 
 
-def _gap_reports():
-    import gap_real
-
-    return gap_real, gap_real.reports()
-
-
 def _gap_check():
     """The gap analysis of the shortest recording, recomputed, against its committed report."""
-    import gap_real
-    from gyrofilter.analysis.gap import analyse_gap
-    from gyrofilter.recording import read_recording
-
     name = "mpu6050_static_100s"
     committed, _ = gap_real.reports()[name]
     now = analyse_gap(read_recording(ROOT / "recordings" / f"{name}.csv.gz"), seed=0,
@@ -484,20 +462,17 @@ def _gap_check():
 
 @artefact("gap-reports", "tools/gap_real.py (docs/gap/*.json and the gap figures)", _gap_check)
 def make_gap_real():
-    import gap_real
-
     gap_real.analyse(seed=0)
 
 
 @block("gap-real", "docs/gap.md", "`docs/gap/*.json` (`python tools/gap_real.py`)")
 def gap_real_block():
-    gr, reps = _gap_reports()
-    return "\n\n".join([gr.table(reps), "Evidence, gain per finding, and notes:", gr.evidence(reps), gr.figure_links(reps)])
+    reps = gap_real.reports()
+    return "\n\n".join([gap_real.table(reps), "Evidence, gain per finding, and notes:", gap_real.evidence(reps),
+                        gap_real.figure_links(reps)])
 
 
 def _gap_example_check(body):
-    import gap_real
-
     rep, _ = gap_real.reports()["mpu6050_static_655s"]
     d = rep["discrepancy"]
     return [f"axis {a}: D {d['before'][a]:.3g} -> {d['after'][a]:.3g} of docs/gap/mpu6050_static_655s.json is not in the block"
@@ -559,8 +534,6 @@ def gap_closure():
 
 def _fleet_check(body):
     """The rows of the real recordings must carry the D of their committed gap reports."""
-    import gap_real
-
     problems = []
     for name, (rep, _) in gap_real.reports().items():
         d = rep["discrepancy"]
