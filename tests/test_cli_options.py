@@ -7,7 +7,6 @@ import pytest
 from gyrofilter.cli import options
 from gyrofilter.errors import SettingsError
 from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
-from support import REPO
 
 
 @pytest.mark.parametrize("command", ["record", "run", "simulate"])

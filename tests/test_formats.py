@@ -11,7 +11,7 @@ from gyrofilter.recording import read_recording
 from gyrofilter.sim.model import EFFECTS, validate_model
 from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources import KINDS
-from support import REPO
+from support import REPO, tool
 
 ROOT = REPO
 DOC = (ROOT / "docs" / "formats.md").read_text(encoding="utf-8")
@@ -147,23 +147,11 @@ def test_fleet_table_example_has_the_columns_of_the_code():
     assert all(c in documented or c.rsplit("_", 1)[0] in documented for c in COLUMNS)
 
 
-def setting_ranges_table():
-    """The table of the filter settings' ranges that section 8 shows, from settings.SETTING_RANGES."""
-    from gyrofilter.filter.settings import SETTING_RANGES
-
-    def number(x):
-        return f"{x:g}" if abs(x) < 1e6 else f"{x:.0e}".replace("e+0", "e").replace("e+", "e")
-
-    lines = ["| setting | range |", "|---|---|"]
-    for name, r in SETTING_RANGES.items():
-        low = f"{'(' if r.get('low_open') else '['}{number(r['low'])}"
-        high = f"{number(r['high'])}{')' if r.get('high_open') else ']'}"
-        lines.append(f"| `{name}` | {low}, {high}{' whole' if r.get('integer') else ''} |")
-    return "\n".join(lines)
-
-
 def test_section_8_states_every_settings_range_as_the_code_holds_it():
-    assert setting_ranges_table() in section(8)
+    """The table of the filter settings' ranges, from settings.SETTING_RANGES (written by tools/docs.py)."""
+    table = tool("docs").setting_ranges_table()
+    assert table.startswith("| setting | range |") and "| `block_len` | [1, 100] whole |" in table
+    assert table in section(8)
 
 
 @pytest.mark.parametrize("row, value", [

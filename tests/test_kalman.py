@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from gyrofilter import GyroFilter
-from gyrofilter.filter import adaptive_kalman, kalman
+from gyrofilter.filter import adaptive_kalman
 
 FS = 100.0
 CAL = 200  # 2 s of calibration at 100 Hz

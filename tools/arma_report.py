@@ -283,10 +283,11 @@ def report(results, n_seeds):
     print(f"RMS over tau of log10(model ADEV / measured ADEV), models simulated like the recording ({n_seeds} seeds); lower is better.\n")
     print("| recording | axis | ARMA chosen by F (paper) | ARMA chosen by BIC | ARMA(1,1) | Allan model (Q/N/B/K/R fit) | better | floor: one record of a perfect model |")
     print("|---|---|---|---|---|---|---|---|")
-    wins = {"arma_chosen": 0, "arma_bic": 0, "arma11": 0, "allan_model": 0}
+    labels = {"arma_chosen": "ARMA by F", "arma_bic": "ARMA by BIC", "arma11": "ARMA(1,1)", "allan_model": "Allan"}
+    wins = dict.fromkeys(labels.values(), 0)
     for r in results:
         dd = r["discrepancy"]
-        best = min(dd, key=dd.get)
+        best = labels[min(dd, key=dd.get)]
         wins[best] += 1
         ch = r["report"]["chosen"]
         floor = r.get("noise_floor")
@@ -294,7 +295,7 @@ def report(results, n_seeds):
         bic = f"{dd['arma_bic']:.4f} (ARMA({cb['p']},{cb['q']}))" if "arma_bic" in dd else "-"
         print(f"| {r['recording']} | {r['axis']} | {dd['arma_chosen']:.4f} (ARMA({ch['p']},{ch['q']})) | {bic} | {dd['arma11']:.4f} | {dd['allan_model']:.4f} | {best} | "
               + ("-" if floor is None else f"{floor:.4f}") + " |")
-    print(f"\nbest per axis: {wins}")
+    print("\nbest per axis: " + ", ".join(f"{label} {n}" for label, n in wins.items()))
 
 
 if __name__ == "__main__":

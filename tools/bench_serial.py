@@ -37,10 +37,13 @@ HEADER = (b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=
           b"fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw\n")
 
 
-def make_lines(n, start=0):
+def make_lines(n, start=0, temp_c=False):
+    """n protocol lines; the temperature as the MPU6050's raw register (what HEADER says), or in
+    deg C (``temp_c``: what a reader without a header takes; it refuses a raw -1520 as absurd)."""
     rng = np.random.default_rng(0)
     g = rng.integers(-2000, 2000, size=(n, 3))
-    return [f"{start + i},{g[i, 0]},{g[i, 1]},{g[i, 2]},{-1520 + i % 7}\n".encode() for i in range(n)]
+    temp = [f"{25 + (i % 7) / 100:.2f}" if temp_c else f"{-1520 + i % 7}" for i in range(n)]
+    return [f"{start + i},{g[i, 0]},{g[i, 1]},{g[i, 2]},{temp[i]}\n".encode() for i in range(n)]
 
 
 def parse_costs(n):
@@ -117,7 +120,7 @@ def _on_pty(lines, read_all):
 def pty_costs(n):
     import serial
 
-    lines = make_lines(n)
+    lines = make_lines(n, temp_c=True)  # the pty sends no header
 
     def chunked(name):
         src = SerialSource(name, gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=1000)

@@ -3,11 +3,14 @@ recording under a file name that is not UTF-8.
 
 ``plain_filter`` is the plain-way oracle of the paper's filter (``tools/bench.py`` uses it as its
 baseline). Helpers that tools need too live in the package: the hidden-effect battery in ``gyrofilter.sim.hidden_effects`` and the
-register-level MPU6050 model in ``gyrofilter.sources.mpu6050_model``.
+register-level MPU6050 model in ``gyrofilter.sources.mpu6050_model``. ``tool(name)`` loads a script
+of ``tools/`` (``tools/docs.py`` for the tests of the documentation).
 """
 from __future__ import annotations
 
+import importlib.util
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -53,3 +56,14 @@ def lsb_recording(tmp_path, name="rec.csv", n=2500, gap_at=None, gap=0, notes=()
     path = tmp_path / name
     write_recording(path, rec)
     return path, read_recording(path)
+
+
+def tool(name):
+    """The module ``tools/<name>.py`` (the scripts beside the package are not installed), loaded once."""
+    key = f"_tools_{name}"
+    if key not in sys.modules:
+        spec = importlib.util.spec_from_file_location(key, REPO / "tools" / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[key] = module
+        spec.loader.exec_module(module)
+    return sys.modules[key]
