@@ -1,5 +1,5 @@
-"""The house rules that the code itself can be held to (CONTRIBUTING.md, "Layout" and "Simple and
-clear"): modules of one concern (at most 600 lines), functions that fit on a screen or two (at
+"""The house rules that the code itself can be held to (CONTRIBUTING.md, "Rules the code is held
+to"): modules of one concern (at most 600 lines), functions that fit on a screen or two (at
 most 120 lines, unless a numba kernel needs the length and a comment above it says so), one name
 for a sample rate, no import circle, and imports at the top of the module."""
 import ast

@@ -37,3 +37,24 @@ def test_the_default_is_no_worse_than_any_other_preset_on_the_held_out_half():
             assert d["rmse_dps"] <= ev.dynamic[other][p]["rmse_dps"], (other, p)
         for b, d in ev.broad[best].items():
             assert d["rmse_all_dps"] <= ev.broad[other][b]["rmse_all_dps"], (other, b)
+
+
+def test_every_preset_is_listed_in_formats_md_and_in_help(capsys):
+    """A new preset is a one-file change (filter/presets.py) but for this hand-written list:
+    docs/settings.md's table is generated, the --preset choices and the smoother's presets come
+    from PRESETS (the new-contributor trial of issue 23 found them typed out in three places)."""
+    import re
+
+    from gyrofilter.cli import main
+    from gyrofilter.filter.smoother import SMOOTHABLE_PRESETS
+    from support import REPO
+
+    formats = (REPO / "docs" / "formats.md").read_text(encoding="utf-8")
+    item = formats[formats.index("- Presets ("):formats.index("- With `temp_coefficient_dps_per_c`")]
+    assert all(f"`{name}`" in item for name in PRESETS), item
+    for command in ("replay", "run"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        help_text = " ".join(capsys.readouterr().out.split())
+        assert re.search(r"--preset \{([^}]*)\}", help_text).group(1).split(",") == sorted(PRESETS)
+    assert set(SMOOTHABLE_PRESETS) == {"recommended", "adaptive_kalman"}

@@ -25,7 +25,7 @@ import numpy as np
 from .. import plots
 from ..errors import RecordingError, SampleError, SettingsError
 from ..filter.settings import SETTING_NAMES
-from ..filter.smoother import Smoother
+from ..filter.smoother import SMOOTHABLE_PRESETS, Smoother
 from ..recording import CHUNK_ROWS, COLUMNS, RecordingWriter, dps_header, header_text, iter_recording, note_line, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
 from . import console, filtering, options, outputs
@@ -42,7 +42,7 @@ def add_arguments(parser):
                                                                     "(stdout is then a recording, format v1; the summary goes to stderr)")
     parser.add_argument("--smooth", action="store_true",
                         help="offline: smooth with the forward-backward smoother over the adaptive Kalman filter "
-                             "(each row from the whole recording; presets recommended and adaptive_kalman)")
+                             f"(each row from the whole recording; presets {', '.join(SMOOTHABLE_PRESETS)})")
     filtering.add_filter_arguments(parser)
     options.add_force_argument(parser)
 

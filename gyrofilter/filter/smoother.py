@@ -37,7 +37,12 @@ import numpy as np
 from . import adaptive_kalman, kalman
 from ..errors import SettingsError
 from .pipeline import GyroFilter
-from .presets import DEFAULT_PRESET
+from .presets import DEFAULT_PRESET, PRESETS
+
+#: the presets the smoother takes: those with the adaptive Kalman stage and no hold stage
+SMOOTHABLE_PRESETS = tuple(name for name, chosen in PRESETS.items()
+                           if chosen.get("kalman_noise") == "adaptive" and chosen.get("tracker", "kalman") == "kalman"
+                           and not chosen.get("hold", False))
 
 #: blocks per call of the backward filter (its memory: 15 floats per block of the chunk)
 BACKWARD_CHUNK = 65536
@@ -77,8 +82,8 @@ class Smoother:
     ``filt``: the :class:`gyrofilter.GyroFilter` to smooth, before its first sample.
     The filter is fed as usual (``update()`` or ``filter()``, in chunks of any size);
     :meth:`smooth` returns one row per output row the filter produced so far, in deg/s. It
-    needs the adaptive Kalman stage (``kalman_noise="adaptive"``: presets ``recommended`` and
-    ``adaptive_kalman``) and no hold stage.
+    needs the adaptive Kalman stage (``kalman_noise="adaptive"``: the presets of
+    :data:`SMOOTHABLE_PRESETS`) and no hold stage.
     """
 
     def __init__(self, filt):
@@ -88,7 +93,7 @@ class Smoother:
             raise SettingsError("this filter already has a Smoother; use that one")
         s = filt.settings
         if s.tracker != "kalman" or s.kalman_noise != "adaptive" or s.hold:
-            raise SettingsError(f"smoothing needs the adaptive Kalman filter (preset 'recommended' or 'adaptive_kalman'), "
+            raise SettingsError(f"smoothing needs the adaptive Kalman filter (preset {' or '.join(map(repr, SMOOTHABLE_PRESETS))}), "
                                 f"not preset {filt.preset!r} with tracker={s.tracker!r}, kalman_noise={s.kalman_noise!r}, "
                                 f"hold={s.hold}")
         if filt.blocks_out:
