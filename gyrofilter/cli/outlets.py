@@ -43,18 +43,23 @@ class Outlets:
     def open(cls, args):
         if args.udp_format is not None and args.udp is None:
             raise SettingsError("--udp-format: give --udp HOST:PORT too (where to send the datagrams)")
+        serve = udp = None  # every value is checked before anything is bound or said
+        if args.serve is not None:
+            host, port = split_address(args.serve, "--serve")
+            serve = host, resolve(host, port, "--serve", socket.SOCK_STREAM)
+        if args.udp is not None:
+            host, port = split_address(args.udp, "--udp", min_port=1)
+            udp = resolve(host, port, "--udp", socket.SOCK_DGRAM)
         outlets = []
-        try:
-            if args.serve is not None:
-                outlets.append(_open_server(args.serve))
-            if args.udp is not None:
-                host, port = split_address(args.udp, "--udp", min_port=1)
-                family, sockaddr = resolve(host, port, "--udp", socket.SOCK_DGRAM)
-                outlets.append(UdpSender(family, sockaddr, args.udp_format or FORMATS[0], args.udp))
-        except BaseException:
-            for outlet in outlets:
-                outlet.close()
-            raise
+        if udp is not None:
+            outlets.append(UdpSender(*udp, args.udp_format or FORMATS[0], args.udp))
+        if serve is not None:
+            try:
+                outlets.append(_open_server(args.serve, *serve))
+            except BaseException:
+                for outlet in outlets:
+                    outlet.close()
+                raise
         return cls(outlets, args.calibration is not None)
 
     def __enter__(self):
@@ -90,10 +95,10 @@ class Outlets:
             outlet.feed(step)
 
 
-def _open_server(text):
-    """The live view listening at ``text`` ([HOST:]PORT), announced on stderr."""
-    host, port = split_address(text, "--serve")
-    family, sockaddr = resolve(host, port, "--serve", socket.SOCK_STREAM)
+def _open_server(text, host, resolved):
+    """The live view listening at ``text`` (--serve's [HOST:]PORT: ``host`` and its ``resolved``
+    (family, sockaddr)), announced on stderr."""
+    family, sockaddr = resolved
     try:
         server = LiveServer(family, sockaddr, loopback_only=is_loopback(host))
     except OSError as exc:

@@ -26,6 +26,8 @@ def split_address(text, option, *, min_port=0):
     ``port`` in [``min_port``, 65535]. SettingsError for anything else."""
     text = str(text)
     where = f"{option} {quote(text)}"
+    if "/" in text:
+        raise SettingsError(f"{where}: give [HOST:]PORT without http:// or a path, e.g. 127.0.0.1:8000")
     host, port_text = DEFAULT_HOST, text
     if text.startswith("["):
         inside, bracket, rest = text[1:].partition("]")

@@ -6,8 +6,9 @@ The standard library's threaded server (a thread per connection, at most
 publisher thread that, every :data:`FRAME_INTERVAL_S`, drains the
 :class:`~gyrofilter.view.state.LiveState` the run loop feeds, encodes the new rows once and puts
 the frame in every stream client's queue. A queue holds at most :data:`CLIENT_QUEUE_FRAMES`
-frames: a slow or stalled client loses its oldest frames (counted), never the run's samples,
-and a client that accepts no byte for :data:`SOCKET_TIMEOUT_S` is disconnected. Nothing on the
+frames (and the connection's kernel buffer :data:`STREAM_SEND_BUFFER_BYTES`): a slow or stalled
+client loses its oldest frames (counted), never the run's samples, and a client that accepts no
+byte for :data:`SOCKET_TIMEOUT_S` is disconnected. Nothing on the
 run loop's side waits for a socket.
 
 Read-only and closed: GET and HEAD only (any other method 405), the fixed paths only (404 for
@@ -36,6 +37,8 @@ from .state import HISTORY_S, LiveState, rounded_rows
 MAX_STREAM_CLIENTS = 16
 MAX_CONNECTIONS = 64
 CLIENT_QUEUE_FRAMES = 64
+#: the kernel's send buffer of a stream connection: what a stalled client holds beyond its queue
+STREAM_SEND_BUFFER_BYTES = 128 * 1024
 FRAME_INTERVAL_S = 0.1
 STATUS_INTERVAL_S = 0.5
 SOCKET_TIMEOUT_S = 10.0
@@ -74,9 +77,9 @@ class ClientQueue:
     """The frames waiting for one stream client: at most ``capacity``; :meth:`put` drops the
     oldest beyond that (``dropped`` counts them) and never waits."""
 
-    def __init__(self, connection, capacity=CLIENT_QUEUE_FRAMES):
+    def __init__(self, connection, capacity=None):
         self.connection = connection
-        self.capacity = capacity
+        self.capacity = capacity or CLIENT_QUEUE_FRAMES
         self.dropped = 0
         self.closed = False
         self._frames = collections.deque()
@@ -363,6 +366,7 @@ class _Handler(http.server.BaseHTTPRequestHandler):
                         head_only, extra=(("Retry-After", "5"),))
             return
         try:
+            self.connection.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, STREAM_SEND_BUFFER_BYTES)
             self.send_response(200)
             self.send_header("Content-Type", "text/event-stream; charset=utf-8")
             self.send_header("X-Accel-Buffering", "no")
