@@ -95,3 +95,12 @@ def test_sixteen_clients_and_hostile_requests_leave_the_rows_as_replay_writes_th
         assert final["running"] is False and final["rows_out"] == len(want) and final["samples_in"] == samples
     for client in stalled:
         client.close()
+
+
+def test_a_run_that_fails_is_one_error_line_with_serve_and_udp(tmp_path, capsys):
+    """A source that cannot open: its error alone (the view was bound, not announced)."""
+    code = main(["run", "--source", f"replay:{tmp_path / 'missing.csv'}", "--serve", "127.0.0.1:0",
+                 "--udp", "127.0.0.1:9"])
+    captured = capsys.readouterr()
+    assert code == 2 and captured.out == ""
+    assert len(captured.err.splitlines()) == 1 and "missing.csv" in captured.err, captured.err

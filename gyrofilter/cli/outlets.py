@@ -3,10 +3,10 @@ view in a browser, a UDP stream to PlotJuggler or Teleplot; :mod:`gyrofilter.vie
 
 :meth:`Outlets.open` checks the values and binds or resolves them before the source is opened
 and before anything is written, so a bad value (a port out of range or in use, a bad host) is
-one refusal line and exit 2; it then says on stderr where the view is (and, when it listens
-beyond this machine, one warning line). The run loop calls :meth:`Outlets.start` once and
+one refusal line and exit 2. The run loop calls :meth:`Outlets.start` once, which says on stderr
+where the view is (or, when it listens beyond this machine, one warning line), and
 :meth:`Outlets.feed` after each read; the outlets never make it wait. Leaving the ``with``
-block closes them, and their summaries go to stderr.
+block closes them, and their summaries go to stderr after a run that did not fail.
 """
 import errno
 import socket
@@ -35,9 +35,10 @@ class Outlets:
     """The outlets a run was given (none, the live view, a UDP stream, or both); see the module
     docstring. ``calibration_loaded``: the filter starts from a saved calibration."""
 
-    def __init__(self, outlets, calibration_loaded):
+    def __init__(self, outlets, calibration_loaded, announcements=()):
         self._outlets = outlets
         self._calibration_loaded = calibration_loaded
+        self._announcements = list(announcements)
 
     @classmethod
     def open(cls, args):
@@ -50,29 +51,36 @@ class Outlets:
         if args.udp is not None:
             host, port = split_address(args.udp, "--udp", min_port=1)
             udp = resolve(host, port, "--udp", socket.SOCK_DGRAM)
-        outlets = []
+        outlets, announcements = [], []
         if udp is not None:
             outlets.append(UdpSender(*udp, args.udp_format or FORMATS[0], args.udp))
         if serve is not None:
             try:
-                outlets.append(_open_server(args.serve, *serve))
+                server, line = _open_server(args.serve, *serve)
             except BaseException:
                 for outlet in outlets:
                     outlet.close()
                 raise
-        return cls(outlets, args.calibration is not None)
+            outlets.append(server)
+            announcements.append(line)
+        return cls(outlets, args.calibration is not None, announcements)
 
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, exc_type, exc, tb):
+        """Close the outlets; their summaries go to stderr after a run that did not fail (a failure
+        is one error line)."""
         for outlet in self._outlets:
             summary = outlet.close()
-            if summary:
+            if summary and exc_type is None:
                 common.say(f"gyrofilter run: {summary}")
         return False
 
     def start(self, source_spec, sample_rate_hz, filt):
+        """Start serving once the source is open and the filter made; say where the view is."""
+        for line in self._announcements:
+            common.say(line)
         info = RunInfo(source=source_spec, sample_rate_hz=float(sample_rate_hz), block_len=filt.settings.block_len,
                        output_rate_hz=filt.output_rate_hz, preset=filt.preset)
         for outlet in self._outlets:
@@ -97,19 +105,17 @@ class Outlets:
 
 def _open_server(text, host, resolved):
     """The live view listening at ``text`` (--serve's [HOST:]PORT: ``host`` and its ``resolved``
-    (family, sockaddr)), announced on stderr."""
+    (family, sockaddr)), and the line that tells the user where it is."""
     family, sockaddr = resolved
     try:
         server = LiveServer(family, sockaddr, loopback_only=is_loopback(host))
     except OSError as exc:
         raise SettingsError(f"--serve {text}: cannot listen there: {_why(exc)}") from None
     if is_loopback(host):
-        common.say(f"gyrofilter run: live view on {server.url} (this machine only)")
-    else:
-        where = "every network interface" if is_wildcard(host) else host
-        common.say(f"gyrofilter run: warning: the live view listens on {where}, port {server.address[1]}: anyone on "
-                   "the network can watch this sensor (read-only); use 127.0.0.1 to keep it to this machine")
-    return server
+        return server, f"gyrofilter run: live view on {server.url} (this machine only)"
+    where = "every network interface" if is_wildcard(host) else host
+    return server, (f"gyrofilter run: warning: the live view listens on {where}, port {server.address[1]}: anyone "
+                    "on the network can watch this sensor (read-only); use 127.0.0.1 to keep it to this machine")
 
 
 _BIND_HINTS = {errno.EADDRINUSE: "another program uses this port; choose another, or 0 for any free port",
