@@ -33,8 +33,17 @@ def live():
     server.close()
 
 
-def test_the_page_and_its_files_come_from_the_package(live):
-    port = live.address[1]
+@pytest.fixture(scope="module")
+def idle():
+    """One server for the tests that feed it nothing."""
+    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=True)
+    server.start(INFO)
+    yield server
+    server.close()
+
+
+def test_the_page_and_its_files_come_from_the_package(idle):
+    port = idle.address[1]
     code, head, body = get(port, "/")
     assert code == 200 and "text/html" in head and "Content-Security-Policy: default-src 'none'" in head
     page = body.decode()
@@ -98,13 +107,13 @@ def test_a_client_that_connects_later_gets_the_history_first(live):
     (b"GET / HTTP/1.1\r\nHost: attacker.example:8000\r\n\r\n", 421),
     (b"\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03garbage\r\n\r\n", 400),
 ])
-def test_what_is_refused(live, raw, code):
-    got, answer = request(live.address[1], raw)
+def test_what_is_refused(idle, raw, code):
+    got, answer = request(idle.address[1], raw)
     if got is None:  # a request line that is not HTTP/1.x gets an answer without a status line (HTTP/0.9)
         got = int(answer[:3])
     assert got == code, answer[:200]
     assert b"root:" not in answer and b"[project]" not in answer
-    assert get(live.address[1], "/status")[0] == 200  # and the server goes on
+    assert get(idle.address[1], "/status")[0] == 200  # and the server goes on
 
 
 def test_at_most_16_stream_clients_the_17th_gets_503(live):
