@@ -86,6 +86,20 @@ def test_a_view_that_falls_behind_drops_whole_reads_and_counts_them(monkeypatch)
     assert len(raw) == sum(len(s.t_s) for s in kept) // BLOCK
 
 
+def test_the_inbox_holds_a_bounded_number_of_samples(monkeypatch):
+    monkeypatch.setattr(state_module, "INBOX_SAMPLES", 100)
+    _, _, fed = steps(600, seed=5)
+    state = LiveState()
+    state.start(INFO)
+    for step in fed:
+        state.feed(step)
+    state.drain()
+    status = state.status()
+    kept = len(fed) - state.inbox_dropped
+    assert 0 < kept < len(fed) and sum(len(s.t_s) for s in fed[-kept:]) <= 100 < sum(len(s.t_s) for s in fed[-kept - 1 :])
+    assert status["samples_in"] == 600
+
+
 def test_the_state_keeps_copies_of_what_it_is_fed():
     _, _, fed = steps(50, seed=4)
     state = LiveState()

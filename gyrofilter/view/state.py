@@ -6,8 +6,8 @@ calls :meth:`LiveState.drain` a few times a second: it turns the steps into the 
 and raw block means, keeps the last :data:`HISTORY_S` seconds of both for a page that opens
 later, the latest counters and temperature, and the Allan deviation of the still stretches
 (:class:`~gyrofilter.view.still_allan.StillAllan`). When the publisher falls behind by more than
-:data:`INBOX_STEPS` reads, the oldest are dropped and counted (``inbox_dropped``): the view
-loses them, the run does not.
+:data:`INBOX_STEPS` reads or :data:`INBOX_SAMPLES` samples, the oldest reads are dropped and
+counted (``inbox_dropped``): the view loses them, the run does not.
 
 Raw block means: the mean of each block of L (the filter's block length) consecutive input
 samples, counted from the first sample of the run (deg/s, bias not removed, no outlier
@@ -30,8 +30,9 @@ from .still_allan import StillAllan
 HISTORY_S = 60.0
 #: at most this many rows of each series in that history, whatever the rate
 MAX_HISTORY_ROWS = 20000
-#: reads waiting for the publisher before the oldest are dropped
+#: reads, and samples in them, waiting for the publisher before the oldest reads are dropped
 INBOX_STEPS = 2000
+INBOX_SAMPLES = 200_000
 #: digits kept in what the view sends: rates to 1e-6 deg/s, times to 1e-6 s
 DECIMALS = 6
 
@@ -75,6 +76,7 @@ class LiveState:
 
     def __init__(self):
         self._inbox = collections.deque()
+        self._inbox_samples = 0
         self._inbox_lock = threading.Lock()
         self._lock = threading.Lock()  # what drain() builds, read by status() and history()
         self.inbox_dropped = 0
@@ -97,16 +99,17 @@ class LiveState:
         never waiting for anything but a short lock."""
         copied = _copied(step)
         with self._inbox_lock:
-            if len(self._inbox) >= INBOX_STEPS:
-                self._inbox.popleft()
-                self.inbox_dropped += 1
             self._inbox.append(copied)
+            self._inbox_samples += len(copied.t_s)
+            while len(self._inbox) > INBOX_STEPS or (self._inbox_samples > INBOX_SAMPLES and len(self._inbox) > 1):
+                self._inbox_samples -= len(self._inbox.popleft().t_s)
+                self.inbox_dropped += 1
 
     def drain(self):
         """The steps queued since the last call, processed: ``(rows, raw)``, the new filtered rows
         and raw block means as (M, 4) arrays of t, x, y, z (deg/s); both empty when nothing came."""
         with self._inbox_lock:
-            steps, self._inbox = list(self._inbox), collections.deque()
+            steps, self._inbox, self._inbox_samples = list(self._inbox), collections.deque(), 0
             dropped = self.inbox_dropped
         with self._lock:
             if dropped != self._dropped_seen:  # reads were lost between two drains: no block spans them
