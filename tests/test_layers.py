@@ -8,7 +8,8 @@ import gyrofilter
 #: part -> the parts it may import from (besides itself); "core" is every module at the root
 ALLOWED = {"face": {"core", "filter"}, "core": set(), "filter": {"core"}, "sim": {"core"}, "analysis": {"core", "filter", "sim"},
            "evaluation": {"core", "filter", "sim"}, "sources": {"core", "sim"},
-           "cli": {"core", "filter", "sim", "analysis", "evaluation", "sources"}}
+           "view": {"core", "filter", "sim", "analysis"},
+           "cli": {"core", "filter", "sim", "analysis", "evaluation", "sources", "view"}}
 
 
 def part_of(dotted):

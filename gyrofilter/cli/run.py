@@ -20,7 +20,7 @@ import numpy as np
 from .. import __version__
 from ..errors import SampleError, SettingsError
 from ..recording import COLUMNS, END_NOTE, dps_header, header_text, note_line
-from . import console, filtering, live, options, outputs
+from . import console, filtering, live, options, outlets, outputs
 
 
 
@@ -34,6 +34,7 @@ def add_arguments(parser):
     options.add_force_argument(parser)
     parser.add_argument("--quiet", action="store_true", help="no status line")
     filtering.add_filter_arguments(parser)
+    outlets.add_arguments(parser)
 
 
 class _TextOut:
@@ -67,14 +68,15 @@ def run(args):
     live.check_duration(args.duration)
     outputs.check_outputs([args.out, args.save_calibration],
                           live.source_files(args.source) + [args.calibration, args.temp_model], args.force)
-    source = live.open_from_args(args)
-    try:
-        return _run(args, source)
-    finally:
-        source.close()
+    with outlets.Outlets.open(args) as sinks:  # --serve, --udp: a bad value is refused before any output
+        source = live.open_from_args(args)
+        try:
+            return _run(args, source, sinks)
+        finally:
+            source.close()
 
 
-def _run(args, source):
+def _run(args, source, sinks):
     head = source.header
     filtering.refuse_filtered_output(head, f"source {args.source}")
     cols = source.columns
@@ -83,6 +85,7 @@ def _run(args, source):
     temp_idx = cols.index("temp") if "temp" in cols else None
     filtering.check_temperature(filt, temp_idx is not None, f"source {args.source}")
     block = filt.settings.block_len
+    sinks.start(args.source, source.sample_rate_hz, filt)
     out_header = dps_header({
         "description": f"gyrofilter {__version__} run: filtered rates, preset {filt.preset}, block of {block} samples; t = time of the block's last sample",
         "live_source": args.source,
@@ -110,14 +113,17 @@ def _run(args, source):
                 if len(rows):
                     was_calibrating = filt.calibrating
                     temps = None if temp_idx is None else rows[:, temp_idx]
+                    gyro = source.gyro_dps(rows)
                     try:
-                        t_out, out = filt.filter_timed(source.gyro_dps(rows), rows[:, t_idx], temps)
+                        t_out, out = filt.filter_timed(gyro, rows[:, t_idx], temps)
                     except SampleError as exc:  # a sample beyond the filter's range: name the source and the sample
                         raise SettingsError(f"source {args.source}: sample {filt.samples_in + exc.row}: {exc.reason}") from None
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note(filtering.calibrated_note(filt.bias_dps))
                     if len(out):
                         writer.write(np.column_stack([t_out, out]))
+                    sinks.feed(rows[:, t_idx], gyro, temps, t_out, out, samples_in=loop.samples,
+                               rows_out=writer.rows_written, source=source, filt=filt)
                 now = time.monotonic()
                 if now - last_flush >= live.FLUSH_INTERVAL_S or not args.out:
                     writer.flush()

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import adaptive_kalman, kalman
+from . import adaptive_kalman
 from ..errors import SettingsError
 from .pipeline import GyroFilter
 from .presets import DEFAULT_PRESET, PRESETS

@@ -1,0 +1,106 @@
+"""`gyrofilter run --serve / --udp` as a user runs it: bad values refused before any output, the
+warning for a view open to the network, and a paced replay watched by 16 stream clients (three
+never read) while requests that must be refused come in: the run writes exactly the rows that
+`replay --out` writes, and a client that reads gets every one of them."""
+import socket
+
+import numpy as np
+import pytest
+
+from gyrofilter.cli import main
+from gyrofilter.recording import read_recording
+from support import REPO
+from support.live import EventReader, StalledClient, request, start_run, status, wait_for
+
+BUNDLED = REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz"
+
+
+@pytest.fixture
+def busy_port():
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        sock.listen()
+        yield sock.getsockname()[1]
+
+
+@pytest.mark.parametrize("options, words", [
+    (["--serve", "70000"], "--serve '70000': the port must be a whole number from 0 to 65535"),
+    (["--serve", "http://x:80"], "--serve 'http://x:80': give [HOST:]PORT without http:// or a path"),
+    (["--serve", "999.1.1.1:8000"], "'999.1.1.1' is not an IPv4 address"),
+    (["--serve", "BUSY"], "cannot listen there: Address already in use (another program uses this port"),
+    (["--udp", "0"], "--udp '0': the port must be a whole number from 1 to 65535"),
+    (["--udp", "bad host!:9870"], "'bad host!' is not a host name"),
+    (["--udp-format", "teleplot"], "--udp-format: give --udp HOST:PORT too"),
+    (["--serve", "8000", "--udp", "127.0.0.1:99999"], "--udp '127.0.0.1:99999': the port must be"),
+])
+def test_a_bad_value_is_one_line_and_exit_2_before_any_output(tmp_path, capsys, busy_port, options, words):
+    options = [str(busy_port) if o == "BUSY" else o for o in options]
+    out = tmp_path / "out.csv"
+    code = main(["run", "--source", "sim:seed=1,realtime=0,duration=5", "--out", str(out), *options])
+    captured = capsys.readouterr()
+    assert code == 2 and captured.out == ""
+    assert len(captured.err.splitlines()) == 1 and words in captured.err, captured.err
+    assert not out.exists()
+
+
+def test_a_view_open_to_the_network_says_so_in_one_warning_line(tmp_path, capsys):
+    code = main(["run", "--source", "sim:seed=1,realtime=0,duration=3", "--serve", "0.0.0.0:0", "--quiet",
+                 "--out", str(tmp_path / "out.csv")])
+    err = capsys.readouterr().err
+    assert code == 0
+    warnings = [line for line in err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "anyone on the network can watch" in warnings[0]
+    assert "live view http://0.0.0.0:" in err  # the summary
+
+
+def test_sixteen_clients_and_hostile_requests_leave_the_rows_as_replay_writes_them(tmp_path, capsys):
+    out = tmp_path / "run.csv"
+    proc, port = start_run("--source", f"replay:{BUNDLED},realtime,speed=20", "--out", str(out))
+    try:
+        readers = [EventReader(port) for _ in range(13)]
+        for r in readers:
+            r.start()
+        stalled = [StalledClient(port) for _ in range(3)]
+        wait_for(lambda: status(port)["clients"] == 16, what="16 stream clients")
+        refused = {
+            "17th client": request(port, b"GET /stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")[0],
+            "POST": request(port, b"POST /status HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 2\r\n\r\n{}")[0],
+            "..": request(port, b"GET /../../../../etc/passwd HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")[0],
+            "long line": request(port, b"GET /" + b"x" * 100000 + b" HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")[0],
+        }
+        assert refused == {"17th client": 503, "POST": 405, "..": 404, "long line": 414}
+        assert status(port)["running"] is True
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+        proc.wait()
+    assert proc.returncode == 0, err
+    assert "16 stream clients served" in err and "1 refused (more than 16)" in err
+    replayed = tmp_path / "replayed.csv"
+    assert main(["replay", str(BUNDLED), "--out", str(replayed)]) == 0
+    capsys.readouterr()
+    got, want = read_recording(out), read_recording(replayed)
+    samples = len(read_recording(BUNDLED))
+    assert len(got) == len(want) == (samples - 200) // 5
+    np.testing.assert_array_equal(got.t_s, want.t_s)
+    np.testing.assert_array_equal(got.gyro_dps, want.gyro_dps)
+    for reader in readers:
+        reader.join(10)
+        assert reader.error is None and reader.status_code == 200
+        hello = reader.named("hello")[0]
+        streamed = {round(r[0], 6): r[1:] for r in hello["rows"] + [r for e in reader.named("rows") for r in e["rows"]]}
+        assert sorted(streamed) == pytest.approx(list(want.t_s))
+        np.testing.assert_allclose([streamed[k] for k in sorted(streamed)], want.gyro_dps, atol=1e-6)
+        final = reader.named("status")[-1]
+        assert final["running"] is False and final["rows_out"] == len(want) and final["samples_in"] == samples
+    for client in stalled:
+        client.close()
+
+
+def test_a_run_that_fails_is_one_error_line_with_serve_and_udp(tmp_path, capsys):
+    """A source that cannot open: its error alone (the view was bound, not announced)."""
+    code = main(["run", "--source", f"replay:{tmp_path / 'missing.csv'}", "--serve", "127.0.0.1:0",
+                 "--udp", "127.0.0.1:9"])
+    captured = capsys.readouterr()
+    assert code == 2 and captured.out == ""
+    assert len(captured.err.splitlines()) == 1 and "missing.csv" in captured.err, captured.err
