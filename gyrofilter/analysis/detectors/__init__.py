@@ -70,6 +70,7 @@ from .common import (  # noqa: F401
     COLORED_MIN_LAG2_GAP,
     COLORED_Z,
     COMPOSITE_MIN_GAIN,
+    CONFOUNDED_SPREADS,
     Candidate,
     DETERMINISTIC_THRESHOLD,
     EXACT_GM_MARGIN,
@@ -123,8 +124,15 @@ from .colored import (  # noqa: F401
 )
 from .slow import (  # noqa: F401
     PERIODOGRAM,
+    SLOW_EFFECTS,
     STOCHASTIC_MODELS,
-    detect_slow,
+    TIME_SHAPES,
     exact_stochastic_gain,
+    slow_reading,
     stochastic_fits,
+)
+from .covariate import (  # noqa: F401
+    detect_slow,
+    gls,
+    temperature_first,
 )
