@@ -15,6 +15,10 @@ cause to name: it predicts the bias at the next power-up, an exponential in time
 * the **time reading**: the slow effects without the temperature (the shapes ramp, step and
   warm-up, and the stochastic spectra), as on a record without a ``temp`` column.
 
+A covariate reading that needs a stochastic term where the time reading explains the record by
+a shape alone is the more complex reading and is not returned (a ramp under a warming
+temperature reads as the temperature's settling plus a random walk for the difference).
+
 The covariate reading is returned when it names the temperature; the time reading rides on the
 temperature candidate (``extra["alternative"]``) so that :mod:`gyrofilter.analysis.gap_readings`
 can weigh the two on the discrepancy D and keep the covariate unless the time reading is clearly
@@ -27,7 +31,7 @@ import math
 import numpy as np
 
 from .common import DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, Candidate, block_means, dot
-from .slow import TIME_SHAPES, _periodogram_detrended, _spectrum, slow_reading
+from .slow import STOCHASTIC_MODELS, TIME_SHAPES, _periodogram_detrended, _spectrum, slow_reading
 
 
 def detect_slow(x, sample_rate_hz, temp_c=None):
@@ -43,7 +47,11 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     if temp_c is None:
         return time_reading, stats
     covariate = temperature_first(x, sample_rate_hz, temp_c, stats)
-    if covariate is None:
+    if covariate is None or (any(c.effect in STOCHASTIC_MODELS for c in covariate[1:])
+                             and not any(c.effect in STOCHASTIC_MODELS for c in time_reading)):
+        # a covariate reading that needs a wander where a shape in time alone explains the
+        # record is the more complex reading (a ramp read as the temperature's settling plus a
+        # random walk for the difference)
         return time_reading, stats
     if time_reading:
         covariate[0].extra["alternative"] = time_reading
