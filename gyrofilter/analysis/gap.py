@@ -18,6 +18,9 @@ function each on a shared run (:class:`_GapRun`); the modules beside this one ho
    temperature are told apart), each with its own significance threshold, and estimates the
    parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
    and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_from_highpassed`).
+   Where the temperature and a shape in time (or a slow wander) explain a slow departure, both
+   readings are simulated and the measured covariate is kept unless the other is clearly better
+   on D (:mod:`gyrofilter.analysis.gap_readings`); one as good is listed as ``alternatives``.
 4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
    better; about 1 when the model explains the measurement) is computed against the baseline's
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a

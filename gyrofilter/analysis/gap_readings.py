@@ -71,23 +71,28 @@ def weigh_readings(run):
         spread = det.CONFOUNDED_SPREADS * max(run.null_spread(i, others + cov_ks, label),
                                               run.null_spread(i, others + time_ks, label))
         shown = " + ".join(_show(c) for c in reading["time"])
+        weighed = (f"axis {a}: readings weighed on D: with the temperature {d_cov:.3g}, in time ({shown}) {d_time:.3g}; "
+                   f"about equal within {spread:.2g} ({det.CONFOUNDED_SPREADS:g} null spreads of D)")
         if d_time < d_cov - spread:
             run.excluded.update(cov_ks)
             run.ext_axes[a], run.wvs[i] = reading["ext_axis"], reading["wv"]
             for c in reading["time"]:
                 c.extra.pop("reading")
-            notes.append(f"temperature on {a} not named: the time reading ({shown}) explains the record better "
-                         f"(D {d_time:.3g} against {d_cov:.3g} with the temperature; null spread of D {spread:.2g})")
+            notes.append(weighed + ": the time reading is clearly better, the temperature is not named")
             continue
         run.excluded.update(time_ks)
-        if d_time <= d_cov + spread:
-            temp.extra["alternatives"] = [(c, d_time) for c in reading["time"]]
-            temp.evidence += (f"; the time reading {shown} explains this record about as well (D {d_time:.3g} against "
-                              f"{d_cov:.3g}, within the null spread of D, {spread:.2g}): the temperature follows a "
-                              "warm-up itself, so this record cannot tell them apart. The temperature is named because it "
-                              "is measured and predicts the bias at the next power-up; read in time, the bias would "
-                              "settle the same way after every power-on whatever the temperature does, and a record "
-                              "where the temperature moves without a power-up (heating, a cold start) tells them apart")
+        if d_time > d_cov + spread:
+            notes.append(weighed + ": the temperature is clearly better, the time reading is not listed")
+            continue
+        notes.append(weighed + ": the record cannot tell them apart; the temperature is named, the time reading "
+                     "listed as its alternatives")
+        temp.extra["alternatives"] = [(c, d_time) for c in reading["time"]]
+        temp.evidence += (f"; the time reading {shown} explains this record about as well (D {d_time:.3g} against "
+                          f"{d_cov:.3g}, within the null spread of D, {spread:.2g}): the temperature follows a "
+                          "warm-up itself, so this record cannot tell them apart. The temperature is named because it "
+                          "is measured and predicts the bias at the next power-up; read in time, the bias would "
+                          "settle the same way after every power-on whatever the temperature does, and a record "
+                          "where the temperature moves without a power-up (heating, a cold start) tells them apart")
 
 
 def _show(c):

@@ -59,11 +59,16 @@ ones found, because the effects are confusable:
      shape must also beat the *exact* Kalman-filter likelihood of a random-walk and of a
      Gauss-Markov wander on the same (undetrended) block means, so a wander that happens to
      look like a ramp or a step is called a wander;
-   * with no shape, the best stochastic spectrum is reported if above its threshold.
+   * with no shape, the best stochastic spectrum is reported if above its threshold;
+   * where a temperature is recorded, the temperature coefficient is fitted first and the rules
+     above run on what it leaves (``covariate``: the coefficient by generalised least squares
+     under the residual's stochastic model, significant jointly with any time shape there); the
+     reading without the temperature rides along as its alternative, and the gap weighs the two
+     on D (:mod:`gyrofilter.analysis.gap_readings`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
 :class:`Candidate`, helpers), ``outliers``, ``sinusoid``, ``narrowband``, ``colored`` and
-``slow``; every name is importable from ``gyrofilter.analysis.detectors`` as before.
+``slow`` (+ ``covariate``, the temperature first); every name is importable from ``gyrofilter.analysis.detectors`` as before.
 """
 from .common import (  # noqa: F401
     COLORED_MIN_LAG1,
