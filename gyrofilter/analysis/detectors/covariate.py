@@ -15,7 +15,9 @@ cause to name: it predicts the bias at the next power-up, an exponential in time
 * the **time reading**: the slow effects without the temperature (the shapes ramp, step and
   warm-up, and the stochastic spectra), as on a record without a ``temp`` column.
 
-A covariate reading that needs a stochastic term where the time reading explains the record by
+The covariate is preferred over a warm-up and a slow wander, which a settling temperature
+mimics; against a ramp or a step (a line or a jump is not a settling) the better fit of the block
+means decides as on any shape (the larger ``Delta chi^2 - k ln n``). A covariate reading that needs a stochastic term where the time reading explains the record by
 a shape alone is the more complex reading and is not returned (a ramp under a warming
 temperature reads as the temperature's settling plus a random walk for the difference).
 
@@ -31,7 +33,7 @@ import math
 import numpy as np
 
 from .common import DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, Candidate, block_means, dot
-from .slow import STOCHASTIC_MODELS, TIME_SHAPES, _periodogram_detrended, _spectrum, slow_reading
+from .slow import _N_PARAMS, STOCHASTIC_MODELS, TIME_SHAPES, _periodogram_detrended, _spectrum, slow_reading
 
 
 def detect_slow(x, sample_rate_hz, temp_c=None):
@@ -47,6 +49,11 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     if temp_c is None:
         return time_reading, stats
     covariate = temperature_first(x, sample_rate_hz, temp_c, stats)
+    line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in ("rate_ramp", "bias_step") else None
+    if line_or_jump and stats[line_or_jump] - _N_PARAMS[line_or_jump] * math.log(block_means(x)[0].size) >= \
+            stats.get("temperature", 0.0) - math.log(block_means(x)[0].size):
+        # a line or a jump is not a settling: against them the better fit of the block means decides (BIC)
+        return time_reading, stats
     if covariate is None or (any(c.effect in STOCHASTIC_MODELS for c in covariate[1:])
                              and not any(c.effect in STOCHASTIC_MODELS for c in time_reading)):
         # a covariate reading that needs a wander where a shape in time alone explains the
