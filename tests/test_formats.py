@@ -82,6 +82,17 @@ def test_gap_example_findings_use_the_effect_table():
         assert finding["axis"] in "xyz" and {"metric", "before", "after"} <= set(finding["gain"])
 
 
+def test_gap_alternatives_example_uses_the_effect_table():
+    blocks = re.findall(r"^```json\n(.*?)^```", section(3), re.M | re.S)
+    finding = json.loads(next(b for b in blocks if '"alternatives"' in b))
+    assert finding["alternatives"]
+    for entry in [finding] + finding["alternatives"]:
+        required, optional = EFFECTS[entry["effect"]]
+        assert set(required) <= set(entry["params"]) <= set(required) | set(optional)
+    assert {"effect", "params", "D"} == set(finding["alternatives"][0])
+    assert "`alternatives`" in section(3)
+
+
 def test_allan_example_uses_the_coefficient_keys_of_the_code():
     doc = json.loads(example(4, "json"))
     for axis in doc["axes"].values():

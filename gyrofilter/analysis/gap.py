@@ -18,6 +18,9 @@ function each on a shared run (:class:`_GapRun`); the modules beside this one ho
    temperature are told apart), each with its own significance threshold, and estimates the
    parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
    and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_from_highpassed`).
+   Where the temperature and a shape in time (or a slow wander) explain a slow departure, both
+   readings are simulated and the measured covariate is kept unless the other is clearly better
+   on D (:mod:`gyrofilter.analysis.gap_readings`); one as good is listed as ``alternatives``.
 4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
    better; about 1 when the model explains the measurement) is computed against the baseline's
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a
@@ -44,9 +47,11 @@ import warnings
 import numpy as np
 
 from . import detectors as det
+from .detectors import SLOW_EFFECTS
 from .gap_baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
                            temperature_table)
 from .gap_composite import composite_step, slow_wavelet_variance
+from .gap_readings import alternatives_entry, null_spread, weigh_readings
 from .gap_features import (METRIC, departure_summary, departures, discrepancy, feature_bands, feature_taus, features,
                            still_departs, strongest)
 from .still import not_static
@@ -88,6 +93,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
     if run.n >= MIN_SAMPLES:
         _baseline_spread(run)       # 2.
         _detect(run)                # 3.
+        weigh_readings(run)         # 3., covariate or time reading of a confounded temperature
         _keep_findings(run)         # 4., gain per finding
         composite_step(run)         # 4., composite stochastic part where D stays high
         _write_findings(run)        # 5.
@@ -144,7 +150,11 @@ class _GapRun:
         self.wvs = [None, None, None]  # wavelet variance of each cleaned axis at the composite's scales
         self.kept = []  # (candidate index, axis index, Candidate, D of the axis with it alone)
         self.resolved_lags = [None, None, None]  # composite model: the colored noise's lags (gap_composite)
+        self.readings = {}  # axis index -> the covariate and time readings of a confounded temperature (gap_readings)
+        self.alt_axes = {}  # axis name -> the extended axis spec of the time reading
+        self.excluded = set()  # candidate indices of the reading not chosen
         self._deps_cache = {}
+        self._sims_cache = {}
 
     def axis_spec(self, i, ks):
         """Axis ``i``'s spec extended by the candidates ``ks`` (the composite's white level and
@@ -152,7 +162,8 @@ class _GapRun:
         a = AXES[i]
         cands = [self.candidates[k][1] for k in ks]
         composite = any(c.extra.get("composite") for c in cands)
-        spec = dict(self.composite_axes[a] if composite else self.ext_axes[a])
+        time_reading = any(c.extra.get("reading") == "time" for c in cands)
+        spec = dict(self.composite_axes[a] if composite else self.alt_axes[a] if time_reading else self.ext_axes[a])
         spec["effects"] = [effect_entry(c, preserve="arw" if composite else "std") for c in cands]
         if composite and self.resolved_lags[i]:
             for entry in spec["effects"]:
@@ -172,7 +183,15 @@ class _GapRun:
             sims_k = sim_features(model, self.n, self.sample_rate_hz, self.seeds[:self.n_ext], [i], self.taus,
                                   self.bands, self.say, label)[i]
             self._deps_cache[key] = departures(self.meas_feats[i], sims_k, self.n)
+            self._sims_cache[key] = sims_k
         return self._deps_cache[key]
+
+    def null_spread(self, i, ks, label):
+        """The null spread of D for axis ``i`` extended by the candidates ``ks``
+        (:func:`gyrofilter.analysis.gap_readings.null_spread` of its simulated runs)."""
+        self.axis_deps(i, ks, label)
+        key = (i, tuple(sorted(ks)), tuple(sorted((self.resolved_lags[i] or {}).items())))
+        return null_spread(self._sims_cache[key], self.n)
 
     def axis_discrepancy(self, i, ks, label):
         return discrepancy(self.axis_deps(i, ks, label))
@@ -219,23 +238,35 @@ def _detect(run):
             run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
             continue
         try:
-            cands, xc = _detect_axis(x, run.sample_rate_hz, run.temp)
+            cands, xc, alt = _detect_axis(x, run.sample_rate_hz, run.temp)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
-            cands, xc = [], x
+            cands, xc, alt = [], x, None
+        first = len(run.candidates)
         for c in cands:
             if c.effect == "temperature":
                 c.extra["reference_c"] = float(np.mean(run.temp))
             run.candidates.append((i, c))
+        if alt is not None:  # the time reading of a confounded temperature (gap_readings)
+            alt_cands, xa = alt
+            fast = [c for c in cands if c.effect not in SLOW_EFFECTS]
+            run.readings[i] = {"covariate": [first + j for j, c in enumerate(cands) if c.effect in SLOW_EFFECTS],
+                               "time": alt_cands,
+                               "ext_axis": extended_axis(run.base["axes"][a], fast + alt_cands, xa, run.sample_rate_hz, run.q),
+                               "wv": slow_wavelet_variance(xa, run.sample_rate_hz)}
+            del xa
         run.ext_axes[a] = extended_axis(run.base["axes"][a], cands, xc, run.sample_rate_hz, run.q)
         run.wvs[i] = slow_wavelet_variance(xc, run.sample_rate_hz)
         del x, xc
 
 
 def _detect_axis(x, sample_rate_hz, temp):
-    """Run the detectors of one axis in the decision order; returns (candidates, cleaned x).
-    Each finding's component is subtracted from a private copy of ``x`` and then dropped, so
-    the axis costs two series of memory besides the detectors' own."""
+    """Run the detectors of one axis in the decision order; returns (candidates, cleaned x,
+    alternative): ``alternative`` is None or, where the slow effects have a covariate and a time
+    reading (:func:`gyrofilter.analysis.detectors.detect_slow`), ``(time reading's candidates,
+    x cleaned of those instead)``. Each finding's component is subtracted from a private copy of
+    ``x`` and then dropped, so the axis costs two series of memory besides the detectors' own
+    (three with an alternative reading)."""
     cands = []
     c, mask = det.detect_outliers(x)
     if c is not None:
@@ -255,10 +286,17 @@ def _detect_axis(x, sample_rate_hz, temp):
         cands.append(c)
     slow, _ = det.detect_slow(x, sample_rate_hz, temp)
     cands.extend(slow)
+    alt = slow[0].extra.pop("alternative", None) if slow else None
+    if alt is not None:
+        xa = x.copy()
+        for s in alt:
+            if s.component is not None:
+                xa = _subtract_component(xa, s, True)
+        alt = (alt, xa)
     for s in slow:
         if s.component is not None:
             x, owned = _subtract_component(x, s, owned), True
-    return cands, x
+    return cands, x, alt
 
 
 def _subtract_component(x, cand, owned):
@@ -280,6 +318,8 @@ def _keep_findings(run):
     cands, before, notes = run.candidates, run.before, run.report["notes"]
     run.single = single = {}
     for k, (i, c) in enumerate(cands):
+        if k in run.excluded:
+            continue
         label = f"gain of {c.effect} on {AXES[i]} ({k + 1}/{len(cands)})"
         run.say(label)
         try:
@@ -302,10 +342,17 @@ def _keep_findings(run):
                 without = run.axis_discrepancy(i, others, label)
             except (ValueError, FloatingPointError):
                 with_all = without = float("inf")
-            if with_all < without:
+            why = "" if with_all < without else None
+            if why is None and c.effect == "temperature" and np.isfinite(with_all):
+                # the measured covariate is kept where D cannot tell (gap_readings)
+                spread = det.CONFOUNDED_SPREADS * max(run.null_spread(i, others + [k], label), run.null_spread(i, others, label))
+                if with_all <= without + spread:
+                    why = (f", within the null spread of D ({spread:.2g}): the measured covariate is kept where D "
+                           "cannot tell")
+            if why is not None:
                 run.kept.append((k, i, c, after))
                 notes.append(f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "
-                             f"axis's other findings D = {with_all:.3g}, without it {without:.3g}")
+                             f"axis's other findings D = {with_all:.3g}, without it {without:.3g}{why}")
                 continue
         notes.append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
     run.after = list(before)
@@ -336,6 +383,8 @@ def _write_findings(run):
             "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": after},
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
         })
+        if c.extra.get("alternatives"):
+            report["findings"][-1]["alternatives"] = alternatives_entry(c)
     for i in range(3):
         if run.after[i] > det.OUTSIDE_NULL_D:
             deps_e = run.axis_deps(i, run.kept_on(i), f"extended model on {AXES[i]}") if run.kept_on(i) else run.deps[i]

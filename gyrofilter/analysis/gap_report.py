@@ -8,7 +8,8 @@
 * ``temperature_<axis>.png`` -- block-mean rate minus bias against block-mean temperature (when
   the recording has a ``temp`` column);
 * ``time_<axis>.png`` -- block means of the rate in time with the found deterministic shapes
-  (step, warm-up, ramp, temperature) when the axis has one.
+  (step, warm-up, ramp, temperature) when the axis has one besides the temperature, or a
+  finding with ``alternatives`` (their shapes dashed: how the other reading would look).
 
 Each finding is listed with its parameters, its evidence sentence and its gain.
 """
@@ -97,26 +98,50 @@ def plot_temperature(x, temp, axis, coef, path):
             f"axis {axis}: rate against temperature")
 
 
-def plot_time(x, sample_rate_hz, axis, findings, path):
-    plt = pyplot()
-    y, length = _blocks(x)
-    t = (np.arange(y.size) + 0.5) * length / sample_rate_hz
-    fig, ax = plt.subplots(figsize=(7.0, 4.0))
-    ax.plot(t, y, "k-", lw=0.8, label=f"block means ({length / sample_rate_hz:.3g} s)")
+_SHAPES = ("bias_step", "warmup", "rate_ramp", "temperature")
+
+
+def _shape(findings, t, temp_blocks, ax=None):
+    """The deterministic shapes of ``findings`` on the block times ``t`` (deg/s; the
+    temperature's on the block-mean temperature ``temp_blocks``); a step's time marked on ``ax``."""
     shape = np.zeros_like(t)
     for f in findings:
         p = f["params"]
         if f["effect"] == "bias_step":
             shape += p["size_dps"] * (t >= p["time_s"])
-            ax.axvline(p["time_s"], color="r", ls=":", lw=1)
+            if ax is not None:
+                ax.axvline(p["time_s"], color="r", ls=":", lw=1)
         elif f["effect"] == "warmup":
             shape += p["amplitude_dps"] * np.exp(-t / p["tau_s"])
         elif f["effect"] == "rate_ramp":
             shape += p["r_dps_per_s"] * t
-    if np.ptp(shape) > 0:
-        shape += np.mean(y) - np.mean(shape)
-        ax.plot(t, shape, "r-", lw=1.5, label="found: " + ", ".join(f["effect"] for f in findings))
+        elif f["effect"] == "temperature" and temp_blocks is not None:
+            shape += p["coefficient_dps_per_c"] * temp_blocks
+    return shape
+
+
+def plot_time(x, sample_rate_hz, axis, findings, path, temp=None, alternatives=()):
+    """Block means of the rate in time with the found deterministic shapes (solid) and those of
+    an alternative reading (``alternatives``: entries of a finding's ``alternatives``, dashed)."""
+    plt = pyplot()
+    y, length = _blocks(x)
+    t = (np.arange(y.size) + 0.5) * length / sample_rate_hz
+    tb = _blocks(temp)[0][:y.size] if temp is not None else None
+    fig, ax = plt.subplots(figsize=(7.0, 4.0))
+    ax.plot(t, y, "k-", lw=0.8, label=f"block means ({length / sample_rate_hz:.3g} s)")
+    for group, style, words in ((findings, "r-", "found: "), (alternatives, "b--", "alternative reading: ")):
+        shape = _shape(group, t, tb, ax if style == "r-" else None)
+        if np.ptp(shape) > 0:
+            shape += np.mean(y) - np.mean(shape)
+            ax.plot(t, shape, style, lw=1.5, label=words + ", ".join(f["effect"] for f in group if f["effect"] in _SHAPES))
     _finish(plt, fig, ax, path, "time (s)", "rate (deg/s)", f"axis {axis}: rate in time")
+
+
+def alternatives_text(alternatives):
+    """``effect (k = v, ...) + ...: D d`` of a finding's ``alternatives`` (one reading: the entries share D)."""
+    parts = [f"{e['effect']} (" + ", ".join(f"{k} = {_fmt(v)}" for k, v in e["params"].items()) + ")"
+             for e in alternatives]
+    return " + ".join(parts) + f": D {alternatives[0]['D']:.3g}"
 
 
 def _fmt(v):
@@ -155,6 +180,10 @@ def write_report(report, rec, out_dir, *, seed=0):
         lines += [f"- **{f['effect']}** on **{f['axis']}**: {params}.",
                   f"  Evidence: {f['evidence']}.",
                   f"  Gain: D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}."]
+        if f.get("alternatives"):
+            lines.append("  **Indistinguishable in this record** from the alternative reading "
+                         + alternatives_text(f["alternatives"]) + " (D of the axis with it instead; the figure "
+                         "of the rate in time shows both readings).")
     for note in report.get("notes", []):
         lines.append(f"- note: {note}")
     lines += ["", "## Figures", ""]
@@ -171,9 +200,11 @@ def write_report(report, rec, out_dir, *, seed=0):
             coef = next((f["params"]["coefficient_dps_per_c"] for f in fa if f["effect"] == "temperature"), None)
             plot_temperature(g[:, i], temp, a, coef, os.path.join(out_dir, _figure("temperature", a)))
             lines += [f"![rate vs temperature {a}]({_figure('temperature', a)})", ""]
-        slow = [f for f in fa if f["effect"] in ("bias_step", "warmup", "rate_ramp")]
-        if slow:
-            plot_time(g[:, i], sample_rate_hz, a, slow, os.path.join(out_dir, _figure("time", a)))
+        slow = [f for f in fa if f["effect"] in _SHAPES]
+        alternatives = [e for f in fa for e in f.get("alternatives", [])]
+        if any(f["effect"] != "temperature" for f in slow) or alternatives:
+            plot_time(g[:, i], sample_rate_hz, a, slow, os.path.join(out_dir, _figure("time", a)), temp=temp,
+                      alternatives=alternatives)
             lines += [f"![rate in time {a}]({_figure('time', a)})", ""]
     path = os.path.join(out_dir, REPORT_NAME)
     with open(path, "w", encoding="utf-8") as fh:

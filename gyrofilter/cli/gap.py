@@ -90,6 +90,9 @@ def run(args):
         for f in found:
             params = ", ".join(f"{k}={v:.4g}" for k, v in f["params"].items())
             print(f"    {f['effect']} ({params}); alone D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}")
+            if f.get("alternatives"):
+                print(f"      indistinguishable in this record from {gap_report.alternatives_text(f['alternatives'])} "
+                      f"(within the null spread of D); {f['effect']} is named as the measured cause (see its evidence)")
     for note in report.get("notes", []):
         print(f"  note: {note}")
     if d:

@@ -59,17 +59,23 @@ ones found, because the effects are confusable:
      shape must also beat the *exact* Kalman-filter likelihood of a random-walk and of a
      Gauss-Markov wander on the same (undetrended) block means, so a wander that happens to
      look like a ramp or a step is called a wander;
-   * with no shape, the best stochastic spectrum is reported if above its threshold.
+   * with no shape, the best stochastic spectrum is reported if above its threshold;
+   * where a temperature is recorded, the temperature coefficient is fitted first and the rules
+     above run on what it leaves (``covariate``: the coefficient by generalised least squares
+     under the residual's stochastic model, significant jointly with any time shape there); the
+     reading without the temperature rides along as its alternative, and the gap weighs the two
+     on D (:mod:`gyrofilter.analysis.gap_readings`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
 :class:`Candidate`, helpers), ``outliers``, ``sinusoid``, ``narrowband``, ``colored`` and
-``slow``; every name is importable from ``gyrofilter.analysis.detectors`` as before.
+``slow`` (+ ``covariate``, the temperature first); every name is importable from ``gyrofilter.analysis.detectors`` as before.
 """
 from .common import (  # noqa: F401
     COLORED_MIN_LAG1,
     COLORED_MIN_LAG2_GAP,
     COLORED_Z,
     COMPOSITE_MIN_GAIN,
+    CONFOUNDED_SPREADS,
     Candidate,
     DETERMINISTIC_THRESHOLD,
     EXACT_GM_MARGIN,
@@ -123,8 +129,15 @@ from .colored import (  # noqa: F401
 )
 from .slow import (  # noqa: F401
     PERIODOGRAM,
+    SLOW_EFFECTS,
     STOCHASTIC_MODELS,
-    detect_slow,
+    TIME_SHAPES,
     exact_stochastic_gain,
+    slow_reading,
     stochastic_fits,
+)
+from .covariate import (  # noqa: F401
+    detect_slow,
+    gls,
+    temperature_first,
 )

@@ -51,6 +51,11 @@ NARROWBAND_THRESHOLD = 4.0
 #: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
 #: composite stochastic part, and the report says which feature still departs
 OUTSIDE_NULL_D = 2.0
+#: two readings of a slow departure (the temperature's and one in time) explain a record about
+#: equally when their D differ by at most this many null spreads (the sd of D over a model's own
+#: simulated runs, leave one out; gap_readings): the band D keeps in 95 % of records a model
+#: explains exactly. Measured on the example model (docs/gap.md, "Confounded causes")
+CONFOUNDED_SPREADS = 2.0
 #: the factor a composite stochastic part must lower D by
 COMPOSITE_MIN_GAIN = 0.8
 #: a finding's evidence names the feature furthest outside the baseline simulations' spread when

@@ -322,26 +322,37 @@ def exact_stochastic_gain(y, sto, delta_s):
     return out
 
 
-def detect_slow(x, sample_rate_hz, temp_c=None):
-    """Slow bias effects of one axis (see the module docstring for the decision rules).
+#: the deterministic shapes in time (the temperature shape is tied to a measured covariate:
+#: :mod:`gyrofilter.analysis.detectors.covariate`)
+TIME_SHAPES = ("rate_ramp", "bias_step", "warmup")
+#: every effect the slow detector may name
+SLOW_EFFECTS = STOCHASTIC_MODELS + TIME_SHAPES + ("temperature",)
 
-    Returns ``(candidates, stats)``: a list of :class:`Candidate` and the raw statistics
-    (for the simulated-spread comparison): ``{name: value}``.
+
+def slow_reading(x, sample_rate_hz, shapes=TIME_SHAPES, temp_c=None, stats=None):
+    """One reading of the slow bias effects of one axis ``x`` (deg/s), with the deterministic
+    shapes ``shapes`` (names of :data:`_N_PARAMS`; ``temperature`` needs ``temp_c``) and the
+    stochastic spectra, by the decision rules of :mod:`gyrofilter.analysis.detectors`.
+
+    Returns ``(candidates, noise)``: at most one shape and one stochastic candidate, and the
+    stochastic model of the series left by the shape as ``(model, theta, s0, delta_s)`` of
+    the block means (``model`` None: white noise of variance ``s0``); ``stats`` (a dict) gets
+    the raw statistics.
     """
+    stats = {} if stats is None else stats
     y, length = block_means(x)
     n = y.size
-    stats = {}
     if n < 16:
-        return [], stats
+        return [], None
     delta_s = length / sample_rate_hz
     temp_blocks = None
-    if temp_c is not None:
+    if temp_c is not None and "temperature" in shapes:
         tb, _ = block_means(np.asarray(temp_c, dtype=float))
         if tb.size == n and np.ptp(tb) > 0:
             temp_blocks = tb
     penalty = math.log(n)
     sto, s0 = stochastic_fits(y, delta_s)
-    det = _deterministic_shapes(y, delta_s, temp_blocks)
+    det = {k: v for k, v in _deterministic_shapes(y, delta_s, temp_blocks).items() if k in shapes}
     for name, (d, *_rest) in det.items():
         stats[name] = d / s0
     for name, (d2, *_rest) in sto.items():
@@ -366,6 +377,7 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     _, sto_name = best_of_sto(sto)
     det_sig = det_name is not None and det[det_name][0] / s0 > DETERMINISTIC_THRESHOLD
     sto_sig = sto_name is not None and sto[sto_name][0] > STOCHASTIC_THRESHOLD
+    noise = (sto_name, sto[sto_name][1], sto[sto_name][2], delta_s) if sto_sig else (None, (), s0, delta_s)
 
     findings = []
     if det_sig:
@@ -385,6 +397,7 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
             # the stochastic model is re-fitted without the shape when the shape is dropped
             if keep_det:
                 findings.append(_rw_or_gm(sto_r_name, sto_r, resid, delta_s))
+                noise = (sto_r_name, theta, s0_model, delta_s)
             else:
                 findings.append(_rw_or_gm(sto_name, sto, y, delta_s))
         if keep_det and not findings:
@@ -416,12 +429,14 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
                     findings.append(_rw_or_gm(sto_name, sto, y, delta_s))
                 else:
                     findings.append(_stochastic_candidate(name, exact[name], group_delta, m))
+            else:
+                noise = (None, (), s0, delta_s)
         if keep_det:
             findings.insert(0, _deterministic_candidate(det_name, d / s0, params, x, sample_rate_hz,
                                                        length, temp_c))
     elif sto_sig:
         findings.append(_rw_or_gm(sto_name, sto, y, delta_s))
-    return findings, stats
+    return findings, noise
 
 
 def _rw_or_gm(name, table, y, delta_s):
