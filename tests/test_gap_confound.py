@@ -173,3 +173,21 @@ def test_gls_matches_the_dense_formula(model, theta):
     # the Toeplitz column comes from the spectrum on a grid of 2048 frequencies: exact to ~1e-4 for phi = 0.9
     assert beta == pytest.approx(want, rel=2e-3)
     assert cov[1, 1] == pytest.approx(want_cov[1, 1], rel=2e-3)
+
+
+def test_a_hidden_effect_listed_as_the_indistinguishable_alternative_counts_as_named():
+    """The batteries score a hidden warm-up that the report names as the temperature's
+    indistinguishable alternative as named (with its own parameters), and the temperature finding
+    that carries it is not a false one; a finding elsewhere still is."""
+    from gyrofilter.sim import hidden_effects as he
+
+    case = {"effect": "warmup", "axis": "y", "duration_s": 600.0,
+            "params": {"amplitude_dps": 0.2, "tau_s": 300.0}}
+    alt = {"effect": "warmup", "params": {"amplitude_dps": 0.21, "tau_s": 310.0}, "D": 1.0}
+    carrier = {"effect": "temperature", "axis": "y", "params": {"coefficient_dps_per_c": 0.1}, "alternatives": [alt]}
+    elsewhere = {"effect": "sinusoid", "axis": "x", "params": {}}
+    named, ok, others = he.check(case, {"findings": [carrier, elsewhere]})
+    assert named and ok and others == [elsewhere]
+    far = dict(alt, params={"amplitude_dps": 2.0, "tau_s": 310.0})
+    assert he.check(case, {"findings": [dict(carrier, alternatives=[far])]})[:2] == (True, False)
+    assert he.check(case, {"findings": [dict(carrier, alternatives=[])]}) == (False, False, [dict(carrier, alternatives=[])])

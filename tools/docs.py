@@ -526,6 +526,15 @@ def gap_battery_clean_30min():
     return _battery("--cases", "20", "--duration", "1800", "--effects", "none", "--sims", "12", "--seed", "7000")
 
 
+@block("gap-confound", "docs/gap.md", "tools/gap_confound.py --seeds 1,2 --long-seeds 1", slow=True)
+def gap_confound():
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "confound.md")
+        tool("gap_confound.py", "--seeds", "1,2", "--long-seeds", "1", "--out", out)
+        with open(out, encoding="utf-8") as fh:
+            return fh.read().rstrip("\n")
+
+
 @block("bench-gap", "docs/gap.md", "tools/bench_gap.py", slow=True)
 def bench_gap():
     return fence(tool("bench_gap.py"))

@@ -180,14 +180,19 @@ def _value(params, name):
 def check(case, report):
     """Score a gap report against the case: returns ``(named, in_tolerance, false_findings)``.
 
-    named: the hidden effect is among the findings on the right axis; in_tolerance: and all
-    its listed parameters are within :data:`TOLERANCES` (an optional one compared at its
-    default where absent: ``colored_noise``'s ``lag2`` is lag1² then); false_findings: findings
-    other than the hidden one.
+    named: the hidden effect is among the findings on the right axis, or it is listed in the
+    ``alternatives`` of a finding there (the report says the record cannot tell the two readings
+    apart, e.g. a warm-up under a temperature that settles alike: docs/gap.md, "Confounded
+    causes"; that finding is then not a false one); in_tolerance: and all its listed parameters
+    are within :data:`TOLERANCES` (an optional one compared at its default where absent:
+    ``colored_noise``'s ``lag2`` is lag1² then); false_findings: findings other than the hidden one.
     """
     findings = report["findings"]
-    hit = [f for f in findings if f["effect"] == case["effect"] and f["axis"] == case["axis"]]
-    others = [f for f in findings if not (f["effect"] == case["effect"] and f["axis"] == case["axis"])]
+    mine = [f for f in findings if f["axis"] == case["axis"]]
+    hit = [f for f in mine if f["effect"] == case["effect"]]
+    hit += [alt for f in mine if not hit for alt in f.get("alternatives", []) if alt["effect"] == case["effect"]]
+    carrier = [f for f in mine if any(alt in hit for alt in f.get("alternatives", []))]
+    others = [f for f in findings if not (f["effect"] == case["effect"] and f["axis"] == case["axis"]) and f not in carrier]
     if case["effect"] == "none" or not hit:
         return False, False, others
     params = hit[0]["params"]
