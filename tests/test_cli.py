@@ -89,3 +89,15 @@ def test_help_does_not_import_device_libraries():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert "IMPORTED []" in out.stdout, out.stdout + out.stderr
     assert "serial:/dev/ttyUSB0" in out.stdout  # the SOURCE syntax is in --help
+
+
+def test_version_prints_the_package_version(capsys):
+    """`gyrofilter --version` (a new user's first question about a bug report): the version of
+    gyrofilter.__version__, the one home the package metadata also takes it from."""
+    import gyrofilter
+    from gyrofilter.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out == f"gyrofilter {gyrofilter.__version__}\n"

@@ -1,4 +1,5 @@
 import json
+import re
 import subprocess
 import sys
 
@@ -357,7 +358,9 @@ def test_realtime_stdout_is_a_recording(tmp_path, capsys):
 
 
 def test_realtime_into_head_still_writes_the_whole_out_file(tmp_path):
-    """`replay --realtime --out F | head`: the reader goes away; F is complete, the exit clean."""
+    """`replay --realtime --out F | head`: the reader goes away; F is complete, the exit clean, and
+    stderr says that the rest of the rows were not printed (the summary counts every row filtered:
+    a new user read it as every row delivered)."""
     src = _paced_source(tmp_path, 4000, 1000.0)  # 4 s paced
     out = tmp_path / "out.csv"
     proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "replay", str(src), "--realtime", "--calibration-s", "0.2", "--out", str(out)],
@@ -369,6 +372,8 @@ def test_realtime_into_head_still_writes_the_whole_out_file(tmp_path):
     assert proc.wait(timeout=60) == 0, err
     assert "Traceback" not in err and "BrokenPipe" not in err
     assert len(read_recording(out)) == (4000 - 200) // 5
+    closed = re.search(r"gyrofilter: warning: stdout was closed by its reader after (\d+) lines: the rest of the rows", err)
+    assert closed and 0 < int(closed.group(1)) < (4000 - 200) // 5, err  # rows, after the header lines
 
 
 @pytest.mark.parametrize("rows, args, message", [

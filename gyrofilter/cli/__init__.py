@@ -18,6 +18,7 @@ import signal
 import sys
 import threading
 
+from .. import __version__
 from ..errors import GyroFilterError, one_line
 
 # command name -> (module, one-line summary)
@@ -85,6 +86,7 @@ def build_parser(command=None):
         prog="gyrofilter",
         description="Real-time filtering and error analysis for low-cost MEMS gyroscopes (MPU6050).",
     )
+    parser.add_argument("--version", action="version", version=f"gyrofilter {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_OneLineParser)
     parser.commands = {}
     for name, (module_name, summary) in COMMANDS.items():

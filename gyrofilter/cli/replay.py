@@ -85,6 +85,9 @@ def run(args):
     warn_about_gaps(head, "the filter treats the samples as uniform", console.say_warning)
     with contextlib.redirect_stdout(sys.stderr) if args.realtime else contextlib.nullcontext():  # stdout has the rows
         console.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
+    if args.realtime and not replay.stdout_open:
+        console.say_warning(f"stdout was closed by its reader after {replay.lines_printed} lines: the rest of the "
+                            "rows were filtered (the summary counts them) but not printed")
     if saved:
         console.say(f"saved the calibration to {args.save_calibration}")
     if args.out:
@@ -132,6 +135,7 @@ class _Replay:
         self._t_tail = np.empty(0)
         self._wall_start = None
         self.stdout_open = True  # False once the reader of --realtime's rows went away (| head)
+        self.lines_printed = 0
 
     def feed(self, gyro, t_s, temps, realtime):
         filt = self.filt
@@ -188,6 +192,7 @@ class _Replay:
             return
         try:
             print(text, flush=True)
+            self.lines_printed += 1
         except BrokenPipeError:
             self.stdout_open = False
             devnull = os.open(os.devnull, os.O_WRONLY)  # what is left in stdout's buffer goes nowhere, silently
