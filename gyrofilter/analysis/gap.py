@@ -219,7 +219,8 @@ def _detect(run):
             run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
             continue
         try:
-            cands, xc = _detect_axis(x, run.sample_rate_hz, run.temp)
+            cands, xc = _detect_axis(x, run.sample_rate_hz, run.temp, tails_z=float(run.deps[i]["tails"][0][0]),
+                                     notes=run.report["notes"], axis=a)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
             cands, xc = [], x
@@ -232,12 +233,20 @@ def _detect(run):
         del x, xc
 
 
-def _detect_axis(x, sample_rate_hz, temp):
+def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis=""):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x).
     Each finding's component is subtracted from a private copy of ``x`` and then dropped, so
-    the axis costs two series of memory besides the detectors' own."""
+    the axis costs two series of memory besides the detectors' own. ``tails_z``: the tail
+    statistic's departure from the baseline simulations; ``notes``: where a note on tails that
+    spikes explain as well goes."""
     cands = []
     c, mask = det.detect_outliers(x)
+    tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
+    if note and notes is not None:
+        notes.append(f"axis {axis}: {note}" + ("; they are analysed as outliers" if c is not None else ""))
+    if tails is not None:  # the spikes are the noise's tails: nothing is cleaned
+        cands.append(tails)
+        c, mask = None, mask[:0]
     if c is not None:
         cands.append(c)
         x = det.clean_spikes(x, mask)  # a copy
