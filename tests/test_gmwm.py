@@ -88,6 +88,23 @@ def test_beats_the_allan_nnls_fit_where_a_gauss_markov_bump_is_present():
     assert d_nnls > 5 * d_gmwm, (d_gmwm, d_nnls)
 
 
+def test_wvic_optimism_is_twice_the_parameters_when_the_weights_are_exact():
+    """With V_w = I (scales independent, Var as weighted) the optimism 2 tr(P V_w) is 2 p: the
+    WVIC reduces to Q + 2 p; the bootstrap's V_w of the overlapping scales is not I."""
+    x = series([{"effect": "gauss_markov", "sigma_dps": 0.01, "tau_s": 10.0}], 0.01, 1800.0, seed=2)
+    wv = gmwm.haar_wv(x, FS)
+    fit = gmwm.fit_model(wv, (), 1, starts=2)
+    assert gmwm.wvic_optimism(fit, np.eye(wv.tau_s.size)) == pytest.approx(2 * fit.n_params)
+    cov = gmwm.bootstrap_cov(fit, wv, runs=20, seed=1)
+    assert cov.shape == (wv.tau_s.size,) * 2 and np.all(np.diag(cov) > 0)
+    corr = cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov)))
+    assert corr[0, 1] > 0.2  # neighbouring dyadic scales of the overlapping estimator are correlated
+    with pytest.raises(ValueError, match="criterion"):
+        gmwm.select_model(wv, criterion="aic")
+    best, fits = gmwm.select_model(wv, starts=2, max_gm=1, terms_allowed=(), criterion="q2p")
+    assert all(f.criterion == pytest.approx(f.objective + 2 * f.n_params) for f in fits)
+
+
 def test_simulated_wv_of_a_model_is_its_closed_form():
     model = {"sample_rate_hz": FS, "axes": {"y": {"arw_dps_per_sqrt_hz": 0.01,
                                                   "effects": [{"effect": "gauss_markov", "sigma_dps": 0.02, "tau_s": 2.0}]}}}

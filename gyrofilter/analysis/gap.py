@@ -229,7 +229,7 @@ def _detect(run):
                 c.extra["reference_c"] = float(np.mean(run.temp))
             run.candidates.append((i, c))
         run.ext_axes[a] = extended_axis(run.base["axes"][a], cands, xc, run.sample_rate_hz, run.q)
-        run.wvs[i] = slow_wavelet_variance(xc, run.sample_rate_hz)
+        run.wvs[i] = slow_wavelet_variance(xc, run.sample_rate_hz, cands)
         del x, xc
 
 
