@@ -94,12 +94,13 @@ class Candidate:
 # helpers
 
 
-def robust_sigma(x):
+def robust_sigma(x, max_count=100_000):
     """1.4826 MAD (a Gaussian's sigma), falling back to the std when the MAD is 0 (coarse
-    quantization)."""
+    quantization); of an evenly strided subsample of about ``max_count`` values when the series is
+    more than twice as long."""
     x = np.asarray(x, dtype=float)
-    if x.size > 200_000:  # a strided subsample is plenty for a scale estimate
-        x = x[:: int(math.ceil(x.size / 100_000))]
+    if x.size > 2 * max_count:  # a strided subsample is plenty for a scale estimate
+        x = x[:: int(math.ceil(x.size / max_count))]
     med = np.median(x)
     mad = MAD_TO_SIGMA * np.median(np.abs(x - med))
     if mad > 0:

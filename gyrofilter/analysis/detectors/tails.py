@@ -11,11 +11,11 @@ filters, so ``u`` is standard normal in the tails whatever the spectrum, and its
 nearly independent.
 
 **Tail statistic** (:func:`tails_statistic`, a feature of the gap analysis, so it is also
-computed on every baseline simulation): the winsorized kurtosis ``K_w = mean(min(|u|, k)^4) /
-E[min(|Z|, k)^4]``, k = :data:`~gyrofilter.analysis.detectors.common.TAILS_WINSOR_SD` (Z standard
-normal), as ``log K_w``: 0 for a Gaussian, with sampling sd about ``3.2 / sqrt(N)``; a single
-spike moves it by at most ``k^4 / (3 N)``, so it measures the tails of the whole record, not its
-largest samples.
+computed on every baseline simulation): the winsorized kurtosis ``K_w = mean(v^2) / mean(v)^2``,
+``v = min(|u|, k)^2``, k = :data:`~gyrofilter.analysis.detectors.common.TAILS_WINSOR_SD`, over its
+value for a standard normal, as a log: 0 for a Gaussian whatever its scale, with sampling sd
+about ``1.6 / sqrt(N)`` (:func:`tails_sd`); a single spike moves it by at most about
+``k^4 / (3 N)``, so it measures the tails of the whole record, not its largest samples.
 
 **Models of the tails** (:func:`tail_fits`), fitted by maximum likelihood to the histogram of
 ``|u|`` (bins of 0.25 to 4, then 40 log-spaced to the largest and one beyond it; exact bin
@@ -70,14 +70,16 @@ _GH_W = _GH_W / _GH_W.sum()
 
 
 def _winsor_moments(k):
-    """``(E[min(|Z|, k)^4], Var[min(|Z|, k)^4])`` for Z standard normal, in closed form:
-    ``E[Z^2n; |Z| < k] = (2n-1)!! (2 Phi(k) - 1) - 2 phi(k) P_n(k)`` (integration by parts), with
-    P_2 = k^3 + 3k and P_4 = k^7 + 7k^5 + 35k^3 + 105k, plus ``k^2n P(|Z| > k)``."""
+    """``E[v^j]``, j = 1..4, of ``v = min(|Z|, k)^2`` for Z standard normal, in closed form:
+    ``E[Z^2n; |Z| < k] = (2n-1) E[Z^(2n-2); |Z| < k] - 2 k^(2n-1) phi(k)`` (integration by
+    parts) from ``2 Phi(k) - 1``, plus ``k^2n P(|Z| > k)``."""
     nd = NormalDist()
     inner, dens, tail = 2.0 * nd.cdf(k) - 1.0, nd.pdf(k), 2.0 * nd.cdf(-k)
-    m4 = 3.0 * inner - 2.0 * dens * (k**3 + 3.0 * k) + tail * k**4
-    m8 = 105.0 * inner - 2.0 * dens * (k**7 + 7.0 * k**5 + 35.0 * k**3 + 105.0 * k) + tail * k**8
-    return m4, m8 - m4 * m4
+    out = []
+    for n in range(1, 5):
+        inner = (2 * n - 1) * inner - 2.0 * k ** (2 * n - 1) * dens
+        out.append(inner + tail * k ** (2 * n))
+    return tuple(out)
 
 
 _WINSOR = _winsor_moments(TAILS_WINSOR_SD)
@@ -99,7 +101,7 @@ def tail_residual(x, sample_rate_hz):
     a1, a2 = (r1 * (1.0 - r2) / den, (r2 - r1 * r1) / den) if den > 1e-9 else (0.0, 0.0)
     u = e[2:] - a1 * e[1:-1]
     u -= a2 * e[:-2]
-    s = robust_sigma(u)
+    s = robust_sigma(u, max_count=20_000)
     if not s > 0:
         return np.zeros(0)
     u /= s
@@ -118,22 +120,26 @@ def _lattice_step(x, count=100_000):
 
 
 def tails_statistic(x, sample_rate_hz, u=None):
-    """``log K_w``, the winsorized kurtosis of the residual (module docstring); 0 when it
-    cannot be computed."""
+    """``log(K_w / K_Z)``: the winsorized kurtosis ``K_w = mean(v^2) / mean(v)^2`` of the residual,
+    ``v = min(|u|, k)^2``, over its Gaussian value (module docstring); 0 when it cannot be
+    computed. Self-normalized, so the robust scale only sets the winsorizing level."""
     u = tail_residual(x, sample_rate_hz) if u is None else u
     if u.size == 0:
         return 0.0
-    m4, _ = _WINSOR
+    m1, m2, _, _ = _WINSOR
     v = np.minimum(np.abs(u), TAILS_WINSOR_SD)
     v *= v
-    return math.log(max(float(dot(v, v)) / v.size / m4, 1e-12))
+    mean_v = float(np.mean(v))
+    return math.log(max(float(dot(v, v)) / v.size / mean_v**2, 1e-12) / (m2 / m1**2))
 
 
 def tails_sd(n):
-    """Sampling sd of :func:`tails_statistic` for a Gaussian white noise of ``n`` samples:
-    ``sqrt(Var[min(|Z|, k)^4] / n) / E[min(|Z|, k)^4]`` (delta method)."""
-    m4, var = _WINSOR
-    return math.sqrt(var / max(n, 1)) / m4
+    """Sampling sd of :func:`tails_statistic` for a Gaussian white noise of ``n`` samples, by the
+    delta method on (mean v^2, mean v): ``Var = [Var v^2 / m2^2 + 4 Var v / m1^2 - 4 Cov(v^2, v) /
+    (m1 m2)] / n`` with ``m_j = E v^j`` (:func:`_winsor_moments`)."""
+    m1, m2, m3, m4 = _WINSOR
+    var = (m4 - m2 * m2) / m2**2 + 4.0 * (m2 - m1 * m1) / m1**2 - 4.0 * (m3 - m2 * m1) / (m1 * m2)
+    return math.sqrt(var / max(n, 1))
 
 
 # ---------------------------------------------------------------------------------------------
