@@ -25,7 +25,8 @@ OUTLIER_MIN_COUNT = 3
 #: real MPU6050 and ADIS16405 static records (15 axes) 11.3, so 30 sits 2.7-4 times above
 TAILS_WINSOR_SD = 6.0
 #: a rate quantized in steps above this many noise sd has the quantizer's distribution, not the
-#: noise's: its tails are not judged (the MPU6050 at 131 LSB per deg/s: 0.06-0.11)
+#: noise's: its tails are not judged without the baseline's simulations, which carry the same
+#: quantizer (the MPU6050 at 131 LSB per deg/s: 0.06-0.11)
 TAILS_MAX_STEP_SD = 0.5
 HEAVY_TAILS_Z = 4.0
 HEAVY_TAILS_THRESHOLD = 30.0

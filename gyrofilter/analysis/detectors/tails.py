@@ -20,8 +20,9 @@ about ``1.6 / sqrt(N)`` (:func:`tails_sd`); a single spike moves it by at most a
 ``k^4 / (3 N)``, so it measures the tails of the whole record, not its largest samples.
 
 **Models of the tails** (:func:`tail_fits`), fitted by maximum likelihood to the histogram of
-``|u|`` (bins of 0.25 to 4, then 40 log-spaced to the largest and one beyond it; exact bin
-probabilities, so the cost does not grow with N):
+``|u|`` (bins of 0.25, or of the quantization step where that is coarser, to 4 (8 steps), then 40
+log-spaced to the largest and one beyond it; exact bin probabilities, so the cost does not grow
+with N):
 
 * Gaussian: ``|u| ~ |N(0, sigma^2)|``;
 * heavy tails, the simulator's ``heavy_tails`` (a Gaussian scale mixture; Tukey 1960):
@@ -43,6 +44,10 @@ probabilities, so the cost does not grow with N):
    Kass & Raftery 1995) when the outlier detector has found spikes beyond its gross-error
    threshold: spikes far outside the noise are direct evidence of gross errors, replaced by a
    heavy-tailed noise only on strong evidence.
+
+Without the baseline's simulations (``tails_z`` None) a rate quantized in steps above
+:data:`~gyrofilter.analysis.detectors.common.TAILS_MAX_STEP_SD` noise sd is not judged (the
+quantizer alone moves the statistic; the simulations carry the same quantizer).
 
 A heavy-tailed noise puts a continuous excess at every level of the distribution, from 2-3
 standard deviations outward, with wide-component samples of every size; isolated gross errors
@@ -195,17 +200,20 @@ def _best(objective, starts):
     return best
 
 
-def tail_fits(u):
+def tail_fits(u, step=0.0):
     """Maximum-likelihood fits of the three models (module docstring) to the histogram of
-    ``|u|``. Returns a dict: ``log_l`` per model (``gauss``, ``mixture``, ``spikes``), the mixture's
-    ``fraction``, ``scale_ratio`` and core ``sigma`` (units of the robust sd), the spikes'
-    ``rate`` and ``magnitude`` (same units)."""
+    ``|u|``, in bins no narrower than the quantization ``step`` (units of ``u``). Returns a dict:
+    ``log_l`` per model (``gauss``, ``mixture``, ``spikes``), the mixture's ``fraction``,
+    ``scale_ratio`` and core ``sigma`` (units of the robust sd), the spikes' ``rate`` and
+    ``magnitude`` (same units)."""
     from scipy.optimize import minimize_scalar
 
     a = np.abs(u)
-    top = max(4.5, float(a.max()) * 1.001)
-    edges = np.r_[np.arange(0.0, 4.0, 0.25), np.geomspace(4.0, top, 40), np.inf]  # the last bin is empty, so the
-    # models' probabilities sum to 1 over the bins (no mass beyond the largest sample is lost)
+    width = max(0.25, float(step))
+    linear = max(4.0, 8.0 * width)
+    top = max(1.125 * linear, float(a.max()) * 1.001)
+    edges = np.r_[np.arange(0.0, linear - 1e-9, width), np.geomspace(linear, top, 40), np.inf]  # the last bin is
+    # empty, so the models' probabilities sum to 1 over the bins (no mass beyond the largest sample is lost)
     counts, _ = np.histogram(a, edges)
     gauss = minimize_scalar(lambda t: -_log_l(counts, _fold(edges, math.exp(t))), bounds=(-2.0, 2.0), method="bounded")
 
@@ -244,12 +252,12 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
     z = stat / tails_sd(u.size) if tails_z is None else float(tails_z)
     if z < HEAVY_TAILS_Z:
         return None, None
-    step = _lattice_step(x)
-    if step > TAILS_MAX_STEP_SD * robust_sigma(x - moving_mean(x, colored_window(x.size, sample_rate_hz))):
+    step = _lattice_step(x) / robust_sigma(x - moving_mean(x, colored_window(x.size, sample_rate_hz)), max_count=20_000)
+    if tails_z is None and step > TAILS_MAX_STEP_SD:  # the baseline's simulations would carry the quantizer too
         return None, (f"the noise's distribution departs from a Gaussian (winsorized kurtosis {math.exp(stat):.3g}, "
                       f"z = {z:+.1f}) but the rate is quantized in steps of more than {TAILS_MAX_STEP_SD:g} noise sd: "
-                      "its tails cannot be told from the quantizer's")
-    fits = tail_fits(u)
+                      "its tails cannot be told from the quantizer's without simulations of it")
+    fits = tail_fits(u, step)
     ll = fits["log_l"]
     lr = 2.0 * (ll["mixture"] - ll["gauss"])
     over = 2.0 * (ll["mixture"] - ll["spikes"])
