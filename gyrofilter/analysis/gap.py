@@ -10,10 +10,11 @@ function each on a shared run (:class:`_GapRun`); the modules beside this one ho
    and the same features are computed on the measurement and on every run
    (:mod:`gyrofilter.analysis.gap_features`: the overlapping Allan deviation at log-spaced tau,
    band powers of the periodogram in log-spaced bands, the largest periodogram line over the
-   local noise level, the lag-1 autocorrelation of the high-passed noise and the spike count).
+   local noise level, the lag-1 autocorrelation of the high-passed noise, the spike count and the tail
+   statistic, a winsorized kurtosis).
    Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
 3. **Causes**: :mod:`gyrofilter.analysis.detectors` maps departures to effects of the table, in a fixed
-   decision order (outliers, sinusoid, narrow-band noise, colored noise, slow bias effects; see
+   decision order (outliers or heavy tails, sinusoid, narrow-band noise, colored noise, slow bias effects; see
    there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
    temperature are told apart), each with its own significance threshold, and estimates the
    parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
@@ -246,7 +247,7 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis=""):
         notes.append(f"axis {axis}: {note}" + ("; they are analysed as outliers" if c is not None else ""))
     if tails is not None:  # the spikes are the noise's tails: nothing is cleaned
         cands.append(tails)
-        c, mask = None, mask[:0]
+        c = None
     if c is not None:
         cands.append(c)
         x = det.clean_spikes(x, mask)  # a copy

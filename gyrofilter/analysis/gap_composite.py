@@ -9,10 +9,13 @@ the colored noise and the bands), the model chosen by the WVIC (Guerrier et al. 
 the white level (the colored noise then keeps the long-tau level, ``preserve: arw``, and, if D
 is lower so, the per-sample variance too: :func:`_composite_lags`). The replacement is kept
 only if D falls below :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value.
-Where the axis has ``outliers`` or ``heavy_tails`` (the tail statistic's findings), the wavelet
-variance is the robust M-estimate (:mod:`gyrofilter.analysis.wv_robust`), Fisher-consistent at
-the heavy-tailed noise found, so that spikes the outlier detector missed and heavy tails do not
-pull the fit.
+Where the axis has ``outliers`` the wavelet variance is the robust M-estimate
+(:mod:`gyrofilter.analysis.wv_robust`), so that spikes the outlier detector missed do not pull the
+fit; where it has ``heavy_tails`` the classical one, which is consistent for that noise (its tails
+are part of the model's variance) and at the composite's scales (1 s and more: a hundred samples
+and more per coefficient, nearly Gaussian) more precise than the robust one (``tools/robust_gmwm.py``,
+docs/gap.md), while the WVIC's bootstrap simulates the heavy-tailed noise, so that the selection
+sees how much noisier it makes the short scales.
 """
 from __future__ import annotations
 
@@ -100,14 +103,14 @@ def composite_step(run):
 def slow_wavelet_variance(xc, sample_rate_hz, cands=()):
     """Haar wavelet variance (:func:`gyrofilter.analysis.gmwm.haar_wv`) of the cleaned series at the
     dyadic scales tau >= max(:data:`COMPOSITE_MIN_TAU_S`, 16 / f_s); None when fewer than 4. The
-    robust estimate where the axis's candidates ``cands`` hold ``outliers`` or ``heavy_tails``
-    (consistent at the heavy-tailed noise: its fraction and scale ratio)."""
+    robust estimate where the axis's candidates ``cands`` hold ``outliers``; with ``heavy_tails``
+    the classical one, marked with the noise's fraction and scale ratio for the WVIC's bootstrap
+    (module docstring)."""
     m_min = max(16, int(math.ceil(COMPOSITE_MIN_TAU_S * sample_rate_hz)))
     if (xc.size - 2 * m_min * 8 + 1) / (2.0 * m_min * 8) < 2.0:
         return None
     tails = next((c for c in cands if c.effect == "heavy_tails"), None)
-    robust = tails is not None or any(c.effect == "outliers" for c in cands)
-    wv = gmwm.haar_wv(xc, sample_rate_hz, min_m=m_min, robust=robust,
+    wv = gmwm.haar_wv(xc, sample_rate_hz, min_m=m_min, robust=any(c.effect == "outliers" for c in cands),
                       tails=(tails.params["fraction"], tails.params["scale_ratio"]) if tails is not None else None)
     return wv if wv.tau_s.size >= 4 else None
 

@@ -82,7 +82,7 @@ class WaveletVariance:
     wv_dps2: np.ndarray
     edf: np.ndarray
     robust: bool = False
-    tails: tuple = None  # (fraction, scale_ratio) of a heavy-tailed white noise the robust estimate is consistent at
+    tails: tuple = None  # (fraction, scale_ratio) of a heavy-tailed white noise (the robust estimate is consistent at it)
 
     @property
     def m(self):
@@ -100,7 +100,8 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
     Scales start at the first 2^j >= ``min_m`` samples and stop where η_j = (N - 2m + 1) / (2m)
     falls below ``min_edf``. ``robust``: the biweight M-estimate of each scale's coefficients
     instead (:func:`gyrofilter.analysis.wv_robust.robust_wv`; η_j times its Gaussian efficiency),
-    Fisher-consistent at the heavy-tailed white noise ``tails`` = (fraction, scale_ratio) when given.
+    Fisher-consistent at the heavy-tailed white noise ``tails`` = (fraction, scale_ratio) when given;
+    ``tails`` also makes the WVIC's bootstrap (:func:`bootstrap_cov`) simulate that noise.
     """
     n = int(np.asarray(x_dps).size)
     m = []
@@ -112,8 +113,9 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
         raise ValueError(f"record too short for a wavelet-variance fit ({n} samples)")
     m = np.array(m, dtype=np.int64)
     edf = np.maximum((n - 2 * m + 1) / (2.0 * m), 1.0) * (ROBUST_EFFICIENCY if robust else 1.0)
-    return WaveletVariance(float(sample_rate_hz), n, m / float(sample_rate_hz), _wv_values(x_dps, sample_rate_hz, m, robust, tails),
-                           edf, robust=bool(robust), tails=tails if robust else None)
+    values = _wv_values(x_dps, sample_rate_hz, m, robust, tails)
+    return WaveletVariance(float(sample_rate_hz), n, m / float(sample_rate_hz), values, edf, robust=bool(robust),
+                           tails=tails)
 
 
 def _wv_values(x_dps, sample_rate_hz, m, robust=False, tails=None):
