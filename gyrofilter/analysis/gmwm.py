@@ -66,8 +66,11 @@ MAX_GM = 3
 
 #: parametric-bootstrap runs of the largest model for the WVIC's estimator covariance
 BOOTSTRAP_RUNS = 30
-#: criteria closer than this to the lowest count as a tie (won by the model with fewer parameters)
-TIE = 1e-3
+#: criteria closer than this to the lowest count as a tie, won by the model with fewer parameters
+#: (the one-standard-error rule of Breiman et al. 1984): the optimism is a bootstrap estimate
+#: (BOOTSTRAP_RUNS runs give the covariance's elements to about +-26 %, so an extra term's 2 V_kk,
+#: about 1-2, to about +-0.4)
+TIE = 0.5
 
 
 @dataclass
@@ -289,7 +292,8 @@ def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0, terms_
             f.criterion = f.objective + f.optimism
     low = min(f.criterion for f in fits)
     # a term fitted to nothing (its variance at the lower bound) adds no rank, so such a model ties
-    # with the smaller one it reduces to: within TIE of the lowest, the fewest parameters win
+    # with the smaller one it reduces to; and the optimism is an estimate: within TIE of the lowest,
+    # the fewest parameters win
     return min((f for f in fits if f.criterion <= low + TIE), key=lambda f: (f.n_params, f.criterion)), fits
 
 
