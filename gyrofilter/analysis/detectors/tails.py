@@ -5,9 +5,9 @@ told apart from ``outliers`` (a few isolated spikes on a Gaussian floor); see
 **Residual.** The tails are those of the noise's innovations: ``e = x - moving_mean(x, W)``
 (the colored-noise detector's high pass, which removes every slow effect; the mean taken over
 the samples clipped to 4 robust sd, so that a wide sample does not leak into its neighbours)
-prewhitened by the
-AR(2) fitted to its lag-1 and lag-2 autocorrelations (Yule-Walker), ``e_w[n] = e[n] - a1 e[n-1] -
-a2 e[n-2]``, in units of its robust standard deviation ``s`` (1.4826 MAD): ``u = e_w / s``. Any
+prewhitened by the AR(2) fitted to its lag-1 and lag-2 autocorrelations (Yule-Walker),
+``e_w[n] = e[n] - a1 e[n-1] - a2 e[n-2]``, in units of its robust standard deviation ``s``
+(1.4826 MAD): ``u = e_w / s``. Any
 Gaussian process (colored noise, narrow bands, random walks) stays Gaussian under these linear
 filters, so ``u`` is standard normal in the tails whatever the spectrum, and its samples are
 nearly independent.
@@ -254,8 +254,8 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
         return None, None
     step = _lattice_step(x) / robust_sigma(x - moving_mean(x, colored_window(x.size, sample_rate_hz)), max_count=20_000)
     if tails_z is None and step > TAILS_MAX_STEP_SD:  # the baseline's simulations would carry the quantizer too
-        return None, (f"the noise's distribution departs from a Gaussian (winsorized kurtosis {math.exp(stat):.3g}, "
-                      f"z = {z:+.1f}) but the rate is quantized in steps of more than {TAILS_MAX_STEP_SD:g} noise sd: "
+        return None, (f"the noise's distribution departs from a Gaussian (winsorized kurtosis z = {z:+.1f}) "
+                      f"but the rate is quantized in steps of more than {TAILS_MAX_STEP_SD:g} noise sd: "
                       "its tails cannot be told from the quantizer's without simulations of it")
     fits = tail_fits(u, step)
     ll = fits["log_l"]
@@ -265,18 +265,24 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
         return None, None
     margin = HEAVY_TAILS_OVER_SPIKES if spikes_found else 0.0
     close = abs(over) < HEAVY_TAILS_OVER_SPIKES
+    gauss_kw = _WINSOR[1] / _WINSOR[0] ** 2
+    heavier = (f"the noise's tails are heavier than a Gaussian's (winsorized kurtosis {math.exp(stat) * gauss_kw:.3g}, "
+               f"a Gaussian's {gauss_kw:.3g}; z = {z:+.1f})")
     if over < margin:
-        if not close:
-            return None, None
-        return None, (f"the noise's tails are heavier than a Gaussian's (winsorized kurtosis {math.exp(stat):.3g}, "
-                      f"z = {z:+.1f} against the baseline simulations) and a heavy-tailed noise (fraction "
-                      f"{fits['fraction']:.3g}, scale ratio {fits['scale_ratio']:.3g}) explains them about as well as "
-                      f"isolated spikes (2 Delta log L = {over:+.1f}, margin {HEAVY_TAILS_OVER_SPIKES:g})")
+        if spikes_found and not close:
+            return None, None  # isolated spikes, as the outlier detector says
+        if close:
+            return None, (f"{heavier} and a heavy-tailed noise (fraction {fits['fraction']:.3g}, scale ratio "
+                          f"{fits['scale_ratio']:.3g}) explains them about as well as isolated spikes (2 Delta log L = "
+                          f"{over:+.1f}, margin {HEAVY_TAILS_OVER_SPIKES:g})")
+        return None, (f"{heavier}; isolated spikes (about {fits['magnitude']:.2g} robust sd, a fraction "
+                      f"{fits['rate']:.2g} of the samples) explain them better than a heavy-tailed noise (2 Delta log L = "
+                      f"{-over:.1f}) but too few lie beyond the gross-error threshold to name outliers")
     beyond6 = float(np.mean(np.abs(u) > 6.0))
     kurt = float(np.mean(u**4) / np.mean(u**2) ** 2)
-    evidence = (f"the noise is heavier-tailed than a Gaussian at every level: winsorized kurtosis {math.exp(stat):.3g} "
-                f"(z = {z:+.1f}), kurtosis {kurt:.3g}, {100 * beyond6:.2g} % of the samples beyond 6 robust sd "
-                f"(a Gaussian: 2e-7 %); a Gaussian scale mixture (fraction {fits['fraction']:.3g} of the samples with "
+    evidence = (f"the noise is heavier-tailed than a Gaussian at every level: winsorized kurtosis "
+                f"{math.exp(stat) * gauss_kw:.3g} (a Gaussian's {gauss_kw:.3g}; z = {z:+.1f}), kurtosis {kurt:.3g}, "
+                f"{100 * beyond6:.2g} % of the samples beyond 6 robust sd (a Gaussian: 2e-7 %); a Gaussian scale mixture (fraction {fits['fraction']:.3g} of the samples with "
                 f"{fits['scale_ratio']:.3g} times the others' sd) beats a Gaussian by 2 Delta log L = {lr:.0f} "
                 f"(threshold {HEAVY_TAILS_THRESHOLD:g}) and isolated spikes by {over:+.1f}")
     if close:
