@@ -76,15 +76,15 @@ TIE = 0.5
 @dataclass
 class WaveletVariance:
     """Haar wavelet variance at dyadic scales: ``tau_s``, ``wv_dps2`` (ν², (deg/s)²), ``edf`` (η;
-    of a robust estimate, η times its Gaussian efficiency), ``robust`` (an M-estimate,
-    :mod:`gyrofilter.analysis.wv_robust`)."""
+    of a robust estimate, η times its Gaussian efficiency), ``robust`` (the Gaussian efficiency
+    of the M-estimate, :mod:`gyrofilter.analysis.wv_robust`; 0 for the classical estimate)."""
 
     sample_rate_hz: float
     n_samples: int
     tau_s: np.ndarray
     wv_dps2: np.ndarray
     edf: np.ndarray
-    robust: bool = False
+    robust: float = 0.0
     tails: tuple = None  # (fraction, scale_ratio) of a heavy-tailed white noise (the robust estimate is consistent at it)
 
     @property
@@ -102,7 +102,8 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
 
     Scales start at the first 2^j >= ``min_m`` samples and stop where η_j = (N - 2m + 1) / (2m)
     falls below ``min_edf``. ``robust``: the biweight M-estimate of each scale's coefficients
-    instead (:func:`gyrofilter.analysis.wv_robust.robust_wv`; η_j times its Gaussian efficiency),
+    instead (:func:`gyrofilter.analysis.wv_robust.robust_wv`; η_j times its Gaussian efficiency,
+    :data:`~gyrofilter.analysis.wv_robust.ROBUST_EFFICIENCY` for True, else the number given),
     Fisher-consistent at the heavy-tailed white noise ``tails`` = (fraction, scale_ratio) when given;
     ``tails`` also makes the WVIC's bootstrap (:func:`bootstrap_cov`) simulate that noise.
     """
@@ -115,16 +116,18 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
     if len(m) < 2:
         raise ValueError(f"record too short for a wavelet-variance fit ({n} samples)")
     m = np.array(m, dtype=np.int64)
-    edf = np.maximum((n - 2 * m + 1) / (2.0 * m), 1.0) * (ROBUST_EFFICIENCY if robust else 1.0)
-    values = _wv_values(x_dps, sample_rate_hz, m, robust, tails)
-    return WaveletVariance(float(sample_rate_hz), n, m / float(sample_rate_hz), values, edf, robust=bool(robust),
+    efficiency = ROBUST_EFFICIENCY if robust is True else float(robust)
+    edf = np.maximum((n - 2 * m + 1) / (2.0 * m), 1.0) * (efficiency or 1.0)
+    values = _wv_values(x_dps, sample_rate_hz, m, efficiency, tails)
+    return WaveletVariance(float(sample_rate_hz), n, m / float(sample_rate_hz), values, edf, robust=efficiency,
                            tails=tails)
 
 
-def _wv_values(x_dps, sample_rate_hz, m, robust=False, tails=None):
-    """ν̂² at the scales ``m`` (samples): AVAR / 2, or the robust estimate."""
-    if robust:
-        return robust_wv(x_dps, m, tails=tails)
+def _wv_values(x_dps, sample_rate_hz, m, efficiency=0.0, tails=None):
+    """ν̂² at the scales ``m`` (samples): AVAR / 2, or the robust estimate of that Gaussian
+    efficiency (when not 0)."""
+    if efficiency:
+        return robust_wv(x_dps, m, efficiency=efficiency, tails=tails)
     return overlapping_adev(x_dps, sample_rate_hz, np.asarray(m) / sample_rate_hz)[1] ** 2 / 2.0
 
 
