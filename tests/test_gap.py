@@ -99,6 +99,53 @@ def test_detectors_on_arrays_have_white_noise_nulls():
         assert det.detect_sinusoid(x, 100.0) is None
         assert det.detect_colored(x, 100.0) is None
         assert det.detect_slow(x, 100.0)[0] == []
+        assert det.detect_heavy_tails(x, 100.0) == (None, None)
+
+
+def test_heavy_tails_are_told_apart_from_isolated_spikes():
+    """The same excess of large samples two ways: a Gaussian scale mixture at every sample (named
+    heavy_tails, fraction and scale ratio within the battery's tolerances, also under an AR(1)
+    colored noise: the residual is prewhitened) and a few isolated spikes on a Gaussian floor
+    (the outlier detector's; not heavy tails)."""
+    rng = np.random.default_rng(12)
+    from scipy.signal import lfilter
+
+    for p, c, rho in ((0.03, 8.0, 0.0), (0.06, 30.0, 0.0), (0.02, 5.0, 0.6)):
+        k = np.where(rng.random(360_000) < p, c, 1.0) / math.sqrt(1 - p + p * c * c)
+        x = lfilter([1.0], [1.0, -rho], 0.1 * k * rng.standard_normal(k.size))
+        cand, note = det.detect_heavy_tails(x, 100.0, spikes_found=det.detect_outliers(x)[0] is not None)
+        assert cand is not None and note is None, (p, c, rho)
+        assert 1 / 1.5 <= cand.params["fraction"] / p <= 1.5 and abs(cand.params["scale_ratio"] / c - 1) < 0.3, cand.params
+    x = rng.normal(0.0, 0.1, 360_000)
+    hit = rng.random(x.size) < 1e-3
+    x[hit] += np.where(rng.random(hit.sum()) < 0.5, -2.0, 2.0) * np.exp(0.25 * rng.standard_normal(hit.sum()))
+    assert det.detect_outliers(x)[0] is not None
+    assert det.detect_heavy_tails(x, 100.0, spikes_found=True)[0] is None
+    # a rate quantized coarser than its noise has the quantizer's distribution (a Gaussian of 0.3 LSB
+    # is a winsorized kurtosis z of about +160): not judged, a note says why
+    coarse = np.round(rng.normal(0.0, 0.3, 100_000))
+    cand, note = det.detect_heavy_tails(coarse, 100.0)
+    assert cand is None and "quantized" in note
+
+
+def test_heavy_tails_extended_model_reproduces_the_short_tau_allan_deviation():
+    """An Xsens-like axis (6 % of the samples with 30 times the others' sd, on a low-passed noise):
+    named heavy_tails (never outliers) with the colored noise, and the extended model's Allan
+    deviation at the shortest tau is within the spread of its simulations, where the baseline
+    (which masks the tails as spikes) is far below it."""
+    model = {"sample_rate_hz": 100.0, "axes": {a: {"bias_dps": 0.2, "arw_dps_per_sqrt_hz": 0.01, "effects": []} for a in "xyz"}}
+    model["axes"]["y"]["effects"] = [{"effect": "heavy_tails", "fraction": 0.06, "scale_ratio": 30.0},
+                                     {"effect": "colored_noise", "lag1": 0.5}]
+    report = analyse_gap(simulate(model, 600.0, seed=5), seed=1, n_sims=SIMS)
+    found = {(f["effect"], f["axis"]): f for f in report["findings"]}
+    assert set(found) == {("heavy_tails", "y"), ("colored_noise", "y")}, report["findings"]
+    tails = found["heavy_tails", "y"]["params"]
+    assert 0.04 < tails["fraction"] < 0.09 and 20 < tails["scale_ratio"] < 40, tails
+    d = report["departures"]["y"]
+    z_ext = (d["adev_meas_log"][0] - d["extended_adev_sim_mean_log"][0]) / max(d["extended_adev_sim_sd_log"][0], 0.02)
+    z_base = (d["adev_meas_log"][0] - d["adev_sim_mean_log"][0]) / max(d["adev_sim_sd_log"][0], 0.02)
+    assert abs(z_ext) < 2.5 and z_base > 5, (z_ext, z_base)
+    assert report["discrepancy"]["after"]["y"] < det.OUTSIDE_NULL_D
 
 
 def test_lag1_correction_recovers_ar1():
@@ -287,6 +334,25 @@ def test_battery_rates(scale, duration):
     assert false_clean <= max(1, 0.05 * n_clean)
     if scale == 1.0:
         assert named_ok >= 0.9 * n_eff
+
+
+@pytest.mark.slow
+def test_heavy_tails_battery_is_found_and_never_confused_with_outliers():
+    """Many seeds of each: hidden heavy tails named (>= 95 %, never as outliers), hidden
+    outliers never named heavy tails, clean records with no finding (docs/gap.md, heavy tails)."""
+    found = confused = outliers_as_tails = clean_findings = 0
+    for k in range(20):
+        case = he.draw_case(6000 + k, effect="heavy_tails", duration_s=1200.0)
+        report = _run(case)
+        named = {(f["effect"], f["axis"]) for f in report["findings"]}
+        found += ("heavy_tails", case["axis"]) in named
+        confused += ("outliers", case["axis"]) in named
+        spikes = he.draw_case(6100 + k, effect="outliers", duration_s=1200.0)
+        outliers_as_tails += any(f["effect"] == "heavy_tails" for f in _run(spikes)["findings"])
+        if k % 2 == 0:
+            clean_findings += bool(_run(he.draw_case(6200 + k, effect="none", duration_s=1200.0))["findings"])
+    assert found >= 19 and confused == 0 and outliers_as_tails == 0 and clean_findings == 0, \
+        (found, confused, outliers_as_tails, clean_findings)
 
 
 def test_a_statistic_that_cannot_run_gives_no_findings_not_a_crash(monkeypatch):

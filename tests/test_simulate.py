@@ -6,6 +6,7 @@ of several standard errors. All random tests are seeded.
 """
 import json
 import math
+from statistics import NormalDist
 
 import numpy as np
 import pytest
@@ -39,6 +40,7 @@ ALL_EFFECTS = [
     {"effect": "colored_noise", "lag1": 0.5},
     {"effect": "narrowband", "center_hz": 33.0, "bandwidth_hz": 2.0, "rms_dps": 0.03},
     {"effect": "arma", "sigma_a_dps": 0.01, "phi": [1.2, -0.5], "theta": [0.3]},
+    {"effect": "heavy_tails", "fraction": 0.05, "scale_ratio": 8.0},
 ]
 TEMP = {"start_c": 25.0, "end_c": 32.0, "tau_s": 60.0, "noise_c": 0.02, "resolution_c": 1 / 340}
 
@@ -50,7 +52,8 @@ def full_model(**kw):
 
 def test_every_effect_of_the_table_is_supported():
     assert list(EFFECTS) == ["bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
-                             "temperature", "bias_step", "warmup", "outliers", "colored_noise", "narrowband", "arma"]
+                             "temperature", "bias_step", "warmup", "outliers", "colored_noise", "narrowband", "arma",
+                             "heavy_tails"]
     assert {e["effect"] for e in ALL_EFFECTS} == set(EFFECTS)
 
 
@@ -148,6 +151,9 @@ def test_rate_override_and_sample_count():
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "outliers", "rate": 1.5, "magnitude_dps": 1}), r"rate: expected a number in \[0, 1\]"),
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "sinusoid", "frequency_hz": "7", "amplitude_dps": 1}), r"frequency_hz: expected a number >= 0, got \"7\""),
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "colored_noise", "lag1": 1.0}), r"lag1: expected a number in \(-1, 1\)"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "heavy_tails", "fraction": 0.6, "scale_ratio": 5}), r"\(heavy_tails\).fraction: expected a number <= 0.5"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "heavy_tails", "fraction": 0.1, "scale_ratio": 0.5}), r"\(heavy_tails\).scale_ratio: expected a number >= 1"),
+    (lambda m: m["axes"]["y"]["effects"].extend([{"effect": "heavy_tails", "fraction": 0.1, "scale_ratio": 5}] * 2), r"axes.y.effects: at most one heavy_tails per axis"),
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "colored_noise", "lag1": 0.6, "lag2": 0.0}),
      r"\(colored_noise\).lag2: no first-order ARMA noise has lag-1 autocorrelation 0.6 and lag-2 0"),
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "colored_noise", "lag1": 0.2, "lag2": 0.3}),
@@ -421,6 +427,26 @@ def test_outliers_rate_magnitude_and_sign():
     assert abs(np.mean(spikes > 0) - 0.5) < 0.04
     # |spike| is log-normal with log-spread 0.25 (default spread_ln)
     assert abs(np.log(np.abs(spikes)).std() / 0.25 - 1) < 0.06
+
+
+def test_heavy_tails_keep_the_variance_and_have_the_mixture_s_tails():
+    """A Gaussian scale mixture of the white noise's variance: per-sample sd and the Allan
+    deviation stay N sqrt(f_s) and N / sqrt(tau); the kurtosis and the fraction beyond 6 core sd
+    are the mixture's (noise_terms.ScaleMixtureNormal); the normals are the baseline's own
+    (common random numbers: the same sign at every sample)."""
+    n_arw, fs, p, c = 0.01, 100.0, 0.06, 30.0
+    tails = [{"effect": "heavy_tails", "fraction": p, "scale_ratio": c}]
+    g = simulate(model(tails, arw=n_arw, fs=fs), 2000.0, seed=21).gyro_dps
+    plain = simulate(model([], arw=n_arw, fs=fs), 2000.0, seed=21).gyro_dps
+    assert np.array_equal(np.sign(g), np.sign(plain))
+    assert np.allclose(g.std(axis=0), n_arw * math.sqrt(fs), rtol=0.03)  # 200 000 samples, kurtosis 48: se 1.1 %
+    ad = np.array([overlapping_adev(g[:, i], fs, taus_s=[0.01, 1.0])[1] for i in range(3)]).mean(axis=0)
+    assert np.allclose(ad * np.sqrt([0.01, 1.0]), n_arw, rtol=0.03)
+    k0 = 1 / math.sqrt(1 - p + p * c * c)
+    kurt = np.mean([np.mean(g[:, i] ** 4) / np.mean(g[:, i] ** 2) ** 2 for i in range(3)])
+    assert abs(kurt / (3 * (1 - p + p * c**4) / (1 - p + p * c * c) ** 2) - 1) < 0.15
+    beyond = np.mean(np.abs(g) > 6 * k0 * n_arw * math.sqrt(fs))
+    assert abs(beyond / (2 * p * NormalDist().cdf(-6 / c)) - 1) < 0.05  # about 30 000 samples
 
 
 def test_colored_noise_lag1_and_meaning_of_arw():

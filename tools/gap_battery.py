@@ -7,7 +7,8 @@ Draws ``--cases`` cases with :func:`tests.hidden_effects.draw_case` (seeds ``see
 cases - 1``; every effect of the table equally often, plus clean cases), runs
 :func:`gyrofilter.analysis.gap.analyse_gap` on each and prints per effect: cases, named on the right
 axis, named with parameters within tolerance, and extra findings; for clean cases the fraction
-with any finding. ``--scale 0.333 --duration 600`` is the harder set (effects a third of the
+with any finding; and how often hidden heavy tails were named outliers and hidden outliers heavy
+tails (on the hidden axis). ``--scale 0.333 --duration 600`` is the harder set (effects a third of the
 size, 10-minute recordings). ``--real FILE`` hides the effects in real static recordings
 instead (real noise as the baseline; findings already present in the untouched recording are
 not counted as extra).
@@ -109,6 +110,11 @@ def summarise(rows, total_s):
     if n_eff:
         print(f"{'all effects':18s} {n_eff:5d} {n_named:6d} {n_ok:7d}   detection (named, in tolerance): "
               f"{100 * n_named / n_eff:.1f} %, {100 * n_ok / n_eff:.1f} %")
+    for hidden, named_as in (("heavy_tails", "outliers"), ("outliers", "heavy_tails")):  # the two readings of tails
+        rs = by.get(hidden, [])
+        if rs:
+            wrong = sum(any(f["effect"] == named_as and f["axis"] == r[0]["axis"] for f in r[3]) for r in rs)
+            print(f"{hidden} cases named {named_as} on their axis: {wrong} of {len(rs)}")
     times = [r[4] for r in rows]
     print(f"gap runtime per case: median {np.median(times):.1f} s, max {np.max(times):.1f} s; battery {total_s:.0f} s")
 

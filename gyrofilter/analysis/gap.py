@@ -10,10 +10,11 @@ function each on a shared run (:class:`_GapRun`); the modules beside this one ho
    and the same features are computed on the measurement and on every run
    (:mod:`gyrofilter.analysis.gap_features`: the overlapping Allan deviation at log-spaced tau,
    band powers of the periodogram in log-spaced bands, the largest periodogram line over the
-   local noise level, the lag-1 autocorrelation of the high-passed noise and the spike count).
+   local noise level, the lag-1 autocorrelation of the high-passed noise, the spike count and the tail
+   statistic, a winsorized kurtosis).
    Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
 3. **Causes**: :mod:`gyrofilter.analysis.detectors` maps departures to effects of the table, in a fixed
-   decision order (outliers, sinusoid, narrow-band noise, colored noise, slow bias effects; see
+   decision order (outliers or heavy tails, sinusoid, narrow-band noise, colored noise, slow bias effects; see
    there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
    temperature are told apart), each with its own significance threshold, and estimates the
    parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
@@ -238,7 +239,8 @@ def _detect(run):
             run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
             continue
         try:
-            cands, xc, alt = _detect_axis(x, run.sample_rate_hz, run.temp)
+            cands, xc, alt = _detect_axis(x, run.sample_rate_hz, run.temp, tails_z=float(run.deps[i]["tails"][0][0]),
+                                          notes=run.report["notes"], axis=a)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
             cands, xc, alt = [], x, None
@@ -253,22 +255,29 @@ def _detect(run):
             run.readings[i] = {"covariate": [first + j for j, c in enumerate(cands) if c.effect in SLOW_EFFECTS],
                                "time": alt_cands,
                                "ext_axis": extended_axis(run.base["axes"][a], fast + alt_cands, xa, run.sample_rate_hz, run.q),
-                               "wv": slow_wavelet_variance(xa, run.sample_rate_hz)}
+                               "wv": slow_wavelet_variance(xa, run.sample_rate_hz, fast)}
             del xa
         run.ext_axes[a] = extended_axis(run.base["axes"][a], cands, xc, run.sample_rate_hz, run.q)
-        run.wvs[i] = slow_wavelet_variance(xc, run.sample_rate_hz)
+        run.wvs[i] = slow_wavelet_variance(xc, run.sample_rate_hz, cands)
         del x, xc
 
 
-def _detect_axis(x, sample_rate_hz, temp):
+def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis=""):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x,
     alternative): ``alternative`` is None or, where the slow effects have a covariate and a time
     reading (:func:`gyrofilter.analysis.detectors.detect_slow`), ``(time reading's candidates,
     x cleaned of those instead)``. Each finding's component is subtracted from a private copy of
     ``x`` and then dropped, so the axis costs two series of memory besides the detectors' own
-    (three with an alternative reading)."""
+    (three with an alternative reading). ``tails_z``: the tail statistic's departure from the
+    baseline simulations; ``notes``: where a note on tails that spikes explain as well goes."""
     cands = []
     c, mask = det.detect_outliers(x)
+    tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
+    if note and notes is not None:
+        notes.append(f"axis {axis}: {note}" + ("; they are analysed as outliers" if c is not None else ""))
+    if tails is not None:  # the spikes are the noise's tails: nothing is cleaned
+        cands.append(tails)
+        c = None
     if c is not None:
         cands.append(c)
         x = det.clean_spikes(x, mask)  # a copy

@@ -8,7 +8,8 @@ high-passed rate ``x - moving_mean(x, W)`` (W = max(64 samples, 0.5 s), divided 
 simulator adds back (``q = 1 / lsb_per_dps`` for ``gyro_unit: lsb``, else 0);
 ``arw_dps_per_sqrt_hz = sigma / sqrt(f_s)`` (white noise per sample ``N sqrt(f_s)``, IEEE Std
 952-1997 annex C). The extended model's axis is re-fitted the same way on the series cleaned of
-its findings (:func:`extended_axis`); a finding enters the model as an entry of the effect table
+its findings (:func:`extended_axis`; with ``heavy_tails`` no sample is masked: the tails are part of
+the white noise's variance, which the effect keeps); a finding enters the model as an entry of the effect table
 (:func:`effect_entry`). The models are simulated one axis of one seeded run at a time
 (:func:`sim_features`), the features computed on each run.
 """
@@ -42,12 +43,13 @@ def axis_dps(rec, i):
     return to_dps(rec.columns[GYRO_COLUMNS[i]], rec.gyro_unit, rec.lsb_per_dps)
 
 
-def noise_sigma(x, sample_rate_hz, q_dps):
-    """Per-sample white-noise std of the baseline (see module docstring)."""
+def noise_sigma(x, sample_rate_hz, q_dps, mask_spikes=True):
+    """Per-sample white-noise std of the baseline (see module docstring); ``mask_spikes=False``
+    keeps every sample (a heavy-tailed noise, whose tails are part of its variance)."""
     w = det.colored_window(x.size, sample_rate_hz)
     e = x - det.moving_mean(x, w)
-    mask, _, _ = det.outlier_statistic(x)
-    if mask.any():
+    mask, _, _ = det.outlier_statistic(x) if mask_spikes else (None, None, None)
+    if mask is not None and mask.any():
         e = e[~mask]
     var = float(np.var(e)) / max(1.0 - 1.0 / w, 0.5)
     var = max(var - (q_dps ** 2) / 12.0, 0.25 * var)
@@ -83,7 +85,7 @@ def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
     if not cands:
         return spec
     n = xc.size
-    sigma = noise_sigma(xc, sample_rate_hz, q or 0.0)
+    sigma = noise_sigma(xc, sample_rate_hz, q or 0.0, mask_spikes=not any(c.effect == "heavy_tails" for c in cands))
     for c in cands:  # narrow bands (above the high-pass) are noise of their own: N'^2 = N^2 - rms^2
         if c.effect == "narrowband":
             sigma = math.sqrt(max(sigma**2 - c.params["rms_dps"] ** 2, 0.05 * sigma**2))

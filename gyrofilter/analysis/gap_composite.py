@@ -4,11 +4,18 @@ Where an extended axis's D stays above :data:`~gyrofilter.analysis.detectors.OUT
 a GMWM-style fit (:mod:`gyrofilter.analysis.gmwm`; Guerrier et al. 2013) of white noise, an
 optional rate random walk and 0-3 Gauss-Markov terms to the Haar wavelet variance of the series
 cleaned of the deterministic findings, at tau >= max(1 s, 16 samples) (shorter scales belong to
-the colored noise and the bands), the model chosen by Q + 2p (not WVIC), replaces the axis's
-slow stochastic findings (and its colored noise, if that is better without it); its N becomes
+the colored noise and the bands), the model chosen by the WVIC (Guerrier et al. 2016;
+:func:`gyrofilter.analysis.gmwm.select_model`), replaces the axis's slow stochastic findings (and its colored noise, if that is better without it); its N becomes
 the white level (the colored noise then keeps the long-tau level, ``preserve: arw``, and, if D
 is lower so, the per-sample variance too: :func:`_composite_lags`). The replacement is kept
 only if D falls below :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value.
+Where the axis has ``outliers`` the wavelet variance is the robust M-estimate
+(:mod:`gyrofilter.analysis.wv_robust`), so that spikes the outlier detector missed do not pull the
+fit; where it has ``heavy_tails`` the classical one, which is consistent for that noise (its tails
+are part of the model's variance) and at the composite's scales (1 s and more: a hundred samples
+and more per coefficient, nearly Gaussian) more precise than the robust one (``tools/robust_gmwm.py``,
+docs/gap.md), while the WVIC's bootstrap simulates the heavy-tailed noise, so that the selection
+sees how much noisier it makes the short scales.
 """
 from __future__ import annotations
 
@@ -71,7 +78,8 @@ def composite_step(run):
             single_k = {k: run.axis_discrepancy(i, [k], f"gain of the composite's {cands[k][1].effect} on {a}")
                         for k in comp_k}
             notes.append(
-                f"axis {a}: the composite stochastic fit ({fit.name}, chosen by Q + 2p on the wavelet variance at "
+                f"axis {a}: the composite stochastic fit ({fit.name}, chosen by WVIC on the "
+                f"{'robust ' if run.wvs[i].robust else ''}wavelet variance at "
                 f"tau >= {run.wvs[i].tau_s[0]:.3g} s) lowers D from {run.after[i]:.3g} to {d_comp:.3g}; it replaces the "
                 "axis's slow stochastic findings")
             for k in comp_k:
@@ -92,26 +100,32 @@ def composite_step(run):
                          f"({run.after[i]:.3g} -> {d_comp:.3g}); not used")
 
 
-def slow_wavelet_variance(xc, sample_rate_hz):
+def slow_wavelet_variance(xc, sample_rate_hz, cands=()):
     """Haar wavelet variance (:func:`gyrofilter.analysis.gmwm.haar_wv`) of the cleaned series at the
-    dyadic scales tau >= max(:data:`COMPOSITE_MIN_TAU_S`, 16 / f_s); None when fewer than 4."""
+    dyadic scales tau >= max(:data:`COMPOSITE_MIN_TAU_S`, 16 / f_s); None when fewer than 4. The
+    robust estimate where the axis's candidates ``cands`` hold ``outliers``; with ``heavy_tails``
+    the classical one, marked with the noise's fraction and scale ratio for the WVIC's bootstrap
+    (module docstring)."""
     m_min = max(16, int(math.ceil(COMPOSITE_MIN_TAU_S * sample_rate_hz)))
     if (xc.size - 2 * m_min * 8 + 1) / (2.0 * m_min * 8) < 2.0:
         return None
-    wv = gmwm.haar_wv(xc, sample_rate_hz, min_m=m_min)
+    tails = next((c for c in cands if c.effect == "heavy_tails"), None)
+    wv = gmwm.haar_wv(xc, sample_rate_hz, min_m=m_min, robust=any(c.effect == "outliers" for c in cands),
+                      tails=(tails.params["fraction"], tails.params["scale_ratio"]) if tails is not None else None)
     return wv if wv.tau_s.size >= 4 else None
 
 
 def _composite_candidates(wv, sample_rate_hz):
     """GMWM-style composite fit (:func:`gyrofilter.analysis.gmwm.select_model`, Guerrier et al. 2013) of
     white noise + optionally a rate random walk + 0..3 Gauss-Markov terms to ``wv``, the model
-    chosen by Q + 2p (not WVIC: see gyrofilter.analysis.gmwm). Returns ``(fit, candidates)``: one
+    chosen by the WVIC (see gyrofilter.analysis.gmwm). Returns ``(fit, candidates)``: one
     ``gauss_markov`` per Gauss-Markov term and a ``rate_random_walk`` if the fit has one, marked
     ``extra["composite"]``; the fit's N is the composite model's white level."""
     fit, _ = gmwm.select_model(wv, terms_allowed=("rrw",), starts=3, seed=0)
     out = []
-    evidence = (f"composite fit {fit.name} to the Haar wavelet variance at tau = {wv.tau_s[0]:.3g}-{wv.tau_s[-1]:.3g} s "
-                f"(weighted objective Q = {fit.objective:.3g} over {wv.tau_s.size} scales, model chosen by Q + 2p)")
+    evidence = (f"composite fit {fit.name} to the {'robust ' if wv.robust else ''}Haar wavelet variance at tau = "
+                f"{wv.tau_s[0]:.3g}-{wv.tau_s[-1]:.3g} s (weighted objective Q = {fit.objective:.3g} over {wv.tau_s.size} "
+                f"scales, model chosen by WVIC = Q + {fit.optimism:.3g})")
     for sigma_dps, tau_s in fit.gauss_markov:
         out.append(det.Candidate(effect="gauss_markov", params={"sigma_dps": sigma_dps, "tau_s": tau_s},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,

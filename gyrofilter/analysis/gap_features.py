@@ -3,8 +3,9 @@ measurement departs from its simulations.
 
 The features of one axis (:func:`features`): the overlapping Allan deviation at log-spaced tau
 (:func:`feature_adev`), band powers of the periodogram in log-spaced bands, the largest
-periodogram line over the local noise level, the lag-1 autocorrelation of the high-passed noise
-and the spike count. Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims,
+periodogram line over the local noise level, the lag-1 autocorrelation of the high-passed noise,
+the spike count and the tail statistic (the winsorized kurtosis of the prewhitened noise,
+:func:`gyrofilter.analysis.detectors.tails_statistic`). Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims,
 floor)`` (:func:`departures`); the discrepancy ``D = mean_k z_k^2`` (:func:`discrepancy`) is the
 gap's measure of fit. The sentences of the report that say where a measurement departs most
 (:func:`strongest`, :func:`still_departs`) are here too.
@@ -17,7 +18,8 @@ import numpy as np
 
 from . import detectors as det
 
-METRIC = "mean squared z-score of the Allan deviation, band powers, spectral line, lag-1 and spike count vs model simulations"
+METRIC = ("mean squared z-score of the Allan deviation, band powers, spectral line, lag-1, spike count and tail statistic "
+          "vs model simulations")
 #: floors of the feature spreads (log units for log features)
 _LOG_FLOOR = 0.02
 
@@ -89,7 +91,7 @@ _ADEV_CHUNK = 1 << 15
 
 def features(x, sample_rate_hz, taus_s, bands_hz):
     """Feature vector of one axis: (log ADEV per tau (:func:`feature_adev`), log band powers,
-    log line ratio, lag1, log(1 + spikes)). Returns a dict of arrays."""
+    log line ratio, lag1, log(1 + spikes), log winsorized kurtosis). Returns a dict of arrays."""
     adev = feature_adev(x, sample_rate_hz, taus_s)
     line, _, _, spec = det.sinusoid_statistic(x, sample_rate_hz, return_spectrum=True)
     n_p = det.periodogram_length(x.size)  # the samples the periodogram uses
@@ -101,7 +103,8 @@ def features(x, sample_rate_hz, taus_s, bands_hz):
     mask, _, _ = det.outlier_statistic(x)
     return {"adev": np.log(np.maximum(adev, 1e-300)), "band": np.log(np.maximum(bp, 1e-300)),
             "line": np.array([math.log(max(line, 1.0))]), "lag1": np.array([r1]),
-            "spikes": np.array([math.log1p(float(mask.sum()))])}
+            "spikes": np.array([math.log1p(float(mask.sum()))]),
+            "tails": np.array([det.tails_statistic(x, sample_rate_hz)])}
 
 
 def _first_bins(freqs_hz, size, n, sample_rate_hz):
@@ -116,7 +119,7 @@ def _first_bins(freqs_hz, size, n, sample_rate_hz):
     return idx
 
 
-_FLOORS = {"adev": _LOG_FLOOR, "band": _LOG_FLOOR, "line": 0.3, "lag1": None, "spikes": 0.5}
+_FLOORS = {"adev": _LOG_FLOOR, "band": _LOG_FLOOR, "line": 0.3, "lag1": None, "spikes": 0.5, "tails": None}
 
 
 def departures(meas, sims, n):
@@ -153,7 +156,8 @@ def departure_summary(deps, meas, taus, bands):
             "band_meas_log": fl(meas["band"]),
             "band_sim_mean_log": fl(deps["band"][1]), "band_sim_sd_log": fl(deps["band"][2]),
             "line_z": float(deps["line"][0][0]), "lag1_z": float(deps["lag1"][0][0]),
-            "spikes_z": float(deps["spikes"][0][0]), "discrepancy": discrepancy(deps)}
+            "spikes_z": float(deps["spikes"][0][0]), "tails_z": float(deps["tails"][0][0]),
+            "discrepancy": discrepancy(deps)}
 
 
 def _furthest(deps, taus, bands):
@@ -168,7 +172,8 @@ def _furthest(deps, taus, bands):
              "band": lambda: f"spectrum band {bands[j]:.3g}-{bands[j + 1]:.3g} Hz",
              "line": lambda: "largest spectral line",
              "lag1": lambda: "lag-1 autocorrelation",
-             "spikes": lambda: "spike count"}[key]()
+             "spikes": lambda: "spike count",
+             "tails": lambda: "tail statistic (winsorized kurtosis of the noise)"}[key]()
     return key, z, j, where
 
 
@@ -198,5 +203,8 @@ def still_departs(axis, d_after, deps, taus, bands):
         if z > 0:
             return text + f"; the measurement holds more power there than the model ({scale} miss a part)"
         return text + f"; the model puts too much power there ({scale} are too strong at that scale)"
+    if key == "tails":
+        return text + ("; the noise's tails are heavier than the model's" if z > 0 else
+                       "; the model's noise is heavier-tailed than the measurement's")
     return text + {"line": "; a spectral line the model lacks", "lag1": "; the noise's short correlation differs",
                    "spikes": "; spikes the model lacks or overstates"}[key]

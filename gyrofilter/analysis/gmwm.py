@@ -30,10 +30,21 @@ from several starting points.
 
 Model selection: every combination of the optional terms (quantisation, random walk, drift)
 with k = 0..3 Gauss-Markov terms (white noise always in) is fitted, and the model with the
-smallest C = Q(θ̂) + 2 p is chosen (Q the weighted objective, p the number of parameters). This
-is an AIC-like criterion under the approximation that Q is chi-square with independent scales;
-it is **not** the WVIC of Guerrier et al. (2016), whose optimism term needs a bootstrap of the
-estimator that is not done here.
+smallest **WVIC** is chosen (Guerrier, Stebler, Skaloud & Victoria-Feser 2016, "Wavelet-based
+improvements for inertial sensor error modeling", IEEE TIM 65(4); the ``rank.models`` of their R
+package gmwm): C = Q(θ̂) + 2 tr(Ω Cov(ν(θ̂), ν̂)), an estimate of the expected objective of the
+fitted model on an independent replicate ν̂* of the wavelet variance (Q alone falls with every
+term; the second term, the optimism, is what the fit gained by fitting ν̂'s own noise; Efron
+1986). Linearized, ν(θ̂) - ν ≈ A (AᵀΩA)⁻¹ AᵀΩ (ν̂ - ν) with A = ∂ν/∂θ, so in the standardized
+units of the weights (Ω = diag 1/Var ν̂², A_w = Ω^½ A) the optimism is 2 tr(P V_w), P the
+projection onto the columns of A_w and V_w the correlation-scale covariance Ω^½ Cov(ν̂) Ω^½ of
+the estimator, estimated once by a parametric bootstrap of the largest model
+(:data:`BOOTSTRAP_RUNS` runs, :func:`bootstrap_cov`), as gmwm does. Were the scales independent
+with Var ν̂² exactly as weighted (V_w = I), the optimism would be 2 p and C = Q + 2 p, the AIC-like
+criterion used before (``criterion="q2p"``, kept for comparison); the overlapping scales are
+correlated, a robust estimate is less precise than its η says and a heavy-tailed noise makes the
+short scales noisier, which the bootstrap sees and a fixed penalty does not. ``tools/gmwm_select.py``
+measures both on simulated composite processes (docs/gap.md).
 """
 from __future__ import annotations
 
@@ -44,23 +55,37 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .allan import overlapping_adev
+from .wv_robust import ROBUST_EFFICIENCY, robust_wv
 from ..sim.model import validate_model
-from ..sim.noise_terms import ar1_allan_variance
+from ..sim.noise_terms import ScaleMixtureNormal, ar1_allan_variance
 from ..sim.simulate import simulate_axis_dps
 
 OPTIONAL_TERMS = ("quantization", "rrw", "ramp")
 MAX_GM = 3
 
 
+#: parametric-bootstrap runs of the largest model for the WVIC's estimator covariance
+BOOTSTRAP_RUNS = 30
+#: criteria closer than this to the lowest count as a tie, won by the model with fewer parameters
+#: (the one-standard-error rule of Breiman et al. 1984): the optimism is a bootstrap estimate
+#: (BOOTSTRAP_RUNS runs give the covariance's elements to about +-26 %, so an extra term's 2 V_kk,
+#: about 1-2, to about +-0.4)
+TIE = 0.5
+
+
 @dataclass
 class WaveletVariance:
-    """Haar wavelet variance at dyadic scales: ``tau_s``, ``wv_dps2`` (ν², (deg/s)²), ``edf`` (η)."""
+    """Haar wavelet variance at dyadic scales: ``tau_s``, ``wv_dps2`` (ν², (deg/s)²), ``edf`` (η;
+    of a robust estimate, η times its Gaussian efficiency), ``robust`` (the Gaussian efficiency
+    of the M-estimate, :mod:`gyrofilter.analysis.wv_robust`; 0 for the classical estimate)."""
 
     sample_rate_hz: float
     n_samples: int
     tau_s: np.ndarray
     wv_dps2: np.ndarray
     edf: np.ndarray
+    robust: float = 0.0
+    tails: tuple = None  # (fraction, scale_ratio) of a heavy-tailed white noise (the robust estimate is consistent at it)
 
     @property
     def m(self):
@@ -72,11 +97,15 @@ class WaveletVariance:
         return self.wv_dps2 * np.sqrt(2.0 / self.edf)
 
 
-def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1):
+def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=None):
     """Haar wavelet variance ν̂²(τ_j) = σ̂²_A(τ_j) / 2 at τ_j = 2^j / f_s, with η_j (module docstring).
 
     Scales start at the first 2^j >= ``min_m`` samples and stop where η_j = (N - 2m + 1) / (2m)
-    falls below ``min_edf``.
+    falls below ``min_edf``. ``robust``: the biweight M-estimate of each scale's coefficients
+    instead (:func:`gyrofilter.analysis.wv_robust.robust_wv`; η_j times its Gaussian efficiency,
+    :data:`~gyrofilter.analysis.wv_robust.ROBUST_EFFICIENCY` for True, else the number given),
+    Fisher-consistent at the heavy-tailed white noise ``tails`` = (fraction, scale_ratio) when given;
+    ``tails`` also makes the WVIC's bootstrap (:func:`bootstrap_cov`) simulate that noise.
     """
     n = int(np.asarray(x_dps).size)
     m = []
@@ -87,9 +116,19 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1):
     if len(m) < 2:
         raise ValueError(f"record too short for a wavelet-variance fit ({n} samples)")
     m = np.array(m, dtype=np.int64)
-    tau_s, adev = overlapping_adev(x_dps, sample_rate_hz, m / sample_rate_hz)
-    edf = np.maximum((n - 2 * m + 1) / (2.0 * m), 1.0)
-    return WaveletVariance(float(sample_rate_hz), n, tau_s, adev**2 / 2.0, edf)
+    efficiency = ROBUST_EFFICIENCY if robust is True else float(robust)
+    edf = np.maximum((n - 2 * m + 1) / (2.0 * m), 1.0) * (efficiency or 1.0)
+    values = _wv_values(x_dps, sample_rate_hz, m, efficiency, tails)
+    return WaveletVariance(float(sample_rate_hz), n, m / float(sample_rate_hz), values, edf, robust=efficiency,
+                           tails=tails)
+
+
+def _wv_values(x_dps, sample_rate_hz, m, efficiency=0.0, tails=None):
+    """ν̂² at the scales ``m`` (samples): AVAR / 2, or the robust estimate of that Gaussian
+    efficiency (when not 0)."""
+    if efficiency:
+        return robust_wv(x_dps, m, efficiency=efficiency, tails=tails)
+    return overlapping_adev(x_dps, sample_rate_hz, np.asarray(m) / sample_rate_hz)[1] ** 2 / 2.0
 
 
 def wv_white(tau_s, arw_dps_per_sqrt_hz):
@@ -131,7 +170,9 @@ class GmwmFit:
     gauss_markov: list = field(default_factory=list)  # [(sigma_dps, tau_s)], by increasing tau_s
     objective: float = float("nan")  # Q(θ̂) = Σ (ν̂² - ν²(θ̂))² / Var(ν̂²)
     n_params: int = 0
-    criterion: float = float("nan")  # Q + 2 p
+    optimism: float = float("nan")  # WVIC's 2 tr(P V_w) (2 p with criterion "q2p")
+    criterion: float = float("nan")  # Q + optimism
+    jacobian_w: np.ndarray = None  # ∂ν/∂θ at θ̂ in units of the weights (A_w = Ω^½ A), J x p
 
     @property
     def name(self):
@@ -160,7 +201,8 @@ class GmwmFit:
                 "quantization_deg": self.quantization_deg, "rrw_dps_per_sqrt_s": self.rrw_dps_per_sqrt_s,
                 "ramp_dps_per_s2": self.ramp_dps_per_s2,
                 "gauss_markov": [{"sigma_dps": s, "tau_s": t} for s, t in self.gauss_markov],
-                "objective": self.objective, "n_params": self.n_params, "criterion": self.criterion}
+                "objective": self.objective, "n_params": self.n_params, "optimism": self.optimism,
+                "criterion": self.criterion}
 
 
 def wv_distance(wv: WaveletVariance, model_wv_dps2):
@@ -226,20 +268,88 @@ def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
     out = _unpack(best.x, terms, k_gm, sample_rate_hz)
     out.objective = float(2.0 * best.cost)
     out.n_params = n_par
-    out.criterion = out.objective + 2.0 * n_par
+    out.optimism = 2.0 * n_par
+    out.criterion = out.objective + out.optimism
+    out.jacobian_w = -np.asarray(best.jac)  # the residuals are (ν̂² - ν²(θ)) / sd
     return out
 
 
-def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0, terms_allowed=OPTIONAL_TERMS):
+def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0, terms_allowed=OPTIONAL_TERMS,
+                 criterion="wvic", runs=BOOTSTRAP_RUNS):
     """Fit every model (white noise + any subset of ``terms_allowed`` (of quantization, rrw,
     ramp) + 0..``max_gm`` Gauss-Markov terms) and return ``(best, all_fits)``, best by the
-    smallest Q + 2p."""
+    smallest WVIC (``criterion="wvic"``: Q + 2 tr(P V_w), V_w from ``runs`` bootstrap runs of the
+    largest model, seeded by ``seed``) or Q + 2p (``"q2p"``); module docstring. Ties (within
+    :data:`TIE`) go to the model with fewer parameters."""
+    if criterion not in ("wvic", "q2p"):
+        raise ValueError(f"criterion must be 'wvic' or 'q2p', got {criterion!r}")
     fits = []
     for k_gm in range(max_gm + 1):
         for r in range(len(terms_allowed) + 1):
             for terms in itertools.combinations(terms_allowed, r):
                 fits.append(fit_model(wv, terms, k_gm, starts=starts, seed=seed))
-    return min(fits, key=lambda f: f.criterion), fits
+    if criterion == "wvic":
+        cov_w = bootstrap_cov(max(fits, key=lambda f: f.n_params), wv, runs=runs, seed=seed)
+        for f in fits:
+            f.optimism = wvic_optimism(f, cov_w)
+            f.criterion = f.objective + f.optimism
+    low = min(f.criterion for f in fits)
+    # a term fitted to nothing (its variance at the lower bound) adds no rank, so such a model ties
+    # with the smaller one it reduces to; and the optimism is an estimate: within TIE of the lowest,
+    # the fewest parameters win
+    return min((f for f in fits if f.criterion <= low + TIE), key=lambda f: (f.n_params, f.criterion)), fits
+
+
+def wvic_optimism(fit: GmwmFit, cov_w):
+    """The WVIC's optimism 2 tr(P V_w): P the projection onto the columns of the fit's
+    standardized Jacobian A_w (its rank: directions with singular values below 1e-8 of the
+    largest, parameters pinned at a bound, do not count), ``cov_w`` the estimator's covariance
+    in units of the weights (module docstring)."""
+    u, sv, _ = np.linalg.svd(fit.jacobian_w, full_matrices=False)
+    u = u[:, sv > 1e-8 * sv[0]] if sv.size and sv[0] > 0 else u[:, :0]
+    return 2.0 * float(np.sum((u.T @ cov_w) * u.T))
+
+
+def bootstrap_cov(fit: GmwmFit, wv: WaveletVariance, *, runs=BOOTSTRAP_RUNS, seed=0):
+    """Covariance of the wavelet-variance estimator (the one ``wv`` was made with: classical or
+    robust, at its scales) in units of ``wv``'s weights, ``Cov(ν̂*_j / sd_j, ν̂*_k / sd_k)`` over
+    ``runs`` simulations of ``fit`` of the same duration (:func:`simulate_fit`). Scales of at
+    least 32 samples are simulated at a rate lowered by a power of 2 so that the first keeps 16
+    samples or more: the wavelet variance at a given τ depends on the duration, not on the rate,
+    for these terms (a heavy-tailed noise is then a little noisier at the first scales than the
+    record's, whose coefficients average more samples)."""
+    m0 = int(wv.m[0])
+    d = 2 ** max(0, int(math.floor(math.log2(max(m0, 1) / 16.0)))) if m0 >= 32 else 1
+    sample_rate_hz = wv.sample_rate_hz / d
+    n, m = wv.n_samples // d, wv.m // d
+    rng = np.random.default_rng(seed)
+    draws = np.array([_wv_values(simulate_fit(fit, n, sample_rate_hz, rng, tails=wv.tails), sample_rate_hz, m, wv.robust,
+                                 wv.tails) / wv.sd_dps2 for _ in range(runs)])
+    return np.atleast_2d(np.cov(draws, rowvar=False))
+
+
+def simulate_fit(fit: GmwmFit, n, sample_rate_hz, rng, tails=None):
+    """``n`` samples of the composite model ``fit`` at ``sample_rate_hz`` (deg/s): white noise
+    N sqrt(f_s) w (w a unit-variance Gaussian scale mixture with ``tails`` = (fraction,
+    scale_ratio), :class:`gyrofilter.sim.noise_terms.ScaleMixtureNormal`), quantisation as the
+    difference of a white angle noise of sd Q (ν² = 3Q²/(2τ²)), a random walk K / sqrt(f_s) per
+    sample, a drift R t and stationary AR(1) Gauss-Markov terms (the simulator's equations,
+    :mod:`gyrofilter.sim.noise_terms`)."""
+    from scipy.signal import lfilter
+
+    draws = rng if tails is None else ScaleMixtureNormal(rng, np.random.default_rng(rng.integers(2**63)), *tails)
+    x = fit.arw_dps_per_sqrt_hz * math.sqrt(sample_rate_hz) * draws.standard_normal(n)
+    if fit.quantization_deg is not None:
+        x += np.diff(fit.quantization_deg * rng.standard_normal(n + 1)) * sample_rate_hz
+    if fit.rrw_dps_per_sqrt_s is not None:
+        x += np.cumsum(fit.rrw_dps_per_sqrt_s / math.sqrt(sample_rate_hz) * rng.standard_normal(n))
+    if fit.ramp_dps_per_s2 is not None:
+        x += fit.ramp_dps_per_s2 * np.arange(n) / sample_rate_hz
+    for sigma_dps, tau_s in fit.gauss_markov:
+        phi = math.exp(-1.0 / (sample_rate_hz * tau_s))
+        w = rng.standard_normal(n)
+        x += lfilter([sigma_dps * math.sqrt(1.0 - phi * phi)], [1.0, -phi], w, zi=[phi * sigma_dps * rng.standard_normal()])[0]
+    return x
 
 
 def simulated_wv(model, axis, n_samples, *, seeds=(0, 1, 2, 3), min_edf=2.0):

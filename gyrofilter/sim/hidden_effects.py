@@ -22,6 +22,9 @@ warmup             amplitude 0.1-0.4 deg/s (either sign), tau_s 30-300
 outliers           rate 2e-4 to 2e-3, magnitude_dps 1-3
 colored_noise      half the cases a low pass, lag1 0.3-0.8; half a first-order ARMA, lag1 0.15-0.35
                    and lag2 = p lag1 with p -0.2 to 0.2
+heavy_tails        fraction 0.01-0.1 (log-uniform; ``scale`` shrinks it: the excess kurtosis is
+                   about proportional to it), scale_ratio 4-30 (log-uniform); 30 and 0.06
+                   reproduce the Xsens MTi-G record of issue 24 (5 % beyond 6 robust sd)
 =================  ============================================================================
 """
 from __future__ import annotations
@@ -36,7 +39,7 @@ from ..recording import Recording
 from ..units import AXES
 
 EFFECTS = ("bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
-           "temperature", "bias_step", "warmup", "outliers", "colored_noise")
+           "temperature", "bias_step", "warmup", "outliers", "colored_noise", "heavy_tails")
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
@@ -51,18 +54,19 @@ TOLERANCES = {
     "warmup": {"amplitude_dps": ("rel", 0.35), "tau_s": ("rel", 0.5)},
     "outliers": {"rate": ("factor", 1.6), "magnitude_dps": ("rel", 0.35)},
     "colored_noise": {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
+    "heavy_tails": {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
 }
 
 
 def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
     """Draw one case. ``effect=None`` draws one of EFFECTS or 'none' (probability ``p_clean``,
-    default 1/11); ``effect='none'`` forces a clean case. Returns a dict with the model,
+    default 1/(len(EFFECTS) + 1)); ``effect='none'`` forces a clean case. Returns a dict with the model,
     duration, hidden effect/axis/params and the simulation seed."""
     rng = np.random.default_rng(seed)
     if duration_s is None:
         duration_s = float(rng.uniform(1800.0, 3600.0))
     if effect is None:
-        p = 1.0 / 11 if p_clean is None else p_clean
+        p = 1.0 / (len(EFFECTS) + 1) if p_clean is None else p_clean
         effect = "none" if rng.random() < p else EFFECTS[rng.integers(len(EFFECTS))]
     axis = AXES[rng.integers(3)]
     model = {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0,
@@ -101,6 +105,9 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
         else:
             lag1 = scale * rng.uniform(0.15, 0.35)
             params = {"lag1": lag1, "lag2": lag1 * rng.uniform(-0.2, 0.2)}
+    elif effect == "heavy_tails":
+        params = {"fraction": scale * math.exp(rng.uniform(math.log(0.01), math.log(0.1))),
+                  "scale_ratio": math.exp(rng.uniform(math.log(4.0), math.log(30.0)))}
     params = {k: float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))
@@ -149,6 +156,15 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
             b, a = [math.sqrt(1 - rho * rho)], [1.0, -rho]
         dev = gyro[:, i] - gyro[:, i].mean()
         gyro[:, i] = gyro[:, i].mean() + lfilter(b, a, dev)
+    elif effect == "heavy_tails":
+        # a property of the noise too: the real fast noise (the rate less its moving mean over 64
+        # samples) scaled per sample by the effect's k[n] (variance kept on average)
+        i = AXES.index(axis)
+        p, c = float(params["fraction"]), float(params["scale_ratio"])
+        k0 = 1.0 / math.sqrt(1.0 - p + p * c * c)
+        k = np.where(np.random.default_rng(seed).random(n) < p, c * k0, k0)
+        fast = gyro[:, i] - np.convolve(gyro[:, i], np.full(64, 1.0 / 64), mode="same")
+        gyro[:, i] += (k - 1.0) * fast
     else:
         model["axes"][axis]["effects"].append({"effect": effect, **params})
         sim = simulate(model, n / sample_rate_hz, seed=seed)

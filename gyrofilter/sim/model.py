@@ -33,7 +33,7 @@ MAX_ARMA_COEFFICIENTS = 20  # each of phi and theta; `gyrofilter arma --max-n 10
 MAX_TABLE_POINTS = 100_000  # a temperature table's t_s and temp_c
 #: bounds of the numbers whose key carries no unit, by key
 _NAMED_LIMITS = {"lsb_per_dps": (1e-3, 1e9), "per_decade": (0.1, 10.0), "spread_ln": (0.0, 5.0),
-                 "phi": (-1e6, 1e6), "theta": (-1e6, 1e6)}
+                 "phi": (-1e6, 1e6), "theta": (-1e6, 1e6), "fraction": (0.0, 0.5), "scale_ratio": (1.0, 1000.0)}
 
 # kinds of parameter checks: (test, what is expected)
 _KINDS = {
@@ -59,6 +59,7 @@ EFFECTS = {
     "colored_noise": ({"lag1": "lag"}, {"lag2": ("lag", None), "preserve": ("choice:arw,std", "arw")}),
     "narrowband": ({"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {}),
     "arma": ({"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])}),
+    "heavy_tails": ({"fraction": "frac", "scale_ratio": "pos"}, {}),
 }
 
 _TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", "temperature", "axes"}
@@ -143,11 +144,12 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     per sqrt(s), per sqrt(Hz) and per deg C; times |t| <= :data:`MAX_TIME_S`, time constants and
     periods in [:data:`MIN_TIME_CONSTANT_S`, :data:`MAX_TIME_S`] s; frequencies <= the highest
     sample rate; temperatures in ``units.TEMP_RANGE_C``; phases |p| <= :data:`MAX_PHASE_RAD`;
-    ``lsb_per_dps``, ``per_decade``, ``spread_ln`` and the ARMA coefficients by
-    :data:`_NAMED_LIMITS`), a narrowband line's width in [:data:`MIN_BANDWIDTH_PER_RATE` f_s, f_s]
-    and its centre below Nyquist; and every list: at most :data:`MAX_EFFECTS_PER_AXIS` effects
-    per axis, :data:`MAX_ARMA_COEFFICIENTS` coefficients each in ``phi`` and ``theta``,
-    :data:`MAX_TABLE_POINTS` points in a temperature table.
+    ``lsb_per_dps``, ``per_decade``, ``spread_ln``, the ARMA coefficients and ``heavy_tails``'s
+    ``fraction`` (at most 0.5) and ``scale_ratio`` (1 to 1000) by :data:`_NAMED_LIMITS`), a
+    narrowband line's width in [:data:`MIN_BANDWIDTH_PER_RATE` f_s, f_s] and its centre below
+    Nyquist; and every list: at most :data:`MAX_EFFECTS_PER_AXIS` effects per axis (one
+    ``colored_noise`` and one ``heavy_tails``), :data:`MAX_ARMA_COEFFICIENTS` coefficients each in
+    ``phi`` and ``theta``, :data:`MAX_TABLE_POINTS` points in a temperature table.
 
     ``model``: the model dict (docs/formats.md, section 2; e.g. from :func:`load_model`);
     ``sample_rate_hz``: sample rate (Hz) overriding the model's. In ``normalized`` the units are
@@ -247,8 +249,9 @@ def _validate_axis(spec, where, model, warnings, coefficients_only):
     _check_length(effects, f"{where}.effects", MAX_EFFECTS_PER_AXIS, "effects")
     for i, eff in enumerate(effects):
         out["effects"].append(_validate_effect(eff, f"{where}.effects[{i}]", model, warnings, coefficients_only))
-    if sum(e["effect"] == "colored_noise" for e in out["effects"]) > 1:
-        _err(f"{where}.effects", "at most one colored_noise per axis")
+    for single in ("colored_noise", "heavy_tails"):  # properties of the one white noise of the axis
+        if sum(e["effect"] == single for e in out["effects"]) > 1:
+            _err(f"{where}.effects", f"at most one {single} per axis")
     return out
 
 

@@ -101,6 +101,30 @@ class WhiteNoise:
         return y
 
 
+class ScaleMixtureNormal:
+    """Unit-variance draws of a Gaussian scale mixture: the ``heavy_tails`` effect's white noise.
+
+    w[n] = k[n] z[n], z[n] ~ N(0, 1), k[n] = c k₀ with probability p (the wide component), else
+    k₀, independently per sample; k₀ = 1 / sqrt(1 - p + p c²), so Var w = 1 (a contaminated
+    normal, Tukey 1960). Kurtosis 3 (1 - p + p c⁴) / (1 - p + p c²)²; beyond t core sd k₀ lie
+    2 (1 - p) Φ(-t) + 2 p Φ(-t / c). In place of a noise term's generator it makes the white
+    noise (a colored noise's innovations) heavy-tailed at the same variance: N and the Allan
+    deviation keep. ``rng_normal``: the z's generator (the noise term's own stream: common random
+    numbers); ``rng_scale``: the components'; ``fraction``: p in [0, 1); ``scale_ratio``: c >= 1.
+    """
+
+    def __init__(self, rng_normal, rng_scale, fraction, scale_ratio):
+        self.rng_normal, self.rng_scale = rng_normal, rng_scale
+        self.p, self.c = float(fraction), float(scale_ratio)
+        self.k0 = 1.0 / math.sqrt(1.0 - self.p + self.p * self.c**2)
+
+    def standard_normal(self, size=None):
+        """``size`` draws (one float for None) of w, consuming both streams in order."""
+        z = self.rng_normal.standard_normal(size)
+        k = np.where(self.rng_scale.random(size) < self.p, self.c * self.k0, self.k0)
+        return z * k if size is not None else float(z * k)
+
+
 class GaussMarkov:
     """First-order Gauss-Markov bias: stationary std σ, correlation time T.
 

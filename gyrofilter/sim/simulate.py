@@ -7,7 +7,8 @@ effect table with every parameter are stated in docs/formats.md (section 2) and 
 Per axis and sample n (t = n / f_s), in deg/s:
 
     ω[n] = b + e[n] + Σ_effects x_k[n]                (b = ``bias_dps``; e = white noise, N sqrt(f_s) w[n],
-                                                       or its low-passed form with ``colored_noise``)
+                                                       or its low-passed form with ``colored_noise``;
+                                                       w[n] of unit variance, heavy-tailed with ``heavy_tails``)
     ω[n] ← ω[n] + spikes[n]                           (``outliers``)
     ω[n] ← clip(ω[n], -FS, +FS)                       (``full_scale_dps``: saturation)
     ω[n] ← round(ω[n] · lsb_per_dps) / lsb_per_dps    (quantization, when ``lsb_per_dps`` is given)
@@ -23,6 +24,13 @@ N sqrt(f_s). See :class:`gyrofilter.sim.noise_terms.WhiteNoise`. With ``lag2`` (
 autocorrelation; default lag1², the first-order low pass) the filter is the first-order ARMA with
 both autocorrelations (:func:`gyrofilter.sim.noise_terms.colored_noise_filter`): ``lag2 = 0`` is a
 two-tap average, the fast noise of the ADIS16405.
+
+``heavy_tails`` makes the draws w[n] of the white noise (the innovations of a colored noise)
+a Gaussian scale mixture of unit variance (:class:`gyrofilter.sim.noise_terms.ScaleMixtureNormal`):
+a fraction ``fraction`` of the samples has ``scale_ratio`` times the others' standard deviation.
+The variance is kept, so N keeps its meaning and the Allan deviation is unchanged in
+expectation; only the distribution of every sample is heavier-tailed than a Gaussian (unlike
+``outliers``, a few isolated spikes added on top).
 
 The ``temperature`` key designs the ``temp`` column (an exponential self-heating profile with
 an optional cycle, or a table interpolated linearly; read noise and resolution only on the
@@ -95,12 +103,16 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
     terms = [nt.Constant(spec["bias_dps"])]
     outliers = []
     colored = next((e for e in spec["effects"] if e["effect"] == "colored_noise"), None)
+    tails = next((e for e in spec["effects"] if e["effect"] == "heavy_tails"), None)
+    draws = _stream(root, ax_index, 0, 0, 0)
+    if tails is not None:  # the same normals, scaled per sample: heavy-tailed at the same variance
+        draws = nt.ScaleMixtureNormal(draws, _stream(root, ax_index, _EFFECT_ID["heavy_tails"], 0, 0), tails["fraction"],
+                                      tails["scale_ratio"])
     if colored is not None and colored["lag2"] is not None:
         noise = nt.FilteredNoise(*nt.colored_noise_filter(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, colored["lag1"],
-                                                          colored["lag2"], colored["preserve"]),
-                                 _stream(root, ax_index, 0, 0, 0))
+                                                          colored["lag2"], colored["preserve"]), draws)
     else:
-        noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, _stream(root, ax_index, 0, 0, 0),
+        noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, draws,
                               lag1=colored["lag1"] if colored else 0.0,
                               preserve=colored["preserve"] if colored else "arw")
     seen = {}
@@ -136,7 +148,7 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
             terms.append(nt.FilteredNoise(b, a, _stream(root, *key, 0)))
         elif name == "outliers":
             outliers.append(nt.Outliers(eff["rate"], eff["magnitude_dps"], _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
-        # colored_noise is part of the noise term
+        # colored_noise and heavy_tails are part of the noise term
     return terms, noise, outliers
 
 

@@ -17,6 +17,12 @@ ones found, because the effects are confusable:
    N = 360 000), and a finding needs at least 3 spikes (white noise: probability 2e-5).
    Paper 001 (gross errors: isolated, much larger than the noise). Found spikes are replaced
    by their neighbours' median before the next detectors run.
+1b. ``heavy_tails`` -- the noise is heavier-tailed than a Gaussian at every sample (a Gaussian
+   scale mixture), told apart from isolated spikes by the shape of the high-passed, prewhitened
+   residual's distribution: a winsorized kurtosis departing from the baseline's simulations, a
+   scale mixture beating a Gaussian and beating isolated spikes by likelihood (see
+   :mod:`~gyrofilter.analysis.detectors.tails` for the rule). When named, the outlier candidate is
+   dropped (its spikes are the tails) and the series is not cleaned.
 2. ``sinusoid`` -- a line in the periodogram. The periodogram ordinate divided by the local
    noise level (median over a +-5 % frequency band / ln 2) is Exp(1) under any smooth noise
    spectrum, so the largest of ``M`` ordinates exceeds ``t`` with probability about
@@ -67,8 +73,9 @@ ones found, because the effects are confusable:
      on D (:mod:`gyrofilter.analysis.gap_readings`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
-:class:`Candidate`, helpers), ``outliers``, ``sinusoid``, ``narrowband``, ``colored`` and
-``slow`` (+ ``covariate``, the temperature first); every name is importable from ``gyrofilter.analysis.detectors`` as before.
+:class:`Candidate`, helpers), ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``colored``
+and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
+``gyrofilter.analysis.detectors`` as before.
 """
 from .common import (  # noqa: F401
     COLORED_MIN_LAG1,
@@ -80,6 +87,9 @@ from .common import (  # noqa: F401
     DETERMINISTIC_THRESHOLD,
     EXACT_GM_MARGIN,
     GM_MAX_TAU_DIVISOR,
+    HEAVY_TAILS_OVER_SPIKES,
+    HEAVY_TAILS_THRESHOLD,
+    HEAVY_TAILS_Z,
     JOINT_THRESHOLD,
     MAX_BLOCKS,
     NARROWBAND_THRESHOLD,
@@ -90,6 +100,8 @@ from .common import (  # noqa: F401
     SINUSOID_ALPHA,
     STOCHASTIC_PENALTY,
     STOCHASTIC_THRESHOLD,
+    TAILS_MAX_STEP_SD,
+    TAILS_WINSOR_SD,
     block_means,
     detrend_line,
     dot,
@@ -102,6 +114,13 @@ from .outliers import (  # noqa: F401
     clean_spikes,
     detect_outliers,
     outlier_statistic,
+)
+from .tails import (  # noqa: F401
+    detect_heavy_tails,
+    tail_fits,
+    tail_residual,
+    tails_sd,
+    tails_statistic,
 )
 from .sinusoid import (  # noqa: F401
     CHUNK_SAMPLES,
