@@ -508,12 +508,12 @@ def gap_hidden_real():
 
 @block("gap-battery-standard", "docs/gap.md", "tools/gap_battery.py (standard battery)", slow=True)
 def gap_battery_standard():
-    return _battery("--cases", "44", "--sims", "12", "--seed", "3000")
+    return _battery("--cases", "48", "--sims", "12", "--seed", "3000")
 
 
 @block("gap-battery-harder", "docs/gap.md", "tools/gap_battery.py (harder battery)", slow=True)
 def gap_battery_harder():
-    return _battery("--cases", "66", "--duration", "600", "--scale", "0.3333", "--sims", "12", "--seed", "4000")
+    return _battery("--cases", "72", "--duration", "600", "--scale", "0.3333", "--sims", "12", "--seed", "4000")
 
 
 @block("gap-battery-clean-10min", "docs/gap.md", "tools/gap_battery.py (clean 10-minute records)", slow=True)
@@ -524,6 +524,31 @@ def gap_battery_clean_10min():
 @block("gap-battery-clean-30min", "docs/gap.md", "tools/gap_battery.py (clean 30-minute records)", slow=True)
 def gap_battery_clean_30min():
     return _battery("--cases", "20", "--duration", "1800", "--effects", "none", "--sims", "12", "--seed", "7000")
+
+
+@block("gap-battery-tails", "docs/gap.md", "tools/gap_battery.py (heavy tails and outliers hidden)", slow=True)
+def gap_battery_tails():
+    harder = ("--scale", "0.3333", "--duration", "600")
+    runs = [("heavy_tails", (), "8000"), ("heavy_tails", harder, "8100"), ("outliers", (), "8200"), ("outliers", harder, "8300")]
+    return "\n\n".join(_battery("--cases", "40", "--effects", effect, *size, "--sims", "12", "--seed", seed)
+                         for effect, size, seed in runs)
+
+
+@block("gap-heavy-tails", "docs/gap.md", "tools/gap_heavy_tails.py --real --adis DIR (DIR: the ADIS16405 records)", slow=True)
+def gap_heavy_tails():
+    adis = data_dir("adis16405_long")
+    out = tool("gap_heavy_tails.py", "--real", "--adis", str(adis))
+    return fence(out.replace(str(adis), "DIR"))
+
+
+@block("robust-gmwm", "docs/gap.md", "tools/robust_gmwm.py", slow=True)
+def robust_gmwm():
+    return fence(tool("robust_gmwm.py"))
+
+
+@block("gmwm-select", "docs/gap.md", "tools/gmwm_select.py", slow=True)
+def gmwm_select():
+    return fence(tool("gmwm_select.py"))
 
 
 @block("gap-confound", "docs/gap.md", "tools/gap_confound.py --seeds 1,2 --long-seeds 1", slow=True)
