@@ -1,7 +1,7 @@
 """Coverage of the gap's 95 % parameter intervals over hidden-effect batteries.
 
     python tools/gap_coverage.py [--cases 40] [--seed 9000] [--duration S] [--scale 1] [--sims 8]
-                                 [--bootstrap N] [--effects a,b] [--compare] [-v] [--out FILE]
+                                 [--bootstrap N] [--effects a,b] [--compare] [--oracle] [-v] [--out FILE]
 
 For every effect kind of :mod:`gyrofilter.sim.hidden_effects` draws ``--cases`` cases (seeds
 ``seed + k``; random axis and parameters over the kind's ranges, 30-60 min unless
@@ -19,7 +19,9 @@ uncertainty), and the coverage per parameter.
 percentile interval ``[q_0.025, q_0.975]`` of the replicates, the basic interval
 ``[2 u - q_0.975, 2 u - q_0.025]`` on the parameter's scale, and the normal-t interval without the
 bias correction (run it with ``--bootstrap 60`` or more: the percentiles of 20 runs are their
-extremes).
+extremes). ``--oracle`` runs no gap: on the same ``bias_step`` records it scores the exact
+interval of the step size (true step time, true noise level), the coverage the records' own noise
+allows.
 """
 from __future__ import annotations
 
@@ -129,7 +131,37 @@ def score(case, report, calls=None):
     return bool(hit), found, base
 
 
+def oracle(args):
+    """``--oracle``: on the same ``bias_step`` records, the coverage of the exact interval of the
+    step size, mean after - mean before at the true step time +- 1.96 sigma sqrt(1/n1 + 1/n2)
+    with the true per-sample sigma (quantization included): what the records' own noise allows,
+    no estimator involved."""
+    kinds = args.effects.split(",") if args.effects else list(he.EFFECTS)
+    ok = n = 0
+    for k in range(args.cases * len(kinds)):
+        if kinds[k % len(kinds)] != "bias_step":
+            continue
+        case = he.draw_case(args.seed + k, effect="bias_step", duration_s=args.duration, scale=args.scale)
+        rec = he.simulate_case(case)
+        i = AXES.index(case["axis"])
+        x = rec.gyro_dps[:, i]
+        rate = rec.sample_rate_hz
+        first = int(math.ceil(case["params"]["time_s"] * rate - 1e-9))
+        axis = case["model"]["axes"][case["axis"]]
+        sigma = math.sqrt(axis["arw_dps_per_sqrt_hz"] ** 2 * rate + (1 / case["model"]["lsb_per_dps"]) ** 2 / 12)
+        size = float(x[first:].mean() - x[:first].mean())
+        half = 1.96 * sigma * math.sqrt(1 / first + 1 / (x.size - first))
+        ok += abs(size - case["params"]["size_dps"]) <= half
+        n += 1
+    lo, hi = wilson(ok, n)
+    print(f"bias_step size_dps, exact interval at the true step time with the true noise level: {ok}/{n} = "
+          f"{100 * ok / max(n, 1):.1f} % [{100 * lo:.1f}, {100 * hi:.1f}] (the records' own luck)")
+
+
 def run(args):
+    if args.oracle:
+        oracle(args)
+        return
     kinds = args.effects.split(",") if args.effects else list(he.EFFECTS)
     rows = defaultdict(lambda: {"cases": 0, "named": 0, "params": defaultdict(lambda: defaultdict(lambda: [0, 0]))})
     base = defaultdict(lambda: [0, 0])
@@ -210,6 +242,8 @@ def main(argv=None):
     p.add_argument("--sims", type=int, default=8, help="baseline simulations (the intervals do not depend on them)")
     p.add_argument("--bootstrap", type=int, default=gi.DEFAULT_BOOTSTRAP)
     p.add_argument("--effects", default=None, help="comma-separated effect kinds (default: all)")
+    p.add_argument("--oracle", action="store_true",
+                   help="only the exact step-size interval on the same bias_step records (no gap run)")
     p.add_argument("--compare", action="store_true", help="also score the percentile, basic and not bias-corrected intervals")
     p.add_argument("-v", "--verbose", action="store_true")
     p.add_argument("--out", default=None, help="also write the command and the table to this file")

@@ -91,7 +91,8 @@ def add_intervals(run, n_boot, seed):
     block["method"] = METHOD
     findings = report["findings"]
     rows = list(zip(run.kept, findings))
-    if any(c.effect != f["effect"] or AXES[i] != f["axis"] for (_, i, c, _), f in rows):
+    if len(run.kept) != len(findings) or any(c.effect != f["effect"] or AXES[i] != f["axis"]
+                                             for (_, i, c, _), f in rows):
         report["notes"].append("intervals: the findings do not match the kept candidates; no intervals computed")
         return
     seeds = np.random.default_rng([int(seed), 24]).integers(0, 2**31, size=int(n_boot))
