@@ -186,7 +186,8 @@ def _table(folder):
 
 
 def _reports(folder):
-    """{file name: content} of the reports, the gap reports without their runtime_s."""
+    """{file name: content} of the reports, the gap reports without their runtime_s (and their
+    intervals' runtime_s)."""
     out = {}
     for name in sorted(os.listdir(folder)):
         if name.startswith("fleet."):
@@ -196,6 +197,7 @@ def _reports(folder):
         if name.endswith(".gap.json"):
             doc = json.loads(text)
             doc.pop("runtime_s")
+            doc.get("intervals", {}).pop("runtime_s", None)
             text = doc
         out[name] = text
     return out

@@ -93,6 +93,20 @@ def test_gap_alternatives_example_uses_the_effect_table():
     assert "`alternatives`" in section(3)
 
 
+def test_gap_example_intervals_follow_the_parameters():
+    """Every parameter of a finding and of the baseline has its [low, high]; the intervals block
+    is in the example and in the key table."""
+    report = json.loads(example(3, "json"))
+    for finding in report["findings"]:
+        assert set(finding["params_ci95"]) == set(finding["params"])
+        assert all(low < high for low, high in finding["params_ci95"].values())
+    for axis in report["baseline"]["axes"].values():
+        for name, (low, high) in axis.get("params_ci95", {}).items():
+            assert name in axis and low < high
+    assert {"confidence", "bootstrap_runs", "method"} <= set(report["intervals"])
+    assert "`intervals`" in table_rows(section(3))
+
+
 def test_allan_example_uses_the_coefficient_keys_of_the_code():
     doc = json.loads(example(4, "json"))
     for axis in doc["axes"].values():

@@ -36,7 +36,9 @@ function each on a shared run (:class:`_GapRun`); the modules beside this one ho
    departures and the discrepancies; where an axis's D after is still above
    :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`, a note names the feature that departs
    most from the extended model and what its sign says
-   (:func:`gyrofilter.analysis.gap_features.still_departs`).
+   (:func:`gyrofilter.analysis.gap_features.still_departs`); every parameter's 95 % interval
+   (``params_ci95``), by parametric bootstrap of the extended model
+   (:mod:`gyrofilter.analysis.gap_intervals`).
 """
 from __future__ import annotations
 
@@ -55,6 +57,7 @@ from .gap_composite import composite_step, slow_wavelet_variance
 from .gap_readings import alternatives_entry, null_spread, weigh_readings
 from .gap_features import (METRIC, departure_summary, departures, discrepancy, feature_bands, feature_taus, features,
                            still_departs, strongest)
+from .gap_intervals import DEFAULT_BOOTSTRAP, add_intervals
 from .still import not_static
 from ..errors import GyroFilterError, RecordingError
 from ..units import AXES, MIN_NOISE_DPS, check_sample_rate_hz
@@ -63,14 +66,17 @@ from ..units import AXES, MIN_NOISE_DPS, check_sample_rate_hz
 MIN_SAMPLES = 256
 
 
-def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None):
+def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=DEFAULT_BOOTSTRAP):
     """Run the gap analysis on a :class:`~gyrofilter.recording.Recording`; returns the report
     dict of docs/formats.md section 3 (with ``discrepancy``, ``departures``,
-    ``runtime_s``). ``progress(text)`` is called with short status lines."""
+    ``runtime_s``). ``progress(text)`` is called with short status lines. ``bootstrap``: runs
+    per axis with findings for the parameters' intervals (:mod:`gyrofilter.analysis.gap_intervals`;
+    0: none)."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
-            return _analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=recording_name)
+            return _analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=recording_name,
+                                bootstrap=bootstrap)
         except GyroFilterError:
             raise
         except (ValueError, ArithmeticError) as exc:  # a statistic that cannot run numerically (a singular
@@ -87,7 +93,7 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None)
                     "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
 
 
-def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
+def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
     """The five steps of the module docstring, one function each, on a shared :class:`_GapRun`."""
     t_start = time.perf_counter()
     run = _GapRun(rec, seed=seed, n_sims=n_sims, say=progress or (lambda text: None), recording_name=recording_name)
@@ -98,6 +104,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name):
         _keep_findings(run)         # 4., gain per finding
         composite_step(run)         # 4., composite stochastic part where D stays high
         _write_findings(run)        # 5.
+        add_intervals(run, bootstrap, seed)  # 5., the parameters' intervals
     run.report["runtime_s"] = time.perf_counter() - t_start
     return run.report
 

@@ -11,10 +11,12 @@
   (step, warm-up, ramp, temperature) when the axis has one besides the temperature, or a
   finding with ``alternatives`` (their shapes dashed: how the other reading would look).
 
-Each finding is listed with its parameters, its evidence sentence and its gain.
+Each finding is listed with its parameters and their 95 % intervals (:func:`params_text`), its
+evidence sentence and its gain.
 """
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -152,6 +154,27 @@ def _fmt(v):
     return str(v)
 
 
+def value_with_interval(value, interval):
+    """``value [low, high]`` with as many significant digits as show the interval's width to two
+    digits (at least 4, at most 10); ``value`` alone (4 digits) without an interval."""
+    if not interval:
+        return f"{value:.4g}"
+    low, high = interval
+    width = abs(high - low)
+    top = max(abs(value), abs(low), abs(high))
+    digits = 4
+    if width > 0 and top > 0:
+        digits = int(min(10, max(4, math.floor(math.log10(top)) - math.floor(math.log10(width)) + 2)))
+    return f"{value:.{digits}g} [{low:.{digits}g}, {high:.{digits}g}]"
+
+
+def params_text(finding, sep="="):
+    """A finding's parameters, each with its 95 % interval where the report has one:
+    ``frequency_hz=31.4381 [31.4378, 31.4384], ...`` (``sep`` between name and value)."""
+    ci = finding.get("params_ci95") or {}
+    return ", ".join(f"{k}{sep}{value_with_interval(v, ci.get(k))}" for k, v in finding["params"].items())
+
+
 def write_report(report, rec, out_dir, *, seed=0):
     """Write the Markdown report and figures; returns the Markdown path."""
     os.makedirs(out_dir, exist_ok=True)
@@ -168,16 +191,22 @@ def write_report(report, rec, out_dir, *, seed=0):
     disc = report.get("discrepancy", {})
     for a in AXES:
         b = report["baseline"]["axes"][a]
-        lines.append(f"| {a} | {_fmt(b.get('bias_dps'))} | {_fmt(b.get('arw_dps_per_sqrt_hz'))} | "
+        ci = b.get("params_ci95") or {}
+        bias, arw = ([value_with_interval(b[k], ci.get(k)) if b.get(k) is not None else "-"
+                      for k in ("bias_dps", "arw_dps_per_sqrt_hz")])
+        lines.append(f"| {a} | {bias} | {arw} | "
                      f"{_fmt(b.get('quantization_dps'))} | {_fmt(disc.get('before', {}).get(a))} | "
                      f"{_fmt(disc.get('after', {}).get(a))} |")
     lines += ["", f"Discrepancy D: {disc.get('definition', '')} (lower is better; about 1 when the "
               "model explains the measurement).", "", "## Findings", ""]
+    intervals = report.get("intervals") or {}
+    if report["findings"] and intervals.get("bootstrap_runs"):
+        lines += [f"Each parameter with its {100 * intervals['confidence']:.0f} % interval in brackets "
+                  f"({intervals['bootstrap_runs']} bootstrap runs per axis with findings; docs/gap.md).", ""]
     if not report["findings"]:
         lines.append("None: the baseline explains the measurement within the simulations' spread.")
     for f in report["findings"]:
-        params = ", ".join(f"{k} = {_fmt(v)}" for k, v in f["params"].items())
-        lines += [f"- **{f['effect']}** on **{f['axis']}**: {params}.",
+        lines += [f"- **{f['effect']}** on **{f['axis']}**: {params_text(f, ' = ')}.",
                   f"  Evidence: {f['evidence']}.",
                   f"  Gain: D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}."]
         if f.get("alternatives"):

@@ -1,10 +1,11 @@
-"""``gyrofilter gap RECORDING --json OUT.json [--report DIR] [--seed N] [--sims N]``.
+"""``gyrofilter gap RECORDING --json OUT.json [--report DIR] [--seed N] [--sims N] [--bootstrap N]``.
 
 Finds what the baseline noise model (constant bias + white noise + quantization) gets wrong
 about a recording, names the cause (an effect of the effect table), extends the model and
-measures the gain; writes the gap report (docs/formats.md) to OUT.json and, with ``--report``,
-a Markdown report with PNG figures. A one-line summary per finding goes to stdout; progress goes
-to stderr (on a terminal, or with ``--progress``).
+measures the gain, with a 95 % interval for every parameter (``--bootstrap N`` runs per axis with
+findings; 0: no intervals); writes the gap report (docs/formats.md) to OUT.json and, with
+``--report``, a Markdown report with PNG figures. A one-line summary per finding goes to stdout;
+progress goes to stderr (on a terminal, or with ``--progress``).
 
 Outputs that exist are refused unless ``--force``, and an output that is the recording always,
 before any work; all outputs are written under temporary names and take their places together
@@ -18,6 +19,7 @@ import time
 from ..analysis import gap_report
 from ..analysis.fleet import FleetSettings
 from ..analysis.gap import analyse_gap
+from ..analysis.gap_intervals import DEFAULT_BOOTSTRAP, MAX_BOOTSTRAP
 from ..errors import SettingsError
 from ..plots import pyplot
 from ..recording import read_recording, warn_about_gaps
@@ -36,6 +38,9 @@ def add_arguments(parser):
     parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; 2 to {MAX_SIMS})")
+    parser.add_argument("--bootstrap", type=options.whole_number, default=DEFAULT_BOOTSTRAP, metavar="N",
+                        help=f"bootstrap runs per axis with findings for the parameters' 95 %% intervals (default "
+                             f"{DEFAULT_BOOTSTRAP}; 0: no intervals; at most {MAX_BOOTSTRAP})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     batch.add_arguments(parser)
     options.add_force_argument(parser)
@@ -44,6 +49,8 @@ def add_arguments(parser):
 def run(args):
     if args.sims is not None and not 2 <= args.sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {args.sims}")
+    if not 0 <= args.bootstrap <= MAX_BOOTSTRAP:
+        raise SettingsError(f"--bootstrap must be in [0, {MAX_BOOTSTRAP}], got {args.bootstrap}")
     check_seed(args.seed, "--seed")
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
@@ -70,7 +77,7 @@ def run(args):
                     console.say_warning)
     progress(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
     report = analyse_gap(rec, seed=args.seed, n_sims=args.sims, progress=progress,
-                         recording_name=args.recording)
+                         recording_name=args.recording, bootstrap=args.bootstrap)
     with contextlib.ExitStack() as files:
         outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
         if args.report:
@@ -88,8 +95,7 @@ def run(args):
             before, after = d["before"][axis], d["after"][axis]
             print(f"  {axis}: D {before:.3g}" + (f" -> {after:.3g} with {_count(len(found), 'finding')}" if found else ", no finding"))
         for f in found:
-            params = ", ".join(f"{k}={v:.4g}" for k, v in f["params"].items())
-            print(f"    {f['effect']} ({params}); alone D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}")
+            print(f"    {f['effect']} ({gap_report.params_text(f)}); alone D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}")
             if f.get("alternatives"):
                 print(f"      indistinguishable in this record from {gap_report.alternatives_text(f['alternatives'])} "
                       f"(within the null spread of D); {f['effect']} is named as the measured cause (see its evidence)")

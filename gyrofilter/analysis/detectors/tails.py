@@ -136,6 +136,12 @@ def _lattice_step(x, count=100_000):
     return float(steps.min()) if steps.size else 0.0
 
 
+def tail_step(x, sample_rate_hz):
+    """The quantization step of ``x`` in units of its high-passed noise's robust sd (0 when the
+    series is on no lattice): the narrowest histogram bin of :func:`tail_fits`."""
+    return _lattice_step(x) / robust_sigma(x - moving_mean(x, colored_window(x.size, sample_rate_hz)), max_count=20_000)
+
+
 def tails_statistic(x, sample_rate_hz, u=None):
     """``log(K_w / K_Z)``: the winsorized kurtosis ``K_w = mean(v^2) / mean(v)^2`` of the residual,
     ``v = min(|u|, k)^2``, over its Gaussian value (module docstring); 0 when it cannot be
@@ -252,7 +258,7 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
     z = stat / tails_sd(u.size) if tails_z is None else float(tails_z)
     if z < HEAVY_TAILS_Z:
         return None, None
-    step = _lattice_step(x) / robust_sigma(x - moving_mean(x, colored_window(x.size, sample_rate_hz)), max_count=20_000)
+    step = tail_step(x, sample_rate_hz)
     if tails_z is None and step > TAILS_MAX_STEP_SD:  # the baseline's simulations would carry the quantizer too
         return None, (f"the noise's distribution departs from a Gaussian (winsorized kurtosis z = {z:+.1f}) "
                       f"but the rate is quantized in steps of more than {TAILS_MAX_STEP_SD:g} noise sd: "

@@ -1,0 +1,207 @@
+"""95 % intervals of every finding's parameters and of the baseline's, by parametric bootstrap of
+the extended model (:mod:`gyrofilter.analysis.gap`, after step 5).
+
+For each axis with findings, the axis of the extended model (the baseline's bias and white noise
+re-fitted, every kept finding, the record's temperature profile where a finding needs it) is
+simulated ``B`` times with the record's length and rate (seeded, streams of their own), and the
+estimator of every finding of the axis is run on each replicate
+(:func:`gyrofilter.analysis.gap_reestimate.reestimate_axis`), as are the baseline's (the mean and
+the high-passed white-noise level, :func:`gyrofilter.analysis.gap_baseline.noise_sigma`). This is
+the parametric bootstrap GMWM uses for its intervals (Guerrier et al. 2013, sec. 4; Efron &
+Tibshirani 1993, ch. 6).
+
+The interval is the **bias-corrected normal interval on a transformed scale with the Student
+quantile** (Efron & Tibshirani 1993, sec. 13.3 and 10.6): with ``u = g(theta)`` (``g`` = log for a
+positive scale parameter, atanh for an autocorrelation, the identity for a signed one; see
+:data:`SCALES`), ``u*_b`` the replicates' estimates, ``bias = mean(u*) - u_hat`` and ``s`` their
+standard deviation,
+
+    u in  u_hat - bias  +-  t_{0.975, B-1} sqrt(1 + 1/B) s,     mapped back by g^-1.
+
+Why this and not the percentile interval: the replicates are simulated from the *estimated*
+model, so an estimator that is biased (the slow spectra on block means, the spike magnitude
+corrected for the threshold, a tau scanned on a grid) shows its bias in the replicates; the
+percentile interval would carry it twice, the basic and this one remove it. The log and atanh
+scales make the estimators' spread about constant in the parameter (a scale parameter's error is
+relative). With few replicates the 2.5 % and 97.5 % percentiles are poor (B = 19: the smallest
+and largest), while ``t_{B-1} sqrt(1 + 1/B)`` is the exact factor for a normal ``u``: the spread
+``s`` and the bias come from B draws, the estimate is one more draw, so
+``(u_hat - bias - u) / (s sqrt(1 + 1/B))`` is Student-t with B - 1 degrees of freedom. Circular
+``phase_rad`` uses the deviations wrapped to (-pi, pi] and is reported unwrapped (the truth lies in
+the interval modulo 2 pi). A replicate whose estimator has nothing to estimate is left out.
+
+An axis without findings has the baseline's model, white noise: its bias interval is
+``mean +- z s / sqrt(N)`` (s the per-sample std, quantization included) and its white-noise
+level's ``sigma^2 (1 +- z sqrt(2 / N) (sigma^2 + q^2/12) / sigma^2)`` (the variance of a sample
+variance, 2 s^4 / N), z = 1.96.
+"""
+from __future__ import annotations
+
+import copy
+import math
+import time
+from statistics import NormalDist
+
+import numpy as np
+
+from .gap_baseline import _Progress, _simulate_axis, noise_sigma, temperature_table
+from .gap_reestimate import SUPPORTED, reestimate_axis
+from ..sim.model import validate_model
+from ..units import AXES
+
+#: the two-sided level of every interval
+CONFIDENCE = 0.95
+#: bootstrap replicates per axis with findings (``gyrofilter gap --bootstrap``)
+DEFAULT_BOOTSTRAP = 20
+#: the most replicates ``--bootstrap`` takes
+MAX_BOOTSTRAP = 1000
+#: a parameter's interval needs at least this many replicates where its estimator ran
+MIN_REPLICATES = 5
+#: per effect, the scale on which each parameter's interval is computed: ``log`` (positive scale
+#: parameters), ``atanh`` (autocorrelations in (-1, 1)), ``phase`` (radians, circular), else
+#: ``linear`` (signed parameters, times, frequencies)
+SCALES = {
+    "bias_instability": {"b_dps": "log"},
+    "rate_random_walk": {"k_dps_per_sqrt_s": "log"},
+    "gauss_markov": {"sigma_dps": "log", "tau_s": "log"},
+    "sinusoid": {"amplitude_dps": "log", "phase_rad": "phase"},
+    "warmup": {"tau_s": "log"},
+    "outliers": {"rate": "log", "magnitude_dps": "log"},
+    "heavy_tails": {"fraction": "log", "scale_ratio": "log"},
+    "colored_noise": {"lag1": "atanh", "lag2": "atanh"},
+    "narrowband": {"bandwidth_hz": "log", "rms_dps": "log"},
+    "baseline": {"arw_dps_per_sqrt_hz": "log"},
+}
+METHOD = ("parametric bootstrap of the extended model (each axis with findings simulated B times with the record's "
+          "length, rate and temperature; every finding's estimator re-run on each run); bias-corrected normal interval "
+          "on the log scale (positive parameters), atanh (autocorrelations) or linear, with the Student quantile of "
+          "B - 1 degrees of freedom; axes without findings: the white-noise baseline's analytic intervals")
+
+
+def add_intervals(run, n_boot, seed):
+    """Write ``params_ci95`` into every finding of ``run.report`` and into the baseline's axes,
+    from ``n_boot`` replicates per axis with findings (none with ``n_boot`` 0), and the
+    report's ``intervals`` block saying how."""
+    report = run.report
+    t0 = time.perf_counter()
+    block = {"confidence": CONFIDENCE, "bootstrap_runs": int(n_boot)}
+    report["intervals"] = block
+    if n_boot <= 0:
+        block["method"] = "none: --bootstrap 0 asked for no intervals"
+        return
+    block["method"] = METHOD
+    findings = report["findings"]
+    rows = list(zip(run.kept, findings))
+    if len(run.kept) != len(findings) or any(c.effect != f["effect"] or AXES[i] != f["axis"]
+                                             for (_, i, c, _), f in rows):
+        report["notes"].append("intervals: the findings do not match the kept candidates; no intervals computed")
+        return
+    seeds = np.random.default_rng([int(seed), 24]).integers(0, 2**31, size=int(n_boot))
+    for i, a in enumerate(AXES):
+        here = [(c, f) for (_, ci, c, _), f in rows if ci == i]
+        base_axis = report["baseline"]["axes"][a]
+        if not here:
+            _baseline_analytic(run, i, base_axis)
+            continue
+        for c, f in here:
+            f["params_ci95"] = dict.fromkeys(f["params"])
+            if c.effect not in SUPPORTED:
+                report["notes"].append(f"intervals: no estimator for {c.effect} on {a}; its parameters have no interval")
+        try:
+            estimates = _replicates(run, i, [c for c, _ in here], seeds)
+        except (ValueError, ArithmeticError) as exc:  # a singular fit: never lose the findings for it
+            report["notes"].append(f"intervals on {a}: the bootstrap could not run ({exc}); no intervals")
+            continue
+        for j, (c, f) in enumerate(here):
+            reps = [e[j] for e in estimates["findings"]]
+            f["params_ci95"] = {name: _interval(value, [r.get(name) if r else None for r in reps],
+                                                SCALES.get(c.effect, {}).get(name, "linear"))
+                                for name, value in f["params"].items()}
+        base_axis["params_ci95"] = {name: _interval(base_axis[name], estimates[name],
+                                                    SCALES["baseline"].get(name, "linear"))
+                                    for name in ("bias_dps", "arw_dps_per_sqrt_hz")}
+    block["runtime_s"] = time.perf_counter() - t0
+
+
+def _replicates(run, i, cands, seeds):
+    """Axis ``i`` of the extended model simulated once per seed: each run's finding estimates
+    (a list per run, in the order of ``cands``) and the baseline's ``bias_dps`` and
+    ``arw_dps_per_sqrt_hz``."""
+    a = AXES[i]
+    model = copy.deepcopy(run.base)
+    model["axes"][a] = run.axis_spec(i, run.kept_on(i))
+    if any(c.effect == "temperature" for c in cands):
+        model["temperature"] = temperature_table(run.rec)
+    spec, _ = validate_model(model)
+    temp = run.temp if any(c.effect == "temperature" for c in cands) else None
+    resolved = bool(run.resolved_lags[i]) and any(c.effect == "colored_noise" and c.extra.get("composite") for c in cands)
+    out = {"findings": [], "bias_dps": [], "arw_dps_per_sqrt_hz": []}
+    bar = _Progress(run.say, f"intervals on {a}: bootstrap runs", len(seeds))
+    for k, s in enumerate(seeds):
+        x = _simulate_axis(spec, run.n, run.sample_rate_hz, s, i)
+        out["bias_dps"].append(float(np.mean(x)))
+        out["arw_dps_per_sqrt_hz"].append(noise_sigma(x, run.sample_rate_hz, run.q or 0.0) / math.sqrt(run.sample_rate_hz))
+        try:
+            out["findings"].append(reestimate_axis(x, run.sample_rate_hz, temp, cands, resolved, run.q or 0.0))
+        except (ValueError, ArithmeticError):  # a fit that cannot run on this replicate
+            out["findings"].append([None] * len(cands))
+        bar.step(k + 1)
+    return out
+
+
+def _forward(values, scale):
+    v = np.asarray(values, dtype=float)
+    if scale == "log":
+        return np.log(np.where(v > 0, v, np.nan))
+    if scale == "atanh":
+        return np.arctanh(np.where(np.abs(v) < 1, v, np.nan))
+    return v
+
+
+def _back(u, scale):
+    if scale == "log":
+        return math.exp(u)
+    if scale == "atanh":
+        return math.tanh(u)
+    return u
+
+
+def _interval(estimate, replicates, scale):
+    """The bias-corrected normal-t interval of the module docstring, ``[low, high]``, or None
+    when fewer than :data:`MIN_REPLICATES` replicates have the parameter."""
+    from scipy.stats import t as student_t
+
+    values = [np.nan if r is None else float(r) for r in replicates]
+    if scale == "log" and not estimate > 0:
+        scale = "linear"
+    u_hat = float(_forward([estimate], scale)[0])
+    u = _forward(values, scale)
+    u = u[np.isfinite(u)]
+    if u.size < MIN_REPLICATES or not math.isfinite(u_hat):
+        return None
+    dev = u - u_hat
+    if scale == "phase":
+        dev = (dev + math.pi) % (2 * math.pi) - math.pi
+    b = u.size
+    bias, sd = float(np.mean(dev)), float(np.std(dev, ddof=1))
+    half = float(student_t.ppf(0.5 + CONFIDENCE / 2, b - 1)) * math.sqrt(1 + 1 / b) * sd
+    centre = u_hat - bias
+    return [_back(centre - half, scale), _back(centre + half, scale)]
+
+
+def _baseline_analytic(run, i, base_axis):
+    """Intervals of the white-noise baseline of axis ``i`` (module docstring)."""
+    n = run.n
+    z = NormalDist().inv_cdf(0.5 + CONFIDENCE / 2)
+    q2 = (run.q or 0.0) ** 2 / 12.0
+    sigma2 = (base_axis["arw_dps_per_sqrt_hz"] ** 2) * run.sample_rate_hz
+    total = sigma2 + q2
+    if not total > 0:
+        return
+    se_mean = math.sqrt(total / n)
+    bias = base_axis["bias_dps"]
+    rel = z * math.sqrt(2.0 / n) * total / max(sigma2, 1e-300)
+    base_axis["params_ci95"] = {
+        "bias_dps": [bias - z * se_mean, bias + z * se_mean],
+        "arw_dps_per_sqrt_hz": [base_axis["arw_dps_per_sqrt_hz"] * math.sqrt(max(1 - rel, 0.0)),
+                                base_axis["arw_dps_per_sqrt_hz"] * math.sqrt(1 + rel)]}
