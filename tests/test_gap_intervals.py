@@ -8,6 +8,7 @@ The coverage figures per kind, on more cases, are in docs/gap.md (``tools/gap_co
 """
 import json
 import math
+from statistics import NormalDist
 
 import numpy as np
 import pytest
@@ -122,15 +123,27 @@ class _BaselineRun:
 @pytest.mark.parametrize("family", FAMILIES)
 def test_a_hidden_effect_lies_inside_its_intervals(family):
     """One 30-minute case per family (the standard battery's shortest record; the effect drawn
-    from the family by the seed): every true parameter inside its interval, every interval
-    finite and ordered. A single case misses 5 % of the time: the rates are the slow test's and
+    from the family by the seed): every true parameter inside its interval widened to 99.9 %,
+    every interval finite and ordered. The 95 % rates are the slow test's and
     tools/gap_coverage.py's."""
     case = _family_case(family, 500 + list(FAMILIES).index(family), duration_s=1800.0)
     report = analyse_gap(he.simulate_case(case), seed=case["seed"], n_sims=SIMS)
     _check_finite_and_ordered(report)
     f = _hit(case, report)
     for name in f["params"]:
-        assert _inside(_true(case, name), f["params_ci95"][name], name), (case["effect"], name, case["params"], f)
+        interval = _widened(f["params_ci95"][name], gi.SCALES.get(case["effect"], {}).get(name, "linear"))
+        assert _inside(_true(case, name), interval, name), (case["effect"], name, case["params"], f)
+
+
+def _widened(interval, scale, confidence=0.999):
+    """The 95 % interval stretched about its centre, on its scale, to ``confidence`` (normal
+    quantiles): a single case then misses 0.1 % of the time, not 5 %, and the test stays
+    able to fail when an interval is off by more than its own width."""
+    z = NormalDist().inv_cdf(0.5 + confidence / 2) / NormalDist().inv_cdf(0.975)
+    scale = scale if scale in ("log", "atanh") and (scale != "log" or interval[0] > 0) else "linear"
+    lo, hi = gi._forward(interval, scale)
+    mid, half = (lo + hi) / 2, z * (hi - lo) / 2
+    return [gi._back(mid - half, scale), gi._back(mid + half, scale)]
 
 
 def test_a_hidden_narrowband_lies_inside_its_intervals():

@@ -534,6 +534,12 @@ def gap_battery_tails():
                          for effect, size, seed in runs)
 
 
+@block("gap-coverage", "docs/gap.md", "tools/gap_coverage.py", slow=True)
+def gap_coverage():
+    return fence(tool("gap_coverage.py", "--cases", "60", "--duration", "600", "--seed", "9000",
+                      keep=lambda line: not line.startswith(("case ", "  "))))
+
+
 @block("gap-heavy-tails", "docs/gap.md", "tools/gap_heavy_tails.py --real --adis DIR (DIR: the ADIS16405 records)", slow=True)
 def gap_heavy_tails():
     adis = data_dir("adis16405_long")
