@@ -96,7 +96,7 @@ def unresolved_text(r, min_clusters):
         return ""
     longest = r.tau_s[r.fit_used][-1]
     return (f"{', '.join(missing)} not resolved: the longest cluster time with {min_clusters} clusters is "
-            f"{longest:.3g} s; slower effects need a longer still recording; the bounds above hold")
+            f"{longest:.3g} s; slower effects need a longer still recording")
 
 
 def run(args):
@@ -140,7 +140,7 @@ def run(args):
             print(f"    ({line})")
         missing = unresolved_text(r, args.min_clusters)
         if missing:
-            print(f"    ({missing})")
+            print(f"    ({missing}; the bounds above hold)")
         console.print_warnings(r.warnings)
     # every result is finite here; each file appears only when it is complete
     if args.json:
