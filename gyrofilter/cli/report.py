@@ -138,8 +138,6 @@ def compute(path, *, seed, sims, keep_outliers, warn, progress):
     filtered, filter_error = _filter(path)
     if filter_error:
         warned(f"not filtered: {filter_error}")
-    for note in gap_doc.get("notes", []):
-        warned(f"gap analysis: {note}")
     data = report_data(recording=json_ready(recording), allan=allan_doc, gap=json_ready(gap_doc),
                        filter_summary=filtered.summary() if filtered else None, warnings=found,
                        options={"seed": seed, "sims": sims, "keep_outliers": keep_outliers}, version=__version__,
