@@ -99,7 +99,8 @@ def _summary(data):
             rows.append((key, text if len(text) <= _LONG_TEXT else text[:_LONG_TEXT] + " ..."))
     if rec.get("t_gaps"):
         rows.append(("gaps in t", f"{rec['t_gaps']} step(s) longer than 1.5 sample intervals"))
-    rows.append(("options", ", ".join(f"{k} {v}" for k, v in opts.items())))
+    rows.append(("options", f"--seed {opts['seed']}, --sims {opts['sims'] or 'as gap chooses'}"
+                            + (", --keep-outliers" if opts["keep_outliers"] else "")))
     return "<h2>Recording</h2>" + _table(["", ""], rows, header_row=False)
 
 
