@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import time
-from html.parser import HTMLParser
 
 import numpy as np
 import pytest
@@ -16,45 +15,15 @@ import pytest
 from gyrofilter.analysis.still import clipped
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
-from gyrofilter.view.report import DATA_ID, FORMAT
+from gyrofilter.view.report import FORMAT
 from support import REPO, RECORDINGS
+from support.report_page import parse
 
 STATIC = str(RECORDINGS / "mpu6050_static_100s.csv.gz")
 MULTIPOSE = str(RECORDINGS / "mpu6050_multipose_102s.csv.gz")  # saturates: x 12 samples, z 6 (its header says)
 #: the shipped recordings whose report takes more than a few seconds (the gap analysis of long or moving records)
 SLOW = {"broad_02_slow", "broad_05_slow_breaks", "broad_07_fast", "broad_09_fast_breaks", "mpu6050_rotate_x90_100s",
         "mpu6050_static_449s", "mpu6050_static_655s"}
-
-
-class _Page(HTMLParser):
-    """What a self-contained page must be checked for: every tag with its attributes, the
-    scripts' types and the text of the data block."""
-
-    def __init__(self):
-        super().__init__()
-        self.tags, self.scripts, self.data, self._in_data = [], [], None, False
-
-    def handle_starttag(self, tag, attrs):
-        attrs = dict(attrs)
-        self.tags.append((tag, attrs))
-        if tag == "script":
-            self.scripts.append(attrs.get("type"))
-            self._in_data = attrs.get("id") == DATA_ID
-
-    def handle_endtag(self, tag):
-        if tag == "script":
-            self._in_data = False
-
-    def handle_data(self, data):
-        if self._in_data:
-            self.data = (self.data or "") + data
-
-
-def parse(path):
-    page = _Page()
-    page.feed(open(path, encoding="utf-8").read())
-    page.close()
-    return page
 
 
 def report(tmp_path, capsys, *args, name="report.html"):
