@@ -157,6 +157,18 @@ def test_source_records_first_then_reports(tmp_path, capsys):
     assert "exists (use --force" in capsys.readouterr().err and not (tmp_path / "other.html").exists()
 
 
+def test_a_paced_replay_source_records_its_first_seconds(tmp_path, capsys):
+    """The real replay:FILE,realtime source: the recording kept is the file's first 20 s, sample for sample."""
+    out, kept = tmp_path / "r.html", tmp_path / "first20.csv.gz"
+    assert main(["report", "--source", f"replay:{STATIC},realtime,speed=20", "--duration", "20", "--out", str(out),
+                 "--recording-out", str(kept), "--sims", "4"]) == 0
+    capsys.readouterr()
+    got, whole = read_recording(kept), read_recording(STATIC)
+    assert len(got) == 2000
+    np.testing.assert_array_equal(got.gyro, whole.gyro[:2000])
+    assert json.loads(parse(out).data)["recording"]["samples"] == 2000
+
+
 def test_an_interrupted_recording_is_kept_and_reported(tmp_path):
     """Ctrl-C ends the recording early: the recording reads, the report covers it (exit 0)."""
     out, kept = tmp_path / "r.html", tmp_path / "r.csv"
