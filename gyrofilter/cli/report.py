@@ -83,13 +83,14 @@ def run(args):
         path = args.recording_out or default_recording_path(args.out)
         live.check_duration(args.duration)
         outputs.check_outputs([args.out, path], live.source_files(args.source), args.force)
-        _check_writable(args.out)
+        _check_writable(args.out)  # before the recording, which may take long
         status = _record_first(args, path, show)
         if status:
             return status
     else:
         path = args.recording
         outputs.check_outputs([args.out], [path], args.force)
+        _check_writable(args.out)
     data, envelopes = compute(path, seed=args.seed, sims=args.sims, keep_outliers=args.keep_outliers,
                               warn=console.say_warning, progress=progress)
     page = report_page(data, *envelopes)
@@ -188,7 +189,7 @@ def _check_source_options(args):
 
 
 def _check_writable(out):
-    """Refuse, before a recording, an --out whose folder cannot be written (the nearest existing one)."""
+    """Refuse, before any work, an --out whose folder (the nearest that exists) cannot be written."""
     folder = os.path.dirname(os.path.abspath(out))
     while not os.path.isdir(folder):
         folder = os.path.dirname(folder)
