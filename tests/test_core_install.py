@@ -1,4 +1,4 @@
-"""A core install (``pip install gyrofilter``, no extras) runs replay, allan, gap and simulate; a
+"""A core install (``pip install gyrofilter``, no extras) runs replay, allan, gap, simulate and report; a
 command that needs an extra stops with one line naming it, not a traceback.
 
 The commands run in a subprocess with the optional packages made unimportable
@@ -54,6 +54,14 @@ def test_core_commands_run_without_the_extras(tmp_path, args, blocked):
     assert "Traceback" not in out.stderr
     assert "No module named" not in out.stdout + out.stderr  # no analysis silently skipped
     assert out.stdout.strip()
+
+
+def test_the_report_runs_without_the_extras(tmp_path):
+    """Its figures are the package's own SVG: no matplotlib."""
+    out = _run(["report", str(RECORDING), "--out", "r.html", "--sims", "6"], OPTIONAL, tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "Traceback" not in out.stderr and "No module named" not in out.stderr
+    assert (tmp_path / "r.html").read_text(encoding="utf-8").count("<svg ") == 6
 
 
 @pytest.mark.parametrize("args,package", [

@@ -5,6 +5,7 @@ import re
 import numpy as np
 import pytest
 
+from gyrofilter.cli import main
 from gyrofilter.filter.calibration import Calibration
 from gyrofilter.analysis.noise_export import JSON_KEY
 from gyrofilter.recording import read_recording
@@ -12,6 +13,7 @@ from gyrofilter.sim.model import EFFECTS, validate_model
 from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources import KINDS
 from support import REPO, tool
+from support.report_page import parse
 
 ROOT = REPO
 DOC = (ROOT / "docs" / "formats.md").read_text(encoding="utf-8")
@@ -114,6 +116,17 @@ def test_allan_example_uses_the_coefficient_keys_of_the_code():
         assert len(axis["tau_s"]) == len(axis["adev_dps"])
     for key in JSON_KEY.values():
         assert f"`{key}`" in section(4)
+
+
+def test_report_example_has_the_keys_of_the_report(tmp_path, capsys):
+    doc = json.loads(example(10, "json"))
+    out = tmp_path / "r.html"
+    assert main(["report", str(ROOT / "recordings" / "mpu6050_static_100s.csv.gz"), "--out", str(out), "--sims", "2"]) == 0
+    capsys.readouterr()
+    data = json.loads(parse(out).data)
+    assert set(doc) == set(data) and doc["format"] == data["format"]
+    for key in ("recording", "options", "filter"):
+        assert set(doc[key]) == set(data[key]), key
 
 
 def test_calibration_example_loads(tmp_path):

@@ -7,9 +7,7 @@ own that installs chromium and chromium-driver). They skip with the reason when 
 driver or selenium is missing. ``GYROFILTER_LIVE_SCREENSHOT=docs/figures/live_view.png pytest -m
 browser`` also writes the README's screenshot (no assertion is made on its pixels).
 """
-import importlib.util
 import os
-import shutil
 import signal
 
 import numpy as np
@@ -18,47 +16,14 @@ import pytest
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
 from support import REPO
+from support.browser import browser, console_errors, missing  # noqa: F401 (browser: the fixture)
 from support.live import EventReader, StalledClient, start_run, status, wait_for
 
-CHROMIUM = "/usr/bin/chromium"
-CHROMEDRIVER = "/usr/bin/chromedriver"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync",
-         "--disable-dev-shm-usage", "--window-size=1400,1000"]
 # still, a 90-degree turn about x at 15-22 s, still; relative to the repository, where the run starts
 ROTATION = "recordings/mpu6050_rotate_x90_100s.csv.gz"
 IDS = ("plot-x", "plot-y", "plot-z", "rows-out", "samples-in", "lost-samples", "calibration")
 
-
-def _missing():
-    if not os.path.exists(CHROMIUM):
-        return f"needs Debian's chromium at {CHROMIUM} (apt-get install chromium chromium-driver)"
-    if not os.path.exists(CHROMEDRIVER):
-        return f"needs chromium-driver at {CHROMEDRIVER} (apt-get install chromium-driver)"
-    if importlib.util.find_spec("selenium") is None:
-        return "needs selenium (pip install -e '.[test]')"
-    return None
-
-
-pytestmark = [pytest.mark.browser, pytest.mark.skipif(_missing() is not None, reason=str(_missing()))]
-
-
-@pytest.fixture
-def browser(tmp_path):
-    from selenium import webdriver
-    from selenium.webdriver.chrome.options import Options
-    from selenium.webdriver.chrome.service import Service
-
-    options = Options()
-    options.binary_location = CHROMIUM
-    for flag in FLAGS + [f"--user-data-dir={tmp_path / 'chromium-profile'}"]:
-        options.add_argument(flag)
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
-    driver.set_page_load_timeout(30)
-    yield driver
-    driver.quit()
-    shutil.rmtree(tmp_path / "chromium-profile", ignore_errors=True)
+pytestmark = [pytest.mark.browser, pytest.mark.skipif(missing() is not None, reason=str(missing()))]
 
 
 def rows_out(driver):
@@ -81,10 +46,6 @@ def check_page(driver, port):
     assert driver.find_element("id", "lost-samples").text == "0"
     wait_for(lambda: driver.find_element("id", "calibration").text == "calibrated", what="the calibration")
     assert driver.find_element("id", "connection").text == "live"
-
-
-def console_errors(driver):
-    return [entry for entry in driver.get_log("browser") if entry["level"] == "SEVERE"]
 
 
 def test_a_paced_replay_under_load(browser, tmp_path, capsys):

@@ -571,6 +571,11 @@ def bench_gap():
     return fence(tool("bench_gap.py"))
 
 
+@block("bench-report", "docs/report.md", "tools/bench_report.py", slow=True)
+def bench_report():
+    return fence(tool("bench_report.py"))
+
+
 @block("gap-closure", "docs/gap_closure.md", "tools/gap_closure.py --adis DIR (DIR: the ADIS16405 records)", slow=True)
 def gap_closure():
     adis = data_dir("adis16405_long")

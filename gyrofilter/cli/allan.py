@@ -72,6 +72,33 @@ def readoff_only(r):
     return out
 
 
+def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn, progress=None):
+    """What ``allan`` computes of one recording ``path``: (head, {axis: AxisNoise}, the ``--json``
+    document of docs/formats.md section 4), through :func:`~gyrofilter.analysis.still.characterise_recording`
+    (its arguments, ``warn(text)`` and ``progress(text)`` included) and
+    :func:`~gyrofilter.analysis.noise_export.to_json`; the duration is rows / sample rate (s).
+    A result that is not finite raises AllanInputError naming the file."""
+    try:
+        head, results = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
+                                               keep_outliers=keep_outliers, warn=warn, progress=progress)
+    except AllanInputError as exc:  # the data of this file: name it
+        raise AllanInputError(f"{path}: {exc}") from None
+    duration_s = head.rows / head.sample_rate_hz
+    return head, results, to_json(results, head.sample_rate_hz, recording=path, duration_s=duration_s)
+
+
+def unresolved_text(r, min_clusters):
+    """What the record ``r`` (an AxisNoise) is too short to resolve: the slow terms (B, K, R) the fit
+    left unresolved and the longest cluster time with ``min_clusters`` clusters, or "" when it
+    resolves them all."""
+    missing = [TERM_SYMBOL[t] for t in ("bias_instability", "rrw", "rate_ramp") if r.fitted[t].value is None]
+    if not missing:
+        return ""
+    longest = r.tau_s[r.fit_used][-1]
+    return (f"{', '.join(missing)} not resolved: the longest cluster time with {min_clusters} clusters is "
+            f"{longest:.3g} s; slower effects need a longer still recording")
+
+
 def run(args):
     axes = args.axes
     if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
@@ -91,12 +118,9 @@ def run(args):
     if args.plot:
         check_figure_path(args.plot)
     progress = console.say if args.progress or sys.stderr.isatty() else None
-    try:
-        head, results = characterise_recording(args.recording, axes=axes, confidence=args.confidence,
-                                               min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
-                                               warn=console.say_warning, progress=progress)
-    except AllanInputError as exc:  # the data of this file: name it
-        raise AllanInputError(f"{args.recording}: {exc}") from None
+    head, results, document = analyse(args.recording, axes=axes, confidence=args.confidence,
+                                      min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
+                                      warn=console.say_warning, progress=progress)
     sample_rate_hz = head.sample_rate_hz
     duration_s = head.rows / sample_rate_hz
     print(f"recording: {args.recording}")
@@ -114,16 +138,14 @@ def run(args):
                   f" slope read-off: {_fmt(ro, base)}")
         for line in readoff_only(r):
             print(f"    ({line})")
-        missing = [TERM_SYMBOL[t] for t in ("bias_instability", "rrw", "rate_ramp") if r.fitted[t].value is None]
+        missing = unresolved_text(r, args.min_clusters)
         if missing:
-            longest = r.tau_s[r.fit_used][-1]
-            print(f"    ({', '.join(missing)} not resolved: the longest cluster time with {args.min_clusters} clusters is "
-                  f"{longest:.3g} s; slower effects need a longer still recording; the bounds above hold)")
+            print(f"    ({missing}; the bounds above hold)")
         console.print_warnings(r.warnings)
     # every result is finite here; each file appears only when it is complete
     if args.json:
         with outputs.replacing(args.json) as tmp:
-            outputs.write_json_document(tmp, to_json(results, sample_rate_hz, recording=args.recording, duration_s=duration_s))
+            outputs.write_json_document(tmp, document)
         console.say(f"wrote {args.json}")
     if args.kalibr:
         with outputs.replacing(args.kalibr) as tmp:

@@ -46,12 +46,31 @@ def add_arguments(parser):
     options.add_force_argument(parser)
 
 
+def check_options(seed, sims, bootstrap=DEFAULT_BOOTSTRAP):
+    """Refuse a ``--seed``, ``--sims`` (None: the default) or ``--bootstrap`` that the analysis
+    cannot take, naming the option."""
+    if sims is not None and not 2 <= sims <= MAX_SIMS:
+        raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {sims}")
+    if not 0 <= bootstrap <= MAX_BOOTSTRAP:
+        raise SettingsError(f"--bootstrap must be in [0, {MAX_BOOTSTRAP}], got {bootstrap}")
+    check_seed(seed, "--seed")
+
+
+def analyse(path, *, seed=0, sims=None, bootstrap=DEFAULT_BOOTSTRAP, warn, progress):
+    """What ``gap`` computes of one recording ``path``: (the Recording, the gap report, which is
+    the ``--json`` document of docs/formats.md), through :func:`~gyrofilter.analysis.gap.analyse_gap`
+    with ``seed``, ``sims`` (``n_sims``) and ``bootstrap``. The reader's warnings and the gaps in ``t`` go to
+    ``warn(text)``, the steps to ``progress(text)``."""
+    rec = read_recording(path)
+    for text in rec.warnings:
+        warn(text)
+    warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)
+    progress(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
+    return rec, analyse_gap(rec, seed=seed, n_sims=sims, progress=progress, recording_name=path, bootstrap=bootstrap)
+
+
 def run(args):
-    if args.sims is not None and not 2 <= args.sims <= MAX_SIMS:
-        raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {args.sims}")
-    if not 0 <= args.bootstrap <= MAX_BOOTSTRAP:
-        raise SettingsError(f"--bootstrap must be in [0, {MAX_BOOTSTRAP}], got {args.bootstrap}")
-    check_seed(args.seed, "--seed")
+    check_options(args.seed, args.sims, args.bootstrap)
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--report"])
@@ -71,13 +90,8 @@ def run(args):
 
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis
-    rec = read_recording(args.recording)
-    console.print_warnings(rec.warnings)
-    warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful",
-                    console.say_warning)
-    progress(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
-    report = analyse_gap(rec, seed=args.seed, n_sims=args.sims, progress=progress,
-                         recording_name=args.recording, bootstrap=args.bootstrap)
+    rec, report = analyse(args.recording, seed=args.seed, sims=args.sims, bootstrap=args.bootstrap,
+                          warn=console.say_warning, progress=progress)
     with contextlib.ExitStack() as files:
         outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
         if args.report:

@@ -23,9 +23,10 @@ FLUSH_INTERVAL_S = 0.5  # the --out recording is flushed at least this often: wh
 EXIT_DISCONNECTED = 1
 
 
-def add_source_arguments(parser):
-    """--source and the unit options for devices that send no header (``record`` and ``run``)."""
-    parser.add_argument("--source", required=True, metavar="SOURCE", help=SOURCE_HELP)
+def add_source_arguments(parser, required=True):
+    """--source (``required`` or not) and the unit options for devices that send no header (``record``,
+    ``run`` and ``report``)."""
+    parser.add_argument("--source", required=required, metavar="SOURCE", help=SOURCE_HELP)
     parser.add_argument("--duration", type=options.decimal, metavar="S",
                         help="stop after S seconds of samples (default: until Ctrl-C, SIGTERM, SIGHUP or the end of the source)")
     parser.add_argument("--gyro-unit", choices=GYRO_UNITS,

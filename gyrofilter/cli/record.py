@@ -52,18 +52,23 @@ def run(args):
     outputs.check_outputs([args.out], live.source_files(args.source), args.force)
     source = live.open_from_args(args)
     try:
-        return _record(args, source)
+        return record(source, args.source, args.out, args.duration,
+                      show_status=args.progress or (sys.stderr.isatty() and not args.quiet))
     finally:
         source.close()
 
 
-def _record(args, source):
-    header = recording_header(source, args.source)
+def record(source, spec, out, duration_s, *, show_status, command="gyrofilter record"):
+    """Record the open ``source`` (opened from the SOURCE text ``spec``) to the recording ``out``
+    until a stop signal, its end, a device failure or ``duration_s`` seconds (None: no limit),
+    with a status line on stderr when ``show_status``; the summary goes to stderr, headed ``command``. Returns the
+    exit status: 0, or ``live.EXIT_DISCONNECTED`` when the device failed (what it gave is kept)."""
+    header = recording_header(source, spec)
     columns = list(source.columns)
-    loop = live.LiveLoop(source, args.duration)
-    status = live.Status(args.progress or (sys.stderr.isatty() and not args.quiet), loop.sample_rate_hz)
+    loop = live.LiveLoop(source, duration_s)
+    status = live.Status(show_status, loop.sample_rate_hz)
     wall0 = time.monotonic()
-    writer = live.LiveOutput(args.out, header, columns, None, "sample")  # every value exactly as the source gave it
+    writer = live.LiveOutput(out, header, columns, None, "sample")  # every value exactly as the source gave it
     try:
         with loop:
             last_flush = time.monotonic()
@@ -87,16 +92,16 @@ def _record(args, source):
             reason = loop.reason()
             writer.note(f"{END_NOTE}{reason}; {loop.samples} samples; " + (live.source_summary(source.stats) or "no losses"))
     except BaseException as exc:
-        live.close_after_failure(writer, exc, "gyrofilter record")
+        live.close_after_failure(writer, exc, command)
         raise
     left = writer.close(loop.failed())
     stats = source.stats
     print(
-        f"gyrofilter record: {reason}\n"
-        f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.sample_rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {args.out}\n"
+        f"{command}: {reason}\n"
+        f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.sample_rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {out}\n"
         f"  lost {stats.get('lost_samples', 0)} samples"
         + (f"; {live.source_summary(stats)}" if live.source_summary(stats) else "")
-        + (f"\n  {args.out}: {left}" if left else ""),
+        + (f"\n  {out}: {left}" if left else ""),
         file=sys.stderr,
     )
     return live.EXIT_DISCONNECTED if loop.failed() else 0

@@ -28,6 +28,7 @@ from ..filter.settings import SETTING_NAMES
 from ..filter.smoother import SMOOTHABLE_PRESETS, Smoother
 from ..recording import CHUNK_ROWS, COLUMNS, RecordingWriter, dps_header, header_text, iter_recording, note_line, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
+from ..units import json_ready
 from . import console, filtering, options, outputs
 
 BUNDLED = "mpu6050_static_100s.csv.gz"
@@ -59,22 +60,15 @@ def run(args):
     filtering.refuse_filtered_output(head.header, path)
     filt = filtering.make_filter(args, head.sample_rate_hz)
     filtering.check_temperature(filt, "temp" in head.names, path)
-    replay = _Replay(path, head, filt, plot=bool(args.plot), smoother=Smoother(filt) if args.smooth else None,
-                     calibration_from=args.calibration)
+    replay = Replay(path, head, filt, plot=bool(args.plot), smoother=Smoother(filt) if args.smooth else None,
+                    calibration_from=args.calibration)
     with contextlib.ExitStack() as files:
         if args.out:
             replay.out_path, replay.out_name = files.enter_context(outputs.replacing(args.out)), args.out
             files.callback(replay.close)
         if args.realtime:  # stdout is a recording (format v1) too
             replay.print_rows(header_text(replay.stdout_header(), OUT_COLUMNS, "stdout").rstrip("\n"))
-        for chunk in chunks:
-            try:
-                replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in),
-                            head.column(chunk, "temp"), args.realtime)
-            except SampleError as exc:  # the filter refused a sample (beyond its range): name the file's line
-                raise RecordingError(f"{path}: line {head.line_of_row(filt.samples_in + exc.row)}: {exc.reason}") from None
-        _refuse_nothing_filtered(path, head, filt)
-        replay.finish()
+        feed_recording(replay, chunks, args.realtime)
         replay.close()
         # every output goes through replacing(): all land when the command succeeds, none when it fails
         if args.plot:
@@ -97,6 +91,21 @@ def run(args):
     return 0
 
 
+def feed_recording(replay, chunks, realtime=False):
+    """Feed the rest of the recording's ``chunks`` (:func:`~gyrofilter.recording.iter_recording`
+    after its head) through ``replay`` (a :class:`Replay`, paced with ``realtime``) and finish it.
+    RecordingError naming the file's line of a sample the filter refuses, and when nothing was
+    filtered (:func:`_refuse_nothing_filtered`)."""
+    path, head, filt = replay.path, replay.head, replay.filt
+    for chunk in chunks:
+        try:
+            replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in), head.column(chunk, "temp"), realtime)
+        except SampleError as exc:  # the filter refused a sample (beyond its range): name the file's line
+            raise RecordingError(f"{path}: line {head.line_of_row(filt.samples_in + exc.row)}: {exc.reason}") from None
+    _refuse_nothing_filtered(path, head, filt)
+    replay.finish()
+
+
 def _refuse_nothing_filtered(path, head, filt):
     """A recording without samples, or one that ends inside the start-up calibration window,
     has nothing to filter: an error (no output is kept), not an empty result."""
@@ -114,20 +123,21 @@ def _refuse_nothing_filtered(path, head, filt):
 _LOST_IN_BLOCKS = "the input lost samples in most filter blocks here; not written, it would not read back"
 
 
-class _Replay:
+class Replay:
     """Feeds chunks to the filter and passes its rows on: to the output file, the running
-    statistics and the plot envelopes. ``raw`` are the samples of the blocks that produced a
-    row (calibration and an unfinished last block left out). With a ``smoother`` the rows are
-    passed on by :meth:`finish`, smoothed, with the time stamps collected on the way."""
+    statistics and the plot envelopes (with ``plot``: at most ``plot_buckets`` buckets each, or
+    :class:`~gyrofilter.streamstats.Envelope`'s default). ``raw`` are the samples of the blocks that
+    produced a row (calibration and an unfinished last block left out). With a ``smoother`` the
+    rows are passed on by :meth:`finish`, smoothed, with the time stamps collected on the way."""
 
-    def __init__(self, path, head, filt, plot, smoother=None, calibration_from=None):
+    def __init__(self, path, head, filt, plot, smoother=None, calibration_from=None, plot_buckets=None):
         self.path, self.head, self.filt, self.smoother = path, head, filt, smoother
         self.calibration_from = calibration_from
         self._row_times = []
         self.raw = RunningMoments(3)
         self.filtered = RunningMoments(3)
-        self.raw_envelope = Envelope(3) if plot else None
-        self.filtered_envelope = Envelope(3) if plot else None
+        self.raw_envelope = self._envelope(plot_buckets) if plot else None
+        self.filtered_envelope = self._envelope(plot_buckets) if plot else None
         self.out_path = None  # the temporary file written, for the user's out_name
         self.out_name = None
         self._writer = None
@@ -136,6 +146,27 @@ class _Replay:
         self._wall_start = None
         self.stdout_open = True  # False once the reader of --realtime's rows went away (| head)
         self.lines_printed = 0
+
+    @staticmethod
+    def _envelope(buckets):
+        return Envelope(3) if buckets is None else Envelope(3, buckets)
+
+    def summary(self):
+        """The numbers of replay's summary table (:func:`~gyrofilter.cli.console.print_summary`),
+        JSON-ready: the preset, rates (Hz), the start-up bias (deg/s, None without a calibration),
+        rows, and per axis the raw and filtered mean and standard deviation (deg/s; None where
+        undefined), their std ratio and the rejected samples."""
+        filt, raw, filtered = self.filt, self.raw, self.filtered
+        cal = filt.calibration
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = raw.std / filtered.std
+        return json_ready({
+            "preset": filt.preset, "sample_rate_hz": filt.sample_rate_hz, "output_rate_hz": filt.output_rate_hz,
+            "samples_in": filt.samples_in, "rows_out": filtered.count,
+            "bias_dps": None if cal is None else list(cal.bias_dps),
+            "calibration_samples": None if cal is None else cal.samples,
+            "raw_mean_dps": raw.mean, "raw_std_dps": raw.std, "filtered_mean_dps": filtered.mean,
+            "filtered_std_dps": filtered.std, "std_ratio": ratio, "rejected": [int(n) for n in filt.rejected]})
 
     def feed(self, gyro, t_s, temps, realtime):
         filt = self.filt

@@ -1,0 +1,277 @@
+"""The sensor report of ``gyrofilter report``: one self-contained HTML page (docs/report.md).
+
+:func:`report_page` turns the report's data (:func:`report_data`: the ``allan --json`` and
+``gap --json`` documents as those commands write them, replay's filter summary, the warnings)
+and the filter's min/max envelopes into the page. Everything shown is read from that data,
+which the page also carries whole in ``<script type="application/json" id="report-data">``
+(docs/formats.md, section 10), so that the numbers a reader sees are the numbers a program
+reads. The figures are inline SVG (:mod:`gyrofilter.view.svg`); the page loads nothing (no
+URL, no script to run), so it reads offline, attached to a bug report or a mail.
+
+A pure function of its arguments: numbers in, text out; nothing here reads a file or prints.
+"""
+from __future__ import annotations
+
+import html
+import json
+
+import numpy as np
+
+from ..analysis.gap_report import alternatives_text
+from ..analysis.noise_export import JSON_KEY, JSON_UNIT
+from ..analysis.noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
+from ..units import AXES
+from .svg import Band, Line, figure
+
+#: the format of the embedded data block (docs/formats.md, section 10)
+FORMAT = "gyrofilter-report 1"
+#: the id of the embedded data block
+DATA_ID = "report-data"
+AXIS_COLOURS = {"x": "#c0392b", "y": "#27864a", "z": "#2e5fa8"}
+#: the header keys the summary shows, in this order (the data block has the whole header)
+SUMMARY_KEYS = ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc", "live_source", "recorded_by",
+                "description")
+_LONG_TEXT = 400  # characters of a header value the summary shows
+_NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
+          "rrw": "rate random walk", "rate_ramp": "rate ramp"}
+
+_STYLE = """
+body { font-family: sans-serif; margin: 0 auto; padding: 0 16px 32px; max-width: 1180px; color: #222; line-height: 1.4; }
+h1 { font-size: 1.5em; margin-top: 18px; } h2 { border-bottom: 1px solid #ccc; margin-top: 28px; } h3 { margin-bottom: 4px; }
+table { border-collapse: collapse; margin: 8px 0; } td, th { border: 1px solid #ccc; padding: 3px 8px; vertical-align: top; }
+th { background: #f2f2f2; text-align: left; } td.num { text-align: right; font-family: monospace; white-space: nowrap; }
+.figures { display: grid; grid-template-columns: repeat(auto-fit, minmax(320px, 1fr)); gap: 12px; }
+.warnings li { margin: 4px 0; } .warnings { background: #fff6e0; border: 1px solid #e0b050; padding: 8px 8px 8px 28px; }
+.ok { background: #eaf6ea; border: 1px solid #8c8; padding: 8px; } .small { font-size: 0.9em; color: #555; }
+.scroll { overflow-x: auto; }
+"""
+
+
+def report_data(*, recording, allan, gap, filter_summary, warnings, options, version, allan_error=None,
+                filter_error=None):
+    """The report's data block (docs/formats.md, section 10): ``allan`` (the ``allan --json``
+    document, None when allan refused the record: ``allan_error`` says why), ``gap`` (the ``gap
+    --json`` document), ``filter_summary`` (:meth:`~gyrofilter.cli.replay.Replay.summary`, None
+    with ``filter_error``), ``recording`` (name, header, samples, duration), the ``warnings``
+    (lines of text), the ``options`` that change numbers, and the gyrofilter ``version``."""
+    return {"format": FORMAT, "gyrofilter_version": version, "recording": recording, "options": options,
+            "warnings": list(warnings), "filter": filter_summary, "filter_error": filter_error,
+            "allan": allan, "allan_error": allan_error, "gap": gap}
+
+
+def report_page(data, raw_envelope=None, filtered_envelope=None):
+    """The HTML page (text) of the report ``data`` (:func:`report_data`), with the filter's
+    trace drawn from the :class:`~gyrofilter.streamstats.Envelope` of the raw samples minus the
+    start-up bias and of the filtered rows (none without them)."""
+    rec = data["recording"]
+    title = f"gyrofilter sensor report: {rec['name']}"
+    parts = ["<!DOCTYPE html>", "<html lang='en'><head><meta charset='utf-8'>",
+             "<meta name='viewport' content='width=device-width, initial-scale=1'>",
+             f"<title>{_esc(title)}</title><style>{_STYLE}</style></head><body>",
+             f"<h1>{_esc(title)}</h1>",
+             _summary(data), _warnings(data["warnings"]), _filter(data, raw_envelope, filtered_envelope),
+             _allan(data), _gap(data),
+             "<p class='small'>Made by gyrofilter " + _esc(data["gyrofilter_version"]) + " (<code>gyrofilter report</code>). "
+             f"Every number above is in the JSON block <code>#{DATA_ID}</code> of this file (docs/formats.md, "
+             "section 10): the documents of <code>allan --json</code> and <code>gap --json</code> as those commands "
+             "write them, and replay's filter summary.</p>",
+             f"<script type='application/json' id='{DATA_ID}'>{embedded_json(data)}</script>",
+             "</body></html>"]
+    return "\n".join(parts) + "\n"
+
+
+def embedded_json(data):
+    """``data`` as JSON that can sit inside a script element: every ``<`` written as ``\\u003c``
+    (the same JSON value), so that no text in it ends the element."""
+    return json.dumps(data, allow_nan=False, separators=(",", ":")).replace("<", "\\u003c")
+
+
+def _summary(data):
+    rec, opts = data["recording"], data["options"]
+    header = rec["header"]
+    rows = [("file", rec["name"]), ("samples", f"{rec['samples']} at {_num(header.get('sample_rate_hz'))} Hz "
+                                                f"({rec['duration_s']:.1f} s)"),
+            ("unit in the file", header.get("gyro_unit", "") + (f", {header['lsb_per_dps']} LSB per deg/s"
+                                                                  if header.get("lsb_per_dps") else ""))]
+    for key in SUMMARY_KEYS:
+        if key in header:
+            text = str(header[key])
+            rows.append((key, text if len(text) <= _LONG_TEXT else text[:_LONG_TEXT] + " ..."))
+    if rec.get("t_gaps"):
+        rows.append(("gaps in t", f"{rec['t_gaps']} step(s) longer than 1.5 sample intervals"))
+    rows.append(("options", f"--seed {opts['seed']}, --sims {opts['sims'] or 'as gap chooses'}"
+                            + (", --keep-outliers" if opts["keep_outliers"] else "")))
+    return "<h2>Recording</h2>" + _table(["", ""], rows, header_row=False)
+
+
+def _warnings(warnings):
+    if not warnings:
+        return "<h2>Warnings</h2><p class='ok'>None: the record looks still, whole and unclipped.</p>"
+    return "<h2>Warnings</h2><ul class='warnings'>" + "".join(f"<li>{_esc(w)}</li>" for w in warnings) + "</ul>"
+
+
+def _filter(data, raw_envelope, filtered_envelope):
+    out = ["<h2>The default filter's effect</h2>"]
+    s = data["filter"]
+    if s is None:
+        return out[0] + f"<p>Not filtered: {_esc(data['filter_error'])}</p>"
+    bias = ("start-up bias " + ", ".join(f"{b:+.4f}" for b in s["bias_dps"]) + f" deg/s ({s['calibration_samples']} "
+            "samples)") if s["bias_dps"] is not None else "no start-up calibration"
+    out.append(f"<p>Preset <b>{_esc(s['preset'])}</b>, as <code>gyrofilter replay</code> runs it: {s['samples_in']} "
+               f"samples in at {_esc(_num(s['sample_rate_hz']))} Hz, {s['rows_out']} rows out at {_esc(_num(s['output_rate_hz']))} Hz; "
+               f"{bias}. Raw: the samples after the calibration window that made a row, bias included; filtered: "
+               "the rows, bias removed (deg/s).</p>")
+    rows = [(a, _num(s["raw_mean_dps"][i]), _num(s["raw_std_dps"][i]), _num(s["filtered_mean_dps"][i]),
+             _num(s["filtered_std_dps"][i]), _num(s["std_ratio"][i], ".3g") + "x" if s["std_ratio"][i] is not None else "-",
+             str(s["rejected"][i])) for i, a in enumerate(AXES)]
+    out.append(_table(["axis", "raw mean (deg/s)", "raw std (deg/s)", "filtered mean (deg/s)", "filtered std (deg/s)",
+                       "std ratio", "rejected samples"], rows, numeric_from=1))
+    if raw_envelope is not None and len(raw_envelope.t_s):
+        out.append("<div class='figures'>" + "".join(_trace(i, a, raw_envelope, filtered_envelope)
+                                                     for i, a in enumerate(AXES)) + "</div>")
+        out.append(f"<p class='small'>Min/max of every bucket of {raw_envelope.bucket} raw samples (grey) and of "
+                   f"{filtered_envelope.bucket} filtered rows (colour) over the whole record.</p>")
+    return "".join(out)
+
+
+def _trace(i, axis, raw, filtered):
+    layers = [Band(raw.t_s, raw.low[:, i], raw.high[:, i], "#777", "raw minus start-up bias (min/max)", 0.35),
+              Band(filtered.t_s, filtered.low[:, i], filtered.high[:, i], AXIS_COLOURS[axis], "filtered (min/max)", 0.9),
+              Line(filtered.t_s, (filtered.low[:, i] + filtered.high[:, i]) / 2, AXIS_COLOURS[axis], width=1.0)]
+    return figure(layers, key=f"trace-{axis}", title=f"axis {axis}: rate in time", xlabel="time (s)",
+                  ylabel="rate (deg/s)")
+
+
+def _allan(data):
+    doc = data["allan"]
+    out = ["<h2>Allan deviation and noise coefficients</h2>"]
+    if doc is None:
+        return out[0] + f"<p>Not computed: {_esc(data['allan_error'])}</p>"
+    out.append("<p>Overlapping Allan deviation with its chi-square interval, the fitted five-term model "
+               "(sigma<sup>2</sup> = 3Q<sup>2</sup>/tau<sup>2</sup> + N<sup>2</sup>/tau + (2 ln2/pi) B<sup>2</sup> + "
+               "K<sup>2</sup> tau/3 + R<sup>2</sup> tau<sup>2</sup>/2) and each resolved term's line with its slope; "
+               f"as <code>gyrofilter allan</code> computes them. {_esc(doc['method']['interval'])}.</p>")
+    out.append("<div class='figures'>" + "".join(_allan_figure(a, ax) for a, ax in doc["axes"].items()) + "</div>")
+    for a, ax in doc["axes"].items():
+        out.append(f"<h3>axis {_esc(a)}</h3>")
+        rows = []
+        for t in TERMS:
+            d, ro = ax["details"][JSON_KEY[t]], ax["readoff"][JSON_KEY[t]]
+            rows.append((f"{TERM_SYMBOL[t]} {_NAMES[t]}", _interval(d), d["unit"], _interval(d["customary"]),
+                         d["customary"]["unit"], _interval(ro)))
+        out.append("<div class='scroll'>" + _table(["term", "fit: value [interval]", "unit", "customary", "unit",
+                                                     "slope read-off (upper estimate)"], rows, numeric_from=1) + "</div>")
+    return "".join(out)
+
+
+def _allan_figure(axis, ax):
+    """The log-log figure of one axis of the allan document: the deviation, its interval, the
+    model (:func:`~gyrofilter.analysis.noise_model.model_adev`) and each resolved term's line."""
+    tau = np.asarray(ax["tau_s"], dtype=float)
+    colour = AXIS_COLOURS.get(axis, "#333")
+    layers = [Band(tau, _floats(ax["adev_low_dps"]), _floats(ax["adev_high_dps"]), colour, "interval of each point"),
+              Line(tau, _floats(ax["adev_dps"]), colour, "measured", marks=True)]
+    if tau.size:
+        t = np.logspace(np.log10(tau[0]), np.log10(tau[-1]), 120)
+        values = [(ax["coefficients"][JSON_KEY[term]] or {}).get("value") for term in TERMS]
+        layers.append(Line(t, model_adev(values, t), "#000", "fitted model", width=1.2, fit=False))
+        b = basis(t)
+        for j, term in enumerate(TERMS):
+            if values[j] is not None:
+                layers.append(Line(t, np.sqrt(b[:, j]) * values[j], "#666", dash="5 3", width=1.0, fit=False,
+                                   label=f"{TERM_SYMBOL[term]} = {values[j]:.3g} {JSON_UNIT[term]} "
+                                         f"(slope {_slope(TERM_SLOPE[term])})"))
+    return figure(layers, key=f"allan-{axis}", title=f"axis {axis}: Allan deviation", xlabel="tau (s)",
+                  ylabel="Allan deviation (deg/s)", log_x=True, log_y=True)
+
+
+def _gap(data):
+    g = data["gap"]
+    out = ["<h2>What the baseline model misses (gap analysis)</h2>",
+           f"<p>As <code>gyrofilter gap</code> finds it: the baseline (constant bias + white noise + quantization) "
+           f"against {g.get('n_simulations', 0)} simulations of it (seed {_esc(data['options'].get('seed'))}); "
+           "D is the mean squared z-score of the record's features against the model's simulations, about 1 "
+           "where the model explains the record.</p>"]
+    disc = g.get("discrepancy") or {}
+    rows = []
+    for a in AXES:
+        b = g["baseline"]["axes"][a]
+        rows.append((a, _num(b.get("bias_dps")), _num(b.get("arw_dps_per_sqrt_hz")), _num(b.get("quantization_dps")),
+                     _num(disc.get("before", {}).get(a)), _num(disc.get("after", {}).get(a))))
+    out.append(_table(["axis", "bias (deg/s)", "ARW (deg/s/sqrt(Hz))", "quantization (deg/s)", "D baseline",
+                       "D extended"], rows, numeric_from=1))
+    out.append("<h3>Findings</h3>")
+    if not g["findings"]:
+        out.append("<p>None: the baseline explains the record within the simulations' spread.</p>")
+    out.append("<ul>" + "".join(_finding(f) for f in g["findings"]) + "</ul>")
+    for note in g.get("notes", []):
+        out.append(f"<p>Note: {_esc(note)}</p>")
+    out.append("<h3>Extended model</h3>" + _extended(g.get("extended_model")))
+    return "".join(out)
+
+
+def _finding(f):
+    ci = f.get("params_ci95") or {}
+    params = _esc(", ".join(f"{k} = {_num(v)}" + (f" [{_num(ci[k][0])}, {_num(ci[k][1])}]" if k in ci else "")
+                            for k, v in f["params"].items()))
+    text = (f"<li><b>{_esc(f['effect'])}</b> on <b>{_esc(f['axis'])}</b>: {params}"
+            + (" (95 % intervals in brackets)" if ci else "") + f". Gain: D {_esc(_num(f['gain']['before']))} -&gt; "
+            f"{_esc(_num(f['gain']['after']))}.<br><span class='small'>Evidence: {_esc(f['evidence'])}.</span>")
+    if f.get("alternatives"):
+        text += (f"<br>Indistinguishable in this record from {_esc(alternatives_text(f['alternatives']))} (within the "
+                 f"null spread of D); {_esc(f['effect'])} is named as the measured cause.")
+    return text + "</li>"
+
+
+def _extended(model):
+    if not model:
+        return "<p>None.</p>"
+    rows = []
+    for a, spec in model["axes"].items():
+        effects = "; ".join(f"{e['effect']}: " + ", ".join(f"{k} = {_num(v)}" for k, v in e.items() if k != "effect")
+                            for e in spec.get("effects", [])) or "none"
+        rows.append((a, _num(spec.get("bias_dps")), _num(spec.get("arw_dps_per_sqrt_hz")), effects))
+    return _table(["axis", "bias (deg/s)", "ARW (deg/s/sqrt(Hz))", "effects"], rows, numeric_from=1, numeric_to=3)
+
+
+def _interval(d):
+    """A coefficient of the allan document: value [low, high], or "not resolved (< bound)"."""
+    if d.get("value") is None:
+        return "not resolved" + (f" (< {_num(d['upper_bound'])})" if d.get("upper_bound") is not None else "")
+    return f"{_num(d['value'])} [{_num(d.get('low'))}, {_num(d.get('high'))}]"
+
+
+def _table(headers, rows, *, numeric_from=None, numeric_to=None, header_row=True):
+    """An HTML table of plain-text cells (escaped here); those of the columns numeric_from ..
+    numeric_to - 1 right-aligned."""
+    out = ["<table>"]
+    if header_row:
+        out.append("<tr>" + "".join(f"<th>{_esc(h)}</th>" for h in headers) + "</tr>")
+    for row in rows:
+        cells = []
+        for j, cell in enumerate(row):
+            numeric = numeric_from is not None and j >= numeric_from and (numeric_to is None or j < numeric_to)
+            cells.append(f"<td class='num'>{_esc(cell)}</td>" if numeric else f"<td>{_esc(cell)}</td>")
+        out.append("<tr>" + "".join(cells) + "</tr>")
+    return "".join(out) + "</table>"
+
+
+def _num(v, spec=".4g"):
+    """A number of the data as plain text (4 significant digits), "-" for None (not finite)."""
+    if v is None:
+        return "-"
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        return format(v, spec)
+    return str(v)
+
+
+def _floats(values):
+    return np.array([np.nan if v is None else v for v in values], dtype=float)
+
+
+def _slope(s):
+    return {-1.0: "-1", -0.5: "-1/2", 0.0: "0", 0.5: "+1/2", 1.0: "+1"}[s]
+
+
+def _esc(text):
+    return html.escape(str(text), quote=True)

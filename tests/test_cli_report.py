@@ -1,0 +1,236 @@
+"""gyrofilter report end to end: its numbers are those of allan --json, gap --json and replay on the
+same file with the same options; the file is self-contained; every shipped recording yields one;
+--source records first (the real sim source); every bad input is one line and exit 2."""
+import gzip
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from gyrofilter.analysis.still import clipped
+from gyrofilter.cli import main
+from gyrofilter.recording import read_recording
+from gyrofilter.view.report import FORMAT
+from support import REPO, RECORDINGS
+from support.report_page import parse
+
+STATIC = str(RECORDINGS / "mpu6050_static_100s.csv.gz")
+MULTIPOSE = str(RECORDINGS / "mpu6050_multipose_102s.csv.gz")  # saturates: x 12 samples, z 6 (its header says)
+#: the one shipped recording whose report the default run makes here (a moving record: no filter); the other
+#: tests report on the 100 s still one and the multipose one, and the rest run with -m slow
+FAST = {"mpu6050_rotate_z_24s"}
+
+
+def without_wall_times(gap_doc):
+    """The gap document less the run's own numbers, its wall times (each must be there)."""
+    assert gap_doc.pop("runtime_s") > 0 and gap_doc["intervals"].pop("runtime_s", 1.0) > 0
+
+
+def report(tmp_path, capsys, *args, name="report.html"):
+    out = tmp_path / name
+    assert main(["report", *args, "--out", str(out)]) == 0
+    capsys.readouterr()
+    return out, json.loads(parse(out).data)
+
+
+def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
+    out, data = report(tmp_path, capsys, STATIC, "--seed", "3", "--sims", "8")
+    assert data["format"] == FORMAT
+    assert main(["allan", STATIC, "--json", str(tmp_path / "adev.json")]) == 0
+    assert main(["gap", STATIC, "--json", str(tmp_path / "gap.json"), "--seed", "3", "--sims", "8"]) == 0
+    assert main(["replay", STATIC]) == 0
+    table = capsys.readouterr().out
+    assert data["allan"] == json.loads((tmp_path / "adev.json").read_text())
+    want = json.loads((tmp_path / "gap.json").read_text())
+    for doc in (data["gap"], want):
+        without_wall_times(doc)
+    assert data["gap"] == want
+    assert data["gap"]["n_simulations"] == 8 and data["options"]["seed"] == 3
+    # replay's summary table prints these with 4 decimals
+    f = data["filter"]
+    for i, axis in enumerate("xyz"):
+        row = next(line.split() for line in table.splitlines() if line.startswith(f"  {axis}  "))
+        printed = [float(v) for v in row[1:5]] + [float(row[5].rstrip("x")), int(row[6])]
+        got = [f["raw_mean_dps"][i], f["raw_std_dps"][i], f["filtered_mean_dps"][i], f["filtered_std_dps"][i]]
+        np.testing.assert_allclose(printed[:4], got, atol=5e-5, rtol=0)
+        assert printed[4] == pytest.approx(f["std_ratio"][i], abs=5e-3)
+        assert printed[5] == f["rejected"][i]
+    assert f["preset"] == "recommended" and f"{f['rows_out']} output rows" in table
+    # what the page shows is that data: a coefficient of the table, a finding of the gap analysis
+    text = out.read_text(encoding="utf-8")
+    n = data["allan"]["axes"]["x"]["details"]["arw_dps_per_sqrt_hz"]
+    assert f"{n['value']:.4g} [{n['low']:.4g}, {n['high']:.4g}]" in text
+    for finding in data["gap"]["findings"]:
+        assert f"<b>{finding['effect']}</b> on <b>{finding['axis']}</b>" in text
+
+
+def test_the_file_is_self_contained(tmp_path, capsys):
+    out, data = report(tmp_path, capsys, STATIC, "--sims", "2")
+    page = parse(out)
+    assert page.scripts == ["application/json"]  # the data block only: nothing runs
+    linked = [(tag, k, v) for tag, attrs in page.tags for k, v in attrs.items()
+              if k in ("src", "href", "xlink:href", "srcset", "action", "data", "poster")]
+    assert linked == []
+    assert not [tag for tag, _ in page.tags if tag in ("link", "img", "iframe", "object", "embed", "base")]
+    text = out.read_text(encoding="utf-8")
+    for word in ("http://", "https://", "@import", "url(http", "url(//"):
+        assert word not in text
+    assert [tag for tag, _ in page.tags].count("svg") == 6  # per axis: the filter's trace, the Allan deviation
+    assert text.count("Allan deviation</title>") == 3 and text.count("rate in time</title>") == 3
+    assert data["warnings"] == [w for w in data["warnings"] if isinstance(w, str)]
+
+
+def test_text_from_the_file_cannot_end_the_data_block(tmp_path, capsys):
+    """A header value with </script> and markup is shown as text and read back whole."""
+    lines = gzip.decompress(open(STATIC, "rb").read()).decode().splitlines(keepends=True)
+    lines.insert(1, "# description: </script><script>alert(1)</script> <b>&amp;\n")
+    rec = tmp_path / "odd.csv"
+    rec.write_text("".join(line for line in lines if not line.startswith("# description: static")))
+    out, data = report(tmp_path, capsys, str(rec), "--sims", "2")
+    assert data["recording"]["header"]["description"] == "</script><script>alert(1)</script> <b>&amp;"
+    assert parse(out).scripts == ["application/json"]
+
+
+@pytest.mark.parametrize("name", [pytest.param(p.name[:-len(".csv.gz")],
+                                               marks=[] if p.name[:-len(".csv.gz")] in FAST else [pytest.mark.slow])
+                                  for p in sorted(RECORDINGS.glob("*.csv.gz"))])
+def test_every_shipped_recording_yields_a_report(tmp_path, capsys, name):
+    out, data = report(tmp_path, capsys, str(RECORDINGS / f"{name}.csv.gz"), "--sims", "2")
+    rec = read_recording(RECORDINGS / f"{name}.csv.gz")
+    assert data["recording"]["samples"] == len(rec)
+    assert (data["allan"] is None) == (data["allan_error"] is not None)
+    if data["allan"] is None:  # a moving record: allan refuses its gross errors, and the report says so
+        assert "gross error" in data["allan_error"] and any("no Allan deviation" in w for w in data["warnings"])
+    if data["filter"] is None:  # a record that moves in the start-up window: replay refuses it too
+        assert "calibration: the sensor moved" in data["filter_error"]
+        assert main(["replay", str(RECORDINGS / f"{name}.csv.gz")]) == 2
+        assert data["filter_error"] in capsys.readouterr().err
+    else:
+        assert data["filter"]["rows_out"] > 0
+    assert len(data["gap"]["baseline"]["axes"]) == 3
+
+
+def test_warnings_clipping_and_a_moving_record(tmp_path, capsys):
+    out, data = report(tmp_path, capsys, MULTIPOSE, "--sims", "2")
+    rec = read_recording(MULTIPOSE)
+    clip = clipped(rec.gyro_dps, 250.0, 131.0)
+    assert "18 sample(s) at the full scale of +-250 deg/s (x: 12, z: 6)" in clip
+    assert clip in data["warnings"]
+    assert data["allan"] is None and "--keep-outliers" in data["allan_error"]
+    _, kept = report(tmp_path, capsys, MULTIPOSE, "--sims", "2", "--keep-outliers", name="kept.html")
+    assert kept["allan"] is not None and any("does not look static" in w for w in kept["warnings"])
+    assert main(["allan", MULTIPOSE, "--keep-outliers", "--json", str(tmp_path / "a.json")]) == 0
+    assert kept["allan"] == json.loads((tmp_path / "a.json").read_text())
+    _, still = report(tmp_path, capsys, STATIC, "--sims", "2", name="still.html")
+    assert not any("full scale" in w or "static" in w for w in still["warnings"])
+
+
+def test_clipped_counts_samples_at_the_full_scale():
+    x = np.zeros((10, 3))
+    x[2, 0], x[3, 2], x[4, 1] = 32767 / 131, -32768 / 131, 249.9  # two saturated registers, one sample below
+    assert clipped(x, 250.0, 131.0) == ("2 sample(s) at the full scale of +-250 deg/s (x: 1, z: 1): the rate was "
+                                        "clipped there (the motion was faster than the sensor's range)")
+    assert clipped(x, 250.0) is not None and clipped(np.clip(x, -249.0, 249.0), 250.0, 131.0) is None
+    assert clipped(x, None) is None
+
+
+def test_source_records_first_then_reports(tmp_path, capsys):
+    out = tmp_path / "unit1.html"
+    assert main(["report", "--source", "sim:seed=5", "--duration", "5", "--out", str(out), "--sims", "2"]) == 0
+    err = capsys.readouterr().err
+    assert "keep the sensor still" in err and "duration reached" in err
+    kept = tmp_path / "unit1.csv"  # beside the report
+    rec = read_recording(kept)
+    assert len(rec) == 500 and rec.header["live_source"] == "sim:seed=5"
+    data = json.loads(parse(out).data)
+    assert data["recording"]["name"] == str(kept) and data["recording"]["samples"] == 500
+    # the recording is the report's: the same report of the kept file
+    again = tmp_path / "again.html"
+    assert main(["report", str(kept), "--out", str(again), "--sims", "2"]) == 0
+    data_again = json.loads(parse(again).data)
+    for d in (data, data_again):
+        without_wall_times(d["gap"])
+    assert data == data_again
+    # never overwritten without --force, before anything is recorded
+    capsys.readouterr()
+    assert main(["report", "--source", "sim", "--duration", "5", "--out", str(tmp_path / "other.html"),
+                 "--recording-out", str(kept)]) == 2
+    assert "exists (use --force" in capsys.readouterr().err and not (tmp_path / "other.html").exists()
+
+
+def test_a_paced_replay_source_records_its_first_seconds(tmp_path, capsys):
+    """The real replay:FILE,realtime source: the recording kept is the file's first 20 s, sample for sample."""
+    out, kept = tmp_path / "r.html", tmp_path / "first20.csv.gz"
+    assert main(["report", "--source", f"replay:{STATIC},realtime,speed=20", "--duration", "20", "--out", str(out),
+                 "--recording-out", str(kept), "--sims", "2"]) == 0
+    capsys.readouterr()
+    got, whole = read_recording(kept), read_recording(STATIC)
+    assert len(got) == 2000
+    np.testing.assert_array_equal(got.gyro, whole.gyro[:2000])
+    assert json.loads(parse(out).data)["recording"]["samples"] == 2000
+
+
+def test_an_interrupted_recording_is_kept_and_reported(tmp_path):
+    """Ctrl-C ends the recording early: the recording reads, the report covers it (exit 0)."""
+    out, kept = tmp_path / "r.html", tmp_path / "r.csv"
+    proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "report", "--source", "sim:seed=2", "--out", str(out),
+                             "--sims", "2"], cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(REPO)},
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not (kept.exists() and len(read_recording(kept)) >= 400):  # some 4 s of samples
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            time.sleep(0.2)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+        proc.wait()
+    assert proc.returncode == 0, err
+    assert "stopped by SIGINT" in err
+    data = json.loads(parse(out).data)
+    assert data["recording"]["samples"] == len(read_recording(kept)) >= 400
+
+
+@pytest.mark.parametrize("args, words", [
+    (["{tmp}/bad.csv"], "bad.csv"),
+    (["{tmp}/missing.csv"], "missing.csv"),
+    (["{static}", "--out", "{static}", "--force"], "is an input of this command"),
+    (["{static}", "--out", "{tmp}/exists.html"], "exists (use --force"),
+    (["{static}", "--out", "{tmp}/bad.csv/r.html"], "is a file, not a folder"),
+    (["{static}", "--out", "{tmp}/"], "folder"),
+    (["{static}", "--source", "sim"], "one of them"),
+    ([], "one of them"),
+    (["{static}", "--duration", "5"], "--duration records a source first"),
+    (["{static}", "--recording-out", "{tmp}/x.csv"], "--recording-out records a source first"),
+    (["{static}", "--sims", "1"], "--sims must be in [2, 1000]"),
+    (["{static}", "--seed", "-1"], "--seed"),
+    (["--source", "sim", "--duration", "0"], "--duration"),
+    (["--source", "nosuchkind"], "nosuchkind"),
+    (["--source", "sim", "--duration", "5", "--out", "{tmp}/r.csv"], "named for two outputs"),
+])
+def test_errors_are_one_line_and_exit_2(tmp_path, capsys, args, words):
+    (tmp_path / "bad.csv").write_text("this is not a recording\n1,2,3\n")
+    (tmp_path / "exists.html").write_text("mine\n")
+    argv = [a.format(tmp=tmp_path, static=STATIC) for a in args]
+    if "--out" not in argv:
+        argv += ["--out", str(tmp_path / "r.html")]
+    before = sorted(os.listdir(tmp_path))
+    assert main(["report", *argv]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and words in err, err
+    assert sorted(os.listdir(tmp_path)) == before  # nothing written, nothing recorded
+    assert (tmp_path / "exists.html").read_text() == "mine\n"
+
+
+def test_missing_out_is_one_line(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["report", STATIC])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "--out" in err
