@@ -1,6 +1,7 @@
 """The confounded causes of the example model (docs/gap.md, "Confounded causes"): per record and
 axis, D of the covariate reading (the temperature first) and of the time reading (a warm-up or a
-slow wander instead), the allowance within which they count as equal, and what the gap names.
+slow wander instead), the allowance within which they count as equal, what the gap names, and the
+temperature coefficient with its 95 % interval against the model's true one.
 
     python tools/gap_confound.py [--seeds 1,2,3,4] [--long-seeds 1,2,3] [--out FILE]
 
@@ -38,7 +39,7 @@ def rows(duration_s, sample_rate_hz, seed, model):
             weighed[m.group(1)] = m.groups()[1:]
     for a in AXES:
         named = ", ".join(f["effect"] + ("*" if f.get("alternatives") else "") for f in report["findings"] if f["axis"] == a)
-        coef = next((f"{f['params']['coefficient_dps_per_c']:.4g}" for f in report["findings"]
+        coef = next((_coefficient(f, model, a) for f in report["findings"]
                      if f["axis"] == a and f["effect"] == "temperature"), "-")
         if a in weighed:
             d_cov, time_reading, d_time, allowance, verdict = weighed[a]
@@ -49,6 +50,16 @@ def rows(duration_s, sample_rate_hz, seed, model):
         yield [f"{duration_s / 3600:g} h at {sample_rate_hz:g} Hz, seed {seed}", a] + cells + [named or "-", coef, f"{runtime:.0f} s"]
 
 
+def _coefficient(finding, model, axis):
+    """The coefficient, its 95 % interval and whether the model's true one lies in it."""
+    value = finding["params"]["coefficient_dps_per_c"]
+    true = next(e["coefficient_dps_per_c"] for e in model["axes"][axis]["effects"] if e["effect"] == "temperature")
+    low, high = (finding.get("params_ci95") or {}).get("coefficient_dps_per_c") or (None, None)
+    if low is None:
+        return f"{value:.4g} (true {true:.4g}; no interval)"
+    return f"{value:.4g} [{low:.4g}, {high:.4g}], true {true:.4g} {'inside' if low <= true <= high else 'OUTSIDE'}"
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", default="1,2,3,4")
@@ -57,7 +68,7 @@ def main(argv=None):
     args = p.parse_args(argv)
     model = json.loads((ROOT / "gyrofilter" / "data" / "mpu6050_model.json").read_text(encoding="utf-8"))
     head = ["record", "axis", "D with the temperature", "time reading", "D in time", "allowance (2 null spreads)",
-            "verdict", "named (* with alternatives)", "coefficient (deg/s/C)", "gap runtime"]
+            "verdict", "named (* with alternatives)", "coefficient (deg/s/C) [95 % interval]", "gap runtime"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     runs = [(3600.0, 100.0, int(s)) for s in args.seeds.split(",") if s] + \
         [(86400.0, 10.0, int(s)) for s in args.long_seeds.split(",") if s]
