@@ -1,7 +1,7 @@
 """Coverage of the gap's 95 % parameter intervals over hidden-effect batteries.
 
     python tools/gap_coverage.py [--cases 40] [--seed 9000] [--duration S] [--scale 1] [--sims 8]
-                                 [--bootstrap N] [--effects a,b] [--compare] [--oracle] [-v] [--out FILE]
+                                 [--bootstrap N] [--effects a,b] [--compare] [--oracle] [-v]
 
 For every effect kind of :mod:`gyrofilter.sim.hidden_effects` draws ``--cases`` cases (seeds
 ``seed + k``; random axis and parameters over the kind's ranges, 30-60 min unless
@@ -26,8 +26,6 @@ allows.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
 import math
 import sys
 import time
@@ -246,27 +244,9 @@ def main(argv=None):
                    help="only the exact step-size interval on the same bias_step records (no gap run)")
     p.add_argument("--compare", action="store_true", help="also score the percentile, basic and not bias-corrected intervals")
     p.add_argument("-v", "--verbose", action="store_true")
-    p.add_argument("--out", default=None, help="also write the command and the table to this file")
     args = p.parse_args(argv)
-    buf = io.StringIO()
-    out = sys.stdout
+    run(args)
 
-    class Tee(io.TextIOBase):
-        def write(self, text):
-            out.write(text)
-            buf.write(text)
-            return len(text)
-
-        def flush(self):
-            out.flush()
-
-    with contextlib.redirect_stdout(Tee()):
-        run(args)
-    if args.out:
-        table = [ln for ln in buf.getvalue().splitlines() if not ln.startswith("case ")]
-        cmd = "python tools/gap_coverage.py " + " ".join(argv if argv is not None else sys.argv[1:])
-        with open(args.out, "w", encoding="utf-8") as fh:
-            fh.write(cmd + "\n" + "\n".join(table).strip() + "\n")
 
 if __name__ == "__main__":
     main()
