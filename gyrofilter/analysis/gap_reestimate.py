@@ -125,7 +125,7 @@ def _heavy_tails(x, sample_rate_hz):
     u = tail_residual(x, sample_rate_hz)
     if u.size < 256:
         return None
-    fits = tail_fits(u, tail_step(x, sample_rate_hz))
+    fits = tail_fits(u, tail_step(x, sample_rate_hz), models=("mixture",))
     return {"fraction": fits["fraction"], "scale_ratio": fits["scale_ratio"]}
 
 

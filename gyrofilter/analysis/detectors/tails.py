@@ -206,12 +206,13 @@ def _best(objective, starts):
     return best
 
 
-def tail_fits(u, step=0.0):
+def tail_fits(u, step=0.0, models=("gauss", "mixture", "spikes")):
     """Maximum-likelihood fits of the three models (module docstring) to the histogram of
     ``|u|``, in bins no narrower than the quantization ``step`` (units of ``u``). Returns a dict:
     ``log_l`` per model (``gauss``, ``mixture``, ``spikes``), the mixture's ``fraction``,
     ``scale_ratio`` and core ``sigma`` (units of the robust sd), the spikes' ``rate`` and
-    ``magnitude`` (same units)."""
+    ``magnitude`` (same units); only of the ``models`` asked for (the intervals' bootstrap
+    re-fits the mixture alone)."""
     from scipy.optimize import minimize_scalar
 
     a = np.abs(u)
@@ -221,7 +222,6 @@ def tail_fits(u, step=0.0):
     edges = np.r_[np.arange(0.0, linear - 1e-9, width), np.geomspace(linear, top, 40), np.inf]  # the last bin is
     # empty, so the models' probabilities sum to 1 over the bins (no mass beyond the largest sample is lost)
     counts, _ = np.histogram(a, edges)
-    gauss = minimize_scalar(lambda t: -_log_l(counts, _fold(edges, math.exp(t))), bounds=(-2.0, 2.0), method="bounded")
 
     def params(t):  # (sigma, share in (0, 1/2), ratio or magnitude), each bounded: the search may wander
         t = np.clip(t, -50.0, 50.0)
@@ -236,12 +236,21 @@ def tail_fits(u, step=0.0):
         return -_log_l(counts, (1 - p) * _fold(edges, s) + p * _spikes(edges, m, s))
 
     logit = lambda p: math.log(p / (0.5 - p))  # noqa: E731
-    mix = _best(mixture, [(0.0, logit(p), math.log(c - 1)) for p in (0.005, 0.1) for c in (2.0, 20.0)])
-    spk = _best(spikes, [(0.0, logit(p), math.log(m)) for p in (0.001, 0.03) for m in (3.0, 10.0, 30.0)])
-    sigma, fraction, ratio = params(mix.x)
-    _, rate, magnitude = params(spk.x)
-    return {"log_l": {"gauss": -float(gauss.fun), "mixture": -float(mix.fun), "spikes": -float(spk.fun)},
-            "sigma": sigma, "fraction": fraction, "scale_ratio": 1.0 + ratio, "rate": rate, "magnitude": magnitude}
+    out = {"log_l": {}}
+    if "gauss" in models:
+        gauss = minimize_scalar(lambda t: -_log_l(counts, _fold(edges, math.exp(t))), bounds=(-2.0, 2.0), method="bounded")
+        out["log_l"]["gauss"] = -float(gauss.fun)
+    if "mixture" in models:
+        mix = _best(mixture, [(0.0, logit(p), math.log(c - 1)) for p in (0.005, 0.1) for c in (2.0, 20.0)])
+        sigma, fraction, ratio = params(mix.x)
+        out["log_l"]["mixture"] = -float(mix.fun)
+        out.update(sigma=sigma, fraction=fraction, scale_ratio=1.0 + ratio)
+    if "spikes" in models:
+        spk = _best(spikes, [(0.0, logit(p), math.log(m)) for p in (0.001, 0.03) for m in (3.0, 10.0, 30.0)])
+        _, rate, magnitude = params(spk.x)
+        out["log_l"]["spikes"] = -float(spk.fun)
+        out.update(rate=rate, magnitude=magnitude)
+    return out
 
 
 def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
