@@ -2,6 +2,7 @@
 same file with the same options; the file is self-contained; every shipped recording yields one;
 --source records first (the real sim source); every bad input is one line and exit 2."""
 import gzip
+import html
 import json
 import os
 import signal
@@ -12,6 +13,7 @@ import time
 import numpy as np
 import pytest
 
+from gyrofilter.analysis.gap_report import params_text
 from gyrofilter.analysis.still import clipped
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
@@ -67,6 +69,8 @@ def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
     assert f"{n['value']:.4g} [{n['low']:.4g}, {n['high']:.4g}]" in text
     for finding in data["gap"]["findings"]:
         assert f"<b>{finding['effect']}</b> on <b>{finding['axis']}</b>" in text
+        # every parameter with the console's digits: enough that an interval's ends differ
+        assert html.escape(params_text(finding, sep=" = ")) in text, finding
 
 
 def test_the_file_is_self_contained(tmp_path, capsys):

@@ -190,10 +190,10 @@ def test_cli_prints_every_parameter_with_its_interval_and_checks_the_option(tmp_
     f = _hit(case, rep)
     for name, value in f["params"].items():
         assert f"{name}={value_with_interval(value, f['params_ci95'][name])}" in printed, printed
-    for bad in ("-1", str(gi.MAX_BOOTSTRAP + 1)):
+    for bad in ("-1", "1", str(gi.MIN_REPLICATES - 1), str(gi.MAX_BOOTSTRAP + 1)):  # 1-4 runs: no interval at all
         assert main(["gap", str(path), "--bootstrap", bad, "--json", str(tmp_path / "o.json")]) == 2
         err = capsys.readouterr().err
-        assert err.count("\n") == 1 and "--bootstrap must be in [0, 1000]" in err, err
+        assert err.count("\n") == 1 and "--bootstrap must be 0 (no intervals) or in [5, 1000]" in err, err
 
 
 def test_value_with_interval_shows_the_width():

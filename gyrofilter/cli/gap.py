@@ -19,7 +19,7 @@ import time
 from ..analysis import gap_report
 from ..analysis.fleet import FleetSettings
 from ..analysis.gap import analyse_gap
-from ..analysis.gap_intervals import DEFAULT_BOOTSTRAP, MAX_BOOTSTRAP
+from ..analysis.gap_intervals import DEFAULT_BOOTSTRAP, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import SettingsError
 from ..plots import pyplot
 from ..recording import read_recording, warn_about_gaps
@@ -40,7 +40,7 @@ def add_arguments(parser):
                         help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; 2 to {MAX_SIMS})")
     parser.add_argument("--bootstrap", type=options.whole_number, default=DEFAULT_BOOTSTRAP, metavar="N",
                         help=f"bootstrap runs per axis with findings for the parameters' 95 %% intervals (default "
-                             f"{DEFAULT_BOOTSTRAP}; 0: no intervals; at most {MAX_BOOTSTRAP})")
+                             f"{DEFAULT_BOOTSTRAP}; 0: no intervals; else {MIN_REPLICATES} to {MAX_BOOTSTRAP})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     batch.add_arguments(parser)
     options.add_force_argument(parser)
@@ -51,8 +51,9 @@ def check_options(seed, sims, bootstrap=DEFAULT_BOOTSTRAP):
     cannot take, naming the option."""
     if sims is not None and not 2 <= sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {sims}")
-    if not 0 <= bootstrap <= MAX_BOOTSTRAP:
-        raise SettingsError(f"--bootstrap must be in [0, {MAX_BOOTSTRAP}], got {bootstrap}")
+    if not (bootstrap == 0 or MIN_REPLICATES <= bootstrap <= MAX_BOOTSTRAP):
+        raise SettingsError(f"--bootstrap must be 0 (no intervals) or in [{MIN_REPLICATES}, {MAX_BOOTSTRAP}] "
+                            f"(an interval needs {MIN_REPLICATES} runs), got {bootstrap}")
     check_seed(seed, "--seed")
 
 

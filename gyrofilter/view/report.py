@@ -17,7 +17,7 @@ import json
 
 import numpy as np
 
-from ..analysis.gap_report import alternatives_text
+from ..analysis.gap_report import alternatives_text, params_text
 from ..analysis.noise_export import JSON_KEY, JSON_UNIT
 from ..analysis.noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
 from ..units import AXES
@@ -212,8 +212,7 @@ def _gap(data):
 
 def _finding(f):
     ci = f.get("params_ci95") or {}
-    params = _esc(", ".join(f"{k} = {_num(v)}" + (f" [{_num(ci[k][0])}, {_num(ci[k][1])}]" if k in ci else "")
-                            for k, v in f["params"].items()))
+    params = _esc(params_text(f, sep=" = "))  # the console's digits: enough to tell an interval's ends apart
     text = (f"<li><b>{_esc(f['effect'])}</b> on <b>{_esc(f['axis'])}</b>: {params}"
             + (" (95 % intervals in brackets)" if ci else "") + f". Gain: D {_esc(_num(f['gain']['before']))} -&gt; "
             f"{_esc(_num(f['gain']['after']))}.<br><span class='small'>Evidence: {_esc(f['evidence'])}.</span>")

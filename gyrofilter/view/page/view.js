@@ -154,7 +154,8 @@
     const left = 44, right = 8, top = 8, bottom = 20;
     const width = w - left - right, height = h - top - bottom;
     const values = a.adev_dps.flat().filter((v) => v > 0);
-    const lx0 = Math.floor(Math.log10(a.tau_s[0])), lx1 = Math.ceil(Math.log10(a.tau_s[a.tau_s.length - 1]) + 1e-9) || lx0 + 1;
+    // at least one decade; no `|| fallback`: a top decade of 1e0 s is 0 (or -0), which is false
+    const lx0 = Math.floor(Math.log10(a.tau_s[0])), lx1 = Math.max(lx0 + 1, Math.ceil(Math.log10(a.tau_s[a.tau_s.length - 1]) - 1e-9));
     const ly0 = Math.floor(Math.log10(Math.min(...values))), ly1 = Math.ceil(Math.log10(Math.max(...values)) + 1e-9);
     const X = (t) => left + (Math.log10(t) - lx0) / Math.max(1, lx1 - lx0) * width;
     const Y = (v) => top + (ly1 - Math.log10(v)) / Math.max(1, ly1 - ly0) * height;
