@@ -18,8 +18,8 @@ import time
 
 from ..analysis import gap_report
 from ..analysis.fleet import FleetSettings
-from ..analysis.gap import analyse_gap
-from ..analysis.gap_intervals import DEFAULT_BOOTSTRAP, MAX_BOOTSTRAP
+from ..analysis.gap import analyse_gap, gap_columns
+from ..analysis.gap_intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP
 from ..errors import SettingsError
 from ..plots import pyplot
 from ..recording import read_recording, warn_about_gaps
@@ -38,9 +38,10 @@ def add_arguments(parser):
     parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; 2 to {MAX_SIMS})")
-    parser.add_argument("--bootstrap", type=options.whole_number, default=DEFAULT_BOOTSTRAP, metavar="N",
+    parser.add_argument("--bootstrap", type=options.whole_number, default=None, metavar="N",
                         help=f"bootstrap runs per axis with findings for the parameters' 95 %% intervals (default "
-                             f"{DEFAULT_BOOTSTRAP}; 0: no intervals; at most {MAX_BOOTSTRAP})")
+                             f"{DEFAULT_BOOTSTRAP}; 10-{DEFAULT_BOOTSTRAP} above {FEWER_BOOTSTRAP_FROM:,} samples per axis; "
+                             f"0: no intervals; at most {MAX_BOOTSTRAP})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     batch.add_arguments(parser)
     options.add_force_argument(parser)
@@ -49,7 +50,7 @@ def add_arguments(parser):
 def run(args):
     if args.sims is not None and not 2 <= args.sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {args.sims}")
-    if not 0 <= args.bootstrap <= MAX_BOOTSTRAP:
+    if args.bootstrap is not None and not 0 <= args.bootstrap <= MAX_BOOTSTRAP:
         raise SettingsError(f"--bootstrap must be in [0, {MAX_BOOTSTRAP}], got {args.bootstrap}")
     check_seed(args.seed, "--seed")
     paths = batch.expand(args.recordings)
@@ -71,7 +72,7 @@ def run(args):
 
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis
-    rec = read_recording(args.recording)
+    rec = read_recording(args.recording, columns=gap_columns, compact=True)
     console.print_warnings(rec.warnings)
     warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful",
                     console.say_warning)
