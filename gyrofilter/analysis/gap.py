@@ -259,12 +259,13 @@ def _detect(run):
             run.report["notes"].append(f"axis {a}: {idle}, nothing to analyse")
             run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
             continue
+        owned = not np.shares_memory(x, run.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
         try:
             cands, xc, alt = _detect_axis(x, run.sample_rate_hz, run.temp, tails_z=float(run.deps[i]["tails"][0][0]),
-                                          notes=run.report["notes"], axis=a)
+                                          notes=run.report["notes"], axis=a, owned=owned)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
-            cands, xc, alt = [], x, None
+            cands, xc, alt = [], axis_dps(run.rec, i), None  # x may have been cleaned in place
         first = len(run.candidates)
         for c in cands:
             if c.effect == "temperature":
@@ -283,14 +284,15 @@ def _detect(run):
         del x, xc
 
 
-def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis=""):
+def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x,
     alternative): ``alternative`` is None or, where the slow effects have a covariate and a time
     reading (:func:`gyrofilter.analysis.detectors.detect_slow`), ``(time reading's candidates,
     x cleaned of those instead)``. Each finding's component is subtracted from a private copy of
-    ``x`` and then dropped, so the axis costs two series of memory besides the detectors' own
-    (three with an alternative reading). ``tails_z``: the tail statistic's departure from the
-    baseline simulations; ``notes``: where a note on tails that spikes explain as well goes."""
+    ``x`` (``x`` itself when ``owned``: the caller's to change) and then dropped, so the axis
+    costs one series of memory besides the detectors' own (two without ``owned``, three with an
+    alternative reading). ``tails_z``: the tail statistic's departure from the baseline
+    simulations; ``notes``: where a note on tails that spikes explain as well goes."""
     cands = []
     c, mask = det.detect_outliers(x)
     tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
@@ -301,9 +303,9 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis=""):
         c = None
     if c is not None:
         cands.append(c)
-        x = det.clean_spikes(x, mask)  # a copy
+        x = det.clean_spikes(x, mask, in_place=owned)  # a copy unless owned
+        owned = True
     del mask
-    owned = bool(cands)
     c = det.detect_sinusoid(x, sample_rate_hz)
     if c is not None:
         cands.append(c)

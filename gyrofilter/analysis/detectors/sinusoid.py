@@ -269,9 +269,9 @@ def detect_sinusoid(x, sample_rate_hz):
     df = sample_rate_hz / periodogram_length(x.size)
     # refine: golden-section search of the LS amplitude within +-1 bin of the periodogram
     lo, hi = max(f0 - df, df), min(f0 + df, sample_rate_hz / 2)
-    f_hz = golden_max(_dft_amplitude(x - x.mean(), sample_rate_hz, f0), lo, hi, 30)
+    f_hz = golden_max(_dft_amplitude(x, sample_rate_hz, f0, float(x.mean())), lo, hi, 30)
+    sigma = robust_sigma(_diff_sample(x)) / math.sqrt(2)
     amplitude, phase, fit = sinusoid_fit(x, sample_rate_hz, f_hz)
-    sigma = robust_sigma(np.diff(x)) / math.sqrt(2)
     return Candidate(
         effect="sinusoid",
         params={"frequency_hz": f_hz, "amplitude_dps": amplitude, "phase_rad": phase},
@@ -286,11 +286,19 @@ def detect_sinusoid(x, sample_rate_hz):
     )
 
 
+def _diff_sample(x, max_count=100_000):
+    """``np.diff(x)`` as :func:`robust_sigma` samples it (every ``s``-th difference where it
+    would subsample), without the N-sample array of all differences."""
+    n = x.size - 1
+    step = int(math.ceil(n / max_count)) if n > 2 * max_count else 1
+    return x[1::step] - x[:-1:step]
+
+
 #: blocks of the demodulated series in :func:`_dft_amplitude`
 DFT_BLOCKS = 4096
 
 
-def _dft_amplitude(xc, sample_rate_hz, f0):
+def _dft_amplitude(x, sample_rate_hz, f0, mean=0.0):
     """``|X(f)| = |sum_n x_n exp(-2 pi i f n / f_s)|`` for ``f`` near ``f0``, in O(blocks) per
     call after one O(N) pass.
 
@@ -299,15 +307,16 @@ def _dft_amplitude(xc, sample_rate_hz, f0):
     starting at ``n_b``; within a block ``exp(-i theta s) = 1 - i theta s - (theta s)^2 / 2 + R``
     with ``|R| <= |theta s|^3 / 6``, so three block moments ``sum z s^k`` (k = 0, 1, 2) give
     ``X(f)`` to a relative ``(2 pi B |f - f0| / f_s)^3 / 6``: below 1e-9 for ``|f - f0|`` of
-    one bin (``f_s / N``) and ``B = N / 4096`` samples per block."""
-    n = xc.size
+    one bin (``f_s / N``) and ``B = N / 4096`` samples per block. ``x_n`` is the series less
+    ``mean``, taken a pass at a time."""
+    n = x.size
     b = max(1, -(-n // DFT_BLOCKS))
     m = -(-n // b)
     s = np.arange(b, dtype=float)
     moments = np.zeros((3, m), dtype=complex)
     step = max(1, (1 << 16) // b) * b  # whole blocks per pass, about 65536 samples: bounded memory
     for a in range(0, n, step):
-        seg = xc[a:a + step]
+        seg = x[a:a + step] - mean
         w = np.arange(a, a + seg.size) * (-2 * math.pi * f0 / sample_rate_hz)
         z = np.zeros(-(-seg.size // b) * b, dtype=complex)
         z.real[:seg.size] = np.cos(w) * seg
