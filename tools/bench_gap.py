@@ -140,6 +140,12 @@ def table(rows):
     return "\n".join(lines)
 
 
+def report(doc):
+    """What the tool prints for ``doc`` (``{"cores": ..., "rows": [...]}``, as ``--json`` writes it)."""
+    return (f"gyrofilter allan FILE / gyrofilter gap FILE --json OUT.json, each in a fresh process (peak MB: "
+            f"ru_maxrss, MiB); {doc['cores']} cores shared with other work (load: 1-minute average)\n" + table(doc["rows"]))
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--records", nargs="*", default=["10m@100", "1h@100", "24h@100", "1h@1000"],
@@ -161,12 +167,11 @@ def main(argv=None):
         row = dict(run_commands(path), record=label, kind=kind)
         rows.append(row)
         print(table([row]).splitlines()[1], file=sys.stderr, flush=True)
-    print(f"$ gyrofilter allan FILE / gyrofilter gap FILE --json OUT.json, each in a fresh process "
-          f"(peak MB: ru_maxrss); {os.cpu_count()} cores")
-    print(table(rows))
+    doc = {"cores": os.cpu_count(), "rows": rows}
+    print(report(doc))
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
-            json.dump({"rows": rows}, f, indent=1)
+            json.dump(doc, f, indent=1)
             f.write("\n")
 
 

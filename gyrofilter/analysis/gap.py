@@ -61,7 +61,7 @@ from .gap_intervals import add_intervals
 from .still import not_static
 from ..errors import GyroFilterError, RecordingError
 from ..recording import GYRO_COLUMNS
-from ..units import AXES, MIN_NOISE_DPS, check_sample_rate_hz
+from ..units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
 
 #: minimum samples for any analysis
 MIN_SAMPLES = 256
@@ -137,7 +137,8 @@ class _GapRun:
             "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
                          "axes": {a: {} for a in AXES}},
             "findings": [], "extended_model": {}, "notes": []}
-        if not all(np.all(np.isfinite(axis_dps(rec, i))) for i in range(3)):
+        if not all(np.isfinite(to_dps(rec.columns[c][lo:lo + (1 << 16)], rec.gyro_unit, rec.lsb_per_dps)).all()
+                   for c in GYRO_COLUMNS for lo in range(0, n, 1 << 16)):  # in deg/s, a pass at a time
             raise RecordingError(f"{where}: gyro columns hold non-finite values")
         self.base = base = baseline_model(rec)
         report["baseline"]["model"] = base

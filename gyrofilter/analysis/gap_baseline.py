@@ -37,10 +37,18 @@ def default_n_sims(n_samples):
     return int(max(12, min(24, round(24 * 200_000 / max(n_samples, 1)))))
 
 
-def axis_dps(rec, i):
-    """Axis ``i`` of ``rec.gyro_dps``, converted from its column when asked (the column
-    itself for ``gyro_unit: dps``): the analysis never holds the three axes in deg/s at once."""
-    return to_dps(rec.columns[GYRO_COLUMNS[i]], rec.gyro_unit, rec.lsb_per_dps)
+def axis_dps(rec, i, pass_samples=1 << 16):
+    """Axis ``i`` of ``rec.gyro_dps`` in float64: the column itself for a float64 ``gyro_unit:
+    dps`` column, else a new array converted a pass at a time (:func:`~gyrofilter.units.to_dps`,
+    the same numbers, one N-sample array): the analysis never holds the three axes in deg/s at
+    once."""
+    column = rec.columns[GYRO_COLUMNS[i]]
+    if rec.gyro_unit == "dps" and column.dtype == np.float64:
+        return column
+    out = np.empty(column.size)
+    for lo in range(0, column.size, pass_samples):
+        out[lo:lo + pass_samples] = to_dps(column[lo:lo + pass_samples], rec.gyro_unit, rec.lsb_per_dps)
+    return out
 
 
 def noise_sigma(x, sample_rate_hz, q_dps, mask_spikes=True):
