@@ -67,9 +67,10 @@ def collect_columns(head, chunks, names, compact=False):
             take = min(size - fill, len(chunk) - pos)
             for name, i in zip(names, where):
                 values = chunk[pos:pos + take, i]
-                if dtypes[name] is np.float32 and not np.array_equal(values.astype(np.float32), values):
+                if dtypes[name] is np.float32 and not _exact_in_float32(values):
                     dtypes[name] = np.float64  # not exact in float32: this column in float64 from its start
-                    blocks[name] = [b.astype(np.float64) for b in blocks[name]]
+                    with np.errstate(invalid="ignore"):  # the unfilled end of the last block is not yet data
+                        blocks[name] = [b.astype(np.float64) for b in blocks[name]]
                 blocks[name][-1][fill:fill + take] = values
             fill += take
             pos += take
@@ -78,8 +79,14 @@ def collect_columns(head, chunks, names, compact=False):
         parts = blocks.pop(name)
         if parts:
             parts[-1] = parts[-1][:fill]
-        columns[name] = np.concatenate(parts) if len(parts) > 1 else (parts[0].copy() if parts else np.empty(0))
+        columns[name] = np.concatenate(parts) if len(parts) > 1 else (parts[0].copy() if parts else np.empty(0, dtypes[name]))
     return columns
+
+
+def _exact_in_float32(values):
+    """Every value is a float32 exactly (a value beyond float32's range is not)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.array_equal(values.astype(np.float32), values)
 
 
 def iter_recording(path, chunk_rows=CHUNK_ROWS):
