@@ -71,10 +71,18 @@ def _round_trip(rec, name):
         path = os.path.join(folder, name)
         write_recording(path, rec)
         back = read_recording(path)
+        compact = read_recording(path, columns=lambda names: names[::-2], compact=True)
     assert list(back.columns) == list(rec.columns) and back.warnings == []
     for column, values in rec.columns.items():
         np.testing.assert_array_equal(back.columns[column], values)
     assert back.header == {k: one_line_text(v) for k, v in rec.header.items()}
+    # the columns asked for, float32 only where every value is exactly one: the same numbers
+    assert list(compact.columns) == list(rec.columns)[::-2]
+    for column, values in compact.columns.items():
+        assert np.array_equal(np.asarray(values, dtype=float), rec.columns[column])
+        with np.errstate(over="ignore"):
+            exact = np.array_equal(rec.columns[column].astype(np.float32), rec.columns[column])
+        assert values.dtype == (np.float32 if exact else np.float64)
 
 
 @FAST

@@ -158,3 +158,49 @@ def test_periodogram_length_is_the_largest_11_smooth_length():
         assert got <= n and smooth(got), n
         assert not any(smooth(v) for v in range(got + 1, n + 1)), n
     assert det.periodogram_length(333_269) == 332_750  # 2 5^3 11^3
+
+
+def _traced_peak(fn):
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        out = fn()
+        return tracemalloc.get_traced_memory()[1], out
+    finally:
+        tracemalloc.stop()
+
+
+def _axis_with_spikes_and_a_line(n, fs, seed):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / fs
+    x = np.round((0.4 + rng.normal(0, 0.1, n) + 0.02 * np.sin(2 * math.pi * 7.3 * t)) * 131.0) / 131.0
+    x[rng.integers(0, n, 40)] += 1.5
+    return x
+
+
+def test_features_and_detectors_hold_a_few_series_not_a_copy_per_statistic():
+    """The memory design of long records (docs/gap.md, "Speed and memory"): the features of a run
+    and the detectors of an axis need about one series of work space besides the series itself
+    (numpy reports its buffers to tracemalloc), whatever the number of statistics. The features:
+    the growth of the peak from 1 to 2 million samples per added series; the detectors that work
+    on the whole series (the slow ones work on at most 2048 block means), their peak at 2
+    million. Before issue 24 the features took 3.75 series (the tail statistic 3.1, numpy's rfft
+    three more outside tracemalloc's sight) and the sinusoid detector 3.3; a regression that
+    keeps an N-sample copy per statistic fails here."""
+    fs = 100.0
+    peaks = {}
+    for n in (1_000_000, 2_000_000):
+        x = _axis_with_spikes_and_a_line(n, fs, 11)
+        taus, bands = gap_features.feature_taus(n, fs), gap_features.feature_bands(n, fs)
+        peaks[n], _ = _traced_peak(lambda: gap_features.features(x.copy(), fs, taus, bands, overwrite=True))
+    per_series = (peaks[2_000_000] - peaks[1_000_000]) / (1_000_000 * 8)
+    assert per_series < 2.8, f"features: {per_series:.2f} series (the run itself is 1)"
+    series = x.nbytes
+    for name, call in [("outliers", lambda: det.detect_outliers(x)),
+                       ("heavy tails", lambda: det.detect_heavy_tails(x, fs, spikes_found=True, tails_z=0.0)),
+                       ("sinusoid", lambda: det.detect_sinusoid(x, fs)),
+                       ("narrow band", lambda: det.detect_narrowband(x, fs)),
+                       ("colored noise", lambda: det.detect_colored(x, fs))]:
+        peak, _ = _traced_peak(call)
+        assert peak < 2.5 * series, f"{name} detector: {peak / series:.2f} series besides the axis"

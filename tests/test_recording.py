@@ -565,3 +565,24 @@ def test_a_users_own_csv_is_told_what_a_recording_needs_in_one_go(tmp_path):
             read_recording(path)
     path.write_text(header + "t,gx,gy,gz,ref_time_offset\n0.00,1,2,3,4\n")  # a name that merely contains 'time' is kept
     assert read_recording(path).columns["ref_time_offset"].tolist() == [4.0]
+
+
+def test_compact_reading_keeps_the_numbers_and_the_columns_asked_for(tmp_path):
+    """``read_recording(..., columns=, compact=True)``: an lsb column of integers is float32, a
+    column that turns out not to be exact after two chunks is float64 from its start, and every
+    value reads as in the file; the other columns are dropped."""
+    n = 150_000  # more than two chunks of the reader and several blocks of collect_columns
+    rng = np.random.default_rng(4)
+    gx = np.round(rng.normal(0, 2000, n))
+    gy = np.round(rng.normal(0, 2000, n))
+    gy[-3] = 0.1  # not a float32: the whole column is float64
+    rec = Recording(columns={"t": np.arange(n) / 100.0, "gx": gx, "gy": gy, "gz": -gx},
+                    header={"gyrofilter-recording": "1", "sample_rate_hz": "100", "gyro_unit": "lsb", "lsb_per_dps": "131"})
+    path = tmp_path / "r.csv.gz"
+    write_recording(path, rec)
+    back = read_recording(path, columns=lambda names: [c for c in names if c != "t"], compact=True)
+    assert list(back.columns) == ["gx", "gy", "gz"]
+    assert [back.columns[c].dtype for c in ("gx", "gy", "gz")] == [np.float32, np.float64, np.float32]
+    for c in ("gx", "gy", "gz"):
+        assert np.array_equal(np.asarray(back.columns[c], dtype=float), rec.columns[c])
+    assert np.array_equal(back.gyro_dps, read_recording(path).gyro_dps)

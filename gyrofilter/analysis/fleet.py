@@ -59,7 +59,7 @@ from concurrent.futures.process import BrokenProcessPool
 import numpy as np
 
 from .allan import MIN_CLUSTERS
-from .gap import analyse_gap
+from .gap import analyse_gap, gap_columns
 from .noise_export import JSON_KEY, kalibr_yaml, to_json
 from .noise_model import TERM_SYMBOL, TERM_UNIT, TERMS
 from .still import characterise_recording
@@ -149,7 +149,7 @@ def analyse_recording(path, settings):
 
 
 def _gap_report(path, settings, warnings):
-    rec = read_recording(path)
+    rec = read_recording(path, columns=gap_columns, compact=True)
     warnings.extend(rec.warnings)
     return analyse_gap(rec, seed=settings.seed, n_sims=settings.sims, recording_name=path)
 

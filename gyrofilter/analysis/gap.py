@@ -57,21 +57,30 @@ from .gap_composite import composite_step, slow_wavelet_variance
 from .gap_readings import alternatives_entry, null_spread, weigh_readings
 from .gap_features import (METRIC, departure_summary, departures, discrepancy, feature_bands, feature_taus, features,
                            still_departs, strongest)
-from .gap_intervals import DEFAULT_BOOTSTRAP, add_intervals
+from .gap_intervals import add_intervals
 from .still import not_static
 from ..errors import GyroFilterError, RecordingError
-from ..units import AXES, MIN_NOISE_DPS, check_sample_rate_hz
+from ..recording import GYRO_COLUMNS
+from ..units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
 
 #: minimum samples for any analysis
 MIN_SAMPLES = 256
 
 
-def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=DEFAULT_BOOTSTRAP):
+def gap_columns(names):
+    """The columns of a file (with column ``names``) that the gap analysis uses: the gyro axes,
+    and, where the file has ``temp``, ``temp`` and ``t`` (the temperature table's times). For
+    ``read_recording(path, columns=gap_columns, compact=True)``: a day at 100 Hz in ``lsb`` is
+    held in 3 float32 columns (104 MB) instead of 4-5 float64 ones (276-346 MB)."""
+    return list(GYRO_COLUMNS) + ([c for c in ("t", "temp") if c in names] if "temp" in names else [])
+
+
+def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=None):
     """Run the gap analysis on a :class:`~gyrofilter.recording.Recording`; returns the report
     dict of docs/formats.md section 3 (with ``discrepancy``, ``departures``,
     ``runtime_s``). ``progress(text)`` is called with short status lines. ``bootstrap``: runs
     per axis with findings for the parameters' intervals (:mod:`gyrofilter.analysis.gap_intervals`;
-    0: none)."""
+    0: none; None: :func:`~gyrofilter.analysis.gap_intervals.default_bootstrap` of the record's length)."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
@@ -128,7 +137,8 @@ class _GapRun:
             "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
                          "axes": {a: {} for a in AXES}},
             "findings": [], "extended_model": {}, "notes": []}
-        if not all(np.all(np.isfinite(axis_dps(rec, i))) for i in range(3)):
+        if not all(np.isfinite(to_dps(rec.columns[c][lo:lo + (1 << 16)], rec.gyro_unit, rec.lsb_per_dps)).all()
+                   for c in GYRO_COLUMNS for lo in range(0, n, 1 << 16)):  # in deg/s, a pass at a time
             raise RecordingError(f"{where}: gyro columns hold non-finite values")
         self.base = base = baseline_model(rec)
         report["baseline"]["model"] = base
@@ -221,7 +231,12 @@ def _baseline_spread(run):
     """Step 2: features of the measurement and of ``m`` baseline runs; departures and D before."""
     n, sample_rate_hz = run.n, run.sample_rate_hz
     run.say(f"baseline: {run.m} simulations of {n / sample_rate_hz:.0f} s at {sample_rate_hz:g} Hz")
-    run.meas_feats = [features(axis_dps(run.rec, i), sample_rate_hz, run.taus, run.bands) for i in range(3)]
+    run.meas_feats = []
+    for i in range(3):
+        x = axis_dps(run.rec, i)  # the features may overwrite it unless it is the record's own column
+        run.meas_feats.append(features(x, sample_rate_hz, run.taus, run.bands,
+                                       overwrite=not np.shares_memory(x, run.rec.columns[GYRO_COLUMNS[i]])))
+        del x
     sims = sim_features(run.base, n, sample_rate_hz, run.seeds, range(3), run.taus, run.bands, run.say,
                         "baseline simulations (runs x axes)")
     run.deps = [departures(run.meas_feats[i], sims[i], n) for i in range(3)]
@@ -245,12 +260,13 @@ def _detect(run):
             run.report["notes"].append(f"axis {a}: {idle}, nothing to analyse")
             run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
             continue
+        owned = not np.shares_memory(x, run.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
         try:
             cands, xc, alt = _detect_axis(x, run.sample_rate_hz, run.temp, tails_z=float(run.deps[i]["tails"][0][0]),
-                                          notes=run.report["notes"], axis=a)
+                                          notes=run.report["notes"], axis=a, owned=owned)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
-            cands, xc, alt = [], x, None
+            cands, xc, alt = [], axis_dps(run.rec, i), None  # x may have been cleaned in place
         first = len(run.candidates)
         for c in cands:
             if c.effect == "temperature":
@@ -269,14 +285,15 @@ def _detect(run):
         del x, xc
 
 
-def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis=""):
+def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x,
     alternative): ``alternative`` is None or, where the slow effects have a covariate and a time
     reading (:func:`gyrofilter.analysis.detectors.detect_slow`), ``(time reading's candidates,
     x cleaned of those instead)``. Each finding's component is subtracted from a private copy of
-    ``x`` and then dropped, so the axis costs two series of memory besides the detectors' own
-    (three with an alternative reading). ``tails_z``: the tail statistic's departure from the
-    baseline simulations; ``notes``: where a note on tails that spikes explain as well goes."""
+    ``x`` (``x`` itself when ``owned``: the caller's to change) and then dropped, so the axis
+    costs one series of memory besides the detectors' own (two without ``owned``, three with an
+    alternative reading). ``tails_z``: the tail statistic's departure from the baseline
+    simulations; ``notes``: where a note on tails that spikes explain as well goes."""
     cands = []
     c, mask = det.detect_outliers(x)
     tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
@@ -287,9 +304,9 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis=""):
         c = None
     if c is not None:
         cands.append(c)
-        x = det.clean_spikes(x, mask)  # a copy
+        x = det.clean_spikes(x, mask, in_place=owned)  # a copy unless owned
+        owned = True
     del mask
-    owned = bool(cands)
     c = det.detect_sinusoid(x, sample_rate_hz)
     if c is not None:
         cands.append(c)

@@ -37,23 +37,43 @@ def default_n_sims(n_samples):
     return int(max(12, min(24, round(24 * 200_000 / max(n_samples, 1)))))
 
 
-def axis_dps(rec, i):
-    """Axis ``i`` of ``rec.gyro_dps``, converted from its column when asked (the column
-    itself for ``gyro_unit: dps``): the analysis never holds the three axes in deg/s at once."""
-    return to_dps(rec.columns[GYRO_COLUMNS[i]], rec.gyro_unit, rec.lsb_per_dps)
+def axis_dps(rec, i, pass_samples=1 << 16):
+    """Axis ``i`` of ``rec.gyro_dps`` in float64: the column itself for a float64 ``gyro_unit:
+    dps`` column, else a new array converted a pass at a time (:func:`~gyrofilter.units.to_dps`,
+    the same numbers, one N-sample array): the analysis never holds the three axes in deg/s at
+    once."""
+    column = rec.columns[GYRO_COLUMNS[i]]
+    if rec.gyro_unit == "dps" and column.dtype == np.float64:
+        return column
+    out = np.empty(column.size)
+    for lo in range(0, column.size, pass_samples):
+        out[lo:lo + pass_samples] = to_dps(column[lo:lo + pass_samples], rec.gyro_unit, rec.lsb_per_dps)
+    return out
 
 
 def noise_sigma(x, sample_rate_hz, q_dps, mask_spikes=True):
     """Per-sample white-noise std of the baseline (see module docstring); ``mask_spikes=False``
     keeps every sample (a heavy-tailed noise, whose tails are part of its variance)."""
     w = det.colored_window(x.size, sample_rate_hz)
-    e = x - det.moving_mean(x, w)
     mask, _, _ = det.outlier_statistic(x) if mask_spikes else (None, None, None)
-    if mask is not None and mask.any():
-        e = e[~mask]
-    var = float(np.var(e)) / max(1.0 - 1.0 / w, 0.5)
+    e = det.highpassed(x, sample_rate_hz)[0]
+    var = _variance(e, None if mask is None or not mask.any() else ~mask) / max(1.0 - 1.0 / w, 0.5)
     var = max(var - (q_dps ** 2) / 12.0, 0.25 * var)
     return math.sqrt(var)
+
+
+def _variance(e, keep=None, pass_samples=1 << 16):
+    """The variance (ddof 0) of ``e``, or of its samples where ``keep`` is True, in two passes
+    of ``pass_samples`` at a time (no N-sample temporary)."""
+    parts = [(e[lo:lo + pass_samples], None if keep is None else keep[lo:lo + pass_samples])
+             for lo in range(0, e.size, pass_samples)]
+    count = e.size if keep is None else int(np.count_nonzero(keep))
+    mean = sum(float(p.sum() if k is None else p[k].sum()) for p, k in parts) / count
+    total = 0.0
+    for p, k in parts:
+        d = (p if k is None else p[k]) - mean
+        total += float(det.dot(d, d))
+    return total / count
 
 
 def baseline_model(rec, gyro_dps=None):
@@ -178,6 +198,7 @@ def sim_features(model, n, sample_rate_hz, seeds, axes_idx, taus, bands, say=Non
     bar = _Progress(say, label, len(seeds) * len(axes_idx))
     for k, s in enumerate(seeds):
         for j, i in enumerate(axes_idx):
-            out[i].append(features(_simulate_axis(spec, n, sample_rate_hz, s, i), sample_rate_hz, taus, bands))
+            out[i].append(features(_simulate_axis(spec, n, sample_rate_hz, s, i), sample_rate_hz, taus, bands,
+                                   overwrite=True))
             bar.step(k * len(axes_idx) + j + 1)
     return out

@@ -89,22 +89,31 @@ def feature_adev(x, sample_rate_hz, taus_s):
 _ADEV_CHUNK = 1 << 15
 
 
-def features(x, sample_rate_hz, taus_s, bands_hz):
+def features(x, sample_rate_hz, taus_s, bands_hz, overwrite=False):
     """Feature vector of one axis: (log ADEV per tau (:func:`feature_adev`), log band powers,
-    log line ratio, lag1, log(1 + spikes), log winsorized kurtosis). Returns a dict of arrays."""
+    log line ratio, lag1, log(1 + spikes), log winsorized kurtosis). Returns a dict of arrays.
+
+    ``overwrite``: ``x`` is the caller's to lose (a simulated run, a fresh copy of an axis): the
+    periodogram, computed last, uses it as its work space. Memory besides ``x``: one N-sample
+    array (the high-passed series, shared by the lag-1 and the tail statistics; then the
+    detrended copy for the periodogram, unless ``overwrite``) and the half-length periodogram."""
     adev = feature_adev(x, sample_rate_hz, taus_s)
-    line, _, _, spec = det.sinusoid_statistic(x, sample_rate_hz, return_spectrum=True)
+    mask, _, _ = det.outlier_statistic(x)
+    spikes = math.log1p(float(mask.sum()))
+    del mask
+    e = det.highpassed(x, sample_rate_hz)[0] if x.size >= 64 else None
+    r1, _ = det.lag1_statistic(x, sample_rate_hz, e=e)
+    tails = det.tails_statistic(x, sample_rate_hz, u=det.tail_residual(x, sample_rate_hz, e=e))
+    del e
+    line, _, _, spec = det.sinusoid_statistic(x, sample_rate_hz, return_spectrum=True, overwrite=overwrite)
     n_p = det.periodogram_length(x.size)  # the samples the periodogram uses
     if spec is None:
-        spec = np.abs(np.fft.rfft(det.detrend_line(x[:n_p]))) ** 2 / n_p
+        spec = det.periodogram(x, overwrite=overwrite)
     idx = _first_bins(bands_hz, spec.size, n_p, sample_rate_hz)
     bp = np.array([spec[a:b].mean() if b > a else np.nan for a, b in zip(idx[:-1], idx[1:])])
-    r1, _ = det.lag1_statistic(x, sample_rate_hz)
-    mask, _, _ = det.outlier_statistic(x)
     return {"adev": np.log(np.maximum(adev, 1e-300)), "band": np.log(np.maximum(bp, 1e-300)),
             "line": np.array([math.log(max(line, 1.0))]), "lag1": np.array([r1]),
-            "spikes": np.array([math.log1p(float(mask.sum()))]),
-            "tails": np.array([det.tails_statistic(x, sample_rate_hz)])}
+            "spikes": np.array([spikes]), "tails": np.array([tails])}
 
 
 def _first_bins(freqs_hz, size, n, sample_rate_hz):

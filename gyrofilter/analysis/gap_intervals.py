@@ -51,8 +51,11 @@ from ..units import AXES
 
 #: the two-sided level of every interval
 CONFIDENCE = 0.95
-#: bootstrap replicates per axis with findings (``gyrofilter gap --bootstrap``)
+#: bootstrap replicates per axis with findings (``gyrofilter gap --bootstrap``) up to
+#: :data:`FEWER_BOOTSTRAP_FROM` samples per axis; fewer above (:func:`default_bootstrap`)
 DEFAULT_BOOTSTRAP = 20
+#: from this many samples per axis the default number of replicates falls, to 10 at twice as many
+FEWER_BOOTSTRAP_FROM = 1_000_000
 #: the most replicates ``--bootstrap`` takes
 MAX_BOOTSTRAP = 1000
 #: a parameter's interval needs at least this many replicates where its estimator ran
@@ -78,11 +81,25 @@ METHOD = ("parametric bootstrap of the extended model (each axis with findings s
           "B - 1 degrees of freedom; axes without findings: the white-noise baseline's analytic intervals")
 
 
+def default_bootstrap(n_samples):
+    """Replicates per axis with findings when ``--bootstrap`` is not given:
+    ``max(10, min(20, round(20 M / N)))``, M = :data:`FEWER_BOOTSTRAP_FROM`: 20 up to a million
+    samples per axis (3 h at 100 Hz), 10 from two million (6 h at 100 Hz, 1 h at 1 kHz). Each
+    replicate is a simulation and a re-estimation of the whole record, so on long records they
+    are most of the analysis's time. The interval's Student factor ``t_{B-1} sqrt(1 + 1/B)``
+    (module docstring) keeps the coverage with fewer replicates: with 10 the intervals are on
+    average 11 % wider than with 20 (2.37 against 2.14 times the replicates' sd), on records
+    whose intervals are already sqrt(N / 360 000) times narrower than those of an hour at 100 Hz."""
+    return int(max(10, min(DEFAULT_BOOTSTRAP, round(DEFAULT_BOOTSTRAP * FEWER_BOOTSTRAP_FROM / max(n_samples, 1)))))
+
+
 def add_intervals(run, n_boot, seed):
     """Write ``params_ci95`` into every finding of ``run.report`` and into the baseline's axes,
-    from ``n_boot`` replicates per axis with findings (none with ``n_boot`` 0), and the
-    report's ``intervals`` block saying how."""
+    from ``n_boot`` replicates per axis with findings (none with ``n_boot`` 0; None:
+    :func:`default_bootstrap` of the record's length), and the report's ``intervals`` block
+    saying how."""
     report = run.report
+    n_boot = default_bootstrap(run.n) if n_boot is None else n_boot
     t0 = time.perf_counter()
     block = {"confidence": CONFIDENCE, "bootstrap_runs": int(n_boot)}
     report["intervals"] = block

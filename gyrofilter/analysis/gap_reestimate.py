@@ -134,7 +134,7 @@ def _sinusoid(x, sample_rate_hz, f_hz):
     df = sample_rate_hz / det.periodogram_length(x.size)
     f0 = max(round(f_hz / df), 1) * df
     lo, hi = max(f0 - df, df), min(f0 + df, sample_rate_hz / 2)
-    f = det.golden_max(_dft_amplitude(x - x.mean(), sample_rate_hz, f0), lo, hi, 30)
+    f = det.golden_max(_dft_amplitude(x, sample_rate_hz, f0, float(x.mean())), lo, hi, 30)
     amplitude, phase, fit = det.sinusoid_fit(x, sample_rate_hz, f)
     return {"frequency_hz": f, "amplitude_dps": amplitude, "phase_rad": phase}, fit
 
@@ -143,8 +143,7 @@ def _colored(x, sample_rate_hz, with_lag2, band):
     """The colored noise's lags as :func:`~gyrofilter.analysis.detectors.detect_colored` computes
     them, on the parametrisation of the finding (``with_lag2``), without its thresholds."""
     n = x.size
-    w = det.colored_window(n, sample_rate_hz)
-    e = x - det.moving_mean(x, w)
+    e, w = det.highpassed(x, sample_rate_hz)
     den = float(det.dot(e, e))
     if not den > 0:
         return None

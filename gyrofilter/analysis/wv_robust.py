@@ -147,14 +147,27 @@ def heavy_tail_factor(m, fraction, scale_ratio, c, b):
     return math.exp(2.0 * brentq(excess, -8.0, 8.0, xtol=1e-10))
 
 
-def haar_coefficients(x, m, max_count=MAX_COEFFICIENTS):
-    """Haar MODWT coefficients W_t = (X_{t+2m} - 2X_{t+m} + X_t) / (2m) of the mean-removed
-    series at scale m, every ``max(1, m // 8, ceil(M / max_count))``-th of the M = N - 2m + 1."""
+def integrated(x, pass_samples=1 << 16):
+    """``X_t = sum_{k<t} (x_k - mean x)``, t = 0 .. N, the integral of the mean-removed series,
+    summed a pass at a time (the only N-sample array is the result)."""
     x = np.asarray(x, dtype=float)
+    mean = float(np.mean(x))
     cum = np.empty(x.size + 1)
     cum[0] = 0.0
-    np.cumsum(x - float(np.mean(x)), out=cum[1:])
-    count = x.size - 2 * m + 1
+    for lo in range(0, x.size, pass_samples):
+        part = cum[lo + 1:lo + 1 + pass_samples]
+        np.subtract(x[lo:lo + pass_samples], mean, out=part)
+        np.cumsum(part, out=part)
+        part += cum[lo]
+    return cum
+
+
+def haar_coefficients(x, m, max_count=MAX_COEFFICIENTS, cum=None):
+    """Haar MODWT coefficients W_t = (X_{t+2m} - 2X_{t+m} + X_t) / (2m) of the mean-removed
+    series at scale m, every ``max(1, m // 8, ceil(M / max_count))``-th of the M = N - 2m + 1.
+    ``cum``: :func:`integrated` of ``x`` when the caller has it (several scales of one series)."""
+    cum = integrated(x) if cum is None else cum
+    count = cum.size - 2 * m
     stride = max(1, m // 8, int(math.ceil(count / max_count)))
     t = np.arange(0, count, stride)
     return (cum[t + 2 * m] - 2.0 * cum[t + m] + cum[t]) / (2.0 * m)
@@ -166,8 +179,9 @@ def robust_wv(x, m_list, *, efficiency=ROBUST_EFFICIENCY, tails=None):
     (fraction, scale_ratio) is given. Returns an array ((deg/s)² for ``x`` in deg/s)."""
     c, b = biweight_constants(efficiency)
     out = np.empty(len(m_list))
+    cum = integrated(x)
     for j, m in enumerate(m_list):
-        out[j] = m_scale2(haar_coefficients(x, int(m)), c, b)
+        out[j] = m_scale2(haar_coefficients(x, int(m), cum=cum), c, b)
         if tails is not None:
             out[j] /= heavy_tail_factor(int(m), tails[0], tails[1], c, b)
     return out

@@ -18,8 +18,8 @@ import time
 
 from ..analysis import gap_report
 from ..analysis.fleet import FleetSettings
-from ..analysis.gap import analyse_gap
-from ..analysis.gap_intervals import DEFAULT_BOOTSTRAP, MAX_BOOTSTRAP, MIN_REPLICATES
+from ..analysis.gap import analyse_gap, gap_columns
+from ..analysis.gap_intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import SettingsError
 from ..plots import pyplot
 from ..recording import read_recording, warn_about_gaps
@@ -38,31 +38,33 @@ def add_arguments(parser):
     parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; 2 to {MAX_SIMS})")
-    parser.add_argument("--bootstrap", type=options.whole_number, default=DEFAULT_BOOTSTRAP, metavar="N",
+    parser.add_argument("--bootstrap", type=options.whole_number, default=None, metavar="N",
                         help=f"bootstrap runs per axis with findings for the parameters' 95 %% intervals (default "
-                             f"{DEFAULT_BOOTSTRAP}; 0: no intervals; else {MIN_REPLICATES} to {MAX_BOOTSTRAP})")
+                             f"{DEFAULT_BOOTSTRAP}; 10-{DEFAULT_BOOTSTRAP} above {FEWER_BOOTSTRAP_FROM:,} samples per axis; "
+                             f"0: no intervals; else {MIN_REPLICATES} to {MAX_BOOTSTRAP})")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     batch.add_arguments(parser)
     options.add_force_argument(parser)
 
 
-def check_options(seed, sims, bootstrap=DEFAULT_BOOTSTRAP):
-    """Refuse a ``--seed``, ``--sims`` (None: the default) or ``--bootstrap`` that the analysis
+def check_options(seed, sims, bootstrap=None):
+    """Refuse a ``--seed``, ``--sims`` or ``--bootstrap`` (None: their defaults) that the analysis
     cannot take, naming the option."""
     if sims is not None and not 2 <= sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {sims}")
-    if not (bootstrap == 0 or MIN_REPLICATES <= bootstrap <= MAX_BOOTSTRAP):
+    if bootstrap is not None and not (bootstrap == 0 or MIN_REPLICATES <= bootstrap <= MAX_BOOTSTRAP):
         raise SettingsError(f"--bootstrap must be 0 (no intervals) or in [{MIN_REPLICATES}, {MAX_BOOTSTRAP}] "
                             f"(an interval needs {MIN_REPLICATES} runs), got {bootstrap}")
     check_seed(seed, "--seed")
 
 
-def analyse(path, *, seed=0, sims=None, bootstrap=DEFAULT_BOOTSTRAP, warn, progress):
+def analyse(path, *, seed=0, sims=None, bootstrap=None, warn, progress):
     """What ``gap`` computes of one recording ``path``: (the Recording, the gap report, which is
     the ``--json`` document of docs/formats.md), through :func:`~gyrofilter.analysis.gap.analyse_gap`
     with ``seed``, ``sims`` (``n_sims``) and ``bootstrap``. The reader's warnings and the gaps in ``t`` go to
-    ``warn(text)``, the steps to ``progress(text)``."""
-    rec = read_recording(path)
+    ``warn(text)``, the steps to ``progress(text)``. Only the columns the analysis uses are kept,
+    integer (``lsb``) readings as float32, which holds them exactly (``gap_columns``)."""
+    rec = read_recording(path, columns=gap_columns, compact=True)
     for text in rec.warnings:
         warn(text)
     warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)

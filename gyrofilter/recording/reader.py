@@ -22,19 +22,29 @@ CHUNK_ROWS = 1 << 16
 _BLOCK_ROWS = 1 << 19   # rows per block of collect_columns
 
 
-def read_recording(path) -> Recording:
+def read_recording(path, *, columns=None, compact=False) -> Recording:
     """Read a format-v1 recording (``.csv`` or gzip, detected by content) from ``path``: the
-    chunks of :func:`iter_recording` gathered by :func:`collect_columns`."""
+    chunks of :func:`iter_recording` gathered by :func:`collect_columns`.
+
+    ``columns``: None (every column), or a function of the file's column names that returns the
+    names to keep (every line is still read and checked; the other columns are dropped as they
+    are read). ``compact``: keep a column in float32 where every value of it reads back exactly
+    from float32 (:func:`collect_columns`): an analysis that needs only some columns of a long
+    record holds half the memory, with the same numbers."""
     chunks = iter_recording(path)
     head = next(chunks)
-    columns = collect_columns(head, chunks, head.names)
-    return Recording(columns=columns, header=head.header, path=head.path, warnings=head.warnings, notes=head.notes,
-                     t_gaps=head.t_gaps)
+    names = head.names if columns is None else list(columns(list(head.names)))
+    return Recording(columns=collect_columns(head, chunks, names, compact=compact), header=head.header, path=head.path,
+                     warnings=head.warnings, notes=head.notes, t_gaps=head.t_gaps)
 
 
-def collect_columns(head, chunks, names):
+def collect_columns(head, chunks, names, compact=False):
     """The columns ``names`` of the remaining ``chunks`` of :func:`iter_recording` as one float64
-    array each (file units); ``head`` is the :class:`RecordingHead` it yielded first.
+    array each (file units); ``head`` is the :class:`RecordingHead` it yielded first. With
+    ``compact``, a column whose every value is exactly a float32 (``float64(float32(v)) == v``:
+    the integers of an ``lsb`` column up to 2^24, a value with few binary digits) is kept in
+    float32, half the memory, and gives the same numbers when converted back (``np.asarray(column,
+    dtype=float)``); the first value that is not turns that column to float64.
 
     Values are copied into blocks (16 Ki rows, doubling up to ``_BLOCK_ROWS`` = 4 MB; large
     blocks are memory mappings of their own, so the many short-lived chunk buffers do not
@@ -44,6 +54,7 @@ def collect_columns(head, chunks, names):
     """
     where = [head.names.index(name) for name in names]
     blocks = {name: [] for name in names}
+    dtypes = {name: np.float32 if compact else np.float64 for name in names}
     size = fill = 0
     for chunk in chunks:
         pos = 0
@@ -51,11 +62,16 @@ def collect_columns(head, chunks, names):
             if fill == size:  # a new block, twice the last one up to _BLOCK_ROWS
                 size = min(_BLOCK_ROWS, max(1 << 14, 2 * size))
                 for name in names:
-                    blocks[name].append(np.empty(size))
+                    blocks[name].append(np.empty(size, dtype=dtypes[name]))
                 fill = 0
             take = min(size - fill, len(chunk) - pos)
             for name, i in zip(names, where):
-                blocks[name][-1][fill:fill + take] = chunk[pos:pos + take, i]
+                values = chunk[pos:pos + take, i]
+                if dtypes[name] is np.float32 and not _exact_in_float32(values):
+                    dtypes[name] = np.float64  # not exact in float32: this column in float64 from its start
+                    with np.errstate(invalid="ignore"):  # the unfilled end of the last block is not yet data
+                        blocks[name] = [b.astype(np.float64) for b in blocks[name]]
+                blocks[name][-1][fill:fill + take] = values
             fill += take
             pos += take
     columns = {}
@@ -63,8 +79,14 @@ def collect_columns(head, chunks, names):
         parts = blocks.pop(name)
         if parts:
             parts[-1] = parts[-1][:fill]
-        columns[name] = np.concatenate(parts) if len(parts) > 1 else (parts[0].copy() if parts else np.empty(0))
+        columns[name] = np.concatenate(parts) if len(parts) > 1 else (parts[0].copy() if parts else np.empty(0, dtypes[name]))
     return columns
+
+
+def _exact_in_float32(values):
+    """Every value is a float32 exactly (a value beyond float32's range is not)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.array_equal(values.astype(np.float32), values)
 
 
 def iter_recording(path, chunk_rows=CHUNK_ROWS):

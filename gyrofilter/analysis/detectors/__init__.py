@@ -131,6 +131,7 @@ from .sinusoid import (  # noqa: F401
     fitted,
     periodogram_length,
     sinusoid_fit,
+    periodogram,
     sinusoid_statistic,
 )
 from .narrowband import (  # noqa: F401
@@ -142,6 +143,7 @@ from .narrowband import (  # noqa: F401
 from .colored import (  # noqa: F401
     colored_window,
     detect_colored,
+    highpassed,
     lag1_statistic,
     lags_from_highpassed,
     long_run_ratio,

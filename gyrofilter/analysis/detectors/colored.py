@@ -20,7 +20,7 @@ def colored_window(n, sample_rate_hz):
     return int(min(max(64, round(0.5 * sample_rate_hz)), max(8, n // 8)))
 
 
-def _highpassed(x, sample_rate_hz):
+def highpassed(x, sample_rate_hz):
     """``(x - moving_mean(x, W), W)``, W of :func:`colored_window`."""
     w = colored_window(x.size, sample_rate_hz)
     e = moving_mean(x, w)
@@ -28,11 +28,12 @@ def _highpassed(x, sample_rate_hz):
     return e, w
 
 
-def lag1_statistic(x, sample_rate_hz):
-    """Lag-1 autocorrelation of ``x - moving_mean(x, W)``; white noise: about -1/W."""
+def lag1_statistic(x, sample_rate_hz, e=None):
+    """Lag-1 autocorrelation of ``x - moving_mean(x, W)`` (``e``, when the caller has it);
+    white noise: about -1/W."""
     if x.size < 32:
         return 0.0, 0
-    e, w = _highpassed(x, sample_rate_hz)
+    e, w = highpassed(x, sample_rate_hz) if e is None else (e, colored_window(x.size, sample_rate_hz))
     den = float(dot(e, e))
     if den <= 0:
         return 0.0, w
@@ -93,7 +94,7 @@ def detect_colored(x, sample_rate_hz, band=None):
     n = x.size
     if n < 32:
         return None
-    e, w = _highpassed(x, sample_rate_hz)
+    e, w = highpassed(x, sample_rate_hz)
     den = float(dot(e, e))
     if den <= 0:
         return None

@@ -139,43 +139,69 @@ def dot(a, b):
     return np.einsum("i,i->", a, b)
 
 
-def detrend_line(x):
+#: samples per pass of the chunked series helpers (:func:`detrend_line`, :func:`moving_mean`): their
+#: temporaries are a few MB whatever the record's length
+PASS_SAMPLES = 1 << 16
+
+
+def detrend_line(x, out=None):
     """``x`` minus its least-squares line ``a + s t``, ``t = i - (N - 1) / 2`` (closed form,
-    O(N)): ``s = sum t x / sum t^2`` with ``sum t^2 = N (N^2 - 1) / 12``."""
+    O(N)): ``s = sum t x / sum t^2`` with ``sum t^2 = N (N^2 - 1) / 12``. Into ``out`` (which
+    may be ``x`` itself) or a new array; ``t`` is made :data:`PASS_SAMPLES` at a time, so the
+    only N-sample array is the result."""
     n = x.size
-    t = np.arange(n, dtype=float)
-    t -= 0.5 * (n - 1)
     tt = n * (n * n - 1.0) / 12.0
-    slope = float(dot(t, x)) / tt if tt > 0 else 0.0
-    t *= slope
-    t += float(x.mean())
-    return x - t
+    centre = 0.5 * (n - 1)
+    txs = 0.0
+    for lo in range(0, n, PASS_SAMPLES):
+        hi = min(n, lo + PASS_SAMPLES)
+        txs += float(dot(np.arange(lo, hi, dtype=float) - centre, x[lo:hi]))
+    slope = txs / tt if tt > 0 else 0.0
+    mean = float(x.mean())
+    out = np.empty(n) if out is None else out
+    for lo in range(0, n, PASS_SAMPLES):
+        hi = min(n, lo + PASS_SAMPLES)
+        t = np.arange(lo, hi, dtype=float)
+        t -= centre
+        t *= slope
+        t += mean
+        np.subtract(x[lo:hi], t, out=out[lo:hi])
+    return out
 
 
 def moving_mean(x, window):
     """Centred moving mean with window ``window`` samples: sample ``i`` averages
     ``x[i - W//2 : i - W//2 + W]``, clipped to the series at the edges (shorter windows), from
-    one cumulative sum."""
+    cumulative sums ``c_j = sum_{k<j} x_k`` made :data:`PASS_SAMPLES` at a time (the running
+    total carried from pass to pass), so the only N-sample array is the result."""
     window = max(1, int(window))
     n = x.size
-    c = np.empty(n + 1)
-    c[0] = 0.0
-    np.cumsum(x, out=c[1:])
     half = window // 2
     if window >= n:
+        c = np.concatenate(([0.0], np.cumsum(x)))
         lo = np.clip(np.arange(n) - half, 0, n)
         hi = np.clip(np.arange(n) - half + window, 0, n)
         return (c[hi] - c[lo]) / (hi - lo)
     out = np.empty(n)
-    # interior: i in [half, n - window + half], windows of full length
-    i0, i1 = half, n - window + half + 1
-    np.subtract(c[window:n + 1], c[:n + 1 - window], out=out[i0:i1])
-    out[i0:i1] /= window
-    head = np.arange(i0)
-    out[:i0] = c[head - half + window] / (head - half + window)
+    # interior: out[j + half] = (c[j + W] - c[j]) / W for j in [0, n - W], a pass of j at a time
+    carry = 0.0  # c[j0]
+    last = n - window + 1
+    for j0 in range(0, last, PASS_SAMPLES):
+        j1 = min(last, j0 + PASS_SAMPLES)
+        c = np.empty(j1 - j0 + window)
+        c[0] = carry
+        np.cumsum(x[j0:j1 + window - 1], out=c[1:])
+        c[1:] += carry
+        np.subtract(c[window:], c[:j1 - j0], out=out[j0 + half:j1 + half])
+        out[j0 + half:j1 + half] /= window
+        carry = float(c[j1 - j0])
+    head = np.arange(half)  # i < half: c[i - half + W] / (i - half + W)
+    c_head = np.cumsum(x[:window])
+    out[:half] = c_head[head - half + window - 1] / (head - half + window)
+    i1 = n - window + half + 1  # i >= i1: (c[n] - c[i - half]) / (n - i + half), from the sums of the last samples
     tail = np.arange(i1, n)
-    lo = tail - half
-    out[i1:] = (c[n] - c[lo]) / (n - lo)
+    suffix = np.cumsum(x[::-1][:n - i1 + half])[::-1]  # suffix[k] = sum x[i1 - half + k:]
+    out[i1:] = suffix[tail - i1] / (n - tail + half)
     return out
 
 

@@ -42,12 +42,13 @@ def outlier_statistic(x):
     return mask, k, sd_r
 
 
-def clean_spikes(x, mask):
+def clean_spikes(x, mask, in_place=False):
     """Replace masked samples by the mean of their neighbours (the median of the next 2 on
-    each side that are not masked)."""
+    each side that are not masked), in a copy or (``in_place``) in ``x`` itself: the
+    replacements read only samples that are not masked."""
     if not mask.any():
         return x
-    y = x.copy()
+    y = x if in_place else x.copy()
     idx = np.flatnonzero(mask)
     y[idx] = _replacements(x, mask, idx)
     return y
