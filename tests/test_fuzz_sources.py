@@ -17,7 +17,7 @@ from collections import Counter
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from gyrofilter.errors import DeviceError, GyroFilterError, SettingsError
@@ -307,6 +307,7 @@ def _check_header(line):
 
 @FAST
 @given(line=header_lines())
+@example(line=b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100 lsb_per_dps=lsb")  # was a ValueError traceback
 def test_fuzz_serial_header_is_accepted_whole_or_refused_in_one_line(line):
     _check_header(line)
 

@@ -260,7 +260,7 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
         _err(where, f"expected an object with an 'effect' name, got {_show(eff)}")
     name = eff["effect"]
     if not isinstance(name, str) or name not in EFFECTS:
-        _err(f"{where}.effect", f"unknown effect {_show(name, 40)} (expected one of {', '.join(EFFECTS)})")
+        _err(f"{where}.effect", f"unknown effect {_show(name, 20)} (expected one of {', '.join(EFFECTS)})")
     required, optional = EFFECTS[name]
     label = f"{where} ({name})"
     out = {"effect": name}

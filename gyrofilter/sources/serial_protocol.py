@@ -159,8 +159,10 @@ class LineParser:
             raise SettingsError(f"{self.where}: {where}: gyro_unit {quote(unit)} is not one of {', '.join(GYRO_UNITS)}")
         sample_rate_hz = self._positive(values, "sample_rate_hz", where, "rate=HZ")
         lsb_per_dps = None
-        if unit == "lsb":
+        if unit == "lsb" or values.get("lsb_per_dps") is not None:  # checked whenever given: a header keeps it
             lsb_per_dps = self._positive(values, "lsb_per_dps", where, "gyro_unit lsb needs lsb_per_dps")
+        if unit != "lsb":
+            lsb_per_dps = None
         return units_header(sample_rate_hz, unit, lsb_per_dps)
 
     def _positive(self, values, key, where, hint):
