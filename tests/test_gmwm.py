@@ -66,6 +66,42 @@ def test_recovers_white_gauss_markov_and_random_walk(seed):
     assert abs(best.rrw_dps_per_sqrt_s / k - 1) < 0.4
 
 
+def test_flicker_closed_form_matches_the_simulated_bias_instability_and_simulate_fit():
+    """The flicker term's ν² (the simulator's bank, T_max = the record's length) against the mean
+    measured wavelet variance of simulated bias instability, and of :func:`gmwm.simulate_fit`'s
+    flicker, at every scale with 8 or more degrees of freedom; flat at B² ln 2 / π mid-band."""
+    b, duration_s = 0.004, 2000.0
+    n = int(duration_s * FS)
+    wv = gmwm.haar_wv(series([], 0.0, duration_s, seed=0) + 1.0, FS)  # the scales only
+    keep = wv.edf >= 8
+    closed = gmwm.wv_flicker(wv.tau_s, b, FS, duration_s)
+    mid = (wv.tau_s > 0.2) & (wv.tau_s < duration_s / 9)
+    assert np.allclose(closed[mid], b * b * math.log(2) / math.pi, rtol=0.03)
+    runs = np.array([gmwm.haar_wv(series([{"effect": "bias_instability", "b_dps": b}], 0.0, duration_s, seed=s), FS).wv_dps2
+                     for s in range(12)])
+    fit = gmwm.GmwmFit(sample_rate_hz=FS, arw_dps_per_sqrt_hz=0.0, flicker_b_dps=b, duration_s=duration_s)
+    rng = np.random.default_rng(3)
+    fitted = np.array([gmwm.haar_wv(gmwm.simulate_fit(fit, n, FS, rng), FS).wv_dps2 for _ in range(12)])
+    for mean in (runs.mean(axis=0), fitted.mean(axis=0)):
+        # 12 runs: a scale with eta degrees of freedom has a relative error of about sqrt(2 / (12 eta))
+        assert np.all(np.abs(mean[keep] / closed[keep] - 1) < 4 * np.sqrt(2 / (12 * wv.edf[keep])) + 0.03)
+
+
+@pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow), pytest.param(3, marks=pytest.mark.slow)])
+def test_a_bias_instability_is_read_as_flicker_not_as_gauss_markov_terms(seed):
+    """White noise + bias instability over 2 h (the gap's composite terms: random walk, flicker,
+    0-3 Gauss-Markov, at tau >= 1 s): the WVIC chooses WN+FL, with B within 25 %; a Gauss-Markov
+    wander of the same record length is not read as flicker."""
+    b = 0.003
+    x = series([{"effect": "bias_instability", "b_dps": b}], 0.01, 7200.0, seed)
+    best, _ = gmwm.select_model(gmwm.haar_wv(x, FS, min_m=100), terms_allowed=("rrw", "flicker"), starts=3, seed=seed)
+    assert best.name == "WN+FL", best.to_dict()
+    assert abs(best.flicker_b_dps / b - 1) < 0.25
+    x = series([{"effect": "gauss_markov", "sigma_dps": 0.01, "tau_s": 30.0}], 0.01, 7200.0, seed)
+    best, _ = gmwm.select_model(gmwm.haar_wv(x, FS, min_m=100), terms_allowed=("rrw", "flicker"), starts=3, seed=seed)
+    assert best.name == "WN+1GM", best.to_dict()
+
+
 @pytest.mark.parametrize("seed", [pytest.param(4, marks=pytest.mark.slow), pytest.param(5, marks=pytest.mark.slow)])
 def test_two_gauss_markov_terms_are_told_apart(seed):
     effects = [{"effect": "gauss_markov", "sigma_dps": 0.02, "tau_s": 0.5},

@@ -2,7 +2,9 @@
 
 Where an extended axis's D stays above :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`,
 a GMWM-style fit (:mod:`gyrofilter.analysis.gmwm`; Guerrier et al. 2013) of white noise, an
-optional rate random walk and 0-3 Gauss-Markov terms to the Haar wavelet variance of the series
+optional rate random walk, an optional bias instability (the simulator's flicker bank, whose
+wavelet variance is flat: no sum of a few Gauss-Markov terms is, so without it a 1/f bias reads as
+three of them) and 0-3 Gauss-Markov terms to the Haar wavelet variance of the series
 cleaned of the deterministic findings, at tau >= max(1 s, 16 samples) (shorter scales belong to
 the colored noise and the bands), the model chosen by the WVIC (Guerrier et al. 2016;
 :func:`gyrofilter.analysis.gmwm.select_model`), replaces the axis's slow stochastic findings (and its colored noise, if that is better without it); its N becomes
@@ -28,6 +30,8 @@ from . import gmwm
 from ..sim import noise_terms as nt
 from ..units import AXES
 
+#: the optional terms of the composite fit (:data:`gyrofilter.analysis.gmwm.TERMS`) and the effect each becomes
+COMPOSITE_TERMS = {"rrw": "rate_random_walk", "flicker": "bias_instability"}
 #: the composite fit uses the wavelet variance at tau >= max(1 s, 16 samples): shorter scales
 #: carry the colored noise's low-pass shape and the narrow bands, which have their own terms
 COMPOSITE_MIN_TAU_S = 1.0
@@ -117,11 +121,12 @@ def slow_wavelet_variance(xc, sample_rate_hz, cands=()):
 
 def _composite_candidates(wv, sample_rate_hz):
     """GMWM-style composite fit (:func:`gyrofilter.analysis.gmwm.select_model`, Guerrier et al. 2013) of
-    white noise + optionally a rate random walk + 0..3 Gauss-Markov terms to ``wv``, the model
-    chosen by the WVIC (see gyrofilter.analysis.gmwm). Returns ``(fit, candidates)``: one
-    ``gauss_markov`` per Gauss-Markov term and a ``rate_random_walk`` if the fit has one, marked
-    ``extra["composite"]``; the fit's N is the composite model's white level."""
-    fit, _ = gmwm.select_model(wv, terms_allowed=("rrw",), starts=3, seed=0)
+    white noise + optionally a rate random walk and a bias instability + 0..3 Gauss-Markov terms
+    to ``wv``, the model chosen by the WVIC (see gyrofilter.analysis.gmwm). Returns
+    ``(fit, candidates)``: one ``gauss_markov`` per Gauss-Markov term, a ``rate_random_walk`` and a
+    ``bias_instability`` if the fit has them, marked ``extra["composite"]``; the fit's N is the
+    composite model's white level."""
+    fit, _ = gmwm.select_model(wv, terms_allowed=tuple(COMPOSITE_TERMS), starts=3, seed=0)
     out = []
     evidence = (f"composite fit {fit.name} to the {'robust ' if wv.robust else ''}Haar wavelet variance at tau = "
                 f"{wv.tau_s[0]:.3g}-{wv.tau_s[-1]:.3g} s (weighted objective Q = {fit.objective:.3g} over {wv.tau_s.size} "
@@ -135,6 +140,11 @@ def _composite_candidates(wv, sample_rate_hz):
         out.append(det.Candidate(effect="rate_random_walk", params={"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"random-walk term (K {fit.rrw_dps_per_sqrt_s:.3g} deg/s/sqrt(s)) of a " + evidence,
+                                 extra={"composite": True}))
+    if fit.flicker_b_dps is not None:
+        out.append(det.Candidate(effect="bias_instability", params={"b_dps": fit.flicker_b_dps},
+                                 statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
+                                 evidence=f"flicker term (B {fit.flicker_b_dps:.3g} deg/s) of a " + evidence,
                                  extra={"composite": True}))
     return fit, out
 

@@ -55,7 +55,7 @@ from .detectors.slow import _deterministic_candidate, _deterministic_shapes, _st
 from .detectors.tails import tail_fits, tail_residual, tail_step
 from .detectors.sinusoid import _dft_amplitude
 from .gap_baseline import extended_axis
-from .gap_composite import _composite_lags, slow_wavelet_variance
+from .gap_composite import COMPOSITE_TERMS, _composite_lags, slow_wavelet_variance
 
 #: the slow deterministic shapes of :func:`gyrofilter.analysis.detectors.detect_slow`
 DETERMINISTIC = ("rate_ramp", "bias_step", "warmup", "temperature")
@@ -213,10 +213,12 @@ def _composite(x, sample_rate_hz, cands, ks, out):
     if wv is None:
         return None
     gm = sorted((k for k in ks if cands[k].effect == "gauss_markov"), key=lambda k: cands[k].params["tau_s"])
-    rrw = [k for k in ks if cands[k].effect == "rate_random_walk"]
-    fit = gmwm.fit_model(wv, ("rrw",) if rrw else (), len(gm), starts=3, seed=0)
+    terms = {term: [k for k in ks if cands[k].effect == effect] for term, effect in COMPOSITE_TERMS.items()}
+    fit = gmwm.fit_model(wv, tuple(term for term, k in terms.items() if k), len(gm), starts=3, seed=0)
     for k, (sigma_dps, tau_s) in zip(gm, fit.gauss_markov):
         out[k] = {"sigma_dps": sigma_dps, "tau_s": tau_s}
-    for k in rrw:
+    for k in terms["rrw"]:
         out[k] = {"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s}
+    for k in terms["flicker"]:
+        out[k] = {"b_dps": fit.flicker_b_dps}
     return fit

@@ -18,6 +18,9 @@ Theoretical wavelet variances of the terms (m = τ f_s samples; AVAR/2 of each):
 * rate random walk K (deg/s/√s), discrete:     ν² = K² (2m² + 1) / (12 m f_s)  (Guerrier et al.
   2013, table 1: γ² (τ_j² + 2) / (12 τ_j) with τ_j = 2m samples and γ = K/√f_s)
 * drift (rate ramp) R (deg/s²):                ν² = R² τ² / 4
+* flicker (bias instability) B (deg/s):        the simulator's bank of Gauss-Markov terms
+  (:func:`gyrofilter.sim.noise_terms.flicker_bank`, T_min = 1/f_s, T_max = the record's length),
+  the sum of their exact ν²; flat at B² ln 2 / π (AVAR/2 of IEEE Std 952-1997 C.3) over the bank
 * Gauss-Markov, stationary std σ, correlation time T, exact for the sampled AR(1)
   φ = exp(-1/(f_s T)): half of :func:`gyrofilter.sim.noise_terms.ar1_allan_variance`
   (equivalent to Guerrier et al. 2013, table 1, and Zhang 2008).
@@ -29,7 +32,8 @@ independent), every parameter log-transformed (positive), by ``scipy.optimize.le
 from several starting points.
 
 Model selection: every combination of the optional terms (quantisation, random walk, drift)
-with k = 0..3 Gauss-Markov terms (white noise always in) is fitted, and the model with the
+with k = 0..3 Gauss-Markov terms (white noise always in) is fitted (the flicker term is
+not among the default optional terms, as in R's gmwm; the gap analysis's composite asks for it), and the model with the
 smallest **WVIC** is chosen (Guerrier, Stebler, Skaloud & Victoria-Feser 2016, "Wavelet-based
 improvements for inertial sensor error modeling", IEEE TIM 65(4); the ``rank.models`` of their R
 package gmwm): C = Q(θ̂) + 2 tr(Ω Cov(ν(θ̂), ν̂)), an estimate of the expected objective of the
@@ -57,10 +61,14 @@ import numpy as np
 from .allan import overlapping_adev
 from .wv_robust import ROBUST_EFFICIENCY, robust_wv
 from ..sim.model import validate_model
-from ..sim.noise_terms import ScaleMixtureNormal, ar1_allan_variance
+from ..sim.noise_terms import BiasInstability, ScaleMixtureNormal, ar1_allan_variance, flicker_bank
 from ..sim.simulate import simulate_axis_dps
 
 OPTIONAL_TERMS = ("quantization", "rrw", "ramp")
+#: every term a fit can hold beside white noise and Gauss-Markov terms, in parameter order
+TERMS = OPTIONAL_TERMS + ("flicker",)
+_FIELD = {"quantization": "quantization_deg", "rrw": "rrw_dps_per_sqrt_s", "ramp": "ramp_dps_per_s2",
+          "flicker": "flicker_b_dps"}
 MAX_GM = 3
 
 
@@ -152,6 +160,14 @@ def wv_ramp(tau_s, r_dps_per_s2):
     return r_dps_per_s2**2 * np.asarray(tau_s) ** 2 / 4.0
 
 
+def wv_flicker(tau_s, b_dps, sample_rate_hz, duration_s):
+    """ν² of the simulator's bias instability B over a record of ``duration_s``: the sum of the
+    exact ν² of its flicker bank (:func:`gyrofilter.sim.noise_terms.flicker_bank`, T_min = 1/f_s,
+    T_max = ``duration_s``, 2 per decade), flat at B² ln 2 / π between ~3/f_s and T_max / 9."""
+    taus_s, q_dps = flicker_bank(b_dps, sample_rate_hz, 1.0 / sample_rate_hz, max(duration_s, 1.0 / sample_rate_hz))
+    return sum(wv_gauss_markov(tau_s, q_dps, t, sample_rate_hz) for t in taus_s)
+
+
 def wv_gauss_markov(tau_s, sigma_dps, corr_time_s, sample_rate_hz):
     """ν² of a sampled Gauss-Markov process (AR(1), φ = exp(-1/(f_s T))): exact, AVAR/2."""
     phi = math.exp(-1.0 / (sample_rate_hz * corr_time_s))
@@ -167,6 +183,8 @@ class GmwmFit:
     quantization_deg: float = None
     rrw_dps_per_sqrt_s: float = None
     ramp_dps_per_s2: float = None
+    flicker_b_dps: float = None
+    duration_s: float = None  # the record's length: the flicker bank's longest correlation time
     gauss_markov: list = field(default_factory=list)  # [(sigma_dps, tau_s)], by increasing tau_s
     objective: float = float("nan")  # Q(θ̂) = Σ (ν̂² - ν²(θ̂))² / Var(ν̂²)
     n_params: int = 0
@@ -178,7 +196,7 @@ class GmwmFit:
     def name(self):
         parts = ["WN"]
         parts += [label for label, v in (("QN", self.quantization_deg), ("RW", self.rrw_dps_per_sqrt_s),
-                                         ("DR", self.ramp_dps_per_s2)) if v is not None]
+                                         ("DR", self.ramp_dps_per_s2), ("FL", self.flicker_b_dps)) if v is not None]
         parts += [f"{len(self.gauss_markov)}GM"] if self.gauss_markov else []
         return "+".join(parts)
 
@@ -192,6 +210,8 @@ class GmwmFit:
             out = out + wv_rrw(tau_s, self.rrw_dps_per_sqrt_s, sample_rate_hz)
         if self.ramp_dps_per_s2 is not None:
             out = out + wv_ramp(tau_s, self.ramp_dps_per_s2)
+        if self.flicker_b_dps is not None:
+            out = out + wv_flicker(tau_s, self.flicker_b_dps, sample_rate_hz, self.duration_s)
         for sigma_dps, tau_gm_s in self.gauss_markov:
             out = out + wv_gauss_markov(tau_s, sigma_dps, tau_gm_s, sample_rate_hz)
         return out
@@ -199,7 +219,7 @@ class GmwmFit:
     def to_dict(self):
         return {"model": self.name, "arw_dps_per_sqrt_hz": self.arw_dps_per_sqrt_hz,
                 "quantization_deg": self.quantization_deg, "rrw_dps_per_sqrt_s": self.rrw_dps_per_sqrt_s,
-                "ramp_dps_per_s2": self.ramp_dps_per_s2,
+                "ramp_dps_per_s2": self.ramp_dps_per_s2, "flicker_b_dps": self.flicker_b_dps,
                 "gauss_markov": [{"sigma_dps": s, "tau_s": t} for s, t in self.gauss_markov],
                 "objective": self.objective, "n_params": self.n_params, "optimism": self.optimism,
                 "criterion": self.criterion}
@@ -213,27 +233,26 @@ def wv_distance(wv: WaveletVariance, model_wv_dps2):
     return float(np.mean(r**2))
 
 
-def _unpack(theta, terms, k_gm, sample_rate_hz):
+def _unpack(theta, terms, k_gm, sample_rate_hz, duration_s):
     """Log-parameters -> GmwmFit fields (variances and correlation times are exp of theta)."""
     values = iter(np.exp(theta))
     out = {"arw_dps_per_sqrt_hz": math.sqrt(next(values))}
-    for term in OPTIONAL_TERMS:
+    for term in TERMS:
         if term in terms:
-            out[{"quantization": "quantization_deg", "rrw": "rrw_dps_per_sqrt_s", "ramp": "ramp_dps_per_s2"}[term]] = \
-                math.sqrt(next(values))
+            out[_FIELD[term]] = math.sqrt(next(values))
     gm = [(math.sqrt(next(values)), float(next(values))) for _ in range(k_gm)]
     out["gauss_markov"] = sorted(gm, key=lambda p: p[1])
-    return GmwmFit(sample_rate_hz=sample_rate_hz, **out)
+    return GmwmFit(sample_rate_hz=sample_rate_hz, duration_s=duration_s, **out)
 
 
 def _starts(wv: WaveletVariance, terms, k_gm, rng, count):
     """Starting log-parameters: white from the first scale, random walk and drift from the last,
-    quantisation small, Gauss-Markov times spread over the scales; then ``count - 1`` jittered copies."""
+    quantisation small, flicker at half the lowest level, Gauss-Markov times spread over the scales; then ``count - 1`` jittered copies."""
     tau, nu = wv.tau_s, wv.wv_dps2
     base = [math.log(2.0 * nu[0] * tau[0])]
     scale = {"quantization": 0.1 * 2.0 * nu[0] * tau[0] ** 2 / 3.0, "rrw": 0.3 * 12.0 * nu[-1] / (2.0 * tau[-1]),
-             "ramp": 0.1 * 4.0 * nu[-1] / tau[-1] ** 2}
-    base += [math.log(scale[t]) for t in OPTIONAL_TERMS if t in terms]
+             "ramp": 0.1 * 4.0 * nu[-1] / tau[-1] ** 2, "flicker": 0.5 * float(np.min(nu)) * math.pi / math.log(2.0)}
+    base += [math.log(scale[t]) for t in TERMS if t in terms]
     gm_taus = np.geomspace(tau[0] * 4.0, tau[-1] / 4.0, k_gm + 2)[1:-1] if k_gm else []
     for t in gm_taus:
         j = int(np.argmin(np.abs(np.log(tau / t))))
@@ -243,16 +262,16 @@ def _starts(wv: WaveletVariance, terms, k_gm, rng, count):
 
 
 def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
-    """GMWM fit of white noise + ``terms`` (subset of quantization, rrw, ramp) + ``k_gm``
+    """GMWM fit of white noise + ``terms`` (subset of :data:`TERMS`) + ``k_gm``
     Gauss-Markov terms to ``wv``: weighted least squares on log-parameters (module docstring)."""
     from scipy.optimize import least_squares
 
-    sample_rate_hz = wv.sample_rate_hz
+    sample_rate_hz, duration_s = wv.sample_rate_hz, wv.n_samples / wv.sample_rate_hz
     rng = np.random.default_rng(seed)
     lo_t, hi_t = math.log(0.5 / sample_rate_hz), math.log(wv.tau_s[-1] * 100.0)
 
     def residuals(theta):
-        return (wv.wv_dps2 - _unpack(theta, terms, k_gm, sample_rate_hz).wv(wv.tau_s)) / wv.sd_dps2
+        return (wv.wv_dps2 - _unpack(theta, terms, k_gm, sample_rate_hz, duration_s).wv(wv.tau_s)) / wv.sd_dps2
 
     n_par = 1 + len(terms) + 2 * k_gm
     lower = np.full(n_par, -200.0)
@@ -265,7 +284,7 @@ def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
                             x_scale=1.0, max_nfev=400 * n_par)
         if best is None or res.cost < best.cost:
             best = res
-    out = _unpack(best.x, terms, k_gm, sample_rate_hz)
+    out = _unpack(best.x, terms, k_gm, sample_rate_hz, duration_s)
     out.objective = float(2.0 * best.cost)
     out.n_params = n_par
     out.optimism = 2.0 * n_par
@@ -276,8 +295,8 @@ def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
 
 def select_model(wv: WaveletVariance, *, max_gm=MAX_GM, starts=4, seed=0, terms_allowed=OPTIONAL_TERMS,
                  criterion="wvic", runs=BOOTSTRAP_RUNS):
-    """Fit every model (white noise + any subset of ``terms_allowed`` (of quantization, rrw,
-    ramp) + 0..``max_gm`` Gauss-Markov terms) and return ``(best, all_fits)``, best by the
+    """Fit every model (white noise + any subset of ``terms_allowed`` (of :data:`TERMS`)
+    + 0..``max_gm`` Gauss-Markov terms) and return ``(best, all_fits)``, best by the
     smallest WVIC (``criterion="wvic"``: Q + 2 tr(P V_w), V_w from ``runs`` bootstrap runs of the
     largest model, seeded by ``seed``) or Q + 2p (``"q2p"``); module docstring. Ties (within
     :data:`TIE`) go to the model with fewer parameters."""
@@ -333,8 +352,8 @@ def simulate_fit(fit: GmwmFit, n, sample_rate_hz, rng, tails=None):
     N sqrt(f_s) w (w a unit-variance Gaussian scale mixture with ``tails`` = (fraction,
     scale_ratio), :class:`gyrofilter.sim.noise_terms.ScaleMixtureNormal`), quantisation as the
     difference of a white angle noise of sd Q (ν² = 3Q²/(2τ²)), a random walk K / sqrt(f_s) per
-    sample, a drift R t and stationary AR(1) Gauss-Markov terms (the simulator's equations,
-    :mod:`gyrofilter.sim.noise_terms`)."""
+    sample, a drift R t, the bias instability's flicker bank over the ``n`` samples and stationary
+    AR(1) Gauss-Markov terms (the simulator's equations, :mod:`gyrofilter.sim.noise_terms`)."""
     from scipy.signal import lfilter
 
     draws = rng if tails is None else ScaleMixtureNormal(rng, np.random.default_rng(rng.integers(2**63)), *tails)
@@ -345,6 +364,10 @@ def simulate_fit(fit: GmwmFit, n, sample_rate_hz, rng, tails=None):
         x += np.cumsum(fit.rrw_dps_per_sqrt_s / math.sqrt(sample_rate_hz) * rng.standard_normal(n))
     if fit.ramp_dps_per_s2 is not None:
         x += fit.ramp_dps_per_s2 * np.arange(n) / sample_rate_hz
+    if fit.flicker_b_dps is not None:
+        bank = BiasInstability(fit.flicker_b_dps, sample_rate_hz, rng, 1.0 / sample_rate_hz, n / sample_rate_hz)
+        for start in range(0, n, 1 << 16):  # in blocks: the bank draws one normal per component and sample
+            x[start:start + (1 << 16)] += bank.next(np.zeros(min(1 << 16, n - start)), None)
     for sigma_dps, tau_s in fit.gauss_markov:
         phi = math.exp(-1.0 / (sample_rate_hz * tau_s))
         w = rng.standard_normal(n)
