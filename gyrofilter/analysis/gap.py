@@ -29,7 +29,7 @@ function each on a shared run (:class:`_GapRun`); the modules beside this one ho
    extended by every kept finding. Where an axis's D after is still above
    :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`, a **composite stochastic part** is
    tried (:mod:`gyrofilter.analysis.gap_composite`: a GMWM-style fit of white noise, an optional
-   rate random walk and 0-3 Gauss-Markov terms that replaces the axis's slow stochastic findings
+   rate random walk, an optional bias instability and 0-3 Gauss-Markov terms that replaces the axis's slow stochastic findings
    when it lowers D enough).
 5. The report: a JSON-ready dict with ``baseline``, ``findings`` (effect, axis, params,
    evidence, gain), ``extended_model`` (runs in ``gyrofilter simulate``), per-axis feature
