@@ -83,6 +83,31 @@ def test_interval_is_the_bias_corrected_student_interval_on_the_log_scale():
     assert low < -2.0 < high and gi._interval(1.0, [1.0, 1.1, None, None], "log") is None
 
 
+def test_a_step_of_test_inversion_mends_an_estimator_whose_spread_grows_with_the_parameter():
+    """A scale estimate log(theta-hat) = log(theta) + 0.5 sqrt(theta) z (its spread grows with theta,
+    as a Gauss-Markov estimate's with tau): the plain interval, from replicates at theta-hat,
+    misses a true theta above more often than below; one step of test inversion
+    (gi.inversion_step, replicates at the ends) brings the coverage closer to 95 % and balances
+    the two sides. 4000 seeded records, 20 replicates each.""" 
+    rng = np.random.default_rng(5)
+    draw = lambda theta, size=None: theta * np.exp(0.5 * math.sqrt(theta) * rng.standard_normal(size))
+    theta = 1.0
+    miss = {"plain": [0, 0], "inverted": [0, 0]}
+    for _ in range(4000):
+        est = float(draw(theta))
+        reps = draw(est, 20)
+        plain = gi._interval(est, reps, "log")
+        inverted = gi.inversion_step({"p": est}, [{"p": v} for v in reps],
+                                     lambda at: [{"p": v} for v in draw(at["p"], 20)], {"p": "log"})["p"]
+        for name, (low, high) in (("plain", plain), ("inverted", inverted)):
+            miss[name][0] += theta < low
+            miss[name][1] += theta > high
+    cover = {name: 1 - sum(m) / 4000 for name, m in miss.items()}
+    assert cover["plain"] < 0.93 and abs(cover["inverted"] - 0.95) < abs(cover["plain"] - 0.95), (cover, miss)
+    assert miss["plain"][1] > 2 * miss["plain"][0]  # the plain interval misses above
+    assert miss["inverted"][1] < miss["plain"][1]
+
+
 def test_phase_interval_wraps_the_replicates_and_lags_stay_inside_minus_one_one():
     low, high = gi._interval(3.1, [3.05, -3.12, 3.13, -3.1, 3.08, 3.11], "phase")  # replicates across +-pi
     assert high - low < 0.5 and _inside(3.1, (low, high), "phase_rad")
