@@ -89,16 +89,16 @@ def test_flicker_closed_form_matches_the_simulated_bias_instability_and_simulate
 
 @pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow), pytest.param(3, marks=pytest.mark.slow)])
 def test_a_bias_instability_is_read_as_flicker_not_as_gauss_markov_terms(seed):
-    """White noise + bias instability over 2 h (the gap's composite terms: random walk, flicker,
-    0-3 Gauss-Markov, at tau >= 1 s): the WVIC chooses WN+FL, with B within 25 %; a Gauss-Markov
-    wander of the same record length is not read as flicker."""
-    b = 0.003
-    x = series([{"effect": "bias_instability", "b_dps": b}], 0.01, 7200.0, seed)
-    best, _ = gmwm.select_model(gmwm.haar_wv(x, FS, min_m=100), terms_allowed=("rrw", "flicker"), starts=3, seed=seed)
+    """White noise + bias instability over 2 h at 10 Hz (the gap's composite terms: random walk,
+    flicker, 0-3 Gauss-Markov, at tau >= 1.6 s): the WVIC chooses WN+FL, with B within 25 %; a
+    Gauss-Markov wander of the same record length is not read as flicker."""
+    b, fs = 0.003, 10.0
+    x = series([{"effect": "bias_instability", "b_dps": b}], 0.01, 7200.0, seed, fs=fs)
+    best, _ = gmwm.select_model(gmwm.haar_wv(x, fs, min_m=16), terms_allowed=("rrw", "flicker"), starts=3, seed=seed)
     assert best.name == "WN+FL", best.to_dict()
     assert abs(best.flicker_b_dps / b - 1) < 0.25
-    x = series([{"effect": "gauss_markov", "sigma_dps": 0.01, "tau_s": 30.0}], 0.01, 7200.0, seed)
-    best, _ = gmwm.select_model(gmwm.haar_wv(x, FS, min_m=100), terms_allowed=("rrw", "flicker"), starts=3, seed=seed)
+    x = series([{"effect": "gauss_markov", "sigma_dps": 0.01, "tau_s": 30.0}], 0.01, 7200.0, seed, fs=fs)
+    best, _ = gmwm.select_model(gmwm.haar_wv(x, fs, min_m=16), terms_allowed=("rrw", "flicker"), starts=3, seed=seed)
     assert best.name == "WN+1GM", best.to_dict()
 
 

@@ -52,6 +52,7 @@ measures both on simulated composite processes (docs/gap.md).
 """
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass, field
@@ -164,8 +165,16 @@ def wv_flicker(tau_s, b_dps, sample_rate_hz, duration_s):
     """ν² of the simulator's bias instability B over a record of ``duration_s``: the sum of the
     exact ν² of its flicker bank (:func:`gyrofilter.sim.noise_terms.flicker_bank`, T_min = 1/f_s,
     T_max = ``duration_s``, 2 per decade), flat at B² ln 2 / π between ~3/f_s and T_max / 9."""
-    taus_s, q_dps = flicker_bank(b_dps, sample_rate_hz, 1.0 / sample_rate_hz, max(duration_s, 1.0 / sample_rate_hz))
-    return sum(wv_gauss_markov(tau_s, q_dps, t, sample_rate_hz) for t in taus_s)
+    tau_s = np.asarray(tau_s, dtype=float)
+    return b_dps**2 * _flicker_unit(tuple(tau_s.ravel()), float(sample_rate_hz), float(duration_s)).reshape(tau_s.shape)
+
+
+@functools.lru_cache(maxsize=64)
+def _flicker_unit(tau_s, sample_rate_hz, duration_s):
+    """:func:`wv_flicker` for B = 1 at the scales ``tau_s`` (a tuple): the fit evaluates it at
+    every step, and it is B² times this."""
+    taus_s, q_dps = flicker_bank(1.0, sample_rate_hz, 1.0 / sample_rate_hz, max(duration_s, 1.0 / sample_rate_hz))
+    return sum(wv_gauss_markov(np.array(tau_s), q_dps, t, sample_rate_hz) for t in taus_s)
 
 
 def wv_gauss_markov(tau_s, sigma_dps, corr_time_s, sample_rate_hz):
