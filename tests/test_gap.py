@@ -490,7 +490,7 @@ def test_two_gauss_markov_terms_are_found_by_the_composite_fit(seed):
 ])
 def test_an_axis_that_does_not_close_gets_a_note_naming_the_feature(key, j, z, says):
     from gyrofilter.analysis.detectors import OUTSIDE_NULL_D
-    from gyrofilter.analysis.gap_features import still_departs
+    from gyrofilter.analysis.gap_features import departs_most, still_departs
 
     taus = np.array([0.01, 0.03, 0.1, 1.0, 10.0, 100.0])
     bands = np.array([0.08, 0.13, 1.0, 3.0, 10.0, 20.0, 30.0])
@@ -500,6 +500,8 @@ def test_an_axis_that_does_not_close_gets_a_note_naming_the_feature(key, j, z, s
     note = still_departs("z", 4.85, deps, taus, bands)
     assert note.startswith(f"axis z: after extension D = 4.85, above {OUTSIDE_NULL_D:g}")
     assert says in note
+    most = departs_most(deps, taus, bands)  # the report's structured form of the same
+    assert most["feature"] == key and most["z"] == z and f"{most['where']} departs most" in note
 
 
 def test_a_moving_axis_gets_a_note_and_the_still_ones_none():
@@ -510,6 +512,12 @@ def test_a_moving_axis_gets_a_note_and_the_still_ones_none():
     report = analyse_gap(Recording.from_dps(g, fs), seed=0, n_sims=4)
     moving = [note for note in report["notes"] if "does not look static" in note]
     assert len(moving) == 1 and moving[0].startswith("axis y: the rate moves by up to"), report["notes"]
+    # an axis that does not close has its furthest feature in the report, as its note says
+    for a in "xyz":
+        note = next((n for n in report["notes"] if n.startswith(f"axis {a}: after extension D")), None)
+        most = report["departures"][a].get("departs_most")
+        assert (note is None) == (most is None) and (note is None or f"The {most['where']} departs most" in note)
+    assert "departs_most" in report["departures"]["y"]
 
 
 def test_cli_warns_that_lost_samples_make_the_analysis_not_meaningful(tmp_path, capsys):

@@ -91,19 +91,15 @@ def null_band(base_model, n, fs, seeds, *, q=0.95):
     return float(np.quantile(values, q)), values
 
 
-def worst_feature(summary, notes=(), axis=""):
+def worst_feature(summary):
     """Sentence on the feature furthest outside the extended model's simulations: the gap's own
-    word where its report says the axis does not close (every feature, the tail statistic
-    included: :func:`gyrofilter.analysis.gap_features.still_departs`), else the Allan-deviation
-    tau or band power furthest out (from the report's departure summary of the axis)."""
-    import re
-
+    ``departs_most`` where its report says the axis does not close (every feature, the tail
+    statistic included), else the Allan-deviation tau or band power furthest out (from the
+    report's departure summary of the axis)."""
     import numpy as np
 
-    for note in notes:
-        m = re.match(rf"axis {axis}: after extension .*? The (.*?) departs most \(z = ([+-]?[\d.]+) ", note)
-        if m:
-            return f"{m.group(1).split(' (')[0]} (z {float(m.group(2)):+.1f})"
+    if "departs_most" in summary:
+        return f"{summary['departs_most']['where'].split(' (')[0]} (z {summary['departs_most']['z']:+.1f})"
 
     from gyrofilter.analysis.gap_features import _LOG_FLOOR
 
@@ -202,7 +198,7 @@ def main(argv=None):
             found = ", ".join(f["effect"] for f in rep["findings"] if f["axis"] == a) or "-"
             closed = after <= band
             row = (f"| `{name}` ({n / fs:.0f} s at {fs:.4g} Hz) | {a} | {before:.2f} -> {after:.2f} | {band:.2f} | "
-                   f"{'yes' if closed else 'no'} | {found} | {'' if closed else worst_feature(rep['departures'][a], rep['notes'], a)} |")
+                   f"{'yes' if closed else 'no'} | {found} | {'' if closed else worst_feature(rep['departures'][a])} |")
             if dist is not None:
                 row += f" {dist[i][0]:.3g} / {dist[i][1]:.3g} ({dist[i][2]}) | {out[i][0]:.3g} / {out[i][1]:.3g} |"
                 for key, (ext, other) in (("in-sample", dist[i][:2]), ("held out", out[i])):

@@ -55,8 +55,8 @@ from .gap_baseline import (axis_dps, baseline_model, default_n_sims, effect_entr
                            temperature_table)
 from .gap_composite import composite_step, slow_wavelet_variance
 from .gap_readings import alternatives_entry, null_spread, weigh_readings
-from .gap_features import (METRIC, departure_summary, departures, discrepancy, feature_bands, feature_taus, features,
-                           still_departs, strongest)
+from .gap_features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
+                           features, still_departs, strongest)
 from .gap_intervals import add_intervals
 from .still import not_static
 from ..errors import GyroFilterError, RecordingError
@@ -422,6 +422,8 @@ def _write_findings(run):
         if run.after[i] > det.OUTSIDE_NULL_D:
             deps_e = run.axis_deps(i, run.kept_on(i), f"extended model on {AXES[i]}") if run.kept_on(i) else run.deps[i]
             report["notes"].append(still_departs(AXES[i], run.after[i], deps_e, run.taus, run.bands))
+            if AXES[i] in report.get("departures", {}):
+                report["departures"][AXES[i]]["departs_most"] = departs_most(deps_e, run.taus, run.bands)
     for i in sorted({i for _, i, _, _ in kept}):
         deps_e = run.axis_deps(i, run.kept_on(i), f"extended model on {AXES[i]}")
         summ = report["departures"][AXES[i]]

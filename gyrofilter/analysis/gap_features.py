@@ -195,6 +195,13 @@ def strongest(deps, taus, bands):
     return f"largest departure in the {where}, z = {z:+.1f} sd of the simulated spread"
 
 
+def departs_most(deps, taus, bands):
+    """The feature furthest outside the simulations' spread, for the report: ``{"feature": key
+    of :func:`features`, "where": its description, "z": its departure}``."""
+    key, z, _, where = _furthest(deps, taus, bands)
+    return {"feature": key, "where": where, "z": z}
+
+
 def still_departs(axis, d_after, deps, taus, bands):
     """The note on an axis whose D after extension is above :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`: the feature
     furthest outside the extended model's simulations, and what its sign says. For the Allan
