@@ -108,8 +108,10 @@ def summarise(rows, total_s):
         n_ok += ok
         print(f"{effect:18s} {len(rs):5d} {named:6d} {ok:7d} {extra:9d}")
     if n_eff:
+        lo, hi = he.wilson(n_ok, n_eff)
         print(f"{'all effects':18s} {n_eff:5d} {n_named:6d} {n_ok:7d}   detection (named, in tolerance): "
-              f"{100 * n_named / n_eff:.1f} %, {100 * n_ok / n_eff:.1f} %")
+              f"{100 * n_named / n_eff:.1f} %, {100 * n_ok / n_eff:.1f} % (95 % Wilson interval of the latter: "
+              f"{100 * lo:.1f}-{100 * hi:.1f} %)")
     for hidden, named_as in (("heavy_tails", "outliers"), ("outliers", "heavy_tails")):  # the two readings of tails
         rs = by.get(hidden, [])
         if rs:

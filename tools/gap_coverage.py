@@ -50,16 +50,6 @@ def inside(true, interval, name):
     return low <= true <= high
 
 
-def wilson(k, n, z=1.96):
-    """95 % Wilson score interval of a binomial proportion k / n."""
-    if n == 0:
-        return float("nan"), float("nan")
-    p = k / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return centre - half, centre + half
-
-
 class Recorder:
     """Keeps every ``gap_intervals._interval`` call's estimate, replicates and scale, so that
     ``--compare`` can score other intervals on the same bootstrap runs."""
@@ -150,7 +140,7 @@ def oracle(args):
         half = 1.96 * sigma * math.sqrt(1 / first + 1 / (x.size - first))
         ok += abs(size - case["params"]["size_dps"]) <= half
         n += 1
-    lo, hi = wilson(ok, n)
+    lo, hi = he.wilson(ok, n)
     print(f"bias_step size_dps, exact interval at the true step time with the true noise level: {ok}/{n} = "
           f"{100 * ok / max(n, 1):.1f} % [{100 * lo:.1f}, {100 * hi:.1f}] (the records' own luck)")
 
@@ -193,7 +183,7 @@ def run(args):
 
 
 def _line(label, cases, named, ok, n, per_param):
-    lo, hi = wilson(ok, n)
+    lo, hi = he.wilson(ok, n)
     cover = f"{100 * ok / n:6.1f} %  [{100 * lo:4.1f}, {100 * hi:5.1f}]" if n else f"{'-':>8s}  {'':14s}"
     print(f"{label:22s} {cases:>5} {named:>5} {n:6d} {ok:6d} {cover}  {per_param}")
 

@@ -215,3 +215,14 @@ def check(case, report):
     ok = all(_within(kind, tol, _value(params, name), _value(case["params"], name), case["duration_s"])
              for name, (kind, tol) in TOLERANCES[case["effect"]].items())
     return True, ok, others
+
+
+def wilson(k, n, z=1.96):
+    """95 % Wilson score interval of a binomial proportion k / n (a battery's rate: how sure it
+    is on n cases); (nan, nan) for n = 0."""
+    if n == 0:
+        return float("nan"), float("nan")
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return centre - half, centre + half
