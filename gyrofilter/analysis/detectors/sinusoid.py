@@ -34,7 +34,8 @@ def _local_level(power, first_bin, ratio=1.1, min_bins=16):
     lo, span = float(key.min()), float(np.ptp(key)) * 1.000001 + 1e-12
     key -= lo
     key /= span
-    key += np.repeat(np.arange(edges.size - 1, dtype=float), np.diff(edges))
+    for band in range(1, edges.size - 1):  # a band at a time: no N-bin temporary
+        key[edges[band] - first_bin:edges[band + 1] - first_bin] += band
     key.sort()
     counts = np.diff(edges)
     starts = edges[:-1] - first_bin

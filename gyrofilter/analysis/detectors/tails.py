@@ -152,7 +152,9 @@ def _lattice_step(x, count=100_000):
 def tail_step(x, sample_rate_hz):
     """The quantization step of ``x`` in units of its high-passed noise's robust sd (0 when the
     series is on no lattice): the narrowest histogram bin of :func:`tail_fits`."""
-    return _lattice_step(x) / robust_sigma(x - moving_mean(x, colored_window(x.size, sample_rate_hz)), max_count=20_000)
+    resid = moving_mean(x, colored_window(x.size, sample_rate_hz))
+    np.subtract(x, resid, out=resid)  # in place: one N-sample array, not two
+    return _lattice_step(x) / robust_sigma(resid, max_count=20_000)
 
 
 def tails_statistic(x, sample_rate_hz, u=None):
