@@ -287,11 +287,13 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
     z = stat / tails_sd(u.size) if tails_z is None else float(tails_z)
     if z < HEAVY_TAILS_Z:
         return None, None
+    del u  # made again below: with tail_step's moving mean it would be two N-sample arrays at once
     step = tail_step(x, sample_rate_hz)
     if tails_z is None and step > TAILS_MAX_STEP_SD:  # the baseline's simulations would carry the quantizer too
         return None, (f"the noise's distribution departs from a Gaussian (winsorized kurtosis z = {z:+.1f}) "
                       f"but the rate is quantized in steps of more than {TAILS_MAX_STEP_SD:g} noise sd: "
                       "its tails cannot be told from the quantizer's without simulations of it")
+    u = tail_residual(x, sample_rate_hz)
     fits = tail_fits(u, step)
     ll = fits["log_l"]
     lr = 2.0 * (ll["mixture"] - ll["gauss"])
