@@ -235,13 +235,12 @@ def tail_fits(u, step=0.0, models=("gauss", "mixture", "spikes")):
     re-fits the mixture alone)."""
     from scipy.optimize import minimize_scalar
 
-    a = np.abs(u)
     width = max(0.25, float(step))
     linear = max(4.0, 8.0 * width)
-    top = max(1.125 * linear, float(a.max()) * 1.001)
+    top = max(1.125 * linear, max(float(u.max()), -float(u.min())) * 1.001)  # max |u|
     edges = np.r_[np.arange(0.0, linear - 1e-9, width), np.geomspace(linear, top, 40), np.inf]  # the last bin is
     # empty, so the models' probabilities sum to 1 over the bins (no mass beyond the largest sample is lost)
-    counts, _ = np.histogram(a, edges)
+    counts = sum(np.histogram(np.abs(u[lo:lo + _PASS]), edges)[0] for lo in range(0, u.size, _PASS))  # |u| a pass at a time
 
     def params(t):  # (sigma, share in (0, 1/2), ratio or magnitude), each bounded: the search may wander
         t = np.clip(t, -50.0, 50.0)
