@@ -8,7 +8,8 @@ import pytest
 from scipy.signal import lfilter
 
 from gyrofilter.sim import noise_terms as nt
-from gyrofilter.sim.flicker import FLICKER_ADEV_PER_B, KNOT_PERIODS, KNOT_STEP, BiasInstability, bank_levels, flicker_bank
+from gyrofilter.sim.flicker import (FLICKER_ADEV_PER_B, KNOT_PERIODS, KNOT_STEP, BiasInstability, bank_levels, flicker_bank,
+                                   sum_of_ar1_filter)
 
 
 def interpolated_ar1_allan_variance(phi, variance, step, m):
@@ -135,3 +136,21 @@ def test_drawn_bank_variance_and_knot_law():
     x = term.next(np.zeros(400_000), None)
     assert term.levels.max() >= 1
     assert abs(np.var(x) / (len(term.taus_s) * term.q_dps**2) - 1) < 0.05
+
+
+def test_joint_filter_has_the_law_of_the_sum_of_its_components():
+    # level 0 of the default bank (P = 1 .. 100 samples): one ARMA(5, 4) for five AR(1)s; its
+    # stationary variance and spectrum are those of the sum (oracles: noise_terms' Lyapunov
+    # variance and the AR(1) spectra); close poles fail the check and are drawn one by one
+    periods = 10.0 ** (np.arange(5) / 2.0)
+    phis, gains = np.exp(-1.0 / periods), 0.3 * np.sqrt(1.0 - np.exp(-2.0 / periods))
+    b, a = sum_of_ar1_filter(phis, gains)
+    assert len(b) == 5 and len(a) == 6
+    assert abs(nt.filter_variance(b, a) / np.sum(gains**2 / (1.0 - phis**2)) - 1.0) < 1e-5
+    f_hz = np.linspace(0.0, 50.0, 101)
+    ar1 = sum(nt.filter_psd([g], [1.0, -p], f_hz, 100.0) for p, g in zip(phis, gains))
+    assert np.allclose(nt.filter_psd(b, a, f_hz, 100.0), ar1, rtol=1e-5)
+    close = np.exp(-1.0 / (20.0 * 10.0 ** (np.arange(5) / 10.0)))
+    assert sum_of_ar1_filter(close, np.full(5, 0.1)) is None
+    term = BiasInstability(0.01, 100.0, np.random.default_rng(0), 0.2, 0.5, per_decade=10.0)
+    assert len(term.bank.filters) == len(term.taus_s)  # the fallback: a filter per component
