@@ -362,18 +362,6 @@ def test_rate_ramp_allan_slope():
 # stochastic effects
 
 
-def test_bias_instability_bank_is_flat_at_0664_b_exactly():
-    # exact Allan variance of the Gauss-Markov bank (sum of AR(1) oracles), no sampling error
-    fs, duration, b = 100.0, 3600.0, 0.02
-    taus, q = nt.flicker_bank(b, fs, 1 / fs, duration, 2.0)
-    m = np.unique(np.round(np.logspace(np.log10(0.3 * fs), np.log10(duration * fs / 9), 30)).astype(int))
-    avar = sum(nt.ar1_allan_variance(math.exp(-1 / (fs * T)), q * q, m) for T in taus)
-    ratio = np.sqrt(avar) / (nt.FLICKER_ADEV_PER_B * b)
-    assert np.log10(m[-1] / m[0]) > 3  # 0.3 s .. 400 s
-    assert np.all(np.abs(ratio - 1) < 0.02)
-    assert abs(nt.FLICKER_ADEV_PER_B - 0.664) < 5e-4
-
-
 def test_bias_instability_simulated_allan_floor():
     # three independent realisations (axes) of pure flicker: the mean Allan deviation is flat at
     # 0.664 B within 10 % from tau = 1 s to 100 s (2 decades); a single Gauss-Markov is not flat

@@ -19,8 +19,8 @@ Theoretical wavelet variances of the terms (m = τ f_s samples; AVAR/2 of each):
   2013, table 1: γ² (τ_j² + 2) / (12 τ_j) with τ_j = 2m samples and γ = K/√f_s)
 * drift (rate ramp) R (deg/s²):                ν² = R² τ² / 4
 * flicker (bias instability) B (deg/s):        the simulator's bank of Gauss-Markov terms
-  (:func:`gyrofilter.sim.noise_terms.flicker_bank`, T_min = 1/f_s, T_max = the record's length),
-  the sum of their exact ν²; flat at B² ln 2 / π (AVAR/2 of IEEE Std 952-1997 C.3) over the bank
+  (:func:`gyrofilter.sim.flicker.flicker_bank`, T_min = 1/f_s, T_max = the record's length),
+  the sum of their exact ν² (the simulator draws the slow ones at knots: within 1 %); flat at B² ln 2 / π (AVAR/2 of IEEE Std 952-1997 C.3) over the bank
 * Gauss-Markov, stationary std σ, correlation time T, exact for the sampled AR(1)
   φ = exp(-1/(f_s T)): half of :func:`gyrofilter.sim.noise_terms.ar1_allan_variance`
   (equivalent to Guerrier et al. 2013, table 1, and Zhang 2008).
@@ -62,7 +62,8 @@ import numpy as np
 from .allan import overlapping_adev
 from .wv_robust import ROBUST_EFFICIENCY, robust_wv
 from ..sim.model import validate_model
-from ..sim.noise_terms import BiasInstability, ScaleMixtureNormal, ar1_allan_variance, flicker_bank
+from ..sim.flicker import BiasInstability, flicker_bank
+from ..sim.noise_terms import ScaleMixtureNormal, ar1_allan_variance
 from ..sim.simulate import simulate_axis_dps
 
 OPTIONAL_TERMS = ("quantization", "rrw", "ramp")
@@ -163,7 +164,7 @@ def wv_ramp(tau_s, r_dps_per_s2):
 
 def wv_flicker(tau_s, b_dps, sample_rate_hz, duration_s):
     """ν² of the simulator's bias instability B over a record of ``duration_s``: the sum of the
-    exact ν² of its flicker bank (:func:`gyrofilter.sim.noise_terms.flicker_bank`, T_min = 1/f_s,
+    exact ν² of its full-rate flicker bank (:func:`gyrofilter.sim.flicker.flicker_bank`, T_min = 1/f_s,
     T_max = ``duration_s``, 2 per decade), flat at B² ln 2 / π between ~3/f_s and T_max / 9."""
     tau_s = np.asarray(tau_s, dtype=float)
     return b_dps**2 * _flicker_unit(tuple(tau_s.ravel()), float(sample_rate_hz), float(duration_s)).reshape(tau_s.shape)

@@ -1,4 +1,5 @@
-"""Per-effect generators of the gyro simulator, one class per term of the effect table.
+"""Per-effect generators of the gyro simulator, one class per term of the effect table (the
+``bias_instability`` bank lives in :mod:`gyrofilter.sim.flicker`).
 
 Every generator is *streaming*: it is built once per axis and then asked for consecutive blocks
 of samples with :meth:`next(t_s, temp_c)`; it keeps the state it needs (filter memory, the last
@@ -26,10 +27,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-#: Allan deviation of flicker (1/f) rate noise in its flat region, in units of B:
-#: σ(τ) = sqrt(2 ln 2 / π) · B ≈ 0.664 B (IEEE Std 952-1997, eq. C.16).
-FLICKER_ADEV_PER_B = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
 
 def _lfilter_ar1(phi, gain, w, state):
@@ -349,63 +346,6 @@ def filter_psd(b, a, f_hz, sample_rate_hz):
     num = np.polyval(np.asarray(b)[::-1], z)
     den = np.polyval(np.asarray(a)[::-1], z)
     return np.abs(num) ** 2 / np.abs(den) ** 2 / sample_rate_hz
-
-
-def flicker_bank(b_dps, sample_rate_hz, tau_min_s, tau_max_s, per_decade=2.0):
-    """Time constants and per-component std of the Gauss-Markov bank that makes 1/f noise.
-
-    A sum of independent Gauss-Markov processes with log-spaced correlation times
-    T_i = T_min r^i (ratio r = 10^(1/per_decade)) and equal variance q² has the one-sided PSD
-    S(f) = Σ 4 q² T_i / (1 + (2π f T_i)²) ≈ q² / (f ln r) for 1/(2π T_max) << f << 1/(2π T_min)
-    (the sum approximates ∫ dT/(T ln r)). Flicker rate noise S(f) = h₋₁ / f has the flat Allan
-    variance σ² = 2 ln 2 · h₋₁ (NIST SP 1065 table 5); the gyro convention σ = 0.664 B
-    (IEEE Std 952-1997 C.3: S(f) = B²/(π f) one-sided) gives h₋₁ = B²/π, so q² = B² ln r / π.
-
-    Returns (tau_s array, q_dps). The Allan floor is flat (within a few per cent) for
-    about 3 T_min < τ < T_max / 3.
-
-    ``b_dps``: B (deg/s); ``sample_rate_hz``: f_s (Hz; not used by the bank itself);
-    ``tau_min_s``, ``tau_max_s``: T_min and T_max (s), > 0; ``per_decade``: components per decade
-    of T. ``tau_s`` are the T_i (s) and ``q_dps`` the std q (deg/s) of each component.
-    """
-    ratio = 10.0 ** (1.0 / per_decade)
-    count = max(1, int(math.ceil(math.log(tau_max_s / tau_min_s) / math.log(ratio) - 1e-9)) + 1)
-    taus_s = tau_min_s * ratio ** np.arange(count)
-    q_dps = float(b_dps) * math.sqrt(math.log(ratio) / math.pi)
-    return taus_s, q_dps
-
-
-class BiasInstability:
-    """Bias instability: flicker (1/f) rate noise with the flat Allan floor σ = 0.664 B.
-
-    Built as a bank of independent Gauss-Markov processes (see :func:`flicker_bank`):
-    x[n] = Σ_i x_i[n], x_i[n] = φ_i x_i[n-1] + q sqrt(1 - φ_i²) w_i[n], φ_i = exp(-1/(f_s T_i)),
-    each started stationary. Memory is one number per component, so it streams.
-    Defaults: T_min = 1/f_s, T_max = the record length, 2 components per decade (the Allan
-    floor is then flat within 1 % from ~0.2 s to T_max / 9, and within 6 % from 3/f_s).
-
-    ``b_dps``: B (deg/s); ``sample_rate_hz``: f_s (Hz); ``rng``: the term's generator;
-    ``tau_min_s``, ``tau_max_s``: T_min and T_max (s); ``per_decade``: components per decade.
-    """
-
-    def __init__(self, b_dps, sample_rate_hz, rng, tau_min_s, tau_max_s, per_decade=2.0):
-        self.taus_s, self.q_dps = flicker_bank(b_dps, sample_rate_hz, tau_min_s, tau_max_s, per_decade)
-        self.phis = np.exp(-1.0 / (sample_rate_hz * self.taus_s))
-        self.gains = self.q_dps * np.sqrt(1.0 - self.phis**2)
-        self.rng = rng
-        self.state = None
-
-    def next(self, t_s, temp_c):
-        """The next block, (n,) deg/s, at times ``t_s`` (s); see the module docstring."""
-        k = len(self.taus_s)
-        if self.state is None:
-            self.state = self.q_dps * self.rng.standard_normal(k)
-        w = self.rng.standard_normal((len(t_s), k))  # row-major: consumed in time order
-        out = np.zeros(len(t_s))
-        for i in range(k):
-            y, self.state[i] = _lfilter_ar1(self.phis[i], self.gains[i], w[:, i], self.state[i])
-            out += y
-        return out
 
 
 class RateRandomWalk:

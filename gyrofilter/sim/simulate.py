@@ -49,6 +49,7 @@ import json
 import numpy as np
 
 from . import noise_terms as nt
+from .flicker import BiasInstability
 from .model import EFFECTS, validate_model
 from ..errors import SettingsError
 from ..recording import COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, Recording, format_number, units_header
@@ -123,8 +124,8 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
         if name == "bias_instability":
             tau_min = eff["tau_min_s"] or 1.0 / sample_rate_hz
             tau_max = eff["tau_max_s"] or max(duration_s, tau_min)
-            terms.append(nt.BiasInstability(eff["b_dps"], sample_rate_hz, _stream(root, *key, 0), tau_min, tau_max,
-                                            eff["per_decade"]))
+            terms.append(BiasInstability(eff["b_dps"], sample_rate_hz, _stream(root, *key, 0), tau_min, tau_max,
+                                         eff["per_decade"]))
         elif name == "rate_random_walk":
             terms.append(nt.RateRandomWalk(eff["k_dps_per_sqrt_s"], sample_rate_hz, _stream(root, *key, 0)))
         elif name == "rate_ramp":

@@ -17,7 +17,8 @@ from .common import Candidate, SINUSOID_ALPHA, detrend_line, dot, golden_max, ro
 def _local_level(power, first_bin, ratio=1.1, min_bins=16):
     """Local noise level of a periodogram: median over log-spaced bands (width ratio 1.1,
     at least 16 bins) / ln 2, interpolated in log-log. Bins below ``first_bin`` get the first
-    band's level. The band medians come from one sort (no Python loop over bands)."""
+    band's level. Each band's median comes from a partial sort (``numpy.partition``) of a copy
+    of that band alone: linear time, and no array of the periodogram's length besides the output."""
     n = power.size
     edges = [first_bin]
     while edges[-1] < n:
@@ -26,24 +27,13 @@ def _local_level(power, first_bin, ratio=1.1, min_bins=16):
     if len(edges) > 2 and edges[-1] - edges[-2] < min_bins:
         edges.pop(-2)
     edges = np.asarray(edges)
-    # one sort of "band index + power / scale" orders the bins by band, then by power
-    # (log power scaled into [0, 1), so that a strong line does not eat the precision);
-    # computed in place in one array
-    key = np.maximum(power[first_bin:edges[-1]], 1e-300)
-    np.log(key, out=key)
-    lo, span = float(key.min()), float(np.ptp(key)) * 1.000001 + 1e-12
-    key -= lo
-    key /= span
-    key += np.repeat(np.arange(edges.size - 1, dtype=float), np.diff(edges))
-    key.sort()
-    counts = np.diff(edges)
-    starts = edges[:-1] - first_bin
-    lo_i, hi_i = starts + (counts - 1) // 2, starts + counts // 2
-    band_ids = np.arange(edges.size - 1)
-    med = 0.5 * (np.exp(lo + (key[lo_i] - band_ids) * span) + np.exp(lo + (key[hi_i] - band_ids) * span))
+    med = np.empty(edges.size - 1)
+    for band, (lo, hi) in enumerate(zip(edges[:-1], edges[1:])):
+        mid = [(hi - lo - 1) // 2, (hi - lo) // 2]
+        part = np.partition(power[lo:hi], mid)
+        med[band] = 0.5 * (max(float(part[mid[0]]), 1e-300) + max(float(part[mid[1]]), 1e-300))
     centres = 0.5 * (edges[:-1] + edges[1:] - 1)
     levels = np.log(np.maximum(med / math.log(2.0), 1e-300))
-    del key
     out = np.empty(n)
     log_centres = np.log(np.maximum(centres, 1.0))
     for lo in range(0, n, CHUNK_SAMPLES):  # log-log interpolation, a pass at a time

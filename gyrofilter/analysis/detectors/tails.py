@@ -152,7 +152,9 @@ def _lattice_step(x, count=100_000):
 def tail_step(x, sample_rate_hz):
     """The quantization step of ``x`` in units of its high-passed noise's robust sd (0 when the
     series is on no lattice): the narrowest histogram bin of :func:`tail_fits`."""
-    return _lattice_step(x) / robust_sigma(x - moving_mean(x, colored_window(x.size, sample_rate_hz)), max_count=20_000)
+    resid = moving_mean(x, colored_window(x.size, sample_rate_hz))
+    np.subtract(x, resid, out=resid)  # in place: one N-sample array, not two
+    return _lattice_step(x) / robust_sigma(resid, max_count=20_000)
 
 
 def tails_statistic(x, sample_rate_hz, u=None):
@@ -233,13 +235,12 @@ def tail_fits(u, step=0.0, models=("gauss", "mixture", "spikes")):
     re-fits the mixture alone)."""
     from scipy.optimize import minimize_scalar
 
-    a = np.abs(u)
     width = max(0.25, float(step))
     linear = max(4.0, 8.0 * width)
-    top = max(1.125 * linear, float(a.max()) * 1.001)
+    top = max(1.125 * linear, max(float(u.max()), -float(u.min())) * 1.001)  # max |u|
     edges = np.r_[np.arange(0.0, linear - 1e-9, width), np.geomspace(linear, top, 40), np.inf]  # the last bin is
     # empty, so the models' probabilities sum to 1 over the bins (no mass beyond the largest sample is lost)
-    counts, _ = np.histogram(a, edges)
+    counts = sum(np.histogram(np.abs(u[lo:lo + _PASS]), edges)[0] for lo in range(0, u.size, _PASS))  # |u| a pass at a time
 
     def params(t):  # (sigma, share in (0, 1/2), ratio or magnitude), each bounded: the search may wander
         t = np.clip(t, -50.0, 50.0)
@@ -285,11 +286,13 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
     z = stat / tails_sd(u.size) if tails_z is None else float(tails_z)
     if z < HEAVY_TAILS_Z:
         return None, None
+    del u  # made again below: with tail_step's moving mean it would be two N-sample arrays at once
     step = tail_step(x, sample_rate_hz)
     if tails_z is None and step > TAILS_MAX_STEP_SD:  # the baseline's simulations would carry the quantizer too
         return None, (f"the noise's distribution departs from a Gaussian (winsorized kurtosis z = {z:+.1f}) "
                       f"but the rate is quantized in steps of more than {TAILS_MAX_STEP_SD:g} noise sd: "
                       "its tails cannot be told from the quantizer's without simulations of it")
+    u = tail_residual(x, sample_rate_hz)
     fits = tail_fits(u, step)
     ll = fits["log_l"]
     lr = 2.0 * (ll["mixture"] - ll["gauss"])
