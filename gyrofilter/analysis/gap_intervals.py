@@ -231,7 +231,7 @@ def _replicates(run, i, cands, seeds, at=None):
         out["bias_dps"].append(float(np.mean(x)))
         out["arw_dps_per_sqrt_hz"].append(noise_sigma(x, run.sample_rate_hz, run.q or 0.0) / math.sqrt(run.sample_rate_hz))
         try:
-            out["findings"].append(reestimate_axis(x, run.sample_rate_hz, temp, cands, resolved, run.q or 0.0))
+            out["findings"].append(reestimate_axis(x, run.sample_rate_hz, temp, cands, resolved, run.q or 0.0, owned=True))
         except (ValueError, ArithmeticError):  # a fit that cannot run on this replicate
             out["findings"].append([None] * len(cands))
         bar.step(k + 1)

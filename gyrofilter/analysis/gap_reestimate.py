@@ -63,7 +63,7 @@ DETERMINISTIC = ("rate_ramp", "bias_step", "warmup", "temperature")
 SUPPORTED = ("heavy_tails", "outliers", "sinusoid", "narrowband", "colored_noise") + DETERMINISTIC + det.STOCHASTIC_MODELS
 
 
-def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0):
+def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False):
     """Parameters of each finding of ``cands`` (the axis's kept
     :class:`~gyrofilter.analysis.detectors.Candidate` s) estimated on the replicate ``x`` (deg/s);
     returns a list of dicts (or None where the estimator has nothing to estimate), in the order
@@ -71,7 +71,9 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     ``temperature`` finding) or None. ``resolved_lags``: the colored noise's lags were re-solved
     for a composite model (:func:`gyrofilter.analysis.gap_composite._composite_lags`), and are so
     on the replicate, from its extended white level (the quantization step ``q_dps``) and its
-    composite fit's."""
+    composite fit's. ``owned``: ``x`` is the caller's to lose (a bootstrap replicate): the
+    findings' components are taken out of it in place, else out of one copy."""
+    x = x if owned else np.array(x, dtype=float)
     out = [None] * len(cands)
     by = {}
     for k, c in enumerate(cands):
@@ -82,12 +84,12 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     if "outliers" in by:
         cand, mask = det.detect_outliers(x)
         out[by["outliers"][0]] = None if cand is None else dict(cand.params)
-        x = det.clean_spikes(x, mask)
+        x = det.clean_spikes(x, mask, in_place=True)
     if "sinusoid" in by:
         k = by["sinusoid"][0]
         params, fit = _sinusoid(x, sample_rate_hz, cands[k].params["frequency_hz"])
         out[k] = params
-        x = x - fit
+        x -= fit
     band = None
     if "narrowband" in by and x.size >= 4096:
         band = det.band_estimate(x, sample_rate_hz)
@@ -176,7 +178,7 @@ def _slow(x, sample_rate_hz, temp_c, cands, slow_det, slow_sto, out):
     covariate = temperature_first(x, sample_rate_hz, temp_c, {}) if k_temp is not None else None
     if covariate is not None:  # the detector's GLS coefficient; the shapes in time on what it leaves
         out[k_temp] = dict(covariate[0].params)
-        x = x - covariate[0].component
+        x -= covariate[0].component
         series = series - det.block_means(covariate[0].component)[0][:n]
         slow_det = [k for k in slow_det if k != k_temp]
         temp_blocks = None
@@ -189,7 +191,7 @@ def _slow(x, sample_rate_hz, temp_c, cands, slow_det, slow_sto, out):
             d, params, shape, _ = shapes[name]
             cand = _deterministic_candidate(name, d, params, x, sample_rate_hz, length, temp_c)
             out[k] = dict(cand.params)
-            x = x - cand.component
+            x -= cand.component
             series = series - shape
     for k in slow_sto:
         name = cands[k].effect
