@@ -291,6 +291,21 @@ def test_noise_below_the_floor_is_a_note_saying_so():
     assert not any("could not run" in n for n in report["notes"])
 
 
+@pytest.mark.parametrize("level", [0.3, -3.27, 0.0])
+def test_a_constant_axis_in_deg_s_is_explained_by_the_baseline(level):
+    """A stuck axis written in deg/s (every sample 0.3) got a white noise of 2.4e-15 deg/s/sqrt(Hz)
+    from the float rounding of the high-pass, and D = 1.8e8 with the note "the model does not
+    close here ... too much power" beside "constant signal, nothing to analyse" (hostile 24a);
+    its baseline is the constant, with no white noise, as in ``lsb``."""
+    g = np.random.default_rng(5).normal(0, 0.05, (3000, 3))
+    g[:, 2] = level
+    report = analyse_gap(Recording.from_dps(g, 100.0), n_sims=4)
+    assert "axis z: constant signal, nothing to analyse" in report["notes"]
+    assert report["baseline"]["axes"]["z"]["arw_dps_per_sqrt_hz"] == 0.0
+    assert report["discrepancy"]["before"]["z"] < 2 and report["discrepancy"]["after"]["z"] < 2
+    assert not any(n.startswith("axis z: after extension") for n in report["notes"]), report["notes"]
+
+
 def test_cli_on_a_too_short_recording_says_so_and_prints_no_nan(tmp_path, capsys):
     from gyrofilter.cli import main
 
