@@ -406,7 +406,8 @@ def test_cli_refuses_existing_outputs_and_never_writes_onto_the_recording(tmp_pa
              (["--json", str(tmp_path / "new.json"), "--report", str(tmp_path / "rep")], "adev_y.png: exists"),
              (["--json", rec], "is an input of this command"),
              (["--json", str(tmp_path / "new.json"), "--report", rec, "--force"], "is a file; give a folder"),
-             (["--json", rec, "--force"], "is an input of this command")]
+             (["--json", rec, "--force"], "is an input of this command"),
+             (["--json", str(tmp_path / "same"), "--report", str(tmp_path / "same")], "--report folder")]
     for args, expected in cases:
         assert main(["gap", rec, "--sims", "4"] + args) == 2
         err = capsys.readouterr().err
