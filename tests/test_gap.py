@@ -15,6 +15,7 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from gyrofilter.analysis import detectors as det
 from gyrofilter.analysis.gap import analyse_gap
@@ -24,7 +25,7 @@ from gyrofilter.sim.model import validate_model
 from gyrofilter.sim.simulate import simulate
 
 import gyrofilter.sim.hidden_effects as he
-from support import RECORDINGS
+from support import RECORDINGS, REPO
 
 REAL = str(RECORDINGS / "mpu6050_static_449s.csv.gz")
 SIMS = 10
@@ -126,6 +127,30 @@ def test_heavy_tails_are_told_apart_from_isolated_spikes():
     coarse = np.round(rng.normal(0.0, 0.3, 100_000))
     cand, note = det.detect_heavy_tails(coarse, 100.0)
     assert cand is None and "quantized" in note
+
+
+@settings(max_examples=12, deadline=None, derandomize=True)
+@given(p=st.floats(0.002, 0.5), log_c=st.floats(0.0, 9.0), seed=st.integers(0, 2**16))
+def test_tail_fit_parameters_are_always_a_valid_model_entry(p, log_c, seed):
+    """The mixture fit's scale ratio capped at 1 + exp(log 999) was 1000.0000000000003, which the
+    model refuses (at most 1000): a heavy_tails candidate with the ratio at its cap (1 % of the
+    samples at 1000 times the others' sd) was dropped as "extended model could not run" and the
+    record got no finding (hostile 24a). Whatever the tails, the fit is a valid model entry."""
+    rng = np.random.default_rng(seed)
+    c = math.exp(log_c)
+    u = np.where(rng.random(10_000) < p, c, 1.0) * rng.standard_normal(10_000)
+    fits = det.tail_fits(u / det.robust_sigma(u))
+    validate_model({"sample_rate_hz": 100.0, "axes": {"x": {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.01, "effects": [
+        {"effect": "heavy_tails", "fraction": fits["fraction"], "scale_ratio": fits["scale_ratio"]}]}}})
+
+
+def test_heavy_tails_at_the_largest_scale_ratio_are_named():
+    """The case of the test above end to end, on the example model with 1 % of the samples at 1000
+    times the others' sd (it was no finding, and D 8.7e3 on the axis)."""
+    model = json.loads((REPO / "examples" / "models" / "heavy_tails.json").read_text())
+    model["axes"]["z"]["effects"] = [{"effect": "heavy_tails", "fraction": 0.01, "scale_ratio": 1000.0}]
+    report = analyse_gap(simulate(model, 300.0, seed=100), seed=0, n_sims=12, bootstrap=0)
+    assert [(f["effect"], f["axis"]) for f in report["findings"]] == [("heavy_tails", "z")], report["notes"]
 
 
 def test_heavy_tails_extended_model_reproduces_the_short_tau_allan_deviation():
