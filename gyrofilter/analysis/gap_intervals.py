@@ -46,7 +46,7 @@ import numpy as np
 
 from .gap_baseline import _Progress, _simulate_axis, noise_sigma, temperature_table
 from .gap_reestimate import SUPPORTED, reestimate_axis
-from ..sim.model import validate_model
+from ..sim.model import param_bounds, validate_model
 from ..units import AXES
 
 #: the two-sided level of every interval
@@ -132,7 +132,8 @@ def add_intervals(run, n_boot, seed):
         for j, (c, f) in enumerate(here):
             reps = [e[j] for e in estimates["findings"]]
             f["params_ci95"] = {name: _interval(value, [r.get(name) if r else None for r in reps],
-                                                SCALES.get(c.effect, {}).get(name, "linear"))
+                                                SCALES.get(c.effect, {}).get(name, "linear"),
+                                                param_bounds(c.effect, name))
                                 for name, value in f["params"].items()}
         base_axis["params_ci95"] = {name: _interval(base_axis[name], estimates[name],
                                                     SCALES["baseline"].get(name, "linear"))
@@ -183,9 +184,12 @@ def _back(u, scale):
     return u
 
 
-def _interval(estimate, replicates, scale):
-    """The bias-corrected normal-t interval of the module docstring, ``[low, high]``, or None
-    when fewer than :data:`MIN_REPLICATES` replicates have the parameter."""
+def _interval(estimate, replicates, scale, bounds=(-math.inf, math.inf)):
+    """The bias-corrected normal-t interval of the module docstring, ``[low, high]``, cut to the
+    parameter's domain ``bounds`` (:func:`~gyrofilter.sim.model.param_bounds`: the log scale
+    keeps a fraction positive, not below 0.5), or None when fewer than :data:`MIN_REPLICATES`
+    replicates have the parameter or when the interval lies wholly outside the domain (the
+    replicates' bias is then not the estimator's near the estimate)."""
     from scipy.stats import t as student_t
 
     values = [np.nan if r is None else float(r) for r in replicates]
@@ -203,7 +207,10 @@ def _interval(estimate, replicates, scale):
     bias, sd = float(np.mean(dev)), float(np.std(dev, ddof=1))
     half = float(student_t.ppf(0.5 + CONFIDENCE / 2, b - 1)) * math.sqrt(1 + 1 / b) * sd
     centre = u_hat - bias
-    return [_back(centre - half, scale), _back(centre + half, scale)]
+    low, high = _back(centre - half, scale), _back(centre + half, scale)
+    if high < bounds[0] or low > bounds[1]:  # the bias correction left the domain: no interval
+        return None
+    return [max(low, bounds[0]), min(high, bounds[1])]
 
 
 def _baseline_analytic(run, i, base_axis):
