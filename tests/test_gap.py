@@ -15,6 +15,7 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from gyrofilter.analysis import detectors as det
 from gyrofilter.analysis.gap import analyse_gap
@@ -24,7 +25,7 @@ from gyrofilter.sim.model import validate_model
 from gyrofilter.sim.simulate import simulate
 
 import gyrofilter.sim.hidden_effects as he
-from support import RECORDINGS
+from support import RECORDINGS, REPO
 
 REAL = str(RECORDINGS / "mpu6050_static_449s.csv.gz")
 SIMS = 10
@@ -126,6 +127,30 @@ def test_heavy_tails_are_told_apart_from_isolated_spikes():
     coarse = np.round(rng.normal(0.0, 0.3, 100_000))
     cand, note = det.detect_heavy_tails(coarse, 100.0)
     assert cand is None and "quantized" in note
+
+
+@settings(max_examples=12, deadline=None, derandomize=True)
+@given(p=st.floats(0.002, 0.5), log_c=st.floats(0.0, 9.0), seed=st.integers(0, 2**16))
+def test_tail_fit_parameters_are_always_a_valid_model_entry(p, log_c, seed):
+    """The mixture fit's scale ratio capped at 1 + exp(log 999) was 1000.0000000000003, which the
+    model refuses (at most 1000): a heavy_tails candidate with the ratio at its cap (1 % of the
+    samples at 1000 times the others' sd) was dropped as "extended model could not run" and the
+    record got no finding (hostile 24a). Whatever the tails, the fit is a valid model entry."""
+    rng = np.random.default_rng(seed)
+    c = math.exp(log_c)
+    u = np.where(rng.random(10_000) < p, c, 1.0) * rng.standard_normal(10_000)
+    fits = det.tail_fits(u / det.robust_sigma(u))
+    validate_model({"sample_rate_hz": 100.0, "axes": {"x": {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.01, "effects": [
+        {"effect": "heavy_tails", "fraction": fits["fraction"], "scale_ratio": fits["scale_ratio"]}]}}})
+
+
+def test_heavy_tails_at_the_largest_scale_ratio_are_named():
+    """The case of the test above end to end, on the example model with 1 % of the samples at 1000
+    times the others' sd (it was no finding, and D 8.7e3 on the axis)."""
+    model = json.loads((REPO / "examples" / "models" / "heavy_tails.json").read_text())
+    model["axes"]["z"]["effects"] = [{"effect": "heavy_tails", "fraction": 0.01, "scale_ratio": 1000.0}]
+    report = analyse_gap(simulate(model, 300.0, seed=100), seed=0, n_sims=12, bootstrap=0)
+    assert [(f["effect"], f["axis"]) for f in report["findings"]] == [("heavy_tails", "z")], report["notes"]
 
 
 def test_heavy_tails_extended_model_reproduces_the_short_tau_allan_deviation():
@@ -291,6 +316,21 @@ def test_noise_below_the_floor_is_a_note_saying_so():
     assert not any("could not run" in n for n in report["notes"])
 
 
+@pytest.mark.parametrize("level", [0.3, -3.27, 0.0])
+def test_a_constant_axis_in_deg_s_is_explained_by_the_baseline(level):
+    """A stuck axis written in deg/s (every sample 0.3) got a white noise of 2.4e-15 deg/s/sqrt(Hz)
+    from the float rounding of the high-pass, and D = 1.8e8 with the note "the model does not
+    close here ... too much power" beside "constant signal, nothing to analyse" (hostile 24a);
+    its baseline is the constant, with no white noise, as in ``lsb``."""
+    g = np.random.default_rng(5).normal(0, 0.05, (3000, 3))
+    g[:, 2] = level
+    report = analyse_gap(Recording.from_dps(g, 100.0), n_sims=4)
+    assert "axis z: constant signal, nothing to analyse" in report["notes"]
+    assert report["baseline"]["axes"]["z"]["arw_dps_per_sqrt_hz"] == 0.0
+    assert report["discrepancy"]["before"]["z"] < 2 and report["discrepancy"]["after"]["z"] < 2
+    assert not any(n.startswith("axis z: after extension") for n in report["notes"]), report["notes"]
+
+
 def test_cli_on_a_too_short_recording_says_so_and_prints_no_nan(tmp_path, capsys):
     from gyrofilter.cli import main
 
@@ -404,7 +444,8 @@ def test_cli_refuses_existing_outputs_and_never_writes_onto_the_recording(tmp_pa
              (["--json", str(tmp_path / "new.json"), "--report", str(tmp_path / "rep")], "adev_y.png: exists"),
              (["--json", rec], "is an input of this command"),
              (["--json", str(tmp_path / "new.json"), "--report", rec, "--force"], "is a file; give a folder"),
-             (["--json", rec, "--force"], "is an input of this command")]
+             (["--json", rec, "--force"], "is an input of this command"),
+             (["--json", str(tmp_path / "same"), "--report", str(tmp_path / "same")], "--report folder")]
     for args, expected in cases:
         assert main(["gap", rec, "--sims", "4"] + args) == 2
         err = capsys.readouterr().err

@@ -23,6 +23,7 @@ from gyrofilter.cli import main
 from gyrofilter.recording import write_recording
 from gyrofilter.sim.simulate import simulate
 from gyrofilter.units import AXES
+from support import REPO
 
 SIMS = 8
 #: the families of effects, each drawn at random from the seed
@@ -255,3 +256,23 @@ def test_coverage_per_effect_kind():
         assert ok >= LOW_SLOW * n, (effect, ok, n, per_kind)
     ok, n = (sum(v[i] for v in per_kind.values()) for i in (0, 1))
     assert 0.90 * n <= ok <= 0.98 * n, per_kind
+
+
+def test_intervals_stay_inside_the_parameters_domain():
+    """A heavy-tailed noise at the largest fraction (half the samples at 3 times the others' sd):
+    the log-scale interval of ``fraction`` reached 0.518, beyond the 0.5 a model takes (and a scale
+    ratio's beyond 1000, hostile 24a). Every end of every interval is a value the model takes."""
+    from gyrofilter.sim.model import validate_model
+
+    model = json.loads((REPO / "examples" / "models" / "heavy_tails.json").read_text())
+    model["axes"]["z"]["effects"] = [{"effect": "heavy_tails", "fraction": 0.5, "scale_ratio": 3.0}]
+    report = analyse_gap(simulate(model, 300.0, seed=101), seed=1, n_sims=12)
+    hit = [f for f in report["findings"] if f["effect"] == "heavy_tails"]
+    assert hit and hit[0]["params_ci95"]["fraction"] is not None
+    # cut to the domain; none where the bias correction put it wholly outside
+    assert gi._interval(0.45, [0.42, 0.44, 0.46, 0.48, 0.5], "log", (0.0, 0.5))[1] == 0.5
+    assert gi._interval(0.45, [0.3, 0.301, 0.302, 0.299, 0.3], "log", (0.0, 0.5)) is None
+    for f in report["findings"]:
+        for end in (0, 1):
+            entry = dict({k: v[end] for k, v in f["params_ci95"].items() if v is not None}, effect=f["effect"])
+            validate_model({"sample_rate_hz": 100.0, "axes": {f["axis"]: {"bias_dps": 0.0, "effects": [entry]}}})

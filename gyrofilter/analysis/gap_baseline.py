@@ -53,7 +53,10 @@ def axis_dps(rec, i, pass_samples=1 << 16):
 
 def noise_sigma(x, sample_rate_hz, q_dps, mask_spikes=True):
     """Per-sample white-noise std of the baseline (see module docstring); ``mask_spikes=False``
-    keeps every sample (a heavy-tailed noise, whose tails are part of its variance)."""
+    keeps every sample (a heavy-tailed noise, whose tails are part of its variance). A constant
+    series has none: 0 (its high-pass would give the float rounding of the moving mean)."""
+    if not np.ptp(x) > 0:
+        return 0.0
     w = det.colored_window(x.size, sample_rate_hz)
     mask, _, _ = det.outlier_statistic(x) if mask_spikes else (None, None, None)
     e = det.highpassed(x, sample_rate_hz)[0]

@@ -58,7 +58,7 @@ import numpy as np
 
 from .gap_baseline import _Progress, _simulate_axis, noise_sigma, temperature_table
 from .gap_reestimate import SUPPORTED, reestimate_axis
-from ..sim.model import validate_model
+from ..sim.model import param_bounds, validate_model
 from ..units import AXES
 
 #: the two-sided level of every interval
@@ -146,7 +146,8 @@ def add_intervals(run, n_boot, seed):
         for j, (c, f) in enumerate(here):
             reps = [e[j] for e in estimates["findings"]]
             f["params_ci95"] = {name: _interval(value, [r.get(name) if r else None for r in reps],
-                                                SCALES.get(c.effect, {}).get(name, "linear"))
+                                                SCALES.get(c.effect, {}).get(name, "linear"),
+                                                param_bounds(c.effect, name))
                                 for name, value in f["params"].items()}
             if c.effect in INVERTED and all(f["params_ci95"].values()):
                 _invert(run, i, [c for c, _ in here], j, f, reps, seeds)
@@ -163,10 +164,11 @@ def _invert(run, i, cands, j, finding, reps, seeds):
     def replicates_at(at):
         return [e[j] for e in _replicates(run, i, cands, seeds, {j: at})["findings"]]
 
-    finding["params_ci95"] = inversion_step(finding["params"], reps, replicates_at, SCALES.get(finding["effect"], {}))
+    finding["params_ci95"] = inversion_step(finding["params"], reps, replicates_at, SCALES.get(finding["effect"], {}),
+                                            {name: param_bounds(finding["effect"], name) for name in finding["params"]})
 
 
-def inversion_step(params, replicates, replicates_at, scales):
+def inversion_step(params, replicates, replicates_at, scales, bounds=None):
     """``{name: [low, high]}`` of the estimates ``params`` after one secant step of test
     inversion (module docstring). ``replicates``: the estimates (dicts, or None) of replicates
     simulated at ``params``; ``replicates_at(at)`` returns those of replicates simulated at the
@@ -180,7 +182,8 @@ def inversion_step(params, replicates, replicates_at, scales):
         lower: u_hat - (b0 + h0) / (1 + k_b + k_h),   upper: u_hat + (h0 - b0) / (1 + k_b - k_h),
 
     the plain interval where k_b = k_h = 0. A denominator below 1/2 is taken as 1/2 (an end moves at
-    most twice as far as the plain one); a parameter with too few replicates keeps its plain interval."""
+    most twice as far as the plain one); a parameter with too few replicates keeps its plain interval.
+    The result is cut to each parameter's domain ``bounds`` (``{name: (low, high)}``, :func:`_in_domain`)."""
     out = {}
     first = {name: _spread(value, [r.get(name) if r else None for r in replicates], scales.get(name, "linear"))
              for name, value in params.items()}
@@ -198,14 +201,14 @@ def inversion_step(params, replicates, replicates_at, scales):
             out[name] = None
             continue
         scale, u_hat, b0, h0 = first[name]
-        bounds = list(plain[name])
+        ends_u = list(plain[name])
         for side, sign in ((0, -1.0), (1, 1.0)):
             end = ends.get(side, {}).get(name)
-            if end is None or end[0] != scale or bounds[side] == u_hat:
+            if end is None or end[0] != scale or ends_u[side] == u_hat:
                 continue
-            k_b, k_h = ((end[2] - b0) / (bounds[side] - u_hat), (end[3] - h0) / (bounds[side] - u_hat))
-            bounds[side] = u_hat + (sign * h0 - b0) / max(1.0 + k_b + sign * -k_h, 0.5)
-        out[name] = [_back(bounds[0], scale), _back(bounds[1], scale)]
+            k_b, k_h = ((end[2] - b0) / (ends_u[side] - u_hat), (end[3] - h0) / (ends_u[side] - u_hat))
+            ends_u[side] = u_hat + (sign * h0 - b0) / max(1.0 + k_b + sign * -k_h, 0.5)
+        out[name] = _in_domain(_back(ends_u[0], scale), _back(ends_u[1], scale), (bounds or {}).get(name, (-math.inf, math.inf)))
     return out
 
 
@@ -255,14 +258,25 @@ def _back(u, scale):
     return u
 
 
-def _interval(estimate, replicates, scale):
-    """The bias-corrected normal-t interval of the module docstring, ``[low, high]``, or None
-    when fewer than :data:`MIN_REPLICATES` replicates have the parameter."""
+def _interval(estimate, replicates, scale, bounds=(-math.inf, math.inf)):
+    """The bias-corrected normal-t interval of the module docstring, ``[low, high]``, cut to the
+    parameter's domain ``bounds`` (:func:`_in_domain`), or None when fewer than
+    :data:`MIN_REPLICATES` replicates have the parameter."""
     spread = _spread(estimate, replicates, scale)
     if spread is None:
         return None
     scale, u_hat, bias, half = spread
-    return [_back(u_hat - bias - half, scale), _back(u_hat - bias + half, scale)]
+    return _in_domain(_back(u_hat - bias - half, scale), _back(u_hat - bias + half, scale), bounds)
+
+
+def _in_domain(low, high, bounds):
+    """``[low, high]`` cut to the parameter's domain ``bounds``
+    (:func:`~gyrofilter.sim.model.param_bounds`: the log scale keeps a fraction positive, not
+    below 0.5), or None when it lies wholly outside (the replicates' bias is then not the
+    estimator's near the estimate)."""
+    if high < bounds[0] or low > bounds[1]:
+        return None
+    return [max(low, bounds[0]), min(high, bounds[1])]
 
 
 def _spread(estimate, replicates, scale, at=None):

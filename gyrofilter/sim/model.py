@@ -93,6 +93,22 @@ def _limits(key, kind):
     return -math.inf, math.inf, ""  # rate, lag1, lag2: their kind bounds them
 
 
+#: the interval of each kind of parameter (:data:`_KINDS`), before the limits of its key
+_KIND_BOUNDS = {"nonneg": (0.0, math.inf), "pos": (0.0, math.inf), "frac": (0.0, 1.0), "lag": (-1.0, 1.0)}
+
+
+def param_bounds(effect, name):
+    """``(lowest, highest)`` a model takes for the parameter ``name`` of ``effect`` (an entry of
+    :data:`EFFECTS`): its kind's interval (:data:`_KINDS`) within the limits of its key
+    (:func:`_limits`); the ends of ``pos`` and ``lag`` are open. The domain an estimate of the
+    parameter, and its interval, lie in."""
+    required, optional = EFFECTS.get(effect, ({}, {}))
+    kind = required.get(name) or optional.get(name, ("any",))[0]
+    low, high, _ = _limits(name, kind)
+    kind_low, kind_high = _KIND_BOUNDS.get(kind, (-math.inf, math.inf))
+    return max(low, kind_low), min(high, kind_high)
+
+
 def _number(value, where, kind="any"):
     """``value`` as a float, or SettingsError naming ``where``: a number (not a bool) of the kind
     ``kind`` (:data:`_KINDS`) inside the limits of its key (:func:`_limits`)."""

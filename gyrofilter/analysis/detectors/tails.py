@@ -242,9 +242,10 @@ def tail_fits(u, step=0.0, models=("gauss", "mixture", "spikes")):
     # empty, so the models' probabilities sum to 1 over the bins (no mass beyond the largest sample is lost)
     counts = sum(np.histogram(np.abs(u[lo:lo + _PASS]), edges)[0] for lo in range(0, u.size, _PASS))  # |u| a pass at a time
 
-    def params(t):  # (sigma, share in (0, 1/2), ratio or magnitude), each bounded: the search may wander
+    def params(t):  # (sigma, share in (0, 1/2), ratio or magnitude), each bounded: the search may wander;
+        # the ratio's cap is applied after exp (exp(log 999) is 999.0000000000003: a scale ratio above the model's 1000)
         t = np.clip(t, -50.0, 50.0)
-        return math.exp(min(max(t[0], -5.0), 5.0)), 0.5 / (1.0 + math.exp(-t[1])), math.exp(min(t[2], math.log(999.0)))
+        return math.exp(min(max(t[0], -5.0), 5.0)), 0.5 / (1.0 + math.exp(-t[1])), min(math.exp(t[2]), 999.0)
 
     def mixture(t):
         s, p, c = params(t)
