@@ -354,6 +354,29 @@ def test_rad_per_s_at_1_hz_runs():
     assert abs(step["time_s"] - 4000.0) < 60 and abs(step["size_dps"] / 0.004 - 1) < 0.3
 
 
+def test_the_extended_bias_follows_the_kept_shapes_only():
+    """The model's bias at t = 0 is the record's mean less the mean of the shapes the model holds
+    (gap_baseline.start_bias). A new user's case: on the 449-s log a ramp on z was dropped but its
+    R T / 2 stayed in the extended model's bias, and the baseline's bias interval, bootstrapped
+    from that model, missed the mean of 45,000 samples by ten widths."""
+    from gyrofilter.analysis.detectors import Candidate
+    from gyrofilter.analysis.gap_baseline import start_bias
+
+    ramp = Candidate(effect="rate_ramp", params={"r_dps_per_s": 2e-4}, statistic=0.0, threshold=0.0,
+                     statistic_name="", evidence="")
+    assert start_bias(1.0, [], 100.0) == 1.0 and start_bias(1.0, [ramp], 100.0) == pytest.approx(1.0 - 0.01)
+    report = analyse_gap(read_recording(RECORDINGS / "mpu6050_static_449s.csv.gz"), seed=0)
+    for a in "xyz":
+        base = report["baseline"]["axes"][a]
+        low, high = base["params_ci95"]["bias_dps"]
+        assert low <= base["bias_dps"] <= high, (a, base)
+        kept = [f for f in report["findings"] if f["axis"] == a]
+        cands = [Candidate(effect=f["effect"], params=f["params"], statistic=0.0, threshold=0.0, statistic_name="",
+                           evidence="") for f in kept]
+        assert report["extended_model"]["axes"][a]["bias_dps"] == pytest.approx(
+            start_bias(base["bias_dps"], cands, report["duration_s"]), abs=2e-4), (a, [f["effect"] for f in kept])
+
+
 def test_wilson_interval_of_a_battery_rate():
     """The Wilson score interval against its textbook values (Agresti & Coull 1998: 0 of 10 gives
     [0, 0.278]; 42 of 44, the standard battery's, about [0.85, 0.99]) and its coverage of a

@@ -51,7 +51,7 @@ import numpy as np
 
 from . import detectors as det
 from .detectors import SLOW_EFFECTS
-from .gap_baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
+from .gap_baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
                            temperature_table)
 from .gap_composite import composite_step, slow_wavelet_variance
 from .gap_readings import alternatives_entry, null_spread, weigh_readings
@@ -182,6 +182,7 @@ class _GapRun:
         composite = any(c.extra.get("composite") for c in cands)
         time_reading = any(c.extra.get("reading") == "time" for c in cands)
         spec = dict(self.composite_axes[a] if composite else self.alt_axes[a] if time_reading else self.ext_axes[a])
+        spec["bias_dps"] = start_bias(spec["bias_dps"], cands, self.n / self.sample_rate_hz)
         spec["effects"] = [effect_entry(c, preserve="arw" if composite else "std") for c in cands]
         if composite and self.resolved_lags[i]:
             for entry in spec["effects"]:

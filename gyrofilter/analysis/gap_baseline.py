@@ -101,8 +101,9 @@ def baseline_model(rec, gyro_dps=None):
 def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
     """The extended model's axis spec before its effects: white noise re-fitted on the
     series ``xc`` cleaned of the findings ``cands`` (corrected for the colored noise's
-    high-pass loss), and the bias of the cleaned series less the mean of the deterministic
-    components that were fitted mean-free. Without findings, the baseline's axis."""
+    high-pass loss), and the **mean** bias of the cleaned series (the deterministic components
+    were fitted mean-free); :func:`start_bias` turns it into the model's bias at t = 0 for the
+    findings a model holds. Without findings, the baseline's axis."""
     spec = dict(base_axis)
     spec["effects"] = []
     if not cands:
@@ -121,16 +122,25 @@ def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
         sigma *= math.sqrt((1 - 1.0 / w) / (1 - frac))
     spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(sample_rate_hz))
     spec["bias_dps"] = float(np.mean(xc))
-    T = n / sample_rate_hz
-    for c in cands:  # deterministic components were fitted mean-free
+    return spec
+
+
+def start_bias(mean_bias_dps, cands, duration_s):
+    """The model's constant bias b for the findings ``cands`` of a record of ``duration_s``
+    whose mean bias is ``mean_bias_dps``: the mean less each deterministic shape's mean over the
+    record (the simulator's shapes start at t = 0: a step s at t_0 has mean s (1 - t_0 / T), a
+    ramp R t has R T / 2, a warm-up A e^(-t/tau) has A tau / T (1 - e^(-T/tau))). Only the
+    findings the model holds move it: a shape that was dropped leaves the mean."""
+    b, T = float(mean_bias_dps), float(duration_s)
+    for c in cands:
         if c.effect == "bias_step":
-            spec["bias_dps"] -= c.params["size_dps"] * (1 - c.params["time_s"] / T)
+            b -= c.params["size_dps"] * (1 - c.params["time_s"] / T)
         elif c.effect == "rate_ramp":
-            spec["bias_dps"] -= c.params["r_dps_per_s"] * T / 2
+            b -= c.params["r_dps_per_s"] * T / 2
         elif c.effect == "warmup":
             tau = c.params["tau_s"]
-            spec["bias_dps"] -= c.params["amplitude_dps"] * tau / T * (1 - math.exp(-T / tau))
-    return spec
+            b -= c.params["amplitude_dps"] * tau / T * (1 - math.exp(-T / tau))
+    return b
 
 
 def temperature_table(rec, max_points=1000):
