@@ -553,6 +553,19 @@ def test_two_gauss_markov_terms_are_found_by_the_composite_fit(seed):
         assert abs(sigma / sigma_true - 1) < 0.5, (gm, terms)
     assert all(f["axis"] == axis for f in report["findings"]), got
     assert any("composite stochastic fit" in note for note in report["notes"])
+    _no_note_drops_a_finding(report)
+
+
+def _no_note_drops_a_finding(report):
+    """No note says a finding was dropped that the report still lists (a new user saw "colored_noise
+    on z dropped: the composite ... explains" beside a composite fit "not used" and the colored
+    noise still a finding)."""
+    import re
+
+    found = {(f["effect"], f["axis"]) for f in report["findings"]}
+    for note in report["notes"]:
+        m = re.match(r"(\w+) on (\w) dropped", note)
+        assert not (m and (m.group(1), m.group(2)) in found), (note, sorted(found))
 
 
 @pytest.mark.parametrize("key, j, z, says", [
@@ -595,6 +608,7 @@ def test_a_moving_axis_gets_a_note_and_the_still_ones_none():
         most = report["departures"][a].get("departs_most")
         assert (note is None) == (most is None) and (note is None or f"The {most['where']} departs most" in note)
     assert "departs_most" in report["departures"]["y"]
+    _no_note_drops_a_finding(report)
 
 
 def test_cli_warns_that_lost_samples_make_the_analysis_not_meaningful(tmp_path, capsys):

@@ -61,6 +61,7 @@ def composite_step(run):
         run.composite_axes[a] = dict(run.ext_axes[a], arw_dps_per_sqrt_hz=fit.arw_dps_per_sqrt_hz)
         d_comp = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
         colored_k = [k for k in keep_k if cands[k][1].effect == "colored_noise"]
+        dropped_colored = False
         if colored_k:
             # the colored noise re-solved to keep the per-sample variance as well
             run.resolved_lags[i] = _composite_lags(run.ext_axes[a], run.composite_axes[a], cands[colored_k[0]][1].params)
@@ -76,9 +77,11 @@ def composite_step(run):
                 d_comp = d_alt
                 cands[colored_k[0]][1].extra.pop("composite")
                 keep_k = [k for k in keep_k if k not in colored_k]
+                dropped_colored = True
+        if d_comp < det.COMPOSITE_MIN_GAIN * run.after[i]:
+            if dropped_colored:  # said only where the composite model is used
                 notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the "
                              "correlation without it")
-        if d_comp < det.COMPOSITE_MIN_GAIN * run.after[i]:
             single_k = {k: run.axis_discrepancy(i, [k], f"gain of the composite's {cands[k][1].effect} on {a}")
                         for k in comp_k}
             notes.append(
