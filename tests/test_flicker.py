@@ -154,3 +154,14 @@ def test_joint_filter_has_the_law_of_the_sum_of_its_components():
     assert sum_of_ar1_filter(close, np.full(5, 0.1)) is None
     term = BiasInstability(0.01, 100.0, np.random.default_rng(0), 0.2, 0.5, per_decade=10.0)
     assert len(term.bank.filters) == len(term.taus_s)  # the fallback: a filter per component
+
+
+def test_a_zero_bias_instability_is_zero_and_warns_nothing():
+    """B = 0 (a model may say so): every gain is 0, the joint filter's spectral check has nothing
+    to compare and falls back without a 0/0 warning (the fuzzed model files caught one)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        bank = BiasInstability(0.0, 100.0, np.random.default_rng(0), 0.01, 3600.0)
+        assert not np.any(bank.next(np.arange(1000) / 100.0, None))

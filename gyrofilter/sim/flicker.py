@@ -124,9 +124,13 @@ def sum_of_ar1_filter(phis, gains):
     monic = np.atleast_1d(np.real(np.poly(inside)))
     z = np.exp(-1j * np.linspace(0.0, math.pi, 513))
     target = sum(g * g / np.abs(1.0 - p * z) ** 2 for p, g in zip(phis, gains))
-    got = np.abs(np.polyval(monic[::-1], z)) ** 2 / np.abs(np.polyval(den[::-1], z)) ** 2
-    got *= target[-1] / got[-1]  # s² from ω = π, where N's terms add (at ω = 0 they cancel)
-    if not np.all(np.abs(got / target - 1.0) < SPECTRUM_RTOL):
+    if not (np.all(np.isfinite(target)) and np.all(target > 0)):  # zero gains (B = 0): one filter per component
+        return None
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        got = np.abs(np.polyval(monic[::-1], z)) ** 2 / np.abs(np.polyval(den[::-1], z)) ** 2
+        got *= target[-1] / got[-1]  # s² from ω = π, where N's terms add (at ω = 0 they cancel)
+        close = np.abs(got / target - 1.0) < SPECTRUM_RTOL
+    if not np.all(close):
         return None
     return math.sqrt(target[-1] / (np.abs(np.polyval(monic[::-1], -1.0)) ** 2 / np.abs(np.polyval(den[::-1], -1.0)) ** 2)) * monic, den
 
