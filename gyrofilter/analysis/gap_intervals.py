@@ -38,9 +38,10 @@ too tight and too little biased, and the interval above misses on short records 
 10-minute records, 60 cases). The exact interval's upper end theta_U is where the estimator,
 simulated at theta_U, puts the estimate at its lower 2.5 %; one step towards it: the model is
 simulated again at the interval's upper ends (sigma and tau together: their estimates are
-positively correlated), and the upper end becomes ``u_hat - bias_U + t s_U`` with that run's bias
-and spread; the same at the lower ends for the lower end. This costs two more sets of replicates
-on an axis with such a finding.
+positively correlated), and the upper end moves by one secant step of that equation, its bias and
+spread taken linear between the estimate's replicates and these (:func:`inversion_step`; a plain
+step to ``u_hat - bias_U + t s_U`` overshoots); the same at the lower ends for the lower end. This
+costs two more sets of replicates on an axis with such a finding.
 
 An axis without findings has the baseline's model, white noise: its bias interval is
 ``mean +- z s / sqrt(N)`` (s the per-sample std, quantization included) and its white-noise

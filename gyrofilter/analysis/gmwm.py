@@ -376,7 +376,7 @@ def simulate_fit(fit: GmwmFit, n, sample_rate_hz, rng, tails=None):
         x += fit.ramp_dps_per_s2 * np.arange(n) / sample_rate_hz
     if fit.flicker_b_dps is not None:
         bank = BiasInstability(fit.flicker_b_dps, sample_rate_hz, rng, 1.0 / sample_rate_hz, n / sample_rate_hz)
-        for start in range(0, n, 1 << 16):  # in blocks: the bank draws one normal per component and sample
+        for start in range(0, n, 1 << 16):  # in blocks, as the simulator streams it: bounded memory
             x[start:start + (1 << 16)] += bank.next(np.zeros(min(1 << 16, n - start)), None)
     for sigma_dps, tau_s in fit.gauss_markov:
         phi = math.exp(-1.0 / (sample_rate_hz * tau_s))

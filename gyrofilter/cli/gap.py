@@ -82,9 +82,7 @@ def run(args):
     if args.json is None:
         raise SettingsError("--json OUT.json is required (or --fleet DIR for several recordings)")
     report_files = [os.path.join(args.report, name) for name in gap_report.report_file_names()] if args.report else []
-    outputs.check_output_folder(args.report, "--report")
-    if args.report and os.path.realpath(args.json) == os.path.realpath(args.report):
-        raise SettingsError(f"--json {args.json}: is also the --report folder; give the JSON file another name")
+    outputs.check_output_folder(args.report, "--report", [args.json])
     outputs.check_outputs([args.json] + report_files, [args.recording], args.force)
     show = args.progress or sys.stderr.isatty()
     t0 = time.perf_counter()

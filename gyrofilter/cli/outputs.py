@@ -109,10 +109,18 @@ def commit(tmp, path):
         os.unlink(tmp)
 
 
-def check_output_folder(folder, option):
-    """Refuse, before any work, an output folder (``option`` DIR) that exists as a file."""
-    if folder and os.path.exists(folder) and not os.path.isdir(folder):
+def check_output_folder(folder, option, files=()):
+    """Refuse, before any work, an output folder (``option`` DIR) that exists as a file, or
+    that one of the command's output ``files`` names too (the folder would be made first and the
+    file could then not be written)."""
+    if not folder:
+        return
+    if os.path.exists(folder) and not os.path.isdir(folder):
         raise SettingsError(f"{option} {folder}: is a file; give a folder for the output files")
+    key = _file_key(folder)
+    for path in filter(None, files):
+        if _file_key(path) == key:
+            raise SettingsError(f"{path}: is also the {option} folder; give the output file another name")
 
 
 def _file_key(path):
