@@ -61,6 +61,33 @@ def test_feature_adev_is_the_strided_overlapping_estimator():
     assert np.allclose(got, overlapping_adev(x, 100.0, taus)[1], rtol=0.15, atol=0)
 
 
+def test_feature_adev_caps_the_terms_in_evenly_spread_runs(monkeypatch):
+    """Past ADEV_MAX_TERMS start points, the sum keeps runs of consecutive ones: the same
+    formula on that subset, and close to the full estimator, also on a sinusoid whose period
+    divides the stride a coarser lattice would take (aliasing)."""
+    monkeypatch.setattr(gap_features, "_ADEV_CHUNK", 1000)
+    monkeypatch.setattr(gap_features, "ADEV_MAX_TERMS", 8000)
+    rng = np.random.default_rng(11)
+    n, fs = 120_001, 100.0
+    x = rng.normal(0.0, 0.1, n) + 0.3 * np.sin(2 * math.pi * 12.5 * np.arange(n) / fs)  # period 8 samples
+    taus = gap_features.feature_taus(n, fs)
+    got = gap_features.feature_adev(x, fs, taus)
+    phase = np.concatenate(([0.0], np.cumsum(x - x.mean()))) / fs
+    for tau, value in zip(taus, got):
+        m = int(round(tau * fs))
+        step = max(1, m // 8)
+        k = (n - 2 * m) // step + 1
+        runs = gap_features._adev_runs(k)
+        idx = np.concatenate([np.arange(a, b) for a, b in runs]) * step
+        assert idx.size == min(k, 8000) and np.unique(idx).size == idx.size
+        assert idx[0] == 0 and idx[-1] == (k - 1) * step
+        d = phase[idx + 2 * m] - 2 * phase[idx + m] + phase[idx]
+        assert value == pytest.approx(math.sqrt(np.mean(d ** 2) / 2) / (m / fs), rel=1e-9)
+    capped = (n - 2 * np.round(taus * fs)) // np.maximum(1, np.round(taus * fs) // 8) + 1 > 8000
+    assert capped.sum() >= 5
+    assert np.allclose(got[capped], _strided_adev(x, fs, taus[capped]), rtol=0.03, atol=0)
+
+
 def test_dft_amplitude_equals_the_direct_sum_near_the_peak():
     rng = np.random.default_rng(4)
     n, fs, f0 = 300_007, 100.0, 7.31

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cmath
 import functools
 import math
 
@@ -87,13 +88,23 @@ def fitted(columns, coef, n):
 
 
 def _sine_columns(sample_rate_hz, f_hz):
-    """Columns ``cos(2 pi f n / f_s)`` and ``sin(2 pi f n / f_s)`` at samples ``lo .. hi - 1``."""
+    """Columns ``cos(2 pi f n / f_s)`` and ``sin(2 pi f n / f_s)`` at samples ``lo .. hi - 1``
+    (at most :data:`CHUNK_SAMPLES` of them), the real and imaginary parts of :func:`phasors`."""
     k = 2 * math.pi * f_hz / sample_rate_hz
+    table = phasors(k, CHUNK_SAMPLES)
 
     def columns(lo, hi):
-        w = np.arange(lo, hi) * k
-        return np.cos(w), np.sin(w)
+        p = table[:hi - lo] * cmath.exp(1j * k * lo)
+        return p.real, p.imag
     return columns
+
+
+def phasors(k, count):
+    """``exp(i k s)``, s = 0 .. count - 1: a table whose product with the number
+    ``exp(i k lo)`` is ``exp(i k n)`` at samples ``n = lo .. lo + count - 1``, one complex product
+    per sample in place of a cosine and a sine (the angle ``k n`` rounded as ``k lo`` and
+    ``k s`` are: 1e-16 of it, as when it is formed whole)."""
+    return np.exp(1j * k * np.arange(count))
 
 
 def sinusoid_fit(x, sample_rate_hz, f_hz):
@@ -187,8 +198,9 @@ def _unit_outer(k, count, size, split=64):
 def _real_power(z, n):
     """``|X_k|^2 / n``, k = 0 .. n / 2, of the real series whose packed complex transform
     :func:`_four_step_fft` left in ``z`` (the unpacking of :func:`periodogram`), a block of
-    stored rows at a time: row ``k1`` holds ``Z_k``, ``k = k1 + R k2``, and its partners
-    ``Z_{N/2-k}`` are row ``R - k1`` reversed (row 0: itself, reversed and shifted by one)."""
+    stored rows at a time into two preallocated buffers: row ``k1`` holds ``Z_k``,
+    ``k = k1 + R k2``, and its partners ``Z_{N/2-k}`` are row ``R - k1`` reversed (row 0:
+    itself, reversed and shifted by one), so a block's partners are a view of the array."""
     half = n // 2
     rows = _four_step_rows(half)
     cols = half // rows
@@ -197,19 +209,26 @@ def _real_power(z, n):
     out = spec[:half].reshape(cols, rows)  # out[k2, k1] = spec[k1 + R k2]
     col_factor = np.exp((-2j * math.pi * rows / n) * np.arange(cols))
     step = max(1, CHUNK_SAMPLES // cols)
+    total = np.empty((step, cols), dtype=complex)
+    diff = np.empty((step, cols), dtype=complex)
+    power = np.empty((step, cols))
     for r0 in range(0, rows, step):
-        k1 = np.arange(r0, min(rows, r0 + step))
-        zk = a[k1]
-        zc = np.conj(a[(rows - k1) % rows, ::-1])
+        r1 = min(rows, r0 + step)
+        size = r1 - r0
+        zk, zs, zd, pw = a[r0:r1], total[:size], diff[:size], power[:size]
         if r0 == 0:
-            zc[0] = np.roll(zc[0], 1)
-        diff = zk - zc
-        diff *= np.exp((-2j * math.pi / n) * k1)[:, None] * col_factor[None, :]
-        diff *= -1j
-        diff += zk
-        diff += zc
-        out[:, r0:r0 + k1.size] = np.square(diff.real).T
-        out[:, r0:r0 + k1.size] += np.square(diff.imag).T
+            np.conjugate(a[(rows - np.arange(size)) % rows, ::-1], out=zs)
+            zs[0] = np.roll(zs[0], 1)
+        else:
+            np.conjugate(a[rows - r1 + 1:rows - r0 + 1][::-1, ::-1], out=zs)
+        np.subtract(zk, zs, out=zd)  # Z_k - conj Z_{N/2-k}
+        zs += zk  # Z_k + conj Z_{N/2-k}
+        zd *= col_factor  # times -i exp(-2 pi i k / n), k = k1 + R k2: a factor per column, then per row
+        zd *= (-1j * np.exp((-2j * math.pi / n) * np.arange(r0, r1)))[:, None]
+        zs += zd  # 2 X_k
+        np.square(zs.real, out=pw)
+        pw += np.square(zs.imag)
+        out[:, r0:r1] = pw.T
     z0 = a[0, 0]
     spec[half] = (z0.real - z0.imag) ** 2
     spec *= 0.25
@@ -305,12 +324,13 @@ def _dft_amplitude(x, sample_rate_hz, f0, mean=0.0):
     s = np.arange(b, dtype=float)
     moments = np.zeros((3, m), dtype=complex)
     step = max(1, (1 << 16) // b) * b  # whole blocks per pass, about 65536 samples: bounded memory
+    k = -2 * math.pi * f0 / sample_rate_hz
+    table = phasors(k, step)
     for a in range(0, n, step):
         seg = x[a:a + step] - mean
-        w = np.arange(a, a + seg.size) * (-2 * math.pi * f0 / sample_rate_hz)
         z = np.zeros(-(-seg.size // b) * b, dtype=complex)
-        z.real[:seg.size] = np.cos(w) * seg
-        z.imag[:seg.size] = np.sin(w) * seg
+        np.multiply(table[:seg.size], cmath.exp(1j * k * a), out=z[:seg.size])
+        z[:seg.size] *= seg
         z = z.reshape(-1, b)
         rows = slice(a // b, a // b + z.shape[0])
         moments[0, rows] = z.sum(axis=1)
