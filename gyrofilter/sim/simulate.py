@@ -217,12 +217,13 @@ def _axis_rate(axis_terms, t_s, true_c, spec):
     if spec["full_scale_dps"] is not None:
         np.clip(rate, -spec["full_scale_dps"], spec["full_scale_dps"], out=rate)
     lsb = spec["lsb_per_dps"]
-    if lsb is not None:
-        rate = np.round(rate * lsb)
+    if lsb is not None:  # in place: ``rate`` is this block's own array
+        np.multiply(rate, lsb, out=rate)
+        np.round(rate, out=rate)
         if spec["gyro_unit"] != "lsb":
-            rate = rate / lsb
+            rate /= lsb
     if spec["gyro_unit"] == "rad/s":
-        rate = rate / DEG_PER_RAD
+        rate /= DEG_PER_RAD
     if not np.isfinite(rate).all():  # the last guard: validate_model's bounds should make this unreachable
         raise SettingsError(f"simulate: the model gives a non-finite rate at t = {t_s[~np.isfinite(rate)][0]:g} s")
     return rate

@@ -147,25 +147,27 @@ PASS_SAMPLES = 1 << 16
 def detrend_line(x, out=None):
     """``x`` minus its least-squares line ``a + s t``, ``t = i - (N - 1) / 2`` (closed form,
     O(N)): ``s = sum t x / sum t^2`` with ``sum t^2 = N (N^2 - 1) / 12``. Into ``out`` (which
-    may be ``x`` itself) or a new array; ``t`` is made :data:`PASS_SAMPLES` at a time, so the
-    only N-sample array is the result."""
+    may be ``x`` itself) or a new array. A pass's ``t`` is one table ``0 .. P - 1`` (P =
+    :data:`PASS_SAMPLES`) plus the pass's offset, ``sum t x = sum s x_s + (lo - centre) sum x``
+    over the pass, so the only N-sample array is the result."""
     n = x.size
     tt = n * (n * n - 1.0) / 12.0
     centre = 0.5 * (n - 1)
+    table = np.arange(min(n, PASS_SAMPLES), dtype=float)
     txs = 0.0
     for lo in range(0, n, PASS_SAMPLES):
-        hi = min(n, lo + PASS_SAMPLES)
-        txs += float(dot(np.arange(lo, hi, dtype=float) - centre, x[lo:hi]))
+        part = x[lo:lo + PASS_SAMPLES]
+        txs += float(dot(table[:part.size], part)) + (lo - centre) * float(part.sum())
     slope = txs / tt if tt > 0 else 0.0
     mean = float(x.mean())
     out = np.empty(n) if out is None else out
+    line = np.empty(table.size)
     for lo in range(0, n, PASS_SAMPLES):
-        hi = min(n, lo + PASS_SAMPLES)
-        t = np.arange(lo, hi, dtype=float)
-        t -= centre
-        t *= slope
-        t += mean
-        np.subtract(x[lo:hi], t, out=out[lo:hi])
+        part = x[lo:lo + PASS_SAMPLES]
+        t = line[:part.size]
+        np.multiply(table[:part.size], slope, out=t)
+        t += mean + slope * (lo - centre)
+        np.subtract(part, t, out=out[lo:lo + part.size])
     return out
 
 
