@@ -17,7 +17,10 @@ cause to name: it predicts the bias at the next power-up, an exponential in time
 
 The covariate is preferred over a warm-up and a slow wander, which a settling temperature
 mimics; against a ramp or a step (a line or a jump is not a settling) the better fit of the block
-means decides as on any shape (the larger ``Delta chi^2 - k ln n``). A covariate reading that needs a stochastic term where the time reading explains the record by
+means decides as on any shape (the larger ``Delta chi^2 - k ln n``), and a ramp must win by more
+than the null spread of that difference (:func:`_shape_beats_temperature`): a temperature that
+settles slowly is nearly a line over the record, and a ramp fitting it about as well is the
+alternative, not the cause. A covariate reading that needs a stochastic term where the time reading explains the record by
 a shape alone is the more complex reading and is not returned (a ramp under a warming
 temperature reads as the temperature's settling plus a random walk for the difference).
 
@@ -50,9 +53,8 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
         return time_reading, stats
     covariate = temperature_first(x, sample_rate_hz, temp_c, stats)
     line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in ("rate_ramp", "bias_step") else None
-    if line_or_jump and stats[line_or_jump] - _N_PARAMS[line_or_jump] * math.log(block_means(x)[0].size) >= \
-            stats.get("temperature", 0.0) - math.log(block_means(x)[0].size):
-        # a line or a jump is not a settling: against them the better fit of the block means decides (BIC)
+    if line_or_jump and _shape_beats_temperature(line_or_jump, stats, x, temp_c):
+        # a line or a jump is not a settling: against them the better fit of the block means decides
         return time_reading, stats
     if covariate is None or (any(c.effect in STOCHASTIC_MODELS for c in covariate[1:])
                              and not any(c.effect in STOCHASTIC_MODELS for c in time_reading)):
@@ -63,6 +65,40 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     if time_reading:
         covariate[0].extra["alternative"] = time_reading
     return covariate, stats
+
+
+#: two-sided 95 % normal quantile: a ramp's better fit over the temperature's counts when it is
+#: beyond this many sd of the difference's null spread (:func:`_shape_beats_temperature`)
+_SPREAD_Z = 1.96
+
+
+def _shape_beats_temperature(name, stats, x, temp_c):
+    """Whether the time shape ``name`` (a ramp or a step) fits the block means better than the
+    temperature (``stats``: their Delta chi^2 in units of the white level).
+
+    A step wins by BIC (``Delta chi^2 - k ln n``). A ramp must also beat the temperature by more
+    than the null spread of the difference: for two one-column fits of white block means
+    ``y = beta g_T + e`` (``g`` the unit-norm, mean-free regressors, ``rho = g_R . g_T``),
+    ``a = g_T . y`` and ``b = g_R . y`` are N(beta, 1) and N(rho beta, 1) with correlation rho, and
+    ``a^2 - b^2 = (a - b)(a + b)`` has sd ``2 |beta| sqrt(1 - rho^2)`` to first order (Vuong 1989,
+    non-nested models). A temperature settling over a long time constant is nearly a line, and
+    a ramp then fits it within that spread about as often as not: the measured covariate is the
+    cause to name (the ramp rides on it as the alternative, weighed on D in gap_readings)."""
+    y, _ = block_means(x)
+    n = y.size
+    d_shape, d_temp = stats[name], stats.get("temperature", 0.0)
+    if d_shape - _N_PARAMS[name] * math.log(n) < d_temp - math.log(n):
+        return False
+    if name != "rate_ramp":
+        return True
+    tb, _ = block_means(np.asarray(temp_c, dtype=float))
+    if tb.size != n or not np.ptp(tb) > 0:
+        return True
+    g_t = tb - tb.mean()
+    g_r = np.arange(n) - 0.5 * (n - 1)
+    rho = float(np.dot(g_t, g_r) / math.sqrt(np.dot(g_t, g_t) * np.dot(g_r, g_r)))
+    spread = 2.0 * math.sqrt(max(1.0 - rho * rho, 0.0) * max(d_shape, d_temp))
+    return d_shape - d_temp > _SPREAD_Z * spread
 
 
 def temperature_first(x, sample_rate_hz, temp_c, stats):
