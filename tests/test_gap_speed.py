@@ -173,6 +173,20 @@ def test_progress_gives_fraction_and_time_left_and_the_extended_model_reuses_the
     assert report["discrepancy"]["after"]["z"] == finding["gain"]["after"]
 
 
+@pytest.mark.parametrize("n", [777, 2048, 61_440, 1_000_000])
+def test_periodogram_equals_numpys_rfft_of_the_detrended_series(n):
+    """The four-step transform and its unpacking (several blocks of rows, the first with its
+    self-partnered row 0) give |rfft|^2 / N of the detrended series; odd N takes rfft itself."""
+    x = np.random.default_rng(n).normal(0.3, 0.1, n) + 1e-5 * np.arange(n)
+    size = det.periodogram_length(n)
+    t = np.arange(size)
+    r = x[:size] - np.polyval(np.polyfit(t, x[:size], 1), t)
+    ref = np.abs(np.fft.rfft(r)) ** 2 / size
+    got = det.periodogram(x.copy())
+    assert got.shape == ref.shape
+    assert np.max(np.abs(got - ref)) <= 1e-11 * ref.mean()
+
+
 def test_periodogram_length_is_the_largest_11_smooth_length():
     def smooth(v):
         for p in (2, 3, 5, 7, 11):
