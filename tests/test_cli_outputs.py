@@ -74,6 +74,40 @@ def test_an_output_named_as_a_folder_that_does_not_exist_is_refused_before_any_w
     assert sorted(os.listdir(tmp_path)) == ["in.csv"]
 
 
+def _read_only_folder(tmp_path, monkeypatch):
+    """A folder this process cannot write: mode 0o555, and for root (whom the mode does not stop)
+    ``os.access`` answering as the kernel would for any other user."""
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    if os.geteuid() == 0:
+        real = os.access
+        monkeypatch.setattr(os, "access", lambda p, mode, **kw: False if os.path.abspath(p) == str(folder)
+                            and mode & os.W_OK else real(p, mode, **kw))
+    return folder
+
+
+@pytest.mark.parametrize("command", ["gap", "report", "simulate"])
+def test_an_output_in_a_folder_that_cannot_be_written_is_refused_before_any_work(tmp_path, monkeypatch, capsys, command):
+    """``gap`` ran its whole analysis before finding that --json could not be written (the
+    hostile pass of issue 24); every command now refuses such an output first, naming it."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    folder = _read_only_folder(tmp_path, monkeypatch)
+    src = str(tmp_path / "in.csv")
+    write_recording(src, Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
+    out = str(folder / "sub" / "out.json")
+    argv = {"gap": ["gap", src, "--json", out],
+            "report": ["report", src, "--out", out],
+            "simulate": ["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "1", "--out", out]}[command]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0] == f"gyrofilter: error: {out}: the folder {folder} is not writable", err
+    assert os.listdir(folder) == []
+    folder.chmod(0o755)
+
+
 def test_replacing_makes_missing_folders_and_removes_them_on_failure(tmp_path):
     target = tmp_path / "a" / "b" / "out.json"
     with pytest.raises(RuntimeError), outputs.replacing(str(target)) as tmp:

@@ -167,6 +167,18 @@ def test_source_records_first_then_reports(tmp_path, capsys):
     assert "exists (use --force" in capsys.readouterr().err and not (tmp_path / "other.html").exists()
 
 
+def test_a_recording_without_a_sample_is_refused_and_not_left_behind(tmp_path, capsys):
+    """``--duration`` shorter than one sample recorded a header alone, kept it, and failed with the
+    gap analysis's complaint about that file (issue 24's hostile pass): now one line naming the
+    source and the duration, and no file."""
+    out = tmp_path / "unit1.html"
+    assert main(["report", "--source", "sim", "--duration", "0.001", "--out", str(out)]) == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last == (f"gyrofilter: error: sim: no sample was recorded in --duration 0.001 s, so there is nothing to "
+                    f"report; the empty {tmp_path / 'unit1.csv'} is not kept")
+    assert os.listdir(tmp_path) == []
+
+
 def test_a_paced_replay_source_records_its_first_seconds(tmp_path, capsys):
     """The real replay:FILE,realtime source: the recording kept is the file's first 20 s, sample for sample."""
     out, kept = tmp_path / "r.html", tmp_path / "first20.csv.gz"

@@ -24,7 +24,9 @@ def check_outputs(outputs, inputs=(), force=False):
     folder's, existing or not); so is one that exists as anything but a regular
     file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
     replaced. An output that exists is refused without ``force``; two outputs naming one file are
-    refused. Raises FileExistsError / SettingsError naming the file.
+    refused; so is one whose folder (the nearest that exists: the others are made) cannot be
+    written, so that a long run does not end in a file it cannot write. Raises FileExistsError /
+    SettingsError naming the file.
     """
     inputs = {_file_key(p) for p in inputs if p}
     seen = set()
@@ -44,6 +46,8 @@ def check_outputs(outputs, inputs=(), force=False):
             if os.path.lexists(parent):
                 raise SettingsError(f"{out}: {parent} is a file, not a folder")
             parent = os.path.dirname(parent)
+        if not os.access(parent, os.W_OK | os.X_OK):
+            raise SettingsError(f"{out}: the folder {parent} is not writable")
         if not os.path.lexists(out):
             continue
         mode = os.lstat(out).st_mode

@@ -82,15 +82,13 @@ def run(args):
     if args.source is not None:
         path = args.recording_out or default_recording_path(args.out)
         live.check_duration(args.duration)
-        outputs.check_outputs([args.out, path], live.source_files(args.source), args.force)
-        _check_writable(args.out)  # before the recording, which may take long
+        outputs.check_outputs([args.out, path], live.source_files(args.source), args.force)  # before the recording
         status = _record_first(args, path, show)
         if status:
             return status
     else:
         path = args.recording
         outputs.check_outputs([args.out], [path], args.force)
-        _check_writable(args.out)
     data, envelopes = compute(path, seed=args.seed, sims=args.sims, keep_outliers=args.keep_outliers,
                               warn=console.say_warning, progress=progress)
     page = report_page(data, *envelopes)
@@ -188,15 +186,6 @@ def _check_source_options(args):
                 raise SettingsError(f"{option} records a source first: it needs --source (a RECORDING is read as it is)")
 
 
-def _check_writable(out):
-    """Refuse, before any work, an --out whose folder (the nearest that exists) cannot be written."""
-    folder = os.path.dirname(os.path.abspath(out))
-    while not os.path.isdir(folder):
-        folder = os.path.dirname(folder)
-    if not os.access(folder, os.W_OK):
-        raise SettingsError(f"--out {out}: the folder {folder} is not writable")
-
-
 def _record_first(args, path, show):
     """Record ``args.source`` to ``path`` (``record``'s loop). Returns 0, or the exit status when
     the device failed (what it gave is kept, and said)."""
@@ -215,5 +204,17 @@ def _record_first(args, path, show):
         return status
     if not os.path.exists(path):
         raise SettingsError(f"{args.source}: no sample was recorded, so there is nothing to report")
+    if not _holds_samples(path):  # a header alone (a --duration shorter than one sample): not kept
+        os.remove(path)
+        within = f" in --duration {args.duration:g} s" if args.duration is not None else ""
+        raise SettingsError(f"{args.source}: no sample was recorded{within}, so there is nothing to report; the empty "
+                            f"{path} is not kept")
     return 0
+
+
+def _holds_samples(path):
+    """Whether the recording at ``path`` has a data row (read up to the first)."""
+    with contextlib.closing(iter_recording(path)) as chunks:
+        next(chunks)  # the head
+        return any(len(chunk) for chunk in chunks)
 
