@@ -17,6 +17,7 @@ from gyrofilter.analysis.gap_report import params_text
 from gyrofilter.analysis.still import clipped
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
+from gyrofilter.units import AXES
 from gyrofilter.view.report import FORMAT
 from support import REPO, RECORDINGS
 from support.report_page import parse
@@ -141,6 +142,33 @@ def test_clipped_counts_samples_at_the_full_scale():
                                         "clipped there (the motion was faster than the sensor's range)")
     assert clipped(x, 250.0) is not None and clipped(np.clip(x, -249.0, 249.0), 250.0, 131.0) is None
     assert clipped(x, None) is None
+
+
+def test_the_gap_section_says_why_the_covariate_is_named_once():
+    """The trial's "wall of text": three temperature findings each ended their evidence with the
+    same paragraph on why the covariate is named. The page says it once, above the findings; each
+    finding shows its alternative before its evidence; the notes are a list."""
+    from gyrofilter.analysis.gap_readings import WHY_THE_COVARIATE
+    from gyrofilter.view.report import _gap
+
+    axis = {"bias_dps": 0.1, "arw_dps_per_sqrt_hz": 0.01, "quantization_dps": None}
+    findings = [{"effect": "temperature", "axis": a, "params": {"coefficient_dps_per_c": 0.02},
+                 "gain": {"before": 15.0, "after": 3.0},
+                 "evidence": f"the bias follows the temperature on {a}; so this record cannot tell them apart. "
+                             f"{WHY_THE_COVARIATE}; baseline simulations: largest departure on {a}",
+                 "alternatives": [{"effect": "warmup", "params": {"amplitude_dps": 0.06, "tau_s": 840.0}, "D": 0.84}]}
+                for a in AXES]
+    page = _gap({"options": {"seed": 0}, "gap": {"n_simulations": 24, "baseline": {"axes": {a: axis for a in AXES}},
+                                                 "findings": findings, "notes": ["first note", "second note"],
+                                                 "extended_model": None}})
+    assert page.count(html.escape(WHY_THE_COVARIATE)) == 1
+    assert page.index(html.escape(WHY_THE_COVARIATE)) < page.index("<b>temperature</b>")
+    for a in AXES:
+        item = page[page.index(f"<b>temperature</b> on <b>{a}</b>"):]
+        item = item[:item.index("</li>")]
+        assert item.index("Indistinguishable") < item.index("Evidence:")
+        assert f"cannot tell them apart; baseline simulations: largest departure on {a}." in item
+    assert "<h3>Notes</h3><ul><li>first note</li><li>second note</li></ul>" in page
 
 
 def test_source_records_first_then_reports(tmp_path, capsys):

@@ -47,6 +47,14 @@ def null_spread(sims, n):
     return float(np.std(d, ddof=1))
 
 
+#: why the covariate is named where a reading in time explains a record as well (the end of such a
+#: temperature finding's evidence; the HTML report says it once for all its findings)
+WHY_THE_COVARIATE = ("The temperature is named because it is measured and predicts the bias at the next power-up; "
+                     "read in time, the bias would settle the same way after every power-on whatever the temperature "
+                     "does, and a record where the temperature moves without a power-up (heating, a cold start) tells "
+                     "them apart")
+
+
 def weigh_readings(run):
     """Choose per axis between the covariate and the time reading of a confounded temperature
     (module docstring) on the gap analysis ``run``; the reading not chosen goes to
@@ -89,10 +97,7 @@ def weigh_readings(run):
         temp.extra["alternatives"] = [(c, d_time) for c in reading["time"]]
         temp.evidence += (f"; the time reading {shown} explains this record about as well (D {d_time:.3g} against "
                           f"{d_cov:.3g}, within the null spread of D, {spread:.2g}): the temperature follows a "
-                          "warm-up itself, so this record cannot tell them apart. The temperature is named because it "
-                          "is measured and predicts the bias at the next power-up; read in time, the bias would "
-                          "settle the same way after every power-on whatever the temperature does, and a record "
-                          "where the temperature moves without a power-up (heating, a cold start) tells them apart")
+                          f"warm-up itself, so this record cannot tell them apart. {WHY_THE_COVARIATE}")
 
 
 def _show(c):

@@ -17,6 +17,7 @@ import json
 
 import numpy as np
 
+from ..analysis.gap_readings import WHY_THE_COVARIATE
 from ..analysis.gap_report import alternatives_text, params_text
 from ..analysis.noise_export import JSON_KEY, JSON_UNIT
 from ..analysis.noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
@@ -203,9 +204,12 @@ def _gap(data):
     out.append("<h3>Findings</h3>")
     if not g["findings"]:
         out.append("<p>None: the baseline explains the record within the simulations' spread.</p>")
+    if any(WHY_THE_COVARIATE in f["evidence"] for f in g["findings"]):
+        out.append(f"<p>Some findings below cannot be told apart in this record from a reading in time (shown under "
+                   f"them). {_esc(WHY_THE_COVARIATE)}.</p>")
     out.append("<ul>" + "".join(_finding(f) for f in g["findings"]) + "</ul>")
-    for note in g.get("notes", []):
-        out.append(f"<p>Note: {_esc(note)}</p>")
+    if g.get("notes"):
+        out.append("<h3>Notes</h3><ul>" + "".join(f"<li>{_esc(note)}</li>" for note in g["notes"]) + "</ul>")
     out.append("<h3>Extended model</h3>" + _extended(g.get("extended_model")))
     return "".join(out)
 
@@ -215,11 +219,12 @@ def _finding(f):
     params = _esc(params_text(f, sep=" = "))  # the console's digits: enough to tell an interval's ends apart
     text = (f"<li><b>{_esc(f['effect'])}</b> on <b>{_esc(f['axis'])}</b>: {params}"
             + (" (95 % intervals in brackets)" if ci else "") + f". Gain: D {_esc(_num(f['gain']['before']))} -&gt; "
-            f"{_esc(_num(f['gain']['after']))}.<br><span class='small'>Evidence: {_esc(f['evidence'])}.</span>")
+            f"{_esc(_num(f['gain']['after']))}.")
     if f.get("alternatives"):
-        text += (f"<br>Indistinguishable in this record from {_esc(alternatives_text(f['alternatives']))} (within the "
-                 f"null spread of D); {_esc(f['effect'])} is named as the measured cause.")
-    return text + "</li>"
+        text += (f"<br><b>Indistinguishable</b> in this record from {_esc(alternatives_text(f['alternatives']))} "
+                 f"(within the null spread of D); {_esc(f['effect'])} is named as the measured cause.")
+    evidence = f["evidence"].replace(f". {WHY_THE_COVARIATE}", "")  # said once above the findings
+    return text + f"<br><span class='small'>Evidence: {_esc(evidence)}.</span></li>"
 
 
 def _extended(model):
