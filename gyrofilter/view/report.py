@@ -151,7 +151,10 @@ def _allan(data):
     out.append("<p>Overlapping Allan deviation with its chi-square interval, the fitted five-term model "
                "(sigma<sup>2</sup> = 3Q<sup>2</sup>/tau<sup>2</sup> + N<sup>2</sup>/tau + (2 ln2/pi) B<sup>2</sup> + "
                "K<sup>2</sup> tau/3 + R<sup>2</sup> tau<sup>2</sup>/2) and each resolved term's line with its slope; "
-               f"as <code>gyrofilter allan</code> computes them. {_esc(doc['method']['interval'])}.</p>")
+               f"as <code>gyrofilter allan</code> computes them. {_esc(doc['method']['interval'])}. The slope "
+               "read-off takes each term from where its slope meets the curve (IEEE Std 952 practice); the other terms "
+               "add to the curve there, so it overstates the term: where the fit leaves a term not resolved, the "
+               "fit's bound (&lt; value) is the tighter statement, even below the read-off.</p>")
     out.append("<div class='figures'>" + "".join(_allan_figure(a, ax) for a, ax in doc["axes"].items()) + "</div>")
     for a, ax in doc["axes"].items():
         out.append(f"<h3>axis {_esc(a)}</h3>")
