@@ -23,6 +23,7 @@ import numpy as np
 
 from ..plots import pyplot
 from ..units import AXES, utf8_text
+from .gap_readings import WHY_THE_COVARIATE
 
 REPORT_NAME = "gap_report.md"
 FIGURE_KINDS = ("adev", "spectrum", "temperature", "time")
@@ -139,6 +140,20 @@ def plot_time(x, sample_rate_hz, axis, findings, path, temp=None, alternatives=(
     _finish(plt, fig, ax, path, "time (s)", "rate (deg/s)", f"axis {axis}: rate in time")
 
 
+def covariate_preamble(findings):
+    """The sentence said once before the findings where some of them cannot be told apart from a
+    reading in time (their evidence ends with :data:`~gyrofilter.analysis.gap_readings.WHY_THE_COVARIATE`),
+    or None; :func:`evidence_text` leaves it out of each finding."""
+    if not any(WHY_THE_COVARIATE in f["evidence"] for f in findings):
+        return None
+    return f"Some findings below cannot be told apart in this record from a reading in time (shown under them). {WHY_THE_COVARIATE}."
+
+
+def evidence_text(finding):
+    """A finding's evidence less the sentence :func:`covariate_preamble` says once for all."""
+    return finding["evidence"].replace(f". {WHY_THE_COVARIATE}", "")
+
+
 def alternatives_text(alternatives):
     """``effect (k = v, ...) + ...: D d`` of a finding's ``alternatives`` (one reading: the entries share D)."""
     parts = [f"{e['effect']} (" + ", ".join(f"{k} = {_fmt(v)}" for k, v in e["params"].items()) + ")"
@@ -205,14 +220,16 @@ def write_report(report, rec, out_dir, *, seed=0):
                   f"({intervals['bootstrap_runs']} bootstrap runs per axis with findings; docs/gap.md).", ""]
     if not report["findings"]:
         lines.append("None: the baseline explains the measurement within the simulations' spread.")
+    if covariate_preamble(report["findings"]):
+        lines += [covariate_preamble(report["findings"]), ""]
     for f in report["findings"]:
         lines += [f"- **{f['effect']}** on **{f['axis']}**: {params_text(f, ' = ')}.",
-                  f"  Evidence: {f['evidence']}.",
                   f"  Gain: D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}."]
         if f.get("alternatives"):
             lines.append("  **Indistinguishable in this record** from the alternative reading "
                          + alternatives_text(f["alternatives"]) + " (D of the axis with it instead; the figure "
                          "of the rate in time shows both readings).")
+        lines.append(f"  Evidence: {evidence_text(f)}.")
     for note in report.get("notes", []):
         lines.append(f"- note: {note}")
     lines += ["", "## Figures", ""]

@@ -17,8 +17,7 @@ import json
 
 import numpy as np
 
-from ..analysis.gap_readings import WHY_THE_COVARIATE
-from ..analysis.gap_report import alternatives_text, params_text
+from ..analysis.gap_report import alternatives_text, covariate_preamble, evidence_text, params_text
 from ..analysis.noise_export import JSON_KEY, JSON_UNIT
 from ..analysis.noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
 from ..units import AXES
@@ -207,9 +206,8 @@ def _gap(data):
     out.append("<h3>Findings</h3>")
     if not g["findings"]:
         out.append("<p>None: the baseline explains the record within the simulations' spread.</p>")
-    if any(WHY_THE_COVARIATE in f["evidence"] for f in g["findings"]):
-        out.append(f"<p>Some findings below cannot be told apart in this record from a reading in time (shown under "
-                   f"them). {_esc(WHY_THE_COVARIATE)}.</p>")
+    if covariate_preamble(g["findings"]):
+        out.append(f"<p>{_esc(covariate_preamble(g['findings']))}</p>")
     out.append("<ul>" + "".join(_finding(f) for f in g["findings"]) + "</ul>")
     if g.get("notes"):
         out.append("<h3>Notes</h3><ul>" + "".join(f"<li>{_esc(note)}</li>" for note in g["notes"]) + "</ul>")
@@ -226,8 +224,7 @@ def _finding(f):
     if f.get("alternatives"):
         text += (f"<br><b>Indistinguishable</b> in this record from {_esc(alternatives_text(f['alternatives']))} "
                  f"(within the null spread of D); {_esc(f['effect'])} is named as the measured cause.")
-    evidence = f["evidence"].replace(f". {WHY_THE_COVARIATE}", "")  # said once above the findings
-    return text + f"<br><span class='small'>Evidence: {_esc(evidence)}.</span></li>"
+    return text + f"<br><span class='small'>Evidence: {_esc(evidence_text(f))}.</span></li>"
 
 
 def _extended(model):
