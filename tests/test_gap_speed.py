@@ -9,6 +9,7 @@ import pytest
 
 from gyrofilter.analysis import detectors as det
 from gyrofilter.analysis import gap, gap_features
+from gyrofilter.analysis.detectors import sinusoid
 from gyrofilter.analysis.allan import overlapping_adev
 from gyrofilter.sim.simulate import simulate, simulate_axis_dps
 
@@ -185,6 +186,28 @@ def test_periodogram_equals_numpys_rfft_of_the_detrended_series(n):
     got = det.periodogram(x.copy())
     assert got.shape == ref.shape
     assert np.max(np.abs(got - ref)) <= 1e-11 * ref.mean()
+
+
+def test_peak_ratio_equals_the_argmax_over_every_bins_level():
+    """The line statistic searches stretches by a bound (``_peak_ratio``); it must give the ratio and
+    bin of the plain search over the level at every bin, ties and all-zero spectra included."""
+    rng = np.random.default_rng(12)
+    for trial in range(400):
+        n = int(rng.integers(41, 80)) if trial % 10 == 0 else int(rng.integers(41, 100_000))
+        spec = rng.exponential(1.0, n) * (np.arange(n) + 1.0) ** rng.uniform(-2, 1)
+        if trial % 3 == 0:
+            spec[rng.integers(8, n)] *= rng.uniform(1, 50)
+        if trial % 7 == 0:
+            spec[rng.integers(0, n, size=n // 3)] = 0.0
+        if trial % 50 == 0:
+            spec[:] = 0.0
+        level = sinusoid._level_at(np.arange(n), sinusoid._band_levels(spec, 8))
+        ratio = spec / level
+        ratio[:8] = 0.0
+        ratio[-1] = 0.0
+        j = int(np.argmax(ratio))
+        got = sinusoid._peak_ratio(spec, 8)
+        assert got[1] == j and got[0] == pytest.approx(float(ratio[j]), rel=1e-12, abs=0), (n, trial)
 
 
 def test_periodogram_length_is_the_largest_11_smooth_length():

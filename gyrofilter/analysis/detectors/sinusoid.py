@@ -15,11 +15,12 @@ from .common import Candidate, SINUSOID_ALPHA, detrend_line, dot, golden_max, ro
 # 2. sinusoid
 
 
-def _local_level(power, first_bin, ratio=1.1, min_bins=16):
-    """Local noise level of a periodogram: median over log-spaced bands (width ratio 1.1,
-    at least 16 bins) / ln 2, interpolated in log-log. Bins below ``first_bin`` get the first
-    band's level. Each band's median comes from a partial sort (``numpy.partition``) of a copy
-    of that band alone: linear time, and no array of the periodogram's length besides the output."""
+def _band_levels(power, first_bin, ratio=1.1, min_bins=16):
+    """Local noise level of a periodogram, at its nodes: the median over log-spaced bands (width
+    ratio 1.1, at least 16 bins) / ln 2, ``(log of the band centres, log of the levels)``;
+    :func:`_level_at` interpolates them in log-log (bins below the first centre get the first
+    band's level, above the last the last's). Each band's median comes from a partial sort
+    (``numpy.partition``) of a copy of that band alone: linear time."""
     n = power.size
     edges = [first_bin]
     while edges[-1] < n:
@@ -34,13 +35,41 @@ def _local_level(power, first_bin, ratio=1.1, min_bins=16):
         part = np.partition(power[lo:hi], mid)
         med[band] = 0.5 * (max(float(part[mid[0]]), 1e-300) + max(float(part[mid[1]]), 1e-300))
     centres = 0.5 * (edges[:-1] + edges[1:] - 1)
-    levels = np.log(np.maximum(med / math.log(2.0), 1e-300))
-    out = np.empty(n)
-    log_centres = np.log(np.maximum(centres, 1.0))
-    for lo in range(0, n, CHUNK_SAMPLES):  # log-log interpolation, a pass at a time
-        log_bin = np.log(np.maximum(np.arange(lo, min(n, lo + CHUNK_SAMPLES), dtype=float), 1.0))
-        np.exp(np.interp(log_bin, log_centres, levels), out=out[lo:lo + log_bin.size])
-    return out
+    return np.log(np.maximum(centres, 1.0)), np.log(np.maximum(med / math.log(2.0), 1e-300))
+
+
+def _level_at(bins, nodes):
+    """The local level (:func:`_band_levels`' ``nodes``) at ``bins`` (an array of bin indices)."""
+    return np.exp(np.interp(np.log(np.maximum(bins.astype(float), 1.0)), *nodes))
+
+
+def _peak_ratio(power, first_bin):
+    """``(max_j power_j / level_j, j)`` over bins ``first_bin .. N - 2`` (the first of equal
+    maxima; ``(0, 0)`` where every ratio is 0), the level of :func:`_level_at`, without the level
+    at every bin: between two nodes the level is monotone (a line in log-log; constant beyond the
+    end nodes), so a stretch's largest ratio is at most its largest power over the smaller level
+    at its two ends. The stretches are searched in the order of that bound, the exact ratios
+    computed only where the bound is not below the best found (a few stretches of the millions
+    of bins of a long record)."""
+    nodes = _band_levels(power, first_bin)
+    last = power.size - 1  # the Nyquist bin is not searched
+    inner = np.ceil(np.exp(nodes[0])).astype(np.int64)
+    starts = np.unique(np.clip(np.concatenate(([first_bin], inner)), first_bin, last))
+    starts = starts[starts < last]
+    ends = np.append(starts[1:], last)
+    peaks = np.maximum.reduceat(power[first_bin:last], starts - first_bin)
+    level_lo, level_hi = _level_at(starts, nodes), _level_at(ends - 1, nodes)
+    bound = peaks / np.minimum(level_lo, level_hi)
+    best, best_j = -math.inf, -1
+    for k in np.argsort(-bound, kind="stable"):
+        if bound[k] < best:
+            break
+        lo, hi = int(starts[k]), int(ends[k])
+        r = power[lo:hi] / _level_at(np.arange(lo, hi), nodes)
+        i = int(np.argmax(r))
+        if r[i] > best or (r[i] == best and lo + i < best_j):
+            best, best_j = float(r[i]), lo + i
+    return (best, best_j) if best > 0 else (0.0, 0)  # no power: as argmax over all-zero ratios
 
 
 #: samples per pass of :func:`_least_squares` and :func:`fitted`: the columns of a fit are made a
@@ -259,14 +288,10 @@ def sinusoid_statistic(x, sample_rate_hz, return_spectrum=False, overwrite=False
     first = 8
     if spec.size <= first + 32:
         return nothing + (spec,) if return_spectrum else nothing
-    ratio = _local_level(spec, first)
-    np.divide(spec, ratio, out=ratio)
-    ratio[:first] = 0.0
-    ratio[-1] = 0.0
-    j = int(np.argmax(ratio))
+    stat, j = _peak_ratio(spec, first)
     m = spec.size - first
     threshold = math.log(m / SINUSOID_ALPHA)
-    out = (float(ratio[j]), j * sample_rate_hz / n, threshold)
+    out = (stat, j * sample_rate_hz / n, threshold)
     return out + (spec,) if return_spectrum else out
 
 
