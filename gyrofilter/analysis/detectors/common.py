@@ -174,8 +174,10 @@ def detrend_line(x, out=None):
 def moving_mean(x, window):
     """Centred moving mean with window ``window`` samples: sample ``i`` averages
     ``x[i - W//2 : i - W//2 + W]``, clipped to the series at the edges (shorter windows), from
-    cumulative sums ``c_j = sum_{k<j} x_k`` made :data:`PASS_SAMPLES` at a time (the running
-    total carried from pass to pass), so the only N-sample array is the result."""
+    differences of cumulative sums made :data:`PASS_SAMPLES` at a time, each pass's sums started
+    at 0 (a difference ``c_{j+W} - c_j`` does not need the total before the pass, and its
+    rounding is that of the pass's sums, not of the record's), so the only N-sample array is the
+    result."""
     window = max(1, int(window))
     n = x.size
     half = window // 2
@@ -185,18 +187,17 @@ def moving_mean(x, window):
         hi = np.clip(np.arange(n) - half + window, 0, n)
         return (c[hi] - c[lo]) / (hi - lo)
     out = np.empty(n)
-    # interior: out[j + half] = (c[j + W] - c[j]) / W for j in [0, n - W], a pass of j at a time
-    carry = 0.0  # c[j0]
+    # interior: out[j + half] = (c[j + W] - c[j]) / W for j in [0, n - W], a pass of j at a time,
+    # c the sums from the pass's first sample
     last = n - window + 1
+    c = np.empty(min(last, PASS_SAMPLES) + window)
+    c[0] = 0.0
     for j0 in range(0, last, PASS_SAMPLES):
         j1 = min(last, j0 + PASS_SAMPLES)
-        c = np.empty(j1 - j0 + window)
-        c[0] = carry
-        np.cumsum(x[j0:j1 + window - 1], out=c[1:])
-        c[1:] += carry
-        np.subtract(c[window:], c[:j1 - j0], out=out[j0 + half:j1 + half])
-        out[j0 + half:j1 + half] /= window
-        carry = float(c[j1 - j0])
+        np.cumsum(x[j0:j1 + window - 1], out=c[1:j1 - j0 + window])
+        part = out[j0 + half:j1 + half]
+        np.subtract(c[window:j1 - j0 + window], c[:j1 - j0], out=part)
+        part /= window
     head = np.arange(half)  # i < half: c[i - half + W] / (i - half + W)
     c_head = np.cumsum(x[:window])
     out[:half] = c_head[head - half + window - 1] / (head - half + window)
