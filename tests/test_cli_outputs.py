@@ -74,6 +74,23 @@ def test_an_output_named_as_a_folder_that_does_not_exist_is_refused_before_any_w
     assert sorted(os.listdir(tmp_path)) == ["in.csv"]
 
 
+def test_an_output_past_a_missing_folder_and_dotdot_is_refused_before_any_work(tmp_path, monkeypatch, capsys):
+    """``--json rel/../rel2/x.json`` with no ``rel``: the check read the path as written without
+    ``rel/..`` (it passed), the system does not (the analysis ran, then "No such file or directory")."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    monkeypatch.chdir(tmp_path)
+    write_recording("in.csv", Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
+    out = os.path.join("rel", "..", "rel2", "x.json")
+    assert main(["gap", "in.csv", "--json", out, "--sims", "2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"gyrofilter: error: {out}: the folder rel does not exist, so rel/.. does not name a folder"], err
+    assert sorted(os.listdir(tmp_path)) == ["in.csv"]
+    os.mkdir("rel")
+    outputs.check_outputs([out], [])  # with rel there, rel/.. is the folder
+
+
 def _read_only_folder(tmp_path, monkeypatch):
     """A folder this process cannot write: mode 0o555, and for root (whom the mode does not stop)
     ``os.access`` answering as the kernel would for any other user."""

@@ -207,6 +207,20 @@ def test_a_recording_without_a_sample_is_refused_and_not_left_behind(tmp_path, c
     assert os.listdir(tmp_path) == []
 
 
+def test_a_recording_without_a_sample_leaves_the_file_it_would_replace_as_it_was(tmp_path, capsys):
+    """``--recording-out OLD --force`` and a ``--duration`` shorter than a sample: nothing was
+    recorded, so the user's OLD is kept as it was (it was replaced by the header, then removed)."""
+    old = tmp_path / "old.csv"
+    old.write_text("precious\n")
+    out = tmp_path / "unit1.html"
+    assert main(["report", "--source", "sim", "--duration", "0.001", "--out", str(out),
+                 "--recording-out", str(old), "--force"]) == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last == (f"gyrofilter: error: sim: no sample was recorded in --duration 0.001 s, so there is nothing to "
+                    f"report; {old} is left as it was")
+    assert old.read_text() == "precious\n" and sorted(os.listdir(tmp_path)) == ["old.csv"]
+
+
 def test_a_paced_replay_source_records_its_first_seconds(tmp_path, capsys):
     """The real replay:FILE,realtime source: the recording kept is the file's first 20 s, sample for sample."""
     out, kept = tmp_path / "r.html", tmp_path / "first20.csv.gz"

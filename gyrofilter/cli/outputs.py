@@ -41,6 +41,7 @@ def check_outputs(outputs, inputs=(), force=False):
         if key in seen:
             raise SettingsError(f"{out}: named for two outputs; give each output its own file")
         seen.add(key)
+        _check_dotdot(out)
         parent = os.path.dirname(os.path.abspath(out))
         while not os.path.isdir(parent):
             if os.path.lexists(parent):
@@ -60,6 +61,18 @@ def check_outputs(outputs, inputs=(), force=False):
         if not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
         _replaceable.add(_identity(os.lstat(out)))
+
+
+def _check_dotdot(out):
+    """Refuse ``out`` when a ``..`` in it follows a folder that does not exist: ``abspath`` drops
+    ``missing/..``, the system does not (the file could not be written after the work)."""
+    parts = out.split(os.sep)
+    for i, part in enumerate(parts):
+        prefix = os.sep.join(parts[:i])
+        if part == ".." and prefix and not os.path.isdir(prefix):
+            if os.path.lexists(prefix):
+                raise SettingsError(f"{out}: {prefix} is a file, not a folder")
+            raise SettingsError(f"{out}: the folder {prefix} does not exist, so {prefix}{os.sep}.. does not name a folder")
 
 
 #: the files check_outputs let --force replace (:func:`_identity`): any other file found at an

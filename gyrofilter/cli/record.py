@@ -58,11 +58,12 @@ def run(args):
         source.close()
 
 
-def record(source, spec, out, duration_s, *, show_status, command="gyrofilter record"):
+def record(source, spec, out, duration_s, *, show_status, command="gyrofilter record", keep_empty=True):
     """Record the open ``source`` (opened from the SOURCE text ``spec``) to the recording ``out``
     until a stop signal, its end, a device failure or ``duration_s`` seconds (None: no limit),
     with a status line on stderr when ``show_status``; the summary goes to stderr, headed ``command``. Returns the
-    exit status: 0, or ``live.EXIT_DISCONNECTED`` when the device failed (what it gave is kept)."""
+    exit status: 0, or ``live.EXIT_DISCONNECTED`` when the device failed (what it gave is kept).
+    Without ``keep_empty`` a recording of no sample is not written (a file at ``out`` stays as it was)."""
     header = recording_header(source, spec)
     columns = list(source.columns)
     loop = live.LiveLoop(source, duration_s)
@@ -94,7 +95,7 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
     except BaseException as exc:
         live.close_after_failure(writer, exc, command)
         raise
-    left = writer.close(loop.failed())
+    left = writer.close(loop.failed() or (not keep_empty and loop.samples == 0))
     stats = source.stats
     print(
         f"{command}: {reason}\n"
