@@ -21,7 +21,9 @@ function each on a shared run (:class:`_GapRun`); the modules beside this one ho
    and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_from_highpassed`).
    Where the temperature and a shape in time (or a slow wander) explain a slow departure, both
    readings are simulated and the measured covariate is kept unless the other is clearly better
-   on D (:mod:`gyrofilter.analysis.gap_readings`); one as good is listed as ``alternatives``.
+   on D (:mod:`gyrofilter.analysis.gap_readings`); one as good is listed as ``alternatives``. A
+   bias instability and a Gauss-Markov wander that both fit are weighed the same way (the bias
+   instability, one parameter fewer, is named unless the Gauss-Markov is clearly better).
 4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
    better; about 1 when the model explains the measurement) is computed against the baseline's
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a
@@ -54,7 +56,7 @@ from .detectors import SLOW_EFFECTS
 from .gap_baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
                            temperature_table)
 from .gap_composite import composite_step, slow_wavelet_variance
-from .gap_readings import alternatives_entry, null_spread, weigh_readings
+from .gap_readings import alternatives_entry, null_spread, weigh_readings, weigh_wanders
 from .gap_features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                            features, still_departs, strongest)
 from .gap_intervals import add_intervals
@@ -110,6 +112,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
         _baseline_spread(run)       # 2.
         _detect(run)                # 3.
         weigh_readings(run)         # 3., covariate or time reading of a confounded temperature
+        weigh_wanders(run)          # 3., bias instability or Gauss-Markov
         _keep_findings(run)         # 4., gain per finding
         composite_step(run)         # 4., composite stochastic part where D stays high
         _write_findings(run)        # 5.

@@ -10,7 +10,9 @@ the colored noise and the bands), the model chosen by the WVIC (Guerrier et al. 
 :func:`gyrofilter.analysis.gmwm.select_model`), replaces the axis's slow stochastic findings (and its colored noise, if that is better without it); its N becomes
 the white level (the colored noise then keeps the long-tau level, ``preserve: arw``, and, if D
 is lower so, the per-sample variance too: :func:`_composite_lags`). The replacement is kept
-only if D falls below :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value.
+only if D falls below :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value
+and by more than the null spread of D (as two readings are weighed in
+:mod:`gyrofilter.analysis.gap_readings`: a smaller gain the record cannot vouch for).
 Where the axis has ``outliers`` the wavelet variance is the robust M-estimate
 (:mod:`gyrofilter.analysis.wv_robust`), so that spikes the outlier detector missed do not pull the
 fit; where it has ``heavy_tails`` the classical one, which is consistent for that noise (its tails
@@ -43,7 +45,10 @@ def composite_step(run):
     outside the null band (D above :data:`~gyrofilter.analysis.detectors.OUTSIDE_NULL_D`), a
     composite stochastic part (:func:`_composite_candidates`) replaces the axis's slow
     stochastic findings, and its colored noise if that is better without it, when D falls below
-    :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value."""
+    :data:`~gyrofilter.analysis.detectors.COMPOSITE_MIN_GAIN` times its value and by more than
+    the null spread of D, ``s = k max(s_ext, s_comp)`` of :mod:`gyrofilter.analysis.gap_readings`
+    (``s_ext``: of the axis's extended model; a gain within it is one the record cannot vouch for,
+    and the axis's findings have the fewer parameters)."""
     cands, notes = run.candidates, run.report["notes"]
     for i, a in enumerate(AXES):
         if run.after[i] <= det.OUTSIDE_NULL_D or run.wvs[i] is None:
@@ -52,6 +57,7 @@ def composite_step(run):
         fit, comp = _composite_candidates(run.wvs[i], run.sample_rate_hz)
         if not comp:
             continue
+        s_ext = run.null_spread(i, run.kept_on(i), f"extended model on {a}") if run.kept_on(i) else 0.0
         keep_k = [k for k, ci, c, _ in run.kept if ci == i and c.effect not in det.STOCHASTIC_MODELS]
         first = len(cands)
         cands.extend((i, c) for c in comp)
@@ -78,7 +84,8 @@ def composite_step(run):
                 cands[colored_k[0]][1].extra.pop("composite")
                 keep_k = [k for k in keep_k if k not in colored_k]
                 dropped_colored = True
-        if d_comp < det.COMPOSITE_MIN_GAIN * run.after[i]:
+        spread = det.CONFOUNDED_SPREADS * max(s_ext, run.null_spread(i, keep_k + comp_k, f"composite model on {a}"))
+        if d_comp < det.COMPOSITE_MIN_GAIN * run.after[i] and d_comp < run.after[i] - spread:
             if dropped_colored:  # said only where the composite model is used
                 notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the "
                              "correlation without it")
@@ -104,7 +111,8 @@ def composite_step(run):
             for k in keep_k:
                 cands[k][1].extra.pop("composite")
             notes.append(f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
-                         f"({run.after[i]:.3g} -> {d_comp:.3g}); not used")
+                         f"({run.after[i]:.3g} -> {d_comp:.3g}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times "
+                         f"its value and by more than the null spread of D, {spread:.2g}); not used")
 
 
 def slow_wavelet_variance(xc, sample_rate_hz, cands=()):

@@ -1,6 +1,7 @@
 """Confounded causes in the gap analysis (:mod:`gyrofilter.analysis.gap`, step 3, continued):
 which reading of a slow departure to name when the temperature and a shape in time (or a slow
-wander) explain it about equally.
+wander) explain it about equally, and which of two slow wanders, a bias instability or a
+Gauss-Markov (:func:`weigh_wanders`).
 
 Where a temperature is recorded and follows a warm-up itself, the slow detector
 (:func:`gyrofilter.analysis.detectors.detect_slow`) gives two readings of an axis: the
@@ -98,6 +99,53 @@ def weigh_readings(run):
         temp.evidence += (f"; the time reading {shown} explains this record about as well (D {d_time:.3g} against "
                           f"{d_cov:.3g}, within the null spread of D, {spread:.2g}): the temperature follows a "
                           f"warm-up itself, so this record cannot tell them apart. {WHY_THE_COVARIATE}")
+
+
+def weigh_wanders(run):
+    """Choose per axis between a bias instability and a Gauss-Markov wander where the slow
+    detector found both significant (:func:`gyrofilter.analysis.detectors.slow._with_wander_alternative`):
+    each is simulated with the axis's other findings and scored by D, as the readings of a
+    confounded temperature are (module docstring). A Gauss-Markov whose correlation time is
+    long against the record has a spectrum that falls like 1/f over the record's frequencies, so
+    the two can explain a record equally. The Gauss-Markov is named only where it is clearly
+    better (``D_gm < D_bi - s``); otherwise the bias instability, which has one parameter fewer,
+    and where the two are about equal the Gauss-Markov rides on it as ``extra["alternatives"]``.
+    The reading not chosen goes to ``run.excluded``."""
+    cands, notes = run.candidates, run.report["notes"]
+    for k in range(len(cands)):
+        i, c = cands[k]
+        alt = c.extra.pop("wander_alternative", None)
+        if alt is None or k in run.excluded:
+            continue
+        cands.append((i, alt))
+        k_alt = len(cands) - 1
+        a = AXES[i]
+        others = [j for j, (ci, _) in enumerate(cands) if ci == i and j not in (k, k_alt) and j not in run.excluded]
+        label = f"bias instability and Gauss-Markov readings on {a}"
+        run.say(label)
+        d = {c.effect: run.axis_discrepancy(i, others + [k], label),
+             alt.effect: run.axis_discrepancy(i, others + [k_alt], label)}
+        spread = det.CONFOUNDED_SPREADS * max(run.null_spread(i, others + [k], label),
+                                              run.null_spread(i, others + [k_alt], label))
+        bi, gm = ((k, c), (k_alt, alt)) if c.effect == "bias_instability" else ((k_alt, alt), (k, c))
+        d_bi, d_gm = d["bias_instability"], d["gauss_markov"]
+        weighed = (f"axis {a}: readings of the slow wander weighed on D: {_show(bi[1])} {d_bi:.3g}, {_show(gm[1])} "
+                   f"{d_gm:.3g}; about equal within {spread:.2g} ({det.CONFOUNDED_SPREADS:g} null spreads of D)")
+        if d_gm < d_bi - spread:
+            run.excluded.add(bi[0])
+            notes.append(weighed + ": the Gauss-Markov is clearly better, the bias instability is not named")
+            continue
+        run.excluded.add(gm[0])
+        if d_bi < d_gm - spread:
+            notes.append(weighed + ": the bias instability is clearly better, the Gauss-Markov is not listed")
+            continue
+        notes.append(weighed + ": the record cannot tell them apart; the bias instability is named (one parameter "
+                     "fewer), the Gauss-Markov listed as its alternative")
+        bi[1].extra["alternatives"] = [(gm[1], d_gm)]
+        bi[1].evidence += (f"; a Gauss-Markov wander {_show(gm[1])} explains this record about as well (D {d_gm:.3g} "
+                           f"against {d_bi:.3g}, within the null spread of D, {spread:.2g}): with a correlation "
+                           "time that long its spectrum falls like 1/f over this record's frequencies, so the "
+                           "record cannot tell them apart; the bias instability is named, with one parameter fewer")
 
 
 def _show(c):

@@ -114,8 +114,7 @@ def run(args):
         for f in found:
             print(f"    {f['effect']} ({gap_report.params_text(f)}); alone D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}")
             if f.get("alternatives"):
-                print(f"      indistinguishable in this record from {gap_report.alternatives_text(f['alternatives'])} "
-                      f"(within the null spread of D); {f['effect']} is named as the measured cause (see its evidence)")
+                print(f"      {gap_report.indistinguishable_text(f)}")
     for note in report.get("notes", []):
         print(f"  note: {note}")
     if d:

@@ -17,7 +17,7 @@ import json
 
 import numpy as np
 
-from ..analysis.gap_report import alternatives_text, covariate_preamble, evidence_text, params_text
+from ..analysis.gap_report import covariate_preamble, evidence_text, indistinguishable_text, params_text
 from ..analysis.noise_export import JSON_KEY, JSON_UNIT
 from ..analysis.noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
 from ..units import AXES
@@ -222,8 +222,7 @@ def _finding(f):
             + (" (95 % intervals in brackets)" if ci else "") + f". Gain: D {_esc(_num(f['gain']['before']))} -&gt; "
             f"{_esc(_num(f['gain']['after']))}.")
     if f.get("alternatives"):
-        text += (f"<br><b>Indistinguishable</b> in this record from {_esc(alternatives_text(f['alternatives']))} "
-                 f"(within the null spread of D); {_esc(f['effect'])} is named as the measured cause.")
+        text += f"<br>{_esc(indistinguishable_text(f))}."
     return text + f"<br><span class='small'>Evidence: {_esc(evidence_text(f))}.</span></li>"
 
 

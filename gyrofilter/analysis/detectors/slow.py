@@ -444,10 +444,12 @@ def _rw_or_gm(name, table, y, delta_s):
     means (at most 512), which keep the low-frequency information the detrended Whittle fit
     loses. Gauss-Markov needs ``EXACT_GM_MARGIN`` more than the random walk and a tau below a
     fifth of the record; on 30-minute and 10-minute test cases this told the two apart in 53
-    of 56 cases against 49 of 56 for the Whittle comparison. Other models pass through."""
+    of 56 cases against 49 of 56 for the Whittle comparison. A bias instability passes through.
+    A bias instability or Gauss-Markov candidate carries the other wander where that one is
+    significant too (:func:`_with_wander_alternative`)."""
     n = y.size
-    if name not in ("rate_random_walk", "gauss_markov"):
-        return _stochastic_candidate(name, table[name], delta_s, n)
+    if name == "bias_instability":
+        return _with_wander_alternative(_stochastic_candidate(name, table[name], delta_s, n), table, delta_s, n)
     group = max(1, int(math.ceil(n / 512)))
     m = n // group
     yg = y[: m * group].reshape(m, group).mean(axis=1)
@@ -456,8 +458,28 @@ def _rw_or_gm(name, table, y, delta_s):
     gm = exact["gauss_markov"]
     tau = _stochastic_params("gauss_markov", gm[1], delta_s * group)["tau_s"]
     if gm[0] - exact["rate_random_walk"][0] > EXACT_GM_MARGIN and tau < n * delta_s / GM_MAX_TAU_DIVISOR:
-        return _stochastic_candidate("gauss_markov", gm, delta_s * group, m)
+        return _with_wander_alternative(_stochastic_candidate("gauss_markov", gm, delta_s * group, m), table, delta_s, n)
     return _stochastic_candidate("rate_random_walk", table["rate_random_walk"], delta_s, n)
+
+
+#: the two stationary slow wanders whose spectra a record may not tell apart (1/f and a Lorentzian
+#: whose corner lies near the record's lowest frequencies)
+WANDERS = ("bias_instability", "gauss_markov")
+
+
+def _with_wander_alternative(cand, table, delta_s, n):
+    """``cand`` (a bias instability or a Gauss-Markov wander) with the other of :data:`WANDERS`
+    in ``extra["wander_alternative"]`` where that one is significant over white noise too (and,
+    a Gauss-Markov, with its tau below a fifth of the record): the gap analysis weighs the two
+    readings on D (:func:`gyrofilter.analysis.gap_readings.weigh_wanders`)."""
+    other = WANDERS[1 - WANDERS.index(cand.effect)]
+    two_dl, theta, _ = table[other]
+    if two_dl <= STOCHASTIC_THRESHOLD:
+        return cand
+    if other == "gauss_markov" and _stochastic_params(other, theta, delta_s)["tau_s"] >= n * delta_s / GM_MAX_TAU_DIVISOR:
+        return cand
+    cand.extra["wander_alternative"] = _stochastic_candidate(other, table[other], delta_s, n)
+    return cand
 
 
 def _stochastic_candidate(name, fit, delta_s, n):
