@@ -558,11 +558,11 @@ def gmwm_select():
     return fence(tool("gmwm_select.py"))
 
 
-@block("gap-confound", "docs/gap.md", "tools/gap_confound.py --seeds 1,2 --long-seeds 1", slow=True)
+@block("gap-confound", "docs/gap.md", "tools/gap_confound.py --seeds 1,2,3,4,5,6,7,8,9,10 --long-seeds 1", slow=True)
 def gap_confound():
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "confound.md")
-        tool("gap_confound.py", "--seeds", "1,2", "--long-seeds", "1", "--out", out)
+        tool("gap_confound.py", "--seeds", "1,2,3,4,5,6,7,8,9,10", "--long-seeds", "1", "--out", out)
         with open(out, encoding="utf-8") as fh:
             return fh.read().rstrip("\n")
 

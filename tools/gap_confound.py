@@ -7,7 +7,10 @@ temperature coefficient with its 95 % interval against the model's true one.
 
 Records: gyrofilter/data/mpu6050_model.json simulated for 1 h at 100 Hz (``--seeds``) and for
 24 h at 10 Hz (``--long-seeds``), each analysed by ``analyse_gap`` with the defaults (seed 0).
-The numbers are read from the report's notes ("readings weighed on D").
+The numbers are read from the report's notes ("readings weighed on D"). The last line counts the
+axes whose model has a bias instability: on how many it is named, and how the slow detector's
+two wanders were weighed (notes "readings of the slow wander weighed on D";
+``gyrofilter.analysis.gap_readings.weigh_wanders``).
 """
 import argparse
 import json
@@ -26,8 +29,11 @@ from gyrofilter.units import AXES  # noqa: E402
 WEIGHED = re.compile(r"axis (\w): readings weighed on D: with the temperature ([\d.e+-]+), in time \((.*)\) "
                      r"([\d.e+-]+); about equal within ([\d.e+-]+) .*?: (.*)$")
 
+WANDER = re.compile(r"axis (\w): readings of the slow wander weighed on D: .*: (the record cannot tell them apart|"
+                    r"the bias instability is clearly better|the Gauss-Markov is clearly better)")
 
-def rows(duration_s, sample_rate_hz, seed, model):
+
+def rows(duration_s, sample_rate_hz, seed, model, tally):
     model = dict(model, sample_rate_hz=sample_rate_hz)
     t0 = time.perf_counter()
     report = analyse_gap(simulate(model, duration_s, seed=seed), seed=0)
@@ -37,7 +43,14 @@ def rows(duration_s, sample_rate_hz, seed, model):
         m = WEIGHED.match(note)
         if m:
             weighed[m.group(1)] = m.groups()[1:]
+        m = WANDER.match(note)
+        if m:
+            tally[m.group(2)] = tally.get(m.group(2), 0) + 1
     for a in AXES:
+        if any(e["effect"] == "bias_instability" for e in model["axes"][a]["effects"]):
+            tally["axes"] = tally.get("axes", 0) + 1
+            tally["named"] = tally.get("named", 0) + any(f["axis"] == a and f["effect"] == "bias_instability"
+                                                         for f in report["findings"])
         named = ", ".join(f["effect"] + ("*" if f.get("alternatives") else "") for f in report["findings"] if f["axis"] == a)
         coef = next((_coefficient(f, model, a) for f in report["findings"]
                      if f["axis"] == a and f["effect"] == "temperature"), "-")
@@ -72,10 +85,17 @@ def main(argv=None):
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     runs = [(3600.0, 100.0, int(s)) for s in args.seeds.split(",") if s] + \
         [(86400.0, 10.0, int(s)) for s in args.long_seeds.split(",") if s]
+    tally = {}
     for duration_s, sample_rate_hz, seed in runs:
-        for row in rows(duration_s, sample_rate_hz, seed, model):
+        for row in rows(duration_s, sample_rate_hz, seed, model, tally):
             lines.append("| " + " | ".join(row) + " |")
             print(lines[-1], flush=True)
+    lines += ["", f"bias_instability named on {tally.get('named', 0)} of {tally.get('axes', 0)} axes that have it; the two "
+              "wanders weighed on D on " + str(sum(v for k, v in tally.items() if k not in ("axes", "named"))) + ": "
+              + ", ".join(f"{k} on {tally.get(k, 0)}" for k in ("the record cannot tell them apart",
+                                                                 "the bias instability is clearly better",
+                                                                 "the Gauss-Markov is clearly better")) + "."]
+    print(lines[-1], flush=True)
     if args.out:
         Path(args.out).write_text("\n".join(lines) + "\n", encoding="utf-8")
 
