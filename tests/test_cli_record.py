@@ -351,3 +351,20 @@ def test_a_recording_replaced_by_another_command_while_it_runs_is_told(tmp_path)
     with pytest.raises(FileExistsError, match="was replaced by another program while this command wrote it: its 10 samples"):
         writer.close(failed=False)
     assert len(read_recording(out)) == 3
+
+
+@pytest.mark.parametrize("old", [None, "precious\n"])
+def test_a_recording_without_a_sample_is_refused_and_leaves_no_file(tmp_path, capsys, old):
+    """``--duration`` shorter than one sample wrote a header alone and exited 0: a file no command
+    reads (they all say "no samples"). Now exit 2 with one line naming the source and the duration;
+    no file, or the one ``--force`` would have replaced left as it was."""
+    out = tmp_path / "r.csv"
+    if old is not None:
+        out.write_text(old)
+    args = ["record", "--source", "sim", "--duration", "0.001", "--out", str(out)] + (["--force"] if old else [])
+    assert main(args) == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    left = f"{out} is left as it was" if old else f"the empty {out} is not kept"
+    assert last == f"gyrofilter: error: sim: no sample was recorded in --duration 0.001 s; {left}"
+    assert os.listdir(tmp_path) == (["r.csv"] if old else [])
+    assert old is None or out.read_text() == old

@@ -80,14 +80,6 @@ def _check_dotdot(out):
 _replaceable = set()
 
 
-def identity(path):
-    """:func:`_identity` of the file at ``path`` (not following a link), or None when there is none."""
-    try:
-        return _identity(os.lstat(path))
-    except FileNotFoundError:
-        return None
-
-
 def _identity(st):
     """What tells one state of a file from another: device, inode (reused at once after a delete),
     modification time and size."""

@@ -12,10 +12,12 @@ as it was, so that the same command can be run again; a failed write (disk full,
 keeps the samples of the last flush, a file that reads, and exits with status 2 saying how many.
 The output is never one of the source's files, and overwrites only a regular file, only with --force.
 """
+import os
 import sys
 import time
 
 from .. import __version__
+from ..errors import SettingsError
 from ..recording import END_NOTE
 from . import live, options, outputs
 
@@ -58,12 +60,14 @@ def run(args):
         source.close()
 
 
-def record(source, spec, out, duration_s, *, show_status, command="gyrofilter record", keep_empty=True):
+def record(source, spec, out, duration_s, *, show_status, command="gyrofilter record"):
     """Record the open ``source`` (opened from the SOURCE text ``spec``) to the recording ``out``
     until a stop signal, its end, a device failure or ``duration_s`` seconds (None: no limit),
     with a status line on stderr when ``show_status``; the summary goes to stderr, headed ``command``. Returns the
     exit status: 0, or ``live.EXIT_DISCONNECTED`` when the device failed (what it gave is kept).
-    Without ``keep_empty`` a recording of no sample is not written (a file at ``out`` stays as it was)."""
+    A recording of no sample (a ``duration_s`` shorter than one, a source that ends at once) is
+    not written, a file at ``out`` (``--force``) stays as it was, and SettingsError says so: a
+    header without data is not a recording any command reads."""
     header = recording_header(source, spec)
     columns = list(source.columns)
     loop = live.LiveLoop(source, duration_s)
@@ -95,7 +99,13 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
     except BaseException as exc:
         live.close_after_failure(writer, exc, command)
         raise
-    left = writer.close(loop.failed() or (not keep_empty and loop.samples == 0))
+    existed = os.path.lexists(out)
+    empty = loop.samples == 0 and not loop.failed()
+    left = writer.close(loop.failed() or empty)
+    if empty:
+        within = f" in --duration {duration_s:g} s" if duration_s is not None else f" ({reason})"
+        raise SettingsError(f"{spec}: no sample was recorded{within}; "
+                            + (f"{out} is left as it was" if existed else f"the empty {out} is not kept"))
     stats = source.stats
     print(
         f"{command}: {reason}\n"

@@ -192,20 +192,14 @@ def _record_first(args, path, show):
     length = f"for {args.duration:g} s" if args.duration is not None else "until Ctrl-C"
     console.say(f"gyrofilter report: recording {args.source} {length} to {path}: keep the sensor still (do not touch "
                 "it or what it stands on); Ctrl-C ends the recording early")
-    before = outputs.identity(path)  # a file --force lets the recording replace: kept when nothing is recorded
     source = live.open_from_args(args)
-    try:
+    try:  # no sample recorded: record says so (SettingsError), and there is nothing to report
         status = record.record(source, args.source, path, args.duration, show_status=show,
-                               command="gyrofilter report: recording", keep_empty=False)
+                               command="gyrofilter report: recording")
     finally:
         source.close()
     if status:
         console.say(f"gyrofilter report: no report: the recording stopped on a device failure; what it holds is in "
                     f"{path} (gyrofilter report {path} --out {args.out})")
-        return status
-    if outputs.identity(path) in (None, before):  # no sample (a --duration shorter than one, a source that ended at once)
-        within = f" in --duration {args.duration:g} s" if args.duration is not None else ""
-        left = f"{path} is left as it was" if before else f"the empty {path} is not kept"
-        raise SettingsError(f"{args.source}: no sample was recorded{within}, so there is nothing to report; {left}")
-    return 0
+    return status
 
