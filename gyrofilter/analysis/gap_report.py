@@ -256,7 +256,7 @@ def write_report(report, rec, out_dir, *, seed=0):
             plot_temperature(g[:, i], temp, a, coef, os.path.join(out_dir, _figure("temperature", a)))
             lines += [f"![rate vs temperature {a}]({_figure('temperature', a)})", ""]
         slow = [f for f in fa if f["effect"] in _SHAPES]
-        alternatives = [e for f in fa for e in f.get("alternatives", [])]
+        alternatives = [e for f in fa for e in f.get("alternatives", []) if e["effect"] in _SHAPES]  # a wander has no shape
         if any(f["effect"] != "temperature" for f in slow) or alternatives:
             plot_time(g[:, i], sample_rate_hz, a, slow, os.path.join(out_dir, _figure("time", a)), temp=temp,
                       alternatives=alternatives)
