@@ -99,14 +99,15 @@ def test_example_model_names_temperature_with_the_warmup_as_alternative(tmp_path
 
 @pytest.mark.slow
 @pytest.mark.parametrize("duration_s, sample_rate_hz, seed",
-                         [(3600.0, 100.0, 1), (86400.0, 10.0, 1)] + [(3600.0, 10.0, s) for s in (11, 12, 13, 14)]
-                         + [(86400.0, 10.0, 21)])
+                         [(3600.0, 100.0, 1), (3600.0, 100.0, 3), (86400.0, 10.0, 1)]
+                         + [(3600.0, 10.0, s) for s in (11, 12, 13, 14)] + [(86400.0, 10.0, 21)])
 def test_drawn_example_models_name_temperature(duration_s, sample_rate_hz, seed):
-    model = EXAMPLE if seed == 1 else draw_example(seed)
-    if seed == 1:  # the example itself: z's settling is 12 B; its coefficient is checked on x and y only
-        model = copy.deepcopy(EXAMPLE)
+    # seeds below 10: the example itself (seed 3 at 100 Hz: x's composite fit lowered D by less than the
+    # extended model's null spread and named a 10-s Gauss-Markov term in place of the bias instability)
+    example = seed < 10
+    model = copy.deepcopy(EXAMPLE) if example else draw_example(seed)
     report = _example_case(model, duration_s, sample_rate_hz, seed)
-    if seed == 1:
+    if example:  # z's settling is 12 B; its coefficient is checked on x and y only
         z = next((f for f in report["findings"] if f["axis"] == "z" and f["effect"] == "temperature"), None)
         assert z is not None, report["findings"]
         model["axes"]["z"]["effects"][1]["coefficient_dps_per_c"] = z["params"]["coefficient_dps_per_c"]
