@@ -59,9 +59,9 @@ class Recorder:
         self._original = gi._interval
 
     def __enter__(self):
-        def recording(estimate, replicates, scale):
+        def recording(estimate, replicates, scale, *bounds):  # bounds: the parameter's domain, as the gap's
             self.calls.append((estimate, list(replicates), scale))
-            return self._original(estimate, replicates, scale)
+            return self._original(estimate, replicates, scale, *bounds)
 
         gi._interval = recording
         return self
