@@ -65,7 +65,10 @@ ones found, because the effects are confusable:
      shape must also beat the *exact* Kalman-filter likelihood of a random-walk and of a
      Gauss-Markov wander on the same (undetrended) block means, so a wander that happens to
      look like a ramp or a step is called a wander;
-   * with no shape, the best stochastic spectrum is reported if above its threshold;
+   * with no shape, the best stochastic spectrum is reported if above its threshold; a bias
+     instability or Gauss-Markov finding carries the other of the two where that one is
+     significant too, and the gap weighs the two on D (the bias instability, one parameter
+     fewer, unless the Gauss-Markov is clearly better: :func:`gyrofilter.analysis.gap_readings.weigh_wanders`);
    * where a temperature is recorded, the temperature coefficient is fitted first and the rules
      above run on what it leaves (``covariate``: the coefficient by generalised least squares
      under the residual's stochastic model, significant jointly with any time shape there); the
