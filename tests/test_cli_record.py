@@ -368,3 +368,64 @@ def test_a_recording_without_a_sample_is_refused_and_leaves_no_file(tmp_path, ca
     assert last == f"gyrofilter: error: sim: no sample was recorded in --duration 0.001 s; {left}"
     assert os.listdir(tmp_path) == (["r.csv"] if old else [])
     assert old is None or out.read_text() == old
+
+
+def _header_only_serial(out, *extra):
+    """``record`` in a subprocess on a real pseudo-terminal whose device sends its header (with
+    ``fields``, so the source opens) and then no sample. Returns the process and the terminal's end."""
+    primary, secondary = os.openpty()
+    port = os.ttyname(secondary)
+    proc = start_record(f"serial:{port},header_timeout=20", out, "--quiet", *extra)
+    assert os.read(primary, 1) == b"?"  # the port is open (and its input flushed): the source asks for the header
+    os.write(primary, b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 fields=counter,gx,gy,gz\n")
+    return proc, primary, port, secondary
+
+
+def test_a_stop_before_the_first_sample_says_what_stopped_it_not_the_duration(tmp_path):
+    """A --duration of 60 s that a SIGTERM ends before the device sent a sample said "no sample
+    was recorded in --duration 60 s", as if the duration had run out: the line names the stop."""
+    out = tmp_path / "r.csv"
+    proc, primary, port, secondary = _header_only_serial(out, "--duration", "60")
+    try:
+        time.sleep(1.0)  # a stop before the first sample, whenever it comes
+        proc.send_signal(signal.SIGTERM)
+        err = proc.communicate(timeout=30)[1]
+    finally:
+        os.close(primary)
+        os.close(secondary)
+    assert proc.returncode == 2, err
+    assert err.strip().splitlines() == [
+        f"gyrofilter: error: serial:{port},header_timeout=20: no sample was recorded (stopped by SIGTERM); the empty {out} is not kept"]
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_source_that_ends_at_once_is_named_as_the_cause_not_the_duration(tmp_path, capsys):
+    """A header-only recording replayed with --duration 10: the source ended, the duration did not."""
+    src = tmp_path / "header_only.csv"
+    src.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n")
+    out = tmp_path / "r.csv"
+    assert main(["record", "--source", str(src), "--duration", "10", "--out", str(out)]) == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last == (f"gyrofilter: error: {src}: no sample was recorded (source ended: end of {src} (0 samples)); "
+                    f"the empty {out} is not kept")
+    assert sorted(os.listdir(tmp_path)) == ["header_only.csv"]
+
+
+def test_no_sample_leaves_no_folder_the_recording_made(tmp_path, capsys):
+    """--out in folders that do not exist yet: record makes them for the file; when no file is
+    kept (no sample, or the device failing before the first) the folders it made go too, and
+    a folder that existed stays."""
+    (tmp_path / "had").mkdir()
+    assert main(["record", "--source", "sim", "--duration", "0.001", "--out", str(tmp_path / "new" / "sub" / "r.csv")]) == 2
+    assert main(["record", "--source", "sim", "--duration", "0.001", "--out", str(tmp_path / "had" / "sub" / "r.csv")]) == 2
+    assert sorted(os.listdir(tmp_path)) == ["had"] and os.listdir(tmp_path / "had") == []
+    out = tmp_path / "gone" / "r.csv"
+    proc, primary, port, secondary = _header_only_serial(out)
+    deadline = time.monotonic() + 30
+    while not out.parent.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)  # the source is open and the recording started
+    os.close(primary)  # the device goes away before its first sample
+    err = proc.communicate(timeout=30)[1]
+    os.close(secondary)
+    assert proc.returncode == 1 and f"{out}: not written, no sample was kept" in err, err
+    assert sorted(os.listdir(tmp_path)) == ["had"]

@@ -198,11 +198,11 @@ def test_source_records_first_then_reports(tmp_path, capsys):
 def test_a_recording_without_a_sample_is_refused_and_not_left_behind(tmp_path, capsys):
     """``--duration`` shorter than one sample recorded a header alone, kept it, and failed with the
     gap analysis's complaint about that file (issue 24's hostile pass): now one line naming the
-    source and the duration, and no file."""
-    out = tmp_path / "unit1.html"
+    source and the duration, and no file, nor the folder made for it (it stayed behind, empty)."""
+    out = tmp_path / "new" / "unit1.html"
     assert main(["report", "--source", "sim", "--duration", "0.001", "--out", str(out)]) == 2
     last = capsys.readouterr().err.strip().splitlines()[-1]
-    assert last == f"gyrofilter: error: sim: no sample was recorded in --duration 0.001 s; the empty {tmp_path / 'unit1.csv'} is not kept"
+    assert last == f"gyrofilter: error: sim: no sample was recorded in --duration 0.001 s; the empty {out.parent / 'unit1.csv'} is not kept"
     assert os.listdir(tmp_path) == []
 
 

@@ -21,6 +21,7 @@ from . import console, options, outputs
 STATUS_INTERVAL_S = 1.0
 FLUSH_INTERVAL_S = 0.5  # the --out recording is flushed at least this often: what a crash can lose
 EXIT_DISCONNECTED = 1
+DURATION_REACHED = "duration reached"  # LiveLoop.ended (and its reason) when --duration ran out
 
 
 def add_source_arguments(parser, required=True):
@@ -55,9 +56,9 @@ class LiveOutput:
     its own name (``os.replace``, atomic) at the first flush that holds a data row, or when the
     command ends without failing. So an interrupted recording reads under its name, and a file
     that exists (``--force``) is left as it was by any failure before the first row (a bad
-    source, a refused calibration, a device failing): the temporary file goes instead. A failed
-    write (disk full, file size limit) keeps the file as it was at its last flush, whole lines
-    that read (:class:`~gyrofilter.recording.RecordingWriter`). ``row_name``: what a data row
+    source, a refused calibration, a device failing): the temporary file goes instead, and the
+    folders made for it. A failed write (disk full, file size limit) keeps the file as it was at
+    its last flush, whole lines that read (:class:`~gyrofilter.recording.RecordingWriter`). ``row_name``: what a data row
     is, for the messages ("sample", "filtered row").
     """
 
@@ -65,17 +66,17 @@ class LiveOutput:
         self.path = path
         self.row_name = row_name
         self.published = False
-        folder = os.path.dirname(os.path.abspath(path))
-        os.makedirs(folder, exist_ok=True)
-        outputs.remove_stale_partials(folder)
+        self._folder = os.path.dirname(os.path.abspath(path))
+        self._made = outputs.make_folders(self._folder)  # removed again when no file is kept
+        outputs.remove_stale_partials(self._folder)
         self._tmp = outputs.partial_path(path)
         try:
             self._writer = RecordingWriter(self._tmp, header, columns, formats=formats, flush_interval_s=None, name=path)
         except OSError as exc:  # named by the user's name, not the temporary one
-            _remove(self._tmp)
+            self._discard()
             raise OSError(exc.errno, exc.strerror, path) from None
         except BaseException:
-            _remove(self._tmp)
+            self._discard()
             raise
 
     @property
@@ -109,18 +110,23 @@ class LiveOutput:
         kept = self._writer.rows_flushed
         if failed and not kept:
             if not self.published:
-                _remove(self._tmp)
+                self._discard()
                 return f"not written, no {self.row_name} was kept"
         elif not self.published:
             try:
                 self._publish()
             except BaseException:
-                _remove(self._tmp)
+                self._discard()
                 raise
         elif _inode(self.path) != self._inode:  # another command replaced it (--force): our rows went with it
             raise FileExistsError(17, f"was replaced by another program while this command wrote it: its "
                                       f"{kept} {self.row_name}s are not in it", self.path)
         return f"kept the first {kept} {self.row_name}s" if failed else ""
+
+    def _discard(self):
+        """Remove the temporary file, and the folders made for it (the file never took its name)."""
+        _remove(self._tmp)
+        outputs.remove_made_folders(self._folder, self._made)
 
 
 def _inode(path):
@@ -251,7 +257,7 @@ class LiveLoop:
         self.first_t = self.last_t = None
         self._t_end = None  # samples at t >= this are beyond the duration (half a sample of margin)
         self.samples = 0
-        self.ended = None  # SourceEnded, DeviceError or "duration reached"
+        self.ended = None  # SourceEnded, DeviceError or DURATION_REACHED
         self._signals = StopSignals()
 
     def __enter__(self):
@@ -285,9 +291,9 @@ class LiveLoop:
                 # when the next sample would be beyond it anyway, stop now instead of waiting for it
                 beyond = np.flatnonzero(t >= self._t_end)
                 if len(beyond):
-                    rows, self.ended = rows[: beyond[0]], "duration reached"
+                    rows, self.ended = rows[: beyond[0]], DURATION_REACHED
                 elif t[-1] + 1.0 / self.sample_rate_hz >= self._t_end:
-                    self.ended = "duration reached"
+                    self.ended = DURATION_REACHED
             if len(rows):
                 self.last_t = float(rows[-1, self.t_col])
                 self.samples += len(rows)

@@ -262,17 +262,40 @@ def _process_runs(pid):
     return True
 
 
-@contextlib.contextmanager
-def _folder(folder):
-    """Make ``folder`` and its missing parents; on a failure inside the block, remove what was
-    made. An existing folder first loses its stale partial files (:func:`remove_stale_partials`)."""
+def make_folders(folder):
+    """Make ``folder`` and its missing parents; returns the topmost one made (None when
+    ``folder`` existed), for :func:`remove_made_folders` or a clean-up of its own."""
     top = None
     parent = os.path.abspath(folder)
     while not os.path.isdir(parent):
         top, parent = parent, os.path.dirname(parent)
     if top is not None:
-        os.makedirs(folder)
-    else:
+        os.makedirs(folder, exist_ok=True)
+    return top
+
+
+def remove_made_folders(folder, top):
+    """Undo :func:`make_folders`: remove ``folder`` and its parents up to ``top`` (None: nothing
+    was made) while they are empty; a folder something else has put a file in stays."""
+    if top is None:
+        return
+    folder, top = os.path.abspath(folder), os.path.abspath(top)
+    while True:
+        try:
+            os.rmdir(folder)
+        except OSError:
+            return
+        if folder == top:
+            return
+        folder = os.path.dirname(folder)
+
+
+@contextlib.contextmanager
+def _folder(folder):
+    """Make ``folder`` and its missing parents; on a failure inside the block, remove what was
+    made. An existing folder first loses its stale partial files (:func:`remove_stale_partials`)."""
+    top = make_folders(folder)
+    if top is None:
         remove_stale_partials(folder)
     try:
         yield

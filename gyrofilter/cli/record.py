@@ -65,9 +65,10 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
     until a stop signal, its end, a device failure or ``duration_s`` seconds (None: no limit),
     with a status line on stderr when ``show_status``; the summary goes to stderr, headed ``command``. Returns the
     exit status: 0, or ``live.EXIT_DISCONNECTED`` when the device failed (what it gave is kept).
-    A recording of no sample (a ``duration_s`` shorter than one, a source that ends at once) is
-    not written, a file at ``out`` (``--force``) stays as it was, and SettingsError says so: a
-    header without data is not a recording any command reads."""
+    A recording of no sample (a ``duration_s`` shorter than one, a source that ends at once, a
+    stop signal before the first) is not written, a file at ``out`` (``--force``) stays as it
+    was, and SettingsError says so, naming the duration only where it ran out (else why the loop
+    stopped): a header without data is not a recording any command reads."""
     header = recording_header(source, spec)
     columns = list(source.columns)
     loop = live.LiveLoop(source, duration_s)
@@ -103,7 +104,7 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
     empty = loop.samples == 0 and not loop.failed()
     left = writer.close(loop.failed() or empty)
     if empty:
-        within = f" in --duration {duration_s:g} s" if duration_s is not None else f" ({reason})"
+        within = f" in --duration {duration_s:g} s" if loop.ended == live.DURATION_REACHED else f" ({reason})"
         raise SettingsError(f"{spec}: no sample was recorded{within}; "
                             + (f"{out} is left as it was" if existed else f"the empty {out} is not kept"))
     stats = source.stats
