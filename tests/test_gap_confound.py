@@ -269,3 +269,22 @@ def test_a_slow_settling_is_not_read_as_a_ramp_and_a_ramp_is_never_lost():
             f"seed {seed}: {first.effect} with alternative {alternative}"
         named += first.effect == "rate_ramp"
     assert named >= 15, f"only {named} of 30 ramps named as the reading"
+
+
+def test_a_wander_alternatives_evidence_gives_the_reason_that_holds_for_its_correlation_time():
+    """The evidence of a bias instability with a Gauss-Markov alternative said "with a correlation
+    time that long its spectrum falls like 1/f over this record's frequencies" of a 5.6-s wander in
+    a 655-s record (docs/gap.md): a Gauss-Markov spectrum is flat below its corner 1/(2 pi tau) and
+    falls like 1/f^2 above it (long against the record, a random walk's 1/f^2 throughout). The
+    evidence names the corner, which lies among the record's frequencies (tau below a fifth of
+    the record), and says the two spectra differ by less than the record shows."""
+    from gyrofilter.recording import read_recording
+    from support import RECORDINGS
+
+    report = analyse_gap(read_recording(RECORDINGS / "mpu6050_static_655s.csv.gz"), seed=0, bootstrap=0)
+    f = next(f for f in report["findings"] if f["effect"] == "bias_instability" and f.get("alternatives"))
+    tau = f["alternatives"][0]["params"]["tau_s"]
+    assert tau < report["duration_s"] / 5
+    assert "that long" not in f["evidence"] and "falls like 1/f over" not in f["evidence"]
+    corner = f"flat below its corner 1/(2 pi tau) = {1 / (2 * math.pi * tau):.2g} Hz and falling like 1/f^2 above it"
+    assert corner in f["evidence"], f["evidence"]

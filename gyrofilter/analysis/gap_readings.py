@@ -105,9 +105,12 @@ def weigh_wanders(run):
     """Choose per axis between a bias instability and a Gauss-Markov wander where the slow
     detector found both significant (:func:`gyrofilter.analysis.detectors.slow._with_wander_alternative`):
     each is simulated with the axis's other findings and scored by D, as the readings of a
-    confounded temperature are (module docstring). A Gauss-Markov whose correlation time is
-    long against the record has a spectrum that falls like 1/f over the record's frequencies, so
-    the two can explain a record equally. The Gauss-Markov is named only where it is clearly
+    confounded temperature are (module docstring). A Gauss-Markov spectrum is flat below its
+    corner ``1/(2 pi tau)`` and falls like 1/f^2 above it; with the corner among the record's
+    frequencies (tau below a fifth of the record) it bends across them about as a bias
+    instability's 1/f falls, and its Allan deviation, a broad hump near ``1.9 tau``, fits the
+    flat floor of a bias instability over a decade or two, so the two can explain a record
+    equally. The Gauss-Markov is named only where it is clearly
     better (``D_gm < D_bi - s``); otherwise the bias instability, which has one parameter fewer,
     and where the two are about equal the Gauss-Markov rides on it as ``extra["alternatives"]``.
     The reading not chosen goes to ``run.excluded``."""
@@ -142,10 +145,13 @@ def weigh_wanders(run):
         notes.append(weighed + ": the record cannot tell them apart; the bias instability is named (one parameter "
                      "fewer), the Gauss-Markov listed as its alternative")
         bi[1].extra["alternatives"] = [(gm[1], d_gm)]
-        bi[1].evidence += (f"; a Gauss-Markov wander {_show(gm[1])} explains this record about as well (D {d_gm:.3g} "
-                           f"against {d_bi:.3g}, within the null spread of D, {spread:.2g}): with a correlation "
-                           "time that long its spectrum falls like 1/f over this record's frequencies, so the "
-                           "record cannot tell them apart; the bias instability is named, with one parameter fewer")
+        corner_hz = 1.0 / (2.0 * np.pi * gm[1].params["tau_s"])
+        bi[1].evidence += (f"; the wander reading {_show(gm[1])} explains this record about as well (D {d_gm:.3g} "
+                           f"against {d_bi:.3g}, within the null spread of D, {spread:.2g}): its spectrum, flat "
+                           f"below its corner 1/(2 pi tau) = {corner_hz:.2g} Hz and falling like 1/f^2 above it, "
+                           "bends across this record's frequencies about as the 1/f of a bias instability falls, "
+                           "so the record cannot tell them apart; the bias instability is named, with one "
+                           "parameter fewer")
 
 
 def _show(c):
