@@ -147,7 +147,9 @@ def test_clipped_counts_samples_at_the_full_scale():
 def test_the_gap_section_says_why_the_covariate_is_named_once():
     """The trial's "wall of text": three temperature findings each ended their evidence with the
     same paragraph on why the covariate is named. The page says it once, above the findings; each
-    finding shows its alternative before its evidence; the notes are a list."""
+    finding shows its alternative before its evidence, and promises no figure of the readings (the
+    page draws none; the shared line said "the figure of the rate in time shows both readings");
+    the notes are a list."""
     from gyrofilter.analysis.gap_readings import WHY_THE_COVARIATE
     from gyrofilter.view.report import _gap
 
@@ -167,6 +169,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
         item = page[page.index(f"<b>temperature</b> on <b>{a}</b>"):]
         item = item[:item.index("</li>")]
         assert item.index("Indistinguishable") < item.index("Evidence:")
+        assert "figure" not in item  # the page's rate in time is the filter's trace: it shows no reading
         assert f"cannot tell them apart; baseline simulations: largest departure on {a}." in item
     assert "<h3>Notes</h3><ul><li>first note</li><li>second note</li></ul>" in page
 

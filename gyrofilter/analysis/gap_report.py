@@ -154,12 +154,13 @@ def evidence_text(finding):
     return finding["evidence"].replace(f". {WHY_THE_COVARIATE}", "")
 
 
-def indistinguishable_text(finding):
+def indistinguishable_text(finding, *, figure=False):
     """The line under a finding with ``alternatives`` (console, Markdown and HTML reports): the
     reading it cannot be told apart from, and that its evidence says why it is the one named (the
     measured covariate; of two wanders the one with fewer parameters); where the other reading
-    has a shape in time, that the figure of the rate in time shows both."""
-    shaped = any(e["effect"] in _SHAPES for e in finding["alternatives"])
+    has a shape in time and the caller draws it (``figure``: the Markdown report's rate in time),
+    that the figure shows both."""
+    shaped = figure and any(e["effect"] in _SHAPES for e in finding["alternatives"])
     return (f"Indistinguishable in this record from {alternatives_text(finding['alternatives'])} (D of the axis with it "
             f"instead, within the null spread of D); {finding['effect']} is named, its evidence says why"
             + ("; the figure of the rate in time shows both readings" if shaped else ""))
@@ -237,7 +238,7 @@ def write_report(report, rec, out_dir, *, seed=0):
         lines += [f"- **{f['effect']}** on **{f['axis']}**: {params_text(f, ' = ')}.",
                   f"  Gain: D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}."]
         if f.get("alternatives"):
-            lines.append(f"  {indistinguishable_text(f)}.")
+            lines.append(f"  {indistinguishable_text(f, figure=True)}.")
         lines.append(f"  Evidence: {evidence_text(f)}.")
     for note in report.get("notes", []):
         lines.append(f"- note: {note}")
