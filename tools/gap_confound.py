@@ -27,7 +27,7 @@ from gyrofilter.sim.simulate import simulate  # noqa: E402
 from gyrofilter.units import AXES  # noqa: E402
 
 WEIGHED = re.compile(r"axis (\w): readings weighed on D: with the temperature ([\d.e+-]+), in time \((.*)\) "
-                     r"([\d.e+-]+); about equal within ([\d.e+-]+) .*?: (.*)$")
+                     r"([\d.e+-]+); allowance ([\d.e+-]+) .*?: (.*)$")
 
 WANDER = re.compile(r"axis (\w): readings of the slow wander weighed on D: .*: (the record cannot tell them apart|"
                     r"the bias instability is clearly better|the Gauss-Markov is clearly better)")

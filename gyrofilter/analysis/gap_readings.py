@@ -48,6 +48,11 @@ def null_spread(sims, n):
     return float(np.std(d, ddof=1))
 
 
+#: why a finding with ``alternatives`` is the one named, by its effect (the reports' line under it:
+#: :func:`gyrofilter.analysis.gap_report.indistinguishable_text`)
+NAMED_BECAUSE = {"temperature": "it is measured and predicts the bias at the next power-up",
+                 "bias_instability": "it has one parameter fewer"}
+
 #: why the covariate is named where a reading in time explains a record as well (the end of such a
 #: temperature finding's evidence; the HTML report says it once for all its findings)
 WHY_THE_COVARIATE = ("The temperature is named because it is measured and predicts the bias at the next power-up; "
@@ -81,7 +86,7 @@ def weigh_readings(run):
                                               run.null_spread(i, others + time_ks, label))
         shown = " + ".join(_show(c) for c in reading["time"])
         weighed = (f"axis {a}: readings weighed on D: with the temperature {d_cov:.3g}, in time ({shown}) {d_time:.3g}; "
-                   f"about equal within {spread:.2g} ({det.CONFOUNDED_SPREADS:g} null spreads of D)")
+                   f"allowance {spread:.2g} ({det.CONFOUNDED_SPREADS:g} null spreads of D)")
         if d_time < d_cov - spread:
             run.excluded.update(cov_ks)
             run.ext_axes[a], run.wvs[i] = reading["ext_axis"], reading["wv"]
@@ -133,7 +138,7 @@ def weigh_wanders(run):
         bi, gm = ((k, c), (k_alt, alt)) if c.effect == "bias_instability" else ((k_alt, alt), (k, c))
         d_bi, d_gm = d["bias_instability"], d["gauss_markov"]
         weighed = (f"axis {a}: readings of the slow wander weighed on D: {_show(bi[1])} {d_bi:.3g}, {_show(gm[1])} "
-                   f"{d_gm:.3g}; about equal within {spread:.2g} ({det.CONFOUNDED_SPREADS:g} null spreads of D)")
+                   f"{d_gm:.3g}; allowance {spread:.2g} ({det.CONFOUNDED_SPREADS:g} null spreads of D)")
         if d_gm < d_bi - spread:
             run.excluded.add(bi[0])
             notes.append(weighed + ": the Gauss-Markov is clearly better, the bias instability is not named")

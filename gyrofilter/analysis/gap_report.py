@@ -23,7 +23,7 @@ import numpy as np
 
 from ..plots import pyplot
 from ..units import AXES, utf8_text
-from .gap_readings import WHY_THE_COVARIATE
+from .gap_readings import NAMED_BECAUSE, WHY_THE_COVARIATE
 
 REPORT_NAME = "gap_report.md"
 FIGURE_KINDS = ("adev", "spectrum", "temperature", "time")
@@ -156,13 +156,14 @@ def evidence_text(finding):
 
 def indistinguishable_text(finding, *, figure=False):
     """The line under a finding with ``alternatives`` (console, Markdown and HTML reports): the
-    reading it cannot be told apart from, and that its evidence says why it is the one named (the
-    measured covariate; of two wanders the one with fewer parameters); where the other reading
-    has a shape in time and the caller draws it (``figure``: the Markdown report's rate in time),
-    that the figure shows both."""
+    reading it cannot be told apart from, and why it is the one named
+    (:data:`~gyrofilter.analysis.gap_readings.NAMED_BECAUSE`: the measured covariate; of two
+    wanders the one with fewer parameters); where the other reading has a shape in time and the
+    caller draws it (``figure``: the Markdown report's rate in time), that the figure shows both."""
     shaped = figure and any(e["effect"] in _SHAPES for e in finding["alternatives"])
+    why = NAMED_BECAUSE.get(finding["effect"])
     return (f"Indistinguishable in this record from {alternatives_text(finding['alternatives'])} (D of the axis with it "
-            f"instead, within the null spread of D); {finding['effect']} is named, its evidence says why"
+            f"instead, within the null spread of D); {finding['effect']} is named" + (f": {why}" if why else "")
             + ("; the figure of the rate in time shows both readings" if shaped else ""))
 
 
