@@ -66,7 +66,7 @@ class LiveOutput:
         self.path = path
         self.row_name = row_name
         self.published = False
-        self._folder = os.path.dirname(os.path.abspath(path))
+        self._folder = outputs.output_folder(path)
         self._made = outputs.make_folders(self._folder)  # removed again when no file is kept
         outputs.remove_stale_partials(self._folder)
         self._tmp = outputs.partial_path(path)

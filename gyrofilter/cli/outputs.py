@@ -42,7 +42,7 @@ def check_outputs(outputs, inputs=(), force=False):
             raise SettingsError(f"{out}: named for two outputs; give each output its own file")
         seen.add(key)
         _check_dotdot(out)
-        parent = os.path.dirname(os.path.abspath(out))
+        parent = output_folder(out)
         while not os.path.isdir(parent):
             if os.path.lexists(parent):
                 raise SettingsError(f"{out}: {parent} is a file, not a folder")
@@ -203,13 +203,20 @@ def _naming(tmp, path):
         raise
 
 
+def output_folder(path):
+    """The folder the system writes ``path`` into: its folder part resolved as the system resolves
+    it, a symbolic link before a ``..`` followed first (``link/..`` is the link target's parent;
+    ``abspath`` would drop both), so that a temporary file made there is renamed within one
+    file system."""
+    return os.path.realpath(os.path.dirname(path) or os.curdir)
+
+
 def partial_path(path):
     """The temporary name beside ``path`` under which a file is written until it may take its
     own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
     extension, by which writers choose the format, is kept. A process killed before the rename
     leaves it behind; :func:`remove_stale_partials` removes it later."""
-    folder, name = os.path.split(os.path.abspath(path))
-    return os.path.join(folder, f"{_PARTIAL_PREFIX}{_OWNER}-{name}")
+    return os.path.join(output_folder(path), f"{_PARTIAL_PREFIX}{_OWNER}-{os.path.basename(path)}")
 
 
 _PARTIAL_PREFIX = ".partial-"
