@@ -29,8 +29,10 @@ from gyrofilter.units import AXES  # noqa: E402
 WEIGHED = re.compile(r"axis (\w): readings weighed on D: with the temperature ([\d.e+-]+), in time \((.*)\) "
                      r"([\d.e+-]+); allowance ([\d.e+-]+) .*?: (.*)$")
 
-WANDER = re.compile(r"axis (\w): readings of the slow wander weighed on D: .*: (the record cannot tell them apart|"
-                    r"the bias instability is clearly better|the Gauss-Markov is clearly better)")
+#: the verdicts of gap_readings.weigh_wanders' notes
+VERDICTS = ("the record cannot tell them apart", "the bias instability is clearly better",
+            "the Gauss-Markov is clearly better")
+WANDER = re.compile(r"axis (\w): readings of the slow wander weighed on D: .*: (" + "|".join(VERDICTS) + ")")
 
 
 def rows(duration_s, sample_rate_hz, seed, model, tally):
@@ -91,10 +93,8 @@ def main(argv=None):
             lines.append("| " + " | ".join(row) + " |")
             print(lines[-1], flush=True)
     lines += ["", f"bias_instability named on {tally.get('named', 0)} of {tally.get('axes', 0)} axes that have it; the two "
-              "wanders weighed on D on " + str(sum(v for k, v in tally.items() if k not in ("axes", "named"))) + ": "
-              + ", ".join(f"{k} on {tally.get(k, 0)}" for k in ("the record cannot tell them apart",
-                                                                 "the bias instability is clearly better",
-                                                                 "the Gauss-Markov is clearly better")) + "."]
+              f"wanders weighed on D on {sum(tally.get(v, 0) for v in VERDICTS)}: "
+              + ", ".join(f"{v} on {tally.get(v, 0)}" for v in VERDICTS) + "."]
     print(lines[-1], flush=True)
     if args.out:
         Path(args.out).write_text("\n".join(lines) + "\n", encoding="utf-8")

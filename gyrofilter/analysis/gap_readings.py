@@ -55,7 +55,7 @@ NAMED_BECAUSE = {"temperature": "it is measured and predicts the bias at the nex
 
 #: why the covariate is named where a reading in time explains a record as well (the end of such a
 #: temperature finding's evidence; the HTML report says it once for all its findings)
-WHY_THE_COVARIATE = ("The temperature is named because it is measured and predicts the bias at the next power-up; "
+WHY_THE_COVARIATE = (f"The temperature is named because {NAMED_BECAUSE['temperature']}; "
                      "read in time, the bias would settle the same way after every power-on whatever the temperature "
                      "does, and a record where the temperature moves without a power-up (heating, a cold start) tells "
                      "them apart")
@@ -131,12 +131,11 @@ def weigh_wanders(run):
         others = [j for j, (ci, _) in enumerate(cands) if ci == i and j not in (k, k_alt) and j not in run.excluded]
         label = f"bias instability and Gauss-Markov readings on {a}"
         run.say(label)
-        d = {c.effect: run.axis_discrepancy(i, others + [k], label),
-             alt.effect: run.axis_discrepancy(i, others + [k_alt], label)}
-        spread = det.CONFOUNDED_SPREADS * max(run.null_spread(i, others + [k], label),
-                                              run.null_spread(i, others + [k_alt], label))
         bi, gm = ((k, c), (k_alt, alt)) if c.effect == "bias_instability" else ((k_alt, alt), (k, c))
-        d_bi, d_gm = d["bias_instability"], d["gauss_markov"]
+        d_bi = run.axis_discrepancy(i, others + [bi[0]], label)
+        d_gm = run.axis_discrepancy(i, others + [gm[0]], label)
+        spread = det.CONFOUNDED_SPREADS * max(run.null_spread(i, others + [bi[0]], label),
+                                              run.null_spread(i, others + [gm[0]], label))
         weighed = (f"axis {a}: readings of the slow wander weighed on D: {_show(bi[1])} {d_bi:.3g}, {_show(gm[1])} "
                    f"{d_gm:.3g}; allowance {spread:.2g} ({det.CONFOUNDED_SPREADS:g} null spreads of D)")
         if d_gm < d_bi - spread:
