@@ -622,3 +622,39 @@ def test_cli_warns_that_lost_samples_make_the_analysis_not_meaningful(tmp_path, 
     err = capsys.readouterr().err
     assert f"gyrofilter: warning: {path}: t shows 59 gap(s) longer than 1.5 sample intervals; the gap analysis" in err
     assert read_recording(path).t_gaps == 59
+
+
+#: the last commit before issue 24 (version 0.2.0): docs/gap.md compares the harder battery with it
+REGRESSION_BASE = "c82287b"
+
+
+def _git(*args):
+    return subprocess.run(["git", "-C", str(REPO), *args], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+
+
+def test_the_regression_tool_runs_each_revision_on_the_same_recordings(capsys, tmp_path):
+    """tools/gap_regression.py: the earlier revision is its own tree (a simulator without
+    heavy_tails, whose cases are then left out), and against HEAD, with the package unchanged since
+    HEAD, the two columns agree case by case; the exact McNemar p of known splits."""
+    from support import tool
+
+    regression = tool("gap_regression")
+    assert regression.mcnemar_p(8, 0) == 2 / 256
+    assert regression.mcnemar_p(1, 5) == 2 * 7 / 64
+    assert regression.mcnemar_p(3, 3) == 1.0 and regression.mcnemar_p(0, 0) == 1.0
+    try:
+        have_base = _git("cat-file", "-e", REGRESSION_BASE + "^{commit}").returncode == 0
+    except OSError:
+        pytest.skip("no git")
+    if not have_base:
+        pytest.skip(f"not a git checkout with {REGRESSION_BASE}")
+    known = regression.known_effects(regression.export(REGRESSION_BASE, str(tmp_path)))
+    assert "bias_instability" in known and "none" in known and "heavy_tails" not in known
+    if _git("status", "--porcelain", "gyrofilter").stdout.strip():
+        pytest.skip("the package differs from HEAD")
+    regression.main(["--rev", "HEAD", "--cases", "3", "--duration", "300", "--sims", "6", "-v"])
+    out = capsys.readouterr().out
+    rows = [line.split() for line in out.splitlines() if line.split()[:1] and line.split()[0] in he.EFFECTS]
+    assert [r[0] for r in rows] == list(he.EFFECTS[:3])
+    assert all(r[2] == r[3] for r in rows), out
+    assert "paired: 0 case(s) gained, 0 lost" in out and "  case " not in out

@@ -517,6 +517,13 @@ def gap_battery_harder():
     return _battery("--cases", "72", "--duration", "600", "--scale", "0.3333", "--sims", "12", "--seed", "4000")
 
 
+@block("gap-regression-harder", "docs/gap.md",
+       "tools/gap_regression.py (the harder battery, paired against the last commit before issue 24)", slow=True)
+def gap_regression_harder():
+    return fence(tool("gap_regression.py", "--rev", "c82287b", "--cases", "216", "--duration", "600", "--scale", "0.3333",
+                      "--seed", "14000", "-v"))
+
+
 @block("gap-battery-clean-10min", "docs/gap.md", "tools/gap_battery.py (clean 10-minute records)", slow=True)
 def gap_battery_clean_10min():
     return _battery("--cases", "40", "--duration", "600", "--effects", "none", "--sims", "12", "--seed", "6000")

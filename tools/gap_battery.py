@@ -27,18 +27,26 @@ import gyrofilter.sim.hidden_effects as he
 
 
 
+def battery_cases(cases, seed, *, effects=None, duration_s=None, scale=1.0):
+    """The battery's cases, ``(seed + k, case)`` for k < ``cases``: the effect kinds (``effects``,
+    comma-separated; default every effect of the table and ``none``) cycled, so each is drawn
+    equally often."""
+    kinds = effects.split(",") if effects else list(he.EFFECTS) + ["none"]
+    for k in range(cases):
+        yield seed + k, he.draw_case(seed + k, effect=kinds[k % len(kinds)], duration_s=duration_s, scale=scale)
+
+
 def run_synthetic(args):
     from gyrofilter.analysis.gap import analyse_gap
 
     rows = []
-    kinds = args.effects.split(",") if args.effects else list(he.EFFECTS) + ["none"]
     t_all = time.perf_counter()
-    for k in range(args.cases):
-        effect = kinds[k % len(kinds)]
-        case = he.draw_case(args.seed + k, effect=effect, duration_s=args.duration, scale=args.scale)
+    for seed, case in battery_cases(args.cases, args.seed, effects=args.effects, duration_s=args.duration,
+                                    scale=args.scale):
+        effect = case["effect"]
         rec = he.simulate_case(case)
         t0 = time.perf_counter()
-        rep = analyse_gap(rec, seed=args.seed + k, n_sims=args.sims)
+        rep = analyse_gap(rec, seed=seed, n_sims=args.sims)
         dt = time.perf_counter() - t0
         named, ok, others = he.check(case, rep)
         rows.append((case, named, ok, others, dt))
@@ -46,7 +54,7 @@ def run_synthetic(args):
             got = "; ".join(f"{f['axis']}:{f['effect']} " + ", ".join(f"{a}={v:.3g}" for a, v in f["params"].items())
                             for f in rep["findings"])
             true = ", ".join(f"{a}={v:.3g}" for a, v in case["params"].items())
-            print(f"case {args.seed + k:4d} {effect:17s} {case['axis'] or '-'} {true:55s} -> "
+            print(f"case {seed:4d} {effect:17s} {case['axis'] or '-'} {true:55s} -> "
                   f"{'OK ' if ok else ('nam' if named else '---')} [{got}] {dt:.1f}s", flush=True)
     summarise(rows, time.perf_counter() - t_all)
 
