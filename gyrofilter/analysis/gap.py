@@ -53,8 +53,8 @@ import numpy as np
 
 from . import detectors as det
 from .detectors import SLOW_EFFECTS
-from .gap_baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
-                           temperature_table)
+from .gap_baseline import (WANDERS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
+                           temperature_table, wander_highpassed, white_less_wanders)
 from .gap_composite import composite_step, slow_wavelet_variance
 from .gap_readings import alternatives_entry, null_spread, weigh_readings, weigh_wanders
 from .gap_features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
@@ -187,6 +187,10 @@ class _GapRun:
         spec = dict(self.composite_axes[a] if composite else self.alt_axes[a] if time_reading else self.ext_axes[a])
         spec["bias_dps"] = start_bias(spec["bias_dps"], cands, self.n / self.sample_rate_hz)
         spec["effects"] = [effect_entry(c, preserve="arw" if composite else "std") for c in cands]
+        if not composite:  # the white level was measured with the wanders' high-frequency part in it
+            spec["arw_dps_per_sqrt_hz"] = white_less_wanders(spec["arw_dps_per_sqrt_hz"], spec["effects"],
+                                                             [c for ci, c in self.candidates if ci == i], self.n,
+                                                             self.sample_rate_hz)
         if composite and self.resolved_lags[i]:
             for entry in spec["effects"]:
                 if entry["effect"] == "colored_noise":
@@ -318,10 +322,17 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     band = det.detect_narrowband(x, sample_rate_hz)
     if band is not None:
         cands.append(band)
-    c = det.detect_colored(x, sample_rate_hz, band)
-    if c is not None:
-        cands.append(c)
+    colored = det.detect_colored(x, sample_rate_hz, band)
     slow, _ = det.detect_slow(x, sample_rate_hz, temp)
+    wander = next((s for s in slow if s.effect in WANDERS), None)
+    if colored is not None and wander is not None:  # the wander's high-frequency part is correlated too
+        colored = det.detect_colored(x, sample_rate_hz, band,
+                                     wander_highpassed(effect_entry(wander), sample_rate_hz, x.size))
+        if colored is None and notes is not None:
+            notes.append(f"axis {axis}: the lag-1 correlation is the {wander.effect}'s own (its high-frequency part); "
+                         "no colored noise")
+    if colored is not None:
+        cands.append(colored)
     cands.extend(slow)
     alt = slow[0].extra.pop("alternative", None) if slow else None
     if alt is not None:

@@ -15,6 +15,7 @@ the white noise's variance, which the effect keeps); a finding enters the model 
 """
 from __future__ import annotations
 
+import functools
 import math
 import time
 
@@ -123,6 +124,57 @@ def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
     spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(sample_rate_hz))
     spec["bias_dps"] = float(np.mean(xc))
     return spec
+
+
+#: the stochastic wanders: their high-frequency power is also in the high-passed series that
+#: the white level and the lag-1 are measured on (:func:`wander_highpassed`)
+WANDERS = ("bias_instability", "gauss_markov", "rate_random_walk")
+#: samples of the wander simulated alone by :func:`wander_highpassed` (the high-pass keeps
+#: scales below a window of 64 samples or 0.5 s, so a stretch of this length holds thousands)
+WANDER_SAMPLES = 1 << 18
+
+
+def wander_highpassed(entry, sample_rate_hz, n):
+    """``(v, r1, r2)``: the per-sample variance that the high-pass of :func:`noise_sigma`
+    (``x - moving_mean(x, W)``, W = :func:`~gyrofilter.analysis.detectors.colored_window` of
+    ``n``) keeps of the wander ``entry`` (an effect-table entry of :data:`WANDERS`) alone, and
+    its lag-1 and lag-2 autocorrelations there. A bias instability's 1/f spectrum reaches the
+    highest frequencies: at 10 Hz with B = 0.008 and N = 0.0057 deg/s/sqrt(Hz) it is 18 % of
+    the high-passed variance (2 % at 100 Hz), which the white level would otherwise take for its
+    own, with a lag-1 of 0.65 that the colored detector would take for a colored noise's. The wander is simulated alone (no
+    white noise, no bias, no quantization; seed 0) over min(n, :data:`WANDER_SAMPLES`) samples."""
+    return _wander_highpassed(tuple(sorted((k, v) for k, v in entry.items())), float(sample_rate_hz), int(n))
+
+
+@functools.lru_cache(maxsize=64)
+def _wander_highpassed(items, sample_rate_hz, n):
+    zero = {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []}
+    spec, _ = validate_model({"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",
+                              "axes": {"x": dict(zero, effects=[dict(items)]), "y": dict(zero), "z": dict(zero)}})
+    m = min(n, WANDER_SAMPLES)
+    e = _simulate_axis(spec, m, sample_rate_hz, 0, 0)
+    e -= det.moving_mean(e, det.colored_window(n, sample_rate_hz))
+    e -= e.mean()
+    v = float(det.dot(e, e))
+    return (v / m, float(det.dot(e[1:], e[:-1])) / v, float(det.dot(e[2:], e[:-2])) / v) if v > 0 else (0.0, 0.0, 0.0)
+
+
+def white_less_wanders(arw_dps_per_sqrt_hz, entries, cands, n, sample_rate_hz):
+    """The white level of a model holding the effect entries ``entries`` when ``arw`` was
+    measured on the high-passed series (:func:`extended_axis`, with the axis's candidates
+    ``cands``): less what the wanders among them put there,
+    ``N'^2 f_s = N^2 f_s - g sum v_w`` (``v_w`` of :func:`wander_highpassed`; ``g`` the scaling
+    of that variance to the white level: ``1 / (1 - 1/W)``, or ``1 / (1 - c)`` under a colored
+    noise, whose correction :func:`extended_axis` made), at least a twentieth of the variance."""
+    v = sum(wander_highpassed(e, sample_rate_hz, n)[0] for e in entries if e["effect"] in WANDERS)
+    if not v > 0:
+        return arw_dps_per_sqrt_hz
+    w = det.colored_window(n, sample_rate_hz)
+    colored = next((c for c in cands if c.effect == "colored_noise"), None)
+    g = (1.0 / (1.0 - min(det.long_run_ratio(colored.params["lag1"], colored.params.get("lag2")) / w, 0.9))
+         if colored is not None else 1.0 / max(1.0 - 1.0 / w, 0.5))
+    s2 = arw_dps_per_sqrt_hz ** 2 * sample_rate_hz
+    return float(math.sqrt(max(s2 - g * v, 0.05 * s2) / sample_rate_hz))
 
 
 def start_bias(mean_bias_dps, cands, duration_s):

@@ -54,7 +54,7 @@ from .detectors.covariate import temperature_first
 from .detectors.slow import _deterministic_candidate, _deterministic_shapes, _stochastic_params
 from .detectors.tails import tail_fits, tail_residual, tail_step
 from .detectors.sinusoid import _dft_amplitude
-from .gap_baseline import extended_axis
+from .gap_baseline import WANDERS, effect_entry, extended_axis, wander_highpassed
 from .gap_composite import COMPOSITE_TERMS, _composite_lags, slow_wavelet_variance
 
 #: the slow deterministic shapes of :func:`gyrofilter.analysis.detectors.detect_slow`
@@ -97,7 +97,9 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
         out[by["narrowband"][0]] = band
     if "colored_noise" in by:
         k = by["colored_noise"][0]
-        out[k] = _colored(x, sample_rate_hz, "lag2" in cands[k].params, band)
+        wander = next((c for c in cands if c.effect in WANDERS and not c.extra.get("composite")), None)
+        out[k] = _colored(x, sample_rate_hz, "lag2" in cands[k].params, band,
+                          None if wander is None else wander_highpassed(effect_entry(wander), sample_rate_hz, x.size))
     slow_det = [k for name in DETERMINISTIC for k in by.get(name, [])]
     slow_sto = [k for name in det.STOCHASTIC_MODELS for k in by.get(name, [])]
     if slow_det or slow_sto:
@@ -141,19 +143,19 @@ def _sinusoid(x, sample_rate_hz, f_hz):
     return {"frequency_hz": f, "amplitude_dps": amplitude, "phase_rad": phase}, fit
 
 
-def _colored(x, sample_rate_hz, with_lag2, band):
+def _colored(x, sample_rate_hz, with_lag2, band, wander=None):
     """The colored noise's lags as :func:`~gyrofilter.analysis.detectors.detect_colored` computes
-    them, on the parametrisation of the finding (``with_lag2``), without its thresholds."""
+    them, on the parametrisation of the finding (``with_lag2``), without its thresholds (less
+    the correlation of the finding's wander, ``wander`` = its ``(v, r1, r2)``)."""
     n = x.size
     e, w = det.highpassed(x, sample_rate_hz)
     den = float(det.dot(e, e))
     if not den > 0:
         return None
     r1, r2 = float(det.dot(e[1:], e[:-1]) / den), float(det.dot(e[2:], e[:-2]) / den)
-    band_lags, band_share = None, 0.0
-    if band is not None:
-        band_lags = det.narrowband_lags(band["center_hz"], band["bandwidth_hz"], sample_rate_hz)
-        band_share = band["rms_dps"] ** 2 / (den / n)
+    band_lags = None if band is None else det.narrowband_lags(band["center_hz"], band["bandwidth_hz"], sample_rate_hz)
+    band_lags, band_share = det.other_correlation(den / n, band_lags, band["rms_dps"] ** 2 if band is not None else 0.0,
+                                                  wander)
     lags = det.lags_from_highpassed(r1, r2 if with_lag2 else None, w, band_lags, band_share)
     if lags is None:
         return None

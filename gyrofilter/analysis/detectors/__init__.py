@@ -149,6 +149,7 @@ from .colored import (  # noqa: F401
     highpassed,
     lag1_statistic,
     lags_from_highpassed,
+    other_correlation,
     long_run_ratio,
 )
 from .slow import (  # noqa: F401

@@ -78,10 +78,31 @@ def lags_from_highpassed(r1, r2, window, band_lags=None, band_share=0.0):
     return rho1, rho2
 
 
-def detect_colored(x, sample_rate_hz, band=None):
+def other_correlation(var_per_sample, band_lags=None, band_var=0.0, wander=None):
+    """``(lags, share)`` of the correlated parts of the high-passed series that are not the
+    colored noise, for :func:`lags_from_highpassed`: a narrow band (its ``(r_L1, r_L2)`` and
+    variance ``band_var``) and a wander's high-frequency part (``wander`` = its ``(v, r1, r2)``,
+    :func:`gyrofilter.analysis.gap_baseline.wander_highpassed`), variance-weighted:
+    ``r_k = sum_j r_jk v_j / sum_j v_j``, ``share = sum_j v_j / V`` (V = ``var_per_sample``,
+    the series' variance). ``(None, 0.0)`` without either."""
+    parts = []
+    if band_lags is not None:
+        parts.append((band_lags[0], band_lags[1], band_var))
+    if wander is not None:
+        parts.append((wander[1], wander[2], wander[0]))
+    total = sum(v for _, _, v in parts)
+    if not total > 0 or not var_per_sample > 0:
+        return None, 0.0
+    return (sum(r1 * v for r1, _, v in parts) / total, sum(r2 * v for _, r2, v in parts) / total), total / var_per_sample
+
+
+def detect_colored(x, sample_rate_hz, band=None, wander=None):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
     pass) from the high-passed r1, r2, less the correlation of a ``narrowband`` candidate
-    ``band`` still in ``x`` (:func:`lags_from_highpassed`).
+    ``band`` still in ``x`` and of a wander's high-frequency part (``wander``: its ``(v, r1, r2)``
+    in the high-passed series, :func:`gyrofilter.analysis.gap_baseline.wander_highpassed`)
+    (:func:`lags_from_highpassed`, :func:`other_correlation`). With a wander the significance is
+    that of the correlation it leaves.
 
     ``lag2`` is reported when it falls below ``lag1²``, the AR(1)'s, by :data:`COLORED_Z`
     standard errors, sqrt((1 + 2ρ² - 3ρ⁴) / N) (Bartlett's variance of r₂ for an AR(1) of
@@ -100,13 +121,17 @@ def detect_colored(x, sample_rate_hz, band=None):
         return None
     r1, r2 = float(dot(e[1:], e[:-1]) / den), float(dot(e[2:], e[:-2]) / den)
     del e
-    z = lags_from_highpassed(r1, None, w)[0] * math.sqrt(n)  # the correlation of the noise as measured
-    if abs(z) < COLORED_Z:
+    left = lags_from_highpassed(r1, None, w, *other_correlation(den / n, wander=wander))
+    if left is None:  # the wander holds nearly all the high-passed variance
         return None
-    band_lags, band_share = None, 0.0
-    if band is not None:  # the band brings its own correlation: the colored noise's is what is left
+    z = left[0] * math.sqrt(n)
+    if abs(z) < COLORED_Z:  # the correlation of the noise as measured (less a wander's)
+        return None
+    band_lags = None  # the band brings its own correlation: the colored noise's is what is left
+    if band is not None:
         band_lags = narrowband_lags(band.params["center_hz"], band.params["bandwidth_hz"], sample_rate_hz)
-        band_share = band.params["rms_dps"] ** 2 / (den / n)
+    band_lags, band_share = other_correlation(den / n, band_lags, band.params["rms_dps"] ** 2 if band is not None else 0.0,
+                                              wander)
     lags = lags_from_highpassed(r1, r2, w, band_lags, band_share)
     if lags is None:
         return None
@@ -119,8 +144,10 @@ def detect_colored(x, sample_rate_hz, band=None):
     if abs(lag1) < COLORED_MIN_LAG1:
         return None
     evidence = f"lag-1 autocorrelation of the noise {lag1:+.3f}"
-    if band is not None:
-        evidence += " once the narrow band's own correlation is taken out"
+    if band is not None or wander is not None:
+        evidence += " once the " + " and the ".join(
+            name for name, there in (("narrow band's", band is not None), ("wander's", wander is not None)) if there
+        ) + " own correlation is taken out"
     evidence += f" (white noise: 0 +- {1 / math.sqrt(n):.4f}; as measured {abs(z):.0f} standard errors away)"
     if arma:
         evidence += (f"; lag-2 {lag2:+.3f}, below the {lag1 * lag1:.3f} of a first-order low pass "
