@@ -706,3 +706,37 @@ def test_a_strong_bias_instability_at_a_low_rate_closes_without_a_colored_noise(
     assert [f["effect"] for f in on_x] == ["bias_instability"], on_x
     assert on_x[0]["params"]["b_dps"] == pytest.approx(0.008, rel=0.25)
     assert rep["discrepancy"]["after"]["x"] < 2.0
+
+
+def test_an_extended_models_spread_is_pooled_with_the_baselines_where_the_two_agree():
+    """gap_features.departures(pool=): at a feature where the extended model's mean lies within
+    2 standard errors of the baseline's, the sd is the pooled one (a fluke-low sd from 6 runs
+    no longer multiplies z); where the extension moved the feature, the model's own sd."""
+    from gyrofilter.analysis.gap_features import departures
+
+    spread = np.linspace(-1.6, 1.6, 12)  # mean 0, sd 1.03
+    base_runs = [{"adev": np.array([0.1 * v, 0.1 * v])} for v in spread]
+    base = departures({"adev": np.zeros(2)}, base_runs, 10_000)
+    # 6 runs: feature 0 agrees with the baseline but its sd came out 4x low; feature 1 moved by 1.0
+    ext_runs = [{"adev": np.array([0.025 * v, 1.0 + 0.1 * v])} for v in (-1.2, -0.6, -0.2, 0.2, 0.6, 1.2)]
+    meas = {"adev": np.array([0.3, 1.3])}
+    own = departures(meas, ext_runs, 10_000)["adev"]
+    pooled = departures(meas, ext_runs, 10_000, (base, 12))["adev"]
+    sd_0 = base["adev"][2][0]
+    expect = math.sqrt((5 * own[2][0] ** 2 + 11 * sd_0 ** 2) / 16)
+    assert pooled[2][0] == pytest.approx(expect) and pooled[0][0] < own[0][0] / 2.5
+    assert pooled[2][1] == own[2][1] and pooled[0][1] == own[0][1]
+
+
+def test_a_sinusoid_alone_gets_no_slow_finding_on_the_benchmarks_hour():
+    """tools/bench_gap.py's hour at 100 Hz (seed 1): z holds only a 7.3-Hz sinusoid. Its extended
+    model's 6 runs gave the Allan deviation at 270 s an sd of 0.044 (the baseline's 12: 0.115),
+    z = +10, D 3.9 > 2, and the composite step added a bias instability; with the spread pooled
+    where the two models agree, z keeps the sinusoid alone."""
+    from support import tool
+
+    bench = tool("bench_gap")
+    rec = simulate(bench.model(100.0, True), 3600.0, seed=bench.SEED)
+    rep = analyse_gap(rec, seed=0)
+    assert [f["effect"] for f in rep["findings"] if f["axis"] == "z"] == ["sinusoid"]
+    assert rep["discrepancy"]["after"]["z"] < 2.0

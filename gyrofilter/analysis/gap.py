@@ -208,7 +208,7 @@ class _GapRun:
                 model["temperature"] = temperature_table(self.rec)
             sims_k = sim_features(model, self.n, self.sample_rate_hz, self.seeds[:self.n_ext], [i], self.taus,
                                   self.bands, self.say, label)[i]
-            self._deps_cache[key] = departures(self.meas_feats[i], sims_k, self.n)
+            self._deps_cache[key] = departures(self.meas_feats[i], sims_k, self.n, (self.deps[i], self.m))
             self._sims_cache[key] = sims_k
         return self._deps_cache[key]
 
@@ -217,7 +217,7 @@ class _GapRun:
         (:func:`gyrofilter.analysis.gap_readings.null_spread` of its simulated runs)."""
         self.axis_deps(i, ks, label)
         key = (i, tuple(sorted(ks)), tuple(sorted((self.resolved_lags[i] or {}).items())))
-        return null_spread(self._sims_cache[key], self.n)
+        return null_spread(self._sims_cache[key], self.n, (self.deps[i], self.m))
 
     def axis_discrepancy(self, i, ks, label):
         return discrepancy(self.axis_deps(i, ks, label))
