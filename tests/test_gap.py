@@ -686,7 +686,7 @@ def test_the_white_level_and_the_lag1_leave_out_a_wanders_high_frequency_part():
     part = wander_highpassed(bi, 10.0, n)
     raw = noise_sigma(x, 10.0, q) / math.sqrt(10.0)
     assert raw > 1.06 * 0.0057  # the flicker's part taken for white noise
-    assert white_less_wanders(raw, [bi], [], n, 10.0) == pytest.approx(0.0057, rel=0.03)
+    assert white_less_wanders(raw, [bi], None, n, 10.0) == pytest.approx(0.0057, rel=0.03)
     assert det.detect_colored(x, 10.0) is not None  # as measured: a lag-1 of the flicker's
     assert det.detect_colored(x, 10.0, wander=part) is None
     colored = _strong_wander_at_10_hz(12, effects=[bi, {"effect": "colored_noise", "lag1": 0.3}]).gyro_dps[:, 0]

@@ -188,9 +188,9 @@ class _GapRun:
         spec["bias_dps"] = start_bias(spec["bias_dps"], cands, self.n / self.sample_rate_hz)
         spec["effects"] = [effect_entry(c, preserve="arw" if composite else "std") for c in cands]
         if not composite:  # the white level was measured with the wanders' high-frequency part in it
-            spec["arw_dps_per_sqrt_hz"] = white_less_wanders(spec["arw_dps_per_sqrt_hz"], spec["effects"],
-                                                             [c for ci, c in self.candidates if ci == i], self.n,
-                                                             self.sample_rate_hz)
+            colored = next((c for ci, c in self.candidates if ci == i and c.effect == "colored_noise"), None)
+            spec["arw_dps_per_sqrt_hz"] = white_less_wanders(spec["arw_dps_per_sqrt_hz"], spec["effects"], colored,
+                                                             self.n, self.sample_rate_hz)
         if composite and self.resolved_lags[i]:
             for entry in spec["effects"]:
                 if entry["effect"] == "colored_noise":

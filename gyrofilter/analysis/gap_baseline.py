@@ -116,11 +116,8 @@ def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
             sigma = math.sqrt(max(sigma**2 - c.params["rms_dps"] ** 2, 0.05 * sigma**2))
     colored = next((c for c in cands if c.effect == "colored_noise"), None)
     if colored is not None:
-        # the high-pass of noise_sigma also removed the variance fraction c = L / W of a
-        # correlated noise (L its long-run ratio; detectors.lags_from_highpassed)
         w = det.colored_window(n, sample_rate_hz)
-        frac = min(det.long_run_ratio(colored.params["lag1"], colored.params.get("lag2")) / w, 0.9)
-        sigma *= math.sqrt((1 - 1.0 / w) / (1 - frac))
+        sigma *= math.sqrt((1 - 1.0 / w) / (1 - highpass_loss(colored, w)))
     spec["arw_dps_per_sqrt_hz"] = float(sigma / math.sqrt(sample_rate_hz))
     spec["bias_dps"] = float(np.mean(xc))
     return spec
@@ -159,10 +156,10 @@ def _wander_highpassed(items, sample_rate_hz, n):
     return (v / m, float(det.dot(e[1:], e[:-1])) / v, float(det.dot(e[2:], e[:-2])) / v) if v > 0 else (0.0, 0.0, 0.0)
 
 
-def white_less_wanders(arw_dps_per_sqrt_hz, entries, cands, n, sample_rate_hz):
+def white_less_wanders(arw_dps_per_sqrt_hz, entries, colored, n, sample_rate_hz):
     """The white level of a model holding the effect entries ``entries`` when ``arw`` was
-    measured on the high-passed series (:func:`extended_axis`, with the axis's candidates
-    ``cands``): less what the wanders among them put there,
+    measured on the high-passed series (:func:`extended_axis`, with the axis's colored-noise
+    candidate ``colored`` or None): less what the wanders among them put there,
     ``N'^2 f_s = N^2 f_s - g sum v_w`` (``v_w`` of :func:`wander_highpassed`; ``g`` the scaling
     of that variance to the white level: ``1 / (1 - 1/W)``, or ``1 / (1 - c)`` under a colored
     noise, whose correction :func:`extended_axis` made), at least a twentieth of the variance."""
@@ -170,11 +167,16 @@ def white_less_wanders(arw_dps_per_sqrt_hz, entries, cands, n, sample_rate_hz):
     if not v > 0:
         return arw_dps_per_sqrt_hz
     w = det.colored_window(n, sample_rate_hz)
-    colored = next((c for c in cands if c.effect == "colored_noise"), None)
-    g = (1.0 / (1.0 - min(det.long_run_ratio(colored.params["lag1"], colored.params.get("lag2")) / w, 0.9))
-         if colored is not None else 1.0 / max(1.0 - 1.0 / w, 0.5))
+    g = 1.0 / (1.0 - highpass_loss(colored, w)) if colored is not None else 1.0 / max(1.0 - 1.0 / w, 0.5)
     s2 = arw_dps_per_sqrt_hz ** 2 * sample_rate_hz
     return float(math.sqrt(max(s2 - g * v, 0.05 * s2) / sample_rate_hz))
+
+
+def highpass_loss(colored, w):
+    """The fraction ``c = L / W`` (at most 0.9) of a colored noise's variance that the high-pass
+    of :func:`noise_sigma` (a moving mean of ``w`` samples) removed with the white noise's
+    ``1 / W`` (L its long-run ratio; :func:`gyrofilter.analysis.detectors.lags_from_highpassed`)."""
+    return min(det.long_run_ratio(colored.params["lag1"], colored.params.get("lag2")) / w, 0.9)
 
 
 def start_bias(mean_bias_dps, cands, duration_s):
