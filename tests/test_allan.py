@@ -1,10 +1,10 @@
-"""Tests for gyrofilter.analysis.allan: Stable32/NBS14 reference values, allantools as oracle, bad input."""
+"""Tests for gyrofilter.analysis.noise.allan: Stable32/NBS14 reference values, allantools as oracle, bad input."""
 import math
 
 import numpy as np
 import pytest
 
-from gyrofilter.analysis.allan import (AllanInputError, adev, default_cluster_sizes, overlapping_adev)
+from gyrofilter.analysis.noise.allan import (AllanInputError, adev, default_cluster_sizes, overlapping_adev)
 from gyrofilter.errors import GyroFilterError, SettingsError
 
 # NBS14 frequency data set with Stable32 results (NIST SP 1065 Table 31; used by allantools).
@@ -93,7 +93,7 @@ def test_missing_or_bad_rate(rate):
 
 
 # --- confidence intervals -------------------------------------------------------------------
-from gyrofilter.analysis.allan import chi2_interval, edf_mixture, edf_oavar, simple_interval  # noqa: E402
+from gyrofilter.analysis.noise.allan import chi2_interval, edf_mixture, edf_oavar, simple_interval  # noqa: E402
 
 
 @pytest.mark.parametrize("alpha", [2, 1, 0, -1, -2])

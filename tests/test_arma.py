@@ -9,7 +9,9 @@ pytest.importorskip("statsmodels")
 pytest.importorskip("scipy")
 
 
-from gyrofilter.analysis import arma, arma_checks, arma_fit  # noqa: E402
+from gyrofilter.analysis.arma import identify as arma  # noqa: E402
+from gyrofilter.analysis.arma import checks as arma_checks  # noqa: E402
+from gyrofilter.analysis.arma import fit as arma_fit  # noqa: E402
 from gyrofilter.errors import GyroFilterError  # noqa: E402
 
 PHI, THETA, SIGMA = 0.9, 0.5, 0.1

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from gyrofilter.analysis.bias_kf import BiasKalmanFilter, BiasKFSettings
+from gyrofilter.analysis.arma.bias_kf import BiasKalmanFilter, BiasKFSettings
 from gyrofilter.filter.calibration import Calibration
 from gyrofilter.errors import SettingsError
 
@@ -107,7 +107,7 @@ def test_gauss_markov_bias_relaxes_to_the_calibration_when_unobserved():
 
 
 def test_settings_from_arma_bias_model():
-    from gyrofilter.analysis.arma import BiasModel
+    from gyrofilter.analysis.arma.identify import BiasModel
 
     model = BiasModel(tau_s=100.0, bias_sigma_dps=0.01, bias_walk_dps_per_sqrt_s=0.0014, white_noise_dps_per_sqrt_hz=0.01, valid=True)
     s = BiasKFSettings.from_bias_model(model, calibration_s=1.0)

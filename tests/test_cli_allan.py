@@ -249,8 +249,8 @@ def test_a_read_off_where_the_fit_resolves_nothing_is_labelled_an_upper_estimate
     axis, as if both were B. The read-off is the slope method, another estimator: labelled so,
     and where the fit resolves no term but the read-off gives a number, said to be an upper
     estimate. The 655-s still log has such an axis (checked below, so the test is not empty)."""
-    from gyrofilter.analysis.noise_export import JSON_KEY
-    from gyrofilter.analysis.noise_model import TERM_SYMBOL, TERMS
+    from gyrofilter.analysis.noise.export import JSON_KEY
+    from gyrofilter.analysis.noise.model import TERM_SYMBOL, TERMS
     from support import RECORDINGS
 
     out = tmp_path / "a.json"

@@ -174,9 +174,9 @@ def test_record_from_the_mpu6050_register_model(tmp_path, monkeypatch, capsys):
     """`record --source mpu6050:...` through the real driver and smbus2, with the register-level
     model behind smbus2's ioctl: the header carries what an analysis needs, and the samples are
     the model's, contiguous (nothing lost or doubled), on the sensor's clock."""
-    from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock
+    from gyrofilter.sources.mpu6050.model import FakeI2CBus, MPU6050Model, VirtualClock
 
-    import gyrofilter.sources.mpu6050 as mpu
+    import gyrofilter.sources.mpu6050.driver as mpu
     from gyrofilter.cli import main
 
     clock = VirtualClock()

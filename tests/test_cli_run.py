@@ -7,7 +7,7 @@ the same samples: same count, same numbers, same time stamps. What a source deli
 recorded with `gyrofilter record` from the same deterministic source and then replayed.
 
 Real parts: the MPU6050 driver through smbus2's own code with only its ioctl replaced by the
-register-level model (gyrofilter/sources/mpu6050_model.py) on a virtual clock; pyserial on a real
+register-level model (gyrofilter/sources/mpu6050/model.py) on a virtual clock; pyserial on a real
 pseudo-terminal; the replay source paced by the host's clock.
 """
 import errno
@@ -23,9 +23,9 @@ import pytest
 from smbus2 import I2cFunc
 
 
-from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock
+from gyrofilter.sources.mpu6050.model import FakeI2CBus, MPU6050Model, VirtualClock
 
-import gyrofilter.sources.mpu6050 as mpu  # noqa: E402
+import gyrofilter.sources.mpu6050.driver as mpu  # noqa: E402
 from gyrofilter import GyroFilter  # noqa: E402
 from gyrofilter.cli import main  # noqa: E402
 from gyrofilter.recording import Recording, read_recording, write_recording  # noqa: E402

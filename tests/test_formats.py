@@ -7,7 +7,7 @@ import pytest
 
 from gyrofilter.cli import main
 from gyrofilter.filter.calibration import Calibration
-from gyrofilter.analysis.noise_export import JSON_KEY
+from gyrofilter.analysis.noise.export import JSON_KEY
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.model import EFFECTS, validate_model
 from gyrofilter.sim.simulate import simulate

@@ -17,9 +17,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from gyrofilter.analysis import detectors as det
-from gyrofilter.analysis.gap import analyse_gap
-from gyrofilter.analysis.gap_features import departures, discrepancy
+from gyrofilter.analysis import stats
+from gyrofilter.analysis.gap import detectors as det
+from gyrofilter.analysis.gap.pipeline import analyse_gap
+from gyrofilter.analysis.gap.features import departures, discrepancy
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.sim.model import validate_model
 from gyrofilter.sim.simulate import simulate
@@ -77,7 +78,7 @@ def test_baseline_fit_recovers_bias_and_white_noise():
 @pytest.mark.slow
 def test_ramp_and_random_walk_are_told_apart():
     """Both raise the long-tau Allan deviation; the decision rules (module docstring of
-    gyrofilter.analysis.detectors) must call the ramp a ramp and a random walk a stochastic wander,
+    gyrofilter.analysis.gap.detectors) must call the ramp a ramp and a random walk a stochastic wander,
     never a ramp or step. (Whether one 30-minute random-walk path reverts enough to look
     like Gauss-Markov is a property of the path; the battery measures how often.)"""
     ramp = he.draw_case(31, effect="rate_ramp", duration_s=1800.0)
@@ -139,7 +140,7 @@ def test_tail_fit_parameters_are_always_a_valid_model_entry(p, log_c, seed):
     rng = np.random.default_rng(seed)
     c = math.exp(log_c)
     u = np.where(rng.random(10_000) < p, c, 1.0) * rng.standard_normal(10_000)
-    fits = det.tail_fits(u / det.robust_sigma(u))
+    fits = det.tail_fits(u / stats.robust_sigma(u))
     validate_model({"sample_rate_hz": 100.0, "axes": {"x": {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.01, "effects": [
         {"effect": "heavy_tails", "fraction": fits["fraction"], "scale_ratio": fits["scale_ratio"]}]}}})
 
@@ -356,11 +357,11 @@ def test_rad_per_s_at_1_hz_runs():
 
 def test_the_extended_bias_follows_the_kept_shapes_only():
     """The model's bias at t = 0 is the record's mean less the mean of the shapes the model holds
-    (gap_baseline.start_bias). A new user's case: on the 449-s log a ramp on z was dropped but its
+    (gap.baseline.start_bias). A new user's case: on the 449-s log a ramp on z was dropped but its
     R T / 2 stayed in the extended model's bias, and the baseline's bias interval, bootstrapped
     from that model, missed the mean of 45,000 samples by ten widths."""
-    from gyrofilter.analysis.detectors import Candidate
-    from gyrofilter.analysis.gap_baseline import start_bias
+    from gyrofilter.analysis.gap.detectors import Candidate
+    from gyrofilter.analysis.gap.baseline import start_bias
 
     ramp = Candidate(effect="rate_ramp", params={"r_dps_per_s": 2e-4}, statistic=0.0, threshold=0.0,
                      statistic_name="", evidence="")
@@ -432,7 +433,7 @@ def test_heavy_tails_battery_is_found_and_never_confused_with_outliers():
 
 
 def test_a_statistic_that_cannot_run_gives_no_findings_not_a_crash(monkeypatch):
-    from gyrofilter.analysis import gap
+    from gyrofilter.analysis.gap import pipeline as gap
 
     rec = Recording.from_dps(np.random.default_rng(1).normal(0, 0.1, (5000, 3)), 100.0)
     monkeypatch.setattr(gap.det, "detect_slow", lambda *a, **k: (_ for _ in ()).throw(ValueError("boom")))
@@ -482,7 +483,7 @@ def test_cli_refuses_existing_outputs_and_never_writes_onto_the_recording(tmp_pa
 
 def test_cli_failure_leaves_no_output(tmp_path, capsys, monkeypatch):
     pytest.importorskip("matplotlib")
-    import gyrofilter.analysis.gap_report as gr
+    import gyrofilter.analysis.gap.report as gr
     from gyrofilter.cli import main
     from gyrofilter.errors import GyroFilterError
 
@@ -579,8 +580,8 @@ def _no_note_drops_a_finding(report):
                       "a spectral line the model lacks"),
 ])
 def test_an_axis_that_does_not_close_gets_a_note_naming_the_feature(key, j, z, says):
-    from gyrofilter.analysis.detectors import OUTSIDE_NULL_D
-    from gyrofilter.analysis.gap_features import departs_most, still_departs
+    from gyrofilter.analysis.gap.detectors import OUTSIDE_NULL_D
+    from gyrofilter.analysis.gap.features import departs_most, still_departs
 
     taus = np.array([0.01, 0.03, 0.1, 1.0, 10.0, 100.0])
     bands = np.array([0.08, 0.13, 1.0, 3.0, 10.0, 20.0, 30.0])
@@ -676,9 +677,9 @@ def test_the_white_level_and_the_lag1_leave_out_a_wanders_high_frequency_part():
     """A flicker's 1/f spectrum reaches the highest frequencies, so the high-passed series on
     which the white level and the lag-1 are measured holds some of it: at 10 Hz with B 0.008 the
     white level read there is ~10 % high and the lag-1 looks like a colored noise's. Less the
-    wander's own part (gap_baseline.wander_highpassed), the white level is N again and the
+    wander's own part (gap.baseline.wander_highpassed), the white level is N again and the
     colored detector finds nothing; a true colored noise under the same wander keeps its lag-1."""
-    from gyrofilter.analysis.gap_baseline import noise_sigma, wander_highpassed, white_less_wanders
+    from gyrofilter.analysis.gap.baseline import noise_sigma, wander_highpassed, white_less_wanders
 
     bi = {"effect": "bias_instability", "b_dps": 0.008}
     x = _strong_wander_at_10_hz(11).gyro_dps[:, 0]
@@ -709,10 +710,10 @@ def test_a_strong_bias_instability_at_a_low_rate_closes_without_a_colored_noise(
 
 
 def test_an_extended_models_spread_is_pooled_with_the_baselines_where_the_two_agree():
-    """gap_features.departures(pool=): at a feature where the extended model's mean lies within
+    """gap.features.departures(pool=): at a feature where the extended model's mean lies within
     2 standard errors of the baseline's, the sd is the pooled one (a fluke-low sd from 6 runs
     no longer multiplies z); where the extension moved the feature, the model's own sd."""
-    from gyrofilter.analysis.gap_features import departures
+    from gyrofilter.analysis.gap.features import departures
 
     spread = np.linspace(-1.6, 1.6, 12)  # mean 0, sd 1.03
     base_runs = [{"adev": np.array([0.1 * v, 0.1 * v])} for v in spread]

@@ -1,4 +1,4 @@
-"""The 95 % intervals of the gap's parameters (gyrofilter.analysis.gap_intervals): the interval
+"""The 95 % intervals of the gap's parameters (gyrofilter.analysis.gap.intervals): the interval
 formula against a hand computation, the analytic baseline intervals' coverage on white noise,
 one hidden-effect case per family of effects whose true parameters must lie inside their
 intervals (the effect drawn at random within the family from the seed), ``--bootstrap 0``, the
@@ -15,10 +15,10 @@ import pytest
 from scipy.stats import t as student_t
 
 import gyrofilter.sim.hidden_effects as he
-from gyrofilter.analysis import gap_intervals as gi
-from gyrofilter.analysis.gap import analyse_gap
-from gyrofilter.analysis.gap_baseline import baseline_model
-from gyrofilter.analysis.gap_report import value_with_interval
+from gyrofilter.analysis.gap import intervals as gi
+from gyrofilter.analysis.gap.pipeline import analyse_gap
+from gyrofilter.analysis.gap.baseline import baseline_model
+from gyrofilter.analysis.gap.report import value_with_interval
 from gyrofilter.cli import main
 from gyrofilter.recording import write_recording
 from gyrofilter.sim.simulate import simulate

@@ -7,10 +7,12 @@ import re
 import numpy as np
 import pytest
 
-from gyrofilter.analysis import detectors as det
-from gyrofilter.analysis import gap, gap_features
-from gyrofilter.analysis.detectors import sinusoid
-from gyrofilter.analysis.allan import overlapping_adev
+from gyrofilter.analysis import stats
+from gyrofilter.analysis.gap import detectors as det
+from gyrofilter.analysis.gap import pipeline as gap
+from gyrofilter.analysis.gap import features as gap_features
+from gyrofilter.analysis.gap.detectors import sinusoid
+from gyrofilter.analysis.noise.allan import overlapping_adev
 from gyrofilter.sim.simulate import simulate, simulate_axis_dps
 
 MODEL = {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0,
@@ -95,7 +97,7 @@ def test_dft_amplitude_equals_the_direct_sum_near_the_peak():
     t = np.arange(n) / fs
     x = rng.normal(0, 0.1, n) + 0.02 * np.sin(2 * math.pi * f0 * t + 0.4)
     xc = x - x.mean()
-    amp = det._dft_amplitude(xc, fs, f0)
+    amp = det.dft_amplitude(xc, fs, f0)
     for f in (f0, f0 + 0.6 * fs / n, f0 - fs / n):
         direct = abs(np.sum(xc * np.exp(-2j * math.pi * f * t)))
         assert amp(f) == pytest.approx(direct, rel=1e-8)
@@ -109,7 +111,7 @@ def test_moving_mean_and_spike_mask_equal_their_index_formulas():
             c = np.concatenate(([0.0], np.cumsum(x)))
             lo = np.clip(np.arange(n) - w // 2, 0, n)
             hi = np.clip(np.arange(n) - w // 2 + w, 0, n)
-            assert np.allclose(det.moving_mean(x, w), (c[hi] - c[lo]) / (hi - lo), rtol=0, atol=1e-12)
+            assert np.allclose(stats.moving_mean(x, w), (c[hi] - c[lo]) / (hi - lo), rtol=0, atol=1e-12)
         x[rng.integers(0, n, 8)] += 3.0
         x[0] += 3.0
         r = np.empty(n)
@@ -128,12 +130,12 @@ def test_least_squares_and_detrend_equal_lstsq():
     g = np.exp(-t / 60.0)
     x = 0.3 * g + 0.01 * t + rng.normal(0, 0.1, n)
     columns = lambda lo, hi: (g[lo:hi], t[lo:hi] - t.mean())  # noqa: E731
-    coef = det._least_squares(columns, x)
+    coef = det.least_squares(columns, x)
     ref, *_ = np.linalg.lstsq(np.column_stack([g, t - t.mean(), np.ones(n)]), x, rcond=None)
     assert np.allclose(coef, ref, rtol=1e-9, atol=1e-12)
     assert np.allclose(det.fitted(columns, coef[:2], n), coef[0] * g + coef[1] * (t - t.mean()), rtol=0, atol=1e-12)
     line = np.polyval(np.polyfit(t, x, 1), t)
-    assert np.allclose(det.detrend_line(x), x - line, rtol=0, atol=1e-10)
+    assert np.allclose(stats.detrend_line(x), x - line, rtol=0, atol=1e-10)
 
 
 def test_sinusoid_fit_in_pieces_equals_the_full_fit():

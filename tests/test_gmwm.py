@@ -1,13 +1,13 @@
-"""GMWM-style composite fit (gyrofilter.analysis.gmwm): the wavelet variance, its closed forms, recovery of
+"""GMWM-style composite fit (gyrofilter.analysis.noise.gmwm): the wavelet variance, its closed forms, recovery of
 simulated composite processes (seeded, several seeds) and the comparison with the Allan NNLS fit."""
 import math
 
 import numpy as np
 import pytest
 
-from gyrofilter.analysis import gmwm
-from gyrofilter.analysis.allan import overlapping_adev
-from gyrofilter.analysis.noise_fit import characterise_axis
+from gyrofilter.analysis.noise import gmwm
+from gyrofilter.analysis.noise.allan import overlapping_adev
+from gyrofilter.analysis.noise.fit import characterise_axis
 from gyrofilter.sim.simulate import simulate
 from support import REPO
 

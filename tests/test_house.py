@@ -1,7 +1,8 @@
 """The house rules that the code itself can be held to (CONTRIBUTING.md, "Rules the code is held
 to"): modules of one concern (at most 600 lines), functions that fit on a screen or two (at
 most 120 lines, unless a numba kernel needs the length and a comment above it says so), one name
-for a sample rate, no import circle, and imports at the top of the module."""
+for a sample rate, no import circle, imports at the top of the module, no private name imported
+from another module, and a family of three or more modules in a folder of its own."""
 import ast
 from pathlib import Path
 
@@ -16,6 +17,9 @@ KERNEL_MARK = "numba kernel"  # in a comment right above a def: its length is th
 LAZY_OK = {"scipy", "statsmodels", "matplotlib", "numba", "dask", "distributed", "serial", "smbus2", "filterpy"}
 #: names a sample rate must not have (it is ``sample_rate_hz`` everywhere)
 RATE_ALIASES = {"fs", "rate_hz"}
+#: modules whose names share a prefix up to '_' (``gap_baseline``, ``gap_features``, ...) in one
+#: folder: this many make a family that belongs in a folder of its own
+FAMILY_SIZE = 3
 
 
 def modules(package=PACKAGE):
@@ -131,6 +135,30 @@ def imports_in_functions(package=PACKAGE):
     return sorted(set(out))
 
 
+def private_imports(package=PACKAGE):
+    """``from module import _name`` of a gyrofilter module's private name in another module."""
+    out = []
+    for path, _, tree in modules(package):
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").split(".")[0] == "gyrofilter"):
+                out += [f"{path.relative_to(package)}:{node.lineno} imports {a.name}" for a in node.names
+                        if a.name.startswith("_") and not a.name.startswith("__")]
+    return out
+
+
+def flat_families(package=PACKAGE):
+    """Folders holding FAMILY_SIZE or more modules named ``<prefix>_...`` or ``<prefix>``: a family
+    whose prefix stands in for a folder."""
+    out = []
+    for folder in sorted({p.parent for p, _, _ in modules(package)}):
+        stems = [p.stem for p in folder.glob("*.py") if p.stem != "__init__"]
+        for prefix in sorted({s.split("_")[0] for s in stems if "_" in s}):
+            members = sorted(s for s in stems if s == prefix or s.startswith(prefix + "_"))
+            if len(members) >= FAMILY_SIZE:
+                out.append(f"{folder.relative_to(package.parent)}: {', '.join(members)}")
+    return out
+
+
 def test_no_module_is_over_600_lines():
     assert not long_modules(), "\n".join(long_modules())
 
@@ -151,6 +179,14 @@ def test_imports_are_at_the_top_but_for_heavy_optional_packages():
     assert not imports_in_functions(), "\n".join(imports_in_functions())
 
 
+def test_no_private_name_is_imported_from_another_module():
+    assert not private_imports(), "\n".join(private_imports())
+
+
+def test_a_family_of_modules_lives_in_its_own_folder():
+    assert not flat_families(), "\n".join(flat_families())
+
+
 def test_the_checks_catch_what_they_look_for(tmp_path):
     package = tmp_path / "gyrofilter"
     (package / "cli").mkdir(parents=True)
@@ -163,3 +199,8 @@ def test_the_checks_catch_what_they_look_for(tmp_path):
     assert rate_aliases(package) == ["cli/b.py:1 fs", "cli/b.py:1 rate_hz"]
     assert import_circles(package) == ["gyrofilter.cli.a -> gyrofilter.cli.b -> gyrofilter.cli.a"]
     assert imports_in_functions(package) == ["cli/b.py:2 f imports gyrofilter", "cli/b.py:4 f imports json"]
+    (package / "cli" / "c.py").write_text("from .a import _hidden, public, __version__\nfrom numpy import _core\n")
+    assert private_imports(package) == ["cli/c.py:1 imports _hidden"]
+    for name in ("gap.py", "gap_one.py", "gap_two.py", "noise_a.py", "noise_b.py"):
+        (package / "cli" / name).write_text("")
+    assert flat_families(package) == ["gyrofilter/cli: gap, gap_one, gap_two"]

@@ -13,7 +13,7 @@ ALLOWED = {"face": {"core", "filter"}, "core": set(), "filter": {"core"}, "sim":
 
 
 def part_of(dotted):
-    """'gyrofilter.analysis.gap' -> 'analysis'; ``python -m gyrofilter`` (__main__) -> 'cli'; the
+    """'gyrofilter.analysis.gap.pipeline' -> 'analysis'; ``python -m gyrofilter`` (__main__) -> 'cli'; the
     package's ``__init__`` -> 'face' (the API: GyroFilter, Smoother); a module at its root -> 'core'."""
     parts = dotted.split(".")
     if parts[1:] == ["__main__"]:
@@ -62,7 +62,7 @@ def test_an_upward_or_sideways_import_is_caught(tmp_path):
         (package / folder).mkdir(parents=True)
     (package / "filter" / "pipeline.py").write_text("from ..analysis import gap\nfrom .. import units\n")
     (package / "analysis" / "fleet.py").write_text("from ..cli.allan import run\nfrom ..sim.simulate import simulate\n")
-    (package / "sources" / "serial.py").write_text("import gyrofilter.analysis.allan\nfrom ..errors import one_line\n")
+    (package / "sources" / "serial.py").write_text("import gyrofilter.analysis.noise.allan\nfrom ..errors import one_line\n")
     assert violations(package) == ["gyrofilter/analysis/fleet.py (analysis) imports gyrofilter.cli.allan.run (cli)",
                                    "gyrofilter/filter/pipeline.py (filter) imports gyrofilter.analysis.gap (analysis)",
-                                   "gyrofilter/sources/serial.py (sources) imports gyrofilter.analysis.allan (analysis)"]
+                                   "gyrofilter/sources/serial.py (sources) imports gyrofilter.analysis.noise.allan (analysis)"]

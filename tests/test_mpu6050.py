@@ -1,6 +1,6 @@
 """MPU-6050 driver through smbus2's real code; only os.open/os.close and smbus2's ioctl are fakes.
 
-The register-level model (gyrofilter/sources/mpu6050_model.py) runs on a virtual clock shared with the driver,
+The register-level model (gyrofilter/sources/mpu6050/model.py) runs on a virtual clock shared with the driver,
 so sample timing is deterministic and no test depends on the host's speed.
 """
 import errno
@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 
 
-from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock, samples_from_recording
+from gyrofilter.sources.mpu6050.model import FakeI2CBus, MPU6050Model, VirtualClock, samples_from_recording
 
 from gyrofilter.errors import DeviceError, SettingsError, SourceEnded
 from gyrofilter.recording import Recording
-from gyrofilter.sources import mpu6050_registers as R
-from gyrofilter.sources.mpu6050 import open_mpu6050
-from gyrofilter.sources.mpu6050_chip import auto_dlpf_cfg, decode_fifo, sample_rate_settings
+from gyrofilter.sources.mpu6050 import registers as R
+from gyrofilter.sources.mpu6050.driver import open_mpu6050
+from gyrofilter.sources.mpu6050.chip import auto_dlpf_cfg, decode_fifo, sample_rate_settings
 from support import RECORDINGS
 
 
@@ -91,7 +91,7 @@ def test_sample_rate_divider_and_refusal():
 
 def test_smbus2_imported_only_when_a_device_is_opened():
     import subprocess
-    code = ("import sys, gyrofilter, gyrofilter.sources.mpu6050 as m; "
+    code = ("import sys, gyrofilter, gyrofilter.sources.mpu6050.driver as m; "
             "print('smbus2' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
@@ -536,7 +536,7 @@ def test_fatal_error_part_way_through_a_fifo_read_delivers_the_frames_read_befor
 
 def _virtual_mpu6050(monkeypatch, seconds=6.0, sample_rate_hz=200):
     """A still model at /dev/i2c-1, 0x68, on a virtual clock that the driver opened by a command shares."""
-    import gyrofilter.sources.mpu6050 as mpu
+    import gyrofilter.sources.mpu6050.driver as mpu
 
     clock = VirtualClock()
     rng = np.random.default_rng(3)

@@ -1,12 +1,12 @@
-"""The narrow-band detector (gyrofilter.analysis.detectors.narrowband): its batched Welch PSD
+"""The narrow-band detector (gyrofilter.analysis.gap.detectors.narrowband): its batched Welch PSD
 against scipy.signal.welch, and the detector on the shipped recordings with either PSD."""
 import math
 
 import numpy as np
 import pytest
 
-from gyrofilter.analysis.detectors import NARROWBAND_THRESHOLD
-from gyrofilter.analysis.detectors import narrowband as nb
+from gyrofilter.analysis.gap.detectors import NARROWBAND_THRESHOLD
+from gyrofilter.analysis.gap.detectors import narrowband as nb
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording
 from support import RECORDINGS

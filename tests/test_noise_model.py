@@ -1,16 +1,16 @@
-"""Tests for gyrofilter.analysis.noise_model and the modules of its fit (noise_fit, noise_intervals, noise_readoff,
-noise_screen, noise_export): model identities, NNLS oracle, seeded round trips on
+"""Tests for gyrofilter.analysis.noise.model and the modules of its fit (noise.fit, noise.intervals, noise.readoff,
+noise.screen, noise.export): model identities, NNLS oracle, seeded round trips on
 simulated noise with known coefficients, unit conversions, bad input, JSON and Kalibr export."""
 import math
 
 import numpy as np
 import pytest
 
-from gyrofilter.analysis.allan import AllanInputError
+from gyrofilter.analysis.noise.allan import AllanInputError
 from gyrofilter.errors import GyroFilterError, SettingsError
-from gyrofilter.analysis.noise_export import kalibr_yaml, to_json
-from gyrofilter.analysis.noise_fit import characterise, characterise_axis, nnls_weighted
-from gyrofilter.analysis.noise_model import (FLICKER_FLOOR, UNIT_FACTORS, arw_from_white_std, basis, convert, model_adev,
+from gyrofilter.analysis.noise.export import kalibr_yaml, to_json
+from gyrofilter.analysis.noise.fit import characterise, characterise_axis, nnls_weighted
+from gyrofilter.analysis.noise.model import (FLICKER_FLOOR, UNIT_FACTORS, arw_from_white_std, basis, convert, model_adev,
                                              white_std_from_arw)
 from support import RECORDINGS
 
@@ -61,7 +61,7 @@ def test_model_terms_meet_their_read_off_points():
 
 def test_generator_levels_match_the_model():
     # the tests' generator against the model it is meant to produce (one long seed per term)
-    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.analysis.noise.allan import overlapping_adev
     rng = np.random.default_rng(11)
     tau, dev = overlapping_adev(simulate(400000, 10.0, rng, B=0.01), 10.0, [10.0, 100.0])
     np.testing.assert_allclose(dev, 0.01 * FLICKER_FLOOR, rtol=0.1)
@@ -288,8 +288,8 @@ def test_kalibr_yaml_uses_continuous_time_si_units_and_the_largest_axis():
 
 @pytest.mark.parametrize("kind, alpha", [("white", 0), ("random_walk", -2)])
 def test_correlation_between_cluster_times_matches_monte_carlo(kind, alpha):
-    from gyrofilter.analysis.allan import overlapping_adev
-    from gyrofilter.analysis.noise_intervals import avar_correlation
+    from gyrofilter.analysis.noise.allan import overlapping_adev
+    from gyrofilter.analysis.noise.intervals import avar_correlation
     m = np.array([1, 2, 5, 10, 20, 40])
     est = []
     for seed in range(400):
@@ -304,7 +304,7 @@ def test_correlation_between_cluster_times_matches_monte_carlo(kind, alpha):
 
 
 def test_discrete_and_continuous_correlation_agree_for_large_m():
-    from gyrofilter.analysis.noise_intervals import _rho_table, avar_correlation
+    from gyrofilter.analysis.noise.intervals import _rho_table, avar_correlation
     for alpha in (0, -1, -2):
         log_r, rho = _rho_table(alpha)
         assert avar_correlation(30, 60, alpha) == pytest.approx(np.interp(math.log(2), log_r, rho), abs=0.01)
@@ -347,7 +347,7 @@ def test_round_trip_through_the_package_simulator():
 
 
 def test_gross_errors_find_spikes_and_absurd_rates_but_not_noise_or_drift():
-    from gyrofilter.analysis.noise_screen import gross_errors
+    from gyrofilter.analysis.noise.screen import gross_errors
 
     rng = np.random.default_rng(12)
     n = 200_000  # several of the function's blocks
@@ -364,7 +364,7 @@ def test_gross_errors_find_spikes_and_absurd_rates_but_not_noise_or_drift():
 
 
 def test_gross_errors_leave_the_still_recordings_alone():
-    from gyrofilter.analysis.noise_screen import gross_errors
+    from gyrofilter.analysis.noise.screen import gross_errors
     from gyrofilter.recording import read_recording
 
     for path in sorted(RECORDINGS.glob("mpu6050_static_*.csv.gz")):

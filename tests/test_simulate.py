@@ -1,7 +1,7 @@
 """Tests of the gyro simulator: every term has the statistics its docstring claims.
 
 Oracles: closed forms (deterministic terms, AR(1) Allan variance), the Allan deviation of
-gyrofilter.analysis.allan (itself tested against allantools), and sample statistics with tolerances
+gyrofilter.analysis.noise.allan (itself tested against allantools), and sample statistics with tolerances
 of several standard errors. All random tests are seeded.
 """
 import json
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.sim import noise_terms as nt
-from gyrofilter.analysis.allan import overlapping_adev
+from gyrofilter.analysis.noise.allan import overlapping_adev
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording, write_recording
 from gyrofilter.sim.model import EFFECTS, validate_model

@@ -11,7 +11,7 @@ import pytest
 from scipy.signal import welch
 
 from gyrofilter.sim import noise_terms as nt
-from gyrofilter.analysis.allan import overlapping_adev
+from gyrofilter.analysis.noise.allan import overlapping_adev
 from gyrofilter.errors import SettingsError
 from gyrofilter.sim.model import validate_model
 from gyrofilter.sim.simulate import simulate

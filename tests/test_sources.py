@@ -80,7 +80,7 @@ def test_parse_source_refuses_repeated_empty_and_unplain_values_in_one_short_lin
 
 
 def test_open_source_passes_only_given_keys_to_the_mpu6050_driver(monkeypatch):
-    import gyrofilter.sources.mpu6050 as mpu
+    import gyrofilter.sources.mpu6050.driver as mpu
 
     seen = {}
     monkeypatch.setattr(mpu, "open_mpu6050", lambda **kw: seen.update(kw) or "opened")

@@ -1,9 +1,9 @@
 """The Allan deviation of the still stretches that the live view shows, against the batch
-non-overlapping Allan deviation (gyrofilter.analysis.allan.adev) and a hand-pooled numpy sum."""
+non-overlapping Allan deviation (gyrofilter.analysis.noise.allan.adev) and a hand-pooled numpy sum."""
 import numpy as np
 import pytest
 
-from gyrofilter.analysis.allan import MIN_CLUSTERS, adev
+from gyrofilter.analysis.noise.allan import MIN_CLUSTERS, adev
 from gyrofilter.view.still_allan import StillAllan
 
 TAU0_S = 0.005

@@ -81,12 +81,12 @@ def test_check_sample_rate_hz_refuses_with_one_wording_naming_the_value(value, s
 
 def _sample_rate_takers():
     """Every module that takes a sample rate, called with ``rate`` (what each checks first)."""
-    from gyrofilter.analysis.allan import overlapping_adev
-    from gyrofilter.analysis.arma import prepare_series
-    from gyrofilter.analysis.bias_kf import BiasKalmanFilter
+    from gyrofilter.analysis.noise.allan import overlapping_adev
+    from gyrofilter.analysis.arma.identify import prepare_series
+    from gyrofilter.analysis.arma.bias_kf import BiasKalmanFilter
     from gyrofilter.sim.profiles import profile_samples_dps
     from gyrofilter.sim.model import validate_model
-    from gyrofilter.sources.mpu6050 import sample_rate_settings
+    from gyrofilter.sources.mpu6050.driver import sample_rate_settings
 
     header = "# gyrofilter-recording: 1\n# sample_rate_hz: {}\n# gyro_unit: dps\ngx,gy,gz\n0,0,0\n"
     return {

@@ -1,4 +1,4 @@
-"""Robust wavelet variance (gyrofilter.analysis.wv_robust): the biweight M-scale is consistent and
+"""Robust wavelet variance (gyrofilter.analysis.noise.wv_robust): the biweight M-scale is consistent and
 of the stated efficiency at a Gaussian, unmoved by isolated spikes where the classical wavelet
 variance moves, and consistent at a heavy-tailed white noise once corrected for it. Seeded."""
 import math
@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from gyrofilter.analysis import gmwm
-from gyrofilter.analysis import wv_robust as wr
+from gyrofilter.analysis.noise import gmwm
+from gyrofilter.analysis.noise import wv_robust as wr
 from gyrofilter.sim.simulate import simulate
 
 FS = 100.0

@@ -23,10 +23,10 @@ import sys
 
 import numpy as np
 
-from gyrofilter.analysis.allan import overlapping_adev
-from gyrofilter.analysis.noise_fit import characterise
-from gyrofilter.analysis.noise_model import convert
-from gyrofilter.analysis.plots_allan import AXIS_COLOURS, plot_allan, plot_before_after
+from gyrofilter.analysis.noise.allan import overlapping_adev
+from gyrofilter.analysis.noise.fit import characterise
+from gyrofilter.analysis.noise.model import convert
+from gyrofilter.analysis.noise.plots import AXIS_COLOURS, plot_allan, plot_before_after
 from gyrofilter.filter.calibration import calibration_samples
 from gyrofilter.filter.presets import PRESETS
 from gyrofilter.recording import read_recording

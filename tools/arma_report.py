@@ -10,7 +10,7 @@ model and the ARMA(1, 1) next to paper 003's x_t - 1.0000 x_{t-1} = a_t - 0.9994
 
 Then which model reproduces the measured overlapping Allan deviation better: the chosen ARMA
 and the ARMA(1, 1), simulated (same length and rate, several seeds, RMS of the deviations), and
-the Allan-based noise model (gyrofilter.analysis.noise_fit: Q/N/B/K/R), simulated through
+the Allan-based noise model (gyrofilter.analysis.noise.fit: Q/N/B/K/R), simulated through
 gyrofilter.sim.simulate (white noise N, bias instability B, rate random walk K, rate ramp R,
 quantisation 1/131 deg/s) over the same seeds. Discrepancy = RMS over tau of
 log10(model ADEV / measured ADEV) (0.01 ~ 2.3 % off).
@@ -25,9 +25,11 @@ import sys
 
 import numpy as np
 
-from gyrofilter.analysis import arma, arma_checks, arma_fit
-from gyrofilter.analysis.allan import overlapping_adev
-from gyrofilter.analysis.noise_fit import characterise_axis
+from gyrofilter.analysis.arma import identify as arma
+from gyrofilter.analysis.arma import checks as arma_checks
+from gyrofilter.analysis.arma import fit as arma_fit
+from gyrofilter.analysis.noise.allan import overlapping_adev
+from gyrofilter.analysis.noise.fit import characterise_axis
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.simulate import simulate_dps
 

@@ -4,13 +4,13 @@
     python tools/bench_allan.py [--samples 10000000] [--skip-day]
 
 1. Overlapping Allan deviation of the same 10 million samples at the same taus (the default
-   grid: ~10 per decade, 1 sample .. N/9, 59 taus): ``gyrofilter.analysis.allan.overlapping_adev``
+   grid: ~10 per decade, 1 sample .. N/9, 59 taus): ``gyrofilter.analysis.noise.allan.overlapping_adev``
    against ``allantools.oadev(x, rate, data_type="freq", taus=...)``. Time = best of 2 runs;
    peak memory = ``tracemalloc`` peak of one call (numpy reports its buffers to tracemalloc),
    also as a multiple of the input array (80 MB). The largest relative difference of the two
    results is printed as a check. Targets (issue 4): >= 2x faster, peak < 3x the input.
 2. A 24-hour 100 Hz three-axis recording (8.64 million samples per axis, white noise + rate
-   random walk + bias): ``gyrofilter.analysis.noise_fit.characterise`` (deviation, EDF intervals, NNLS
+   random walk + bias): ``gyrofilter.analysis.noise.fit.characterise`` (deviation, EDF intervals, NNLS
    fit with covariance, read-offs) wall time. Target: well under a minute.
 3. With ``--day-file``: the same day written as an MPU6050-style .csv.gz recording (lsb) and the
    command ``gyrofilter allan FILE --json OUT`` timed end to end in a fresh process (reading the
@@ -44,7 +44,7 @@ def _peak(fn):
 def oadev_vs_allantools(n_samples):
     import allantools
 
-    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.analysis.noise.allan import overlapping_adev
 
     fs = 100.0
     rng = np.random.default_rng(0)
@@ -59,7 +59,7 @@ def oadev_vs_allantools(n_samples):
     print(f"overlapping Allan deviation: {n_samples:,} samples (input {mb:.0f} MB), {tau.size} taus "
           f"{tau[0]:g} .. {tau[-1]:g} s")
     print(f"  {'implementation':<44}{'time s':>9}{'peak MB':>10}{'peak/input':>12}  (tracemalloc: memory allocated during the call)")
-    print(f"  {'gyrofilter.analysis.allan.overlapping_adev':<44}{t_ours:>9.2f}{m_ours / 1e6:>10.0f}{m_ours / x.nbytes:>11.2f}x")
+    print(f"  {'gyrofilter.analysis.noise.allan.overlapping_adev':<44}{t_ours:>9.2f}{m_ours / 1e6:>10.0f}{m_ours / x.nbytes:>11.2f}x")
     print(f"  {'allantools ' + allantools.__version__ + ' oadev(data_type=freq)':<44}{t_ref:>9.2f}{m_ref / 1e6:>10.0f}"
           f"{m_ref / x.nbytes:>11.2f}x")
     print(f"  ratio: {t_ref / t_ours:.1f}x faster, {m_ref / max(m_ours, 1):.1f}x less peak memory; "
@@ -68,7 +68,7 @@ def oadev_vs_allantools(n_samples):
 
 
 def day_characterisation():
-    from gyrofilter.analysis.noise_fit import characterise
+    from gyrofilter.analysis.noise.fit import characterise
 
     fs, n = 100.0, 24 * 3600 * 100
     rng = np.random.default_rng(1)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Benchmark of the bias-augmented Kalman filter (gyrofilter.analysis.bias_kf): samples per second.
+"""Benchmark of the bias-augmented Kalman filter (gyrofilter.analysis.arma.bias_kf): samples per second.
 
     python tools/bench_bias_kf.py
 
@@ -11,7 +11,7 @@ sample; a Raspberry Pi is roughly 5-10x slower than this machine.
 
 import numpy as np
 
-from gyrofilter.analysis.bias_kf import BiasKalmanFilter
+from gyrofilter.analysis.arma.bias_kf import BiasKalmanFilter
 
 from bench import best_of  # tools/bench.py, beside this file
 

@@ -8,7 +8,7 @@ What is timed (wall clock on this machine, per gyro frame = one three-axis sampl
   a per-frame ``struct.unpack`` loop building the same rows;
 * read: ``source.read()`` end to end through smbus2's real code (INT_STATUS + FIFO_COUNT + FIFO
   data per poll, 20 frames per poll at 1 kHz) with the register-level model of
-  gyrofilter/sources/mpu6050_model.py behind smbus2's ``ioctl``; the time spent inside the fake ioctl (the
+  gyrofilter/sources/mpu6050/model.py behind smbus2's ``ioctl``; the time spent inside the fake ioctl (the
   model, standing in for the kernel) is measured and subtracted, so "host" is driver + smbus2;
 * baselines through the same smbus2 + model: one ``read_byte_data`` per gyro register (6 per
   sample, the naive loop), and one 6-byte ``read_i2c_block_data`` of GYRO_XOUT_H per sample.
@@ -26,9 +26,9 @@ import time
 import numpy as np
 
 
-from gyrofilter.sources.mpu6050_model import FakeI2CBus, MPU6050Model, VirtualClock
+from gyrofilter.sources.mpu6050.model import FakeI2CBus, MPU6050Model, VirtualClock
 
-from gyrofilter.sources.mpu6050 import open_mpu6050
+from gyrofilter.sources.mpu6050.driver import open_mpu6050
 
 SCL_HZ = 400e3
 

@@ -29,7 +29,7 @@ def measure(func):
 def main():
     from scipy.signal import welch
 
-    from gyrofilter.analysis.detectors.narrowband import welch_psd
+    from gyrofilter.analysis.gap.detectors.narrowband import welch_psd
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--hours", type=float, default=24.0)

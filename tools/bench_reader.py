@@ -138,7 +138,7 @@ def allan_end_to_end(paths, repeats):
     except ImportError:
         print("allan end to end: allantools is not installed (pip install allantools); skipped")
         return
-    from gyrofilter.analysis.allan import cluster_sizes
+    from gyrofilter.analysis.noise.allan import cluster_sizes
     from gyrofilter.recording import iter_recording
 
     print(f"allan end to end, fresh processes, wall s (best of {repeats})")

@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from gyrofilter.analysis.bias_kf import BiasKalmanFilter, BiasKFSettings
+from gyrofilter.analysis.arma.bias_kf import BiasKalmanFilter, BiasKFSettings
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.simulate import simulate_dps
 
@@ -37,12 +37,13 @@ SIM_FS = 100.0
 
 
 def arma_settings(x_rest_dps, fs, fallback: BiasKFSettings):
-    """Settings whose bias model is the ARMA(1, 1) of a still stretch (paper 003 via gyrofilter.analysis.arma).
+    """Settings whose bias model is the ARMA(1, 1) of a still stretch (paper 003 via gyrofilter.analysis.arma.identify).
 
     Per axis; an axis whose ARMA(1, 1) has no Gauss-Markov decomposition keeps the fallback's model.
     Returns (settings, description).
     """
-    from gyrofilter.analysis import arma, arma_fit
+    from gyrofilter.analysis.arma import identify as arma
+    from gyrofilter.analysis.arma import fit as arma_fit
 
     taus, sigmas, walks, desc = [], [], [], []
     for i, name in enumerate("xyz"):
@@ -236,7 +237,7 @@ def main(argv=None):
                       f"{row['kf_start'] * to_mrad:.3f} | {row['kf_end'] * to_mrad:.3f} | {row['arma_start'] * to_mrad:.3f} | {row['arma_end'] * to_mrad:.3f} |")
         tot = lambda key: math.sqrt(np.mean([row[key] ** 2 for r in broad for row in r["rows"]])) * to_mrad  # noqa: E731
         print(f"| **RMS over all rest phases** | | | | {tot('startup'):.3f} | {tot('kf_start'):.3f} | {tot('kf_end'):.3f} | {tot('arma_start'):.3f} | {tot('arma_end'):.3f} |")
-        print("\nKF-ARMA: bias model from the ARMA(1, 1) of each trial's first rest phase (gyrofilter.analysis.arma):\n")
+        print("\nKF-ARMA: bias model from the ARMA(1, 1) of each trial's first rest phase (gyrofilter.analysis.arma.identify):\n")
         for r in broad:
             print(f"- {r['name']}: {r['arma_desc']}")
         print("\nRate RMSE against the optical reference (deg/s, norm over 3 axes, on 0.1 s block means; blocks with occlusion skipped):\n")

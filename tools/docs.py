@@ -48,7 +48,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from gyrofilter.analysis.gap import analyse_gap
+from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.evaluation import evaluate as E
 from gyrofilter.filter.settings import SETTING_RANGES, FilterSettings
 from gyrofilter.filter.presets import DEFAULT_PRESET, PRESETS

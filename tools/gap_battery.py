@@ -5,7 +5,7 @@
 
 Draws ``--cases`` cases with :func:`tests.hidden_effects.draw_case` (seeds ``seed .. seed +
 cases - 1``; every effect of the table equally often, plus clean cases), runs
-:func:`gyrofilter.analysis.gap.analyse_gap` on each and prints per effect: cases, named on the right
+:func:`gyrofilter.analysis.gap.pipeline.analyse_gap` on each and prints per effect: cases, named on the right
 axis, named with parameters within tolerance, and extra findings; for clean cases the fraction
 with any finding; and how often hidden heavy tails were named outliers and hidden outliers heavy
 tails (on the hidden axis). ``--scale 0.333 --duration 600`` is the harder set (effects a third of the
@@ -37,7 +37,7 @@ def battery_cases(cases, seed, *, effects=None, duration_s=None, scale=1.0):
 
 
 def run_synthetic(args):
-    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
 
     rows = []
     t_all = time.perf_counter()
@@ -60,7 +60,7 @@ def run_synthetic(args):
 
 
 def run_real(args):
-    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
     from gyrofilter.recording import read_recording
 
     rows = []

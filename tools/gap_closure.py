@@ -19,7 +19,7 @@ each BROAD trial (``recordings/``; movement flag 0, less 1.5 s at both ends, the
   deviation at one tau or one band power; z in units of the simulated spread);
 * with the distance columns: the weighted distance (1/J) Σ_j (ν̂²_j - ν²_j)² / Var(ν̂²_j) of the
   extended model's Haar wavelet variance (mean of 4 simulations) and of the GMWM-style fit
-  (``gyrofilter.analysis.gmwm.select_model``, all dyadic scales) to the measured one (docs/gap.md);
+  (``gyrofilter.analysis.noise.gmwm.select_model``, all dyadic scales) to the measured one (docs/gap.md);
 * **held out**, the check independent of D and of the fitted data: the record cut in two halves,
   the gap and the GMWM-style fit made on one half and their wavelet variances scored by the same
   distance against the *other* half's, the mean of both directions. In-sample, the GMWM-style fit
@@ -80,7 +80,7 @@ def null_band(base_model, n, fs, seeds, *, q=0.95):
     ``base_model`` (``len(seeds)`` runs of ``n`` samples at ``fs``), each analysed by ``analyse_gap``."""
     import numpy as np
 
-    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
     from gyrofilter.sim.simulate import simulate
 
     values = []
@@ -101,7 +101,7 @@ def worst_feature(summary):
     if "departs_most" in summary:
         return f"{summary['departs_most']['where'].split(' (')[0]} (z {summary['departs_most']['z']:+.1f})"
 
-    from gyrofilter.analysis.gap_features import _LOG_FLOOR
+    from gyrofilter.analysis.gap.features import _LOG_FLOOR
 
     best = None
     for key, where in (("adev", "adev_tau_s"), ("band", "band_edges_hz")):
@@ -124,7 +124,7 @@ def distances(rec, rep, seed):
     """Per axis (distance of the extended model, distance of the GMWM-style fit, its name)."""
     import numpy as np
 
-    from gyrofilter.analysis import gmwm
+    from gyrofilter.analysis.noise import gmwm
 
     out = []
     gyro = rec.gyro_dps
@@ -142,8 +142,8 @@ def held_out(rec, seed):
     ``rec``, to the wavelet variance of the other half, mean of the two directions."""
     import numpy as np
 
-    from gyrofilter.analysis import gmwm
-    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.analysis.noise import gmwm
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
     from gyrofilter.recording import Recording
 
     half = len(rec) // 2
@@ -174,7 +174,7 @@ def main(argv=None):
                         "CC BY-NC-SA); default: ../shared/data/adis16405_long beside the repository")
     args = p.parse_args(argv)
 
-    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
 
     if not glob.glob(os.path.join(args.adis, "*.csv.gz")):
         print(f"note: {args.adis} absent, ADIS16405 records skipped", file=sys.stderr)

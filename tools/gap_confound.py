@@ -10,7 +10,7 @@ Records: gyrofilter/data/mpu6050_model.json simulated for 1 h at 100 Hz (``--see
 The numbers are read from the report's notes ("readings weighed on D"). The last line counts the
 axes whose model has a bias instability: on how many it is named, and how the slow detector's
 two wanders were weighed (notes "readings of the slow wander weighed on D";
-``gyrofilter.analysis.gap_readings.weigh_wanders``).
+``gyrofilter.analysis.gap.readings.weigh_wanders``).
 """
 import argparse
 import json
@@ -22,7 +22,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from gyrofilter.analysis.gap import analyse_gap  # noqa: E402
+from gyrofilter.analysis.gap.pipeline import analyse_gap  # noqa: E402
 from gyrofilter.sim.simulate import simulate  # noqa: E402
 from gyrofilter.units import AXES  # noqa: E402
 

@@ -5,7 +5,7 @@
 
 For every effect kind of :mod:`gyrofilter.sim.hidden_effects` draws ``--cases`` cases (seeds
 ``seed + k``; random axis and parameters over the kind's ranges, 30-60 min unless
-``--duration``), runs :func:`gyrofilter.analysis.gap.analyse_gap` on each with ``--bootstrap``
+``--duration``), runs :func:`gyrofilter.analysis.gap.pipeline.analyse_gap` on each with ``--bootstrap``
 replicates, and counts, for the cases where the hidden effect is named on its axis, how often
 every true parameter lies inside the finding's ``params_ci95`` (a ``phase_rad`` modulo 2 pi;
 ``colored_noise``'s ``lag2`` where the finding reports it, against lag1² where the hidden
@@ -33,9 +33,9 @@ from collections import defaultdict
 import numpy as np
 from scipy.stats import t as student_t
 
-import gyrofilter.analysis.gap_intervals as gi
+import gyrofilter.analysis.gap.intervals as gi
 import gyrofilter.sim.hidden_effects as he
-from gyrofilter.analysis.gap import analyse_gap
+from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.units import AXES
 
 

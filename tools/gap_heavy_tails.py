@@ -9,7 +9,7 @@ N = 0.01 deg/s/sqrt(Hz) at 100 Hz through a first-order low pass (lag1 0.5), wit
 innovations at 30 times the others' sd (``heavy_tails``; 5 % beyond 6 core sd). ``gap`` runs on it
 as it is and with the heavy-tail stage switched off (the previous reading); printed: the findings,
 D of the axis before and after, and an Allan distance independent of D: the weighted distance
-(:func:`gyrofilter.analysis.gmwm.wv_distance`, all dyadic scales) between the record's Haar
+(:func:`gyrofilter.analysis.noise.gmwm.wv_distance`, all dyadic scales) between the record's Haar
 wavelet variance and the mean of 4 simulations of each extended model, and of a direct two-term
 composite fit (white noise + one Gauss-Markov term, the AR(1)) to the record.
 
@@ -26,8 +26,9 @@ import time
 
 import numpy as np
 
-from gyrofilter.analysis import detectors as det
-from gyrofilter.analysis import gap, gmwm
+from gyrofilter.analysis.gap import detectors as det
+from gyrofilter.analysis.gap import pipeline as gap
+from gyrofilter.analysis.noise import gmwm
 from gyrofilter.recording import read_recording
 from gyrofilter.sim.simulate import simulate
 

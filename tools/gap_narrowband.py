@@ -4,14 +4,14 @@ and without a ``narrowband`` term estimated from the spectrum.
     python tools/gap_narrowband.py RECORDING AXIS [--seed 0] [--sims 12]
 
 Runs ``analyse_gap`` on RECORDING, estimates the strongest band of AXIS (x, y or z) from the Welch
-PSD (:func:`gyrofilter.analysis.detectors.band_estimate`) and prints the gap's discrepancy D (docs/gap.md) against the recording,
+PSD (:func:`gyrofilter.analysis.gap.detectors.band_estimate`) and prints the gap's discrepancy D (docs/gap.md) against the recording,
 from the same simulation seeds, of: the extended model; the extended model plus the band as a
 ``narrowband`` effect, white noise reduced to keep the per-sample variance (N'² = N² - rms² / f_s);
 and the same with the white level read off the Allan deviation at τ = 1 s (N = σ(1 s), IEEE Std
 952-1997 C.1) and a ``colored_noise`` term switched to ``preserve: arw`` (so N is the long-τ level);
 and that with the colored noise's lag1 re-solved so that noise plus line have the measured lag-1
 autocorrelation (:func:`with_narrowband`).
-The gap now proposes ``narrowband`` itself (:func:`gyrofilter.analysis.detectors.detect_narrowband`); this
+The gap now proposes ``narrowband`` itself (:func:`gyrofilter.analysis.gap.detectors.detect_narrowband`); this
 tool measures the steps one by one.
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ import argparse
 import copy
 import math
 
-from gyrofilter.analysis.detectors import band_estimate, narrowband_lags
+from gyrofilter.analysis.gap.detectors import band_estimate, narrowband_lags
 
 
 def with_narrowband(model, axis, band, arw_dps_per_sqrt_hz=None, lag1=None):
@@ -66,11 +66,11 @@ def _colored_lag1(r1, arw_dps_per_sqrt_hz, fs, band, current):
 
 
 def axis_discrepancy(x_dps, sample_rate_hz, models, axis_index, seeds):
-    """The gap's D (:func:`gyrofilter.analysis.gap_features.discrepancy`) of each model's axis against ``x_dps``,
+    """The gap's D (:func:`gyrofilter.analysis.gap.features.discrepancy`) of each model's axis against ``x_dps``,
     every model simulated with the same ``seeds``. Returns a list of floats."""
     import numpy as np
 
-    from gyrofilter.analysis import gap_features
+    from gyrofilter.analysis.gap import features as gap_features
     from gyrofilter.sim.model import validate_model
     from gyrofilter.sim.simulate import simulate_axis_dps
 
@@ -97,8 +97,8 @@ def main(argv=None):
 
     import numpy as np
 
-    from gyrofilter.analysis.allan import overlapping_adev
-    from gyrofilter.analysis.gap import analyse_gap
+    from gyrofilter.analysis.noise.allan import overlapping_adev
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
     from gyrofilter.recording import read_recording
 
     rec = read_recording(args.recording)

@@ -2,7 +2,7 @@
 
     python tools/gap_real.py [--seed 0]
 
-For every static MPU6050 recording in ``recordings/`` runs ``gyrofilter.analysis.gap.analyse_gap``
+For every static MPU6050 recording in ``recordings/`` runs ``gyrofilter.analysis.gap.pipeline.analyse_gap``
 (seed 0, the command's defaults), writes the JSON reports to ``docs/gap/<name>.json`` and
 ``docs/figures/gap_<name>_{adev,spectrum}_<axis>.png`` for the axes with findings, and prints
 the table. ``tools/docs.py`` writes the table, the evidence and the figure links into docs/gap.md
@@ -16,7 +16,7 @@ import json
 import os
 import time
 
-from gyrofilter.analysis.gap import analyse_gap
+from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.cli.outputs import write_json
 from gyrofilter.recording import read_recording
 
@@ -40,7 +40,7 @@ def _fmt_params(params):
 
 def analyse(seed=0):
     """Run the gap analysis on every static recording; write the reports and figures."""
-    from gyrofilter.analysis.gap_report import plot_adev, plot_spectrum
+    from gyrofilter.analysis.gap.report import plot_adev, plot_spectrum
 
     os.makedirs(JSON_DIR, exist_ok=True)
     for path in recording_paths():

@@ -4,13 +4,13 @@
 
 For the long ADIS16405 records (``../shared/data/adis16405_long``, skipped when absent; licence
 CC BY-NC-SA, never copied into the repo) and the static MPU6050 logs (``recordings/``), per axis:
-the measured Haar wavelet variance ν̂² (= overlapping AVAR / 2, :mod:`gyrofilter.analysis.gmwm`) and the
+the measured Haar wavelet variance ν̂² (= overlapping AVAR / 2, :mod:`gyrofilter.analysis.noise.gmwm`) and the
 weighted distance (1/J) Σ_j (ν̂²_j - ν²_j)² / Var(ν̂²_j) to the curves of
 
 * the gap's baseline (bias + white noise + quantisation) and extended model (``analyse_gap``;
   their curves are the mean over ``--sims`` simulations),
-* the five-term Allan NNLS fit (``gyrofilter.analysis.noise_fit``: Q, N, B, K, R),
-* the GMWM-style composite fit (``gyrofilter.analysis.gmwm.select_model``).
+* the five-term Allan NNLS fit (``gyrofilter.analysis.noise.fit``: Q, N, B, K, R),
+* the GMWM-style composite fit (``gyrofilter.analysis.noise.gmwm.select_model``).
 
 About 1 means the model is within the sampling error at every dyadic scale. Prints a Markdown table.
 """
@@ -38,9 +38,9 @@ def compare_record(rec, *, seed=0, sims=4, name=None):
     """Rows (one dict per axis) of distances for one recording; numbers only."""
     import numpy as np
 
-    from gyrofilter.analysis import gmwm
-    from gyrofilter.analysis.gap import analyse_gap
-    from gyrofilter.analysis.noise_fit import characterise_axis
+    from gyrofilter.analysis.noise import gmwm
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
+    from gyrofilter.analysis.noise.fit import characterise_axis
 
     t0 = time.perf_counter()
     rep = analyse_gap(rec, seed=seed, recording_name=name)

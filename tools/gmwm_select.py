@@ -8,7 +8,7 @@ a rate random walk (2e-4 deg/s/sqrt(s)), with both, with two Gauss-Markov terms 
 0.004 deg/s, 300 s), and the last two again with a heavy-tailed white noise (5 % of the samples at
 20 times the others' sd; the classical wavelet variance, as ``gap`` uses it there, with the
 WVIC's bootstrap simulating the heavy tails). The composite fit of the gap analysis (white noise,
-optional random walk, 0-3 Gauss-Markov terms, tau >= 1 s; :func:`gyrofilter.analysis.gmwm.select_model`)
+optional random walk, 0-3 Gauss-Markov terms, tau >= 1 s; :func:`gyrofilter.analysis.noise.gmwm.select_model`)
 chooses by ``criterion="wvic"`` and by ``"q2p"``; printed: how often each names the true model,
 and how often it chooses one with more terms, fewer, or as many but others.
 """
@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from gyrofilter.analysis import gmwm
+from gyrofilter.analysis.noise import gmwm
 from gyrofilter.sim.simulate import simulate
 
 FS = 100.0

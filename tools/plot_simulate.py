@@ -40,7 +40,7 @@ def main(argv=None):
 
     plt = pyplot()
 
-    from gyrofilter.analysis.allan import overlapping_adev
+    from gyrofilter.analysis.noise.allan import overlapping_adev
     from gyrofilter.sim.simulate import simulate
 
     fig, axes = plt.subplots(2, 5, figsize=(18, 7.5), sharex=True)

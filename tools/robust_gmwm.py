@@ -6,9 +6,9 @@ Per case, ``--seeds`` records of white noise N = 0.01 deg/s/sqrt(Hz), a Gauss-Ma
 (0.005 deg/s, 20 s) and a rate random walk (2e-4 deg/s/sqrt(s)) at 100 Hz, with nothing, isolated
 spikes (``outliers``: 1 in 5000 or 1 in 500 samples, median 2 deg/s = 20 noise sd) or a
 heavy-tailed white noise (``heavy_tails``: 5 % of the samples at 20 times the others' sd). The
-composite fit of the gap analysis (:func:`gyrofilter.analysis.gmwm.select_model`: white noise,
+composite fit of the gap analysis (:func:`gyrofilter.analysis.noise.gmwm.select_model`: white noise,
 an optional random walk, 0-3 Gauss-Markov terms, by WVIC, on the scales tau >= 1 s) runs on the
-classical and on the robust wavelet variance (:mod:`gyrofilter.analysis.wv_robust`; consistent at
+classical and on the robust wavelet variance (:mod:`gyrofilter.analysis.noise.wv_robust`; consistent at
 the heavy-tailed noise for that case, whose WVIC bootstrap simulates it for both), of the raw record and, for spikes, of the record cleaned by
 the outlier detector as ``gap`` does. Printed per variant: how often the true model
 (WN+RW+1GM) is chosen, the median |error| of N, of the Gauss-Markov sigma and of K (a missing
@@ -24,9 +24,9 @@ import time
 
 import numpy as np
 
-from gyrofilter.analysis import detectors as det
-from gyrofilter.analysis import gmwm
-from gyrofilter.analysis.wv_robust import ROBUST_EFFICIENCY
+from gyrofilter.analysis.gap import detectors as det
+from gyrofilter.analysis.noise import gmwm
+from gyrofilter.analysis.noise.wv_robust import ROBUST_EFFICIENCY
 from gyrofilter.sim.simulate import simulate
 
 FS = 100.0

@@ -1,9 +1,19 @@
-"""What a recording says about its gyro: Allan deviation and noise coefficients (``allan``;
-``noise_model`` the five-term model, ``noise_fit`` its fit, ``noise_intervals``, ``noise_readoff``,
-``noise_screen`` the gross errors, ``noise_export`` the JSON and Kalibr files; papers 000, 002),
-ARMA and bias-state models (``arma``, ``arma_fit``, ``arma_checks``, ``bias_kf``; paper 003), the
-composite wavelet-variance fit (``gmwm``), the model-gap analysis (``gap``, ``gap_features``,
-``gap_baseline``, ``gap_composite``, ``gap_readings``, ``gap_intervals`` and ``gap_reestimate`` the
-parameters' intervals, ``detectors``, ``gap_report``), still-sensor reading
-(``still``), the Allan figure (``plots_allan``) and many recordings at once (``fleet``). Uses the
-core, ``gyrofilter.filter`` and ``gyrofilter.sim``; nothing here is imported by ``import gyrofilter``."""
+"""What a recording says about its gyro. One folder per family, the folder name says where a
+decision lives:
+
+- ``noise/``: the Allan deviation and the five noise coefficients (papers 000, 002): ``allan``
+  (the deviation and its intervals), ``model`` (the five-term model), ``fit`` (its fit),
+  ``intervals``, ``readoff`` (the slope read-off), ``screen`` (gross errors), ``export`` (the JSON
+  and Kalibr files), ``plots`` (the Allan figure), ``gmwm`` and ``wv_robust`` (the wavelet-variance
+  fit of a composite model).
+- ``gap/``: the model-gap analysis, what the plain simulation gets wrong and why: ``pipeline``
+  (the steps in order), ``baseline``, ``features``, ``detectors/`` (one statistic per effect),
+  ``readings`` (the confounded causes), ``composite``, ``intervals`` and ``reestimate`` (the
+  parameters' intervals), ``report`` (Markdown and figures).
+- ``arma/``: ARMA and bias-state models (paper 003): ``identify`` (order selection, the bias
+  model), ``fit``, ``checks`` (the residual tests), ``bias_kf`` (the bias-tracking filter).
+- ``stats``: the statistics the families share; ``still``: is the record still, and the Allan
+  analysis of a file; ``fleet``: many recordings at once.
+
+Uses the core, ``gyrofilter.filter`` and ``gyrofilter.sim``; nothing here is imported by
+``import gyrofilter``."""

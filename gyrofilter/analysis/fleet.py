@@ -58,10 +58,10 @@ from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
-from .allan import MIN_CLUSTERS
-from .gap import analyse_gap, gap_columns
-from .noise_export import JSON_KEY, kalibr_yaml, to_json
-from .noise_model import TERM_SYMBOL, TERM_UNIT, TERMS
+from .noise.allan import MIN_CLUSTERS
+from .gap.pipeline import analyse_gap, gap_columns
+from .noise.export import JSON_KEY, kalibr_yaml, to_json
+from .noise.model import TERM_SYMBOL, TERM_UNIT, TERMS
 from .still import characterise_recording
 from ..errors import MissingExtraError, SettingsError, one_line
 from ..extras import install_hint, require

@@ -1,7 +1,7 @@
 """A still sensor's recording, from the file to its noise coefficients: read the axes, warn about
 missing samples, refuse gross errors, say when it moved (:func:`not_static`) or was clipped
 (:func:`clipped`), characterise each axis (papers 000, 002: the Allan
-deviation and its coefficients, :mod:`gyrofilter.analysis.noise_fit`).
+deviation and its coefficients, :mod:`gyrofilter.analysis.noise.fit`).
 
 The one path from a file to the Allan results of ``gyrofilter allan``, ``gyrofilter arma`` and
 a fleet run (:mod:`gyrofilter.analysis.fleet`). Warnings go to the caller's ``warn(text)``;
@@ -14,10 +14,10 @@ import numpy as np
 from ..errors import RecordingError
 from ..recording import collect_columns, iter_recording, warn_about_gaps
 from ..units import AXES, to_dps
-from .allan import MIN_CLUSTERS, AllanInputError
-from .detectors.common import block_means
-from .noise_fit import characterise_axis
-from .noise_screen import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
+from .noise.allan import MIN_CLUSTERS, AllanInputError
+from .stats import block_means
+from .noise.fit import characterise_axis
+from .noise.screen import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
 
 #: block-mean excursion (deg/s) beyond which a recording is called not static
 STATIC_LIMIT_DPS = 1.0
@@ -85,7 +85,7 @@ def read_axes(path, axes, with_t=False):
 def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
-    (:func:`~gyrofilter.analysis.noise_screen.gross_errors`); with ``keep`` only warn (``warn(text)``).
+    (:func:`~gyrofilter.analysis.noise.screen.gross_errors`); with ``keep`` only warn (``warn(text)``).
     Samples are never dropped. ``series`` start at the file's sample ``first_row``.
 
     ``head``: the file's :class:`~gyrofilter.recording.RecordingHead` (for its path and line
@@ -125,9 +125,9 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     ``path``: the recording; ``axes``: axis letters (default all, :data:`~gyrofilter.units.AXES`); ``confidence``: level of the
     Allan deviation's confidence intervals (0..1, 0.95 = 95 %); ``min_clusters``: fewest
     clusters an averaging time tau needs to be used; ``keep_outliers``: analyse gross errors
-    instead of refusing. Each :class:`~gyrofilter.analysis.noise_model.AxisNoise` holds the
+    instead of refusing. Each :class:`~gyrofilter.analysis.noise.model.AxisNoise` holds the
     Allan deviation (deg/s) against tau (s) and the fitted coefficients (N in deg/sqrt(s) = deg/s/sqrt(Hz),
-    B in deg/s, K in deg/s/sqrt(s); :mod:`gyrofilter.analysis.noise_model`).
+    B in deg/s, K in deg/s/sqrt(s); :mod:`gyrofilter.analysis.noise.model`).
     """
     head, series = read_axes(path, axes)
     for text in head.warnings:

@@ -7,17 +7,17 @@ to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` 
 log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
 
 The recording is read in chunks into one float64 array per axis. Gross errors (isolated spikes
-far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise_screen.gross_errors`)
+far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise.screen.gross_errors`)
 are refused before any computation unless ``--keep-outliers`` is given; they are never dropped.
 Output files are written only once every result is finite, each whole or not at all.
 """
 import sys
 
-from ..analysis.allan import MIN_CLUSTERS, AllanInputError
+from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError
 from ..analysis.fleet import FleetSettings
-from ..analysis.noise_export import kalibr_yaml, to_json
-from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert
-from ..analysis.plots_allan import plot_allan
+from ..analysis.noise.export import kalibr_yaml, to_json
+from ..analysis.noise.model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert
+from ..analysis.noise.plots import plot_allan
 from ..analysis.still import characterise_recording
 from ..errors import SettingsError
 from ..plots import check_figure_path
@@ -76,7 +76,7 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     """What ``allan`` computes of one recording ``path``: (head, {axis: AxisNoise}, the ``--json``
     document of docs/formats.md section 4), through :func:`~gyrofilter.analysis.still.characterise_recording`
     (its arguments, ``warn(text)`` and ``progress(text)`` included) and
-    :func:`~gyrofilter.analysis.noise_export.to_json`; the duration is rows / sample rate (s).
+    :func:`~gyrofilter.analysis.noise.export.to_json`; the duration is rows / sample rate (s).
     A result that is not finite raises AllanInputError naming the file."""
     try:
         head, results = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,

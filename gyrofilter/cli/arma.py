@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 
-from ..analysis import arma
+from ..analysis.arma import identify as arma
 from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
 from ..recording import warn_about_gaps

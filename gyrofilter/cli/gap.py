@@ -16,10 +16,10 @@ import os
 import sys
 import time
 
-from ..analysis import gap_report
+from ..analysis.gap import report as gap_report
 from ..analysis.fleet import FleetSettings
-from ..analysis.gap import analyse_gap, gap_columns
-from ..analysis.gap_intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
+from ..analysis.gap.pipeline import analyse_gap, gap_columns
+from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import SettingsError
 from ..plots import pyplot
 from ..recording import read_recording, warn_about_gaps
@@ -60,7 +60,7 @@ def check_options(seed, sims, bootstrap=None):
 
 def analyse(path, *, seed=0, sims=None, bootstrap=None, warn, progress):
     """What ``gap`` computes of one recording ``path``: (the Recording, the gap report, which is
-    the ``--json`` document of docs/formats.md), through :func:`~gyrofilter.analysis.gap.analyse_gap`
+    the ``--json`` document of docs/formats.md), through :func:`~gyrofilter.analysis.gap.pipeline.analyse_gap`
     with ``seed``, ``sims`` (``n_sims``) and ``bootstrap``. The reader's warnings and the gaps in ``t`` go to
     ``warn(text)``, the steps to ``progress(text)``. Only the columns the analysis uses are kept,
     integer (``lsb``) readings as float32, which holds them exactly (``gap_columns``)."""

@@ -325,7 +325,7 @@ def write_json(path, doc):
 
 
 def write_json_document(path, doc):
-    """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise_export.to_json`) to ``path`` (no
+    """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise.export.to_json`) to ``path`` (no
     replacing: give it the path :func:`replacing` yields)."""
     with open(path, "w", encoding="utf-8") as fh:
         json.dump(doc, fh, indent=1, allow_nan=False)

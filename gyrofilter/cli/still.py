@@ -1,6 +1,6 @@
 """What the commands that analyse a still recording (``allan``, ``arma``) share: the
 ``--keep-outliers`` option, the way past :func:`gyrofilter.analysis.still.refuse_gross_errors`."""
-from ..analysis.noise_screen import GROSS_LIMIT_DPS, GROSS_Z
+from ..analysis.noise.screen import GROSS_LIMIT_DPS, GROSS_Z
 
 
 def add_keep_outliers_argument(parser):

@@ -324,7 +324,7 @@ def narrowband_filter(rms_dps, center_hz, bandwidth_hz, sample_rate_hz):
 
 
 def arma_filter(phi, theta, sigma_a_dps):
-    """(b, a) of the ``arma`` effect in the signs of :mod:`gyrofilter.analysis.arma` (paper 003):
+    """(b, a) of the ``arma`` effect in the signs of :mod:`gyrofilter.analysis.arma.identify` (paper 003):
     x[n] - Σ φ_i x[n-i] = a[n] - Σ θ_j a[n-j], a ~ N(0, σ_a²), so A(z) = 1 - Σ φ_i z⁻ⁱ and
     B(z) = σ_a (1 - Σ θ_j z⁻ʲ) (Box & Jenkins, eq. 3.4.1).
 

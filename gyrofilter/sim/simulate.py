@@ -234,7 +234,7 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     ``chunk_samples`` samples whose concatenation equals ``simulate(model, duration_s,
     seed=seed).gyro_dps[:, axis]`` bit for bit (every random term draws from its own stream,
     keyed by the axis, so the other axes need not be generated). For analyses that simulate
-    one axis many times (:mod:`gyrofilter.analysis.gap`): no time column, no other axes, memory bounded
+    one axis many times (:mod:`gyrofilter.analysis.gap.pipeline`): no time column, no other axes, memory bounded
     by the block.
 
     ``model``: the model dict; ``duration_s``: run length (s); ``axis``: 0, 1 or 2 (x, y, z);

@@ -45,7 +45,7 @@ import re
 from ..errors import SettingsError
 from ..inputs import check_number, parse_number, quote
 from ..units import GYRO_UNITS
-from . import mpu6050
+from .mpu6050 import driver as mpu6050_driver
 from .replay import ReplaySource
 from .serial_source import SerialSource
 from .simulated import SimulatedSource
@@ -266,7 +266,7 @@ def _in_source_terms(message, spec, named):
 
 def _open(kind, kwargs):
     if kind == "mpu6050":
-        return mpu6050.open_mpu6050(**kwargs)
+        return mpu6050_driver.open_mpu6050(**kwargs)
     if kind == "serial":
         return SerialSource(**kwargs)
     if kind == "replay":

@@ -54,7 +54,7 @@ from ..errors import DeviceError, SettingsError
 from ..inputs import check_number, is_plain_number, parse_number, quote
 from ..recording import COLUMNS, GYRO_COLUMNS, format_number, units_header
 from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
-from .mpu6050_chip import temperature_c
+from .mpu6050.chip import temperature_c
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
 PROTOCOL_VERSION = "1"

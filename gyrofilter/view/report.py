@@ -17,9 +17,9 @@ import json
 
 import numpy as np
 
-from ..analysis.gap_report import covariate_preamble, evidence_text, indistinguishable_text, params_text
-from ..analysis.noise_export import JSON_KEY, JSON_UNIT
-from ..analysis.noise_model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
+from ..analysis.gap.report import covariate_preamble, evidence_text, indistinguishable_text, params_text
+from ..analysis.noise.export import JSON_KEY, JSON_UNIT
+from ..analysis.noise.model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
 from ..units import AXES
 from .svg import Band, Line, figure
 
@@ -169,7 +169,7 @@ def _allan(data):
 
 def _allan_figure(axis, ax):
     """The log-log figure of one axis of the allan document: the deviation, its interval, the
-    model (:func:`~gyrofilter.analysis.noise_model.model_adev`) and each resolved term's line."""
+    model (:func:`~gyrofilter.analysis.noise.model.model_adev`) and each resolved term's line."""
     tau = np.asarray(ax["tau_s"], dtype=float)
     colour = AXIS_COLOURS.get(axis, "#333")
     layers = [Band(tau, _floats(ax["adev_low_dps"]), _floats(ax["adev_high_dps"]), colour, "interval of each point"),

@@ -14,11 +14,11 @@ octave cluster times ``tau_k = 2^k tau0_s``, pooled over the stretches::
 
 where ``ybar_j`` are the means of consecutive clusters of ``2^k`` blocks counted from each
 stretch's start and ``K_k`` is the number of adjacent pairs of all stretches. Within one stretch
-this equals :func:`gyrofilter.analysis.allan.adev` of its block means. Cluster means are built
+this equals :func:`gyrofilter.analysis.noise.allan.adev` of its block means. Cluster means are built
 level by level (two of level k make one of level k+1), so the state is a few numbers per level
 however long the run. A cluster time is reported once ``K_k`` reaches
-:data:`~gyrofilter.analysis.allan.MIN_CLUSTERS`, with paper 000's relative error
-``1 / sqrt(2 K_k)`` (:func:`gyrofilter.analysis.allan.simple_interval`).
+:data:`~gyrofilter.analysis.noise.allan.MIN_CLUSTERS`, with paper 000's relative error
+``1 / sqrt(2 K_k)`` (:func:`gyrofilter.analysis.noise.allan.simple_interval`).
 """
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from ..analysis.allan import MIN_CLUSTERS
+from ..analysis.noise.allan import MIN_CLUSTERS
 from ..analysis.still import STATIC_LIMIT_DPS
 
 #: octave levels kept: tau up to 2^29 tau0 (years at 200 blocks per second)

@@ -1,0 +1,151 @@
+"""The series tests of paper 003's procedure (:mod:`gyrofilter.analysis.arma.identify`): stationarity (the
+augmented Dickey-Fuller test), normality (Kolmogorov-Smirnov and Jarque-Bera) and the residuals'
+whiteness (ACF/PACF and the Ljung-Box test), each at a significance level ``alpha``.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .fit import require_stats
+
+DEFAULT_ADF_MAXLAG = 20
+DEFAULT_ALPHA = 0.05
+WHITENESS_LAGS = 20
+
+
+# ---------------------------------------------------------------------------------------------
+# results
+
+
+@dataclass
+class Stationarity:
+    """Augmented Dickey-Fuller test (H0: unit root). Stationary if the statistic is below the 5 % value."""
+
+    adf_statistic: float
+    p_value: float
+    lags_used: int
+    n_obs: int
+    critical_values: dict
+    stationary: bool
+
+
+@dataclass
+class Normality:
+    """Kolmogorov-Smirnov (standardised series vs N(0, 1)) and Jarque-Bera tests (H0: normal)."""
+
+    ks_statistic: float
+    ks_p_value: float
+    ks_critical_5pct: float
+    jb_statistic: float
+    jb_p_value: float
+    jb_critical_5pct: float
+    skewness: float
+    excess_kurtosis: float
+    normal_ks: bool
+    normal_jb: bool
+    ks_dithered_statistic: float = None  # KS after adding uniform dither of one quantisation step
+    ks_dithered_p_value: float = None
+    normal_ks_dithered: bool = None
+
+
+@dataclass
+class Whiteness:
+    """Residual whiteness: ACF/PACF against +-1.96/sqrt(N), Ljung-Box Q (H0: white)."""
+
+    lags: list
+    acf: list
+    pacf: list
+    band: float
+    outside_band: int  # lags (1..lags) whose |ACF| exceeds the band; ~5 % expected for white noise
+    ljung_box_q: float
+    ljung_box_lag: int
+    ljung_box_p_value: float
+    white: bool
+
+
+# ---------------------------------------------------------------------------------------------
+# the tests
+
+
+def adf_test(x, maxlag=DEFAULT_ADF_MAXLAG, alpha=DEFAULT_ALPHA) -> Stationarity:
+    """Augmented Dickey-Fuller test of the series ``x`` with a constant, lag order by AIC up to
+    ``maxlag``, at significance ``alpha``.
+
+    statsmodels' default maxlag (12 (N/100)^(1/4), 60 at N = 65 000) takes ~20 s there for
+    the same verdict, hence the cap.
+    """
+    require_stats()
+    from statsmodels.tsa.stattools import adfuller
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        stat, p, lags, nobs, crit, _ = adfuller(np.asarray(x, float), maxlag=maxlag, regression="c", autolag="AIC")
+    key = f"{int(round(alpha * 100))}%"
+    threshold = crit.get(key, crit["5%"])
+    return Stationarity(float(stat), float(p), int(lags), int(nobs), {k: float(v) for k, v in crit.items()},
+                        bool(stat < threshold))
+
+
+def normality_tests(x, alpha=DEFAULT_ALPHA, quantum=None, seed=0) -> Normality:
+    """Kolmogorov-Smirnov on (x - mean) / std against N(0, 1), and Jarque-Bera.
+
+    JB = N/6 (S^2 + (K - 3)^2 / 4) ~ chi2(2) (Jarque and Bera 1987). The KS critical value is
+    the asymptotic 1.358 / sqrt(N); with mean and std estimated from the data the KS p-value is
+    conservative (Lilliefors), and on quantised data (MPU6050 LSB steps) KS also sees the steps:
+    with ``quantum`` (the step, in the series' unit) KS is repeated on x + U(-quantum/2, quantum/2)
+    (seeded dither, ``seed``), which removes the steps but not a non-normal shape. ``alpha``:
+    the significance level.
+    """
+    require_stats()
+    from scipy import stats
+
+    x = np.asarray(x, float)
+    z = (x - x.mean()) / x.std(ddof=1)
+    ks = stats.kstest(z, "norm")
+    jb = stats.jarque_bera(x)
+    n = len(x)
+    result = Normality(
+        ks_statistic=float(ks.statistic),
+        ks_p_value=float(ks.pvalue),
+        ks_critical_5pct=float(1.358 / math.sqrt(n)),
+        jb_statistic=float(jb.statistic),
+        jb_p_value=float(jb.pvalue),
+        jb_critical_5pct=float(stats.chi2.ppf(1 - alpha, 2)),
+        skewness=float(stats.skew(x)),
+        excess_kurtosis=float(stats.kurtosis(x)),
+        normal_ks=bool(ks.pvalue >= alpha),
+        normal_jb=bool(jb.pvalue >= alpha),
+    )
+    if quantum:
+        xd = x + np.random.default_rng(seed).uniform(-quantum / 2, quantum / 2, n)
+        ksd = stats.kstest((xd - xd.mean()) / xd.std(ddof=1), "norm")
+        result.ks_dithered_statistic = float(ksd.statistic)
+        result.ks_dithered_p_value = float(ksd.pvalue)
+        result.normal_ks_dithered = bool(ksd.pvalue >= alpha)
+    return result
+
+
+def whiteness(residuals, n_params=0, lags=WHITENESS_LAGS, alpha=DEFAULT_ALPHA) -> Whiteness:
+    """ACF/PACF of ``residuals`` (lags 1..lags) and the Ljung-Box test at ``lags`` with ``n_params``
+    df removed, at significance ``alpha``.
+
+    Q = N (N + 2) sum_{k=1}^{h} r_k^2 / (N - k) ~ chi2(h - p - q) (Ljung and Box 1978).
+    """
+    require_stats()
+    from statsmodels.stats.diagnostic import acorr_ljungbox
+    from statsmodels.tsa.stattools import acf, pacf
+
+    r = np.asarray(residuals, float)
+    n = len(r)
+    a = acf(r, nlags=lags, fft=True)[1:]
+    pa = pacf(r, nlags=lags, method="ywm")[1:]
+    band = 1.96 / math.sqrt(n)
+    lb = acorr_ljungbox(r, lags=[lags], model_df=n_params)
+    q = float(np.asarray(lb["lb_stat"])[0])
+    p = float(np.asarray(lb["lb_pvalue"])[0])
+    return Whiteness(list(range(1, lags + 1)), [float(v) for v in a], [float(v) for v in pa], band,
+                     int(np.sum(np.abs(a) > band)), q, lags, p, bool(p >= alpha))

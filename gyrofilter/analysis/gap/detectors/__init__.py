@@ -1,0 +1,161 @@
+"""Detectors for the model-gap analysis: one statistic per effect of the effect table.
+
+Every detector works on one axis, a 1-D rate series ``x_dps`` (deg/s) sampled at
+``sample_rate_hz``, and returns a :class:`Candidate` (or None): the effect name, its parameter
+estimates in the units of the effect table (docs/formats.md, section 2), the detector's statistic, the
+threshold it had to pass and an evidence sentence. :mod:`gyrofilter.analysis.gap.pipeline` runs the same
+statistic on the baseline simulations to show the simulated spread, and keeps a candidate only
+when the extended model lowers the discrepancy.
+
+The detectors run in a fixed **decision order**, each on the series cleaned of what the earlier
+ones found, because the effects are confusable:
+
+1. ``outliers`` -- isolated spikes. Statistic: the second-difference residual
+   ``r_i = x_i - (x_{i-1} + x_{i+1}) / 2`` (white noise: ``sd(r) = sigma sqrt(3/2)``) against a
+   robust (MAD) scale; a spike is ``|r_i| > k sd(r)`` with ``k`` set so that white Gaussian noise
+   gives 0.05 expected false spikes per axis (``k = Phi^-1(1 - 0.025 / N)``, about 5.0 for
+   N = 360 000), and a finding needs at least 3 spikes (white noise: probability 2e-5).
+   Paper 001 (gross errors: isolated, much larger than the noise). Found spikes are replaced
+   by their neighbours' median before the next detectors run.
+1b. ``heavy_tails`` -- the noise is heavier-tailed than a Gaussian at every sample (a Gaussian
+   scale mixture), told apart from isolated spikes by the shape of the high-passed, prewhitened
+   residual's distribution: a winsorized kurtosis departing from the baseline's simulations, a
+   scale mixture beating a Gaussian and beating isolated spikes by likelihood (see
+   :mod:`~gyrofilter.analysis.gap.detectors.tails` for the rule). When named, the outlier candidate is
+   dropped (its spikes are the tails) and the series is not cleaned.
+2. ``sinusoid`` -- a line in the periodogram. The periodogram ordinate divided by the local
+   noise level (median over a +-5 % frequency band / ln 2) is Exp(1) under any smooth noise
+   spectrum, so the largest of ``M`` ordinates exceeds ``t`` with probability about
+   ``M exp(-t)`` (Fisher's test, the max-periodogram form; Priestley 1981, sec. 6.1.4). The line
+   is fitted by least squares (amplitude, phase) at the refined frequency and subtracted.
+2b. ``narrowband`` -- a band of noise with a resolved width (a resonance): the Welch PSD over a
+   running-median background (±min(f_s / 10, 20 Hz), narrowed and mirrored at f_s / 2, so the
+   search reaches the Nyquist frequency), the peak excess in units of its sampling error
+   ``(R - 1) sqrt(K)`` (K Welch segments; Welch 1967), centre, half-power width and rms refined
+   by a least-squares fit of the effect's own AR(2) resonator PSD (:func:`band_estimate`). Runs
+   on the series with the sinusoid removed; a band cannot be subtracted (it is noise), so the
+   later detectors see it, and the colored noise's lag-1 is corrected for it.
+3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
+   high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
+   (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
+   tells a first-order low pass (AR(1): ``rho_2 = rho_1^2``) from other short correlations (a
+   two-tap average: ``rho_2 = 0``); where it is clearly lower the finding carries ``lag2`` and the noise
+   is the first-order ARMA with both autocorrelations.
+4. Slow bias effects, on block means ``y_k`` of the cleaned series (at most 2048 blocks of
+   ``Delta`` seconds): deterministic shapes (``rate_ramp``: LS line; ``bias_step``: two-mean
+   scan; ``warmup``: ``a exp(-t/tau)`` scanned over tau; ``temperature``: regression on the
+   block-mean temperature) are scored by the drop of the residual sum of squares in units of
+   the block white-noise variance (``Delta chi^2``); stochastic spectra
+   (``rate_random_walk`` ``S = K^2 / (4 pi^2 f^2 Delta)``, ``bias_instability``
+   ``S = B^2 / (2 pi f Delta)``, ``gauss_markov`` AR(1); IEEE Std 952-1997 annex C for the
+   PSD forms) by the Whittle likelihood ratio over white noise (Whittle 1953) on the
+   LS-detrended block means, the random walk's expected periodogram taking the detrend into
+   account (:func:`_detrended_shapes`). Decision rules, in order:
+
+   * the best deterministic shape is the largest ``Delta chi^2 - k ln n`` (k free
+     parameters: BIC), so a warm-up with a very long tau loses to a ramp;
+   * the best stochastic spectrum is the largest ``2 Delta log L - 6 k``: an extra parameter
+     (Gauss-Markov's tau) must buy 6 (likelihood-ratio test at about 1.4 %), and a
+     Gauss-Markov process whose tau exceeds a fifth of the record is a random walk as far as
+     the data can tell;
+   * a shape above its threshold is tested against the stochastic spectra of its residual:
+     if one is still significant, the shape is kept only if its amplitude is significant
+     against that fitted noise (the variance of the amplitude estimate under it, e.g.
+     ``q sum_k (sum_{i>=k} w_i)^2`` for a random walk), giving both findings; otherwise the
+     shape must also beat the *exact* Kalman-filter likelihood of a random-walk and of a
+     Gauss-Markov wander on the same (undetrended) block means, so a wander that happens to
+     look like a ramp or a step is called a wander;
+   * with no shape, the best stochastic spectrum is reported if above its threshold; a bias
+     instability or Gauss-Markov finding carries the other of the two where that one is
+     significant too, and the gap weighs the two on D (the bias instability, one parameter
+     fewer, unless the Gauss-Markov is clearly better: :func:`gyrofilter.analysis.gap.readings.weigh_wanders`);
+   * where a temperature is recorded, the temperature coefficient is fitted first and the rules
+     above run on what it leaves (``covariate``: the coefficient by generalised least squares
+     under the residual's stochastic model, significant jointly with any time shape there); the
+     reading without the temperature rides along as its alternative, and the gap weighs the two
+     on D (:mod:`gyrofilter.analysis.gap.readings`).
+
+The package holds one module per concern: ``common`` (every threshold of the gap analysis,
+:class:`Candidate`, helpers), ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``colored``
+and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
+``gyrofilter.analysis.gap.detectors`` as before.
+"""
+from .common import (  # noqa: F401
+    COLORED_MIN_LAG1,
+    COLORED_MIN_LAG2_GAP,
+    COLORED_Z,
+    COMPOSITE_MIN_GAIN,
+    CONFOUNDED_SPREADS,
+    Candidate,
+    DETERMINISTIC_THRESHOLD,
+    EXACT_GM_MARGIN,
+    GM_MAX_TAU_DIVISOR,
+    HEAVY_TAILS_OVER_SPIKES,
+    HEAVY_TAILS_THRESHOLD,
+    HEAVY_TAILS_Z,
+    JOINT_THRESHOLD,
+    NARROWBAND_THRESHOLD,
+    OUTLIER_FALSE_PER_AXIS,
+    OUTLIER_MIN_COUNT,
+    OUTSIDE_NULL_D,
+    REPORTED_DEPARTURE_Z,
+    SINUSOID_ALPHA,
+    STOCHASTIC_PENALTY,
+    STOCHASTIC_THRESHOLD,
+    TAILS_MAX_STEP_SD,
+    TAILS_WINSOR_SD,
+)
+from .outliers import (  # noqa: F401
+    OUTLIER_SPREAD_LN,
+    clean_spikes,
+    detect_outliers,
+    outlier_statistic,
+)
+from .tails import (  # noqa: F401
+    detect_heavy_tails,
+    tail_fits,
+    tail_residual,
+    tails_sd,
+    tails_statistic,
+)
+from .sinusoid import (  # noqa: F401
+    CHUNK_SAMPLES,
+    DFT_BLOCKS,
+    dft_amplitude,
+    least_squares,
+    detect_sinusoid,
+    fitted,
+    periodogram_length,
+    sinusoid_fit,
+    periodogram,
+    sinusoid_statistic,
+)
+from .narrowband import (  # noqa: F401
+    BAND_BACKGROUND_HZ,
+    band_estimate,
+    detect_narrowband,
+    narrowband_lags,
+)
+from .colored import (  # noqa: F401
+    colored_window,
+    detect_colored,
+    highpassed,
+    lag1_statistic,
+    lags_from_highpassed,
+    other_correlation,
+    long_run_ratio,
+)
+from .slow import (  # noqa: F401
+    PERIODOGRAM,
+    SLOW_EFFECTS,
+    STOCHASTIC_MODELS,
+    TIME_SHAPES,
+    exact_stochastic_gain,
+    slow_reading,
+    stochastic_fits,
+)
+from .covariate import (  # noqa: F401
+    detect_slow,
+    gls,
+    temperature_first,
+)

@@ -1,0 +1,90 @@
+"""Shared by the detectors: every threshold of the gap analysis (the detectors' significance
+levels and the gap's decision rules), :class:`Candidate` (the shared statistics are in
+:mod:`gyrofilter.analysis.stats`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+#: expected number of false spikes per axis on white Gaussian noise (with at least
+#: OUTLIER_MIN_COUNT spikes required: P(Poisson(0.05) >= 3) = 2e-5 per axis)
+OUTLIER_FALSE_PER_AXIS = 0.05
+#: minimum number of spikes for an outlier finding
+OUTLIER_MIN_COUNT = 3
+#: heavy tails (detectors.tails): the winsorizing level (robust sd) of the tail statistic, the
+#: z its value must reach against the baseline's simulations (or its Gaussian sampling sd), the
+#: 2 Delta log L a Gaussian scale mixture must gain over a Gaussian, and the 2 Delta log L by
+#: which it must beat isolated spikes where the outlier detector found spikes (10: "very strong"
+#: evidence, Kass & Raftery 1995, sec. 3.2). The mixture's threshold is set from clean records
+#: only: on 100 simulated ones (white, AR(1) lag1 0.3-0.85, a two-tap average, a narrow band, a
+#: large sinusoid, 1 kHz; 10-60 min, MPU6050 quantization) its largest value was 7.4, on the
+#: real MPU6050 and ADIS16405 static records (15 axes) 11.3, so 30 sits 2.7-4 times above
+TAILS_WINSOR_SD = 6.0
+#: a rate quantized in steps above this many noise sd has the quantizer's distribution, not the
+#: noise's: its tails are not judged without the baseline's simulations, which carry the same
+#: quantizer (the MPU6050 at 131 LSB per deg/s: 0.06-0.11)
+TAILS_MAX_STEP_SD = 0.5
+HEAVY_TAILS_Z = 4.0
+HEAVY_TAILS_THRESHOLD = 30.0
+HEAVY_TAILS_OVER_SPIKES = 10.0
+#: false-alarm probability per axis for the periodogram line test
+SINUSOID_ALPHA = 1e-4
+#: z-score (in units of 1/sqrt(N)) the lag-1 autocorrelation must exceed, and the smallest
+#: |lag1| reported (smaller correlations are real but immaterial)
+COLORED_Z = 6.0
+COLORED_MIN_LAG1 = 0.03
+#: the colored noise's lag-2 is reported (a first-order ARMA instead of the low pass) when it
+#: falls below lag1^2 (the AR(1) value) by COLORED_Z standard errors and by at least this much
+COLORED_MIN_LAG2_GAP = 0.01
+#: Delta chi^2 / 2 Delta log L thresholds of the slow-effect tests, set from clean recordings
+#: only (white noise + quantization + a temperature column, 10 and 40 min, 60 runs): the
+#: largest null values were 10.6 (step scan), 6.9 (warm-up scan, ramp, temperature) and 4.4
+#: (Gauss-Markov), so the thresholds sit 2-4 times above the null maxima
+DETERMINISTIC_THRESHOLD = 25.0
+STOCHASTIC_THRESHOLD = 16.0
+#: 2 Delta log L an extra spectral parameter must buy (chi^2_1: about 1.4 %)
+STOCHASTIC_PENALTY = 6.0
+#: z^2 a deterministic shape must reach against the fitted stochastic noise to be kept with it
+JOINT_THRESHOLD = 25.0
+#: 2 Delta log L (exact likelihood) a Gauss-Markov process must gain over a random walk
+EXACT_GM_MARGIN = 8.0
+#: a Gauss-Markov process whose tau exceeds the record length over this is a random walk as far
+#: as the data can tell
+GM_MAX_TAU_DIVISOR = 5
+#: the band statistic (peak excess over the background in units of its sampling error,
+#: ``(R - 1) sqrt(K)``) a band must exceed; on white and AR(1) noise (white + 0.3 white, lag1
+#: -0.7 to 0.7, 4096 to 10^6 samples at 99.37, 100 and 285.7 Hz, 240 runs, issue 12) its
+#: largest value was 2.16 (at 4096 samples and 285.7 Hz; 1.5-1.7 from 7 500 samples up), its
+#: 99th percentile 1.73; on 400 more of 4096-12 000 samples 2.31 (2.29 within W of f_s / 2);
+#: at the Nyquist edge of AR(1) lag1 -0.7 (a PSD peaking at f_s / 2) 2.2 on 10^6 and 2.4 on
+#: 8.64 * 10^6 samples at 100 Hz
+NARROWBAND_THRESHOLD = 4.0
+#: D above which an axis is clearly outside the null band (its 95th percentile is 1.06-1.96 on
+#: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
+#: composite stochastic part, and the report says which feature still departs
+OUTSIDE_NULL_D = 2.0
+#: two readings of a slow departure (the temperature's and one in time) explain a record about
+#: equally when their D differ by at most this many null spreads (the sd of D over a model's own
+#: simulated runs, leave one out; gap.readings): the band D keeps in 95 % of records a model
+#: explains exactly. Measured on the example model (docs/gap.md, "Confounded causes")
+CONFOUNDED_SPREADS = 2.0
+#: the factor a composite stochastic part must lower D by
+COMPOSITE_MIN_GAIN = 0.8
+#: a finding's evidence names the feature furthest outside the baseline simulations' spread when
+#: it is at least this many standard deviations of that spread away
+REPORTED_DEPARTURE_Z = 3
+
+
+@dataclass
+class Candidate:
+    """A departure from the baseline, mapped to an effect of the table."""
+
+    effect: str
+    params: dict
+    statistic: float
+    threshold: float
+    evidence: str
+    statistic_name: str = ""
+    #: model component to subtract from the series (deterministic effects), per sample, or None
+    component: object = None
+    extra: dict = field(default_factory=dict)

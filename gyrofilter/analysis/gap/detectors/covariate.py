@@ -1,0 +1,213 @@
+"""Detector 4, with a recorded temperature: the covariate first (see :mod:`gyrofilter.analysis.gap.detectors`).
+
+Where the temperature itself follows a warm-up, a bias warm-up in time and a temperature
+coefficient fit the block means about equally, and so can a slow stochastic wander (a bias
+instability or a random walk takes up a settling as well). The measured covariate is the
+cause to name: it predicts the bias at the next power-up, an exponential in time does not. So
+:func:`detect_slow` reads the slow effects twice:
+
+* the **covariate reading** (:func:`temperature_first`): the temperature coefficient is fitted
+  first, and the time shapes and stochastic spectra are looked for in what it leaves
+  (:func:`gyrofilter.analysis.gap.detectors.slow.slow_reading` on the residual); the coefficient is
+  then re-estimated by generalised least squares under the stochastic model of that residual
+  (:func:`gls`), and it must be significant there, jointly with any time shape found in the
+  residual (``z^2 > JOINT_THRESHOLD``); otherwise the temperature is not named;
+* the **time reading**: the slow effects without the temperature (the shapes ramp, step and
+  warm-up, and the stochastic spectra), as on a record without a ``temp`` column.
+
+The covariate is preferred over a warm-up and a slow wander, which a settling temperature
+mimics; against a ramp or a step (a line or a jump is not a settling) the better fit of the block
+means decides as on any shape (the larger ``Delta chi^2 - k ln n``), and a ramp must win by more
+than the null spread of that difference (:func:`_shape_beats_temperature`): a temperature that
+settles slowly is nearly a line over the record, and a ramp fitting it about as well is the
+alternative, not the cause. A covariate reading that needs a stochastic term where the time reading explains the record by
+a shape alone is the more complex reading and is not returned (a ramp under a warming
+temperature reads as the temperature's settling plus a random walk for the difference).
+
+The covariate reading is returned when it names the temperature; the time reading rides on the
+temperature candidate (``extra["alternative"]``) so that :mod:`gyrofilter.analysis.gap.readings`
+can weigh the two on the discrepancy D and keep the covariate unless the time reading is clearly
+better.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .common import DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, Candidate
+from ...stats import block_means, dot
+from .slow import N_PARAMS, STOCHASTIC_MODELS, TIME_SHAPES, periodogram_detrended, slow_spectrum, slow_reading
+
+
+def detect_slow(x, sample_rate_hz, temp_c=None):
+    """Slow bias effects of one axis (the decision rules of :mod:`gyrofilter.analysis.gap.detectors`),
+    the covariate reading first where a temperature is recorded (module docstring).
+
+    Returns ``(candidates, stats)``: a list of :class:`Candidate` (a temperature candidate
+    carries the time reading, a list of candidates, in ``extra["alternative"]`` when that reading
+    names anything) and the raw statistics ``{name: value}``.
+    """
+    stats = {}
+    time_reading, _ = slow_reading(x, sample_rate_hz, TIME_SHAPES, stats=stats)
+    if temp_c is None:
+        return time_reading, stats
+    covariate = temperature_first(x, sample_rate_hz, temp_c, stats)
+    line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in ("rate_ramp", "bias_step") else None
+    if line_or_jump and _shape_beats_temperature(line_or_jump, stats, x, temp_c):
+        # a line or a jump is not a settling: against them the better fit of the block means decides
+        return time_reading, stats
+    if covariate is None or (any(c.effect in STOCHASTIC_MODELS for c in covariate[1:])
+                             and not any(c.effect in STOCHASTIC_MODELS for c in time_reading)):
+        # a covariate reading that needs a wander where a shape in time alone explains the
+        # record is the more complex reading (a ramp read as the temperature's settling plus a
+        # random walk for the difference)
+        return time_reading, stats
+    if time_reading:
+        covariate[0].extra["alternative"] = time_reading
+    return covariate, stats
+
+
+#: two-sided 95 % normal quantile: a ramp's better fit over the temperature's counts when it is
+#: beyond this many sd of the difference's null spread (:func:`_shape_beats_temperature`)
+_SPREAD_Z = 1.96
+
+
+def _shape_beats_temperature(name, stats, x, temp_c):
+    """Whether the time shape ``name`` (a ramp or a step) fits the block means better than the
+    temperature (``stats``: their Delta chi^2 in units of the white level).
+
+    A step wins by BIC (``Delta chi^2 - k ln n``). A ramp must also beat the temperature by more
+    than the null spread of the difference: for two one-column fits of white block means
+    ``y = beta g_T + e`` (``g`` the unit-norm, mean-free regressors, ``rho = g_R . g_T``),
+    ``a = g_T . y`` and ``b = g_R . y`` are N(beta, 1) and N(rho beta, 1) with correlation rho, and
+    ``a^2 - b^2 = (a - b)(a + b)`` has sd ``2 |beta| sqrt(1 - rho^2)`` to first order (Vuong 1989,
+    non-nested models). A temperature settling over a long time constant is nearly a line, and
+    a ramp then fits it within that spread about as often as not: the measured covariate is the
+    cause to name (the ramp rides on it as the alternative, weighed on D in gap.readings)."""
+    y, _ = block_means(x)
+    n = y.size
+    d_shape, d_temp = stats[name], stats.get("temperature", 0.0)
+    if d_shape - N_PARAMS[name] * math.log(n) < d_temp - math.log(n):
+        return False
+    if name != "rate_ramp":
+        return True
+    tb, _ = block_means(np.asarray(temp_c, dtype=float))
+    if tb.size != n or not np.ptp(tb) > 0:
+        return True
+    g_t = tb - tb.mean()
+    g_r = np.arange(n) - 0.5 * (n - 1)
+    rho = float(np.dot(g_t, g_r) / math.sqrt(np.dot(g_t, g_t) * np.dot(g_r, g_r)))
+    spread = 2.0 * math.sqrt(max(1.0 - rho * rho, 0.0) * max(d_shape, d_temp))
+    return d_shape - d_temp > _SPREAD_Z * spread
+
+
+def temperature_first(x, sample_rate_hz, temp_c, stats):
+    """The covariate reading of one axis: ``[temperature candidate, *what the residual shows]``,
+    or None when the temperature coefficient is not significant (module docstring).
+
+    1. The least-squares coefficient ``a`` of the block means on the block-mean temperature must
+       lower chi^2 of the block means by more than ``DETERMINISTIC_THRESHOLD`` (in units of
+       their white level, as every shape).
+    2. The time shapes and stochastic spectra of ``x - a (T - mean T)``
+       (:func:`~gyrofilter.analysis.gap.detectors.slow.slow_reading`).
+    3. ``a`` re-estimated by GLS (:func:`gls`) of the block means on ``[1, T, shape]`` under the
+       residual's stochastic model (``shape``: the residual's time shape, if any), its
+       ``z^2 = a^2 / Var(a)`` above ``JOINT_THRESHOLD``; the residual's effects re-read on
+       ``x - a_GLS (T - mean T)``.
+    """
+    y, length = block_means(x)
+    n = y.size
+    temp = np.asarray(temp_c, dtype=float)
+    tb, _ = block_means(temp)
+    if n < 16 or tb.size != n or not np.ptp(tb) > 0:
+        return None
+    spec, _ = periodogram_detrended(y)
+    s0 = float(spec[spec.size // 2:].mean())  # the white level of the block means
+    tc = tb - tb.mean()
+    a = float(np.dot(tc, y - y.mean()) / np.dot(tc, tc))
+    d = a * a * float(np.dot(tc, tc)) / s0
+    stats["temperature"] = d
+    if not d > DETERMINISTIC_THRESHOLD:
+        return None
+    t_mean = float(temp.mean())
+    rest, noise = slow_reading(_less(x, a, temp, t_mean), sample_rate_hz, TIME_SHAPES)
+    columns = [tb]
+    if rest and rest[0].component is not None:  # the residual's time shape, fitted jointly
+        columns.append(block_means(rest[0].component)[0][:n])
+    coef, cov = gls(y, columns, noise)
+    a_gls, z2 = float(coef[1]), float(coef[1] ** 2 / cov[1, 1])
+    stats["temperature_gls_z2"] = z2
+    if not z2 > JOINT_THRESHOLD:
+        return None
+    rest, _ = slow_reading(_less(x, a_gls, temp, t_mean), sample_rate_hz, TIME_SHAPES)
+    comp = a_gls * (temp - t_mean)
+    comp -= comp.mean()
+    words = {None: "white noise", "bias_instability": "a bias instability", "rate_random_walk": "a random walk",
+             "gauss_markov": "a Gauss-Markov wander"}[noise[0]]
+    cand = Candidate(
+        effect="temperature", params={"coefficient_dps_per_c": a_gls}, statistic=d,
+        threshold=DETERMINISTIC_THRESHOLD, statistic_name="Delta chi^2 of the block means over a constant bias",
+        component=comp,
+        evidence=(f"the bias follows the temperature with {a_gls:+.3g} deg/s per deg C over {np.ptp(temp):.2f} deg C "
+                  f"(generalised least squares under {words} left by it: z = {math.sqrt(z2):.1f}, threshold "
+                  f"{math.sqrt(JOINT_THRESHOLD):.0f}); the fit lowers chi^2 of the block means by {d:.0f} "
+                  f"(threshold {DETERMINISTIC_THRESHOLD:.0f})"))
+    return [cand] + rest
+
+
+def _less(x, a, temp, t_mean):
+    """``x - a (temp - t_mean)``, a new series."""
+    out = temp - t_mean
+    out *= -a
+    out += x
+    return out
+
+
+def gls(y, columns, noise):
+    """Generalised least squares of the block means ``y`` on ``[1, *columns]`` under the noise
+    ``noise = (model, theta, s0, delta_s)`` of :func:`~gyrofilter.analysis.gap.detectors.slow.slow_reading`
+    (white level ``s0`` plus the stochastic model ``model``, or white alone when it is None):
+    ``beta = (X' C^-1 X)^-1 X' C^-1 y``, ``Cov(beta) = (X' C^-1 X)^-1`` (Aitken 1935).
+
+    ``C`` is Toeplitz for the stationary models: the autocovariance
+    ``c_k = (1/M) sum_j S(omega_j) e^(i omega_j k) + s0 [k = 0]`` of the spectrum of
+    :func:`~gyrofilter.analysis.gap.detectors.slow.slow_spectrum` on a grid of ``M >= 8 n`` frequencies
+    (the flicker's ``h / omega`` is cut at half the lowest grid frequency), solved by Levinson
+    recursion (:func:`scipy.linalg.solve_toeplitz`, no BLAS). A random walk is not stationary:
+    the regression is made on first differences, whose noise ``w_k + v_k - v_{k-1}`` is an MA(1)
+    with ``c_0 = q + 2 s0``, ``c_1 = -s0`` (the constant drops out). Returns ``(beta, cov)`` with
+    ``beta[0]`` the constant (0 for the random walk)."""
+    from scipy.linalg import solve_toeplitz
+
+    model, theta, s0, _ = noise
+    y = np.asarray(y, dtype=float)
+    n = y.size
+    x_mat = np.column_stack([np.ones(n)] + [np.asarray(c, dtype=float) for c in columns])
+    if model == "rate_random_walk":
+        yy, xx = np.diff(y), np.diff(x_mat[:, 1:], axis=0)
+        acov = np.zeros(n - 1)
+        acov[0], acov[1] = theta[0] + 2 * s0, -s0
+    else:
+        yy, xx = y, x_mat
+        if model is None:
+            acov = np.zeros(n)
+        else:
+            m = 1 << int(math.ceil(math.log2(8 * n)))
+            omega = 2 * math.pi * np.arange(m) / m
+            omega = np.minimum(omega, 2 * math.pi - omega)
+            omega[0] = omega[1] / 2
+            acov = np.fft.ifft(slow_spectrum(model, theta, omega, 1.0)).real[:n]
+        acov[0] += s0
+    rhs = np.column_stack([xx, yy])
+    solved = solve_toeplitz(acov, rhs) if model is not None else rhs / s0
+    k = xx.shape[1]
+    a_mat = np.array([[float(dot(xx[:, i], solved[:, j])) for j in range(k)] for i in range(k)])
+    b_vec = np.array([float(dot(xx[:, i], solved[:, k])) for i in range(k)])
+    cov = np.linalg.inv(a_mat)
+    beta = cov @ b_vec
+    if model == "rate_random_walk":
+        beta, cov_full = np.concatenate(([0.0], beta)), np.zeros((k + 1, k + 1))
+        cov_full[1:, 1:] = cov
+        cov = cov_full
+    return beta, cov

@@ -1,0 +1,322 @@
+"""95 % intervals of every finding's parameters and of the baseline's, by parametric bootstrap of
+the extended model (:mod:`gyrofilter.analysis.gap.pipeline`, after step 5).
+
+For each axis with findings, the axis of the extended model (the baseline's bias and white noise
+re-fitted, every kept finding, the record's temperature profile where a finding needs it) is
+simulated ``B`` times with the record's length and rate (seeded, streams of their own), and the
+estimator of every finding of the axis is run on each replicate
+(:func:`gyrofilter.analysis.gap.reestimate.reestimate_axis`), as are the baseline's (the mean and
+the high-passed white-noise level, :func:`gyrofilter.analysis.gap.baseline.noise_sigma`). This is
+the parametric bootstrap GMWM uses for its intervals (Guerrier et al. 2013, sec. 4; Efron &
+Tibshirani 1993, ch. 6).
+
+The interval is the **bias-corrected normal interval on a transformed scale with the Student
+quantile** (Efron & Tibshirani 1993, sec. 13.3 and 10.6): with ``u = g(theta)`` (``g`` = log for a
+positive scale parameter, atanh for an autocorrelation, the identity for a signed one; see
+:data:`SCALES`), ``u*_b`` the replicates' estimates, ``bias = mean(u*) - u_hat`` and ``s`` their
+standard deviation,
+
+    u in  u_hat - bias  +-  t_{0.975, B-1} sqrt(1 + 1/B) s,     mapped back by g^-1.
+
+Why this and not the percentile interval: the replicates are simulated from the *estimated*
+model, so an estimator that is biased (the slow spectra on block means, the spike magnitude
+corrected for the threshold, a tau scanned on a grid) shows its bias in the replicates; the
+percentile interval would carry it twice, the basic and this one remove it. The log and atanh
+scales make the estimators' spread about constant in the parameter (a scale parameter's error is
+relative). With few replicates the 2.5 % and 97.5 % percentiles are poor (B = 19: the smallest
+and largest), while ``t_{B-1} sqrt(1 + 1/B)`` is the exact factor for a normal ``u``: the spread
+``s`` and the bias come from B draws, the estimate is one more draw, so
+``(u_hat - bias - u) / (s sqrt(1 + 1/B))`` is Student-t with B - 1 degrees of freedom. Circular
+``phase_rad`` uses the deviations wrapped to (-pi, pi] and is reported unwrapped (the truth lies in
+the interval modulo 2 pi). A replicate whose estimator has nothing to estimate is left out.
+
+**Gauss-Markov findings: one step of test inversion** (Carpenter 1999, "Test inversion bootstrap
+confidence intervals", JRSS B 61: 159-172). The spread and the bias of a Gauss-Markov estimate
+grow with its correlation time (a record holds T / tau correlation times: the sd of log sigma-hat
+is about sqrt(tau / T)), so the replicates simulated at an estimate whose tau came out short are
+too tight and too little biased, and the interval above misses on short records (85.8 % on
+10-minute records, 60 cases). The exact interval's upper end theta_U is where the estimator,
+simulated at theta_U, puts the estimate at its lower 2.5 %; one step towards it: the model is
+simulated again at the interval's upper ends (sigma and tau together: their estimates are
+positively correlated), and the upper end moves by one secant step of that equation, its bias and
+spread taken linear between the estimate's replicates and these (:func:`inversion_step`; a plain
+step to ``u_hat - bias_U + t s_U`` overshoots); the same at the lower ends for the lower end. This
+costs two more sets of replicates on an axis with such a finding.
+
+An axis without findings has the baseline's model, white noise: its bias interval is
+``mean +- z s / sqrt(N)`` (s the per-sample std, quantization included) and its white-noise
+level's ``sigma^2 (1 +- z sqrt(2 / N) (sigma^2 + q^2/12) / sigma^2)`` (the variance of a sample
+variance, 2 s^4 / N), z = 1.96.
+"""
+from __future__ import annotations
+
+import copy
+import math
+import time
+from statistics import NormalDist
+
+import numpy as np
+
+from .baseline import Progress, simulate_axis, noise_sigma, temperature_table
+from .reestimate import SUPPORTED, reestimate_axis
+from ...sim.model import param_bounds, validate_model
+from ...units import AXES
+
+#: the two-sided level of every interval
+CONFIDENCE = 0.95
+#: bootstrap replicates per axis with findings (``gyrofilter gap --bootstrap``) up to
+#: :data:`FEWER_BOOTSTRAP_FROM` samples per axis; fewer above (:func:`default_bootstrap`)
+DEFAULT_BOOTSTRAP = 20
+#: from this many samples per axis the default number of replicates falls, to 10 at twice as many
+FEWER_BOOTSTRAP_FROM = 1_000_000
+#: the most replicates ``--bootstrap`` takes
+MAX_BOOTSTRAP = 1000
+#: a parameter's interval needs at least this many replicates where its estimator ran
+MIN_REPLICATES = 5
+#: effects whose intervals take one step of test inversion (module docstring)
+INVERTED = ("gauss_markov",)
+#: per effect, the scale on which each parameter's interval is computed: ``log`` (positive scale
+#: parameters), ``atanh`` (autocorrelations in (-1, 1)), ``phase`` (radians, circular), else
+#: ``linear`` (signed parameters, times, frequencies)
+SCALES = {
+    "bias_instability": {"b_dps": "log"},
+    "rate_random_walk": {"k_dps_per_sqrt_s": "log"},
+    "gauss_markov": {"sigma_dps": "log", "tau_s": "log"},
+    "sinusoid": {"amplitude_dps": "log", "phase_rad": "phase"},
+    "warmup": {"tau_s": "log"},
+    "outliers": {"rate": "log", "magnitude_dps": "log"},
+    "heavy_tails": {"fraction": "log", "scale_ratio": "log"},
+    "colored_noise": {"lag1": "atanh", "lag2": "atanh"},
+    "narrowband": {"bandwidth_hz": "log", "rms_dps": "log"},
+    "baseline": {"arw_dps_per_sqrt_hz": "log"},
+}
+METHOD = ("parametric bootstrap of the extended model (each axis with findings simulated B times with the record's "
+          "length, rate and temperature; every finding's estimator re-run on each run); bias-corrected normal interval "
+          "on the log scale (positive parameters), atanh (autocorrelations) or linear, with the Student quantile of "
+          "B - 1 degrees of freedom; axes without findings: the white-noise baseline's analytic intervals")
+
+
+def default_bootstrap(n_samples):
+    """Replicates per axis with findings when ``--bootstrap`` is not given:
+    ``max(10, min(20, round(20 M / N)))``, M = :data:`FEWER_BOOTSTRAP_FROM`: 20 up to a million
+    samples per axis (3 h at 100 Hz), 10 from two million (6 h at 100 Hz, 1 h at 1 kHz). Each
+    replicate is a simulation and a re-estimation of the whole record, so on long records they
+    are most of the analysis's time. The interval's Student factor ``t_{B-1} sqrt(1 + 1/B)``
+    (module docstring) keeps the coverage with fewer replicates: with 10 the intervals are on
+    average 11 % wider than with 20 (2.37 against 2.14 times the replicates' sd), on records
+    whose intervals are already sqrt(N / 360 000) times narrower than those of an hour at 100 Hz."""
+    return int(max(10, min(DEFAULT_BOOTSTRAP, round(DEFAULT_BOOTSTRAP * FEWER_BOOTSTRAP_FROM / max(n_samples, 1)))))
+
+
+def add_intervals(run, n_boot, seed):
+    """Write ``params_ci95`` into every finding of ``run.report`` and into the baseline's axes,
+    from ``n_boot`` replicates per axis with findings (none with ``n_boot`` 0; None:
+    :func:`default_bootstrap` of the record's length), and the report's ``intervals`` block
+    saying how."""
+    report = run.report
+    n_boot = default_bootstrap(run.n) if n_boot is None else n_boot
+    t0 = time.perf_counter()
+    block = {"confidence": CONFIDENCE, "bootstrap_runs": int(n_boot)}
+    report["intervals"] = block
+    if n_boot <= 0:
+        block["method"] = "none: --bootstrap 0 asked for no intervals"
+        return
+    block["method"] = METHOD
+    findings = report["findings"]
+    rows = list(zip(run.kept, findings))
+    if len(run.kept) != len(findings) or any(c.effect != f["effect"] or AXES[i] != f["axis"]
+                                             for (_, i, c, _), f in rows):
+        report["notes"].append("intervals: the findings do not match the kept candidates; no intervals computed")
+        return
+    seeds = np.random.default_rng([int(seed), 24]).integers(0, 2**31, size=int(n_boot))
+    for i, a in enumerate(AXES):
+        here = [(c, f) for (_, ci, c, _), f in rows if ci == i]
+        base_axis = report["baseline"]["axes"][a]
+        if not here:
+            _baseline_analytic(run, i, base_axis)
+            continue
+        for c, f in here:
+            f["params_ci95"] = dict.fromkeys(f["params"])
+            if c.effect not in SUPPORTED:
+                report["notes"].append(f"intervals: no estimator for {c.effect} on {a}; its parameters have no interval")
+        try:
+            estimates = _replicates(run, i, [c for c, _ in here], seeds)
+        except (ValueError, ArithmeticError) as exc:  # a singular fit: never lose the findings for it
+            report["notes"].append(f"intervals on {a}: the bootstrap could not run ({exc}); no intervals")
+            continue
+        for j, (c, f) in enumerate(here):
+            reps = [e[j] for e in estimates["findings"]]
+            f["params_ci95"] = {name: _interval(value, [r.get(name) if r else None for r in reps],
+                                                SCALES.get(c.effect, {}).get(name, "linear"),
+                                                param_bounds(c.effect, name))
+                                for name, value in f["params"].items()}
+            if c.effect in INVERTED and all(f["params_ci95"].values()):
+                _invert(run, i, [c for c, _ in here], j, f, reps, seeds)
+        base_axis["params_ci95"] = {name: _interval(base_axis[name], estimates[name],
+                                                    SCALES["baseline"].get(name, "linear"))
+                                    for name in ("bias_dps", "arw_dps_per_sqrt_hz")}
+    block["runtime_s"] = time.perf_counter() - t0
+
+
+def _invert(run, i, cands, j, finding, reps, seeds):
+    """One step of test inversion (module docstring) for the finding ``j`` of ``cands`` on axis
+    ``i`` (``reps``: its replicates' estimates at the finding): its interval's ends re-made with
+    replicates simulated at its lower and at its upper ends."""
+    def replicates_at(at):
+        return [e[j] for e in _replicates(run, i, cands, seeds, {j: at})["findings"]]
+
+    finding["params_ci95"] = inversion_step(finding["params"], reps, replicates_at, SCALES.get(finding["effect"], {}),
+                                            {name: param_bounds(finding["effect"], name) for name in finding["params"]})
+
+
+def inversion_step(params, replicates, replicates_at, scales, bounds=None):
+    """``{name: [low, high]}`` of the estimates ``params`` after one secant step of test
+    inversion (module docstring). ``replicates``: the estimates (dicts, or None) of replicates
+    simulated at ``params``; ``replicates_at(at)`` returns those of replicates simulated at the
+    parameters ``at``, and is called at the interval's lower ends and at its upper ends.
+
+    On the parameter's scale, with bias b(u) and half-width h(u) of the estimator simulated at u
+    (:func:`_spread`), the lower end solves ``u_hat = u + b(u) + h(u)`` and the upper end
+    ``u_hat = u + b(u) - h(u)``; with b and h linear between the estimate (b0, h0) and the plain
+    interval's end u1 (b1, h1), ``k_b = (b1 - b0) / (u1 - u_hat)``, ``k_h = (h1 - h0) / (u1 - u_hat)``:
+
+        lower: u_hat - (b0 + h0) / (1 + k_b + k_h),   upper: u_hat + (h0 - b0) / (1 + k_b - k_h),
+
+    the plain interval where k_b = k_h = 0. A denominator below 1/2 is taken as 1/2 (an end moves at
+    most twice as far as the plain one); a parameter with too few replicates keeps its plain interval.
+    The result is cut to each parameter's domain ``bounds`` (``{name: (low, high)}``, :func:`_in_domain`)."""
+    out = {}
+    first = {name: _spread(value, [r.get(name) if r else None for r in replicates], scales.get(name, "linear"))
+             for name, value in params.items()}
+    plain = {name: None if f is None else (f[1] - f[2] - f[3], f[1] - f[2] + f[3]) for name, f in first.items()}
+    ends = {}
+    for side in (0, 1):
+        if any(p is None for p in plain.values()):
+            break
+        at = {name: _back(plain[name][side], first[name][0]) for name in params}
+        reps = replicates_at(at)
+        ends[side] = {name: _spread(params[name], [r.get(name) if r else None for r in reps], first[name][0], at=at[name])
+                      for name in params}
+    for name in params:
+        if plain[name] is None:
+            out[name] = None
+            continue
+        scale, u_hat, b0, h0 = first[name]
+        ends_u = list(plain[name])
+        for side, sign in ((0, -1.0), (1, 1.0)):
+            end = ends.get(side, {}).get(name)
+            if end is None or end[0] != scale or ends_u[side] == u_hat:
+                continue
+            k_b, k_h = ((end[2] - b0) / (ends_u[side] - u_hat), (end[3] - h0) / (ends_u[side] - u_hat))
+            ends_u[side] = u_hat + (sign * h0 - b0) / max(1.0 + k_b + sign * -k_h, 0.5)
+        out[name] = _in_domain(_back(ends_u[0], scale), _back(ends_u[1], scale), (bounds or {}).get(name, (-math.inf, math.inf)))
+    return out
+
+
+def _replicates(run, i, cands, seeds, at=None):
+    """Axis ``i`` of the extended model simulated once per seed: each run's finding estimates
+    (a list per run, in the order of ``cands``) and the baseline's ``bias_dps`` and
+    ``arw_dps_per_sqrt_hz``. ``at``: ``{index into cands: params}`` simulated in place of those
+    findings' estimates."""
+    a = AXES[i]
+    model = copy.deepcopy(run.base)
+    model["axes"][a] = run.axis_spec(i, run.kept_on(i))
+    for j, params in (at or {}).items():
+        model["axes"][a]["effects"][j].update(params)
+    if any(c.effect == "temperature" for c in cands):
+        model["temperature"] = temperature_table(run.rec)
+    spec, _ = validate_model(model)
+    temp = run.temp if any(c.effect == "temperature" for c in cands) else None
+    resolved = bool(run.resolved_lags[i]) and any(c.effect == "colored_noise" and c.extra.get("composite") for c in cands)
+    out = {"findings": [], "bias_dps": [], "arw_dps_per_sqrt_hz": []}
+    bar = Progress(run.say, f"intervals on {a}: bootstrap runs", len(seeds))
+    for k, s in enumerate(seeds):
+        x = simulate_axis(spec, run.n, run.sample_rate_hz, s, i)
+        out["bias_dps"].append(float(np.mean(x)))
+        out["arw_dps_per_sqrt_hz"].append(noise_sigma(x, run.sample_rate_hz, run.q or 0.0) / math.sqrt(run.sample_rate_hz))
+        try:
+            out["findings"].append(reestimate_axis(x, run.sample_rate_hz, temp, cands, resolved, run.q or 0.0, owned=True))
+        except (ValueError, ArithmeticError):  # a fit that cannot run on this replicate
+            out["findings"].append([None] * len(cands))
+        bar.step(k + 1)
+    return out
+
+
+def _forward(values, scale):
+    v = np.asarray(values, dtype=float)
+    if scale == "log":
+        return np.log(np.where(v > 0, v, np.nan))
+    if scale == "atanh":
+        return np.arctanh(np.where(np.abs(v) < 1, v, np.nan))
+    return v
+
+
+def _back(u, scale):
+    if scale == "log":
+        return math.exp(u)
+    if scale == "atanh":
+        return math.tanh(u)
+    return u
+
+
+def _interval(estimate, replicates, scale, bounds=(-math.inf, math.inf)):
+    """The bias-corrected normal-t interval of the module docstring, ``[low, high]``, cut to the
+    parameter's domain ``bounds`` (:func:`_in_domain`), or None when fewer than
+    :data:`MIN_REPLICATES` replicates have the parameter."""
+    spread = _spread(estimate, replicates, scale)
+    if spread is None:
+        return None
+    scale, u_hat, bias, half = spread
+    return _in_domain(_back(u_hat - bias - half, scale), _back(u_hat - bias + half, scale), bounds)
+
+
+def _in_domain(low, high, bounds):
+    """``[low, high]`` cut to the parameter's domain ``bounds``
+    (:func:`~gyrofilter.sim.model.param_bounds`: the log scale keeps a fraction positive, not
+    below 0.5), or None when it lies wholly outside (the replicates' bias is then not the
+    estimator's near the estimate)."""
+    if high < bounds[0] or low > bounds[1]:
+        return None
+    return [max(low, bounds[0]), min(high, bounds[1])]
+
+
+def _spread(estimate, replicates, scale, at=None):
+    """``(scale, g(estimate), bias, half-width)`` of the replicates on the parameter's scale (a
+    log scale falls back to linear for an estimate <= 0), the bias ``mean(u*) - g(at)`` (``at``:
+    the value they were simulated at, the estimate by default); None when fewer than
+    :data:`MIN_REPLICATES` have the parameter."""
+    from scipy.stats import t as student_t
+
+    values = [np.nan if r is None else float(r) for r in replicates]
+    if scale == "log" and not estimate > 0:
+        scale = "linear"
+    u_hat = float(_forward([estimate], scale)[0])
+    u_at = u_hat if at is None else float(_forward([at], scale)[0])
+    u = _forward(values, scale)
+    u = u[np.isfinite(u)]
+    if u.size < MIN_REPLICATES or not (math.isfinite(u_hat) and math.isfinite(u_at)):
+        return None
+    dev = u - u_at
+    if scale == "phase":
+        dev = (dev + math.pi) % (2 * math.pi) - math.pi
+    b = u.size
+    half = float(student_t.ppf(0.5 + CONFIDENCE / 2, b - 1)) * math.sqrt(1 + 1 / b) * float(np.std(dev, ddof=1))
+    return scale, u_hat, float(np.mean(dev)), half
+
+
+def _baseline_analytic(run, i, base_axis):
+    """Intervals of the white-noise baseline of axis ``i`` (module docstring)."""
+    n = run.n
+    z = NormalDist().inv_cdf(0.5 + CONFIDENCE / 2)
+    q2 = (run.q or 0.0) ** 2 / 12.0
+    sigma2 = (base_axis["arw_dps_per_sqrt_hz"] ** 2) * run.sample_rate_hz
+    total = sigma2 + q2
+    if not total > 0:
+        return
+    se_mean = math.sqrt(total / n)
+    bias = base_axis["bias_dps"]
+    rel = z * math.sqrt(2.0 / n) * total / max(sigma2, 1e-300)
+    base_axis["params_ci95"] = {
+        "bias_dps": [bias - z * se_mean, bias + z * se_mean],
+        "arw_dps_per_sqrt_hz": [base_axis["arw_dps_per_sqrt_hz"] * math.sqrt(max(1 - rel, 0.0)),
+                                base_axis["arw_dps_per_sqrt_hz"] * math.sqrt(1 + rel)]}

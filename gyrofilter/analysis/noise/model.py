@@ -1,0 +1,193 @@
+"""Gyro noise coefficients from the Allan deviation, with uncertainties and units.
+
+The five-term model (IEEE Std 952; paper 000 eqs. 4-8; paper 002) of the Allan variance of a
+gyro's rate::
+
+    sigma^2(tau) = 3 Q^2 / tau^2  +  N^2 / tau  +  (2 ln 2 / pi) B^2  +  K^2 tau / 3  +  R^2 tau^2 / 2
+
+=========  =====================  ================  ====================  ======================
+symbol     name                   unit (here)       slope of sigma(tau)   read-off (papers 000/002)
+=========  =====================  ================  ====================  ======================
+Q          quantization (angle)   deg               -1                    sigma(sqrt(3) s) on the -1 line
+N          angle random walk      deg/sqrt(s)       -1/2                  sigma(1 s) on the -1/2 line
+B          bias instability       deg/s             0                     flat minimum / 0.664
+K          rate random walk       deg/s/sqrt(s)     +1/2                  sigma(3 s) on the +1/2 line
+R          rate ramp              deg/s^2           +1                    sigma(sqrt(2) s) on the +1 line
+=========  =====================  ================  ====================  ======================
+
+(deg/sqrt(s) is the same as deg/s/sqrt(Hz): N is the rate noise density.)
+
+The coefficients are estimated in the modules beside this one: :mod:`~gyrofilter.analysis.noise.fit`
+(the weighted fit, :func:`~gyrofilter.analysis.noise.fit.characterise`), with the intervals of
+:mod:`~gyrofilter.analysis.noise.intervals`, and :mod:`~gyrofilter.analysis.noise.readoff` (the
+slope read-offs of papers 000/002); :mod:`~gyrofilter.analysis.noise.screen` finds the gross
+errors a record must not hold, :mod:`~gyrofilter.analysis.noise.export` writes the allan JSON and
+Kalibr's imu.yaml. This module holds the model itself: the terms, their units and conversions,
+and the result types.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...errors import SettingsError
+from ...units import DEG_PER_RAD
+
+#: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
+TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
+TERM_SYMBOL = {"quantization": "Q", "arw": "N", "bias_instability": "B", "rrw": "K", "rate_ramp": "R"}
+TERM_UNIT = {"quantization": "deg", "arw": "deg/sqrt(s)", "bias_instability": "deg/s",
+             "rrw": "deg/s/sqrt(s)", "rate_ramp": "deg/s^2"}
+#: slope of log sigma vs log tau for each term
+TERM_SLOPE = {"quantization": -1.0, "arw": -0.5, "bias_instability": 0.0, "rrw": 0.5, "rate_ramp": 1.0}
+#: tau (s) at which the read-off line gives the coefficient (sigma(tau_read) = coefficient)
+READ_TAU_S = {"quantization": math.sqrt(3.0), "arw": 1.0, "rrw": 3.0, "rate_ramp": math.sqrt(2.0)}
+#: power-law exponent of the rate PSD (NIST SP 1065); the ramp is treated as random-walk FM
+TERM_ALPHA = {"quantization": 2, "arw": 0, "bias_instability": -1, "rrw": -2, "rate_ramp": -2}
+#: sqrt(2 ln 2 / pi) = 0.664: flat Allan deviation per unit bias instability (paper 000)
+FLICKER_FLOOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
+
+
+def basis(tau_s):
+    """Columns of the model matrix at the cluster times ``tau_s`` (n,) in s:
+    ``[3/tau^2, 1/tau, 2 ln2/pi, tau/3, tau^2/2]`` (shape (n, 5))."""
+    tau = np.asarray(tau_s, dtype=np.float64)
+    return np.column_stack([3.0 / tau ** 2, 1.0 / tau, np.full_like(tau, 2.0 * math.log(2.0) / math.pi),
+                            tau / 3.0, tau ** 2 / 2.0])
+
+
+def model_adev(coefficients, tau_s):
+    """sqrt of the five-term model (deg/s) at ``tau_s`` (s) for ``coefficients`` = (Q, N, B, K, R)
+    in their base units (TERM_UNIT; None counts as 0)."""
+    c = np.array([0.0 if v is None else float(v) for v in coefficients])
+    return np.sqrt(basis(tau_s) @ c ** 2)
+
+
+def term_shares(theta_sq, tau):
+    return (basis(tau) * theta_sq).T  # (5, n)
+
+
+# --------------------------------------------------------------------------------------------
+# Unit conversions (all coefficients are stored in the deg/s-based units of TERM_UNIT)
+# --------------------------------------------------------------------------------------------
+
+#: (term, unit) -> factor: value_in_unit = factor * value_in_base_unit
+UNIT_FACTORS = {
+    ("quantization", "deg"): 1.0,
+    ("quantization", "arcsec"): 3600.0,
+    ("quantization", "rad"): 1.0 / DEG_PER_RAD,
+    ("arw", "deg/sqrt(s)"): 1.0,
+    ("arw", "deg/s/sqrt(Hz)"): 1.0,
+    ("arw", "deg/sqrt(h)"): 60.0,                    # sqrt(3600 s / h)
+    ("arw", "rad/s/sqrt(Hz)"): 1.0 / DEG_PER_RAD,    # Kalibr gyroscope_noise_density
+    ("bias_instability", "deg/s"): 1.0,
+    ("bias_instability", "deg/h"): 3600.0,
+    ("bias_instability", "rad/s"): 1.0 / DEG_PER_RAD,
+    ("rrw", "deg/s/sqrt(s)"): 1.0,
+    ("rrw", "deg/s^2/sqrt(Hz)"): 1.0,
+    ("rrw", "deg/h/sqrt(h)"): 3600.0 * 60.0,
+    ("rrw", "rad/s^2/sqrt(Hz)"): 1.0 / DEG_PER_RAD,  # Kalibr gyroscope_random_walk
+    ("rate_ramp", "deg/s^2"): 1.0,
+    ("rate_ramp", "deg/h^2"): 3600.0 ** 2,
+}
+#: the customary units shown beside the base unit
+CUSTOMARY_UNIT = {"quantization": "arcsec", "arw": "deg/sqrt(h)", "bias_instability": "deg/h",
+                  "rrw": "deg/h/sqrt(h)", "rate_ramp": "deg/h^2"}
+
+
+def convert(value, term, unit, to_base=False):
+    """Convert ``value``, a coefficient of ``term``, from its base unit (TERM_UNIT) to ``unit``, or back
+    with ``to_base=True``. Raises SettingsError for an unknown (term, unit) pair."""
+    try:
+        factor = UNIT_FACTORS[(term, unit)]
+    except KeyError:
+        known = ", ".join(u for t, u in UNIT_FACTORS if t == term)
+        raise SettingsError(f"no unit {unit!r} for {term!r}; known: {known}") from None
+    if value is None:
+        return None
+    return value / factor if to_base else value * factor
+
+
+def arw_from_white_std(std_dps, sample_rate_hz):
+    """Rate noise density of white noise with per-sample std ``std_dps`` at ``sample_rate_hz``:
+    ``N = std / sqrt(fs)`` (deg/sqrt(s)); the discrete-to-continuous conversion Kalibr expects."""
+    return std_dps / math.sqrt(sample_rate_hz)
+
+
+def white_std_from_arw(arw_dps_per_sqrt_hz, sample_rate_hz):
+    """Per-sample standard deviation (deg/s) of white rate noise of density N =
+    ``arw_dps_per_sqrt_hz`` (deg/s/sqrt(Hz)) sampled at fs = ``sample_rate_hz`` (Hz): ``N sqrt(fs)``."""
+    return arw_dps_per_sqrt_hz * math.sqrt(sample_rate_hz)
+
+
+# --------------------------------------------------------------------------------------------
+# Results
+# --------------------------------------------------------------------------------------------
+
+@dataclass
+class Coefficient:
+    """One noise coefficient in its base unit (TERM_UNIT[term]).
+
+    ``value`` is None when the term is not resolved; ``low``/``high`` bound it at
+    ``confidence``; ``upper`` is the upper bound when not resolved. ``tau_s`` is the cluster
+    time that determines it (read-off point or narrowest interval).
+    """
+
+    term: str
+    value: float | None
+    low: float | None = None
+    high: float | None = None
+    upper: float | None = None
+    tau_s: float | None = None
+    note: str = ""
+    z_score: float | None = None   # fitted c^2 / its standard deviation (fit only)
+
+    @property
+    def unit(self):
+        """The coefficient's base unit (TERM_UNIT)."""
+        return TERM_UNIT[self.term]
+
+    @property
+    def resolved(self):
+        """True when a value was estimated (else only ``upper`` bounds it)."""
+        return self.value is not None
+
+    def to_dict(self, unit=None):
+        """value, low, high in ``unit`` (default: the base unit) and the unit's name, as a dict."""
+        unit = unit or self.unit
+        return {"value": convert(self.value, self.term, unit), "low": convert(self.low, self.term, unit),
+                "high": convert(self.high, self.term, unit), "unit": unit}
+
+
+@dataclass
+class AxisNoise:
+    """Allan deviation of one axis and the coefficients from both methods."""
+
+    sample_rate_hz: float
+    n_samples: int
+    tau_s: np.ndarray
+    adev: np.ndarray
+    m: np.ndarray
+    n_clusters: np.ndarray
+    edf: np.ndarray
+    ci_low: np.ndarray          # chi-square interval of the deviation (at confidence)
+    ci_high: np.ndarray
+    simple_rel: np.ndarray      # paper 000 relative error 1/sqrt(2(N/m - 1))
+    fitted: dict                # term -> Coefficient (weighted NNLS)
+    readoff: dict               # term -> Coefficient (slope read-offs)
+    fit_values: np.ndarray      # the NNLS coefficients (Q, N, B, K, R), zeros included
+    fit_used: np.ndarray        # bool mask of taus used by the fit
+    confidence: float = 0.95
+    warnings: list = field(default_factory=list)
+
+    def model_adev(self, tau_s=None):
+        """The fitted model's Allan deviation (deg/s) at ``tau_s`` (s; default: the measured taus)."""
+        return model_adev(self.fit_values, self.tau_s if tau_s is None else tau_s)
+
+    def fit_consistency(self):
+        """Fraction of fitted taus whose chi-square interval contains the model."""
+        mod = self.model_adev()[self.fit_used]
+        lo, hi = self.ci_low[self.fit_used], self.ci_high[self.fit_used]
+        return float(np.mean((mod >= lo) & (mod <= hi))) if mod.size else float("nan")

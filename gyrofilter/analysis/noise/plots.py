@@ -1,0 +1,93 @@
+"""Allan deviation plots (matplotlib imported lazily, Agg backend).
+
+* :func:`plot_allan`: log-log overlapping Allan deviation per axis with its chi-square band,
+  the fitted five-term model, each resolved term's line, and the read-off points marked.
+* :func:`plot_before_after`: raw and filtered deviation of the same axes on one plot
+  (paper 001 Fig. 4).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis
+from ...plots import pyplot
+
+AXIS_COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
+TERM_STYLE = {"quantization": ":", "arw": "--", "bias_instability": "-.", "rrw": (0, (5, 2, 1, 2)),
+              "rate_ramp": (0, (1, 1))}
+
+
+def plot_allan(path, results, title=""):
+    """Write the figure file ``path`` (PNG) with one panel per axis, headed ``title``.
+    ``results``: {axis: AxisNoise}."""
+    plt = pyplot()
+    n = len(results)
+    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.6), squeeze=False)
+    for ax, (name, r) in zip(axes[0], results.items()):
+        colour = AXIS_COLOURS.get(name, "k")
+        ok = r.n_clusters >= 9
+        ax.fill_between(r.tau_s, r.ci_low, r.ci_high, color=colour, alpha=0.2, lw=0,
+                        label=f"{r.confidence:.0%} chi-square interval")
+        ax.loglog(r.tau_s[ok], r.adev[ok], "o-", ms=3, color=colour, label=f"{name}: overlapping ADEV")
+        if np.any(~ok):
+            ax.loglog(r.tau_s[~ok], r.adev[~ok], "o", ms=3, mfc="none", color=colour,
+                      label="< 9 clusters (not fitted)")
+        t = np.logspace(math.log10(r.tau_s[0]), math.log10(r.tau_s[-1]), 200)
+        ax.loglog(t, r.model_adev(t), "k-", lw=1.2, label="fitted model")
+        b = basis(t)
+        for j, term in enumerate(TERMS):
+            c = r.fitted[term]
+            if c.value is None:
+                continue
+            ax.loglog(t, np.sqrt(b[:, j]) * c.value, color="0.35", ls=TERM_STYLE[term], lw=1,
+                      label=f"{TERM_SYMBOL[term]} = {c.value:.3g} {c.unit}")
+        for term in TERMS:
+            c = r.readoff[term]
+            if c.value is None or c.tau_s is None:
+                continue
+            i = int(np.argmin(np.abs(r.tau_s - c.tau_s)))
+            ax.loglog([r.tau_s[i]], [r.adev[i]], "s", ms=8, mfc="none", mec="k")
+            if term == "bias_instability":
+                ax.annotate(f"B read-off: min/0.664 = {c.value:.3g}", (r.tau_s[i], r.adev[i]),
+                            textcoords="offset points", xytext=(-40, 12), fontsize=7)
+            else:
+                ax.annotate(f"{TERM_SYMBOL[term]} (slope {TERM_SLOPE[term]:+g})", (r.tau_s[i], r.adev[i]),
+                            textcoords="offset points", xytext=(4, 6), fontsize=7)
+        _label(ax, None, legend_size=6.5)
+        low = np.min(np.where(r.ci_low > 0, r.ci_low, np.min(r.adev[r.adev > 0])))
+        ax.set_ylim(low / 2.0, np.max(r.ci_high) * 1.5)
+        ax.set_title(f"axis {name}", fontsize=10)
+    axes[0][0].set_ylabel("Allan deviation (deg/s)")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return _save(plt, fig, path)
+
+
+def plot_before_after(path, curves, title=""):
+    """Write the figure file ``path`` (PNG), headed ``title``: one log-log axes of ``curves``, a
+    list of (label, tau_s, adev_dps, colour, linestyle)."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))
+    for label, tau, dev, colour, style in curves:
+        ax.loglog(tau, dev, style, color=colour, ms=3, label=label)
+    _label(ax, "Allan deviation (deg/s)", legend_size=7)
+    if title:
+        ax.set_title(title, fontsize=9)
+    return _save(plt, fig, path)
+
+
+def _label(ax, ylabel, legend_size):
+    ax.set_xlabel("cluster time tau (s)")
+    if ylabel:
+        ax.set_ylabel(ylabel)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=legend_size, loc="best")
+
+
+def _save(plt, fig, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
