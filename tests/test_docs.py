@@ -13,7 +13,11 @@ committed text to what the code gives now.
 After a change that moves a number: ``python tools/docs.py --fast`` (or ``--only NAME``, or the
 full run for the slow blocks), then commit the pages.
 """
+import os
 import re
+import shutil
+import subprocess
+import sys
 
 import pytest
 
@@ -125,3 +129,24 @@ def test_the_readme_set_up_section_runs_the_main_job_and_the_tests_word_for_word
     assert recording and (REPO / recording.group(1)).is_file()
     assert "python3 -m venv .venv && . .venv/bin/activate && pip install" in blocks[0]
     assert '"## Set up and run"' in (REPO / ".ci" / "run").read_text(encoding="utf-8")
+
+
+def test_the_readme_embedding_example_runs_in_a_folder_of_its_own(tmp_path):
+    """The Python block of "### 2. Embed the filter in your code", run as a user runs it: in a
+    fresh folder holding the recording it reads, so the calibration file it saves lands there and
+    not in the clone (a tracked cal.json was once rewritten by it). Its calibration reads back."""
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    section = re.search(r"^### 2\. Embed the filter in your code\n(.*?)(?=^### )", readme, re.M | re.S).group(1)
+    code = re.search(r"^```python\n(.*?)^```", section, re.M | re.S).group(1)
+    paths = re.findall(r'read_recording\("([^"]+)"\)', code)
+    assert paths
+    for rel in paths:
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(REPO / rel, tmp_path / rel)
+    checks = "\nassert g.bias_dps == f.bias_dps and rates.ndim == 2 and rates.shape[1] == 3 and len(rates) > 0\n"
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    done = subprocess.run([sys.executable, "-c", code + checks], cwd=tmp_path, env=env, capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert (tmp_path / "cal.json").is_file()
+    assert not (REPO / "cal.json").exists()
