@@ -7,6 +7,7 @@ import ast
 from pathlib import Path
 
 import gyrofilter
+from gyrofilter.effects import REGISTRY
 
 PACKAGE = Path(gyrofilter.__file__).parent
 MAX_MODULE_LINES = 600
@@ -17,6 +18,10 @@ KERNEL_MARK = "numba kernel"  # in a comment right above a def: its length is th
 LAZY_OK = {"scipy", "statsmodels", "matplotlib", "numba", "dask", "distributed", "serial", "smbus2", "filterpy"}
 #: names a sample rate must not have (it is ``sample_rate_hz`` everywhere)
 RATE_ALIASES = {"fs", "rate_hz"}
+#: an effect's name is spelled through gyrofilter.effects' constants; as a literal in at most this
+#: many modules (the registry itself, and where the same word names another thing: the model's
+#: temperature profile, a figure, a source option, the `arma` command)
+MAX_EFFECT_LITERAL_MODULES = 5
 #: modules whose names share a prefix up to '_' (``gap_baseline``, ``gap_features``, ...) in one
 #: folder: this many make a family that belongs in a folder of its own
 FAMILY_SIZE = 3
@@ -159,6 +164,20 @@ def flat_families(package=PACKAGE):
     return out
 
 
+def effect_literals(package=PACKAGE, names=None):
+    """Per effect name of the registry, the modules holding it as a string literal (docstrings aside)."""
+    names = {e.name for e in REGISTRY} if names is None else set(names)
+    where = {n: set() for n in names}
+    for path, _, tree in modules(package):
+        docs = {id(node.body[0].value) for node in ast.walk(tree)
+                if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+                and ast.get_docstring(node, clean=False) is not None}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and node.value in names and id(node) not in docs:
+                where[node.value].add(str(path.relative_to(package)))
+    return where
+
+
 def test_no_module_is_over_600_lines():
     assert not long_modules(), "\n".join(long_modules())
 
@@ -187,6 +206,11 @@ def test_a_family_of_modules_lives_in_its_own_folder():
     assert not flat_families(), "\n".join(flat_families())
 
 
+def test_an_effect_name_is_a_literal_in_few_modules():
+    wide = {n: sorted(m) for n, m in effect_literals().items() if len(m) > MAX_EFFECT_LITERAL_MODULES}
+    assert not wide, wide
+
+
 def test_the_checks_catch_what_they_look_for(tmp_path):
     package = tmp_path / "gyrofilter"
     (package / "cli").mkdir(parents=True)
@@ -204,3 +228,6 @@ def test_the_checks_catch_what_they_look_for(tmp_path):
     for name in ("gap.py", "gap_one.py", "gap_two.py", "noise_a.py", "noise_b.py"):
         (package / "cli" / name).write_text("")
     assert flat_families(package) == ["gyrofilter/cli: gap, gap_one, gap_two"]
+    (package / "cli" / "d.py").write_text('"""warmup"""\nX = ("warmup", "sinusoid")\n\n\ndef f():\n    """warmup"""\n    return "warmup"\n')
+    assert effect_literals(package, ["warmup", "sinusoid", "outliers"]) == {"warmup": {"cli/d.py"}, "sinusoid": {"cli/d.py"},
+                                                                            "outliers": set()}

@@ -58,6 +58,7 @@ from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
+from ..effects import BIAS_INSTABILITY, RATE_RAMP
 from .noise.allan import MIN_CLUSTERS
 from .gap.pipeline import analyse_gap, gap_columns
 from .noise.export import JSON_KEY, kalibr_yaml, to_json
@@ -70,7 +71,7 @@ from ..recording import read_recording
 from ..units import AXES, MAD_TO_SIGMA, utf8_text
 
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
-COEFFICIENTS = ("arw", "bias_instability", "rrw", "rate_ramp")
+COEFFICIENTS = ("arw", BIAS_INSTABILITY, "rrw", RATE_RAMP)
 #: modified z-score beyond which a unit stands out (Iglewicz & Hoaglin 1993)
 FLAG_Z = 3.5
 #: least spread s of the log levels (10 %): the unit-to-unit spread assumed at least

@@ -13,6 +13,7 @@ Output files are written only once every result is finite, each whole or not at 
 """
 import sys
 
+from ..effects import BIAS_INSTABILITY, RATE_RAMP
 from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError
 from ..analysis.fleet import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
@@ -27,8 +28,8 @@ from . import batch, console, options, outputs, still
 MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
 ALL_AXES = "".join(AXES)  # --axes as one word: xyz
 
-NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
-         "rrw": "rate random walk", "rate_ramp": "rate ramp"}
+NAMES = {"quantization": "quantization", "arw": "angle random walk", BIAS_INSTABILITY: "bias instability",
+         "rrw": "rate random walk", RATE_RAMP: "rate ramp"}
 
 
 def add_arguments(parser):
@@ -91,7 +92,7 @@ def unresolved_text(r, min_clusters):
     """What the record ``r`` (an AxisNoise) is too short to resolve: the slow terms (B, K, R) the fit
     left unresolved and the longest cluster time with ``min_clusters`` clusters, or "" when it
     resolves them all."""
-    missing = [TERM_SYMBOL[t] for t in ("bias_instability", "rrw", "rate_ramp") if r.fitted[t].value is None]
+    missing = [TERM_SYMBOL[t] for t in (BIAS_INSTABILITY, "rrw", RATE_RAMP) if r.fitted[t].value is None]
     if not missing:
         return ""
     longest = r.tau_s[r.fit_used][-1]

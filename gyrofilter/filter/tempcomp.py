@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..effects import TEMPERATURE
 from ..errors import SettingsError
 from ..units import AXES, plain
 
@@ -56,7 +57,7 @@ def coefficients_from_model(model: dict):
     for name in AXES:
         c = 0.0
         for eff in axes.get(name, {}).get("effects", []):
-            if eff.get("effect") == "temperature":
+            if eff.get("effect") == TEMPERATURE:
                 c += float(eff["coefficient_dps_per_c"])
         out.append(c)
     return tuple(out)

@@ -33,28 +33,31 @@ import math
 
 import numpy as np
 
+from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
+                      RATE_RANDOM_WALK, SINUSOID, TEMPERATURE, WARMUP)
+from .model import TEMPERATURE_PROFILE
 from .noise_terms import colored_noise_filter
 from .simulate import simulate
 from ..recording import Recording
 from ..units import AXES
 
-EFFECTS = ("bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
-           "temperature", "bias_step", "warmup", "outliers", "colored_noise", "heavy_tails")
+EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
+           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS)
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
 TOLERANCES = {
-    "bias_instability": {"b_dps": ("rel", 0.5)},
-    "rate_random_walk": {"k_dps_per_sqrt_s": ("rel", 0.5)},
-    "rate_ramp": {"r_dps_per_s": ("rel", 0.3)},
-    "gauss_markov": {"sigma_dps": ("rel", 0.5), "tau_s": ("factor", 2.5)},
-    "sinusoid": {"frequency_hz": ("rel", 0.01), "amplitude_dps": ("rel", 0.25)},
-    "temperature": {"coefficient_dps_per_c": ("rel", 0.3)},
-    "bias_step": {"time_s": ("time", (5.0, 0.02)), "size_dps": ("rel", 0.35)},
-    "warmup": {"amplitude_dps": ("rel", 0.35), "tau_s": ("rel", 0.5)},
-    "outliers": {"rate": ("factor", 1.6), "magnitude_dps": ("rel", 0.35)},
-    "colored_noise": {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
-    "heavy_tails": {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
+    BIAS_INSTABILITY: {"b_dps": ("rel", 0.5)},
+    RATE_RANDOM_WALK: {"k_dps_per_sqrt_s": ("rel", 0.5)},
+    RATE_RAMP: {"r_dps_per_s": ("rel", 0.3)},
+    GAUSS_MARKOV: {"sigma_dps": ("rel", 0.5), "tau_s": ("factor", 2.5)},
+    SINUSOID: {"frequency_hz": ("rel", 0.01), "amplitude_dps": ("rel", 0.25)},
+    TEMPERATURE: {"coefficient_dps_per_c": ("rel", 0.3)},
+    BIAS_STEP: {"time_s": ("time", (5.0, 0.02)), "size_dps": ("rel", 0.35)},
+    WARMUP: {"amplitude_dps": ("rel", 0.35), "tau_s": ("rel", 0.5)},
+    OUTLIERS: {"rate": ("factor", 1.6), "magnitude_dps": ("rel", 0.35)},
+    COLORED_NOISE: {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
+    HEAVY_TAILS: {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
 }
 
 
@@ -77,42 +80,42 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
     params = {}
     sign = 1.0 if rng.random() < 0.5 else -1.0
     T = duration_s
-    if effect == "bias_instability":
+    if effect == BIAS_INSTABILITY:
         params = {"b_dps": scale * rng.uniform(0.006, 0.02)}
-    elif effect == "rate_random_walk":
+    elif effect == RATE_RANDOM_WALK:
         params = {"k_dps_per_sqrt_s": scale * rng.uniform(0.0008, 0.003)}
-    elif effect == "rate_ramp":
+    elif effect == RATE_RAMP:
         params = {"r_dps_per_s": sign * scale * rng.uniform(0.05, 0.25) / T}
-    elif effect == "gauss_markov":
+    elif effect == GAUSS_MARKOV:
         # a correlation time the record can resolve: at most a fifteenth of its length
         params = {"sigma_dps": scale * rng.uniform(0.02, 0.06), "tau_s": float(rng.uniform(10, min(120.0, T / 15)))}
-    elif effect == "sinusoid":
+    elif effect == SINUSOID:
         params = {"frequency_hz": float(math.exp(rng.uniform(math.log(0.1), math.log(30.0)))),
                   "amplitude_dps": scale * rng.uniform(0.01, 0.04),
                   "phase_rad": float(rng.uniform(0, 2 * math.pi))}
-    elif effect == "temperature":
+    elif effect == TEMPERATURE:
         params = {"coefficient_dps_per_c": sign * scale * rng.uniform(0.01, 0.04)}
-    elif effect == "bias_step":
+    elif effect == BIAS_STEP:
         params = {"time_s": float(rng.uniform(0.2, 0.8) * T), "size_dps": sign * scale * rng.uniform(0.03, 0.1)}
-    elif effect == "warmup":
+    elif effect == WARMUP:
         params = {"amplitude_dps": sign * scale * rng.uniform(0.1, 0.4), "tau_s": float(rng.uniform(30, 300))}
-    elif effect == "outliers":
+    elif effect == OUTLIERS:
         params = {"rate": float(math.exp(rng.uniform(math.log(2e-4), math.log(2e-3)))),
                   "magnitude_dps": scale * rng.uniform(1.0, 3.0)}
-    elif effect == "colored_noise":
+    elif effect == COLORED_NOISE:
         if rng.uniform() < 0.5:
             params = {"lag1": scale * rng.uniform(0.3, 0.8)}
         else:
             lag1 = scale * rng.uniform(0.15, 0.35)
             params = {"lag1": lag1, "lag2": lag1 * rng.uniform(-0.2, 0.2)}
-    elif effect == "heavy_tails":
+    elif effect == HEAVY_TAILS:
         params = {"fraction": scale * math.exp(rng.uniform(math.log(0.01), math.log(0.1))),
                   "scale_ratio": math.exp(rng.uniform(math.log(4.0), math.log(30.0)))}
     params = {k: float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))
-    model["temperature"] = {"start_c": start,
-                            "end_c": start + float(rng.uniform(3, 8) if effect == "temperature" else rng.uniform(0, 1.5)),
+    model[TEMPERATURE_PROFILE] = {"start_c": start,
+                            "end_c": start + float(rng.uniform(3, 8) if effect == TEMPERATURE else rng.uniform(0, 1.5)),
                             "tau_s": float(rng.uniform(300, 900)), "noise_c": 0.01,
                             "resolution_c": 1.0 / 340.0}
     if effect != "none":
@@ -136,14 +139,14 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",
              "axes": {a: {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []} for a in AXES}}
     temp = rec.temp_c
-    if effect == "temperature":
+    if effect == TEMPERATURE:
         if temp is None:
             raise ValueError("temperature needs a temp column")
         t = np.arange(n) / sample_rate_hz
         step = max(1, n // 500)
-        model["temperature"] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
+        model[TEMPERATURE_PROFILE] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
     gyro = rec.gyro_dps.copy()
-    if effect == "colored_noise":
+    if effect == COLORED_NOISE:
         # a property of the noise, not an additive term: filter the real noise of the axis by
         # the colored noise's own filter, keeping its variance (preserve "std")
         from scipy.signal import lfilter
@@ -156,7 +159,7 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
             b, a = [math.sqrt(1 - rho * rho)], [1.0, -rho]
         dev = gyro[:, i] - gyro[:, i].mean()
         gyro[:, i] = gyro[:, i].mean() + lfilter(b, a, dev)
-    elif effect == "heavy_tails":
+    elif effect == HEAVY_TAILS:
         # a property of the noise too: the real fast noise (the rate less its moving mean over 64
         # samples) scaled per sample by the effect's k[n] (variance kept on average)
         i = AXES.index(axis)

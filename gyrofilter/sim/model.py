@@ -15,6 +15,7 @@ import re
 import numpy as np
 
 from . import noise_terms as nt
+from ..effects import ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, SINUSOID, TEMPERATURE
 from ..errors import SettingsError
 from ..inputs import MAX_QUOTE_CHARS, load_json, quote
 from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_sample_rate_hz, plain
@@ -46,23 +47,11 @@ _KINDS = {
 }
 
 #: effect name -> (required {param: kind}, optional {param: (kind, default)}), in table order.
-EFFECTS = {
-    "bias_instability": ({"b_dps": "nonneg"}, {"tau_min_s": ("pos", None), "tau_max_s": ("pos", None), "per_decade": ("pos", 2.0)}),
-    "rate_random_walk": ({"k_dps_per_sqrt_s": "nonneg"}, {}),
-    "rate_ramp": ({"r_dps_per_s": "any"}, {}),
-    "gauss_markov": ({"sigma_dps": "nonneg", "tau_s": "pos"}, {}),
-    "sinusoid": ({"frequency_hz": "nonneg", "amplitude_dps": "nonneg"}, {"phase_rad": ("any", 0.0)}),
-    "temperature": ({"coefficient_dps_per_c": "any"}, {"reference_c": ("any", None)}),
-    "bias_step": ({"time_s": "nonneg", "size_dps": "any"}, {}),
-    "warmup": ({"amplitude_dps": "any", "tau_s": "pos"}, {}),
-    "outliers": ({"rate": "frac", "magnitude_dps": "nonneg"}, {"spread_ln": ("nonneg", 0.25)}),
-    "colored_noise": ({"lag1": "lag"}, {"lag2": ("lag", None), "preserve": ("choice:arw,std", "arw")}),
-    "narrowband": ({"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {}),
-    "arma": ({"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])}),
-    "heavy_tails": ({"fraction": "frac", "scale_ratio": "pos"}, {}),
-}
+EFFECTS = {e.name: (e.required, e.optional) for e in REGISTRY}
 
-_TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", "temperature", "axes"}
+#: the model's top-level key of its temperature profile (docs/formats.md, section 2; not the effect)
+TEMPERATURE_PROFILE = "temperature"
+_TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", TEMPERATURE_PROFILE, "axes"}
 _META_KEYS = {"description", "name", "comment", "notes", "source", "sensor"}
 _AXIS_KEYS = {"bias_dps", "arw_dps_per_sqrt_hz", "effects"}
 _TEMP_EXP = {"start_c": ("any", None), "end_c": ("any", None), "tau_s": ("pos", 600.0),
@@ -199,7 +188,8 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     out["lsb_per_dps"] = None if lsb is None else _number(lsb, "lsb_per_dps", "pos")
     full_scale_dps = model.get("full_scale_dps")
     out["full_scale_dps"] = None if full_scale_dps is None else _number(full_scale_dps, "full_scale_dps", "pos")
-    out["temperature"] = None if model.get("temperature") is None else _validate_temperature(model["temperature"])
+    out[TEMPERATURE_PROFILE] = (None if model.get(TEMPERATURE_PROFILE) is None
+                                else _validate_temperature(model[TEMPERATURE_PROFILE]))
 
     axes = model.get("axes", {})
     if not isinstance(axes, dict):
@@ -214,7 +204,7 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
 
 
 def _validate_temperature(spec):
-    where = "temperature"
+    where = TEMPERATURE_PROFILE
     if not isinstance(spec, dict):
         _err(where, f"expected an object, got {_show(spec)}")
     out = {}
@@ -265,7 +255,7 @@ def _validate_axis(spec, where, model, warnings, coefficients_only):
     _check_length(effects, f"{where}.effects", MAX_EFFECTS_PER_AXIS, "effects")
     for i, eff in enumerate(effects):
         out["effects"].append(_validate_effect(eff, f"{where}.effects[{i}]", model, warnings, coefficients_only))
-    for single in ("colored_noise", "heavy_tails"):  # properties of the one white noise of the axis
+    for single in (COLORED_NOISE, HEAVY_TAILS):  # properties of the one white noise of the axis
         if sum(e["effect"] == single for e in out["effects"]) > 1:
             _err(f"{where}.effects", f"at most one {single} per axis")
     return out
@@ -301,25 +291,25 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     for key in eff:
         if key != "effect" and key not in required and key not in optional and not _is_ignored(key):
             warnings.append(f"model: {label}: unknown parameter '{key}' ignored")
-    if name == "temperature" and model["temperature"] is None and not coefficients_only:
+    if name == TEMPERATURE and model[TEMPERATURE_PROFILE] is None and not coefficients_only:
         _err(label, "needs the model's 'temperature' profile (the top-level 'temperature' key)")
     rate = model["sample_rate_hz"]
-    if name == "sinusoid" and rate is not None and out["frequency_hz"] > rate / 2.0:
+    if name == SINUSOID and rate is not None and out["frequency_hz"] > rate / 2.0:
         warnings.append(f"model: {label}: frequency_hz {out['frequency_hz']:g} is above the Nyquist frequency "
                         f"{rate / 2.0:g} Hz and will alias")
-    if name == "narrowband" and rate is not None:
+    if name == NARROWBAND and rate is not None:
         if out["center_hz"] >= rate / 2.0:
             _err(f"{label}.center_hz", f"expected a frequency below the Nyquist frequency {rate / 2.0:g} Hz, "
                                        f"got {out['center_hz']:g}")
         if not MIN_BANDWIDTH_PER_RATE * rate <= out["bandwidth_hz"] <= rate:
             _err(f"{label}.bandwidth_hz", f"expected a width in [{MIN_BANDWIDTH_PER_RATE * rate:g}, {rate:g}] Hz "
                                           f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")
-    if name == "arma" and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:
+    if name == ARMA and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:
         _err(f"{label}.phi", "expected a stationary AR part (every root of z^p - phi_1 z^(p-1) - ... - phi_p inside the unit circle)")
-    if name == "colored_noise" and out["lag2"] is not None and nt.arma11_from_lags(out["lag1"], out["lag2"]) is None:
+    if name == COLORED_NOISE and out["lag2"] is not None and nt.arma11_from_lags(out["lag1"], out["lag2"]) is None:
         _err(f"{label}.lag2", f"no first-order ARMA noise has lag-1 autocorrelation {out['lag1']:g} and lag-2 "
                               f"{out['lag2']:g} (expected |lag2| < |lag1| and 1 + p^2 - 2 p lag1 > 2 |lag1 - p|, p = lag2 / lag1)")
-    if name == "bias_instability" and out["tau_min_s"] and out["tau_max_s"] and out["tau_max_s"] < out["tau_min_s"]:
+    if name == BIAS_INSTABILITY and out["tau_min_s"] and out["tau_max_s"] and out["tau_max_s"] < out["tau_min_s"]:
         _err(f"{label}.tau_max_s", "expected tau_max_s >= tau_min_s")
     return out
 

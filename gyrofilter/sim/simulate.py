@@ -48,9 +48,11 @@ import json
 
 import numpy as np
 
+from ..effects import (ARMA, BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND,
+                       OUTLIERS, RATE_RAMP, RATE_RANDOM_WALK, SINUSOID, TEMPERATURE, WARMUP)
 from . import noise_terms as nt
 from .flicker import BiasInstability
-from .model import EFFECTS, validate_model
+from .model import EFFECTS, TEMPERATURE_PROFILE, validate_model
 from ..errors import SettingsError
 from ..recording import COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, Recording, format_number, units_header
 from ..units import AXES, DEG_PER_RAD, check_duration_s, plain, to_dps
@@ -103,11 +105,11 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
     """(additive terms, noise term, outlier terms) for one axis."""
     terms = [nt.Constant(spec["bias_dps"])]
     outliers = []
-    colored = next((e for e in spec["effects"] if e["effect"] == "colored_noise"), None)
-    tails = next((e for e in spec["effects"] if e["effect"] == "heavy_tails"), None)
+    colored = next((e for e in spec["effects"] if e["effect"] == COLORED_NOISE), None)
+    tails = next((e for e in spec["effects"] if e["effect"] == HEAVY_TAILS), None)
     draws = _stream(root, ax_index, 0, 0, 0)
     if tails is not None:  # the same normals, scaled per sample: heavy-tailed at the same variance
-        draws = nt.ScaleMixtureNormal(draws, _stream(root, ax_index, _EFFECT_ID["heavy_tails"], 0, 0), tails["fraction"],
+        draws = nt.ScaleMixtureNormal(draws, _stream(root, ax_index, _EFFECT_ID[HEAVY_TAILS], 0, 0), tails["fraction"],
                                       tails["scale_ratio"])
     if colored is not None and colored["lag2"] is not None:
         noise = nt.FilteredNoise(*nt.colored_noise_filter(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, colored["lag1"],
@@ -121,33 +123,33 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
         name = eff["effect"]
         occ = seen[name] = seen.get(name, -1) + 1
         key = (ax_index, _EFFECT_ID[name], occ)
-        if name == "bias_instability":
+        if name == BIAS_INSTABILITY:
             tau_min = eff["tau_min_s"] or 1.0 / sample_rate_hz
             tau_max = eff["tau_max_s"] or max(duration_s, tau_min)
             terms.append(BiasInstability(eff["b_dps"], sample_rate_hz, _stream(root, *key, 0), tau_min, tau_max,
                                          eff["per_decade"]))
-        elif name == "rate_random_walk":
+        elif name == RATE_RANDOM_WALK:
             terms.append(nt.RateRandomWalk(eff["k_dps_per_sqrt_s"], sample_rate_hz, _stream(root, *key, 0)))
-        elif name == "rate_ramp":
+        elif name == RATE_RAMP:
             terms.append(nt.RateRamp(eff["r_dps_per_s"]))
-        elif name == "gauss_markov":
+        elif name == GAUSS_MARKOV:
             terms.append(nt.GaussMarkov(eff["sigma_dps"], eff["tau_s"], sample_rate_hz, _stream(root, *key, 0)))
-        elif name == "sinusoid":
+        elif name == SINUSOID:
             terms.append(nt.Sinusoid(eff["amplitude_dps"], eff["frequency_hz"], eff["phase_rad"]))
-        elif name == "temperature":
+        elif name == TEMPERATURE:
             ref = temp_profile.start_c() if eff["reference_c"] is None else eff["reference_c"]
             terms.append(nt.TemperatureCoefficient(eff["coefficient_dps_per_c"], ref))
-        elif name == "bias_step":
+        elif name == BIAS_STEP:
             terms.append(nt.BiasStep(eff["size_dps"], eff["time_s"]))
-        elif name == "warmup":
+        elif name == WARMUP:
             terms.append(nt.Warmup(eff["amplitude_dps"], eff["tau_s"]))
-        elif name == "narrowband":
+        elif name == NARROWBAND:
             b, a = nt.narrowband_filter(eff["rms_dps"], eff["center_hz"], eff["bandwidth_hz"], sample_rate_hz)
             terms.append(nt.FilteredNoise(b, a, _stream(root, *key, 0)))
-        elif name == "arma":
+        elif name == ARMA:
             b, a = nt.arma_filter(eff["phi"], eff["theta"], eff["sigma_a_dps"])
             terms.append(nt.FilteredNoise(b, a, _stream(root, *key, 0)))
-        elif name == "outliers":
+        elif name == OUTLIERS:
             outliers.append(nt.Outliers(eff["rate"], eff["magnitude_dps"], _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
         # colored_noise and heavy_tails are part of the noise term
     return terms, noise, outliers
@@ -193,7 +195,7 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
     n_total = sample_count(duration_s, sample_rate_hz)
     duration_s = n_total / sample_rate_hz
     root = _root_seed(seed, rng)
-    temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
+    temp = nt.TemperatureProfile(spec[TEMPERATURE_PROFILE], _stream(root, 3, 0, 0, 0)) if spec[TEMPERATURE_PROFILE] else None
     axes = [_axis_terms(i, spec["axes"][a], sample_rate_hz, duration_s, root, temp) for i, a in enumerate(AXES)]
     for start in range(0, n_total, chunk_samples):
         n = min(chunk_samples, n_total - start)
@@ -247,7 +249,7 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     sample_rate_hz = spec["sample_rate_hz"]
     n_total = sample_count(duration_s, sample_rate_hz)
     root = _root_seed(seed, None)
-    temp = nt.TemperatureProfile(spec["temperature"], _stream(root, 3, 0, 0, 0)) if spec["temperature"] else None
+    temp = nt.TemperatureProfile(spec[TEMPERATURE_PROFILE], _stream(root, 3, 0, 0, 0)) if spec[TEMPERATURE_PROFILE] else None
     axis = int(axis)
     terms = _axis_terms(axis, spec["axes"][AXES[axis]], sample_rate_hz, n_total / sample_rate_hz, root, temp)
     for start in range(0, n_total, chunk_samples):
@@ -300,7 +302,7 @@ def recording_columns(model_or_spec):
     ``model_or_spec``: the model dict or its validated form. Returns a list of names: ``t`` in
     s, the gyro columns in the model's ``gyro_unit``, ``temp`` in deg C.
     """
-    has_temp = model_or_spec.get("temperature") is not None
+    has_temp = model_or_spec.get(TEMPERATURE_PROFILE) is not None
     return list(COLUMNS) + (["temp"] if has_temp else [])
 
 
@@ -325,7 +327,7 @@ def simulate(model: dict, duration_s: float, *, sample_rate_hz=None, rng=None, s
     columns = {"t": t_s}
     for i, name in enumerate(GYRO_COLUMNS):
         columns[name] = gyro[:, i]
-    if spec["temperature"] is not None:
+    if spec[TEMPERATURE_PROFILE] is not None:
         columns["temp"] = np.concatenate([p[2] for p in parts])
     header = recording_header(model, duration_s, seed=seed, validated=spec)
     return Recording(columns=columns, header=header)

@@ -17,6 +17,7 @@ import json
 
 import numpy as np
 
+from ..effects import BIAS_INSTABILITY, RATE_RAMP
 from ..analysis.gap.report import covariate_preamble, evidence_text, indistinguishable_text, params_text
 from ..analysis.noise.export import JSON_KEY, JSON_UNIT
 from ..analysis.noise.model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
@@ -32,8 +33,8 @@ AXIS_COLOURS = {"x": "#c0392b", "y": "#27864a", "z": "#2e5fa8"}
 SUMMARY_KEYS = ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc", "live_source", "recorded_by",
                 "description")
 _LONG_TEXT = 400  # characters of a header value the summary shows
-_NAMES = {"quantization": "quantization", "arw": "angle random walk", "bias_instability": "bias instability",
-          "rrw": "rate random walk", "rate_ramp": "rate ramp"}
+_NAMES = {"quantization": "quantization", "arw": "angle random walk", BIAS_INSTABILITY: "bias instability",
+          "rrw": "rate random walk", RATE_RAMP: "rate ramp"}
 
 _STYLE = """
 body { font-family: sans-serif; margin: 0 auto; padding: 0 16px 32px; max-width: 1180px; color: #222; line-height: 1.4; }

@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 
+from ...effects import BIAS_STEP, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, RATE_RAMP, TEMPERATURE, WANDERS, WARMUP
 from .. import stats
 from . import detectors as det
 from .features import features
@@ -111,11 +112,11 @@ def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
     if not cands:
         return spec
     n = xc.size
-    sigma = noise_sigma(xc, sample_rate_hz, q or 0.0, mask_spikes=not any(c.effect == "heavy_tails" for c in cands))
+    sigma = noise_sigma(xc, sample_rate_hz, q or 0.0, mask_spikes=not any(c.effect == HEAVY_TAILS for c in cands))
     for c in cands:  # narrow bands (above the high-pass) are noise of their own: N'^2 = N^2 - rms^2
-        if c.effect == "narrowband":
+        if c.effect == NARROWBAND:
             sigma = math.sqrt(max(sigma**2 - c.params["rms_dps"] ** 2, 0.05 * sigma**2))
-    colored = next((c for c in cands if c.effect == "colored_noise"), None)
+    colored = next((c for c in cands if c.effect == COLORED_NOISE), None)
     if colored is not None:
         w = det.colored_window(n, sample_rate_hz)
         sigma *= math.sqrt((1 - 1.0 / w) / (1 - highpass_loss(colored, w)))
@@ -124,9 +125,6 @@ def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
     return spec
 
 
-#: the stochastic wanders: their high-frequency power is also in the high-passed series that
-#: the white level and the lag-1 are measured on (:func:`wander_highpassed`)
-WANDERS = ("bias_instability", "gauss_markov", "rate_random_walk")
 #: samples of the wander simulated alone by :func:`wander_highpassed` (the high-pass keeps
 #: scales below a window of 64 samples or 0.5 s, so a stretch of this length holds thousands)
 WANDER_SAMPLES = 1 << 18
@@ -188,11 +186,11 @@ def start_bias(mean_bias_dps, cands, duration_s):
     findings the model holds move it: a shape that was dropped leaves the mean."""
     b, T = float(mean_bias_dps), float(duration_s)
     for c in cands:
-        if c.effect == "bias_step":
+        if c.effect == BIAS_STEP:
             b -= c.params["size_dps"] * (1 - c.params["time_s"] / T)
-        elif c.effect == "rate_ramp":
+        elif c.effect == RATE_RAMP:
             b -= c.params["r_dps_per_s"] * T / 2
-        elif c.effect == "warmup":
+        elif c.effect == WARMUP:
             tau = c.params["tau_s"]
             b -= c.params["amplitude_dps"] * tau / T * (1 - math.exp(-T / tau))
     return b
@@ -215,9 +213,9 @@ def effect_entry(cand, preserve="std"):
     from the wavelet-variance fit, its long-tau level (``"arw"``)."""
     entry = {"effect": cand.effect}
     entry.update({k: float(v) for k, v in cand.params.items()})
-    if cand.effect == "colored_noise":
+    if cand.effect == COLORED_NOISE:
         entry["preserve"] = preserve
-    if cand.effect == "temperature":
+    if cand.effect == TEMPERATURE:
         entry["reference_c"] = cand.extra.get("reference_c")
     return entry
 

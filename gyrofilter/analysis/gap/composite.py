@@ -27,13 +27,15 @@ import math
 
 import numpy as np
 
+from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RANDOM_WALK,
+                            WANDERS)
 from . import detectors as det
 from ..noise import gmwm
 from ...sim import noise_terms as nt
 from ...units import AXES
 
 #: the optional terms of the composite fit (:data:`gyrofilter.analysis.noise.gmwm.TERMS`) and the effect each becomes
-COMPOSITE_TERMS = {"rrw": "rate_random_walk", "flicker": "bias_instability"}
+COMPOSITE_TERMS = {"rrw": RATE_RANDOM_WALK, "flicker": BIAS_INSTABILITY}
 #: the composite fit uses the wavelet variance at tau >= max(1 s, 16 samples): shorter scales
 #: carry the colored noise's low-pass shape and the narrow bands, which have their own terms
 COMPOSITE_MIN_TAU_S = 1.0
@@ -60,7 +62,7 @@ def composite_step(run):
         if not comp:
             continue
         s_ext = run.null_spread(i, run.kept_on(i), f"extended model on {a}") if run.kept_on(i) else 0.0
-        keep_k = [k for k, ci, c, _ in run.kept if ci == i and c.effect not in det.STOCHASTIC_MODELS]
+        keep_k = [k for k, ci, c, _ in run.kept if ci == i and c.effect not in WANDERS]
         first = len(cands)
         cands.extend((i, c) for c in comp)
         comp_k = list(range(first, len(cands)))
@@ -68,7 +70,7 @@ def composite_step(run):
             cands[k][1].extra["composite"] = True
         run.composite_axes[a] = dict(run.ext_axes[a], arw_dps_per_sqrt_hz=fit.arw_dps_per_sqrt_hz)
         d_comp = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
-        colored_k = [k for k in keep_k if cands[k][1].effect == "colored_noise"]
+        colored_k = [k for k in keep_k if cands[k][1].effect == COLORED_NOISE]
         dropped_colored = False
         if colored_k:
             # the colored noise re-solved to keep the per-sample variance as well
@@ -126,8 +128,8 @@ def slow_wavelet_variance(xc, sample_rate_hz, cands=()):
     m_min = max(16, int(math.ceil(COMPOSITE_MIN_TAU_S * sample_rate_hz)))
     if (xc.size - 2 * m_min * 8 + 1) / (2.0 * m_min * 8) < 2.0:
         return None
-    tails = next((c for c in cands if c.effect == "heavy_tails"), None)
-    wv = gmwm.haar_wv(xc, sample_rate_hz, min_m=m_min, robust=any(c.effect == "outliers" for c in cands),
+    tails = next((c for c in cands if c.effect == HEAVY_TAILS), None)
+    wv = gmwm.haar_wv(xc, sample_rate_hz, min_m=m_min, robust=any(c.effect == OUTLIERS for c in cands),
                       tails=(tails.params["fraction"], tails.params["scale_ratio"]) if tails is not None else None)
     return wv if wv.tau_s.size >= 4 else None
 
@@ -145,17 +147,17 @@ def _composite_candidates(wv, sample_rate_hz):
                 f"{wv.tau_s[0]:.3g}-{wv.tau_s[-1]:.3g} s (weighted objective Q = {fit.objective:.3g} over {wv.tau_s.size} "
                 f"scales, model chosen by WVIC = Q + {fit.optimism:.3g})")
     for sigma_dps, tau_s in fit.gauss_markov:
-        out.append(det.Candidate(effect="gauss_markov", params={"sigma_dps": sigma_dps, "tau_s": tau_s},
+        out.append(det.Candidate(effect=GAUSS_MARKOV, params={"sigma_dps": sigma_dps, "tau_s": tau_s},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"Gauss-Markov term (sigma {sigma_dps:.3g} deg/s, tau {tau_s:.3g} s) of a " + evidence,
                                  extra={"composite": True}))
     if fit.rrw_dps_per_sqrt_s is not None:
-        out.append(det.Candidate(effect="rate_random_walk", params={"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s},
+        out.append(det.Candidate(effect=RATE_RANDOM_WALK, params={"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"random-walk term (K {fit.rrw_dps_per_sqrt_s:.3g} deg/s/sqrt(s)) of a " + evidence,
                                  extra={"composite": True}))
     if fit.flicker_b_dps is not None:
-        out.append(det.Candidate(effect="bias_instability", params={"b_dps": fit.flicker_b_dps},
+        out.append(det.Candidate(effect=BIAS_INSTABILITY, params={"b_dps": fit.flicker_b_dps},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"flicker term (B {fit.flicker_b_dps:.3g} deg/s) of a " + evidence,
                                  extra={"composite": True}))

@@ -57,9 +57,10 @@ from statistics import NormalDist
 
 import numpy as np
 
+from ...effects import COLORED_NOISE, GAUSS_MARKOV, REGISTRY, TEMPERATURE
 from .baseline import Progress, simulate_axis, noise_sigma, temperature_table
 from .reestimate import SUPPORTED, reestimate_axis
-from ...sim.model import param_bounds, validate_model
+from ...sim.model import TEMPERATURE_PROFILE, param_bounds, validate_model
 from ...units import AXES
 
 #: the two-sided level of every interval
@@ -74,22 +75,12 @@ MAX_BOOTSTRAP = 1000
 #: a parameter's interval needs at least this many replicates where its estimator ran
 MIN_REPLICATES = 5
 #: effects whose intervals take one step of test inversion (module docstring)
-INVERTED = ("gauss_markov",)
-#: per effect, the scale on which each parameter's interval is computed: ``log`` (positive scale
-#: parameters), ``atanh`` (autocorrelations in (-1, 1)), ``phase`` (radians, circular), else
-#: ``linear`` (signed parameters, times, frequencies)
-SCALES = {
-    "bias_instability": {"b_dps": "log"},
-    "rate_random_walk": {"k_dps_per_sqrt_s": "log"},
-    "gauss_markov": {"sigma_dps": "log", "tau_s": "log"},
-    "sinusoid": {"amplitude_dps": "log", "phase_rad": "phase"},
-    "warmup": {"tau_s": "log"},
-    "outliers": {"rate": "log", "magnitude_dps": "log"},
-    "heavy_tails": {"fraction": "log", "scale_ratio": "log"},
-    "colored_noise": {"lag1": "atanh", "lag2": "atanh"},
-    "narrowband": {"bandwidth_hz": "log", "rms_dps": "log"},
-    "baseline": {"arw_dps_per_sqrt_hz": "log"},
-}
+INVERTED = (GAUSS_MARKOV,)
+#: per effect, the scale on which each parameter's interval is computed (the registry's
+#: ``interval_scales``: ``log`` for positive scale parameters, ``atanh`` for autocorrelations in (-1, 1),
+#: ``phase`` for radians, else ``linear``: signed parameters, times, frequencies), and the baseline's
+SCALES = {**{e.name: e.interval_scales for e in REGISTRY if e.interval_scales},
+          "baseline": {"arw_dps_per_sqrt_hz": "log"}}
 METHOD = ("parametric bootstrap of the extended model (each axis with findings simulated B times with the record's "
           "length, rate and temperature; every finding's estimator re-run on each run); bias-corrected normal interval "
           "on the log scale (positive parameters), atanh (autocorrelations) or linear, with the Student quantile of "
@@ -223,11 +214,11 @@ def _replicates(run, i, cands, seeds, at=None):
     model["axes"][a] = run.axis_spec(i, run.kept_on(i))
     for j, params in (at or {}).items():
         model["axes"][a]["effects"][j].update(params)
-    if any(c.effect == "temperature" for c in cands):
-        model["temperature"] = temperature_table(run.rec)
+    if any(c.effect == TEMPERATURE for c in cands):
+        model[TEMPERATURE_PROFILE] = temperature_table(run.rec)
     spec, _ = validate_model(model)
-    temp = run.temp if any(c.effect == "temperature" for c in cands) else None
-    resolved = bool(run.resolved_lags[i]) and any(c.effect == "colored_noise" and c.extra.get("composite") for c in cands)
+    temp = run.temp if any(c.effect == TEMPERATURE for c in cands) else None
+    resolved = bool(run.resolved_lags[i]) and any(c.effect == COLORED_NOISE and c.extra.get("composite") for c in cands)
     out = {"findings": [], "bias_dps": [], "arw_dps_per_sqrt_hz": []}
     bar = Progress(run.say, f"intervals on {a}: bootstrap runs", len(seeds))
     for k, s in enumerate(seeds):

@@ -51,9 +51,9 @@ import warnings
 
 import numpy as np
 
+from ...effects import COLORED_NOISE, SLOW, TEMPERATURE, WANDERS
 from . import detectors as det
-from .detectors import SLOW_EFFECTS
-from .baseline import (WANDERS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
+from .baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
                            temperature_table, wander_highpassed, white_less_wanders)
 from .composite import composite_step, slow_wavelet_variance
 from .readings import alternatives_entry, null_spread, weigh_readings, weigh_wanders
@@ -63,6 +63,7 @@ from .intervals import add_intervals
 from ..still import not_static
 from ...errors import GyroFilterError, RecordingError
 from ...recording import GYRO_COLUMNS
+from ...sim.model import TEMPERATURE_PROFILE
 from ...units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
 
 #: minimum samples for any analysis
@@ -188,12 +189,12 @@ class _GapRun:
         spec["bias_dps"] = start_bias(spec["bias_dps"], cands, self.n / self.sample_rate_hz)
         spec["effects"] = [effect_entry(c, preserve="arw" if composite else "std") for c in cands]
         if not composite:  # the white level was measured with the wanders' high-frequency part in it
-            colored = next((c for ci, c in self.candidates if ci == i and c.effect == "colored_noise"), None)
+            colored = next((c for ci, c in self.candidates if ci == i and c.effect == COLORED_NOISE), None)
             spec["arw_dps_per_sqrt_hz"] = white_less_wanders(spec["arw_dps_per_sqrt_hz"], spec["effects"], colored,
                                                              self.n, self.sample_rate_hz)
         if composite and self.resolved_lags[i]:
             for entry in spec["effects"]:
-                if entry["effect"] == "colored_noise":
+                if entry["effect"] == COLORED_NOISE:
                     entry.update(self.resolved_lags[i])
         return spec
 
@@ -204,8 +205,8 @@ class _GapRun:
         if key not in self._deps_cache:
             model = copy.deepcopy(self.base)
             model["axes"][AXES[i]] = self.axis_spec(i, key[1])
-            if any(self.candidates[k][1].effect == "temperature" for k in key[1]):
-                model["temperature"] = temperature_table(self.rec)
+            if any(self.candidates[k][1].effect == TEMPERATURE for k in key[1]):
+                model[TEMPERATURE_PROFILE] = temperature_table(self.rec)
             sims_k = sim_features(model, self.n, self.sample_rate_hz, self.seeds[:self.n_ext], [i], self.taus,
                                   self.bands, self.say, label)[i]
             self._deps_cache[key] = departures(self.meas_feats[i], sims_k, self.n, (self.deps[i], self.m))
@@ -277,13 +278,13 @@ def _detect(run):
             cands, xc, alt = [], axis_dps(run.rec, i), None  # x may have been cleaned in place
         first = len(run.candidates)
         for c in cands:
-            if c.effect == "temperature":
+            if c.effect == TEMPERATURE:
                 c.extra["reference_c"] = float(np.mean(run.temp))
             run.candidates.append((i, c))
         if alt is not None:  # the time reading of a confounded temperature (gap.readings)
             alt_cands, xa = alt
-            fast = [c for c in cands if c.effect not in SLOW_EFFECTS]
-            run.readings[i] = {"covariate": [first + j for j, c in enumerate(cands) if c.effect in SLOW_EFFECTS],
+            fast = [c for c in cands if c.effect not in SLOW]
+            run.readings[i] = {"covariate": [first + j for j, c in enumerate(cands) if c.effect in SLOW],
                                "time": alt_cands,
                                "ext_axis": extended_axis(run.base["axes"][a], fast + alt_cands, xa, run.sample_rate_hz, run.q),
                                "wv": slow_wavelet_variance(xa, run.sample_rate_hz, fast)}
@@ -391,7 +392,7 @@ def _keep_findings(run):
             except (ValueError, FloatingPointError):
                 with_all = without = float("inf")
             why = "" if with_all < without else None
-            if why is None and c.effect == "temperature" and np.isfinite(with_all):
+            if why is None and c.effect == TEMPERATURE and np.isfinite(with_all):
                 # the measured covariate is kept where D cannot tell (gap.readings)
                 spread = det.CONFOUNDED_SPREADS * max(run.null_spread(i, others + [k], label), run.null_spread(i, others, label))
                 if with_all <= without + spread:
@@ -419,8 +420,8 @@ def _write_findings(run):
         ks = run.kept_on(i)
         if ks:
             ext["axes"][a] = run.axis_spec(i, ks)
-    if any(c.effect == "temperature" for _, _, c, _ in kept):
-        ext["temperature"] = temperature_table(run.rec)
+    if any(c.effect == TEMPERATURE for _, _, c, _ in kept):
+        ext[TEMPERATURE_PROFILE] = temperature_table(run.rec)
     report["extended_model"] = ext
     for _, i, c, after in kept:
         z_info = strongest(run.deps[i], run.taus, run.bands)

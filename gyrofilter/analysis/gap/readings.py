@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...effects import BIAS_INSTABILITY, TEMPERATURE
 from . import detectors as det
 from .features import departures, discrepancy
 from ...units import AXES
@@ -50,12 +51,12 @@ def null_spread(sims, n, pool=None):
 
 #: why a finding with ``alternatives`` is the one named, by its effect (the reports' line under it:
 #: :func:`gyrofilter.analysis.gap.report.indistinguishable_text`)
-NAMED_BECAUSE = {"temperature": "it is measured and predicts the bias at the next power-up",
-                 "bias_instability": "it has one parameter fewer"}
+NAMED_BECAUSE = {TEMPERATURE: "it is measured and predicts the bias at the next power-up",
+                 BIAS_INSTABILITY: "it has one parameter fewer"}
 
 #: why the covariate is named where a reading in time explains a record as well (the end of such a
 #: temperature finding's evidence; the HTML report says it once for all its findings)
-WHY_THE_COVARIATE = (f"The temperature is named because {NAMED_BECAUSE['temperature']}; "
+WHY_THE_COVARIATE = (f"The temperature is named because {NAMED_BECAUSE[TEMPERATURE]}; "
                      "read in time, the bias would settle the same way after every power-on whatever the temperature "
                      "does, and a record where the temperature moves without a power-up (heating, a cold start) tells "
                      "them apart")
@@ -71,7 +72,7 @@ def weigh_readings(run):
         a = AXES[i]
         cov_ks = reading["covariate"]
         others = [k for k, (ci, _) in enumerate(cands) if ci == i and k not in cov_ks and k not in run.excluded]
-        temp = next(cands[k][1] for k in cov_ks if cands[k][1].effect == "temperature")
+        temp = next(cands[k][1] for k in cov_ks if cands[k][1].effect == TEMPERATURE)
         first = len(cands)
         for c in reading["time"]:
             c.extra["reading"] = "time"
@@ -131,7 +132,7 @@ def weigh_wanders(run):
         others = [j for j, (ci, _) in enumerate(cands) if ci == i and j not in (k, k_alt) and j not in run.excluded]
         label = f"bias instability and Gauss-Markov readings on {a}"
         run.say(label)
-        bi, gm = ((k, c), (k_alt, alt)) if c.effect == "bias_instability" else ((k_alt, alt), (k, c))
+        bi, gm = ((k, c), (k_alt, alt)) if c.effect == BIAS_INSTABILITY else ((k_alt, alt), (k, c))
         d_bi = run.axis_discrepancy(i, others + [bi[0]], label)
         d_gm = run.axis_discrepancy(i, others + [gm[0]], label)
         spread = det.CONFOUNDED_SPREADS * max(run.null_spread(i, others + [bi[0]], label),

@@ -48,6 +48,8 @@ import math
 
 import numpy as np
 
+from ...effects import (COLORED_NOISE, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND, OUTLIERS, SHAPES,
+                            SINUSOID, TEMPERATURE, WANDERS)
 from .. import stats
 from . import detectors as det
 from ..noise import gmwm
@@ -55,13 +57,13 @@ from .detectors.covariate import temperature_first
 from .detectors.slow import deterministic_candidate, deterministic_shapes, stochastic_params
 from .detectors.tails import tail_fits, tail_residual, tail_step
 from .detectors.sinusoid import dft_amplitude
-from .baseline import WANDERS, effect_entry, extended_axis, wander_highpassed
+from .baseline import effect_entry, extended_axis, wander_highpassed
 from .composite import COMPOSITE_TERMS, composite_lags, slow_wavelet_variance
 
 #: the slow deterministic shapes of :func:`gyrofilter.analysis.gap.detectors.detect_slow`
-DETERMINISTIC = ("rate_ramp", "bias_step", "warmup", "temperature")
+DETERMINISTIC = SHAPES + COVARIATES
 #: the effects :func:`reestimate_axis` can estimate
-SUPPORTED = ("heavy_tails", "outliers", "sinusoid", "narrowband", "colored_noise") + DETERMINISTIC + det.STOCHASTIC_MODELS
+SUPPORTED = (HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, COLORED_NOISE) + DETERMINISTIC + WANDERS
 
 
 def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False):
@@ -78,36 +80,36 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     out = [None] * len(cands)
     by = {}
     for k, c in enumerate(cands):
-        key = "composite" if c.extra.get("composite") and c.effect in det.STOCHASTIC_MODELS else c.effect
+        key = "composite" if c.extra.get("composite") and c.effect in WANDERS else c.effect
         by.setdefault(key, []).append(k)
-    if "heavy_tails" in by:
-        out[by["heavy_tails"][0]] = _heavy_tails(x, sample_rate_hz)
-    if "outliers" in by:
+    if HEAVY_TAILS in by:
+        out[by[HEAVY_TAILS][0]] = _heavy_tails(x, sample_rate_hz)
+    if OUTLIERS in by:
         cand, mask = det.detect_outliers(x)
-        out[by["outliers"][0]] = None if cand is None else dict(cand.params)
+        out[by[OUTLIERS][0]] = None if cand is None else dict(cand.params)
         x = det.clean_spikes(x, mask, in_place=True)
-    if "sinusoid" in by:
-        k = by["sinusoid"][0]
+    if SINUSOID in by:
+        k = by[SINUSOID][0]
         params, fit = _sinusoid(x, sample_rate_hz, cands[k].params["frequency_hz"])
         out[k] = params
         x -= fit
     band = None
-    if "narrowband" in by and x.size >= 4096:
+    if NARROWBAND in by and x.size >= 4096:
         band = det.band_estimate(x, sample_rate_hz)
         band = {name: band[name] for name in ("center_hz", "bandwidth_hz", "rms_dps")}
-        out[by["narrowband"][0]] = band
-    if "colored_noise" in by:
-        k = by["colored_noise"][0]
+        out[by[NARROWBAND][0]] = band
+    if COLORED_NOISE in by:
+        k = by[COLORED_NOISE][0]
         wander = next((c for c in cands if c.effect in WANDERS and not c.extra.get("composite")), None)
         out[k] = _colored(x, sample_rate_hz, "lag2" in cands[k].params, band,
                           None if wander is None else wander_highpassed(effect_entry(wander), sample_rate_hz, x.size))
     slow_det = [k for name in DETERMINISTIC for k in by.get(name, [])]
-    slow_sto = [k for name in det.STOCHASTIC_MODELS for k in by.get(name, [])]
+    slow_sto = [k for name in WANDERS for k in by.get(name, [])]
     if slow_det or slow_sto:
         x = _slow(x, sample_rate_hz, temp_c, cands, slow_det, slow_sto, out)
     if "composite" in by:
         fit = _composite(x, sample_rate_hz, cands, by["composite"], out)
-        k = by.get("colored_noise", [None])[0]
+        k = by.get(COLORED_NOISE, [None])[0]
         if resolved_lags and k is not None and out[k] is not None and fit is not None:
             out[k] = _resolved(x, sample_rate_hz, cands, out, fit, q_dps)
     return out
@@ -118,9 +120,9 @@ def _resolved(xc, sample_rate_hz, cands, out, fit, q_dps):
     level re-fitted on the cleaned replicate ``xc`` with the replicate's band and colored noise
     (:func:`gyrofilter.analysis.gap.baseline.extended_axis`), against the composite fit's."""
     reps = [det.Candidate(c.effect, params, 0.0, 0.0, "") for c, params in zip(cands, out)
-            if params is not None and c.effect in ("narrowband", "colored_noise")]
+            if params is not None and c.effect in (NARROWBAND, COLORED_NOISE)]
     ext = extended_axis({"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0}, reps, xc, sample_rate_hz, q_dps)
-    lags = next(c.params for c in reps if c.effect == "colored_noise")
+    lags = next(c.params for c in reps if c.effect == COLORED_NOISE)
     return composite_lags(ext, {"arw_dps_per_sqrt_hz": fit.arw_dps_per_sqrt_hz}, lags)
 
 
@@ -177,7 +179,7 @@ def _slow(x, sample_rate_hz, temp_c, cands, slow_det, slow_sto, out):
         if tb.size == n and np.ptp(tb) > 0:
             temp_blocks = tb
     series = y
-    k_temp = next((k for k in slow_det if cands[k].effect == "temperature"), None)
+    k_temp = next((k for k in slow_det if cands[k].effect == TEMPERATURE), None)
     covariate = temperature_first(x, sample_rate_hz, temp_c, {}) if k_temp is not None else None
     if covariate is not None:  # the detector's GLS coefficient; the shapes in time on what it leaves
         out[k_temp] = dict(covariate[0].params)
@@ -198,7 +200,7 @@ def _slow(x, sample_rate_hz, temp_c, cands, slow_det, slow_sto, out):
             series = series - shape
     for k in slow_sto:
         name = cands[k].effect
-        if name == "gauss_markov":
+        if name == GAUSS_MARKOV:
             group = max(1, int(math.ceil(n / 512)))
             m = n // group
             yg = series[: m * group].reshape(m, group).mean(axis=1)
@@ -217,7 +219,7 @@ def _composite(x, sample_rate_hz, cands, ks, out):
     wv = slow_wavelet_variance(x, sample_rate_hz, cands)
     if wv is None:
         return None
-    gm = sorted((k for k in ks if cands[k].effect == "gauss_markov"), key=lambda k: cands[k].params["tau_s"])
+    gm = sorted((k for k in ks if cands[k].effect == GAUSS_MARKOV), key=lambda k: cands[k].params["tau_s"])
     terms = {term: [k for k in ks if cands[k].effect == effect] for term, effect in COMPOSITE_TERMS.items()}
     fit = gmwm.fit_model(wv, tuple(term for term, k in terms.items() if k), len(gm), starts=3, seed=0)
     for k, (sigma_dps, tau_s) in zip(gm, fit.gauss_markov):

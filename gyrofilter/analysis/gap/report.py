@@ -21,6 +21,7 @@ import os
 
 import numpy as np
 
+from ...effects import BIAS_STEP, COVARIATES, RATE_RAMP, SHAPES, TEMPERATURE, WARMUP
 from ...plots import pyplot
 from ...units import AXES, utf8_text
 from .readings import NAMED_BECAUSE, WHY_THE_COVARIATE
@@ -101,7 +102,7 @@ def plot_temperature(x, temp, axis, coef, path):
             f"axis {axis}: rate against temperature")
 
 
-_SHAPES = ("bias_step", "warmup", "rate_ramp", "temperature")
+_SHAPES = SHAPES + COVARIATES
 
 
 def _shape(findings, t, temp_blocks, ax=None):
@@ -110,15 +111,15 @@ def _shape(findings, t, temp_blocks, ax=None):
     shape = np.zeros_like(t)
     for f in findings:
         p = f["params"]
-        if f["effect"] == "bias_step":
+        if f["effect"] == BIAS_STEP:
             shape += p["size_dps"] * (t >= p["time_s"])
             if ax is not None:
                 ax.axvline(p["time_s"], color="r", ls=":", lw=1)
-        elif f["effect"] == "warmup":
+        elif f["effect"] == WARMUP:
             shape += p["amplitude_dps"] * np.exp(-t / p["tau_s"])
-        elif f["effect"] == "rate_ramp":
+        elif f["effect"] == RATE_RAMP:
             shape += p["r_dps_per_s"] * t
-        elif f["effect"] == "temperature" and temp_blocks is not None:
+        elif f["effect"] == TEMPERATURE and temp_blocks is not None:
             shape += p["coefficient_dps_per_c"] * temp_blocks
     return shape
 
@@ -254,12 +255,12 @@ def write_report(report, rec, out_dir, *, seed=0):
         lines += [f"### axis {a}", "", f"![Allan deviation {a}]({_figure('adev', a)}) ![spectrum {a}]({_figure('spectrum', a)})", ""]
         fa = [f for f in report["findings"] if f["axis"] == a]
         if temp is not None and np.ptp(temp) > 0:
-            coef = next((f["params"]["coefficient_dps_per_c"] for f in fa if f["effect"] == "temperature"), None)
+            coef = next((f["params"]["coefficient_dps_per_c"] for f in fa if f["effect"] == TEMPERATURE), None)
             plot_temperature(g[:, i], temp, a, coef, os.path.join(out_dir, _figure("temperature", a)))
             lines += [f"![rate vs temperature {a}]({_figure('temperature', a)})", ""]
         slow = [f for f in fa if f["effect"] in _SHAPES]
         alternatives = [e for f in fa for e in f.get("alternatives", []) if e["effect"] in _SHAPES]  # a wander has no shape
-        if any(f["effect"] != "temperature" for f in slow) or alternatives:
+        if any(f["effect"] != TEMPERATURE for f in slow) or alternatives:
             plot_time(g[:, i], sample_rate_hz, a, slow, os.path.join(out_dir, _figure("time", a)), temp=temp,
                       alternatives=alternatives)
             lines += [f"![rate in time {a}]({_figure('time', a)})", ""]

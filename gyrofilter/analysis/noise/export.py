@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import math
 
+from ...effects import BIAS_INSTABILITY, RATE_RAMP
 from .model import CUSTOMARY_UNIT, TERM_SYMBOL, TERMS, AxisNoise, Coefficient, convert
 from ...units import utf8_text
 
 #: JSON key of each coefficient (docs/formats.md, section 4), in its base unit
 JSON_KEY = {"quantization": "quantization_deg", "arw": "arw_dps_per_sqrt_hz",
-            "bias_instability": "bias_instability_dps", "rrw": "rrw_dps_per_sqrt_s",
-            "rate_ramp": "rate_ramp_dps_per_s"}
+            BIAS_INSTABILITY: "bias_instability_dps", "rrw": "rrw_dps_per_sqrt_s",
+            RATE_RAMP: "rate_ramp_dps_per_s"}
 #: the units of JSON_KEY (rate_ramp_dps_per_s is deg/s per s = deg/s^2)
-JSON_UNIT = {"quantization": "deg", "arw": "deg/s/sqrt(Hz)", "bias_instability": "deg/s",
-             "rrw": "deg/s/sqrt(s)", "rate_ramp": "deg/s/s"}
+JSON_UNIT = {"quantization": "deg", "arw": "deg/s/sqrt(Hz)", BIAS_INSTABILITY: "deg/s",
+             "rrw": "deg/s/sqrt(s)", RATE_RAMP: "deg/s/s"}
 
 
 def _coef_json(c: Coefficient):

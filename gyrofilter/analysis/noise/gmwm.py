@@ -59,6 +59,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...effects import GAUSS_MARKOV
 from .allan import overlapping_adev
 from .wv_robust import ROBUST_EFFICIENCY, robust_wv
 from ...sim.model import validate_model
@@ -230,7 +231,7 @@ class GmwmFit:
         return {"model": self.name, "arw_dps_per_sqrt_hz": self.arw_dps_per_sqrt_hz,
                 "quantization_deg": self.quantization_deg, "rrw_dps_per_sqrt_s": self.rrw_dps_per_sqrt_s,
                 "ramp_dps_per_s2": self.ramp_dps_per_s2, "flicker_b_dps": self.flicker_b_dps,
-                "gauss_markov": [{"sigma_dps": s, "tau_s": t} for s, t in self.gauss_markov],
+                GAUSS_MARKOV: [{"sigma_dps": s, "tau_s": t} for s, t in self.gauss_markov],
                 "objective": self.objective, "n_params": self.n_params, "optimism": self.optimism,
                 "criterion": self.criterion}
 
@@ -251,7 +252,7 @@ def _unpack(theta, terms, k_gm, sample_rate_hz, duration_s):
         if term in terms:
             out[_FIELD[term]] = math.sqrt(next(values))
     gm = [(math.sqrt(next(values)), float(next(values))) for _ in range(k_gm)]
-    out["gauss_markov"] = sorted(gm, key=lambda p: p[1])
+    out[GAUSS_MARKOV] = sorted(gm, key=lambda p: p[1])
     return GmwmFit(sample_rate_hz=sample_rate_hz, duration_s=duration_s, **out)
 
 

@@ -32,20 +32,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...effects import BIAS_INSTABILITY, RATE_RAMP
 from ...errors import SettingsError
 from ...units import DEG_PER_RAD
 
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
-TERMS = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
-TERM_SYMBOL = {"quantization": "Q", "arw": "N", "bias_instability": "B", "rrw": "K", "rate_ramp": "R"}
-TERM_UNIT = {"quantization": "deg", "arw": "deg/sqrt(s)", "bias_instability": "deg/s",
-             "rrw": "deg/s/sqrt(s)", "rate_ramp": "deg/s^2"}
+TERMS = ("quantization", "arw", BIAS_INSTABILITY, "rrw", RATE_RAMP)
+TERM_SYMBOL = {"quantization": "Q", "arw": "N", BIAS_INSTABILITY: "B", "rrw": "K", RATE_RAMP: "R"}
+TERM_UNIT = {"quantization": "deg", "arw": "deg/sqrt(s)", BIAS_INSTABILITY: "deg/s",
+             "rrw": "deg/s/sqrt(s)", RATE_RAMP: "deg/s^2"}
 #: slope of log sigma vs log tau for each term
-TERM_SLOPE = {"quantization": -1.0, "arw": -0.5, "bias_instability": 0.0, "rrw": 0.5, "rate_ramp": 1.0}
+TERM_SLOPE = {"quantization": -1.0, "arw": -0.5, BIAS_INSTABILITY: 0.0, "rrw": 0.5, RATE_RAMP: 1.0}
 #: tau (s) at which the read-off line gives the coefficient (sigma(tau_read) = coefficient)
-READ_TAU_S = {"quantization": math.sqrt(3.0), "arw": 1.0, "rrw": 3.0, "rate_ramp": math.sqrt(2.0)}
+READ_TAU_S = {"quantization": math.sqrt(3.0), "arw": 1.0, "rrw": 3.0, RATE_RAMP: math.sqrt(2.0)}
 #: power-law exponent of the rate PSD (NIST SP 1065); the ramp is treated as random-walk FM
-TERM_ALPHA = {"quantization": 2, "arw": 0, "bias_instability": -1, "rrw": -2, "rate_ramp": -2}
+TERM_ALPHA = {"quantization": 2, "arw": 0, BIAS_INSTABILITY: -1, "rrw": -2, RATE_RAMP: -2}
 #: sqrt(2 ln 2 / pi) = 0.664: flat Allan deviation per unit bias instability (paper 000)
 FLICKER_FLOOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
@@ -82,19 +83,19 @@ UNIT_FACTORS = {
     ("arw", "deg/s/sqrt(Hz)"): 1.0,
     ("arw", "deg/sqrt(h)"): 60.0,                    # sqrt(3600 s / h)
     ("arw", "rad/s/sqrt(Hz)"): 1.0 / DEG_PER_RAD,    # Kalibr gyroscope_noise_density
-    ("bias_instability", "deg/s"): 1.0,
-    ("bias_instability", "deg/h"): 3600.0,
-    ("bias_instability", "rad/s"): 1.0 / DEG_PER_RAD,
+    (BIAS_INSTABILITY, "deg/s"): 1.0,
+    (BIAS_INSTABILITY, "deg/h"): 3600.0,
+    (BIAS_INSTABILITY, "rad/s"): 1.0 / DEG_PER_RAD,
     ("rrw", "deg/s/sqrt(s)"): 1.0,
     ("rrw", "deg/s^2/sqrt(Hz)"): 1.0,
     ("rrw", "deg/h/sqrt(h)"): 3600.0 * 60.0,
     ("rrw", "rad/s^2/sqrt(Hz)"): 1.0 / DEG_PER_RAD,  # Kalibr gyroscope_random_walk
-    ("rate_ramp", "deg/s^2"): 1.0,
-    ("rate_ramp", "deg/h^2"): 3600.0 ** 2,
+    (RATE_RAMP, "deg/s^2"): 1.0,
+    (RATE_RAMP, "deg/h^2"): 3600.0 ** 2,
 }
 #: the customary units shown beside the base unit
-CUSTOMARY_UNIT = {"quantization": "arcsec", "arw": "deg/sqrt(h)", "bias_instability": "deg/h",
-                  "rrw": "deg/h/sqrt(h)", "rate_ramp": "deg/h^2"}
+CUSTOMARY_UNIT = {"quantization": "arcsec", "arw": "deg/sqrt(h)", BIAS_INSTABILITY: "deg/h",
+                  "rrw": "deg/h/sqrt(h)", RATE_RAMP: "deg/h^2"}
 
 
 def convert(value, term, unit, to_base=False):

@@ -11,12 +11,13 @@ import math
 
 import numpy as np
 
+from ...effects import BIAS_INSTABILITY, RATE_RAMP
 from .model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis
 from ...plots import pyplot
 
 AXIS_COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
-TERM_STYLE = {"quantization": ":", "arw": "--", "bias_instability": "-.", "rrw": (0, (5, 2, 1, 2)),
-              "rate_ramp": (0, (1, 1))}
+TERM_STYLE = {"quantization": ":", "arw": "--", BIAS_INSTABILITY: "-.", "rrw": (0, (5, 2, 1, 2)),
+              RATE_RAMP: (0, (1, 1))}
 
 
 def plot_allan(path, results, title=""):
@@ -49,7 +50,7 @@ def plot_allan(path, results, title=""):
                 continue
             i = int(np.argmin(np.abs(r.tau_s - c.tau_s)))
             ax.loglog([r.tau_s[i]], [r.adev[i]], "s", ms=8, mfc="none", mec="k")
-            if term == "bias_instability":
+            if term == BIAS_INSTABILITY:
                 ax.annotate(f"B read-off: min/0.664 = {c.value:.3g}", (r.tau_s[i], r.adev[i]),
                             textcoords="offset points", xytext=(-40, 12), fontsize=7)
             else:

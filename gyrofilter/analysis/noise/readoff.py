@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...effects import BIAS_INSTABILITY
 from .model import FLICKER_FLOOR, READ_TAU_S, TERM_SLOPE, TERMS, Coefficient
 
 
@@ -68,7 +69,7 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15,
     out = {}
     for term in TERMS:
         s = TERM_SLOPE[term]
-        if term == "bias_instability":
+        if term == BIAS_INSTABILITY:
             if idx_all.size == 0:
                 out[term] = Coefficient(term, None, note="no cluster time with enough clusters")
                 continue

@@ -147,9 +147,6 @@ from .colored import (  # noqa: F401
 )
 from .slow import (  # noqa: F401
     PERIODOGRAM,
-    SLOW_EFFECTS,
-    STOCHASTIC_MODELS,
-    TIME_SHAPES,
     exact_stochastic_gain,
     slow_reading,
     stochastic_fits,

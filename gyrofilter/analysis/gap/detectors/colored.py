@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ....effects import COLORED_NOISE
 from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate
 from ...stats import dot, moving_mean
 from .narrowband import narrowband_lags
@@ -154,7 +155,7 @@ def detect_colored(x, sample_rate_hz, band=None, wander=None):
         evidence += (f"; lag-2 {lag2:+.3f}, below the {lag1 * lag1:.3f} of a first-order low pass "
                      f"by {-gap2 / se2:.0f} standard errors: a first-order ARMA noise")
     return Candidate(
-        effect="colored_noise",
+        effect=COLORED_NOISE,
         params={"lag1": lag1, "lag2": lag2} if arma else {"lag1": lag1},
         statistic=abs(z),
         threshold=COLORED_Z,

@@ -35,9 +35,11 @@ import math
 
 import numpy as np
 
+from ....effects import (BIAS_INSTABILITY, BIAS_STEP, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK, SHAPES,
+                             TEMPERATURE, WANDERS)
 from .common import DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, Candidate
 from ...stats import block_means, dot
-from .slow import N_PARAMS, STOCHASTIC_MODELS, TIME_SHAPES, periodogram_detrended, slow_spectrum, slow_reading
+from .slow import N_PARAMS, periodogram_detrended, slow_spectrum, slow_reading
 
 
 def detect_slow(x, sample_rate_hz, temp_c=None):
@@ -49,16 +51,16 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     names anything) and the raw statistics ``{name: value}``.
     """
     stats = {}
-    time_reading, _ = slow_reading(x, sample_rate_hz, TIME_SHAPES, stats=stats)
+    time_reading, _ = slow_reading(x, sample_rate_hz, SHAPES, stats=stats)
     if temp_c is None:
         return time_reading, stats
     covariate = temperature_first(x, sample_rate_hz, temp_c, stats)
-    line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in ("rate_ramp", "bias_step") else None
+    line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP) else None
     if line_or_jump and _shape_beats_temperature(line_or_jump, stats, x, temp_c):
         # a line or a jump is not a settling: against them the better fit of the block means decides
         return time_reading, stats
-    if covariate is None or (any(c.effect in STOCHASTIC_MODELS for c in covariate[1:])
-                             and not any(c.effect in STOCHASTIC_MODELS for c in time_reading)):
+    if covariate is None or (any(c.effect in WANDERS for c in covariate[1:])
+                             and not any(c.effect in WANDERS for c in time_reading)):
         # a covariate reading that needs a wander where a shape in time alone explains the
         # record is the more complex reading (a ramp read as the temperature's settling plus a
         # random walk for the difference)
@@ -87,10 +89,10 @@ def _shape_beats_temperature(name, stats, x, temp_c):
     cause to name (the ramp rides on it as the alternative, weighed on D in gap.readings)."""
     y, _ = block_means(x)
     n = y.size
-    d_shape, d_temp = stats[name], stats.get("temperature", 0.0)
+    d_shape, d_temp = stats[name], stats.get(TEMPERATURE, 0.0)
     if d_shape - N_PARAMS[name] * math.log(n) < d_temp - math.log(n):
         return False
-    if name != "rate_ramp":
+    if name != RATE_RAMP:
         return True
     tb, _ = block_means(np.asarray(temp_c, dtype=float))
     if tb.size != n or not np.ptp(tb) > 0:
@@ -127,11 +129,11 @@ def temperature_first(x, sample_rate_hz, temp_c, stats):
     tc = tb - tb.mean()
     a = float(np.dot(tc, y - y.mean()) / np.dot(tc, tc))
     d = a * a * float(np.dot(tc, tc)) / s0
-    stats["temperature"] = d
+    stats[TEMPERATURE] = d
     if not d > DETERMINISTIC_THRESHOLD:
         return None
     t_mean = float(temp.mean())
-    rest, noise = slow_reading(_less(x, a, temp, t_mean), sample_rate_hz, TIME_SHAPES)
+    rest, noise = slow_reading(_less(x, a, temp, t_mean), sample_rate_hz, SHAPES)
     columns = [tb]
     if rest and rest[0].component is not None:  # the residual's time shape, fitted jointly
         columns.append(block_means(rest[0].component)[0][:n])
@@ -140,13 +142,13 @@ def temperature_first(x, sample_rate_hz, temp_c, stats):
     stats["temperature_gls_z2"] = z2
     if not z2 > JOINT_THRESHOLD:
         return None
-    rest, _ = slow_reading(_less(x, a_gls, temp, t_mean), sample_rate_hz, TIME_SHAPES)
+    rest, _ = slow_reading(_less(x, a_gls, temp, t_mean), sample_rate_hz, SHAPES)
     comp = a_gls * (temp - t_mean)
     comp -= comp.mean()
-    words = {None: "white noise", "bias_instability": "a bias instability", "rate_random_walk": "a random walk",
-             "gauss_markov": "a Gauss-Markov wander"}[noise[0]]
+    words = {None: "white noise", BIAS_INSTABILITY: "a bias instability", RATE_RANDOM_WALK: "a random walk",
+             GAUSS_MARKOV: "a Gauss-Markov wander"}[noise[0]]
     cand = Candidate(
-        effect="temperature", params={"coefficient_dps_per_c": a_gls}, statistic=d,
+        effect=TEMPERATURE, params={"coefficient_dps_per_c": a_gls}, statistic=d,
         threshold=DETERMINISTIC_THRESHOLD, statistic_name="Delta chi^2 of the block means over a constant bias",
         component=comp,
         evidence=(f"the bias follows the temperature with {a_gls:+.3g} deg/s per deg C over {np.ptp(temp):.2f} deg C "
@@ -184,7 +186,7 @@ def gls(y, columns, noise):
     y = np.asarray(y, dtype=float)
     n = y.size
     x_mat = np.column_stack([np.ones(n)] + [np.asarray(c, dtype=float) for c in columns])
-    if model == "rate_random_walk":
+    if model == RATE_RANDOM_WALK:
         yy, xx = np.diff(y), np.diff(x_mat[:, 1:], axis=0)
         acov = np.zeros(n - 1)
         acov[0], acov[1] = theta[0] + 2 * s0, -s0
@@ -206,7 +208,7 @@ def gls(y, columns, noise):
     b_vec = np.array([float(dot(xx[:, i], solved[:, k])) for i in range(k)])
     cov = np.linalg.inv(a_mat)
     beta = cov @ b_vec
-    if model == "rate_random_walk":
+    if model == RATE_RANDOM_WALK:
         beta, cov_full = np.concatenate(([0.0], beta)), np.zeros((k + 1, k + 1))
         cov_full[1:, 1:] = cov
         cov = cov_full

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ....effects import NARROWBAND
 from .common import NARROWBAND_THRESHOLD, Candidate
 from ...stats import dot
 from ....sim.noise_terms import filter_psd, narrowband_filter
@@ -213,7 +214,7 @@ def detect_narrowband(x, sample_rate_hz):
         return None
     resolved = band["bandwidth_hz"] > 1.5 * band["resolution_hz"]
     return Candidate(
-        effect="narrowband",
+        effect=NARROWBAND,
         params={"center_hz": band["center_hz"], "bandwidth_hz": band["bandwidth_hz"], "rms_dps": band["rms_dps"]},
         statistic=stat,
         threshold=NARROWBAND_THRESHOLD,

@@ -7,6 +7,7 @@ from statistics import NormalDist
 
 import numpy as np
 
+from ....effects import OUTLIERS
 from .common import Candidate, OUTLIER_FALSE_PER_AXIS, OUTLIER_MIN_COUNT
 from ...stats import robust_sigma
 
@@ -113,7 +114,7 @@ def detect_outliers(x):
     rate = count / x.size / p_det
     expected = OUTLIER_FALSE_PER_AXIS
     cand = Candidate(
-        effect="outliers",
+        effect=OUTLIERS,
         params={"rate": rate, "magnitude_dps": magnitude},
         statistic=float(count),
         threshold=float(OUTLIER_MIN_COUNT),

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from ....effects import SINUSOID
 from .common import Candidate, SINUSOID_ALPHA
 from ...stats import detrend_line, dot, golden_max, robust_sigma
 
@@ -308,7 +309,7 @@ def detect_sinusoid(x, sample_rate_hz):
     sigma = robust_sigma(_diff_sample(x)) / math.sqrt(2)
     amplitude, phase, fit = sinusoid_fit(x, sample_rate_hz, f_hz)
     return Candidate(
-        effect="sinusoid",
+        effect=SINUSOID,
         params={"frequency_hz": f_hz, "amplitude_dps": amplitude, "phase_rad": phase},
         statistic=stat,
         threshold=thr,

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+from ....effects import (BIAS_INSTABILITY, BIAS_STEP, BY_NAME, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK, SHAPES,
+                             SLOW, TEMPERATURE, WANDERS, WARMUP)
 from .common import DETERMINISTIC_THRESHOLD, EXACT_GM_MARGIN, GM_MAX_TAU_DIVISOR, JOINT_THRESHOLD, STOCHASTIC_PENALTY, STOCHASTIC_THRESHOLD, Candidate
 from ...stats import block_means, detrend_line, golden_max
 from .sinusoid import least_squares, fitted
@@ -80,13 +82,13 @@ def _periodogram(y):
 
 def slow_spectrum(model, theta, omega, delta_s):
     """Component spectrum of a stochastic bias model for block means (sampling delta_s)."""
-    if model == "rate_random_walk":
+    if model == RATE_RANDOM_WALK:
         q = theta[0]
         return q / (4 * np.sin(omega / 2) ** 2)
-    if model == "bias_instability":
+    if model == BIAS_INSTABILITY:
         h = theta[0]
         return h / omega
-    if model == "gauss_markov":
+    if model == GAUSS_MARKOV:
         var, phi = theta
         return var * (1 - phi ** 2) / (1 - 2 * phi * np.cos(omega) + phi ** 2)
     raise ValueError(model)
@@ -101,15 +103,15 @@ def _whittle(spec, omega, model, delta_s, s0_start, white_shape=None, rw_shape=N
 
     low = max(float(spec[: max(4, spec.size // 16)].mean()), 1e-300)
     cos_w = np.cos(omega)
-    if model == "rate_random_walk":
+    if model == RATE_RANDOM_WALK:
         shape = 1.0 / (4 * np.sin(omega / 2) ** 2) if rw_shape is None else rw_shape
-    elif model == "bias_instability":
+    elif model == BIAS_INSTABILITY:
         shape = 1.0 / omega
     wsh = np.ones_like(omega) if white_shape is None else white_shape
 
     def fun(p):
         s0 = math.exp(p[0])
-        if model == "gauss_markov":
+        if model == GAUSS_MARKOV:
             var = math.exp(p[1])
             phi = 1.0 / (1.0 + math.exp(-p[2]))
             den = 1 - 2 * phi * cos_w + phi * phi
@@ -124,9 +126,9 @@ def _whittle(spec, omega, model, delta_s, s0_start, white_shape=None, rw_shape=N
         grad = np.array([float(np.dot(w, d)) for d in derivs])
         return float(np.sum(np.log(s) + spec / s)), grad
 
-    if model == "rate_random_walk":
+    if model == RATE_RANDOM_WALK:
         starts = [[math.log(s0_start), math.log(low * 4 * math.sin(omega[1] / 2) ** 2 + 1e-300)]]
-    elif model == "bias_instability":
+    elif model == BIAS_INSTABILITY:
         starts = [[math.log(s0_start), math.log(low * omega[2] + 1e-300)]]
     else:
         starts = [[math.log(s0_start), math.log(max(low, s0_start) * 0.2), math.log(phi / (1 - phi))]
@@ -142,19 +144,18 @@ def _whittle(spec, omega, model, delta_s, s0_start, white_shape=None, rw_shape=N
             best = (float(res.fun), res.x)
     if best is None:
         s0 = float(spec.mean())
-        return float(np.sum(np.log(s0) + spec / s0)), ((0.0,) if model != "gauss_markov" else (0.0, 0.5)), s0
+        return float(np.sum(np.log(s0) + spec / s0)), ((0.0,) if model != GAUSS_MARKOV else (0.0, 0.5)), s0
     p = best[1]
     s0 = math.exp(p[0])
-    if model == "gauss_markov":
+    if model == GAUSS_MARKOV:
         theta = (math.exp(p[1]), 1.0 / (1.0 + math.exp(-p[2])))
     else:
         theta = (math.exp(p[1]),)
     return best[0], theta, s0
 
 
-STOCHASTIC_MODELS = ("rate_random_walk", "bias_instability", "gauss_markov")
-N_PARAMS = {"rate_random_walk": 1, "bias_instability": 1, "gauss_markov": 2,
-             "rate_ramp": 1, "temperature": 1, "bias_step": 2, "warmup": 2}
+#: the parameters each slow effect's fit estimates (a penalty per parameter)
+N_PARAMS = {name: BY_NAME[name].n_params for name in SLOW}
 
 
 def stochastic_fits(y, delta_s):
@@ -174,7 +175,7 @@ def stochastic_fits(y, delta_s):
     nll0 = float(np.sum(np.log(s0_white * wsh) + spec / (s0_white * wsh)))
     s0_hf = float(spec[spec.size // 2:].mean())
     out = {}
-    for model in STOCHASTIC_MODELS:
+    for model in WANDERS:
         nll, theta, s0 = _whittle(spec, omega, model, delta_s, s0_hf, wsh, gsh)
         out[model] = (max(0.0, 2 * (nll0 - nll)), theta, s0)
     return out, s0_hf
@@ -182,10 +183,10 @@ def stochastic_fits(y, delta_s):
 
 def stochastic_params(model, theta, delta_s):
     """Table parameters from the block-mean model parameters."""
-    if model == "rate_random_walk":
+    if model == RATE_RANDOM_WALK:
         # q = K^2 delta  (random walk of the rate, increment variance per block)
         return {"k_dps_per_sqrt_s": math.sqrt(theta[0] / delta_s)}
-    if model == "bias_instability":
+    if model == BIAS_INSTABILITY:
         # S_d(omega) = h / omega = B^2 / (2 pi f delta) with omega = 2 pi f delta -> h = B^2
         return {"b_dps": math.sqrt(theta[0])}
     var, phi = theta
@@ -197,7 +198,7 @@ def _amplitude_variance(w, model, theta, s0):
     var = s0 * float(np.dot(w, w))
     if model is None:
         return var
-    if model == "rate_random_walk":
+    if model == RATE_RANDOM_WALK:
         # cov(y_i, y_j) = q min(i, j): w^T C w = q sum_k (sum_{i>=k} w_i)^2
         tail = np.cumsum(w[::-1])[::-1]
         return var + theta[0] * float(np.dot(tail, tail))
@@ -230,7 +231,7 @@ def deterministic_shapes(y, delta_s, temp_blocks=None):
 
     # ramp
     d, a, gc = single(t)
-    out["rate_ramp"] = (d, {"r_dps_per_s": a}, a * gc, gc / np.dot(gc, gc))
+    out[RATE_RAMP] = (d, {"r_dps_per_s": a}, a * gc, gc / np.dot(gc, gc))
     # step: two-mean scan over split k (first k blocks vs the rest)
     if n >= 8:
         c = np.cumsum(yc)
@@ -241,7 +242,7 @@ def deterministic_shapes(y, delta_s, temp_blocks=None):
         kk = int(k[i])
         g = (np.arange(n) >= kk).astype(float)
         d, a, gc = single(g)
-        out["bias_step"] = (d, {"time_s": kk * delta_s, "size_dps": a}, a * gc,
+        out[BIAS_STEP] = (d, {"time_s": kk * delta_s, "size_dps": a}, a * gc,
                             gc / np.dot(gc, gc))
     # warm-up: a exp(-t / tau) scanned over tau
     if n >= 8:
@@ -258,10 +259,10 @@ def deterministic_shapes(y, delta_s, temp_blocks=None):
         d, a, gc = single(np.exp(-t / tau))
         if d < best[0]:
             d, a, tau, gc = best
-        out["warmup"] = (d, {"amplitude_dps": a, "tau_s": tau}, a * gc, gc / np.dot(gc, gc))
+        out[WARMUP] = (d, {"amplitude_dps": a, "tau_s": tau}, a * gc, gc / np.dot(gc, gc))
     if temp_blocks is not None and np.ptp(temp_blocks) > 0:
         d, a, gc = single(temp_blocks)
-        out["temperature"] = (d, {"coefficient_dps_per_c": a}, a * gc, gc / np.dot(gc, gc))
+        out[TEMPERATURE] = (d, {"coefficient_dps_per_c": a}, a * gc, gc / np.dot(gc, gc))
     return out
 
 
@@ -302,34 +303,27 @@ def exact_stochastic_gain(y, sto, delta_s):
     var0 = float(np.var(y))
     base = n * math.log(var0) + n  # white noise, MLE variance
     out = {}
-    q0 = max(sto["rate_random_walk"][1][0], 1e-12 * var0)
-    s00 = max(sto["rate_random_walk"][2], 1e-12 * var0)
+    q0 = max(sto[RATE_RANDOM_WALK][1][0], 1e-12 * var0)
+    s00 = max(sto[RATE_RANDOM_WALK][2], 1e-12 * var0)
     res = minimize(lambda p: _kf_nll(y, 1.0, math.exp(p[0]), math.exp(p[1]), mean),
                    [math.log(q0), math.log(s00)], method="Nelder-Mead",
                    options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 200})
     # the diffuse start drops one observation: add the white model's term for it back
-    out["rate_random_walk"] = (max(0.0, base - (res.fun + math.log(var0) + 1)),
+    out[RATE_RANDOM_WALK] = (max(0.0, base - (res.fun + math.log(var0) + 1)),
                                (math.exp(res.x[0]),), math.exp(res.x[1]))
-    var_g, phi_g = sto["gauss_markov"][1]
-    s0g = max(sto["gauss_markov"][2], 1e-12 * var0)
+    var_g, phi_g = sto[GAUSS_MARKOV][1]
+    s0g = max(sto[GAUSS_MARKOV][2], 1e-12 * var0)
     phi_g = min(max(phi_g, 0.5), 0.9999)
     res = minimize(lambda p: _kf_nll(y, 1 / (1 + math.exp(-p[1])), math.exp(p[0]), math.exp(p[2]), mean),
                    [math.log(max(var_g * (1 - phi_g ** 2), 1e-12 * var0)), math.log(phi_g / (1 - phi_g)), math.log(s0g)],
                    method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 300})
     phi = 1 / (1 + math.exp(-res.x[1]))
     qg = math.exp(res.x[0])
-    out["gauss_markov"] = (max(0.0, base - res.fun), (qg / max(1 - phi * phi, 1e-12), phi), math.exp(res.x[2]))
+    out[GAUSS_MARKOV] = (max(0.0, base - res.fun), (qg / max(1 - phi * phi, 1e-12), phi), math.exp(res.x[2]))
     return out
 
 
-#: the deterministic shapes in time (the temperature shape is tied to a measured covariate:
-#: :mod:`gyrofilter.analysis.gap.detectors.covariate`)
-TIME_SHAPES = ("rate_ramp", "bias_step", "warmup")
-#: every effect the slow detector may name
-SLOW_EFFECTS = STOCHASTIC_MODELS + TIME_SHAPES + ("temperature",)
-
-
-def slow_reading(x, sample_rate_hz, shapes=TIME_SHAPES, temp_c=None, stats=None):
+def slow_reading(x, sample_rate_hz, shapes=SHAPES, temp_c=None, stats=None):
     """One reading of the slow bias effects of one axis ``x`` (deg/s), with the deterministic
     shapes ``shapes`` (names of :data:`N_PARAMS`; ``temperature`` needs ``temp_c``) and the
     stochastic spectra, by the decision rules of :mod:`gyrofilter.analysis.gap.detectors`.
@@ -346,7 +340,7 @@ def slow_reading(x, sample_rate_hz, shapes=TIME_SHAPES, temp_c=None, stats=None)
         return [], None
     delta_s = length / sample_rate_hz
     temp_blocks = None
-    if temp_c is not None and "temperature" in shapes:
+    if temp_c is not None and TEMPERATURE in shapes:
         tb, _ = block_means(np.asarray(temp_c, dtype=float))
         if tb.size == n and np.ptp(tb) > 0:
             temp_blocks = tb
@@ -364,7 +358,7 @@ def slow_reading(x, sample_rate_hz, shapes=TIME_SHAPES, temp_c=None, stats=None)
         # longer than a fifth of the record is a random walk as far as the data can tell
         items = []
         for k, v in table.items():
-            if k == "gauss_markov" and -delta_s / math.log(min(max(v[1][1], 1e-12), 1 - 1e-12)) > n * delta_s / GM_MAX_TAU_DIVISOR:
+            if k == GAUSS_MARKOV and -delta_s / math.log(min(max(v[1][1], 1e-12), 1 - 1e-12)) > n * delta_s / GM_MAX_TAU_DIVISOR:
                 continue
             items.append((v[0] - N_PARAMS[k] * STOCHASTIC_PENALTY, k))
         return max(items) if items else (-np.inf, None)
@@ -425,7 +419,7 @@ def slow_reading(x, sample_rate_hz, shapes=TIME_SHAPES, temp_c=None, stats=None)
             if best_exact[0] > score_det:
                 keep_det = False
                 name = best_exact[1]
-                if sto_sig and sto_name in ("rate_random_walk", "gauss_markov", "bias_instability"):
+                if sto_sig and sto_name in (RATE_RANDOM_WALK, GAUSS_MARKOV, BIAS_INSTABILITY):
                     findings.append(_rw_or_gm(sto_name, sto, y, delta_s))
                 else:
                     findings.append(_stochastic_candidate(name, exact[name], group_delta, m))
@@ -448,35 +442,35 @@ def _rw_or_gm(name, table, y, delta_s):
     A bias instability or Gauss-Markov candidate carries the other wander where that one is
     significant too (:func:`_with_wander_alternative`)."""
     n = y.size
-    if name == "bias_instability":
+    if name == BIAS_INSTABILITY:
         return _with_wander_alternative(_stochastic_candidate(name, table[name], delta_s, n), table, delta_s, n)
     group = max(1, int(math.ceil(n / 512)))
     m = n // group
     yg = y[: m * group].reshape(m, group).mean(axis=1)
     sto_g, _ = stochastic_fits(yg, delta_s * group)
     exact = exact_stochastic_gain(yg, sto_g, delta_s * group)
-    gm = exact["gauss_markov"]
-    tau = stochastic_params("gauss_markov", gm[1], delta_s * group)["tau_s"]
-    if gm[0] - exact["rate_random_walk"][0] > EXACT_GM_MARGIN and tau < n * delta_s / GM_MAX_TAU_DIVISOR:
-        return _with_wander_alternative(_stochastic_candidate("gauss_markov", gm, delta_s * group, m), table, delta_s, n)
-    return _stochastic_candidate("rate_random_walk", table["rate_random_walk"], delta_s, n)
+    gm = exact[GAUSS_MARKOV]
+    tau = stochastic_params(GAUSS_MARKOV, gm[1], delta_s * group)["tau_s"]
+    if gm[0] - exact[RATE_RANDOM_WALK][0] > EXACT_GM_MARGIN and tau < n * delta_s / GM_MAX_TAU_DIVISOR:
+        return _with_wander_alternative(_stochastic_candidate(GAUSS_MARKOV, gm, delta_s * group, m), table, delta_s, n)
+    return _stochastic_candidate(RATE_RANDOM_WALK, table[RATE_RANDOM_WALK], delta_s, n)
 
 
 #: the two stationary slow wanders whose spectra a record may not tell apart (1/f and a Lorentzian
 #: whose corner lies near the record's lowest frequencies)
-WANDERS = ("bias_instability", "gauss_markov")
+CONFUSABLE_WANDERS = (BIAS_INSTABILITY, GAUSS_MARKOV)
 
 
 def _with_wander_alternative(cand, table, delta_s, n):
-    """``cand`` (a bias instability or a Gauss-Markov wander) with the other of :data:`WANDERS`
+    """``cand`` (a bias instability or a Gauss-Markov wander) with the other of :data:`CONFUSABLE_WANDERS`
     in ``extra["wander_alternative"]`` where that one is significant over white noise too (and,
     a Gauss-Markov, with its tau below a fifth of the record): the gap analysis weighs the two
     readings on D (:func:`gyrofilter.analysis.gap.readings.weigh_wanders`)."""
-    other = WANDERS[1 - WANDERS.index(cand.effect)]
+    other = CONFUSABLE_WANDERS[1 - CONFUSABLE_WANDERS.index(cand.effect)]
     two_dl, theta, _ = table[other]
     if two_dl <= STOCHASTIC_THRESHOLD:
         return cand
-    if other == "gauss_markov" and stochastic_params(other, theta, delta_s)["tau_s"] >= n * delta_s / GM_MAX_TAU_DIVISOR:
+    if other == GAUSS_MARKOV and stochastic_params(other, theta, delta_s)["tau_s"] >= n * delta_s / GM_MAX_TAU_DIVISOR:
         return cand
     cand.extra["wander_alternative"] = _stochastic_candidate(other, table[other], delta_s, n)
     return cand
@@ -485,9 +479,9 @@ def _with_wander_alternative(cand, table, delta_s, n):
 def _stochastic_candidate(name, fit, delta_s, n):
     two_dl, theta, s0 = fit
     params = stochastic_params(name, theta, delta_s)
-    words = {"rate_random_walk": "a 1/f^2 (random-walk) bias spectrum",
-             "bias_instability": "a 1/f (flicker) bias spectrum",
-             "gauss_markov": "an exponentially correlated (Lorentzian) bias spectrum"}[name]
+    words = {RATE_RANDOM_WALK: "a 1/f^2 (random-walk) bias spectrum",
+             BIAS_INSTABILITY: "a 1/f (flicker) bias spectrum",
+             GAUSS_MARKOV: "an exponentially correlated (Lorentzian) bias spectrum"}[name]
     return Candidate(
         effect=name, params=params, statistic=two_dl, threshold=STOCHASTIC_THRESHOLD,
         statistic_name="2 Delta log-likelihood (Whittle) over white noise",
@@ -530,7 +524,7 @@ def deterministic_candidate(name, d, params, x, sample_rate_hz, length, temp_c):
     (:func:`gyrofilter.analysis.gap.detectors.sinusoid.fitted`): one series of memory."""
     params = dict(params)
     n = x.size
-    if name == "bias_step":
+    if name == BIAS_STEP:
         ts = _refine_step(x, sample_rate_hz, length, params["time_s"])
         first = _first_sample_at(ts, sample_rate_hz, n)  # the first sample with t = i / sample_rate_hz >= ts
         params["time_s"] = ts
@@ -540,12 +534,12 @@ def deterministic_candidate(name, d, params, x, sample_rate_hz, length, temp_c):
         comp[first:] = params["size_dps"]
         what = f"the mean steps by {params['size_dps']:+.3g} deg/s at t = {ts:.1f} s"
     else:
-        if name == "rate_ramp":
+        if name == RATE_RAMP:
             t_mean = 0.5 * (n - 1) / sample_rate_hz
 
             def columns(lo, hi):
                 return (np.arange(lo, hi) / sample_rate_hz - t_mean,)
-        elif name == "warmup":
+        elif name == WARMUP:
             tau = params["tau_s"]
 
             def columns(lo, hi):
@@ -558,10 +552,10 @@ def deterministic_candidate(name, d, params, x, sample_rate_hz, length, temp_c):
                 return (tc[lo:hi] - tc_mean,)
         coef = least_squares(columns, x)
         comp = fitted(columns, coef[:1], n)
-        if name == "rate_ramp":
+        if name == RATE_RAMP:
             params["r_dps_per_s"] = float(coef[0])
             what = f"the bias drifts linearly by {params['r_dps_per_s']:+.3g} deg/s per s"
-        elif name == "warmup":
+        elif name == WARMUP:
             params["amplitude_dps"] = float(coef[0])
             what = (f"the bias settles exponentially: {params['amplitude_dps']:+.3g} deg/s at t = 0, "
                     f"time constant {tau:.3g} s")

@@ -67,6 +67,7 @@ from statistics import NormalDist
 
 import numpy as np
 
+from ....effects import HEAVY_TAILS
 from .colored import colored_window
 from .common import Candidate, HEAVY_TAILS_OVER_SPIKES, HEAVY_TAILS_THRESHOLD, HEAVY_TAILS_Z, TAILS_MAX_STEP_SD, TAILS_WINSOR_SD
 from ...stats import dot, moving_mean, robust_sigma
@@ -325,7 +326,7 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
     if close:
         evidence += (f" (below {HEAVY_TAILS_OVER_SPIKES:g}: isolated spikes of about "
                      f"{fits['magnitude']:.2g} robust sd explain the tails about as well)")
-    cand = Candidate(effect="heavy_tails", params={"fraction": fits["fraction"], "scale_ratio": fits["scale_ratio"]},
+    cand = Candidate(effect=HEAVY_TAILS, params={"fraction": fits["fraction"], "scale_ratio": fits["scale_ratio"]},
                      statistic=lr, threshold=HEAVY_TAILS_THRESHOLD, evidence=evidence,
                      statistic_name="2 Delta log L, Gaussian scale mixture over a Gaussian (residual's histogram)",
                      extra={"over_spikes": over, "tails_z": z})

@@ -1,0 +1,105 @@
+"""The effect registry: one record per effect that the simulator adds to a gyro's rate and the
+gap analysis names, the one place where an effect's name, kind and parameters are stated.
+
+An effect is a term of the model's axis (docs/formats.md, section 2): its **name** (the
+``effect`` key of a model entry and of a gap finding; code spells it through the constants
+below, never as a literal), its **kind**, its **parameters** (required, each with the check of
+:data:`gyrofilter.sim.model._KINDS`; optional, each with its check and default) and the
+**scale** on which the gap analysis computes each parameter's 95 % interval
+(:mod:`gyrofilter.analysis.gap.intervals`: ``log`` for positive scale parameters, ``atanh`` for
+autocorrelations, ``phase`` for radians, else linear).
+
+The kinds, and the groups every module derives from them (never a list of its own):
+
+- ``wander``: a slow stochastic wander of the bias (bias instability, rate random walk,
+  Gauss-Markov), found by the slow detector's spectral fits (:data:`WANDERS`);
+- ``shape``: a deterministic shape of the bias in time (ramp, step, warm-up; :data:`SHAPES`);
+- ``covariate``: the bias following a measured quantity (the temperature; :data:`COVARIATES`);
+- ``line``: a deterministic periodic rate (a sinusoid);
+- ``noise``: stationary noise with a spectrum other than white (colored noise, a narrow band,
+  an ARMA process);
+- ``tails``: the rate's distribution (isolated spikes, heavy tails; :data:`TAILS`).
+
+The registry's **order** is the simulator's: each effect's random stream is keyed by its place
+(:mod:`gyrofilter.sim.simulate`), so a new effect is appended at the end.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+BIAS_INSTABILITY = "bias_instability"
+RATE_RANDOM_WALK = "rate_random_walk"
+RATE_RAMP = "rate_ramp"
+GAUSS_MARKOV = "gauss_markov"
+SINUSOID = "sinusoid"
+TEMPERATURE = "temperature"
+BIAS_STEP = "bias_step"
+WARMUP = "warmup"
+OUTLIERS = "outliers"
+COLORED_NOISE = "colored_noise"
+NARROWBAND = "narrowband"
+ARMA = "arma"
+HEAVY_TAILS = "heavy_tails"
+
+KINDS = ("wander", "shape", "covariate", "line", "noise", "tails")
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One effect of the registry (module docstring)."""
+
+    name: str
+    kind: str
+    #: parameter -> its check (a kind of :data:`gyrofilter.sim.model._KINDS`)
+    required: dict
+    #: parameter -> (its check, its default; None: the effect's own rule)
+    optional: dict = field(default_factory=dict)
+    #: parameter -> the scale of its bootstrap interval (``log``, ``atanh``, ``phase``; absent: linear)
+    interval_scales: dict = field(default_factory=dict)
+
+    @property
+    def n_params(self):
+        """The parameters a fit of the effect estimates (its required ones): what an information
+        criterion or a likelihood-ratio penalty counts."""
+        return len(self.required)
+
+
+REGISTRY = (
+    Effect(BIAS_INSTABILITY, "wander", {"b_dps": "nonneg"},
+           {"tau_min_s": ("pos", None), "tau_max_s": ("pos", None), "per_decade": ("pos", 2.0)}, {"b_dps": "log"}),
+    Effect(RATE_RANDOM_WALK, "wander", {"k_dps_per_sqrt_s": "nonneg"}, {}, {"k_dps_per_sqrt_s": "log"}),
+    Effect(RATE_RAMP, "shape", {"r_dps_per_s": "any"}),
+    Effect(GAUSS_MARKOV, "wander", {"sigma_dps": "nonneg", "tau_s": "pos"}, {}, {"sigma_dps": "log", "tau_s": "log"}),
+    Effect(SINUSOID, "line", {"frequency_hz": "nonneg", "amplitude_dps": "nonneg"}, {"phase_rad": ("any", 0.0)},
+           {"amplitude_dps": "log", "phase_rad": "phase"}),
+    Effect(TEMPERATURE, "covariate", {"coefficient_dps_per_c": "any"}, {"reference_c": ("any", None)}),
+    Effect(BIAS_STEP, "shape", {"time_s": "nonneg", "size_dps": "any"}),
+    Effect(WARMUP, "shape", {"amplitude_dps": "any", "tau_s": "pos"}, {}, {"tau_s": "log"}),
+    Effect(OUTLIERS, "tails", {"rate": "frac", "magnitude_dps": "nonneg"}, {"spread_ln": ("nonneg", 0.25)},
+           {"rate": "log", "magnitude_dps": "log"}),
+    Effect(COLORED_NOISE, "noise", {"lag1": "lag"}, {"lag2": ("lag", None), "preserve": ("choice:arw,std", "arw")},
+           {"lag1": "atanh", "lag2": "atanh"}),
+    Effect(NARROWBAND, "noise", {"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {},
+           {"bandwidth_hz": "log", "rms_dps": "log"}),
+    Effect(ARMA, "noise", {"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])}),
+    Effect(HEAVY_TAILS, "tails", {"fraction": "frac", "scale_ratio": "pos"}, {}, {"fraction": "log", "scale_ratio": "log"}),
+)
+#: name -> record, in the registry's order
+BY_NAME = {e.name: e for e in REGISTRY}
+
+
+def of_kind(*kinds):
+    """The names of the effects of these kinds, in the registry's order."""
+    return tuple(e.name for e in REGISTRY if e.kind in kinds)
+
+
+#: the slow stochastic wanders of the bias
+WANDERS = of_kind("wander")
+#: the deterministic shapes of the bias in time
+SHAPES = of_kind("shape")
+#: the effects that follow a measured covariate
+COVARIATES = of_kind("covariate")
+#: everything slow: the wanders, the shapes in time and the covariates (the slow detector's effects)
+SLOW = of_kind("wander", "shape", "covariate")
+#: the effects of the rate's distribution
+TAILS = of_kind("tails")
