@@ -150,7 +150,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
     finding shows its alternative before its evidence, and promises no figure of the readings (the
     page draws none; the shared line said "the figure of the rate in time shows both readings");
     the notes are a list."""
-    from gyrofilter.analysis.gap.readings import WHY_THE_COVARIATE
+    from gyrofilter.analysis.gap.confound import WHY_THE_COVARIATE
     from gyrofilter.view.report import _gap
 
     axis = {"bias_dps": 0.1, "arw_dps_per_sqrt_hz": 0.01, "quantization_dps": None}

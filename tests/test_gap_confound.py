@@ -1,4 +1,4 @@
-"""Confounded causes in the gap analysis (gyrofilter.analysis.gap.readings, detectors.covariate):
+"""Confounded causes in the gap analysis (gyrofilter.analysis.gap.confound, detectors.covariate):
 where the temperature follows a warm-up itself, the measured covariate is named and the time
 reading is listed as its alternative; a real bias warm-up under a flat temperature stays a
 warm-up; a temperature that varies without a coefficient is not named.
@@ -19,7 +19,7 @@ from gyrofilter.analysis.gap import detectors as det
 from gyrofilter.analysis.gap.detectors.covariate import detect_slow
 from gyrofilter.analysis.gap import report as gap_report
 from gyrofilter.analysis.gap.pipeline import analyse_gap
-from gyrofilter.analysis.gap.readings import WHY_THE_COVARIATE
+from gyrofilter.analysis.gap.confound import WHY_THE_COVARIATE
 from gyrofilter.sim import hidden_effects as he
 from gyrofilter.sim.model import EFFECTS
 from gyrofilter.sim.simulate import simulate
@@ -124,7 +124,7 @@ def _wander_case(effect, seed):
 @pytest.mark.parametrize("seed", [501] + [pytest.param(s, marks=pytest.mark.slow) for s in range(502, 508)])
 def test_a_wander_is_named_as_itself_or_listed(seed):
     # a bias instability is named as itself, within tolerance; a Gauss-Markov wander is never lost to a
-    # bias instability: where D cannot tell them apart (gap.readings.weigh_wanders) it is listed as the
+    # bias instability: where D cannot tell them apart (gap.confound.weigh_wanders) it is listed as the
     # bias instability's alternative (a Gauss-Markov read as a random walk is the slow detector's older
     # confusion, docs/gap.md)
     case, report = _wander_case("bias_instability", seed)

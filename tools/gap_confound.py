@@ -10,7 +10,7 @@ Records: gyrofilter/data/mpu6050_model.json simulated for 1 h at 100 Hz (``--see
 The numbers are read from the report's notes ("readings weighed on D"). The last line counts the
 axes whose model has a bias instability: on how many it is named, and how the slow detector's
 two wanders were weighed (notes "readings of the slow wander weighed on D";
-``gyrofilter.analysis.gap.readings.weigh_wanders``).
+``gyrofilter.analysis.gap.confound.weigh_wanders``).
 """
 import argparse
 import json
@@ -29,7 +29,7 @@ from gyrofilter.units import AXES  # noqa: E402
 WEIGHED = re.compile(r"axis (\w): readings weighed on D: with the temperature ([\d.e+-]+), in time \((.*)\) "
                      r"([\d.e+-]+); allowance ([\d.e+-]+) .*?: (.*)$")
 
-#: the verdicts of gap_readings.weigh_wanders' notes
+#: the verdicts of gap.confound.weigh_wanders' notes
 VERDICTS = ("the record cannot tell them apart", "the bias instability is clearly better",
             "the Gauss-Markov is clearly better")
 WANDER = re.compile(r"axis (\w): readings of the slow wander weighed on D: .*: (" + "|".join(VERDICTS) + ")")

@@ -8,7 +8,7 @@ decision lives:
   fit of a composite model).
 - ``gap/``: the model-gap analysis, what the plain simulation gets wrong and why: ``pipeline``
   (the steps in order), ``baseline``, ``features``, ``detectors/`` (one statistic per effect),
-  ``readings`` (the confounded causes), ``composite``, ``intervals`` and ``reestimate`` (the
+  ``confound`` (the confounded causes), ``composite``, ``intervals`` and ``reestimate`` (the
   parameters' intervals), ``report`` (Markdown and figures).
 - ``arma/``: ARMA and bias-state models (paper 003): ``identify`` (order selection, the bias
   model), ``fit``, ``checks`` (the residual tests), ``bias_kf`` (the bias-tracking filter).

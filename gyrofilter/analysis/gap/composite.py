@@ -12,7 +12,7 @@ the white level (the colored noise then keeps the long-tau level, ``preserve: ar
 is lower so, the per-sample variance too: :func:`composite_lags`). The replacement is kept
 only if D falls below :data:`~gyrofilter.analysis.gap.detectors.COMPOSITE_MIN_GAIN` times its value
 and by more than two null spreads of D of the axis's extended model (as two readings are
-weighed in :mod:`gyrofilter.analysis.gap.readings`: a smaller gain the record cannot vouch for).
+weighed in :mod:`gyrofilter.analysis.gap.confound`: a smaller gain the record cannot vouch for).
 Where the axis has ``outliers`` the wavelet variance is the robust M-estimate
 (:mod:`gyrofilter.analysis.noise.wv_robust`), so that spikes the outlier detector missed do not pull the
 fit; where it has ``heavy_tails`` the classical one, which is consistent for that noise (its tails
@@ -30,6 +30,7 @@ import numpy as np
 from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RANDOM_WALK,
                             WANDERS)
 from . import detectors as det
+from .confound import CONFOUNDED_SPREADS
 from ..noise import gmwm
 from ...sim import noise_terms as nt
 from ...units import AXES
@@ -49,7 +50,7 @@ def composite_step(run):
     stochastic findings, and its colored noise if that is better without it, when D falls below
     :data:`~gyrofilter.analysis.gap.detectors.COMPOSITE_MIN_GAIN` times its value and by more than
     ``k s_ext``, ``s_ext`` the null spread of D of the axis's extended model and ``k`` =
-    :data:`~gyrofilter.analysis.gap.detectors.CONFOUNDED_SPREADS` (:mod:`gyrofilter.analysis.gap.readings`):
+    :data:`~gyrofilter.analysis.gap.confound.CONFOUNDED_SPREADS` (:mod:`gyrofilter.analysis.gap.confound`):
     D of that model moves that much between records it explains exactly, so a smaller gain is
     one the record cannot vouch for (a bias instability was replaced by a 10-s Gauss-Markov term,
     2.31 -> 1.5 against 2 x 0.83, on the example model's hour at 100 Hz, seed 3, x)."""
@@ -88,7 +89,7 @@ def composite_step(run):
                 cands[colored_k[0]][1].extra.pop("composite")
                 keep_k = [k for k in keep_k if k not in colored_k]
                 dropped_colored = True
-        spread = det.CONFOUNDED_SPREADS * s_ext
+        spread = CONFOUNDED_SPREADS * s_ext
         if d_comp < det.COMPOSITE_MIN_GAIN * run.after[i] and d_comp < run.after[i] - spread:
             if dropped_colored:  # said only where the composite model is used
                 notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the "
@@ -116,7 +117,7 @@ def composite_step(run):
                 cands[k][1].extra.pop("composite")
             notes.append(f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
                          f"({run.after[i]:.3g} -> {d_comp:.3g}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times "
-                         f"its value and by more than {det.CONFOUNDED_SPREADS:g} null spreads of D of the extended model, {spread:.2g}); not used")
+                         f"its value and by more than {CONFOUNDED_SPREADS:g} null spreads of D of the extended model, {spread:.2g}); not used")
 
 
 def slow_wavelet_variance(xc, sample_rate_hz, cands=()):

@@ -266,3 +266,14 @@ def still_departs(axis, d_after, deps, taus, bands):
                        "; the model's noise is heavier-tailed than the measurement's")
     return text + {"line": "; a spectral line the model lacks", "lag1": "; the noise's short correlation differs",
                    "spikes": "; spikes the model lacks or overstates"}[key]
+
+
+def null_spread(sims, n, pool=None):
+    """The null spread of D of a model from its simulated runs' features ``sims`` (a list, one
+    dict of features per run): ``sd_j(D_j)`` with ``D_j`` the discrepancy of run ``j`` against
+    the other runs (:func:`gyrofilter.analysis.gap.features.departures`, with the measurement's
+    ``pool``), ``n`` the samples per run. 0 with fewer than 3 runs."""
+    if len(sims) < 3:
+        return 0.0
+    d = [discrepancy(departures(sims[j], sims[:j] + sims[j + 1:], n, pool)) for j in range(len(sims))]
+    return float(np.std(d, ddof=1))

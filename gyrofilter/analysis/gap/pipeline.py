@@ -21,7 +21,7 @@ function each on a shared run (:class:`_GapRun`); the modules beside this one ho
    and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_from_highpassed`).
    Where the temperature and a shape in time (or a slow wander) explain a slow departure, both
    readings are simulated and the measured covariate is kept unless the other is clearly better
-   on D (:mod:`gyrofilter.analysis.gap.readings`); one as good is listed as ``alternatives``. A
+   on D (:mod:`gyrofilter.analysis.gap.confound`); one as good is listed as ``alternatives``. A
    bias instability and a Gauss-Markov wander that both fit are weighed the same way (the bias
    instability, one parameter fewer, is named unless the Gauss-Markov is clearly better).
 4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
@@ -56,9 +56,9 @@ from . import detectors as det
 from .baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
                            temperature_table, wander_highpassed, white_less_wanders)
 from .composite import composite_step, slow_wavelet_variance
-from .readings import alternatives_entry, null_spread, weigh_readings, weigh_wanders
+from .confound import alternatives_entry, kept_without_gain, weigh_readings, weigh_wanders
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
-                           features, still_departs, strongest)
+                           features, null_spread, still_departs, strongest)
 from .intervals import add_intervals
 from ..still import not_static
 from ...errors import GyroFilterError, RecordingError
@@ -172,7 +172,7 @@ class _GapRun:
         self.wvs = [None, None, None]  # wavelet variance of each cleaned axis at the composite's scales
         self.kept = []  # (candidate index, axis index, Candidate, D of the axis with it alone)
         self.resolved_lags = [None, None, None]  # composite model: the colored noise's lags (gap.composite)
-        self.readings = {}  # axis index -> the covariate and time readings of a confounded temperature (gap.readings)
+        self.readings = {}  # axis index -> the covariate and time readings of a confounded temperature (gap.confound)
         self.alt_axes = {}  # axis name -> the extended axis spec of the time reading
         self.excluded = set()  # candidate indices of the reading not chosen
         self._deps_cache = {}
@@ -215,7 +215,7 @@ class _GapRun:
 
     def null_spread(self, i, ks, label):
         """The null spread of D for axis ``i`` extended by the candidates ``ks``
-        (:func:`gyrofilter.analysis.gap.readings.null_spread` of its simulated runs)."""
+        (:func:`gyrofilter.analysis.gap.features.null_spread` of its simulated runs)."""
         self.axis_deps(i, ks, label)
         key = (i, tuple(sorted(ks)), tuple(sorted((self.resolved_lags[i] or {}).items())))
         return null_spread(self._sims_cache[key], self.n, (self.deps[i], self.m))
@@ -281,7 +281,7 @@ def _detect(run):
             if c.effect == TEMPERATURE:
                 c.extra["reference_c"] = float(np.mean(run.temp))
             run.candidates.append((i, c))
-        if alt is not None:  # the time reading of a confounded temperature (gap.readings)
+        if alt is not None:  # the time reading of a confounded temperature (gap.confound)
             alt_cands, xa = alt
             fast = [c for c in cands if c.effect not in SLOW]
             run.readings[i] = {"covariate": [first + j for j, c in enumerate(cands) if c.effect in SLOW],
@@ -391,13 +391,8 @@ def _keep_findings(run):
                 without = run.axis_discrepancy(i, others, label)
             except (ValueError, FloatingPointError):
                 with_all = without = float("inf")
-            why = "" if with_all < without else None
-            if why is None and c.effect == TEMPERATURE and np.isfinite(with_all):
-                # the measured covariate is kept where D cannot tell (gap.readings)
-                spread = det.CONFOUNDED_SPREADS * max(run.null_spread(i, others + [k], label), run.null_spread(i, others, label))
-                if with_all <= without + spread:
-                    why = (f", within the null spread of D ({spread:.2g}): the measured covariate is kept where D "
-                           "cannot tell")
+            why = kept_without_gain(c.effect, with_all, without,
+                                    lambda: max(run.null_spread(i, others + [k], label), run.null_spread(i, others, label)))
             if why is not None:
                 run.kept.append((k, i, c, after))
                 notes.append(f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "

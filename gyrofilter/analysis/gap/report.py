@@ -24,7 +24,7 @@ import numpy as np
 from ...effects import BIAS_STEP, COVARIATES, RATE_RAMP, SHAPES, TEMPERATURE, WARMUP
 from ...plots import pyplot
 from ...units import AXES, utf8_text
-from .readings import NAMED_BECAUSE, WHY_THE_COVARIATE
+from .confound import NAMED_BECAUSE, WHY_THE_COVARIATE
 
 REPORT_NAME = "gap_report.md"
 FIGURE_KINDS = ("adev", "spectrum", "temperature", "time")
@@ -143,7 +143,7 @@ def plot_time(x, sample_rate_hz, axis, findings, path, temp=None, alternatives=(
 
 def covariate_preamble(findings):
     """The sentence said once before the findings where some of them cannot be told apart from a
-    reading in time (their evidence ends with :data:`~gyrofilter.analysis.gap.readings.WHY_THE_COVARIATE`),
+    reading in time (their evidence ends with :data:`~gyrofilter.analysis.gap.confound.WHY_THE_COVARIATE`),
     or None; :func:`evidence_text` leaves it out of each finding."""
     if not any(WHY_THE_COVARIATE in f["evidence"] for f in findings):
         return None
@@ -158,7 +158,7 @@ def evidence_text(finding):
 def indistinguishable_text(finding, *, figure=False):
     """The line under a finding with ``alternatives`` (console, Markdown and HTML reports): the
     reading it cannot be told apart from, and why it is the one named
-    (:data:`~gyrofilter.analysis.gap.readings.NAMED_BECAUSE`: the measured covariate; of two
+    (:data:`~gyrofilter.analysis.gap.confound.NAMED_BECAUSE`: the measured covariate; of two
     wanders the one with fewer parameters); where the other reading has a shape in time and the
     caller draws it (``figure``: the Markdown report's rate in time), that the figure shows both."""
     shaped = figure and any(e["effect"] in _SHAPES for e in finding["alternatives"])

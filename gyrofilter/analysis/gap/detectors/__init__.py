@@ -68,12 +68,12 @@ ones found, because the effects are confusable:
    * with no shape, the best stochastic spectrum is reported if above its threshold; a bias
      instability or Gauss-Markov finding carries the other of the two where that one is
      significant too, and the gap weighs the two on D (the bias instability, one parameter
-     fewer, unless the Gauss-Markov is clearly better: :func:`gyrofilter.analysis.gap.readings.weigh_wanders`);
+     fewer, unless the Gauss-Markov is clearly better: :func:`gyrofilter.analysis.gap.confound.weigh_wanders`);
    * where a temperature is recorded, the temperature coefficient is fitted first and the rules
      above run on what it leaves (``covariate``: the coefficient by generalised least squares
      under the residual's stochastic model, significant jointly with any time shape there); the
      reading without the temperature rides along as its alternative, and the gap weighs the two
-     on D (:mod:`gyrofilter.analysis.gap.readings`).
+     on D (:mod:`gyrofilter.analysis.gap.confound`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
 :class:`Candidate`, helpers), ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``colored``
@@ -85,12 +85,10 @@ from .common import (  # noqa: F401
     COLORED_MIN_LAG2_GAP,
     COLORED_Z,
     COMPOSITE_MIN_GAIN,
-    CONFOUNDED_SPREADS,
     Candidate,
     DETERMINISTIC_THRESHOLD,
     EXACT_GM_MARGIN,
     GM_MAX_TAU_DIVISOR,
-    HEAVY_TAILS_OVER_SPIKES,
     HEAVY_TAILS_THRESHOLD,
     HEAVY_TAILS_Z,
     JOINT_THRESHOLD,

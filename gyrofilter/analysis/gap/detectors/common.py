@@ -1,5 +1,6 @@
-"""Shared by the detectors: every threshold of the gap analysis (the detectors' significance
-levels and the gap's decision rules), :class:`Candidate` (the shared statistics are in
+"""Shared by the detectors: the thresholds of the gap analysis (the detectors' significance
+levels and the gap's decision rules; those of the confounded causes are in
+:mod:`gyrofilter.analysis.gap.confound`), :class:`Candidate` (the shared statistics are in
 :mod:`gyrofilter.analysis.stats`)."""
 
 from __future__ import annotations
@@ -12,10 +13,9 @@ OUTLIER_FALSE_PER_AXIS = 0.05
 #: minimum number of spikes for an outlier finding
 OUTLIER_MIN_COUNT = 3
 #: heavy tails (detectors.tails): the winsorizing level (robust sd) of the tail statistic, the
-#: z its value must reach against the baseline's simulations (or its Gaussian sampling sd), the
-#: 2 Delta log L a Gaussian scale mixture must gain over a Gaussian, and the 2 Delta log L by
-#: which it must beat isolated spikes where the outlier detector found spikes (10: "very strong"
-#: evidence, Kass & Raftery 1995, sec. 3.2). The mixture's threshold is set from clean records
+#: z its value must reach against the baseline's simulations (or its Gaussian sampling sd) and the
+#: 2 Delta log L a Gaussian scale mixture must gain over a Gaussian (the margin over isolated
+#: spikes is a rule of the confounded causes: gap.confound.HEAVY_TAILS_OVER_SPIKES). The mixture's threshold is set from clean records
 #: only: on 100 simulated ones (white, AR(1) lag1 0.3-0.85, a two-tap average, a narrow band, a
 #: large sinusoid, 1 kHz; 10-60 min, MPU6050 quantization) its largest value was 7.4, on the
 #: real MPU6050 and ADIS16405 static records (15 axes) 11.3, so 30 sits 2.7-4 times above
@@ -26,7 +26,6 @@ TAILS_WINSOR_SD = 6.0
 TAILS_MAX_STEP_SD = 0.5
 HEAVY_TAILS_Z = 4.0
 HEAVY_TAILS_THRESHOLD = 30.0
-HEAVY_TAILS_OVER_SPIKES = 10.0
 #: false-alarm probability per axis for the periodogram line test
 SINUSOID_ALPHA = 1e-4
 #: z-score (in units of 1/sqrt(N)) the lag-1 autocorrelation must exceed, and the smallest
@@ -63,11 +62,6 @@ NARROWBAND_THRESHOLD = 4.0
 #: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
 #: composite stochastic part, and the report says which feature still departs
 OUTSIDE_NULL_D = 2.0
-#: two readings of a slow departure (the temperature's and one in time) explain a record about
-#: equally when their D differ by at most this many null spreads (the sd of D over a model's own
-#: simulated runs, leave one out; gap.readings): the band D keeps in 95 % of records a model
-#: explains exactly. Measured on the example model (docs/gap.md, "Confounded causes")
-CONFOUNDED_SPREADS = 2.0
 #: the factor a composite stochastic part must lower D by
 COMPOSITE_MIN_GAIN = 0.8
 #: a finding's evidence names the feature furthest outside the baseline simulations' spread when

@@ -15,19 +15,11 @@ cause to name: it predicts the bias at the next power-up, an exponential in time
 * the **time reading**: the slow effects without the temperature (the shapes ramp, step and
   warm-up, and the stochastic spectra), as on a record without a ``temp`` column.
 
-The covariate is preferred over a warm-up and a slow wander, which a settling temperature
-mimics; against a ramp or a step (a line or a jump is not a settling) the better fit of the block
-means decides as on any shape (the larger ``Delta chi^2 - k ln n``), and a ramp must win by more
-than the null spread of that difference (:func:`_shape_beats_temperature`): a temperature that
-settles slowly is nearly a line over the record, and a ramp fitting it about as well is the
-alternative, not the cause. A covariate reading that needs a stochastic term where the time reading explains the record by
-a shape alone is the more complex reading and is not returned (a ramp under a warming
-temperature reads as the temperature's settling plus a random walk for the difference).
-
-The covariate reading is returned when it names the temperature; the time reading rides on the
-temperature candidate (``extra["alternative"]``) so that :mod:`gyrofilter.analysis.gap.readings`
-can weigh the two on the discrepancy D and keep the covariate unless the time reading is clearly
-better.
+Which reading is returned is a rule of the confounded causes, stated with its thresholds in
+:mod:`gyrofilter.analysis.gap.confound` (:func:`~gyrofilter.analysis.gap.confound.covariate_or_time`):
+the covariate reading, with the time reading riding on the temperature candidate
+(``extra["alternative"]``), unless a ramp or a step in time beats the temperature or the
+covariate reading is the more complex one; the two are then weighed on the discrepancy D.
 """
 from __future__ import annotations
 
@@ -35,11 +27,11 @@ import math
 
 import numpy as np
 
-from ....effects import (BIAS_INSTABILITY, BIAS_STEP, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK, SHAPES,
-                             TEMPERATURE, WANDERS)
+from ....effects import BIAS_INSTABILITY, GAUSS_MARKOV, RATE_RANDOM_WALK, SHAPES, TEMPERATURE
+from ..confound import covariate_or_time
 from .common import DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, Candidate
 from ...stats import block_means, dot
-from .slow import N_PARAMS, periodogram_detrended, slow_spectrum, slow_reading
+from .slow import periodogram_detrended, slow_spectrum, slow_reading
 
 
 def detect_slow(x, sample_rate_hz, temp_c=None):
@@ -55,53 +47,7 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     if temp_c is None:
         return time_reading, stats
     covariate = temperature_first(x, sample_rate_hz, temp_c, stats)
-    line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP) else None
-    if line_or_jump and _shape_beats_temperature(line_or_jump, stats, x, temp_c):
-        # a line or a jump is not a settling: against them the better fit of the block means decides
-        return time_reading, stats
-    if covariate is None or (any(c.effect in WANDERS for c in covariate[1:])
-                             and not any(c.effect in WANDERS for c in time_reading)):
-        # a covariate reading that needs a wander where a shape in time alone explains the
-        # record is the more complex reading (a ramp read as the temperature's settling plus a
-        # random walk for the difference)
-        return time_reading, stats
-    if time_reading:
-        covariate[0].extra["alternative"] = time_reading
-    return covariate, stats
-
-
-#: two-sided 95 % normal quantile: a ramp's better fit over the temperature's counts when it is
-#: beyond this many sd of the difference's null spread (:func:`_shape_beats_temperature`)
-_SPREAD_Z = 1.96
-
-
-def _shape_beats_temperature(name, stats, x, temp_c):
-    """Whether the time shape ``name`` (a ramp or a step) fits the block means better than the
-    temperature (``stats``: their Delta chi^2 in units of the white level).
-
-    A step wins by BIC (``Delta chi^2 - k ln n``). A ramp must also beat the temperature by more
-    than the null spread of the difference: for two one-column fits of white block means
-    ``y = beta g_T + e`` (``g`` the unit-norm, mean-free regressors, ``rho = g_R . g_T``),
-    ``a = g_T . y`` and ``b = g_R . y`` are N(beta, 1) and N(rho beta, 1) with correlation rho, and
-    ``a^2 - b^2 = (a - b)(a + b)`` has sd ``2 |beta| sqrt(1 - rho^2)`` to first order (Vuong 1989,
-    non-nested models). A temperature settling over a long time constant is nearly a line, and
-    a ramp then fits it within that spread about as often as not: the measured covariate is the
-    cause to name (the ramp rides on it as the alternative, weighed on D in gap.readings)."""
-    y, _ = block_means(x)
-    n = y.size
-    d_shape, d_temp = stats[name], stats.get(TEMPERATURE, 0.0)
-    if d_shape - N_PARAMS[name] * math.log(n) < d_temp - math.log(n):
-        return False
-    if name != RATE_RAMP:
-        return True
-    tb, _ = block_means(np.asarray(temp_c, dtype=float))
-    if tb.size != n or not np.ptp(tb) > 0:
-        return True
-    g_t = tb - tb.mean()
-    g_r = np.arange(n) - 0.5 * (n - 1)
-    rho = float(np.dot(g_t, g_r) / math.sqrt(np.dot(g_t, g_t) * np.dot(g_r, g_r)))
-    spread = 2.0 * math.sqrt(max(1.0 - rho * rho, 0.0) * max(d_shape, d_temp))
-    return d_shape - d_temp > _SPREAD_Z * spread
+    return covariate_or_time(time_reading, covariate, stats, x, temp_c), stats
 
 
 def temperature_first(x, sample_rate_hz, temp_c, stats):

@@ -8,6 +8,7 @@ import numpy as np
 
 from ....effects import (BIAS_INSTABILITY, BIAS_STEP, BY_NAME, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK, SHAPES,
                              SLOW, TEMPERATURE, WANDERS, WARMUP)
+from ..confound import CONFUSABLE_WANDERS
 from .common import DETERMINISTIC_THRESHOLD, EXACT_GM_MARGIN, GM_MAX_TAU_DIVISOR, JOINT_THRESHOLD, STOCHASTIC_PENALTY, STOCHASTIC_THRESHOLD, Candidate
 from ...stats import block_means, detrend_line, golden_max
 from .sinusoid import least_squares, fitted
@@ -456,16 +457,11 @@ def _rw_or_gm(name, table, y, delta_s):
     return _stochastic_candidate(RATE_RANDOM_WALK, table[RATE_RANDOM_WALK], delta_s, n)
 
 
-#: the two stationary slow wanders whose spectra a record may not tell apart (1/f and a Lorentzian
-#: whose corner lies near the record's lowest frequencies)
-CONFUSABLE_WANDERS = (BIAS_INSTABILITY, GAUSS_MARKOV)
-
-
 def _with_wander_alternative(cand, table, delta_s, n):
-    """``cand`` (a bias instability or a Gauss-Markov wander) with the other of :data:`CONFUSABLE_WANDERS`
+    """``cand`` (a bias instability or a Gauss-Markov wander) with the other of :data:`~gyrofilter.analysis.gap.confound.CONFUSABLE_WANDERS`
     in ``extra["wander_alternative"]`` where that one is significant over white noise too (and,
     a Gauss-Markov, with its tau below a fifth of the record): the gap analysis weighs the two
-    readings on D (:func:`gyrofilter.analysis.gap.readings.weigh_wanders`)."""
+    readings on D (:func:`gyrofilter.analysis.gap.confound.weigh_wanders`)."""
     other = CONFUSABLE_WANDERS[1 - CONFUSABLE_WANDERS.index(cand.effect)]
     two_dl, theta, _ = table[other]
     if two_dl <= STOCHASTIC_THRESHOLD:

@@ -40,7 +40,7 @@ with N):
    :data:`~gyrofilter.analysis.gap.detectors.common.HEAVY_TAILS_THRESHOLD`, and
 3. it explains the tails better than isolated spikes: ``2 (log L_mixture - log L_spikes) >= 0``
    (both have three parameters: the likelier model), and by at least
-   :data:`~gyrofilter.analysis.gap.detectors.common.HEAVY_TAILS_OVER_SPIKES` (very strong evidence,
+   :data:`~gyrofilter.analysis.gap.confound.HEAVY_TAILS_OVER_SPIKES` (very strong evidence,
    Kass & Raftery 1995) when the outlier detector has found spikes beyond its gross-error
    threshold: spikes far outside the noise are direct evidence of gross errors, replaced by a
    heavy-tailed noise only on strong evidence.
@@ -69,7 +69,8 @@ import numpy as np
 
 from ....effects import HEAVY_TAILS
 from .colored import colored_window
-from .common import Candidate, HEAVY_TAILS_OVER_SPIKES, HEAVY_TAILS_THRESHOLD, HEAVY_TAILS_Z, TAILS_MAX_STEP_SD, TAILS_WINSOR_SD
+from ..confound import tails_or_spikes
+from .common import Candidate, HEAVY_TAILS_THRESHOLD, HEAVY_TAILS_Z, TAILS_MAX_STEP_SD, TAILS_WINSOR_SD
 from ...stats import dot, moving_mean, robust_sigma
 from .outliers import OUTLIER_SPREAD_LN
 
@@ -301,21 +302,12 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
     over = 2.0 * (ll["mixture"] - ll["spikes"])
     if lr < HEAVY_TAILS_THRESHOLD:
         return None, None
-    margin = HEAVY_TAILS_OVER_SPIKES if spikes_found else 0.0
-    close = abs(over) < HEAVY_TAILS_OVER_SPIKES
     gauss_kw = _WINSOR[1] / _WINSOR[0] ** 2
     heavier = (f"the noise's tails are heavier than a Gaussian's (winsorized kurtosis {math.exp(stat) * gauss_kw:.3g}, "
                f"a Gaussian's {gauss_kw:.3g}; z = {z:+.1f})")
-    if over < margin:
-        if spikes_found and not close:
-            return None, None  # isolated spikes, as the outlier detector says
-        if close:
-            return None, (f"{heavier} and a heavy-tailed noise (fraction {fits['fraction']:.3g}, scale ratio "
-                          f"{fits['scale_ratio']:.3g}) explains them about as well as isolated spikes (2 Delta log L = "
-                          f"{over:+.1f}, margin {HEAVY_TAILS_OVER_SPIKES:g})")
-        return None, (f"{heavier}; isolated spikes (about {fits['magnitude']:.2g} robust sd, a fraction "
-                      f"{fits['rate']:.2g} of the samples) explain them better than a heavy-tailed noise (2 Delta log L = "
-                      f"{-over:.1f}) but too few lie beyond the gross-error threshold to name outliers")
+    named, note, evidence_end = tails_or_spikes(over, spikes_found, fits, heavier)
+    if not named:
+        return None, note
     beyond6 = float(np.mean(np.abs(u) > 6.0))
     kurt = float(np.mean(u**4) / np.mean(u**2) ** 2)
     evidence = (f"the noise is heavier-tailed than a Gaussian at every level: winsorized kurtosis "
@@ -323,9 +315,7 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
                 f"{100 * beyond6:.2g} % of the samples beyond 6 robust sd (a Gaussian: 2e-7 %); a Gaussian scale mixture (fraction {fits['fraction']:.3g} of the samples with "
                 f"{fits['scale_ratio']:.3g} times the others' sd) beats a Gaussian by 2 Delta log L = {lr:.0f} "
                 f"(threshold {HEAVY_TAILS_THRESHOLD:g}) and isolated spikes by {over:+.1f}")
-    if close:
-        evidence += (f" (below {HEAVY_TAILS_OVER_SPIKES:g}: isolated spikes of about "
-                     f"{fits['magnitude']:.2g} robust sd explain the tails about as well)")
+    evidence += evidence_end
     cand = Candidate(effect=HEAVY_TAILS, params={"fraction": fits["fraction"], "scale_ratio": fits["scale_ratio"]},
                      statistic=lr, threshold=HEAVY_TAILS_THRESHOLD, evidence=evidence,
                      statistic_name="2 Delta log L, Gaussian scale mixture over a Gaussian (residual's histogram)",
