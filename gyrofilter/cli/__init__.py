@@ -31,6 +31,7 @@ COMMANDS = {
     "gap": ("gyrofilter.cli.gap", "find what the baseline noise model gets wrong about a recording"),
     "arma": ("gyrofilter.cli.arma", "ARMA model of the bias (paper 003)"),
     "evaluate": ("gyrofilter.cli.evaluate", "compare filters on static, synthetic-motion and reference data"),
+    "convert": ("gyrofilter.cli.convert", "another tool's gyro log (CSV or text) as a recording"),
     "report": ("gyrofilter.cli.report", "one self-contained HTML report of a recording, to attach or compare"),
 }
 
