@@ -200,13 +200,15 @@ class StopSignals:
 
 class Status:
     """A status line on stderr at most once per ``STATUS_INTERVAL_S``: the rate achieved beside the
-    source's nominal ``sample_rate_hz``, losses, CPU use."""
+    source's nominal ``sample_rate_hz``, losses, CPU use. On a terminal one line rewritten in
+    place, unless ``whole_lines`` (rows are printed on that terminal too: a line left open there
+    would take the next row into it), then a whole line each time, as to a file."""
 
-    def __init__(self, enabled, sample_rate_hz, stream=None):
+    def __init__(self, enabled, sample_rate_hz, stream=None, whole_lines=False):
         self.enabled = enabled
         self.sample_rate_hz = sample_rate_hz
         self.stream = stream or sys.stderr
-        self.tty = self.stream.isatty()
+        self.tty = self.stream.isatty() and not whole_lines
         self._wall = time.monotonic()
         self._cpu = time.process_time()
         self._samples = 0
