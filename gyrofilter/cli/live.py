@@ -217,9 +217,13 @@ class Status:
     def due(self):
         return self.enabled and time.monotonic() - self._wall >= STATUS_INTERVAL_S
 
-    def show(self, samples, text):
-        """``samples`` = total so far; ``text`` = the rest of the line."""
+    def show(self, samples, text, first_sample_wall=None):
+        """``samples`` = total so far; ``text`` = the rest of the line; ``first_sample_wall``: when
+        (time.monotonic) the first sample came, where the first rate is measured from: a source's
+        start-up (a simulator's first block, a device's reset) is no rate it delivers at."""
         wall, cpu = time.monotonic(), time.process_time()
+        if self._samples == 0 and first_sample_wall is not None:
+            self._wall = max(self._wall, first_sample_wall)
         dt = max(wall - self._wall, 1e-9)
         rate = (samples - self._samples) / dt
         cpu_pct = 100.0 * (cpu - self._cpu) / dt
@@ -257,6 +261,7 @@ class LiveLoop:
         self.sample_rate_hz = source.sample_rate_hz
         self.t_col = source.columns.index("t")
         self.first_t = self.last_t = None
+        self.first_wall = None  # when (time.monotonic) the first sample came
         self._t_end = None  # samples at t >= this are beyond the duration (half a sample of margin)
         self.samples = 0
         self.ended = None  # SourceEnded, DeviceError or DURATION_REACHED
@@ -286,6 +291,7 @@ class LiveLoop:
             t = rows[:, self.t_col]
             if self.first_t is None:
                 self.first_t = float(t[0])
+                self.first_wall = time.monotonic()
                 if self.duration_s is not None:
                     self._t_end = self.first_t + self.duration_s - 0.5 / self.sample_rate_hz
             if self._t_end is not None:

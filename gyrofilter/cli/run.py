@@ -150,7 +150,7 @@ def _run(args, source, sinks):
                 if status.due():
                     state = "calibrating" if filt.calibrating else f"{writer.rows_written} filtered rows"
                     status.show(loop.samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
-                                              f"rejected outliers {int(filt.rejected.sum())}")
+                                              f"rejected outliers {int(filt.rejected.sum())}", loop.first_wall)
             status.end()
             for text in loop.pop_notes():
                 writer.note(text)

@@ -45,6 +45,7 @@ from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_sample_rate_hz, to_dps
 from .checks import TimeCheck
 from .content import Recording, RecordingHead
 from .header import FORMAT_VERSION, GYRO_COLUMNS, MAX_LINE_BYTES, VERSION_KEY, format_number
+from .lines import sibling_hint
 
 #: time units of a time column and their length in s
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
@@ -93,8 +94,11 @@ def _normal(name):
 def _lines(path):
     """(line number, text) of the file ``path`` (gzip when it starts with the gzip magic),
     line ends dropped, each line at most MAX_LINE_BYTES bytes and UTF-8."""
-    with open(path, "rb") as raw:
-        zipped = raw.read(2) == b"\x1f\x8b"
+    try:
+        with open(path, "rb") as raw:
+            zipped = raw.read(2) == b"\x1f\x8b"
+    except OSError as exc:
+        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
     opener = gzip.open if zipped else open
     try:
         with opener(path, "rb") as fh:
