@@ -51,7 +51,7 @@ th { background: #f2f2f2; text-align: left; } td.num { text-align: right; font-f
 .figures { display: grid; grid-template-columns: repeat(auto-fit, minmax(320px, 1fr)); gap: 12px; }
 .warnings li { margin: 4px 0; } .warnings { background: #fff6e0; border: 1px solid #e0b050; padding: 8px 8px 8px 28px; }
 .ok { background: #eaf6ea; border: 1px solid #8c8; padding: 8px; } .small { font-size: 0.9em; color: #555; }
-.scroll { overflow-x: auto; }
+.scroll { overflow-x: auto; } code { white-space: nowrap; }
 """
 
 
