@@ -156,3 +156,13 @@ def test_given_rate_without_time_column_and_gzip_input(tmp_path, capsys):
     _check_same(rec, gyro)
     assert main(["convert", str(src), "--out", str(dst), "--unit", "dps", "--sample-rate-hz", "250"]) == 2  # exists
     assert "--force" in capsys.readouterr().err
+
+
+def test_units_stated_by_name_suffixes(tmp_path, capsys):
+    """``time_ms`` and ``gyro_x_dps``: no --unit, no inference."""
+    rows = "\n".join(f"{1000 + 10 * i},{i % 3},{-(i % 5)},0.5" for i in range(N))
+    rc, dst = _convert(tmp_path, "time_ms,gyro_x_dps,gyro_y_dps,gyro_z_dps\n" + rows + "\n")
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.gyro_unit == "dps" and rec.sample_rate_hz == 100 and rec.header["time_origin"] == "1000 ms (time_ms)"
+    assert "(as its name states" in capsys.readouterr().err

@@ -141,17 +141,22 @@ def _pick(names, path, columns, time_unit):
     else:
         gyro = [_gyro_column(normal, names, axis, path) for axis in AXES]
         time = _time_column(normal, gyro)
-    units = {normal[i][1] or (GYRO_NAME.fullmatch(normal[i][0]) or {"unit": None})["unit"] for i in gyro} - {None}
-    units = {_UNIT_WORDS.get(u, u) for u in units}
+    units = {_name_unit(normal[i], GYRO_NAME) for i in gyro} - {None}
     if len(units) > 1:
         raise RecordingError(f"{path}: the gyro columns state different units ({', '.join(sorted(units))})")
     stated = units.pop() if units else None
-    unit = time_unit
-    if time is not None and unit is None:
-        key, bracket = normal[time]
-        match = TIME_NAME.fullmatch(key)
-        unit = bracket or (match and (_UNIT_WORDS.get(match["unit"] or "") or _WORD_UNITS.get(match["word"])))
+    unit = time_unit or (None if time is None else _name_unit(normal[time], TIME_NAME))
     return time, (unit if unit in TIME_UNITS else None), gyro, stated
+
+
+def _name_unit(normal, pattern):
+    """The unit a column's name (as :func:`_normal` gives it) states: in brackets, as the unit at
+    the end of its ``pattern`` (``gyro_x_dps``, ``time_ms``), or by its word (``millis``); else None."""
+    key, bracket = normal
+    match = pattern.fullmatch(key)
+    if bracket or match is None:
+        return bracket
+    return _UNIT_WORDS.get(match["unit"] or "") or _WORD_UNITS.get(match.groupdict().get("word"))
 
 
 def _column_index(text, names, path):
@@ -179,9 +184,8 @@ def _gyro_column(normal, names, axis, path):
 
 def _time_column(normal, gyro):
     """The time column: the first whose name states its unit, else the first named like a time; None without one."""
-    candidates = [i for i, (key, unit) in enumerate(normal) if i not in gyro and TIME_NAME.fullmatch(key)]
-    stated = [i for i in candidates if normal[i][1] in TIME_UNITS or TIME_NAME.fullmatch(normal[i][0])["unit"]
-              or TIME_NAME.fullmatch(normal[i][0])["word"] in _WORD_UNITS]
+    candidates = [i for i, (key, _) in enumerate(normal) if i not in gyro and TIME_NAME.fullmatch(key)]
+    stated = [i for i in candidates if _name_unit(normal[i], TIME_NAME) in TIME_UNITS]
     return (stated or candidates or [None])[0]
 
 
