@@ -175,11 +175,12 @@ def test_rows_and_the_status_line_on_one_terminal_never_share_a_line(monkeypatch
     monkeypatch.setattr(sys, "stdout", screen.file)
     monkeypatch.setattr(sys, "stderr", screen.file)
     monkeypatch.setattr(live, "STATUS_INTERVAL_S", 0.0)
-    code = main(["run", "--source", "sim:seed=1,duration=2.5", "--udp", "127.0.0.1:9", "--rows"])  # paced: many reads
+    code = main(["run", "--source", "sim:seed=1,duration=1.2", "--calibration-s", "0.2", "--udp", "127.0.0.1:9",
+                 "--rows"])  # paced: many reads
     lines = screen.text().splitlines()
     assert code == 0
     status = [line for line in lines if "samples/s" in line]
     rows = [line for line in lines if re.fullmatch(r"[0-9.]+(,-?[0-9.e-]+){3}", line)]
-    assert len(status) > 5 and len(rows) == 10, lines  # 2.5 s at 20 Hz after the 2-s calibration
+    assert len(status) > 5 and len(rows) == 20, lines  # 1.2 s at 20 Hz after the 0.2-s calibration
     for line in status:
         assert re.fullmatch(r" *[0-9.]+ samples/s \(nominal 100\), [a-z0-9 ,]+, CPU +[0-9.]+%", line), line
