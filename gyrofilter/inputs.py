@@ -14,9 +14,12 @@ The rules (docs/formats.md, section 8):
   one such as ``/dev/zero`` is refused), must be UTF-8, may nest at most :data:`MAX_JSON_DEPTH`
   levels, and hold no ``NaN``/``Infinity`` tokens and no key twice in one object.
 - **Quoting** user text in an error: at most :data:`MAX_QUOTE_CHARS` characters (:func:`quote`).
+- **A mistyped name** (a command, an option, a setting) is refused with the closest known one
+  (:func:`closest`, :func:`did_you_mean`): one rule for the command line and the Python settings.
 """
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import os
@@ -30,6 +33,9 @@ MAX_NUMBER_CHARS = 64
 MAX_JSON_BYTES = 16 * 1024 * 1024
 MAX_JSON_DEPTH = 32
 MAX_QUOTE_CHARS = 80
+
+#: how alike a mistyped name and a known one must be to be suggested (difflib's ratio; its own default cutoff)
+SUGGEST_RATIO = 0.6
 
 _INTEGER = re.compile(r"[+-]?[0-9]+")
 _DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # [0-9]: \d takes any script's digits
@@ -46,6 +52,24 @@ def quote(text, limit=MAX_QUOTE_CHARS):
     while len(repr(text[:keep])) > limit + 2:
         keep -= 1
     return f"{text[:keep]!r}... ({len(text)} characters)"
+
+
+def closest(word, names, also=None):
+    """``(ratio, name)``: the name of ``names`` most like ``word`` by difflib's ratio, taken when
+    the ratio is at least :data:`SUGGEST_RATIO` or ``also(name)`` holds; ``(0.0, None)`` when no
+    name is. The one rule of every "did you mean" (commands, options, settings)."""
+    best = (0.0, None)
+    for name in names:
+        ratio = difflib.SequenceMatcher(None, word, name).ratio()
+        if (ratio >= SUGGEST_RATIO or (also is not None and also(name))) and (best[1] is None or ratio > best[0]):
+            best = (ratio, name)
+    return best
+
+
+def did_you_mean(word, names):
+    """"; did you mean NAME?" for the name of ``names`` closest to ``word`` (:func:`closest`), else ""."""
+    name = closest(word, names)[1]
+    return f"; did you mean {name}?" if name is not None else ""
 
 
 def _bounds_text(low, high, low_open, high_open):

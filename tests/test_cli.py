@@ -15,6 +15,9 @@ from support import file_named_by_bytes
     (["replay", "REC", "--sample-rat", "3", "--outt", "x"], "gyrofilter replay", "; did you mean --out?"),
     (["replay", "REC", "-q"], "gyrofilter replay", "unrecognized arguments: -q"),
     (["--bogus"], "gyrofilter", "unrecognized arguments: --bogus"),
+    (["replya"], "gyrofilter", "unknown command 'replya'; did you mean replay?; the commands: replay, record,"),
+    (["--version", "convret", "x"], "gyrofilter", "unknown command 'convret'; did you mean convert?"),
+    (["frobnicate"], "gyrofilter", "unknown command 'frobnicate'; the commands: replay,"),
     (["simulate", "--duration", "x"], "gyrofilter simulate", "argument --duration: must be a plain decimal number"),
 ])
 def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, prog, said, capsys):

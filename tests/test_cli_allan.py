@@ -57,6 +57,18 @@ def test_allan_json_kalibr_and_plot(static_recording, tmp_path, capsys):
     assert "deg/sqrt(h)" in printed and "deg/sqrt(s)" in printed and "not resolved" in printed
 
 
+def test_the_console_table_fits_100_columns(static_recording, capsys):
+    """Issue 38: the table was 185 columns wide, unreadable on an 80- or 120-column terminal. Every
+    line of stdout now fits 100 (the full table, every interval, is --json's); the widest
+    labels: a 99.99 % interval, and unresolved terms (quantization, bias instability) with bounds."""
+    path, _ = static_recording
+    assert main(["allan", path, "--confidence", "0.9999"]) == 0
+    printed = capsys.readouterr().out
+    widest = max(printed.splitlines(), key=len)
+    assert len(widest) <= 100, (len(widest), widest)
+    assert "deg/sqrt(h)" in printed and "< " in printed and "--json" in printed
+
+
 def test_allan_one_axis(static_recording, tmp_path):
     path, _ = static_recording
     out = tmp_path / "z.json"
@@ -261,7 +273,7 @@ def test_a_read_off_where_the_fit_resolves_nothing_is_labelled_an_upper_estimate
     assert "another estimator" in printed and "read-off" in doc["method"]["readoff"]
     seen = 0
     for axis, ax in doc["axes"].items():
-        block = printed.split(f"  axis {axis}:\n")[1].split("  axis ")[0]
+        block = " ".join(printed.split(f"  axis {axis}:\n")[1].split("  axis ")[0].split())  # wrapped lines joined
         for t in TERMS:
             key, sym = JSON_KEY[t], TERM_SYMBOL[t]
             disagree = ax["coefficients"][key] is None and ax["readoff"][key]["resolved"]

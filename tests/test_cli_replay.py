@@ -23,6 +23,31 @@ def test_replay_without_argument_filters_the_bundled_recording(capsys):
         assert (raw_std - half) / (filt_std + half) <= ratio <= (raw_std + half) / (filt_std - half) and ratio > 2
 
 
+def test_the_bundled_recordings_figure_is_titled_by_its_name_not_the_package_path(tmp_path, monkeypatch, capsys):
+    """Issue 38: ``replay --plot`` titled the figure with the absolute path of the installed package."""
+    import gyrofilter.plots
+
+    titles = []
+
+    def plot_filtered(path, raw, filtered, title):
+        titles.append(title)
+        open(path, "wb").close()
+
+    monkeypatch.setattr(gyrofilter.plots, "plot_filtered", plot_filtered)
+    monkeypatch.setattr(gyrofilter.plots, "check_figure_path", lambda path: None)
+    assert main(["replay", "--plot", str(tmp_path / "r.png")]) == 0
+    assert titles == ["mpu6050_static_100s.csv.gz (bundled) (raw minus start-up bias)"]
+
+
+def test_a_missing_csv_whose_gz_exists_names_it(tmp_path, capsys):
+    """Issue 38: a .csv/.csv.gz mix-up said only "No such file"."""
+    write_recording(tmp_path / "rec.csv.gz", Recording.from_dps(np.zeros((10, 3)), 100.0))
+    assert main(["replay", str(tmp_path / "rec.csv")]) == 2
+    assert capsys.readouterr().err.rstrip().endswith(f"No such file or directory; there is {tmp_path / 'rec.csv.gz'}")
+    assert main(["convert", str(tmp_path / "rec.csv"), "--out", str(tmp_path / "o.csv")]) == 2
+    assert f"; there is {tmp_path / 'rec.csv.gz'}" in capsys.readouterr().err
+
+
 def test_replay_out_writes_the_filtered_series(tmp_path, capsys):
     rng = np.random.default_rng(0)
     src = tmp_path / "in.csv"

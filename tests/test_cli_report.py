@@ -72,6 +72,15 @@ def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
         assert f"<b>{finding['effect']}</b> on <b>{finding['axis']}</b>" in text
         # every parameter with the console's digits: enough that an interval's ends differ
         assert html.escape(params_text(finding, sep=" = ")) in text, finding
+    # issue 38: two white-noise levels side by side (Allan N, gap ARW) said why; one meaning per word:
+    # "quantization" is the Allan Q (deg), the gap's step of the recorded unit is the "LSB step" (deg/s)
+    from gyrofilter.view.report import WHITE_LEVELS
+
+    allan_at, gap_at = text.index("<h2>Allan deviation and noise coefficients"), text.index("<h2>What the baseline")
+    assert allan_at < gap_at  # "the Allan N above"
+    gap_part = text[gap_at:text.index("<script", gap_at)]  # the page's text, not its data block's keys
+    assert html.escape(WHITE_LEVELS) in gap_part and "<th>LSB step (deg/s)</th>" in gap_part
+    assert "quantization" not in gap_part.replace(html.escape(WHITE_LEVELS), "")
 
 
 def test_the_file_is_self_contained(tmp_path, capsys):

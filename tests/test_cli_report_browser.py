@@ -42,6 +42,10 @@ def test_chromium_opens_the_report(browser, tmp_path, capsys, monkeypatch, name)
         assert svg.is_displayed() and size["width"] > 250 and size["height"] > 150
     # the page is no wider than the window (the tables of long coefficients scroll in their box)
     assert browser.execute_script("return document.documentElement.scrollWidth") <= 1280
+    # issue 38: a command named in the text ("gap --json" in the footer) broke across two lines
+    broken = browser.execute_script("return [...document.querySelectorAll('code')]"
+                                    ".filter((c) => c.getClientRects().length > 1).map((c) => c.textContent)")
+    assert broken == []
     shot = os.environ.get("GYROFILTER_REPORT_SCREENSHOT")
     if shot and name == "mpu6050_static_655s":
         browser.save_screenshot(shot)

@@ -2,12 +2,17 @@
 warning for a view open to the network, and a paced replay watched by 16 stream clients (three
 never read) while requests that must be refused come in: the run writes exactly the rows that
 `replay --out` writes, and a client that reads gets every one of them."""
+import ipaddress
+import os
+import re
 import socket
+import sys
+import threading
 
 import numpy as np
 import pytest
 
-from gyrofilter.cli import main
+from gyrofilter.cli import live, main
 from gyrofilter.recording import read_recording
 from support import REPO
 from support.live import EventReader, StalledClient, request, start_run, status, wait_for
@@ -51,6 +56,15 @@ def test_a_view_open_to_the_network_says_so_in_one_warning_line(tmp_path, capsys
     warnings = [line for line in err.splitlines() if "warning" in line]
     assert len(warnings) == 1 and "anyone on the network can watch" in warnings[0]
     assert "live view http://0.0.0.0:" in err  # the summary
+    # issue 38: only the port was said; now the addresses to open, this machine's own last
+    opened = [line for line in err.splitlines() if line.startswith("gyrofilter run: live view on ")]
+    assert len(opened) == 1, err
+    urls = opened[0].removeprefix("gyrofilter run: live view on ").split(", ")
+    port = warnings[0].split(", port ")[1].split(":")[0]
+    assert urls[-1] == f"http://127.0.0.1:{port}/"
+    for url in urls:
+        host = url.removeprefix("http://").rsplit(":", 1)[0]
+        assert url.endswith(f":{port}/") and not ipaddress.ip_address(host).is_unspecified, url
 
 
 def test_sixteen_clients_and_hostile_requests_leave_the_rows_as_replay_writes_them(tmp_path, capsys):
@@ -104,3 +118,69 @@ def test_a_run_that_fails_is_one_error_line_with_serve_and_udp(tmp_path, capsys)
     captured = capsys.readouterr()
     assert code == 2 and captured.out == ""
     assert len(captured.err.splitlines()) == 1 and "missing.csv" in captured.err, captured.err
+
+
+class _Terminal:
+    """A real pseudo-terminal (os.openpty) as a stream of the command: ``file`` is its side a
+    program writes to (isatty() is True), :meth:`text` what appeared on the screen side, read
+    while the command writes so that it never blocks."""
+
+    def __init__(self):
+        self.master, slave = os.openpty()
+        self.file = os.fdopen(slave, "w", encoding="utf-8")
+        self._chunks = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self):
+        while True:
+            try:
+                data = os.read(self.master, 65536)
+            except OSError:  # the other side closed
+                return
+            if not data:
+                return
+            self._chunks.append(data)
+
+    def text(self):
+        self.file.close()
+        self._reader.join(5)
+        os.close(self.master)
+        return b"".join(self._chunks).decode("utf-8").replace("\r\n", "\n")  # the terminal's own line ends
+
+
+@pytest.mark.parametrize("asked", [[], ["--rows"], ["--out", "-"]])
+def test_on_a_terminal_the_view_shows_the_rows_and_its_address_stays_in_sight(monkeypatch, capsys, asked):
+    """Issue 38: with --serve on a terminal, 20 rows a second scrolled the line that says where
+    the view is out of sight at once. Now the rows go to the terminal only when asked."""
+    screen = _Terminal()
+    monkeypatch.setattr(sys, "stdout", screen.file)
+    code = main(["run", "--source", "sim:seed=1,realtime=0,duration=3", "--serve", "127.0.0.1:0", "--quiet", *asked])
+    shown, err = screen.text(), capsys.readouterr().err
+    assert code == 0
+    assert "gyrofilter run: live view on http://127.0.0.1:" in err
+    rows = [line for line in shown.splitlines() if line and not line.startswith("#") and line != "t,gx,gy,gz"]
+    if asked:
+        assert len(rows) == 20 and "rows are not printed" not in err  # 3 s at 20 Hz, calibration included
+    else:
+        assert shown == "" and "the rows are not printed on this terminal (the live view shows them); --rows" in err
+
+
+def test_rows_and_the_status_line_on_one_terminal_never_share_a_line(monkeypatch):
+    """Issue 38: the status line (stderr, rewritten in place with \\r) and the rows (stdout) on one
+    terminal gave "CPU 66.9%# calibrated: bias...". Where rows are printed on the terminal, the
+    status comes as whole lines between them: each is a whole line of its own (no \r, no row in it).
+    A status at every read (interval 0), so that there are many."""
+    screen = _Terminal()
+    monkeypatch.setattr(sys, "stdout", screen.file)
+    monkeypatch.setattr(sys, "stderr", screen.file)
+    monkeypatch.setattr(live, "STATUS_INTERVAL_S", 0.0)
+    code = main(["run", "--source", "sim:seed=1,duration=1.2", "--calibration-s", "0.2", "--udp", "127.0.0.1:9",
+                 "--rows"])  # paced: many reads
+    lines = screen.text().splitlines()
+    assert code == 0
+    status = [line for line in lines if "samples/s" in line]
+    rows = [line for line in lines if re.fullmatch(r"[0-9.]+(,-?[0-9.e-]+){3}", line)]
+    assert len(status) > 5 and len(rows) == 20, lines  # 1.2 s at 20 Hz after the 0.2-s calibration
+    for line in status:
+        assert re.fullmatch(r" *[0-9.]+ samples/s \(nominal 100\), [a-z0-9 ,]+, CPU +[0-9.]+%", line), line

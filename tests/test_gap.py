@@ -342,6 +342,18 @@ def test_cli_on_a_too_short_recording_says_so_and_prints_no_nan(tmp_path, capsys
     assert "nan" not in out and "no discrepancy computed (see the notes)" in out and "note:" in out
 
 
+def test_cli_without_json_prints_the_findings_and_writes_nothing(tmp_path, capsys):
+    """``gap REC`` alone (issue 38: it was refused for want of --json) prints and exits 0."""
+    from gyrofilter.cli import main
+
+    path = tmp_path / "still.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(3).normal(0, 0.1, (3000, 3)), 100.0))
+    assert main(["gap", str(path), "--sims", "4", "--bootstrap", "0"]) == 0
+    captured = capsys.readouterr()
+    assert f"{path}: " in captured.out and "  x: D " in captured.out and "--json OUT.json" in captured.err
+    assert sorted(os.listdir(tmp_path)) == ["still.csv"]
+
+
 def test_rad_per_s_at_1_hz_runs():
     """Another gyro: rad/s, 1 Hz, 3 h, with a step on z; the unit must not matter."""
     model = {"sample_rate_hz": 1.0, "gyro_unit": "rad/s",

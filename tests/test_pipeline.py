@@ -204,6 +204,7 @@ def test_state_does_not_grow_with_time():
         ({"fifo_depth": 2.5}, "fifo_depth"),
         ({"calibration_s": float("nan")}, "calibration_s"),
         ({"bogus": 1}, "unknown setting"),
+        ({"blok_len": 5}, r"unknown setting\(s\) blok_len; did you mean block_len\?; known: "),  # issue 38: as --set does
         ({"preset": "best"}, "unknown preset"),
         ({"kalman_noise": "sage"}, "kalman_noise"),
         ({"kalman_noise": "adaptive", "gain_min": 0.3}, "unstable .*1.009.* stable above 0.335"),

@@ -262,6 +262,25 @@ def test_simulated_source_equals_the_simulator_whatever_the_pacing():
     assert paced_src.header["simulated_seed"] == "11" and paced_src.header["gyro_unit"] == "lsb"
 
 
+def test_a_paced_simulation_starts_its_clock_at_its_first_sample():
+    """Issue 38: ``run --source sim`` reported 0.3 samples/s and then 390.7 (nominal 100): the
+    pacing clock started before the first block was simulated, so the time that took came out
+    as a backlog handed out at once. A first block that takes 3 s now delays the start instead."""
+    from gyrofilter.sources.simulated import SimulatedSource
+
+    clock = FakeClock()
+    src = SimulatedSource(seed=11, duration_s=10.0, sample_rate_hz=100.0, clock=clock, sleep=clock.sleep)
+    make_block = src._more
+
+    def slow_first_block():
+        clock.now += 3.0 if src.stats["samples"] == 0 and not len(src._buf) else 0.0
+        return make_block()
+
+    src._more = slow_first_block
+    first_two_reads = len(src.read()) + len(src.read())
+    assert first_two_reads <= 5, first_two_reads  # the 300 samples of those 3 s came out at once
+
+
 def test_unseeded_simulation_records_a_seed_that_repeats_it():
     a = open_source("sim:realtime=0,duration=1")
     seed = int(a.header["simulated_seed"])

@@ -7,8 +7,10 @@ own that installs chromium and chromium-driver). They skip with the reason when 
 driver or selenium is missing. ``GYROFILTER_LIVE_SCREENSHOT=docs/figures/live_view.png pytest -m
 browser`` also writes the README's screenshot (no assertion is made on its pixels).
 """
+import json
 import os
 import signal
+import time
 
 import numpy as np
 import pytest
@@ -48,6 +50,31 @@ def check_page(driver, port):
     assert driver.find_element("id", "connection").text == "live"
 
 
+def check_labels(driver):
+    """Issue 38: the Allan plot's "1e-3" overlapped its "1e-2 s", "1e1" was clipped, no axis had a
+    unit and tick labels mixed precisions (0.100 / 0.0500 / 0). Every text each figure draws is
+    listed by the page (canvas.dataset.labels, CSS px): inside its canvas, overlapping none of the
+    others, a title with its unit on both axes, and the tick labels of one axis with one number of
+    decimals. The Allan table's columns name their units."""
+    for canvas in ("plot-x", "plot-y", "plot-z", "plot-allan"):
+        element = driver.find_element("id", canvas)
+        boxes = json.loads(element.get_attribute("data-labels") or "[]")
+        w, h = (driver.execute_script(f"return arguments[0].{side};", element) for side in ("clientWidth", "clientHeight"))
+        assert boxes, canvas
+        for i, b in enumerate(boxes):
+            assert 0 <= b["x0"] < b["x1"] <= w and 0 <= b["y0"] < b["y1"] <= h, (canvas, b, w, h)
+            for other in boxes[:i]:
+                apart = b["x1"] <= other["x0"] or other["x1"] <= b["x0"] or b["y1"] <= other["y0"] or other["y1"] <= b["y0"]
+                assert apart, (canvas, b, other)
+        titles = {b["kind"]: b["text"] for b in boxes if b["kind"].endswith("title")}
+        assert titles["y-title"].endswith("(deg/s)") and titles["x-title"].endswith("(s)"), (canvas, titles)
+        if canvas != "plot-allan":
+            ticks = [b["text"] for b in boxes if b["kind"] == "tick" and b["y0"] < h - 35]  # the rate axis
+            assert len({len(t.partition(".")[2]) for t in ticks}) == 1, (canvas, ticks)
+    heads = [th.text for th in driver.find_elements("css selector", ".allan-table th")]
+    assert heads[:4] == ["τ (s)", "x (deg/s)", "y (deg/s)", "z (deg/s)"], heads
+
+
 def test_a_paced_replay_under_load(browser, tmp_path, capsys):
     """12 stream clients, 3 of which never read, and the browser: the run still writes the rows
     `replay --out` writes for the same file."""
@@ -66,6 +93,10 @@ def test_a_paced_replay_under_load(browser, tmp_path, capsys):
         shot = os.environ.get("GYROFILTER_LIVE_SCREENSHOT")
         if shot:
             browser.save_screenshot(shot)
+        check_labels(browser)
+        browser.set_window_size(820, 900)  # narrow: the labels must still fit and stay apart
+        time.sleep(0.5)  # the page redraws every 0.1 s after a resize
+        check_labels(browser)
         assert console_errors(browser) == []
         _, err = proc.communicate(timeout=120)
     finally:

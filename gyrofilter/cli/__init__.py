@@ -11,7 +11,6 @@ Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors and Ctrl-
 line on stderr and a non-zero exit code; a traceback is a bug.
 """
 import argparse
-import difflib
 import importlib
 import os
 import signal
@@ -20,6 +19,8 @@ import threading
 
 from .. import __version__
 from ..errors import GyroFilterError, one_line
+from ..inputs import closest, quote
+from ..inputs import did_you_mean as _did_you_mean
 
 # command name -> (module, one-line summary)
 COMMANDS = {
@@ -31,6 +32,7 @@ COMMANDS = {
     "gap": ("gyrofilter.cli.gap", "find what the baseline noise model gets wrong about a recording"),
     "arma": ("gyrofilter.cli.arma", "ARMA model of the bias (paper 003)"),
     "evaluate": ("gyrofilter.cli.evaluate", "compare filters on static, synthetic-motion and reference data"),
+    "convert": ("gyrofilter.cli.convert", "another tool's gyro log (CSV or text) as a recording"),
     "report": ("gyrofilter.cli.report", "one self-contained HTML report of a recording, to attach or compare"),
 }
 
@@ -67,19 +69,18 @@ class _Parser(_OneLineParser):
 
 def did_you_mean(parser, extras):
     """"; did you mean --out?" for the unknown option among ``extras`` (words of argv) that is
-    closest to an option of ``parser`` (difflib ratio without the dashes), else "". An option
-    qualifies when the ratio is at least 0.6 or when its words (split at "-") hold every word
-    typed, as a removed spelling's do: ``--rate`` -> ``--sample-rate-hz``."""
+    closest to an option of ``parser`` (:func:`gyrofilter.inputs.closest`, without the dashes),
+    else "". An option also qualifies when its words (split at "-") hold every word typed, as a
+    removed spelling's do: ``--rate`` -> ``--sample-rate-hz``."""
     known = {s.lstrip("-"): s for action in parser._actions for s in action.option_strings if s.startswith("--")}
-    best = (0.0, "")
+    best = (0.0, None)
     for word in extras:
         if word.startswith("-"):
             typed = word.split("=", 1)[0].lstrip("-")
-            for name, option in known.items():
-                ratio = difflib.SequenceMatcher(None, typed, name).ratio()
-                if ratio >= 0.6 or set(typed.split("-")) <= set(name.split("-")):
-                    best = max(best, (ratio, option))
-    return f"; did you mean {best[1]}?" if best[1] else ""
+            found = closest(typed, known, also=lambda name: set(typed.split("-")) <= set(name.split("-")))
+            if found[1] is not None and (best[1] is None or found[0] > best[0]):
+                best = found
+    return f"; did you mean {known[best[1]]}?" if best[1] is not None else ""
 
 
 def build_parser(command=None):
@@ -121,9 +122,10 @@ def _main(argv):
             stream.reconfigure(errors="backslashreplace")
     argv = sys.argv[1:] if argv is None else list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
-    if command not in COMMANDS:
-        command = None
     try:
+        if command is not None and command not in COMMANDS:
+            build_parser().error(f"unknown command {quote(command)}{_did_you_mean(command, COMMANDS)}; "
+                                 f"the commands: {', '.join(COMMANDS)}")
         parser = build_parser(command)
         args = parser.parse_args(argv)
         if args.command is None:

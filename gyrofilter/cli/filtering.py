@@ -3,14 +3,13 @@
 :class:`~gyrofilter.filter.pipeline.GyroFilter` they make, the refusals of what it cannot be fed,
 the saved calibration, and how a filtered row and the calibration note are written."""
 import argparse
-import difflib
 
 from ..errors import RecordingError, SettingsError
 from ..filter.pipeline import GyroFilter
 from ..filter.settings import SETTING_NAMES
 from ..filter.presets import DEFAULT_PRESET, PRESETS
 from ..filter.tempcomp import coefficients_from_model
-from ..inputs import parse_json, quote
+from ..inputs import did_you_mean, parse_json, quote
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT
 from ..sim.model import load_model, validate_model
 from .console import bias_text
@@ -105,9 +104,7 @@ def _parse_setting(text):
     if name in _NOT_SETTINGS:
         raise SettingsError(f"--set {name}: not a filter setting; {_NOT_SETTINGS[name]}")
     if name not in SETTING_NAMES:
-        close = difflib.get_close_matches(name, SETTING_NAMES, n=1)
-        raise SettingsError(f"--set {quote(name)}: not a filter setting{f'; did you mean {close[0]}?' if close else ''} "
-                            "(--help lists them)")
+        raise SettingsError(f"--set {quote(name)}: not a filter setting{did_you_mean(name, SETTING_NAMES)} (--help lists them)")
     if value.strip() in ("True", "False"):  # Python's spelling of a bool, as the settings' errors print it
         return name, value.strip() == "True"
     for candidate in (value, f"[{value}]") if "," in value else (value,):

@@ -1,10 +1,11 @@
-"""``gyrofilter gap RECORDING --json OUT.json [--report DIR] [--seed N] [--sims N] [--bootstrap N]``.
+"""``gyrofilter gap RECORDING [--json OUT.json] [--report DIR] [--seed N] [--sims N] [--bootstrap N]``.
 
 Finds what the baseline noise model (constant bias + white noise + quantization) gets wrong
 about a recording, names the cause (an effect of the effect table), extends the model and
 measures the gain, with a 95 % interval for every parameter (``--bootstrap N`` runs per axis with
-findings; 0: no intervals); writes the gap report (docs/formats.md) to OUT.json and, with
-``--report``, a Markdown report with PNG figures. A one-line summary per finding goes to stdout;
+findings; 0: no intervals); prints the findings and, with ``--json``, writes the gap report
+(docs/formats.md) to OUT.json; with ``--report``, a Markdown report with PNG figures. A one-line
+summary per finding goes to stdout;
 progress goes to stderr (on a terminal, or with ``--progress``).
 
 Outputs that exist are refused unless ``--force``, and an output that is the recording always,
@@ -33,7 +34,7 @@ MAX_SIMS = 1000  # baseline simulations; the default is 12-24, and the spread is
 def add_arguments(parser):
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
                         help="recording file (format v1, .csv or .csv.gz); several files or globs with --fleet")
-    parser.add_argument("--json", metavar="OUT.json", type=options.file_name, help="write the gap report (JSON) here (required without --fleet)")
+    parser.add_argument("--json", metavar="OUT.json", type=options.file_name, help="also write the gap report (JSON, every number) here")
     parser.add_argument("--report", metavar="DIR", type=options.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
     parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
@@ -79,11 +80,10 @@ def run(args):
         batch.refuse_single_file_outputs(args, ["--json", "--report"])
         return batch.run(args, FleetSettings("gap", seed=args.seed, sims=args.sims), paths)
     args.recording = batch.single(args, paths)
-    if args.json is None:
-        raise SettingsError("--json OUT.json is required (or --fleet DIR for several recordings)")
     report_files = [os.path.join(args.report, name) for name in gap_report.report_file_names()] if args.report else []
-    outputs.check_output_folder(args.report, "--report", [args.json])
-    outputs.check_outputs([args.json] + report_files, [args.recording], args.force)
+    json_files = [args.json] if args.json is not None else []
+    outputs.check_output_folder(args.report, "--report", json_files)
+    outputs.check_outputs(json_files + report_files, [args.recording], args.force)
     show = args.progress or sys.stderr.isatty()
     t0 = time.perf_counter()
 
@@ -96,11 +96,13 @@ def run(args):
     rec, report = analyse(args.recording, seed=args.seed, sims=args.sims, bootstrap=args.bootstrap,
                           warn=console.say_warning, progress=progress)
     with contextlib.ExitStack() as files:
-        outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
+        if args.json is not None:
+            outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
         if args.report:
             progress("report")
             gap_report.write_report(report, rec, files.enter_context(outputs.replacing_in(args.report)), seed=args.seed)
-    console.say(f"wrote {args.json}" + (f" and {os.path.join(args.report, gap_report.REPORT_NAME)}" if args.report else ""))
+    written = json_files + ([os.path.join(args.report, gap_report.REPORT_NAME)] if args.report else [])
+    console.say(f"wrote {' and '.join(written)}" if written else "(every number of the analysis: --json OUT.json)")
     d = report.get("discrepancy")
     gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}" if d else
             "no discrepancy computed (see the notes)")

@@ -200,13 +200,15 @@ class StopSignals:
 
 class Status:
     """A status line on stderr at most once per ``STATUS_INTERVAL_S``: the rate achieved beside the
-    source's nominal ``sample_rate_hz``, losses, CPU use."""
+    source's nominal ``sample_rate_hz``, losses, CPU use. On a terminal one line rewritten in
+    place, unless ``whole_lines`` (rows are printed on that terminal too: a line left open there
+    would take the next row into it), then a whole line each time, as to a file."""
 
-    def __init__(self, enabled, sample_rate_hz, stream=None):
+    def __init__(self, enabled, sample_rate_hz, stream=None, whole_lines=False):
         self.enabled = enabled
         self.sample_rate_hz = sample_rate_hz
         self.stream = stream or sys.stderr
-        self.tty = self.stream.isatty()
+        self.tty = self.stream.isatty() and not whole_lines
         self._wall = time.monotonic()
         self._cpu = time.process_time()
         self._samples = 0
@@ -215,9 +217,13 @@ class Status:
     def due(self):
         return self.enabled and time.monotonic() - self._wall >= STATUS_INTERVAL_S
 
-    def show(self, samples, text):
-        """``samples`` = total so far; ``text`` = the rest of the line."""
+    def show(self, samples, text, first_sample_wall=None):
+        """``samples`` = total so far; ``text`` = the rest of the line; ``first_sample_wall``: when
+        (time.monotonic) the first sample came, where the first rate is measured from: a source's
+        start-up (a simulator's first block, a device's reset) is no rate it delivers at."""
         wall, cpu = time.monotonic(), time.process_time()
+        if self._samples == 0 and first_sample_wall is not None:
+            self._wall = max(self._wall, first_sample_wall)
         dt = max(wall - self._wall, 1e-9)
         rate = (samples - self._samples) / dt
         cpu_pct = 100.0 * (cpu - self._cpu) / dt
@@ -255,6 +261,7 @@ class LiveLoop:
         self.sample_rate_hz = source.sample_rate_hz
         self.t_col = source.columns.index("t")
         self.first_t = self.last_t = None
+        self.first_wall = None  # when (time.monotonic) the first sample came
         self._t_end = None  # samples at t >= this are beyond the duration (half a sample of margin)
         self.samples = 0
         self.ended = None  # SourceEnded, DeviceError or DURATION_REACHED
@@ -284,6 +291,7 @@ class LiveLoop:
             t = rows[:, self.t_col]
             if self.first_t is None:
                 self.first_t = float(t[0])
+                self.first_wall = time.monotonic()
                 if self.duration_s is not None:
                     self._t_end = self.first_t + self.duration_s - 0.5 / self.sample_rate_hz
             if self._t_end is not None:

@@ -12,7 +12,7 @@ import errno
 import socket
 
 from ..errors import SettingsError
-from ..view.address import is_loopback, is_wildcard, resolve, split_address
+from ..view.address import is_loopback, is_wildcard, loopback, machine_addresses, resolve, split_address, url
 from ..view.server import LiveServer
 from ..view.sink import RunInfo, Step
 from ..view.udp import FORMATS, UdpSender
@@ -35,10 +35,12 @@ class Outlets:
     """The outlets a run was given (none, the live view, a UDP stream, or both); see the module
     docstring. ``calibration_loaded``: the filter starts from a saved calibration."""
 
-    def __init__(self, outlets, calibration_loaded, announcements=()):
+    def __init__(self, outlets, calibration_loaded, announcements=(), show_rows=""):
         self._outlets = outlets
         self._calibration_loaded = calibration_loaded
         self._announcements = list(announcements)
+        #: what shows the rows besides the output, in words ("the live view"), "" for nothing
+        self.show_rows = show_rows
 
     @classmethod
     def open(cls, args):
@@ -56,14 +58,15 @@ class Outlets:
             outlets.append(UdpSender(*udp, args.udp_format or FORMATS[0], args.udp))
         if serve is not None:
             try:
-                server, line = _open_server(args.serve, *serve)
+                server, lines = _open_server(args.serve, *serve)
             except BaseException:
                 for outlet in outlets:
                     outlet.close()
                 raise
             outlets.append(server)
-            announcements.append(line)
-        return cls(outlets, args.calibration is not None, announcements)
+            announcements.extend(lines)
+        shown = [what for what, given in (("the live view", serve), ("the UDP stream", udp)) if given is not None]
+        return cls(outlets, args.calibration is not None, announcements, " and ".join(shown))
 
     def __enter__(self):
         return self
@@ -105,17 +108,23 @@ class Outlets:
 
 def _open_server(text, host, resolved):
     """The live view listening at ``text`` (--serve's [HOST:]PORT: ``host`` and its ``resolved``
-    (family, sockaddr)), and the line that tells the user where it is."""
+    (family, sockaddr)), and the lines that tell the user where it is: listening on every
+    interface (0.0.0.0), the addresses to open, this machine's first (:func:`machine_addresses`)."""
     family, sockaddr = resolved
     try:
         server = LiveServer(family, sockaddr, loopback_only=is_loopback(host))
     except OSError as exc:
         raise SettingsError(f"--serve {text}: cannot listen there: {_why(exc)}") from None
     if is_loopback(host):
-        return server, f"gyrofilter run: live view on {server.url} (this machine only)"
+        return server, [f"gyrofilter run: live view on {server.url} (this machine only)"]
     where = "every network interface" if is_wildcard(host) else host
-    return server, (f"gyrofilter run: warning: the live view listens on {where}, port {server.address[1]}: anyone "
-                    "on the network can watch this sensor (read-only); use 127.0.0.1 to keep it to this machine")
+    port = server.address[1]
+    urls = [server.url]
+    if is_wildcard(host):
+        urls = [url(address, port) for address in machine_addresses(family)] + [url(loopback(family), port)]
+    return server, [f"gyrofilter run: warning: the live view listens on {where}, port {port}: anyone "
+                    "on the network can watch this sensor (read-only); use 127.0.0.1 to keep it to this machine",
+                    f"gyrofilter run: live view on {', '.join(urls)}"]
 
 
 _BIND_HINTS = {errno.EADDRINUSE: "another program uses this port; choose another, or 0 for any free port",

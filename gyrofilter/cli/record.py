@@ -91,7 +91,8 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
                     writer.flush()
                     last_flush, dirty = now, False
                 if status.due():
-                    status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost")
+                    status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost",
+                                loop.first_wall)
             status.end()
             for text in loop.pop_notes():
                 writer.note(text)

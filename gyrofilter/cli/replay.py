@@ -73,7 +73,7 @@ def run(args):
         # every output goes through replacing(): all land when the command succeeds, none when it fails
         if args.plot:
             plots.plot_filtered(files.enter_context(outputs.replacing(args.plot)), replay.raw_envelope,
-                                replay.filtered_envelope, title=f"{path} (raw minus start-up bias)")
+                                replay.filtered_envelope, title=f"{args.recording or BUNDLED + ' (bundled)'} (raw minus start-up bias)")
         saved = filtering.save_calibration(args.save_calibration, filt, files)
     console.print_warnings(head.warnings)
     warn_about_gaps(head, "the filter treats the samples as uniform", console.say_warning)

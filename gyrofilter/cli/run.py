@@ -1,12 +1,15 @@
 """gyrofilter run: filter a live source in real time.
 
 The filtered rates (deg/s, one row per block of the pipeline, ``t`` = time of the block's last
-sample on the sensor's clock) go to stdout, or to ``--out FILE``, as a format-v1 recording
+sample on the sensor's clock) go to stdout (``--out -``), or to ``--out FILE``, as a format-v1 recording
 (so ``gyrofilter run ... > out.csv`` is a readable recording too), whose header names the SOURCE
 as ``filtered_from`` (so ``replay`` refuses to filter it again) and whose last line is the
 note ``# end: why; N samples in, M filtered rows out``. A status line on stderr, at
 most once per second, shows the sample rate achieved, lost samples, rejected outliers and the
-CPU use of this process. Ctrl-C, SIGTERM or SIGHUP stops cleanly (exit 0). The --out file takes its name
+CPU use of this process. On a terminal the screen stays readable: with ``--serve`` or ``--udp``
+the rows are not printed there unless asked (``--rows`` or ``--out -``: they are watched in the
+view), so the line that says where the view is stays in sight; and where rows are printed on the
+terminal the status comes as whole lines between them, never inside one. Ctrl-C, SIGTERM or SIGHUP stops cleanly (exit 0). The --out file takes its name
 at its first flush with a filtered row (:class:`~gyrofilter.cli.live.LiveOutput`): a run that fails
 before it (the device failing, the calibration refused because the sensor moved, any error) leaves
 no file and an existing one (--force) as it was, so that the same command can be run again.
@@ -30,7 +33,9 @@ def add_arguments(parser):
         "stdout or to --out, a status line on stderr once per second."
     )
     live.add_source_arguments(parser)
-    parser.add_argument("--out", metavar="FILE", type=options.file_name, help="write the filtered rates to this recording (" + options.RECORDING_FILE_HELP + ") instead of stdout")
+    parser.add_argument("--out", metavar="FILE", type=options.file_name, help="write the filtered rates to this recording (" + options.RECORDING_FILE_HELP + ") instead of stdout; - for stdout")
+    parser.add_argument("--rows", action="store_true", help="print the rows on stdout also when it is a terminal and "
+                                                           "--serve or --udp show them (the default there: not printed)")
     options.add_force_argument(parser)
     parser.add_argument("--quiet", action="store_true", help="no status line")
     filtering.add_filter_arguments(parser)
@@ -38,7 +43,8 @@ def add_arguments(parser):
 
 
 class _TextOut:
-    """Recording format v1 as text on a stream (stdout), flushed by the caller."""
+    """Recording format v1 as text on a stream (stdout), flushed by the caller; with ``stream``
+    None the rows are only counted (a terminal whose rows a view shows)."""
 
     path = None  # no file to keep or remove after a failure
     write_failed = False  # an error writing stdout ends the command as it is
@@ -46,18 +52,24 @@ class _TextOut:
     def __init__(self, stream, header, columns):
         self.stream = stream
         self.rows_written = 0
-        self.stream.write(header_text(header, columns, "stdout"))
-        self.stream.flush()
+        self._write(header_text(header, columns, "stdout"))
+        self.flush()
+
+    def _write(self, text):
+        if self.stream is not None:
+            self.stream.write(text)
 
     def write(self, rows):
         self.rows_written += len(rows)
-        self.stream.write("".join(filtering.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
+        if self.stream is not None:
+            self._write("".join(filtering.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
 
     def note(self, text):
-        self.stream.write(note_line(text))
+        self._write(note_line(text))
 
     def flush(self):
-        self.stream.flush()
+        if self.stream is not None:
+            self.stream.flush()
 
     def close(self, failed):
         self.flush()
@@ -66,7 +78,7 @@ class _TextOut:
 
 def run(args):
     live.check_duration(args.duration)
-    outputs.check_outputs([args.out, args.save_calibration],
+    outputs.check_outputs([_out_file(args), args.save_calibration],
                           live.source_files(args.source) + [args.calibration, args.temp_model], args.force)
     with outlets.Outlets.open(args) as sinks:  # --serve, --udp: a bad value is refused before any output
         source = live.open_from_args(args)
@@ -97,12 +109,19 @@ def _run(args, source, sinks):
             out_header[key] = head[key]
     out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
     columns = list(COLUMNS)
-    if args.out:
-        writer = live.LiveOutput(args.out, out_header, columns, filtering.ROW_FORMATS, "filtered row")
+    out_file = _out_file(args)
+    rows_on_terminal = out_file is None and sys.stdout.isatty()
+    if out_file:
+        writer = live.LiveOutput(out_file, out_header, columns, filtering.ROW_FORMATS, "filtered row")
+    elif rows_on_terminal and sinks.show_rows and args.out is None and not args.rows:
+        writer = _TextOut(None, out_header, columns)
+        console.say(f"gyrofilter run: the rows are not printed on this terminal ({sinks.show_rows} shows them); "
+                    "--rows or --out - prints them, --out FILE keeps them")
+        rows_on_terminal = False
     else:
         writer = _TextOut(sys.stdout, out_header, columns)
     loop = live.LiveLoop(source, args.duration)
-    status = live.Status(not args.quiet, source.sample_rate_hz)
+    status = live.Status(not args.quiet, source.sample_rate_hz, whole_lines=rows_on_terminal)
     last_flush = time.monotonic()
     try:
         with loop:
@@ -125,13 +144,13 @@ def _run(args, source, sinks):
                     sinks.feed(rows[:, t_idx], gyro, temps, t_out, out, samples_in=loop.samples,
                                rows_out=writer.rows_written, source=source, filt=filt)
                 now = time.monotonic()
-                if now - last_flush >= live.FLUSH_INTERVAL_S or not args.out:
+                if now - last_flush >= live.FLUSH_INTERVAL_S or not out_file:
                     writer.flush()
                     last_flush = now
                 if status.due():
                     state = "calibrating" if filt.calibrating else f"{writer.rows_written} filtered rows"
                     status.show(loop.samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
-                                              f"rejected outliers {int(filt.rejected.sum())}")
+                                              f"rejected outliers {int(filt.rejected.sum())}", loop.first_wall)
             status.end()
             for text in loop.pop_notes():
                 writer.note(text)
@@ -153,7 +172,7 @@ def _run(args, source, sinks):
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
         f"  lost {source.stats.get('lost_samples', 0)} samples"
         + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else "")
-        + (f"\n  {args.out}: {left}" if left else "")
+        + (f"\n  {out_file}: {left}" if left else "")
         + ("\n  nothing filtered: it stopped inside the start-up calibration window "
            f"({filt.settings.calibration_s:g} s)" if nothing else ""),
         file=sys.stderr,
@@ -162,3 +181,8 @@ def _run(args, source, sinks):
         return live.EXIT_DISCONNECTED
     # a source that ended by itself before the first row is an error, as in replay; a user's stop is not
     return 2 if nothing and not loop.interrupted else 0
+
+
+def _out_file(args):
+    """The file of ``--out``, or None for stdout (no ``--out``, or ``--out -``)."""
+    return None if args.out in (None, "-") else args.out

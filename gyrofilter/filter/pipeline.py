@@ -26,7 +26,7 @@ from .hold import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
 from .calibration import Calibration, calibrate, calibration_samples
 from ..errors import CalibrationError, SampleError, SettingsError
-from ..inputs import check_number
+from ..inputs import check_number, did_you_mean
 from .presets import DEFAULT_PRESET, PRESETS
 from .samples import as_numbers, check_sample, check_samples, check_temperature
 from .settings import MAX_CALIBRATION_SAMPLES, SETTING_NAMES, FilterSettings
@@ -68,7 +68,8 @@ class GyroFilter:
             raise SettingsError(f"unknown preset {shown(preset)}; choose one of {', '.join(PRESETS)}")
         unknown = sorted(set(settings) - set(SETTING_NAMES))
         if unknown:
-            raise SettingsError(f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(SETTING_NAMES)}")
+            named = [f"{u}{did_you_mean(u, SETTING_NAMES)}" for u in unknown]
+            raise SettingsError(f"unknown setting(s) {', '.join(named)}; known: {', '.join(SETTING_NAMES)}")
         _check_calibration_argument(calibration, calibration_s)
         chosen = dict(PRESETS[preset])
         chosen.update(settings)

@@ -124,7 +124,7 @@ def check_header(header, where):
     if missing:
         raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
                              "'# gyrofilter-recording: 1', '# sample_rate_hz: RATE', '# gyro_unit: dps|rad/s|lsb' "
-                             "lines (docs/formats.md, section 1)")
+                             "lines (docs/formats.md, section 1); another tool's log: gyrofilter convert")
     version = header[VERSION_KEY]
     if version != FORMAT_VERSION:
         raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
@@ -163,4 +163,4 @@ def check_columns(names, where):
     if times:
         raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
                              "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
-                             "it as an extra column")
+                             "it as an extra column; another tool's log: gyrofilter convert")

@@ -6,6 +6,7 @@ read. Damaged gzip data are an error; a stream cut short (an interrupted recordi
 """
 from __future__ import annotations
 
+import os
 import zlib
 
 from ..errors import RecordingError
@@ -59,13 +60,23 @@ def _gzip_damage(path):
     return None
 
 
+def sibling_hint(path, exc):
+    """"; there is NAME" when ``exc`` says ``path`` does not exist but its sibling with or without
+    ``.gz`` does (``rec.csv`` for ``rec.csv.gz``, and the other way round), else ""."""
+    if not isinstance(exc, FileNotFoundError):
+        return ""
+    path = os.fspath(path)
+    sibling = path[:-3] if path.endswith(".gz") else path + ".gz"
+    return f"; there is {sibling}" if os.path.isfile(sibling) else ""
+
+
 def _byte_blocks(path, warnings):
     """The file's bytes in blocks of at most ``_READ_BYTES``, gunzipped (:func:`_gunzip`) when it
     starts with the gzip magic."""
     try:
         fh = open(path, "rb")
     except OSError as exc:
-        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
+        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
     with fh:
         raw = fh.read(_READ_BYTES)
         if raw[:2] == _GZIP_MAGIC:

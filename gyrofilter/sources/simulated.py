@@ -123,11 +123,11 @@ class SimulatedSource(Source):
                 pass
             n = min(len(self._buf), FAST_CHUNK_SAMPLES)
         else:
-            now = self._clock()
-            if self._start is None:
-                self._start = now
             if not len(self._buf):
                 self._more()
+            now = self._clock()
+            if self._start is None:  # paced from the first sample on, not from before its block was made
+                self._start = now
             if len(self._buf):
                 # sleep until the next sample is due, and at least POLL_S since the last read
                 wait = max(self._buf[0, 0] - (now - self._start), POLL_S - (now - self._last))

@@ -96,3 +96,42 @@ def is_wildcard(host):
         return ipaddress.ip_address(host).is_unspecified
     except ValueError:
         return False
+
+
+#: documentation addresses (RFC 5737, RFC 3849) that a UDP socket is connected to, to learn which
+#: address of this machine the default route goes out from: connecting a UDP socket sends nothing
+_PROBE = {socket.AF_INET: ("192.0.2.1", 9), socket.AF_INET6: ("2001:db8::1", 9)}
+
+
+def url(host, port):
+    """``http://HOST:PORT/``, an IPv6 address in brackets."""
+    return f"http://{f'[{host}]' if ':' in host else host}:{port}/"
+
+
+def loopback(family):
+    """This machine's own address in ``family``: 127.0.0.1 or ::1."""
+    return "::1" if family == socket.AF_INET6 else "127.0.0.1"
+
+
+def machine_addresses(family):
+    """The addresses of this machine in ``family`` (socket.AF_INET or AF_INET6) that another machine
+    would open a view listening on every interface at (0.0.0.0, ::): the one the default route
+    goes out from, else those its host name resolves to; loopback ones left out; [] when it has none."""
+    found = []
+    try:
+        with socket.socket(family, socket.SOCK_DGRAM) as probe:
+            probe.connect(_PROBE[family])
+            found.append(probe.getsockname()[0])
+    except (OSError, KeyError):
+        pass
+    if not found:
+        try:
+            found = [info[4][0] for info in socket.getaddrinfo(socket.gethostname(), None, family, socket.SOCK_STREAM)]
+        except (OSError, UnicodeError):
+            pass
+    addresses = []
+    for address in found:
+        address = address.split("%")[0]  # an IPv6 link-local address's zone
+        if address not in addresses and not ipaddress.ip_address(address).is_loopback:
+            addresses.append(address)
+    return addresses

@@ -36,6 +36,14 @@ _LONG_TEXT = 400  # characters of a header value the summary shows
 _NAMES = {"quantization": "quantization", "arw": "angle random walk", BIAS_INSTABILITY: "bias instability",
           "rrw": "rate random walk", RATE_RAMP: "rate ramp"}
 
+#: why the gap baseline's white level (ARW) and the Allan fit's N differ for one axis, said where both stand
+WHITE_LEVELS = ("Two white-noise levels, two meanings: the ARW here is the per-sample scatter of the noise faster "
+                "than about 0.5 s, over sqrt(sample rate): all that a white-noise-only model must reproduce, spectral "
+                "lines and colored noise included (the findings below name them); the Allan N above is the density "
+                "of the tau^-1/2 slope the Allan fit reads at cluster times where such fast noise has averaged out. "
+                "They agree for pure white noise. Likewise the LSB step here (deg/s) is the rounding of the recorded "
+                "unit, and the Allan Q above (deg) the quantization noise the Allan curve shows.")
+
 _STYLE = """
 body { font-family: sans-serif; margin: 0 auto; padding: 0 16px 32px; max-width: 1180px; color: #222; line-height: 1.4; }
 h1 { font-size: 1.5em; margin-top: 18px; } h2 { border-bottom: 1px solid #ccc; margin-top: 28px; } h3 { margin-bottom: 4px; }
@@ -44,7 +52,7 @@ th { background: #f2f2f2; text-align: left; } td.num { text-align: right; font-f
 .figures { display: grid; grid-template-columns: repeat(auto-fit, minmax(320px, 1fr)); gap: 12px; }
 .warnings li { margin: 4px 0; } .warnings { background: #fff6e0; border: 1px solid #e0b050; padding: 8px 8px 8px 28px; }
 .ok { background: #eaf6ea; border: 1px solid #8c8; padding: 8px; } .small { font-size: 0.9em; color: #555; }
-.scroll { overflow-x: auto; }
+.scroll { overflow-x: auto; } code { white-space: nowrap; }
 """
 
 
@@ -192,17 +200,17 @@ def _allan_figure(axis, ax):
 def _gap(data):
     g = data["gap"]
     out = ["<h2>What the baseline model misses (gap analysis)</h2>",
-           f"<p>As <code>gyrofilter gap</code> finds it: the baseline (constant bias + white noise + quantization) "
-           f"against {g.get('n_simulations', 0)} simulations of it (seed {_esc(data['options'].get('seed'))}); "
-           "D is the mean squared z-score of the record's features against the model's simulations, about 1 "
-           "where the model explains the record.</p>"]
+           f"<p>As <code>gyrofilter gap</code> finds it: the baseline (constant bias + white noise + rounding to "
+           f"the LSB step) against {g.get('n_simulations', 0)} simulations of it (seed "
+           f"{_esc(data['options'].get('seed'))}); D is the mean squared z-score of the record's features against "
+           f"the model's simulations, about 1 where the model explains the record. {WHITE_LEVELS}</p>"]
     disc = g.get("discrepancy") or {}
     rows = []
     for a in AXES:
         b = g["baseline"]["axes"][a]
         rows.append((a, _num(b.get("bias_dps")), _num(b.get("arw_dps_per_sqrt_hz")), _num(b.get("quantization_dps")),
                      _num(disc.get("before", {}).get(a)), _num(disc.get("after", {}).get(a))))
-    out.append(_table(["axis", "bias (deg/s)", "ARW (deg/s/sqrt(Hz))", "quantization (deg/s)", "D baseline",
+    out.append(_table(["axis", "bias (deg/s)", "ARW (deg/s/sqrt(Hz))", "LSB step (deg/s)", "D baseline",
                        "D extended"], rows, numeric_from=1))
     out.append("<h3>Findings</h3>")
     if not g["findings"]:

@@ -214,8 +214,8 @@ def write_report(report, rec, out_dir, *, seed=0):
              f"{report['duration_s']:.1f} s at {report['sample_rate_hz']:g} Hz; "
              f"{report.get('n_simulations', 0)} baseline simulations (seed {seed}); "
              f"runtime {report.get('runtime_s', float('nan')):.1f} s.", "",
-             "## Baseline (constant bias + white noise + quantization)", "",
-             "| axis | bias (deg/s) | ARW (deg/s/sqrt(Hz)) | quantization (deg/s) | discrepancy D before | after |",
+             "## Baseline (constant bias + white noise + rounding to the LSB step)", "",
+             "| axis | bias (deg/s) | ARW (deg/s/sqrt(Hz)) | LSB step (deg/s) | discrepancy D before | after |",
              "|---|---|---|---|---|---|"]
     disc = report.get("discrepancy", {})
     for a in AXES:

@@ -49,7 +49,7 @@
     body.textContent = "";
     a.tau_s.forEach((tau, i) => {
       const tr = document.createElement("tr");
-      const cells = [tau.toPrecision(3), ...a.adev_dps[i].map((v) => v.toExponential(2)),
+      const cells = [String(Number(tau.toPrecision(3))), ...a.adev_dps[i].map((v) => v.toExponential(2)),
         `${(100 * a.relative_error[i]).toFixed(0)} %`, String(a.pairs[i])];
       for (const text of cells) {
         const td = document.createElement("td");
@@ -96,10 +96,39 @@
     return out;
   }
 
+  // every text a figure draws goes through here: it is kept inside the canvas, a tick label that
+  // would overlap one drawn before it (titles first) is left out, and each one drawn is listed in
+  // canvas.dataset.labels ({text, kind, x0, y0, x1, y1} in CSS px) for the browser test to check
+  function labeller(canvas, ctx, w, h) {
+    const boxes = [];
+    canvas.dataset.labels = "[]";
+    return (text, x, y, align, baseline, kind) => {
+      const m = ctx.measureText(text);
+      const tw = m.width, th = (m.actualBoundingBoxAscent || 9) + (m.actualBoundingBoxDescent || 2);
+      let x0 = align === "right" ? x - tw : align === "center" ? x - tw / 2 : x;
+      let y0 = baseline === "bottom" ? y - th : baseline === "middle" ? y - th / 2 : y;
+      x0 = Math.min(Math.max(x0, 1), w - tw - 1); y0 = Math.min(Math.max(y0, 1), h - th - 1);
+      const box = { text, kind, x0, y0, x1: x0 + tw, y1: y0 + th };
+      if (boxes.some((b) => box.x0 < b.x1 + 2 && b.x0 < box.x1 + 2 && box.y0 < b.y1 && b.y0 < box.y1)) {
+        if (kind === "tick") return;
+      }
+      ctx.textAlign = "left"; ctx.textBaseline = "top";
+      ctx.fillText(text, x0, y0);
+      boxes.push(box);
+      canvas.dataset.labels = JSON.stringify(boxes);
+    };
+  }
+
+  // tick values of one step written with the same number of decimals (0.10, 0.05, 0.00)
+  function tickText(v, step) { return v.toFixed(Math.max(0, -Math.floor(Math.log10(step) + 1e-9))); }
+
+  // a power of ten as a tick label: plain from 0.001 to 1000, else 1e-5
+  function decade(e) { return e >= -3 && e <= 3 ? String(Number((10 ** e).toFixed(Math.max(0, -e)))) : `1e${e}`; }
+
   function drawAxis(canvas, a) {
     const { ctx, w, h } = fit(canvas);
     ctx.clearRect(0, 0, w, h);
-    const left = 58, right = 8, top = 8, bottom = 20;
+    const left = 58, right = 8, top = 18, bottom = 32;
     const width = w - left - right, height = h - top - bottom;
     const last = Math.max(state.rows.length ? state.rows[state.rows.length - 1][0] : -Infinity,
       state.raw.length ? state.raw[state.raw.length - 1][0] : -Infinity);
@@ -116,18 +145,20 @@
     ctx.font = "11px system-ui, sans-serif";
     ctx.lineWidth = 1;
     ctx.strokeStyle = GRID; ctx.fillStyle = TEXT;
+    const label = labeller(canvas, ctx, w, h);
+    label(`${AXES[a]}: rate (deg/s)`, 4, 3, "left", "top", "y-title");
+    label("sensor time (s)", w - right, h - 2, "right", "bottom", "x-title");
     const ys = niceStep(hi - lo, 6);
-    ctx.textAlign = "right"; ctx.textBaseline = "middle";
-    for (let v = Math.ceil(lo / ys) * ys; v <= hi; v += ys) {
+    for (let k = Math.ceil(lo / ys); k * ys <= hi; k++) {
+      const v = k * ys;
       ctx.beginPath(); ctx.moveTo(left, y(v)); ctx.lineTo(left + width, y(v)); ctx.stroke();
-      ctx.fillText(Math.abs(v) < ys / 1e6 ? "0" : v.toPrecision(3), left - 4, y(v));
+      label(tickText(k === 0 ? 0 : v, ys), left - 4, y(v), "right", "middle", "tick");
     }
     const xs = niceStep(state.windowS, 6);
-    ctx.textAlign = "center"; ctx.textBaseline = "top";
-    for (let t = Math.ceil(t0 / xs) * xs; t <= t1; t += xs) {
-      const x = left + (t - t0) / (t1 - t0) * width;
+    for (let k = Math.ceil(t0 / xs); k * xs <= t1; k++) {
+      const x = left + (k * xs - t0) / (t1 - t0) * width;
       ctx.beginPath(); ctx.moveTo(x, top); ctx.lineTo(x, top + height); ctx.stroke();
-      ctx.fillText(`${+t.toFixed(3)}`, x, top + height + 3);
+      label(tickText(k * xs, xs), x, top + height + 3, "center", "top", "tick");
     }
     for (const [points, color, lineWidth] of [[raw, RAW_COLOR, 1], [filt, COLORS[AXES[a]], 1.5]]) {
       if (!points.length) continue;
@@ -146,12 +177,12 @@
     ctx.clearRect(0, 0, w, h);
     const a = state.allan;
     ctx.font = "11px system-ui, sans-serif"; ctx.fillStyle = TEXT;
+    const label = labeller(canvas, ctx, w, h);
     if (!a || !a.tau_s.length) {
-      ctx.textAlign = "center"; ctx.textBaseline = "middle";
-      ctx.fillText("waiting for still data (9 cluster pairs at least)", w / 2, h / 2);
+      label("waiting for still data (9 cluster pairs at least)", w / 2, h / 2, "center", "middle", "note");
       return;
     }
-    const left = 44, right = 8, top = 8, bottom = 20;
+    const left = 48, right = 12, top = 18, bottom = 32;
     const width = w - left - right, height = h - top - bottom;
     const values = a.adev_dps.flat().filter((v) => v > 0);
     // at least one decade; no `|| fallback`: a top decade of 1e0 s is 0 (or -0), which is false
@@ -159,19 +190,24 @@
     const ly0 = Math.floor(Math.log10(Math.min(...values))), ly1 = Math.ceil(Math.log10(Math.max(...values)) + 1e-9);
     const X = (t) => left + (Math.log10(t) - lx0) / Math.max(1, lx1 - lx0) * width;
     const Y = (v) => top + (ly1 - Math.log10(v)) / Math.max(1, ly1 - ly0) * height;
+    label("Allan deviation (deg/s)", 4, 3, "left", "top", "y-title");
+    label("cluster time tau (s)", w - right, h - 2, "right", "bottom", "x-title");
+    AXES.forEach((name, i) => {
+      ctx.fillStyle = COLORS[name];
+      label(name, w - right - 14 * (AXES.length - i), 3, "left", "top", "legend");
+    });
+    ctx.fillStyle = TEXT;
     ctx.strokeStyle = GRID; ctx.lineWidth = 1;
-    ctx.textAlign = "center"; ctx.textBaseline = "top";
     for (let e = lx0; e <= Math.max(lx1, lx0 + 1); e++) {
       ctx.beginPath(); ctx.moveTo(X(10 ** e), top); ctx.lineTo(X(10 ** e), top + height); ctx.stroke();
-      ctx.fillText(`1e${e} s`, X(10 ** e), top + height + 3);
+      label(decade(e), X(10 ** e), top + height + 3, "center", "top", "tick");
     }
-    ctx.textAlign = "right"; ctx.textBaseline = "middle";
     for (let e = ly0; e <= Math.max(ly1, ly0 + 1); e++) {
       ctx.beginPath(); ctx.moveTo(left, Y(10 ** e)); ctx.lineTo(left + width, Y(10 ** e)); ctx.stroke();
-      ctx.fillText(`1e${e}`, left - 4, Y(10 ** e));
+      label(decade(e), left - 4, Y(10 ** e), "right", "middle", "tick");
     }
     AXES.forEach((name, i) => {
-      ctx.strokeStyle = COLORS[name]; ctx.fillStyle = COLORS[name]; ctx.lineWidth = 1.5;
+      ctx.strokeStyle = COLORS[name]; ctx.lineWidth = 1.5;
       ctx.beginPath();
       a.tau_s.forEach((t, k) => {
         const v = a.adev_dps[k][i];
@@ -179,8 +215,6 @@
         if (k === 0) ctx.moveTo(X(t), Y(v)); else ctx.lineTo(X(t), Y(v));
       });
       ctx.stroke();
-      ctx.textAlign = "left";
-      ctx.fillText(name, left + 6 + 14 * i, top + 8);
     });
   }
 

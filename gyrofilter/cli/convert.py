@@ -1,0 +1,48 @@
+"""``gyrofilter convert IN --out REC.csv.gz [--unit dps|rad/s|lsb] [--lsb-per-dps X] [--columns A,B,C[,D]]
+[--sample-rate-hz HZ] [--time-unit s|ms|us|ns]``: another tool's gyro log (a phone logger's CSV,
+a ROS bag export, an Arduino sketch's text) as a recording of format v1, the way to bring your
+own data to every other command. The reading rules are :mod:`gyrofilter.recording.foreign`'s;
+this module parses argv, writes the file whole (:func:`~gyrofilter.cli.outputs.replacing`) and
+says what it read.
+"""
+from .. import __version__
+from ..recording import write_recording
+from ..recording.foreign import TIME_UNITS, read_foreign
+from ..units import GYRO_UNITS
+from . import console, options, outputs
+
+
+def add_arguments(parser):
+    parser.add_argument("input", metavar="IN", help="the log: CSV or blank-separated text (gzip too), time and gyro columns")
+    parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name,
+                        help="output recording (" + options.RECORDING_FILE_HELP + ")")
+    parser.add_argument("--unit", choices=GYRO_UNITS, default=None,
+                        help="unit of the gyro columns (default: the one their names state, e.g. 'gyro_x (rad/s)'; "
+                             "never guessed)")
+    parser.add_argument("--lsb-per-dps", type=options.decimal, default=None, metavar="X",
+                        help="LSB per deg/s, with --unit lsb (MPU6050: 131 at +-250 deg/s)")
+    parser.add_argument("--columns", default=None, metavar="NAMES",
+                        help="the gyro's x,y,z columns, or time,x,y,z: names of the column row or 1-based numbers "
+                             "(default: found by their usual names, e.g. timestamp, gyro_x, wx, angular_velocity.x)")
+    options.add_sample_rate_argument(parser, help="sample rate in Hz (default: from the time column's median step; "
+                                                  "required without a time column)")
+    parser.add_argument("--time-unit", choices=tuple(TIME_UNITS), default=None,
+                        help="unit of the time column (default: the one its name states, else the first of s, ms, us, "
+                             "ns giving 5 Hz or more)")
+    options.add_force_argument(parser)
+
+
+def run(args):
+    outputs.check_outputs([args.out], [args.input], args.force)
+    columns = None if args.columns is None else [c.strip() for c in args.columns.split(",")]
+    foreign = read_foreign(args.input, unit=args.unit, lsb_per_dps=args.lsb_per_dps, columns=columns,
+                           sample_rate_hz=options.sample_rate_hz(args), time_unit=args.time_unit)
+    rec = foreign.recording
+    rec.header["converted_by"] = f"gyrofilter {__version__} convert"
+    with outputs.replacing(args.out) as tmp:
+        write_recording(tmp, rec)
+    for line in foreign.summary:
+        console.say(f"  {line}")
+    print(f"wrote {args.out}: {len(rec)} samples at {rec.sample_rate_hz:g} Hz ({rec.duration_s:g} s), "
+          f"gyro_unit {rec.gyro_unit}")
+    return 0

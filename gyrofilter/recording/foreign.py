@@ -1,0 +1,366 @@
+"""Another tool's gyro log as a recording of format v1 (``gyrofilter convert``).
+
+A phone logger's CSV (``timestamp,gyro_x,gyro_y,gyro_z`` in rad/s, time in ns), a ROS bag
+export (``%time,field.header.seq,...,field.angular_velocity.x,...``), an Arduino sketch's
+whitespace text of raw LSB: :func:`read_foreign` reads plain text of that kind (comma, semicolon,
+tab or blank separated, gzip too) and returns a :class:`~gyrofilter.recording.content.Recording`
+that :func:`~gyrofilter.recording.write_recording` writes.
+
+- **Columns.** The time and the three gyro columns are found by their usual names
+  (:data:`TIME_NAME`, :data:`GYRO_NAME`: ``t``/``time``/``timestamp``/``%time``/
+  ``seconds_elapsed``, ``gx``/``gyro_x``/``wx``/``omega_x``/``angular_velocity.x``, ``x``; case,
+  ``field.`` prefixes, ``.``/``-``/blanks and a unit in brackets do not matter), or given by
+  ``columns`` (names or 1-based numbers: three gyro columns x, y, z, or the time column and
+  then those three). Several candidates for one axis are refused: no guess picks a column.
+- **Unit.** The gyro unit is the one the caller gives or the one the column names state
+  (``Gyroscope x (rad/s)``, ``gyro_x_dps``); never guessed (a wrong one is a factor 57). The
+  values are written as they are, with their unit in the header (``gyro_unit``), so that
+  nothing is rounded.
+- **Time.** The time column's unit (s, ms, us, ns) is the caller's, the name's (``time_ms``,
+  ``millis``, ``%time`` of a ROS export in ns, ``seconds_elapsed``) or, failing both, the
+  first of s, ms, us, ns in which the typical step means :data:`MIN_INFERRED_RATE_HZ` or more
+  (a gyro logs at 5 Hz or faster), said in the summary. ``t`` counts from the first time stamp
+  (integer stamps are subtracted exactly: ns since 1970 keep every nanosecond); the first
+  stamp is kept in the header (``time_origin``). The rate is the caller's or 1 / the median
+  step; either way ``t`` is held to it as the reader holds a recording's
+  (:class:`~gyrofilter.recording.checks.TimeCheck`: every window of 1000 steps within 5 %), so
+  a file whose steps are not one rate is refused, naming the line. Without a time column the
+  caller gives the rate.
+- **Refusals** name the file, the line and the column: a cell that is not a plain decimal
+  number (:func:`~gyrofilter.inputs.is_plain_number`), a row of the wrong length, a time that does not increase,
+  a rate beyond +-100000 deg/s. Comment lines (``#``, ``//``) and blank lines are skipped and
+  counted; nothing else is dropped.
+"""
+from __future__ import annotations
+
+import gzip
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import RecordingError
+from ..inputs import check_number, is_plain_number, quote
+from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_sample_rate_hz, to_dps
+from .checks import TimeCheck
+from .content import Recording, RecordingHead
+from .header import FORMAT_VERSION, GYRO_COLUMNS, MAX_LINE_BYTES, VERSION_KEY, format_number
+from .lines import sibling_hint
+
+#: time units of a time column and their length in s
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+#: the slowest rate a time unit is inferred for: a gyro logs at 5 Hz or faster (the MPU6050's slowest is 3.9 Hz)
+MIN_INFERRED_RATE_HZ = 5.0
+#: a time column's name once normalised (:func:`_normal`), with its unit when the name states it
+TIME_NAME = re.compile(r"(?:header_)?(?P<word>t|time|times|timestamp|time_stamp|stamp|%time|seconds_elapsed|elapsed|"
+                       r"elapsed_time|seconds|secs|sec|millis|micros|nanos)(?:_(?P<unit>s|sec|ms|us|ns))?")
+#: a gyro column's name once normalised, its axis in ``axis``, an optional unit at the end
+GYRO_NAME = re.compile(r"(?:.*_)?(?:g|gyr|gyro|gyroscope|w|omega|angular_velocity|angularvelocity|rotation_rate|"
+                       r"rotationrate|rot|rate)_?(?P<axis>[xyz])(?:_(?P<unit>rad_?s|rad_per_s|dps|deg_?s|deg_per_s|lsb|raw))?")
+#: a bare axis name (``x``: the phone loggers' gyroscope files), taken where no gyro-named column exists
+BARE_AXIS = re.compile(r"(?P<axis>[xyz])")
+_WORD_UNITS = {"millis": "ms", "micros": "us", "nanos": "ns", "%time": "ns", "seconds_elapsed": "s", "seconds": "s",
+               "secs": "s", "sec": "s"}
+_UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s": "rad/s", "rad s^-1": "rad/s",
+               "deg/s": "dps", "dps": "dps", "°/s": "dps", "degs": "dps", "deg_s": "dps", "deg_per_s": "dps",
+               "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns"}
+_BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
+_COMMENT = ("#", "//")
+
+
+@dataclass
+class Foreign:
+    """What :func:`read_foreign` made: the ``recording`` (header and columns, ready to write)
+    and the ``summary``, sentences saying what was read and how (columns, units, rate, jitter)."""
+
+    recording: Recording
+    summary: list = field(default_factory=list)
+
+
+def _normal(name):
+    """A column name as the patterns match it, and the unit its brackets state (or None):
+    ``"Gyroscope x (rad/s)"`` -> ``("gyroscope_x", "rad/s")``, ``"field.angular_velocity.x"`` ->
+    ``("angular_velocity_x", None)``."""
+    name = name.strip().strip('"').strip()
+    unit = None
+    bracket = _BRACKET.search(name)
+    if bracket:
+        unit = _UNIT_WORDS.get(bracket.group(1).lower().replace(" ", ""), bracket.group(1))
+        name = name[:bracket.start()]
+    key = re.sub(r"[^a-z0-9%]+", "_", name.lower()).strip("_")
+    return key.removeprefix("field_"), unit
+
+
+def _lines(path):
+    """(line number, text) of the file ``path`` (gzip when it starts with the gzip magic),
+    line ends dropped, each line at most MAX_LINE_BYTES bytes and UTF-8."""
+    try:
+        with open(path, "rb") as raw:
+            zipped = raw.read(2) == b"\x1f\x8b"
+    except OSError as exc:
+        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
+    opener = gzip.open if zipped else open
+    try:
+        with opener(path, "rb") as fh:
+            number = 0
+            while True:
+                data = fh.readline(MAX_LINE_BYTES + 1)
+                if not data:
+                    return
+                number += 1
+                if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
+                    raise RecordingError(f"{path}: line {number}: longer than {MAX_LINE_BYTES} bytes, not a line of a log")
+                try:
+                    yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n")
+                except UnicodeDecodeError:
+                    raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
+    except (EOFError, gzip.BadGzipFile, OSError) as exc:
+        if isinstance(exc, RecordingError):
+            raise
+        raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
+
+
+def _splitter(line):
+    """How the cells of ``line`` are split: at commas, else semicolons, else at runs of blanks and tabs."""
+    for sep in (",", ";"):
+        if sep in line:
+            return lambda text, sep=sep: [c.strip().strip('"') for c in text.split(sep)]
+    return lambda text: text.split()
+
+
+def _pick(names, path, columns, time_unit):
+    """(index of the time column or None, its unit or None, [indices of x, y, z], unit the names
+    state or None), from the column ``names`` by :data:`TIME_NAME`/:data:`GYRO_NAME` or from ``columns``."""
+    normal = [_normal(n) for n in names]
+    if columns is not None:
+        chosen = [_column_index(c, names, path) for c in columns]
+        if len(chosen) not in (3, 4) or len(set(chosen)) != len(chosen):
+            raise RecordingError(f"--columns takes 3 different columns (gyro x, y, z) or 4 (time, x, y, z), got {len(chosen)}")
+        gyro = chosen[-3:]
+        time = chosen[0] if len(chosen) == 4 else _time_column(normal, gyro)
+    else:
+        gyro = [_gyro_column(normal, names, axis, path) for axis in AXES]
+        time = _time_column(normal, gyro)
+    units = {_name_unit(normal[i], GYRO_NAME) for i in gyro} - {None}
+    if len(units) > 1:
+        raise RecordingError(f"{path}: the gyro columns state different units ({', '.join(sorted(units))})")
+    stated = units.pop() if units else None
+    unit = time_unit or (None if time is None else _name_unit(normal[time], TIME_NAME))
+    return time, (unit if unit in TIME_UNITS else None), gyro, stated
+
+
+def _name_unit(normal, pattern):
+    """The unit a column's name (as :func:`_normal` gives it) states: in brackets, as the unit at
+    the end of its ``pattern`` (``gyro_x_dps``, ``time_ms``), or by its word (``millis``); else None."""
+    key, bracket = normal
+    match = pattern.fullmatch(key)
+    if bracket or match is None:
+        return bracket
+    return _UNIT_WORDS.get(match["unit"] or "") or _WORD_UNITS.get(match.groupdict().get("word"))
+
+
+def _column_index(text, names, path):
+    """The index of the column ``text`` of ``--columns``: a name of the column row, or a 1-based number."""
+    if text in names:
+        return names.index(text)
+    if text.isdigit() and 1 <= int(text) <= len(names):
+        return int(text) - 1
+    raise RecordingError(f"{path}: --columns: no column {quote(text)} (have {quote(', '.join(names))}; "
+                         f"or give 1-based numbers, 1 to {len(names)})")
+
+
+def _gyro_column(normal, names, axis, path):
+    """The one column that holds the gyro's ``axis``: named like a gyro's (:data:`GYRO_NAME`), else bare (``x``)."""
+    for pattern in (GYRO_NAME, BARE_AXIS):
+        found = [i for i, (key, _) in enumerate(normal) if (m := pattern.fullmatch(key)) and m["axis"] == axis]
+        if len(found) == 1:
+            return found[0]
+        if len(found) > 1:
+            raise RecordingError(f"{path}: line with the column names: columns {', '.join(quote(names[i]) for i in found)} "
+                                 f"could each be the gyro's {axis}; name the three in --columns")
+    raise RecordingError(f"{path}: no column for the gyro's {axis} among {quote(', '.join(names))}; name the three "
+                         "(or the time and the three) in --columns, e.g. --columns time,wx,wy,wz")
+
+
+def _time_column(normal, gyro):
+    """The time column: the first whose name states its unit, else the first named like a time; None without one."""
+    candidates = [i for i, (key, _) in enumerate(normal) if i not in gyro and TIME_NAME.fullmatch(key)]
+    stated = [i for i in candidates if _name_unit(normal[i], TIME_NAME) in TIME_UNITS]
+    return (stated or candidates or [None])[0]
+
+
+def _cell(cells, index, line, names, path):
+    text = cells[index].strip()
+    if not is_plain_number(text):
+        raise RecordingError(f"{path}: line {line}, column {index + 1} ({quote(names[index])}): "
+                             f"not a plain decimal number: {quote(text)}")
+    return text
+
+
+def _read_rows(lines, path, names, split, header_line, wanted):
+    """The cells of the columns ``wanted`` (indices) of every data row, as text, and each row's line number."""
+    cells_of = [[] for _ in wanted]
+    line_of = []
+    skipped = 0
+    for number, text in lines:
+        if not text.strip() or text.lstrip().startswith(_COMMENT):
+            skipped += 1
+            continue
+        cells = split(text)
+        if len(cells) != len(names):
+            raise RecordingError(f"{path}: line {number}: {len(cells)} values, but {len(names)} columns "
+                                 f"({'line ' + str(header_line) if header_line else 'the first row'})")
+        for store, index in zip(cells_of, wanted):
+            store.append(_cell(cells, index, number, names, path))
+        line_of.append(number)
+    return cells_of, np.array(line_of), skipped
+
+
+def _times(texts):
+    """A time column's cells as offsets from the first (exact for whole numbers) and the first as text."""
+    if all(re.fullmatch(r"[+-]?[0-9]+", t) for t in texts):
+        first = int(texts[0])
+        return np.array([float(int(t) - first) for t in texts]), texts[0]
+    values = np.array([float(t) for t in texts])
+    return values - values[0], texts[0]
+
+
+def _infer_time_unit(steps, path, name):
+    """The first time unit in which the median step means MIN_INFERRED_RATE_HZ or more."""
+    median = float(np.median(steps))
+    for unit, seconds in TIME_UNITS.items():
+        if median > 0 and 1.0 / (median * seconds) >= MIN_INFERRED_RATE_HZ:
+            return unit
+    raise RecordingError(f"{path}: the time column {quote(name)} does not step forward; give --time-unit or --sample-rate-hz")
+
+
+def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate_hz=None, time_unit=None):
+    """Read another tool's gyro log ``path`` (see the module's rules) as a :class:`Foreign`.
+
+    ``unit``: ``dps``, ``rad/s`` or ``lsb`` (None: the one the column names state);
+    ``lsb_per_dps``: LSB per deg/s, with ``lsb``; ``columns``: 3 or 4 column names or 1-based
+    numbers (None: found by name); ``sample_rate_hz``: the rate (Hz; None: from the time
+    column); ``time_unit``: ``s``, ``ms``, ``us`` or ``ns`` (None: stated by the name or inferred).
+    RecordingError naming the file, line and column for what cannot be read, SettingsError for a bad argument."""
+    path = str(path)
+    if unit is not None and unit not in GYRO_UNITS:
+        raise RecordingError(f"--unit must be one of {', '.join(GYRO_UNITS)}, got {quote(unit)}")
+    if time_unit is not None and time_unit not in TIME_UNITS:
+        raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
+    if sample_rate_hz is not None:
+        sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
+    lines = _lines(path)
+    header_line, names, split, first_data, preamble = None, None, None, [], 0
+    for number, text in lines:
+        preamble += 1
+        if text.strip() and not text.lstrip().startswith(_COMMENT):
+            preamble -= 1
+            split = _splitter(text)
+            cells = split(text)
+            if all(is_plain_number(c) for c in cells):  # no column names: the columns are numbered
+                names, first_data = [str(i + 1) for i in range(len(cells))], [(number, text)]
+            else:
+                header_line, names = number, cells
+            break
+    if names is None:
+        raise RecordingError(f"{path}: no data (only blank or comment lines)")
+    if header_line is None and columns is None:
+        raise RecordingError(f"{path}: line {first_data[0][0]}: numbers but no column names; give the columns by number, "
+                             "e.g. --columns 1,2,3,4 (time, x, y, z) or --columns 2,3,4 (x, y, z)")
+    time, t_unit, gyro, stated = _pick(names, path, columns, time_unit)
+    unit = _gyro_unit(unit, stated, lsb_per_dps, path)
+    wanted = gyro + ([time] if time is not None else [])
+    cells, line_of, skipped = _read_rows(_chain(first_data, lines), path, names, split, header_line, wanted)
+    skipped += preamble
+    if len(line_of) < 2:
+        raise RecordingError(f"{path}: {len(line_of)} data row(s); a recording needs at least 2")
+    gyro_values = [np.array([float(c) for c in col]) for col in cells[:3]]
+    _check_range(gyro_values, unit, lsb_per_dps, line_of, gyro, names, path)
+    summary = [f"columns: x {quote(names[gyro[0]])}, y {quote(names[gyro[1]])}, z {quote(names[gyro[2]])} "
+               f"in {unit}{' (as the names state)' if stated else ''}; {len(line_of)} rows"
+               + (f", {skipped} blank or comment line(s) skipped" if skipped else "")]
+    left = [n for i, n in enumerate(names) if i not in wanted]
+    if left:
+        summary.append(f"left out: {', '.join(left)}")
+    header = {VERSION_KEY: FORMAT_VERSION}
+    data = dict(zip(GYRO_COLUMNS, gyro_values))
+    if time is not None:
+        t_s, rate_hz, origin, t_unit = _time_axis(cells[3], t_unit, sample_rate_hz, names[time], path, summary)
+        head = RecordingHead(header={"sample_rate_hz": format_number(rate_hz)}, names=["t"], path=path)
+        check = TimeCheck(head, "the time column's steps are not one rate; give the rate in --sample-rate-hz "
+                                "if they are, or split the file where it changes")
+        check.add(t_s, lambda row: f"line {line_of[row]}, column {time + 1} ({quote(names[time])})")
+        check.finish()
+        data = {"t": t_s, **data}
+        header.update(sample_rate_hz=format_number(rate_hz), time_origin=f"{origin} {t_unit} ({names[time]})")
+    elif sample_rate_hz is None:
+        raise RecordingError(f"{path}: no time column among {quote(', '.join(names))}; give the rate in --sample-rate-hz, "
+                             "or name the time column first in --columns")
+    else:
+        header["sample_rate_hz"] = format_number(sample_rate_hz)
+        summary.append(f"no time column: samples taken as uniform at {sample_rate_hz:g} Hz")
+    header["gyro_unit"] = unit
+    if unit == "lsb":
+        header["lsb_per_dps"] = format_number(lsb_per_dps)
+    header["converted_from"] = path
+    return Foreign(Recording(columns=data, header=header, path=path), summary)
+
+
+def _chain(first, rest):
+    yield from first
+    yield from rest
+
+
+def _gyro_unit(unit, stated, lsb_per_dps, path):
+    """The gyro unit: the caller's, which must agree with the names', or the names'; never guessed."""
+    if unit is not None and stated is not None and unit != stated:
+        raise RecordingError(f"{path}: --unit {unit}, but the column names say {stated}")
+    unit = unit or stated
+    if unit not in GYRO_UNITS:
+        raise RecordingError(f"{path}: the gyro unit is not stated{f' ({quote(stated)})' if stated else ''}; "
+                             "give --unit dps, rad/s or lsb (with --lsb-per-dps)")
+    if unit == "lsb":
+        if lsb_per_dps is None:
+            raise RecordingError("--unit lsb needs --lsb-per-dps (LSB per deg/s; the MPU6050 at +-250 deg/s: 131)")
+        check_number(lsb_per_dps, "--lsb-per-dps", low=0, low_open=True, error=RecordingError)
+    elif lsb_per_dps is not None:
+        raise RecordingError(f"--lsb-per-dps goes with --unit lsb, not {unit}")
+    return unit
+
+
+def _check_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
+    """Refuse a gyro value beyond +-MAX_RATE_DPS, naming its line and column."""
+    with np.errstate(over="ignore"):
+        dps = to_dps(np.column_stack(values), unit, lsb_per_dps)
+    bad = np.argwhere(~(np.abs(dps) <= MAX_RATE_DPS))
+    if bad.size:
+        row, axis = (int(i) for i in bad[0])
+        raise RecordingError(f"{path}: line {line_of[row]}, column {gyro[axis] + 1} ({quote(names[gyro[axis]])}): "
+                             f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
+
+
+def _time_axis(texts, t_unit, sample_rate_hz, name, path, summary):
+    """(t in s from the first stamp, the rate in Hz, the first stamp as text, the time unit); says how in ``summary``."""
+    offsets, origin = _times(texts)
+    steps = np.diff(offsets)
+    how = "as its name states"
+    if t_unit is None:
+        t_unit, how = _infer_time_unit(steps, path, name), f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more"
+    t_s = offsets * TIME_UNITS[t_unit]
+    step_s = np.diff(t_s)
+    median_s = float(np.median(step_s))
+    text = f"time: column {quote(name)} in {t_unit} ({how}; --time-unit to say otherwise)"
+    if sample_rate_hz is None:
+        if not median_s > 0:
+            raise RecordingError(f"{path}: the time column {quote(name)} does not step forward (median step {median_s:g} s)")
+        sample_rate_hz = check_sample_rate_hz(float(f"{1.0 / median_s:.6g}"), f"{path}: the rate of the time column", RecordingError)
+        text += f"; rate {sample_rate_hz:g} Hz from its median step"
+    else:
+        text += f"; rate {sample_rate_hz:g} Hz as given"
+    if median_s > 0:
+        low, high = np.percentile(step_s, [5, 95]) / median_s - 1
+        gaps = int(np.count_nonzero(step_s > 1.5 * median_s))
+        text += (f"; jitter: 90 % of the steps within {100 * low:+.2g} % .. {100 * high:+.2g} % of the median "
+                 f"({median_s * 1e3:.4g} ms), {gaps} gap(s) longer than 1.5 steps")
+    summary.append(text)
+    return t_s, sample_rate_hz, origin, t_unit

@@ -1,0 +1,168 @@
+"""``gyrofilter convert``: logs shaped like common tools' (a phone logger's CSV with time stamps in
+ns or s and rates in rad/s, a ROS bag export, an Arduino sketch's blank-separated raw LSB) become
+recordings that read back with the very values of the log; every refusal is one line naming the
+file, the line and the column, exit 2, no output."""
+import gzip
+
+import numpy as np
+import pytest
+
+from gyrofilter.cli import main
+from gyrofilter.recording import read_recording
+
+N = 1500  # 15 s at 100 Hz: past the filter's 2 s start-up calibration
+
+
+def _rates(seed, scale):
+    rng = np.random.default_rng(seed)
+    return np.round((np.array([-3.3, 1.1, -0.5]) + 0.05 * rng.standard_normal((N, 3))) * scale, 6)
+
+
+def _jittered_ns(seed, rate_hz=100.0):
+    """Phone time stamps: ns since 1970, each step the nominal one +-0.2 %."""
+    rng = np.random.default_rng(seed)
+    steps = np.round(1e9 / rate_hz * (1 + 0.002 * rng.uniform(-1, 1, N - 1))).astype(np.int64)
+    return 1_732_000_000_123_456_789 + np.concatenate(([0], np.cumsum(steps)))
+
+
+def _convert(tmp_path, text, *options, name="log.csv", out="rec.csv.gz"):
+    src = tmp_path / name
+    src.write_text(text)
+    dst = tmp_path / out
+    return main(["convert", str(src), "--out", str(dst), *options]), dst
+
+
+def _check_same(rec, gyro, t_s=None):
+    assert np.array_equal(rec.gyro, gyro)  # the values as they are: unit in the header, nothing rounded
+    if t_s is not None:
+        assert np.allclose(rec.t_s, t_s, rtol=0, atol=1e-9)
+
+
+def test_phone_logger_csv_in_rad_per_s_with_ns_time_stamps(tmp_path, capsys):
+    gyro = _rates(1, np.pi / 180)
+    stamps = _jittered_ns(2)
+    rows = "\n".join(f"{s},{x},{y},{z}" for s, (x, y, z) in zip(stamps.tolist(), gyro.tolist()))
+    rc, dst = _convert(tmp_path, "timestamp,gyro_x,gyro_y,gyro_z\n" + rows + "\n", "--unit", "rad/s")
+    assert rc == 0, capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "in ns (inferred" in err and "jitter" in err
+    rec = read_recording(dst)
+    assert rec.gyro_unit == "rad/s" and abs(rec.sample_rate_hz - 100.0) < 0.01
+    assert rec.header["time_origin"] == f"{stamps[0]} ns (timestamp)"
+    _check_same(rec, gyro, (stamps - stamps[0]) * 1e-9)  # integer stamps subtracted exactly
+    assert main(["replay", str(dst)]) == 0
+    bias_line = next(ln for ln in capsys.readouterr().out.splitlines() if "bias (" in ln)
+    assert abs(float(bias_line.split(":")[1].split(",")[0]) + 3.3) < 0.02  # in deg/s: the unit went through
+
+
+def test_phone_logger_with_seconds_elapsed_and_bare_axes_in_its_own_order(tmp_path, capsys):
+    """Sensor Logger's gyroscope file: time (ns), seconds_elapsed (s), then z, y, x."""
+    gyro = _rates(3, np.pi / 180)
+    stamps = _jittered_ns(4)
+    rows = "\n".join(f"{s},{(s - stamps[0]) / 1e9},{z},{y},{x}" for s, (x, y, z) in zip(stamps.tolist(), gyro.tolist()))
+    rc, dst = _convert(tmp_path, "time,seconds_elapsed,z,y,x\n" + rows + "\n", "--unit", "rad/s")
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    _check_same(rec, gyro, (stamps - stamps[0]) * 1e-9)
+    assert "seconds_elapsed" in rec.header["time_origin"]
+
+
+def test_phyphox_export_states_its_units_in_the_names(tmp_path, capsys):
+    gyro = _rates(5, np.pi / 180)
+    t_s = np.arange(N) / 100.0
+    rows = "\n".join(f"{t},{x},{y},{z},{np.hypot(x, y)}" for t, (x, y, z) in zip(t_s.tolist(), gyro.tolist()))
+    head = '"Time (s)","Gyroscope x (rad/s)","Gyroscope y (rad/s)","Gyroscope z (rad/s)","Absolute (rad/s)"\n'
+    rc, dst = _convert(tmp_path, head + rows + "\n")  # no --unit: the names say rad/s
+    assert rc == 0, capsys.readouterr().err
+    _check_same(read_recording(dst), gyro, t_s)
+    assert "left out: Absolute (rad/s)" in capsys.readouterr().err
+    rc, _ = _convert(tmp_path, head + rows + "\n", "--unit", "dps", out="other.csv")
+    assert rc == 2 and "--unit dps, but the column names say rad/s" in capsys.readouterr().err
+
+
+def test_ros_bag_export(tmp_path, capsys):
+    """``rostopic echo -p /imu``: %time and header.stamp in ns, quaternions, covariances, a frame id."""
+    gyro = _rates(6, np.pi / 180)
+    stamps = _jittered_ns(7, rate_hz=200.0)
+    head = ("%time,field.header.seq,field.header.stamp,field.header.frame_id,field.orientation.x,field.orientation.y,"
+            "field.orientation.z,field.orientation.w,field.angular_velocity.x,field.angular_velocity.y,"
+            "field.angular_velocity.z,field.linear_acceleration.x,field.linear_acceleration.y,field.linear_acceleration.z\n")
+    rows = "\n".join(f"{s + 150000},{i},{s},imu_link,0,0,0,1,{x},{y},{z},0.01,-0.02,9.81"
+                     for i, (s, (x, y, z)) in enumerate(zip(stamps.tolist(), gyro.tolist())))
+    rc, dst = _convert(tmp_path, head + rows + "\n", "--unit", "rad/s")
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert abs(rec.sample_rate_hz - 200.0) < 0.05 and rec.header["time_origin"].endswith("ns (%time)")
+    _check_same(rec, gyro, (stamps - stamps[0]) * 1e-9)
+
+
+def test_arduino_blank_separated_raw_lsb_without_column_names(tmp_path, capsys):
+    rng = np.random.default_rng(8)
+    lsb = np.round(np.array([-432.0, 144.0, -65.0]) + 6 * rng.standard_normal((N, 3)))
+    millis = 12345 + np.cumsum(np.r_[0, 10 + rng.integers(-1, 2, N - 1)])  # millis() of a 100 Hz loop
+    text = "# MPU6050 ready\n"
+    text += "\n".join(f"{m}\t{int(x)} {int(y)} {int(z)}" for m, (x, y, z) in zip(millis.tolist(), lsb.tolist())) + "\n"
+    rc, _ = _convert(tmp_path, text, "--unit", "lsb", "--lsb-per-dps", "131", name="log.txt")
+    assert rc == 2 and "line 2: numbers but no column names; give the columns by number" in capsys.readouterr().err
+    rc, dst = _convert(tmp_path, text, "--unit", "lsb", "--lsb-per-dps", "131", "--columns", "1,2,3,4", name="log.txt")
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.lsb_per_dps == 131 and rec.header["time_origin"] == "12345 ms (1)"
+    _check_same(rec, lsb, (millis - millis[0]) * 1e-3)
+    assert "1 blank or comment line(s) skipped" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text, options, expected", [
+    ("t,gx,gy,gz\n0,1,2,3\n0.01,1,x,3\n", ["--unit", "dps"], "log.csv: line 3, column 3 ('gy'): not a plain decimal number: 'x'"),
+    ("t,gx,gy,gz\n0,1,2,3\n0.01,1,,3\n", ["--unit", "dps"], "line 3, column 3 ('gy'): not a plain decimal number: ''"),
+    ("t,gx,gy,gz\n0,1,2,3\n0.01,1,3\n", ["--unit", "dps"], "line 3: 3 values, but 4 columns (line 1)"),
+    ("t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n0.01,1,2,3\n", ["--unit", "dps"], "line 4, column 1 ('t'): t does not increase"),
+    ("t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n", [], "the gyro unit is not stated; give --unit"),
+    ("t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n", ["--unit", "lsb"], "--unit lsb needs --lsb-per-dps"),
+    ("a,b,c\n0,1,2\n1,2,3\n", ["--unit", "dps"], "no column for the gyro's x among 'a, b, c'; name the three"),
+    ("gyro_x,wx,gy,gz\n0,1,2,3\n1,2,3,4\n", ["--unit", "dps"], "columns 'gyro_x', 'wx' could each be the gyro's x"),
+    ("gx,gy,gz\n0,1,2\n1,2,3\n", ["--unit", "dps"], "no time column among 'gx, gy, gz'; give the rate in --sample-rate-hz"),
+    ("t,gx,gy,gz\n0,1,2,3\n0.01,1e9,2,3\n", ["--unit", "dps"], "line 3, column 2 ('gx'): 1000000000 dps is beyond"),
+    ("t,gx,gy,gz\n0,1,2,3\n", ["--unit", "dps"], "1 data row(s); a recording needs at least 2"),
+    ("t,gx,gy,gz\n0,1,2,3\n1,1,2,3\n", ["--unit", "dps", "--columns", "gx,gy,nope"], "--columns: no column 'nope'"),
+])
+def test_refusals_name_the_line_and_the_column(tmp_path, capsys, text, options, expected):
+    rc, dst = _convert(tmp_path, text, *options)
+    err = capsys.readouterr().err
+    assert rc == 2 and expected in err and err.count("\n") == 1, err
+    assert not dst.exists()
+
+
+def test_time_steps_that_are_not_one_rate_are_refused_naming_the_line(tmp_path, capsys):
+    """The first 1000 steps at 100 Hz, the next 1500 at 50 Hz: no window of the second part agrees."""
+    t_s = np.concatenate((np.arange(1001) * 0.01, 10 + np.arange(1, 1501) * 0.02))
+    rows = "\n".join(f"{t},1,2,3" for t in t_s.tolist())
+    rc, dst = _convert(tmp_path, "time_s,gx,gy,gz\n" + rows + "\n", "--unit", "dps")
+    err = capsys.readouterr().err
+    assert rc == 2 and "column 1 ('time_s')" in err and "not one rate" in err and not dst.exists(), err
+    match = int(err.split("steps from line ")[1].split(",")[0])
+    assert 2 <= match <= 1503
+
+
+def test_given_rate_without_time_column_and_gzip_input(tmp_path, capsys):
+    gyro = _rates(9, 1.0)
+    text = "gx;gy;gz\n" + "\n".join(f"{x};{y};{z}" for x, y, z in gyro.tolist()) + "\n"
+    src = tmp_path / "log.csv.gz"
+    src.write_bytes(gzip.compress(text.encode()))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--out", str(dst), "--unit", "dps", "--sample-rate-hz", "250"]) == 0
+    rec = read_recording(dst)
+    assert rec.sample_rate_hz == 250 and "t" not in rec.columns
+    _check_same(rec, gyro)
+    assert main(["convert", str(src), "--out", str(dst), "--unit", "dps", "--sample-rate-hz", "250"]) == 2  # exists
+    assert "--force" in capsys.readouterr().err
+
+
+def test_units_stated_by_name_suffixes(tmp_path, capsys):
+    """``time_ms`` and ``gyro_x_dps``: no --unit, no inference."""
+    rows = "\n".join(f"{1000 + 10 * i},{i % 3},{-(i % 5)},0.5" for i in range(N))
+    rc, dst = _convert(tmp_path, "time_ms,gyro_x_dps,gyro_y_dps,gyro_z_dps\n" + rows + "\n")
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.gyro_unit == "dps" and rec.sample_rate_hz == 100 and rec.header["time_origin"] == "1000 ms (time_ms)"
+    assert "(as its name states" in capsys.readouterr().err
