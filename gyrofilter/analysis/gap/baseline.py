@@ -216,7 +216,7 @@ def effect_entry(cand, preserve="std"):
     if cand.effect == COLORED_NOISE:
         entry["preserve"] = preserve
     if cand.effect == TEMPERATURE:
-        entry["reference_c"] = cand.extra.get("reference_c")
+        entry["reference_c"] = cand.reference_c
     return entry
 
 

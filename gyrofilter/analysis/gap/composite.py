@@ -24,6 +24,7 @@ sees how much noisier it makes the short scales.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -31,6 +32,7 @@ from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAI
                             WANDERS)
 from . import detectors as det
 from .confound import CONFOUNDED_SPREADS
+from .state import Kept
 from ..noise import gmwm
 from ...sim import noise_terms as nt
 from ...units import AXES
@@ -43,8 +45,8 @@ COMPOSITE_MIN_TAU_S = 1.0
 _COMPOSITE_STATISTIC = "D of the extended axis without the composite stochastic part / D with it"
 
 
-def composite_step(run):
-    """Step 4, continued, on the gap analysis ``run``: where an extended axis is still far
+def composite_step(inp, state, scorer):
+    """Step 4, continued, on the gap analysis's state (returns the new one): where an extended axis is still far
     outside the null band (D above :data:`~gyrofilter.analysis.gap.detectors.OUTSIDE_NULL_D`), a
     composite stochastic part (:func:`_composite_candidates`) replaces the axis's slow
     stochastic findings, and its colored noise if that is better without it, when D falls below
@@ -54,70 +56,82 @@ def composite_step(run):
     D of that model moves that much between records it explains exactly, so a smaller gain is
     one the record cannot vouch for (a bias instability was replaced by a 10-s Gauss-Markov term,
     2.31 -> 1.5 against 2 x 0.83, on the example model's hour at 100 Hz, seed 3, x)."""
-    cands, notes = run.candidates, run.report["notes"]
     for i, a in enumerate(AXES):
-        if run.after[i] <= det.OUTSIDE_NULL_D or run.wvs[i] is None:
+        models = state.axes[i]
+        if state.after[i] <= det.OUTSIDE_NULL_D or models.wv is None:
             continue
-        run.say(f"composite stochastic fit on {a}")
-        fit, comp = _composite_candidates(run.wvs[i], run.sample_rate_hz)
+        inp.say(f"composite stochastic fit on {a}")
+        fit, comp = _composite_candidates(models.wv, inp.sample_rate_hz)
         if not comp:
             continue
-        s_ext = run.null_spread(i, run.kept_on(i), f"extended model on {a}") if run.kept_on(i) else 0.0
-        keep_k = [k for k, ci, c, _ in run.kept if ci == i and c.effect not in WANDERS]
-        first = len(cands)
-        cands.extend((i, c) for c in comp)
-        comp_k = list(range(first, len(cands)))
-        for k in keep_k:  # the axis's other findings join the composite model
-            cands[k][1].extra["composite"] = True
-        run.composite_axes[a] = dict(run.ext_axes[a], arw_dps_per_sqrt_hz=fit.arw_dps_per_sqrt_hz)
-        d_comp = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
-        colored_k = [k for k in keep_k if cands[k][1].effect == COLORED_NOISE]
-        dropped_colored = False
-        if colored_k:
-            # the colored noise re-solved to keep the per-sample variance as well
-            run.resolved_lags[i] = composite_lags(run.ext_axes[a], run.composite_axes[a], cands[colored_k[0]][1].params)
-            if run.resolved_lags[i] is not None:
-                d_alt = run.axis_discrepancy(i, keep_k + comp_k, f"composite model on {a}")
-                if d_alt < d_comp:
-                    d_comp = d_alt
-                else:
-                    run.resolved_lags[i] = None
-            # a fast Gauss-Markov term of the composite may be what the colored noise stood for
-            d_alt = run.axis_discrepancy(i, [k for k in keep_k if k not in colored_k] + comp_k, f"composite model on {a}")
+        state = _with_composite(inp, state, scorer, i, fit, comp)
+    return state
+
+
+def _with_composite(inp, state, scorer, i, fit, comp):
+    """The state with axis ``i``'s slow stochastic findings replaced by the composite fit's
+    candidates ``comp`` where that lowers D enough (:func:`composite_step`); the candidates are
+    appended either way."""
+    a, after = AXES[i], state.after[i]
+    s_ext = scorer.null_spread(i, state.model(inp, i, state.kept_on(i)), f"extended model on {a}") if state.kept_on(i) else 0.0
+    keep_k = [row.k for row in state.kept if row.axis == i and row.cand.effect not in WANDERS]
+    first = len(state.candidates)
+    state = replace(state, candidates=state.candidates + tuple((i, c) for c in comp))
+    comp_k = list(range(first, len(state.candidates)))
+    trial = state
+    for k in keep_k:  # the axis's other findings join the composite model
+        trial = trial.with_candidate(k, replace(trial.candidates[k][1], composite=True))
+    trial = trial.with_axis(i, composite=dict(state.axes[i].ext, arw_dps_per_sqrt_hz=fit.arw_dps_per_sqrt_hz))
+
+    def d_of(model_state, ks):
+        return scorer.discrepancy(i, model_state.model(inp, i, ks), f"composite model on {a}")
+
+    d_comp = d_of(trial, keep_k + comp_k)
+    colored_k = [k for k in keep_k if trial.candidates[k][1].effect == COLORED_NOISE]
+    dropped_colored = False
+    if colored_k:
+        # the colored noise re-solved to keep the per-sample variance as well
+        lags = composite_lags(trial.axes[i].ext, trial.axes[i].composite, trial.candidates[colored_k[0]][1].params)
+        if lags is not None:
+            d_alt = d_of(trial.with_axis(i, lags=lags), keep_k + comp_k)
             if d_alt < d_comp:
-                d_comp = d_alt
-                cands[colored_k[0]][1].extra.pop("composite")
-                keep_k = [k for k in keep_k if k not in colored_k]
-                dropped_colored = True
-        spread = CONFOUNDED_SPREADS * s_ext
-        if d_comp < det.COMPOSITE_MIN_GAIN * run.after[i] and d_comp < run.after[i] - spread:
-            if dropped_colored:  # said only where the composite model is used
-                notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the "
-                             "correlation without it")
-            single_k = {k: run.axis_discrepancy(i, [k], f"gain of the composite's {cands[k][1].effect} on {a}")
-                        for k in comp_k}
-            notes.append(
-                f"axis {a}: the composite stochastic fit ({fit.name}, chosen by WVIC on the "
-                f"{'robust ' if run.wvs[i].robust else ''}wavelet variance at "
-                f"tau >= {run.wvs[i].tau_s[0]:.3g} s) lowers D from {run.after[i]:.3g} to {d_comp:.3g}; it replaces the "
-                "axis's slow stochastic findings")
-            for k in comp_k:
-                cands[k][1].statistic = run.after[i] / d_comp
-            if run.resolved_lags[i] and colored_k and colored_k[0] in keep_k:
-                colored = cands[colored_k[0]][1]
-                colored.params.update(run.resolved_lags[i])
-                colored.evidence += ("; in the composite model its lags are re-solved to keep both the per-sample "
-                                     "variance and the composite fit's white level")
-            run.kept = [row for row in run.kept if row[1] != i] + \
-                [(k, i, cands[k][1], run.single[k]) for k in keep_k] + [(k, i, cands[k][1], single_k[k]) for k in comp_k]
-            run.after[i] = d_comp
-        else:
-            run.resolved_lags[i] = None
-            for k in keep_k:
-                cands[k][1].extra.pop("composite")
-            notes.append(f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
-                         f"({run.after[i]:.3g} -> {d_comp:.3g}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times "
-                         f"its value and by more than {CONFOUNDED_SPREADS:g} null spreads of D of the extended model, {spread:.2g}); not used")
+                d_comp, trial = d_alt, trial.with_axis(i, lags=lags)
+        # a fast Gauss-Markov term of the composite may be what the colored noise stood for
+        d_alt = d_of(trial, [k for k in keep_k if k not in colored_k] + comp_k)
+        if d_alt < d_comp:
+            d_comp = d_alt
+            trial = trial.with_candidate(colored_k[0], replace(trial.candidates[colored_k[0]][1], composite=False))
+            keep_k = [k for k in keep_k if k not in colored_k]
+            dropped_colored = True
+    spread = CONFOUNDED_SPREADS * s_ext
+    if not (d_comp < det.COMPOSITE_MIN_GAIN * after and d_comp < after - spread):
+        return state.with_notes(
+            f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
+            f"({after:.3g} -> {d_comp:.3g}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times "
+            f"its value and by more than {CONFOUNDED_SPREADS:g} null spreads of D of the extended model, {spread:.2g}); not used")
+    notes = []
+    if dropped_colored:  # said only where the composite model is used
+        notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the correlation without it")
+    single_k = {k: scorer.discrepancy(i, trial.model(inp, i, [k]), f"gain of the composite's {trial.candidates[k][1].effect} on {a}")
+                for k in comp_k}
+    wv = state.axes[i].wv
+    notes.append(
+        f"axis {a}: the composite stochastic fit ({fit.name}, chosen by WVIC on the "
+        f"{'robust ' if wv.robust else ''}wavelet variance at "
+        f"tau >= {wv.tau_s[0]:.3g} s) lowers D from {after:.3g} to {d_comp:.3g}; it replaces the "
+        "axis's slow stochastic findings")
+    for k in comp_k:
+        trial = trial.with_candidate(k, replace(trial.candidates[k][1], statistic=after / d_comp))
+    lags = trial.axes[i].lags
+    if lags and colored_k and colored_k[0] in keep_k:
+        colored = trial.candidates[colored_k[0]][1]
+        trial = trial.with_candidate(colored_k[0], replace(
+            colored, params={**colored.params, **lags},
+            evidence_notes=colored.evidence_notes + ("in the composite model its lags are re-solved to keep both the "
+                                                     "per-sample variance and the composite fit's white level",)))
+    kept = ([row for row in state.kept if row.axis != i] + [Kept(k, i, trial.candidates[k][1], state.single[k]) for k in keep_k]
+            + [Kept(k, i, trial.candidates[k][1], single_k[k]) for k in comp_k])
+    return replace(trial, kept=tuple(kept), after=state.after[:i] + (d_comp,) + state.after[i + 1:]).with_notes(*notes)
 
 
 def slow_wavelet_variance(xc, sample_rate_hz, cands=()):
@@ -140,7 +154,7 @@ def _composite_candidates(wv, sample_rate_hz):
     white noise + optionally a rate random walk and a bias instability + 0..3 Gauss-Markov terms
     to ``wv``, the model chosen by the WVIC (see gyrofilter.analysis.noise.gmwm). Returns
     ``(fit, candidates)``: one ``gauss_markov`` per Gauss-Markov term, a ``rate_random_walk`` and a
-    ``bias_instability`` if the fit has them, marked ``extra["composite"]``; the fit's N is the
+    ``bias_instability`` if the fit has them, marked ``composite``; the fit's N is the
     composite model's white level."""
     fit, _ = gmwm.select_model(wv, terms_allowed=tuple(COMPOSITE_TERMS), starts=3, seed=0)
     out = []
@@ -151,17 +165,17 @@ def _composite_candidates(wv, sample_rate_hz):
         out.append(det.Candidate(effect=GAUSS_MARKOV, params={"sigma_dps": sigma_dps, "tau_s": tau_s},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"Gauss-Markov term (sigma {sigma_dps:.3g} deg/s, tau {tau_s:.3g} s) of a " + evidence,
-                                 extra={"composite": True}))
+                                 composite=True))
     if fit.rrw_dps_per_sqrt_s is not None:
         out.append(det.Candidate(effect=RATE_RANDOM_WALK, params={"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"random-walk term (K {fit.rrw_dps_per_sqrt_s:.3g} deg/s/sqrt(s)) of a " + evidence,
-                                 extra={"composite": True}))
+                                 composite=True))
     if fit.flicker_b_dps is not None:
         out.append(det.Candidate(effect=BIAS_INSTABILITY, params={"b_dps": fit.flicker_b_dps},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"flicker term (B {fit.flicker_b_dps:.3g} deg/s) of a " + evidence,
-                                 extra={"composite": True}))
+                                 composite=True))
     return fit, out
 
 

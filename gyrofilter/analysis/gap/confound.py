@@ -63,6 +63,7 @@ a note, says that the other explains the tails about as well.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -89,7 +90,7 @@ def covariate_or_time(time_reading, covariate, stats, x, temp_c):
     """The reading the slow detector returns for an axis with a recorded temperature (module
     docstring, 1.): ``time_reading`` (a list of candidates) or ``covariate`` (the covariate
     reading, the temperature candidate first; None where the temperature is not significant),
-    the time reading riding on the temperature candidate as ``extra["alternative"]``.
+    the time reading riding on the temperature candidate (``time_reading``).
     ``stats``: the shapes' Delta chi^2 of the block means; ``x``, ``temp_c``: the axis's series."""
     line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP) else None
     if line_or_jump and _shape_beats_temperature(line_or_jump, stats, x, temp_c):
@@ -102,7 +103,7 @@ def covariate_or_time(time_reading, covariate, stats, x, temp_c):
         # random walk for the difference)
         return time_reading
     if time_reading:
-        covariate[0].extra["alternative"] = time_reading
+        return [replace(covariate[0], time_reading=time_reading)] + covariate[1:]
     return covariate
 
 
@@ -185,101 +186,101 @@ WHY_THE_COVARIATE = (f"The temperature is named because {NAMED_BECAUSE[TEMPERATU
                      "them apart")
 
 
-def weigh_readings(run):
+def weigh_readings(inp, state, scorer):
     """Choose per axis between the covariate and the time reading of a confounded temperature
-    (module docstring) on the gap analysis ``run``; the reading not chosen goes to
-    ``run.excluded``, a time reading that is as good rides on the temperature candidate as
-    ``extra["alternatives"]``."""
-    cands, notes = run.candidates, run.report["notes"]
-    for i, reading in sorted(run.readings.items()):
+    (module docstring, 1.); returns the new state: the reading not chosen excluded, a time reading
+    that is as good riding on the temperature candidate as its ``alternatives``."""
+    for i, reading in sorted(state.readings.items()):
         a = AXES[i]
-        cov_ks = reading["covariate"]
-        others = [k for k, (ci, _) in enumerate(cands) if ci == i and k not in cov_ks and k not in run.excluded]
-        temp = next(cands[k][1] for k in cov_ks if cands[k][1].effect == TEMPERATURE)
-        first = len(cands)
-        for c in reading["time"]:
-            c.extra["reading"] = "time"
-            cands.append((i, c))
-        time_ks = list(range(first, len(cands)))
-        run.alt_axes[a] = reading["ext_axis"]
+        cov_ks = reading.covariate
+        others = [k for k, (ci, _) in enumerate(state.candidates) if ci == i and k not in cov_ks and k not in state.excluded]
+        k_temp = next(k for k in cov_ks if state.candidates[k][1].effect == TEMPERATURE)
+        first = len(state.candidates)
+        time_cands = [replace(c, reading="time") for c in reading.time]
+        state = replace(state, candidates=state.candidates + tuple((i, c) for c in time_cands)).with_axis(i, time=reading.ext_axis)
+        time_ks = list(range(first, len(state.candidates)))
         label = f"covariate and time readings on {a}"
-        run.say(label)
-        d_cov = run.axis_discrepancy(i, others + cov_ks, label)
-        d_time = run.axis_discrepancy(i, others + time_ks, label)
-        spread = CONFOUNDED_SPREADS * max(run.null_spread(i, others + cov_ks, label),
-                                              run.null_spread(i, others + time_ks, label))
-        shown = " + ".join(_show(c) for c in reading["time"])
+        inp.say(label)
+        cov_model, time_model = state.model(inp, i, others + cov_ks), state.model(inp, i, others + time_ks)
+        d_cov = scorer.discrepancy(i, cov_model, label)
+        d_time = scorer.discrepancy(i, time_model, label)
+        spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, cov_model, label), scorer.null_spread(i, time_model, label))
+        shown = " + ".join(_show(c) for c in reading.time)
         weighed = (f"axis {a}: readings weighed on D: with the temperature {d_cov:.3g}, in time ({shown}) {d_time:.3g}; "
                    f"allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} null spreads of D)")
         if d_time < d_cov - spread:
-            run.excluded.update(cov_ks)
-            run.ext_axes[a], run.wvs[i] = reading["ext_axis"], reading["wv"]
-            for c in reading["time"]:
-                c.extra.pop("reading")
-            notes.append(weighed + ": the time reading is clearly better, the temperature is not named")
+            state = replace(state, excluded=state.excluded | set(cov_ks)).with_axis(i, ext=reading.ext_axis, wv=reading.wv)
+            for k in time_ks:
+                state = state.with_candidate(k, replace(state.candidates[k][1], reading=""))
+            state = state.with_notes(weighed + ": the time reading is clearly better, the temperature is not named")
             continue
-        run.excluded.update(time_ks)
+        state = replace(state, excluded=state.excluded | set(time_ks))
         if d_time > d_cov + spread:
-            notes.append(weighed + ": the temperature is clearly better, the time reading is not listed")
+            state = state.with_notes(weighed + ": the temperature is clearly better, the time reading is not listed")
             continue
-        notes.append(weighed + ": the record cannot tell them apart; the temperature is named, the time reading "
-                     "listed as its alternatives")
-        temp.extra["alternatives"] = [(c, d_time) for c in reading["time"]]
-        temp.evidence += (f"; the time reading {shown} explains this record about as well (D {d_time:.3g} against "
-                          f"{d_cov:.3g}, within the null spread of D, {spread:.2g}): the temperature follows a "
-                          f"warm-up itself, so this record cannot tell them apart. {WHY_THE_COVARIATE}")
+        state = state.with_notes(weighed + ": the record cannot tell them apart; the temperature is named, the time "
+                                 "reading listed as its alternatives")
+        temp = state.candidates[k_temp][1]
+        state = state.with_candidate(k_temp, replace(
+            temp, alternatives=tuple((c, d_time) for c in time_cands),
+            evidence_notes=temp.evidence_notes + (
+                f"the time reading {shown} explains this record about as well (D {d_time:.3g} against {d_cov:.3g}, "
+                f"within the null spread of D, {spread:.2g}): the temperature follows a warm-up itself, so this "
+                f"record cannot tell them apart. {WHY_THE_COVARIATE}",)))
+    return state
 
 
-def weigh_wanders(run):
+def weigh_wanders(inp, state, scorer):
     """Choose per axis between a bias instability and a Gauss-Markov wander where the slow
-    detector found both significant (:func:`gyrofilter.analysis.gap.detectors.slow._with_wander_alternative`):
-    each is simulated with the axis's other findings and scored by D, as the readings of a
-    confounded temperature are (module docstring). A Gauss-Markov spectrum is flat below its
-    corner ``1/(2 pi tau)`` and falls like 1/f^2 above it; with the corner among the record's
-    frequencies (tau below a fifth of the record) it bends across them about as a bias
-    instability's 1/f falls, and its Allan deviation, a broad hump near ``1.9 tau``, fits the
-    flat floor of a bias instability over a decade or two, so the two can explain a record
-    equally. The Gauss-Markov is named only where it is clearly
-    better (``D_gm < D_bi - s``); otherwise the bias instability, which has one parameter fewer,
-    and where the two are about equal the Gauss-Markov rides on it as ``extra["alternatives"]``.
-    The reading not chosen goes to ``run.excluded``."""
-    cands, notes = run.candidates, run.report["notes"]
-    for k in range(len(cands)):
-        i, c = cands[k]
-        alt = c.extra.pop("wander_alternative", None)
-        if alt is None or k in run.excluded:
+    detector found both significant (the candidate's ``wander_alternative``): each is simulated
+    with the axis's other findings and scored by D, as the readings of a confounded temperature
+    are (module docstring, 2.). The Gauss-Markov is named only where it is clearly better
+    (``D_gm < D_bi - s``); otherwise the bias instability, which has one parameter fewer, and where
+    the two are about equal the Gauss-Markov rides on it as its ``alternatives``. Returns the new
+    state, the reading not chosen excluded."""
+    for k in range(len(state.candidates)):
+        i, c = state.candidates[k]
+        alt = c.wander_alternative
+        if alt is None:
             continue
-        cands.append((i, alt))
-        k_alt = len(cands) - 1
+        c = replace(c, wander_alternative=None)
+        state = state.with_candidate(k, c)
+        if k in state.excluded:
+            continue
+        state = replace(state, candidates=state.candidates + ((i, alt),))
+        k_alt = len(state.candidates) - 1
         a = AXES[i]
-        others = [j for j, (ci, _) in enumerate(cands) if ci == i and j not in (k, k_alt) and j not in run.excluded]
+        others = [j for j, (ci, _) in enumerate(state.candidates)
+                  if ci == i and j not in (k, k_alt) and j not in state.excluded]
         label = f"bias instability and Gauss-Markov readings on {a}"
-        run.say(label)
+        inp.say(label)
         bi, gm = ((k, c), (k_alt, alt)) if c.effect == BIAS_INSTABILITY else ((k_alt, alt), (k, c))
-        d_bi = run.axis_discrepancy(i, others + [bi[0]], label)
-        d_gm = run.axis_discrepancy(i, others + [gm[0]], label)
-        spread = CONFOUNDED_SPREADS * max(run.null_spread(i, others + [bi[0]], label),
-                                              run.null_spread(i, others + [gm[0]], label))
+        bi_model, gm_model = state.model(inp, i, others + [bi[0]]), state.model(inp, i, others + [gm[0]])
+        d_bi = scorer.discrepancy(i, bi_model, label)
+        d_gm = scorer.discrepancy(i, gm_model, label)
+        spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, bi_model, label), scorer.null_spread(i, gm_model, label))
         weighed = (f"axis {a}: readings of the slow wander weighed on D: {_show(bi[1])} {d_bi:.3g}, {_show(gm[1])} "
                    f"{d_gm:.3g}; allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} null spreads of D)")
         if d_gm < d_bi - spread:
-            run.excluded.add(bi[0])
-            notes.append(weighed + ": the Gauss-Markov is clearly better, the bias instability is not named")
+            state = replace(state, excluded=state.excluded | {bi[0]}).with_notes(
+                weighed + ": the Gauss-Markov is clearly better, the bias instability is not named")
             continue
-        run.excluded.add(gm[0])
+        state = replace(state, excluded=state.excluded | {gm[0]})
         if d_bi < d_gm - spread:
-            notes.append(weighed + ": the bias instability is clearly better, the Gauss-Markov is not listed")
+            state = state.with_notes(weighed + ": the bias instability is clearly better, the Gauss-Markov is not listed")
             continue
-        notes.append(weighed + ": the record cannot tell them apart; the bias instability is named (one parameter "
-                     "fewer), the Gauss-Markov listed as its alternative")
-        bi[1].extra["alternatives"] = [(gm[1], d_gm)]
+        state = state.with_notes(weighed + ": the record cannot tell them apart; the bias instability is named (one "
+                                 "parameter fewer), the Gauss-Markov listed as its alternative")
         corner_hz = 1.0 / (2.0 * np.pi * gm[1].params["tau_s"])
-        bi[1].evidence += (f"; the wander reading {_show(gm[1])} explains this record about as well (D {d_gm:.3g} "
-                           f"against {d_bi:.3g}, within the null spread of D, {spread:.2g}): its spectrum, flat "
-                           f"below its corner 1/(2 pi tau) = {corner_hz:.2g} Hz and falling like 1/f^2 above it, "
-                           "bends across this record's frequencies about as the 1/f of a bias instability falls, "
-                           "so the record cannot tell them apart; the bias instability is named, with one "
-                           "parameter fewer")
+        state = state.with_candidate(bi[0], replace(
+            bi[1], alternatives=((gm[1], d_gm),),
+            evidence_notes=bi[1].evidence_notes + (
+                f"the wander reading {_show(gm[1])} explains this record about as well (D {d_gm:.3g} against "
+                f"{d_bi:.3g}, within the null spread of D, {spread:.2g}): its spectrum, flat below its corner "
+                f"1/(2 pi tau) = {corner_hz:.2g} Hz and falling like 1/f^2 above it, bends across this record's "
+                "frequencies about as the 1/f of a bias instability falls, so the record cannot tell them apart; "
+                "the bias instability is named, with one parameter fewer",)))
+    return state
 
 
 def _show(c):
@@ -291,4 +292,4 @@ def alternatives_entry(cand):
     """The ``alternatives`` of a finding in the gap report: per entry of the other reading its
     effect, params and D (of the axis with that whole reading in place of the finding's)."""
     return [{"effect": c.effect, "params": {k: float(v) for k, v in c.params.items()}, "D": float(d)}
-            for c, d in cand.extra["alternatives"]]
+            for c, d in cand.alternatives]

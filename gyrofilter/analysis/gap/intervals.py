@@ -99,13 +99,13 @@ def default_bootstrap(n_samples):
     return int(max(10, min(DEFAULT_BOOTSTRAP, round(DEFAULT_BOOTSTRAP * FEWER_BOOTSTRAP_FROM / max(n_samples, 1)))))
 
 
-def add_intervals(run, n_boot, seed):
-    """Write ``params_ci95`` into every finding of ``run.report`` and into the baseline's axes,
+def add_intervals(inp, state, report, n_boot, seed):
+    """Write ``params_ci95`` into every finding of ``report`` (of the gap analysis's ``inp`` and
+    final ``state``) and into the baseline's axes,
     from ``n_boot`` replicates per axis with findings (none with ``n_boot`` 0; None:
     :func:`default_bootstrap` of the record's length), and the report's ``intervals`` block
     saying how."""
-    report = run.report
-    n_boot = default_bootstrap(run.n) if n_boot is None else n_boot
+    n_boot = default_bootstrap(inp.n) if n_boot is None else n_boot
     t0 = time.perf_counter()
     block = {"confidence": CONFIDENCE, "bootstrap_runs": int(n_boot)}
     report["intervals"] = block
@@ -114,8 +114,8 @@ def add_intervals(run, n_boot, seed):
         return
     block["method"] = METHOD
     findings = report["findings"]
-    rows = list(zip(run.kept, findings))
-    if len(run.kept) != len(findings) or any(c.effect != f["effect"] or AXES[i] != f["axis"]
+    rows = list(zip(state.kept, findings))
+    if len(state.kept) != len(findings) or any(c.effect != f["effect"] or AXES[i] != f["axis"]
                                              for (_, i, c, _), f in rows):
         report["notes"].append("intervals: the findings do not match the kept candidates; no intervals computed")
         return
@@ -124,14 +124,14 @@ def add_intervals(run, n_boot, seed):
         here = [(c, f) for (_, ci, c, _), f in rows if ci == i]
         base_axis = report["baseline"]["axes"][a]
         if not here:
-            _baseline_analytic(run, i, base_axis)
+            _baseline_analytic(inp, i, base_axis)
             continue
         for c, f in here:
             f["params_ci95"] = dict.fromkeys(f["params"])
             if c.effect not in SUPPORTED:
                 report["notes"].append(f"intervals: no estimator for {c.effect} on {a}; its parameters have no interval")
         try:
-            estimates = _replicates(run, i, [c for c, _ in here], seeds)
+            estimates = _replicates(inp, state, i, [c for c, _ in here], seeds)
         except (ValueError, ArithmeticError) as exc:  # a singular fit: never lose the findings for it
             report["notes"].append(f"intervals on {a}: the bootstrap could not run ({exc}); no intervals")
             continue
@@ -142,19 +142,19 @@ def add_intervals(run, n_boot, seed):
                                                 param_bounds(c.effect, name))
                                 for name, value in f["params"].items()}
             if c.effect in INVERTED and all(f["params_ci95"].values()):
-                _invert(run, i, [c for c, _ in here], j, f, reps, seeds)
+                _invert(inp, state, i, [c for c, _ in here], j, f, reps, seeds)
         base_axis["params_ci95"] = {name: _interval(base_axis[name], estimates[name],
                                                     SCALES["baseline"].get(name, "linear"))
                                     for name in ("bias_dps", "arw_dps_per_sqrt_hz")}
     block["runtime_s"] = time.perf_counter() - t0
 
 
-def _invert(run, i, cands, j, finding, reps, seeds):
+def _invert(inp, state, i, cands, j, finding, reps, seeds):
     """One step of test inversion (module docstring) for the finding ``j`` of ``cands`` on axis
     ``i`` (``reps``: its replicates' estimates at the finding): its interval's ends re-made with
     replicates simulated at its lower and at its upper ends."""
     def replicates_at(at):
-        return [e[j] for e in _replicates(run, i, cands, seeds, {j: at})["findings"]]
+        return [e[j] for e in _replicates(inp, state, i, cands, seeds, {j: at})["findings"]]
 
     finding["params_ci95"] = inversion_step(finding["params"], reps, replicates_at, SCALES.get(finding["effect"], {}),
                                             {name: param_bounds(finding["effect"], name) for name in finding["params"]})
@@ -204,29 +204,29 @@ def inversion_step(params, replicates, replicates_at, scales, bounds=None):
     return out
 
 
-def _replicates(run, i, cands, seeds, at=None):
+def _replicates(inp, state, i, cands, seeds, at=None):
     """Axis ``i`` of the extended model simulated once per seed: each run's finding estimates
     (a list per run, in the order of ``cands``) and the baseline's ``bias_dps`` and
     ``arw_dps_per_sqrt_hz``. ``at``: ``{index into cands: params}`` simulated in place of those
     findings' estimates."""
     a = AXES[i]
-    model = copy.deepcopy(run.base)
-    model["axes"][a] = run.axis_spec(i, run.kept_on(i))
+    model = copy.deepcopy(inp.base)
+    model["axes"][a] = state.spec(inp, i, state.kept_on(i))
     for j, params in (at or {}).items():
         model["axes"][a]["effects"][j].update(params)
     if any(c.effect == TEMPERATURE for c in cands):
-        model[TEMPERATURE_PROFILE] = temperature_table(run.rec)
+        model[TEMPERATURE_PROFILE] = temperature_table(inp.rec)
     spec, _ = validate_model(model)
-    temp = run.temp if any(c.effect == TEMPERATURE for c in cands) else None
-    resolved = bool(run.resolved_lags[i]) and any(c.effect == COLORED_NOISE and c.extra.get("composite") for c in cands)
+    temp = inp.temp if any(c.effect == TEMPERATURE for c in cands) else None
+    resolved = bool(state.axes[i].lags) and any(c.effect == COLORED_NOISE and c.composite for c in cands)
     out = {"findings": [], "bias_dps": [], "arw_dps_per_sqrt_hz": []}
-    bar = Progress(run.say, f"intervals on {a}: bootstrap runs", len(seeds))
+    bar = Progress(inp.say, f"intervals on {a}: bootstrap runs", len(seeds))
     for k, s in enumerate(seeds):
-        x = simulate_axis(spec, run.n, run.sample_rate_hz, s, i)
+        x = simulate_axis(spec, inp.n, inp.sample_rate_hz, s, i)
         out["bias_dps"].append(float(np.mean(x)))
-        out["arw_dps_per_sqrt_hz"].append(noise_sigma(x, run.sample_rate_hz, run.q or 0.0) / math.sqrt(run.sample_rate_hz))
+        out["arw_dps_per_sqrt_hz"].append(noise_sigma(x, inp.sample_rate_hz, inp.q or 0.0) / math.sqrt(inp.sample_rate_hz))
         try:
-            out["findings"].append(reestimate_axis(x, run.sample_rate_hz, temp, cands, resolved, run.q or 0.0, owned=True))
+            out["findings"].append(reestimate_axis(x, inp.sample_rate_hz, temp, cands, resolved, inp.q or 0.0, owned=True))
         except (ValueError, ArithmeticError):  # a fit that cannot run on this replicate
             out["findings"].append([None] * len(cands))
         bar.step(k + 1)
@@ -295,12 +295,12 @@ def _spread(estimate, replicates, scale, at=None):
     return scale, u_hat, float(np.mean(dev)), half
 
 
-def _baseline_analytic(run, i, base_axis):
+def _baseline_analytic(inp, i, base_axis):
     """Intervals of the white-noise baseline of axis ``i`` (module docstring)."""
-    n = run.n
+    n = inp.n
     z = NormalDist().inv_cdf(0.5 + CONFIDENCE / 2)
-    q2 = (run.q or 0.0) ** 2 / 12.0
-    sigma2 = (base_axis["arw_dps_per_sqrt_hz"] ** 2) * run.sample_rate_hz
+    q2 = (inp.q or 0.0) ** 2 / 12.0
+    sigma2 = (base_axis["arw_dps_per_sqrt_hz"] ** 2) * inp.sample_rate_hz
     total = sigma2 + q2
     if not total > 0:
         return

@@ -1,7 +1,11 @@
 """Model-gap analysis: what the baseline simulation gets wrong, the cause, and the gain.
 
 ``analyse_gap(rec)`` writes the gap report of docs/formats.md (section 3) in five steps, one
-function each on a shared run (:class:`_GapRun`); the modules beside this one hold the parts:
+function each: :func:`prepare` and :func:`baseline_spread` make the
+:class:`~gyrofilter.analysis.gap.state.GapInput` every step reads, the later steps each take a
+:class:`~gyrofilter.analysis.gap.state.GapState` and return a new one, scoring the models they
+weigh through one :class:`~gyrofilter.analysis.gap.scoring.Scorer`; the modules beside this one
+hold the parts:
 
 1. **Baseline fit** per axis (the package's plain simulation: constant bias, white noise,
    quantization of the recorded unit; :func:`gyrofilter.analysis.gap.baseline.baseline_model`).
@@ -48,26 +52,30 @@ import copy
 import math
 import time
 import warnings
+from dataclasses import replace
 
 import numpy as np
 
-from ...effects import COLORED_NOISE, SLOW, TEMPERATURE, WANDERS
-from . import detectors as det
-from .baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
-                           temperature_table, wander_highpassed, white_less_wanders)
-from .composite import composite_step, slow_wavelet_variance
-from .confound import alternatives_entry, kept_without_gain, weigh_readings, weigh_wanders
-from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
-                           features, null_spread, still_departs, strongest)
-from .intervals import add_intervals
-from ..still import not_static
+from ...effects import SLOW, TEMPERATURE, WANDERS
 from ...errors import GyroFilterError, RecordingError
 from ...recording import GYRO_COLUMNS
 from ...sim.model import TEMPERATURE_PROFILE
 from ...units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
+from ..still import not_static
+from . import detectors as det
+from .baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
+                       temperature_table, wander_highpassed)
+from .composite import composite_step, slow_wavelet_variance
+from .confound import alternatives_entry, kept_without_gain, weigh_readings, weigh_wanders
+from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
+                       features, still_departs, strongest)
+from .intervals import add_intervals
+from .scoring import Scorer
+from .state import AxisModels, GapInput, GapState, Kept, TimeReading
 
 #: minimum samples for any analysis
 MIN_SAMPLES = 256
+_BASELINE_DESCRIPTION = "constant bias + white noise (+ quantization of the recorded unit)"
 
 
 def gap_columns(names):
@@ -99,199 +107,143 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None,
             name = recording_name if recording_name is not None else (rec.path or "")
             return {"recording": name, "sample_rate_hz": float(rec.sample_rate_hz),
                     "duration_s": len(g) / float(rec.sample_rate_hz),
-                    "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
+                    "baseline": {"description": _BASELINE_DESCRIPTION,
                                  "axes": {a: dict(base.get("axes", {}).get(a, {})) for a in AXES}, "model": base},
                     "findings": [], "extended_model": base,
                     "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
 
 
 def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
-    """The five steps of the module docstring, one function each, on a shared :class:`_GapRun`."""
+    """The five steps of the module docstring, in order."""
     t_start = time.perf_counter()
-    run = _GapRun(rec, seed=seed, n_sims=n_sims, say=progress or (lambda text: None), recording_name=recording_name)
-    if run.n >= MIN_SAMPLES:
-        _baseline_spread(run)       # 2.
-        _detect(run)                # 3.
-        weigh_readings(run)         # 3., covariate or time reading of a confounded temperature
-        weigh_wanders(run)          # 3., bias instability or Gauss-Markov
-        _keep_findings(run)         # 4., gain per finding
-        composite_step(run)         # 4., composite stochastic part where D stays high
-        _write_findings(run)        # 5.
-        add_intervals(run, bootstrap, seed)  # 5., the parameters' intervals
-    run.report["runtime_s"] = time.perf_counter() - t_start
-    return run.report
-
-
-class _GapRun:
-    """One gap analysis: the recording, the baseline fit (step 1, done here), the simulation
-    seeds and features, the candidates and the per-axis departures of every model tried
-    (computed once per set of findings: an axis's departures depend only on that axis's model,
-    whose random streams are its own)."""
-
-    def __init__(self, rec, *, seed, n_sims, say, recording_name):
-        where = rec.path or "recording"
-        sample_rate_hz = check_sample_rate_hz(rec.sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
-        n = len(rec)
-        if n < 2:
-            raise RecordingError(f"{where}: {n} sample(s) after the header: a gap analysis needs data rows")
-        self.rec, self.sample_rate_hz, self.n, self.say = rec, sample_rate_hz, n, say
-        self.report = report = {
-            "recording": recording_name if recording_name is not None else (rec.path or ""),
-            "sample_rate_hz": sample_rate_hz, "duration_s": n / sample_rate_hz,
-            "baseline": {"description": "constant bias + white noise (+ quantization of the recorded unit)",
-                         "axes": {a: {} for a in AXES}},
-            "findings": [], "extended_model": {}, "notes": []}
-        if not all(np.isfinite(to_dps(rec.columns[c][lo:lo + (1 << 16)], rec.gyro_unit, rec.lsb_per_dps)).all()
-                   for c in GYRO_COLUMNS for lo in range(0, n, 1 << 16)):  # in deg/s, a pass at a time
-            raise RecordingError(f"{where}: gyro columns hold non-finite values")
-        self.base = base = baseline_model(rec)
-        report["baseline"]["model"] = base
-        self.q = q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None
-        for a in AXES:
-            report["baseline"]["axes"][a] = {"bias_dps": base["axes"][a]["bias_dps"],
-                                             "arw_dps_per_sqrt_hz": base["axes"][a]["arw_dps_per_sqrt_hz"],
-                                             "quantization_dps": q}
-        report["extended_model"] = copy.deepcopy(base)
-        if n < MIN_SAMPLES:
-            report["notes"].append(f"only {n} samples (< {MIN_SAMPLES}): too short to tell anything beyond the baseline")
-            return
-        temp = rec.temp_c
-        self.temp = None if temp is None else np.asarray(temp, dtype=float)
-        if self.temp is not None and not np.all(np.isfinite(self.temp)):
-            self.temp = None
-            report["notes"].append("temp column has non-finite values: temperature not analysed")
-        _static_notes(self)
-        self.taus = feature_taus(n, sample_rate_hz)
-        self.bands = feature_bands(n, sample_rate_hz)
-        self.m = default_n_sims(n) if n_sims is None else int(n_sims)
-        self.seeds = np.random.default_rng(seed).integers(0, 2**31, size=self.m)
-        self.n_ext = max(6, self.m // 2)
-        self.candidates = []  # (axis index, Candidate)
-        self.ext_axes = {}  # axis name -> the extended axis spec before its effects
-        self.composite_axes = {}  # axis name -> the same with the composite fit's white level
-        self.wvs = [None, None, None]  # wavelet variance of each cleaned axis at the composite's scales
-        self.kept = []  # (candidate index, axis index, Candidate, D of the axis with it alone)
-        self.resolved_lags = [None, None, None]  # composite model: the colored noise's lags (gap.composite)
-        self.readings = {}  # axis index -> the covariate and time readings of a confounded temperature (gap.confound)
-        self.alt_axes = {}  # axis name -> the extended axis spec of the time reading
-        self.excluded = set()  # candidate indices of the reading not chosen
-        self._deps_cache = {}
-        self._sims_cache = {}
-
-    def axis_spec(self, i, ks):
-        """Axis ``i``'s spec extended by the candidates ``ks`` (the composite's white level and
-        ``preserve: arw`` when one of them belongs to a composite model)."""
-        a = AXES[i]
-        cands = [self.candidates[k][1] for k in ks]
-        composite = any(c.extra.get("composite") for c in cands)
-        time_reading = any(c.extra.get("reading") == "time" for c in cands)
-        spec = dict(self.composite_axes[a] if composite else self.alt_axes[a] if time_reading else self.ext_axes[a])
-        spec["bias_dps"] = start_bias(spec["bias_dps"], cands, self.n / self.sample_rate_hz)
-        spec["effects"] = [effect_entry(c, preserve="arw" if composite else "std") for c in cands]
-        if not composite:  # the white level was measured with the wanders' high-frequency part in it
-            colored = next((c for ci, c in self.candidates if ci == i and c.effect == COLORED_NOISE), None)
-            spec["arw_dps_per_sqrt_hz"] = white_less_wanders(spec["arw_dps_per_sqrt_hz"], spec["effects"], colored,
-                                                             self.n, self.sample_rate_hz)
-        if composite and self.resolved_lags[i]:
-            for entry in spec["effects"]:
-                if entry["effect"] == COLORED_NOISE:
-                    entry.update(self.resolved_lags[i])
-        return spec
-
-    def axis_deps(self, i, ks, label):
-        """Departures of the measured axis ``i`` from ``n_ext`` runs of the baseline with axis
-        ``i`` extended by the candidates ``ks``."""
-        key = (i, tuple(sorted(ks)), tuple(sorted((self.resolved_lags[i] or {}).items())))
-        if key not in self._deps_cache:
-            model = copy.deepcopy(self.base)
-            model["axes"][AXES[i]] = self.axis_spec(i, key[1])
-            if any(self.candidates[k][1].effect == TEMPERATURE for k in key[1]):
-                model[TEMPERATURE_PROFILE] = temperature_table(self.rec)
-            sims_k = sim_features(model, self.n, self.sample_rate_hz, self.seeds[:self.n_ext], [i], self.taus,
-                                  self.bands, self.say, label)[i]
-            self._deps_cache[key] = departures(self.meas_feats[i], sims_k, self.n, (self.deps[i], self.m))
-            self._sims_cache[key] = sims_k
-        return self._deps_cache[key]
-
-    def null_spread(self, i, ks, label):
-        """The null spread of D for axis ``i`` extended by the candidates ``ks``
-        (:func:`gyrofilter.analysis.gap.features.null_spread` of its simulated runs)."""
-        self.axis_deps(i, ks, label)
-        key = (i, tuple(sorted(ks)), tuple(sorted((self.resolved_lags[i] or {}).items())))
-        return null_spread(self._sims_cache[key], self.n, (self.deps[i], self.m))
-
-    def axis_discrepancy(self, i, ks, label):
-        return discrepancy(self.axis_deps(i, ks, label))
-
-    def kept_on(self, i):
-        return [k for k, ci, _, _ in self.kept if ci == i]
-
-
-def _static_notes(run):
-    """A note per axis whose block means move more than a still gyro's would."""
-    for i, a in enumerate(AXES):
-        white_std_dps = run.base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(run.sample_rate_hz)
-        moved = not_static(axis_dps(run.rec, i), run.sample_rate_hz, white_std_dps)
-        if moved:
-            run.report["notes"].append(f"axis {a}: {moved}; the analysis models a still gyro, so its findings describe the motion")
-
-
-def _baseline_spread(run):
-    """Step 2: features of the measurement and of ``m`` baseline runs; departures and D before."""
-    n, sample_rate_hz = run.n, run.sample_rate_hz
-    run.say(f"baseline: {run.m} simulations of {n / sample_rate_hz:.0f} s at {sample_rate_hz:g} Hz")
-    run.meas_feats = []
-    for i in range(3):
-        x = axis_dps(run.rec, i)  # the features may overwrite it unless it is the record's own column
-        run.meas_feats.append(features(x, sample_rate_hz, run.taus, run.bands,
-                                       overwrite=not np.shares_memory(x, run.rec.columns[GYRO_COLUMNS[i]])))
-        del x
-    sims = sim_features(run.base, n, sample_rate_hz, run.seeds, range(3), run.taus, run.bands, run.say,
-                        "baseline simulations (runs x axes)")
-    run.deps = [departures(run.meas_feats[i], sims[i], n) for i in range(3)]
-    del sims
-    run.before = [discrepancy(d) for d in run.deps]
-    run.report["departures"] = {a: departure_summary(run.deps[i], run.meas_feats[i], run.taus, run.bands)
+    say = progress or (lambda text: None)
+    report, setup = prepare(rec, seed=seed, n_sims=n_sims, recording_name=recording_name)
+    if setup is not None:
+        inp = baseline_spread(setup, say)                               # 2.
+        report["departures"] = {a: departure_summary(inp.deps[i], inp.meas_feats[i], inp.taus, inp.bands)
                                 for i, a in enumerate(AXES)}
+        scorer = Scorer(inp)
+        state = detect(inp, report["notes"])                            # 3.
+        state = weigh_readings(inp, state, scorer)                      # 3., covariate or time reading of a temperature
+        state = weigh_wanders(inp, state, scorer)                       # 3., bias instability or Gauss-Markov
+        state = keep_findings(inp, state, scorer)                       # 4., gain per finding
+        state = composite_step(inp, state, scorer)                      # 4., composite stochastic part where D stays high
+        report["notes"] = list(state.notes)
+        write_findings(inp, state, scorer, report)                      # 5.
+        add_intervals(inp, state, report, bootstrap, seed)              # 5., the parameters' intervals
+    report["runtime_s"] = time.perf_counter() - t_start
+    return report
 
 
-def _detect(run):
+def prepare(rec, *, seed, n_sims, recording_name):
+    """Step 1: the checks, the baseline fit and the report's head. Returns ``(report, setup)``:
+    ``setup`` is the dict of :class:`~gyrofilter.analysis.gap.state.GapInput`'s fields known
+    before the simulations, or None for a record too short to analyse."""
+    where = rec.path or "recording"
+    sample_rate_hz = check_sample_rate_hz(rec.sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
+    n = len(rec)
+    if n < 2:
+        raise RecordingError(f"{where}: {n} sample(s) after the header: a gap analysis needs data rows")
+    report = {
+        "recording": recording_name if recording_name is not None else (rec.path or ""),
+        "sample_rate_hz": sample_rate_hz, "duration_s": n / sample_rate_hz,
+        "baseline": {"description": _BASELINE_DESCRIPTION, "axes": {a: {} for a in AXES}},
+        "findings": [], "extended_model": {}, "notes": []}
+    if not all(np.isfinite(to_dps(rec.columns[c][lo:lo + (1 << 16)], rec.gyro_unit, rec.lsb_per_dps)).all()
+               for c in GYRO_COLUMNS for lo in range(0, n, 1 << 16)):  # in deg/s, a pass at a time
+        raise RecordingError(f"{where}: gyro columns hold non-finite values")
+    base = baseline_model(rec)
+    report["baseline"]["model"] = base
+    q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None
+    for a in AXES:
+        report["baseline"]["axes"][a] = {"bias_dps": base["axes"][a]["bias_dps"],
+                                         "arw_dps_per_sqrt_hz": base["axes"][a]["arw_dps_per_sqrt_hz"],
+                                         "quantization_dps": q}
+    report["extended_model"] = copy.deepcopy(base)
+    if n < MIN_SAMPLES:
+        report["notes"].append(f"only {n} samples (< {MIN_SAMPLES}): too short to tell anything beyond the baseline")
+        return report, None
+    temp = rec.temp_c
+    temp = None if temp is None else np.asarray(temp, dtype=float)
+    if temp is not None and not np.all(np.isfinite(temp)):
+        temp = None
+        report["notes"].append("temp column has non-finite values: temperature not analysed")
+    report["notes"] += _static_notes(rec, base, sample_rate_hz)
+    m = default_n_sims(n) if n_sims is None else int(n_sims)
+    return report, {"rec": rec, "sample_rate_hz": sample_rate_hz, "n": n, "temp": temp, "base": base, "q": q,
+                    "taus": feature_taus(n, sample_rate_hz), "bands": feature_bands(n, sample_rate_hz), "n_sims": m,
+                    "seeds": np.random.default_rng(seed).integers(0, 2**31, size=m), "n_ext": max(6, m // 2)}
+
+
+def _static_notes(rec, base, sample_rate_hz):
+    """A note per axis whose block means move more than a still gyro's would."""
+    notes = []
+    for i, a in enumerate(AXES):
+        white_std_dps = base["axes"][a]["arw_dps_per_sqrt_hz"] * math.sqrt(sample_rate_hz)
+        moved = not_static(axis_dps(rec, i), sample_rate_hz, white_std_dps)
+        if moved:
+            notes.append(f"axis {a}: {moved}; the analysis models a still gyro, so its findings describe the motion")
+    return notes
+
+
+def baseline_spread(setup, say):
+    """Step 2: features of the measurement and of ``n_sims`` baseline runs; departures and D
+    before. Returns the :class:`~gyrofilter.analysis.gap.state.GapInput`."""
+    rec, n, sample_rate_hz, taus, bands = setup["rec"], setup["n"], setup["sample_rate_hz"], setup["taus"], setup["bands"]
+    say(f"baseline: {setup['n_sims']} simulations of {n / sample_rate_hz:.0f} s at {sample_rate_hz:g} Hz")
+    meas_feats = []
+    for i in range(3):
+        x = axis_dps(rec, i)  # the features may overwrite it unless it is the record's own column
+        meas_feats.append(features(x, sample_rate_hz, taus, bands,
+                                   overwrite=not np.shares_memory(x, rec.columns[GYRO_COLUMNS[i]])))
+        del x
+    sims = sim_features(setup["base"], n, sample_rate_hz, setup["seeds"], range(3), taus, bands, say,
+                        "baseline simulations (runs x axes)")
+    deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
+    del sims
+    return GapInput(**setup, meas_feats=meas_feats, deps=deps, before=[discrepancy(d) for d in deps], say=say)
+
+
+def detect(inp, notes):
     """Step 3: the detectors per axis, in the decision order; the extended model's white noise
     and bias re-fitted on the series cleaned of the axis's findings, and that series' wavelet
-    variance kept for the composite step."""
+    variance kept for the composite step. ``notes``: the notes so far (the state's first)."""
+    notes = list(notes)
+    candidates, axes, readings = [], [], {}
     for i, a in enumerate(AXES):
-        run.say(f"detectors on {a}")
-        x = axis_dps(run.rec, i)
+        inp.say(f"detectors on {a}")
+        x = axis_dps(inp.rec, i)
         idle = ("constant signal" if not np.ptp(x) > 0 else
                 f"noise below {MIN_NOISE_DPS:g} deg/s (too small for the detectors in float64)"
                 if not np.std(x) >= MIN_NOISE_DPS else None)
         if idle:
-            run.report["notes"].append(f"axis {a}: {idle}, nothing to analyse")
-            run.ext_axes[a] = dict(run.base["axes"][a], effects=[])
+            notes.append(f"axis {a}: {idle}, nothing to analyse")
+            axes.append(AxisModels(ext=dict(inp.base["axes"][a], effects=[])))
             continue
-        owned = not np.shares_memory(x, run.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
+        owned = not np.shares_memory(x, inp.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
         try:
-            cands, xc, alt = _detect_axis(x, run.sample_rate_hz, run.temp, tails_z=float(run.deps[i]["tails"][0][0]),
-                                          notes=run.report["notes"], axis=a, owned=owned)
+            cands, xc, alt = _detect_axis(x, inp.sample_rate_hz, inp.temp, tails_z=float(inp.deps[i]["tails"][0][0]),
+                                          notes=notes, axis=a, owned=owned)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
-            run.report["notes"].append(f"axis {a}: detectors could not run ({exc})")
-            cands, xc, alt = [], axis_dps(run.rec, i), None  # x may have been cleaned in place
-        first = len(run.candidates)
-        for c in cands:
-            if c.effect == TEMPERATURE:
-                c.extra["reference_c"] = float(np.mean(run.temp))
-            run.candidates.append((i, c))
+            notes.append(f"axis {a}: detectors could not run ({exc})")
+            cands, xc, alt = [], axis_dps(inp.rec, i), None  # x may have been cleaned in place
+        cands = [replace(c, reference_c=float(np.mean(inp.temp))) if c.effect == TEMPERATURE else c for c in cands]
+        first = len(candidates)
+        candidates += [(i, c) for c in cands]
         if alt is not None:  # the time reading of a confounded temperature (gap.confound)
             alt_cands, xa = alt
             fast = [c for c in cands if c.effect not in SLOW]
-            run.readings[i] = {"covariate": [first + j for j, c in enumerate(cands) if c.effect in SLOW],
-                               "time": alt_cands,
-                               "ext_axis": extended_axis(run.base["axes"][a], fast + alt_cands, xa, run.sample_rate_hz, run.q),
-                               "wv": slow_wavelet_variance(xa, run.sample_rate_hz, fast)}
+            readings[i] = TimeReading(covariate=[first + j for j, c in enumerate(cands) if c.effect in SLOW],
+                                      time=alt_cands,
+                                      ext_axis=extended_axis(inp.base["axes"][a], fast + alt_cands, xa, inp.sample_rate_hz,
+                                                             inp.q),
+                                      wv=slow_wavelet_variance(xa, inp.sample_rate_hz, fast))
             del xa
-        run.ext_axes[a] = extended_axis(run.base["axes"][a], cands, xc, run.sample_rate_hz, run.q)
-        run.wvs[i] = slow_wavelet_variance(xc, run.sample_rate_hz, cands)
+        axes.append(AxisModels(ext=extended_axis(inp.base["axes"][a], cands, xc, inp.sample_rate_hz, inp.q),
+                               wv=slow_wavelet_variance(xc, inp.sample_rate_hz, cands)))
         del x, xc
+    return GapState(candidates=tuple(candidates), axes=tuple(axes), readings=readings, after=tuple(inp.before),
+                    notes=tuple(notes))
 
 
 def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False):
@@ -335,8 +287,9 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     if colored is not None:
         cands.append(colored)
     cands.extend(slow)
-    alt = slow[0].extra.pop("alternative", None) if slow else None
+    alt = slow[0].time_reading if slow else None
     if alt is not None:
+        slow[0].time_reading = None  # the detectors' own candidate: the reading is returned apart
         xa = x.copy()
         for s in alt:
             if s.component is not None:
@@ -359,98 +312,111 @@ def _subtract_component(x, cand, owned):
     return x
 
 
-def _keep_findings(run):
+def keep_findings(inp, state, scorer):
     """Step 4: gain per finding, the axis extended by this finding alone (the contract's gain);
     a finding that shows no gain alone is still kept when the axis has other candidates and
-    leaving it out of the model with all of them raises the discrepancy (leave-one-out). Then D
-    of each axis extended by all its kept findings."""
-    cands, before, notes = run.candidates, run.before, run.report["notes"]
-    run.single = single = {}
+    leaving it out of the model with all of them raises the discrepancy (leave-one-out; a
+    temperature also within the null spread of D: :func:`gyrofilter.analysis.gap.confound.kept_without_gain`).
+    Then D of each axis extended by all its kept findings."""
+    cands, before, notes = state.candidates, inp.before, []
+    single = {}
+
+    def d_of(i, ks, label):
+        return scorer.discrepancy(i, state.model(inp, i, ks), label)
+
     for k, (i, c) in enumerate(cands):
-        if k in run.excluded:
+        if k in state.excluded:
             continue
         label = f"gain of {c.effect} on {AXES[i]} ({k + 1}/{len(cands)})"
-        run.say(label)
+        inp.say(label)
         try:
-            single[k] = run.axis_discrepancy(i, [k], label)
+            single[k] = d_of(i, [k], label)
         except (ValueError, FloatingPointError) as exc:
             notes.append(f"{c.effect} on {AXES[i]}: extended model could not run ({exc})")
+    kept = []
     for k, (i, c) in enumerate(cands):
         if k not in single:
             continue
         after = single[k]
         if after < before[i]:
-            run.kept.append((k, i, c, after))
+            kept.append(Kept(k, i, c, after))
             continue
         others = [k2 for k2, (i2, _) in enumerate(cands) if i2 == i and k2 != k and k2 in single]
         if others:
             label = f"{c.effect} on {AXES[i]} with and without the axis's other findings"
-            run.say(label)
+            inp.say(label)
             try:
-                with_all = run.axis_discrepancy(i, others + [k], label)
-                without = run.axis_discrepancy(i, others, label)
+                with_all = d_of(i, others + [k], label)
+                without = d_of(i, others, label)
             except (ValueError, FloatingPointError):
                 with_all = without = float("inf")
-            why = kept_without_gain(c.effect, with_all, without,
-                                    lambda: max(run.null_spread(i, others + [k], label), run.null_spread(i, others, label)))
+            why = kept_without_gain(c.effect, with_all, without, lambda: max(
+                scorer.null_spread(i, state.model(inp, i, others + [k]), label),
+                scorer.null_spread(i, state.model(inp, i, others), label)))
             if why is not None:
-                run.kept.append((k, i, c, after))
+                kept.append(Kept(k, i, c, after))
                 notes.append(f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "
                              f"axis's other findings D = {with_all:.3g}, without it {without:.3g}{why}")
                 continue
         notes.append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
-    run.after = list(before)
-    if run.kept:
-        run.say("overall gain of the extended model")
-        for i in sorted({i for _, i, _, _ in run.kept}):
-            run.after[i] = run.axis_discrepancy(i, run.kept_on(i), f"extended model on {AXES[i]}")
+    state = replace(state, kept=tuple(kept), single=single).with_notes(*notes)
+    after = list(before)
+    if kept:
+        inp.say("overall gain of the extended model")
+        for i in sorted({row.axis for row in kept}):
+            after[i] = d_of(i, state.kept_on(i), f"extended model on {AXES[i]}")
+    return replace(state, after=tuple(after))
 
 
-def _write_findings(run):
+def write_findings(inp, state, scorer, report):
     """Step 5: the extended model, the findings with evidence and gain, the extended model's
-    spread in the departure summaries, and the discrepancies."""
-    report, kept, before = run.report, run.kept, run.before
-    ext = copy.deepcopy(run.base)
+    spread in the departure summaries, and the discrepancies, into ``report``."""
+    kept, before, after = state.kept, inp.before, state.after
+    ext = copy.deepcopy(inp.base)
     for i, a in enumerate(AXES):
-        ks = run.kept_on(i)
+        ks = state.kept_on(i)
         if ks:
-            ext["axes"][a] = run.axis_spec(i, ks)
-    if any(c.effect == TEMPERATURE for _, _, c, _ in kept):
-        ext[TEMPERATURE_PROFILE] = temperature_table(run.rec)
+            ext["axes"][a] = state.spec(inp, i, ks)
+    if any(row.cand.effect == TEMPERATURE for row in kept):
+        ext[TEMPERATURE_PROFILE] = temperature_table(inp.rec)
     report["extended_model"] = ext
-    for _, i, c, after in kept:
-        z_info = strongest(run.deps[i], run.taus, run.bands)
+    for _, i, c, d_alone in kept:
+        z_info = strongest(inp.deps[i], inp.taus, inp.bands)
         report["findings"].append({
             "effect": c.effect, "axis": AXES[i],
             "params": {k: float(v) for k, v in c.params.items()},
-            "evidence": c.evidence + (f"; baseline simulations: {z_info}" if z_info else ""),
-            "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": after},
+            "evidence": c.evidence_text(*([f"baseline simulations: {z_info}"] if z_info else [])),
+            "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": d_alone},
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
         })
-        if c.extra.get("alternatives"):
+        if c.alternatives:
             report["findings"][-1]["alternatives"] = alternatives_entry(c)
+
+    def extended_deps(i):
+        return scorer.departures(i, state.model(inp, i, state.kept_on(i)), f"extended model on {AXES[i]}")
+
     for i in range(3):
-        if run.after[i] > det.OUTSIDE_NULL_D:
-            deps_e = run.axis_deps(i, run.kept_on(i), f"extended model on {AXES[i]}") if run.kept_on(i) else run.deps[i]
-            report["notes"].append(still_departs(AXES[i], run.after[i], deps_e, run.taus, run.bands))
+        if after[i] > det.OUTSIDE_NULL_D:
+            deps_e = extended_deps(i) if state.kept_on(i) else inp.deps[i]
+            report["notes"].append(still_departs(AXES[i], after[i], deps_e, inp.taus, inp.bands))
             if AXES[i] in report.get("departures", {}):
-                report["departures"][AXES[i]]["departs_most"] = departs_most(deps_e, run.taus, run.bands)
-    for i in sorted({i for _, i, _, _ in kept}):
-        deps_e = run.axis_deps(i, run.kept_on(i), f"extended model on {AXES[i]}")
+                report["departures"][AXES[i]]["departs_most"] = departs_most(deps_e, inp.taus, inp.bands)
+    for i in sorted({row.axis for row in kept}):
+        deps_e = extended_deps(i)
         summ = report["departures"][AXES[i]]
         summ["extended_adev_sim_mean_log"] = [float(v) for v in deps_e["adev"][1]]
         summ["extended_adev_sim_sd_log"] = [float(v) for v in deps_e["adev"][2]]
         summ["extended_band_sim_mean_log"] = [float(v) for v in deps_e["band"][1]]
         summ["extended_band_sim_sd_log"] = [float(v) for v in deps_e["band"][2]]
-        summ["extended_discrepancy"] = run.after[i]
+        summ["extended_discrepancy"] = after[i]
     report["discrepancy"] = {"metric": METRIC,
                              "definition": "D = mean over features of z^2, z = (measured - mean of simulations) / max(sd of simulations, floor)",
                              "before": {a: before[i] for i, a in enumerate(AXES)},
-                             "after": {a: run.after[i] for i, a in enumerate(AXES)},
+                             "after": {a: after[i] for i, a in enumerate(AXES)},
                              "overall_before": float(np.mean(before)),
-                             "overall_after": float(np.mean(run.after))}
-    report["n_simulations"] = run.m
-    n, sample_rate_hz = run.n, run.sample_rate_hz
+                             "overall_after": float(np.mean(after))}
+    report["n_simulations"] = inp.n_sims
+    n, sample_rate_hz = inp.n, inp.sample_rate_hz
     if n / sample_rate_hz < 300:
         report["notes"].append(f"record of {n / sample_rate_hz:.0f} s: slow bias effects (drift, random walk, bias instability) "
                                "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / sample_rate_hz / 9))

@@ -80,7 +80,7 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     out = [None] * len(cands)
     by = {}
     for k, c in enumerate(cands):
-        key = "composite" if c.extra.get("composite") and c.effect in WANDERS else c.effect
+        key = "composite" if c.composite and c.effect in WANDERS else c.effect
         by.setdefault(key, []).append(k)
     if HEAVY_TAILS in by:
         out[by[HEAVY_TAILS][0]] = _heavy_tails(x, sample_rate_hz)
@@ -100,7 +100,7 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
         out[by[NARROWBAND][0]] = band
     if COLORED_NOISE in by:
         k = by[COLORED_NOISE][0]
-        wander = next((c for c in cands if c.effect in WANDERS and not c.extra.get("composite")), None)
+        wander = next((c for c in cands if c.effect in WANDERS and not c.composite), None)
         out[k] = _colored(x, sample_rate_hz, "lag2" in cands[k].params, band,
                           None if wander is None else wander_highpassed(effect_entry(wander), sample_rate_hz, x.size))
     slow_det = [k for name in DETERMINISTIC for k in by.get(name, [])]

@@ -5,7 +5,7 @@ levels and the gap's decision rules; those of the confounded causes are in
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 #: expected number of false spikes per axis on white Gaussian noise (with at least
 #: OUTLIER_MIN_COUNT spikes required: P(Poisson(0.05) >= 3) = 2e-5 per axis)
@@ -71,14 +71,36 @@ REPORTED_DEPARTURE_Z = 3
 
 @dataclass
 class Candidate:
-    """A departure from the baseline, mapped to an effect of the table."""
+    """A departure from the baseline, mapped to an effect of the table: a detector's finding, and
+    what the later steps of the gap analysis decide about it (they replace a candidate with
+    :func:`dataclasses.replace`, never change it)."""
 
     effect: str
     params: dict
     statistic: float
     threshold: float
+    #: the detector's sentence; :attr:`evidence_notes` are what later steps add to it
     evidence: str
     statistic_name: str = ""
     #: model component to subtract from the series (deterministic effects), per sample, or None
     component: object = None
-    extra: dict = field(default_factory=dict)
+    #: a temperature's reference (deg C): the record's mean temperature
+    reference_c: float | None = None
+    #: the slow detector's other reading beside it, for the confounded causes to weigh
+    #: (:mod:`gyrofilter.analysis.gap.confound`): a temperature's time reading (candidates), a
+    #: bias instability's or Gauss-Markov's other wander
+    time_reading: list | None = None
+    wander_alternative: Candidate | None = None
+    #: "time" for a candidate of the time reading of a confounded temperature
+    reading: str = ""
+    #: part of a composite stochastic model (its white level, ``preserve: arw``)
+    composite: bool = False
+    #: the other reading that explains the record about as well: ``[(candidate, D of the axis with it)]``
+    alternatives: tuple = ()
+    #: what later steps add to the evidence, in order
+    evidence_notes: tuple = ()
+
+    def evidence_text(self, *more):
+        """The evidence as the report writes it: the detector's sentence, the later steps'
+        notes and ``more``, joined by "; "."""
+        return "; ".join((self.evidence,) + tuple(self.evidence_notes) + more)

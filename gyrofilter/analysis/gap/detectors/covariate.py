@@ -18,7 +18,7 @@ cause to name: it predicts the bias at the next power-up, an exponential in time
 Which reading is returned is a rule of the confounded causes, stated with its thresholds in
 :mod:`gyrofilter.analysis.gap.confound` (:func:`~gyrofilter.analysis.gap.confound.covariate_or_time`):
 the covariate reading, with the time reading riding on the temperature candidate
-(``extra["alternative"]``), unless a ramp or a step in time beats the temperature or the
+(``time_reading``), unless a ramp or a step in time beats the temperature or the
 covariate reading is the more complex one; the two are then weighed on the discrepancy D.
 """
 from __future__ import annotations
@@ -39,7 +39,7 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     the covariate reading first where a temperature is recorded (module docstring).
 
     Returns ``(candidates, stats)``: a list of :class:`Candidate` (a temperature candidate
-    carries the time reading, a list of candidates, in ``extra["alternative"]`` when that reading
+    carries the time reading, a list of candidates, as its ``time_reading`` when that reading
     names anything) and the raw statistics ``{name: value}``.
     """
     stats = {}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -459,7 +460,7 @@ def _rw_or_gm(name, table, y, delta_s):
 
 def _with_wander_alternative(cand, table, delta_s, n):
     """``cand`` (a bias instability or a Gauss-Markov wander) with the other of :data:`~gyrofilter.analysis.gap.confound.CONFUSABLE_WANDERS`
-    in ``extra["wander_alternative"]`` where that one is significant over white noise too (and,
+    as its ``wander_alternative`` where that one is significant over white noise too (and,
     a Gauss-Markov, with its tau below a fifth of the record): the gap analysis weighs the two
     readings on D (:func:`gyrofilter.analysis.gap.confound.weigh_wanders`)."""
     other = CONFUSABLE_WANDERS[1 - CONFUSABLE_WANDERS.index(cand.effect)]
@@ -468,8 +469,7 @@ def _with_wander_alternative(cand, table, delta_s, n):
         return cand
     if other == GAUSS_MARKOV and stochastic_params(other, theta, delta_s)["tau_s"] >= n * delta_s / GM_MAX_TAU_DIVISOR:
         return cand
-    cand.extra["wander_alternative"] = _stochastic_candidate(other, table[other], delta_s, n)
-    return cand
+    return replace(cand, wander_alternative=_stochastic_candidate(other, table[other], delta_s, n))
 
 
 def _stochastic_candidate(name, fit, delta_s, n):

@@ -318,6 +318,5 @@ def detect_heavy_tails(x, sample_rate_hz, *, spikes_found=False, tails_z=None):
     evidence += evidence_end
     cand = Candidate(effect=HEAVY_TAILS, params={"fraction": fits["fraction"], "scale_ratio": fits["scale_ratio"]},
                      statistic=lr, threshold=HEAVY_TAILS_THRESHOLD, evidence=evidence,
-                     statistic_name="2 Delta log L, Gaussian scale mixture over a Gaussian (residual's histogram)",
-                     extra={"over_spikes": over, "tails_z": z})
+                     statistic_name="2 Delta log L, Gaussian scale mixture over a Gaussian (residual's histogram)")
     return cand, None
