@@ -21,7 +21,7 @@ import pytest
 from gyrofilter.analysis import fleet
 from gyrofilter.cli import main
 from gyrofilter.cli.batch import expand
-from gyrofilter.recording import write_recording
+from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.simulate import simulate
 
 #: per-axis white noise of the simulated units (the 449-s MPU6050 recording), deg/s/sqrt(Hz)
@@ -446,3 +446,13 @@ def test_an_allan_fleets_markdown_has_no_gap_columns_and_a_gap_fleets_has(small_
         assert ("gap analysis" in table) == gap
         with open(folder / "fleet.csv", encoding="utf-8", newline="") as fh:
             assert next(csv.reader(fh)) == list(fleet.COLUMNS)
+
+
+def test_the_fleet_warns_about_lost_samples_as_gap_does(tmp_path):
+    """The fleet and `gap` read a file through one path (analysis.gap.pipeline.analyse_file): the
+    fleet's copy said nothing about gaps in t where `gap` warned."""
+    t = np.concatenate(([0.0], np.cumsum(np.where(np.arange(299) % 5 == 4, 0.02, 0.01))))
+    path = tmp_path / "gaps.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (300, 3)), 100.0, t_s=t))
+    result = fleet.analyse_recording(str(path), fleet.FleetSettings("gap", sims=2))
+    assert any("t shows 59 gap(s) longer than 1.5 sample intervals; the gap analysis" in w for w in result["warnings"])

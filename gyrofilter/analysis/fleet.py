@@ -60,14 +60,13 @@ import numpy as np
 
 from ..effects import BIAS_INSTABILITY, RATE_RAMP
 from .noise.allan import MIN_CLUSTERS
-from .gap.pipeline import analyse_gap, gap_columns
+from .gap.pipeline import analyse_file
 from .noise.export import JSON_KEY, kalibr_yaml, to_json
 from .noise.model import TERM_SYMBOL, TERM_UNIT, TERMS
 from .still import characterise_recording
 from ..errors import MissingExtraError, SettingsError, one_line
 from ..extras import install_hint, require
 from ..inputs import quote
-from ..recording import read_recording
 from ..units import AXES, MAD_TO_SIGMA, utf8_text
 
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
@@ -150,9 +149,7 @@ def analyse_recording(path, settings):
 
 
 def _gap_report(path, settings, warnings):
-    rec = read_recording(path, columns=gap_columns, compact=True)
-    warnings.extend(rec.warnings)
-    return analyse_gap(rec, seed=settings.seed, n_sims=settings.sims, recording_name=path)
+    return analyse_file(path, seed=settings.seed, n_sims=settings.sims, warn=warnings.append)[1]
 
 
 def _allan_part(path, settings, result):

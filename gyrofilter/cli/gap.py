@@ -19,11 +19,10 @@ import time
 
 from ..analysis.gap import report as gap_report
 from ..analysis.fleet import FleetSettings
-from ..analysis.gap.pipeline import analyse_gap, gap_columns
+from ..analysis.gap.pipeline import analyse_file
 from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import SettingsError
 from ..plots import pyplot
-from ..recording import read_recording, warn_about_gaps
 from ..sim.simulate import check_seed
 from ..units import AXES
 from . import batch, console, options, outputs
@@ -59,20 +58,6 @@ def check_options(seed, sims, bootstrap=None):
     check_seed(seed, "--seed")
 
 
-def analyse(path, *, seed=0, sims=None, bootstrap=None, warn, progress):
-    """What ``gap`` computes of one recording ``path``: (the Recording, the gap report, which is
-    the ``--json`` document of docs/formats.md), through :func:`~gyrofilter.analysis.gap.pipeline.analyse_gap`
-    with ``seed``, ``sims`` (``n_sims``) and ``bootstrap``. The reader's warnings and the gaps in ``t`` go to
-    ``warn(text)``, the steps to ``progress(text)``. Only the columns the analysis uses are kept,
-    integer (``lsb``) readings as float32, which holds them exactly (``gap_columns``)."""
-    rec = read_recording(path, columns=gap_columns, compact=True)
-    for text in rec.warnings:
-        warn(text)
-    warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)
-    progress(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
-    return rec, analyse_gap(rec, seed=seed, n_sims=sims, progress=progress, recording_name=path, bootstrap=bootstrap)
-
-
 def run(args):
     check_options(args.seed, args.sims, args.bootstrap)
     paths = batch.expand(args.recordings)
@@ -93,8 +78,8 @@ def run(args):
 
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis
-    rec, report = analyse(args.recording, seed=args.seed, sims=args.sims, bootstrap=args.bootstrap,
-                          warn=console.say_warning, progress=progress)
+    rec, report = analyse_file(args.recording, seed=args.seed, n_sims=args.sims, bootstrap=args.bootstrap,
+                               warn=console.say_warning, progress=progress)
     with contextlib.ExitStack() as files:
         if args.json is not None:
             outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)

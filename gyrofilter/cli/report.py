@@ -7,7 +7,7 @@ to compare units with (docs/report.md).
 The page (:mod:`gyrofilter.view.report`) shows the recording's summary, the warnings, the default
 filter's effect, the Allan deviation with every coefficient and its interval, and the gap
 findings with their gain and the extended model. Its numbers are computed once, by the very
-functions the commands call: :func:`gyrofilter.cli.gap.analyse` (``gap --json``'s document),
+functions the commands call: :func:`gyrofilter.analysis.gap.pipeline.analyse_file` (``gap --json``'s document),
 :func:`gyrofilter.cli.allan.analyse` (``allan --json``'s) and :class:`gyrofilter.cli.replay.Replay`
 with replay's default options (its summary table); the page embeds those documents whole.
 
@@ -28,6 +28,7 @@ import sys
 import time
 
 from .. import __version__
+from ..analysis.gap.pipeline import analyse_file
 from ..analysis.still import clipped
 from ..errors import GyroFilterError, SettingsError, one_line
 from ..inputs import parse_number
@@ -112,7 +113,7 @@ def compute(path, *, seed, sims, keep_outliers, warn, progress):
             found.append(text)
             warn(text)
 
-    rec, gap_doc = gap.analyse(path, seed=seed, sims=sims, warn=warned, progress=progress)
+    rec, gap_doc = analyse_file(path, seed=seed, n_sims=sims, warn=warned, progress=progress)
     clip = clipped(rec.gyro_dps, _full_scale_dps(rec.header, warned), rec.lsb_per_dps if rec.gyro_unit == "lsb" else None)
     if clip:
         warned(clip)

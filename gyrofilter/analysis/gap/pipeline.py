@@ -58,7 +58,7 @@ import numpy as np
 
 from ...effects import SLOW, TEMPERATURE, WANDERS
 from ...errors import GyroFilterError, RecordingError
-from ...recording import GYRO_COLUMNS
+from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
 from ...units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
 from ..still import not_static
@@ -84,6 +84,22 @@ def gap_columns(names):
     ``read_recording(path, columns=gap_columns, compact=True)``: a day at 100 Hz in ``lsb`` is
     held in 3 float32 columns (104 MB) instead of 4-5 float64 ones (276-346 MB)."""
     return list(GYRO_COLUMNS) + ([c for c in ("t", "temp") if c in names] if "temp" in names else [])
+
+
+def analyse_file(path, *, seed=0, n_sims=None, bootstrap=None, warn, progress=None):
+    """The gap analysis of the recording file ``path``, the one way every command reads and
+    analyses a file (``gap``, ``report``, the fleet): returns ``(the Recording, the gap report)``
+    (:func:`analyse_gap` with ``seed``, ``n_sims``, ``bootstrap``). The reader's warnings and the
+    gaps in ``t`` go to ``warn(text)``, the steps to ``progress(text)``. Only the columns the
+    analysis uses are kept, integer (``lsb``) readings as float32, which holds them exactly
+    (:func:`gap_columns`)."""
+    say = progress or (lambda text: None)
+    rec = read_recording(path, columns=gap_columns, compact=True)
+    for text in rec.warnings:
+        warn(text)
+    warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)
+    say(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
+    return rec, analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=path, bootstrap=bootstrap)
 
 
 def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=None):
