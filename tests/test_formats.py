@@ -220,3 +220,16 @@ def test_section_8_states_the_sizes_the_code_holds():
     assert (f"| {model.MAX_EFFECTS_PER_AXIS}; {model.MAX_ARMA_COEFFICIENTS}; {model.MAX_TABLE_POINTS} |"
             in text)
     assert f"| {fleet.SCHEDULER_TIMEOUT_S:g} s |" in text
+
+
+def test_the_glossary_names_each_term_as_the_code_does():
+    """Section 12: one row per Allan term, in the model's order, with the code's name, symbol,
+    Allan document key and (for an effect) its parameter."""
+    from gyrofilter.analysis.noise.model import TERM_SYMBOL, TERMS
+    from gyrofilter.effects import BY_NAME
+    rows = [line.split("|")[1:-1] for line in section(12).splitlines() if line.startswith("| ") and "---" not in line][1:]
+    assert [r[2].strip().strip("`") for r in rows] == list(TERMS)
+    for (_, symbol, name, key, param, _), term in zip(rows, TERMS):
+        assert symbol.strip() == TERM_SYMBOL[term] and key.strip().strip("`") == JSON_KEY[term]
+        if term in BY_NAME:
+            assert param.strip().strip("`") == next(iter(BY_NAME[term].required))

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.analysis.noise import gmwm
+from gyrofilter.effects import BIAS_INSTABILITY, RATE_RANDOM_WALK
 from gyrofilter.analysis.noise.allan import overlapping_adev
 from gyrofilter.analysis.noise.fit import characterise_axis
 from gyrofilter.sim.simulate import simulate
@@ -79,7 +80,7 @@ def test_flicker_closed_form_matches_the_simulated_bias_instability_and_simulate
     assert np.allclose(closed[mid], b * b * math.log(2) / math.pi, rtol=0.03)
     runs = np.array([gmwm.haar_wv(series([{"effect": "bias_instability", "b_dps": b}], 0.0, duration_s, seed=s), FS).wv_dps2
                      for s in range(12)])
-    fit = gmwm.GmwmFit(sample_rate_hz=FS, arw_dps_per_sqrt_hz=0.0, flicker_b_dps=b, duration_s=duration_s)
+    fit = gmwm.GmwmFit(sample_rate_hz=FS, arw_dps_per_sqrt_hz=0.0, bias_instability_dps=b, duration_s=duration_s)
     rng = np.random.default_rng(3)
     fitted = np.array([gmwm.haar_wv(gmwm.simulate_fit(fit, n, FS, rng), FS).wv_dps2 for _ in range(12)])
     for mean in (runs.mean(axis=0), fitted.mean(axis=0)):
@@ -94,11 +95,11 @@ def test_a_bias_instability_is_read_as_flicker_not_as_gauss_markov_terms(seed):
     Gauss-Markov wander of the same record length is not read as flicker."""
     b, fs = 0.003, 10.0
     x = series([{"effect": "bias_instability", "b_dps": b}], 0.01, 7200.0, seed, fs=fs)
-    best, _ = gmwm.select_model(gmwm.haar_wv(x, fs, min_m=16), terms_allowed=("rrw", "flicker"), starts=3, seed=seed)
+    best, _ = gmwm.select_model(gmwm.haar_wv(x, fs, min_m=16), terms_allowed=(RATE_RANDOM_WALK, BIAS_INSTABILITY), starts=3, seed=seed)
     assert best.name == "WN+FL", best.to_dict()
-    assert abs(best.flicker_b_dps / b - 1) < 0.25
+    assert abs(best.bias_instability_dps / b - 1) < 0.25
     x = series([{"effect": "gauss_markov", "sigma_dps": 0.01, "tau_s": 30.0}], 0.01, 7200.0, seed, fs=fs)
-    best, _ = gmwm.select_model(gmwm.haar_wv(x, fs, min_m=16), terms_allowed=("rrw", "flicker"), starts=3, seed=seed)
+    best, _ = gmwm.select_model(gmwm.haar_wv(x, fs, min_m=16), terms_allowed=(RATE_RANDOM_WALK, BIAS_INSTABILITY), starts=3, seed=seed)
     assert best.name == "WN+1GM", best.to_dict()
 
 

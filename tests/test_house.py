@@ -22,6 +22,9 @@ RATE_ALIASES = {"fs", "rate_hz"}
 #: many modules (the registry itself, and where the same word names another thing: the model's
 #: temperature profile, a figure, a source option, the `arma` command)
 MAX_EFFECT_LITERAL_MODULES = 5
+#: former names of the rate random walk, the bias instability and the rate ramp (docs/formats.md,
+#: section 12: one name per term)
+TERM_ALIASES = {"rrw", "flicker", "ramp"}
 #: modules whose names share a prefix up to '_' (``gap_baseline``, ``gap_features``, ...) in one
 #: folder: this many make a family that belongs in a folder of its own
 FAMILY_SIZE = 3
@@ -178,6 +181,11 @@ def effect_literals(package=PACKAGE, names=None):
     return where
 
 
+def term_aliases(package=PACKAGE):
+    """String literals (docstrings aside) that spell a term by a former alias of :data:`TERM_ALIASES`."""
+    return sorted(f"{module}: {name!r}" for name, where in effect_literals(package, TERM_ALIASES).items() for module in where)
+
+
 def test_no_module_is_over_600_lines():
     assert not long_modules(), "\n".join(long_modules())
 
@@ -211,6 +219,10 @@ def test_an_effect_name_is_a_literal_in_few_modules():
     assert not wide, wide
 
 
+def test_a_term_has_one_name():
+    assert not term_aliases(), "\n".join(term_aliases())
+
+
 def test_the_checks_catch_what_they_look_for(tmp_path):
     package = tmp_path / "gyrofilter"
     (package / "cli").mkdir(parents=True)
@@ -231,3 +243,5 @@ def test_the_checks_catch_what_they_look_for(tmp_path):
     (package / "cli" / "d.py").write_text('"""warmup"""\nX = ("warmup", "sinusoid")\n\n\ndef f():\n    """warmup"""\n    return "warmup"\n')
     assert effect_literals(package, ["warmup", "sinusoid", "outliers"]) == {"warmup": {"cli/d.py"}, "sinusoid": {"cli/d.py"},
                                                                             "outliers": set()}
+    (package / "cli" / "e.py").write_text('TERMS = ("rrw", "arw")\n')
+    assert term_aliases(package) == ["cli/e.py: 'rrw'"]

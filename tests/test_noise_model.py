@@ -6,15 +6,16 @@ import math
 import numpy as np
 import pytest
 
+from gyrofilter.effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from gyrofilter.analysis.noise.allan import AllanInputError
 from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.analysis.noise.export import kalibr_yaml, to_json
 from gyrofilter.analysis.noise.fit import characterise, characterise_axis, nnls_weighted
-from gyrofilter.analysis.noise.model import (FLICKER_FLOOR, UNIT_FACTORS, arw_from_white_std, basis, convert, model_adev,
-                                             white_std_from_arw)
+from gyrofilter.analysis.noise.model import (ANGLE_RANDOM_WALK, FLICKER_FLOOR, QUANTIZATION, UNIT_FACTORS, arw_from_white_std,
+                                             basis, convert, model_adev, white_std_from_arw)
 from support import RECORDINGS
 
-SYMBOL_TERM = {"Q": "quantization", "N": "arw", "B": "bias_instability", "K": "rrw", "R": "rate_ramp"}
+SYMBOL_TERM = {"Q": QUANTIZATION, "N": ANGLE_RANDOM_WALK, "B": BIAS_INSTABILITY, "K": RATE_RANDOM_WALK, "R": RATE_RAMP}
 
 
 # --- a minimal noise generator (the tests' own; independent of the package's simulator) -------
@@ -92,7 +93,7 @@ CASES = {
     "flicker": (131072, {"N": 0.05, "B": 0.01}),
     "random_walk": (65536, {"N": 0.05, "K": 0.002}),
     "ramp": (131072, {"N": 0.05, "R": 1e-4}),
-    "quantization": (50000, {"Q": 0.01, "N": 0.01}),
+    QUANTIZATION: (50000, {"Q": 0.01, "N": 0.01}),
 }
 
 
@@ -133,8 +134,8 @@ def test_round_trip_battery_200_seeds(case):
 def test_short_record_leaves_slow_terms_unresolved():
     # 100 s of white noise cannot show bias instability, rate random walk or a ramp
     r = characterise_axis(simulate(10000, 100.0, np.random.default_rng(5), N=0.009), 100.0)
-    assert r.fitted["arw"].value == pytest.approx(0.009, rel=0.03)
-    for term in ("bias_instability", "rrw", "rate_ramp"):
+    assert r.fitted[ANGLE_RANDOM_WALK].value == pytest.approx(0.009, rel=0.03)
+    for term in ("bias_instability", RATE_RANDOM_WALK, "rate_ramp"):
         c = r.fitted[term]
         assert c.value is None and c.upper is not None and c.upper > 0
         assert "not resolved" in c.note
@@ -147,7 +148,7 @@ def test_read_off_white_noise_gives_n_at_one_second():
     hits = 0
     for seed in range(30):
         r = characterise_axis(simulate(20000, 100.0, np.random.default_rng(seed), N=0.01), 100.0)
-        c = r.readoff["arw"]
+        c = r.readoff[ANGLE_RANDOM_WALK]
         assert c.tau_s == pytest.approx(1.0, rel=0.15)
         hits += bool(c.low <= 0.01 <= c.high)
         assert r.readoff["quantization"].value is None
@@ -178,26 +179,26 @@ def test_unit_conversions_round_trip(term, unit):
 
 
 def test_unit_conversion_values():
-    assert convert(1.0, "arw", "deg/sqrt(h)") == pytest.approx(60.0)
-    assert convert(0.005, "arw", "deg/sqrt(h)") == pytest.approx(0.3)            # MPU6050 datasheet
+    assert convert(1.0, ANGLE_RANDOM_WALK, "deg/sqrt(h)") == pytest.approx(60.0)
+    assert convert(0.005, ANGLE_RANDOM_WALK, "deg/sqrt(h)") == pytest.approx(0.3)            # MPU6050 datasheet
     assert convert(1.0, "bias_instability", "deg/h") == pytest.approx(3600.0)
-    assert convert(1.0, "rrw", "deg/h/sqrt(h)") == pytest.approx(216000.0)
-    assert convert(0.01, "arw", "rad/s/sqrt(Hz)") == pytest.approx(0.01 * math.pi / 180)  # Kalibr
-    assert convert(1.0, "rrw", "rad/s^2/sqrt(Hz)") == pytest.approx(math.pi / 180)
-    assert convert(None, "arw", "deg/sqrt(h)") is None
+    assert convert(1.0, RATE_RANDOM_WALK, "deg/h/sqrt(h)") == pytest.approx(216000.0)
+    assert convert(0.01, ANGLE_RANDOM_WALK, "rad/s/sqrt(Hz)") == pytest.approx(0.01 * math.pi / 180)  # Kalibr
+    assert convert(1.0, RATE_RANDOM_WALK, "rad/s^2/sqrt(Hz)") == pytest.approx(math.pi / 180)
+    assert convert(None, ANGLE_RANDOM_WALK, "deg/sqrt(h)") is None
     # paper 000's NAV440 ARW 0.174 deg/sqrt(h) = 0.0029 deg/sqrt(s)
-    assert convert(0.174, "arw", "deg/sqrt(h)", to_base=True) == pytest.approx(0.0029)
+    assert convert(0.174, ANGLE_RANDOM_WALK, "deg/sqrt(h)", to_base=True) == pytest.approx(0.0029)
     assert white_std_from_arw(arw_from_white_std(0.1, 100.0), 100.0) == pytest.approx(0.1)
     assert arw_from_white_std(0.1, 100.0) == pytest.approx(0.01)
     with pytest.raises(SettingsError, match="known"):
-        convert(1.0, "arw", "furlongs")
+        convert(1.0, ANGLE_RANDOM_WALK, "furlongs")
 
 
 def test_fitted_arw_converts_to_the_per_sample_noise():
     # discrete-time std sigma_d = N sqrt(fs): the conversion Kalibr users get wrong
     fs = 200.0
     x = simulate(100000, fs, np.random.default_rng(9), N=0.004)
-    n_fit = characterise_axis(x, fs).fitted["arw"].value
+    n_fit = characterise_axis(x, fs).fitted[ANGLE_RANDOM_WALK].value
     assert white_std_from_arw(n_fit, fs) == pytest.approx(np.std(x), rel=0.02)
 
 
@@ -277,10 +278,10 @@ def test_kalibr_yaml_uses_continuous_time_si_units_and_the_largest_axis():
     values = dict(line.split("#")[0].split(":", 1) for line in text.splitlines()
                   if line and not line.startswith("#"))
     nd = float(values["gyroscope_noise_density"])
-    assert nd == pytest.approx(max(r.fitted["arw"].value for r in res.values()) * math.pi / 180, rel=1e-6)
+    assert nd == pytest.approx(max(r.fitted[ANGLE_RANDOM_WALK].value for r in res.values()) * math.pi / 180, rel=1e-6)
     assert float(values["update_rate"]) == 100.0
     rw = float(values["gyroscope_random_walk"])
-    assert rw == pytest.approx(max(r.fitted["rrw"].upper for r in res.values()) * math.pi / 180, rel=1e-6)
+    assert rw == pytest.approx(max(r.fitted[RATE_RANDOM_WALK].upper for r in res.values()) * math.pi / 180, rel=1e-6)
     assert "upper bound: K not resolved" in text
 
 
@@ -316,7 +317,7 @@ def test_fit_uncertainty_of_n_matches_the_spread_over_seeds():
     est, sd = [], []
     for seed in range(60):
         r = characterise_axis(simulate(20000, 10.0, np.random.default_rng(seed), N=0.05), 10.0)
-        c = r.fitted["arw"]
+        c = r.fitted[ANGLE_RANDOM_WALK]
         est.append(c.value ** 2)
         sd.append((c.high ** 2 - c.low ** 2) / (2 * 1.96))
     ratio = np.std(est, ddof=1) / np.mean(sd)
@@ -334,8 +335,8 @@ def test_round_trip_through_the_package_simulator():
               "effects": [{"effect": "rate_random_walk", "k_dps_per_sqrt_s": 0.002}]},
         "z": {"bias_dps": -1.0, "arw_dps_per_sqrt_hz": 0.05,
               "effects": [{"effect": "rate_ramp", "r_dps_per_s": 1e-4}]}}}
-    truth = [("x", "arw", 0.05), ("x", "bias_instability", 0.01), ("y", "arw", 0.05),
-             ("y", "rrw", 0.002), ("z", "arw", 0.05), ("z", "rate_ramp", 1e-4)]
+    truth = [("x", ANGLE_RANDOM_WALK, 0.05), ("x", "bias_instability", 0.01), ("y", ANGLE_RANDOM_WALK, 0.05),
+             ("y", RATE_RANDOM_WALK, 0.002), ("z", ANGLE_RANDOM_WALK, 0.05), ("z", "rate_ramp", 1e-4)]
     hits = {key: 0 for key in truth}
     for seed in range(12):
         g, _ = simulate_dps(model, 13107.2, seed=seed)

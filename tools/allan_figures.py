@@ -23,9 +23,10 @@ import sys
 
 import numpy as np
 
+from gyrofilter.effects import RATE_RANDOM_WALK
 from gyrofilter.analysis.noise.allan import overlapping_adev
 from gyrofilter.analysis.noise.fit import characterise
-from gyrofilter.analysis.noise.model import convert
+from gyrofilter.analysis.noise.model import ANGLE_RANDOM_WALK, convert
 from gyrofilter.analysis.noise.plots import AXIS_COLOURS, plot_allan, plot_before_after
 from gyrofilter.filter.calibration import calibration_samples
 from gyrofilter.filter.presets import PRESETS
@@ -65,14 +66,14 @@ def tables(results, motion_names):
         tmax = res["x"].tau_s[res["x"].fit_used][-1]
         for a, r in res.items():
             f = r.fitted
-            rows_arw.append(f"| {name} | {a} | {rec.duration_s:.0f} s / {tmax:.0f} s | {_interval(f['arw'], 'deg/sqrt(s)')} | "
-                            f"{_interval(f['arw'], 'deg/sqrt(h)')} | {_interval(f['quantization'], 'deg')} | "
+            rows_arw.append(f"| {name} | {a} | {rec.duration_s:.0f} s / {tmax:.0f} s | {_interval(f[ANGLE_RANDOM_WALK], 'deg/sqrt(s)')} | "
+                            f"{_interval(f[ANGLE_RANDOM_WALK], 'deg/sqrt(h)')} | {_interval(f['quantization'], 'deg')} | "
                             f"{r.fit_consistency():.0%} |")
             rows_slow.append(f"| {name} | {a} | {_interval(f['bias_instability'], 'deg/s')} | "
-                             f"{_interval(f['rrw'], 'deg/s/sqrt(s)')} | {_interval(f['rate_ramp'], 'deg/s^2')} |")
+                             f"{_interval(f[RATE_RANDOM_WALK], 'deg/s/sqrt(s)')} | {_interval(f['rate_ramp'], 'deg/s^2')} |")
             b_ro = r.readoff["bias_instability"]
             at_tau = "" if b_ro.value is None else f" at {b_ro.tau_s:.0f} s"
-            rows_ro.append(f"| {name} | {a} | {_interval(r.readoff['arw'], 'deg/sqrt(s)')} | "
+            rows_ro.append(f"| {name} | {a} | {_interval(r.readoff[ANGLE_RANDOM_WALK], 'deg/sqrt(s)')} | "
                            f"{_interval(b_ro, 'deg/s')}{at_tau} |")
     return "\n".join([
         "#### Angle random walk N (fit, 95 % interval)", "",

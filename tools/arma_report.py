@@ -25,6 +25,8 @@ import sys
 
 import numpy as np
 
+from gyrofilter.analysis.noise.model import QUANTIZATION, ANGLE_RANDOM_WALK
+from gyrofilter.effects import RATE_RANDOM_WALK
 from gyrofilter.analysis.arma import identify as arma
 from gyrofilter.analysis.arma import checks as arma_checks
 from gyrofilter.analysis.arma import fit as arma_fit
@@ -37,7 +39,7 @@ from gyrofilter.sim.simulate import simulate_dps
 def allan_model_adev(x, fs, lsb_per_dps, seeds, tau):
     """Mean ADEV of the Allan-fitted five-term model, simulated like the recording."""
     res = characterise_axis(x, fs)
-    terms = {t: res.fitted[t].value for t in ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")}
+    terms = {t: res.fitted[t].value for t in (QUANTIZATION, ANGLE_RANDOM_WALK, "bias_instability", RATE_RANDOM_WALK, "rate_ramp")}
     model = allan_model(terms, fs, lsb_per_dps)
     curves = []
     for s in seeds:
@@ -53,12 +55,12 @@ def allan_model(terms, fs, lsb_per_dps):
     effects = []
     if val("bias_instability") > 0:
         effects.append({"effect": "bias_instability", "b_dps": val("bias_instability")})
-    if val("rrw") > 0:
-        effects.append({"effect": "rate_random_walk", "k_dps_per_sqrt_s": val("rrw")})
+    if val(RATE_RANDOM_WALK) > 0:
+        effects.append({"effect": "rate_random_walk", "k_dps_per_sqrt_s": val(RATE_RANDOM_WALK)})
     if val("rate_ramp") > 0:
         effects.append({"effect": "rate_ramp", "r_dps_per_s": val("rate_ramp")})
     model = {"sample_rate_hz": fs, "gyro_unit": "dps",
-             "axes": {a: {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": val("arw"), "effects": effects if a == "x" else []} for a in "xyz"}}
+             "axes": {a: {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": val(ANGLE_RANDOM_WALK), "effects": effects if a == "x" else []} for a in "xyz"}}
     if lsb_per_dps:
         model["gyro_unit"] = "lsb"
         model["lsb_per_dps"] = lsb_per_dps

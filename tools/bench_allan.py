@@ -69,6 +69,8 @@ def oadev_vs_allantools(n_samples):
 
 def day_characterisation():
     from gyrofilter.analysis.noise.fit import characterise
+    from gyrofilter.analysis.noise.model import ANGLE_RANDOM_WALK
+    from gyrofilter.effects import RATE_RANDOM_WALK
 
     fs, n = 100.0, 24 * 3600 * 100
     rng = np.random.default_rng(1)
@@ -81,7 +83,7 @@ def day_characterisation():
     print(f"24 h at 100 Hz, three axes ({n:,} samples per axis): characterise() in {dt:.1f} s "
           f"(target: well under 60 s)")
     for name, r in res.items():
-        n_c, k_c = r.fitted["arw"], r.fitted["rrw"]
+        n_c, k_c = r.fitted[ANGLE_RANDOM_WALK], r.fitted[RATE_RANDOM_WALK]
         k_text = "not resolved" if k_c.value is None else f"{k_c.value:.3g} [{k_c.low:.3g}, {k_c.high:.3g}]"
         print(f"  {name}: {r.tau_s.size} taus, N = {n_c.value:.4g} [{n_c.low:.4g}, {n_c.high:.4g}] deg/sqrt(s), "
               f"K = {k_text} deg/s/sqrt(s)")

@@ -18,6 +18,7 @@ import argparse
 import time
 
 from gyrofilter.analysis.noise import gmwm
+from gyrofilter.effects import RATE_RANDOM_WALK
 from gyrofilter.sim.simulate import simulate
 
 FS = 100.0
@@ -51,7 +52,7 @@ def main(argv=None):
             x = simulate(model, args.duration, seed=500 + seed).gyro_dps[:, 0]
             wv = gmwm.haar_wv(x, FS, min_m=int(FS), tails=tails)
             for criterion in counts:
-                fit, _ = gmwm.select_model(wv, terms_allowed=("rrw",), starts=3, seed=seed, criterion=criterion)
+                fit, _ = gmwm.select_model(wv, terms_allowed=(RATE_RANDOM_WALK,), starts=3, seed=seed, criterion=criterion)
                 k = 0 if fit.name == name else 1 if size(fit.name) > size(name) else 2 if size(fit.name) < size(name) else 3
                 counts[criterion][k] += 1
         label = name + (" (heavy tails)" if tails else "")

@@ -26,6 +26,7 @@ import numpy as np
 
 from gyrofilter.analysis.gap import detectors as det
 from gyrofilter.analysis.noise import gmwm
+from gyrofilter.effects import RATE_RANDOM_WALK
 from gyrofilter.analysis.noise.wv_robust import ROBUST_EFFICIENCY
 from gyrofilter.sim.simulate import simulate
 
@@ -83,7 +84,7 @@ def main(argv=None):
                 {"effect": "rate_random_walk", "k_dps_per_sqrt_s": K}] + effects}}}
             x = simulate(model, args.duration, seed=100 + seed).gyro_dps[:, 0]
             for label, wv in variants(x, effects, args.efficiency):
-                fit, _ = gmwm.select_model(wv, terms_allowed=("rrw",), starts=3, seed=seed)
+                fit, _ = gmwm.select_model(wv, terms_allowed=(RATE_RANDOM_WALK,), starts=3, seed=seed)
                 truth = truth_wv(wv.tau_s)
                 yardstick = truth * np.sqrt(2.0 / (wv.edf / (wv.robust or 1.0)))
                 rows.setdefault(label, []).append((fit.name == TRUE_NAME, *errors(fit),

@@ -58,11 +58,11 @@ from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
-from ..effects import BIAS_INSTABILITY, RATE_RAMP
+from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from .noise.allan import MIN_CLUSTERS
 from .gap.pipeline import analyse_file
 from .noise.export import JSON_KEY, kalibr_yaml, to_json
-from .noise.model import TERM_SYMBOL, TERM_UNIT, TERMS
+from .noise.model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SYMBOL, TERM_UNIT
 from .still import characterise_recording
 from ..errors import MissingExtraError, SettingsError, one_line
 from ..extras import install_hint, require
@@ -70,7 +70,7 @@ from ..inputs import quote
 from ..units import AXES, MAD_TO_SIGMA, utf8_text
 
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
-COEFFICIENTS = ("arw", BIAS_INSTABILITY, "rrw", RATE_RAMP)
+COEFFICIENTS = (ANGLE_RANDOM_WALK, BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP)
 #: modified z-score beyond which a unit stands out (Iglewicz & Hoaglin 1993)
 FLAG_Z = 3.5
 #: least spread s of the log levels (10 %): the unit-to-unit spread assumed at least
@@ -375,7 +375,7 @@ def fleet_rows(names, results):
                        warnings=[w for w in base["warnings"] if not w.startswith("axis ") or w.startswith(f"axis {axis}:")])
             if axis in allan_axes:
                 details = allan_axes[axis]["details"]
-                for term in ("quantization",) + COEFFICIENTS:
+                for term in (QUANTIZATION,) + COEFFICIENTS:
                     key = JSON_KEY[term]
                     d = details[key]
                     row[key], row[f"{key}_low"], row[f"{key}_high"] = d["value"], d["low"], d["high"]
@@ -416,7 +416,7 @@ def flag_units(rows):
                 high = (math.log(r[f"{key}_low"]) - median) / spread
                 low = (median - math.log(r[f"{key}_high"])) / spread
                 for direction, z in (("high", high), ("low", low)):
-                    if z > FLAG_Z and (direction == "high" or term == "arw"):
+                    if z > FLAG_Z and (direction == "high" or term == ANGLE_RANDOM_WALK):
                         r["flag"].append({
                             "kind": "coefficient", "what": TERM_SYMBOL[term], "direction": direction, "z": z,
                             "text": f"{TERM_SYMBOL[term]} {direction}: {r[key]:.3g} [{r[f'{key}_low']:.3g}, "

@@ -14,11 +14,11 @@ Output files are written only once every result is finite, each whole or not at 
 import sys
 import textwrap
 
-from ..effects import BIAS_INSTABILITY, RATE_RAMP
+from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError
 from ..analysis.fleet import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
-from ..analysis.noise.model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert
+from ..analysis.noise.model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, TERM_UNIT, convert
 from ..analysis.noise.plots import plot_allan
 from ..analysis.still import characterise_recording
 from ..errors import SettingsError
@@ -29,8 +29,8 @@ from . import batch, console, options, outputs, still
 MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
 ALL_AXES = "".join(AXES)  # --axes as one word: xyz
 
-NAMES = {"quantization": "quantization", "arw": "angle random walk", BIAS_INSTABILITY: "bias instability",
-         "rrw": "rate random walk", RATE_RAMP: "rate ramp"}
+NAMES = {QUANTIZATION: "quantization", ANGLE_RANDOM_WALK: "angle random walk", BIAS_INSTABILITY: "bias instability",
+         RATE_RANDOM_WALK: "rate random walk", RATE_RAMP: "rate ramp"}
 
 
 def add_arguments(parser):
@@ -105,7 +105,7 @@ def unresolved_text(r, min_clusters):
     """What the record ``r`` (an AxisNoise) is too short to resolve: the slow terms (B, K, R) the fit
     left unresolved and the longest cluster time with ``min_clusters`` clusters, or "" when it
     resolves them all."""
-    missing = [TERM_SYMBOL[t] for t in (BIAS_INSTABILITY, "rrw", RATE_RAMP) if r.fitted[t].value is None]
+    missing = [TERM_SYMBOL[t] for t in (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP) if r.fitted[t].value is None]
     if not missing:
         return ""
     longest = r.tau_s[r.fit_used][-1]

@@ -17,10 +17,10 @@ import json
 
 import numpy as np
 
-from ..effects import BIAS_INSTABILITY, RATE_RAMP
+from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from ..analysis.gap.report import covariate_preamble, evidence_text, indistinguishable_text, params_text
 from ..analysis.noise.export import JSON_KEY, JSON_UNIT
-from ..analysis.noise.model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis, model_adev
+from ..analysis.noise.model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SLOPE, TERM_SYMBOL, basis, model_adev
 from ..units import AXES
 from .svg import Band, Line, figure
 
@@ -33,8 +33,8 @@ AXIS_COLOURS = {"x": "#c0392b", "y": "#27864a", "z": "#2e5fa8"}
 SUMMARY_KEYS = ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc", "live_source", "recorded_by",
                 "description")
 _LONG_TEXT = 400  # characters of a header value the summary shows
-_NAMES = {"quantization": "quantization", "arw": "angle random walk", BIAS_INSTABILITY: "bias instability",
-          "rrw": "rate random walk", RATE_RAMP: "rate ramp"}
+_NAMES = {QUANTIZATION: "quantization", ANGLE_RANDOM_WALK: "angle random walk", BIAS_INSTABILITY: "bias instability",
+          RATE_RANDOM_WALK: "rate random walk", RATE_RAMP: "rate ramp"}
 
 #: why the gap baseline's white level (ARW) and the Allan fit's N differ for one axis, said where both stand
 WHITE_LEVELS = ("Two white-noise levels, two meanings: the ARW here is the per-sample scatter of the noise faster "

@@ -37,8 +37,8 @@ from ..noise import gmwm
 from ...sim import noise_terms as nt
 from ...units import AXES
 
-#: the optional terms of the composite fit (:data:`gyrofilter.analysis.noise.gmwm.TERMS`) and the effect each becomes
-COMPOSITE_TERMS = {"rrw": RATE_RANDOM_WALK, "flicker": BIAS_INSTABILITY}
+#: the optional terms of the composite fit (of :data:`gyrofilter.analysis.noise.gmwm.TERMS`, named as the effects they become)
+COMPOSITE_TERMS = (RATE_RANDOM_WALK, BIAS_INSTABILITY)
 #: the composite fit uses the wavelet variance at tau >= max(1 s, 16 samples): shorter scales
 #: carry the colored noise's low-pass shape and the narrow bands, which have their own terms
 COMPOSITE_MIN_TAU_S = 1.0
@@ -156,7 +156,7 @@ def _composite_candidates(wv, sample_rate_hz):
     ``(fit, candidates)``: one ``gauss_markov`` per Gauss-Markov term, a ``rate_random_walk`` and a
     ``bias_instability`` if the fit has them, marked ``composite``; the fit's N is the
     composite model's white level."""
-    fit, _ = gmwm.select_model(wv, terms_allowed=tuple(COMPOSITE_TERMS), starts=3, seed=0)
+    fit, _ = gmwm.select_model(wv, terms_allowed=COMPOSITE_TERMS, starts=3, seed=0)
     out = []
     evidence = (f"composite fit {fit.name} to the {'robust ' if wv.robust else ''}Haar wavelet variance at tau = "
                 f"{wv.tau_s[0]:.3g}-{wv.tau_s[-1]:.3g} s (weighted objective Q = {fit.objective:.3g} over {wv.tau_s.size} "
@@ -171,10 +171,10 @@ def _composite_candidates(wv, sample_rate_hz):
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
                                  evidence=f"random-walk term (K {fit.rrw_dps_per_sqrt_s:.3g} deg/s/sqrt(s)) of a " + evidence,
                                  composite=True))
-    if fit.flicker_b_dps is not None:
-        out.append(det.Candidate(effect=BIAS_INSTABILITY, params={"b_dps": fit.flicker_b_dps},
+    if fit.bias_instability_dps is not None:
+        out.append(det.Candidate(effect=BIAS_INSTABILITY, params={"b_dps": fit.bias_instability_dps},
                                  statistic=0.0, threshold=1.0 / det.COMPOSITE_MIN_GAIN, statistic_name=_COMPOSITE_STATISTIC,
-                                 evidence=f"flicker term (B {fit.flicker_b_dps:.3g} deg/s) of a " + evidence,
+                                 evidence=f"flicker term (B {fit.bias_instability_dps:.3g} deg/s) of a " + evidence,
                                  composite=True))
     return fit, out
 

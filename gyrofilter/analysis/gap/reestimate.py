@@ -48,8 +48,8 @@ import math
 
 import numpy as np
 
-from ...effects import (COLORED_NOISE, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND, OUTLIERS, SHAPES,
-                            SINUSOID, TEMPERATURE, WANDERS)
+from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND, OUTLIERS,
+                        RATE_RANDOM_WALK, SHAPES, SINUSOID, TEMPERATURE, WANDERS)
 from .. import stats
 from . import detectors as det
 from ..noise import gmwm
@@ -220,12 +220,12 @@ def _composite(x, sample_rate_hz, cands, ks, out):
     if wv is None:
         return None
     gm = sorted((k for k in ks if cands[k].effect == GAUSS_MARKOV), key=lambda k: cands[k].params["tau_s"])
-    terms = {term: [k for k in ks if cands[k].effect == effect] for term, effect in COMPOSITE_TERMS.items()}
+    terms = {term: [k for k in ks if cands[k].effect == term] for term in COMPOSITE_TERMS}
     fit = gmwm.fit_model(wv, tuple(term for term, k in terms.items() if k), len(gm), starts=3, seed=0)
     for k, (sigma_dps, tau_s) in zip(gm, fit.gauss_markov):
         out[k] = {"sigma_dps": sigma_dps, "tau_s": tau_s}
-    for k in terms["rrw"]:
+    for k in terms[RATE_RANDOM_WALK]:
         out[k] = {"k_dps_per_sqrt_s": fit.rrw_dps_per_sqrt_s}
-    for k in terms["flicker"]:
-        out[k] = {"b_dps": fit.flicker_b_dps}
+    for k in terms[BIAS_INSTABILITY]:
+        out[k] = {"b_dps": fit.bias_instability_dps}
     return fit

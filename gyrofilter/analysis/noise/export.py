@@ -4,17 +4,17 @@ from __future__ import annotations
 
 import math
 
-from ...effects import BIAS_INSTABILITY, RATE_RAMP
-from .model import CUSTOMARY_UNIT, TERM_SYMBOL, TERMS, AxisNoise, Coefficient, convert
+from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
+from .model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, AxisNoise, Coefficient, convert
 from ...units import utf8_text
 
 #: JSON key of each coefficient (docs/formats.md, section 4), in its base unit
-JSON_KEY = {"quantization": "quantization_deg", "arw": "arw_dps_per_sqrt_hz",
-            BIAS_INSTABILITY: "bias_instability_dps", "rrw": "rrw_dps_per_sqrt_s",
+JSON_KEY = {QUANTIZATION: "quantization_deg", ANGLE_RANDOM_WALK: "arw_dps_per_sqrt_hz",
+            BIAS_INSTABILITY: "bias_instability_dps", RATE_RANDOM_WALK: "rrw_dps_per_sqrt_s",
             RATE_RAMP: "rate_ramp_dps_per_s"}
 #: the units of JSON_KEY (rate_ramp_dps_per_s is deg/s per s = deg/s^2)
-JSON_UNIT = {"quantization": "deg", "arw": "deg/s/sqrt(Hz)", BIAS_INSTABILITY: "deg/s",
-             "rrw": "deg/s/sqrt(s)", RATE_RAMP: "deg/s/s"}
+JSON_UNIT = {QUANTIZATION: "deg", ANGLE_RANDOM_WALK: "deg/s/sqrt(Hz)", BIAS_INSTABILITY: "deg/s",
+             RATE_RANDOM_WALK: "deg/s/sqrt(s)", RATE_RAMP: "deg/s/s"}
 
 
 def _coef_json(c: Coefficient):
@@ -81,12 +81,12 @@ def kalibr_values(r: AxisNoise):
     ``gyroscope_random_walk`` (rad/s^2/sqrt(Hz)) = K for one axis. When K is not resolved its
     upper bound is used (stated in ``random_walk_is_upper_bound``); B is *not* K. ``r``: the
     axis's AxisNoise."""
-    n = r.fitted["arw"]
-    k = r.fitted["rrw"]
+    n = r.fitted[ANGLE_RANDOM_WALK]
+    k = r.fitted[RATE_RANDOM_WALK]
     nd = n.value if n.value is not None else n.upper
     rw = k.value if k.value is not None else k.upper
-    return {"gyroscope_noise_density": convert(nd, "arw", "rad/s/sqrt(Hz)"),
-            "gyroscope_random_walk": convert(rw, "rrw", "rad/s^2/sqrt(Hz)"),
+    return {"gyroscope_noise_density": convert(nd, ANGLE_RANDOM_WALK, "rad/s/sqrt(Hz)"),
+            "gyroscope_random_walk": convert(rw, RATE_RANDOM_WALK, "rad/s^2/sqrt(Hz)"),
             "noise_density_is_upper_bound": n.value is None,
             "random_walk_is_upper_bound": k.value is None}
 

@@ -59,19 +59,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...effects import GAUSS_MARKOV
+from ...effects import BIAS_INSTABILITY, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK
 from .allan import overlapping_adev
+from .model import QUANTIZATION
 from .wv_robust import ROBUST_EFFICIENCY, robust_wv
 from ...sim.model import validate_model
 from ...sim.flicker import BiasInstability, flicker_bank
 from ...sim.noise_terms import ScaleMixtureNormal, ar1_allan_variance
 from ...sim.simulate import simulate_axis_dps
 
-OPTIONAL_TERMS = ("quantization", "rrw", "ramp")
-#: every term a fit can hold beside white noise and Gauss-Markov terms, in parameter order
-TERMS = OPTIONAL_TERMS + ("flicker",)
-_FIELD = {"quantization": "quantization_deg", "rrw": "rrw_dps_per_sqrt_s", "ramp": "ramp_dps_per_s2",
-          "flicker": "flicker_b_dps"}
+OPTIONAL_TERMS = (QUANTIZATION, RATE_RANDOM_WALK, RATE_RAMP)
+#: every term a fit can hold beside white noise and Gauss-Markov terms, in parameter order (the
+#: names of the Allan terms, :mod:`gyrofilter.analysis.noise.model`)
+TERMS = OPTIONAL_TERMS + (BIAS_INSTABILITY,)
+_FIELD = {QUANTIZATION: "quantization_deg", RATE_RANDOM_WALK: "rrw_dps_per_sqrt_s", RATE_RAMP: "rate_ramp_dps_per_s",
+          BIAS_INSTABILITY: "bias_instability_dps"}
 MAX_GM = 3
 
 
@@ -193,8 +195,8 @@ class GmwmFit:
     arw_dps_per_sqrt_hz: float
     quantization_deg: float = None
     rrw_dps_per_sqrt_s: float = None
-    ramp_dps_per_s2: float = None
-    flicker_b_dps: float = None
+    rate_ramp_dps_per_s: float = None
+    bias_instability_dps: float = None
     duration_s: float = None  # the record's length: the flicker bank's longest correlation time
     gauss_markov: list = field(default_factory=list)  # [(sigma_dps, tau_s)], by increasing tau_s
     objective: float = float("nan")  # Q(θ̂) = Σ (ν̂² - ν²(θ̂))² / Var(ν̂²)
@@ -207,7 +209,7 @@ class GmwmFit:
     def name(self):
         parts = ["WN"]
         parts += [label for label, v in (("QN", self.quantization_deg), ("RW", self.rrw_dps_per_sqrt_s),
-                                         ("DR", self.ramp_dps_per_s2), ("FL", self.flicker_b_dps)) if v is not None]
+                                         ("DR", self.rate_ramp_dps_per_s), ("FL", self.bias_instability_dps)) if v is not None]
         parts += [f"{len(self.gauss_markov)}GM"] if self.gauss_markov else []
         return "+".join(parts)
 
@@ -219,10 +221,10 @@ class GmwmFit:
             out = out + wv_quantization(tau_s, self.quantization_deg)
         if self.rrw_dps_per_sqrt_s is not None:
             out = out + wv_rrw(tau_s, self.rrw_dps_per_sqrt_s, sample_rate_hz)
-        if self.ramp_dps_per_s2 is not None:
-            out = out + wv_ramp(tau_s, self.ramp_dps_per_s2)
-        if self.flicker_b_dps is not None:
-            out = out + wv_flicker(tau_s, self.flicker_b_dps, sample_rate_hz, self.duration_s)
+        if self.rate_ramp_dps_per_s is not None:
+            out = out + wv_ramp(tau_s, self.rate_ramp_dps_per_s)
+        if self.bias_instability_dps is not None:
+            out = out + wv_flicker(tau_s, self.bias_instability_dps, sample_rate_hz, self.duration_s)
         for sigma_dps, tau_gm_s in self.gauss_markov:
             out = out + wv_gauss_markov(tau_s, sigma_dps, tau_gm_s, sample_rate_hz)
         return out
@@ -230,7 +232,7 @@ class GmwmFit:
     def to_dict(self):
         return {"model": self.name, "arw_dps_per_sqrt_hz": self.arw_dps_per_sqrt_hz,
                 "quantization_deg": self.quantization_deg, "rrw_dps_per_sqrt_s": self.rrw_dps_per_sqrt_s,
-                "ramp_dps_per_s2": self.ramp_dps_per_s2, "flicker_b_dps": self.flicker_b_dps,
+                "rate_ramp_dps_per_s": self.rate_ramp_dps_per_s, "bias_instability_dps": self.bias_instability_dps,
                 GAUSS_MARKOV: [{"sigma_dps": s, "tau_s": t} for s, t in self.gauss_markov],
                 "objective": self.objective, "n_params": self.n_params, "optimism": self.optimism,
                 "criterion": self.criterion}
@@ -261,8 +263,8 @@ def _starts(wv: WaveletVariance, terms, k_gm, rng, count):
     quantisation small, flicker at half the lowest level, Gauss-Markov times spread over the scales; then ``count - 1`` jittered copies."""
     tau, nu = wv.tau_s, wv.wv_dps2
     base = [math.log(2.0 * nu[0] * tau[0])]
-    scale = {"quantization": 0.1 * 2.0 * nu[0] * tau[0] ** 2 / 3.0, "rrw": 0.3 * 12.0 * nu[-1] / (2.0 * tau[-1]),
-             "ramp": 0.1 * 4.0 * nu[-1] / tau[-1] ** 2, "flicker": 0.5 * float(np.min(nu)) * math.pi / math.log(2.0)}
+    scale = {QUANTIZATION: 0.1 * 2.0 * nu[0] * tau[0] ** 2 / 3.0, RATE_RANDOM_WALK: 0.3 * 12.0 * nu[-1] / (2.0 * tau[-1]),
+             RATE_RAMP: 0.1 * 4.0 * nu[-1] / tau[-1] ** 2, BIAS_INSTABILITY: 0.5 * float(np.min(nu)) * math.pi / math.log(2.0)}
     base += [math.log(scale[t]) for t in TERMS if t in terms]
     gm_taus = np.geomspace(tau[0] * 4.0, tau[-1] / 4.0, k_gm + 2)[1:-1] if k_gm else []
     for t in gm_taus:
@@ -373,10 +375,10 @@ def simulate_fit(fit: GmwmFit, n, sample_rate_hz, rng, tails=None):
         x += np.diff(fit.quantization_deg * rng.standard_normal(n + 1)) * sample_rate_hz
     if fit.rrw_dps_per_sqrt_s is not None:
         x += np.cumsum(fit.rrw_dps_per_sqrt_s / math.sqrt(sample_rate_hz) * rng.standard_normal(n))
-    if fit.ramp_dps_per_s2 is not None:
-        x += fit.ramp_dps_per_s2 * np.arange(n) / sample_rate_hz
-    if fit.flicker_b_dps is not None:
-        bank = BiasInstability(fit.flicker_b_dps, sample_rate_hz, rng, 1.0 / sample_rate_hz, n / sample_rate_hz)
+    if fit.rate_ramp_dps_per_s is not None:
+        x += fit.rate_ramp_dps_per_s * np.arange(n) / sample_rate_hz
+    if fit.bias_instability_dps is not None:
+        bank = BiasInstability(fit.bias_instability_dps, sample_rate_hz, rng, 1.0 / sample_rate_hz, n / sample_rate_hz)
         for start in range(0, n, 1 << 16):  # in blocks, as the simulator streams it: bounded memory
             x[start:start + (1 << 16)] += bank.next(np.zeros(min(1 << 16, n - start)), None)
     for sigma_dps, tau_s in fit.gauss_markov:

@@ -32,21 +32,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...effects import BIAS_INSTABILITY, RATE_RAMP
+from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from ...errors import SettingsError
 from ...units import DEG_PER_RAD
 
+#: the Allan terms' names in code (IEEE Std 952's Q and N; B, K and R are named as the effects they
+#: are, gyrofilter.effects): one name per term in every module (docs/formats.md, "Glossary")
+QUANTIZATION = "quantization"
+ANGLE_RANDOM_WALK = "angle_random_walk"
 #: term names in model order, with unit, power of tau in sigma^2, basis and power-law alpha
-TERMS = ("quantization", "arw", BIAS_INSTABILITY, "rrw", RATE_RAMP)
-TERM_SYMBOL = {"quantization": "Q", "arw": "N", BIAS_INSTABILITY: "B", "rrw": "K", RATE_RAMP: "R"}
-TERM_UNIT = {"quantization": "deg", "arw": "deg/sqrt(s)", BIAS_INSTABILITY: "deg/s",
-             "rrw": "deg/s/sqrt(s)", RATE_RAMP: "deg/s^2"}
+TERMS = (QUANTIZATION, ANGLE_RANDOM_WALK, BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP)
+TERM_SYMBOL = {QUANTIZATION: "Q", ANGLE_RANDOM_WALK: "N", BIAS_INSTABILITY: "B", RATE_RANDOM_WALK: "K", RATE_RAMP: "R"}
+TERM_UNIT = {QUANTIZATION: "deg", ANGLE_RANDOM_WALK: "deg/sqrt(s)", BIAS_INSTABILITY: "deg/s",
+             RATE_RANDOM_WALK: "deg/s/sqrt(s)", RATE_RAMP: "deg/s^2"}
 #: slope of log sigma vs log tau for each term
-TERM_SLOPE = {"quantization": -1.0, "arw": -0.5, BIAS_INSTABILITY: 0.0, "rrw": 0.5, RATE_RAMP: 1.0}
+TERM_SLOPE = {QUANTIZATION: -1.0, ANGLE_RANDOM_WALK: -0.5, BIAS_INSTABILITY: 0.0, RATE_RANDOM_WALK: 0.5, RATE_RAMP: 1.0}
 #: tau (s) at which the read-off line gives the coefficient (sigma(tau_read) = coefficient)
-READ_TAU_S = {"quantization": math.sqrt(3.0), "arw": 1.0, "rrw": 3.0, RATE_RAMP: math.sqrt(2.0)}
+READ_TAU_S = {QUANTIZATION: math.sqrt(3.0), ANGLE_RANDOM_WALK: 1.0, RATE_RANDOM_WALK: 3.0, RATE_RAMP: math.sqrt(2.0)}
 #: power-law exponent of the rate PSD (NIST SP 1065); the ramp is treated as random-walk FM
-TERM_ALPHA = {"quantization": 2, "arw": 0, BIAS_INSTABILITY: -1, "rrw": -2, RATE_RAMP: -2}
+TERM_ALPHA = {QUANTIZATION: 2, ANGLE_RANDOM_WALK: 0, BIAS_INSTABILITY: -1, RATE_RANDOM_WALK: -2, RATE_RAMP: -2}
 #: sqrt(2 ln 2 / pi) = 0.664: flat Allan deviation per unit bias instability (paper 000)
 FLICKER_FLOOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
@@ -76,26 +80,26 @@ def term_shares(theta_sq, tau):
 
 #: (term, unit) -> factor: value_in_unit = factor * value_in_base_unit
 UNIT_FACTORS = {
-    ("quantization", "deg"): 1.0,
-    ("quantization", "arcsec"): 3600.0,
-    ("quantization", "rad"): 1.0 / DEG_PER_RAD,
-    ("arw", "deg/sqrt(s)"): 1.0,
-    ("arw", "deg/s/sqrt(Hz)"): 1.0,
-    ("arw", "deg/sqrt(h)"): 60.0,                    # sqrt(3600 s / h)
-    ("arw", "rad/s/sqrt(Hz)"): 1.0 / DEG_PER_RAD,    # Kalibr gyroscope_noise_density
+    (QUANTIZATION, "deg"): 1.0,
+    (QUANTIZATION, "arcsec"): 3600.0,
+    (QUANTIZATION, "rad"): 1.0 / DEG_PER_RAD,
+    (ANGLE_RANDOM_WALK, "deg/sqrt(s)"): 1.0,
+    (ANGLE_RANDOM_WALK, "deg/s/sqrt(Hz)"): 1.0,
+    (ANGLE_RANDOM_WALK, "deg/sqrt(h)"): 60.0,                    # sqrt(3600 s / h)
+    (ANGLE_RANDOM_WALK, "rad/s/sqrt(Hz)"): 1.0 / DEG_PER_RAD,    # Kalibr gyroscope_noise_density
     (BIAS_INSTABILITY, "deg/s"): 1.0,
     (BIAS_INSTABILITY, "deg/h"): 3600.0,
     (BIAS_INSTABILITY, "rad/s"): 1.0 / DEG_PER_RAD,
-    ("rrw", "deg/s/sqrt(s)"): 1.0,
-    ("rrw", "deg/s^2/sqrt(Hz)"): 1.0,
-    ("rrw", "deg/h/sqrt(h)"): 3600.0 * 60.0,
-    ("rrw", "rad/s^2/sqrt(Hz)"): 1.0 / DEG_PER_RAD,  # Kalibr gyroscope_random_walk
+    (RATE_RANDOM_WALK, "deg/s/sqrt(s)"): 1.0,
+    (RATE_RANDOM_WALK, "deg/s^2/sqrt(Hz)"): 1.0,
+    (RATE_RANDOM_WALK, "deg/h/sqrt(h)"): 3600.0 * 60.0,
+    (RATE_RANDOM_WALK, "rad/s^2/sqrt(Hz)"): 1.0 / DEG_PER_RAD,  # Kalibr gyroscope_random_walk
     (RATE_RAMP, "deg/s^2"): 1.0,
     (RATE_RAMP, "deg/h^2"): 3600.0 ** 2,
 }
 #: the customary units shown beside the base unit
-CUSTOMARY_UNIT = {"quantization": "arcsec", "arw": "deg/sqrt(h)", BIAS_INSTABILITY: "deg/h",
-                  "rrw": "deg/h/sqrt(h)", RATE_RAMP: "deg/h^2"}
+CUSTOMARY_UNIT = {QUANTIZATION: "arcsec", ANGLE_RANDOM_WALK: "deg/sqrt(h)", BIAS_INSTABILITY: "deg/h",
+                  RATE_RANDOM_WALK: "deg/h/sqrt(h)", RATE_RAMP: "deg/h^2"}
 
 
 def convert(value, term, unit, to_base=False):

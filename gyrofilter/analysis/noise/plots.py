@@ -11,12 +11,12 @@ import math
 
 import numpy as np
 
-from ...effects import BIAS_INSTABILITY, RATE_RAMP
-from .model import TERM_SLOPE, TERM_SYMBOL, TERMS, basis
+from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
+from .model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SLOPE, TERM_SYMBOL, basis
 from ...plots import pyplot
 
 AXIS_COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
-TERM_STYLE = {"quantization": ":", "arw": "--", BIAS_INSTABILITY: "-.", "rrw": (0, (5, 2, 1, 2)),
+TERM_STYLE = {QUANTIZATION: ":", ANGLE_RANDOM_WALK: "--", BIAS_INSTABILITY: "-.", RATE_RANDOM_WALK: (0, (5, 2, 1, 2)),
               RATE_RAMP: (0, (1, 1))}
 
 
