@@ -27,7 +27,7 @@ def step(i, n=10):
 
 @pytest.fixture
 def live():
-    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=True)
+    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
     server.start(INFO)
     yield server
     server.close()
@@ -36,7 +36,7 @@ def live():
 @pytest.fixture(scope="module")
 def idle():
     """One server for the tests that feed it nothing."""
-    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=True)
+    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
     server.start(INFO)
     yield server
     server.close()
@@ -176,7 +176,7 @@ def test_stalled_clients_never_hold_up_the_feed(live, monkeypatch):
 
 
 def test_close_sends_a_final_status_and_frees_the_port():
-    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=True)
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
     live.start(INFO)
     port = live.address[1]
     reader = EventReader(port)
@@ -193,11 +193,25 @@ def test_close_sends_a_final_status_and_frees_the_port():
 
 
 def test_a_server_bound_to_all_interfaces_answers_any_host_name():
-    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=False)
+    live = LiveServer(socket.AF_INET, ("0.0.0.0", 0))
     live.start(INFO)
     try:
         code, _, body = get(live.address[1], "/status", host="raspberrypi.local")
         assert code == 200 and json.loads(body)["running"] is True
+    finally:
+        live.close()
+
+
+def test_a_server_bound_to_loopback_through_a_name_answers_that_name_and_loopback_names_only():
+    """The address bound decides (issue 37): a Pi's own name maps to 127.0.1.1."""
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0), name="RaspberryPi.")
+    live.start(INFO)
+    try:
+        port = live.address[1]
+        assert live.loopback_only
+        for host, code in (("raspberrypi", 200), ("localhost", 200), ("127.0.0.1", 200), ("evil.example", 421),
+                           ("raspberrypi.evil.example", 421)):
+            assert get(port, "/status", host=host)[0] == code, host
     finally:
         live.close()
 

@@ -12,7 +12,7 @@ import errno
 import socket
 
 from ..errors import SettingsError
-from ..view.address import is_loopback, is_wildcard, resolve, split_address
+from ..view.address import is_wildcard, resolve, split_address
 from ..view.server import LiveServer
 from ..view.sink import RunInfo, Step
 from ..view.udp import FORMATS, UdpSender
@@ -108,10 +108,10 @@ def _open_server(text, host, resolved):
     (family, sockaddr)), and the line that tells the user where it is."""
     family, sockaddr = resolved
     try:
-        server = LiveServer(family, sockaddr, loopback_only=is_loopback(host))
+        server = LiveServer(family, sockaddr, name=host)
     except OSError as exc:
         raise SettingsError(f"--serve {text}: cannot listen there: {_why(exc)}") from None
-    if is_loopback(host):
+    if server.loopback_only:  # the address bound decides, not the name (raspberrypi -> 127.0.1.1)
         return server, f"gyrofilter run: live view on {server.url} (this machine only)"
     where = "every network interface" if is_wildcard(host) else host
     return server, (f"gyrofilter run: warning: the live view listens on {where}, port {server.address[1]}: anyone "

@@ -14,9 +14,10 @@ run loop's side waits for a socket.
 Read-only and closed: GET and HEAD only (any other method 405), the fixed paths only (404 for
 any other; no file is served from a path the client names), at most
 :data:`MAX_STREAM_CLIENTS` stream clients (503 beyond), request lines and headers within the
-standard library's limits (414, 431). Bound to a loopback address, it answers only requests
-whose Host is a loopback name (421 otherwise: a web page elsewhere cannot read the view through
-DNS rebinding). Every answer carries a Content-Security-Policy that allows the page's own
+standard library's limits (414, 431). Bound to a loopback address (the address bound decides,
+whatever name was given: a host's own name may map to 127.0.1.1), it answers only requests
+whose Host is a loopback name or the name it was given (421 otherwise: a web page elsewhere
+cannot read the view through DNS rebinding). Every answer carries a Content-Security-Policy that allows the page's own
 script and style sheet only.
 """
 from __future__ import annotations
@@ -120,13 +121,14 @@ class LiveServer:
     :class:`~gyrofilter.view.state.LiveState`. Binding happens here (an OSError for an address
     in use or not of this machine); :meth:`start` starts serving.
 
-    ``family``, ``sockaddr``: what :func:`gyrofilter.view.address.resolve` gave;
-    ``loopback_only``: answer only requests addressed to a loopback name (bound to one).
+    ``family``, ``sockaddr``: what :func:`gyrofilter.view.address.resolve` gave; ``name``: the
+    host name given for it, accepted as a Host besides the loopback names. ``loopback_only``
+    (set from the address bound): this server is reachable from this machine only, and answers
+    only requests addressed to a loopback name or ``name``.
     """
 
-    def __init__(self, family, sockaddr, *, loopback_only):
+    def __init__(self, family, sockaddr, *, name=None):
         self.state = LiveState()
-        self.loopback_only = loopback_only
         folder = resources.files(__package__).joinpath("page")
         self.page = {path: (folder.joinpath(name).read_bytes(), ctype) for path, (name, ctype) in PAGE_FILES.items()}
         self._publish_lock = threading.Lock()
@@ -143,6 +145,8 @@ class LiveServer:
         self.last_error = None
         self._httpd = _HTTPServer(family, sockaddr, self)
         self.address = self._httpd.server_address[:2]
+        self.loopback_only = is_loopback(self.address[0])
+        self.host_names = {_host_name(name)} if name else set()
 
     @property
     def url(self):
@@ -321,7 +325,8 @@ class _Handler(http.server.BaseHTTPRequestHandler):
         if self.command not in ("GET", "HEAD"):
             self._reply(405, b"405 read-only: GET or HEAD\n", TEXT_TYPE, extra=(("Allow", "GET, HEAD"),))
             return False
-        if self.server.live.loopback_only and not _loopback_host(self.headers.get("Host")):
+        live = self.server.live
+        if live.loopback_only and not _loopback_host(self.headers.get("Host"), live.host_names):
             self._reply(421, b"421 this view answers requests for localhost only\n", TEXT_TYPE)
             return False
         return True
@@ -384,8 +389,9 @@ class _Handler(http.server.BaseHTTPRequestHandler):
             self.close_connection = True
 
 
-def _loopback_host(host_header):
-    """True when a Host header names a loopback host (or is absent, as from an HTTP/1.0 client)."""
+def _loopback_host(host_header, names):
+    """True when a Host header names a loopback host or one of ``names`` (or is absent, as from an
+    HTTP/1.0 client)."""
     if host_header is None:
         return True
     host = host_header.strip()
@@ -393,4 +399,10 @@ def _loopback_host(host_header):
         host = host[1:].partition("]")[0]
     elif ":" in host:
         host = host.rpartition(":")[0]
-    return is_loopback(host.lower())
+    host = _host_name(host)
+    return is_loopback(host) or host in names
+
+
+def _host_name(host):
+    """A host name as compared: lower case, without the root's trailing dot."""
+    return host.lower().removesuffix(".")
