@@ -225,3 +225,50 @@ def test_an_error_inside_the_view_is_counted_not_raised(live, monkeypatch):
     wait_for(lambda: live.errors > 0, what="the publisher's error")
     assert live.last_error == "RuntimeError: boom"
     monkeypatch.setattr(server_module, "CLOSE_GRACE_S", 0.1)
+
+
+class Trickler(threading.Thread):
+    """A slowloris client: a byte of a request line every 0.2 s, until the server closes the
+    connection (``closed`` is set) or :meth:`stop`."""
+
+    def __init__(self, port):
+        super().__init__(daemon=True)
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=30)
+        self.closed = threading.Event()
+        self._halt = threading.Event()
+
+    def run(self):
+        try:
+            for byte in b"GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\n" + b"X-Slow: " + b"a" * 10000:
+                self.sock.sendall(bytes([byte]))
+                if self._halt.wait(0.2):
+                    return
+        except OSError:  # reset by the server
+            pass
+        finally:
+            self.closed.set()
+
+    def stop(self):
+        self._halt.set()
+        self.sock.close()
+
+
+def test_clients_trickling_their_requests_cannot_hold_every_connection(monkeypatch):
+    """Slowloris (issue 37): as many clients as there are connection slots, each sending a byte
+    every 0.2 s, are cut at the whole-request deadline (the socket timeout is per read), and the
+    server answers /status again while they go on trickling."""
+    monkeypatch.setattr(server_module, "MAX_CONNECTIONS", 4)
+    monkeypatch.setattr(server_module, "REQUEST_DEADLINE_S", 1.0)
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
+    live.start(INFO)
+    port = live.address[1]
+    tricklers = [Trickler(port) for _ in range(4)]
+    try:
+        for t in tricklers:
+            t.start()
+        wait_for(lambda: all(t.closed.is_set() for t in tricklers), timeout_s=20, what="the server to cut the tricklers")
+        assert get(port, "/status")[0] == 200
+    finally:
+        for t in tricklers:
+            t.stop()
+        live.close()

@@ -8,8 +8,10 @@ publisher thread that, every :data:`FRAME_INTERVAL_S`, drains the
 the frame in every stream client's queue. A queue holds at most :data:`CLIENT_QUEUE_FRAMES`
 frames (and the connection's kernel buffer :data:`STREAM_SEND_BUFFER_BYTES`): a slow or stalled
 client loses its oldest frames (counted), never the run's samples, and a client that accepts no
-byte for :data:`SOCKET_TIMEOUT_S` is disconnected. Nothing on the
-run loop's side waits for a socket.
+byte for :data:`SOCKET_TIMEOUT_S` is disconnected. A request's line and headers must all arrive
+within :data:`REQUEST_DEADLINE_S` of the connection (a deadline for the whole request, not per
+read: clients trickling a byte at a time cannot hold the :data:`MAX_CONNECTIONS` slots). Nothing
+on the run loop's side waits for a socket.
 
 Read-only and closed: GET and HEAD only (any other method 405), the fixed paths only (404 for
 any other; no file is served from a path the client names), at most
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import collections
 import http.server
+import io
 import json
 import socket
 import socketserver
@@ -43,6 +46,8 @@ STREAM_SEND_BUFFER_BYTES = 128 * 1024
 FRAME_INTERVAL_S = 0.1
 STATUS_INTERVAL_S = 0.5
 SOCKET_TIMEOUT_S = 10.0
+#: from the connection to the end of the request's headers, however the bytes trickle in
+REQUEST_DEADLINE_S = 10.0
 CLOSE_GRACE_S = 1.0
 POLL_INTERVAL_S = 0.2
 
@@ -257,6 +262,27 @@ class LiveServer:
             self._gone.notify_all()
 
 
+class _DeadlineReader(io.RawIOBase):
+    """A socket's bytes until ``deadline`` (time.monotonic()): each receive waits at most the
+    time left, and none starts after it (TimeoutError, which the handler takes as a timed-out
+    request: the connection is closed unanswered)."""
+
+    def __init__(self, connection, deadline):
+        super().__init__()
+        self._connection = connection
+        self._deadline = deadline
+
+    def readable(self):
+        return True
+
+    def readinto(self, buffer):
+        left = self._deadline - time.monotonic()
+        if left <= 0:
+            raise TimeoutError("the request did not arrive in time")
+        self._connection.settimeout(left)
+        return self._connection.recv_into(buffer)
+
+
 def _shutdown(connection):
     try:
         connection.shutdown(socket.SHUT_RDWR)
@@ -311,6 +337,13 @@ class _Handler(http.server.BaseHTTPRequestHandler):
     def version_string(self):
         return self.server_version
 
+    def setup(self):
+        """The request is read through a :class:`_DeadlineReader`: its line and headers must all
+        arrive within REQUEST_DEADLINE_S (one request per connection: HTTP/1.0)."""
+        super().setup()
+        self.rfile.close()  # the standard library's reader of the socket, replaced
+        self.rfile = io.BufferedReader(_DeadlineReader(self.connection, time.monotonic() + REQUEST_DEADLINE_S))
+
     def log_message(self, format, *args):  # noqa: A002 - the standard library's signature
         """Nothing: the library never prints (the run's summary counts what matters)."""
 
@@ -322,6 +355,7 @@ class _Handler(http.server.BaseHTTPRequestHandler):
     def parse_request(self):
         if not super().parse_request():
             return False
+        self.connection.settimeout(SOCKET_TIMEOUT_S)  # the request is in; the answer's writes time out per write
         if self.command not in ("GET", "HEAD"):
             self._reply(405, b"405 read-only: GET or HEAD\n", TEXT_TYPE, extra=(("Allow", "GET, HEAD"),))
             return False
