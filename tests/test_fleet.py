@@ -447,3 +447,13 @@ def test_an_allan_fleets_markdown_has_no_gap_columns_and_a_gap_fleets_has(small_
         assert ("gap analysis" in table) == gap
         with open(folder / "fleet.csv", encoding="utf-8", newline="") as fh:
             assert next(csv.reader(fh)) == list(fleet.COLUMNS)
+
+
+def test_a_file_name_cannot_add_a_key_to_a_units_kalibr_yaml(small_fleet, tmp_path):
+    """Issue 37: the fleet writes its imu.yaml files through the one writer that escapes the name."""
+    hostile = tmp_path / "unit7\naccelerometer_noise_density: 1.0e-9\n#.csv.gz"
+    shutil.copyfile(small_fleet[0], hostile)
+    assert main(["allan", str(hostile), small_fleet[1], "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    yaml, = (tmp_path / "f").glob("unit7*.imu.yaml")
+    keys = [line.split(":", 1)[0] for line in yaml.read_text().splitlines() if line.split("#")[0].strip()]
+    assert keys == ["gyroscope_noise_density", "gyroscope_random_walk", "rostopic", "update_rate"]
