@@ -84,7 +84,7 @@ def test_an_output_past_a_missing_folder_and_dotdot_is_refused_before_any_work(t
     monkeypatch.chdir(tmp_path)
     write_recording("in.csv", Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
     out = os.path.join("rel", "..", "rel2", "x.json")
-    assert main(["gap", "in.csv", "--json", out, "--sims", "2"]) == 2
+    assert main(["gap", "in.csv", "--json", out, "--sims", "10"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"gyrofilter: error: {out}: the folder rel does not exist, so rel/.. does not name a folder"], err
     assert sorted(os.listdir(tmp_path)) == ["in.csv"]
@@ -408,7 +408,7 @@ def test_a_write_that_fails_names_the_file_and_says_it_was_not_written(tmp_path)
                 "replay.csv": ["replay", str(rec)],
                 "allan.json": ["allan", str(rec), "--json"],
                 "kalibr.yaml": ["allan", str(rec), "--kalibr"],
-                "report.html": ["report", str(rec), "--sims", "4"]}
+                "report.html": ["report", str(rec), "--sims", "10"]}
     argvs = [argv + ([] if argv[-1].startswith("--") else ["--out"]) + [str(out / name)] for name, argv in commands.items()]
     proc = subprocess.run([sys.executable, "-c", _UNDER_A_SIZE_LIMIT, "200", json.dumps(argvs)],
                           capture_output=True, text=True, timeout=120, cwd=REPO)

@@ -203,7 +203,7 @@ def _reports(folder):
     return out
 
 
-GAP_ARGS = ["--sims", "4", "--progress"]
+GAP_ARGS = ["--sims", "10", "--progress"]
 
 
 @pytest.fixture(scope="module")

@@ -53,8 +53,8 @@ import numpy as np
 
 from . import detectors as det
 from .detectors import SLOW_EFFECTS
-from .gap_baseline import (WANDERS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features, start_bias,
-                           temperature_table, wander_highpassed, white_less_wanders)
+from .gap_baseline import (MIN_SIMS, WANDERS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
+                           start_bias, temperature_table, wander_highpassed, white_less_wanders)
 from .gap_composite import composite_step, slow_wavelet_variance
 from .gap_readings import alternatives_entry, null_spread, weigh_readings, weigh_wanders
 from .gap_features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
@@ -433,8 +433,11 @@ def _write_findings(run):
         })
         if c.extra.get("alternatives"):
             report["findings"][-1]["alternatives"] = alternatives_entry(c)
+    if run.m < MIN_SIMS:  # the spread of a feature from so few runs is too uncertain to judge D by
+        report["notes"].append(f"D from {run.m} simulations is not judged (pure white noise reads D up to 14-98 from "
+                               f"2-3 of them): give {MIN_SIMS} or more")
     for i in range(3):
-        if run.after[i] > det.OUTSIDE_NULL_D:
+        if run.after[i] > det.OUTSIDE_NULL_D and run.m >= MIN_SIMS:
             deps_e = run.axis_deps(i, run.kept_on(i), f"extended model on {AXES[i]}") if run.kept_on(i) else run.deps[i]
             report["notes"].append(still_departs(AXES[i], run.after[i], deps_e, run.taus, run.bands))
             if AXES[i] in report.get("departures", {}):
