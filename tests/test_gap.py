@@ -327,6 +327,22 @@ def test_too_few_simulations_are_refused_and_the_library_does_not_judge_d_from_t
     assert not any("does not close" in n for n in notes)
 
 
+def test_a_quiet_quantized_sensor_is_analysed():
+    """Issue 37: 99 % of the samples on one code, 1 % one LSB off: once the off-code samples are
+    cleaned as spikes the block means are all equal, and the slow detector took the log of their
+    zero variance ("detectors could not run (math domain error)" on every axis, D ~ 4e8)."""
+    from gyrofilter.recording import convert_gyro
+
+    rng = np.random.default_rng(8)
+    codes = np.where(rng.random((6000, 3)) < 0.01, rng.choice([-1, 1], (6000, 3)), 0) + np.array([-432, 144, -66])
+    rec = convert_gyro(Recording.from_dps(codes / 131.0, 100.0), "lsb", 131.0)
+    for c in ("gx", "gy", "gz"):
+        rec.columns[c] = np.round(rec.columns[c])
+    report = analyse_gap(rec, seed=0, n_sims=10, bootstrap=0)
+    assert not any("could not run" in note for note in report["notes"]), report["notes"]
+    assert all(d < 10 for d in report["discrepancy"]["after"].values()), report["discrepancy"]
+
+
 def test_noise_below_the_floor_is_a_note_saying_so():
     """Noise of 1e-300 deg/s gave the note "detectors could not run (math domain error)" (hostile 3-1)."""
     g = np.random.default_rng(0).normal(0, 0.1, (3000, 3))
