@@ -77,7 +77,9 @@ def test_constant_axis_is_a_clear_error(tmp_path, capsys):
                          np.random.default_rng(1).normal(size=2000)])
     path = _write(tmp_path / "stuck.csv", g, lsb=False)
     assert main(["allan", path]) == 2
-    _assert_one_line_error(capsys, "stuck.csv: axis y", "constant")
+    _assert_one_line_error(capsys, "stuck.csv: axis y", "constant", "; give --axes xz to analyse the others")
+    assert main(["allan", path, "--axes", "xz", "--json", str(tmp_path / "xz.json")]) == 0
+    assert sorted(json.loads((tmp_path / "xz.json").read_text())["axes"]) == ["x", "z"]
 
 
 def test_too_short_recording_is_a_clear_error(tmp_path, capsys):

@@ -16,7 +16,7 @@ import pytest
 from gyrofilter.analysis.gap_report import params_text
 from gyrofilter.analysis.still import clipped
 from gyrofilter.cli import main
-from gyrofilter.recording import read_recording
+from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.units import AXES
 from gyrofilter.view.report import FORMAT
 from support import REPO, RECORDINGS
@@ -293,3 +293,15 @@ def test_missing_out_is_one_line(capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "--out" in err
+
+
+def test_a_stuck_axis_leaves_the_others_allan_results(tmp_path, capsys):
+    """Issue 37: one constant axis made the whole Allan part fail ("no Allan deviation")."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    g[:, 0] = -3.3
+    path = tmp_path / "stuckx.csv"
+    write_recording(path, Recording.from_dps(g, 100.0))
+    _, data = report(tmp_path, capsys, str(path), "--sims", "10")
+    assert data["allan_error"] is None and sorted(data["allan"]["axes"]) == ["y", "z"]
+    assert any(w.startswith("axis x: all 6000 samples equal -3.3 deg/s") and w.endswith("left out of the Allan analysis")
+               for w in data["warnings"]), data["warnings"]

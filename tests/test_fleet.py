@@ -21,7 +21,7 @@ import pytest
 from gyrofilter.analysis import fleet
 from gyrofilter.cli import main
 from gyrofilter.cli.batch import expand
-from gyrofilter.recording import write_recording
+from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.simulate import simulate
 
 #: per-axis white noise of the simulated units (the 449-s MPU6050 recording), deg/s/sqrt(Hz)
@@ -457,3 +457,18 @@ def test_a_file_name_cannot_add_a_key_to_a_units_kalibr_yaml(small_fleet, tmp_pa
     yaml, = (tmp_path / "f").glob("unit7*.imu.yaml")
     keys = [line.split(":", 1)[0] for line in yaml.read_text().splitlines() if line.split("#")[0].strip()]
     assert keys == ["gyroscope_noise_density", "gyroscope_random_walk", "rostopic", "update_rate"]
+
+
+def test_a_stuck_axis_costs_the_fleet_that_axis_only(tmp_path, capsys):
+    """Issue 37: a unit with one constant axis lost its other axes' Allan results; now its y and z
+    rows hold them and its x row says why it has none (naming the file)."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    g[:, 0] = -3.3
+    path = tmp_path / "stuckx.csv"
+    write_recording(path, Recording.from_dps(g, 100.0))
+    assert main(["allan", str(path), "--fleet", str(tmp_path / "f")]) == 0
+    rows = {r["axis"]: r for r in _table(tmp_path / "f")}
+    assert rows["y"]["status"] == rows["z"]["status"] == "ok" and rows["y"]["arw_dps_per_sqrt_hz"]
+    assert rows["x"]["status"].startswith(f"{path}: axis x: all 6000 samples equal -3.3 deg/s")
+    assert rows["x"]["arw_dps_per_sqrt_hz"] == ""
+    assert "1 recording(s), 1 analysed, 0 failed" in capsys.readouterr().out

@@ -13,7 +13,7 @@ Output files are written only once every result is finite, each whole or not at 
 """
 import sys
 
-from ..analysis.allan import MIN_CLUSTERS, AllanInputError
+from ..analysis.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from ..analysis.fleet import FleetSettings
 from ..analysis.noise_export import kalibr_yaml, to_json
 from ..analysis.noise_model import CUSTOMARY_UNIT, TERM_SYMBOL, TERM_UNIT, TERMS, convert
@@ -72,15 +72,21 @@ def readoff_only(r):
     return out
 
 
-def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn, progress=None):
+def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn, progress=None,
+            skip_constant=False):
     """What ``allan`` computes of one recording ``path``: (head, {axis: AxisNoise}, the ``--json``
     document of docs/formats.md section 4), through :func:`~gyrofilter.analysis.still.characterise_recording`
-    (its arguments, ``warn(text)`` and ``progress(text)`` included) and
+    (its arguments, ``warn(text)``, ``progress(text)`` and ``skip_constant`` included) and
     :func:`~gyrofilter.analysis.noise_export.to_json`; the duration is rows / sample rate (s).
-    A result that is not finite raises AllanInputError naming the file."""
+    A result that is not finite raises AllanInputError naming the file; a stuck axis (not
+    skipped) says which ``--axes`` analyse the others."""
     try:
         head, results = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
-                                               keep_outliers=keep_outliers, warn=warn, progress=progress)
+                                               keep_outliers=keep_outliers, warn=warn, progress=progress,
+                                               skip_constant=skip_constant)
+    except ConstantAxisError as exc:
+        others = axes.replace(exc.axis, "")
+        raise AllanInputError(f"{path}: {exc}" + (f"; give --axes {others} to analyse the others" if others else "")) from None
     except AllanInputError as exc:  # the data of this file: name it
         raise AllanInputError(f"{path}: {exc}") from None
     duration_s = head.rows / head.sample_rate_hz
