@@ -53,7 +53,10 @@ class Outlets:
             udp = resolve(host, port, "--udp", socket.SOCK_DGRAM)
         outlets, announcements = [], []
         if udp is not None:
-            outlets.append(UdpSender(*udp, args.udp_format or FORMATS[0], args.udp))
+            try:
+                outlets.append(UdpSender(*udp, args.udp_format or FORMATS[0], args.udp))
+            except OSError as exc:
+                raise SettingsError(f"--udp {args.udp}: cannot send there: {_why(exc)}") from None
         if serve is not None:
             try:
                 server, line = _open_server(args.serve, *serve)
