@@ -272,3 +272,24 @@ def test_clients_trickling_their_requests_cannot_hold_every_connection(monkeypat
         for t in tricklers:
             t.stop()
         live.close()
+
+
+def test_a_new_client_takes_the_place_of_the_oldest_trickler(monkeypatch):
+    """Clients that keep reconnecting to trickle would take every slot freed at the deadline: when
+    all slots are taken, a new connection closes the oldest one still sending its request."""
+    monkeypatch.setattr(server_module, "MAX_CONNECTIONS", 4)
+    monkeypatch.setattr(server_module, "REQUEST_DEADLINE_S", 60.0)
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
+    live.start(INFO)
+    port = live.address[1]
+    tricklers = [Trickler(port) for _ in range(4)]
+    try:
+        for t in tricklers:
+            t.start()
+        wait_for(lambda: live._httpd._connections == 4, what="4 trickling connections")
+        assert [get(port, "/status")[0] for _ in range(3)] == [200, 200, 200]
+        wait_for(lambda: tricklers[0].closed.is_set(), what="the oldest trickler to be closed")
+    finally:
+        for t in tricklers:
+            t.stop()
+        live.close()

@@ -10,8 +10,10 @@ frames (and the connection's kernel buffer :data:`STREAM_SEND_BUFFER_BYTES`): a 
 client loses its oldest frames (counted), never the run's samples, and a client that accepts no
 byte for :data:`SOCKET_TIMEOUT_S` is disconnected. A request's line and headers must all arrive
 within :data:`REQUEST_DEADLINE_S` of the connection (a deadline for the whole request, not per
-read: clients trickling a byte at a time cannot hold the :data:`MAX_CONNECTIONS` slots). Nothing
-on the run loop's side waits for a socket.
+read: clients trickling a byte at a time cannot hold the :data:`MAX_CONNECTIONS` slots), and when
+every slot is taken a new connection closes the oldest one still sending its request, so that
+clients that keep reconnecting to trickle cannot shut others out either. Nothing on the run
+loop's side waits for a socket.
 
 Read-only and closed: GET and HEAD only (any other method 405), the fixed paths only (404 for
 any other; no file is served from a path the client names), at most
@@ -291,8 +293,10 @@ def _shutdown(connection):
 
 
 class _HTTPServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
-    """A thread per connection, at most MAX_CONNECTIONS; no reverse name look-up at bind time
-    (http.server.HTTPServer does one), errors counted instead of printed."""
+    """A thread per connection, at most MAX_CONNECTIONS (when all are taken, the oldest one whose
+    request has not arrived whole is closed for the new one; none such: the new one is closed);
+    no reverse name look-up at bind time (http.server.HTTPServer does one), errors counted
+    instead of printed."""
 
     allow_reuse_address = True
     daemon_threads = True
@@ -303,17 +307,30 @@ class _HTTPServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
         self.live = live
         self._count_lock = threading.Lock()
         self._connections = 0
+        self._pending = {}  # the connections whose request has not arrived whole, oldest first
         super().__init__(sockaddr, _Handler)
 
     def process_request(self, request, client_address):
         with self._count_lock:
-            full = self._connections >= MAX_CONNECTIONS
+            oldest = None
+            if self._connections >= MAX_CONNECTIONS and self._pending:
+                oldest = next(iter(self._pending))
+                del self._pending[oldest]
+            full = self._connections >= MAX_CONNECTIONS and oldest is None
             if not full:
                 self._connections += 1
+                self._pending[request] = None
+        if oldest is not None:  # its thread reads the end of the stream and leaves
+            _shutdown(oldest)
         if full:
             self.shutdown_request(request)
             return
         super().process_request(request, client_address)
+
+    def request_arrived(self, request):
+        """The request of the connection ``request`` has arrived whole: it is no longer evictable."""
+        with self._count_lock:
+            self._pending.pop(request, None)
 
     def process_request_thread(self, request, client_address):
         try:
@@ -321,6 +338,7 @@ class _HTTPServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
         finally:
             with self._count_lock:
                 self._connections -= 1
+                self._pending.pop(request, None)
 
     def handle_error(self, request, client_address):
         self.live.record_error(sys.exc_info()[1])
@@ -353,7 +371,9 @@ class _Handler(http.server.BaseHTTPRequestHandler):
         super().end_headers()
 
     def parse_request(self):
-        if not super().parse_request():
+        parsed = super().parse_request()  # reads the headers
+        self.server.request_arrived(self.connection)  # its line and headers are in (or refused)
+        if not parsed:
             return False
         self.connection.settimeout(SOCKET_TIMEOUT_S)  # the request is in; the answer's writes time out per write
         if self.command not in ("GET", "HEAD"):
