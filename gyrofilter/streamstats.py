@@ -6,7 +6,11 @@
 
       n = n_a + n_b,  d = m_b - m_a,  m = m_a + d n_b / n,  M2 = M2_a + M2_b + d^2 n_a n_b / n
 
-  so no sum of squares is ever formed: a large mean does not cancel the variance.
+  so no sum of squares is ever formed: a large mean does not cancel the variance. A column
+  whose values are all equal (a stuck sensor) has a standard deviation of exactly 0: its
+  minimum and maximum are kept, since the rounding of the means (-3.3 is no binary fraction)
+  leaves an M2 of about 1e-30 that a ratio of two such standard deviations would read as a
+  number (46x).
 * :class:`Envelope`: the minimum and maximum of every bucket of ``bucket`` consecutive rows,
   for drawing a long series; when more than ``max_buckets`` buckets exist, neighbouring
   buckets are merged in pairs and ``bucket`` doubles, so it keeps between ``max_buckets / 2``
@@ -26,6 +30,8 @@ class RunningMoments:
         self.count = 0
         self.mean = np.zeros(n_columns)
         self._m2 = np.zeros(n_columns)
+        self._low = np.full(n_columns, np.inf)
+        self._high = np.full(n_columns, -np.inf)
 
     def add(self, rows):
         """Add the rows of an (k, n_columns) array (pairwise update, module docstring)."""
@@ -35,6 +41,8 @@ class RunningMoments:
             return
         mean_b = rows.mean(axis=0)
         m2_b = ((rows - mean_b) ** 2).sum(axis=0)
+        self._low = np.minimum(self._low, rows.min(axis=0))
+        self._high = np.maximum(self._high, rows.max(axis=0))
         if self.count == 0:
             self.count, self.mean, self._m2 = n_b, mean_b, m2_b
             return
@@ -46,10 +54,11 @@ class RunningMoments:
 
     @property
     def std(self):
-        """Sample standard deviation (ddof = 1); NaN with fewer than 2 rows."""
+        """Sample standard deviation (ddof = 1), exactly 0 where every value is the same; NaN
+        with fewer than 2 rows."""
         if self.count < 2:
             return np.full_like(self.mean, np.nan)
-        return np.sqrt(self._m2 / (self.count - 1))
+        return np.where(self._low == self._high, 0.0, np.sqrt(self._m2 / (self.count - 1)))
 
 
 class Envelope:

@@ -125,6 +125,22 @@ def test_adf_verdicts():
     assert not arma_checks.adf_test(walk).stationary
 
 
+def test_the_analysis_does_not_depend_on_the_noise_scale():
+    """Issue 37 (the earlier pass's note): noise of 1e-21 deg/s read ADF -0.00, "unit root not
+    rejected", where the same series at 1 deg/s reads -59; every test and the chosen model are
+    now the same, the levels scaled."""
+    rng = np.random.default_rng(5)
+    e = rng.normal(size=4000)
+    x = np.empty_like(e)
+    x[0] = e[0]
+    for i in range(1, e.size):
+        x[i] = 0.7 * x[i - 1] + e[i]
+    big, tiny = (arma.analyze_axis(x * s, 100.0) for s in (0.05, 0.05e-21))
+    assert tiny.stationarity.stationary and tiny.stationarity.adf_statistic == pytest.approx(big.stationarity.adf_statistic, rel=1e-6)
+    assert tiny.chosen.order == big.chosen.order and tiny.chosen.sigma_a == pytest.approx(big.chosen.sigma_a * 1e-21, rel=1e-6)
+    assert tiny.whiteness.ljung_box_q == pytest.approx(big.whiteness.ljung_box_q, rel=1e-6)
+
+
 def test_normality_verdicts():
     rng = np.random.default_rng(4)
     gauss = arma_checks.normality_tests(rng.normal(size=5_000))

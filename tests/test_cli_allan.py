@@ -2,6 +2,7 @@
 import importlib.util
 import json
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -88,7 +89,9 @@ def test_constant_axis_is_a_clear_error(tmp_path, capsys):
                          np.random.default_rng(1).normal(size=2000)])
     path = _write(tmp_path / "stuck.csv", g, lsb=False)
     assert main(["allan", path]) == 2
-    _assert_one_line_error(capsys, "stuck.csv: axis y", "constant")
+    _assert_one_line_error(capsys, "stuck.csv: axis y", "constant", "; give --axes xz to analyse the others")
+    assert main(["allan", path, "--axes", "xz", "--json", str(tmp_path / "xz.json")]) == 0
+    assert sorted(json.loads((tmp_path / "xz.json").read_text())["axes"]) == ["x", "z"]
 
 
 def test_too_short_recording_is_a_clear_error(tmp_path, capsys):
@@ -319,3 +322,22 @@ def test_numerically_degenerate_recordings_end_in_a_result_or_one_line_naming_th
     why = "below 1e-100 deg/s" if kind == "tiny" else "predicts the series exactly"
     _assert_one_line_error(capsys, f"{kind}.csv: axis x: ", why)
     assert not (tmp_path / "out.json").exists()
+
+
+HOSTILE_NAME = "unit7\naccelerometer_noise_density: 1.0e-9\n#.csv.gz"
+
+
+def yaml_keys(text):
+    """The keys of a flat YAML document (what is left of each line that is not a comment)."""
+    return [line.split(":", 1)[0] for line in text.splitlines() if line.split("#")[0].strip()]
+
+
+def test_a_file_name_cannot_add_a_key_to_the_kalibr_yaml(static_recording, tmp_path):
+    """Issue 37: the recording's name goes into a comment line with its line ends escaped."""
+    path = tmp_path / HOSTILE_NAME
+    shutil.copyfile(static_recording[0], path)
+    yaml = tmp_path / "imu.yaml"
+    assert main(["allan", str(path), "--kalibr", str(yaml)]) == 0
+    text = yaml.read_text()
+    assert yaml_keys(text) == ["gyroscope_noise_density", "gyroscope_random_walk", "rostopic", "update_rate"]
+    assert "unit7\\naccelerometer_noise_density: 1.0e-9\\n#.csv.gz" in text

@@ -12,7 +12,8 @@ import pytest
 
 from gyrofilter.cli import outputs
 from gyrofilter.errors import SettingsError
-from support import RECORDINGS, file_named_by_bytes
+from gyrofilter.recording import Recording, write_recording
+from support import REPO, RECORDINGS, file_named_by_bytes
 from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 
 
@@ -83,7 +84,7 @@ def test_an_output_past_a_missing_folder_and_dotdot_is_refused_before_any_work(t
     monkeypatch.chdir(tmp_path)
     write_recording("in.csv", Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
     out = os.path.join("rel", "..", "rel2", "x.json")
-    assert main(["gap", "in.csv", "--json", out, "--sims", "2"]) == 2
+    assert main(["gap", "in.csv", "--json", out, "--sims", "10"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"gyrofilter: error: {out}: the folder rel does not exist, so rel/.. does not name a folder"], err
     assert sorted(os.listdir(tmp_path)) == ["in.csv"]
@@ -384,3 +385,34 @@ def test_outputs_land_together_or_none_when_one_name_was_taken_meanwhile(tmp_pat
             a.write_text("theirs")  # the name of the one that would land last is taken
     assert a.read_text() == "theirs" and not b.exists()
     assert sorted(os.listdir(tmp_path)) == ["a.json"]
+
+
+_UNDER_A_SIZE_LIMIT = """
+import json, resource, signal, sys
+from gyrofilter.cli import main
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[1]), int(sys.argv[1])))
+for argv in json.loads(sys.argv[2]):
+    print("exit", main(argv), flush=True)
+"""
+
+
+def test_a_write_that_fails_names_the_file_and_says_it_was_not_written(tmp_path):
+    """Issue 37 (9): under a file size limit (a full disk alike) every command that writes a whole
+    file says "FILE: File too large; not written" (docs/formats.md section 8), leaves nothing behind
+    (it said "[Errno 27] File too large", no file named)."""
+    rec = tmp_path / "in.csv"
+    write_recording(rec, Recording.from_dps(np.random.default_rng(37).normal(0, 0.05, (3000, 3)), 100.0))
+    out = tmp_path / "out"
+    commands = {"sim.csv": ["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "30", "--seed", "1"],
+                "replay.csv": ["replay", str(rec)],
+                "allan.json": ["allan", str(rec), "--json"],
+                "kalibr.yaml": ["allan", str(rec), "--kalibr"],
+                "report.html": ["report", str(rec), "--sims", "10"]}
+    argvs = [argv + ([] if argv[-1].startswith("--") else ["--out"]) + [str(out / name)] for name, argv in commands.items()]
+    proc = subprocess.run([sys.executable, "-c", _UNDER_A_SIZE_LIMIT, "200", json.dumps(argvs)],
+                          capture_output=True, text=True, timeout=120, cwd=REPO)
+    assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * len(commands)
+    lines = [line for line in proc.stderr.splitlines() if not line.startswith("gyrofilter: warning")]
+    assert lines == [f"gyrofilter: error: {out / name}: File too large; not written" for name in commands], proc.stderr
+    assert not out.exists()

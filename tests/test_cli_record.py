@@ -429,3 +429,29 @@ def test_no_sample_leaves_no_folder_the_recording_made(tmp_path, capsys):
     os.close(secondary)
     assert proc.returncode == 1 and f"{out}: not written, no sample was kept" in err, err
     assert sorted(os.listdir(tmp_path)) == ["had"]
+
+
+@pytest.mark.parametrize("command, suffix, row_name", [("record", ".csv", "sample"), ("run", ".csv", "filtered row")])
+def test_a_disk_that_fills_at_the_last_flush_names_the_file_and_what_it_kept(tmp_path, command, suffix, row_name):
+    """Issue 37 (4): the file size limit just below the whole file's size fails the last flush,
+    at the close (a plain file: its size does not depend on when the flushes came): one line
+    naming the file and what it kept, which reads back; no hidden
+    partial file is left (it was "[Errno 27] File too large" alone)."""
+    args = [command, "--source", "sim:seed=4,realtime=0,duration=20"]
+    whole = tmp_path / f"whole{suffix}"
+    assert main(args + ["--out", str(whole)]) == 0
+    (tmp_path / "cut").mkdir()
+    out = tmp_path / "cut" / f"out{suffix}"
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", *args, "--out", str(out)], capture_output=True,
+                          text=True, timeout=60, preexec_fn=_file_size_limit(os.path.getsize(whole) - 4))
+    lines = proc.stderr.splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
+    said = re.fullmatch(rf"gyrofilter: error: {re.escape(str(out))}: File too large; "
+                        rf"(kept the first (\d+) {row_name}s|not written, no {row_name} was kept)", lines[0])
+    assert said, lines[0]
+    if said.group(2):
+        n = int(said.group(2))
+        assert os.listdir(out.parent) == [out.name]
+        np.testing.assert_array_equal(read_recording(out).gyro, read_recording(whole).gyro[:n])
+    else:
+        assert os.listdir(out.parent) == []

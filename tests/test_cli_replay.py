@@ -318,6 +318,17 @@ def test_summary_is_readable_for_constant_and_huge_values(tmp_path, capsys):
     assert max(len(ln) for ln in table.splitlines()) < 100 and "1.41e+150" in table and "+1e+300" in table and "n/a" in table
 
 
+@pytest.mark.parametrize("value_dps", [-3.3, 3 / 131.0])
+def test_a_stuck_sensor_has_no_std_ratio(tmp_path, capsys, value_dps):
+    """Issue 37: every sample -3.3 deg/s (or 3 LSB) gave a ratio of 46x (100x) from the rounding
+    of the running sums; a constant raw series has no noise to reduce: n/a, null in the JSON."""
+    src = tmp_path / "stuck.csv"
+    write_recording(src, Recording.from_dps(np.full((1500, 3), value_dps), 100.0))
+    assert main(["replay", str(src)]) == 0
+    rows = [ln for ln in capsys.readouterr().out.splitlines() if ln.strip()[:2] in ("x ", "y ", "z ")]
+    assert len(rows) == 3 and all(ln.split()[5] == "n/a" for ln in rows), rows
+
+
 def test_outputs_are_checked_before_any_work(tmp_path, capsys):
     rng = np.random.default_rng(11)
     src = tmp_path / "in.csv"

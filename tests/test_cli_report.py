@@ -16,7 +16,7 @@ import pytest
 from gyrofilter.analysis.gap.report import params_text
 from gyrofilter.analysis.still import clipped
 from gyrofilter.cli import main
-from gyrofilter.recording import read_recording
+from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.units import AXES
 from gyrofilter.view.report import FORMAT
 from support import REPO, RECORDINGS
@@ -42,10 +42,10 @@ def report(tmp_path, capsys, *args, name="report.html"):
 
 
 def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
-    out, data = report(tmp_path, capsys, STATIC, "--seed", "3", "--sims", "8")
+    out, data = report(tmp_path, capsys, STATIC, "--seed", "3", "--sims", "10")
     assert data["format"] == FORMAT
     assert main(["allan", STATIC, "--json", str(tmp_path / "adev.json")]) == 0
-    assert main(["gap", STATIC, "--json", str(tmp_path / "gap.json"), "--seed", "3", "--sims", "8"]) == 0
+    assert main(["gap", STATIC, "--json", str(tmp_path / "gap.json"), "--seed", "3", "--sims", "10"]) == 0
     assert main(["replay", STATIC]) == 0
     table = capsys.readouterr().out
     assert data["allan"] == json.loads((tmp_path / "adev.json").read_text())
@@ -53,7 +53,7 @@ def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
     for doc in (data["gap"], want):
         without_wall_times(doc)
     assert data["gap"] == want
-    assert data["gap"]["n_simulations"] == 8 and data["options"]["seed"] == 3
+    assert data["gap"]["n_simulations"] == 10 and data["options"]["seed"] == 3
     # replay's summary table prints these with 4 decimals
     f = data["filter"]
     for i, axis in enumerate("xyz"):
@@ -84,7 +84,7 @@ def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
 
 
 def test_the_file_is_self_contained(tmp_path, capsys):
-    out, data = report(tmp_path, capsys, STATIC, "--sims", "2")
+    out, data = report(tmp_path, capsys, STATIC, "--sims", "10")
     page = parse(out)
     assert page.scripts == ["application/json"]  # the data block only: nothing runs
     linked = [(tag, k, v) for tag, attrs in page.tags for k, v in attrs.items()
@@ -105,7 +105,7 @@ def test_text_from_the_file_cannot_end_the_data_block(tmp_path, capsys):
     lines.insert(1, "# description: </script><script>alert(1)</script> <b>&amp;\n")
     rec = tmp_path / "odd.csv"
     rec.write_text("".join(line for line in lines if not line.startswith("# description: static")))
-    out, data = report(tmp_path, capsys, str(rec), "--sims", "2")
+    out, data = report(tmp_path, capsys, str(rec), "--sims", "10")
     assert data["recording"]["header"]["description"] == "</script><script>alert(1)</script> <b>&amp;"
     assert parse(out).scripts == ["application/json"]
 
@@ -114,7 +114,7 @@ def test_text_from_the_file_cannot_end_the_data_block(tmp_path, capsys):
                                                marks=[] if p.name[:-len(".csv.gz")] in FAST else [pytest.mark.slow])
                                   for p in sorted(RECORDINGS.glob("*.csv.gz"))])
 def test_every_shipped_recording_yields_a_report(tmp_path, capsys, name):
-    out, data = report(tmp_path, capsys, str(RECORDINGS / f"{name}.csv.gz"), "--sims", "2")
+    out, data = report(tmp_path, capsys, str(RECORDINGS / f"{name}.csv.gz"), "--sims", "10")
     rec = read_recording(RECORDINGS / f"{name}.csv.gz")
     assert data["recording"]["samples"] == len(rec)
     assert (data["allan"] is None) == (data["allan_error"] is not None)
@@ -130,17 +130,17 @@ def test_every_shipped_recording_yields_a_report(tmp_path, capsys, name):
 
 
 def test_warnings_clipping_and_a_moving_record(tmp_path, capsys):
-    out, data = report(tmp_path, capsys, MULTIPOSE, "--sims", "2")
+    out, data = report(tmp_path, capsys, MULTIPOSE, "--sims", "10")
     rec = read_recording(MULTIPOSE)
     clip = clipped(rec.gyro_dps, 250.0, 131.0)
     assert "18 sample(s) at the full scale of +-250 deg/s (x: 12, z: 6)" in clip
     assert clip in data["warnings"]
     assert data["allan"] is None and "--keep-outliers" in data["allan_error"]
-    _, kept = report(tmp_path, capsys, MULTIPOSE, "--sims", "2", "--keep-outliers", name="kept.html")
+    _, kept = report(tmp_path, capsys, MULTIPOSE, "--sims", "10", "--keep-outliers", name="kept.html")
     assert kept["allan"] is not None and any("does not look static" in w for w in kept["warnings"])
     assert main(["allan", MULTIPOSE, "--keep-outliers", "--json", str(tmp_path / "a.json")]) == 0
     assert kept["allan"] == json.loads((tmp_path / "a.json").read_text())
-    _, still = report(tmp_path, capsys, STATIC, "--sims", "2", name="still.html")
+    _, still = report(tmp_path, capsys, STATIC, "--sims", "10", name="still.html")
     assert not any("full scale" in w or "static" in w for w in still["warnings"])
 
 
@@ -185,7 +185,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
 
 def test_source_records_first_then_reports(tmp_path, capsys):
     out = tmp_path / "unit1.html"
-    assert main(["report", "--source", "sim:seed=5", "--duration", "5", "--out", str(out), "--sims", "2"]) == 0
+    assert main(["report", "--source", "sim:seed=5", "--duration", "5", "--out", str(out), "--sims", "10"]) == 0
     err = capsys.readouterr().err
     assert "keep the sensor still" in err and "duration reached" in err
     kept = tmp_path / "unit1.csv"  # beside the report
@@ -195,7 +195,7 @@ def test_source_records_first_then_reports(tmp_path, capsys):
     assert data["recording"]["name"] == str(kept) and data["recording"]["samples"] == 500
     # the recording is the report's: the same report of the kept file
     again = tmp_path / "again.html"
-    assert main(["report", str(kept), "--out", str(again), "--sims", "2"]) == 0
+    assert main(["report", str(kept), "--out", str(again), "--sims", "10"]) == 0
     data_again = json.loads(parse(again).data)
     for d in (data, data_again):
         without_wall_times(d["gap"])
@@ -235,7 +235,7 @@ def test_a_paced_replay_source_records_its_first_seconds(tmp_path, capsys):
     """The real replay:FILE,realtime source: the recording kept is the file's first 20 s, sample for sample."""
     out, kept = tmp_path / "r.html", tmp_path / "first20.csv.gz"
     assert main(["report", "--source", f"replay:{STATIC},realtime,speed=20", "--duration", "20", "--out", str(out),
-                 "--recording-out", str(kept), "--sims", "2"]) == 0
+                 "--recording-out", str(kept), "--sims", "10"]) == 0
     capsys.readouterr()
     got, whole = read_recording(kept), read_recording(STATIC)
     assert len(got) == 2000
@@ -247,7 +247,7 @@ def test_an_interrupted_recording_is_kept_and_reported(tmp_path):
     """Ctrl-C ends the recording early: the recording reads, the report covers it (exit 0)."""
     out, kept = tmp_path / "r.html", tmp_path / "r.csv"
     proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "report", "--source", "sim:seed=2", "--out", str(out),
-                             "--sims", "2"], cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(REPO)},
+                             "--sims", "10"], cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(REPO)},
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 60
@@ -276,7 +276,7 @@ def test_an_interrupted_recording_is_kept_and_reported(tmp_path):
     ([], "one of them"),
     (["{static}", "--duration", "5"], "--duration records a source first"),
     (["{static}", "--recording-out", "{tmp}/x.csv"], "--recording-out records a source first"),
-    (["{static}", "--sims", "1"], "--sims must be in [2, 1000]"),
+    (["{static}", "--sims", "9"], "--sims must be in [10, 1000]"),
     (["{static}", "--seed", "-1"], "--seed"),
     (["--source", "sim", "--duration", "0"], "--duration"),
     (["--source", "nosuchkind"], "nosuchkind"),
@@ -302,3 +302,15 @@ def test_missing_out_is_one_line(capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "--out" in err
+
+
+def test_a_stuck_axis_leaves_the_others_allan_results(tmp_path, capsys):
+    """Issue 37: one constant axis made the whole Allan part fail ("no Allan deviation")."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    g[:, 0] = -3.3
+    path = tmp_path / "stuckx.csv"
+    write_recording(path, Recording.from_dps(g, 100.0))
+    _, data = report(tmp_path, capsys, str(path), "--sims", "10")
+    assert data["allan_error"] is None and sorted(data["allan"]["axes"]) == ["y", "z"]
+    assert any(w.startswith("axis x: all 6000 samples equal -3.3 deg/s") and w.endswith("left out of the Allan analysis")
+               for w in data["warnings"]), data["warnings"]

@@ -11,6 +11,7 @@ register-level model (gyrofilter/sources/mpu6050/model.py) on a virtual clock; p
 pseudo-terminal; the replay source paced by the host's clock.
 """
 import errno
+import json
 import os
 import re
 import select
@@ -527,3 +528,17 @@ def test_run_refuses_to_overwrite_and_reports_bad_sources(tmp_path, capsys):
     assert main(["run", "--source", "mpu6050:speed=3"]) == 2
     err = capsys.readouterr().err
     assert "--force" in err and "unknown key 'speed'" in err
+
+
+def test_a_run_from_a_saved_calibration_names_it_and_its_bias_in_the_header(tmp_path, capsys):
+    """Issue 37 (the earlier pass's note): `run --calibration` wrote neither the calibration's file
+    nor its bias into the output's header (replay --calibration does)."""
+    cal = tmp_path / "cal.json"
+    assert main(["run", "--source", "sim:seed=2,realtime=0,duration=5", "--save-calibration", str(cal), "--quiet"]) == 0
+    out = tmp_path / "out.csv"
+    assert main(["run", "--source", "sim:seed=3,realtime=0,duration=5", "--calibration", str(cal), "--out", str(out),
+                 "--quiet"]) == 0
+    capsys.readouterr()
+    header = read_recording(out).header
+    saved = json.loads(cal.read_text())["bias_dps"]
+    assert header["calibration_from"] == str(cal) and json.loads(header["bias_dps"]) == saved

@@ -2,6 +2,7 @@
 warning for a view open to the network, and a paced replay watched by 16 stream clients (three
 never read) while requests that must be refused come in: the run writes exactly the rows that
 `replay --out` writes, and a client that reads gets every one of them."""
+import argparse
 import ipaddress
 import os
 import re
@@ -13,9 +14,12 @@ import numpy as np
 import pytest
 
 from gyrofilter.cli import live, main
+from gyrofilter.cli.outlets import Outlets
+from gyrofilter.view.address import is_loopback
+from gyrofilter.view.sink import RunInfo
 from gyrofilter.recording import read_recording
 from support import REPO
-from support.live import EventReader, StalledClient, request, start_run, status, wait_for
+from support.live import EventReader, StalledClient, get, request, start_run, status, wait_for
 
 BUNDLED = REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz"
 
@@ -65,6 +69,26 @@ def test_a_view_open_to_the_network_says_so_in_one_warning_line(tmp_path, capsys
     for url in urls:
         host = url.removeprefix("http://").rsplit(":", 1)[0]
         assert url.endswith(f":{port}/") and not ipaddress.ip_address(host).is_unspecified, url
+
+
+def test_a_host_name_that_resolves_to_loopback_keeps_the_view_to_this_machine():
+    """`--serve NAME:0` where NAME is this machine's own name (127.0.1.1 on Raspberry Pi OS): the
+    address bound decides, so no warning and a request for another Host is refused (issue 37)."""
+    name = socket.gethostname()
+    try:
+        found = socket.getaddrinfo(name, 0, type=socket.SOCK_STREAM)
+    except socket.gaierror:
+        pytest.skip(f"this machine's name {name!r} does not resolve")
+    if not is_loopback(found[0][4][0]) or is_loopback(name):
+        pytest.skip(f"this machine's name {name!r} is not a loopback address's")
+    args = argparse.Namespace(serve=f"{name}:0", udp=None, udp_format=None, calibration=None)
+    with Outlets.open(args) as outlets:
+        server, = outlets._outlets
+        assert outlets._announcements == [f"gyrofilter run: live view on {server.url} (this machine only)"]
+        server.start(RunInfo(source="sim", sample_rate_hz=100.0, block_len=5, output_rate_hz=20.0, preset="recommended"))
+        port = server.address[1]
+        assert get(port, "/status", host="evil.example")[0] == 421
+        assert get(port, "/status", host=name)[0] == 200
 
 
 def test_sixteen_clients_and_hostile_requests_leave_the_rows_as_replay_writes_them(tmp_path, capsys):

@@ -44,9 +44,9 @@ def test_the_blocker_makes_a_package_unimportable(tmp_path):
     (["replay"], ("scipy",) + OPTIONAL),
     (["replay", "--preset", "recommended"], ("scipy",) + OPTIONAL),
     (["allan", str(RECORDING), "--json", "adev.json"], ("scipy",) + OPTIONAL),
-    (["gap", str(RECORDING), "--json", "gap.json", "--sims", "6"], OPTIONAL),
+    (["gap", str(RECORDING), "--json", "gap.json", "--sims", "10"], OPTIONAL),
     (["simulate", "--model", str(MODEL), "--duration", "20", "--seed", "1", "--out", "sim.csv.gz"], OPTIONAL),
-    (["gap", str(RECORDING), "--fleet", "fleet", "--sims", "6", "--jobs", "2"], OPTIONAL),
+    (["gap", str(RECORDING), "--fleet", "fleet", "--sims", "10", "--jobs", "2"], OPTIONAL),
 ], ids=["replay", "replay-recommended", "allan", "gap", "simulate", "fleet"])
 def test_core_commands_run_without_the_extras(tmp_path, args, blocked):
     out = _run(args, blocked, tmp_path)
@@ -58,7 +58,7 @@ def test_core_commands_run_without_the_extras(tmp_path, args, blocked):
 
 def test_the_report_runs_without_the_extras(tmp_path):
     """Its figures are the package's own SVG: no matplotlib."""
-    out = _run(["report", str(RECORDING), "--out", "r.html", "--sims", "6"], OPTIONAL, tmp_path)
+    out = _run(["report", str(RECORDING), "--out", "r.html", "--sims", "10"], OPTIONAL, tmp_path)
     assert out.returncode == 0, out.stderr
     assert "Traceback" not in out.stderr and "No module named" not in out.stderr
     assert (tmp_path / "r.html").read_text(encoding="utf-8").count("<svg ") == 6

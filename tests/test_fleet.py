@@ -203,7 +203,7 @@ def _reports(folder):
     return out
 
 
-GAP_ARGS = ["--sims", "4", "--progress"]
+GAP_ARGS = ["--sims", "10", "--progress"]
 
 
 @pytest.fixture(scope="module")
@@ -454,5 +454,30 @@ def test_the_fleet_warns_about_lost_samples_as_gap_does(tmp_path):
     t = np.concatenate(([0.0], np.cumsum(np.where(np.arange(299) % 5 == 4, 0.02, 0.01))))
     path = tmp_path / "gaps.csv"
     write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (300, 3)), 100.0, t_s=t))
-    result = fleet.analyse_recording(str(path), fleet.FleetSettings("gap", sims=2))
+    result = fleet.analyse_recording(str(path), fleet.FleetSettings("gap", sims=10))
     assert any("t shows 59 gap(s) longer than 1.5 sample intervals; the gap analysis" in w for w in result["warnings"])
+
+
+def test_a_file_name_cannot_add_a_key_to_a_units_kalibr_yaml(small_fleet, tmp_path):
+    """Issue 37: the fleet writes its imu.yaml files through the one writer that escapes the name."""
+    hostile = tmp_path / "unit7\naccelerometer_noise_density: 1.0e-9\n#.csv.gz"
+    shutil.copyfile(small_fleet[0], hostile)
+    assert main(["allan", str(hostile), small_fleet[1], "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    yaml, = (tmp_path / "f").glob("unit7*.imu.yaml")
+    keys = [line.split(":", 1)[0] for line in yaml.read_text().splitlines() if line.split("#")[0].strip()]
+    assert keys == ["gyroscope_noise_density", "gyroscope_random_walk", "rostopic", "update_rate"]
+
+
+def test_a_stuck_axis_costs_the_fleet_that_axis_only(tmp_path, capsys):
+    """Issue 37: a unit with one constant axis lost its other axes' Allan results; now its y and z
+    rows hold them and its x row says why it has none (naming the file)."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    g[:, 0] = -3.3
+    path = tmp_path / "stuckx.csv"
+    write_recording(path, Recording.from_dps(g, 100.0))
+    assert main(["allan", str(path), "--fleet", str(tmp_path / "f")]) == 0
+    rows = {r["axis"]: r for r in _table(tmp_path / "f")}
+    assert rows["y"]["status"] == rows["z"]["status"] == "ok" and rows["y"]["arw_dps_per_sqrt_hz"]
+    assert rows["x"]["status"].startswith(f"{path}: axis x: all 6000 samples equal -3.3 deg/s")
+    assert rows["x"]["arw_dps_per_sqrt_hz"] == ""
+    assert "1 recording(s), 1 analysed, 0 failed" in capsys.readouterr().out

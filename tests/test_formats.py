@@ -121,7 +121,7 @@ def test_allan_example_uses_the_coefficient_keys_of_the_code():
 def test_report_example_has_the_keys_of_the_report(tmp_path, capsys):
     doc = json.loads(example(10, "json"))
     out = tmp_path / "r.html"
-    assert main(["report", str(ROOT / "recordings" / "mpu6050_static_100s.csv.gz"), "--out", str(out), "--sims", "2"]) == 0
+    assert main(["report", str(ROOT / "recordings" / "mpu6050_static_100s.csv.gz"), "--out", str(out), "--sims", "10"]) == 0
     capsys.readouterr()
     data = json.loads(parse(out).data)
     assert set(doc) == set(data) and doc["format"] == data["format"]

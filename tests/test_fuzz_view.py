@@ -74,7 +74,7 @@ REQUESTS = st.one_of(
 
 @pytest.fixture(scope="module")
 def server():
-    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=True)
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
     live.start(RunInfo(source="sim", sample_rate_hz=100.0, block_len=5, output_rate_hz=20.0, preset="paper"))
     yield live
     live.close()

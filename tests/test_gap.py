@@ -255,7 +255,7 @@ def test_cli_writes_contract_json_and_report(tmp_path):
     write_recording(str(path), rec)
     out = tmp_path / "gap.json"
     report = ["--report", str(tmp_path / "rep")] if importlib.util.find_spec("matplotlib") else []
-    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "gap", str(path), "--json", str(out), "--sims", "6"] + report,
+    proc = subprocess.run([sys.executable, "-m", "gyrofilter", "gap", str(path), "--json", str(out), "--sims", "10"] + report,
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     rep = json.loads(out.read_text())
@@ -308,6 +308,42 @@ def test_too_short_recording_gives_no_findings_and_a_note():
     assert report["findings"] == [] and report["notes"]
 
 
+def test_too_few_simulations_are_refused_and_the_library_does_not_judge_d_from_them(tmp_path, capsys):
+    """Issue 37: from 2 or 3 baseline runs pure white noise read D after 14-106 and "the model does
+    not close here". gap (and report, the fleet) refuse --sims below MIN_SIMS; analyse_gap notes
+    that D is not judged instead."""
+    from gyrofilter.analysis.gap.baseline import MIN_SIMS
+    from gyrofilter.cli import main
+
+    rec = Recording.from_dps(np.random.default_rng(1).normal(0, 0.05, (3000, 3)), 100.0)
+    path = tmp_path / "white.csv"
+    write_recording(path, rec)
+    for sims in ("2", str(MIN_SIMS - 1)):
+        assert main(["gap", str(path), "--sims", sims, "--json", str(tmp_path / "g.json")]) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and f"--sims must be in [{MIN_SIMS}, 1000]" in err[0], err
+    assert not (tmp_path / "g.json").exists()
+    notes = analyse_gap(rec, seed=1, n_sims=2, bootstrap=0)["notes"]
+    assert f"D from 2 simulations is not judged (pure white noise reads D up to 14-98 from 2-3 of them): give {MIN_SIMS} or more" in notes
+    assert not any("does not close" in n for n in notes)
+
+
+def test_a_quiet_quantized_sensor_is_analysed():
+    """Issue 37: 99 % of the samples on one code, 1 % one LSB off: once the off-code samples are
+    cleaned as spikes the block means are all equal, and the slow detector took the log of their
+    zero variance ("detectors could not run (math domain error)" on every axis, D ~ 4e8)."""
+    from gyrofilter.recording import convert_gyro
+
+    rng = np.random.default_rng(8)
+    codes = np.where(rng.random((6000, 3)) < 0.01, rng.choice([-1, 1], (6000, 3)), 0) + np.array([-432, 144, -66])
+    rec = convert_gyro(Recording.from_dps(codes / 131.0, 100.0), "lsb", 131.0)
+    for c in ("gx", "gy", "gz"):
+        rec.columns[c] = np.round(rec.columns[c])
+    report = analyse_gap(rec, seed=0, n_sims=10, bootstrap=0)
+    assert not any("could not run" in note for note in report["notes"]), report["notes"]
+    assert all(d < 10 for d in report["discrepancy"]["after"].values()), report["discrepancy"]
+
+
 def test_noise_below_the_floor_is_a_note_saying_so():
     """Noise of 1e-300 deg/s gave the note "detectors could not run (math domain error)" (hostile 3-1)."""
     g = np.random.default_rng(0).normal(0, 0.1, (3000, 3))
@@ -348,7 +384,7 @@ def test_cli_without_json_prints_the_findings_and_writes_nothing(tmp_path, capsy
 
     path = tmp_path / "still.csv"
     write_recording(str(path), Recording.from_dps(np.random.default_rng(3).normal(0, 0.1, (3000, 3)), 100.0))
-    assert main(["gap", str(path), "--sims", "4", "--bootstrap", "0"]) == 0
+    assert main(["gap", str(path), "--sims", "10", "--bootstrap", "0"]) == 0
     captured = capsys.readouterr()
     assert f"{path}: " in captured.out and "  x: D " in captured.out and "--json OUT.json" in captured.err
     assert sorted(os.listdir(tmp_path)) == ["still.csv"]
@@ -483,12 +519,12 @@ def test_cli_refuses_existing_outputs_and_never_writes_onto_the_recording(tmp_pa
              (["--json", rec, "--force"], "is an input of this command"),
              (["--json", str(tmp_path / "same"), "--report", str(tmp_path / "same")], "--report folder")]
     for args, expected in cases:
-        assert main(["gap", rec, "--sims", "4"] + args) == 2
+        assert main(["gap", rec, "--sims", "10"] + args) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and expected in err, err
     assert out.read_text() == "{}\n" and open(rec).read() == rec_text
     assert not (tmp_path / "new.json").exists()
-    assert main(["gap", rec, "--sims", "4", "--json", str(out), "--force"]) == 0
+    assert main(["gap", rec, "--sims", "10", "--json", str(out), "--force"]) == 0
     text = out.read_text()
     assert json.loads(text)["findings"] == [] and "NaN" not in text and "Infinity" not in text
 
@@ -505,7 +541,7 @@ def test_cli_failure_leaves_no_output(tmp_path, capsys, monkeypatch):
 
     monkeypatch.setattr(gr, "write_report", failing)
     rec = _short_recording(tmp_path)
-    assert main(["gap", rec, "--sims", "4", "--json", str(tmp_path / "g.json"), "--report", str(tmp_path / "rep")]) == 2
+    assert main(["gap", rec, "--sims", "10", "--json", str(tmp_path / "g.json"), "--report", str(tmp_path / "rep")]) == 2
     assert "simulated failure" in capsys.readouterr().err
     assert sorted(os.listdir(tmp_path)) == ["rec.csv"]
 
@@ -612,7 +648,7 @@ def test_a_moving_axis_gets_a_note_and_the_still_ones_none():
     n, fs = 30000, 100.0
     g = np.array([-3.3, 1.1, -0.5]) + rng.normal(0, 0.1, (n, 3))
     g[:, 1] += 12.0 * np.sin(2 * np.pi * 0.1 * np.arange(n) / fs)
-    report = analyse_gap(Recording.from_dps(g, fs), seed=0, n_sims=4)
+    report = analyse_gap(Recording.from_dps(g, fs), seed=0, n_sims=10)
     moving = [note for note in report["notes"] if "does not look static" in note]
     assert len(moving) == 1 and moving[0].startswith("axis y: the rate moves by up to"), report["notes"]
     # an axis that does not close has its furthest feature in the report, as its note says
@@ -631,7 +667,7 @@ def test_cli_warns_that_lost_samples_make_the_analysis_not_meaningful(tmp_path, 
     t = np.concatenate(([0.0], np.cumsum(np.where(np.arange(299) % 5 == 4, 0.02, 0.01))))
     path = tmp_path / "gaps.csv"
     write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (300, 3)), 100.0, t_s=t))
-    assert main(["gap", str(path), "--sims", "2", "--json", str(tmp_path / "g.json")]) == 0
+    assert main(["gap", str(path), "--sims", "10", "--json", str(tmp_path / "g.json")]) == 0
     err = capsys.readouterr().err
     assert f"gyrofilter: warning: {path}: t shows 59 gap(s) longer than 1.5 sample intervals; the gap analysis" in err
     assert read_recording(path).t_gaps == 59

@@ -209,7 +209,7 @@ def test_cli_prints_every_parameter_with_its_interval_and_checks_the_option(tmp_
     path = tmp_path / "rec.csv.gz"
     write_recording(str(path), he.simulate_case(case))
     out = tmp_path / "gap.json"
-    assert main(["gap", str(path), "--sims", "4", "--bootstrap", "6", "--json", str(out)]) == 0
+    assert main(["gap", str(path), "--sims", "10", "--bootstrap", "6", "--json", str(out)]) == 0
     printed = capsys.readouterr().out
     rep = json.loads(out.read_text())
     assert rep["intervals"]["bootstrap_runs"] == 6

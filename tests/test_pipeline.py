@@ -269,6 +269,29 @@ def test_a_sample_beyond_max_rate_is_refused_before_it_poisons_the_filter():
     assert np.isfinite(edge.filter(np.full((50, 3), MAX_RATE_DPS) * [1, -1, 1])).all()  # the bound itself is a sample
 
 
+def test_a_masked_sample_is_refused_not_filtered_as_data():
+    """Issue 37: np.asarray drops a masked array's mask, so a masked 5000 deg/s went through as a
+    sample. Now filter(), filter_timed() and the temperatures refuse the first masked row; a mask
+    with nothing masked is plain data."""
+    from gyrofilter.errors import SampleError
+
+    x = noisy(1000)
+    x[700, 1] = 5000.0
+    masked = np.ma.masked_array(x, mask=np.abs(x) > 1000)
+    f = GyroFilter(100.0)
+    with pytest.raises(SampleError, match=r"samples_dps row 700 is masked") as info:
+        f.filter(masked)
+    assert info.value.row == 700 and f.samples_in == 0
+    with pytest.raises(SampleError, match=r"samples_dps row 700 is masked"):
+        f.filter_timed(masked, np.arange(1000) / 100.0)
+    temps = np.ma.masked_array(np.full(1000, 30.0), mask=np.arange(1000) == 3)
+    with pytest.raises(SampleError, match=r"temp_c row 3 is masked"):
+        f.filter(x[:600], temp_c=temps[:600])
+    assert f.samples_in == 0
+    plain = np.ma.masked_array(x[:600], mask=False)
+    assert np.array_equal(f.filter(plain), GyroFilter(100.0).filter(x[:600]))
+
+
 @pytest.mark.parametrize("sample", [{1.0, 2.0, 3.0}, {0: 1.0, 1: 2.0, 2: 3.0}, {"x": 1.0, "y": 2.0, "z": 3.0}, "1,2", (True, 0.0, 0.0),
                                     np.zeros(3, dtype=bool), ("1", 2.0, 3.0), iter((1.0, 2.0, 3.0)), np.zeros((1, 3))])
 def test_update_takes_a_sequence_of_three_numbers_only(sample):

@@ -27,6 +27,10 @@ from support import lsb_recording
     ("sim:model.json,seed=1", "sim", {"model": "model.json", "seed": 1}),
     ("sim,realtime=0", "sim", {"realtime": False}),          # no ARG: the keys may follow KIND directly
     ("mpu6050,rate=200", "mpu6050", {"sample_rate_hz": 200.0}),
+    # issue 37: '=' in a partitioned folder's name is the path's, not a key's
+    ("replay:data/date=2024-01-01/imu.csv.gz,realtime", "replay", {"path": "data/date=2024-01-01/imu.csv.gz", "realtime": True}),
+    ("data/Date=2024-01-01/imu.csv.gz", "replay", {"path": "data/Date=2024-01-01/imu.csv.gz"}),
+    ("sim:models/v=2.json,seed=1", "sim", {"model": "models/v=2.json", "seed": 1}),
 ])
 def test_parse_source(spec, kind, kwargs):
     assert parse_source(spec) == (kind, kwargs)
@@ -34,6 +38,8 @@ def test_parse_source(spec, kind, kwargs):
 
 @pytest.mark.parametrize("spec, words", [
     ("mpu6050:bux=1", ["'bux'", "known: bus"]),
+    ("sim:sed=1", ["unknown key 'sed' for sim"]),     # a mistyped key is no file name
+    ("replay:bux=1", ["unknown key 'bux' for replay"]),
     ("mpu6050:rate=fast", ["'fast'", "'rate'"]),
     ("serial:baud=9600", ["needs a port"]),
     ("serial:/dev/ttyS0,unit=furlong", ["'furlong'", "'unit'"]),
@@ -352,3 +358,20 @@ def test_the_sim_source_takes_a_seed_beyond_2_53_exactly():
     assert a.seed == 9007199254740993 and b.seed == 9007199254740992
     with a, b:
         assert not np.array_equal(a.read(), b.read())
+
+
+def test_a_file_in_a_partitioned_folder_is_recorded(tmp_path, monkeypatch):
+    """Issue 37: a SOURCE path holding '=' (date=2024-01-01/) could not be given at all; an
+    existing file named key=value is taken too, relative to the working folder."""
+    from gyrofilter.cli import main
+
+    folder = tmp_path / "date=2024-01-01"
+    folder.mkdir()
+    rec = Recording.from_dps(np.random.default_rng(11).normal(0, 0.05, (500, 3)), 100.0)
+    write_recording(folder / "imu.csv", rec)
+    write_recording(tmp_path / "v=2", rec)
+    monkeypatch.chdir(tmp_path)
+    for source in (f"replay:{folder / 'imu.csv'}", "date=2024-01-01/imu.csv", "replay:v=2,realtime=0"):
+        out = tmp_path / "out.csv"
+        assert main(["record", "--source", source, "--out", str(out), "--force"]) == 0, source
+        np.testing.assert_array_equal(read_recording(out).gyro_dps, rec.gyro_dps)

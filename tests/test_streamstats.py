@@ -27,6 +27,16 @@ def test_running_moments_undefined_below_two_rows():
     assert np.isnan(m.std).all() and m.mean.tolist() == [1, 1, 1]
 
 
+def test_a_constant_column_has_a_std_of_exactly_zero():
+    """Issue 37: -3.3 is no binary fraction; the chunks' rounded means left a std of ~1e-15."""
+    rng = np.random.default_rng(7)
+    x = np.column_stack([np.full(3000, -3.3), np.full(3000, 3 / 131), rng.normal(0, 1e-12, 3000)])
+    m = RunningMoments(3)
+    for chunk in _chunks(x, rng):
+        m.add(chunk)
+    assert m.std[:2].tolist() == [0.0, 0.0] and m.std[2] == pytest.approx(x[:, 2].std(ddof=1), rel=1e-6)
+
+
 @pytest.mark.parametrize("n", [1, 7, 100, 10_007])
 def test_envelope_buckets_hold_the_min_and_max_of_consecutive_rows(n):
     rng = np.random.default_rng(n)

@@ -27,7 +27,7 @@ def step(i, n=10):
 
 @pytest.fixture
 def live():
-    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=True)
+    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
     server.start(INFO)
     yield server
     server.close()
@@ -36,7 +36,7 @@ def live():
 @pytest.fixture(scope="module")
 def idle():
     """One server for the tests that feed it nothing."""
-    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=True)
+    server = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
     server.start(INFO)
     yield server
     server.close()
@@ -176,7 +176,7 @@ def test_stalled_clients_never_hold_up_the_feed(live, monkeypatch):
 
 
 def test_close_sends_a_final_status_and_frees_the_port():
-    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=True)
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
     live.start(INFO)
     port = live.address[1]
     reader = EventReader(port)
@@ -193,11 +193,25 @@ def test_close_sends_a_final_status_and_frees_the_port():
 
 
 def test_a_server_bound_to_all_interfaces_answers_any_host_name():
-    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0), loopback_only=False)
+    live = LiveServer(socket.AF_INET, ("0.0.0.0", 0))
     live.start(INFO)
     try:
         code, _, body = get(live.address[1], "/status", host="raspberrypi.local")
         assert code == 200 and json.loads(body)["running"] is True
+    finally:
+        live.close()
+
+
+def test_a_server_bound_to_loopback_through_a_name_answers_that_name_and_loopback_names_only():
+    """The address bound decides (issue 37): a Pi's own name maps to 127.0.1.1."""
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0), name="RaspberryPi.")
+    live.start(INFO)
+    try:
+        port = live.address[1]
+        assert live.loopback_only
+        for host, code in (("raspberrypi", 200), ("localhost", 200), ("127.0.0.1", 200), ("evil.example", 421),
+                           ("raspberrypi.evil.example", 421)):
+            assert get(port, "/status", host=host)[0] == code, host
     finally:
         live.close()
 
@@ -211,3 +225,71 @@ def test_an_error_inside_the_view_is_counted_not_raised(live, monkeypatch):
     wait_for(lambda: live.errors > 0, what="the publisher's error")
     assert live.last_error == "RuntimeError: boom"
     monkeypatch.setattr(server_module, "CLOSE_GRACE_S", 0.1)
+
+
+class Trickler(threading.Thread):
+    """A slowloris client: a byte of a request line every 0.2 s, until the server closes the
+    connection (``closed`` is set) or :meth:`stop`."""
+
+    def __init__(self, port):
+        super().__init__(daemon=True)
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=30)
+        self.closed = threading.Event()
+        self._halt = threading.Event()
+
+    def run(self):
+        try:
+            for byte in b"GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\n" + b"X-Slow: " + b"a" * 10000:
+                self.sock.sendall(bytes([byte]))
+                if self._halt.wait(0.2):
+                    return
+        except OSError:  # reset by the server
+            pass
+        finally:
+            self.closed.set()
+
+    def stop(self):
+        self._halt.set()
+        self.sock.close()
+
+
+def test_clients_trickling_their_requests_cannot_hold_every_connection(monkeypatch):
+    """Slowloris (issue 37): as many clients as there are connection slots, each sending a byte
+    every 0.2 s, are cut at the whole-request deadline (the socket timeout is per read), and the
+    server answers /status again while they go on trickling."""
+    monkeypatch.setattr(server_module, "MAX_CONNECTIONS", 4)
+    monkeypatch.setattr(server_module, "REQUEST_DEADLINE_S", 1.0)
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
+    live.start(INFO)
+    port = live.address[1]
+    tricklers = [Trickler(port) for _ in range(4)]
+    try:
+        for t in tricklers:
+            t.start()
+        wait_for(lambda: all(t.closed.is_set() for t in tricklers), timeout_s=20, what="the server to cut the tricklers")
+        assert get(port, "/status")[0] == 200
+    finally:
+        for t in tricklers:
+            t.stop()
+        live.close()
+
+
+def test_a_new_client_takes_the_place_of_the_oldest_trickler(monkeypatch):
+    """Clients that keep reconnecting to trickle would take every slot freed at the deadline: when
+    all slots are taken, a new connection closes the oldest one still sending its request."""
+    monkeypatch.setattr(server_module, "MAX_CONNECTIONS", 4)
+    monkeypatch.setattr(server_module, "REQUEST_DEADLINE_S", 60.0)
+    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
+    live.start(INFO)
+    port = live.address[1]
+    tricklers = [Trickler(port) for _ in range(4)]
+    try:
+        for t in tricklers:
+            t.start()
+        wait_for(lambda: live._httpd._connections == 4, what="4 trickling connections")
+        assert [get(port, "/status")[0] for _ in range(3)] == [200, 200, 200]
+        wait_for(lambda: tricklers[0].closed.is_set(), what="the oldest trickler to be closed")
+    finally:
+        for t in tricklers:
+            t.stop()
+        live.close()

@@ -94,6 +94,26 @@ def test_nobody_listening_is_no_error():
     assert sender.close().endswith(": 2 datagrams sent, 0 dropped")
 
 
+def test_a_broadcast_address_is_sent_to():
+    """Issue 37: `--udp 255.255.255.255:PORT` dropped every datagram (no SO_BROADCAST: EACCES), said
+    only in the final summary. A socket bound to every interface of this machine gets them."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener:
+        listener.bind(("0.0.0.0", 0))
+        listener.settimeout(5)
+        port = listener.getsockname()[1]
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+            try:
+                probe.sendto(b"probe", ("255.255.255.255", port))
+                listener.recv(100)
+            except OSError as exc:
+                pytest.skip(f"no broadcast on this machine's network ({exc})")
+        sender = UdpSender(socket.AF_INET, ("255.255.255.255", port), "plotjuggler", f"255.255.255.255:{port}")
+        sender.feed(rows_step([1.0, 1.1], [[0, 0, 0], [1, 1, 1]]))
+        assert sender.close().endswith(": 2 datagrams sent, 0 dropped")
+        assert [json.loads(listener.recv(1000))["timestamp"] for _ in range(2)] == [1.0, 1.1]
+
+
 def test_run_sends_the_rows_it_writes(tmp_path, capsys):
     """A paced replay of 20 s of the bundled recording: the datagrams are the rows of --out."""
     rec = read_recording(BUNDLED)

@@ -74,3 +74,12 @@ def test_heavy_tail_factor_is_one_without_tails_and_tends_to_one_at_long_scales(
     assert wr.heavy_tail_factor(64, 0.0, 10.0, c, b) == 1.0
     factors = [wr.heavy_tail_factor(m, 0.05, 20.0, c, b) for m in (1, 16, 256, 4096)]
     assert factors == sorted(factors) and factors[0] < 0.1 and abs(factors[-1] - 1) < 0.01
+
+
+def test_the_scale_of_values_mostly_zero_is_their_mean_square():
+    """Issue 37: a quiet quantized sensor's Haar coefficients are mostly exactly 0 (MAD 0); the
+    biweight iteration then ran toward 0 (1e-232), and the composite fit that divides by it
+    stopped the gap analysis ("array must not contain infs or NaNs")."""
+    w = np.zeros(1000)
+    w[::97] = [1.0, -1.0] * 5 + [1.0]
+    assert wr.m_scale2(w, 1.5476, 0.5) == pytest.approx(np.mean(w * w))

@@ -41,7 +41,10 @@ from gap_battery import battery_cases  # noqa: E402
 WORKER = r"""
 import glob, json, os, sys
 import gyrofilter
-from gyrofilter.analysis.gap.pipeline import analyse_gap
+try:
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
+except ImportError:  # a revision from before the analysis families moved into folders
+    from gyrofilter.analysis.gap import analyse_gap
 from gyrofilter.recording import read_recording
 folder, tag, tree, sims = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 assert os.path.realpath(gyrofilter.__file__).startswith(os.path.realpath(tree)), gyrofilter.__file__

@@ -63,7 +63,7 @@ from .noise.allan import MIN_CLUSTERS
 from .gap.pipeline import analyse_file
 from .noise.export import JSON_KEY, kalibr_yaml, to_json
 from .noise.model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SYMBOL, TERM_UNIT
-from .still import characterise_recording
+from .still import LEFT_OUT, characterise_recording
 from ..errors import MissingExtraError, SettingsError, one_line
 from ..extras import install_hint, require
 from ..inputs import quote
@@ -159,7 +159,7 @@ def _allan_part(path, settings, result):
 
     head, results = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
                                            min_clusters=settings.min_clusters,
-                                           keep_outliers=settings.keep_outliers, warn=warn)
+                                           keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True)
     sample_rate_hz = head.sample_rate_hz
     for axis, r in results.items():
         result["warnings"].extend(text if text.startswith("axis ") else f"axis {axis}: {text}" for text in r.warnings)
@@ -368,11 +368,14 @@ def fleet_rows(names, results):
             continue
         allan_axes = (res["allan"] or {}).get("axes", {})
         gap = res["gap"]
-        axes = [a for a in AXES if a in allan_axes or gap is not None]
+        stuck = {w[len("axis ")]: w for w in base["warnings"] if w.startswith("axis ") and w.endswith(LEFT_OUT)}
+        axes = [a for a in AXES if a in allan_axes or a in stuck or gap is not None]
         for axis in axes:
             # the recording's warnings, and of the per-axis ones ("axis x: ...") only this axis's
             row = dict(base, axis=axis, flag=[],
                        warnings=[w for w in base["warnings"] if not w.startswith("axis ") or w.startswith(f"axis {axis}:")])
+            if axis in stuck and gap is None:  # an Allan fleet's stuck axis: a row that says so, not none
+                row["status"] = f"{res['recording']}: {stuck[axis]}"
             if axis in allan_axes:
                 details = allan_axes[axis]["details"]
                 for term in (QUANTIZATION,) + COEFFICIENTS:
@@ -489,10 +492,11 @@ def fleet_markdown(rows, stats, *, title):
     when some row has gap results), and the fleet statistics ``stats`` (what
     :func:`flag_units` returns) with the rules."""
     units = list(dict.fromkeys(r["unit"] for r in rows))
-    failed_rows = [r for r in rows if r["status"] != "ok"]
+    failed_rows = [r for r in rows if r["status"] != "ok"]  # a recording, or one stuck axis of it
+    done = len({r["unit"] for r in rows if r["status"] == "ok"})
     flagged = [r for r in rows if r["flag"]]
     lines = [f"# {title}", "",
-             (f"{len(units)} recordings: {len(units) - len(failed_rows)} analysed, {len(failed_rows)} failed; "
+             (f"{len(units)} recordings: {done} analysed, {len(units) - done} failed; "
               f"{len({r['unit'] for r in flagged})} stand out."), "", "## Units that stand out", ""]
     if flagged:
         lines += ["| unit | axis | why |", "|---|---|---|"]

@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import RecordingError
 from ..recording import collect_columns, iter_recording, warn_about_gaps
 from ..units import AXES, to_dps
-from .noise.allan import MIN_CLUSTERS, AllanInputError
+from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
 from .noise.screen import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
@@ -110,8 +110,12 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
     warn(f"{text}: analysed as they are (--keep-outliers)")
 
 
+#: what ends the warning of an axis :func:`characterise_recording` leaves out ("axis x: ...")
+LEFT_OUT = ": left out of the Allan analysis"
+
+
 def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
-                           progress=None):
+                           progress=None, skip_constant=False):
     """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
 
     The one path from a file to its Allan results, for one recording and for a fleet
@@ -128,6 +132,9 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     instead of refusing. Each :class:`~gyrofilter.analysis.noise.model.AxisNoise` holds the
     Allan deviation (deg/s) against tau (s) and the fitted coefficients (N in deg/sqrt(s) = deg/s/sqrt(Hz),
     B in deg/s, K in deg/s/sqrt(s); :mod:`gyrofilter.analysis.noise.model`).
+    An axis whose samples are all equal (stuck) raises ConstantAxisError; with ``skip_constant``
+    it is left out instead, said through ``warn``, while another axis is analysed (a sensor
+    report, a fleet: one stuck axis does not cost the others' results).
     """
     head, series = read_axes(path, axes)
     for text in head.warnings:
@@ -141,9 +148,15 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
             moved = not_static(x, head.sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0)
         if progress:
             progress(f"allan: axis {a} ({head.rows} samples)...")
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
-            results[a] = characterise_axis(x, head.sample_rate_hz, axis=a, confidence=confidence,
-                                           min_clusters=min_clusters)
+        try:
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
+                results[a] = characterise_axis(x, head.sample_rate_hz, axis=a, confidence=confidence,
+                                               min_clusters=min_clusters)
+        except ConstantAxisError as exc:
+            if not skip_constant or (a == axes[-1] and not results):
+                raise
+            warn(f"{exc}{LEFT_OUT}")
+            continue
         check_finite(results[a], a, path)
         if moved:
             results[a].warnings.insert(0, f"axis {a}: {moved}; the Allan deviation of a moving gyro describes the "

@@ -15,7 +15,7 @@ import sys
 import textwrap
 
 from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
-from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError
+from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from ..analysis.fleet import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
 from ..analysis.noise.model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, TERM_UNIT, convert
@@ -86,15 +86,21 @@ def readoff_only(r):
     return out
 
 
-def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn, progress=None):
+def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn, progress=None,
+            skip_constant=False):
     """What ``allan`` computes of one recording ``path``: (head, {axis: AxisNoise}, the ``--json``
     document of docs/formats.md section 4), through :func:`~gyrofilter.analysis.still.characterise_recording`
-    (its arguments, ``warn(text)`` and ``progress(text)`` included) and
+    (its arguments, ``warn(text)``, ``progress(text)`` and ``skip_constant`` included) and
     :func:`~gyrofilter.analysis.noise.export.to_json`; the duration is rows / sample rate (s).
-    A result that is not finite raises AllanInputError naming the file."""
+    A result that is not finite raises AllanInputError naming the file; a stuck axis (not
+    skipped) says which ``--axes`` analyse the others."""
     try:
         head, results = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
-                                               keep_outliers=keep_outliers, warn=warn, progress=progress)
+                                               keep_outliers=keep_outliers, warn=warn, progress=progress,
+                                               skip_constant=skip_constant)
+    except ConstantAxisError as exc:
+        others = axes.replace(exc.axis, "")
+        raise AllanInputError(f"{path}: {exc}" + (f"; give --axes {others} to analyse the others" if others else "")) from None
     except AllanInputError as exc:  # the data of this file: name it
         raise AllanInputError(f"{path}: {exc}") from None
     duration_s = head.rows / head.sample_rate_hz

@@ -140,7 +140,7 @@ def _span_s(i0, i1, sample_rate_hz, t_s):
 
 def _print_axis(rep, alpha):
     pct = f"{alpha * 100:g} %"
-    print(f"\naxis {rep.axis}: mean {rep.mean_dps:+.4f} deg/s, std {rep.std_dps:.4f} deg/s")
+    print(f"\naxis {rep.axis}: mean {rep.mean_dps:+.4g} deg/s, std {rep.std_dps:.4g} deg/s")
     for note in rep.notes:
         print(f"  note: {note}")
     s = rep.stationarity
@@ -158,11 +158,11 @@ def _print_axis(rep, alpha):
     for f in rep.fits:
         mark = " <- chosen" if f is rep.chosen else (" <- adequate ARMA(2n, 2n-1)" if f.order == rep.adequate_order else "")
         bic = arma.information_criterion(f, "bic")
-        print(f"    ARMA({f.p},{f.q})  {f.aic:10.5f}  {bic:10.5f}  {f.sigma_a:.6f}  {f.rss:.6g}{mark}")
+        print(f"    ARMA({f.p},{f.q})  {f.aic:10.5f}  {bic:10.5f}  {f.sigma_a:<8.4g}  {f.rss:.6g}{mark}")
     print(f"  F tests at {pct} (larger model significantly better?):")
     for st in rep.steps:
         print(f"    ARMA{st.smaller} vs ARMA{st.larger}: F = {st.f_statistic:.3f}, critical {st.f_critical:.3f} -> {'yes' if st.significant else 'no'}")
-    print(f"  chosen: ARMA{rep.chosen.order}: {rep.chosen.equation()}   (sigma_a = {rep.chosen.sigma_a:.5f} deg/s)")
+    print(f"  chosen: ARMA{rep.chosen.order}: {rep.chosen.equation()}   (sigma_a = {rep.chosen.sigma_a:.4g} deg/s)")
     if rep.chosen.order != (1, 1):
         print(f"  ARMA(1,1) for comparison with paper 003: {rep.arma11.equation()}")
     w = rep.whiteness

@@ -140,10 +140,11 @@ def run(args, settings, paths):
 
 def _summary(rows, fleet_files, written, elapsed_s):
     """Print the fleet's outcome on stdout; the exit code."""
-    failed = [r for r in rows if r["status"] != "ok"]
+    failed = [r for r in rows if r["status"] != "ok"]  # a recording, or one stuck axis of it
     units = len({r["unit"] for r in rows})
+    done = len({r["unit"] for r in rows if r["status"] == "ok"})
     flagged = [r for r in rows if r["flag"]]
-    print(f"fleet: {units} recording(s), {units - len(failed)} analysed, {len(failed)} failed, "
+    print(f"fleet: {units} recording(s), {done} analysed, {units - done} failed, "
           f"{len({r['unit'] for r in flagged})} stand(s) out ({elapsed_s:.1f} s)")
     for r in failed:
         print(f"  failed: {r['status']}")
@@ -151,4 +152,4 @@ def _summary(rows, fleet_files, written, elapsed_s):
         for f in r["flag"]:
             print(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
     console.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report(s)")
-    return EXIT_NOTHING_DONE if len(failed) == units else 0
+    return EXIT_NOTHING_DONE if not done else 0

@@ -48,7 +48,7 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None, smooth
     print("  axis   raw mean    raw std   filt mean   filt std  std ratio  rejected")
     raw_std, f_std = raw.std, filtered.std
     for a, name in enumerate(AXES):
-        ratio = _number(raw_std[a] / f_std[a], 8, decimals=2) + "x" if f_std[a] > 0 else f"{'n/a':>9}"
+        ratio = _number(raw_std[a] / f_std[a], 8, decimals=2) + "x" if raw_std[a] > 0 and f_std[a] > 0 else f"{'n/a':>9}"
         print(f"  {name}    {_number(raw.mean[a], 9, sign=True)}  {_number(raw_std[a], 9)}  {_number(filtered.mean[a], 9, sign=True)}"
               f"  {_number(f_std[a], 9)}  {ratio}  {int(filt.rejected[a]):8d}")
     removed = "bias removed" if cal is not None else "no calibration, so no bias removed"

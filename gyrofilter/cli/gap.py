@@ -19,6 +19,7 @@ import time
 
 from ..analysis.gap import report as gap_report
 from ..analysis.fleet import FleetSettings
+from ..analysis.gap.baseline import MIN_SIMS
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import SettingsError
@@ -37,7 +38,7 @@ def add_arguments(parser):
     parser.add_argument("--report", metavar="DIR", type=options.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
     parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
-                        help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; 2 to {MAX_SIMS})")
+                        help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; {MIN_SIMS} to {MAX_SIMS})")
     parser.add_argument("--bootstrap", type=options.whole_number, default=None, metavar="N",
                         help=f"bootstrap runs per axis with findings for the parameters' 95 %% intervals (default "
                              f"{DEFAULT_BOOTSTRAP}; 10-{DEFAULT_BOOTSTRAP} above {FEWER_BOOTSTRAP_FROM:,} samples per axis; "
@@ -50,8 +51,9 @@ def add_arguments(parser):
 def check_options(seed, sims, bootstrap=None):
     """Refuse a ``--seed``, ``--sims`` or ``--bootstrap`` (None: their defaults) that the analysis
     cannot take, naming the option."""
-    if sims is not None and not 2 <= sims <= MAX_SIMS:
-        raise SettingsError(f"--sims must be in [2, {MAX_SIMS}], got {sims}")
+    if sims is not None and not MIN_SIMS <= sims <= MAX_SIMS:
+        raise SettingsError(f"--sims must be in [{MIN_SIMS}, {MAX_SIMS}] (from fewer simulations D cannot be judged: "
+                            f"pure white noise reads D up to 14-98 from 2-3), got {sims}")
     if bootstrap is not None and not (bootstrap == 0 or MIN_REPLICATES <= bootstrap <= MAX_BOOTSTRAP):
         raise SettingsError(f"--bootstrap must be 0 (no intervals) or in [{MIN_REPLICATES}, {MAX_BOOTSTRAP}] "
                             f"(an interval needs {MIN_REPLICATES} runs), got {bootstrap}")

@@ -74,7 +74,7 @@ class LiveOutput:
             self._writer = RecordingWriter(self._tmp, header, columns, formats=formats, flush_interval_s=None, name=path)
         except OSError as exc:  # named by the user's name, not the temporary one
             self._discard()
-            raise OSError(exc.errno, exc.strerror, path) from None
+            raise OSError(exc.errno, f"{exc.strerror or exc}; not written", path) from None
         except BaseException:
             self._discard()
             raise
@@ -105,8 +105,18 @@ class LiveOutput:
 
     def close(self, failed):
         """Close the file; after a failure (``failed``) keep it only when it holds a data row.
-        Returns what the user must be told about the file (for "PATH: ..."), else ""."""
-        self._writer.close()
+        Returns what the user must be told about the file (for "PATH: ..."), else "". A failure
+        of the close itself (the last flush on a disk that fills now) is a failed write: the file
+        keeps its last flush, and the OSError says so ("PATH: No space left on device; kept the
+        first N samples", or "not written, ...")."""
+        try:
+            self._writer.close()
+        except OSError as exc:
+            raise OSError(exc.errno, f"{exc.strerror or exc}; {self._keep(True)}", self.path) from None
+        return self._keep(failed)
+
+    def _keep(self, failed):
+        """Publish or discard the closed file; what the user must be told (see :meth:`close`)."""
         kept = self._writer.rows_flushed
         if failed and not kept:
             if not self.published:
@@ -147,7 +157,12 @@ def close_after_failure(output, exc, command):
     A failed write of the output (an OSError) is raised again as the command's one error line,
     saying what the file kept; otherwise what the failure left goes on stderr and the caller
     raises ``exc``."""
-    line = output.close(failed=True)
+    try:
+        line = output.close(failed=True)
+    except OSError as closing:  # the close failed too (a disk full): its line says what the file kept
+        if isinstance(exc, GyroFilterError):
+            raise GyroFilterError(f"{one_line(exc)}; {one_line(closing)}") from None
+        raise closing from None
     if output.write_failed and isinstance(exc, OSError):
         raise OSError(exc.errno, f"{exc.strerror or exc}; {line}", output.path) from None
     if line and isinstance(exc, GyroFilterError):  # one error line that also says what the file kept

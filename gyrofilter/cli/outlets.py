@@ -12,7 +12,7 @@ import errno
 import socket
 
 from ..errors import SettingsError
-from ..view.address import is_loopback, is_wildcard, loopback, machine_addresses, resolve, split_address, url
+from ..view.address import is_wildcard, loopback, machine_addresses, resolve, split_address, url
 from ..view.server import LiveServer
 from ..view.sink import RunInfo, Step
 from ..view.udp import FORMATS, UdpSender
@@ -55,7 +55,10 @@ class Outlets:
             udp = resolve(host, port, "--udp", socket.SOCK_DGRAM)
         outlets, announcements = [], []
         if udp is not None:
-            outlets.append(UdpSender(*udp, args.udp_format or FORMATS[0], args.udp))
+            try:
+                outlets.append(UdpSender(*udp, args.udp_format or FORMATS[0], args.udp))
+            except OSError as exc:
+                raise SettingsError(f"--udp {args.udp}: cannot send there: {_why(exc)}") from None
         if serve is not None:
             try:
                 server, lines = _open_server(args.serve, *serve)
@@ -112,10 +115,10 @@ def _open_server(text, host, resolved):
     interface (0.0.0.0), the addresses to open, this machine's first (:func:`machine_addresses`)."""
     family, sockaddr = resolved
     try:
-        server = LiveServer(family, sockaddr, loopback_only=is_loopback(host))
+        server = LiveServer(family, sockaddr, name=host)
     except OSError as exc:
         raise SettingsError(f"--serve {text}: cannot listen there: {_why(exc)}") from None
-    if is_loopback(host):
+    if server.loopback_only:  # the address bound decides, not the name (raspberrypi -> 127.0.1.1)
         return server, [f"gyrofilter run: live view on {server.url} (this machine only)"]
     where = "every network interface" if is_wildcard(host) else host
     port = server.address[1]

@@ -3,6 +3,7 @@ files written under a temporary name that take their own name only when whole (:
 :func:`replacing_in`, :func:`commit`), the clean-up of what killed processes left
 (:func:`remove_stale_partials`), and the writers of the JSON and text reports."""
 import contextlib
+import errno
 import json
 import os
 import re
@@ -188,15 +189,26 @@ def replacing_in(folder):
             shutil.rmtree(tmp, ignore_errors=True)
 
 
+#: what only a write raises (a full disk or quota, a file size limit, a read-only file system):
+#: such an error without a file name, inside :func:`replacing`, is the output's (a file's close,
+#: matplotlib's savefig)
+WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EROFS})
+
+
 @contextlib.contextmanager
 def _naming(tmp, path):
-    """An error about the temporary ``tmp`` (or a file in it) names the user's ``path`` instead:
-    an OSError's file name, and the text of a GyroFilterError (a writer's refusal, same class)."""
+    """An error about the temporary ``tmp`` (or a file in it) names the user's ``path`` instead
+    and says that it was not written ("PATH: No space left on device; not written"): an OSError
+    naming ``tmp`` or ``path``, or no file with an errno of :data:`WRITE_ERRNOS`; and the text of a
+    GyroFilterError (a writer's refusal, same class)."""
     try:
         yield
     except OSError as exc:
-        if isinstance(exc.filename, str) and exc.filename.startswith(tmp):
-            raise OSError(exc.errno, exc.strerror, path + exc.filename[len(tmp):]) from None
+        name = exc.filename
+        if isinstance(name, str) and name.startswith(tmp):
+            raise OSError(exc.errno, f"{exc.strerror or exc}; not written", path + name[len(tmp):]) from None
+        if name == path or (name is None and exc.errno in WRITE_ERRNOS):  # a writer that names the user's file
+            raise OSError(exc.errno, f"{exc.strerror or exc}; not written", path) from None
         raise
     except GyroFilterError as exc:
         exc.args = tuple(a.replace(tmp, path) if isinstance(a, str) else a for a in exc.args)
@@ -318,20 +330,31 @@ def write_json(path, doc):
     Through :func:`gyrofilter.units.json_ready`: numpy values become plain numbers and lists, a
     non-finite number becomes ``null``.
     """
-    with open(path, "w", encoding="utf-8") as fh:
+    with _writing(path) as fh:
         json.dump(json_ready(doc), fh, indent=1, allow_nan=False)
         fh.write("\n")
-
 
 
 def write_json_document(path, doc):
     """Write the Allan document ``doc`` (:func:`gyrofilter.analysis.noise.export.to_json`) to ``path`` (no
     replacing: give it the path :func:`replacing` yields)."""
-    with open(path, "w", encoding="utf-8") as fh:
+    with _writing(path) as fh:
         json.dump(doc, fh, indent=1, allow_nan=False)
 
 
 def write_text(path, text):
     """Write ``text`` to ``path`` (no replacing: give it the path :func:`replacing` yields)."""
-    with open(path, "w", encoding="utf-8") as fh:
+    with _writing(path) as fh:
         fh.write(text)
+
+
+@contextlib.contextmanager
+def _writing(path):
+    """``path`` open for writing text; a failed write or close (a full disk) names ``path``."""
+    try:
+        with open(path, "w", encoding="utf-8") as fh:
+            yield fh
+    except OSError as exc:
+        if exc.filename is None:
+            raise OSError(exc.errno, exc.strerror or str(exc), path) from None
+        raise

@@ -158,8 +158,8 @@ class Replay:
         undefined), their std ratio and the rejected samples."""
         filt, raw, filtered = self.filt, self.raw, self.filtered
         cal = filt.calibration
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = raw.std / filtered.std
+        with np.errstate(divide="ignore", invalid="ignore"):  # undefined (None) where either does not vary
+            ratio = np.where((raw.std > 0) & (filtered.std > 0), raw.std / filtered.std, np.nan)
         return json_ready({
             "preset": filt.preset, "sample_rate_hz": filt.sample_rate_hz, "output_rate_hz": filt.output_rate_hz,
             "samples_in": filt.samples_in, "rows_out": filtered.count,

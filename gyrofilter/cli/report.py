@@ -123,7 +123,7 @@ def compute(path, *, seed, sims, keep_outliers, warn, progress):
     progress("allan")
     allan_doc = allan_error = None
     try:
-        _, results, allan_doc = allan.analyse(path, keep_outliers=keep_outliers, warn=warned)
+        _, results, allan_doc = allan.analyse(path, keep_outliers=keep_outliers, warn=warned, skip_constant=True)
     except GyroFilterError as exc:
         allan_error = one_line(exc)
         warned(f"no Allan deviation: {allan_error}")

@@ -15,6 +15,7 @@ before it (the device failing, the calibration refused because the sensor moved,
 no file and an existing one (--force) as it was, so that the same command can be run again.
 """
 import contextlib
+import json
 import sys
 import time
 
@@ -108,6 +109,9 @@ def _run(args, source, sinks):
         if key in head:
             out_header[key] = head[key]
     out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
+    if args.calibration is not None:  # the bias is known from the start: the header names it and its file, as replay's
+        out_header["bias_dps"] = json.dumps(list(filt.bias_dps))
+        out_header["calibration_from"] = args.calibration
     columns = list(COLUMNS)
     out_file = _out_file(args)
     rows_on_terminal = out_file is None and sys.stdout.isatty()

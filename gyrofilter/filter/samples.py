@@ -54,7 +54,14 @@ def check_samples(samples_dps):
 
 def as_numbers(values, name, unit):
     """``values`` as a float array when they are numbers (ints or floats: no strings, bools,
-    objects or ragged lists), else SampleError naming ``name``."""
+    objects or ragged lists), else SampleError naming ``name``. A masked array with a masked
+    value is refused, naming its row: converting it would drop the mask and filter the value
+    behind it as data."""
+    mask = np.ma.getmask(values)
+    if mask is not np.ma.nomask and mask.any():
+        row = int(np.flatnonzero(mask.reshape(len(mask), -1).any(axis=1))[0]) if mask.ndim else 0
+        raise SampleError(f"{name} row {row} is masked; give the measured values only (drop the masked rows, or "
+                          "fill them with np.ma.filled if a value is meant)", row)
     try:
         x = np.asarray(values)
     except (ValueError, TypeError):  # a ragged list

@@ -146,13 +146,16 @@ class RecordingWriter(Closable):
 
     @contextlib.contextmanager
     def _failing(self):
-        """Refuse to write after a failed write; note a new failure (``write_failed``)."""
+        """Refuse to write after a failed write; note a new failure (``write_failed``), naming the
+        file when the system's error does not (a write's or a close's)."""
         if self.write_failed:
             raise OSError(errno.EIO, "an earlier write failed", self.name)
         try:
             yield
-        except OSError:
+        except OSError as exc:
             self.write_failed = True
+            if exc.filename is None:
+                raise OSError(exc.errno, exc.strerror or str(exc), self.name) from None
             raise
 
     def write(self, rows):
@@ -204,12 +207,19 @@ class RecordingWriter(Closable):
         return super().__exit__(exc_type, *exc)
 
     def _close(self):
+        """End the file; a failure of its last writes (a disk that fills now) is a failed write
+        like any other: the file is cut back to its last flush, then the OSError is raised."""
         if self.write_failed:
             self._cut_to_last_flush()
             return
-        if self._gz is not None:
-            self._gz.close()
-        self._raw.flush()
+        try:
+            with self._failing():
+                if self._gz is not None:
+                    self._gz.close()
+                self._raw.flush()
+        except OSError:
+            self._cut_to_last_flush()
+            raise
         self._raw.close()
         self.rows_flushed = self.rows_written
         if self._times is not None:

@@ -179,7 +179,7 @@ def parse_source(spec: str):
             continue
         key, eq, value = item.partition("=")
         key, value = key.strip().lower(), value.strip()
-        if not eq and index == 0 and positional_name is not None and key not in keys:
+        if index == 0 and positional_name is not None and key not in keys and (not eq or _names_a_file(item, key)):
             kwargs[positional_name] = item
             given[positional_name] = f"the {positional_name}"
             continue
@@ -272,3 +272,11 @@ def _open(kind, kwargs):
     if kind == "replay":
         return ReplaySource(**kwargs)
     return SimulatedSource(**kwargs)
+
+
+def _names_a_file(item, key):
+    """Whether the first item of a SOURCE, holding ``=`` before which is no key (``key``), is the
+    positional file itself: a path with ``=`` in a folder's name (``data/date=2024-01-01/imu.csv.gz``,
+    as partitioned folders are named) or a file that exists. A key never holds a path separator
+    or a dot, so a mistyped key (``sed=1``) is still refused as one."""
+    return any(c in key for c in (os.sep, os.altsep or os.sep, ".")) or os.path.exists(item)

@@ -8,21 +8,27 @@ publisher thread that, every :data:`FRAME_INTERVAL_S`, drains the
 the frame in every stream client's queue. A queue holds at most :data:`CLIENT_QUEUE_FRAMES`
 frames (and the connection's kernel buffer :data:`STREAM_SEND_BUFFER_BYTES`): a slow or stalled
 client loses its oldest frames (counted), never the run's samples, and a client that accepts no
-byte for :data:`SOCKET_TIMEOUT_S` is disconnected. Nothing on the
-run loop's side waits for a socket.
+byte for :data:`SOCKET_TIMEOUT_S` is disconnected. A request's line and headers must all arrive
+within :data:`REQUEST_DEADLINE_S` of the connection (a deadline for the whole request, not per
+read: clients trickling a byte at a time cannot hold the :data:`MAX_CONNECTIONS` slots), and when
+every slot is taken a new connection closes the oldest one still sending its request, so that
+clients that keep reconnecting to trickle cannot shut others out either. Nothing on the run
+loop's side waits for a socket.
 
 Read-only and closed: GET and HEAD only (any other method 405), the fixed paths only (404 for
 any other; no file is served from a path the client names), at most
 :data:`MAX_STREAM_CLIENTS` stream clients (503 beyond), request lines and headers within the
-standard library's limits (414, 431). Bound to a loopback address, it answers only requests
-whose Host is a loopback name (421 otherwise: a web page elsewhere cannot read the view through
-DNS rebinding). Every answer carries a Content-Security-Policy that allows the page's own
+standard library's limits (414, 431). Bound to a loopback address (the address bound decides,
+whatever name was given: a host's own name may map to 127.0.1.1), it answers only requests
+whose Host is a loopback name or the name it was given (421 otherwise: a web page elsewhere
+cannot read the view through DNS rebinding). Every answer carries a Content-Security-Policy that allows the page's own
 script and style sheet only.
 """
 from __future__ import annotations
 
 import collections
 import http.server
+import io
 import json
 import socket
 import socketserver
@@ -42,6 +48,8 @@ STREAM_SEND_BUFFER_BYTES = 128 * 1024
 FRAME_INTERVAL_S = 0.1
 STATUS_INTERVAL_S = 0.5
 SOCKET_TIMEOUT_S = 10.0
+#: from the connection to the end of the request's headers, however the bytes trickle in
+REQUEST_DEADLINE_S = 10.0
 CLOSE_GRACE_S = 1.0
 POLL_INTERVAL_S = 0.2
 
@@ -120,13 +128,14 @@ class LiveServer:
     :class:`~gyrofilter.view.state.LiveState`. Binding happens here (an OSError for an address
     in use or not of this machine); :meth:`start` starts serving.
 
-    ``family``, ``sockaddr``: what :func:`gyrofilter.view.address.resolve` gave;
-    ``loopback_only``: answer only requests addressed to a loopback name (bound to one).
+    ``family``, ``sockaddr``: what :func:`gyrofilter.view.address.resolve` gave; ``name``: the
+    host name given for it, accepted as a Host besides the loopback names. ``loopback_only``
+    (set from the address bound): this server is reachable from this machine only, and answers
+    only requests addressed to a loopback name or ``name``.
     """
 
-    def __init__(self, family, sockaddr, *, loopback_only):
+    def __init__(self, family, sockaddr, *, name=None):
         self.state = LiveState()
-        self.loopback_only = loopback_only
         folder = resources.files(__package__).joinpath("page")
         self.page = {path: (folder.joinpath(name).read_bytes(), ctype) for path, (name, ctype) in PAGE_FILES.items()}
         self._publish_lock = threading.Lock()
@@ -143,6 +152,8 @@ class LiveServer:
         self.last_error = None
         self._httpd = _HTTPServer(family, sockaddr, self)
         self.address = self._httpd.server_address[:2]
+        self.loopback_only = is_loopback(self.address[0])
+        self.host_names = {_host_name(name)} if name else set()
 
     @property
     def url(self):
@@ -253,6 +264,27 @@ class LiveServer:
             self._gone.notify_all()
 
 
+class _DeadlineReader(io.RawIOBase):
+    """A socket's bytes until ``deadline`` (time.monotonic()): each receive waits at most the
+    time left, and none starts after it (TimeoutError, which the handler takes as a timed-out
+    request: the connection is closed unanswered)."""
+
+    def __init__(self, connection, deadline):
+        super().__init__()
+        self._connection = connection
+        self._deadline = deadline
+
+    def readable(self):
+        return True
+
+    def readinto(self, buffer):
+        left = self._deadline - time.monotonic()
+        if left <= 0:
+            raise TimeoutError("the request did not arrive in time")
+        self._connection.settimeout(left)
+        return self._connection.recv_into(buffer)
+
+
 def _shutdown(connection):
     try:
         connection.shutdown(socket.SHUT_RDWR)
@@ -261,8 +293,10 @@ def _shutdown(connection):
 
 
 class _HTTPServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
-    """A thread per connection, at most MAX_CONNECTIONS; no reverse name look-up at bind time
-    (http.server.HTTPServer does one), errors counted instead of printed."""
+    """A thread per connection, at most MAX_CONNECTIONS (when all are taken, the oldest one whose
+    request has not arrived whole is closed for the new one; none such: the new one is closed);
+    no reverse name look-up at bind time (http.server.HTTPServer does one), errors counted
+    instead of printed."""
 
     allow_reuse_address = True
     daemon_threads = True
@@ -273,17 +307,30 @@ class _HTTPServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
         self.live = live
         self._count_lock = threading.Lock()
         self._connections = 0
+        self._pending = {}  # the connections whose request has not arrived whole, oldest first
         super().__init__(sockaddr, _Handler)
 
     def process_request(self, request, client_address):
         with self._count_lock:
-            full = self._connections >= MAX_CONNECTIONS
+            oldest = None
+            if self._connections >= MAX_CONNECTIONS and self._pending:
+                oldest = next(iter(self._pending))
+                del self._pending[oldest]
+            full = self._connections >= MAX_CONNECTIONS and oldest is None
             if not full:
                 self._connections += 1
+                self._pending[request] = None
+        if oldest is not None:  # its thread reads the end of the stream and leaves
+            _shutdown(oldest)
         if full:
             self.shutdown_request(request)
             return
         super().process_request(request, client_address)
+
+    def request_arrived(self, request):
+        """The request of the connection ``request`` has arrived whole: it is no longer evictable."""
+        with self._count_lock:
+            self._pending.pop(request, None)
 
     def process_request_thread(self, request, client_address):
         try:
@@ -291,6 +338,7 @@ class _HTTPServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
         finally:
             with self._count_lock:
                 self._connections -= 1
+                self._pending.pop(request, None)
 
     def handle_error(self, request, client_address):
         self.live.record_error(sys.exc_info()[1])
@@ -307,6 +355,13 @@ class _Handler(http.server.BaseHTTPRequestHandler):
     def version_string(self):
         return self.server_version
 
+    def setup(self):
+        """The request is read through a :class:`_DeadlineReader`: its line and headers must all
+        arrive within REQUEST_DEADLINE_S (one request per connection: HTTP/1.0)."""
+        super().setup()
+        self.rfile.close()  # the standard library's reader of the socket, replaced
+        self.rfile = io.BufferedReader(_DeadlineReader(self.connection, time.monotonic() + REQUEST_DEADLINE_S))
+
     def log_message(self, format, *args):  # noqa: A002 - the standard library's signature
         """Nothing: the library never prints (the run's summary counts what matters)."""
 
@@ -316,12 +371,16 @@ class _Handler(http.server.BaseHTTPRequestHandler):
         super().end_headers()
 
     def parse_request(self):
-        if not super().parse_request():
+        parsed = super().parse_request()  # reads the headers
+        self.server.request_arrived(self.connection)  # its line and headers are in (or refused)
+        if not parsed:
             return False
+        self.connection.settimeout(SOCKET_TIMEOUT_S)  # the request is in; the answer's writes time out per write
         if self.command not in ("GET", "HEAD"):
             self._reply(405, b"405 read-only: GET or HEAD\n", TEXT_TYPE, extra=(("Allow", "GET, HEAD"),))
             return False
-        if self.server.live.loopback_only and not _loopback_host(self.headers.get("Host")):
+        live = self.server.live
+        if live.loopback_only and not _loopback_host(self.headers.get("Host"), live.host_names):
             self._reply(421, b"421 this view answers requests for localhost only\n", TEXT_TYPE)
             return False
         return True
@@ -384,8 +443,9 @@ class _Handler(http.server.BaseHTTPRequestHandler):
             self.close_connection = True
 
 
-def _loopback_host(host_header):
-    """True when a Host header names a loopback host (or is absent, as from an HTTP/1.0 client)."""
+def _loopback_host(host_header, names):
+    """True when a Host header names a loopback host or one of ``names`` (or is absent, as from an
+    HTTP/1.0 client)."""
     if host_header is None:
         return True
     host = host_header.strip()
@@ -393,4 +453,10 @@ def _loopback_host(host_header):
         host = host[1:].partition("]")[0]
     elif ":" in host:
         host = host.rpartition(":")[0]
-    return is_loopback(host.lower())
+    host = _host_name(host)
+    return is_loopback(host) or host in names
+
+
+def _host_name(host):
+    """A host name as compared: lower case, without the root's trailing dot."""
+    return host.lower().removesuffix(".")

@@ -19,6 +19,10 @@ Formats (``--udp-format``):
 ``timestamp`` is the row's ``t`` (s, the sensor's clock, as in the output file); rates in deg/s
 with 9 significant digits. The socket never blocks: a datagram the system cannot take at once is
 dropped and counted, and so is one refused by the network (the summary names the last error).
+An IPv4 socket may broadcast (``SO_BROADCAST``: 255.255.255.255 or a subnet's broadcast
+address, which the address alone does not tell from a host's), and the destination is checked
+when the sender is made (a UDP ``connect`` on a socket of its own: no route there is an OSError
+before the run, not every datagram dropped after it).
 """
 from __future__ import annotations
 
@@ -56,7 +60,13 @@ class UdpSender:
         self.sent = 0
         self.dropped = 0
         self.last_error = None
-        self._sock = socket.socket(family, socket.SOCK_DGRAM)
+        self._sock = _datagram_socket(family)
+        try:
+            with _datagram_socket(family) as probe:  # sends nothing: the route and the permission to send there
+                probe.connect(sockaddr)
+        except OSError:
+            self._sock.close()
+            raise
         self._sock.setblocking(False)
 
     def start(self, info):
@@ -77,3 +87,11 @@ class UdpSender:
         self._sock.close()
         text = f"udp {self.fmt} to {self.name}: {self.sent} datagrams sent, {self.dropped} dropped"
         return text + (f" (last error: {self.last_error})" if self.last_error else "")
+
+
+def _datagram_socket(family):
+    """A UDP socket of ``family``; an IPv4 one may send to a broadcast address."""
+    sock = socket.socket(family, socket.SOCK_DGRAM)
+    if family == socket.AF_INET:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+    return sock

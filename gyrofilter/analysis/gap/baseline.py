@@ -34,6 +34,14 @@ from ...units import AXES, to_dps
 # the models
 
 
+#: fewest baseline runs from which D is judged (``gap --sims`` refuses fewer; the library notes
+#: it). Measured on pure white noise (10 seeds x 3 axes, D after, issue 37): from 2, 3, 5, 8, 10
+#: runs the 95th percentile of D is 36, 12, 3.0, 1.6, 1.5 on 5-minute records (axes above
+#: OUTSIDE_NULL_D = 2, "does not close": 30, 18, 6, 0, 0 of 30) and 3.1, 3.0, 2.6, 2.1 from
+#: 6, 7, 8, 10 runs on 30-s records (max 7.5, 7.8, 8.0, 4.1); the default's 12 to 24: 1.6-2.0
+MIN_SIMS = 10
+
+
 def default_n_sims(n_samples):
     """Baseline runs: 24 up to 200 000 samples per axis, then fewer (at least 12) so that
     hours of data stay fast; the spread of a feature is estimated to about +-20 % from 12 runs."""

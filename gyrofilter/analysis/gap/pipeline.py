@@ -63,7 +63,7 @@ from ...sim.model import TEMPERATURE_PROFILE
 from ...units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
 from ..still import not_static
 from . import detectors as det
-from .baseline import (axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
+from .baseline import (MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
                        temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
 from .confound import alternatives_entry, kept_without_gain, weigh_readings, weigh_wanders
@@ -411,8 +411,11 @@ def write_findings(inp, state, scorer, report):
     def extended_deps(i):
         return scorer.departures(i, state.model(inp, i, state.kept_on(i)), f"extended model on {AXES[i]}")
 
+    if inp.n_sims < MIN_SIMS:  # the spread of a feature from so few runs is too uncertain to judge D by
+        report["notes"].append(f"D from {inp.n_sims} simulations is not judged (pure white noise reads D up to 14-98 from "
+                               f"2-3 of them): give {MIN_SIMS} or more")
     for i in range(3):
-        if after[i] > det.OUTSIDE_NULL_D:
+        if after[i] > det.OUTSIDE_NULL_D and inp.n_sims >= MIN_SIMS:
             deps_e = extended_deps(i) if state.kept_on(i) else inp.deps[i]
             report["notes"].append(still_departs(AXES[i], after[i], deps_e, inp.taus, inp.bands))
             if AXES[i] in report.get("departures", {}):

@@ -43,6 +43,15 @@ class AllanInputError(GyroFilterError, ValueError):
     """The data or the requested cluster times cannot give an Allan deviation."""
 
 
+class ConstantAxisError(AllanInputError):
+    """An axis whose samples are all equal (a stuck or unconnected axis): nothing to characterise.
+    ``axis``: its name; the others of a recording may still be analysed."""
+
+    def __init__(self, message, axis):
+        super().__init__(message)
+        self.axis = axis
+
+
 def _check_series(x, name="x"):
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 1:

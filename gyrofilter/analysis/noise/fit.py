@@ -21,8 +21,8 @@ import itertools
 
 import numpy as np
 
-from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture, edf_oavar, n_clusters,
-                    overlapping_adev, simple_interval)
+from .allan import (MIN_CLUSTERS, AllanInputError, ConstantAxisError, chi2_interval, cluster_sizes, edf_mixture,
+                    edf_oavar, n_clusters, overlapping_adev, simple_interval)
 from .intervals import fitted_intervals
 from .model import TERM_ALPHA, TERMS, AxisNoise, basis, term_shares
 from .readoff import read_off
@@ -130,9 +130,9 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     if x.ndim != 1:
         raise AllanInputError(f"axis {axis}: expected a 1-D rate series, got shape {x.shape}")
     if x.size and np.all(np.isfinite(x)) and np.ptp(x) == 0:
-        raise AllanInputError(
+        raise ConstantAxisError(
             f"axis {axis}: all {x.size} samples equal {x[0]:g} deg/s (constant data): no noise to "
-            "characterise (sensor not connected, or a saturated/stuck axis?)")
+            "characterise (sensor not connected, or a saturated/stuck axis?)", axis)
     if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
         raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
     for t in terms:

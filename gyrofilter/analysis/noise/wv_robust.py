@@ -99,13 +99,14 @@ def biweight_constants(efficiency=ROBUST_EFFICIENCY):
 
 def m_scale2(w, c, b, iterations=200, tol=1e-10):
     """The biweight M-estimate of scale, squared, of the zero-mean values ``w`` (module
-    docstring): the fixed point s² ← s² mean ρ(w / s) / b from (1.4826 MAD)²."""
+    docstring): the fixed point s² ← s² mean ρ(w / s) / b from (1.4826 MAD)². Where the MAD is 0
+    (most values exactly 0: a quiet sensor whose samples sit on one code) the iteration has no
+    fixed point but 0 (every nonzero value looks like an outlier: 1e-232 after 200 steps, which
+    broke the fits that divide by it); the mean square is returned there."""
     w = np.asarray(w, dtype=float)
     s2 = (1.4826 * float(np.median(np.abs(w)))) ** 2
     if not s2 > 0:
-        s2 = float(np.mean(w * w))
-    if not s2 > 0:
-        return 0.0
+        return float(np.mean(w * w))
     sq = w * w
     for _ in range(iterations):
         new = s2 * float(np.mean(biweight_rho(np.sqrt(sq / s2), c))) / b
