@@ -1,5 +1,5 @@
 """A fleet run (``allan``/``gap`` with ``--fleet DIR``): the same results on every backend, a
-failing file in its own row, and the flags catching a unit with a hidden defect (gyrofilter/analysis/fleet.py).
+failing file in its own row, and the flags catching a unit with a hidden defect (gyrofilter/analysis/fleet/).
 """
 import contextlib
 import csv
@@ -18,7 +18,8 @@ import time
 import numpy as np
 import pytest
 
-from gyrofilter.analysis import fleet
+from gyrofilter.analysis.fleet import runner, work
+from gyrofilter.analysis.fleet import table as fleet_table
 from gyrofilter.cli import main
 from gyrofilter.cli.batch import expand
 from gyrofilter.recording import Recording, write_recording
@@ -57,9 +58,9 @@ def write_fleet(folder, seed, defect, units=7, duration_s=600.0):
 
 def flagged(paths, settings):
     """{(unit, axis): [flag, ...]} of the fleet ``paths`` analysed in this process."""
-    names = fleet.unit_names(paths)
-    rows = fleet.fleet_rows(names, [fleet.analyse_recording(p, settings) for p in paths])
-    fleet.flag_units(rows)
+    names = fleet_table.unit_names(paths)
+    rows = fleet_table.fleet_rows(names, [work.analyse_recording(p, settings) for p in paths])
+    fleet_table.flag_units(rows)
     return {(r["unit"], r["axis"]): r["flag"] for r in rows if r["flag"]}
 
 
@@ -72,7 +73,7 @@ def _check_only_the_defect(found, bad, axis, what):
                                   pytest.param(6, marks=pytest.mark.slow), pytest.param(7, marks=pytest.mark.slow)])
 def test_the_unit_with_a_larger_b_and_only_it_is_flagged(tmp_path, seed):
     paths, bad, axis = write_fleet(tmp_path, seed, "b")
-    found = flagged(paths, fleet.FleetSettings("allan"))
+    found = flagged(paths, work.FleetSettings("allan"))
     _check_only_the_defect(found, bad, axis, "B")
     assert found[(f"unit{bad:02d}", axis)][0]["direction"] == "high"
 
@@ -80,7 +81,7 @@ def test_the_unit_with_a_larger_b_and_only_it_is_flagged(tmp_path, seed):
 @pytest.mark.parametrize("seed", [pytest.param(11, marks=pytest.mark.slow), pytest.param(12, marks=pytest.mark.slow), pytest.param(13, marks=pytest.mark.slow)])
 def test_the_unit_with_a_spectral_line_and_only_it_is_flagged(tmp_path, seed):
     paths, bad, axis = write_fleet(tmp_path, seed, "line", duration_s=300.0)
-    found = flagged(paths, fleet.FleetSettings("gap", sims=12))
+    found = flagged(paths, work.FleetSettings("gap", sims=12))
     _check_only_the_defect(found, bad, axis, "sinusoid")
 
 
@@ -90,14 +91,14 @@ def test_a_clean_fleet_has_no_flags(tmp_path):
     for u in range(6):
         paths.append(str(tmp_path / f"unit{u}.csv.gz"))
         write_recording(paths[-1], simulate(unit_model(rng), 600.0, seed=2100 + u))
-    assert flagged(paths, fleet.FleetSettings("allan")) == {}
+    assert flagged(paths, work.FleetSettings("allan")) == {}
 
 
 # ------------------------------------------------------------------------------ the rules alone
 
 
 def _row(unit, axis="x", n=0.01, n_rel=0.01, b=None, b_upper=0.002, findings=(), d_before=None):
-    row = dict.fromkeys(fleet.COLUMNS)
+    row = dict.fromkeys(fleet_table.COLUMNS)
     row.update(unit=unit, axis=axis, status="ok", flag=[], findings=list(findings),
                d_before=d_before if d_before is not None else (5.0 if findings else 1.0),
                arw_dps_per_sqrt_hz=n, arw_dps_per_sqrt_hz_low=n * (1 - n_rel), arw_dps_per_sqrt_hz_high=n * (1 + n_rel),
@@ -110,23 +111,23 @@ def _row(unit, axis="x", n=0.01, n_rel=0.01, b=None, b_upper=0.002, findings=(),
 def test_flag_rule_high_and_low_n_against_median_and_mad():
     ns = [0.0100, 0.0104, 0.0097, 0.0102, 0.0099, 0.0180, 0.0050]
     rows = [_row(f"u{i}", n=n) for i, n in enumerate(ns)]
-    stats = fleet.flag_units(rows)
+    stats = fleet_table.flag_units(rows)
     assert [(r["unit"], f["what"], f["direction"]) for r in rows for f in r["flag"]] == [("u5", "N", "high"), ("u6", "N", "low")]
     entry = next(s for s in stats if s["axis"] == "x" and s["what"] == "N")
     assert entry["median"] == pytest.approx(0.0100)
-    assert entry["spread"] == fleet.MIN_SPREAD_LN  # these units agree within 10 %: the floor holds
+    assert entry["spread"] == fleet_table.MIN_SPREAD_LN  # these units agree within 10 %: the floor holds
     # the near end of the interval decides: the same 0.0180 with a +-45 % interval is not flagged
     rows = [_row(f"u{i}", n=n, n_rel=0.45 if i == 5 else 0.01) for i, n in enumerate(ns)]
-    fleet.flag_units(rows)
+    fleet_table.flag_units(rows)
     assert [r["unit"] for r in rows if r["flag"]] == ["u6"]
 
 
 def test_an_unresolved_b_is_never_flagged_and_too_few_units_are_not_compared():
     rows = [_row(f"u{i}", b_upper=u) for i, u in enumerate([0.002, 0.0021, 0.0019, 0.0022, 0.05])]
-    fleet.flag_units(rows)
+    fleet_table.flag_units(rows)
     assert not any(r["flag"] for r in rows)  # an upper bound says only "at most"
     rows = [_row(f"u{i}", n=n, b=b, b_upper=0.002) for i, (n, b) in enumerate([(0.01, None), (0.0101, None), (0.1, 0.05)])]
-    stats = fleet.flag_units(rows)
+    stats = fleet_table.flag_units(rows)
     assert not any(r["flag"] for r in rows)
     assert all(not s["compared"] for s in stats if s["axis"] == "x")
 
@@ -136,13 +137,13 @@ def test_a_finding_most_units_share_is_not_flagged_and_a_rare_one_is():
     step = {"effect": "bias_step", "axis": "z", "params": {"time_s": 100.0, "size_dps": 0.02}}
     rows = [_row(f"u{i}", axis="z", findings=[line] + ([step] if i == 2 else [])) for i in range(3)]
     rows += [_row("u3", axis="z"), _row("u4", axis="z", findings=[line])]
-    fleet.flag_units(rows)
+    fleet_table.flag_units(rows)
     assert [(r["unit"], [f["what"] for f in r["flag"]]) for r in rows if r["flag"]] == [("u2", ["bias_step"])]
     # a rare finding where the baseline already explains the axis (D below RARE_MIN_D) is no flag
-    rows[2] = _row("u2", axis="z", findings=[line, step], d_before=fleet.RARE_MIN_D * 0.99)
+    rows[2] = _row("u2", axis="z", findings=[line, step], d_before=fleet_table.RARE_MIN_D * 0.99)
     for r in rows:
         r["flag"] = []
-    fleet.flag_units(rows)
+    fleet_table.flag_units(rows)
     assert not any(r["flag"] for r in rows)
 
 
@@ -150,9 +151,9 @@ def test_a_finding_most_units_share_is_not_flagged_and_a_rare_one_is():
 
 
 def test_unit_names_tell_files_of_the_same_name_apart():
-    assert fleet.unit_names(["a/robot1/imu.csv.gz", "a/robot2/imu.csv", "b/x.csv", "c.txt"]) == \
+    assert fleet_table.unit_names(["a/robot1/imu.csv.gz", "a/robot2/imu.csv", "b/x.csv", "c.txt"]) == \
         ["robot1-imu", "robot2-imu", "x", "c.txt"]
-    assert fleet.unit_names(["p/q/imu.csv", "r/q/imu.csv"]) == ["p-q-imu", "r-q-imu"]
+    assert fleet_table.unit_names(["p/q/imu.csv", "r/q/imu.csv"]) == ["p-q-imu", "r-q-imu"]
 
 
 def test_globs_expand_in_order_once_and_a_pattern_without_match_stays(tmp_path):
@@ -301,7 +302,7 @@ def test_a_rows_warnings_are_the_recordings_and_its_own_axis():
     res = {"recording": "r.csv", "error": None, "warnings": ["r.csv: 2 samples lost", "axis z: few clusters"],
            "sample_rate_hz": 100.0, "duration_s": 60.0, "runtime_s": 1.0, "allan": None,
            "gap": {"findings": [], "discrepancy": {}}}
-    rows = fleet.fleet_rows(["r"], [res])
+    rows = fleet_table.fleet_rows(["r"], [res])
     assert {r["axis"]: r["warnings"] for r in rows} == {
         "x": ["r.csv: 2 samples lost"], "y": ["r.csv: 2 samples lost"], "z": ["r.csv: 2 samples lost", "axis z: few clusters"]}
 
@@ -309,10 +310,10 @@ def test_a_rows_warnings_are_the_recordings_and_its_own_axis():
 def test_findings_cell_is_effect_param_value_items_in_full_precision():
     findings = [{"effect": "sinusoid", "axis": "z", "params": {"frequency_hz": 7.3, "amplitude_dps": 0.051234567891}},
                 {"effect": "bias_step", "axis": "z", "params": {"time_s": 120.0, "size_dps": -0.04}}]
-    items = [re.fullmatch(r"([a-z_]+):([a-z_]+)=(.+)", item).groups() for item in fleet.findings_cell(findings).split(";")]
+    items = [re.fullmatch(r"([a-z_]+):([a-z_]+)=(.+)", item).groups() for item in fleet_table.findings_cell(findings).split(";")]
     assert [(e, k, float(v)) for e, k, v in items] == [("sinusoid", "frequency_hz", 7.3), ("sinusoid", "amplitude_dps", 0.051234567891),
                                                       ("bias_step", "time_s", 120.0), ("bias_step", "size_dps", -0.04)]
-    assert fleet.findings_cell([]) == ""
+    assert fleet_table.findings_cell([]) == ""
 
 
 def test_a_fleet_where_no_file_could_be_analysed_exits_2_with_its_table(tmp_path, capsys):
@@ -367,7 +368,7 @@ def test_dask_scheduler_address_that_is_no_dask_scheduler_is_one_line(small_flee
     """Issue 22 (16, 21): an HTTP server used to end in a MemoryError ("3.07 EiB"), a server that
     never answers in a hang of minutes; both are one line, within the scheduler timeout."""
     pytest.importorskip("distributed")
-    monkeypatch.setattr(fleet, "SCHEDULER_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(runner, "SCHEDULER_TIMEOUT_S", 1.0)
     out = tmp_path / "out"
     with _server(kind) as address:
         assert main(["allan", *small_fleet[:2], "--fleet", str(out), "--scheduler", address]) == 2
@@ -445,7 +446,7 @@ def test_an_allan_fleets_markdown_has_no_gap_columns_and_a_gap_fleets_has(small_
         assert len(rows) == 9 and all(ln.count("|") == head.count("|") for ln in rows)
         assert ("gap analysis" in table) == gap
         with open(folder / "fleet.csv", encoding="utf-8", newline="") as fh:
-            assert next(csv.reader(fh)) == list(fleet.COLUMNS)
+            assert next(csv.reader(fh)) == list(fleet_table.COLUMNS)
 
 
 def test_the_fleet_warns_about_lost_samples_as_gap_does(tmp_path):
@@ -454,7 +455,7 @@ def test_the_fleet_warns_about_lost_samples_as_gap_does(tmp_path):
     t = np.concatenate(([0.0], np.cumsum(np.where(np.arange(299) % 5 == 4, 0.02, 0.01))))
     path = tmp_path / "gaps.csv"
     write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (300, 3)), 100.0, t_s=t))
-    result = fleet.analyse_recording(str(path), fleet.FleetSettings("gap", sims=10))
+    result = work.analyse_recording(str(path), work.FleetSettings("gap", sims=10))
     assert any("t shows 59 gap(s) longer than 1.5 sample intervals; the gap analysis" in w for w in result["warnings"])
 
 

@@ -176,7 +176,7 @@ def test_links_to_formats_md_point_at_its_sections():
 def test_fleet_table_example_has_the_columns_of_the_code():
     import csv
 
-    from gyrofilter.analysis.fleet import COLUMNS
+    from gyrofilter.analysis.fleet.table import COLUMNS
 
     rows = list(csv.reader(example(9, "text").splitlines()))
     assert rows[0] == list(COLUMNS)
@@ -208,7 +208,7 @@ def test_section_8_states_the_bounds_the_code_holds(row, value):
 
 def test_section_8_states_the_sizes_the_code_holds():
     from gyrofilter import inputs, recording
-    from gyrofilter.analysis import fleet
+    from gyrofilter.analysis.fleet import runner
     from gyrofilter.sim import model
     from gyrofilter.sources import serial_protocol
 
@@ -219,7 +219,7 @@ def test_section_8_states_the_sizes_the_code_holds():
     assert inputs.MAX_JSON_BYTES == 16 * 2 ** 20 and f"| 16 MiB, {inputs.MAX_JSON_DEPTH} levels |" in text
     assert (f"| {model.MAX_EFFECTS_PER_AXIS}; {model.MAX_ARMA_COEFFICIENTS}; {model.MAX_TABLE_POINTS} |"
             in text)
-    assert f"| {fleet.SCHEDULER_TIMEOUT_S:g} s |" in text
+    assert f"| {runner.SCHEDULER_TIMEOUT_S:g} s |" in text
 
 
 def test_the_glossary_names_each_term_as_the_code_does():

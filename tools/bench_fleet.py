@@ -82,7 +82,7 @@ def main(argv=None):
     p.add_argument("--no-dask", action="store_true", help="skip the LocalCluster run")
     args = p.parse_args(argv)
 
-    from gyrofilter.analysis.fleet import default_jobs
+    from gyrofilter.analysis.fleet.runner import default_jobs
 
     cores = default_jobs()
     with tempfile.TemporaryDirectory() as tmp:

@@ -12,8 +12,10 @@ decision lives:
   parameters' intervals), ``report`` (Markdown and figures).
 - ``arma/``: ARMA and bias-state models (paper 003): ``identify`` (order selection, the bias
   model), ``fit``, ``checks`` (the residual tests), ``bias_kf`` (the bias-tracking filter).
+- ``fleet/``: many recordings at once: ``work`` (one file), ``runner`` (worker processes, Dask),
+  ``table`` (the rows, the units that stand out, fleet.csv and fleet.md).
 - ``stats``: the statistics the families share; ``still``: is the record still, and the Allan
-  analysis of a file; ``fleet``: many recordings at once.
+  analysis of a file.
 
 Uses the core, ``gyrofilter.filter`` and ``gyrofilter.sim``; nothing here is imported by
 ``import gyrofilter``."""

@@ -16,7 +16,7 @@ import textwrap
 
 from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
-from ..analysis.fleet import FleetSettings
+from ..analysis.fleet.work import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
 from ..analysis.noise.model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, TERM_UNIT, convert
 from ..analysis.noise.plots import plot_allan

@@ -13,7 +13,7 @@ import os
 import sys
 import time
 
-from ..analysis import fleet
+from ..analysis.fleet import runner, table, work
 from ..errors import SettingsError
 from . import console, options, outputs
 
@@ -89,21 +89,21 @@ def run(args, settings, paths):
     if args.jobs is not None and args.scheduler:
         raise SettingsError("--jobs and --scheduler: give one (the cluster's workers set the parallelism)")
     outputs.check_output_folder(args.fleet, "--fleet")
-    names = fleet.unit_names(paths)
+    names = table.unit_names(paths)
     files = report_files(settings.command)
     report_paths = [os.path.join(args.fleet, name + suffix) for name in names for suffix, _, _ in files]
     fleet_files = [os.path.join(args.fleet, FLEET_CSV), os.path.join(args.fleet, FLEET_MD)]
     outputs.check_outputs(report_paths + fleet_files, paths, args.force)
-    results = [fleet.failed(p, "no file matches") if glob.has_magic(p) and not os.path.exists(p) else None
+    results = [work.failed(p, "no file matches") if glob.has_magic(p) and not os.path.exists(p) else None
                for p in paths]
     todo = [i for i, r in enumerate(results) if r is None]
     if args.scheduler:
         where = f"the Dask cluster at {args.scheduler}"
-        stream = fleet.run_dask([paths[i] for i in todo], settings, args.scheduler)
+        stream = runner.run_dask([paths[i] for i in todo], settings, args.scheduler)
     else:
-        jobs = max(1, min(args.jobs or fleet.default_jobs(), len(todo)))
+        jobs = max(1, min(args.jobs or runner.default_jobs(), len(todo)))
         where = f"{jobs} worker process(es)"
-        stream = fleet.run_local([paths[i] for i in todo], settings, jobs)
+        stream = runner.run_local([paths[i] for i in todo], settings, jobs)
     show = args.progress or sys.stderr.isatty()
     t0 = time.perf_counter()
     if show:
@@ -128,13 +128,13 @@ def run(args, settings, paths):
                 state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
                          else f"FAILED: {result['error']}")
                 console.say(f"{settings.command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}")
-    rows = fleet.fleet_rows(names, results)
-    stats = fleet.flag_units(rows)
+    rows = table.fleet_rows(names, results)
+    stats = table.flag_units(rows)
     title = f"Fleet: gyrofilter {settings.command}, {len(paths)} recordings"
     with outputs.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
-        fh.write(fleet.fleet_csv(rows))
+        fh.write(table.fleet_csv(rows))
     with outputs.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(fleet.fleet_markdown(rows, stats, title=title))
+        fh.write(table.fleet_markdown(rows, stats, title=title))
     return _summary(rows, fleet_files, written, time.perf_counter() - t0)
 
 

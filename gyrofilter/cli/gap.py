@@ -18,7 +18,7 @@ import sys
 import time
 
 from ..analysis.gap import report as gap_report
-from ..analysis.fleet import FleetSettings
+from ..analysis.fleet.work import FleetSettings
 from ..analysis.gap.baseline import MIN_SIMS
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
