@@ -341,3 +341,32 @@ def test_a_file_name_cannot_add_a_key_to_the_kalibr_yaml(static_recording, tmp_p
     text = yaml.read_text()
     assert yaml_keys(text) == ["gyroscope_noise_density", "gyroscope_random_walk", "rostopic", "update_rate"]
     assert "unit7\\naccelerometer_noise_density: 1.0e-9\\n#.csv.gz" in text
+
+
+def test_every_label_of_the_allan_figure_stays_inside_its_panel():
+    """Issue 38: a read-off's label ran out of its panel in adev.png (the B read-off near the
+    right end of the curve). Every annotation's box lies within its axes' box."""
+    pytest.importorskip("matplotlib")
+    from gyrofilter.analysis.noise.fit import characterise
+    from gyrofilter.analysis.noise.plots import allan_figure
+    from gyrofilter.plots import pyplot
+    from gyrofilter.recording import read_recording
+    from support import RECORDINGS
+
+    rec = read_recording(str(RECORDINGS / "mpu6050_static_655s.csv.gz"))
+    plt = pyplot()
+    fig = allan_figure(plt, characterise(rec.gyro_dps, rec.sample_rate_hz), title="t")
+    try:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        outside = []
+        for ax in fig.axes:
+            box = ax.get_window_extent(renderer)
+            for text in ax.texts:
+                t = text.get_window_extent(renderer)
+                if t.x0 < box.x0 - 1 or t.x1 > box.x1 + 1 or t.y0 < box.y0 - 1 or t.y1 > box.y1 + 1:
+                    outside.append(text.get_text())
+        assert [t for ax in fig.axes for t in ax.texts], "no read-off labels drawn"
+        assert outside == []
+    finally:
+        plt.close(fig)

@@ -24,6 +24,12 @@ def plot_allan(path, results, title=""):
     """Write the figure file ``path`` (PNG) with one panel per axis, headed ``title``.
     ``results``: {axis: AxisNoise}."""
     plt = pyplot()
+    return _save(plt, allan_figure(plt, results, title), path)
+
+
+def allan_figure(plt, results, title=""):
+    """The figure of :func:`plot_allan` (laid out, not saved). A read-off's label stands on the
+    side of its point that faces the panel's middle, so that it stays inside the panel."""
     n = len(results)
     fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.6), squeeze=False)
     for ax, (name, r) in zip(axes[0], results.items()):
@@ -50,12 +56,12 @@ def plot_allan(path, results, title=""):
                 continue
             i = int(np.argmin(np.abs(r.tau_s - c.tau_s)))
             ax.loglog([r.tau_s[i]], [r.adev[i]], "s", ms=8, mfc="none", mec="k")
-            if term == BIAS_INSTABILITY:
-                ax.annotate(f"B read-off: min/0.664 = {c.value:.3g}", (r.tau_s[i], r.adev[i]),
-                            textcoords="offset points", xytext=(-40, 12), fontsize=7)
-            else:
-                ax.annotate(f"{TERM_SYMBOL[term]} (slope {TERM_SLOPE[term]:+g})", (r.tau_s[i], r.adev[i]),
-                            textcoords="offset points", xytext=(4, 6), fontsize=7)
+            text = (f"B read-off: min/0.664 = {c.value:.3g}" if term == BIAS_INSTABILITY
+                    else f"{TERM_SYMBOL[term]} (slope {TERM_SLOPE[term]:+g})")
+            right_half = math.log(r.tau_s[i] / r.tau_s[0]) > 0.5 * math.log(r.tau_s[-1] / r.tau_s[0])
+            ax.annotate(text, (r.tau_s[i], r.adev[i]), textcoords="offset points", fontsize=7,
+                        xytext=(-6 if right_half else 6, 12 if term == BIAS_INSTABILITY else 6),
+                        ha="right" if right_half else "left")
         _label(ax, None, legend_size=6.5)
         low = np.min(np.where(r.ci_low > 0, r.ci_low, np.min(r.adev[r.adev > 0])))
         ax.set_ylim(low / 2.0, np.max(r.ci_high) * 1.5)
@@ -63,7 +69,8 @@ def plot_allan(path, results, title=""):
     axes[0][0].set_ylabel("Allan deviation (deg/s)")
     if title:
         fig.suptitle(title, fontsize=10)
-    return _save(plt, fig, path)
+    fig.tight_layout()
+    return fig
 
 
 def plot_before_after(path, curves, title=""):
