@@ -34,6 +34,8 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
+import datetime
+import importlib.util
 import json
 import math
 import os
@@ -621,6 +623,26 @@ def bench_report():
 def gap_closure():
     adis = data_dir("adis16405_long")
     return tool("gap_closure.py", "--adis", str(adis), prompt=False).strip()
+
+
+# ---------------------------------------------------------------------------------------------
+# CONTRIBUTING.md
+
+
+@block("test-time", "CONTRIBUTING.md", "`python -m pytest -q` (the default suite, timed)", slow=True)
+def test_time():
+    """The one statement of how long the default suite takes: run it, as the README's test
+    command does, and say when, on how many cores, under what load and with or without numba."""
+    load = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider"], cwd=ROOT, env=_env(),
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, check=False)
+    wall_s = time.perf_counter() - t0
+    summary = next((ln for ln in reversed(res.stdout.splitlines()) if " passed" in ln), "no summary line")
+    numba = "with numba" if importlib.util.find_spec("numba") else "without numba"
+    return (f"Measured {datetime.date.today().isoformat()} by `python tools/docs.py --only test-time`: the default suite "
+            f"took {wall_s:.0f} s on {os.cpu_count()} cores {numba} (load {load:.1f} at the start; "
+            f"{summary.strip('= ')}).")
 
 
 # ---------------------------------------------------------------------------------------------
