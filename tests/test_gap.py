@@ -789,3 +789,21 @@ def test_a_sinusoid_alone_gets_no_slow_finding_on_the_benchmarks_hour():
     rep = analyse_gap(rec, seed=0)
     assert [f["effect"] for f in rep["findings"] if f["axis"] == "z"] == ["sinusoid"]
     assert rep["discrepancy"]["after"]["z"] < 2.0
+
+
+def test_the_cli_refuses_a_moving_record_in_one_line_unless_asked(tmp_path, capsys):
+    """Issue 35: `allan` judged the rotation log moved at once, `gap` spent a minute on it and named
+    ten effects of the motion. Now `gap` refuses in one line naming the file, the axis and the
+    option; with --allow-motion it analyses and warns first."""
+    from gyrofilter.cli import main
+
+    path = str(RECORDINGS / "mpu6050_rotate_z_24s.csv.gz")
+    out = tmp_path / "g.json"
+    assert main(["gap", path, "--json", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"gyrofilter: error: {path}: axis ") and "--allow-motion" in err[0]
+    assert not out.exists()
+    assert main(["gap", path, "--allow-motion", "--sims", "10", "--bootstrap", "0", "--json", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "does not look static; the gap analysis models a still gyro, so its findings describe the motion" in err
+    assert json.loads(out.read_text())["findings"] is not None

@@ -43,6 +43,15 @@ def not_static(x_dps, sample_rate_hz, white_std_dps):
             "the recording does not look static")
 
 
+def moved(x_dps, sample_rate_hz):
+    """:func:`not_static` of the series ``x_dps`` (deg/s) with its white level from the first
+    differences, ``sd(diff x) / sqrt(2)``, as every still-sensor analysis (allan, gap, report)
+    judges it: why it looks moved, or None."""
+    x = np.asarray(x_dps, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: the analyses say so
+        return not_static(x, sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0)
+
+
 def clipped(gyro_dps, full_scale_dps, lsb_per_dps=None):
     """Why a record ``gyro_dps`` ((N, 3), deg/s) looks clipped, or None: the samples at the sensor's
     full scale ``full_scale_dps`` (deg/s, the header's ``full_scale_dps``), counted per axis. A
@@ -144,8 +153,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     results = {}
     for a in axes:
         x = series.pop(a)
-        with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: check_finite says so
-            moved = not_static(x, head.sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0)
+        motion = moved(x, head.sample_rate_hz)
         if progress:
             progress(f"allan: axis {a} ({head.rows} samples)...")
         try:
@@ -158,8 +166,8 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
             warn(f"{exc}{LEFT_OUT}")
             continue
         check_finite(results[a], a, path)
-        if moved:
-            results[a].warnings.insert(0, f"axis {a}: {moved}; the Allan deviation of a moving gyro describes the "
+        if motion:
+            results[a].warnings.insert(0, f"axis {a}: {motion}; the Allan deviation of a moving gyro describes the "
                                           "motion, not the sensor's noise")
     return head, results
 

@@ -43,6 +43,9 @@ def add_arguments(parser):
                         help=f"bootstrap runs per axis with findings for the parameters' 95 %% intervals (default "
                              f"{DEFAULT_BOOTSTRAP}; 10-{DEFAULT_BOOTSTRAP} above {FEWER_BOOTSTRAP_FROM:,} samples per axis; "
                              f"0: no intervals; else {MIN_REPLICATES} to {MAX_BOOTSTRAP})")
+    parser.add_argument("--allow-motion", action="store_true",
+                        help="analyse a recording that does not look still (refused by default: the analysis models a "
+                             "still gyro, so its findings would describe the motion)")
     parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
     batch.add_arguments(parser)
     options.add_force_argument(parser)
@@ -81,7 +84,7 @@ def run(args):
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis
     rec, report = analyse_file(args.recording, seed=args.seed, n_sims=args.sims, bootstrap=args.bootstrap,
-                               warn=console.say_warning, progress=progress)
+                               warn=console.say_warning, progress=progress, refuse_motion=not args.allow_motion)
     with contextlib.ExitStack() as files:
         if args.json is not None:
             outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)

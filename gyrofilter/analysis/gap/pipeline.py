@@ -61,7 +61,7 @@ from ...errors import GyroFilterError, RecordingError
 from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
 from ...units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
-from ..still import not_static
+from ..still import moved, not_static
 from . import detectors as det
 from .baseline import (MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
                        temperature_table, wander_highpassed)
@@ -86,15 +86,23 @@ def gap_columns(names):
     return list(GYRO_COLUMNS) + ([c for c in ("t", "temp") if c in names] if "temp" in names else [])
 
 
-def analyse_file(path, *, seed=0, n_sims=None, bootstrap=None, warn, progress=None):
+def analyse_file(path, *, seed=0, n_sims=None, bootstrap=None, warn, progress=None, refuse_motion=False):
     """The gap analysis of the recording file ``path``, the one way every command reads and
     analyses a file (``gap``, ``report``, the fleet): returns ``(the Recording, the gap report)``
-    (:func:`analyse_gap` with ``seed``, ``n_sims``, ``bootstrap``). The reader's warnings and the
-    gaps in ``t`` go to ``warn(text)``, the steps to ``progress(text)``. Only the columns the
-    analysis uses are kept, integer (``lsb``) readings as float32, which holds them exactly
-    (:func:`gap_columns`)."""
+    (:func:`analyse_gap` with ``seed``, ``n_sims``, ``bootstrap``). The analysis models a still
+    gyro: an axis that looks moved (:func:`gyrofilter.analysis.still.moved`, as ``allan`` judges
+    it) raises RecordingError with ``refuse_motion``, else is the first warning. The reader's
+    warnings and the gaps in ``t`` go to ``warn(text)``, the steps to ``progress(text)``. Only the
+    columns the analysis uses are kept, integer (``lsb``) readings as float32, which holds them
+    exactly (:func:`gap_columns`)."""
     say = progress or (lambda text: None)
     rec = read_recording(path, columns=gap_columns, compact=True)
+    motion = [f"axis {a}: {why}" for i, a in enumerate(AXES) if (why := moved(axis_dps(rec, i), rec.sample_rate_hz))]
+    if motion and refuse_motion:
+        raise RecordingError(f"{path}: {motion[0]}; the gap analysis models a still gyro (--allow-motion analyses it "
+                             "anyway)")
+    for text in motion:
+        warn(f"{path}: {text}; the gap analysis models a still gyro, so its findings describe the motion")
     for text in rec.warnings:
         warn(text)
     warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)
