@@ -104,3 +104,13 @@ def test_version_prints_the_package_version(capsys):
         main(["--version"])
     assert stop.value.code == 0
     assert capsys.readouterr().out == f"gyrofilter {gyrofilter.__version__}\n"
+
+
+def test_a_mistyped_choice_gets_the_closest_one(capsys):
+    """The new user's `--preset papr` listed the presets but suggested none."""
+    from gyrofilter.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(["replay", "--preset", "papr"])
+    err = capsys.readouterr().err.strip()
+    assert stop.value.code == 2 and len(err.splitlines()) == 1 and "did you mean paper?" in err

@@ -166,3 +166,14 @@ def test_units_stated_by_name_suffixes(tmp_path, capsys):
     rec = read_recording(dst)
     assert rec.gyro_unit == "dps" and rec.sample_rate_hz == 100 and rec.header["time_origin"] == "1000 ms (time_ms)"
     assert "(as its name states" in capsys.readouterr().err
+
+
+def test_unit_deg_per_s_is_taken_as_dps(tmp_path, capsys):
+    """The new user's `--unit deg/s` was refused (the format's name is dps)."""
+    gyro = _rates(3, 1.0)
+    rows = "\n".join(f"{k * 0.01:.2f},{x},{y},{z}" for k, (x, y, z) in enumerate(gyro.tolist()))
+    rc, dst = _convert(tmp_path, "t,gx,gy,gz\n" + rows + "\n", "--unit", "deg/s")
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.gyro_unit == "dps"
+    _check_same(rec, gyro)

@@ -807,3 +807,13 @@ def test_the_cli_refuses_a_moving_record_in_one_line_unless_asked(tmp_path, caps
     err = capsys.readouterr().err
     assert "does not look static; the gap analysis models a still gyro, so its findings describe the motion" in err
     assert json.loads(out.read_text())["findings"] is not None
+
+
+def test_the_console_output_fits_100_columns(capsys):
+    """Issue 38: the gap console printed notes of up to 317 characters; every line now fits a
+    100-column terminal (every number stays in --json)."""
+    from gyrofilter.cli import main
+
+    assert main(["gap", str(RECORDINGS / "mpu6050_static_655s.csv.gz"), "--bootstrap", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "note:" in out and max(len(line) for line in out.splitlines()) <= 100

@@ -13,6 +13,7 @@ line on stderr and a non-zero exit code; a traceback is a bug.
 import argparse
 import importlib
 import os
+import re
 import signal
 import sys
 import threading
@@ -51,6 +52,9 @@ class _OneLineParser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def error(self, message):
+        choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:  # a mistyped value of an option with choices (--preset papr): the closest one
+            message += _did_you_mean(choice.group(1), [c.strip(" '\"") for c in choice.group(2).split(",")])
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
 
 

@@ -12,7 +12,6 @@ are refused before any computation unless ``--keep-outliers`` is given; they are
 Output files are written only once every result is finite, each whole or not at all.
 """
 import sys
-import textwrap
 
 from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
@@ -51,7 +50,6 @@ def add_arguments(parser):
 
 
 #: widest line of the console table (characters): it reads on a 100-column terminal; the full table is --json's
-MAX_LINE_CHARS = 100
 
 
 def _fmt(c, unit, interval=True):
@@ -62,12 +60,6 @@ def _fmt(c, unit, interval=True):
         return f"< {up:.3g}" if up is not None else "-"
     v, lo, hi = (convert(x, c.term, unit) for x in (c.value, c.low, c.high))
     return f"{v:.4g} [{lo:.3g}, {hi:.3g}]" if interval else f"{v:.4g}"
-
-
-def _say(text, indent):
-    """Print ``text`` wrapped at :data:`MAX_LINE_CHARS`, every line indented by ``indent``."""
-    print(textwrap.fill(text, MAX_LINE_CHARS, initial_indent=indent, subsequent_indent=indent + "  ",
-                        break_on_hyphens=False, break_long_words=False))
 
 
 def readoff_only(r):
@@ -146,11 +138,11 @@ def run(args):
     print(f"recording: {args.recording}")
     print(f"  {head.rows} samples at {sample_rate_hz:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
-    _say(f"coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval], and "
+    console.paragraph(f"coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval], and "
          "its customary unit; slope read-off: the slope method of papers 000/002, another estimator, for "
          "comparison: the curve at one tau, which every term adds to, so an upper estimate of its term "
          "(<: not resolved, at most; -: not resolved; every interval: --json)", "  ")
-    _say(", ".join(f"{TERM_SYMBOL[t]} {NAMES[t]}" for t in TERMS), "  ")
+    console.paragraph(", ".join(f"{TERM_SYMBOL[t]} {NAMES[t]}" for t in TERMS), "  ")
     for a, r in results.items():
         print(f"  axis {a}:")
         print(f"    {'':<16}{'fit [' + format(args.confidence, '.0%') + ' interval]':<32}{'= customary unit':<25}slope read-off")
@@ -160,10 +152,10 @@ def run(args):
             print(f"    {TERM_SYMBOL[t]} {base:<14}{_fmt(c, base):<32}{_fmt(c, cust, interval=False) + ' ' + cust:<25}"
                   f"{_fmt(ro, base, interval=False)}".rstrip())
         for line in readoff_only(r):
-            _say(f"({line})", "    ")
+            console.paragraph(f"({line})", "    ")
         missing = unresolved_text(r, args.min_clusters)
         if missing:
-            _say(f"({missing}; the bounds above hold)", "    ")
+            console.paragraph(f"({missing}; the bounds above hold)", "    ")
         console.print_warnings(r.warnings)
     # every result is finite here; each file appears only when it is complete
     if args.json:

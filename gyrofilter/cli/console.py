@@ -2,8 +2,20 @@
 data), the start-up bias as printed, and the summary table of a filtered recording."""
 import math
 import sys
+import textwrap
 
 from ..units import AXES
+
+
+#: the widest line the commands print on stdout (a terminal of 100 columns; every number is in --json)
+MAX_LINE_CHARS = 100
+
+
+def paragraph(text, indent="", *, file=None):
+    """Print ``text`` wrapped at :data:`MAX_LINE_CHARS`, its first line indented by ``indent`` and
+    the others by two more spaces (stdout, or ``file``)."""
+    print(textwrap.fill(text, MAX_LINE_CHARS, initial_indent=indent, subsequent_indent=indent + "  ",
+                        break_on_hyphens=False, break_long_words=False), file=file)
 
 
 def say(text):

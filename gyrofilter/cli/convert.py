@@ -12,13 +12,17 @@ from ..units import GYRO_UNITS
 from . import console, options, outputs
 
 
+#: other spellings of a unit that --unit takes (the recording format's name is dps)
+UNIT_SPELLINGS = {"deg/s": "dps"}
+
+
 def add_arguments(parser):
     parser.add_argument("input", metavar="IN", help="the log: CSV or blank-separated text (gzip too), time and gyro columns")
     parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name,
                         help="output recording (" + options.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--unit", choices=GYRO_UNITS, default=None,
-                        help="unit of the gyro columns (default: the one their names state, e.g. 'gyro_x (rad/s)'; "
-                             "never guessed)")
+    parser.add_argument("--unit", choices=GYRO_UNITS, default=None, type=lambda text: UNIT_SPELLINGS.get(text, text),
+                        help="unit of the gyro columns: dps (also deg/s), rad/s or lsb (default: the one their names "
+                             "state, e.g. 'gyro_x (rad/s)'; never guessed)")
     parser.add_argument("--lsb-per-dps", type=options.decimal, default=None, metavar="X",
                         help="LSB per deg/s, with --unit lsb (MPU6050: 131 at +-250 deg/s)")
     parser.add_argument("--columns", default=None, metavar="NAMES",

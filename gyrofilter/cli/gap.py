@@ -96,22 +96,24 @@ def run(args):
     d = report.get("discrepancy")
     gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}" if d else
             "no discrepancy computed (see the notes)")
-    print(f"{args.recording}: {_count(len(report['findings']), 'finding')}; {gain} "
-          f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
+    console.paragraph(f"{args.recording}: {_count(len(report['findings']), 'finding')}; {gain} "
+                      f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
     for axis in AXES:
         found = [f for f in report["findings"] if f["axis"] == axis]
         if d:
             before, after = d["before"][axis], d["after"][axis]
-            print(f"  {axis}: D {before:.3g}" + (f" -> {after:.3g} with {_count(len(found), 'finding')}" if found else ", no finding"))
+            console.paragraph(f"{axis}: D {before:.3g}" + (f" -> {after:.3g} with {_count(len(found), 'finding')}"
+                                                            if found else ", no finding"), "  ")
         for f in found:
-            print(f"    {f['effect']} ({gap_report.params_text(f)}); alone D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}")
+            console.paragraph(f"{f['effect']} ({gap_report.params_text(f)}); alone D {f['gain']['before']:.3g} -> "
+                              f"{f['gain']['after']:.3g}", "    ")
             if f.get("alternatives"):
-                print(f"      {gap_report.indistinguishable_text(f)}")
+                console.paragraph(gap_report.indistinguishable_text(f), "      ")
     for note in report.get("notes", []):
-        print(f"  note: {note}")
+        console.paragraph(f"note: {note}", "  ")
     if d:
-        print("  (D: mean squared z-score of the record's features against the model's simulations; about 1 where "
-              "the model explains the record)")
+        console.paragraph("(D: mean squared z-score of the record's features against the model's simulations; about 1 "
+                          "where the model explains the record)", "  ")
     return 0
 
 
