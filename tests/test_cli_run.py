@@ -542,3 +542,28 @@ def test_a_run_from_a_saved_calibration_names_it_and_its_bias_in_the_header(tmp_
     header = read_recording(out).header
     saved = json.loads(cal.read_text())["bias_dps"]
     assert header["calibration_from"] == str(cal) and json.loads(header["bias_dps"]) == saved
+
+
+def test_the_status_line_fits_the_terminal_it_is_rewritten_on():
+    """A new user's run on a narrow terminal: a status line wider than the terminal wrapped, and
+    each rewrite (\\r) left the wrapped part behind. On a real pseudo-terminal of 60 columns the
+    line stays within 59."""
+    import fcntl
+    import struct
+    import termios
+    from gyrofilter.cli.live import Status
+
+    master, slave = os.openpty()
+    try:
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 60, 0, 0))
+        with os.fdopen(os.dup(slave), "w") as stream:
+            status = Status(True, 100.0, stream=stream)
+            status.show(500, "rows 100, rejected outliers 0 0 0, lost samples 0, slow clients 0, " + "x" * 80)
+            status.end()
+        time.sleep(0.05)
+        text = os.read(master, 4096).decode()
+    finally:
+        os.close(master)
+        os.close(slave)
+    shown = text.replace("\r\n", "\n").split("\r")[-1].split("\x1b[K")[0]
+    assert "samples/s" in shown and len(shown) <= 59, repr(text)

@@ -244,8 +244,8 @@ class Status:
         cpu_pct = 100.0 * (cpu - self._cpu) / dt
         self._wall, self._cpu, self._samples = wall, cpu, samples
         line = f"{rate:7.1f} samples/s (nominal {self.sample_rate_hz:g}), {text}, CPU {cpu_pct:4.1f}%"
-        if self.tty:
-            self.stream.write("\r" + line + "\x1b[K")
+        if self.tty:  # rewritten in place: a line wider than the terminal would wrap, and the next rewrite garble it
+            self.stream.write("\r" + line[:max(_columns(self.stream) - 1, 20)] + "\x1b[K")
         else:
             self.stream.write(line + "\n")
         self.stream.flush()
@@ -255,6 +255,14 @@ class Status:
         if self._shown and self.tty:
             self.stream.write("\n")
             self.stream.flush()
+
+
+def _columns(stream):
+    """The width of the terminal ``stream`` writes to (100 where it cannot be told)."""
+    try:
+        return os.get_terminal_size(stream.fileno()).columns or 100
+    except (OSError, ValueError, AttributeError):
+        return 100
 
 
 def source_summary(stats):
