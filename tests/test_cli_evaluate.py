@@ -26,6 +26,9 @@ def test_evaluate_command_writes_table_json_and_figure(tmp_path, capsys):
     assert code == 0
     text = (out / "evaluate_table.md").read_text()
     assert "| paper001 |" in text and "recommended preset" in text
+    console = capsys.readouterr().out  # a row per filter that fits 100 columns; every number in the file
+    assert max(len(line) for line in console.splitlines()) <= 100
+    assert sum(line.startswith(("paper001 ", "recommended preset ")) for line in console.splitlines()) == 2
     data = json.loads((out / "evaluate.json").read_text())
     # the block mean reduces white noise by sqrt(5)
     assert np.allclose(data["static_std_reduction"]["block mean 5"]["mpu6050_static_91s"], math.sqrt(5), rtol=0.1)

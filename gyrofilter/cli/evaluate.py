@@ -75,7 +75,16 @@ def run(args):
         + "\n".join(verdicts)
         + "\n"
     )
-    print(text)
+    console.paragraph(f"Data: {rec_dir} (split: {args.split}); static: {', '.join(ev.static_names)}; "
+                      f"profiles: {', '.join(ev.profiles)}; BROAD: {', '.join(ev.broad_names)}")
+    print("\n" + E.console_table(ev) + "\n")
+    console.paragraph("Columns: static std reduction (min over axes and recordings / geometric mean); profiles' RMSE "
+                      "(deg/s, geometric mean) and worst lag; BROAD RMSE vs the optical reference (deg/s, geometric "
+                      f"means) in motion / at rest. Every profile and trial: {os.path.join(args.out, OUTPUT_NAMES[0])}")
+    console.paragraph("Pareto dominance over the faithful paper001 (static >= 12.6x on every axis of every static "
+                      "recording, RMSE <= paper001 on every profile and BROAD trial):")
+    for line in verdicts:
+        console.paragraph(line)
     doc = {"filters": ev.filters, "families": ev.families, "static_std_reduction": ev.static,
            "dynamic": ev.dynamic, "broad": ev.broad}
     table_name, json_name, png_name = OUTPUT_NAMES
