@@ -123,8 +123,8 @@ def check_header(header, where):
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
         raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
-                             "'# gyrofilter-recording: 1', '# sample_rate_hz: RATE', '# gyro_unit: dps|rad/s|lsb' "
-                             "lines (docs/formats.md, section 1); another tool's log: gyrofilter convert")
+                             "'# gyrofilter-recording: 1', '# sample_rate_hz: RATE', '# gyro_unit: dps|rad/s|lsb'; "
+                             "another tool's log: gyrofilter convert")
     version = header[VERSION_KEY]
     if version != FORMAT_VERSION:
         raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
