@@ -166,3 +166,18 @@ def test_units_stated_by_name_suffixes(tmp_path, capsys):
     rec = read_recording(dst)
     assert rec.gyro_unit == "dps" and rec.sample_rate_hz == 100 and rec.header["time_origin"] == "1000 ms (time_ms)"
     assert "(as its name states" in capsys.readouterr().err
+
+
+def test_damaged_gzip_log_is_one_refusal_line(tmp_path, capsys):
+    """Corrupt compressed blocks (not a stream cut short) raise zlib.error, not BadGzipFile/EOFError:
+    it went through as a traceback."""
+    rows = "".join(f"{i * 0.01:.2f},{0.1 * (i % 7)},0.2,0.3\n" for i in range(3000))
+    data = gzip.compress(("t,gx_dps,gy_dps,gz_dps\n" + rows).encode())
+    src = tmp_path / "log.csv.gz"
+    src.write_bytes(data[:10] + b"x" * 50 + data[60:])
+    dst = tmp_path / "rec.csv.gz"
+    assert main(["convert", str(src), "--out", str(dst)]) == 2
+    err = capsys.readouterr().err
+    assert "damaged gzip data" in err and str(src) in err and len(err.strip().splitlines()) == 1
+    assert not dst.exists()
+

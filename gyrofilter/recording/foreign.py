@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import gzip
 import re
+import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -114,7 +115,7 @@ def _lines(path):
                     yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n")
                 except UnicodeDecodeError:
                     raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
-    except (EOFError, gzip.BadGzipFile, OSError) as exc:
+    except (EOFError, gzip.BadGzipFile, zlib.error, OSError) as exc:
         if isinstance(exc, RecordingError):
             raise
         raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
