@@ -181,3 +181,23 @@ def test_damaged_gzip_log_is_one_refusal_line(tmp_path, capsys):
     assert "damaged gzip data" in err and str(src) in err and len(err.strip().splitlines()) == 1
     assert not dst.exists()
 
+
+def test_decimal_epoch_seconds_are_subtracted_exactly(tmp_path, capsys):
+    """A phone's stamps in s since 1970 with 9 decimals: as floats their steps are off by up to 2.4e-7 s
+    (the rate read 399.991 Hz for 400 Hz); subtracted as decimals every ns is kept."""
+    stamps_ns = 1_700_000_000_000_000_000 + 2_500_000 * np.arange(N)
+    rows = "".join(f"{s // 10**9}.{s % 10**9:09d},0.1,0.2,0.3\n" for s in stamps_ns.tolist())
+    rc, dst = _convert(tmp_path, "timestamp,gx_dps,gy_dps,gz_dps\n" + rows)
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.sample_rate_hz == 400.0
+    assert np.allclose(rec.t_s, (stamps_ns - stamps_ns[0]) * 1e-9, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("stamp", ["1e400", "-1e99999"])
+def test_a_time_stamp_too_far_for_a_float_is_refused_naming_its_line(tmp_path, capsys, stamp):
+    rows = "".join(f"{i * 0.01:.2f},0.1,0.2,0.3\n" for i in range(300))
+    rc, dst = _convert(tmp_path, "t,gx_dps,gy_dps,gz_dps\n" + rows + f"{stamp},0,0,0\n")
+    assert rc == 2 and not dst.exists()
+    err = capsys.readouterr().err.strip()
+    assert f"line 302, column 1 ('t'): time stamp '{stamp}' is too far" in err and len(err.splitlines()) == 1
