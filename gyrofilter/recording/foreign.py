@@ -95,15 +95,15 @@ def _normal(name):
 
 def _lines(path):
     """(line number, text) of the file ``path`` (gzip when it starts with the gzip magic),
-    line ends dropped, each line at most MAX_LINE_BYTES bytes and UTF-8."""
+    line ends dropped, each line at most MAX_LINE_BYTES bytes and UTF-8. The file is opened once
+    and its first bytes peeked at, not read: a pipe (``<(zcat log.gz)``, /dev/stdin) cannot be
+    read twice, and opening it again lost the block the magic was read from."""
     try:
-        with open(path, "rb") as raw:
-            zipped = raw.read(2) == b"\x1f\x8b"
+        raw = open(path, "rb")
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
-    opener = gzip.open if zipped else open
     try:
-        with opener(path, "rb") as fh:
+        with raw, (gzip.GzipFile(fileobj=raw, mode="rb") if raw.peek(2)[:2] == b"\x1f\x8b" else raw) as fh:
             number = 0
             while True:
                 data = fh.readline(MAX_LINE_BYTES + 1)
