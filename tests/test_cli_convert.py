@@ -3,6 +3,8 @@ ns or s and rates in rad/s, a ROS bag export, an Arduino sketch's blank-separate
 recordings that read back with the very values of the log; every refusal is one line naming the
 file, the line and the column, exit 2, no output."""
 import gzip
+import os
+import threading
 
 import numpy as np
 import pytest
@@ -177,3 +179,64 @@ def test_unit_deg_per_s_is_taken_as_dps(tmp_path, capsys):
     rec = read_recording(dst)
     assert rec.gyro_unit == "dps"
     _check_same(rec, gyro)
+
+
+def test_damaged_gzip_log_is_one_refusal_line(tmp_path, capsys):
+    """Corrupt compressed blocks (not a stream cut short) raise zlib.error, not BadGzipFile/EOFError:
+    it went through as a traceback."""
+    rows = "".join(f"{i * 0.01:.2f},{0.1 * (i % 7)},0.2,0.3\n" for i in range(3000))
+    data = gzip.compress(("t,gx_dps,gy_dps,gz_dps\n" + rows).encode())
+    src = tmp_path / "log.csv.gz"
+    src.write_bytes(data[:10] + b"x" * 50 + data[60:])
+    dst = tmp_path / "rec.csv.gz"
+    assert main(["convert", str(src), "--out", str(dst)]) == 2
+    err = capsys.readouterr().err
+    assert "damaged gzip data" in err and str(src) in err and len(err.strip().splitlines()) == 1
+    assert not dst.exists()
+
+
+def test_decimal_epoch_seconds_are_subtracted_exactly(tmp_path, capsys):
+    """A phone's stamps in s since 1970 with 9 decimals: as floats their steps are off by up to 2.4e-7 s
+    (the rate read 399.991 Hz for 400 Hz); subtracted as decimals every ns is kept."""
+    stamps_ns = 1_700_000_000_000_000_000 + 2_500_000 * np.arange(N)
+    rows = "".join(f"{s // 10**9}.{s % 10**9:09d},0.1,0.2,0.3\n" for s in stamps_ns.tolist())
+    rc, dst = _convert(tmp_path, "timestamp,gx_dps,gy_dps,gz_dps\n" + rows)
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.sample_rate_hz == 400.0
+    assert np.allclose(rec.t_s, (stamps_ns - stamps_ns[0]) * 1e-9, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("stamp", ["1e400", "-1e99999"])
+def test_a_time_stamp_too_far_for_a_float_is_refused_naming_its_line(tmp_path, capsys, stamp):
+    rows = "".join(f"{i * 0.01:.2f},0.1,0.2,0.3\n" for i in range(300))
+    rc, dst = _convert(tmp_path, "t,gx_dps,gy_dps,gz_dps\n" + rows + f"{stamp},0,0,0\n")
+    assert rc == 2 and not dst.exists()
+    err = capsys.readouterr().err.strip()
+    assert f"line 302, column 1 ('t'): time stamp '{stamp}' is too far" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize("zipped", [False, True])
+def test_a_log_read_from_a_pipe_keeps_its_first_rows(tmp_path, capsys, zipped):
+    """`convert <(zcat log.gz)`: the log was opened twice (once for the gzip magic), and a pipe
+    cannot be read twice: its first block (256 rows of 16 bytes here, at a line end) was lost
+    with exit 0 and a time origin 256 ms late."""
+    text = "".join(f"{i:05d},{i % 10},0.2,0.3\n" for i in range(3000)).encode()
+    read_end, write_end = os.pipe()  # as the shell makes <(...): /dev/fd/N, the pipe's read end
+
+    def feed():
+        with open(write_end, "wb") as fh:
+            fh.write(gzip.compress(text) if zipped else text)
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    dst = tmp_path / "rec.csv"
+    try:
+        rc = main(["convert", f"/dev/fd/{read_end}", "--columns", "1,2,3,4", "--unit", "dps", "--time-unit", "ms", "--out", str(dst)])
+    finally:
+        os.close(read_end)
+    writer.join(timeout=10)
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert len(rec) == 3000 and rec.header["time_origin"] == "00000 ms (1)"
+    assert np.array_equal(rec.gyro[:, 0], np.arange(3000) % 10)

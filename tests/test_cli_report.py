@@ -1,6 +1,7 @@
 """gyrofilter report end to end: its numbers are those of allan --json, gap --json and replay on the
 same file with the same options; the file is self-contained; every shipped recording yields one;
 --source records first (the real sim source); every bad input is one line and exit 2."""
+import contextlib
 import gzip
 import html
 import json
@@ -8,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -316,3 +318,26 @@ def test_a_stuck_axis_leaves_the_others_allan_results(tmp_path, capsys):
     assert data["allan_error"] is None and sorted(data["allan"]["axes"]) == ["y", "z"]
     assert any(w.startswith("axis x: all 6000 samples equal -3.3 deg/s") and w.endswith("left out of the Allan analysis")
                for w in data["warnings"]), data["warnings"]
+
+
+def test_a_recording_from_a_pipe_is_refused(tmp_path, capsys):
+    """`report <(zcat rec.csv.gz)`: the report reads its recording three times, and a pipe gives its
+    text once: the report came out with exit 0, its Allan and filter sections lost to 'empty file'."""
+    text = gzip.decompress(open(STATIC, "rb").read())
+    read_end, write_end = os.pipe()  # as the shell makes <(...): /dev/fd/N, the pipe's read end
+
+    def feed():
+        with contextlib.suppress(BrokenPipeError), open(write_end, "wb") as fh:
+            fh.write(text)
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    out = tmp_path / "r.html"
+    try:
+        rc = main(["report", f"/dev/fd/{read_end}", "--sims", "10", "--out", str(out)])
+    finally:
+        os.close(read_end)
+    writer.join(timeout=10)
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "not a regular file (a pipe?)" in err and len(err.splitlines()) == 1, err
+    assert not out.exists()

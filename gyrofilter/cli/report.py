@@ -89,6 +89,7 @@ def run(args):
             return status
     else:
         path = args.recording
+        _check_read_again(path)
         outputs.check_outputs([args.out], [path], args.force)
     data, envelopes = compute(path, seed=args.seed, sims=args.sims, keep_outliers=args.keep_outliers,
                               warn=console.say_warning, progress=progress)
@@ -175,6 +176,15 @@ def _full_scale_dps(header, warn):
     except SettingsError as exc:
         warn(f"{exc}; clipping not checked")
         return None
+
+
+def _check_read_again(path):
+    """Refuse a RECORDING that is no regular file: the report reads it three times (gap, allan,
+    the filter), and a pipe (``<(zcat rec.csv.gz)``) gives its text once: the later readers found
+    it empty and the report lost its Allan and filter sections to warnings saying 'empty file'."""
+    if os.path.exists(path) and not os.path.isfile(path):
+        raise SettingsError(f"{path}: not a regular file (a pipe?): the report reads the recording three times "
+                            "(gap, allan, the filter); save it to a file first")
 
 
 def _check_source_options(args):

@@ -20,7 +20,7 @@ that :func:`~gyrofilter.recording.write_recording` writes.
   ``millis``, ``%time`` of a ROS export in ns, ``seconds_elapsed``) or, failing both, the
   first of s, ms, us, ns in which the typical step means :data:`MIN_INFERRED_RATE_HZ` or more
   (a gyro logs at 5 Hz or faster), said in the summary. ``t`` counts from the first time stamp
-  (integer stamps are subtracted exactly: ns since 1970 keep every nanosecond); the first
+  (stamps are subtracted exactly, as decimals: ns or s since 1970 keep every nanosecond); the first
   stamp is kept in the header (``time_origin``). The rate is the caller's or 1 / the median
   step; either way ``t`` is held to it as the reader holds a recording's
   (:class:`~gyrofilter.recording.checks.TimeCheck`: every window of 1000 steps within 5 %), so
@@ -33,8 +33,10 @@ that :func:`~gyrofilter.recording.write_recording` writes.
 """
 from __future__ import annotations
 
+import decimal
 import gzip
 import re
+import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -93,15 +95,15 @@ def _normal(name):
 
 def _lines(path):
     """(line number, text) of the file ``path`` (gzip when it starts with the gzip magic),
-    line ends dropped, each line at most MAX_LINE_BYTES bytes and UTF-8."""
+    line ends dropped, each line at most MAX_LINE_BYTES bytes and UTF-8. The file is opened once
+    and its first bytes peeked at, not read: a pipe (``<(zcat log.gz)``, /dev/stdin) cannot be
+    read twice, and opening it again lost the block the magic was read from."""
     try:
-        with open(path, "rb") as raw:
-            zipped = raw.read(2) == b"\x1f\x8b"
+        raw = open(path, "rb")
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
-    opener = gzip.open if zipped else open
     try:
-        with opener(path, "rb") as fh:
+        with raw, (gzip.GzipFile(fileobj=raw, mode="rb") if raw.peek(2)[:2] == b"\x1f\x8b" else raw) as fh:
             number = 0
             while True:
                 data = fh.readline(MAX_LINE_BYTES + 1)
@@ -114,7 +116,7 @@ def _lines(path):
                     yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n")
                 except UnicodeDecodeError:
                     raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
-    except (EOFError, gzip.BadGzipFile, OSError) as exc:
+    except (EOFError, gzip.BadGzipFile, zlib.error, OSError) as exc:
         if isinstance(exc, RecordingError):
             raise
         raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
@@ -216,13 +218,22 @@ def _read_rows(lines, path, names, split, header_line, wanted):
     return cells_of, np.array(line_of), skipped
 
 
-def _times(texts):
-    """A time column's cells as offsets from the first (exact for whole numbers) and the first as text."""
-    if all(re.fullmatch(r"[+-]?[0-9]+", t) for t in texts):
-        first = int(texts[0])
-        return np.array([float(int(t) - first) for t in texts]), texts[0]
-    values = np.array([float(t) for t in texts])
-    return values - values[0], texts[0]
+def _times(texts, where, path):
+    """A time column's cells as offsets from the first and the first as text. The cells are
+    subtracted as decimals, exactly, before they become floats: a phone's stamps in s since 1970
+    with 9 decimals (or ns since 1970) keep every ns, which floats of the stamps themselves
+    (2.4e-7 s apart near 1.7e9) would not. ``where(row)`` names a row for the refusal of a stamp
+    too far from the first for a float."""
+    with decimal.localcontext() as ctx:
+        ctx.traps[decimal.Overflow] = False  # 1e99999 - 0 is Infinity, refused below
+        first = decimal.Decimal(texts[0])
+        offsets = np.array([float(decimal.Decimal(t) - first) for t in texts])
+    bad = np.flatnonzero(~np.isfinite(offsets))
+    if bad.size:
+        row = int(bad[0])
+        raise RecordingError(f"{path}: {where(row)}: time stamp {quote(texts[row])} is too far from the first "
+                             f"({quote(texts[0])}) to be a time of this log")
+    return offsets, texts[0]
 
 
 def _infer_time_unit(steps, path, name):
@@ -285,11 +296,13 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
     header = {VERSION_KEY: FORMAT_VERSION}
     data = dict(zip(GYRO_COLUMNS, gyro_values))
     if time is not None:
-        t_s, rate_hz, origin, t_unit = _time_axis(cells[3], t_unit, sample_rate_hz, names[time], path, summary)
+        def where(row):
+            return f"line {line_of[row]}, column {time + 1} ({quote(names[time])})"
+        t_s, rate_hz, origin, t_unit = _time_axis(cells[3], t_unit, sample_rate_hz, names[time], where, path, summary)
         head = RecordingHead(header={"sample_rate_hz": format_number(rate_hz)}, names=["t"], path=path)
         check = TimeCheck(head, "the time column's steps are not one rate; give the rate in --sample-rate-hz "
                                 "if they are, or split the file where it changes")
-        check.add(t_s, lambda row: f"line {line_of[row]}, column {time + 1} ({quote(names[time])})")
+        check.add(t_s, where)
         check.finish()
         data = {"t": t_s, **data}
         header.update(sample_rate_hz=format_number(rate_hz), time_origin=f"{origin} {t_unit} ({names[time]})")
@@ -339,9 +352,9 @@ def _check_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
                              f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
 
 
-def _time_axis(texts, t_unit, sample_rate_hz, name, path, summary):
+def _time_axis(texts, t_unit, sample_rate_hz, name, where, path, summary):
     """(t in s from the first stamp, the rate in Hz, the first stamp as text, the time unit); says how in ``summary``."""
-    offsets, origin = _times(texts)
+    offsets, origin = _times(texts, where, path)
     steps = np.diff(offsets)
     how = "as its name states"
     if t_unit is None:
