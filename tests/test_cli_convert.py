@@ -240,3 +240,16 @@ def test_a_log_read_from_a_pipe_keeps_its_first_rows(tmp_path, capsys, zipped):
     rec = read_recording(dst)
     assert len(rec) == 3000 and rec.header["time_origin"] == "00000 ms (1)"
     assert np.array_equal(rec.gyro[:, 0], np.arange(3000) % 10)
+
+
+def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
+    """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
+    30286365 ns after the first): each time is now the exact decimal offset rounded once."""
+    gyro = _rates(4, np.pi / 180)
+    stamps = _jittered_ns(5)
+    rows = "\n".join(f"{s},{x},{y},{z}" for s, (x, y, z) in zip(stamps.tolist(), gyro.tolist()))
+    rc, dst = _convert(tmp_path, "timestamp,gyro_x,gyro_y,gyro_z\n" + rows + "\n", "--unit", "rad/s", out="rec.csv")
+    assert rc == 0, capsys.readouterr().err
+    t_texts = [line.split(",")[0] for line in dst.read_text().splitlines() if line[:1].isdigit()]
+    assert len(t_texts) == N
+    assert t_texts == [str(float(f"{(s - stamps[0]) / 1e9:.9f}")) for s in stamps.tolist()]

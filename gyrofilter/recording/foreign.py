@@ -236,6 +236,15 @@ def _times(texts, where, path):
     return offsets, texts[0]
 
 
+def _seconds(texts, unit_s):
+    """The time column's cells as seconds from the first: the decimal offsets (:func:`_times`)
+    scaled exactly, then rounded once to a float, so that a stamp 39966971 ns after the first is
+    written 0.039966971, not 0.039966971000000004."""
+    scale = decimal.Decimal(repr(unit_s))
+    first = decimal.Decimal(texts[0])
+    return np.array([float((decimal.Decimal(t) - first) * scale) for t in texts])
+
+
 def _infer_time_unit(steps, path, name):
     """The first time unit in which the median step means MIN_INFERRED_RATE_HZ or more."""
     median = float(np.median(steps))
@@ -359,7 +368,7 @@ def _time_axis(texts, t_unit, sample_rate_hz, name, where, path, summary):
     how = "as its name states"
     if t_unit is None:
         t_unit, how = _infer_time_unit(steps, path, name), f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more"
-    t_s = offsets * TIME_UNITS[t_unit]
+    t_s = _seconds(texts, TIME_UNITS[t_unit])
     step_s = np.diff(t_s)
     median_s = float(np.median(step_s))
     text = f"time: column {quote(name)} in {t_unit} ({how}; --time-unit to say otherwise)"
