@@ -445,14 +445,19 @@ class _Handler(http.server.BaseHTTPRequestHandler):
 
 def _loopback_host(host_header, names):
     """True when a Host header names a loopback host or one of ``names`` (or is absent, as from an
-    HTTP/1.0 client)."""
+    HTTP/1.0 client). A Host is ``name`` or ``name:port`` (``[address]:port`` for IPv6, RFC 9110
+    section 7.2), the port digits only: ``localhost:80@evil.example`` is no loopback host."""
     if host_header is None:
         return True
     host = host_header.strip()
     if host.startswith("["):
-        host = host[1:].partition("]")[0]
+        host, _, port = host[1:].partition("]")
+        if port and not (port[:1] == ":" and port[1:].isdigit()):
+            return False
     elif ":" in host:
-        host = host.rpartition(":")[0]
+        host, _, port = host.rpartition(":")
+        if not port.isdigit():
+            return False
     host = _host_name(host)
     return is_loopback(host) or host in names
 
