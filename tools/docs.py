@@ -64,7 +64,7 @@ import allan_figures  # noqa: E402
 import bench_gap  # noqa: E402
 import dynamic_test  # noqa: E402
 import gap_real  # noqa: E402
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PAGES = [ROOT / "README.md", ROOT / "CONTRIBUTING.md", *sorted((ROOT / "docs").glob("*.md"))]
 DATA = ROOT.parent / "shared" / "data"  # the real data sets beside the repository (--data)
 MARK = re.compile(r"^<!-- docs\.py: ([\w-]+) -->\n(.*?)^<!-- /docs\.py: \1 -->$", re.M | re.S)
 ANY_MARK = re.compile(r"^<!-- /?docs\.py: ([\w-]+) -->$", re.M)
@@ -629,7 +629,7 @@ def gap_closure():
 # CONTRIBUTING.md
 
 
-@block("test-time", "CONTRIBUTING.md", "`python -m pytest -q` (the default suite, timed)", slow=True)
+@block("test-time", "CONTRIBUTING.md", "tools/docs.py timing `python -m pytest -q` (the default suite)", slow=True)
 def test_time():
     """The one statement of how long the default suite takes: run it, as the README's test
     command does, and say when, on how many cores, under what load and with or without numba."""
