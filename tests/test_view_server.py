@@ -1,5 +1,6 @@
 """The live view's HTTP server on a real socket on 127.0.0.1, fed from the test as the run loop
 feeds it: the endpoints and their JSON, what it refuses, and clients that read slowly or never."""
+import contextlib
 import json
 import socket
 import threading
@@ -259,28 +260,26 @@ def test_clients_trickling_their_requests_cannot_hold_every_connection(monkeypat
     """Slowloris (issue 37): as many clients as there are connection slots, each sending a byte
     every 0.2 s, are cut at the whole-request deadline (the socket timeout is per read), and the
     server answers /status again while they go on trickling."""
-    monkeypatch.setattr(server_module, "MAX_CONNECTIONS", 4)
-    monkeypatch.setattr(server_module, "REQUEST_DEADLINE_S", 1.0)
-    live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
-    live.start(INFO)
-    port = live.address[1]
-    tricklers = [Trickler(port) for _ in range(4)]
-    try:
-        for t in tricklers:
-            t.start()
+    with _trickled(monkeypatch, deadline_s=1.0) as (live, port, tricklers):
         wait_for(lambda: all(t.closed.is_set() for t in tricklers), timeout_s=20, what="the server to cut the tricklers")
         assert get(port, "/status")[0] == 200
-    finally:
-        for t in tricklers:
-            t.stop()
-        live.close()
 
 
 def test_a_new_client_takes_the_place_of_the_oldest_trickler(monkeypatch):
     """Clients that keep reconnecting to trickle would take every slot freed at the deadline: when
     all slots are taken, a new connection closes the oldest one still sending its request."""
+    with _trickled(monkeypatch, deadline_s=60.0) as (live, port, tricklers):
+        wait_for(lambda: live._httpd._connections == 4, what="4 trickling connections")
+        assert [get(port, "/status")[0] for _ in range(3)] == [200, 200, 200]
+        wait_for(lambda: tricklers[0].closed.is_set(), what="the oldest trickler to be closed")
+
+
+@contextlib.contextmanager
+def _trickled(monkeypatch, deadline_s):
+    """A live view of 4 connection slots and ``deadline_s`` per request, with 4 clients trickling
+    their requests into it: ``(server, port, tricklers)``."""
     monkeypatch.setattr(server_module, "MAX_CONNECTIONS", 4)
-    monkeypatch.setattr(server_module, "REQUEST_DEADLINE_S", 60.0)
+    monkeypatch.setattr(server_module, "REQUEST_DEADLINE_S", deadline_s)
     live = LiveServer(socket.AF_INET, ("127.0.0.1", 0))
     live.start(INFO)
     port = live.address[1]
@@ -288,9 +287,7 @@ def test_a_new_client_takes_the_place_of_the_oldest_trickler(monkeypatch):
     try:
         for t in tricklers:
             t.start()
-        wait_for(lambda: live._httpd._connections == 4, what="4 trickling connections")
-        assert [get(port, "/status")[0] for _ in range(3)] == [200, 200, 200]
-        wait_for(lambda: tricklers[0].closed.is_set(), what="the oldest trickler to be closed")
+        yield live, port, tricklers
     finally:
         for t in tricklers:
             t.stop()
