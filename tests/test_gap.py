@@ -817,3 +817,25 @@ def test_the_console_output_fits_100_columns(capsys):
     assert main(["gap", str(RECORDINGS / "mpu6050_static_655s.csv.gz"), "--bootstrap", "0"]) == 0
     out = capsys.readouterr().out
     assert "note:" in out and max(len(line) for line in out.splitlines()) <= 100
+
+
+@pytest.mark.parametrize("sigma_lsb", [0.15, 0.3])
+def test_a_quiet_quantized_sensor_has_its_noise_and_bias_read_from_its_codes(sigma_lsb):
+    """Issue 37 (8): noise below half a step of the recorded unit (an MPU6050 at +-2000 deg/s,
+    16.4 LSB per deg/s) had its white level masked away as spikes and its bias taken as the codes'
+    mean: D before ~5e8. The baseline reads both from the histogram of the codes, so the baseline
+    explains a record that is nothing but that noise."""
+    from gyrofilter.analysis.gap.baseline import noise_sigma
+    from gyrofilter.analysis.gap.detectors import OUTSIDE_NULL_D
+
+    lsb = 16.4
+    model = {"sample_rate_hz": 100.0, "gyro_unit": "lsb", "lsb_per_dps": lsb,
+             "axes": {a: {"bias_dps": (0.37 + 1.3 * k) / lsb, "arw_dps_per_sqrt_hz": sigma_lsb / lsb / 10.0,
+                          "effects": []} for k, a in enumerate("xyz")}}
+    rec = simulate(validate_model(model)[0], 120.0, seed=3)
+    for i in range(3):
+        codes = np.unique(np.rint(rec.gyro_dps[:, i] * lsb), return_counts=True)[1]
+        if np.sum(codes >= 50) >= 3:  # two codes hold only P(one of them): sigma and the mean are not separable
+            assert noise_sigma(rec.gyro_dps[:, i], 100.0, 1 / lsb) * lsb == pytest.approx(sigma_lsb, rel=0.15)
+    report = analyse_gap(rec, seed=0, bootstrap=0)
+    assert max(report["discrepancy"]["before"].values()) < OUTSIDE_NULL_D, report["discrepancy"]["before"]

@@ -42,6 +42,14 @@ from ...units import AXES, to_dps
 MIN_SIMS = 10
 
 
+#: a quantized rate whose white noise is below this many steps is read by its codes' histogram
+#: (:func:`sub_lsb_fit`); above, the additive model of quantization holds (sigma 0.6 steps: the
+#: high-passed estimate within 1 %)
+SUB_LSB_SIGMA = 0.5
+#: the codes of the histogram fit: within this many steps of the commonest
+SUB_LSB_CODES = 3
+
+
 def default_n_sims(n_samples):
     """Baseline runs: 24 up to 200 000 samples per axis, then fewer (at least 12) so that
     hours of data stay fast; the spread of a feature is estimated to about +-20 % from 12 runs."""
@@ -65,15 +73,63 @@ def axis_dps(rec, i, pass_samples=1 << 16):
 def noise_sigma(x, sample_rate_hz, q_dps, mask_spikes=True):
     """Per-sample white-noise std of the baseline (see module docstring); ``mask_spikes=False``
     keeps every sample (a heavy-tailed noise, whose tails are part of its variance). A constant
-    series has none: 0 (its high-pass would give the float rounding of the moving mean)."""
+    series has none: 0 (its high-pass would give the float rounding of the moving mean). A
+    quantized series whose noise is below half a step is read by its codes (:func:`sub_lsb_fit`)."""
     if not np.ptp(x) > 0:
         return 0.0
+    fit = sub_lsb_fit(x, q_dps) if q_dps > 0 else None
+    if fit is not None:
+        return fit[0]
     w = det.colored_window(x.size, sample_rate_hz)
     mask, _, _ = det.outlier_statistic(x) if mask_spikes else (None, None, None)
     e = det.highpassed(x, sample_rate_hz)[0]
     var = _variance(e, None if mask is None or not mask.any() else ~mask) / max(1.0 - 1.0 / w, 0.5)
     var = max(var - (q_dps ** 2) / 12.0, 0.25 * var)
     return math.sqrt(var)
+
+
+def sub_lsb_fit(x, q_dps):
+    """``(sigma, mu)`` in deg/s: the white-noise sigma and the mean of the rate before rounding of
+    ``x``, quantized in steps of ``q_dps``, where sigma is below :data:`SUB_LSB_SIGMA` steps, else
+    None (mu is the baseline's bias there: the mean of the codes is pulled towards the commonest
+    one, and a bias off by that moves every simulated sample's code). There the additive model of quantization (variance
+    sigma^2 + q^2 / 12) fails: most samples sit on one code, the few beside it look like spikes to
+    the outlier mask, and the variance left is far below the noise's (a quiet sensor read D ~ 5e8,
+    issue 37). Instead sigma and the mean mu (in steps) are the maximum-likelihood fit of a
+    Gaussian rounded to the grid, P(k) = Phi((k + 1/2 - mu) / sigma) - Phi((k - 1/2 - mu) / sigma),
+    to the counts of the codes k within :data:`SUB_LSB_CODES` of the commonest (renormalised to
+    that window, so that gross errors far out do not widen it); None where that window holds
+    less than half of the samples (a noise spread over many steps). Where only two codes occur
+    the record holds one number, the share of one of them, and sigma and mu are not separable:
+    the fit is one of the pairs giving that share, and every such pair simulates the same white
+    noise record (its samples are independent), which is what the baseline needs."""
+    from scipy.optimize import minimize
+    from scipy.special import ndtr
+
+    codes = np.rint(np.asarray(x, dtype=float) / q_dps).astype(np.int64)
+    values, counts = np.unique(codes, return_counts=True)
+    mode = int(values[np.argmax(counts)])
+    k = np.arange(mode - SUB_LSB_CODES, mode + SUB_LSB_CODES + 1)
+    n = np.array([counts[values == j].sum() for j in k], dtype=float)
+    if n.sum() < 0.5 * codes.size:
+        return None
+    low, high = k - 0.5, k + 0.5
+
+    def mass(a, b):  # Phi(b) - Phi(a), from the nearer tail (no cancellation far above the mean)
+        return np.where(a > 0, ndtr(-a) - ndtr(-b), ndtr(b) - ndtr(a))
+
+    def nll(p):
+        s = math.exp(p[1])
+        prob = mass((low - p[0]) / s, (high - p[0]) / s)
+        total = float(mass(np.array((low[0] - p[0]) / s), np.array((high[-1] - p[0]) / s)))
+        return -float(np.dot(n, np.log(np.maximum(prob / max(total, 1e-300), 1e-300))))
+
+    mean = float(np.dot(n, k) / n.sum())
+    fits = [minimize(nll, [mean, math.log(start)], method="Nelder-Mead", options={"xatol": 1e-5, "fatol": 1e-7})
+            for start in (0.05, 0.15, 0.4)]
+    fit = min(fits, key=lambda f: f.fun)
+    sigma_steps = math.exp(float(fit.x[1]))
+    return (sigma_steps * q_dps, float(fit.x[0]) * q_dps) if sigma_steps < SUB_LSB_SIGMA else None
 
 
 def _variance(e, keep=None, pass_samples=1 << 16):
@@ -104,7 +160,8 @@ def baseline_model(rec, gyro_dps=None):
     for i, a in enumerate(AXES):
         x = axis_dps(rec, i) if gyro_dps is None else gyro_dps[:, i]
         sigma = noise_sigma(x, sample_rate_hz, q)
-        model["axes"][a] = {"bias_dps": float(np.mean(x)),
+        fit = sub_lsb_fit(x, q) if q > 0 and np.ptp(x) > 0 else None
+        model["axes"][a] = {"bias_dps": float(np.mean(x)) if fit is None else fit[1],
                             "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(sample_rate_hz)), "effects": []}
     return model
 
