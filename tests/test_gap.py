@@ -839,3 +839,5 @@ def test_a_quiet_quantized_sensor_has_its_noise_and_bias_read_from_its_codes(sig
             assert noise_sigma(rec.gyro_dps[:, i], 100.0, 1 / lsb) * lsb == pytest.approx(sigma_lsb, rel=0.15)
     report = analyse_gap(rec, seed=0, bootstrap=0)
     assert max(report["discrepancy"]["before"].values()) < OUTSIDE_NULL_D, report["discrepancy"]["before"]
+    # and its one-step excursions, the quantizer's, are no spikes (outliers were named at 0.15 steps)
+    assert report["findings"] == [], [(f["effect"], f["axis"]) for f in report["findings"]]

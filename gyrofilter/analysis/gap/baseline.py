@@ -81,7 +81,7 @@ def noise_sigma(x, sample_rate_hz, q_dps, mask_spikes=True):
     if fit is not None:
         return fit[0]
     w = det.colored_window(x.size, sample_rate_hz)
-    mask, _, _ = det.outlier_statistic(x) if mask_spikes else (None, None, None)
+    mask, _, _ = det.outlier_statistic(x, q_dps) if mask_spikes else (None, None, None)
     e = det.highpassed(x, sample_rate_hz)[0]
     var = _variance(e, None if mask is None or not mask.any() else ~mask) / max(1.0 - 1.0 / w, 0.5)
     var = max(var - (q_dps ** 2) / 12.0, 0.25 * var)

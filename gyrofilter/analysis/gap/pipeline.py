@@ -247,7 +247,7 @@ def detect(inp, notes):
         owned = not np.shares_memory(x, inp.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
         try:
             cands, xc, alt = _detect_axis(x, inp.sample_rate_hz, inp.temp, tails_z=float(inp.deps[i]["tails"][0][0]),
-                                          notes=notes, axis=a, owned=owned)
+                                          notes=notes, axis=a, owned=owned, q_dps=inp.q or 0.0)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             notes.append(f"axis {a}: detectors could not run ({exc})")
             cands, xc, alt = [], axis_dps(inp.rec, i), None  # x may have been cleaned in place
@@ -270,7 +270,7 @@ def detect(inp, notes):
                     notes=tuple(notes))
 
 
-def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False):
+def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False, q_dps=0.0):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x,
     alternative): ``alternative`` is None or, where the slow effects have a covariate and a time
     reading (:func:`gyrofilter.analysis.gap.detectors.detect_slow`), ``(time reading's candidates,
@@ -280,7 +280,7 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     alternative reading). ``tails_z``: the tail statistic's departure from the baseline
     simulations; ``notes``: where a note on tails that spikes explain as well goes."""
     cands = []
-    c, mask = det.detect_outliers(x)
+    c, mask = det.detect_outliers(x, q_dps)
     tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
     if note and notes is not None:
         notes.append(f"axis {axis}: {note}" + ("; they are analysed as outliers" if c is not None else ""))

@@ -85,7 +85,7 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     if HEAVY_TAILS in by:
         out[by[HEAVY_TAILS][0]] = _heavy_tails(x, sample_rate_hz)
     if OUTLIERS in by:
-        cand, mask = det.detect_outliers(x)
+        cand, mask = det.detect_outliers(x, q_dps)
         out[by[OUTLIERS][0]] = None if cand is None else dict(cand.params)
         x = det.clean_spikes(x, mask, in_place=True)
     if SINUSOID in by:

@@ -16,9 +16,12 @@ from ...stats import robust_sigma
 # 1. outliers
 
 
-def outlier_statistic(x):
+def outlier_statistic(x, q_dps=0.0):
     """Spike mask and count: ``|x_i - (x_{i-1}+x_{i+1})/2| > k sd`` and a local maximum.
 
+    ``sd`` is the robust sd of the second difference, at least what a quantizer of step ``q_dps``
+    puts into it alone, ``sqrt(1.5 / 12) q``: a quiet sensor whose samples sit on one code has a
+    robust sd of about 0, and its one-step excursions, the quantizer's, are no spikes (issue 37).
     Returns ``(mask, k, sd_r)``.
     """
     n = x.size
@@ -31,7 +34,7 @@ def outlier_statistic(x):
     a[1:-1] += x[1:-1]
     a[0] = x[0] - x[1]
     a[-1] = x[-1] - x[-2]
-    sd_r = robust_sigma(a[1:-1])
+    sd_r = max(robust_sigma(a[1:-1]), math.sqrt(1.5 / 12.0) * q_dps)
     if sd_r <= 0:
         return mask, np.inf, 0.0
     k = NormalDist().inv_cdf(1.0 - 0.5 * OUTLIER_FALSE_PER_AXIS / n)
@@ -84,15 +87,15 @@ def _spike_model(m_dps, sd_r, thr):
     return p, mean_log
 
 
-def detect_outliers(x):
-    """Outlier (spike) candidate.
+def detect_outliers(x, q_dps=0.0):
+    """Outlier (spike) candidate (``q_dps``: the recorded unit's step, :func:`outlier_statistic`).
 
     Spikes below the threshold are missed, so the parameters are fitted to the detected ones:
     the median magnitude ``m`` is the one whose detected spikes (``|s| = m exp(0.25 z)`` plus
     the second-difference noise, thresholded like the data) have the observed mean log|r|,
     and ``rate = count / (N P_detect(m))`` (P_detect floored at 0.2).
     """
-    mask, k, sd_r = outlier_statistic(x)
+    mask, k, sd_r = outlier_statistic(x, q_dps)
     count = int(mask.sum())
     if count < OUTLIER_MIN_COUNT:
         return None, mask
