@@ -370,3 +370,13 @@ def test_every_label_of_the_allan_figure_stays_inside_its_panel():
         assert outside == []
     finally:
         plt.close(fig)
+
+
+def test_a_record_of_three_samples_is_too_short_not_gross_errors(tmp_path, capsys):
+    """The attack pass: on 3 samples the spike screen took every sample for a gross error (the one
+    residual's robust sigma is 0); the refusal now says the record is too short."""
+    path = tmp_path / "three.csv"
+    write_recording(path, Recording.from_dps(np.array([[0.1, 0.2, 0.3], [0.2, 0.1, 0.3], [0.1, 0.3, 0.2]]), 100.0))
+    assert main(["allan", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "gross error" not in err and "fewer than 9 clusters" in err

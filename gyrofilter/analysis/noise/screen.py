@@ -17,6 +17,11 @@ GROSS_Z = 50.0
 _GROSS_BLOCK = 1 << 16
 
 
+#: fewest samples whose spikes are judged against the robust sigma of their residuals (with 3, the
+#: one residual's sigma is 0 and every sample read as a gross error)
+MIN_SCREENED = 16
+
+
 def gross_errors(x_dps, *, z=GROSS_Z, limit_dps=GROSS_LIMIT_DPS):
     """Indices of the samples of ``x_dps`` (deg/s) that are gross errors rather than noise or drift.
 
@@ -32,7 +37,7 @@ def gross_errors(x_dps, *, z=GROSS_Z, limit_dps=GROSS_LIMIT_DPS):
     x = np.asarray(x_dps, dtype=np.float64)
     n = x.size
     with np.errstate(over="ignore", invalid="ignore"):
-        if n < 3:
+        if n < MIN_SCREENED:  # too few residuals for a robust sigma: only the absolute limit applies
             return np.flatnonzero(~(np.abs(x) <= limit_dps))
         step = max(1, n // 100_000)
         mid = np.arange(1, n - 1, step)
