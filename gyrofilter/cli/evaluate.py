@@ -64,25 +64,24 @@ def run(args):
             continue
         ok, fails = E.dominates(ev, name)
         verdicts.append(f"- {name}: {'dominates paper001' if ok else 'does not dominate: ' + '; '.join(fails[:3]) + (' ...' if len(fails) > 3 else '')}")
+    data = (f"Data: {rec_dir} (split: {args.split}); static: {', '.join(ev.static_names)}; "
+            f"profiles: {', '.join(ev.profiles)}; BROAD: {', '.join(ev.broad_names)}")
+    dominance = ("Pareto dominance over the faithful paper001 (static >= 12.6x on every axis of every static recording, "
+                 "RMSE <= paper001 on every profile and BROAD trial):")
     text = (
-        f"Data: {rec_dir} (split: {args.split}); static: {', '.join(ev.static_names)}; "
-        f"profiles: {', '.join(ev.profiles)}; BROAD: {', '.join(ev.broad_names)}\n\n"
+        data + "\n\n"
         "Columns: static std reduction (min over axes and recordings / geometric mean); "
         "profile RMSE (deg/s) / worst lag; BROAD RMSE vs optical reference (deg/s) in motion / at rest / lag behind the reference.\n\n"
-        + table
-        + "\n\nPareto dominance over the faithful paper001 (static >= 12.6x on every axis of every static recording, "
-        "RMSE <= paper001 on every profile and BROAD trial):\n"
+        + table + "\n\n" + dominance + "\n"
         + "\n".join(verdicts)
         + "\n"
     )
-    console.paragraph(f"Data: {rec_dir} (split: {args.split}); static: {', '.join(ev.static_names)}; "
-                      f"profiles: {', '.join(ev.profiles)}; BROAD: {', '.join(ev.broad_names)}")
+    console.paragraph(data)
     print("\n" + E.console_table(ev) + "\n")
     console.paragraph("Columns: static std reduction (min over axes and recordings / geometric mean); profiles' RMSE "
                       "(deg/s, geometric mean) and worst lag; BROAD RMSE vs the optical reference (deg/s, geometric "
                       f"means) in motion / at rest. Every profile and trial: {os.path.join(args.out, OUTPUT_NAMES[0])}")
-    console.paragraph("Pareto dominance over the faithful paper001 (static >= 12.6x on every axis of every static "
-                      "recording, RMSE <= paper001 on every profile and BROAD trial):")
+    console.paragraph(dominance)
     for line in verdicts:
         console.paragraph(line)
     doc = {"filters": ev.filters, "families": ev.families, "static_std_reduction": ev.static,

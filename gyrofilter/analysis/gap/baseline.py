@@ -48,6 +48,14 @@ MIN_SIMS = 10
 SUB_LSB_SIGMA = 0.5
 #: the codes of the histogram fit: within this many steps of the commonest
 SUB_LSB_CODES = 3
+#: ... holding at least this share of the samples (else the noise spreads over many steps)
+SUB_LSB_MIN_SHARE = 0.5
+#: samples of the first look at that share (evenly spread), and the margin below it at which the
+#: probe alone says no (35 standard errors of the share of 131 072 samples): the codes of a noisy
+#: record are not sorted whole (0.05-0.23 s a day-long axis, 2-5 ms with the probe, in
+#: every bootstrap run)
+SUB_LSB_PROBE = 1 << 17
+SUB_LSB_PROBE_MARGIN = 0.05
 
 
 def default_n_sims(n_samples):
@@ -75,17 +83,23 @@ def noise_sigma(x, sample_rate_hz, q_dps, mask_spikes=True):
     keeps every sample (a heavy-tailed noise, whose tails are part of its variance). A constant
     series has none: 0 (its high-pass would give the float rounding of the moving mean). A
     quantized series whose noise is below half a step is read by its codes (:func:`sub_lsb_fit`)."""
+    return _white_noise(x, sample_rate_hz, q_dps, mask_spikes)[0]
+
+
+def _white_noise(x, sample_rate_hz, q_dps, mask_spikes=True):
+    """``(sigma, sub-LSB fit or None)``: :func:`noise_sigma`, with the fit of :func:`sub_lsb_fit`
+    where it applies (its mean is the baseline's bias there), so that the fit is made once."""
     if not np.ptp(x) > 0:
-        return 0.0
+        return 0.0, None
     fit = sub_lsb_fit(x, q_dps) if q_dps > 0 else None
     if fit is not None:
-        return fit[0]
+        return fit[0], fit
     w = det.colored_window(x.size, sample_rate_hz)
     mask, _, _ = det.outlier_statistic(x, q_dps) if mask_spikes else (None, None, None)
     e = det.highpassed(x, sample_rate_hz)[0]
     var = _variance(e, None if mask is None or not mask.any() else ~mask) / max(1.0 - 1.0 / w, 0.5)
     var = max(var - (q_dps ** 2) / 12.0, 0.25 * var)
-    return math.sqrt(var)
+    return math.sqrt(var), None
 
 
 def sub_lsb_fit(x, q_dps):
@@ -106,12 +120,11 @@ def sub_lsb_fit(x, q_dps):
     from scipy.optimize import minimize
     from scipy.special import ndtr
 
-    codes = np.rint(np.asarray(x, dtype=float) / q_dps).astype(np.int64)
-    values, counts = np.unique(codes, return_counts=True)
-    mode = int(values[np.argmax(counts)])
-    k = np.arange(mode - SUB_LSB_CODES, mode + SUB_LSB_CODES + 1)
-    n = np.array([counts[values == j].sum() for j in k], dtype=float)
-    if n.sum() < 0.5 * codes.size:
+    x = np.asarray(x, dtype=float)
+    if _window_share(x[::max(1, x.size // SUB_LSB_PROBE)], q_dps)[0] < SUB_LSB_MIN_SHARE - SUB_LSB_PROBE_MARGIN:
+        return None  # a noise over many steps, told from evenly spread samples: no sort of the record
+    share, k, n = _window_share(x, q_dps)
+    if share < SUB_LSB_MIN_SHARE:
         return None
     low, high = k - 0.5, k + 0.5
 
@@ -130,6 +143,16 @@ def sub_lsb_fit(x, q_dps):
     fit = min(fits, key=lambda f: f.fun)
     sigma_steps = math.exp(float(fit.x[1]))
     return (sigma_steps * q_dps, float(fit.x[0]) * q_dps) if sigma_steps < SUB_LSB_SIGMA else None
+
+
+def _window_share(x, q_dps):
+    """``(share, k, n)``: the codes ``k`` of ``x`` rounded to steps ``q_dps`` within
+    :data:`SUB_LSB_CODES` of the commonest, their counts ``n`` and the share of the samples they hold."""
+    values, counts = np.unique(np.rint(x / q_dps).astype(np.int64), return_counts=True)
+    mode = int(values[np.argmax(counts)])
+    k = np.arange(mode - SUB_LSB_CODES, mode + SUB_LSB_CODES + 1)
+    n = np.array([counts[values == j].sum() for j in k], dtype=float)
+    return float(n.sum()) / x.size, k, n
 
 
 def _variance(e, keep=None, pass_samples=1 << 16):
@@ -159,8 +182,7 @@ def baseline_model(rec, gyro_dps=None):
     model["axes"] = {}
     for i, a in enumerate(AXES):
         x = axis_dps(rec, i) if gyro_dps is None else gyro_dps[:, i]
-        sigma = noise_sigma(x, sample_rate_hz, q)
-        fit = sub_lsb_fit(x, q) if q > 0 and np.ptp(x) > 0 else None
+        sigma, fit = _white_noise(x, sample_rate_hz, q)
         model["axes"][a] = {"bias_dps": float(np.mean(x)) if fit is None else fit[1],
                             "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(sample_rate_hz)), "effects": []}
     return model
