@@ -15,9 +15,11 @@ The kinds, and the groups every module derives from them (never a list of its ow
   Gauss-Markov), found by the slow detector's spectral fits (:data:`WANDERS`);
 - ``shape``: a deterministic shape of the bias in time (ramp, step, warm-up; :data:`SHAPES`);
 - ``covariate``: the bias following a measured quantity (the temperature; :data:`COVARIATES`);
-- ``line``: a deterministic periodic rate (a sinusoid);
-- ``noise``: stationary noise with a spectrum other than white (colored noise, a narrow band,
-  an ARMA process);
+- ``line``: a spectral line: a deterministic periodic rate (a sinusoid) or noise in a narrow band
+  around a centre frequency (a line of finite width); the gap analysis names one, the other or
+  both for one peak of the spectrum (:data:`LINES`);
+- ``noise``: stationary noise with a broad spectrum other than white (colored noise, an ARMA
+  process);
 - ``tails``: the rate's distribution (isolated spikes, heavy tails; :data:`TAILS`).
 
 The registry's **order** is the simulator's: each effect's random stream is keyed by its place
@@ -79,7 +81,7 @@ REGISTRY = (
            {"rate": "log", "magnitude_dps": "log"}),
     Effect(COLORED_NOISE, "noise", {"lag1": "lag"}, {"lag2": ("lag", None), "preserve": ("choice:arw,std", "arw")},
            {"lag1": "atanh", "lag2": "atanh"}),
-    Effect(NARROWBAND, "noise", {"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {},
+    Effect(NARROWBAND, "line", {"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {},
            {"bandwidth_hz": "log", "rms_dps": "log"}),
     Effect(ARMA, "noise", {"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])}),
     Effect(HEAVY_TAILS, "tails", {"fraction": "frac", "scale_ratio": "pos"}, {}, {"fraction": "log", "scale_ratio": "log"}),
@@ -103,3 +105,7 @@ COVARIATES = of_kind("covariate")
 SLOW = of_kind("wander", "shape", "covariate")
 #: the effects of the rate's distribution
 TAILS = of_kind("tails")
+#: the spectral lines: a sinusoid and a narrow band, alternative readings of one peak of the spectrum
+LINES = of_kind("line")
+#: the parameter that holds each line's frequency (Hz)
+LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz"}

@@ -5,6 +5,7 @@ import contextlib
 import csv
 import http.server
 import json
+import math
 import os
 import re
 import shutil
@@ -94,6 +95,55 @@ def test_a_clean_fleet_has_no_flags(tmp_path):
     assert flagged(paths, work.FleetSettings("allan")) == {}
 
 
+def write_board(folder, seed, extra=None, units=4):
+    """A board of issue 35: ``units`` simulated MPU-9250-like units of one model, 16 min at 43 Hz in
+    LSB (131 per deg/s), white noise log-normal around 0.009 deg/s/sqrt(Hz) with an 8 % spread, and
+    one narrow-band line (0.3 Hz wide) at a drawn frequency of 4-15 Hz on a drawn axis, its rms
+    log-normal around 0.03 deg/s with a 15 % spread from unit to unit; ``extra`` (axis offset
+    from the line's, effect entry) added to unit 0. Returns (paths, the line's axis, the extra's)."""
+    rng = np.random.default_rng(seed)
+    center_hz, axis = float(rng.uniform(4, 15)), "xyz"[rng.integers(3)]
+    other = "xyz"[("xyz".index(axis) + extra[0]) % 3] if extra else None
+    paths = []
+    for u in range(units):
+        axes = {a: {"bias_dps": float(rng.uniform(-3, 3)), "arw_dps_per_sqrt_hz": float(0.009 * np.exp(0.08 * rng.standard_normal())),
+                    "effects": []} for a in "xyz"}
+        axes[axis]["effects"].append({"effect": "narrowband", "center_hz": center_hz, "bandwidth_hz": 0.3,
+                                      "rms_dps": float(0.03 * np.exp(0.15 * rng.standard_normal()))})
+        if extra and u == 0:
+            axes[other]["effects"].append(extra[1])
+        model = {"sample_rate_hz": 43.0, "gyro_unit": "lsb", "lsb_per_dps": 131.0, "axes": axes}
+        paths.append(str(folder / f"unit{u:02d}.csv.gz"))
+        write_recording(paths[-1], simulate(model, 960.0, seed=seed * 100 + u))
+    return paths, axis, other
+
+
+@pytest.mark.parametrize("seed", [2, pytest.param(4, marks=pytest.mark.slow), pytest.param(6, marks=pytest.mark.slow)])
+def test_a_board_whose_units_share_one_line_has_no_unit_that_stands_out(tmp_path, seed):
+    """Issue 35: the gap analysis names the board's one line differently on its units (in these
+    seeds: a sinusoid and a narrow band on one unit, a narrow band on the others), and the old
+    rule flagged the unit whose label was rare."""
+    paths, axis, _ = write_board(tmp_path, seed)
+    settings = work.FleetSettings("gap")
+    results = [work.analyse_recording(p, settings) for p in paths]
+    labels = {tuple(f["effect"] for f in r["gap"]["findings"] if f["axis"] == axis) for r in results}
+    assert len(labels) > 1 and all(labels), labels  # the labels differ: the case of the issue
+    rows = fleet_table.fleet_rows(fleet_table.unit_names(paths), results)
+    fleet_table.flag_units(rows)
+    assert {(r["unit"], r["axis"]): r["flag"] for r in rows if r["flag"]} == {}
+
+
+@pytest.mark.parametrize("offset, extra, what", [
+    (1, {"effect": "sinusoid", "frequency_hz": 3.3, "amplitude_dps": 0.04}, ["sinusoid"]),
+    pytest.param(2, {"effect": "bias_instability", "b_dps": 0.01}, ["B", "bias_instability"], marks=pytest.mark.slow),
+])
+def test_the_unit_of_the_board_with_a_departure_of_its_own_and_only_it_stands_out(tmp_path, offset, extra, what):
+    paths, _, other = write_board(tmp_path, 2, (offset, extra))
+    found = flagged(paths, work.FleetSettings("gap"))
+    assert set(found) == {("unit00", other)}, found
+    assert [f["what"] for f in found[("unit00", other)]] == what
+
+
 # ------------------------------------------------------------------------------ the rules alone
 
 
@@ -132,17 +182,91 @@ def test_an_unresolved_b_is_never_flagged_and_too_few_units_are_not_compared():
     assert all(not s["compared"] for s in stats if s["axis"] == "x")
 
 
-def test_a_finding_most_units_share_is_not_flagged_and_a_rare_one_is():
+def test_a_departure_most_units_share_is_not_flagged_and_a_rare_one_where_the_unit_differs_is():
     line = {"effect": "sinusoid", "axis": "z", "params": {"frequency_hz": 31.4, "amplitude_dps": 0.01}}
     step = {"effect": "bias_step", "axis": "z", "params": {"time_s": 100.0, "size_dps": 0.02}}
-    rows = [_row(f"u{i}", axis="z", findings=[line] + ([step] if i == 2 else [])) for i in range(3)]
-    rows += [_row("u3", axis="z"), _row("u4", axis="z", findings=[line])]
+
+    def flags(d_step):
+        rows = [_row(f"u{i}", axis="z", findings=[line] + ([step] if i == 2 else []), d_before=d_step if i == 2 else None)
+                for i in range(3)]
+        rows += [_row("u3", axis="z"), _row("u4", axis="z", findings=[line])]
+        fleet_table.flag_units(rows)
+        return [(r["unit"], [f["what"] for f in r["flag"]]) for r in rows if r["flag"]]
+
+    # the common line at D 5 on four units; u2's step leaves its D among theirs: it does not differ
+    assert flags(5.0) == []
+    # a step that takes u2's D far above its peers' (ln 60/5 = 2.5 > 3.5 x the floor 0.5 of s)
+    assert flags(60.0) == [("u2", ["bias_step"])]
+    assert flags(5.0 * math.exp(3.4 * fleet_table.MIN_SPREAD_D_LN)) == []
+
+
+def test_a_rare_departure_on_an_axis_whose_peers_are_clean_needs_a_clear_d():
+    step = {"effect": "bias_step", "axis": "z", "params": {"time_s": 100.0, "size_dps": 0.02}}
+    for d, flagged_units in ((fleet_table.RARE_MIN_D, ["u4"]), (fleet_table.RARE_MIN_D * 0.99, [])):
+        rows = [_row(f"u{i}", axis="z", d_before=dc) for i, dc in enumerate([0.7, 1.0, 1.3, 2.5])]
+        rows.append(_row("u4", axis="z", findings=[step], d_before=d))
+        fleet_table.flag_units(rows)
+        assert [r["unit"] for r in rows if r["flag"]] == flagged_units
+        if flagged_units:
+            assert "within the null band" in rows[-1]["flag"][0]["text"]
+
+
+def _line(effect, axis, center_hz, size_dps):
+    params = ({"frequency_hz": center_hz, "amplitude_dps": size_dps} if effect == "sinusoid" else
+              {"center_hz": center_hz, "bandwidth_hz": 0.3, "rms_dps": size_dps})
+    return {"effect": effect, "axis": axis, "params": params}
+
+
+def _board(extra=None):
+    """The rows of the board of issue 35 on its line's axis z: four units of one model with one
+    line at 9.63 Hz whose size differs a little from unit to unit, named a narrow band on one unit,
+    a sinusoid on another, both on a third, a narrow band and heavy tails on the fourth (D before
+    as measured on simulated units of the kind: 39-74); ``extra`` (unit, finding, D) adds a
+    finding to a unit and sets its D."""
+    tails = {"effect": "heavy_tails", "axis": "z", "params": {"fraction": 0.01, "scale_ratio": 4.0}}
+    findings = [[_line("narrowband", "z", 9.63, 0.030)], [_line("sinusoid", "z", 9.63, 0.044)],
+                [_line("sinusoid", "z", 9.627, 0.0064), _line("narrowband", "z", 9.632, 0.0305)],
+                [_line("narrowband", "z", 9.647, 0.035), tails]]
+    d_before = [54.2, 55.4, 38.9, 73.9]
+    if extra:
+        findings[extra[0]].append(extra[1])
+        d_before[extra[0]] = extra[2]
+    return [_row(f"u{i}", axis="z", findings=f, d_before=d) for i, (f, d) in enumerate(zip(findings, d_before))]
+
+
+def test_one_line_named_differently_on_the_units_of_a_board_is_no_flag():
+    """Issue 35: every label of the board's one line was "rare" (the old rule flagged u1, u2 for
+    the sinusoid and u3 for the heavy tails): they are one departure, which all units share."""
+    rows = _board()
+    stats = fleet_table.flag_units(rows)
+    assert not any(r["flag"] for r in rows)
+    assert {s["what"]: s["having"] for s in stats if "having" in s} == {"sinusoid/narrowband 9.627-9.647 Hz": 4, "heavy_tails": 1}
+
+
+def test_lines_within_five_percent_are_one_departure_and_alternatives_share_a_key():
+    """The lines of the real sensor-fusion board's z axis (31.0-31.57 Hz on four recordings, a
+    sinusoid or a narrow band) are one departure; 20.66 Hz is another."""
+    found = [_line("sinusoid", "z", 31.19, 0.02), _line("narrowband", "z", 31.34, 0.06), _line("sinusoid", "z", 31.57, 0.08),
+             _line("sinusoid", "z", 31.0, 0.004), _line("sinusoid", "z", 20.66, 0.04),
+             {"effect": "gauss_markov", "axis": "z", "params": {"sigma_dps": 0.01, "tau_s": 5.0}},
+             {"effect": "bias_instability", "axis": "z", "params": {"b_dps": 0.005}},
+             {"effect": "outliers", "axis": "z", "params": {"rate": 1e-4, "magnitude_dps": 2.0}},
+             {"effect": "bias_step", "axis": "z", "params": {"time_s": 10.0, "size_dps": 0.1}}]
+    keys = fleet_table.departures(found)
+    assert keys[:5] == ["line 31-31.57 Hz"] * 4 + ["line 20.66 Hz"]
+    assert keys[5] == keys[6] != keys[7] != keys[8] == "bias_step"
+
+
+@pytest.mark.parametrize("extra, what", [
+    ((2, {"effect": "gauss_markov", "axis": "z", "params": {"sigma_dps": 0.02, "tau_s": 30.0}}, 900.0), "gauss_markov"),
+    ((0, _line("sinusoid", "z", 3.1, 0.2), 2000.0), "sinusoid"),  # a second line, at another frequency
+])
+def test_a_unit_whose_departure_takes_it_far_from_the_board_stands_out(extra, what):
+    rows = _board(extra)
     fleet_table.flag_units(rows)
-    assert [(r["unit"], [f["what"] for f in r["flag"]]) for r in rows if r["flag"]] == [("u2", ["bias_step"])]
-    # a rare finding where the baseline already explains the axis (D below RARE_MIN_D) is no flag
-    rows[2] = _row("u2", axis="z", findings=[line, step], d_before=fleet_table.RARE_MIN_D * 0.99)
-    for r in rows:
-        r["flag"] = []
+    assert [(r["unit"], [f["what"] for f in r["flag"]]) for r in rows if r["flag"]] == [(f"u{extra[0]}", [what])]
+    # the same departure at the board's D is no flag: the unit does not differ there
+    rows = _board((extra[0], extra[1], 60.0))
     fleet_table.flag_units(rows)
     assert not any(r["flag"] for r in rows)
 

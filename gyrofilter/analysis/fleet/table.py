@@ -15,11 +15,40 @@ limit 3.5):
    flagged **low** when (m - ln high) / s > 3.5. B, K and R are not flagged low: a longer record
    resolves them lower, which is no defect. Unresolved terms enter the median as their upper
    bounds, which only raises it: the rule errs on the side of no flag.
-2. *Findings.* A gap finding (effect on an axis) that fewer than half of the units analysed by
-   ``gap`` have is flagged on the units that have it ("a finding most units lack"), where the
-   baseline's discrepancy on that axis is at least :data:`RARE_MIN_D` (a clear departure: the
-   gap analysis names a weak effect on a clean unit now and then, about 1 axis in several
-   hundred, at D near 1).
+2. *Findings: a departure the unit has and its fleet has not* (issue 35: a unit stands out where
+   it differs from the other units, not where the gap analysis has a label for it). On the real
+   board of four MPU-9250 units the gap analysis named one spectral line a narrow band on one
+   unit, a sinusoid on another and both on a third, and heavy tails on some: every label was
+   "rare" and all four units stood out. So the units are compared on what was measured, the
+   discrepancy D of the axis against the plain baseline before any extension, and a finding
+   counts as its **departure** (:func:`departures`): the labels that are alternative readings of
+   one departure are one (:data:`ALTERNATIVES`: the lines, sinusoid and narrow band,
+   :data:`gyrofilter.effects.LINES`, where their frequencies lie within :data:`LINE_SAME_REL`,
+   5 %, of each other: the same line of the real sensor-fusion board is named at 31.0-31.57 Hz on
+   its four recordings, 1.8 % apart, and a narrow band 0.3 Hz wide at 9.6 Hz spans 3 %; the
+   wanders, :data:`~gyrofilter.effects.WANDERS`; the tails, outliers and heavy tails,
+   :data:`~gyrofilter.effects.TAILS`; every other effect is its own departure). A unit is flagged
+   for a departure on an axis when all three hold:
+
+   a. *rare*: fewer than half of the units analysed by ``gap`` have it on that axis
+      (:data:`RARE_SHARE`);
+   b. *clear*: the unit's D before on that axis is at least :data:`RARE_MIN_D` (the gap analysis
+      names a weak effect on a clean unit now and then, about 1 axis in several hundred, at D
+      near 1);
+   c. *the unit differs there*: the median D before of the other units on that axis is within the
+      null band, at most :data:`~gyrofilter.analysis.gap.detectors.OUTSIDE_NULL_D` (the unit departs
+      where its peers do not), or the unit's D before is an outlier high among the fleet's on that
+      axis: the modified z-score of rule 1 on ln D, (ln D - m) / s > 3.5, m the median and
+      s = max(1.4826 MAD, :data:`MIN_SPREAD_D_LN`) over the units analysed (the unit departs far
+      more than its peers do, who share some other departure).
+
+   The floor 0.5 of s is the least unit-to-unit spread of ln D assumed, as rule 1's 10 % is of a
+   coefficient: D grows steeply with a departure's size (about as its amplitude to the power 2-4
+   on a line), so units of one model that share a line whose amplitude differs by 15 % from unit
+   to unit spread ln D by 0.2-1.1 (1.4826 MAD of four units, median 0.4, in 8 simulated fleets
+   of four MPU-9250-like units, 16 min at 43 Hz), and without the floor their largest D reached
+   3.3 spreads. A departure most units share (the board's line, whatever each unit's label) is
+   never flagged, nor one that leaves the unit's D among its peers'.
 
 A comparison needs at least :data:`MIN_UNITS` units with a number (3 peers besides the unit);
 with fewer, no unit is flagged on it and :func:`flag_units` says so in its statistics.
@@ -34,9 +63,10 @@ import os
 
 import numpy as np
 
-from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
+from ...effects import BIAS_INSTABILITY, LINE_FREQUENCY, LINES, RATE_RAMP, RATE_RANDOM_WALK, REGISTRY, TAILS, WANDERS
 from ...errors import SettingsError
 from ...units import AXES, MAD_TO_SIGMA, utf8_text
+from ..gap.detectors import OUTSIDE_NULL_D
 from ..noise.export import JSON_KEY
 from ..noise.model import ANGLE_RANDOM_WALK, QUANTIZATION, TERM_SYMBOL, TERM_UNIT, TERMS
 from ..still import LEFT_OUT
@@ -62,11 +92,48 @@ MIN_UNITS = 4
 RARE_SHARE = 0.5
 
 
-#: a rare finding flags a unit only where the baseline's discrepancy D on that axis (before the
+#: a rare departure flags a unit only where the baseline's discrepancy D on that axis (before the
 #: extension) is at least this: a departure well outside clean units' (D is about 1 when the baseline
 #: explains the data; clean simulated 300-s units: 0.6-1.7, and a rare false sinusoid at D 1.2,
 #: tests/test_fleet.py seed 13; units with a hidden line: 7.8-26)
 RARE_MIN_D = 3.0
+
+
+#: least spread s of ln D before across the fleet (module docstring, rule 2c)
+MIN_SPREAD_D_LN = 0.5
+
+
+#: the gap's labels that are alternative readings of one departure from the baseline (rule 2)
+ALTERNATIVES = (LINES, WANDERS, TAILS)
+
+
+#: two lines (sinusoid or narrow band) of an axis are one departure when their frequencies are within
+#: this share of the higher one (module docstring, rule 2)
+LINE_SAME_REL = 0.05
+
+
+def departures(findings):
+    """The departures (rule 2) that the gap ``findings`` of the units on one axis read: a key per
+    finding, in order. A line's key is ``"line f_lo-f_hi Hz"``: the lines of all ``findings``
+    sorted by frequency, each joined to the one below it when within :data:`LINE_SAME_REL` of its
+    frequency (single linkage), and f_lo, f_hi the group's lowest and highest frequency (``"line f
+    Hz"`` for one frequency); another
+    finding's key is its group of :data:`ALTERNATIVES` joined by "/", or its effect alone."""
+    lines = sorted({f["params"][LINE_FREQUENCY[f["effect"]]] for f in findings if f["effect"] in LINES})
+    group_of, members = {}, []
+    for hz in lines:
+        if not members or hz - members[-1][-1] > LINE_SAME_REL * hz:
+            members.append([])
+        members[-1].append(hz)
+        group_of[hz] = members[-1]
+    keys = []
+    for f in findings:
+        if f["effect"] in LINES:
+            group = group_of[f["params"][LINE_FREQUENCY[f["effect"]]]]
+            keys.append(f"line {group[0]:.4g} Hz" if len(group) == 1 else f"line {group[0]:.4g}-{group[-1]:.4g} Hz")
+        else:
+            keys.append("/".join(next((g for g in ALTERNATIVES if f["effect"] in g), (f["effect"],))))
+    return keys
 
 
 def unit_names(paths):
@@ -148,50 +215,89 @@ def flag_units(rows):
     """Mark the rows of units that stand out (module docstring: the rules). Adds to each row's
     ``flag`` a dict per flag (``kind``: "coefficient" or "finding", ``what``, ``direction``,
     ``z`` or ``share``, ``text``) and returns the fleet statistics: a list of dicts per axis and
-    quantity (``units``: how many had a number; ``median``/``spread`` of the log levels, or
-    ``having`` for findings; ``compared``: False when too few units)."""
+    quantity (``units``: how many had a number; ``median``/``spread`` of the log levels (of the
+    coefficients and of "D before"), or ``having`` for a departure, ``what`` its labels joined by
+    "/"; ``compared``: False when too few units)."""
     stats = []
     ok = [r for r in rows if r["status"] == "ok"]
     for axis in AXES:
         on_axis = [r for r in ok if r["axis"] == axis]
         for term in COEFFICIENTS:
-            key = JSON_KEY[term]
-            have = [r for r in on_axis if (r[key] if r[key] is not None else r[f"{key}_upper"]) is not None]
-            levels = np.log([r[key] if r[key] is not None else r[f"{key}_upper"] for r in have])
-            entry = {"axis": axis, "what": TERM_SYMBOL[term], "units": len(have), "compared": len(have) >= MIN_UNITS}
-            stats.append(entry)
-            if not entry["compared"]:
+            stats.append(_flag_coefficient(axis, term, on_axis))
+        stats.extend(_flag_departures(axis, [r for r in on_axis if r["findings"] is not None]))
+    return stats
+
+
+def _log_centre(values, floor):
+    """Median m and spread s = max(1.4826 MAD, ``floor``) of the natural log of ``values``."""
+    levels = np.log(values)
+    median = float(np.median(levels))
+    return median, max(MAD_TO_SIGMA * float(np.median(np.abs(levels - median))), floor)
+
+
+def _flag_coefficient(axis, term, on_axis):
+    """Rule 1 on one coefficient ``term`` of the rows ``on_axis``; their statistics entry."""
+    key = JSON_KEY[term]
+    have = [r for r in on_axis if (r[key] if r[key] is not None else r[f"{key}_upper"]) is not None]
+    entry = {"axis": axis, "what": TERM_SYMBOL[term], "units": len(have), "compared": len(have) >= MIN_UNITS}
+    if not entry["compared"]:
+        return entry
+    median, spread = _log_centre([r[key] if r[key] is not None else r[f"{key}_upper"] for r in have], MIN_SPREAD_LN)
+    entry.update(median=math.exp(median), spread=spread)
+    for r in have:
+        if r[key] is None:
+            continue
+        high = (math.log(r[f"{key}_low"]) - median) / spread
+        low = (median - math.log(r[f"{key}_high"])) / spread
+        for direction, z in (("high", high), ("low", low)):
+            if z > FLAG_Z and (direction == "high" or term == ANGLE_RANDOM_WALK):
+                r["flag"].append({
+                    "kind": "coefficient", "what": TERM_SYMBOL[term], "direction": direction, "z": z,
+                    "text": f"{TERM_SYMBOL[term]} {direction}: {r[key]:.3g} [{r[f'{key}_low']:.3g}, "
+                            f"{r[f'{key}_high']:.3g}] {TERM_UNIT[term]} against the fleet's median "
+                            f"{math.exp(median):.3g}: {z:.1f} spreads beyond (limit {FLAG_Z:g})"})
+    return entry
+
+
+def _flag_departures(axis, analysed):
+    """Rule 2 on the rows ``analysed`` by the gap on ``axis``; their statistics entries (D before,
+    then one per departure found)."""
+    measured = [r for r in analysed if r["d_before"] is not None and r["d_before"] > 0]
+    entry = {"axis": axis, "what": "D before", "units": len(measured), "compared": len(measured) >= MIN_UNITS}
+    stats = [entry]
+    if entry["compared"]:
+        median, spread = _log_centre([r["d_before"] for r in measured], MIN_SPREAD_D_LN)
+        entry.update(median=math.exp(median), spread=spread)
+    found = [f for r in analysed for f in r["findings"]]
+    key_of = dict(zip(map(id, found), departures(found)))
+    labels = {}  # departure -> its labels found on this axis, in the order of the registry
+    for effect in (e.name for e in REGISTRY):
+        for f in found:
+            if f["effect"] == effect and effect not in labels.setdefault(key_of[id(f)], []):
+                labels[key_of[id(f)]].append(effect)
+    for key, effects in labels.items():
+        having = [r for r in analysed if any(key_of[id(f)] == key for f in r["findings"])]
+        share = len(having) / len(analysed)
+        name = "/".join(effects) + (key[len("line"):] if key.startswith("line ") else "")
+        stats.append({"axis": axis, "what": name, "units": len(analysed), "having": len(having),
+                      "compared": len(analysed) >= MIN_UNITS and entry["compared"]})
+        if not stats[-1]["compared"] or share >= RARE_SHARE:
+            continue
+        for r in having:
+            d = r["d_before"]
+            if d is None or d < RARE_MIN_D:
                 continue
-            median = float(np.median(levels))
-            spread = max(MAD_TO_SIGMA * float(np.median(np.abs(levels - median))), MIN_SPREAD_LN)
-            entry.update(median=math.exp(median), spread=spread)
-            for r in have:
-                if r[key] is None:
-                    continue
-                high = (math.log(r[f"{key}_low"]) - median) / spread
-                low = (median - math.log(r[f"{key}_high"])) / spread
-                for direction, z in (("high", high), ("low", low)):
-                    if z > FLAG_Z and (direction == "high" or term == ANGLE_RANDOM_WALK):
-                        r["flag"].append({
-                            "kind": "coefficient", "what": TERM_SYMBOL[term], "direction": direction, "z": z,
-                            "text": f"{TERM_SYMBOL[term]} {direction}: {r[key]:.3g} [{r[f'{key}_low']:.3g}, "
-                                    f"{r[f'{key}_high']:.3g}] {TERM_UNIT[term]} against the fleet's median "
-                                    f"{math.exp(median):.3g}: {z:.1f} spreads beyond (limit {FLAG_Z:g})"})
-        analysed = [r for r in on_axis if r["findings"] is not None]
-        effects = sorted({f["effect"] for r in analysed for f in r["findings"]})
-        for effect in effects:
-            having = [r for r in analysed if any(f["effect"] == effect for f in r["findings"])]
-            share = len(having) / len(analysed)
-            entry = {"axis": axis, "what": effect, "units": len(analysed), "having": len(having),
-                     "compared": len(analysed) >= MIN_UNITS}
-            stats.append(entry)
-            if entry["compared"] and share < RARE_SHARE:
-                for r in having:
-                    if r["d_before"] is None or r["d_before"] < RARE_MIN_D:
-                        continue
-                    r["flag"].append({"kind": "finding", "what": effect, "direction": "rare", "share": share,
-                                       "text": f"{effect} on {axis}, a finding {len(having)} of {len(analysed)} "
-                                               f"units have (limit: fewer than {RARE_SHARE:.0%})"})
+            peers = float(np.median([p["d_before"] for p in measured if p is not r]))
+            z = (math.log(d) - median) / spread
+            if peers > OUTSIDE_NULL_D and z <= FLAG_Z:
+                continue
+            why = (f"the other units' median {peers:.3g} is within the null band (at most {OUTSIDE_NULL_D:g})"
+                   if peers <= OUTSIDE_NULL_D else
+                   f"{z:.1f} spreads above the fleet's median {math.exp(median):.3g} (limit {FLAG_Z:g})")
+            what = "/".join(f["effect"] for f in r["findings"] if key_of[id(f)] == key)
+            r["flag"].append({"kind": "finding", "what": what, "direction": "rare", "share": share, "z": z,
+                              "text": f"{what} on {axis}, a departure {len(having)} of {len(analysed)} units have "
+                                      f"(limit: fewer than {RARE_SHARE:.0%}), at D before {d:.3g}: {why}"})
     return stats
 
 
@@ -281,9 +387,12 @@ def fleet_markdown(rows, stats, *, title):
               (f"Coefficients: median m over the units of the level (fit, or upper bound when not resolved) and "
                f"spread s = max({MAD_TO_SIGMA} MAD, {MIN_SPREAD_LN:g}) of its natural log; a unit is flagged when the "
                f"near end of its interval lies more than {FLAG_Z:g} s from m (N high or low; B, K, R high). "
-               f"Findings: flagged when fewer than {RARE_SHARE:.0%} of the units analysed have them and the "
-               f"unit's D before the extension is at least {RARE_MIN_D:g}. "
-               f"At least {MIN_UNITS} units per comparison."), "",
+               f"Findings, as departures (labels that read one departure count as one: "
+               f"{'; '.join('/'.join(g) for g in ALTERNATIVES)}): flagged when fewer than {RARE_SHARE:.0%} of "
+               f"the units analysed have the departure, the unit's D before the extension is at least "
+               f"{RARE_MIN_D:g}, and the other units' median D before is at most {OUTSIDE_NULL_D:g} (the null band) "
+               f"or the unit's D lies more than {FLAG_Z:g} s above the fleet's (s of ln D at least "
+               f"{MIN_SPREAD_D_LN:g}). At least {MIN_UNITS} units per comparison."), "",
               "| axis | quantity | units | median | spread s (ln) / units with it |", "|---|---|---|---|---|"]
     for s in stats:
         if not s["compared"]:
