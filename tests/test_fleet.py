@@ -244,7 +244,7 @@ def test_one_line_named_differently_on_the_units_of_a_board_is_no_flag():
 
 
 def test_lines_within_five_percent_are_one_departure_and_alternatives_share_a_key():
-    """The lines of the real sensor-fusion board's z axis (31.0-31.57 Hz on four recordings, a
+    """The 31-Hz lines on z of the real MPU6050 recordings (31.0-31.57 Hz on four of them, a
     sinusoid or a narrow band) are one departure; 20.66 Hz is another."""
     found = [_line("sinusoid", "z", 31.19, 0.02), _line("narrowband", "z", 31.34, 0.06), _line("sinusoid", "z", 31.57, 0.08),
              _line("sinusoid", "z", 31.0, 0.004), _line("sinusoid", "z", 20.66, 0.04),

@@ -24,8 +24,8 @@ limit 3.5):
    counts as its **departure** (:func:`departures`): the labels that are alternative readings of
    one departure are one (:data:`ALTERNATIVES`: the lines, sinusoid and narrow band,
    :data:`gyrofilter.effects.LINES`, where their frequencies lie within :data:`LINE_SAME_REL`,
-   5 %, of each other: the same line of the real sensor-fusion board is named at 31.0-31.57 Hz on
-   its four recordings, 1.8 % apart, and a narrow band 0.3 Hz wide at 9.6 Hz spans 3 %; the
+   5 %, of each other: the 31-Hz line on z of the real MPU6050 recordings is named at 31.0-31.57 Hz
+   on four of them, 1.8 % apart, and a narrow band 0.3 Hz wide at 9.6 Hz spans 3 %; the
    wanders, :data:`~gyrofilter.effects.WANDERS`; the tails, outliers and heavy tails,
    :data:`~gyrofilter.effects.TAILS`; every other effect is its own departure). A unit is flagged
    for a departure on an axis when all three hold:
@@ -45,10 +45,13 @@ limit 3.5):
    The floor 0.5 of s is the least unit-to-unit spread of ln D assumed, as rule 1's 10 % is of a
    coefficient: D grows steeply with a departure's size (about as its amplitude to the power 2-4
    on a line), so units of one model that share a line whose amplitude differs by 15 % from unit
-   to unit spread ln D by 0.2-1.1 (1.4826 MAD of four units, median 0.4, in 8 simulated fleets
-   of four MPU-9250-like units, 16 min at 43 Hz), and without the floor their largest D reached
-   3.3 spreads. A departure most units share (the board's line, whatever each unit's label) is
-   never flagged, nor one that leaves the unit's D among its peers'.
+   to unit spread ln D by 0.10-1.10 (1.4826 MAD of the four units, median 0.38, in 20 simulated
+   boards of four MPU-9250-like units, 16 min at 43 Hz: tests/test_fleet.py ``write_board``,
+   seeds 1-20), and without the floor their highest D lay up to 2.6 spreads above the median (3.3
+   in 8 such boards with a sinusoid for the line), with it up to 1.7. A departure most units share
+   (the board's line, whatever each unit's label) is never flagged, nor one that leaves the unit's
+   D among its peers'. On those 20 boards the old rule (a label fewer than half have, at D of at
+   least 3) flagged a unit on 4; this one on none.
 
 A comparison needs at least :data:`MIN_UNITS` units with a number (3 peers besides the unit);
 with fewer, no unit is flagged on it and :func:`flag_units` says so in its statistics.
