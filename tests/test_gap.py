@@ -19,6 +19,7 @@ from hypothesis import given, settings, strategies as st
 
 from gyrofilter.analysis import stats
 from gyrofilter.analysis.gap import detectors as det
+from gyrofilter.analysis.gap import report as gap_report
 from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.analysis.gap.features import departures, discrepancy
 from gyrofilter.recording import Recording, read_recording, write_recording
@@ -272,8 +273,12 @@ def test_cli_writes_contract_json_and_report(tmp_path):
     d = rep["discrepancy"]
     for axis in "xyz":
         n = sum(f["axis"] == axis for f in rep["findings"])
-        tail = f" -> {d['after'][axis]:.3g} with {n} finding" if n else ", no finding"
-        assert f"  {axis}: D {d['before'][axis]:.3g}{tail}" in proc.stdout, proc.stdout
+        # D with the digits its sampling error supports (gap.report.d_text)
+        after = gap_report.d_text(d["after"][axis], d["after_se"][axis])
+        tail = f" -> {after} with {n} finding" if n else ", no finding"
+        assert f"  {axis}: D {gap_report.d_text(d['before'][axis], d['before_se'][axis])}{tail}" in proc.stdout, \
+            proc.stdout
+        assert d["before_se"][axis] > 0
     assert proc.stdout.count("; alone D ") == len(rep["findings"])
     assert any(e["effect"] == "bias_step" for e in spec["axes"][case["axis"]]["effects"])
     if not report:

@@ -264,7 +264,7 @@ def test_a_slow_settling_is_not_read_as_a_ramp_and_a_ramp_is_never_lost():
         cands = _ramp_or_settling(seed, "rate_ramp")
         assert cands, f"seed {seed}: the ramp is not found"
         first = cands[0]
-        alternative = [c.effect for c in first.time_reading or []]
+        alternative = [c.effect for c in first.other_reading or []]
         assert first.effect == "rate_ramp" or (first.effect == "temperature" and "rate_ramp" in alternative), \
             f"seed {seed}: {first.effect} with alternative {alternative}"
         named += first.effect == "rate_ramp"

@@ -36,7 +36,9 @@ def add_arguments(parser):
                         help="recording file (format v1, .csv or .csv.gz); several files or globs with --fleet")
     parser.add_argument("--json", metavar="OUT.json", type=options.file_name, help="also write the gap report (JSON, every number) here")
     parser.add_argument("--report", metavar="DIR", type=options.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
-    parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N", help="seed of the simulations (default 0)")
+    parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N",
+                        help="seed of the intervals' bootstrap (default 0); the findings do not depend on it "
+                             "(docs/gap.md, \"How stable\")")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; {MIN_SIMS} to {MAX_SIMS})")
     parser.add_argument("--bootstrap", type=options.whole_number, default=None, metavar="N",
@@ -101,9 +103,10 @@ def run(args):
     for axis in AXES:
         found = [f for f in report["findings"] if f["axis"] == axis]
         if d:
-            before, after = d["before"][axis], d["after"][axis]
-            console.paragraph(f"{axis}: D {before:.3g}" + (f" -> {after:.3g} with {_count(len(found), 'finding')}"
-                                                            if found else ", no finding"), "  ")
+            before = gap_report.d_text(d["before"][axis], d.get("before_se", {}).get(axis, 0.0))
+            after = gap_report.d_text(d["after"][axis], d.get("after_se", {}).get(axis, 0.0))
+            console.paragraph(f"{axis}: D {before}" + (f" -> {after} with {_count(len(found), 'finding')}"
+                                                       if found else ", no finding"), "  ")
         for f in found:
             console.paragraph(f"{f['effect']} ({gap_report.params_text(f)}); alone D {f['gain']['before']:.3g} -> "
                               f"{f['gain']['after']:.3g}", "    ")
@@ -113,7 +116,7 @@ def run(args):
         console.paragraph(f"note: {note}", "  ")
     if d:
         console.paragraph("(D: mean squared z-score of the record's features against the model's simulations; about 1 "
-                          "where the model explains the record)", "  ")
+                          "where the model explains the record; +- its sampling error over the simulations)", "  ")
     return 0
 
 

@@ -56,7 +56,7 @@ def add_arguments(parser):
                         help="with --source: the recording to write and keep (default: beside --out, "
                              "REPORT.csv for REPORT.html; " + options.RECORDING_FILE_HELP + ")")
     parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N",
-                        help="seed of the gap analysis's simulations (default 0, as gap)")
+                        help="seed of the gap analysis's interval bootstrap (default 0, as gap)")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help="baseline simulations of the gap analysis (as gap --sims)")
     still.add_keep_outliers_argument(parser)

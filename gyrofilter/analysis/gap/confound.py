@@ -30,15 +30,22 @@ power-up, an exponential in time does not (:data:`WHY_THE_COVARIATE`). Three pla
   the better fit of the block means decides (``Delta chi^2 - k ln n``), and a ramp must win by more
   than the null spread of that difference (:func:`_shape_beats_temperature`, ``RAMP_SPREAD_Z``
   sd). A covariate reading that needs a wander where the time reading explains the record by a
-  shape alone is the more complex reading and is not returned. Otherwise the covariate reading is
-  returned with the time reading riding on the temperature candidate.
+  shape alone is the more complex reading: the time reading is returned first, with the covariate
+  reading riding on it. Otherwise the covariate reading is returned first, with the time reading
+  riding on the temperature candidate.
 * *Weighing on D* (:func:`weigh_readings`): both readings are simulated with the axis's other
-  findings and scored by D. The covariate reading is kept unless the time reading is clearly
-  better (``D_time < D_cov - s``); where both explain about equally, the time reading is listed on
-  the temperature finding as ``alternatives`` (each entry: effect, params, and D of the axis with
-  the whole time reading in place of the covariate reading), and the evidence says that the
-  record cannot tell them apart and how the other reading would look. When the time reading is
-  clearly better, it replaces the covariate reading and a note says so.
+  findings and scored by D. The reading returned first is kept unless the other is clearly
+  better (``D_other < D_first - s``); where both explain about equally, the other reading is
+  listed on the first finding of the one named as ``alternatives`` (each entry: effect, params,
+  and D of the axis with the whole other reading in its place), and the evidence says that the
+  record cannot tell them apart and how the other reading would look. When the other reading is
+  clearly better, it replaces the first and a note says so.
+* *Suggested, not established* (:func:`suggested_temperature`): a temperature coefficient that
+  fits the block means (``Delta chi^2 > DETERMINISTIC_THRESHOLD``) but is not significant under the
+  wander the record shows (GLS ``z^2`` at most ``JOINT_THRESHOLD``, at least
+  ``SUGGESTED_Z2``) is not named: the wander could have drawn that trend. The report lists it
+  under ``uncertain`` with its GLS interval, so that a record too short to decide still says
+  what it suggests.
 * *Keeping without a gain alone* (:func:`kept_without_gain`): a finding with no gain alone is kept
   when the axis's other findings do better with it; a temperature also where D with it is within
   the allowance of D without it (the measured covariate is kept where D cannot tell).
@@ -52,7 +59,18 @@ both are weighed on D: the Gauss-Markov is named only where it is clearly better
 bias instability, which has one parameter fewer, with the Gauss-Markov as its alternative where
 the two are about equal.
 
-**3. Heavy tails or isolated spikes** (:func:`tails_or_spikes`). A heavy-tailed noise and a few
+**3. One spectral line: a sinusoid or a narrow band** (:func:`same_line`, :func:`weigh_lines`). The
+sinusoid detector takes the coherent part of a line out of the series and the narrow-band detector
+then finds what is left of it, so a vibration whose frequency wanders a little is found twice: a
+sinusoid and a band at the same frequency (the band's centre within its half-power width of the
+sinusoid's frequency). It is one line, and one finding: the line as a tone (the sinusoid, the
+band's power returned to the white noise) and as a band of noise (the band holding the sinusoid's
+power as well, ``rms'^2 = rms^2 + A^2 / 2``) are weighed on D with the axis's other findings, and
+with both where both may be there. The band is named where it is clearly better, both only where
+both together are clearly better than either; otherwise the sinusoid (a line no wider than the
+record needs is a tone), with the band as its alternative where the two are about equal.
+
+**4. Heavy tails or isolated spikes** (:func:`tails_or_spikes`). A heavy-tailed noise and a few
 gross errors both widen the tails of the noise's distribution. The likelier of the two models of
 the tails is named, by at least ``HEAVY_TAILS_OVER_SPIKES`` (2 Delta log L = 10, very strong
 evidence, Kass & Raftery 1995) where the outlier detector has found spikes beyond its gross-error
@@ -67,7 +85,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...effects import BIAS_INSTABILITY, BIAS_STEP, BY_NAME, GAUSS_MARKOV, RATE_RAMP, TEMPERATURE, WANDERS
+from ...effects import (BIAS_INSTABILITY, BIAS_STEP, BY_NAME, GAUSS_MARKOV, NARROWBAND, RATE_RAMP, SHAPES,
+                       SINUSOID, TEMPERATURE, WANDERS)
 from ...units import AXES
 from ..stats import block_means
 
@@ -81,6 +100,9 @@ RAMP_SPREAD_Z = 1.96
 #: found spikes (10: "very strong" evidence, Kass & Raftery 1995, sec. 3.2); also the margin within
 #: which the two explain the tails about as well
 HEAVY_TAILS_OVER_SPIKES = 10.0
+#: GLS z^2 of a temperature coefficient from which a coefficient not significant under the record's
+#: wander is still reported as suggested (:func:`suggested_temperature`): 3 sd, two-sided p = 0.003
+SUGGESTED_Z2 = 9.0
 #: the two stationary slow wanders whose spectra a record may not tell apart (1/f and a Lorentzian
 #: whose corner lies near the record's lowest frequencies)
 CONFUSABLE_WANDERS = (BIAS_INSTABILITY, GAUSS_MARKOV)
@@ -90,21 +112,22 @@ def covariate_or_time(time_reading, covariate, stats, x, temp_c):
     """The reading the slow detector returns for an axis with a recorded temperature (module
     docstring, 1.): ``time_reading`` (a list of candidates) or ``covariate`` (the covariate
     reading, the temperature candidate first; None where the temperature is not significant),
-    the time reading riding on the temperature candidate (``time_reading``).
+    the other reading riding on the first candidate (``other_reading``) for :func:`weigh_readings`.
     ``stats``: the shapes' Delta chi^2 of the block means; ``x``, ``temp_c``: the axis's series."""
     line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP) else None
     if line_or_jump and _shape_beats_temperature(line_or_jump, stats, x, temp_c):
         # a line or a jump is not a settling: against them the better fit of the block means decides
         return time_reading
-    if covariate is None or (any(c.effect in WANDERS for c in covariate[1:])
-                             and not any(c.effect in WANDERS for c in time_reading)):
-        # a covariate reading that needs a wander where a shape in time alone explains the
-        # record is the more complex reading (a ramp read as the temperature's settling plus a
-        # random walk for the difference)
+    if covariate is None:
         return time_reading
-    if time_reading:
-        return [replace(covariate[0], time_reading=time_reading)] + covariate[1:]
-    return covariate
+    if not time_reading:
+        return covariate
+    if any(c.effect in WANDERS for c in covariate[1:]) and not any(c.effect in WANDERS for c in time_reading):
+        # a covariate reading that needs a wander where a shape in time alone explains the record is
+        # the more complex reading (a ramp read as the temperature's settling plus a random walk for
+        # the difference): the time reading first, the covariate reading weighed against it
+        return [replace(time_reading[0], other_reading=covariate)] + time_reading[1:]
+    return [replace(covariate[0], other_reading=time_reading)] + covariate[1:]
 
 
 def _shape_beats_temperature(name, stats, x, temp_c):
@@ -134,6 +157,30 @@ def _shape_beats_temperature(name, stats, x, temp_c):
     rho = float(np.dot(g_t, g_r) / math.sqrt(np.dot(g_t, g_t) * np.dot(g_r, g_r)))
     spread = 2.0 * math.sqrt(max(1.0 - rho * rho, 0.0) * max(d_shape, d_temp))
     return d_shape - d_temp > RAMP_SPREAD_Z * spread
+
+
+def suggested_temperature(stats, axis):
+    """The ``uncertain`` entry of a temperature the slow detector did not name (module docstring,
+    1.) from its statistics ``stats`` (:func:`gyrofilter.analysis.gap.detectors.detect_slow`), or
+    None: where the coefficient fits the block means (the detector reaches its GLS test only then)
+    and its GLS ``z^2`` under the axis's wander lies in [SUGGESTED_Z2, the detector's threshold].
+    Its interval is the GLS one, ``a +- 1.96 sqrt(Var a)``."""
+    if "temperature_gls" not in stats:
+        return None
+    a, var, wander, threshold_z2 = stats["temperature_gls"]
+    z2 = a * a / var
+    if not SUGGESTED_Z2 <= z2 <= threshold_z2:
+        return None
+    half = 1.959964 * math.sqrt(var)
+    words = {None: "white noise", BIAS_INSTABILITY: "the bias instability", GAUSS_MARKOV: "the Gauss-Markov wander"}.get(
+        wander, "the random walk")
+    return {"effect": TEMPERATURE, "axis": axis, "params": {"coefficient_dps_per_c": a},
+            "params_ci95": {"coefficient_dps_per_c": [a - half, a + half]},
+            "why": (f"the bias follows the temperature ({a:+.3g} deg/s per deg C fits the block means by Delta chi^2 "
+                    f"{stats[TEMPERATURE]:.0f}), but under {words} the record also shows the coefficient is "
+                    f"{math.sqrt(z2):.1f} standard errors from 0, not the {math.sqrt(threshold_z2):.0f} the gap "
+                    "analysis requires: a wander could have drawn this trend; a longer record, or one where the "
+                    "temperature moves otherwise, decides")}
 
 
 def kept_without_gain(effect, with_all, without, spread_of):
@@ -176,7 +223,9 @@ def tails_or_spikes(over, spikes_found, fits, heavier):
 #: why a finding with ``alternatives`` is the one named, by its effect (the reports' line under it:
 #: :func:`gyrofilter.analysis.gap.report.indistinguishable_text`)
 NAMED_BECAUSE = {TEMPERATURE: "it is measured and predicts the bias at the next power-up",
-                 BIAS_INSTABILITY: "it has one parameter fewer"}
+                 BIAS_INSTABILITY: "it has one parameter fewer",
+                 SINUSOID: "a line no wider than the record needs is a tone",
+                 **dict.fromkeys(SHAPES, "the temperature reading needs a wander besides, this one does not")}
 
 #: why the covariate is named where a reading in time explains a record as well (the end of such a
 #: temperature finding's evidence; the HTML report says it once for all its findings)
@@ -188,45 +237,60 @@ WHY_THE_COVARIATE = (f"The temperature is named because {NAMED_BECAUSE[TEMPERATU
 
 def weigh_readings(inp, state, scorer):
     """Choose per axis between the covariate and the time reading of a confounded temperature
-    (module docstring, 1.); returns the new state: the reading not chosen excluded, a time reading
-    that is as good riding on the temperature candidate as its ``alternatives``."""
+    (module docstring, 1.); returns the new state: the reading not chosen excluded, the other
+    reading where it is as good riding on the first candidate of the reading named as its
+    ``alternatives``. The reading the detector returned first (the covariate reading, or the time
+    reading where it is the simpler) is named unless the other is clearly better."""
     for i, reading in sorted(state.readings.items()):
         a = AXES[i]
-        cov_ks = reading.covariate
-        others = [k for k, (ci, _) in enumerate(state.candidates) if ci == i and k not in cov_ks and k not in state.excluded]
-        k_temp = next(k for k in cov_ks if state.candidates[k][1].effect == TEMPERATURE)
-        first = len(state.candidates)
-        time_cands = [replace(c, reading="time") for c in reading.time]
-        state = replace(state, candidates=state.candidates + tuple((i, c) for c in time_cands)).with_axis(i, time=reading.ext_axis)
-        time_ks = list(range(first, len(state.candidates)))
+        first_ks = reading.first
+        others = [k for k, (ci, _) in enumerate(state.candidates) if ci == i and k not in first_ks and k not in state.excluded]
+        covariate_first = any(state.candidates[k][1].effect == TEMPERATURE for k in first_ks)
+        k_head = next((k for k in first_ks if state.candidates[k][1].effect == TEMPERATURE), first_ks[0])
+        start = len(state.candidates)
+        other_cands = [replace(c, reading="other") for c in reading.other]
+        state = replace(state, candidates=state.candidates + tuple((i, c) for c in other_cands)).with_axis(
+            i, other=reading.ext_axis)
+        other_ks = list(range(start, len(state.candidates)))
         label = f"covariate and time readings on {a}"
         inp.say(label)
-        cov_model, time_model = state.model(inp, i, others + cov_ks), state.model(inp, i, others + time_ks)
-        d_cov = scorer.discrepancy(i, cov_model, label)
-        d_time = scorer.discrepancy(i, time_model, label)
-        spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, cov_model, label), scorer.null_spread(i, time_model, label))
-        shown = " + ".join(_show(c) for c in reading.time)
-        weighed = (f"axis {a}: readings weighed on D: with the temperature {d_cov:.3g}, in time ({shown}) {d_time:.3g}; "
-                   f"allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} null spreads of D)")
-        if d_time < d_cov - spread:
-            state = replace(state, excluded=state.excluded | set(cov_ks)).with_axis(i, ext=reading.ext_axis, wv=reading.wv)
-            for k in time_ks:
+        first_model, other_model = state.model(inp, i, others + first_ks), state.model(inp, i, others + other_ks)
+        d_first = scorer.discrepancy(i, first_model, label)
+        d_other = scorer.discrepancy(i, other_model, label)
+        spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, first_model, label),
+                                          scorer.null_spread(i, other_model, label))
+        shown = " + ".join(_show(c) for c in reading.other)
+        shown_first = " + ".join(_show(state.candidates[k][1]) for k in first_ks)
+        d_cov, d_time = (d_first, d_other) if covariate_first else (d_other, d_first)
+        time_shown, cov_shown = (shown, shown_first) if covariate_first else (shown_first, shown)
+        weighed = (f"axis {a}: readings weighed on D: with the temperature ({cov_shown}) {d_cov:.3g}, in time "
+                   f"({time_shown}) {d_time:.3g}; allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} null spreads of D)")
+        first_named, other_named = ("the temperature", "the time reading") if covariate_first else \
+            ("the time reading", "the temperature")
+        if d_other < d_first - spread:
+            state = replace(state, excluded=state.excluded | set(first_ks)).with_axis(i, ext=reading.ext_axis, wv=reading.wv)
+            for k in other_ks:
                 state = state.with_candidate(k, replace(state.candidates[k][1], reading=""))
-            state = state.with_notes(weighed + ": the time reading is clearly better, the temperature is not named")
+            state = state.with_notes(weighed + f": {other_named} is clearly better, {first_named} is not named")
             continue
-        state = replace(state, excluded=state.excluded | set(time_ks))
-        if d_time > d_cov + spread:
-            state = state.with_notes(weighed + ": the temperature is clearly better, the time reading is not listed")
+        state = replace(state, excluded=state.excluded | set(other_ks))
+        if d_other > d_first + spread:
+            state = state.with_notes(weighed + f": {first_named} is clearly better, {other_named} is not listed")
             continue
-        state = state.with_notes(weighed + ": the record cannot tell them apart; the temperature is named, the time "
-                                 "reading listed as its alternatives")
-        temp = state.candidates[k_temp][1]
-        state = state.with_candidate(k_temp, replace(
-            temp, alternatives=tuple((c, d_time) for c in time_cands),
-            evidence_notes=temp.evidence_notes + (
-                f"the time reading {shown} explains this record about as well (D {d_time:.3g} against {d_cov:.3g}, "
-                f"within the null spread of D, {spread:.2g}): the temperature follows a warm-up itself, so this "
-                f"record cannot tell them apart. {WHY_THE_COVARIATE}",)))
+        why = ("the temperature is named, the time reading listed as its alternatives" if covariate_first else
+               "the time reading is named (the temperature reading needs a wander besides, the time reading does "
+               "not), the temperature reading listed as its alternatives")
+        state = state.with_notes(weighed + f": the record cannot tell them apart; {why}")
+        head = state.candidates[k_head][1]
+        about = (f"the time reading {shown} explains this record about as well (D {d_time:.3g} against {d_cov:.3g}, "
+                 f"within the null spread of D, {spread:.2g}): the temperature follows a warm-up itself, so this "
+                 f"record cannot tell them apart. {WHY_THE_COVARIATE}") if covariate_first else (
+                 f"the temperature reading {shown} explains this record about as well (D {d_cov:.3g} against "
+                 f"{d_time:.3g}, within the null spread of D, {spread:.2g}): the temperature follows a warm-up "
+                 "itself, so this record cannot tell them apart; the reading in time is named because the "
+                 "temperature reading needs a wander besides and the reading in time does not")
+        state = state.with_candidate(k_head, replace(head, alternatives=tuple((c, d_other) for c in other_cands),
+                                                     evidence_notes=head.evidence_notes + (about,)))
     return state
 
 
@@ -280,6 +344,68 @@ def weigh_wanders(inp, state, scorer):
                 f"1/(2 pi tau) = {corner_hz:.2g} Hz and falling like 1/f^2 above it, bends across this record's "
                 "frequencies about as the 1/f of a bias instability falls, so the record cannot tell them apart; "
                 "the bias instability is named, with one parameter fewer",)))
+    return state
+
+
+def same_line(sinusoid, band):
+    """Whether a sinusoid and a narrow-band candidate are one spectral line (module docstring, 3.):
+    the band's centre lies within its half-power full width of the sinusoid's frequency (that
+    width is at least the Welch resolution, the width a pure line shows)."""
+    return abs(sinusoid.params["frequency_hz"] - band.params["center_hz"]) <= band.params["bandwidth_hz"]
+
+
+def weigh_lines(inp, state, scorer):
+    """Choose per axis between a sinusoid and a narrow band that are one line (:func:`same_line`;
+    module docstring, 3.): the tone (the sinusoid; the band's variance back in the white level,
+    ``N'^2 = N^2 + rms^2 / f_s``), the band (``rms'^2 = rms^2 + A^2 / 2``: the sinusoid's power in
+    it) and both, each simulated with the axis's other findings and scored by D. Returns the new
+    state, the readings not chosen excluded; a band as good as the tone rides on the sinusoid as its
+    ``alternatives``."""
+    for i, a in enumerate(AXES):
+        on = state.on_axis(i)
+        k_sin = next((k for k in on if state.candidates[k][1].effect == SINUSOID), None)
+        k_band = next((k for k in on if state.candidates[k][1].effect == NARROWBAND), None)
+        if k_sin is None or k_band is None or not same_line(state.candidates[k_sin][1], state.candidates[k_band][1]):
+            continue
+        sin, band = state.candidates[k_sin][1], state.candidates[k_band][1]
+        rms = math.hypot(band.params["rms_dps"], sin.params["amplitude_dps"] / math.sqrt(2.0))
+        whole = replace(band, params=dict(band.params, rms_dps=rms), evidence_notes=band.evidence_notes + (
+            f"it holds the sinusoid at {sin.params['frequency_hz']:.4g} Hz that the sinusoid detector took out of it "
+            f"(rms {band.params['rms_dps']:.3g} deg/s without it)",))
+        state = replace(state, candidates=state.candidates + ((i, whole),))
+        k_whole = len(state.candidates) - 1
+        others = [k for k in on if k not in (k_sin, k_band)]
+        ext = state.axes[i].ext
+        tone_ext = dict(ext, arw_dps_per_sqrt_hz=math.sqrt(
+            ext["arw_dps_per_sqrt_hz"] ** 2 + band.params["rms_dps"] ** 2 / inp.sample_rate_hz))
+        label = f"sinusoid and narrow-band readings of the line on {a}"
+        inp.say(label)
+        tone_state = state.with_axis(i, ext=tone_ext)
+        models = {"tone": tone_state.model(inp, i, others + [k_sin]), "band": state.model(inp, i, others + [k_whole]),
+                  "both": state.model(inp, i, others + [k_sin, k_band])}
+        d = {name: scorer.discrepancy(i, m, label) for name, m in models.items()}
+        spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, m, label) for m in models.values())
+        weighed = (f"axis {a}: one line at {sin.params['frequency_hz']:.4g} Hz weighed on D: as a sinusoid {d['tone']:.3g}, "
+                   f"as a narrow band {d['band']:.3g}, as both {d['both']:.3g}; allowance {spread:.2g} "
+                   f"({CONFOUNDED_SPREADS:g} null spreads of D)")
+        if d["both"] < min(d["tone"], d["band"]) - spread:
+            state = replace(state, excluded=state.excluded | {k_whole}).with_notes(
+                weighed + ": both together are clearly better, both are named")
+            continue
+        if d["band"] < d["tone"] - spread:
+            state = replace(state, excluded=state.excluded | {k_sin, k_band}).with_notes(
+                weighed + ": the narrow band is clearly better, the sinusoid is not named")
+            continue
+        state = replace(state, excluded=state.excluded | {k_band, k_whole}).with_axis(i, ext=tone_ext)
+        if d["tone"] < d["band"] - spread:
+            state = state.with_notes(weighed + ": the sinusoid is clearly better, the narrow band is not listed")
+            continue
+        state = state.with_notes(weighed + f": the record cannot tell them apart; the sinusoid is named "
+                                 f"({NAMED_BECAUSE[SINUSOID]}), the narrow band listed as its alternative")
+        state = state.with_candidate(k_sin, replace(sin, alternatives=((whole, d["band"]),), evidence_notes=(
+            sin.evidence_notes + (f"the line read as a narrow band, {_show(whole)}, explains this record about as "
+                                  f"well (D {d['band']:.3g} against {d['tone']:.3g}, within the null spread of D, "
+                                  f"{spread:.2g}); the sinusoid is named: {NAMED_BECAUSE[SINUSOID]}",))))
     return state
 
 

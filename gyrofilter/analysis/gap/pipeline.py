@@ -9,7 +9,8 @@ hold the parts:
 
 1. **Baseline fit** per axis (the package's plain simulation: constant bias, white noise,
    quantization of the recorded unit; :func:`gyrofilter.analysis.gap.baseline.baseline_model`).
-2. **Simulated spread**: the baseline is simulated ``n_sims`` times (seeded; common random
+2. **Simulated spread**: the baseline is simulated ``n_sims`` times (seeded by
+   ``decision_streams``, not by ``seed``: :data:`DECISION_STREAMS`; common random
    numbers with the extended model; :func:`gyrofilter.analysis.gap.baseline.sim_features`),
    and the same features are computed on the measurement and on every run
    (:mod:`gyrofilter.analysis.gap.features`: the overlapping Allan deviation at log-spaced tau,
@@ -27,7 +28,8 @@ hold the parts:
    readings are simulated and the measured covariate is kept unless the other is clearly better
    on D (:mod:`gyrofilter.analysis.gap.confound`); one as good is listed as ``alternatives``. A
    bias instability and a Gauss-Markov wander that both fit are weighed the same way (the bias
-   instability, one parameter fewer, is named unless the Gauss-Markov is clearly better).
+   instability, one parameter fewer, is named unless the Gauss-Markov is clearly better), and so are
+   a sinusoid and a narrow band at the same frequency, one spectral line named once.
 4. **Gain**: the discrepancy ``D = mean_k z_k^2`` over the features of the axis (lower is
    better; about 1 when the model explains the measurement) is computed against the baseline's
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a
@@ -66,12 +68,13 @@ from . import detectors as det
 from .baseline import (MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
                        temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
-from .confound import alternatives_entry, kept_without_gain, weigh_readings, weigh_wanders
+from .confound import (alternatives_entry, kept_without_gain, suggested_temperature, weigh_lines, weigh_readings,
+                       weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
 from .intervals import add_intervals
 from .scoring import Scorer
-from .state import AxisModels, GapInput, GapState, Kept, TimeReading
+from .state import AxisModels, GapInput, GapState, Kept, OtherReading
 
 #: minimum samples for any analysis
 MIN_SAMPLES = 256
@@ -110,17 +113,27 @@ def analyse_file(path, *, seed=0, n_sims=None, bootstrap=None, warn, progress=No
     return rec, analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=path, bootstrap=bootstrap)
 
 
-def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=None):
+#: the seed of the simulations every decision is scored on (the baseline's runs and the extended
+#: models', which share their first streams): the same whatever ``--seed``, so that no named cause
+#: moves with it (common random numbers across runs of the command); ``tools/gap_stability.py
+#: --streams`` measures how the decisions hold on other streams (docs/gap.md, "How stable")
+DECISION_STREAMS = 0
+
+
+def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=None,
+                decision_streams=DECISION_STREAMS):
     """Run the gap analysis on a :class:`~gyrofilter.recording.Recording`; returns the report
     dict of docs/formats.md section 3 (with ``discrepancy``, ``departures``,
-    ``runtime_s``). ``progress(text)`` is called with short status lines. ``bootstrap``: runs
+    ``runtime_s``). ``progress(text)`` is called with short status lines. ``seed``: the
+    parameters' bootstrap; ``decision_streams``: the simulations the decisions are scored on
+    (:data:`DECISION_STREAMS`). ``bootstrap``: runs
     per axis with findings for the parameters' intervals (:mod:`gyrofilter.analysis.gap.intervals`;
     0: none; None: :func:`~gyrofilter.analysis.gap.intervals.default_bootstrap` of the record's length)."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
             return _analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=recording_name,
-                                bootstrap=bootstrap)
+                                bootstrap=bootstrap, decision_streams=decision_streams)
         except GyroFilterError:
             raise
         except (ValueError, ArithmeticError) as exc:  # a statistic that cannot run numerically (a singular
@@ -137,11 +150,11 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None,
                     "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
 
 
-def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
+def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap, decision_streams):
     """The five steps of the module docstring, in order."""
     t_start = time.perf_counter()
     say = progress or (lambda text: None)
-    report, setup = prepare(rec, seed=seed, n_sims=n_sims, recording_name=recording_name)
+    report, setup = prepare(rec, decision_streams=decision_streams, n_sims=n_sims, recording_name=recording_name)
     if setup is not None:
         inp = baseline_spread(setup, say)                               # 2.
         report["departures"] = {a: departure_summary(inp.deps[i], inp.meas_feats[i], inp.taus, inp.bands)
@@ -150,6 +163,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
         state = detect(inp, report["notes"])                            # 3.
         state = weigh_readings(inp, state, scorer)                      # 3., covariate or time reading of a temperature
         state = weigh_wanders(inp, state, scorer)                       # 3., bias instability or Gauss-Markov
+        state = weigh_lines(inp, state, scorer)                         # 3., one line: sinusoid or narrow band
         state = keep_findings(inp, state, scorer)                       # 4., gain per finding
         state = composite_step(inp, state, scorer)                      # 4., composite stochastic part where D stays high
         report["notes"] = list(state.notes)
@@ -159,7 +173,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
     return report
 
 
-def prepare(rec, *, seed, n_sims, recording_name):
+def prepare(rec, *, decision_streams, n_sims, recording_name):
     """Step 1: the checks, the baseline fit and the report's head. Returns ``(report, setup)``:
     ``setup`` is the dict of :class:`~gyrofilter.analysis.gap.state.GapInput`'s fields known
     before the simulations, or None for a record too short to analyse."""
@@ -196,7 +210,7 @@ def prepare(rec, *, seed, n_sims, recording_name):
     m = default_n_sims(n) if n_sims is None else int(n_sims)
     return report, {"rec": rec, "sample_rate_hz": sample_rate_hz, "n": n, "temp": temp, "base": base, "q": q,
                     "taus": feature_taus(n, sample_rate_hz), "bands": feature_bands(n, sample_rate_hz), "n_sims": m,
-                    "seeds": np.random.default_rng(seed).integers(0, 2**31, size=m), "n_ext": max(6, m // 2)}
+                    "seeds": np.random.default_rng(decision_streams).integers(0, 2**31, size=m), "n_ext": max(6, m // 2)}
 
 
 def _static_notes(rec, base, sample_rate_hz):
@@ -224,8 +238,8 @@ def baseline_spread(setup, say):
     sims = sim_features(setup["base"], n, sample_rate_hz, setup["seeds"], range(3), taus, bands, say,
                         "baseline simulations (runs x axes)")
     deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
-    del sims
-    return GapInput(**setup, meas_feats=meas_feats, deps=deps, before=[discrepancy(d) for d in deps], say=say)
+    return GapInput(**setup, meas_feats=meas_feats, deps=deps, before=[discrepancy(d) for d in deps], base_sims=sims,
+                    say=say)
 
 
 def detect(inp, notes):
@@ -233,7 +247,7 @@ def detect(inp, notes):
     and bias re-fitted on the series cleaned of the axis's findings, and that series' wavelet
     variance kept for the composite step. ``notes``: the notes so far (the state's first)."""
     notes = list(notes)
-    candidates, axes, readings = [], [], {}
+    candidates, axes, readings, uncertain = [], [], {}, []
     for i, a in enumerate(AXES):
         inp.say(f"detectors on {a}")
         x = axis_dps(inp.rec, i)
@@ -246,35 +260,45 @@ def detect(inp, notes):
             continue
         owned = not np.shares_memory(x, inp.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
         try:
-            cands, xc, alt = _detect_axis(x, inp.sample_rate_hz, inp.temp, tails_z=float(inp.deps[i]["tails"][0][0]),
-                                          notes=notes, axis=a, owned=owned, q_dps=inp.q or 0.0)
+            cands, xc, alt, slow_stats = _detect_axis(x, inp.sample_rate_hz, inp.temp,
+                                                      tails_z=float(inp.deps[i]["tails"][0][0]), notes=notes, axis=a,
+                                                      owned=owned, q_dps=inp.q or 0.0)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             notes.append(f"axis {a}: detectors could not run ({exc})")
-            cands, xc, alt = [], axis_dps(inp.rec, i), None  # x may have been cleaned in place
-        cands = [replace(c, reference_c=float(np.mean(inp.temp))) if c.effect == TEMPERATURE else c for c in cands]
+            cands, xc, alt, slow_stats = [], axis_dps(inp.rec, i), None, {}  # x may have been cleaned in place
+        suggested = suggested_temperature(slow_stats, a)
+        if suggested is not None:
+            uncertain.append(suggested)
+        cands = _with_reference(cands, inp.temp)
         first = len(candidates)
         candidates += [(i, c) for c in cands]
-        if alt is not None:  # the time reading of a confounded temperature (gap.confound)
+        if alt is not None:  # the other reading of a confounded temperature (gap.confound)
             alt_cands, xa = alt
+            alt_cands = _with_reference(alt_cands, inp.temp)
             fast = [c for c in cands if c.effect not in SLOW]
-            readings[i] = TimeReading(covariate=[first + j for j, c in enumerate(cands) if c.effect in SLOW],
-                                      time=alt_cands,
-                                      ext_axis=extended_axis(inp.base["axes"][a], fast + alt_cands, xa, inp.sample_rate_hz,
-                                                             inp.q),
-                                      wv=slow_wavelet_variance(xa, inp.sample_rate_hz, fast))
+            readings[i] = OtherReading(first=[first + j for j, c in enumerate(cands) if c.effect in SLOW],
+                                       other=alt_cands,
+                                       ext_axis=extended_axis(inp.base["axes"][a], fast + alt_cands, xa,
+                                                              inp.sample_rate_hz, inp.q),
+                                       wv=slow_wavelet_variance(xa, inp.sample_rate_hz, fast))
             del xa
         axes.append(AxisModels(ext=extended_axis(inp.base["axes"][a], cands, xc, inp.sample_rate_hz, inp.q),
                                wv=slow_wavelet_variance(xc, inp.sample_rate_hz, cands)))
         del x, xc
     return GapState(candidates=tuple(candidates), axes=tuple(axes), readings=readings, after=tuple(inp.before),
-                    notes=tuple(notes))
+                    notes=tuple(notes), uncertain=tuple(uncertain))
+
+
+def _with_reference(cands, temp):
+    """The candidates, a temperature's with the record's mean temperature as its reference."""
+    return [replace(c, reference_c=float(np.mean(temp))) if c.effect == TEMPERATURE else c for c in cands]
 
 
 def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False, q_dps=0.0):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x,
-    alternative): ``alternative`` is None or, where the slow effects have a covariate and a time
-    reading (:func:`gyrofilter.analysis.gap.detectors.detect_slow`), ``(time reading's candidates,
-    x cleaned of those instead)``. Each finding's component is subtracted from a private copy of
+    alternative, the slow detector's statistics): ``alternative`` is None or, where the slow
+    effects have a covariate and a time reading (:func:`gyrofilter.analysis.gap.detectors.detect_slow`),
+    ``(the other reading's candidates, x cleaned of those instead)``. Each finding's component is subtracted from a private copy of
     ``x`` (``x`` itself when ``owned``: the caller's to change) and then dropped, so the axis
     costs one series of memory besides the detectors' own (two without ``owned``, three with an
     alternative reading). ``tails_z``: the tail statistic's departure from the baseline
@@ -300,7 +324,7 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     if band is not None:
         cands.append(band)
     colored = det.detect_colored(x, sample_rate_hz, band)
-    slow, _ = det.detect_slow(x, sample_rate_hz, temp)
+    slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)
     if colored is not None and wander is not None:  # the wander's high-frequency part is correlated too
         colored = det.detect_colored(x, sample_rate_hz, band,
@@ -311,9 +335,9 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     if colored is not None:
         cands.append(colored)
     cands.extend(slow)
-    alt = slow[0].time_reading if slow else None
+    alt = slow[0].other_reading if slow else None
     if alt is not None:
-        slow[0].time_reading = None  # the detectors' own candidate: the reading is returned apart
+        slow[0].other_reading = None  # the detectors' own candidate: the reading is returned apart
         xa = x.copy()
         for s in alt:
             if s.component is not None:
@@ -322,7 +346,7 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     for s in slow:
         if s.component is not None:
             x, owned = _subtract_component(x, s, owned), True
-    return cands, x, alt
+    return cands, x, alt, slow_stats
 
 
 def _subtract_component(x, cand, owned):
@@ -412,9 +436,8 @@ def write_findings(inp, state, scorer, report):
             "evidence": c.evidence_text(*([f"baseline simulations: {z_info}"] if z_info else [])),
             "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": d_alone},
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
+            "alternatives": alternatives_entry(c),
         })
-        if c.alternatives:
-            report["findings"][-1]["alternatives"] = alternatives_entry(c)
 
     def extended_deps(i):
         return scorer.departures(i, state.model(inp, i, state.kept_on(i)), f"extended model on {AXES[i]}")
@@ -441,7 +464,12 @@ def write_findings(inp, state, scorer, report):
                              "before": {a: before[i] for i, a in enumerate(AXES)},
                              "after": {a: after[i] for i, a in enumerate(AXES)},
                              "overall_before": float(np.mean(before)),
-                             "overall_after": float(np.mean(after))}
+                             "overall_after": float(np.mean(after)),
+                             "before_se": {a: scorer.discrepancy_error(i, None, "") for i, a in enumerate(AXES)},
+                             "after_se": {a: scorer.discrepancy_error(
+                                 i, state.model(inp, i, state.kept_on(i)) if state.kept_on(i) else None,
+                                 f"extended model on {a}") for i, a in enumerate(AXES)}}
+    report["uncertain"] = [dict(entry) for entry in state.uncertain]
     report["n_simulations"] = inp.n_sims
     n, sample_rate_hz = inp.n, inp.sample_rate_hz
     if n / sample_rate_hz < 300:

@@ -169,6 +169,19 @@ def indistinguishable_text(finding, *, figure=False):
             + ("; the figure of the rate in time shows both readings" if shaped else ""))
 
 
+def d_text(value, se):
+    """D with the digits its sampling error ``se`` supports: rounded to the error's first
+    significant digit (its first two where that digit is 1), ``D +- se``; three significant digits
+    where the error is 0 (fewer than 3 simulations)."""
+    if not se > 0:
+        return f"{value:.3g}"
+    digits = -int(math.floor(math.log10(se)))
+    if int(se * 10 ** digits) < 2:
+        digits += 1
+    digits = max(digits, 0)
+    return f"{value:.{digits}f} +- {se:.{digits}f}"
+
+
 def alternatives_text(alternatives):
     """``effect (k = v, ...) + ...: D d`` of a finding's ``alternatives`` (one reading: the entries share D)."""
     parts = [f"{e['effect']} (" + ", ".join(f"{k} = {_fmt(v)}" for k, v in e["params"].items()) + ")"
@@ -213,7 +226,7 @@ def write_report(report, rec, out_dir, *, seed=0):
     temp = rec.temp_c
     lines = [f"# Model-gap report: {one_line_text(report['recording'])}", "",
              f"{report['duration_s']:.1f} s at {report['sample_rate_hz']:g} Hz; "
-             f"{report.get('n_simulations', 0)} baseline simulations (seed {seed}); "
+             f"{report.get('n_simulations', 0)} baseline simulations (bootstrap seed {seed}); "
              f"runtime {report.get('runtime_s', float('nan')):.1f} s.", "",
              "## Baseline (constant bias + white noise + rounding to the LSB step)", "",
              "| axis | bias (deg/s) | ARW (deg/s/sqrt(Hz)) | LSB step (deg/s) | discrepancy D before | after |",

@@ -15,7 +15,7 @@ import numpy as np
 from ...sim.model import TEMPERATURE_PROFILE
 from ...units import AXES
 from .baseline import sim_features, temperature_table
-from .features import departures, discrepancy, null_spread
+from .features import departures, discrepancy, discrepancy_error, null_spread
 
 
 def _frozen(value):
@@ -57,6 +57,15 @@ class Scorer:
 
     def discrepancy(self, i, model, label):
         return discrepancy(self.departures(i, model, label))
+
+    def discrepancy_error(self, i, model, label):
+        """The sampling error of D of ``model`` on axis ``i``, D before's where ``model`` is None
+        (:func:`gyrofilter.analysis.gap.features.discrepancy_error`)."""
+        inp = self.inp
+        if model is None:
+            return discrepancy_error(inp.meas_feats[i], inp.base_sims[i], inp.n)
+        key = self._key(i, *model, label)
+        return discrepancy_error(inp.meas_feats[i], self._sims[key], inp.n, (inp.deps[i], inp.n_sims))
 
     def null_spread(self, i, model, label):
         """The null spread of D of ``model`` (:func:`gyrofilter.analysis.gap.features.null_spread`

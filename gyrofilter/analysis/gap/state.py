@@ -49,6 +49,8 @@ class GapInput:
     meas_feats: list
     deps: list
     before: list
+    #: per axis: the features of the baseline's runs (for the sampling error of a gain)
+    base_sims: list
     #: progress lines
     say: Callable[[str], None]
 
@@ -60,8 +62,8 @@ class AxisModels:
 
     #: the detectors' reading (the time reading's where that is chosen over a temperature)
     ext: dict
-    #: the time reading of a confounded temperature (:mod:`gyrofilter.analysis.gap.confound`)
-    time: dict | None = None
+    #: the other reading of a confounded temperature (:mod:`gyrofilter.analysis.gap.confound`)
+    other: dict | None = None
     #: the composite stochastic fit's white level (:mod:`gyrofilter.analysis.gap.composite`)
     composite: dict | None = None
     #: the colored noise's lags re-solved for a composite model, or None
@@ -71,13 +73,14 @@ class AxisModels:
 
 
 @dataclass(frozen=True)
-class TimeReading:
-    """The time reading of a confounded temperature on one axis: the indices of the covariate
-    reading's candidates, the time reading's candidates (not yet in the state), its axis spec and
-    wavelet variance."""
+class OtherReading:
+    """The two readings of a confounded temperature on one axis (:mod:`gyrofilter.analysis.gap.confound`):
+    the indices of the candidates of the reading the detector returned (``first``: the covariate
+    reading, or the time reading where it is the simpler), the other reading's candidates (not yet
+    in the state), its axis spec and wavelet variance."""
 
-    covariate: list
-    time: list
+    first: list
+    other: list
     ext_axis: dict
     wv: object
 
@@ -100,7 +103,7 @@ class GapState:
     candidates: tuple = ()
     #: the models of each axis
     axes: tuple = ()
-    #: axis index -> its :class:`TimeReading`
+    #: axis index -> its :class:`OtherReading`
     readings: dict = field(default_factory=dict)
     #: indices of the candidates of a reading not chosen
     excluded: frozenset = frozenset()
@@ -111,6 +114,8 @@ class GapState:
     #: D per axis after extension by its kept findings
     after: tuple = ()
     notes: tuple = ()
+    #: entries of the report's ``uncertain``: effects the record suggests but does not establish
+    uncertain: tuple = ()
 
     def with_notes(self, *notes):
         return replace(self, notes=self.notes + tuple(notes))
@@ -138,12 +143,12 @@ class GapState:
     def spec(self, inp, i, ks):
         """Axis ``i``'s spec extended by the candidates ``ks`` (the composite's white level, its
         re-solved lags and ``preserve: arw`` when one of them belongs to a composite model; the
-        time reading's spec when one belongs to it)."""
+        other reading's spec when one belongs to it)."""
         models = self.axes[i]
         cands = [self.candidates[k][1] for k in ks]
         composite = any(c.composite for c in cands)
-        time_reading = any(c.reading == "time" for c in cands)
-        spec = dict(models.composite if composite else models.time if time_reading else models.ext)
+        other_reading = any(c.reading == "other" for c in cands)
+        spec = dict(models.composite if composite else models.other if other_reading else models.ext)
         spec["bias_dps"] = start_bias(spec["bias_dps"], cands, inp.n / inp.sample_rate_hz)
         spec["effects"] = [effect_entry(c, preserve="arw" if composite else "std") for c in cands]
         if not composite:  # the white level was measured with the wanders' high-frequency part in it

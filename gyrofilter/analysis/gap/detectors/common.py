@@ -87,11 +87,14 @@ class Candidate:
     #: a temperature's reference (deg C): the record's mean temperature
     reference_c: float | None = None
     #: the slow detector's other reading beside it, for the confounded causes to weigh
-    #: (:mod:`gyrofilter.analysis.gap.confound`): a temperature's time reading (candidates), a
-    #: bias instability's or Gauss-Markov's other wander
-    time_reading: list | None = None
+    #: (:mod:`gyrofilter.analysis.gap.confound`): the other reading of a confounded temperature
+    #: (candidates: the time reading on a temperature candidate, the covariate reading on the time
+    #: reading's first candidate where that reading is the simpler), a bias instability's or
+    #: Gauss-Markov's other wander
+    other_reading: list | None = None
     wander_alternative: Candidate | None = None
-    #: "time" for a candidate of the time reading of a confounded temperature
+    #: "other" for a candidate of the other reading of a confounded temperature (its axis spec is
+    #: :attr:`~gyrofilter.analysis.gap.state.AxisModels.other`)
     reading: str = ""
     #: part of a composite stochastic model (its white level, ``preserve: arw``)
     composite: bool = False

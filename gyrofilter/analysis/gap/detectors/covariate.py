@@ -18,8 +18,9 @@ cause to name: it predicts the bias at the next power-up, an exponential in time
 Which reading is returned is a rule of the confounded causes, stated with its thresholds in
 :mod:`gyrofilter.analysis.gap.confound` (:func:`~gyrofilter.analysis.gap.confound.covariate_or_time`):
 the covariate reading, with the time reading riding on the temperature candidate
-(``time_reading``), unless a ramp or a step in time beats the temperature or the
-covariate reading is the more complex one; the two are then weighed on the discrepancy D.
+(``other_reading``), unless a ramp or a step in time beats the temperature; where the covariate
+reading is the more complex one, the time reading with the covariate reading riding on it. The two
+are then weighed on the discrepancy D.
 """
 from __future__ import annotations
 
@@ -39,8 +40,9 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     the covariate reading first where a temperature is recorded (module docstring).
 
     Returns ``(candidates, stats)``: a list of :class:`Candidate` (a temperature candidate
-    carries the time reading, a list of candidates, as its ``time_reading`` when that reading
-    names anything) and the raw statistics ``{name: value}``.
+    carries the time reading, a list of candidates, as its ``other_reading`` when that reading
+    names anything, or the time reading's first candidate the covariate reading) and the raw
+    statistics ``{name: value}``.
     """
     stats = {}
     time_reading, _ = slow_reading(x, sample_rate_hz, SHAPES, stats=stats)
@@ -86,6 +88,7 @@ def temperature_first(x, sample_rate_hz, temp_c, stats):
     coef, cov = gls(y, columns, noise)
     a_gls, z2 = float(coef[1]), float(coef[1] ** 2 / cov[1, 1])
     stats["temperature_gls_z2"] = z2
+    stats["temperature_gls"] = (a_gls, float(cov[1, 1]), noise[0], JOINT_THRESHOLD)  # confound.suggested_temperature
     if not z2 > JOINT_THRESHOLD:
         return None
     rest, _ = slow_reading(_less(x, a_gls, temp, t_mean), sample_rate_hz, SHAPES)
