@@ -178,7 +178,9 @@ def _allan(data):
 
 def _allan_figure(axis, ax):
     """The log-log figure of one axis of the allan document: the deviation, its interval, the
-    model (:func:`~gyrofilter.analysis.noise.model.model_adev`) and each resolved term's line."""
+    fitted model (:func:`~gyrofilter.analysis.noise.model.model_adev` of every term's
+    ``model_value``: a term the model holds counts even where its interval, widened by the misfit,
+    leaves it not resolved) and each resolved term's line."""
     tau = np.asarray(ax["tau_s"], dtype=float)
     colour = AXIS_COLOURS.get(axis, "#333")
     layers = [Band(tau, _floats(ax["adev_low_dps"]), _floats(ax["adev_high_dps"]), colour, "interval of each point"),
@@ -186,7 +188,8 @@ def _allan_figure(axis, ax):
     if tau.size:
         t = np.logspace(np.log10(tau[0]), np.log10(tau[-1]), 120)
         values = [(ax["coefficients"][JSON_KEY[term]] or {}).get("value") for term in TERMS]
-        layers.append(Line(t, model_adev(values, t), "#000", "fitted model", width=1.2, fit=False))
+        layers.append(Line(t, model_adev([ax["details"][JSON_KEY[term]]["model_value"] for term in TERMS], t), "#000",
+                           "fitted model", width=1.2, fit=False))
         b = basis(t)
         for j, term in enumerate(TERMS):
             if values[j] is not None:
