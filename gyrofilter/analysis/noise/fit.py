@@ -153,7 +153,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     # only soak up variance). Which terms the model needs is judged on the Allan variances' stated
     # scatter; the misfit widens what is then said of them (fitted_intervals, widen=True): a misfit
     # elsewhere on the curve is no evidence that a term is absent (a B dropped on that ground raised
-    # the misfit of a 2.8-h ADIS16405 record 7-fold)
+    # the misfit of the 2.8-h ADIS16405 records 3- to 19-fold)
     allowed = list(terms)
     while True:
         theta, used, _, warnings = fit(tau, dev, m, n, terms=allowed, min_clusters=min_clusters,
