@@ -15,6 +15,7 @@ import time
 import numpy as np
 import pytest
 
+from gyrofilter.analysis.agreement import compare
 from gyrofilter.analysis.gap.report import params_text
 from gyrofilter.analysis.still import clipped
 from gyrofilter.cli import main
@@ -83,6 +84,23 @@ def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
     gap_part = text[gap_at:text.index("<script", gap_at)]  # the page's text, not its data block's keys
     assert html.escape(WHITE_LEVELS) in gap_part and "<th>LSB step (deg/s)</th>" in gap_part
     assert "quantization" not in gap_part.replace(html.escape(WHITE_LEVELS), "")
+    # issue 35: allan and gap tell one story here; the page says nothing of their agreement
+    assert data["allan_and_gap"] == compare(data["allan"], data["gap"]) == []
+    assert "<h2>allan and gap</h2>" not in text
+
+
+def test_where_allan_and_gap_disagree_the_page_says_why(tmp_path, capsys):
+    """The 64-s record's z axis: gap's baseline white level holds a 31.6-Hz line that allan's N
+    (the tau^-1/2 slope) averages out; the page says so under "allan and gap" (issue 35)."""
+    out, data = report(tmp_path, capsys, str(RECORDINGS / "mpu6050_static_64s_set1.csv.gz"), "--sims", "10")
+    said = data["allan_and_gap"]
+    assert said == compare(data["allan"], data["gap"])
+    assert ("z", "N") in [(s["axis"], s["term"]) for s in said]
+    text = out.read_text(encoding="utf-8")
+    part = text[text.index("<h2>allan and gap</h2>"):text.index("<script", text.index("<h2>allan and gap</h2>"))]
+    for s in said:
+        assert html.escape(s["text"]) in part
+    assert "sinusoid" in next(s["text"] for s in said if s["axis"] == "z")
 
 
 def test_the_file_is_self_contained(tmp_path, capsys):

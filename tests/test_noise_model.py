@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 
 from gyrofilter.effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
-from gyrofilter.analysis.noise.allan import AllanInputError
+from gyrofilter.analysis.noise.allan import AllanInputError, cluster_sizes, default_cluster_sizes, overlapping_adev
 from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.analysis.noise.export import kalibr_yaml, to_json
-from gyrofilter.analysis.noise.fit import characterise, characterise_axis, nnls_weighted
+from gyrofilter.analysis.noise.fit import characterise, characterise_axis, fit, nnls_weighted
+from gyrofilter.analysis.noise.intervals import fitted_intervals, reduced_chi2
 from gyrofilter.analysis.noise.model import (ANGLE_RANDOM_WALK, FLICKER_FLOOR, QUANTIZATION, UNIT_FACTORS, arw_from_white_std,
                                              basis, convert, model_adev, white_std_from_arw)
 from support import RECORDINGS
@@ -407,3 +408,88 @@ def test_deviations_exactly_zero_give_a_result_not_a_failed_svd():
     assert np.all(res.adev[1::2][:2] == 0) and res.adev[0] == pytest.approx(math.sqrt(2))
     assert all(c.value is None for c in res.fitted.values())
     assert np.all(np.isfinite(res.ci_low)) and np.all(np.isfinite(res.ci_high)) and np.all(np.isfinite(res.edf))
+
+
+# --- the fit's misfit (noise.intervals.reduced_chi2) widens its intervals --------------------
+
+def _fitted_curve(bump, widen=True, n=200_000, fs=100.0):
+    """The fit of an exact five-term curve (N = 0.01, B = 0.003, K = 2e-4: not resolved in 2000 s), with ``bump``: the
+    Allan variance raised by that fraction around tau = 1 s (a Gaussian in log tau, which no term
+    has the shape of); returns (coefficients, chi2_nu, dof)."""
+    m = default_cluster_sizes(n)
+    tau = m / fs
+    avar = model_adev((0.0, 0.01, 0.003, 2e-4, 0.0), tau) ** 2
+    avar = avar * (1.0 + bump * np.exp(-0.5 * (np.log(tau) / 0.4) ** 2))
+    theta, used, _, _ = fit(tau, np.sqrt(avar), m, n)
+    return fitted_intervals(theta, tau, m, n, used, 0.95, avar, widen=widen)
+
+
+def test_a_bump_no_term_fits_widens_every_interval_by_the_root_of_the_misfit():
+    clean, chi2_clean, _ = _fitted_curve(0.0)
+    bumped, chi2, dof = _fitted_curve(0.1)
+    assert chi2_clean < 1e-6 < 1.3 < chi2 and 0 < dof
+    unwidened, chi2_again, _ = _fitted_curve(0.1, widen=False)
+    assert chi2_again == chi2
+    for term in (ANGLE_RANDOM_WALK, BIAS_INSTABILITY):
+        c, b, u = clean[term], bumped[term], unwidened[term]
+        width = [x.high - x.low for x in (c, b, u)]
+        assert width[1] > width[0] and width[1] > width[2], (term, width)
+        # the variance scale chi2_nu: about sqrt(chi2_nu) on the coefficient's interval (same value)
+        assert 0.8 * math.sqrt(chi2) < width[1] / width[2] < 1.2 * math.sqrt(chi2), (term, width, chi2)
+    for term in (QUANTIZATION, RATE_RANDOM_WALK, RATE_RAMP):  # and every bound
+        assert bumped[term].upper > unwidened[term].upper
+    # a larger bump: B, resolved on the stated scatter alone, is within the widened uncertainty of zero
+    bumped, chi2, _ = _fitted_curve(0.3)
+    unwidened, _, _ = _fitted_curve(0.3, widen=False)
+    assert chi2 > 4 and unwidened[BIAS_INSTABILITY].value is not None and bumped[BIAS_INSTABILITY].value is None
+    assert bumped[BIAS_INSTABILITY].upper > unwidened[BIAS_INSTABILITY].high
+
+
+def test_a_fit_within_its_stated_scatter_keeps_its_intervals():
+    # white noise: chi2_nu about 1 or below; a value <= 1 changes nothing (no narrowing either)
+    for seed in range(4):
+        x = simulate(20000, 10.0, np.random.default_rng(700 + seed), N=0.05)
+        tau, dev = overlapping_adev(x, 10.0)
+        m = cluster_sizes(x.size, 10.0, tau)
+        theta, used, _, _ = fit(tau, dev, m, x.size)
+        widened, chi2, _ = fitted_intervals(theta, tau, m, x.size, used, 0.95, dev ** 2)
+        plain_, _, _ = fitted_intervals(theta, tau, m, x.size, used, 0.95, dev ** 2, widen=False)
+        if chi2 <= 1.0:
+            assert widened == plain_
+        else:
+            assert widened[ANGLE_RANDOM_WALK].high > plain_[ANGLE_RANDOM_WALK].high
+    clean, chi2_clean, _ = _fitted_curve(0.0)
+    assert clean == _fitted_curve(0.0, widen=False)[0] and chi2_clean <= 1.0
+
+
+def test_the_misfit_counts_taus_minus_terms_for_independent_estimates_and_fewer_when_correlated():
+    rng = np.random.default_rng(5)
+    tau = np.logspace(-1, 2, 20)
+    a = basis(tau)
+    theta = np.array([0.0, 1.0, 0.5, 0.0, 0.0])
+    y = a @ theta * (1.0 + 0.1 * rng.standard_normal(tau.size))
+    sd = 0.1 * (a @ theta)
+    w = 1.0 / sd ** 2
+    active = theta > 0
+    chi2, dof = reduced_chi2(a, y, theta, w, np.diag(sd ** 2), active)
+    assert dof == pytest.approx(tau.size - 2)
+    assert chi2 == pytest.approx(float(np.sum(w * (y - a @ theta) ** 2)) / (tau.size - 2))
+    rho = 0.9 ** np.abs(np.subtract.outer(np.arange(tau.size), np.arange(tau.size)))
+    _, dof_corr = reduced_chi2(a, y, theta, w, rho * np.outer(sd, sd), active)
+    assert 0 < dof_corr < tau.size - 2
+    assert reduced_chi2(a[:2], y[:2], theta, w[:2], np.diag(sd[:2] ** 2), active) == (None, None)
+
+
+def test_a_term_left_out_is_bounded_above_what_the_data_give_it():
+    # K in the data but left out of the fit: its bound is at least the forced-in least-squares K
+    n, fs = 200_000, 100.0
+    m = default_cluster_sizes(n)
+    tau = m / fs
+    avar = model_adev((0.0, 0.01, 0.0, 1e-4, 0.0), tau) ** 2
+    theta, used, _, _ = fit(tau, np.sqrt(avar), m, n, terms=(ANGLE_RANDOM_WALK,))
+    coeffs, _, _ = fitted_intervals(theta, tau, m, n, used, 0.95, avar)
+    a = basis(tau[used])[:, [1, 3]]
+    w = 1.0 / avar[used] ** 2
+    ls = np.linalg.lstsq(a * np.sqrt(w)[:, None], avar[used] * np.sqrt(w), rcond=None)[0]
+    assert coeffs[RATE_RANDOM_WALK].value is None
+    assert coeffs[RATE_RANDOM_WALK].upper >= math.sqrt(ls[1]) > 0.5e-4

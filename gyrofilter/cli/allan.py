@@ -99,16 +99,31 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     return head, results, to_json(results, head.sample_rate_hz, recording=path, duration_s=duration_s)
 
 
+def misfit_text(r):
+    """The fit's reduced chi-square of the axis result ``r`` (an AxisNoise; one with a fit that has
+    degrees of freedom left) and what it did to the intervals, one line."""
+    text = f"fit's reduced chi-square {r.fit_reduced_chi2:.3g} ({r.fit_dof:.3g} effective dof)"
+    return text + (f": intervals and bounds widened x{r.interval_widening:.3g}" if r.fit_reduced_chi2 > 1 else "")
+
+
 def unresolved_text(r, min_clusters):
-    """What the record ``r`` (an AxisNoise) is too short to resolve: the slow terms (B, K, R) the fit
-    left unresolved and the longest cluster time with ``min_clusters`` clusters, or "" when it
-    resolves them all."""
-    missing = [TERM_SYMBOL[t] for t in (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP) if r.fitted[t].value is None]
-    if not missing:
-        return ""
-    longest = r.tau_s[r.fit_used][-1]
-    return (f"{', '.join(missing)} not resolved: the longest cluster time with {min_clusters} clusters is "
-            f"{longest:.3g} s; slower effects need a longer still recording")
+    """What the record ``r`` (an AxisNoise) does not resolve of the slow terms (B, K, R): those the
+    fit left out, with the longest cluster time with ``min_clusters`` clusters (the record is too
+    short), and those the model holds whose interval, widened by the fit's misfit, reaches zero
+    (the curve holds what the five terms do not fit); "" when it resolves them all."""
+    slow = [t for t in (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP) if r.fitted[t].value is None]
+    held = [TERM_SYMBOL[t] for t in slow if r.fit_values[TERMS.index(t)] > 0]
+    missing = [TERM_SYMBOL[t] for t in slow if r.fit_values[TERMS.index(t)] == 0]
+    out = []
+    if missing:
+        longest = r.tau_s[r.fit_used][-1]
+        out.append(f"{', '.join(missing)} not resolved: the longest cluster time with {min_clusters} clusters is "
+                   f"{longest:.3g} s; slower effects need a longer still recording")
+    if held:
+        out.append(f"{', '.join(held)} in the fitted model but not resolved: with the fit's misfit (reduced "
+                   f"chi-square {r.fit_reduced_chi2:.3g}) the interval reaches zero; the curve holds what the "
+                   "five terms do not fit (see `gyrofilter gap`)")
+    return "; ".join(out)
 
 
 def run(args):
@@ -145,6 +160,8 @@ def run(args):
     console.paragraph(", ".join(f"{TERM_SYMBOL[t]} {NAMES[t]}" for t in TERMS), "  ")
     for a, r in results.items():
         print(f"  axis {a}:")
+        if r.fit_reduced_chi2 is not None:
+            print(f"    {misfit_text(r)}")
         print(f"    {'':<16}{'fit [' + format(args.confidence, '.0%') + ' interval]':<32}{'= customary unit':<25}slope read-off")
         for t in TERMS:
             c, ro = r.fitted[t], r.readoff[t]

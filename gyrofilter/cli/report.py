@@ -5,8 +5,9 @@ to compare units with (docs/report.md).
     gyrofilter report --source SOURCE --duration S --out REPORT.html   # records first
 
 The page (:mod:`gyrofilter.view.report`) shows the recording's summary, the warnings, the default
-filter's effect, the Allan deviation with every coefficient and its interval, and the gap
-findings with their gain and the extended model. Its numbers are computed once, by the very
+filter's effect, the Allan deviation with every coefficient and its interval, the gap
+findings with their gain and the extended model, and where allan and gap disagree on a noise
+term, why (:func:`gyrofilter.analysis.agreement.compare`). Its numbers are computed once, by the very
 functions the commands call: :func:`gyrofilter.analysis.gap.pipeline.analyse_file` (``gap --json``'s document),
 :func:`gyrofilter.cli.allan.analyse` (``allan --json``'s) and :class:`gyrofilter.cli.replay.Replay`
 with replay's default options (its summary table); the page embeds those documents whole.
@@ -28,6 +29,7 @@ import sys
 import time
 
 from .. import __version__
+from ..analysis.agreement import compare
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.still import clipped
 from ..errors import GyroFilterError, SettingsError, one_line
@@ -139,10 +141,12 @@ def compute(path, *, seed, sims, keep_outliers, warn, progress):
     filtered, filter_error = _filter(path)
     if filter_error:
         warned(f"not filtered: {filter_error}")
-    data = report_data(recording=json_ready(recording), allan=allan_doc, gap=json_ready(gap_doc),
+    gap_doc = json_ready(gap_doc)
+    data = report_data(recording=json_ready(recording), allan=allan_doc, gap=gap_doc,
                        filter_summary=filtered.summary() if filtered else None, warnings=found,
                        options={"seed": seed, "sims": sims, "keep_outliers": keep_outliers}, version=__version__,
-                       allan_error=allan_error, filter_error=filter_error)
+                       allan_error=allan_error, filter_error=filter_error,
+                       allan_and_gap=compare(allan_doc, gap_doc) if allan_doc is not None else [])
     envelopes = (filtered.raw_envelope, filtered.filtered_envelope) if filtered else (None, None)
     return data, envelopes
 

@@ -57,15 +57,16 @@ th { background: #f2f2f2; text-align: left; } td.num { text-align: right; font-f
 
 
 def report_data(*, recording, allan, gap, filter_summary, warnings, options, version, allan_error=None,
-                filter_error=None):
+                filter_error=None, allan_and_gap=()):
     """The report's data block (docs/formats.md, section 10): ``allan`` (the ``allan --json``
     document, None when allan refused the record: ``allan_error`` says why), ``gap`` (the ``gap
     --json`` document), ``filter_summary`` (:meth:`~gyrofilter.cli.replay.Replay.summary`, None
     with ``filter_error``), ``recording`` (name, header, samples, duration), the ``warnings``
-    (lines of text), the ``options`` that change numbers, and the gyrofilter ``version``."""
+    (lines of text), the ``options`` that change numbers, the gyrofilter ``version``, and
+    ``allan_and_gap``: where the two analyses disagree (:func:`gyrofilter.analysis.agreement.compare`)."""
     return {"format": FORMAT, "gyrofilter_version": version, "recording": recording, "options": options,
             "warnings": list(warnings), "filter": filter_summary, "filter_error": filter_error,
-            "allan": allan, "allan_error": allan_error, "gap": gap}
+            "allan": allan, "allan_error": allan_error, "gap": gap, "allan_and_gap": list(allan_and_gap)}
 
 
 def report_page(data, raw_envelope=None, filtered_envelope=None):
@@ -79,7 +80,7 @@ def report_page(data, raw_envelope=None, filtered_envelope=None):
              f"<title>{_esc(title)}</title><style>{_STYLE}</style></head><body>",
              f"<h1>{_esc(title)}</h1>",
              _summary(data), _warnings(data["warnings"]), _filter(data, raw_envelope, filtered_envelope),
-             _allan(data), _gap(data),
+             _allan(data), _gap(data), _allan_and_gap(data.get("allan_and_gap")),
              "<p class='small'>Made by gyrofilter " + _esc(data["gyrofilter_version"]) + " (<code>gyrofilter report</code>). "
              f"Every number above is in the JSON block <code>#{DATA_ID}</code> of this file (docs/formats.md, "
              "section 10): the documents of <code>allan --json</code> and <code>gap --json</code> as those commands "
@@ -178,7 +179,9 @@ def _allan(data):
 
 def _allan_figure(axis, ax):
     """The log-log figure of one axis of the allan document: the deviation, its interval, the
-    model (:func:`~gyrofilter.analysis.noise.model.model_adev`) and each resolved term's line."""
+    fitted model (:func:`~gyrofilter.analysis.noise.model.model_adev` of every term's
+    ``model_value``: a term the model holds counts even where its interval, widened by the misfit,
+    leaves it not resolved) and each resolved term's line."""
     tau = np.asarray(ax["tau_s"], dtype=float)
     colour = AXIS_COLOURS.get(axis, "#333")
     layers = [Band(tau, _floats(ax["adev_low_dps"]), _floats(ax["adev_high_dps"]), colour, "interval of each point"),
@@ -186,7 +189,8 @@ def _allan_figure(axis, ax):
     if tau.size:
         t = np.logspace(np.log10(tau[0]), np.log10(tau[-1]), 120)
         values = [(ax["coefficients"][JSON_KEY[term]] or {}).get("value") for term in TERMS]
-        layers.append(Line(t, model_adev(values, t), "#000", "fitted model", width=1.2, fit=False))
+        layers.append(Line(t, model_adev([ax["details"][JSON_KEY[term]]["model_value"] for term in TERMS], t), "#000",
+                           "fitted model", width=1.2, fit=False))
         b = basis(t)
         for j, term in enumerate(TERMS):
             if values[j] is not None:
@@ -222,6 +226,16 @@ def _gap(data):
         out.append("<h3>Notes</h3><ul>" + "".join(f"<li>{_esc(note)}</li>" for note in g["notes"]) + "</ul>")
     out.append("<h3>Extended model</h3>" + _extended(g.get("extended_model")))
     return "".join(out)
+
+
+def _allan_and_gap(sentences):
+    """Where allan and gap disagree on a noise term, a sentence each with the reasons known
+    (:func:`gyrofilter.analysis.agreement.compare`); nothing where they tell one story."""
+    if not sentences:
+        return ""
+    return ("<h2>allan and gap</h2><p>The two analyses estimate N, B, K and R on their own: allan from the Allan "
+            "curve's five-term fit, gap from its baseline and findings. Where they do not tell one story:</p><ul>"
+            + "".join(f"<li>{_esc(s['text'])}</li>" for s in sentences) + "</ul>")
 
 
 def _finding(f):

@@ -24,9 +24,11 @@ def _coef_json(c: Coefficient):
     return {"value": c.value, "low": c.low, "high": c.high}
 
 
-def _details_json(c: Coefficient):
+def _details_json(c: Coefficient, model_value=None):
     d = {"symbol": TERM_SYMBOL[c.term], "unit": JSON_UNIT[c.term], "resolved": c.resolved,
          "value": c.value, "low": c.low, "high": c.high, "upper_bound": c.upper, "tau_s": c.tau_s}
+    if model_value is not None:
+        d["model_value"] = model_value
     cu = CUSTOMARY_UNIT[c.term]
     d["customary"] = {"unit": cu, "value": convert(c.value, c.term, cu), "low": convert(c.low, c.term, cu),
                       "high": convert(c.high, c.term, cu), "upper_bound": convert(c.upper, c.term, cu)}
@@ -51,7 +53,9 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
                         "(2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2 over taus with >= 9 clusters",
         "interval": f"{any_axis.confidence:.0%} two-sided: chi-square interval with edf = 2 c^2 / var(c^2), "
                     "var from cov = G C G' of the linear fit (C: Allan-variance covariance from the NIST SP "
-                    "1065 Table 5 EDFs and the Allan transfer function); low/high bound the value",
+                    "1065 Table 5 EDFs and the Allan transfer function), times the fit's reduced chi-square "
+                    "where it exceeds 1 (fit_reduced_chi2: the misfit widens every interval and bound by "
+                    "its square root); low/high bound the value",
         "curve_interval": f"adev_low_dps/adev_high_dps: {any_axis.confidence:.0%} chi-square interval of each "
                           "point (NIST SP 1065 eq. 41, EDF for the fitted noise mixture); paper000_relative_error: "
                           "1/sqrt(2 (N/m - 1))",
@@ -68,10 +72,11 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
               "paper000_relative_error": [None if not math.isfinite(v) else v for v in r.simple_rel.tolist()],
               "n_clusters": r.n_clusters.tolist(), "edf": r.edf.tolist(),
               "coefficients": {JSON_KEY[t]: _coef_json(r.fitted[t]) for t in TERMS},
-              "details": {JSON_KEY[t]: _details_json(r.fitted[t]) for t in TERMS},
+              "details": {JSON_KEY[t]: _details_json(r.fitted[t], float(v)) for t, v in zip(TERMS, r.fit_values)},
               "readoff": {JSON_KEY[t]: _details_json(r.readoff[t]) for t in TERMS},
               "kalibr": kalibr_values(r),
               "fit_consistency": r.fit_consistency(),
+              "fit_reduced_chi2": r.fit_reduced_chi2, "fit_dof": r.fit_dof,
               "warnings": list(r.warnings)}
         doc["axes"][name] = ax
     return doc

@@ -131,21 +131,74 @@ def _gain(a, w, active):
     return np.linalg.solve(aa.T @ (aa * w[:, None]), (aa * w[:, None]).T)
 
 
-def fitted_intervals(theta, tau, m, n_samples, used, confidence):
-    """Per-term value and interval of the fit (module docstring).
+def reduced_chi2(a, y, theta, w, cov_y, active):
+    """The fit's misfit: ``(chi2_nu, dof)``, or ``(None, None)`` where the fit has no residual
+    degree of freedom (as many fitted taus as active terms) or no active term.
 
+    ``a``: the model matrix at the fitted taus; ``y``: the measured Allan variances there;
+    ``theta``: the fitted Q^2 .. R^2 (same units as ``y``); ``w``: the fit's weights
+    ``1 / sd_i^2`` (the weights ``edf_i / (2 model_i^2)`` of :func:`~gyrofilter.analysis.noise.fit.fit`,
+    from the fitted mixture); ``cov_y``: the covariance :func:`avar_covariance` of ``y``;
+    ``active``: the fitted terms (bool, 5). With the residuals ``r = y - A theta``::
+
+        X^2 = sum_i w_i r_i^2,   dof = E[X^2] = tr(W (I - H) C (I - H)'),   chi2_nu = X^2 / dof
+
+    ``H = A (A' W A)^-1 A' W`` (the active columns; ``r = (I - H) y`` for the weights ``W``), and
+    ``dof`` the expectation of the quadratic form ``r' W r`` if ``y`` had the covariance ``C``
+    (E[x'Mx] = tr(MC) for a zero-mean x of covariance C; e.g. Searle, *Linear Models*, 1971,
+    ch. 2). For independent estimates (``C = W^-1``) it is the textbook ``n - p`` (taus fitted
+    minus terms fitted; Bevington & Robinson, *Data Reduction and Error Analysis for the Physical
+    Sciences*, 3rd ed., ch. 6 and 11); the Allan variances at neighbouring taus are correlated
+    (:func:`avar_correlation`: 0.53 between m and 2m for white noise, more between the grid's
+    neighbours 10 per decade apart), so their residuals scatter less than ``n - p`` independent
+    ones would: ``dof`` is an effective count, smaller, and ``X^2 / (n - p)`` would understate the
+    misfit (it is optimistic). ``chi2_nu`` is then the factor by
+    which the stated covariance understates the scatter the fit leaves: about 1 where the
+    five-term model and ``C`` describe the curve, above 1 where the curve has structure no term fits.
+    """
+    if not active.any() or a.shape[0] <= int(np.sum(active)):
+        return None, None
+    r = y - a @ theta
+    x2 = float(np.sum(w * r ** 2))
+    resid = np.eye(a.shape[0]) - a[:, active] @ _gain(a, w, active)
+    dof = float(np.sum(w * np.einsum("ij,jk,ik->i", resid, cov_y, resid)))
+    if not dof > 0:
+        return None, None
+    return x2 / dof, dof
+
+
+def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=True):
+    """Per-term value and interval of the fit (module docstring), and the fit's misfit:
+    returns ``(coefficients, chi2_nu, dof)`` (:func:`reduced_chi2`; None, None without residual
+    degrees of freedom).
+
+    ``theta``: the fitted Q^2 .. R^2; ``tau``, ``m``: the cluster times (s) and sizes; ``used``:
+    the taus fitted; ``avar``: the measured Allan variances at every tau ((deg/s)^2); ``widen``:
+    scale by the misfit (below; False: the intervals of the stated scatter alone).
     The fit is linear in the Allan variances on its active set: ``theta = G y`` with
     ``G = (A' W A)^-1 A' W``, so ``cov(theta) = G C G'`` with ``C`` from
-    :func:`avar_covariance`. A term is resolved when ``theta_j - z sd_j > 0`` (z: the normal
+    :func:`avar_covariance`. Where the fit's reduced chi-square exceeds 1, ``C`` (so every
+    ``var_j``) is multiplied by it: the stated scatter of the Allan variances does not cover the
+    misfit, and least-squares practice scales the covariance of the parameters by chi2_nu
+    (Bevington & Robinson, ch. 11; the Birge ratio, R. T. Birge, Phys. Rev. 40, 207, 1932; the
+    Particle Data Group's scale factor S = sqrt(chi2_nu), Review of Particle Physics,
+    Introduction, "Unconstrained averaging"); below 1 nothing changes (a fit better than its
+    stated scatter is not taken as a reason to narrow the intervals).
+    Every statement below uses the scaled ``var_j``: the resolution test, the interval, the bound.
+    A term is resolved when ``theta_j - z sd_j > 0`` (z: the normal
     quantile of ``confidence``); its interval is the chi-square interval with
     ``edf_j = 2 theta_j^2 / var_j`` (Satterthwaite), which stays positive and is skewed like the
-    Allan variance itself. Terms fitted to zero get the upper bound ``z sd_j`` of a fit with the
-    term forced in; a fit that is zero for every term has no covariance, hence no bounds.
+    Allan variance itself (scaling ``var_j`` by chi2_nu divides ``edf_j`` by it: the interval
+    widens by about sqrt(chi2_nu) on either scale, theta_j or its square root). A term left out
+    of the fit (fitted to zero, or dropped as not resolved) gets the upper bound
+    ``max(theta_j, 0) + z sd_j`` of the unconstrained fit with the term forced in (a dropped
+    term keeps the value the data give it: its bound is not below it); a fit that is zero for
+    every term has no covariance, hence no bounds.
     Variances are computed in units of the largest fitted one, so any deviation a float holds works.
     """
     if not np.any(theta > 0):  # e.g. data whose deviation is exactly 0 at some cluster times
         return {term: Coefficient(term, None, note="not resolved: the fit is 0 for every term, so it gives no bound")
-                for term in TERMS}
+                for term in TERMS}, None, None
     z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
     tau_u, m_u = tau[used], m[used]
     a = basis(tau_u)
@@ -157,6 +210,10 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence):
     sd, cov_y = avar_covariance(tau_u, m_u, n_samples, theta)
     w = 1.0 / sd ** 2
     active = theta > 0
+    y = np.asarray(avar, dtype=np.float64)[used] / var_unit
+    chi2_nu, dof = reduced_chi2(a, y, theta, w, cov_y, active)
+    if widen and chi2_nu is not None and chi2_nu > 1.0:
+        cov_y = cov_y * chi2_nu
     out = {}
     cov = np.zeros((5, 5))
     if active.any():
@@ -171,7 +228,7 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence):
                 g = _gain(a, w, forced)
                 pos = int(np.sum(forced[:j]))  # row of term j among the forced-in terms
                 var = float((g @ cov_y @ g.T)[pos, pos])
-                upper = math.sqrt(z * math.sqrt(max(var, 0.0))) * root
+                upper = math.sqrt(max(float(g[pos] @ y), 0.0) + z * math.sqrt(max(var, 0.0))) * root
             except np.linalg.LinAlgError:
                 upper = None
             note = f"not resolved: {sym} is not needed to fit the data (fitted to 0 or not significant)"
@@ -194,4 +251,4 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence):
         share = a[:, j] * c2 / (a @ theta)
         out[term] = Coefficient(term, math.sqrt(c2) * root, math.sqrt(float(lo)) * root, math.sqrt(float(hi)) * root,
                                 tau_s=float(tau_u[int(np.argmax(share))]), z_score=c2 / sdj)
-    return out
+    return out, chi2_nu, dof

@@ -185,7 +185,15 @@ class AxisNoise:
     fit_values: np.ndarray      # the NNLS coefficients (Q, N, B, K, R), zeros included
     fit_used: np.ndarray        # bool mask of taus used by the fit
     confidence: float = 0.95
+    fit_reduced_chi2: float | None = None   # the fit's misfit chi2_nu (intervals.reduced_chi2); None: no dof left
+    fit_dof: float | None = None            # its effective degrees of freedom
     warnings: list = field(default_factory=list)
+
+    @property
+    def interval_widening(self):
+        """The factor sqrt(max(1, chi2_nu)) by which the fit's misfit widened its intervals
+        (:func:`~gyrofilter.analysis.noise.intervals.fitted_intervals`; 1 without a misfit)."""
+        return math.sqrt(max(1.0, self.fit_reduced_chi2 or 0.0))
 
     def model_adev(self, tau_s=None):
         """The fitted model's Allan deviation (deg/s) at ``tau_s`` (s; default: the measured taus)."""
