@@ -5,8 +5,8 @@ runs them in order).
   model, the features of the measurement and their departures from the baseline's runs, the
   seeds of every simulation.
 - :class:`GapState` (steps 3 to 5): the candidates found so far, which are excluded, which are
-  kept with their gain, the models each axis's candidates extend (:class:`AxisModels`) and the
-  notes. A step takes a state and returns a new one (:func:`dataclasses.replace`); it changes
+  kept with their gain, which are set aside as uncertain, the models each axis's candidates
+  extend (:class:`AxisModels`) and the notes. A step takes a state and returns a new one (:func:`dataclasses.replace`); it changes
   neither the state it was given nor a candidate in it (a candidate that changes is replaced).
 - :meth:`GapState.model`: the extended model of an axis with some of its candidates, the one
   thing every step scores (:class:`gyrofilter.analysis.gap.scoring.Scorer`).
@@ -111,6 +111,9 @@ class GapState:
     #: D per axis after extension by its kept findings
     after: tuple = ()
     notes: tuple = ()
+    #: findings the record suggests but does not establish, set aside from ``kept``: (:class:`Kept`,
+    #: why: a sentence), in the report's order
+    uncertain: tuple = ()
 
     def with_notes(self, *notes):
         return replace(self, notes=self.notes + tuple(notes))
