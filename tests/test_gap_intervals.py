@@ -6,6 +6,7 @@ console, and (slow) the coverage over many seeds per effect kind.
 
 The coverage figures per kind, on more cases, are in docs/gap.md (``tools/gap_coverage.py``).
 """
+import html
 import json
 import math
 from statistics import NormalDist
@@ -18,8 +19,9 @@ import gyrofilter.sim.hidden_effects as he
 from gyrofilter.analysis.gap import intervals as gi
 from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.analysis.gap.baseline import baseline_model
-from gyrofilter.analysis.gap.report import interval_text, value_with_interval
+from gyrofilter.analysis.gap.report import interval_text, params_text, uncertain_text, value_with_interval
 from gyrofilter.cli import main
+from gyrofilter.effects import BY_NAME
 from gyrofilter.recording import write_recording
 from gyrofilter.sim.simulate import simulate
 from gyrofilter.units import AXES
@@ -308,3 +310,94 @@ def test_the_coverage_tool_scores_the_gaps_intervals_and_the_alternatives_on_the
     compare = out[out.index("coverage of other intervals"):]
     assert all(m in compare for m in tool.METHODS)
     assert gi._interval.__name__ == "_interval"  # the wrapper is undone
+
+
+def test_an_interval_holds_its_estimate_where_the_bias_exceeds_the_spread():
+    """Replicates 20 % above the estimate with a spread of 1 %: the bias-corrected interval alone
+    lies wholly below the estimate (scale_ratio=10.42 [8.5, 8.8] before); the interval given is
+    its hull with the estimate, its far end the bias-corrected one. So on every scale, and after
+    a step of test inversion."""
+    rng = np.random.default_rng(11)
+    reps = 12.5 * np.exp(0.01 * rng.standard_normal(20))
+    bias_corrected = math.exp(2 * math.log(10.42) - np.log(reps).mean())  # the centre, moved down by the bias
+    low, high = gi._interval(10.42, list(reps), "log").ends
+    assert low < bias_corrected < 10.42 == pytest.approx(high), (low, high)
+    for estimate, replicates, scale in ((0.6445, 0.5621 + 0.004 * rng.standard_normal(20), "atanh"),
+                                        (-2.0, -1.0 + 0.01 * rng.standard_normal(20), "linear"),
+                                        (3.0, -2.9 + 0.01 * rng.standard_normal(20), "phase")):  # bias across +-pi
+        low, high = gi._interval(estimate, list(replicates), scale).ends
+        assert low <= estimate <= high and estimate in (pytest.approx(low), pytest.approx(high)), (scale, low, high)
+    inverted = gi.inversion_step({"p": 10.42}, [{"p": v} for v in reps],
+                                 lambda at: [{"p": v} for v in at["p"] * 1.2 * np.exp(0.01 * rng.standard_normal(20))],
+                                 {"p": "log"})["p"].ends
+    assert inverted[0] <= 10.42 <= inverted[1], inverted
+
+
+def test_a_positive_parameter_spanning_over_a_factor_100_is_not_determined():
+    """A log-scale interval over two decades (b_dps 0.0033 in [3.4e-7, 1412] on a real record):
+    null, and the reason names the ends; a signed parameter is never cut by the span."""
+    rng = np.random.default_rng(12)
+    reps = 0.0033 * np.exp(2.0 * rng.standard_normal(20))  # a spread of a factor e^2 per sd
+    got = gi._interval(0.0033, list(reps), "log")
+    assert got.ends is None and f"over a factor {gi.MAX_SPAN_RATIO}" in got.why, got
+    narrower = gi._interval(0.0033, list(0.0033 * np.exp(0.5 * rng.standard_normal(20))), "log")
+    assert narrower.ends is not None and narrower.ends[1] < gi.MAX_SPAN_RATIO * narrower.ends[0]
+    assert gi._interval(0.0033, list(reps - 0.0033), "linear").ends is not None
+
+
+def test_a_parameter_whose_estimator_ran_on_fewer_than_half_the_runs_is_not_determined():
+    """9 of 20 runs gave an estimate (an interval from 5 before): null, the reason says how many;
+    10 of 20 give an interval."""
+    values = [1.0, 1.1, 0.9, 1.05, 0.95, 1.02, 0.98, 1.08, 0.93]
+    got = gi._interval(1.0, values + [None] * 11, "log")
+    assert got.ends is None and "9 of 20 bootstrap runs, fewer than half" in got.why, got
+    assert gi._interval(1.0, values + [1.01] + [None] * 10, "log").ends is not None
+
+
+def _uncertain_case():
+    """A hidden random walk on y that a 10-minute record reads as a bias instability whose size it
+    does not bound (its interval spans about 0.00015 to 0.29 deg/s)."""
+    return he.draw_case(111, effect="rate_random_walk", duration_s=600.0, scale=0.5)
+
+
+def test_a_finding_whose_defining_parameter_is_not_determined_is_uncertain_not_named():
+    """Not in findings, not in the extended model, D after of its axis without it; listed in
+    uncertain with its (null) interval and why, and a note."""
+    case = _uncertain_case()
+    report = analyse_gap(he.simulate_case(case), seed=111, n_sims=10)
+    entry = next(e for e in report["uncertain"] if e["axis"] == case["axis"])
+    effect, defining = entry["effect"], BY_NAME[entry["effect"]].defining
+    assert set(entry) == {"effect", "axis", "params", "params_ci95", "why"}
+    assert entry["params_ci95"][defining] is None and f"its defining parameter {defining} is not determined" in entry["why"]
+    assert not any(f["effect"] == effect and f["axis"] == case["axis"] for f in report["findings"])
+    assert all(e["effect"] != effect for e in report["extended_model"]["axes"][case["axis"]]["effects"])
+    assert f"{effect} on {case['axis']}: {defining} not determined by this record (its 95 % interval spans" in " ".join(
+        report["notes"])
+    if not any(f["axis"] == case["axis"] for f in report["findings"]):
+        d = report["discrepancy"]
+        assert d["after"][case["axis"]] == d["before"][case["axis"]]
+    _check_finite_and_ordered(report)
+
+
+def test_the_console_and_the_reports_say_not_determined_and_list_the_uncertain(tmp_path, capsys):
+    case = _uncertain_case()
+    path = tmp_path / "rec.csv.gz"
+    write_recording(str(path), he.simulate_case(case))
+    assert main(["gap", str(path), "--seed", "111", "--sims", "10", "--json", str(tmp_path / "gap.json"),
+                 "--report", str(tmp_path / "md")]) == 0
+    printed = capsys.readouterr().out
+    rep = json.loads((tmp_path / "gap.json").read_text())
+    entry = rep["uncertain"][0]
+    assert "(not determined)" in params_text(entry)
+    markdown = (tmp_path / "md" / "gap_report.md").read_text()
+    for text in (" ".join(printed.split()), markdown):
+        assert "Suggested but not established" in text and uncertain_text(entry) in text.replace(" = ", "=")
+    assert main(["report", str(path), "--seed", "111", "--sims", "10", "--out", str(tmp_path / "r.html")]) == 0
+    page = (tmp_path / "r.html").read_text(encoding="utf-8")
+    assert "<h3>Suggested but not established</h3>" in page and html.escape(uncertain_text(entry, sep=" = ")) in page
+
+
+def test_interval_text_says_not_determined_for_a_null_interval():
+    assert interval_text(0.0033, {"b_dps": None}, "b_dps") == "0.0033 (not determined)"
+    assert interval_text(0.0033, None, "b_dps") == "0.0033"  # no intervals at all (--bootstrap 0)
+    assert interval_text(0.0033, {"b_dps": [0.003, 0.004]}, "b_dps") == "0.0033 [0.003, 0.004]"

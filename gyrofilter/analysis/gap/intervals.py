@@ -1,5 +1,5 @@
 """95 % intervals of every finding's parameters and of the baseline's, by parametric bootstrap of
-the extended model (:mod:`gyrofilter.analysis.gap.pipeline`, after step 5).
+the extended model (:mod:`gyrofilter.analysis.gap.pipeline`, step 5, before the findings are written).
 
 For each axis with findings, the axis of the extended model (the baseline's bias and white noise
 re-fitted, every kept finding, the record's temperature profile where a finding needs it) is

@@ -44,7 +44,9 @@ hold the parts:
    most from the extended model and what its sign says
    (:func:`gyrofilter.analysis.gap.features.still_departs`); every parameter's 95 % interval
    (``params_ci95``), by parametric bootstrap of the extended model
-   (:mod:`gyrofilter.analysis.gap.intervals`).
+   (:mod:`gyrofilter.analysis.gap.intervals`), computed before the findings are written: a
+   finding whose defining parameter the record does not determine is listed in ``uncertain``
+   instead, out of the extended model and of D after (:func:`set_aside_uncertain`).
 """
 from __future__ import annotations
 
