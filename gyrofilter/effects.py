@@ -7,7 +7,9 @@ below, never as a literal), its **kind**, its **parameters** (required, each wit
 :data:`gyrofilter.sim.model._KINDS`; optional, each with its check and default) and the
 **scale** on which the gap analysis computes each parameter's 95 % interval
 (:mod:`gyrofilter.analysis.gap.intervals`: ``log`` for positive scale parameters, ``atanh`` for
-autocorrelations, ``phase`` for radians, else linear).
+autocorrelations, ``phase`` for radians, else linear) and its **defining** parameter, the one
+whose size says the effect is there (a gap finding whose defining parameter the record does not
+determine is listed as uncertain, not named).
 
 The kinds, and the groups every module derives from them (never a list of its own):
 
@@ -58,6 +60,13 @@ class Effect:
     optional: dict = field(default_factory=dict)
     #: parameter -> the scale of its bootstrap interval (``log``, ``atanh``, ``phase``; absent: linear)
     interval_scales: dict = field(default_factory=dict)
+    #: the required parameter whose size says the effect is there: a gap finding whose defining
+    #: parameter the record does not determine is not named (:mod:`gyrofilter.analysis.gap.intervals`)
+    defining: str = field(kw_only=True)
+
+    def __post_init__(self):
+        if self.defining not in self.required:
+            raise ValueError(f"effect {self.name}: its defining parameter {self.defining!r} is not a required one")
 
     @property
     def n_params(self):
@@ -68,23 +77,29 @@ class Effect:
 
 REGISTRY = (
     Effect(BIAS_INSTABILITY, "wander", {"b_dps": "nonneg"},
-           {"tau_min_s": ("pos", None), "tau_max_s": ("pos", None), "per_decade": ("pos", 2.0)}, {"b_dps": "log"}),
-    Effect(RATE_RANDOM_WALK, "wander", {"k_dps_per_sqrt_s": "nonneg"}, {}, {"k_dps_per_sqrt_s": "log"}),
-    Effect(RATE_RAMP, "shape", {"r_dps_per_s": "any"}),
-    Effect(GAUSS_MARKOV, "wander", {"sigma_dps": "nonneg", "tau_s": "pos"}, {}, {"sigma_dps": "log", "tau_s": "log"}),
+           {"tau_min_s": ("pos", None), "tau_max_s": ("pos", None), "per_decade": ("pos", 2.0)}, {"b_dps": "log"},
+           defining="b_dps"),
+    Effect(RATE_RANDOM_WALK, "wander", {"k_dps_per_sqrt_s": "nonneg"}, {}, {"k_dps_per_sqrt_s": "log"},
+           defining="k_dps_per_sqrt_s"),
+    Effect(RATE_RAMP, "shape", {"r_dps_per_s": "any"}, defining="r_dps_per_s"),
+    Effect(GAUSS_MARKOV, "wander", {"sigma_dps": "nonneg", "tau_s": "pos"}, {}, {"sigma_dps": "log", "tau_s": "log"},
+           defining="sigma_dps"),
     Effect(SINUSOID, "line", {"frequency_hz": "nonneg", "amplitude_dps": "nonneg"}, {"phase_rad": ("any", 0.0)},
-           {"amplitude_dps": "log", "phase_rad": "phase"}),
-    Effect(TEMPERATURE, "covariate", {"coefficient_dps_per_c": "any"}, {"reference_c": ("any", None)}),
-    Effect(BIAS_STEP, "shape", {"time_s": "nonneg", "size_dps": "any"}),
-    Effect(WARMUP, "shape", {"amplitude_dps": "any", "tau_s": "pos"}, {}, {"tau_s": "log"}),
+           {"amplitude_dps": "log", "phase_rad": "phase"}, defining="amplitude_dps"),
+    Effect(TEMPERATURE, "covariate", {"coefficient_dps_per_c": "any"}, {"reference_c": ("any", None)},
+           defining="coefficient_dps_per_c"),
+    Effect(BIAS_STEP, "shape", {"time_s": "nonneg", "size_dps": "any"}, defining="size_dps"),
+    Effect(WARMUP, "shape", {"amplitude_dps": "any", "tau_s": "pos"}, {}, {"tau_s": "log"}, defining="amplitude_dps"),
     Effect(OUTLIERS, "tails", {"rate": "frac", "magnitude_dps": "nonneg"}, {"spread_ln": ("nonneg", 0.25)},
-           {"rate": "log", "magnitude_dps": "log"}),
+           {"rate": "log", "magnitude_dps": "log"}, defining="magnitude_dps"),
     Effect(COLORED_NOISE, "noise", {"lag1": "lag"}, {"lag2": ("lag", None), "preserve": ("choice:arw,std", "arw")},
-           {"lag1": "atanh", "lag2": "atanh"}),
+           {"lag1": "atanh", "lag2": "atanh"}, defining="lag1"),
     Effect(NARROWBAND, "line", {"center_hz": "pos", "bandwidth_hz": "pos", "rms_dps": "nonneg"}, {},
-           {"bandwidth_hz": "log", "rms_dps": "log"}),
-    Effect(ARMA, "noise", {"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])}),
-    Effect(HEAVY_TAILS, "tails", {"fraction": "frac", "scale_ratio": "pos"}, {}, {"fraction": "log", "scale_ratio": "log"}),
+           {"bandwidth_hz": "log", "rms_dps": "log"}, defining="rms_dps"),
+    Effect(ARMA, "noise", {"sigma_a_dps": "nonneg"}, {"phi": ("coefs", []), "theta": ("coefs", [])},
+           defining="sigma_a_dps"),
+    Effect(HEAVY_TAILS, "tails", {"fraction": "frac", "scale_ratio": "pos"}, {}, {"fraction": "log", "scale_ratio": "log"},
+           defining="scale_ratio"),
 )
 #: name -> record, in the registry's order
 BY_NAME = {e.name: e for e in REGISTRY}

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.cli import main
+from gyrofilter.effects import BY_NAME
 from gyrofilter.filter.calibration import Calibration
 from gyrofilter.analysis.noise.export import JSON_KEY
 from gyrofilter.recording import read_recording
@@ -107,6 +108,20 @@ def test_gap_example_intervals_follow_the_parameters():
             assert name in axis and low < high
     assert {"confidence", "bootstrap_runs", "method"} <= set(report["intervals"])
     assert "`intervals`" in table_rows(section(3))
+
+
+def test_gap_uncertain_example_has_the_entry_shape_of_the_code():
+    """The example of an ``uncertain`` entry: the keys the pipeline writes, the parameters of the
+    effect table, the defining parameter not determined (null); ``uncertain`` in the example
+    report and in the key table."""
+    blocks = re.findall(r"^```json\n(.*?)^```", section(3), re.M | re.S)
+    entry = json.loads(next(b for b in blocks if '"why"' in b))
+    assert set(entry) == {"effect", "axis", "params", "params_ci95", "why"}
+    required, optional = EFFECTS[entry["effect"]]
+    assert set(required) <= set(entry["params"]) <= set(required) | set(optional)
+    assert set(entry["params_ci95"]) == set(entry["params"])
+    assert entry["params_ci95"][BY_NAME[entry["effect"]].defining] is None
+    assert json.loads(example(3, "json"))["uncertain"] == [] and "`uncertain`" in table_rows(section(3))
 
 
 def test_allan_example_uses_the_coefficient_keys_of_the_code():

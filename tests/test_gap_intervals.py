@@ -6,6 +6,7 @@ console, and (slow) the coverage over many seeds per effect kind.
 
 The coverage figures per kind, on more cases, are in docs/gap.md (``tools/gap_coverage.py``).
 """
+import html
 import json
 import math
 from statistics import NormalDist
@@ -18,8 +19,9 @@ import gyrofilter.sim.hidden_effects as he
 from gyrofilter.analysis.gap import intervals as gi
 from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.analysis.gap.baseline import baseline_model
-from gyrofilter.analysis.gap.report import value_with_interval
+from gyrofilter.analysis.gap.report import interval_text, params_text, uncertain_text, value_with_interval
 from gyrofilter.cli import main
+from gyrofilter.effects import BY_NAME
 from gyrofilter.recording import write_recording
 from gyrofilter.sim.simulate import simulate
 from gyrofilter.units import AXES
@@ -40,11 +42,17 @@ def _inside(true, interval, name):
 
 
 def _check_finite_and_ordered(report):
-    """Every finding and baseline axis has an interval per parameter, finite, low < high."""
+    """Every finding and baseline axis has an interval per parameter, finite, low < high, holding
+    the estimate, or null and a note saying so."""
     for f in report["findings"]:
         assert set(f["params_ci95"]) == set(f["params"]), f
-        for name, (low, high) in f["params_ci95"].items():
+        for name, interval in f["params_ci95"].items():
+            if interval is None:
+                assert any(n.startswith(f"{f['effect']} on {f['axis']}: {name} not determined") for n in report["notes"])
+                continue
+            low, high = interval
             assert math.isfinite(low) and math.isfinite(high) and low < high, (f["effect"], name, low, high)
+            assert low <= f["params"][name] <= high, (f["effect"], name, f["params"][name], low, high)
     for a in AXES:
         for name, (low, high) in report["baseline"]["axes"][a]["params_ci95"].items():
             assert math.isfinite(low) and math.isfinite(high) and low < high, (a, name, low, high)
@@ -75,13 +83,13 @@ def test_interval_is_the_bias_corrected_student_interval_on_the_log_scale():
     b = len(reps)
     centre = math.log(1.0) - (u.mean() - math.log(1.0))
     half = student_t.ppf(0.975, b - 1) * math.sqrt(1 + 1 / b) * u.std(ddof=1)
-    low, high = gi._interval(1.0, reps, "log")
+    low, high = gi._interval(1.0, reps, "log").ends
     assert low == pytest.approx(math.exp(centre - half)) and high == pytest.approx(math.exp(centre + half))
     # replicates 10 % high on average: the interval is moved down by that bias
     assert high < 1.0 * math.exp(half)
     # a signed parameter on the linear scale; too few replicates: no interval
-    low, high = gi._interval(-2.0, [-2.1, -1.9, -2.05, -1.95, -2.0, None], "linear")
-    assert low < -2.0 < high and gi._interval(1.0, [1.0, 1.1, None, None], "log") is None
+    low, high = gi._interval(-2.0, [-2.1, -1.9, -2.05, -1.95, -2.0, None], "linear").ends
+    assert low < -2.0 < high and gi._interval(1.0, [1.0, 1.1, None, None], "log").ends is None
 
 
 def test_a_step_of_test_inversion_mends_an_estimator_whose_spread_grows_with_the_parameter():
@@ -89,30 +97,36 @@ def test_a_step_of_test_inversion_mends_an_estimator_whose_spread_grows_with_the
     as a Gauss-Markov estimate's with tau): the plain interval, from replicates at theta-hat,
     misses a true theta above more often than below; one step of test inversion
     (gi.inversion_step, replicates at the ends) brings the coverage closer to 95 % and balances
-    the two sides. 4000 seeded records, 20 replicates each.""" 
+    the two sides. 4000 seeded records, 20 replicates each; the coverage of the intervals given
+    (an estimate far above theta has a spread of over a factor 100: not determined, a few %)."""
     rng = np.random.default_rng(5)
     draw = lambda theta, size=None: theta * np.exp(0.5 * math.sqrt(theta) * rng.standard_normal(size))
     theta = 1.0
     miss = {"plain": [0, 0], "inverted": [0, 0]}
+    given = {"plain": 0, "inverted": 0}
     for _ in range(4000):
         est = float(draw(theta))
         reps = draw(est, 20)
-        plain = gi._interval(est, reps, "log")
+        plain = gi._interval(est, reps, "log").ends
         inverted = gi.inversion_step({"p": est}, [{"p": v} for v in reps],
-                                     lambda at: [{"p": v} for v in draw(at["p"], 20)], {"p": "log"})["p"]
-        for name, (low, high) in (("plain", plain), ("inverted", inverted)):
-            miss[name][0] += theta < low
-            miss[name][1] += theta > high
-    cover = {name: 1 - sum(m) / 4000 for name, m in miss.items()}
+                                     lambda at: [{"p": v} for v in draw(at["p"], 20)], {"p": "log"})["p"].ends
+        for name, interval in (("plain", plain), ("inverted", inverted)):
+            if interval is None:
+                continue
+            given[name] += 1
+            miss[name][0] += theta < interval[0]
+            miss[name][1] += theta > interval[1]
+    assert min(given.values()) > 0.95 * 4000, given
+    cover = {name: 1 - sum(m) / given[name] for name, m in miss.items()}
     assert cover["plain"] < 0.93 and abs(cover["inverted"] - 0.95) < abs(cover["plain"] - 0.95), (cover, miss)
     assert miss["plain"][1] > 2 * miss["plain"][0]  # the plain interval misses above
     assert miss["inverted"][1] < miss["plain"][1]
 
 
 def test_phase_interval_wraps_the_replicates_and_lags_stay_inside_minus_one_one():
-    low, high = gi._interval(3.1, [3.05, -3.12, 3.13, -3.1, 3.08, 3.11], "phase")  # replicates across +-pi
+    low, high = gi._interval(3.1, [3.05, -3.12, 3.13, -3.1, 3.08, 3.11], "phase").ends  # replicates across +-pi
     assert high - low < 0.5 and _inside(3.1, (low, high), "phase_rad")
-    low, high = gi._interval(0.97, [0.95, 0.985, 0.99, 0.96, 0.975], "atanh")
+    low, high = gi._interval(0.97, [0.95, 0.985, 0.99, 0.96, 0.975], "atanh").ends
     assert -1 < low < high < 1
 
 
@@ -129,10 +143,9 @@ def test_baseline_intervals_of_white_noise_cover_the_truth():
                  "axes": {"x": {"bias_dps": bias, "arw_dps_per_sqrt_hz": arw, "effects": []}}}
         rec = simulate(model, 600.0, seed=seed)
         run = _BaselineRun(rec)
-        axis = dict(run.base["axes"]["x"])
-        gi._baseline_analytic(run, 0, axis)
-        inside["bias_dps"] += _inside(bias, axis["params_ci95"]["bias_dps"], "bias_dps")
-        inside["arw_dps_per_sqrt_hz"] += _inside(arw, axis["params_ci95"]["arw_dps_per_sqrt_hz"], "arw")
+        ci = gi._baseline_analytic(run, 0)
+        inside["bias_dps"] += _inside(bias, ci["bias_dps"], "bias_dps")
+        inside["arw_dps_per_sqrt_hz"] += _inside(arw, ci["arw_dps_per_sqrt_hz"], "arw")
     for name, k in inside.items():
         assert 0.90 * n <= k <= 0.99 * n, (name, k)
 
@@ -215,7 +228,7 @@ def test_cli_prints_every_parameter_with_its_interval_and_checks_the_option(tmp_
     assert rep["intervals"]["bootstrap_runs"] == 6
     f = _hit(case, rep)
     for name, value in f["params"].items():
-        assert f"{name}={value_with_interval(value, f['params_ci95'][name])}" in printed, printed
+        assert f"{name}={interval_text(value, f['params_ci95'], name)}" in printed, printed
     for bad in ("-1", "1", str(gi.MIN_REPLICATES - 1), str(gi.MAX_BOOTSTRAP + 1)):  # 1-4 runs: no interval at all
         assert main(["gap", str(path), "--bootstrap", bad, "--json", str(tmp_path / "o.json")]) == 2
         err = capsys.readouterr().err
@@ -249,7 +262,7 @@ def test_coverage_per_effect_kind():
             continue
         ok, n = per_kind.get(effect, (0, 0))
         for name, interval in hit[0]["params_ci95"].items():
-            if name in case["params"] or name == "lag2":
+            if interval is not None and (name in case["params"] or name == "lag2"):  # null: not determined, no trial
                 ok, n = ok + _inside(_true(case, name), interval, name), n + 1
         per_kind[effect] = (ok, n)
     for effect, (ok, n) in per_kind.items():
@@ -270,8 +283,9 @@ def test_intervals_stay_inside_the_parameters_domain():
     hit = [f for f in report["findings"] if f["effect"] == "heavy_tails"]
     assert hit and hit[0]["params_ci95"]["fraction"] is not None
     # cut to the domain; none where the bias correction put it wholly outside
-    assert gi._interval(0.45, [0.42, 0.44, 0.46, 0.48, 0.5], "log", (0.0, 0.5))[1] == 0.5
-    assert gi._interval(0.45, [0.3, 0.301, 0.302, 0.299, 0.3], "log", (0.0, 0.5)) is None
+    assert gi._interval(0.45, [0.42, 0.44, 0.46, 0.48, 0.5], "log", (0.0, 0.5)).ends[1] == 0.5
+    # where the bias correction alone would put it wholly outside, the hull with the estimate is cut
+    assert gi._interval(0.45, [0.3, 0.301, 0.302, 0.299, 0.3], "log", (0.0, 0.5)).ends == [0.45, 0.5]
     for f in report["findings"]:
         for end in (0, 1):
             entry = dict({k: v[end] for k, v in f["params_ci95"].items() if v is not None}, effect=f["effect"])
@@ -296,3 +310,94 @@ def test_the_coverage_tool_scores_the_gaps_intervals_and_the_alternatives_on_the
     compare = out[out.index("coverage of other intervals"):]
     assert all(m in compare for m in tool.METHODS)
     assert gi._interval.__name__ == "_interval"  # the wrapper is undone
+
+
+def test_an_interval_holds_its_estimate_where_the_bias_exceeds_the_spread():
+    """Replicates 20 % above the estimate with a spread of 1 %: the bias-corrected interval alone
+    lies wholly below the estimate (scale_ratio=10.42 [8.5, 8.8] before); the interval given is
+    its hull with the estimate, its far end the bias-corrected one. So on every scale, and after
+    a step of test inversion."""
+    rng = np.random.default_rng(11)
+    reps = 12.5 * np.exp(0.01 * rng.standard_normal(20))
+    bias_corrected = math.exp(2 * math.log(10.42) - np.log(reps).mean())  # the centre, moved down by the bias
+    low, high = gi._interval(10.42, list(reps), "log").ends
+    assert low < bias_corrected < 10.42 == pytest.approx(high), (low, high)
+    for estimate, replicates, scale in ((0.6445, 0.5621 + 0.004 * rng.standard_normal(20), "atanh"),
+                                        (-2.0, -1.0 + 0.01 * rng.standard_normal(20), "linear"),
+                                        (3.0, -2.9 + 0.01 * rng.standard_normal(20), "phase")):  # bias across +-pi
+        low, high = gi._interval(estimate, list(replicates), scale).ends
+        assert low <= estimate <= high and estimate in (pytest.approx(low), pytest.approx(high)), (scale, low, high)
+    inverted = gi.inversion_step({"p": 10.42}, [{"p": v} for v in reps],
+                                 lambda at: [{"p": v} for v in at["p"] * 1.2 * np.exp(0.01 * rng.standard_normal(20))],
+                                 {"p": "log"})["p"].ends
+    assert inverted[0] <= 10.42 <= inverted[1], inverted
+
+
+def test_a_positive_parameter_spanning_over_a_factor_100_is_not_determined():
+    """A log-scale interval over two decades (b_dps 0.0033 in [3.4e-7, 1412] on a real record):
+    null, and the reason names the ends; a signed parameter is never cut by the span."""
+    rng = np.random.default_rng(12)
+    reps = 0.0033 * np.exp(2.0 * rng.standard_normal(20))  # a spread of a factor e^2 per sd
+    got = gi._interval(0.0033, list(reps), "log")
+    assert got.ends is None and f"over a factor {gi.MAX_SPAN_RATIO}" in got.why, got
+    narrower = gi._interval(0.0033, list(0.0033 * np.exp(0.5 * rng.standard_normal(20))), "log")
+    assert narrower.ends is not None and narrower.ends[1] < gi.MAX_SPAN_RATIO * narrower.ends[0]
+    assert gi._interval(0.0033, list(reps - 0.0033), "linear").ends is not None
+
+
+def test_a_parameter_whose_estimator_ran_on_fewer_than_half_the_runs_is_not_determined():
+    """9 of 20 runs gave an estimate (an interval from 5 before): null, the reason says how many;
+    10 of 20 give an interval."""
+    values = [1.0, 1.1, 0.9, 1.05, 0.95, 1.02, 0.98, 1.08, 0.93]
+    got = gi._interval(1.0, values + [None] * 11, "log")
+    assert got.ends is None and "9 of 20 bootstrap runs, fewer than half" in got.why, got
+    assert gi._interval(1.0, values + [1.01] + [None] * 10, "log").ends is not None
+
+
+def _uncertain_case():
+    """A hidden random walk on y that a 10-minute record reads as a bias instability whose size it
+    does not bound (its interval spans about 0.00015 to 0.29 deg/s)."""
+    return he.draw_case(111, effect="rate_random_walk", duration_s=600.0, scale=0.5)
+
+
+def test_a_finding_whose_defining_parameter_is_not_determined_is_uncertain_not_named():
+    """Not in findings, not in the extended model, D after of its axis without it; listed in
+    uncertain with its (null) interval and why, and a note."""
+    case = _uncertain_case()
+    report = analyse_gap(he.simulate_case(case), seed=111, n_sims=10)
+    entry = next(e for e in report["uncertain"] if e["axis"] == case["axis"])
+    effect, defining = entry["effect"], BY_NAME[entry["effect"]].defining
+    assert set(entry) == {"effect", "axis", "params", "params_ci95", "why"}
+    assert entry["params_ci95"][defining] is None and f"its defining parameter {defining} is not determined" in entry["why"]
+    assert not any(f["effect"] == effect and f["axis"] == case["axis"] for f in report["findings"])
+    assert all(e["effect"] != effect for e in report["extended_model"]["axes"][case["axis"]]["effects"])
+    assert f"{effect} on {case['axis']}: {defining} not determined by this record (its 95 % interval spans" in " ".join(
+        report["notes"])
+    if not any(f["axis"] == case["axis"] for f in report["findings"]):
+        d = report["discrepancy"]
+        assert d["after"][case["axis"]] == d["before"][case["axis"]]
+    _check_finite_and_ordered(report)
+
+
+def test_the_console_and_the_reports_say_not_determined_and_list_the_uncertain(tmp_path, capsys):
+    case = _uncertain_case()
+    path = tmp_path / "rec.csv.gz"
+    write_recording(str(path), he.simulate_case(case))
+    assert main(["gap", str(path), "--seed", "111", "--sims", "10", "--json", str(tmp_path / "gap.json"),
+                 "--report", str(tmp_path / "md")]) == 0
+    printed = capsys.readouterr().out
+    rep = json.loads((tmp_path / "gap.json").read_text())
+    entry = rep["uncertain"][0]
+    assert "(not determined)" in params_text(entry)
+    markdown = (tmp_path / "md" / "gap_report.md").read_text()
+    for text in (" ".join(printed.split()), markdown):
+        assert "Suggested but not established" in text and uncertain_text(entry) in text.replace(" = ", "=")
+    assert main(["report", str(path), "--seed", "111", "--sims", "10", "--out", str(tmp_path / "r.html")]) == 0
+    page = (tmp_path / "r.html").read_text(encoding="utf-8")
+    assert "<h3>Suggested but not established</h3>" in page and html.escape(uncertain_text(entry, sep=" = ")) in page
+
+
+def test_interval_text_says_not_determined_for_a_null_interval():
+    assert interval_text(0.0033, {"b_dps": None}, "b_dps") == "0.0033 (not determined)"
+    assert interval_text(0.0033, None, "b_dps") == "0.0033"  # no intervals at all (--bootstrap 0)
+    assert interval_text(0.0033, {"b_dps": [0.003, 0.004]}, "b_dps") == "0.0033 [0.003, 0.004]"

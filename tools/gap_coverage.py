@@ -9,7 +9,10 @@ For every effect kind of :mod:`gyrofilter.sim.hidden_effects` draws ``--cases`` 
 replicates, and counts, for the cases where the hidden effect is named on its axis, how often
 every true parameter lies inside the finding's ``params_ci95`` (a ``phase_rad`` modulo 2 pi;
 ``colored_noise``'s ``lag2`` where the finding reports it, against lag1² where the hidden
-noise is a low pass). The baseline's ``bias_dps`` and ``arw_dps_per_sqrt_hz`` are checked on the
+noise is a low pass). A parameter the record does not determine (``null``) is no trial: it is
+counted apart (column ``null``), as are the cases where the hidden effect is listed as
+``uncertain`` on its axis instead of named (column ``uncert``). The baseline's ``bias_dps`` and
+``arw_dps_per_sqrt_hz`` are checked on the
 two untouched axes of every case. Each row gives the trials (cases x parameters), the coverage
 and its 95 % Wilson interval (the binomial uncertainty of a coverage measured on that many
 trials; the parameters of one case are not independent, so it is a lower bound on the
@@ -77,7 +80,7 @@ def alternatives(estimate, replicates, scale):
     u_hat = float(gi._forward([estimate], scale)[0])
     u = gi._forward([np.nan if r is None else r for r in replicates], scale)
     u = u[np.isfinite(u)]
-    if u.size < gi.MIN_REPLICATES:
+    if isinstance(gi._spread(estimate, replicates, scale), str):  # the gap's own rule: not determined
         return dict.fromkeys(METHODS[1:])
     dev = u - u_hat
     if scale == "phase":
@@ -93,17 +96,23 @@ METHODS = ("gap (bias-corrected t)", "percentile", "basic", "t, not bias-correct
 
 
 def score(case, report, calls=None):
-    """``(named, {param: {method: inside}}, {param: [inside]} of the untouched axes' baseline)``;
-    only the gap's own method unless ``calls`` (a :class:`Recorder`'s) are given."""
+    """``(named, uncertain, {param: {method: inside}}, [params not determined], {param: [inside]} of
+    the untouched axes' baseline)``; only the gap's own method unless ``calls`` (a
+    :class:`Recorder`'s) are given."""
     hit = [f for f in report["findings"] if f["effect"] == case["effect"] and f["axis"] == case["axis"]]
-    found = {}
+    uncertain = any(e["effect"] == case["effect"] and e["axis"] == case["axis"] for e in report.get("uncertain", []))
+    found, null = {}, []
     if hit:
         f = hit[0]
         for name, value in f["params"].items():
             if name not in case["params"] and not (name == "lag2" and case["effect"] == "colored_noise"):
                 continue
+            interval = (f.get("params_ci95") or {}).get(name)
+            if interval is None:
+                null.append(name)
+                continue
             true = case["params"].get(name, case["params"].get("lag1", 0.0) ** 2)
-            found[name] = {METHODS[0]: inside(true, (f.get("params_ci95") or {}).get(name), name)}
+            found[name] = {METHODS[0]: inside(true, interval, name)}
             call = next((c for c in calls or [] if c[0] == value), None)
             if call is not None:
                 found[name].update({m: inside(true, iv, name) for m, iv in alternatives(*call).items()})
@@ -115,7 +124,7 @@ def score(case, report, calls=None):
         true = case["model"]["axes"][a]
         for name in ("bias_dps", "arw_dps_per_sqrt_hz"):
             base[name].append(inside(true[name], got.get(name), name))
-    return bool(hit), found, base
+    return bool(hit), uncertain, found, null, base
 
 
 def oracle(args):
@@ -150,7 +159,8 @@ def run(args):
         oracle(args)
         return
     kinds = args.effects.split(",") if args.effects else list(he.EFFECTS)
-    rows = defaultdict(lambda: {"cases": 0, "named": 0, "params": defaultdict(lambda: defaultdict(lambda: [0, 0]))})
+    rows = defaultdict(lambda: {"cases": 0, "named": 0, "uncertain": 0, "null": defaultdict(int),
+                                "params": defaultdict(lambda: defaultdict(lambda: [0, 0]))})
     base = defaultdict(lambda: [0, 0])
     times = []
     t_all = time.perf_counter()
@@ -162,10 +172,13 @@ def run(args):
         with Recorder() as recorder:
             report = analyse_gap(rec, seed=args.seed + k, n_sims=args.sims, bootstrap=args.bootstrap)
         times.append((time.perf_counter() - t0, report.get("intervals", {}).get("runtime_s", 0.0)))
-        named, found, base_in = score(case, report, recorder.calls if args.compare else None)
+        named, uncertain, found, null, base_in = score(case, report, recorder.calls if args.compare else None)
         row = rows[effect]
         row["cases"] += 1
         row["named"] += named
+        row["uncertain"] += uncertain
+        for name in null:
+            row["null"][name] += 1
         for name, by_method in found.items():
             for method, ok in by_method.items():
                 row["params"][name][method][0] += ok
@@ -176,22 +189,24 @@ def run(args):
         if args.verbose:
             hit = next((f for f in report["findings"] if f["effect"] == effect and f["axis"] == case["axis"]), None)
             got = ("; ".join(f"{p}={hit['params'][p]:.4g} [{', '.join(f'{v:.4g}' for v in (hit.get('params_ci95') or {}).get(p) or [])}]"
-                             f"{'' if ok[METHODS[0]] else ' MISS'}" for p, ok in found.items()) if hit else "not named")
+                             f"{'' if ok[METHODS[0]] else ' MISS'}" for p, ok in found.items())
+                   + "".join(f"; {p} not determined" for p in null) if hit else
+                   "uncertain" if uncertain else "not named")
             true = ", ".join(f"{p}={v:.4g}" for p, v in case["params"].items())
             print(f"case {args.seed + k:5d} {effect:17s} {case['axis']} {true} -> {got}", flush=True)
     summarise(rows, base, times, time.perf_counter() - t_all, args.compare)
 
 
-def _line(label, cases, named, ok, n, per_param):
+def _line(label, cases, named, uncertain, ok, n, null, per_param):
     lo, hi = he.wilson(ok, n)
     cover = f"{100 * ok / n:6.1f} %  [{100 * lo:4.1f}, {100 * hi:5.1f}]" if n else f"{'-':>8s}  {'':14s}"
-    print(f"{label:22s} {cases:>5} {named:>5} {n:6d} {ok:6d} {cover}  {per_param}")
+    print(f"{label:22s} {cases:>5} {named:>5} {n:6d} {ok:6d} {cover} {uncertain:>6} {null:>4}  {per_param}")
 
 
 def summarise(rows, base, times, total_s, compare=False):
     print()
     print(f"{'effect':22s} {'cases':>5s} {'named':>5s} {'trials':>6s} {'inside':>6s} {'coverage':>8s}  "
-          f"{'95 % (Wilson)':14s}  per parameter (inside/trials)")
+          f"{'95 % (Wilson)':14s} {'uncert':>6s} {'null':>4s}  per parameter (inside/trials)")
     total = defaultdict(lambda: [0, 0])
     for effect, row in rows.items():
         for method in METHODS:
@@ -201,12 +216,15 @@ def summarise(rows, base, times, total_s, compare=False):
                     total[(effect, method)][1] += v[method][1]
                     total[("all", method)][0] += v[method][0]
                     total[("all", method)][1] += v[method][1]
-        per = ", ".join(f"{p} {v[METHODS[0]][0]}/{v[METHODS[0]][1]}" for p, v in row["params"].items())
-        _line(effect, row["cases"], row["named"], *total[(effect, METHODS[0])], per)
+        per = ", ".join([f"{p} {v[METHODS[0]][0]}/{v[METHODS[0]][1]}" for p, v in row["params"].items()]
+                        + [f"{p} null {k}" for p, k in row["null"].items()])
+        _line(effect, row["cases"], row["named"], row["uncertain"], *total[(effect, METHODS[0])],
+              sum(row["null"].values()), per)
     _line("all effects", sum(r["cases"] for r in rows.values()), sum(r["named"] for r in rows.values()),
-          *total[("all", METHODS[0])], "")
+          sum(r["uncertain"] for r in rows.values()), *total[("all", METHODS[0])],
+          sum(sum(r["null"].values()) for r in rows.values()), "")
     for name, (ok, n) in base.items():
-        _line(f"baseline {name}"[:22], "", "", ok, n, "(the untouched axes)")
+        _line(f"baseline {name}"[:22], "", "", "", ok, n, "", "(the untouched axes)")
     gap_s = sorted(t for t, _ in times)
     iv_s = sorted(t for _, t in times)
     print(f"gap runtime per case: median {gap_s[len(gap_s) // 2]:.1f} s, of which intervals "

@@ -112,6 +112,10 @@ def run(args):
                               f"{f['gain']['after']:.3g}", "    ")
             if f.get("alternatives"):
                 console.paragraph(gap_report.indistinguishable_text(f), "      ")
+    if report.get("uncertain"):
+        console.paragraph(f"{gap_report.UNCERTAIN_HEADING} (not in the extended model):", "  ")
+        for entry in report["uncertain"]:
+            console.paragraph(gap_report.uncertain_text(entry), "    ")
     for note in report.get("notes", []):
         console.paragraph(f"note: {note}", "  ")
     if d:

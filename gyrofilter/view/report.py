@@ -18,7 +18,8 @@ import json
 import numpy as np
 
 from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
-from ..analysis.gap.report import covariate_preamble, evidence_text, indistinguishable_text, params_text
+from ..analysis.gap.report import (UNCERTAIN_HEADING, covariate_preamble, evidence_text, indistinguishable_text, params_text,
+                                   uncertain_text)
 from ..analysis.noise.export import JSON_KEY, JSON_UNIT
 from ..analysis.noise.model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SLOPE, TERM_SYMBOL, basis, model_adev
 from ..units import AXES
@@ -222,6 +223,9 @@ def _gap(data):
     if covariate_preamble(g["findings"]):
         out.append(f"<p>{_esc(covariate_preamble(g['findings']))}</p>")
     out.append("<ul>" + "".join(_finding(f) for f in g["findings"]) + "</ul>")
+    if g.get("uncertain"):
+        out.append(f"<h3>{_esc(UNCERTAIN_HEADING)}</h3><p>Not in the extended model.</p><ul>"
+                   + "".join(f"<li>{_esc(uncertain_text(e, sep=' = '))}.</li>" for e in g["uncertain"]) + "</ul>")
     if g.get("notes"):
         out.append("<h3>Notes</h3><ul>" + "".join(f"<li>{_esc(note)}</li>" for note in g["notes"]) + "</ul>")
     out.append("<h3>Extended model</h3>" + _extended(g.get("extended_model")))

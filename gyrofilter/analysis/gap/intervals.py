@@ -1,5 +1,5 @@
 """95 % intervals of every finding's parameters and of the baseline's, by parametric bootstrap of
-the extended model (:mod:`gyrofilter.analysis.gap.pipeline`, after step 5).
+the extended model (:mod:`gyrofilter.analysis.gap.pipeline`, step 5, before the findings are written).
 
 For each axis with findings, the axis of the extended model (the baseline's bias and white noise
 re-fitted, every kept finding, the record's temperature profile where a finding needs it) is
@@ -30,6 +30,46 @@ and largest), while ``t_{B-1} sqrt(1 + 1/B)`` is the exact factor for a normal `
 ``phase_rad`` uses the deviations wrapped to (-pi, pi] and is reported unwrapped (the truth lies in
 the interval modulo 2 pi). A replicate whose estimator has nothing to estimate is left out.
 
+**An interval always holds its estimate**: the interval given is the hull of the bias-corrected
+interval and the estimate, ``[min(low, theta_hat), max(high, theta_hat)]`` (on any scale: ``g`` is
+monotone; a phase in the unwrapped frame of the interval). Where the replicates' bias is larger
+than their spread (a spike magnitude corrected for the threshold, a scale ratio of heavy tails, a
+lag-1 correlation shrunk by a band: ``scale_ratio=10.42 [11.75, 13.13]`` on a real record), the
+bias-corrected interval alone lies wholly on one side of the estimate. The bias is the
+estimator's at the estimate, not at the unknown truth, and it is itself estimated from B runs;
+Efron & Tibshirani (1993, sec. 10.6) call a correction by a bias that is large against the
+standard error dangerous (it may add more error than it removes, and a large bias says the
+estimator is a poor one there). The hull keeps the correction's direction and never claims the
+estimate itself is ruled out; it contains the bias-corrected interval, so its coverage is at
+least that interval's (a superset covers whenever the set does) and only rises. The basic and
+BCa intervals were no way out: the basic one ``[2 u_hat - q_0.975, 2 u_hat - q_0.025]`` holds
+``u_hat`` only when ``u_hat`` lies between the replicates' 2.5 % and 97.5 % points, which a bias
+larger than the spread breaks, and BCa's ends are quantiles of the replicates, all of which lie
+on one side of the estimate then (Efron & Tibshirani 1993, sec. 14.3).
+
+**Not determined** (``null`` in ``params_ci95`` and a note saying why): a parameter whose estimator
+ran on fewer than half of the B replicates (:data:`MIN_SHARE`; and never on fewer than
+:data:`MIN_REPLICATES`): when most records simulated from the record's own extended model give
+the estimator nothing to estimate, the record's estimate is the exception under its own model,
+and the replicates that did run are a selected subset whose spread is not the estimator's (the
+spike rate of only the runs that happened to hold spikes); half is where they stop being the
+typical run. And a positive (log-scale) parameter whose interval spans more than a factor
+:data:`MAX_SPAN_RATIO` (two decades): the record then bounds neither its order of magnitude nor
+whether it matters (``b_dps 0.0033 in [3.4e-7, 1412]``). A signed parameter (a temperature
+coefficient, a step size, a warm-up amplitude, a ramp) is not determined by the failing-runs
+rule only; its interval holding 0 is not taken to mean that: each of these effects was named
+by its detector's own test of exactly that parameter against 0, at a calibrated false-alarm rate
+(the clean batteries, docs/gap.md) and far beyond 95 %, and confirmed by the gain in D; a second,
+looser two-sided test on the bootstrap would overrule a calibrated decision with an uncalibrated
+one, while the interval, even across 0, still bounds the effect's size, which a two-decade span
+of a scale parameter does not.
+
+A finding whose **defining** parameter (:attr:`gyrofilter.effects.Effect.defining`, its size) is
+not determined is not named: :func:`gyrofilter.analysis.gap.pipeline.set_aside_uncertain` moves it
+from the findings to ``uncertain`` and takes it out of the extended model. The other findings of
+its axis keep the intervals computed here, with it in the simulated model (a second bootstrap
+without it would double the step's cost for a change within the intervals' own noise).
+
 **Gauss-Markov findings: one step of test inversion** (Carpenter 1999, "Test inversion bootstrap
 confidence intervals", JRSS B 61: 159-172). The spread and the bias of a Gauss-Markov estimate
 grow with its correlation time (a record holds T / tau correlation times: the sd of log sigma-hat
@@ -54,6 +94,7 @@ import copy
 import math
 import time
 from statistics import NormalDist
+from typing import NamedTuple
 
 import numpy as np
 
@@ -74,6 +115,10 @@ FEWER_BOOTSTRAP_FROM = 1_000_000
 MAX_BOOTSTRAP = 1000
 #: a parameter's interval needs at least this many replicates where its estimator ran
 MIN_REPLICATES = 5
+#: ... and at least this share of the replicates (module docstring: fewer, it is not determined)
+MIN_SHARE = 0.5
+#: a positive (log-scale) parameter whose interval spans more than this factor is not determined
+MAX_SPAN_RATIO = 100
 #: effects whose intervals take one step of test inversion (module docstring)
 INVERTED = (GAUSS_MARKOV,)
 #: per effect, the scale on which each parameter's interval is computed (the registry's
@@ -84,7 +129,29 @@ SCALES = {**{e.name: e.interval_scales for e in REGISTRY if e.interval_scales},
 METHOD = ("parametric bootstrap of the extended model (each axis with findings simulated B times with the record's "
           "length, rate and temperature; every finding's estimator re-run on each run); bias-corrected normal interval "
           "on the log scale (positive parameters), atanh (autocorrelations) or linear, with the Student quantile of "
-          "B - 1 degrees of freedom; axes without findings: the white-noise baseline's analytic intervals")
+          "B - 1 degrees of freedom, widened to hold the estimate; not determined (null) where the estimator ran on "
+          f"fewer than half of the runs or a positive parameter's interval spans over a factor {MAX_SPAN_RATIO}; axes "
+          "without findings: the white-noise baseline's analytic intervals")
+
+
+class Interval(NamedTuple):
+    """A parameter's 95 % interval: ``ends`` ``[low, high]`` (holding the estimate), or None and
+    ``why``, a clause saying why the record does not determine the parameter."""
+
+    ends: list | None
+    why: str | None = None
+
+
+class Intervals(NamedTuple):
+    """What :func:`bootstrap_intervals` found: the report's ``intervals`` block; per kept finding
+    (its candidate index) ``{param: [low, high] or None}`` (empty with no bootstrap); per axis
+    the baseline's; per kept finding ``{param: why}`` of the parameters not determined; notes."""
+
+    block: dict
+    findings: dict
+    baseline: dict
+    undetermined: dict
+    notes: list
 
 
 def default_bootstrap(n_samples):
@@ -99,69 +166,73 @@ def default_bootstrap(n_samples):
     return int(max(10, min(DEFAULT_BOOTSTRAP, round(DEFAULT_BOOTSTRAP * FEWER_BOOTSTRAP_FROM / max(n_samples, 1)))))
 
 
-def add_intervals(inp, state, report, n_boot, seed):
-    """Write ``params_ci95`` into every finding of ``report`` (of the gap analysis's ``inp`` and
-    final ``state``) and into the baseline's axes,
-    from ``n_boot`` replicates per axis with findings (none with ``n_boot`` 0; None:
-    :func:`default_bootstrap` of the record's length), and the report's ``intervals`` block
-    saying how."""
+def bootstrap_intervals(inp, state, n_boot, seed):
+    """The 95 % intervals of every kept finding's parameters (the gap analysis's ``inp`` and
+    ``state`` after step 4) and of the baseline's axes, from ``n_boot`` replicates per axis with
+    findings (none with ``n_boot`` 0; None: :func:`default_bootstrap` of the record's length):
+    an :class:`Intervals`. A parameter not determined (module docstring) has None, its ``why`` in
+    ``undetermined`` and a note."""
     n_boot = default_bootstrap(inp.n) if n_boot is None else n_boot
     t0 = time.perf_counter()
-    block = {"confidence": CONFIDENCE, "bootstrap_runs": int(n_boot)}
-    report["intervals"] = block
+    found = Intervals({"confidence": CONFIDENCE, "bootstrap_runs": int(n_boot)}, {}, {}, {}, [])
     if n_boot <= 0:
-        block["method"] = "none: --bootstrap 0 asked for no intervals"
-        return
-    block["method"] = METHOD
-    findings = report["findings"]
-    rows = list(zip(state.kept, findings))
-    if len(state.kept) != len(findings) or any(c.effect != f["effect"] or AXES[i] != f["axis"]
-                                             for (_, i, c, _), f in rows):
-        report["notes"].append("intervals: the findings do not match the kept candidates; no intervals computed")
-        return
+        found.block["method"] = "none: --bootstrap 0 asked for no intervals"
+        return found
+    found.block["method"] = METHOD
     seeds = np.random.default_rng([int(seed), 24]).integers(0, 2**31, size=int(n_boot))
     for i, a in enumerate(AXES):
-        here = [(c, f) for (_, ci, c, _), f in rows if ci == i]
-        base_axis = report["baseline"]["axes"][a]
+        here = [row for row in state.kept if row.axis == i]
         if not here:
-            _baseline_analytic(inp, i, base_axis)
+            found.baseline[a] = _baseline_analytic(inp, i)
             continue
-        for c, f in here:
-            f["params_ci95"] = dict.fromkeys(f["params"])
-            if c.effect not in SUPPORTED:
-                report["notes"].append(f"intervals: no estimator for {c.effect} on {a}; its parameters have no interval")
+        for row in here:
+            found.findings[row.k] = dict.fromkeys(row.cand.params)
+            if row.cand.effect not in SUPPORTED:
+                found.notes.append(f"intervals: no estimator for {row.cand.effect} on {a}; its parameters have no interval")
+        cands = [row.cand for row in here]
         try:
-            estimates = _replicates(inp, state, i, [c for c, _ in here], seeds)
+            estimates = _replicates(inp, state, i, cands, seeds)
         except (ValueError, ArithmeticError) as exc:  # a singular fit: never lose the findings for it
-            report["notes"].append(f"intervals on {a}: the bootstrap could not run ({exc}); no intervals")
+            found.notes.append(f"intervals on {a}: the bootstrap could not run ({exc}); no intervals")
             continue
-        for j, (c, f) in enumerate(here):
+        for j, row in enumerate(here):
+            if row.cand.effect not in SUPPORTED:
+                continue
+            c = row.cand
+            params = {name: float(v) for name, v in c.params.items()}
             reps = [e[j] for e in estimates["findings"]]
-            f["params_ci95"] = {name: _interval(value, [r.get(name) if r else None for r in reps],
-                                                SCALES.get(c.effect, {}).get(name, "linear"),
-                                                param_bounds(c.effect, name))
-                                for name, value in f["params"].items()}
-            if c.effect in INVERTED and all(f["params_ci95"].values()):
-                _invert(inp, state, i, [c for c, _ in here], j, f, reps, seeds)
-        base_axis["params_ci95"] = {name: _interval(base_axis[name], estimates[name],
-                                                    SCALES["baseline"].get(name, "linear"))
-                                    for name in ("bias_dps", "arw_dps_per_sqrt_hz")}
-    block["runtime_s"] = time.perf_counter() - t0
+            got = {name: _interval(value, [r.get(name) if r else None for r in reps],
+                                   SCALES.get(c.effect, {}).get(name, "linear"), param_bounds(c.effect, name))
+                   for name, value in params.items()}
+            if c.effect in INVERTED and all(g.ends for g in got.values()):
+                got = _invert(inp, state, i, cands, j, c.effect, params, reps, seeds)
+            found.findings[row.k] = {name: g.ends for name, g in got.items()}
+            for name, g in got.items():
+                if g.ends is None:
+                    found.undetermined.setdefault(row.k, {})[name] = g.why
+                    found.notes.append(f"{c.effect} on {a}: {name} not determined by this record ({g.why})")
+        got = {name: _interval(inp.base["axes"][a][name], estimates[name], SCALES["baseline"].get(name, "linear"))
+               for name in ("bias_dps", "arw_dps_per_sqrt_hz")}
+        found.baseline[a] = {name: g.ends for name, g in got.items()}
+        found.notes.extend(f"baseline on {a}: {name} not determined by this record ({g.why})"
+                           for name, g in got.items() if g.ends is None)
+    found.block["runtime_s"] = time.perf_counter() - t0
+    return found
 
 
-def _invert(inp, state, i, cands, j, finding, reps, seeds):
+def _invert(inp, state, i, cands, j, effect, params, reps, seeds):
     """One step of test inversion (module docstring) for the finding ``j`` of ``cands`` on axis
-    ``i`` (``reps``: its replicates' estimates at the finding): its interval's ends re-made with
-    replicates simulated at its lower and at its upper ends."""
+    ``i`` (an ``effect`` with estimates ``params``; ``reps``: its replicates' estimates at them):
+    ``{name: Interval}``, its ends re-made with replicates simulated at its lower and at its upper ends."""
     def replicates_at(at):
         return [e[j] for e in _replicates(inp, state, i, cands, seeds, {j: at})["findings"]]
 
-    finding["params_ci95"] = inversion_step(finding["params"], reps, replicates_at, SCALES.get(finding["effect"], {}),
-                                            {name: param_bounds(finding["effect"], name) for name in finding["params"]})
+    return inversion_step(params, reps, replicates_at, SCALES.get(effect, {}),
+                          {name: param_bounds(effect, name) for name in params})
 
 
 def inversion_step(params, replicates, replicates_at, scales, bounds=None):
-    """``{name: [low, high]}`` of the estimates ``params`` after one secant step of test
+    """``{name: Interval}`` of the estimates ``params`` after one secant step of test
     inversion (module docstring). ``replicates``: the estimates (dicts, or None) of replicates
     simulated at ``params``; ``replicates_at(at)`` returns those of replicates simulated at the
     parameters ``at``, and is called at the interval's lower ends and at its upper ends.
@@ -174,12 +245,13 @@ def inversion_step(params, replicates, replicates_at, scales, bounds=None):
         lower: u_hat - (b0 + h0) / (1 + k_b + k_h),   upper: u_hat + (h0 - b0) / (1 + k_b - k_h),
 
     the plain interval where k_b = k_h = 0. A denominator below 1/2 is taken as 1/2 (an end moves at
-    most twice as far as the plain one); a parameter with too few replicates keeps its plain interval.
-    The result is cut to each parameter's domain ``bounds`` (``{name: (low, high)}``, :func:`_in_domain`)."""
+    most twice as far as the plain one); a parameter with too few replicates at an end keeps its
+    plain end there. The result holds the estimate and is cut to each parameter's domain ``bounds``
+    (``{name: (low, high)}``), or is not determined (:func:`_finish`)."""
     out = {}
     first = {name: _spread(value, [r.get(name) if r else None for r in replicates], scales.get(name, "linear"))
              for name, value in params.items()}
-    plain = {name: None if f is None else (f[1] - f[2] - f[3], f[1] - f[2] + f[3]) for name, f in first.items()}
+    plain = {name: None if isinstance(f, str) else (f[1] - f[2] - f[3], f[1] - f[2] + f[3]) for name, f in first.items()}
     ends = {}
     for side in (0, 1):
         if any(p is None for p in plain.values()):
@@ -190,17 +262,17 @@ def inversion_step(params, replicates, replicates_at, scales, bounds=None):
                       for name in params}
     for name in params:
         if plain[name] is None:
-            out[name] = None
+            out[name] = Interval(None, first[name])
             continue
         scale, u_hat, b0, h0 = first[name]
         ends_u = list(plain[name])
         for side, sign in ((0, -1.0), (1, 1.0)):
             end = ends.get(side, {}).get(name)
-            if end is None or end[0] != scale or ends_u[side] == u_hat:
+            if end is None or isinstance(end, str) or end[0] != scale or ends_u[side] == u_hat:
                 continue
             k_b, k_h = ((end[2] - b0) / (ends_u[side] - u_hat), (end[3] - h0) / (ends_u[side] - u_hat))
             ends_u[side] = u_hat + (sign * h0 - b0) / max(1.0 + k_b + sign * -k_h, 0.5)
-        out[name] = _in_domain(_back(ends_u[0], scale), _back(ends_u[1], scale), (bounds or {}).get(name, (-math.inf, math.inf)))
+        out[name] = _finish(ends_u[0], ends_u[1], u_hat, scale, (bounds or {}).get(name, (-math.inf, math.inf)))
     return out
 
 
@@ -251,31 +323,37 @@ def _back(u, scale):
 
 
 def _interval(estimate, replicates, scale, bounds=(-math.inf, math.inf)):
-    """The bias-corrected normal-t interval of the module docstring, ``[low, high]``, cut to the
-    parameter's domain ``bounds`` (:func:`_in_domain`), or None when fewer than
-    :data:`MIN_REPLICATES` replicates have the parameter."""
+    """The :class:`Interval` of the module docstring: the bias-corrected normal-t interval widened
+    to hold ``estimate`` and cut to the parameter's domain ``bounds``, or not determined
+    (:func:`_spread`, :func:`_finish`)."""
     spread = _spread(estimate, replicates, scale)
-    if spread is None:
-        return None
+    if isinstance(spread, str):
+        return Interval(None, spread)
     scale, u_hat, bias, half = spread
-    return _in_domain(_back(u_hat - bias - half, scale), _back(u_hat - bias + half, scale), bounds)
+    return _finish(u_hat - bias - half, u_hat - bias + half, u_hat, scale, bounds)
 
 
-def _in_domain(low, high, bounds):
-    """``[low, high]`` cut to the parameter's domain ``bounds``
+def _finish(u_low, u_high, u_hat, scale, bounds):
+    """The :class:`Interval` of the ends ``u_low``, ``u_high`` on ``scale``: their hull with the
+    estimate ``u_hat`` (module docstring), mapped back and cut to the parameter's domain ``bounds``
     (:func:`~gyrofilter.sim.model.param_bounds`: the log scale keeps a fraction positive, not
-    below 0.5), or None when it lies wholly outside (the replicates' bias is then not the
-    estimator's near the estimate)."""
+    below 0.5); not determined where a log-scale interval spans more than :data:`MAX_SPAN_RATIO`,
+    or where the estimate itself lies outside the domain (the hull then does too)."""
+    low, high = _back(min(u_low, u_hat), scale), _back(max(u_high, u_hat), scale)
     if high < bounds[0] or low > bounds[1]:
-        return None
-    return [max(low, bounds[0]), min(high, bounds[1])]
+        return Interval(None, "its estimate lies outside the values a model takes")
+    low, high = max(low, bounds[0]), min(high, bounds[1])
+    if scale == "log" and high > MAX_SPAN_RATIO * low:
+        return Interval(None, f"its 95 % interval spans {low:.2g} to {high:.2g}, over a factor {MAX_SPAN_RATIO}")
+    return Interval([low, high])
 
 
 def _spread(estimate, replicates, scale, at=None):
     """``(scale, g(estimate), bias, half-width)`` of the replicates on the parameter's scale (a
     log scale falls back to linear for an estimate <= 0), the bias ``mean(u*) - g(at)`` (``at``:
-    the value they were simulated at, the estimate by default); None when fewer than
-    :data:`MIN_REPLICATES` have the parameter."""
+    the value they were simulated at, the estimate by default); or, where the replicates do not
+    determine the parameter, a clause saying why: fewer than :data:`MIN_SHARE` of them (and
+    fewer than :data:`MIN_REPLICATES`) have it, or the estimate has no value on the scale."""
     from scipy.stats import t as student_t
 
     values = [np.nan if r is None else float(r) for r in replicates]
@@ -285,8 +363,11 @@ def _spread(estimate, replicates, scale, at=None):
     u_at = u_hat if at is None else float(_forward([at], scale)[0])
     u = _forward(values, scale)
     u = u[np.isfinite(u)]
-    if u.size < MIN_REPLICATES or not (math.isfinite(u_hat) and math.isfinite(u_at)):
-        return None
+    if u.size < max(MIN_REPLICATES, MIN_SHARE * len(values)):
+        return f"its estimator ran on {u.size} of {len(values)} bootstrap runs, fewer than " + (
+            "half" if MIN_SHARE * len(values) > MIN_REPLICATES else f"the {MIN_REPLICATES} an interval needs")
+    if not (math.isfinite(u_hat) and math.isfinite(u_at)):
+        return f"its estimate has no value on the {scale} scale"
     dev = u - u_at
     if scale == "phase":
         dev = (dev + math.pi) % (2 * math.pi) - math.pi
@@ -295,19 +376,21 @@ def _spread(estimate, replicates, scale, at=None):
     return scale, u_hat, float(np.mean(dev)), half
 
 
-def _baseline_analytic(inp, i, base_axis):
-    """Intervals of the white-noise baseline of axis ``i`` (module docstring)."""
+def _baseline_analytic(inp, i):
+    """Intervals of the white-noise baseline of axis ``i`` (module docstring): ``{param: [low,
+    high]}``, or None for a constant axis."""
     n = inp.n
+    base_axis = inp.base["axes"][AXES[i]]
     z = NormalDist().inv_cdf(0.5 + CONFIDENCE / 2)
     q2 = (inp.q or 0.0) ** 2 / 12.0
     sigma2 = (base_axis["arw_dps_per_sqrt_hz"] ** 2) * inp.sample_rate_hz
     total = sigma2 + q2
     if not total > 0:
-        return
+        return None
     se_mean = math.sqrt(total / n)
     bias = base_axis["bias_dps"]
     rel = z * math.sqrt(2.0 / n) * total / max(sigma2, 1e-300)
-    base_axis["params_ci95"] = {
+    return {
         "bias_dps": [bias - z * se_mean, bias + z * se_mean],
         "arw_dps_per_sqrt_hz": [base_axis["arw_dps_per_sqrt_hz"] * math.sqrt(max(1 - rel, 0.0)),
                                 base_axis["arw_dps_per_sqrt_hz"] * math.sqrt(1 + rel)]}

@@ -46,7 +46,9 @@ hold the parts:
    most from the extended model and what its sign says
    (:func:`gyrofilter.analysis.gap.features.still_departs`); every parameter's 95 % interval
    (``params_ci95``), by parametric bootstrap of the extended model
-   (:mod:`gyrofilter.analysis.gap.intervals`).
+   (:mod:`gyrofilter.analysis.gap.intervals`), computed before the findings are written: a
+   finding whose defining parameter the record does not determine is listed in ``uncertain``
+   instead, out of the extended model and of D after (:func:`set_aside_uncertain`).
 """
 from __future__ import annotations
 
@@ -58,7 +60,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...effects import SLOW, TEMPERATURE, WANDERS
+from ...effects import BY_NAME, SLOW, TEMPERATURE, WANDERS
 from ...errors import GyroFilterError, RecordingError
 from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
@@ -72,7 +74,7 @@ from .confound import (alternatives_entry, kept_without_gain, suggested_temperat
                        weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
-from .intervals import add_intervals
+from .intervals import bootstrap_intervals
 from .scoring import Scorer
 from .state import AxisModels, GapInput, GapState, Kept, OtherReading
 
@@ -146,7 +148,7 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None,
                     "duration_s": len(g) / float(rec.sample_rate_hz),
                     "baseline": {"description": _BASELINE_DESCRIPTION,
                                  "axes": {a: dict(base.get("axes", {}).get(a, {})) for a in AXES}, "model": base},
-                    "findings": [], "extended_model": base,
+                    "findings": [], "uncertain": [], "extended_model": base,
                     "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
 
 
@@ -167,8 +169,9 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap, deci
         state = keep_findings(inp, state, scorer)                       # 4., gain per finding
         state = composite_step(inp, state, scorer)                      # 4., composite stochastic part where D stays high
         report["notes"] = list(state.notes)
-        write_findings(inp, state, scorer, report)                      # 5.
-        add_intervals(inp, state, report, bootstrap, seed)              # 5., the parameters' intervals
+        found = bootstrap_intervals(inp, state, bootstrap, seed)        # 5., the parameters' intervals
+        state = set_aside_uncertain(inp, state, scorer, found)          # 5., a finding the record does not determine
+        write_findings(inp, state, scorer, report, found)               # 5.
     report["runtime_s"] = time.perf_counter() - t_start
     return report
 
@@ -186,7 +189,7 @@ def prepare(rec, *, decision_streams, n_sims, recording_name):
         "recording": recording_name if recording_name is not None else (rec.path or ""),
         "sample_rate_hz": sample_rate_hz, "duration_s": n / sample_rate_hz,
         "baseline": {"description": _BASELINE_DESCRIPTION, "axes": {a: {} for a in AXES}},
-        "findings": [], "extended_model": {}, "notes": []}
+        "findings": [], "uncertain": [], "extended_model": {}, "notes": []}
     if not all(np.isfinite(to_dps(rec.columns[c][lo:lo + (1 << 16)], rec.gyro_unit, rec.lsb_per_dps)).all()
                for c in GYRO_COLUMNS for lo in range(0, n, 1 << 16)):  # in deg/s, a pass at a time
         raise RecordingError(f"{where}: gyro columns hold non-finite values")
@@ -416,9 +419,36 @@ def keep_findings(inp, state, scorer):
     return replace(state, after=tuple(after))
 
 
-def write_findings(inp, state, scorer, report):
-    """Step 5: the extended model, the findings with evidence and gain, the extended model's
-    spread in the departure summaries, and the discrepancies, into ``report``."""
+def set_aside_uncertain(inp, state, scorer, found):
+    """Step 5: a kept finding whose defining parameter (:attr:`gyrofilter.effects.Effect.defining`)
+    the record does not determine (``found``: the
+    :class:`~gyrofilter.analysis.gap.intervals.Intervals`, whose ``undetermined`` says so and why)
+    is not named: it moves from ``kept`` to ``uncertain``, and D after of its axis is that of the
+    axis extended by the findings that stay (the baseline's where none does)."""
+    moved = [(row, found.undetermined[row.k][BY_NAME[row.cand.effect].defining]) for row in state.kept
+             if BY_NAME[row.cand.effect].defining in found.undetermined.get(row.k, {})]
+    if not moved:
+        return state
+    gone = {row.k for row, _ in moved}
+    state = replace(state, kept=tuple(row for row in state.kept if row.k not in gone),
+                    uncertain=state.uncertain + tuple(
+                        {"effect": row.cand.effect, "axis": AXES[row.axis],
+                         "params": {k: float(v) for k, v in row.cand.params.items()},
+                         "params_ci95": found.findings[row.k],
+                         "why": (f"its defining parameter {BY_NAME[row.cand.effect].defining} is not determined by "
+                                 f"this record ({why})")} for row, why in moved))
+    after = list(state.after)
+    for i in sorted({row.axis for row, _ in moved}):
+        ks = state.kept_on(i)
+        after[i] = scorer.discrepancy(i, state.model(inp, i, ks), f"extended model on {AXES[i]}") if ks else inp.before[i]
+    return replace(state, after=tuple(after))
+
+
+def write_findings(inp, state, scorer, report, found):
+    """Step 5: the extended model, the findings with evidence, gain and intervals (``found``: the
+    :class:`~gyrofilter.analysis.gap.intervals.Intervals`), the uncertain ones, the extended
+    model's spread in the departure summaries, the discrepancies, and the intervals' block and
+    notes, into ``report``."""
     kept, before, after = state.kept, inp.before, state.after
     ext = copy.deepcopy(inp.base)
     for i, a in enumerate(AXES):
@@ -428,16 +458,20 @@ def write_findings(inp, state, scorer, report):
     if any(row.cand.effect == TEMPERATURE for row in kept):
         ext[TEMPERATURE_PROFILE] = temperature_table(inp.rec)
     report["extended_model"] = ext
-    for _, i, c, d_alone in kept:
+    for row in kept:
+        i, c = row.axis, row.cand
         z_info = strongest(inp.deps[i], inp.taus, inp.bands)
         report["findings"].append({
             "effect": c.effect, "axis": AXES[i],
             "params": {k: float(v) for k, v in c.params.items()},
             "evidence": c.evidence_text(*([f"baseline simulations: {z_info}"] if z_info else [])),
-            "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": d_alone},
+            "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": row.after},
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
             "alternatives": alternatives_entry(c),
         })
+        if found.block["bootstrap_runs"] > 0:
+            report["findings"][-1]["params_ci95"] = found.findings.get(row.k, dict.fromkeys(c.params))
+    report["uncertain"] = [dict(entry) for entry in state.uncertain]
 
     def extended_deps(i):
         return scorer.departures(i, state.model(inp, i, state.kept_on(i)), f"extended model on {AXES[i]}")
@@ -469,9 +503,13 @@ def write_findings(inp, state, scorer, report):
                              "after_se": {a: scorer.discrepancy_error(
                                  i, state.model(inp, i, state.kept_on(i)) if state.kept_on(i) else None,
                                  f"extended model on {a}") for i, a in enumerate(AXES)}}
-    report["uncertain"] = [dict(entry) for entry in state.uncertain]
     report["n_simulations"] = inp.n_sims
+    report["intervals"] = found.block
+    for a, ci in found.baseline.items():
+        if ci is not None:
+            report["baseline"]["axes"][a]["params_ci95"] = ci
     n, sample_rate_hz = inp.n, inp.sample_rate_hz
     if n / sample_rate_hz < 300:
         report["notes"].append(f"record of {n / sample_rate_hz:.0f} s: slow bias effects (drift, random walk, bias instability) "
                                "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / sample_rate_hz / 9))
+    report["notes"] += found.notes

@@ -12,7 +12,8 @@
   finding with ``alternatives`` (their shapes dashed: how the other reading would look).
 
 Each finding is listed with its parameters and their 95 % intervals (:func:`params_text`), its
-evidence sentence and its gain.
+evidence sentence and its gain; then the effects the record suggests but does not establish
+(the report's ``uncertain``, :func:`uncertain_text`).
 """
 from __future__ import annotations
 
@@ -211,11 +212,31 @@ def value_with_interval(value, interval):
     return f"{value:.{digits}g} [{low:.{digits}g}, {high:.{digits}g}]"
 
 
+def interval_text(value, intervals, name):
+    """The parameter ``name`` of value ``value`` with its interval from ``intervals`` (a
+    ``params_ci95``: :func:`value_with_interval`): the value alone where the report has no
+    intervals (``intervals`` None), ``value (not determined)`` where its interval is null (the
+    record does not determine it, docs/formats.md section 3)."""
+    if intervals is not None and intervals.get(name) is None:
+        return f"{value:.4g} (not determined)"
+    return value_with_interval(value, (intervals or {}).get(name))
+
+
 def params_text(finding, sep="="):
-    """A finding's parameters, each with its 95 % interval where the report has one:
-    ``frequency_hz=31.4381 [31.4378, 31.4384], ...`` (``sep`` between name and value)."""
-    ci = finding.get("params_ci95") or {}
-    return ", ".join(f"{k}{sep}{value_with_interval(v, ci.get(k))}" for k, v in finding["params"].items())
+    """A finding's parameters (or an ``uncertain`` entry's), each with its 95 % interval where the
+    report has one: ``frequency_hz=31.4381 [31.4378, 31.4384], ...`` (``sep`` between name and
+    value; :func:`interval_text`)."""
+    ci = finding.get("params_ci95")
+    return ", ".join(f"{k}{sep}{interval_text(v, ci, k)}" for k, v in finding["params"].items())
+
+
+#: the heading of the report's ``uncertain`` entries (console, Markdown and HTML reports)
+UNCERTAIN_HEADING = "Suggested but not established"
+
+
+def uncertain_text(entry, sep="="):
+    """An entry of the report's ``uncertain``: ``effect on axis (params): why``."""
+    return f"{entry['effect']} on {entry['axis']} ({params_text(entry, sep)}): {entry['why']}"
 
 
 def write_report(report, rec, out_dir, *, seed=0):
@@ -234,8 +255,7 @@ def write_report(report, rec, out_dir, *, seed=0):
     disc = report.get("discrepancy", {})
     for a in AXES:
         b = report["baseline"]["axes"][a]
-        ci = b.get("params_ci95") or {}
-        bias, arw = ([value_with_interval(b[k], ci.get(k)) if b.get(k) is not None else "-"
+        bias, arw = ([interval_text(b[k], b.get("params_ci95"), k) if b.get(k) is not None else "-"
                       for k in ("bias_dps", "arw_dps_per_sqrt_hz")])
         lines.append(f"| {a} | {bias} | {arw} | "
                      f"{_fmt(b.get('quantization_dps'))} | {_fmt(disc.get('before', {}).get(a))} | "
@@ -256,6 +276,10 @@ def write_report(report, rec, out_dir, *, seed=0):
         if f.get("alternatives"):
             lines.append(f"  {indistinguishable_text(f, figure=True)}.")
         lines.append(f"  Evidence: {evidence_text(f)}.")
+    if report.get("uncertain"):
+        lines += ["", f"{UNCERTAIN_HEADING} (not in the extended model):", ""]
+        lines += [f"- {uncertain_text(e, ' = ')}." for e in report["uncertain"]]
+        lines.append("")
     for note in report.get("notes", []):
         lines.append(f"- note: {note}")
     lines += ["", "## Figures", ""]

@@ -5,8 +5,8 @@ runs them in order).
   model, the features of the measurement and their departures from the baseline's runs, the
   seeds of every simulation.
 - :class:`GapState` (steps 3 to 5): the candidates found so far, which are excluded, which are
-  kept with their gain, the models each axis's candidates extend (:class:`AxisModels`) and the
-  notes. A step takes a state and returns a new one (:func:`dataclasses.replace`); it changes
+  kept with their gain, which are set aside as uncertain, the models each axis's candidates
+  extend (:class:`AxisModels`) and the notes. A step takes a state and returns a new one (:func:`dataclasses.replace`); it changes
   neither the state it was given nor a candidate in it (a candidate that changes is replaced).
 - :meth:`GapState.model`: the extended model of an axis with some of its candidates, the one
   thing every step scores (:class:`gyrofilter.analysis.gap.scoring.Scorer`).
@@ -114,7 +114,8 @@ class GapState:
     #: D per axis after extension by its kept findings
     after: tuple = ()
     notes: tuple = ()
-    #: entries of the report's ``uncertain``: effects the record suggests but does not establish
+    #: the report's ``uncertain`` entries (dicts: effect, axis, params, why, params_ci95 where known):
+    #: effects the record suggests but does not establish, none of them in ``kept``
     uncertain: tuple = ()
 
     def with_notes(self, *notes):
