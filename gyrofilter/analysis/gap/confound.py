@@ -370,8 +370,8 @@ def weigh_lines(inp, state, scorer):
         sin, band = state.candidates[k_sin][1], state.candidates[k_band][1]
         rms = math.hypot(band.params["rms_dps"], sin.params["amplitude_dps"] / math.sqrt(2.0))
         whole = replace(band, params=dict(band.params, rms_dps=rms), evidence_notes=band.evidence_notes + (
-            f"it holds the sinusoid at {sin.params['frequency_hz']:.4g} Hz that the sinusoid detector took out of it "
-            f"(rms {band.params['rms_dps']:.3g} deg/s without it)",))
+            f"with the sinusoid at {sin.params['frequency_hz']:.4g} Hz that the sinusoid detector took out of it, its "
+            f"rms is {rms:.3g} deg/s ({band.params['rms_dps']:.3g} without it)",))
         state = replace(state, candidates=state.candidates + ((i, whole),))
         k_whole = len(state.candidates) - 1
         others = [k for k in on if k not in (k_sin, k_band)]
