@@ -51,6 +51,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from gyrofilter.analysis.gap.pipeline import analyse_gap
+from gyrofilter.analysis.gap.report import d_text
 from gyrofilter.evaluation import evaluate as E
 from gyrofilter.filter.settings import SETTING_RANGES, FilterSettings
 from gyrofilter.filter.presets import DEFAULT_PRESET, PRESETS
@@ -487,8 +488,9 @@ def gap_real_block():
 def _gap_example_check(body):
     rep, _ = gap_real.reports()["mpu6050_static_655s"]
     d = rep["discrepancy"]
-    return [f"axis {a}: D {d['before'][a]:.3g} -> {d['after'][a]:.3g} of docs/gap/mpu6050_static_655s.json is not in the block"
-            for a in "xyz" if f"{a}: D {d['before'][a]:.3g} -> {d['after'][a]:.3g}" not in body]
+    shown = {a: f"{a}: D {d_text(d['before'][a], d['before_se'][a])}" for a in "xyz"}
+    return [f"axis {a}: '{shown[a]}' of docs/gap/mpu6050_static_655s.json is not in the block"
+            for a in "xyz" if shown[a] not in body]
 
 
 @block("gap-example", "docs/gap.md", "`gyrofilter gap recordings/mpu6050_static_655s.csv.gz --json gap.json`",

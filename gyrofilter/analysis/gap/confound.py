@@ -48,7 +48,10 @@ power-up, an exponential in time does not (:data:`WHY_THE_COVARIATE`). Three pla
   what it suggests.
 * *Keeping without a gain alone* (:func:`kept_without_gain`): a finding with no gain alone is kept
   when the axis's other findings do better with it; a temperature also where D with it is within
-  the allowance of D without it (the measured covariate is kept where D cannot tell).
+  the allowance of D without it, with the axis's other findings or, alone on its axis, against
+  the baseline (the measured covariate is kept where D cannot tell: a small coefficient on a
+  10-minute record moves D less than D's own noise, so a gain-or-not decision there was a coin
+  toss on the simulations' streams).
 
 **2. Bias instability or Gauss-Markov** (:data:`CONFUSABLE_WANDERS`, :func:`weigh_wanders`). A
 Gauss-Markov spectrum is flat below its corner ``1/(2 pi tau)`` and falls like 1/f^2 above it;

@@ -60,7 +60,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...effects import BY_NAME, SLOW, TEMPERATURE, WANDERS
+from ...effects import BY_NAME, COVARIATES, SLOW, TEMPERATURE, WANDERS
 from ...errors import GyroFilterError, RecordingError
 from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
@@ -367,7 +367,8 @@ def keep_findings(inp, state, scorer):
     """Step 4: gain per finding, the axis extended by this finding alone (the contract's gain);
     a finding that shows no gain alone is still kept when the axis has other candidates and
     leaving it out of the model with all of them raises the discrepancy (leave-one-out; a
-    temperature also within the null spread of D: :func:`gyrofilter.analysis.gap.confound.kept_without_gain`).
+    temperature also within the null spread of D, alone on its axis against the baseline:
+    :func:`gyrofilter.analysis.gap.confound.kept_without_gain`).
     Then D of each axis extended by all its kept findings."""
     cands, before, notes = state.candidates, inp.before, []
     single = {}
@@ -408,6 +409,14 @@ def keep_findings(inp, state, scorer):
                 kept.append(Kept(k, i, c, after))
                 notes.append(f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "
                              f"axis's other findings D = {with_all:.3g}, without it {without:.3g}{why}")
+                continue
+        elif c.effect in COVARIATES:  # alone on its axis: weighed against the baseline the same way
+            label = f"{c.effect} on {AXES[i]} against the baseline"
+            why = kept_without_gain(c.effect, after, before[i], lambda: max(
+                scorer.null_spread(i, state.model(inp, i, [k]), label), scorer.null_spread(i, None, label)))
+            if why:
+                kept.append(Kept(k, i, c, after))
+                notes.append(f"{c.effect} on {AXES[i]}: no gain ({before[i]:.3g} -> {after:.3g}) but kept{why}")
                 continue
         notes.append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
     state = replace(state, kept=tuple(kept), single=single).with_notes(*notes)

@@ -69,6 +69,8 @@ class Scorer:
 
     def null_spread(self, i, model, label):
         """The null spread of D of ``model`` (:func:`gyrofilter.analysis.gap.features.null_spread`
-        of its runs)."""
+        of its runs; the baseline's where ``model`` is None)."""
+        if model is None:
+            return null_spread(self.inp.base_sims[i], self.inp.n)
         key = self._key(i, *model, label)
         return null_spread(self._sims[key], self.inp.n, (self.inp.deps[i], self.inp.n_sims))
