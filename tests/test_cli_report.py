@@ -56,7 +56,7 @@ def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
     for doc in (data["gap"], want):
         without_wall_times(doc)
     assert data["gap"] == want
-    assert data["gap"]["n_simulations"] == 10 and data["options"]["seed"] == 3
+    assert data["gap"]["n_simulations"] == 10 and data["options"]["sims"] == 10
     # replay's summary table prints these with 4 decimals
     f = data["filter"]
     for i, axis in enumerate("xyz"):
@@ -191,7 +191,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
                              f"{WHY_THE_COVARIATE}; baseline simulations: largest departure on {a}",
                  "alternatives": [{"effect": "warmup", "params": {"amplitude_dps": 0.06, "tau_s": 840.0}, "D": 0.84}]}
                 for a in AXES]
-    page = _gap({"options": {"seed": 0}, "gap": {"n_simulations": 24, "baseline": {"axes": {a: axis for a in AXES}},
+    page = _gap({"options": {}, "gap": {"n_simulations": 24, "baseline": {"axes": {a: axis for a in AXES}},
                                                  "findings": findings, "notes": ["first note", "second note"],
                                                  "extended_model": None}})
     assert page.count(html.escape(WHY_THE_COVARIATE)) == 1

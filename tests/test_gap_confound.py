@@ -92,7 +92,7 @@ def test_example_model_names_temperature_with_the_warmup_as_alternative(tmp_path
     temp = next(f for f in report["findings"] if "alternatives" in f)
     assert "cannot tell them apart" in temp["evidence"] and WHY_THE_COVARIATE in temp["evidence"]
     if importlib.util.find_spec("matplotlib"):  # the Markdown report says why once, not per finding
-        gap_report.write_report(report, rec, str(tmp_path), seed=0)
+        gap_report.write_report(report, rec, str(tmp_path))
         md = (tmp_path / gap_report.REPORT_NAME).read_text()
         assert md.count(WHY_THE_COVARIATE) == 1 and "cannot tell them apart; baseline simulations" in md
 

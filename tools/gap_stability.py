@@ -1,18 +1,17 @@
-"""Do gap's answers hold still? The same records analysed with seeds 0, 1 and 2: the causes per
-axis, the intervals, and D.
+"""Do gap's answers hold on other simulations? The same records analysed with the simulations
+drawn from seeds 0, 1 and 2: the causes per axis, the intervals, and D.
 
-    python tools/gap_stability.py [--seeds 0,1,2] [--streams] [--bootstrap N] [--sim-seeds 1,2,3,4,5,6]
+    python tools/gap_stability.py [--seeds 0,1,2] [--bootstrap N] [--sim-seeds 1,2,3,4,5,6]
                                   [--only SUBSTRING] [--adis DIR] [--jobs 2] [--json OUT]
 
 Records: those of ``tools/gap_closure.py`` (the ADIS16405 logs where ``../shared/data`` has them,
 the shipped static MPU6050 logs, the BROAD rest phases), none of which the detectors were tuned
 on, and the default model's 10-minute records (``gyrofilter record --source
 sim:seed=K,realtime=0 --duration 600``, one per ``--sim-seeds``). Each is analysed by
-``analyse_gap`` with the command's defaults (intervals included) once per ``--seeds``: as
-``gyrofilter gap --seed N`` runs it, the decisions on the same simulation streams whatever the
-seed (``DECISION_STREAMS``), the bootstrap on the seed's. ``--streams`` also draws the decisions'
-simulations from the seed: how the decisions hold on other simulations, the measure of how
-sure they are.
+``analyse_gap`` with the command's defaults (intervals included) once per ``--seeds``, the seed
+drawing every simulation (the decisions' and the intervals'). The commands use seed 0 whatever
+their ``--seed`` (``COMMAND_SEED``), so their answer is the first column; the others show how it
+holds on other simulations, the measure of how sure the decisions are.
 
 Per axis it counts:
 
@@ -51,7 +50,7 @@ def _sim_record(seed, folder):
 
 
 def _job(args):
-    name, seed, only_path, bootstrap, streams, adis = args
+    name, seed, only_path, bootstrap, adis = args
     from gap_closure import records
 
     from gyrofilter.analysis.gap.pipeline import analyse_gap
@@ -61,7 +60,7 @@ def _job(args):
         rec = read_recording(only_path)
     else:
         rec = next(r for n, r in records(only=name, adis_dir=adis) if n == name)
-    rep = analyse_gap(rec, seed=seed, bootstrap=bootstrap, decision_streams=seed if streams else 0)
+    rep = analyse_gap(rec, seed=seed, bootstrap=bootstrap)
     return name, seed, rep
 
 
@@ -99,14 +98,12 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", default=None, help="write every axis's rows here")
     ap.add_argument("--bootstrap", type=int, default=None, help="bootstrap runs (default: the command's)")
-    ap.add_argument("--streams", action="store_true",
-                    help="vary the decisions' simulation streams with the seed as well (analyse_gap's decision_streams)")
     args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
     from gap_closure import ADIS_DIR, records
 
     adis = args.adis or ADIS_DIR
-    jobs = [(name, s, None, args.bootstrap, args.streams, adis) for name, _ in records(only=args.only, adis_dir=adis)
+    jobs = [(name, s, None, args.bootstrap, adis) for name, _ in records(only=args.only, adis_dir=adis)
             for s in seeds]
     with tempfile.TemporaryDirectory() as folder:
         sims = [] if not args.sim_seeds else [int(k) for k in args.sim_seeds.split(",")]
@@ -114,7 +111,7 @@ def main(argv=None):
             name = f"default model seed {k}"
             if args.only is None or args.only in name:
                 path = _sim_record(k, folder)
-                jobs += [(name, s, path, args.bootstrap, args.streams, adis) for s in seeds]
+                jobs += [(name, s, path, args.bootstrap, adis) for s in seeds]
         results = {}
         with ProcessPoolExecutor(args.jobs) as pool:
             for name, seed, rep in pool.map(_job, jobs):

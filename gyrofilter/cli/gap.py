@@ -37,8 +37,8 @@ def add_arguments(parser):
     parser.add_argument("--json", metavar="OUT.json", type=options.file_name, help="also write the gap report (JSON, every number) here")
     parser.add_argument("--report", metavar="DIR", type=options.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
     parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N",
-                        help="seed of the intervals' bootstrap (default 0); the findings do not depend on it "
-                             "(docs/gap.md, \"How stable\")")
+                        help="no effect, kept for older scripts: the analysis draws its simulations from fixed "
+                             "streams, so its answer does not depend on a seed (docs/gap.md, \"How stable\")")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; {MIN_SIMS} to {MAX_SIMS})")
     parser.add_argument("--bootstrap", type=options.whole_number, default=None, metavar="N",
@@ -70,7 +70,7 @@ def run(args):
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--report"])
-        return batch.run(args, FleetSettings("gap", seed=args.seed, sims=args.sims), paths)
+        return batch.run(args, FleetSettings("gap", sims=args.sims), paths)
     args.recording = batch.single(args, paths)
     report_files = [os.path.join(args.report, name) for name in gap_report.report_file_names()] if args.report else []
     json_files = [args.json] if args.json is not None else []
@@ -85,14 +85,14 @@ def run(args):
 
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis
-    rec, report = analyse_file(args.recording, seed=args.seed, n_sims=args.sims, bootstrap=args.bootstrap,
+    rec, report = analyse_file(args.recording, n_sims=args.sims, bootstrap=args.bootstrap,
                                warn=console.say_warning, progress=progress, refuse_motion=not args.allow_motion)
     with contextlib.ExitStack() as files:
         if args.json is not None:
             outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
         if args.report:
             progress("report")
-            gap_report.write_report(report, rec, files.enter_context(outputs.replacing_in(args.report)), seed=args.seed)
+            gap_report.write_report(report, rec, files.enter_context(outputs.replacing_in(args.report)))
     written = json_files + ([os.path.join(args.report, gap_report.REPORT_NAME)] if args.report else [])
     console.say(f"wrote {' and '.join(written)}" if written else "(every number of the analysis: --json OUT.json)")
     d = report.get("discrepancy")

@@ -58,7 +58,7 @@ def add_arguments(parser):
                         help="with --source: the recording to write and keep (default: beside --out, "
                              "REPORT.csv for REPORT.html; " + options.RECORDING_FILE_HELP + ")")
     parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N",
-                        help="seed of the gap analysis's interval bootstrap (default 0, as gap)")
+                        help="no effect, kept for older scripts (as gap --seed)")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help="baseline simulations of the gap analysis (as gap --sims)")
     still.add_keep_outliers_argument(parser)
@@ -93,7 +93,7 @@ def run(args):
         path = args.recording
         _check_read_again(path)
         outputs.check_outputs([args.out], [path], args.force)
-    data, envelopes = compute(path, seed=args.seed, sims=args.sims, keep_outliers=args.keep_outliers,
+    data, envelopes = compute(path, sims=args.sims, keep_outliers=args.keep_outliers,
                               warn=console.say_warning, progress=progress)
     page = report_page(data, *envelopes)
     with outputs.replacing(args.out) as tmp:
@@ -103,7 +103,7 @@ def run(args):
     return 0
 
 
-def compute(path, *, seed, sims, keep_outliers, warn, progress):
+def compute(path, *, sims, keep_outliers, warn, progress):
     """The report's data (:func:`gyrofilter.view.report.report_data`) and the filter's (raw,
     filtered) envelopes ((None, None) when it did not run) of the recording ``path``: the gap
     analysis (a recording that does not read raises here), allan and replay's default filter,
@@ -116,7 +116,7 @@ def compute(path, *, seed, sims, keep_outliers, warn, progress):
             found.append(text)
             warn(text)
 
-    rec, gap_doc = analyse_file(path, seed=seed, n_sims=sims, warn=warned, progress=progress)
+    rec, gap_doc = analyse_file(path, n_sims=sims, warn=warned, progress=progress)
     clip = clipped(rec.gyro_dps, _full_scale_dps(rec.header, warned), rec.lsb_per_dps if rec.gyro_unit == "lsb" else None)
     if clip:
         warned(clip)
@@ -144,7 +144,7 @@ def compute(path, *, seed, sims, keep_outliers, warn, progress):
     gap_doc = json_ready(gap_doc)
     data = report_data(recording=json_ready(recording), allan=allan_doc, gap=gap_doc,
                        filter_summary=filtered.summary() if filtered else None, warnings=found,
-                       options={"seed": seed, "sims": sims, "keep_outliers": keep_outliers}, version=__version__,
+                       options={"sims": sims, "keep_outliers": keep_outliers}, version=__version__,
                        allan_error=allan_error, filter_error=filter_error,
                        allan_and_gap=compare(allan_doc, gap_doc) if allan_doc is not None else [])
     envelopes = (filtered.raw_envelope, filtered.filtered_envelope) if filtered else (None, None)

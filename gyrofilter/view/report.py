@@ -110,7 +110,7 @@ def _summary(data):
             rows.append((key, text if len(text) <= _LONG_TEXT else text[:_LONG_TEXT] + " ..."))
     if rec.get("t_gaps"):
         rows.append(("gaps in t", f"{rec['t_gaps']} step(s) longer than 1.5 sample intervals"))
-    rows.append(("options", f"--seed {opts['seed']}, --sims {opts['sims'] or 'as gap chooses'}"
+    rows.append(("options", f"--sims {opts['sims'] or 'as gap chooses'}"
                             + (", --keep-outliers" if opts["keep_outliers"] else "")))
     return "<h2>Recording</h2>" + _table(["", ""], rows, header_row=False)
 
@@ -206,8 +206,7 @@ def _gap(data):
     g = data["gap"]
     out = ["<h2>What the baseline model misses (gap analysis)</h2>",
            f"<p>As <code>gyrofilter gap</code> finds it: the baseline (constant bias + white noise + rounding to "
-           f"the LSB step) against {g.get('n_simulations', 0)} simulations of it (seed "
-           f"{_esc(data['options'].get('seed'))}); D is the mean squared z-score of the record's features against "
+           f"the LSB step) against {g.get('n_simulations', 0)} simulations of it (fixed streams); D is the mean squared z-score of the record's features against "
            f"the model's simulations, about 1 where the model explains the record. {WHITE_LEVELS}</p>"]
     disc = g.get("discrepancy") or {}
     rows = []

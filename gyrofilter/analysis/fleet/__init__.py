@@ -5,7 +5,7 @@
   ``gyrofilter gap`` (the gap analysis, and the Allan coefficients of the same file). It reads the
   file and returns plain data (the reports as the single-file commands write them); a file that
   cannot be analysed gives a result with its ``error`` instead of an exception. Its numbers depend
-  only on the file and the settings (the gap simulations use ``settings.seed`` for every file),
+  only on the file and the settings (the gap simulations use fixed streams for every file),
   never on where it runs.
 - ``runner``: runs it in worker processes (:func:`~gyrofilter.analysis.fleet.runner.run_local`, a
   :class:`concurrent.futures.ProcessPoolExecutor`) or on a Dask distributed cluster

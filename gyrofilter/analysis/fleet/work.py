@@ -24,7 +24,7 @@ class FleetSettings:
 
     ``command``: ``"allan"`` (the Allan part only) or ``"gap"`` (the gap analysis and the Allan
     part). The Allan part uses ``axes``, ``confidence``, ``min_clusters``, ``keep_outliers`` as
-    ``gyrofilter allan`` does; the gap part ``seed`` and ``sims`` as ``gyrofilter gap``.
+    ``gyrofilter allan`` does; the gap part ``sims`` as ``gyrofilter gap``.
     """
 
     command: str
@@ -32,7 +32,6 @@ class FleetSettings:
     confidence: float = 0.95
     min_clusters: int = MIN_CLUSTERS
     keep_outliers: bool = False
-    seed: int = 0
     sims: int | None = None
 
 
@@ -70,7 +69,7 @@ def analyse_recording(path, settings):
 
 
 def _gap_report(path, settings, warnings):
-    return analyse_file(path, seed=settings.seed, n_sims=settings.sims, warn=warnings.append)[1]
+    return analyse_file(path, n_sims=settings.sims, warn=warnings.append)[1]
 
 
 def _allan_part(path, settings, result):

@@ -9,8 +9,8 @@ hold the parts:
 
 1. **Baseline fit** per axis (the package's plain simulation: constant bias, white noise,
    quantization of the recorded unit; :func:`gyrofilter.analysis.gap.baseline.baseline_model`).
-2. **Simulated spread**: the baseline is simulated ``n_sims`` times (seeded by
-   ``decision_streams``, not by ``seed``: :data:`DECISION_STREAMS`; common random
+2. **Simulated spread**: the baseline is simulated ``n_sims`` times (seeded; the commands use
+   :data:`COMMAND_SEED` whatever their ``--seed``; common random
    numbers with the extended model; :func:`gyrofilter.analysis.gap.baseline.sim_features`),
    and the same features are computed on the measurement and on every run
    (:mod:`gyrofilter.analysis.gap.features`: the overlapping Allan deviation at log-spaced tau,
@@ -91,10 +91,17 @@ def gap_columns(names):
     return list(GYRO_COLUMNS) + ([c for c in ("t", "temp") if c in names] if "temp" in names else [])
 
 
-def analyse_file(path, *, seed=0, n_sims=None, bootstrap=None, warn, progress=None, refuse_motion=False):
+#: the seed of every simulation of the commands (``gap``, ``report``, the fleet): fixed, so that no
+#: named cause, interval or D moves with a seed (common random numbers across runs; their
+#: ``--seed`` is kept for older scripts and has no effect). How the answers hold on other streams
+#: is measured by ``tools/gap_stability.py`` (docs/gap.md, "How stable the answers are")
+COMMAND_SEED = 0
+
+
+def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refuse_motion=False):
     """The gap analysis of the recording file ``path``, the one way every command reads and
     analyses a file (``gap``, ``report``, the fleet): returns ``(the Recording, the gap report)``
-    (:func:`analyse_gap` with ``seed``, ``n_sims``, ``bootstrap``). The analysis models a still
+    (:func:`analyse_gap` with :data:`COMMAND_SEED`, ``n_sims``, ``bootstrap``). The analysis models a still
     gyro: an axis that looks moved (:func:`gyrofilter.analysis.still.moved`, as ``allan`` judges
     it) raises RecordingError with ``refuse_motion``, else is the first warning. The reader's
     warnings and the gaps in ``t`` go to ``warn(text)``, the steps to ``progress(text)``. Only the
@@ -112,30 +119,22 @@ def analyse_file(path, *, seed=0, n_sims=None, bootstrap=None, warn, progress=No
         warn(text)
     warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)
     say(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
-    return rec, analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=path, bootstrap=bootstrap)
+    return rec, analyse_gap(rec, seed=COMMAND_SEED, n_sims=n_sims, progress=progress, recording_name=path,
+                            bootstrap=bootstrap)
 
 
-#: the seed of the simulations every decision is scored on (the baseline's runs and the extended
-#: models', which share their first streams): the same whatever ``--seed``, so that no named cause
-#: moves with it (common random numbers across runs of the command); ``tools/gap_stability.py
-#: --streams`` measures how the decisions hold on other streams (docs/gap.md, "How stable")
-DECISION_STREAMS = 0
-
-
-def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=None,
-                decision_streams=DECISION_STREAMS):
+def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=None):
     """Run the gap analysis on a :class:`~gyrofilter.recording.Recording`; returns the report
     dict of docs/formats.md section 3 (with ``discrepancy``, ``departures``,
-    ``runtime_s``). ``progress(text)`` is called with short status lines. ``seed``: the
-    parameters' bootstrap; ``decision_streams``: the simulations the decisions are scored on
-    (:data:`DECISION_STREAMS`). ``bootstrap``: runs
+    ``runtime_s``). ``progress(text)`` is called with short status lines. ``seed``: the streams
+    of every simulation (the decisions' and the intervals'). ``bootstrap``: runs
     per axis with findings for the parameters' intervals (:mod:`gyrofilter.analysis.gap.intervals`;
     0: none; None: :func:`~gyrofilter.analysis.gap.intervals.default_bootstrap` of the record's length)."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
             return _analyse_gap(rec, seed=seed, n_sims=n_sims, progress=progress, recording_name=recording_name,
-                                bootstrap=bootstrap, decision_streams=decision_streams)
+                                bootstrap=bootstrap)
         except GyroFilterError:
             raise
         except (ValueError, ArithmeticError) as exc:  # a statistic that cannot run numerically (a singular
@@ -152,11 +151,11 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None,
                     "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
 
 
-def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap, decision_streams):
+def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
     """The five steps of the module docstring, in order."""
     t_start = time.perf_counter()
     say = progress or (lambda text: None)
-    report, setup = prepare(rec, decision_streams=decision_streams, n_sims=n_sims, recording_name=recording_name)
+    report, setup = prepare(rec, seed=seed, n_sims=n_sims, recording_name=recording_name)
     if setup is not None:
         inp = baseline_spread(setup, say)                               # 2.
         report["departures"] = {a: departure_summary(inp.deps[i], inp.meas_feats[i], inp.taus, inp.bands)
@@ -176,7 +175,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap, deci
     return report
 
 
-def prepare(rec, *, decision_streams, n_sims, recording_name):
+def prepare(rec, *, seed, n_sims, recording_name):
     """Step 1: the checks, the baseline fit and the report's head. Returns ``(report, setup)``:
     ``setup`` is the dict of :class:`~gyrofilter.analysis.gap.state.GapInput`'s fields known
     before the simulations, or None for a record too short to analyse."""
@@ -213,7 +212,7 @@ def prepare(rec, *, decision_streams, n_sims, recording_name):
     m = default_n_sims(n) if n_sims is None else int(n_sims)
     return report, {"rec": rec, "sample_rate_hz": sample_rate_hz, "n": n, "temp": temp, "base": base, "q": q,
                     "taus": feature_taus(n, sample_rate_hz), "bands": feature_bands(n, sample_rate_hz), "n_sims": m,
-                    "seeds": np.random.default_rng(decision_streams).integers(0, 2**31, size=m), "n_ext": max(6, m // 2)}
+                    "seeds": np.random.default_rng(seed).integers(0, 2**31, size=m), "n_ext": max(6, m // 2)}
 
 
 def _static_notes(rec, base, sample_rate_hz):

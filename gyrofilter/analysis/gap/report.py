@@ -239,7 +239,7 @@ def uncertain_text(entry, sep="="):
     return f"{entry['effect']} on {entry['axis']} ({params_text(entry, sep)}): {entry['why']}"
 
 
-def write_report(report, rec, out_dir, *, seed=0):
+def write_report(report, rec, out_dir):
     """Write the Markdown report and figures; returns the Markdown path."""
     os.makedirs(out_dir, exist_ok=True)
     g = rec.gyro_dps
@@ -247,7 +247,7 @@ def write_report(report, rec, out_dir, *, seed=0):
     temp = rec.temp_c
     lines = [f"# Model-gap report: {one_line_text(report['recording'])}", "",
              f"{report['duration_s']:.1f} s at {report['sample_rate_hz']:g} Hz; "
-             f"{report.get('n_simulations', 0)} baseline simulations (bootstrap seed {seed}); "
+             f"{report.get('n_simulations', 0)} baseline simulations; "
              f"runtime {report.get('runtime_s', float('nan')):.1f} s.", "",
              "## Baseline (constant bias + white noise + rounding to the LSB step)", "",
              "| axis | bias (deg/s) | ARW (deg/s/sqrt(Hz)) | LSB step (deg/s) | discrepancy D before | after |",
