@@ -126,7 +126,8 @@ def main(argv=None):
 def report(results, seeds):
     """Print the table and the counts; return the counts."""
     counts = {"real_axes": 0, "real_same": 0, "sim_axes": 0, "sim_same": 0, "outside": 0, "wide": 0,
-              "sim_foreign": 0, "sim_temperature": 0, "sim_axis_seeds": 0}
+              "sim_foreign": 0, "sim_temperature_named": 0, "sim_temperature_listed": 0, "sim_temperature_suggested": 0,
+              "sim_axis_seeds": 0}
     print("| record | axis | " + " | ".join(f"seed {s}" for s in seeds) + " | same | D |")
     print("|---|---|" + "---|" * len(seeds) + "---|---|")
     for name, by_seed in results.items():
@@ -143,7 +144,10 @@ def report(results, seeds):
                 if sim:
                     counts["sim_axis_seeds"] += 1
                     counts["sim_foreign"] += any(e not in DEFAULT_MODEL_EFFECTS for e in r["named"])
-                    counts["sim_temperature"] += "temperature" in r["named"] + r["alternatives"] + r["uncertain"]
+                    named, listed = "temperature" in r["named"], "temperature" in r["alternatives"]
+                    counts["sim_temperature_named"] += named
+                    counts["sim_temperature_listed"] += listed and not named
+                    counts["sim_temperature_suggested"] += "temperature" in r["uncertain"] and not (named or listed)
             cells = [", ".join(r["named"]) + (f" (uncertain: {', '.join(r['uncertain'])})" if r["uncertain"] else "")
                      or "-" for r in rows]
             d = " / ".join(f"{r['D']:.3g}" if r["D"] is not None else "-" for r in rows)
@@ -159,7 +163,9 @@ def report(results, seeds):
     print(f"intervals outside their estimate: {counts['outside']}; over a factor 100: {counts['wide']}")
     if counts["sim_axis_seeds"]:
         print(f"default model (axis x seed): a cause outside its terms on {counts['sim_foreign']} of "
-              f"{counts['sim_axis_seeds']}; temperature named, listed or suggested (uncertain) on {counts['sim_temperature']}")
+              f"{counts['sim_axis_seeds']}; the temperature named on {counts['sim_temperature_named']}, listed as an "
+              f"alternative on {counts['sim_temperature_listed']} more, suggested (uncertain) on "
+              f"{counts['sim_temperature_suggested']} more")
     return counts
 
 
