@@ -606,3 +606,18 @@ def test_a_stuck_axis_costs_the_fleet_that_axis_only(tmp_path, capsys):
     assert rows["x"]["status"].startswith(f"{path}: axis x: all 6000 samples equal -3.3 deg/s")
     assert rows["x"]["arw_dps_per_sqrt_hz"] == ""
     assert "1 recording(s), 1 analysed, 0 failed" in capsys.readouterr().out
+
+
+def test_a_stuck_axis_of_a_gap_fleet_is_not_analysed(tmp_path, capsys):
+    """Issue 37 (attack): in a gap fleet the stuck axis's row said ``ok`` with its D of 2e-09
+    against a constant baseline; now it says the axis was not analysed and holds no D."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    g[:, 0] = -3.3
+    path = tmp_path / "stuckx.csv"
+    write_recording(path, Recording.from_dps(g, 100.0))
+    assert main(["gap", str(path), "--fleet", str(tmp_path / "f"), "--sims", "10", "--bootstrap", "0"]) == 0
+    rows = {r["axis"]: r for r in _table(tmp_path / "f")}
+    assert rows["x"]["status"] == f"{path}: axis x: constant signal, not analysed"
+    assert rows["x"]["d_before"] == rows["x"]["d_after"] == ""
+    assert rows["y"]["status"] == "ok" and float(rows["y"]["d_before"]) > 0.1
+    assert "not analysed" in capsys.readouterr().out

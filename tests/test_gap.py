@@ -373,6 +373,21 @@ def test_a_constant_axis_in_deg_s_is_explained_by_the_baseline(level):
     assert not any(n.startswith("axis z: after extension") for n in report["notes"]), report["notes"]
 
 
+def test_a_constant_axis_enters_no_overall_discrepancy():
+    """Issue 37 (attack): a stuck axis's D (2.3e-09 against its constant baseline) was averaged into
+    overall_before/after as if analysed; now the mean is over the axes analysed and
+    ``not_analysed`` says which is not and why."""
+    g = np.random.default_rng(12).normal(0, 0.05, (3000, 3))
+    g[:, 0] = -3.3
+    d = analyse_gap(Recording.from_dps(g, 100.0), n_sims=4, bootstrap=0)["discrepancy"]
+    assert d["not_analysed"] == {"x": "constant signal"}
+    assert d["overall_before"] == pytest.approx((d["before"]["y"] + d["before"]["z"]) / 2)
+    assert d["overall_after"] == pytest.approx((d["after"]["y"] + d["after"]["z"]) / 2)
+    g[:, 1:] = 0.25
+    d = analyse_gap(Recording.from_dps(g, 100.0), n_sims=4, bootstrap=0)["discrepancy"]
+    assert set(d["not_analysed"]) == set("xyz") and d["overall_before"] is None and d["overall_after"] is None
+
+
 def test_cli_on_a_too_short_recording_says_so_and_prints_no_nan(tmp_path, capsys):
     from gyrofilter.cli import main
 

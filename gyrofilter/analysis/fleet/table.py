@@ -190,6 +190,7 @@ def fleet_rows(names, results):
             continue
         allan_axes = (res["allan"] or {}).get("axes", {})
         gap = res["gap"]
+        idle = ((gap or {}).get("discrepancy") or {}).get("not_analysed", {})
         stuck = {w[len("axis ")]: w for w in base["warnings"] if w.startswith("axis ") and w.endswith(LEFT_OUT)}
         axes = [a for a in AXES if a in allan_axes or a in stuck or gap is not None]
         for axis in axes:
@@ -198,6 +199,8 @@ def fleet_rows(names, results):
                        warnings=[w for w in base["warnings"] if not w.startswith("axis ") or w.startswith(f"axis {axis}:")])
             if axis in stuck and gap is None:  # an Allan fleet's stuck axis: a row that says so, not none
                 row["status"] = f"{res['recording']}: {stuck[axis]}"
+            if axis in idle:  # the gap had nothing to analyse there: its D (about 0) is no measurement
+                row["status"] = f"{res['recording']}: axis {axis}: {idle[axis]}, not analysed"
             if axis in allan_axes:
                 details = allan_axes[axis]["details"]
                 for term in (QUANTIZATION,) + COEFFICIENTS:
@@ -205,7 +208,7 @@ def fleet_rows(names, results):
                     d = details[key]
                     row[key], row[f"{key}_low"], row[f"{key}_high"] = d["value"], d["low"], d["high"]
                     row[f"{key}_upper"] = None if d["resolved"] else d["upper_bound"]
-            if gap is not None:
+            if gap is not None and axis not in idle:
                 row["findings"] = [f for f in gap["findings"] if f["axis"] == axis]
                 d = gap.get("discrepancy", {})
                 row["d_before"] = d.get("before", {}).get(axis)

@@ -232,9 +232,12 @@ def baseline_spread(setup, say):
     before. Returns the :class:`~gyrofilter.analysis.gap.state.GapInput`."""
     rec, n, sample_rate_hz, taus, bands = setup["rec"], setup["n"], setup["sample_rate_hz"], setup["taus"], setup["bands"]
     say(f"baseline: {setup['n_sims']} simulations of {n / sample_rate_hz:.0f} s at {sample_rate_hz:g} Hz")
-    meas_feats = []
+    meas_feats, idle = [], {}
     for i in range(3):
         x = axis_dps(rec, i)  # the features may overwrite it unless it is the record's own column
+        why = nothing_to_analyse(x)
+        if why:
+            idle[AXES[i]] = why
         meas_feats.append(features(x, sample_rate_hz, taus, bands,
                                    overwrite=not np.shares_memory(x, rec.columns[GYRO_COLUMNS[i]])))
         del x
@@ -242,7 +245,17 @@ def baseline_spread(setup, say):
                         "baseline simulations (runs x axes)")
     deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
     return GapInput(**setup, meas_feats=meas_feats, deps=deps, before=[discrepancy(d) for d in deps], base_sims=sims,
-                    say=say)
+                    idle=idle, say=say)
+
+
+def nothing_to_analyse(x_dps):
+    """Why the axis samples ``x_dps`` have nothing for the detectors (a constant signal, or a
+    standard deviation below :data:`~gyrofilter.units.MIN_NOISE_DPS`), or None."""
+    if not np.ptp(x_dps) > 0:
+        return "constant signal"
+    if not np.std(x_dps) >= MIN_NOISE_DPS:
+        return f"noise below {MIN_NOISE_DPS:g} deg/s (too small for the detectors in float64)"
+    return None
 
 
 def detect(inp, notes):
@@ -253,14 +266,11 @@ def detect(inp, notes):
     candidates, axes, readings, uncertain = [], [], {}, []
     for i, a in enumerate(AXES):
         inp.say(f"detectors on {a}")
-        x = axis_dps(inp.rec, i)
-        idle = ("constant signal" if not np.ptp(x) > 0 else
-                f"noise below {MIN_NOISE_DPS:g} deg/s (too small for the detectors in float64)"
-                if not np.std(x) >= MIN_NOISE_DPS else None)
-        if idle:
-            notes.append(f"axis {a}: {idle}, nothing to analyse")
+        if a in inp.idle:
+            notes.append(f"axis {a}: {inp.idle[a]}, nothing to analyse")
             axes.append(AxisModels(ext=dict(inp.base["axes"][a], effects=[])))
             continue
+        x = axis_dps(inp.rec, i)
         owned = not np.shares_memory(x, inp.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
         try:
             cands, xc, alt, slow_stats = _detect_axis(x, inp.sample_rate_hz, inp.temp,
@@ -493,12 +503,14 @@ def write_findings(inp, state, scorer, report, found):
         summ["extended_band_sim_mean_log"] = [float(v) for v in deps_e["band"][1]]
         summ["extended_band_sim_sd_log"] = [float(v) for v in deps_e["band"][2]]
         summ["extended_discrepancy"] = after[i]
+    analysed = [i for i, a in enumerate(AXES) if a not in inp.idle]  # an idle axis's D ~ 0 says nothing
     report["discrepancy"] = {"metric": METRIC,
                              "definition": "D = mean over features of z^2, z = (measured - mean of simulations) / max(sd of simulations, floor)",
                              "before": {a: before[i] for i, a in enumerate(AXES)},
                              "after": {a: after[i] for i, a in enumerate(AXES)},
-                             "overall_before": float(np.mean(before)),
-                             "overall_after": float(np.mean(after)),
+                             "overall_before": _mean_or_none([before[i] for i in analysed]),
+                             "overall_after": _mean_or_none([after[i] for i in analysed]),
+                             "not_analysed": dict(inp.idle),
                              "before_se": {a: scorer.discrepancy_error(i, None, "") for i, a in enumerate(AXES)},
                              "after_se": {a: scorer.discrepancy_error(
                                  i, state.model(inp, i, state.kept_on(i)) if state.kept_on(i) else None,
@@ -513,3 +525,8 @@ def write_findings(inp, state, scorer, report, found):
         report["notes"].append(f"record of {n / sample_rate_hz:.0f} s: slow bias effects (drift, random walk, bias instability) "
                                "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / sample_rate_hz / 9))
     report["notes"] += found.notes
+
+
+def _mean_or_none(values):
+    """The mean of ``values`` (the D of the axes analysed), None when there is none."""
+    return float(np.mean(values)) if values else None

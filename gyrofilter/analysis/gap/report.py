@@ -257,9 +257,9 @@ def write_report(report, rec, out_dir, *, seed=0):
         b = report["baseline"]["axes"][a]
         bias, arw = ([interval_text(b[k], b.get("params_ci95"), k) if b.get(k) is not None else "-"
                       for k in ("bias_dps", "arw_dps_per_sqrt_hz")])
-        lines.append(f"| {a} | {bias} | {arw} | "
-                     f"{_fmt(b.get('quantization_dps'))} | {_fmt(disc.get('before', {}).get(a))} | "
-                     f"{_fmt(disc.get('after', {}).get(a))} |")
+        d_before, d_after = (("not analysed",) * 2 if a in disc.get("not_analysed", {}) else
+                             (_fmt(disc.get("before", {}).get(a)), _fmt(disc.get("after", {}).get(a))))
+        lines.append(f"| {a} | {bias} | {arw} | {_fmt(b.get('quantization_dps'))} | {d_before} | {d_after} |")
     lines += ["", f"Discrepancy D: {disc.get('definition', '')} (lower is better; about 1 when the "
               "model explains the measurement).", "", "## Findings", ""]
     intervals = report.get("intervals") or {}
