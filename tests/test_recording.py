@@ -1,5 +1,6 @@
 import gzip
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -322,6 +323,16 @@ def test_a_repeated_header_key_is_refused_naming_its_line(tmp_path, key):
     path = _dps_file(tmp_path, "0,1,2,3\n", header=f"# sensor: a\n# {key}: {value}\n")
     with pytest.raises(RecordingError, match=f"{path}: line 5: header key '{key}' repeated \\(first on line [234]\\)"):
         read_recording(path)
+
+
+def test_a_t_step_beyond_a_float_is_refused_without_a_warning(tmp_path):
+    """Issue 37 (attack): t from -1e308 to 1e308 printed numpy's "RuntimeWarning: overflow
+    encountered in subtract" above the one-line refusal."""
+    path = _dps_file(tmp_path, "-1e308,0,0,0\n1e308,0,0,0\n1.1e308,0,0,0\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(RecordingError, match=f"{path}: t steps by "):
+            read_recording(path)
 
 
 @pytest.mark.parametrize("step_s", [0.001, 0.0094, 0.0106, 0.1])

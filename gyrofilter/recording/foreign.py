@@ -35,7 +35,9 @@ from __future__ import annotations
 
 import decimal
 import gzip
+import math
 import re
+import sys
 import zlib
 from dataclasses import dataclass, field
 
@@ -223,16 +225,19 @@ def _times(texts, where, path):
     subtracted as decimals, exactly, before they become floats: a phone's stamps in s since 1970
     with 9 decimals (or ns since 1970) keep every ns, which floats of the stamps themselves
     (2.4e-7 s apart near 1.7e9) would not. ``where(row)`` names a row for the refusal of a stamp
-    too far from the first for a float."""
+    beyond a float's range (the first such row: a first stamp of 1e400 is blamed, not the next
+    row, whose offset from it is what overflows) or too far from the first for a float."""
     with decimal.localcontext() as ctx:
         ctx.traps[decimal.Overflow] = False  # 1e99999 - 0 is Infinity, refused below
         first = decimal.Decimal(texts[0])
         offsets = np.array([float(decimal.Decimal(t) - first) for t in texts])
     bad = np.flatnonzero(~np.isfinite(offsets))
     if bad.size:
-        row = int(bad[0])
-        raise RecordingError(f"{path}: {where(row)}: time stamp {quote(texts[row])} is too far from the first "
-                             f"({quote(texts[0])}) to be a time of this log")
+        huge = [row for row in range(int(bad[0]) + 1) if not math.isfinite(float(decimal.Decimal(texts[row])))]
+        row = huge[0] if huge else int(bad[0])
+        why = (f"is beyond the range of a float ({sys.float_info.max:.3g})" if huge else
+               f"is too far from the first ({quote(texts[0])}) to be a time of this log")
+        raise RecordingError(f"{path}: {where(row)}: time stamp {quote(texts[row])} {why}")
     return offsets, texts[0]
 
 
