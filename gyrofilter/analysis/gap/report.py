@@ -23,7 +23,8 @@ import os
 import numpy as np
 
 from ...effects import BIAS_STEP, COVARIATES, RATE_RAMP, SHAPES, TEMPERATURE, WARMUP
-from ...plots import pyplot
+from ...errors import naming_file
+from ...plots import pyplot, save_figure
 from ...recording.header import one_line_text
 from ...units import AXES, utf8_text
 from .confound import NAMED_BECAUSE, WHY_THE_COVARIATE
@@ -46,7 +47,7 @@ def _band_centres(edges):
     return np.sqrt(np.maximum(e[:-1], 1e-12) * e[1:])
 
 
-def _finish(plt, fig, ax, path, xlabel, ylabel, title):
+def _finish(fig, ax, path, xlabel, ylabel, title):
     """Labels, grid, legend; save as PNG and close."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
@@ -54,8 +55,7 @@ def _finish(plt, fig, ax, path, xlabel, ylabel, title):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def _plot_spread(x, dep, key, axis, path, *, xlabel, ylabel, title):
@@ -71,7 +71,7 @@ def _plot_spread(x, dep, key, axis, path, *, xlabel, ylabel, title):
         ax.fill_between(x, np.exp(me - 2 * se), np.exp(me + 2 * se), color="tab:green", alpha=0.3,
                         label="extended model (mean +- 2 sd)")
     ax.loglog(x, np.exp(dep[f"{key}_meas_log"]), "k.-", lw=1.2, label="measurement")
-    _finish(plt, fig, ax, path, xlabel, ylabel, f"axis {axis}: {title}")
+    _finish(fig, ax, path, xlabel, ylabel, f"axis {axis}: {title}")
 
 
 def plot_adev(dep, axis, path):
@@ -100,7 +100,7 @@ def plot_temperature(x, temp, axis, coef, path):
     if coef is not None:
         tt = np.linspace(tb.min(), tb.max(), 10)
         ax.plot(tt, coef * (tt - np.mean(temp)), "r-", label=f"fit: {coef:+.3g} deg/s per deg C")
-    _finish(plt, fig, ax, path, "sensor temperature (deg C)", "rate minus mean (deg/s)",
+    _finish(fig, ax, path, "sensor temperature (deg C)", "rate minus mean (deg/s)",
             f"axis {axis}: rate against temperature")
 
 
@@ -140,7 +140,7 @@ def plot_time(x, sample_rate_hz, axis, findings, path, temp=None, alternatives=(
         if np.ptp(shape) > 0:
             shape += np.mean(y) - np.mean(shape)
             ax.plot(t, shape, style, lw=1.5, label=words + ", ".join(f["effect"] for f in group if f["effect"] in _SHAPES))
-    _finish(plt, fig, ax, path, "time (s)", "rate (deg/s)", f"axis {axis}: rate in time")
+    _finish(fig, ax, path, "time (s)", "rate (deg/s)", f"axis {axis}: rate in time")
 
 
 def covariate_preamble(findings):
@@ -303,6 +303,6 @@ def write_report(report, rec, out_dir, *, seed=0):
                       alternatives=alternatives)
             lines += [f"![rate in time {a}]({_figure('time', a)})", ""]
     path = os.path.join(out_dir, REPORT_NAME)
-    with open(path, "w", encoding="utf-8") as fh:
+    with naming_file(path), open(path, "w", encoding="utf-8") as fh:
         fh.write(utf8_text("\n".join(lines) + "\n"))  # the recording's name may be a file name that is not UTF-8
     return path
