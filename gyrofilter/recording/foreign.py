@@ -44,8 +44,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RecordingError
-from ..inputs import check_number, is_plain_number, quote
-from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_sample_rate_hz, to_dps
+from ..inputs import is_plain_number, quote
+from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sample_rate_hz, to_dps
 from .checks import TimeCheck
 from .content import Recording, RecordingHead
 from .header import FORMAT_VERSION, GYRO_COLUMNS, MAX_LINE_BYTES, VERSION_KEY, format_number
@@ -349,7 +349,7 @@ def _gyro_unit(unit, stated, lsb_per_dps, path):
     if unit == "lsb":
         if lsb_per_dps is None:
             raise RecordingError("--unit lsb needs --lsb-per-dps (LSB per deg/s; the MPU6050 at +-250 deg/s: 131)")
-        check_number(lsb_per_dps, "--lsb-per-dps", low=0, low_open=True, error=RecordingError)
+        check_lsb_per_dps(lsb_per_dps, "--lsb-per-dps", RecordingError)
     elif lsb_per_dps is not None:
         raise RecordingError(f"--lsb-per-dps goes with --unit lsb, not {unit}")
     return unit

@@ -10,7 +10,7 @@ import re
 
 from ..errors import RecordingError
 from ..inputs import parse_number, quote
-from ..units import AXES, GYRO_UNITS, check_sample_rate_hz, utf8_text
+from ..units import AXES, GYRO_UNITS, check_lsb_per_dps, check_sample_rate_hz, utf8_text
 
 #: the first header key of every recording; its value is the format version
 VERSION_KEY = "gyrofilter-recording"
@@ -118,7 +118,7 @@ def check_header(header, where):
     naming ``where`` (the file): the version, the required keys, ``sample_rate_hz`` a plain
     decimal number (:func:`~gyrofilter.inputs.parse_number`) checked by
     :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
-    ``lsb_per_dps`` a positive number with ``lsb``. The one check of a header: the reader's and
+    ``lsb_per_dps`` with ``lsb``, checked by :func:`~gyrofilter.units.check_lsb_per_dps`. The one check of a header: the reader's and
     the writers' (:func:`header_text`)."""
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
@@ -135,7 +135,8 @@ def check_header(header, where):
     if header["gyro_unit"] == "lsb":
         if "lsb_per_dps" not in header:
             raise RecordingError(f"{where}: gyro_unit is lsb but header key 'lsb_per_dps' is missing")
-        parse_number(header["lsb_per_dps"], f"{where}: lsb_per_dps", low=0, low_open=True, error=RecordingError)
+        check_lsb_per_dps(parse_number(header["lsb_per_dps"], f"{where}: lsb_per_dps", error=RecordingError),
+                          f"{where}: lsb_per_dps", RecordingError)
 
 
 #: column names that look like time stamps but are not ``t``: refused, so that a user's own file

@@ -53,7 +53,7 @@ import numpy as np
 from ..errors import DeviceError, SettingsError
 from ..inputs import check_number, is_plain_number, parse_number, quote
 from ..recording import COLUMNS, GYRO_COLUMNS, format_number, units_header
-from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
+from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz, to_dps
 from .mpu6050.chip import temperature_c
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
@@ -166,8 +166,9 @@ class LineParser:
         return units_header(sample_rate_hz, unit, lsb_per_dps)
 
     def _positive(self, values, key, where, hint):
-        """``values[key]`` (header text or an option's number) as a positive number (a float); a
-        sample rate within :func:`gyrofilter.units.check_sample_rate_hz`'s range."""
+        """``values[key]`` (header text or an option's number) as a positive number (a float): a
+        sample rate within :func:`gyrofilter.units.check_sample_rate_hz`'s range, an ``lsb_per_dps``
+        within :func:`gyrofilter.units.check_lsb_per_dps`'s."""
         value = values.get(key)
         if value is None:
             raise SettingsError(f"{self.where}: {where}: {key} missing ({hint})")
@@ -178,7 +179,7 @@ class LineParser:
         if key == "sample_rate_hz":
             number = check_sample_rate_hz(number, what, error)
         else:
-            number = check_number(number, what, low=0, low_open=True, error=error)
+            number = check_lsb_per_dps(number, what, error)
         return float(number)
 
     def _apply(self, header):
