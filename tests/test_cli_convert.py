@@ -265,3 +265,17 @@ def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     t_texts = [line.split(",")[0] for line in dst.read_text().splitlines() if line[:1].isdigit()]
     assert len(t_texts) == N
     assert t_texts == [str(float(f"{(s - stamps[0]) / 1e9:.9f}")) for s in stamps.tolist()]
+
+
+@pytest.mark.parametrize("digits", ["\uff11,\uff12,\uff13,\uff14", "\u00b9,2,3,4", "\u0661,2,3,4"])
+def test_columns_in_other_scripts_digits_are_refused(tmp_path, capsys, digits):
+    """Issue 37 (attack): ``--columns １,２,３,４`` (full-width digits) was read as 1,2,3,4 by
+    str.isdigit/int, and ``¹`` (isdigit, but no int) ended in "invalid literal for int()"; a number
+    a user gives is ASCII digits everywhere (gyrofilter.inputs)."""
+    rows = "".join(f"{i * 0.01:.2f},0.1,0.2,0.3\n" for i in range(50))
+    rc, dst = _convert(tmp_path, "a,b,c,d\n" + rows, "--unit", "dps", "--columns", digits)
+    assert rc == 2 and not dst.exists()
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and f"--columns: no column '{digits[0]}'" in err
+    rc, dst = _convert(tmp_path, "a,b,c,d\n" + rows, "--unit", "dps", "--columns", "1,2,3,4")
+    assert rc == 0

@@ -164,10 +164,11 @@ def _name_unit(normal, pattern):
 
 
 def _column_index(text, names, path):
-    """The index of the column ``text`` of ``--columns``: a name of the column row, or a 1-based number."""
+    """The index of the column ``text`` of ``--columns``: a name of the column row, or a 1-based number
+    in ASCII digits (as every number a user gives: :mod:`gyrofilter.inputs`; ``１`` or ``¹`` is no number)."""
     if text in names:
         return names.index(text)
-    if text.isdigit() and 1 <= int(text) <= len(names):
+    if re.fullmatch(r"[0-9]+", text) and 1 <= int(text) <= len(names):
         return int(text) - 1
     raise RecordingError(f"{path}: --columns: no column {quote(text)} (have {quote(', '.join(names))}; "
                          f"or give 1-based numbers, 1 to {len(names)})")
