@@ -621,3 +621,21 @@ def test_a_stuck_axis_of_a_gap_fleet_is_not_analysed(tmp_path, capsys):
     assert rows["x"]["d_before"] == rows["x"]["d_after"] == ""
     assert rows["y"]["status"] == "ok" and float(rows["y"]["d_before"]) > 0.1
     assert "not analysed" in capsys.readouterr().out
+
+
+def test_names_and_reasons_from_files_are_markdown_text_in_fleet_md(tmp_path, capsys):
+    """Attack pass (issue 37): a file named ``a|b<img src=x onerror=alert(5)>.csv`` put a tag into
+    fleet.md and split its row's cells at the ``|`` (its N under the unit's column); a cell quoted from
+    a bad line put ``<script>`` there too. Both are written literally now (entities, ``\\|``)."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    odd = tmp_path / "a|b<img src=x onerror=alert(5)>.csv"
+    write_recording(odd, Recording.from_dps(g, 100.0))
+    bad = tmp_path / "bad.csv"
+    bad.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,<script>x</script>\n")
+    assert main(["allan", str(odd), str(bad), "--fleet", str(tmp_path / "f")]) == 0
+    md = (tmp_path / "f" / "fleet.md").read_text()
+    assert "<img" not in md and "<script" not in md
+    assert "&lt;script&gt;x&lt;/script&gt;" in md
+    header = next(line for line in md.splitlines() if line.startswith("| unit | axis | N "))
+    row, = [line for line in md.splitlines() if line.startswith("| a\\|b&lt;img src=x onerror=alert(5)&gt; | x |")]
+    assert len(row.replace("\\|", "").split("|")) == len(header.split("|"))  # the escaped | splits no cell

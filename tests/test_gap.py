@@ -861,3 +861,16 @@ def test_a_quiet_quantized_sensor_has_its_noise_and_bias_read_from_its_codes(sig
     assert max(report["discrepancy"]["before"].values()) < OUTSIDE_NULL_D, report["discrepancy"]["before"]
     # and its one-step excursions, the quantizer's, are no spikes (outliers were named at 0.15 steps)
     assert report["findings"] == [], [(f["effect"], f["axis"]) for f in report["findings"]]
+
+
+@pytest.mark.skipif(importlib.util.find_spec("matplotlib") is None, reason="the report's figures need matplotlib")
+def test_the_reports_title_shows_a_recordings_name_literally(tmp_path):
+    """Attack pass (issue 37): a recording named ``<img src=x onerror=alert(9)>.csv`` put that tag
+    into the title of gap_report.md, which a Markdown viewer that renders HTML runs."""
+    from gyrofilter.cli import main
+
+    path = tmp_path / "<img src=x onerror=alert(9)>.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(3).normal(0, 0.1, (3000, 3)), 100.0))
+    assert main(["gap", str(path), "--sims", "10", "--bootstrap", "0", "--report", str(tmp_path / "rep")]) == 0
+    title = (tmp_path / "rep" / gap_report.REPORT_NAME).read_text().splitlines()[0]
+    assert title == f"# Model-gap report: {tmp_path}/&lt;img src=x onerror=alert(9)&gt;.csv"

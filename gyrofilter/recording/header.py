@@ -43,6 +43,19 @@ def one_line_text(text):
     return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), utf8_text(str(text))).strip()
 
 
+#: what a Markdown page must not take literally from a file's text: an HTML tag's or entity's start,
+#: a table cell's end, a code span's fence, the escape character itself
+_MARKDOWN_SPECIAL = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "\\|", "`": "\\`", "\\": "\\\\"}
+
+
+def markdown_text(text):
+    """``text`` from a file (a file name, a quoted cell, a header value) as a Markdown page shows
+    it: on one line (:func:`one_line_text`), ``&``, ``<`` and ``>`` as HTML entities (no tag of a
+    file's text is rendered by a Markdown viewer), ``|``, a backtick and a backslash escaped (a table
+    cell stays one cell; CommonMark's backslash escapes)."""
+    return "".join(_MARKDOWN_SPECIAL.get(c, c) for c in one_line_text(text))
+
+
 #: longest annotation text a writer writes (characters; a gap note is about 60)
 MAX_NOTE_CHARS = 4000
 

@@ -25,7 +25,7 @@ import numpy as np
 from ...effects import BIAS_STEP, COVARIATES, RATE_RAMP, SHAPES, TEMPERATURE, WARMUP
 from ...errors import naming_file
 from ...plots import pyplot, save_figure
-from ...recording.header import one_line_text
+from ...recording.header import markdown_text
 from ...units import AXES, utf8_text
 from .confound import NAMED_BECAUSE, WHY_THE_COVARIATE
 
@@ -245,7 +245,7 @@ def write_report(report, rec, out_dir, *, seed=0):
     g = rec.gyro_dps
     sample_rate_hz = rec.sample_rate_hz
     temp = rec.temp_c
-    lines = [f"# Model-gap report: {one_line_text(report['recording'])}", "",
+    lines = [f"# Model-gap report: {markdown_text(report['recording'])}", "",
              f"{report['duration_s']:.1f} s at {report['sample_rate_hz']:g} Hz; "
              f"{report.get('n_simulations', 0)} baseline simulations (bootstrap seed {seed}); "
              f"runtime {report.get('runtime_s', float('nan')):.1f} s.", "",
