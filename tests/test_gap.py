@@ -874,3 +874,17 @@ def test_the_reports_title_shows_a_recordings_name_literally(tmp_path):
     assert main(["gap", str(path), "--sims", "10", "--bootstrap", "0", "--report", str(tmp_path / "rep")]) == 0
     title = (tmp_path / "rep" / gap_report.REPORT_NAME).read_text().splitlines()[0]
     assert title == f"# Model-gap report: {tmp_path}/&lt;img src=x onerror=alert(9)&gt;.csv"
+
+
+@pytest.mark.parametrize("glitch", [1e300, -273.5, 250.0])
+def test_a_temperature_no_die_reaches_is_said_and_not_analysed(glitch):
+    """Attack pass (issue 37): a temp column with one value of 1e300 deg C was analysed silently (a
+    regression on that one value; replay refuses the file); now, as for a non-finite value, a note
+    names the first such sample and the temperature is left out."""
+    rng = np.random.default_rng(4)
+    temp = np.linspace(25.0, 35.0, 6000)
+    g = rng.normal(0, 0.05, (6000, 3)) + 0.02 * (temp - 30.0)[:, None]
+    temp[1234] = glitch
+    report = analyse_gap(Recording.from_dps(g, 100.0, temp_c=temp), n_sims=4, bootstrap=0)
+    assert f"temp column has values outside [-100, 200] deg C (sample 1235: {glitch:g}): temperature not analysed" in report["notes"]
+    assert not any(f["effect"] == "temperature" for f in report["findings"])

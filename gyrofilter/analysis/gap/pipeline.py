@@ -64,7 +64,7 @@ from ...effects import BY_NAME, SLOW, TEMPERATURE, WANDERS
 from ...errors import GyroFilterError, RecordingError
 from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
-from ...units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
+from ...units import AXES, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
 from ..still import moved, not_static
 from . import detectors as det
 from .baseline import (MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
@@ -206,9 +206,12 @@ def prepare(rec, *, decision_streams, n_sims, recording_name):
         return report, None
     temp = rec.temp_c
     temp = None if temp is None else np.asarray(temp, dtype=float)
-    if temp is not None and not np.all(np.isfinite(temp)):
+    if temp is not None and not np.all((temp >= TEMP_RANGE_C[0]) & (temp <= TEMP_RANGE_C[1])):
+        # a value no die reaches (replay refuses it): the covariate's fit would be that one value's
+        row = int(np.flatnonzero(~((temp >= TEMP_RANGE_C[0]) & (temp <= TEMP_RANGE_C[1])))[0])
+        report["notes"].append(f"temp column has values outside [{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C "
+                               f"(sample {row + 1}: {temp[row]:g}): temperature not analysed")
         temp = None
-        report["notes"].append("temp column has non-finite values: temperature not analysed")
     report["notes"] += _static_notes(rec, base, sample_rate_hz)
     m = default_n_sims(n) if n_sims is None else int(n_sims)
     return report, {"rec": rec, "sample_rate_hz": sample_rate_hz, "n": n, "temp": temp, "base": base, "q": q,
