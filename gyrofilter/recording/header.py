@@ -43,6 +43,16 @@ def one_line_text(text):
     return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), utf8_text(str(text))).strip()
 
 
+#: header keys gyrofilter writes to say where a recording's samples came from and what was done
+#: to them (docs/formats.md, section 1): a live device's header does not give them (the serial
+#: source drops them with a note), or a raw recording could say it is a filtered one
+#: (``filtered_from``, which replay refuses) or carry another time origin than its own
+PROVENANCE_KEYS = frozenset({"filtered_from", "filter_preset", "filter_settings", "bias_dps", "t_meaning",
+                             "calibration_from", "input_sample_rate_hz", "converted_from", "converted_by",
+                             "time_origin", "simulated_seed", "simulated_duration_s", "simulated_model",
+                             "simulated_model_name", "live_source", "recorded_by", "serial_port", "start_time_utc"})
+
+
 #: what a Markdown page must not take literally from a file's text: an HTML tag's or entity's start,
 #: a table cell's end, a code span's fence, the escape character itself
 _MARKDOWN_SPECIAL = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "\\|", "`": "\\`", "\\": "\\\\"}

@@ -52,7 +52,7 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError
 from ..inputs import check_number, is_plain_number, parse_number, quote
-from ..recording import COLUMNS, GYRO_COLUMNS, format_number, units_header
+from ..recording import COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
 from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz, to_dps
 from .mpu6050.chip import temperature_c
 
@@ -230,7 +230,11 @@ class LineParser:
                     same = key in units and float(units[key]) == float(value)
                 if not same:
                     raise UnitsConflict(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
-        header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS}
+        header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS and k not in PROVENANCE_KEYS}
+        for key in sorted(PROVENANCE_KEYS & values.keys()):
+            note = f"serial: the device's header key {key} is gyrofilter's own (where the samples came from): ignored"
+            if note not in self.notes:
+                self.notes.append(note)
         header.update(units)
         fields = self.fields
         if "fields" in values:
