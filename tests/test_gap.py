@@ -888,3 +888,22 @@ def test_a_temperature_no_die_reaches_is_said_and_not_analysed(glitch):
     report = analyse_gap(Recording.from_dps(g, 100.0, temp_c=temp), n_sims=4, bootstrap=0)
     assert f"temp column has values outside [-100, 200] deg C (sample 1235: {glitch:g}): temperature not analysed" in report["notes"]
     assert not any(f["effect"] == "temperature" for f in report["findings"])
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"n_sims": 0}, r"^n_sims \(baseline simulations\) must be in \[2, 1000\], got 0$"),
+    ({"n_sims": 2.5}, r"^n_sims \(baseline simulations\) must be a whole number, got 2.5$"),
+    ({"n_sims": 10**9}, r"^n_sims \(baseline simulations\) must be in \[2, 1000\], got 1000000000$"),
+    ({"n_sims": True}, r"^n_sims \(baseline simulations\) must be a finite number"),
+    ({"seed": -1}, r"^seed must be an integer in \[0, 2\^63 - 1\], got -1$"),
+    ({"bootstrap": 3}, r"^bootstrap must be 0 \(no intervals\) or in \[5, 1000\]"),
+])
+def test_the_api_refuses_run_settings_it_cannot_take(kwargs, message):
+    """Attack pass (issue 37): analyse_gap took n_sims=0 (a TypeError deep in the spread), 2.5 (2 runs),
+    10**9 (a run without end) and seed=-1 (a report saying the analysis "could not run"); the CLI's
+    --sims/--seed were checked, the library's keywords not."""
+    from gyrofilter.errors import SettingsError
+
+    rec = Recording.from_dps(np.random.default_rng(0).normal(0, 0.05, (3000, 3)), 100.0)
+    with pytest.raises(SettingsError, match=message):
+        analyse_gap(rec, **({"n_sims": 4, "bootstrap": 0} | kwargs))

@@ -19,7 +19,7 @@ import time
 
 from ..analysis.gap import report as gap_report
 from ..analysis.fleet.work import FleetSettings
-from ..analysis.gap.baseline import MIN_SIMS
+from ..analysis.gap.baseline import MAX_SIMS, MIN_SIMS
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import SettingsError
@@ -28,7 +28,6 @@ from ..sim.simulate import check_seed
 from ..units import AXES
 from . import batch, console, options, outputs
 
-MAX_SIMS = 1000  # baseline simulations; the default is 12-24, and the spread is known to +-3 % from 1000
 
 
 def add_arguments(parser):

@@ -61,20 +61,22 @@ from dataclasses import replace
 import numpy as np
 
 from ...effects import BY_NAME, SLOW, TEMPERATURE, WANDERS
-from ...errors import GyroFilterError, RecordingError
+from ...errors import GyroFilterError, RecordingError, SettingsError
+from ...inputs import check_number
 from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
+from ...sim.simulate import check_seed
 from ...units import AXES, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
 from ..still import moved, not_static
 from . import detectors as det
-from .baseline import (MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
-                       temperature_table, wander_highpassed)
+from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
+                       sim_features, temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
 from .confound import (alternatives_entry, kept_without_gain, suggested_temperature, weigh_lines, weigh_readings,
                        weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
-from .intervals import bootstrap_intervals
+from .intervals import MAX_BOOTSTRAP, MIN_REPLICATES, bootstrap_intervals
 from .scoring import Scorer
 from .state import AxisModels, GapInput, GapState, Kept, OtherReading
 
@@ -130,7 +132,9 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None,
     parameters' bootstrap; ``decision_streams``: the simulations the decisions are scored on
     (:data:`DECISION_STREAMS`). ``bootstrap``: runs
     per axis with findings for the parameters' intervals (:mod:`gyrofilter.analysis.gap.intervals`;
-    0: none; None: :func:`~gyrofilter.analysis.gap.intervals.default_bootstrap` of the record's length)."""
+    0: none; None: :func:`~gyrofilter.analysis.gap.intervals.default_bootstrap` of the record's length).
+    A ``seed``, ``n_sims`` or ``bootstrap`` it cannot take is refused (:func:`check_run_settings`)."""
+    check_run_settings(seed, n_sims, bootstrap)
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
@@ -150,6 +154,25 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None,
                                  "axes": {a: dict(base.get("axes", {}).get(a, {})) for a in AXES}, "model": base},
                     "findings": [], "uncertain": [], "extended_model": base,
                     "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
+
+
+def check_run_settings(seed, n_sims, bootstrap):
+    """Refuse (SettingsError naming the keyword) a ``seed`` that is not
+    :func:`~gyrofilter.sim.simulate.check_seed`'s, an ``n_sims`` that is not None or a whole number
+    in [2, :data:`~gyrofilter.analysis.gap.baseline.MAX_SIMS`] (a spread needs 2 runs; below
+    :data:`~gyrofilter.analysis.gap.baseline.MIN_SIMS` a note says D is not judged), a ``bootstrap``
+    that is not None, 0 or a whole number in [:data:`~gyrofilter.analysis.gap.intervals.MIN_REPLICATES`,
+    :data:`~gyrofilter.analysis.gap.intervals.MAX_BOOTSTRAP`]: an API call took ``n_sims=0`` (a
+    TypeError deep in the spread), ``2.5`` (2 runs), ``10**9`` (a run without end) and ``seed=-1``
+    (a report that "could not run")."""
+    check_seed(seed, "seed")
+    if n_sims is not None:
+        check_number(n_sims, "n_sims (baseline simulations)", low=2, high=MAX_SIMS, integer=True)
+    if bootstrap is not None:
+        runs = check_number(bootstrap, "bootstrap (runs per axis)", low=0, high=MAX_BOOTSTRAP, integer=True)
+        if 0 < runs < MIN_REPLICATES:
+            raise SettingsError(f"bootstrap must be 0 (no intervals) or in [{MIN_REPLICATES}, {MAX_BOOTSTRAP}] (an "
+                                f"interval needs {MIN_REPLICATES} runs), got {bootstrap}")
 
 
 def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap, decision_streams):
