@@ -44,6 +44,16 @@ LSB_PER_DPS_RANGE = (0.1, 1e8)
 MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
 
 
+def check_axes(axes, name="axes"):
+    """``axes`` as a tuple of axis letters when it is a non-empty subset of :data:`AXES` without
+    repeats, in any order (a string such as ``"xz"`` or a sequence of letters), else SettingsError
+    naming ``name``."""
+    letters = tuple(axes) if isinstance(axes, (str, tuple, list)) else ()
+    if not letters or any(a not in AXES for a in letters) or len(set(letters)) != len(letters):
+        raise SettingsError(f"{name} must be a subset of {''.join(AXES)} such as xz, got {plain(axes)}")
+    return letters
+
+
 def check_lsb_per_dps(value, name="lsb_per_dps", error=SettingsError):
     """``value`` as a float when it is LSB per deg/s within :data:`LSB_PER_DPS_RANGE`, else ``error``
     naming ``name`` (the keyword, option or header key, with its file if any): the one check of a
