@@ -54,16 +54,20 @@ PROVENANCE_KEYS = frozenset({"filtered_from", "filter_preset", "filter_settings"
 
 
 #: what a Markdown page must not take literally from a file's text: an HTML tag's or entity's start,
-#: a table cell's end, a code span's fence, the escape character itself
-_MARKDOWN_SPECIAL = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "\\|", "`": "\\`", "\\": "\\\\"}
+#: a table cell's end, a code span's fence
+_MARKDOWN_SPECIAL = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "\\|", "`": "\\`"}
+#: a backslash that CommonMark would read as an escape: one before ASCII punctuation
+_MARKDOWN_ESCAPE = re.compile(r"\\(?=[!-/:-@\[-`{-~])")
 
 
 def markdown_text(text):
     """``text`` from a file (a file name, a quoted cell, a header value) as a Markdown page shows
     it: on one line (:func:`one_line_text`), ``&``, ``<`` and ``>`` as HTML entities (no tag of a
-    file's text is rendered by a Markdown viewer), ``|``, a backtick and a backslash escaped (a table
-    cell stays one cell; CommonMark's backslash escapes)."""
-    return "".join(_MARKDOWN_SPECIAL.get(c, c) for c in one_line_text(text))
+    file's text is rendered by a Markdown viewer), ``|`` and a backtick escaped (a table cell stays
+    one cell), and a backslash before ASCII punctuation doubled (CommonMark's escapes; one before
+    anything else, as in ``\\udcff``, is shown as it is)."""
+    text = _MARKDOWN_ESCAPE.sub(r"\\\\", one_line_text(text))
+    return "".join(_MARKDOWN_SPECIAL.get(c, c) for c in text)
 
 
 #: longest annotation text a writer writes (characters; a gap note is about 60)
