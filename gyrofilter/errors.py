@@ -3,6 +3,8 @@
 Library code raises these; only the command line catches them and prints one line.
 Every message names what was wrong and where (file and line, register, setting).
 """
+import contextlib
+import os
 
 
 class GyroFilterError(Exception):
@@ -43,6 +45,19 @@ class DeviceError(GyroFilterError):
 
 class SourceEnded(Exception):
     """A finite source (replay file, simulation, closed port) has delivered its last sample."""
+
+
+@contextlib.contextmanager
+def naming_file(path):
+    """Writing the file ``path``: an OSError that names no file (a full disk or a file size limit
+    met at a write or a close, or inside a writer such as an image library) names ``path``, so that
+    the one-line error says which file could not be written, not only the folder it was in."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is None:
+            raise OSError(exc.errno, exc.strerror or str(exc), os.fspath(path)) from None
+        raise
 
 
 def one_line(exc):

@@ -1,7 +1,7 @@
 """Figures of filtered series (matplotlib, imported only when a figure is drawn)."""
 import os
 
-from .errors import SettingsError
+from .errors import SettingsError, naming_file
 from .extras import require
 from .units import AXES
 
@@ -10,6 +10,18 @@ def pyplot():
     """matplotlib.pyplot with the file-only Agg backend, or MissingExtraError naming the extra."""
     require("matplotlib", "figures").use("Agg")
     return require("matplotlib.pyplot", "figures")
+
+
+def save_figure(fig, path, dpi=110):
+    """Write the matplotlib figure ``fig`` to ``path`` and close it. A write error that names no
+    file (a full disk or a file size limit met inside the image writer, which then removes the file
+    it made) names ``path`` (:func:`gyrofilter.errors.naming_file`)."""
+    plt = pyplot()
+    try:
+        with naming_file(path):
+            fig.savefig(path, dpi=dpi)
+    finally:
+        plt.close(fig)
 
 
 def check_figure_path(path, option="--plot"):
@@ -47,5 +59,4 @@ def plot_filtered(path, raw, filtered, *, title=""):
     if title:
         axes[0].set_title(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)

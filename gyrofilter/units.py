@@ -35,7 +35,39 @@ MIN_SAMPLE_RATE_HZ = 0.001
 #: the steps of its t, a saved calibration's and the filter's (a clock drifts around its nominal
 #: rate by well under 1 %, not further)
 RATE_TOLERANCE = 0.05
+#: the LSB per deg/s a gyro's output may have (lsb_per_dps), ends included. MEMS gyros span about 2
+#: to 10^4: a 12-bit output at +-2000 deg/s reads 1, the MPU6050 16.4 to 131, a 16-bit part at
+#: +-125 deg/s 262, a 32-bit output of a navigation-grade MEMS part (ADIS16495, 0.00625 deg/s over 2^16)
+#: 1.05e7. The range keeps a factor of about 10 beyond each end; a number outside it is a unit or typing
+#: error (1e308 or 1e-308 LSB per deg/s would read every sample as 0 or as inf deg/s)
+LSB_PER_DPS_RANGE = (0.1, 1e8)
 MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
+
+
+def check_axes(axes, name="axes"):
+    """``axes`` as a tuple of axis letters when it is a non-empty subset of :data:`AXES` without
+    repeats, in any order (a string such as ``"xz"`` or a sequence of letters), else SettingsError
+    naming ``name``."""
+    letters = tuple(axes) if isinstance(axes, (str, tuple, list)) else ()
+    if not letters or any(a not in AXES for a in letters) or len(set(letters)) != len(letters):
+        raise SettingsError(f"{name} must be a subset of {''.join(AXES)} such as xz, got {plain(axes)}")
+    return letters
+
+
+def check_lsb_per_dps(value, name="lsb_per_dps", error=SettingsError):
+    """``value`` as a float when it is LSB per deg/s within :data:`LSB_PER_DPS_RANGE`, else ``error``
+    naming ``name`` (the keyword, option or header key, with its file if any): the one check of a
+    gyro's scale, for options, headers and models."""
+    low, high = LSB_PER_DPS_RANGE
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+    try:
+        ok = ok and low <= float(value) <= high  # NaN fails the comparison
+    except OverflowError:  # an int beyond a float's range
+        ok = False
+    if not ok:
+        raise error(f"{name} must be a number of LSB per deg/s in [{low:g}, {high:g}] (MEMS gyros span about 2 to "
+                    f"1e4), got {plain(value)}")
+    return float(value)
 
 
 def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):

@@ -140,3 +140,25 @@ def test_simple_interval_paper_000_example():
     low, high, rel = simple_interval(1.0, 10000, 100)
     assert float(rel) == pytest.approx(0.0711, abs=5e-5)
     assert float(high) == pytest.approx(1.0711, abs=5e-5)
+
+
+def test_odd_series_and_taus_are_refused_in_one_sentence():
+    """Attack pass (issue 37): a masked value was taken as data (the filter refuses it), values of
+    1e300 gave an Allan deviation of inf/nan without a word, a tau of 1e300 s was "shorter than one
+    sample" (after a RuntimeWarning of the int cast), and read_axes took axes="q" (a ValueError)."""
+    import warnings
+
+    from gyrofilter.analysis.still import characterise_recording
+
+    x = np.random.default_rng(0).normal(0, 0.05, 3000)
+    with pytest.raises(AllanInputError, match="x has masked values, the first at sample 3"):
+        overlapping_adev(np.ma.masked_array(x, mask=np.arange(3000) == 3), 100.0)
+    assert np.array_equal(overlapping_adev(np.ma.masked_array(x), 100.0)[1], overlapping_adev(x, 100.0)[1])
+    with pytest.raises(AllanInputError, match=r"values up to 1e\+300 overflow the squares"):
+        overlapping_adev(np.sign(x) * 1e300, 100.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(AllanInputError, match=r"too short for tau = 1e\+300 s"):
+            overlapping_adev(x, 100.0, [1e300])
+    with pytest.raises(SettingsError, match="^axes must be a subset of xyz such as xz, got 'q'$"):
+        characterise_recording("never-read.csv", axes="q", warn=print)

@@ -208,12 +208,24 @@ def test_decimal_epoch_seconds_are_subtracted_exactly(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("stamp", ["1e400", "-1e99999"])
-def test_a_time_stamp_too_far_for_a_float_is_refused_naming_its_line(tmp_path, capsys, stamp):
-    rows = "".join(f"{i * 0.01:.2f},0.1,0.2,0.3\n" for i in range(300))
-    rc, dst = _convert(tmp_path, "t,gx_dps,gy_dps,gz_dps\n" + rows + f"{stamp},0,0,0\n")
+@pytest.mark.parametrize("first", [False, True])
+def test_a_time_stamp_too_far_for_a_float_is_refused_naming_its_line(tmp_path, capsys, stamp, first):
+    """Issue 37 (attack): a first stamp of 1e400 was blamed on the next line ("time stamp '0.01' is
+    too far from the first ('1e400')"); the line named is the one holding the stamp."""
+    rows = [f"{i * 0.01:.2f},0.1,0.2,0.3\n" for i in range(300)]
+    rows.insert(0 if first else 300, f"{stamp},0,0,0\n")
+    rc, dst = _convert(tmp_path, "t,gx_dps,gy_dps,gz_dps\n" + "".join(rows))
     assert rc == 2 and not dst.exists()
     err = capsys.readouterr().err.strip()
-    assert f"line 302, column 1 ('t'): time stamp '{stamp}' is too far" in err and len(err.splitlines()) == 1
+    line = 2 if first else 302
+    assert f"line {line}, column 1 ('t'): time stamp '{stamp}' is beyond the range of a float" in err
+    assert len(err.splitlines()) == 1
+
+
+def test_a_time_stamp_too_far_from_the_first_is_refused_naming_its_line(tmp_path, capsys):
+    rc, dst = _convert(tmp_path, "t,gx_dps,gy_dps,gz_dps\n-1e308,0,0,0\n0,0,0,0\n1e308,0,0,0\n")
+    assert rc == 2 and not dst.exists()
+    assert "line 4, column 1 ('t'): time stamp '1e308' is too far from the first ('-1e308')" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("zipped", [False, True])
@@ -253,3 +265,17 @@ def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     t_texts = [line.split(",")[0] for line in dst.read_text().splitlines() if line[:1].isdigit()]
     assert len(t_texts) == N
     assert t_texts == [str(float(f"{(s - stamps[0]) / 1e9:.9f}")) for s in stamps.tolist()]
+
+
+@pytest.mark.parametrize("digits", ["\uff11,\uff12,\uff13,\uff14", "\u00b9,2,3,4", "\u0661,2,3,4"])
+def test_columns_in_other_scripts_digits_are_refused(tmp_path, capsys, digits):
+    """Issue 37 (attack): ``--columns １,２,３,４`` (full-width digits) was read as 1,2,3,4 by
+    str.isdigit/int, and ``¹`` (isdigit, but no int) ended in "invalid literal for int()"; a number
+    a user gives is ASCII digits everywhere (gyrofilter.inputs)."""
+    rows = "".join(f"{i * 0.01:.2f},0.1,0.2,0.3\n" for i in range(50))
+    rc, dst = _convert(tmp_path, "a,b,c,d\n" + rows, "--unit", "dps", "--columns", digits)
+    assert rc == 2 and not dst.exists()
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and f"--columns: no column '{digits[0]}'" in err
+    rc, dst = _convert(tmp_path, "a,b,c,d\n" + rows, "--unit", "dps", "--columns", "1,2,3,4")
+    assert rc == 0

@@ -76,7 +76,7 @@ def test_every_numeric_option_of_every_command_uses_the_plain_number_types():
         sub = next(a for a in build_parser(name)._actions if a.dest == "command").choices[name]
         for action in sub._actions:
             assert action.type not in (float, int), (name, action.option_strings)
-            checked += action.type in (options.decimal, options.whole_number)
+            checked += action.type in (options.decimal, options.whole_number, options.lsb_per_dps)
     assert checked >= 19  # the options of 2026-12: --duration, --seed, --jobs, --confidence, ...
 
 
@@ -91,3 +91,27 @@ def test_a_number_in_another_script_is_refused_before_any_work(tmp_path, capsys)
     assert code == 2
     assert "argument --duration: must be a plain decimal number (like 12, -0.5 or 1e-3), got '١_٠'" in capsys.readouterr().err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("value", ["1e308", "1e-308", "0.05", "2e8"])
+@pytest.mark.parametrize("command", ["convert", "record", "run"])
+def test_lsb_per_dps_is_bounded_to_what_a_gyro_can_be(tmp_path, capsys, command, value):
+    """Issue 37 (attack): --lsb-per-dps took any positive number (1e308 read every sample as 0
+    deg/s, 1e-308 as inf); it is refused outside units.LSB_PER_DPS_RANGE in one line naming it."""
+    from gyrofilter.cli import main
+
+    log = tmp_path / "log.csv"
+    log.write_text("t,gx,gy,gz\n" + "".join(f"{i / 100},1,2,3\n" for i in range(100)))
+    argv = {"convert": ["convert", str(log), "--unit", "lsb"],
+            "record": ["record", "--source", "serial:loop://", "--gyro-unit", "lsb"],
+            "run": ["run", "--source", "serial:loop://", "--gyro-unit", "lsb"]}[command]
+    with pytest.raises(SystemExit) as info:
+        main(argv + ["--lsb-per-dps", value, "--out", str(tmp_path / "o.csv")])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "argument --lsb-per-dps: must be a number of LSB per deg/s in [0.1, 1e+08]" in err
+    assert sorted(os.listdir(tmp_path)) == ["log.csv"]
+
+
+def test_lsb_per_dps_in_the_range_is_taken():
+    assert options.lsb_per_dps("131") == 131.0 and options.lsb_per_dps("0.1") == 0.1 and options.lsb_per_dps("1e8") == 1e8

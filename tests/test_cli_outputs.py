@@ -416,3 +416,21 @@ def test_a_write_that_fails_names_the_file_and_says_it_was_not_written(tmp_path)
     lines = [line for line in proc.stderr.splitlines() if not line.startswith("gyrofilter: warning")]
     assert lines == [f"gyrofilter: error: {out / name}: File too large; not written" for name in commands], proc.stderr
     assert not out.exists()
+
+
+def test_a_figure_that_fails_names_the_figure_not_its_folder(tmp_path):
+    """Issue 37 (attack): ``gap --report DIR`` under a file size limit said "DIR: File too large;
+    not written": the image writer raises without a file name (and removes what it wrote), so the
+    folder was named. Now the figure is, as ``allan --plot`` names its file; nothing is left behind."""
+    rec = tmp_path / "in.csv"
+    write_recording(rec, Recording.from_dps(np.random.default_rng(37).normal(0, 0.05, (3000, 3)), 100.0))
+    out = tmp_path / "out"
+    argvs = [["gap", str(rec), "--sims", "10", "--bootstrap", "0", "--report", str(out / "rep")],
+             ["allan", str(rec), "--plot", str(out / "allan.png")]]
+    proc = subprocess.run([sys.executable, "-c", _UNDER_A_SIZE_LIMIT, "2000", json.dumps(argvs)],
+                          capture_output=True, text=True, timeout=120, cwd=REPO)
+    assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * 2
+    lines = [line for line in proc.stderr.splitlines() if not line.startswith("gyrofilter: warning")]
+    assert lines == [f"gyrofilter: error: {out / 'rep' / 'adev_x.png'}: File too large; not written",
+                     f"gyrofilter: error: {out / 'allan.png'}: File too large; not written"], proc.stderr
+    assert not out.exists()

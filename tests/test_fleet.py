@@ -607,3 +607,36 @@ def test_a_stuck_axis_costs_the_fleet_that_axis_only(tmp_path, capsys):
     assert rows["x"]["status"].startswith(f"{path}: axis x: all 6000 samples equal -3.3 deg/s")
     assert rows["x"]["arw_dps_per_sqrt_hz"] == ""
     assert "1 recording(s), 1 analysed, 0 failed" in capsys.readouterr().out
+
+
+def test_a_stuck_axis_of_a_gap_fleet_is_not_analysed(tmp_path, capsys):
+    """Issue 37 (attack): in a gap fleet the stuck axis's row said ``ok`` with its D of 2e-09
+    against a constant baseline; now it says the axis was not analysed and holds no D."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    g[:, 0] = -3.3
+    path = tmp_path / "stuckx.csv"
+    write_recording(path, Recording.from_dps(g, 100.0))
+    assert main(["gap", str(path), "--fleet", str(tmp_path / "f"), "--sims", "10", "--bootstrap", "0"]) == 0
+    rows = {r["axis"]: r for r in _table(tmp_path / "f")}
+    assert rows["x"]["status"] == f"{path}: axis x: constant signal, not analysed"
+    assert rows["x"]["d_before"] == rows["x"]["d_after"] == ""
+    assert rows["y"]["status"] == "ok" and float(rows["y"]["d_before"]) > 0.1
+    assert "not analysed" in capsys.readouterr().out
+
+
+def test_names_and_reasons_from_files_are_markdown_text_in_fleet_md(tmp_path, capsys):
+    """Attack pass (issue 37): a file named ``a|b<img src=x onerror=alert(5)>.csv`` put a tag into
+    fleet.md and split its row's cells at the ``|`` (its N under the unit's column); a cell quoted from
+    a bad line put ``<script>`` there too. Both are written literally now (entities, ``\\|``)."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    odd = tmp_path / "a|b<img src=x onerror=alert(5)>.csv"
+    write_recording(odd, Recording.from_dps(g, 100.0))
+    bad = tmp_path / "bad.csv"
+    bad.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n1,2,<script>x</script>\n")
+    assert main(["allan", str(odd), str(bad), "--fleet", str(tmp_path / "f")]) == 0
+    md = (tmp_path / "f" / "fleet.md").read_text()
+    assert "<img" not in md and "<script" not in md
+    assert "&lt;script&gt;x&lt;/script&gt;" in md
+    header = next(line for line in md.splitlines() if line.startswith("| unit | axis | N "))
+    row, = [line for line in md.splitlines() if line.startswith("| a\\|b&lt;img src=x onerror=alert(5)&gt; | x |")]
+    assert len(row.replace("\\|", "").split("|")) == len(header.split("|"))  # the escaped | splits no cell

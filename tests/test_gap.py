@@ -373,6 +373,21 @@ def test_a_constant_axis_in_deg_s_is_explained_by_the_baseline(level):
     assert not any(n.startswith("axis z: after extension") for n in report["notes"]), report["notes"]
 
 
+def test_a_constant_axis_enters_no_overall_discrepancy():
+    """Issue 37 (attack): a stuck axis's D (2.3e-09 against its constant baseline) was averaged into
+    overall_before/after as if analysed; now the mean is over the axes analysed and
+    ``not_analysed`` says which is not and why."""
+    g = np.random.default_rng(12).normal(0, 0.05, (3000, 3))
+    g[:, 0] = -3.3
+    d = analyse_gap(Recording.from_dps(g, 100.0), n_sims=4, bootstrap=0)["discrepancy"]
+    assert d["not_analysed"] == {"x": "constant signal"}
+    assert d["overall_before"] == pytest.approx((d["before"]["y"] + d["before"]["z"]) / 2)
+    assert d["overall_after"] == pytest.approx((d["after"]["y"] + d["after"]["z"]) / 2)
+    g[:, 1:] = 0.25
+    d = analyse_gap(Recording.from_dps(g, 100.0), n_sims=4, bootstrap=0)["discrepancy"]
+    assert set(d["not_analysed"]) == set("xyz") and d["overall_before"] is None and d["overall_after"] is None
+
+
 def test_cli_on_a_too_short_recording_says_so_and_prints_no_nan(tmp_path, capsys):
     from gyrofilter.cli import main
 
@@ -846,3 +861,49 @@ def test_a_quiet_quantized_sensor_has_its_noise_and_bias_read_from_its_codes(sig
     assert max(report["discrepancy"]["before"].values()) < OUTSIDE_NULL_D, report["discrepancy"]["before"]
     # and its one-step excursions, the quantizer's, are no spikes (outliers were named at 0.15 steps)
     assert report["findings"] == [], [(f["effect"], f["axis"]) for f in report["findings"]]
+
+
+@pytest.mark.skipif(importlib.util.find_spec("matplotlib") is None, reason="the report's figures need matplotlib")
+def test_the_reports_title_shows_a_recordings_name_literally(tmp_path):
+    """Attack pass (issue 37): a recording named ``<img src=x onerror=alert(9)>.csv`` put that tag
+    into the title of gap_report.md, which a Markdown viewer that renders HTML runs."""
+    from gyrofilter.cli import main
+
+    path = tmp_path / "<img src=x onerror=alert(9)>.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(3).normal(0, 0.1, (3000, 3)), 100.0))
+    assert main(["gap", str(path), "--sims", "10", "--bootstrap", "0", "--report", str(tmp_path / "rep")]) == 0
+    title = (tmp_path / "rep" / gap_report.REPORT_NAME).read_text().splitlines()[0]
+    assert title == f"# Model-gap report: {tmp_path}/&lt;img src=x onerror=alert(9)&gt;.csv"
+
+
+@pytest.mark.parametrize("glitch", [1e300, -273.5, 250.0])
+def test_a_temperature_no_die_reaches_is_said_and_not_analysed(glitch):
+    """Attack pass (issue 37): a temp column with one value of 1e300 deg C was analysed silently (a
+    regression on that one value; replay refuses the file); now, as for a non-finite value, a note
+    names the first such sample and the temperature is left out."""
+    rng = np.random.default_rng(4)
+    temp = np.linspace(25.0, 35.0, 6000)
+    g = rng.normal(0, 0.05, (6000, 3)) + 0.02 * (temp - 30.0)[:, None]
+    temp[1234] = glitch
+    report = analyse_gap(Recording.from_dps(g, 100.0, temp_c=temp), n_sims=4, bootstrap=0)
+    assert f"temp column has values outside [-100, 200] deg C (sample 1235: {glitch:g}): temperature not analysed" in report["notes"]
+    assert not any(f["effect"] == "temperature" for f in report["findings"])
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"n_sims": 0}, r"^n_sims \(baseline simulations\) must be in \[2, 1000\], got 0$"),
+    ({"n_sims": 2.5}, r"^n_sims \(baseline simulations\) must be a whole number, got 2.5$"),
+    ({"n_sims": 10**9}, r"^n_sims \(baseline simulations\) must be in \[2, 1000\], got 1000000000$"),
+    ({"n_sims": True}, r"^n_sims \(baseline simulations\) must be a finite number"),
+    ({"seed": -1}, r"^seed must be an integer in \[0, 2\^63 - 1\], got -1$"),
+    ({"bootstrap": 3}, r"^bootstrap must be 0 \(no intervals\) or in \[5, 1000\]"),
+])
+def test_the_api_refuses_run_settings_it_cannot_take(kwargs, message):
+    """Attack pass (issue 37): analyse_gap took n_sims=0 (a TypeError deep in the spread), 2.5 (2 runs),
+    10**9 (a run without end) and seed=-1 (a report saying the analysis "could not run"); the CLI's
+    --sims/--seed were checked, the library's keywords not."""
+    from gyrofilter.errors import SettingsError
+
+    rec = Recording.from_dps(np.random.default_rng(0).normal(0, 0.05, (3000, 3)), 100.0)
+    with pytest.raises(SettingsError, match=message):
+        analyse_gap(rec, **({"n_sims": 4, "bootstrap": 0} | kwargs))

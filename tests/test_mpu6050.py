@@ -613,3 +613,18 @@ def test_an_option_the_source_cannot_take_is_refused_naming_it(monkeypatch, tmp_
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and all(word in err for word in words), err
     assert not out.exists() and model.regs[0x6B] == 0x40  # nothing written, the chip never woken
+
+
+def test_numbers_in_other_scripts_digits_are_refused(rig):
+    """Issue 37 (attack): int() reads full-width digits ("\uff16\uff18" as 68): the API's address
+    and allow_chip texts take ASCII only, as every number a user gives."""
+    from gyrofilter.errors import SettingsError
+    from gyrofilter.sources.mpu6050.chip import chip_ids
+
+    with pytest.raises(SettingsError, match="allow_chip"):
+        chip_ids(["\uff11\uff11\uff12"])
+    assert chip_ids(["0x70", 113]) == {0x70, 113}
+    clock, model, bus = rig()
+    with pytest.raises(SettingsError, match="address=.* is not an integer"):
+        open_src(clock, address="\uff11\uff10\uff14")
+    open_src(clock, address="104").close()

@@ -7,7 +7,7 @@ import pytest
 
 from gyrofilter import GyroFilter
 from gyrofilter.filter.calibration import Calibration
-from gyrofilter.errors import CalibrationError, SettingsError
+from gyrofilter.errors import CalibrationError, SampleError, SettingsError
 from gyrofilter.filter.jit import numba_available
 from support.plain_filter import plain_filter
 from support import stream
@@ -393,6 +393,21 @@ def test_the_calibration_window_held_in_memory_is_bounded_in_samples():
                                             "the still window is held in memory: at most 3600000 samples"):
         GyroFilter(100_000.0, calibration_s=3600.0)
     assert GyroFilter(1000.0, calibration_s=MAX_CALIBRATION_SAMPLES / 1000.0).calibrating
+
+
+def test_filter_timed_refuses_float16_times():
+    """Issue 37 (attack): float16 times (spaced 1 s apart from 1024 s, 2 s from 2048 s) were taken
+    and the rows stamped with them: 100-Hz samples 2100 s in all read 2100 s. They are refused,
+    the filter left as it was; float32 and float64 times are kept as given."""
+    f = GyroFilter(sample_rate_hz=100.0, calibration_s=0.5)
+    t = 2100.0 + np.arange(300) / 100.0
+    with pytest.raises(SampleError, match="t_s is float16"):
+        f.filter_timed(noisy(300), t.astype(np.float16))
+    with pytest.raises(SampleError, match="t_s is float16"):
+        f.filter_timed(noisy(300), list(t.astype(np.float16)))
+    assert f.samples_in == 0
+    t_rows, rows = f.filter_timed(noisy(300), t.astype(np.float32))
+    assert len(rows) and np.all(np.diff(t_rows) > 0) and set(t_rows) <= set(t.astype(np.float32).astype(float))
 
 
 def test_filter_timed_refuses_times_that_are_not_finite():

@@ -1,5 +1,6 @@
 import gzip
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -324,6 +325,16 @@ def test_a_repeated_header_key_is_refused_naming_its_line(tmp_path, key):
         read_recording(path)
 
 
+def test_a_t_step_beyond_a_float_is_refused_without_a_warning(tmp_path):
+    """Issue 37 (attack): t from -1e308 to 1e308 printed numpy's "RuntimeWarning: overflow
+    encountered in subtract" above the one-line refusal."""
+    path = _dps_file(tmp_path, "-1e308,0,0,0\n1e308,0,0,0\n1.1e308,0,0,0\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(RecordingError, match=f"{path}: t steps by "):
+            read_recording(path)
+
+
 @pytest.mark.parametrize("step_s", [0.001, 0.0094, 0.0106, 0.1])
 def test_t_that_disagrees_with_the_sample_rate_is_refused_both_ways(tmp_path, step_s):
     """A 100-Hz header with 1-ms steps of t read silently (Allan taus 10x off)."""
@@ -492,7 +503,8 @@ def test_header_values_with_control_characters_read_back_as_written(tmp_path, va
     ({"sample_rate_hz": "100", "gyro_unit": "dps", "sample_rate_hz:": "5"}, "header key 'sample_rate_hz:' is not a name"),
     ({"sample_rate_hz": "100", "gyro_unit": "dps", "my key": "5"}, "header key 'my key' is not a name"),
     ({"sample_rate_hz": "1_00", "gyro_unit": "dps"}, "sample_rate_hz must be a plain decimal number"),
-    ({"sample_rate_hz": "100", "gyro_unit": "lsb", "lsb_per_dps": "-131"}, "lsb_per_dps must be > 0"),
+    ({"sample_rate_hz": "100", "gyro_unit": "lsb", "lsb_per_dps": "-131"}, r"lsb_per_dps must be a number of LSB per deg/s in \[0.1, 1e\+08\]"),
+    ({"sample_rate_hz": "100", "gyro_unit": "lsb", "lsb_per_dps": "1e308"}, r"lsb_per_dps must be a number of LSB per deg/s in \[0.1, 1e\+08\]"),
     ({"sample_rate_hz": "100", "gyro_unit": "dps", "simulated_model": "x" * (1 << 21)}, "longer than 1048576 bytes"),
 ])
 def test_the_writer_refuses_what_the_reader_would_refuse_before_creating_the_file(tmp_path, header, match):
@@ -533,7 +545,7 @@ def test_long_values_in_errors_are_quoted_short(tmp_path):
 
 
 @pytest.mark.parametrize("unit, extra, cell", [("rad/s", "", "1e308"), ("dps", "", "-100000.5"),
-                                               ("lsb", "# lsb_per_dps: 1e-6\n", "1")])
+                                               ("lsb", "# lsb_per_dps: 0.1\n", "10000.1")])
 def test_a_rate_no_gyro_reads_is_refused_naming_its_line(tmp_path, unit, extra, cell):
     """1e308 rad/s read as inf deg/s (an overflow warning, then inf in every analysis); the reader
     refuses any value beyond +-MAX_RATE_DPS once in deg/s, naming the line."""

@@ -224,6 +224,28 @@ def test_parser_first_header_errors():
         LineParser().feed(b"# gyrofilter-serial: 1 gyro_unit=lsb sample_rate_hz=100\n")
 
 
+@pytest.mark.parametrize("value", ["1e308", "1e-308"])
+def test_lsb_per_dps_outside_what_a_gyro_can_be_is_refused(value):
+    """Issue 37 (attack): any positive lsb_per_dps was taken, from the device's header or the options."""
+    with pytest.raises(DeviceError, match=r"lsb_per_dps must be a number of LSB per deg/s in \[0.1, 1e\+08\]"):
+        LineParser().feed(HEADER.replace(b"131", value.encode()))
+    with pytest.raises(SettingsError, match=r"lsb_per_dps must be a number of LSB per deg/s in \[0.1, 1e\+08\]"):
+        LineParser(gyro_unit="lsb", lsb_per_dps=float(value), sample_rate_hz=100)
+
+
+def test_a_device_cannot_give_the_keys_gyrofilter_writes_about_provenance():
+    """Attack pass (issue 37): a device's header word ``filtered_from=x`` was copied into the
+    recording, and replay then refused the raw recording as a filtered output; ``time_origin`` and
+    ``t_meaning`` could lie about its times. Those keys are dropped, with a note naming each."""
+    p = LineParser()
+    p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100 filtered_from=x time_origin=5 sensor=ok\n"
+           + _lines([0, 1]))
+    assert "filtered_from" not in p.header and "time_origin" not in p.header and p.header["sensor"] == "ok"
+    assert [n for n in p.notes if "gyrofilter's own" in n] == [
+        "serial: the device's header key filtered_from is gyrofilter's own (where the samples came from): ignored",
+        "serial: the device's header key time_origin is gyrofilter's own (where the samples came from): ignored"]
+
+
 def test_parser_with_options_uses_a_header_that_comes_first():
     p = LineParser(gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=100)
     rows = p.feed(HEADER + _lines([0, 1]))  # the header is a whole line: nothing is dropped

@@ -237,7 +237,7 @@ def test_model_numbers_are_bounded_so_no_signal_is_infinite(effect, message):
      r"^model: axes.y.effects: at most 100 effects, got 101$"),
     (lambda m: m.update(temperature={"t_s": list(range(100_001)), "temp_c": [25.0] * 100_001}),
      r"^model: temperature.t_s: at most 100000 points, got 100001$"),
-    (lambda m: m.update(lsb_per_dps=1e-9), r"^model: lsb_per_dps: expected a number >= 0.001, got 1e-09$"),
+    (lambda m: m.update(lsb_per_dps=1e-9), r"^model: lsb_per_dps: expected a number >= 0.1, got 1e-09$"),
     # null where the default is a number was taken as None and crashed the simulation (found by tests/test_fuzz_model.py)
     (lambda m: m.update(temperature={"start_c": None, "end_c": 30.0}), r"^model: temperature.start_c: missing"),
     (lambda m: m.update(temperature={"start_c": 25.0, "tau_s": None}), r"^model: temperature.tau_s: expected a number > 0, got null$"),

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import collect_columns, iter_recording, warn_about_gaps
-from ..units import AXES, to_dps
+from ..units import AXES, check_axes, to_dps
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
@@ -81,6 +81,7 @@ def read_axes(path, axes, with_t=False):
     notes, ``t_gaps`` and ``sample_rate_hz`` in Hz); the arrays are converted from the file's
     ``gyro_unit``. RecordingError for a bad file or one without samples.
     """
+    axes = check_axes(axes)
     chunks = iter_recording(path)
     head = next(chunks)
     times = ["t"] if with_t and "t" in head.names else []

@@ -22,7 +22,7 @@ from ..analysis.noise.plots import plot_allan
 from ..analysis.still import characterise_recording
 from ..errors import SettingsError
 from ..plots import check_figure_path
-from ..units import AXES
+from ..units import AXES, check_axes
 from . import batch, console, options, outputs, still
 
 MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
@@ -127,9 +127,7 @@ def unresolved_text(r, min_clusters):
 
 
 def run(args):
-    axes = args.axes
-    if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
-        raise SettingsError(f"--axes must be a subset of {ALL_AXES} such as xz, got {args.axes!r}")
+    axes = "".join(check_axes(args.axes, "--axes"))
     if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
         raise SettingsError(f"--min-clusters must be in [2, {MAX_MIN_CLUSTERS}], got {args.min_clusters}")
     if not 0.5 <= args.confidence <= 0.9999:  # every value inside works (0.9999999999999999 failed in the intervals)

@@ -23,7 +23,7 @@ def add_arguments(parser):
     parser.add_argument("--unit", choices=GYRO_UNITS, default=None, type=lambda text: UNIT_SPELLINGS.get(text, text),
                         help="unit of the gyro columns: dps (also deg/s), rad/s or lsb (default: the one their names "
                              "state, e.g. 'gyro_x (rad/s)'; never guessed)")
-    parser.add_argument("--lsb-per-dps", type=options.decimal, default=None, metavar="X",
+    parser.add_argument("--lsb-per-dps", type=options.lsb_per_dps, default=None, metavar="X",
                         help="LSB per deg/s, with --unit lsb (MPU6050: 131 at +-250 deg/s)")
     parser.add_argument("--columns", default=None, metavar="NAMES",
                         help="the gyro's x,y,z columns, or time,x,y,z: names of the column row or 1-based numbers "

@@ -19,7 +19,7 @@ import time
 
 from ..analysis.gap import report as gap_report
 from ..analysis.fleet.work import FleetSettings
-from ..analysis.gap.baseline import MIN_SIMS
+from ..analysis.gap.baseline import MAX_SIMS, MIN_SIMS
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import SettingsError
@@ -28,7 +28,6 @@ from ..sim.simulate import check_seed
 from ..units import AXES
 from . import batch, console, options, outputs
 
-MAX_SIMS = 1000  # baseline simulations; the default is 12-24, and the spread is known to +-3 % from 1000
 
 
 def add_arguments(parser):
@@ -96,13 +95,17 @@ def run(args):
     written = json_files + ([os.path.join(args.report, gap_report.REPORT_NAME)] if args.report else [])
     console.say(f"wrote {' and '.join(written)}" if written else "(every number of the analysis: --json OUT.json)")
     d = report.get("discrepancy")
-    gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}" if d else
-            "no discrepancy computed (see the notes)")
+    gain = ("no discrepancy computed (see the notes)" if not d else
+            "no axis analysed (see the notes)" if d["overall_before"] is None else
+            f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}"
+            + (f" over {', '.join(a for a in AXES if a not in d['not_analysed'])}" if d["not_analysed"] else ""))
     console.paragraph(f"{args.recording}: {_count(len(report['findings']), 'finding')}; {gain} "
                       f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
     for axis in AXES:
         found = [f for f in report["findings"] if f["axis"] == axis]
-        if d:
+        if d and axis in d["not_analysed"]:
+            console.paragraph(f"{axis}: not analysed ({d['not_analysed'][axis]})", "  ")
+        elif d:
             before = gap_report.d_text(d["before"][axis], d.get("before_se", {}).get(axis, 0.0))
             after = gap_report.d_text(d["after"][axis], d.get("after_se", {}).get(axis, 0.0))
             console.paragraph(f"{axis}: D {before}" + (f" -> {after} with {_count(len(found), 'finding')}"

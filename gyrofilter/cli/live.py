@@ -32,7 +32,7 @@ def add_source_arguments(parser, required=True):
                         help="stop after S seconds of samples (default: until Ctrl-C, SIGTERM, SIGHUP or the end of the source)")
     parser.add_argument("--gyro-unit", choices=GYRO_UNITS,
                         help="gyro unit of a serial device that sends no header line")
-    parser.add_argument("--lsb-per-dps", type=options.decimal, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
+    parser.add_argument("--lsb-per-dps", type=options.lsb_per_dps, metavar="X", help="LSB per deg/s of such a device (with --gyro-unit lsb)")
     options.add_sample_rate_argument(parser, help="sample rate (Hz) of an mpu6050, a simulation or a serial device that sends no header")
 
 

@@ -4,7 +4,7 @@ import argparse
 
 from ..errors import SettingsError
 from ..inputs import parse_number
-from ..units import check_sample_rate_hz
+from ..units import check_lsb_per_dps, check_sample_rate_hz
 
 
 #: what --out FILE of a recording takes: any name, the format is CSV text (docs/formats.md, section 1)
@@ -33,6 +33,15 @@ def decimal(text):
     is checked where it is used."""
     try:
         return parse_number(text, "")
+    except SettingsError as exc:
+        raise argparse.ArgumentTypeError(str(exc).strip()) from None
+
+
+def lsb_per_dps(text):
+    """argparse type of ``--lsb-per-dps``: a plain decimal number within
+    :data:`gyrofilter.units.LSB_PER_DPS_RANGE` (:func:`gyrofilter.units.check_lsb_per_dps`), as a float."""
+    try:
+        return check_lsb_per_dps(parse_number(text, ""), "")
     except SettingsError as exc:
         raise argparse.ArgumentTypeError(str(exc).strip()) from None
 

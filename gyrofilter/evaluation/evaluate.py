@@ -21,7 +21,7 @@ from .datasets import NOISE_SEGMENT_S, find_broad_recordings, find_static_record
 from .filters import default_filters
 from .metrics import broad_metrics, dynamic_metrics, static_reduction
 from ..errors import SettingsError
-from ..plots import pyplot
+from ..plots import pyplot, save_figure
 from ..sim.profiles import PROFILES
 
 PAPER_CLAIM_REDUCTION = 12.6
@@ -231,6 +231,5 @@ def plot_pareto(ev, path, reference="paper001"):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
     return path

@@ -335,10 +335,16 @@ class GyroFilter:
         ``filter(samples_dps, temp_c)`` returns and ``t_rows_s`` (M,) the time of each row's
         block's last input sample. A row comes out when that sample goes in, so it is always one
         of this call's samples, whatever the chunking. Times must be finite (SampleError names
-        the first that is not, and the filter is left as it was).
+        the first that is not, and the filter is left as it was) and not float16: its 11
+        significant bits space the times 1 ms apart from 1 s on, 1 s from 1024 s and 32 s near its
+        largest, 65504 s, so the stamps of a 100-Hz record collapse onto each other within seconds
+        (refused, not up-cast: the stamps are already rounded; float32 or float64 keep them).
         """
         x = check_samples(samples_dps)
         t = as_numbers(t_s, "t_s", "s")
+        if np.asarray(t_s).dtype == np.float16:
+            raise SampleError("t_s is float16, which holds times to 11 significant bits (1 s apart from 1024 s "
+                              "on); give them as float64 (or float32)")
         if t.shape != (len(x),):
             raise SampleError(f"t_s must have shape ({len(x)},), one time per sample, got {t.shape}")
         finite = np.isfinite(t)

@@ -66,7 +66,8 @@ class TimeCheck:
             prev, cur, row0 = t[:-1], t[1:], 1
         else:
             prev, cur, row0 = np.concatenate(([self.t_last], t[:-1])), t, 0
-        step = cur - prev
+        with np.errstate(over="ignore"):  # -1e308 to 1e308 steps by inf: a step off the rate, refused below
+            step = cur - prev
         bad = np.flatnonzero(step <= 0)
         if bad.size:
             k = int(bad[0])

@@ -35,15 +35,17 @@ from __future__ import annotations
 
 import decimal
 import gzip
+import math
 import re
+import sys
 import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import RecordingError
-from ..inputs import check_number, is_plain_number, quote
-from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_sample_rate_hz, to_dps
+from ..inputs import is_plain_number, quote
+from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sample_rate_hz, to_dps
 from .checks import TimeCheck
 from .content import Recording, RecordingHead
 from .header import FORMAT_VERSION, GYRO_COLUMNS, MAX_LINE_BYTES, VERSION_KEY, format_number
@@ -162,10 +164,11 @@ def _name_unit(normal, pattern):
 
 
 def _column_index(text, names, path):
-    """The index of the column ``text`` of ``--columns``: a name of the column row, or a 1-based number."""
+    """The index of the column ``text`` of ``--columns``: a name of the column row, or a 1-based number
+    in ASCII digits (as every number a user gives: :mod:`gyrofilter.inputs`; ``１`` or ``¹`` is no number)."""
     if text in names:
         return names.index(text)
-    if text.isdigit() and 1 <= int(text) <= len(names):
+    if re.fullmatch(r"[0-9]+", text) and 1 <= int(text) <= len(names):
         return int(text) - 1
     raise RecordingError(f"{path}: --columns: no column {quote(text)} (have {quote(', '.join(names))}; "
                          f"or give 1-based numbers, 1 to {len(names)})")
@@ -223,16 +226,19 @@ def _times(texts, where, path):
     subtracted as decimals, exactly, before they become floats: a phone's stamps in s since 1970
     with 9 decimals (or ns since 1970) keep every ns, which floats of the stamps themselves
     (2.4e-7 s apart near 1.7e9) would not. ``where(row)`` names a row for the refusal of a stamp
-    too far from the first for a float."""
+    beyond a float's range (the first such row: a first stamp of 1e400 is blamed, not the next
+    row, whose offset from it is what overflows) or too far from the first for a float."""
     with decimal.localcontext() as ctx:
         ctx.traps[decimal.Overflow] = False  # 1e99999 - 0 is Infinity, refused below
         first = decimal.Decimal(texts[0])
         offsets = np.array([float(decimal.Decimal(t) - first) for t in texts])
     bad = np.flatnonzero(~np.isfinite(offsets))
     if bad.size:
-        row = int(bad[0])
-        raise RecordingError(f"{path}: {where(row)}: time stamp {quote(texts[row])} is too far from the first "
-                             f"({quote(texts[0])}) to be a time of this log")
+        huge = [row for row in range(int(bad[0]) + 1) if not math.isfinite(float(decimal.Decimal(texts[row])))]
+        row = huge[0] if huge else int(bad[0])
+        why = (f"is beyond the range of a float ({sys.float_info.max:.3g})" if huge else
+               f"is too far from the first ({quote(texts[0])}) to be a time of this log")
+        raise RecordingError(f"{path}: {where(row)}: time stamp {quote(texts[row])} {why}")
     return offsets, texts[0]
 
 
@@ -344,7 +350,7 @@ def _gyro_unit(unit, stated, lsb_per_dps, path):
     if unit == "lsb":
         if lsb_per_dps is None:
             raise RecordingError("--unit lsb needs --lsb-per-dps (LSB per deg/s; the MPU6050 at +-250 deg/s: 131)")
-        check_number(lsb_per_dps, "--lsb-per-dps", low=0, low_open=True, error=RecordingError)
+        check_lsb_per_dps(lsb_per_dps, "--lsb-per-dps", RecordingError)
     elif lsb_per_dps is not None:
         raise RecordingError(f"--lsb-per-dps goes with --unit lsb, not {unit}")
     return unit

@@ -10,7 +10,7 @@ import re
 
 from ..errors import RecordingError
 from ..inputs import parse_number, quote
-from ..units import AXES, GYRO_UNITS, check_sample_rate_hz, utf8_text
+from ..units import AXES, GYRO_UNITS, check_lsb_per_dps, check_sample_rate_hz, utf8_text
 
 #: the first header key of every recording; its value is the format version
 VERSION_KEY = "gyrofilter-recording"
@@ -41,6 +41,33 @@ def one_line_text(text):
     UTF-8) as :func:`~gyrofilter.units.utf8_text` writes it (``\\udcff``), spaces at both ends
     dropped; that is what the reader reads back."""
     return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), utf8_text(str(text))).strip()
+
+
+#: header keys gyrofilter writes to say where a recording's samples came from and what was done
+#: to them (docs/formats.md, section 1): a live device's header does not give them (the serial
+#: source drops them with a note), or a raw recording could say it is a filtered one
+#: (``filtered_from``, which replay refuses) or carry another time origin than its own
+PROVENANCE_KEYS = frozenset({"filtered_from", "filter_preset", "filter_settings", "bias_dps", "t_meaning",
+                             "calibration_from", "input_sample_rate_hz", "converted_from", "converted_by",
+                             "time_origin", "simulated_seed", "simulated_duration_s", "simulated_model",
+                             "simulated_model_name", "live_source", "recorded_by", "serial_port", "start_time_utc"})
+
+
+#: what a Markdown page must not take literally from a file's text: an HTML tag's or entity's start,
+#: a table cell's end, a code span's fence
+_MARKDOWN_SPECIAL = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "\\|", "`": "\\`"}
+#: a backslash that CommonMark would read as an escape: one before ASCII punctuation
+_MARKDOWN_ESCAPE = re.compile(r"\\(?=[!-/:-@\[-`{-~])")
+
+
+def markdown_text(text):
+    """``text`` from a file (a file name, a quoted cell, a header value) as a Markdown page shows
+    it: on one line (:func:`one_line_text`), ``&``, ``<`` and ``>`` as HTML entities (no tag of a
+    file's text is rendered by a Markdown viewer), ``|`` and a backtick escaped (a table cell stays
+    one cell), and a backslash before ASCII punctuation doubled (CommonMark's escapes; one before
+    anything else, as in ``\\udcff``, is shown as it is)."""
+    text = _MARKDOWN_ESCAPE.sub(r"\\\\", one_line_text(text))
+    return "".join(_MARKDOWN_SPECIAL.get(c, c) for c in text)
 
 
 #: longest annotation text a writer writes (characters; a gap note is about 60)
@@ -118,7 +145,7 @@ def check_header(header, where):
     naming ``where`` (the file): the version, the required keys, ``sample_rate_hz`` a plain
     decimal number (:func:`~gyrofilter.inputs.parse_number`) checked by
     :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
-    ``lsb_per_dps`` a positive number with ``lsb``. The one check of a header: the reader's and
+    ``lsb_per_dps`` with ``lsb``, checked by :func:`~gyrofilter.units.check_lsb_per_dps`. The one check of a header: the reader's and
     the writers' (:func:`header_text`)."""
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
@@ -135,7 +162,8 @@ def check_header(header, where):
     if header["gyro_unit"] == "lsb":
         if "lsb_per_dps" not in header:
             raise RecordingError(f"{where}: gyro_unit is lsb but header key 'lsb_per_dps' is missing")
-        parse_number(header["lsb_per_dps"], f"{where}: lsb_per_dps", low=0, low_open=True, error=RecordingError)
+        check_lsb_per_dps(parse_number(header["lsb_per_dps"], f"{where}: lsb_per_dps", error=RecordingError),
+                          f"{where}: lsb_per_dps", RecordingError)
 
 
 #: column names that look like time stamps but are not ``t``: refused, so that a user's own file

@@ -52,8 +52,8 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError
 from ..inputs import check_number, is_plain_number, parse_number, quote
-from ..recording import COLUMNS, GYRO_COLUMNS, format_number, units_header
-from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
+from ..recording import COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
+from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz, to_dps
 from .mpu6050.chip import temperature_c
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
@@ -166,8 +166,9 @@ class LineParser:
         return units_header(sample_rate_hz, unit, lsb_per_dps)
 
     def _positive(self, values, key, where, hint):
-        """``values[key]`` (header text or an option's number) as a positive number (a float); a
-        sample rate within :func:`gyrofilter.units.check_sample_rate_hz`'s range."""
+        """``values[key]`` (header text or an option's number) as a positive number (a float): a
+        sample rate within :func:`gyrofilter.units.check_sample_rate_hz`'s range, an ``lsb_per_dps``
+        within :func:`gyrofilter.units.check_lsb_per_dps`'s."""
         value = values.get(key)
         if value is None:
             raise SettingsError(f"{self.where}: {where}: {key} missing ({hint})")
@@ -178,7 +179,7 @@ class LineParser:
         if key == "sample_rate_hz":
             number = check_sample_rate_hz(number, what, error)
         else:
-            number = check_number(number, what, low=0, low_open=True, error=error)
+            number = check_lsb_per_dps(number, what, error)
         return float(number)
 
     def _apply(self, header):
@@ -229,7 +230,11 @@ class LineParser:
                     same = key in units and float(units[key]) == float(value)
                 if not same:
                     raise UnitsConflict(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
-        header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS}
+        header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS and k not in PROVENANCE_KEYS}
+        for key in sorted(PROVENANCE_KEYS & values.keys()):
+            note = f"serial: the device's header key {key} is gyrofilter's own (where the samples came from): ignored"
+            if note not in self.notes:
+                self.notes.append(note)
         header.update(units)
         fields = self.fields
         if "fields" in values:

@@ -212,8 +212,10 @@ def _gap(data):
     rows = []
     for a in AXES:
         b = g["baseline"]["axes"][a]
+        d_cells = (("not analysed",) * 2 if a in disc.get("not_analysed", {}) else
+                   (_num(disc.get("before", {}).get(a)), _num(disc.get("after", {}).get(a))))
         rows.append((a, _num(b.get("bias_dps")), _num(b.get("arw_dps_per_sqrt_hz")), _num(b.get("quantization_dps")),
-                     _num(disc.get("before", {}).get(a)), _num(disc.get("after", {}).get(a))))
+                     *d_cells))
     out.append(_table(["axis", "bias (deg/s)", "ARW (deg/s/sqrt(Hz))", "LSB step (deg/s)", "D baseline",
                        "D extended"], rows, numeric_from=1))
     out.append("<h3>Findings</h3>")

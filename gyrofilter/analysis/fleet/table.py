@@ -68,6 +68,7 @@ import numpy as np
 
 from ...effects import BIAS_INSTABILITY, LINE_FREQUENCY, LINES, RATE_RAMP, RATE_RANDOM_WALK, REGISTRY, TAILS, WANDERS
 from ...errors import SettingsError
+from ...recording.header import markdown_text
 from ...units import AXES, MAD_TO_SIGMA, utf8_text
 from ..gap.detectors import OUTSIDE_NULL_D
 from ..noise.export import JSON_KEY
@@ -190,6 +191,7 @@ def fleet_rows(names, results):
             continue
         allan_axes = (res["allan"] or {}).get("axes", {})
         gap = res["gap"]
+        idle = ((gap or {}).get("discrepancy") or {}).get("not_analysed", {})
         stuck = {w[len("axis ")]: w for w in base["warnings"] if w.startswith("axis ") and w.endswith(LEFT_OUT)}
         axes = [a for a in AXES if a in allan_axes or a in stuck or gap is not None]
         for axis in axes:
@@ -198,6 +200,8 @@ def fleet_rows(names, results):
                        warnings=[w for w in base["warnings"] if not w.startswith("axis ") or w.startswith(f"axis {axis}:")])
             if axis in stuck and gap is None:  # an Allan fleet's stuck axis: a row that says so, not none
                 row["status"] = f"{res['recording']}: {stuck[axis]}"
+            if axis in idle:  # the gap had nothing to analyse there: its D (about 0) is no measurement
+                row["status"] = f"{res['recording']}: axis {axis}: {idle[axis]}, not analysed"
             if axis in allan_axes:
                 details = allan_axes[axis]["details"]
                 for term in (QUANTIZATION,) + COEFFICIENTS:
@@ -205,7 +209,7 @@ def fleet_rows(names, results):
                     d = details[key]
                     row[key], row[f"{key}_low"], row[f"{key}_high"] = d["value"], d["low"], d["high"]
                     row[f"{key}_upper"] = None if d["resolved"] else d["upper_bound"]
-            if gap is not None:
+            if gap is not None and axis not in idle:
                 row["findings"] = [f for f in gap["findings"] if f["axis"] == axis]
                 d = gap.get("discrepancy", {})
                 row["d_before"] = d.get("before", {}).get(axis)
@@ -361,12 +365,13 @@ def fleet_markdown(rows, stats, *, title):
               f"{len({r['unit'] for r in flagged})} stand out."), "", "## Units that stand out", ""]
     if flagged:
         lines += ["| unit | axis | why |", "|---|---|---|"]
-        lines += [f"| {r['unit']} | {r['axis']} | {f['text']} |" for r in flagged for f in r["flag"]]
+        lines += [f"| {markdown_text(r['unit'])} | {r['axis']} | {f['text']} |" for r in flagged for f in r["flag"]]
     else:
         lines.append("None.")
     if failed_rows:
         lines += ["", "## Failed", "", "| unit | recording | reason |", "|---|---|---|"]
-        lines += [f"| {r['unit']} | `{r['recording']}` | {r['status']} |" for r in failed_rows]
+        lines += [f"| {markdown_text(r['unit'])} | {markdown_text(r['recording'])} | {markdown_text(r['status'])} |"
+                  for r in failed_rows]
     keys = [JSON_KEY[t] for t in COEFFICIENTS]
     head = " | ".join(f"{TERM_SYMBOL[t]} ({TERM_UNIT[t]})" for t in COEFFICIENTS)
     # the gap's columns only when the gap ran (a gap fleet); an allan fleet has none to show
@@ -385,7 +390,7 @@ def fleet_markdown(rows, stats, *, title):
             cells.append("" if r["findings"] is None else ("; ".join(finding_text(f) for f in r["findings"]) or "none"))
             cells.append("" if r["d_before"] is None else f"{r['d_before']:.3g} -> {r['d_after']:.3g}")
         cells += [f"{r['runtime_s']:.1f}", ", ".join(f"{f['what']} {f['direction']}" for f in r["flag"])]
-        lines.append(f"| {r['unit']} | {r['axis']} | " + " | ".join(cells) + " |")
+        lines.append(f"| {markdown_text(r['unit'])} | {r['axis']} | " + " | ".join(cells) + " |")
     lines += ["", "## Fleet statistics", "",
               (f"Coefficients: median m over the units of the level (fit, or upper bound when not resolved) and "
                f"spread s = max({MAD_TO_SIGMA} MAD, {MIN_SPREAD_LN:g}) of its natural log; a unit is flagged when the "

@@ -42,6 +42,11 @@ from ...units import AXES, to_dps
 MIN_SIMS = 10
 
 
+#: most baseline simulations a gap analysis runs (the default is 12-24; the spread is known to
+#: +-3 % from 1000); the library also runs 2 to MIN_SIMS - 1, and a note says D is not judged
+MAX_SIMS = 1000
+
+
 #: a quantized rate whose white noise is below this many steps is read by its codes' histogram
 #: (:func:`sub_lsb_fit`); above, the additive model of quantization holds (sigma 0.6 steps: the
 #: high-passed estimate within 1 %)

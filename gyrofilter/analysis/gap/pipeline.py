@@ -61,20 +61,22 @@ from dataclasses import replace
 import numpy as np
 
 from ...effects import BY_NAME, COVARIATES, SLOW, TEMPERATURE, WANDERS
-from ...errors import GyroFilterError, RecordingError
+from ...errors import GyroFilterError, RecordingError, SettingsError
+from ...inputs import check_number
 from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
-from ...units import AXES, MIN_NOISE_DPS, check_sample_rate_hz, to_dps
+from ...sim.simulate import check_seed
+from ...units import AXES, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
 from ..still import moved, not_static
 from . import detectors as det
-from .baseline import (MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis, sim_features,
-                       temperature_table, wander_highpassed)
+from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
+                       sim_features, temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
 from .confound import (alternatives_entry, kept_without_gain, suggested_temperature, weigh_lines, weigh_readings,
                        weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
-from .intervals import bootstrap_intervals
+from .intervals import MAX_BOOTSTRAP, MIN_REPLICATES, bootstrap_intervals
 from .scoring import Scorer
 from .state import AxisModels, GapInput, GapState, Kept, OtherReading
 
@@ -129,7 +131,9 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None,
     ``runtime_s``). ``progress(text)`` is called with short status lines. ``seed``: the streams
     of every simulation (the decisions' and the intervals'). ``bootstrap``: runs
     per axis with findings for the parameters' intervals (:mod:`gyrofilter.analysis.gap.intervals`;
-    0: none; None: :func:`~gyrofilter.analysis.gap.intervals.default_bootstrap` of the record's length)."""
+    0: none; None: :func:`~gyrofilter.analysis.gap.intervals.default_bootstrap` of the record's length).
+    A ``seed``, ``n_sims`` or ``bootstrap`` it cannot take is refused (:func:`check_run_settings`)."""
+    check_run_settings(seed, n_sims, bootstrap)
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
@@ -149,6 +153,25 @@ def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None,
                                  "axes": {a: dict(base.get("axes", {}).get(a, {})) for a in AXES}, "model": base},
                     "findings": [], "uncertain": [], "extended_model": base,
                     "notes": [f"the analysis could not run ({type(exc).__name__}: {exc}); no findings reported"]}
+
+
+def check_run_settings(seed, n_sims, bootstrap):
+    """Refuse (SettingsError naming the keyword) a ``seed`` that is not
+    :func:`~gyrofilter.sim.simulate.check_seed`'s, an ``n_sims`` that is not None or a whole number
+    in [2, :data:`~gyrofilter.analysis.gap.baseline.MAX_SIMS`] (a spread needs 2 runs; below
+    :data:`~gyrofilter.analysis.gap.baseline.MIN_SIMS` a note says D is not judged), a ``bootstrap``
+    that is not None, 0 or a whole number in [:data:`~gyrofilter.analysis.gap.intervals.MIN_REPLICATES`,
+    :data:`~gyrofilter.analysis.gap.intervals.MAX_BOOTSTRAP`]: an API call took ``n_sims=0`` (a
+    TypeError deep in the spread), ``2.5`` (2 runs), ``10**9`` (a run without end) and ``seed=-1``
+    (a report that "could not run")."""
+    check_seed(seed, "seed")
+    if n_sims is not None:
+        check_number(n_sims, "n_sims (baseline simulations)", low=2, high=MAX_SIMS, integer=True)
+    if bootstrap is not None:
+        runs = check_number(bootstrap, "bootstrap (runs per axis)", low=0, high=MAX_BOOTSTRAP, integer=True)
+        if 0 < runs < MIN_REPLICATES:
+            raise SettingsError(f"bootstrap must be 0 (no intervals) or in [{MIN_REPLICATES}, {MAX_BOOTSTRAP}] (an "
+                                f"interval needs {MIN_REPLICATES} runs), got {bootstrap}")
 
 
 def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
@@ -205,9 +228,12 @@ def prepare(rec, *, seed, n_sims, recording_name):
         return report, None
     temp = rec.temp_c
     temp = None if temp is None else np.asarray(temp, dtype=float)
-    if temp is not None and not np.all(np.isfinite(temp)):
+    if temp is not None and not np.all((temp >= TEMP_RANGE_C[0]) & (temp <= TEMP_RANGE_C[1])):
+        # a value no die reaches (replay refuses it): the covariate's fit would be that one value's
+        row = int(np.flatnonzero(~((temp >= TEMP_RANGE_C[0]) & (temp <= TEMP_RANGE_C[1])))[0])
+        report["notes"].append(f"temp column has values outside [{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C "
+                               f"(sample {row + 1}: {temp[row]:g}): temperature not analysed")
         temp = None
-        report["notes"].append("temp column has non-finite values: temperature not analysed")
     report["notes"] += _static_notes(rec, base, sample_rate_hz)
     m = default_n_sims(n) if n_sims is None else int(n_sims)
     return report, {"rec": rec, "sample_rate_hz": sample_rate_hz, "n": n, "temp": temp, "base": base, "q": q,
@@ -231,9 +257,12 @@ def baseline_spread(setup, say):
     before. Returns the :class:`~gyrofilter.analysis.gap.state.GapInput`."""
     rec, n, sample_rate_hz, taus, bands = setup["rec"], setup["n"], setup["sample_rate_hz"], setup["taus"], setup["bands"]
     say(f"baseline: {setup['n_sims']} simulations of {n / sample_rate_hz:.0f} s at {sample_rate_hz:g} Hz")
-    meas_feats = []
+    meas_feats, idle = [], {}
     for i in range(3):
         x = axis_dps(rec, i)  # the features may overwrite it unless it is the record's own column
+        why = nothing_to_analyse(x)
+        if why:
+            idle[AXES[i]] = why
         meas_feats.append(features(x, sample_rate_hz, taus, bands,
                                    overwrite=not np.shares_memory(x, rec.columns[GYRO_COLUMNS[i]])))
         del x
@@ -241,7 +270,17 @@ def baseline_spread(setup, say):
                         "baseline simulations (runs x axes)")
     deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
     return GapInput(**setup, meas_feats=meas_feats, deps=deps, before=[discrepancy(d) for d in deps], base_sims=sims,
-                    say=say)
+                    idle=idle, say=say)
+
+
+def nothing_to_analyse(x_dps):
+    """Why the axis samples ``x_dps`` have nothing for the detectors (a constant signal, or a
+    standard deviation below :data:`~gyrofilter.units.MIN_NOISE_DPS`), or None."""
+    if not np.ptp(x_dps) > 0:
+        return "constant signal"
+    if not np.std(x_dps) >= MIN_NOISE_DPS:
+        return f"noise below {MIN_NOISE_DPS:g} deg/s (too small for the detectors in float64)"
+    return None
 
 
 def detect(inp, notes):
@@ -252,14 +291,11 @@ def detect(inp, notes):
     candidates, axes, readings, uncertain = [], [], {}, []
     for i, a in enumerate(AXES):
         inp.say(f"detectors on {a}")
-        x = axis_dps(inp.rec, i)
-        idle = ("constant signal" if not np.ptp(x) > 0 else
-                f"noise below {MIN_NOISE_DPS:g} deg/s (too small for the detectors in float64)"
-                if not np.std(x) >= MIN_NOISE_DPS else None)
-        if idle:
-            notes.append(f"axis {a}: {idle}, nothing to analyse")
+        if a in inp.idle:
+            notes.append(f"axis {a}: {inp.idle[a]}, nothing to analyse")
             axes.append(AxisModels(ext=dict(inp.base["axes"][a], effects=[])))
             continue
+        x = axis_dps(inp.rec, i)
         owned = not np.shares_memory(x, inp.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
         try:
             cands, xc, alt, slow_stats = _detect_axis(x, inp.sample_rate_hz, inp.temp,
@@ -501,12 +537,14 @@ def write_findings(inp, state, scorer, report, found):
         summ["extended_band_sim_mean_log"] = [float(v) for v in deps_e["band"][1]]
         summ["extended_band_sim_sd_log"] = [float(v) for v in deps_e["band"][2]]
         summ["extended_discrepancy"] = after[i]
+    analysed = [i for i, a in enumerate(AXES) if a not in inp.idle]  # an idle axis's D ~ 0 says nothing
     report["discrepancy"] = {"metric": METRIC,
                              "definition": "D = mean over features of z^2, z = (measured - mean of simulations) / max(sd of simulations, floor)",
                              "before": {a: before[i] for i, a in enumerate(AXES)},
                              "after": {a: after[i] for i, a in enumerate(AXES)},
-                             "overall_before": float(np.mean(before)),
-                             "overall_after": float(np.mean(after)),
+                             "overall_before": _mean_or_none([before[i] for i in analysed]),
+                             "overall_after": _mean_or_none([after[i] for i in analysed]),
+                             "not_analysed": dict(inp.idle),
                              "before_se": {a: scorer.discrepancy_error(i, None, "") for i, a in enumerate(AXES)},
                              "after_se": {a: scorer.discrepancy_error(
                                  i, state.model(inp, i, state.kept_on(i)) if state.kept_on(i) else None,
@@ -521,3 +559,8 @@ def write_findings(inp, state, scorer, report, found):
         report["notes"].append(f"record of {n / sample_rate_hz:.0f} s: slow bias effects (drift, random walk, bias instability) "
                                "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / sample_rate_hz / 9))
     report["notes"] += found.notes
+
+
+def _mean_or_none(values):
+    """The mean of ``values`` (the D of the axes analysed), None when there is none."""
+    return float(np.mean(values)) if values else None

@@ -23,8 +23,9 @@ import os
 import numpy as np
 
 from ...effects import BIAS_STEP, COVARIATES, RATE_RAMP, SHAPES, TEMPERATURE, WARMUP
-from ...plots import pyplot
-from ...recording.header import one_line_text
+from ...errors import naming_file
+from ...plots import pyplot, save_figure
+from ...recording.header import markdown_text
 from ...units import AXES, utf8_text
 from .confound import NAMED_BECAUSE, WHY_THE_COVARIATE
 
@@ -46,7 +47,7 @@ def _band_centres(edges):
     return np.sqrt(np.maximum(e[:-1], 1e-12) * e[1:])
 
 
-def _finish(plt, fig, ax, path, xlabel, ylabel, title):
+def _finish(fig, ax, path, xlabel, ylabel, title):
     """Labels, grid, legend; save as PNG and close."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
@@ -54,8 +55,7 @@ def _finish(plt, fig, ax, path, xlabel, ylabel, title):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def _plot_spread(x, dep, key, axis, path, *, xlabel, ylabel, title):
@@ -71,7 +71,7 @@ def _plot_spread(x, dep, key, axis, path, *, xlabel, ylabel, title):
         ax.fill_between(x, np.exp(me - 2 * se), np.exp(me + 2 * se), color="tab:green", alpha=0.3,
                         label="extended model (mean +- 2 sd)")
     ax.loglog(x, np.exp(dep[f"{key}_meas_log"]), "k.-", lw=1.2, label="measurement")
-    _finish(plt, fig, ax, path, xlabel, ylabel, f"axis {axis}: {title}")
+    _finish(fig, ax, path, xlabel, ylabel, f"axis {axis}: {title}")
 
 
 def plot_adev(dep, axis, path):
@@ -100,7 +100,7 @@ def plot_temperature(x, temp, axis, coef, path):
     if coef is not None:
         tt = np.linspace(tb.min(), tb.max(), 10)
         ax.plot(tt, coef * (tt - np.mean(temp)), "r-", label=f"fit: {coef:+.3g} deg/s per deg C")
-    _finish(plt, fig, ax, path, "sensor temperature (deg C)", "rate minus mean (deg/s)",
+    _finish(fig, ax, path, "sensor temperature (deg C)", "rate minus mean (deg/s)",
             f"axis {axis}: rate against temperature")
 
 
@@ -140,7 +140,7 @@ def plot_time(x, sample_rate_hz, axis, findings, path, temp=None, alternatives=(
         if np.ptp(shape) > 0:
             shape += np.mean(y) - np.mean(shape)
             ax.plot(t, shape, style, lw=1.5, label=words + ", ".join(f["effect"] for f in group if f["effect"] in _SHAPES))
-    _finish(plt, fig, ax, path, "time (s)", "rate (deg/s)", f"axis {axis}: rate in time")
+    _finish(fig, ax, path, "time (s)", "rate (deg/s)", f"axis {axis}: rate in time")
 
 
 def covariate_preamble(findings):
@@ -245,7 +245,7 @@ def write_report(report, rec, out_dir):
     g = rec.gyro_dps
     sample_rate_hz = rec.sample_rate_hz
     temp = rec.temp_c
-    lines = [f"# Model-gap report: {one_line_text(report['recording'])}", "",
+    lines = [f"# Model-gap report: {markdown_text(report['recording'])}", "",
              f"{report['duration_s']:.1f} s at {report['sample_rate_hz']:g} Hz; "
              f"{report.get('n_simulations', 0)} baseline simulations; "
              f"runtime {report.get('runtime_s', float('nan')):.1f} s.", "",
@@ -257,9 +257,9 @@ def write_report(report, rec, out_dir):
         b = report["baseline"]["axes"][a]
         bias, arw = ([interval_text(b[k], b.get("params_ci95"), k) if b.get(k) is not None else "-"
                       for k in ("bias_dps", "arw_dps_per_sqrt_hz")])
-        lines.append(f"| {a} | {bias} | {arw} | "
-                     f"{_fmt(b.get('quantization_dps'))} | {_fmt(disc.get('before', {}).get(a))} | "
-                     f"{_fmt(disc.get('after', {}).get(a))} |")
+        d_before, d_after = (("not analysed",) * 2 if a in disc.get("not_analysed", {}) else
+                             (_fmt(disc.get("before", {}).get(a)), _fmt(disc.get("after", {}).get(a))))
+        lines.append(f"| {a} | {bias} | {arw} | {_fmt(b.get('quantization_dps'))} | {d_before} | {d_after} |")
     lines += ["", f"Discrepancy D: {disc.get('definition', '')} (lower is better; about 1 when the "
               "model explains the measurement).", "", "## Findings", ""]
     intervals = report.get("intervals") or {}
@@ -303,6 +303,6 @@ def write_report(report, rec, out_dir):
                       alternatives=alternatives)
             lines += [f"![rate in time {a}]({_figure('time', a)})", ""]
     path = os.path.join(out_dir, REPORT_NAME)
-    with open(path, "w", encoding="utf-8") as fh:
+    with naming_file(path), open(path, "w", encoding="utf-8") as fh:
         fh.write(utf8_text("\n".join(lines) + "\n"))  # the recording's name may be a file name that is not UTF-8
     return path

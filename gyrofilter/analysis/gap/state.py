@@ -51,6 +51,9 @@ class GapInput:
     before: list
     #: per axis: the features of the baseline's runs (for the sampling error of a gain)
     base_sims: list
+    #: axis letter -> why it has nothing to analyse (a constant signal, noise below float64's reach):
+    #: no detector runs on it and its D enters no overall figure
+    idle: dict
     #: progress lines
     say: Callable[[str], None]
 

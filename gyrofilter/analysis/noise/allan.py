@@ -53,6 +53,13 @@ class ConstantAxisError(AllanInputError):
 
 
 def _check_series(x, name="x"):
+    """``x`` as a contiguous float64 series, or AllanInputError: not 1-D, fewer than 3 samples, a
+    masked value (converting would drop the mask and take the value behind it as data) or one
+    that is not finite."""
+    mask = np.ma.getmask(x)
+    if mask is not np.ma.nomask and mask.any():
+        raise AllanInputError(f"{name} has masked values, the first at sample {int(np.argmax(np.ravel(mask)))}; "
+                              "the Allan deviation needs evenly spaced measured samples (fill or cut gaps first)")
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 1:
         raise AllanInputError(
@@ -99,7 +106,7 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
     taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
     if taus.ndim != 1 or taus.size == 0 or not np.all(np.isfinite(taus)):
         raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {plain(taus_s)}")
-    m = np.round(taus * rate).astype(np.int64)
+    m = np.round(taus * rate)  # compared as floats: a tau of 1e300 s is no int64
     if np.any(m < 1):
         raise AllanInputError(
             f"tau {taus[m < 1].min():g} s is shorter than one sample (1/{rate:g} Hz = {1 / rate:g} s)")
@@ -110,7 +117,7 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
             f"{taus[m > m_limit].max():g} s: the longest tau with two clusters is "
             f"{m_limit / rate:g} s, and {MIN_CLUSTERS} clusters (paper 002) allow up to "
             f"{(n_samples // MIN_CLUSTERS) / rate:g} s")
-    return m
+    return m.astype(np.int64)
 
 
 def _phase(x, tau0):
@@ -199,6 +206,9 @@ def _deviation(x, sample_rate_hz, taus_s, overlapping):
     for i, mi in enumerate(m):
         total, n_terms = _sum_second_difference_squared(phase, int(mi), stride=1 if overlapping else int(mi))
         out[i] = math.sqrt(total / (2.0 * n_terms)) / (mi / rate)
+    if not np.all(np.isfinite(out)):  # squares beyond float64: |x| near 1e150 or more
+        raise AllanInputError(f"x: values up to {float(np.max(np.abs(x))):.3g} overflow the squares of the Allan "
+                              "variance in float64; give the series in a unit that keeps it below about 1e100")
     return m / rate, out
 
 

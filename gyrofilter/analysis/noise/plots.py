@@ -13,7 +13,7 @@ import numpy as np
 
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from .model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SLOPE, TERM_SYMBOL, basis
-from ...plots import pyplot
+from ...plots import pyplot, save_figure
 
 AXIS_COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
 TERM_STYLE = {QUANTIZATION: ":", ANGLE_RANDOM_WALK: "--", BIAS_INSTABILITY: "-.", RATE_RANDOM_WALK: (0, (5, 2, 1, 2)),
@@ -24,7 +24,7 @@ def plot_allan(path, results, title=""):
     """Write the figure file ``path`` (PNG) with one panel per axis, headed ``title``.
     ``results``: {axis: AxisNoise}."""
     plt = pyplot()
-    return _save(plt, allan_figure(plt, results, title), path)
+    return _save(allan_figure(plt, results, title), path)
 
 
 def allan_figure(plt, results, title=""):
@@ -83,7 +83,7 @@ def plot_before_after(path, curves, title=""):
     _label(ax, "Allan deviation (deg/s)", legend_size=7)
     if title:
         ax.set_title(title, fontsize=9)
-    return _save(plt, fig, path)
+    return _save(fig, path)
 
 
 def _label(ax, ylabel, legend_size):
@@ -94,8 +94,7 @@ def _label(ax, ylabel, legend_size):
     ax.legend(fontsize=legend_size, loc="best")
 
 
-def _save(plt, fig, path):
+def _save(fig, path):
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
     return path

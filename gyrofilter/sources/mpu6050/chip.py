@@ -43,6 +43,8 @@ def chip_ids(allow_chip):
     if isinstance(allow_chip, (int, str)):
         allow_chip = [allow_chip]
     try:
+        if any(isinstance(c, str) and not c.isascii() for c in allow_chip):  # int() takes other scripts' digits
+            raise ValueError(allow_chip)
         return {int(c, 0) if isinstance(c, str) else int(c) for c in allow_chip}
     except (TypeError, ValueError):
         raise SettingsError(f"allow_chip={allow_chip!r}: expected a WHO_AM_I value such as 0x70, a list "

@@ -53,7 +53,11 @@ I2C_FUNC_I2C = 0x00000001   # adapter supports plain I2C messages (I2C_RDWR)
 
 
 def _as_int(value, name):
+    """``value`` as an int: an int, or text of a Python integer literal in ASCII (``0x68``, ``104``;
+    no other script's digits, as every number a user gives: :mod:`gyrofilter.inputs`)."""
     try:
+        if isinstance(value, str) and not value.isascii():
+            raise ValueError(value)
         return int(value, 0) if isinstance(value, str) else int(value)
     except (TypeError, ValueError):
         raise SettingsError(f"{name}={value!r} is not an integer") from None
