@@ -433,7 +433,10 @@ def test_a_bump_no_term_fits_widens_every_interval_by_the_root_of_the_misfit():
     for term in (ANGLE_RANDOM_WALK, BIAS_INSTABILITY):
         c, b, u = clean[term], bumped[term], unwidened[term]
         width = [x.high - x.low for x in (c, b, u)]
-        assert width[1] > width[0] and width[1] > width[2], (term, width)
+        # against the same fit unwidened (the clean curve is fitted exactly: which zero terms its
+        # NNLS keeps, so its effective dof and widths, is a numerical tie that numpy 1.24 breaks
+        # otherwise than 2.x; it is no reference for the widening)
+        assert width[1] > width[2], (term, width)
         # the variance scale chi2_nu: about sqrt(chi2_nu) on the coefficient's interval (same value)
         assert 0.8 * math.sqrt(chi2) < width[1] / width[2] < 1.2 * math.sqrt(chi2), (term, width, chi2)
     for term in (QUANTIZATION, RATE_RANDOM_WALK, RATE_RAMP):  # and every bound

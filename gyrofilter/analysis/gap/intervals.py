@@ -272,7 +272,7 @@ def inversion_step(params, replicates, replicates_at, scales, bounds=None):
                 continue
             k_b, k_h = ((end[2] - b0) / (ends_u[side] - u_hat), (end[3] - h0) / (ends_u[side] - u_hat))
             ends_u[side] = u_hat + (sign * h0 - b0) / max(1.0 + k_b + sign * -k_h, 0.5)
-        out[name] = _finish(ends_u[0], ends_u[1], u_hat, scale, (bounds or {}).get(name, (-math.inf, math.inf)))
+        out[name] = _finish(ends_u[0], ends_u[1], params[name], scale, (bounds or {}).get(name, (-math.inf, math.inf)))
     return out
 
 
@@ -330,16 +330,17 @@ def _interval(estimate, replicates, scale, bounds=(-math.inf, math.inf)):
     if isinstance(spread, str):
         return Interval(None, spread)
     scale, u_hat, bias, half = spread
-    return _finish(u_hat - bias - half, u_hat - bias + half, u_hat, scale, bounds)
+    return _finish(u_hat - bias - half, u_hat - bias + half, estimate, scale, bounds)
 
 
-def _finish(u_low, u_high, u_hat, scale, bounds):
-    """The :class:`Interval` of the ends ``u_low``, ``u_high`` on ``scale``: their hull with the
-    estimate ``u_hat`` (module docstring), mapped back and cut to the parameter's domain ``bounds``
+def _finish(u_low, u_high, estimate, scale, bounds):
+    """The :class:`Interval` of the ends ``u_low``, ``u_high`` on ``scale``: mapped back, their hull
+    with the ``estimate`` itself (module docstring; the estimate, not its image mapped back and
+    forth, which may miss it by a rounding), cut to the parameter's domain ``bounds``
     (:func:`~gyrofilter.sim.model.param_bounds`: the log scale keeps a fraction positive, not
     below 0.5); not determined where a log-scale interval spans more than :data:`MAX_SPAN_RATIO`,
     or where the estimate itself lies outside the domain (the hull then does too)."""
-    low, high = _back(min(u_low, u_hat), scale), _back(max(u_high, u_hat), scale)
+    low, high = min(_back(u_low, scale), estimate), max(_back(u_high, scale), estimate)
     if high < bounds[0] or low > bounds[1]:
         return Interval(None, "its estimate lies outside the values a model takes")
     low, high = max(low, bounds[0]), min(high, bounds[1])
