@@ -50,6 +50,6 @@ def run(args):
                 writer.write(rows)
     for line in foreign.summary:
         console.say(f"  {line}")
-    print(f"wrote {args.out}: {foreign.rows} samples at {foreign.sample_rate_hz:g} Hz "
-          f"({foreign.rows / foreign.sample_rate_hz:g} s), gyro_unit {header['gyro_unit']}")
+    console.tell(f"wrote {args.out}: {foreign.rows} samples at {foreign.sample_rate_hz:g} Hz "
+                 f"({foreign.rows / foreign.sample_rate_hz:g} s), gyro_unit {header['gyro_unit']}")
     return 0
