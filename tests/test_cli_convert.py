@@ -316,3 +316,24 @@ def test_a_million_row_log_converts_in_bounded_memory(tmp_path):
     rec = read_recording(dst)
     _check_same(rec, gyro, (stamps - stamps[0]) * 1e-9)
     assert rec.header["time_origin"] == f"{stamps[0]} ns (timestamp)" and abs(rec.sample_rate_hz - 1000) < 0.01
+
+
+@pytest.mark.parametrize("change", ["longer", "shorter", "not a number"])
+def test_a_log_that_changes_between_the_passes_is_refused(tmp_path, change):
+    """convert reads its log more than once (a checking pass first, then the writer's): a log
+    changed in between is refused in one sentence, not written from rows nobody checked."""
+    from gyrofilter.errors import RecordingError
+    from gyrofilter.recording.foreign import read_foreign
+
+    src = tmp_path / "log.csv"
+    rows = [f"{i * 0.01:.2f},0.1,0.2,0.3\n" for i in range(300)]
+    src.write_text("t,gx_dps,gy_dps,gz_dps\n" + "".join(rows))
+    with read_foreign(src) as foreign:
+        assert foreign.rows == 300
+        if change == "not a number":
+            rows[100] = "1.00,0.1,x,0.3\n"
+        src.write_text("t,gx_dps,gy_dps,gz_dps\n" + "".join(rows[:299] if change == "shorter" else
+                                                          rows + ["3.00,0,0,0\n"] if change == "longer" else rows))
+        with pytest.raises(RecordingError, match="log.csv: changed while it was read"):
+            for _ in foreign.chunks():
+                pass

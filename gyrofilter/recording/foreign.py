@@ -105,10 +105,11 @@ class Foreign(Closable):
         """The rows of the recording, arrays (at most :data:`CHUNK_ROWS`, len(columns)) in the
         columns' order: the log read again, its gyro cells as floats and ``t`` as checked."""
         t_s, done = self._plan.t_s, 0
-        for numbers, cells in _row_chunks(self._source, self.path, self._plan):
+        for numbers, cells in _row_chunks(self._source, self.path, self._plan, again=True):
             if done + len(numbers) > self.rows:
                 raise RecordingError(f"{self.path}: changed while it was read (more than {self.rows} rows now)")
-            gyro = [np.array(col, dtype=float) for col in cells[:3]]
+            with _unchanged(self.path):
+                gyro = [np.array([float(c) for c in col]) for col in cells[:3]]
             yield np.column_stack(([t_s[done:done + len(numbers)]] if t_s is not None else []) + gyro)
             done += len(numbers)
         if done != self.rows:
@@ -271,10 +272,12 @@ def _cell(cells, index, line, names, path):
     return text
 
 
-def _row_chunks(raw, path, plan, counts=None):
+def _row_chunks(raw, path, plan, counts=None, *, again=False):
     """The data rows of the log, :data:`CHUNK_ROWS` at a time: (their line numbers, the cells of the
     columns ``plan.wanted`` as text, one list per column). Each row is checked (its length, its
-    cells plain decimal numbers); blank and comment lines are skipped, counted in ``counts["skipped"]``."""
+    cells plain decimal numbers; ``again``: a pass after the first, which checked them, checks the
+    length only, and :func:`_unchanged` the numbers); blank and comment lines are skipped,
+    counted in ``counts["skipped"]``."""
     names, wanted = plan.names, plan.wanted
     numbers, cells_of = [], [[] for _ in wanted]
     for number, text in _lines(raw, path):
@@ -289,13 +292,23 @@ def _row_chunks(raw, path, plan, counts=None):
             raise RecordingError(f"{path}: line {number}: {len(cells)} values, but {len(names)} columns "
                                  f"({'line ' + str(plan.header_line) if plan.header_line else 'the first row'})")
         for store, index in zip(cells_of, wanted):
-            store.append(_cell(cells, index, number, names, path))
+            store.append(cells[index].strip() if again else _cell(cells, index, number, names, path))
         numbers.append(number)
         if len(numbers) == CHUNK_ROWS:
             yield numbers, cells_of
             numbers, cells_of = [], [[] for _ in wanted]
     if numbers:
         yield numbers, cells_of
+
+
+@contextlib.contextmanager
+def _unchanged(path):
+    """A pass after the first: a cell that is no number now (float's ValueError, Decimal's
+    InvalidOperation) means the log changed since the first pass checked it."""
+    try:
+        yield
+    except (ValueError, ArithmeticError):
+        raise RecordingError(f"{path}: changed while it was read (a cell checked before is no number now)") from None
 
 
 class _Stamps:
@@ -449,7 +462,9 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
             t_unit, how = _infer_time_unit(np.diff(offsets), path, names[time]), \
                 f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more"
             del offsets
-            t_parts = [_seconds(cells[3], stamps.origin, TIME_UNITS[t_unit]) for _, cells in _row_chunks(raw, path, plan)]
+            with _unchanged(path):
+                t_parts = [_seconds(cells[3], stamps.origin, TIME_UNITS[t_unit])
+                           for _, cells in _row_chunks(raw, path, plan, again=True)]
         t_s = np.concatenate(t_parts)
         del t_parts
         rate_hz = _time_axis(t_s, t_unit, how, sample_rate_hz, names[time], path, summary)
