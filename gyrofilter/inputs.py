@@ -41,6 +41,19 @@ _INTEGER = re.compile(r"[+-]?[0-9]+")
 _DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # [0-9]: \d takes any script's digits
 
 
+#: a control character: the C0 controls (line ends, tab, escape), DEL, the C1 controls (0x9b starts
+#: a terminal's control sequence too), the Unicode line and paragraph separators
+CONTROL_CHARACTER = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def escape_controls(text):
+    """``text`` on one line: each control character (:data:`CONTROL_CHARACTER`) written as its
+    Python escape, as ``repr`` writes it inside a string (``\\n``, ``\\t``, ``\\x1b``,
+    ``\\u2028``), every other character as it is. The one rule of the header values and notes a
+    recording holds and of the lines the commands print."""
+    return CONTROL_CHARACTER.sub(lambda m: repr(m.group())[1:-1], str(text))
+
+
 def quote(text, limit=MAX_QUOTE_CHARS):
     """``repr(text)`` cut to at most ``limit`` characters inside its quotes (``...`` and the full
     length after a cut), for error messages that show what a user wrote. The cut counts the

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from support import file_named_by_bytes
+from support import file_named_by_bytes, lsb_recording
 
 
 @pytest.mark.parametrize("argv, prog, said", [
@@ -114,3 +114,33 @@ def test_a_mistyped_choice_gets_the_closest_one(capsys):
         main(["replay", "--preset", "papr"])
     err = capsys.readouterr().err.strip()
     assert stop.value.code == 2 and len(err.splitlines()) == 1 and "did you mean paper?" in err
+
+
+#: a file name that would fake an output line and colour the terminal, were it printed as it is
+_FAKING = "a\nb\x1b[31m"
+
+
+def test_file_names_with_control_characters_print_escaped_on_their_own_line(tmp_path, capsys):
+    """Issue 37 (attack): `gyrofilter allan "$(printf 'a\\nb.csv')" --json "$(printf 'x\\ny.json')"`
+    printed the names as they are: the "recording:" and "wrote" lines broke in two (a faked output
+    line) and an ESC sequence coloured the terminal. Every line the commands print goes through one
+    rule (gyrofilter.inputs.escape_controls): the names show as repr writes them inside quotes."""
+    from gyrofilter.cli import main
+
+    rec = tmp_path / f"{_FAKING}.csv"
+    lsb_recording(tmp_path, name=rec.name)
+    out_json, out_rec = tmp_path / f"x{_FAKING}.json", tmp_path / f"c{_FAKING}.csv"
+    assert main(["allan", str(rec), "--json", str(out_json)]) == 0
+    assert main(["convert", str(rec), "--out", str(out_rec), "--unit", "lsb", "--lsb-per-dps", "131"]) == 0
+    assert main(["convert", str(rec), "--out", str(out_rec), "--unit", "lsb", "--lsb-per-dps", "131"]) == 2  # exists
+    said = capsys.readouterr()
+    text = said.out + said.err
+    assert "\x1b" not in text and "b\\x1b[31m" in text
+    shown = str(tmp_path) + "/a\\nb\\x1b[31m"
+    lines = text.splitlines()
+    assert f"recording: {shown}.csv" in lines
+    assert f"wrote {tmp_path}/xa\\nb\\x1b[31m.json" in lines
+    assert any(line.startswith(f"wrote {tmp_path}/ca\\nb\\x1b[31m.csv: ") for line in lines)
+    # a refusal's whitespace is collapsed to one line (errors.one_line), its other controls escaped
+    assert f"gyrofilter: error: {tmp_path}/ca b\\x1b[31m.csv: exists (use --force to overwrite)" in lines
+    assert not any(line.startswith(("b\x1b", "b\\x1b")) for line in lines)  # no line begins inside a name

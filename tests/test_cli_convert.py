@@ -3,7 +3,10 @@ ns or s and rates in rad/s, a ROS bag export, an Arduino sketch's blank-separate
 recordings that read back with the very values of the log; every refusal is one line naming the
 file, the line and the column, exit 2, no output."""
 import gzip
+import json
 import os
+import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -279,3 +282,58 @@ def test_columns_in_other_scripts_digits_are_refused(tmp_path, capsys, digits):
     assert len(err.splitlines()) == 1 and f"--columns: no column '{digits[0]}'" in err
     rc, dst = _convert(tmp_path, "a,b,c,d\n" + rows, "--unit", "dps", "--columns", "1,2,3,4")
     assert rc == 0
+
+
+#: run in a fresh interpreter: convert, then its own peak resident memory (VmHWM: this process
+#: image's peak; ru_maxrss would carry the parent's across fork + exec)
+_PEAK = """
+import json, sys
+from gyrofilter.cli import main
+rc = main(sys.argv[1:])
+peak_kb = next(int(ln.split()[1]) for ln in open("/proc/self/status") if ln.startswith("VmHWM:"))
+print(json.dumps({"rc": rc, "peak_mb": peak_kb / 1024}))
+"""
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="needs /proc (Linux) for the peak memory")
+def test_a_million_row_log_converts_in_bounded_memory(tmp_path):
+    """Issue 37 (attack): convert held every cell as a Python string, 457 MB for 1,000,000 rows (a
+    day at 1 kHz: ~37 GB, MemoryError); it reads in chunks now and keeps 16 bytes a row. The phone
+    log's time unit is inferred (its offsets kept), and the output reads back with its values."""
+    n = 1_000_000
+    rng = np.random.default_rng(11)
+    stamps = 1_732_000_000_123_456_789 + np.concatenate(([0], np.cumsum(rng.integers(999_000, 1_001_000, n - 1))))
+    gyro = np.round(rng.standard_normal((n, 3)) * 0.01, 6)
+    src, dst = tmp_path / "phone.csv", tmp_path / "rec.csv.gz"
+    with open(src, "w") as fh:
+        fh.write("timestamp,gyro_x,gyro_y,gyro_z\n")
+        fh.writelines(f"{s},{x},{y},{z}\n" for s, (x, y, z) in zip(stamps.tolist(), gyro.tolist()))
+    done = subprocess.run([sys.executable, "-c", _PEAK, "convert", str(src), "--out", str(dst), "--unit", "rad/s"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["rc"] == 0 and result["peak_mb"] < 200, result  # the whole-file reader's peak: 488 MB
+    rec = read_recording(dst)
+    _check_same(rec, gyro, (stamps - stamps[0]) * 1e-9)
+    assert rec.header["time_origin"] == f"{stamps[0]} ns (timestamp)" and abs(rec.sample_rate_hz - 1000) < 0.01
+
+
+@pytest.mark.parametrize("change", ["longer", "shorter", "not a number"])
+def test_a_log_that_changes_between_the_passes_is_refused(tmp_path, change):
+    """convert reads its log more than once (a checking pass first, then the writer's): a log
+    changed in between is refused in one sentence, not written from rows nobody checked."""
+    from gyrofilter.errors import RecordingError
+    from gyrofilter.recording.foreign import read_foreign
+
+    src = tmp_path / "log.csv"
+    rows = [f"{i * 0.01:.2f},0.1,0.2,0.3\n" for i in range(300)]
+    src.write_text("t,gx_dps,gy_dps,gz_dps\n" + "".join(rows))
+    with read_foreign(src) as foreign:
+        assert foreign.rows == 300
+        if change == "not a number":
+            rows[100] = "1.00,0.1,x,0.3\n"
+        src.write_text("t,gx_dps,gy_dps,gz_dps\n" + "".join(rows[:299] if change == "shorter" else
+                                                          rows + ["3.00,0,0,0\n"] if change == "longer" else rows))
+        with pytest.raises(RecordingError, match="log.csv: changed while it was read"):
+            for _ in foreign.chunks():
+                pass

@@ -20,8 +20,9 @@ import threading
 
 from .. import __version__
 from ..errors import GyroFilterError, one_line
-from ..inputs import closest, quote
+from ..inputs import closest, escape_controls, quote
 from ..inputs import did_you_mean as _did_you_mean
+from . import console
 
 # command name -> (module, one-line summary)
 COMMANDS = {
@@ -55,7 +56,7 @@ class _OneLineParser(argparse.ArgumentParser):
         choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
         if choice:  # a mistyped value of an option with choices (--preset papr): the closest one
             message += _did_you_mean(choice.group(1), [c.strip(" '\"") for c in choice.group(2).split(",")])
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {escape_controls(' '.join(message.split()))} (see {self.prog} --help)\n")
 
 
 class _Parser(_OneLineParser):
@@ -146,5 +147,5 @@ def _main(argv):
         os.dup2(devnull, sys.stdout.fileno())
         return 0
     except (GyroFilterError, OSError, ValueError) as exc:
-        print(f"gyrofilter: error: {one_line(exc)}", file=sys.stderr)
+        console.say(f"gyrofilter: error: {one_line(exc)}")
         return EXIT_BAD_INPUT

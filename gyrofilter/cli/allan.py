@@ -148,7 +148,7 @@ def run(args):
                                       warn=console.say_warning, progress=progress)
     sample_rate_hz = head.sample_rate_hz
     duration_s = head.rows / sample_rate_hz
-    print(f"recording: {args.recording}")
+    console.tell(f"recording: {args.recording}")
     print(f"  {head.rows} samples at {sample_rate_hz:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
     console.paragraph(f"coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval], and "

@@ -68,7 +68,7 @@ def run(args):
     n = i1 - i0
     start_s, span_s = _start_s(i0, fs, t_s), _span_s(i0, i1, fs, t_s)
     reports = {}
-    print(f"recording: {args.recording}")
+    console.tell(f"recording: {args.recording}")
     print(f"  {n} samples at {fs:g} Hz ({span_s:.1f} s) from {start_s:g} s after the first sample, unit {head.gyro_unit}; "
           "each axis minus its mean")
     for name in axes:

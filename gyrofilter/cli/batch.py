@@ -144,12 +144,12 @@ def _summary(rows, fleet_files, written, elapsed_s):
     units = len({r["unit"] for r in rows})
     done = len({r["unit"] for r in rows if r["status"] == "ok"})
     flagged = [r for r in rows if r["flag"]]
-    print(f"fleet: {units} recording(s), {done} analysed, {units - done} failed, "
-          f"{len({r['unit'] for r in flagged})} stand(s) out ({elapsed_s:.1f} s)")
+    console.tell(f"fleet: {units} recording(s), {done} analysed, {units - done} failed, "
+                 f"{len({r['unit'] for r in flagged})} stand(s) out ({elapsed_s:.1f} s)")
     for r in failed:
-        print(f"  failed: {r['status']}")
+        console.tell(f"  failed: {r['status']}")
     for r in flagged:
         for f in r["flag"]:
-            print(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
+            console.tell(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
     console.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report(s)")
     return EXIT_NOTHING_DONE if not done else 0

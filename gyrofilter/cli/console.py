@@ -1,9 +1,12 @@
 """What the commands tell the user on the console: messages and warnings on stderr (stdout stays
-data), the start-up bias as printed, and the summary table of a filtered recording."""
+data), the start-up bias as printed, and the summary table of a filtered recording. Every message
+(a line that may name a file) goes through :func:`~gyrofilter.inputs.escape_controls` (``\\n``, ``\\x1b``: a file
+name cannot start a line of its own or colour the terminal)."""
 import math
 import sys
 import textwrap
 
+from ..inputs import escape_controls
 from ..units import AXES
 
 
@@ -11,16 +14,23 @@ from ..units import AXES
 MAX_LINE_CHARS = 100
 
 
+def tell(*lines):
+    """Lines for the user on stdout (a command's result: "wrote FILE ..."), each :func:`~gyrofilter.inputs.escape_controls`."""
+    for line in lines:
+        print(escape_controls(line))
+
+
 def paragraph(text, indent="", *, file=None):
-    """Print ``text`` wrapped at :data:`MAX_LINE_CHARS`, its first line indented by ``indent`` and
-    the others by two more spaces (stdout, or ``file``)."""
-    print(textwrap.fill(text, MAX_LINE_CHARS, initial_indent=indent, subsequent_indent=indent + "  ",
+    """Print ``text`` (:func:`~gyrofilter.inputs.escape_controls`) wrapped at :data:`MAX_LINE_CHARS`, its first line indented by
+    ``indent`` and the others by two more spaces (stdout, or ``file``)."""
+    print(textwrap.fill(escape_controls(text), MAX_LINE_CHARS, initial_indent=indent, subsequent_indent=indent + "  ",
                         break_on_hyphens=False, break_long_words=False), file=file)
 
 
-def say(text):
-    """A message for the user (stderr, so that stdout stays data)."""
-    print(text, file=sys.stderr)
+def say(*lines, flush=False):
+    """Messages for the user, one line each (:func:`~gyrofilter.inputs.escape_controls`), on stderr, so that stdout stays data."""
+    for line in lines:
+        print(escape_controls(line), file=sys.stderr, flush=flush)
 
 
 def say_warning(text):
@@ -42,12 +52,12 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None, smooth
     """The per-axis table: raw and filtered mean/std (:class:`~gyrofilter.streamstats.RunningMoments`),
     std ratio, rejected samples. ``calibration_from``: the file the bias was loaded from, if any;
     ``smoothed``: the rows are the forward-backward smoother's."""
-    print(f"recording: {path}")
+    tell(f"recording: {path}")
     print(f"  {head.rows} samples at {head.sample_rate_hz:g} Hz ({head.rows / head.sample_rate_hz:.1f} s), unit {head.gyro_unit}")
     cal = filt.calibration
     if cal is not None:
         source = f"loaded from {calibration_from}" if calibration_from else f"start-up calibration, {cal.samples} samples"
-        print(f"  bias ({source}): " + ", ".join(_number(b, 0, sign=True) for b in cal.bias_dps) + " deg/s")
+        tell(f"  bias ({source}): " + ", ".join(_number(b, 0, sign=True) for b in cal.bias_dps) + " deg/s")
     how = ", smoothed forward-backward" if smoothed else ""
     if filt.compensates_temperature:
         how += ", temperature compensated (" + ", ".join(f"{c:g}" for c in filt.settings.temp_coefficients()) + " deg/s/degC)"

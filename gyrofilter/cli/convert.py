@@ -2,11 +2,12 @@
 [--sample-rate-hz HZ] [--time-unit s|ms|us|ns]``: another tool's gyro log (a phone logger's CSV,
 a ROS bag export, an Arduino sketch's text) as a recording of format v1, the way to bring your
 own data to every other command. The reading rules are :mod:`gyrofilter.recording.foreign`'s;
-this module parses argv, writes the file whole (:func:`~gyrofilter.cli.outputs.replacing`) and
-says what it read.
+this module parses argv, writes the file a chunk at a time under a temporary name
+(:class:`~gyrofilter.recording.RecordingWriter` in :func:`~gyrofilter.cli.outputs.replacing`: the
+file takes its name only when whole) and says what it read.
 """
 from .. import __version__
-from ..recording import write_recording
+from ..recording import RecordingWriter
 from ..recording.foreign import TIME_UNITS, read_foreign
 from ..units import GYRO_UNITS
 from . import console, options, outputs
@@ -39,14 +40,16 @@ def add_arguments(parser):
 def run(args):
     outputs.check_outputs([args.out], [args.input], args.force)
     columns = None if args.columns is None else [c.strip() for c in args.columns.split(",")]
-    foreign = read_foreign(args.input, unit=args.unit, lsb_per_dps=args.lsb_per_dps, columns=columns,
-                           sample_rate_hz=options.sample_rate_hz(args), time_unit=args.time_unit)
-    rec = foreign.recording
-    rec.header["converted_by"] = f"gyrofilter {__version__} convert"
-    with outputs.replacing(args.out) as tmp:
-        write_recording(tmp, rec)
+    with read_foreign(args.input, unit=args.unit, lsb_per_dps=args.lsb_per_dps, columns=columns,
+                      sample_rate_hz=options.sample_rate_hz(args), time_unit=args.time_unit) as foreign:
+        header = {**foreign.header, "converted_by": f"gyrofilter {__version__} convert"}
+        with outputs.replacing(args.out) as tmp, \
+                RecordingWriter(tmp, header, foreign.columns, formats=foreign.formats, flush_interval_s=None,
+                                fsync=False) as writer:
+            for rows in foreign.chunks():
+                writer.write(rows)
     for line in foreign.summary:
         console.say(f"  {line}")
-    print(f"wrote {args.out}: {len(rec)} samples at {rec.sample_rate_hz:g} Hz ({rec.duration_s:g} s), "
-          f"gyro_unit {rec.gyro_unit}")
+    console.tell(f"wrote {args.out}: {foreign.rows} samples at {foreign.sample_rate_hz:g} Hz "
+                 f"({foreign.rows / foreign.sample_rate_hz:g} s), gyro_unit {header['gyro_unit']}")
     return 0

@@ -47,7 +47,7 @@ def run(args):
     rec_dir = _recordings_dir(args.recordings)
     pyplot()  # a missing matplotlib is said now, not after the evaluation
     show = args.progress or sys.stderr.isatty()
-    progress = (lambda text: print(text, file=sys.stderr, flush=True)) if show else None
+    progress = (lambda text: console.say(text, flush=True)) if show else None
     split = {"all": {}, "tune": E.TUNE_SPLIT, "holdout": E.HOLDOUT_SPLIT}[args.split]
     ev = E.evaluate(
         recordings_dir=rec_dir,

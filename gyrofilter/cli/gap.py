@@ -80,7 +80,7 @@ def run(args):
 
     def progress(text):
         if show:
-            print(f"gap [{time.perf_counter() - t0:5.1f} s] {text}", file=sys.stderr, flush=True)
+            console.say(f"gap [{time.perf_counter() - t0:5.1f} s] {text}", flush=True)
 
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis

@@ -336,7 +336,7 @@ class LiveLoop:
         notes = self.source.pop_notes()
         for text in notes:
             if text.startswith(WARNING_PREFIX):
-                print(f"gyrofilter: {text}", file=sys.stderr)
+                console.say(f"gyrofilter: {text}")
         return notes
 
     @property

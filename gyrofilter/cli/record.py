@@ -19,7 +19,7 @@ import time
 from .. import __version__
 from ..errors import SettingsError
 from ..recording import END_NOTE
-from . import live, options, outputs
+from . import console, live, options, outputs
 
 # header keys first in this order, the rest as the source gives them
 _HEADER_ORDER = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "sensor", "chip_id", "full_scale_dps",
@@ -109,12 +109,10 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
         raise SettingsError(f"{spec}: no sample was recorded{within}; "
                             + (f"{out} is left as it was" if existed else f"the empty {out} is not kept"))
     stats = source.stats
-    print(
-        f"{command}: {reason}\n"
-        f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.sample_rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {out}\n"
-        f"  lost {stats.get('lost_samples', 0)} samples"
-        + (f"; {live.source_summary(stats)}" if live.source_summary(stats) else "")
-        + (f"\n  {out}: {left}" if left else ""),
-        file=sys.stderr,
+    console.say(
+        f"{command}: {reason}",
+        f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.sample_rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {out}",
+        f"  lost {stats.get('lost_samples', 0)} samples" + (f"; {live.source_summary(stats)}" if live.source_summary(stats) else ""),
+        *([f"  {out}: {left}"] if left else []),
     )
     return live.EXIT_DISCONNECTED if loop.failed() else 0

@@ -80,7 +80,7 @@ def run(args):
 
     def progress(text):
         if show:
-            print(f"report [{time.perf_counter() - t0:5.1f} s] {text}", file=sys.stderr, flush=True)
+            console.say(f"report [{time.perf_counter() - t0:5.1f} s] {text}", flush=True)
 
     if args.source is not None:
         path = args.recording_out or default_recording_path(args.out)

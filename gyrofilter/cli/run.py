@@ -170,16 +170,15 @@ def _run(args, source, sinks):
     left = writer.close(loop.failed() or nothing)
     reason = loop.reason()
     bias = "" if filt.bias_dps is None else f" bias {console.bias_text(filt.bias_dps)};"
-    print(
-        f"gyrofilter run: {reason}\n"
+    console.say(
+        f"gyrofilter run: {reason}",
         f"  {loop.samples} samples in, {writer.rows_written} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
-        f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})\n"
+        f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})",
         f"  lost {source.stats.get('lost_samples', 0)} samples"
-        + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else "")
-        + (f"\n  {out_file}: {left}" if left else "")
-        + ("\n  nothing filtered: it stopped inside the start-up calibration window "
-           f"({filt.settings.calibration_s:g} s)" if nothing else ""),
-        file=sys.stderr,
+        + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else ""),
+        *([f"  {out_file}: {left}"] if left else []),
+        *([f"  nothing filtered: it stopped inside the start-up calibration window ({filt.settings.calibration_s:g} s)"]
+          if nothing else []),
     )
     if loop.failed():
         return live.EXIT_DISCONNECTED

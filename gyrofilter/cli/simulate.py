@@ -75,6 +75,6 @@ def run(args):
                 print(f"\rsimulate: {done}/{n_total} samples ({100.0 * done / n_total:.0f} %)", end="", file=sys.stderr)
     if show:
         print(file=sys.stderr)
-    print(f"wrote {args.out}: {n_total} samples at {spec['sample_rate_hz']:g} Hz ({n_total / spec['sample_rate_hz']:g} s), "
+    console.tell(f"wrote {args.out}: {n_total} samples at {spec['sample_rate_hz']:g} Hz ({n_total / spec['sample_rate_hz']:g} s), "
           f"gyro_unit {spec['gyro_unit']}, seed {seed}")
     return 0

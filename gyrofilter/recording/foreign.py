@@ -3,9 +3,14 @@
 A phone logger's CSV (``timestamp,gyro_x,gyro_y,gyro_z`` in rad/s, time in ns), a ROS bag
 export (``%time,field.header.seq,...,field.angular_velocity.x,...``), an Arduino sketch's
 whitespace text of raw LSB: :func:`read_foreign` reads plain text of that kind (comma, semicolon,
-tab or blank separated, gzip too) and returns a :class:`~gyrofilter.recording.content.Recording`
-that :func:`~gyrofilter.recording.write_recording` writes.
+tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
+:class:`~gyrofilter.recording.RecordingWriter` writes a chunk at a time.
 
+- **Memory.** The log is read in chunks of :data:`~gyrofilter.recording.reader.CHUNK_ROWS` rows,
+  never whole: a first pass checks every row and keeps 16 bytes a row (its line number and its
+  time), a pass over the time column follows when its unit is inferred (the times in s need
+  it), and :meth:`Foreign.chunks` reads it once more for the writer. A log that cannot be read
+  twice (a pipe) is first copied, as it is, to an anonymous temporary file.
 - **Columns.** The time and the three gyro columns are found by their usual names
   (:data:`TIME_NAME`, :data:`GYRO_NAME`: ``t``/``time``/``timestamp``/``%time``/
   ``seconds_elapsed``, ``gx``/``gyro_x``/``wx``/``omega_x``/``angular_velocity.x``, ``x``; case,
@@ -33,13 +38,16 @@ that :func:`~gyrofilter.recording.write_recording` writes.
 """
 from __future__ import annotations
 
+import contextlib
 import decimal
 import gzip
 import math
 import re
+import shutil
 import sys
+import tempfile
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,9 +55,12 @@ from ..errors import RecordingError
 from ..inputs import is_plain_number, quote
 from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sample_rate_hz, to_dps
 from .checks import TimeCheck
-from .content import Recording, RecordingHead
+from ..closable import Closable
+from .content import RecordingHead
 from .header import FORMAT_VERSION, GYRO_COLUMNS, MAX_LINE_BYTES, VERSION_KEY, format_number
 from .lines import sibling_hint
+from .reader import CHUNK_ROWS
+from .writer import EXACT_FORMAT, exact_format
 
 #: time units of a time column and their length in s
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
@@ -72,13 +83,54 @@ _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
 
 
-@dataclass
-class Foreign:
-    """What :func:`read_foreign` made: the ``recording`` (header and columns, ready to write)
-    and the ``summary``, sentences saying what was read and how (columns, units, rate, jitter)."""
+class Foreign(Closable):
+    """What :func:`read_foreign` found, checked in a first pass over the log: the recording's
+    ``header`` (ready to write), its ``columns``, the exact ``formats`` of their values (the
+    writer's rule, :func:`~gyrofilter.recording.writer.exact_format`, applied to each whole
+    column, so that the file is the one writing it in one go makes), ``rows``, and the
+    ``summary``, sentences saying what was read and how (columns, units, rate, jitter).
+    :meth:`chunks` reads the log again and yields its rows. Holds the log open (or its copy,
+    when it is a pipe) until closed."""
 
-    recording: Recording
-    summary: list = field(default_factory=list)
+    def __init__(self, source, path, header, columns, formats, rows, summary, plan):
+        self._source, self.path, self._plan = source, path, plan
+        self.header, self.columns, self.formats, self.rows, self.summary = header, columns, formats, rows, summary
+
+    @property
+    def sample_rate_hz(self):
+        """The header's rate (Hz)."""
+        return float(self.header["sample_rate_hz"])
+
+    def chunks(self):
+        """The rows of the recording, arrays (at most :data:`CHUNK_ROWS`, len(columns)) in the
+        columns' order: the log read again, its gyro cells as floats and ``t`` as checked."""
+        t_s, done = self._plan.t_s, 0
+        for numbers, cells in _row_chunks(self._source, self.path, self._plan, again=True):
+            if done + len(numbers) > self.rows:
+                raise RecordingError(f"{self.path}: changed while it was read (more than {self.rows} rows now)")
+            with _unchanged(self.path):
+                gyro = [np.array([float(c) for c in col]) for col in cells[:3]]
+            yield np.column_stack(([t_s[done:done + len(numbers)]] if t_s is not None else []) + gyro)
+            done += len(numbers)
+        if done != self.rows:
+            raise RecordingError(f"{self.path}: changed while it was read ({done} rows now, {self.rows} before)")
+
+    def _close(self):
+        self._source.close()
+
+
+@dataclass
+class _Plan:
+    """How the data rows of a log are read: its column ``names``, how a line is ``split``, the
+    line with the names (None without), the columns ``wanted`` (x, y, z, then the time's), the
+    line the data start after; ``t_s``, once known."""
+
+    names: list
+    split: object
+    header_line: object
+    wanted: list
+    after_line: int
+    t_s: object = None
 
 
 def _normal(name):
@@ -95,17 +147,35 @@ def _normal(name):
     return key.removeprefix("field_"), unit
 
 
-def _lines(path):
-    """(line number, text) of the file ``path`` (gzip when it starts with the gzip magic),
-    line ends dropped, each line at most MAX_LINE_BYTES bytes and UTF-8. The file is opened once
-    and its first bytes peeked at, not read: a pipe (``<(zcat log.gz)``, /dev/stdin) cannot be
-    read twice, and opening it again lost the block the magic was read from."""
+def _open(path):
+    """The log ``path`` open for reading twice (binary): the file itself, or, when it cannot seek
+    (a pipe: ``<(zcat log.gz)``, /dev/stdin), an anonymous temporary copy of its bytes (in the
+    system's temporary folder, gone when closed), made one block at a time."""
     try:
         raw = open(path, "rb")
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
+    if raw.seekable():
+        return raw
+    with raw:
+        copy = tempfile.TemporaryFile()
+        try:
+            shutil.copyfileobj(raw, copy, 1 << 20)
+            copy.seek(0)
+        except OSError as exc:
+            copy.close()
+            raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    return copy
+
+
+def _lines(raw, path):
+    """(line number, text) of the open log ``raw`` (the file ``path``; gzip when it starts with the
+    gzip magic), from its start, line ends dropped, each line at most MAX_LINE_BYTES bytes and
+    UTF-8. The first bytes are peeked at, not read."""
+    raw.seek(0)
     try:
-        with raw, (gzip.GzipFile(fileobj=raw, mode="rb") if raw.peek(2)[:2] == b"\x1f\x8b" else raw) as fh:
+        zipped = raw.peek(2)[:2] == b"\x1f\x8b"
+        with (gzip.GzipFile(fileobj=raw, mode="rb") if zipped else contextlib.nullcontext(raw)) as fh:
             number = 0
             while True:
                 data = fh.readline(MAX_LINE_BYTES + 1)
@@ -202,52 +272,97 @@ def _cell(cells, index, line, names, path):
     return text
 
 
-def _read_rows(lines, path, names, split, header_line, wanted):
-    """The cells of the columns ``wanted`` (indices) of every data row, as text, and each row's line number."""
-    cells_of = [[] for _ in wanted]
-    line_of = []
-    skipped = 0
-    for number, text in lines:
-        if not text.strip() or text.lstrip().startswith(_COMMENT):
-            skipped += 1
+def _row_chunks(raw, path, plan, counts=None, *, again=False):
+    """The data rows of the log, :data:`CHUNK_ROWS` at a time: (their line numbers, the cells of the
+    columns ``plan.wanted`` as text, one list per column). Each row is checked (its length, its
+    cells plain decimal numbers; ``again``: a pass after the first, which checked them, checks the
+    length only, and :func:`_unchanged` the numbers); blank and comment lines are skipped,
+    counted in ``counts["skipped"]``."""
+    names, wanted = plan.names, plan.wanted
+    numbers, cells_of = [], [[] for _ in wanted]
+    for number, text in _lines(raw, path):
+        if number <= plan.after_line:
             continue
-        cells = split(text)
+        if not text.strip() or text.lstrip().startswith(_COMMENT):
+            if counts is not None:
+                counts["skipped"] += 1
+            continue
+        cells = plan.split(text)
         if len(cells) != len(names):
             raise RecordingError(f"{path}: line {number}: {len(cells)} values, but {len(names)} columns "
-                                 f"({'line ' + str(header_line) if header_line else 'the first row'})")
+                                 f"({'line ' + str(plan.header_line) if plan.header_line else 'the first row'})")
         for store, index in zip(cells_of, wanted):
-            store.append(_cell(cells, index, number, names, path))
-        line_of.append(number)
-    return cells_of, np.array(line_of), skipped
+            store.append(cells[index].strip() if again else _cell(cells, index, number, names, path))
+        numbers.append(number)
+        if len(numbers) == CHUNK_ROWS:
+            yield numbers, cells_of
+            numbers, cells_of = [], [[] for _ in wanted]
+    if numbers:
+        yield numbers, cells_of
 
 
-def _times(texts, where, path):
-    """A time column's cells as offsets from the first and the first as text. The cells are
-    subtracted as decimals, exactly, before they become floats: a phone's stamps in s since 1970
-    with 9 decimals (or ns since 1970) keep every ns, which floats of the stamps themselves
-    (2.4e-7 s apart near 1.7e9) would not. ``where(row)`` names a row for the refusal of a stamp
-    beyond a float's range (the first such row: a first stamp of 1e400 is blamed, not the next
-    row, whose offset from it is what overflows) or too far from the first for a float."""
-    with decimal.localcontext() as ctx:
-        ctx.traps[decimal.Overflow] = False  # 1e99999 - 0 is Infinity, refused below
-        first = decimal.Decimal(texts[0])
-        offsets = np.array([float(decimal.Decimal(t) - first) for t in texts])
-    bad = np.flatnonzero(~np.isfinite(offsets))
-    if bad.size:
-        huge = [row for row in range(int(bad[0]) + 1) if not math.isfinite(float(decimal.Decimal(texts[row])))]
-        row = huge[0] if huge else int(bad[0])
-        why = (f"is beyond the range of a float ({sys.float_info.max:.3g})" if huge else
-               f"is too far from the first ({quote(texts[0])}) to be a time of this log")
-        raise RecordingError(f"{path}: {where(row)}: time stamp {quote(texts[row])} {why}")
-    return offsets, texts[0]
+@contextlib.contextmanager
+def _unchanged(path):
+    """A pass after the first: a cell that is no number now (float's ValueError, Decimal's
+    InvalidOperation) means the log changed since the first pass checked it."""
+    try:
+        yield
+    except (ValueError, ArithmeticError):
+        raise RecordingError(f"{path}: changed while it was read (a cell checked before is no number now)") from None
 
 
-def _seconds(texts, unit_s):
-    """The time column's cells as seconds from the first: the decimal offsets (:func:`_times`)
-    scaled exactly, then rounded once to a float, so that a stamp 39966971 ns after the first is
-    written 0.039966971, not 0.039966971000000004."""
+class _Stamps:
+    """The time column's cells, a chunk at a time (:meth:`add`), as offsets from the first stamp.
+    The cells are subtracted as decimals, exactly, before they become floats: a phone's stamps
+    in s since 1970 with 9 decimals (or ns since 1970) keep every ns, which floats of the stamps
+    themselves (2.4e-7 s apart near 1.7e9) would not. Kept: the offsets as floats (8 bytes a row;
+    the time unit is inferred from their median step) when ``keep``, and the first stamp beyond a
+    float's range and the first offset beyond it, refused by :meth:`check` as the first in the
+    file (a first stamp of 1e400 is blamed, not the next row, whose offset from it is what overflows)."""
+
+    def __init__(self, keep):
+        self.first, self.origin, self.offsets = None, None, [] if keep else None
+        self.huge = self.far = None  # (row, text) of the first stamp beyond a float / offset beyond one
+        self.rows = 0
+
+    def add(self, texts):
+        """Take the next chunk's cells; False once a stamp or offset is beyond a float."""
+        if self.first is None:
+            self.origin = texts[0]
+            self.first = decimal.Decimal(texts[0])
+            if not math.isfinite(float(self.first)):
+                self.huge = (0, texts[0])  # blamed when an offset from it is beyond a float
+        with decimal.localcontext() as ctx:
+            ctx.traps[decimal.Overflow] = False  # 1e99999 - 0 is Infinity, refused by check()
+            offsets = np.array([float(decimal.Decimal(t) - self.first) for t in texts])
+        bad = np.flatnonzero(~np.isfinite(offsets))
+        if bad.size and self.far is None:
+            self.far = (self.rows + int(bad[0]), texts[int(bad[0])])
+            for row in range(int(bad[0]) + 1):  # a stamp itself beyond a float comes at or before its offset
+                if self.huge is None and not math.isfinite(float(decimal.Decimal(texts[row]))):
+                    self.huge = (self.rows + row, texts[row])
+        if self.offsets is not None:
+            self.offsets.append(offsets)
+        self.rows += len(texts)
+        return self.far is None
+
+    def check(self, where, path):
+        """Refuse the first stamp beyond a float's range, or too far from the first for a float;
+        ``where(row)`` names a row."""
+        if self.far is None:
+            return
+        row, text = self.huge or self.far
+        why = (f"is beyond the range of a float ({sys.float_info.max:.3g})" if self.huge else
+               f"is too far from the first ({quote(self.origin)}) to be a time of this log")
+        raise RecordingError(f"{path}: {where(row)}: time stamp {quote(text)} {why}")
+
+
+def _seconds(texts, origin, unit_s):
+    """The time column's cells as seconds from the first stamp ``origin`` (text): the exact decimal
+    offsets (:class:`_Stamps`) scaled exactly, then rounded once to a float, so that a stamp
+    39966971 ns after the first is written 0.039966971, not 0.039966971000000004."""
     scale = decimal.Decimal(repr(unit_s))
-    first = decimal.Decimal(texts[0])
+    first = decimal.Decimal(origin)
     return np.array([float((decimal.Decimal(t) - first) * scale) for t in texts])
 
 
@@ -275,52 +390,92 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
         raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
     if sample_rate_hz is not None:
         sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
-    lines = _lines(path)
-    header_line, names, split, first_data, preamble = None, None, None, [], 0
-    for number, text in lines:
+    raw = _open(path)
+    try:
+        return _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit)
+    except BaseException:
+        raw.close()
+        raise
+
+
+def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
+    """:func:`read_foreign` on the open log ``raw``: the column row, then a first pass over the
+    rows that checks each and keeps 16 bytes a row (a row's line number and its time, or its
+    offset from the first stamp while the time unit is not known; then a pass over the time
+    column computes the times in s). Every refusal comes in the order of reading it whole."""
+    header_line, names, split, first_data, preamble = None, None, None, None, 0
+    for number, text in _lines(raw, path):
         preamble += 1
         if text.strip() and not text.lstrip().startswith(_COMMENT):
             preamble -= 1
             split = _splitter(text)
             cells = split(text)
             if all(is_plain_number(c) for c in cells):  # no column names: the columns are numbered
-                names, first_data = [str(i + 1) for i in range(len(cells))], [(number, text)]
+                names, first_data = [str(i + 1) for i in range(len(cells))], number
             else:
                 header_line, names = number, cells
             break
     if names is None:
         raise RecordingError(f"{path}: no data (only blank or comment lines)")
     if header_line is None and columns is None:
-        raise RecordingError(f"{path}: line {first_data[0][0]}: numbers but no column names; give the columns by number, "
+        raise RecordingError(f"{path}: line {first_data}: numbers but no column names; give the columns by number, "
                              "e.g. --columns 1,2,3,4 (time, x, y, z) or --columns 2,3,4 (x, y, z)")
     time, t_unit, gyro, stated = _pick(names, path, columns, time_unit)
     unit = _gyro_unit(unit, stated, lsb_per_dps, path)
     wanted = gyro + ([time] if time is not None else [])
-    cells, line_of, skipped = _read_rows(_chain(first_data, lines), path, names, split, header_line, wanted)
-    skipped += preamble
-    if len(line_of) < 2:
-        raise RecordingError(f"{path}: {len(line_of)} data row(s); a recording needs at least 2")
-    gyro_values = [np.array([float(c) for c in col]) for col in cells[:3]]
-    _check_range(gyro_values, unit, lsb_per_dps, line_of, gyro, names, path)
+    plan = _Plan(names, split, header_line, wanted, after_line=header_line or first_data - 1)
+    counts, rows, integral, out_of_range = {"skipped": preamble}, 0, [True] * 3, None
+    stamps = _Stamps(keep=t_unit is None) if time is not None else None
+    t_parts, line_parts = [], []
+    for numbers, cells in _row_chunks(raw, path, plan, counts):
+        gyro_values = [np.array([float(c) for c in col]) for col in cells[:3]]
+        out_of_range = out_of_range or _out_of_range(gyro_values, unit, lsb_per_dps, numbers, gyro, names, path)
+        integral = [whole and exact_format(v) == "%d" for whole, v in zip(integral, gyro_values)]
+        if stamps is not None:
+            line_parts.append(np.array(numbers))
+            if stamps.far is None and stamps.add(cells[3]) and t_unit is not None:
+                t_parts.append(_seconds(cells[3], stamps.origin, TIME_UNITS[t_unit]))
+        rows += len(numbers)
+    skipped = counts["skipped"]
+    if rows < 2:
+        raise RecordingError(f"{path}: {rows} data row(s); a recording needs at least 2")
+    if out_of_range:
+        raise RecordingError(out_of_range)
     summary = [f"columns: x {quote(names[gyro[0]])}, y {quote(names[gyro[1]])}, z {quote(names[gyro[2]])} "
-               f"in {unit}{' (as the names state)' if stated else ''}; {len(line_of)} rows"
+               f"in {unit}{' (as the names state)' if stated else ''}; {rows} rows"
                + (f", {skipped} blank or comment line(s) skipped" if skipped else "")]
     left = [n for i, n in enumerate(names) if i not in wanted]
     if left:
         summary.append(f"left out: {', '.join(left)}")
     header = {VERSION_KEY: FORMAT_VERSION}
-    data = dict(zip(GYRO_COLUMNS, gyro_values))
+    out_columns, formats = list(GYRO_COLUMNS), ["%d" if whole else EXACT_FORMAT for whole in integral]
     if time is not None:
+        line_of = np.concatenate(line_parts)
+
         def where(row):
             return f"line {line_of[row]}, column {time + 1} ({quote(names[time])})"
-        t_s, rate_hz, origin, t_unit = _time_axis(cells[3], t_unit, sample_rate_hz, names[time], where, path, summary)
+        stamps.check(where, path)
+        how = "as its name states"
+        if t_unit is None:
+            offsets = np.concatenate(stamps.offsets)
+            stamps.offsets = None
+            t_unit, how = _infer_time_unit(np.diff(offsets), path, names[time]), \
+                f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more"
+            del offsets
+            with _unchanged(path):
+                t_parts = [_seconds(cells[3], stamps.origin, TIME_UNITS[t_unit])
+                           for _, cells in _row_chunks(raw, path, plan, again=True)]
+        t_s = np.concatenate(t_parts)
+        del t_parts
+        rate_hz = _time_axis(t_s, t_unit, how, sample_rate_hz, names[time], path, summary)
         head = RecordingHead(header={"sample_rate_hz": format_number(rate_hz)}, names=["t"], path=path)
         check = TimeCheck(head, "the time column's steps are not one rate; give the rate in --sample-rate-hz "
                                 "if they are, or split the file where it changes")
         check.add(t_s, where)
         check.finish()
-        data = {"t": t_s, **data}
-        header.update(sample_rate_hz=format_number(rate_hz), time_origin=f"{origin} {t_unit} ({names[time]})")
+        plan.t_s = t_s
+        out_columns, formats = ["t"] + out_columns, [exact_format(t_s)] + formats
+        header.update(sample_rate_hz=format_number(rate_hz), time_origin=f"{stamps.origin} {t_unit} ({names[time]})")
     elif sample_rate_hz is None:
         raise RecordingError(f"{path}: no time column among {quote(', '.join(names))}; give the rate in --sample-rate-hz, "
                              "or name the time column first in --columns")
@@ -331,12 +486,7 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
     if unit == "lsb":
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     header["converted_from"] = path
-    return Foreign(Recording(columns=data, header=header, path=path), summary)
-
-
-def _chain(first, rest):
-    yield from first
-    yield from rest
+    return Foreign(raw, path, header, out_columns, formats, rows, summary, plan)
 
 
 def _gyro_unit(unit, stated, lsb_per_dps, path):
@@ -356,25 +506,20 @@ def _gyro_unit(unit, stated, lsb_per_dps, path):
     return unit
 
 
-def _check_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
-    """Refuse a gyro value beyond +-MAX_RATE_DPS, naming its line and column."""
+def _out_of_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
+    """The refusal of the first gyro value beyond +-MAX_RATE_DPS, naming its line and column, or None."""
     with np.errstate(over="ignore"):
         dps = to_dps(np.column_stack(values), unit, lsb_per_dps)
     bad = np.argwhere(~(np.abs(dps) <= MAX_RATE_DPS))
-    if bad.size:
-        row, axis = (int(i) for i in bad[0])
-        raise RecordingError(f"{path}: line {line_of[row]}, column {gyro[axis] + 1} ({quote(names[gyro[axis]])}): "
-                             f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
+    if not bad.size:
+        return None
+    row, axis = (int(i) for i in bad[0])
+    return (f"{path}: line {line_of[row]}, column {gyro[axis] + 1} ({quote(names[gyro[axis]])}): "
+            f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
 
 
-def _time_axis(texts, t_unit, sample_rate_hz, name, where, path, summary):
-    """(t in s from the first stamp, the rate in Hz, the first stamp as text, the time unit); says how in ``summary``."""
-    offsets, origin = _times(texts, where, path)
-    steps = np.diff(offsets)
-    how = "as its name states"
-    if t_unit is None:
-        t_unit, how = _infer_time_unit(steps, path, name), f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more"
-    t_s = _seconds(texts, TIME_UNITS[t_unit])
+def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary):
+    """The rate in Hz (the caller's, or 1 / the median step of ``t_s``, the times in s); says how in ``summary``."""
     step_s = np.diff(t_s)
     median_s = float(np.median(step_s))
     text = f"time: column {quote(name)} in {t_unit} ({how}; --time-unit to say otherwise)"
@@ -391,4 +536,4 @@ def _time_axis(texts, t_unit, sample_rate_hz, name, where, path, summary):
         text += (f"; jitter: 90 % of the steps within {100 * low:+.2g} % .. {100 * high:+.2g} % of the median "
                  f"({median_s * 1e3:.4g} ms), {gaps} gap(s) longer than 1.5 steps")
     summary.append(text)
-    return t_s, sample_rate_hz, origin, t_unit
+    return sample_rate_hz

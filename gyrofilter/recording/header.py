@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 
 from ..errors import RecordingError
-from ..inputs import parse_number, quote
+from ..inputs import CONTROL_CHARACTER, escape_controls, parse_number, quote
 from ..units import AXES, GYRO_UNITS, check_lsb_per_dps, check_sample_rate_hz, utf8_text
 
 #: the first header key of every recording; its value is the format version
@@ -31,8 +31,6 @@ MAX_LINE_BYTES = 1 << 20
 #: hold at most MAX_LINE_BYTES bytes as well
 MAX_HEADER_LINES = 1000
 
-#: control characters (line ends, tabs, ...), which header values and annotations never hold
-_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 
 def one_line_text(text):
@@ -40,7 +38,7 @@ def one_line_text(text):
     a tab, ...) written as its escape (``\\n``), and each lone surrogate (a file name that is not
     UTF-8) as :func:`~gyrofilter.units.utf8_text` writes it (``\\udcff``), spaces at both ends
     dropped; that is what the reader reads back."""
-    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), utf8_text(str(text))).strip()
+    return escape_controls(utf8_text(str(text))).strip()
 
 
 #: header keys gyrofilter writes to say where a recording's samples came from and what was done
@@ -123,13 +121,13 @@ def header_text(header, columns, where):
     for key, value in header.items():
         if key == VERSION_KEY:
             continue
-        if not isinstance(key, str) or not key or _CONTROL.search(key) or ":" in key or key.split() != [key]:
+        if not isinstance(key, str) or not key or CONTROL_CHARACTER.search(key) or ":" in key or key.split() != [key]:
             raise RecordingError(f"{where}: header key {quote(key)} is not a name (no ':', spaces or control characters)")
         head[key] = one_line_text(value)
     check_header(head, where)
     columns = list(columns)
     for i, name in enumerate(columns):
-        if (not isinstance(name, str) or _CONTROL.search(name) or "," in name or name.split() != [name]
+        if (not isinstance(name, str) or CONTROL_CHARACTER.search(name) or "," in name or name.split() != [name]
                 or (i == 0 and name.startswith("#"))):
             raise RecordingError(f"{where}: column name {quote(name)} is not a name (no ',', spaces or control characters)")
     check_columns(columns, where)

@@ -175,7 +175,7 @@ class RecordingWriter(Closable):
         check_rates(values, self._head, lambda row: f"row {row + 1} of the rows to write")
         if self._times is not None:
             self._times.add(self._head.column(values, "t"), lambda row: f"row {self.rows_written + row + 1} of the output")
-        fmt = ",".join(f if f is not None else _exact_format(values[:, i]) for i, f in enumerate(self._formats)) + "\n"
+        fmt = ",".join(f if f is not None else exact_format(values[:, i]) for i, f in enumerate(self._formats)) + "\n"
         self._emit("".join(fmt % tuple(r) for r in (rows if rows.dtype == object else values).tolist()))
         self.rows_written += len(rows)
         if self._flush_interval_s is not None and time.monotonic() - self._last_flush >= self._flush_interval_s:
@@ -240,7 +240,7 @@ class RecordingWriter(Closable):
             os.close(fd)
 
 
-def _exact_format(values):
+def exact_format(values):
     """The exact format of a column's ``values`` (finite): ``%d`` when all are integers below 2^53
     in size (no decimal point), else :data:`EXACT_FORMAT`."""
     return "%d" if np.all((values == np.round(values)) & (np.abs(values) < _INTEGER_LIMIT)) else EXACT_FORMAT
