@@ -100,3 +100,15 @@ def test_what_one_document_lacks_is_not_compared(drop):
     else:  # a gap analysis that could not run has a baseline without numbers
         gap["baseline"]["axes"]["x"] = {}
     assert compare(allan, gap) == []
+
+
+def test_a_term_gap_suggests_but_does_not_establish_is_said_so():
+    """A new user saw "gap finds no slow effect" where gap listed the very bias instability under
+    ``uncertain`` (its b_dps not determined by a 10-minute record)."""
+    gap = _gap()
+    gap["uncertain"] = [{"effect": BIAS_INSTABILITY, "axis": "x", "params": {"b_dps": 0.00345},
+                         "params_ci95": {"b_dps": None}, "why": "its defining parameter b_dps is not determined"}]
+    said = compare(_allan(bias_instability_dps=_term(0.0035, 0.0026, 0.0055)), gap)
+    assert [s["term"] for s in said] == ["B"]
+    assert "gap suggests B = 0.00345 deg/s but does not establish it (its defining parameter" in said[0]["text"]
+    assert "no slow effect" not in said[0]["text"]

@@ -138,7 +138,12 @@ def _why(term, axis, ax, gap, findings, *, finding=None, bounded=False, allan_on
                            "white between those time scales")
     else:
         slow = sorted({f["effect"] for f in findings if f["effect"] in SLOW and f["effect"] != term})
-        if slow and allan_only:
+        suggested = next((u for u in gap.get("uncertain", []) if u["axis"] == axis and u["effect"] == term), None)
+        if suggested is not None and allan_only:
+            value = suggested["params"].get(GAP_PARAM[term])
+            reasons.append(f"gap suggests {TERM_SYMBOL[term]} = {value:.3g} {TERM_UNIT[term]} but does not establish it "
+                           f"({suggested['why']})")
+        elif slow and allan_only:
             reasons.append(f"gap explains the slow part with {', '.join(slow)}, which allan's five terms can only hold "
                            f"as B, K and R")
         elif slow:

@@ -35,7 +35,7 @@ def add_arguments(parser):
                         help="recording file (format v1, .csv or .csv.gz); several files or globs with --fleet")
     parser.add_argument("--json", metavar="OUT.json", type=options.file_name, help="also write the gap report (JSON, every number) here")
     parser.add_argument("--report", metavar="DIR", type=options.file_name, default=None, help="also write a Markdown report with PNG figures to DIR")
-    parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N",
+    parser.add_argument("--seed", type=options.whole_number, default=None, metavar="N",
                         help="no effect, kept for older scripts: the analysis draws its simulations from fixed "
                              "streams, so its answer does not depend on a seed (docs/gap.md, \"How stable\")")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
@@ -54,14 +54,17 @@ def add_arguments(parser):
 
 def check_options(seed, sims, bootstrap=None):
     """Refuse a ``--seed``, ``--sims`` or ``--bootstrap`` (None: their defaults) that the analysis
-    cannot take, naming the option."""
+    cannot take, naming the option; a ``--seed`` given is said to have no effect (a user who gives
+    one expects the answer to change)."""
     if sims is not None and not MIN_SIMS <= sims <= MAX_SIMS:
         raise SettingsError(f"--sims must be in [{MIN_SIMS}, {MAX_SIMS}] (from fewer simulations D cannot be judged: "
                             f"pure white noise reads D up to 14-98 from 2-3), got {sims}")
     if bootstrap is not None and not (bootstrap == 0 or MIN_REPLICATES <= bootstrap <= MAX_BOOTSTRAP):
         raise SettingsError(f"--bootstrap must be 0 (no intervals) or in [{MIN_REPLICATES}, {MAX_BOOTSTRAP}] "
                             f"(an interval needs {MIN_REPLICATES} runs), got {bootstrap}")
-    check_seed(seed, "--seed")
+    if seed is not None:
+        check_seed(seed, "--seed")
+        console.say_warning("--seed has no effect: gap's simulations use fixed streams, its answer does not depend on it")
 
 
 def run(args):

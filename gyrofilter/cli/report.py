@@ -57,7 +57,7 @@ def add_arguments(parser):
     parser.add_argument("--recording-out", metavar="FILE", type=options.file_name,
                         help="with --source: the recording to write and keep (default: beside --out, "
                              "REPORT.csv for REPORT.html; " + options.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--seed", type=options.whole_number, default=0, metavar="N",
+    parser.add_argument("--seed", type=options.whole_number, default=None, metavar="N",
                         help="no effect, kept for older scripts (as gap --seed)")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help="baseline simulations of the gap analysis (as gap --sims)")

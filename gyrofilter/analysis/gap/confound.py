@@ -388,7 +388,8 @@ def weigh_lines(inp, state, scorer):
                   "both": state.model(inp, i, others + [k_sin, k_band])}
         d = {name: scorer.discrepancy(i, m, label) for name, m in models.items()}
         spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, m, label) for m in models.values())
-        weighed = (f"axis {a}: one line at {sin.params['frequency_hz']:.4g} Hz weighed on D: as a sinusoid {d['tone']:.3g}, "
+        weighed = (f"axis {a}: one line weighed on D (the sinusoid's {sin.params['frequency_hz']:.4g} Hz, the band's "
+                   f"{band.params['center_hz']:.4g} Hz): as a sinusoid {d['tone']:.3g}, "
                    f"as a narrow band {d['band']:.3g}, as both {d['both']:.3g}; allowance {spread:.2g} "
                    f"({CONFOUNDED_SPREADS:g} null spreads of D)")
         if d["both"] < min(d["tone"], d["band"]) - spread:
