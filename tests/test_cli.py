@@ -144,3 +144,15 @@ def test_file_names_with_control_characters_print_escaped_on_their_own_line(tmp_
     # a refusal's whitespace is collapsed to one line (errors.one_line), its other controls escaped
     assert f"gyrofilter: error: {tmp_path}/ca b\\x1b[31m.csv: exists (use --force to overwrite)" in lines
     assert not any(line.startswith(("b\x1b", "b\\x1b")) for line in lines)  # no line begins inside a name
+
+
+def test_a_wrapped_console_line_keeps_a_value_with_its_label(capsys):
+    """A new user read "D" at a line's end and its value on the next, and "95" apart from "%"."""
+    from gyrofilter.cli import console
+
+    text = ("x" * 88 + " stay below it in 95 % of runs; " + "y" * 90 + " (D of the axis with it instead): D 0.607 and "
+            + "z" * 89 + " tau_s = 5.565")
+    console.paragraph(text)
+    lines = capsys.readouterr().out.splitlines()
+    assert not any(line.rstrip().endswith(("95", " D", "=")) for line in lines), lines
+    assert " ".join(line.strip() for line in lines) == text

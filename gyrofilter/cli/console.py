@@ -3,6 +3,7 @@ data), the start-up bias as printed, and the summary table of a filtered recordi
 (a line that may name a file) goes through :func:`~gyrofilter.inputs.escape_controls` (``\\n``, ``\\x1b``: a file
 name cannot start a line of its own or colour the terminal)."""
 import math
+import re
 import sys
 import textwrap
 
@@ -20,11 +21,20 @@ def tell(*lines):
         print(escape_controls(line))
 
 
+#: the spaces a wrapped line never breaks at: inside "95 %", after "D" and after "=" before a number
+#: ("D 0.607", "tau_s = 5.565"): a new user read "D" at a line's end and its value on the next
+_KEEP_TOGETHER = re.compile(r"(?<=\d) (?=%)|(?<=\bD) (?=[-+]?\d)|(?<==) (?=[-+]?\d)")
+#: what such a space is while the text is wrapped (a private-use character: no text holds it)
+_GLUE = "\ue000"
+
+
 def paragraph(text, indent="", *, file=None):
     """Print ``text`` (:func:`~gyrofilter.inputs.escape_controls`) wrapped at :data:`MAX_LINE_CHARS`, its first line indented by
-    ``indent`` and the others by two more spaces (stdout, or ``file``)."""
-    print(textwrap.fill(escape_controls(text), MAX_LINE_CHARS, initial_indent=indent, subsequent_indent=indent + "  ",
-                        break_on_hyphens=False, break_long_words=False), file=file)
+    ``indent`` and the others by two more spaces (stdout, or ``file``); never broken at the
+    spaces of :data:`_KEEP_TOGETHER`."""
+    glued = _KEEP_TOGETHER.sub(_GLUE, escape_controls(text))
+    print(textwrap.fill(glued, MAX_LINE_CHARS, initial_indent=indent, subsequent_indent=indent + "  ",
+                        break_on_hyphens=False, break_long_words=False).replace(_GLUE, " "), file=file)
 
 
 def say(*lines, flush=False):
