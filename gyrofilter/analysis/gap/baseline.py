@@ -304,7 +304,7 @@ def effect_entry(cand, preserve="std"):
     axis's white noise (``preserve="std"``) or, in a composite model whose white level N comes
     from the wavelet-variance fit, its long-tau level (``"arw"``)."""
     entry = {"effect": cand.effect}
-    entry.update({k: float(v) for k, v in cand.params.items()})
+    entry.update(cand.plain_params())
     if cand.effect == COLORED_NOISE:
         entry["preserve"] = preserve
     if cand.effect == TEMPERATURE:

@@ -421,5 +421,5 @@ def _show(c):
 def alternatives_entry(cand):
     """The ``alternatives`` of a finding in the gap report: per entry of the other reading its
     effect, params and D (of the axis with that whole reading in place of the finding's)."""
-    return [{"effect": c.effect, "params": {k: float(v) for k, v in c.params.items()}, "D": float(d)}
+    return [{"effect": c.effect, "params": c.plain_params(), "D": float(d)}
             for c, d in cand.alternatives]

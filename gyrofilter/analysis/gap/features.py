@@ -275,15 +275,11 @@ def discrepancy_error(meas, sims, n, pool=None):
     ``se = sqrt((m - 1) / m sum_j (D_j - mean D)^2)``. 0 with fewer than 3 runs. D is ratio-like:
     one feature far outside a spread estimated from a few runs makes its error of the order of D
     itself (a hidden sinusoid's axis: 17.6 +- 10.4 from 10 runs)."""
-    if len(sims) < 3:
+    m = len(sims)
+    if m < 3:
         return 0.0
-    return _jackknife_se([discrepancy(departures(meas, sims[:j] + sims[j + 1:], n, pool)) for j in range(len(sims))])
-
-
-def _jackknife_se(values):
-    """``sqrt((m - 1) / m sum_j (v_j - mean v)^2)`` of the leave-one-out values ``v_j``."""
-    v = np.asarray(values, dtype=float)
-    return float(np.sqrt((v.size - 1) / v.size * np.sum((v - v.mean()) ** 2)))
+    d = np.array([discrepancy(departures(meas, sims[:j] + sims[j + 1:], n, pool)) for j in range(m)])
+    return float(np.sqrt((m - 1) / m * np.sum((d - d.mean()) ** 2)))
 
 
 def null_spread(sims, n, pool=None):

@@ -199,7 +199,7 @@ def bootstrap_intervals(inp, state, n_boot, seed):
             if row.cand.effect not in SUPPORTED:
                 continue
             c = row.cand
-            params = {name: float(v) for name, v in c.params.items()}
+            params = c.plain_params()
             reps = [e[j] for e in estimates["findings"]]
             got = {name: _interval(value, [r.get(name) if r else None for r in reps],
                                    SCALES.get(c.effect, {}).get(name, "linear"), param_bounds(c.effect, name))

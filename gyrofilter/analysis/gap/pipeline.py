@@ -477,7 +477,7 @@ def set_aside_uncertain(inp, state, scorer, found):
     state = replace(state, kept=tuple(row for row in state.kept if row.k not in gone),
                     uncertain=state.uncertain + tuple(
                         {"effect": row.cand.effect, "axis": AXES[row.axis],
-                         "params": {k: float(v) for k, v in row.cand.params.items()},
+                         "params": row.cand.plain_params(),
                          "params_ci95": found.findings[row.k],
                          "why": (f"its defining parameter {BY_NAME[row.cand.effect].defining} is not determined by "
                                  f"this record ({why})")} for row, why in moved))
@@ -507,7 +507,7 @@ def write_findings(inp, state, scorer, report, found):
         z_info = strongest(inp.deps[i], inp.taus, inp.bands)
         report["findings"].append({
             "effect": c.effect, "axis": AXES[i],
-            "params": {k: float(v) for k, v in c.params.items()},
+            "params": c.plain_params(),
             "evidence": c.evidence_text(*([f"baseline simulations: {z_info}"] if z_info else [])),
             "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": row.after},
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},

@@ -49,7 +49,7 @@ class GapInput:
     meas_feats: list
     deps: list
     before: list
-    #: per axis: the features of the baseline's runs (for the sampling error of a gain)
+    #: per axis: the features of the baseline's runs (D before's sampling error, its null spread)
     base_sims: list
     #: axis letter -> why it has nothing to analyse (a constant signal, noise below float64's reach):
     #: no detector runs on it and its D enters no overall figure

@@ -103,6 +103,10 @@ class Candidate:
     #: what later steps add to the evidence, in order
     evidence_notes: tuple = ()
 
+    def plain_params(self):
+        """The parameters as plain floats, as the report writes them."""
+        return {k: float(v) for k, v in self.params.items()}
+
     def evidence_text(self, *more):
         """The evidence as the report writes it: the detector's sentence, the later steps'
         notes and ``more``, joined by "; "."""
