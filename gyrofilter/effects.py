@@ -22,7 +22,12 @@ The kinds, and the groups every module derives from them (never a list of its ow
   both for one peak of the spectrum (:data:`LINES`);
 - ``noise``: stationary noise with a broad spectrum other than white (colored noise, an ARMA
   process);
-- ``tails``: the rate's distribution (isolated spikes, heavy tails; :data:`TAILS`).
+- ``tails``: the rate's distribution (isolated spikes, heavy tails; :data:`TAILS`);
+- ``rows``: whole rows of the record, every axis (and the temperature) at once, after the
+  quantization (rows that repeat the previous one: a driver polling faster than the sensor
+  updates its registers; :data:`ROWS`). Not a term of an axis: a model gives it as a top-level
+  key of its own name (docs/formats.md, section 2), because the axes are simulated
+  independently and a per-axis term could not repeat the same rows on every axis.
 
 The registry's **order** is the simulator's: each effect's random stream is keyed by its place
 (:mod:`gyrofilter.sim.simulate`), so a new effect is appended at the end.
@@ -44,8 +49,9 @@ COLORED_NOISE = "colored_noise"
 NARROWBAND = "narrowband"
 ARMA = "arma"
 HEAVY_TAILS = "heavy_tails"
+REPEATED_SAMPLES = "repeated_samples"
 
-KINDS = ("wander", "shape", "covariate", "line", "noise", "tails")
+KINDS = ("wander", "shape", "covariate", "line", "noise", "tails", "rows")
 
 
 @dataclass(frozen=True)
@@ -100,6 +106,8 @@ REGISTRY = (
            defining="sigma_a_dps"),
     Effect(HEAVY_TAILS, "tails", {"fraction": "frac", "scale_ratio": "pos"}, {}, {"fraction": "log", "scale_ratio": "log"},
            defining="scale_ratio"),
+    Effect(REPEATED_SAMPLES, "rows", {"fraction": "frac"}, {"pattern": ("choice:random,beat", "random")},
+           {"fraction": "log"}, defining="fraction"),
 )
 #: name -> record, in the registry's order
 BY_NAME = {e.name: e for e in REGISTRY}
@@ -120,6 +128,8 @@ COVARIATES = of_kind("covariate")
 SLOW = of_kind("wander", "shape", "covariate")
 #: the effects of the rate's distribution
 TAILS = of_kind("tails")
+#: the effects on whole rows (every axis at once): a model's top-level keys, not terms of an axis
+ROWS = of_kind("rows")
 #: the spectral lines: a sinusoid and a narrow band, alternative readings of one peak of the spectrum
 LINES = of_kind("line")
 #: the parameter that holds each line's frequency (Hz)

@@ -15,7 +15,7 @@ import re
 import numpy as np
 
 from . import noise_terms as nt
-from ..effects import ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, SINUSOID, TEMPERATURE
+from ..effects import ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, ROWS, SINUSOID, TEMPERATURE
 from ..errors import SettingsError
 from ..inputs import MAX_QUOTE_CHARS, load_json, quote
 from ..units import AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_sample_rate_hz, plain
@@ -51,7 +51,8 @@ EFFECTS = {e.name: (e.required, e.optional) for e in REGISTRY}
 
 #: the model's top-level key of its temperature profile (docs/formats.md, section 2; not the effect)
 TEMPERATURE_PROFILE = "temperature"
-_TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", TEMPERATURE_PROFILE, "axes"}
+#: the top-level keys of the effects on whole rows (:data:`gyrofilter.effects.ROWS`): one object of parameters each
+_TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", TEMPERATURE_PROFILE, "axes", *ROWS}
 _META_KEYS = {"description", "name", "comment", "notes", "source", "sensor"}
 _AXIS_KEYS = {"bias_dps", "arw_dps_per_sqrt_hz", "effects"}
 _TEMP_EXP = {"start_c": ("any", None), "end_c": ("any", None), "tau_s": ("pos", 600.0),
@@ -190,6 +191,12 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     out["full_scale_dps"] = None if full_scale_dps is None else _number(full_scale_dps, "full_scale_dps", "pos")
     out[TEMPERATURE_PROFILE] = (None if model.get(TEMPERATURE_PROFILE) is None
                                 else _validate_temperature(model[TEMPERATURE_PROFILE]))
+    for name in ROWS:  # a whole-row effect: its parameters at the top level, None when absent
+        spec = model.get(name)
+        if spec is not None and (not isinstance(spec, dict) or spec.get("effect", name) != name):
+            _err(name, f"expected an object of {name}'s parameters, got {_show(spec)}")
+        out[name] = None if spec is None else _validate_effect({**spec, "effect": name}, name, out, warnings,
+                                                                coefficients_only)
 
     axes = model.get("axes", {})
     if not isinstance(axes, dict):
@@ -267,6 +274,9 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     name = eff["effect"]
     if not isinstance(name, str) or name not in EFFECTS:
         _err(f"{where}.effect", f"unknown effect {_show(name, 20)} (expected one of {', '.join(EFFECTS)})")
+    if name in ROWS and where != name:
+        _err(f"{where}.effect", f"{name} acts on whole rows, every axis at once: give it as the model's top-level key "
+                                f"'{name}' (an object of its parameters), not as an effect of an axis")
     required, optional = EFFECTS[name]
     label = f"{where} ({name})"
     out = {"effect": name}

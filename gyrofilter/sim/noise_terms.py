@@ -474,6 +474,52 @@ class Outliers:
         return out
 
 
+class RepeatedRows:
+    """Rows that repeat the previous row exactly, every column at once (``repeated_samples``): the
+    mark of a driver that polls the sensor faster than the sensor updates its output registers
+    (an MPU6050 read without its data-ready flag or FIFO reads the same registers twice).
+
+    Not an additive term: it acts on whole rows after the quantization. Row n (n >= 1) is a
+    repeat, ``y[n] = y[n-1]`` on every column (so a run of repeats holds one row), where
+
+    - ``pattern="random"``: independently with probability f = ``fraction`` (u[n] < f, u uniform);
+    - ``pattern="beat"``: the poll clock (the sample rate f_s) beating against the sensor's output
+      clock at f_out = (1 - f) f_s: the poll n reads output number j[n] = floor(n (1 - f) + φ),
+      φ uniform in [0, 1) once per run, and repeats where j[n] = j[n-1]: a repeat every 1/f rows,
+      at regular intervals, a fraction f of the rows.
+
+    The expected fraction of repeated rows is f in both. ``fraction``: f in [0, 1); ``pattern``:
+    ``random`` or ``beat``; ``rng``: the generator of u (or of φ). :meth:`next_mask` gives the
+    repeats of the next block of rows and :meth:`apply` repeats them in a column, keeping the
+    column's last row between blocks (a chunked run equals a one-shot run).
+    """
+
+    def __init__(self, fraction, pattern, rng):
+        self.f, self.pattern, self.rng = float(fraction), pattern, rng
+        self.phase = float(rng.random()) if pattern == "beat" else 0.0
+        self.start = 0
+
+    def next_mask(self, n):
+        """(n,) bool: which of the next ``n`` rows repeat the row before them (row 0 never does)."""
+        idx = np.arange(self.start, self.start + n)
+        self.start += n
+        if self.pattern == "beat":
+            j = np.floor(idx * (1.0 - self.f) + self.phase)
+            mask = j == np.floor((idx - 1) * (1.0 - self.f) + self.phase)
+        else:
+            mask = self.rng.random(n) < self.f
+        return mask & (idx > 0)
+
+    @staticmethod
+    def apply(values, mask, last):
+        """``values`` (n,) with each row of ``mask`` replaced by the row before it (``last``: the
+        previous block's last value, used by a repeat at the block's first row; None for the first
+        block). Returns ``(new values, this block's last value)``."""
+        src = np.maximum.accumulate(np.where(mask, -1, np.arange(mask.size)))
+        out = np.where(src >= 0, values[np.maximum(src, 0)], last if last is not None else values[0])
+        return out, (out[-1] if out.size else last)
+
+
 class TemperatureProfile:
     """Sensor temperature (deg C): the true T(t) and the recorded column.
 

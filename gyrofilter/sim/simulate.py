@@ -13,7 +13,10 @@ Per axis and sample n (t = n / f_s), in deg/s:
     ω[n] ← clip(ω[n], -FS, +FS)                       (``full_scale_dps``: saturation)
     ω[n] ← round(ω[n] · lsb_per_dps) / lsb_per_dps    (quantization, when ``lsb_per_dps`` is given)
 
-then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb_per_dps)).
+then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb_per_dps)). Last,
+``repeated_samples`` (a top-level key: whole rows) makes some rows repeat the previous row on every
+column, the temperature's too (:class:`gyrofilter.sim.noise_terms.RepeatedRows`); its stream is the
+record's, not an axis's, so one axis simulated alone (:func:`simulate_axis_dps`) repeats the same rows.
 Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`.
 
 ``colored_noise`` low-passes the white noise: with ``preserve="arw"`` (default)
@@ -49,7 +52,7 @@ import json
 import numpy as np
 
 from ..effects import (ARMA, BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND,
-                       OUTLIERS, RATE_RAMP, RATE_RANDOM_WALK, SINUSOID, TEMPERATURE, WARMUP)
+                       OUTLIERS, RATE_RAMP, RATE_RANDOM_WALK, REPEATED_SAMPLES, SINUSOID, TEMPERATURE, WARMUP)
 from . import noise_terms as nt
 from .flicker import BiasInstability
 from .model import EFFECTS, TEMPERATURE_PROFILE, validate_model
@@ -99,6 +102,18 @@ def _stream(root, *key):
 
 # ---------------------------------------------------------------------------------------------
 # simulation
+
+
+#: the key of the record's own streams (the axes are 0-2, the temperature 3): the whole-row effects
+_RECORD_KEY = 4
+
+
+def _repeats(spec, root):
+    """The :class:`~gyrofilter.sim.noise_terms.RepeatedRows` of the model's ``repeated_samples``, or None."""
+    rows = spec.get(REPEATED_SAMPLES)
+    if rows is None:
+        return None
+    return nt.RepeatedRows(rows["fraction"], rows["pattern"], _stream(root, _RECORD_KEY, _EFFECT_ID[REPEATED_SAMPLES], 0, 0))
 
 
 def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
@@ -197,6 +212,7 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
     root = _root_seed(seed, rng)
     temp = nt.TemperatureProfile(spec[TEMPERATURE_PROFILE], _stream(root, 3, 0, 0, 0)) if spec[TEMPERATURE_PROFILE] else None
     axes = [_axis_terms(i, spec["axes"][a], sample_rate_hz, duration_s, root, temp) for i, a in enumerate(AXES)]
+    repeats, last = _repeats(spec, root), [None] * 4
     for start in range(0, n_total, chunk_samples):
         n = min(chunk_samples, n_total - start)
         t_s = np.arange(start, start + n) / sample_rate_hz
@@ -204,7 +220,14 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
         gyro = np.empty((n, 3))
         for i, terms in enumerate(axes):
             gyro[:, i] = _axis_rate(terms, t_s, true_c, spec)
-        yield t_s, gyro, (temp.recorded_c(true_c) if temp else None)
+        temp_c = temp.recorded_c(true_c) if temp else None
+        if repeats is not None:
+            mask = repeats.next_mask(n)
+            for i in range(3):
+                gyro[:, i], last[i] = repeats.apply(gyro[:, i], mask, last[i])
+            if temp_c is not None:
+                temp_c, last[3] = repeats.apply(temp_c, mask, last[3])
+        yield t_s, gyro, temp_c
 
 
 def _axis_rate(axis_terms, t_s, true_c, spec):
@@ -252,9 +275,12 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     temp = nt.TemperatureProfile(spec[TEMPERATURE_PROFILE], _stream(root, 3, 0, 0, 0)) if spec[TEMPERATURE_PROFILE] else None
     axis = int(axis)
     terms = _axis_terms(axis, spec["axes"][AXES[axis]], sample_rate_hz, n_total / sample_rate_hz, root, temp)
+    repeats, last = _repeats(spec, root), None
     for start in range(0, n_total, chunk_samples):
         t_s = np.arange(start, min(start + chunk_samples, n_total)) / sample_rate_hz
         rate = _axis_rate(terms, t_s, temp.true_c(t_s) if temp else None, spec)
+        if repeats is not None:
+            rate, last = repeats.apply(rate, repeats.next_mask(rate.size), last)
         yield to_dps(rate, spec["gyro_unit"], spec["lsb_per_dps"])
 
 
