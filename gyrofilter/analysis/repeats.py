@@ -75,8 +75,8 @@ class RepeatedRows:
     excess_ci95: tuple | None = None
     #: the one-sided binomial test's p-value
     p_value: float | None = None
-    #: per axis: the step q_a (deg/s)
-    step_dps: tuple | None = None
+    #: axis letter -> the step q_a (deg/s)
+    step_dps: dict | None = None
 
     def more_than_chance(self, alpha):
         """Whether the record holds more repeated rows than chance at level ``alpha``."""
@@ -89,7 +89,7 @@ class RepeatedRows:
         return {"applicable": True, "rows": self.rows, "repeated": self.repeated, "fraction": self.fraction,
                 "chance": self.chance, "chance_ci95": list(self.chance_ci95), "excess_fraction": self.excess,
                 "excess_fraction_ci95": list(self.excess_ci95), "p_value": self.p_value,
-                "step_dps": dict(zip(AXES, self.step_dps))}
+                "step_dps": dict(self.step_dps)}
 
 
 def grid_step(x_dps):
@@ -110,7 +110,7 @@ def grid_step(x_dps):
 def _zero_chance(k):
     """``(log p0, var(log p0))`` of one axis's differences in steps ``k`` (module docstring), or
     None when the counts at |k| = 1, 2 are below :data:`MIN_NEIGHBOUR_COUNT`."""
-    a = np.abs(k)
+    a = np.abs(k)  # whole numbers of steps (floats)
     counts = np.array([np.count_nonzero(a == j) / 2.0 for j in (1, 2, 3)])
     if counts[0] < MIN_NEIGHBOUR_COUNT or counts[1] < MIN_NEIGHBOUR_COUNT:
         return None
@@ -142,31 +142,41 @@ def binomial_upper_tail(k, m, p):
     return float(min(1.0, np.exp(logs).sum()))
 
 
-def repeated_rows(gyro_dps, step_dps=None):
-    """The repeated rows of ``gyro_dps`` ((N, 3), deg/s) against their chance level (module
-    docstring). ``step_dps``: the quantization step (deg/s, 1 / lsb_per_dps) when the record
-    states it; None: each axis's grid (:func:`grid_step`). Returns a :class:`RepeatedRows`."""
-    g = np.asarray(gyro_dps, dtype=float)
-    if g.ndim != 2 or g.shape[0] < 3:
+def repeated_rows(gyro_dps, step_dps=None, axes=AXES):
+    """The repeated rows of ``gyro_dps`` ((N, k) deg/s, or a list of k columns of N: the axes
+    ``axes``) against their chance level (module docstring). ``step_dps``: the quantization step
+    (deg/s, 1 / lsb_per_dps) when the record states it; None: each axis's grid (:func:`grid_step`).
+    Returns a :class:`RepeatedRows`. Memory: a column's differences at a time."""
+    with np.errstate(all="ignore"):  # values too large for float64 differences sit on no grid
+        return _count(gyro_dps, step_dps, axes)
+
+
+def _count(gyro_dps, step_dps, axes):
+    """:func:`repeated_rows`'s work."""
+    columns = [gyro_dps[:, i] for i in range(gyro_dps.shape[1])] if isinstance(gyro_dps, np.ndarray) else list(gyro_dps)
+    if not columns or len(columns[0]) < 3:
         return RepeatedRows(False, "too few rows")
-    steps = [step_dps if step_dps else grid_step(g[:, i]) for i in range(g.shape[1])]
-    off = [a for a, s in zip(AXES, steps) if s is None]
-    if off:
-        return RepeatedRows(False, f"the values of axis {off[0]} sit on no grid (not quantized, or constant)")
-    k = np.rint(np.diff(g, axis=0) / np.asarray(steps)).astype(np.int64)
-    m = k.shape[0]
-    log_p, var_log = 0.0, 0.0
-    for i, a in enumerate(AXES[:g.shape[1]]):
-        fit = _zero_chance(k[:, i])
+    m = len(columns[0]) - 1
+    equal = np.ones(m, dtype=bool)
+    log_p, var_log, steps = 0.0, 0.0, []
+    for a, x in zip(axes, columns):
+        step = step_dps if step_dps else grid_step(x)
+        if step is None:
+            return RepeatedRows(False, f"the values of axis {a} sit on no grid (not quantized, or constant)")
+        k = np.rint(np.diff(np.asarray(x, dtype=float)) / step)
+        fit = _zero_chance(k)
         if fit is None:
             return RepeatedRows(False, f"axis {a}: too few differences of 1 and 2 steps for the chance level "
                                        f"(the noise is below the step, or the record is short)")
+        equal &= k == 0
         log_p, var_log = log_p + fit[0], var_log + fit[1]
+        steps.append(float(step))
+        del k
     chance = math.exp(log_p)
     if chance > MAX_CHANCE:
         return RepeatedRows(False, f"a row equals the previous one by chance {chance:.0%} of the time: the noise sits "
                                    "below the step, repeats cannot be told from chance")
-    repeated = int(np.count_nonzero(np.all(k == 0, axis=1)))
+    repeated = int(np.count_nonzero(equal))
     sd = math.sqrt(var_log)
     chance_ci = (chance * math.exp(-Z95 * sd), min(1.0, chance * math.exp(Z95 * sd)))
     lo, hi = wilson(repeated, m)
@@ -175,4 +185,4 @@ def repeated_rows(gyro_dps, step_dps=None):
     return RepeatedRows(True, rows=m, repeated=repeated, fraction=repeated / m, chance=chance, chance_ci95=chance_ci,
                         excess=max(0.0, (repeated / m - chance) / (1 - chance)), excess_ci95=excess_ci,
                         p_value=binomial_upper_tail(repeated, m, min(1.0, chance * math.exp(CHANCE_BOUND_SD * sd))),
-                        step_dps=tuple(float(s) for s in steps))
+                        step_dps=dict(zip(axes, steps)))

@@ -18,6 +18,8 @@ from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
 from .noise.screen import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
+from .gap.detectors.repeats import repeats_warning
+from .repeats import repeated_rows
 
 #: block-mean excursion (deg/s) beyond which a recording is called not static
 STATIC_LIMIT_DPS = 1.0
@@ -126,7 +128,8 @@ LEFT_OUT = ": left out of the Allan analysis"
 
 def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
                            progress=None, skip_constant=False):
-    """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}).
+    """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}, the
+    count of its repeated rows).
 
     The one path from a file to its Allan results, for one recording and for a fleet
     (:mod:`gyrofilter.analysis.fleet`). The reader's warnings, missing samples and gross errors kept with
@@ -144,13 +147,20 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     B in deg/s, K in deg/s/sqrt(s); :mod:`gyrofilter.analysis.noise.model`).
     An axis whose samples are all equal (stuck) raises ConstantAxisError; with ``skip_constant``
     it is left out instead, said through ``warn``, while another axis is analysed (a sensor
-    report, a fleet: one stuck axis does not cost the others' results).
+    report, a fleet: one stuck axis does not cost the others' results). The rows of ``axes``
+    that repeat the previous one (:func:`gyrofilter.analysis.repeats.repeated_rows`, a
+    :class:`~gyrofilter.analysis.repeats.RepeatedRows`) are counted before any axis, and said
+    through ``warn`` when more than chance (they bias the short-tau deviation and N low).
     """
     head, series = read_axes(path, axes)
     for text in head.warnings:
         warn(text)
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
+    repeats = repeated_rows([series[a] for a in axes], 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
+                            axes=axes)
+    if repeats_warning(repeats):
+        warn(f"{path}: {repeats_warning(repeats)}")
     results = {}
     for a in axes:
         x = series.pop(a)
@@ -170,7 +180,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
         if motion:
             results[a].warnings.insert(0, f"axis {a}: {motion}; the Allan deviation of a moving gyro describes the "
                                           "motion, not the sensor's noise")
-    return head, results
+    return head, results, repeats
 
 
 def check_finite(result, axis, path):

@@ -83,11 +83,12 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     """What ``allan`` computes of one recording ``path``: (head, {axis: AxisNoise}, the ``--json``
     document of docs/formats.md section 4), through :func:`~gyrofilter.analysis.still.characterise_recording`
     (its arguments, ``warn(text)``, ``progress(text)`` and ``skip_constant`` included) and
-    :func:`~gyrofilter.analysis.noise.export.to_json`; the duration is rows / sample rate (s).
+    :func:`~gyrofilter.analysis.noise.export.to_json` (with the count of repeated rows); the
+    duration is rows / sample rate (s).
     A result that is not finite raises AllanInputError naming the file; a stuck axis (not
     skipped) says which ``--axes`` analyse the others."""
     try:
-        head, results = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
+        head, results, repeats = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
                                                keep_outliers=keep_outliers, warn=warn, progress=progress,
                                                skip_constant=skip_constant)
     except ConstantAxisError as exc:
@@ -96,7 +97,8 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     except AllanInputError as exc:  # the data of this file: name it
         raise AllanInputError(f"{path}: {exc}") from None
     duration_s = head.rows / head.sample_rate_hz
-    return head, results, to_json(results, head.sample_rate_hz, recording=path, duration_s=duration_s)
+    return head, results, to_json(results, head.sample_rate_hz, recording=path, duration_s=duration_s,
+                                  repeated_rows=repeats)
 
 
 def misfit_text(r):

@@ -77,7 +77,7 @@ def _allan_part(path, settings, result):
         if text not in result["warnings"]:  # the gap part read the same file and said it already
             result["warnings"].append(text)
 
-    head, results = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
+    head, results, _ = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
                                            min_clusters=settings.min_clusters,
                                            keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True)
     sample_rate_hz = head.sample_rate_hz

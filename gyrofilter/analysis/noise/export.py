@@ -7,6 +7,7 @@ import math
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from .model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, AxisNoise, Coefficient, convert
 from ...recording.header import one_line_text
+from ..gap.detectors.repeats import repeats_warning
 from ...units import utf8_text
 
 #: JSON key of each coefficient (docs/formats.md, section 4), in its base unit
@@ -37,10 +38,12 @@ def _details_json(c: Coefficient, model_value=None):
     return d
 
 
-def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
+def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeated_rows=None):
     """The ``gyrofilter allan --json`` document (docs/formats.md, section 4) of ``results``
     ({axis name: AxisNoise}, from :func:`characterise`) for a record at ``sample_rate_hz`` (Hz);
-    ``recording`` (its name) and ``duration_s`` (s) are written when given."""
+    ``recording`` (its name), ``duration_s`` (s) and ``repeated_rows`` (the record's
+    :class:`~gyrofilter.analysis.repeats.RepeatedRows`, its block with the warning where it holds more
+    repeated rows than chance) are written when given."""
     doc = {"sample_rate_hz": float(sample_rate_hz)}
     if recording is not None:
         doc["recording"] = utf8_text(str(recording))
@@ -79,6 +82,8 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None):
               "fit_reduced_chi2": r.fit_reduced_chi2, "fit_dof": r.fit_dof,
               "warnings": list(r.warnings)}
         doc["axes"][name] = ax
+    if repeated_rows is not None:
+        doc["repeated_rows"] = dict(repeated_rows.as_dict(), warning=repeats_warning(repeated_rows))
     return doc
 
 

@@ -96,6 +96,8 @@ from .common import (  # noqa: F401
     OUTLIER_FALSE_PER_AXIS,
     OUTLIER_MIN_COUNT,
     OUTSIDE_NULL_D,
+    REPEATS_ALPHA,
+    REPEATS_MAX_STATISTIC,
     REPORTED_DEPARTURE_Z,
     SINUSOID_ALPHA,
     STOCHASTIC_PENALTY,
@@ -148,6 +150,10 @@ from .slow import (  # noqa: F401
     exact_stochastic_gain,
     slow_reading,
     stochastic_fits,
+)
+from .repeats import (  # noqa: F401
+    detect_repeats,
+    repeats_warning,
 )
 from .covariate import (  # noqa: F401
     detect_slow,

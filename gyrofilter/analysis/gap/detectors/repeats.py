@@ -1,0 +1,51 @@
+"""``repeated_samples``: rows that repeat the previous row exactly on every axis more often than
+chance at the record's quantization (a driver polling faster than the sensor updates). A
+record-level detector: it reads every axis at once, runs before nothing and cleans nothing (the
+gap analysis weighs it after the axes' findings, :func:`gyrofilter.analysis.gap.pipeline.weigh_repeats`).
+
+The statistic is :func:`gyrofilter.analysis.repeats.repeated_rows`: the count K of the M rows
+equal to the previous one on every axis, against the chance level p_chance = Π_a P(Δ_a = 0) read
+off each axis's successive differences of ±1, ±2, ±3 steps (a sampled Gaussian); a one-sided
+binomial test P(K' >= K), K' ~ Binomial(M, p_chance's upper bound), below
+:data:`~gyrofilter.analysis.gap.detectors.common.REPEATS_ALPHA` names it, with the excess fraction
+f = (K / M - p_chance) / (1 - p_chance) and its 95 % interval.
+"""
+from __future__ import annotations
+
+import math
+
+from ....effects import REPEATED_SAMPLES
+from ...repeats import repeated_rows
+from .common import REPEATS_ALPHA, REPEATS_MAX_STATISTIC, Candidate
+
+
+def detect_repeats(gyro_dps, q_dps=None):
+    """``(the RepeatedRows count, a Candidate or None)`` of the record ``gyro_dps`` ((N, 3), deg/s)
+    whose step is ``q_dps`` (deg/s; None: each axis's grid). The candidate's ``fraction`` is the
+    excess fraction, its statistic -log10 of the test's p-value (at most
+    :data:`~gyrofilter.analysis.gap.detectors.common.REPEATS_MAX_STATISTIC`)."""
+    counted = repeated_rows(gyro_dps, q_dps)
+    if not counted.more_than_chance(REPEATS_ALPHA):
+        return counted, None
+    statistic = min(REPEATS_MAX_STATISTIC, -math.log10(counted.p_value) if counted.p_value > 0 else REPEATS_MAX_STATISTIC)
+    return counted, Candidate(
+        REPEATED_SAMPLES, {"fraction": counted.excess}, statistic, -math.log10(REPEATS_ALPHA),
+        f"{counted.repeated} of {counted.rows} rows ({counted.fraction:.2%}) equal the previous row on every axis, "
+        f"chance at this quantization {counted.chance:.2%}", statistic_name="-log10 p of the binomial test of the equal rows")
+
+
+def repeats_warning(counted):
+    """The warning of ``allan`` and ``report`` for the count ``counted`` (a RepeatedRows) when the
+    record holds more repeated rows than chance (:data:`REPEATS_ALPHA`), else None."""
+    if not counted.more_than_chance(REPEATS_ALPHA):
+        return None
+    lo, hi = counted.excess_ci95
+    return (f"{counted.repeated} of {counted.rows} rows ({counted.fraction:.2%}) repeat the previous row exactly on every "
+            f"axis, where chance at this quantization gives {counted.chance:.2%} (binomial test p {_p_text(counted.p_value)}): "
+            f"an excess of {counted.excess:.2%} [95 %: {lo:.2%}, {hi:.2%}], the mark of a driver that polls faster than "
+            "the sensor updates its output; repeats lower the Allan deviation at short tau and the white-noise level N")
+
+
+def _p_text(p_value):
+    """``= p`` to two digits, ``< 1e-300`` where it underflowed to 0."""
+    return f"= {p_value:.2g}" if p_value > 0 else "< 1e-300"
