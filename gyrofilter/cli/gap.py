@@ -104,6 +104,7 @@ def run(args):
             + (f" over {', '.join(a for a in AXES if a not in d['not_analysed'])}" if d["not_analysed"] else ""))
     console.paragraph(f"{args.recording}: {_count(len(report['findings']), 'finding')}; {gain} "
                       f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
+    rows = [f for f in report["findings"] if f["axis"] not in AXES]  # whole rows: every axis at once
     for axis in AXES:
         found = [f for f in report["findings"] if f["axis"] == axis]
         if d and axis in d["not_analysed"]:
@@ -112,12 +113,16 @@ def run(args):
             before = gap_report.d_text(d["before"][axis], d.get("before_se", {}).get(axis, 0.0))
             after = gap_report.d_text(d["after"][axis], d.get("after_se", {}).get(axis, 0.0))
             console.paragraph(f"{axis}: D {before}" + (f" -> {after} with {_count(len(found), 'finding')}"
-                                                       if found else ", no finding"), "  ")
+                                                       if found else f" -> {after} with the rows' finding, none of its "
+                                                       "own" if rows else ", no finding"), "  ")
         for f in found:
             console.paragraph(f"{f['effect']} ({gap_report.params_text(f)}); alone D {f['gain']['before']:.3g} -> "
                               f"{f['gain']['after']:.3g}", "    ")
             if f.get("alternatives"):
                 console.paragraph(gap_report.indistinguishable_text(f), "      ")
+    for f in rows:
+        console.paragraph(f"every axis: {f['effect']} ({gap_report.params_text(f)}); {f['evidence']}; mean D "
+                          f"{f['gain']['before']:.3g} -> {f['gain']['after']:.3g}", "  ")
     if report.get("uncertain"):
         console.paragraph(f"{gap_report.UNCERTAIN_HEADING} (not in the extended model):", "  ")
         for entry in report["uncertain"]:

@@ -77,6 +77,7 @@ from .confound import (alternatives_entry, kept_without_gain, suggested_temperat
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
 from .intervals import MAX_BOOTSTRAP, MIN_REPLICATES, bootstrap_intervals
+from .rows import rows_findings, weigh_repeats
 from .scoring import Scorer
 from .state import AxisModels, GapInput, GapState, Kept, OtherReading
 
@@ -193,6 +194,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
         report["notes"] = list(state.notes)
         found = bootstrap_intervals(inp, state, bootstrap, seed)        # 5., the parameters' intervals
         state = set_aside_uncertain(inp, state, scorer, found)          # 5., a finding the record does not determine
+        state = weigh_repeats(inp, state, scorer)                       # 5., repeated rows: the whole record
         write_findings(inp, state, scorer, report, found)               # 5.
     report["runtime_s"] = time.perf_counter() - t_start
     return report
@@ -501,6 +503,8 @@ def write_findings(inp, state, scorer, report, found):
             ext["axes"][a] = state.spec(inp, i, ks)
     if any(row.cand.effect == TEMPERATURE for row in kept):
         ext[TEMPERATURE_PROFILE] = temperature_table(inp.rec)
+    if state.rows is not None:
+        ext.update(state.rows.entry)
     report["extended_model"] = ext
     for row in kept:
         i, c = row.axis, row.cand
@@ -515,6 +519,7 @@ def write_findings(inp, state, scorer, report, found):
         })
         if found.block["bootstrap_runs"] > 0:
             report["findings"][-1]["params_ci95"] = found.findings.get(row.k, dict.fromkeys(c.params))
+    report["findings"] += rows_findings(state)
     report["uncertain"] = [dict(entry) for entry in state.uncertain]
 
     def extended_deps(i):

@@ -35,12 +35,14 @@ class Scorer:
         self._deps = {}
         self._sims = {}
 
-    def _key(self, i, spec, with_temperature, label):
-        """The cache key of a model, its runs simulated and scored the first time."""
-        key = (i, _frozen(spec), with_temperature)
+    def _key(self, i, spec, with_temperature, rows, label):
+        """The cache key of a model, its runs simulated and scored the first time; ``rows``: the
+        model's top-level whole-row entries (``{name: params}``: repeated rows)."""
+        key = (i, _frozen(spec), with_temperature, _frozen(rows))
         if key not in self._deps:
             inp = self.inp
             model = copy.deepcopy(inp.base)
+            model.update(copy.deepcopy(rows))
             model["axes"][AXES[i]] = spec
             if with_temperature:
                 model[TEMPERATURE_PROFILE] = temperature_table(inp.rec)
@@ -52,7 +54,7 @@ class Scorer:
 
     def departures(self, i, model, label):
         """Departures of the measured axis ``i`` from the runs of ``model`` = ``(spec,
-        with_temperature)`` (:meth:`gyrofilter.analysis.gap.state.GapState.model`)."""
+        with_temperature, rows)`` (:meth:`gyrofilter.analysis.gap.state.GapState.model`)."""
         return self._deps[self._key(i, *model, label)]
 
     def discrepancy(self, i, model, label):

@@ -120,6 +120,9 @@ class GapState:
     #: the report's ``uncertain`` entries (dicts: effect, axis, params, why, params_ci95 where known):
     #: effects the record suggests but does not establish, none of them in ``kept``
     uncertain: tuple = ()
+    #: the kept whole-row finding (:func:`gyrofilter.analysis.gap.pipeline.weigh_repeats`): its
+    #: :class:`RowsFinding`, or None; every model scored after it carries its top-level entry
+    rows: object = None
 
     def with_notes(self, *notes):
         return replace(self, notes=self.notes + tuple(notes))
@@ -166,8 +169,22 @@ class GapState:
         return spec
 
     def model(self, inp, i, ks):
-        """``(spec, with_temperature)``: axis ``i`` extended by the candidates ``ks`` in the order
-        scored (sorted), and whether it needs the record's temperature profile."""
+        """``(spec, with_temperature, rows)``: axis ``i`` extended by the candidates ``ks`` in the
+        order scored (sorted), whether it needs the record's temperature profile, and the kept
+        whole-row entries (``{name: params}``, empty before :attr:`rows`)."""
         ks = sorted(ks)
-        return self.spec(inp, i, ks), any(self.candidates[k][1].effect == TEMPERATURE for k in ks)
+        return (self.spec(inp, i, ks), any(self.candidates[k][1].effect == TEMPERATURE for k in ks),
+                self.rows.entry if self.rows is not None else {})
+
+
+class RowsFinding(NamedTuple):
+    """A kept whole-row finding: the candidate, the count it came from
+    (:class:`gyrofilter.analysis.repeats.RepeatedRows`), its top-level model entry
+    (``{name: params}``) and the mean D over the analysed axes before and after it."""
+
+    cand: Candidate
+    counted: object
+    entry: dict
+    before: float
+    after: float
 
