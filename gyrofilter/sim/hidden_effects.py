@@ -25,6 +25,9 @@ colored_noise      half the cases a low pass, lag1 0.3-0.8; half a first-order A
 heavy_tails        fraction 0.01-0.1 (log-uniform; ``scale`` shrinks it: the excess kurtosis is
                    about proportional to it), scale_ratio 4-30 (log-uniform); 30 and 0.06
                    reproduce the Xsens MTi-G record of issue 24 (5 % beyond 6 robust sd)
+repeated_samples   fraction 0.01-0.05 of the rows (uniform), half the cases the random pattern and
+                   half the beat of the poll and output clocks; whole rows, so the case's axis is
+                   ``xyz`` (issue 36: 1.8 % on MPU-9250 records)
 =================  ============================================================================
 """
 from __future__ import annotations
@@ -34,15 +37,15 @@ import math
 import numpy as np
 
 from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
-                      RATE_RANDOM_WALK, SINUSOID, TEMPERATURE, WARMUP)
+                      RATE_RANDOM_WALK, REPEATED_SAMPLES, ROWS, SINUSOID, TEMPERATURE, WARMUP)
 from .model import TEMPERATURE_PROFILE
-from .noise_terms import colored_noise_filter
+from .noise_terms import RepeatedRows, colored_noise_filter
 from .simulate import simulate
 from ..recording import Recording
 from ..units import AXES
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
-           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS)
+           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES)
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
@@ -58,6 +61,7 @@ TOLERANCES = {
     OUTLIERS: {"rate": ("factor", 1.6), "magnitude_dps": ("rel", 0.35)},
     COLORED_NOISE: {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
     HEAVY_TAILS: {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
+    REPEATED_SAMPLES: {"fraction": ("rel", 0.15)},
 }
 
 
@@ -111,14 +115,18 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
     elif effect == HEAVY_TAILS:
         params = {"fraction": scale * math.exp(rng.uniform(math.log(0.01), math.log(0.1))),
                   "scale_ratio": math.exp(rng.uniform(math.log(4.0), math.log(30.0)))}
-    params = {k: float(v) for k, v in params.items()}
+    elif effect == REPEATED_SAMPLES:
+        params = {"fraction": scale * rng.uniform(0.01, 0.05), "pattern": "beat" if rng.random() < 0.5 else "random"}
+    params = {k: v if isinstance(v, str) else float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))
     model[TEMPERATURE_PROFILE] = {"start_c": start,
                             "end_c": start + float(rng.uniform(3, 8) if effect == TEMPERATURE else rng.uniform(0, 1.5)),
                             "tau_s": float(rng.uniform(300, 900)), "noise_c": 0.01,
                             "resolution_c": 1.0 / 340.0}
-    if effect != "none":
+    if effect in ROWS:  # whole rows: the model's top-level key, every axis
+        model[effect], axis = dict(params), "".join(AXES)
+    elif effect != "none":
         model["axes"][axis]["effects"].append({"effect": effect, **params})
     return {"seed": int(seed), "effect": effect, "axis": axis if effect != "none" else None,
             "params": params, "model": model, "duration_s": float(duration_s),
@@ -168,6 +176,11 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         k = np.where(np.random.default_rng(seed).random(n) < p, c * k0, k0)
         fast = gyro[:, i] - np.convolve(gyro[:, i], np.full(64, 1.0 / 64), mode="same")
         gyro[:, i] += (k - 1.0) * fast
+    elif effect == REPEATED_SAMPLES:  # whole rows of the real record, the temperature's too
+        repeats = RepeatedRows(params["fraction"], params.get("pattern", "random"), np.random.default_rng(seed))
+        mask = repeats.next_mask(n)
+        gyro = np.column_stack([repeats.apply(gyro[:, i], mask, None)[0] for i in range(3)])
+        temp = None if temp is None else repeats.apply(np.asarray(temp, dtype=float), mask, None)[0]
     else:
         model["axes"][axis]["effects"].append({"effect": effect, **params})
         sim = simulate(model, n / sample_rate_hz, seed=seed)
