@@ -380,3 +380,38 @@ def test_a_record_of_three_samples_is_too_short_not_gross_errors(tmp_path, capsy
     assert main(["allan", str(path)]) == 2
     err = capsys.readouterr().err
     assert "gross error" not in err and "fewer than 9 clusters" in err
+
+
+def _issue36_recording(path, seed, repeats=True):
+    """16 min of examples/models/repeated_samples.json (43 Hz, 1.6 LSB of noise, 2 % of the rows
+    repeated), or of the same model without the repeats."""
+    from support import REPO
+
+    from gyrofilter.sim.model import load_model
+    from gyrofilter.sim.simulate import simulate
+
+    model = load_model(REPO / "examples" / "models" / "repeated_samples.json")
+    if not repeats:
+        del model["repeated_samples"]
+    write_recording(str(path), simulate(model, 960.0, seed=seed))
+    return str(path)
+
+
+def test_allan_warns_of_repeated_rows_and_writes_their_count(tmp_path, capsys):
+    path = _issue36_recording(tmp_path / "rep.csv", seed=1)
+    assert main(["allan", path, "--json", str(tmp_path / "a.json")]) == 0
+    err = capsys.readouterr().err
+    assert "repeat the previous row exactly on every axis, where chance at this quantization gives 0." in err
+    block = json.loads((tmp_path / "a.json").read_text())["repeated_rows"]
+    assert block["applicable"] and block["p_value"] < 1e-3 and block["warning"] in err
+    assert 0.004 < block["chance"] < 0.007 and block["excess_fraction_ci95"][0] < 0.02 < block["excess_fraction_ci95"][1]
+    assert block["fraction"] == block["repeated"] / block["rows"]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_allan_says_nothing_of_repeats_on_a_clean_record_of_the_same_noise(tmp_path, capsys, seed):
+    path = _issue36_recording(tmp_path / "clean.csv", seed=seed, repeats=False)
+    assert main(["allan", path, "--json", str(tmp_path / "a.json")]) == 0
+    assert "repeat the previous row" not in capsys.readouterr().err
+    block = json.loads((tmp_path / "a.json").read_text())["repeated_rows"]
+    assert block["applicable"] and block["warning"] is None and block["p_value"] > 1e-3

@@ -22,8 +22,10 @@ from gyrofilter.analysis.gap import detectors as det
 from gyrofilter.analysis.gap import report as gap_report
 from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.analysis.gap.features import departures, discrepancy
+from gyrofilter.cli import main
 from gyrofilter.recording import Recording, read_recording, write_recording
-from gyrofilter.sim.model import validate_model
+from gyrofilter.effects import REPEATED_SAMPLES
+from gyrofilter.sim.model import load_model, validate_model
 from gyrofilter.sim.simulate import simulate
 
 import gyrofilter.sim.hidden_effects as he
@@ -907,3 +909,43 @@ def test_the_api_refuses_run_settings_it_cannot_take(kwargs, message):
     rec = Recording.from_dps(np.random.default_rng(0).normal(0, 0.05, (3000, 3)), 100.0)
     with pytest.raises(SettingsError, match=message):
         analyse_gap(rec, **({"n_sims": 4, "bootstrap": 0} | kwargs))
+
+
+def _issue36(seed, repeats=True):
+    """16 min of examples/models/repeated_samples.json (43 Hz, 2 % of the rows repeated), or of the
+    same model without the repeats."""
+    model = load_model(REPO / "examples" / "models" / "repeated_samples.json")
+    if not repeats:
+        del model[REPEATED_SAMPLES]
+    return simulate(model, 960.0, seed=seed)
+
+
+def test_cli_names_repeated_rows_with_their_interval_and_gain(tmp_path, capsys):
+    path = tmp_path / "rep.csv"
+    write_recording(str(path), _issue36(1))
+    assert main(["gap", str(path), "--json", str(tmp_path / "g.json")]) == 0
+    out = capsys.readouterr().out
+    assert "every axis: repeated_samples (fraction=0.0" in out
+    report = json.loads((tmp_path / "g.json").read_text())
+    (finding,) = [f for f in report["findings"] if f["effect"] == REPEATED_SAMPLES]
+    assert finding["axis"] == "xyz"
+    low, high = finding["params_ci95"]["fraction"]
+    assert low < 0.02 < high and low <= finding["params"]["fraction"] <= high
+    assert finding["gain"]["after"] < finding["gain"]["before"]
+    assert report["extended_model"][REPEATED_SAMPLES] == {"fraction": finding["params"]["fraction"]}
+    d = report["discrepancy"]
+    assert d["overall_after"] == pytest.approx(finding["gain"]["after"])  # every axis's D after reflects it
+    validate_model(report["extended_model"])
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_clean_record_of_the_same_noise_has_no_repeated_rows(seed):
+    report = analyse_gap(_issue36(seed, repeats=False), seed=0, n_sims=SIMS)
+    assert not [f for f in report["findings"] if f["effect"] == REPEATED_SAMPLES], report["findings"]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_hidden_repeated_rows_are_named_over_seeds(seed):
+    case = he.draw_case(500 + seed, effect=REPEATED_SAMPLES, duration_s=600.0)
+    named, in_tol, others = he.check(case, _run(case))
+    assert named and in_tol and not others, (case["params"], others)

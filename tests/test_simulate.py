@@ -15,6 +15,7 @@ from gyrofilter.sim import noise_terms as nt
 from gyrofilter.analysis.noise.allan import overlapping_adev
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording, write_recording
+from gyrofilter.effects import ROWS
 from gyrofilter.sim.model import EFFECTS, validate_model
 from gyrofilter.sim.simulate import simulate, simulate_chunks
 from gyrofilter.units import DEG_PER_RAD
@@ -53,8 +54,9 @@ def full_model(**kw):
 def test_every_effect_of_the_table_is_supported():
     assert list(EFFECTS) == ["bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
                              "temperature", "bias_step", "warmup", "outliers", "colored_noise", "narrowband", "arma",
-                             "heavy_tails"]
-    assert {e["effect"] for e in ALL_EFFECTS} == set(EFFECTS)
+                             "heavy_tails", "repeated_samples"]
+    # the whole-row effects are top-level keys of a model (tests/test_repeats.py), not effects of an axis
+    assert {e["effect"] for e in ALL_EFFECTS} == set(EFFECTS) - set(ROWS)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -48,7 +48,10 @@ hold the parts:
    (``params_ci95``), by parametric bootstrap of the extended model
    (:mod:`gyrofilter.analysis.gap.intervals`), computed before the findings are written: a
    finding whose defining parameter the record does not determine is listed in ``uncertain``
-   instead, out of the extended model and of D after (:func:`set_aside_uncertain`).
+   instead, out of the extended model and of D after (:func:`set_aside_uncertain`). Last, rows
+   repeated beyond chance (counted in step 2, every axis at once) are weighed on the mean D over
+   the axes and, kept, join the extended model as its top-level ``repeated_samples``
+   (:mod:`gyrofilter.analysis.gap.rows`).
 """
 from __future__ import annotations
 
@@ -272,7 +275,7 @@ def baseline_spread(setup, say):
                         "baseline simulations (runs x axes)")
     deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
     return GapInput(**setup, meas_feats=meas_feats, deps=deps, before=[discrepancy(d) for d in deps], base_sims=sims,
-                    idle=idle, say=say)
+                    repeats=det.detect_repeats([axis_dps(rec, i) for i in range(3)], setup["q"]), idle=idle, say=say)
 
 
 def nothing_to_analyse(x_dps):
@@ -291,6 +294,7 @@ def detect(inp, notes):
     variance kept for the composite step. ``notes``: the notes so far (the state's first)."""
     notes = list(notes)
     candidates, axes, readings, uncertain = [], [], {}, []
+    repeated_fraction = inp.repeats[1].params["fraction"] if inp.repeats[1] is not None else 0.0
     for i, a in enumerate(AXES):
         inp.say(f"detectors on {a}")
         if a in inp.idle:
@@ -302,7 +306,7 @@ def detect(inp, notes):
         try:
             cands, xc, alt, slow_stats = _detect_axis(x, inp.sample_rate_hz, inp.temp,
                                                       tails_z=float(inp.deps[i]["tails"][0][0]), notes=notes, axis=a,
-                                                      owned=owned, q_dps=inp.q or 0.0)
+                                                      owned=owned, q_dps=inp.q or 0.0, repeated_fraction=repeated_fraction)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             notes.append(f"axis {a}: detectors could not run ({exc})")
             cands, xc, alt, slow_stats = [], axis_dps(inp.rec, i), None, {}  # x may have been cleaned in place
@@ -334,7 +338,7 @@ def _with_reference(cands, temp):
     return [replace(c, reference_c=float(np.mean(temp))) if c.effect == TEMPERATURE else c for c in cands]
 
 
-def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False, q_dps=0.0):
+def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False, q_dps=0.0, repeated_fraction=0.0):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x,
     alternative, the slow detector's statistics): ``alternative`` is None or, where the slow
     effects have a covariate and a time reading (:func:`gyrofilter.analysis.gap.detectors.detect_slow`),
@@ -342,7 +346,9 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     ``x`` (``x`` itself when ``owned``: the caller's to change) and then dropped, so the axis
     costs one series of memory besides the detectors' own (two without ``owned``, three with an
     alternative reading). ``tails_z``: the tail statistic's departure from the baseline
-    simulations; ``notes``: where a note on tails that spikes explain as well goes."""
+    simulations; ``notes``: where a note on tails that spikes explain as well goes;
+    ``repeated_fraction``: the record's rows repeated beyond chance, whose lag-1 correlation the
+    colored noise's detector takes out."""
     cands = []
     c, mask = det.detect_outliers(x, q_dps)
     tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
@@ -363,12 +369,12 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     band = det.detect_narrowband(x, sample_rate_hz)
     if band is not None:
         cands.append(band)
-    colored = det.detect_colored(x, sample_rate_hz, band)
+    colored = det.detect_colored(x, sample_rate_hz, band, repeated_fraction=repeated_fraction)
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)
     if colored is not None and wander is not None:  # the wander's high-frequency part is correlated too
         colored = det.detect_colored(x, sample_rate_hz, band,
-                                     wander_highpassed(effect_entry(wander), sample_rate_hz, x.size))
+                                     wander_highpassed(effect_entry(wander), sample_rate_hz, x.size), repeated_fraction)
         if colored is None and notes is not None:
             notes.append(f"axis {axis}: the lag-1 correlation is the {wander.effect}'s own (its high-frequency part); "
                          "no colored noise")

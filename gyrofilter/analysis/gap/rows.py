@@ -1,10 +1,11 @@
 """The gap analysis's whole-row findings (:data:`gyrofilter.effects.ROWS`): repeated rows, a
 property of the record rather than of an axis (issue 36).
 
-:func:`weigh_repeats` runs after the axes' findings are decided (the decision order of
-:mod:`gyrofilter.analysis.gap.detectors`): the record-level detector
-(:func:`~gyrofilter.analysis.gap.detectors.repeats.detect_repeats`) on every axis at once; a
-candidate is kept where the extended model with the repeats (the model's top-level
+The record-level detector (:func:`~gyrofilter.analysis.gap.detectors.repeats.detect_repeats`)
+counts on every axis at once before the axes' detectors (step 2, :attr:`GapInput.repeats`: the
+colored noise's detector takes the repeats' lag-1 correlation out); :func:`weigh_repeats` weighs
+it after the axes' findings are decided (the decision order of
+:mod:`gyrofilter.analysis.gap.detectors`): a candidate is kept where the extended model with the repeats (the model's top-level
 ``repeated_samples`` at the estimated excess fraction, random pattern) lowers the mean D over the
 analysed axes (its gain; every axis's D after then reflects it). Its interval is the count's own
 (the binomial interval of the excess fraction, :func:`gyrofilter.analysis.repeats.repeated_rows`),
@@ -18,8 +19,6 @@ import numpy as np
 
 from ...effects import REPEATED_SAMPLES
 from ...units import AXES
-from . import detectors as det
-from .baseline import axis_dps
 from .features import METRIC
 from .state import RowsFinding
 
@@ -31,7 +30,7 @@ def weigh_repeats(inp, state, scorer):
     analysed = [i for i, a in enumerate(AXES) if a not in inp.idle]
     if not analysed:
         return state
-    counted, cand = det.detect_repeats([axis_dps(inp.rec, i) for i in range(3)], inp.q)
+    counted, cand = inp.repeats
     if cand is None:
         return state
     entry = {REPEATED_SAMPLES: {"fraction": float(cand.params["fraction"])}}

@@ -51,6 +51,9 @@ class GapInput:
     before: list
     #: per axis: the features of the baseline's runs (D before's sampling error, its null spread)
     base_sims: list
+    #: the record's repeated rows: ``(the count, a repeated_samples Candidate or None)``
+    #: (:func:`gyrofilter.analysis.gap.detectors.repeats.detect_repeats`)
+    repeats: tuple
     #: axis letter -> why it has nothing to analyse (a constant signal, noise below float64's reach):
     #: no detector runs on it and its D enters no overall figure
     idle: dict

@@ -10,6 +10,12 @@ when the extended model lowers the discrepancy.
 The detectors run in a fixed **decision order**, each on the series cleaned of what the earlier
 ones found, because the effects are confusable:
 
+0. ``repeated_samples`` -- rows equal to the previous one on every axis beyond chance at the
+   record's quantization (:mod:`~gyrofilter.analysis.gap.detectors.repeats`): the one detector of the
+   whole record, counted before the axes' detectors (a repeat adds its fraction f to the lag-1
+   correlation, which ``colored_noise`` takes out) and weighed on D after their findings
+   (:mod:`gyrofilter.analysis.gap.rows`). Nothing is cleaned.
+
 1. ``outliers`` -- isolated spikes. Statistic: the second-difference residual
    ``r_i = x_i - (x_{i-1} + x_{i+1}) / 2`` (white noise: ``sd(r) = sigma sqrt(3/2)``) against a
    robust (MAD) scale; a spike is ``|r_i| > k sd(r)`` with ``k`` set so that white Gaussian noise
@@ -76,7 +82,7 @@ ones found, because the effects are confusable:
      on D (:mod:`gyrofilter.analysis.gap.confound`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
-:class:`Candidate`, helpers), ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``colored``
+:class:`Candidate`, helpers), ``repeats``, ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``colored``
 and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
 ``gyrofilter.analysis.gap.detectors`` as before.
 """

@@ -98,7 +98,7 @@ def other_correlation(var_per_sample, band_lags=None, band_var=0.0, wander=None)
     return (sum(r1 * v for r1, _, v in parts) / total, sum(r2 * v for _, r2, v in parts) / total), total / var_per_sample
 
 
-def detect_colored(x, sample_rate_hz, band=None, wander=None):
+def detect_colored(x, sample_rate_hz, band=None, wander=None, repeated_fraction=0.0):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
     pass) from the high-passed r1, r2, less the correlation of a ``narrowband`` candidate
     ``band`` still in ``x`` and of a wander's high-frequency part (``wander``: its ``(v, r1, r2)``
@@ -113,7 +113,12 @@ def detect_colored(x, sample_rate_hz, band=None, wander=None):
     a correlation that dies faster than a low pass's (a two-tap average, a decimation filter).
     One that dies slower is a slow process the slow detectors name (a flicker floor gives
     lag2 close to lag1), and the high-pass correction, which holds for correlation times well
-    below W, would inflate it."""
+    below W, would inflate it.
+
+    ``repeated_fraction``: the record's rows repeated beyond chance (f, the ``repeated_samples``
+    finding): a repeat copies the row before it, so the high-passed r1 holds f of lag-1
+    correlation (Cov(y[n], y[n-1]) = f σ² for white noise; lag-2 f², left in) that is the rows',
+    not the noise's: it is taken out of r1 first."""
     n = x.size
     if n < 32:
         return None
@@ -121,7 +126,7 @@ def detect_colored(x, sample_rate_hz, band=None, wander=None):
     den = float(dot(e, e))
     if den <= 0:
         return None
-    r1, r2 = float(dot(e[1:], e[:-1]) / den), float(dot(e[2:], e[:-2]) / den)
+    r1, r2 = float(dot(e[1:], e[:-1]) / den) - repeated_fraction, float(dot(e[2:], e[:-2]) / den)
     del e
     left = lags_from_highpassed(r1, None, w, *other_correlation(den / n, wander=wander))
     if left is None:  # the wander holds nearly all the high-passed variance
