@@ -359,3 +359,19 @@ def test_a_recording_from_a_pipe_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert rc == 2 and "not a regular file (a pipe?)" in err and len(err.splitlines()) == 1, err
     assert not out.exists()
+
+
+def test_repeated_rows_are_warned_and_named(tmp_path, capsys):
+    """Issue 36: a record with 2 % of its rows repeated (examples/models/repeated_samples.json):
+    the report warns with the fraction and the chance level, and its gap section names the effect."""
+    from gyrofilter.effects import REPEATED_SAMPLES
+    from gyrofilter.sim.model import load_model
+    from gyrofilter.sim.simulate import simulate
+
+    path = tmp_path / "rep.csv"
+    write_recording(str(path), simulate(load_model(REPO / "examples" / "models" / "repeated_samples.json"), 600.0, seed=4))
+    _, data = report(tmp_path, capsys, str(path), "--sims", "10")
+    (warning,) = [w for w in data["warnings"] if "repeat the previous row exactly on every axis" in w]
+    assert "where chance at this quantization gives 0." in warning
+    assert data["allan"]["repeated_rows"]["warning"] in warning
+    assert [f["axis"] for f in data["gap"]["findings"] if f["effect"] == REPEATED_SAMPLES] == ["xyz"]

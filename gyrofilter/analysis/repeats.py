@@ -167,7 +167,7 @@ def _count(gyro_dps, step_dps, axes):
         fit = _zero_chance(k)
         if fit is None:
             return RepeatedRows(False, f"axis {a}: too few differences of 1 and 2 steps for the chance level "
-                                       f"(the noise is below the step, or the record is short)")
+                                       f"(the record is short, or its noise is far below or far above the step)")
         equal &= k == 0
         log_p, var_log = log_p + fit[0], var_log + fit[1]
         steps.append(float(step))
