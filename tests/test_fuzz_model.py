@@ -34,7 +34,8 @@ ODD_VALUES = [None, True, False, "0.02", "", [], {}, 0, -5, 1, 0.5, -0.5, 1e-320
               1e308, -1e308, 10**400, [0.5] * 3000, [0.1] * 21, {"effect": "no_such_effect"}, "furlongs",
               {"effect": "arma", "sigma_a_dps": 0.1, "phi": [0.999999999]},
               {"effect": "narrowband", "center_hz": 10.0, "bandwidth_hz": 1e-6, "rms_dps": 1.0},
-              {"effect": "bias_instability", "b_dps": 0.01, "tau_min_s": 1e-6, "tau_max_s": 1e9, "per_decade": 10}]
+              {"effect": "bias_instability", "b_dps": 0.01, "tau_min_s": 1e-6, "tau_max_s": 1e9, "per_decade": 10},
+              {"effect": "repeated_samples", "fraction": 0.02}, {"fraction": 0.5, "pattern": "beat"}]
 
 
 def _paths(node, prefix=()):
