@@ -408,7 +408,7 @@ def test_allan_warns_of_repeated_rows_and_writes_their_count(tmp_path, capsys):
     assert block["fraction"] == block["repeated"] / block["rows"]
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow), pytest.param(3, marks=pytest.mark.slow)])
 def test_allan_says_nothing_of_repeats_on_a_clean_record_of_the_same_noise(tmp_path, capsys, seed):
     path = _issue36_recording(tmp_path / "clean.csv", seed=seed, repeats=False)
     assert main(["allan", path, "--json", str(tmp_path / "a.json")]) == 0
