@@ -79,7 +79,7 @@ def test_the_model_key_is_checked():
     spec, _ = validate_model(model(0.02))
     assert spec[REPEATED_SAMPLES] == {"effect": REPEATED_SAMPLES, "fraction": 0.02, "pattern": "random"}
     assert validate_model(model())[0][REPEATED_SAMPLES] is None
-    with pytest.raises(SettingsError, match=r"^model: repeated_samples \(repeated_samples\)\.fraction: expected a number "
+    with pytest.raises(SettingsError, match=r"^model: repeated_samples\.fraction: expected a number "
                                             r"<= 0\.5, got 0\.7$"):
         validate_model(model(0.7))
     with pytest.raises(SettingsError, match="pattern: expected one of random, beat"):

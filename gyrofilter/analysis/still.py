@@ -159,8 +159,9 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     repeats = repeated_rows([series[a] for a in axes], 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
                             axes=axes)
-    if repeats_warning(repeats):
-        warn(f"{path}: {repeats_warning(repeats)}")
+    said = repeats_warning(repeats)
+    if said:
+        warn(f"{path}: {said}")
     results = {}
     for a in axes:
         x = series.pop(a)

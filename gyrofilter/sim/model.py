@@ -51,7 +51,8 @@ EFFECTS = {e.name: (e.required, e.optional) for e in REGISTRY}
 
 #: the model's top-level key of its temperature profile (docs/formats.md, section 2; not the effect)
 TEMPERATURE_PROFILE = "temperature"
-#: the top-level keys of the effects on whole rows (:data:`gyrofilter.effects.ROWS`): one object of parameters each
+#: the model's top-level keys, among them each whole-row effect's (:data:`gyrofilter.effects.ROWS`: an object of
+#: its parameters)
 _TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", TEMPERATURE_PROFILE, "axes", *ROWS}
 _META_KEYS = {"description", "name", "comment", "notes", "source", "sensor"}
 _AXIS_KEYS = {"bias_dps", "arw_dps_per_sqrt_hz", "effects"}
@@ -142,7 +143,8 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     wrong raises :class:`SettingsError` with one line naming the key path and what was expected,
     e.g. ``model: axes.z.effects[0] (gauss_markov): missing parameter 'tau_s' (expected a number > 0)``.
     Keys starting with ``_`` and top-level metadata (description, name, comment, notes, source,
-    sensor) are ignored.
+    sensor) are ignored. A whole-row effect (``repeated_samples``) is a top-level key holding its
+    parameters, checked as an effect's; ``normalized`` holds it (with ``effect``) or None.
 
     Every number is bounded, so that no model makes a non-finite or absurd signal: the sample
     rate by :func:`~gyrofilter.units.check_sample_rate_hz`; others by its
@@ -278,7 +280,7 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
         _err(f"{where}.effect", f"{name} acts on whole rows, every axis at once: give it as the model's top-level key "
                                 f"'{name}' (an object of its parameters), not as an effect of an axis")
     required, optional = EFFECTS[name]
-    label = f"{where} ({name})"
+    label = where if where == name else f"{where} ({name})"  # a whole-row effect's top-level key names it
     out = {"effect": name}
     for key, kind in required.items():
         if key not in eff:

@@ -123,7 +123,7 @@ class GapState:
     #: the report's ``uncertain`` entries (dicts: effect, axis, params, why, params_ci95 where known):
     #: effects the record suggests but does not establish, none of them in ``kept``
     uncertain: tuple = ()
-    #: the kept whole-row finding (:func:`gyrofilter.analysis.gap.pipeline.weigh_repeats`): its
+    #: the kept whole-row finding (:func:`gyrofilter.analysis.gap.rows.weigh_repeats`): its
     #: :class:`RowsFinding`, or None; every model scored after it carries its top-level entry
     rows: object = None
 
