@@ -150,7 +150,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     report, a fleet: one stuck axis does not cost the others' results). The rows of ``axes``
     that repeat the previous one (:func:`gyrofilter.analysis.repeats.repeated_rows`, a
     :class:`~gyrofilter.analysis.repeats.RepeatedRows`) are counted before any axis, and said
-    through ``warn`` when more than chance (they bias the short-tau deviation and N low).
+    through ``warn`` when more than chance (they bias the short-tau deviation low and the fitted N).
     """
     head, series = read_axes(path, axes)
     for text in head.warnings:

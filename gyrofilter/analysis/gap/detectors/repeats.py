@@ -43,7 +43,8 @@ def repeats_warning(counted):
     return (f"{counted.repeated} of {counted.rows} rows ({counted.fraction:.2%}) repeat the previous row exactly on every "
             f"axis, where chance at this quantization gives {counted.chance:.2%} (binomial test p {_p_text(counted.p_value)}): "
             f"an excess of {counted.excess:.2%} [95 %: {lo:.2%}, {hi:.2%}], the mark of a driver that polls faster than "
-            "the sensor updates its output; repeats lower the Allan deviation at short tau and the white-noise level N")
+            "the sensor updates its output; repeats bias the Allan deviation at the shortest tau low (by about half the "
+            "excess) and the fitted white-noise level N")
 
 
 def _p_text(p_value):
