@@ -147,3 +147,22 @@ def test_deg_per_s_records_on_a_grid_and_records_off_any_grid():
     assert off.as_dict() == {"applicable": False, "why": off.why}
     below = repeated_rows(simulate(model(sigma_lsb=0.1), 960.0, seed=4).gyro_dps, 1 / LSB_PER_DPS)
     assert not below.applicable and "far below or far above the step" in below.why
+
+
+def test_the_colored_noise_detector_takes_the_repeats_correlation_out():
+    """A repeat copies its row: white noise with 5 % of its rows repeated reads a lag-1 of about
+    0.05, above the colored noise's smallest (0.03); told the fraction, the detector finds none,
+    and a low pass of lag-1 0.5 under the same repeats reads 0.5 again (unquantized rates; without
+    the repeats this seed reads 0.4965)."""
+    from gyrofilter.analysis.gap.detectors import detect_colored
+
+    fs = 100.0
+    white = {"sample_rate_hz": fs, REPEATED_SAMPLES: {"fraction": 0.05},
+             "axes": {a: {"arw_dps_per_sqrt_hz": 0.01} for a in "xyz"}}
+    x = simulate(white, 1800.0, seed=6).gyro_dps[:, 0]
+    assert detect_colored(x, fs) is not None and abs(detect_colored(x, fs).params["lag1"] - 0.05) < 0.015
+    assert detect_colored(x, fs, repeated_fraction=0.05) is None
+    white["axes"]["x"]["effects"] = [{"effect": "colored_noise", "lag1": 0.5}]
+    x = simulate(white, 1800.0, seed=6).gyro_dps[:, 0]
+    assert detect_colored(x, fs).params["lag1"] > 0.505  # f + (1 - f) ((1 - f) 0.5 + f 0.25) = 0.513
+    assert abs(detect_colored(x, fs, repeated_fraction=0.05).params["lag1"] - 0.5) < 0.01

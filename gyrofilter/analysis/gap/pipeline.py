@@ -529,18 +529,18 @@ def write_findings(inp, state, scorer, report, found):
     report["uncertain"] = [dict(entry) for entry in state.uncertain]
 
     def extended_deps(i):
-        return scorer.departures(i, state.model(inp, i, state.kept_on(i)), f"extended model on {AXES[i]}")
+        return scorer.departures(i, state.extended(inp, i), f"extended model on {AXES[i]}")
 
     if inp.n_sims < MIN_SIMS:  # the spread of a feature from so few runs is too uncertain to judge D by
         report["notes"].append(f"D from {inp.n_sims} simulations is not judged (pure white noise reads D up to 14-98 from "
                                f"2-3 of them): give {MIN_SIMS} or more")
     for i in range(3):
         if after[i] > det.OUTSIDE_NULL_D and inp.n_sims >= MIN_SIMS:
-            deps_e = extended_deps(i) if state.kept_on(i) else inp.deps[i]
+            deps_e = extended_deps(i) if state.extended(inp, i) else inp.deps[i]
             report["notes"].append(still_departs(AXES[i], after[i], deps_e, inp.taus, inp.bands))
             if AXES[i] in report.get("departures", {}):
                 report["departures"][AXES[i]]["departs_most"] = departs_most(deps_e, inp.taus, inp.bands)
-    for i in sorted({row.axis for row in kept}):
+    for i in [i for i in range(3) if state.extended(inp, i) and AXES[i] not in inp.idle]:
         deps_e = extended_deps(i)
         summ = report["departures"][AXES[i]]
         summ["extended_adev_sim_mean_log"] = [float(v) for v in deps_e["adev"][1]]
@@ -557,9 +557,8 @@ def write_findings(inp, state, scorer, report, found):
                              "overall_after": _mean_or_none([after[i] for i in analysed]),
                              "not_analysed": dict(inp.idle),
                              "before_se": {a: scorer.discrepancy_error(i, None, "") for i, a in enumerate(AXES)},
-                             "after_se": {a: scorer.discrepancy_error(
-                                 i, state.model(inp, i, state.kept_on(i)) if state.kept_on(i) else None,
-                                 f"extended model on {a}") for i, a in enumerate(AXES)}}
+                             "after_se": {a: scorer.discrepancy_error(i, state.extended(inp, i), f"extended model on {a}")
+                                          for i, a in enumerate(AXES)}}
     report["n_simulations"] = inp.n_sims
     report["intervals"] = found.block
     for a, ci in found.baseline.items():

@@ -36,9 +36,8 @@ def weigh_repeats(inp, state, scorer):
     entry = {REPEATED_SAMPLES: {"fraction": float(cand.params["fraction"])}}
     after = list(state.after)
     for i in analysed:
-        ks = state.kept_on(i)
-        spec, with_temperature, _ = state.model(inp, i, ks) if ks else (inp.base["axes"][AXES[i]], False, {})
-        after[i] = scorer.discrepancy(i, (spec, with_temperature, entry), f"{REPEATED_SAMPLES} on {AXES[i]}")
+        spec, with_temperature, _ = state.extended(inp, i) or (inp.base["axes"][AXES[i]], False, {})
+        after[i] = scorer.discrepancy(i, (spec, with_temperature, entry), f"extended model on {AXES[i]}")
     before_mean = float(np.mean([state.after[i] for i in analysed]))
     after_mean = float(np.mean([after[i] for i in analysed]))
     if not after_mean < before_mean:

@@ -20,6 +20,7 @@ import numpy as np
 
 from ...effects import COLORED_NOISE, TEMPERATURE
 from ...recording import Recording
+from ...units import AXES
 from .baseline import effect_entry, start_bias, white_less_wanders
 from .detectors import Candidate
 
@@ -178,6 +179,17 @@ class GapState:
         ks = sorted(ks)
         return (self.spec(inp, i, ks), any(self.candidates[k][1].effect == TEMPERATURE for k in ks),
                 self.rows.entry if self.rows is not None else {})
+
+    def extended(self, inp, i):
+        """Axis ``i``'s extended model as the report gives it: its kept findings and the kept
+        whole-row entries (:meth:`model`), the baseline's axis with those entries where it has no
+        finding of its own, None where it is the baseline itself."""
+        ks = self.kept_on(i)
+        if ks:
+            return self.model(inp, i, ks)
+        if self.rows is not None:
+            return dict(inp.base["axes"][AXES[i]]), False, self.rows.entry
+        return None
 
 
 class RowsFinding(NamedTuple):

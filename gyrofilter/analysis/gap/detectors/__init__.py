@@ -148,6 +148,7 @@ from .colored import (  # noqa: F401
     highpassed,
     lag1_statistic,
     lags_from_highpassed,
+    lags_without_repeats,
     other_correlation,
     long_run_ratio,
 )

@@ -98,6 +98,25 @@ def other_correlation(var_per_sample, band_lags=None, band_var=0.0, wander=None)
     return (sum(r1 * v for r1, _, v in parts) / total, sum(r2 * v for _, r2, v in parts) / total), total / var_per_sample
 
 
+def lags_without_repeats(r1, r2, f, iterations=4):
+    """The noise's lag-1 and lag-2 autocorrelations ρ1, ρ2 under rows repeated at the fraction
+    ``f`` (each row independently a copy of the row before it), from those measured, ``r1``,
+    ``r2``. A repeated row's neighbours are the rows around the one it copies, so to first order
+    in f for the lag-2 (the lag-1's exact for isolated repeats):
+
+        r1 = f + (1 - f)² ρ1 + f (1 - f) ρ2
+        r2 = f ρ1 + (1 - 2f) ρ2 + f ρ3,        ρ3 ≈ ρ2² / ρ1 (a first-order low pass's)
+
+    solved by fixed-point iteration from ρ2 = r2 (white noise under repeats: r1 = f, r2 = 0
+    give 0 and 0; a low pass of lag-1 0.5 under 5 % repeats reads r1 = 0.513)."""
+    rho1, rho2 = r1, r2
+    for _ in range(iterations):
+        rho1 = (r1 - f - f * (1 - f) * rho2) / (1 - f) ** 2
+        rho3 = rho2 * rho2 / rho1 if abs(rho1) > 1e-3 else 0.0
+        rho2 = (r2 - f * rho1 - f * rho3) / (1 - 2 * f)
+    return rho1, rho2
+
+
 def detect_colored(x, sample_rate_hz, band=None, wander=None, repeated_fraction=0.0):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
     pass) from the high-passed r1, r2, less the correlation of a ``narrowband`` candidate
@@ -116,9 +135,7 @@ def detect_colored(x, sample_rate_hz, band=None, wander=None, repeated_fraction=
     below W, would inflate it.
 
     ``repeated_fraction``: the record's rows repeated beyond chance (f, the ``repeated_samples``
-    finding): a repeat copies the row before it, so the high-passed r1 holds f of lag-1
-    correlation (Cov(y[n], y[n-1]) = f σ² for white noise; lag-2 f², left in) that is the rows',
-    not the noise's: it is taken out of r1 first."""
+    finding), whose correlation is taken out of r1 and r2 first (:func:`lags_without_repeats`)."""
     n = x.size
     if n < 32:
         return None
@@ -126,8 +143,10 @@ def detect_colored(x, sample_rate_hz, band=None, wander=None, repeated_fraction=
     den = float(dot(e, e))
     if den <= 0:
         return None
-    r1, r2 = float(dot(e[1:], e[:-1]) / den) - repeated_fraction, float(dot(e[2:], e[:-2]) / den)
+    r1, r2 = float(dot(e[1:], e[:-1]) / den), float(dot(e[2:], e[:-2]) / den)
     del e
+    if repeated_fraction > 0:
+        r1, r2 = lags_without_repeats(r1, r2, repeated_fraction)
     left = lags_from_highpassed(r1, None, w, *other_correlation(den / n, wander=wander))
     if left is None:  # the wander holds nearly all the high-passed variance
         return None
