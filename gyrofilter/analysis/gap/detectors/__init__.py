@@ -12,8 +12,9 @@ ones found, because the effects are confusable:
 
 0. ``repeated_samples`` -- rows equal to the previous one on every axis beyond chance at the
    record's quantization (:mod:`~gyrofilter.analysis.gap.detectors.repeats`): the one detector of the
-   whole record, counted before the axes' detectors (a repeat adds its fraction f to the lag-1
-   correlation, which ``colored_noise`` takes out) and weighed on D after their findings
+   whole record, counted before the axes' detectors (repeats add about f to the lag-1
+   correlation: ``colored_noise`` solves its lags for under them, :func:`lags_without_repeats`)
+   and weighed on D after their findings
    (:mod:`gyrofilter.analysis.gap.rows`). Nothing is cleaned.
 
 1. ``outliers`` -- isolated spikes. Statistic: the second-difference residual
