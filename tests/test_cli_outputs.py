@@ -359,8 +359,8 @@ def test_a_file_name_that_is_not_utf8_is_written_escaped_in_every_output(tmp_pat
     assert main(["allan", src, other, "--fleet", str(tmp_path / "fleet"), "--jobs", "1"]) == 0
     table = (tmp_path / "fleet" / "fleet.csv").read_text(encoding="utf-8").splitlines()
     assert len(table) == 7 and table[1].startswith("\\udcff,") and f",{escaped}," in table[1]
-    assert f"# recording: {escaped}" in (tmp_path / "fleet" / "\udcff.imu.yaml").read_text(encoding="utf-8")
-    assert "| \\udcff | x |" in (tmp_path / "fleet" / "fleet.md").read_text(encoding="utf-8")
+    assert f'# recording: "{escaped}"' in (tmp_path / "fleet" / "\udcff.imu.yaml").read_text(encoding="utf-8")
+    assert "| \\\\udcff | x |" in (tmp_path / "fleet" / "fleet.md").read_text(encoding="utf-8")  # shown: \\udcff
 
 
 def test_utf8_text_escapes_lone_surrogates_only():
