@@ -161,7 +161,7 @@ def replacing(path):
     with _folder(os.path.dirname(tmp)):
         _pending.append(path)
         try:
-            with _naming(tmp, path):
+            with _naming(tmp, path), _unwritten_on_interrupt(path):
                 yield tmp
                 commit(tmp, path)
         finally:
@@ -178,7 +178,7 @@ def replacing_in(folder):
     with _folder(folder):
         tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{_OWNER}-", dir=folder)
         try:
-            with _naming(tmp, folder):
+            with _naming(tmp, folder), _unwritten_on_interrupt(f"the files of {folder}"):
                 yield tmp
                 names = sorted(os.listdir(tmp))
                 for name in names:  # all may land, or none does
@@ -187,6 +187,17 @@ def replacing_in(folder):
                     commit(os.path.join(tmp, name), os.path.join(folder, name))
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _unwritten_on_interrupt(what):
+    """A KeyboardInterrupt (Ctrl-C, SIGTERM, SIGHUP) leaving a :func:`replacing` block lists ``what``
+    was not written in its ``not_written`` attribute, for the interrupted command's one line."""
+    try:
+        yield
+    except KeyboardInterrupt as exc:
+        exc.not_written = [*getattr(exc, "not_written", []), what]
+        raise
 
 
 #: what only a write raises (a full disk or quota, a file size limit, a read-only file system):
