@@ -653,3 +653,22 @@ def test_a_name_in_a_markdown_table_cell_and_heading_renders_as_itself(name):
     heading = re.search(r"<h1>report: (.*?)</h1>", md.render(f"# report: {shown}\n"), re.S).group(1)
     for rendered in (cell, heading):
         assert "<" not in rendered and json.loads(f'"{html.unescape(rendered)}"') == name
+
+
+def test_annotations_beyond_the_cap_are_skipped_with_one_warning(tmp_path, monkeypatch):
+    """Attack pass (issue 37): 15 million '#' lines (30 KB of gzip) were kept as notes, 4.9 GB of
+    memory; the reader keeps the first MAX_NOTES and says so once, the samples all read."""
+    from gyrofilter.recording import reader
+
+    monkeypatch.setattr(reader, "MAX_NOTES", 10)
+    lines = [f"{i / 100:.2f},0.{i % 7},0.2,0.3\n" for i in range(300)]
+    notes = "".join(f"# note {k}\n" for k in range(25))
+    path = tmp_path / "notes.csv.gz"
+    with gzip.open(path, "wt") as fh:
+        fh.write("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n"
+                 + "".join(lines[:100]) + notes + "".join(lines[100:]))
+    rec = read_recording(path)
+    assert len(rec) == 300 and [n.text for n in rec.notes] == [f"note {k}" for k in range(10)]
+    first_skipped = 5 + 100 + 10
+    assert rec.warnings == [f"{path}: line {first_skipped}: more than 10 annotation lines; the first are kept, "
+                            "the others skipped"]

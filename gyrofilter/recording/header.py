@@ -77,6 +77,10 @@ def markdown_text(text):
 
 #: longest annotation text a writer writes (characters; a gap note is about 60)
 MAX_NOTE_CHARS = 4000
+#: most annotations a reader keeps (a day of a serial source that loses samples every second has
+#: about 86400 gap notes); the lines after them are skipped with one warning: 15 million ``#``
+#: lines, 30 KB of gzip, took 4.9 GB as notes
+MAX_NOTES = 100_000
 
 
 def note_text(text):
