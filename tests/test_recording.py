@@ -5,6 +5,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, RecordingWriter, iter_recording, read_recording, write_recording
@@ -626,6 +628,14 @@ def test_a_name_in_markdown_is_shown_literally_and_reads_back_exactly(name):
     """Issue 37 (leftover): a file named ``*a*b.csv`` was shown as a<em>a</em>b, ``![i](URL)`` as an
     image fetched from URL, ``a<newline>b`` and ``a\\nb`` the same. What a Markdown page shows
     of a name is its JSON string's body, escaped so that it holds no markup: it reads back exactly."""
+    from gyrofilter.recording.header import markdown_text
+
+    shown = commonmark_text(markdown_text(name))
+    assert shown is not None and json.loads(f'"{shown}"') == name
+
+
+@given(st.text(st.characters(blacklist_categories=()), max_size=40))
+def test_every_text_in_markdown_reads_back_by_the_commonmark_escape_rules(name):
     from gyrofilter.recording.header import markdown_text
 
     shown = commonmark_text(markdown_text(name))
