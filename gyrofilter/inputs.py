@@ -221,7 +221,8 @@ def _depth(doc):
 def load_json(path, what, error=SettingsError):
     """The JSON document in the file ``path``, or ``error`` whose message starts with the path and
     names ``what`` (e.g. "calibration", "model"): unreadable, larger than :data:`MAX_JSON_BYTES`
-    (read no further, so an endless file such as /dev/zero ends at once), not UTF-8, or refused
+    (read no further, so an endless file such as /dev/zero ends at once), not UTF-8 (a UTF-8
+    byte-order mark at the start is ignored, as a recording's and a log's are), or refused
     by :func:`parse_json`. ``path`` is a file name (str, bytes or os.PathLike): an int would be
     taken by open() as a file descriptor, and closed. The one loader of the JSON files a user
     hands to gyrofilter."""
@@ -235,7 +236,7 @@ def load_json(path, what, error=SettingsError):
     if len(data) > MAX_JSON_BYTES:
         raise error(f"{path}: not a {what} file: larger than {MAX_JSON_BYTES // (1024 * 1024)} MiB")
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8").removeprefix("\ufeff")  # a byte-order mark (Windows editors) is ignored, RFC 8259 section 8.1
     except UnicodeDecodeError:
         raise error(f"{path}: not a {what} file: not UTF-8 text") from None
     return parse_json(text, f"{path}", error)

@@ -264,3 +264,17 @@ def test_every_string_reads_back_from_its_json_string(name):
 def test_a_json_string_reads_back_as_a_yaml_double_quoted_scalar(name):
     yaml = pytest.importorskip("yaml")
     assert yaml.safe_load(f"key: {inputs.json_string(name)}  # comment\nother: 1\n") == {"key": name, "other": 1}
+
+
+def test_a_json_file_saved_with_a_byte_order_mark_is_read(tmp_path):
+    """Attack pass (issue 37): a model saved by a Windows editor (UTF-8 with BOM) was refused with
+    Python's "Unexpected UTF-8 BOM (decode using utf-8-sig)"; a recording's BOM is skipped, and
+    RFC 8259 (section 8.1) lets a parser ignore it: so does load_json, only at the start."""
+    path = tmp_path / "model.json"
+    path.write_text('{"a": [1, 2.5]}', encoding="utf-8-sig")
+    assert inputs.load_json(str(path), "model") == {"a": [1, 2.5]}
+    path.write_text('{"a": "\ufeff"}', encoding="utf-8-sig")
+    assert inputs.load_json(str(path), "model") == {"a": "\ufeff"}
+    path.write_bytes(b' \xef\xbb\xbf{"a": 1}')
+    with pytest.raises(SettingsError, match="not valid JSON"):
+        inputs.load_json(str(path), "model")
