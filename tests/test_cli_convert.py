@@ -19,6 +19,7 @@ import pytest
 
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
+from support import REPO
 
 N = 1500  # 15 s at 100 Hz: past the filter's 2 s start-up calibration
 
@@ -321,6 +322,22 @@ def test_a_temporary_folder_that_fills_while_a_pipe_is_copied_is_said(tmp_path, 
     err = capsys.readouterr().err
     assert rc == 2 and not dst.exists() and len(err.strip().splitlines()) == 1
     assert f"copying it to {tempfile.gettempdir()}: No space left on device; save the log to a file" in err
+
+
+def test_a_log_on_the_standard_input_is_read_as_dash(tmp_path):
+    """Attack pass (issue 37): ``zcat log.gz | gyrofilter convert - --out rec.csv.gz`` said
+    "-: cannot read: No such file or directory"; ``-`` is the standard input (a pipe: copied
+    within the bound), gzip or text."""
+    text = "".join(f"{i:05d},{i % 10},0.2,0.3\n" for i in range(3000)).encode()
+    for data, name in ((text, "a.csv"), (gzip.compress(text), "b.csv.gz")):
+        dst = tmp_path / name
+        done = subprocess.run([sys.executable, "-m", "gyrofilter", "convert", "-", "--columns", "1,2,3,4", "--unit", "dps",
+                               "--time-unit", "ms", "--out", str(dst)], input=data, capture_output=True, timeout=120,
+                              cwd=REPO)
+        assert done.returncode == 0, done.stderr
+        rec = read_recording(dst)
+        assert len(rec) == 3000 and rec.header["converted_from"] == "-"
+        assert np.array_equal(rec.gyro[:, 0], np.arange(3000) % 10)
 
 
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):

@@ -418,6 +418,25 @@ def test_a_write_that_fails_names_the_file_and_says_it_was_not_written(tmp_path)
     assert not out.exists()
 
 
+def test_convert_and_arma_under_a_size_limit_say_what_was_not_written(tmp_path):
+    """Attack pass (issue 37, fresh case of 9): the commands the first test leaves out, convert
+    (a gzip recording: the limit is met inside the compressor) and arma --json."""
+    log = tmp_path / "log.csv"
+    log.write_text("t,gx_dps,gy_dps,gz_dps\n" + "".join(f"{i * 0.01:.2f},{(i * 7919) % 13 * 0.01:.2f},0.2,0.3\n"
+                                                          for i in range(40000)))
+    rec = tmp_path / "in.csv"
+    write_recording(rec, Recording.from_dps(np.random.default_rng(38).normal(0, 0.05, (3000, 3)), 100.0))
+    out = tmp_path / "out"
+    argvs = [["convert", str(log), "--out", str(out / "c.csv.gz")], ["convert", str(log), "--out", str(out / "c.csv")],
+             ["arma", str(rec), "--axis", "x", "--max-n", "1", "--json", str(out / "a.json")]]
+    proc = subprocess.run([sys.executable, "-c", _UNDER_A_SIZE_LIMIT, "100", json.dumps(argvs)],
+                          capture_output=True, text=True, timeout=120, cwd=REPO)
+    assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * 3, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("gyrofilter: error")]
+    assert lines == [f"gyrofilter: error: {out / name}: File too large; not written" for name in ("c.csv.gz", "c.csv", "a.json")]
+    assert not out.exists()
+
+
 def test_a_figure_that_fails_names_the_figure_not_its_folder(tmp_path):
     """Issue 37 (attack): ``gap --report DIR`` under a file size limit said "DIR: File too large;
     not written": the image writer raises without a file name (and removes what it wrote), so the

@@ -18,7 +18,8 @@ UNIT_SPELLINGS = {"deg/s": "dps"}
 
 
 def add_arguments(parser):
-    parser.add_argument("input", metavar="IN", help="the log: CSV or blank-separated text (gzip too), time and gyro columns")
+    parser.add_argument("input", metavar="IN", help="the log: CSV or blank-separated text (gzip too), time and gyro "
+                                                    "columns; - reads the standard input")
     parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name,
                         help="output recording (" + options.RECORDING_FILE_HELP + ")")
     parser.add_argument("--unit", choices=GYRO_UNITS, default=None, type=lambda text: UNIT_SPELLINGS.get(text, text),

@@ -45,6 +45,7 @@ import decimal
 import errno
 import gzip
 import math
+import os
 import re
 import shutil
 import sys
@@ -89,6 +90,8 @@ _COMMENT = ("#", "//")
 MAX_PIPE_COPY_BYTES = 4 << 30
 #: bytes read from a pipe at a time
 PIPE_BLOCK_BYTES = 1 << 20
+#: the log name that means the standard input (``zcat log.gz | gyrofilter convert - --out rec.csv.gz``)
+STDIN = "-"
 
 
 class Foreign(Closable):
@@ -156,12 +159,12 @@ def _normal(name):
 
 
 def _open(path):
-    """The log ``path`` open for reading twice (binary): the file itself, or, when it cannot seek
+    """The log ``path`` (``-``: the standard input) open for reading twice (binary): the file itself, or, when it cannot seek
     (a pipe: ``<(zcat log.gz)``, /dev/stdin), an anonymous temporary copy of its bytes (in the
     system's temporary folder, gone when closed), made one block at a time and bounded
     (:func:`_copy_pipe`)."""
     try:
-        raw = open(path, "rb")
+        raw = open(os.dup(sys.stdin.fileno()) if path == STDIN else path, "rb")
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
     if raw.seekable():
