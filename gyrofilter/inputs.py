@@ -54,6 +54,22 @@ def escape_controls(text):
     return CONTROL_CHARACTER.sub(lambda m: repr(m.group())[1:-1], str(text))
 
 
+#: what :func:`json_string` writes as ``\\uXXXX`` besides JSON's own escapes: DEL, the C1 controls,
+#: the line and paragraph separators (JSON leaves them as they are; YAML 1.1 reads U+0085 as a line
+#: end) and lone surrogates (a file name that is not UTF-8: no UTF-8 text holds them)
+_NOT_LITERAL_IN_JSON = re.compile("[\x7f-\x9f\u2028\u2029\ud800-\udfff]")
+
+
+def json_string(text):
+    """``text`` as a JSON string literal on one line, its quotes included, that reads back exactly:
+    ``json.loads(json_string(t)) == t`` for every str, and the same as a YAML double-quoted
+    scalar (YAML 1.2, section 7.3.1: JSON's strings are a subset). JSON's escapes (RFC 8259,
+    section 7: ``\\"``, ``\\\\``, ``\\n``, ``\\u001b``), ``\\uXXXX`` for each character of
+    :data:`_NOT_LITERAL_IN_JSON`, every other character as it is. The one rule of a name that a
+    file written for a program to read holds as text (the Kalibr YAML's comment, the Markdown pages)."""
+    return _NOT_LITERAL_IN_JSON.sub(lambda m: f"\\u{ord(m.group()):04x}", json.dumps(str(text), ensure_ascii=False))
+
+
 def quote(text, limit=MAX_QUOTE_CHARS):
     """``repr(text)`` cut to at most ``limit`` characters inside its quotes (``...`` and the full
     length after a cut), for error messages that show what a user wrote. The cut counts the
@@ -205,7 +221,8 @@ def _depth(doc):
 def load_json(path, what, error=SettingsError):
     """The JSON document in the file ``path``, or ``error`` whose message starts with the path and
     names ``what`` (e.g. "calibration", "model"): unreadable, larger than :data:`MAX_JSON_BYTES`
-    (read no further, so an endless file such as /dev/zero ends at once), not UTF-8, or refused
+    (read no further, so an endless file such as /dev/zero ends at once), not UTF-8 (a UTF-8
+    byte-order mark at the start is ignored, as a recording's and a log's are), or refused
     by :func:`parse_json`. ``path`` is a file name (str, bytes or os.PathLike): an int would be
     taken by open() as a file descriptor, and closed. The one loader of the JSON files a user
     hands to gyrofilter."""
@@ -219,7 +236,7 @@ def load_json(path, what, error=SettingsError):
     if len(data) > MAX_JSON_BYTES:
         raise error(f"{path}: not a {what} file: larger than {MAX_JSON_BYTES // (1024 * 1024)} MiB")
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8").removeprefix("\ufeff")  # a byte-order mark (Windows editors) is ignored, RFC 8259 section 8.1
     except UnicodeDecodeError:
         raise error(f"{path}: not a {what} file: not UTF-8 text") from None
     return parse_json(text, f"{path}", error)

@@ -1,5 +1,6 @@
 """Tests for gyrofilter.analysis.noise.allan: Stable32/NBS14 reference values, allantools as oracle, bad input."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -162,3 +163,33 @@ def test_odd_series_and_taus_are_refused_in_one_sentence():
             overlapping_adev(x, 100.0, [1e300])
     with pytest.raises(SettingsError, match="^axes must be a subset of xyz such as xz, got 'q'$"):
         characterise_recording("never-read.csv", axes="q", warn=print)
+
+
+@pytest.mark.parametrize("values", [np.arange(3000) * (1 + 1j), np.arange(3000) % 2 == 0, np.arange(3000).astype(str),
+                                    np.arange(3000).astype(object)])
+def test_what_is_not_numbers_is_refused_not_converted(values):
+    """Attack pass (issue 37): complex rates lost their imaginary part with only a ComplexWarning,
+    strings ('1') were parsed, booleans taken as 0/1, objects converted: the Allan deviation of
+    something else. Ints and floats only, as the filter takes them (filter.samples.as_numbers)."""
+    from gyrofilter.analysis.noise.fit import characterise
+
+    shown = re.escape(str(values.dtype))
+    with pytest.raises(AllanInputError, match=f"x must be numbers \\(rates\\), got an array of {shown}"):
+        overlapping_adev(values, 100.0)
+    with pytest.raises(AllanInputError, match=f"gyro_dps must be numbers \\(rates\\), got an array of {shown}"):
+        characterise(np.stack([values] * 3, axis=1), 100.0)
+    assert np.array_equal(overlapping_adev(np.arange(3000) % 7, 100.0)[1],
+                          overlapping_adev((np.arange(3000) % 7).astype(float), 100.0)[1])
+
+
+def test_a_masked_sample_of_three_axes_is_refused_not_taken_as_data():
+    """Attack pass (issue 37): characterise() converted a masked (N, 3) array with asarray, so a
+    masked sample (a dropout holding 1e4) entered every axis' Allan deviation."""
+    from gyrofilter.analysis.noise.fit import characterise
+
+    g = np.random.default_rng(5).normal(0, 0.05, (6000, 3))
+    mask = np.zeros(g.shape, bool)
+    mask[1234, 2] = True
+    g[mask] = 1e4
+    with pytest.raises(AllanInputError, match="gyro_dps has masked values, the first at sample 1234"):
+        characterise(np.ma.masked_array(g, mask=mask), 100.0)

@@ -343,6 +343,28 @@ def test_a_file_name_cannot_add_a_key_to_the_kalibr_yaml(static_recording, tmp_p
     assert "unit7\\naccelerometer_noise_density: 1.0e-9\\n#.csv.gz" in text
 
 
+@pytest.mark.parametrize("name", ["ends in a backslash\\", "two characters \\n, not a line end.csv",
+                                  'a "quoted": name #.csv', "nel\x85line.csv"])
+def test_the_recording_name_in_the_kalibr_yaml_reads_back_exactly(static_recording, tmp_path, name):
+    """Issue 37 (leftover): the name in the comment was escaped for controls only, so the two
+    characters ``\\n`` read as a line end's escape, and a name ending in a backslash would end a
+    quoted string early. The comment holds the name as a JSON string: it reads back exactly."""
+    path = tmp_path / name
+    shutil.copyfile(static_recording[0], path)
+    out = tmp_path / "imu.yaml"
+    assert main(["allan", str(path), "--kalibr", str(out)]) == 0
+    text = out.read_text(encoding="utf-8")
+    assert yaml_keys(text) == ["gyroscope_noise_density", "gyroscope_random_walk", "rostopic", "update_rate"]
+    comment, = [line for line in text.splitlines() if line.startswith("# recording: ")]
+    assert json.loads(comment.removeprefix("# recording: ")) == str(path)
+    try:
+        import yaml
+    except ImportError:
+        return
+    assert yaml.safe_load(comment.removeprefix("# recording: ")) == str(path)
+    assert set(yaml.safe_load(text)) == {"gyroscope_noise_density", "gyroscope_random_walk", "rostopic", "update_rate"}
+
+
 def test_every_label_of_the_allan_figure_stays_inside_its_panel():
     """Issue 38: a read-off's label ran out of its panel in adev.png (the B read-off near the
     right end of the curve). Every annotation's box lies within its axes' box."""

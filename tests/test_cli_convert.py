@@ -2,18 +2,24 @@
 ns or s and rates in rad/s, a ROS bag export, an Arduino sketch's blank-separated raw LSB) become
 recordings that read back with the very values of the log; every refusal is one line naming the
 file, the line and the column, exit 2, no output."""
+import contextlib
+import errno
 import gzip
+import io
 import json
 import os
 import subprocess
 import sys
+import tempfile
 import threading
+import types
 
 import numpy as np
 import pytest
 
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
+from support import REPO
 
 N = 1500  # 15 s at 100 Hz: past the filter's 2 s start-up calibration
 
@@ -255,6 +261,83 @@ def test_a_log_read_from_a_pipe_keeps_its_first_rows(tmp_path, capsys, zipped):
     rec = read_recording(dst)
     assert len(rec) == 3000 and rec.header["time_origin"] == "00000 ms (1)"
     assert np.array_equal(rec.gyro[:, 0], np.arange(3000) % 10)
+
+
+def _convert_pipe(tmp_path, data):
+    """``convert /dev/fd/N`` of a pipe fed ``data`` by a thread (stopped by a closed read end); (rc, out)."""
+    read_end, write_end = os.pipe()
+
+    def feed():
+        with contextlib.suppress(BrokenPipeError), open(write_end, "wb") as fh:
+            fh.write(data)
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    dst = tmp_path / "rec.csv"
+    try:
+        rc = main(["convert", f"/dev/fd/{read_end}", "--columns", "1,2,3,4", "--unit", "dps", "--time-unit", "ms",
+                   "--out", str(dst)])
+    finally:
+        os.close(read_end)
+    writer.join(timeout=10)
+    assert not writer.is_alive()
+    return rc, dst
+
+
+_PIPED = "".join(f"{i:06d},{i % 10},0.2,0.3\n" for i in range(20000)).encode()  # 340000 bytes
+
+
+@pytest.mark.parametrize("limit, free, held", [(100_000, 10**12, False), (10**12, 300_000, False),
+                                               (len(_PIPED), 2 * len(_PIPED), True)])
+def test_a_pipe_is_copied_within_a_bound_or_refused(tmp_path, capsys, monkeypatch, limit, free, held):
+    """Issue 37 (leftover): ``zcat huge.gz | convert /dev/stdin`` copied the whole pipe to the
+    temporary folder first (a pipe cannot be read twice), filling /tmp with a log of many GB.
+    The copy holds at most MAX_PIPE_COPY_BYTES and half the free space of that folder; beyond,
+    one line says what to do, no output is written and the temporary folder keeps nothing."""
+    from gyrofilter.recording import foreign
+
+    monkeypatch.setattr(foreign, "MAX_PIPE_COPY_BYTES", limit)
+    monkeypatch.setattr(foreign.shutil, "disk_usage", lambda folder: types.SimpleNamespace(free=free))
+    rc, dst = _convert_pipe(tmp_path, _PIPED)
+    err = capsys.readouterr().err
+    if held:
+        assert rc == 0 and len(read_recording(dst)) == 20000, err
+        return
+    assert rc == 2 and not dst.exists() and len(err.strip().splitlines()) == 1
+    assert f"a pipe is copied to {tempfile.gettempdir()} to be read twice, and this one holds more than " \
+           f"{min(limit, free // 2)} bytes" in err
+    assert "save the log to a file and convert that" in err
+
+
+def test_a_temporary_folder_that_fills_while_a_pipe_is_copied_is_said(tmp_path, capsys, monkeypatch):
+    """The copy of a pipe meeting a full temporary folder (ENOSPC) said "cannot read", blaming the log."""
+    from gyrofilter.recording import foreign
+
+    class Full(io.BytesIO):
+        def write(self, data):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(foreign.tempfile, "TemporaryFile", Full)
+    rc, dst = _convert_pipe(tmp_path, _PIPED)
+    err = capsys.readouterr().err
+    assert rc == 2 and not dst.exists() and len(err.strip().splitlines()) == 1
+    assert f"copying it to {tempfile.gettempdir()}: No space left on device; save the log to a file" in err
+
+
+def test_a_log_on_the_standard_input_is_read_as_dash(tmp_path):
+    """Attack pass (issue 37): ``zcat log.gz | gyrofilter convert - --out rec.csv.gz`` said
+    "-: cannot read: No such file or directory"; ``-`` is the standard input (a pipe: copied
+    within the bound), gzip or text."""
+    text = "".join(f"{i:05d},{i % 10},0.2,0.3\n" for i in range(3000)).encode()
+    for data, name in ((text, "a.csv"), (gzip.compress(text), "b.csv.gz")):
+        dst = tmp_path / name
+        done = subprocess.run([sys.executable, "-m", "gyrofilter", "convert", "-", "--columns", "1,2,3,4", "--unit", "dps",
+                               "--time-unit", "ms", "--out", str(dst)], input=data, capture_output=True, timeout=120,
+                              cwd=REPO)
+        assert done.returncode == 0, done.stderr
+        rec = read_recording(dst)
+        assert len(rec) == 3000 and rec.header["converted_from"] == "-"
+        assert np.array_equal(rec.gyro[:, 0], np.arange(3000) % 10)
 
 
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):

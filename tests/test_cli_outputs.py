@@ -359,8 +359,8 @@ def test_a_file_name_that_is_not_utf8_is_written_escaped_in_every_output(tmp_pat
     assert main(["allan", src, other, "--fleet", str(tmp_path / "fleet"), "--jobs", "1"]) == 0
     table = (tmp_path / "fleet" / "fleet.csv").read_text(encoding="utf-8").splitlines()
     assert len(table) == 7 and table[1].startswith("\\udcff,") and f",{escaped}," in table[1]
-    assert f"# recording: {escaped}" in (tmp_path / "fleet" / "\udcff.imu.yaml").read_text(encoding="utf-8")
-    assert "| \\udcff | x |" in (tmp_path / "fleet" / "fleet.md").read_text(encoding="utf-8")
+    assert f'# recording: "{escaped}"' in (tmp_path / "fleet" / "\udcff.imu.yaml").read_text(encoding="utf-8")
+    assert "| \\\\udcff | x |" in (tmp_path / "fleet" / "fleet.md").read_text(encoding="utf-8")  # shown: \\udcff
 
 
 def test_utf8_text_escapes_lone_surrogates_only():
@@ -415,6 +415,25 @@ def test_a_write_that_fails_names_the_file_and_says_it_was_not_written(tmp_path)
     assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * len(commands)
     lines = [line for line in proc.stderr.splitlines() if not line.startswith("gyrofilter: warning")]
     assert lines == [f"gyrofilter: error: {out / name}: File too large; not written" for name in commands], proc.stderr
+    assert not out.exists()
+
+
+def test_convert_and_arma_under_a_size_limit_say_what_was_not_written(tmp_path):
+    """Attack pass (issue 37, fresh case of 9): the commands the first test leaves out, convert
+    (a gzip recording: the limit is met inside the compressor) and arma --json."""
+    log = tmp_path / "log.csv"
+    log.write_text("t,gx_dps,gy_dps,gz_dps\n" + "".join(f"{i * 0.01:.2f},{(i * 7919) % 13 * 0.01:.2f},0.2,0.3\n"
+                                                          for i in range(40000)))
+    rec = tmp_path / "in.csv"
+    write_recording(rec, Recording.from_dps(np.random.default_rng(38).normal(0, 0.05, (3000, 3)), 100.0))
+    out = tmp_path / "out"
+    argvs = [["convert", str(log), "--out", str(out / "c.csv.gz")], ["convert", str(log), "--out", str(out / "c.csv")],
+             ["arma", str(rec), "--axis", "x", "--max-n", "1", "--json", str(out / "a.json")]]
+    proc = subprocess.run([sys.executable, "-c", _UNDER_A_SIZE_LIMIT, "100", json.dumps(argvs)],
+                          capture_output=True, text=True, timeout=120, cwd=REPO)
+    assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * 3, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("gyrofilter: error")]
+    assert lines == [f"gyrofilter: error: {out / name}: File too large; not written" for name in ("c.csv.gz", "c.csv", "a.json")]
     assert not out.exists()
 
 

@@ -1,4 +1,5 @@
 import json
+import os
 import re
 import subprocess
 import sys
@@ -432,6 +433,17 @@ def test_an_output_below_a_file_is_refused_naming_the_file(tmp_path, capsys):
     assert main(["replay", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"gyrofilter: error: {out}: {tmp_path / 'cal.json'} is a file, not a folder"]
+
+
+def test_an_output_below_a_loop_of_links_is_refused_naming_the_loop(tmp_path, capsys):
+    """Attack pass (issue 37): a folder that is a loop of symbolic links was called "a file"."""
+    os.symlink(tmp_path / "b", tmp_path / "a")
+    os.symlink(tmp_path / "a", tmp_path / "b")
+    out = tmp_path / "a" / "x.csv"
+    assert main(["replay", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"gyrofilter: error: {out}: {tmp_path / 'a'} is a symbolic link that leads to no folder "
+                   "(Too many levels of symbolic links)"]
 
 
 @pytest.mark.parametrize("realtime", [[], ["--realtime"]])

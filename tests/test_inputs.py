@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from gyrofilter import inputs
 from gyrofilter.errors import CalibrationError, SettingsError
@@ -232,3 +234,47 @@ def test_a_whole_number_of_2_53_or_more_must_be_written_in_digits(text):
         parse_number(text, "seed", integer=True)
     assert parse_number(text.split(".")[0].split("e")[0] if text[0] == "9" and "e" not in text else "1" + "0" * 18,
                         "seed", integer=True) > 2 ** 53
+
+
+#: names that read differently once escaped the old way: a backslash at the end, the two characters
+#: backslash and n, a line end, a quote, DEL/C1 controls and separators, a lone surrogate
+ODD_NAMES = ["unit\\", "a\\nb.csv", "a\nb.csv", 'say "hi".csv', "x\x7f\x85\u2028\u2029.csv", "\udcff.csv",
+             "tab\there", "\\u0041", "é ü.csv", " both ends ", ""]
+
+
+@pytest.mark.parametrize("name", ODD_NAMES)
+def test_a_json_string_is_one_line_and_reads_back_exactly(name):
+    """Issue 37 (leftover): a name written by the one-line rule (escape_controls) read the same for
+    a line end and for the two characters ``\\n``, and a name ending in a backslash could end a
+    quoted string early. json_string is one line, has no control character and reads back
+    exactly with the format's own reader."""
+    text = inputs.json_string(name)
+    assert json.loads(text) == name
+    assert not inputs.CONTROL_CHARACTER.search(text) and text.encode("utf-8")
+    assert text.startswith('"') and text.endswith('"')
+
+
+@given(st.text(st.characters(blacklist_categories=())))
+def test_every_string_reads_back_from_its_json_string(name):
+    text = inputs.json_string(name)
+    assert json.loads(text) == name and not inputs.CONTROL_CHARACTER.search(text)
+
+
+@pytest.mark.parametrize("name", ODD_NAMES)
+def test_a_json_string_reads_back_as_a_yaml_double_quoted_scalar(name):
+    yaml = pytest.importorskip("yaml")
+    assert yaml.safe_load(f"key: {inputs.json_string(name)}  # comment\nother: 1\n") == {"key": name, "other": 1}
+
+
+def test_a_json_file_saved_with_a_byte_order_mark_is_read(tmp_path):
+    """Attack pass (issue 37): a model saved by a Windows editor (UTF-8 with BOM) was refused with
+    Python's "Unexpected UTF-8 BOM (decode using utf-8-sig)"; a recording's BOM is skipped, and
+    RFC 8259 (section 8.1) lets a parser ignore it: so does load_json, only at the start."""
+    path = tmp_path / "model.json"
+    path.write_text('{"a": [1, 2.5]}', encoding="utf-8-sig")
+    assert inputs.load_json(str(path), "model") == {"a": [1, 2.5]}
+    path.write_text('{"a": "\ufeff"}', encoding="utf-8-sig")
+    assert inputs.load_json(str(path), "model") == {"a": "\ufeff"}
+    path.write_bytes(b' \xef\xbb\xbf{"a": 1}')
+    with pytest.raises(SettingsError, match="not valid JSON"):
+        inputs.load_json(str(path), "model")

@@ -1,9 +1,12 @@
 import gzip
+import json
 import re
 import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, RecordingWriter, iter_recording, read_recording, write_recording
@@ -598,3 +601,84 @@ def test_compact_reading_keeps_the_numbers_and_the_columns_asked_for(tmp_path):
     for c in ("gx", "gy", "gz"):
         assert np.array_equal(np.asarray(back.columns[c], dtype=float), rec.columns[c])
     assert np.array_equal(back.gyro_dps, read_recording(path).gyro_dps)
+
+
+#: names a Markdown viewer read as markup, or whose escapes read the same as another name's
+MARKDOWN_NAMES = ["*a*b.csv", "_a_.csv", "x [click](http://e.example).csv", "![i](http://e.example/t.png)",
+                  "t ~~s~~", "end #", "a|b", "`c`", "a&amp;b", "<img src=x>", "unit\\", "a\\nb", "a\nb",
+                  'q"x', "\x85\u2028", "\udcff", " lead", "trail ", "a\\|b", "a\\*b", "a\\_b", "x_.y",
+                  "mpu6050_static_100s", "é_ü", "&#65;", "\\u0041"]
+
+
+def commonmark_text(shown):
+    """What a CommonMark viewer shows of inline text that holds no markup but escapes and
+    entities (CommonMark 0.31, sections 2.4 and 2.5): each backslash before ASCII punctuation
+    dropped (one before anything else is shown), each entity decoded. None when markup is left
+    (an unescaped markup character)."""
+    import html
+
+    plain = re.sub(r"\\[!-/:-@\[-`{-~]", "", shown)
+    if re.search(r"[|`*\[\]~!#<>]", plain) or re.search(r"(?<![^\W_])_|_(?![^\W_])", plain):
+        return None
+    return html.unescape(re.sub(r"\\([!-/:-@\[-`{-~])", r"\1", shown))
+
+
+@pytest.mark.parametrize("name", MARKDOWN_NAMES)
+def test_a_name_in_markdown_is_shown_literally_and_reads_back_exactly(name):
+    """Issue 37 (leftover): a file named ``*a*b.csv`` was shown as a<em>a</em>b, ``![i](URL)`` as an
+    image fetched from URL, ``a<newline>b`` and ``a\\nb`` the same. What a Markdown page shows
+    of a name is its JSON string's body, escaped so that it holds no markup: it reads back exactly."""
+    from gyrofilter.recording.header import markdown_text
+
+    shown = commonmark_text(markdown_text(name))
+    assert shown is not None and json.loads(f'"{shown}"') == name
+
+
+@given(st.text(st.characters(blacklist_categories=()), max_size=40))
+def test_every_text_in_markdown_reads_back_by_the_commonmark_escape_rules(name):
+    from gyrofilter.recording.header import markdown_text
+
+    shown = commonmark_text(markdown_text(name))
+    assert shown is not None and json.loads(f'"{shown}"') == name
+
+
+def test_a_plain_name_is_shown_in_markdown_as_it_is():
+    from gyrofilter.recording.header import markdown_text
+
+    for name in ("logs/unit 7.csv.gz", "mpu6050_static_100s", "recordings/mpu6050_static_64s_set1.csv.gz", "é_ü"):
+        assert markdown_text(name) == name
+
+
+@pytest.mark.parametrize("name", MARKDOWN_NAMES)
+def test_a_name_in_a_markdown_table_cell_and_heading_renders_as_itself(name):
+    """The same through a CommonMark parser with tables and strikethrough (GitHub's)."""
+    import html
+
+    markdown_it = pytest.importorskip("markdown_it")
+    from gyrofilter.recording.header import markdown_text
+
+    md = markdown_it.MarkdownIt("commonmark").enable("table").enable("strikethrough")
+    shown = markdown_text(name)
+    cell = re.search(r"<td>(.*?)</td>", md.render(f"| h |\n|---|\n| {shown} |\n"), re.S).group(1)
+    heading = re.search(r"<h1>report: (.*?)</h1>", md.render(f"# report: {shown}\n"), re.S).group(1)
+    for rendered in (cell, heading):
+        assert "<" not in rendered and json.loads(f'"{html.unescape(rendered)}"') == name
+
+
+def test_annotations_beyond_the_cap_are_skipped_with_one_warning(tmp_path, monkeypatch):
+    """Attack pass (issue 37): 15 million '#' lines (30 KB of gzip) were kept as notes, 4.9 GB of
+    memory; the reader keeps the first MAX_NOTES and says so once, the samples all read."""
+    from gyrofilter.recording import reader
+
+    monkeypatch.setattr(reader, "MAX_NOTES", 10)
+    lines = [f"{i / 100:.2f},0.{i % 7},0.2,0.3\n" for i in range(300)]
+    notes = "".join(f"# note {k}\n" for k in range(25))
+    path = tmp_path / "notes.csv.gz"
+    with gzip.open(path, "wt") as fh:
+        fh.write("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n"
+                 + "".join(lines[:100]) + notes + "".join(lines[100:]))
+    rec = read_recording(path)
+    assert len(rec) == 300 and [n.text for n in rec.notes] == [f"note {k}" for k in range(10)]
+    first_skipped = 5 + 100 + 10
+    assert rec.warnings == [f"{path}: line {first_skipped}: more than 10 annotation lines; the first are kept, "
+                            "the others skipped"]

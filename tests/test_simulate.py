@@ -6,6 +6,7 @@ of several standard errors. All random tests are seeded.
 """
 import json
 import math
+import re
 from statistics import NormalDist
 
 import numpy as np
@@ -201,7 +202,7 @@ def test_a_duration_beyond_the_bound_is_refused_not_an_overflow():
 
     with pytest.raises(SettingsError, match=r"duration_s must be in \(0, 1e\+09\], got 1e\+308"):
         sample_count(1e308, 100.0)
-    assert sample_count(1e9, 100.0) == 10**11
+    assert sample_count(1e9, 100.0) == 10**11  # a stream's count (simulate_chunks); a whole run is held to MAX_SAMPLES
     with pytest.raises(SettingsError, match=r"must be in \(0, 1e\+09\]"):
         SimulatedSource(None, seed=1, realtime=False, duration_s=1e308)
 
@@ -545,3 +546,29 @@ def test_numpy_scalars_are_accepted_as_parameters():
     assert spec["sample_rate_hz"] == 50.0 and spec["axes"]["x"]["effects"][0]["tau_s"] == 2.0
     with pytest.raises(SettingsError, match=r"sigma_dps: expected a number >= 0, got array"):
         validate_model(model([{"effect": "gauss_markov", "sigma_dps": np.array([1.0]), "tau_s": 1}]))
+
+
+@pytest.mark.parametrize("duration_s, sample_rate_hz", [(1e9, 1000.0), (1e6 + 0.5, 1000.0), (2e4, 1e5)])
+def test_a_run_held_whole_beyond_the_sample_limit_is_refused_before_any_allocation(duration_s, sample_rate_hz):
+    """Issue 37 (leftover): ``simulate(model, 1e9)`` at 1 kHz tried to hold 1e12 samples (32 TB:
+    MemoryError or the OOM killer). The API and ``gyrofilter simulate`` share one limit,
+    MAX_SAMPLES (1e9, about 32 GB in memory), refused as a ValueError naming the parameter and it."""
+    from gyrofilter.sim.simulate import MAX_SAMPLES, sample_count
+
+    n_total = sample_count(duration_s, sample_rate_hz)
+    assert n_total > MAX_SAMPLES == 10**9
+    expected = f"duration_s: {duration_s:g} s at {sample_rate_hz:g} Hz is {n_total:.3g} samples; a simulated recording holds at most 1e+09"
+    with pytest.raises(ValueError, match=re.escape(expected)):
+        simulate(model(fs=sample_rate_hz), duration_s, seed=1)
+
+
+def test_a_run_held_whole_equals_its_blocks():
+    """simulate() fills its arrays block by block: the same numbers as the blocks of
+    simulate_chunks, with and without a temperature column, whatever the block size."""
+    m = full_model()
+    rec = simulate(m, 3.0, seed=4, chunk_samples=7)
+    parts = list(simulate_chunks(m, 3.0, seed=4, chunk_samples=64))
+    assert rec.temp_c is not None and len(rec) == 300
+    assert np.array_equal(rec.t_s, np.concatenate([p[0] for p in parts]))
+    assert np.array_equal(rec.gyro, np.concatenate([p[1] for p in parts]))
+    assert np.array_equal(rec.temp_c, np.concatenate([p[2] for p in parts]))

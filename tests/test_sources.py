@@ -36,6 +36,25 @@ def test_parse_source(spec, kind, kwargs):
     assert parse_source(spec) == (kind, kwargs)
 
 
+@pytest.mark.parametrize("spec, path, rest", [
+    ("replay:{d}/a,b/imu,2.csv.gz", "{d}/a,b/imu,2.csv.gz", {}),
+    ("replay:{d}/a,b/imu,2.csv.gz,realtime,speed=3", "{d}/a,b/imu,2.csv.gz", {"realtime": True, "speed": 3.0}),
+    ("{d}/a,b/imu,2.csv.gz,speed=3", "{d}/a,b/imu,2.csv.gz", {"speed": 3.0}),
+    ("replay:{d}/x=1,y/imu.csv.gz,realtime", "{d}/x=1,y/imu.csv.gz", {"realtime": True}),
+])
+def test_a_file_whose_path_holds_commas_is_taken_whole(tmp_path, spec, path, rest):
+    """Attack pass (issue 37): ``replay:logs/a,b/imu.csv.gz`` (a comma in a folder's or file's name)
+    was split at the comma ("'b/imu' is not a key of replay"): no SOURCE could name that file. The
+    path is the longest comma-joined start that is an existing file; what follows is keys."""
+    for folder in ("a,b", "x=1,y"):
+        (tmp_path / folder).mkdir()
+    for name in ("a,b/imu,2.csv.gz", "x=1,y/imu.csv.gz"):
+        (tmp_path / name).write_bytes(b"")
+    assert parse_source(spec.format(d=tmp_path)) == ("replay", {"path": path.format(d=tmp_path), **rest})
+    with pytest.raises(SettingsError, match="unknown key 'sped' for replay"):
+        parse_source(spec.format(d=tmp_path) + ",sped=3")
+
+
 @pytest.mark.parametrize("spec, words", [
     ("mpu6050:bux=1", ["'bux'", "known: bus"]),
     ("sim:sed=1", ["unknown key 'sed' for sim"]),     # a mistyped key is no file name

@@ -67,6 +67,16 @@ def test_loopback_and_wildcard():
     assert is_wildcard("0.0.0.0") and is_wildcard("::") and not is_wildcard("127.0.0.1") and not is_wildcard("localhost")
 
 
+def test_an_ipv4_mapped_loopback_address_is_loopback():
+    """Attack pass (issue 37): ``--serve [::ffff:127.0.0.1]:PORT`` binds an address only this
+    machine reaches, but was taken for a public one: the Host check was off (a page at
+    evil.example could read the sensor through DNS rebinding) and the warning said the
+    network could watch. An IPv4-mapped address is judged as the IPv4 address it maps."""
+    assert is_loopback("::ffff:127.0.0.1") and is_loopback("::ffff:127.0.1.1")
+    assert not is_loopback("::ffff:192.0.2.1") and not is_loopback("::ffff:0.0.0.0")
+    assert is_wildcard("::ffff:0.0.0.0") and not is_wildcard("::ffff:127.0.0.1")
+
+
 def test_a_url_is_not_an_address():
     with pytest.raises(SettingsError, match=r"--serve 'http://127.0.0.1:8000/': give \[HOST:\]PORT without http://"):
         split_address("http://127.0.0.1:8000/", "--serve")

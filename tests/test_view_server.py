@@ -219,6 +219,23 @@ def test_a_server_bound_to_loopback_through_a_name_answers_that_name_and_loopbac
         live.close()
 
 
+def test_a_server_bound_to_an_ipv4_mapped_loopback_address_keeps_the_host_check():
+    """Attack pass (issue 37): bound to ::ffff:127.0.0.1 (reachable from this machine only), the
+    server answered a request for evil.example (DNS rebinding); it answers loopback names only."""
+    try:
+        live = LiveServer(socket.AF_INET6, ("::ffff:127.0.0.1", 0, 0, 0))
+    except OSError as exc:
+        pytest.skip(f"no IPv4-mapped IPv6 socket here ({exc})")
+    live.start(INFO)
+    try:
+        assert live.loopback_only
+        port = live.address[1]
+        for host, code in (("127.0.0.1", 200), ("localhost", 200), ("evil.example", 421)):
+            assert get(port, "/status", host=host)[0] == code, host
+    finally:
+        live.close()
+
+
 def test_an_error_inside_the_view_is_counted_not_raised(live, monkeypatch):
     def broken():
         raise RuntimeError("boom")

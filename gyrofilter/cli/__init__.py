@@ -138,8 +138,9 @@ def _main(argv):
             return EXIT_BAD_INPUT
         module = importlib.import_module(COMMANDS[args.command][0])
         return module.run(args) or 0
-    except KeyboardInterrupt:
-        print("gyrofilter: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        unwritten = getattr(exc, "not_written", [])
+        console.say(f"gyrofilter: interrupted{'; not written: ' + ', '.join(unwritten) if unwritten else ''}")
         return EXIT_INTERRUPTED
     except BrokenPipeError:
         # stdout closed early (e.g. piped into `head`): not an error worth a message

@@ -8,7 +8,7 @@ file takes its name only when whole) and says what it read.
 """
 from .. import __version__
 from ..recording import RecordingWriter
-from ..recording.foreign import TIME_UNITS, read_foreign
+from ..recording.foreign import MAX_PIPE_COPY_BYTES, TIME_UNITS, read_foreign
 from ..units import GYRO_UNITS
 from . import console, options, outputs
 
@@ -18,7 +18,10 @@ UNIT_SPELLINGS = {"deg/s": "dps"}
 
 
 def add_arguments(parser):
-    parser.add_argument("input", metavar="IN", help="the log: CSV or blank-separated text (gzip too), time and gyro columns")
+    parser.add_argument("input", metavar="IN", help="the log: CSV or blank-separated text (gzip too), time and gyro "
+                                                    "columns; - reads the standard input (a pipe is read twice from a "
+                                                    f"copy in TMPDIR, at most {MAX_PIPE_COPY_BYTES / 2**30:g} GiB and "
+                                                    "half its free space)")
     parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name,
                         help="output recording (" + options.RECORDING_FILE_HELP + ")")
     parser.add_argument("--unit", choices=GYRO_UNITS, default=None, type=lambda text: UNIT_SPELLINGS.get(text, text),

@@ -46,7 +46,7 @@ def check_outputs(outputs, inputs=(), force=False):
         parent = output_folder(out)
         while not os.path.isdir(parent):
             if os.path.lexists(parent):
-                raise SettingsError(f"{out}: {parent} is a file, not a folder")
+                raise SettingsError(f"{out}: {parent} {_not_a_folder(parent)}")
             parent = os.path.dirname(parent)
         if not os.access(parent, os.W_OK | os.X_OK):
             raise SettingsError(f"{out}: the folder {parent} is not writable")
@@ -64,6 +64,18 @@ def check_outputs(outputs, inputs=(), force=False):
         _replaceable.add(_identity(os.lstat(out)))
 
 
+def _not_a_folder(path):
+    """Why ``path``, which exists (or is a link), is no folder: a file, or a symbolic link that
+    leads nowhere (dangling, or a loop of links: "is a file" sent the user looking for a file)."""
+    if not os.path.islink(path):
+        return "is a file, not a folder"
+    try:
+        os.stat(path)
+    except OSError as exc:
+        return f"is a symbolic link that leads to no folder ({exc.strerror})"
+    return "is a symbolic link to a file, not a folder"
+
+
 def _check_dotdot(out):
     """Refuse ``out`` when a ``..`` in it follows a folder that does not exist: ``abspath`` drops
     ``missing/..``, the system does not (the file could not be written after the work)."""
@@ -72,7 +84,7 @@ def _check_dotdot(out):
         prefix = os.sep.join(parts[:i])
         if part == ".." and prefix and not os.path.isdir(prefix):
             if os.path.lexists(prefix):
-                raise SettingsError(f"{out}: {prefix} is a file, not a folder")
+                raise SettingsError(f"{out}: {prefix} {_not_a_folder(prefix)}")
             raise SettingsError(f"{out}: the folder {prefix} does not exist, so {prefix}{os.sep}.. does not name a folder")
 
 
@@ -161,7 +173,7 @@ def replacing(path):
     with _folder(os.path.dirname(tmp)):
         _pending.append(path)
         try:
-            with _naming(tmp, path):
+            with _naming(tmp, path), _unwritten_on_interrupt(path):
                 yield tmp
                 commit(tmp, path)
         finally:
@@ -178,7 +190,7 @@ def replacing_in(folder):
     with _folder(folder):
         tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{_OWNER}-", dir=folder)
         try:
-            with _naming(tmp, folder):
+            with _naming(tmp, folder), _unwritten_on_interrupt(f"the files of {folder}"):
                 yield tmp
                 names = sorted(os.listdir(tmp))
                 for name in names:  # all may land, or none does
@@ -187,6 +199,17 @@ def replacing_in(folder):
                     commit(os.path.join(tmp, name), os.path.join(folder, name))
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _unwritten_on_interrupt(what):
+    """A KeyboardInterrupt (Ctrl-C, SIGTERM, SIGHUP) leaving a :func:`replacing` block lists ``what``
+    was not written in its ``not_written`` attribute, for the interrupted command's one line."""
+    try:
+        yield
+    except KeyboardInterrupt as exc:
+        exc.not_written = [*getattr(exc, "not_written", []), what]
+        raise
 
 
 #: what only a write raises (a full disk or quota, a file size limit, a read-only file system):

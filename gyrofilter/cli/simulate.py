@@ -14,11 +14,11 @@ import numpy as np
 from ..errors import SettingsError
 from ..recording import RecordingWriter
 from ..sim.model import load_model, validate_model
-from ..sim.simulate import check_seed, draw_seed, recording_columns, recording_header, sample_count, simulate_chunks
+from ..sim.simulate import (MAX_SAMPLES, check_sample_count, check_seed, draw_seed, recording_columns, recording_header,
+                            simulate_chunks)
 from ..units import MAX_DURATION_S, check_duration_s
 from . import console, options, outputs
 
-MAX_SAMPLES = 10**9  # a file of about 40 GB: more is no recording anyone can use
 MAX_CHUNK = 2**20  # samples per block; the flicker bank draws (block x components) numbers at once
 
 
@@ -51,10 +51,7 @@ def run(args):
         spec, warnings = validate_model(model, sample_rate_hz=sample_rate_hz)
     except SettingsError as exc:
         raise SettingsError(f"{args.model}: {exc}") from None
-    n_total = sample_count(args.duration, spec["sample_rate_hz"])
-    if n_total > MAX_SAMPLES:
-        raise SettingsError(f"--duration {args.duration:g} s at {spec['sample_rate_hz']:g} Hz is {n_total:.3g} samples; "
-                            f"simulate writes at most {MAX_SAMPLES:.0e}")
+    n_total = check_sample_count(args.duration, spec["sample_rate_hz"], "--duration")
     for text in warnings:
         console.say_warning(f"{args.model}: {text}")
     seed = draw_seed() if args.seed is None else args.seed

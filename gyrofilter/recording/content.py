@@ -141,7 +141,9 @@ class RecordingHead(_HeaderFacts):
 
     ``warnings`` and ``notes`` (:class:`Note`: ``(line, text)`` and ``row``) grow while the chunks are read, ``rows`` counts
     the samples read so far and ``t_gaps`` the steps of the ``t`` column longer than 1.5 sample
-    intervals (lost samples). :meth:`line_of_row` gives the file line of a sample read so far.
+    intervals (lost samples); ``notes_cut``: more annotations than the reader keeps
+    (:data:`~gyrofilter.recording.header.MAX_NOTES`) were met. :meth:`line_of_row` gives the file
+    line of a sample read so far.
     """
 
     header: dict
@@ -149,6 +151,7 @@ class RecordingHead(_HeaderFacts):
     path: str
     warnings: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    notes_cut: bool = False
     rows: int = 0
     t_gaps: int = 0
     _line_starts: list = field(default_factory=list, repr=False)  # (row, line) where line - row changes

@@ -10,7 +10,9 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
   never whole: a first pass checks every row and keeps 16 bytes a row (its line number and its
   time), a pass over the time column follows when its unit is inferred (the times in s need
   it), and :meth:`Foreign.chunks` reads it once more for the writer. A log that cannot be read
-  twice (a pipe) is first copied, as it is, to an anonymous temporary file.
+  twice (a pipe) is first copied, as it is, to an anonymous temporary file, of at most
+  :data:`MAX_PIPE_COPY_BYTES` and half the free space of the temporary folder (a longer pipe is
+  refused, saying to give the log as a file).
 - **Columns.** The time and the three gyro columns are found by their usual names
   (:data:`TIME_NAME`, :data:`GYRO_NAME`: ``t``/``time``/``timestamp``/``%time``/
   ``seconds_elapsed``, ``gx``/``gyro_x``/``wx``/``omega_x``/``angular_velocity.x``, ``x``; case,
@@ -40,8 +42,10 @@ from __future__ import annotations
 
 import contextlib
 import decimal
+import errno
 import gzip
 import math
+import os
 import re
 import shutil
 import sys
@@ -81,6 +85,13 @@ _UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s":
                "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns"}
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
+#: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
+#: where it is): 4 GiB, a 1 kHz log of about 40 h
+MAX_PIPE_COPY_BYTES = 4 << 30
+#: bytes read from a pipe at a time
+PIPE_BLOCK_BYTES = 1 << 20
+#: the log name that means the standard input (``zcat log.gz | gyrofilter convert - --out rec.csv.gz``)
+STDIN = "-"
 
 
 class Foreign(Closable):
@@ -148,23 +159,48 @@ def _normal(name):
 
 
 def _open(path):
-    """The log ``path`` open for reading twice (binary): the file itself, or, when it cannot seek
+    """The log ``path`` (``-``: the standard input) open for reading twice (binary): the file itself, or, when it cannot seek
     (a pipe: ``<(zcat log.gz)``, /dev/stdin), an anonymous temporary copy of its bytes (in the
-    system's temporary folder, gone when closed), made one block at a time."""
+    system's temporary folder, gone when closed), made one block at a time and bounded
+    (:func:`_copy_pipe`)."""
     try:
-        raw = open(path, "rb")
+        raw = open(os.dup(sys.stdin.fileno()) if path == STDIN else path, "rb")
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
     if raw.seekable():
         return raw
     with raw:
-        copy = tempfile.TemporaryFile()
-        try:
-            shutil.copyfileobj(raw, copy, 1 << 20)
-            copy.seek(0)
-        except OSError as exc:
-            copy.close()
-            raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
+        return _copy_pipe(raw, path)
+
+
+def _copy_pipe(raw, path):
+    """The pipe ``raw`` copied to an anonymous temporary file, rewound. The copy holds at most
+    :data:`MAX_PIPE_COPY_BYTES` and at most half of the space free in the temporary folder
+    (``TMPDIR``) when it starts, so that a piped log of many GB never fills that folder: a longer
+    pipe, or a folder that fills all the same, is refused with what to do instead (give the
+    log as a file, which is read where it is, or a roomier ``TMPDIR``)."""
+    folder = tempfile.gettempdir()
+    limit = min(MAX_PIPE_COPY_BYTES, shutil.disk_usage(folder).free // 2)
+    instead = "save the log to a file and convert that (a file is read where it is, not copied), or set TMPDIR to a roomier folder"
+    copy = tempfile.TemporaryFile()
+    try:
+        copied = 0
+        while block := raw.read(PIPE_BLOCK_BYTES):
+            copied += len(block)
+            if copied > limit:
+                raise RecordingError(f"{path}: a pipe is copied to {folder} to be read twice, and this one holds more than "
+                                     f"{limit} bytes (at most {MAX_PIPE_COPY_BYTES / 2**30:g} GiB and half of the space free "
+                                     f"there); {instead}")
+            copy.write(block)
+        copy.flush()
+        copy.seek(0)
+    except OSError as exc:
+        copy.close()
+        where = "copying it to " + folder if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else "cannot read"
+        raise RecordingError(f"{path}: {where}: {exc.strerror or exc}; {instead}") from None
+    except BaseException:
+        copy.close()
+        raise
     return copy
 
 

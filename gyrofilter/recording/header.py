@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 
 from ..errors import RecordingError
-from ..inputs import CONTROL_CHARACTER, escape_controls, parse_number, quote
+from ..inputs import CONTROL_CHARACTER, escape_controls, json_string, parse_number, quote
 from ..units import AXES, GYRO_UNITS, check_lsb_per_dps, check_sample_rate_hz, utf8_text
 
 #: the first header key of every recording; its value is the format version
@@ -51,25 +51,36 @@ PROVENANCE_KEYS = frozenset({"filtered_from", "filter_preset", "filter_settings"
                              "simulated_model_name", "live_source", "recorded_by", "serial_port", "start_time_utc"})
 
 
-#: what a Markdown page must not take literally from a file's text: an HTML tag's or entity's start,
-#: a table cell's end, a code span's fence
-_MARKDOWN_SPECIAL = {"&": "&amp;", "<": "&lt;", ">": "&gt;", "|": "\\|", "`": "\\`"}
-#: a backslash that CommonMark would read as an escape: one before ASCII punctuation
-_MARKDOWN_ESCAPE = re.compile(r"\\(?=[!-/:-@\[-`{-~])")
+#: what a Markdown page must not take literally from a file's text: an HTML tag's or entity's start
+#: (as an entity), and, backslash-escaped (CommonMark 0.31, section 2.4: any ASCII punctuation), a
+#: backslash, a table cell's end, a code span's fence, emphasis, strikethrough, a link's or image's
+#: brackets, a heading's closing ``#``; ``_`` is escaped unless both its neighbours are letters or
+#: digits (inside a word it is no emphasis, and ``mpu6050_static`` stays as it reads)
+_MARKDOWN_SPECIAL = {"&": "&amp;", "<": "&lt;", ">": "&gt;", **{c: "\\" + c for c in "\\|`*[]~!#"}}
 
 
 def markdown_text(text):
     """``text`` from a file (a file name, a quoted cell, a header value) as a Markdown page shows
-    it: on one line (:func:`one_line_text`), ``&``, ``<`` and ``>`` as HTML entities (no tag of a
-    file's text is rendered by a Markdown viewer), ``|`` and a backtick escaped (a table cell stays
-    one cell), and a backslash before ASCII punctuation doubled (CommonMark's escapes; one before
-    anything else, as in ``\\udcff``, is shown as it is)."""
-    text = _MARKDOWN_ESCAPE.sub(r"\\\\", one_line_text(text))
-    return "".join(_MARKDOWN_SPECIAL.get(c, c) for c in text)
+    it: the body of its JSON string (:func:`~gyrofilter.inputs.json_string`: one line, a backslash
+    doubled, ``"`` as ``\\"``, a control character as ``\\n`` or ``\\u0085``), a space at either end as
+    ``\\u0020`` (a table cell's or heading's ends are trimmed), and each character a Markdown viewer
+    would take as markup written so that it is shown literally (:data:`_MARKDOWN_SPECIAL`). What
+    the page shows reads back exactly: ``json.loads('"' + shown + '"') == text``; a plain name
+    (``logs/unit 7.csv.gz``) is shown as it is."""
+    body = json_string(text)[1:-1]
+    shown = "".join(("_" if 0 < i < len(body) - 1 and body[i - 1].isalnum() and body[i + 1].isalnum() else "\\_")
+                    if c == "_" else _MARKDOWN_SPECIAL.get(c, c) for i, c in enumerate(body))
+    kept = shown.strip(" ")
+    start = len(shown) - len(shown.lstrip(" "))
+    return "\\u0020" * start + kept + "\\u0020" * (len(shown) - start - len(kept))
 
 
 #: longest annotation text a writer writes (characters; a gap note is about 60)
 MAX_NOTE_CHARS = 4000
+#: most annotations a reader keeps (a day of a serial source that loses samples every second has
+#: about 86400 gap notes); the lines after them are skipped with one warning: 15 million ``#``
+#: lines, 30 KB of gzip, took 4.9 GB as notes
+MAX_NOTES = 100_000
 
 
 def note_text(text):

@@ -14,7 +14,7 @@ from ..errors import RecordingError, SettingsError
 from ..inputs import is_plain_number, quote
 from .checks import TimeCheck, check_rates
 from .content import Note, Recording, RecordingHead
-from .header import MAX_HEADER_LINES, MAX_LINE_BYTES, check_columns, check_header
+from .header import MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, check_columns, check_header
 from .lines import blame_gzip_damage, line_chunks
 
 #: most lines per chunk of :func:`iter_recording` (a chunk also ends with each block of text)
@@ -188,7 +188,8 @@ def _parse_chunk(lines, first, head):
     Fast path: ``numpy.loadtxt`` on the list of lines, accepted when it gives one finite row per
     line. (Its parser, numpy >= 1.23, reads a finite number only in plain decimal syntax, as
     :func:`~gyrofilter.inputs.parse_number` does: ``0.0_1``, ``0x1``, ``1d5`` fail it.) Otherwise
-    the lines are classified one by one: ``#`` lines are notes, blank lines are skipped, and the
+    the lines are classified one by one: ``#`` lines are notes (the first :data:`MAX_NOTES`; a
+    warning says when more are skipped), blank lines are skipped, and the
     data lines are parsed again (loadtxt, then, if that still fails, line by line so that the
     first bad line is named).
     """
@@ -200,7 +201,12 @@ def _parse_chunk(lines, first, head):
     rows, numbers = [], []
     for j, ln in enumerate(lines):
         if ln.startswith("#"):
-            head.notes.append(Note(first + j, ln[1:].strip(), head.rows + len(rows)))
+            if len(head.notes) < MAX_NOTES:
+                head.notes.append(Note(first + j, ln[1:].strip(), head.rows + len(rows)))
+            elif not head.notes_cut:
+                head.notes_cut = True
+                head.warnings.append(f"{head.path}: line {first + j}: more than {MAX_NOTES} annotation lines; "
+                                     "the first are kept, the others skipped")
         elif ln.strip():
             rows.append(ln)
             numbers.append(first + j)

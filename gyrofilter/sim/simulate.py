@@ -61,6 +61,11 @@ from ..recording import COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, Reco
 from ..units import AXES, DEG_PER_RAD, check_duration_s, plain, to_dps
 
 DEFAULT_CHUNK_SAMPLES = 65536
+#: most samples a simulated recording holds, in memory (:func:`simulate`) or in a file (``gyrofilter
+#: simulate``): 1e9 samples are 32 GB of t, gx, gy, gz as floats (about 40 GB of file), more than any
+#: machine that runs gyrofilter holds and more than any analysis reads. The streams of
+#: :func:`simulate_chunks` (the ``sim`` source runs a week) hold one block and are not bounded.
+MAX_SAMPLES = 10**9
 _EFFECT_ID = {name: i + 1 for i, name in enumerate(EFFECTS)}  # 0 = white noise; fixed stream keys
 
 
@@ -178,6 +183,17 @@ def sample_count(duration_s, sample_rate_hz):
     """
     duration_s = check_duration_s(duration_s, "simulate: duration_s")
     return max(1, int(round(duration_s * sample_rate_hz)))
+
+
+def check_sample_count(duration_s, sample_rate_hz, name="simulate: duration_s"):
+    """:func:`sample_count` of a run that is held whole (in memory or in a file), at most
+    :data:`MAX_SAMPLES`, else SettingsError (a ValueError) naming ``name``, the count and the limit."""
+    n_total = sample_count(duration_s, sample_rate_hz)
+    if n_total > MAX_SAMPLES:
+        raise SettingsError(f"{name}: {float(duration_s):g} s at {sample_rate_hz:g} Hz is {n_total:.3g} samples; "
+                            f"a simulated recording holds at most {MAX_SAMPLES:.0e} (MAX_SAMPLES; simulate_chunks "
+                            "streams longer runs block by block)")
+    return n_total
 
 
 def _check_chunk_samples(chunk_samples):
@@ -344,17 +360,26 @@ def simulate(model: dict, duration_s: float, *, sample_rate_hz=None, rng=None, s
     to whole samples; ``sample_rate_hz``: Hz; ``seed`` (int >= 0) or ``rng``
     (``numpy.random.Generator``), not both (neither: fresh entropy, and the header's
     ``simulated_seed`` is ``none``); ``chunk_samples``: block size of the computation (does not
-    change the numbers). Memory: the whole run (use :func:`simulate_chunks` for long ones).
+    change the numbers). Memory: the whole run, 32 bytes a sample (40 with a temperature), at most
+    :data:`MAX_SAMPLES` samples (more: SettingsError, a ValueError; :func:`simulate_chunks` streams them).
     """
     spec, _ = validate_model(model, sample_rate_hz=sample_rate_hz)
-    parts = list(simulate_chunks(model, duration_s, chunk_samples=chunk_samples, rng=rng, seed=seed, validated=spec))
-    t_s = np.concatenate([p[0] for p in parts])
-    gyro = np.concatenate([p[1] for p in parts])
+    n_total = check_sample_count(duration_s, spec["sample_rate_hz"])
+    has_temp = spec[TEMPERATURE_PROFILE] is not None
+    t_s, gyro, temp_c = np.empty(n_total), np.empty((n_total, 3)), np.empty(n_total) if has_temp else None
+    start = 0
+    for t_part, gyro_part, temp_part in simulate_chunks(model, duration_s, chunk_samples=chunk_samples, rng=rng,
+                                                        seed=seed, validated=spec):
+        stop = start + len(t_part)
+        t_s[start:stop], gyro[start:stop] = t_part, gyro_part
+        if has_temp:
+            temp_c[start:stop] = temp_part
+        start = stop
     columns = {"t": t_s}
     for i, name in enumerate(GYRO_COLUMNS):
         columns[name] = gyro[:, i]
-    if spec[TEMPERATURE_PROFILE] is not None:
-        columns["temp"] = np.concatenate([p[2] for p in parts])
+    if has_temp:
+        columns["temp"] = temp_c
     header = recording_header(model, duration_s, seed=seed, validated=spec)
     return Recording(columns=columns, header=header)
 

@@ -10,7 +10,9 @@ One syntax names every source (``--source SOURCE`` of ``gyrofilter record`` and 
     sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]   (or sim:model=MODEL.json,...)
 
 A bare ``/dev/tty...`` is a serial port and a bare existing file or ``*.csv``/``*.csv.gz`` name
-is a replay. Numbers are plain decimals (``gyrofilter.inputs.parse_number``: ``12``, ``0.5``,
+is a replay. A path holding commas (``replay:logs/a,b/imu.csv.gz,realtime``) is the longest
+comma-joined start that is an existing file; one holding ``=`` (``data/date=2024-01-01/imu.csv.gz``)
+is the path when a path separator or a dot comes before its ``=``. Numbers are plain decimals (``gyrofilter.inputs.parse_number``: ``12``, ``0.5``,
 ``1e3``; no ``nan``, ``inf`` or ``1_000``), whole numbers (``bus``, ``addr``, ``seed``, ...) also
 ``0x`` hex of at most 8 digits; flags are ``1/0``, ``yes/no``, ``true/false``, ``on/off`` or the
 bare key (= true). An unknown key, a key given twice (``addr`` and ``address`` are one key; so are
@@ -161,7 +163,7 @@ def parse_source(spec: str):
     kind = _ALIASES.get(head.lower(), head.lower())
     if kind not in KINDS:
         # no known KIND prefix: a bare device or file name
-        first = spec.split(",", 1)[0]
+        first = ",".join(spec.split(",")[:_path_items(spec.split(","))])
         if first.startswith("/dev/tty") or first.startswith("/dev/serial"):
             kind, rest = "serial", spec
         elif os.path.exists(first) or first.endswith((".csv", ".csv.gz", ".gz")):
@@ -173,7 +175,12 @@ def parse_source(spec: str):
     positional_name, keys = KINDS[kind]
     kwargs = {}
     given = {}  # keyword name -> the key (or the positional) that gave it
-    for index, item in enumerate(rest.split(",") if rest else []):
+    items = rest.split(",") if rest else []
+    if positional_name is not None and _path_items(items) > 1:  # a file whose path holds commas: taken whole
+        kwargs[positional_name] = ",".join(items[:_path_items(items)]).strip()
+        given[positional_name] = f"the {positional_name}"
+        items = [""] + items[_path_items(items):]
+    for index, item in enumerate(items):
         item = item.strip()
         if not item:
             continue
@@ -272,6 +279,13 @@ def _open(kind, kwargs):
     if kind == "replay":
         return ReplaySource(**kwargs)
     return SimulatedSource(**kwargs)
+
+
+def _path_items(items):
+    """How many of the comma-separated ``items`` of a SOURCE make up the path it starts with: the
+    most whose comma-joined text is an existing file (``replay:logs/a,b/imu.csv.gz,realtime``: the
+    file ``logs/a,b/imu.csv.gz``), else 1."""
+    return max((k for k in range(2, len(items) + 1) if os.path.isfile(",".join(items[:k]).strip())), default=1)
 
 
 def _names_a_file(item, key):

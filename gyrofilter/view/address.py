@@ -80,22 +80,30 @@ def resolve(host, port, option, kind):
     return family, sockaddr
 
 
+def _ip(host):
+    """The address ``host`` writes (an IPv4-mapped IPv6 address, ``::ffff:127.0.0.1``, as the
+    IPv4 address it maps: RFC 4291 section 2.5.5.2, what a socket bound to it reaches), or None
+    for a name."""
+    try:
+        address = ipaddress.ip_address(host)
+    except ValueError:
+        return None
+    return getattr(address, "ipv4_mapped", None) or address
+
+
 def is_loopback(host):
-    """True when ``host`` can only be reached from this machine (127.0.0.0/8, ::1, localhost)."""
+    """True when ``host`` can only be reached from this machine (127.0.0.0/8, ::1, localhost, and
+    127.0.0.0/8 mapped into IPv6, ``::ffff:127.0.0.1``)."""
     if host == "localhost":
         return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
+    address = _ip(host)
+    return address is not None and address.is_loopback
 
 
 def is_wildcard(host):
-    """True for the addresses that mean every interface of this machine (0.0.0.0, ::)."""
-    try:
-        return ipaddress.ip_address(host).is_unspecified
-    except ValueError:
-        return False
+    """True for the addresses that mean every interface of this machine (0.0.0.0, ::, ::ffff:0.0.0.0)."""
+    address = _ip(host)
+    return address is not None and address.is_unspecified
 
 
 #: documentation addresses (RFC 5737, RFC 3849) that a UDP socket is connected to, to learn which

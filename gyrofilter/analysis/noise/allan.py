@@ -52,15 +52,29 @@ class ConstantAxisError(AllanInputError):
         self.axis = axis
 
 
-def _check_series(x, name="x"):
-    """``x`` as a contiguous float64 series, or AllanInputError: not 1-D, fewer than 3 samples, a
-    masked value (converting would drop the mask and take the value behind it as data) or one
-    that is not finite."""
+def rate_numbers(x, name="x"):
+    """``x`` as a float64 array when it holds numbers (ints or floats), else AllanInputError naming
+    ``name``: a masked value (converting would drop the mask and take the value behind it as
+    data), complex numbers (converting drops the imaginary part), booleans, strings, objects or
+    ragged lists (the filter's rule, :func:`gyrofilter.filter.samples.as_numbers`)."""
     mask = np.ma.getmask(x)
     if mask is not np.ma.nomask and mask.any():
-        raise AllanInputError(f"{name} has masked values, the first at sample {int(np.argmax(np.ravel(mask)))}; "
+        first = int(np.flatnonzero(mask.reshape(len(mask), -1).any(axis=1))[0]) if mask.ndim else 0
+        raise AllanInputError(f"{name} has masked values, the first at sample {first}; "
                               "the Allan deviation needs evenly spaced measured samples (fill or cut gaps first)")
-    x = np.asarray(x, dtype=np.float64)
+    try:
+        array = np.asarray(x)
+    except (ValueError, TypeError):  # a ragged list
+        raise AllanInputError(f"{name} must be an array of numbers (rates), got a {type(x).__name__} that is none") from None
+    if array.dtype.kind not in "iuf":
+        raise AllanInputError(f"{name} must be numbers (rates), got an array of {array.dtype}")
+    return array.astype(np.float64, copy=False)
+
+
+def _check_series(x, name="x"):
+    """``x`` as a contiguous float64 series (:func:`rate_numbers`), or AllanInputError: not 1-D,
+    fewer than 3 samples, or a value that is not finite."""
+    x = rate_numbers(x, name)
     if x.ndim != 1:
         raise AllanInputError(
             f"{name} must be a 1-D rate series (one axis), got an array of shape {x.shape}; "

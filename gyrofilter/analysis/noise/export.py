@@ -6,8 +6,8 @@ import math
 
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from .model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, AxisNoise, Coefficient, convert
-from ...recording.header import one_line_text
 from ..gap.detectors.repeats import repeats_warning
+from ...inputs import json_string
 from ...units import utf8_text
 
 #: JSON key of each coefficient (docs/formats.md, section 4), in its base unit
@@ -108,13 +108,14 @@ def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0"):
     package characterises the gyro only); Kalibr needs them, so fill them in from your own
     accelerometer analysis. ``results``, ``sample_rate_hz`` (Hz) and ``recording`` as for
     :func:`to_json`; ``rostopic``: the IMU topic written. The recording's name goes into a comment
-    on one line (:func:`~gyrofilter.recording.header.one_line_text`: a line end in a file name
-    cannot add a key)."""
+    as a JSON string (:func:`~gyrofilter.inputs.json_string`, also a YAML double-quoted scalar): on
+    one line, so that a line end in a file name cannot add a key, and reading back exactly (a
+    backslash doubled: a name holding the two characters ``\\n`` is not one holding a line end)."""
     per_axis = {a: kalibr_values(r) for a, r in results.items()}
     nd = max(v["gyroscope_noise_density"] for v in per_axis.values())
     rw = max(v["gyroscope_random_walk"] for v in per_axis.values())
     lines = ["# Kalibr IMU noise model (gyroscope), written by gyrofilter allan",
-             f"# recording: {one_line_text(recording)}" if recording else "# recording: (array)",
+             f"# recording: {json_string(recording)}" if recording else "# recording: (array)",
              "# continuous-time densities; the maximum over the axes is used:"]
     for a, v in per_axis.items():
         lines.append(f"#   {a}: noise_density {v['gyroscope_noise_density']:.6e} rad/s/sqrt(Hz)"

@@ -21,7 +21,7 @@ import itertools
 
 import numpy as np
 
-from .allan import (MIN_CLUSTERS, AllanInputError, ConstantAxisError, chi2_interval, cluster_sizes, edf_mixture,
+from .allan import (MIN_CLUSTERS, AllanInputError, ConstantAxisError, chi2_interval, cluster_sizes, edf_mixture, rate_numbers,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
 from .intervals import fitted_intervals
 from .model import TERM_ALPHA, TERMS, AxisNoise, basis, term_shares
@@ -194,7 +194,7 @@ def characterise(gyro_dps, sample_rate_hz, *, axes=AXES, **kwargs):
     """:func:`characterise_axis` for each column of ``gyro_dps`` (shape (N, 3), deg/s) at
     ``sample_rate_hz`` (Hz) named in ``axes`` (a subset of :data:`~gyrofilter.units.AXES`); ``kwargs`` go to
     :func:`characterise_axis`; returns {axis name: AxisNoise}."""
-    g = np.asarray(gyro_dps, dtype=np.float64)
+    g = rate_numbers(gyro_dps, "gyro_dps")
     if g.ndim != 2 or g.shape[1] != len(axes):
         got = g.shape if g.ndim else "a scalar"
         raise AllanInputError(
