@@ -16,6 +16,7 @@ from ..recording import RecordingWriter
 from ..sim.model import load_model, validate_model
 from ..sim.simulate import (MAX_SAMPLES, check_sample_count, check_seed, draw_seed, recording_columns, recording_header,
                             simulate_chunks)
+from ..effects import REGISTRY, ROWS
 from ..units import MAX_DURATION_S, check_duration_s
 from . import console, options, outputs
 
@@ -24,7 +25,9 @@ MAX_CHUNK = 2**20  # samples per block; the flicker bank draws (block x componen
 
 def add_arguments(parser):
     parser.add_argument("--model", required=True, metavar="MODEL.json",
-                        help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json)")
+                        help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json); "
+                             "the effects of an axis: " + ", ".join(e.name for e in REGISTRY if e.name not in ROWS)
+                             + "; of whole rows (a top-level key): " + ", ".join(ROWS))
     parser.add_argument("--duration", required=True, type=options.decimal, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
     options.add_sample_rate_argument(parser, help="sample rate in Hz (overrides the model's)")
     parser.add_argument("--seed", type=options.whole_number, default=None, metavar="N",

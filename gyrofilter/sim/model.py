@@ -17,7 +17,7 @@ import numpy as np
 from . import noise_terms as nt
 from ..effects import ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, ROWS, SINUSOID, TEMPERATURE
 from ..errors import SettingsError
-from ..inputs import MAX_QUOTE_CHARS, load_json, quote
+from ..inputs import MAX_QUOTE_CHARS, did_you_mean, load_json, quote
 from ..units import AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_sample_rate_hz, plain
 
 # Bounds of every model number, so that no model gives a non-finite or absurd signal. A number is
@@ -275,7 +275,8 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
         _err(where, f"expected an object with an 'effect' name, got {_show(eff)}")
     name = eff["effect"]
     if not isinstance(name, str) or name not in EFFECTS:
-        _err(f"{where}.effect", f"unknown effect {_show(name, 20)} (expected one of {', '.join(EFFECTS)})")
+        hint = did_you_mean(name, EFFECTS) if isinstance(name, str) else ""
+        _err(f"{where}.effect", f"unknown effect {_show(name, 20)}{hint} (`gyrofilter simulate --help` lists the effects)")
     if name in ROWS and where != name:
         _err(f"{where}.effect", f"{name} acts on whole rows, every axis at once: give it as the model's top-level key "
                                 f"'{name}' (an object of its parameters), not as an effect of an axis")
