@@ -17,9 +17,11 @@ The kinds, and the groups every module derives from them (never a list of its ow
   Gauss-Markov), found by the slow detector's spectral fits (:data:`WANDERS`);
 - ``shape``: a deterministic shape of the bias in time (ramp, step, warm-up; :data:`SHAPES`);
 - ``covariate``: the bias following a measured quantity (the temperature; :data:`COVARIATES`);
-- ``line``: a spectral line: a deterministic periodic rate (a sinusoid) or noise in a narrow band
-  around a centre frequency (a line of finite width); the gap analysis names one, the other or
-  both for one peak of the spectrum (:data:`LINES`);
+- ``line``: a peak of the spectrum: a deterministic periodic rate (a sinusoid), noise in a narrow
+  band around a centre frequency (a line of finite width), a broad low hump of noise (a
+  resonance of the board driven by noise) or the same resonance rung by random shocks (bursts
+  that decay); the gap analysis names one reading of a peak, or two where both are there
+  (:data:`LINES`);
 - ``noise``: stationary noise with a broad spectrum other than white (colored noise, an ARMA
   process);
 - ``tails``: the rate's distribution (isolated spikes, heavy tails; :data:`TAILS`).
@@ -44,6 +46,8 @@ COLORED_NOISE = "colored_noise"
 NARROWBAND = "narrowband"
 ARMA = "arma"
 HEAVY_TAILS = "heavy_tails"
+RESONANCE = "resonance"
+RINGING = "ringing"
 
 KINDS = ("wander", "shape", "covariate", "line", "noise", "tails")
 
@@ -100,6 +104,11 @@ REGISTRY = (
            defining="sigma_a_dps"),
     Effect(HEAVY_TAILS, "tails", {"fraction": "frac", "scale_ratio": "pos"}, {}, {"fraction": "log", "scale_ratio": "log"},
            defining="scale_ratio"),
+    Effect(RESONANCE, "line", {"center_hz": "pos", "q": "pos", "rms_dps": "nonneg"}, {},
+           {"q": "log", "rms_dps": "log"}, defining="rms_dps"),
+    Effect(RINGING, "line", {"center_hz": "pos", "q": "pos", "shock_rate_hz": "pos", "shock_dps": "nonneg"},
+           {"spread_ln": ("nonneg", 0.25)}, {"q": "log", "shock_rate_hz": "log", "shock_dps": "log"},
+           defining="shock_dps"),
 )
 #: name -> record, in the registry's order
 BY_NAME = {e.name: e for e in REGISTRY}
@@ -120,7 +129,10 @@ COVARIATES = of_kind("covariate")
 SLOW = of_kind("wander", "shape", "covariate")
 #: the effects of the rate's distribution
 TAILS = of_kind("tails")
-#: the spectral lines: a sinusoid and a narrow band, alternative readings of one peak of the spectrum
+#: the peaks of the spectrum: a sinusoid, a narrow band, a resonance's hump and its ringing,
+#: alternative readings of one peak of the spectrum
 LINES = of_kind("line")
 #: the parameter that holds each line's frequency (Hz)
-LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz"}
+LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz", RESONANCE: "center_hz", RINGING: "center_hz"}
+#: the resonator's effects: its hump (white noise through it) and its ringing (shocks through it)
+RESONATORS = (RESONANCE, RINGING)

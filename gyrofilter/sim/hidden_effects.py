@@ -25,6 +25,8 @@ colored_noise      half the cases a low pass, lag1 0.3-0.8; half a first-order A
 heavy_tails        fraction 0.01-0.1 (log-uniform; ``scale`` shrinks it: the excess kurtosis is
                    about proportional to it), scale_ratio 4-30 (log-uniform); 30 and 0.06
                    reproduce the Xsens MTi-G record of issue 24 (5 % beyond 6 robust sd)
+resonance          center_hz 5-40 % of the Nyquist frequency, q 1-4 (log-uniform), the hump's
+                   peak 0.4-1.5 times the white level (issue 36's MPU-9250: 0.5)
 =================  ============================================================================
 """
 from __future__ import annotations
@@ -34,15 +36,16 @@ import math
 import numpy as np
 
 from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
-                      RATE_RANDOM_WALK, SINUSOID, TEMPERATURE, WARMUP)
+                      RATE_RANDOM_WALK, RESONANCE, SINUSOID, TEMPERATURE, WARMUP)
 from .model import TEMPERATURE_PROFILE
-from .noise_terms import colored_noise_filter
+from .noise_terms import colored_noise_filter, filter_variance
+from .resonance import band_pass
 from .simulate import simulate
 from ..recording import Recording
 from ..units import AXES
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
-           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS)
+           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, RESONANCE)
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
@@ -58,6 +61,7 @@ TOLERANCES = {
     OUTLIERS: {"rate": ("factor", 1.6), "magnitude_dps": ("rel", 0.35)},
     COLORED_NOISE: {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
     HEAVY_TAILS: {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
+    RESONANCE: {"center_hz": ("rel", 0.05), "q": ("factor", 1.5), "rms_dps": ("rel", 0.3)},
 }
 
 
@@ -111,6 +115,8 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
     elif effect == HEAVY_TAILS:
         params = {"fraction": scale * math.exp(rng.uniform(math.log(0.01), math.log(0.1))),
                   "scale_ratio": math.exp(rng.uniform(math.log(4.0), math.log(30.0)))}
+    elif effect == RESONANCE:
+        params = _hump(rng, model, axis, scale)
     params = {k: float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))
@@ -123,6 +129,18 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
     return {"seed": int(seed), "effect": effect, "axis": axis if effect != "none" else None,
             "params": params, "model": model, "duration_s": float(duration_s),
             "sim_seed": int(rng.integers(2**31))}
+
+
+def _hump(rng, model, axis, scale):
+    """A resonance's parameters: centre 5-40 % of the Nyquist frequency, Q 1-4 (log-uniform), its
+    peak 0.4-1.5 times the white level (``scale`` times that), so the spectrum there is 1.4-2.5
+    times the neighbouring level (issue 36's hump: 1.5): rms = sqrt(L Σ h²) σ for the resonator
+    of unit peak gain (Σ h² its energy) and the white noise's per-sample std σ."""
+    rate = model["sample_rate_hz"]
+    centre, q = rng.uniform(0.05, 0.4) * rate / 2.0, math.exp(rng.uniform(0.0, math.log(4.0)))
+    sigma = model["axes"][axis]["arw_dps_per_sqrt_hz"] * math.sqrt(rate)
+    level = scale * rng.uniform(0.4, 1.5)
+    return {"center_hz": centre, "q": q, "rms_dps": math.sqrt(level * filter_variance(*band_pass(centre, q, rate))) * sigma}
 
 
 def simulate_case(case):

@@ -358,14 +358,14 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     if c is not None:
         cands.append(c)
         x, owned = _subtract_component(x, c, owned), True
-    band = det.detect_narrowband(x, sample_rate_hz)
-    if band is not None:
-        cands.append(band)
-    colored = det.detect_colored(x, sample_rate_hz, band)
+    hump, band = det.detect_resonance(x, sample_rate_hz, det.detect_narrowband(x, sample_rate_hz))
+    bands = [c for c in (band, hump) if c is not None]
+    cands.extend(bands)
+    colored = det.detect_colored(x, sample_rate_hz, bands)
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)
     if colored is not None and wander is not None:  # the wander's high-frequency part is correlated too
-        colored = det.detect_colored(x, sample_rate_hz, band,
+        colored = det.detect_colored(x, sample_rate_hz, bands,
                                      wander_highpassed(effect_entry(wander), sample_rate_hz, x.size))
         if colored is None and notes is not None:
             notes.append(f"axis {axis}: the lag-1 correlation is the {wander.effect}'s own (its high-frequency part); "

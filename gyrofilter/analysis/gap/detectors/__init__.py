@@ -35,6 +35,14 @@ ones found, because the effects are confusable:
    by a least-squares fit of the effect's own AR(2) resonator PSD (:func:`band_estimate`). Runs
    on the series with the sinusoid removed; a band cannot be subtracted (it is noise), so the
    later detectors see it, and the colored noise's lag-1 is corrected for it.
+2c. ``resonance`` -- a broad low hump of noise power (the board's resonance driven by noise): the
+   Welch log-PSD fitted by a smooth spectrum (white through a first-order ARMA, and a 1/f floor)
+   with and without the ``resonance`` effect's resonator hump; the drop of the residual sum of
+   squares in residual variances is the statistic. A peak of quality Q = f0 / B at most
+   ``RESONANCE_MAX_Q`` is a hump, a narrower one a line (``narrowband``): a narrow-band line's
+   bins are left out of the hump's fit, a broad band at the hump's centre is the hump
+   (:func:`~gyrofilter.analysis.gap.detectors.resonance.hump_or_line`). Like a band, the hump is
+   noise and stays in the series; the colored noise's lag-1 is corrected for it.
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
@@ -76,7 +84,7 @@ ones found, because the effects are confusable:
      on D (:mod:`gyrofilter.analysis.gap.confound`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
-:class:`Candidate`, helpers), ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``colored``
+:class:`Candidate`, helpers), ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``resonance``, ``colored``
 and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
 ``gyrofilter.analysis.gap.detectors`` as before.
 """
@@ -93,6 +101,9 @@ from .common import (  # noqa: F401
     HEAVY_TAILS_Z,
     JOINT_THRESHOLD,
     NARROWBAND_THRESHOLD,
+    RESONANCE_MAX_Q,
+    RESONANCE_MIN_Q,
+    RESONANCE_THRESHOLD,
     OUTLIER_FALSE_PER_AXIS,
     OUTLIER_MIN_COUNT,
     OUTSIDE_NULL_D,
@@ -133,6 +144,12 @@ from .narrowband import (  # noqa: F401
     band_estimate,
     detect_narrowband,
     narrowband_lags,
+)
+from .resonance import (  # noqa: F401
+    band_correlation,
+    detect_resonance,
+    hump_or_line,
+    resonance_fit,
 )
 from .colored import (  # noqa: F401
     colored_window,

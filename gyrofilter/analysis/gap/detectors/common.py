@@ -58,6 +58,19 @@ GM_MAX_TAU_DIVISOR = 5
 #: at the Nyquist edge of AR(1) lag1 -0.7 (a PSD peaking at f_s / 2) 2.2 on 10^6 and 2.4 on
 #: 8.64 * 10^6 samples at 100 Hz
 NARROWBAND_THRESHOLD = 4.0
+#: the hump statistic (the drop of the Welch log-PSD residual sum of squares by a resonance, in
+#: residual variances: detectors.resonance) a hump must exceed, set from clean records only: on
+#: 120 simulated axes without a hump (white, AR(1) and ARMA colored noise, bias instability,
+#: Gauss-Markov, heavy tails, outliers, sinusoids; 10-60 min at 100 Hz, MPU6050 quantization)
+#: its largest value with Q in the hump's range was 26 (43 with a narrower or broader peak), so
+#: 60 sits more than twice above; a hump 1.5 times the level (issue 36) reads 100-1200 in 15 min
+RESONANCE_THRESHOLD = 60.0
+#: the quality factors Q = f0 / B of a hump: a narrower peak (Q above the largest) is a line
+#: (narrowband), a broader one (below the smallest: more than an octave and a half between its
+#: half-power points) a tilt of the background. The board resonance of issue 36 is a hump of Q
+#: about 4 (10.5-13.5 Hz at 12 Hz); the narrow bands of the tests and of the DLPF's ringing are Q 8-60
+RESONANCE_MIN_Q = 0.7
+RESONANCE_MAX_Q = 5.0
 #: D above which an axis is clearly outside the null band (its 95th percentile is 1.06-1.96 on
 #: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
 #: composite stochastic part, and the report says which feature still departs
