@@ -27,6 +27,8 @@ heavy_tails        fraction 0.01-0.1 (log-uniform; ``scale`` shrinks it: the exc
                    reproduce the Xsens MTi-G record of issue 24 (5 % beyond 6 robust sd)
 resonance          center_hz 5-40 % of the Nyquist frequency, q 1-4 (log-uniform), the hump's
                    peak 0.4-1.5 times the white level (issue 36's MPU-9250: 0.5)
+ringing            center_hz 5-40 % of the Nyquist frequency, q 1.5-5, shock_rate_hz 0.05-0.3
+                   (log-uniform), shock_dps 10-30 per-sample white-noise sd
 =================  ============================================================================
 """
 from __future__ import annotations
@@ -36,7 +38,7 @@ import math
 import numpy as np
 
 from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
-                      RATE_RANDOM_WALK, RESONANCE, SINUSOID, TEMPERATURE, WARMUP)
+                      RATE_RANDOM_WALK, RESONANCE, RINGING, SINUSOID, TEMPERATURE, WARMUP)
 from .model import TEMPERATURE_PROFILE
 from .noise_terms import colored_noise_filter, filter_variance
 from .resonance import band_pass
@@ -45,7 +47,7 @@ from ..recording import Recording
 from ..units import AXES
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
-           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, RESONANCE)
+           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, RESONANCE, RINGING)
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
@@ -62,6 +64,7 @@ TOLERANCES = {
     COLORED_NOISE: {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
     HEAVY_TAILS: {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
     RESONANCE: {"center_hz": ("rel", 0.05), "q": ("factor", 1.5), "rms_dps": ("rel", 0.3)},
+    RINGING: {"center_hz": ("rel", 0.05), "q": ("factor", 1.5), "shock_rate_hz": ("factor", 1.6), "shock_dps": ("rel", 0.35)},
 }
 
 
@@ -117,6 +120,12 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
                   "scale_ratio": math.exp(rng.uniform(math.log(4.0), math.log(30.0)))}
     elif effect == RESONANCE:
         params = _hump(rng, model, axis, scale)
+    elif effect == RINGING:
+        sigma = model["axes"][axis]["arw_dps_per_sqrt_hz"] * math.sqrt(model["sample_rate_hz"])
+        params = {"center_hz": rng.uniform(0.05, 0.4) * model["sample_rate_hz"] / 2.0,
+                  "q": math.exp(rng.uniform(math.log(1.5), math.log(5.0))),
+                  "shock_rate_hz": math.exp(rng.uniform(math.log(0.05), math.log(0.3))),
+                  "shock_dps": scale * rng.uniform(10.0, 30.0) * sigma}
     params = {k: float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))

@@ -72,7 +72,7 @@ from . import detectors as det
 from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
                        sim_features, temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
-from .confound import (alternatives_entry, kept_without_gain, suggested_temperature, weigh_lines, weigh_readings,
+from .confound import (alternatives_entry, kept_without_gain, one_cause_of_spikes, ring_or_hump, suggested_temperature, weigh_lines, weigh_readings,
                        weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
@@ -344,6 +344,11 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     cands = []
     c, mask = det.detect_outliers(x, q_dps)
     tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
+    ring = det.detect_ringing(x, sample_rate_hz) if c is not None or tails is not None else None
+    c, tails, note = one_cause_of_spikes(ring, c, tails, note)
+    if ring is not None:  # the shocks ring: their rings are taken out, not the spikes cleaned
+        cands.append(ring)
+        x, owned = _subtract_component(x, ring, owned), True
     if note and notes is not None:
         notes.append(f"axis {axis}: {note}" + ("; they are analysed as outliers" if c is not None else ""))
     if tails is not None:  # the spikes are the noise's tails: nothing is cleaned
@@ -359,6 +364,7 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
         cands.append(c)
         x, owned = _subtract_component(x, c, owned), True
     hump, band = det.detect_resonance(x, sample_rate_hz, det.detect_narrowband(x, sample_rate_hz))
+    hump = ring_or_hump(ring, hump)
     bands = [c for c in (band, hump) if c is not None]
     cands.extend(bands)
     colored = det.detect_colored(x, sample_rate_hz, bands)

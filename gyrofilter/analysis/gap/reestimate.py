@@ -15,6 +15,8 @@ came from. Only where an estimator has nothing to estimate (fewer than
 
 The estimators, as in :mod:`gyrofilter.analysis.gap.detectors`:
 
+* ``ringing``: :func:`~gyrofilter.analysis.gap.detectors.ringing_estimate` (the hump's centre and
+  Q, the rings' count and median peak), its rings taken out of the replicate;
 * ``heavy_tails``: the Gaussian scale mixture's maximum-likelihood fraction and scale ratio on
   the histogram of the high-passed, prewhitened residual
   (:func:`~gyrofilter.analysis.gap.detectors.tails.tail_fits`), nothing cleaned;
@@ -51,7 +53,7 @@ import math
 import numpy as np
 
 from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND, OUTLIERS,
-                        RATE_RANDOM_WALK, RESONANCE, SHAPES, SINUSOID, TEMPERATURE, WANDERS)
+                        RATE_RANDOM_WALK, RESONANCE, RINGING, SHAPES, SINUSOID, TEMPERATURE, WANDERS)
 from .. import stats
 from . import detectors as det
 from ..noise import gmwm
@@ -66,7 +68,7 @@ from .composite import COMPOSITE_TERMS, composite_lags, slow_wavelet_variance
 #: the slow deterministic shapes of :func:`gyrofilter.analysis.gap.detectors.detect_slow`
 DETERMINISTIC = SHAPES + COVARIATES
 #: the effects :func:`reestimate_axis` can estimate
-SUPPORTED = (HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, RESONANCE, COLORED_NOISE) + DETERMINISTIC + WANDERS
+SUPPORTED = (RINGING, HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, RESONANCE, COLORED_NOISE) + DETERMINISTIC + WANDERS
 
 
 def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False):
@@ -85,6 +87,11 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     for k, c in enumerate(cands):
         key = "composite" if c.composite and c.effect in WANDERS else c.effect
         by.setdefault(key, []).append(k)
+    if RINGING in by and x.size >= 4096:
+        found = det.ringing_estimate(x, sample_rate_hz)
+        if found is not None:
+            out[by[RINGING][0]] = found[0]
+            x -= found[2]
     if HEAVY_TAILS in by:
         out[by[HEAVY_TAILS][0]] = _heavy_tails(x, sample_rate_hz)
     if OUTLIERS in by:

@@ -23,6 +23,14 @@ ones found, because the effects are confusable:
    scale mixture beating a Gaussian and beating isolated spikes by likelihood (see
    :mod:`~gyrofilter.analysis.gap.detectors.tails` for the rule). When named, the outlier candidate is
    dropped (its spikes are the tails) and the series is not cleaned.
+1c. ``ringing`` -- shocks that ring the board's resonance (bursts that decay): where spikes or
+   heavy tails were found, a hump of the ``resonance`` detector's fit on the series as recorded,
+   the events of the series through the hump's own resonator, and at each the resonator's ring
+   fitted against an isolated spike: the energy the rings explain beyond isolated spikes, in
+   noise variances, is the statistic. When named, the spike and tail candidates are dropped (the
+   spikes are the rings' peaks: one cause, :func:`gyrofilter.analysis.gap.confound.one_cause_of_spikes`),
+   the fitted rings are taken out of the series, and a hump at the ring's resonance is not named
+   beside it.
 2. ``sinusoid`` -- a line in the periodogram. The periodogram ordinate divided by the local
    noise level (median over a +-5 % frequency band / ln 2) is Exp(1) under any smooth noise
    spectrum, so the largest of ``M`` ordinates exceeds ``t`` with probability about
@@ -84,7 +92,8 @@ ones found, because the effects are confusable:
      on D (:mod:`gyrofilter.analysis.gap.confound`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
-:class:`Candidate`, helpers), ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``resonance``, ``colored``
+:class:`Candidate`, helpers), ``outliers``, ``tails``, ``ringing``, ``sinusoid``, ``narrowband``, ``resonance``,
+``colored``
 and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
 ``gyrofilter.analysis.gap.detectors`` as before.
 """
@@ -104,6 +113,7 @@ from .common import (  # noqa: F401
     RESONANCE_MAX_Q,
     RESONANCE_MIN_Q,
     RESONANCE_THRESHOLD,
+    RINGING_THRESHOLD,
     OUTLIER_FALSE_PER_AXIS,
     OUTLIER_MIN_COUNT,
     OUTSIDE_NULL_D,
@@ -150,6 +160,11 @@ from .resonance import (  # noqa: F401
     detect_resonance,
     hump_or_line,
     resonance_fit,
+)
+from .ringing import (  # noqa: F401
+    detect_ringing,
+    ring_fit,
+    ringing_estimate,
 )
 from .colored import (  # noqa: F401
     colored_window,

@@ -71,6 +71,10 @@ RESONANCE_THRESHOLD = 60.0
 #: about 4 (10.5-13.5 Hz at 12 Hz); the narrow bands of the tests and of the DLPF's ringing are Q 8-60
 RESONANCE_MIN_Q = 0.7
 RESONANCE_MAX_Q = 5.0
+#: the ringing statistic (the energy fitted rings explain beyond isolated spikes, in noise
+#: variances: detectors.ringing) shocks that ring must exceed; isolated spikes and heavy tails read
+#: below 0 (a spike projects on a ring by at most 1 / <g, g> of its energy), set from them (below)
+RINGING_THRESHOLD = 50.0
 #: D above which an axis is clearly outside the null band (its 95th percentile is 1.06-1.96 on
 #: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
 #: composite stochastic part, and the report says which feature still departs
