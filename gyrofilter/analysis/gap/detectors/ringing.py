@@ -28,7 +28,8 @@ with at least :data:`~gyrofilter.analysis.gap.detectors.common.OUTLIER_MIN_COUNT
 the spike and tail findings are not named beside it (:func:`gyrofilter.analysis.gap.confound.one_cause_of_spikes`)
 and the fitted rings are the finding's component, taken out of the series for the later
 detectors. Parameters: the hump's centre and Q, ``shock_rate_hz`` = events / duration (the
-shocks below the event threshold are not counted), ``shock_dps`` = the median |a_i|.
+shocks below the event threshold are not counted), ``shock_dps`` = the median |a_i|; the centre
+and Q refined on the rings themselves (:func:`refine_ring`) and the rings fitted again with them.
 """
 
 from __future__ import annotations
@@ -102,8 +103,73 @@ def ring_fit(x, sample_rate_hz, center_hz, q):
             component[lo + j:end] += ring
     if not amps:
         return None
-    return {"statistic": float(stat), "events": len(amps), "amplitudes_dps": np.array(amps),
-            "onsets": np.array(onsets), "template": g, "component": component}
+    onsets, amps = _joint_amplitudes(x - float(np.mean(x)), g, np.array(onsets), k * sigma / math.sqrt(energy))
+    component = np.zeros(x.size)
+    for o, a_i in zip(onsets, amps):
+        end = min(o + size, x.size)
+        component[o:end] += a_i * g[:end - o]
+    return {"statistic": float(stat), "events": int(amps.size), "amplitudes_dps": amps,
+            "onsets": onsets, "template": g, "component": component}
+
+
+def _joint_amplitudes(x0, g, onsets, least_dps):
+    """The rings' amplitudes fitted jointly by least squares at their onsets (overlapping rings
+    apart: the normal equations G a = b, G_ij = Σ g[n] g[n + |o_i - o_j|], b_i = <x0[o_i:], g>),
+    then the events whose amplitude is below ``least_dps`` (the event threshold in units of an
+    amplitude's noise, σ / sqrt(<g, g>)) dropped and the rest fitted again: what is left of a
+    ring fitted at a wrong onset is no shock."""
+    size = g.size
+    auto = np.array([float(np.dot(g[:size - d], g[d:])) for d in range(size)])
+    onsets = np.unique(onsets)  # one shock found again on a later pass is one shock
+    amps = np.zeros(0)
+    for _ in range(2):
+        if onsets.size == 0:
+            break
+        lag = np.abs(onsets[:, None] - onsets[None, :])
+        gram = np.where(lag < size, auto[np.minimum(lag, size - 1)], 0.0)
+        rhs = np.array([float(np.dot(x0[o:o + size], g[:min(size, x0.size - o)])) for o in onsets])
+        amps = np.linalg.lstsq(gram, rhs, rcond=None)[0]
+        keep = np.abs(amps) >= least_dps
+        if keep.all():
+            break
+        onsets = onsets[keep]
+        amps = amps[keep]
+    return onsets, amps
+
+
+def refine_ring(x, sample_rate_hz, rings, center_hz, q):
+    """``(centre, Q)`` refined on the rings themselves: each event's window ``w_i`` (its ring plus
+    the noise, the other rings taken out: what :func:`ring_fit` leaves at its onset, with its own
+    ring back) fitted by ``a_i g(f₀, Q)`` with ``a_i`` profiled out, least squares over f₀ (within
+    10 %) and log Q (within a factor 2), from the hump's values. The rings stand far above the
+    noise, so the time domain pins the resonance better than the spectrum of a few shocks."""
+    from scipy.optimize import least_squares
+
+    g0 = rings["template"]
+    resid = x - float(np.mean(x)) - rings["component"]
+    size = g0.size
+    wins = np.array([np.r_[resid[o:o + size], np.zeros(max(0, o + size - x.size))] + a * g0
+                     for o, a in zip(rings["onsets"], rings["amplitudes_dps"])])
+
+    def res(p):
+        g = _template_of_length(p[0], math.exp(p[1]), sample_rate_hz, size)
+        amp = wins @ g / float(np.dot(g, g))
+        return (wins - amp[:, None] * g[None, :]).ravel()
+
+    lower, upper = [0.9 * center_hz, math.log(q / 2.0)], [min(1.1 * center_hz, 0.499 * sample_rate_hz), math.log(2.0 * q)]
+    try:
+        fit = least_squares(res, [center_hz, math.log(q)], bounds=(lower, upper), x_scale=[0.01 * center_hz, 0.05],
+                            max_nfev=100)
+    except (ValueError, FloatingPointError):
+        return center_hz, q
+    return float(fit.x[0]), float(math.exp(fit.x[1]))
+
+
+def _template_of_length(center_hz, q, sample_rate_hz, size):
+    """The ring of :func:`ring_template` over exactly ``size`` samples."""
+    h = impulse_response(center_hz, q, sample_rate_hz)
+    g = np.r_[h[:size], np.zeros(max(0, size - h.size))]
+    return g / float(np.max(np.abs(h)))
 
 
 def ringing_estimate(x, sample_rate_hz, hump=None):
@@ -114,6 +180,9 @@ def ringing_estimate(x, sample_rate_hz, hump=None):
     rings = None if hump is None else ring_fit(x, sample_rate_hz, hump["center_hz"], hump["q"])
     if rings is None:
         return None
+    centre, q = refine_ring(x, sample_rate_hz, rings, hump["center_hz"], hump["q"])
+    rings = ring_fit(x, sample_rate_hz, centre, q) or rings
+    hump = dict(hump, center_hz=centre, q=q) if rings["template"].size else hump
     amps = rings["amplitudes_dps"]
     params = {"center_hz": hump["center_hz"], "q": hump["q"], "shock_rate_hz": rings["events"] * sample_rate_hz / x.size,
               "shock_dps": float(np.median(np.abs(amps)))}
