@@ -4,15 +4,17 @@ by random shocks: bursts that decay). Both follow the ``next`` protocol of
 :mod:`gyrofilter.sim.noise_terms`.
 
 The resonator is the second-order band pass H(s) = (ω₀/Q) s / (s² + (ω₀/Q) s + ω₀²) (peak gain
-1 at ω₀ = 2π f₀, half-power full width f₀ / Q), discretised by the bilinear transform prewarped
+1 at ω₀, half-power full width ω₀ / Q), discretised by the bilinear transform prewarped
 at f₀ (R. Bristow-Johnson, "Audio EQ Cookbook", band-pass with constant 0 dB peak gain):
 ω = 2π f₀ / f_s, α = sin ω / (2Q),
 
     H(z) = (α - α z⁻²) / ((1 + α) - 2 cos ω z⁻¹ + (1 - α) z⁻²),
 
 so the peak lies exactly at f₀ and the zeros at 0 Hz and f_s / 2 (a hump adds no power at DC,
-where the white level and the slow effects are read, nor at the Nyquist frequency); the width
-is f₀ / Q to within the bilinear warping (a few % below f_s / 5).
+where the white level and the slow effects are read, nor at the Nyquist frequency). Q is the
+analog prototype's: the half-power frequencies f₁, f₂ satisfy
+tan(π f₂ / f_s) - tan(π f₁ / f_s) = tan(π f₀ / f_s) / Q, so the width is f₀ / Q as f₀ << f_s
+and narrower by the warping above (9 % at f₀ = 0.12 f_s).
 """
 from __future__ import annotations
 

@@ -61,7 +61,6 @@ from .detectors.covariate import temperature_first
 from .detectors.slow import deterministic_candidate, deterministic_shapes, stochastic_params
 from .detectors.tails import tail_fits, tail_residual, tail_step
 from .detectors.sinusoid import dft_amplitude
-from .detectors.resonance import LINE_EXCLUDED_WIDTHS
 from .baseline import effect_entry, extended_axis, wander_highpassed
 from .composite import COMPOSITE_TERMS, composite_lags, slow_wavelet_variance
 
@@ -109,8 +108,9 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
         out[by[NARROWBAND][0]] = {name: band[name] for name in ("center_hz", "bandwidth_hz", "rms_dps")}
         bands.append(det.Candidate(NARROWBAND, out[by[NARROWBAND][0]], 0.0, 0.0, ""))
     if RESONANCE in by and x.size >= 4096:
-        exclude = [(b.params["center_hz"], LINE_EXCLUDED_WIDTHS * b.params["bandwidth_hz"]) for b in bands]
-        fit = det.resonance_fit(x, sample_rate_hz, exclude)
+        lines = [(b.params["center_hz"], b.params["bandwidth_hz"], b.params["rms_dps"]) for b in bands
+                 if det.hump_or_line(b.params["center_hz"] / b.params["bandwidth_hz"]) == NARROWBAND]
+        fit = det.resonance_fit(x, sample_rate_hz, lines)
         if fit is not None:
             out[by[RESONANCE][0]] = {name: fit[name] for name in ("center_hz", "q", "rms_dps")}
             bands.append(det.Candidate(RESONANCE, out[by[RESONANCE][0]], 0.0, 0.0, ""))

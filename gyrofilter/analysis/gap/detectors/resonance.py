@@ -23,7 +23,7 @@ width) at most :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MAX_Q`
 is a line, the ``narrowband`` effect (:func:`hump_or_line`); one broader than
 :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MIN_Q` is a tilt of the background. Where the narrow-band detector found a
 line, its bins (within :data:`LINE_EXCLUDED_WIDTHS` widths of its centre) are left out of the
-fit, so a line beside a hump (the MPU-9250 of issue 36: a hump at 10.5-13.5 Hz beside a line at
+fit and its own PSD is part of the background, so a line beside a hump (the MPU-9250 of issue 36: a hump at 10.5-13.5 Hz beside a line at
 20.37 Hz) leaves the hump's fit alone; where it found a broad peak, the same peak as the hump's is
 one hump, named ``resonance``.
 """
@@ -37,7 +37,7 @@ import numpy as np
 from ....effects import NARROWBAND, RESONANCE, RINGING
 from .common import RESONANCE_MAX_Q, RESONANCE_MIN_Q, RESONANCE_THRESHOLD, Candidate
 from .narrowband import narrowband_lags, welch_psd
-from ....sim.noise_terms import filter_variance
+from ....sim.noise_terms import filter_psd, filter_variance, narrowband_filter
 from ....sim.resonance import band_pass, resonance_lags, ringing_variance
 from ....units import check_sample_rate_hz
 
@@ -77,9 +77,12 @@ def _null_psd(p, f, sample_rate_hz):
     return c * np.abs(1.0 + mu * z) ** 2 / np.abs(1.0 - phi * z) ** 2 + d / f
 
 
-def resonance_fit(x, sample_rate_hz, exclude=()):
-    """The two fits of the module docstring on the rate series ``x`` (deg/s), leaving out the bins
-    within ``(centre_hz, half_width_hz)`` of each pair of ``exclude``. Returns a dict with
+def resonance_fit(x, sample_rate_hz, lines=()):
+    """The two fits of the module docstring on the rate series ``x`` (deg/s), beside the narrow-band
+    lines ``lines`` (their ``(center_hz, bandwidth_hz, rms_dps)``): the bins within
+    :data:`LINE_EXCLUDED_WIDTHS` widths of a line's centre are left out, and its PSD (that of the
+    ``narrowband`` effect, :func:`gyrofilter.sim.noise_terms.narrowband_filter`) is part of both
+    fits' background, so a tall line's tails are not taken for a hump. Returns a dict with
     ``center_hz``, ``q``, ``rms_dps`` (the hump's), ``statistic`` (F), ``peak_ratio`` (the hump's
     PSD over the null's at f₀) and ``segments``; None where the record is too short (fewer than
     32 bins to fit)."""
@@ -88,24 +91,26 @@ def resonance_fit(x, sample_rate_hz, exclude=()):
     f, s, n_seg = _welch(x, sample_rate_hz)
     nyq = sample_rate_hz / 2.0
     sel = (f >= max(RESONANCE_MIN_FRACTION * nyq, f[1])) & (f < nyq - f[1] / 2)
-    for centre, half in exclude:
-        sel &= np.abs(f - centre) > half
+    for centre, width, _ in lines:
+        sel &= np.abs(f - centre) > LINE_EXCLUDED_WIDTHS * width
     if sel.sum() < 32:
         return None
     fw, logs = f[sel], np.log(np.maximum(s[sel], 1e-300))
+    known = sum((2.0 * filter_psd(*narrowband_filter(rms, centre, width, sample_rate_hz), fw, sample_rate_hz)
+                 for centre, width, rms in lines), np.zeros(fw.size))
     level = float(np.median(s[sel]))
     p0 = np.array([math.log(level), 0.0, 0.0, math.log(level * 1e-3 * fw[0])])
     lo0, hi0 = [p0[0] - 10, -0.95, -0.95, p0[3] - 30], [p0[0] + 10, 0.95, 0.95, p0[3] + 10]
 
     def null_resid(p):
-        return np.log(np.maximum(_null_psd(p, fw, sample_rate_hz), 1e-300)) - logs
+        return np.log(np.maximum(_null_psd(p, fw, sample_rate_hz) + known, 1e-300)) - logs
 
     null = least_squares(null_resid, p0, bounds=(lo0, hi0), max_nfev=400)
     rss0 = float(np.sum(null.fun ** 2))
 
     def resid(p):
         hump = _hump_psd(fw, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz)
-        return np.log(np.maximum(_null_psd(p[:4], fw, sample_rate_hz) + hump, 1e-300)) - logs
+        return np.log(np.maximum(_null_psd(p[:4], fw, sample_rate_hz) + known + hump, 1e-300)) - logs
 
     sd0 = math.sqrt(level * nyq)  # the rms of a hump as high as the level over the band
     best = None
@@ -146,15 +151,15 @@ def detect_resonance(x, sample_rate_hz, band=None):
     check_sample_rate_hz(sample_rate_hz)
     if x.size < 4096:
         return None, band
-    exclude = ()
+    lines = ()
     if band is not None and hump_or_line(band.params["center_hz"] / band.params["bandwidth_hz"]) == NARROWBAND:
-        exclude = ((band.params["center_hz"], LINE_EXCLUDED_WIDTHS * band.params["bandwidth_hz"]),)
-    fit = resonance_fit(x, sample_rate_hz, exclude)
+        lines = ((band.params["center_hz"], band.params["bandwidth_hz"], band.params["rms_dps"]),)
+    fit = resonance_fit(x, sample_rate_hz, lines)
     if (fit is None or not fit["statistic"] > RESONANCE_THRESHOLD or hump_or_line(fit["q"]) != RESONANCE
             or fit["q"] < RESONANCE_MIN_Q):
         return None, band
     half = fit["center_hz"] / (2.0 * fit["q"])
-    if band is not None and not exclude and abs(band.params["center_hz"] - fit["center_hz"]) <= half:
+    if band is not None and not lines and abs(band.params["center_hz"] - fit["center_hz"]) <= half:
         band = None  # the narrow-band detector's broad peak is the hump
     cand = Candidate(
         effect=RESONANCE,
