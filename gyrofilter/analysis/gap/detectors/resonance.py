@@ -21,7 +21,9 @@ chi² with 3 degrees of freedom where f₀ is known; scanned over f₀ it is lar
 **A hump, not a line.** A peak is a hump where it is broad: Q = f₀ / B (B its half-power full
 width) at most :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MAX_Q`; a narrower peak
 is a line, the ``narrowband`` effect (:func:`hump_or_line`); one broader than
-:data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MIN_Q` is a tilt of the background. Where the narrow-band detector found a
+:data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MIN_Q` is a tilt of the background, and
+one centred below :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_LOWEST_FRACTION` of the
+Nyquist frequency the rise of the slow effects' spectra (:func:`is_hump`). Where the narrow-band detector found a
 line, its bins (within :data:`LINE_EXCLUDED_WIDTHS` widths of its centre) are left out of the
 fit and its own PSD is part of the background, so a line beside a hump (the MPU-9250 of issue 36: a hump at 10.5-13.5 Hz beside a line at
 20.37 Hz) leaves the hump's fit alone; where it found a broad peak, the same peak as the hump's is
@@ -35,7 +37,7 @@ import math
 import numpy as np
 
 from ....effects import NARROWBAND, RESONANCE, RINGING
-from .common import RESONANCE_MAX_Q, RESONANCE_MIN_Q, RESONANCE_THRESHOLD, Candidate
+from .common import RESONANCE_LOWEST_FRACTION, RESONANCE_MAX_Q, RESONANCE_MIN_Q, RESONANCE_THRESHOLD, Candidate
 from .narrowband import narrowband_lags, welch_psd
 from ....sim.noise_terms import filter_psd, filter_variance, narrowband_filter
 from ....sim.resonance import band_pass, resonance_lags, ringing_variance
@@ -136,6 +138,16 @@ def resonance_fit(x, sample_rate_hz, lines=()):
             "peak_ratio": float(peak), "segments": int(n_seg)}
 
 
+def is_hump(fit, sample_rate_hz):
+    """Whether the fit ``fit`` of :func:`resonance_fit` holds a hump: its statistic above
+    :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_THRESHOLD`, its Q at least
+    :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MIN_Q` (a broader peak is a tilt) and
+    its centre at least :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_LOWEST_FRACTION`
+    of the Nyquist frequency (a lower one sits on the slow effects' rise)."""
+    return (fit["statistic"] > RESONANCE_THRESHOLD and fit["q"] >= RESONANCE_MIN_Q
+            and fit["center_hz"] >= RESONANCE_LOWEST_FRACTION * sample_rate_hz / 2.0)
+
+
 def hump_or_line(q):
     """The rule that tells a hump from a line (module docstring): ``RESONANCE`` where the peak's
     quality Q = f₀ / B is at most :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MAX_Q`,
@@ -155,8 +167,7 @@ def detect_resonance(x, sample_rate_hz, band=None):
     if band is not None and hump_or_line(band.params["center_hz"] / band.params["bandwidth_hz"]) == NARROWBAND:
         lines = ((band.params["center_hz"], band.params["bandwidth_hz"], band.params["rms_dps"]),)
     fit = resonance_fit(x, sample_rate_hz, lines)
-    if (fit is None or not fit["statistic"] > RESONANCE_THRESHOLD or hump_or_line(fit["q"]) != RESONANCE
-            or fit["q"] < RESONANCE_MIN_Q):
+    if fit is None or not is_hump(fit, sample_rate_hz) or hump_or_line(fit["q"]) != RESONANCE:
         return None, band
     half = fit["center_hz"] / (2.0 * fit["q"])
     if band is not None and not lines and abs(band.params["center_hz"] - fit["center_hz"]) <= half:

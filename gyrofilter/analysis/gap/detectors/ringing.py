@@ -7,7 +7,8 @@ rings' peaks, taken for ``outliers`` or ``heavy_tails``) and a hump of power at 
 found something, before the spikes are cleaned, and names the one cause:
 
 1. **The hump.** :func:`~gyrofilter.analysis.gap.detectors.resonance.resonance_fit` on the
-   series as recorded; no hump of Q in the hump's range above its threshold, no ringing.
+   series as recorded; no hump (:func:`~gyrofilter.analysis.gap.detectors.resonance.is_hump`), no
+   ringing (a ring may be narrower than a hump: Q up to the fit's largest).
 2. **The events.** The series less its mean through the hump's own resonator (a matched filter
    of a ring, :func:`gyrofilter.sim.resonance.band_pass`), y; an event is the largest |y| of a
    run of samples beyond ``k`` robust sd of y, runs closer than a ring's length L merged
@@ -40,8 +41,8 @@ from statistics import NormalDist
 import numpy as np
 
 from ....effects import RINGING
-from .common import OUTLIER_FALSE_PER_AXIS, OUTLIER_MIN_COUNT, RESONANCE_MIN_Q, RESONANCE_THRESHOLD, RINGING_THRESHOLD, Candidate
-from .resonance import Q_RANGE, resonance_fit
+from .common import OUTLIER_FALSE_PER_AXIS, OUTLIER_MIN_COUNT, RINGING_THRESHOLD, Candidate
+from .resonance import Q_RANGE, is_hump, resonance_fit
 from ...stats import robust_sigma
 from ....sim.resonance import band_pass, impulse_response
 
@@ -195,7 +196,7 @@ def detect_ringing(x, sample_rate_hz):
     if x.size < 4096:
         return None
     hump = resonance_fit(x, sample_rate_hz)
-    if hump is None or not hump["statistic"] > RESONANCE_THRESHOLD or not RESONANCE_MIN_Q <= hump["q"] < Q_RANGE[1]:
+    if hump is None or not is_hump(hump, sample_rate_hz) or not hump["q"] < Q_RANGE[1]:
         return None
     found = ringing_estimate(x, sample_rate_hz, hump)
     if found is None:
