@@ -19,10 +19,11 @@ hold the parts:
    statistic, a winsorized kurtosis).
    Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
 3. **Causes**: :mod:`gyrofilter.analysis.gap.detectors` maps departures to effects of the table, in a fixed
-   decision order (outliers or heavy tails, sinusoid, narrow-band noise, colored noise, slow bias effects; see
+   decision order (outliers or heavy tails, or shocks that ring; sinusoid, narrow-band noise, a resonance's hump,
+   colored noise, slow bias effects; see
    there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
    temperature are told apart), each with its own significance threshold, and estimates the
-   parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
+   parameters. A narrow band's or a hump's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
    and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_from_highpassed`).
    Where the temperature and a shape in time (or a slow wander) explain a slow departure, both
    readings are simulated and the measured covariate is kept unless the other is clearly better
@@ -72,8 +73,8 @@ from . import detectors as det
 from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
                        sim_features, temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
-from .confound import (alternatives_entry, kept_without_gain, one_cause_of_spikes, ring_or_hump, suggested_temperature, weigh_lines, weigh_readings,
-                       weigh_wanders)
+from .confound import (alternatives_entry, kept_without_gain, one_cause_of_spikes, ring_or_hump, suggested_temperature,
+                       weigh_lines, weigh_readings, weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
 from .intervals import MAX_BOOTSTRAP, MIN_REPLICATES, bootstrap_intervals

@@ -66,7 +66,9 @@ def ring_template(center_hz, q, sample_rate_hz):
 def ring_fit(x, sample_rate_hz, center_hz, q):
     """The events and rings of the module docstring (2., 3.) for the resonator (``center_hz``,
     ``q``) in ``x``: a dict with ``statistic``, ``events`` (count), ``amplitudes_dps`` (a_i),
-    ``onsets`` (o_i), ``template`` (g) and ``component`` (the fitted rings, per sample); None
+    ``onsets`` (o_i), ``template`` (g), ``component`` (the fitted rings, per sample) and
+    ``band_kurtosis`` (the excess kurtosis of the series through the resonator: about 0 for a
+    Gaussian hump, large for shocks; the evidence's, not the decision's); None
     where there is no event. Each ring is taken out of the series as it is fitted, and the events
     are sought again on what is left, up to :data:`RING_PASSES` times: a ring that starts within
     another's is an event of the next pass."""
@@ -76,7 +78,11 @@ def ring_fit(x, sample_rate_hz, center_hz, q):
     g = ring_template(center_hz, q, sample_rate_hz)
     size, energy = g.size, float(np.dot(g, g))
     b, a = band_pass(center_hz, q, sample_rate_hz)
-    sd_y = robust_sigma(lfilter(b, a, resid))
+    y = lfilter(b, a, resid)
+    sd_y = robust_sigma(y)
+    var_y = float(np.mean(y * y))
+    kurtosis = float(np.mean(y ** 4)) / var_y**2 - 3.0 if var_y > 0 else 0.0
+    del y
     sigma = robust_sigma(resid)
     k = NormalDist().inv_cdf(1.0 - 0.5 * OUTLIER_FALSE_PER_AXIS / x.size)
     stat, amps, onsets = 0.0, [], []
@@ -110,7 +116,7 @@ def ring_fit(x, sample_rate_hz, center_hz, q):
         end = min(o + size, x.size)
         component[o:end] += a_i * g[:end - o]
     return {"statistic": float(stat), "events": int(amps.size), "amplitudes_dps": amps,
-            "onsets": onsets, "template": g, "component": component}
+            "onsets": onsets, "template": g, "component": component, "band_kurtosis": kurtosis}
 
 
 def _joint_amplitudes(x0, g, onsets, least_dps):
@@ -213,7 +219,9 @@ def detect_ringing(x, sample_rate_hz):
         statistic_name="energy the rings explain beyond isolated spikes, in noise variances",
         evidence=(f"{rings['events']} shocks that ring at {centre:.4g} Hz (Q = {q:.2g}, decaying in "
                   f"{q / (math.pi * centre):.2g} s), median peak {shock:.3g} deg/s: their rings explain "
-                  f"{rings['statistic']:.0f} noise variances beyond isolated spikes (threshold {RINGING_THRESHOLD:g}); "
+                  f"{rings['statistic']:.0f} noise variances beyond isolated spikes (threshold {RINGING_THRESHOLD:g}), "
+                  f"and the series through the resonator has an excess kurtosis of {rings['band_kurtosis']:+.1f} "
+                  f"(a hump of Gaussian noise: 0); "
                   f"the spikes and the hump of power at {centre:.4g} Hz are one cause"),
         component=component,
     )
