@@ -63,7 +63,7 @@ TOLERANCES = {
     OUTLIERS: {"rate": ("factor", 1.6), "magnitude_dps": ("rel", 0.35)},
     COLORED_NOISE: {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
     HEAVY_TAILS: {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
-    RESONANCE: {"center_hz": ("rel", 0.05), "q": ("factor", 1.5), "rms_dps": ("rel", 0.3)},
+    RESONANCE: {"center_hz": ("rel", 0.05), "q": ("factor", 2.0), "rms_dps": ("rel", 0.3)},
     RINGING: {"center_hz": ("rel", 0.05), "q": ("factor", 1.5), "shock_rate_hz": ("factor", 1.6), "shock_dps": ("rel", 0.35)},
 }
 

@@ -71,10 +71,10 @@ RESONANCE_THRESHOLD = 60.0
 #: about 4 (10.5-13.5 Hz at 12 Hz); the narrow bands of the tests and of the DLPF's ringing are Q 8-60
 RESONANCE_MIN_Q = 0.7
 RESONANCE_MAX_Q = 5.0
-#: the lowest centre of a hump, as a fraction of the Nyquist frequency: 2.5 times the lowest
+#: the lowest centre of a hump, as a fraction of the Nyquist frequency: twice the lowest
 #: frequency of the hump's fit (detectors.resonance.RESONANCE_MIN_FRACTION); a peak below it sits on
 #: the rise of the slow effects' spectra (two Gauss-Markov terms at 10 Hz read a hump at 0.11 Hz)
-RESONANCE_LOWEST_FRACTION = 0.05
+RESONANCE_LOWEST_FRACTION = 0.04
 #: the ringing statistic (the energy fitted rings explain beyond isolated spikes, in noise
 #: variances: detectors.ringing) shocks that ring must exceed; isolated spikes and heavy tails read
 #: below 0 (a spike projects on a ring by at most 1 / <g, g> of its energy), set from them (below)
