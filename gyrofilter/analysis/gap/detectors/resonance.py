@@ -40,7 +40,7 @@ from ....effects import NARROWBAND, RESONANCE, RINGING
 from .common import RESONANCE_LOWEST_FRACTION, RESONANCE_MAX_Q, RESONANCE_MIN_Q, RESONANCE_THRESHOLD, Candidate
 from .narrowband import narrowband_lags, welch_psd
 from ....sim.noise_terms import filter_psd, filter_variance, narrowband_filter
-from ....sim.resonance import band_pass, resonance_lags, ringing_variance
+from ....sim.resonance import SHOCK_SPREAD_LN, band_pass, resonance_lags, ringing_variance
 from ....units import check_sample_rate_hz
 
 #: Welch segment (samples) of the fit: f_s / 1024 resolution, 0.1 Hz at 100 Hz, a tenth of the
@@ -203,7 +203,7 @@ def band_correlation(bands, sample_rate_hz):
         elif c.effect == RINGING:
             parts.append((resonance_lags(p["center_hz"], p["q"], sample_rate_hz),
                           ringing_variance(p["shock_rate_hz"], p["shock_dps"], p["center_hz"], p["q"], sample_rate_hz,
-                                           p.get("spread_ln", 0.25))))
+                                           p.get("spread_ln", SHOCK_SPREAD_LN))))
     total = sum(v for _, v in parts)
     if not total > 0:
         return None, 0.0

@@ -54,13 +54,14 @@ RING_END = 0.01
 RING_PASSES = 4
 
 
-def ring_template(center_hz, q, sample_rate_hz):
-    """The ring g of a unit shock (peak |g| = 1) over L samples (module docstring, 2.)."""
+def ring_template(center_hz, q, sample_rate_hz, size=None):
+    """The ring g of a unit shock (peak |g| = 1) over L samples (module docstring, 2.), or over
+    exactly ``size`` samples."""
     h = impulse_response(center_hz, q, sample_rate_hz)
-    decay = math.pi * center_hz / (q * sample_rate_hz)
-    n = int(min(RING_MAX_SAMPLES, max(4, math.ceil(-math.log(RING_END) / decay)), h.size))
-    g = h[:n]
-    return g / float(np.max(np.abs(h)))
+    if size is None:
+        decay = math.pi * center_hz / (q * sample_rate_hz)
+        size = int(min(RING_MAX_SAMPLES, max(4, math.ceil(-math.log(RING_END) / decay)), h.size))
+    return np.r_[h[:size], np.zeros(max(0, size - h.size))] / float(np.max(np.abs(h)))
 
 
 def ring_fit(x, sample_rate_hz, center_hz, q):
@@ -159,7 +160,7 @@ def refine_ring(x, sample_rate_hz, rings, center_hz, q):
                      for o, a in zip(rings["onsets"], rings["amplitudes_dps"])])
 
     def res(p):
-        g = _template_of_length(p[0], math.exp(p[1]), sample_rate_hz, size)
+        g = ring_template(p[0], math.exp(p[1]), sample_rate_hz, size)
         amp = wins @ g / float(np.dot(g, g))
         return (wins - amp[:, None] * g[None, :]).ravel()
 
@@ -172,13 +173,6 @@ def refine_ring(x, sample_rate_hz, rings, center_hz, q):
     return float(fit.x[0]), float(math.exp(fit.x[1]))
 
 
-def _template_of_length(center_hz, q, sample_rate_hz, size):
-    """The ring of :func:`ring_template` over exactly ``size`` samples."""
-    h = impulse_response(center_hz, q, sample_rate_hz)
-    g = np.r_[h[:size], np.zeros(max(0, size - h.size))]
-    return g / float(np.max(np.abs(h)))
-
-
 def ringing_estimate(x, sample_rate_hz, hump=None):
     """The ringing's parameters on ``x`` without the thresholds (the re-estimator's): ``(params,
     rings, component)`` from the hump ``hump`` (:func:`~gyrofilter.analysis.gap.detectors.resonance.resonance_fit`'s,
@@ -188,8 +182,9 @@ def ringing_estimate(x, sample_rate_hz, hump=None):
     if rings is None:
         return None
     centre, q = refine_ring(x, sample_rate_hz, rings, hump["center_hz"], hump["q"])
-    rings = ring_fit(x, sample_rate_hz, centre, q) or rings
-    hump = dict(hump, center_hz=centre, q=q) if rings["template"].size else hump
+    refit = ring_fit(x, sample_rate_hz, centre, q)
+    if refit is not None:
+        rings, hump = refit, dict(hump, center_hz=centre, q=q)
     amps = rings["amplitudes_dps"]
     params = {"center_hz": hump["center_hz"], "q": hump["q"], "shock_rate_hz": rings["events"] * sample_rate_hz / x.size,
               "shock_dps": float(np.median(np.abs(amps)))}
