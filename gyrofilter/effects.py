@@ -17,9 +17,11 @@ The kinds, and the groups every module derives from them (never a list of its ow
   Gauss-Markov), found by the slow detector's spectral fits (:data:`WANDERS`);
 - ``shape``: a deterministic shape of the bias in time (ramp, step, warm-up; :data:`SHAPES`);
 - ``covariate``: the bias following a measured quantity (the temperature; :data:`COVARIATES`);
-- ``line``: a spectral line: a deterministic periodic rate (a sinusoid) or noise in a narrow band
-  around a centre frequency (a line of finite width); the gap analysis names one, the other or
-  both for one peak of the spectrum (:data:`LINES`);
+- ``line``: a peak of the spectrum: a deterministic periodic rate (a sinusoid), noise in a narrow
+  band around a centre frequency (a line of finite width), a broad low hump of noise (a
+  resonance of the board driven by noise) or the same resonance rung by random shocks (bursts
+  that decay); the gap analysis names one reading of a peak, or two where both are there
+  (:data:`LINES`);
 - ``noise``: stationary noise with a broad spectrum other than white (colored noise, an ARMA
   process);
 - ``tails``: the rate's distribution (isolated spikes, heavy tails; :data:`TAILS`);
@@ -50,6 +52,8 @@ NARROWBAND = "narrowband"
 ARMA = "arma"
 HEAVY_TAILS = "heavy_tails"
 REPEATED_SAMPLES = "repeated_samples"
+RESONANCE = "resonance"
+RINGING = "ringing"
 
 KINDS = ("wander", "shape", "covariate", "line", "noise", "tails", "rows")
 
@@ -108,6 +112,11 @@ REGISTRY = (
            defining="scale_ratio"),
     Effect(REPEATED_SAMPLES, "rows", {"fraction": "frac"}, {"pattern": ("choice:random,beat", "random")},
            {"fraction": "log"}, defining="fraction"),
+    Effect(RESONANCE, "line", {"center_hz": "pos", "q": "pos", "rms_dps": "nonneg"}, {},
+           {"q": "log", "rms_dps": "log"}, defining="rms_dps"),
+    Effect(RINGING, "line", {"center_hz": "pos", "q": "pos", "shock_rate_hz": "pos", "shock_dps": "nonneg"},
+           {"spread_ln": ("nonneg", 0.25)}, {"q": "log", "shock_rate_hz": "log", "shock_dps": "log"},
+           defining="shock_dps"),
 )
 #: name -> record, in the registry's order
 BY_NAME = {e.name: e for e in REGISTRY}
@@ -130,7 +139,10 @@ SLOW = of_kind("wander", "shape", "covariate")
 TAILS = of_kind("tails")
 #: the effects on whole rows (every axis at once): a model's top-level keys, not terms of an axis
 ROWS = of_kind("rows")
-#: the spectral lines: a sinusoid and a narrow band, alternative readings of one peak of the spectrum
+#: the peaks of the spectrum: a sinusoid, a narrow band, a resonance's hump and its ringing,
+#: alternative readings of one peak of the spectrum
 LINES = of_kind("line")
 #: the parameter that holds each line's frequency (Hz)
-LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz"}
+LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz", RESONANCE: "center_hz", RINGING: "center_hz"}
+#: the resonator's effects: its hump (white noise through it) and its ringing (shocks through it)
+RESONATORS = (RESONANCE, RINGING)

@@ -28,6 +28,10 @@ heavy_tails        fraction 0.01-0.1 (log-uniform; ``scale`` shrinks it: the exc
 repeated_samples   fraction 0.01-0.05 of the rows (uniform), half the cases the random pattern and
                    half the beat of the poll and output clocks; whole rows, so the case's axis is
                    ``xyz`` (issue 36: 1.8 % on MPU-9250 records)
+resonance          center_hz 5-40 % of the Nyquist frequency, q 1-4 (log-uniform), the hump's
+                   peak 0.4-1.5 times the white level (issue 36's MPU-9250: 0.5)
+ringing            center_hz 5-40 % of the Nyquist frequency, q 1.5-5, shock_rate_hz 0.05-0.3
+                   (log-uniform), shock_dps 10-30 per-sample white-noise sd
 =================  ============================================================================
 """
 from __future__ import annotations
@@ -37,15 +41,16 @@ import math
 import numpy as np
 
 from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
-                      RATE_RANDOM_WALK, REPEATED_SAMPLES, ROWS, SINUSOID, TEMPERATURE, WARMUP)
+                      RATE_RANDOM_WALK, REPEATED_SAMPLES, RESONANCE, RINGING, ROWS, SINUSOID, TEMPERATURE, WARMUP)
 from .model import TEMPERATURE_PROFILE
-from .noise_terms import RepeatedRows, colored_noise_filter
+from .noise_terms import RepeatedRows, colored_noise_filter, filter_variance
+from .resonance import band_pass
 from .simulate import simulate
 from ..recording import Recording
 from ..units import AXES
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
-           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES)
+           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES, RESONANCE, RINGING)
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
@@ -62,6 +67,8 @@ TOLERANCES = {
     COLORED_NOISE: {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
     HEAVY_TAILS: {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
     REPEATED_SAMPLES: {"fraction": ("rel", 0.15)},
+    RESONANCE: {"center_hz": ("rel", 0.05), "q": ("factor", 2.0), "rms_dps": ("rel", 0.3)},
+    RINGING: {"center_hz": ("rel", 0.05), "q": ("factor", 1.5), "shock_rate_hz": ("factor", 1.6), "shock_dps": ("rel", 0.35)},
 }
 
 
@@ -117,6 +124,14 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
                   "scale_ratio": math.exp(rng.uniform(math.log(4.0), math.log(30.0)))}
     elif effect == REPEATED_SAMPLES:
         params = {"fraction": scale * rng.uniform(0.01, 0.05), "pattern": "beat" if rng.random() < 0.5 else "random"}
+    elif effect == RESONANCE:
+        params = _hump(rng, model, axis, scale)
+    elif effect == RINGING:
+        sigma = model["axes"][axis]["arw_dps_per_sqrt_hz"] * math.sqrt(model["sample_rate_hz"])
+        params = {"center_hz": rng.uniform(0.05, 0.4) * model["sample_rate_hz"] / 2.0,
+                  "q": math.exp(rng.uniform(math.log(1.5), math.log(5.0))),
+                  "shock_rate_hz": math.exp(rng.uniform(math.log(0.05), math.log(0.3))),
+                  "shock_dps": scale * rng.uniform(10.0, 30.0) * sigma}
     params = {k: v if isinstance(v, str) else float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))
@@ -131,6 +146,18 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
     return {"seed": int(seed), "effect": effect, "axis": axis if effect != "none" else None,
             "params": params, "model": model, "duration_s": float(duration_s),
             "sim_seed": int(rng.integers(2**31))}
+
+
+def _hump(rng, model, axis, scale):
+    """A resonance's parameters: centre 5-40 % of the Nyquist frequency, Q 1-4 (log-uniform), its
+    peak 0.4-1.5 times the white level (``scale`` times that), so the spectrum there is 1.4-2.5
+    times the neighbouring level (issue 36's hump: 1.5): rms = sqrt(L Σ h²) σ for the resonator
+    of unit peak gain (Σ h² its energy) and the white noise's per-sample std σ."""
+    rate = model["sample_rate_hz"]
+    centre, q = rng.uniform(0.05, 0.4) * rate / 2.0, math.exp(rng.uniform(0.0, math.log(4.0)))
+    sigma = model["axes"][axis]["arw_dps_per_sqrt_hz"] * math.sqrt(rate)
+    level = scale * rng.uniform(0.4, 1.5)
+    return {"center_hz": centre, "q": q, "rms_dps": math.sqrt(level * filter_variance(*band_pass(centre, q, rate))) * sigma}
 
 
 def simulate_case(case):

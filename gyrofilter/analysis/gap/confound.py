@@ -80,6 +80,15 @@ evidence, Kass & Raftery 1995) where the outlier detector has found spikes beyon
 threshold: spikes far outside the noise are direct evidence of gross errors, replaced by a
 heavy-tailed noise only on strong evidence. Where the two fit within that margin, the finding, or
 a note, says that the other explains the tails about as well.
+
+**5. Shocks that ring: one cause of spikes and a hump** (:func:`one_cause_of_spikes`,
+:func:`ring_or_hump`). Shocks through the board's resonance leave spikes (the rings' peaks, which
+the spike and tail detectors take for ``outliers`` or ``heavy_tails``) and a hump of power at the
+resonance (the rings' spectrum, which the hump detector takes for a ``resonance``). Where the
+ringing detector finds rings that explain the spikes' neighbourhoods beyond isolated spikes
+(:mod:`gyrofilter.analysis.gap.detectors.ringing`), the ringing is the one cause named: the spike
+and tail findings are not named beside it, nor a hump whose centre lies within the ring's
+half-power band (its half-width f0 / (2Q)) of the ring's centre.
 """
 from __future__ import annotations
 
@@ -423,3 +432,18 @@ def alternatives_entry(cand):
     effect, params and D (of the axis with that whole reading in place of the finding's)."""
     return [{"effect": c.effect, "params": c.plain_params(), "D": float(d)}
             for c, d in cand.alternatives]
+
+
+def one_cause_of_spikes(ring, spikes, tails, note):
+    """Rule 5 (module docstring): ``(spikes, tails, note)`` as the axis keeps them beside the
+    ringing candidate ``ring`` (None: all as found): none of them where the shocks ring."""
+    return (spikes, tails, note) if ring is None else (None, None, None)
+
+
+def ring_or_hump(ring, hump):
+    """Rule 5 (module docstring): the hump candidate ``hump`` as the axis keeps it beside the
+    ringing candidate ``ring``: None where the hump lies at the ring's resonance."""
+    if ring is None or hump is None:
+        return hump
+    half = ring.params["center_hz"] / (2.0 * ring.params["q"])
+    return None if abs(hump.params["center_hz"] - ring.params["center_hz"]) <= half else hump

@@ -19,10 +19,11 @@ hold the parts:
    statistic, a winsorized kurtosis).
    Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
 3. **Causes**: :mod:`gyrofilter.analysis.gap.detectors` maps departures to effects of the table, in a fixed
-   decision order (outliers or heavy tails, sinusoid, narrow-band noise, colored noise, slow bias effects; see
+   decision order (outliers or heavy tails, or shocks that ring; sinusoid, narrow-band noise, a resonance's hump,
+   colored noise, slow bias effects; see
    there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
    temperature are told apart), each with its own significance threshold, and estimates the
-   parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
+   parameters. A narrow band's or a hump's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
    and its lag-1 and lag-2 correlations out of the colored noise's (:func:`detectors.lags_from_highpassed`).
    Where the temperature and a shape in time (or a slow wander) explain a slow departure, both
    readings are simulated and the measured covariate is kept unless the other is clearly better
@@ -75,8 +76,8 @@ from . import detectors as det
 from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
                        sim_features, temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
-from .confound import (alternatives_entry, kept_without_gain, suggested_temperature, weigh_lines, weigh_readings,
-                       weigh_wanders)
+from .confound import (alternatives_entry, kept_without_gain, one_cause_of_spikes, ring_or_hump, suggested_temperature,
+                       weigh_lines, weigh_readings, weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
 from .intervals import MAX_BOOTSTRAP, MIN_REPLICATES, bootstrap_intervals
@@ -352,6 +353,11 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     cands = []
     c, mask = det.detect_outliers(x, q_dps)
     tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
+    ring = det.detect_ringing(x, sample_rate_hz) if c is not None or tails is not None else None
+    c, tails, note = one_cause_of_spikes(ring, c, tails, note)
+    if ring is not None:  # the shocks ring: their rings are taken out, not the spikes cleaned
+        cands.append(ring)
+        x, owned = _subtract_component(x, ring, owned), True
     if note and notes is not None:
         notes.append(f"axis {axis}: {note}" + ("; they are analysed as outliers" if c is not None else ""))
     if tails is not None:  # the spikes are the noise's tails: nothing is cleaned
@@ -366,14 +372,15 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     if c is not None:
         cands.append(c)
         x, owned = _subtract_component(x, c, owned), True
-    band = det.detect_narrowband(x, sample_rate_hz)
-    if band is not None:
-        cands.append(band)
-    colored = det.detect_colored(x, sample_rate_hz, band, repeated_fraction=repeated_fraction)
+    hump, band = det.detect_resonance(x, sample_rate_hz, det.detect_narrowband(x, sample_rate_hz))
+    hump = ring_or_hump(ring, hump)
+    bands = [c for c in (band, hump) if c is not None]
+    cands.extend(bands)
+    colored = det.detect_colored(x, sample_rate_hz, bands, repeated_fraction=repeated_fraction)
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)
     if colored is not None and wander is not None:  # the wander's high-frequency part is correlated too
-        colored = det.detect_colored(x, sample_rate_hz, band,
+        colored = det.detect_colored(x, sample_rate_hz, bands,
                                      wander_highpassed(effect_entry(wander), sample_rate_hz, x.size), repeated_fraction)
         if colored is None and notes is not None:
             notes.append(f"axis {axis}: the lag-1 correlation is the {wander.effect}'s own (its high-frequency part); "

@@ -15,6 +15,8 @@ came from. Only where an estimator has nothing to estimate (fewer than
 
 The estimators, as in :mod:`gyrofilter.analysis.gap.detectors`:
 
+* ``ringing``: :func:`~gyrofilter.analysis.gap.detectors.ringing_estimate` (the hump's centre and
+  Q, the rings' count and median peak), its rings taken out of the replicate;
 * ``heavy_tails``: the Gaussian scale mixture's maximum-likelihood fraction and scale ratio on
   the histogram of the high-passed, prewhitened residual
   (:func:`~gyrofilter.analysis.gap.detectors.tails.tail_fits`), nothing cleaned;
@@ -25,6 +27,8 @@ The estimators, as in :mod:`gyrofilter.analysis.gap.detectors`:
   least squares (:func:`~gyrofilter.analysis.gap.detectors.sinusoid_fit`); the detector's own search
   around the largest line, started where that line is;
 * ``narrowband``: :func:`~gyrofilter.analysis.gap.detectors.band_estimate` (the strongest band);
+* ``resonance``: :func:`~gyrofilter.analysis.gap.detectors.resonance_fit` (the hump's centre, Q
+  and rms), the finding's narrow band's bins left out as the detector leaves them;
 * ``colored_noise``: the high-passed lag-1 and lag-2 autocorrelations less the band's
   (:func:`~gyrofilter.analysis.gap.detectors.lags_from_highpassed`);
 * ``temperature``: the coefficient by generalised least squares under the residual's noise
@@ -49,7 +53,7 @@ import math
 import numpy as np
 
 from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND, OUTLIERS,
-                        RATE_RANDOM_WALK, SHAPES, SINUSOID, TEMPERATURE, WANDERS)
+                        RATE_RANDOM_WALK, RESONANCE, RINGING, SHAPES, SINUSOID, TEMPERATURE, WANDERS)
 from .. import stats
 from . import detectors as det
 from ..noise import gmwm
@@ -63,7 +67,7 @@ from .composite import COMPOSITE_TERMS, composite_lags, slow_wavelet_variance
 #: the slow deterministic shapes of :func:`gyrofilter.analysis.gap.detectors.detect_slow`
 DETERMINISTIC = SHAPES + COVARIATES
 #: the effects :func:`reestimate_axis` can estimate
-SUPPORTED = (HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, COLORED_NOISE) + DETERMINISTIC + WANDERS
+SUPPORTED = (RINGING, HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, RESONANCE, COLORED_NOISE) + DETERMINISTIC + WANDERS
 
 
 def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False):
@@ -82,6 +86,11 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     for k, c in enumerate(cands):
         key = "composite" if c.composite and c.effect in WANDERS else c.effect
         by.setdefault(key, []).append(k)
+    if RINGING in by and x.size >= 4096:
+        found = det.ringing_estimate(x, sample_rate_hz)
+        if found is not None:
+            out[by[RINGING][0]] = found[0]
+            x -= found[2]
     if HEAVY_TAILS in by:
         out[by[HEAVY_TAILS][0]] = _heavy_tails(x, sample_rate_hz)
     if OUTLIERS in by:
@@ -93,15 +102,22 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
         params, fit = _sinusoid(x, sample_rate_hz, cands[k].params["frequency_hz"])
         out[k] = params
         x -= fit
-    band = None
+    bands = []
     if NARROWBAND in by and x.size >= 4096:
         band = det.band_estimate(x, sample_rate_hz)
-        band = {name: band[name] for name in ("center_hz", "bandwidth_hz", "rms_dps")}
-        out[by[NARROWBAND][0]] = band
+        out[by[NARROWBAND][0]] = {name: band[name] for name in ("center_hz", "bandwidth_hz", "rms_dps")}
+        bands.append(det.Candidate(NARROWBAND, out[by[NARROWBAND][0]], 0.0, 0.0, ""))
+    if RESONANCE in by and x.size >= 4096:
+        lines = [(b.params["center_hz"], b.params["bandwidth_hz"], b.params["rms_dps"]) for b in bands
+                 if det.hump_or_line(b.params["center_hz"] / b.params["bandwidth_hz"]) == NARROWBAND]
+        fit = det.resonance_fit(x, sample_rate_hz, lines)
+        if fit is not None:
+            out[by[RESONANCE][0]] = {name: fit[name] for name in ("center_hz", "q", "rms_dps")}
+            bands.append(det.Candidate(RESONANCE, out[by[RESONANCE][0]], 0.0, 0.0, ""))
     if COLORED_NOISE in by:
         k = by[COLORED_NOISE][0]
         wander = next((c for c in cands if c.effect in WANDERS and not c.composite), None)
-        out[k] = _colored(x, sample_rate_hz, "lag2" in cands[k].params, band,
+        out[k] = _colored(x, sample_rate_hz, "lag2" in cands[k].params, bands,
                           None if wander is None else wander_highpassed(effect_entry(wander), sample_rate_hz, x.size))
     slow_det = [k for name in DETERMINISTIC for k in by.get(name, [])]
     slow_sto = [k for name in WANDERS for k in by.get(name, [])]
@@ -120,7 +136,7 @@ def _resolved(xc, sample_rate_hz, cands, out, fit, q_dps):
     level re-fitted on the cleaned replicate ``xc`` with the replicate's band and colored noise
     (:func:`gyrofilter.analysis.gap.baseline.extended_axis`), against the composite fit's."""
     reps = [det.Candidate(c.effect, params, 0.0, 0.0, "") for c, params in zip(cands, out)
-            if params is not None and c.effect in (NARROWBAND, COLORED_NOISE)]
+            if params is not None and c.effect in (NARROWBAND, RESONANCE, COLORED_NOISE)]
     ext = extended_axis({"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0}, reps, xc, sample_rate_hz, q_dps)
     lags = next(c.params for c in reps if c.effect == COLORED_NOISE)
     return composite_lags(ext, {"arw_dps_per_sqrt_hz": fit.arw_dps_per_sqrt_hz}, lags)
@@ -146,19 +162,18 @@ def _sinusoid(x, sample_rate_hz, f_hz):
     return {"frequency_hz": f, "amplitude_dps": amplitude, "phase_rad": phase}, fit
 
 
-def _colored(x, sample_rate_hz, with_lag2, band, wander=None):
+def _colored(x, sample_rate_hz, with_lag2, bands, wander=None):
     """The colored noise's lags as :func:`~gyrofilter.analysis.gap.detectors.detect_colored` computes
     them, on the parametrisation of the finding (``with_lag2``), without its thresholds (less
-    the correlation of the finding's wander, ``wander`` = its ``(v, r1, r2)``)."""
+    the correlation of the replicate's bands, ``bands``, and of the finding's wander, ``wander`` =
+    its ``(v, r1, r2)``)."""
     n = x.size
     e, w = det.highpassed(x, sample_rate_hz)
     den = float(stats.dot(e, e))
     if not den > 0:
         return None
     r1, r2 = float(stats.dot(e[1:], e[:-1]) / den), float(stats.dot(e[2:], e[:-2]) / den)
-    band_lags = None if band is None else det.narrowband_lags(band["center_hz"], band["bandwidth_hz"], sample_rate_hz)
-    band_lags, band_share = det.other_correlation(den / n, band_lags, band["rms_dps"] ** 2 if band is not None else 0.0,
-                                                  wander)
+    band_lags, band_share = det.other_correlation(den / n, *det.band_correlation(bands, sample_rate_hz), wander)
     lags = det.lags_from_highpassed(r1, r2 if with_lag2 else None, w, band_lags, band_share)
     if lags is None:
         return None

@@ -30,6 +30,14 @@ ones found, because the effects are confusable:
    scale mixture beating a Gaussian and beating isolated spikes by likelihood (see
    :mod:`~gyrofilter.analysis.gap.detectors.tails` for the rule). When named, the outlier candidate is
    dropped (its spikes are the tails) and the series is not cleaned.
+1c. ``ringing`` -- shocks that ring the board's resonance (bursts that decay): where spikes or
+   heavy tails were found, a hump of the ``resonance`` detector's fit on the series as recorded,
+   the events of the series through the hump's own resonator, and at each the resonator's ring
+   fitted against an isolated spike: the energy the rings explain beyond isolated spikes, in
+   noise variances, is the statistic. When named, the spike and tail candidates are dropped (the
+   spikes are the rings' peaks: one cause, :func:`gyrofilter.analysis.gap.confound.one_cause_of_spikes`),
+   the fitted rings are taken out of the series, and a hump at the ring's resonance is not named
+   beside it.
 2. ``sinusoid`` -- a line in the periodogram. The periodogram ordinate divided by the local
    noise level (median over a +-5 % frequency band / ln 2) is Exp(1) under any smooth noise
    spectrum, so the largest of ``M`` ordinates exceeds ``t`` with probability about
@@ -42,6 +50,14 @@ ones found, because the effects are confusable:
    by a least-squares fit of the effect's own AR(2) resonator PSD (:func:`band_estimate`). Runs
    on the series with the sinusoid removed; a band cannot be subtracted (it is noise), so the
    later detectors see it, and the colored noise's lag-1 is corrected for it.
+2c. ``resonance`` -- a broad low hump of noise power (the board's resonance driven by noise): the
+   Welch log-PSD fitted by a smooth spectrum (white through a first-order ARMA, and a 1/f floor)
+   with and without the ``resonance`` effect's resonator hump; the drop of the residual sum of
+   squares in residual variances is the statistic. A peak of quality Q = f0 / B at most
+   ``RESONANCE_MAX_Q`` is a hump, a narrower one a line (``narrowband``): a narrow-band line's
+   bins are left out of the hump's fit, a broad band at the hump's centre is the hump
+   (:func:`~gyrofilter.analysis.gap.detectors.resonance.hump_or_line`). Like a band, the hump is
+   noise and stays in the series; the colored noise's lag-1 is corrected for it.
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
@@ -83,7 +99,8 @@ ones found, because the effects are confusable:
      on D (:mod:`gyrofilter.analysis.gap.confound`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
-:class:`Candidate`, helpers), ``repeats``, ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``colored``
+:class:`Candidate`, helpers), ``repeats``, ``outliers``, ``tails``, ``ringing``, ``sinusoid``, ``narrowband``,
+``resonance``, ``colored``
 and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
 ``gyrofilter.analysis.gap.detectors`` as before.
 """
@@ -100,6 +117,11 @@ from .common import (  # noqa: F401
     HEAVY_TAILS_Z,
     JOINT_THRESHOLD,
     NARROWBAND_THRESHOLD,
+    RESONANCE_LOWEST_FRACTION,
+    RESONANCE_MAX_Q,
+    RESONANCE_MIN_Q,
+    RESONANCE_THRESHOLD,
+    RINGING_THRESHOLD,
     OUTLIER_FALSE_PER_AXIS,
     OUTLIER_MIN_COUNT,
     OUTSIDE_NULL_D,
@@ -142,6 +164,17 @@ from .narrowband import (  # noqa: F401
     band_estimate,
     detect_narrowband,
     narrowband_lags,
+)
+from .resonance import (  # noqa: F401
+    band_correlation,
+    detect_resonance,
+    hump_or_line,
+    resonance_fit,
+)
+from .ringing import (  # noqa: F401
+    detect_ringing,
+    ring_fit,
+    ringing_estimate,
 )
 from .colored import (  # noqa: F401
     colored_window,

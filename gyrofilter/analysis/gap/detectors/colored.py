@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 
-from ....effects import COLORED_NOISE
+from ....effects import COLORED_NOISE, NARROWBAND, RESONATORS
 from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate
 from ...stats import dot, moving_mean
-from .narrowband import narrowband_lags
+from .resonance import band_correlation
 from ....sim.noise_terms import arma11_from_lags, arma11_long_run_ratio
 
 
@@ -117,10 +117,11 @@ def lags_without_repeats(r1, r2, f, iterations=4):
     return rho1, rho2
 
 
-def detect_colored(x, sample_rate_hz, band=None, wander=None, repeated_fraction=0.0):
+def detect_colored(x, sample_rate_hz, bands=(), wander=None, repeated_fraction=0.0):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
-    pass) from the high-passed r1, r2, less the correlation of a ``narrowband`` candidate
-    ``band`` still in ``x`` and of a wander's high-frequency part (``wander``: its ``(v, r1, r2)``
+    pass) from the high-passed r1, r2, less the correlation of the band candidates ``bands``
+    (``narrowband``, ``resonance``: noise still in ``x``;
+    :func:`~gyrofilter.analysis.gap.detectors.resonance.band_correlation`) and of a wander's high-frequency part (``wander``: its ``(v, r1, r2)``
     in the high-passed series, :func:`gyrofilter.analysis.gap.baseline.wander_highpassed`)
     (:func:`lags_from_highpassed`, :func:`other_correlation`). With a wander the significance is
     that of the correlation it leaves.
@@ -153,11 +154,8 @@ def detect_colored(x, sample_rate_hz, band=None, wander=None, repeated_fraction=
     z = left[0] * math.sqrt(n)
     if abs(z) < COLORED_Z:  # the correlation of the noise as measured (less a wander's)
         return None
-    band_lags = None  # the band brings its own correlation: the colored noise's is what is left
-    if band is not None:
-        band_lags = narrowband_lags(band.params["center_hz"], band.params["bandwidth_hz"], sample_rate_hz)
-    band_lags, band_share = other_correlation(den / n, band_lags, band.params["rms_dps"] ** 2 if band is not None else 0.0,
-                                              wander)
+    band_lags, band_var = band_correlation(bands, sample_rate_hz)  # the bands' own correlation: the colored noise's is what is left
+    band_lags, band_share = other_correlation(den / n, band_lags, band_var, wander)
     lags = lags_from_highpassed(r1, r2, w, band_lags, band_share)
     if lags is None:
         return None
@@ -170,9 +168,11 @@ def detect_colored(x, sample_rate_hz, band=None, wander=None, repeated_fraction=
     if abs(lag1) < COLORED_MIN_LAG1:
         return None
     evidence = f"lag-1 autocorrelation of the noise {lag1:+.3f}"
-    if band is not None or wander is not None:
+    if bands or wander is not None:
         evidence += " once the " + " and the ".join(
-            name for name, there in (("narrow band's", band is not None), ("wander's", wander is not None)) if there
+            name for name, there in (("narrow band's", any(c.effect == NARROWBAND for c in bands)),
+                                     ("resonance's", any(c.effect in RESONATORS for c in bands)),
+                                     ("wander's", wander is not None)) if there
         ) + " own correlation is taken out"
     evidence += f" (white noise: 0 +- {1 / math.sqrt(n):.4f}; as measured {abs(z):.0f} standard errors away)"
     if arma:

@@ -66,6 +66,27 @@ NARROWBAND_THRESHOLD = 4.0
 REPEATS_ALPHA = 1e-3
 #: the statistic of a repeated-rows finding, -log10 p, is capped here (a p-value underflows to 0)
 REPEATS_MAX_STATISTIC = 300.0
+#: the hump statistic (the drop of the Welch log-PSD residual sum of squares by a resonance, in
+#: residual variances: detectors.resonance) a hump must exceed, set from clean records only: on
+#: 120 simulated axes without a hump (white, AR(1) and ARMA colored noise, bias instability,
+#: Gauss-Markov, heavy tails, outliers, sinusoids; 10-60 min at 100 Hz, MPU6050 quantization)
+#: its largest value with Q in the hump's range was 26 (43 with a narrower or broader peak), so
+#: 60 sits more than twice above; a hump 1.5 times the level (issue 36) reads 100-1200 in 15 min
+RESONANCE_THRESHOLD = 60.0
+#: the quality factors Q = f0 / B of a hump: a narrower peak (Q above the largest) is a line
+#: (narrowband), a broader one (below the smallest: more than an octave and a half between its
+#: half-power points) a tilt of the background. The board resonance of issue 36 is a hump of Q
+#: about 4 (10.5-13.5 Hz at 12 Hz); the narrow bands of the tests and of the DLPF's ringing are Q 8-60
+RESONANCE_MIN_Q = 0.7
+RESONANCE_MAX_Q = 5.0
+#: the lowest centre of a hump, as a fraction of the Nyquist frequency: twice the lowest
+#: frequency of the hump's fit (detectors.resonance.RESONANCE_MIN_FRACTION); a peak below it sits on
+#: the rise of the slow effects' spectra (two Gauss-Markov terms at 10 Hz read a hump at 0.11 Hz)
+RESONANCE_LOWEST_FRACTION = 0.04
+#: the ringing statistic (the energy fitted rings explain beyond isolated spikes, in noise
+#: variances: detectors.ringing) shocks that ring must exceed; isolated spikes and heavy tails read
+#: below 0 (a spike projects on a ring by at most 1 / <g, g> of its energy), set from them (below)
+RINGING_THRESHOLD = 50.0
 #: D above which an axis is clearly outside the null band (its 95th percentile is 1.06-1.96 on
 #: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
 #: composite stochastic part, and the report says which feature still departs
