@@ -18,7 +18,8 @@ The kinds, and the groups every module derives from them (never a list of its ow
 - ``shape``: a deterministic shape of the bias in time (ramp, step, warm-up; :data:`SHAPES`);
 - ``covariate``: the bias following a measured quantity (the temperature; :data:`COVARIATES`);
 - ``line``: a spectral line: a deterministic periodic rate (a sinusoid) or noise in a narrow band
-  around a centre frequency (a line of finite width); the gap analysis names one, the other or
+  around a centre frequency (a line of finite width), or a tone of constant amplitude whose
+  frequency wanders within a band (a line of finite width that is not Gaussian); the gap analysis names one, the other or
   both for one peak of the spectrum (:data:`LINES`);
 - ``noise``: stationary noise with a broad spectrum other than white (colored noise, an ARMA
   process);
@@ -50,6 +51,7 @@ NARROWBAND = "narrowband"
 ARMA = "arma"
 HEAVY_TAILS = "heavy_tails"
 REPEATED_SAMPLES = "repeated_samples"
+WANDERING_TONE = "wandering_tone"
 
 KINDS = ("wander", "shape", "covariate", "line", "noise", "tails", "rows")
 
@@ -108,6 +110,8 @@ REGISTRY = (
            defining="scale_ratio"),
     Effect(REPEATED_SAMPLES, "rows", {"fraction": "frac"}, {"pattern": ("choice:random,beat", "random")},
            {"fraction": "log"}, defining="fraction"),
+    Effect(WANDERING_TONE, "line", {"center_hz": "pos", "spread_hz": "nonneg", "wander_s": "pos", "amplitude_dps": "nonneg"},
+           {}, {"spread_hz": "log", "wander_s": "log", "amplitude_dps": "log"}, defining="amplitude_dps"),
 )
 #: name -> record, in the registry's order
 BY_NAME = {e.name: e for e in REGISTRY}
@@ -130,7 +134,7 @@ SLOW = of_kind("wander", "shape", "covariate")
 TAILS = of_kind("tails")
 #: the effects on whole rows (every axis at once): a model's top-level keys, not terms of an axis
 ROWS = of_kind("rows")
-#: the spectral lines: a sinusoid and a narrow band, alternative readings of one peak of the spectrum
+#: the spectral lines: a sinusoid, a narrow band and a wandering tone, alternative readings of one peak of the spectrum
 LINES = of_kind("line")
 #: the parameter that holds each line's frequency (Hz)
-LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz"}
+LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz", WANDERING_TONE: "center_hz"}

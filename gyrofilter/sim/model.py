@@ -15,7 +15,8 @@ import re
 import numpy as np
 
 from . import noise_terms as nt
-from ..effects import ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, ROWS, SINUSOID, TEMPERATURE
+from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, ROWS, SINUSOID, TEMPERATURE,
+                       WANDERING_TONE)
 from ..errors import SettingsError
 from ..inputs import MAX_QUOTE_CHARS, load_json, quote
 from ..units import AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_sample_rate_hz, plain
@@ -154,8 +155,8 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     sample rate; temperatures in ``units.TEMP_RANGE_C``; phases |p| <= :data:`MAX_PHASE_RAD`;
     ``lsb_per_dps``, ``per_decade``, ``spread_ln``, the ARMA coefficients and ``heavy_tails``'s
     ``fraction`` (at most 0.5) and ``scale_ratio`` (1 to 1000) by :data:`_NAMED_LIMITS`), a
-    narrowband line's width in [:data:`MIN_BANDWIDTH_PER_RATE` f_s, f_s] and its centre below
-    Nyquist; and every list: at most :data:`MAX_EFFECTS_PER_AXIS` effects per axis (one
+    narrowband line's width in [:data:`MIN_BANDWIDTH_PER_RATE` f_s, f_s] and its centre (a
+    wandering tone's too) below Nyquist; and every list: at most :data:`MAX_EFFECTS_PER_AXIS` effects per axis (one
     ``colored_noise`` and one ``heavy_tails``), :data:`MAX_ARMA_COEFFICIENTS` coefficients each in
     ``phi`` and ``theta``, :data:`MAX_TABLE_POINTS` points in a temperature table.
 
@@ -309,11 +310,11 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     if name == SINUSOID and rate is not None and out["frequency_hz"] > rate / 2.0:
         warnings.append(f"model: {label}: frequency_hz {out['frequency_hz']:g} is above the Nyquist frequency "
                         f"{rate / 2.0:g} Hz and will alias")
-    if name == NARROWBAND and rate is not None:
+    if name in (NARROWBAND, WANDERING_TONE) and rate is not None:
         if out["center_hz"] >= rate / 2.0:
             _err(f"{label}.center_hz", f"expected a frequency below the Nyquist frequency {rate / 2.0:g} Hz, "
                                        f"got {out['center_hz']:g}")
-        if not MIN_BANDWIDTH_PER_RATE * rate <= out["bandwidth_hz"] <= rate:
+        if name == NARROWBAND and not MIN_BANDWIDTH_PER_RATE * rate <= out["bandwidth_hz"] <= rate:
             _err(f"{label}.bandwidth_hz", f"expected a width in [{MIN_BANDWIDTH_PER_RATE * rate:g}, {rate:g}] Hz "
                                           f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")
     if name == ARMA and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:

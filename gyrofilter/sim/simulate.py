@@ -52,8 +52,10 @@ import json
 import numpy as np
 
 from ..effects import (ARMA, BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND,
-                       OUTLIERS, RATE_RAMP, RATE_RANDOM_WALK, REPEATED_SAMPLES, SINUSOID, TEMPERATURE, WARMUP)
+                       OUTLIERS, RATE_RAMP, RATE_RANDOM_WALK, REPEATED_SAMPLES, SINUSOID, TEMPERATURE, WANDERING_TONE,
+                       WARMUP)
 from . import noise_terms as nt
+from .tone import WanderingTone
 from .flicker import BiasInstability
 from .model import EFFECTS, TEMPERATURE_PROFILE, validate_model
 from ..errors import SettingsError
@@ -164,6 +166,9 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
         elif name == ARMA:
             b, a = nt.arma_filter(eff["phi"], eff["theta"], eff["sigma_a_dps"])
             terms.append(nt.FilteredNoise(b, a, _stream(root, *key, 0)))
+        elif name == WANDERING_TONE:
+            terms.append(WanderingTone(eff["amplitude_dps"], eff["center_hz"], eff["spread_hz"], eff["wander_s"],
+                                       sample_rate_hz, _stream(root, *key, 0)))
         elif name == OUTLIERS:
             outliers.append(nt.Outliers(eff["rate"], eff["magnitude_dps"], _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
         # colored_noise and heavy_tails are part of the noise term

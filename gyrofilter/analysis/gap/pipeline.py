@@ -362,13 +362,14 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
         x = det.clean_spikes(x, mask, in_place=owned)  # a copy unless owned
         owned = True
     del mask
-    c = det.detect_sinusoid(x, sample_rate_hz)
-    if c is not None:
-        cands.append(c)
-        x, owned = _subtract_component(x, c, owned), True
+    line = det.detect_sinusoid(x, sample_rate_hz)
+    if line is not None:
+        cands.append(line)
+        x, owned = _subtract_component(x, line, owned), True
     band = det.detect_narrowband(x, sample_rate_hz)
-    if band is not None:
-        cands.append(band)
+    if band is not None:  # the band, or the tone that wanders in it (with the sinusoid it holds)
+        tone, folded = det.detect_wandering_tone(x, sample_rate_hz, band, line)
+        cands = [k for k in cands if not (folded and k is line)] + [band if tone is None else tone]
     colored = det.detect_colored(x, sample_rate_hz, band, repeated_fraction=repeated_fraction)
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)

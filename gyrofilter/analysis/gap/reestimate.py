@@ -25,6 +25,8 @@ The estimators, as in :mod:`gyrofilter.analysis.gap.detectors`:
   least squares (:func:`~gyrofilter.analysis.gap.detectors.sinusoid_fit`); the detector's own search
   around the largest line, started where that line is;
 * ``narrowband``: :func:`~gyrofilter.analysis.gap.detectors.band_estimate` (the strongest band);
+* ``wandering_tone``: :func:`~gyrofilter.analysis.gap.detectors.tone_estimate` on the strongest
+  band (centre, spread, correlation time and amplitude of its frequency track and variance);
 * ``colored_noise``: the high-passed lag-1 and lag-2 autocorrelations less the band's
   (:func:`~gyrofilter.analysis.gap.detectors.lags_from_highpassed`);
 * ``temperature``: the coefficient by generalised least squares under the residual's noise
@@ -49,7 +51,7 @@ import math
 import numpy as np
 
 from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND, OUTLIERS,
-                        RATE_RANDOM_WALK, SHAPES, SINUSOID, TEMPERATURE, WANDERS)
+                        RATE_RANDOM_WALK, SHAPES, SINUSOID, TEMPERATURE, WANDERING_TONE, WANDERS)
 from .. import stats
 from . import detectors as det
 from ..noise import gmwm
@@ -63,7 +65,7 @@ from .composite import COMPOSITE_TERMS, composite_lags, slow_wavelet_variance
 #: the slow deterministic shapes of :func:`gyrofilter.analysis.gap.detectors.detect_slow`
 DETERMINISTIC = SHAPES + COVARIATES
 #: the effects :func:`reestimate_axis` can estimate
-SUPPORTED = (HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, COLORED_NOISE) + DETERMINISTIC + WANDERS
+SUPPORTED = (HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, WANDERING_TONE, COLORED_NOISE) + DETERMINISTIC + WANDERS
 
 
 def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False):
@@ -98,6 +100,11 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
         band = det.band_estimate(x, sample_rate_hz)
         band = {name: band[name] for name in ("center_hz", "bandwidth_hz", "rms_dps")}
         out[by[NARROWBAND][0]] = band
+    if WANDERING_TONE in by and x.size >= 4096:  # the band's reading as a tone, as the detector reads it
+        band = det.band_estimate(x, sample_rate_hz)
+        band = {name: band[name] for name in ("center_hz", "bandwidth_hz", "rms_dps")}
+        tone = det.tone_estimate(x, sample_rate_hz, band["center_hz"], band["bandwidth_hz"])
+        out[by[WANDERING_TONE][0]] = {name: tone[name] for name in ("center_hz", "spread_hz", "wander_s", "amplitude_dps")}
     if COLORED_NOISE in by:
         k = by[COLORED_NOISE][0]
         wander = next((c for c in cands if c.effect in WANDERS and not c.composite), None)
@@ -120,7 +127,7 @@ def _resolved(xc, sample_rate_hz, cands, out, fit, q_dps):
     level re-fitted on the cleaned replicate ``xc`` with the replicate's band and colored noise
     (:func:`gyrofilter.analysis.gap.baseline.extended_axis`), against the composite fit's."""
     reps = [det.Candidate(c.effect, params, 0.0, 0.0, "") for c, params in zip(cands, out)
-            if params is not None and c.effect in (NARROWBAND, COLORED_NOISE)]
+            if params is not None and c.effect in (NARROWBAND, COLORED_NOISE, WANDERING_TONE)]
     ext = extended_axis({"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0}, reps, xc, sample_rate_hz, q_dps)
     lags = next(c.params for c in reps if c.effect == COLORED_NOISE)
     return composite_lags(ext, {"arw_dps_per_sqrt_hz": fit.arw_dps_per_sqrt_hz}, lags)

@@ -42,6 +42,15 @@ ones found, because the effects are confusable:
    by a least-squares fit of the effect's own AR(2) resonator PSD (:func:`band_estimate`). Runs
    on the series with the sinusoid removed; a band cannot be subtracted (it is noise), so the
    later detectors see it, and the colored noise's lag-1 is corrected for it.
+2c. ``wandering_tone`` -- the band read as a tone of constant amplitude whose frequency wanders
+   (:mod:`~gyrofilter.analysis.gap.detectors.tone`): the same spectrum, another distribution. The
+   band cut out of the series has an excess kurtosis of 0 when Gaussian and -3/2 s² when a
+   constant-amplitude tone holds a share s of its variance; a kurtosis below 0 by
+   :data:`TONE_KURTOSIS_Z` block standard errors and at least :data:`TONE_MIN_FRACTION` of a
+   tone's names the tone instead of the band, provided the peak of its short-time spectra moves
+   (else it keeps one frequency: a sinusoid's). A sinusoid found within the band is the tone
+   dwelling at one frequency and joins it (one line, one finding). The colored noise's lags are
+   still corrected with the band's resonator (the same spectrum).
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
@@ -83,7 +92,7 @@ ones found, because the effects are confusable:
      on D (:mod:`gyrofilter.analysis.gap.confound`).
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
-:class:`Candidate`, helpers), ``repeats``, ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``colored``
+:class:`Candidate`, helpers), ``repeats``, ``outliers``, ``tails``, ``sinusoid``, ``narrowband``, ``tone``, ``colored``
 and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
 ``gyrofilter.analysis.gap.detectors`` as before.
 """
@@ -111,6 +120,8 @@ from .common import (  # noqa: F401
     STOCHASTIC_THRESHOLD,
     TAILS_MAX_STEP_SD,
     TAILS_WINSOR_SD,
+    TONE_KURTOSIS_Z,
+    TONE_MIN_FRACTION,
 )
 from .outliers import (  # noqa: F401
     OUTLIER_SPREAD_LN,
@@ -142,6 +153,10 @@ from .narrowband import (  # noqa: F401
     band_estimate,
     detect_narrowband,
     narrowband_lags,
+)
+from .tone import (  # noqa: F401
+    detect_wandering_tone,
+    tone_estimate,
 )
 from .colored import (  # noqa: F401
     colored_window,
