@@ -28,6 +28,11 @@ heavy_tails        fraction 0.01-0.1 (log-uniform; ``scale`` shrinks it: the exc
 repeated_samples   fraction 0.01-0.05 of the rows (uniform), half the cases the random pattern and
                    half the beat of the poll and output clocks; whole rows, so the case's axis is
                    ``xyz`` (issue 36: 1.8 % on MPU-9250 records)
+wandering_tone     center_hz 12-40 (the band detector looks above min(f_s / 10, 20 Hz)), spread_hz
+                   0.3-1.2, wander_s 30-300 (log-uniform; the 5-s frames of the detector's track
+                   resolve it), amplitude_dps 0.03-0.08 (where a frame's tone bin is not well
+                   above the white noise's, the track is lost; the ADIS16405 z axes: about 0.34
+                   at 19.7 Hz, spread 0.5-0.8 Hz, issue 36)
 =================  ============================================================================
 """
 from __future__ import annotations
@@ -37,7 +42,7 @@ import math
 import numpy as np
 
 from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
-                      RATE_RANDOM_WALK, REPEATED_SAMPLES, ROWS, SINUSOID, TEMPERATURE, WARMUP)
+                      RATE_RANDOM_WALK, REPEATED_SAMPLES, ROWS, SINUSOID, TEMPERATURE, WANDERING_TONE, WARMUP)
 from .model import TEMPERATURE_PROFILE
 from .noise_terms import RepeatedRows, colored_noise_filter
 from .simulate import simulate
@@ -45,7 +50,7 @@ from ..recording import Recording
 from ..units import AXES
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
-           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES)
+           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES, WANDERING_TONE)
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
@@ -62,6 +67,8 @@ TOLERANCES = {
     COLORED_NOISE: {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
     HEAVY_TAILS: {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
     REPEATED_SAMPLES: {"fraction": ("rel", 0.15)},
+    WANDERING_TONE: {"center_hz": ("abs", 0.5), "spread_hz": ("factor", 1.6), "wander_s": ("factor", 3.0),
+                     "amplitude_dps": ("rel", 0.25)},
 }
 
 
@@ -117,6 +124,10 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
                   "scale_ratio": math.exp(rng.uniform(math.log(4.0), math.log(30.0)))}
     elif effect == REPEATED_SAMPLES:
         params = {"fraction": scale * rng.uniform(0.01, 0.05), "pattern": "beat" if rng.random() < 0.5 else "random"}
+    elif effect == WANDERING_TONE:
+        params = {"center_hz": float(rng.uniform(12.0, 40.0)), "spread_hz": float(rng.uniform(0.3, 1.2)),
+                  "wander_s": float(math.exp(rng.uniform(math.log(30.0), math.log(300.0)))),
+                  "amplitude_dps": scale * rng.uniform(0.03, 0.08)}
     params = {k: v if isinstance(v, str) else float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))

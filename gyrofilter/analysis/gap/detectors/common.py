@@ -59,14 +59,14 @@ GM_MAX_TAU_DIVISOR = 5
 #: 8.64 * 10^6 samples at 100 Hz
 NARROWBAND_THRESHOLD = 4.0
 #: a band is a wandering tone when its excess kurtosis is below 0 by this many standard errors
-#: (block standard error over :data:`TONE_BLOCKS` blocks, a t with 15 degrees of freedom: a
-#: Gaussian band passes with probability about 1e-4) ...
-TONE_KURTOSIS_Z = 5.0
+#: (block standard error over :data:`TONE_BLOCKS` blocks, a t with 31 degrees of freedom: a
+#: Gaussian band passes with probability about 2e-4) ...
+TONE_KURTOSIS_Z = 4.0
 #: ... and nearer a tone's than a Gaussian's: at least this fraction of the -3/2 s² of a
 #: constant-amplitude tone whose share of the band's variance is s (detectors/tone.py)
 TONE_MIN_FRACTION = 0.5
 #: the blocks the band's kurtosis is computed in for its standard error
-TONE_BLOCKS = 16
+TONE_BLOCKS = 32
 #: a tone whose frequency track spreads less than this many bins of its short-time spectrum
 #: (f_s / L) keeps one frequency: a sinusoid, not a wandering tone
 TONE_MIN_SPREAD_BINS = 0.5

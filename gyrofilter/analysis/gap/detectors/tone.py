@@ -21,6 +21,15 @@ TONE_WINDOW_S = 10.0
 #: so ±1.5 widths hold ±3.5 σ), at least :data:`TONE_MIN_HALF_BINS` bins of the short-time spectrum
 TONE_HALF_WIDTHS = 1.5
 TONE_MIN_HALF_BINS = 4
+#: where the frequency track's standard deviation times :data:`TONE_TRACK_SDS` exceeds the band's
+#: half-width (the line's half-power width underestimates a wandering tone's on a short record,
+#: or catches the frequency it dwelt at longest), the band is widened to that, around the track's
+#: mean, at most :data:`TONE_WIDENINGS` times
+TONE_TRACK_SDS = 3.5
+TONE_WIDENINGS = 3
+#: the track is the running median over this many frames of the frames' peaks: a frame whose peak
+#: is a noise bin (a weak tone, or one that moved across bins within the frame) is not followed
+TONE_MEDIAN_FRAMES = 3
 #: frames of the short-time spectrum transformed at once (bounded memory)
 TONE_BATCH_FRAMES = 256
 
@@ -36,7 +45,8 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     ``narrowband`` candidate's) read as a tone whose frequency wanders.
 
     The band [f_c - h, f_c + h], h = max(:data:`TONE_HALF_WIDTHS` B, :data:`TONE_MIN_HALF_BINS`
-    f_s / L), is cut out of the series by a brick-wall filter (its DFT, the other bins zeroed):
+    f_s / L) (widened to :data:`TONE_TRACK_SDS` standard deviations of the frequency track below
+    where that is wider), is cut out of the series by a brick-wall filter (its DFT, the other bins zeroed):
     y. Its variance v = mean y², the white noise's share of it v_n = S_n · 2h (S_n the median of
     the Welch PSD, segments of L, over the flanks h to 2h beyond either edge), the line's share
     s = 1 - v_n / v, and y's excess kurtosis κ = mean y⁴ / v² - 3. Cumulants of independent
@@ -47,22 +57,30 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     :data:`TONE_BLOCKS` blocks of y, sd / sqrt(blocks).
 
     The frequency track: per frame of L samples (Hann, 50 % overlap) the peak of |Y|² within
-    the band, refined by a parabola through the log powers of the peak bin and its neighbours.
-    The centre is the track's mean; the spread σ_f its variance less its estimation noise,
-    sqrt(var(f) - e²), e² = (1.4826 MAD(Δf))² / 2 (the frame-to-frame differences of a track
-    that wanders slowly are its estimation noise); the wander's correlation time T the lag at
+    the band, refined by a parabola through the log powers of the peak bin and its neighbours,
+    and its running median over :data:`TONE_MEDIAN_FRAMES` frames. The centre is the track's mean; the spread σ_f its variance less its estimation noise,
+    sqrt(sd(f)² - sd(Δf)² / 2) (sd: 1.4826 MAD, robust to the frames where a noise bin beats the
+    tone; the frame-to-frame differences of a track that wanders slowly are its estimation noise); the wander's correlation time T the lag at
     which the track's autocovariance over σ_f² falls to 1/e (interpolated on the log), else
     -m Δt / ln ρ(m) at the largest lag m = frames / 4 (Δt = L / 2 / f_s). The amplitude is
     A = sqrt(2 (v - v_n)). Returns a dict of these (``center_hz``, ``spread_hz``, ``wander_s``,
     ``amplitude_dps``, ``kurtosis``, ``kurtosis_se``, ``share``, ``fraction``, ``resolution_hz``
     = f_s / L, ``low_hz``, ``high_hz``)."""
+    from scipy.ndimage import median_filter
+
     x = np.asarray(x_dps, dtype=float)
     n = x.size
     nyquist = sample_rate_hz / 2.0
     seg = tone_window(n, sample_rate_hz)
     res = sample_rate_hz / seg
     half = max(TONE_HALF_WIDTHS * bandwidth_hz, TONE_MIN_HALF_BINS * res)
-    lo, hi = max(center_hz - half, res), min(center_hz + half, nyquist - res)
+    for _ in range(TONE_WIDENINGS + 1):  # a band narrower than the track's excursions is widened
+        lo, hi = max(center_hz - half, res), min(center_hz + half, nyquist - res)
+        track = median_filter(_track(x - np.mean(x), sample_rate_hz, seg, lo, hi), size=TONE_MEDIAN_FRAMES, mode="nearest")
+        wide = TONE_TRACK_SDS * _robust_sd(track)
+        if not wide > 1.05 * half:
+            break
+        center_hz, half = float(np.mean(track)), wide
     spec = np.fft.rfft(x - np.mean(x))
     f = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
     spec[(f < lo) | (f > hi)] = 0.0
@@ -77,11 +95,8 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     blocks = np.array_split(y, TONE_BLOCKS)
     per = np.array([np.mean(b ** 4) / np.mean(b * b) ** 2 - 3.0 for b in blocks])
     se = float(np.std(per, ddof=1) / math.sqrt(len(per)))
-    track = _track(y, sample_rate_hz, seg, lo, hi)
     dev = track - track.mean()
-    diffs = np.diff(track)
-    noise_var = 0.5 * (1.4826 * float(np.median(np.abs(diffs - np.median(diffs))))) ** 2 if diffs.size else 0.0
-    spread2 = max(float(np.mean(dev * dev)) - noise_var, 0.0)
+    spread2 = max(_robust_sd(track) ** 2 - 0.5 * _robust_sd(np.diff(track)) ** 2, 0.0)
     return {"center_hz": float(track.mean()), "spread_hz": math.sqrt(spread2),
             "wander_s": _wander_s(dev, spread2, seg / 2.0 / sample_rate_hz),
             "amplitude_dps": math.sqrt(2.0 * max(v - level * (hi - lo), 0.0)),
@@ -90,9 +105,15 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
             "resolution_hz": res, "low_hz": lo, "high_hz": hi}
 
 
+def _robust_sd(v):
+    """1.4826 times the median absolute deviation of ``v`` (0 for no values): the standard
+    deviation of a Gaussian, unmoved by the few frames where a noise bin beats the tone."""
+    return 1.4826 * float(np.median(np.abs(v - np.median(v)))) if v.size else 0.0
+
+
 def _track(y, sample_rate_hz, seg, lo, hi):
-    """The peak frequency (Hz) of |Y|² within [lo, hi] per frame of ``seg`` samples (Hann, hop
-    ``seg // 2``), parabola-refined on the log powers (:func:`tone_estimate`)."""
+    """The peak frequency (Hz) of |Y|² within [lo, hi] per frame of ``seg`` samples of ``y``
+    (mean removed; Hann, hop ``seg // 2``), parabola-refined on the log powers (:func:`tone_estimate`)."""
     step = seg // 2
     frames = (y.size - seg) // step + 1
     win = np.hanning(seg + 1)[:-1]
