@@ -67,7 +67,7 @@ TOLERANCES = {
     COLORED_NOISE: {"lag1": ("abs", 0.1), "lag2": ("abs", 0.05)},
     HEAVY_TAILS: {"fraction": ("factor", 1.5), "scale_ratio": ("rel", 0.3)},
     REPEATED_SAMPLES: {"fraction": ("rel", 0.15)},
-    WANDERING_TONE: {"center_hz": ("abs", 0.5), "spread_hz": ("factor", 1.6), "wander_s": ("factor", 3.0),
+    WANDERING_TONE: {"center_hz": ("abs", 0.75), "spread_hz": ("factor", 1.6), "wander_s": ("factor", 3.0),
                      "amplitude_dps": ("rel", 0.25)},
 }
 

@@ -370,6 +370,7 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     if band is not None:  # the band, or the tone that wanders in it (with the sinusoid it holds)
         tone, folded = det.detect_wandering_tone(x, sample_rate_hz, band, line)
         cands = [k for k in cands if not (folded and k is line)] + [band if tone is None else tone]
+        band = band if tone is None else replace(tone, params=det.tone_band(tone.params))  # its correlation
     colored = det.detect_colored(x, sample_rate_hz, band, repeated_fraction=repeated_fraction)
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)

@@ -26,7 +26,8 @@ The estimators, as in :mod:`gyrofilter.analysis.gap.detectors`:
   around the largest line, started where that line is;
 * ``narrowband``: :func:`~gyrofilter.analysis.gap.detectors.band_estimate` (the strongest band);
 * ``wandering_tone``: :func:`~gyrofilter.analysis.gap.detectors.tone_estimate` on the strongest
-  band (centre, spread, correlation time and amplitude of its frequency track and variance);
+  band (centre, spread, correlation time and amplitude of its frequency track and variance); the
+  colored noise is corrected for its spectrum (:func:`~gyrofilter.analysis.gap.detectors.tone_band`);
 * ``colored_noise``: the high-passed lag-1 and lag-2 autocorrelations less the band's
   (:func:`~gyrofilter.analysis.gap.detectors.lags_from_highpassed`);
 * ``temperature``: the coefficient by generalised least squares under the residual's noise
@@ -102,9 +103,9 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
         out[by[NARROWBAND][0]] = band
     if WANDERING_TONE in by and x.size >= 4096:  # the band's reading as a tone, as the detector reads it
         band = det.band_estimate(x, sample_rate_hz)
-        band = {name: band[name] for name in ("center_hz", "bandwidth_hz", "rms_dps")}
         tone = det.tone_estimate(x, sample_rate_hz, band["center_hz"], band["bandwidth_hz"])
         out[by[WANDERING_TONE][0]] = {name: tone[name] for name in ("center_hz", "spread_hz", "wander_s", "amplitude_dps")}
+        band = det.tone_band(tone)
     if COLORED_NOISE in by:
         k = by[COLORED_NOISE][0]
         wander = next((c for c in cands if c.effect in WANDERS and not c.composite), None)

@@ -50,7 +50,8 @@ ones found, because the effects are confusable:
    tone's names the tone instead of the band, provided the peak of its short-time spectra moves
    (else it keeps one frequency: a sinusoid's). A sinusoid found within the band is the tone
    dwelling at one frequency and joins it (one line, one finding). The colored noise's lags are
-   still corrected with the band's resonator (the same spectrum).
+   corrected for the tone's spectrum (:func:`tone_band`: its variance A² / 2 in a resonator of the
+   same centre and width).
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
@@ -156,6 +157,7 @@ from .narrowband import (  # noqa: F401
 )
 from .tone import (  # noqa: F401
     detect_wandering_tone,
+    tone_band,
     tone_estimate,
 )
 from .colored import (  # noqa: F401

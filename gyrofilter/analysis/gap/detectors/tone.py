@@ -154,6 +154,17 @@ def _wander_s(dev, spread2, hop_s):
     return float(-m * hop_s / math.log(min(max(rho[m], 1e-3), 0.999)))
 
 
+def tone_band(params):
+    """The ``narrowband`` parameters of the same spectrum as the wandering tone of ``params``,
+    for the corrections made for a band (the colored noise's lags, :func:`narrowband_lags`):
+    ``center_hz`` f_c, ``rms_dps`` A / sqrt(2) (the tone's variance, well determined, where
+    the band estimate of a tone that dwelt at a few frequencies is not), and ``bandwidth_hz``
+    the half-power full width 2 sqrt(2 ln 2) σ_f of its Gaussian line (slow wander), at least
+    a millihertz."""
+    return {"center_hz": params["center_hz"], "rms_dps": params["amplitude_dps"] / math.sqrt(2.0),
+            "bandwidth_hz": max(2.0 * math.sqrt(2.0 * math.log(2.0)) * params["spread_hz"], 1e-3)}
+
+
 def detect_wandering_tone(x, sample_rate_hz, band, sinusoid=None):
     """The ``wandering_tone`` reading of the ``narrowband`` candidate ``band`` (:func:`tone_estimate`
     on its centre and width): returns ``(candidate or None, whether the sinusoid is part of it)``.
