@@ -30,6 +30,9 @@ TONE_WIDENINGS = 3
 #: the track is the running median over this many frames of the frames' peaks: a frame whose peak
 #: is a noise bin (a weak tone, or one that moved across bins within the frame) is not followed
 TONE_MEDIAN_FRAMES = 3
+#: fixed-point steps of the correction of the track's variance and autocorrelation for the
+#: record's length (:func:`_wander`)
+TONE_LENGTH_ITERATIONS = 5
 #: frames of the short-time spectrum transformed at once (bounded memory)
 TONE_BATCH_FRAMES = 256
 
@@ -62,7 +65,8 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     sqrt(sd(f)² - sd(Δf)² / 2) (sd: 1.4826 MAD, robust to the frames where a noise bin beats the
     tone; the frame-to-frame differences of a track that wanders slowly are its estimation noise); the wander's correlation time T the lag at
     which the track's autocovariance over σ_f² falls to 1/e (interpolated on the log), else
-    -m Δt / ln ρ(m) at the largest lag m = frames / 4 (Δt = L / 2 / f_s). The amplitude is
+    -m Δt / ln ρ(m) at the largest lag m = frames / 4 (Δt = L / 2 / f_s); σ_f and T corrected
+    for the mean the record's length takes out (:func:`_wander`). The amplitude is
     A = sqrt(2 (v - v_n)). Returns a dict of these (``center_hz``, ``spread_hz``, ``wander_s``,
     ``amplitude_dps``, ``kurtosis``, ``kurtosis_se``, ``share``, ``fraction``, ``resolution_hz``
     = f_s / L, ``low_hz``, ``high_hz``)."""
@@ -96,9 +100,9 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     per = np.array([np.mean(b ** 4) / np.mean(b * b) ** 2 - 3.0 for b in blocks])
     se = float(np.std(per, ddof=1) / math.sqrt(len(per)))
     dev = track - track.mean()
-    spread2 = max(_robust_sd(track) ** 2 - 0.5 * _robust_sd(np.diff(track)) ** 2, 0.0)
-    return {"center_hz": float(track.mean()), "spread_hz": math.sqrt(spread2),
-            "wander_s": _wander_s(dev, spread2, seg / 2.0 / sample_rate_hz),
+    wander_s, spread2 = _wander(dev, max(_robust_sd(track) ** 2 - 0.5 * _robust_sd(np.diff(track)) ** 2, 0.0),
+                                seg / 2.0 / sample_rate_hz)
+    return {"center_hz": float(track.mean()), "spread_hz": math.sqrt(spread2), "wander_s": wander_s,
             "amplitude_dps": math.sqrt(2.0 * max(v - level * (hi - lo), 0.0)),
             "kurtosis": kurt, "kurtosis_se": se, "share": share,
             "fraction": kurt / (-1.5 * share ** 2) if share > 0 else 0.0,
@@ -136,15 +140,29 @@ def _track(y, sample_rate_hz, seg, lo, hi):
     return out
 
 
-def _wander_s(dev, spread2, hop_s):
-    """The correlation time (s) of the track ``dev`` (mean removed) whose variance without the
-    estimation noise is ``spread2`` (:func:`tone_estimate`)."""
+def _wander(dev, spread2, hop_s):
+    """``(T, σ_f²)``: the correlation time (s) of the track ``dev`` (mean removed) whose variance
+    without the estimation noise is ``spread2``, and that variance, both corrected for the
+    record's length (:func:`tone_estimate`). Removing the mean of F frames of a process of
+    correlation time T removes its variance over the record, σ² b with b = 2 T / (F Δt), from
+    the variance and from every autocovariance alike: σ² = s² / (1 - b), ρ(k) = ĉ(k) / σ² + b;
+    solved by :data:`TONE_LENGTH_ITERATIONS` fixed-point steps from b = 0 (b at most 1/2)."""
     m = max(dev.size // 4, 1)
     if not spread2 > 0 or dev.size < 8:
-        return hop_s
+        return hop_s, spread2
     padded = np.fft.rfft(dev, 2 * dev.size)
     acov = np.fft.irfft(padded * np.conj(padded))[:m + 1] / dev.size
-    rho = acov / spread2
+    b, tau_s, var = 0.0, hop_s, spread2
+    for _ in range(TONE_LENGTH_ITERATIONS):
+        var = spread2 / (1.0 - b)
+        tau_s = _one_over_e(acov / var + b, m, hop_s)
+        b = min(2.0 * tau_s / (dev.size * hop_s), 0.5)
+    return tau_s, var
+
+
+def _one_over_e(rho, m, hop_s):
+    """The lag (s) at which the autocorrelation ``rho`` (lags 0..m, frames of ``hop_s``) falls to
+    1/e, interpolated on its log; else -m Δt / ln ρ(m)."""
     below = np.flatnonzero(rho[1:] < math.exp(-1.0))
     if below.size:
         k = int(below[0]) + 1
