@@ -68,8 +68,8 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     -m Δt / ln ρ(m) at the largest lag m = frames / 4 (Δt = L / 2 / f_s); σ_f and T corrected
     for the mean the record's length takes out (:func:`_wander`). The amplitude is
     A = sqrt(2 (v - v_n)). Returns a dict of these (``center_hz``, ``spread_hz``, ``wander_s``,
-    ``amplitude_dps``, ``kurtosis``, ``kurtosis_se``, ``share``, ``fraction``, ``resolution_hz``
-    = f_s / L, ``low_hz``, ``high_hz``)."""
+    ``amplitude_dps``, ``track_hz`` (the track's 5th and 95th percentiles), ``kurtosis``,
+    ``kurtosis_se``, ``share``, ``fraction``, ``resolution_hz`` = f_s / L, ``low_hz``, ``high_hz``)."""
     from scipy.ndimage import median_filter
 
     x = np.asarray(x_dps, dtype=float)
@@ -103,6 +103,7 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     wander_s, spread2 = _wander(dev, max(_robust_sd(track) ** 2 - 0.5 * _robust_sd(np.diff(track)) ** 2, 0.0),
                                 seg / 2.0 / sample_rate_hz)
     return {"center_hz": float(track.mean()), "spread_hz": math.sqrt(spread2), "wander_s": wander_s,
+            "track_hz": (float(np.percentile(track, 5)), float(np.percentile(track, 95))),
             "amplitude_dps": math.sqrt(2.0 * max(v - level * (hi - lo), 0.0)),
             "kurtosis": kurt, "kurtosis_se": se, "share": share,
             "fraction": kurt / (-1.5 * share ** 2) if share > 0 else 0.0,
@@ -209,9 +210,10 @@ def detect_wandering_tone(x, sample_rate_hz, band, sinusoid=None):
                 f"nearly constant amplitude {amplitude:.3g} deg/s whose frequency wanders: its excess kurtosis "
                 f"{est['kurtosis']:+.2f} (+- {est['kurtosis_se']:.2g}; a Gaussian band gives 0, a constant-amplitude "
                 f"tone -1.5 s^2 = {-1.5 * est['share'] ** 2:+.2f} at its share s = {est['share']:.2f} of the band's "
-                f"variance: {est['fraction']:.2f} of a tone's), its peak moving by sd {est['spread_hz']:.3g} Hz around "
-                f"{est['center_hz']:.4g} Hz over short-time spectra of {est['resolution_hz']:.2g}-Hz bins, with a "
-                f"correlation time of {est['wander_s']:.3g} s")
+                f"variance: {est['fraction']:.2f} of a tone's), its peak in short-time spectra of "
+                f"{est['resolution_hz']:.2g}-Hz bins moving between {est['track_hz'][0]:.3g} and {est['track_hz'][1]:.3g} Hz "
+                f"(5-95 %): a frequency wandering by sd {est['spread_hz']:.3g} Hz around {est['center_hz']:.4g} Hz with a "
+                f"correlation time of {est['wander_s']:.3g} s (both corrected for the record's length)")
     if folded:
         evidence += (f"; the sinusoid at {sinusoid.params['frequency_hz']:.4g} Hz that the sinusoid detector took "
                      "out of it is the tone dwelling there, and is part of it")
