@@ -60,7 +60,8 @@ GM_MAX_TAU_DIVISOR = 5
 NARROWBAND_THRESHOLD = 4.0
 #: a band is a wandering tone when its excess kurtosis is below 0 by this many standard errors
 #: (block standard error over :data:`TONE_BLOCKS` blocks, a t with 31 degrees of freedom: a
-#: Gaussian band passes with probability about 2e-4) ...
+#: Gaussian band passes with probability about 2e-4; on 40 Gaussian bands of 0.2-4 Hz at 12-45 Hz,
+#: 10-60 min at 100 Hz, the statistic's sd was 1.3 and its largest value 2.76) ...
 TONE_KURTOSIS_Z = 4.0
 #: ... and nearer a tone's than a Gaussian's: at least this fraction of the -3/2 s² of a
 #: constant-amplitude tone whose share of the band's variance is s (detectors/tone.py)
