@@ -17,7 +17,8 @@ then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb
 ``repeated_samples`` (a top-level key: whole rows) makes some rows repeat the previous row on every
 column, the temperature's too (:class:`gyrofilter.sim.noise_terms.RepeatedRows`); its stream is the
 record's, not an axis's, so one axis simulated alone (:func:`simulate_axis_dps`) repeats the same rows.
-Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`.
+Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`
+(``wandering_tone`` in :mod:`gyrofilter.sim.tone`).
 
 ``colored_noise`` low-passes the white noise: with ``preserve="arw"`` (default)
 ``arw_dps_per_sqrt_hz`` keeps its Allan meaning (the white level for τ well beyond the filter's

@@ -19,7 +19,7 @@ hold the parts:
    statistic, a winsorized kurtosis).
    Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
 3. **Causes**: :mod:`gyrofilter.analysis.gap.detectors` maps departures to effects of the table, in a fixed
-   decision order (outliers or heavy tails, sinusoid, narrow-band noise, colored noise, slow bias effects; see
+   decision order (outliers or heavy tails, sinusoid, narrow-band noise or a wandering tone, colored noise, slow bias effects; see
    there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
    temperature are told apart), each with its own significance threshold, and estimates the
    parameters. A narrow band's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
