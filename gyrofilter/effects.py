@@ -19,9 +19,10 @@ The kinds, and the groups every module derives from them (never a list of its ow
 - ``covariate``: the bias following a measured quantity (the temperature; :data:`COVARIATES`);
 - ``line``: a peak of the spectrum: a deterministic periodic rate (a sinusoid), noise in a narrow
   band around a centre frequency (a line of finite width), a broad low hump of noise (a
-  resonance of the board driven by noise) or the same resonance rung by random shocks (bursts
-  that decay); the gap analysis names one reading of a peak, or two where both are there
-  (:data:`LINES`);
+  resonance of the board driven by noise), the same resonance rung by random shocks (bursts
+  that decay), or a tone of constant amplitude whose frequency wanders within a band (a line of
+  finite width that is not Gaussian); the gap analysis names one reading of a peak, or two where
+  both are there (:data:`LINES`);
 - ``noise``: stationary noise with a broad spectrum other than white (colored noise, an ARMA
   process);
 - ``tails``: the rate's distribution (isolated spikes, heavy tails; :data:`TAILS`);
@@ -54,6 +55,7 @@ HEAVY_TAILS = "heavy_tails"
 REPEATED_SAMPLES = "repeated_samples"
 RESONANCE = "resonance"
 RINGING = "ringing"
+WANDERING_TONE = "wandering_tone"
 
 KINDS = ("wander", "shape", "covariate", "line", "noise", "tails", "rows")
 
@@ -117,6 +119,8 @@ REGISTRY = (
     Effect(RINGING, "line", {"center_hz": "pos", "q": "pos", "shock_rate_hz": "pos", "shock_dps": "nonneg"},
            {"spread_ln": ("nonneg", 0.25)}, {"q": "log", "shock_rate_hz": "log", "shock_dps": "log"},
            defining="shock_dps"),
+    Effect(WANDERING_TONE, "line", {"center_hz": "pos", "spread_hz": "nonneg", "wander_s": "pos", "amplitude_dps": "nonneg"},
+           {}, {"spread_hz": "log", "wander_s": "log", "amplitude_dps": "log"}, defining="amplitude_dps"),
 )
 #: name -> record, in the registry's order
 BY_NAME = {e.name: e for e in REGISTRY}
@@ -139,10 +143,11 @@ SLOW = of_kind("wander", "shape", "covariate")
 TAILS = of_kind("tails")
 #: the effects on whole rows (every axis at once): a model's top-level keys, not terms of an axis
 ROWS = of_kind("rows")
-#: the peaks of the spectrum: a sinusoid, a narrow band, a resonance's hump and its ringing,
-#: alternative readings of one peak of the spectrum
+#: the peaks of the spectrum: a sinusoid, a narrow band, a resonance's hump and its ringing, a
+#: wandering tone, alternative readings of one peak of the spectrum
 LINES = of_kind("line")
 #: the parameter that holds each line's frequency (Hz)
-LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz", RESONANCE: "center_hz", RINGING: "center_hz"}
+LINE_FREQUENCY = {SINUSOID: "frequency_hz", NARROWBAND: "center_hz", RESONANCE: "center_hz", RINGING: "center_hz",
+                  WANDERING_TONE: "center_hz"}
 #: the resonator's effects: its hump (white noise through it) and its ringing (shocks through it)
 RESONATORS = (RESONANCE, RINGING)

@@ -32,6 +32,11 @@ resonance          center_hz 5-40 % of the Nyquist frequency, q 1-4 (log-uniform
                    peak 0.4-1.5 times the white level (issue 36's MPU-9250: 0.5)
 ringing            center_hz 5-40 % of the Nyquist frequency, q 1.5-5, shock_rate_hz 0.05-0.3
                    (log-uniform), shock_dps 10-30 per-sample white-noise sd
+wandering_tone     center_hz 12-40 (the band detector looks above min(f_s / 10, 20 Hz)), spread_hz
+                   0.3-1.2, wander_s 30-300 (log-uniform; the 5-s frames of the detector's track
+                   resolve it), amplitude_dps 0.03-0.08 (where a frame's tone bin is not well
+                   above the white noise's, the track is lost; the ADIS16405 z axes: about 0.34
+                   at 19.7 Hz, spread 0.5-0.8 Hz, issue 36)
 =================  ============================================================================
 """
 from __future__ import annotations
@@ -41,7 +46,8 @@ import math
 import numpy as np
 
 from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
-                      RATE_RANDOM_WALK, REPEATED_SAMPLES, RESONANCE, RINGING, ROWS, SINUSOID, TEMPERATURE, WARMUP)
+                      RATE_RANDOM_WALK, REPEATED_SAMPLES, RESONANCE, RINGING, ROWS, SINUSOID, TEMPERATURE, WANDERING_TONE,
+                      WARMUP)
 from .model import TEMPERATURE_PROFILE
 from .noise_terms import RepeatedRows, colored_noise_filter, filter_variance
 from .resonance import band_pass
@@ -50,7 +56,8 @@ from ..recording import Recording
 from ..units import AXES
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
-           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES, RESONANCE, RINGING)
+           TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES, RESONANCE, RINGING,
+           WANDERING_TONE)
 
 #: per parameter: ("rel", r) |est/true - 1| <= r; ("abs", a) |est - true| <= a;
 #: ("factor", f) est/true in [1/f, f]; ("time", (a_s, frac)) |est - true| <= max(a_s, frac T)
@@ -69,6 +76,8 @@ TOLERANCES = {
     REPEATED_SAMPLES: {"fraction": ("rel", 0.15)},
     RESONANCE: {"center_hz": ("rel", 0.05), "q": ("factor", 2.0), "rms_dps": ("rel", 0.3)},
     RINGING: {"center_hz": ("rel", 0.05), "q": ("factor", 1.5), "shock_rate_hz": ("factor", 1.6), "shock_dps": ("rel", 0.35)},
+    WANDERING_TONE: {"center_hz": ("abs", 0.75), "spread_hz": ("factor", 1.6), "wander_s": ("factor", 3.0),
+                     "amplitude_dps": ("rel", 0.25)},
 }
 
 
@@ -132,6 +141,10 @@ def draw_case(seed, *, effect=None, duration_s=None, scale=1.0, p_clean=None):
                   "q": math.exp(rng.uniform(math.log(1.5), math.log(5.0))),
                   "shock_rate_hz": math.exp(rng.uniform(math.log(0.05), math.log(0.3))),
                   "shock_dps": scale * rng.uniform(10.0, 30.0) * sigma}
+    elif effect == WANDERING_TONE:
+        params = {"center_hz": float(rng.uniform(12.0, 40.0)), "spread_hz": float(rng.uniform(0.3, 1.2)),
+                  "wander_s": float(math.exp(rng.uniform(math.log(30.0), math.log(300.0)))),
+                  "amplitude_dps": scale * rng.uniform(0.03, 0.08)}
     params = {k: v if isinstance(v, str) else float(v) for k, v in params.items()}
     # every case has a temperature column: a slow warming after power-on, MPU6050 resolution
     start = float(rng.uniform(22, 28))

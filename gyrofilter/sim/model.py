@@ -16,7 +16,7 @@ import numpy as np
 
 from . import noise_terms as nt
 from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, RESONATORS, ROWS,
-                       SINUSOID, TEMPERATURE)
+                       SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
 from ..inputs import MAX_QUOTE_CHARS, did_you_mean, load_json, quote
 from ..units import AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_sample_rate_hz, plain
@@ -157,7 +157,7 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     ``lsb_per_dps``, ``per_decade``, ``spread_ln``, the ARMA coefficients and ``heavy_tails``'s
     ``fraction`` (at most 0.5) and ``scale_ratio`` (1 to 1000), a resonator's ``q`` (0.05 to 1000)
     by :data:`_NAMED_LIMITS`), a narrowband line's width in [:data:`MIN_BANDWIDTH_PER_RATE` f_s, f_s]
-    and its centre, and a resonance's or ringing's centre, below Nyquist; and every list: at most :data:`MAX_EFFECTS_PER_AXIS` effects per axis (one
+    and its centre, and a resonance's, ringing's or wandering tone's centre, below Nyquist; and every list: at most :data:`MAX_EFFECTS_PER_AXIS` effects per axis (one
     ``colored_noise`` and one ``heavy_tails``), :data:`MAX_ARMA_COEFFICIENTS` coefficients each in
     ``phi`` and ``theta``, :data:`MAX_TABLE_POINTS` points in a temperature table.
 
@@ -312,7 +312,7 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     if name == SINUSOID and rate is not None and out["frequency_hz"] > rate / 2.0:
         warnings.append(f"model: {label}: frequency_hz {out['frequency_hz']:g} is above the Nyquist frequency "
                         f"{rate / 2.0:g} Hz and will alias")
-    if name in (NARROWBAND,) + RESONATORS and rate is not None:
+    if name in (NARROWBAND, WANDERING_TONE) + RESONATORS and rate is not None:
         if out["center_hz"] >= rate / 2.0:
             _err(f"{label}.center_hz", f"expected a frequency below the Nyquist frequency {rate / 2.0:g} Hz, "
                                        f"got {out['center_hz']:g}")

@@ -17,7 +17,8 @@ then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb
 ``repeated_samples`` (a top-level key: whole rows) makes some rows repeat the previous row on every
 column, the temperature's too (:class:`gyrofilter.sim.noise_terms.RepeatedRows`); its stream is the
 record's, not an axis's, so one axis simulated alone (:func:`simulate_axis_dps`) repeats the same rows.
-Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`.
+Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`
+(``wandering_tone`` in :mod:`gyrofilter.sim.tone`).
 
 ``colored_noise`` low-passes the white noise: with ``preserve="arw"`` (default)
 ``arw_dps_per_sqrt_hz`` keeps its Allan meaning (the white level for τ well beyond the filter's
@@ -53,9 +54,10 @@ import numpy as np
 
 from ..effects import (ARMA, BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND,
                        OUTLIERS, RATE_RAMP, RATE_RANDOM_WALK, REPEATED_SAMPLES, RESONANCE, RINGING, SINUSOID, TEMPERATURE,
-                       WARMUP)
+                       WANDERING_TONE, WARMUP)
 from . import noise_terms as nt
 from .resonance import Ringing, resonance_filter
+from .tone import WanderingTone
 from .flicker import BiasInstability
 from .model import EFFECTS, TEMPERATURE_PROFILE, validate_model
 from ..errors import SettingsError
@@ -177,6 +179,9 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
         elif name == RINGING:
             terms.append(Ringing(eff["shock_rate_hz"], eff["shock_dps"], eff["center_hz"], eff["q"], sample_rate_hz,
                                  _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
+        elif name == WANDERING_TONE:
+            terms.append(WanderingTone(eff["amplitude_dps"], eff["center_hz"], eff["spread_hz"], eff["wander_s"],
+                                       sample_rate_hz, _stream(root, *key, 0)))
         elif name == OUTLIERS:
             outliers.append(nt.Outliers(eff["rate"], eff["magnitude_dps"], _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
         # colored_noise and heavy_tails are part of the noise term

@@ -21,7 +21,8 @@ import time
 
 import numpy as np
 
-from ...effects import BIAS_STEP, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, RATE_RAMP, RESONANCE, TEMPERATURE, WANDERS, WARMUP
+from ...effects import (BIAS_STEP, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, RATE_RAMP, RESONANCE, TEMPERATURE, WANDERING_TONE,
+                        WANDERS, WARMUP)
 from .. import stats
 from . import detectors as det
 from .features import features
@@ -205,9 +206,10 @@ def extended_axis(base_axis, cands, xc, sample_rate_hz, q):
         return spec
     n = xc.size
     sigma = noise_sigma(xc, sample_rate_hz, q or 0.0, mask_spikes=not any(c.effect == HEAVY_TAILS for c in cands))
-    for c in cands:  # bands and humps (above the high-pass) are noise of their own: N'^2 = N^2 - rms^2
-        if c.effect in (NARROWBAND, RESONANCE):
-            sigma = math.sqrt(max(sigma**2 - c.params["rms_dps"] ** 2, 0.05 * sigma**2))
+    for c in cands:  # bands, humps and tones (above the high-pass) are terms of their own: N'^2 = N^2 - rms^2
+        if c.effect in (NARROWBAND, RESONANCE, WANDERING_TONE):
+            rms2 = c.params["amplitude_dps"] ** 2 / 2.0 if c.effect == WANDERING_TONE else c.params["rms_dps"] ** 2
+            sigma = math.sqrt(max(sigma**2 - rms2, 0.05 * sigma**2))
     colored = next((c for c in cands if c.effect == COLORED_NOISE), None)
     if colored is not None:
         w = det.colored_window(n, sample_rate_hz)

@@ -19,8 +19,8 @@ hold the parts:
    statistic, a winsorized kurtosis).
    Each feature's departure is ``z = (f_meas - mean_sims) / max(sd_sims, floor)``.
 3. **Causes**: :mod:`gyrofilter.analysis.gap.detectors` maps departures to effects of the table, in a fixed
-   decision order (outliers or heavy tails, or shocks that ring; sinusoid, narrow-band noise, a resonance's hump,
-   colored noise, slow bias effects; see
+   decision order (outliers or heavy tails, or shocks that ring; sinusoid, narrow-band noise or a wandering tone,
+   a resonance's hump, colored noise, slow bias effects; see
    there for how ramp / random walk / warm-up / Gauss-Markov / bias instability / step /
    temperature are told apart), each with its own significance threshold, and estimates the
    parameters. A narrow band's or a hump's variance is taken out of the white noise (N'^2 = N^2 - rms^2 / f_s)
@@ -368,12 +368,17 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
         x = det.clean_spikes(x, mask, in_place=owned)  # a copy unless owned
         owned = True
     del mask
-    c = det.detect_sinusoid(x, sample_rate_hz)
-    if c is not None:
-        cands.append(c)
-        x, owned = _subtract_component(x, c, owned), True
+    line = det.detect_sinusoid(x, sample_rate_hz)
+    if line is not None:
+        cands.append(line)
+        x, owned = _subtract_component(x, line, owned), True
     hump, band = det.detect_resonance(x, sample_rate_hz, det.detect_narrowband(x, sample_rate_hz))
     hump = ring_or_hump(ring, hump)
+    if band is not None:  # the band, or the tone that wanders in it (with the sinusoid it holds)
+        tone, folded = det.detect_wandering_tone(x, sample_rate_hz, band, line)
+        if tone is not None:
+            cands = [k for k in cands if not (folded and k is line)]
+            band = tone
     bands = [c for c in (band, hump) if c is not None]
     cands.extend(bands)
     colored = det.detect_colored(x, sample_rate_hz, bands, repeated_fraction=repeated_fraction)

@@ -29,6 +29,9 @@ The estimators, as in :mod:`gyrofilter.analysis.gap.detectors`:
 * ``narrowband``: :func:`~gyrofilter.analysis.gap.detectors.band_estimate` (the strongest band);
 * ``resonance``: :func:`~gyrofilter.analysis.gap.detectors.resonance_fit` (the hump's centre, Q
   and rms), the finding's narrow band's bins left out as the detector leaves them;
+* ``wandering_tone``: :func:`~gyrofilter.analysis.gap.detectors.tone_estimate` on the strongest
+  band (centre, spread, correlation time and amplitude of its frequency track and variance); the
+  colored noise is corrected for its spectrum (:func:`~gyrofilter.analysis.gap.detectors.tone_band`);
 * ``colored_noise``: the high-passed lag-1 and lag-2 autocorrelations less the band's
   (:func:`~gyrofilter.analysis.gap.detectors.lags_from_highpassed`);
 * ``temperature``: the coefficient by generalised least squares under the residual's noise
@@ -53,7 +56,7 @@ import math
 import numpy as np
 
 from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND, OUTLIERS,
-                        RATE_RANDOM_WALK, RESONANCE, RINGING, SHAPES, SINUSOID, TEMPERATURE, WANDERS)
+                        RATE_RANDOM_WALK, RESONANCE, RINGING, SHAPES, SINUSOID, TEMPERATURE, WANDERING_TONE, WANDERS)
 from .. import stats
 from . import detectors as det
 from ..noise import gmwm
@@ -67,7 +70,7 @@ from .composite import COMPOSITE_TERMS, composite_lags, slow_wavelet_variance
 #: the slow deterministic shapes of :func:`gyrofilter.analysis.gap.detectors.detect_slow`
 DETERMINISTIC = SHAPES + COVARIATES
 #: the effects :func:`reestimate_axis` can estimate
-SUPPORTED = (RINGING, HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, RESONANCE, COLORED_NOISE) + DETERMINISTIC + WANDERS
+SUPPORTED = (RINGING, HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, WANDERING_TONE, RESONANCE, COLORED_NOISE) + DETERMINISTIC + WANDERS
 
 
 def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False):
@@ -107,9 +110,14 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
         band = det.band_estimate(x, sample_rate_hz)
         out[by[NARROWBAND][0]] = {name: band[name] for name in ("center_hz", "bandwidth_hz", "rms_dps")}
         bands.append(det.Candidate(NARROWBAND, out[by[NARROWBAND][0]], 0.0, 0.0, ""))
+    if WANDERING_TONE in by and x.size >= 4096:  # the band's reading as a tone, as the detector reads it
+        band = det.band_estimate(x, sample_rate_hz)
+        tone = det.tone_estimate(x, sample_rate_hz, band["center_hz"], band["bandwidth_hz"])
+        out[by[WANDERING_TONE][0]] = {name: tone[name] for name in ("center_hz", "spread_hz", "wander_s", "amplitude_dps")}
+        bands.append(det.Candidate(WANDERING_TONE, out[by[WANDERING_TONE][0]], 0.0, 0.0, ""))
     if RESONANCE in by and x.size >= 4096:
         lines = [(b.params["center_hz"], b.params["bandwidth_hz"], b.params["rms_dps"]) for b in bands
-                 if det.hump_or_line(b.params["center_hz"] / b.params["bandwidth_hz"]) == NARROWBAND]
+                 if b.effect == NARROWBAND and det.hump_or_line(b.params["center_hz"] / b.params["bandwidth_hz"]) == NARROWBAND]
         fit = det.resonance_fit(x, sample_rate_hz, lines)
         if fit is not None:
             out[by[RESONANCE][0]] = {name: fit[name] for name in ("center_hz", "q", "rms_dps")}
@@ -136,7 +144,7 @@ def _resolved(xc, sample_rate_hz, cands, out, fit, q_dps):
     level re-fitted on the cleaned replicate ``xc`` with the replicate's band and colored noise
     (:func:`gyrofilter.analysis.gap.baseline.extended_axis`), against the composite fit's."""
     reps = [det.Candidate(c.effect, params, 0.0, 0.0, "") for c, params in zip(cands, out)
-            if params is not None and c.effect in (NARROWBAND, RESONANCE, COLORED_NOISE)]
+            if params is not None and c.effect in (NARROWBAND, RESONANCE, COLORED_NOISE, WANDERING_TONE)]
     ext = extended_axis({"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0}, reps, xc, sample_rate_hz, q_dps)
     lags = next(c.params for c in reps if c.effect == COLORED_NOISE)
     return composite_lags(ext, {"arw_dps_per_sqrt_hz": fit.arw_dps_per_sqrt_hz}, lags)

@@ -58,6 +58,16 @@ ones found, because the effects are confusable:
    bins are left out of the hump's fit, a broad band at the hump's centre is the hump
    (:func:`~gyrofilter.analysis.gap.detectors.resonance.hump_or_line`). Like a band, the hump is
    noise and stays in the series; the colored noise's lag-1 is corrected for it.
+2d. ``wandering_tone`` -- the band read as a tone of constant amplitude whose frequency wanders
+   (:mod:`~gyrofilter.analysis.gap.detectors.tone`): the same spectrum, another distribution. The
+   band cut out of the series has an excess kurtosis of 0 when Gaussian and -3/2 s² when a
+   constant-amplitude tone holds a share s of its variance; a kurtosis below 0 by
+   :data:`TONE_KURTOSIS_Z` block standard errors and at least :data:`TONE_MIN_FRACTION` of a
+   tone's names the tone instead of the band, provided the peak of its short-time spectra moves
+   (else it keeps one frequency: a sinusoid's). A sinusoid found within the band is the tone
+   dwelling at one frequency and joins it (one line, one finding). The colored noise's lags are
+   corrected for the tone's spectrum (:func:`tone_band`: its variance A² / 2 in a resonator of the
+   same centre and width).
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
@@ -100,7 +110,7 @@ ones found, because the effects are confusable:
 
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
 :class:`Candidate`, helpers), ``repeats``, ``outliers``, ``tails``, ``ringing``, ``sinusoid``, ``narrowband``,
-``resonance``, ``colored``
+``resonance``, ``tone``, ``colored``
 and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
 ``gyrofilter.analysis.gap.detectors`` as before.
 """
@@ -133,6 +143,8 @@ from .common import (  # noqa: F401
     STOCHASTIC_THRESHOLD,
     TAILS_MAX_STEP_SD,
     TAILS_WINSOR_SD,
+    TONE_KURTOSIS_Z,
+    TONE_MIN_FRACTION,
 )
 from .outliers import (  # noqa: F401
     OUTLIER_SPREAD_LN,
@@ -175,6 +187,11 @@ from .ringing import (  # noqa: F401
     detect_ringing,
     ring_fit,
     ringing_estimate,
+)
+from .tone import (  # noqa: F401
+    detect_wandering_tone,
+    tone_band,
+    tone_estimate,
 )
 from .colored import (  # noqa: F401
     colored_window,

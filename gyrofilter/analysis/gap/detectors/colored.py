@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ....effects import COLORED_NOISE, NARROWBAND, RESONATORS
+from ....effects import COLORED_NOISE, NARROWBAND, RESONATORS, WANDERING_TONE
 from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate
 from ...stats import dot, moving_mean
 from .resonance import band_correlation
@@ -120,7 +120,7 @@ def lags_without_repeats(r1, r2, f, iterations=4):
 def detect_colored(x, sample_rate_hz, bands=(), wander=None, repeated_fraction=0.0):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
     pass) from the high-passed r1, r2, less the correlation of the band candidates ``bands``
-    (``narrowband``, ``resonance``: noise still in ``x``;
+    (``narrowband``, ``wandering_tone``, ``resonance``: noise still in ``x``;
     :func:`~gyrofilter.analysis.gap.detectors.resonance.band_correlation`) and of a wander's high-frequency part (``wander``: its ``(v, r1, r2)``
     in the high-passed series, :func:`gyrofilter.analysis.gap.baseline.wander_highpassed`)
     (:func:`lags_from_highpassed`, :func:`other_correlation`). With a wander the significance is
@@ -171,6 +171,7 @@ def detect_colored(x, sample_rate_hz, bands=(), wander=None, repeated_fraction=0
     if bands or wander is not None:
         evidence += " once the " + " and the ".join(
             name for name, there in (("narrow band's", any(c.effect == NARROWBAND for c in bands)),
+                                     ("tone's", any(c.effect == WANDERING_TONE for c in bands)),
                                      ("resonance's", any(c.effect in RESONATORS for c in bands)),
                                      ("wander's", wander is not None)) if there
         ) + " own correlation is taken out"

@@ -58,6 +58,19 @@ GM_MAX_TAU_DIVISOR = 5
 #: at the Nyquist edge of AR(1) lag1 -0.7 (a PSD peaking at f_s / 2) 2.2 on 10^6 and 2.4 on
 #: 8.64 * 10^6 samples at 100 Hz
 NARROWBAND_THRESHOLD = 4.0
+#: a band is a wandering tone when its excess kurtosis is below 0 by this many standard errors
+#: (block standard error over :data:`TONE_BLOCKS` blocks, a t with 31 degrees of freedom: a
+#: Gaussian band passes with probability about 2e-4; on 40 Gaussian bands of 0.2-4 Hz at 12-45 Hz,
+#: 10-60 min at 100 Hz, the statistic's sd was 1.3 and its largest value 2.76) ...
+TONE_KURTOSIS_Z = 4.0
+#: ... and nearer a tone's than a Gaussian's: at least this fraction of the -3/2 s² of a
+#: constant-amplitude tone whose share of the band's variance is s (detectors/tone.py)
+TONE_MIN_FRACTION = 0.5
+#: the blocks the band's kurtosis is computed in for its standard error
+TONE_BLOCKS = 32
+#: a tone whose frequency track spreads less than this many bins of its short-time spectrum
+#: (f_s / L) keeps one frequency: a sinusoid, not a wandering tone
+TONE_MIN_SPREAD_BINS = 0.5
 #: repeated rows: the level of the one-sided binomial test of the rows equal to the previous one
 #: against their chance level (:mod:`gyrofilter.analysis.repeats`), for the gap's finding and for
 #: the warnings of ``allan`` and ``report``. Clean quantized 16-min records at 43 Hz (0.5-10 LSB of

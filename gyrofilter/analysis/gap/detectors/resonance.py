@@ -36,9 +36,10 @@ import math
 
 import numpy as np
 
-from ....effects import NARROWBAND, RESONANCE, RINGING
+from ....effects import NARROWBAND, RESONANCE, RINGING, WANDERING_TONE
 from .common import RESONANCE_LOWEST_FRACTION, RESONANCE_MAX_Q, RESONANCE_MIN_Q, RESONANCE_THRESHOLD, Candidate
 from .narrowband import narrowband_lags, welch_psd
+from .tone import tone_band
 from ....sim.noise_terms import filter_psd, filter_variance, narrowband_filter
 from ....sim.resonance import SHOCK_SPREAD_LN, band_pass, resonance_lags, ringing_variance
 from ....units import check_sample_rate_hz
@@ -188,7 +189,7 @@ def detect_resonance(x, sample_rate_hz, band=None):
 
 def band_correlation(bands, sample_rate_hz):
     """``(lags, variance)`` of the noise of the band candidates ``bands`` (``narrowband``,
-    ``resonance``, ``ringing``; none: ``(None, 0.0)``): each one's lag-1 and lag-2
+    ``wandering_tone``, ``resonance``, ``ringing``; none: ``(None, 0.0)``): each one's lag-1 and lag-2
     autocorrelations (:func:`~gyrofilter.analysis.gap.detectors.narrowband.narrowband_lags`,
     :func:`gyrofilter.sim.resonance.resonance_lags`) weighted by its variance (rms², or the
     ringing's :func:`gyrofilter.sim.resonance.ringing_variance`), and the sum of the variances:
@@ -196,7 +197,8 @@ def band_correlation(bands, sample_rate_hz):
     parts = []
     for c in bands:
         p = c.params
-        if c.effect == NARROWBAND:
+        if c.effect in (NARROWBAND, WANDERING_TONE):  # a tone: the band of its spectrum (tone_band)
+            p = p if c.effect == NARROWBAND else tone_band(p)
             parts.append((narrowband_lags(p["center_hz"], p["bandwidth_hz"], sample_rate_hz), p["rms_dps"] ** 2))
         elif c.effect == RESONANCE:
             parts.append((resonance_lags(p["center_hz"], p["q"], sample_rate_hz), p["rms_dps"] ** 2))
