@@ -17,7 +17,7 @@ from gyrofilter.analysis.gap.detectors import (RESONANCE_THRESHOLD, RINGING_THRE
 from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.sim.model import validate_model
 from gyrofilter.sim.noise_terms import filter_variance
-from gyrofilter.sim.resonance import band_pass, resonance_filter, ringing_variance
+from gyrofilter.sim.resonance import band_pass, band_pass_energy, resonance_filter, ringing_variance
 from gyrofilter.sim.simulate import simulate
 
 SIMS = 10
@@ -44,6 +44,17 @@ def test_resonator_peaks_at_its_centre_with_width_centre_over_q():
     assert warped[1] * warped[0] == pytest.approx(warped[2] ** 2, rel=1e-3)  # geometric centre
     assert above.max() - above.min() == pytest.approx(f0 / q, rel=0.1)
     assert power[0] < 1e-12 and power[-1] < 1e-12  # zeros at 0 Hz and f_s / 2
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_the_resonators_energy_in_closed_form_is_the_lyapunov_one(seed):
+    """Σ h² = α / (1 + α) (band_pass_energy) against the state-space Lyapunov solution, over
+    centres from 0.1 % to 99 % of Nyquist and Q from 0.5 to 30."""
+    rng = np.random.default_rng(seed)
+    for _ in range(50):
+        fs = float(rng.uniform(10, 2000))
+        f0, q = float(rng.uniform(0.001, 0.99)) * fs / 2, float(math.exp(rng.uniform(math.log(0.5), math.log(30))))
+        assert band_pass_energy(f0, q, fs) == pytest.approx(filter_variance(*band_pass(f0, q, fs)), rel=1e-7)
 
 
 @pytest.mark.parametrize("seed", [1, 2])

@@ -22,7 +22,6 @@ import math
 
 import numpy as np
 
-from .noise_terms import filter_variance
 
 #: log-spread of a shock's size about its median (natural-log units; as an outlier's default)
 SHOCK_SPREAD_LN = 0.25
@@ -38,12 +37,24 @@ def band_pass(center_hz, q, sample_rate_hz):
     return np.array([alpha, 0.0, -alpha]) / a0, np.array([a0, -2.0 * math.cos(w), 1.0 - alpha]) / a0
 
 
+def band_pass_energy(center_hz, q, sample_rate_hz):
+    """Σ h² of the resonator :func:`band_pass` (its output variance for unit white input), in closed
+    form: ``α / (1 + α)``, ``α = sin(ω₀) / (2Q)``. With ``b = b₀ (1, 0, -1)``, the output is
+    ``b₀ (u[n] - u[n-2])`` for the AR(2) ``u`` of the denominator (φ₁ = -a₁, φ₂ = -a₂), so
+    Σ h² = 2 b₀² γ₀ (1 - ρ₂), with γ₀ = (1 - φ₂) / ((1 + φ₂)((1 - φ₂)² - φ₁²)),
+    ρ₂ = φ₁² / (1 - φ₂) + φ₂ (Box, Jenkins & Reinsel, sec. 3.2.4), which reduces to α / (1 + α)
+    (checked against :func:`~gyrofilter.sim.noise_terms.filter_variance`'s Lyapunov solution in
+    the tests). The hump's fit evaluates it thousands of times."""
+    alpha = math.sin(2.0 * math.pi * float(center_hz) / sample_rate_hz) / (2.0 * float(q))
+    return alpha / (1.0 + alpha)
+
+
 def resonance_filter(rms_dps, center_hz, q, sample_rate_hz):
     """(b, a) of the ``resonance`` effect for :class:`~gyrofilter.sim.noise_terms.FilteredNoise`:
-    the resonator with its gain set so the stationary std is ``rms_dps``
-    (:func:`~gyrofilter.sim.noise_terms.filter_variance`, Σ h² of the unit resonator)."""
+    the resonator with its gain set so the stationary std is ``rms_dps`` (:func:`band_pass_energy`,
+    Σ h² of the unit resonator)."""
     b, a = band_pass(center_hz, q, sample_rate_hz)
-    return b * (float(rms_dps) / math.sqrt(filter_variance(b, a))), a
+    return b * (float(rms_dps) / math.sqrt(band_pass_energy(center_hz, q, sample_rate_hz))), a
 
 
 def impulse_response(center_hz, q, sample_rate_hz):

@@ -40,8 +40,8 @@ from ....effects import NARROWBAND, RESONANCE, RINGING, WANDERING_TONE
 from .common import RESONANCE_LOWEST_FRACTION, RESONANCE_MAX_Q, RESONANCE_MIN_Q, RESONANCE_THRESHOLD, Candidate
 from .narrowband import narrowband_lags, welch_psd
 from .tone import tone_band
-from ....sim.noise_terms import filter_psd, filter_variance, narrowband_filter
-from ....sim.resonance import SHOCK_SPREAD_LN, band_pass, resonance_lags, ringing_variance
+from ....sim.noise_terms import filter_psd, narrowband_filter
+from ....sim.resonance import SHOCK_SPREAD_LN, band_pass, band_pass_energy, resonance_lags, ringing_variance
 from ....units import check_sample_rate_hz
 
 #: Welch segment (samples) of the fit: f_s / 1024 resolution, 0.1 Hz at 100 Hz, a tenth of the
@@ -70,8 +70,7 @@ def _hump_psd(f, centre, q, rms, sample_rate_hz):
     b, a = band_pass(centre, q, sample_rate_hz)
     z = np.exp(-2j * math.pi * f / sample_rate_hz)
     gain2 = np.abs(b[0] + b[2] * z * z) ** 2 / np.abs(a[0] + a[1] * z + a[2] * z * z) ** 2
-    energy = filter_variance(b, a)
-    return 2.0 * rms * rms * gain2 / (sample_rate_hz * energy)
+    return 2.0 * rms * rms * gain2 / (sample_rate_hz * band_pass_energy(centre, q, sample_rate_hz))
 
 
 def _null_psd(p, f, sample_rate_hz):
