@@ -422,6 +422,60 @@ def weigh_lines(inp, state, scorer):
     return state
 
 
+def weigh_tones(inp, state, scorer):
+    """Choose per axis between a wandering tone and the narrow band it was read from (the
+    candidate's ``band_alternative``; module docstring, 3.): one line, read as a tone of constant
+    amplitude (the detector's evidence: the band's distribution and its moving peak) or as
+    Gaussian noise in the band, each simulated with the axis's other findings and scored by D. The
+    band reading puts its own variance in place of the tone's in the white level
+    (``N'^2 = N^2 + (A^2 / 2 - rms^2) / f_s``). The tone is named unless the band is clearly better
+    (``D_band < D_tone - s``): then the band, and a note says so; where the two are about equal, the
+    band rides on the tone as its ``alternatives``. Returns the new state, the reading not chosen
+    excluded."""
+    for k in range(len(state.candidates)):
+        i, c = state.candidates[k]
+        band = c.band_alternative
+        if band is None:
+            continue
+        c = replace(c, band_alternative=None)
+        state = state.with_candidate(k, c)
+        if k in state.excluded:
+            continue
+        state = replace(state, candidates=state.candidates + ((i, band),))
+        k_band = len(state.candidates) - 1
+        a = AXES[i]
+        others = [j for j, (ci, _) in enumerate(state.candidates)
+                  if ci == i and j not in (k, k_band) and j not in state.excluded]
+        ext = state.axes[i].ext
+        arw2 = ext["arw_dps_per_sqrt_hz"] ** 2
+        arw2_band = arw2 + (c.params["amplitude_dps"] ** 2 / 2.0 - band.params["rms_dps"] ** 2) / inp.sample_rate_hz
+        band_state = state.with_axis(i, ext=dict(ext, arw_dps_per_sqrt_hz=math.sqrt(max(arw2_band, 0.05 * arw2))))
+        label = f"tone and narrow-band readings of the line on {a}"
+        inp.say(label)
+        tone_model, band_model = state.model(inp, i, others + [k]), band_state.model(inp, i, others + [k_band])
+        d_tone, d_band = scorer.discrepancy(i, tone_model, label), scorer.discrepancy(i, band_model, label)
+        spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, tone_model, label),
+                                          scorer.null_spread(i, band_model, label))
+        weighed = (f"axis {a}: one line weighed on D (at {c.params['center_hz']:.4g} Hz): as a wandering tone "
+                   f"{d_tone:.3g}, as a narrow band {d_band:.3g}; allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} "
+                   "null spreads of D)")
+        if d_band < d_tone - spread:
+            state = replace(band_state, excluded=band_state.excluded | {k}).with_notes(
+                weighed + ": the narrow band is clearly better, the tone is not named")
+            continue
+        state = replace(state, excluded=state.excluded | {k_band})
+        if d_tone < d_band - spread:
+            state = state.with_notes(weighed + ": the tone is clearly better, the narrow band is not listed")
+            continue
+        state = state.with_notes(weighed + ": the record cannot tell them apart on D; the tone is named (the band's "
+                                 "distribution is a tone's), the narrow band listed as its alternative")
+        state = state.with_candidate(k, replace(c, alternatives=((band, d_band),), evidence_notes=c.evidence_notes + (
+            f"the line read as Gaussian noise in the band, {_show(band)}, explains this record about as well on D "
+            f"(D {d_band:.3g} against {d_tone:.3g}, within the null spread of D, {spread:.2g}); the tone is named: "
+            "the band's distribution is a tone's",)))
+    return state
+
+
 def _show(c):
     """``effect (k=v, ...)`` of a candidate."""
     return f"{c.effect} (" + ", ".join(f"{k}={v:.3g}" for k, v in c.params.items()) + ")"

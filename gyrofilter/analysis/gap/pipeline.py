@@ -77,7 +77,7 @@ from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_s
                        sim_features, temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
 from .confound import (alternatives_entry, kept_without_gain, one_cause_of_spikes, ring_or_hump, suggested_temperature,
-                       weigh_lines, weigh_readings, weigh_wanders)
+                       weigh_lines, weigh_readings, weigh_tones, weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
                        features, still_departs, strongest)
 from .intervals import MAX_BOOTSTRAP, MIN_REPLICATES, bootstrap_intervals
@@ -193,6 +193,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
         state = weigh_readings(inp, state, scorer)                      # 3., covariate or time reading of a temperature
         state = weigh_wanders(inp, state, scorer)                       # 3., bias instability or Gauss-Markov
         state = weigh_lines(inp, state, scorer)                         # 3., one line: sinusoid or narrow band
+        state = weigh_tones(inp, state, scorer)                         # 3., one line: a tone or a narrow band
         state = keep_findings(inp, state, scorer)                       # 4., gain per finding
         state = composite_step(inp, state, scorer)                      # 4., composite stochastic part where D stays high
         report["notes"] = list(state.notes)
@@ -374,13 +375,15 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
         x, owned = _subtract_component(x, line, owned), True
     hump, band = det.detect_resonance(x, sample_rate_hz, det.detect_narrowband(x, sample_rate_hz))
     hump = ring_or_hump(ring, hump)
+    measured = [c for c in (band, hump) if c is not None]  # the bands as measured: the colored noise's correction
     if band is not None:  # the band, or the tone that wanders in it (with the sinusoid it holds)
         tone, folded = det.detect_wandering_tone(x, sample_rate_hz, band, line)
-        if tone is not None:
+        if tone is not None:  # the band's Gaussian reading (holding a folded sinusoid's power) rides on it
             cands = [k for k in cands if not (folded and k is line)]
-            band = tone
-    bands = [c for c in (band, hump) if c is not None]
-    cands.extend(bands)
+            rms = math.hypot(band.params["rms_dps"], line.params["amplitude_dps"] / math.sqrt(2.0)) if folded else None
+            band = replace(tone, band_alternative=band if rms is None else replace(band, params=dict(band.params, rms_dps=rms)))
+    cands.extend(c for c in (band, hump) if c is not None)
+    bands = measured
     colored = det.detect_colored(x, sample_rate_hz, bands, repeated_fraction=repeated_fraction)
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)
