@@ -65,9 +65,10 @@ ones found, because the effects are confusable:
    :data:`TONE_KURTOSIS_Z` block standard errors and at least :data:`TONE_MIN_FRACTION` of a
    tone's names the tone instead of the band, provided the peak of its short-time spectra moves
    (else it keeps one frequency: a sinusoid's). A sinusoid found within the band is the tone
-   dwelling at one frequency and joins it (one line, one finding). The colored noise's lags are
-   corrected for the tone's spectrum (:func:`tone_band`: its variance A² / 2 in a resonator of the
-   same centre and width).
+   dwelling at one frequency and joins it (one line, one finding). The tone carries the band as its
+   Gaussian reading, and the two are weighed on D
+   (:func:`gyrofilter.analysis.gap.confound.weigh_tones`); the colored noise's lags are corrected for
+   the band as measured, whichever reading is named.
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
