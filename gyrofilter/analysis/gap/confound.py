@@ -71,7 +71,11 @@ band's power returned to the white noise) and as a band of noise (the band holdi
 power as well, ``rms'^2 = rms^2 + A^2 / 2``) are weighed on D with the axis's other findings, and
 with both where both may be there. The band is named where it is clearly better, both only where
 both together are clearly better than either; otherwise the sinusoid (a line no wider than the
-record needs is a tone), with the band as its alternative where the two are about equal.
+record needs is a tone), with the band as its alternative where the two are about equal. A band
+whose distribution is a tone's (:mod:`gyrofilter.analysis.gap.detectors.tone`) is read as a
+wandering tone, and that reading is weighed on D against the band as Gaussian noise
+(:func:`weigh_tones`): the tone is named unless the band is clearly better, the band listed as its
+alternative where the two are about equal.
 
 **4. Heavy tails or isolated spikes** (:func:`tails_or_spikes`). A heavy-tailed noise and a few
 gross errors both widen the tails of the noise's distribution. The likelier of the two models of
