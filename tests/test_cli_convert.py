@@ -13,6 +13,7 @@ import sys
 import tempfile
 import threading
 import types
+import zlib
 
 import numpy as np
 import pytest
@@ -307,6 +308,50 @@ def test_a_pipe_is_copied_within_a_bound_or_refused(tmp_path, capsys, monkeypatc
     assert f"a pipe is copied to {tempfile.gettempdir()} to be read twice, and this one holds more than " \
            f"{min(limit, free // 2)} bytes" in err
     assert "save the log to a file and convert that" in err
+
+
+@pytest.mark.parametrize("zipped", [False, True])
+def test_a_pipe_whose_first_line_is_no_line_of_a_log_is_refused_before_it_is_copied(tmp_path, capsys, zipped):
+    """Issue 37 (attack 3): ``cat /dev/zero | convert -`` copied up to 4 GiB to the temporary
+    folder before refusing line 1. The first line must end within MAX_LINE_BYTES + 1 bytes (of
+    text, gzip or not): checked on the first blocks as they come, refused at once. The pipe
+    offers 64 MiB of zeros (text), or 2 GiB of them gzip-compressed, a block at a time."""
+    from gyrofilter.recording.header import MAX_LINE_BYTES
+
+    offered = 64 << 20
+    fed = [0]  # bytes the pipe took before its reader went away
+    read_end, write_end = os.pipe()
+
+    def blocks():
+        zeros = bytes(1 << 16)
+        if not zipped:
+            yield from (zeros for _ in range(offered // len(zeros)))
+            return
+        packer = zlib.compressobj(6, zlib.DEFLATED, 31)
+        for _ in range((2 << 30) // len(zeros)):
+            if packed := packer.compress(zeros):
+                yield packed
+        yield packer.flush()
+
+    def feed():
+        with contextlib.suppress(BrokenPipeError), open(write_end, "wb") as fh:
+            for block in blocks():
+                fh.write(block)
+                fed[0] += len(block)
+            fed.append("all")
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    try:
+        rc = main(["convert", f"/dev/fd/{read_end}", "--unit", "dps", "--out", str(tmp_path / "rec.csv")])
+    finally:
+        os.close(read_end)
+    writer.join(timeout=60)
+    assert not writer.is_alive()
+    err = capsys.readouterr().err
+    assert rc == 2 and err == f"gyrofilter: error: /dev/fd/{read_end}: line 1: longer than {MAX_LINE_BYTES} bytes, not a line of a log\n"
+    assert fed[-1] != "all" and fed[0] < 4 * MAX_LINE_BYTES, fed  # refused within the first blocks, not after the copy
+    assert os.listdir(tmp_path) == []
 
 
 def test_a_temporary_folder_that_fills_while_a_pipe_is_copied_is_said(tmp_path, capsys, monkeypatch):

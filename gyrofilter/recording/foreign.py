@@ -88,7 +88,7 @@ _COMMENT = ("#", "//")
 #: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
 #: where it is): 4 GiB, a 1 kHz log of about 40 h
 MAX_PIPE_COPY_BYTES = 4 << 30
-#: bytes read from a pipe at a time
+#: most bytes read from a pipe at a time
 PIPE_BLOCK_BYTES = 1 << 20
 #: the log name that means the standard input (``zcat log.gz | gyrofilter convert - --out rec.csv.gz``)
 STDIN = "-"
@@ -178,14 +178,18 @@ def _copy_pipe(raw, path):
     :data:`MAX_PIPE_COPY_BYTES` and at most half of the space free in the temporary folder
     (``TMPDIR``) when it starts, so that a piped log of many GB never fills that folder: a longer
     pipe, or a folder that fills all the same, is refused with what to do instead (give the
-    log as a file, which is read where it is, or a roomier ``TMPDIR``)."""
+    log as a file, which is read where it is, or a roomier ``TMPDIR``). Its first block is
+    checked as it comes (:func:`_first_line_ends`): a pipe of bytes that are no log (``cat
+    /dev/zero``) is refused at once, not after 4 GiB."""
     folder = tempfile.gettempdir()
     limit = min(MAX_PIPE_COPY_BYTES, shutil.disk_usage(folder).free // 2)
     instead = "save the log to a file and convert that (a file is read where it is, not copied), or set TMPDIR to a roomier folder"
     copy = tempfile.TemporaryFile()
     try:
-        copied = 0
-        while block := raw.read(PIPE_BLOCK_BYTES):
+        copied, start = 0, b""  # start: the first blocks, until the first line is checked
+        while block := raw.read1(PIPE_BLOCK_BYTES):  # what has come, at most a block
+            if start is not None:
+                start = None if _first_line_ends(start + block, path) else start + block
             copied += len(block)
             if copied > limit:
                 raise RecordingError(f"{path}: a pipe is copied to {folder} to be read twice, and this one holds more than "
@@ -204,6 +208,29 @@ def _copy_pipe(raw, path):
     return copy
 
 
+def _first_line_ends(start, path):
+    """True when ``start``, the first bytes of a log (gzip-compressed or not), holds the end of
+    its first line within MAX_LINE_BYTES + 1 bytes of text; False while it holds fewer bytes of
+    text and no line end; a refusal when :func:`_lines` would refuse line 1 whatever follows (no
+    line end in that many bytes, gzip data that do not decompress)."""
+    text = start
+    if start[:2] == b"\x1f\x8b":
+        try:
+            text = zlib.decompressobj(31).decompress(start, MAX_LINE_BYTES + 1)
+        except zlib.error as exc:
+            raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
+    if b"\n" in text:
+        return True
+    if len(text) > MAX_LINE_BYTES:
+        raise _too_long(path, 1)
+    return False
+
+
+def _too_long(path, number):
+    """The refusal of the log's line ``number``, longer than MAX_LINE_BYTES bytes."""
+    return RecordingError(f"{path}: line {number}: longer than {MAX_LINE_BYTES} bytes, not a line of a log")
+
+
 def _lines(raw, path):
     """(line number, text) of the open log ``raw`` (the file ``path``; gzip when it starts with the
     gzip magic), from its start, line ends dropped, each line at most MAX_LINE_BYTES bytes and
@@ -219,7 +246,7 @@ def _lines(raw, path):
                     return
                 number += 1
                 if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
-                    raise RecordingError(f"{path}: line {number}: longer than {MAX_LINE_BYTES} bytes, not a line of a log")
+                    raise _too_long(path, number)
                 try:
                     yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n")
                 except UnicodeDecodeError:
