@@ -295,10 +295,10 @@ def test_a_pipe_is_copied_within_a_bound_or_refused(tmp_path, capsys, monkeypatc
     temporary folder first (a pipe cannot be read twice), filling /tmp with a log of many GB.
     The copy holds at most MAX_PIPE_COPY_BYTES and half the free space of that folder; beyond,
     one line says what to do, no output is written and the temporary folder keeps nothing."""
-    from gyrofilter.recording import foreign
+    from gyrofilter.recording import logtext
 
-    monkeypatch.setattr(foreign, "MAX_PIPE_COPY_BYTES", limit)
-    monkeypatch.setattr(foreign.shutil, "disk_usage", lambda folder: types.SimpleNamespace(free=free))
+    monkeypatch.setattr(logtext, "MAX_PIPE_COPY_BYTES", limit)
+    monkeypatch.setattr(logtext.shutil, "disk_usage", lambda folder: types.SimpleNamespace(free=free))
     rc, dst = _convert_pipe(tmp_path, _PIPED)
     err = capsys.readouterr().err
     if held:
@@ -383,13 +383,13 @@ def test_runs_of_empty_lines_are_skipped_in_bulk_and_counted(tmp_path, capsys, m
 
 def test_a_temporary_folder_that_fills_while_a_pipe_is_copied_is_said(tmp_path, capsys, monkeypatch):
     """The copy of a pipe meeting a full temporary folder (ENOSPC) said "cannot read", blaming the log."""
-    from gyrofilter.recording import foreign
+    from gyrofilter.recording import logtext
 
     class Full(io.BytesIO):
         def write(self, data):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(foreign.tempfile, "TemporaryFile", Full)
+    monkeypatch.setattr(logtext.tempfile, "TemporaryFile", Full)
     rc, dst = _convert_pipe(tmp_path, _PIPED)
     err = capsys.readouterr().err
     assert rc == 2 and not dst.exists() and len(err.strip().splitlines()) == 1

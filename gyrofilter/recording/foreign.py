@@ -10,9 +10,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
   never whole: a first pass checks every row and keeps 16 bytes a row (its line number and its
   time), a pass over the time column follows when its unit is inferred (the times in s need
   it), and :meth:`Foreign.chunks` reads it once more for the writer. A log that cannot be read
-  twice (a pipe) is first copied, as it is, to an anonymous temporary file, of at most
-  :data:`MAX_PIPE_COPY_BYTES` and half the free space of the temporary folder (a longer pipe is
-  refused, saying to give the log as a file).
+  twice (a pipe) is first copied, as it is, to an anonymous temporary file, within a bound
+  (:mod:`gyrofilter.recording.logtext`: a longer pipe is refused, saying to give the log as a file).
 - **Columns.** The time and the three gyro columns are found by their usual names
   (:data:`TIME_NAME`, :data:`GYRO_NAME`: ``t``/``time``/``timestamp``/``%time``/
   ``seconds_elapsed``, ``gx``/``gyro_x``/``wx``/``omega_x``/``angular_velocity.x``, ``x``; case,
@@ -42,15 +41,9 @@ from __future__ import annotations
 
 import contextlib
 import decimal
-import errno
-import gzip
 import math
-import os
 import re
-import shutil
 import sys
-import tempfile
-import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,8 +54,8 @@ from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sam
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .header import FORMAT_VERSION, GYRO_COLUMNS, MAX_LINE_BYTES, VERSION_KEY, format_number
-from .lines import sibling_hint
+from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number
+from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
 from .writer import EXACT_FORMAT, exact_format
 
@@ -85,15 +78,6 @@ _UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s":
                "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns"}
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
-#: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
-#: where it is): 4 GiB, a 1 kHz log of about 40 h
-MAX_PIPE_COPY_BYTES = 4 << 30
-#: most bytes read from a pipe at a time
-PIPE_BLOCK_BYTES = 1 << 20
-#: the log name that means the standard input (``zcat log.gz | gyrofilter convert - --out rec.csv.gz``)
-STDIN = "-"
-
-
 class Foreign(Closable):
     """What :func:`read_foreign` found, checked in a first pass over the log: the recording's
     ``header`` (ready to write), its ``columns``, the exact ``formats`` of their values (the
@@ -156,131 +140,6 @@ def _normal(name):
         name = name[:bracket.start()]
     key = re.sub(r"[^a-z0-9%]+", "_", name.lower()).strip("_")
     return key.removeprefix("field_"), unit
-
-
-def _open(path):
-    """The log ``path`` (``-``: the standard input) open for reading twice (binary): the file itself, or, when it cannot seek
-    (a pipe: ``<(zcat log.gz)``, /dev/stdin), an anonymous temporary copy of its bytes (in the
-    system's temporary folder, gone when closed), made one block at a time and bounded
-    (:func:`_copy_pipe`)."""
-    try:
-        raw = open(os.dup(sys.stdin.fileno()) if path == STDIN else path, "rb")
-    except OSError as exc:
-        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
-    if raw.seekable():
-        return raw
-    with raw:
-        return _copy_pipe(raw, path)
-
-
-def _copy_pipe(raw, path):
-    """The pipe ``raw`` copied to an anonymous temporary file, rewound. The copy holds at most
-    :data:`MAX_PIPE_COPY_BYTES` and at most half of the space free in the temporary folder
-    (``TMPDIR``) when it starts, so that a piped log of many GB never fills that folder: a longer
-    pipe, or a folder that fills all the same, is refused with what to do instead (give the
-    log as a file, which is read where it is, or a roomier ``TMPDIR``). Its first block is
-    checked as it comes (:func:`_first_line_ends`): a pipe of bytes that are no log (``cat
-    /dev/zero``) is refused at once, not after 4 GiB."""
-    folder = tempfile.gettempdir()
-    limit = min(MAX_PIPE_COPY_BYTES, shutil.disk_usage(folder).free // 2)
-    instead = "save the log to a file and convert that (a file is read where it is, not copied), or set TMPDIR to a roomier folder"
-    copy = tempfile.TemporaryFile()
-    try:
-        copied, start = 0, b""  # start: the first blocks, until the first line is checked
-        while block := raw.read1(PIPE_BLOCK_BYTES):  # what has come, at most a block
-            if start is not None:
-                start = None if _first_line_ends(start + block, path) else start + block
-            copied += len(block)
-            if copied > limit:
-                raise RecordingError(f"{path}: a pipe is copied to {folder} to be read twice, and this one holds more than "
-                                     f"{limit} bytes (at most {MAX_PIPE_COPY_BYTES / 2**30:g} GiB and half of the space free "
-                                     f"there); {instead}")
-            copy.write(block)
-        copy.flush()
-        copy.seek(0)
-    except OSError as exc:
-        copy.close()
-        where = "copying it to " + folder if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else "cannot read"
-        raise RecordingError(f"{path}: {where}: {exc.strerror or exc}; {instead}") from None
-    except BaseException:
-        copy.close()
-        raise
-    return copy
-
-
-def _first_line_ends(start, path):
-    """True when ``start``, the first bytes of a log (gzip-compressed or not), holds the end of
-    its first line within MAX_LINE_BYTES + 1 bytes of text; False while it holds fewer bytes of
-    text and no line end; a refusal when :func:`_lines` would refuse line 1 whatever follows (no
-    line end in that many bytes, gzip data that do not decompress)."""
-    text = start
-    if start[:2] == b"\x1f\x8b":
-        try:
-            text = zlib.decompressobj(31).decompress(start, MAX_LINE_BYTES + 1)
-        except zlib.error as exc:
-            raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
-    if b"\n" in text:
-        return True
-    if len(text) > MAX_LINE_BYTES:
-        raise _too_long(path, 1)
-    return False
-
-
-def _too_long(path, number):
-    """The refusal of the log's line ``number``, longer than MAX_LINE_BYTES bytes."""
-    return RecordingError(f"{path}: line {number}: longer than {MAX_LINE_BYTES} bytes, not a line of a log")
-
-
-def _lines(raw, path):
-    """(line number, text, lines) of the open log ``raw`` (the file ``path``; gzip when it starts
-    with the gzip magic), from its start, line ends dropped, each line at most MAX_LINE_BYTES
-    bytes and UTF-8; ``lines`` is 1, or for a run of empty lines (``\\n`` or ``\\r\\n`` alone) the
-    number of them, one item with ``text`` "" numbered by the first: a run is skipped in bulk
-    (:func:`_skip_empty_lines`), so that 30 MB of line ends (30 kB of gzip) cost no more than a
-    few blocks, not a Python step each (17 s). The first bytes are peeked at, not read."""
-    raw.seek(0)
-    try:
-        zipped = raw.peek(2)[:2] == b"\x1f\x8b"
-        with (gzip.GzipFile(fileobj=raw, mode="rb") if zipped else contextlib.nullcontext(raw)) as fh:
-            number = 0
-            while True:
-                data = fh.readline(MAX_LINE_BYTES + 1)
-                if not data:
-                    return
-                number += 1
-                if data in (b"\n", b"\r\n"):
-                    run = 1 + _skip_empty_lines(fh)
-                    yield number, "", run
-                    number += run - 1
-                    continue
-                if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
-                    raise _too_long(path, number)
-                try:
-                    yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n"), 1
-                except UnicodeDecodeError:
-                    raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
-    except (EOFError, gzip.BadGzipFile, zlib.error, OSError) as exc:
-        if isinstance(exc, RecordingError):
-            raise
-        raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
-
-
-_EMPTY_LINES = re.compile(rb"(?:\r?\n)+")
-
-
-def _skip_empty_lines(fh):
-    """Read past the empty lines (``\\n`` or ``\\r\\n`` alone) that come next in ``fh``, a buffered
-    block at a time (``peek``); how many there were."""
-    skipped = 0
-    while True:
-        ahead = fh.peek(PIPE_BLOCK_BYTES)
-        run = _EMPTY_LINES.match(ahead)
-        if run is None:
-            return skipped
-        fh.read(run.end())
-        skipped += run.group().count(b"\n")
-        if run.end() < len(ahead):
-            return skipped
 
 
 def _splitter(line):
@@ -369,7 +228,7 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
     counted in ``counts["skipped"]``."""
     names, wanted = plan.names, plan.wanted
     numbers, cells_of = [], [[] for _ in wanted]
-    for number, text, lines in _lines(raw, path):
+    for number, text, lines in log_lines(raw, path):
         if number <= plan.after_line:
             continue
         if not text.strip() or text.lstrip().startswith(_COMMENT):
@@ -479,7 +338,7 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
         raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
     if sample_rate_hz is not None:
         sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
-    raw = _open(path)
+    raw = open_log(path)
     try:
         return _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit)
     except BaseException:
@@ -493,7 +352,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     offset from the first stamp while the time unit is not known; then a pass over the time
     column computes the times in s). Every refusal comes in the order of reading it whole."""
     header_line, names, split, first_data, preamble = None, None, None, None, 0
-    for number, text, lines in _lines(raw, path):
+    for number, text, lines in log_lines(raw, path):
         if text.strip() and not text.lstrip().startswith(_COMMENT):
             preamble = number - 1  # the lines before it, blank or comments
             split = _splitter(text)
