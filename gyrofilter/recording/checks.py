@@ -46,8 +46,9 @@ class TimeCheck:
       when there are half a window of them, and a file shorter than one window on all its steps
       (:meth:`finish`). The typical step is the lower median of the window's steps that are not
       gaps (:func:`typical_steps`): a device that lost most samples still shows the rate in the
-      steps between samples it delivered in a row, and its recording reads, its gaps counted. A window of gaps only holds no such step: its
-      median of all steps is compared (a ``t`` at half the header's rate looks just so).
+      steps between samples it delivered in a row, and its recording reads, its gaps counted. A
+      window of gaps only holds no such step: its median of all steps is compared (a ``t`` at
+      half the header's rate looks just so).
 
     ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
     advice a refusal ends with (the writer says why its rows would come out so).
