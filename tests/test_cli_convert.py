@@ -13,6 +13,7 @@ import sys
 import tempfile
 import threading
 import types
+import zlib
 
 import numpy as np
 import pytest
@@ -294,10 +295,10 @@ def test_a_pipe_is_copied_within_a_bound_or_refused(tmp_path, capsys, monkeypatc
     temporary folder first (a pipe cannot be read twice), filling /tmp with a log of many GB.
     The copy holds at most MAX_PIPE_COPY_BYTES and half the free space of that folder; beyond,
     one line says what to do, no output is written and the temporary folder keeps nothing."""
-    from gyrofilter.recording import foreign
+    from gyrofilter.recording import logtext
 
-    monkeypatch.setattr(foreign, "MAX_PIPE_COPY_BYTES", limit)
-    monkeypatch.setattr(foreign.shutil, "disk_usage", lambda folder: types.SimpleNamespace(free=free))
+    monkeypatch.setattr(logtext, "MAX_PIPE_COPY_BYTES", limit)
+    monkeypatch.setattr(logtext.shutil, "disk_usage", lambda folder: types.SimpleNamespace(free=free))
     rc, dst = _convert_pipe(tmp_path, _PIPED)
     err = capsys.readouterr().err
     if held:
@@ -309,15 +310,86 @@ def test_a_pipe_is_copied_within_a_bound_or_refused(tmp_path, capsys, monkeypatc
     assert "save the log to a file and convert that" in err
 
 
+@pytest.mark.parametrize("zipped", [False, True])
+def test_a_pipe_whose_first_line_is_no_line_of_a_log_is_refused_before_it_is_copied(tmp_path, capsys, zipped):
+    """Issue 37 (attack 3): ``cat /dev/zero | convert -`` copied up to 4 GiB to the temporary
+    folder before refusing line 1. The first line must end within MAX_LINE_BYTES + 1 bytes (of
+    text, gzip or not): checked on the first blocks as they come, refused at once. The pipe
+    offers 64 MiB of zeros (text), or 2 GiB of them gzip-compressed, a block at a time."""
+    from gyrofilter.recording.header import MAX_LINE_BYTES
+
+    offered = 64 << 20
+    fed = [0]  # bytes the pipe took before its reader went away
+    read_end, write_end = os.pipe()
+
+    def blocks():
+        zeros = bytes(1 << 16)
+        if not zipped:
+            yield from (zeros for _ in range(offered // len(zeros)))
+            return
+        packer = zlib.compressobj(6, zlib.DEFLATED, 31)
+        for _ in range((2 << 30) // len(zeros)):
+            if packed := packer.compress(zeros):
+                yield packed
+        yield packer.flush()
+
+    def feed():
+        with contextlib.suppress(BrokenPipeError), open(write_end, "wb") as fh:
+            for block in blocks():
+                fh.write(block)
+                fed[0] += len(block)
+            fed.append("all")
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    try:
+        rc = main(["convert", f"/dev/fd/{read_end}", "--unit", "dps", "--out", str(tmp_path / "rec.csv")])
+    finally:
+        os.close(read_end)
+    writer.join(timeout=60)
+    assert not writer.is_alive()
+    err = capsys.readouterr().err
+    assert rc == 2 and err == f"gyrofilter: error: /dev/fd/{read_end}: line 1: longer than {MAX_LINE_BYTES} bytes, not a line of a log\n"
+    assert fed[-1] != "all" and fed[0] < 4 * MAX_LINE_BYTES, fed  # refused within the first blocks, not after the copy
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("name", ["bomb.csv.gz", "bomb.csv"])
+def test_runs_of_empty_lines_are_skipped_in_bulk_and_counted(tmp_path, capsys, monkeypatch, name):
+    """Issue 37 (attack 3): 30 MB of line ends (30 kB of gzip) took 17-22 s, a Python step per
+    line. A run of empty lines (\\n or \\r\\n alone) is read past a block at a time: a few
+    hundred reads of a line for 4 million of them, every line still counted and numbered."""
+    text = (b"\n\r\n# note\nt,gx,gy,gz\n" + b"\n" * 3_000_000 + b"0,1,2,3\r\n\r\n\r\n0.01,1,2,3\n\n# x\n"
+            + b"\r\n" * 1_000_000 + b"0.02,1,2\n")
+    path = tmp_path / name
+    path.write_bytes(gzip.compress(text) if name.endswith(".gz") else text)
+    calls = [0]
+    readline = gzip.GzipFile.readline
+
+    def counted(self, *args):
+        calls[0] += 1
+        return readline(self, *args)
+
+    monkeypatch.setattr(gzip.GzipFile, "readline", counted)  # a gzip log's lines (a text file's: C code)
+    assert main(["convert", str(path), "--unit", "dps", "--out", str(tmp_path / "rec.csv")]) == 2
+    bad_line = text.count(b"\n")  # the last line, its number counted across the runs
+    assert capsys.readouterr().err == f"gyrofilter: error: {path}: line {bad_line}: 3 values, but 4 columns (line 4)\n"
+    assert calls[0] < 1000 if name.endswith(".gz") else calls[0] == 0, calls
+    path.write_bytes(text.replace(b"0.02,1,2\n", b"0.02,1,2,3\n"))
+    assert main(["convert", str(path), "--unit", "dps", "--out", str(tmp_path / "rec.csv")]) == 0
+    assert "; 3 rows, 4000007 blank or comment line(s) skipped" in capsys.readouterr().err
+    assert len(read_recording(tmp_path / "rec.csv")) == 3
+
+
 def test_a_temporary_folder_that_fills_while_a_pipe_is_copied_is_said(tmp_path, capsys, monkeypatch):
     """The copy of a pipe meeting a full temporary folder (ENOSPC) said "cannot read", blaming the log."""
-    from gyrofilter.recording import foreign
+    from gyrofilter.recording import logtext
 
     class Full(io.BytesIO):
         def write(self, data):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(foreign.tempfile, "TemporaryFile", Full)
+    monkeypatch.setattr(logtext.tempfile, "TemporaryFile", Full)
     rc, dst = _convert_pipe(tmp_path, _PIPED)
     err = capsys.readouterr().err
     assert rc == 2 and not dst.exists() and len(err.strip().splitlines()) == 1

@@ -453,3 +453,17 @@ def test_a_figure_that_fails_names_the_figure_not_its_folder(tmp_path):
     assert lines == [f"gyrofilter: error: {out / 'rep' / 'adev_x.png'}: File too large; not written",
                      f"gyrofilter: error: {out / 'allan.png'}: File too large; not written"], proc.stderr
     assert not out.exists()
+
+
+@pytest.mark.parametrize("out", [os.path.join("d", "x.csv"), os.path.join("d", "sub", "x.csv")])
+def test_an_output_below_a_symbolic_link_to_a_missing_place_is_refused_not_made(tmp_path, monkeypatch, capsys, out):
+    """Issue 37 (attack 3): with ``d -> nowhere``, ``simulate --out d/x.csv`` made ``./nowhere/``
+    (the folder was resolved, then made) and wrote there. One line names the link; nothing is made."""
+    from gyrofilter.cli import main
+
+    os.symlink("nowhere", tmp_path / "d")
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "1", "--out", out]) == 2
+    assert capsys.readouterr().err == (f"gyrofilter: error: {out}: d is a symbolic link that leads to no folder "
+                                       "(No such file or directory)\n")
+    assert os.listdir(tmp_path) == ["d"]

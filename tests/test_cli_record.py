@@ -4,12 +4,14 @@ The source is a seeded simulation paced in real time (or a paced replay), so the
 every sample the source delivered; whatever the signal, the file reads back and its samples
 equal the source's from the first one up to the last flush.
 """
+import contextlib
 import os
 import re
 import resource
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -456,3 +458,44 @@ def test_a_disk_that_fills_at_the_last_flush_names_the_file_and_what_it_kept(tmp
         np.testing.assert_array_equal(read_recording(out).gyro, read_recording(whole).gyro[:n])
     else:
         assert os.listdir(out.parent) == []
+
+
+
+@pytest.mark.parametrize("lines, delivered, steps_s, duration_s", [
+    pytest.param(b"5,0,0,0\n6,nan,0,0\n7,0.1,0.2,0.3\n", [[0, 0, 0], [0.1, 0.2, 0.3]], [0.02, 0.01], 3,
+                 id="one of three lost, a short file"),
+    pytest.param(b"5,0,0,0\n6,nan,0,0\n7,0.1,0.2,0.3\n8,nan,0,0\n9,0.4,0.5,0.6\n",
+                 [[0, 0, 0], [0.1, 0.2, 0.3], [0.4, 0.5, 0.6]], [0.02, 0.02, 0.01], 22, id="two of five lost, windows")])
+def test_a_serial_device_that_loses_samples_is_recorded_whole_with_its_gaps(tmp_path, lines, delivered, steps_s, duration_s):
+    """Issue 37 (attack 3): a device on a real pseudo-terminal that sends counters 5, 6 (a NaN
+    line, refused), 7, ... over and over (samples lost, then a restart) gave a t whose steps were
+    mostly 0.02 s in a 100-Hz file; record exited 2 ("t steps by 0.02 s ... not written") and kept
+    nothing (of a short file) or stopped at the first window. Every sample it delivered is in
+    the file, which reads, its gaps in t counted and noted."""
+    out = tmp_path / "lossy.csv"
+    primary, secondary = os.openpty()
+    port = os.ttyname(secondary)
+    proc = start_record(f"serial:{port}", out, "--quiet", "--duration", str(duration_s))
+
+    def feed():
+        with contextlib.suppress(OSError):  # the record ended and the port closed
+            for _ in range(int(2 * duration_s / sum(steps_s))):  # twice the duration's samples
+                os.write(primary, lines)
+
+    try:
+        assert os.read(primary, 1) == b"?"
+        os.write(primary, b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
+        threading.Thread(target=feed, daemon=True).start()
+        err = proc.communicate(timeout=60)[1]
+    finally:
+        os.close(primary)
+        os.close(secondary)
+    assert proc.returncode == 0, err
+    rec = read_recording(out)
+    n = len(rec)
+    assert n == int(re.search(r"wrote (\d+) samples", err).group(1)) > 100 * duration_s / 2
+    np.testing.assert_array_equal(rec.gyro_dps, np.tile(delivered, (n, 1))[:n])
+    steps = np.tile(steps_s, n)[:n - 1]
+    np.testing.assert_allclose(np.diff(rec.t_s), steps, atol=1e-9)
+    gap_notes = sum(text.startswith("gap: 1 samples lost before") for _, text in rec.notes)
+    assert rec.t_gaps == np.count_nonzero(steps > 0.015) and gap_notes >= rec.t_gaps  # notes may run ahead of the cut

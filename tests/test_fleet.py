@@ -4,6 +4,7 @@ failing file in its own row, and the flags catching a unit with a hidden defect 
 import contextlib
 import csv
 import http.server
+import io
 import json
 import math
 import os
@@ -439,6 +440,22 @@ def test_findings_cell_is_effect_param_value_items_in_full_precision():
     assert [(e, k, float(v)) for e, k, v in items] == [("sinusoid", "frequency_hz", 7.3), ("sinusoid", "amplitude_dps", 0.051234567891),
                                                       ("bias_step", "time_s", 120.0), ("bias_step", "size_dps", -0.04)]
     assert fleet_table.findings_cell([]) == ""
+
+
+@pytest.mark.parametrize("name", ["=1+2", "+1", "-1", "@SUM(A1)", "\tx", "\rx"])
+def test_a_text_cell_a_spreadsheet_would_run_as_a_formula_gets_a_quote_in_front(name):
+    """Issue 37 (attack 3): a recording named '=1+2.csv.gz' put the formula =1+2 in fleet.csv's
+    unit column (and its path, and a failed file's reason that names it). OWASP's rule: a ' in
+    front; an ordinary name, and numbers (a negative one too), are written as they are."""
+    results = [{"recording": f"{name}.csv.gz", "error": f"{name}.csv.gz: line 6: not a number", "sample_rate_hz": None,
+                "duration_s": None, "runtime_s": 0.5, "warnings": []},
+               {"recording": "unit-1.csv", "error": "unit-1.csv: gone", "sample_rate_hz": 100.0, "duration_s": -2.5,
+                "runtime_s": 0.25, "warnings": [f"{name} warned"]}]
+    rows = fleet_table.fleet_rows([name, "unit-1"], results)
+    lines = list(csv.DictReader(io.StringIO(fleet_table.fleet_csv(rows), newline="")))
+    assert [(r["unit"], r["recording"], r["status"]) for r in lines] == [
+        (f"'{name}", f"'{name}.csv.gz", f"'{name}.csv.gz: line 6: not a number"), ("unit-1", "unit-1.csv", "unit-1.csv: gone")]
+    assert (lines[1]["duration_s"], lines[1]["warnings"]) == ("-2.5", f"'{name} warned")
 
 
 def test_a_fleet_where_no_file_could_be_analysed_exits_2_with_its_table(tmp_path, capsys):

@@ -21,7 +21,7 @@ from gyrofilter.analysis import stats
 from gyrofilter.analysis.gap import detectors as det
 from gyrofilter.analysis.gap import report as gap_report
 from gyrofilter.analysis.gap.pipeline import analyse_gap
-from gyrofilter.analysis.gap.features import departures, discrepancy
+from gyrofilter.analysis.gap.features import D_FAR, d_shown, departures, discrepancy
 from gyrofilter.cli import main
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.effects import COLORED_NOISE, REPEATED_SAMPLES, RINGING
@@ -970,3 +970,15 @@ def test_hidden_repeated_rows_are_named_over_seeds(seed):
     case = he.draw_case(500 + seed, effect=REPEATED_SAMPLES, duration_s=600.0)
     named, in_tol, others = he.check(case, _run(case))
     assert named and in_tol and not others, (case["params"], others)
+
+
+def test_a_d_far_outside_is_written_so_not_as_digits():
+    """Issue 37 (attack 3): an axis constant but for one sample gave the note "warmup on x
+    dropped: no gain (discrepancy 0.643 -> 4.96e+08)": digits that say nothing but "far off".
+    Beyond D_FAR the notes and the report write "far outside (D > 1e+06)"; below, 3 digits (or
+    those the sampling error supports) as before."""
+    far = f"far outside (D > {D_FAR:g})"
+    assert far == "far outside (D > 1e+06)"
+    assert [d_shown(v) for v in (0.643, 17.6, D_FAR, 4.96e8, math.inf)] == ["0.643", "17.6", "1e+06", far, far]
+    assert gap_report.d_text(4.96e8, 2.1e7) == far and gap_report.d_text(math.inf, 0.0) == far
+    assert gap_report.d_text(17.6, 10.4) == "18 +- 10" and gap_report.d_text(0.643, 0.0) == "0.643"

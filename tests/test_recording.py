@@ -360,6 +360,19 @@ def test_t_with_gaps_and_jitter_within_5_percent_still_reads(tmp_path, chunk_row
     assert head.t_gaps == 1500
 
 
+@pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
+def test_t_of_a_device_that_lost_most_samples_reads_with_its_gaps_counted(tmp_path, chunk_rows):
+    """Issue 37 (attack 3): a serial device that lost two samples of three, restarting its
+    counter each time, gave steps of 0.02 s and 0.01 s in turn (median 0.02 s in a 100-Hz file):
+    refused, so that its recording kept nothing. The typical step is the median of the steps
+    that are not gaps; the gaps are counted."""
+    steps = np.tile([0.02, 0.01], 1500)
+    steps[::7] = 0.03  # and a few longer gaps
+    head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
+    np.testing.assert_array_equal(data[:, 0], np.concatenate(([0.0], np.cumsum(steps))))
+    assert head.t_gaps == np.count_nonzero(steps > 0.015)
+
+
 def _t_body(steps_s):
     """Data lines of a recording whose t has the steps ``steps_s`` (gyro values all 0)."""
     t = np.concatenate(([0.0], np.cumsum(steps_s)))
@@ -367,13 +380,15 @@ def _t_body(steps_s):
 
 
 @pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
-@pytest.mark.parametrize("late_step_s", [pytest.param(0.001, id="t runs 10x fast"), pytest.param(0.02, id="every other sample lost")])
-def test_t_is_checked_against_the_rate_in_every_window_not_only_the_first(tmp_path, chunk_rows, late_step_s):
-    """Only the first 1000 steps were checked: a t that ran 10x fast, or lost most samples, from
-    step 2300 on read silently with the header's rate. Windows are steps 1-1000, 1001-2000, ...;
+@pytest.mark.parametrize("late_step_s, late_from", [pytest.param(0.001, 2300, id="t runs 10x fast"),
+                                                     pytest.param(0.02, 2000, id="every other sample lost")])
+def test_t_is_checked_against_the_rate_in_every_window_not_only_the_first(tmp_path, chunk_rows, late_step_s, late_from):
+    """Only the first 1000 steps were checked: a t that ran 10x fast from step 2300 on, or lost
+    every other sample from step 2000 on (a window of gaps only: it looks like a header at twice
+    t's rate), read silently with the header's rate. Windows are steps 1-1000, 1001-2000, ...;
     the third (mostly late steps) starts at sample 2000, file line 2005."""
     steps = np.full(4000, 0.01)
-    steps[2300:] = late_step_s
+    steps[late_from:] = late_step_s
     path = _dps_file(tmp_path, _t_body(steps))
     with pytest.raises(RecordingError, match=re.escape(
             f"{path}: t steps by {late_step_s:g} s (median of the 1000 steps from line 2005), but sample_rate_hz "
@@ -409,7 +424,7 @@ def test_a_stretch_at_another_rate_as_long_as_a_window_is_caught_wherever_it_lie
 def test_writers_refuse_a_t_the_reader_would_refuse(tmp_path):
     """What is written reads back: a t whose steps disagree with sample_rate_hz in some window."""
     steps = np.full(2999, 0.01)
-    steps[1400:] = 0.03
+    steps[1000:] = 0.03  # a window of gaps only: nothing in it shows the header's rate
     t = np.concatenate(([0.0], np.cumsum(steps)))
     rec = Recording.from_dps(np.zeros((3000, 3)), 100.0, t_s=t)
     with pytest.raises(RecordingError, match=r"late.csv: t steps by 0.03 s \(median of the 1000 steps from row 1001 of "

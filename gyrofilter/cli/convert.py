@@ -8,7 +8,8 @@ file takes its name only when whole) and says what it read.
 """
 from .. import __version__
 from ..recording import RecordingWriter
-from ..recording.foreign import MAX_PIPE_COPY_BYTES, TIME_UNITS, read_foreign
+from ..recording.foreign import TIME_UNITS, read_foreign
+from ..recording.logtext import MAX_PIPE_COPY_BYTES
 from ..units import GYRO_UNITS
 from . import console, options, outputs
 

@@ -26,7 +26,9 @@ def check_outputs(outputs, inputs=(), force=False):
     file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
     replaced. An output that exists is refused without ``force``; two outputs naming one file are
     refused; so is one whose folder (the nearest that exists: the others are made) cannot be
-    written, so that a long run does not end in a file it cannot write. Raises FileExistsError /
+    written, so that a long run does not end in a file it cannot write, and one whose missing
+    folders would be made through a symbolic link that leads nowhere (``d -> nowhere``: ``d/x.csv``
+    made ``./nowhere/``). Raises FileExistsError /
     SettingsError naming the file.
     """
     inputs = {_file_key(p) for p in inputs if p}
@@ -43,11 +45,11 @@ def check_outputs(outputs, inputs=(), force=False):
             raise SettingsError(f"{out}: named for two outputs; give each output its own file")
         seen.add(key)
         _check_dotdot(out)
-        parent = output_folder(out)
+        parent = os.path.dirname(out) or os.curdir  # as given: a symbolic link on the way is seen, not resolved
         while not os.path.isdir(parent):
-            if os.path.lexists(parent):
+            if os.path.lexists(parent):  # a file, or a link to no folder (its target would be made)
                 raise SettingsError(f"{out}: {parent} {_not_a_folder(parent)}")
-            parent = os.path.dirname(parent)
+            parent = os.path.dirname(parent) or os.curdir
         if not os.access(parent, os.W_OK | os.X_OK):
             raise SettingsError(f"{out}: the folder {parent} is not writable")
         if not os.path.lexists(out):

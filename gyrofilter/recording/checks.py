@@ -37,15 +37,18 @@ class TimeCheck:
 
     - ``t`` increases strictly, also across chunks;
     - steps longer than 1.5 sample intervals are counted in ``head.t_gaps`` (lost samples: legal);
-    - the typical step of every window of :data:`RATE_CHECK_STEPS` consecutive steps, their lower
-      median, is ``1 / sample_rate_hz`` within :data:`~gyrofilter.units.RATE_TOLERANCE`, in both directions: a ``t``
+    - the typical step of every window of :data:`RATE_CHECK_STEPS` consecutive steps is
+      ``1 / sample_rate_hz`` within :data:`~gyrofilter.units.RATE_TOLERANCE`, in both directions: a ``t``
       that runs faster or slower than the header says, anywhere in the file, would make every
       time constant and Allan cluster time wrong. The windows start every half window (steps
       1-1000, 501-1500, 1001-2000, ...), so a stretch at the wrong rate as long as a window is
       caught wherever it lies; at the end, the steps after the last whole window are checked
       when there are half a window of them, and a file shorter than one window on all its steps
-      (:meth:`finish`). Gaps lengthen some steps, not the median, unless they are most of a
-      window's steps.
+      (:meth:`finish`). The typical step is the lower median of the window's steps that are not
+      gaps (:func:`typical_steps`): a device that lost most samples still shows the rate in the
+      steps between samples it delivered in a row, and its recording reads, its gaps counted. A
+      window of gaps only holds no such step: its median of all steps is compared (a ``t`` at
+      half the header's rate looks just so).
 
     ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
     advice a refusal ends with (the writer says why its rows would come out so).
@@ -90,7 +93,7 @@ class TimeCheck:
         whole_file = self.phases[0].windows == 0
         for phase in self.phases:
             if len(phase.pending) and (whole_file or len(phase.pending) >= RATE_CHECK_STEPS // 2):
-                median = float(_lower_medians(phase.pending[None, :])[0])
+                median = float(typical_steps(phase.pending[None, :], self.max_step_s)[0])
                 if self._off(median):
                     self._refuse(median, len(phase.pending), phase.pending_where, first=whole_file)
             if whole_file:
@@ -127,7 +130,7 @@ class _WindowPhase:
         steps = np.concatenate((self.pending, step))
         whole = len(steps) // RATE_CHECK_STEPS * RATE_CHECK_STEPS
         if whole:
-            medians = _lower_medians(steps[:whole].reshape(-1, RATE_CHECK_STEPS))
+            medians = typical_steps(steps[:whole].reshape(-1, RATE_CHECK_STEPS), check.max_step_s)
             wrong = np.flatnonzero(check._off(medians))
             if wrong.size:
                 j = int(wrong[0])
@@ -139,6 +142,19 @@ class _WindowPhase:
             if whole < len(steps):
                 self.pending_where = step_start(first + whole - len(self.pending))
         self.pending = steps[whole:]
+
+
+def typical_steps(windows, max_step_s):
+    """The typical step of each row of ``windows`` (2-D, steps of ``t`` in s): the lower median of
+    its steps of at most ``max_step_s`` (1.5 sample intervals; the longer ones are gaps, lost
+    samples), or of all its steps when every one is a gap."""
+    typical = _lower_medians(windows)
+    gappy = np.flatnonzero((windows > max_step_s).any(axis=1))
+    for row in gappy:  # rare: sorted one by one, the gaps left out
+        kept = windows[row][windows[row] <= max_step_s]
+        if len(kept):
+            typical[row] = _lower_medians(kept[None, :])[0]
+    return typical
 
 
 def _lower_medians(windows):

@@ -10,9 +10,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
   never whole: a first pass checks every row and keeps 16 bytes a row (its line number and its
   time), a pass over the time column follows when its unit is inferred (the times in s need
   it), and :meth:`Foreign.chunks` reads it once more for the writer. A log that cannot be read
-  twice (a pipe) is first copied, as it is, to an anonymous temporary file, of at most
-  :data:`MAX_PIPE_COPY_BYTES` and half the free space of the temporary folder (a longer pipe is
-  refused, saying to give the log as a file).
+  twice (a pipe) is first copied, as it is, to an anonymous temporary file, within a bound
+  (:mod:`gyrofilter.recording.logtext`: a longer pipe is refused, saying to give the log as a file).
 - **Columns.** The time and the three gyro columns are found by their usual names
   (:data:`TIME_NAME`, :data:`GYRO_NAME`: ``t``/``time``/``timestamp``/``%time``/
   ``seconds_elapsed``, ``gx``/``gyro_x``/``wx``/``omega_x``/``angular_velocity.x``, ``x``; case,
@@ -42,15 +41,9 @@ from __future__ import annotations
 
 import contextlib
 import decimal
-import errno
-import gzip
 import math
-import os
 import re
-import shutil
 import sys
-import tempfile
-import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,8 +54,8 @@ from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sam
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .header import FORMAT_VERSION, GYRO_COLUMNS, MAX_LINE_BYTES, VERSION_KEY, format_number
-from .lines import sibling_hint
+from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number
+from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
 from .writer import EXACT_FORMAT, exact_format
 
@@ -85,15 +78,6 @@ _UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s":
                "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns"}
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
-#: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
-#: where it is): 4 GiB, a 1 kHz log of about 40 h
-MAX_PIPE_COPY_BYTES = 4 << 30
-#: bytes read from a pipe at a time
-PIPE_BLOCK_BYTES = 1 << 20
-#: the log name that means the standard input (``zcat log.gz | gyrofilter convert - --out rec.csv.gz``)
-STDIN = "-"
-
-
 class Foreign(Closable):
     """What :func:`read_foreign` found, checked in a first pass over the log: the recording's
     ``header`` (ready to write), its ``columns``, the exact ``formats`` of their values (the
@@ -156,78 +140,6 @@ def _normal(name):
         name = name[:bracket.start()]
     key = re.sub(r"[^a-z0-9%]+", "_", name.lower()).strip("_")
     return key.removeprefix("field_"), unit
-
-
-def _open(path):
-    """The log ``path`` (``-``: the standard input) open for reading twice (binary): the file itself, or, when it cannot seek
-    (a pipe: ``<(zcat log.gz)``, /dev/stdin), an anonymous temporary copy of its bytes (in the
-    system's temporary folder, gone when closed), made one block at a time and bounded
-    (:func:`_copy_pipe`)."""
-    try:
-        raw = open(os.dup(sys.stdin.fileno()) if path == STDIN else path, "rb")
-    except OSError as exc:
-        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
-    if raw.seekable():
-        return raw
-    with raw:
-        return _copy_pipe(raw, path)
-
-
-def _copy_pipe(raw, path):
-    """The pipe ``raw`` copied to an anonymous temporary file, rewound. The copy holds at most
-    :data:`MAX_PIPE_COPY_BYTES` and at most half of the space free in the temporary folder
-    (``TMPDIR``) when it starts, so that a piped log of many GB never fills that folder: a longer
-    pipe, or a folder that fills all the same, is refused with what to do instead (give the
-    log as a file, which is read where it is, or a roomier ``TMPDIR``)."""
-    folder = tempfile.gettempdir()
-    limit = min(MAX_PIPE_COPY_BYTES, shutil.disk_usage(folder).free // 2)
-    instead = "save the log to a file and convert that (a file is read where it is, not copied), or set TMPDIR to a roomier folder"
-    copy = tempfile.TemporaryFile()
-    try:
-        copied = 0
-        while block := raw.read(PIPE_BLOCK_BYTES):
-            copied += len(block)
-            if copied > limit:
-                raise RecordingError(f"{path}: a pipe is copied to {folder} to be read twice, and this one holds more than "
-                                     f"{limit} bytes (at most {MAX_PIPE_COPY_BYTES / 2**30:g} GiB and half of the space free "
-                                     f"there); {instead}")
-            copy.write(block)
-        copy.flush()
-        copy.seek(0)
-    except OSError as exc:
-        copy.close()
-        where = "copying it to " + folder if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else "cannot read"
-        raise RecordingError(f"{path}: {where}: {exc.strerror or exc}; {instead}") from None
-    except BaseException:
-        copy.close()
-        raise
-    return copy
-
-
-def _lines(raw, path):
-    """(line number, text) of the open log ``raw`` (the file ``path``; gzip when it starts with the
-    gzip magic), from its start, line ends dropped, each line at most MAX_LINE_BYTES bytes and
-    UTF-8. The first bytes are peeked at, not read."""
-    raw.seek(0)
-    try:
-        zipped = raw.peek(2)[:2] == b"\x1f\x8b"
-        with (gzip.GzipFile(fileobj=raw, mode="rb") if zipped else contextlib.nullcontext(raw)) as fh:
-            number = 0
-            while True:
-                data = fh.readline(MAX_LINE_BYTES + 1)
-                if not data:
-                    return
-                number += 1
-                if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
-                    raise RecordingError(f"{path}: line {number}: longer than {MAX_LINE_BYTES} bytes, not a line of a log")
-                try:
-                    yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n")
-                except UnicodeDecodeError:
-                    raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
-    except (EOFError, gzip.BadGzipFile, zlib.error, OSError) as exc:
-        if isinstance(exc, RecordingError):
-            raise
-        raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
 
 
 def _splitter(line):
@@ -316,12 +228,12 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
     counted in ``counts["skipped"]``."""
     names, wanted = plan.names, plan.wanted
     numbers, cells_of = [], [[] for _ in wanted]
-    for number, text in _lines(raw, path):
+    for number, text, lines in log_lines(raw, path):
         if number <= plan.after_line:
             continue
         if not text.strip() or text.lstrip().startswith(_COMMENT):
             if counts is not None:
-                counts["skipped"] += 1
+                counts["skipped"] += lines
             continue
         cells = plan.split(text)
         if len(cells) != len(names):
@@ -426,7 +338,7 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
         raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
     if sample_rate_hz is not None:
         sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
-    raw = _open(path)
+    raw = open_log(path)
     try:
         return _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit)
     except BaseException:
@@ -440,10 +352,9 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     offset from the first stamp while the time unit is not known; then a pass over the time
     column computes the times in s). Every refusal comes in the order of reading it whole."""
     header_line, names, split, first_data, preamble = None, None, None, None, 0
-    for number, text in _lines(raw, path):
-        preamble += 1
+    for number, text, lines in log_lines(raw, path):
         if text.strip() and not text.lstrip().startswith(_COMMENT):
-            preamble -= 1
+            preamble = number - 1  # the lines before it, blank or comments
             split = _splitter(text)
             cells = split(text)
             if all(is_plain_number(c) for c in cells):  # no column names: the columns are numbered

@@ -59,8 +59,6 @@ with fewer, no unit is flagged on it and :func:`flag_units` says so in its stati
 from __future__ import annotations
 
 import collections
-import csv
-import io
 import math
 import os
 
@@ -320,28 +318,43 @@ def findings_cell(findings):
     return ";".join(f"{f['effect']}:{k}={_cell(v)}" for f in findings for k, v in f["params"].items())
 
 
+#: what a spreadsheet runs as a formula when a text cell starts with it (OWASP, "CSV Injection")
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
 def _cell(value):
+    """A cell of fleet.csv: a number in full precision, or text; text that starts with one of
+    :data:`FORMULA_STARTS` (a unit named ``=1+2``) gets a ``'`` in front, OWASP's rule against CSV
+    injection, so that a spreadsheet shows it instead of running it (the exact name is in the
+    fleet's JSON reports); numbers (a negative one too) are written as they are."""
     if value is None:
         return ""
     if isinstance(value, float):
         return repr(value)
     if isinstance(value, list):
-        return "; ".join(v["text"] if isinstance(v, dict) else str(v) for v in value)
-    return str(value)
+        value = "; ".join(v["text"] if isinstance(v, dict) else str(v) for v in value)
+    elif not isinstance(value, str):
+        return str(value)
+    return "'" + value if value.startswith(FORMULA_STARTS) else value
 
 
 def fleet_csv(rows):
     """fleet.csv: a header of :data:`COLUMNS` and one line per row of ``rows`` (:func:`fleet_rows`);
     numbers in full precision (Python's shortest round-trip form), empty cells for None, findings
     as :func:`findings_cell`, other lists (flags, warnings) joined by "; "; text as
-    :func:`~gyrofilter.units.utf8_text` writes it."""
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(COLUMNS)
-    for row in rows:
-        writer.writerow([findings_cell(row[c]) if c == "findings" and row[c] is not None else _cell(row[c])
-                         for c in COLUMNS])
-    return utf8_text(out.getvalue())  # names and reasons hold file names, which may not be UTF-8
+    :func:`~gyrofilter.units.utf8_text` writes it, a text cell a spreadsheet would run as a formula
+    after a ``'`` (:func:`_cell`). Lines end in ``\\n``; a cell holding ``,``, ``"``, a line feed or
+    a carriage return is quoted, ``"`` doubled (RFC 4180; Python's ``csv.writer`` leaves a carriage
+    return unquoted when the lines end in ``\\n``, and a name holding one split its row)."""
+    lines = [COLUMNS] + [[findings_cell(row[c]) if c == "findings" and row[c] is not None else _cell(row[c])
+                          for c in COLUMNS] for row in rows]
+    text = "".join(",".join(_quoted(cell) for cell in line) + "\n" for line in lines)
+    return utf8_text(text)  # names and reasons hold file names, which may not be UTF-8
+
+
+def _quoted(cell):
+    """A CSV cell as RFC 4180 writes it: in ``"`` when it holds ``,``, ``"``, CR or LF, ``"`` doubled."""
+    return '"' + cell.replace('"', '""') + '"' if any(c in cell for c in ',"\r\n') else cell
 
 
 def _coef_md(row, key):

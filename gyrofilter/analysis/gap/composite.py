@@ -32,6 +32,7 @@ from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAI
                             WANDERS)
 from . import detectors as det
 from .confound import CONFOUNDED_SPREADS
+from .features import d_shown
 from .state import Kept
 from ..noise import gmwm
 from ...sim import noise_terms as nt
@@ -107,7 +108,7 @@ def _with_composite(inp, state, scorer, i, fit, comp):
     if not (d_comp < det.COMPOSITE_MIN_GAIN * after and d_comp < after - spread):
         return state.with_notes(
             f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
-            f"({after:.3g} -> {d_comp:.3g}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times "
+            f"({d_shown(after)} -> {d_shown(d_comp)}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times "
             f"its value and by more than {CONFOUNDED_SPREADS:g} null spreads of D of the extended model, {spread:.2g}); not used")
     notes = []
     if dropped_colored:  # said only where the composite model is used
@@ -118,7 +119,7 @@ def _with_composite(inp, state, scorer, i, fit, comp):
     notes.append(
         f"axis {a}: the composite stochastic fit ({fit.name}, chosen by WVIC on the "
         f"{'robust ' if wv.robust else ''}wavelet variance at "
-        f"tau >= {wv.tau_s[0]:.3g} s) lowers D from {after:.3g} to {d_comp:.3g}; it replaces the "
+        f"tau >= {wv.tau_s[0]:.3g} s) lowers D from {d_shown(after)} to {d_shown(d_comp)}; it replaces the "
         "axis's slow stochastic findings")
     for k in comp_k:
         trial = trial.with_candidate(k, replace(trial.candidates[k][1], statistic=after / d_comp))

@@ -192,6 +192,18 @@ def discrepancy(deps):
     return float(np.mean(z ** 2)) if z.size else 0.0
 
 
+#: a D beyond it is written "far outside (D > 1e+06)", not as a number (:func:`d_shown`)
+D_FAR = 1e6
+
+
+def d_shown(value):
+    """A discrepancy D as the notes and reports write it: 3 significant digits, or "far outside
+    (D > 1e+06)" beyond :data:`D_FAR`. So large a D comes from a spread of the simulations near 0
+    (an axis constant but for one sample: "0.643 -> 4.96e+08"); it says that the model is far
+    off, and its digits say nothing more. The JSON keeps the number."""
+    return f"far outside (D > {D_FAR:g})" if value > D_FAR else f"{value:.3g}"
+
+
 # ---------------------------------------------------------------------------------------------
 # what the report says about the departures
 
@@ -252,7 +264,7 @@ def still_departs(axis, d_after, deps, taus, bands):
     holds there (an effect the table lacks or too weak to name), below, a fitted term too strong
     at that scale."""
     key, z, j, where = _furthest(deps, taus, bands)
-    text = (f"axis {axis}: after extension D = {d_after:.3g}, above {det.OUTSIDE_NULL_D:g} (clean records of 27 s "
+    text = (f"axis {axis}: after extension D = {d_shown(d_after)}, above {det.OUTSIDE_NULL_D:g} (clean records of 27 s "
             f"to 2.8 h stay below it in 95 % of runs): the model does not close here. The {where} departs most "
             f"(z = {z:+.1f} sd of the extended model's simulations)")
     if key in ("adev", "band"):

@@ -78,8 +78,8 @@ from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_s
 from .composite import composite_step, slow_wavelet_variance
 from .confound import (alternatives_entry, kept_without_gain, one_cause_of_spikes, ring_or_hump, suggested_temperature,
                        weigh_lines, weigh_readings, weigh_tones, weigh_wanders)
-from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands, feature_taus,
-                       features, still_departs, strongest)
+from .features import (METRIC, d_shown, departs_most, departure_summary, departures, discrepancy, feature_bands,
+                       feature_taus, features, still_departs, strongest)
 from .intervals import MAX_BOOTSTRAP, MIN_REPLICATES, bootstrap_intervals
 from .rows import rows_findings, weigh_repeats
 from .scoring import Scorer
@@ -465,8 +465,8 @@ def keep_findings(inp, state, scorer):
                 scorer.null_spread(i, state.model(inp, i, others), label)))
             if why is not None:
                 kept.append(Kept(k, i, c, after))
-                notes.append(f"{c.effect} on {AXES[i]}: no gain alone ({before[i]:.3g} -> {after:.3g}) but kept: with the "
-                             f"axis's other findings D = {with_all:.3g}, without it {without:.3g}{why}")
+                notes.append(f"{c.effect} on {AXES[i]}: no gain alone ({d_shown(before[i])} -> {d_shown(after)}) but kept: with the "
+                             f"axis's other findings D = {d_shown(with_all)}, without it {d_shown(without)}{why}")
                 continue
         elif c.effect in COVARIATES:  # alone on its axis: weighed against the baseline the same way
             label = f"{c.effect} on {AXES[i]} against the baseline"
@@ -474,9 +474,9 @@ def keep_findings(inp, state, scorer):
                 scorer.null_spread(i, state.model(inp, i, [k]), label), scorer.null_spread(i, None, label)))
             if why:
                 kept.append(Kept(k, i, c, after))
-                notes.append(f"{c.effect} on {AXES[i]}: no gain ({before[i]:.3g} -> {after:.3g}) but kept{why}")
+                notes.append(f"{c.effect} on {AXES[i]}: no gain ({d_shown(before[i])} -> {d_shown(after)}) but kept{why}")
                 continue
-        notes.append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {before[i]:.3g} -> {after:.3g})")
+        notes.append(f"{c.effect} on {AXES[i]} dropped: no gain (discrepancy {d_shown(before[i])} -> {d_shown(after)})")
     state = replace(state, kept=tuple(kept), single=single).with_notes(*notes)
     after = list(before)
     if kept:

@@ -28,6 +28,7 @@ from ...plots import pyplot, save_figure
 from ...recording.header import markdown_text
 from ...units import AXES, utf8_text
 from .confound import NAMED_BECAUSE, WHY_THE_COVARIATE
+from .features import D_FAR, d_shown
 
 REPORT_NAME = "gap_report.md"
 FIGURE_KINDS = ("adev", "spectrum", "temperature", "time")
@@ -173,7 +174,9 @@ def indistinguishable_text(finding, *, figure=False):
 def d_text(value, se):
     """D with the digits its sampling error ``se`` supports: rounded to the error's first
     significant digit (its first two where that digit is 1), ``D +- se``; three significant digits
-    where the error is 0 (fewer than 3 simulations)."""
+    where the error is 0 (fewer than 3 simulations); far outside as :func:`~.features.d_shown` says it."""
+    if value > D_FAR:
+        return d_shown(value)
     if not se > 0:
         return f"{value:.3g}"
     digits = -int(math.floor(math.log10(se)))
@@ -187,7 +190,7 @@ def alternatives_text(alternatives):
     """``effect (k = v, ...) + ...: D d`` of a finding's ``alternatives`` (one reading: the entries share D)."""
     parts = [f"{e['effect']} (" + ", ".join(f"{k} = {_fmt(v)}" for k, v in e["params"].items()) + ")"
              for e in alternatives]
-    return " + ".join(parts) + f": D {alternatives[0]['D']:.3g}"
+    return " + ".join(parts) + f": D {d_shown(alternatives[0]['D'])}"
 
 
 def _fmt(v):
@@ -272,7 +275,7 @@ def write_report(report, rec, out_dir):
         lines += [covariate_preamble(report["findings"]), ""]
     for f in report["findings"]:
         lines += [f"- **{f['effect']}** on **{f['axis']}**: {params_text(f, ' = ')}.",
-                  f"  Gain: D {f['gain']['before']:.3g} -> {f['gain']['after']:.3g}."]
+                  f"  Gain: D {d_shown(f['gain']['before'])} -> {d_shown(f['gain']['after'])}."]
         if f.get("alternatives"):
             lines.append(f"  {indistinguishable_text(f, figure=True)}.")
         lines.append(f"  Evidence: {evidence_text(f)}.")

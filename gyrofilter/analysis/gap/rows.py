@@ -19,7 +19,7 @@ import numpy as np
 
 from ...effects import REPEATED_SAMPLES
 from ...units import AXES
-from .features import METRIC
+from .features import METRIC, d_shown
 from .state import RowsFinding
 
 
@@ -41,8 +41,8 @@ def weigh_repeats(inp, state, scorer):
     before_mean = float(np.mean([state.after[i] for i in analysed]))
     after_mean = float(np.mean([after[i] for i in analysed]))
     if not after_mean < before_mean:
-        return state.with_notes(f"{REPEATED_SAMPLES} dropped: no gain (mean discrepancy over the axes {before_mean:.3g} "
-                                f"-> {after_mean:.3g})")
+        return state.with_notes(f"{REPEATED_SAMPLES} dropped: no gain (mean discrepancy over the axes {d_shown(before_mean)} "
+                                f"-> {d_shown(after_mean)})")
     return replace(state, rows=RowsFinding(cand, counted, entry, before_mean, after_mean), after=tuple(after))
 
 

@@ -1,0 +1,154 @@
+"""The text of another tool's gyro log, for :mod:`gyrofilter.recording.foreign`: the log opened to
+be read more than once (:func:`open_log`: a file where it is, a pipe copied first, within a bound,
+its first line checked as its first bytes come) and its lines (:func:`log_lines`: numbered,
+checked for length and UTF-8, runs of empty lines read past a block at a time).
+"""
+from __future__ import annotations
+
+import contextlib
+import errno
+import gzip
+import os
+import re
+import shutil
+import sys
+import tempfile
+import zlib
+
+from ..errors import RecordingError
+from .header import MAX_LINE_BYTES
+from .lines import sibling_hint
+
+#: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
+#: where it is): 4 GiB, a 1 kHz log of about 40 h
+MAX_PIPE_COPY_BYTES = 4 << 30
+#: most bytes read from a pipe at a time
+PIPE_BLOCK_BYTES = 1 << 20
+#: the log name that means the standard input (``zcat log.gz | gyrofilter convert - --out rec.csv.gz``)
+STDIN = "-"
+
+
+
+def open_log(path):
+    """The log ``path`` (``-``: the standard input) open for reading twice (binary): the file itself, or, when it cannot seek
+    (a pipe: ``<(zcat log.gz)``, /dev/stdin), an anonymous temporary copy of its bytes (in the
+    system's temporary folder, gone when closed), made one block at a time and bounded
+    (:func:`_copy_pipe`)."""
+    try:
+        raw = open(os.dup(sys.stdin.fileno()) if path == STDIN else path, "rb")
+    except OSError as exc:
+        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
+    if raw.seekable():
+        return raw
+    with raw:
+        return _copy_pipe(raw, path)
+
+
+def _copy_pipe(raw, path):
+    """The pipe ``raw`` copied to an anonymous temporary file, rewound. The copy holds at most
+    :data:`MAX_PIPE_COPY_BYTES` and at most half of the space free in the temporary folder
+    (``TMPDIR``) when it starts, so that a piped log of many GB never fills that folder: a longer
+    pipe, or a folder that fills all the same, is refused with what to do instead (give the
+    log as a file, which is read where it is, or a roomier ``TMPDIR``). Its first block is
+    checked as it comes (:func:`_first_line_ends`): a pipe of bytes that are no log (``cat
+    /dev/zero``) is refused at once, not after 4 GiB."""
+    folder = tempfile.gettempdir()
+    limit = min(MAX_PIPE_COPY_BYTES, shutil.disk_usage(folder).free // 2)
+    instead = "save the log to a file and convert that (a file is read where it is, not copied), or set TMPDIR to a roomier folder"
+    copy = tempfile.TemporaryFile()
+    try:
+        copied, start = 0, b""  # start: the first blocks, until the first line is checked
+        while block := raw.read1(PIPE_BLOCK_BYTES):  # what has come, at most a block
+            if start is not None:
+                start = None if _first_line_ends(start + block, path) else start + block
+            copied += len(block)
+            if copied > limit:
+                raise RecordingError(f"{path}: a pipe is copied to {folder} to be read twice, and this one holds more than "
+                                     f"{limit} bytes (at most {MAX_PIPE_COPY_BYTES / 2**30:g} GiB and half of the space free "
+                                     f"there); {instead}")
+            copy.write(block)
+        copy.flush()
+        copy.seek(0)
+    except OSError as exc:
+        copy.close()
+        where = "copying it to " + folder if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else "cannot read"
+        raise RecordingError(f"{path}: {where}: {exc.strerror or exc}; {instead}") from None
+    except BaseException:
+        copy.close()
+        raise
+    return copy
+
+
+def _first_line_ends(start, path):
+    """True when ``start``, the first bytes of a log (gzip-compressed or not), holds the end of
+    its first line within MAX_LINE_BYTES + 1 bytes of text; False while it holds fewer bytes of
+    text and no line end; a refusal when :func:`log_lines` would refuse line 1 whatever follows (no
+    line end in that many bytes, gzip data that do not decompress)."""
+    text = start
+    if start[:2] == b"\x1f\x8b":
+        try:
+            text = zlib.decompressobj(31).decompress(start, MAX_LINE_BYTES + 1)
+        except zlib.error as exc:
+            raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
+    if b"\n" in text:
+        return True
+    if len(text) > MAX_LINE_BYTES:
+        raise _too_long(path, 1)
+    return False
+
+
+def _too_long(path, number):
+    """The refusal of the log's line ``number``, longer than MAX_LINE_BYTES bytes."""
+    return RecordingError(f"{path}: line {number}: longer than {MAX_LINE_BYTES} bytes, not a line of a log")
+
+
+def log_lines(raw, path):
+    """(line number, text, lines) of the open log ``raw`` (the file ``path``; gzip when it starts
+    with the gzip magic), from its start, line ends dropped, each line at most MAX_LINE_BYTES
+    bytes and UTF-8; ``lines`` is 1, or for a run of empty lines (``\\n`` or ``\\r\\n`` alone) the
+    number of them, one item with ``text`` "" numbered by the first: a run is skipped in bulk
+    (:func:`_skip_empty_lines`), so that 30 MB of line ends (30 kB of gzip) cost no more than a
+    few blocks, not a Python step each (17 s). The first bytes are peeked at, not read."""
+    raw.seek(0)
+    try:
+        zipped = raw.peek(2)[:2] == b"\x1f\x8b"
+        with (gzip.GzipFile(fileobj=raw, mode="rb") if zipped else contextlib.nullcontext(raw)) as fh:
+            number = 0
+            while True:
+                data = fh.readline(MAX_LINE_BYTES + 1)
+                if not data:
+                    return
+                number += 1
+                if data in (b"\n", b"\r\n"):
+                    run = 1 + _skip_empty_lines(fh)
+                    yield number, "", run
+                    number += run - 1
+                    continue
+                if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
+                    raise _too_long(path, number)
+                try:
+                    yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n"), 1
+                except UnicodeDecodeError:
+                    raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
+    except (EOFError, gzip.BadGzipFile, zlib.error, OSError) as exc:
+        if isinstance(exc, RecordingError):
+            raise
+        raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
+
+
+_EMPTY_LINES = re.compile(rb"(?:\r?\n)+")
+
+
+def _skip_empty_lines(fh):
+    """Read past the empty lines (``\\n`` or ``\\r\\n`` alone) that come next in ``fh``, a buffered
+    block at a time (``peek``); how many there were."""
+    skipped = 0
+    while True:
+        ahead = fh.peek(PIPE_BLOCK_BYTES)
+        run = _EMPTY_LINES.match(ahead)
+        if run is None:
+            return skipped
+        fh.read(run.end())
+        skipped += run.group().count(b"\n")
+        if run.end() < len(ahead):
+            return skipped
