@@ -499,3 +499,22 @@ def test_a_serial_device_that_loses_samples_is_recorded_whole_with_its_gaps(tmp_
     np.testing.assert_allclose(np.diff(rec.t_s), steps, atol=1e-9)
     gap_notes = sum(text.startswith("gap: 1 samples lost before") for _, text in rec.notes)
     assert rec.t_gaps == np.count_nonzero(steps > 0.015) and gap_notes >= rec.t_gaps  # notes may run ahead of the cut
+
+
+def test_a_live_file_refused_at_its_close_does_not_stay(tmp_path):
+    """Issue 37 (attack 3): `run --out` from a device that loses samples wrote filtered rows whose
+    steps (0.08 s at 20 Hz) the writer refuses at the close of a file shorter than one window,
+    saying "not written", while the file it had published at its first flush stayed, a file the
+    reader refuses. The refused file goes, and the folder made for it."""
+    from gyrofilter.cli import live
+
+    out = tmp_path / "made" / "filtered.csv"
+    writer = live.LiveOutput(str(out), {"sample_rate_hz": 20, "gyro_unit": "dps"}, ["t", "gx", "gy", "gz"], None,
+                             "filtered row")
+    rows = np.column_stack([0.08 * np.arange(100), np.zeros((100, 3))])
+    writer.write(rows)
+    writer.flush()  # published under its name
+    assert out.exists()
+    with pytest.raises(RecordingError, match="not written: it would not read back"):
+        writer.close(failed=False)
+    assert not out.exists() and not out.parent.exists()

@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from ..errors import DeviceError, GyroFilterError, SourceEnded, one_line
+from ..errors import DeviceError, GyroFilterError, RecordingError, SourceEnded, one_line
 from ..recording import RecordingWriter
 from ..sources import SOURCE_HELP, open_source, parse_source
 from ..sources.base import WARNING_PREFIX
@@ -54,7 +54,8 @@ class LiveOutput:
 
     It is written under a temporary name beside ``path`` (:func:`outputs.partial_path`) and takes
     its own name (``os.replace``, atomic) at the first flush that holds a data row, or when the
-    command ends without failing. So an interrupted recording reads under its name, and a file
+    command ends without failing. So an interrupted recording reads under its name (a file the
+    writer refuses at its close, whose ``t`` would not read back, is removed, as its error says), and a file
     that exists (``--force``) is left as it was by any failure before the first row (a bad
     source, a refused calibration, a device failing): the temporary file goes instead, and the
     folders made for it. A failed write (disk full, file size limit) keeps the file as it was at
@@ -113,7 +114,19 @@ class LiveOutput:
             self._writer.close()
         except OSError as exc:
             raise OSError(exc.errno, f"{exc.strerror or exc}; {self._keep(True)}", self.path) from None
+        except RecordingError:  # its t refused at the close (a file shorter than one window): it would not read back
+            self._withdraw()
+            raise
         return self._keep(failed)
+
+    def _withdraw(self):
+        """Remove the file the writer refused at its close (the refusal says "not written"): the temporary
+        one, or the published one when it is still this command's (the same inode)."""
+        if self.published and _inode(self.path) == self._inode:
+            _remove(self.path)
+            outputs.remove_made_folders(self._folder, self._made)
+        elif not self.published:
+            self._discard()
 
     def _keep(self, failed):
         """Publish or discard the closed file; what the user must be told (see :meth:`close`)."""
