@@ -101,7 +101,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...effects import (BIAS_INSTABILITY, BIAS_STEP, BY_NAME, GAUSS_MARKOV, NARROWBAND, RATE_RAMP, SHAPES,
+from ...effects import (BIAS_INSTABILITY, BIAS_STEP, BY_NAME, COLORED_NOISE, GAUSS_MARKOV, NARROWBAND, RATE_RAMP, SHAPES,
                        SINUSOID, TEMPERATURE, WANDERS)
 from ...units import AXES
 from ..stats import block_means
@@ -428,35 +428,41 @@ def weigh_lines(inp, state, scorer):
 
 def weigh_tones(inp, state, scorer):
     """Choose per axis between a wandering tone and the narrow band it was read from (the
-    candidate's ``band_alternative``; module docstring, 3.): one line, read as a tone of constant
-    amplitude (the detector's evidence: the band's distribution and its moving peak) or as
-    Gaussian noise in the band, each simulated with the axis's other findings and scored by D. The
-    band reading puts its own variance in place of the tone's in the white level
-    (``N'^2 = N^2 + (A^2 / 2 - rms^2) / f_s``). The tone is named unless the band is clearly better
-    (``D_band < D_tone - s``): then the band, and a note says so; where the two are about equal, the
-    band rides on the tone as its ``alternatives``. Returns the new state, the reading not chosen
-    excluded."""
+    candidate's ``band_alternative``: the band and the colored noise left beside it; module
+    docstring, 3.): one line, read as a tone of constant amplitude (the detector's evidence: the
+    band's distribution and its moving peak) with the colored noise left beside the tone's line, or
+    as Gaussian noise in the band with the colored noise left beside the band, each simulated with
+    the axis's other findings and scored by D. The band reading puts its own variance in place of
+    the tone's in the white level (``N'^2 = N^2 + (A^2 / 2 - rms^2) / f_s``). The tone is named
+    unless the band is clearly better (``D_band < D_tone - s``): then the band, and a note says
+    so; where the two are about equal, the band rides on the tone as its ``alternatives``.
+    Returns the new state, the reading not chosen excluded."""
     for k in range(len(state.candidates)):
         i, c = state.candidates[k]
-        band = c.band_alternative
-        if band is None:
+        reading = c.band_alternative
+        if reading is None:
             continue
         c = replace(c, band_alternative=None)
         state = state.with_candidate(k, c)
         if k in state.excluded:
             continue
-        state = replace(state, candidates=state.candidates + ((i, band),))
-        k_band = len(state.candidates) - 1
+        band = reading[0]
+        k_colored = [j for j, (ci, cj) in enumerate(state.candidates)
+                     if ci == i and cj.effect == COLORED_NOISE and j not in state.excluded]
+        first = len(state.candidates)
+        state = replace(state, candidates=state.candidates + tuple((i, r) for r in reading))
+        k_band = list(range(first, first + len(reading)))
         a = AXES[i]
         others = [j for j, (ci, _) in enumerate(state.candidates)
-                  if ci == i and j not in (k, k_band) and j not in state.excluded]
+                  if ci == i and j != k and j not in k_colored + k_band and j not in state.excluded]
         ext = state.axes[i].ext
         arw2 = ext["arw_dps_per_sqrt_hz"] ** 2
         arw2_band = arw2 + (c.params["amplitude_dps"] ** 2 / 2.0 - band.params["rms_dps"] ** 2) / inp.sample_rate_hz
         band_state = state.with_axis(i, ext=dict(ext, arw_dps_per_sqrt_hz=math.sqrt(max(arw2_band, 0.05 * arw2))))
         label = f"tone and narrow-band readings of the line on {a}"
         inp.say(label)
-        tone_model, band_model = state.model(inp, i, others + [k]), band_state.model(inp, i, others + [k_band])
+        tone_model = state.model(inp, i, others + [k] + k_colored)
+        band_model = band_state.model(inp, i, others + k_band)
         d_tone, d_band = scorer.discrepancy(i, tone_model, label), scorer.discrepancy(i, band_model, label)
         spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, tone_model, label),
                                           scorer.null_spread(i, band_model, label))
@@ -464,10 +470,10 @@ def weigh_tones(inp, state, scorer):
                    f"{d_tone:.3g}, as a narrow band {d_band:.3g}; allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} "
                    "null spreads of D)")
         if d_band < d_tone - spread:
-            state = replace(band_state, excluded=band_state.excluded | {k}).with_notes(
+            state = replace(band_state, excluded=band_state.excluded | {k, *k_colored}).with_notes(
                 weighed + ": the narrow band is clearly better, the tone is not named")
             continue
-        state = replace(state, excluded=state.excluded | {k_band})
+        state = replace(state, excluded=state.excluded | set(k_band))
         if d_tone < d_band - spread:
             state = state.with_notes(weighed + ": the tone is clearly better, the narrow band is not listed")
             continue

@@ -375,24 +375,33 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
         x, owned = _subtract_component(x, line, owned), True
     hump, band = det.detect_resonance(x, sample_rate_hz, det.detect_narrowband(x, sample_rate_hz))
     hump = ring_or_hump(ring, hump)
-    measured = [c for c in (band, hump) if c is not None]  # the bands as measured: the colored noise's correction
+    measured = [c for c in (band, hump) if c is not None]  # the bands as measured: the band reading's correction
+    tone = None
     if band is not None:  # the band, or the tone that wanders in it (with the sinusoid it holds)
         tone, folded = det.detect_wandering_tone(x, sample_rate_hz, band, line)
-        if tone is not None:  # the band's Gaussian reading (holding a folded sinusoid's power) rides on it
+        if tone is not None:
             cands = [k for k in cands if not (folded and k is line)]
             rms = math.hypot(band.params["rms_dps"], line.params["amplitude_dps"] / math.sqrt(2.0)) if folded else None
-            band = replace(tone, band_alternative=band if rms is None else replace(band, params=dict(band.params, rms_dps=rms)))
-    cands.extend(c for c in (band, hump) if c is not None)
-    bands = measured
-    colored = det.detect_colored(x, sample_rate_hz, bands, repeated_fraction=repeated_fraction)
+            band = band if rms is None else replace(band, params=dict(band.params, rms_dps=rms))  # the sinusoid's power too
+    cands.extend(c for c in (tone or band, hump) if c is not None)
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)
-    if colored is not None and wander is not None:  # the wander's high-frequency part is correlated too
-        colored = det.detect_colored(x, sample_rate_hz, bands,
-                                     wander_highpassed(effect_entry(wander), sample_rate_hz, x.size), repeated_fraction)
-        if colored is None and notes is not None:
-            notes.append(f"axis {axis}: the lag-1 correlation is the {wander.effect}'s own (its high-frequency part); "
-                         "no colored noise")
+
+    def colored_beside(bands, say):  # the colored noise left beside the bands' (and the wander's) own correlation
+        found = det.detect_colored(x, sample_rate_hz, bands, repeated_fraction=repeated_fraction)
+        if found is not None and wander is not None:  # the wander's high-frequency part is correlated too
+            found = det.detect_colored(x, sample_rate_hz, bands,
+                                       wander_highpassed(effect_entry(wander), sample_rate_hz, x.size), repeated_fraction)
+            if found is None and say and notes is not None:
+                notes.append(f"axis {axis}: the lag-1 correlation is the {wander.effect}'s own (its high-frequency "
+                             "part); no colored noise")
+        return found
+
+    colored = colored_beside(measured, tone is None)
+    if tone is not None:  # each reading of the line with the colored noise left beside it: weighed on D (gap.confound)
+        band_reading = [band] + ([colored] if colored is not None else [])
+        colored = colored_beside([replace(band, params=det.tone_band(tone.params))] + measured[1:], True)
+        cands = [replace(c, band_alternative=band_reading) if c is tone else c for c in cands]
     if colored is not None:
         cands.append(colored)
     cands.extend(slow)

@@ -67,8 +67,9 @@ ones found, because the effects are confusable:
    (else it keeps one frequency: a sinusoid's). A sinusoid found within the band is the tone
    dwelling at one frequency and joins it (one line, one finding). The tone carries the band as its
    Gaussian reading, and the two are weighed on D
-   (:func:`gyrofilter.analysis.gap.confound.weigh_tones`); the colored noise's lags are corrected for
-   the band as measured, whichever reading is named.
+   (:func:`gyrofilter.analysis.gap.confound.weigh_tones`), each with the colored noise left beside
+   its own line (:func:`tone_band`: the tone's variance A² / 2 in a line of its width; or the band as
+   measured).
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``

@@ -135,9 +135,9 @@ class Candidate:
     #: Gauss-Markov's other wander
     other_reading: list | None = None
     wander_alternative: Candidate | None = None
-    #: a wandering tone's band read as Gaussian noise (the narrow band it was read from), for
-    #: :func:`gyrofilter.analysis.gap.confound.weigh_tones` to weigh on D
-    band_alternative: Candidate | None = None
+    #: a wandering tone's band read as Gaussian noise (candidates: the narrow band it was read from
+    #: and the colored noise left beside it), for :func:`gyrofilter.analysis.gap.confound.weigh_tones`
+    band_alternative: list | None = None
     #: "other" for a candidate of the other reading of a confounded temperature (its axis spec is
     #: :attr:`~gyrofilter.analysis.gap.state.AxisModels.other`)
     reading: str = ""
