@@ -109,6 +109,26 @@ def _bounds_text(low, high, low_open, high_open):
     return f"{'<' if high_open else '<='} {high:g}"
 
 
+def number_array(values):
+    """The one rule for an array of numbers handed to the API (the filter's samples, the Allan
+    functions' rates): ``(array, None)``, ``array`` float64 (not copied when it is one already),
+    where ``values`` holds ints or floats; else ``(None, (problem, detail))``: ``("masked", row)``
+    for a masked array with a masked value (converting it would drop the mask and take the value
+    behind it as data; ``row`` the first such row), ``("ragged", values)`` for what numpy cannot make
+    an array of, ``("kind", dtype)`` for complex numbers (converting drops the imaginary part),
+    booleans, strings or objects. Each caller words its own error."""
+    mask = np.ma.getmask(values)
+    if mask is not np.ma.nomask and mask.any():
+        return None, ("masked", int(np.flatnonzero(mask.reshape(len(mask), -1).any(axis=1))[0]) if mask.ndim else 0)
+    try:
+        array = np.asarray(values)
+    except (ValueError, TypeError):  # a ragged list
+        return None, ("ragged", values)
+    if array.dtype.kind not in "iuf":
+        return None, ("kind", array.dtype)
+    return array.astype(np.float64, copy=False), None
+
+
 def check_number(value, what, *, low=None, high=None, low_open=False, high_open=False, integer=False,
                  error=SettingsError):
     """``value`` (from JSON or Python code) as a float (an int when ``integer``), or ``error`` whose

@@ -12,7 +12,7 @@ from functools import partial
 import numpy as np
 
 from ..errors import SampleError
-from ..inputs import check_number
+from ..inputs import check_number, number_array
 from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, shown
 
 _UPDATE_TAKES = f"update() takes one sample (gx, gy, gz): 3 finite numbers in deg/s within +-{MAX_RATE_DPS:g}"
@@ -56,19 +56,17 @@ def as_numbers(values, name, unit):
     """``values`` as a float array when they are numbers (ints or floats: no strings, bools,
     objects or ragged lists), else SampleError naming ``name``. A masked array with a masked
     value is refused, naming its row: converting it would drop the mask and filter the value
-    behind it as data."""
-    mask = np.ma.getmask(values)
-    if mask is not np.ma.nomask and mask.any():
-        row = int(np.flatnonzero(mask.reshape(len(mask), -1).any(axis=1))[0]) if mask.ndim else 0
-        raise SampleError(f"{name} row {row} is masked; give the measured values only (drop the masked rows, or "
-                          "fill them with np.ma.filled if a value is meant)", row)
-    try:
-        x = np.asarray(values)
-    except (ValueError, TypeError):  # a ragged list
-        raise SampleError(f"{name} must be an array of numbers in {unit}, got {shown(values)}") from None
-    if x.dtype.kind not in "iuf":
-        raise SampleError(f"{name} must be numbers in {unit}, got an array of {x.dtype}")
-    return x.astype(float, copy=False)
+    behind it as data (the rule: :func:`gyrofilter.inputs.number_array`)."""
+    x, problem = number_array(values)
+    if problem is None:
+        return x
+    kind, detail = problem
+    if kind == "masked":
+        raise SampleError(f"{name} row {detail} is masked; give the measured values only (drop the masked rows, or "
+                          "fill them with np.ma.filled if a value is meant)", detail)
+    if kind == "ragged":
+        raise SampleError(f"{name} must be an array of numbers in {unit}, got {shown(values)}")
+    raise SampleError(f"{name} must be numbers in {unit}, got an array of {detail}")
 
 
 def check_temperature(value, required, where, row=0):

@@ -28,6 +28,7 @@ from statistics import NormalDist
 import numpy as np
 
 from ...errors import GyroFilterError, SettingsError
+from ...inputs import number_array
 from ...units import check_sample_rate_hz, plain
 
 #: cluster count below which a deviation (and any fit using it) is flagged: paper 002 needs
@@ -56,19 +57,17 @@ def rate_numbers(x, name="x"):
     """``x`` as a float64 array when it holds numbers (ints or floats), else AllanInputError naming
     ``name``: a masked value (converting would drop the mask and take the value behind it as
     data), complex numbers (converting drops the imaginary part), booleans, strings, objects or
-    ragged lists (the filter's rule, :func:`gyrofilter.filter.samples.as_numbers`)."""
-    mask = np.ma.getmask(x)
-    if mask is not np.ma.nomask and mask.any():
-        first = int(np.flatnonzero(mask.reshape(len(mask), -1).any(axis=1))[0]) if mask.ndim else 0
-        raise AllanInputError(f"{name} has masked values, the first at sample {first}; "
+    ragged lists (the rule: :func:`gyrofilter.inputs.number_array`)."""
+    array, problem = number_array(x)
+    if problem is None:
+        return array
+    kind, detail = problem
+    if kind == "masked":
+        raise AllanInputError(f"{name} has masked values, the first at sample {detail}; "
                               "the Allan deviation needs evenly spaced measured samples (fill or cut gaps first)")
-    try:
-        array = np.asarray(x)
-    except (ValueError, TypeError):  # a ragged list
-        raise AllanInputError(f"{name} must be an array of numbers (rates), got a {type(x).__name__} that is none") from None
-    if array.dtype.kind not in "iuf":
-        raise AllanInputError(f"{name} must be numbers (rates), got an array of {array.dtype}")
-    return array.astype(np.float64, copy=False)
+    if kind == "ragged":
+        raise AllanInputError(f"{name} must be an array of numbers (rates), got a {type(x).__name__} that is none")
+    raise AllanInputError(f"{name} must be numbers (rates), got an array of {detail}")
 
 
 def _check_series(x, name="x"):
