@@ -310,6 +310,19 @@ def weigh_readings(inp, state, scorer):
     return state
 
 
+def _detached(state, k, field):
+    """Candidate ``k``'s other reading held in ``field`` (``wander_alternative``,
+    ``band_alternative``), taken off it: ``(new state, (axis, candidate, the reading))``, or
+    ``(new state, None)`` where it holds none or the candidate is excluded."""
+    i, c = state.candidates[k]
+    reading = getattr(c, field)
+    if reading is None:
+        return state, None
+    c = replace(c, **{field: None})
+    state = state.with_candidate(k, c)
+    return state, (None if k in state.excluded else (i, c, reading))
+
+
 def weigh_wanders(inp, state, scorer):
     """Choose per axis between a bias instability and a Gauss-Markov wander where the slow
     detector found both significant (the candidate's ``wander_alternative``): each is simulated
@@ -319,14 +332,10 @@ def weigh_wanders(inp, state, scorer):
     the two are about equal the Gauss-Markov rides on it as its ``alternatives``. Returns the new
     state, the reading not chosen excluded."""
     for k in range(len(state.candidates)):
-        i, c = state.candidates[k]
-        alt = c.wander_alternative
-        if alt is None:
+        state, taken = _detached(state, k, "wander_alternative")
+        if taken is None:
             continue
-        c = replace(c, wander_alternative=None)
-        state = state.with_candidate(k, c)
-        if k in state.excluded:
-            continue
+        i, c, alt = taken
         state = replace(state, candidates=state.candidates + ((i, alt),))
         k_alt = len(state.candidates) - 1
         a = AXES[i]
@@ -438,14 +447,10 @@ def weigh_tones(inp, state, scorer):
     so; where the two are about equal, the band rides on the tone as its ``alternatives``.
     Returns the new state, the reading not chosen excluded."""
     for k in range(len(state.candidates)):
-        i, c = state.candidates[k]
-        reading = c.band_alternative
-        if reading is None:
+        state, taken = _detached(state, k, "band_alternative")
+        if taken is None:
             continue
-        c = replace(c, band_alternative=None)
-        state = state.with_candidate(k, c)
-        if k in state.excluded:
-            continue
+        i, c, reading = taken
         band = reading[0]
         k_colored = [j for j, (ci, cj) in enumerate(state.candidates)
                      if ci == i and cj.effect == COLORED_NOISE and j not in state.excluded]
