@@ -27,9 +27,9 @@ power-up, an exponential in time does not (:data:`WHY_THE_COVARIATE`). Three pla
   :func:`gyrofilter.analysis.gap.detectors.detect_slow` with its two readings: the covariate
   reading, the temperature first and the time shapes and spectra in what it leaves, and the time
   reading without the temperature). A line or a jump is not a settling: against a ramp or a step
-  the better fit of the block means decides (``Delta chi^2 - k ln n``), and a ramp must win by more
-  than the null spread of that difference (:func:`_shape_beats_temperature`, ``RAMP_SPREAD_Z``
-  sd). A covariate reading that needs a wander where the time reading explains the record by a
+  the better fit of the block means decides (``Delta chi^2 - k ln n``), and the shape must hold
+  beside the temperature: what the temperature leaves of it passes the time shapes' test against
+  flicker (:func:`_shape_beats_temperature`). A covariate reading that needs a wander where the time reading explains the record by a
   shape alone is the more complex reading: the time reading is returned first, with the covariate
   reading riding on it. Otherwise the covariate reading is returned first, with the time reading
   riding on the temperature candidate.
@@ -104,14 +104,10 @@ import numpy as np
 from ...effects import (BIAS_INSTABILITY, BIAS_STEP, BY_NAME, COLORED_NOISE, GAUSS_MARKOV, NARROWBAND, RATE_RAMP, SHAPES,
                        SINUSOID, TEMPERATURE, WANDERS)
 from ...units import AXES
-from ..stats import block_means
 
 #: two readings explain a record about equally when their D differ by at most this many null
 #: spreads of D (module docstring). Measured on the example model (docs/gap.md, "Confounded causes")
 CONFOUNDED_SPREADS = 2.0
-#: two-sided 95 % normal quantile: a ramp's better fit over the temperature's counts when it is
-#: beyond this many sd of the difference's null spread (:func:`_shape_beats_temperature`)
-RAMP_SPREAD_Z = 1.96
 #: 2 Delta log L by which a heavy-tailed noise must beat isolated spikes where the outlier detector
 #: found spikes (10: "very strong" evidence, Kass & Raftery 1995, sec. 3.2); also the margin within
 #: which the two explain the tails about as well
@@ -124,55 +120,56 @@ SUGGESTED_Z2 = 9.0
 CONFUSABLE_WANDERS = (BIAS_INSTABILITY, GAUSS_MARKOV)
 
 
-def covariate_or_time(time_reading, covariate, stats, x, temp_c):
+def covariate_or_time(time_reading, covariate, stats, n_blocks):
     """The reading the slow detector returns for an axis with a recorded temperature (module
     docstring, 1.): ``time_reading`` (a list of candidates) or ``covariate`` (the covariate
     reading, the temperature candidate first; None where the temperature is not significant),
     the other reading riding on the first candidate (``other_reading``) for :func:`weigh_readings`.
-    ``stats``: the shapes' Delta chi^2 of the block means; ``x``, ``temp_c``: the axis's series."""
+    ``stats``: the shapes' Delta chi^2 of the block means (and ``beside_temperature_p``);
+    ``n_blocks``: the number of block means."""
     line_or_jump = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP) else None
-    if line_or_jump and _shape_beats_temperature(line_or_jump, stats, x, temp_c):
+    if line_or_jump and _shape_beats_temperature(line_or_jump, stats, n_blocks):
         # a line or a jump is not a settling: against them the better fit of the block means decides
         return time_reading
     if covariate is None:
         return time_reading
     if not time_reading:
         return covariate
-    if any(c.effect in WANDERS for c in covariate[1:]) and not any(c.effect in WANDERS for c in time_reading):
+    if (any(c.effect in WANDERS for c in covariate[1:]) and not any(c.effect in WANDERS for c in time_reading)
+            and not _explained_by_temperature(stats)):
         # a covariate reading that needs a wander where a shape in time alone explains the record is
         # the more complex reading (a ramp read as the temperature's settling plus a random walk for
-        # the difference): the time reading first, the covariate reading weighed against it
+        # the difference): the time reading first, the covariate reading weighed against it; unless
+        # the shape does not hold beside the temperature (a settling the temperature explains, the
+        # wander the bias instability's)
         return [replace(time_reading[0], other_reading=covariate)] + time_reading[1:]
     return [replace(covariate[0], other_reading=time_reading)] + covariate[1:]
 
 
-def _shape_beats_temperature(name, stats, x, temp_c):
-    """Whether the time shape ``name`` (a ramp or a step) fits the block means better than the
-    temperature (``stats``: their Delta chi^2 in units of the white level).
+def _explained_by_temperature(stats):
+    """Whether the time reading's shape does not hold beside the temperature: what the temperature
+    leaves of it flicker draws in more than ``FLICKER_ALPHA`` of records (``beside_temperature_p``
+    of ``stats``, :func:`gyrofilter.analysis.gap.detectors.covariate.beside_covariate_p`)."""
+    from .detectors.common import FLICKER_ALPHA  # not at the top: the detectors import this module
 
-    A step wins by BIC (``Delta chi^2 - k ln n``). A ramp must also beat the temperature by more
-    than the null spread of the difference: for two one-column fits of white block means
-    ``y = beta g_T + e`` (``g`` the unit-norm, mean-free regressors, ``rho = g_R . g_T``),
-    ``a = g_T . y`` and ``b = g_R . y`` are N(beta, 1) and N(rho beta, 1) with correlation rho, and
-    ``a^2 - b^2 = (a - b)(a + b)`` has sd ``2 |beta| sqrt(1 - rho^2)`` to first order (Vuong 1989,
-    non-nested models). A temperature settling over a long time constant is nearly a line, and
-    a ramp then fits it within that spread about as often as not: the measured covariate is the
-    cause to name (the ramp rides on it as the alternative, weighed on D by :func:`weigh_readings`)."""
-    y, _ = block_means(x)
-    n = y.size
+    return stats.get("beside_temperature_p", 0.0) > FLICKER_ALPHA
+
+
+def _shape_beats_temperature(name, stats, n):
+    """Whether the time shape ``name`` (a ramp or a step) is the reading to return in the place of
+    the temperature (``stats``: their Delta chi^2 of the block means in units of the white level,
+    and ``beside_temperature_p``). It must fit the block means better by BIC (``Delta chi^2 - k ln
+    n``) and hold beside the temperature: what the temperature leaves of it must pass the time
+    shapes' test against flicker (:func:`gyrofilter.analysis.gap.detectors.covariate.beside_covariate_p`,
+    at most ``FLICKER_ALPHA``). A temperature settling over a long time constant is nearly a line,
+    and a bias instability's excursion beside it is shaped like a line or a jump about as often as
+    not (the default model's records); where the shape does not hold beside the temperature, the
+    measured covariate is the cause to name and the shape rides on it as the alternative, weighed
+    on D by :func:`weigh_readings`. ``n``: the number of block means."""
     d_shape, d_temp = stats[name], stats.get(TEMPERATURE, 0.0)
     if d_shape - BY_NAME[name].n_params * math.log(n) < d_temp - math.log(n):
         return False
-    if name != RATE_RAMP:
-        return True
-    tb, _ = block_means(np.asarray(temp_c, dtype=float))
-    if tb.size != n or not np.ptp(tb) > 0:
-        return True
-    g_t = tb - tb.mean()
-    g_r = np.arange(n) - 0.5 * (n - 1)
-    rho = float(np.dot(g_t, g_r) / math.sqrt(np.dot(g_t, g_t) * np.dot(g_r, g_r)))
-    spread = 2.0 * math.sqrt(max(1.0 - rho * rho, 0.0) * max(d_shape, d_temp))
-    return d_shape - d_temp > RAMP_SPREAD_Z * spread
+    return not _explained_by_temperature(stats)
 
 
 def suggested_temperature(stats, axis):

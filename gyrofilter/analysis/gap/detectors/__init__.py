@@ -100,6 +100,12 @@ ones found, because the effects are confusable:
      shape must also beat the *exact* Kalman-filter likelihood of a random-walk and of a
      Gauss-Markov wander on the same (undetrended) block means, so a wander that happens to
      look like a ramp or a step is called a wander;
+   * a step, ramp or warm-up that passes is named only where white noise with flicker (1/f,
+     the bias instability every MEMS gyro has) fitted to the record draws its likelihood ratio
+     over flicker in at most 1 % of records (a parametric bootstrap of 1000 records from a fixed
+     stream, :func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value`); else the bias
+     instability is named in its place. In ten minutes a bias instability's excursions passed
+     the rules above as a shape on 37 of 200 axes, against it on 5;
    * with no shape, the best stochastic spectrum is reported if above its threshold; a bias
      instability or Gauss-Markov finding carries the other of the two where that one is
      significant too, and the gap weighs the two on D (the bias instability, one parameter

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 #: expected number of false spikes per axis on white Gaussian noise (with at least
 #: OUTLIER_MIN_COUNT spikes required: P(Poisson(0.05) >= 3) = 2e-5 per axis)
 OUTLIER_FALSE_PER_AXIS = 0.05
@@ -45,6 +47,18 @@ STOCHASTIC_THRESHOLD = 16.0
 STOCHASTIC_PENALTY = 6.0
 #: z^2 a deterministic shape must reach against the fitted stochastic noise to be kept with it
 JOINT_THRESHOLD = 25.0
+#: a shape in time (step, ramp, warm-up) is named only where white noise with flicker fitted to the
+#: record draws its likelihood ratio over flicker as clearly in at most this share of records
+#: (:func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value`); a temperature under a bias
+#: instability, and a ramp or step in the place of a temperature, are held to the same test
+FLICKER_ALPHA = 0.01
+#: records of that parametric bootstrap, their block means (at most) and their fixed stream
+FLICKER_REPLICATES = 1000
+FLICKER_BLOCKS = 128
+#: the flicker-to-white ratios (flicker variance of a block mean over the white level) over which
+#: :func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value` profiles its likelihoods, with 0 (no flicker)
+FLICKER_RATIOS = np.geomspace(1e-3, 1e3, 25)
+FLICKER_STREAM = 20261129
 #: 2 Delta log L (exact likelihood) a Gauss-Markov process must gain over a random walk
 EXACT_GM_MARGIN = 8.0
 #: a Gauss-Markov process whose tau exceeds the record length over this is a random walk as far

@@ -11,7 +11,10 @@ cause to name: it predicts the bias at the next power-up, an exponential in time
   (:func:`gyrofilter.analysis.gap.detectors.slow.slow_reading` on the residual); the coefficient is
   then re-estimated by generalised least squares under the stochastic model of that residual
   (:func:`gls`), and it must be significant there, jointly with any time shape found in the
-  residual (``z^2 > JOINT_THRESHOLD``); otherwise the temperature is not named;
+  residual (``z^2 > JOINT_THRESHOLD``), or, where that model is a bias instability, pass the time
+  shapes' test against flicker (:func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value`: a
+  settling the temperature explains is then named as the temperature, not as a shape in time);
+  otherwise the temperature is not named;
 * the **time reading**: the slow effects without the temperature (the shapes ramp, step and
   warm-up, and the stochastic spectra), as on a record without a ``temp`` column.
 
@@ -28,11 +31,11 @@ import math
 
 import numpy as np
 
-from ....effects import BIAS_INSTABILITY, GAUSS_MARKOV, RATE_RANDOM_WALK, SHAPES, TEMPERATURE
+from ....effects import BIAS_INSTABILITY, BIAS_STEP, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK, SHAPES, TEMPERATURE, WARMUP
 from ..confound import covariate_or_time
 from .common import DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, Candidate
 from ...stats import block_means, dot
-from .slow import periodogram_detrended, slow_spectrum, slow_reading
+from .slow import FLICKER_ALPHA, flicker_p_value, periodogram_detrended, slow_spectrum, slow_reading
 
 
 def detect_slow(x, sample_rate_hz, temp_c=None):
@@ -49,12 +52,31 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     if temp_c is None:
         return time_reading, stats
     covariate = temperature_first(x, sample_rate_hz, temp_c, stats)
-    return covariate_or_time(time_reading, covariate, stats, x, temp_c), stats
+    shape = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP, WARMUP) else None
+    if shape and stats.get(TEMPERATURE, 0.0) > DETERMINISTIC_THRESHOLD:
+        stats["beside_temperature_p"] = p_value = beside_covariate_p(x, temp_c, shape)
+        if covariate is None and p_value > FLICKER_ALPHA:
+            # a settling real against flicker that the temperature explains: the covariate's reading
+            covariate = temperature_first(x, sample_rate_hz, temp_c, stats, explains=(shape, p_value))
+    return covariate_or_time(time_reading, covariate, stats, block_means(x)[0].size), stats
 
 
-def temperature_first(x, sample_rate_hz, temp_c, stats):
+def beside_covariate_p(x, temp_c, shape):
+    """Whether the time shape ``shape`` holds beside the temperature: its p-value against flicker
+    with the block-mean temperature fitted in both models
+    (:func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value`)."""
+    y, _ = block_means(x)
+    tb, _ = block_means(np.asarray(temp_c, dtype=float))
+    return flicker_p_value(y, shape, beside=tb)
+
+
+def temperature_first(x, sample_rate_hz, temp_c, stats, explains=None):
     """The covariate reading of one axis: ``[temperature candidate, *what the residual shows]``,
     or None when the temperature coefficient is not significant (module docstring).
+    ``explains``: ``(shape, p)`` where the time reading's shape passed its test against flicker and
+    the temperature explains it (what the temperature leaves of it flicker draws in a share ``p``
+    of records, :func:`beside_covariate_p`): the shape's evidence is the covariate's, and step 3's
+    test is waived.
 
     1. The least-squares coefficient ``a`` of the block means on the block-mean temperature must
        lower chi^2 of the block means by more than ``DETERMINISTIC_THRESHOLD`` (in units of
@@ -88,8 +110,12 @@ def temperature_first(x, sample_rate_hz, temp_c, stats):
     coef, cov = gls(y, columns, noise)
     a_gls, z2 = float(coef[1]), float(coef[1] ** 2 / cov[1, 1])
     stats["temperature_gls_z2"] = z2
-    stats["temperature_gls"] = (a_gls, float(cov[1, 1]), noise[0], JOINT_THRESHOLD)  # confound.suggested_temperature
-    if not z2 > JOINT_THRESHOLD:
+    p_value = None
+    if not z2 > JOINT_THRESHOLD and noise[0] == BIAS_INSTABILITY and explains is None:
+        # under a bias instability, the test of the time shapes: the covariate against flicker
+        stats["temperature_flicker_p"] = p_value = flicker_p_value(y, tb)
+    if not (z2 > JOINT_THRESHOLD or (p_value is not None and p_value <= FLICKER_ALPHA) or explains):
+        stats["temperature_gls"] = (a_gls, float(cov[1, 1]), noise[0], JOINT_THRESHOLD)  # confound.suggested_temperature
         return None
     rest, _ = slow_reading(_less(x, a_gls, temp, t_mean), sample_rate_hz, SHAPES)
     comp = a_gls * (temp - t_mean)
@@ -102,8 +128,15 @@ def temperature_first(x, sample_rate_hz, temp_c, stats):
         component=comp,
         evidence=(f"the bias follows the temperature with {a_gls:+.3g} deg/s per deg C over {np.ptp(temp):.2f} deg C "
                   f"(generalised least squares under {words} left by it: z = {math.sqrt(z2):.1f}, threshold "
-                  f"{math.sqrt(JOINT_THRESHOLD):.0f}); the fit lowers chi^2 of the block means by {d:.0f} "
-                  f"(threshold {DETERMINISTIC_THRESHOLD:.0f})"))
+                  f"{math.sqrt(JOINT_THRESHOLD):.0f}"
+                  + ("" if p_value is None else
+                     f"; or, as here, white noise with flicker draws it as clearly in {100 * p_value:.1f} % of records, "
+                     f"at most {100 * FLICKER_ALPHA:g} % as a shape in time")
+                  + ("" if not explains or z2 > JOINT_THRESHOLD else
+                     f"; or, as here, the bias settles as a {explains[0].replace('_', ' ')} would, beyond what flicker "
+                     f"draws, and the temperature explains that settling: flicker draws what it leaves of the "
+                     f"{explains[0].replace('_', ' ')} in {100 * explains[1]:.0f} % of records")
+                  + f"); the fit lowers chi^2 of the block means by {d:.0f} (threshold {DETERMINISTIC_THRESHOLD:.0f})"))
     return [cand] + rest
 
 
