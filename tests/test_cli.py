@@ -156,3 +156,18 @@ def test_a_wrapped_console_line_keeps_a_value_with_its_label(capsys):
     lines = capsys.readouterr().out.splitlines()
     assert not any(line.rstrip().endswith(("95", " D", "=")) for line in lines), lines
     assert " ".join(line.strip() for line in lines) == text
+
+
+def test_a_warning_is_wrapped_at_the_console_width_and_keeps_a_number_with_its_unit(capsys):
+    """A new user read the repeated rows' warning as one line of 426 columns, and "66.7" at a
+    line's end with its "s" on the next."""
+    from gyrofilter.cli import console
+
+    text = "axis x: B, K, R not resolved: the longest cluster time with 9 clusters is 66.7 s; " + "w " * 120
+    console.say_warning(text)
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert captured.out == "" and len(lines) > 1 and max(map(len, lines)) <= console.MAX_LINE_CHARS
+    assert lines[0].startswith("gyrofilter: warning: axis x: ") and all(line.startswith("  ") for line in lines[1:])
+    assert not any(line.rstrip().endswith("66.7") for line in lines), lines
+    assert " ".join(captured.err.split()) == f"gyrofilter: warning: {text}".strip()

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from gyrofilter.cli import main
+from gyrofilter.cli.console import MAX_LINE_CHARS
 from gyrofilter.recording import Recording, write_recording
 
 
@@ -423,9 +424,11 @@ def test_allan_warns_of_repeated_rows_and_writes_their_count(tmp_path, capsys):
     path = _issue36_recording(tmp_path / "rep.csv", seed=1)
     assert main(["allan", path, "--json", str(tmp_path / "a.json")]) == 0
     err = capsys.readouterr().err
-    assert "repeat the previous row exactly on every axis, where chance at this quantization gives 0." in err
+    assert max(len(line) for line in err.splitlines()) <= MAX_LINE_CHARS  # wrapped (was 426 columns on one line)
+    words = " ".join(err.split())
+    assert "repeat the previous row exactly on every axis, chance 0." in words and "half the excess), N a little high" in words
     block = json.loads((tmp_path / "a.json").read_text())["repeated_rows"]
-    assert block["applicable"] and block["p_value"] < 1e-3 and block["warning"] in err
+    assert block["applicable"] and block["p_value"] < 1e-3 and block["warning"] in words
     assert 0.004 < block["chance"] < 0.007 and block["excess_fraction_ci95"][0] < 0.02 < block["excess_fraction_ci95"][1]
     assert block["fraction"] == block["repeated"] / block["rows"]
 

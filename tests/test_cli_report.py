@@ -370,8 +370,13 @@ def test_repeated_rows_are_warned_and_named(tmp_path, capsys):
 
     path = tmp_path / "rep.csv"
     write_recording(str(path), simulate(load_model(REPO / "examples" / "models" / "repeated_samples.json"), 600.0, seed=4))
-    _, data = report(tmp_path, capsys, str(path), "--sims", "10")
+    out, data = report(tmp_path, capsys, str(path), "--sims", "10")
     (warning,) = [w for w in data["warnings"] if "repeat the previous row exactly on every axis" in w]
-    assert "where chance at this quantization gives 0." in warning
+    assert "chance 0." in warning and warning.endswith("N a little high")
     assert data["allan"]["repeated_rows"]["warning"] in warning
     assert [f["axis"] for f in data["gap"]["findings"] if f["effect"] == REPEATED_SAMPLES] == ["xyz"]
+    # the extended model's whole-row effect (its top-level key) is in the page's table, not "none" alone
+    fraction = data["gap"]["extended_model"][REPEATED_SAMPLES]["fraction"]
+    page = out.read_text()
+    table = page[page.index("<h3>Extended model</h3>"):]
+    assert f"{REPEATED_SAMPLES}: fraction = {fraction:.4g}" in table[:table.index("</p>")]

@@ -288,3 +288,28 @@ def test_a_wander_alternatives_evidence_gives_the_reason_that_holds_for_its_corr
     assert "that long" not in f["evidence"] and "falls like 1/f over" not in f["evidence"]
     corner = f"flat below its corner 1/(2 pi tau) = {1 / (2 * math.pi * tau):.2g} Hz and falling like 1/f^2 above it"
     assert corner in f["evidence"], f["evidence"]
+
+
+def test_a_tone_and_its_band_read_alike_are_written_in_one_wording():
+    """A wandering tone at 12 Hz that D cannot tell from its band (10 min, seed 2): the finding's
+    evidence, the line under it and the note write the band in one format
+    (:func:`~gyrofilter.analysis.gap.confound.effect_shown`) and the allowance as the note does
+    ("allowance 0.72 (2 null spreads of D)"), and say plainly why the tone is named."""
+    import re
+
+    from gyrofilter.analysis.gap.confound import effect_shown
+    from gyrofilter.effects import NARROWBAND, WANDERING_TONE
+
+    model = json.loads((REPO / "examples" / "models" / "wandering_tone.json").read_text())
+    model["axes"]["z"]["effects"][0].update(center_hz=12.0, spread_hz=0.4, wander_s=60.0, amplitude_dps=0.03)
+    report = analyse_gap(simulate(model, 600.0, seed=2))
+    (tone,) = [f for f in report["findings"] if f["effect"] == WANDERING_TONE]
+    assert [e["effect"] for e in tone["alternatives"]] == [NARROWBAND], tone["alternatives"]
+    (note,) = [n for n in report["notes"] if "as a wandering tone" in n]
+    allowance = re.search(r"allowance [0-9.e+-]+ \(2 null spreads of D\)", note).group(0)
+    band = effect_shown(NARROWBAND, tone["alternatives"][0]["params"])
+    under = gap_report.indistinguishable_text(tone)
+    assert f"within the {allowance}" in tone["evidence"] and band in tone["evidence"] and band in under
+    plainly = "the band's values are distributed as a tone's: arcsine-like, excess kurtosis below 0"
+    assert all(plainly in text for text in (note, tone["evidence"], under))
+    assert not any("null spread of D," in text or "distribution is a tone's" in text for text in (note, tone["evidence"]))

@@ -192,6 +192,24 @@ def test_unknown_effect_parameter_is_a_warning_and_defaults_are_filled():
     assert spec["axes"]["y"] == {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []}
 
 
+def test_a_misspelt_parameter_is_named_with_the_parameter_it_is_like():
+    """A parameter name off by a spelling or a case: the warning says which parameter it is like
+    (the did-you-mean of effect names), and a required one missing names the unknown key beside it."""
+    hump = {"effect": "resonance", "center_hz": 12.0, "q": 4.0, "rms_dps": 0.02}
+    _, warnings = validate_model(model([dict(hump, Q=5.0)], axes="x"))
+    assert warnings == ["model: axes.x.effects[0] (resonance): unknown parameter 'Q' ignored; did you mean q?"]
+    misspelt = {k: v for k, v in hump.items() if k != "center_hz"} | {"centre_hz": 12.0}
+    with pytest.raises(SettingsError) as info:
+        validate_model(model([misspelt], axes="x"))
+    assert str(info.value) == ("model: axes.x.effects[0] (resonance): missing parameter 'center_hz' (expected a number > 0); "
+                               "the unknown 'centre_hz' is ignored: did you mean center_hz?")
+    with pytest.raises(SettingsError) as info:  # a key like none of the parameters: the missing one alone
+        validate_model(model([{k: v for k, v in hump.items() if k != "q"} | {"width": 3.0}], axes="x"))
+    assert str(info.value).endswith("missing parameter 'q' (expected a number > 0)")
+    _, warnings = validate_model(model(repeated_samples={"fraction": 0.02, "patern": "beat"}))  # a whole-row effect's key
+    assert warnings == ["model: repeated_samples: unknown parameter 'patern' ignored; did you mean pattern?"]
+
+
 @pytest.mark.parametrize("duration", [0.0, -1.0, float("nan"), 1e308, 1e10])
 def test_bad_duration(duration):
     with pytest.raises(SettingsError, match="duration"):

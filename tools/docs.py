@@ -51,11 +51,13 @@ from typing import Callable, Optional
 import numpy as np
 
 from gyrofilter.analysis.gap.pipeline import analyse_gap
+from gyrofilter.analysis.gap.detectors.common import RESONANCE_MAX_Q
 from gyrofilter.analysis.gap.report import d_text
 from gyrofilter.evaluation import evaluate as E
 from gyrofilter.filter.settings import SETTING_RANGES, FilterSettings
 from gyrofilter.filter.presets import DEFAULT_PRESET, PRESETS
 from gyrofilter.recording import read_recording
+from gyrofilter.sim.resonance import band_pass
 
 ROOT = Path(__file__).resolve().parents[1]
 TOOLS = ROOT / "tools"
@@ -709,6 +711,40 @@ def bench_reader():
 @block("bench-serial", "docs/live.md", "tools/bench_serial.py", slow=True)
 def bench_serial():
     return fence(tool("bench_serial.py"))
+
+
+#: the resonator's centres (fractions of f_s) and quality factors the width table shows
+WIDTH_FRACTIONS = (0.05, 0.1, 0.12, 0.15, 0.2, 0.25, 0.3, 0.4)
+WIDTH_QS = (1.0, 2.0, 4.0, 10.0)
+
+
+def _half_power_width(fraction, q):
+    """The half-power full width (f₂ − f₁)/f_s of the resonator ``band_pass(fraction, q, 1)``, read
+    off its own frequency response |H(e^{2πjf})|² = 1/2 on either side of the peak (brentq)."""
+    from scipy.optimize import brentq
+
+    b, a = band_pass(fraction, q, 1.0)
+
+    def excess(f):
+        z = np.exp(-2j * np.pi * f * np.arange(3))
+        return abs(np.dot(b, z) / np.dot(a, z)) ** 2 - 0.5
+
+    return brentq(excess, fraction, 0.5 - 1e-12) - brentq(excess, 1e-12, fraction)
+
+
+@block("resonance-width", "docs/simulate.md", "`gyrofilter.sim.resonance.band_pass` (its half-power points) and "
+       "`gyrofilter.analysis.gap.detectors.common.RESONANCE_MAX_Q`")
+def resonance_width():
+    head = "| Q | " + " | ".join(f"f₀ = {r:g} f_s" for r in WIDTH_FRACTIONS) + " |"
+    rows = [head, "|---" * (len(WIDTH_FRACTIONS) + 1) + "|"]
+    for q in WIDTH_QS:
+        narrower = [1.0 - _half_power_width(r, q) / (r / q) for r in WIDTH_FRACTIONS]
+        rows.append(f"| {q:g} | " + " | ".join(f"{100 * n:.0f} %" for n in narrower) + " |")
+    return ("How much narrower than f₀/Q the `resonance`'s (and `ringing`'s) half-power band is, read off the "
+            "filter's own response:\n\n" + "\n".join(rows) + "\n\n"
+            f"`gap` names a peak whose fitted `q` is at most {RESONANCE_MAX_Q:g} a `resonance` and a narrower one a "
+            "`narrowband` line (its line rule, [gap.md](gap.md#a-hump-a-line-or-shocks-that-ring)): a `resonance` "
+            f"simulated with `q` above {RESONANCE_MAX_Q:g} is reported, where the record shows it, as a `narrowband`.")
 
 
 @block("bench-simulate", "docs/simulate.md", "tools/bench_simulate.py", slow=True)

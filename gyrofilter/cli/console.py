@@ -22,8 +22,9 @@ def tell(*lines):
 
 
 #: the spaces a wrapped line never breaks at: inside "95 %", after "D" and after "=" before a number
-#: ("D 0.607", "tau_s = 5.565"): a new user read "D" at a line's end and its value on the next
-_KEEP_TOGETHER = re.compile(r"(?<=\d) (?=%)|(?<=\bD) (?=[-+]?\d)|(?<==) (?=[-+]?\d)")
+#: ("D 0.607", "tau_s = 5.565"): a new user read "D" at a line's end and its value on the next;
+#: and between a number and its unit ("66.7 s", "12 Hz")
+_KEEP_TOGETHER = re.compile(r"(?<=\d) (?=%)|(?<=\bD) (?=[-+]?\d)|(?<==) (?=[-+]?\d)|(?<=\d) (?=(?:s|Hz|min|h)\b)")
 #: what such a space is while the text is wrapped (a private-use character: no text holds it)
 _GLUE = "\ue000"
 
@@ -44,8 +45,9 @@ def say(*lines, flush=False):
 
 
 def say_warning(text):
-    """A warning for the user: one line on stderr, "gyrofilter: warning: <text>"."""
-    say(f"gyrofilter: warning: {text}")
+    """A warning for the user on stderr, "gyrofilter: warning: <text>", wrapped as a :func:`paragraph`
+    (at :data:`MAX_LINE_CHARS`, the lines after the first indented by two spaces)."""
+    paragraph(f"gyrofilter: warning: {text}", file=sys.stderr)
 
 
 def print_warnings(warnings):

@@ -27,7 +27,8 @@ def add_arguments(parser):
     parser.add_argument("--model", required=True, metavar="MODEL.json",
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json); "
                              "the effects of an axis: " + ", ".join(e.name for e in REGISTRY if e.name not in ROWS)
-                             + "; of whole rows (a top-level key): " + ", ".join(ROWS))
+                             + "; of whole rows (a top-level key): " + ", ".join(ROWS)
+                             + "; their parameters: docs/formats.md, section 2")
     parser.add_argument("--duration", required=True, type=options.decimal, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
     options.add_sample_rate_argument(parser, help="sample rate in Hz (overrides the model's)")
     parser.add_argument("--seed", type=options.whole_number, default=None, metavar="N",

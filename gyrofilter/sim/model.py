@@ -18,7 +18,7 @@ from . import noise_terms as nt
 from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, RESONATORS, ROWS,
                        SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
-from ..inputs import MAX_QUOTE_CHARS, did_you_mean, load_json, quote
+from ..inputs import MAX_QUOTE_CHARS, closest, did_you_mean, load_json, quote
 from ..units import AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_sample_rate_hz, plain
 
 # Bounds of every model number, so that no model gives a non-finite or absurd signal. A number is
@@ -272,6 +272,13 @@ def _validate_axis(spec, where, model, warnings, coefficients_only):
     return out
 
 
+def _closest_parameter(key, names):
+    """The parameter of ``names`` that an unknown parameter ``key`` of an effect is most like
+    (:func:`~gyrofilter.inputs.closest`, the one rule of every "did you mean", or the same name in
+    another case: ``Q`` for ``q``), else None."""
+    return closest(key, names, also=lambda name: name.casefold() == key.casefold())[1]
+
+
 def _validate_effect(eff, where, model, warnings, coefficients_only):
     if not isinstance(eff, dict) or "effect" not in eff:
         _err(where, f"expected an object with an 'effect' name, got {_show(eff)}")
@@ -285,9 +292,13 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     required, optional = EFFECTS[name]
     label = where if where == name else f"{where} ({name})"  # a whole-row effect's top-level key names it
     out = {"effect": name}
+    unknown = {key: _closest_parameter(key, {**required, **optional}) for key in eff
+               if key != "effect" and key not in required and key not in optional and not _is_ignored(key)}
     for key, kind in required.items():
         if key not in eff:
-            _err(label, f"missing parameter '{key}' (expected {_KINDS[kind][1]})")
+            like = [k for k, near in unknown.items() if near == key]
+            hint = f"; the unknown {quote(like[0])} is ignored: did you mean {key}?" if like else ""
+            _err(label, f"missing parameter '{key}' (expected {_KINDS[kind][1]}){hint}")
         out[key] = _number(eff[key], f"{label}.{key}", kind)
     for key, (kind, default) in optional.items():
         value = eff.get(key, default)
@@ -303,9 +314,9 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
             out[key] = [_number(v, f"{label}.{key}[{i}]") for i, v in enumerate(value)]
         else:  # null stands for "not given" only where the default is derived (None)
             out[key] = None if value is None and default is None else _number(value, f"{label}.{key}", kind)
-    for key in eff:
-        if key != "effect" and key not in required and key not in optional and not _is_ignored(key):
-            warnings.append(f"model: {label}: unknown parameter '{key}' ignored")
+    for key, near in unknown.items():
+        warnings.append(f"model: {label}: unknown parameter {quote(key)} ignored"
+                        + (f"; did you mean {near}?" if near is not None else ""))
     if name == TEMPERATURE and model[TEMPERATURE_PROFILE] is None and not coefficients_only:
         _err(label, "needs the model's 'temperature' profile (the top-level 'temperature' key)")
     rate = model["sample_rate_hz"]

@@ -14,7 +14,8 @@ so the peak lies exactly at f₀ and the zeros at 0 Hz and f_s / 2 (a hump adds 
 where the white level and the slow effects are read, nor at the Nyquist frequency). Q is the
 analog prototype's: the half-power frequencies f₁, f₂ satisfy
 tan(π f₂ / f_s) - tan(π f₁ / f_s) = tan(π f₀ / f_s) / Q, so the width is f₀ / Q as f₀ << f_s
-and narrower by the warping above (9 % at f₀ = 0.12 f_s).
+and narrower by the warping above (for Q = 4: 9 % at f₀ = 0.12 f_s, 25 % at 0.2 f_s;
+docs/simulate.md tabulates it, tools/docs.py's block ``resonance-width``).
 """
 from __future__ import annotations
 

@@ -17,7 +17,7 @@ import json
 
 import numpy as np
 
-from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
+from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK, ROWS
 from ..analysis.gap.report import (UNCERTAIN_HEADING, covariate_preamble, evidence_text, indistinguishable_text, params_text,
                                    uncertain_text)
 from ..analysis.noise.export import JSON_KEY, JSON_UNIT
@@ -255,14 +255,25 @@ def _finding(f):
 
 
 def _extended(model):
+    """The extended model: a row per axis (bias, white level, its effects), and a line under the
+    table with the model's whole-row effects, its top-level keys (:data:`~gyrofilter.effects.ROWS`:
+    ``repeated_samples``), which no axis holds."""
     if not model:
         return "<p>None.</p>"
     rows = []
     for a, spec in model["axes"].items():
-        effects = "; ".join(f"{e['effect']}: " + ", ".join(f"{k} = {_num(v)}" for k, v in e.items() if k != "effect")
-                            for e in spec.get("effects", [])) or "none"
+        effects = "; ".join(_term(e["effect"], e) for e in spec.get("effects", [])) or "none"
         rows.append((a, _num(spec.get("bias_dps")), _num(spec.get("arw_dps_per_sqrt_hz")), effects))
-    return _table(["axis", "bias (deg/s)", "ARW (deg/s/sqrt(Hz))", "effects"], rows, numeric_from=1, numeric_to=3)
+    table = _table(["axis", "bias (deg/s)", "ARW (deg/s/sqrt(Hz))", "effects"], rows, numeric_from=1, numeric_to=3)
+    whole = [_term(name, model[name]) for name in ROWS if name in model]
+    if whole:
+        table += f"<p>Effects of whole rows (every axis at once; top-level keys of the model): {_esc('; '.join(whole))}.</p>"
+    return table
+
+
+def _term(name, params):
+    """An effect of the extended model as text: "name: key = value, ..." (its parameters but ``effect``)."""
+    return f"{name}: " + ", ".join(f"{k} = {_num(v)}" for k, v in params.items() if k != "effect")
 
 
 def _interval(d):

@@ -72,7 +72,8 @@ power as well, ``rms'^2 = rms^2 + A^2 / 2``) are weighed on D with the axis's ot
 with both where both may be there. The band is named where it is clearly better, both only where
 both together are clearly better than either; otherwise the sinusoid (a line no wider than the
 record needs is a tone), with the band as its alternative where the two are about equal. A band
-whose distribution is a tone's (:mod:`gyrofilter.analysis.gap.detectors.tone`) is read as a
+whose values are distributed as a tone's (arcsine-like, excess kurtosis below 0;
+:mod:`gyrofilter.analysis.gap.detectors.tone`) is read as a
 wandering tone, and that reading is weighed on D against the band as Gaussian noise
 (:func:`weigh_tones`): the tone is named unless the band is clearly better, the band listed as its
 alternative where the two are about equal.
@@ -102,7 +103,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...effects import (BIAS_INSTABILITY, BIAS_STEP, BY_NAME, COLORED_NOISE, GAUSS_MARKOV, NARROWBAND, RATE_RAMP, SHAPES,
-                       SINUSOID, TEMPERATURE, WANDERS)
+                       SINUSOID, TEMPERATURE, WANDERING_TONE, WANDERS)
 from ...units import AXES
 
 #: two readings explain a record about equally when their D differ by at most this many null
@@ -196,6 +197,12 @@ def suggested_temperature(stats, axis):
                     "temperature moves otherwise, decides")}
 
 
+def allowance_text(spread):
+    """The allowance ``spread`` (:data:`CONFOUNDED_SPREADS` null spreads of D) as every note and
+    evidence of a weighing writes it: "allowance 0.89 (2 null spreads of D)"."""
+    return f"allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} null spreads of D)"
+
+
 def kept_without_gain(effect, with_all, without, spread_of):
     """Why a finding with no gain alone is kept (module docstring, 1.): ``""`` where the axis's
     other findings do better with it (``with_all < without``); for a temperature, the reason where
@@ -206,7 +213,7 @@ def kept_without_gain(effect, with_all, without, spread_of):
     if effect == TEMPERATURE and np.isfinite(with_all):
         spread = CONFOUNDED_SPREADS * spread_of()
         if with_all <= without + spread:
-            return f", within the null spread of D ({spread:.2g}): the measured covariate is kept where D cannot tell"
+            return f", within the {allowance_text(spread)}: the measured covariate is kept where D cannot tell"
     return None
 
 
@@ -238,6 +245,7 @@ def tails_or_spikes(over, spikes_found, fits, heavier):
 NAMED_BECAUSE = {TEMPERATURE: "it is measured and predicts the bias at the next power-up",
                  BIAS_INSTABILITY: "it has one parameter fewer",
                  SINUSOID: "a line no wider than the record needs is a tone",
+                 WANDERING_TONE: "the band's values are distributed as a tone's: arcsine-like, excess kurtosis below 0",
                  **dict.fromkeys(SHAPES, "the temperature reading needs a wander besides, this one does not")}
 
 #: why the covariate is named where a reading in time explains a record as well (the end of such a
@@ -277,7 +285,7 @@ def weigh_readings(inp, state, scorer):
         d_cov, d_time = (d_first, d_other) if covariate_first else (d_other, d_first)
         time_shown, cov_shown = (shown, shown_first) if covariate_first else (shown_first, shown)
         weighed = (f"axis {a}: readings weighed on D: with the temperature ({cov_shown}) {d_cov:.3g}, in time "
-                   f"({time_shown}) {d_time:.3g}; allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} null spreads of D)")
+                   f"({time_shown}) {d_time:.3g}; {allowance_text(spread)}")
         first_named, other_named = ("the temperature", "the time reading") if covariate_first else \
             ("the time reading", "the temperature")
         if d_other < d_first - spread:
@@ -296,10 +304,10 @@ def weigh_readings(inp, state, scorer):
         state = state.with_notes(weighed + f": the record cannot tell them apart; {why}")
         head = state.candidates[k_head][1]
         about = (f"the time reading {shown} explains this record about as well (D {d_time:.3g} against {d_cov:.3g}, "
-                 f"within the null spread of D, {spread:.2g}): the temperature follows a warm-up itself, so this "
+                 f"within the {allowance_text(spread)}): the temperature follows a warm-up itself, so this "
                  f"record cannot tell them apart. {WHY_THE_COVARIATE}") if covariate_first else (
                  f"the temperature reading {shown} explains this record about as well (D {d_cov:.3g} against "
-                 f"{d_time:.3g}, within the null spread of D, {spread:.2g}): the temperature follows a warm-up "
+                 f"{d_time:.3g}, within the {allowance_text(spread)}): the temperature follows a warm-up "
                  "itself, so this record cannot tell them apart; the reading in time is named because the "
                  "temperature reading needs a wander besides and the reading in time does not")
         state = state.with_candidate(k_head, replace(head, alternatives=tuple((c, d_other) for c in other_cands),
@@ -346,7 +354,7 @@ def weigh_wanders(inp, state, scorer):
         d_gm = scorer.discrepancy(i, gm_model, label)
         spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, bi_model, label), scorer.null_spread(i, gm_model, label))
         weighed = (f"axis {a}: readings of the slow wander weighed on D: {_show(bi[1])} {d_bi:.3g}, {_show(gm[1])} "
-                   f"{d_gm:.3g}; allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} null spreads of D)")
+                   f"{d_gm:.3g}; {allowance_text(spread)}")
         if d_gm < d_bi - spread:
             state = replace(state, excluded=state.excluded | {bi[0]}).with_notes(
                 weighed + ": the Gauss-Markov is clearly better, the bias instability is not named")
@@ -362,7 +370,7 @@ def weigh_wanders(inp, state, scorer):
             bi[1], alternatives=((gm[1], d_gm),),
             evidence_notes=bi[1].evidence_notes + (
                 f"the wander reading {_show(gm[1])} explains this record about as well (D {d_gm:.3g} against "
-                f"{d_bi:.3g}, within the null spread of D, {spread:.2g}): its spectrum, flat below its corner "
+                f"{d_bi:.3g}, within the {allowance_text(spread)}): its spectrum, flat below its corner "
                 f"1/(2 pi tau) = {corner_hz:.2g} Hz and falling like 1/f^2 above it, bends across this record's "
                 "frequencies about as the 1/f of a bias instability falls, so the record cannot tell them apart; "
                 "the bias instability is named, with one parameter fewer",)))
@@ -409,8 +417,7 @@ def weigh_lines(inp, state, scorer):
         spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, m, label) for m in models.values())
         weighed = (f"axis {a}: one line weighed on D (the sinusoid's {sin.params['frequency_hz']:.4g} Hz, the band's "
                    f"{band.params['center_hz']:.4g} Hz): as a sinusoid {d['tone']:.3g}, "
-                   f"as a narrow band {d['band']:.3g}, as both {d['both']:.3g}; allowance {spread:.2g} "
-                   f"({CONFOUNDED_SPREADS:g} null spreads of D)")
+                   f"as a narrow band {d['band']:.3g}, as both {d['both']:.3g}; {allowance_text(spread)}")
         if d["both"] < min(d["tone"], d["band"]) - spread:
             state = replace(state, excluded=state.excluded | {k_whole}).with_notes(
                 weighed + ": both together are clearly better, both are named")
@@ -427,8 +434,8 @@ def weigh_lines(inp, state, scorer):
                                  f"({NAMED_BECAUSE[SINUSOID]}), the narrow band listed as its alternative")
         state = state.with_candidate(k_sin, replace(sin, alternatives=((whole, d["band"]),), evidence_notes=(
             sin.evidence_notes + (f"the line read as a narrow band, {_show(whole)}, explains this record about as "
-                                  f"well (D {d['band']:.3g} against {d['tone']:.3g}, within the null spread of D, "
-                                  f"{spread:.2g}); the sinusoid is named: {NAMED_BECAUSE[SINUSOID]}",))))
+                                  f"well (D {d['band']:.3g} against {d['tone']:.3g}, within the {allowance_text(spread)}); "
+                                  f"the sinusoid is named: {NAMED_BECAUSE[SINUSOID]}",))))
     return state
 
 
@@ -469,8 +476,7 @@ def weigh_tones(inp, state, scorer):
         spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, tone_model, label),
                                           scorer.null_spread(i, band_model, label))
         weighed = (f"axis {a}: one line weighed on D (at {c.params['center_hz']:.4g} Hz): as a wandering tone "
-                   f"{d_tone:.3g}, as a narrow band {d_band:.3g}; allowance {spread:.2g} ({CONFOUNDED_SPREADS:g} "
-                   "null spreads of D)")
+                   f"{d_tone:.3g}, as a narrow band {d_band:.3g}; {allowance_text(spread)}")
         if d_band < d_tone - spread:
             state = replace(band_state, excluded=band_state.excluded | {k, *k_colored}).with_notes(
                 weighed + ": the narrow band is clearly better, the tone is not named")
@@ -479,18 +485,30 @@ def weigh_tones(inp, state, scorer):
         if d_tone < d_band - spread:
             state = state.with_notes(weighed + ": the tone is clearly better, the narrow band is not listed")
             continue
-        state = state.with_notes(weighed + ": the record cannot tell them apart on D; the tone is named (the band's "
-                                 "distribution is a tone's), the narrow band listed as its alternative")
+        state = state.with_notes(weighed + ": the record cannot tell them apart on D; the tone is named "
+                                 f"({NAMED_BECAUSE[WANDERING_TONE]}), the narrow band listed as its alternative")
         state = state.with_candidate(k, replace(c, alternatives=((band, d_band),), evidence_notes=c.evidence_notes + (
             f"the line read as Gaussian noise in the band, {_show(band)}, explains this record about as well on D "
-            f"(D {d_band:.3g} against {d_tone:.3g}, within the null spread of D, {spread:.2g}); the tone is named: "
-            "the band's distribution is a tone's",)))
+            f"(D {d_band:.3g} against {d_tone:.3g}, within the {allowance_text(spread)}); the tone is named: "
+            f"{NAMED_BECAUSE[WANDERING_TONE]}",)))
     return state
 
 
 def _show(c):
-    """``effect (k=v, ...)`` of a candidate."""
-    return f"{c.effect} (" + ", ".join(f"{k}={v:.3g}" for k, v in c.params.items()) + ")"
+    """A candidate as the notes write it (:func:`effect_shown`)."""
+    return effect_shown(c.effect, c.params)
+
+
+def effect_shown(effect, params):
+    """An effect and its parameters as the notes of the weighings and the reports write them (one
+    format for all): ``narrowband (center_hz = 12.05, bandwidth_hz = 0.473)``, numbers to 4
+    significant digits, ``-`` for a parameter not determined (None), other values as they are."""
+    def value(v):
+        if v is None:
+            return "-"
+        return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+    return f"{effect} (" + ", ".join(f"{k} = {value(v)}" for k, v in params.items()) + ")"
 
 
 def alternatives_entry(cand):

@@ -27,7 +27,7 @@ from ...errors import naming_file
 from ...plots import pyplot, save_figure
 from ...recording.header import markdown_text
 from ...units import AXES, utf8_text
-from .confound import NAMED_BECAUSE, WHY_THE_COVARIATE
+from .confound import CONFOUNDED_SPREADS, NAMED_BECAUSE, WHY_THE_COVARIATE, effect_shown
 from .features import D_FAR, d_shown
 
 REPORT_NAME = "gap_report.md"
@@ -167,7 +167,8 @@ def indistinguishable_text(finding, *, figure=False):
     shaped = figure and any(e["effect"] in _SHAPES for e in finding["alternatives"])
     why = NAMED_BECAUSE.get(finding["effect"])
     return (f"Indistinguishable in this record from {alternatives_text(finding['alternatives'])} (D of the axis with it "
-            f"instead, within the null spread of D); {finding['effect']} is named" + (f": {why}" if why else "")
+            f"instead, within the allowance of {CONFOUNDED_SPREADS:g} null spreads of D); {finding['effect']} is named"
+            + (f": {why}" if why else "")
             + ("; the figure of the rate in time shows both readings" if shaped else ""))
 
 
@@ -188,8 +189,7 @@ def d_text(value, se):
 
 def alternatives_text(alternatives):
     """``effect (k = v, ...) + ...: D d`` of a finding's ``alternatives`` (one reading: the entries share D)."""
-    parts = [f"{e['effect']} (" + ", ".join(f"{k} = {_fmt(v)}" for k, v in e["params"].items()) + ")"
-             for e in alternatives]
+    parts = [effect_shown(e["effect"], e["params"]) for e in alternatives]
     return " + ".join(parts) + f": D {d_shown(alternatives[0]['D'])}"
 
 

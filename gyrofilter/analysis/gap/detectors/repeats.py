@@ -36,17 +36,13 @@ def detect_repeats(gyro_dps, q_dps=None):
 
 def repeats_warning(counted):
     """The warning of ``allan`` and ``report`` for the count ``counted`` (a RepeatedRows) when the
-    record holds more repeated rows than chance (:data:`REPEATS_ALPHA`), else None."""
+    record holds more repeated rows than chance (:data:`REPEATS_ALPHA`), else None: the count, the
+    chance level and the excess with its interval (the test's p-value is in the JSON), and which way
+    the Allan results are biased (:mod:`gyrofilter.analysis.repeats`: the shortest tau low, N high)."""
     if not counted.more_than_chance(REPEATS_ALPHA):
         return None
     lo, hi = counted.excess_ci95
     return (f"{counted.repeated} of {counted.rows} rows ({counted.fraction:.2%}) repeat the previous row exactly on every "
-            f"axis, where chance at this quantization gives {counted.chance:.2%} (binomial test p {_p_text(counted.p_value)}): "
-            f"an excess of {counted.excess:.2%} [95 %: {lo:.2%}, {hi:.2%}], the mark of a driver that polls faster than "
-            "the sensor updates its output; repeats bias the Allan deviation at the shortest tau low (by about half the "
-            "excess) and the fitted white-noise level N")
-
-
-def _p_text(p_value):
-    """``= p`` to two digits, ``< 1e-300`` where it underflowed to 0."""
-    return f"= {p_value:.2g}" if p_value > 0 else "< 1e-300"
+            f"axis, chance {counted.chance:.2%} at this quantization: an excess of {counted.excess:.2%} "
+            f"[95 %: {lo:.2%}, {hi:.2%}], a driver polling faster than the sensor updates; the Allan deviation at "
+            "the shortest tau reads low (by about half the excess), N a little high")
