@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from ....effects import BIAS_INSTABILITY, BIAS_STEP, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK, SHAPES, TEMPERATURE, WARMUP
+from ....effects import BIAS_INSTABILITY, BIAS_STEP, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK, SHAPES, TEMPERATURE, WANDERS, WARMUP
 from ..confound import covariate_or_time
 from .common import DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, Candidate
 from ...stats import block_means, dot
@@ -55,8 +55,9 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     shape = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP, WARMUP) else None
     if shape and stats.get(TEMPERATURE, 0.0) > DETERMINISTIC_THRESHOLD:
         stats["beside_temperature_p"] = p_value = beside_covariate_p(x, temp_c, shape)
-        if covariate is None and p_value > FLICKER_ALPHA:
-            # a settling real against flicker that the temperature explains: the covariate's reading
+        if covariate is None and p_value > FLICKER_ALPHA and not any(c.effect in WANDERS for c in time_reading):
+            # a settling real against flicker, alone in its reading, that the temperature explains: the
+            # covariate's reading (beside a strong wander, nothing holds beside the temperature)
             covariate = temperature_first(x, sample_rate_hz, temp_c, stats, explains=(shape, p_value))
     return covariate_or_time(time_reading, covariate, stats, block_means(x)[0].size), stats
 
