@@ -394,6 +394,20 @@ def test_a_constant_axis_in_deg_s_is_explained_by_the_baseline(level):
     assert not any(n.startswith("axis z: after extension") for n in report["notes"]), report["notes"]
 
 
+def test_a_record_of_equal_rows_is_not_analysed_and_says_nothing_of_its_d():
+    """Issue 37 (attack 4): a record whose 6000 rows all equal (0.102, -0.128, 0.021) deg/s gave
+    axis y D = 5e8 against its constant baseline (its bias, the mean of the equal samples, an ulp
+    off the value) and the note "axis y: after extension D = far outside ... the model does not
+    close here" beside "axis y: constant signal, nothing to analyse"."""
+    g = np.tile([0.10204595606925913, -0.1277832515657091, 0.020904942336288944], (6000, 1))
+    report = analyse_gap(Recording.from_dps(g, 100.0), n_sims=10, bootstrap=0)
+    d = report["discrepancy"]
+    assert set(d["not_analysed"]) == set("xyz")
+    assert {a: report["baseline"]["axes"][a]["bias_dps"] for a in "xyz"} == dict(zip("xyz", g[0].tolist()))
+    assert max(d["before"].values()) < 2 and max(d["after"].values()) < 2, d
+    assert not any("after extension" in n for n in report["notes"]), report["notes"]
+
+
 def test_a_constant_axis_enters_no_overall_discrepancy():
     """Issue 37 (attack): a stuck axis's D (2.3e-09 against its constant baseline) was averaged into
     overall_before/after as if analysed; now the mean is over the axes analysed and
