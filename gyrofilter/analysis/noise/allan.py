@@ -119,7 +119,8 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
     taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
     if taus.ndim != 1 or taus.size == 0 or not np.all(np.isfinite(taus)):
         raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {plain(taus_s)}")
-    m = np.round(taus * rate)  # compared as floats: a tau of 1e300 s is no int64
+    with np.errstate(over="ignore"):  # compared as floats: a tau of 1e300 s is no int64, 1e308 s at 100 Hz inf
+        m = np.round(taus * rate)
     if np.any(m < 1):
         raise AllanInputError(
             f"tau {taus[m < 1].min():g} s is shorter than one sample (1/{rate:g} Hz = {1 / rate:g} s)")
