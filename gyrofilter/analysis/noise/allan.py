@@ -46,11 +46,13 @@ class AllanInputError(GyroFilterError, ValueError):
 
 class ConstantAxisError(AllanInputError):
     """An axis whose samples are all equal (a stuck or unconnected axis): nothing to characterise.
-    ``axis``: its name; the others of a recording may still be analysed."""
+    ``axis``: its name; the others of a recording may still be analysed: ``varying``, the letters
+    of the axes asked for whose samples are not all equal, where the caller has looked (None: not known)."""
 
     def __init__(self, message, axis):
         super().__init__(message)
         self.axis = axis
+        self.varying = None
 
 
 def rate_numbers(x, name="x"):
