@@ -161,6 +161,8 @@ def test_odd_series_and_taus_are_refused_in_one_sentence():
         warnings.simplefilter("error")
         with pytest.raises(AllanInputError, match=r"too short for tau = 1e\+300 s"):
             overlapping_adev(x, 100.0, [1e300])
+        with pytest.raises(AllanInputError, match=r"too short for tau = 1e\+308 s"):  # attack 4: tau * rate overflowed, a RuntimeWarning
+            overlapping_adev(x, 100.0, [1e308])
     with pytest.raises(SettingsError, match="^axes must be a subset of xyz such as xz, got 'q'$"):
         characterise_recording("never-read.csv", axes="q", warn=print)
 

@@ -93,6 +93,15 @@ def test_constant_axis_is_a_clear_error(tmp_path, capsys):
     _assert_one_line_error(capsys, "stuck.csv: axis y", "constant", "; give --axes xz to analyse the others")
     assert main(["allan", path, "--axes", "xz", "--json", str(tmp_path / "xz.json")]) == 0
     assert sorted(json.loads((tmp_path / "xz.json").read_text())["axes"]) == ["x", "z"]
+    capsys.readouterr()
+    # issue 37 (attack 4): where the others are constant too, --axes names only the ones that vary
+    g[:, 2] = 0.25
+    path = _write(tmp_path / "stuck2.csv", g, lsb=False)
+    assert main(["allan", path]) == 2
+    _assert_one_line_error(capsys, "stuck2.csv: axis y", "; give --axes x to analyse the others")
+    path = _write(tmp_path / "equal.csv", np.full((2000, 3), 0.5), lsb=False)
+    assert main(["allan", path]) == 2
+    _assert_one_line_error(capsys, "equal.csv: axis x", "; every axis asked for is constant")
 
 
 def test_too_short_recording_is_a_clear_error(tmp_path, capsys):

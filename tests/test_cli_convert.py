@@ -354,6 +354,24 @@ def test_a_pipe_whose_first_line_is_no_line_of_a_log_is_refused_before_it_is_cop
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.parametrize("chunks", [1, 3])
+def test_a_time_that_does_not_increase_is_refused_where_it_is_read(tmp_path, capsys, chunks):
+    """Issue 37 (attack 4): a gzip log of one row "0,0,0,0" 150 million times (1.8 MB) was read
+    whole, 16 bytes a row (2.4 GB after 300 s), before its t, not increasing from line 3 on,
+    was refused; a later line's own defect was named instead. The first stamp that does not
+    increase is refused as it is read, in the first chunk or across chunks."""
+    from gyrofilter.recording import CHUNK_ROWS
+
+    first = max(1, CHUNK_ROWS * (chunks - 1))  # the row whose t goes back: the second, or the first of the third chunk
+    # (then a chunk of such rows: the defect of the last line comes in a later chunk)
+    rows = [f"{i * 0.01:.2f},0,0,0\n" for i in range(first)] + [f"{(first - 1) * 0.01:.2f},0,0,0\n"] * CHUNK_ROWS
+    rc, dst = _convert(tmp_path, "t,gx,gy,gz\n" + "".join(rows) + "1e3,0,0\n", "--unit", "dps")
+    assert rc == 2 and not dst.exists()
+    stamp = f"{(first - 1) * 0.01:.2f}"
+    assert capsys.readouterr().err.endswith(f"log.csv: line {first + 2}, column 1 ('t'): t does not increase "
+                                            f"('{stamp}' after '{stamp}')\n")
+
+
 @pytest.mark.parametrize("name", ["bomb.csv.gz", "bomb.csv"])
 def test_runs_of_empty_lines_are_skipped_in_bulk_and_counted(tmp_path, capsys, monkeypatch, name):
     """Issue 37 (attack 3): 30 MB of line ends (30 kB of gzip) took 17-22 s, a Python step per

@@ -10,11 +10,14 @@ Real parts: the MPU6050 driver through smbus2's own code with only its ioctl rep
 register-level model (gyrofilter/sources/mpu6050/model.py) on a virtual clock; pyserial on a real
 pseudo-terminal; the replay source paced by the host's clock.
 """
+import contextlib
 import errno
 import json
 import os
 import re
 import select
+import subprocess
+import sys
 import threading
 import time
 import tty
@@ -224,6 +227,48 @@ def test_run_on_a_serial_port_writes_the_rows_replay_writes(tmp_path, capsys):
     assert f"{n} samples in" in err and "disconnected" in err
     assert len(read_recording(recorded)) == n
     assert_same_rows(read_recording(out), replayed(tmp_path, recorded, capsys), rows_due(recorded))
+
+
+@pytest.mark.parametrize("lines, delivered, steps_s", [
+    pytest.param(b"5,0,0,0\n6,nan,0,0\n7,0.1,0.2,0.3\n", [[0, 0, 0], [0.1, 0.2, 0.3]], [0.02, 0.01], id="one of three lost"),
+    pytest.param(b"1,0.2,0,0\n2,0,0.4,0\n3,nan,0,0\n4,0,0,0.1\n5,0.3,0.1,0\n",
+                 [[0.2, 0, 0], [0, 0.4, 0], [0, 0, 0.1], [0.3, 0.1, 0]], [0.01, 0.02, 0.01, 0.01], id="one of five lost")])
+def test_run_from_a_device_that_loses_samples_writes_a_row_for_every_block_of_delivered_samples(tmp_path, lines,
+                                                                                                 delivered, steps_s):
+    """Issue 37 (task A of attack 4): `run --out` from a device on a real pseudo-terminal that
+    loses samples (a NaN line, refused; the counter restarts) exited 2 ("t steps by 0.07 s ... not
+    written") and kept nothing: a row's t is its block's last sample's, so blocks that span lost
+    samples come late. The filter runs on the delivered samples as on a regular stream; every
+    block of them has its row, at its own t, and the file reads back, those rows counted as gaps."""
+    pytest.importorskip("serial")
+    out = tmp_path / "filtered.csv"
+    primary, secondary = os.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "run", "--source", f"serial:{os.ttyname(secondary)}",
+                             "--out", str(out), "--quiet", "--duration", "12"], stderr=subprocess.PIPE, text=True)
+
+    def feed():
+        with contextlib.suppress(OSError):  # the run ended and the port closed
+            for _ in range(4000):  # more than 12 s of samples
+                os.write(primary, lines)
+
+    try:
+        assert os.read(primary, 1) == b"?"
+        os.write(primary, b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
+        threading.Thread(target=feed, daemon=True).start()
+        err = proc.communicate(timeout=60)[1]
+    finally:
+        os.close(primary)
+        os.close(secondary)
+    assert proc.returncode == 0, err
+    n = int(re.search(r"(\d+) samples in", err).group(1))
+    x = np.tile(np.asarray(delivered, float), (n // len(delivered) + 1, 1))[:n]
+    t = np.concatenate(([0.0], np.cumsum(np.tile(steps_s, n)[:n - 1])))
+    t_want, want = GyroFilter(100.0).filter_timed(x, t)  # the oracle: the library fed the delivered samples
+    got = read_recording(out)
+    assert len(got) == len(want) == (n - 100 * CALIBRATION_S) // BLOCK > 100, err
+    np.testing.assert_allclose(got.gyro_dps, want, rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(got.t_s - got.t_s[0], t_want - t_want[0], atol=1e-9)
+    assert got.t_gaps == np.count_nonzero(np.diff(t_want) > 0.055) > 0
 
 
 # ------------------------------------------------------------------------------ paced replay

@@ -127,7 +127,7 @@ def texts(draw, valid=False):
                          max_size=3, unique_by=lambda kv: kv[0]))
     header += [(k, v) for k, v in free if k not in dict(GOOD_HEADER)]
     lines = [f"# {k}: {v}" for k, v in header]
-    mutation = "none" if valid else draw(st.sampled_from(["none"] * 4 + ["bad line", "bad rate", "missing"]))
+    mutation = "none" if valid else draw(st.sampled_from(["none"] * 4 + ["bad line", "bad rate", "missing", "bad input rate"]))
     if mutation == "bad line":
         lines.insert(draw(st.integers(1, len(lines))), draw(st.sampled_from(BAD_HEADER_LINES)))
         broken = "header"
@@ -137,6 +137,9 @@ def texts(draw, valid=False):
     elif mutation == "missing":
         del lines[draw(st.integers(0, 2))]
         broken = "missing key"
+    elif mutation == "bad input rate":  # a filtered output's: a rate, and not below sample_rate_hz (100)
+        lines.insert(draw(st.integers(1, len(lines))), f"# input_sample_rate_hz: {draw(st.sampled_from(BAD_RATES + ['99.9']))}")
+        broken = "input rate"
     lines.append(draw(st.sampled_from(["gx,gy,gz", "gx, gy ,gz", "gz,gx,gy"])))
     names = [c.strip() for c in lines[-1].split(",")]
     rows = []

@@ -397,6 +397,20 @@ def test_a_constant_axis_in_deg_s_is_explained_by_the_baseline(level):
     assert not any(n.startswith("axis z: after extension") for n in report["notes"]), report["notes"]
 
 
+def test_a_record_of_equal_rows_is_not_analysed_and_says_nothing_of_its_d():
+    """Issue 37 (attack 4): a record whose 6000 rows all equal (0.102, -0.128, 0.021) deg/s gave
+    axis y D = 5e8 against its constant baseline (its bias, the mean of the equal samples, an ulp
+    off the value) and the note "axis y: after extension D = far outside ... the model does not
+    close here" beside "axis y: constant signal, nothing to analyse"."""
+    g = np.tile([0.10204595606925913, -0.1277832515657091, 0.020904942336288944], (6000, 1))
+    report = analyse_gap(Recording.from_dps(g, 100.0), n_sims=10, bootstrap=0)
+    d = report["discrepancy"]
+    assert set(d["not_analysed"]) == set("xyz")
+    assert {a: report["baseline"]["axes"][a]["bias_dps"] for a in "xyz"} == dict(zip("xyz", g[0].tolist()))
+    assert max(d["before"].values()) < 2 and max(d["after"].values()) < 2, d
+    assert not any("after extension" in n for n in report["notes"]), report["notes"]
+
+
 def test_a_constant_axis_enters_no_overall_discrepancy():
     """Issue 37 (attack): a stuck axis's D (2.3e-09 against its constant baseline) was averaged into
     overall_before/after as if analysed; now the mean is over the axes analysed and
@@ -958,6 +972,43 @@ def test_cli_names_repeated_rows_with_their_interval_and_gain(tmp_path, capsys):
     d = report["discrepancy"]
     assert d["overall_after"] == pytest.approx(finding["gain"]["after"])  # every axis's D after reflects it
     validate_model(report["extended_model"])
+
+
+@pytest.mark.parametrize("pattern, fraction", [("beat", 0.5), pytest.param("random", 0.5, marks=pytest.mark.slow),
+                                               pytest.param("copies", 0.9, marks=pytest.mark.slow)])
+def test_a_record_of_half_its_rows_repeated_or_more_is_analysed(pattern, fraction):
+    """Issue 37 (attack 4): a record simulated from a valid model (repeated_samples 0.5, beat) read
+    an excess of 50.05 %, and the gap failed: "model: repeated_samples.fraction: expected a number
+    <= 0.5, got 0.500499" (its extended model refused); capped, the colored-noise lags under
+    repeats divided by 1 - 2f = 0 ("the analysis could not run (ZeroDivisionError)"). A driver
+    polling ten times faster than the sensor (each value ten times: 90 %) failed alike; it is
+    analysed (a model of at most 0.5 repeats explains it less than a colored noise of lag-1 0.99
+    does, which is named instead). The finding's fraction is the most a model takes, 0.5, saying
+    the excess is beyond it."""
+    model = load_model(REPO / "examples" / "models" / "repeated_samples.json")
+    if pattern == "copies":
+        del model[REPEATED_SAMPLES]
+        rec = simulate(model, 600.0, seed=3)
+        rec.columns.update({c: np.repeat(v[::10], 10)[:len(v)] for c, v in rec.columns.items() if c != "t"})
+    else:
+        model[REPEATED_SAMPLES] = {"fraction": fraction, "pattern": pattern}
+        rec = simulate(model, 120.0, seed=3)
+    report = analyse_gap(rec, seed=0, n_sims=10, bootstrap=0)
+    assert not any("could not run" in n for n in report["notes"]), report["notes"]
+    validate_model(report["extended_model"])
+    if pattern == "copies":
+        return
+    (finding,) = [f for f in report["findings"] if f["effect"] == REPEATED_SAMPLES]
+    assert finding["params"] == {"fraction": 0.5} == report["extended_model"][REPEATED_SAMPLES]
+    if pattern != "random":  # random repeats at 0.5 can read an excess just below it
+        assert "is beyond the 50% a model simulates" in finding["evidence"]
+
+
+def test_the_lags_under_repeats_at_half_the_rows_are_finite():
+    """At f = 0.5 the measured lag-2 does not hold the noise's (1 - 2f = 0): a first-order low pass's is taken."""
+    rho1, rho2 = det.lags_without_repeats(0.5 + 0.25 * 0.3, 0.2, 0.5)
+    assert rho1 == pytest.approx(0.3 - 0.25 * 0.09 / 0.25, abs=0.1) and rho2 == pytest.approx(rho1 ** 2)
+    assert det.lags_without_repeats(0.5, 0.0, 0.5) == (0.0, 0.0)  # white noise under repeats
 
 
 @pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow), pytest.param(3, marks=pytest.mark.slow)])

@@ -5,6 +5,7 @@ cause (no outliers or heavy tails beside them), a narrow line still a narrow ban
 naming neither. Extra seeds are ``slow``."""
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -81,6 +82,29 @@ def test_model_checks_the_resonators_centre_and_q():
     with pytest.raises(SettingsError, match="q"):
         validate_model(_axis_only({"effect": "ringing", "center_hz": 5.0, "q": 0.0, "shock_rate_hz": 1.0,
                                    "shock_dps": 1.0}))
+
+
+@pytest.mark.parametrize("effect", ["resonance", "ringing"])
+def test_a_resonator_centred_near_0_hz_is_refused_naming_its_centre(tmp_path, capsys, effect):
+    """Issue 37 (attack 4): a resonance at center_hz 1e-300 (100 Hz) failed with "gyrofilter: error:
+    A singular matrix detected: slice(s) [0] are singular." (no file, no parameter); at 1e-4 Hz it
+    simulated with scipy's LinAlgWarning on stderr (its start's variance from an ill-conditioned
+    solve); a ringing at 1e-300 Hz rang without decay. Below 1e-4 times the rate: refused; at it, Q
+    1000, no warning."""
+    import warnings
+
+    from gyrofilter.cli import main
+
+    params = {"q": 1000.0, "rms_dps": 0.02} if effect == "resonance" else {"q": 1000.0, "shock_rate_hz": 0.1, "shock_dps": 0.5}
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(_axis_only({"effect": effect, "center_hz": 1e-300, **params})))
+    assert main(["simulate", "--model", str(path), "--duration", "10", "--out", str(tmp_path / "o.csv")]) == 2
+    assert capsys.readouterr().err == (f"gyrofilter: error: {path}: model: axes.x.effects[0] ({effect}).center_hz: expected "
+                                       "a frequency >= 0.01 Hz (0.0001 times the sample rate), got 1e-300\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        x = simulate(_axis_only({"effect": effect, "center_hz": 0.01, **params}), 60.0, seed=1).gyro_dps
+    assert np.isfinite(x).all()
 
 
 def _hump_case(seed, fraction, duration_s=900.0):

@@ -125,6 +125,19 @@ def test_clean_quantized_records_raise_few_false_alarms():
     assert min(p_values) > 10 * REPEATS_ALPHA
 
 
+@pytest.mark.parametrize("sigma_lsb", [0.3, 0.45, 0.6])
+def test_a_clean_record_of_noise_near_the_step_is_not_applicable_not_a_false_alarm(sigma_lsb):
+    """Issue 37 (attack 4): clean white noise of 0.3-0.62 LSB, its means anywhere on the step
+    (here 0.2 steps off the codes), rounded: the rows equal by chance far more often
+    than the sampled Gaussian of the ±1-3-step differences says (36 % against 24.5 % at 0.3 LSB),
+    and allan warned of repeated rows, "an excess of 15.70 %", at p < 1e-300, in up to half of
+    such records. There the count is not applicable, saying why."""
+    rng = np.random.default_rng(11)
+    codes = np.round(rng.normal(0.2, sigma_lsb, (60000, 3)))  # at 0.45 LSB: p = 2.5e-59 before
+    counted = repeated_rows(codes / LSB_PER_DPS, 1 / LSB_PER_DPS)
+    assert not counted.applicable and "too near the step" in counted.why, counted
+
+
 @pytest.mark.parametrize("pattern", ["random", "beat"])
 def test_two_percent_of_repeated_rows_are_found_with_their_fraction(pattern):
     counted, cand = detect_repeats(simulate(model(0.02, pattern), 960.0, seed=3).gyro_dps, 1 / LSB_PER_DPS)

@@ -19,7 +19,9 @@ The rule, per axis a, on the successive differences in steps (LSB) k_a[n] = (x_a
   count c_j of |k| = j (the two signs averaged). A and B are fitted by weighted least squares on
   j = 1, 2, 3 (weights 2 c_j, the inverse variance of log c_j of a Poisson count), and
   p0_a = exp(A) / M with M = N - 1 differences. Repeats add to c_0 only, so p0_a is the chance
-  level without them; var(log p0_a) = var(A) of the fit.
+  level without them; var(log p0_a) = var(A) of the fit. The parabola holds at 0 only where the
+  differences spread at least :data:`MIN_DIFF_SD_STEPS` steps (sqrt(1 / 2B)); nearer the step
+  the count is "not applicable".
 - Axes independent, a row equals the previous one by chance with p_chance = Π_a p0_a, and
   var(log p_chance) = Σ_a var(A_a).
 - The count K of rows whose k_a = 0 on every axis is Binomial(M, p_chance) without repeats. With
@@ -48,6 +50,12 @@ from ..units import AXES
 MIN_NEIGHBOUR_COUNT = 20
 #: above this chance of an equal row the noise sits below the step: repeats cannot be told from chance
 MAX_CHANCE = 0.25
+#: least sd (in steps) of an axis's differences, as the fit's parabola gives it (sqrt(1 / 2B)), for
+#: the sampled Gaussian to hold at 0: nearer the step the rounding makes its zero count far above
+#: the parabola's (issue 37, attack 4: clean records of white noise of 0.3-0.62 LSB, means anywhere
+#: on the step, 60000 rows, read an excess at p < 0.001 in up to half of them; 0 of 60 at 0.65, 0.7,
+#: 0.8 and 1.0 LSB; the differences' sd is about sqrt(2 sigma^2 + 1/6), 1.0 at 0.65 LSB)
+MIN_DIFF_SD_STEPS = 1.1
 #: a grid: this share of the non-zero differences within GRID_TOLERANCE steps of a whole number of steps
 GRID_SHARE = 0.999
 GRID_TOLERANCE = 1e-3
@@ -110,7 +118,8 @@ def grid_step(x_dps):
 
 
 def _zero_chance(k):
-    """``(log p0, var(log p0))`` of one axis's differences in steps ``k`` (module docstring), or
+    """``(log p0, var(log p0), sd)`` of one axis's differences in steps ``k`` (module docstring;
+    ``sd`` = sqrt(1 / 2B), the spread of the fitted sampled Gaussian in steps, inf for B <= 0), or
     None when the counts at |k| = 1, 2 are below :data:`MIN_NEIGHBOUR_COUNT`."""
     a = np.abs(k)  # whole numbers of steps (floats)
     counts = np.array([np.count_nonzero(a == j) / 2.0 for j in (1, 2, 3)])
@@ -123,7 +132,8 @@ def _zero_chance(k):
     normal = design.T @ (w[:, None] * design)
     cov = np.linalg.inv(normal)
     coef = cov @ (design.T @ (w * np.log(counts[use])))
-    return float(coef[0]) - math.log(k.size), float(cov[0, 0])
+    sd = math.sqrt(0.5 / coef[1]) if coef[1] > 0 else math.inf
+    return float(coef[0]) - math.log(k.size), float(cov[0, 0]), sd
 
 
 def binomial_upper_tail(k, m, p):
@@ -170,6 +180,10 @@ def _count(gyro_dps, step_dps, axes):
         if fit is None:
             return RepeatedRows(False, f"axis {a}: too few differences of 1 and 2 steps for the chance level "
                                        f"(the record is short, or its noise is far below or far above the step)")
+        if fit[2] < MIN_DIFF_SD_STEPS:
+            return RepeatedRows(False, f"axis {a}: its differences spread {fit[2]:.2g} steps (sd), below "
+                                       f"{MIN_DIFF_SD_STEPS:g}: the noise sits too near the step for the chance level "
+                                       "(rounding makes equal rows commoner than a sampled Gaussian says)")
         equal &= k == 0
         log_p, var_log = log_p + fit[0], var_log + fit[1]
         steps.append(float(step))

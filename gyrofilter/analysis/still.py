@@ -174,6 +174,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
                                                min_clusters=min_clusters)
         except ConstantAxisError as exc:
             if not skip_constant or (a == axes[-1] and not results):
+                exc.varying = "".join(results) + "".join(b for b in axes[axes.index(a) + 1:] if np.ptp(series[b]) > 0)
                 raise
             warn(f"{exc}{LEFT_OUT}")
             continue

@@ -91,9 +91,11 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
         head, results, repeats = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
                                                keep_outliers=keep_outliers, warn=warn, progress=progress,
                                                skip_constant=skip_constant)
-    except ConstantAxisError as exc:
-        others = axes.replace(exc.axis, "")
-        raise AllanInputError(f"{path}: {exc}" + (f"; give --axes {others} to analyse the others" if others else "")) from None
+    except ConstantAxisError as exc:  # which --axes would run: the others that vary (all of them were "yz" of a file of equal rows)
+        others = exc.varying
+        advice = (f"; give --axes {others} to analyse the others" if others else
+                  "; every axis asked for is constant" if len(axes) > 1 else "")
+        raise AllanInputError(f"{path}: {exc}{advice}") from None
     except AllanInputError as exc:  # the data of this file: name it
         raise AllanInputError(f"{path}: {exc}") from None
     duration_s = head.rows / head.sample_rate_hz

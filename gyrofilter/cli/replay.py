@@ -26,7 +26,7 @@ from .. import plots
 from ..errors import RecordingError, SampleError, SettingsError
 from ..filter.settings import SETTING_NAMES
 from ..filter.smoother import SMOOTHABLE_PRESETS, Smoother
-from ..recording import CHUNK_ROWS, COLUMNS, RecordingWriter, dps_header, header_text, iter_recording, note_line, warn_about_gaps
+from ..recording import CHUNK_ROWS, COLUMNS, RecordingWriter, dps_header, format_number, header_text, iter_recording, note_line, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
 from ..units import json_ready
 from . import console, filtering, options, outputs
@@ -116,11 +116,6 @@ def _refuse_nothing_filtered(path, head, filt):
         raise RecordingError(f"{path}: its {filt.samples_in} samples ({filt.samples_in / head.sample_rate_hz:.2f} s) end "
                              f"inside the start-up calibration window ({needed_s:g} s); nothing filtered: give a "
                              "shorter --calibration-s or a saved calibration (--calibration FILE)")
-
-
-#: why replay's rows can have a t the reader refuses while the input's reads: a row's t is its
-#: block's last sample's, so samples lost in most blocks lengthen most of the rows' steps
-_LOST_IN_BLOCKS = "the input lost samples in most filter blocks here; not written, it would not read back"
 
 
 class Replay:
@@ -241,7 +236,7 @@ class Replay:
             return
         if self._writer is None:  # the header names the bias, known once the calibration is done
             self._writer = RecordingWriter(self.out_path, self._out_header(), OUT_COLUMNS, formats=filtering.ROW_FORMATS,
-                                           flush_interval_s=None, fsync=False, name=self.out_name, t_advice=_LOST_IN_BLOCKS)
+                                           flush_interval_s=None, fsync=False, name=self.out_name)
         self._writer.write(np.column_stack([t_s, rows]))
 
     def _out_header(self):
@@ -255,6 +250,7 @@ class Replay:
             "bias_dps": json.dumps(list(filt.bias_dps or ())),
             **({"calibration_from": self.calibration_from} if self.calibration_from else {}),
             "t_meaning": "time of the last input sample of each block (s)",
+            "input_sample_rate_hz": format_number(filt.sample_rate_hz),
         }, filt.output_rate_hz)
 
     def stdout_header(self):

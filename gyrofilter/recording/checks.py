@@ -36,7 +36,13 @@ class TimeCheck:
     the reader and the writer share them, so that what is written reads back:
 
     - ``t`` increases strictly, also across chunks;
-    - steps longer than 1.5 sample intervals are counted in ``head.t_gaps`` (lost samples: legal);
+    - steps longer than one sample interval plus half an input sample interval are gaps, counted
+      in ``head.t_gaps`` (lost samples: legal). The input is the file's own samples (1.5 sample
+      intervals) unless the header names ``input_sample_rate_hz``, the rate of the samples a
+      filtered output's rows come from (``run``/``replay --out``: a row per block of
+      L = input_sample_rate_hz / sample_rate_hz delivered samples, at the time of the block's
+      last one): a row whose block spans lost samples comes at least L + 1 input intervals
+      after the one before;
     - the typical step of every window of :data:`RATE_CHECK_STEPS` consecutive steps is
       ``1 / sample_rate_hz`` within :data:`~gyrofilter.units.RATE_TOLERANCE`, in both directions: a ``t``
       that runs faster or slower than the header says, anywhere in the file, would make every
@@ -47,8 +53,10 @@ class TimeCheck:
       (:meth:`finish`). The typical step is the lower median of the window's steps that are not
       gaps (:func:`typical_steps`): a device that lost most samples still shows the rate in the
       steps between samples it delivered in a row, and its recording reads, its gaps counted. A
-      window of gaps only holds no such step: its median of all steps is compared (a ``t`` at
-      half the header's rate looks just so).
+      window of gaps only holds no such step: in a file of samples its median of all steps is
+      compared (a ``t`` at half the header's rate looks just so); in a filtered output it shows
+      no rate and passes (every block of the window lost samples: each step is longer than a
+      row interval by the input samples lost, which says nothing of the rate).
 
     ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
     advice a refusal ends with (the writer says why its rows would come out so).
@@ -57,7 +65,8 @@ class TimeCheck:
     def __init__(self, head, why="is sample_rate_hz or t wrong, or were most samples lost here?"):
         self.head = head
         self.why = why
-        self.max_step_s = 1.5 / head.sample_rate_hz
+        self.max_step_s = 1.0 / head.sample_rate_hz + 0.5 / head.input_sample_rate_hz
+        self.gaps_show_rate = head.input_sample_rate_hz == head.sample_rate_hz  # a file of samples, not of blocks
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
@@ -93,13 +102,14 @@ class TimeCheck:
         whole_file = self.phases[0].windows == 0
         for phase in self.phases:
             if len(phase.pending) and (whole_file or len(phase.pending) >= RATE_CHECK_STEPS // 2):
-                median = float(typical_steps(phase.pending[None, :], self.max_step_s)[0])
+                median = float(typical_steps(phase.pending[None, :], self.max_step_s, self.gaps_show_rate)[0])
                 if self._off(median):
                     self._refuse(median, len(phase.pending), phase.pending_where, first=whole_file)
             if whole_file:
                 break
 
     def _off(self, typical_s):
+        """Whether each typical step is more than RATE_TOLERANCE off the rate's (NaN, no rate shown: not off)."""
         expected_s = 1.0 / self.head.sample_rate_hz
         return np.abs(typical_s - expected_s) > RATE_TOLERANCE * expected_s
 
@@ -130,7 +140,7 @@ class _WindowPhase:
         steps = np.concatenate((self.pending, step))
         whole = len(steps) // RATE_CHECK_STEPS * RATE_CHECK_STEPS
         if whole:
-            medians = typical_steps(steps[:whole].reshape(-1, RATE_CHECK_STEPS), check.max_step_s)
+            medians = typical_steps(steps[:whole].reshape(-1, RATE_CHECK_STEPS), check.max_step_s, check.gaps_show_rate)
             wrong = np.flatnonzero(check._off(medians))
             if wrong.size:
                 j = int(wrong[0])
@@ -144,16 +154,18 @@ class _WindowPhase:
         self.pending = steps[whole:]
 
 
-def typical_steps(windows, max_step_s):
+def typical_steps(windows, max_step_s, gaps_show_rate=True):
     """The typical step of each row of ``windows`` (2-D, steps of ``t`` in s): the lower median of
-    its steps of at most ``max_step_s`` (1.5 sample intervals; the longer ones are gaps, lost
-    samples), or of all its steps when every one is a gap."""
+    its steps of at most ``max_step_s`` (the longer ones are gaps, lost samples: :class:`TimeCheck`),
+    or, when every one is a gap, of all its steps (``gaps_show_rate``) or NaN (no rate shown)."""
     typical = _lower_medians(windows)
     gappy = np.flatnonzero((windows > max_step_s).any(axis=1))
     for row in gappy:  # rare: sorted one by one, the gaps left out
         kept = windows[row][windows[row] <= max_step_s]
         if len(kept):
             typical[row] = _lower_medians(kept[None, :])[0]
+        elif not gaps_show_rate:
+            typical[row] = np.nan
     return typical
 
 

@@ -25,6 +25,12 @@ class _HeaderFacts:
         return float(self.header["sample_rate_hz"])
 
     @property
+    def input_sample_rate_hz(self) -> float:
+        """The rate (Hz) of the samples the rows come from: the header's ``input_sample_rate_hz``
+        (a filtered output's: a row per block of input samples) as a float, else ``sample_rate_hz``."""
+        return float(self.header.get("input_sample_rate_hz", self.header["sample_rate_hz"]))
+
+    @property
     def gyro_unit(self) -> str:
         """The header's ``gyro_unit``: ``dps``, ``rad/s`` or ``lsb`` (the gyro columns' unit)."""
         return self.header["gyro_unit"]
@@ -70,7 +76,8 @@ class Recording(_HeaderFacts):
     ``columns`` maps each column name to a float array in file order and in the file's units;
     use :attr:`gyro_dps` for the rates in deg/s whatever the file's ``gyro_unit``. ``notes`` are
     the annotation lines, each a :class:`Note` (``(line, text)`` with the sample ``row`` it precedes);
-    ``t_gaps`` the steps of a file's ``t`` longer than 1.5 sample intervals (:func:`warn_about_gaps`).
+    ``t_gaps`` the steps of a file's ``t`` that span lost samples (:class:`~gyrofilter.recording.checks.TimeCheck`,
+    :func:`warn_about_gaps`).
     """
 
     columns: dict
@@ -140,8 +147,8 @@ class RecordingHead(_HeaderFacts):
     """A recording being read by :func:`~gyrofilter.recording.iter_recording`: header, column names and path.
 
     ``warnings`` and ``notes`` (:class:`Note`: ``(line, text)`` and ``row``) grow while the chunks are read, ``rows`` counts
-    the samples read so far and ``t_gaps`` the steps of the ``t`` column longer than 1.5 sample
-    intervals (lost samples); ``notes_cut``: more annotations than the reader keeps
+    the samples read so far and ``t_gaps`` the steps of the ``t`` column that span lost samples
+    (:class:`~gyrofilter.recording.checks.TimeCheck`); ``notes_cut``: more annotations than the reader keeps
     (:data:`~gyrofilter.recording.header.MAX_NOTES`) were met. :meth:`line_of_row` gives the file
     line of a sample read so far.
     """
@@ -209,8 +216,12 @@ def warn_about_gaps(head, consequence, warn):
     what that means for the command.
 
     ``head``: the :class:`RecordingHead` after its chunks were read, or a :class:`Recording`
-    (its ``t_gaps`` counts the steps of ``t`` longer than 1.5 sample intervals); ``consequence``: text appended to the
-    warning; ``warn``: a callable taking one line of text. Returns None; warns at most once.
+    (its ``t_gaps`` counts the steps of ``t`` that span lost samples: longer than 1.5 sample intervals, or in a
+    filtered output, whose header names ``input_sample_rate_hz``, rows whose block of input samples
+    spans lost ones); ``consequence``: text appended to the warning; ``warn``: a callable taking one
+    line of text. Returns None; warns at most once.
     """
     if head.t_gaps:
-        warn(f"{head.path}: t shows {head.t_gaps} gap(s) longer than 1.5 sample intervals; {consequence}")
+        gaps = ("longer than 1.5 sample intervals" if head.input_sample_rate_hz == head.sample_rate_hz else
+                "(rows whose block of input samples spans lost samples)")
+        warn(f"{head.path}: t shows {head.t_gaps} gap(s) {gaps}; {consequence}")

@@ -272,9 +272,12 @@ class _Stamps:
         self.first, self.origin, self.offsets = None, None, [] if keep else None
         self.huge = self.far = None  # (row, text) of the first stamp beyond a float / offset beyond one
         self.rows = 0
+        self.last = None  # (offset, text) of the last stamp taken
 
-    def add(self, texts):
-        """Take the next chunk's cells; False once a stamp or offset is beyond a float."""
+    def add(self, texts, where):
+        """Take the next chunk's cells; False once a stamp or offset is beyond a float. A stamp
+        that does not increase is refused at once (``where(i)`` names the chunk's row i): a gzip
+        bomb of equal rows, "0,0,0,0" 150 million times in 1.8 MB, was read whole first (16 bytes a row: 2.4 GB)."""
         if self.first is None:
             self.origin = texts[0]
             self.first = decimal.Decimal(texts[0])
@@ -289,9 +292,17 @@ class _Stamps:
             for row in range(int(bad[0]) + 1):  # a stamp itself beyond a float comes at or before its offset
                 if self.huge is None and not math.isfinite(float(decimal.Decimal(texts[row]))):
                     self.huge = (self.rows + row, texts[row])
+        with np.errstate(invalid="ignore"):  # inf - inf: an offset beyond a float
+            steps = np.diff(offsets) if self.last is None else np.diff(np.r_[self.last[0], offsets])
+            back = np.flatnonzero((steps <= 0) & np.isfinite(steps))  # an offset beyond a float: refused by check()
+        if back.size:
+            i = int(back[0]) + (1 if self.last is None else 0)
+            before = texts[i - 1] if i > 0 else self.last[1]
+            raise RecordingError(f"{where(i)}: t does not increase ({quote(texts[i])} after {quote(before)})")
         if self.offsets is not None:
             self.offsets.append(offsets)
         self.rows += len(texts)
+        self.last = (float(offsets[-1]), texts[-1])
         return self.far is None
 
     def check(self, where, path):
@@ -380,7 +391,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
         integral = [whole and exact_format(v) == "%d" for whole, v in zip(integral, gyro_values)]
         if stamps is not None:
             line_parts.append(np.array(numbers))
-            if stamps.far is None and stamps.add(cells[3]) and t_unit is not None:
+            if stamps.far is None and stamps.add(cells[3], lambda i: f"{path}: line {numbers[i]}, column {time + 1} "
+                                                                   f"({quote(names[time])})") and t_unit is not None:
                 t_parts.append(_seconds(cells[3], stamps.origin, TIME_UNITS[t_unit]))
         rows += len(numbers)
     skipped = counts["skipped"]

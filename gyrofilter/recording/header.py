@@ -154,7 +154,8 @@ def check_header(header, where):
     naming ``where`` (the file): the version, the required keys, ``sample_rate_hz`` a plain
     decimal number (:func:`~gyrofilter.inputs.parse_number`) checked by
     :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
-    ``lsb_per_dps`` with ``lsb``, checked by :func:`~gyrofilter.units.check_lsb_per_dps`. The one check of a header: the reader's and
+    ``lsb_per_dps`` with ``lsb``, checked by :func:`~gyrofilter.units.check_lsb_per_dps`; ``input_sample_rate_hz``,
+    when given, as ``sample_rate_hz`` and not below it. The one check of a header: the reader's and
     the writers' (:func:`header_text`)."""
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
@@ -166,6 +167,12 @@ def check_header(header, where):
         raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
     sample_rate_hz = parse_number(header["sample_rate_hz"], f"{where}: sample_rate_hz", error=RecordingError)
     check_sample_rate_hz(sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
+    if "input_sample_rate_hz" in header:  # a filtered output's: its rows are blocks of input samples, never more of them
+        input_hz = parse_number(header["input_sample_rate_hz"], f"{where}: input_sample_rate_hz", error=RecordingError)
+        check_sample_rate_hz(input_hz, f"{where}: input_sample_rate_hz", RecordingError)
+        if input_hz < sample_rate_hz:
+            raise RecordingError(f"{where}: input_sample_rate_hz {header['input_sample_rate_hz']} is below sample_rate_hz "
+                                 f"{header['sample_rate_hz']}; a filtered output has one row per block of input samples")
     if header["gyro_unit"] not in GYRO_UNITS:
         raise RecordingError(f"{where}: gyro_unit {quote(header['gyro_unit'])} is not one of {', '.join(GYRO_UNITS)}")
     if header["gyro_unit"] == "lsb":

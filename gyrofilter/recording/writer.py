@@ -105,9 +105,6 @@ class RecordingWriter(Closable):
         gzip level 1-9 for ``.gz`` files.
     name : str, optional
         The file as messages name it (default ``path``; a writer to a temporary file names the user's).
-    t_advice : str, optional
-        What a refusal of the ``t`` column ends with: why the writer's rows could come out so
-        (default: "not written: it would not read back").
 
     RecordingError for a bad header, column list or value, and for a ``t`` column the reader
     would refuse (:class:`TimeCheck`, rows named "row N of the output"): a window refused as
@@ -116,13 +113,13 @@ class RecordingWriter(Closable):
     """
 
     def __init__(self, path, header: dict, columns, *, formats=None, flush_interval_s=1.0, fsync=True,
-                 compresslevel=6, name=None, t_advice=None):
+                 compresslevel=6, name=None):
         self.path = os.fspath(path)
         self.name = self.path if name is None else os.fspath(name)
         self.columns = list(columns)
         text = header_text(header, self.columns, self.name)
         self._head = RecordingHead(header={k: str(v) for k, v in header.items()}, names=self.columns, path=self.name)
-        self._times = TimeCheck(self._head, t_advice or _NOT_WRITTEN) if "t" in self.columns else None
+        self._times = TimeCheck(self._head, _NOT_WRITTEN) if "t" in self.columns else None
         self._formats = list(formats) if formats is not None else [None] * len(self.columns)
         if len(self._formats) != len(self.columns):
             raise RecordingError(f"{self.name}: {len(self._formats)} formats for {len(self.columns)} columns")

@@ -30,6 +30,10 @@ MAX_PHASE_RAD = 1000.0
 MIN_RESOLUTION_C = 1e-6  # a temperature's quantization step: a finer one (5e-324) made the rounding infinite
 MAX_FREQUENCY_HZ = MAX_SAMPLE_RATE_HZ
 MIN_BANDWIDTH_PER_RATE = 1e-9  # narrowband: bandwidth_hz >= this times the sample rate (a resonator off the unit circle)
+#: resonance and ringing: center_hz >= this times the sample rate. Below it the resonator's poles
+#: sit on z = 1 in float64: at 1e-6 times the rate and Q 1000 the stationary start's Lyapunov solve
+#: is ill-conditioned (scipy's LinAlgWarning on stderr), at 1e-302 singular (an error naming nothing)
+MIN_RESONATOR_CENTER_PER_RATE = 1e-4
 MAX_EFFECTS_PER_AXIS = 100
 MAX_ARMA_COEFFICIENTS = 20  # each of phi and theta; `gyrofilter arma --max-n 10` fits ARMA(20, 19)
 MAX_TABLE_POINTS = 100_000  # a temperature table's t_s and temp_c
@@ -327,6 +331,9 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
         if out["center_hz"] >= rate / 2.0:
             _err(f"{label}.center_hz", f"expected a frequency below the Nyquist frequency {rate / 2.0:g} Hz, "
                                        f"got {out['center_hz']:g}")
+        if name in RESONATORS and out["center_hz"] < MIN_RESONATOR_CENTER_PER_RATE * rate:
+            _err(f"{label}.center_hz", f"expected a frequency >= {MIN_RESONATOR_CENTER_PER_RATE * rate:g} Hz "
+                                       f"({MIN_RESONATOR_CENTER_PER_RATE:g} times the sample rate), got {out['center_hz']:g}")
         if name == NARROWBAND and not MIN_BANDWIDTH_PER_RATE * rate <= out["bandwidth_hz"] <= rate:
             _err(f"{label}.bandwidth_hz", f"expected a width in [{MIN_BANDWIDTH_PER_RATE * rate:g}, {rate:g}] Hz "
                                           f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")

@@ -189,7 +189,10 @@ def baseline_model(rec, gyro_dps=None):
     for i, a in enumerate(AXES):
         x = axis_dps(rec, i) if gyro_dps is None else gyro_dps[:, i]
         sigma, fit = _white_noise(x, sample_rate_hz, q)
-        model["axes"][a] = {"bias_dps": float(np.mean(x)) if fit is None else fit[1],
+        # a constant axis's bias is its value, exactly (the mean of 6000 equal samples can be an ulp off,
+        # and its constant simulations then differ from the record in every feature: D ~ 5e8)
+        bias_dps = fit[1] if fit is not None else float(x[0]) if not np.ptp(x) > 0 else float(np.mean(x))
+        model["axes"][a] = {"bias_dps": bias_dps,
                             "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(sample_rate_hz)), "effects": []}
     return model
 

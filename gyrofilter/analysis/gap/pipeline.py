@@ -559,7 +559,7 @@ def write_findings(inp, state, scorer, report, found):
         report["notes"].append(f"D from {inp.n_sims} simulations is not judged (pure white noise reads D up to 14-98 from "
                                f"2-3 of them): give {MIN_SIMS} or more")
     for i in range(3):
-        if after[i] > det.OUTSIDE_NULL_D and inp.n_sims >= MIN_SIMS:
+        if after[i] > det.OUTSIDE_NULL_D and inp.n_sims >= MIN_SIMS and AXES[i] not in inp.idle:
             deps_e = extended_deps(i) if state.extended(inp, i) else inp.deps[i]
             report["notes"].append(still_departs(AXES[i], after[i], deps_e, inp.taus, inp.bands))
             if AXES[i] in report.get("departures", {}):

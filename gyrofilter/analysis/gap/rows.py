@@ -19,6 +19,7 @@ import numpy as np
 
 from ...effects import REPEATED_SAMPLES
 from ...units import AXES
+from . import detectors as det
 from .features import METRIC, d_shown
 from .state import RowsFinding
 
@@ -57,4 +58,4 @@ def rows_findings(state):
              "gain": {"metric": f"discrepancy D ({METRIC}), mean over the analysed axes", "before": state.rows.before,
                       "after": state.rows.after},
              "statistic": {"name": cand.statistic_name, "value": float(cand.statistic), "threshold": float(cand.threshold)},
-             "alternatives": [], "params_ci95": {"fraction": [float(v) for v in counted.excess_ci95]}}]
+             "alternatives": [], "params_ci95": {"fraction": [min(float(v), det.max_fraction()) for v in counted.excess_ci95]}}]

@@ -46,11 +46,13 @@ class AllanInputError(GyroFilterError, ValueError):
 
 class ConstantAxisError(AllanInputError):
     """An axis whose samples are all equal (a stuck or unconnected axis): nothing to characterise.
-    ``axis``: its name; the others of a recording may still be analysed."""
+    ``axis``: its name; the others of a recording may still be analysed: ``varying``, the letters
+    of the axes asked for whose samples are not all equal, where the caller has looked (None: not known)."""
 
     def __init__(self, message, axis):
         super().__init__(message)
         self.axis = axis
+        self.varying = None
 
 
 def rate_numbers(x, name="x"):
@@ -119,7 +121,8 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
     taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
     if taus.ndim != 1 or taus.size == 0 or not np.all(np.isfinite(taus)):
         raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {plain(taus_s)}")
-    m = np.round(taus * rate)  # compared as floats: a tau of 1e300 s is no int64
+    with np.errstate(over="ignore"):  # compared as floats: a tau of 1e300 s is no int64, 1e308 s at 100 Hz inf
+        m = np.round(taus * rate)
     if np.any(m < 1):
         raise AllanInputError(
             f"tau {taus[m < 1].min():g} s is shorter than one sample (1/{rate:g} Hz = {1 / rate:g} s)")

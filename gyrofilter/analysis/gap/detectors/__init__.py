@@ -219,6 +219,7 @@ from .slow import (  # noqa: F401
 )
 from .repeats import (  # noqa: F401
     detect_repeats,
+    max_fraction,
     repeats_warning,
 )
 from .covariate import (  # noqa: F401

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from ....effects import COLORED_NOISE, NARROWBAND, RESONATORS, WANDERING_TONE
-from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, Candidate
+from .common import COLORED_MIN_LAG1, COLORED_MIN_LAG2_GAP, COLORED_Z, REPEATS_LAG2_MIN_WEIGHT, Candidate
 from ...stats import dot, moving_mean
 from .resonance import band_correlation
 from ....sim.noise_terms import arma11_from_lags, arma11_long_run_ratio
@@ -108,10 +108,16 @@ def lags_without_repeats(r1, r2, f, iterations=4):
         r2 = f ρ1 + (1 - 2f) ρ2 + f ρ3,        ρ3 ≈ ρ2² / ρ1 (a first-order low pass's)
 
     solved by fixed-point iteration from ρ2 = r2 (white noise under repeats: r1 = f, r2 = 0
-    give 0 and 0; a low pass of lag-1 0.5 under 5 % repeats reads r1 = 0.513)."""
+    give 0 and 0; a low pass of lag-1 0.5 under 5 % repeats reads r1 = 0.513). Where ρ2's weight
+    1 - 2f in r2 is below :data:`~gyrofilter.analysis.gap.detectors.common.REPEATS_LAG2_MIN_WEIGHT`
+    (f above 0.45; none at f = 0.5) r2 does not determine ρ2: it is taken as a first-order low
+    pass's, ρ2 = ρ1²."""
     rho1, rho2 = r1, r2
     for _ in range(iterations):
         rho1 = (r1 - f - f * (1 - f) * rho2) / (1 - f) ** 2
+        if 1 - 2 * f < REPEATS_LAG2_MIN_WEIGHT:
+            rho2 = rho1 * rho1
+            continue
         rho3 = rho2 * rho2 / rho1 if abs(rho1) > 1e-3 else 0.0
         rho2 = (r2 - f * rho1 - f * rho3) / (1 - 2 * f)
     return rho1, rho2

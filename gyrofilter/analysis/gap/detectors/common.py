@@ -93,6 +93,11 @@ TONE_MIN_SPREAD_BINS = 0.5
 REPEATS_ALPHA = 1e-3
 #: the statistic of a repeated-rows finding, -log10 p, is capped here (a p-value underflows to 0)
 REPEATS_MAX_STATISTIC = 300.0
+#: colored noise under repeated rows (:func:`~gyrofilter.analysis.gap.detectors.colored.lags_without_repeats`):
+#: the least weight 1 - 2f of the noise's lag-2 in the measured one for which it is solved from it; above
+#: f = 0.45 (a record of half its rows repeated: 1 - 2f = 0, the division failed) the lag-2 is taken as a
+#: first-order low pass's, rho1^2
+REPEATS_LAG2_MIN_WEIGHT = 0.1
 #: the hump statistic (the drop of the Welch log-PSD residual sum of squares by a resonance, in
 #: residual variances: detectors.resonance) a hump must exceed, set from clean records only: on
 #: 120 simulated axes without a hump (white, AR(1) and ARMA colored noise, bias instability,
