@@ -1,4 +1,4 @@
-"""A shape in time against flicker (gyrofilter.analysis.gap.detectors.slow, flicker_p_value): bias
+"""A shape in time against flicker (gyrofilter.analysis.gap.detectors.flicker, flicker_p_value): bias
 instability's 1/f excursions are not named as a step, a ramp or a warm-up, and a shape on white noise
 is named as before.
 
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from gyrofilter.analysis.gap.detectors import slow
+from gyrofilter.analysis.gap.detectors import flicker, slow
 from gyrofilter.effects import BIAS_STEP, RATE_RAMP, WARMUP
 from gyrofilter.sim.simulate import simulate_axis_dps
 
@@ -36,7 +36,7 @@ def _named(x):
 def test_flicker_covariance_is_its_spectrum_integrated():
     """The closed form (cosine integrals) against numerical quadrature of the spectrum."""
     n = 64
-    r = slow.flicker_covariance(n)
+    r = flicker.flicker_covariance(n)
     wc = 1.0 / n
     for k in (0, 1, 5, 63):
         low = quad(lambda w: math.cos(k * w) / wc, 0.0, wc)[0]

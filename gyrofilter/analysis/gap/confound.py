@@ -148,12 +148,10 @@ def covariate_or_time(time_reading, covariate, stats, n_blocks):
 
 
 def _explained_by_temperature(stats):
-    """Whether the time reading's shape does not hold beside the temperature: what the temperature
-    leaves of it flicker draws in more than ``FLICKER_ALPHA`` of records (``beside_temperature_p``
-    of ``stats``, :func:`gyrofilter.analysis.gap.detectors.covariate.beside_covariate_p`)."""
-    from .detectors.common import FLICKER_ALPHA  # not at the top: the detectors import this module
-
-    return stats.get("beside_temperature_p", 0.0) > FLICKER_ALPHA
+    """Whether the time reading's shape does not hold beside the temperature (``stats``'s
+    ``explained_by_temperature``: what the temperature leaves of it flicker draws in more than
+    ``FLICKER_ALPHA`` of records, :func:`gyrofilter.analysis.gap.detectors.covariate.beside_covariate_p`)."""
+    return stats.get("explained_by_temperature", False)
 
 
 def _shape_beats_temperature(name, stats, n):

@@ -103,7 +103,7 @@ ones found, because the effects are confusable:
    * a step, ramp or warm-up that passes is named only where white noise with flicker (1/f,
      the bias instability every MEMS gyro has) fitted to the record draws its likelihood ratio
      over flicker in at most 1 % of records (a parametric bootstrap of 1000 records from a fixed
-     stream, :func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value`); else the bias
+     stream, :func:`~gyrofilter.analysis.gap.detectors.flicker.flicker_p_value`); else the bias
      instability is named in its place. In ten minutes a bias instability's excursions passed
      the rules above as a shape on 37 of 200 axes, against it on 5;
    * with no shape, the best stochastic spectrum is reported if above its threshold; a bias
@@ -119,7 +119,7 @@ ones found, because the effects are confusable:
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
 :class:`Candidate`, helpers), ``repeats``, ``outliers``, ``tails``, ``ringing``, ``sinusoid``, ``narrowband``,
 ``resonance``, ``tone``, ``colored``
-and ``slow`` (+ ``covariate``, the temperature first); every name is importable from
+and ``slow`` (+ ``covariate``, the temperature first, and ``flicker``, a shape against a bias instability); every name is importable from
 ``gyrofilter.analysis.gap.detectors`` as before.
 """
 from .common import (  # noqa: F401

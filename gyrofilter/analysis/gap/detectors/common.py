@@ -49,14 +49,14 @@ STOCHASTIC_PENALTY = 6.0
 JOINT_THRESHOLD = 25.0
 #: a shape in time (step, ramp, warm-up) is named only where white noise with flicker fitted to the
 #: record draws its likelihood ratio over flicker as clearly in at most this share of records
-#: (:func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value`); a temperature under a bias
+#: (:func:`~gyrofilter.analysis.gap.detectors.flicker.flicker_p_value`); a temperature under a bias
 #: instability, and a ramp or step in the place of a temperature, are held to the same test
 FLICKER_ALPHA = 0.01
 #: records of that parametric bootstrap, their block means (at most) and their fixed stream
 FLICKER_REPLICATES = 1000
 FLICKER_BLOCKS = 128
 #: the flicker-to-white ratios (flicker variance of a block mean over the white level) over which
-#: :func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value` profiles its likelihoods, with 0 (no flicker)
+#: :func:`~gyrofilter.analysis.gap.detectors.flicker.flicker_p_value` profiles its likelihoods, with 0 (no flicker)
 FLICKER_RATIOS = np.geomspace(1e-3, 1e3, 25)
 FLICKER_STREAM = 20261129
 #: 2 Delta log L (exact likelihood) a Gauss-Markov process must gain over a random walk

@@ -12,7 +12,7 @@ cause to name: it predicts the bias at the next power-up, an exponential in time
   then re-estimated by generalised least squares under the stochastic model of that residual
   (:func:`gls`), and it must be significant there, jointly with any time shape found in the
   residual (``z^2 > JOINT_THRESHOLD``), or, where that model is a bias instability, pass the time
-  shapes' test against flicker (:func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value`: a
+  shapes' test against flicker (:func:`~gyrofilter.analysis.gap.detectors.flicker.flicker_p_value`: a
   settling the temperature explains is then named as the temperature, not as a shape in time);
   otherwise the temperature is not named;
 * the **time reading**: the slow effects without the temperature (the shapes ramp, step and
@@ -33,9 +33,10 @@ import numpy as np
 
 from ....effects import BIAS_INSTABILITY, BIAS_STEP, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK, SHAPES, TEMPERATURE, WANDERS, WARMUP
 from ..confound import covariate_or_time
-from .common import DETERMINISTIC_THRESHOLD, JOINT_THRESHOLD, Candidate
+from .common import DETERMINISTIC_THRESHOLD, FLICKER_ALPHA, JOINT_THRESHOLD, Candidate
 from ...stats import block_means, dot
-from .slow import FLICKER_ALPHA, flicker_p_value, periodogram_detrended, slow_spectrum, slow_reading
+from .flicker import flicker_p_value
+from .slow import periodogram_detrended, slow_spectrum, slow_reading
 
 
 def detect_slow(x, sample_rate_hz, temp_c=None):
@@ -55,6 +56,7 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     shape = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP, WARMUP) else None
     if shape and stats.get(TEMPERATURE, 0.0) > DETERMINISTIC_THRESHOLD:
         stats["beside_temperature_p"] = p_value = beside_covariate_p(x, temp_c, shape)
+        stats["explained_by_temperature"] = p_value > FLICKER_ALPHA  # confound.covariate_or_time
         if covariate is None and p_value > FLICKER_ALPHA and not any(c.effect in WANDERS for c in time_reading):
             # a settling real against flicker, alone in its reading, that the temperature explains: the
             # covariate's reading (beside a strong wander, nothing holds beside the temperature)
@@ -65,7 +67,7 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
 def beside_covariate_p(x, temp_c, shape):
     """Whether the time shape ``shape`` holds beside the temperature: its p-value against flicker
     with the block-mean temperature fitted in both models
-    (:func:`~gyrofilter.analysis.gap.detectors.slow.flicker_p_value`)."""
+    (:func:`~gyrofilter.analysis.gap.detectors.flicker.flicker_p_value`)."""
     y, _ = block_means(x)
     tb, _ = block_means(np.asarray(temp_c, dtype=float))
     return flicker_p_value(y, shape, beside=tb)
