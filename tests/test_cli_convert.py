@@ -510,3 +510,24 @@ def test_a_log_that_changes_between_the_passes_is_refused(tmp_path, change):
         with pytest.raises(RecordingError, match="log.csv: changed while it was read"):
             for _ in foreign.chunks():
                 pass
+
+
+@pytest.mark.parametrize("rows, how", [(3, "file"), (3, "gzip"), (120_000, "file"), (120_000, "pipe")])
+def test_a_log_of_cr_only_line_ends_is_refused_naming_them(tmp_path, capsys, rows, how):
+    """Attack pass (issue 37): a log with CR-only line ends (classic Mac OS) read as one line of
+    column names ("no column for the gyro's z among 't, gx, gy, gz\\r0, 1, ..."); past 1 MiB it was
+    "line 1: longer than ... bytes". Now one line names the file and the line ends, read from a
+    file, gzip or a pipe alike."""
+    data = ("t,gx,gy,gz\r" + "".join(f"{i / 100:.2f},1,2,3\r" for i in range(rows))).encode()
+    src = tmp_path / "mac.csv"
+    src.write_bytes(gzip.compress(data) if how == "gzip" else data)
+    if how == "pipe":
+        rc, _ = _convert_pipe(tmp_path, data)
+        src = "/dev/fd/"
+    else:
+        rc = main(["convert", str(src), "--out", str(tmp_path / "rec.csv"), "--unit", "dps"])
+    assert rc == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"gyrofilter: error: {src}") and err.endswith(": line ends are CR only (old Mac): convert them "
+                                                                          "to LF (e.g. tr '\\r' '\\n')")
+    assert len(err.splitlines()) == 1

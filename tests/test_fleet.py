@@ -626,6 +626,30 @@ def test_a_stuck_axis_costs_the_fleet_that_axis_only(tmp_path, capsys):
     assert "1 recording(s), 1 analysed, 0 failed" in capsys.readouterr().out
 
 
+def test_the_fleet_counts_as_failed_the_lines_it_labels_failed(tmp_path, capsys):
+    """Issue 37 (attack): the summary said "1 failed" over two "failed:" lines, a stuck axis left out
+    labelled a failure of its unit; now a failed recording is "failed:", a stuck axis "left out:",
+    each counted, on stdout and in fleet.md alike."""
+    g = np.random.default_rng(12).normal(0, 0.05, (6000, 3))
+    g[:, 0] = -3.3
+    path = tmp_path / "stuckx.csv"
+    write_recording(path, Recording.from_dps(g, 100.0))
+    bad = tmp_path / "bad.csv"
+    bad.write_text("not a recording\n")
+    assert main(["allan", str(path), str(bad), "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "2 recording(s), 1 analysed, 1 failed, 1 axis/axes left out, " in out
+    failed = [line for line in out.splitlines() if line.startswith("  failed: ")]
+    left_out = [line for line in out.splitlines() if line.startswith("  left out: ")]
+    assert len(failed) == 1 and str(bad) in failed[0]
+    assert len(left_out) == 1 and left_out[0].startswith(f"  left out: {path}: axis x: all 6000 samples equal")
+    md = (tmp_path / "f" / "fleet.md").read_text()
+    assert "2 recordings: 1 analysed, 1 failed, 1 axis/axes left out;" in md
+    failed_md = md.split("## Failed", 1)[1].split("##", 1)[0]
+    assert "bad" in failed_md and "stuckx" not in failed_md
+    assert "axis x: all 6000 samples equal" in md.split("## Axes left out", 1)[1].split("##", 1)[0]
+
+
 def test_a_stuck_axis_of_a_gap_fleet_is_not_analysed(tmp_path, capsys):
     """Issue 37 (attack): in a gap fleet the stuck axis's row said ``ok`` with its D of 2e-09
     against a constant baseline; now it says the axis was not analysed and holds no D."""

@@ -982,9 +982,8 @@ def test_a_record_of_half_its_rows_repeated_or_more_is_analysed(pattern, fractio
     <= 0.5, got 0.500499" (its extended model refused); capped, the colored-noise lags under
     repeats divided by 1 - 2f = 0 ("the analysis could not run (ZeroDivisionError)"). A driver
     polling ten times faster than the sensor (each value ten times: 90 %) failed alike; it is
-    analysed (a model of at most 0.5 repeats explains it less than a colored noise of lag-1 0.99
-    does, which is named instead). The finding's fraction is the most a model takes, 0.5, saying
-    the excess is beyond it."""
+    analysed. The finding's fraction is the most a model takes, 0.5, saying the excess is beyond it
+    (the 90 % record: :func:`test_a_record_repeating_more_rows_than_a_model_holds_says_so`)."""
     model = load_model(REPO / "examples" / "models" / "repeated_samples.json")
     if pattern == "copies":
         del model[REPEATED_SAMPLES]
@@ -996,12 +995,32 @@ def test_a_record_of_half_its_rows_repeated_or_more_is_analysed(pattern, fractio
     report = analyse_gap(rec, seed=0, n_sims=10, bootstrap=0)
     assert not any("could not run" in n for n in report["notes"]), report["notes"]
     validate_model(report["extended_model"])
-    if pattern == "copies":
-        return
     (finding,) = [f for f in report["findings"] if f["effect"] == REPEATED_SAMPLES]
     assert finding["params"] == {"fraction": 0.5} == report["extended_model"][REPEATED_SAMPLES]
     if pattern != "random":  # random repeats at 0.5 can read an excess just below it
         assert "is beyond the 50% a model simulates" in finding["evidence"]
+
+
+def test_a_record_repeating_more_rows_than_a_model_holds_says_so():
+    """Issue 37 (attack 5): a driver polling ten times faster than the sensor (each value ten times:
+    90 % of the rows repeated) read as a colored noise of lag-1 0.99 with heavy tails, its repeated
+    rows at the model's 0.5 kept or dropped by a gain the model cannot judge. Now they are named
+    at the cap whatever the gain, and a note (and allan's and report's warning) says the record
+    repeats more rows than a model holds, so the other findings are not to be trusted."""
+    model = load_model(REPO / "examples" / "models" / "repeated_samples.json")
+    del model[REPEATED_SAMPLES]
+    rec = simulate(model, 300.0, seed=3)
+    rec.columns.update({c: np.repeat(v[::10], 10)[:len(v)] for c, v in rec.columns.items() if c != "t"})
+    report = analyse_gap(rec, seed=0, n_sims=10, bootstrap=0)
+    (finding,) = [f for f in report["findings"] if f["effect"] == REPEATED_SAMPLES]
+    assert finding["params"] == {"fraction": 0.5} == report["extended_model"][REPEATED_SAMPLES]
+    excess = report["repeated_rows"]["excess_fraction"] if report.get("repeated_rows") else None
+    (note,) = [n for n in report["notes"] if "more than the 50% the simulator's model holds" in n]
+    assert note.startswith("the record repeats 9") and "the gap's other findings) is not to be trusted" in note
+    counted, _ = det.detect_repeats(rec.gyro_dps, 1.0 / rec.lsb_per_dps)
+    assert counted.excess > 0.85 and excess in (None, counted.excess)
+    warning = det.repeats_warning(counted)
+    assert warning.endswith(note) and "N a little high" not in warning
 
 
 def test_the_lags_under_repeats_at_half_the_rows_are_finite():

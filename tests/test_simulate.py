@@ -205,9 +205,27 @@ def test_a_misspelt_parameter_is_named_with_the_parameter_it_is_like():
                                "the unknown 'centre_hz' is ignored: did you mean center_hz?")
     with pytest.raises(SettingsError) as info:  # a key like none of the parameters: the missing one alone
         validate_model(model([{k: v for k, v in hump.items() if k != "q"} | {"width": 3.0}], axes="x"))
-    assert str(info.value).endswith("missing parameter 'q' (expected a number > 0)")
+    assert str(info.value).endswith("missing parameter 'q' (expected a number in [0.05, 1000])")
     _, warnings = validate_model(model(repeated_samples={"fraction": 0.02, "patern": "beat"}))  # a whole-row effect's key
     assert warnings == ["model: repeated_samples: unknown parameter 'patern' ignored; did you mean pattern?"]
+
+
+@pytest.mark.parametrize("effect, reach", [
+    ({"effect": "sinusoid", "frequency_hz": 60.0, "amplitude_dps": 0.1}, "frequency_hz 60 Hz"),
+    ({"effect": "wandering_tone", "center_hz": 10.0, "spread_hz": 1e5, "wander_s": 1.0, "amplitude_dps": 0.1},
+     "center_hz + 3 spread_hz 300010 Hz"),
+    ({"effect": "narrowband", "center_hz": 45.0, "bandwidth_hz": 20.0, "rms_dps": 0.1}, "center_hz + bandwidth_hz / 2 55 Hz"),
+])
+def test_a_frequency_past_nyquist_warns_that_it_aliases(effect, reach):
+    """Issue 37: every effect whose frequencies can pass the Nyquist frequency (a wandering tone's
+    centre plus 3 spreads, a narrowband line's upper half-power edge) gets the sinusoid's warning
+    (a wandering tone of spread 1e5 Hz at 100 Hz simulated silently); just below it, none."""
+    _, warnings = validate_model(model([effect], axes="x", fs=100.0))
+    assert warnings == [f"model: axes.x.effects[0] ({effect['effect']}): {reach} is above the Nyquist frequency 50 Hz "
+                        "and will alias"]
+    key = {"sinusoid": "frequency_hz", "wandering_tone": "spread_hz", "narrowband": "bandwidth_hz"}[effect["effect"]]
+    below = dict(effect, **{key: {"sinusoid": 50.0, "wandering_tone": 13.0, "narrowband": 10.0}[effect["effect"]]})
+    assert validate_model(model([below], axes="x", fs=100.0))[1] == []
 
 
 @pytest.mark.parametrize("duration", [0.0, -1.0, float("nan"), 1e308, 1e10])
@@ -266,7 +284,11 @@ def test_model_numbers_are_bounded_so_no_signal_is_infinite(effect, message):
     (lambda m: m.update(temperature={"start_c": None, "end_c": 30.0}), r"^model: temperature.start_c: missing"),
     (lambda m: m.update(temperature={"start_c": 25.0, "tau_s": None}), r"^model: temperature.tau_s: expected a number > 0, got null$"),
     (lambda m: m["axes"]["x"]["effects"].append({"effect": "bias_instability", "b_dps": 0.01, "per_decade": None}),
-     r"\(bias_instability\).per_decade: expected a number > 0, got null$"),
+     r"\(bias_instability\).per_decade: expected a number in \[0.1, 10\], got null$"),
+    # issue 37: the range a key actually takes, not its kind's ([0, 1] for a fraction of at most 0.5)
+    (lambda m: m.update(repeated_samples={"fraction": -0.1}), r"^model: repeated_samples.fraction: expected a number in \[0, 0.5\], got -0.1$"),
+    (lambda m: m["axes"]["x"]["effects"].append({"effect": "heavy_tails", "fraction": 2.0, "scale_ratio": 3.0}),
+     r"\(heavy_tails\).fraction: expected a number in \[0, 0.5\], got 2.0$"),
 ])
 def test_model_sizes_are_bounded_naming_the_key(mutate, message):
     m = model(axes="xyz")

@@ -140,14 +140,17 @@ def run(args, settings, paths):
 
 def _summary(rows, fleet_files, written, elapsed_s):
     """Print the fleet's outcome on stdout; the exit code."""
-    failed = [r for r in rows if r["status"] != "ok"]  # a recording, or one stuck axis of it
+    failed, left_out = table.failed_rows(rows), table.left_out_rows(rows)
     units = len({r["unit"] for r in rows})
     done = len({r["unit"] for r in rows if r["status"] == "ok"})
     flagged = [r for r in rows if r["flag"]]
-    console.tell(f"fleet: {units} recording(s), {done} analysed, {units - done} failed, "
-                 f"{len({r['unit'] for r in flagged})} stand(s) out ({elapsed_s:.1f} s)")
+    console.tell(f"fleet: {units} recording(s), {done} analysed, {len(failed)} failed, "
+                 + (f"{len(left_out)} axis/axes left out, " if left_out else "")
+                 + f"{len({r['unit'] for r in flagged})} stand(s) out ({elapsed_s:.1f} s)")
     for r in failed:
         console.tell(f"  failed: {r['status']}")
+    for r in left_out:
+        console.tell(f"  left out: {r['status']}")
     for r in flagged:
         for f in r["flag"]:
             console.tell(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")

@@ -1,7 +1,7 @@
 """The text of another tool's gyro log, for :mod:`gyrofilter.recording.foreign`: the log opened to
 be read more than once (:func:`open_log`: a file where it is, a pipe copied first, within a bound,
 its first line checked as its first bytes come) and its lines (:func:`log_lines`: numbered,
-checked for length and UTF-8, runs of empty lines read past a block at a time).
+checked for length and UTF-8, the first for line ends of CR only, runs of empty lines read past a block at a time).
 """
 from __future__ import annotations
 
@@ -90,11 +90,24 @@ def _first_line_ends(start, path):
             text = zlib.decompressobj(31).decompress(start, MAX_LINE_BYTES + 1)
         except zlib.error as exc:
             raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
+    _refuse_cr_only(text.split(b"\n", 1)[0], path)
     if b"\n" in text:
         return True
     if len(text) > MAX_LINE_BYTES:
         raise _too_long(path, 1)
     return False
+
+
+#: a CR that ends no line (not before an LF, not the last byte read): a log whose line ends are CR only
+_BARE_CR = re.compile(rb"\r(?!\n|$)")
+
+
+def _refuse_cr_only(text, path):
+    """Refuse the log ``path`` when ``text``, its first line (or its first bytes), holds a CR that
+    ends no line: line ends of CR only (classic Mac OS), where the whole log would read as one
+    line of column names."""
+    if _BARE_CR.search(text):
+        raise RecordingError(f"{path}: line ends are CR only (old Mac): convert them to LF (e.g. tr '\\r' '\\n')")
 
 
 def _too_long(path, number):
@@ -124,6 +137,8 @@ def log_lines(raw, path):
                     yield number, "", run
                     number += run - 1
                     continue
+                if number == 1:
+                    _refuse_cr_only(data, path)
                 if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
                     raise _too_long(path, number)
                 try:

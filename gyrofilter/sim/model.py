@@ -106,6 +106,16 @@ def param_bounds(effect, name):
     return max(low, kind_low), min(high, kind_high)
 
 
+def _expected(key, kind):
+    """What the parameter ``key`` of the kind ``kind`` takes, for an error message: the interval of
+    :data:`_NAMED_LIMITS` where its key has one (narrower than its kind's: ``repeated_samples``'s
+    ``fraction`` is a ``frac`` of at most 0.5), else its kind's (:data:`_KINDS`)."""
+    if key in _NAMED_LIMITS:
+        low, high = _NAMED_LIMITS[key]
+        return f"a number in [{low:g}, {high:g}]"
+    return _KINDS[kind][1]
+
+
 def _number(value, where, kind="any"):
     """``value`` as a float, or SettingsError naming ``where``: a number (not a bool) of the kind
     ``kind`` (:data:`_KINDS`) inside the limits of its key (:func:`_limits`)."""
@@ -115,11 +125,12 @@ def _number(value, where, kind="any"):
             number = float(value)
         except OverflowError:  # an int beyond a float's range
             pass
+    key = re.sub(r"\[\d+\]$", "", where.rsplit(".", 1)[-1])
     if math.isnan(number) and not isinstance(value, (float, np.floating)):
-        _err(where, f"expected {_KINDS[kind][1]}, got {_show(value)}")
+        _err(where, f"expected {_expected(key, kind)}, got {_show(value)}")
     if not math.isfinite(number) or not _KINDS[kind][0](number):
-        _err(where, f"expected {_KINDS[kind][1]}, got {plain(number)}")
-    low, high, unit = _limits(re.sub(r"\[\d+\]$", "", where.rsplit(".", 1)[-1]), kind)
+        _err(where, f"expected {_expected(key, kind)}, got {plain(number)}")
+    low, high, unit = _limits(key, kind)
     if number > high:
         _err(where, f"expected a number <= {high:g}{unit}, got {number:g}")
     if number < low:
@@ -302,7 +313,7 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
         if key not in eff:
             like = [k for k, near in unknown.items() if near == key]
             hint = f"; the unknown {quote(like[0])} is ignored: did you mean {key}?" if like else ""
-            _err(label, f"missing parameter '{key}' (expected {_KINDS[kind][1]}){hint}")
+            _err(label, f"missing parameter '{key}' (expected {_expected(key, kind)}){hint}")
         out[key] = _number(eff[key], f"{label}.{key}", kind)
     for key, (kind, default) in optional.items():
         value = eff.get(key, default)
@@ -324,8 +335,9 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     if name == TEMPERATURE and model[TEMPERATURE_PROFILE] is None and not coefficients_only:
         _err(label, "needs the model's 'temperature' profile (the top-level 'temperature' key)")
     rate = model["sample_rate_hz"]
-    if name == SINUSOID and rate is not None and out["frequency_hz"] > rate / 2.0:
-        warnings.append(f"model: {label}: frequency_hz {out['frequency_hz']:g} is above the Nyquist frequency "
+    top_hz = highest_frequency_hz(name, out)
+    if top_hz is not None and rate is not None and top_hz > rate / 2.0:
+        warnings.append(f"model: {label}: {_HIGHEST_FREQUENCY[name][1]} {top_hz:g} Hz is above the Nyquist frequency "
                         f"{rate / 2.0:g} Hz and will alias")
     if name in (NARROWBAND, WANDERING_TONE) + RESONATORS and rate is not None:
         if out["center_hz"] >= rate / 2.0:
@@ -345,6 +357,30 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     if name == BIAS_INSTABILITY and out["tau_min_s"] and out["tau_max_s"] and out["tau_max_s"] < out["tau_min_s"]:
         _err(f"{label}.tau_max_s", "expected tau_max_s >= tau_min_s")
     return out
+
+
+#: a wandering tone's frequency reaches its centre plus this many spread_hz (its instantaneous
+#: frequency is Gaussian: 3 standard deviations hold 99.7 % of the record)
+TONE_REACH_SPREADS = 3.0
+#: effect -> (its highest frequency (Hz) from its checked parameters, how a warning names it): the
+#: effects whose frequency can pass the Nyquist frequency and alias. A sinusoid's frequency; a
+#: wandering tone's centre plus :data:`TONE_REACH_SPREADS` spreads; a narrowband line's upper
+#: half-power edge (centre plus half its full width). The centres of these lines and of the
+#: resonators are refused at or above Nyquist (:func:`validate_model`).
+_HIGHEST_FREQUENCY = {
+    SINUSOID: (lambda p: p["frequency_hz"], "frequency_hz"),
+    WANDERING_TONE: (lambda p: p["center_hz"] + TONE_REACH_SPREADS * p["spread_hz"],
+                     f"center_hz + {TONE_REACH_SPREADS:g} spread_hz"),
+    NARROWBAND: (lambda p: p["center_hz"] + 0.5 * p["bandwidth_hz"], "center_hz + bandwidth_hz / 2"),
+}
+
+
+def highest_frequency_hz(name, params):
+    """The highest frequency (Hz) of the effect ``name`` with the checked parameters ``params``
+    (:data:`_HIGHEST_FREQUENCY`), or None for an effect without one. The one rule of the
+    Nyquist warning: above f_s / 2 a frequency aliases (Oppenheim & Schafer, sec. 4.2)."""
+    rule = _HIGHEST_FREQUENCY.get(name)
+    return None if rule is None else rule[0](params)
 
 
 def _check_length(values, where, most, what):

@@ -216,6 +216,18 @@ def fleet_rows(names, results):
     return rows
 
 
+def failed_rows(rows):
+    """The rows of ``rows`` (:func:`fleet_rows`) of recordings that failed: their one row, no axis."""
+    return [r for r in rows if r["status"] != "ok" and r["axis"] is None]
+
+
+def left_out_rows(rows):
+    """The axes of analysed recordings left out (a stuck axis of an ``allan`` fleet, an axis the gap
+    had nothing to analyse): their rows say why. Not a failure of the unit: its other axes hold
+    their results."""
+    return [r for r in rows if r["status"] != "ok" and r["axis"] is not None]
+
+
 def flag_units(rows):
     """Mark the rows of units that stand out (module docstring: the rules). Adds to each row's
     ``flag`` a dict per flag (``kind``: "coefficient" or "finding", ``what``, ``direction``,
@@ -370,21 +382,23 @@ def fleet_markdown(rows, stats, *, title):
     when some row has gap results), and the fleet statistics ``stats`` (what
     :func:`flag_units` returns) with the rules."""
     units = list(dict.fromkeys(r["unit"] for r in rows))
-    failed_rows = [r for r in rows if r["status"] != "ok"]  # a recording, or one stuck axis of it
+    failed, left_out = failed_rows(rows), left_out_rows(rows)
     done = len({r["unit"] for r in rows if r["status"] == "ok"})
     flagged = [r for r in rows if r["flag"]]
     lines = [f"# {title}", "",
-             (f"{len(units)} recordings: {done} analysed, {len(units) - done} failed; "
-              f"{len({r['unit'] for r in flagged})} stand out."), "", "## Units that stand out", ""]
+             (f"{len(units)} recordings: {done} analysed, {len(failed)} failed"
+              + (f", {len(left_out)} axis/axes left out" if left_out else "")
+              + f"; {len({r['unit'] for r in flagged})} stand out."), "", "## Units that stand out", ""]
     if flagged:
         lines += ["| unit | axis | why |", "|---|---|---|"]
         lines += [f"| {markdown_text(r['unit'])} | {r['axis']} | {f['text']} |" for r in flagged for f in r["flag"]]
     else:
         lines.append("None.")
-    if failed_rows:
-        lines += ["", "## Failed", "", "| unit | recording | reason |", "|---|---|---|"]
-        lines += [f"| {markdown_text(r['unit'])} | {markdown_text(r['recording'])} | {markdown_text(r['status'])} |"
-                  for r in failed_rows]
+    for heading, which in (("Failed", failed), ("Axes left out", left_out)):
+        if which:
+            lines += ["", f"## {heading}", "", "| unit | recording | reason |", "|---|---|---|"]
+            lines += [f"| {markdown_text(r['unit'])} | {markdown_text(r['recording'])} | {markdown_text(r['status'])} |"
+                      for r in which]
     keys = [JSON_KEY[t] for t in COEFFICIENTS]
     head = " | ".join(f"{TERM_SYMBOL[t]} ({TERM_UNIT[t]})" for t in COEFFICIENTS)
     # the gap's columns only when the gap ran (a gap fleet); an allan fleet has none to show

@@ -196,10 +196,10 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
         state = weigh_tones(inp, state, scorer)                         # 3., one line: a tone or a narrow band
         state = keep_findings(inp, state, scorer)                       # 4., gain per finding
         state = composite_step(inp, state, scorer)                      # 4., composite stochastic part where D stays high
-        report["notes"] = list(state.notes)
         found = bootstrap_intervals(inp, state, bootstrap, seed)        # 5., the parameters' intervals
         state = set_aside_uncertain(inp, state, scorer, found)          # 5., a finding the record does not determine
         state = weigh_repeats(inp, state, scorer)                       # 5., repeated rows: the whole record
+        report["notes"] = list(state.notes)  # after the repeats' weighing: its notes were lost
         write_findings(inp, state, scorer, report, found)               # 5.
     report["runtime_s"] = time.perf_counter() - t_start
     return report

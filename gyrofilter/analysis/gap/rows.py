@@ -7,7 +7,9 @@ colored noise's detector takes the repeats' lag-1 correlation out); :func:`weigh
 it after the axes' findings are decided (the decision order of
 :mod:`gyrofilter.analysis.gap.detectors`): a candidate is kept where the extended model with the repeats (the model's top-level
 ``repeated_samples`` at the estimated excess fraction, random pattern) lowers the mean D over the
-analysed axes (its gain; every axis's D after then reflects it). Its interval is the count's own
+analysed axes (its gain; every axis's D after then reflects it), or, where the excess fraction is
+beyond the largest a model takes (50 %), whatever its gain, at that cap, with a note that no model
+reproduces the record and its other findings are not to be trusted (issue 37). Its interval is the count's own
 (the binomial interval of the excess fraction, :func:`gyrofilter.analysis.repeats.repeated_rows`),
 not a bootstrap: the fraction is a count.
 """
@@ -41,7 +43,9 @@ def weigh_repeats(inp, state, scorer):
         after[i] = scorer.discrepancy(i, (spec, with_temperature, entry), f"extended model on {AXES[i]}")
     before_mean = float(np.mean([state.after[i] for i in analysed]))
     after_mean = float(np.mean([after[i] for i in analysed]))
-    if not after_mean < before_mean:
+    if det.beyond_model(counted):  # named at the model's cap whatever its gain: no model holds the record to weigh it
+        state = state.with_notes(det.beyond_model_text(counted))
+    elif not after_mean < before_mean:
         return state.with_notes(f"{REPEATED_SAMPLES} dropped: no gain (mean discrepancy over the axes {d_shown(before_mean)} "
                                 f"-> {d_shown(after_mean)})")
     return replace(state, rows=RowsFinding(cand, counted, entry, before_mean, after_mean), after=tuple(after))

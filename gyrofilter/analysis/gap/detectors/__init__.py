@@ -218,6 +218,8 @@ from .slow import (  # noqa: F401
     stochastic_fits,
 )
 from .repeats import (  # noqa: F401
+    beyond_model,
+    beyond_model_text,
     detect_repeats,
     max_fraction,
     repeats_warning,

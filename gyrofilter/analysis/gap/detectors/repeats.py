@@ -33,7 +33,7 @@ def detect_repeats(gyro_dps, q_dps=None):
     statistic = min(REPEATS_MAX_STATISTIC, -math.log10(counted.p_value) if counted.p_value > 0 else REPEATS_MAX_STATISTIC)
     most = max_fraction()
     beyond = (f"; an excess of {counted.excess:.2%} is beyond the {most:.0%} a model simulates: the model's fraction is "
-              f"{most:.0%}") if counted.excess > most else ""
+              f"{most:.0%}") if beyond_model(counted) else ""
     return counted, Candidate(
         REPEATED_SAMPLES, {"fraction": min(counted.excess, most)}, statistic, -math.log10(REPEATS_ALPHA),
         f"{counted.repeated} of {counted.rows} rows ({counted.fraction:.2%}) equal the previous row on every axis, "
@@ -45,6 +45,20 @@ def max_fraction():
     return param_bounds(REPEATED_SAMPLES, "fraction")[1]
 
 
+def beyond_model(counted):
+    """Whether the count ``counted`` (a RepeatedRows) has more repeated rows beyond chance (its excess
+    fraction) than a model holds (:func:`max_fraction`): then no model reproduces the record, and
+    what is read off its rows (the Allan deviation, the gap's other findings) is not to be trusted."""
+    return counted.applicable and counted.excess > max_fraction()
+
+
+def beyond_model_text(counted):
+    """What ``gap``'s note, ``allan``'s and ``report``'s warning say of a count :func:`beyond_model`."""
+    return (f"the record repeats {counted.excess:.2%} of its rows beyond chance, more than the {max_fraction():.0%} "
+            "the simulator's model holds: no model reproduces it, and what is read off these rows (the Allan "
+            "deviation, the gap's other findings) is not to be trusted")
+
+
 def repeats_warning(counted):
     """The warning of ``allan`` and ``report`` for the count ``counted`` (a RepeatedRows) when the
     record holds more repeated rows than chance (:data:`REPEATS_ALPHA`), else None: the count, the
@@ -53,7 +67,9 @@ def repeats_warning(counted):
     if not counted.more_than_chance(REPEATS_ALPHA):
         return None
     lo, hi = counted.excess_ci95
-    return (f"{counted.repeated} of {counted.rows} rows ({counted.fraction:.2%}) repeat the previous row exactly on every "
+    said = (f"{counted.repeated} of {counted.rows} rows ({counted.fraction:.2%}) repeat the previous row exactly on every "
             f"axis, chance {counted.chance:.2%} at this quantization: an excess of {counted.excess:.2%} "
-            f"[95 %: {lo:.2%}, {hi:.2%}], a driver polling faster than the sensor updates; the Allan deviation at "
-            "the shortest tau reads low (by about half the excess), N a little high")
+            f"[95 %: {lo:.2%}, {hi:.2%}], a driver polling faster than the sensor updates; ")
+    if beyond_model(counted):
+        return said + beyond_model_text(counted)
+    return said + "the Allan deviation at the shortest tau reads low (by about half the excess), N a little high"
