@@ -46,6 +46,15 @@ def report(tmp_path, capsys, *args, name="report.html"):
     return out, json.loads(parse(out).data)
 
 
+@pytest.fixture(scope="module")
+def static_report(tmp_path_factory):
+    """The 100 s still record's report with --sims 10 (its page and its data), made once for the
+    tests that read it."""
+    out = tmp_path_factory.mktemp("static") / "report.html"
+    assert main(["report", STATIC, "--sims", "10", "--out", str(out)]) == 0
+    return out, json.loads(parse(out).data)
+
+
 def test_the_numbers_are_those_of_allan_gap_and_replay(tmp_path, capsys):
     out, data = report(tmp_path, capsys, STATIC, "--seed", "3", "--sims", "10")
     assert data["format"] == FORMAT
@@ -105,8 +114,8 @@ def test_where_allan_and_gap_disagree_the_page_says_why(tmp_path, capsys):
     assert "sinusoid" in next(s["text"] for s in said if s["axis"] == "z")
 
 
-def test_the_file_is_self_contained(tmp_path, capsys):
-    out, data = report(tmp_path, capsys, STATIC, "--sims", "10")
+def test_the_file_is_self_contained(static_report, capsys):
+    out, data = static_report
     check_shipped_report(STATIC, data, capsys)
     page = parse(out)
     assert page.scripts == ["application/json"]  # the data block only: nothing runs
@@ -159,7 +168,7 @@ def test_every_shipped_recording_yields_a_report(tmp_path, capsys, name):
     check_shipped_report(path, data, capsys)
 
 
-def test_warnings_clipping_and_a_moving_record(tmp_path, capsys):
+def test_warnings_clipping_and_a_moving_record(tmp_path, capsys, static_report):
     out, data = report(tmp_path, capsys, MULTIPOSE, "--sims", "10")
     check_shipped_report(MULTIPOSE, data, capsys)
     rec = read_recording(MULTIPOSE)
@@ -173,7 +182,7 @@ def test_warnings_clipping_and_a_moving_record(tmp_path, capsys):
     assert kept["allan"] is not None and any("does not look static" in w for w in kept["warnings"])
     assert main(["allan", MULTIPOSE, "--keep-outliers", "--json", str(tmp_path / "a.json")]) == 0
     assert kept["allan"] == json.loads((tmp_path / "a.json").read_text())
-    _, still = report(tmp_path, capsys, STATIC, "--sims", "10", name="still.html")
+    _, still = static_report
     assert not any("full scale" in w or "static" in w for w in still["warnings"])
 
 
