@@ -516,8 +516,9 @@ def test_heavy_tails_battery_is_found_and_never_confused_with_outliers():
     """Many seeds of each: hidden heavy tails named (>= 95 %, never as outliers), hidden
     outliers never named heavy tails, clean records with no finding (docs/gap.md, heavy tails).
     The ten-minute cases of tests/support/battery.py, 12 of each kind (random axis and
-    parameters), analysed once per session: the intervals' coverage test scores the first 8 of
-    them (they were 20 twenty-minute cases of their own, a fifth of the slow run's time)."""
+    parameters; >= 95 % is then all 12) and 10 clean ones, analysed once per session: the
+    intervals' coverage test scores the first 8 of each kind too (they were 20 twenty-minute
+    cases of each and 10 clean of their own, a tenth of the slow run's time)."""
     def named(report):
         return {(f["effect"], f["axis"]) for f in report["findings"]}
 

@@ -255,9 +255,10 @@ def test_coverage_per_effect_kind():
     and parameters; test_gap.py's heavy-tails battery and repeated-rows seeds score the same
     runs): the coverage per kind at least 75 % (a kind at 95 % falls below with probability
     < 1 % on 8-32 trials) and over all kinds in 90-98 % (about 240 trials: +-3 % is two binomial
-    standard errors). 8 cases per kind, not 12 (the test took over a quarter of the slow run): the fewest that
-    keep a one-parameter kind's bound below 1 %, and the trials over all kinds above the 200 of
-    the two standard errors (measured: 226 of 239 inside, every kind at 7 of 8 or better)."""
+    standard errors). 8 cases per kind, not 12 (the test took over a quarter of the slow run):
+    the fewest that keep a one-parameter kind's bound below 1 %, and the trials over all kinds
+    above the 200 of the two standard errors (measured: 226 of 239 inside, every kind at 7 of 8
+    or better)."""
     per_kind = {}
     for effect in he.EFFECTS:
         for case, report in battery.cases(effect, PER_KIND):
