@@ -28,8 +28,10 @@ from support.report_page import parse
 STATIC = str(RECORDINGS / "mpu6050_static_100s.csv.gz")
 MULTIPOSE = str(RECORDINGS / "mpu6050_multipose_102s.csv.gz")  # saturates: x 12 samples, z 6 (its header says)
 #: the one shipped recording whose report the default run makes here (a moving record: no filter); the other
-#: tests report on the 100 s still one and the multipose one, and the rest run with -m slow
+#: tests report on the 100 s still one and the multipose one (and hold them to what the shipped ones are held
+#: to: not again here), and the rest run with -m slow
 FAST = {"mpu6050_rotate_z_24s"}
+ELSEWHERE = {os.path.basename(STATIC), os.path.basename(MULTIPOSE)}
 
 
 def without_wall_times(gap_doc):
@@ -41,6 +43,15 @@ def report(tmp_path, capsys, *args, name="report.html"):
     out = tmp_path / name
     assert main(["report", *args, "--out", str(out)]) == 0
     capsys.readouterr()
+    return out, json.loads(parse(out).data)
+
+
+@pytest.fixture(scope="module")
+def static_report(tmp_path_factory):
+    """The 100 s still record's report with --sims 10 (its page and its data), made once for the
+    tests that read it."""
+    out = tmp_path_factory.mktemp("static") / "report.html"
+    assert main(["report", STATIC, "--sims", "10", "--out", str(out)]) == 0
     return out, json.loads(parse(out).data)
 
 
@@ -103,8 +114,9 @@ def test_where_allan_and_gap_disagree_the_page_says_why(tmp_path, capsys):
     assert "sinusoid" in next(s["text"] for s in said if s["axis"] == "z")
 
 
-def test_the_file_is_self_contained(tmp_path, capsys):
-    out, data = report(tmp_path, capsys, STATIC, "--sims", "10")
+def test_the_file_is_self_contained(static_report, capsys):
+    out, data = static_report
+    check_shipped_report(STATIC, data, capsys)
     page = parse(out)
     assert page.scripts == ["application/json"]  # the data block only: nothing runs
     linked = [(tag, k, v) for tag, attrs in page.tags for k, v in attrs.items()
@@ -130,27 +142,35 @@ def test_text_from_the_file_cannot_end_the_data_block(tmp_path, capsys):
     assert parse(out).scripts == ["application/json"]
 
 
-@pytest.mark.parametrize("name", [pytest.param(p.name[:-len(".csv.gz")],
-                                               marks=[] if p.name[:-len(".csv.gz")] in FAST else [pytest.mark.slow])
-                                  for p in sorted(RECORDINGS.glob("*.csv.gz"))])
-def test_every_shipped_recording_yields_a_report(tmp_path, capsys, name):
-    out, data = report(tmp_path, capsys, str(RECORDINGS / f"{name}.csv.gz"), "--sims", "10")
-    rec = read_recording(RECORDINGS / f"{name}.csv.gz")
+def check_shipped_report(path, data, capsys):
+    """What every shipped recording's report (``data``, of the file ``path``) holds: all its samples, the
+    Allan part or its error, the filter's rows or the refusal replay gives, the gap's three axes."""
+    rec = read_recording(path)
     assert data["recording"]["samples"] == len(rec)
     assert (data["allan"] is None) == (data["allan_error"] is not None)
     if data["allan"] is None:  # a moving record: allan refuses its gross errors, and the report says so
         assert "gross error" in data["allan_error"] and any("no Allan deviation" in w for w in data["warnings"])
     if data["filter"] is None:  # a record that moves in the start-up window: replay refuses it too
         assert "calibration: the sensor moved" in data["filter_error"]
-        assert main(["replay", str(RECORDINGS / f"{name}.csv.gz")]) == 2
+        assert main(["replay", str(path)]) == 2
         assert data["filter_error"] in capsys.readouterr().err
     else:
         assert data["filter"]["rows_out"] > 0
     assert len(data["gap"]["baseline"]["axes"]) == 3
 
 
-def test_warnings_clipping_and_a_moving_record(tmp_path, capsys):
+@pytest.mark.parametrize("name", [pytest.param(p.name[:-len(".csv.gz")],
+                                               marks=[] if p.name[:-len(".csv.gz")] in FAST else [pytest.mark.slow])
+                                  for p in sorted(RECORDINGS.glob("*.csv.gz")) if p.name not in ELSEWHERE])
+def test_every_shipped_recording_yields_a_report(tmp_path, capsys, name):
+    path = RECORDINGS / f"{name}.csv.gz"
+    _, data = report(tmp_path, capsys, str(path), "--sims", "10")
+    check_shipped_report(path, data, capsys)
+
+
+def test_warnings_clipping_and_a_moving_record(tmp_path, capsys, static_report):
     out, data = report(tmp_path, capsys, MULTIPOSE, "--sims", "10")
+    check_shipped_report(MULTIPOSE, data, capsys)
     rec = read_recording(MULTIPOSE)
     clip = clipped(rec.gyro_dps, 250.0, 131.0)
     assert "18 sample(s) at the full scale of +-250 deg/s (x: 12, z: 6)" in clip
@@ -162,7 +182,7 @@ def test_warnings_clipping_and_a_moving_record(tmp_path, capsys):
     assert kept["allan"] is not None and any("does not look static" in w for w in kept["warnings"])
     assert main(["allan", MULTIPOSE, "--keep-outliers", "--json", str(tmp_path / "a.json")]) == 0
     assert kept["allan"] == json.loads((tmp_path / "a.json").read_text())
-    _, still = report(tmp_path, capsys, STATIC, "--sims", "10", name="still.html")
+    _, still = static_report
     assert not any("full scale" in w or "static" in w for w in still["warnings"])
 
 

@@ -2,7 +2,7 @@
 recording under a file name that is not UTF-8.
 
 ``plain_filter`` is the plain-way oracle of the paper's filter (``tools/bench.py`` uses it as its
-baseline). Helpers that tools need too live in the package: the hidden-effect battery in ``gyrofilter.sim.hidden_effects`` and the
+baseline); ``battery`` the slow tests' ten-minute hidden-effect cases, each analysed once per session. Helpers that tools need too live in the package: the hidden-effect battery in ``gyrofilter.sim.hidden_effects`` and the
 register-level MPU6050 model in ``gyrofilter.sources.mpu6050.model``. ``tool(name)`` loads a script
 of ``tools/`` (``tools/docs.py`` for the tests of the documentation).
 """
