@@ -156,3 +156,14 @@ def test_the_adis16405_z_axes_are_a_wandering_tone(name):
     assert 19.0 < tone[0]["params"]["center_hz"] < 20.5 and tone[0]["params"]["amplitude_dps"] > 0.3
     assert not any(f["effect"] == NARROWBAND for f in report["findings"])
     assert max(report["discrepancy"]["after"].values()) <= 5.0, report["discrepancy"]
+
+
+@pytest.mark.parametrize("center_hz, bandwidth_hz", [(50.0, 0.01), (60.0, 0.01), (-5.0, 0.01), (25.0, 1e-6)])
+def test_a_band_at_an_edge_or_narrower_than_a_bin_is_estimated_without_failing(center_hz, bandwidth_hz):
+    """A bootstrap replicate can hand the tone's estimate a band at or past the Nyquist frequency or 0, or one
+    narrower than the track's bins (the gap-stability tool crashed on an IndexError there): the track
+    then follows the nearest bin inside the edges, and every number returned is finite."""
+    x = np.random.default_rng(5).normal(0.0, 0.01, 60_000)
+    out = det.tone_estimate(x, 100.0, center_hz, bandwidth_hz)
+    assert all(math.isfinite(v) for v in out.values() if isinstance(v, float))
+    assert 0.0 < out["center_hz"] < 50.0

@@ -78,13 +78,14 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     seg = tone_window(n, sample_rate_hz)
     res = sample_rate_hz / seg
     half = max(TONE_HALF_WIDTHS * bandwidth_hz, TONE_MIN_HALF_BINS * res)
+    center_hz = min(max(center_hz, res), nyquist - res)  # a replicate's band past an edge: the band at it
     for _ in range(TONE_WIDENINGS + 1):  # a band narrower than the track's excursions is widened
         lo, hi = max(center_hz - half, res), min(center_hz + half, nyquist - res)
         track = median_filter(_track(x - np.mean(x), sample_rate_hz, seg, lo, hi), size=TONE_MEDIAN_FRAMES, mode="nearest")
         wide = TONE_TRACK_SDS * _robust_sd(track)
         if not wide > 1.05 * half:
             break
-        center_hz, half = float(np.mean(track)), wide
+        center_hz, half = min(max(float(np.mean(track)), res), nyquist - res), wide
     spec = np.fft.rfft(x - np.mean(x))
     f = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
     spec[(f < lo) | (f > hi)] = 0.0
@@ -124,6 +125,8 @@ def _track(y, sample_rate_hz, seg, lo, hi):
     win = np.hanning(seg + 1)[:-1]
     f = np.fft.rfftfreq(seg, 1.0 / sample_rate_hz)
     inside = np.flatnonzero((f >= lo) & (f <= hi))
+    if inside.size == 0:  # a band narrower than a bin, or pushed to an edge: its nearest bin within the edges
+        inside = np.array([min(max(int(round(0.5 * (lo + hi) / f[1])), 1), f.size - 2)])
     first, last = int(inside[0]), int(inside[-1])
     out = np.empty(frames)
     for start in range(0, frames, TONE_BATCH_FRAMES):
