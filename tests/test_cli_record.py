@@ -4,14 +4,12 @@ The source is a seeded simulation paced in real time (or a paced replay), so the
 every sample the source delivered; whatever the signal, the file reads back and its samples
 equal the source's from the first one up to the last flush.
 """
-import contextlib
 import os
 import re
 import resource
 import signal
 import subprocess
 import sys
-import threading
 import time
 
 import numpy as np
@@ -22,7 +20,7 @@ from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources.simulated import DEFAULT_MODEL, DEFAULT_MODEL_PATH
-from support import RECORDINGS
+from support import RECORDINGS, play_lossy_device
 
 SIM_SECONDS = 60.0  # the source's own length; the recording is stopped long before
 RATE_HZ = 500.0
@@ -477,19 +475,7 @@ def test_a_serial_device_that_loses_samples_is_recorded_whole_with_its_gaps(tmp_
     port = os.ttyname(secondary)
     proc = start_record(f"serial:{port}", out, "--quiet", "--duration", str(duration_s))
 
-    def feed():
-        with contextlib.suppress(OSError):  # the record ended and the port closed
-            for _ in range(int(2 * duration_s / sum(steps_s))):  # twice the duration's samples
-                os.write(primary, lines)
-
-    try:
-        assert os.read(primary, 1) == b"?"
-        os.write(primary, b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
-        threading.Thread(target=feed, daemon=True).start()
-        err = proc.communicate(timeout=60)[1]
-    finally:
-        os.close(primary)
-        os.close(secondary)
+    err = play_lossy_device(primary, secondary, proc, lines, int(2 * duration_s / sum(steps_s)))
     assert proc.returncode == 0, err
     rec = read_recording(out)
     n = len(rec)

@@ -10,7 +10,6 @@ Real parts: the MPU6050 driver through smbus2's own code with only its ioctl rep
 register-level model (gyrofilter/sources/mpu6050/model.py) on a virtual clock; pyserial on a real
 pseudo-terminal; the replay source paced by the host's clock.
 """
-import contextlib
 import errno
 import json
 import os
@@ -33,7 +32,7 @@ import gyrofilter.sources.mpu6050.driver as mpu  # noqa: E402
 from gyrofilter import GyroFilter  # noqa: E402
 from gyrofilter.cli import main  # noqa: E402
 from gyrofilter.recording import Recording, read_recording, write_recording  # noqa: E402
-from support import REPO, lsb_recording
+from support import REPO, lsb_recording, play_lossy_device
 
 REAL_OPEN_MPU6050 = mpu.open_mpu6050
 BUNDLED = str(REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz")
@@ -246,19 +245,7 @@ def test_run_from_a_device_that_loses_samples_writes_a_row_for_every_block_of_de
     proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "run", "--source", f"serial:{os.ttyname(secondary)}",
                              "--out", str(out), "--quiet", "--duration", "12"], stderr=subprocess.PIPE, text=True)
 
-    def feed():
-        with contextlib.suppress(OSError):  # the run ended and the port closed
-            for _ in range(4000):  # more than 12 s of samples
-                os.write(primary, lines)
-
-    try:
-        assert os.read(primary, 1) == b"?"
-        os.write(primary, b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
-        threading.Thread(target=feed, daemon=True).start()
-        err = proc.communicate(timeout=60)[1]
-    finally:
-        os.close(primary)
-        os.close(secondary)
+    err = play_lossy_device(primary, secondary, proc, lines, 4000)
     assert proc.returncode == 0, err
     n = int(re.search(r"(\d+) samples in", err).group(1))
     x = np.tile(np.asarray(delivered, float), (n // len(delivered) + 1, 1))[:n]

@@ -8,9 +8,11 @@ of ``tools/`` (``tools/docs.py`` for the tests of the documentation).
 """
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import os
 import sys
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -67,3 +69,23 @@ def tool(name):
         sys.modules[key] = module
         spec.loader.exec_module(module)
     return sys.modules[key]
+
+
+def play_lossy_device(primary, secondary, proc, lines, repeats):
+    """Play a serial device on the pseudo-terminal ``primary`` (its other end ``secondary``) for the
+    command ``proc`` (a ``subprocess.Popen`` reading it): answer its first byte (``?``) with the
+    protocol header of a 100-Hz device in deg/s, then send ``lines`` (bytes) ``repeats`` times
+    until the command ends; both ends are closed. Returns the command's stderr."""
+    def feed():
+        with contextlib.suppress(OSError):  # the command ended and the port closed
+            for _ in range(repeats):
+                os.write(primary, lines)
+
+    try:
+        assert os.read(primary, 1) == b"?"
+        os.write(primary, b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
+        threading.Thread(target=feed, daemon=True).start()
+        return proc.communicate(timeout=60)[1]
+    finally:
+        os.close(primary)
+        os.close(secondary)
