@@ -69,10 +69,11 @@ _PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
 _KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp")
 _HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
 _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
-# a cell of the numpy path: signs, digits and points, at most 50 of them, so that a line of 5
-# cells and its "\r" stays within MAX_LINE_BYTES, and a cell numpy reads whole ("1.2.3", "+-4" it
-# does not, and the line-by-line path names them) is a plain decimal of a finite value
-_PLAIN_CELL = rb"[-+0-9.]{1,50}"
+# a cell of the numpy path: a plain decimal of at most 50 characters (sign, 24 digits, a point, 24
+# digits), so that a line of 5 cells and its "\r" stays within MAX_LINE_BYTES, and strictly one:
+# numpy 1.24's fromstring reads "1.2.3" as 1.2 and stops, unnoticed where it is the block's last
+# cell; every other cell ("1.2.3", "+-4", "1e3") goes the line-by-line way, which names it
+_PLAIN_CELL = rb"[-+]?(?:[0-9]{1,24}(?:\.[0-9]{0,24})?|\.[0-9]{1,24})"
 _PLAIN_LINES = {}  # field count -> compiled pattern of a block of plain CSV number lines
 # bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
 _TEXT = b"0123456789+-.,eEnaifNAIF \t"
