@@ -120,6 +120,7 @@ def temperature_first(x, sample_rate_hz, temp_c, stats, explains=None):
     if not (z2 > JOINT_THRESHOLD or (p_value is not None and p_value <= FLICKER_ALPHA) or explains):
         stats["temperature_gls"] = (a_gls, float(cov[1, 1]), noise[0], JOINT_THRESHOLD)  # confound.suggested_temperature
         return None
+    stats.pop("temperature_gls", None)  # named: not also suggested (an earlier reading may have set it)
     rest, _ = slow_reading(_less(x, a_gls, temp, t_mean), sample_rate_hz, SHAPES)
     comp = a_gls * (temp - t_mean)
     comp -= comp.mean()
