@@ -53,22 +53,22 @@ def detect_slow(x, sample_rate_hz, temp_c=None):
     if temp_c is None:
         return time_reading, stats
     covariate = temperature_first(x, sample_rate_hz, temp_c, stats)
+    y, _ = block_means(x)
     shape = time_reading[0].effect if time_reading and time_reading[0].effect in (RATE_RAMP, BIAS_STEP, WARMUP) else None
     if shape and stats.get(TEMPERATURE, 0.0) > DETERMINISTIC_THRESHOLD:
-        stats["beside_temperature_p"] = p_value = beside_covariate_p(x, temp_c, shape)
+        stats["beside_temperature_p"] = p_value = beside_covariate_p(y, temp_c, shape)
         stats["explained_by_temperature"] = p_value > FLICKER_ALPHA  # confound.covariate_or_time
         if covariate is None and p_value > FLICKER_ALPHA and not any(c.effect in WANDERS for c in time_reading):
             # a settling real against flicker, alone in its reading, that the temperature explains: the
             # covariate's reading (beside a strong wander, nothing holds beside the temperature)
             covariate = temperature_first(x, sample_rate_hz, temp_c, stats, explains=(shape, p_value))
-    return covariate_or_time(time_reading, covariate, stats, block_means(x)[0].size), stats
+    return covariate_or_time(time_reading, covariate, stats, y.size), stats
 
 
-def beside_covariate_p(x, temp_c, shape):
-    """Whether the time shape ``shape`` holds beside the temperature: its p-value against flicker
-    with the block-mean temperature fitted in both models
+def beside_covariate_p(y, temp_c, shape):
+    """Whether the time shape ``shape`` holds beside the temperature: its p-value against flicker on
+    the block means ``y`` with the block-mean temperature fitted in both models
     (:func:`~gyrofilter.analysis.gap.detectors.flicker.flicker_p_value`)."""
-    y, _ = block_means(x)
     tb, _ = block_means(np.asarray(temp_c, dtype=float))
     return flicker_p_value(y, shape, beside=tb)
 
