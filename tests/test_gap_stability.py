@@ -162,3 +162,48 @@ def test_the_commands_answer_does_not_depend_on_the_seed(tmp_path):
     assert docs[0] == docs[1]
     rec = read_recording(path)
     assert analyse_gap(rec, seed=1, bootstrap=0)["discrepancy"]["before"] != docs[0]["discrepancy"]["before"]
+
+
+def test_a_wander_the_record_does_not_hold_is_estimated_as_zero_not_as_a_tiny_level():
+    """The Whittle fit of a bias instability or a rate random walk to white block means that it
+    does not improve (2 Delta log L = 0) is the boundary's estimate, 0: the optimiser on the log
+    of the level stopped at an arbitrary ~1e-6 deg/s, and one such bootstrap replicate among 20
+    (the 449-s log's y) made b_dps's interval span 0.00013 to 0.22 on some seeds and 0.0018 to
+    0.0076 on others, so the bias instability was named or not by the seed."""
+    from gyrofilter.analysis.gap.detectors.slow import stochastic_fits, stochastic_params
+
+    rng = np.random.default_rng(5)
+    at_boundary = inside = 0
+    for _ in range(40):
+        fits, _ = stochastic_fits(0.01 * rng.standard_normal(1000), 0.45)
+        for name in ("bias_instability", "rate_random_walk"):
+            gain, theta, _ = fits[name]
+            level = next(iter(stochastic_params(name, theta, 0.45).values()))
+            if gain == 0:
+                at_boundary += 1
+                assert level == 0.0, (name, level)
+            else:
+                inside += 1
+                assert level > 1e-5, (name, gain, level)
+    assert at_boundary >= 10 and inside >= 10  # both cases drawn
+
+
+def test_a_zero_estimate_is_left_out_of_a_positive_parameters_interval():
+    """Replicates whose estimator found nothing (0 on a log scale) are left out, as a replicate
+    with no estimate is: one of 20 does not make the interval span decades."""
+    from gyrofilter.analysis.gap import intervals as gi
+
+    rng = np.random.default_rng(3)
+    reps = list(0.003 * np.exp(0.25 * rng.standard_normal(19))) + [0.0]
+    got = gi._interval(0.003, reps, "log", (0.0, np.inf))
+    assert got.ends is not None and got.ends[1] < 10 * got.ends[0], got
+
+
+@pytest.mark.slow
+def test_the_449s_logs_bias_instability_is_named_whatever_the_seed():
+    """The y axis of the shipped 449-s log: the same findings with seeds 0, 1 and 2 (seeds 0 and 1
+    set its bias instability aside as not determined before the boundary estimate was a zero)."""
+    rec = read_recording(REPO / "recordings" / "mpu6050_static_449s.csv.gz")
+    named = [sorted(f["effect"] for f in analyse_gap(rec, seed=seed)["findings"] if f["axis"] == "y")
+             for seed in (0, 1, 2)]
+    assert named[0] == named[1] == named[2] and "bias_instability" in named[0], named

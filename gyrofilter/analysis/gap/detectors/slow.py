@@ -166,7 +166,14 @@ def stochastic_fits(y, delta_s):
     """Whittle fits of each stochastic model to the block means ``y`` (bridge periodogram,
     :func:`_periodogram`).
 
-    Returns ``{model: (two_delta_loglik, theta, s0)}`` and the white-only level.
+    Returns ``{model: (two_delta_loglik, theta, s0)}`` and the white-only level. A fit no better
+    than white noise alone (``2 Delta log L <= 0``) is the maximum likelihood estimate on the
+    boundary: the term's level is 0 (the white fit is the model with it at 0), its ``theta``
+    ``(0,)`` (``(0, phi)`` for a Gauss-Markov), with ``s0`` the white level. The optimiser,
+    working on ``log`` of the level, only drifts towards that boundary and stops at an arbitrary
+    tiny level (``b_dps`` ~ 1e-6 where a term the record holds at all is above ~1e-4); a bootstrap
+    replicate's estimate there is a zero, not a value six decades down
+    (:mod:`gyrofilter.analysis.gap.intervals` leaves it out as nothing to estimate).
     """
     n = y.size
     if PERIODOGRAM == "bridge":
@@ -181,6 +188,8 @@ def stochastic_fits(y, delta_s):
     out = {}
     for model in WANDERS:
         nll, theta, s0 = _whittle(spec, omega, model, delta_s, s0_hf, wsh, gsh)
+        if nll >= nll0:
+            theta, s0 = (0.0,) + tuple(theta[1:]), s0_white
         out[model] = (max(0.0, 2 * (nll0 - nll)), theta, s0)
     return out, s0_hf
 
