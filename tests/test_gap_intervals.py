@@ -360,23 +360,28 @@ def test_a_parameter_whose_estimator_ran_on_fewer_than_half_the_runs_is_not_dete
 
 
 def _uncertain_case():
-    """A hidden random walk on y that a 10-minute record reads as a bias instability whose size it
-    does not bound (its interval spans about 0.00015 to 0.29 deg/s)."""
-    return he.draw_case(111, effect="rate_random_walk", duration_s=600.0, scale=0.5)
+    """Hidden spikes on y, a 2-minute record at a third of the battery's size: the tail detector
+    reads them as outliers (rate 0.00125, magnitude 0.39 deg/s after its threshold correction),
+    but spikes of that size in records simulated from the extended model stay below the spike
+    detector's threshold on every bootstrap run, so their size is not determined. (A random walk
+    read as a bias instability with an interval of 0.00015 to 0.29 deg/s served here until a
+    wander no better than white was estimated as 0: one bootstrap run's stray 1e-6 had made that
+    span.)"""
+    return he.draw_case(103, effect="outliers", duration_s=120.0, scale=0.3)
 
 
 def test_a_finding_whose_defining_parameter_is_not_determined_is_uncertain_not_named():
     """Not in findings, not in the extended model, D after of its axis without it; listed in
     uncertain with its (null) interval and why, and a note."""
     case = _uncertain_case()
-    report = analyse_gap(he.simulate_case(case), seed=111, n_sims=10)
+    report = analyse_gap(he.simulate_case(case), seed=103, n_sims=10)
     entry = next(e for e in report["uncertain"] if e["axis"] == case["axis"])
     effect, defining = entry["effect"], BY_NAME[entry["effect"]].defining
     assert set(entry) == {"effect", "axis", "params", "params_ci95", "why"}
     assert entry["params_ci95"][defining] is None and f"its defining parameter {defining} is not determined" in entry["why"]
     assert not any(f["effect"] == effect and f["axis"] == case["axis"] for f in report["findings"])
     assert all(e["effect"] != effect for e in report["extended_model"]["axes"][case["axis"]]["effects"])
-    assert f"{effect} on {case['axis']}: {defining} not determined by this record (its 95 % interval spans" in " ".join(
+    assert f"{effect} on {case['axis']}: {defining} not determined by this record (" in " ".join(
         report["notes"])
     if not any(f["axis"] == case["axis"] for f in report["findings"]):
         d = report["discrepancy"]
@@ -388,7 +393,7 @@ def test_the_console_and_the_reports_say_not_determined_and_list_the_uncertain(t
     case = _uncertain_case()
     path = tmp_path / "rec.csv.gz"
     write_recording(str(path), he.simulate_case(case))
-    assert main(["gap", str(path), "--seed", "111", "--sims", "10", "--json", str(tmp_path / "gap.json"),
+    assert main(["gap", str(path), "--sims", "10", "--json", str(tmp_path / "gap.json"),
                  "--report", str(tmp_path / "md")]) == 0
     printed = capsys.readouterr().out
     rep = json.loads((tmp_path / "gap.json").read_text())
@@ -397,7 +402,7 @@ def test_the_console_and_the_reports_say_not_determined_and_list_the_uncertain(t
     markdown = (tmp_path / "md" / "gap_report.md").read_text()
     for text in (" ".join(printed.split()), markdown):
         assert "Suggested but not established" in text and uncertain_text(entry) in text.replace(" = ", "=")
-    assert main(["report", str(path), "--seed", "111", "--sims", "10", "--out", str(tmp_path / "r.html")]) == 0
+    assert main(["report", str(path), "--sims", "10", "--out", str(tmp_path / "r.html")]) == 0
     page = (tmp_path / "r.html").read_text(encoding="utf-8")
     assert "<h3>Suggested but not established</h3>" in page and html.escape(uncertain_text(entry, sep=" = ")) in page
 
