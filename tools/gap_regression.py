@@ -15,7 +15,8 @@ Printed: per effect, the cases and how many each version names within tolerance 
 how many have any finding); the totals with their 95 % Wilson intervals; the cases gained and
 lost, and the exact two-sided McNemar p of the difference (the binomial test of the discordant
 pairs, McNemar 1947): a paired comparison tells a change from the luck of the draw on far fewer
-cases than two unpaired rates.
+cases than two unpaired rates; how many cases of each version have a finding besides the hidden
+one (a false cause: scored apart from the named rate).
 """
 from __future__ import annotations
 
@@ -109,18 +110,20 @@ def main(argv=None):
                  for tag, t in (("rev", tree), ("here", str(ROOT)))]
         if any(proc.wait() != 0 for proc in procs):
             sys.exit("gap_regression: an analysis failed (its traceback above)")
-        scores = {}
+        scores, extras = {}, {}
         for seed, case in cases.items():
             scores[seed] = []
             for tag in ("rev", "here"):
                 with open(os.path.join(folder, f"{seed}.{tag}.json")) as fh:
                     named, ok, others = he.check(case, json.load(fh))
                 scores[seed].append(bool(others) if case["effect"] == "none" else ok)
-    report(args, cases, scores, list(he.EFFECTS) + ["none"])
+                extras.setdefault(seed, []).append(bool(others))
+    report(args, cases, scores, extras, list(he.EFFECTS) + ["none"])
 
 
-def report(args, cases, scores, order):
-    """The table of :func:`main`'s docstring."""
+def report(args, cases, scores, extras, order):
+    """The table of :func:`main`'s docstring; ``extras``: per case, whether each version has a
+    finding other than the hidden one."""
     by = defaultdict(list)
     for seed, case in cases.items():
         by[case["effect"]].append(scores[seed])
@@ -145,10 +148,14 @@ def report(args, cases, scores, order):
         gained = sum(1 for r in effect_pairs if r[1] and not r[0])
         lost = sum(1 for r in effect_pairs if r[0] and not r[1])
         print(f"paired: {gained} case(s) gained, {lost} lost; exact McNemar p = {mcnemar_p(gained, lost):.2g}")
+        hidden = [extras[seed] for seed, case in cases.items() if case["effect"] != "none"]
+        print(f"cases with a finding besides the hidden one: {args.rev} {sum(e[0] for e in hidden)}, "
+              f"this checkout {sum(e[1] for e in hidden)} of {len(hidden)}")
     if args.verbose:
         for seed, (old, new) in sorted(scores.items()):
-            if old != new:
-                print(f"  case {seed} {cases[seed]['effect']} on {cases[seed]['axis']}: {args.rev} {old}, this checkout {new}")
+            if old != new or extras[seed][0] != extras[seed][1]:
+                print(f"  case {seed} {cases[seed]['effect']} on {cases[seed]['axis']}: {args.rev} {old}, this checkout {new}"
+                      f"; extra findings: {args.rev} {extras[seed][0]}, this checkout {extras[seed][1]}")
 
 
 if __name__ == "__main__":

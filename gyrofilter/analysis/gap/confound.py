@@ -47,11 +47,13 @@ power-up, an exponential in time does not (:data:`WHY_THE_COVARIATE`). Three pla
   under ``uncertain`` with its GLS interval, so that a record too short to decide still says
   what it suggests.
 * *Keeping without a gain alone* (:func:`kept_without_gain`): a finding with no gain alone is kept
-  when the axis's other findings do better with it; a temperature also where D with it is within
-  the allowance of D without it, with the axis's other findings or, alone on its axis, against
-  the baseline (the measured covariate is kept where D cannot tell: a small coefficient on a
-  10-minute record moves D less than D's own noise, so a gain-or-not decision there was a coin
-  toss on the simulations' streams).
+  when the axis's other findings do better with it, or where D with it is within the allowance of
+  D without it, with the axis's other findings or, alone on its axis, against the baseline: D
+  cannot tell, and the detector's own test, calibrated against clean records, named it. A small
+  temperature coefficient or bias instability on a 10-minute record moves D less than D's own
+  noise, so a gain-or-not decision there was a coin toss on the simulations' streams (the shipped
+  655-s log's y axis kept its bias instability with one seed's runs and dropped it with
+  another's). A finding is dropped where D is clearly worse with it (beyond the allowance).
 
 **2. Bias instability or Gauss-Markov** (:data:`CONFUSABLE_WANDERS`, :func:`weigh_wanders`). A
 Gauss-Markov spectrum is flat below its corner ``1/(2 pi tau)`` and falls like 1/f^2 above it;
@@ -203,15 +205,16 @@ def allowance_text(spread):
 
 def kept_without_gain(effect, with_all, without, spread_of):
     """Why a finding with no gain alone is kept (module docstring, 1.): ``""`` where the axis's
-    other findings do better with it (``with_all < without``); for a temperature, the reason where
-    D with it is within the allowance of D without it (``spread_of()``: the larger null spread of
-    D of the two models, computed only then); None where it is dropped."""
+    other findings do better with it (``with_all < without``); the reason where D with it is
+    within the allowance of D without it (``spread_of()``: the larger null spread of D of the two
+    models, computed only then); None where it is dropped."""
     if with_all < without:
         return ""
-    if effect == TEMPERATURE and np.isfinite(with_all):
+    if np.isfinite(with_all):
         spread = CONFOUNDED_SPREADS * spread_of()
         if with_all <= without + spread:
-            return f", within the {allowance_text(spread)}: the measured covariate is kept where D cannot tell"
+            what = "the measured covariate" if effect == TEMPERATURE else "what its detector's test names"
+            return f", within the {allowance_text(spread)}: {what} is kept where D cannot tell"
     return None
 
 

@@ -64,7 +64,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...effects import BY_NAME, COVARIATES, SLOW, TEMPERATURE, WANDERS
+from ...effects import BY_NAME, SLOW, TEMPERATURE, WANDERS
 from ...errors import GyroFilterError, RecordingError, SettingsError
 from ...inputs import check_number
 from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
@@ -432,10 +432,9 @@ def _subtract_component(x, cand, owned):
 
 def keep_findings(inp, state, scorer):
     """Step 4: gain per finding, the axis extended by this finding alone (the contract's gain);
-    a finding that shows no gain alone is still kept when the axis has other candidates and
-    leaving it out of the model with all of them raises the discrepancy (leave-one-out; a
-    temperature also within the null spread of D, alone on its axis against the baseline:
-    :func:`gyrofilter.analysis.gap.confound.kept_without_gain`).
+    a finding that shows no gain alone is still kept where leaving it out of the model with the
+    axis's other candidates (alone on its axis: the baseline) does not lower D beyond its null
+    spread (:func:`gyrofilter.analysis.gap.confound.kept_without_gain`).
     Then D of each axis extended by all its kept findings."""
     cands, before, notes = state.candidates, inp.before, []
     single = {}
@@ -477,7 +476,7 @@ def keep_findings(inp, state, scorer):
                 notes.append(f"{c.effect} on {AXES[i]}: no gain alone ({d_shown(before[i])} -> {d_shown(after)}) but kept: with the "
                              f"axis's other findings D = {d_shown(with_all)}, without it {d_shown(without)}{why}")
                 continue
-        elif c.effect in COVARIATES:  # alone on its axis: weighed against the baseline the same way
+        else:  # alone on its axis: weighed against the baseline the same way
             label = f"{c.effect} on {AXES[i]} against the baseline"
             why = kept_without_gain(c.effect, after, before[i], lambda: max(
                 scorer.null_spread(i, state.model(inp, i, [k]), label), scorer.null_spread(i, None, label)))
