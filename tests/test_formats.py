@@ -92,7 +92,7 @@ def test_gap_alternatives_example_uses_the_effect_table():
     for entry in [finding] + finding["alternatives"]:
         required, optional = EFFECTS[entry["effect"]]
         assert set(required) <= set(entry["params"]) <= set(required) | set(optional)
-    assert {"effect", "params", "D"} == set(finding["alternatives"][0])
+    assert {"effect", "params", "D", "in_place_of"} == set(finding["alternatives"][0])
     assert "`alternatives`" in section(3)
 
 

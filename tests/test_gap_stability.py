@@ -207,3 +207,27 @@ def test_the_449s_logs_bias_instability_is_named_whatever_the_seed():
     named = [sorted(f["effect"] for f in analyse_gap(rec, seed=seed)["findings"] if f["axis"] == "y")
              for seed in (0, 1, 2)]
     assert named[0] == named[1] == named[2] and "bias_instability" in named[0], named
+
+
+def test_an_alternative_says_which_findings_of_the_named_reading_it_replaces():
+    """A temperature read with a wander beside it, weighed as a whole against a warm-up: the
+    warm-up's entry says it stands in place of both (so the wander is not a cause of its own), less
+    a member no longer named; the report's line says so; a lone finding's entry names itself."""
+    from gyrofilter.analysis.gap.confound import alternatives_entry
+    from gyrofilter.analysis.gap.detectors import Candidate
+    from gyrofilter.analysis.gap.report import indistinguishable_text
+    from gyrofilter.sim.hidden_effects import check
+
+    warm = Candidate("warmup", {"amplitude_dps": -0.15, "tau_s": 250.0}, 0.0, 0.0, "")
+    temp = Candidate("temperature", {"coefficient_dps_per_c": 0.49}, 0.0, 0.0, "", alternatives=((warm, 0.48),),
+                     in_place_of=("temperature", "bias_instability"))
+    entry = alternatives_entry(temp, {"temperature", "bias_instability"})
+    assert entry[0]["in_place_of"] == ["temperature", "bias_instability"] and entry[0]["D"] == 0.48
+    assert alternatives_entry(temp, {"temperature"})[0]["in_place_of"] == ["temperature"]
+    finding = {"effect": "temperature", "axis": "x", "params": temp.params, "alternatives": entry}
+    assert "(D of the axis with it in place of temperature + bias_instability," in indistinguishable_text(finding)
+    wander = {"effect": "bias_instability", "axis": "x", "params": {"b_dps": 0.002}, "alternatives": []}
+    case = {"effect": "warmup", "axis": "x", "params": {"amplitude_dps": -0.15, "tau_s": 250.0}, "duration_s": 600.0}
+    assert check(case, {"findings": [finding, wander]})[2] == []
+    finding["alternatives"] = alternatives_entry(temp, {"temperature"})
+    assert check(case, {"findings": [finding, wander]})[2] == [wander]  # a wander outside the reading is a false cause

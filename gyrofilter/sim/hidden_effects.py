@@ -255,7 +255,8 @@ def check(case, report):
     named: the hidden effect is among the findings on the right axis, or it is listed in the
     ``alternatives`` of a finding there (the report says the record cannot tell the two readings
     apart, e.g. a warm-up under a temperature that settles alike: docs/gap.md, "Confounded
-    causes"; that finding is then not a false one); in_tolerance: and all its listed parameters
+    causes"; that finding, and the findings of its reading that the alternative replaces as a
+    whole, its ``in_place_of``, are then not false ones); in_tolerance: and all its listed parameters
     are within :data:`TOLERANCES` (an optional one compared at its default where absent:
     ``colored_noise``'s ``lag2`` is lag1² then); false_findings: findings other than the hidden one.
     """
@@ -264,7 +265,9 @@ def check(case, report):
     hit = [f for f in mine if f["effect"] == case["effect"]]
     hit += [alt for f in mine if not hit for alt in f.get("alternatives", []) if alt["effect"] == case["effect"]]
     carrier = [f for f in mine if any(alt in hit for alt in f.get("alternatives", []))]
-    others = [f for f in findings if not (f["effect"] == case["effect"] and f["axis"] == case["axis"]) and f not in carrier]
+    reading = {e for f in carrier for alt in f["alternatives"] for e in alt.get("in_place_of", [f["effect"]])}
+    others = [f for f in findings if not (f["effect"] == case["effect"] and f["axis"] == case["axis"]) and f not in carrier
+              and not (f["axis"] == case["axis"] and f["effect"] in reading)]
     if case["effect"] == "none" or not hit:
         return False, False, others
     params = hit[0]["params"]

@@ -312,6 +312,7 @@ def weigh_readings(inp, state, scorer):
                  "itself, so this record cannot tell them apart; the reading in time is named because the "
                  "temperature reading needs a wander besides and the reading in time does not")
         state = state.with_candidate(k_head, replace(head, alternatives=tuple((c, d_other) for c in other_cands),
+                                                     in_place_of=tuple(state.candidates[k][1].effect for k in first_ks),
                                                      evidence_notes=head.evidence_notes + (about,)))
     return state
 
@@ -512,10 +513,13 @@ def effect_shown(effect, params):
     return f"{effect} (" + ", ".join(f"{k} = {value(v)}" for k, v in params.items()) + ")"
 
 
-def alternatives_entry(cand):
+def alternatives_entry(cand, named):
     """The ``alternatives`` of a finding in the gap report: per entry of the other reading its
-    effect, params and D (of the axis with that whole reading in place of the finding's)."""
-    return [{"effect": c.effect, "params": c.plain_params(), "D": float(d)}
+    effect, params, D (of the axis with that whole reading in place of the finding's) and
+    ``in_place_of``, the effects of the finding's reading (``cand.in_place_of`` less those not
+    among ``named``, the effects named on the axis; the finding's own where it is alone)."""
+    in_place_of = [e for e in cand.in_place_of if e in named] or [cand.effect]
+    return [{"effect": c.effect, "params": c.plain_params(), "D": float(d), "in_place_of": in_place_of}
             for c, d in cand.alternatives]
 
 

@@ -544,7 +544,7 @@ def write_findings(inp, state, scorer, report, found):
             "evidence": c.evidence_text(*([f"baseline simulations: {z_info}"] if z_info else [])),
             "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": row.after},
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
-            "alternatives": alternatives_entry(c),
+            "alternatives": alternatives_entry(c, {r.cand.effect for r in kept if r.axis == i}),
         })
         if found.block["bootstrap_runs"] > 0:
             report["findings"][-1]["params_ci95"] = found.findings.get(row.k, dict.fromkeys(c.params))

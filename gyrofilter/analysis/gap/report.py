@@ -166,8 +166,10 @@ def indistinguishable_text(finding, *, figure=False):
     caller draws it (``figure``: the Markdown report's rate in time), that the figure shows both."""
     shaped = figure and any(e["effect"] in _SHAPES for e in finding["alternatives"])
     why = NAMED_BECAUSE.get(finding["effect"])
+    reading = finding["alternatives"][0].get("in_place_of", [finding["effect"]])
+    instead = "instead" if reading == [finding["effect"]] else "in place of " + " + ".join(reading)
     return (f"Indistinguishable in this record from {alternatives_text(finding['alternatives'])} (D of the axis with it "
-            f"instead, within the allowance of {CONFOUNDED_SPREADS:g} null spreads of D); {finding['effect']} is named"
+            f"{instead}, within the allowance of {CONFOUNDED_SPREADS:g} null spreads of D); {finding['effect']} is named"
             + (f": {why}" if why else "")
             + ("; the figure of the rate in time shows both readings" if shaped else ""))
 

@@ -164,6 +164,9 @@ class Candidate:
     composite: bool = False
     #: the other reading that explains the record about as well: ``[(candidate, D of the axis with it)]``
     alternatives: tuple = ()
+    #: the effects of the reading named that the other reading replaces as a whole (the covariate
+    #: reading's temperature and the wander beside it); empty: this candidate's alone
+    in_place_of: tuple = ()
     #: what later steps add to the evidence, in order
     evidence_notes: tuple = ()
 
