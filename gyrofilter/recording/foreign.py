@@ -78,6 +78,9 @@ _UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s":
                "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns"}
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
+#: most bytes of blank and comment lines read before the first data row: a log without rows (2 GiB
+#: of line ends, 2 MB of gzip, took 64 s to refuse) is refused once they are read (a second or two)
+MAX_BYTES_BEFORE_ROWS = 64 << 20
 class Foreign(Closable):
     """What :func:`read_foreign` found, checked in a first pass over the log: the recording's
     ``header`` (ready to write), its ``columns``, the exact ``formats`` of their values (the
@@ -228,13 +231,17 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
     counted in ``counts["skipped"]``."""
     names, wanted = plan.names, plan.wanted
     numbers, cells_of = [], [[] for _ in wanted]
+    rows_seen = again
     for number, text, lines in log_lines(raw, path):
         if number <= plan.after_line:
             continue
         if not text.strip() or text.lstrip().startswith(_COMMENT):
             if counts is not None:
                 counts["skipped"] += lines
+            if not rows_seen:
+                _before_rows(counts, text, lines, path)
             continue
+        rows_seen = True
         cells = plan.split(text)
         if len(cells) != len(names):
             raise RecordingError(f"{path}: line {number}: {len(cells)} values, but {len(names)} columns "
@@ -247,6 +254,16 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
             numbers, cells_of = [], [[] for _ in wanted]
     if numbers:
         yield numbers, cells_of
+
+
+def _before_rows(counts, text, lines, path):
+    """Count a blank or comment item of :func:`log_lines` (``text``, ``lines`` lines) read before
+    the first data row in ``counts["before_rows"]`` (its bytes: the text and a line end per line,
+    CR not counted); a refusal past :data:`MAX_BYTES_BEFORE_ROWS`."""
+    counts["before_rows"] += len(text) + lines
+    if counts["before_rows"] > MAX_BYTES_BEFORE_ROWS:
+        raise RecordingError(f"{path}: no data rows in the first {MAX_BYTES_BEFORE_ROWS >> 20} MB "
+                             "(only blank or comment lines); not a log of rates")
 
 
 @contextlib.contextmanager
@@ -363,8 +380,11 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     offset from the first stamp while the time unit is not known; then a pass over the time
     column computes the times in s). Every refusal comes in the order of reading it whole."""
     header_line, names, split, first_data, preamble = None, None, None, None, 0
+    counts = {"skipped": 0, "before_rows": 0}
     for number, text, lines in log_lines(raw, path):
-        if text.strip() and not text.lstrip().startswith(_COMMENT):
+        if not text.strip() or text.lstrip().startswith(_COMMENT):
+            _before_rows(counts, text, lines, path)
+        else:
             preamble = number - 1  # the lines before it, blank or comments
             split = _splitter(text)
             cells = split(text)
@@ -382,7 +402,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     unit = _gyro_unit(unit, stated, lsb_per_dps, path)
     wanted = gyro + ([time] if time is not None else [])
     plan = _Plan(names, split, header_line, wanted, after_line=header_line or first_data - 1)
-    counts, rows, integral, out_of_range = {"skipped": preamble}, 0, [True] * 3, None
+    counts["skipped"] = preamble
+    rows, integral, out_of_range = 0, [True] * 3, None
     stamps = _Stamps(keep=t_unit is None) if time is not None else None
     t_parts, line_parts = [], []
     for numbers, cells in _row_chunks(raw, path, plan, counts):

@@ -155,8 +155,8 @@ def check_header(header, where):
     decimal number (:func:`~gyrofilter.inputs.parse_number`) checked by
     :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
     ``lsb_per_dps`` with ``lsb``, checked by :func:`~gyrofilter.units.check_lsb_per_dps`; ``input_sample_rate_hz``,
-    when given, as ``sample_rate_hz`` and not below it. The one check of a header: the reader's and
-    the writers' (:func:`header_text`)."""
+    when given, as ``sample_rate_hz`` and a whole multiple of it (a row per block of input samples).
+    The one check of a header: the reader's and the writers' (:func:`header_text`)."""
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
         raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
@@ -170,8 +170,10 @@ def check_header(header, where):
     if "input_sample_rate_hz" in header:  # a filtered output's: its rows are blocks of input samples, never more of them
         input_hz = parse_number(header["input_sample_rate_hz"], f"{where}: input_sample_rate_hz", error=RecordingError)
         check_sample_rate_hz(input_hz, f"{where}: input_sample_rate_hz", RecordingError)
-        if input_hz < sample_rate_hz:
-            raise RecordingError(f"{where}: input_sample_rate_hz {header['input_sample_rate_hz']} is below sample_rate_hz "
+        block = input_hz / sample_rate_hz  # input samples a row: a whole number (filter.pipeline's block_len)
+        if input_hz < sample_rate_hz or abs(block - round(block)) > 1e-9 * block:
+            raise RecordingError(f"{where}: input_sample_rate_hz {header['input_sample_rate_hz']} is "
+                                 f"{'below' if input_hz < sample_rate_hz else 'not a whole multiple of'} sample_rate_hz "
                                  f"{header['sample_rate_hz']}; a filtered output has one row per block of input samples")
     if header["gyro_unit"] not in GYRO_UNITS:
         raise RecordingError(f"{where}: gyro_unit {quote(header['gyro_unit'])} is not one of {', '.join(GYRO_UNITS)}")
