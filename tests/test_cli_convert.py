@@ -540,8 +540,8 @@ def test_a_log_without_rows_is_refused_once_its_blank_lines_pass_the_bound(tmp_p
     the first data row are counted as they are read (a run of them in items of at most
     MAX_RUN_BYTES) and refused past MAX_BYTES_BEFORE_ROWS; as many blank lines after a data row
     are read (the rows around them kept)."""
-    from gyrofilter.recording import foreign, logtext
-    monkeypatch.setattr(foreign, "MAX_BYTES_BEFORE_ROWS", 1 << 20)
+    from gyrofilter.recording import header, logtext
+    monkeypatch.setattr(header, "MAX_BYTES_BEFORE_ROWS", 1 << 20)
     monkeypatch.setattr(logtext, "MAX_RUN_BYTES", 1 << 16)
     reads = [0]
     skip = logtext._skip_empty_lines

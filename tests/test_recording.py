@@ -802,3 +802,25 @@ def test_a_header_naming_an_input_rate_gets_the_same_rate_check(tmp_path, chunk_
     lossy = _t_body(np.full(2500, 0.011))  # every block of 10 lost one input sample
     head, data = _read_chunked(_dps_file(tmp_path, lossy, "# input_sample_rate_hz: 1000\n", name="lossy.csv"), chunk_rows)
     assert len(data) == 2501 and head.t_gaps == 2500
+
+
+@pytest.mark.parametrize("name", ["b.csv", "b.csv.gz"])
+def test_a_recording_without_rows_is_refused_once_its_blank_lines_pass_the_bound(tmp_path, monkeypatch, name):
+    """Issue 37 (attack 6): a recording whose header was followed by 300 MB of line ends (300 kB
+    of gzip) took 31 s to say "no samples" (2 GiB: minutes), a Python step per line. Blank
+    lines before the first row are counted and refused past MAX_BYTES_BEFORE_ROWS, as convert
+    does; a chunk of empty lines is skipped at once; as many after a row are read, every row
+    kept with its line number."""
+    from gyrofilter.recording import header
+    monkeypatch.setattr(header, "MAX_BYTES_BEFORE_ROWS", 1 << 20)
+    head = HEADER + "t,gx,gy,gz\n"
+    path = tmp_path / name
+    body = (head + "\n" * (3 << 20)).encode()
+    path.write_bytes(gzip.compress(body) if name.endswith(".gz") else body)
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: no data rows in the first 1 MB")):
+        read_recording(path)
+    body = (head + "0.00,1,2,3\n" + "\n" * (3 << 20) + "# a note\n0.01,4,5,6\n").encode()
+    path.write_bytes(gzip.compress(body) if name.endswith(".gz") else body)
+    rec = read_recording(path)
+    np.testing.assert_array_equal(rec.gyro, [[1, 2, 3], [4, 5, 6]])
+    assert rec.notes == [(7 + (3 << 20) + 1, "a note")]

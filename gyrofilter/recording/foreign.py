@@ -54,7 +54,7 @@ from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sam
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number
+from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
 from .writer import EXACT_FORMAT, exact_format
@@ -78,9 +78,6 @@ _UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s":
                "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns"}
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
-#: most bytes of blank and comment lines read before the first data row: a log without rows (2 GiB
-#: of line ends, 2 MB of gzip, took 64 s to refuse) is refused once they are read (a second or two)
-MAX_BYTES_BEFORE_ROWS = 64 << 20
 class Foreign(Closable):
     """What :func:`read_foreign` found, checked in a first pass over the log: the recording's
     ``header`` (ready to write), its ``columns``, the exact ``formats`` of their values (the
@@ -259,11 +256,9 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
 def _before_rows(counts, text, lines, path):
     """Count a blank or comment item of :func:`log_lines` (``text``, ``lines`` lines) read before
     the first data row in ``counts["before_rows"]`` (its bytes: the text and a line end per line,
-    CR not counted); a refusal past :data:`MAX_BYTES_BEFORE_ROWS`."""
+    CR not counted); :func:`~gyrofilter.recording.header.refuse_rowless` refuses past its bound."""
     counts["before_rows"] += len(text) + lines
-    if counts["before_rows"] > MAX_BYTES_BEFORE_ROWS:
-        raise RecordingError(f"{path}: no data rows in the first {MAX_BYTES_BEFORE_ROWS >> 20} MB "
-                             "(only blank or comment lines); not a log of rates")
+    refuse_rowless(path, counts["before_rows"])
 
 
 @contextlib.contextmanager

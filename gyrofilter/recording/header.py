@@ -27,6 +27,11 @@ END_NOTE = "end: "
 #: once that many bytes are read (a gzip bomb of one endless line, /dev/zero): the reader holds
 #: one block of text of this size at a time, so a line inside a block is never longer.
 MAX_LINE_BYTES = 1 << 20
+#: most bytes of blank and comment lines read before the first data row, of a recording (after
+#: its header) or another tool's log: a file without rows (2 GiB of line ends, 2 MB of gzip, took
+#: 64 s to refuse as a log and minutes as a recording) is refused once they are read, in a second
+#: or two (:func:`refuse_rowless`)
+MAX_BYTES_BEFORE_ROWS = 64 << 20
 #: most lines before the column-name row (the header, with its blank ``#`` lines); together they
 #: hold at most MAX_LINE_BYTES bytes as well
 MAX_HEADER_LINES = 1000
@@ -210,3 +215,11 @@ def check_columns(names, where):
         raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
                              "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
                              "it as an extra column; another tool's log: gyrofilter convert")
+
+
+def refuse_rowless(path, bytes_before_rows):
+    """Refuse the file ``path`` once ``bytes_before_rows``, the bytes of the blank and comment lines
+    read before its first data row, pass :data:`MAX_BYTES_BEFORE_ROWS`."""
+    if bytes_before_rows > MAX_BYTES_BEFORE_ROWS:
+        raise RecordingError(f"{path}: no data rows in the first {MAX_BYTES_BEFORE_ROWS >> 20} MB "
+                             "(only blank or comment lines); not a log of rates")
