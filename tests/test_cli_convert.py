@@ -531,3 +531,31 @@ def test_a_log_of_cr_only_line_ends_is_refused_naming_them(tmp_path, capsys, row
     assert err.startswith(f"gyrofilter: error: {src}") and err.endswith(": line ends are CR only (old Mac): convert them "
                                                                           "to LF (e.g. tr '\\r' '\\n')")
     assert len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize("head", [b"", b"# a phone logger\ntime_s,gx_dps,gy_dps,gz_dps\n"])
+def test_a_log_without_rows_is_refused_once_its_blank_lines_pass_the_bound(tmp_path, capsys, monkeypatch, head):
+    """Issue 37 (attack 6): a gzip of 2 GiB of line ends took 64 s to refuse ("no data"), every
+    run of them read past whole before anything was counted. The blank and comment lines before
+    the first data row are counted as they are read (a run of them in items of at most
+    MAX_RUN_BYTES) and refused past MAX_BYTES_BEFORE_ROWS; as many blank lines after a data row
+    are read (the rows around them kept)."""
+    from gyrofilter.recording import header, logtext
+    monkeypatch.setattr(header, "MAX_BYTES_BEFORE_ROWS", 1 << 20)
+    monkeypatch.setattr(logtext, "MAX_RUN_BYTES", 1 << 16)
+    reads = [0]
+    skip = logtext._skip_empty_lines
+
+    def counted(fh):
+        reads[0] += 1
+        return skip(fh)
+    monkeypatch.setattr(logtext, "_skip_empty_lines", counted)
+    path = tmp_path / "blank.csv.gz"
+    path.write_bytes(gzip.compress(head + b"\n" * (8 << 20)))
+    assert main(["convert", str(path), "--out", str(tmp_path / "rec.csv")]) == 2
+    assert capsys.readouterr().err == (f"gyrofilter: error: {path}: no data rows in the first 1 MB (only blank or "
+                                       "comment lines); not a log of rates\n")
+    assert reads[0] <= (1 << 20) // (1 << 16) + 1  # refused after 1 MB read, not the 8 MB
+    path.write_bytes(gzip.compress(b"time_s,gx_dps,gy_dps,gz_dps\n0,1,2,3\n" + b"\n" * (3 << 20) + b"0.01,1,2,3\n"))
+    assert main(["convert", str(path), "--out", str(tmp_path / "rec.csv")]) == 0
+    assert len(read_recording(tmp_path / "rec.csv")) == 2

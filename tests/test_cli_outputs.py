@@ -12,7 +12,7 @@ import pytest
 
 from gyrofilter.cli import outputs
 from gyrofilter.errors import SettingsError
-from gyrofilter.recording import Recording, write_recording
+from gyrofilter.recording import Recording, read_recording, write_recording
 from support import REPO, RECORDINGS, file_named_by_bytes
 from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 
@@ -65,7 +65,7 @@ def test_check_outputs(tmp_path):
 def test_an_output_named_as_a_folder_that_does_not_exist_is_refused_before_any_work(tmp_path, capsys):
     """``--out newdir/`` failed only after the work, with "Not a directory" (issue 22, hostile 5-13)."""
     from gyrofilter.cli import main
-    from gyrofilter.recording import Recording, write_recording
+    from gyrofilter.recording import Recording, read_recording, write_recording
 
     src = str(tmp_path / "in.csv")
     write_recording(src, Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
@@ -79,7 +79,7 @@ def test_an_output_past_a_missing_folder_and_dotdot_is_refused_before_any_work(t
     """``--json rel/../rel2/x.json`` with no ``rel``: the check read the path as written without
     ``rel/..`` (it passed), the system does not (the analysis ran, then "No such file or directory")."""
     from gyrofilter.cli import main
-    from gyrofilter.recording import Recording, write_recording
+    from gyrofilter.recording import Recording, read_recording, write_recording
 
     monkeypatch.chdir(tmp_path)
     write_recording("in.csv", Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
@@ -140,7 +140,7 @@ def test_an_output_in_a_folder_that_cannot_be_written_is_refused_before_any_work
     """``gap`` ran its whole analysis before finding that --json could not be written (the
     hostile pass of issue 24); every command now refuses such an output first, naming it."""
     from gyrofilter.cli import main
-    from gyrofilter.recording import Recording, write_recording
+    from gyrofilter.recording import Recording, read_recording, write_recording
 
     folder = _read_only_folder(tmp_path, monkeypatch)
     src = str(tmp_path / "in.csv")
@@ -186,7 +186,7 @@ def test_an_error_writing_the_temporary_file_names_the_users_path(tmp_path):
 def test_a_writers_refusal_inside_replacing_names_the_users_path_in_the_same_class(tmp_path):
     """A recording writer refusing a value named ``.partial-PID-out.csv`` (issue 22, hostile 5-1)."""
     from gyrofilter.errors import RecordingError
-    from gyrofilter.recording import Recording, write_recording
+    from gyrofilter.recording import Recording, read_recording, write_recording
 
     for path, opened in ((str(tmp_path / "out.csv"), outputs.replacing), (str(tmp_path / "rep"), outputs.replacing_in)):
         rec = Recording.from_dps(np.array([[0.0, 0.0, 0.0], [2e5, 0.0, 0.0]]), 100.0)
@@ -467,3 +467,30 @@ def test_an_output_below_a_symbolic_link_to_a_missing_place_is_refused_not_made(
     assert capsys.readouterr().err == (f"gyrofilter: error: {out}: d is a symbolic link that leads to no folder "
                                        "(No such file or directory)\n")
     assert os.listdir(tmp_path) == ["d"]
+
+
+@pytest.mark.parametrize("name", ["y" * 236 + ".csv.gz", "é" * 118 + ".json"])  # 243 and 241 bytes: legal names
+def test_a_long_legal_name_is_written_and_one_too_long_is_refused_before_any_work(tmp_path, capsys, name):
+    """Issue 37 (attack 6): a legal output name of 240 bytes failed every command after its work
+    (``gap --json``: "/dir/.partial-PID.HOST-yyy...: File name too long", the hidden partial
+    named): the partial's prefix took it past the 255 bytes a name may have, and the cleanup's
+    own error hid the translated one. The partial's name now keeps the end (the extension) and
+    fits; a name past 255 bytes is refused by the option, before any work."""
+    from gyrofilter.cli import main
+    out = tmp_path / name
+    assert len(outputs.partial_path(str(out)).rsplit("/", 1)[1].encode()) <= outputs.NAME_MAX_BYTES
+    assert outputs.partial_path(str(out)).endswith(name[-16:])
+    if name.endswith(".json"):
+        with outputs.replacing(str(out)) as tmp:
+            outputs.write_json(tmp, {"a": 1})
+        assert json.loads(out.read_text()) == {"a": 1}
+    else:
+        assert main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "1", "--seed", "1",
+                     "--out", str(out)]) == 0
+        assert len(read_recording(out)) == 100
+    too_long = str(tmp_path / ("x" * 300 + ".json"))
+    with pytest.raises(SystemExit) as exit_info:
+        main(["gap", str(out), "--json", too_long])
+    assert exit_info.value.code == 2
+    assert "argument --json: a name longer than 255 bytes" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]

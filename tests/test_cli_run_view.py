@@ -208,3 +208,20 @@ def test_rows_and_the_status_line_on_one_terminal_never_share_a_line(monkeypatch
     assert len(status) > 5 and len(rows) == 20, lines  # 1.2 s at 20 Hz after the 0.2-s calibration
     for line in status:
         assert re.fullmatch(r" *[0-9.]+ samples/s \(nominal 100\), [a-z0-9 ,]+, CPU +[0-9.]+%", line), line
+
+
+@pytest.mark.parametrize("spelling, everywhere", [("0x7f000001", False), ("0x0", True), ("0.0.0.0", True)])
+def test_the_address_bound_decides_in_every_spelling(spelling, everywhere):
+    """Issue 37 (attack 6): ``--serve 0x7f000001:0`` (inet_aton's hex, which the resolver takes)
+    bound 127.0.0.1 and kept the view to this machine; ``0x0:0`` bound every interface but was
+    announced as listening "on 0x0" at http://0.0.0.0:PORT/, an address no other machine
+    opens: the wildcard too is decided on the address bound."""
+    args = argparse.Namespace(serve=f"{spelling}:0", udp=None, udp_format=None, calibration=None)
+    with Outlets.open(args) as outlets:
+        server, = outlets._outlets
+        assert server.loopback_only is not everywhere
+        said = " ".join(outlets._announcements)
+        if everywhere:
+            assert "listens on every network interface" in said and "http://0.0.0.0:" not in said, said
+        else:
+            assert said == f"gyrofilter run: live view on {server.url} (this machine only)"

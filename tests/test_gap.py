@@ -1066,3 +1066,22 @@ def test_a_d_far_outside_is_written_so_not_as_digits():
     assert [d_shown(v) for v in (0.643, 17.6, D_FAR, 4.96e8, math.inf)] == ["0.643", "17.6", "1e+06", far, far]
     assert gap_report.d_text(4.96e8, 2.1e7) == far and gap_report.d_text(math.inf, 0.0) == far
     assert gap_report.d_text(17.6, 10.4) == "18 +- 10" and gap_report.d_text(0.643, 0.0) == "0.643"
+
+
+@pytest.mark.parametrize("n", [60_000, 59_049])  # an even record (its last bin is f_s / 2), an odd one (3^10)
+def test_a_line_at_nyquist_is_named_a_sinusoid_at_half_the_rate(n):
+    """Issue 37 (attack 6): a tone at exactly f_s / 2 (a, -a, a, ... on z) was never searched by
+    the sinusoid detector (its last bin was left out): a narrow band took it, D after 30 to 66.
+    It is a sinusoid at f_s / 2 (phase pi/2: the amplitude is that of the alternation), and the
+    extended model closes (D after near 1). White noise of either length still has no line."""
+    rng = np.random.default_rng(8)
+    gyro = rng.normal(0.0, 0.1, (n, 3))
+    gyro[:, 2] += 0.05 * (-1.0) ** np.arange(n)
+    report = analyse_gap(Recording.from_dps(gyro, 100.0), seed=1, n_sims=SIMS, bootstrap=0)
+    (finding,) = report["findings"]
+    assert finding["axis"] == "z" and finding["effect"] == "sinusoid", report["findings"]
+    assert finding["params"]["frequency_hz"] == 50.0
+    assert abs(finding["params"]["amplitude_dps"] - 0.05) < 0.003
+    assert abs(abs(finding["params"]["phase_rad"]) - math.pi / 2) < 1e-9
+    assert report["discrepancy"]["after"]["z"] < 2.0
+    assert det.detect_sinusoid(gyro[:, 0], 100.0) is None

@@ -128,3 +128,20 @@ def test_a_temperature_named_for_the_settling_is_not_also_suggested():
     cands, stats = detect_slow(rec.columns["gz"] / base["lsb_per_dps"], RATE_HZ, rec.columns["temp"])
     assert cands[0].effect == "temperature"
     assert suggested_temperature(stats, "z") is None
+
+
+def test_a_covariate_constant_over_the_groups_and_a_ratio_that_is_no_number_are_no_evidence():
+    """Issue 37 (attack 6): a temperature alternating every block (a heater cycling every two
+    blocks, 3.5 s at 100 Hz) has block means that vary but are constant once grouped to the
+    test's 128 blocks: fitted beside the shape it made the nuisance matrix singular, and the gap
+    lost every detector of the axis ("detectors could not run (Singular matrix)", a 0.5 deg/s
+    step not named). It is the constant again and adds nothing: the same p-value as without it.
+    A ratio that is no number (a NaN in the block means, from the Python API) counted as beating
+    every draw (p = 1/1001, "significant"); it is now as flicker draws it (p = 1)."""
+    flicker_p_value = flicker.flicker_p_value
+    rng = np.random.default_rng(4)
+    y = rng.normal(size=2048) + 0.2 * (np.arange(2048) > 900)
+    alternating = 25.0 + 0.5 * (np.arange(2048) % 2)
+    assert flicker_p_value(y, BIAS_STEP, beside=alternating) == flicker_p_value(y, BIAS_STEP)
+    assert flicker_p_value(np.full(512, np.nan), BIAS_STEP) == 1.0
+    assert flicker_p_value(y[:512], np.full(512, np.nan)) == 1.0

@@ -1,4 +1,5 @@
 import gzip
+import os
 import json
 import re
 import warnings
@@ -719,3 +720,107 @@ def test_annotations_beyond_the_cap_are_skipped_with_one_warning(tmp_path, monke
     first_skipped = 5 + 100 + 10
     assert rec.warnings == [f"{path}: line {first_skipped}: more than 10 annotation lines; the first are kept, "
                             "the others skipped"]
+
+
+def test_a_fifo_nobody_writes_to_is_refused_and_one_written_later_is_read(tmp_path, monkeypatch):
+    """Issue 37 (attack 6): a FIFO given as the recording (``mkfifo x.csv``) blocked ``replay``,
+    ``gap``, ``allan`` and ``convert`` forever when nobody wrote to it: the open waited for a
+    writer. Opened without blocking, it is refused after PIPE_WAIT_S with one line; a writer that
+    comes within the wait is read as a pipe, once (its first bytes kept); a folder is refused."""
+    import threading
+
+    from gyrofilter.recording import lines
+    from gyrofilter.recording.foreign import read_foreign
+    monkeypatch.setattr(lines, "PIPE_WAIT_S", 0.3)
+    fifo = tmp_path / "x.csv"
+    os.mkfifo(fifo)
+    for read in (read_recording, read_foreign):
+        with pytest.raises(RecordingError, match=re.escape(f"{fifo}: not a regular file (a pipe or FIFO) and nothing "
+                                                           "was written to it in 0.3 s")):
+            read(str(fifo))
+    text = HEADER + "t,gx,gy,gz\n" + "".join(f"{i / 100:.2f},{i},-3,40\n" for i in range(50))
+    monkeypatch.setattr(lines, "PIPE_WAIT_S", 30.0)
+
+    def write_late():
+        with open(fifo, "w") as fh:
+            fh.write(text)
+    writer = threading.Timer(0.1, write_late)
+    writer.start()
+    rec = read_recording(str(fifo))
+    writer.join()
+    np.testing.assert_array_equal(rec.gyro[:, 0], np.arange(50))
+    with pytest.raises(RecordingError, match=re.escape(f"{tmp_path}: cannot read: Is a directory")):
+        read_recording(str(tmp_path))
+
+
+@pytest.mark.parametrize("name", ["n.csv", "n.csv.gz"])
+def test_nul_bytes_before_the_header_are_refused_naming_the_line(tmp_path, name):
+    """Issue 37 (attack 6): a log starting with NUL bytes (an SD card after a power cut) was
+    converted, the NULs becoming part of the time column's name (``--columns 1,2,3,4``); a
+    recording so started was refused for missing header keys. Both name the line and the NULs;
+    a NUL line later in the file too. A recording's last line cut short, NULs and all, is only
+    warned about (its rows before it are kept)."""
+    from gyrofilter.recording.foreign import read_foreign
+    rows = "".join(f"{i / 100:.2f},{i},-3,40\n" for i in range(50))
+
+    def put(text, file_name=name):
+        path = tmp_path / file_name
+        path.write_bytes(gzip.compress(text) if file_name.endswith(".gz") else text)
+        return str(path)
+    log = put(b"\0\0\0\0time_s,x_dps,y_dps,z_dps\n" + rows.encode())
+    with pytest.raises(RecordingError, match=re.escape(f"{log}: line 1: NUL bytes")):
+        read_foreign(log, columns=["1", "2", "3", "4"], unit="dps")
+    log = put(b"# a comment\n\n\0\0\0\ntime_s,x_dps,y_dps,z_dps\n" + rows.encode(), "later_" + name)
+    with pytest.raises(RecordingError, match=re.escape(f"{log}: line 3: NUL bytes")):
+        read_foreign(log)
+    recording = (HEADER + "t,gx,gy,gz\n" + rows).encode()
+    path = put(b"\0" * 512 + recording, "rec_" + name)
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: line 1: NUL bytes")):
+        read_recording(path)
+    path = put(recording + b"\0" * 512, "tail_" + name)
+    rec = read_recording(path)
+    assert len(rec) == 50 and "last line has no line end" in rec.warnings[0]
+
+
+@pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
+def test_a_header_naming_an_input_rate_gets_the_same_rate_check(tmp_path, chunk_rows):
+    """Issue 37 (attack 6): a file of samples whose t runs at half the header's rate was
+    refused, but read (its every step "a gap") once its header named an input_sample_rate_hz
+    above the rate, even 100.001 at 100 Hz: a window of gaps only showed no rate in a filtered
+    output. Now an input rate is a whole multiple of the rate (a row per block), and a window of
+    gaps only whose steps are two row intervals or more (half the input samples lost, or t at
+    half the rate) is refused there as in a file of samples; fewer lost samples still read."""
+    half_rate = _t_body(np.full(2500, 0.02))
+    for input_hz in ("100", "200", "1000"):
+        with pytest.raises(RecordingError, match=re.escape("t steps by 0.02 s (median of its first 1000 steps")):
+            _read_chunked(_dps_file(tmp_path, half_rate, f"# input_sample_rate_hz: {input_hz}\n", name=f"{input_hz}.csv"),
+                          chunk_rows)
+    for input_hz in ("100.001", "150"):
+        with pytest.raises(RecordingError, match=re.escape(f"input_sample_rate_hz {input_hz} is not a whole multiple of "
+                                                           "sample_rate_hz 100")):
+            _read_chunked(_dps_file(tmp_path, half_rate, f"# input_sample_rate_hz: {input_hz}\n", name="odd.csv"), chunk_rows)
+    lossy = _t_body(np.full(2500, 0.011))  # every block of 10 lost one input sample
+    head, data = _read_chunked(_dps_file(tmp_path, lossy, "# input_sample_rate_hz: 1000\n", name="lossy.csv"), chunk_rows)
+    assert len(data) == 2501 and head.t_gaps == 2500
+
+
+@pytest.mark.parametrize("name", ["b.csv", "b.csv.gz"])
+def test_a_recording_without_rows_is_refused_once_its_blank_lines_pass_the_bound(tmp_path, monkeypatch, name):
+    """Issue 37 (attack 6): a recording whose header was followed by 300 MB of line ends (300 kB
+    of gzip) took 31 s to say "no samples" (2 GiB: minutes), a Python step per line. Blank
+    lines before the first row are counted and refused past MAX_BYTES_BEFORE_ROWS, as convert
+    does; a chunk of empty lines is skipped at once; as many after a row are read, every row
+    kept with its line number."""
+    from gyrofilter.recording import header
+    monkeypatch.setattr(header, "MAX_BYTES_BEFORE_ROWS", 1 << 20)
+    head = HEADER + "t,gx,gy,gz\n"
+    path = tmp_path / name
+    body = (head + "\n" * (3 << 20)).encode()
+    path.write_bytes(gzip.compress(body) if name.endswith(".gz") else body)
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: no data rows in the first 1 MB")):
+        read_recording(path)
+    body = (head + "0.00,1,2,3\n" + "\n" * (3 << 20) + "# a note\n0.01,4,5,6\n").encode()
+    path.write_bytes(gzip.compress(body) if name.endswith(".gz") else body)
+    rec = read_recording(path)
+    np.testing.assert_array_equal(rec.gyro, [[1, 2, 3], [4, 5, 6]])
+    assert rec.notes == [(7 + (3 << 20) + 1, "a note")]

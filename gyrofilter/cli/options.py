@@ -1,10 +1,12 @@
 """The argparse types of the commands' options (plain decimal numbers, whole numbers, file names)
 and the options several commands share: ``--sample-rate-hz``, ``--force``, a recording's ``--out``."""
 import argparse
+import os
 
 from ..errors import SettingsError
 from ..inputs import parse_number
 from ..units import check_lsb_per_dps, check_sample_rate_hz
+from . import outputs
 
 
 #: what --out FILE of a recording takes: any name, the format is CSV text (docs/formats.md, section 1)
@@ -57,9 +59,13 @@ def whole_number(text):
 
 
 def file_name(text):
-    """argparse type of an output option: any name but an empty one (the error names the option)."""
+    """argparse type of an output option: any name but an empty one, or one whose last part is
+    longer than the file systems take (:data:`~gyrofilter.cli.outputs.NAME_MAX_BYTES`: refused
+    before any work, not after it); the error names the option."""
     if not text.strip():
         raise argparse.ArgumentTypeError("an empty name; give a file or folder name")
+    if len(os.fsencode(os.path.basename(text.rstrip("/")))) > outputs.NAME_MAX_BYTES:
+        raise argparse.ArgumentTypeError(f"a name longer than {outputs.NAME_MAX_BYTES} bytes, more than a file system takes")
     return text
 
 

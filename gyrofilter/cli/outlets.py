@@ -120,10 +120,11 @@ def _open_server(text, host, resolved):
         raise SettingsError(f"--serve {text}: cannot listen there: {_why(exc)}") from None
     if server.loopback_only:  # the address bound decides, not the name (raspberrypi -> 127.0.1.1)
         return server, [f"gyrofilter run: live view on {server.url} (this machine only)"]
-    where = "every network interface" if is_wildcard(host) else host
+    everywhere = is_wildcard(server.address[0])  # the address bound, as for loopback (0x0 and 0 are 0.0.0.0)
+    where = "every network interface" if everywhere else host
     port = server.address[1]
     urls = [server.url]
-    if is_wildcard(host):
+    if everywhere:
         urls = [url(address, port) for address in machine_addresses(family)] + [url(loopback(family), port)]
     return server, [f"gyrofilter run: warning: the live view listens on {where}, port {port}: anyone "
                     "on the network can watch this sensor (read-only); use 127.0.0.1 to keep it to this machine",

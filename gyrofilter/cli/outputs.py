@@ -180,7 +180,7 @@ def replacing(path):
                 commit(tmp, path)
         finally:
             _pending.remove(path)
-            with contextlib.suppress(FileNotFoundError):
+            with contextlib.suppress(OSError):  # gone (renamed), or never made: never hides the error
                 os.unlink(tmp)
 
 
@@ -248,12 +248,29 @@ def output_folder(path):
     return os.path.realpath(os.path.dirname(path) or os.curdir)
 
 
+#: the longest file name the usual file systems take (ext4, vfat, exFAT, NFS), in bytes
+NAME_MAX_BYTES = 255
+#: the characters at the end of an output's name a shortened partial name keeps (its extension)
+_KEPT_END_CHARS = 16
+
+
 def partial_path(path):
     """The temporary name beside ``path`` under which a file is written until it may take its
     own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
-    extension, by which writers choose the format, is kept. A process killed before the rename
-    leaves it behind; :func:`remove_stale_partials` removes it later."""
-    return os.path.join(output_folder(path), f"{_PARTIAL_PREFIX}{_OWNER}-{os.path.basename(path)}")
+    extension, by which writers choose the format, is kept. A NAME too long to take the prefix
+    within :data:`NAME_MAX_BYTES` keeps its last characters and as much of its start as fits,
+    joined by ``~`` (a legal name of 240 bytes made every command fail after its work, naming
+    the partial). A process killed before the rename leaves it behind;
+    :func:`remove_stale_partials` removes it later."""
+    prefix = f"{_PARTIAL_PREFIX}{_OWNER}-"
+    name = os.path.basename(path)
+    room = NAME_MAX_BYTES - len(os.fsencode(prefix))
+    if len(os.fsencode(name)) > room:
+        head, end = name[:-_KEPT_END_CHARS], name[-_KEPT_END_CHARS:]
+        while head and len(os.fsencode(f"{head}~{end}")) > room:
+            head = head[:-1]
+        name = f"{head}~{end}"
+    return os.path.join(output_folder(path), prefix + name)
 
 
 _PARTIAL_PREFIX = ".partial-"

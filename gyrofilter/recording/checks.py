@@ -54,9 +54,13 @@ class TimeCheck:
       gaps (:func:`typical_steps`): a device that lost most samples still shows the rate in the
       steps between samples it delivered in a row, and its recording reads, its gaps counted. A
       window of gaps only holds no such step: in a file of samples its median of all steps is
-      compared (a ``t`` at half the header's rate looks just so); in a filtered output it shows
-      no rate and passes (every block of the window lost samples: each step is longer than a
-      row interval by the input samples lost, which says nothing of the rate).
+      compared (a ``t`` at half the header's rate looks just so: every other sample lost); in a
+      filtered output it is compared when it is two row intervals or more (less
+      RATE_TOLERANCE): half the input samples or more lost, as in a file of samples, or a ``t``
+      at half the rate or less (a file of samples whose header names an input rate was so read
+      at any rate). A shorter one shows no rate and passes (every block of the window lost a
+      few samples: each step is longer than a row interval by the input samples lost, which
+      says nothing of the rate).
 
     ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
     advice a refusal ends with (the writer says why its rows would come out so).
@@ -66,7 +70,10 @@ class TimeCheck:
         self.head = head
         self.why = why
         self.max_step_s = 1.0 / head.sample_rate_hz + 0.5 / head.input_sample_rate_hz
-        self.gaps_show_rate = head.input_sample_rate_hz == head.sample_rate_hz  # a file of samples, not of blocks
+        # the typical step of a window of gaps only that is compared: any (a file of samples), or
+        # half the input samples lost or more (a filtered output, whose rows are blocks)
+        self.min_gaps_step_s = 0.0 if head.input_sample_rate_hz == head.sample_rate_hz else \
+            (2.0 - RATE_TOLERANCE) / head.sample_rate_hz
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
@@ -102,7 +109,7 @@ class TimeCheck:
         whole_file = self.phases[0].windows == 0
         for phase in self.phases:
             if len(phase.pending) and (whole_file or len(phase.pending) >= RATE_CHECK_STEPS // 2):
-                median = float(typical_steps(phase.pending[None, :], self.max_step_s, self.gaps_show_rate)[0])
+                median = float(typical_steps(phase.pending[None, :], self.max_step_s, self.min_gaps_step_s)[0])
                 if self._off(median):
                     self._refuse(median, len(phase.pending), phase.pending_where, first=whole_file)
             if whole_file:
@@ -140,7 +147,7 @@ class _WindowPhase:
         steps = np.concatenate((self.pending, step))
         whole = len(steps) // RATE_CHECK_STEPS * RATE_CHECK_STEPS
         if whole:
-            medians = typical_steps(steps[:whole].reshape(-1, RATE_CHECK_STEPS), check.max_step_s, check.gaps_show_rate)
+            medians = typical_steps(steps[:whole].reshape(-1, RATE_CHECK_STEPS), check.max_step_s, check.min_gaps_step_s)
             wrong = np.flatnonzero(check._off(medians))
             if wrong.size:
                 j = int(wrong[0])
@@ -154,17 +161,18 @@ class _WindowPhase:
         self.pending = steps[whole:]
 
 
-def typical_steps(windows, max_step_s, gaps_show_rate=True):
+def typical_steps(windows, max_step_s, min_gaps_step_s=0.0):
     """The typical step of each row of ``windows`` (2-D, steps of ``t`` in s): the lower median of
     its steps of at most ``max_step_s`` (the longer ones are gaps, lost samples: :class:`TimeCheck`),
-    or, when every one is a gap, of all its steps (``gaps_show_rate``) or NaN (no rate shown)."""
+    or, when every one is a gap, of all its steps when that is ``min_gaps_step_s`` or more, else
+    NaN (no rate shown)."""
     typical = _lower_medians(windows)
     gappy = np.flatnonzero((windows > max_step_s).any(axis=1))
     for row in gappy:  # rare: sorted one by one, the gaps left out
         kept = windows[row][windows[row] <= max_step_s]
         if len(kept):
             typical[row] = _lower_medians(kept[None, :])[0]
-        elif not gaps_show_rate:
+        elif typical[row] < min_gaps_step_s:
             typical[row] = np.nan
     return typical
 

@@ -54,7 +54,7 @@ from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sam
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number
+from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
 from .writer import EXACT_FORMAT, exact_format
@@ -228,13 +228,17 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
     counted in ``counts["skipped"]``."""
     names, wanted = plan.names, plan.wanted
     numbers, cells_of = [], [[] for _ in wanted]
+    rows_seen = again
     for number, text, lines in log_lines(raw, path):
         if number <= plan.after_line:
             continue
         if not text.strip() or text.lstrip().startswith(_COMMENT):
             if counts is not None:
                 counts["skipped"] += lines
+            if not rows_seen:
+                _before_rows(counts, text, lines, path)
             continue
+        rows_seen = True
         cells = plan.split(text)
         if len(cells) != len(names):
             raise RecordingError(f"{path}: line {number}: {len(cells)} values, but {len(names)} columns "
@@ -247,6 +251,14 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
             numbers, cells_of = [], [[] for _ in wanted]
     if numbers:
         yield numbers, cells_of
+
+
+def _before_rows(counts, text, lines, path):
+    """Count a blank or comment item of :func:`log_lines` (``text``, ``lines`` lines) read before
+    the first data row in ``counts["before_rows"]`` (its bytes: the text and a line end per line,
+    CR not counted); :func:`~gyrofilter.recording.header.refuse_rowless` refuses past its bound."""
+    counts["before_rows"] += len(text) + lines
+    refuse_rowless(path, counts["before_rows"])
 
 
 @contextlib.contextmanager
@@ -363,8 +375,11 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     offset from the first stamp while the time unit is not known; then a pass over the time
     column computes the times in s). Every refusal comes in the order of reading it whole."""
     header_line, names, split, first_data, preamble = None, None, None, None, 0
+    counts = {"skipped": 0, "before_rows": 0}
     for number, text, lines in log_lines(raw, path):
-        if text.strip() and not text.lstrip().startswith(_COMMENT):
+        if not text.strip() or text.lstrip().startswith(_COMMENT):
+            _before_rows(counts, text, lines, path)
+        else:
             preamble = number - 1  # the lines before it, blank or comments
             split = _splitter(text)
             cells = split(text)
@@ -382,7 +397,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     unit = _gyro_unit(unit, stated, lsb_per_dps, path)
     wanted = gyro + ([time] if time is not None else [])
     plan = _Plan(names, split, header_line, wanted, after_line=header_line or first_data - 1)
-    counts, rows, integral, out_of_range = {"skipped": preamble}, 0, [True] * 3, None
+    counts["skipped"] = preamble
+    rows, integral, out_of_range = 0, [True] * 3, None
     stamps = _Stamps(keep=t_unit is None) if time is not None else None
     t_parts, line_parts = [], []
     for numbers, cells in _row_chunks(raw, path, plan, counts):

@@ -27,6 +27,11 @@ END_NOTE = "end: "
 #: once that many bytes are read (a gzip bomb of one endless line, /dev/zero): the reader holds
 #: one block of text of this size at a time, so a line inside a block is never longer.
 MAX_LINE_BYTES = 1 << 20
+#: most bytes of blank and comment lines read before the first data row, of a recording (after
+#: its header) or another tool's log: a file without rows (2 GiB of line ends, 2 MB of gzip, took
+#: 64 s to refuse as a log and minutes as a recording) is refused once they are read, in a second
+#: or two (:func:`refuse_rowless`)
+MAX_BYTES_BEFORE_ROWS = 64 << 20
 #: most lines before the column-name row (the header, with its blank ``#`` lines); together they
 #: hold at most MAX_LINE_BYTES bytes as well
 MAX_HEADER_LINES = 1000
@@ -155,8 +160,8 @@ def check_header(header, where):
     decimal number (:func:`~gyrofilter.inputs.parse_number`) checked by
     :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
     ``lsb_per_dps`` with ``lsb``, checked by :func:`~gyrofilter.units.check_lsb_per_dps`; ``input_sample_rate_hz``,
-    when given, as ``sample_rate_hz`` and not below it. The one check of a header: the reader's and
-    the writers' (:func:`header_text`)."""
+    when given, as ``sample_rate_hz`` and a whole multiple of it (a row per block of input samples).
+    The one check of a header: the reader's and the writers' (:func:`header_text`)."""
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
         raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
@@ -170,8 +175,10 @@ def check_header(header, where):
     if "input_sample_rate_hz" in header:  # a filtered output's: its rows are blocks of input samples, never more of them
         input_hz = parse_number(header["input_sample_rate_hz"], f"{where}: input_sample_rate_hz", error=RecordingError)
         check_sample_rate_hz(input_hz, f"{where}: input_sample_rate_hz", RecordingError)
-        if input_hz < sample_rate_hz:
-            raise RecordingError(f"{where}: input_sample_rate_hz {header['input_sample_rate_hz']} is below sample_rate_hz "
+        block = input_hz / sample_rate_hz  # input samples a row: a whole number (filter.pipeline's block_len)
+        if input_hz < sample_rate_hz or abs(block - round(block)) > 1e-9 * block:
+            raise RecordingError(f"{where}: input_sample_rate_hz {header['input_sample_rate_hz']} is "
+                                 f"{'below' if input_hz < sample_rate_hz else 'not a whole multiple of'} sample_rate_hz "
                                  f"{header['sample_rate_hz']}; a filtered output has one row per block of input samples")
     if header["gyro_unit"] not in GYRO_UNITS:
         raise RecordingError(f"{where}: gyro_unit {quote(header['gyro_unit'])} is not one of {', '.join(GYRO_UNITS)}")
@@ -208,3 +215,11 @@ def check_columns(names, where):
         raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
                              "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
                              "it as an extra column; another tool's log: gyrofilter convert")
+
+
+def refuse_rowless(path, bytes_before_rows):
+    """Refuse the file ``path`` once ``bytes_before_rows``, the bytes of the blank and comment lines
+    read before its first data row, pass :data:`MAX_BYTES_BEFORE_ROWS`."""
+    if bytes_before_rows > MAX_BYTES_BEFORE_ROWS:
+        raise RecordingError(f"{path}: no data rows in the first {MAX_BYTES_BEFORE_ROWS >> 20} MB "
+                             "(only blank or comment lines); not a log of rates")

@@ -6,7 +6,12 @@ read. Damaged gzip data are an error; a stream cut short (an interrupted recordi
 """
 from __future__ import annotations
 
+import errno
+import io
 import os
+import select
+import stat
+import time
 import zlib
 
 from ..errors import RecordingError
@@ -47,6 +52,8 @@ def _gzip_damage(path):
     """The zlib error decompressing the whole gzip file ``path`` (every member) meets, or None
     (not gzip, intact, or only cut short as an interrupted recording leaves it). Memory: one
     block at a time, as when reading."""
+    if not os.path.isfile(path):  # a pipe was read once, as it came
+        return None
     try:
         with open(path, "rb") as fh:
             raw = fh.read(_READ_BYTES)
@@ -70,13 +77,92 @@ def sibling_hint(path, exc):
     return f"; there is {sibling}" if os.path.isfile(sibling) else ""
 
 
+#: seconds an input that is a pipe (a FIFO made by ``mkfifo``, ``<(zcat log.gz)``) is waited for:
+#: its writer's first bytes, or the writer itself
+PIPE_WAIT_S = 5.0
+
+
+def open_input(path, *, fd=None):
+    """The input file ``path`` open for reading (binary), the one place inputs are opened (a
+    recording, another tool's log). Opening never blocks (``O_NONBLOCK``: a FIFO that nobody
+    writes to would block ``open`` forever): a regular file or a device is read as it is; a
+    pipe (a FIFO, ``<(zcat log.gz)``, the standard input given as ``fd``) is read once, as it
+    comes, when within :data:`PIPE_WAIT_S` s its writer is there (a read that would wait) or its
+    first bytes come, and refused as "not a regular file" otherwise, the bytes read meanwhile
+    kept; a folder is refused. ``fd``: the input open already (the standard input, whose writer
+    is the shell's pipeline: read as it is). RecordingError naming ``path``."""
+    given = fd is not None
+    try:
+        if not given:
+            fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        mode = os.fstat(fd).st_mode
+    except OSError as exc:
+        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
+    if stat.S_ISDIR(mode):
+        os.close(fd)
+        raise RecordingError(f"{path}: cannot read: {os.strerror(errno.EISDIR)}")
+    if given or not stat.S_ISFIFO(mode):
+        os.set_blocking(fd, True)
+        return open(fd, "rb")
+    try:
+        first = _first_pipe_bytes(fd, path)
+    except BaseException:
+        os.close(fd)
+        raise
+    os.set_blocking(fd, True)
+    return io.BufferedReader(_Prefixed(fd, first), _READ_BYTES)
+
+
+def _first_pipe_bytes(fd, path):
+    """What the pipe ``fd`` (non-blocking) holds first: its first bytes, or b"" when its writer is
+    there but has written nothing yet; waited for :data:`PIPE_WAIT_S` s (a read that finds no
+    writer returns at once with nothing: the writer of a FIFO may come later), then refused."""
+    deadline = time.monotonic() + PIPE_WAIT_S
+    while True:
+        try:
+            first = os.read(fd, _READ_BYTES)
+        except BlockingIOError:
+            return b""
+        if first:
+            return first
+        left = deadline - time.monotonic()
+        if left <= 0:
+            raise RecordingError(f"{path}: not a regular file (a pipe or FIFO) and nothing was written to it in "
+                                 f"{PIPE_WAIT_S:g} s; give the file itself")
+        select.select([fd], [], [], min(left, 0.05))
+
+
+class _Prefixed(io.RawIOBase):
+    """The pipe ``fd`` read as a raw stream, ``first`` (its bytes read already) ahead of the rest."""
+
+    def __init__(self, fd, first):
+        self.fd, self.first = fd, first
+
+    def readable(self):
+        return True
+
+    def readinto(self, buffer):
+        if self.first:
+            n = min(len(buffer), len(self.first))
+            buffer[:n], self.first = self.first[:n], self.first[n:]
+            return n
+        data = os.read(self.fd, len(buffer))
+        buffer[:len(data)] = data
+        return len(data)
+
+    def fileno(self):
+        return self.fd
+
+    def close(self):
+        if not self.closed:
+            os.close(self.fd)
+        super().close()
+
+
 def _byte_blocks(path, warnings):
     """The file's bytes in blocks of at most ``_READ_BYTES``, gunzipped (:func:`_gunzip`) when it
     starts with the gzip magic."""
-    try:
-        fh = open(path, "rb")
-    except OSError as exc:
-        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
+    fh = open_input(path)
     with fh:
         raw = fh.read(_READ_BYTES)
         if raw[:2] == _GZIP_MAGIC:
@@ -172,10 +258,23 @@ def line_chunks(path, chunk_rows, warnings):
             yield first, [_decode(pending, path, first)]
 
 
+def refuse_nul(data, path, first_line):
+    """Refuse ``data`` (bytes of whole lines, the first being line ``first_line`` of ``path``)
+    when it holds a NUL byte: no text holds one, and a file cut by a power failure (an SD card's
+    unwritten blocks) starts or goes on with them; the first line that holds one is named."""
+    at = data.find(b"\0")
+    if at >= 0:
+        line = first_line + data.count(b"\n", 0, at)
+        raise RecordingError(f"{path}: line {line}: NUL bytes (binary data, e.g. blocks a power cut left on an SD card), not text")
+
+
 def _decode(data, path, first_line):
-    """``data`` (whole lines, the first being line ``first_line``) as text, or RecordingError."""
+    """``data`` (whole lines, the first being line ``first_line``) as text, or RecordingError
+    (not UTF-8, or UTF-8 holding NUL bytes: :func:`refuse_nul`)."""
     try:
-        return data.decode("utf-8")
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = first_line + data[:exc.start].count(b"\n")
         raise RecordingError(f"{path}: line {line}: not UTF-8 text") from None
+    refuse_nul(data, path, first_line)
+    return text

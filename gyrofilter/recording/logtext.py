@@ -17,7 +17,7 @@ import zlib
 
 from ..errors import RecordingError
 from .header import MAX_LINE_BYTES
-from .lines import sibling_hint
+from .lines import open_input, refuse_nul
 
 #: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
 #: where it is): 4 GiB, a 1 kHz log of about 40 h
@@ -35,9 +35,10 @@ def open_log(path):
     system's temporary folder, gone when closed), made one block at a time and bounded
     (:func:`_copy_pipe`)."""
     try:
-        raw = open(os.dup(sys.stdin.fileno()) if path == STDIN else path, "rb")
+        fd = os.dup(sys.stdin.fileno()) if path == STDIN else None
     except OSError as exc:
-        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
+        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    raw = open_input(path, fd=fd)
     if raw.seekable():
         return raw
     with raw:
@@ -119,7 +120,8 @@ def log_lines(raw, path):
     """(line number, text, lines) of the open log ``raw`` (the file ``path``; gzip when it starts
     with the gzip magic), from its start, line ends dropped, each line at most MAX_LINE_BYTES
     bytes and UTF-8; ``lines`` is 1, or for a run of empty lines (``\\n`` or ``\\r\\n`` alone) the
-    number of them, one item with ``text`` "" numbered by the first: a run is skipped in bulk
+    number of them, one item with ``text`` "" numbered by the first (a line holding a NUL byte:
+    :func:`~gyrofilter.recording.lines.refuse_nul`): a run is skipped in bulk
     (:func:`_skip_empty_lines`), so that 30 MB of line ends (30 kB of gzip) cost no more than a
     few blocks, not a Python step each (17 s). The first bytes are peeked at, not read."""
     raw.seek(0)
@@ -137,6 +139,7 @@ def log_lines(raw, path):
                     yield number, "", run
                     number += run - 1
                     continue
+                refuse_nul(data, path, number)
                 if number == 1:
                     _refuse_cr_only(data, path)
                 if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
@@ -154,16 +157,23 @@ def log_lines(raw, path):
 _EMPTY_LINES = re.compile(rb"(?:\r?\n)+")
 
 
+#: most bytes of empty lines one item of :func:`log_lines` stands for: a longer run comes as
+#: several, so that a reader counting what it skipped sees it grow (2 GiB of line ends)
+MAX_RUN_BYTES = 16 << 20
+
+
 def _skip_empty_lines(fh):
     """Read past the empty lines (``\\n`` or ``\\r\\n`` alone) that come next in ``fh``, a buffered
-    block at a time (``peek``); how many there were."""
-    skipped = 0
-    while True:
+    block at a time (``peek``), at most :data:`MAX_RUN_BYTES`; how many there were."""
+    skipped = read = 0
+    while read < MAX_RUN_BYTES:
         ahead = fh.peek(PIPE_BLOCK_BYTES)
         run = _EMPTY_LINES.match(ahead)
         if run is None:
             return skipped
         fh.read(run.end())
+        read += run.end()
         skipped += run.group().count(b"\n")
         if run.end() < len(ahead):
             return skipped
+    return skipped

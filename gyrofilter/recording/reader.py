@@ -14,7 +14,7 @@ from ..errors import RecordingError, SettingsError
 from ..inputs import is_plain_number, quote
 from .checks import TimeCheck, check_rates
 from .content import Note, Recording, RecordingHead
-from .header import MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, check_columns, check_header
+from .header import MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, check_columns, check_header, refuse_rowless
 from .lines import blame_gzip_damage, line_chunks
 
 #: most lines per chunk of :func:`iter_recording` (a chunk also ends with each block of text)
@@ -99,7 +99,9 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
     and a bad line is named by its file line number and reason (:mod:`gyrofilter.recording`). A cut last
     line or a gzip stream without its end marker is added to ``head.warnings`` when the end is
     reached. A UTF-8 byte-order mark at the start is skipped. The ``t`` column is checked as
-    :class:`TimeCheck` says (increasing, its typical step agreeing with ``sample_rate_hz``).
+    :class:`TimeCheck` says (increasing, its typical step agreeing with ``sample_rate_hz``). A
+    file whose blank and annotation lines after the header pass
+    :data:`~gyrofilter.recording.header.MAX_BYTES_BEFORE_ROWS` before any row is refused then.
     """
     path = os.fspath(path)
     if not (isinstance(chunk_rows, int) and chunk_rows >= 1):
@@ -112,10 +114,14 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
         raise blame_gzip_damage(path, exc) from None
     yield head
     times = TimeCheck(head) if "t" in head.names else None
+    before_rows = 0  # bytes of the blank and annotation lines before the first row
     while True:
         if lines:
             try:
                 data, line_numbers = _parse_chunk(lines, first, head)
+                if not (head.rows or len(data)):
+                    before_rows += sum(map(len, lines)) + len(lines)
+                    refuse_rowless(path, before_rows)
                 check_rates(data, head, lambda row: f"line {line_numbers[row]}")
                 if len(data) and times is not None:
                     times.add(head.column(data, "t"), lambda row: f"line {line_numbers[row]}")
@@ -188,12 +194,14 @@ def _parse_chunk(lines, first, head):
     Fast path: ``numpy.loadtxt`` on the list of lines, accepted when it gives one finite row per
     line. (Its parser, numpy >= 1.23, reads a finite number only in plain decimal syntax, as
     :func:`~gyrofilter.inputs.parse_number` does: ``0.0_1``, ``0x1``, ``1d5`` fail it.) Otherwise
-    the lines are classified one by one: ``#`` lines are notes (the first :data:`MAX_NOTES`; a
+    the lines are classified one by one (a chunk of empty lines only at once): ``#`` lines are notes (the first :data:`MAX_NOTES`; a
     warning says when more are skipped), blank lines are skipped, and the
     data lines are parsed again (loadtxt, then, if that still fails, line by line so that the
     first bad line is named).
     """
     n = len(head.names)
+    if not any(lines):  # empty lines only (a run of line ends): nothing to classify one by one
+        return np.empty((0, n)), np.empty(0, dtype=np.int64)
     if lines[0].strip() and not lines[0].startswith("#"):
         data = _loadtxt(lines, n)
         if data is not None:

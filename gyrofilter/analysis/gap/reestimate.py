@@ -23,7 +23,8 @@ The estimators, as in :mod:`gyrofilter.analysis.gap.detectors`:
 * ``outliers``: :func:`~gyrofilter.analysis.gap.detectors.detect_outliers` (the median magnitude
   corrected for the spikes below the threshold; rate = count / (N P_detect));
 * ``sinusoid``: the least-squares amplitude maximised over ``f`` within one periodogram bin of
-  the bin nearest the finding's frequency (golden-section search), then amplitude and phase by
+  the bin nearest the finding's frequency (:func:`~gyrofilter.analysis.gap.detectors.sinusoid.line_frequency`:
+  golden-section search, f_s / 2 itself at Nyquist), then amplitude and phase by
   least squares (:func:`~gyrofilter.analysis.gap.detectors.sinusoid_fit`); the detector's own search
   around the largest line, started where that line is;
 * ``narrowband``: :func:`~gyrofilter.analysis.gap.detectors.band_estimate` (the strongest band);
@@ -63,7 +64,7 @@ from ..noise import gmwm
 from .detectors.covariate import temperature_first
 from .detectors.slow import deterministic_candidate, deterministic_shapes, stochastic_params
 from .detectors.tails import tail_fits, tail_residual, tail_step
-from .detectors.sinusoid import dft_amplitude
+from .detectors.sinusoid import line_frequency
 from .baseline import effect_entry, extended_axis, wander_highpassed
 from .composite import COMPOSITE_TERMS, composite_lags, slow_wavelet_variance
 
@@ -163,9 +164,7 @@ def _heavy_tails(x, sample_rate_hz):
 def _sinusoid(x, sample_rate_hz, f_hz):
     """The line near ``f_hz``: (params, fitted component)."""
     df = sample_rate_hz / det.periodogram_length(x.size)
-    f0 = max(round(f_hz / df), 1) * df
-    lo, hi = max(f0 - df, df), min(f0 + df, sample_rate_hz / 2)
-    f = stats.golden_max(dft_amplitude(x, sample_rate_hz, f0, float(x.mean())), lo, hi, 30)
+    f = line_frequency(x, sample_rate_hz, max(round(f_hz / df), 1) * df)
     amplitude, phase, fit = det.sinusoid_fit(x, sample_rate_hz, f)
     return {"frequency_hz": f, "amplitude_dps": amplitude, "phase_rad": phase}, fit
 

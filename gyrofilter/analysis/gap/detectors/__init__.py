@@ -41,7 +41,9 @@ ones found, because the effects are confusable:
 2. ``sinusoid`` -- a line in the periodogram. The periodogram ordinate divided by the local
    noise level (median over a +-5 % frequency band / ln 2) is Exp(1) under any smooth noise
    spectrum, so the largest of ``M`` ordinates exceeds ``t`` with probability about
-   ``M exp(-t)`` (Fisher's test, the max-periodogram form; Priestley 1981, sec. 6.1.4). The line
+   ``M exp(-t)`` (Fisher's test, the max-periodogram form; Priestley 1981, sec. 6.1.4); the
+   Nyquist bin's ordinate (one degree of freedom) is halved, which keeps its tail below
+   ``exp(-t)``, so a line at f_s / 2 (a, -a, a, ...) is one too, fitted at f_s / 2 itself. The line
    is fitted by least squares (amplitude, phase) at the refined frequency and subtracted.
 2b. ``narrowband`` -- a band of noise with a resolved width (a resonance): the Welch PSD over a
    running-median background (±min(f_s / 10, 20 Hz), narrowed and mirrored at f_s / 2, so the

@@ -80,7 +80,10 @@ def _shape_or_flicker(columns, nuisance, lam, series):
     sum log(1 + rho lam) + m``, ``Q`` the weighted residual sum of squares after the nuisance
     regressors (and the shape's best regressor ``g``: ``Q - (g' W y)^2 / (g' W g)``, both
     projected off the nuisance regressors in the metric ``W``; Kariya & Kurata 2004, ch. 2), and
-    ``rho`` is profiled over :data:`FLICKER_RATIOS` (and 0)."""
+    ``rho`` is profiled over :data:`FLICKER_RATIOS` (and 0). The nuisance regressors' normal
+    matrix is inverted as a pseudo-inverse: a covariate whose block means are constant over
+    these blocks (a heater cycling every two blocks) is the constant again, and adds nothing
+    (``inv`` raised "Singular matrix", and the axis's every detector was lost)."""
     m = series.shape[0]
     r0 = float(np.mean(lam))
     best0 = np.full(series.shape[1], np.inf)
@@ -91,7 +94,7 @@ def _shape_or_flicker(columns, nuisance, lam, series):
         v = 1.0 + rho * lam
         w = 1.0 / v
         wz = w[:, None] * nuisance
-        inv = np.linalg.inv(nuisance.T @ wz)
+        inv = np.linalg.pinv(nuisance.T @ wz, hermitian=True)  # a covariate constant on these blocks adds nothing
         zy = wz.T @ series
         zg = wz.T @ columns
         wy = w[:, None] * series
@@ -138,4 +141,4 @@ def flicker_p_value(y, shape, beside=None):
     draws = scale[:, None] * np.random.default_rng(FLICKER_STREAM).standard_normal((m, FLICKER_REPLICATES))
     null, _, _ = _shape_or_flicker(columns, nuisance, lam, draws)
     observed = observed[0]
-    return (1 + int(np.sum(null >= observed))) / (FLICKER_REPLICATES + 1)
+    return (1 + int(np.sum(~(null < observed)))) / (FLICKER_REPLICATES + 1)  # no ratio (NaN): as flicker draws it

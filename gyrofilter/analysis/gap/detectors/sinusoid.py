@@ -45,16 +45,20 @@ def _level_at(bins, nodes):
     return np.exp(np.interp(np.log(np.maximum(bins.astype(float), 1.0)), *nodes))
 
 
-def _peak_ratio(power, first_bin):
-    """``(max_j power_j / level_j, j)`` over bins ``first_bin .. N - 2`` (the first of equal
-    maxima; ``(0, 0)`` where every ratio is 0), the level of :func:`_level_at`, without the level
+def _peak_ratio(power, first_bin, nyquist=False):
+    """``(max_j power_j / level_j, j)`` over bins ``first_bin .. N - 1`` (the first of equal
+    maxima; ``(0, 0)`` where every ratio is 0), the last bin's ratio halved with ``nyquist``
+    (an even record: the last bin is f_s / 2, whose ordinate is chi-squared with one degree of
+    freedom, not two: P(ratio / 2 > t) = erfc(sqrt t) <= exp(-t), the other bins' tail, so the
+    threshold holds for it too). The last bin was not searched: a line at f_s / 2, the sequence
+    a, -a, a, ..., went to the narrow-band detector, D after 30 to 66. The level of :func:`_level_at`, without the level
     at every bin: between two nodes the level is monotone (a line in log-log; constant beyond the
     end nodes), so a stretch's largest ratio is at most its largest power over the smaller level
     at its two ends. The stretches are searched in the order of that bound, the exact ratios
     computed only where the bound is not below the best found (a few stretches of the millions
     of bins of a long record)."""
     nodes = _band_levels(power, first_bin)
-    last = power.size - 1  # the Nyquist bin is not searched
+    last = power.size - 1  # the last bin, searched on its own below
     inner = np.ceil(np.exp(nodes[0])).astype(np.int64)
     starts = np.unique(np.clip(np.concatenate(([first_bin], inner)), first_bin, last))
     starts = starts[starts < last]
@@ -71,6 +75,10 @@ def _peak_ratio(power, first_bin):
         i = int(np.argmax(r))
         if r[i] > best or (r[i] == best and lo + i < best_j):
             best, best_j = float(r[i]), lo + i
+    if last >= first_bin:
+        r = float(power[last] / _level_at(np.array([last]), nodes)[0]) / (2.0 if nyquist else 1.0)
+        if r > best:
+            best, best_j = r, last
     return (best, best_j) if best > 0 else (0.0, 0)  # no power: as argmax over all-zero ratios
 
 
@@ -120,13 +128,14 @@ def fitted(columns, coef, n):
 
 def _sine_columns(sample_rate_hz, f_hz):
     """Columns ``cos(2 pi f n / f_s)`` and ``sin(2 pi f n / f_s)`` at samples ``lo .. hi - 1``
-    (at most :data:`CHUNK_SAMPLES` of them), the real and imaginary parts of :func:`phasors`."""
+    (at most :data:`CHUNK_SAMPLES` of them), the real and imaginary parts of :func:`phasors`;
+    at ``f = f_s / 2`` the cosine alone, ``(-1)^n`` (the sine is 0 at every sample)."""
     k = 2 * math.pi * f_hz / sample_rate_hz
     table = phasors(k, CHUNK_SAMPLES)
 
     def columns(lo, hi):
         p = table[:hi - lo] * cmath.exp(1j * k * lo)
-        return p.real, p.imag
+        return (p.real,) if 2 * f_hz == sample_rate_hz else (p.real, p.imag)
     return columns
 
 
@@ -139,12 +148,32 @@ def phasors(k, count):
 
 
 def sinusoid_fit(x, sample_rate_hz, f_hz):
-    """Least-squares ``a cos(2 pi f t) + b sin(2 pi f t) + c``; returns (amplitude, phase, fit)."""
+    """Least-squares ``a cos(2 pi f t) + b sin(2 pi f t) + c``; returns (amplitude, phase, fit).
+    At ``f = f_s / 2``, ``b = 0`` (:func:`_sine_columns`): ``a (-1)^n = |a| sin(pi n + phase)``
+    with phase ``+-pi / 2``."""
     columns = _sine_columns(sample_rate_hz, f_hz)
     coef = least_squares(columns, x)
-    amp = math.hypot(coef[0], coef[1])
-    phase = math.atan2(coef[0], coef[1])  # amp sin(w + phase)
-    return amp, phase, fitted(columns, coef[:2], x.size)
+    a, b = coef[0], (coef[1] if coef.size == 3 else 0.0)
+    amp = math.hypot(a, b)
+    phase = math.atan2(a, b)  # amp sin(w + phase)
+    return amp, phase, fitted(columns, coef[:-1], x.size)
+
+
+#: a line refined to within this fraction of a bin of f_s / 2 is at f_s / 2 (:func:`line_frequency`)
+NYQUIST_SNAP_BINS = 0.01
+
+
+def line_frequency(x, sample_rate_hz, f0_hz):
+    """The frequency of the line whose periodogram peak is at ``f0_hz``: the largest
+    :func:`dft_amplitude` within a bin of it (golden section, 30 steps), and ``f_s / 2`` itself
+    when that lies within :data:`NYQUIST_SNAP_BINS` of a bin of it (a line at Nyquist is the
+    sequence ``a (-1)^n``; its DFT amplitude falls on either side only, so the search ends a
+    hair below, where the sine column is a hair above 0 and the fit ill-conditioned)."""
+    nyquist = sample_rate_hz / 2
+    df = sample_rate_hz / periodogram_length(x.size)
+    lo, hi = max(f0_hz - df, df), min(f0_hz + df, nyquist)
+    f_hz = golden_max(dft_amplitude(x, sample_rate_hz, f0_hz, float(x.mean())), lo, hi, 30)
+    return nyquist if nyquist - f_hz < NYQUIST_SNAP_BINS * df else f_hz
 
 
 @functools.lru_cache(maxsize=64)
@@ -290,7 +319,7 @@ def sinusoid_statistic(x, sample_rate_hz, return_spectrum=False, overwrite=False
     first = 8
     if spec.size <= first + 32:
         return nothing + (spec,) if return_spectrum else nothing
-    stat, j = _peak_ratio(spec, first)
+    stat, j = _peak_ratio(spec, first, nyquist=n % 2 == 0)
     m = spec.size - first
     threshold = math.log(m / SINUSOID_ALPHA)
     out = (stat, j * sample_rate_hz / n, threshold)
@@ -302,10 +331,7 @@ def detect_sinusoid(x, sample_rate_hz):
     stat, f0, thr = sinusoid_statistic(x, sample_rate_hz)
     if not stat > thr:
         return None
-    df = sample_rate_hz / periodogram_length(x.size)
-    # refine: golden-section search of the LS amplitude within +-1 bin of the periodogram
-    lo, hi = max(f0 - df, df), min(f0 + df, sample_rate_hz / 2)
-    f_hz = golden_max(dft_amplitude(x, sample_rate_hz, f0, float(x.mean())), lo, hi, 30)
+    f_hz = line_frequency(x, sample_rate_hz, f0)
     sigma = robust_sigma(_diff_sample(x)) / math.sqrt(2)
     amplitude, phase, fit = sinusoid_fit(x, sample_rate_hz, f_hz)
     return Candidate(
