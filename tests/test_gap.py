@@ -536,14 +536,15 @@ def test_every_effect_a_third_of_its_size_runs():
 def test_heavy_tails_battery_is_found_and_never_confused_with_outliers():
     """Many seeds of each: hidden heavy tails named (>= 95 %, never as outliers), hidden
     outliers never named heavy tails, clean records with no finding (docs/gap.md, heavy tails).
-    The ten-minute cases of tests/support/battery.py, 12 of each kind (random axis and
-    parameters; >= 95 % is then all 12) and 10 clean ones, analysed once per session: the
-    intervals' coverage test scores the first 8 of each kind too (they were 20 twenty-minute
-    cases of each and 10 clean of their own, a tenth of the slow run's time)."""
+    The ten-minute cases of tests/support/battery.py, ``PER_KIND`` (8) of each kind (random axis
+    and parameters; >= 95 % is then all 8) and 10 clean ones, analysed once per session: the
+    intervals' coverage and the rate score the same runs (these were 20 twenty-minute cases of
+    each and 10 clean of their own, a tenth of the slow run's time; then 12 of each, the last 4 of
+    which were the only effect cases the battery's other tests did not share)."""
     def named(report):
         return {(f["effect"], f["axis"]) for f in report["findings"]}
 
-    tails, spikes = battery.cases("heavy_tails", 12), battery.cases("outliers", 12)
+    tails, spikes = battery.cases("heavy_tails", battery.PER_KIND), battery.cases("outliers", battery.PER_KIND)
     found = sum(("heavy_tails", case["axis"]) in named(report) for case, report in tails)
     confused = sum(("outliers", case["axis"]) in named(report) for case, report in tails)
     outliers_as_tails = sum(any(f["effect"] == "heavy_tails" for f in report["findings"]) for _, report in spikes)
