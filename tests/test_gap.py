@@ -504,42 +504,47 @@ def test_wilson_interval_of_a_battery_rate():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scale,duration,n_cases", [(1.0, None, 44), (1 / 3, 600.0, 32)])
-def test_battery_rates(scale, duration, n_cases):
-    """Dozens of cases: >= 90 % named in tolerance (scale 1) and <= 5 % clean with findings.
-    At a third of their size (ten minutes) the effects are only run (a valid extended model, no
-    crash; their rate is tools/gap_battery.py's, docs/gap.md), so two rounds of the kinds there
-    (32 cases: both clean ones of the 44, every kind twice) prove what the 44 did."""
-    kinds = list(he.EFFECTS) + ["none"]
-    named_ok = n_eff = false_clean = n_clean = 0
-    for k in range(n_cases):
-        effect = kinds[k % len(kinds)]
-        case = he.draw_case(2000 + k, effect=effect, duration_s=duration, scale=scale)
-        report = _run(case)
-        named, ok, others = he.check(case, report)
-        if effect == "none":
-            n_clean += 1
-            false_clean += bool(report["findings"])
-        else:
+def test_battery_rate():
+    """>= 90 % of the hidden effects named in tolerance, on the battery of tests/support/battery.py:
+    ``PER_KIND`` (8) ten-minute cases of each kind (random axis and parameters), analysed once per
+    session (the intervals' coverage and the heavy tails score the same runs; its clean cases are
+    held to no finding by the heavy-tails test). Ten minutes, not the standard battery's 30-60 (its
+    rate is tools/gap_battery.py's, docs/gap.md): the shorter record is the harder case of the same
+    claim (measured 115 of 120; the wandering tone's wander is out of tolerance in 4 of its 8), on
+    runs the slow tests make anyway, where 44 half-hour-to-hour cases of their own were a fifth of
+    the slow run."""
+    named_ok = n_eff = 0
+    for effect in he.EFFECTS:
+        for case, report in battery.cases(effect, battery.PER_KIND):
             n_eff += 1
-            named_ok += ok
-    assert false_clean <= max(1, 0.05 * n_clean)
-    if scale == 1.0:
-        assert named_ok >= 0.9 * n_eff
+            named_ok += he.check(case, report)[1]
+    assert named_ok >= 0.9 * n_eff, (named_ok, n_eff)
+
+
+@pytest.mark.slow
+def test_every_effect_a_third_of_its_size_runs():
+    """Each kind at a third of its size in a ten-minute record (seeds 2000...) is only run: a valid
+    extended model (``_run``), no crash; whether it is named is tools/gap_battery.py's harder battery
+    (docs/gap.md: below 90 % at that size). One case of each kind proves it (it was two rounds and
+    two clean cases, whose false findings the shared battery's ten clean cases check)."""
+    for k, effect in enumerate(he.EFFECTS):
+        report = _run(he.draw_case(2000 + k, effect=effect, duration_s=600.0, scale=1 / 3))
+        assert report["extended_model"]["axes"], effect
 
 
 @pytest.mark.slow
 def test_heavy_tails_battery_is_found_and_never_confused_with_outliers():
     """Many seeds of each: hidden heavy tails named (>= 95 %, never as outliers), hidden
     outliers never named heavy tails, clean records with no finding (docs/gap.md, heavy tails).
-    The ten-minute cases of tests/support/battery.py, 12 of each kind (random axis and
-    parameters; >= 95 % is then all 12) and 10 clean ones, analysed once per session: the
-    intervals' coverage test scores the first 8 of each kind too (they were 20 twenty-minute
-    cases of each and 10 clean of their own, a tenth of the slow run's time)."""
+    The ten-minute cases of tests/support/battery.py, ``PER_KIND`` (8) of each kind (random axis
+    and parameters; >= 95 % is then all 8) and 10 clean ones, analysed once per session: the
+    intervals' coverage and the rate score the same runs (these were 20 twenty-minute cases of
+    each and 10 clean of their own, a tenth of the slow run's time; then 12 of each, the last 4 of
+    which were the only effect cases the battery's other tests did not share)."""
     def named(report):
         return {(f["effect"], f["axis"]) for f in report["findings"]}
 
-    tails, spikes = battery.cases("heavy_tails", 12), battery.cases("outliers", 12)
+    tails, spikes = battery.cases("heavy_tails", battery.PER_KIND), battery.cases("outliers", battery.PER_KIND)
     found = sum(("heavy_tails", case["axis"]) in named(report) for case, report in tails)
     confused = sum(("outliers", case["axis"]) in named(report) for case, report in tails)
     outliers_as_tails = sum(any(f["effect"] == "heavy_tails" for f in report["findings"]) for _, report in spikes)

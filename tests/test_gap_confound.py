@@ -100,10 +100,12 @@ def test_example_model_names_temperature_with_the_warmup_as_alternative(tmp_path
 @pytest.mark.slow
 @pytest.mark.parametrize("duration_s, sample_rate_hz, seed",
                          [(3600.0, 100.0, 1), (3600.0, 100.0, 3), (86400.0, 10.0, 1)]
-                         + [(3600.0, 10.0, s) for s in (11, 12, 13, 14)] + [(86400.0, 10.0, 21)])
+                         + [(3600.0, 10.0, s) for s in (11, 12, 13, 14)])
 def test_drawn_example_models_name_temperature(duration_s, sample_rate_hz, seed):
     # seeds below 10: the example itself (seed 3 at 100 Hz: x's composite fit lowered D by less than the
-    # extended model's null spread and named a 10-s Gauss-Markov term in place of the bias instability)
+    # extended model's null spread and named a 10-s Gauss-Markov term in place of the bias instability).
+    # One 24-h record, the example's: a day's record is its check, the drawn models' variety the four
+    # one-hour ones' (a drawn model over 24 h, seed 21, took 27 s on the Pi stack, as long as those four)
     example = seed < 10
     model = copy.deepcopy(EXAMPLE) if example else draw_example(seed)
     report = _example_case(model, duration_s, sample_rate_hz, seed)

@@ -245,8 +245,6 @@ def test_value_with_interval_shows_the_width():
 #: falls below it with probability 0.6 % (3 misses or more), of 7 (a case not named) 4 %, of 16
 #: or more trials far less
 LOW_SLOW = 0.75
-#: cases per kind of the slow coverage test (the first of tests/support/battery.py's)
-PER_KIND = 8
 
 
 @pytest.mark.slow
@@ -261,7 +259,7 @@ def test_coverage_per_effect_kind():
     or better)."""
     per_kind = {}
     for effect in he.EFFECTS:
-        for case, report in battery.cases(effect, PER_KIND):
+        for case, report in battery.cases(effect, battery.PER_KIND):
             hit = [f for f in report["findings"] if f["effect"] == effect and f["axis"] == case["axis"]]
             if not hit:
                 continue

@@ -45,6 +45,18 @@ def test_closed_forms_match_simulated_terms(effect, closed_form):
     assert np.all(np.abs(ratio - 1) < 0.2), ratio
 
 
+def test_a_memo_of_the_gauss_markov_terms_changes_no_bit():
+    """GmwmFit.wv with the memo fit_model keeps (one per set of scales) equals it without, bit for
+    bit: a term met again is the one computed before, one that shares its sigma but not its time
+    is computed anew."""
+    tau = np.geomspace(0.01, 60.0, 14)
+    memo = {}
+    for terms in ([(0.02, 5.0), (0.01, 50.0)], [(0.02, 5.0), (0.01, 40.0)], [(0.02, 5.0), (0.01, 50.0)]):
+        fit = gmwm.GmwmFit(sample_rate_hz=FS, arw_dps_per_sqrt_hz=0.01, gauss_markov=terms, duration_s=600.0)
+        assert np.array_equal(fit.wv(tau, memo), fit.wv(tau))
+    assert sorted(memo) == [(0.01, 40.0), (0.01, 50.0), (0.02, 5.0)]
+
+
 @pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow), pytest.param(3, marks=pytest.mark.slow)])
 def test_recovers_white_gauss_markov_and_random_walk(seed):
     """The true model is chosen, or it ties (within gmwm.TIE of the lowest WVIC, the bootstrap's

@@ -17,6 +17,8 @@ from gyrofilter.sim.model import validate_model
 SEED0 = 7000
 DURATION_S = 600.0
 SIMS = 8
+#: cases of each kind the slow tests score (the intervals' coverage, the rate named in tolerance)
+PER_KIND = 8
 
 
 @functools.lru_cache(maxsize=None)

@@ -213,8 +213,12 @@ class GmwmFit:
         parts += [f"{len(self.gauss_markov)}GM"] if self.gauss_markov else []
         return "+".join(parts)
 
-    def wv(self, tau_s):
-        """The model's wavelet variance ν²(τ) ((deg/s)²): the sum of its terms' closed forms."""
+    def wv(self, tau_s, gm_memo=None):
+        """The model's wavelet variance ν²(τ) ((deg/s)²): the sum of its terms' closed forms.
+        ``gm_memo``: a dict of the Gauss-Markov terms' ν² at these same scales ``tau_s``, by
+        ``(sigma_dps, tau_s)``, filled as it goes (a fit evaluates the model at the same scales
+        thousands of times, and its numerical Jacobian moves one parameter at a time: the other
+        terms' values are the ones computed before, bit for bit)."""
         sample_rate_hz = self.sample_rate_hz
         out = wv_white(tau_s, self.arw_dps_per_sqrt_hz)
         if self.quantization_deg is not None:
@@ -226,7 +230,13 @@ class GmwmFit:
         if self.bias_instability_dps is not None:
             out = out + wv_flicker(tau_s, self.bias_instability_dps, sample_rate_hz, self.duration_s)
         for sigma_dps, tau_gm_s in self.gauss_markov:
-            out = out + wv_gauss_markov(tau_s, sigma_dps, tau_gm_s, sample_rate_hz)
+            if gm_memo is None:
+                term = wv_gauss_markov(tau_s, sigma_dps, tau_gm_s, sample_rate_hz)
+            else:
+                term = gm_memo.get((sigma_dps, tau_gm_s))
+                if term is None:
+                    term = gm_memo[(sigma_dps, tau_gm_s)] = wv_gauss_markov(tau_s, sigma_dps, tau_gm_s, sample_rate_hz)
+            out = out + term
         return out
 
     def to_dict(self):
@@ -283,8 +293,10 @@ def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
     rng = np.random.default_rng(seed)
     lo_t, hi_t = math.log(0.5 / sample_rate_hz), math.log(wv.tau_s[-1] * 100.0)
 
+    gm_memo = {}  # the Gauss-Markov terms' ν² at wv's scales (GmwmFit.wv)
+
     def residuals(theta):
-        return (wv.wv_dps2 - _unpack(theta, terms, k_gm, sample_rate_hz, duration_s).wv(wv.tau_s)) / wv.sd_dps2
+        return (wv.wv_dps2 - _unpack(theta, terms, k_gm, sample_rate_hz, duration_s).wv(wv.tau_s, gm_memo)) / wv.sd_dps2
 
     n_par = 1 + len(terms) + 2 * k_gm
     lower = np.full(n_par, -200.0)
@@ -293,6 +305,7 @@ def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
     upper[1 + len(terms) + 1::2] = hi_t
     best = None
     for x0 in _starts(wv, terms, k_gm, rng, starts):
+        gm_memo.clear()  # a start's own terms: the memo stays the size of one descent
         res = least_squares(residuals, np.clip(x0, lower + 1e-9, upper - 1e-9), bounds=(lower, upper), method="trf",
                             x_scale=1.0, max_nfev=400 * n_par)
         if best is None or res.cost < best.cost:

@@ -65,17 +65,29 @@ def _welch(x, sample_rate_hz):
     return f, s, n_seg
 
 
-def _hump_psd(f, centre, q, rms, sample_rate_hz):
-    """One-sided PSD of the resonance of rms ``rms`` at ``f``: 2 rms² |H|² / (f_s Σ h²)."""
+def _unit_circle(f, sample_rate_hz):
+    """z = e^{-j2πf/f_s} at the frequencies ``f``: the fits evaluate their PSDs at the same bins
+    hundreds of times, so it is computed once per fit."""
+    return np.exp(-2j * math.pi * f / sample_rate_hz)
+
+
+def _hump_shape(z, centre, q, sample_rate_hz):
+    """``(|H|², Σ h²)`` of the resonator at ``centre``, ``q`` at the bins ``z`` (:func:`_unit_circle`)."""
     b, a = band_pass(centre, q, sample_rate_hz)
-    z = np.exp(-2j * math.pi * f / sample_rate_hz)
     gain2 = np.abs(b[0] + b[2] * z * z) ** 2 / np.abs(a[0] + a[1] * z + a[2] * z * z) ** 2
-    return 2.0 * rms * rms * gain2 / (sample_rate_hz * band_pass_energy(centre, q, sample_rate_hz))
+    return gain2, band_pass_energy(centre, q, sample_rate_hz)
 
 
-def _null_psd(p, f, sample_rate_hz):
+def _hump_psd(z, centre, q, rms, sample_rate_hz, shape=None):
+    """One-sided PSD of the resonance of rms ``rms`` at the bins ``z`` (:func:`_unit_circle`):
+    2 rms² |H|² / (f_s Σ h²); ``shape``: its :func:`_hump_shape`, where already known."""
+    gain2, energy = _hump_shape(z, centre, q, sample_rate_hz) if shape is None else shape
+    return 2.0 * rms * rms * gain2 / (sample_rate_hz * energy)
+
+
+def _null_psd(p, f, z):
+    """The smooth null's PSD (module docstring) at the frequencies ``f``, ``z`` their :func:`_unit_circle`."""
     c, phi, mu, d = math.exp(p[0]), p[1], p[2], math.exp(p[3])
-    z = np.exp(-2j * math.pi * f / sample_rate_hz)
     return c * np.abs(1.0 + mu * z) ** 2 / np.abs(1.0 - phi * z) ** 2 + d / f
 
 
@@ -100,19 +112,30 @@ def resonance_fit(x, sample_rate_hz, lines=()):
     fw, logs = f[sel], np.log(np.maximum(s[sel], 1e-300))
     known = sum((2.0 * filter_psd(*narrowband_filter(rms, centre, width, sample_rate_hz), fw, sample_rate_hz)
                  for centre, width, rms in lines), np.zeros(fw.size))
+    zw = _unit_circle(fw, sample_rate_hz)
     level = float(np.median(s[sel]))
     p0 = np.array([math.log(level), 0.0, 0.0, math.log(level * 1e-3 * fw[0])])
     lo0, hi0 = [p0[0] - 10, -0.95, -0.95, p0[3] - 30], [p0[0] + 10, 0.95, 0.95, p0[3] + 10]
 
     def null_resid(p):
-        return np.log(np.maximum(_null_psd(p, fw, sample_rate_hz) + known, 1e-300)) - logs
+        return np.log(np.maximum(_null_psd(p, fw, zw) + known, 1e-300)) - logs
 
     null = least_squares(null_resid, p0, bounds=(lo0, hi0), max_nfev=400)
     rss0 = float(np.sum(null.fun ** 2))
+    # the PSDs by the parameters they depend on, for one descent: its numerical Jacobian moves one
+    # parameter at a time, so the null's stays put while the hump's move and the other way round
+    nulls, shapes = {}, {}
 
     def resid(p):
-        hump = _hump_psd(fw, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz)
-        return np.log(np.maximum(_null_psd(p[:4], fw, sample_rate_hz) + known + hump, 1e-300)) - logs
+        key = (p[0], p[1], p[2], p[3])
+        null_psd = nulls.get(key)
+        if null_psd is None:
+            null_psd = nulls[key] = _null_psd(p[:4], fw, zw)
+        shape = shapes.get((p[4], p[5]))
+        if shape is None:
+            shape = shapes[(p[4], p[5])] = _hump_shape(zw, p[4], math.exp(p[5]), sample_rate_hz)
+        hump = _hump_psd(zw, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz, shape)
+        return np.log(np.maximum(null_psd + known + hump, 1e-300)) - logs
 
     sd0 = math.sqrt(level * nyq)  # the rms of a hump as high as the level over the band
     best = None
@@ -120,6 +143,8 @@ def resonance_fit(x, sample_rate_hz, lines=()):
         start = np.r_[null.x, centre, math.log(2.0), math.log(0.1 * sd0)]
         lower = lo0 + [fw[0], math.log(Q_RANGE[0]), math.log(sd0) - 12]
         upper = hi0 + [fw[-1], math.log(Q_RANGE[1]), math.log(sd0) + 4]
+        nulls.clear()
+        shapes.clear()
         try:
             res = least_squares(resid, np.clip(start, np.add(lower, 1e-9), np.subtract(upper, 1e-9)),
                                 bounds=(lower, upper), max_nfev=300)
@@ -132,8 +157,8 @@ def resonance_fit(x, sample_rate_hz, lines=()):
     rss1 = float(np.sum(best.fun ** 2))
     dof = max(fw.size - 7, 1)
     centre, q, rms = float(best.x[4]), float(math.exp(best.x[5])), float(math.exp(best.x[6]))
-    peak = _hump_psd(np.array([centre]), centre, q, rms, sample_rate_hz)[0] / _null_psd(best.x[:4], np.array([centre]),
-                                                                                       sample_rate_hz)[0]
+    at, z_at = np.array([centre]), _unit_circle(np.array([centre]), sample_rate_hz)
+    peak = _hump_psd(z_at, centre, q, rms, sample_rate_hz)[0] / _null_psd(best.x[:4], at, z_at)[0]
     return {"center_hz": centre, "q": q, "rms_dps": rms, "statistic": (rss0 - rss1) / (rss1 / dof) if rss1 > 0 else 0.0,
             "peak_ratio": float(peak), "segments": int(n_seg)}
 
