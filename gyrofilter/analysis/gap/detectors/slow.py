@@ -442,9 +442,9 @@ def slow_reading(x, sample_rate_hz, shapes=SHAPES, temp_c=None, stats=None):
                 noise = (None, (), s0, delta_s)
         if keep_det and det_name in (BIAS_STEP, RATE_RAMP, WARMUP):
             stats["flicker_p"] = p_value = flicker_p_value(y, det_name)
-            if p_value > FLICKER_ALPHA:
+            if p_value > FLICKER_ALPHA:  # the wander named in its place, where its fit holds one at all
                 keep_det = False
-                findings = [_flicker_reading(det_name, p_value, sto, delta_s, n)]
+                findings = [_flicker_reading(det_name, p_value, sto, delta_s, n)] if sto[BIAS_INSTABILITY][0] > 0 else []
                 noise = (BIAS_INSTABILITY, sto[BIAS_INSTABILITY][1], sto[BIAS_INSTABILITY][2], delta_s)
         if keep_det:
             findings.insert(0, deterministic_candidate(det_name, d / s0, params, x, sample_rate_hz,
