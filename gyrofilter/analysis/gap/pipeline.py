@@ -225,6 +225,8 @@ def prepare(rec, *, seed, n_sims, recording_name):
     base = baseline_model(rec)
     report["baseline"]["model"] = base
     q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None
+    if q is not None and rec.gyro_unit != "lsb":
+        report["notes"].append(f"values on a {q:.3g} deg/s grid: quantization step taken from them")
     for a in AXES:
         report["baseline"]["axes"][a] = {"bias_dps": base["axes"][a]["bias_dps"],
                                          "arw_dps_per_sqrt_hz": base["axes"][a]["arw_dps_per_sqrt_hz"],
