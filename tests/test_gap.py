@@ -911,6 +911,24 @@ def test_a_quiet_quantized_sensor_has_its_noise_and_bias_read_from_its_codes(sig
     assert report["findings"] == [], [(f["effect"], f["axis"]) for f in report["findings"]]
 
 
+def test_the_grid_step_is_read_from_whole_multiples_only():
+    """The rule of :func:`stats.grid_step` (issue 37): whole multiples of the smallest difference,
+    three values or more (two with a step given); not an offset grid, not continuous values;
+    the record's step needs every axis on it (a constant axis: none)."""
+    from gyrofilter.analysis.gap.baseline import recorded_lsb_per_dps
+
+    codes = np.rint(np.random.default_rng(2).normal(-40.0, 3.0, 200_000))
+    assert stats.grid_step(codes / 131.0) == pytest.approx(1 / 131.0, rel=1e-12)
+    assert stats.grid_step(codes * 0.05 + 0.01) is None
+    assert stats.grid_step(np.random.default_rng(2).normal(0.0, 0.1, 200_000)) is None
+    assert stats.grid_step(np.array([2, 3, 3, 2]) / 131.0) is None
+    assert stats.grid_step(np.array([2, 3, 3, 2]) / 131.0, 1 / 131.0) == 1 / 131.0
+    axes = [codes / 131.0, np.array([2.0, 3.0] * 100_000) / 131.0, codes[::-1] / 131.0]
+    assert recorded_lsb_per_dps(lambda i: axes[i]) == pytest.approx(131.0, rel=1e-12)
+    axes[1] = np.full(codes.size, 3 / 131.0)
+    assert recorded_lsb_per_dps(lambda i: axes[i]) is None
+
+
 def test_codes_stored_in_deg_s_are_as_quantized_as_codes_stored_in_lsb():
     """Issue 37: int16 codes stored in deg/s (k / 131, white noise of 0.2 LSB, ``gyro_unit: dps``)
     read false outliers on every axis (D 6000 -> 4-17, "does not close"): the step was known only
