@@ -143,8 +143,9 @@ GRID_MIN_VALUES = 3
 
 def grid_step(x, step=None):
     """The step ``q`` of the grid the values of ``x`` sit on, or None: the smallest positive
-    difference of its sorted distinct values where every value is a whole multiple of it (within
-    :data:`GRID_TOLERANCE` of a step) and there are at least :data:`GRID_MIN_VALUES` of them;
+    difference of its sorted distinct values where every value is a whole multiple k of it (within
+    :data:`GRID_TOLERANCE` of a step) and there are at least :data:`GRID_MIN_VALUES` of them
+    (returned as the least-squares q of values = k q, 0.05 where one difference reads 0.0499...98);
     with ``step`` given, ``step`` where the values (two or more) are whole multiples of it.
     A quantized sensor stored in deg/s (int16 codes / 131) or rad/s sits on such a grid; a
     continuous series (a float simulation, a fit's output) does not. An offset grid (x0 + k q) is
@@ -160,6 +161,10 @@ def _on_grid(values, step):
     """:func:`grid_step` of the sorted distinct ``values``."""
     if values.size < (2 if step else GRID_MIN_VALUES):
         return None
+    given = step
     step = step or float(np.min(np.diff(values)))
     codes = values / step
-    return step if np.all(np.abs(codes - np.rint(codes)) <= GRID_TOLERANCE) else None
+    if not np.all(np.abs(codes - np.rint(codes)) <= GRID_TOLERANCE):
+        return None
+    codes = np.rint(codes)  # the least-squares step of values = codes q: the text's rounding of one difference averaged out
+    return given or float(np.dot(values, codes) / np.dot(codes, codes))
