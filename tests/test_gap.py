@@ -916,6 +916,47 @@ def test_a_quiet_quantized_sensor_has_its_noise_and_bias_read_from_its_codes(sig
     assert report["findings"] == [], [(f["effect"], f["axis"]) for f in report["findings"]]
 
 
+def test_the_grid_step_is_read_from_whole_multiples_only():
+    """The rule of :func:`stats.grid_step` (issue 37): whole multiples of the smallest difference,
+    three values or more (two with a step given); not an offset grid, not continuous values;
+    the record's step needs every axis on it (a constant axis: none)."""
+    from gyrofilter.analysis.gap.baseline import recorded_lsb_per_dps
+
+    codes = np.rint(np.random.default_rng(2).normal(-40.0, 3.0, 200_000))
+    assert stats.grid_step(codes / 131.0) == pytest.approx(1 / 131.0, rel=1e-12)
+    assert stats.grid_step(codes * 0.05 + 0.01) is None
+    assert stats.grid_step(np.random.default_rng(2).normal(0.0, 0.1, 200_000)) is None
+    assert stats.grid_step(np.array([2, 3, 3, 2]) / 131.0) is None
+    assert stats.grid_step(np.array([2, 3, 3, 2]) / 131.0, 1 / 131.0) == 1 / 131.0
+    axes = [codes / 131.0, np.array([2.0, 3.0] * 100_000) / 131.0, codes[::-1] / 131.0]
+    assert recorded_lsb_per_dps(lambda i: axes[i]) == pytest.approx(131.0, rel=1e-12)
+    axes[1] = np.full(codes.size, 3 / 131.0)
+    assert recorded_lsb_per_dps(lambda i: axes[i]) is None
+
+
+def test_codes_stored_in_deg_s_are_as_quantized_as_codes_stored_in_lsb():
+    """Issue 37: int16 codes stored in deg/s (k / 131, white noise of 0.2 LSB, ``gyro_unit: dps``)
+    read false outliers on every axis (D 6000 -> 4-17, "does not close"): the step was known only
+    for ``gyro_unit: lsb``. It is now taken from the values, and the same codes read the same
+    baseline in either unit; a continuous record in deg/s keeps no step."""
+    from gyrofilter.analysis.gap.detectors import OUTSIDE_NULL_D
+
+    model = {"sample_rate_hz": 100.0, "gyro_unit": "dps", "lsb_per_dps": 131.0,
+             "axes": {a: {"bias_dps": (0.37 + 1.3 * k) / 131.0, "arw_dps_per_sqrt_hz": 0.2 / 131.0 / 10.0,
+                          "effects": []} for k, a in enumerate("xyz")}}
+    rec = simulate(validate_model(model)[0], 60.0, seed=4)
+    assert rec.gyro_unit == "dps"
+    report = analyse_gap(rec, seed=0, bootstrap=0)
+    assert report["findings"] == [], [(f["effect"], f["axis"]) for f in report["findings"]]
+    assert max(report["discrepancy"]["before"].values()) < OUTSIDE_NULL_D, report["discrepancy"]["before"]
+    assert "values on a 0.00763 deg/s grid: quantization step taken from them" in report["notes"]
+    assert report["baseline"]["axes"]["x"]["quantization_dps"] == pytest.approx(1 / 131.0, rel=1e-9)
+    continuous = analyse_gap(Recording.from_dps(np.random.default_rng(4).normal(0, 0.1, (6000, 3)), 100.0),
+                             seed=0, bootstrap=0, n_sims=SIMS)
+    assert continuous["baseline"]["axes"]["x"]["quantization_dps"] is None
+    assert not any("grid" in note for note in continuous["notes"])
+
+
 @pytest.mark.skipif(importlib.util.find_spec("matplotlib") is None, reason="the report's figures need matplotlib")
 def test_the_reports_title_shows_a_recordings_name_literally(tmp_path):
     """Attack pass (issue 37): a recording named ``<img src=x onerror=alert(9)>.csv`` put that tag

@@ -130,3 +130,41 @@ def block_means(x, max_blocks=MAX_BLOCKS):
     n = n_samples // length
     y = x[: n * length].reshape(n, length).mean(axis=1)
     return y, length
+
+
+#: samples of the first look of :func:`grid_step` (evenly spread): continuous values are told
+#: there without sorting the whole series
+GRID_PROBE = 1 << 17
+#: how far from a whole number of steps a value may be (in steps: the text's float rounding)
+GRID_TOLERANCE = 1e-6
+#: fewest distinct values that show a grid
+GRID_MIN_VALUES = 3
+
+
+def grid_step(x, step=None):
+    """The step ``q`` of the grid the values of ``x`` sit on, or None: the smallest positive
+    difference of its sorted distinct values where every value is a whole multiple k of it (within
+    :data:`GRID_TOLERANCE` of a step) and there are at least :data:`GRID_MIN_VALUES` of them
+    (returned as the least-squares q of values = k q, 0.05 where one difference reads 0.0499...98);
+    with ``step`` given, ``step`` where the values (two or more) are whole multiples of it.
+    A quantized sensor stored in deg/s (int16 codes / 131) or rad/s sits on such a grid; a
+    continuous series (a float simulation, a fit's output) does not. An offset grid (x0 + k q) is
+    not taken: a simulation quantizes to whole multiples of the step."""
+    x = np.asarray(x, dtype=float)
+    probe = np.unique(x[::max(1, x.size // GRID_PROBE)])
+    if probe.size >= GRID_MIN_VALUES and _on_grid(probe, step) is None:
+        return None  # off the grid already there: no sort of the whole series
+    return _on_grid(np.unique(x), step)
+
+
+def _on_grid(values, step):
+    """:func:`grid_step` of the sorted distinct ``values``."""
+    if values.size < (2 if step else GRID_MIN_VALUES):
+        return None
+    given = step
+    step = step or float(np.min(np.diff(values)))
+    codes = values / step
+    if not np.all(np.abs(codes - np.rint(codes)) <= GRID_TOLERANCE):
+        return None
+    codes = np.rint(codes)  # the least-squares step of values = codes q: the text's rounding of one difference averaged out
+    return given or float(np.dot(values, codes) / np.dot(codes, codes))

@@ -5,7 +5,8 @@ The baseline fit per axis (:func:`baseline_model`): constant bias ``b`` = mean o
 white noise of per-sample standard deviation ``sigma`` = the standard deviation of the
 high-passed rate ``x - moving_mean(x, W)`` (W = max(64 samples, 0.5 s), divided by
 ``sqrt(1 - 1/W)``, spikes removed), less the quantization variance ``q^2 / 12`` that the
-simulator adds back (``q = 1 / lsb_per_dps`` for ``gyro_unit: lsb``, else 0);
+simulator adds back (``q = 1 / lsb_per_dps`` for ``gyro_unit: lsb``; in another unit the step
+the values sit on, :func:`recorded_lsb_per_dps`; else 0);
 ``arw_dps_per_sqrt_hz = sigma / sqrt(f_s)`` (white noise per sample ``N sqrt(f_s)``, IEEE Std
 952-1997 annex C). The extended model's axis is re-fitted the same way on the series cleaned of
 its findings (:func:`extended_axis`; with ``heavy_tails`` no sample is masked: the tails are part of
@@ -29,7 +30,7 @@ from .features import features
 from ...recording import GYRO_COLUMNS
 from ...sim.model import validate_model
 from ...sim.simulate import simulate_axis_dps
-from ...units import AXES, to_dps
+from ...units import AXES, LSB_PER_DPS_RANGE, to_dps
 
 # ---------------------------------------------------------------------------------------------
 # the models
@@ -181,8 +182,10 @@ def baseline_model(rec, gyro_dps=None):
     sample_rate_hz = rec.sample_rate_hz
     unit = rec.gyro_unit
     lsb = rec.lsb_per_dps if unit == "lsb" else None
+    if lsb is None:
+        lsb = recorded_lsb_per_dps(lambda i: axis_dps(rec, i) if gyro_dps is None else gyro_dps[:, i])
     q = 1.0 / lsb if lsb else 0.0
-    model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "lsb" if lsb else "dps"}
+    model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "lsb" if unit == "lsb" else "dps"}
     if lsb:
         model["lsb_per_dps"] = lsb
     model["axes"] = {}
@@ -195,6 +198,26 @@ def baseline_model(rec, gyro_dps=None):
         model["axes"][a] = {"bias_dps": bias_dps,
                             "arw_dps_per_sqrt_hz": float(sigma / math.sqrt(sample_rate_hz)), "effects": []}
     return model
+
+
+def recorded_lsb_per_dps(axis_dps_of):
+    """LSB per deg/s of a record not stored in LSB whose three axes (``axis_dps_of(i)``: axis i in
+    deg/s, one at a time) sit on one grid, or None. int16 codes stored as deg/s (k / 131) are as
+    quantized as the codes, and a baseline without the step read their steps as spikes (D 6000
+    and false outliers on every axis, issue 37). The step is that of the axes with three values
+    or more (:func:`~gyrofilter.analysis.stats.grid_step`; the same within its tolerance); an
+    axis with two values (a quiet one) must sit on it. None where an axis is off the grid, or
+    constant, or where no axis has three values, or the step is outside
+    :data:`~gyrofilter.units.LSB_PER_DPS_RANGE`."""
+    steps = [stats.grid_step(axis_dps_of(i)) for i in range(3)]
+    known = [s for s in steps if s is not None]
+    if not known or max(known) - min(known) > stats.GRID_TOLERANCE * min(known):
+        return None
+    q = min(known)
+    if any(s is None and stats.grid_step(axis_dps_of(i), q) is None for i, s in enumerate(steps)):
+        return None
+    lsb = 1.0 / q
+    return lsb if LSB_PER_DPS_RANGE[0] <= lsb <= LSB_PER_DPS_RANGE[1] else None
 
 
 def extended_axis(base_axis, cands, xc, sample_rate_hz, q):

@@ -225,10 +225,11 @@ def prepare(rec, *, seed, n_sims, recording_name):
     base = baseline_model(rec)
     report["baseline"]["model"] = base
     q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None
+    if q is not None and rec.gyro_unit != "lsb":
+        report["notes"].append(f"values on a {q:.3g} deg/s grid: quantization step taken from them")
     for a in AXES:
-        report["baseline"]["axes"][a] = {"bias_dps": base["axes"][a]["bias_dps"],
-                                         "arw_dps_per_sqrt_hz": base["axes"][a]["arw_dps_per_sqrt_hz"],
-                                         "quantization_dps": q}
+        report["baseline"]["axes"][a] = {k: base["axes"][a][k] for k in ("bias_dps", "arw_dps_per_sqrt_hz")}
+        report["baseline"]["axes"][a]["quantization_dps"] = q
     report["extended_model"] = copy.deepcopy(base)
     if n < MIN_SAMPLES:
         report["notes"].append(f"only {n} samples (< {MIN_SAMPLES}): too short to tell anything beyond the baseline")
