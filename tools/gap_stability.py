@@ -18,8 +18,10 @@ Per axis it counts:
 * **same causes**: the set of named effects is the same for every seed (an effect reported as
   uncertain is not named);
 * **interval outside**: a ``params_ci95`` interval that does not contain its own estimate;
-* **interval over 100x**: a positive parameter's interval whose ends differ by more than a factor
-  100 (printed intervals only: ``null``, "not determined", counts as neither);
+* **interval over 100x**: a positive (log-scale) parameter's interval whose ends differ by more
+  than a factor 100, the rule of :mod:`gyrofilter.analysis.gap.intervals` (printed intervals only:
+  ``null``, "not determined", counts as neither; a signed parameter such as an autocorrelation
+  near 0, [8e-6, 0.005], is bounded by its distance from 0, not by its ratio);
 * for the default model's records, a named cause outside the model's own terms (its model has
   white noise, bias instability, temperature and quantization), and whether the temperature is
   named or listed as an alternative.
@@ -67,6 +69,8 @@ def _job(args):
 def axis_rows(rep):
     """{axis: {"named": sorted effects, "alternatives": effects listed, "outside": [...],
     "wide": [...], "D": D after}} of one report."""
+    from gyrofilter.analysis.gap.intervals import MAX_SPAN_RATIO, SCALES
+
     out = {a: {"named": [], "alternatives": [], "outside": [], "wide": [], "uncertain": [],
                "D": rep.get("discrepancy", {}).get("after", {}).get(a)} for a in "xyz"}
     for f in rep["findings"]:
@@ -80,7 +84,7 @@ def axis_rows(rep):
             lo, hi = ci
             if not lo <= v <= hi:
                 row["outside"].append(f"{f['effect']}.{k}={v:.4g} [{lo:.4g}, {hi:.4g}]")
-            elif lo > 0 and hi / lo > 100:
+            elif SCALES.get(f["effect"], {}).get(k) == "log" and lo > 0 and hi / lo > MAX_SPAN_RATIO:
                 row["wide"].append(f"{f['effect']}.{k}=[{lo:.3g}, {hi:.3g}]")
     for u in rep.get("uncertain", []):
         out[u["axis"]]["uncertain"].append(u["effect"])
