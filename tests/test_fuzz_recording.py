@@ -123,11 +123,12 @@ def texts(draw, valid=False):
     broken = None
     header = list(GOOD_HEADER)
     free = draw(st.lists(st.tuples(st.from_regex(r"[a-z][a-z0-9_]{0,8}", fullmatch=True),
-                                   st.text(st.characters(codec="utf-8", exclude_characters="\n", exclude_categories=["Cs"]), max_size=20)),
+                                   st.text(st.characters(codec="utf-8", exclude_characters="\n\x00", exclude_categories=["Cs"]), max_size=20)),
                          max_size=3, unique_by=lambda kv: kv[0]))
     header += [(k, v) for k, v in free if k not in dict(GOOD_HEADER)]
     lines = [f"# {k}: {v}" for k, v in header]
-    mutation = "none" if valid else draw(st.sampled_from(["none"] * 4 + ["bad line", "bad rate", "missing", "bad input rate"]))
+    mutation = "none" if valid else draw(st.sampled_from(["none"] * 4 + ["bad line", "bad rate", "missing", "bad input rate",
+                                                                         "nul"]))
     if mutation == "bad line":
         lines.insert(draw(st.integers(1, len(lines))), draw(st.sampled_from(BAD_HEADER_LINES)))
         broken = "header"
@@ -140,13 +141,16 @@ def texts(draw, valid=False):
     elif mutation == "bad input rate":  # a filtered output's: a rate, and not below sample_rate_hz (100)
         lines.insert(draw(st.integers(1, len(lines))), f"# input_sample_rate_hz: {draw(st.sampled_from(BAD_RATES + ['99.9']))}")
         broken = "input rate"
+    elif mutation == "nul":  # NUL bytes in a header or note line (an SD card after a power cut): refused
+        lines.insert(draw(st.integers(1, len(lines))), "# " + "\x00" * draw(st.integers(1, 4)))
+        broken = "NUL bytes"
     lines.append(draw(st.sampled_from(["gx,gy,gz", "gx, gy ,gz", "gz,gx,gy"])))
     names = [c.strip() for c in lines[-1].split(",")]
     rows = []
     for _ in range(draw(st.integers(0, 12))):
         kind = draw(st.sampled_from(["row"] * 6 + ["note", "blank"] + ([] if valid else ["python", "garbage", "short"])))
         if kind == "note":
-            lines.append("# " + draw(st.text(st.characters(codec="utf-8", exclude_characters="\n\r", exclude_categories=["Cs"]), max_size=20)))
+            lines.append("# " + draw(st.text(st.characters(codec="utf-8", exclude_characters="\n\r\x00", exclude_categories=["Cs"]), max_size=20)))
             continue
         if kind == "blank":
             lines.append(draw(st.sampled_from(["", " ", "\t"])))
