@@ -278,7 +278,7 @@ def baseline_spread(setup, say):
                         "baseline simulations (runs x axes)")
     deps = [departures(meas_feats[i], sims[i], n) for i in range(3)]
     return GapInput(**setup, meas_feats=meas_feats, deps=deps, before=[discrepancy(d) for d in deps], base_sims=sims,
-                    repeats=det.detect_repeats([axis_dps(rec, i) for i in range(3)], setup["q"]), idle=idle, say=say)
+                    repeats=det.detect_repeats((axis_dps(rec, i) for i in range(3)), setup["q"]), idle=idle, say=say)
 
 
 def nothing_to_analyse(x_dps):

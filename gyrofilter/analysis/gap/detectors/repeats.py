@@ -21,8 +21,9 @@ from .common import REPEATS_ALPHA, REPEATS_MAX_STATISTIC, Candidate
 
 
 def detect_repeats(gyro_dps, q_dps=None):
-    """``(the RepeatedRows count, a Candidate or None)`` of the record ``gyro_dps`` ((N, 3), deg/s)
-    whose step is ``q_dps`` (deg/s; None: each axis's grid). The candidate's ``fraction`` is the
+    """``(the RepeatedRows count, a Candidate or None)`` of the record ``gyro_dps`` ((N, 3) deg/s, or
+    an iterable of its three columns, read one at a time) whose step is ``q_dps`` (deg/s; None:
+    each axis's grid). The candidate's ``fraction`` is the
     excess fraction, at most the largest a model takes (:func:`max_fraction`: a record of 50.05 %
     or 90 % repeated rows failed the gap analysis, its extended model refused), its evidence
     saying so; its statistic -log10 of the test's p-value (at most
