@@ -301,6 +301,7 @@ def _replicates(inp, state, i, cands, seeds, at=None):
             out["findings"].append(reestimate_axis(x, inp.sample_rate_hz, temp, cands, resolved, inp.q or 0.0, owned=True))
         except (ValueError, ArithmeticError):  # a fit that cannot run on this replicate
             out["findings"].append([None] * len(cands))
+        del x  # the next run is made while this one would still be held: two series of the record's length
         bar.step(k + 1)
     return out
 
