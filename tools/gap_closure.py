@@ -18,7 +18,7 @@ each BROAD trial (``recordings/``; movement flag 0, less 1.5 s at both ends, the
 * where it is not: the feature that departs most from the extended model's simulations (the Allan
   deviation at one tau or one band power; z in units of the simulated spread);
 * with the distance columns: the weighted distance (1/J) Σ_j (ν̂²_j - ν²_j)² / Var(ν̂²_j) of the
-  extended model's Haar wavelet variance (mean of 4 simulations) and of the GMWM-style fit
+  extended model's Haar wavelet variance (mean of 16 simulations, ``gmwm.MODEL_CURVE_RUNS``) and of the GMWM-style fit
   (``gyrofilter.analysis.noise.gmwm.select_model``, all dyadic scales) to the measured one (docs/gap.md);
 * **held out**, the check independent of D and of the fitted data: the record cut in two halves,
   the gap and the GMWM-style fit made on one half and their wavelet variances scored by the same
@@ -131,7 +131,7 @@ def distances(rec, rep, seed):
     for i in range(3):
         x = np.asarray(gyro[:, i], dtype=float)
         wv = gmwm.haar_wv(x, rec.sample_rate_hz)
-        ext = gmwm.simulated_wv(rep["extended_model"], i, x.size, seeds=tuple(range(1000 + seed, 1004 + seed)))
+        ext = gmwm.simulated_wv(rep["extended_model"], i, x.size, seeds=range(1000 + seed, 1000 + seed + gmwm.MODEL_CURVE_RUNS))
         best, _ = gmwm.select_model(wv, starts=3, seed=seed)
         out.append((gmwm.wv_distance(wv, ext.wv_dps2), gmwm.wv_distance(wv, best.wv(wv.tau_s)), best.name))
     return out
@@ -157,7 +157,7 @@ def held_out(rec, seed):
             x_fit = np.asarray(sub.gyro_dps[:, i], dtype=float)
             y = np.asarray(rec.gyro_dps[parts[score], i], dtype=float)
             wv = gmwm.haar_wv(y, rec.sample_rate_hz)
-            ext = gmwm.simulated_wv(rep["extended_model"], i, y.size, seeds=tuple(range(2000 + seed, 2004 + seed)))
+            ext = gmwm.simulated_wv(rep["extended_model"], i, y.size, seeds=range(2000 + seed, 2000 + seed + gmwm.MODEL_CURVE_RUNS))
             best, _ = gmwm.select_model(gmwm.haar_wv(x_fit, rec.sample_rate_hz), starts=3, seed=seed)
             sums[i] += (gmwm.wv_distance(wv, ext.wv_dps2), gmwm.wv_distance(wv, best.wv(wv.tau_s)))
     return [tuple(row / 2) for row in sums]

@@ -10,7 +10,7 @@ innovations at 30 times the others' sd (``heavy_tails``; 5 % beyond 6 core sd). 
 as it is and with the heavy-tail stage switched off (the previous reading); printed: the findings,
 D of the axis before and after, and an Allan distance independent of D: the weighted distance
 (:func:`gyrofilter.analysis.noise.gmwm.wv_distance`, all dyadic scales) between the record's Haar
-wavelet variance and the mean of 4 simulations of each extended model, and of a direct two-term
+wavelet variance and the mean of 16 simulations (``gmwm.MODEL_CURVE_RUNS``) of each extended model, and of a direct two-term
 composite fit (white noise + one Gauss-Markov term, the AR(1)) to the record.
 
 ``--real``: the tail statistic's departure from the baseline simulations and the decision on every
@@ -48,7 +48,7 @@ def show(label, report, rec, axis):
     i = "xyz".index(axis)
     x = rec.gyro_dps[:, i]
     wv = gmwm.haar_wv(x, rec.sample_rate_hz)
-    ext = gmwm.simulated_wv(report["extended_model"], i, x.size, seeds=(1000, 1001, 1002, 1003))
+    ext = gmwm.simulated_wv(report["extended_model"], i, x.size, seeds=range(1000, 1000 + gmwm.MODEL_CURVE_RUNS))
     found = "; ".join(f"{f['effect']} (" + ", ".join(f"{k} = {v:.3g}" for k, v in f["params"].items()) + ")"
                       for f in report["findings"] if f["axis"] == axis)
     d = report["discrepancy"]
