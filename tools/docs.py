@@ -540,6 +540,13 @@ def gap_battery_clean_30min():
     return _battery("--cases", "20", "--duration", "1800", "--effects", "none", "--sims", "12", "--seed", "7000")
 
 
+@block("gap-battery-band", "docs/gap.md", "tools/gap_battery.py (humps, rings and wandering tones hidden)", slow=True)
+def gap_battery_band():
+    return (_battery("--cases", "36", "--duration", "600", "--effects", "resonance,ringing,none", "--sims", "12", "--seed",
+                     "15000", "--d-after") + "\n\n"
+            + _battery("--cases", "24", "--effects", "wandering_tone,none", "--sims", "12", "--seed", "15100", "--d-after"))
+
+
 @block("gap-battery-tails", "docs/gap.md", "tools/gap_battery.py (heavy tails and outliers hidden)", slow=True)
 def gap_battery_tails():
     harder = ("--scale", "0.3333", "--duration", "600")

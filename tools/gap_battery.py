@@ -36,6 +36,13 @@ def battery_cases(cases, seed, *, effects=None, duration_s=None, scale=1.0):
         yield seed + k, he.draw_case(seed + k, effect=kinds[k % len(kinds)], duration_s=duration_s, scale=scale)
 
 
+def hidden_axis_d_after(case, rep):
+    """D after extension on the axes the case's effect was hidden on (every axis of a clean case
+    or of a whole-row effect)."""
+    axes = case["axis"] if case["axis"] in tuple("xyz") else "xyz"
+    return [rep["discrepancy"]["after"][a] for a in axes]
+
+
 def run_synthetic(args):
     from gyrofilter.analysis.gap.pipeline import analyse_gap
 
@@ -49,14 +56,14 @@ def run_synthetic(args):
         rep = analyse_gap(rec, seed=seed, n_sims=args.sims)
         dt = time.perf_counter() - t0
         named, ok, others = he.check(case, rep)
-        rows.append((case, named, ok, others, dt))
+        rows.append((case, named, ok, others, dt, hidden_axis_d_after(case, rep)))
         if args.verbose:
             got = "; ".join(f"{f['axis']}:{f['effect']} " + ", ".join(f"{a}={v:.3g}" for a, v in f["params"].items())
                             for f in rep["findings"])
             true = ", ".join(f"{a}={v:.3g}" for a, v in case["params"].items())
             print(f"case {seed:4d} {effect:17s} {case['axis'] or '-'} {true:55s} -> "
                   f"{'OK ' if ok else ('nam' if named else '---')} [{got}] {dt:.1f}s", flush=True)
-    summarise(rows, time.perf_counter() - t_all)
+    summarise(rows, time.perf_counter() - t_all, args.d_after)
 
 
 def run_real(args):
@@ -86,15 +93,15 @@ def run_real(args):
             dt = time.perf_counter() - t0
             named, ok, others = he.check(case, rep)
             others = [f for f in others if (f["effect"], f["axis"]) not in present]
-            rows.append((case, named, ok, others, dt))
+            rows.append((case, named, ok, others, dt, hidden_axis_d_after(case, rep)))
             if args.verbose:
                 got = "; ".join(f"{f['axis']}:{f['effect']}" for f in rep["findings"])
                 print(f"  {effect:17s} {case['axis']} -> {'OK ' if ok else ('nam' if named else '---')} [{got}]", flush=True)
         k += 1
-    summarise(rows, time.perf_counter() - t_all)
+    summarise(rows, time.perf_counter() - t_all, args.d_after)
 
 
-def summarise(rows, total_s):
+def summarise(rows, total_s, d_after=False):
     by = defaultdict(list)
     for row in rows:
         by[row[0]["effect"]].append(row)
@@ -125,6 +132,13 @@ def summarise(rows, total_s):
         if rs:
             wrong = sum(any(f["effect"] == named_as and f["axis"] == r[0]["axis"] for f in r[3]) for r in rs)
             print(f"{hidden} cases named {named_as} on their axis: {wrong} of {len(rs)}")
+    if d_after:  # D after against the clean records' null band (2: their 95th percentile, docs/gap.md)
+        for effect in list(he.EFFECTS) + ["none"]:
+            ds = [d for r in by.get(effect, []) for d in r[5]]
+            if ds:
+                what = "axes of clean cases" if effect == "none" else f"{effect} cases, on the hidden axis"
+                print(f"D after <= 2 on {sum(d <= 2.0 for d in ds)} of {len(ds)} {what} (median {np.median(ds):.2f}, "
+                      f"max {np.max(ds):.2f})")
     times = [r[4] for r in rows]
     print(f"gap runtime per case: median {np.median(times):.1f} s, max {np.max(times):.1f} s; battery {total_s:.0f} s")
 
@@ -138,6 +152,7 @@ def main(argv=None):
     p.add_argument("--sims", type=int, default=None)
     p.add_argument("--real", nargs="*", default=None, help="hide effects in these real recordings instead")
     p.add_argument("--effects", default=None, help="comma-separated effects to cycle through (e.g. none for a clean battery)")
+    p.add_argument("--d-after", action="store_true", help="also count the hidden axis's D after extension at or below 2")
     p.add_argument("-v", "--verbose", action="store_true")
     p.add_argument("--out", default=None, help="also write the summary table to this file")
     args = p.parse_args(argv)
