@@ -430,6 +430,16 @@ def test_a_log_on_the_standard_input_is_read_as_dash(tmp_path):
         assert np.array_equal(rec.gyro[:, 0], np.arange(3000) % 10)
 
 
+def test_a_closed_standard_input_is_one_line(tmp_path):
+    """Attack pass 8 (issue 37): ``convert - ... <&-`` (no standard input at all) ended in a
+    traceback (AttributeError: sys.stdin is None); it is one line naming ``-``, and no file."""
+    dst = tmp_path / "rec.csv"
+    done = subprocess.run(["sh", "-c", f'exec "$0" -m gyrofilter convert - --unit dps --out {dst} <&-', sys.executable],
+                          capture_output=True, text=True, timeout=120, cwd=REPO)
+    assert done.returncode == 2 and done.stderr == "gyrofilter: error: -: cannot read: Bad file descriptor\n", done.stderr
+    assert not dst.exists()
+
+
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
     30286365 ns after the first): each time is now the exact decimal offset rounded once."""

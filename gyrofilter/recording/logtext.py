@@ -34,8 +34,8 @@ def open_log(path):
     (a pipe: ``<(zcat log.gz)``, /dev/stdin), an anonymous temporary copy of its bytes (in the
     system's temporary folder, gone when closed), made one block at a time and bounded
     (:func:`_copy_pipe`)."""
-    try:
-        fd = os.dup(sys.stdin.fileno()) if path == STDIN else None
+    try:  # a closed standard input (``<&-``): sys.stdin is None, or fd 0 is no open file
+        fd = None if path != STDIN else os.dup(sys.stdin.fileno()) if sys.stdin is not None else os.dup(0)
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
     raw = open_input(path, fd=fd)
