@@ -10,6 +10,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -880,6 +881,9 @@ def test_the_cli_refuses_a_moving_record_in_one_line_unless_asked(tmp_path, caps
     assert main(["gap", path, "--json", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"gyrofilter: error: {path}: axis ") and "--allow-motion" in err[0]
+    said = err[0][len(f"gyrofilter: error: {path}: "):]  # attack pass 8: it was 150 columns more than the path
+    assert re.fullmatch(r"axis [xyz] is not still \(it moves by up to [0-9.e+]+ deg/s\); --allow-motion analyses it anyway",
+                        said), said
     assert not out.exists()
     assert main(["gap", path, "--allow-motion", "--sims", "10", "--bootstrap", "0", "--json", str(out)]) == 0
     err = " ".join(capsys.readouterr().err.split())  # a warning is wrapped at 100 columns
