@@ -543,6 +543,47 @@ def test_a_log_of_cr_only_line_ends_is_refused_naming_them(tmp_path, capsys, row
     assert len(err.splitlines()) == 1
 
 
+@pytest.mark.parametrize("zipped", [False, True])
+@pytest.mark.parametrize("head", [b"", b"time_s,gx_dps,gy_dps,gz_dps\n# a comment\r\n"])
+def test_a_piped_log_without_rows_is_refused_as_it_is_copied(tmp_path, capsys, monkeypatch, head, zipped):
+    """Attack pass 8 (issue 37's leftover): ``convert -`` copied a pipe whole (up to 4 GiB) before
+    the bound on blank and comment lines before the first data row applied; the lines are now
+    counted as the pipe is copied, and the copy stops at the bound. The pipe offers 4 MB of
+    blank lines (gzip-compressed as a stream, flushed block by block, when ``zipped``) against a
+    1 MB bound and stays open: the refusal comes before its end. A data row after as many
+    blank lines within the bound is read."""
+    from gyrofilter.recording import header
+    monkeypatch.setattr(header, "MAX_BYTES_BEFORE_ROWS", 1 << 20)
+    read_end, write_end = os.pipe()
+    ended = threading.Event()
+
+    def feed():
+        packer = zlib.compressobj(6, zlib.DEFLATED, 31)
+        with contextlib.suppress(BrokenPipeError), open(write_end, "wb", buffering=0) as fh:
+            for block in [head] + [b"\n" * (1 << 16)] * 64:
+                fh.write(packer.compress(block) + packer.flush(zlib.Z_SYNC_FLUSH) if zipped else block)
+            ended.wait(60)  # the pipe stays open: a copy that waits for its end waits for this
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    dst, said = tmp_path / "rec.csv", []
+    reader = threading.Thread(target=lambda: said.append(main(["convert", f"/dev/fd/{read_end}", "--unit", "dps",
+                                                                 "--out", str(dst)])), daemon=True)
+    reader.start()
+    reader.join(timeout=30)
+    refused_before_the_end = not reader.is_alive()
+    ended.set()
+    reader.join(timeout=30)
+    os.close(read_end)
+    writer.join(timeout=10)
+    assert refused_before_the_end and said == [2] and not dst.exists()
+    assert capsys.readouterr().err == (f"gyrofilter: error: /dev/fd/{read_end}: no data rows in the first 1 MB (only "
+                                       "blank or comment lines); not a log of rates\n")
+    text = head or b"time_s,gx_dps,gy_dps,gz_dps\n"
+    rc, dst = _convert_pipe(tmp_path, text + b"\n" * (900 << 10) + b"0,1,2,3\n0.01,1,2,3\n" + b"\n" * (3 << 20))
+    assert rc == 0 and len(read_recording(dst)) == 2
+
+
 @pytest.mark.parametrize("head", [b"", b"# a phone logger\ntime_s,gx_dps,gy_dps,gz_dps\n"])
 def test_a_log_without_rows_is_refused_once_its_blank_lines_pass_the_bound(tmp_path, capsys, monkeypatch, head):
     """Issue 37 (attack 6): a gzip of 2 GiB of line ends took 64 s to refuse ("no data"), every

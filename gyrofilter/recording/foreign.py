@@ -261,6 +261,25 @@ def _before_rows(counts, text, lines, path):
     refuse_rowless(path, counts["before_rows"])
 
 
+class _FirstRow:
+    """``on_line`` of :func:`~gyrofilter.recording.logtext.open_log`: the blank and comment lines of
+    a piped log before its first data row counted as it is copied, and refused past the bound as
+    :func:`_read` refuses them (:func:`_before_rows`), not after the whole pipe is copied; True at
+    the first data row (the row after the column names, or a first row of numbers only)."""
+
+    def __init__(self, path):
+        self.path, self.counts, self.named = path, {"before_rows": 0}, False
+
+    def __call__(self, text, lines):
+        if not text.strip() or text.lstrip().startswith(_COMMENT):
+            _before_rows(self.counts, text, lines, self.path)
+            return False
+        if self.named:
+            return True
+        self.named = True
+        return all(is_plain_number(c) for c in _splitter(text)(text))
+
+
 @contextlib.contextmanager
 def _unchanged(path):
     """A pass after the first: a cell that is no number now (float's ValueError, Decimal's
@@ -361,7 +380,7 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
         raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
     if sample_rate_hz is not None:
         sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
-    raw = open_log(path)
+    raw = open_log(path, on_line=_FirstRow(path))
     try:
         return _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit)
     except BaseException:
