@@ -29,7 +29,7 @@ def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, 
         main(argv)
     assert stop.value.code == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith(f"{prog}: error: ") and said in err
+    assert err.count("\n") == 1 and err.startswith("gyrofilter: error: ") and said in err  # one prefix (attack pass 8)
     assert err.rstrip().endswith(f"(see {prog} --help)")
     assert ("did you mean" in err) == ("did you mean" in said)
 
@@ -51,7 +51,7 @@ def test_a_removed_spelling_of_the_sample_rate_is_refused_naming_the_one_spellin
     assert stop.value.code == 2
     err = capsys.readouterr().err
     typed = " ".join(argv[argv.index(next(a for a in argv if "rate" in a)):])
-    assert err == (f"gyrofilter {argv[0]}: error: unrecognized arguments: {typed}; did you mean --sample-rate-hz? "
+    assert err == (f"gyrofilter: error: unrecognized arguments: {typed}; did you mean --sample-rate-hz? "
                    f"(see gyrofilter {argv[0]} --help)\n")
 
 

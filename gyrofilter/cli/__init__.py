@@ -43,8 +43,9 @@ EXIT_INTERRUPTED = 130
 
 
 class _OneLineParser(argparse.ArgumentParser):
-    """argparse, with a refusal in one line (what every refusal of gyrofilter is) that says where
-    the usage is, instead of the usage text and then the error. An option is taken only as spelled
+    """argparse, with a refusal in one line (what every refusal of gyrofilter is, with the same
+    prefix, :func:`console.error_line`) that says where the usage is, instead of the usage text
+    and then the error. An option is taken only as spelled
     in full: each has one spelling, and a removed one is refused, not read as the prefix of
     another (``--sample-rate`` of ``--sample-rate-hz``)."""
 
@@ -56,7 +57,7 @@ class _OneLineParser(argparse.ArgumentParser):
         choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
         if choice:  # a mistyped value of an option with choices (--preset papr): the closest one
             message += _did_you_mean(choice.group(1), [c.strip(" '\"") for c in choice.group(2).split(",")])
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {escape_controls(' '.join(message.split()))} (see {self.prog} --help)\n")
+        self.exit(EXIT_BAD_INPUT, escape_controls(console.error_line(f"{message} (see {self.prog} --help)")) + "\n")
 
 
 class _Parser(_OneLineParser):
@@ -148,5 +149,5 @@ def _main(argv):
         os.dup2(devnull, sys.stdout.fileno())
         return 0
     except (GyroFilterError, OSError, ValueError) as exc:
-        console.say(f"gyrofilter: error: {one_line(exc)}")
+        console.say(console.error_line(one_line(exc)))
         return EXIT_BAD_INPUT
