@@ -440,6 +440,28 @@ def test_a_closed_standard_input_is_one_line(tmp_path):
     assert not dst.exists()
 
 
+@pytest.mark.parametrize("period_ms", [9.7, 10.3, 4.3, 2.6])
+def test_stamps_rounded_to_whole_ms_give_the_rate_they_span_or_a_refusal(tmp_path, capsys, period_ms):
+    """Attack pass 8 (issue 37): an Arduino's millis() stamps of samples every 2.6 ms step by 2 or
+    3 ms; the rate was 1 / the median step, 333.333 Hz written for 384.6 (4.3 ms: 250 for 232.6; 9.7
+    ms: 100 for 103.1), exit 0, every later tau and density off by as much. The rate is 1 / the
+    mean step (gaps aside); where the stamps' steps then stray more than 5 % from it, the log is
+    refused as one whose steps are not one rate."""
+    n = 6000
+    stamps = np.floor(np.arange(n) * period_ms).astype(int)
+    src = tmp_path / "arduino.csv"
+    src.write_text("millis,gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    dst = tmp_path / "rec.csv"
+    rc = main(["convert", str(src), "--unit", "dps", "--out", str(dst)])
+    err = capsys.readouterr().err
+    true_hz = 1000 / period_ms
+    if rc == 0:
+        assert abs(read_recording(dst).sample_rate_hz / true_hz - 1) < 1e-4, err
+    else:
+        assert rc == 2 and "more than 5% apart" in err and not dst.exists(), err
+    assert (rc == 0) == (period_ms > 9)  # a 1-ms step is within 5 % of a 10-ms period, not of 4.3 or 2.6
+
+
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
     30286365 ns after the first): each time is now the exact decimal offset rounded once."""
