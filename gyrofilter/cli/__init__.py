@@ -53,6 +53,29 @@ class _OneLineParser(argparse.ArgumentParser):
         kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
 
+    def parse_known_args(self, args=None, namespace=None):
+        args = sys.argv[1:] if args is None else list(args)
+        self._refuse_repeated(args)
+        return super().parse_known_args(args, namespace)
+
+    def _refuse_repeated(self, argv):
+        """Refuse an option that takes one value given twice (argparse keeps the last one silently:
+        ``--out a.csv --out b.csv`` wrote only b.csv, ``--preset paper --preset hold`` ran hold), as
+        ``--set`` refuses a setting given twice. The top-level parser has no such option: a
+        command's words are its own parser's to check."""
+        single = {s: a for a in self._actions if isinstance(a, argparse._StoreAction) for s in a.option_strings}
+        seen = {}
+        for i, word in enumerate(argv):
+            if word == "--":
+                return
+            option, equals, value = word.partition("=")
+            if option in single:
+                value = value if equals else (argv[i + 1] if i + 1 < len(argv) else "")
+                action = single[option]  # --fleet and --out-dir are one option
+                if action in seen:
+                    self.error(f"argument {option}: given twice ({quote(seen[action])}, then {quote(value)}); give it once")
+                seen[action] = value
+
     def error(self, message):
         choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
         if choice:  # a mistyped value of an option with choices (--preset papr): the closest one
