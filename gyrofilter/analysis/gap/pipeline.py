@@ -118,8 +118,7 @@ def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refu
     rec = read_recording(path, columns=gap_columns, compact=True)
     motion = [(a, why) for i, a in enumerate(AXES) if (why := moved(axis_dps(rec, i), rec.sample_rate_hz))]
     if motion and refuse_motion:  # one short line: the warning of --allow-motion says the rest
-        a = motion[0][0]
-        why = moved(axis_dps(rec, AXES.index(a)), rec.sample_rate_hz, brief=True)
+        a, why = motion[0][0], moved(axis_dps(rec, AXES.index(motion[0][0])), rec.sample_rate_hz, brief=True)
         raise RecordingError(f"{path}: axis {a} is not still ({why}); --allow-motion analyses it anyway")
     for a, why in motion:
         warn(f"{path}: axis {a}: {why}; the gap analysis models a still gyro, so its findings describe the motion")
