@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from support import file_named_by_bytes, lsb_recording
+from support import REPO, file_named_by_bytes, lsb_recording
 
 
 @pytest.mark.parametrize("argv, prog, said", [
@@ -29,7 +29,7 @@ def test_an_unknown_option_gets_its_commands_usage_and_the_closest_option(argv, 
         main(argv)
     assert stop.value.code == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith(f"{prog}: error: ") and said in err
+    assert err.count("\n") == 1 and err.startswith("gyrofilter: error: ") and said in err  # one prefix (attack pass 8)
     assert err.rstrip().endswith(f"(see {prog} --help)")
     assert ("did you mean" in err) == ("did you mean" in said)
 
@@ -51,7 +51,7 @@ def test_a_removed_spelling_of_the_sample_rate_is_refused_naming_the_one_spellin
     assert stop.value.code == 2
     err = capsys.readouterr().err
     typed = " ".join(argv[argv.index(next(a for a in argv if "rate" in a)):])
-    assert err == (f"gyrofilter {argv[0]}: error: unrecognized arguments: {typed}; did you mean --sample-rate-hz? "
+    assert err == (f"gyrofilter: error: unrecognized arguments: {typed}; did you mean --sample-rate-hz? "
                    f"(see gyrofilter {argv[0]} --help)\n")
 
 
@@ -171,3 +171,25 @@ def test_a_warning_is_wrapped_at_the_console_width_and_keeps_a_number_with_its_u
     assert lines[0].startswith("gyrofilter: warning: axis x: ") and all(line.startswith("  ") for line in lines[1:])
     assert not any(line.rstrip().endswith("66.7") for line in lines), lines
     assert " ".join(captured.err.split()) == f"gyrofilter: warning: {text}".strip()
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["run", "--source", "sim", "--preset", "paper", "--preset", "hold"], "argument --preset: given twice ('paper', then 'hold')"),
+    (["convert", "in.csv", "--out", "a.csv", "--out=b.csv"], "argument --out: given twice ('a.csv', then 'b.csv')"),
+    (["gap", "r.csv", "--fleet", "a", "--out-dir", "b"], "argument --out-dir: given twice ('a', then 'b')"),
+])
+def test_an_option_of_one_value_given_twice_is_refused(argv, said, capsys, tmp_path, monkeypatch):
+    """Attack pass 8 (issue 37): argparse kept the last of an option given twice, silently
+    (``--out a.csv --out b.csv`` wrote b.csv only, ``--preset paper --preset hold`` ran hold);
+    refused as ``--set`` refuses a setting given twice, before any work. An option that may
+    repeat (``--set``) and a flag given twice are taken."""
+    from gyrofilter.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    assert capsys.readouterr().err == f"gyrofilter: error: {said}; give it once (see gyrofilter {argv[0]} --help)\n"
+    assert not list(tmp_path.iterdir())
+    assert main(["simulate", "--model", str(REPO / "examples" / "models" / "sinusoid.json"), "--duration", "1",
+                 "--out", "s.csv", "--force", "--force"]) == 0

@@ -430,6 +430,38 @@ def test_a_log_on_the_standard_input_is_read_as_dash(tmp_path):
         assert np.array_equal(rec.gyro[:, 0], np.arange(3000) % 10)
 
 
+def test_a_closed_standard_input_is_one_line(tmp_path):
+    """Attack pass 8 (issue 37): ``convert - ... <&-`` (no standard input at all) ended in a
+    traceback (AttributeError: sys.stdin is None); it is one line naming ``-``, and no file."""
+    dst = tmp_path / "rec.csv"
+    done = subprocess.run(["sh", "-c", f'exec "$0" -m gyrofilter convert - --unit dps --out {dst} <&-', sys.executable],
+                          capture_output=True, text=True, timeout=120, cwd=REPO)
+    assert done.returncode == 2 and done.stderr == "gyrofilter: error: -: cannot read: Bad file descriptor\n", done.stderr
+    assert not dst.exists()
+
+
+@pytest.mark.parametrize("period_ms", [9.7, 10.3, 4.3, 2.6])
+def test_stamps_rounded_to_whole_ms_give_the_rate_they_span_or_a_refusal(tmp_path, capsys, period_ms):
+    """Attack pass 8 (issue 37): an Arduino's millis() stamps of samples every 2.6 ms step by 2 or
+    3 ms; the rate was 1 / the median step, 333.333 Hz written for 384.6 (4.3 ms: 250 for 232.6; 9.7
+    ms: 100 for 103.1), exit 0, every later tau and density off by as much. The rate is 1 / the
+    mean step (gaps aside); where the stamps' steps then stray more than 5 % from it, the log is
+    refused as one whose steps are not one rate."""
+    n = 6000
+    stamps = np.floor(np.arange(n) * period_ms).astype(int)
+    src = tmp_path / "arduino.csv"
+    src.write_text("millis,gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    dst = tmp_path / "rec.csv"
+    rc = main(["convert", str(src), "--unit", "dps", "--out", str(dst)])
+    err = capsys.readouterr().err
+    true_hz = 1000 / period_ms
+    if rc == 0:
+        assert abs(read_recording(dst).sample_rate_hz / true_hz - 1) < 1e-4, err
+    else:
+        assert rc == 2 and "more than 5% apart" in err and not dst.exists(), err
+    assert (rc == 0) == (period_ms > 9)  # a 1-ms step is within 5 % of a 10-ms period, not of 4.3 or 2.6
+
+
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
     30286365 ns after the first): each time is now the exact decimal offset rounded once."""
@@ -531,6 +563,47 @@ def test_a_log_of_cr_only_line_ends_is_refused_naming_them(tmp_path, capsys, row
     assert err.startswith(f"gyrofilter: error: {src}") and err.endswith(": line ends are CR only (old Mac): convert them "
                                                                           "to LF (e.g. tr '\\r' '\\n')")
     assert len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize("zipped", [False, True])
+@pytest.mark.parametrize("head", [b"", b"time_s,gx_dps,gy_dps,gz_dps\n# a comment\r\n"])
+def test_a_piped_log_without_rows_is_refused_as_it_is_copied(tmp_path, capsys, monkeypatch, head, zipped):
+    """Attack pass 8 (issue 37's leftover): ``convert -`` copied a pipe whole (up to 4 GiB) before
+    the bound on blank and comment lines before the first data row applied; the lines are now
+    counted as the pipe is copied, and the copy stops at the bound. The pipe offers 4 MB of
+    blank lines (gzip-compressed as a stream, flushed block by block, when ``zipped``) against a
+    1 MB bound and stays open: the refusal comes before its end. A data row after as many
+    blank lines within the bound is read."""
+    from gyrofilter.recording import header
+    monkeypatch.setattr(header, "MAX_BYTES_BEFORE_ROWS", 1 << 20)
+    read_end, write_end = os.pipe()
+    ended = threading.Event()
+
+    def feed():
+        packer = zlib.compressobj(6, zlib.DEFLATED, 31)
+        with contextlib.suppress(BrokenPipeError), open(write_end, "wb", buffering=0) as fh:
+            for block in [head] + [b"\n" * (1 << 16)] * 64:
+                fh.write(packer.compress(block) + packer.flush(zlib.Z_SYNC_FLUSH) if zipped else block)
+            ended.wait(60)  # the pipe stays open: a copy that waits for its end waits for this
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    dst, said = tmp_path / "rec.csv", []
+    reader = threading.Thread(target=lambda: said.append(main(["convert", f"/dev/fd/{read_end}", "--unit", "dps",
+                                                                 "--out", str(dst)])), daemon=True)
+    reader.start()
+    reader.join(timeout=30)
+    refused_before_the_end = not reader.is_alive()
+    ended.set()
+    reader.join(timeout=30)
+    os.close(read_end)
+    writer.join(timeout=10)
+    assert refused_before_the_end and said == [2] and not dst.exists()
+    assert capsys.readouterr().err == (f"gyrofilter: error: /dev/fd/{read_end}: no data rows in the first 1 MB (only "
+                                       "blank or comment lines); not a log of rates\n")
+    text = head or b"time_s,gx_dps,gy_dps,gz_dps\n"
+    rc, dst = _convert_pipe(tmp_path, text + b"\n" * (900 << 10) + b"0,1,2,3\n0.01,1,2,3\n" + b"\n" * (3 << 20))
+    assert rc == 0 and len(read_recording(dst)) == 2
 
 
 @pytest.mark.parametrize("head", [b"", b"# a phone logger\ntime_s,gx_dps,gy_dps,gz_dps\n"])

@@ -599,3 +599,37 @@ def test_the_status_line_fits_the_terminal_it_is_rewritten_on():
         os.close(slave)
     shown = text.replace("\r\n", "\n").split("\r")[-1].split("\x1b[K")[0]
     assert "samples/s" in shown and len(shown) <= 59, repr(text)
+
+
+class _FillingStdout:
+    """A stdout on a disk that fills: it takes whole writes until ``room`` characters are in, then
+    every write or flush fails with ENOSPC (``text``: what it took)."""
+
+    def __init__(self, room):
+        self.room, self.text = room, ""
+
+    def isatty(self):
+        return False
+
+    def write(self, text):
+        if len(self.text) + len(text) > self.room:
+            self.room = -1
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        self.text += text
+
+    def flush(self):
+        if self.room < 0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+def test_run_whose_stdout_fills_names_it_and_says_what_it_kept(tmp_path, monkeypatch, capsys):
+    """Attack pass 8 (issue 37, 4 and 9 on stdout): ``run > out.csv`` on a disk that fills said
+    only "[Errno 28] No space left on device"; it names stdout and the rows that went out whole,
+    as a file's error does (formats.md section 8)."""
+    stdout = _FillingStdout(60_000)
+    monkeypatch.setattr(sys, "stdout", stdout)
+    assert main(["run", "--source", "sim:seed=4,realtime=0,duration=200", "--quiet"]) == 2
+    rows = [line for line in stdout.text.splitlines() if line and not line.startswith(("#", "t,"))]
+    assert 0 < len(rows) < 200 * 100 // 5
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"gyrofilter: error: stdout: No space left on device; kept the first {len(rows)} filtered rows"], err

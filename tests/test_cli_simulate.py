@@ -143,7 +143,8 @@ def test_cli_missing_model_file_and_bad_duration(tmp_path, capsys):
 ])
 def test_cli_bad_options_are_named_not_blamed_on_the_model(tmp_path, capsys, option, expected):
     model_path = write_json(tmp_path / "m.json", MODEL)
-    assert main(["simulate", "--model", model_path, "--duration", "1", "--out", str(tmp_path / "o.csv")] + option) == 2
+    duration = [] if option[0] == "--duration" else ["--duration", "1"]  # an option is given once
+    assert main(["simulate", "--model", model_path, *duration, "--out", str(tmp_path / "o.csv")] + option) == 2
     err = capsys.readouterr().err
     assert expected in err and model_path not in err and err.count("\n") == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.json"]

@@ -10,6 +10,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -357,6 +358,11 @@ def test_too_few_simulations_are_refused_and_the_library_does_not_judge_d_from_t
         assert main(["gap", str(path), "--sims", sims, "--json", str(tmp_path / "g.json")]) == 2
         err = capsys.readouterr().err.splitlines()
         assert len(err) == 1 and f"--sims must be in [{MIN_SIMS}, 1000]" in err[0], err
+        assert "from fewer simulations D cannot be judged" in err[0], err
+    assert main(["gap", str(path), "--sims", "1000000", "--json", str(tmp_path / "g.json")]) == 2
+    err = capsys.readouterr().err.splitlines()  # attack pass 8: it said "from fewer simulations" for a million
+    assert err == [f"gyrofilter: error: --sims must be in [{MIN_SIMS}, 1000] (more cost time and gain nothing: D's "
+                   "spread is known to +-3 % from 1000), got 1000000"], err
     assert not (tmp_path / "g.json").exists()
     notes = analyse_gap(rec, seed=1, n_sims=2, bootstrap=0)["notes"]
     assert f"D from 2 simulations is not judged (pure white noise reads D up to 14-98 from 2-3 of them): give {MIN_SIMS} or more" in notes
@@ -875,6 +881,9 @@ def test_the_cli_refuses_a_moving_record_in_one_line_unless_asked(tmp_path, caps
     assert main(["gap", path, "--json", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"gyrofilter: error: {path}: axis ") and "--allow-motion" in err[0]
+    said = err[0][len(f"gyrofilter: error: {path}: "):]  # attack pass 8: it was 150 columns more than the path
+    assert re.fullmatch(r"axis [xyz] is not still \(it moves by up to [0-9.e+]+ deg/s\); --allow-motion analyses it anyway",
+                        said), said
     assert not out.exists()
     assert main(["gap", path, "--allow-motion", "--sims", "10", "--bootstrap", "0", "--json", str(out)]) == 0
     err = " ".join(capsys.readouterr().err.split())  # a warning is wrapped at 100 columns

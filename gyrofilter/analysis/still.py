@@ -27,8 +27,9 @@ STATIC_LIMIT_DPS = 1.0
 STATIC_BLOCKS = 512
 
 
-def not_static(x_dps, sample_rate_hz, white_std_dps):
-    """Why a still gyro's record ``x_dps`` (deg/s) looks moved, or None when it looks still.
+def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False):
+    """Why a still gyro's record ``x_dps`` (deg/s) looks moved, or None when it looks still
+    (``brief``: only how far it moves, for a refusal that must stay one short line).
 
     The means of at most 512 consecutive blocks of L samples; the largest distance of one
     from their median is the excursion. A still gyro's block means scatter by its white noise
@@ -41,17 +42,20 @@ def not_static(x_dps, sample_rate_hz, white_std_dps):
     excursion = float(np.max(np.abs(y - np.median(y))))
     if excursion <= max(STATIC_LIMIT_DPS, 8 * white_std_dps / math.sqrt(length)):
         return None
+    if brief:
+        return f"it moves by up to {excursion:.3g} deg/s"
     return (f"the rate moves by up to {excursion:.3g} deg/s (averages over {length / sample_rate_hz:.2g} s): "
             "the recording does not look static")
 
 
-def moved(x_dps, sample_rate_hz):
+def moved(x_dps, sample_rate_hz, *, brief=False):
     """:func:`not_static` of the series ``x_dps`` (deg/s) with its white level from the first
     differences, ``sd(diff x) / sqrt(2)``, as every still-sensor analysis (allan, gap, report)
     judges it: why it looks moved, or None."""
     x = np.asarray(x_dps, dtype=float)
     with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: the analyses say so
-        return not_static(x, sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0)
+        return not_static(x, sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0,
+                          brief=brief)
 
 
 def clipped(gyro_dps, full_scale_dps, lsb_per_dps=None):

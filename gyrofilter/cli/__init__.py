@@ -43,8 +43,9 @@ EXIT_INTERRUPTED = 130
 
 
 class _OneLineParser(argparse.ArgumentParser):
-    """argparse, with a refusal in one line (what every refusal of gyrofilter is) that says where
-    the usage is, instead of the usage text and then the error. An option is taken only as spelled
+    """argparse, with a refusal in one line (what every refusal of gyrofilter is, with the same
+    prefix, :func:`console.error_line`) that says where the usage is, instead of the usage text
+    and then the error. An option is taken only as spelled
     in full: each has one spelling, and a removed one is refused, not read as the prefix of
     another (``--sample-rate`` of ``--sample-rate-hz``)."""
 
@@ -52,11 +53,34 @@ class _OneLineParser(argparse.ArgumentParser):
         kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
 
+    def parse_known_args(self, args=None, namespace=None):
+        args = sys.argv[1:] if args is None else list(args)
+        self._refuse_repeated(args)
+        return super().parse_known_args(args, namespace)
+
+    def _refuse_repeated(self, argv):
+        """Refuse an option that takes one value given twice (argparse keeps the last one silently:
+        ``--out a.csv --out b.csv`` wrote only b.csv, ``--preset paper --preset hold`` ran hold), as
+        ``--set`` refuses a setting given twice. The top-level parser has no such option: a
+        command's words are its own parser's to check."""
+        single = {s: a for a in self._actions if isinstance(a, argparse._StoreAction) for s in a.option_strings}
+        seen = {}
+        for i, word in enumerate(argv):
+            if word == "--":
+                return
+            option, equals, value = word.partition("=")
+            if option in single:
+                value = value if equals else (argv[i + 1] if i + 1 < len(argv) else "")
+                action = single[option]  # --fleet and --out-dir are one option
+                if action in seen:
+                    self.error(f"argument {option}: given twice ({quote(seen[action])}, then {quote(value)}); give it once")
+                seen[action] = value
+
     def error(self, message):
         choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
         if choice:  # a mistyped value of an option with choices (--preset papr): the closest one
             message += _did_you_mean(choice.group(1), [c.strip(" '\"") for c in choice.group(2).split(",")])
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {escape_controls(' '.join(message.split()))} (see {self.prog} --help)\n")
+        self.exit(EXIT_BAD_INPUT, escape_controls(console.error_line(f"{message} (see {self.prog} --help)")) + "\n")
 
 
 class _Parser(_OneLineParser):
@@ -148,5 +172,5 @@ def _main(argv):
         os.dup2(devnull, sys.stdout.fileno())
         return 0
     except (GyroFilterError, OSError, ValueError) as exc:
-        console.say(f"gyrofilter: error: {one_line(exc)}")
+        console.say(console.error_line(one_line(exc)))
         return EXIT_BAD_INPUT

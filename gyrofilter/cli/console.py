@@ -44,6 +44,16 @@ def say(*lines, flush=False):
         print(escape_controls(line), file=sys.stderr, flush=flush)
 
 
+#: how every refusal of a command starts, whichever part refuses (argparse, a command, the library):
+#: one prefix, so that a script or a reader looks for one
+ERROR_PREFIX = "gyrofilter: error: "
+
+
+def error_line(text):
+    """The one line of a refusal: :data:`ERROR_PREFIX` and ``text``, its whitespace collapsed."""
+    return ERROR_PREFIX + " ".join(text.split())
+
+
 def say_warning(text):
     """A warning for the user on stderr, "gyrofilter: warning: <text>", wrapped as a :func:`paragraph`
     (at :data:`MAX_LINE_CHARS`, the lines after the first indented by two spaces)."""

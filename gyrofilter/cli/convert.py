@@ -33,7 +33,7 @@ def add_arguments(parser):
     parser.add_argument("--columns", default=None, metavar="NAMES",
                         help="the gyro's x,y,z columns, or time,x,y,z: names of the column row or 1-based numbers "
                              "(default: found by their usual names, e.g. timestamp, gyro_x, wx, angular_velocity.x)")
-    options.add_sample_rate_argument(parser, help="sample rate in Hz (default: from the time column's median step; "
+    options.add_sample_rate_argument(parser, help="sample rate in Hz (default: from the time column's mean step, gaps aside; "
                                                   "required without a time column)")
     parser.add_argument("--time-unit", choices=tuple(TIME_UNITS), default=None,
                         help="unit of the time column (default: the one its name states, else the first of s, ms, us, "

@@ -57,8 +57,9 @@ def check_options(seed, sims, bootstrap=None):
     cannot take, naming the option; a ``--seed`` given is said to have no effect (a user who gives
     one expects the answer to change)."""
     if sims is not None and not MIN_SIMS <= sims <= MAX_SIMS:
-        raise SettingsError(f"--sims must be in [{MIN_SIMS}, {MAX_SIMS}] (from fewer simulations D cannot be judged: "
-                            f"pure white noise reads D up to 14-98 from 2-3), got {sims}")
+        why = ("from fewer simulations D cannot be judged: pure white noise reads D up to 14-98 from 2-3" if sims < MIN_SIMS
+               else f"more cost time and gain nothing: D's spread is known to +-3 % from {MAX_SIMS}")
+        raise SettingsError(f"--sims must be in [{MIN_SIMS}, {MAX_SIMS}] ({why}), got {sims}")
     if bootstrap is not None and not (bootstrap == 0 or MIN_REPLICATES <= bootstrap <= MAX_BOOTSTRAP):
         raise SettingsError(f"--bootstrap must be 0 (no intervals) or in [{MIN_REPLICATES}, {MAX_BOOTSTRAP}] "
                             f"(an interval needs {MIN_REPLICATES} runs), got {bootstrap}")

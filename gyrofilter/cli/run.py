@@ -45,20 +45,34 @@ def add_arguments(parser):
 
 class _TextOut:
     """Recording format v1 as text on a stream (stdout), flushed by the caller; with ``stream``
-    None the rows are only counted (a terminal whose rows a view shows)."""
+    None the rows are only counted (a terminal whose rows a view shows). A failed write (a disk
+    that fills under ``run > out.csv``) is an OSError naming ``stdout``, and the close after it
+    says how many rows went out whole (those of the flushes before it), as a file's does."""
 
-    path = None  # no file to keep or remove after a failure
-    write_failed = False  # an error writing stdout ends the command as it is
+    path = "stdout"  # what a failed write names; no file to keep or remove after a failure
 
     def __init__(self, stream, header, columns):
         self.stream = stream
-        self.rows_written = 0
+        self.rows_written = self.rows_flushed = 0
+        self.write_failed = False  # an error writing stdout ends the command as it is
         self._write(header_text(header, columns, "stdout"))
         self.flush()
 
     def _write(self, text):
         if self.stream is not None:
-            self.stream.write(text)
+            with self._named():
+                self.stream.write(text)
+
+    @contextlib.contextmanager
+    def _named(self):
+        """An OSError of the stream raised naming ``stdout`` (a closed reader, BrokenPipeError, as it is)."""
+        try:
+            yield
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            self.write_failed = True
+            raise OSError(exc.errno, exc.strerror or str(exc), self.path) from None
 
     def write(self, rows):
         self.rows_written += len(rows)
@@ -70,9 +84,13 @@ class _TextOut:
 
     def flush(self):
         if self.stream is not None:
-            self.stream.flush()
+            with self._named():
+                self.stream.flush()
+        self.rows_flushed = self.rows_written
 
     def close(self, failed):
+        if self.write_failed:  # flushing again would fail again
+            return f"kept the first {self.rows_flushed} filtered rows" if self.rows_flushed else "no filtered row was kept"
         self.flush()
         return ""
 

@@ -261,6 +261,25 @@ def _before_rows(counts, text, lines, path):
     refuse_rowless(path, counts["before_rows"])
 
 
+class _FirstRow:
+    """``on_line`` of :func:`~gyrofilter.recording.logtext.open_log`: the blank and comment lines of
+    a piped log before its first data row counted as it is copied, and refused past the bound as
+    :func:`_read` refuses them (:func:`_before_rows`), not after the whole pipe is copied; True at
+    the first data row (the row after the column names, or a first row of numbers only)."""
+
+    def __init__(self, path):
+        self.path, self.counts, self.named = path, {"before_rows": 0}, False
+
+    def __call__(self, text, lines):
+        if not text.strip() or text.lstrip().startswith(_COMMENT):
+            _before_rows(self.counts, text, lines, self.path)
+            return False
+        if self.named:
+            return True
+        self.named = True
+        return all(is_plain_number(c) for c in _splitter(text)(text))
+
+
 @contextlib.contextmanager
 def _unchanged(path):
     """A pass after the first: a cell that is no number now (float's ValueError, Decimal's
@@ -361,7 +380,7 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
         raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
     if sample_rate_hz is not None:
         sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
-    raw = open_log(path)
+    raw = open_log(path, on_line=_FirstRow(path))
     try:
         return _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit)
     except BaseException:
@@ -494,15 +513,21 @@ def _out_of_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
 
 
 def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary):
-    """The rate in Hz (the caller's, or 1 / the median step of ``t_s``, the times in s); says how in ``summary``."""
+    """The rate in Hz (the caller's, or 1 / the mean step of ``t_s``, the times in s, its gaps, steps
+    over 1.5 median steps, left out); says how in ``summary``. The mean, not the median: stamps
+    rounded to a coarse unit step by one of two values (an Arduino's ``millis()`` at 385 Hz: 2 or
+    3 ms), whose median is one of them (3 ms: 333 Hz, the rate 13 % off and written as the
+    recording's, every analysis's tau and density off with it); the mean is the rate they span
+    (and the reader's check of ``t`` refuses such stamps where they are more than 5 % off it)."""
     step_s = np.diff(t_s)
     median_s = float(np.median(step_s))
     text = f"time: column {quote(name)} in {t_unit} ({how}; --time-unit to say otherwise)"
     if sample_rate_hz is None:
         if not median_s > 0:
             raise RecordingError(f"{path}: the time column {quote(name)} does not step forward (median step {median_s:g} s)")
-        sample_rate_hz = check_sample_rate_hz(float(f"{1.0 / median_s:.6g}"), f"{path}: the rate of the time column", RecordingError)
-        text += f"; rate {sample_rate_hz:g} Hz from its median step"
+        mean_s = float(np.mean(step_s[step_s <= 1.5 * median_s]))
+        sample_rate_hz = check_sample_rate_hz(float(f"{1.0 / mean_s:.6g}"), f"{path}: the rate of the time column", RecordingError)
+        text += f"; rate {sample_rate_hz:g} Hz from its mean step (gaps aside)"
     else:
         text += f"; rate {sample_rate_hz:g} Hz as given"
     if median_s > 0:

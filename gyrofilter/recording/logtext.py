@@ -29,30 +29,32 @@ STDIN = "-"
 
 
 
-def open_log(path):
+def open_log(path, on_line=None):
     """The log ``path`` (``-``: the standard input) open for reading twice (binary): the file itself, or, when it cannot seek
     (a pipe: ``<(zcat log.gz)``, /dev/stdin), an anonymous temporary copy of its bytes (in the
     system's temporary folder, gone when closed), made one block at a time and bounded
-    (:func:`_copy_pipe`)."""
-    try:
-        fd = os.dup(sys.stdin.fileno()) if path == STDIN else None
+    (:func:`_copy_pipe`); ``on_line(text, lines)`` sees the lines of a pipe as they are copied
+    (:class:`_LineWatch`), until it returns True, so that a rule on the log's first lines (no data
+    row in 64 MB) refuses it as it comes, not after copying GBs."""
+    try:  # a closed standard input (``<&-``): sys.stdin is None, or fd 0 is no open file
+        fd = None if path != STDIN else os.dup(sys.stdin.fileno()) if sys.stdin is not None else os.dup(0)
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
     raw = open_input(path, fd=fd)
     if raw.seekable():
         return raw
     with raw:
-        return _copy_pipe(raw, path)
+        return _copy_pipe(raw, path, _LineWatch(on_line))
 
 
-def _copy_pipe(raw, path):
+def _copy_pipe(raw, path, watch):
     """The pipe ``raw`` copied to an anonymous temporary file, rewound. The copy holds at most
     :data:`MAX_PIPE_COPY_BYTES` and at most half of the space free in the temporary folder
     (``TMPDIR``) when it starts, so that a piped log of many GB never fills that folder: a longer
     pipe, or a folder that fills all the same, is refused with what to do instead (give the
     log as a file, which is read where it is, or a roomier ``TMPDIR``). Its first block is
     checked as it comes (:func:`_first_line_ends`): a pipe of bytes that are no log (``cat
-    /dev/zero``) is refused at once, not after 4 GiB."""
+    /dev/zero``) is refused at once, not after 4 GiB; each block goes to ``watch`` (its refusal stops the copy)."""
     folder = tempfile.gettempdir()
     limit = min(MAX_PIPE_COPY_BYTES, shutil.disk_usage(folder).free // 2)
     instead = "save the log to a file and convert that (a file is read where it is, not copied), or set TMPDIR to a roomier folder"
@@ -62,6 +64,7 @@ def _copy_pipe(raw, path):
         while block := raw.read1(PIPE_BLOCK_BYTES):  # what has come, at most a block
             if start is not None:
                 start = None if _first_line_ends(start + block, path) else start + block
+            watch.feed(block)
             copied += len(block)
             if copied > limit:
                 raise RecordingError(f"{path}: a pipe is copied to {folder} to be read twice, and this one holds more than "
@@ -78,6 +81,61 @@ def _copy_pipe(raw, path):
         copy.close()
         raise
     return copy
+
+
+class _LineWatch:
+    """The lines of a log as its bytes come (gzip decompressed as they come, member after member,
+    a block of text at a time), each handed to ``on_line(text, lines)`` (its line end dropped,
+    UTF-8 with bad bytes replaced; a run of empty lines, ``\\n`` or ``\\r\\n`` alone, at once as
+    ``("", run)``) until it returns True. A line longer than MAX_LINE_BYTES, or gzip data that do
+    not decompress, end the watch: the reading refuses them, naming the line."""
+
+    def __init__(self, on_line):
+        self.on_line, self.done = on_line, on_line is None
+        self.start, self.zipped, self.inflate, self.rest = b"", None, None, b""
+
+    def feed(self, block):
+        if self.done:
+            return
+        if self.zipped is None:  # gzip or not: its first two bytes say
+            self.start += block
+            if len(self.start) < 2:
+                return
+            self.zipped, block, self.start = self.start[:2] == b"\x1f\x8b", self.start, b""
+        for text in self._inflated(block) if self.zipped else (block,):
+            self._lines(text)
+            if self.done:
+                return
+
+    def _inflated(self, data):
+        while not self.done:
+            self.inflate = self.inflate or zlib.decompressobj(31)
+            try:
+                text = self.inflate.decompress(data, PIPE_BLOCK_BYTES)
+            except zlib.error:
+                self.done = True
+                return
+            yield text
+            if self.inflate.eof:  # the next member, if any
+                data, self.inflate = self.inflate.unused_data, None
+            else:
+                data = self.inflate.unconsumed_tail
+            if not data and len(text) < PIPE_BLOCK_BYTES:
+                return
+
+    def _lines(self, text):
+        buf, at = self.rest + text, 0
+        while not self.done:
+            run = _LINE_ENDS.match(buf, at)  # a character class: a run of MBs matched at C speed, no stack
+            if run and b"\n" in run.group():
+                self.done, at = bool(self.on_line("", buf.count(b"\n", at, run.end()))), run.end()
+                continue
+            end = buf.find(b"\n", at)
+            if end < 0:
+                break
+            self.done, at = bool(self.on_line(buf[at:end].rstrip(b"\r").decode("utf-8", "replace"), 1)), end + 1
+        self.rest = buf[at:]
+        self.done = self.done or len(self.rest) > MAX_LINE_BYTES
 
 
 def _first_line_ends(start, path):
@@ -155,6 +213,8 @@ def log_lines(raw, path):
 
 
 _EMPTY_LINES = re.compile(rb"(?:\r?\n)+")
+#: line ends (and CRs) in a row: empty lines, for :class:`_LineWatch`
+_LINE_ENDS = re.compile(rb"[\r\n]+")
 
 
 #: most bytes of empty lines one item of :func:`log_lines` stands for: a longer run comes as

@@ -116,12 +116,12 @@ def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refu
     exactly (:func:`gap_columns`)."""
     say = progress or (lambda text: None)
     rec = read_recording(path, columns=gap_columns, compact=True)
-    motion = [f"axis {a}: {why}" for i, a in enumerate(AXES) if (why := moved(axis_dps(rec, i), rec.sample_rate_hz))]
-    if motion and refuse_motion:
-        raise RecordingError(f"{path}: {motion[0]}; the gap analysis models a still gyro (--allow-motion analyses it "
-                             "anyway)")
-    for text in motion:
-        warn(f"{path}: {text}; the gap analysis models a still gyro, so its findings describe the motion")
+    motion = [(a, why) for i, a in enumerate(AXES) if (why := moved(axis_dps(rec, i), rec.sample_rate_hz))]
+    if motion and refuse_motion:  # one short line: the warning of --allow-motion says the rest
+        a, why = motion[0][0], moved(axis_dps(rec, AXES.index(motion[0][0])), rec.sample_rate_hz, brief=True)
+        raise RecordingError(f"{path}: axis {a} is not still ({why}); --allow-motion analyses it anyway")
+    for a, why in motion:
+        warn(f"{path}: axis {a}: {why}; the gap analysis models a still gyro, so its findings describe the motion")
     for text in rec.warnings:
         warn(text)
     warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)
