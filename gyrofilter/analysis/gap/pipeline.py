@@ -346,12 +346,11 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     alternative, the slow detector's statistics): ``alternative`` is None or, where the slow
     effects have a covariate and a time reading (:func:`gyrofilter.analysis.gap.detectors.detect_slow`),
     ``(the other reading's candidates, x cleaned of those instead)``. Each finding's component is subtracted from a private copy of
-    ``x`` (``x`` itself when ``owned``: the caller's to change) and then dropped, so the axis
-    costs one series of memory besides the detectors' own (two without ``owned``, three with an
-    alternative reading). ``tails_z``: the tail statistic's departure from the baseline
-    simulations; ``notes``: where a note on tails that spikes explain as well goes;
-    ``repeated_fraction``: the record's rows repeated beyond chance, whose lag-1 correlation the
-    colored noise's detector takes out."""
+    ``x`` (``x`` itself when ``owned``: the caller's to change) and then dropped, so the axis costs
+    one series besides the detectors' own (two without ``owned``, three with an alternative
+    reading; the colored noise is sought before the slow shapes, which hold one each). ``tails_z``:
+    the tail statistic's departure from the baseline simulations; ``notes``: where a note on tails
+    that spikes explain as well goes; ``repeated_fraction``: the record's rows repeated beyond chance."""
     cands = []
     c, mask = det.detect_outliers(x, q_dps)
     tails, note = det.detect_heavy_tails(x, sample_rate_hz, spikes_found=c is not None, tails_z=tails_z)
@@ -385,12 +384,13 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
             rms = math.hypot(band.params["rms_dps"], line.params["amplitude_dps"] / math.sqrt(2.0)) if folded else None
             band = band if rms is None else replace(band, params=dict(band.params, rms_dps=rms))  # the sinusoid's power too
     cands.extend(c for c in (tone or band, hump) if c is not None)
+    readings = [measured] + ([[replace(band, params=det.tone_band(tone.params))] + measured[1:]] if tone else [])
+    plain = [det.detect_colored(x, sample_rate_hz, b, repeated_fraction=repeated_fraction) for b in readings]
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)
 
-    def colored_beside(bands, say):  # the colored noise left beside the bands' (and the wander's) own correlation
-        found = det.detect_colored(x, sample_rate_hz, bands, repeated_fraction=repeated_fraction)
-        if found is not None and wander is not None:  # the wander's high-frequency part is correlated too
+    def colored_beside(found, bands, say):  # and beside the wander's own correlation (its high-frequency part)
+        if found is not None and wander is not None:
             found = det.detect_colored(x, sample_rate_hz, bands,
                                        wander_highpassed(effect_entry(wander), sample_rate_hz, x.size), repeated_fraction)
             if found is None and say and notes is not None:
@@ -398,10 +398,10 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
                              "part); no colored noise")
         return found
 
-    colored = colored_beside(measured, tone is None)
+    colored = colored_beside(plain[0], measured, tone is None)
     if tone is not None:  # each reading of the line with the colored noise left beside it: weighed on D (gap.confound)
         band_reading = [band] + ([colored] if colored is not None else [])
-        colored = colored_beside([replace(band, params=det.tone_band(tone.params))] + measured[1:], True)
+        colored = colored_beside(plain[1], readings[1], True)
         cands = [replace(c, band_alternative=band_reading) if c is tone else c for c in cands]
     if colored is not None:
         cands.append(colored)
