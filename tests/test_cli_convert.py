@@ -462,6 +462,28 @@ def test_stamps_rounded_to_whole_ms_give_the_rate_they_span_or_a_refusal(tmp_pat
     assert (rc == 0) == (period_ms > 9)  # a 1-ms step is within 5 % of a 10-ms period, not of 4.3 or 2.6
 
 
+@pytest.mark.parametrize("column, stamps, said", [
+    ("millis", [int(k * 1.4) for k in range(6000)], "steps by its stamps' last digit (1 ms), so its 2399 longer steps"),
+    ("time_s", [f"{int(k * 1.2) / 1000:.3f}" for k in range(6000)], "steps by its stamps' last digit (1 ms), so its 1199"),
+    ("micros", [10000 * (k // 4) + 50 * (k % 4) for k in range(6000)], "(steps over 1.5 median steps) span 98.5 % of it"),
+])
+def test_gaps_that_may_be_a_slower_rate_are_refused(tmp_path, capsys, column, stamps, said):
+    """Attack pass 9 (issue 37): a gap is a step over 1.5 median steps, so stamps of a 714 Hz log
+    rounded to whole ms (millis(): steps of 1 or 2 ms, median 1) were read as 1000 Hz with 2399
+    lost samples (833 Hz in s with 3 decimals: 1000 too), and bursts of 4 samples stamped 50 us
+    apart every 10 ms (100 Hz) as 20 kHz with most samples lost: exit 0, the rate 40 % or 200x
+    off. Refused, asking for the rate; with it given, the check of t decides."""
+    src = tmp_path / "log.csv"
+    src.write_text(f"{column},gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst)]) == 2
+    err = capsys.readouterr().err
+    assert said in err and err.count("\n") == 1 and "--sample-rate-hz" in err and not dst.exists(), err
+    rate = "1000" if column != "micros" else "20000"  # the user's word for the faster rate: taken, gaps counted
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst), "--sample-rate-hz", rate]) == 0
+    assert read_recording(dst).sample_rate_hz == float(rate)
+
+
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
     30286365 ns after the first): each time is now the exact decimal offset rounded once."""
