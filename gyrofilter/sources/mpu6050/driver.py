@@ -375,6 +375,7 @@ class MPU6050Source(Source):
         self._anchor_index = getattr(self, "_next_index", 0)
         self._next_index = self._anchor_index
         self._last_poll = self._anchor_time
+        self._fifo_floor = 0  # bytes the FIFO still holds after a failed read: it shrinks only as read
 
     def _make_header(self):
         bw = R.DLPF[self.dlpf_cfg][0]
@@ -457,9 +458,9 @@ class MPU6050Source(Source):
         """One look at the FIFO: overflow check, count, whole frames -> rows.
 
         A FIFO data read that fails with EREMOTEIO (121: NACK, nothing transferred) is retried after
-        re-reading INT_STATUS and FIFO_COUNT; one that fails with EIO (5: may have stopped part-way
-        and consumed bytes) resets the FIFO and records a gap, so frames never lose alignment. A
-        FIFO_COUNT that is not a whole number of frames also resets the FIFO (recorded as a gap).
+        re-reading INT_STATUS and FIFO_COUNT (a count below the bytes left: it took some, a gap); one
+        that fails with EIO (5: may stop part-way, consuming bytes) resets the FIFO, a gap, so frames
+        never lose alignment. A FIFO_COUNT that is not a whole number of frames also resets it (a gap).
         Any other failure ends the source; frames read before it in the same poll are delivered
         first (the next read() raises), so nothing read off the chip is dropped.
         """
@@ -474,6 +475,10 @@ class MPU6050Source(Source):
                 return empty
             count = self._fifo_count()
             t_count = self._clock()
+            if count < self._fifo_floor:  # a failed read took bytes (whole frames keep the count aligned)
+                self.stats["resyncs"] += 1
+                self._gap(f"a failed FIFO read took {self._fifo_floor - count} bytes or more; FIFO reset")
+                return empty
             if count > self.fifo_size_bytes - self.frame_bytes * self._margin_frames:
                 # (nearly) full: samples arriving while we read would overwrite the oldest bytes
                 # before we get them, and frame alignment would be lost
@@ -490,12 +495,14 @@ class MPU6050Source(Source):
             buf, exc = self._read_fifo(count)
             rows = self._rows(buf) if buf else empty
             if exc is None:
+                self._fifo_floor = 0
                 # every sample produced up to the FIFO_COUNT read is now delivered: re-anchor
                 self._anchor_time, self._anchor_index = t_count, self._next_index
                 return rows
             code = exc.errno
             if code in TRANSIENT_ERRNOS and attempt < self.max_retries:
                 self.stats["retries"] += 1
+                self._fifo_floor = count - len(buf)
                 if code == _errno.EIO:
                     self.stats["resyncs"] += 1
                     self._gap(f"FIFO read failed part-way (errno {code}); FIFO reset to keep frame alignment")
