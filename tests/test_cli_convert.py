@@ -484,6 +484,20 @@ def test_gaps_that_may_be_a_slower_rate_are_refused(tmp_path, capsys, column, st
     assert read_recording(dst).sample_rate_hz == float(rate)
 
 
+def test_whole_ms_stamps_of_1khz_with_a_few_lost_samples_keep_their_rate(tmp_path, capsys):
+    """The other side of the refusal above: 2 % of the samples of a 1 kHz log in whole ms lost
+    (steps of 2 ms put the rate they span 2 % below 1000 Hz, within the reader's tolerance of t)
+    are gaps, not a slower rate."""
+    rng = np.random.default_rng(4)
+    stamps = np.cumsum(np.where(rng.random(6000) < 0.02, 2, 1))
+    src = tmp_path / "log.csv"
+    src.write_text("millis,gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst)]) == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.sample_rate_hz == 1000 and rec.t_gaps == int(np.count_nonzero(np.diff(stamps) == 2))
+
+
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
     30286365 ns after the first): each time is now the exact decimal offset rounded once."""

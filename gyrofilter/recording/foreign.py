@@ -50,7 +50,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import is_plain_number, quote
-from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sample_rate_hz, to_dps
+from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz, to_dps
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
@@ -528,8 +528,10 @@ def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution
 
     Gaps tell lost samples from a slower rate only where the median step is two of the stamps'
     ``resolution_s`` (their last digit's place) or more: a step one unit longer is then within 1.5
-    median steps. A median step of one unit with gaps (``millis()`` of a 714 Hz log steps 1 or 2
-    ms) is refused, as are gaps that span half the time or more (bursts of samples stamped as they
+    median steps. A median step of one unit with gaps that put the rate they span more than
+    RATE_TOLERANCE below the one they leave out (``millis()`` of a 714 Hz log steps 1 or 2 ms: 40 %)
+    is refused (fewer: read as lost samples, within the tolerance the reader holds ``t`` to), as are
+    gaps that span half the time or more (bursts of samples stamped as they
     arrive, 50 us apart every 10 ms, whose median step would write 20 kHz for 100 Hz); both would
     be read as a faster rate with lost samples. The caller's rate is taken as given."""
     step_s = np.diff(t_s)
@@ -539,16 +541,15 @@ def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution
         if not median_s > 0:
             raise RecordingError(f"{path}: the time column {quote(name)} does not step forward (median step {median_s:g} s)")
         gap = step_s > 1.5 * median_s
-        if gap.any() and median_s < 2 * resolution_s * (1 - 1e-9):
+        mean_s, span_s = float(np.mean(step_s[~gap])), float(t_s[-1] - t_s[0])
+        if median_s < 2 * resolution_s * (1 - 1e-9) and span_s / len(step_s) > mean_s * (1 + RATE_TOLERANCE):
             raise RecordingError(f"{path}: the time column {quote(name)} steps by its stamps' last digit "
                                  f"({median_s * 1e3:.4g} ms), so its {int(np.count_nonzero(gap))} longer steps may be lost "
                                  "samples or a slower rate: give the rate in --sample-rate-hz")
-        gap_time_s = float(np.sum(step_s[gap]))
-        if gap_time_s >= 0.5 * float(t_s[-1] - t_s[0]):
+        if float(np.sum(step_s[gap])) >= 0.5 * span_s:
             raise RecordingError(f"{path}: the gaps of the time column {quote(name)} (steps over 1.5 median steps) span "
-                                 f"{100 * gap_time_s / float(t_s[-1] - t_s[0]):.3g} % of it: bursts of samples, or most "
+                                 f"{100 * float(np.sum(step_s[gap])) / span_s:.3g} % of it: bursts of samples, or most "
                                  "lost; give the rate in --sample-rate-hz")
-        mean_s = float(np.mean(step_s[~gap]))
         sample_rate_hz = check_sample_rate_hz(float(f"{1.0 / mean_s:.6g}"), f"{path}: the rate of the time column", RecordingError)
         text += f"; rate {sample_rate_hz:g} Hz from its mean step (gaps aside)"
     else:
