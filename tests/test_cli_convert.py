@@ -498,6 +498,31 @@ def test_whole_ms_stamps_of_1khz_with_a_few_lost_samples_keep_their_rate(tmp_pat
     assert rec.sample_rate_hz == 1000 and rec.t_gaps == int(np.count_nonzero(np.diff(stamps) == 2))
 
 
+def _late_then_caught_up(n, period_us, every):
+    """Stamps every ``period_us``, but each ``every``-th sample 2 periods late and the next two
+    stamped with it, 100 us apart (a logger that stamps as the samples arrive)."""
+    steps = np.full(n - 1, float(period_us))
+    steps[::every], steps[1::every], steps[2::every] = 3 * period_us - 200, 100, 100
+    return np.concatenate([[0], np.cumsum(steps)]).astype(int)
+
+
+@pytest.mark.parametrize("column, stamps, true_hz", [
+    ("micros", _late_then_caught_up(6000, 5000, 100), 200),
+    ("millis", np.concatenate([[0, 1, 2, 3, 4], 5 + 10 * np.arange(6000)]), 100),
+    ("millis", np.concatenate([10 * np.arange(6000), [10 * 5999 + 500_000]]), 100),
+])
+def test_the_rate_of_a_log_with_odd_steps(tmp_path, capsys, column, stamps, true_hz):
+    """Attack pass 9 (issue 37): the mean step kept the short steps, so samples stamped at once
+    after a late one (2 % of the steps) wrote 204.04 Hz for 200 and a log's first 5 rows 1 ms
+    apart 100.075 Hz for 100, exit 0; steps under half the median are now left out, as gaps are.
+    A single long pause (500 s after 60 s) is a gap, not the bursts that are refused."""
+    src = tmp_path / "log.csv"
+    src.write_text(f"{column},gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst)]) == 0, capsys.readouterr().err
+    assert read_recording(dst).sample_rate_hz == true_hz
+
+
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
     30286365 ns after the first): each time is now the exact decimal offset rounded once."""

@@ -520,7 +520,9 @@ def _out_of_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
 
 def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution_s):
     """The rate in Hz (the caller's, or 1 / the mean step of ``t_s``, the times in s, its gaps, steps
-    over 1.5 median steps, left out); says how in ``summary``. The mean, not the median: stamps
+    over 1.5 median steps, and the steps under half the median left out: a sample late by more than
+    half a step and the next early by as much, or a few stamped at once after a gap, move the mean
+    of those kept by neither); says how in ``summary``. The mean, not the median: stamps
     rounded to a coarse unit step by one of two values (an Arduino's ``millis()`` at 385 Hz: 2 or
     3 ms), whose median is one of them (3 ms: 333 Hz, the rate 13 % off and written as the
     recording's, every analysis's tau and density off with it); the mean is the rate they span
@@ -531,9 +533,10 @@ def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution
     median steps. A median step of one unit with gaps that put the rate they span more than
     RATE_TOLERANCE below the one they leave out (``millis()`` of a 714 Hz log steps 1 or 2 ms: 40 %)
     is refused (fewer: read as lost samples, within the tolerance the reader holds ``t`` to), as are
-    gaps that span half the time or more (bursts of samples stamped as they
-    arrive, 50 us apart every 10 ms, whose median step would write 20 kHz for 100 Hz); both would
-    be read as a faster rate with lost samples. The caller's rate is taken as given."""
+    gaps that span half the time or more, one step in a hundred or more (bursts of samples stamped
+    as they arrive, 50 us apart every 10 ms, whose median step would write 20 kHz for 100 Hz; not
+    one long pause); both would be read as a faster rate with lost samples. The caller's rate is
+    taken as given."""
     step_s = np.diff(t_s)
     median_s = float(np.median(step_s))
     text = f"time: column {quote(name)} in {t_unit} ({how}; --time-unit to say otherwise)"
@@ -541,12 +544,13 @@ def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution
         if not median_s > 0:
             raise RecordingError(f"{path}: the time column {quote(name)} does not step forward (median step {median_s:g} s)")
         gap = step_s > 1.5 * median_s
-        mean_s, span_s = float(np.mean(step_s[~gap])), float(t_s[-1] - t_s[0])
+        mean_s = float(np.mean(step_s[~gap & (step_s >= 0.5 * median_s)]))
+        span_s = float(t_s[-1] - t_s[0])
         if median_s < 2 * resolution_s * (1 - 1e-9) and span_s / len(step_s) > mean_s * (1 + RATE_TOLERANCE):
             raise RecordingError(f"{path}: the time column {quote(name)} steps by its stamps' last digit "
                                  f"({median_s * 1e3:.4g} ms), so its {int(np.count_nonzero(gap))} longer steps may be lost "
                                  "samples or a slower rate: give the rate in --sample-rate-hz")
-        if float(np.sum(step_s[gap])) >= 0.5 * span_s:
+        if float(np.sum(step_s[gap])) >= 0.5 * span_s and np.count_nonzero(gap) >= 0.01 * len(step_s):
             raise RecordingError(f"{path}: the gaps of the time column {quote(name)} (steps over 1.5 median steps) span "
                                  f"{100 * float(np.sum(step_s[gap])) / span_s:.3g} % of it: bursts of samples, or most "
                                  "lost; give the rate in --sample-rate-hz")
