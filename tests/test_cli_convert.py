@@ -523,6 +523,33 @@ def test_the_rate_of_a_log_with_odd_steps(tmp_path, capsys, column, stamps, true
     assert read_recording(dst).sample_rate_hz == true_hz
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+@pytest.mark.parametrize("rate", [[], ["--sample-rate-hz", "200"]])
+def test_steps_with_none_near_their_median_are_one_refusal(tmp_path, capsys, rate):
+    """Steps of 1 us and 10 ms by turns (an even count: the median, 5 ms, is neither): the mean
+    of the steps near the median has none to take; refused in one line, no RuntimeWarning."""
+    stamps = np.concatenate([[0], np.cumsum(np.tile([1, 10000], 3000))])
+    src = tmp_path / "log.csv"
+    src.write_text("micros,gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(tmp_path / "rec.csv"), *rate]) == 2
+    err = capsys.readouterr().err
+    assert err.count("gyrofilter: error: ") == 1 and "give the rate in --sample-rate-hz" in err, err
+
+
+def test_a_given_rate_is_said_beside_the_stamps_rate(tmp_path, capsys):
+    """Attack pass 9 (issue 37): --sample-rate-hz 104 for stamps 10 ms apart wrote 104 Hz (within the
+    reader's 5 % tolerance of t), the summary saying only "rate 104 Hz as given" and a jitter of
+    "-1.8e-11 % .. +5.3e-11 %" (float noise); it now states the stamps' rate beside the one given."""
+    src = tmp_path / "log.csv"
+    src.write_text("millis,gx,gy,gz\n" + "".join(f"{10 * k},1,2,3\n" for k in range(3000)))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst), "--sample-rate-hz", "104"]) == 0
+    err = capsys.readouterr().err
+    assert "rate 104 Hz as given (the stamps' mean step: 100 Hz)" in err, err
+    assert "within +0 % .. +0 % of the median (10 ms)" in err, err
+    assert read_recording(dst).sample_rate_hz == 104
+
+
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
     30286365 ns after the first): each time is now the exact decimal offset rounded once."""

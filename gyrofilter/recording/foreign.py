@@ -540,11 +540,13 @@ def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution
     step_s = np.diff(t_s)
     median_s = float(np.median(step_s))
     text = f"time: column {quote(name)} in {t_unit} ({how}; --time-unit to say otherwise)"
+    gap = step_s > 1.5 * median_s
+    kept = ~gap & (step_s >= 0.5 * median_s)
+    kept = kept if kept.any() else ~gap  # none near the median (steps of 1 us and 10 ms by turns): refused below
+    mean_s = float(np.mean(step_s[kept])) if median_s > 0 else math.nan
     if sample_rate_hz is None:
         if not median_s > 0:
             raise RecordingError(f"{path}: the time column {quote(name)} does not step forward (median step {median_s:g} s)")
-        gap = step_s > 1.5 * median_s
-        mean_s = float(np.mean(step_s[~gap & (step_s >= 0.5 * median_s)]))
         span_s = float(t_s[-1] - t_s[0])
         if median_s < 2 * resolution_s * (1 - 1e-9) and span_s / len(step_s) > mean_s * (1 + RATE_TOLERANCE):
             raise RecordingError(f"{path}: the time column {quote(name)} steps by its stamps' last digit "
@@ -556,10 +558,11 @@ def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution
                                  "lost; give the rate in --sample-rate-hz")
         sample_rate_hz = check_sample_rate_hz(float(f"{1.0 / mean_s:.6g}"), f"{path}: the rate of the time column", RecordingError)
         text += f"; rate {sample_rate_hz:g} Hz from its mean step (gaps aside)"
-    else:
-        text += f"; rate {sample_rate_hz:g} Hz as given"
+    else:  # the stamps' rate beside it: one off by less than the reader's tolerance of t is written as given
+        text += f"; rate {sample_rate_hz:g} Hz as given" + (
+            f" (the stamps' mean step: {1.0 / mean_s:.6g} Hz)" if median_s > 0 else "")
     if median_s > 0:
-        low, high = np.percentile(step_s, [5, 95]) / median_s - 1
+        low, high = np.round(np.percentile(step_s, [5, 95]) / median_s - 1, 9) + 0.0  # no float noise (-1.8e-11 %)
         gaps = int(np.count_nonzero(step_s > 1.5 * median_s))
         text += (f"; jitter: 90 % of the steps within {100 * low:+.2g} % .. {100 * high:+.2g} % of the median "
                  f"({median_s * 1e3:.4g} ms), {gaps} gap(s) longer than 1.5 steps")
