@@ -462,6 +462,94 @@ def test_stamps_rounded_to_whole_ms_give_the_rate_they_span_or_a_refusal(tmp_pat
     assert (rc == 0) == (period_ms > 9)  # a 1-ms step is within 5 % of a 10-ms period, not of 4.3 or 2.6
 
 
+@pytest.mark.parametrize("column, stamps, said", [
+    ("millis", [int(k * 1.4) for k in range(6000)], "steps by its stamps' last digit (1 ms), so its 2399 longer steps"),
+    ("time_s", [f"{int(k * 1.2) / 1000:.3f}" for k in range(6000)], "steps by its stamps' last digit (1 ms), so its 1199"),
+    ("micros", [10000 * (k // 4) + 50 * (k % 4) for k in range(6000)], "(steps over 1.5 median steps) span 98.5 % of it"),
+])
+def test_gaps_that_may_be_a_slower_rate_are_refused(tmp_path, capsys, column, stamps, said):
+    """Attack pass 9 (issue 37): a gap is a step over 1.5 median steps, so stamps of a 714 Hz log
+    rounded to whole ms (millis(): steps of 1 or 2 ms, median 1) were read as 1000 Hz with 2399
+    lost samples (833 Hz in s with 3 decimals: 1000 too), and bursts of 4 samples stamped 50 us
+    apart every 10 ms (100 Hz) as 20 kHz with most samples lost: exit 0, the rate 40 % or 200x
+    off. Refused, asking for the rate; with it given, the check of t decides."""
+    src = tmp_path / "log.csv"
+    src.write_text(f"{column},gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst)]) == 2
+    err = capsys.readouterr().err
+    assert said in err and err.count("\n") == 1 and "--sample-rate-hz" in err and not dst.exists(), err
+    rate = "1000" if column != "micros" else "20000"  # the user's word for the faster rate: taken, gaps counted
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst), "--sample-rate-hz", rate]) == 0
+    assert read_recording(dst).sample_rate_hz == float(rate)
+
+
+def test_whole_ms_stamps_of_1khz_with_a_few_lost_samples_keep_their_rate(tmp_path, capsys):
+    """The other side of the refusal above: 2 % of the samples of a 1 kHz log in whole ms lost
+    (steps of 2 ms put the rate they span 2 % below 1000 Hz, within the reader's tolerance of t)
+    are gaps, not a slower rate."""
+    rng = np.random.default_rng(4)
+    stamps = np.cumsum(np.where(rng.random(6000) < 0.02, 2, 1))
+    src = tmp_path / "log.csv"
+    src.write_text("millis,gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst)]) == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.sample_rate_hz == 1000 and rec.t_gaps == int(np.count_nonzero(np.diff(stamps) == 2))
+
+
+def _late_then_caught_up(n, period_us, every):
+    """Stamps every ``period_us``, but each ``every``-th sample 2 periods late and the next two
+    stamped with it, 100 us apart (a logger that stamps as the samples arrive)."""
+    steps = np.full(n - 1, float(period_us))
+    steps[::every], steps[1::every], steps[2::every] = 3 * period_us - 200, 100, 100
+    return np.concatenate([[0], np.cumsum(steps)]).astype(int)
+
+
+@pytest.mark.parametrize("column, stamps, true_hz", [
+    ("micros", _late_then_caught_up(6000, 5000, 100), 200),
+    ("millis", np.concatenate([[0, 1, 2, 3, 4], 5 + 10 * np.arange(6000)]), 100),
+    ("millis", np.concatenate([10 * np.arange(6000), [10 * 5999 + 500_000]]), 100),
+])
+def test_the_rate_of_a_log_with_odd_steps(tmp_path, capsys, column, stamps, true_hz):
+    """Attack pass 9 (issue 37): the mean step kept the short steps, so samples stamped at once
+    after a late one (2 % of the steps) wrote 204.04 Hz for 200 and a log's first 5 rows 1 ms
+    apart 100.075 Hz for 100, exit 0; steps under half the median are now left out, as gaps are.
+    A single long pause (500 s after 60 s) is a gap, not the bursts that are refused."""
+    src = tmp_path / "log.csv"
+    src.write_text(f"{column},gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst)]) == 0, capsys.readouterr().err
+    assert read_recording(dst).sample_rate_hz == true_hz
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+@pytest.mark.parametrize("rate", [[], ["--sample-rate-hz", "200"]])
+def test_steps_with_none_near_their_median_are_one_refusal(tmp_path, capsys, rate):
+    """Steps of 1 us and 10 ms by turns (an even count: the median, 5 ms, is neither): the mean
+    of the steps near the median has none to take; refused in one line, no RuntimeWarning."""
+    stamps = np.concatenate([[0], np.cumsum(np.tile([1, 10000], 3000))])
+    src = tmp_path / "log.csv"
+    src.write_text("micros,gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(tmp_path / "rec.csv"), *rate]) == 2
+    err = capsys.readouterr().err
+    assert err.count("gyrofilter: error: ") == 1 and "give the rate in --sample-rate-hz" in err, err
+
+
+def test_a_given_rate_is_said_beside_the_stamps_rate(tmp_path, capsys):
+    """Attack pass 9 (issue 37): --sample-rate-hz 104 for stamps 10 ms apart wrote 104 Hz (within the
+    reader's 5 % tolerance of t), the summary saying only "rate 104 Hz as given" and a jitter of
+    "-1.8e-11 % .. +5.3e-11 %" (float noise); it now states the stamps' rate beside the one given."""
+    src = tmp_path / "log.csv"
+    src.write_text("millis,gx,gy,gz\n" + "".join(f"{10 * k},1,2,3\n" for k in range(3000)))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst), "--sample-rate-hz", "104"]) == 0
+    err = capsys.readouterr().err
+    assert "rate 104 Hz as given (the stamps' mean step: 100 Hz)" in err, err
+    assert "within +0 % .. +0 % of the median (10 ms)" in err, err
+    assert read_recording(dst).sample_rate_hz == 104
+
+
 def test_times_are_written_as_the_stamps_decimal_values(tmp_path, capsys):
     """The new user's converted t column showed float noise (0.030286365000000003 for a stamp
     30286365 ns after the first): each time is now the exact decimal offset rounded once."""

@@ -27,8 +27,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
   first of s, ms, us, ns in which the typical step means :data:`MIN_INFERRED_RATE_HZ` or more
   (a gyro logs at 5 Hz or faster), said in the summary. ``t`` counts from the first time stamp
   (stamps are subtracted exactly, as decimals: ns or s since 1970 keep every nanosecond); the first
-  stamp is kept in the header (``time_origin``). The rate is the caller's or 1 / the median
-  step; either way ``t`` is held to it as the reader holds a recording's
+  stamp is kept in the header (``time_origin``). The rate is the caller's or 1 / the mean
+  step, gaps aside (refused where the gaps are ambiguous: :func:`_time_axis`); either way ``t`` is held to it as the reader holds a recording's
   (:class:`~gyrofilter.recording.checks.TimeCheck`: every window of 1000 steps within 5 %), so
   a file whose steps are not one rate is refused, naming the line. Without a time column the
   caller gives the rate.
@@ -50,7 +50,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import is_plain_number, quote
-from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, check_lsb_per_dps, check_sample_rate_hz, to_dps
+from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz, to_dps
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
@@ -304,6 +304,7 @@ class _Stamps:
         self.huge = self.far = None  # (row, text) of the first stamp beyond a float / offset beyond one
         self.rows = 0
         self.last = None  # (offset, text) of the last stamp taken
+        self.exponent = None  # the place of the finest last digit of a stamp (-3: 0.001 of the unit)
 
     def add(self, texts, where):
         """Take the next chunk's cells; False once a stamp or offset is beyond a float. A stamp
@@ -316,7 +317,11 @@ class _Stamps:
                 self.huge = (0, texts[0])  # blamed when an offset from it is beyond a float
         with decimal.localcontext() as ctx:
             ctx.traps[decimal.Overflow] = False  # 1e99999 - 0 is Infinity, refused by check()
-            offsets = np.array([float(decimal.Decimal(t) - self.first) for t in texts])
+            stamps = [decimal.Decimal(t) for t in texts]
+            offsets = np.array([float(d - self.first) for d in stamps])
+        places = [d.as_tuple().exponent for d in stamps if d.is_finite()]
+        if places:
+            self.exponent = min(places + ([self.exponent] if self.exponent is not None else []))
         bad = np.flatnonzero(~np.isfinite(offsets))
         if bad.size and self.far is None:
             self.far = (self.rows + int(bad[0]), texts[int(bad[0])])
@@ -461,7 +466,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
                            for _, cells in _row_chunks(raw, path, plan, again=True)]
         t_s = np.concatenate(t_parts)
         del t_parts
-        rate_hz = _time_axis(t_s, t_unit, how, sample_rate_hz, names[time], path, summary)
+        resolution_s = 10.0 ** stamps.exponent * TIME_UNITS[t_unit] if stamps.exponent is not None else 0.0
+        rate_hz = _time_axis(t_s, t_unit, how, sample_rate_hz, names[time], path, summary, resolution_s)
         head = RecordingHead(header={"sample_rate_hz": format_number(rate_hz)}, names=["t"], path=path)
         check = TimeCheck(head, "the time column's steps are not one rate; give the rate in --sample-rate-hz "
                                 "if they are, or split the file where it changes")
@@ -512,26 +518,51 @@ def _out_of_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
             f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
 
 
-def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary):
+def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution_s):
     """The rate in Hz (the caller's, or 1 / the mean step of ``t_s``, the times in s, its gaps, steps
-    over 1.5 median steps, left out); says how in ``summary``. The mean, not the median: stamps
+    over 1.5 median steps, and the steps under half the median left out: a sample late by more than
+    half a step and the next early by as much, or a few stamped at once after a gap, move the mean
+    of those kept by neither); says how in ``summary``. The mean, not the median: stamps
     rounded to a coarse unit step by one of two values (an Arduino's ``millis()`` at 385 Hz: 2 or
     3 ms), whose median is one of them (3 ms: 333 Hz, the rate 13 % off and written as the
     recording's, every analysis's tau and density off with it); the mean is the rate they span
-    (and the reader's check of ``t`` refuses such stamps where they are more than 5 % off it)."""
+    (and the reader's check of ``t`` refuses such stamps where they are more than 5 % off it).
+
+    Gaps tell lost samples from a slower rate only where the median step is two of the stamps'
+    ``resolution_s`` (their last digit's place) or more: a step one unit longer is then within 1.5
+    median steps. A median step of one unit with gaps that put the rate they span more than
+    RATE_TOLERANCE below the one they leave out (``millis()`` of a 714 Hz log steps 1 or 2 ms: 40 %)
+    is refused (fewer: read as lost samples, within the tolerance the reader holds ``t`` to), as are
+    gaps that span half the time or more, one step in a hundred or more (bursts of samples stamped
+    as they arrive, 50 us apart every 10 ms, whose median step would write 20 kHz for 100 Hz; not
+    one long pause); both would be read as a faster rate with lost samples. The caller's rate is
+    taken as given."""
     step_s = np.diff(t_s)
     median_s = float(np.median(step_s))
     text = f"time: column {quote(name)} in {t_unit} ({how}; --time-unit to say otherwise)"
+    gap = step_s > 1.5 * median_s
+    kept = ~gap & (step_s >= 0.5 * median_s)
+    kept = kept if kept.any() else ~gap  # none near the median (steps of 1 us and 10 ms by turns): refused below
+    mean_s = float(np.mean(step_s[kept])) if median_s > 0 else math.nan
     if sample_rate_hz is None:
         if not median_s > 0:
             raise RecordingError(f"{path}: the time column {quote(name)} does not step forward (median step {median_s:g} s)")
-        mean_s = float(np.mean(step_s[step_s <= 1.5 * median_s]))
+        span_s = float(t_s[-1] - t_s[0])
+        if median_s < 2 * resolution_s * (1 - 1e-9) and span_s / len(step_s) > mean_s * (1 + RATE_TOLERANCE):
+            raise RecordingError(f"{path}: the time column {quote(name)} steps by its stamps' last digit "
+                                 f"({median_s * 1e3:.4g} ms), so its {int(np.count_nonzero(gap))} longer steps may be lost "
+                                 "samples or a slower rate: give the rate in --sample-rate-hz")
+        if float(np.sum(step_s[gap])) >= 0.5 * span_s and np.count_nonzero(gap) >= 0.01 * len(step_s):
+            raise RecordingError(f"{path}: the gaps of the time column {quote(name)} (steps over 1.5 median steps) span "
+                                 f"{100 * float(np.sum(step_s[gap])) / span_s:.3g} % of it: bursts of samples, or most "
+                                 "lost; give the rate in --sample-rate-hz")
         sample_rate_hz = check_sample_rate_hz(float(f"{1.0 / mean_s:.6g}"), f"{path}: the rate of the time column", RecordingError)
         text += f"; rate {sample_rate_hz:g} Hz from its mean step (gaps aside)"
-    else:
-        text += f"; rate {sample_rate_hz:g} Hz as given"
+    else:  # the stamps' rate beside it: one off by less than the reader's tolerance of t is written as given
+        text += f"; rate {sample_rate_hz:g} Hz as given" + (
+            f" (the stamps' mean step: {1.0 / mean_s:.6g} Hz)" if median_s > 0 else "")
     if median_s > 0:
-        low, high = np.percentile(step_s, [5, 95]) / median_s - 1
+        low, high = np.round(np.percentile(step_s, [5, 95]) / median_s - 1, 9) + 0.0  # no float noise (-1.8e-11 %)
         gaps = int(np.count_nonzero(step_s > 1.5 * median_s))
         text += (f"; jitter: 90 % of the steps within {100 * low:+.2g} % .. {100 * high:+.2g} % of the median "
                  f"({median_s * 1e3:.4g} ms), {gaps} gap(s) longer than 1.5 steps")

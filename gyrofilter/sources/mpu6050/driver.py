@@ -24,13 +24,10 @@ register map; PS-MPU-6000A-00 rev 3.4, product specification):
 
 Temperature: T / degC = TEMP_OUT / 340 + 36.53 (section 4.18).
 
-This module holds the source (the bus traffic); what the chip is and how its settings and frames
-are computed, without the bus, is in :mod:`gyrofilter.sources.mpu6050.chip`, the register map in
-:mod:`gyrofilter.sources.mpu6050.registers`.
-
-smbus2 is imported only when a bus is opened by number or path; a bus object can be injected
-instead (anything with smbus2's ``read_byte_data``, ``write_byte_data``, ``read_i2c_block_data``
-and, optionally, ``i2c_rdwr``).
+This module holds the source (the bus traffic); the chip without the bus is :mod:`.chip`, the
+register map :mod:`.registers`. smbus2 is imported only when a bus is opened by number or path; a
+bus object can be injected instead (smbus2's ``read_byte_data``, ``write_byte_data``,
+``read_i2c_block_data`` and, optionally, ``i2c_rdwr``).
 """
 import errno as _errno
 import time
@@ -170,30 +167,24 @@ class MPU6050Source(Source):
             sample_rate_hz, self.dlpf_cfg)
         if transfer not in ("auto", "smbus", "rdwr"):
             raise SettingsError(f"transfer={transfer!r}: expected 'auto', 'smbus' or 'rdwr'")
-        self.temperature = bool(temperature)
-        self.address = int(address)
+        self.temperature, self.address = bool(temperature), int(address)
         self.bus_name = _bus_name(bus)
-        self._clock = clock or time.monotonic
-        self._sleep = sleep or time.sleep
-        self._wall_clock = wall_clock or time.time
-        self.poll_interval_s = float(poll_interval_s)
-        self.max_wait_s = float(max_wait_s)
-        self.max_retries = int(max_retries)
-        self.retry_backoff_s = float(retry_backoff_s)
-        self.reset_timeout_s = float(reset_timeout_s)
+        self._clock, self._sleep, self._wall_clock = clock or time.monotonic, sleep or time.sleep, \
+            wall_clock or time.time
+        self.poll_interval_s, self.max_wait_s, self.reset_timeout_s = float(poll_interval_s), float(max_wait_s), \
+            float(reset_timeout_s)
+        self.max_retries, self.retry_backoff_s = int(max_retries), float(retry_backoff_s)
         self.stats = {"samples": 0, "lost_samples": 0, "retries": 0, "overflows": 0, "resyncs": 0,
                       "polls": 0, "fifo_bytes_read": 0}
         self._notes = []
         self._failure = None  # a DeviceError that ended a FIFO read part-way, raised by the next read()
-        self._layout = frame_layout(self.temperature)
-        self._n_words = len(self._layout)
+        self._n_words = len(frame_layout(self.temperature))
         self.frame_bytes = 2 * self._n_words
         self._owns_bus = isinstance(bus, (int, str))
         self._bus = _open_bus(bus) if self._owns_bus else bus
         try:
             self.chip_id = self._identify(allow_chip)
-            name, chip_fifo, self._temp_lsb_per_c, self._temp_offset_c, _ = CHIPS[self.chip_id]
-            self.chip_name = name
+            self.chip_name, chip_fifo, self._temp_lsb_per_c, self._temp_offset_c, _ = CHIPS[self.chip_id]
             self.fifo_size_bytes = int(fifo_bytes or chip_fifo)
             capacity = self.fifo_size_bytes // self.frame_bytes          # frames the FIFO holds
             # poll often enough to read the FIFO at a quarter full; keep a margin of 10 ms of
@@ -367,14 +358,14 @@ class MPU6050Source(Source):
                        self.reset_timeout_s)
         self._read_byte(R.INT_STATUS)                               # clears FIFO_OFLOW_INT
         self._write_byte(uc, uc.put(0, "FIFO_EN", 1))
-        got = self._read_byte(uc)
-        if not got & uc.mask("FIFO_EN"):
+        if not (got := self._read_byte(uc)) & uc.mask("FIFO_EN"):
             raise DeviceError(f"{self.chip_name} at {self._where()}: register {uc} reads back 0x{got:02X} "
                               f"after writing 0x{uc.put(0, 'FIFO_EN', 1):02X}: the FIFO could not be (re)started")
         self._anchor_time = self._clock()
         self._anchor_index = getattr(self, "_next_index", 0)
         self._next_index = self._anchor_index
         self._last_poll = self._anchor_time
+        self._fifo_floor = None  # (bytes left, time) after a failed read: the FIFO grows by the rate, shrinks as read
 
     def _make_header(self):
         bw = R.DLPF[self.dlpf_cfg][0]
@@ -446,8 +437,7 @@ class MPU6050Source(Source):
         produced = int(round((now - self._anchor_time) * self.sample_rate_hz))
         lost = max(0, produced - (self._next_index - self._anchor_index))
         at_t = self._next_index / self.sample_rate_hz
-        self._next_index += lost
-        self.stats["lost_samples"] += lost
+        self._next_index, self.stats["lost_samples"] = self._next_index + lost, self.stats["lost_samples"] + lost
         self._fifo_restart()
         self._notes.append(f"gap: {lost} samples lost before t={self._next_index / self.sample_rate_hz:.6g} s "
                            f"(last good sample at t={at_t - 1 / self.sample_rate_hz:.6g} s; {reason}; "
@@ -457,9 +447,9 @@ class MPU6050Source(Source):
         """One look at the FIFO: overflow check, count, whole frames -> rows.
 
         A FIFO data read that fails with EREMOTEIO (121: NACK, nothing transferred) is retried after
-        re-reading INT_STATUS and FIFO_COUNT; one that fails with EIO (5: may have stopped part-way
-        and consumed bytes) resets the FIFO and records a gap, so frames never lose alignment. A
-        FIFO_COUNT that is not a whole number of frames also resets the FIFO (recorded as a gap).
+        re-reading INT_STATUS and FIFO_COUNT (a count below the bytes left: it took some, a gap); one
+        that fails with EIO (5: may stop part-way, consuming bytes) resets the FIFO, a gap, so frames
+        never lose alignment. A FIFO_COUNT that is not a whole number of frames also resets it (a gap).
         Any other failure ends the source; frames read before it in the same poll are delivered
         first (the next read() raises), so nothing read off the chip is dropped.
         """
@@ -474,6 +464,8 @@ class MPU6050Source(Source):
                 return empty
             count = self._fifo_count()
             t_count = self._clock()
+            if self._fifo_shrank(count, t_count):
+                return empty
             if count > self.fifo_size_bytes - self.frame_bytes * self._margin_frames:
                 # (nearly) full: samples arriving while we read would overwrite the oldest bytes
                 # before we get them, and frame alignment would be lost
@@ -490,18 +482,21 @@ class MPU6050Source(Source):
             buf, exc = self._read_fifo(count)
             rows = self._rows(buf) if buf else empty
             if exc is None:
+                self._fifo_floor = None
                 # every sample produced up to the FIFO_COUNT read is now delivered: re-anchor
                 self._anchor_time, self._anchor_index = t_count, self._next_index
                 return rows
             code = exc.errno
-            if code in TRANSIENT_ERRNOS and attempt < self.max_retries:
+            if code in TRANSIENT_ERRNOS and attempt < self.max_retries:  # (a NACK may have taken bytes too)
                 self.stats["retries"] += 1
+                self._fifo_floor = (count - len(buf), t_count)
                 if code == _errno.EIO:
                     self.stats["resyncs"] += 1
                     self._gap(f"FIFO read failed part-way (errno {code}); FIFO reset to keep frame alignment")
                     return rows
                 self._sleep(self.retry_backoff_s * (2 ** attempt))
-                if len(rows):
+                if len(rows):  # the frames read before it, once the count says whether it took bytes
+                    self._fifo_shrank(self._fifo_count(), self._clock())
                     return rows
                 continue
             failure = self._io_error(str(R.FIFO_R_W), exc, attempt + 1)
@@ -510,6 +505,18 @@ class MPU6050Source(Source):
                 return rows
             raise failure
         return empty
+
+    def _fifo_shrank(self, count, t_count):
+        """A FIFO read that failed took bytes after all (a gap: whole frames keep the count aligned,
+        and the frames after them would take their ``t``): FIFO_COUNT ``count``, read at ``t_count``,
+        is below the bytes left after it plus the frames produced since (less one, and 2 % for the
+        sensor clock). So the count is re-read at once after a failure that leaves frames read."""
+        left, since = self._fifo_floor or (0, t_count)
+        if count >= left + self.frame_bytes * max(0, int((t_count - since) * self.sample_rate_hz * 0.98) - 1):
+            return False
+        self.stats["resyncs"] += 1
+        self._gap("a failed FIFO read took bytes; FIFO reset")
+        return True
 
     def _rows(self, buf):
         """Decode whole frames into rows [t, gx, gy, gz(, temp)] and advance the sample index."""
