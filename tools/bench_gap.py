@@ -1,5 +1,4 @@
-"""Time and peak memory of ``gyrofilter gap FILE`` against ``gyrofilter allan FILE`` on the same
-recording file, against the record length.
+"""Time and peak memory of ``gyrofilter gap FILE`` against ``gyrofilter allan FILE`` (the same file), by record length.
 
     python tools/bench_gap.py [--records 10m@100 1h@100 24h@100 1h@1000] [--clean]
                               [--files recordings/*.csv.gz] [--cache DIR] [--json OUT.json]

@@ -23,7 +23,10 @@ width) at most :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MAX_Q`
 is a line, the ``narrowband`` effect (:func:`hump_or_line`); one broader than
 :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_MIN_Q` is a tilt of the background, and
 one centred below :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_LOWEST_FRACTION` of the
-Nyquist frequency the rise of the slow effects' spectra (:func:`is_hump`). Where the narrow-band detector found a
+Nyquist frequency the rise of the slow effects' spectra (:func:`is_hump`). The Q rule decides
+between the two readings where both detectors see the peak: a narrower peak that the narrow-band
+detector does not find at the fit's centre is named a hump all the same (a hump of true Q 4 read
+Q 5.3 fell between the two detectors and went unnamed, D after 3.0). Where the narrow-band detector found a
 line, its bins (within :data:`LINE_EXCLUDED_WIDTHS` widths of its centre) are left out of the
 fit and its own PSD is part of the background, so a line beside a hump (the MPU-9250 of issue 36: a hump at 10.5-13.5 Hz beside a line at
 20.37 Hz) leaves the hump's fit alone; where it found a broad peak, the same peak as the hump's is
@@ -192,10 +195,13 @@ def detect_resonance(x, sample_rate_hz, band=None):
     if band is not None and hump_or_line(band.params["center_hz"] / band.params["bandwidth_hz"]) == NARROWBAND:
         lines = ((band.params["center_hz"], band.params["bandwidth_hz"], band.params["rms_dps"]),)
     fit = resonance_fit(x, sample_rate_hz, lines)
-    if fit is None or not is_hump(fit, sample_rate_hz) or hump_or_line(fit["q"]) != RESONANCE:
+    if fit is None or not is_hump(fit, sample_rate_hz):
         return None, band
     half = fit["center_hz"] / (2.0 * fit["q"])
-    if band is not None and not lines and abs(band.params["center_hz"] - fit["center_hz"]) <= half:
+    at_band = band is not None and abs(band.params["center_hz"] - fit["center_hz"]) <= half
+    if hump_or_line(fit["q"]) != RESONANCE and at_band:
+        return None, band  # a narrow peak that the narrow-band detector names
+    if at_band and not lines:
         band = None  # the narrow-band detector's broad peak is the hump
     cand = Candidate(
         effect=RESONANCE,
