@@ -96,6 +96,13 @@ ringing detector finds rings that explain the spikes' neighbourhoods beyond isol
 (:mod:`gyrofilter.analysis.gap.detectors.ringing`), the ringing is the one cause named: the spike
 and tail findings are not named beside it, nor a hump whose centre lies within the ring's
 half-power band (its half-width f0 / (2Q)) of the ring's centre.
+
+**6. A finding that makes its axis worse** (:func:`worse_together`). Each finding is kept on its
+gain alone; two findings that each gain alone can still compete for one feature (a hump fitted
+beside a wandering tone: the tone alone D 0.91, the tone with the hump 2.08, a new user's example
+model). Where the axis with all its kept findings has D above the best of them alone by more than
+the allowance, the finding whose leaving out lowers D most is dropped where that lowers D beyond
+the allowance (once per axis; the check costs nothing where the findings add up, the common case).
 """
 from __future__ import annotations
 
@@ -216,6 +223,22 @@ def kept_without_gain(effect, with_all, without, spread_of):
             what = "the measured covariate" if effect == TEMPERATURE else "what its detector's test names"
             return f", within the {allowance_text(spread)}: {what} is kept where D cannot tell"
     return None
+
+
+def worse_together(ks, single, with_all, without_of, spread_of):
+    """The kept finding of an axis to drop (module docstring, 6.): ``(k, D without it, why)`` or
+    None. ``ks``: the axis's kept findings, ``single[k]``: D of the axis with k alone,
+    ``with_all``: D with all of ``ks``, ``without_of(k)``: D with all but k, ``spread_of()``: the
+    null spread of D of the model with all (both computed only where the check applies)."""
+    if len(ks) < 2 or not np.isfinite(with_all) or with_all <= min(single[k] for k in ks):
+        return None
+    spread = CONFOUNDED_SPREADS * spread_of()
+    if with_all <= min(single[k] for k in ks) + spread:
+        return None
+    d, k = min((without_of(k), k) for k in ks)
+    why = (f"the axis's other findings do better without it (D {d:.3g} against {with_all:.3g} with it, beyond "
+           f"the {allowance_text(spread)})")
+    return (k, d, why) if d < with_all - spread else None
 
 
 def tails_or_spikes(over, spikes_found, fits, heavier):

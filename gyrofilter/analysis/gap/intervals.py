@@ -65,7 +65,7 @@ one, while the interval, even across 0, still bounds the effect's size, which a 
 of a scale parameter does not.
 
 A finding whose **defining** parameter (:attr:`gyrofilter.effects.Effect.defining`, its size) is
-not determined is not named: :func:`gyrofilter.analysis.gap.pipeline.set_aside_uncertain` moves it
+not determined is not named: :func:`gyrofilter.analysis.gap.keep.set_aside_uncertain` moves it
 from the findings to ``uncertain`` and takes it out of the extended model. The other findings of
 its axis keep the intervals computed here, with it in the simulated model (a second bootstrap
 without it would double the step's cost for a change within the intervals' own noise).
