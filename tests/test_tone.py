@@ -167,3 +167,35 @@ def test_a_band_at_an_edge_or_narrower_than_a_bin_is_estimated_without_failing(c
     out = det.tone_estimate(x, 100.0, center_hz, bandwidth_hz)
     assert all(math.isfinite(v) for v in out.values() if isinstance(v, float))
     assert 0.0 < out["center_hz"] < 50.0
+
+
+def test_a_hump_that_makes_the_tones_axis_worse_is_dropped():
+    # a new user's trial: the example model's tone, seed 2, read a hump at 7.2 Hz beside the tone
+    # (it gains alone, 30.6 -> 27.6), and the axis with both was D 2.08 against the tone's 0.91 alone
+    import json
+    from pathlib import Path
+
+    model = json.loads((Path(__file__).parent.parent / "examples" / "models" / "wandering_tone.json").read_text())
+    report = analyse_gap(simulate(model, 1800.0, seed=2), seed=0, bootstrap=0)
+    assert [(f["axis"], f["effect"]) for f in report["findings"]] == [("z", WANDERING_TONE)], report["findings"]
+    assert report["discrepancy"]["after"]["z"] <= 2.0, report["discrepancy"]
+    assert any(n.startswith("resonance on z dropped: the axis's other findings do better without it") for n in report["notes"])
+
+
+def test_worse_together_drops_the_finding_whose_leaving_out_lowers_d_most():
+    from gyrofilter.analysis.gap.confound import worse_together
+
+    single = {0: 0.9, 1: 27.0, 2: 5.0}
+    without = {0: 3.0, 1: 0.95, 2: 1.9}
+    asked = []
+
+    def spread():
+        asked.append(1)
+        return 0.5  # an allowance of 1.0
+
+    assert worse_together([0, 1, 2], single, 2.08, without.get, spread)[:2] == (1, 0.95)
+    assert worse_together([0, 1, 2], single, 1.8, without.get, spread) is None  # within the allowance of the best alone
+    assert worse_together([0, 2], single, 2.5, {0: 3.0, 2: 1.9}.get, spread) is None  # no removal lowers D beyond it
+    asked.clear()
+    assert worse_together([0, 1], single, 0.8, without.get, spread) is None and not asked  # the findings add up: no cost
+    assert worse_together([1], single, 30.0, without.get, spread) is None  # one finding: nothing to weigh
