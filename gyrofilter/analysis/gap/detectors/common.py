@@ -111,6 +111,11 @@ RESONANCE_THRESHOLD = 60.0
 #: about 4 (10.5-13.5 Hz at 12 Hz); the narrow bands of the tests and of the DLPF's ringing are Q 8-60
 RESONANCE_MIN_Q = 0.7
 RESONANCE_MAX_Q = 5.0
+#: the narrowest peak named a hump where the narrow-band detector finds no line at it: a hump read
+#: a little narrow (a hump of Q 4, 1.5 times the level, read Q 5.3 [3.4, 8.7] on a 10-min record and
+#: fell between the two detectors); a narrower peak the narrow-band detector does not take is a weak
+#: line, not named (one of Q 30 at 22.5 Hz on the shipped 123-s log's z)
+RESONANCE_UNSEEN_MAX_Q = 8.0
 #: the lowest centre of a hump, as a fraction of the Nyquist frequency: twice the lowest
 #: frequency of the hump's fit (detectors.resonance.RESONANCE_MIN_FRACTION); a peak below it sits on
 #: the rise of the slow effects' spectra (two Gauss-Markov terms at 10 Hz read a hump at 0.11 Hz)

@@ -25,7 +25,8 @@ is a line, the ``narrowband`` effect (:func:`hump_or_line`); one broader than
 one centred below :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_LOWEST_FRACTION` of the
 Nyquist frequency the rise of the slow effects' spectra (:func:`is_hump`). The Q rule decides
 between the two readings where both detectors see the peak: a narrower peak that the narrow-band
-detector does not find at the fit's centre is named a hump all the same (a hump of true Q 4 read
+detector does not find at the fit's centre is named a hump all the same, up to
+:data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_UNSEEN_MAX_Q` (a hump of true Q 4 read
 Q 5.3 fell between the two detectors and went unnamed, D after 3.0). Where the narrow-band detector found a
 line, its bins (within :data:`LINE_EXCLUDED_WIDTHS` widths of its centre) are left out of the
 fit and its own PSD is part of the background, so a line beside a hump (the MPU-9250 of issue 36: a hump at 10.5-13.5 Hz beside a line at
@@ -40,7 +41,8 @@ import math
 import numpy as np
 
 from ....effects import NARROWBAND, RESONANCE, RINGING, WANDERING_TONE
-from .common import RESONANCE_LOWEST_FRACTION, RESONANCE_MAX_Q, RESONANCE_MIN_Q, RESONANCE_THRESHOLD, Candidate
+from .common import (RESONANCE_LOWEST_FRACTION, RESONANCE_MAX_Q, RESONANCE_MIN_Q, RESONANCE_THRESHOLD,
+                     RESONANCE_UNSEEN_MAX_Q, Candidate)
 from .narrowband import narrowband_lags, welch_psd
 from .tone import tone_band
 from ....sim.noise_terms import filter_psd, narrowband_filter
@@ -199,8 +201,8 @@ def detect_resonance(x, sample_rate_hz, band=None):
         return None, band
     half = fit["center_hz"] / (2.0 * fit["q"])
     at_band = band is not None and abs(band.params["center_hz"] - fit["center_hz"]) <= half
-    if hump_or_line(fit["q"]) != RESONANCE and at_band:
-        return None, band  # a narrow peak that the narrow-band detector names
+    if hump_or_line(fit["q"]) != RESONANCE and (at_band or fit["q"] > RESONANCE_UNSEEN_MAX_Q):
+        return None, band  # a narrow peak: the narrow-band detector's line, or a line too weak for it
     if at_band and not lines:
         band = None  # the narrow-band detector's broad peak is the hump
     cand = Candidate(
@@ -210,8 +212,11 @@ def detect_resonance(x, sample_rate_hz, band=None):
         threshold=RESONANCE_THRESHOLD,
         statistic_name="drop of the Welch log-PSD residual sum of squares by a resonance hump, in residual variances",
         evidence=(f"a hump of noise power at {fit['center_hz']:.4g} Hz, half-power band {fit['center_hz'] - half:.3g}-"
-                  f"{fit['center_hz'] + half:.3g} Hz (Q = {fit['q']:.2g}: broader than a line, Q <= {RESONANCE_MAX_Q:g}), "
-                  f"{fit['peak_ratio'] + 1:.2g} times the neighbouring level at its peak, rms {fit['rms_dps']:.3g} deg/s "
+                  f"{fit['center_hz'] + half:.3g} Hz (Q = {fit['q']:.2g}: "
+                  + (f"broader than a line, Q <= {RESONANCE_MAX_Q:g}), " if fit["q"] <= RESONANCE_MAX_Q else
+                     f"narrower than a hump's Q <= {RESONANCE_MAX_Q:g}, but the narrow-band detector finds no line "
+                     f"there), ")
+                  + f"{fit['peak_ratio'] + 1:.2g} times the neighbouring level at its peak, rms {fit['rms_dps']:.3g} deg/s "
                   f"(F = {fit['statistic']:.0f}, threshold {RESONANCE_THRESHOLD:g})"),
     )
     return cand, band
