@@ -27,7 +27,10 @@ Nyquist frequency the rise of the slow effects' spectra (:func:`is_hump`). The Q
 between the two readings where both detectors see the peak: a narrower peak that the narrow-band
 detector does not find at the fit's centre is named a hump all the same, up to
 :data:`~gyrofilter.analysis.gap.detectors.common.RESONANCE_UNSEEN_MAX_Q` (a hump of true Q 4 read
-Q 5.3 fell between the two detectors and went unnamed, D after 3.0). Where the narrow-band detector found a
+Q 5.3 fell between the two detectors and went unnamed, D after 3.0); and a band the narrow-band
+detector finds with a Q in that overlap (its half-power width read off a noisy Welch peak) is the
+hump where the hump's fit of the whole spectrum puts a hump (Q at most 5) at its centre (a hump of
+Q 4 read as a band of Q 6.9, its fit Q 4.6). Where the narrow-band detector found a
 line, its bins (within :data:`LINE_EXCLUDED_WIDTHS` widths of its centre) are left out of the
 fit and its own PSD is part of the background, so a line beside a hump (the MPU-9250 of issue 36: a hump at 10.5-13.5 Hz beside a line at
 20.37 Hz) leaves the hump's fit alone; where it found a broad peak, the same peak as the hump's is
@@ -194,9 +197,15 @@ def detect_resonance(x, sample_rate_hz, band=None):
     if x.size < 4096:
         return None, band
     lines = ()
-    if band is not None and hump_or_line(band.params["center_hz"] / band.params["bandwidth_hz"]) == NARROWBAND:
+    band_q = band.params["center_hz"] / band.params["bandwidth_hz"] if band is not None else None
+    if band is not None and hump_or_line(band_q) == NARROWBAND:
         lines = ((band.params["center_hz"], band.params["bandwidth_hz"], band.params["rms_dps"]),)
     fit = resonance_fit(x, sample_rate_hz, lines)
+    if lines and band_q <= RESONANCE_UNSEEN_MAX_Q:  # a band a little narrow for a hump: the hump's fit of its peak decides
+        whole = resonance_fit(x, sample_rate_hz)
+        if (whole is not None and is_hump(whole, sample_rate_hz) and whole["q"] <= RESONANCE_MAX_Q
+                and abs(band.params["center_hz"] - whole["center_hz"]) <= whole["center_hz"] / (2.0 * whole["q"])):
+            fit, lines = whole, ()
     if fit is None or not is_hump(fit, sample_rate_hz):
         return None, band
     half = fit["center_hz"] / (2.0 * fit["q"])
