@@ -56,8 +56,9 @@ ones found, because the effects are confusable:
    Welch log-PSD fitted by a smooth spectrum (white through a first-order ARMA, and a 1/f floor)
    with and without the ``resonance`` effect's resonator hump; the drop of the residual sum of
    squares in residual variances is the statistic. A peak of quality Q = f0 / B at most
-   ``RESONANCE_MAX_Q`` is a hump, a narrower one a line (``narrowband``): a narrow-band line's
-   bins are left out of the hump's fit, a broad band at the hump's centre is the hump
+   ``RESONANCE_MAX_Q`` is a hump, a narrower one a line (``narrowband``) where the narrow-band
+   detector finds it (up to ``RESONANCE_UNSEEN_MAX_Q`` an unseen one is the hump): a narrow-band
+   line's bins are left out of the hump's fit, a broad band at the hump's centre is the hump
    (:func:`~gyrofilter.analysis.gap.detectors.resonance.hump_or_line`). Like a band, the hump is
    noise and stays in the series; the colored noise's lag-1 is corrected for it.
 2d. ``wandering_tone`` -- the band read as a tone of constant amplitude whose frequency wanders
