@@ -44,21 +44,33 @@ def without_tails(*args, **kwargs):
     return None, None
 
 
-def show(label, report, rec, axis):
-    i = "xyz".index(axis)
+def model_distance(report, rec, i):
+    """The Allan distance of axis ``i`` of ``report``'s extended model to the record ``rec``'s."""
     x = rec.gyro_dps[:, i]
-    wv = gmwm.haar_wv(x, rec.sample_rate_hz)
     ext = gmwm.simulated_wv(report["extended_model"], i, x.size, seeds=range(1000, 1000 + gmwm.MODEL_CURVE_RUNS))
+    return gmwm.wv_distance(gmwm.haar_wv(x, rec.sample_rate_hz), ext.wv_dps2)
+
+
+def two_term(x, seed):
+    """The direct two-term fit (white + AR(1)) to ``x`` and its Allan distance."""
+    wv = gmwm.haar_wv(x, 100.0)
+    fit = gmwm.fit_model(wv, (), 1, starts=4, seed=seed)
+    return fit, gmwm.wv_distance(wv, fit.wv(wv.tau_s))
+
+
+def show(label, report, rec, axis):
     found = "; ".join(f"{f['effect']} (" + ", ".join(f"{k} = {v:.3g}" for k, v in f["params"].items()) + ")"
                       for f in report["findings"] if f["axis"] == axis)
     d = report["discrepancy"]
-    dist = gmwm.wv_distance(wv, ext.wv_dps2)
+    dist = model_distance(report, rec, "xyz".index(axis))
     print(f"{label}: {found or 'no finding'}\n    D {d['before'][axis]:.3g} -> {d['after'][axis]:.3g}; "
           f"Allan distance of the extended model {dist:.3g}")
     return dist
 
 
 def xsens_like(args):
+    """The stand-in of seed ``--seed`` read both ways; returns (the heavy-tail reading's distance,
+    the two-term fit's)."""
     rec = simulate(XSENS_LIKE, args.duration, seed=args.seed)
     print(f"Xsens-like axis z ({args.duration:.0f} s at 100 Hz): heavy_tails fraction 0.06, scale_ratio 30, "
           "colored_noise lag1 0.5")
@@ -73,26 +85,21 @@ def xsens_like(args):
         old = show("without it (previous reading)", gap.analyse_gap(rec, seed=args.seed), rec, "z")
     finally:
         gap.det.detect_heavy_tails = real_stage
-    wv = gmwm.haar_wv(x, 100.0)
-    two = gmwm.fit_model(wv, (), 1, starts=4, seed=args.seed)
-    direct = gmwm.wv_distance(wv, two.wv(wv.tau_s))
+    two, direct = two_term(x, args.seed)
     print(f"direct two-term fit white + AR(1) ({two.name}): Allan distance {direct:.3g}")
     print(f"the previous reading is {old / direct:.3g} times as far as the two-term fit, the heavy-tail reading "
           f"{new / direct:.3g} times")
+    return new, direct
 
 
-def stand_in_seeds(args):
+def stand_in_seeds(args, first):
     """The heavy-tail reading against the two-term fit on the stand-in drawn with ``--stand-ins``
-    seeds (the ratio of two distances near or below 1 moves with the record's draw)."""
-    rows = []
-    for seed in range(args.seed, args.seed + args.stand_ins):
+    seeds (the ratio of two distances near or below 1 moves with the record's draw); ``first``:
+    :func:`xsens_like`'s pair for the first seed."""
+    rows = [first]
+    for seed in range(args.seed + 1, args.seed + args.stand_ins):
         rec = simulate(XSENS_LIKE, args.duration, seed=seed)
-        x = rec.gyro_dps[:, 2]
-        wv = gmwm.haar_wv(x, 100.0)
-        report = gap.analyse_gap(rec, seed=seed)
-        ext = gmwm.simulated_wv(report["extended_model"], 2, x.size, seeds=range(1000, 1000 + gmwm.MODEL_CURVE_RUNS))
-        two = gmwm.fit_model(wv, (), 1, starts=4, seed=seed)
-        rows.append((gmwm.wv_distance(wv, ext.wv_dps2), gmwm.wv_distance(wv, two.wv(wv.tau_s))))
+        rows.append((model_distance(gap.analyse_gap(rec, seed=seed), rec, 2), two_term(rec.gyro_dps[:, 2], seed)[1]))
     ratios = [e / t for e, t in rows]
     print(f"stand-ins of seeds {args.seed}-{args.seed + args.stand_ins - 1}: the heavy-tail reading's distance "
           + ", ".join(f"{e:.2g}" for e, _ in rows) + "; the two-term fit's " + ", ".join(f"{t:.2g}" for _, t in rows)
@@ -123,9 +130,9 @@ def main(argv=None):
     parser.add_argument("--adis", default=ADIS, help="folder of the ADIS16405 long records (default: ../shared/data/adis16405_long)")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
-    xsens_like(args)
+    first = xsens_like(args)
     if args.stand_ins > 1:
-        stand_in_seeds(args)
+        stand_in_seeds(args, first)
     if args.real:
         real(args)
     print(f"({time.perf_counter() - t0:.0f} s)")

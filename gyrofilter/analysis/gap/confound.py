@@ -230,10 +230,11 @@ def worse_together(ks, single, with_all, without_of, spread_of):
     None. ``ks``: the axis's kept findings, ``single[k]``: D of the axis with k alone,
     ``with_all``: D with all of ``ks``, ``without_of(k)``: D with all but k, ``spread_of()``: the
     null spread of D of the model with all (both computed only where the check applies)."""
-    if len(ks) < 2 or not np.isfinite(with_all) or with_all <= min(single[k] for k in ks):
+    best = min(single[k] for k in ks) if ks else math.inf
+    if len(ks) < 2 or not np.isfinite(with_all) or with_all <= best:
         return None
     spread = CONFOUNDED_SPREADS * spread_of()
-    if with_all <= min(single[k] for k in ks) + spread:
+    if with_all <= best + spread:
         return None
     d, k = min((without_of(k), k) for k in ks)
     why = (f"the axis's other findings do better without it (D {d:.3g} against {with_all:.3g} with it, beyond "

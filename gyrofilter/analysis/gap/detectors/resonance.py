@@ -188,6 +188,12 @@ def hump_or_line(q):
     return RESONANCE if q <= RESONANCE_MAX_Q else NARROWBAND
 
 
+def _within_half_width(fit, band):
+    """Whether the band candidate ``band``'s centre lies within the hump ``fit``'s half-power
+    half-width, f0 / (2Q), of its centre: the same peak."""
+    return abs(band.params["center_hz"] - fit["center_hz"]) <= fit["center_hz"] / (2.0 * fit["q"])
+
+
 def detect_resonance(x, sample_rate_hz, band=None):
     """``(resonance candidate or None, band or None)``: the hump of :func:`resonance_fit`, and the
     narrow-band candidate ``band`` of the narrow-band detector as it stands beside it (None where
@@ -204,12 +210,12 @@ def detect_resonance(x, sample_rate_hz, band=None):
     if lines and band_q <= RESONANCE_UNSEEN_MAX_Q:  # a band a little narrow for a hump: the hump's fit of its peak decides
         whole = resonance_fit(x, sample_rate_hz)
         if (whole is not None and is_hump(whole, sample_rate_hz) and whole["q"] <= RESONANCE_MAX_Q
-                and abs(band.params["center_hz"] - whole["center_hz"]) <= whole["center_hz"] / (2.0 * whole["q"])):
+                and _within_half_width(whole, band)):
             fit, lines = whole, ()
     if fit is None or not is_hump(fit, sample_rate_hz):
         return None, band
     half = fit["center_hz"] / (2.0 * fit["q"])
-    at_band = band is not None and abs(band.params["center_hz"] - fit["center_hz"]) <= half
+    at_band = band is not None and _within_half_width(fit, band)
     if hump_or_line(fit["q"]) != RESONANCE and (at_band or fit["q"] > RESONANCE_UNSEEN_MAX_Q):
         return None, band  # a narrow peak: the narrow-band detector's line, or a line too weak for it
     if at_band and not lines:
