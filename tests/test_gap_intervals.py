@@ -409,3 +409,20 @@ def test_interval_text_says_not_determined_for_a_null_interval():
     assert interval_text(0.0033, {"b_dps": None}, "b_dps") == "0.0033 (not determined)"
     assert interval_text(0.0033, None, "b_dps") == "0.0033"  # no intervals at all (--bootstrap 0)
     assert interval_text(0.0033, {"b_dps": [0.003, 0.004]}, "b_dps") == "0.0033 [0.003, 0.004]"
+
+
+def test_a_wandering_tone_read_short_takes_the_step_of_test_inversion_and_its_centre_the_plain_interval(monkeypatch):
+    """Case 16001 of the coverage tool's tones (10 min): a tone whose frequency wanders with a
+    correlation time of 142 s, a quarter of the record, so its spread reads 0.14 Hz for 0.38. The
+    plain interval of the spread ([0.091, 0.256]) missed it; one step of test inversion (the
+    track is a Gauss-Markov process, module docstring of gap.intervals) holds it. The centre, a
+    location parameter, keeps its plain interval: the same as without the step."""
+    case = he.draw_case(16001, effect="wandering_tone", duration_s=600.0)
+    rec = he.simulate_case(case)
+    report = analyse_gap(rec, seed=16001, n_sims=SIMS)
+    f = _hit(case, report)
+    assert _inside(case["params"]["spread_hz"], f["params_ci95"]["spread_hz"], "spread_hz"), (case["params"], f)
+    monkeypatch.setattr(gi, "INVERTED", tuple(e for e in gi.INVERTED if e != "wandering_tone"))
+    plain = _hit(case, analyse_gap(rec, seed=16001, n_sims=SIMS))
+    assert not _inside(case["params"]["spread_hz"], plain["params_ci95"]["spread_hz"], "spread_hz")
+    assert plain["params_ci95"]["center_hz"] == f["params_ci95"]["center_hz"]
