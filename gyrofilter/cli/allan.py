@@ -146,7 +146,7 @@ def kalibr_text_line(k):
     return (f"kalibr: the pair that bounds every axis's Allan deviation over tau {low:g} .. {high:g} s{cut}: "
             f"{k.sensor.name}_noise_density {k.noise_density:.3e} {k.sensor.density_unit} ({f_nd}), "
             f"{k.sensor.name}_random_walk {k.random_walk:.3e} {k.sensor.walk_unit} ({f_rw}); its model lies at "
-            f"1 .. {k.bound.excess:.3g}x the largest axis's deviation there")
+            f"{k.bound.least:.3g} .. {k.bound.excess:.3g}x the largest axis's deviation there")
 
 
 def run(args):

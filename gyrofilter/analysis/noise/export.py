@@ -120,8 +120,8 @@ def _sensor_lines(k: KalibrValues, confidence):
     upper = "" if b.upper_ratio is None else f", at least {b.upper_ratio:.3g}x its {confidence:.0%} upper confidence bound"
     lines += [f"# {name}, plain (largest over the axes): noise_density {_e(k.plain[0])}, random_walk {_e(k.plain[1])}",
               f"# {name}, bounding pair over tau {k.tau_range_s[0]:g} .. {k.tau_range_s[1]:g} s ({len(b.tau_s)} taus): "
-              f"its model lies at 1 .. {b.excess:.3g}x the largest",
-              f"#   axis's Allan deviation (1 at tau {touch} s){upper}",
+              f"its model lies at {b.least:.3g} .. {b.excess:.3g}x the largest",
+              f"#   axis's Allan deviation ({b.least:.3g} at tau {touch} s){upper}",
               f"{name}_noise_density: {k.noise_density:.6e}   # {s.density_unit}, bounding (plain {_times(f_nd)})",
               f"{name}_random_walk: {k.random_walk:.6e}   # {s.walk_unit}, bounding (plain {_times(f_rw)})"]
     return lines
@@ -151,7 +151,8 @@ def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0", ta
              "# continuous-time densities, SI units. Written: the bounding pair, the white + random-walk pair whose",
              "# Kalibr model sigma^2(tau) = nd^2/tau + rw^2 tau/3 lies on or above the measured Allan deviation of",
              "# every axis over the range, with the least largest excess over it (docs/allan.md, \"Kalibr\"). The",
-             "# plain values, the fit's N and K, are too optimistic where bias instability lifts the curve."]
+             "# plain values, the fit's N and K, are too optimistic where bias instability lifts the curve; they",
+             "# are the pair's floor."]
     for k in sensors:
         if k.cut:
             lines.append(f"# {k.sensor.name}: the default range {low:g} .. {high:g} s cut to the record's "

@@ -55,14 +55,16 @@ KALIBR_SENSORS = {"deg/s": GYROSCOPE, "m/s^2": ACCELEROMETER}
 class BoundingPair:
     """The result of :func:`bounding_pair`, in the Allan deviation's unit D: ``noise_density``
     (D sqrt(s) = D/sqrt(Hz)) and ``random_walk`` (D/sqrt(s)); ``excess``: the largest ratio of the
-    model's deviation to the measured one (the largest axis's) over the range, >= 1; ``touch_tau_s``:
-    the taus where the model equals it (ratio 1); ``upper_ratio``: the smallest ratio of the model
+    model's deviation to the measured one (the largest axis's) over the range, >= 1; ``least``: the
+    smallest such ratio (1 unless a floor raised the pair) and ``touch_tau_s`` the taus where the
+    ratio is ``least``; ``upper_ratio``: the smallest ratio of the model
     to the largest axis's upper confidence bound over the range (None without bounds); ``tau_s``:
     the measured taus covered (s)."""
 
     noise_density: float
     random_walk: float
     excess: float
+    least: float
     touch_tau_s: tuple
     upper_ratio: float | None
     tau_s: tuple
@@ -120,7 +122,7 @@ def _inside(tau, low, high):
     return (tau >= low * (1.0 - _TAU_SLACK)) & (tau <= high * (1.0 + _TAU_SLACK))
 
 
-def bounding_pair(tau_s, adev, tau_range_s, *, adev_high=None):
+def bounding_pair(tau_s, adev, tau_range_s, *, adev_high=None, floor=(0.0, 0.0)):
     """The smallest white + random-walk pair (nd, rw) whose Kalibr model lies on or above the
     measured Allan deviation of every axis at the taus within ``tau_range_s`` (low, high; s).
 
@@ -138,6 +140,11 @@ def bounding_pair(tau_s, adev, tau_range_s, *, adev_high=None):
     (ratio 1) at a tau where both terms are positive, so lowering either value breaks the bound.
     Other rules weigh the two ends (e.g. the deviation at the range's ends, or one factor applied
     to the plain values) and overstate one end by more than F to spare the other.
+
+    ``floor`` (nd0, rw0), in the same units: each value is raised to at least its floor (the
+    plain values, :func:`kalibr_sensor`), which only lifts the model, and ``excess`` is that of the
+    pair returned. Without it a range the white noise dominates gives rw = 0 (a bias that never
+    moves, which Kalibr must not be told), and one that starts where flicker dominates nd = 0.
 
     Solution (exact): the ratios ``g_j = m^2(tau_j) / s_j^2`` are linear in (nd^2, rw^2) and
     homogeneous, so with the shape ``p = nd^2 / (nd^2 + rw^2)`` and the scale chosen so that
@@ -173,14 +180,15 @@ def bounding_pair(tau_s, adev, tau_range_s, *, adev_high=None):
     spread = g.max(axis=1) / g.min(axis=1)
     best = int(np.argmin(spread))
     scale = 1.0 / g[best].min()
-    nd, rw = float(np.sqrt(scale * p[best])), float(np.sqrt(scale * (1.0 - p[best])))
+    nd = max(float(np.sqrt(scale * p[best])), float(floor[0]))
+    rw = max(float(np.sqrt(scale * (1.0 - p[best]))), float(floor[1]))
     ratio = kalibr_adev(nd, rw, t) / np.sqrt(v)
     upper = None
     if adev_high is not None:
         top = np.max(np.atleast_2d(np.asarray(adev_high, dtype=np.float64))[:, inside], axis=0)
         upper = float(np.min(kalibr_adev(nd, rw, t) / top))
     touch = tuple(float(x) for x in t[np.isclose(ratio, ratio.min(), rtol=1e-9, atol=0.0)])
-    return BoundingPair(nd, rw, float(ratio.max()), touch, upper, tuple(float(x) for x in t))
+    return BoundingPair(nd, rw, float(ratio.max()), float(ratio.min()), touch, upper, tuple(float(x) for x in t))
 
 
 @dataclass(frozen=True)
@@ -225,16 +233,18 @@ def kalibr_sensor(results, unit, tau_range_s=None):
     """One sensor's Kalibr values (a :class:`KalibrValues`) from its Allan results ``results``
     ({axis: AxisNoise}, the deviation in ``unit``, a key of :data:`KALIBR_SENSORS`: ``deg/s`` for
     a gyroscope, ``m/s^2`` for an accelerometer) over ``tau_range_s`` ((low, high) in s, or None:
-    the default range cut to the record, :func:`tau_range`)."""
+    the default range cut to the record, :func:`tau_range`): the bounding pair with the plain
+    values as its floor (:func:`bounding_pair`)."""
     sensor = KALIBR_SENSORS[unit]
     axes = list(results.values())
     tau = axes[0].tau_s
     if any(r.tau_s.shape != tau.shape or np.any(r.tau_s != tau) for r in axes[1:]):
         raise SettingsError("the axes' Allan deviations are at different cluster times; the bounding pair needs one set")
     low, high, cut = tau_range(tau, tau_range_s)
-    bound = bounding_pair(tau, [r.adev for r in axes], (low, high), adev_high=[r.ci_high for r in axes])
     per_axis = {a: plain_values(r, sensor) for a, r in results.items()}
     plain = tuple(None if any(v[key] is None for v in per_axis.values()) else max(v[key] for v in per_axis.values())
                   for key in ("noise_density", "random_walk"))
+    bound = bounding_pair(tau, [r.adev for r in axes], (low, high), adev_high=[r.ci_high for r in axes],
+                          floor=tuple(0.0 if v is None else v / sensor.to_si for v in plain))
     return KalibrValues(sensor, per_axis, plain, bound, bound.noise_density * sensor.to_si,
                         bound.random_walk * sensor.to_si, (low, high), cut)
