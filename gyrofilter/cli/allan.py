@@ -4,7 +4,8 @@ Prints, per axis, the fitted coefficients Q, N, B, K, R with their intervals in 
 customary units, the slope read-offs of papers 000/002 beside them (another estimator: an upper
 estimate of each term, said so where the fit resolves none), and what the record is too short
 to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` the
-log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
+log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries (the pair that bounds the
+measured deviation over ``--kalibr-tau-s``, :mod:`gyrofilter.analysis.noise.kalibr`).
 
 The recording is read in chunks into one float64 array per axis. Gross errors (isolated spikes
 far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise.screen.gross_errors`)

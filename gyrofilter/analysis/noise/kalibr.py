@@ -1,8 +1,8 @@
 """Kalibr's IMU noise model and the white + random-walk pair that bounds a measured Allan deviation.
 
 Kalibr (and VINS, OpenVINS) model each sensor axis as white noise of density ``nd`` plus a bias
-random walk of density ``rw``; the Allan variance of that model is (IEEE Std 952; paper 000 eqs. 5
-and 7 with Q = B = R = 0)::
+random walk of density ``rw``; the Allan variance of that model is the N and K terms of the
+five-term model (:mod:`~gyrofilter.analysis.noise.model`; IEEE Std 952, paper 000 eqs. 4-8)::
 
     sigma^2(tau) = nd^2 / tau + rw^2 tau / 3
 

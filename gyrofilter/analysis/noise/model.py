@@ -22,7 +22,7 @@ The coefficients are estimated in the modules beside this one: :mod:`~gyrofilter
 :mod:`~gyrofilter.analysis.noise.intervals`, and :mod:`~gyrofilter.analysis.noise.readoff` (the
 slope read-offs of papers 000/002); :mod:`~gyrofilter.analysis.noise.screen` finds the gross
 errors a record must not hold, :mod:`~gyrofilter.analysis.noise.export` writes the allan JSON and
-Kalibr's imu.yaml. This module holds the model itself: the terms, their units and conversions,
+Kalibr's imu.yaml (its values: :mod:`~gyrofilter.analysis.noise.kalibr`). This module holds the model itself: the terms, their units and conversions,
 and the result types.
 """
 from __future__ import annotations
