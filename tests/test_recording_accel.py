@@ -285,6 +285,7 @@ def test_record_keeps_the_sources_accelerometer_and_its_unit(tmp_path, capsys):
     capsys.readouterr()
     recorded = read_recording(out)
     assert recorded.accel_unit == "lsb" and recorded.lsb_per_g == 16384.0
+    assert list(recorded.header)[1:5] == ["sample_rate_hz", "gyro_unit", "accel_unit", "lsb_per_g"]  # the units together
     for name in ("t", "gx", "gy", "gz", "temp", *ACCEL_COLUMNS):
         np.testing.assert_array_equal(recorded.columns[name], rec.columns[name])
     np.testing.assert_array_equal(recorded.accel_mps2, accel * (9.80665 / 16384))
