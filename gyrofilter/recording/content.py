@@ -53,7 +53,7 @@ class _HeaderFacts:
         value = self.header.get("lsb_per_g")
         return None if value is None else float(value)
 
-    def check_accelerometer(self, names):
+    def require_accelerometer(self, names):
         """Refuse an analysis of the accelerometer of a recording with columns ``names`` that has
         no ``ax, ay, az`` or no ``accel_unit`` (a v1 file written before the key: its columns are
         read and carried along, but their unit is not known), with RecordingError naming the file
@@ -128,8 +128,8 @@ class Recording(_HeaderFacts):
     def accel_mps2(self) -> np.ndarray:
         """Acceleration, shape (N, 3), in m/s^2 (:func:`~gyrofilter.units.to_mps2`); RecordingError
         naming the file when the recording has no ``ax, ay, az`` or no ``accel_unit``
-        (:meth:`check_accelerometer`)."""
-        self.check_accelerometer(self.columns)
+        (:meth:`require_accelerometer`)."""
+        self.require_accelerometer(self.columns)
         return to_mps2(np.column_stack([self.columns[c] for c in ACCEL_COLUMNS]), self.accel_unit, self.lsb_per_g)
 
     @property
@@ -216,7 +216,7 @@ class RecordingHead(_HeaderFacts):
     def accel_mps2(self, chunk):
         """Acceleration of ``chunk``, shape (k, 3), in m/s^2; RecordingError as
         :meth:`Recording.accel_mps2` without ``ax, ay, az`` or ``accel_unit``."""
-        self.check_accelerometer(self.names)
+        self.require_accelerometer(self.names)
         return to_mps2(chunk[:, [self.names.index(c) for c in ACCEL_COLUMNS]], self.accel_unit, self.lsb_per_g)
 
     def t_s(self, chunk, first_row):
