@@ -16,6 +16,7 @@ DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 MAD_TO_SIGMA = 1.4826  # sigma = 1.4826 MAD for Gaussian data (1 / Phi^-1(3/4); Hampel 1974)
 GYRO_UNITS = ("dps", "rad/s", "lsb")
+ACCEL_UNITS = ("m/s^2", "g", "lsb")  # the accelerometer columns' units (header key accel_unit)
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
 #: the plausible temperatures (deg C) of a gyro's die, ends included, for a sample and a calibration:
 #: beyond any MEMS part (the MPU6050's TEMP_OUT register spans -60 to +133 deg C)

@@ -127,7 +127,8 @@ def test_configuration_written_and_header(rig, range_dps, fs_bits, lsb):
     assert regs[0x6B] == 0x01                     # awake, CLKSEL = 1 (PLL, X gyro)
     assert regs[0x1B] == fs_bits
     assert regs[0x1A] == 0x03 and regs[0x19] == 9  # DLPF_CFG 3, 1 kHz / (1 + 9)
-    assert regs[0x23] == 0xF0                     # TEMP + XG + YG + ZG into the FIFO
+    assert regs[0x23] == 0xF8                     # TEMP + XG + YG + ZG + ACCEL into the FIFO
+    assert regs[0x1C] == 0x00                     # ACCEL_CONFIG.AFS_SEL 0: +-2 g
     assert regs[0x38] & 0x10 and regs[0x6A] & 0x40
     assert model.sample_rate_hz() == 100.0
     h = src.header
@@ -135,7 +136,8 @@ def test_configuration_written_and_header(rig, range_dps, fs_bits, lsb):
     assert (h["full_scale_dps"], h["dlpf_cfg"], h["sample_rate_hz"]) == (str(range_dps), "3", "100")
     assert (h["i2c_bus"], h["i2c_address"]) == ("/dev/i2c-1", "0x68")
     assert h["start_time_utc"] == "2023-11-14T22:13:20.000Z"
-    assert src.columns == ["t", "gx", "gy", "gz", "temp"]
+    assert (h["accel_unit"], h["lsb_per_g"], h["full_scale_g"]) == ("lsb", "16384", "2")
+    assert src.columns == ["t", "gx", "gy", "gz", "temp", "ax", "ay", "az"]
     src.close()
     assert regs[0x6B] & 0x40 and not bus.fds      # asleep again, bus closed
 
@@ -280,7 +282,7 @@ def test_decoded_rates_equal_model_rates_from_a_recording(rig):
                            np.full(n, 600.0)])           # z beyond +-500: clipped by the sensor
     rec = Recording.from_dps(dps, 200.0)
     clock, model, bus = rig(gyro_dps=rec.gyro_dps, temp_c=31.0)
-    src = open_src(clock, sample_rate_hz=200, range_dps=500, temperature=False)
+    src = open_src(clock, sample_rate_hz=200, range_dps=500, temperature=False, accel=False)
     assert src.columns == ["t", "gx", "gy", "gz"]
     rows, _ = read_for(src, clock, 5.0)
     # first FIFO sample is model sample k0: find it from x, y (continuous values)
@@ -369,7 +371,7 @@ def test_fifo_read_failing_part_way_resets_fifo_and_keeps_alignment(rig):
 
 def test_misaligned_count_is_resynchronised(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, sample_rate_hz=1000, temperature=False, transfer="rdwr")
+    src = open_src(clock, sample_rate_hz=1000, temperature=False, accel=False, transfer="rdwr")
     a, _ = read_for(src, clock, 0.1)
     model.fail_fifo_read(errno.EREMOTEIO, consume_bytes=3)   # a NACK that still ate 3 bytes
     b, notes = read_for(src, clock, 0.2)
@@ -381,7 +383,7 @@ def test_misaligned_count_is_resynchronised(rig):
 
 def test_8khz_polls_often_enough_for_the_fifo(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, sample_rate_hz=8000, dlpf="0", address="0x68", temperature=False)
+    src = open_src(clock, sample_rate_hz=8000, dlpf="0", address="0x68", temperature=False, accel=False)
     assert src.smplrt_div == 0 and src.poll_interval_s == pytest.approx(170 / 8000 / 4)
     rows, notes = read_for(src, clock, 1.0)
     assert notes == [] and len(rows) >= 7900
@@ -404,7 +406,7 @@ def test_read_waits_at_most_max_wait(rig):
     model.regs[0x6A] = 0                          # FIFO stopped behind the driver's back: no data
     t0 = clock.now()
     rows = src.read()
-    assert rows.shape == (0, 5)
+    assert rows.shape == (0, 8)
     assert clock.now() - t0 <= src.max_wait_s + src.poll_interval_s + 1e-9
 
 
@@ -463,7 +465,7 @@ def test_opened_through_the_source_syntax_on_the_real_clock(monkeypatch):
 
     model = MPU6050Model(HostClock(), gyro_lsb=indexed_gyro(200_000))
     FakeI2CBus({0x69: model}).install(monkeypatch)
-    src = open_source("mpu6050:bus=1,addr=0x69,rate=200,range=500,dlpf=2,temp=0")
+    src = open_source("mpu6050:bus=1,addr=0x69,rate=200,range=500,dlpf=2,temp=0,accel=0")
     try:
         h = src.header
         assert (h["i2c_address"], h["sample_rate_hz"], h["lsb_per_dps"], h["dlpf_cfg"]) == \
@@ -515,7 +517,7 @@ def test_fatal_error_part_way_through_a_fifo_read_delivers_the_frames_read_befor
     """The chip vanishes during the 3rd 30-byte block of an SMBus FIFO read: the 10 frames of the
     first two blocks were read off the chip, so they are delivered; the next read raises."""
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, sample_rate_hz=1000, temperature=False, transfer="smbus")
+    src = open_src(clock, sample_rate_hz=1000, temperature=False, accel=False, transfer="smbus")
     a, _ = read_for(src, clock, 0.1)
     model.fail_fifo_read(errno.ENXIO, after_reads=2)
     b = src.read()
