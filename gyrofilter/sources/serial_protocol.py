@@ -222,10 +222,10 @@ class LineParser:
         if self.header is not None:
             old = {k: self.header[k] for k in _UNIT_KEYS if k in self.header}
             if old != units:
-                raise UnitsConflict(
-                    f"{self.where}: the device's header changed the units mid-stream ({old} -> {units}); "
-                    "start a new recording"
-                )
+                changed = ", ".join(f"{k} {old.get(k, '(none)')} -> {units.get(k, '(none)')}"
+                                    for k in _UNIT_KEYS if old.get(k) != units.get(k))
+                raise UnitsConflict(f"{self.where}: the device's header changed the units mid-stream ({changed}); "
+                                    "start a new recording")
         self.header = dict(header)
         self.sample_rate_hz = float(header["sample_rate_hz"])
         self._lsb_per_dps = float(header["lsb_per_dps"]) if "lsb_per_dps" in header else None
