@@ -299,3 +299,18 @@ def test_parser_header_changing_the_accelerometer_unit_mid_stream_is_refused():
     p.feed(HEADER.replace(b"\n", b" " + ACCEL + b"\n"))  # the same header again: fine
     with pytest.raises(DeviceError, match=r"changed the units mid-stream \(accel_unit g -> m/s\^2\); start a new"):
         p.feed(HEADER.replace(b"\n", b" " + ACCEL.replace(b"=g", b"=m/s^2") + b"\n"))
+
+
+def test_a_six_axis_line_longer_than_a_line_may_be_is_refused_in_a_block_as_alone():
+    """Eight cells, seven of 41 characters (a plain-looking block, 295 bytes a line): the numpy path took
+    it whole, the line-by-line path refuses a line beyond 256 bytes; both refuse it now."""
+    head = HEADER.replace(b"\n", b" fields=counter,gx,gy,gz,temp,ax,ay,az accel_unit=g\n")
+    cell = b"1" * 20 + b"." + b"2" * 20
+    long_line = b",".join([b"1"] + [cell] * 7) + b"\n"
+    good = b"0,1,2,3,4,5,6,7\n"
+    assert len(long_line) - 1 > 256
+    whole, alone = LineParser(), LineParser()
+    rows = whole.feed(head + good + long_line + b"2,1,2,3,4,5,6,7\n")
+    parts = [alone.feed(x) for x in (head, good, long_line, b"2,1,2,3,4,5,6,7\n")]
+    np.testing.assert_array_equal(rows, np.concatenate(parts))
+    assert len(rows) == 2 and whole.stats == alone.stats and whole.stats["bad_lines"] == 1

@@ -73,11 +73,11 @@ _KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp", *ACCEL_COLUMNS)
 _UNIT_KEYS = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_per_g")  # a repeated header keeps them
 _HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
 _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
-# a cell of the numpy path: a plain decimal of at most 50 characters (sign, 24 digits, a point, 24
-# digits), so that a line of 5 cells and its "\r" stays within MAX_LINE_BYTES, and strictly one:
-# numpy 1.24's fromstring reads "1.2.3" as 1.2 and stops, unnoticed where it is the block's last
-# cell; every other cell ("1.2.3", "+-4", "1e3") goes the line-by-line way, which names it
-_PLAIN_CELL = rb"[-+]?(?:[0-9]{1,24}(?:\.[0-9]{0,24})?|\.[0-9]{1,24})"
+# a cell of the numpy path (:func:`_plain_cell`): a plain decimal of at most 2 d + 2 characters
+# (sign, d digits, a point, d digits; d = 24 up to 5 fields, fewer for more), so that a line of
+# its cells, commas and "\r" stays within MAX_LINE_BYTES, and strictly one: numpy 1.24's
+# fromstring reads "1.2.3" as 1.2 and stops, unnoticed where it is the block's last cell; every
+# other cell ("1.2.3", "+-4", "1e3", a longer one) goes the line-by-line way, which names it
 _PLAIN_LINES = {}  # field count -> compiled pattern of a block of plain CSV number lines
 # bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
 _TEXT = b"0123456789+-.,eEnaifNAIF \t"
@@ -85,6 +85,13 @@ _TEXT = b"0123456789+-.,eEnaifNAIF \t"
 
 class UnitsConflict(DeviceError):
     """The device's header disagrees with the units already in use (options or an earlier header)."""
+
+
+def _plain_cell(n_fields):
+    """The numpy path's cell pattern for lines of ``n_fields`` cells: d digits either side of the
+    point, d = min(24, the most that keeps n (2 d + 2) + (n - 1) commas + "\r" within MAX_LINE_BYTES)."""
+    digits = min(24, ((MAX_LINE_BYTES - n_fields) // n_fields - 2) // 2)
+    return rb"[-+]?(?:[0-9]{1,%d}(?:\.[0-9]{0,%d})?|\.[0-9]{1,%d})" % (digits, digits, digits)
 
 
 def _parse_fields(text, where):
@@ -358,7 +365,7 @@ class LineParser:
         return np.empty((0, len(cols) if cols else 4))
 
     def _fast(self, block):
-        """All lines plain CSV with the known field count (cells of :data:`_PLAIN_CELL`, which the
+        """All lines plain CSV with the known field count (cells of :func:`_plain_cell`, which the
         line-by-line path reads alike): one regular-expression check, one numpy conversion.
         Anything else (headers, messages, bad lines) returns None."""
         if self.header is None or self.fields is None or self._skip_first_line:
@@ -366,7 +373,8 @@ class LineParser:
         nf = len(self.fields)
         pattern = _PLAIN_LINES.get(nf)
         if pattern is None:
-            pattern = _PLAIN_LINES[nf] = re.compile(rb"(?:%s(?:,%s){%d}\r?\n)*" % (_PLAIN_CELL, _PLAIN_CELL, nf - 1))
+            cell = _plain_cell(nf)
+            pattern = _PLAIN_LINES[nf] = re.compile(rb"(?:%s(?:,%s){%d}\r?\n)*" % (cell, cell, nf - 1))
         if pattern.fullmatch(block) is None:
             return None
         n_lines = block.count(b"\n")
