@@ -6,6 +6,8 @@ FIFO's frames: their layout, their decoding into a source's columns and the temp
 Datasheet sections: InvenSense RM-MPU-6000A-00 rev 4.2 (register map, :mod:`.registers`)
 and PS-MPU-6000A-00 rev 3.4 (product specification).
 """
+import functools
+
 import numpy as np
 
 from ...errors import SettingsError
@@ -137,16 +139,22 @@ def decode_fifo(buf, n_words):
 def frame_values(words, layout, columns, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):
     """Decoded frames (:func:`decode_fifo`, words in ``layout`` order) as a source's value columns.
 
-    ``columns``: the names wanted, in the source's order (``gx, gy, gz[, temp][, ax, ay, az]``,
-    each in ``layout``); gyro and accelerometer stay in LSB, ``temp`` becomes deg C by
-    :func:`temperature_c` with the chip's ``lsb_per_c`` and ``offset_c``. Returns floats, shape
-    (frames, len(columns)).
+    ``layout`` and ``columns``: tuples of names; ``columns`` the names wanted, in the source's
+    order (``gx, gy, gz[, temp][, ax, ay, az]``, each in ``layout``). Gyro and accelerometer stay
+    in LSB, ``temp`` becomes deg C by :func:`temperature_c` with the chip's ``lsb_per_c`` and
+    ``offset_c``. Returns floats, shape (frames, len(columns)).
     """
-    out = np.empty((len(words), len(columns)))
-    for j, name in enumerate(columns):
-        raw = words[:, layout.index(name)]
-        out[:, j] = temperature_c(raw, lsb_per_c, offset_c) if name == "temp" else raw
+    order, temp_at = _column_order(layout, columns)
+    out = words[:, order].astype(float)
+    if temp_at is not None:
+        out[:, temp_at] = temperature_c(out[:, temp_at], lsb_per_c, offset_c)
     return out
+
+
+@functools.lru_cache(maxsize=None)
+def _column_order(layout, columns):
+    """(the index in ``layout`` of each of ``columns``, the place of ``temp`` in ``columns`` or None)."""
+    return np.array([layout.index(name) for name in columns]), (columns.index("temp") if "temp" in columns else None)
 
 
 def temperature_c(raw, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):

@@ -495,7 +495,8 @@ class MPU6050Source(Source):
         n = len(words)
         rows = np.empty((n, len(self.columns)))
         rows[:, 0] = (self._next_index + np.arange(n)) / self.sample_rate_hz
-        rows[:, 1:] = frame_values(words, self._layout, self.columns[1:], self._temp_lsb_per_c, self._temp_offset_c)
+        rows[:, 1:] = frame_values(words, self._layout, tuple(self.columns[1:]), self._temp_lsb_per_c,
+                                   self._temp_offset_c)
         self._next_index += n
         self.stats["samples"] += n
         return rows
