@@ -16,6 +16,11 @@ DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 MAD_TO_SIGMA = 1.4826  # sigma = 1.4826 MAD for Gaussian data (1 / Phi^-1(3/4); Hampel 1974)
 GYRO_UNITS = ("dps", "rad/s", "lsb")
+#: the units of a recording's accelerometer columns ``ax, ay, az`` (its header's ``accel_unit``)
+ACCEL_UNITS = ("m/s^2", "g", "lsb")
+#: standard gravity g_n in m/s^2, exact by definition (3rd CGPM 1901; NIST SP 330, 2019, section 2.3.4):
+#: the one value of g that converts an accelerometer's ``g`` and ``lsb`` (LSB per g) to m/s^2
+STANDARD_GRAVITY_MPS2 = 9.80665
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
 #: the plausible temperatures (deg C) of a gyro's die, ends included, for a sample and a calibration:
 #: beyond any MEMS part (the MPU6050's TEMP_OUT register spans -60 to +133 deg C)
@@ -41,6 +46,12 @@ RATE_TOLERANCE = 0.05
 #: 1.05e7. The range keeps a factor of about 10 beyond each end; a number outside it is a unit or typing
 #: error (1e308 or 1e-308 LSB per deg/s would read every sample as 0 or as inf deg/s)
 LSB_PER_DPS_RANGE = (0.1, 1e8)
+#: the LSB per g an accelerometer's output may have (lsb_per_g), ends included. MEMS accelerometers span
+#: about 5 to 3e8: a 12-bit output at +-400 g (H3LIS331) reads about 5, the MPU6050 2048 (+-16 g) to
+#: 16384 (+-2 g), a 32-bit output of a navigation-grade part (ADIS16495, 0.25 mg over 2^16) 2.6e8. The
+#: range keeps a factor of about 10 beyond each end, as :data:`LSB_PER_DPS_RANGE`: 1e-308 LSB per g
+#: would read every sample as inf m/s^2
+LSB_PER_G_RANGE = (0.5, 3e9)
 MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
 
 

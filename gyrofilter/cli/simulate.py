@@ -9,13 +9,11 @@ its place only when complete, so a failed or interrupted run leaves no file behi
 import sys
 import time
 
-import numpy as np
-
 from ..errors import SettingsError
 from ..recording import RecordingWriter
 from ..sim.model import load_model, validate_model
-from ..sim.simulate import (MAX_SAMPLES, check_sample_count, check_seed, draw_seed, recording_columns, recording_header,
-                            simulate_chunks)
+from ..sim.simulate import (MAX_SAMPLES, block_rows, check_sample_count, check_seed, draw_seed, recording_columns,
+                            recording_header, simulate_chunks)
 from ..effects import REGISTRY, ROWS
 from ..units import MAX_DURATION_S, check_duration_s
 from . import console, options, outputs
@@ -66,11 +64,9 @@ def run(args):
     last = time.monotonic()
     with outputs.replacing(args.out) as tmp, \
             RecordingWriter(tmp, header, columns, flush_interval_s=None, fsync=False) as writer:
-        for t_s, gyro, temp_c in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=seed,
-                                                 validated=spec):
-            cols = [t_s[:, None], gyro] + ([temp_c[:, None]] if temp_c is not None else [])
-            writer.write(np.hstack(cols))
-            done += len(t_s)
+        for block in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=seed, validated=spec):
+            writer.write(block_rows(block))
+            done += len(block.t_s)
             if show and (time.monotonic() - last > 1.0 or done == n_total):
                 last = time.monotonic()
                 print(f"\rsimulate: {done}/{n_total} samples ({100.0 * done / n_total:.0f} %)", end="", file=sys.stderr)

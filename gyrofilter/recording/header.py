@@ -17,6 +17,9 @@ VERSION_KEY = "gyrofilter-recording"
 FORMAT_VERSION = "1"
 #: the gyro columns every recording has, in the order of :data:`~gyrofilter.units.AXES`
 GYRO_COLUMNS = tuple(f"g{axis}" for axis in AXES)
+#: the accelerometer columns of a six-axis recording, all three or none, in the order of
+#: :data:`~gyrofilter.units.AXES`, in the header's ``accel_unit`` (:func:`check_accelerometer`)
+ACCEL_COLUMNS = tuple(f"a{axis}" for axis in AXES)
 #: the columns every gyrofilter source and output starts with: time (s), then the gyro columns
 COLUMNS = ("t", *GYRO_COLUMNS)
 #: the start of the annotation with which ``record`` and ``run`` end their output (``# end: why; ...``):
