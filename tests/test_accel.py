@@ -185,12 +185,22 @@ def test_the_sim_source_delivers_the_accelerometer_as_simulate_does():
     assert np.array_equal(rows, np.column_stack([rec.columns[c] for c in source.columns])[:len(rows)])
 
 
-def test_simulate_writes_the_accelerometer_columns_and_they_read_back(tmp_path):
+def test_simulate_writes_the_accelerometer_columns_and_they_read_back(tmp_path, capsys):
     model_path, out = tmp_path / "m.json", tmp_path / "six.csv.gz"
     model_path.write_text(json.dumps(DEFAULT_MODEL))
     assert main(["simulate", "--model", str(model_path), "--duration", "3", "--seed", "6", "--chunk", "77",
                  "--out", str(out)]) == 0
+    assert "gyro_unit lsb, accel_unit lsb, seed 6" in capsys.readouterr().out
     rec, one = read_recording(out), simulate(DEFAULT_MODEL, 3.0, seed=6)
     assert rec.header["accel_unit"] == "lsb" and rec.header["lsb_per_g"] == "16384"
     for name in one.columns:
         assert np.array_equal(rec.columns[name], one.columns[name]), name
+
+
+def test_formats_md_states_the_accelerometers_bound():
+    from gyrofilter.sim.model import MAX_ACCEL_MPS2
+    from support import REPO
+
+    text = (REPO / "docs" / "formats.md").read_text(encoding="utf-8")
+    assert f"| a model's accelerometer numbers, in m/s² (and m/s² per √s or per °C, m/s per √s) | ±{MAX_ACCEL_MPS2:g} |" in text
+    assert f"Each number within ±{MAX_ACCEL_MPS2:g} m/s²" in text

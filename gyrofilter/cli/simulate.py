@@ -11,7 +11,7 @@ import time
 
 from ..errors import SettingsError
 from ..recording import RecordingWriter
-from ..sim.model import load_model, validate_model
+from ..sim.model import ACCELEROMETER, load_model, validate_model
 from ..sim.simulate import (MAX_SAMPLES, block_rows, check_sample_count, check_seed, draw_seed, recording_columns,
                             recording_header, simulate_chunks)
 from ..effects import REGISTRY, ROWS
@@ -26,6 +26,7 @@ def add_arguments(parser):
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json); "
                              "the effects of an axis: " + ", ".join(e.name for e in REGISTRY if e.name not in ROWS)
                              + "; of whole rows (a top-level key): " + ", ".join(ROWS)
+                             + "; an accelerometer (ax, ay, az): the top-level key " + ACCELEROMETER
                              + "; their parameters: docs/formats.md, section 2")
     parser.add_argument("--duration", required=True, type=options.decimal, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
     options.add_sample_rate_argument(parser, help="sample rate in Hz (overrides the model's)")
@@ -72,6 +73,7 @@ def run(args):
                 print(f"\rsimulate: {done}/{n_total} samples ({100.0 * done / n_total:.0f} %)", end="", file=sys.stderr)
     if show:
         print(file=sys.stderr)
+    accel = spec[ACCELEROMETER]
     console.tell(f"wrote {args.out}: {n_total} samples at {spec['sample_rate_hz']:g} Hz ({n_total / spec['sample_rate_hz']:g} s), "
-          f"gyro_unit {spec['gyro_unit']}, seed {seed}")
+                 f"gyro_unit {spec['gyro_unit']}" + (f", accel_unit {accel['accel_unit']}" if accel else "") + f", seed {seed}")
     return 0

@@ -175,7 +175,10 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     e.g. ``model: axes.z.effects[0] (gauss_markov): missing parameter 'tau_s' (expected a number > 0)``.
     Keys starting with ``_`` and top-level metadata (description, name, comment, notes, source,
     sensor) are ignored. A whole-row effect (``repeated_samples``) is a top-level key holding its
-    parameters, checked as an effect's; ``normalized`` holds it (with ``effect``) or None.
+    parameters, checked as an effect's; ``normalized`` holds it (with ``effect``) or None. The
+    ``accelerometer`` (:mod:`gyrofilter.sim.accel`) is checked likewise, its numbers within
+    ±:data:`MAX_ACCEL_MPS2` and ``lsb_per_g`` in ``units.LSB_PER_G_RANGE``; ``normalized`` holds it
+    with its defaults and its ``accel_unit`` (``lsb`` when ``gyro_unit`` is, else ``m/s^2``), or None.
 
     Every number is bounded, so that no model makes a non-finite or absurd signal: the sample
     rate by :func:`~gyrofilter.units.check_sample_rate_hz`; others by its

@@ -15,7 +15,7 @@ Per axis and sample n (t = n / f_s), in deg/s:
 
 then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb_per_dps)). Last,
 ``repeated_samples`` (a top-level key: whole rows) makes some rows repeat the previous row on every
-column, the temperature's too (:class:`gyrofilter.sim.noise_terms.RepeatedRows`); its stream is the
+column, the temperature's and the accelerometer's too (:class:`gyrofilter.sim.noise_terms.RepeatedRows`); its stream is the
 record's, not an axis's, so one axis simulated alone (:func:`simulate_axis_dps`) repeats the same rows.
 Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`
 (``wandering_tone`` in :mod:`gyrofilter.sim.tone`).
@@ -36,12 +36,16 @@ The variance is kept, so N keeps its meaning and the Allan deviation is unchange
 expectation; only the distribution of every sample is heavier-tailed than a Gaussian (unlike
 ``outliers``, a few isolated spikes added on top).
 
+The ``accelerometer`` key adds the columns ``ax, ay, az`` (:mod:`gyrofilter.sim.accel`, its equations),
+written after the gyro's and ``temp`` in the model's ``accel_unit``.
+
 The ``temperature`` key designs the ``temp`` column (an exponential self-heating profile with
 an optional cycle, or a table interpolated linearly; read noise and resolution only on the
 written column) and drives the ``temperature`` effect.
 
 Randomness: only ``seed`` or ``rng``. Every random term draws from its own stream, derived
-from the root seed and a fixed key (axis, effect name, occurrence), so (1) a run cut into chunks
+from the root seed and a fixed key (axis, effect name, occurrence; the accelerometer's axes have keys
+of their own, so adding one leaves the gyro's samples unchanged bit for bit), so (1) a run cut into chunks
 equals the one-shot run bit for bit, and (2) adding an effect to a model leaves the other terms'
 random draws unchanged for the same seed (common random numbers: a baseline and its extension
 share their white noise).
