@@ -204,3 +204,11 @@ def test_formats_md_states_the_accelerometers_bound():
     text = (REPO / "docs" / "formats.md").read_text(encoding="utf-8")
     assert f"| a model's accelerometer numbers, in m/s² (and m/s² per √s or per °C, m/s per √s) | ±{MAX_ACCEL_MPS2:g} |" in text
     assert f"Each number within ±{MAX_ACCEL_MPS2:g} m/s²" in text
+
+
+def test_record_from_the_sim_source_keeps_the_accelerometer(tmp_path):
+    out = tmp_path / "six.csv"
+    assert main(["record", "--source", "sim:seed=3,realtime=0", "--duration", "2", "--out", str(out), "--quiet"]) == 0
+    rec, one = read_recording(out), simulate(DEFAULT_MODEL, 2.0, seed=3)
+    assert list(rec.columns) == list(one.columns) and rec.header["accel_unit"] == "lsb"
+    assert np.array_equal(np.column_stack([rec.columns[c] for c in ACCEL]), np.column_stack([one.columns[c] for c in ACCEL]))

@@ -23,9 +23,9 @@ Per axis and sample n (t = n / f_s), in m/s^2:
     c_a (T(t) - T(0))             temperature coefficient (``coefficient_mps2_per_c``) on the true
                                   temperature of the model's ``temperature`` profile, T(0) its start
 
-w, w' are independent unit normal draws, each term from its own random stream (the simulator's
-keys :data:`gyrofilter.sim.simulate` gives the accelerometer's axes are disjoint from the gyro's, so
-a model's gyro samples do not change when an accelerometer is added). The terms are the gyro's
+w, w' are independent unit normal draws, each term from its own random stream (:mod:`gyrofilter.sim.simulate`
+keys the accelerometer's streams apart from the gyro's, so a model's gyro samples do not change when an
+accelerometer is added). The terms are the gyro's
 (:mod:`gyrofilter.sim.noise_terms`, :mod:`gyrofilter.sim.flicker`): their arithmetic has no unit, so
 given m/s^2 they give m/s^2.
 
