@@ -202,7 +202,8 @@ def test_formats_md_states_the_accelerometers_bound():
     from support import REPO
 
     text = (REPO / "docs" / "formats.md").read_text(encoding="utf-8")
-    assert f"| a model's accelerometer numbers, in m/s² (and m/s² per √s or per °C, m/s per √s) | ±{MAX_ACCEL_MPS2:g} |" in text
+    row = "| a model's accelerometer numbers, in m/s² (and m/s² per √s or per °C, m/s per √s) |"
+    assert f"{row} ±{MAX_ACCEL_MPS2:g} |" in text
     assert f"Each number within ±{MAX_ACCEL_MPS2:g} m/s²" in text
 
 

@@ -20,7 +20,8 @@ from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARRO
                        SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
 from ..inputs import MAX_QUOTE_CHARS, closest, did_you_mean, load_json, quote
-from ..units import AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, LSB_PER_G_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_sample_rate_hz, plain
+from ..units import (AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, LSB_PER_G_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C,
+                     check_sample_rate_hz, plain)
 
 # Bounds of every model number, so that no model gives a non-finite or absurd signal. A number is
 # bounded by its key's unit (the suffix of its name) and then checked by its kind below; every
@@ -42,9 +43,9 @@ MAX_EFFECTS_PER_AXIS = 100
 MAX_ARMA_COEFFICIENTS = 20  # each of phi and theta; `gyrofilter arma --max-n 10` fits ARMA(20, 19)
 MAX_TABLE_POINTS = 100_000  # a temperature table's t_s and temp_c
 #: bounds of the numbers whose key carries no unit, by key
-_NAMED_LIMITS = {"lsb_per_dps": LSB_PER_DPS_RANGE, "lsb_per_g": LSB_PER_G_RANGE, "per_decade": (0.1, 10.0), "spread_ln": (0.0, 5.0),
-                 "phi": (-1e6, 1e6), "theta": (-1e6, 1e6), "fraction": (0.0, 0.5), "scale_ratio": (1.0, 1000.0),
-                 "q": (0.05, 1000.0)}
+_NAMED_LIMITS = {"lsb_per_dps": LSB_PER_DPS_RANGE, "lsb_per_g": LSB_PER_G_RANGE, "per_decade": (0.1, 10.0),
+                 "spread_ln": (0.0, 5.0), "phi": (-1e6, 1e6), "theta": (-1e6, 1e6), "fraction": (0.0, 0.5),
+                 "scale_ratio": (1.0, 1000.0), "q": (0.05, 1000.0)}
 
 # kinds of parameter checks: (test, what is expected)
 _KINDS = {
