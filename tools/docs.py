@@ -444,6 +444,11 @@ def allan_before_after():
             + allan_figures.before_after_table(rec, ("paper", "hold", "recommended")))
 
 
+@block("allan-consistency", "docs/allan.md", "tools/allan_consistency.py --jobs 2", slow=True)
+def allan_consistency():
+    return fence(tool("allan_consistency.py", "--jobs", "2"))
+
+
 @block("bench-allan", "docs/allan.md", "tools/bench_allan.py --day-file", slow=True)
 def bench_allan():
     return fence(tool("bench_allan.py", "--day-file"))
