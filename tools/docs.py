@@ -457,6 +457,11 @@ def kalibr_mpu6050():
     return fence(f"$ gyrofilter {' '.join(sim)}\n$ gyrofilter {' '.join(allan)}\n...\n{said}$ cat imu.yaml\n{yaml}")
 
 
+@block("allan-consistency", "docs/allan.md", "tools/allan_consistency.py --jobs 2", slow=True)
+def allan_consistency():
+    return fence(tool("allan_consistency.py", "--jobs", "2"))
+
+
 @block("bench-allan", "docs/allan.md", "tools/bench_allan.py --day-file", slow=True)
 def bench_allan():
     return fence(tool("bench_allan.py", "--day-file"))

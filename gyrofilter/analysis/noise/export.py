@@ -79,7 +79,7 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
               "details": {JSON_KEY[t]: _details_json(r.fitted[t], float(v)) for t, v in zip(TERMS, r.fit_values)},
               "readoff": {JSON_KEY[t]: _details_json(r.readoff[t]) for t in TERMS},
               "kalibr": kalibr_values(r),
-              "fit_consistency": r.fit_consistency(),
+              "fit_consistency": r.fit_consistency(), "full_fit_consistency": r.full_fit_consistency(),
               "fit_reduced_chi2": r.fit_reduced_chi2, "fit_dof": r.fit_dof,
               "warnings": list(r.warnings)}
         doc["axes"][name] = ax
