@@ -521,6 +521,7 @@ def _default_model_without_temperature():
 
     model = load_model(str(DEFAULT_MODEL_PATH))
     model.pop("temperature")
+    model.pop("accelerometer", None)  # its temperature coefficients need the profile; the gyro is analysed
     for axis in model["axes"].values():
         axis["effects"] = [e for e in axis["effects"] if e["effect"] != "temperature"]
     return model
