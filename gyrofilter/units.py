@@ -16,6 +16,11 @@ DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 MAD_TO_SIGMA = 1.4826  # sigma = 1.4826 MAD for Gaussian data (1 / Phi^-1(3/4); Hampel 1974)
 GYRO_UNITS = ("dps", "rad/s", "lsb")
+#: the units of a recording's accelerometer columns ``ax, ay, az`` (its header's ``accel_unit``)
+ACCEL_UNITS = ("m/s^2", "g", "lsb")
+#: standard gravity g_n in m/s^2, exact by definition (3rd CGPM 1901; NIST SP 330, 2019, section 2.3.4):
+#: the one value of g that converts an accelerometer's ``g`` and ``lsb`` (LSB per g) to m/s^2
+STANDARD_GRAVITY_MPS2 = 9.80665
 MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples at most at 8 kHz)
 #: the plausible temperatures (deg C) of a gyro's die, ends included, for a sample and a calibration:
 #: beyond any MEMS part (the MPU6050's TEMP_OUT register spans -60 to +133 deg C)
@@ -23,6 +28,10 @@ TEMP_RANGE_C = (-100.0, 200.0)
 #: largest |angular rate| a sample may have (deg/s): 50x the MPU6050's widest full scale (2000 deg/s)
 #: and 7x the widest MEMS gyros' (about 14 000 deg/s); it keeps every square the filters take finite
 MAX_RATE_DPS = 100_000.0
+#: largest |acceleration| a sample of an accelerometer may have (m/s^2; about 1e6 g): far beyond any MEMS
+#: accelerometer (the MPU6050 reads +-16 g, high-g parts +-400 g, shock sensors some 1e5 g), and it
+#: keeps every square an analysis takes finite (1e308 g read as m/s^2 is inf)
+MAX_ACCEL_MPS2 = 1e7
 #: smallest noise (deg/s) the analyses take: an axis whose Allan deviation (allan) or standard deviation
 #: (arma) stays below it is refused. No gyro is that quiet (a unit error?), and the fits' fourth
 #: powers of it stay normal float64 numbers (a noise of 1e-300 deg/s ended in a failed SVD)
@@ -41,6 +50,12 @@ RATE_TOLERANCE = 0.05
 #: 1.05e7. The range keeps a factor of about 10 beyond each end; a number outside it is a unit or typing
 #: error (1e308 or 1e-308 LSB per deg/s would read every sample as 0 or as inf deg/s)
 LSB_PER_DPS_RANGE = (0.1, 1e8)
+#: the LSB per g an accelerometer's output may have (lsb_per_g), ends included. MEMS accelerometers span
+#: about 5 to 3e8: a 12-bit output at +-400 g (H3LIS331) reads about 5, the MPU6050 2048 (+-16 g) to
+#: 16384 (+-2 g), a 32-bit output of a navigation-grade part (ADIS16495, 0.25 mg over 2^16) 2.6e8. The
+#: range keeps a factor of about 10 beyond each end, as :data:`LSB_PER_DPS_RANGE`: 1e-308 LSB per g
+#: would read every sample as inf m/s^2
+LSB_PER_G_RANGE = (0.5, 3e9)
 MAX_DURATION_S = 1e9  # about 32 years: longer than any recording or simulation, short enough for whole sample counts
 
 
@@ -67,6 +82,22 @@ def check_lsb_per_dps(value, name="lsb_per_dps", error=SettingsError):
     if not ok:
         raise error(f"{name} must be a number of LSB per deg/s in [{low:g}, {high:g}] (MEMS gyros span about 2 to "
                     f"1e4), got {plain(value)}")
+    return float(value)
+
+
+def check_lsb_per_g(value, name="lsb_per_g", error=SettingsError):
+    """``value`` as a float when it is LSB per g within :data:`LSB_PER_G_RANGE`, else ``error``
+    naming ``name`` (the keyword, option or header key, with its file and line if any): the one
+    check of an accelerometer's scale, for headers, options and models."""
+    low, high = LSB_PER_G_RANGE
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+    try:
+        ok = ok and low <= float(value) <= high  # NaN fails the comparison
+    except OverflowError:  # an int beyond a float's range
+        ok = False
+    if not ok:
+        raise error(f"{name} must be a number of LSB per g in [{low:g}, {high:g}] (MEMS accelerometers span about "
+                    f"5 to 3e8), got {plain(value)}")
     return float(value)
 
 
@@ -196,3 +227,19 @@ def from_dps(values_dps, unit, lsb_per_dps=None):
             raise SettingsError(f"gyro_unit 'lsb' needs a positive lsb_per_dps, got {plain(lsb_per_dps)}")
         return values_dps * lsb_per_dps
     raise SettingsError(f"unknown gyro unit {unit!r}; expected one of {', '.join(GYRO_UNITS)}")
+
+
+def to_mps2(values, accel_unit, lsb_per_g=None):
+    """Convert acceleration ``values`` from ``accel_unit`` (one of :data:`ACCEL_UNITS`) to m/s^2:
+    a = v (``m/s^2``), a = v g_n (``g``), a = v g_n / lsb_per_g (``lsb``), with g_n =
+    :data:`STANDARD_GRAVITY_MPS2`; ``lsb_per_g`` (LSB per g, > 0) is needed for 'lsb'."""
+    values = np.asarray(values, dtype=float)
+    if accel_unit == "m/s^2":
+        return values
+    if accel_unit == "g":
+        return values * STANDARD_GRAVITY_MPS2
+    if accel_unit == "lsb":
+        if not lsb_per_g or lsb_per_g <= 0:
+            raise SettingsError(f"accel_unit 'lsb' needs a positive lsb_per_g, got {plain(lsb_per_g)}")
+        return values * (STANDARD_GRAVITY_MPS2 / lsb_per_g)
+    raise SettingsError(f"unknown accelerometer unit {plain(accel_unit)}; expected one of {', '.join(ACCEL_UNITS)}")

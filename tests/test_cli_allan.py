@@ -337,6 +337,24 @@ def test_numerically_degenerate_recordings_end_in_a_result_or_one_line_naming_th
 HOSTILE_NAME = "unit7\naccelerometer_noise_density: 1.0e-9\n#.csv.gz"
 
 
+def test_a_kalibr_range_beyond_the_record_is_refused_before_any_output(static_recording, tmp_path, capsys):
+    """--kalibr-tau-s: outside the record's cluster times (300 s: up to 33 s) one line and exit 2,
+    no file written, nothing printed; within them the yaml covers that range; without --kalibr refused."""
+    path, _ = static_recording
+    doc, yaml = tmp_path / "a.json", tmp_path / "imu.yaml"
+    capsys.readouterr()
+    assert main(["allan", path, "--json", str(doc), "--kalibr", str(yaml), "--kalibr-tau-s", "0.1,100"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.strip().splitlines()) == 1
+    assert "--kalibr-tau-s 0.1,100 s lies outside the record's cluster times 0.01 .. 33" in err
+    assert not doc.exists() and not yaml.exists()
+    assert main(["allan", path, "--kalibr", str(yaml), "--kalibr-tau-s", "0.05,20"]) == 0
+    assert "bounding pair over tau 0.05 .. 20 s" in yaml.read_text()
+    assert "the pair that bounds every axis's Allan deviation over tau 0.05 .. 20 s" in capsys.readouterr().out
+    assert main(["allan", path, "--kalibr-tau-s", "0.05,20"]) == 2
+    assert "give --kalibr OUT.yaml as well" in capsys.readouterr().err
+
+
 def yaml_keys(text):
     """The keys of a flat YAML document (what is left of each line that is not a comment)."""
     return [line.split(":", 1)[0] for line in text.splitlines() if line.split("#")[0].strip()]

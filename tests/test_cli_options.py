@@ -76,7 +76,7 @@ def test_every_numeric_option_of_every_command_uses_the_plain_number_types():
         sub = next(a for a in build_parser(name)._actions if a.dest == "command").choices[name]
         for action in sub._actions:
             assert action.type not in (float, int), (name, action.option_strings)
-            checked += action.type in (options.decimal, options.whole_number, options.lsb_per_dps)
+            checked += action.type in (options.decimal, options.whole_number, options.lsb_per_dps, options.number_pair)
     assert checked >= 19  # the options of 2026-12: --duration, --seed, --jobs, --confidence, ...
 
 

@@ -54,6 +54,17 @@ def test_recording_example_parses(tmp_path):
     assert [text for _, text in rec.notes] == ["gap: 2 samples lost before t=0.04 s"]
 
 
+def test_six_axis_recording_example_parses(tmp_path):
+    blocks = re.findall(r"^```text\n(.*?)^```", section(1), re.M | re.S)
+    six = next(block for block in blocks if "accel_unit" in block)
+    path = tmp_path / "six.csv"
+    path.write_text(six, encoding="utf-8")
+    rec = read_recording(path)
+    assert rec.accel_unit == "lsb" and rec.lsb_per_g == 16384.0 and list(rec.columns)[-3:] == ["ax", "ay", "az"]
+    np.testing.assert_allclose(rec.accel_mps2[0], np.array([-120, 88, 16390]) * 9.80665 / 16384)
+    assert "9.80665" in section(1) and "`accel_unit`" in section(1) and "`lsb_per_g`" in section(1)
+
+
 def test_model_example_validates_and_runs():
     model = json.loads(example(2, "json"))
     spec, warnings = validate_model(model)

@@ -156,3 +156,15 @@ def test_a_numeric_option_of_allan_is_taken_or_refused_naming_it(tmp_path, capsy
     if not rec.exists():
         write_recording(rec, simulate({"sample_rate_hz": 100.0, "axes": {"x": {"arw_dps_per_sqrt_hz": 0.01}}}, 20.0, seed=1))
     _check_command(["allan", str(rec), "--axes", "x", f"{option}={value}"], option, capsys)
+
+
+@settings(max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(low=NUMBERS | st.just("0.05"), high=NUMBERS | st.just("2"))
+def test_allans_kalibr_tau_range_is_taken_or_refused_naming_it(tmp_path, capsys, low, high):
+    """--kalibr-tau-s LOW,HIGH: two plain numbers, 0 < LOW < HIGH, within the record's cluster
+    times (20 s: 0.01 .. 2.2 s) and holding two of them; else one line naming the option."""
+    rec = tmp_path / "r.csv"
+    if not rec.exists():
+        write_recording(rec, simulate({"sample_rate_hz": 100.0, "axes": {"x": {"arw_dps_per_sqrt_hz": 0.01}}}, 20.0, seed=1))
+    _check_command(["allan", str(rec), "--axes", "x", "--kalibr", str(tmp_path / "imu.yaml"), "--force",
+                    f"--kalibr-tau-s={low},{high}"], "--kalibr-tau-s", capsys)

@@ -297,6 +297,48 @@ def test_gzip_framing_reads_as_written_a_prefix_when_cut_or_is_refused_many(case
     _check_framing(case)
 
 
+# --- 3b. six axes: the accelerometer's header keys and columns -------------------------------------
+
+ACCEL_UNIT_TEXTS = ["m/s^2", "g", "lsb", "G", "m/s2", "", "LSB", "mps2"]
+LSB_PER_G_TEXTS = ["16384", "2048", "0.5", "3e9", "0", "-16384", "0.4", "4e9", "nan", "1_0", "x", ""]
+
+
+@st.composite
+def six_axis_texts(draw):
+    """(text, whether it is a six-axis recording the reader must take, its ax, ay, az): drawn
+    accel_unit and lsb_per_g text (either may be absent), some of ax, ay, az among the columns,
+    rows of values an accelerometer reads (within 16 g in every unit)."""
+    unit = draw(st.sampled_from([None] + ACCEL_UNIT_TEXTS))
+    lsb_per_g = draw(st.sampled_from([None] + LSB_PER_G_TEXTS))
+    accel = draw(st.sampled_from([(), ("ax",), ("ax", "az"), ("ax", "ay", "az"), ("az", "ay", "ax")]))
+    names = draw(st.permutations(["gx", "gy", "gz", *accel]))
+    rows = np.array(draw(st.lists(st.lists(st.integers(-16, 16).map(float), min_size=len(names), max_size=len(names)),
+                                  min_size=1, max_size=5)))
+    lines = [f"# {k}: {v}" for k, v in GOOD_HEADER]
+    lines += [f"# {k}: {v}" for k, v in (("accel_unit", unit), ("lsb_per_g", lsb_per_g)) if v is not None]
+    lines += [",".join(names)] + [",".join(repr(v) for v in row) for row in rows.tolist()]
+    scale_ok = lsb_per_g is not None and _PLAIN.fullmatch(lsb_per_g) and 0.5 <= float(lsb_per_g) <= 3e9
+    readable = unit is None or (unit in ("m/s^2", "g", "lsb") and (unit != "lsb" or bool(scale_ok)) and len(accel) == 3)
+    return "\n".join(lines) + "\n", readable, rows, names
+
+
+@FAST
+@given(case=six_axis_texts())
+def test_a_six_axis_header_reads_or_is_refused_in_one_line_naming_a_line(case):
+    text, readable, rows, names = case
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, "six.csv")
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        rec, exc = _read(path)
+    if not readable:
+        assert rec is None and re.match(rf"{re.escape(path)}: line \d+: ", str(exc)), exc
+        return
+    assert exc is None, exc
+    for i, name in enumerate(names):
+        np.testing.assert_array_equal(rec.columns[name], rows[:, i])
+
+
 # --- 4. the command line: replay FILE --out OUT --------------------------------------------------
 
 def _check_replay(case):

@@ -119,6 +119,8 @@ def model(lines, tail, fields, bits, temp_raw):
         row = [index / RATE_HZ, values["gx"], values["gy"], values["gz"]]
         if "temp" in fields:
             row.append(values["temp"] / 340.0 + 36.53 if temp_raw else values["temp"])
+        if "ax" in fields:
+            row += [values["ax"], values["ay"], values["az"]]
         rows.append(row)
         stats["samples"] += 1
     if tail:
@@ -168,11 +170,12 @@ def counters(draw, n, bits):
 def streams(draw):
     """(bytes, lines with tags, tail, fields, counter bits, temp_raw) of a drawn stream."""
     fields = draw(st.sampled_from([["counter", "gx", "gy", "gz"], ["counter", "gx", "gy", "gz", "temp"],
-                                   ["gx", "gy", "gz"], ["counter", "gx", "gy", "gz", "temp"]]))
+                                   ["gx", "gy", "gz"], ["counter", "gx", "gy", "gz", "temp"],
+                                   ["counter", "gx", "gy", "gz", "temp", "ax", "ay", "az"], ["ax", "gx", "ay", "gy", "az", "gz"]]))
     bits = draw(st.sampled_from([8, 16, 32]))
     temp_raw = draw(st.booleans())
     words = (f"gyro_unit=lsb lsb_per_dps=131 sample_rate_hz={RATE_HZ} fields={','.join(fields)} "
-             f"temp_unit={'mpu6050_raw' if temp_raw else 'c'}")
+             f"temp_unit={'mpu6050_raw' if temp_raw else 'c'}" + (" accel_unit=lsb lsb_per_g=16384" if "ax" in fields else ""))
     header = f"# gyrofilter-serial: 1 {words} counter_bits={bits} sensor=X".encode()
     lines = [(draw(st.binary(max_size=30).filter(lambda b: b"\n" not in b and not b.startswith(b"#"))), None)
              for _ in range(draw(st.integers(0, 2)))]
@@ -267,11 +270,12 @@ def test_fuzz_serial_stream_in_tiny_chunks(data, size):
 
 
 _key = st.one_of(st.sampled_from(["gyro_unit", "lsb_per_dps", "sample_rate_hz", "fields", "counter_bits",
-                                  "temp_unit", "sensor", "chip_id", "a-b", "", "x" * 50]),
+                                  "temp_unit", "accel_unit", "lsb_per_g", "sensor", "chip_id", "a-b", "", "x" * 50]),
                  st.text(alphabet="abcxyz_09:#=é", max_size=8))
 _value = st.one_of(st.sampled_from(["lsb", "dps", "rad/s", "furlong", "131", "0", "-1", "1e-300", "1e400", "nan",
                                     "100", "100001", "16", "64", "7", "33", "counter,gx,gy,gz", "gx,gy,gz,gx",
-                                    "c", "mpu6050_raw", "", "0x68", "1_0"]),
+                                    "c", "mpu6050_raw", "", "0x68", "1_0", "g", "m/s^2", "16384",
+                                    "counter,gx,gy,gz,ax,ay,az", "gx,gy,gz,ax"]),
                    _numbers, st.text(alphabet="ab1.,=\x00\x7f ", max_size=8))
 
 
@@ -299,6 +303,9 @@ def _check_header(line):
     assert header["gyro_unit"] in ("dps", "rad/s", "lsb") and 0 < float(header["sample_rate_hz"]) <= 100000
     if header["gyro_unit"] == "lsb":
         assert 0 < float(header["lsb_per_dps"]) < math.inf
+    assert header.get("accel_unit", "g") in ("m/s^2", "g", "lsb") and ("lsb_per_g" in header) == (header.get("accel_unit") == "lsb")
+    if "lsb_per_g" in header:
+        assert 0 < float(header["lsb_per_g"]) < math.inf
     words = dict(w.split("=", 1) for w in line.rstrip(b"\r").decode().split()[3:])
     assert set(header) == set(words) - {"fields", "counter_bits", "temp_unit"}
     assert len(words) == len(line.split()) - 3  # no key given twice
@@ -328,7 +335,7 @@ _rate = ["100", "1000", "0.5", "100000", "200000", "0", "-3", "1e3", "nan", "1_0
 _KEY_VALUES = {
     "bus": ["0", "1", "65535", "65536", "-1", "0x1", "1.5"], "addr": ["0x68", "0x69", "104", "0x80", "0x"],
     "address": ["0x68", "105", "-1"], "rate": _rate, "range": ["250", "2000", "300", "1e9"],
-    "dlpf": ["0", "6", "7", "8", "-1"], "temp": _flag, "allow_chip": ["0x70", "255", "256", "0xFFFFFFFFF"],
+    "dlpf": ["0", "6", "7", "8", "-1"], "temp": _flag, "accel": _flag, "accel_range": ["2", "4", "16", "3", "0x10", "1e9"], "allow_chip": ["0x70", "255", "256", "0xFFFFFFFFF"],
     "baud": ["115200", "9600", "0", "-5", "1e300", "100000000", "1.5"], "unit": ["lsb", "dps", "rad/s", "furlong", ""],
     "lsb_per_dps": ["131", "65.5", "0", "-1", "1e-300", "inf"], "header_timeout": ["5", "0", "-1", "3601", "1e400"],
     "realtime": _flag, "speed": ["1", "2", "0.5", "0", "-1", "1e308", "nan"], "seed": ["0", "1", "12345", "-1", "0x10", "1.5", "9" * 30],

@@ -30,6 +30,13 @@ def indexed_gyro(n):
     return np.column_stack([gx, gy, gz])
 
 
+def indexed_accel(n):
+    """ax, ay, az that differ from the gyro words and from each other for every sample index (so a
+    frame read from the wrong offset, or a gyro word taken for an accelerometer word, shows)."""
+    k = np.arange(n)
+    return np.column_stack([(k * 31 + 11) % 65536 - 32768, (k * 7 + 5) % 65536 - 32768, 16384 - k % 4000])
+
+
 def index_of(rows):
     """Recover model sample indices from gx, gy (see indexed_gyro)."""
     gx = rows[:, 1].astype(np.int64)
@@ -127,7 +134,8 @@ def test_configuration_written_and_header(rig, range_dps, fs_bits, lsb):
     assert regs[0x6B] == 0x01                     # awake, CLKSEL = 1 (PLL, X gyro)
     assert regs[0x1B] == fs_bits
     assert regs[0x1A] == 0x03 and regs[0x19] == 9  # DLPF_CFG 3, 1 kHz / (1 + 9)
-    assert regs[0x23] == 0xF0                     # TEMP + XG + YG + ZG into the FIFO
+    assert regs[0x23] == 0xF8                     # TEMP + XG + YG + ZG + ACCEL into the FIFO
+    assert regs[0x1C] == 0x00                     # ACCEL_CONFIG.AFS_SEL 0: +-2 g
     assert regs[0x38] & 0x10 and regs[0x6A] & 0x40
     assert model.sample_rate_hz() == 100.0
     h = src.header
@@ -135,7 +143,8 @@ def test_configuration_written_and_header(rig, range_dps, fs_bits, lsb):
     assert (h["full_scale_dps"], h["dlpf_cfg"], h["sample_rate_hz"]) == (str(range_dps), "3", "100")
     assert (h["i2c_bus"], h["i2c_address"]) == ("/dev/i2c-1", "0x68")
     assert h["start_time_utc"] == "2023-11-14T22:13:20.000Z"
-    assert src.columns == ["t", "gx", "gy", "gz", "temp"]
+    assert (h["accel_unit"], h["lsb_per_g"], h["full_scale_g"]) == ("lsb", "16384", "2")
+    assert src.columns == ["t", "gx", "gy", "gz", "temp", "ax", "ay", "az"]
     src.close()
     assert regs[0x6B] & 0x40 and not bus.fds      # asleep again, bus closed
 
@@ -280,7 +289,7 @@ def test_decoded_rates_equal_model_rates_from_a_recording(rig):
                            np.full(n, 600.0)])           # z beyond +-500: clipped by the sensor
     rec = Recording.from_dps(dps, 200.0)
     clock, model, bus = rig(gyro_dps=rec.gyro_dps, temp_c=31.0)
-    src = open_src(clock, sample_rate_hz=200, range_dps=500, temperature=False)
+    src = open_src(clock, sample_rate_hz=200, range_dps=500, temperature=False, accel=False)
     assert src.columns == ["t", "gx", "gy", "gz"]
     rows, _ = read_for(src, clock, 5.0)
     # first FIFO sample is model sample k0: find it from x, y (continuous values)
@@ -369,7 +378,7 @@ def test_fifo_read_failing_part_way_resets_fifo_and_keeps_alignment(rig):
 
 def test_misaligned_count_is_resynchronised(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, sample_rate_hz=1000, temperature=False, transfer="rdwr")
+    src = open_src(clock, sample_rate_hz=1000, temperature=False, accel=False, transfer="rdwr")
     a, _ = read_for(src, clock, 0.1)
     model.fail_fifo_read(errno.EREMOTEIO, consume_bytes=3)   # a NACK that still ate 3 bytes
     b, notes = read_for(src, clock, 0.2)
@@ -381,7 +390,7 @@ def test_misaligned_count_is_resynchronised(rig):
 
 def test_8khz_polls_often_enough_for_the_fifo(rig):
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, sample_rate_hz=8000, dlpf="0", address="0x68", temperature=False)
+    src = open_src(clock, sample_rate_hz=8000, dlpf="0", address="0x68", temperature=False, accel=False)
     assert src.smplrt_div == 0 and src.poll_interval_s == pytest.approx(170 / 8000 / 4)
     rows, notes = read_for(src, clock, 1.0)
     assert notes == [] and len(rows) >= 7900
@@ -404,7 +413,7 @@ def test_read_waits_at_most_max_wait(rig):
     model.regs[0x6A] = 0                          # FIFO stopped behind the driver's back: no data
     t0 = clock.now()
     rows = src.read()
-    assert rows.shape == (0, 5)
+    assert rows.shape == (0, 8)
     assert clock.now() - t0 <= src.max_wait_s + src.poll_interval_s + 1e-9
 
 
@@ -428,6 +437,8 @@ def test_real_mpu6050_streams_at_the_configured_rate():
         np.testing.assert_allclose(np.diff(rows[:, 0]), 1e-3)
         assert np.all(np.abs(rows[:, 1:4]) < 32767)       # a resting sensor is far from full scale
         assert 0.0 < np.median(rows[:, 4]) < 60.0         # plausible temperature, deg C
+        g = np.linalg.norm(rows[:, 5:8], axis=1) / float(src.header["lsb_per_g"])
+        assert 0.8 < np.median(g) < 1.2                   # at rest the accelerometer reads 1 g
 
 
 REAL = str(RECORDINGS / "mpu6050_multipose_102s.csv.gz")
@@ -463,7 +474,7 @@ def test_opened_through_the_source_syntax_on_the_real_clock(monkeypatch):
 
     model = MPU6050Model(HostClock(), gyro_lsb=indexed_gyro(200_000))
     FakeI2CBus({0x69: model}).install(monkeypatch)
-    src = open_source("mpu6050:bus=1,addr=0x69,rate=200,range=500,dlpf=2,temp=0")
+    src = open_source("mpu6050:bus=1,addr=0x69,rate=200,range=500,dlpf=2,temp=0,accel=0")
     try:
         h = src.header
         assert (h["i2c_address"], h["sample_rate_hz"], h["lsb_per_dps"], h["dlpf_cfg"]) == \
@@ -487,16 +498,20 @@ def test_record_command_writes_the_mpu6050_header(monkeypatch, tmp_path):
     class HostClock:
         now = staticmethod(time.monotonic)
 
-    model = MPU6050Model(HostClock(), gyro_lsb=indexed_gyro(200_000), temp_c=28.0)
+    accel = indexed_accel(200_000)
+    model = MPU6050Model(HostClock(), gyro_lsb=indexed_gyro(200_000), accel_lsb=accel, temp_c=28.0)
     FakeI2CBus({0x68: model}).install(monkeypatch)
     out = tmp_path / "rec.csv"
-    assert main(["record", "--source", "mpu6050:rate=200,range=1000", "--out", str(out),
+    assert main(["record", "--source", "mpu6050:rate=200,range=1000,accel_range=4", "--out", str(out),
                  "--duration", "0.5"]) == 0
     rec = read_recording(str(out))
     for key, value in {"sensor": "MPU6050", "chip_id": "0x68", "gyro_unit": "lsb", "lsb_per_dps": "32.8",
                        "full_scale_dps": "1000", "sample_rate_hz": "200", "i2c_bus": "/dev/i2c-1",
-                       "i2c_address": "0x68"}.items():
+                       "i2c_address": "0x68", "accel_unit": "lsb", "lsb_per_g": "8192", "full_scale_g": "4"}.items():
         assert rec.header[key] == value, key
+    assert model.regs[0x1C] == 0x08                                  # AFS_SEL 1: +-4 g
+    got = np.column_stack([rec.columns[c] for c in ("ax", "ay", "az")])
+    np.testing.assert_array_equal(got, accel[index_of(np.column_stack([rec.t_s, rec.gyro]))])
     assert "start_time_utc" in rec.header and "dlpf_cfg" in rec.header
     assert len(rec) > 0 and np.all(np.abs(rec.temp_c - 28.0) <= 0.5 / 340 + 1e-6)
     rows = np.column_stack([rec.t_s, rec.gyro])
@@ -515,7 +530,7 @@ def test_fatal_error_part_way_through_a_fifo_read_delivers_the_frames_read_befor
     """The chip vanishes during the 3rd 30-byte block of an SMBus FIFO read: the 10 frames of the
     first two blocks were read off the chip, so they are delivered; the next read raises."""
     clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
-    src = open_src(clock, sample_rate_hz=1000, temperature=False, transfer="smbus")
+    src = open_src(clock, sample_rate_hz=1000, temperature=False, accel=False, transfer="smbus")
     a, _ = read_for(src, clock, 0.1)
     model.fail_fifo_read(errno.ENXIO, after_reads=2)
     b = src.read()
@@ -651,3 +666,98 @@ def test_a_failed_fifo_read_that_took_whole_frames_is_a_gap(rig, transfer, rate_
     np.testing.assert_array_equal(np.round(np.diff(rows[:, 0]) * rate_hz), np.diff(idx))  # t steps as the samples do
     assert len(notes) == 1 and notes[0].startswith(f"gap: {src.stats['lost_samples']} samples lost")
     assert src.stats["lost_samples"] >= frames
+
+
+# ------------------------------------------------------------------------------------------ accelerometer
+
+
+@pytest.mark.parametrize("rate_hz,temperature,transfer,stall_s", [(100, True, "smbus", 1.5), (1000, True, "rdwr", 0.2),
+                                                                  (1000, False, "smbus", 0.2), (100, False, "rdwr", 1.5)])
+def test_six_axes_through_smbus2_with_an_overflow_between(rig, rate_hz, temperature, transfer, stall_s):
+    """The done-when of issue 39: six axes at 100 Hz and 1 kHz, a FIFO overflow between two reads;
+    every row's gyro and accelerometer are the model's of one sample index (14- or 12-byte frames
+    never misaligned), the gap is noted and counted as the samples truly lost."""
+    n = 20_000
+    gyro, accel = indexed_gyro(n), indexed_accel(n)
+    clock, model, bus = rig(gyro_lsb=gyro, accel_lsb=accel, temp_c=np.linspace(20, 30, n))
+    src = open_src(clock, sample_rate_hz=rate_hz, temperature=temperature, transfer=transfer)
+    frame = 14 if temperature else 12
+    assert src.frame_bytes == frame and model.regs[0x23] == (0xF8 if temperature else 0x78)
+    assert src.columns == ["t", "gx", "gy", "gz"] + (["temp"] if temperature else []) + ["ax", "ay", "az"]
+    before, notes_before = read_for(src, clock, 2.0)
+    clock.advance(stall_s)                           # longer than the FIFO holds: 1024 // frame frames
+    after, notes = read_for(src, clock, 2.0)
+    assert notes_before == [] and model.fifo_dropped_bytes > 0
+    assert len(notes) == 1 and "FIFO overflow" in notes[0] and src.stats["overflows"] == 1
+    rows = np.concatenate([before, after])
+    idx = index_of(rows)
+    np.testing.assert_array_equal(rows[:, 1:4], gyro[idx])
+    np.testing.assert_array_equal(rows[:, -3:], accel[idx])
+    if temperature:
+        assert np.max(np.abs(rows[:, 4] - np.linspace(20, 30, n)[idx])) <= 0.5 / 340 + 1e-9
+    true_lost = index_of(after)[0] - index_of(before)[-1] - 1
+    assert true_lost > 1024 // frame and src.stats["lost_samples"] == true_lost
+    np.testing.assert_array_equal(np.round(rows[:, 0] * rate_hz), idx - idx[0])   # t jumps by the gap
+    assert src.stats["fifo_bytes_read"] == frame * len(rows) == frame * src.stats["samples"]
+    src.close()
+
+
+@pytest.mark.parametrize("range_g,afs_bits,lsb", [(2, 0x00, 16384), (4, 0x08, 8192), (8, 0x10, 4096), (16, 0x18, 2048)])
+def test_accelerometer_range_written_and_values_scaled(rig, range_g, afs_bits, lsb):
+    """ACCEL_CONFIG.AFS_SEL (0x1C bits 4:3) and the LSB per g of product spec section 6.2."""
+    g = np.array([[0.5, -0.25, 1.0], [-1.5, 1.75, 0.0], [30.0, -30.0, 0.001]])   # 30 g: beyond every range, clipped
+    clock, model, bus = rig(accel_g=g)
+    src = open_src(clock, sample_rate_hz=100, accel_range_g=range_g, temperature=False)
+    assert model.regs[0x1C] == afs_bits
+    assert (src.header["accel_unit"], src.header["lsb_per_g"], src.header["full_scale_g"]) == ("lsb", str(lsb), str(range_g))
+    rows, _ = read_for(src, clock, 0.2)
+    got = {tuple(r) for r in rows[:, 4:7].astype(int)}
+    assert got == {tuple(r) for r in np.clip(np.round(g * lsb), -32768, 32767).astype(int)}
+    src.close()
+
+
+def test_accelerometer_range_that_does_not_stick_is_refused(rig):
+    clock, model, bus = rig(stuck={0x1C: 0x00})
+    with pytest.raises(DeviceError, match=r"register ACCEL_CONFIG \(0x1C\) reads back 0x00 after writing 0x18"):
+        open_src(clock, accel_range_g=16)
+    assert not bus.fds
+
+
+def test_accelerometer_off_leaves_it_out_of_the_fifo_and_the_header(rig):
+    clock, model, bus = rig(gyro_lsb=indexed_gyro(5000))
+    src = open_src(clock, sample_rate_hz=1000, accel=False)
+    assert model.regs[0x23] == 0xF0 and src.frame_bytes == 8 and src.columns == ["t", "gx", "gy", "gz", "temp"]
+    assert not {"accel_unit", "lsb_per_g", "full_scale_g"} & set(src.header)
+    rows, _ = read_for(src, clock, 0.2)
+    np.testing.assert_array_equal(rows[:, 1:4], indexed_gyro(5000)[index_of(rows)])
+
+
+def test_bad_accelerometer_range_refused_naming_the_key(rig):
+    from gyrofilter.sources import open_source
+
+    clock, model, bus = rig()
+    with pytest.raises(SettingsError, match="accel_range_g=3 is not an MPU6050 accelerometer full scale.*2, 4, 8, 16"):
+        open_src(clock, accel_range_g=3)
+    with pytest.raises(SettingsError, match=r"^source 'mpu6050:accel_range=6': accel_range=6 is not"):
+        open_source("mpu6050:accel_range=6")
+    assert bus.ioctl_calls == 0
+
+
+def test_accelerometer_frames_stay_aligned_after_failed_reads(rig):
+    """A NACK that ate 2 bytes leaves a count that is no whole number of 14-byte frames (a resync);
+    an EIO part-way resets the FIFO: both a gap, and every row still one sample's seven words."""
+    n = 20_000
+    gyro, accel = indexed_gyro(n), indexed_accel(n)
+    clock, model, bus = rig(gyro_lsb=gyro, accel_lsb=accel)
+    src = open_src(clock, sample_rate_hz=1000, transfer="rdwr")
+    a, _ = read_for(src, clock, 0.1)
+    model.fail_fifo_read(errno.EREMOTEIO, consume_bytes=2)     # one word: the frames would shift by a word
+    b, notes_b = read_for(src, clock, 0.2)
+    model.fail_fifo_read(errno.EIO, consume_bytes=20)
+    c, notes_c = read_for(src, clock, 0.2)
+    assert "not a whole number of 14-byte frames" in notes_b[0] and "errno 5" in notes_c[0]
+    rows = np.concatenate([a, b, c])
+    idx = index_of(rows)
+    assert np.all(np.diff(idx) >= 1) and src.stats["resyncs"] == 2
+    np.testing.assert_array_equal(rows[:, 1:4], gyro[idx])
+    np.testing.assert_array_equal(rows[:, 5:8], accel[idx])

@@ -264,3 +264,53 @@ def test_a_malformed_last_cell_in_a_block_of_its_own_is_refused(bad):
     got = np.concatenate(rows)
     np.testing.assert_array_equal(got[:, 1:], [[0.0, 0.0, 0.0]])
     assert p.stats["bad_lines"] == 1 and p.stats["samples"] == 2
+
+
+ACCEL = b"fields=counter,gx,gy,gz,ax,ay,az accel_unit=g"
+
+
+@pytest.mark.parametrize("unit,lsb_per_g", [(b"g", None), (b"m/s^2", None), (b"lsb", b"16384")])
+def test_parser_accelerometer_fields_come_after_the_gyro_in_the_header_unit(unit, lsb_per_g):
+    words = ACCEL.replace(b"=g", b"=" + unit) + (b" lsb_per_g=" + lsb_per_g if lsb_per_g else b"")
+    p = LineParser()
+    rows = p.feed(HEADER.replace(b"\n", b" " + words + b"\n") + b"0,1,2,3,0.5,-0.25,9.5\n1,4,5,6,7,8,9\n")
+    assert p.columns == ["t", "gx", "gy", "gz", "ax", "ay", "az"]
+    np.testing.assert_array_equal(rows, [[0, 1, 2, 3, 0.5, -0.25, 9.5], [0.01, 4, 5, 6, 7, 8, 9]])
+    assert p.header["accel_unit"] == unit.decode() and p.header.get("lsb_per_g") == (lsb_per_g and lsb_per_g.decode())
+    assert p.feed(b"2,1,2,3,4,5\n").shape == (0, 7) and p.stats["partial_lines"] == 1  # an accel value missing
+
+
+@pytest.mark.parametrize("words,message", [
+    (b"fields=counter,gx,gy,gz,ax,ay accel_unit=g", "names ax, ay but not az: the accelerometer is all of ax, ay, az or none"),
+    (b"fields=counter,gx,gy,gz,ax,ay,az", "fields name ax, ay, az but the header gives no accel_unit"),
+    (b"fields=counter,gx,gy,gz,ax,ay,az accel_unit=mg", "accel_unit 'mg' is not one of m/s^2, g, lsb"),
+    (b"fields=counter,gx,gy,gz,ax,ay,az accel_unit=lsb", "accel_unit=lsb needs lsb_per_g"),
+    (b"fields=counter,gx,gy,gz,ax,ay,az accel_unit=lsb lsb_per_g=0", "lsb_per_g must be"),
+    (b"fields=counter,gx,gy,gz,ax,ay,az accel_unit=g lsb_per_g=16384", "lsb_per_g with accel_unit=g"),
+])
+def test_parser_refuses_an_accelerometer_header_in_one_line(words, message):
+    with pytest.raises(DeviceError, match=message.replace("^", "\\^")):
+        LineParser().feed(HEADER.replace(b"\n", b" " + words + b"\n"))
+
+
+def test_parser_header_changing_the_accelerometer_unit_mid_stream_is_refused():
+    p = LineParser()
+    p.feed(HEADER.replace(b"\n", b" " + ACCEL + b"\n") + b"0,1,2,3,4,5,6\n")
+    p.feed(HEADER.replace(b"\n", b" " + ACCEL + b"\n"))  # the same header again: fine
+    with pytest.raises(DeviceError, match=r"changed the units mid-stream \(accel_unit g -> m/s\^2\); start a new"):
+        p.feed(HEADER.replace(b"\n", b" " + ACCEL.replace(b"=g", b"=m/s^2") + b"\n"))
+
+
+def test_a_six_axis_line_longer_than_a_line_may_be_is_refused_in_a_block_as_alone():
+    """Eight cells, seven of 41 characters (a plain-looking block, 295 bytes a line): the numpy path took
+    it whole, the line-by-line path refuses a line beyond 256 bytes; both refuse it now."""
+    head = HEADER.replace(b"\n", b" fields=counter,gx,gy,gz,temp,ax,ay,az accel_unit=g\n")
+    cell = b"1" * 20 + b"." + b"2" * 20
+    long_line = b",".join([b"1"] + [cell] * 7) + b"\n"
+    good = b"0,1,2,3,4,5,6,7\n"
+    assert len(long_line) - 1 > 256
+    whole, alone = LineParser(), LineParser()
+    rows = whole.feed(head + good + long_line + b"2,1,2,3,4,5,6,7\n")
+    parts = [alone.feed(x) for x in (head, good, long_line, b"2,1,2,3,4,5,6,7\n")]
+    np.testing.assert_array_equal(rows, np.concatenate(parts))
+    assert len(rows) == 2 and whole.stats == alone.stats and whole.stats["bad_lines"] == 1

@@ -20,15 +20,19 @@ from gyrofilter.sources import open_source
 pytest.importorskip("serial")
 
 HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=1000 sensor=MPU6050 fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw\n"
+#: the header of a six-axis device: the accelerometer as raw MPU6050 LSB at +-2 g, after the temperature
+HEADER_ACCEL = HEADER.replace(b"gz,temp ", b"gz,temp,ax,ay,az accel_unit=lsb lsb_per_g=16384 ")
 RATE_HZ = 1000
 
 
-def line(i, gx=None, raw_temp=True):
+def line(i, gx=None, raw_temp=True, accel=False):
     """Line i of the device: its temperature as the MPU6050's raw register (what HEADER says), or
-    in deg C (a device without a header: the reader takes deg C, and refuses -2000 as absurd)."""
+    in deg C (a device without a header: the reader takes deg C, and refuses -2000 as absurd);
+    with ``accel``, the accelerometer's ax, ay, az (:func:`accel_values`) after it."""
     gx = (i * 7) % 2001 - 1000 if gx is None else gx
     temp = -2000 + i % 50 if raw_temp else 25 + (i % 50) / 100
-    return f"{i},{gx},{-(i % 300)},{(i * i) % 97 - 48},{temp}\n".encode()
+    tail = "".join(f",{int(v)}" for v in accel_values(i)[0]) if accel else ""
+    return f"{i},{gx},{-(i % 300)},{(i * i) % 97 - 48},{temp}{tail}\n".encode()
 
 
 def values(i):
@@ -36,11 +40,19 @@ def values(i):
     return np.column_stack([(i * 7) % 2001 - 1000, -(i % 300), (i * i) % 97 - 48]).astype(float)
 
 
+def accel_values(i):
+    """ax, ay, az (LSB) of line i: each differs from the gyro values and from the others."""
+    i = np.asarray(i).reshape(-1)
+    return np.column_stack([(i * 13) % 4001 - 2000, 500 - i % 1000, 16384 - (i * 3) % 700]).astype(float)
+
+
 class Device(threading.Thread):
     """Stream ``n`` lines at ``RATE_HZ`` into the master side of a pty, with faults injected."""
 
-    def __init__(self, master, n, *, header=True, wait_for_query=True, garbage_at=(), cut_at=(), split_every=97, beyond_at=()):
+    def __init__(self, master, n, *, header=True, wait_for_query=True, garbage_at=(), cut_at=(), split_every=97, beyond_at=(),
+                 accel=False):
         super().__init__(daemon=True)
+        self.accel = accel  # send HEADER_ACCEL and lines with the accelerometer
         self.master, self.n, self.header, self.wait_for_query = master, n, header, wait_for_query
         self.garbage_at, self.cut_at, self.split_every = set(garbage_at), set(cut_at), split_every
         self.beyond_at = set(beyond_at)  # these lines carry gx = 2**31 LSB (16 million deg/s): a corrupt value
@@ -63,7 +75,7 @@ class Device(threading.Thread):
             if ready:
                 self.query = os.read(self.master, 16)
         if self.header:
-            os.write(self.master, HEADER)
+            os.write(self.master, HEADER_ACCEL if self.accel else HEADER)
         start = time.monotonic()
         for i in range(self.n):
             due = start + i / RATE_HZ
@@ -73,7 +85,7 @@ class Device(threading.Thread):
             if i in self.garbage_at:
                 junk = bytes(self.rng.integers(0x80, 0x100, 40, dtype=np.uint8)) + b"garbage!" + b"\n"
                 os.write(self.master, junk)
-            data = line(i, raw_temp=self.header)
+            data = line(i, raw_temp=self.header, accel=self.accel)
             if i in self.beyond_at:
                 os.write(self.master, line(i, gx=2 ** 31))
                 continue
@@ -227,3 +239,42 @@ def test_real_serial_device_streams_clean_lines():
         assert src.stats["lost_samples"] == 0 and src.stats["bad_lines"] == 0
         assert 0.8 * 3 * rate <= len(rows) <= 1.2 * 3 * rate + 1
         np.testing.assert_allclose(np.diff(rows[:, 0]), 1.0 / rate)
+
+
+def test_six_axis_device_every_good_line_once_with_its_accelerometer(pty_pair):
+    """ax, ay, az fields (issue 39) through a real pty at 1 kHz, with garbage and a cut line: every
+    intact line's seven values arrive once, in order, in the columns the header names."""
+    master, name = pty_pair
+    n = 2000
+    dev = Device(master, n, garbage_at=(400,), cut_at=(1200,), accel=True)
+    dev.start()
+    src = open_source(f"serial:{name},baud=115200,header_timeout=10")
+    assert src.columns == ["t", "gx", "gy", "gz", "temp", "ax", "ay", "az"]
+    assert (src.header["accel_unit"], src.header["lsb_per_g"]) == ("lsb", "16384")
+    rows, _ = drain(src)
+    dev.join(10)
+    good = np.array(dev.sent_good)
+    assert dev.error is None and len(good) == n - 1
+    np.testing.assert_array_equal(rows[:, 1:4], values(good))
+    np.testing.assert_array_equal(rows[:, 5:8], accel_values(good))
+    np.testing.assert_allclose(rows[:, 0], good / RATE_HZ)
+    assert src.stats["partial_lines"] == 1 and src.stats["lost_samples"] == 1
+    src.close()
+
+
+def test_record_from_a_six_axis_device_writes_the_accelerometer(pty_pair, tmp_path, capsys):
+    from gyrofilter.cli import main
+
+    master, name = pty_pair
+    dev = Device(master, 800, accel=True, split_every=0)
+    dev.start()
+    out = tmp_path / "serial.csv"
+    code = main(["record", "--source", f"serial:{name}", "--out", str(out)])
+    dev.join(10)
+    assert code == 1 and dev.error is None
+    rec = read_recording(out)
+    good = np.array(dev.sent_good)
+    np.testing.assert_array_equal(rec.gyro, values(good))
+    np.testing.assert_array_equal(np.column_stack([rec.columns[c] for c in ("ax", "ay", "az")]), accel_values(good))
+    assert (rec.header["accel_unit"], rec.header["lsb_per_g"]) == ("lsb", "16384")
+    capsys.readouterr()

@@ -579,7 +579,7 @@ def test_temperature_coefficient_drives_the_bias():
 
 def test_without_temperature_profile_there_is_no_temp_column():
     assert simulate(model(arw=0.01), 1.0, seed=0).temp_c is None
-    assert list(next(simulate_chunks(model(), 1.0, seed=0))[2:]) == [None]
+    assert list(next(simulate_chunks(model(), 1.0, seed=0))[2:]) == [None, None]
 
 
 def test_numpy_scalars_are_accepted_as_parameters():

@@ -50,7 +50,7 @@ def test_the_term_is_a_constant_amplitude_tone_whose_frequency_wanders(seed):
     spread = math.sqrt(np.sum((f - mean) ** 2 * s) / np.sum(s))
     assert mean == pytest.approx(tone["center_hz"], abs=3 * tone["spread_hz"] * math.sqrt(2 * tone["wander_s"] / 3600))
     assert spread == pytest.approx(tone["spread_hz"], rel=0.35)
-    chunks = np.concatenate([g[:, 2] for _, g, _ in simulate_chunks(model, 600.0, seed=seed, chunk_samples=777)])
+    chunks = np.concatenate([block.gyro[:, 2] for block in simulate_chunks(model, 600.0, seed=seed, chunk_samples=777)])
     assert np.array_equal(chunks, simulate(model, 600.0, seed=seed).gyro_dps[:, 2])
 
 

@@ -61,7 +61,7 @@ def bench_decode(n_frames=20, repeat=2000):
     """Per-frame cost of decoding ``n_frames`` 8-byte frames (temp + gyro), numpy vs struct loop."""
     clock, model, bus = _rig(100)
     with bus:
-        src = open_mpu6050(sample_rate_hz=1000, clock=clock.now, sleep=clock.sleep)
+        src = open_mpu6050(sample_rate_hz=1000, accel=False, clock=clock.now, sleep=clock.sleep)
     rng = np.random.default_rng(0)
     buf = rng.integers(0, 256, 8 * n_frames, dtype=np.uint8).tobytes()
     t0 = time.perf_counter()
@@ -89,7 +89,7 @@ def bench_read(n_frames, transfer, sample_rate_hz=1000):
     """Per-frame host cost of source.read() through smbus2 + model; returns a dict."""
     clock, model, bus = _rig(n_frames)
     with bus:
-        src = open_mpu6050(sample_rate_hz=sample_rate_hz, temperature=True, transfer=transfer, clock=clock.now,
+        src = open_mpu6050(sample_rate_hz=sample_rate_hz, temperature=True, accel=False, transfer=transfer, clock=clock.now,
                            sleep=clock.sleep)
         bus.inside_s, bus.bus_bits, bus.ioctl_calls = 0.0, 0, 0
         got = 0
@@ -109,7 +109,7 @@ def bench_naive(n_frames, per_register):
 
     clock, model, bus = _rig(n_frames)
     with bus:
-        src = open_mpu6050(sample_rate_hz=1000, clock=clock.now, sleep=clock.sleep)
+        src = open_mpu6050(sample_rate_hz=1000, accel=False, clock=clock.now, sleep=clock.sleep)
         dev = smbus2.SMBus(1)
         bus.inside_s, bus.bus_bits, bus.ioctl_calls = 0.0, 0, 0
         out = np.empty((n_frames, 3))

@@ -70,15 +70,15 @@ seconds = time.perf_counter() - t0
     "simulate_chunks, baseline model": """
 from gyrofilter.sim.simulate import simulate_chunks
 t0 = time.perf_counter(); n = 0
-for t, g, temp in simulate_chunks(args["model_base"], args["duration"], seed=1):
-    n += len(t)
+for block in simulate_chunks(args["model_base"], args["duration"], seed=1):
+    n += len(block.t_s)
 seconds = time.perf_counter() - t0
 """,
     "simulate_chunks, all effects": """
 from gyrofilter.sim.simulate import simulate_chunks
 t0 = time.perf_counter(); n = 0
-for t, g, temp in simulate_chunks(args["model_all"], args["duration"], seed=1):
-    n += len(t)
+for block in simulate_chunks(args["model_all"], args["duration"], seed=1):
+    n += len(block.t_s)
 seconds = time.perf_counter() - t0
 """,
     "gyrofilter simulate -> .csv.gz, all effects": """

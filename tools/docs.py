@@ -444,6 +444,24 @@ def allan_before_after():
             + allan_figures.before_after_table(rec, ("paper", "hold", "recommended")))
 
 
+@block("kalibr-mpu6050", "docs/allan.md", "`gyrofilter simulate` (the default MPU6050 model, 30 min) and `gyrofilter allan --kalibr`")
+def kalibr_mpu6050():
+    model = "gyrofilter/data/mpu6050_model.json"
+    sim = ["simulate", "--model", model, "--duration", "1800", "--seed", "1", "--out", "mpu6050_30min.csv.gz"]
+    allan = ["allan", "mpu6050_30min.csv.gz", "--kalibr", "imu.yaml"]
+    with tempfile.TemporaryDirectory() as tmp:  # relative names: the yaml's comment reads the same anywhere
+        _run([sys.executable, "-m", "gyrofilter", *sim[:2], str(ROOT / model), *sim[3:]], cwd=tmp)
+        out = _run([sys.executable, "-m", "gyrofilter", *allan], cwd=tmp)
+        yaml = (Path(tmp) / "imu.yaml").read_text(encoding="utf-8")
+    said = out[out.index("  kalibr:"):]
+    return fence(f"$ gyrofilter {' '.join(sim)}\n$ gyrofilter {' '.join(allan)}\n...\n{said}$ cat imu.yaml\n{yaml}")
+
+
+@block("allan-consistency", "docs/allan.md", "tools/allan_consistency.py --jobs 2", slow=True)
+def allan_consistency():
+    return fence(tool("allan_consistency.py", "--jobs", "2"))
+
+
 @block("bench-allan", "docs/allan.md", "tools/bench_allan.py --day-file", slow=True)
 def bench_allan():
     return fence(tool("bench_allan.py", "--day-file"))

@@ -4,7 +4,8 @@ Prints, per axis, the fitted coefficients Q, N, B, K, R with their intervals in 
 customary units, the slope read-offs of papers 000/002 beside them (another estimator: an upper
 estimate of each term, said so where the fit resolves none), and what the record is too short
 to resolve. ``--json`` writes the Allan document of docs/formats.md, ``--plot`` the
-log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries.
+log-log figure, ``--kalibr`` Kalibr's imu.yaml gyroscope entries (the pair that bounds the
+measured deviation over ``--kalibr-tau-s``, :mod:`gyrofilter.analysis.noise.kalibr`).
 
 The recording is read in chunks into one float64 array per axis. Gross errors (isolated spikes
 far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.analysis.noise.screen.gross_errors`)
@@ -17,6 +18,7 @@ from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from ..analysis.fleet.work import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
+from ..analysis.noise.kalibr import DEFAULT_TAU_RANGE_S, check_tau_range_s, kalibr_sensor
 from ..analysis.noise.model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, TERM_UNIT, convert
 from ..analysis.noise.plots import plot_allan
 from ..analysis.still import characterise_recording
@@ -38,7 +40,12 @@ def add_arguments(parser):
                              "with --fleet")
     parser.add_argument("--json", metavar="OUT", type=options.file_name, help="write the deviation curves and coefficients as JSON")
     parser.add_argument("--plot", metavar="OUT.png", type=options.file_name, help="draw the Allan deviation per axis (needs matplotlib)")
-    parser.add_argument("--kalibr", metavar="OUT.yaml", type=options.file_name, help="write Kalibr imu.yaml gyroscope noise entries")
+    parser.add_argument("--kalibr", metavar="OUT.yaml", type=options.file_name, help="write Kalibr imu.yaml gyroscope noise entries: the white + random-walk pair that bounds the "
+                             "measured Allan deviation over --kalibr-tau-s, the plain values in comments")
+    parser.add_argument("--kalibr-tau-s", metavar="LOW,HIGH", type=options.number_pair, default=None,
+                        help="integration times (s) over which the imu.yaml's values bound the measured Allan "
+                             f"deviation of every axis (default {DEFAULT_TAU_RANGE_S[0]:g},{DEFAULT_TAU_RANGE_S[1]:g}, "
+                             "cut to the record; docs/allan.md)")
     parser.add_argument("--axes", default=ALL_AXES, help=f"axes to analyse, a subset of {ALL_AXES} (default {ALL_AXES})")
     parser.add_argument("--confidence", type=options.decimal, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
     parser.add_argument("--min-clusters", type=options.whole_number, default=MIN_CLUSTERS,
@@ -130,17 +137,34 @@ def unresolved_text(r, min_clusters):
     return "; ".join(out)
 
 
+def kalibr_text_line(k):
+    """One paragraph on the bounding pair of ``k`` (a :class:`~gyrofilter.analysis.noise.kalibr.KalibrValues`):
+    the values written, their factors over the plain values and how far the model lies above the data."""
+    f_nd, f_rw = (f"{f:.3g}x the plain value" if f is not None else "no plain value" for f in k.factors())
+    low, high = k.tau_range_s
+    cut = (f" (the default {DEFAULT_TAU_RANGE_S[0]:g} .. {DEFAULT_TAU_RANGE_S[1]:g} s cut to the record)"
+           if k.cut else "")
+    return (f"kalibr: the pair that bounds every axis's Allan deviation over tau {low:g} .. {high:g} s{cut}: "
+            f"{k.sensor.name}_noise_density {k.noise_density:.3e} {k.sensor.density_unit} ({f_nd}), "
+            f"{k.sensor.name}_random_walk {k.random_walk:.3e} {k.sensor.walk_unit} ({f_rw}); its model lies at "
+            f"{k.bound.least:.3g} .. {k.bound.excess:.3g}x the largest axis's deviation there")
+
+
 def run(args):
     axes = "".join(check_axes(args.axes, "--axes"))
     if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
         raise SettingsError(f"--min-clusters must be in [2, {MAX_MIN_CLUSTERS}], got {args.min_clusters}")
     if not 0.5 <= args.confidence <= 0.9999:  # every value inside works (0.9999999999999999 failed in the intervals)
         raise SettingsError(f"--confidence must be in [0.5, 0.9999] (e.g. 0.95), got {args.confidence!r}")
+    if args.kalibr_tau_s is not None:
+        check_tau_range_s(args.kalibr_tau_s)
+        if not args.kalibr and args.fleet is None:
+            raise SettingsError("--kalibr-tau-s sets the range of --kalibr's values: give --kalibr OUT.yaml as well")
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])
         settings = FleetSettings("allan", axes=axes, confidence=args.confidence, min_clusters=args.min_clusters,
-                                 keep_outliers=args.keep_outliers)
+                                 keep_outliers=args.keep_outliers, kalibr_tau_s=args.kalibr_tau_s)
         return batch.run(args, settings, paths)
     args.recording = batch.single(args, paths)
     outputs.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
@@ -152,6 +176,9 @@ def run(args):
                                       warn=console.say_warning, progress=progress)
     sample_rate_hz = head.sample_rate_hz
     duration_s = head.rows / sample_rate_hz
+    # before anything is printed or written: a --kalibr-tau-s beyond the record is refused in one line
+    kalibr_text = (kalibr_yaml(results, sample_rate_hz, recording=args.recording, tau_range_s=args.kalibr_tau_s)
+                   if args.kalibr else None)
     console.tell(f"recording: {args.recording}")
     print(f"  {head.rows} samples at {sample_rate_hz:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
@@ -176,6 +203,8 @@ def run(args):
         if missing:
             console.paragraph(f"({missing}; the bounds above hold)", "    ")
         console.print_warnings(r.warnings)
+    if args.kalibr:
+        console.paragraph(kalibr_text_line(kalibr_sensor(results, "deg/s", args.kalibr_tau_s)), "  ")
     # every result is finite here; each file appears only when it is complete
     if args.json:
         with outputs.replacing(args.json) as tmp:
@@ -183,7 +212,7 @@ def run(args):
         console.say(f"wrote {args.json}")
     if args.kalibr:
         with outputs.replacing(args.kalibr) as tmp:
-            outputs.write_text(tmp, kalibr_yaml(results, sample_rate_hz, recording=args.recording))
+            outputs.write_text(tmp, kalibr_text)
         console.say(f"wrote {args.kalibr}")
     if args.plot:
         with outputs.replacing(args.plot) as tmp:

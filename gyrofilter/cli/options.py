@@ -4,7 +4,7 @@ import argparse
 import os
 
 from ..errors import SettingsError
-from ..inputs import parse_number
+from ..inputs import parse_number, quote
 from ..units import check_lsb_per_dps, check_sample_rate_hz
 from . import outputs
 
@@ -44,6 +44,19 @@ def lsb_per_dps(text):
     :data:`gyrofilter.units.LSB_PER_DPS_RANGE` (:func:`gyrofilter.units.check_lsb_per_dps`), as a float."""
     try:
         return check_lsb_per_dps(parse_number(text, ""), "")
+    except SettingsError as exc:
+        raise argparse.ArgumentTypeError(str(exc).strip()) from None
+
+
+def number_pair(text):
+    """argparse type of an option of two numbers ``LOW,HIGH`` (e.g. ``--kalibr-tau-s 0.1,100``): two
+    plain decimal numbers (:func:`gyrofilter.inputs.parse_number`) separated by a comma, as a tuple of
+    floats; their range is checked where they are used."""
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"two numbers LOW,HIGH separated by a comma, got {quote(text)}")
+    try:
+        return tuple(parse_number(part, "") for part in parts)
     except SettingsError as exc:
         raise argparse.ArgumentTypeError(str(exc).strip()) from None
 

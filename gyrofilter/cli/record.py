@@ -22,8 +22,8 @@ from ..recording import END_NOTE
 from . import console, live, options, outputs
 
 # header keys first in this order, the rest as the source gives them
-_HEADER_ORDER = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "sensor", "chip_id", "full_scale_dps",
-                 "dlpf_cfg", "start_time_utc")
+_HEADER_ORDER = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_per_g", "sensor", "chip_id",
+                 "full_scale_dps", "dlpf_cfg", "start_time_utc")
 
 
 def add_arguments(parser):

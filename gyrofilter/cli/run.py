@@ -23,7 +23,8 @@ import numpy as np
 
 from .. import __version__
 from ..errors import SampleError, SettingsError
-from ..recording import COLUMNS, END_NOTE, dps_header, header_text, note_line
+from ..recording import ACCEL_COLUMNS, COLUMNS, END_NOTE, accel_header, dps_header, header_text, note_line
+from ..recording.writer import exact_format
 from . import console, filtering, live, options, outlets, outputs
 
 
@@ -51,8 +52,9 @@ class _TextOut:
 
     path = "stdout"  # what a failed write names; no file to keep or remove after a failure
 
-    def __init__(self, stream, header, columns):
+    def __init__(self, stream, header, columns, formats):
         self.stream = stream
+        self.formats = formats  # a %-format per column, None for exact (as RecordingWriter's)
         self.rows_written = self.rows_flushed = 0
         self.write_failed = False  # an error writing stdout ends the command as it is
         self._write(header_text(header, columns, "stdout"))
@@ -77,7 +79,8 @@ class _TextOut:
     def write(self, rows):
         self.rows_written += len(rows)
         if self.stream is not None:
-            self._write("".join(filtering.ROW_FORMAT % tuple(r) + "\n" for r in rows.tolist()))
+            fmt = ",".join(f if f is not None else exact_format(rows[:, i]) for i, f in enumerate(self.formats))
+            self._write("".join(fmt % tuple(r) + "\n" for r in rows.tolist()))
 
     def note(self, text):
         self._write(note_line(text))
@@ -130,18 +133,23 @@ def _run(args, source, sinks):
     if args.calibration is not None:  # the bias is known from the start: the header names it and its file, as replay's
         out_header["bias_dps"] = json.dumps(list(filt.bias_dps))
         out_header["calibration_from"] = args.calibration
-    columns = list(COLUMNS)
+    # the source's accelerometer, carried along raw (the filter is a gyro filter): each row gets the
+    # ax, ay, az of its block's last sample, the one whose t it has, exactly as the source gave them
+    accel_idx = [cols.index(c) for c in ACCEL_COLUMNS] if all(c in cols for c in ACCEL_COLUMNS) else []
+    out_header.update(accel_header(head) if accel_idx else {})
+    columns = list(COLUMNS) + (list(ACCEL_COLUMNS) if accel_idx else [])
+    formats = filtering.ROW_FORMATS + [None] * len(accel_idx)  # None: exact, as record writes them
     out_file = _out_file(args)
     rows_on_terminal = out_file is None and sys.stdout.isatty()
     if out_file:
-        writer = live.LiveOutput(out_file, out_header, columns, filtering.ROW_FORMATS, "filtered row")
+        writer = live.LiveOutput(out_file, out_header, columns, formats, "filtered row")
     elif rows_on_terminal and sinks.show_rows and args.out is None and not args.rows:
-        writer = _TextOut(None, out_header, columns)
+        writer = _TextOut(None, out_header, columns, formats)
         console.say(f"gyrofilter run: the rows are not printed on this terminal ({sinks.show_rows} shows them); "
                     "--rows or --out - prints them, --out FILE keeps them")
         rows_on_terminal = False
     else:
-        writer = _TextOut(sys.stdout, out_header, columns)
+        writer = _TextOut(sys.stdout, out_header, columns, formats)
     loop = live.LiveLoop(source, args.duration)
     status = live.Status(not args.quiet, source.sample_rate_hz, whole_lines=rows_on_terminal)
     last_flush = time.monotonic()
@@ -162,7 +170,8 @@ def _run(args, source, sinks):
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note(filtering.calibrated_note(filt.bias_dps))
                     if len(out):
-                        writer.write(np.column_stack([t_out, out]))
+                        ends = filt.block_end_indices(len(out)) - (filt.samples_in - len(rows))
+                        writer.write(np.column_stack([t_out, out, rows[ends][:, accel_idx]]))
                     sinks.feed(rows[:, t_idx], gyro, temps, t_out, out, samples_in=loop.samples,
                                rows_out=writer.rows_written, source=source, filt=filt)
                 now = time.monotonic()

@@ -9,13 +9,11 @@ its place only when complete, so a failed or interrupted run leaves no file behi
 import sys
 import time
 
-import numpy as np
-
 from ..errors import SettingsError
 from ..recording import RecordingWriter
-from ..sim.model import load_model, validate_model
-from ..sim.simulate import (MAX_SAMPLES, check_sample_count, check_seed, draw_seed, recording_columns, recording_header,
-                            simulate_chunks)
+from ..sim.model import ACCELEROMETER, load_model, validate_model
+from ..sim.simulate import (MAX_SAMPLES, block_rows, check_sample_count, check_seed, draw_seed, recording_columns,
+                            recording_header, simulate_chunks)
 from ..effects import REGISTRY, ROWS
 from ..units import MAX_DURATION_S, check_duration_s
 from . import console, options, outputs
@@ -28,6 +26,7 @@ def add_arguments(parser):
                         help="noise model (JSON; e.g. the gap report's extended_model, or examples/models/*.json); "
                              "the effects of an axis: " + ", ".join(e.name for e in REGISTRY if e.name not in ROWS)
                              + "; of whole rows (a top-level key): " + ", ".join(ROWS)
+                             + "; an accelerometer (ax, ay, az): the top-level key " + ACCELEROMETER
                              + "; their parameters: docs/formats.md, section 2")
     parser.add_argument("--duration", required=True, type=options.decimal, metavar="S", help=f"length of the recording in seconds (at most {MAX_DURATION_S:g}, and {MAX_SAMPLES:.0e} samples)")
     options.add_sample_rate_argument(parser, help="sample rate in Hz (overrides the model's)")
@@ -66,16 +65,15 @@ def run(args):
     last = time.monotonic()
     with outputs.replacing(args.out) as tmp, \
             RecordingWriter(tmp, header, columns, flush_interval_s=None, fsync=False) as writer:
-        for t_s, gyro, temp_c in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=seed,
-                                                 validated=spec):
-            cols = [t_s[:, None], gyro] + ([temp_c[:, None]] if temp_c is not None else [])
-            writer.write(np.hstack(cols))
-            done += len(t_s)
+        for block in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=seed, validated=spec):
+            writer.write(block_rows(block))
+            done += len(block.t_s)
             if show and (time.monotonic() - last > 1.0 or done == n_total):
                 last = time.monotonic()
                 print(f"\rsimulate: {done}/{n_total} samples ({100.0 * done / n_total:.0f} %)", end="", file=sys.stderr)
     if show:
         print(file=sys.stderr)
+    accel = spec[ACCELEROMETER]
     console.tell(f"wrote {args.out}: {n_total} samples at {spec['sample_rate_hz']:g} Hz ({n_total / spec['sample_rate_hz']:g} s), "
-          f"gyro_unit {spec['gyro_unit']}, seed {seed}")
+                 f"gyro_unit {spec['gyro_unit']}" + (f", accel_unit {accel['accel_unit']}" if accel else "") + f", seed {seed}")
     return 0

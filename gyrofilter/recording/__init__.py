@@ -6,13 +6,17 @@ The format (docs/formats.md, section 1) is CSV text, optionally gzip-compressed:
     # sample_rate_hz: 100
     # gyro_unit: lsb            (dps, rad/s or lsb)
     # lsb_per_dps: 131          (required when gyro_unit is lsb)
-    t,gx,gy,gz,temp
-    0.00,12,-3,40,25.31
+    # accel_unit: lsb           (m/s^2, g or lsb: with columns ax, ay, az)
+    # lsb_per_g: 16384          (required when accel_unit is lsb)
+    t,gx,gy,gz,temp,ax,ay,az
+    0.00,12,-3,40,25.31,-120,88,16390
 
 Header lines start with ``#`` and hold ``key: value``, each key once; unknown keys are kept;
 numbers are plain decimal text (:func:`~gyrofilter.inputs.parse_number`). Columns ``gx, gy,
 gz`` are required; ``t`` (s, strictly increasing, its typical step ``1 / sample_rate_hz`` within
-5 %) and ``temp`` (deg C) are optional; any other column is carried along unchanged. Lines
+5 %) and ``temp`` (deg C) are optional; ``ax, ay, az`` (a six-axis recording) are all three or
+none, and with ``accel_unit`` in the header they are its accelerometer (without it they are
+carried along as any other column, their unit unknown); any other column is carried along unchanged. Lines
 starting with ``#`` after the column row are annotations (for example a gap note written by
 ``gyrofilter record``); they are kept in :attr:`Recording.notes` and are not samples, and
 neither are blank lines. No line is longer than :data:`MAX_LINE_BYTES`.
@@ -39,14 +43,14 @@ as lines of text, gzip or not), ``checks`` (the gyro values and the ``t`` column
 reader and the writers), ``reader`` and ``writer``. This package presents their public API.
 """
 from .content import Note, Recording, RecordingHead, convert_gyro, warn_about_gaps
-from .header import (COLUMNS, END_NOTE, FORMAT_VERSION, GYRO_COLUMNS, MAX_HEADER_LINES, MAX_LINE_BYTES,
-                     MAX_NOTE_CHARS, PROVENANCE_KEYS, TIME_LIKE_NAMES, VERSION_KEY, dps_header, format_number, header_text,
-                     note_line, note_text, one_line_text, units_header)
+from .header import (ACCEL_COLUMNS, COLUMNS, END_NOTE, FORMAT_VERSION, GYRO_COLUMNS, MAX_HEADER_LINES, MAX_LINE_BYTES,
+                     MAX_NOTE_CHARS, PROVENANCE_KEYS, TIME_LIKE_NAMES, VERSION_KEY, accel_header, accel_units_header,
+                     dps_header, format_number, header_text, note_line, note_text, one_line_text, units_header)
 from .reader import CHUNK_ROWS, collect_columns, iter_recording, read_recording
 from .writer import EXACT_FORMAT, FILTERED_FORMAT, RecordingWriter, write_recording
 
-__all__ = ["CHUNK_ROWS", "COLUMNS", "END_NOTE", "EXACT_FORMAT", "FILTERED_FORMAT", "FORMAT_VERSION", "GYRO_COLUMNS",
+__all__ = ["ACCEL_COLUMNS", "CHUNK_ROWS", "COLUMNS", "END_NOTE", "EXACT_FORMAT", "FILTERED_FORMAT", "FORMAT_VERSION", "GYRO_COLUMNS",
            "MAX_HEADER_LINES", "MAX_LINE_BYTES", "MAX_NOTE_CHARS", "Note", "PROVENANCE_KEYS", "Recording", "RecordingHead",
-           "RecordingWriter", "TIME_LIKE_NAMES", "VERSION_KEY", "collect_columns", "convert_gyro", "dps_header",
-           "format_number", "header_text", "iter_recording", "note_line", "note_text", "one_line_text",
+           "RecordingWriter", "TIME_LIKE_NAMES", "VERSION_KEY", "accel_header", "accel_units_header", "collect_columns",
+           "convert_gyro", "dps_header", "format_number", "header_text", "iter_recording", "note_line", "note_text", "one_line_text",
            "read_recording", "units_header", "warn_about_gaps", "write_recording"]

@@ -1,5 +1,6 @@
 """The checks of a recording's data that the reader and the writers share, so that nothing is
-written that would not read back: every gyro value within +-MAX_RATE_DPS once in deg/s
+written that would not read back: every gyro value within +-MAX_RATE_DPS once in deg/s, and
+every accelerometer value of a six-axis recording within +-MAX_ACCEL_MPS2 once in m/s^2
 (:func:`check_rates`), and the ``t`` column increasing with its typical step agreeing with
 ``sample_rate_hz`` in every window (:class:`TimeCheck`). Both are vectorised, chunk by chunk.
 """
@@ -8,23 +9,34 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import RecordingError
-from ..units import MAX_RATE_DPS, RATE_TOLERANCE
-from .header import GYRO_COLUMNS, format_number
+from ..units import MAX_ACCEL_MPS2, MAX_RATE_DPS, RATE_TOLERANCE
+from .header import ACCEL_COLUMNS, GYRO_COLUMNS, format_number
 
 
 def check_rates(data, head, where):
     """Refuse a gyro value beyond +-MAX_RATE_DPS once in deg/s (1e308 rad/s, a tiny lsb_per_dps):
     no gyro reads it, and it would overflow every analysis. One vectorised pass over ``data``, a
     chunk in ``head``'s columns and units; ``where(row)`` names a row ("line 12"). The reader and
-    the writers share it, so that nothing is written that would not read back."""
+    the writers share it, so that nothing is written that would not read back. With ``accel_unit``
+    in the header (a six-axis recording) the same for ``ax, ay, az`` beyond +-MAX_ACCEL_MPS2 once
+    in m/s^2 (about 1e6 g); without it they are carried along unchecked (their unit unknown)."""
     with np.errstate(over="ignore"):
         ok = np.abs(head.gyro_dps(data)) <= MAX_RATE_DPS
+    _refuse_beyond(ok, data, head, where, GYRO_COLUMNS, head.gyro_unit, f"+-{MAX_RATE_DPS:g} deg/s any gyro reads")
+    if head.accel_unit is not None:
+        with np.errstate(over="ignore"):
+            ok = np.abs(head.accel_mps2(data)) <= MAX_ACCEL_MPS2
+        _refuse_beyond(ok, data, head, where, ACCEL_COLUMNS, head.accel_unit,
+                       f"+-{MAX_ACCEL_MPS2:g} m/s^2 any accelerometer reads")
+
+
+def _refuse_beyond(ok, data, head, where, names, unit, limit):
+    """RecordingError naming the first value of the columns ``names`` (in ``unit``) whose ``ok`` is False."""
     if not ok.all():
         row, axis = (int(i[0]) for i in np.nonzero(~ok))
-        name = GYRO_COLUMNS[axis]
+        name = names[axis]
         raise RecordingError(f"{head.path}: {where(row)}: column {name!r} is "
-                             f"{format_number(data[row, head.names.index(name)])} {head.gyro_unit}, beyond the "
-                             f"+-{MAX_RATE_DPS:g} deg/s any gyro reads")
+                             f"{format_number(data[row, head.names.index(name)])} {unit}, beyond the {limit}")
 
 
 #: the number of consecutive steps of ``t`` in each window whose median is compared with ``1 / sample_rate_hz``

@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RecordingError
-from ..units import from_dps, to_dps
-from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, dps_header, format_number
+from ..units import from_dps, to_dps, to_mps2
+from .header import ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, accel_units_header, dps_header, format_number
 
 
 class _HeaderFacts:
@@ -40,6 +40,30 @@ class _HeaderFacts:
         """The header's ``lsb_per_dps`` as a float (LSB per deg/s), or None when absent."""
         value = self.header.get("lsb_per_dps")
         return None if value is None else float(value)
+
+    @property
+    def accel_unit(self):
+        """The header's ``accel_unit`` (``m/s^2``, ``g`` or ``lsb``: the columns ``ax, ay, az``'s
+        unit), or None when absent."""
+        return self.header.get("accel_unit")
+
+    @property
+    def lsb_per_g(self):
+        """The header's ``lsb_per_g`` as a float (LSB per g), or None when absent."""
+        value = self.header.get("lsb_per_g")
+        return None if value is None else float(value)
+
+    def require_accelerometer(self, names):
+        """Refuse an analysis of the accelerometer of a recording with columns ``names`` that has
+        no ``ax, ay, az`` or no ``accel_unit`` (a v1 file written before the key: its columns are
+        read and carried along, but their unit is not known), with RecordingError naming the file
+        and what is missing. The reader has checked the rest (:func:`~gyrofilter.recording.header.check_accelerometer`)."""
+        path = getattr(self, "path", None) or "recording"
+        if not all(c in names for c in ACCEL_COLUMNS):
+            raise RecordingError(f"{path}: no accelerometer columns {', '.join(ACCEL_COLUMNS)}")
+        if self.accel_unit is None:
+            raise RecordingError(f"{path}: header key 'accel_unit' is missing, so the unit of {', '.join(ACCEL_COLUMNS)} "
+                                 "is not known; add '# accel_unit: m/s^2|g|lsb' (and '# lsb_per_g: N' with lsb) to its header")
 
 
 class Note(tuple):
@@ -101,6 +125,14 @@ class Recording(_HeaderFacts):
         return to_dps(self.gyro, self.gyro_unit, self.lsb_per_dps)
 
     @property
+    def accel_mps2(self) -> np.ndarray:
+        """Acceleration, shape (N, 3), in m/s^2 (:func:`~gyrofilter.units.to_mps2`); RecordingError
+        naming the file when the recording has no ``ax, ay, az`` or no ``accel_unit``
+        (:meth:`require_accelerometer`)."""
+        self.require_accelerometer(self.columns)
+        return to_mps2(np.column_stack([self.columns[c] for c in ACCEL_COLUMNS]), self.accel_unit, self.lsb_per_g)
+
+    @property
     def t_s(self):
         """Sample times in seconds: the ``t`` column, or uniform times from the sample rate."""
         if "t" in self.columns:
@@ -118,15 +150,19 @@ class Recording(_HeaderFacts):
         return len(self) / self.sample_rate_hz
 
     @classmethod
-    def from_dps(cls, gyro_dps, sample_rate_hz, *, t_s=None, temp_c=None, extra=None, header=None):
+    def from_dps(cls, gyro_dps, sample_rate_hz, *, t_s=None, temp_c=None, accel=None, accel_unit=None, lsb_per_g=None,
+                 extra=None, header=None):
         """Build an in-memory recording with ``gyro_unit: dps`` from ``gyro_dps``, an (N, 3) array
         in deg/s, at ``sample_rate_hz`` (Hz); optional ``t_s`` (N,) times (s), ``temp_c`` (N,)
-        temperatures (deg C), ``extra`` further columns (name -> (N,) array) and ``header`` keys."""
+        temperatures (deg C), ``accel`` (N, 3) accelerometer columns ``ax, ay, az`` in ``accel_unit``
+        (``m/s^2``, ``g``, or ``lsb`` with ``lsb_per_g``: header keys), ``extra`` further columns
+        (name -> (N,) array) and ``header`` keys."""
         gyro_dps = np.asarray(gyro_dps, dtype=float)
         if gyro_dps.ndim != 2 or gyro_dps.shape[1] != 3:
             raise RecordingError(f"gyro_dps must have shape (N, 3), got {gyro_dps.shape}")
         head = {VERSION_KEY: FORMAT_VERSION}
         head.update(dps_header(header or {}, sample_rate_hz))
+        head.update(accel_units_header(accel_unit, lsb_per_g))
         columns = {}
         if t_s is not None:
             columns["t"] = np.asarray(t_s, dtype=float)
@@ -134,6 +170,12 @@ class Recording(_HeaderFacts):
             columns[name] = gyro_dps[:, i].copy()
         if temp_c is not None:
             columns["temp"] = np.asarray(temp_c, dtype=float)
+        if accel is not None:
+            accel = np.asarray(accel, dtype=float)
+            if accel.ndim != 2 or accel.shape[1] != 3:
+                raise RecordingError(f"accel must have shape (N, 3), got {accel.shape}")
+            for i, name in enumerate(ACCEL_COLUMNS):
+                columns[name] = accel[:, i].copy()
         for name, values in (extra or {}).items():
             columns[name] = np.asarray(values, dtype=float)
         for name, values in columns.items():
@@ -170,6 +212,12 @@ class RecordingHead(_HeaderFacts):
     def gyro_dps(self, chunk):
         """Angular rate of ``chunk``, shape (k, 3), in deg/s."""
         return to_dps(chunk[:, [self.names.index(c) for c in GYRO_COLUMNS]], self.gyro_unit, self.lsb_per_dps)
+
+    def accel_mps2(self, chunk):
+        """Acceleration of ``chunk``, shape (k, 3), in m/s^2; RecordingError as
+        :meth:`Recording.accel_mps2` without ``ax, ay, az`` or ``accel_unit``."""
+        self.require_accelerometer(self.names)
+        return to_mps2(chunk[:, [self.names.index(c) for c in ACCEL_COLUMNS]], self.accel_unit, self.lsb_per_g)
 
     def t_s(self, chunk, first_row):
         """Times (s) of ``chunk`` whose first sample is sample ``first_row`` of the file: the ``t``

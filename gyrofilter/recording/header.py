@@ -10,13 +10,16 @@ import re
 
 from ..errors import RecordingError
 from ..inputs import CONTROL_CHARACTER, escape_controls, json_string, parse_number, quote
-from ..units import AXES, GYRO_UNITS, check_lsb_per_dps, check_sample_rate_hz, utf8_text
+from ..units import ACCEL_UNITS, AXES, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
 
 #: the first header key of every recording; its value is the format version
 VERSION_KEY = "gyrofilter-recording"
 FORMAT_VERSION = "1"
 #: the gyro columns every recording has, in the order of :data:`~gyrofilter.units.AXES`
 GYRO_COLUMNS = tuple(f"g{axis}" for axis in AXES)
+#: the accelerometer columns of a six-axis recording, all three or none, in the order of
+#: :data:`~gyrofilter.units.AXES`, in the header's ``accel_unit`` (:func:`check_accelerometer`)
+ACCEL_COLUMNS = tuple(f"a{axis}" for axis in AXES)
 #: the columns every gyrofilter source and output starts with: time (s), then the gyro columns
 COLUMNS = ("t", *GYRO_COLUMNS)
 #: the start of the annotation with which ``record`` and ``run`` end their output (``# end: why; ...``):
@@ -104,14 +107,35 @@ def format_number(x):
     return repr(int(x)) if float(x).is_integer() and abs(x) < 1e15 else repr(float(x))
 
 
-def units_header(sample_rate_hz, gyro_unit, lsb_per_dps=None):
+def units_header(sample_rate_hz, gyro_unit, lsb_per_dps=None, accel_unit=None, lsb_per_g=None):
     """The header keys that state a recording's units, as text (:func:`format_number`):
     ``sample_rate_hz`` (Hz), ``gyro_unit`` (``dps``, ``rad/s`` or ``lsb``) and, with ``lsb``,
-    ``lsb_per_dps`` (LSB per deg/s)."""
+    ``lsb_per_dps`` (LSB per deg/s); with ``accel_unit`` (a six-axis recording: ``m/s^2``, ``g``
+    or ``lsb``) that key and, with ``lsb``, ``lsb_per_g`` (LSB per g)."""
     head = {"sample_rate_hz": format_number(float(sample_rate_hz)), "gyro_unit": gyro_unit}
     if gyro_unit == "lsb":
         head["lsb_per_dps"] = format_number(float(lsb_per_dps))
+    head.update(accel_units_header(accel_unit, lsb_per_g))
     return head
+
+
+def accel_units_header(accel_unit, lsb_per_g=None):
+    """The header keys that state the unit of the accelerometer columns, as text: ``accel_unit``
+    and, with ``lsb``, ``lsb_per_g`` (LSB per g, :func:`format_number`); empty when ``accel_unit``
+    is None (no accelerometer)."""
+    if accel_unit is None:
+        return {}
+    head = {"accel_unit": accel_unit}
+    if accel_unit == "lsb":
+        head["lsb_per_g"] = format_number(float(lsb_per_g))
+    return head
+
+
+def accel_header(header):
+    """The keys of ``header`` that state the unit of its accelerometer columns: ``accel_unit`` and,
+    with it, ``lsb_per_g`` when given (empty without ``accel_unit``); what an output that carries
+    the columns ``ax, ay, az`` of its source as they are copies into its own header."""
+    return {k: header[k] for k in ("accel_unit", "lsb_per_g") if "accel_unit" in header and k in header}
 
 
 def dps_header(header, sample_rate_hz):
@@ -131,7 +155,8 @@ def header_text(header, columns, where):
     output) for what would not read back as written: a key that is empty, holds ``:``, spaces or
     control characters; a column name that is empty, holds ``,``, spaces or control characters
     (or the first one starting with ``#``); a line longer than :data:`MAX_LINE_BYTES`; and
-    everything the reader refuses (:func:`check_header`, :func:`check_columns`: the same checks).
+    everything the reader refuses (:func:`check_header`, :func:`check_columns`,
+    :func:`check_accelerometer`: the same checks, lines named as the file will have them).
     """
     head = {VERSION_KEY: FORMAT_VERSION}
     for key, value in header.items():
@@ -147,6 +172,7 @@ def header_text(header, columns, where):
                 or (i == 0 and name.startswith("#"))):
             raise RecordingError(f"{where}: column name {quote(name)} is not a name (no ',', spaces or control characters)")
     check_columns(columns, where)
+    check_accelerometer(head, columns, where, {key: i + 1 for i, key in enumerate(head)}, len(head) + 1)
     lines = [f"# {k}: {v}" for k, v in head.items()] + [",".join(columns)]
     for ln in lines:
         if len(ln.encode("utf-8")) > MAX_LINE_BYTES:
@@ -215,6 +241,39 @@ def check_columns(names, where):
         raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
                              "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
                              "it as an extra column; another tool's log: gyrofilter convert")
+
+
+def check_accelerometer(header, names, where, line_of, columns_line):
+    """Refuse what a six-axis recording's ``header`` and column ``names`` say of its
+    accelerometer, when the header has ``accel_unit`` (docs/formats.md, section 1), with
+    RecordingError naming ``where`` (the file), the line and the key or columns: an
+    ``accel_unit`` not in :data:`~gyrofilter.units.ACCEL_UNITS`; with ``lsb``, a missing
+    ``lsb_per_g`` or one that is not a number in :data:`~gyrofilter.units.LSB_PER_G_RANGE`
+    (:func:`~gyrofilter.units.check_lsb_per_g`); no column of ``ax, ay, az``
+    (:data:`ACCEL_COLUMNS`), or only some of them. ``line_of``: each key's line, ``columns_line``
+    the column row's. Without ``accel_unit`` nothing is checked: columns ``ax, ay, az`` are then
+    carried along as any other column (the v1 files written before the key), and only an
+    analysis of the accelerometer refuses them (:meth:`~gyrofilter.recording.Recording.accel_mps2`)."""
+    if "accel_unit" not in header:
+        return
+    unit_line = f"{where}: line {line_of['accel_unit']}"
+    unit = header["accel_unit"]
+    if unit not in ACCEL_UNITS:
+        raise RecordingError(f"{unit_line}: accel_unit {quote(unit)} is not one of {', '.join(ACCEL_UNITS)}")
+    if unit == "lsb":
+        if "lsb_per_g" not in header:
+            raise RecordingError(f"{unit_line}: accel_unit is lsb but header key 'lsb_per_g' is missing")
+        name = f"{where}: line {line_of['lsb_per_g']}: lsb_per_g"
+        check_lsb_per_g(parse_number(header["lsb_per_g"], name, error=RecordingError), name, RecordingError)
+    present = [c for c in ACCEL_COLUMNS if c in names]
+    if not present:
+        raise RecordingError(f"{unit_line}: header key 'accel_unit' is given but the column row (line {columns_line}) "
+                             f"has no accelerometer columns {', '.join(ACCEL_COLUMNS)}; drop the key or add the columns")
+    if len(present) < len(ACCEL_COLUMNS):
+        missing = [c for c in ACCEL_COLUMNS if c not in present]
+        raise RecordingError(f"{where}: line {columns_line}: accelerometer column(s) {', '.join(missing)} missing "
+                             f"(have {', '.join(present)}); with accel_unit (line {line_of['accel_unit']}) a recording "
+                             f"has all of {', '.join(ACCEL_COLUMNS)}")
 
 
 def refuse_rowless(path, bytes_before_rows):

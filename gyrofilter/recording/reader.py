@@ -14,7 +14,8 @@ from ..errors import RecordingError, SettingsError
 from ..inputs import is_plain_number, quote
 from .checks import TimeCheck, check_rates
 from .content import Note, Recording, RecordingHead
-from .header import MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, check_columns, check_header, refuse_rowless
+from .header import (MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, check_accelerometer, check_columns, check_header,
+                     refuse_rowless)
 from .lines import blame_gzip_damage, line_chunks
 
 #: most lines per chunk of :func:`iter_recording` (a chunk also ends with each block of text)
@@ -150,9 +151,10 @@ def _read_header(parts, path, warnings):
         for j, ln in enumerate(lines):
             blank = blank and not ln.strip()
             if not ln.startswith("#") and not blank:
-                header = _parse_header(header_lines, path)
+                header, line_of = _parse_header(header_lines, path)
                 names = [c.strip() for c in ln.split(",")]
                 check_columns(names, f"{path}: line {first + j}")
+                check_accelerometer(header, names, path, line_of, first + j)
                 head = RecordingHead(header=header, names=names, path=path, warnings=warnings)
                 return head, first + j + 1, lines[j + 1:]
             header_lines.append(ln)
@@ -168,7 +170,7 @@ def _read_header(parts, path, warnings):
 
 def _parse_header(lines, path):
     """The header (key -> value text) of a file's first ``lines`` (its ``#`` lines, line 1 first),
-    checked by :func:`check_header`; a line that is not ``key: value`` or repeats a key is an
+    checked by :func:`check_header`, and the line of each key; a line that is not ``key: value`` or repeats a key is an
     error naming its line."""
     header, line_of = {}, {}
     for i, ln in enumerate(lines):
@@ -185,7 +187,7 @@ def _parse_header(lines, path):
             raise RecordingError(f"{path}: line {i + 1}: header key {quote(key)} repeated (first on line {line_of[key]})")
         header[key], line_of[key] = value.strip(), i + 1
     check_header(header, path)
-    return header
+    return header, line_of
 
 
 def _parse_chunk(lines, first, head):

@@ -15,16 +15,21 @@ import re
 import numpy as np
 
 from . import noise_terms as nt
+from .accel import accel_unit
 from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, RESONATORS, ROWS,
                        SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
 from ..inputs import MAX_QUOTE_CHARS, closest, did_you_mean, load_json, quote
-from ..units import AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C, check_sample_rate_hz, plain
+from ..units import (AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, LSB_PER_G_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C,
+                     check_sample_rate_hz, plain)
 
 # Bounds of every model number, so that no model gives a non-finite or absurd signal. A number is
 # bounded by its key's unit (the suffix of its name) and then checked by its kind below; every
 # rate-like number (_dps, and deg/s per s, per sqrt(s), per sqrt(Hz), per deg C) by units.MAX_RATE_DPS.
 MAX_TIME_S = 1e9  # times and time constants (s): about 32 years
+#: every accelerometer number (m/s^2, and m/s^2 per sqrt(s), per deg C; m/s per sqrt(s)): 10^4 g, beyond
+#: any accelerometer's range (MEMS parts read +-2 to +-400 g); tighter than a recording's units.MAX_ACCEL_MPS2
+MAX_MODEL_ACCEL_MPS2 = 1e5
 MIN_TIME_CONSTANT_S = 1e-6  # time constants and periods (s): far below any sample period
 MAX_PHASE_RAD = 1000.0
 MIN_RESOLUTION_C = 1e-6  # a temperature's quantization step: a finer one (5e-324) made the rounding infinite
@@ -38,9 +43,9 @@ MAX_EFFECTS_PER_AXIS = 100
 MAX_ARMA_COEFFICIENTS = 20  # each of phi and theta; `gyrofilter arma --max-n 10` fits ARMA(20, 19)
 MAX_TABLE_POINTS = 100_000  # a temperature table's t_s and temp_c
 #: bounds of the numbers whose key carries no unit, by key
-_NAMED_LIMITS = {"lsb_per_dps": LSB_PER_DPS_RANGE, "per_decade": (0.1, 10.0), "spread_ln": (0.0, 5.0),
-                 "phi": (-1e6, 1e6), "theta": (-1e6, 1e6), "fraction": (0.0, 0.5), "scale_ratio": (1.0, 1000.0),
-                 "q": (0.05, 1000.0)}
+_NAMED_LIMITS = {"lsb_per_dps": LSB_PER_DPS_RANGE, "lsb_per_g": LSB_PER_G_RANGE, "per_decade": (0.1, 10.0),
+                 "spread_ln": (0.0, 5.0), "phi": (-1e6, 1e6), "theta": (-1e6, 1e6), "fraction": (0.0, 0.5),
+                 "scale_ratio": (1.0, 1000.0), "q": (0.05, 1000.0)}
 
 # kinds of parameter checks: (test, what is expected)
 _KINDS = {
@@ -57,11 +62,19 @@ EFFECTS = {e.name: (e.required, e.optional) for e in REGISTRY}
 
 #: the model's top-level key of its temperature profile (docs/formats.md, section 2; not the effect)
 TEMPERATURE_PROFILE = "temperature"
+#: the model's top-level key of its accelerometer (docs/formats.md, section 2; :mod:`gyrofilter.sim.accel`)
+ACCELEROMETER = "accelerometer"
 #: the model's top-level keys, among them each whole-row effect's (:data:`gyrofilter.effects.ROWS`: an object of
 #: its parameters)
-_TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", TEMPERATURE_PROFILE, "axes", *ROWS}
+_TOP_KEYS = {"sample_rate_hz", "gyro_unit", "lsb_per_dps", "full_scale_dps", TEMPERATURE_PROFILE, ACCELEROMETER, "axes",
+             *ROWS}
 _META_KEYS = {"description", "name", "comment", "notes", "source", "sensor"}
 _AXIS_KEYS = {"bias_dps", "arw_dps_per_sqrt_hz", "effects"}
+#: the accelerometer's axis keys: {key: (kind, default)} (:mod:`gyrofilter.sim.accel`: b_a, N_v, B, K, c_a)
+ACCEL_AXIS_KEYS = {"bias_mps2": ("any", 0.0), "vrw_mps_per_sqrt_s": ("nonneg", 0.0), "b_mps2": ("nonneg", 0.0),
+                   "k_mps2_per_sqrt_s": ("nonneg", 0.0), "coefficient_mps2_per_c": ("any", 0.0)}
+#: the values of the accelerometer's ``up``: the axis that points up, a leading ``-`` when it points down
+UP_AXES = (*AXES, *(f"-{a}" for a in AXES))
 _TEMP_EXP = {"start_c": ("any", None), "end_c": ("any", None), "tau_s": ("pos", 600.0),
              "cycle_amplitude_c": ("nonneg", 0.0), "cycle_period_s": ("pos", 3600.0),
              "noise_c": ("nonneg", 0.0), "resolution_c": ("step", 0.0)}
@@ -79,6 +92,8 @@ def _limits(key, kind):
         return (*_NAMED_LIMITS[key], "")
     if "_dps" in key:
         return -MAX_RATE_DPS, MAX_RATE_DPS, ""
+    if "_mps" in key:
+        return -MAX_MODEL_ACCEL_MPS2, MAX_MODEL_ACCEL_MPS2, ""
     if key.endswith("_s"):
         return (MIN_TIME_CONSTANT_S if kind == "pos" else -MAX_TIME_S), MAX_TIME_S, " s"
     if key.endswith("_hz"):
@@ -161,7 +176,10 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     e.g. ``model: axes.z.effects[0] (gauss_markov): missing parameter 'tau_s' (expected a number > 0)``.
     Keys starting with ``_`` and top-level metadata (description, name, comment, notes, source,
     sensor) are ignored. A whole-row effect (``repeated_samples``) is a top-level key holding its
-    parameters, checked as an effect's; ``normalized`` holds it (with ``effect``) or None.
+    parameters, checked as an effect's; ``normalized`` holds it (with ``effect``) or None. The
+    ``accelerometer`` (:mod:`gyrofilter.sim.accel`) is checked likewise, its numbers within
+    ±:data:`MAX_MODEL_ACCEL_MPS2` and ``lsb_per_g`` in ``units.LSB_PER_G_RANGE``; ``normalized`` holds it
+    with its defaults and its ``accel_unit`` (``lsb`` when ``gyro_unit`` is, else ``m/s^2``), or None.
 
     Every number is bounded, so that no model makes a non-finite or absurd signal: the sample
     rate by :func:`~gyrofilter.units.check_sample_rate_hz`; others by its
@@ -210,6 +228,8 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     out["full_scale_dps"] = None if full_scale_dps is None else _number(full_scale_dps, "full_scale_dps", "pos")
     out[TEMPERATURE_PROFILE] = (None if model.get(TEMPERATURE_PROFILE) is None
                                 else _validate_temperature(model[TEMPERATURE_PROFILE]))
+    out[ACCELEROMETER] = (None if model.get(ACCELEROMETER) is None
+                          else _validate_accelerometer(model[ACCELEROMETER], out, coefficients_only))
     for name in ROWS:  # a whole-row effect: its parameters at the top level, None when absent
         spec = model.get(name)
         if spec is not None and (not isinstance(spec, dict) or spec.get("effect", name) != name):
@@ -263,6 +283,45 @@ def _validate_temperature(spec):
         out[key] = None if value is None and default is None else _number(value, f"{where}.{key}", kind)
     if out["end_c"] is None:
         out["end_c"] = out["start_c"]
+    return out
+
+
+def _validate_accelerometer(spec, model, coefficients_only):
+    """The ``accelerometer`` object checked, its defaults filled in and its unit added
+    (``accel_unit``: :func:`gyrofilter.sim.accel.accel_unit` of the model's ``gyro_unit``).
+    ``model``: the top-level keys checked so far (``gyro_unit``, ``temperature``)."""
+    where = ACCELEROMETER
+    if not isinstance(spec, dict):
+        _err(where, f"expected an object with lsb_per_g, up, axes; got {_show(spec)}")
+    for key in spec:
+        if key not in ("lsb_per_g", "up", "axes") and not _is_ignored(key):
+            _err(f"{where}.{key}", "unknown key (expected axes, lsb_per_g, up)")
+    lsb = spec.get("lsb_per_g")
+    if lsb is None and model["gyro_unit"] == "lsb":
+        _err(f"{where}.lsb_per_g", "missing: gyro_unit 'lsb' writes the accelerometer in LSB too and needs lsb_per_g "
+                                   "(LSB per g, > 0)")
+    up = spec.get("up", "z")
+    if up not in UP_AXES:
+        _err(f"{where}.up", f"expected one of {', '.join(UP_AXES)} (the axis that points up), got {_show(up)}")
+    axes = spec.get("axes", {})
+    if not isinstance(axes, dict):
+        _err(f"{where}.axes", f"expected an object with keys x, y, z, got {_show(axes)}")
+    out = {"lsb_per_g": None if lsb is None else _number(lsb, f"{where}.lsb_per_g", "pos"), "up": up,
+           "accel_unit": accel_unit(model["gyro_unit"]), "axes": {}}
+    for name, axis in axes.items():
+        if name not in AXES and not _is_ignored(name):
+            _err(f"{where}.axes.{name}", "unknown axis (expected x, y or z)")
+        if name in AXES and not isinstance(axis, dict):
+            _err(f"{where}.axes.{name}", f"expected an object with {', '.join(ACCEL_AXIS_KEYS)}; got {_show(axis)}")
+    for name in AXES:
+        axis, path = axes.get(name, {}), f"{where}.axes.{name}"
+        for key in axis:
+            if key not in ACCEL_AXIS_KEYS and not _is_ignored(key):
+                _err(f"{path}.{key}", f"unknown key (expected {', '.join(ACCEL_AXIS_KEYS)})")
+        out["axes"][name] = {key: _number(axis.get(key, default), f"{path}.{key}", kind)
+                             for key, (kind, default) in ACCEL_AXIS_KEYS.items()}
+        if out["axes"][name]["coefficient_mps2_per_c"] and model[TEMPERATURE_PROFILE] is None and not coefficients_only:
+            _err(f"{path}.coefficient_mps2_per_c", "needs the model's 'temperature' profile (the top-level 'temperature' key)")
     return out
 
 

@@ -15,7 +15,7 @@ Per axis and sample n (t = n / f_s), in deg/s:
 
 then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb_per_dps)). Last,
 ``repeated_samples`` (a top-level key: whole rows) makes some rows repeat the previous row on every
-column, the temperature's too (:class:`gyrofilter.sim.noise_terms.RepeatedRows`); its stream is the
+column, the temperature's and the accelerometer's too (:class:`gyrofilter.sim.noise_terms.RepeatedRows`); its stream is the
 record's, not an axis's, so one axis simulated alone (:func:`simulate_axis_dps`) repeats the same rows.
 Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`
 (``wandering_tone`` in :mod:`gyrofilter.sim.tone`).
@@ -36,12 +36,16 @@ The variance is kept, so N keeps its meaning and the Allan deviation is unchange
 expectation; only the distribution of every sample is heavier-tailed than a Gaussian (unlike
 ``outliers``, a few isolated spikes added on top).
 
+The ``accelerometer`` key adds the columns ``ax, ay, az`` (:mod:`gyrofilter.sim.accel`, its equations),
+written after the gyro's and ``temp`` in the model's ``accel_unit``.
+
 The ``temperature`` key designs the ``temp`` column (an exponential self-heating profile with
 an optional cycle, or a table interpolated linearly; read noise and resolution only on the
 written column) and drives the ``temperature`` effect.
 
 Randomness: only ``seed`` or ``rng``. Every random term draws from its own stream, derived
-from the root seed and a fixed key (axis, effect name, occurrence), so (1) a run cut into chunks
+from the root seed and a fixed key (axis, effect name, occurrence; the accelerometer's axes have keys
+of their own, so adding one leaves the gyro's samples unchanged bit for bit), so (1) a run cut into chunks
 equals the one-shot run bit for bit, and (2) adding an effect to a model leaves the other terms'
 random draws unchanged for the same seed (common random numbers: a baseline and its extension
 share their white noise).
@@ -49,6 +53,7 @@ share their white noise).
 from __future__ import annotations
 
 import json
+from typing import NamedTuple
 
 import numpy as np
 
@@ -58,10 +63,11 @@ from ..effects import (ARMA, BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_M
 from . import noise_terms as nt
 from .resonance import Ringing, resonance_filter
 from .tone import WanderingTone
+from .accel import RANDOM_TERMS, Accelerometer
 from .flicker import BiasInstability
-from .model import EFFECTS, TEMPERATURE_PROFILE, validate_model
+from .model import ACCELEROMETER, EFFECTS, TEMPERATURE_PROFILE, validate_model
 from ..errors import SettingsError
-from ..recording import COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, Recording, format_number, units_header
+from ..recording import ACCEL_COLUMNS, COLUMNS, FORMAT_VERSION, VERSION_KEY, Recording, accel_units_header, format_number, units_header
 from ..units import AXES, DEG_PER_RAD, check_duration_s, plain, to_dps
 
 DEFAULT_CHUNK_SAMPLES = 65536
@@ -115,6 +121,8 @@ def _stream(root, *key):
 
 #: the key of the record's own streams (the axes are 0-2, the temperature 3): the whole-row effects
 _RECORD_KEY = 4
+#: the first key of the accelerometer's streams: its axes x, y, z are 5, 6, 7 (:func:`_accelerometer`)
+_ACCEL_KEY = 5
 
 
 def _repeats(spec, root):
@@ -123,6 +131,18 @@ def _repeats(spec, root):
     if rows is None:
         return None
     return nt.RepeatedRows(rows["fraction"], rows["pattern"], _stream(root, _RECORD_KEY, _EFFECT_ID[REPEATED_SAMPLES], 0, 0))
+
+
+def _accelerometer(spec, sample_rate_hz, duration_s, root, temp_profile):
+    """The :class:`~gyrofilter.sim.accel.Accelerometer` of the model's ``accelerometer``, or None
+    without one. Its streams are keyed (5 + axis, term, 0, 0), term the index in
+    :data:`~gyrofilter.sim.accel.RANDOM_TERMS`: apart from every gyro stream, so adding an
+    accelerometer to a model leaves its gyro samples unchanged bit for bit."""
+    accel = spec[ACCELEROMETER]
+    if accel is None:
+        return None
+    rngs = [[_stream(root, _ACCEL_KEY + i, j, 0, 0) for j in range(len(RANDOM_TERMS))] for i in range(3)]
+    return Accelerometer(accel, sample_rate_hz, duration_s, rngs, temp_profile.start_c() if temp_profile else None)
 
 
 def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
@@ -217,14 +237,39 @@ def _check_chunk_samples(chunk_samples):
     return chunk_samples
 
 
+class Block(NamedTuple):
+    """One block of a simulation (:func:`simulate_chunks`): ``t_s`` (n,) seconds; ``gyro`` (n, 3)
+    in the model's ``gyro_unit`` (integers as floats for ``lsb``); ``temp_c`` (n,) deg C, or None
+    without a temperature profile; ``accel`` (n, 3) in the model's ``accel_unit`` (m/s^2, or LSB
+    as floats), or None without an accelerometer."""
+
+    t_s: np.ndarray
+    gyro: np.ndarray
+    temp_c: np.ndarray | None
+    accel: np.ndarray | None
+
+
+def block_rows(block):
+    """The rows of a :class:`Block`, shape (n, len(columns)), in the order of :func:`recording_columns`:
+    t, the gyro, temp (when present), the accelerometer (when present)."""
+    parts = [block.t_s[:, None], block.gyro]
+    if block.temp_c is not None:
+        parts.append(block.temp_c[:, None])
+    if block.accel is not None:
+        parts.append(block.accel)
+    return np.hstack(parts)
+
+
 def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEFAULT_CHUNK_SAMPLES, rng=None, seed=None,
                     validated=None):
-    """Simulate in blocks of ``chunk_samples``: yields ``(t_s, gyro, temp_c)`` per block.
+    """Simulate in blocks of ``chunk_samples``: yields a :class:`Block` ``(t_s, gyro, temp_c, accel)``
+    per block.
 
     ``t_s`` (n,) seconds, ``gyro`` (n, 3) in the model's ``gyro_unit`` (integers as floats for
-    ``lsb``), ``temp_c`` (n,) or None without a temperature profile. Memory is bounded by the
-    block size (and the flicker bank's ~3 numbers per decade); the concatenated blocks equal
-    :func:`simulate`'s output for the same seed, whatever the block size.
+    ``lsb``), ``temp_c`` (n,) or None without a temperature profile, ``accel`` (n, 3) in the
+    model's ``accel_unit`` (:mod:`gyrofilter.sim.accel`) or None without an accelerometer. Memory
+    is bounded by the block size (and the flicker banks' ~3 numbers per decade); the concatenated
+    blocks equal :func:`simulate`'s output for the same seed, whatever the block size.
 
     ``model``: the model dict (:func:`validate_model`); ``duration_s``: run length (s), rounded
     to whole samples (:func:`sample_count`); ``sample_rate_hz``: rate (Hz) overriding the
@@ -241,7 +286,8 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
     root = _root_seed(seed, rng)
     temp = nt.TemperatureProfile(spec[TEMPERATURE_PROFILE], _stream(root, 3, 0, 0, 0)) if spec[TEMPERATURE_PROFILE] else None
     axes = [_axis_terms(i, spec["axes"][a], sample_rate_hz, duration_s, root, temp) for i, a in enumerate(AXES)]
-    repeats, last = _repeats(spec, root), [None] * 4
+    accel_model = _accelerometer(spec, sample_rate_hz, duration_s, root, temp)
+    repeats, last = _repeats(spec, root), [None] * 7  # gx, gy, gz, temp, ax, ay, az
     for start in range(0, n_total, chunk_samples):
         n = min(chunk_samples, n_total - start)
         t_s = np.arange(start, start + n) / sample_rate_hz
@@ -250,13 +296,16 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
         for i, terms in enumerate(axes):
             gyro[:, i] = _axis_rate(terms, t_s, true_c, spec)
         temp_c = temp.recorded_c(true_c) if temp else None
+        accel = accel_model.next(t_s, true_c) if accel_model else None
         if repeats is not None:
             mask = repeats.next_mask(n)
             for i in range(3):
                 gyro[:, i], last[i] = repeats.apply(gyro[:, i], mask, last[i])
             if temp_c is not None:
                 temp_c, last[3] = repeats.apply(temp_c, mask, last[3])
-        yield t_s, gyro, temp_c
+            for i in range(3 if accel is not None else 0):
+                accel[:, i], last[4 + i] = repeats.apply(accel[:, i], mask, last[4 + i])
+        yield Block(t_s, gyro, temp_c, accel)
 
 
 def _axis_rate(axis_terms, t_s, true_c, spec):
@@ -327,8 +376,8 @@ def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, valid
     samples); ``sample_rate_hz``: rate (Hz) overriding the model's; ``seed``: written as
     ``simulated_seed`` (``none`` when None); ``validated``: the validated model, if at hand.
     Returns a dict of text values (``sample_rate_hz`` in Hz, ``gyro_unit``, ``lsb_per_dps`` with
-    ``lsb``, ``full_scale_dps`` in deg/s when the model has one) for
-    :class:`~gyrofilter.recording.RecordingWriter`.
+    ``lsb``, ``full_scale_dps`` in deg/s when the model has one, ``accel_unit`` and, with ``lsb``,
+    ``lsb_per_g`` when it has an accelerometer) for :class:`~gyrofilter.recording.RecordingWriter`.
     """
     spec = validated if validated is not None else validate_model(model, sample_rate_hz=sample_rate_hz)[0]
     given = dict(model)
@@ -337,6 +386,9 @@ def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, valid
               **units_header(spec["sample_rate_hz"], spec["gyro_unit"], spec.get("lsb_per_dps"))}
     if spec["full_scale_dps"] is not None:
         header["full_scale_dps"] = format_number(spec["full_scale_dps"])
+    accel = spec[ACCELEROMETER]
+    if accel is not None:
+        header.update(accel_units_header(accel["accel_unit"], accel.get("lsb_per_g")))
     header["simulated_duration_s"] = format_number(sample_count(duration_s, spec["sample_rate_hz"]) / spec["sample_rate_hz"])
     header["simulated_seed"] = "none" if seed is None else str(int(seed))
     header["simulated_model"] = json.dumps(given, separators=(",", ":"), sort_keys=False, default=_json_default)
@@ -352,47 +404,47 @@ def _json_default(value):
 
 
 def recording_columns(model_or_spec):
-    """Column names of a simulated recording: t, gx, gy, gz (+ temp with a temperature profile).
+    """Column names of a simulated recording: t, gx, gy, gz (+ temp with a temperature profile,
+    + ax, ay, az with an accelerometer).
 
     ``model_or_spec``: the model dict or its validated form. Returns a list of names: ``t`` in
-    s, the gyro columns in the model's ``gyro_unit``, ``temp`` in deg C.
+    s, the gyro columns in the model's ``gyro_unit``, ``temp`` in deg C, the accelerometer's in its
+    ``accel_unit`` (:func:`block_rows` orders a block's values so).
     """
     has_temp = model_or_spec.get(TEMPERATURE_PROFILE) is not None
-    return list(COLUMNS) + (["temp"] if has_temp else [])
+    has_accel = model_or_spec.get(ACCELEROMETER) is not None
+    return list(COLUMNS) + (["temp"] if has_temp else []) + (list(ACCEL_COLUMNS) if has_accel else [])
 
 
 def simulate(model: dict, duration_s: float, *, sample_rate_hz=None, rng=None, seed=None,
-             chunk_samples=DEFAULT_CHUNK_SAMPLES) -> Recording:
+             chunk_samples=DEFAULT_CHUNK_SAMPLES, accelerometer=True) -> Recording:
     """Simulate ``duration_s`` seconds of ``model`` in memory and return a :class:`Recording`.
 
-    Columns t, gx, gy, gz (model's ``gyro_unit``) and temp (with a temperature profile); the
-    header carries ``sensor: simulated``, ``simulated_model`` (compact JSON) and the seed.
-    ``sample_rate_hz`` overrides the model's rate. Same seed, same numbers.
+    Columns t, gx, gy, gz (model's ``gyro_unit``), temp (with a temperature profile) and ax, ay,
+    az (with an accelerometer, in its ``accel_unit``); the header carries ``sensor: simulated``,
+    ``simulated_model`` (compact JSON) and the seed. ``sample_rate_hz`` overrides the model's
+    rate. Same seed, same numbers.
 
     ``model``: the model dict (:func:`validate_model`); ``duration_s``: run length (s), rounded
     to whole samples; ``sample_rate_hz``: Hz; ``seed`` (int >= 0) or ``rng``
     (``numpy.random.Generator``), not both (neither: fresh entropy, and the header's
     ``simulated_seed`` is ``none``); ``chunk_samples``: block size of the computation (does not
-    change the numbers). Memory: the whole run, 32 bytes a sample (40 with a temperature), at most
+    change the numbers); ``accelerometer``: False leaves the model's accelerometer out (no ax,
+    ay, az, nothing of it computed; the other columns are the same). Memory: the whole run, 32
+    bytes a sample (40 with a temperature, 24 more with an accelerometer), at most
     :data:`MAX_SAMPLES` samples (more: SettingsError, a ValueError; :func:`simulate_chunks` streams them).
     """
     spec, _ = validate_model(model, sample_rate_hz=sample_rate_hz)
+    if not accelerometer:
+        spec = {**spec, ACCELEROMETER: None}
     n_total = check_sample_count(duration_s, spec["sample_rate_hz"])
-    has_temp = spec[TEMPERATURE_PROFILE] is not None
-    t_s, gyro, temp_c = np.empty(n_total), np.empty((n_total, 3)), np.empty(n_total) if has_temp else None
+    columns = {name: np.empty(n_total) for name in recording_columns(spec)}
     start = 0
-    for t_part, gyro_part, temp_part in simulate_chunks(model, duration_s, chunk_samples=chunk_samples, rng=rng,
-                                                        seed=seed, validated=spec):
-        stop = start + len(t_part)
-        t_s[start:stop], gyro[start:stop] = t_part, gyro_part
-        if has_temp:
-            temp_c[start:stop] = temp_part
+    for block in simulate_chunks(model, duration_s, chunk_samples=chunk_samples, rng=rng, seed=seed, validated=spec):
+        stop = start + len(block.t_s)
+        for column, values in zip(columns.values(), block_rows(block).T):
+            column[start:stop] = values
         start = stop
-    columns = {"t": t_s}
-    for i, name in enumerate(GYRO_COLUMNS):
-        columns[name] = gyro[:, i]
-    if has_temp:
-        columns["temp"] = temp_c
     header = recording_header(model, duration_s, seed=seed, validated=spec)
     return Recording(columns=columns, header=header)
 
@@ -404,5 +456,5 @@ def simulate_dps(model, duration_s, *, sample_rate_hz=None, rng=None, seed=None)
     or ``rng``). Returns the rates in deg/s whatever the model's ``gyro_unit`` (after its
     quantization and saturation) and the recorded temperature (deg C) or None.
     """
-    rec = simulate(model, duration_s, sample_rate_hz=sample_rate_hz, rng=rng, seed=seed)
+    rec = simulate(model, duration_s, sample_rate_hz=sample_rate_hz, rng=rng, seed=seed, accelerometer=False)
     return rec.gyro_dps, rec.temp_c

@@ -4,7 +4,7 @@ One syntax names every source (``--source SOURCE`` of ``gyrofilter record`` and 
 
     KIND[:ARG][,key=value[,key=value...]][,flag]
 
-    mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,allow_chip=0x70]
+    mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,accel=1,accel_range=2,allow_chip=0x70]
     serial:/dev/ttyUSB0[,baud=115200,unit=lsb,lsb_per_dps=131,rate=100,header_timeout=5]
     replay:FILE[,realtime][,speed=2]          (or just FILE, a .csv/.csv.gz recording)
     sim[:MODEL.json][,seed=1][,realtime=0][,duration=60][,rate=1000]   (or sim:model=MODEL.json,...)
@@ -29,7 +29,9 @@ Every opened source is a :class:`gyrofilter.sources.base.Source`:
   ``start_time_utc``, ...);
 - ``columns``: names of what ``read()`` returns, starting with ``t`` (sample index / sample
   rate, from the sensor's clock: lost samples show as a jump in ``t``), then ``gx, gy, gz`` in
-  the header's ``gyro_unit``, then optional ``temp`` (deg C);
+  the header's ``gyro_unit``, then optional ``temp`` (deg C), then optional ``ax, ay, az`` (all
+  three or none; the accelerometer, in the header's ``accel_unit``, with ``lsb_per_g`` when it is
+  ``lsb``);
 - ``read()``: the rows available now, shape (n, len(columns)); waits at most about 0.1 s;
   shape (0, k) when nothing arrived; raises :class:`gyrofilter.errors.SourceEnded` at the end
   of a finite source (the exception's text says why it ended);
@@ -56,7 +58,7 @@ __all__ = ["open_source", "parse_source", "SOURCE_HELP", "KINDS"]
 
 SOURCE_HELP = (
     "SOURCE is KIND[:ARG][,key=value...]: "
-    "mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,allow_chip=0x70] | "
+    "mpu6050[:bus=1,addr=0x68,rate=100,range=250,dlpf=3,temp=1,accel=1,accel_range=2,allow_chip=0x70] | "
     "serial:/dev/ttyUSB0[,baud=115200,unit=lsb,lsb_per_dps=131,rate=100,header_timeout=5] | "
     "replay:FILE[,realtime][,speed=1] (or just FILE) | "
     "sim[:MODEL.json][,seed=1,realtime=1,duration=S,rate=HZ] (default: an MPU6050-like model)"
@@ -112,6 +114,8 @@ KINDS = {
         "range": (_int(), "range_dps", "full scale in deg/s: 250, 500, 1000 or 2000"),
         "dlpf": (_int(0, 7), "dlpf", "DLPF_CFG 0..6 (CONFIG register bits 2:0)"),
         "temp": (_bool, "temperature", "read the temperature too (1/0)"),
+        "accel": (_bool, "accel", "read the accelerometer too (1/0; default 1)"),
+        "accel_range": (_int(), "accel_range_g", "accelerometer full scale in g: 2, 4, 8 or 16"),
         "allow_chip": (_int(0, 0xFF), "allow_chip", "accept this WHO_AM_I value (a relative or clone)"),
     }),
     "serial": ("port", {

@@ -1,4 +1,4 @@
-"""The line protocol of a gyro streamed over a serial port (``serial:/dev/ttyUSB0,baud=115200``),
+"""The line protocol of a gyro (and accelerometer) streamed over a serial port (``serial:/dev/ttyUSB0,baud=115200``),
 and :class:`LineParser`, which turns its bytes into rows (pure: no I/O; the port is
 :mod:`gyrofilter.sources.serial_source`).
 
@@ -13,7 +13,10 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
   ``lsb_per_dps`` (with lsb), ``sample_rate_hz``; optional ``fields`` (default
   ``counter,gx,gy,gz`` plus ``temp`` if the lines have five values), ``counter_bits`` (an
   integer in [8, 32], default 32: the counter wraps at 2**counter_bits), ``temp_unit`` (``c`` or ``mpu6050_raw``: T = raw/340 + 36.53
-  deg C, MPU-6000/6050 register map rev 4.2 section 4.18); any other key (``sensor``,
+  deg C, MPU-6000/6050 register map rev 4.2 section 4.18); ``accel_unit`` (``m/s^2``, ``g`` or
+  ``lsb``) and ``lsb_per_g`` (with lsb, a number > 0), required when ``fields`` names the
+  accelerometer fields ``ax, ay, az`` (all three or none; only through ``fields``, so a stream
+  with an accelerometer sends a header), and written into the recording header; any other key (``sensor``,
   ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header. The header
   line is printable ASCII; keys are names (letters, digits, ``_``), each given once, each with a
   value; numbers are plain decimals (:func:`gyrofilter.inputs.parse_number`), ``sample_rate_hz``
@@ -52,8 +55,9 @@ import numpy as np
 
 from ..errors import DeviceError, SettingsError
 from ..inputs import check_number, is_plain_number, parse_number, quote
-from ..recording import COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
-from ..units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz, to_dps
+from ..recording import ACCEL_COLUMNS, COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
+from ..units import (ACCEL_UNITS, GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz,
+                     to_dps)
 from .mpu6050.chip import temperature_c
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
@@ -66,14 +70,15 @@ DEFAULT_COUNTER_BITS = 32
 LINE_OUTCOMES = ("samples", "duplicates", "partial_lines", "bad_lines", "empty_lines", "device_messages",
                  "headers", "lines_before_header")
 _PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
-_KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp")
+_KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp", *ACCEL_COLUMNS)
+_UNIT_KEYS = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_per_g")  # a repeated header keeps them
 _HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
 _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
-# a cell of the numpy path: a plain decimal of at most 50 characters (sign, 24 digits, a point, 24
-# digits), so that a line of 5 cells and its "\r" stays within MAX_LINE_BYTES, and strictly one:
-# numpy 1.24's fromstring reads "1.2.3" as 1.2 and stops, unnoticed where it is the block's last
-# cell; every other cell ("1.2.3", "+-4", "1e3") goes the line-by-line way, which names it
-_PLAIN_CELL = rb"[-+]?(?:[0-9]{1,24}(?:\.[0-9]{0,24})?|\.[0-9]{1,24})"
+# a cell of the numpy path (:func:`_plain_cell`): a plain decimal of at most 2 d + 2 characters
+# (sign, d digits, a point, d digits; d = 24 up to 5 fields, fewer for more), so that a line of
+# its cells, commas and "\r" stays within MAX_LINE_BYTES, and strictly one: numpy 1.24's
+# fromstring reads "1.2.3" as 1.2 and stops, unnoticed where it is the block's last cell; every
+# other cell ("1.2.3", "+-4", "1e3", a longer one) goes the line-by-line way, which names it
 _PLAIN_LINES = {}  # field count -> compiled pattern of a block of plain CSV number lines
 # bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
 _TEXT = b"0123456789+-.,eEnaifNAIF \t"
@@ -81,6 +86,13 @@ _TEXT = b"0123456789+-.,eEnaifNAIF \t"
 
 class UnitsConflict(DeviceError):
     """The device's header disagrees with the units already in use (options or an earlier header)."""
+
+
+def _plain_cell(n_fields):
+    """The numpy path's cell pattern for lines of ``n_fields`` cells: d digits either side of the
+    point, d = min(24, the most that keeps n (2 d + 2) + (n - 1) commas + "\r" within MAX_LINE_BYTES)."""
+    digits = min(24, ((MAX_LINE_BYTES - n_fields) // n_fields - 2) // 2)
+    return rb"[-+]?(?:[0-9]{1,%d}(?:\.[0-9]{0,%d})?|\.[0-9]{1,%d})" % (digits, digits, digits)
 
 
 def _parse_fields(text, where):
@@ -93,11 +105,42 @@ def _parse_fields(text, where):
             raise DeviceError(f"{where}: fields={text} lacks {f}")
     if len(set(fields)) != len(fields):
         raise DeviceError(f"{where}: fields={text} names a field twice")
+    accel = [f for f in ACCEL_COLUMNS if f in fields]
+    if accel and len(accel) < len(ACCEL_COLUMNS):
+        raise DeviceError(f"{where}: fields={text} names {', '.join(accel)} but not "
+                          f"{', '.join(f for f in ACCEL_COLUMNS if f not in accel)}: the accelerometer is all of "
+                          f"{', '.join(ACCEL_COLUMNS)} or none")
     return fields
 
 
+def _accel_units(values, fields, where):
+    """The header's ``accel_unit`` and ``lsb_per_g`` words (checked; {} when not given) for a
+    stream whose ``fields`` (None: not known yet) name the accelerometer or not: the unit is
+    required with the accelerometer fields, ``lsb_per_g`` (> 0) with ``lsb``. DeviceError otherwise."""
+    if "accel_unit" not in values:
+        if fields is not None and ACCEL_COLUMNS[0] in fields:
+            raise DeviceError(f"{where}: fields name {', '.join(ACCEL_COLUMNS)} but the header gives no accel_unit "
+                              f"({', '.join(ACCEL_UNITS)})")
+        if "lsb_per_g" in values:
+            raise DeviceError(f"{where}: the header gives lsb_per_g without accel_unit=lsb")
+        return {}
+    unit = values["accel_unit"]
+    if unit not in ACCEL_UNITS:
+        raise DeviceError(f"{where}: accel_unit {quote(unit, 40)} is not one of {', '.join(ACCEL_UNITS)}")
+    if unit != "lsb":
+        if "lsb_per_g" in values:
+            raise DeviceError(f"{where}: the header gives lsb_per_g with accel_unit={unit}: it belongs to lsb only")
+        return {"accel_unit": unit}
+    if "lsb_per_g" not in values:
+        raise DeviceError(f"{where}: accel_unit=lsb needs lsb_per_g (LSB per g, e.g. 16384 for an MPU6050 at +-2 g)")
+    what = f"{where}: header line: lsb_per_g"
+    lsb_per_g = check_lsb_per_g(parse_number(values["lsb_per_g"], what, low=0, low_open=True, error=DeviceError), what,
+                                DeviceError)
+    return {"accel_unit": unit, "lsb_per_g": format_number(lsb_per_g)}
+
+
 class LineParser:
-    """Turn the bytes of the line protocol into rows ``t, gx, gy, gz[, temp]``.
+    """Turn the bytes of the line protocol into rows ``t, gx, gy, gz[, temp][, ax, ay, az]``.
 
     Pure (no I/O): :meth:`feed` takes any bytes (split anywhere) and returns the rows its
     complete lines made; the rows and the counts do not depend on the split. ``header`` is None
@@ -184,14 +227,14 @@ class LineParser:
         return float(number)
 
     def _apply(self, header):
-        units = {k: header[k] for k in ("sample_rate_hz", "gyro_unit", "lsb_per_dps") if k in header}
+        units = {k: header[k] for k in _UNIT_KEYS if k in header}
         if self.header is not None:
-            old = {k: self.header[k] for k in ("sample_rate_hz", "gyro_unit", "lsb_per_dps") if k in self.header}
+            old = {k: self.header[k] for k in _UNIT_KEYS if k in self.header}
             if old != units:
-                raise UnitsConflict(
-                    f"{self.where}: the device's header changed the units mid-stream ({old} -> {units}); "
-                    "start a new recording"
-                )
+                changed = ", ".join(f"{k} {old.get(k, '(none)')} -> {units.get(k, '(none)')}"
+                                    for k in _UNIT_KEYS if old.get(k) != units.get(k))
+                raise UnitsConflict(f"{self.where}: the device's header changed the units mid-stream ({changed}); "
+                                    "start a new recording")
         self.header = dict(header)
         self.sample_rate_hz = float(header["sample_rate_hz"])
         self._lsb_per_dps = float(header["lsb_per_dps"]) if "lsb_per_dps" in header else None
@@ -251,6 +294,7 @@ class LineParser:
         temp_unit = values.get("temp_unit", "c")
         if temp_unit not in ("c", "mpu6050_raw"):
             raise DeviceError(f"{self.where}: temp_unit {quote(temp_unit, 40)} is not c or mpu6050_raw")
+        header.update(_accel_units(values, fields, self.where))
         self._apply(header)  # a repeated header must agree; the counter tells restarts
         self.fields, self._counter_mod, self._temp_raw = fields, counter_mod, temp_unit == "mpu6050_raw"
         self._skip_first_line = False
@@ -259,11 +303,13 @@ class LineParser:
 
     @property
     def columns(self):
-        """Names of the row columns, ``["t", "gx", "gy", "gz"]`` plus ``"temp"`` (deg C) when the
-        lines carry it; None until the fields are known (from a header or the first data line)."""
+        """Names of the row columns, ``["t", "gx", "gy", "gz"]`` plus ``"temp"`` (deg C) and
+        ``"ax", "ay", "az"`` (in the header's ``accel_unit``) when the lines carry them; None until
+        the fields are known (from a header or the first data line)."""
         if self.fields is None:
             return None
-        return [*COLUMNS] + (["temp"] if "temp" in self.fields else [])
+        return ([*COLUMNS] + (["temp"] if "temp" in self.fields else [])
+                + ([*ACCEL_COLUMNS] if ACCEL_COLUMNS[0] in self.fields else []))
 
     def _bad(self, shown, kind, reason, *, count=1, garbage_bytes=None):
         """Count ``count`` refused lines as ``kind`` (``bad_lines`` or ``partial_lines``) and their
@@ -281,9 +327,9 @@ class LineParser:
         """Add received bytes; returns the rows of the complete lines, shape (n, len(columns)).
 
         ``data``: bytes as received, split anywhere (an incomplete last line is kept for the next
-        call). Rows are ``t, gx, gy, gz[, temp]``: t (s) from the device's sample counter and
-        ``sample_rate_hz``, gyro in the header's ``gyro_unit``, temp in deg C (converted from
-        TEMP_OUT with ``temp_unit=mpu6050_raw``). Raises only for a header line: DeviceError or
+        call). Rows are ``t, gx, gy, gz[, temp][, ax, ay, az]``: t (s) from the device's sample
+        counter and ``sample_rate_hz``, gyro in the header's ``gyro_unit``, temp in deg C (converted
+        from TEMP_OUT with ``temp_unit=mpu6050_raw``), accelerometer as sent (``accel_unit``). Raises only for a header line: DeviceError or
         SettingsError when the first one is unreadable or lacks a unit, :class:`UnitsConflict`
         when one changes the units (and DeviceError when a tiny ``sample_rate_hz`` and the
         counter's jumps carry ``t`` beyond a float); other lines are counted in :attr:`stats`
@@ -321,7 +367,7 @@ class LineParser:
         return np.empty((0, len(cols) if cols else 4))
 
     def _fast(self, block):
-        """All lines plain CSV with the known field count (cells of :data:`_PLAIN_CELL`, which the
+        """All lines plain CSV with the known field count (cells of :func:`_plain_cell`, which the
         line-by-line path reads alike): one regular-expression check, one numpy conversion.
         Anything else (headers, messages, bad lines) returns None."""
         if self.header is None or self.fields is None or self._skip_first_line:
@@ -329,7 +375,8 @@ class LineParser:
         nf = len(self.fields)
         pattern = _PLAIN_LINES.get(nf)
         if pattern is None:
-            pattern = _PLAIN_LINES[nf] = re.compile(rb"(?:%s(?:,%s){%d}\r?\n)*" % (_PLAIN_CELL, _PLAIN_CELL, nf - 1))
+            cell = _plain_cell(nf)
+            pattern = _PLAIN_LINES[nf] = re.compile(rb"(?:%s(?:,%s){%d}\r?\n)*" % (cell, cell, nf - 1))
         if pattern.fullmatch(block) is None:
             return None
         n_lines = block.count(b"\n")
@@ -432,7 +479,7 @@ class LineParser:
         return last - first == n - 1 and (n < 3 or bool((np.diff(counter) == 1).all()))
 
     def _rows(self, values):
-        """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping.
+        """Values per line (fields order) -> rows t, gx, gy, gz[, temp][, ax, ay, az]; counter bookkeeping.
 
         A gyro value beyond +-MAX_RATE_DPS in deg/s, a temperature outside TEMP_RANGE_C, or a counter that is not an integer in
         [0, 2**counter_bits), refuses its line (``bad_lines``). Counters are at most 2**32 and the
@@ -487,13 +534,13 @@ class LineParser:
                 self._last_index = int(index[-1])
         if n == 0:
             return self._empty()
-        rows = np.empty((n, len(self.columns)))
+        columns = self.columns
+        rows = np.empty((n, len(columns)))
         rows[:, 0] = index / self.sample_rate_hz  # finite: a rate >= MIN_SAMPLE_RATE_HZ, an int64 index
-        for j, name in enumerate(GYRO_COLUMNS):
-            rows[:, 1 + j] = values[:, fields.index(name)]
-        if "temp" in fields:
-            temp = values[:, fields.index("temp")]
-            rows[:, 4] = temperature_c(temp) if self._temp_raw else temp
+        for j, name in enumerate(columns[1:], start=1):
+            rows[:, j] = values[:, fields.index(name)]
+        if "temp" in fields and self._temp_raw:
+            rows[:, 4] = temperature_c(rows[:, 4])
         self.stats["samples"] += n
         return rows
 

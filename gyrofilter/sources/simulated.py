@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import SettingsError, SourceEnded
 from ..recording import VERSION_KEY
 from ..sim.model import load_model, validate_model
-from ..sim.simulate import check_seed, draw_seed, recording_columns, recording_header, simulate_chunks
+from ..sim.simulate import block_rows, check_seed, draw_seed, recording_columns, recording_header, simulate_chunks
 from .base import Source
 
 MAX_WAIT_S = 0.1
@@ -31,7 +31,8 @@ FAST_CHUNK_SAMPLES = 1000  # rows per read() when not paced
 UNLIMITED_S = 7 * 24 * 3600.0
 
 #: the model of a source given none: an MPU6050 at rest, +-250 deg/s (131 LSB per deg/s), 100 Hz,
-#: DLPF-free, levels as measured in recordings/mpu6050_static_449s.csv.gz; the package's one copy
+#: DLPF-free, levels as measured in recordings/mpu6050_static_449s.csv.gz, and its accelerometer at
+#: +-2 g (16384 LSB per g) from the datasheet (gyrofilter/data/README.md); the package's one copy
 DEFAULT_MODEL_PATH = resources.files("gyrofilter") / "data" / "mpu6050_model.json"
 DEFAULT_MODEL = load_model(str(DEFAULT_MODEL_PATH))
 
@@ -100,17 +101,17 @@ class SimulatedSource(Source):
     def _more(self):
         """Append the next simulator block to the buffer; False at the end."""
         try:
-            t_s, gyro, temp_c = next(self._chunks)
+            rows = block_rows(next(self._chunks))
         except StopIteration:
             self._exhausted = True
             return False
-        parts = [t_s[:, None], gyro] + ([temp_c[:, None]] if temp_c is not None else [])
-        self._buf = np.concatenate([self._buf, np.hstack(parts)]) if len(self._buf) else np.hstack(parts)
+        self._buf = np.concatenate([self._buf, rows]) if len(self._buf) else rows
         return True
 
     def read(self):
         """Next simulated rows, shape (n, len(columns)): t (s), gyro in the model's ``gyro_unit``
-        (deg/s, rad/s or LSB), then ``temp`` (deg C) when the model has a temperature.
+        (deg/s, rad/s or LSB), then ``temp`` (deg C) when the model has a temperature, then ``ax, ay,
+        az`` in its ``accel_unit`` (m/s^2 or LSB) when it has an accelerometer.
 
         Up to :data:`FAST_CHUNK_SAMPLES` rows when not paced; with ``realtime`` the rows due by
         now, waiting at most :data:`MAX_WAIT_S` (0.1 s). Raises

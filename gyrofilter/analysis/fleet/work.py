@@ -23,8 +23,8 @@ class FleetSettings:
     """What :func:`analyse_recording` does with each file (picklable, the same for all files).
 
     ``command``: ``"allan"`` (the Allan part only) or ``"gap"`` (the gap analysis and the Allan
-    part). The Allan part uses ``axes``, ``confidence``, ``min_clusters``, ``keep_outliers`` as
-    ``gyrofilter allan`` does; the gap part ``sims`` as ``gyrofilter gap``.
+    part). The Allan part uses ``axes``, ``confidence``, ``min_clusters``, ``keep_outliers`` and
+    ``kalibr_tau_s`` as ``gyrofilter allan`` does; the gap part ``sims`` as ``gyrofilter gap``.
     """
 
     command: str
@@ -33,6 +33,7 @@ class FleetSettings:
     min_clusters: int = MIN_CLUSTERS
     keep_outliers: bool = False
     sims: int | None = None
+    kalibr_tau_s: tuple | None = None  # the imu.yaml's range (s), as allan's --kalibr-tau-s; None: the default
 
 
 def analyse_recording(path, settings):
@@ -83,9 +84,10 @@ def _allan_part(path, settings, result):
     sample_rate_hz = head.sample_rate_hz
     for axis, r in results.items():
         result["warnings"].extend(text if text.startswith("axis ") else f"axis {axis}: {text}" for text in r.warnings)
+    kalibr = kalibr_yaml(results, sample_rate_hz, recording=path, tau_range_s=settings.kalibr_tau_s)  # may refuse the range
     result["allan"] = to_json(results, sample_rate_hz, recording=path, duration_s=head.rows / sample_rate_hz,
                               repeated_rows=repeats)
-    result["kalibr"] = kalibr_yaml(results, sample_rate_hz, recording=path)
+    result["kalibr"] = kalibr
     result["sample_rate_hz"], result["duration_s"] = sample_rate_hz, head.rows / sample_rate_hz
 
 

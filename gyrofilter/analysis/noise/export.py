@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
+from .kalibr import DEFAULT_TAU_RANGE_S, GYROSCOPE, KalibrValues, kalibr_sensor, plain_values
 from .model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, AxisNoise, Coefficient, convert
 from ..gap.detectors.repeats import repeats_warning
 from ...inputs import json_string
@@ -78,7 +79,7 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
               "details": {JSON_KEY[t]: _details_json(r.fitted[t], float(v)) for t, v in zip(TERMS, r.fit_values)},
               "readoff": {JSON_KEY[t]: _details_json(r.readoff[t]) for t in TERMS},
               "kalibr": kalibr_values(r),
-              "fit_consistency": r.fit_consistency(),
+              "fit_consistency": r.fit_consistency(), "full_fit_consistency": r.full_fit_consistency(),
               "fit_reduced_chi2": r.fit_reduced_chi2, "fit_dof": r.fit_dof,
               "warnings": list(r.warnings)}
         doc["axes"][name] = ax
@@ -88,44 +89,77 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
 
 
 def kalibr_values(r: AxisNoise):
-    """Kalibr's continuous-time ``gyroscope_noise_density`` (rad/s/sqrt(Hz)) = N and
-    ``gyroscope_random_walk`` (rad/s^2/sqrt(Hz)) = K for one axis. When K is not resolved its
-    upper bound is used (stated in ``random_walk_is_upper_bound``); B is *not* K. ``r``: the
-    axis's AxisNoise."""
-    n = r.fitted[ANGLE_RANDOM_WALK]
-    k = r.fitted[RATE_RANDOM_WALK]
-    nd = n.value if n.value is not None else n.upper
-    rw = k.value if k.value is not None else k.upper
-    return {"gyroscope_noise_density": convert(nd, ANGLE_RANDOM_WALK, "rad/s/sqrt(Hz)"),
-            "gyroscope_random_walk": convert(rw, RATE_RANDOM_WALK, "rad/s^2/sqrt(Hz)"),
-            "noise_density_is_upper_bound": n.value is None,
-            "random_walk_is_upper_bound": k.value is None}
+    """The ``kalibr`` block of one axis ``r`` (an AxisNoise) in the allan JSON: Kalibr's plain
+    ``gyroscope_noise_density`` (rad/s/sqrt(Hz)) = N and ``gyroscope_random_walk``
+    (rad/s^2/sqrt(Hz)) = K, with their upper-bound flags (:func:`~gyrofilter.analysis.noise.kalibr.plain_values`)."""
+    v = plain_values(r, GYROSCOPE)
+    return {"gyroscope_noise_density": v["noise_density"], "gyroscope_random_walk": v["random_walk"],
+            "noise_density_is_upper_bound": v["noise_density_is_upper_bound"],
+            "random_walk_is_upper_bound": v["random_walk_is_upper_bound"]}
 
 
-def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0"):
-    """Kalibr ``imu.yaml`` gyroscope entries: the largest value over the axes (Kalibr takes one
-    number for all three), continuous time, SI units. Accelerometer lines are not written (this
-    package characterises the gyro only); Kalibr needs them, so fill them in from your own
-    accelerometer analysis. ``results``, ``sample_rate_hz`` (Hz) and ``recording`` as for
-    :func:`to_json`; ``rostopic``: the IMU topic written. The recording's name goes into a comment
-    as a JSON string (:func:`~gyrofilter.inputs.json_string`, also a YAML double-quoted scalar): on
-    one line, so that a line end in a file name cannot add a key, and reading back exactly (a
-    backslash doubled: a name holding the two characters ``\\n`` is not one holding a line end)."""
-    per_axis = {a: kalibr_values(r) for a, r in results.items()}
-    nd = max(v["gyroscope_noise_density"] for v in per_axis.values())
-    rw = max(v["gyroscope_random_walk"] for v in per_axis.values())
-    lines = ["# Kalibr IMU noise model (gyroscope), written by gyrofilter allan",
-             f"# recording: {json_string(recording)}" if recording else "# recording: (array)",
-             "# continuous-time densities; the maximum over the axes is used:"]
-    for a, v in per_axis.items():
-        lines.append(f"#   {a}: noise_density {v['gyroscope_noise_density']:.6e} rad/s/sqrt(Hz)"
+def _e(value):
+    return "-" if value is None else f"{value:.6e}"
+
+
+def _times(factor):
+    return "-" if factor is None else f"x{factor:.3g}"
+
+
+def _sensor_lines(k: KalibrValues, confidence):
+    """The comment lines and the two keys of one sensor's :class:`~gyrofilter.analysis.noise.kalibr.KalibrValues`."""
+    name, s, b = k.sensor.name, k.sensor, k.bound
+    lines = [f"# {name}, plain values per axis (the fit's N and K; B is not Kalibr's random walk):"]
+    for a, v in k.per_axis.items():
+        lines.append(f"#   {a}: noise_density {_e(v['noise_density'])} {s.density_unit}"
                      f"{' (upper bound)' if v['noise_density_is_upper_bound'] else ''}, random_walk "
-                     f"{v['gyroscope_random_walk']:.6e} rad/s^2/sqrt(Hz)"
+                     f"{_e(v['random_walk'])} {s.walk_unit}"
                      f"{' (upper bound: K not resolved)' if v['random_walk_is_upper_bound'] else ''}")
-    lines += ["# Kalibr recommends inflating these for real-world conditions (e.g. x10 for the random walk).",
-              "# accelerometer_noise_density and accelerometer_random_walk: not estimated here",
-              f"gyroscope_noise_density: {nd:.6e}   # rad/s/sqrt(Hz)",
-              f"gyroscope_random_walk: {rw:.6e}   # rad/s^2/sqrt(Hz)",
-              f"rostopic: {rostopic}",
-              f"update_rate: {float(sample_rate_hz):g}   # Hz", ""]
+    f_nd, f_rw = k.factors()
+    touch = ", ".join(f"{t:.3g}" for t in b.touch_tau_s)
+    upper = "" if b.upper_ratio is None else f", at least {b.upper_ratio:.3g}x its {confidence:.0%} upper confidence bound"
+    lines += [f"# {name}, plain (largest over the axes): noise_density {_e(k.plain[0])}, random_walk {_e(k.plain[1])}",
+              f"# {name}, bounding pair over tau {k.tau_range_s[0]:g} .. {k.tau_range_s[1]:g} s ({len(b.tau_s)} taus): "
+              f"its model lies at {b.least:.3g} .. {b.excess:.3g}x the largest",
+              f"#   axis's Allan deviation ({b.least:.3g} at tau {touch} s){upper}",
+              f"{name}_noise_density: {k.noise_density:.6e}   # {s.density_unit}, bounding (plain {_times(f_nd)})",
+              f"{name}_random_walk: {k.random_walk:.6e}   # {s.walk_unit}, bounding (plain {_times(f_rw)})"]
+    return lines
+
+
+def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0", tau_range_s=None, accelerometer=None):
+    """Kalibr ``imu.yaml``: one white + random-walk pair per sensor (Kalibr takes one pair for all
+    three axes), continuous time, SI units. The values written are the **bounding** pair of
+    :func:`~gyrofilter.analysis.noise.kalibr.bounding_pair` over ``tau_range_s`` ((low, high) in s;
+    None: 0.1-100 s cut to the record), whose model lies on or above every axis's measured Allan
+    deviation there; the plain values (the fit's N and K per axis and their largest) and the
+    factor between the two are comments. ``results``: the gyroscope's {axis: AxisNoise} (deg/s);
+    ``accelerometer``: the accelerometer's (m/s^2), or None: then its keys are not written and a
+    comment says so. ``sample_rate_hz`` (Hz) and ``recording`` as for :func:`to_json`;
+    ``rostopic``: the IMU topic written. The recording's name goes into a comment as a JSON
+    string (:func:`~gyrofilter.inputs.json_string`, also a YAML double-quoted scalar): on one
+    line, so that a line end in a file name cannot add a key, and reading back exactly (a
+    backslash doubled: a name holding the two characters ``\\n`` is not one holding a line end).
+    Raises SettingsError for a ``tau_range_s`` outside a record's taus (:func:`~gyrofilter.analysis.noise.kalibr.tau_range`)."""
+    sensors = [kalibr_sensor(results, "deg/s", tau_range_s)]
+    if accelerometer is not None:
+        sensors.insert(0, kalibr_sensor(accelerometer, "m/s^2", tau_range_s))
+    confidence = next(iter(results.values())).confidence
+    low, high = DEFAULT_TAU_RANGE_S
+    lines = ["# Kalibr IMU noise model, written by gyrofilter allan",
+             f"# recording: {json_string(recording)}" if recording else "# recording: (array)",
+             "# continuous-time densities, SI units. Written: the bounding pair, the white + random-walk pair whose",
+             "# Kalibr model sigma^2(tau) = nd^2/tau + rw^2 tau/3 lies on or above the measured Allan deviation of",
+             "# every axis over the range, with the least largest excess over it (docs/allan.md, \"Kalibr\"). The",
+             "# plain values, the fit's N and K, are too optimistic where bias instability lifts the curve; they",
+             "# are the pair's floor."]
+    for k in sensors:
+        if k.cut:
+            lines.append(f"# {k.sensor.name}: the default range {low:g} .. {high:g} s cut to the record's "
+                         f"{k.tau_range_s[0]:g} .. {k.tau_range_s[1]:g} s; a longer record covers longer times")
+    if accelerometer is None:
+        lines.append("# accelerometer_noise_density and accelerometer_random_walk: not estimated here")
+    for k in sensors:
+        lines += _sensor_lines(k, confidence)
+    lines += [f"rostopic: {rostopic}", f"update_rate: {float(sample_rate_hz):g}   # Hz", ""]
     return "\n".join(lines)

@@ -22,7 +22,7 @@ The coefficients are estimated in the modules beside this one: :mod:`~gyrofilter
 :mod:`~gyrofilter.analysis.noise.intervals`, and :mod:`~gyrofilter.analysis.noise.readoff` (the
 slope read-offs of papers 000/002); :mod:`~gyrofilter.analysis.noise.screen` finds the gross
 errors a record must not hold, :mod:`~gyrofilter.analysis.noise.export` writes the allan JSON and
-Kalibr's imu.yaml. This module holds the model itself: the terms, their units and conversions,
+Kalibr's imu.yaml (its values: :mod:`~gyrofilter.analysis.noise.kalibr`). This module holds the model itself: the terms, their units and conversions,
 and the result types.
 """
 from __future__ import annotations
@@ -184,6 +184,7 @@ class AxisNoise:
     readoff: dict               # term -> Coefficient (slope read-offs)
     fit_values: np.ndarray      # the NNLS coefficients (Q, N, B, K, R), zeros included
     fit_used: np.ndarray        # bool mask of taus used by the fit
+    full_fit_values: np.ndarray  # the fit with every term asked for, none dropped (the adequacy warning's model)
     confidence: float = 0.95
     fit_reduced_chi2: float | None = None   # the fit's misfit chi2_nu (intervals.reduced_chi2); None: no dof left
     fit_dof: float | None = None            # its effective degrees of freedom
@@ -200,7 +201,19 @@ class AxisNoise:
         return model_adev(self.fit_values, self.tau_s if tau_s is None else tau_s)
 
     def fit_consistency(self):
-        """Fraction of fitted taus whose chi-square interval contains the model."""
-        mod = self.model_adev()[self.fit_used]
+        """Fraction of fitted taus whose chi-square interval contains the fitted model (the curve
+        drawn, ``fit_values``)."""
+        return self.consistency(self.fit_values)
+
+    def full_fit_consistency(self):
+        """Fraction of fitted taus whose chi-square interval contains the full fit
+        (``full_fit_values``: every term asked for, none dropped), the model the warning that the
+        noise is not just Q/N/B/K/R judges (:func:`~gyrofilter.analysis.noise.fit.characterise_axis`)."""
+        return self.consistency(self.full_fit_values)
+
+    def consistency(self, coefficients):
+        """Fraction of fitted taus whose chi-square interval (``ci_low``, ``ci_high``) contains the
+        model of ``coefficients`` = (Q, N, B, K, R) in their base units; NaN without fitted taus."""
+        mod = model_adev(coefficients, self.tau_s)[self.fit_used]
         lo, hi = self.ci_low[self.fit_used], self.ci_high[self.fit_used]
         return float(np.mean((mod >= lo) & (mod <= hi))) if mod.size else float("nan")

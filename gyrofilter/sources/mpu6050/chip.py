@@ -1,15 +1,17 @@
 """What an MPU-6050 is and how it is set, without any bus traffic: the WHO_AM_I table of the chip
-and its relatives (:data:`CHIPS`), the full scale (GYRO_CONFIG.FS_SEL), the digital low-pass
+and its relatives (:data:`CHIPS`), the full scales (GYRO_CONFIG.FS_SEL, ACCEL_CONFIG.AFS_SEL), the digital low-pass
 filter (CONFIG.DLPF_CFG) and the sample-rate divider (SMPLRT_DIV) for a requested rate, and the
-FIFO's frames: their layout, their decoding and the temperature formula.
+FIFO's frames: their layout, their decoding into a source's columns and the temperature formula.
 
 Datasheet sections: InvenSense RM-MPU-6000A-00 rev 4.2 (register map, :mod:`.registers`)
 and PS-MPU-6000A-00 rev 3.4 (product specification).
 """
+import functools
+
 import numpy as np
 
 from ...errors import SettingsError
-from ...recording import GYRO_COLUMNS
+from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS
 from . import registers as R
 from ...units import check_sample_rate_hz
 
@@ -60,6 +62,17 @@ def lsb_per_dps_for(range_dps):
                         f"{', '.join(str(v[0]) for v in R.GYRO_FULL_SCALE.values())} (deg/s)")
 
 
+def lsb_per_g_for(range_g):
+    """Return (AFS_SEL, LSB per g) for an accelerometer full scale of ``range_g`` (2, 4, 8 or 16 g):
+    16384, 8192, 4096 or 2048 LSB per g (product spec PS-MPU-6000A-00 section 6.2; register map
+    ACCEL_CONFIG 0x1C, AFS_SEL bits 4:3)."""
+    for afs_sel, (full_scale, lsb) in R.ACCEL_FULL_SCALE.items():
+        if float(range_g) == full_scale:
+            return afs_sel, lsb
+    raise SettingsError(f"accel_range_g={range_g!r} is not an MPU6050 accelerometer full scale; expected one of "
+                        f"{', '.join(str(v[0]) for v in R.ACCEL_FULL_SCALE.values())} (g)")
+
+
 def auto_dlpf_cfg(sample_rate_hz):
     """Widest DLPF bandwidth below the Nyquist frequency ``sample_rate_hz / 2`` (DLPF_CFG 0..6).
 
@@ -102,13 +115,15 @@ def sample_rate_settings(sample_rate_hz, dlpf_cfg):
         f"{base_hz:g} Hz / (1 + SMPLRT_DIV), SMPLRT_DIV 0..255; nearest: {near_txt}")
 
 
-def frame_layout(temperature):
-    """Names of the 16-bit words in one FIFO frame, in FIFO order (register order, section 4.6).
+def frame_layout(temperature, accel=False):
+    """Names of the 16-bit words in one FIFO frame, in FIFO order: register order (section 4.6),
+    ACCEL_XOUT_H 0x3B .. ACCEL_ZOUT_L 0x40, TEMP_OUT 0x41, GYRO_XOUT_H 0x43 .. GYRO_ZOUT_L 0x48.
 
-    ``temperature``: True when TEMP_OUT is in the FIFO. Returns a tuple of names:
-    ``("temp", "gx", "gy", "gz")`` or ``("gx", "gy", "gz")``.
+    ``temperature``: True when TEMP_OUT is in the FIFO; ``accel``: True when the accelerometer is.
+    Returns a tuple of names, e.g. ``("ax", "ay", "az", "temp", "gx", "gy", "gz")`` (14 bytes a
+    frame) or ``("gx", "gy", "gz")`` (6 bytes).
     """
-    return (("temp",) if temperature else ()) + GYRO_COLUMNS
+    return (ACCEL_COLUMNS if accel else ()) + (("temp",) if temperature else ()) + GYRO_COLUMNS
 
 
 def decode_fifo(buf, n_words):
@@ -116,9 +131,30 @@ def decode_fifo(buf, n_words):
 
     ``buf``: the bytes read from FIFO_R_W, a whole number of frames of ``2 * n_words`` bytes;
     ``n_words``: 16-bit words per frame (``len(frame_layout(...))``). Returns raw values in LSB
-    (gyro) or TEMP_OUT counts, one row per frame, columns in :func:`frame_layout` order.
+    (gyro, accelerometer) or TEMP_OUT counts, one row per frame, columns in :func:`frame_layout` order.
     """
     return np.frombuffer(bytes(buf), dtype=">i2").reshape(-1, n_words)
+
+
+def frame_values(words, layout, columns, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):
+    """Decoded frames (:func:`decode_fifo`, words in ``layout`` order) as a source's value columns.
+
+    ``layout`` and ``columns``: tuples of names; ``columns`` the names wanted, in the source's
+    order (``gx, gy, gz[, temp][, ax, ay, az]``, each in ``layout``). Gyro and accelerometer stay
+    in LSB, ``temp`` becomes deg C by :func:`temperature_c` with the chip's ``lsb_per_c`` and
+    ``offset_c``. Returns floats, shape (frames, len(columns)).
+    """
+    order, temp_at = _column_order(layout, columns)
+    out = words[:, order].astype(float)
+    if temp_at is not None:
+        out[:, temp_at] = temperature_c(out[:, temp_at], lsb_per_c, offset_c)
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def _column_order(layout, columns):
+    """(the index in ``layout`` of each of ``columns``, the place of ``temp`` in ``columns`` or None)."""
+    return np.array([layout.index(name) for name in columns]), (columns.index("temp") if "temp" in columns else None)
 
 
 def temperature_c(raw, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):

@@ -1,4 +1,4 @@
-"""MPU-6050 gyroscope over I2C (Linux i2c-dev through smbus2), read through the chip's FIFO.
+"""MPU-6050 gyroscope and accelerometer over I2C (Linux i2c-dev through smbus2), read through the chip's FIFO.
 
 Entry point: :func:`open_mpu6050` returns a live source (see the source protocol in
 ``gyrofilter/sources``): ``header``, ``columns``, ``read()``, ``pop_notes()``, ``stats``, ``close()``.
@@ -11,11 +11,13 @@ register map; PS-MPU-6000A-00 rev 3.4, product specification):
 * resets it (PWR_MGMT_1.DEVICE_RESET), wakes it with the clock from the PLL (CLKSEL = 1, section 4.30),
   with a timeout on every wait;
 * sets full scale (GYRO_CONFIG.FS_SEL bits 4:3: 250/500/1000/2000 deg/s = 131/65.5/32.8/16.4 LSB per
-  deg/s), digital low-pass filter (CONFIG.DLPF_CFG bits 2:0) and sample rate
+  deg/s), the accelerometer's full scale (ACCEL_CONFIG.AFS_SEL bits 4:3: 2/4/8/16 g = 16384/8192/4096/2048
+  LSB per g, product spec section 6.2), digital low-pass filter (CONFIG.DLPF_CFG bits 2:0) and sample rate
   ``rate = gyro output rate / (1 + SMPLRT_DIV)`` with a gyro output rate of 8 kHz for DLPF_CFG 0
   and 1 kHz otherwise (section 4.2); every written register is read back before data are trusted;
-* reads the FIFO (section 4.6: gyro X, Y, Z and optionally TEMP, written in register order, so TEMP
-  comes first): FIFO_COUNT (0x72/0x73) then whole frames, big-endian 16-bit two's complement;
+* reads the FIFO (section 4.6: accelerometer X, Y, Z, TEMP and gyro X, Y, Z as enabled, written in
+  register order: accel, temp, gyro; 14 bytes a frame with all, 12 without TEMP): FIFO_COUNT
+  (0x72/0x73) then whole frames, big-endian 16-bit two's complement;
 * time stamps samples from the sensor's clock: ``t = sample_index / sample_rate_hz``; a FIFO overflow
   (INT_STATUS.FIFO_OFLOW_INT, bit 4) resets the FIFO, keeps frame alignment, and records the gap
   (samples lost, estimated from the host clock at the configured rate) as a note and as a jump in t;
@@ -36,11 +38,12 @@ from datetime import datetime, timezone
 import numpy as np
 
 from ...errors import DeviceError, SettingsError, SourceEnded
-from ...recording import COLUMNS, units_header
+from ...recording import ACCEL_COLUMNS, COLUMNS, format_number, units_header
 from . import registers as R
 from ..base import Source
-from .chip import (CHIPS, MPU6050_ID, auto_dlpf_cfg, chip_ids, decode_fifo, frame_layout, lsb_per_dps_for,
-                           sample_rate_settings, temperature_c)
+from .bus import as_int, bus_name, bus_number, open_bus
+from .chip import (CHIPS, MPU6050_ID, auto_dlpf_cfg, chip_ids, decode_fifo, frame_layout, frame_values,
+                   lsb_per_dps_for, lsb_per_g_for, sample_rate_settings)
 
 __all__ = ["open_mpu6050", "MPU6050Source"]
 
@@ -49,58 +52,13 @@ I2C_BLOCK_MAX = 32          # SMBus I2C-block transfers carry at most 32 bytes
 I2C_FUNC_I2C = 0x00000001   # adapter supports plain I2C messages (I2C_RDWR)
 
 
-def _as_int(value, name):
-    """``value`` as an int: an int, or text of a Python integer literal in ASCII (``0x68``, ``104``;
-    no other script's digits, as every number a user gives: :mod:`gyrofilter.inputs`)."""
-    try:
-        if isinstance(value, str) and not value.isascii():
-            raise ValueError(value)
-        return int(value, 0) if isinstance(value, str) else int(value)
-    except (TypeError, ValueError):
-        raise SettingsError(f"{name}={value!r} is not an integer") from None
-
-
-def _bus_name(bus):
-    if isinstance(bus, int):
-        return f"/dev/i2c-{bus}"
-    if isinstance(bus, str):
-        return bus
-    return repr(bus)
-
-
-def _bus_number(bus):
-    if isinstance(bus, int):
-        return bus
-    if isinstance(bus, str) and bus.startswith("/dev/i2c-") and bus[9:].isdigit():
-        return int(bus[9:])
-    return 1
-
-
-def _open_bus(bus):
-    """Open ``/dev/i2c-N`` with smbus2; turn the OS errors into one-line errors with a hint."""
-    import smbus2  # imported only when a device is opened
-
-    name = _bus_name(bus)
-    try:
-        return smbus2.SMBus(bus)
-    except FileNotFoundError:
-        raise DeviceError(
-            f"no I2C bus {name}: enable I2C (sudo raspi-config -> Interface Options -> I2C, or "
-            f"dtparam=i2c_arm=on in /boot/firmware/config.txt) and reboot; `ls /dev/i2c-*` lists the buses") from None
-    except PermissionError:
-        raise DeviceError(
-            f"permission denied opening {name}: add your user to the i2c group "
-            f"(sudo adduser $USER i2c, then log out and in) or check the device's permissions") from None
-    except OSError as exc:
-        raise DeviceError(f"cannot open I2C bus {name}: {exc.strerror or exc} (errno {exc.errno})") from None
-
-
 class MPU6050Source(Source):
-    """A configured MPU-6050 streaming gyro (and temperature) samples from its FIFO.
+    """A configured MPU-6050 streaming gyro (and temperature and accelerometer) samples from its FIFO.
 
     Use :func:`open_mpu6050`; the constructor does all the bus traffic of start-up.
-    ``read()`` returns rows ``[t, gx, gy, gz(, temp)]``: t in seconds from the sensor's sample
-    index, gyro in LSB (``lsb_per_dps`` LSB per deg/s), temp in deg C.
+    ``read()`` returns rows ``[t, gx, gy, gz(, temp)(, ax, ay, az)]``: t in seconds from the sensor's
+    sample index, gyro in LSB (``lsb_per_dps`` LSB per deg/s), temp in deg C, accelerometer in LSB
+    (``lsb_per_g`` LSB per g).
 
     Parameters
     ----------
@@ -122,6 +80,11 @@ class MPU6050Source(Source):
     allow_chip : int, str, collection or True, optional
         WHO_AM_I values accepted besides 0x68 (known relatives and clones of :data:`CHIPS`
         only); True accepts any usable one; None accepts only an MPU-6050.
+    accel : bool
+        Put the accelerometer in the FIFO (6 more bytes a frame) and ``ax, ay, az`` columns (LSB)
+        in the rows. The accelerometer's output rate is 1 kHz: above it a sample repeats.
+    accel_range_g : float
+        Accelerometer full scale (g): 2, 4, 8 or 16 (16384, 8192, 4096, 2048 LSB per g).
     transfer : str
         How the FIFO is read: ``"smbus"`` (I2C-block reads of at most 32 bytes), ``"rdwr"`` (one
         combined I2C_RDWR transfer; needs a bus with ``i2c_rdwr``) or ``"auto"`` (rdwr when the
@@ -151,24 +114,25 @@ class MPU6050Source(Source):
     gyro_unit = "lsb"
 
     def __init__(self, bus=1, address=0x68, sample_rate_hz=100, range_dps=250, dlpf=None, temperature=True,
-                 allow_chip=None, *, transfer="auto", clock=None, sleep=None, wall_clock=None,
+                 allow_chip=None, accel=True, accel_range_g=2, *, transfer="auto", clock=None, sleep=None, wall_clock=None,
                  poll_interval_s=0.02, max_wait_s=0.1, max_retries=5, retry_backoff_s=0.001,
                  reset_timeout_s=0.5, fifo_bytes=None):
         # settings are checked before any bus traffic (strings such as "0x69" or "3" are accepted)
-        address = _as_int(address, "address")
-        dlpf = None if dlpf is None else _as_int(dlpf, "dlpf")
+        address = as_int(address, "address")
+        dlpf = None if dlpf is None else as_int(dlpf, "dlpf")
         if address not in (0x68, 0x69):
             raise SettingsError(f"address=0x{int(address):02X}: an MPU6050 answers at 0x68 (AD0 low) "
                                 f"or 0x69 (AD0 high)")
         self.fs_sel, self.lsb_per_dps = lsb_per_dps_for(range_dps)
         self.full_scale_dps = R.GYRO_FULL_SCALE[self.fs_sel][0]
+        self.afs_sel, self.lsb_per_g = lsb_per_g_for(accel_range_g)
         self.dlpf_cfg = auto_dlpf_cfg(float(sample_rate_hz)) if dlpf is None else dlpf
         self.smplrt_div, self.sample_rate_hz, self.gyro_output_rate_hz = sample_rate_settings(
             sample_rate_hz, self.dlpf_cfg)
         if transfer not in ("auto", "smbus", "rdwr"):
             raise SettingsError(f"transfer={transfer!r}: expected 'auto', 'smbus' or 'rdwr'")
-        self.temperature, self.address = bool(temperature), int(address)
-        self.bus_name = _bus_name(bus)
+        self.temperature, self.accel, self.address = bool(temperature), bool(accel), int(address)
+        self.bus_name = bus_name(bus)
         self._clock, self._sleep, self._wall_clock = clock or time.monotonic, sleep or time.sleep, \
             wall_clock or time.time
         self.poll_interval_s, self.max_wait_s, self.reset_timeout_s = float(poll_interval_s), float(max_wait_s), \
@@ -178,10 +142,11 @@ class MPU6050Source(Source):
                       "polls": 0, "fifo_bytes_read": 0}
         self._notes = []
         self._failure = None  # a DeviceError that ended a FIFO read part-way, raised by the next read()
-        self._n_words = len(frame_layout(self.temperature))
-        self.frame_bytes = 2 * self._n_words
+        self._layout = frame_layout(self.temperature, self.accel)
+        self.frame_bytes = 2 * len(self._layout)
+        self.columns = [*COLUMNS] + (["temp"] if self.temperature else []) + ([*ACCEL_COLUMNS] if self.accel else [])
         self._owns_bus = isinstance(bus, (int, str))
-        self._bus = _open_bus(bus) if self._owns_bus else bus
+        self._bus = open_bus(bus) if self._owns_bus else bus
         try:
             self.chip_id = self._identify(allow_chip)
             self.chip_name, chip_fifo, self._temp_lsb_per_c, self._temp_offset_c, _ = CHIPS[self.chip_id]
@@ -196,7 +161,6 @@ class MPU6050Source(Source):
         except BaseException:
             self._close_bus()
             raise
-        self.columns = [*COLUMNS] + (["temp"] if self.temperature else [])
         self.header = self._make_header()
 
     # ---------------------------------------------------------------- bus access with retries
@@ -224,7 +188,7 @@ class MPU6050Source(Source):
             return DeviceError(
                 f"no chip answers at {self._where()} ({desc}): check the wiring (VCC 3.3 V, GND, "
                 f"SDA to GPIO2/pin 3, SCL to GPIO3/pin 5) and the address (0x68 with AD0 low, 0x69 with "
-                f"AD0 high); `i2cdetect -y {_bus_number(self.bus_name)}` should list it")
+                f"AD0 high); `i2cdetect -y {bus_number(self.bus_name)}` should list it")
         if code == _errno.EBUSY:
             return DeviceError(
                 f"address {self._where()} is busy ({desc}): a kernel driver owns it (remove "
@@ -255,7 +219,7 @@ class MPU6050Source(Source):
             raise DeviceError(
                 f"chip at {self._where()} answers WHO_AM_I (0x75) = 0x{who:02X}, not 0x68 (MPU6050), "
                 f"and is not a known relative: wrong device at this address? (`i2cdetect -y "
-                f"{_bus_number(self.bus_name)}` lists what answers)")
+                f"{bus_number(self.bus_name)}` lists what answers)")
         if not known[4]:
             raise DeviceError(f"chip at {self._where()} is a {known[0]} (WHO_AM_I 0x{who:02X}); this driver "
                               f"speaks the MPU6050 register map only")
@@ -323,13 +287,15 @@ class MPU6050Source(Source):
         self._sleep(0.05)  # gyro start-up time, product spec table 6.1: 30 ms typical
         # configuration (FIFO stopped while configuring)
         fifo_en = (R.FIFO_EN.mask("XG_FIFO_EN") | R.FIFO_EN.mask("YG_FIFO_EN") | R.FIFO_EN.mask("ZG_FIFO_EN")
-                   | (R.FIFO_EN.mask("TEMP_FIFO_EN") if self.temperature else 0))
+                   | (R.FIFO_EN.mask("TEMP_FIFO_EN") if self.temperature else 0)
+                   | (R.FIFO_EN.mask("ACCEL_FIFO_EN") if self.accel else 0))
         writes = [
             (R.USER_CTRL, 0x00),
             (R.FIFO_EN, 0x00),
             (R.SMPLRT_DIV, self.smplrt_div),
             (R.CONFIG, R.CONFIG.put(0, "DLPF_CFG", self.dlpf_cfg)),
             (R.GYRO_CONFIG, R.GYRO_CONFIG.put(0, "FS_SEL", self.fs_sel)),
+            (R.ACCEL_CONFIG, R.ACCEL_CONFIG.put(0, "AFS_SEL", self.afs_sel)),
             (R.INT_PIN_CFG, 0x00),
             (R.INT_ENABLE, R.INT_ENABLE.mask("FIFO_OFLOW_EN")),
             (R.PWR_MGMT_2, 0x00),
@@ -388,6 +354,10 @@ class MPU6050Source(Source):
         }
         if self.temperature:
             head["temp_formula"] = f"temp_c = TEMP_OUT / {self._temp_lsb_per_c:g} + {self._temp_offset_c:g}"
+        if self.accel:
+            head.update({"accel_unit": "lsb", "lsb_per_g": format_number(self.lsb_per_g),
+                         "full_scale_g": format_number(R.ACCEL_FULL_SCALE[self.afs_sel][0]),
+                         "accel_output_rate_hz": format_number(R.ACCEL_OUTPUT_RATE_HZ)})
         return head
 
     # ---------------------------------------------------------------- streaming
@@ -519,29 +489,26 @@ class MPU6050Source(Source):
         return True
 
     def _rows(self, buf):
-        """Decode whole frames into rows [t, gx, gy, gz(, temp)] and advance the sample index."""
+        """Decode whole frames into rows ``[t, gx, gy, gz(, temp)(, ax, ay, az)]`` and advance the sample index."""
         self.stats["fifo_bytes_read"] += len(buf)
-        words = decode_fifo(buf, self._n_words)
+        words = decode_fifo(buf, len(self._layout))
         n = len(words)
-        rows = np.empty((n, 4 + self.temperature))
+        rows = np.empty((n, len(self.columns)))
         rows[:, 0] = (self._next_index + np.arange(n)) / self.sample_rate_hz
-        if self.temperature:
-            rows[:, 1:4] = words[:, 1:4]
-            rows[:, 4] = temperature_c(words[:, 0], self._temp_lsb_per_c, self._temp_offset_c)
-        else:
-            rows[:, 1:4] = words
+        rows[:, 1:] = frame_values(words, self._layout, tuple(self.columns[1:]), self._temp_lsb_per_c,
+                                   self._temp_offset_c)
         self._next_index += n
         self.stats["samples"] += n
         return rows
 
     def _empty(self):
-        return np.empty((0, 4 + self.temperature))
+        return np.empty((0, len(self.columns)))
 
     def read(self):
         """Rows available now (shape (n, len(columns))); waits at most ``max_wait_s`` for the first.
 
-        Rows are ``[t, gx, gy, gz(, temp)]``: t (s) = sample index / ``sample_rate_hz``, gyro in
-        LSB, temp in deg C; shape (0, len(columns)) when nothing arrived. Raises DeviceError when
+        Rows are ``[t, gx, gy, gz(, temp)(, ax, ay, az)]``: t (s) = sample index / ``sample_rate_hz``,
+        gyro and accelerometer in LSB, temp in deg C; shape (0, len(columns)) when nothing arrived. Raises DeviceError when
         the bus failed (after delivering the rows read before the failure) and
         :class:`gyrofilter.errors.SourceEnded` once closed, as every source does.
         """
@@ -581,7 +548,7 @@ class MPU6050Source(Source):
 
 
 def open_mpu6050(bus=1, address=0x68, sample_rate_hz=100, range_dps=250, dlpf=None, temperature=True,
-                 allow_chip=None, **options):
+                 allow_chip=None, accel=True, accel_range_g=2, **options):
     """Open, identify, reset and configure an MPU-6050; return a live source reading its FIFO.
 
     bus: I2C bus number (``/dev/i2c-N``), a device path, or an smbus2-like bus object (not closed
@@ -590,11 +557,14 @@ def open_mpu6050(bus=1, address=0x68, sample_rate_hz=100, range_dps=250, dlpf=No
     scale 250/500/1000/2000 deg/s (131/65.5/32.8/16.4 LSB per deg/s). dlpf: CONFIG.DLPF_CFG 0..6 (7 is reserved),
     None picks the widest bandwidth below sample_rate_hz/2. temperature: put TEMP_OUT in the FIFO and a
     ``temp`` column (deg C) in the rows. allow_chip: None accepts only WHO_AM_I 0x68; a chip id, a
-    collection of ids, or True lets named relatives (MPU6500, MPU9250, ...) through.
+    collection of ids, or True lets named relatives (MPU6500, MPU9250, ...) through. accel: put the
+    accelerometer in the FIFO and ``ax, ay, az`` columns (LSB) in the rows. accel_range_g: its full
+    scale 2/4/8/16 g (16384/8192/4096/2048 LSB per g, ACCEL_CONFIG.AFS_SEL).
 
     Options (keyword only): transfer ('auto', 'smbus', 'rdwr'), clock/sleep/wall_clock (injected
     time functions), poll_interval_s (0.02 s), max_wait_s (0.1 s), max_retries (5), retry_backoff_s
     (0.001 s), reset_timeout_s (0.5 s), fifo_bytes (FIFO size override, bytes); see
     :class:`MPU6050Source` for each. Returns the started :class:`MPU6050Source`.
     """
-    return MPU6050Source(bus, address, sample_rate_hz, range_dps, dlpf, temperature, allow_chip, **options)
+    return MPU6050Source(bus, address, sample_rate_hz, range_dps, dlpf, temperature, allow_chip, accel, accel_range_g,
+                         **options)

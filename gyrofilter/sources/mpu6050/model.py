@@ -17,8 +17,12 @@ The model (InvenSense RM-MPU-6000A-00 rev 4.2):
   with USER_CTRL.FIFO_EN, appends one frame to the FIFO in register order (accel, temp, gx, gy, gz
   per FIFO_EN), big-endian;
 * data from ``gyro_lsb`` (N, 3 raw integers) or ``gyro_dps`` (N, 3, scaled by the configured
-  FS_SEL, rounded and clipped to int16), and ``temp_c`` (scalar or N values); sample k uses row
-  k mod N;
+  FS_SEL, rounded and clipped to int16), ``accel_lsb`` (M, 3 raw integers) or ``accel_g`` (M, 3,
+  scaled by the configured ACCEL_CONFIG.AFS_SEL: 16384/8192/4096/2048 LSB per g, rounded and
+  clipped to int16; default 0, 0, 1 g: lying flat) and ``temp_c`` (scalar or N values); sample k
+  uses row k mod N of each (the model gives every sample its own accelerometer row: the real
+  part's 1-kHz accelerometer rate, which repeats samples above 1 kHz, is not modelled);
+  ACCEL_XOUT_H..ACCEL_ZOUT_L (0x3B-0x40), TEMP_OUT and GYRO_XOUT_H.. hold the latest sample;
 * FIFO of ``fifo_size`` bytes (1024): on overflow the oldest bytes are dropped (byte-wise, so frame
   alignment is lost) and INT_STATUS.FIFO_OFLOW_INT (bit 4) is set if INT_ENABLE.FIFO_OFLOW_EN is set
   (the model is strict: no enable, no status bit); INT_STATUS clears when read; USER_CTRL.FIFO_RESET
@@ -50,13 +54,14 @@ TEMP_SCALE = {0x68: (340.0, 36.53), 0x72: (340.0, 36.53),
 
 # register addresses (kept literal here, independent of the driver's map, so a wrong address in
 # the driver's table shows up as a test failure)
-SMPLRT_DIV, CONFIG, GYRO_CONFIG, FIFO_EN = 0x19, 0x1A, 0x1B, 0x23
+SMPLRT_DIV, CONFIG, GYRO_CONFIG, ACCEL_CONFIG, FIFO_EN = 0x19, 0x1A, 0x1B, 0x1C, 0x23
 INT_ENABLE, INT_STATUS = 0x38, 0x3A
 ACCEL_XOUT_H, TEMP_OUT_H, GYRO_XOUT_H = 0x3B, 0x41, 0x43
 SIGNAL_PATH_RESET, USER_CTRL, PWR_MGMT_1 = 0x68, 0x6A, 0x6B
 FIFO_COUNT_H, FIFO_COUNT_L, FIFO_R_W, WHO_AM_I = 0x72, 0x73, 0x74, 0x75
 READ_ONLY = {INT_STATUS, FIFO_COUNT_H, FIFO_COUNT_L, WHO_AM_I} | set(range(0x3B, 0x61))
 LSB_PER_DPS = {0: 131.0, 1: 65.5, 2: 32.8, 3: 16.4}
+LSB_PER_G = {0: 16384.0, 1: 8192.0, 2: 4096.0, 3: 2048.0}    # ACCEL_CONFIG.AFS_SEL, product spec 6.2
 
 
 class VirtualClock:
@@ -100,6 +105,11 @@ class MPU6050Model:
     gyro_dps : array (N, 3), optional
         Angular rate (deg/s), scaled by the configured FS_SEL (131/65.5/32.8/16.4 LSB per deg/s),
         rounded and clipped to int16. Neither given: zeros.
+    accel_lsb : array (M, 3), optional
+        Raw accelerometer output (LSB) of samples 0..M-1, repeated; used as is whatever AFS_SEL.
+    accel_g : array (M, 3), optional
+        Acceleration (g), scaled by the configured AFS_SEL (16384/8192/4096/2048 LSB per g),
+        rounded and clipped to int16. Neither given: (0, 0, 1) g.
     temp_c : float or array (N,)
         Die temperature (deg C), written as TEMP_OUT = round((T - offset) * LSB per deg C) with the
         chip's own scale (:data:`TEMP_SCALE`; MPU6050: offset 36.53, 340 LSB per deg C).
@@ -123,7 +133,7 @@ class MPU6050Model:
         Random generator of the failures (default ``default_rng(0)``).
     """
 
-    def __init__(self, clock, *, chip_id=0x68, gyro_lsb=None, gyro_dps=None, temp_c=25.0,
+    def __init__(self, clock, *, chip_id=0x68, gyro_lsb=None, gyro_dps=None, accel_lsb=None, accel_g=None, temp_c=25.0,
                  fifo_size=1024, reset_duration_s=0.002, reset_stuck=False, reset_nack=False,
                  stuck=None, rate_error=0.0,
                  error_rate=0.0, error_errno=_errno.EREMOTEIO, rng=None):
@@ -133,6 +143,10 @@ class MPU6050Model:
             gyro_lsb = np.zeros((1, 3), dtype=np.int64)
         self.gyro_lsb = None if gyro_lsb is None else np.asarray(gyro_lsb, dtype=np.int64)
         self.gyro_dps = None if gyro_dps is None else np.asarray(gyro_dps, dtype=float)
+        if accel_lsb is None and accel_g is None:
+            accel_g = [[0.0, 0.0, 1.0]]
+        self.accel_lsb = None if accel_lsb is None else np.asarray(accel_lsb, dtype=np.int64)
+        self.accel_g = None if accel_g is None else np.asarray(accel_g, dtype=float)
         self.temp_c = np.atleast_1d(np.asarray(temp_c, dtype=float))
         self.fifo_size = fifo_size
         self.reset_duration_s = reset_duration_s
@@ -191,7 +205,7 @@ class MPU6050Model:
         return words
 
     def samples(self, k):
-        """Raw int16 (gx, gy, gz, temp) for sample indices ``k`` (array)."""
+        """Raw int16 gyro (n, 3), TEMP_OUT (n,) and accelerometer (n, 3) for sample indices ``k`` (array)."""
         if self.gyro_lsb is not None:
             g = self.gyro_lsb[k % len(self.gyro_lsb)]
         else:
@@ -200,7 +214,12 @@ class MPU6050Model:
         g = np.clip(g, -32768, 32767)
         lsb_per_c, offset_c = TEMP_SCALE.get(self.chip_id, TEMP_SCALE[0x68])  # the chip's own TEMP_OUT scale
         t = np.round((self.temp_c[k % len(self.temp_c)] - offset_c) * lsb_per_c).astype(np.int64)
-        return g, np.clip(t, -32768, 32767)
+        if self.accel_lsb is not None:
+            a = self.accel_lsb[k % len(self.accel_lsb)]
+        else:
+            lsb = LSB_PER_G[(self.regs[ACCEL_CONFIG] >> 3) & 3]
+            a = np.round(self.accel_g[k % len(self.accel_g)] * lsb).astype(np.int64)
+        return g, np.clip(t, -32768, 32767), np.clip(a, -32768, 32767)
 
     def sync(self):
         """Run the sample clock up to the virtual ``now``."""
@@ -219,8 +238,9 @@ class MPU6050Model:
         self._ticks = due
         k = self.produced + np.arange(new)
         self.produced += new
-        g, t = self.samples(k)
+        g, t, a = self.samples(k)
         regs = self.regs
+        regs[ACCEL_XOUT_H:ACCEL_XOUT_H + 6] = np.asarray(a[-1], dtype=">i2").tobytes()
         regs[TEMP_OUT_H:TEMP_OUT_H + 2] = int(t[-1]).to_bytes(2, "big", signed=True)
         regs[GYRO_XOUT_H:GYRO_XOUT_H + 6] = np.asarray(g[-1], dtype=">i2").tobytes()
         if not regs[USER_CTRL] & 0x40:
@@ -230,8 +250,7 @@ class MPU6050Model:
             return
         frame_bytes = 2 * len(words)
         keep = min(new, self.fifo_size // frame_bytes + 2)   # older frames would be dropped anyway
-        cols = {"ax": np.zeros(keep, np.int64), "ay": np.zeros(keep, np.int64),
-                "az": np.full(keep, 16384, np.int64), "temp": t[-keep:],
+        cols = {"ax": a[-keep:, 0], "ay": a[-keep:, 1], "az": a[-keep:, 2], "temp": t[-keep:],
                 "gx": g[-keep:, 0], "gy": g[-keep:, 1], "gz": g[-keep:, 2]}
         block = np.column_stack([cols[w] for w in words]).astype(">i2").tobytes()
         dropped_before = (new - keep) * frame_bytes

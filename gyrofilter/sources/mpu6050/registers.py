@@ -1,4 +1,4 @@
-"""MPU-6050 register map as data (the registers and bit fields the gyro driver uses).
+"""MPU-6050 register map as data (the registers and bit fields the driver uses).
 
 Source: InvenSense "MPU-6000 and MPU-6050 Register Map and Descriptions", RM-MPU-6000A-00
 rev. 4.2 (2013), and "MPU-6000 and MPU-6050 Product Specification", PS-MPU-6000A-00 rev. 3.4.
@@ -52,7 +52,9 @@ CONFIG = Register("CONFIG", 0x1A, fields={"EXT_SYNC_SET": (5, 3), "DLPF_CFG": (2
 # section 4.4: self-test bits 7:5, FS_SEL bits 4:3
 GYRO_CONFIG = Register("GYRO_CONFIG", 0x1B, fields={"XG_ST": (7, 7), "YG_ST": (6, 6), "ZG_ST": (5, 5),
                                                     "FS_SEL": (4, 3)})
-ACCEL_CONFIG = Register("ACCEL_CONFIG", 0x1C, fields={"AFS_SEL": (4, 3)})
+# section 4.5: accelerometer self-test bits 7:5, AFS_SEL bits 4:3
+ACCEL_CONFIG = Register("ACCEL_CONFIG", 0x1C, fields={"XA_ST": (7, 7), "YA_ST": (6, 6), "ZA_ST": (5, 5),
+                                                      "AFS_SEL": (4, 3)})
 # section 4.6: which sensor registers are written to the FIFO at each sample
 FIFO_EN = Register("FIFO_EN", 0x23, fields={"TEMP_FIFO_EN": (7, 7), "XG_FIFO_EN": (6, 6),
                                             "YG_FIFO_EN": (5, 5), "ZG_FIFO_EN": (4, 4),
@@ -100,11 +102,18 @@ CLKSEL_PLL_XGYRO = 1
 # GYRO_CONFIG.FS_SEL -> (full scale deg/s, sensitivity LSB per deg/s); product spec section 6.1
 GYRO_FULL_SCALE = {0: (250, 131.0), 1: (500, 65.5), 2: (1000, 32.8), 3: (2000, 16.4)}
 
+# ACCEL_CONFIG.AFS_SEL -> (full scale g, sensitivity LSB per g); product spec section 6.2
+ACCEL_FULL_SCALE = {0: (2, 16384.0), 1: (4, 8192.0), 2: (8, 4096.0), 3: (16, 2048.0)}
+# the accelerometer's output rate (Hz), whatever the sample rate: above it the same accelerometer
+# sample is written more than once (register map section 4.2, note)
+ACCEL_OUTPUT_RATE_HZ = 1000.0
+
 # CONFIG.DLPF_CFG -> (gyro bandwidth Hz, gyro delay ms, gyroscope output rate Hz); section 4.3
 DLPF = {0: (256.0, 0.98, 8000.0), 1: (188.0, 1.9, 1000.0), 2: (98.0, 2.8, 1000.0), 3: (42.0, 4.8, 1000.0),
         4: (20.0, 8.3, 1000.0), 5: (10.0, 13.4, 1000.0), 6: (5.0, 18.6, 1000.0), 7: (None, None, 8000.0)}
 
 # FIFO: 1024 bytes on the MPU-6050 (product spec section 7.17); written in register order
+# (accelerometer 0x3B-0x40, temperature 0x41-0x42, gyro 0x43-0x48: register map section 4.6)
 FIFO_SIZE_BYTES = 1024
 
 # Temperature (register map section 4.18): T / degC = TEMP_OUT / 340 + 36.53
