@@ -73,31 +73,27 @@ def check_lsb_per_dps(value, name="lsb_per_dps", error=SettingsError):
     """``value`` as a float when it is LSB per deg/s within :data:`LSB_PER_DPS_RANGE`, else ``error``
     naming ``name`` (the keyword, option or header key, with its file if any): the one check of a
     gyro's scale, for options, headers and models."""
-    low, high = LSB_PER_DPS_RANGE
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
-    try:
-        ok = ok and low <= float(value) <= high  # NaN fails the comparison
-    except OverflowError:  # an int beyond a float's range
-        ok = False
-    if not ok:
-        raise error(f"{name} must be a number of LSB per deg/s in [{low:g}, {high:g}] (MEMS gyros span about 2 to "
-                    f"1e4), got {plain(value)}")
-    return float(value)
+    return _check_scale(value, LSB_PER_DPS_RANGE, "LSB per deg/s", "MEMS gyros span about 2 to 1e4", name, error)
 
 
 def check_lsb_per_g(value, name="lsb_per_g", error=SettingsError):
     """``value`` as a float when it is LSB per g within :data:`LSB_PER_G_RANGE`, else ``error``
     naming ``name`` (the keyword, option or header key, with its file and line if any): the one
     check of an accelerometer's scale, for headers, options and models."""
-    low, high = LSB_PER_G_RANGE
+    return _check_scale(value, LSB_PER_G_RANGE, "LSB per g", "MEMS accelerometers span about 5 to 3e8", name, error)
+
+
+def _check_scale(value, bounds, unit, span, name, error):
+    """``value`` as a float when it is a number (not a bool) within ``bounds``, else ``error``
+    naming ``name``, the ``unit`` and the ``span`` of real parts."""
+    low, high = bounds
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     try:
         ok = ok and low <= float(value) <= high  # NaN fails the comparison
     except OverflowError:  # an int beyond a float's range
         ok = False
     if not ok:
-        raise error(f"{name} must be a number of LSB per g in [{low:g}, {high:g}] (MEMS accelerometers span about "
-                    f"5 to 3e8), got {plain(value)}")
+        raise error(f"{name} must be a number of {unit} in [{low:g}, {high:g}] ({span}), got {plain(value)}")
     return float(value)
 
 
