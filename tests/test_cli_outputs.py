@@ -494,3 +494,20 @@ def test_a_long_legal_name_is_written_and_one_too_long_is_refused_before_any_wor
     assert exit_info.value.code == 2
     assert "argument --json: a name longer than 255 bytes" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+@pytest.mark.parametrize("argv", [["replay", "{src}", "--out", "-"], ["allan", "{src}", "--json", "-"],
+                                  ["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "1", "--out", "-"],
+                                  ["gap", "{src}", "--report", "-"]])
+def test_dash_as_an_output_is_refused_not_written_as_a_file_named_dash(tmp_path, monkeypatch, capsys, argv):
+    """``--out -`` is the standard output in ``run`` and ``-`` the standard input of ``convert``; every
+    other command wrote a file named ``-`` and said "wrote -" (attack pass 10)."""
+    from gyrofilter.cli import main
+
+    src = str(tmp_path / "in.csv")
+    write_recording(src, Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
+    monkeypatch.chdir(tmp_path)
+    assert main([a.format(src=src) for a in argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "outputs are files, not the standard output" in err[0], err
+    assert sorted(os.listdir(tmp_path)) == ["in.csv"]
