@@ -193,3 +193,17 @@ def test_an_option_of_one_value_given_twice_is_refused(argv, said, capsys, tmp_p
     assert not list(tmp_path.iterdir())
     assert main(["simulate", "--model", str(REPO / "examples" / "models" / "sinusoid.json"), "--duration", "1",
                  "--out", "s.csv", "--force", "--force"]) == 0
+
+
+def test_running_out_of_memory_is_one_line_not_a_traceback(monkeypatch, capsys):
+    """A MemoryError anywhere in a command (an input too large to analyse) ended in a traceback,
+    exit 1 (attack pass 10); the recording reader names its file itself (tests/test_recording.py)."""
+    from gyrofilter.cli import main, simulate
+
+    def out_of_memory(args):
+        raise MemoryError("Unable to allocate 7.45 GiB")
+
+    monkeypatch.setattr(simulate, "run", out_of_memory)
+    assert main(["simulate", "--model", "m.json", "--duration", "1", "--out", "x.csv"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["gyrofilter: error: out of memory running simulate; give it a shorter input"], err

@@ -824,3 +824,34 @@ def test_a_recording_without_rows_is_refused_once_its_blank_lines_pass_the_bound
     rec = read_recording(path)
     np.testing.assert_array_equal(rec.gyro, [[1, 2, 3], [4, 5, 6]])
     assert rec.notes == [(7 + (3 << 20) + 1, "a note")]
+
+
+def test_a_recording_that_does_not_fit_in_memory_is_one_error_naming_it(tmp_path, monkeypatch, capsys):
+    """A gzip bomb of valid rows (3 MB holding 367 million rows of ``0,0,0``) ran out of memory
+    while the reader gathered its columns: a MemoryError traceback, exit 1 (attack pass 10). The
+    block allocation fails here after a few blocks, as it does when memory runs out."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import reader
+
+    path = str(tmp_path / "bomb.csv.gz")
+    write_recording(path, Recording.from_dps(np.zeros((200_000, 3)), 100.0))
+    calls = []
+
+    class _Numpy:  # numpy as the reader sees it, out of memory at the third block
+        def __getattr__(self, name):
+            return getattr(np, name)
+
+        def empty(self, *args, **kwargs):
+            calls.append(args)
+            if len(calls) > 6:
+                raise MemoryError("Unable to allocate 4.00 MiB")
+            return np.empty(*args, **kwargs)
+
+    monkeypatch.setattr(reader, "np", _Numpy())
+    with pytest.raises(RecordingError, match=r"bomb\.csv\.gz: does not fit in memory: out of memory after \d+ rows"):
+        read_recording(path)
+    for command in (["allan", path], ["arma", path]):
+        calls.clear()
+        assert main(command) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("gyrofilter: error: ") and "memory" in err[0], err

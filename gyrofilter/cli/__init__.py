@@ -7,8 +7,8 @@ What several commands share has a module of its own: ``outputs`` (output files),
 (option types, ``--sample-rate-hz``), ``console`` (messages, the summary table), ``filtering``
 (the filter options of replay and run), ``still`` (``--keep-outliers``), ``batch`` (fleet runs)
 and ``live`` (the read loop of record and run).
-Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors and Ctrl-C become one
-line on stderr and a non-zero exit code; a traceback is a bug.
+Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors, running out of memory
+and Ctrl-C become one line on stderr and a non-zero exit code; a traceback is a bug.
 """
 import argparse
 import importlib
@@ -173,4 +173,7 @@ def _main(argv):
         return 0
     except (GyroFilterError, OSError, ValueError) as exc:
         console.say(console.error_line(one_line(exc)))
+        return EXIT_BAD_INPUT
+    except MemoryError:  # an input too large to hold (the recording reader names its file itself)
+        console.say(console.error_line(f"out of memory running {command}; give it a shorter input"))
         return EXIT_BAD_INPUT
