@@ -23,7 +23,11 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
 - The counter counts samples on the device: an integer in [0, 2**counter_bits). A jump of
   1 < k < 2**(counter_bits - 1) (modulo the wrap) means k - 1 samples were lost: ``t`` jumps with it
   and a gap note is made. A repeated counter is a duplicate (dropped, counted); a backwards jump
-  is a device restart (noted; ``t`` continues). A counter that is not such an integer (negative,
+  is a device restart (noted; ``t`` continues). A line whose counter jumps (forwards or back)
+  while the next line's continues the one before it (999, 1900, 1001: a corrupt digit) is a
+  corrupt line, refused (``bad_lines``): one bad digit is one sample, not 900 samples "lost"
+  and every later ``t`` shifted by 9 s; a line whose counter jumps therefore waits for the next
+  line (or :meth:`LineParser.finish`) before it is a row. A counter that is not such an integer (negative,
   fractional, too large) refuses its line (counted in ``bad_lines``), and so does a gyro value
   beyond +-``units.MAX_RATE_DPS`` (100000 deg/s) once converted to deg/s: no gyro reads it, and
   the recording would refuse it (a corrupt line must not end a recording).
@@ -138,6 +142,7 @@ class LineParser:
         self._temp_raw = False
         self.sample_rate_hz = None
         self._last_counter = None
+        self._held = None  # a line whose counter jumped, waiting for the next to judge it (_out_of_sequence)
         self._last_index = -1
         self._options = None
         if gyro_unit is not None or sample_rate_hz is not None or lsb_per_dps is not None:
@@ -310,11 +315,14 @@ class LineParser:
         return rows
 
     def finish(self):
-        """The connection ended: a line without its end is a cut line (counted, not used)."""
+        """The connection ended: a line without its end is a cut line (counted, not used); returns
+        the row of a last line whose counter jumped (it waited for a next line that will not come)."""
         if self._buf:
             self.stats["lines"] += 1
             self._bad(self._buf, "partial_lines", "cut off at the end of the stream")
         self._buf, self._overlong = b"", False
+        held, self._held = self._held, None
+        return self._rows(held[None, :], final=True) if held is not None else self._empty()
 
     def _empty(self):
         cols = self.columns
@@ -431,14 +439,17 @@ class LineParser:
         n = len(counter)
         return last - first == n - 1 and (n < 3 or bool((np.diff(counter) == 1).all()))
 
-    def _rows(self, values):
+    def _rows(self, values, final=False):
         """Values per line (fields order) -> rows t, gx, gy, gz[, temp]; counter bookkeeping.
+        A line held by the last call comes first; ``final``: the stream ended, no line is held.
 
         A gyro value beyond +-MAX_RATE_DPS in deg/s, a temperature outside TEMP_RANGE_C, or a counter that is not an integer in
         [0, 2**counter_bits), refuses its line (``bad_lines``). Counters are at most 2**32 and the
         sample index an int64, so no step overflows."""
         fields = self.fields
         values = self._refuse_beyond_range(values)
+        if self._held is not None:
+            values, self._held = np.vstack((self._held, values)), None
         n = len(values)
         if "counter" in fields and n and self._consecutive(values[:, fields.index("counter")]):
             index = self._last_index + 1 + np.arange(n)  # the common case: no gap, no duplicate
@@ -454,6 +465,10 @@ class LineParser:
                 values, counter = values[ok], counter[ok]
                 n = len(values)
             counter = counter.astype(np.int64)
+            if n:
+                keep = self._out_of_sequence(counter, values, final)
+                values, counter = values[keep], counter[keep]
+                n = len(values)
             prev = np.empty(n, dtype=np.int64)
             if n:
                 prev[0] = counter[0] - 1 if self._last_counter is None else self._last_counter
@@ -496,6 +511,37 @@ class LineParser:
             rows[:, 4] = temperature_c(temp) if self._temp_raw else temp
         self.stats["samples"] += n
         return rows
+
+    def _out_of_sequence(self, counter, values, final):
+        """The lines to keep of ``counter`` (valid counters, in order): False for a corrupt line, a
+        counter that jumps from the last kept one while the next line's is the last kept one + 2
+        (999, 1900, 1001 or 999, 100, 1001: a corrupt digit; refused, ``bad_lines``), and for the
+        last line when its counter jumps (forwards or back) and ``final`` is False: it is held
+        (``_held``) until the next line tells. Jumps are rare: a loop over them only."""
+        mod, n = self._counter_mod, len(counter)
+        keep = np.ones(n, dtype=bool)
+        before = np.empty(n, dtype=np.int64)
+        before[0] = counter[0] - 1 if self._last_counter is None else self._last_counter
+        before[1:] = counter[:-1]
+        todo = sorted(np.flatnonzero((counter - before) % mod > 1).tolist())
+        while todo:
+            i = todo.pop(0)
+            j = i - 1
+            while j >= 0 and not keep[j]:
+                j -= 1
+            prev = int(counter[j]) if j >= 0 else self._last_counter
+            if prev is None or (int(counter[i]) - prev) % mod <= 1:
+                continue
+            if i + 1 == n:
+                if not final:
+                    keep[i], self._held = False, values[i].copy()
+            elif (int(counter[i + 1]) - prev) % mod == 2:
+                keep[i] = False
+                self._bad(str(int(counter[i])).encode(), "bad_lines",
+                          f"out of sequence between {prev} and {int(counter[i + 1])}: a corrupt counter", garbage_bytes=0)
+                if i + 1 not in todo:
+                    todo.insert(0, i + 1)
+        return keep
 
     def _refuse_beyond_range(self, values):
         """``values`` (per line, fields order) without the lines holding a gyro value beyond

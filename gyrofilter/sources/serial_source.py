@@ -124,8 +124,7 @@ class SerialSource(Source):
         except self._exceptions as exc:
             self._ended = f"serial port disconnected ({one_line(exc)})"
             self._disconnected = True
-            self._parser.finish()
-            return self._parser._empty()
+            return self._parser.finish()
         return self._parser.feed(data) if data else self._parser._empty()
 
     def read(self):
