@@ -199,10 +199,11 @@ def replacing(path):
 @contextlib.contextmanager
 def replacing_in(folder):
     """:func:`replacing` for files whose names the writer chooses: yields a temporary folder inside
-    ``folder`` (created if needed); on success every file written there replaces its namesake in
-    ``folder``; on any failure the temporary folder goes, with any folder this call created."""
+    ``folder``; on any failure the temporary folder goes, with the files of it that landed before
+    the failure, and any folder this call created while it is empty (:func:`_folder`)."""
     with _folder(folder):
         tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{_OWNER}-", dir=folder)
+        landed = []
         try:
             with _naming(tmp, folder), _unwritten_on_interrupt(f"the files of {folder}"):
                 yield tmp
@@ -211,6 +212,12 @@ def replacing_in(folder):
                     _may_land(os.path.join(folder, name))
                 for name in names:
                     commit(os.path.join(tmp, name), os.path.join(folder, name))
+                    landed.append(os.path.join(folder, name))
+        except BaseException:
+            for path in landed:  # a commit after them failed: none of the files, as none of the others
+                with contextlib.suppress(OSError):
+                    os.unlink(path)
+            raise
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
 
@@ -366,15 +373,18 @@ def remove_made_folders(folder, top):
 @contextlib.contextmanager
 def _folder(folder):
     """Make ``folder`` and its missing parents; on a failure inside the block, remove what was
-    made. An existing folder first loses its stale partial files (:func:`remove_stale_partials`)."""
+    made while it is empty (:func:`remove_made_folders`): another command may have written its
+    own files there meanwhile (two ``gap --report rep`` at once: the one that failed removed the
+    folder with the other's report, which had said "wrote rep/gap_report.md"). The block removes
+    its own temporary files first. An existing folder first loses its stale partial files
+    (:func:`remove_stale_partials`)."""
     top = make_folders(folder)
     if top is None:
         remove_stale_partials(folder)
     try:
         yield
     except BaseException:
-        if top is not None:
-            shutil.rmtree(top, ignore_errors=True)
+        remove_made_folders(folder, top)
         raise
 
 
