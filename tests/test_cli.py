@@ -207,3 +207,17 @@ def test_running_out_of_memory_is_one_line_not_a_traceback(monkeypatch, capsys):
     assert main(["simulate", "--model", "m.json", "--duration", "1", "--out", "x.csv"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["gyrofilter: error: out of memory running simulate; give it a shorter input"], err
+
+
+def test_a_deleted_current_folder_is_said_not_a_nameless_errno(tmp_path, monkeypatch, capsys):
+    """Run from a folder deleted meanwhile, every command ended in "[Errno 2] No such file or
+    directory", naming nothing (attack pass 10)."""
+    from gyrofilter.cli import main
+
+    gone = tmp_path / "gone"
+    gone.mkdir()
+    monkeypatch.chdir(gone)
+    gone.rmdir()
+    assert main(["replay", str(REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz"), "--out", "x.csv"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "gyrofilter: error: the current folder no longer exists (deleted?); cd to one that does"]

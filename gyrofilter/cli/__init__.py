@@ -152,6 +152,11 @@ def _main(argv):
     argv = sys.argv[1:] if argv is None else list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     try:
+        os.getcwd()
+    except FileNotFoundError:  # every relative path would fail with "[Errno 2] No such file or directory", naming nothing
+        console.say(console.error_line("the current folder no longer exists (deleted?); cd to one that does"))
+        return EXIT_BAD_INPUT
+    try:
         if command is not None and command not in COMMANDS:
             build_parser().error(f"unknown command {quote(command)}{_did_you_mean(command, COMMANDS)}; "
                                  f"the commands: {', '.join(COMMANDS)}")
