@@ -57,7 +57,8 @@ def model(lines, tail, fields, bits, temp_raw):
 
     def sample(values, c, next_c=None):
         """The counter rules for a line with counter ``c``; ``next_c``: the next such line's (a
-        jump that the next line does not follow is a corrupt counter). False: wait for the next."""
+        jump whose next line lies between the last counter and it is a corrupt counter). False:
+        wait for the next."""
         nonlocal last, index
         step = 1
         if "counter" in fields:
@@ -70,7 +71,7 @@ def model(lines, tail, fields, bits, temp_raw):
                 return True
             if step > 1 and next_c is False:
                 return False
-            if step > 1 and next_c is not None and (next_c - last) % mod == 2:
+            if step > 1 and next_c is not None and 0 < (next_c - last) % mod < step:
                 stats["bad_lines"] += 1
                 return True
             if step >= mod // 2:
@@ -133,6 +134,9 @@ def model(lines, tail, fields, bits, temp_raw):
             stats["bad_lines"] += 1
             continue
         c = None
+        if held is not None and not held[1] < mod:  # a header between changed counter_bits
+            stats["bad_lines"] += 1
+            held = None
         if "counter" in fields:
             c = values["counter"]
             if not (c == round(c) and 0 <= c < mod):

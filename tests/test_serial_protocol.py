@@ -269,22 +269,24 @@ def test_a_malformed_last_cell_in_a_block_of_its_own_is_refused(bad):
     assert p.stats["bad_lines"] == 1 and p.stats["samples"] == 2
 
 
+@pytest.mark.parametrize("lost", [False, True])
 @pytest.mark.parametrize("corrupt", ["81000", "1900", "100", "10000", "0"])
-def test_one_corrupt_counter_digit_is_one_refused_line_not_a_gap_and_shifted_times(corrupt):
+def test_one_corrupt_counter_digit_is_one_refused_line_not_a_gap_and_shifted_times(corrupt, lost):
     """Counter 1000 received as 81000 (one corrupt digit) made the source count 80000 lost
     samples, shift every later t by 800 s and note a device restart (attack pass 10): a counter that
     jumps while the next line's continues the one before it is a corrupt line, refused; the
     others keep their own times, however the bytes arrive."""
     counters = [str(c) for c in range(995, 1010)]
     counters[5] = corrupt  # counter 1000
-    data = HEADER + b"".join(f"{c},{i},{-i},3\n".encode() for i, c in enumerate(counters))
+    sent = [i for i in range(15) if not (lost and i == 4)]  # counter 999 lost on the way as well
+    data = HEADER + b"".join(f"{counters[i]},{i},{-i},3\n".encode() for i in sent)
     for cut in (len(data), len(HEADER) + 50, len(HEADER) + 60, len(data) - 10):
         p = LineParser()
         rows = np.concatenate([p.feed(data[:cut]), p.feed(data[cut:]), p.finish()])
-        kept = [i for i in range(15) if i != 5]
+        kept = [i for i in sent if i != 5]
         np.testing.assert_allclose(rows[:, 0] * 100, kept)  # t on the sensor's clock: no shift
         np.testing.assert_array_equal(rows[:, 1], kept)
-        assert (p.stats["bad_lines"], p.stats["lost_samples"], p.stats["restarts"]) == (1, 1, 0)
+        assert (p.stats["bad_lines"], p.stats["lost_samples"], p.stats["restarts"]) == (1, 1 + lost, 0)
         assert _reconciles(p)
 
 

@@ -24,8 +24,8 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
   1 < k < 2**(counter_bits - 1) (modulo the wrap) means k - 1 samples were lost: ``t`` jumps with it
   and a gap note is made. A repeated counter is a duplicate (dropped, counted); a backwards jump
   is a device restart (noted; ``t`` continues). A line whose counter jumps (forwards or back)
-  while the next line's continues the one before it (999, 1900, 1001: a corrupt digit) is a
-  corrupt line, refused (``bad_lines``): one bad digit is one sample, not 900 samples "lost"
+  while the next line's lies between the one before it and the jump (999, 1900, 1001: a corrupt
+  digit; a gap or restart goes on from where it jumped) is a corrupt line, refused (``bad_lines``): one bad digit is one sample, not 900 samples "lost"
   and every later ``t`` shifted by 9 s; a line whose counter jumps therefore waits for the next
   line (or :meth:`LineParser.finish`) before it is a row. A counter that is not such an integer (negative,
   fractional, too large) refuses its line (counted in ``bad_lines``), and so does a gyro value
@@ -448,7 +448,7 @@ class LineParser:
         sample index an int64, so no step overflows."""
         fields = self.fields
         values = self._refuse_beyond_range(values)
-        if self._held is not None:
+        if self._held is not None and len(values):  # judged with the next line in range
             values, self._held = np.vstack((self._held, values)), None
         n = len(values)
         if "counter" in fields and n and self._consecutive(values[:, fields.index("counter")]):
@@ -514,8 +514,9 @@ class LineParser:
 
     def _out_of_sequence(self, counter, values, final):
         """The lines to keep of ``counter`` (valid counters, in order): False for a corrupt line, a
-        counter that jumps from the last kept one while the next line's is the last kept one + 2
-        (999, 1900, 1001 or 999, 100, 1001: a corrupt digit; refused, ``bad_lines``), and for the
+        counter that jumps from the last kept one while the next line's lies between the two (999,
+        1900, 1001; 999, 100, 1001; 999, 1901, 1002 with 1000 lost: a corrupt digit; a real gap or
+        restart goes on from the counter it jumped to; refused, ``bad_lines``), and for the
         last line when its counter jumps (forwards or back) and ``final`` is False: it is held
         (``_held``) until the next line tells. Jumps are rare: a loop over them only."""
         mod, n = self._counter_mod, len(counter)
@@ -530,12 +531,13 @@ class LineParser:
             while j >= 0 and not keep[j]:
                 j -= 1
             prev = int(counter[j]) if j >= 0 else self._last_counter
-            if prev is None or (int(counter[i]) - prev) % mod <= 1:
+            jump = None if prev is None else (int(counter[i]) - prev) % mod
+            if jump is None or jump <= 1:
                 continue
             if i + 1 == n:
                 if not final:
                     keep[i], self._held = False, values[i].copy()
-            elif (int(counter[i + 1]) - prev) % mod == 2:
+            elif 0 < (int(counter[i + 1]) - prev) % mod < jump:
                 keep[i] = False
                 self._bad(str(int(counter[i])).encode(), "bad_lines",
                           f"out of sequence between {prev} and {int(counter[i + 1])}: a corrupt counter", garbage_bytes=0)
