@@ -193,3 +193,31 @@ def test_an_option_of_one_value_given_twice_is_refused(argv, said, capsys, tmp_p
     assert not list(tmp_path.iterdir())
     assert main(["simulate", "--model", str(REPO / "examples" / "models" / "sinusoid.json"), "--duration", "1",
                  "--out", "s.csv", "--force", "--force"]) == 0
+
+
+def test_running_out_of_memory_is_one_line_not_a_traceback(monkeypatch, capsys):
+    """A MemoryError anywhere in a command (an input too large to analyse) ended in a traceback,
+    exit 1 (attack pass 10); the recording reader names its file itself (tests/test_recording.py)."""
+    from gyrofilter.cli import main, simulate
+
+    def out_of_memory(args):
+        raise MemoryError("Unable to allocate 7.45 GiB")
+
+    monkeypatch.setattr(simulate, "run", out_of_memory)
+    assert main(["simulate", "--model", "m.json", "--duration", "1", "--out", "x.csv"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["gyrofilter: error: out of memory running simulate; give it a shorter input"], err
+
+
+def test_a_deleted_current_folder_is_said_not_a_nameless_errno(tmp_path, monkeypatch, capsys):
+    """Run from a folder deleted meanwhile, every command ended in "[Errno 2] No such file or
+    directory", naming nothing (attack pass 10)."""
+    from gyrofilter.cli import main
+
+    gone = tmp_path / "gone"
+    gone.mkdir()
+    monkeypatch.chdir(gone)
+    gone.rmdir()
+    assert main(["replay", str(REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz"), "--out", "x.csv"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "gyrofilter: error: the current folder no longer exists (deleted?); cd to one that does"]

@@ -494,3 +494,59 @@ def test_a_long_legal_name_is_written_and_one_too_long_is_refused_before_any_wor
     assert exit_info.value.code == 2
     assert "argument --json: a name longer than 255 bytes" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+@pytest.mark.parametrize("argv", [["replay", "{src}", "--out", "-"], ["allan", "{src}", "--json", "-"],
+                                  ["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "1", "--out", "-"],
+                                  ["gap", "{src}", "--report", "-"]])
+def test_dash_as_an_output_is_refused_not_written_as_a_file_named_dash(tmp_path, monkeypatch, capsys, argv):
+    """``--out -`` is the standard output in ``run`` and ``-`` the standard input of ``convert``; every
+    other command wrote a file named ``-`` and said "wrote -" (attack pass 10)."""
+    from gyrofilter.cli import main
+
+    src = str(tmp_path / "in.csv")
+    write_recording(src, Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
+    monkeypatch.chdir(tmp_path)
+    assert main([a.format(src=src) for a in argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "outputs are files, not the standard output" in err[0], err
+    assert sorted(os.listdir(tmp_path)) == ["in.csv"]
+
+
+def test_a_failed_command_leaves_the_files_another_wrote_meanwhile_in_the_folder_it_made(tmp_path):
+    """Two ``gap --report rep`` at once: the one that failed (the other's files had appeared) removed
+    the folder it had made with the other's whole report, which had said "wrote rep/gap_report.md"
+    (attack pass 10). A failure removes its own files and then the folders it made only while empty."""
+    folder = tmp_path / "made" / "rep"
+    with pytest.raises(RuntimeError), outputs.replacing_in(str(folder)) as tmp:
+        (folder / "gap_report.md").write_text("the other command's report")  # lands while this one runs
+        (open(os.path.join(tmp, "adev_x.png"), "w")).write("mine")
+        raise RuntimeError("failed")
+    assert sorted(os.listdir(folder)) == ["gap_report.md"]
+    with pytest.raises(RuntimeError), outputs.replacing(str(tmp_path / "new" / "a.json")) as tmp:
+        (tmp_path / "new" / "b.json").write_text("another command's")
+        open(tmp, "w").write("mine")
+        raise RuntimeError("failed")
+    assert sorted(os.listdir(tmp_path / "new")) == ["b.json"]
+    with pytest.raises(RuntimeError), outputs.replacing(str(tmp_path / "gone" / "deeper" / "a.json")) as tmp:
+        open(tmp, "w").write("mine")
+        raise RuntimeError("failed")
+    assert not (tmp_path / "gone").exists()  # what it made, empty again, goes
+
+
+def test_files_of_a_folder_output_land_all_or_none_when_a_commit_fails_midway(tmp_path, monkeypatch):
+    """A file that appears between the check of all and the landing of the third: the two that
+    landed go again (none of them, as the contract says), the other command's file stays."""
+    folder = tmp_path / "rep"
+    real_commit = outputs.commit
+
+    def commit(tmp, path):
+        if path.endswith("c.png"):
+            (folder / "c.png").write_text("another command's")
+        return real_commit(tmp, path)
+
+    monkeypatch.setattr(outputs, "commit", commit)
+    with pytest.raises(FileExistsError), outputs.replacing_in(str(folder)) as tmp:
+        for name in "abc":
+            open(os.path.join(tmp, f"{name}.png"), "w").write("mine")
+    assert sorted(os.listdir(folder)) == ["c.png"] and (folder / "c.png").read_text() == "another command's"

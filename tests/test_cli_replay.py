@@ -588,3 +588,26 @@ def test_an_input_that_lost_samples_in_most_blocks_gives_rows_at_their_own_t_tha
     np.testing.assert_allclose(got.gyro_dps, want, rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(got.t_s, t_want, atol=1e-9)
     assert got.t_gaps == np.count_nonzero(np.diff(t_want) > 0.055) > len(got) / 2
+
+
+def test_realtime_rows_on_a_full_stdout_name_stdout(tmp_path, monkeypatch, capsys):
+    """``replay --realtime > out.csv`` on a full disk: "[Errno 28] No space left on device", naming
+    nothing (run named stdout; attack pass 10)."""
+    import errno
+
+    from gyrofilter.recording import Recording, write_recording
+
+    src = str(tmp_path / "in.csv")
+    write_recording(src, Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
+
+    class Full:
+        def write(self, text):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def flush(self):
+            pass
+
+    monkeypatch.setattr(sys, "stdout", Full())
+    assert main(["replay", src, "--realtime"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["gyrofilter: error: stdout: No space left on device; 0 lines printed before it"], err

@@ -236,7 +236,7 @@ def test_section_8_states_the_sizes_the_code_holds():
     from gyrofilter import inputs, recording
     from gyrofilter.analysis.fleet import runner
     from gyrofilter.sim import model
-    from gyrofilter.sources import serial_protocol
+    from gyrofilter.sources.serial import protocol as serial_protocol
 
     text = section(8)
     assert recording.MAX_LINE_BYTES == 2 ** 20 and "| a recording's line (data or header) | 1 MiB |" in text

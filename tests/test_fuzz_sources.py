@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 from gyrofilter.errors import DeviceError, GyroFilterError, SettingsError
 from gyrofilter.sources import KINDS, open_source, parse_source
-from gyrofilter.sources.serial_protocol import LINE_OUTCOMES, MAX_LINE_BYTES, LineParser
+from gyrofilter.sources.serial.protocol import LINE_OUTCOMES, MAX_LINE_BYTES, LineParser
 from gyrofilter.units import MAX_RATE_DPS, TEMP_RANGE_C
 
 FAST = settings(max_examples=100, deadline=None, derandomize=True,
@@ -53,6 +53,44 @@ def model(lines, tail, fields, bits, temp_raw):
     raise. One line at a time, in plain Python: the parser's independent oracle."""
     stats = Counter({k: 0 for k in ("lines", "lost_samples", "counter_jumps", "restarts") + LINE_OUTCOMES})
     rows, mod, last, index, have_header = [], 2 ** bits, None, -1, False
+    held = None  # (values, counter) of a line whose counter jumped, judged by the next one
+
+    def sample(values, c, next_c=None):
+        """The counter rules for a line with counter ``c``; ``next_c``: the next such line's (a
+        jump whose next line lies between the last counter and it is a corrupt counter). False:
+        wait for the next."""
+        nonlocal last, index
+        step = 1
+        if "counter" in fields:
+            if not c < mod:  # a header between changed counter_bits
+                stats["bad_lines"] += 1
+                return True
+            step = 1 if last is None else (c - last) % mod
+            if step == 0:
+                stats["duplicates"] += 1
+                return True
+            if step > 1 and next_c is False:
+                return False
+            if step > 1 and next_c is not None and 0 < (next_c - last) % mod < step:
+                stats["bad_lines"] += 1
+                return True
+            if step >= mod // 2:
+                stats["restarts"] += 1
+                step = 1
+            elif step > 1:
+                stats["counter_jumps"] += 1
+                stats["lost_samples"] += step - 1
+            last = c
+        index += step
+        row = [index / RATE_HZ, values["gx"], values["gy"], values["gz"]]
+        if "temp" in fields:
+            row.append(values["temp"] / 340.0 + 36.53 if temp_raw else values["temp"])
+        if "ax" in fields:
+            row += [values["ax"], values["ay"], values["az"]]
+        rows.append(row)
+        stats["samples"] += 1
+        return True
+
     for raw, tag in lines:
         stats["lines"] += 1
         if len(raw) > MAX_LINE_BYTES:
@@ -97,32 +135,23 @@ def model(lines, tail, fields, bits, temp_raw):
                                            else values.get("temp", 25.0)) <= TEMP_RANGE_C[1]):
             stats["bad_lines"] += 1
             continue
-        step = 1
+        c = None
+        if held is not None and not held[1] < mod:  # a header between changed counter_bits
+            stats["bad_lines"] += 1
+            held = None
         if "counter" in fields:
             c = values["counter"]
             if not (c == round(c) and 0 <= c < mod):
                 stats["bad_lines"] += 1
                 continue
             c = int(c)
-            step = 1 if last is None else (c - last) % mod
-            if step == 0:
-                stats["duplicates"] += 1
-                continue
-            if step >= mod // 2:
-                stats["restarts"] += 1
-                step = 1
-            elif step > 1:
-                stats["counter_jumps"] += 1
-                stats["lost_samples"] += step - 1
-            last = c
-        index += step
-        row = [index / RATE_HZ, values["gx"], values["gy"], values["gz"]]
-        if "temp" in fields:
-            row.append(values["temp"] / 340.0 + 36.53 if temp_raw else values["temp"])
-        if "ax" in fields:
-            row += [values["ax"], values["ay"], values["az"]]
-        rows.append(row)
-        stats["samples"] += 1
+        if held is not None:
+            sample(*held, next_c=c)
+            held = None
+        if not sample(values, c, next_c=False):
+            held = (values, c)
+    if held is not None:
+        sample(*held)
     if tail:
         stats["lines"] += 1
         stats["bad_lines" if len(tail) > MAX_LINE_BYTES else "partial_lines"] += 1
@@ -227,7 +256,7 @@ def _feed(data, cuts):
         parts = [parser.feed(data[a:b]) for a, b in zip(edges, edges[1:])]
     except DeviceError as exc:
         return exc
-    parser.finish()
+    parts.append(parser.finish())
     parts = [p for p in parts if len(p)]  # (empty reads before the fields are known have 4 columns)
     return np.concatenate(parts) if parts else np.empty((0, len(parser.columns))), parser.stats
 

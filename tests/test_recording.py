@@ -391,9 +391,12 @@ def test_t_is_checked_against_the_rate_in_every_window_not_only_the_first(tmp_pa
     steps = np.full(4000, 0.01)
     steps[late_from:] = late_step_s
     path = _dps_file(tmp_path, _t_body(steps))
-    with pytest.raises(RecordingError, match=re.escape(
-            f"{path}: t steps by {late_step_s:g} s (median of the 1000 steps from line 2005), but sample_rate_hz "
-            "100 means 0.01 s: more than 5% apart (is sample_rate_hz or t wrong, or were most samples lost here?)")):
+    said = (f"{path}: t steps by {late_step_s:g} s (median of the 1000 steps from line 2005), but sample_rate_hz "
+            "100 means 0.01 s: more than 5% apart (is sample_rate_hz or t wrong, or were most samples lost here?)")
+    if late_step_s < 0.01:  # caught a window sooner by its span (200 fast steps: 180 rows more than it has room for)
+        said = (f"{path}: t's 1000 steps from line 1505 span 8.2 s, but 1000 sample intervals at sample_rate_hz 100 "
+                "take 10 s: more rows than the rate has room for")
+    with pytest.raises(RecordingError, match=re.escape(said) + (f"|{re.escape(str(path))}: t steps by 0.001 s" if late_step_s < 0.01 else "")):
         _read_chunked(path, chunk_rows)
 
 
@@ -404,10 +407,12 @@ def test_the_steps_after_the_last_whole_window_and_a_short_file_are_checked_as_b
     the median of all its steps is checked."""
     steps = np.full(2500, 0.01)
     steps[2300:] = 0.001  # 200 fast steps: a minority of every window and of the tail
+    steps[2299] += 200 * 0.009  # after a stall of 1.8 s: samples that catch up, the rate kept (they would not fit else)
     head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
-    assert len(data) == 2501
+    assert len(data) == 2501 and head.t_gaps == 1
     steps[2100:] = 0.001  # 400 of the last 500 steps: the tail runs at another rate (was read before)
-    with pytest.raises(RecordingError, match=r"t steps by 0.001 s \(median of the 500 steps from line 2005\)"):
+    with pytest.raises(RecordingError, match=r"t steps by 0.001 s \(median of the 500 steps from line 2005\)"
+                                             r"|t's 1000 steps from line 1505 span 6.4 s, but 1000 sample intervals"):
         _read_chunked(_dps_file(tmp_path, _t_body(steps), name="tail.csv"), chunk_rows)
     with pytest.raises(RecordingError, match=r"t steps by 0.001 s \(median of its first 999 steps from line 5\)"):
         _read_chunked(_dps_file(tmp_path, _t_body(np.full(999, 0.001)), name="short.csv"), chunk_rows)
@@ -441,7 +446,7 @@ def test_a_stretch_at_another_rate_as_long_as_a_window_is_caught_wherever_it_lie
     """Fixed windows 1-1000, 1001-2000 missed 998 fast steps straddling their border, and a fast
     tail of 999 steps: half a file at 10x the header's rate read without a word."""
     steps = np.concatenate([np.full(n, step) for n, step in runs])
-    with pytest.raises(RecordingError, match=r"t steps by 0.001 s"):
+    with pytest.raises(RecordingError, match=r"t steps by 0.001 s|more rows than the rate has room for"):
         _read_chunked(_dps_file(tmp_path, _t_body(steps)), 1 << 16)
 
 
@@ -824,3 +829,50 @@ def test_a_recording_without_rows_is_refused_once_its_blank_lines_pass_the_bound
     rec = read_recording(path)
     np.testing.assert_array_equal(rec.gyro, [[1, 2, 3], [4, 5, 6]])
     assert rec.notes == [(7 + (3 << 20) + 1, "a note")]
+
+
+def test_a_recording_that_does_not_fit_in_memory_is_one_error_naming_it(tmp_path, monkeypatch, capsys):
+    """A gzip bomb of valid rows (3 MB holding 367 million rows of ``0,0,0``) ran out of memory
+    while the reader gathered its columns: a MemoryError traceback, exit 1 (attack pass 10). The
+    block allocation fails here after a few blocks, as it does when memory runs out."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import reader
+
+    path = str(tmp_path / "bomb.csv.gz")
+    write_recording(path, Recording.from_dps(np.zeros((200_000, 3)), 100.0))
+    calls = []
+
+    class _Numpy:  # numpy as the reader sees it, out of memory at the third block
+        def __getattr__(self, name):
+            return getattr(np, name)
+
+        def empty(self, *args, **kwargs):
+            calls.append(args)
+            if len(calls) > 6:
+                raise MemoryError("Unable to allocate 4.00 MiB")
+            return np.empty(*args, **kwargs)
+
+    monkeypatch.setattr(reader, "np", _Numpy())
+    with pytest.raises(RecordingError, match=r"bomb\.csv\.gz: does not fit in memory: out of memory after \d+ rows"):
+        read_recording(path)
+    for command in (["allan", path], ["arma", path]):
+        calls.clear()
+        assert main(command) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("gyrofilter: error: ") and "memory" in err[0], err
+
+
+@pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
+@pytest.mark.parametrize("inserted", [0.2, 0.45])
+def test_rows_the_rate_has_no_room_for_are_refused_even_when_the_typical_step_is_right(tmp_path, chunk_rows, inserted):
+    """A copy of a row (new values) stamped 1 ulp after it, after 45 % of the rows: the typical step
+    stayed 0.01 s, so 8600 rows over 60 s of t read as 86 s at 100 Hz without a word (every Allan
+    tau 43 % off; attack pass 10). A window's steps must span its sample intervals, less 5 %."""
+    rng = np.random.default_rng(3)
+    t = np.arange(6000) / 100.0
+    extra = np.sort(rng.choice(6000, int(inserted * 6000), replace=False))
+    t = np.sort(np.concatenate([t, np.nextafter(t[extra], np.inf)]))
+    body = "".join(f"{v!r},{g},0,0\n" for v, g in zip(t.tolist(), rng.normal(size=len(t)).tolist()))
+    with pytest.raises(RecordingError, match=r"t's 1000 steps from line \d+ span [\d.]+ s, but 1000 sample intervals "
+                                             r"at sample_rate_hz 100 take 10 s: more rows than the rate has room for"):
+        _read_chunked(_dps_file(tmp_path, body), chunk_rows)

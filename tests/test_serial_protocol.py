@@ -1,9 +1,9 @@
-"""The serial line protocol (gyrofilter.sources.serial_protocol.LineParser): rows however the bytes are
+"""The serial line protocol (gyrofilter.sources.serial.protocol.LineParser): rows however the bytes are
 split, the counter arithmetic, the refused lines and the counts that reconcile."""
 import numpy as np
 import pytest
 from gyrofilter.errors import DeviceError, SettingsError
-from gyrofilter.sources.serial_protocol import LineParser
+from gyrofilter.sources.serial.protocol import LineParser
 
 HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 sensor=MPU6050\n"
 
@@ -68,7 +68,7 @@ def test_parser_counter_wraps_at_counter_bits():
 
 def _reconciles(parser):
     """Every line received is a delivered sample or counted as something else, exactly once."""
-    from gyrofilter.sources.serial_protocol import LINE_OUTCOMES
+    from gyrofilter.sources.serial.protocol import LINE_OUTCOMES
 
     return parser.stats["lines"] == sum(parser.stats[k] for k in LINE_OUTCOMES)
 
@@ -102,6 +102,7 @@ def test_parser_gap_arithmetic_at_32_counter_bits_and_a_refused_repeated_header(
     top = 2 ** 32
     rows = p.feed(HEADER.replace(b"\n", b" counter_bits=32\n") + _lines([top - 3, top - 1, 1])
                   + HEADER.replace(b"\n", b" counter_bits=64\n") + _lines([2, 0]))
+    rows = np.concatenate([rows, p.finish()])  # the last line, a restart, waits for a next line or the end
     np.testing.assert_allclose(rows[:, 0] * 100, [0, 2, 4, 5, 6])
     assert (p.stats["lost_samples"], p.stats["counter_jumps"], p.stats["restarts"], p.stats["bad_lines"]) == (2, 2, 1, 1)
     assert _reconciles(p)
@@ -124,7 +125,8 @@ def test_parser_never_hands_out_an_infinite_t():
         p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=1e-300\n" + _lines([0]))
     p = LineParser()
     p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=0.001\n" + _lines([0]))
-    assert p.feed(_lines([2 ** 31 - 1]))[-1, 0] == (2 ** 31 - 1) / 0.001  # the largest jump: finite
+    p.feed(_lines([2 ** 31 - 1]))  # the largest jump, the last line: it waits for the next line or the end
+    assert p.finish()[-1, 0] == (2 ** 31 - 1) / 0.001  # finite
 
 
 def test_parser_counts_reconcile_whatever_the_lines():
@@ -181,6 +183,7 @@ def test_parser_refuses_a_line_with_a_temperature_out_of_range_like_any_bad_line
     line) and run stopped on it; it is a corrupt line, counted and skipped."""
     p = LineParser()
     rows = p.feed(HEADER + b"0,1,2,3,25.5\n1,1,2,3,1e300\n2,1,2,3,-150\n3,1,2,3,26\n")
+    rows = np.concatenate([rows, p.finish()])  # 3 after 0, the last line: it waits for a next line or the end
     np.testing.assert_array_equal(rows[:, 4], [25.5, 26.0])
     assert p.stats["bad_lines"] == 2 and p.stats["lost_samples"] == 2 and _reconciles(p)
 
@@ -207,7 +210,7 @@ def test_parser_units_from_options_drop_the_first_line_and_check_a_later_header(
 def test_parser_header_changing_units_mid_stream_is_refused():
     p = LineParser()
     p.feed(HEADER + _lines([0, 1]))
-    p.feed(HEADER + _lines([0]))  # same header again (device restart): fine
+    p.feed(HEADER + _lines([0, 1]))  # same header again (device restart): fine
     assert p.stats["restarts"] == 1
     with pytest.raises(DeviceError, match="changed the units"):
         p.feed(HEADER.replace(b"131", b"65.5"))
@@ -260,7 +263,7 @@ def test_a_malformed_last_cell_in_a_block_of_its_own_is_refused(bad):
     configuration): such a line is refused and counted whatever the numpy, and the next one read."""
     p = LineParser()
     p.feed(HEADER + b"0,1,2,3\n")
-    rows = [p.feed(b"1,-1000,-1," + bad[:1]), p.feed(bad[1:] + b"\n"), p.feed(b"2,0,0,0\n")]
+    rows = [p.feed(b"1,-1000,-1," + bad[:1]), p.feed(bad[1:] + b"\n"), p.feed(b"2,0,0,0\n"), p.finish()]
     got = np.concatenate(rows)
     np.testing.assert_array_equal(got[:, 1:], [[0.0, 0.0, 0.0]])
     assert p.stats["bad_lines"] == 1 and p.stats["samples"] == 2
@@ -310,7 +313,42 @@ def test_a_six_axis_line_longer_than_a_line_may_be_is_refused_in_a_block_as_alon
     good = b"0,1,2,3,4,5,6,7\n"
     assert len(long_line) - 1 > 256
     whole, alone = LineParser(), LineParser()
-    rows = whole.feed(head + good + long_line + b"2,1,2,3,4,5,6,7\n")
-    parts = [alone.feed(x) for x in (head, good, long_line, b"2,1,2,3,4,5,6,7\n")]
+    rows = np.concatenate([whole.feed(head + good + long_line + b"2,1,2,3,4,5,6,7\n"), whole.finish()])
+    parts = [alone.feed(x) for x in (head, good, long_line, b"2,1,2,3,4,5,6,7\n")] + [alone.finish()]  # 0 -> 2: held
     np.testing.assert_array_equal(rows, np.concatenate(parts))
     assert len(rows) == 2 and whole.stats == alone.stats and whole.stats["bad_lines"] == 1
+
+
+@pytest.mark.parametrize("lost", [False, True])
+@pytest.mark.parametrize("corrupt", ["81000", "1900", "100", "10000", "0"])
+def test_one_corrupt_counter_digit_is_one_refused_line_not_a_gap_and_shifted_times(corrupt, lost):
+    """Counter 1000 received as 81000 (one corrupt digit) made the source count 80000 lost
+    samples, shift every later t by 800 s and note a device restart (attack pass 10): a counter that
+    jumps while the next line's continues the one before it is a corrupt line, refused; the
+    others keep their own times, however the bytes arrive."""
+    counters = [str(c) for c in range(995, 1010)]
+    counters[5] = corrupt  # counter 1000
+    sent = [i for i in range(15) if not (lost and i == 4)]  # counter 999 lost on the way as well
+    data = HEADER + b"".join(f"{counters[i]},{i},{-i},3\n".encode() for i in sent)
+    for cut in (len(data), len(HEADER) + 50, len(HEADER) + 60, len(data) - 10):
+        p = LineParser()
+        rows = np.concatenate([p.feed(data[:cut]), p.feed(data[cut:]), p.finish()])
+        kept = [i for i in sent if i != 5]
+        np.testing.assert_allclose(rows[:, 0] * 100, kept)  # t on the sensor's clock: no shift
+        np.testing.assert_array_equal(rows[:, 1], kept)
+        assert (p.stats["bad_lines"], p.stats["lost_samples"], p.stats["restarts"]) == (1, 1 + lost, 0)
+        assert _reconciles(p)
+
+
+def test_a_real_gap_or_restart_as_the_last_line_waits_for_the_next_line_or_the_end():
+    """A jump the next line follows is a gap (or a restart), as before; a last line that jumps is
+    handed out by the next feed or by finish(), never lost."""
+    p = LineParser()
+    rows = [p.feed(HEADER + _lines([5, 6, 10]))]
+    assert len(rows[0]) == 2
+    rows.append(p.feed(_lines([11, 0])))
+    rows.append(p.finish())
+    rows = np.concatenate(rows)
+    np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 5, 6, 7])
+    assert (p.stats["lost_samples"], p.stats["restarts"], p.stats["bad_lines"]) == (3, 1, 0)
+    assert _reconciles(p)

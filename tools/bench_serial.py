@@ -28,8 +28,8 @@ import numpy as np
 
 
 from gyrofilter.errors import SourceEnded
-from gyrofilter.sources.serial_protocol import LineParser
-from gyrofilter.sources.serial_source import SerialSource
+from gyrofilter.sources.serial.protocol import LineParser
+from gyrofilter.sources.serial.port import SerialSource
 
 from bench import best_of  # tools/bench.py, beside this file
 

@@ -7,8 +7,8 @@ What several commands share has a module of its own: ``outputs`` (output files),
 (option types, ``--sample-rate-hz``), ``console`` (messages, the summary table), ``filtering``
 (the filter options of replay and run), ``still`` (``--keep-outliers``), ``batch`` (fleet runs)
 and ``live`` (the read loop of record and run).
-Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors and Ctrl-C become one
-line on stderr and a non-zero exit code; a traceback is a bug.
+Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors, running out of memory
+and Ctrl-C become one line on stderr and a non-zero exit code; a traceback is a bug.
 """
 import argparse
 import importlib
@@ -152,6 +152,11 @@ def _main(argv):
     argv = sys.argv[1:] if argv is None else list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     try:
+        os.getcwd()
+    except FileNotFoundError:  # every relative path would fail with "[Errno 2] No such file or directory", naming nothing
+        console.say(console.error_line("the current folder no longer exists (deleted?); cd to one that does"))
+        return EXIT_BAD_INPUT
+    try:
         if command is not None and command not in COMMANDS:
             build_parser().error(f"unknown command {quote(command)}{_did_you_mean(command, COMMANDS)}; "
                                  f"the commands: {', '.join(COMMANDS)}")
@@ -173,4 +178,7 @@ def _main(argv):
         return 0
     except (GyroFilterError, OSError, ValueError) as exc:
         console.say(console.error_line(one_line(exc)))
+        return EXIT_BAD_INPUT
+    except MemoryError:  # an input too large to hold (the recording reader names its file itself)
+        console.say(console.error_line(f"out of memory running {command}; give it a shorter input"))
         return EXIT_BAD_INPUT

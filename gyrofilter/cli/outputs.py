@@ -22,7 +22,7 @@ def check_outputs(outputs, inputs=(), force=False):
 
     ``outputs`` and ``inputs`` are paths (None entries are skipped). An output that is one of
     the inputs is refused even with ``force``, and so is a name ending in a path separator (a
-    folder's, existing or not); so is one that exists as anything but a regular
+    folder's, existing or not), and ``-`` (:func:`refuse_standard_output`); so is one that exists as anything but a regular
     file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
     replaced. An output that exists is refused without ``force``; two outputs naming one file are
     refused; so is one whose folder (the nearest that exists: the others are made) cannot be
@@ -34,6 +34,7 @@ def check_outputs(outputs, inputs=(), force=False):
     inputs = {_file_key(p) for p in inputs if p}
     seen = set()
     for out in (p for p in outputs if p):
+        refuse_standard_output(out)
         if os.path.isdir(out):
             raise SettingsError(f"{out}: is a folder; give a file name for the output")
         if out.endswith(tuple(filter(None, (os.sep, os.altsep)))):
@@ -64,6 +65,16 @@ def check_outputs(outputs, inputs=(), force=False):
         if not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
         _replaceable.add(_identity(os.lstat(out)))
+
+
+def refuse_standard_output(path, option=None):
+    """Refuse ``-`` as an output (a file or ``option``'s folder): it names the standard input of
+    ``convert`` and, by the usual convention, the standard output, which no output of gyrofilter
+    is; every command wrote a file named ``-`` and said "wrote -" (a user piping ``--out -``
+    found no data on stdout). A file of that name is still ``./-``."""
+    if path == "-":
+        where = f"{option} -" if option else "-"
+        raise SettingsError(f"{where}: outputs are files, not the standard output; name a file (./- for a file named '-')")
 
 
 def _not_a_folder(path):
@@ -147,6 +158,7 @@ def check_output_folder(folder, option, files=()):
     file could then not be written)."""
     if not folder:
         return
+    refuse_standard_output(folder, option)
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise SettingsError(f"{option} {folder}: is a file; give a folder for the output files")
     key = _file_key(folder)
@@ -187,10 +199,11 @@ def replacing(path):
 @contextlib.contextmanager
 def replacing_in(folder):
     """:func:`replacing` for files whose names the writer chooses: yields a temporary folder inside
-    ``folder`` (created if needed); on success every file written there replaces its namesake in
-    ``folder``; on any failure the temporary folder goes, with any folder this call created."""
+    ``folder``; on any failure the temporary folder goes, with the files of it that landed before
+    the failure, and any folder this call created while it is empty (:func:`_folder`)."""
     with _folder(folder):
         tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{_OWNER}-", dir=folder)
+        landed = []
         try:
             with _naming(tmp, folder), _unwritten_on_interrupt(f"the files of {folder}"):
                 yield tmp
@@ -199,6 +212,12 @@ def replacing_in(folder):
                     _may_land(os.path.join(folder, name))
                 for name in names:
                     commit(os.path.join(tmp, name), os.path.join(folder, name))
+                    landed.append(os.path.join(folder, name))
+        except BaseException:
+            for path in landed:  # a commit after them failed: none of the files, as none of the others
+                with contextlib.suppress(OSError):
+                    os.unlink(path)
+            raise
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
 
@@ -354,15 +373,18 @@ def remove_made_folders(folder, top):
 @contextlib.contextmanager
 def _folder(folder):
     """Make ``folder`` and its missing parents; on a failure inside the block, remove what was
-    made. An existing folder first loses its stale partial files (:func:`remove_stale_partials`)."""
+    made while it is empty (:func:`remove_made_folders`): another command may have written its
+    own files there meanwhile (two ``gap --report rep`` at once: the one that failed removed the
+    folder with the other's report, which had said "wrote rep/gap_report.md"). The block removes
+    its own temporary files first. An existing folder first loses its stale partial files
+    (:func:`remove_stale_partials`)."""
     top = make_folders(folder)
     if top is None:
         remove_stale_partials(folder)
     try:
         yield
     except BaseException:
-        if top is not None:
-            shutil.rmtree(top, ignore_errors=True)
+        remove_made_folders(folder, top)
         raise
 
 

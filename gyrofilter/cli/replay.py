@@ -224,6 +224,9 @@ class Replay:
             devnull = os.open(os.devnull, os.O_WRONLY)  # what is left in stdout's buffer goes nowhere, silently
             os.dup2(devnull, sys.stdout.fileno())
             os.close(devnull)
+        except OSError as exc:  # a full disk under `> out.csv`: named, as run names it ("[Errno 28]" alone named nothing)
+            raise OSError(exc.errno, f"{exc.strerror or exc}; {self.lines_printed} lines printed before it",
+                          "stdout") from None
 
     def _pass_on(self, t_s, rows):
         self.filtered.add(rows)

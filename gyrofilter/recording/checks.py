@@ -72,7 +72,13 @@ class TimeCheck:
       at half the rate or less (a file of samples whose header names an input rate was so read
       at any rate). A shorter one shows no rate and passes (every block of the window lost a
       few samples: each step is longer than a row interval by the input samples lost, which
-      says nothing of the rate).
+      says nothing of the rate);
+    - the rows of every such window (and of the steps after the last whole one, when half a
+      window or more) are not denser than the rate: its steps span at least (1 - RATE_TOLERANCE)
+      times their number of sample intervals (:meth:`_dense`). Lost samples make a window span
+      more, never less; a window that spans less holds rows the rate has no room for (a copy of
+      a row stamped 1 ulp after it, inserted rows: up to half the rows so inserted leave the
+      typical step as it was, and a file 86 s long read as 60 s of t).
 
     ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
     advice a refusal ends with (the writer says why its rows would come out so).
@@ -124,6 +130,8 @@ class TimeCheck:
                 median = float(typical_steps(phase.pending[None, :], self.max_step_s, self.min_gaps_step_s)[0])
                 if self._off(median):
                     self._refuse(median, len(phase.pending), phase.pending_where, first=whole_file)
+                if len(phase.pending) >= RATE_CHECK_STEPS // 2 and self._dense(phase.pending.sum(), len(phase.pending)):
+                    self._refuse_dense(float(phase.pending.sum()), len(phase.pending), phase.pending_where)
             if whole_file:
                 break
 
@@ -131,6 +139,18 @@ class TimeCheck:
         """Whether each typical step is more than RATE_TOLERANCE off the rate's (NaN, no rate shown: not off)."""
         expected_s = 1.0 / self.head.sample_rate_hz
         return np.abs(typical_s - expected_s) > RATE_TOLERANCE * expected_s
+
+    def _dense(self, span_s, n):
+        """Whether steps spanning ``span_s`` (s) in all are too short for ``n`` sample intervals:
+        more than RATE_TOLERANCE under them (jitter moves only a window's two ends)."""
+        return span_s < (1.0 - RATE_TOLERANCE) * n / self.head.sample_rate_hz
+
+    def _refuse_dense(self, span_s, n, start):
+        head = self.head
+        raise RecordingError(
+            f"{head.path}: t's {n} steps from {start} span {span_s:.6g} s, but {n} sample intervals at "
+            f"sample_rate_hz {head.sample_rate_hz:g} take {n / head.sample_rate_hz:.6g} s: more rows than the "
+            f"rate has room for (rows repeated or inserted with their own t, or is sample_rate_hz wrong?)")
 
     def _refuse(self, typical_s, n, start, first):
         head = self.head
@@ -159,13 +179,17 @@ class _WindowPhase:
         steps = np.concatenate((self.pending, step))
         whole = len(steps) // RATE_CHECK_STEPS * RATE_CHECK_STEPS
         if whole:
-            medians = typical_steps(steps[:whole].reshape(-1, RATE_CHECK_STEPS), check.max_step_s, check.min_gaps_step_s)
-            wrong = np.flatnonzero(check._off(medians))
+            windows = steps[:whole].reshape(-1, RATE_CHECK_STEPS)
+            medians = typical_steps(windows, check.max_step_s, check.min_gaps_step_s)
+            spans = windows.sum(axis=1)
+            wrong = np.flatnonzero(check._off(medians) | check._dense(spans, RATE_CHECK_STEPS))
             if wrong.size:
                 j = int(wrong[0])
                 start = j * RATE_CHECK_STEPS - len(self.pending)
-                check._refuse(float(medians[j]), RATE_CHECK_STEPS,
-                              self.pending_where if start < 0 else step_start(first + start),
+                where = self.pending_where if start < 0 else step_start(first + start)
+                if not check._off(medians[j]):
+                    check._refuse_dense(float(spans[j]), RATE_CHECK_STEPS, where)
+                check._refuse(float(medians[j]), RATE_CHECK_STEPS, where,
                               first=self.windows + j == 0 and self.skip == 0 and first == 0)
             self.windows += len(medians)
             if whole < len(steps):

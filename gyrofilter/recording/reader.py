@@ -52,7 +52,21 @@ def collect_columns(head, chunks, names, compact=False):
     fragment the heap around them) and each column's blocks are joined at the end, one column
     at a time: the peak is the arrays with their last blocks' spare room, one more column and
     one chunk.
+
+    A recording that does not fit in memory (a few MB of gzip can hold 10^9 rows) is a
+    RecordingError naming the file and the rows read, not a MemoryError's traceback.
     """
+    try:
+        return _gather(head, chunks, names, compact)
+    except MemoryError:
+        if hasattr(chunks, "close"):
+            chunks.close()
+        raise RecordingError(f"{head.path}: does not fit in memory: out of memory after {head.rows} rows of "
+                             f"{len(names)} columns; analyse a part of it (split it into shorter files)") from None
+
+
+def _gather(head, chunks, names, compact):
+    """The work of :func:`collect_columns`."""
     where = [head.names.index(name) for name in names]
     blocks = {name: [] for name in names}
     dtypes = {name: np.float32 if compact else np.float64 for name in names}

@@ -51,7 +51,7 @@ from ..inputs import check_number, parse_number, quote
 from ..units import GYRO_UNITS
 from .mpu6050 import driver as mpu6050_driver
 from .replay import ReplaySource
-from .serial_source import SerialSource
+from .serial.port import SerialSource
 from .simulated import SimulatedSource
 
 __all__ = ["open_source", "parse_source", "SOURCE_HELP", "KINDS"]

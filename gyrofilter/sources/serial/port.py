@@ -1,6 +1,6 @@
 """A gyro streamed over a serial port as text lines (``serial:/dev/ttyUSB0,baud=115200``):
 :class:`SerialSource` opens the port (pyserial, imported only here), waits for the device's header
-and reads what arrives; the line protocol and its parser are :mod:`gyrofilter.sources.serial_protocol`.
+and reads what arrives; the line protocol and its parser are :mod:`gyrofilter.sources.serial.protocol`.
 
 Reading is chunked: each ``read()`` takes every byte waiting (waiting at most 0.1 s for the
 first) and hands it to the parser. A disconnected port ends the source (:class:`SourceEnded`
@@ -12,10 +12,10 @@ import time
 
 import numpy as np
 
-from ..errors import DeviceError, SourceEnded, one_line
-from ..inputs import check_number
-from .base import Source
-from .serial_protocol import LineParser
+from ...errors import DeviceError, SourceEnded, one_line
+from ...inputs import check_number
+from ..base import Source
+from .protocol import LineParser
 
 MAX_WAIT_S = 0.1
 MIN_BAUD, MAX_BAUD = 50, 12_000_000  # bit/s: the slowest standard rate to the fastest USB-serial chips
@@ -124,8 +124,7 @@ class SerialSource(Source):
         except self._exceptions as exc:
             self._ended = f"serial port disconnected ({one_line(exc)})"
             self._disconnected = True
-            self._parser.finish()
-            return self._parser._empty()
+            return self._parser.finish()
         return self._parser.feed(data) if data else self._parser._empty()
 
     def read(self):

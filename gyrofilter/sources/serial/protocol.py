@@ -1,6 +1,6 @@
 """The line protocol of a gyro (and accelerometer) streamed over a serial port (``serial:/dev/ttyUSB0,baud=115200``),
 and :class:`LineParser`, which turns its bytes into rows (pure: no I/O; the port is
-:mod:`gyrofilter.sources.serial_source`).
+:mod:`gyrofilter.sources.serial.port`).
 
 Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it)::
 
@@ -26,7 +26,11 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
 - The counter counts samples on the device: an integer in [0, 2**counter_bits). A jump of
   1 < k < 2**(counter_bits - 1) (modulo the wrap) means k - 1 samples were lost: ``t`` jumps with it
   and a gap note is made. A repeated counter is a duplicate (dropped, counted); a backwards jump
-  is a device restart (noted; ``t`` continues). A counter that is not such an integer (negative,
+  is a device restart (noted; ``t`` continues). A line whose counter jumps (forwards or back)
+  while the next line's lies between the one before it and the jump (999, 1900, 1001: a corrupt
+  digit; a gap or restart goes on from where it jumped) is a corrupt line, refused (``bad_lines``): one bad digit is one sample, not 900 samples "lost"
+  and every later ``t`` shifted by 9 s; a line whose counter jumps therefore waits for the next
+  line (or :meth:`LineParser.finish`) before it is a row. A counter that is not such an integer (negative,
   fractional, too large) refuses its line (counted in ``bad_lines``), and so does a gyro value
   beyond +-``units.MAX_RATE_DPS`` (100000 deg/s) once converted to deg/s: no gyro reads it, and
   the recording would refuse it (a corrupt line must not end a recording).
@@ -53,12 +57,12 @@ import warnings
 
 import numpy as np
 
-from ..errors import DeviceError, SettingsError
-from ..inputs import check_number, is_plain_number, parse_number, quote
-from ..recording import ACCEL_COLUMNS, COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
-from ..units import (ACCEL_UNITS, GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz,
-                     to_dps)
-from .mpu6050.chip import temperature_c
+from ...errors import DeviceError, SettingsError
+from ...inputs import check_number, is_plain_number, parse_number, quote
+from ...recording import ACCEL_COLUMNS, COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
+from ...units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz, to_dps
+from ..mpu6050.chip import temperature_c
+from .fields import accel_units, parse_fields
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
 PROTOCOL_VERSION = "1"
@@ -70,7 +74,6 @@ DEFAULT_COUNTER_BITS = 32
 LINE_OUTCOMES = ("samples", "duplicates", "partial_lines", "bad_lines", "empty_lines", "device_messages",
                  "headers", "lines_before_header")
 _PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
-_KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp", *ACCEL_COLUMNS)
 _UNIT_KEYS = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_per_g")  # a repeated header keeps them
 _HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
 _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
@@ -93,50 +96,6 @@ def _plain_cell(n_fields):
     point, d = min(24, the most that keeps n (2 d + 2) + (n - 1) commas + "\r" within MAX_LINE_BYTES)."""
     digits = min(24, ((MAX_LINE_BYTES - n_fields) // n_fields - 2) // 2)
     return rb"[-+]?(?:[0-9]{1,%d}(?:\.[0-9]{0,%d})?|\.[0-9]{1,%d})" % (digits, digits, digits)
-
-
-def _parse_fields(text, where):
-    fields = [f.strip() for f in text.split(",")]
-    for f in fields:
-        if f not in _KNOWN_FIELDS:
-            raise DeviceError(f"{where}: unknown field {f!r} in fields={text} (known: {', '.join(_KNOWN_FIELDS)})")
-    for f in GYRO_COLUMNS:
-        if f not in fields:
-            raise DeviceError(f"{where}: fields={text} lacks {f}")
-    if len(set(fields)) != len(fields):
-        raise DeviceError(f"{where}: fields={text} names a field twice")
-    accel = [f for f in ACCEL_COLUMNS if f in fields]
-    if accel and len(accel) < len(ACCEL_COLUMNS):
-        raise DeviceError(f"{where}: fields={text} names {', '.join(accel)} but not "
-                          f"{', '.join(f for f in ACCEL_COLUMNS if f not in accel)}: the accelerometer is all of "
-                          f"{', '.join(ACCEL_COLUMNS)} or none")
-    return fields
-
-
-def _accel_units(values, fields, where):
-    """The header's ``accel_unit`` and ``lsb_per_g`` words (checked; {} when not given) for a
-    stream whose ``fields`` (None: not known yet) name the accelerometer or not: the unit is
-    required with the accelerometer fields, ``lsb_per_g`` (> 0) with ``lsb``. DeviceError otherwise."""
-    if "accel_unit" not in values:
-        if fields is not None and ACCEL_COLUMNS[0] in fields:
-            raise DeviceError(f"{where}: fields name {', '.join(ACCEL_COLUMNS)} but the header gives no accel_unit "
-                              f"({', '.join(ACCEL_UNITS)})")
-        if "lsb_per_g" in values:
-            raise DeviceError(f"{where}: the header gives lsb_per_g without accel_unit=lsb")
-        return {}
-    unit = values["accel_unit"]
-    if unit not in ACCEL_UNITS:
-        raise DeviceError(f"{where}: accel_unit {quote(unit, 40)} is not one of {', '.join(ACCEL_UNITS)}")
-    if unit != "lsb":
-        if "lsb_per_g" in values:
-            raise DeviceError(f"{where}: the header gives lsb_per_g with accel_unit={unit}: it belongs to lsb only")
-        return {"accel_unit": unit}
-    if "lsb_per_g" not in values:
-        raise DeviceError(f"{where}: accel_unit=lsb needs lsb_per_g (LSB per g, e.g. 16384 for an MPU6050 at +-2 g)")
-    what = f"{where}: header line: lsb_per_g"
-    lsb_per_g = check_lsb_per_g(parse_number(values["lsb_per_g"], what, low=0, low_open=True, error=DeviceError), what,
-                                DeviceError)
-    return {"accel_unit": unit, "lsb_per_g": format_number(lsb_per_g)}
 
 
 class LineParser:
@@ -181,6 +140,7 @@ class LineParser:
         self._temp_raw = False
         self.sample_rate_hz = None
         self._last_counter = None
+        self._held = None  # a line whose counter jumped, waiting for the next to judge it (_out_of_sequence)
         self._last_index = -1
         self._options = None
         if gyro_unit is not None or sample_rate_hz is not None or lsb_per_dps is not None:
@@ -282,7 +242,7 @@ class LineParser:
         header.update(units)
         fields = self.fields
         if "fields" in values:
-            fields = _parse_fields(values["fields"], self.where)
+            fields = parse_fields(values["fields"], self.where)
             if self.fields is not None and fields != self.fields:
                 raise UnitsConflict(f"{self.where}: the device's header changed the fields mid-stream ({self.fields} -> {fields})")
         counter_mod = self._counter_mod
@@ -294,7 +254,7 @@ class LineParser:
         temp_unit = values.get("temp_unit", "c")
         if temp_unit not in ("c", "mpu6050_raw"):
             raise DeviceError(f"{self.where}: temp_unit {quote(temp_unit, 40)} is not c or mpu6050_raw")
-        header.update(_accel_units(values, fields, self.where))
+        header.update(accel_units(values, fields, self.where))
         self._apply(header)  # a repeated header must agree; the counter tells restarts
         self.fields, self._counter_mod, self._temp_raw = fields, counter_mod, temp_unit == "mpu6050_raw"
         self._skip_first_line = False
@@ -356,11 +316,14 @@ class LineParser:
         return rows
 
     def finish(self):
-        """The connection ended: a line without its end is a cut line (counted, not used)."""
+        """The connection ended: a line without its end is a cut line (counted, not used); returns
+        the row of a last line whose counter jumped (it waited for a next line that will not come)."""
         if self._buf:
             self.stats["lines"] += 1
             self._bad(self._buf, "partial_lines", "cut off at the end of the stream")
         self._buf, self._overlong = b"", False
+        held, self._held = self._held, None
+        return self._rows(held[None, :], final=True) if held is not None else self._empty()
 
     def _empty(self):
         cols = self.columns
@@ -478,14 +441,17 @@ class LineParser:
         n = len(counter)
         return last - first == n - 1 and (n < 3 or bool((np.diff(counter) == 1).all()))
 
-    def _rows(self, values):
+    def _rows(self, values, final=False):
         """Values per line (fields order) -> rows t, gx, gy, gz[, temp][, ax, ay, az]; counter bookkeeping.
+        A line held by the last call comes first; ``final``: the stream ended, no line is held.
 
         A gyro value beyond +-MAX_RATE_DPS in deg/s, a temperature outside TEMP_RANGE_C, or a counter that is not an integer in
         [0, 2**counter_bits), refuses its line (``bad_lines``). Counters are at most 2**32 and the
         sample index an int64, so no step overflows."""
         fields = self.fields
         values = self._refuse_beyond_range(values)
+        if self._held is not None and len(values):  # judged with the next line in range
+            values, self._held = np.vstack((self._held, values)), None
         n = len(values)
         if "counter" in fields and n and self._consecutive(values[:, fields.index("counter")]):
             index = self._last_index + 1 + np.arange(n)  # the common case: no gap, no duplicate
@@ -501,6 +467,10 @@ class LineParser:
                 values, counter = values[ok], counter[ok]
                 n = len(values)
             counter = counter.astype(np.int64)
+            if n:
+                keep = self._out_of_sequence(counter, values, final)
+                values, counter = values[keep], counter[keep]
+                n = len(values)
             prev = np.empty(n, dtype=np.int64)
             if n:
                 prev[0] = counter[0] - 1 if self._last_counter is None else self._last_counter
@@ -543,6 +513,39 @@ class LineParser:
             rows[:, 4] = temperature_c(rows[:, 4])
         self.stats["samples"] += n
         return rows
+
+    def _out_of_sequence(self, counter, values, final):
+        """The lines to keep of ``counter`` (valid counters, in order): False for a corrupt line, a
+        counter that jumps from the last kept one while the next line's lies between the two (999,
+        1900, 1001; 999, 100, 1001; 999, 1901, 1002 with 1000 lost: a corrupt digit; a real gap or
+        restart goes on from the counter it jumped to; refused, ``bad_lines``), and for the
+        last line when its counter jumps (forwards or back) and ``final`` is False: it is held
+        (``_held``) until the next line tells. Jumps are rare: a loop over them only."""
+        mod, n = self._counter_mod, len(counter)
+        keep = np.ones(n, dtype=bool)
+        before = np.empty(n, dtype=np.int64)
+        before[0] = counter[0] - 1 if self._last_counter is None else self._last_counter
+        before[1:] = counter[:-1]
+        todo = sorted(np.flatnonzero((counter - before) % mod > 1).tolist())
+        while todo:
+            i = todo.pop(0)
+            j = i - 1
+            while j >= 0 and not keep[j]:
+                j -= 1
+            prev = int(counter[j]) if j >= 0 else self._last_counter
+            jump = None if prev is None else (int(counter[i]) - prev) % mod
+            if jump is None or jump <= 1:
+                continue
+            if i + 1 == n:
+                if not final:
+                    keep[i], self._held = False, values[i].copy()
+            elif 0 < (int(counter[i + 1]) - prev) % mod < jump:
+                keep[i] = False
+                self._bad(str(int(counter[i])).encode(), "bad_lines",
+                          f"out of sequence between {prev} and {int(counter[i + 1])}: a corrupt counter", garbage_bytes=0)
+                if i + 1 not in todo:
+                    todo.insert(0, i + 1)
+        return keep
 
     def _refuse_beyond_range(self, values):
         """``values`` (per line, fields order) without the lines holding a gyro value beyond

@@ -1,0 +1,57 @@
+"""The serial line protocol's header words that name the fields of a line and the accelerometer's
+units (:mod:`gyrofilter.sources.serial.protocol`, whose module docstring states the protocol)."""
+from __future__ import annotations
+
+from ...errors import DeviceError
+from ...inputs import parse_number, quote
+from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS, format_number
+from ...units import ACCEL_UNITS, check_lsb_per_g
+
+#: the fields a line may hold, in any order given by the header's ``fields=``
+KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp", *ACCEL_COLUMNS)
+
+
+def parse_fields(text, where):
+    """The header's ``fields=`` word ``text`` as a list of field names (checked: known names, the three gyro
+    fields, none twice, the accelerometer's all or none); DeviceError naming ``where`` otherwise."""
+    fields = [f.strip() for f in text.split(",")]
+    for f in fields:
+        if f not in KNOWN_FIELDS:
+            raise DeviceError(f"{where}: unknown field {f!r} in fields={text} (known: {', '.join(KNOWN_FIELDS)})")
+    for f in GYRO_COLUMNS:
+        if f not in fields:
+            raise DeviceError(f"{where}: fields={text} lacks {f}")
+    if len(set(fields)) != len(fields):
+        raise DeviceError(f"{where}: fields={text} names a field twice")
+    accel = [f for f in ACCEL_COLUMNS if f in fields]
+    if accel and len(accel) < len(ACCEL_COLUMNS):
+        raise DeviceError(f"{where}: fields={text} names {', '.join(accel)} but not "
+                          f"{', '.join(f for f in ACCEL_COLUMNS if f not in accel)}: the accelerometer is all of "
+                          f"{', '.join(ACCEL_COLUMNS)} or none")
+    return fields
+
+
+def accel_units(values, fields, where):
+    """The header's ``accel_unit`` and ``lsb_per_g`` words (checked; {} when not given) for a
+    stream whose ``fields`` (None: not known yet) name the accelerometer or not: the unit is
+    required with the accelerometer fields, ``lsb_per_g`` (> 0) with ``lsb``. DeviceError otherwise."""
+    if "accel_unit" not in values:
+        if fields is not None and ACCEL_COLUMNS[0] in fields:
+            raise DeviceError(f"{where}: fields name {', '.join(ACCEL_COLUMNS)} but the header gives no accel_unit "
+                              f"({', '.join(ACCEL_UNITS)})")
+        if "lsb_per_g" in values:
+            raise DeviceError(f"{where}: the header gives lsb_per_g without accel_unit=lsb")
+        return {}
+    unit = values["accel_unit"]
+    if unit not in ACCEL_UNITS:
+        raise DeviceError(f"{where}: accel_unit {quote(unit, 40)} is not one of {', '.join(ACCEL_UNITS)}")
+    if unit != "lsb":
+        if "lsb_per_g" in values:
+            raise DeviceError(f"{where}: the header gives lsb_per_g with accel_unit={unit}: it belongs to lsb only")
+        return {"accel_unit": unit}
+    if "lsb_per_g" not in values:
+        raise DeviceError(f"{where}: accel_unit=lsb needs lsb_per_g (LSB per g, e.g. 16384 for an MPU6050 at +-2 g)")
+    what = f"{where}: header line: lsb_per_g"
+    lsb_per_g = check_lsb_per_g(parse_number(values["lsb_per_g"], what, low=0, low_open=True, error=DeviceError), what,
+                                DeviceError)
+    return {"accel_unit": unit, "lsb_per_g": format_number(lsb_per_g)}
