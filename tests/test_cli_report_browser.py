@@ -38,8 +38,10 @@ def test_chromium_opens_the_report(browser, tmp_path, capsys, monkeypatch, name)
         list(SECTIONS) + ["allan and gap"] * bool(data.get("allan_and_gap"))
     assert data["recording"]["samples"] > 0
     figures = browser.find_elements("css selector", "svg.figure")
-    # three Allan figures where allan ran, three traces where the filter ran (each may refuse a record)
-    assert len(figures) == 3 * bool(data["allan"]) + 3 * bool(data["filter"])
+    # three Allan figures where allan ran (and three of the accelerometer's where the record has one), three
+    # traces where the filter ran (each may refuse a record)
+    allan_figures = 3 * (1 + bool(data["allan"].get("accelerometer"))) if data["allan"] else 0
+    assert len(figures) == allan_figures + 3 * bool(data["filter"])
     for svg in figures:
         size = svg.size
         assert svg.is_displayed() and size["width"] > 250 and size["height"] > 150
