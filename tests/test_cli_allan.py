@@ -467,3 +467,58 @@ def test_allan_says_nothing_of_repeats_on_a_clean_record_of_the_same_noise(tmp_p
     assert "repeat the previous row" not in capsys.readouterr().err
     block = json.loads((tmp_path / "a.json").read_text())["repeated_rows"]
     assert block["applicable"] and block["warning"] is None and block["p_value"] > 1e-3
+
+
+def _six_axis(path, seed=5, n=30000, accel_unit="m/s^2"):
+    """A still six-axis record: the gyro of the static fixture's kind, the accelerometer white + a random walk
+    with 1 g on z (m/s^2)."""
+    rng = np.random.default_rng(seed)
+    gyro = np.array([-3.3, 1.1, -0.5]) + rng.normal(0.0, 0.1, (n, 3))
+    accel = (np.array([0.2, -0.3, 9.80665]) + rng.normal(0.0, 0.04, (n, 3))
+             + np.cumsum(rng.normal(0.0, 1e-4, (n, 3)), axis=0))
+    write_recording(str(path), Recording.from_dps(gyro, 100.0, accel=accel, accel_unit=accel_unit))
+    return str(path), gyro
+
+
+def test_a_six_axis_record_gets_the_accelerometers_table_json_block_and_kalibr_keys(tmp_path, capsys):
+    """Issue 39: the accelerometer's table after the gyro's, in m/s units; --json's accelerometer block
+    (the gyro's part the same as of the gyro alone); --kalibr's four keys; --axes applies to both."""
+    path, gyro = _six_axis(tmp_path / "six.csv")
+    gyro_only = _write(tmp_path / "gyro.csv", gyro, lsb=False)
+    assert main(["allan", path, "--json", str(tmp_path / "six.json"), "--kalibr", str(tmp_path / "six.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert out.index("accelerometer:") > out.index("  axis z:")
+    table = out[out.index("accelerometer:"):]
+    assert "N m/s/sqrt(s)" in table and "B m/s^2" in table and "K m/s^2/sqrt(s)" in table and "velocity random walk" in table
+    assert all(len(line) <= MAX_LINE_CHARS for line in out.splitlines())
+    assert main(["allan", gyro_only, "--json", str(tmp_path / "gyro.json")]) == 0
+    six, alone = (json.loads((tmp_path / f"{name}.json").read_text()) for name in ("six", "gyro"))
+    assert six["axes"] == alone["axes"] and six["method"] == alone["method"] and "accelerometer" not in alone
+    acc = six["accelerometer"]["axes"]
+    assert sorted(acc) == ["x", "y", "z"]
+    for a in "xyz":  # white noise of 0.04 m/s^2 per sample at 100 Hz: N = 0.004 m/s/sqrt(s)
+        n = acc[a]["coefficients"]["vrw_mps2_per_sqrt_hz"]
+        assert n["low"] <= 0.004 <= n["high"]
+        assert acc[a]["kalibr"]["accelerometer_noise_density"] == pytest.approx(n["value"])
+    text = (tmp_path / "six.yaml").read_text()
+    for key in ("gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density",
+                "accelerometer_random_walk"):
+        assert f"\n{key}: " in text
+    assert "not estimated here" not in text
+    assert main(["allan", path, "--axes", "z", "--json", str(tmp_path / "z.json")]) == 0
+    z = json.loads((tmp_path / "z.json").read_text())
+    assert sorted(z["axes"]) == ["z"] and sorted(z["accelerometer"]["axes"]) == ["z"]
+
+
+def test_accelerometer_columns_without_accel_unit_leave_the_gyro_as_it_was_and_one_note(tmp_path, capsys):
+    path, gyro = _six_axis(tmp_path / "six.csv")
+    stripped = tmp_path / "no_unit.csv"
+    stripped.write_text("".join(line for line in open(path).read().splitlines(True)
+                                if not line.startswith("# accel_unit")))
+    assert main(["allan", str(stripped), "--json", str(tmp_path / "a.json"), "--kalibr", str(tmp_path / "k.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert "accelerometer:" not in out
+    assert sum(line.startswith("note:") for line in out.splitlines()) == 1
+    assert "is not analysed: the header has no accel_unit" in " ".join(out.split())
+    assert "accelerometer" not in json.loads((tmp_path / "a.json").read_text())
+    assert "not estimated here" in (tmp_path / "k.yaml").read_text()

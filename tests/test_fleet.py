@@ -23,6 +23,7 @@ import pytest
 from gyrofilter.analysis.fleet import runner, work
 from gyrofilter.analysis.fleet import table as fleet_table
 from gyrofilter.cli import main
+from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 from gyrofilter.cli.batch import expand
 from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.simulate import simulate
@@ -694,3 +695,18 @@ def test_names_and_reasons_from_files_are_markdown_text_in_fleet_md(tmp_path, ca
     header = next(line for line in md.splitlines() if line.startswith("| unit | axis | N "))
     row, = [line for line in md.splitlines() if line.startswith("| a\\|b&lt;img src=x onerror=alert(5)&gt; | x |")]
     assert len(row.replace("\\|", "").split("|")) == len(header.split("|"))  # the escaped | splits no cell
+
+
+def test_a_six_axis_units_fleet_yaml_and_json_hold_the_accelerometer_as_the_single_file_commands(tmp_path):
+    """Issue 39: a fleet's NAME.imu.yaml and NAME.allan.json of a six-axis record (2 min of the default
+    MPU6050 model) are the single-file commands' bytes: the accelerometer's keys and block included."""
+    rec = str(tmp_path / "six.csv.gz")
+    assert main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "120", "--seed", "3", "--out", rec]) == 0
+    assert main(["allan", rec, "--json", str(tmp_path / "one.json"), "--kalibr", str(tmp_path / "one.yaml")]) == 0
+    assert main(["allan", rec, "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    yaml = (tmp_path / "f" / "six.imu.yaml").read_text()
+    assert yaml == (tmp_path / "one.yaml").read_text()
+    assert "\naccelerometer_noise_density: " in yaml and "\naccelerometer_random_walk: " in yaml
+    assert "not estimated here" not in yaml
+    assert (tmp_path / "f" / "six.allan.json").read_bytes() == (tmp_path / "one.json").read_bytes()
+    assert "accelerometer" in json.loads((tmp_path / "one.json").read_text())

@@ -101,26 +101,35 @@ def kalibr_model_adev_dps(nd_dps, rw_dps, tau_s, sample_rate_hz, n_samples, rng,
 
 
 def test_the_yaml_of_a_simulated_mpu6050_bounds_every_axis_by_simulation(tmp_path):
-    """Issue 39's done-when, for the gyroscope: `allan --kalibr` on 30 min of the default MPU6050
-    model; Kalibr's model simulated with the values written lies at >= 0.9x the measured Allan
-    deviation of every axis over tau 0.1-100 s, and at <= 4x the largest axis's. The plain values
-    (the fit's N and K, the comments) fall below 0.9x where bias instability lifts the curve."""
+    """Issue 39's done-when, for both sensors: `allan --kalibr` on 30 min of the default MPU6050
+    model (gyro and accelerometer) writes all four numbers; Kalibr's model simulated with the values
+    written lies at >= 0.9x the measured Allan deviation of every axis over tau 0.1-100 s, and at
+    <= 4x the largest axis's, for the gyroscope (deg/s) and the accelerometer (m/s^2). The gyroscope's
+    plain values (the fit's N and K, the comments) fall below 0.9x where bias instability lifts the curve."""
     rec, doc_path, yaml_path = tmp_path / "mpu.csv.gz", tmp_path / "a.json", tmp_path / "imu.yaml"
     assert main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "1800", "--seed", "1",
                  "--out", str(rec)]) == 0
     assert main(["allan", str(rec), "--json", str(doc_path), "--kalibr", str(yaml_path)]) == 0
     doc, text = json.loads(doc_path.read_text()), yaml_path.read_text()
     values = yaml_values(text)
+    assert {"gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density",
+            "accelerometer_random_walk"} <= set(values) and "not estimated here" not in text
     to_dps = 180.0 / math.pi
-    nd, rw = (float(values[f"gyroscope_{key}"]) * to_dps for key in ("noise_density", "random_walk"))
-    tau = np.array(doc["axes"]["x"]["tau_s"])
-    inside = (tau >= 0.1) & (tau <= 100.0)
-    measured = np.array([doc["axes"][a]["adev_dps"] for a in "xyz"])[:, inside]
-    model = kalibr_model_adev_dps(nd, rw, tau[inside], 100.0, 180000, np.random.default_rng(7), runs=8)
-    assert np.all(model >= 0.9 * measured)
-    assert np.all(model <= 4.0 * measured.max(axis=0))
+    rng = np.random.default_rng(7)
+    for sensor, axes, adev_key, to_unit in (("gyroscope", doc["axes"], "adev_dps", to_dps),
+                                            ("accelerometer", doc["accelerometer"]["axes"], "adev_mps2", 1.0)):
+        nd, rw = (float(values[f"{sensor}_{key}"]) * to_unit for key in ("noise_density", "random_walk"))
+        tau = np.array(axes["x"]["tau_s"])
+        inside = (tau >= 0.1) & (tau <= 100.0)
+        measured = np.array([axes[a][adev_key] for a in "xyz"])[:, inside]
+        model = kalibr_model_adev_dps(nd, rw, tau[inside], 100.0, 180000, rng, runs=8)
+        assert np.all(model >= 0.9 * measured), sensor
+        assert np.all(model <= 4.0 * measured.max(axis=0)), sensor
     plain = [float(line.split("noise_density ")[1].split(",")[0]) for line in text.splitlines()
              if line.startswith("# gyroscope, plain (largest")]
     plain_rw = max(doc["axes"][a]["kalibr"]["gyroscope_random_walk"] for a in "xyz")
+    tau = np.array(doc["axes"]["x"]["tau_s"])
+    inside = (tau >= 0.1) & (tau <= 100.0)
+    measured = np.array([doc["axes"][a]["adev_dps"] for a in "xyz"])[:, inside]
     plain_model = kalibr_adev(plain[0] * to_dps, plain_rw * to_dps, tau[inside])
     assert np.any(plain_model < 0.9 * measured.max(axis=0))

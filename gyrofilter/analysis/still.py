@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import collect_columns, iter_recording, warn_about_gaps
-from ..units import AXES, check_axes, to_dps
+from ..recording import ACCEL_COLUMNS, collect_columns, iter_recording, warn_about_gaps
+from ..units import AXES, MAX_ACCEL_MPS2, check_axes, to_dps, to_mps2
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
@@ -23,11 +23,16 @@ from .repeats import repeated_rows
 
 #: block-mean excursion (deg/s) beyond which a recording is called not static
 STATIC_LIMIT_DPS = 1.0
+#: block-mean excursion (m/s^2) beyond which an accelerometer's record is called not static: 0.05 g, the
+#: gravity a tilt of 3 degrees moves onto a level axis, and 6 times the drift of the MPU6050's zero-g level
+#: over 10 deg C (its largest, 60 mg over 70 deg C: PS-MPU-6000A-00 rev 3.4, section 6.2)
+STATIC_LIMIT_MPS2 = 0.5
 #: the block means of the stillness check: at most this many blocks over the record
 STATIC_BLOCKS = 512
 
 
-def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False):
+def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATIC_LIMIT_DPS, unit="deg/s",
+               what="rate"):
     """Why a still gyro's record ``x_dps`` (deg/s) looks moved, or None when it looks still
     (``brief``: only how far it moves, for a refusal that must stay one short line).
 
@@ -35,27 +40,29 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False):
     from their median is the excursion. A still gyro's block means scatter by its white noise
     sigma / sqrt(L) (``white_std_dps``: the per-sample sigma, deg/s) plus slow bias wander;
     more than max(1 deg/s, 8 sigma / sqrt(L)) is motion (or a bias far beyond any MEMS gyro's
-    instability)."""
+    instability). An accelerometer's record is judged the same way with ``limit`` =
+    :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name in the text)."""
     y, length = block_means(np.asarray(x_dps, dtype=float), STATIC_BLOCKS)
     if y.size == 0:
         return None
     excursion = float(np.max(np.abs(y - np.median(y))))
-    if excursion <= max(STATIC_LIMIT_DPS, 8 * white_std_dps / math.sqrt(length)):
+    if excursion <= max(limit, 8 * white_std_dps / math.sqrt(length)):
         return None
     if brief:
-        return f"it moves by up to {excursion:.3g} deg/s"
-    return (f"the rate moves by up to {excursion:.3g} deg/s (averages over {length / sample_rate_hz:.2g} s): "
+        return f"it moves by up to {excursion:.3g} {unit}"
+    return (f"the {what} moves by up to {excursion:.3g} {unit} (averages over {length / sample_rate_hz:.2g} s): "
             "the recording does not look static")
 
 
-def moved(x_dps, sample_rate_hz, *, brief=False):
+def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):
     """:func:`not_static` of the series ``x_dps`` (deg/s) with its white level from the first
     differences, ``sd(diff x) / sqrt(2)``, as every still-sensor analysis (allan, gap, report)
-    judges it: why it looks moved, or None."""
+    judges it: why it looks moved, or None. ``sensor``: :func:`not_static`'s ``limit``, ``unit``
+    and ``what`` for another sensor than the gyro."""
     x = np.asarray(x_dps, dtype=float)
     with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: the analyses say so
         return not_static(x, sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0,
-                          brief=brief)
+                          brief=brief, **sensor)
 
 
 def clipped(gyro_dps, full_scale_dps, lsb_per_dps=None):
@@ -76,10 +83,13 @@ def clipped(gyro_dps, full_scale_dps, lsb_per_dps=None):
             "clipped there (the motion was faster than the sensor's range)")
 
 
-def read_axes(path, axes, with_t=False):
+def read_axes(path, axes, with_t=False, with_accel=False):
     """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
     (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array}), and with
     ``with_t`` (head, {axis: array}, t): the ``t`` column (s), or None when the file has none.
+    With ``with_accel`` the accelerations of the same axes follow, {column: array} in m/s^2
+    (columns ``ax``...; :func:`gyrofilter.units.to_mps2` from the header's ``accel_unit``), or None
+    when the file has no accelerometer it can read (:func:`accelerometer_note` says why).
 
     ``path``: a format-v1 recording (``.csv`` or ``.csv.gz``); ``axes``: axis letters, e.g.
     :data:`~gyrofilter.units.AXES` or ``"z"`` (columns ``gx``...). ``head`` is the
@@ -91,14 +101,34 @@ def read_axes(path, axes, with_t=False):
     chunks = iter_recording(path)
     head = next(chunks)
     times = ["t"] if with_t and "t" in head.names else []
-    columns = collect_columns(head, chunks, [f"g{a}" for a in axes] + times)
+    accel = [f"a{a}" for a in axes] if with_accel and has_accelerometer(head) else []
+    columns = collect_columns(head, chunks, [f"g{a}" for a in axes] + times + accel)
     if head.rows == 0:
         raise RecordingError(f"{path}: no samples (the file has a header only)")
     series = {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
-    return (head, series, columns.get("t")) if with_t else (head, series)
+    out = (head, series) + ((columns.get("t"),) if with_t else ())
+    if with_accel:
+        out += ({c: to_mps2(columns.pop(c), head.accel_unit, head.lsb_per_g) for c in accel} or None,)
+    return out
 
 
-def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
+def has_accelerometer(head):
+    """True when the recording ``head`` (a RecordingHead) has an accelerometer an analysis can read:
+    the columns ``ax, ay, az`` and the header's ``accel_unit``."""
+    return all(c in head.names for c in ACCEL_COLUMNS) and head.accel_unit is not None
+
+
+def accelerometer_note(head):
+    """Why the accelerometer of the recording ``head`` is not analysed although it has the columns
+    ``ax, ay, az`` (no ``accel_unit`` in its header: their unit is not known), or None (it has
+    none, or it is analysed)."""
+    if all(c in head.names for c in ACCEL_COLUMNS) and head.accel_unit is None:
+        return (f"the accelerometer ({', '.join(ACCEL_COLUMNS)}) is not analysed: the header has no accel_unit, so "
+                "its unit is not known (add '# accel_unit: m/s^2|g|lsb' to analyse it)")
+    return None
+
+
+def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", limit=GROSS_LIMIT_DPS):
     """Refuse a still-sensor analysis (allan, arma) of data with gross errors, naming the first
     by file, line, sample, axis and value and counting them per axis
     (:func:`~gyrofilter.analysis.noise.screen.gross_errors`); with ``keep`` only warn (``warn(text)``).
@@ -107,18 +137,19 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0):
     ``head``: the file's :class:`~gyrofilter.recording.RecordingHead` (for its path and line
     numbers); ``series``: axis letter -> rates (deg/s); ``keep``: True to warn instead of
     refusing (``--keep-outliers``); ``first_row``: file sample index (0-based) of ``series[...][0]``.
-    A gross error is a spike beyond ``GROSS_Z`` robust sigmas or beyond ``GROSS_LIMIT_DPS``
-    (deg/s). Returns None; raises RecordingError when refusing.
+    A gross error is a spike beyond ``GROSS_Z`` robust sigmas or beyond ``limit`` (default
+    ``GROSS_LIMIT_DPS``, deg/s; an accelerometer's series in ``unit`` m/s^2 take
+    :data:`~gyrofilter.units.MAX_ACCEL_MPS2`). Returns None; raises RecordingError when refusing.
     """
-    found = {a: idx for a, idx in ((a, gross_errors(x)) for a, x in series.items()) if idx.size}
+    found = {a: idx for a, idx in ((a, gross_errors(x, limit_dps=limit)) for a, x in series.items()) if idx.size}
     if not found:
         return
     axis = min(found, key=lambda a: found[a][0])
     row = int(found[axis][0])
     counts = ", ".join(f"{a}: {idx.size}" for a, idx in found.items())
     text = (f"{head.path}: line {head.line_of_row(first_row + row)} (sample {first_row + row}): {axis} = "
-            f"{series[axis][row]:.6g} deg/s is a gross "
-            f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {GROSS_LIMIT_DPS:g} deg/s), and "
+            f"{series[axis][row]:.6g} {unit} is a gross "
+            f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {limit:g} {unit}), and "
             f"{sum(idx.size for idx in found.values())} such sample(s) in all ({counts}); the analysis assumes a still "
             "sensor without spikes (if the sensor moved, record it at rest)")
     if not keep:
@@ -132,8 +163,8 @@ LEFT_OUT = ": left out of the Allan analysis"
 
 def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
                            progress=None, skip_constant=False):
-    """Read a still recording and characterise each of ``axes``: (head, {axis: AxisNoise}, the
-    count of its repeated rows).
+    """Read a still recording and characterise each of ``axes`` of every sensor it holds: (head,
+    {axis: AxisNoise}, the count of its repeated rows, the accelerometer's {axis: AxisNoise} or None).
 
     The one path from a file to its Allan results, for one recording and for a fleet
     (:mod:`gyrofilter.analysis.fleet`). The reader's warnings, missing samples and gross errors kept with
@@ -155,38 +186,72 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     that repeat the previous one (:func:`gyrofilter.analysis.repeats.repeated_rows`, a
     :class:`~gyrofilter.analysis.repeats.RepeatedRows`) are counted before any axis, and said
     through ``warn`` when more than chance (they bias the short-tau deviation low and the fitted N).
+
+    Where the record has an accelerometer (:func:`has_accelerometer`), the same ``axes`` of it are
+    characterised the same way in m/s^2 (coefficients in the units of
+    :data:`~gyrofilter.analysis.noise.model.ACCELEROMETER_TERMS`), its gross errors refused or
+    warned of as the gyro's (beyond :data:`~gyrofilter.units.MAX_ACCEL_MPS2`), its stillness judged
+    against :data:`STATIC_LIMIT_MPS2`; its messages name the axes by their columns (``az``). Gravity,
+    a constant on the axis that points up, does not enter: the Allan deviation is formed of the
+    mean-removed series (:mod:`gyrofilter.analysis.noise.allan`, ``_phase``), so a 9.81 m/s^2 offset
+    costs no float64 precision. A constant accelerometer axis is left out, said through ``warn``,
+    whatever ``skip_constant`` says: it never costs the gyro's results (None when every axis is).
     """
-    head, series = read_axes(path, axes)
+    head, series, accel = read_axes(path, axes, with_accel=True)
     for text in head.warnings:
         warn(text)
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
+    if accel is not None:
+        refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
     repeats = repeated_rows([series[a] for a in axes], 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
                             axes=axes)
     said = repeats_warning(repeats)
     if said:
         warn(f"{path}: {said}")
+    settings = {"path": path, "head": head, "confidence": confidence, "min_clusters": min_clusters, "warn": warn,
+                "progress": progress}
+    results = _characterise_sensor(series, GYRO_SENSOR, skip_constant=skip_constant, **settings)
+    accel_results = None
+    if accel is not None:
+        accel_results = _characterise_sensor({a: accel.pop(f"a{a}") for a in axes}, ACCEL_SENSOR, skip_constant=True,
+                                             **settings) or None
+    return head, results, repeats, accel_results
+
+
+#: how :func:`characterise_recording` treats each sensor: the prefix of its axis names in messages,
+#: its unit, the word for it and its stillness limit (:func:`not_static`)
+GYRO_SENSOR = {"prefix": "", "unit": "deg/s", "word": "gyro", "still": {}}
+ACCEL_SENSOR = {"prefix": "a", "unit": "m/s^2", "word": "accelerometer",
+                "still": {"limit": STATIC_LIMIT_MPS2, "unit": "m/s^2", "what": "acceleration"}}
+
+
+def _characterise_sensor(series, sensor, *, path, head, confidence, min_clusters, warn, progress, skip_constant):
+    """{axis: AxisNoise} of one sensor's ``series`` ({axis letter: values in ``sensor``'s unit}, emptied
+    as it goes), as :func:`characterise_recording` states."""
+    axes = "".join(series)
     results = {}
     for a in axes:
         x = series.pop(a)
-        motion = moved(x, head.sample_rate_hz)
+        name = sensor["prefix"] + a
+        motion = moved(x, head.sample_rate_hz, **sensor["still"])
         if progress:
-            progress(f"allan: axis {a} ({head.rows} samples)...")
+            progress(f"allan: {'' if not sensor['prefix'] else sensor['word'] + ' '}axis {a} ({head.rows} samples)...")
         try:
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # check_finite names an overflow
-                results[a] = characterise_axis(x, head.sample_rate_hz, axis=a, confidence=confidence,
-                                               min_clusters=min_clusters)
+                results[a] = characterise_axis(x, head.sample_rate_hz, axis=name, confidence=confidence,
+                                               min_clusters=min_clusters, unit=sensor["unit"])
         except ConstantAxisError as exc:
-            if not skip_constant or (a == axes[-1] and not results):
+            if not skip_constant or (a == axes[-1] and not results and not sensor["prefix"]):
                 exc.varying = "".join(results) + "".join(b for b in axes[axes.index(a) + 1:] if np.ptp(series[b]) > 0)
                 raise
             warn(f"{exc}{LEFT_OUT}")
             continue
-        check_finite(results[a], a, path)
+        check_finite(results[a], name, path)
         if motion:
-            results[a].warnings.insert(0, f"axis {a}: {motion}; the Allan deviation of a moving gyro describes the "
-                                          "motion, not the sensor's noise")
-    return head, results, repeats
+            results[a].warnings.insert(0, f"axis {name}: {motion}; the Allan deviation of a moving {sensor['word']} "
+                                          "describes the motion, not the sensor's noise")
+    return results
 
 
 def check_finite(result, axis, path):

@@ -19,9 +19,9 @@ from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisEr
 from ..analysis.fleet.work import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
 from ..analysis.noise.kalibr import DEFAULT_TAU_RANGE_S, check_tau_range_s, kalibr_sensor
-from ..analysis.noise.model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, TERM_UNIT, convert
+from ..analysis.noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS, TERMS, TERM_SYMBOL, convert
 from ..analysis.noise.plots import plot_allan
-from ..analysis.still import characterise_recording
+from ..analysis.still import accelerometer_note, characterise_recording
 from ..errors import SettingsError
 from ..plots import check_figure_path
 from ..units import AXES, check_axes
@@ -30,8 +30,6 @@ from . import batch, console, options, outputs, still
 MAX_MIN_CLUSTERS = 1000  # clusters asked for at the longest tau (paper 002: 9)
 ALL_AXES = "".join(AXES)  # --axes as one word: xyz
 
-NAMES = {QUANTIZATION: "quantization", ANGLE_RANDOM_WALK: "angle random walk", BIAS_INSTABILITY: "bias instability",
-         RATE_RANDOM_WALK: "rate random walk", RATE_RAMP: "rate ramp"}
 
 
 def add_arguments(parser):
@@ -40,13 +38,15 @@ def add_arguments(parser):
                              "with --fleet")
     parser.add_argument("--json", metavar="OUT", type=options.file_name, help="write the deviation curves and coefficients as JSON")
     parser.add_argument("--plot", metavar="OUT.png", type=options.file_name, help="draw the Allan deviation per axis (needs matplotlib)")
-    parser.add_argument("--kalibr", metavar="OUT.yaml", type=options.file_name, help="write Kalibr imu.yaml gyroscope noise entries: the white + random-walk pair that bounds the "
-                             "measured Allan deviation over --kalibr-tau-s, the plain values in comments")
+    parser.add_argument("--kalibr", metavar="OUT.yaml", type=options.file_name, help="write Kalibr imu.yaml noise entries (the gyroscope's, and the accelerometer's where the record "
+                             "has one): the white + random-walk pair that bounds the measured Allan deviation over "
+                             "--kalibr-tau-s, the plain values in comments")
     parser.add_argument("--kalibr-tau-s", metavar="LOW,HIGH", type=options.number_pair, default=None,
                         help="integration times (s) over which the imu.yaml's values bound the measured Allan "
                              f"deviation of every axis (default {DEFAULT_TAU_RANGE_S[0]:g},{DEFAULT_TAU_RANGE_S[1]:g}, "
                              "cut to the record; docs/allan.md)")
-    parser.add_argument("--axes", default=ALL_AXES, help=f"axes to analyse, a subset of {ALL_AXES} (default {ALL_AXES})")
+    parser.add_argument("--axes", default=ALL_AXES, help=f"axes to analyse, a subset of {ALL_AXES} (default {ALL_AXES}), "
+                                                          "of the gyro and of the accelerometer")
     parser.add_argument("--confidence", type=options.decimal, default=0.95, help="two-sided confidence of the intervals (default 0.95)")
     parser.add_argument("--min-clusters", type=options.whole_number, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
@@ -69,15 +69,16 @@ def _fmt(c, unit, interval=True):
     return f"{v:.4g} [{lo:.3g}, {hi:.3g}]" if interval else f"{v:.4g}"
 
 
-def readoff_only(r):
+def readoff_only(r, terms=GYROSCOPE_TERMS):
     """One sentence per term of the axis result ``r`` (an AxisNoise) that the fit does not
     resolve but the slope read-off gives a number for: the two are different estimators, and
-    the read-off (the curve at one tau, every term included) bounds the term from above."""
+    the read-off (the curve at one tau, every term included) bounds the term from above.
+    ``terms``: the sensor's :class:`~gyrofilter.analysis.noise.model.SensorTerms` (its units)."""
     out = []
     for t in TERMS:
         c, ro = r.fitted[t], r.readoff[t]
         if c.value is None and ro.value is not None:
-            unit, sym = TERM_UNIT[t], TERM_SYMBOL[t]
+            unit, sym = terms.term_unit[t], TERM_SYMBOL[t]
             bound = f" (< {c.upper:.3g} {unit})" if c.upper is not None else ""
             out.append(f"{sym}: the fit does not resolve it{bound}; the slope read-off {ro.value:.3g} {unit} is the "
                        f"curve at tau = {ro.tau_s:.3g} s, where the other terms add to {sym}: an upper estimate, "
@@ -88,14 +89,14 @@ def readoff_only(r):
 def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn, progress=None,
             skip_constant=False):
     """What ``allan`` computes of one recording ``path``: (head, {axis: AxisNoise}, the ``--json``
-    document of docs/formats.md section 4), through :func:`~gyrofilter.analysis.still.characterise_recording`
+    document of docs/formats.md section 4, the accelerometer's {axis: AxisNoise} or None), through :func:`~gyrofilter.analysis.still.characterise_recording`
     (its arguments, ``warn(text)``, ``progress(text)`` and ``skip_constant`` included) and
     :func:`~gyrofilter.analysis.noise.export.to_json` (with the count of repeated rows); the
     duration is rows / sample rate (s).
     A result that is not finite raises AllanInputError naming the file; a stuck axis (not
     skipped) says which ``--axes`` analyse the others."""
     try:
-        head, results, repeats = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
+        head, results, repeats, accel = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
                                                keep_outliers=keep_outliers, warn=warn, progress=progress,
                                                skip_constant=skip_constant)
     except ConstantAxisError as exc:  # which --axes would run: the others that vary (all of them were "yz" of a file of equal rows)
@@ -107,7 +108,7 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
         raise AllanInputError(f"{path}: {exc}") from None
     duration_s = head.rows / head.sample_rate_hz
     return head, results, to_json(results, head.sample_rate_hz, recording=path, duration_s=duration_s,
-                                  repeated_rows=repeats)
+                                  repeated_rows=repeats, accelerometer=accel), accel
 
 
 def misfit_text(r):
@@ -150,6 +151,29 @@ def kalibr_text_line(k):
             f"{k.bound.least:.3g} .. {k.bound.excess:.3g}x the largest axis's deviation there")
 
 
+def print_coefficients(results, terms, confidence, min_clusters):
+    """The console table of one sensor's ``results`` ({axis: AxisNoise}) in the units of ``terms`` (its
+    :class:`~gyrofilter.analysis.noise.model.SensorTerms`): per axis the misfit, each term's fit with its
+    interval, its customary unit and the slope read-off, and what the record does not resolve."""
+    console.paragraph(", ".join(f"{TERM_SYMBOL[t]} {terms.term_name[t]}" for t in TERMS), "  ")
+    for a, r in results.items():
+        print(f"  axis {a}:")
+        if r.fit_reduced_chi2 is not None:
+            print(f"    {misfit_text(r)}")
+        print(f"    {'':<16}{'fit [' + format(confidence, '.0%') + ' interval]':<32}{'= customary unit':<25}slope read-off")
+        for t in TERMS:
+            c, ro = r.fitted[t], r.readoff[t]
+            base, cust = terms.term_unit[t], terms.customary_unit[t]
+            print(f"    {TERM_SYMBOL[t]} {base:<14}{_fmt(c, base):<32}{_fmt(c, cust, interval=False) + ' ' + cust:<25}"
+                  f"{_fmt(ro, base, interval=False)}".rstrip())
+        for line in readoff_only(r, terms):
+            console.paragraph(f"({line})", "    ")
+        missing = unresolved_text(r, min_clusters)
+        if missing:
+            console.paragraph(f"({missing}; the bounds above hold)", "    ")
+        console.print_warnings(r.warnings)
+
+
 def run(args):
     axes = "".join(check_axes(args.axes, "--axes"))
     if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
@@ -171,14 +195,14 @@ def run(args):
     if args.plot:
         check_figure_path(args.plot)
     progress = console.say if args.progress or sys.stderr.isatty() else None
-    head, results, document = analyse(args.recording, axes=axes, confidence=args.confidence,
-                                      min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
-                                      warn=console.say_warning, progress=progress)
+    head, results, document, accel = analyse(args.recording, axes=axes, confidence=args.confidence,
+                                             min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
+                                             warn=console.say_warning, progress=progress)
     sample_rate_hz = head.sample_rate_hz
     duration_s = head.rows / sample_rate_hz
     # before anything is printed or written: a --kalibr-tau-s beyond the record is refused in one line
-    kalibr_text = (kalibr_yaml(results, sample_rate_hz, recording=args.recording, tau_range_s=args.kalibr_tau_s)
-                   if args.kalibr else None)
+    kalibr_text = (kalibr_yaml(results, sample_rate_hz, recording=args.recording, tau_range_s=args.kalibr_tau_s,
+                               accelerometer=accel) if args.kalibr else None)
     console.tell(f"recording: {args.recording}")
     print(f"  {head.rows} samples at {sample_rate_hz:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
@@ -186,25 +210,20 @@ def run(args):
          "its customary unit; slope read-off: the slope method of papers 000/002, another estimator, for "
          "comparison: the curve at one tau, which every term adds to, so an upper estimate of its term "
          "(<: not resolved, at most; -: not resolved; every interval: --json)", "  ")
-    console.paragraph(", ".join(f"{TERM_SYMBOL[t]} {NAMES[t]}" for t in TERMS), "  ")
-    for a, r in results.items():
-        print(f"  axis {a}:")
-        if r.fit_reduced_chi2 is not None:
-            print(f"    {misfit_text(r)}")
-        print(f"    {'':<16}{'fit [' + format(args.confidence, '.0%') + ' interval]':<32}{'= customary unit':<25}slope read-off")
-        for t in TERMS:
-            c, ro = r.fitted[t], r.readoff[t]
-            base, cust = TERM_UNIT[t], CUSTOMARY_UNIT[t]
-            print(f"    {TERM_SYMBOL[t]} {base:<14}{_fmt(c, base):<32}{_fmt(c, cust, interval=False) + ' ' + cust:<25}"
-                  f"{_fmt(ro, base, interval=False)}".rstrip())
-        for line in readoff_only(r):
-            console.paragraph(f"({line})", "    ")
-        missing = unresolved_text(r, args.min_clusters)
-        if missing:
-            console.paragraph(f"({missing}; the bounds above hold)", "    ")
-        console.print_warnings(r.warnings)
+    print_coefficients(results, GYROSCOPE_TERMS, args.confidence, args.min_clusters)
+    if accel is not None:
+        console.tell("accelerometer:")
+        console.paragraph("the same analysis of the acceleration (m/s^2; gravity, a constant on the axis that points "
+                          "up, does not enter the Allan deviation): Q velocity (m/s), N in m/s/sqrt(s) = "
+                          "m/s^2/sqrt(Hz), B in m/s^2, K in m/s^2/sqrt(s), R in m/s^3", "  ")
+        print_coefficients(accel, ACCELEROMETER_TERMS, args.confidence, args.min_clusters)
+    note = accelerometer_note(head)
+    if note:
+        console.paragraph(f"note: {note}")
     if args.kalibr:
-        console.paragraph(kalibr_text_line(kalibr_sensor(results, "deg/s", args.kalibr_tau_s)), "  ")
+        for sensor, unit in ((results, "deg/s"), (accel, "m/s^2")):
+            if sensor is not None:
+                console.paragraph(kalibr_text_line(kalibr_sensor(sensor, unit, args.kalibr_tau_s)), "  ")
     # every result is finite here; each file appears only when it is complete
     if args.json:
         with outputs.replacing(args.json) as tmp:

@@ -17,11 +17,11 @@ import json
 
 import numpy as np
 
-from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK, ROWS
+from ..effects import ROWS
 from ..analysis.gap.report import (UNCERTAIN_HEADING, covariate_preamble, evidence_text, indistinguishable_text, params_text,
                                    uncertain_text)
-from ..analysis.noise.export import JSON_KEY, JSON_UNIT
-from ..analysis.noise.model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SLOPE, TERM_SYMBOL, basis, model_adev
+from ..analysis.noise.export import ACCEL_JSON, GYRO_JSON
+from ..analysis.noise.model import TERMS, TERM_SLOPE, TERM_SYMBOL, basis, model_adev
 from ..units import AXES
 from .svg import Band, Line, figure
 
@@ -34,8 +34,6 @@ AXIS_COLOURS = {"x": "#c0392b", "y": "#27864a", "z": "#2e5fa8"}
 SUMMARY_KEYS = ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc", "live_source", "recorded_by",
                 "description")
 _LONG_TEXT = 400  # characters of a header value the summary shows
-_NAMES = {QUANTIZATION: "quantization", ANGLE_RANDOM_WALK: "angle random walk", BIAS_INSTABILITY: "bias instability",
-          RATE_RANDOM_WALK: "rate random walk", RATE_RAMP: "rate ramp"}
 
 #: why the gap baseline's white level (ARW) and the Allan fit's N differ for one axis, said where both stand
 WHITE_LEVELS = ("Two white-noise levels, two meanings: the ARW here is the per-sample scatter of the noise faster "
@@ -104,6 +102,9 @@ def _summary(data):
                                                 f"({rec['duration_s']:.1f} s)"),
             ("unit in the file", header.get("gyro_unit", "") + (f", {header['lsb_per_dps']} LSB per deg/s"
                                                                   if header.get("lsb_per_dps") else ""))]
+    if header.get("accel_unit"):
+        rows.append(("accelerometer unit in the file", header["accel_unit"] + (f", {header['lsb_per_g']} LSB per g"
+                                                                               if header.get("lsb_per_g") else "")))
     for key in SUMMARY_KEYS:
         if key in header:
             text = str(header[key])
@@ -165,41 +166,54 @@ def _allan(data):
                "read-off takes each term from where its slope meets the curve (IEEE Std 952 practice); the other terms "
                "add to the curve there, so it overstates the term: where the fit leaves a term not resolved, the "
                "fit's bound (&lt; value) is the tighter statement, even below the read-off.</p>")
-    out.append("<div class='figures'>" + "".join(_allan_figure(a, ax) for a, ax in doc["axes"].items()) + "</div>")
-    for a, ax in doc["axes"].items():
-        out.append(f"<h3>axis {_esc(a)}</h3>")
-        rows = []
-        for t in TERMS:
-            d, ro = ax["details"][JSON_KEY[t]], ax["readoff"][JSON_KEY[t]]
-            rows.append((f"{TERM_SYMBOL[t]} {_NAMES[t]}", _interval(d), d["unit"], _interval(d["customary"]),
-                         d["customary"]["unit"], _interval(ro)))
-        out.append("<div class='scroll'>" + _table(["term", "fit: value [interval]", "unit", "customary", "unit",
-                                                     "slope read-off (upper estimate)"], rows, numeric_from=1) + "</div>")
+    accel = doc.get("accelerometer")
+    sensors = [("", doc["axes"], GYRO_JSON)] + ([("accelerometer ", accel["axes"], ACCEL_JSON)] if accel else [])
+    out.append("<div class='figures'>" + "".join(_allan_figure(a, ax, sensor, prefix)
+                                                 for prefix, axes, sensor in sensors for a, ax in axes.items()) + "</div>")
+    if accel:
+        out.append("<p>The accelerometer's (beside the gyro's): the same analysis of the acceleration in m/s<sup>2</sup>, "
+                   "velocity in the place of the angle (N the velocity random walk, K the acceleration random walk); "
+                   "gravity, a constant on the axis that points up, does not enter the Allan deviation.</p>")
+    for prefix, axes, sensor in sensors:
+        for a, ax in axes.items():
+            out.append(f"<h3>{_esc(prefix)}axis {_esc(a)}</h3>")
+            rows = []
+            for t in TERMS:
+                d, ro = ax["details"][sensor.keys[t]], ax["readoff"][sensor.keys[t]]
+                rows.append((f"{TERM_SYMBOL[t]} {sensor.terms.term_name[t]}", _interval(d), d["unit"],
+                             _interval(d["customary"]), d["customary"]["unit"], _interval(ro)))
+            out.append("<div class='scroll'>" + _table(["term", "fit: value [interval]", "unit", "customary", "unit",
+                                                         "slope read-off (upper estimate)"], rows, numeric_from=1) + "</div>")
     return "".join(out)
 
 
-def _allan_figure(axis, ax):
-    """The log-log figure of one axis of the allan document: the deviation, its interval, the
+def _allan_figure(axis, ax, sensor=GYRO_JSON, prefix=""):
+    """The log-log figure of one axis of the allan document (``sensor``: a
+    :class:`~gyrofilter.analysis.noise.export.JsonSensor`, its keys; ``prefix`` names the sensor in the
+    title): the deviation, its interval, the
     fitted model (:func:`~gyrofilter.analysis.noise.model.model_adev` of every term's
     ``model_value``: a term the model holds counts even where its interval, widened by the misfit,
     leaves it not resolved) and each resolved term's line."""
     tau = np.asarray(ax["tau_s"], dtype=float)
     colour = AXIS_COLOURS.get(axis, "#333")
-    layers = [Band(tau, _floats(ax["adev_low_dps"]), _floats(ax["adev_high_dps"]), colour, "interval of each point"),
-              Line(tau, _floats(ax["adev_dps"]), colour, "measured", marks=True)]
+    suffix, keys = sensor.suffix, sensor.keys
+    layers = [Band(tau, _floats(ax[f"adev_low_{suffix}"]), _floats(ax[f"adev_high_{suffix}"]), colour,
+                   "interval of each point"),
+              Line(tau, _floats(ax[f"adev_{suffix}"]), colour, "measured", marks=True)]
     if tau.size:
         t = np.logspace(np.log10(tau[0]), np.log10(tau[-1]), 120)
-        values = [(ax["coefficients"][JSON_KEY[term]] or {}).get("value") for term in TERMS]
-        layers.append(Line(t, model_adev([ax["details"][JSON_KEY[term]]["model_value"] for term in TERMS], t), "#000",
+        values = [(ax["coefficients"][keys[term]] or {}).get("value") for term in TERMS]
+        layers.append(Line(t, model_adev([ax["details"][keys[term]]["model_value"] for term in TERMS], t), "#000",
                            "fitted model", width=1.2, fit=False))
         b = basis(t)
         for j, term in enumerate(TERMS):
             if values[j] is not None:
                 layers.append(Line(t, np.sqrt(b[:, j]) * values[j], "#666", dash="5 3", width=1.0, fit=False,
-                                   label=f"{TERM_SYMBOL[term]} = {values[j]:.3g} {JSON_UNIT[term]} "
+                                   label=f"{TERM_SYMBOL[term]} = {values[j]:.3g} {sensor.units[term]} "
                                          f"(slope {_slope(TERM_SLOPE[term])})"))
-    return figure(layers, key=f"allan-{axis}", title=f"axis {axis}: Allan deviation", xlabel="tau (s)",
-                  ylabel="Allan deviation (deg/s)", log_x=True, log_y=True)
+    name = "allan" if not prefix else "allan-" + prefix.strip()
+    return figure(layers, key=f"{name}-{axis}", title=f"{prefix}axis {axis}: Allan deviation", xlabel="tau (s)",
+                  ylabel=f"Allan deviation ({sensor.terms.unit})", log_x=True, log_y=True)
 
 
 def _gap(data):

@@ -78,15 +78,19 @@ def _allan_part(path, settings, result):
         if text not in result["warnings"]:  # the gap part read the same file and said it already
             result["warnings"].append(text)
 
-    head, results, repeats = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
-                                                    min_clusters=settings.min_clusters,
-                                                    keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True)
+    head, results, repeats, accel = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
+                                                           min_clusters=settings.min_clusters,
+                                                           keep_outliers=settings.keep_outliers, warn=warn,
+                                                           skip_constant=True)
     sample_rate_hz = head.sample_rate_hz
-    for axis, r in results.items():
-        result["warnings"].extend(text if text.startswith("axis ") else f"axis {axis}: {text}" for text in r.warnings)
-    kalibr = kalibr_yaml(results, sample_rate_hz, recording=path, tau_range_s=settings.kalibr_tau_s)  # may refuse the range
+    for prefix, sensor in (("", results), ("a", accel or {})):
+        for axis, r in sensor.items():
+            result["warnings"].extend(text if text.startswith("axis ") else f"axis {prefix}{axis}: {text}"
+                                      for text in r.warnings)
+    kalibr = kalibr_yaml(results, sample_rate_hz, recording=path, tau_range_s=settings.kalibr_tau_s,
+                         accelerometer=accel)  # may refuse the range
     result["allan"] = to_json(results, sample_rate_hz, recording=path, duration_s=head.rows / sample_rate_hz,
-                              repeated_rows=repeats)
+                              repeated_rows=repeats, accelerometer=accel)
     result["kalibr"] = kalibr
     result["sample_rate_hz"], result["duration_s"] = sample_rate_hz, head.rows / sample_rate_hz
 

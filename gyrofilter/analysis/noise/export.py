@@ -5,8 +5,9 @@ from __future__ import annotations
 import math
 
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
-from .kalibr import DEFAULT_TAU_RANGE_S, GYROSCOPE, KalibrValues, kalibr_sensor, plain_values
-from .model import ANGLE_RANDOM_WALK, CUSTOMARY_UNIT, QUANTIZATION, TERMS, TERM_SYMBOL, AxisNoise, Coefficient, convert
+from .kalibr import ACCELEROMETER, DEFAULT_TAU_RANGE_S, GYROSCOPE, KalibrValues, kalibr_sensor, plain_values
+from .model import (ACCELEROMETER_TERMS, ANGLE_RANDOM_WALK, GYROSCOPE_TERMS, QUANTIZATION, TERMS, TERM_SYMBOL, AxisNoise,
+                    Coefficient, convert)
 from ..gap.detectors.repeats import repeats_warning
 from ...inputs import json_string
 from ...units import utf8_text
@@ -18,6 +19,27 @@ JSON_KEY = {QUANTIZATION: "quantization_deg", ANGLE_RANDOM_WALK: "arw_dps_per_sq
 #: the units of JSON_KEY (rate_ramp_dps_per_s is deg/s per s = deg/s^2)
 JSON_UNIT = {QUANTIZATION: "deg", ANGLE_RANDOM_WALK: "deg/s/sqrt(Hz)", BIAS_INSTABILITY: "deg/s",
              RATE_RANDOM_WALK: "deg/s/sqrt(s)", RATE_RAMP: "deg/s/s"}
+#: the accelerometer's JSON keys (the document's ``accelerometer`` block) and their units: Q the velocity step,
+#: N the velocity random walk (m/s/sqrt(s) = m/s^2/sqrt(Hz)), B, K the acceleration random walk, R its ramp
+ACCEL_JSON_KEY = {QUANTIZATION: "quantization_mps", ANGLE_RANDOM_WALK: "vrw_mps2_per_sqrt_hz",
+                  BIAS_INSTABILITY: "bias_instability_mps2", RATE_RANDOM_WALK: "accel_rw_mps2_per_sqrt_s",
+                  RATE_RAMP: "accel_ramp_mps2_per_s"}
+ACCEL_JSON_UNIT = {QUANTIZATION: "m/s", ANGLE_RANDOM_WALK: "m/s^2/sqrt(Hz)", BIAS_INSTABILITY: "m/s^2",
+                   RATE_RANDOM_WALK: "m/s^2/sqrt(s)", RATE_RAMP: "m/s^2/s"}
+
+
+class JsonSensor:
+    """How one sensor's axes are written in the allan JSON: ``keys`` and ``units`` of its coefficients,
+    ``suffix`` of its curve's keys (``adev_<suffix>``), ``terms`` (its
+    :class:`~gyrofilter.analysis.noise.model.SensorTerms`: the customary units) and ``kalibr`` (its
+    :class:`~gyrofilter.analysis.noise.kalibr.KalibrSensor`)."""
+
+    def __init__(self, keys, units, suffix, terms, kalibr):
+        self.keys, self.units, self.suffix, self.terms, self.kalibr = keys, units, suffix, terms, kalibr
+
+
+GYRO_JSON = JsonSensor(JSON_KEY, JSON_UNIT, "dps", GYROSCOPE_TERMS, GYROSCOPE)
+ACCEL_JSON = JsonSensor(ACCEL_JSON_KEY, ACCEL_JSON_UNIT, "mps2", ACCELEROMETER_TERMS, ACCELEROMETER)
 
 
 def _coef_json(c: Coefficient):
@@ -26,12 +48,12 @@ def _coef_json(c: Coefficient):
     return {"value": c.value, "low": c.low, "high": c.high}
 
 
-def _details_json(c: Coefficient, model_value=None):
-    d = {"symbol": TERM_SYMBOL[c.term], "unit": JSON_UNIT[c.term], "resolved": c.resolved,
+def _details_json(c: Coefficient, model_value=None, sensor=GYRO_JSON):
+    d = {"symbol": TERM_SYMBOL[c.term], "unit": sensor.units[c.term], "resolved": c.resolved,
          "value": c.value, "low": c.low, "high": c.high, "upper_bound": c.upper, "tau_s": c.tau_s}
     if model_value is not None:
         d["model_value"] = model_value
-    cu = CUSTOMARY_UNIT[c.term]
+    cu = sensor.terms.customary_unit[c.term]
     d["customary"] = {"unit": cu, "value": convert(c.value, c.term, cu), "low": convert(c.low, c.term, cu),
                       "high": convert(c.high, c.term, cu), "upper_bound": convert(c.upper, c.term, cu)}
     if c.note:
@@ -39,12 +61,14 @@ def _details_json(c: Coefficient, model_value=None):
     return d
 
 
-def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeated_rows=None):
+def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeated_rows=None, accelerometer=None):
     """The ``gyrofilter allan --json`` document (docs/formats.md, section 4) of ``results``
     ({axis name: AxisNoise}, from :func:`characterise`) for a record at ``sample_rate_hz`` (Hz);
     ``recording`` (its name), ``duration_s`` (s) and ``repeated_rows`` (the record's
     :class:`~gyrofilter.analysis.repeats.RepeatedRows`, its block with the warning where it holds more
-    repeated rows than chance) are written when given."""
+    repeated rows than chance) are written when given. ``accelerometer``: the accelerometer's
+    {axis name: AxisNoise} (m/s^2), written as the block ``accelerometer`` (its axes as the gyro's, in
+    the m/s units of :data:`ACCEL_JSON_KEY`); None: no such block."""
     doc = {"sample_rate_hz": float(sample_rate_hz)}
     if recording is not None:
         doc["recording"] = utf8_text(str(recording))
@@ -69,31 +93,43 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
                    "to it, so each is an upper estimate of its term; another estimator than the fit, for comparison",
         "units": {JSON_KEY[t]: JSON_UNIT[t] for t in TERMS},
     }
-    doc["axes"] = {}
-    for name, r in results.items():
-        ax = {"tau_s": r.tau_s.tolist(), "adev_dps": r.adev.tolist(),
-              "adev_low_dps": r.ci_low.tolist(), "adev_high_dps": r.ci_high.tolist(),
-              "paper000_relative_error": [None if not math.isfinite(v) else v for v in r.simple_rel.tolist()],
-              "n_clusters": r.n_clusters.tolist(), "edf": r.edf.tolist(),
-              "coefficients": {JSON_KEY[t]: _coef_json(r.fitted[t]) for t in TERMS},
-              "details": {JSON_KEY[t]: _details_json(r.fitted[t], float(v)) for t, v in zip(TERMS, r.fit_values)},
-              "readoff": {JSON_KEY[t]: _details_json(r.readoff[t]) for t in TERMS},
-              "kalibr": kalibr_values(r),
-              "fit_consistency": r.fit_consistency(), "full_fit_consistency": r.full_fit_consistency(),
-              "fit_reduced_chi2": r.fit_reduced_chi2, "fit_dof": r.fit_dof,
-              "warnings": list(r.warnings)}
-        doc["axes"][name] = ax
+    doc["axes"] = {name: _axis_json(r, GYRO_JSON) for name, r in results.items()}
     if repeated_rows is not None:
         doc["repeated_rows"] = dict(repeated_rows.as_dict(), warning=repeats_warning(repeated_rows))
+    if accelerometer is not None:
+        doc["accelerometer"] = {
+            "deviation": "overlapping Allan deviation of the acceleration in m/s^2 (NIST SP 1065 eq. 11) of the "
+                         "mean-removed series: gravity, a constant, does not enter; fit, intervals, null and "
+                         "read-offs as the gyro's (method), with velocity in the place of the angle",
+            "units": {ACCEL_JSON_KEY[t]: ACCEL_JSON_UNIT[t] for t in TERMS},
+            "axes": {name: _axis_json(r, ACCEL_JSON) for name, r in accelerometer.items()}}
     return doc
 
 
-def kalibr_values(r: AxisNoise):
+def _axis_json(r, sensor):
+    """One axis ``r`` (an AxisNoise) of the allan JSON, its keys those of ``sensor`` (a :class:`JsonSensor`)."""
+    keys, suffix = sensor.keys, sensor.suffix
+    return {"tau_s": r.tau_s.tolist(), f"adev_{suffix}": r.adev.tolist(),
+            f"adev_low_{suffix}": r.ci_low.tolist(), f"adev_high_{suffix}": r.ci_high.tolist(),
+            "paper000_relative_error": [None if not math.isfinite(v) else v for v in r.simple_rel.tolist()],
+            "n_clusters": r.n_clusters.tolist(), "edf": r.edf.tolist(),
+            "coefficients": {keys[t]: _coef_json(r.fitted[t]) for t in TERMS},
+            "details": {keys[t]: _details_json(r.fitted[t], float(v), sensor) for t, v in zip(TERMS, r.fit_values)},
+            "readoff": {keys[t]: _details_json(r.readoff[t], sensor=sensor) for t in TERMS},
+            "kalibr": kalibr_values(r, sensor.kalibr),
+            "fit_consistency": r.fit_consistency(), "full_fit_consistency": r.full_fit_consistency(),
+            "fit_reduced_chi2": r.fit_reduced_chi2, "fit_dof": r.fit_dof,
+            "warnings": list(r.warnings)}
+
+
+def kalibr_values(r: AxisNoise, sensor=GYROSCOPE):
     """The ``kalibr`` block of one axis ``r`` (an AxisNoise) in the allan JSON: Kalibr's plain
     ``gyroscope_noise_density`` (rad/s/sqrt(Hz)) = N and ``gyroscope_random_walk``
-    (rad/s^2/sqrt(Hz)) = K, with their upper-bound flags (:func:`~gyrofilter.analysis.noise.kalibr.plain_values`)."""
-    v = plain_values(r, GYROSCOPE)
-    return {"gyroscope_noise_density": v["noise_density"], "gyroscope_random_walk": v["random_walk"],
+    (rad/s^2/sqrt(Hz)) = K, with their upper-bound flags (:func:`~gyrofilter.analysis.noise.kalibr.plain_values`);
+    for ``sensor`` :data:`~gyrofilter.analysis.noise.kalibr.ACCELEROMETER` the ``accelerometer_`` keys in
+    m/s^2/sqrt(Hz) and m/s^3/sqrt(Hz)."""
+    v = plain_values(r, sensor)
+    return {f"{sensor.name}_noise_density": v["noise_density"], f"{sensor.name}_random_walk": v["random_walk"],
             "noise_density_is_upper_bound": v["noise_density_is_upper_bound"],
             "random_walk_is_upper_bound": v["random_walk_is_upper_bound"]}
 

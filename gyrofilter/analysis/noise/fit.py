@@ -138,20 +138,24 @@ def fit(tau_s, adev_values, m, n_samples, *, terms=TERMS, min_clusters=MIN_CLUST
 # --------------------------------------------------------------------------------------------
 
 def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CLUSTERS,
-                      confidence=0.95, terms=TERMS, axis="x"):
+                      confidence=0.95, terms=TERMS, axis="x", unit="deg/s"):
     """Overlapping Allan deviation, intervals and both coefficient estimates for one axis.
 
     ``x_dps``: 1-D rate series in deg/s, sampled at ``sample_rate_hz`` (Hz); ``taus_s``: the
     cluster times (s; default grid); ``min_clusters``: fewest clusters a fitted tau needs;
     ``confidence``: of the intervals; ``terms``: the terms fitted; ``axis``: its name. Raises :class:`AllanInputError` for constant data
     (nothing to characterise), NaN, or a record too short for a fit.
+
+    The computation has no unit: a series in another ``unit`` (an accelerometer's in m/s^2,
+    :data:`~gyrofilter.analysis.noise.model.ACCELEROMETER_TERMS`) gives its deviation in that unit and
+    the coefficients in the matching base units; ``unit`` only names it in the messages.
     """
     x = np.asarray(x_dps, dtype=np.float64)
     if x.ndim != 1:
         raise AllanInputError(f"axis {axis}: expected a 1-D rate series, got shape {x.shape}")
     if x.size and np.all(np.isfinite(x)) and np.ptp(x) == 0:
         raise ConstantAxisError(
-            f"axis {axis}: all {x.size} samples equal {x[0]:g} deg/s (constant data): no noise to "
+            f"axis {axis}: all {x.size} samples equal {x[0]:g} {unit} (constant data): no noise to "
             "characterise (sensor not connected, or a saturated/stuck axis?)", axis)
     if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
         raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
@@ -164,8 +168,8 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
         raise AllanInputError(f"axis {axis}: {exc}") from None
     if not np.max(dev) >= MIN_NOISE_DPS:
         raise AllanInputError(
-            f"axis {axis}: the Allan deviation is below {MIN_NOISE_DPS:g} deg/s at every cluster time (largest "
-            f"{np.max(dev):.3g}): too small a noise for the fit in float64; are the rates in deg/s?")
+            f"axis {axis}: the Allan deviation is below {MIN_NOISE_DPS:g} {unit} at every cluster time (largest "
+            f"{np.max(dev):.3g}): too small a noise for the fit in float64; are the values in {unit}?")
     n = x.size
     m = cluster_sizes(n, sample_rate_hz, tau)
     # fit, then drop the least significant unresolved term and refit until every fitted term is
@@ -195,7 +199,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     lo, hi = chi2_interval(1.0, edf, confidence)  # relative, so that no square of a deviation underflows
     ci_low, ci_high = dev * np.sqrt(lo), dev * np.sqrt(hi)
     _, _, rel = simple_interval(dev, n, m)
-    readoff = read_off(tau, dev, ci_low, ci_high, used)
+    readoff = read_off(tau, dev, ci_low, ci_high, used, unit=unit)
     k = n_clusters(n, m)
     if np.any(k < MIN_CLUSTERS):
         warnings.append(f"axis {axis}: {int(np.sum(k < MIN_CLUSTERS))} cluster time(s) have fewer than "

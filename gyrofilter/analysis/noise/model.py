@@ -34,7 +34,7 @@ import numpy as np
 
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from ...errors import SettingsError
-from ...units import DEG_PER_RAD
+from ...units import DEG_PER_RAD, STANDARD_GRAVITY_MPS2
 
 #: the Allan terms' names in code (IEEE Std 952's Q and N; B, K and R are named as the effects they
 #: are, gyrofilter.effects): one name per term in every module (docs/formats.md, "Glossary")
@@ -100,6 +100,54 @@ UNIT_FACTORS = {
 #: the customary units shown beside the base unit
 CUSTOMARY_UNIT = {QUANTIZATION: "arcsec", ANGLE_RANDOM_WALK: "deg/sqrt(h)", BIAS_INSTABILITY: "deg/h",
                   RATE_RANDOM_WALK: "deg/h/sqrt(h)", RATE_RAMP: "deg/h^2"}
+
+#: an accelerometer's terms in the m/s-based units of its Allan deviation (m/s^2): the same five-term model
+#: with velocity in the place of the angle (IEEE Std 1293-2018, Annex C: Q in m/s, the velocity random walk N
+#: in m/s/sqrt(s) = m/s^2/sqrt(Hz), B in m/s^2, the acceleration random walk K in m/s^2/sqrt(s), the ramp R
+#: in m/s^3)
+ACCEL_TERM_UNIT = {QUANTIZATION: "m/s", ANGLE_RANDOM_WALK: "m/s/sqrt(s)", BIAS_INSTABILITY: "m/s^2",
+                   RATE_RANDOM_WALK: "m/s^2/sqrt(s)", RATE_RAMP: "m/s^3"}
+#: its customary units: a datasheet's noise density in ug/sqrt(Hz) (micro-g, g = 9.80665 m/s^2), B in ug
+ACCEL_CUSTOMARY_UNIT = {QUANTIZATION: "m/s", ANGLE_RANDOM_WALK: "ug/sqrt(Hz)", BIAS_INSTABILITY: "ug",
+                        RATE_RANDOM_WALK: "m/s^2/sqrt(h)", RATE_RAMP: "ug/s"}
+_UG_PER_MPS2 = 1e6 / STANDARD_GRAVITY_MPS2
+UNIT_FACTORS.update({
+    (QUANTIZATION, "m/s"): 1.0,
+    (ANGLE_RANDOM_WALK, "m/s/sqrt(s)"): 1.0,
+    (ANGLE_RANDOM_WALK, "m/s^2/sqrt(Hz)"): 1.0,                  # Kalibr accelerometer_noise_density
+    (ANGLE_RANDOM_WALK, "m/s/sqrt(h)"): 60.0,                    # sqrt(3600 s / h)
+    (ANGLE_RANDOM_WALK, "ug/sqrt(Hz)"): _UG_PER_MPS2,
+    (BIAS_INSTABILITY, "m/s^2"): 1.0,
+    (BIAS_INSTABILITY, "ug"): _UG_PER_MPS2,
+    (RATE_RANDOM_WALK, "m/s^2/sqrt(s)"): 1.0,
+    (RATE_RANDOM_WALK, "m/s^3/sqrt(Hz)"): 1.0,                   # Kalibr accelerometer_random_walk
+    (RATE_RANDOM_WALK, "m/s^2/sqrt(h)"): 60.0,
+    (RATE_RAMP, "m/s^3"): 1.0,
+    (RATE_RAMP, "ug/s"): _UG_PER_MPS2,
+})
+
+
+@dataclass(frozen=True)
+class SensorTerms:
+    """How one sensor's five terms are named and in which units: ``name`` (``gyroscope`` or
+    ``accelerometer``), ``unit`` (its Allan deviation's unit: ``deg/s`` or ``m/s^2``), ``term_unit``
+    (each term's base unit, the unit of its fitted value), ``customary_unit`` (shown beside it) and
+    ``term_name`` (each term's name in words). The fit is unit-free: the coefficients of a
+    series in ``unit`` come out in ``term_unit``."""
+
+    name: str
+    unit: str
+    term_unit: dict
+    customary_unit: dict
+    term_name: dict
+
+
+GYROSCOPE_TERMS = SensorTerms("gyroscope", "deg/s", TERM_UNIT, CUSTOMARY_UNIT, {
+    QUANTIZATION: "quantization", ANGLE_RANDOM_WALK: "angle random walk", BIAS_INSTABILITY: "bias instability",
+    RATE_RANDOM_WALK: "rate random walk", RATE_RAMP: "rate ramp"})
+ACCELEROMETER_TERMS = SensorTerms("accelerometer", "m/s^2", ACCEL_TERM_UNIT, ACCEL_CUSTOMARY_UNIT, {
+    QUANTIZATION: "quantization", ANGLE_RANDOM_WALK: "velocity random walk", BIAS_INSTABILITY: "bias instability",
+    RATE_RANDOM_WALK: "acceleration random walk", RATE_RAMP: "acceleration ramp"})
 
 
 def convert(value, term, unit, to_base=False):

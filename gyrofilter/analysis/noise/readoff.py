@@ -43,11 +43,12 @@ def _runs(indices, min_run):
     return np.concatenate(keep) if keep else indices[:0]
 
 
-def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15, min_run=3):
+def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15, min_run=3, unit="deg/s"):
     """Coefficients read from the slopes of the Allan deviation (papers 000 and 002).
 
     ``tau_s`` (s), ``adev_values`` and its interval ``ci_low``, ``ci_high`` (deg/s): the curve;
-    ``used``: the taus with enough clusters.
+    ``used``: the taus with enough clusters; ``unit``: the deviation's (the notes name it: an
+    accelerometer's m/s^2).
 
     Q, N, K, R: among the taus (with enough clusters) whose local slope is within
     ``slope_tolerance`` of the term's slope (-1, -1/2, +1/2, +1), the one nearest the read-off
@@ -79,7 +80,7 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15,
                 upper = ci_high[i] / FLICKER_FLOOR
                 out[term] = Coefficient(term, None, upper=upper, tau_s=float(tau[i]),
                                         note=f"not resolved: no flat minimum (the curve still falls at "
-                                             f"tau = {tau[i]:g} s, slope {slopes[i]:+.2f}); B <= {upper:.3g} deg/s")
+                                             f"tau = {tau[i]:g} s, slope {slopes[i]:+.2f}); B <= {upper:.3g} {unit}")
                 continue
             out[term] = Coefficient(term, dev[i] / FLICKER_FLOOR, ci_low[i] / FLICKER_FLOOR,
                                     ci_high[i] / FLICKER_FLOOR, tau_s=float(tau[i]),
