@@ -522,3 +522,39 @@ def test_accelerometer_columns_without_accel_unit_leave_the_gyro_as_it_was_and_o
     assert "is not analysed: the header has no accel_unit" in " ".join(out.split())
     assert "accelerometer" not in json.loads((tmp_path / "a.json").read_text())
     assert "not estimated here" in (tmp_path / "k.yaml").read_text()
+
+
+def test_kalibr_on_the_filters_output_is_refused_and_the_fleet_writes_no_yaml_for_it(tmp_path, capsys):
+    """A new user's `run --out` then `allan --kalibr` wrote gyroscope_noise_density 3.8e-7 for the
+    sensor's 2.4e-4 (block means of bias-removed rates), silently: the filter's output is not the
+    sensor; one line, exit 2, nothing written. The fleet analyses it but writes no imu.yaml, saying why."""
+    path, _ = _six_axis(tmp_path / "six.csv")
+    filtered = str(tmp_path / "filtered.csv")
+    assert main(["replay", path, "--out", filtered]) == 0
+    capsys.readouterr()
+    out = tmp_path / "f.yaml"
+    assert main(["allan", filtered, "--kalibr", str(out)]) == 2
+    _assert_one_line_error(capsys, "--kalibr", "filtered.csv", "the filter's output", "filtered_from")
+    assert not out.exists()
+    assert main(["allan", filtered, path, "--fleet", str(tmp_path / "fleet")]) == 0
+    assert not (tmp_path / "fleet" / "filtered.imu.yaml").exists() and (tmp_path / "fleet" / "six.imu.yaml").exists()
+    assert "imu.yaml not written: the recording is the filter's output" in (tmp_path / "fleet" / "fleet.csv").read_text()
+
+
+def test_the_kalibr_yaml_says_which_axes_and_what_warnings_its_values_carry(tmp_path, capsys):
+    """A new user: a tilted accelerometer (a 0.2 g step on ax) wrote a random walk 1000x a real one
+    with the console's warning nowhere in the yaml; `--axes xz` wrote values bounding x and z only,
+    unsaid. The yaml now says both, one comment line each, and its values are the same."""
+    path, gyro = _six_axis(tmp_path / "six.csv")
+    rec_accel = np.array([0.2, -0.3, 9.80665]) + np.random.default_rng(1).normal(0.0, 0.04, (len(gyro), 3))
+    rec_accel[len(gyro) // 2:, 0] += 0.2 * 9.80665  # tilted half-way
+    tilted = str(tmp_path / "tilt.csv")
+    write_recording(tilted, Recording.from_dps(gyro, 100.0, accel=rec_accel, accel_unit="m/s^2"))
+    assert main(["allan", tilted, "--kalibr", str(tmp_path / "tilt.yaml")]) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    yaml = (tmp_path / "tilt.yaml").read_text()
+    assert said and any(line.startswith("# warning: ") and "acceleration" in line for line in yaml.splitlines()), yaml
+    assert main(["allan", path, "--axes", "xz", "--kalibr", str(tmp_path / "xz.yaml")]) == 0
+    yaml = (tmp_path / "xz.yaml").read_text()
+    assert "# gyroscope: only axes x, z analysed (of x, y, z)" in yaml
+    assert "# accelerometer: only axes x, z analysed (of x, y, z)" in yaml

@@ -453,7 +453,7 @@ def kalibr_mpu6050():
         _run([sys.executable, "-m", "gyrofilter", *sim[:2], str(ROOT / model), *sim[3:]], cwd=tmp)
         out = _run([sys.executable, "-m", "gyrofilter", *allan], cwd=tmp)
         yaml = (Path(tmp) / "imu.yaml").read_text(encoding="utf-8")
-    said = out[out.index("  kalibr:"):]
+    said = out[out.index("  kalibr, "):]
     return fence(f"$ gyrofilter {' '.join(sim)}\n$ gyrofilter {' '.join(allan)}\n...\n{said}$ cat imu.yaml\n{yaml}")
 
 

@@ -145,7 +145,7 @@ def kalibr_text_line(k):
     low, high = k.tau_range_s
     cut = (f" (the default {DEFAULT_TAU_RANGE_S[0]:g} .. {DEFAULT_TAU_RANGE_S[1]:g} s cut to the record)"
            if k.cut else "")
-    return (f"kalibr: the pair that bounds every axis's Allan deviation over tau {low:g} .. {high:g} s{cut}: "
+    return (f"kalibr, {k.sensor.name}: the pair that bounds every axis's Allan deviation over tau {low:g} .. {high:g} s{cut}: "
             f"{k.sensor.name}_noise_density {k.noise_density:.3e} {k.sensor.density_unit} ({f_nd}), "
             f"{k.sensor.name}_random_walk {k.random_walk:.3e} {k.sensor.walk_unit} ({f_rw}); its model lies at "
             f"{k.bound.least:.3g} .. {k.bound.excess:.3g}x the largest axis's deviation there")
@@ -195,14 +195,20 @@ def run(args):
     if args.plot:
         check_figure_path(args.plot)
     progress = console.say if args.progress or sys.stderr.isatty() else None
+    said = []  # the analysis' warnings, also written into the yaml
+
+    def warn(text):
+        said.append(text)
+        console.say_warning(text)
+
     head, results, document, accel = analyse(args.recording, axes=axes, confidence=args.confidence,
                                              min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
-                                             warn=console.say_warning, progress=progress)
+                                             warn=warn, progress=progress)
     sample_rate_hz = head.sample_rate_hz
     duration_s = head.rows / sample_rate_hz
     # before anything is printed or written: a --kalibr-tau-s beyond the record is refused in one line
     kalibr_text = (kalibr_yaml(results, sample_rate_hz, recording=args.recording, tau_range_s=args.kalibr_tau_s,
-                               accelerometer=accel) if args.kalibr else None)
+                               accelerometer=accel, header=head.header, warnings=said) if args.kalibr else None)
     console.tell(f"recording: {args.recording}")
     print(f"  {head.rows} samples at {sample_rate_hz:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")

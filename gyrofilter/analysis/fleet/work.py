@@ -83,12 +83,17 @@ def _allan_part(path, settings, result):
                                                            keep_outliers=settings.keep_outliers, warn=warn,
                                                            skip_constant=True)
     sample_rate_hz = head.sample_rate_hz
+    kalibr = None
+    if "filtered_from" in head.header:  # the filter's output is analysed, but its noise is not the sensor's
+        result["warnings"].append("imu.yaml not written: the recording is the filter's output (filtered_from), "
+                                  "not the sensor's samples")
+    else:
+        kalibr = kalibr_yaml(results, sample_rate_hz, recording=path, tau_range_s=settings.kalibr_tau_s,
+                             accelerometer=accel, header=head.header, warnings=result["warnings"])  # may refuse the range
     for prefix, sensor in (("", results), ("a", accel or {})):
         for axis, r in sensor.items():
             result["warnings"].extend(text if text.startswith("axis ") else f"axis {prefix}{axis}: {text}"
                                       for text in r.warnings)
-    kalibr = kalibr_yaml(results, sample_rate_hz, recording=path, tau_range_s=settings.kalibr_tau_s,
-                         accelerometer=accel)  # may refuse the range
     result["allan"] = to_json(results, sample_rate_hz, recording=path, duration_s=head.rows / sample_rate_hz,
                               repeated_rows=repeats, accelerometer=accel)
     result["kalibr"] = kalibr

@@ -10,7 +10,8 @@ from .model import (ACCELEROMETER_TERMS, ANGLE_RANDOM_WALK, GYROSCOPE_TERMS, QUA
                     Coefficient, convert)
 from ..gap.detectors.repeats import repeats_warning
 from ...inputs import json_string
-from ...units import utf8_text
+from ...errors import SettingsError
+from ...units import AXES, utf8_text
 
 #: JSON key of each coefficient (docs/formats.md, section 4), in its base unit
 JSON_KEY = {QUANTIZATION: "quantization_deg", ANGLE_RANDOM_WALK: "arw_dps_per_sqrt_hz",
@@ -163,7 +164,8 @@ def _sensor_lines(k: KalibrValues, confidence):
     return lines
 
 
-def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0", tau_range_s=None, accelerometer=None):
+def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0", tau_range_s=None, accelerometer=None,
+                header=None, warnings=()):
     """Kalibr ``imu.yaml``: one white + random-walk pair per sensor (Kalibr takes one pair for all
     three axes), continuous time, SI units. The values written are the **bounding** pair of
     :func:`~gyrofilter.analysis.noise.kalibr.bounding_pair` over ``tau_range_s`` ((low, high) in s;
@@ -176,7 +178,18 @@ def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0", ta
     string (:func:`~gyrofilter.inputs.json_string`, also a YAML double-quoted scalar): on one
     line, so that a line end in a file name cannot add a key, and reading back exactly (a
     backslash doubled: a name holding the two characters ``\\n`` is not one holding a line end).
-    Raises SettingsError for a ``tau_range_s`` outside a record's taus (:func:`~gyrofilter.analysis.noise.kalibr.tau_range`)."""
+    Raises SettingsError for a ``tau_range_s`` outside a record's taus (:func:`~gyrofilter.analysis.noise.kalibr.tau_range`).
+
+    ``header``: the recording's header; one that is the filter's output (``filtered_from``: block
+    means of bias-removed rates, 1/L of the rate) raises SettingsError: its noise is not the
+    sensor's (a new user's yaml said 3.8e-7 rad/s/sqrt(Hz) for the sensor's 2.4e-4). What would
+    make the values wrong goes into the yaml, beside them: the axes of a sensor not analysed and
+    every warning of the analysis (``warnings``: the recording's sentences, e.g. an axis left out
+    or an acceleration that moves; and each axis result's own), one comment line each."""
+    if header is not None and "filtered_from" in header:
+        raise SettingsError(f"--kalibr: {json_string(recording) if recording else 'the recording'} is the filter's output (filtered_from: "
+                            f"{json_string(header['filtered_from'])}), not the sensor's samples: Kalibr's noise model "
+                            "describes the sensor; give the recording it was made from")
     sensors = [kalibr_sensor(results, "deg/s", tau_range_s)]
     if accelerometer is not None:
         sensors.insert(0, kalibr_sensor(accelerometer, "m/s^2", tau_range_s))
@@ -195,6 +208,13 @@ def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0", ta
                          f"{k.tau_range_s[0]:g} .. {k.tau_range_s[1]:g} s; a longer record covers longer times")
     if accelerometer is None:
         lines.append("# accelerometer_noise_density and accelerometer_random_walk: not estimated here")
+    for name, sensor in (("gyroscope", results), ("accelerometer", accelerometer)):
+        if sensor is not None and tuple(sensor) != AXES:
+            lines.append(f"# {name}: only axes {', '.join(sensor)} analysed (of {', '.join(AXES)}): the values bound those")
+    said = list(dict.fromkeys([*warnings, *(f"{name}: {w}" for name, sensor in (("gyroscope", results),
+                                                                               ("accelerometer", accelerometer or {}))
+                                            for r in sensor.values() for w in r.warnings)]))
+    lines += [f"# warning: {' '.join(str(w).split())}" for w in said]
     for k in sensors:
         lines += _sensor_lines(k, confidence)
     lines += [f"rostopic: {rostopic}", f"update_rate: {float(sample_rate_hz):g}   # Hz", ""]
