@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import ACCEL_COLUMNS, collect_columns, iter_recording, warn_about_gaps
-from ..units import AXES, MAX_ACCEL_MPS2, check_axes, to_dps, to_mps2
+from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, to_dps, to_mps2
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
@@ -29,6 +29,11 @@ STATIC_LIMIT_DPS = 1.0
 STATIC_LIMIT_MPS2 = 0.5
 #: the block means of the stillness check: at most this many blocks over the record
 STATIC_BLOCKS = 512
+#: the magnitude (in g) a still accelerometer's samples may have, ends included: it reads gravity, 1 g
+#: (local gravity differs from g_n by 0.3 %), off by its scale and zero-g errors (the MPU6050: +-3 %,
+#: +-80 mg; PS-MPU-6000A-00 rev 3.4, section 6.2). A factor 1.5 either way: the factor 2 of a full-scale
+#: range read with another's lsb_per_g, 9.81 (g and m/s^2 swapped) or 2048+ (LSB read as g) lie beyond it
+GRAVITY_RANGE_G = (1 / 1.5, 1.5)
 
 
 def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATIC_LIMIT_DPS, unit="deg/s",
@@ -118,6 +123,25 @@ def has_accelerometer(head):
     return all(c in head.names for c in ACCEL_COLUMNS) and head.accel_unit is not None
 
 
+def gravity_unlike(accel_mps2, head):
+    """Why the accelerometer's samples ``accel_mps2`` ({column: m/s^2}, the axes read) cannot be a
+    still sensor's in the unit its header states, or None. A still accelerometer reads gravity: the
+    median over the samples of |a| = sqrt(ax^2 + ay^2 + az^2) lies within :data:`GRAVITY_RANGE_G`
+    (motion and tilts move gravity between the axes, not its magnitude). With fewer than three
+    axes read (``--axes``) only the upper end is checked (the axes left out may hold gravity). A
+    magnitude beyond them is a wrong ``accel_unit`` or ``lsb_per_g`` (every coefficient scaled by the
+    same wrong factor, none of them the sensor's) or an output with gravity removed."""
+    with np.errstate(over="ignore"):
+        g = float(np.median(np.sqrt(sum(np.square(x) for x in accel_mps2.values())))) / STANDARD_GRAVITY_MPS2
+    low, high = GRAVITY_RANGE_G
+    if g <= high and (g >= low or len(accel_mps2) < len(ACCEL_COLUMNS)):
+        return None
+    unit = head.accel_unit + (f" (lsb_per_g {head.lsb_per_g:g})" if head.accel_unit == "lsb" else "")
+    return (f"{head.path}: the accelerometer ({', '.join(accel_mps2)}) reads {g:.3g} g at rest (the median |a|), but a "
+            f"still one reads gravity, 1 g (within {low:.2g} .. {high:g} g): is accel_unit {unit} right? (an output "
+            "with gravity removed is not the sensor's)")
+
+
 def accelerometer_note(head):
     """Why the accelerometer of the recording ``head`` is not analysed although it has the columns
     ``ax, ay, az`` (no ``accel_unit`` in its header: their unit is not known), or None (it has
@@ -195,7 +219,8 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     a constant on the axis that points up, does not enter: the Allan deviation is formed of the
     mean-removed series (:mod:`gyrofilter.analysis.noise.allan`, ``_phase``), so a 9.81 m/s^2 offset
     costs no float64 precision. A constant accelerometer axis is left out, said through ``warn``,
-    whatever ``skip_constant`` says: it never costs the gyro's results (None when every axis is).
+    whatever ``skip_constant`` says: it never costs the gyro's results (None when every axis is);
+    so is the whole accelerometer when its samples do not read gravity (:func:`gravity_unlike`).
     """
     head, series, accel = read_axes(path, axes, with_accel=True)
     for text in head.warnings:
@@ -204,6 +229,10 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     if accel is not None:
         refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
+        unlike = gravity_unlike(accel, head)
+        if unlike:  # its unit is wrong: every coefficient would be off by the same factor
+            warn(f"{unlike}{LEFT_OUT}")
+            accel = None
     repeats = repeated_rows([series[a] for a in axes], 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
                             axes=axes)
     said = repeats_warning(repeats)
