@@ -76,10 +76,13 @@ class TimeCheck:
       says nothing of the rate);
     - the rows of every such window (and of the last window) are not denser than the rate: its
       steps span at least (1 - RATE_TOLERANCE) times their number of sample intervals
-      (:meth:`_dense`). Lost samples make a window span more, never less; a window that spans
-      less holds rows the rate has no room for (a copy of a row stamped 1 ulp after it, inserted
-      rows: up to half the rows so inserted leave the typical step as it was, and a file 86 s
-      long read as 60 s of t).
+      (:meth:`_dense`), or, with the half window of steps before it, the steps of both do (samples
+      that catch up after a stall, stamped close together, follow the gap of the stall: a window
+      that starts among them lacks the stall's time, which the steps before it hold: 17 of 50
+      stalls of 2 s at 100 Hz, at random places, were refused). Lost samples make a window span
+      more, never less; a window that spans less holds rows the rate has no room for (a copy of
+      a row stamped 1 ulp after it, inserted rows: up to half the rows so inserted leave the
+      typical step as it was, and a file 86 s long read as 60 s of t).
 
     ``head``: what the messages name (``head.path``) and where gaps are counted; ``why``: the
     advice a refusal ends with (the writer says why its rows would come out so).
@@ -96,7 +99,7 @@ class TimeCheck:
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
-        self.last_steps = np.empty(0)  # the last RATE_CHECK_STEPS steps (:meth:`finish`'s last window)
+        self.last_steps = np.empty(0)  # the last 1.5 RATE_CHECK_STEPS steps (:meth:`finish`'s last window and before it)
 
     def add(self, t, where):
         """Check the times ``t`` of a chunk; ``where(i)`` names its row ``i`` ("line 12")."""
@@ -120,7 +123,8 @@ class TimeCheck:
 
         for phase in self.phases:
             phase.add(step, step_start, self)
-        self.last_steps = np.concatenate((self.last_steps, step[-RATE_CHECK_STEPS:]))[-RATE_CHECK_STEPS:]
+        keep = RATE_CHECK_STEPS + RATE_CHECK_STEPS // 2
+        self.last_steps = np.concatenate((self.last_steps, step[-keep:]))[-keep:]
         self.t_last = float(t[-1])
         self.last_where = where(len(t) - 1)
 
@@ -132,16 +136,19 @@ class TimeCheck:
         the file (checked alone it showed half the rate, and a live recording whose device lost
         every other line over its last 7 s was refused at its close and removed whole)."""
         phase = self.phases[0]
+        before = np.empty(0)
         if phase.windows == 0:
             steps, start, n = phase.pending, phase.pending_where, len(phase.pending)
             if not n:
                 return
         else:
-            steps, n, start = self.last_steps, RATE_CHECK_STEPS, f"up to {self.last_where}"
+            steps, before = self.last_steps[-RATE_CHECK_STEPS:], self.last_steps[:-RATE_CHECK_STEPS]
+            n, start = RATE_CHECK_STEPS, f"up to {self.last_where}"
         median = float(typical_steps(steps[None, :], self.max_step_s, self.min_gaps_step_s)[0])
         if self._off(median):
             self._refuse(median, n, start, first=phase.windows == 0, last=phase.windows > 0)
-        if n >= RATE_CHECK_STEPS // 2 and self._dense(steps.sum(), n):
+        if (n >= RATE_CHECK_STEPS // 2 and self._dense(steps.sum(), n)
+                and self._dense(steps.sum() + before.sum(), n + len(before))):
             self._refuse_dense(float(steps.sum()), n, start)
 
     def _off(self, typical_s):
@@ -183,10 +190,12 @@ class _WindowPhase:
         self.pending = np.empty(0)  # the steps after the last whole window
         self.pending_where = None  # where the first of them starts
         self.windows = 0  # the whole windows checked
+        self.before = np.empty(0)  # up to half a window of the steps just before the next window
 
     def add(self, step, step_start, check):
         first = min(self.skip, len(step))
         self.skip -= first
+        self.before = np.concatenate((self.before, step[:first]))[-(RATE_CHECK_STEPS // 2):]
         step = step[first:]
         if len(self.pending) == 0 and len(step):
             self.pending_where = step_start(first)
@@ -196,7 +205,11 @@ class _WindowPhase:
             windows = steps[:whole].reshape(-1, RATE_CHECK_STEPS)
             medians = typical_steps(windows, check.max_step_s, check.min_gaps_step_s)
             spans = windows.sum(axis=1)
-            wrong = np.flatnonzero(check._off(medians) | check._dense(spans, RATE_CHECK_STEPS))
+            half = RATE_CHECK_STEPS // 2  # each window with the half window before it (a stall's)
+            before_s = np.concatenate(([self.before.sum()], windows[:-1, half:].sum(axis=1)))
+            before_n = np.concatenate(([len(self.before)], np.full(len(windows) - 1, half)))
+            dense = check._dense(spans, RATE_CHECK_STEPS) & check._dense(spans + before_s, RATE_CHECK_STEPS + before_n)
+            wrong = np.flatnonzero(check._off(medians) | dense)
             if wrong.size:
                 j = int(wrong[0])
                 start = j * RATE_CHECK_STEPS - len(self.pending)
@@ -206,6 +219,7 @@ class _WindowPhase:
                 check._refuse(float(medians[j]), RATE_CHECK_STEPS, where,
                               first=self.windows + j == 0 and self.skip == 0 and first == 0)
             self.windows += len(medians)
+            self.before = windows[-1, RATE_CHECK_STEPS // 2:]
             if whole < len(steps):
                 self.pending_where = step_start(first + whole - len(self.pending))
         self.pending = steps[whole:]
