@@ -131,3 +131,5 @@ def test_an_accelerometer_whose_header_lies_about_its_unit_is_left_out_not_scale
             gyro_results = results
     assert accel is None and [r.adev.tolist() for r in results.values()] == [r.adev.tolist() for r in gyro_results.values()]
     assert len(said[-1]) == 1 and f"reads {0.92 * factor:.3g} g at rest" in said[-1][0] and "left out" in said[-1][0]
+    said = []  # an axis without gravity alone (--axes x): judged on all three all the same
+    assert characterise_recording(str(tmp_path / "lies.csv"), axes="x", warn=said.append)[3] is None and len(said) == 1

@@ -92,7 +92,8 @@ def read_axes(path, axes, with_t=False, with_accel=False):
     """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
     (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array}), and with
     ``with_t`` (head, {axis: array}, t): the ``t`` column (s), or None when the file has none.
-    With ``with_accel`` the accelerations of the same axes follow, {column: array} in m/s^2
+    With ``with_accel`` the accelerations of all three axes follow (a still one's gravity is their
+    magnitude: :func:`gravity_unlike`), {column: array} in m/s^2
     (columns ``ax``...; :func:`gyrofilter.units.to_mps2` from the header's ``accel_unit``), or None
     when the file has no accelerometer it can read (:func:`accelerometer_note` says why).
 
@@ -106,7 +107,7 @@ def read_axes(path, axes, with_t=False, with_accel=False):
     chunks = iter_recording(path)
     head = next(chunks)
     times = ["t"] if with_t and "t" in head.names else []
-    accel = [f"a{a}" for a in axes] if with_accel and has_accelerometer(head) else []
+    accel = list(ACCEL_COLUMNS) if with_accel and has_accelerometer(head) else []
     columns = collect_columns(head, chunks, [f"g{a}" for a in axes] + times + accel)
     if head.rows == 0:
         raise RecordingError(f"{path}: no samples (the file has a header only)")
@@ -124,20 +125,19 @@ def has_accelerometer(head):
 
 
 def gravity_unlike(accel_mps2, head):
-    """Why the accelerometer's samples ``accel_mps2`` ({column: m/s^2}, the axes read) cannot be a
+    """Why the accelerometer's samples ``accel_mps2`` ({column: m/s^2} of ``ax, ay, az``) cannot be a
     still sensor's in the unit its header states, or None. A still accelerometer reads gravity: the
     median over the samples of |a| = sqrt(ax^2 + ay^2 + az^2) lies within :data:`GRAVITY_RANGE_G`
-    (motion and tilts move gravity between the axes, not its magnitude). With fewer than three
-    axes read (``--axes``) only the upper end is checked (the axes left out may hold gravity). A
-    magnitude beyond them is a wrong ``accel_unit`` or ``lsb_per_g`` (every coefficient scaled by the
-    same wrong factor, none of them the sensor's) or an output with gravity removed."""
+    (motion and tilts move gravity between the axes, not its magnitude). A magnitude beyond them is
+    a wrong ``accel_unit`` or ``lsb_per_g`` (every coefficient scaled by the same wrong factor, none
+    of them the sensor's) or an output with gravity removed. All three axes, whichever are analysed."""
     with np.errstate(over="ignore"):
-        g = float(np.median(np.sqrt(sum(np.square(x) for x in accel_mps2.values())))) / STANDARD_GRAVITY_MPS2
+        g = float(np.median(np.sqrt(sum(np.square(accel_mps2[c]) for c in ACCEL_COLUMNS)))) / STANDARD_GRAVITY_MPS2
     low, high = GRAVITY_RANGE_G
-    if g <= high and (g >= low or len(accel_mps2) < len(ACCEL_COLUMNS)):
+    if low <= g <= high:
         return None
     unit = head.accel_unit + (f" (lsb_per_g {head.lsb_per_g:g})" if head.accel_unit == "lsb" else "")
-    return (f"{head.path}: the accelerometer ({', '.join(accel_mps2)}) reads {g:.3g} g at rest (the median |a|), but a "
+    return (f"{head.path}: the accelerometer reads {g:.3g} g at rest (the median |a|), but a "
             f"still one reads gravity, 1 g (within {low:.2g} .. {high:g} g): is accel_unit {unit} right? (an output "
             "with gravity removed is not the sensor's)")
 
@@ -228,8 +228,9 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     if accel is not None:
-        refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
         unlike = gravity_unlike(accel, head)
+        accel = {f"a{a}": accel[f"a{a}"] for a in axes}  # the axes analysed
+        refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
         if unlike:  # its unit is wrong: every coefficient would be off by the same factor
             warn(f"{unlike}{LEFT_OUT}")
             accel = None
