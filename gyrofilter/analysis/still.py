@@ -214,7 +214,8 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     Where the record has an accelerometer (:func:`has_accelerometer`), the same ``axes`` of it are
     characterised the same way in m/s^2 (coefficients in the units of
     :data:`~gyrofilter.analysis.noise.model.ACCELEROMETER_TERMS`), its gross errors refused or
-    warned of as the gyro's (beyond :data:`~gyrofilter.units.MAX_ACCEL_MPS2`), its stillness judged
+    warned of as the gyro's (beyond :data:`~gyrofilter.units.MAX_ACCEL_MPS2`; refused, it is left
+    out with the refusal as a warning, the gyro's results kept), its stillness judged
     against :data:`STATIC_LIMIT_MPS2`; its messages name the axes by their columns (``az``). Gravity,
     a constant on the axis that points up, does not enter: the Allan deviation is formed of the
     mean-removed series (:mod:`gyrofilter.analysis.noise.allan`, ``_phase``), so a 9.81 m/s^2 offset
@@ -230,8 +231,11 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     if accel is not None:
         unlike = gravity_unlike(accel, head)
         accel = {f"a{a}": accel[f"a{a}"] for a in axes}  # the axes analysed
-        refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
-        if unlike:  # its unit is wrong: every coefficient would be off by the same factor
+        try:
+            refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
+        except RecordingError as exc:  # the accelerometer's spikes cost it alone, not the gyro's results
+            unlike = str(exc)
+        if unlike:  # or its unit is wrong: every coefficient would be off by the same factor
             warn(f"{unlike}{LEFT_OUT}")
             accel = None
     repeats = repeated_rows([series[a] for a in axes], 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
