@@ -510,6 +510,29 @@ def test_a_six_axis_record_gets_the_accelerometers_table_json_block_and_kalibr_k
     assert sorted(z["axes"]) == ["z"] and sorted(z["accelerometer"]["axes"]) == ["z"]
 
 
+def test_a_spike_in_the_accelerometer_alone_leaves_it_out_and_keeps_the_gyros_document(tmp_path, capsys):
+    """One accelerometer spike refused the whole command (exit 2, no gyro result), where the gyro's
+    part of the document is the same with or without the accelerometer (attack pass 11): the
+    accelerometer is left out with the refusal as a warning; --keep-outliers analyses it."""
+    path, gyro = _six_axis(tmp_path / "six.csv")
+    text = open(path).read().splitlines(True)
+    row = len(text) - 100
+    cells = text[row].rstrip("\n").split(",")
+    cells[-1] = "500"  # az: 500 m/s^2 for one sample
+    text[row] = ",".join(cells) + "\n"
+    spiked = tmp_path / "spiked.csv"
+    spiked.write_text("".join(text))
+    gyro_only = _write(tmp_path / "gyro.csv", gyro, lsb=False)
+    assert main(["allan", str(spiked), "--json", str(tmp_path / "s.json")]) == 0
+    err = capsys.readouterr().err
+    assert "az = 500 m/s^2 is a gross error" in err and "left out of the Allan analysis" in " ".join(err.split())
+    assert main(["allan", gyro_only, "--json", str(tmp_path / "g.json")]) == 0
+    got, alone = (json.loads((tmp_path / f"{name}.json").read_text()) for name in ("s", "g"))
+    assert "accelerometer" not in got and got["axes"] == alone["axes"]
+    assert main(["allan", str(spiked), "--keep-outliers", "--json", str(tmp_path / "k.json")]) == 0
+    assert sorted(json.loads((tmp_path / "k.json").read_text())["accelerometer"]["axes"]) == ["x", "y", "z"]
+
+
 def test_accelerometer_columns_without_accel_unit_leave_the_gyro_as_it_was_and_one_note(tmp_path, capsys):
     path, gyro = _six_axis(tmp_path / "six.csv")
     stripped = tmp_path / "no_unit.csv"

@@ -418,6 +418,52 @@ def test_the_steps_after_the_last_whole_window_and_a_short_file_are_checked_as_b
         _read_chunked(_dps_file(tmp_path, _t_body(np.full(999, 0.001)), name="short.csv"), chunk_rows)
 
 
+@pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
+@pytest.mark.parametrize("stall_at, caught_up", [(4900, 200), (5000, 200), (5000, 60), (7700, 200)])
+def test_samples_that_catch_up_after_a_stall_read_wherever_a_window_starts(tmp_path, chunk_rows, stall_at, caught_up):
+    """A stall of 2 s at 100 Hz whose 200 samples then arrive 1 ms apart (stamped as they came):
+    a window that started among them (steps 5001-6000) spanned 8.2 s for its 1000 intervals and
+    the record was refused as holding rows the rate has no room for (attack pass 11: 17 of 50 such
+    stalls at random places; 0.6 s stalls too, its window 9.46 s). The stall's gap lies in the half
+    window before: with it the steps span their intervals. Rows inserted without a stall before
+    them are still refused."""
+    steps = np.full(8000, 0.01)
+    steps[stall_at - 1] += caught_up * 0.009
+    steps[stall_at:stall_at + caught_up] = 0.001
+    head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
+    assert len(data) == 8001 and head.t_gaps == 1
+    steps[stall_at - 1] = 0.01  # no stall: 180 rows more than the rate has room for (54: within the slack)
+    if caught_up < 100:
+        return
+    with pytest.raises(RecordingError, match=r"more rows than the rate has room for"):
+        _read_chunked(_dps_file(tmp_path, _t_body(steps), name="inserted.csv"), chunk_rows)
+
+
+@pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
+def test_a_tail_that_lost_every_other_sample_reads_as_gaps_as_it_does_inside_the_file(tmp_path, chunk_rows):
+    """The steps after the last whole window were checked alone: a tail of 700 steps of which every
+    other sample was lost showed half the rate and was refused, where the same steps inside the
+    file are gaps; the writer refused it at its close, and a live recording (a serial device that
+    lost every other line over its last 7 s) was removed whole (attack pass 11). The last window
+    is the 1000 steps that end the file, judged as any window: rows inserted in the tail are still
+    refused, by its span."""
+    steps = np.concatenate((np.full(5000, 0.01), np.full(700, 0.02)))
+    head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
+    assert len(data) == 5701 and head.t_gaps == 700
+    head, data = _read_chunked(_dps_file(tmp_path, _t_body(np.concatenate((steps, np.full(5000, 0.01)))),
+                                         name="inside.csv"), chunk_rows)
+    assert len(data) == 10701 and head.t_gaps == 700
+    path = tmp_path / "written.csv"
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "dps"}, ["t", "gx", "gy", "gz"]) as writer:
+        for i in range(0, len(t), chunk_rows):
+            writer.write(np.column_stack((t[i:i + chunk_rows], np.zeros((len(t[i:i + chunk_rows]), 3)))))
+    assert len(read_recording(path).t_s) == 5701
+    with pytest.raises(RecordingError, match=r"t's 1000 steps up to line 5305 span 7.3 s, but 1000 sample intervals"):
+        _read_chunked(_dps_file(tmp_path, _t_body(np.concatenate((np.full(5000, 0.01), np.full(300, 0.001)))),
+                                name="inserted.csv"), chunk_rows)
+
+
 @pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
 def test_a_filtered_outputs_rows_whose_blocks_lost_samples_are_its_gaps(tmp_path, chunk_rows):
     """Issue 37 (attack 4): a filtered output (header input_sample_rate_hz, rows per block of 5

@@ -174,7 +174,8 @@ def test_parser_refuses_a_line_beyond_the_rate_range_like_any_bad_line(header, b
         np.testing.assert_array_equal(rows[:, 0], np.array([4, 5, 6, 7]) / 100)  # t from the counter: 3 is a lost sample
         assert rows[0, 3] == float(edge)
         assert p.stats["bad_lines"] == 1 and p.stats["lost_samples"] == 1 and _reconciles(p)
-        assert any("bad line (a gyro value beyond +-100000 deg/s or a temperature outside [-100, 200] deg C): 3,1,"
+        assert any("bad line (a gyro value beyond +-100000 deg/s, a temperature outside [-100, 200] deg C or an "
+                   "acceleration beyond +-1e+07 m/s^2): 3,1,"
                    in note for note in p.pop_notes())
 
 
@@ -294,6 +295,25 @@ def test_parser_accelerometer_fields_come_after_the_gyro_in_the_header_unit(unit
 def test_parser_refuses_an_accelerometer_header_in_one_line(words, message):
     with pytest.raises(DeviceError, match=message.replace("^", "\\^")):
         LineParser().feed(HEADER.replace(b"\n", b" " + words + b"\n"))
+
+
+@pytest.mark.parametrize("words, beyond, edge", [
+    (b"accel_unit=g", b"1e300", b"1019716"),  # 1e7 m/s^2 is 1019716.2 g
+    (b"accel_unit=m/s^2", b"-20000000", b"-10000000"),
+    (b"accel_unit=lsb lsb_per_g=16384", b"1e300", b"16000000000"),  # 1.6e10 LSB: 9.58e6 m/s^2
+])
+def test_parser_refuses_a_line_with_an_acceleration_beyond_the_range_like_any_bad_line(words, beyond, edge):
+    """An accelerometer value of 1e300 g went on as a sample (only the gyro and the temperature
+    were checked), and the recording's writer refused it, ending the whole recording with every
+    later line lost (attack pass 11): it is a corrupt line, counted and skipped, as a gyro's."""
+    head = HEADER.replace(b"\n", b" fields=counter,gx,gy,gz,ax,ay,az " + words + b"\n")
+    for extra in (b"", b"# a device message\n"):  # the second chunk goes line by line
+        p = LineParser()
+        p.feed(head + b"0,1,2,3,0,0,1\n1,1,2,3,0,0,1\n")
+        rows = p.feed(extra + b"2,1,2,3,0," + beyond + b",1\n3,1,2,3,0,0," + edge + b"\n4,1,2,3,0,0,1\n")
+        np.testing.assert_array_equal(rows[:, 0], [0.03, 0.04])  # 2 is a lost sample
+        assert rows[0, 6] == float(edge) and p.stats["bad_lines"] == 1 and p.stats["lost_samples"] == 1
+        assert any("acceleration beyond +-1e+07 m/s^2): 2,1,2,3,0," in note for note in p.pop_notes())
 
 
 def test_parser_header_changing_the_accelerometer_unit_mid_stream_is_refused():

@@ -218,7 +218,8 @@ def test_record_from_serial_skips_a_value_beyond_the_range_and_goes_on(pty_pair,
     assert len(good) == 599 and 300 not in good
     np.testing.assert_array_equal(rec.gyro, values(good))
     texts = [t for _, t in rec.notes]
-    assert any("bad line (a gyro value beyond +-100000 deg/s or a temperature outside [-100, 200] deg C): 300,2147483648," in t for t in texts), texts
+    assert any("bad line (a gyro value beyond +-100000 deg/s, a temperature outside [-100, 200] deg C or an "
+               "acceleration beyond +-1e+07 m/s^2): 300,2147483648," in t for t in texts), texts
     assert texts[-1].startswith("end: source ended:")
     capsys.readouterr()
 

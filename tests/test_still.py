@@ -60,19 +60,22 @@ def six_axis_file(path, accel_offset_mps2, seed=3, accel_unit="m/s^2"):
     return str(path)
 
 
+Z_UP = np.array([0.0, 0.0, 9.80665])  # a still accelerometer reads 1 g on the axis that points up
+
+
 def test_gravity_on_the_up_axis_changes_no_digit_that_matters(tmp_path):
-    """The same noise with and without 1 g on z: the accelerometer's Allan deviations agree to 1e-9
-    (the deviation is formed of the mean-removed series), x and y exactly."""
-    flat = characterise_recording(six_axis_file(tmp_path / "a.csv", 0.0), warn=lambda text: None)[3]
-    up = characterise_recording(six_axis_file(tmp_path / "b.csv", np.array([0.0, 0.0, 9.80665])),
-                                warn=lambda text: None)[3]
+    """The same noise with 1 g on x and with 1 g on z: the accelerometer's Allan deviations agree
+    to 1e-9 on each axis (the deviation is formed of the mean-removed series), y exactly."""
+    flat = characterise_recording(six_axis_file(tmp_path / "a.csv", Z_UP[::-1]), warn=lambda text: None)[3]
+    up = characterise_recording(six_axis_file(tmp_path / "b.csv", Z_UP), warn=lambda text: None)[3]
     for a in "xyz":
         np.testing.assert_allclose(up[a].adev, flat[a].adev, rtol=1e-9, atol=0.0)
+    np.testing.assert_array_equal(up["y"].adev, flat["y"].adev)
     assert flat["z"].adev[0] > 0.01  # the noise itself: a test that can fail
 
 
 def test_columns_without_accel_unit_are_not_analysed_and_said_so(tmp_path):
-    path = six_axis_file(tmp_path / "a.csv", 0.0)
+    path = six_axis_file(tmp_path / "a.csv", Z_UP)
     text = open(path).read()
     stripped = tmp_path / "no_unit.csv"
     stripped.write_text("".join(line for line in text.splitlines(True) if not line.startswith("# accel_unit")))
@@ -87,11 +90,11 @@ def test_columns_without_accel_unit_are_not_analysed_and_said_so(tmp_path):
 def test_the_accelerometer_is_analysed_in_m_per_s2_whatever_its_unit(tmp_path, unit):
     """A record written in g (or LSB at 16384 per g) gives the deviation of the m/s^2 record times
     1 (the conversion of units.to_mps2 before the analysis)."""
-    ref = characterise_recording(six_axis_file(tmp_path / "a.csv", 0.0), warn=lambda text: None)[3]
+    ref = characterise_recording(six_axis_file(tmp_path / "a.csv", Z_UP), warn=lambda text: None)[3]
     rng = np.random.default_rng(3)
     n = 20000
     gyro = rng.normal(0.0, 0.08, (n, 3))
-    accel = rng.normal(0.0, 0.04, (n, 3)) + np.cumsum(rng.normal(0.0, 2e-4, (n, 3)), axis=0)
+    accel = rng.normal(0.0, 0.04, (n, 3)) + np.cumsum(rng.normal(0.0, 2e-4, (n, 3)), axis=0) + Z_UP
     scale = 1 / 9.80665 * (16384.0 if unit == "lsb" else 1.0)
     rec = Recording.from_dps(gyro, 100.0, accel=accel * scale, accel_unit=unit,
                              lsb_per_g=16384.0 if unit == "lsb" else None)
@@ -99,3 +102,34 @@ def test_the_accelerometer_is_analysed_in_m_per_s2_whatever_its_unit(tmp_path, u
     got = characterise_recording(str(tmp_path / "u.csv"), warn=lambda text: None)[3]
     for a in "xyz":
         np.testing.assert_allclose(got[a].adev, ref[a].adev, rtol=1e-6)
+
+
+@pytest.mark.parametrize("unit, lsb_per_g, factor", [
+    ("g", None, 16384.0),             # LSB at +-2 g under a header that says g: 16384 g
+    ("m/s^2", None, 1 / 9.80665),     # g under a header that says m/s^2: 0.1 g
+    ("g", None, 9.80665),             # m/s^2 under a header that says g: 9.8 g
+    ("lsb", 16384.0, 0.5),            # a +-4 g part (8192 LSB per g) under the +-2 g part's lsb_per_g: 0.5 g
+])
+def test_an_accelerometer_whose_header_lies_about_its_unit_is_left_out_not_scaled(tmp_path, unit, lsb_per_g, factor):
+    """A header that lies about the accelerometer's unit gave every coefficient and the Kalibr
+    values times the same wrong factor (16384 g read at rest: N 65 m/s^2/sqrt(Hz) in imu.yaml),
+    without a word (attack pass 11). A still accelerometer reads 1 g: one that does not is left out
+    with a warning naming what it reads, and the gyro's results are those of the file without it."""
+    rng = np.random.default_rng(3)
+    n = 20000
+    gyro = rng.normal(0.0, 0.08, (n, 3))
+    accel_g = rng.normal(0.0, 0.004, (n, 3)) + np.array([0.0, 0.0, 0.92])  # 0.92 g: as mpu6050_static_100s
+    good = accel_g * (lsb_per_g or 1.0) * (9.80665 if unit == "m/s^2" else 1.0)  # in the header's unit
+    said = []
+    for name, values in (("good", good), ("lies", good * factor)):  # the numbers of another unit
+        write_recording(str(tmp_path / f"{name}.csv"),
+                        Recording.from_dps(gyro, 100.0, accel=values, accel_unit=unit, lsb_per_g=lsb_per_g))
+        said.append([])
+        _, results, _, accel = characterise_recording(str(tmp_path / f"{name}.csv"), warn=said[-1].append)
+        if name == "good":
+            assert set(accel) == set("xyz") and not said[-1]
+            gyro_results = results
+    assert accel is None and [r.adev.tolist() for r in results.values()] == [r.adev.tolist() for r in gyro_results.values()]
+    assert len(said[-1]) == 1 and f"reads {0.92 * factor:.3g} g at rest" in said[-1][0] and "left out" in said[-1][0]
+    said = []  # an axis without gravity alone (--axes x): judged on all three all the same
+    assert characterise_recording(str(tmp_path / "lies.csv"), axes="x", warn=said.append)[3] is None and len(said) == 1

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import ACCEL_COLUMNS, collect_columns, iter_recording, warn_about_gaps
-from ..units import AXES, MAX_ACCEL_MPS2, check_axes, to_dps, to_mps2
+from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, to_dps, to_mps2
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
@@ -29,6 +29,11 @@ STATIC_LIMIT_DPS = 1.0
 STATIC_LIMIT_MPS2 = 0.5
 #: the block means of the stillness check: at most this many blocks over the record
 STATIC_BLOCKS = 512
+#: the magnitude (in g) a still accelerometer's samples may have, ends included: it reads gravity, 1 g
+#: (local gravity differs from g_n by 0.3 %), off by its scale and zero-g errors (the MPU6050: +-3 %,
+#: +-80 mg; PS-MPU-6000A-00 rev 3.4, section 6.2). A factor 1.5 either way: the factor 2 of a full-scale
+#: range read with another's lsb_per_g, 9.81 (g and m/s^2 swapped) or 2048+ (LSB read as g) lie beyond it
+GRAVITY_RANGE_G = (1 / 1.5, 1.5)
 
 
 def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATIC_LIMIT_DPS, unit="deg/s",
@@ -87,7 +92,8 @@ def read_axes(path, axes, with_t=False, with_accel=False):
     """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
     (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array}), and with
     ``with_t`` (head, {axis: array}, t): the ``t`` column (s), or None when the file has none.
-    With ``with_accel`` the accelerations of the same axes follow, {column: array} in m/s^2
+    With ``with_accel`` the accelerations of all three axes follow (a still one's gravity is their
+    magnitude: :func:`gravity_unlike`), {column: array} in m/s^2
     (columns ``ax``...; :func:`gyrofilter.units.to_mps2` from the header's ``accel_unit``), or None
     when the file has no accelerometer it can read (:func:`accelerometer_note` says why).
 
@@ -101,7 +107,7 @@ def read_axes(path, axes, with_t=False, with_accel=False):
     chunks = iter_recording(path)
     head = next(chunks)
     times = ["t"] if with_t and "t" in head.names else []
-    accel = [f"a{a}" for a in axes] if with_accel and has_accelerometer(head) else []
+    accel = list(ACCEL_COLUMNS) if with_accel and has_accelerometer(head) else []
     columns = collect_columns(head, chunks, [f"g{a}" for a in axes] + times + accel)
     if head.rows == 0:
         raise RecordingError(f"{path}: no samples (the file has a header only)")
@@ -116,6 +122,24 @@ def has_accelerometer(head):
     """True when the recording ``head`` (a RecordingHead) has an accelerometer an analysis can read:
     the columns ``ax, ay, az`` and the header's ``accel_unit``."""
     return all(c in head.names for c in ACCEL_COLUMNS) and head.accel_unit is not None
+
+
+def gravity_unlike(accel_mps2, head):
+    """Why the accelerometer's samples ``accel_mps2`` ({column: m/s^2} of ``ax, ay, az``) cannot be a
+    still sensor's in the unit its header states, or None. A still accelerometer reads gravity: the
+    median over the samples of |a| = sqrt(ax^2 + ay^2 + az^2) lies within :data:`GRAVITY_RANGE_G`
+    (motion and tilts move gravity between the axes, not its magnitude). A magnitude beyond them is
+    a wrong ``accel_unit`` or ``lsb_per_g`` (every coefficient scaled by the same wrong factor, none
+    of them the sensor's) or an output with gravity removed. All three axes, whichever are analysed."""
+    with np.errstate(over="ignore"):
+        g = float(np.median(np.sqrt(sum(np.square(accel_mps2[c]) for c in ACCEL_COLUMNS)))) / STANDARD_GRAVITY_MPS2
+    low, high = GRAVITY_RANGE_G
+    if low <= g <= high:
+        return None
+    unit = head.accel_unit + (f" (lsb_per_g {head.lsb_per_g:g})" if head.accel_unit == "lsb" else "")
+    return (f"{head.path}: the accelerometer reads {g:.3g} g at rest (the median |a|), but a "
+            f"still one reads gravity, 1 g (within {low:.2g} .. {high:g} g): is accel_unit {unit} right? (an output "
+            "with gravity removed is not the sensor's)")
 
 
 def accelerometer_note(head):
@@ -190,12 +214,14 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     Where the record has an accelerometer (:func:`has_accelerometer`), the same ``axes`` of it are
     characterised the same way in m/s^2 (coefficients in the units of
     :data:`~gyrofilter.analysis.noise.model.ACCELEROMETER_TERMS`), its gross errors refused or
-    warned of as the gyro's (beyond :data:`~gyrofilter.units.MAX_ACCEL_MPS2`), its stillness judged
+    warned of as the gyro's (beyond :data:`~gyrofilter.units.MAX_ACCEL_MPS2`; refused, it is left
+    out with the refusal as a warning, the gyro's results kept), its stillness judged
     against :data:`STATIC_LIMIT_MPS2`; its messages name the axes by their columns (``az``). Gravity,
     a constant on the axis that points up, does not enter: the Allan deviation is formed of the
     mean-removed series (:mod:`gyrofilter.analysis.noise.allan`, ``_phase``), so a 9.81 m/s^2 offset
     costs no float64 precision. A constant accelerometer axis is left out, said through ``warn``,
-    whatever ``skip_constant`` says: it never costs the gyro's results (None when every axis is).
+    whatever ``skip_constant`` says: it never costs the gyro's results (None when every axis is);
+    so is the whole accelerometer when its samples do not read gravity (:func:`gravity_unlike`).
     """
     head, series, accel = read_axes(path, axes, with_accel=True)
     for text in head.warnings:
@@ -203,7 +229,15 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     if accel is not None:
-        refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
+        unlike = gravity_unlike(accel, head)
+        accel = {f"a{a}": accel[f"a{a}"] for a in axes}  # the axes analysed
+        try:
+            refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
+        except RecordingError as exc:  # the accelerometer's spikes cost it alone, not the gyro's results
+            unlike = str(exc)
+        if unlike:  # or its unit is wrong: every coefficient would be off by the same factor
+            warn(f"{unlike}{LEFT_OUT}")
+            accel = None
     repeats = repeated_rows([series[a] for a in axes], 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
                             axes=axes)
     said = repeats_warning(repeats)

@@ -114,7 +114,7 @@ class LiveOutput:
             self._writer.close()
         except OSError as exc:
             raise OSError(exc.errno, f"{exc.strerror or exc}; {self._keep(True)}", self.path) from None
-        except RecordingError:  # its t refused at the close (a file shorter than one window): it would not read back
+        except RecordingError:  # its t refused at the close (its last window, a file shorter than one): not readable
             self._withdraw()
             raise
         return self._keep(failed)

@@ -60,10 +60,11 @@ class TimeCheck:
       that runs faster or slower than the header says, anywhere in the file, would make every
       time constant and Allan cluster time wrong. The windows start every half window (steps
       1-1000, 501-1500, 1001-2000, ...), so a stretch at the wrong rate as long as a window is
-      caught wherever it lies; at the end, the steps after the last whole window are checked
-      when there are half a window of them, and a file shorter than one window on all its steps
-      (:meth:`finish`). The typical step is the lower median of the window's steps that are not
-      gaps (:func:`typical_steps`): a device that lost most samples still shows the rate in the
+      caught wherever it lies; at the end, the last window, the :data:`RATE_CHECK_STEPS` steps
+      that end the file (the steps after the last whole window judged with those before them, as
+      any window's), and a file shorter than one window on all its steps (:meth:`finish`). The
+      typical step is the lower median of the window's steps that are not gaps
+      (:func:`typical_steps`): a device that lost most samples still shows the rate in the
       steps between samples it delivered in a row, and its recording reads, its gaps counted. A
       window of gaps only holds no such step: in a file of samples its median of all steps is
       compared (a ``t`` at half the header's rate looks just so: every other sample lost); in a
@@ -73,9 +74,12 @@ class TimeCheck:
       at any rate). A shorter one shows no rate and passes (every block of the window lost a
       few samples: each step is longer than a row interval by the input samples lost, which
       says nothing of the rate);
-    - the rows of every such window (and of the steps after the last whole one, when half a
-      window or more) are not denser than the rate: its steps span at least (1 - RATE_TOLERANCE)
-      times their number of sample intervals (:meth:`_dense`). Lost samples make a window span
+    - the rows of every such window (and of the last window) are not denser than the rate: its
+      steps span at least (1 - RATE_TOLERANCE) times their number of sample intervals
+      (:meth:`_dense`), or, with the half window of steps before it, the steps of both do (samples
+      that catch up after a stall, stamped close together, follow the gap of the stall: a window
+      that starts among them lacks the stall's time, which the steps before it hold: 17 of 50
+      stalls of 2 s at 100 Hz, at random places, were refused). Lost samples make a window span
       more, never less; a window that spans less holds rows the rate has no room for (a copy of
       a row stamped 1 ulp after it, inserted rows: up to half the rows so inserted leave the
       typical step as it was, and a file 86 s long read as 60 s of t).
@@ -95,6 +99,7 @@ class TimeCheck:
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
+        self.last_steps = np.empty(0)  # the last 1.5 RATE_CHECK_STEPS steps (:meth:`finish`'s last window and before it)
 
     def add(self, t, where):
         """Check the times ``t`` of a chunk; ``where(i)`` names its row ``i`` ("line 12")."""
@@ -118,22 +123,33 @@ class TimeCheck:
 
         for phase in self.phases:
             phase.add(step, step_start, self)
+        keep = RATE_CHECK_STEPS + RATE_CHECK_STEPS // 2
+        self.last_steps = np.concatenate((self.last_steps, step[-keep:]))[-keep:]
         self.t_last = float(t[-1])
         self.last_where = where(len(t) - 1)
 
     def finish(self):
-        """At the end: the steps after the last whole window, when half a window or more (all of
-        them in a file shorter than one window)."""
-        whole_file = self.phases[0].windows == 0
-        for phase in self.phases:
-            if len(phase.pending) and (whole_file or len(phase.pending) >= RATE_CHECK_STEPS // 2):
-                median = float(typical_steps(phase.pending[None, :], self.max_step_s, self.min_gaps_step_s)[0])
-                if self._off(median):
-                    self._refuse(median, len(phase.pending), phase.pending_where, first=whole_file)
-                if len(phase.pending) >= RATE_CHECK_STEPS // 2 and self._dense(phase.pending.sum(), len(phase.pending)):
-                    self._refuse_dense(float(phase.pending.sum()), len(phase.pending), phase.pending_where)
-            if whole_file:
-                break
+        """At the end: a file shorter than one window on all its steps (their span only when half
+        a window or more); a longer one on its last window, the RATE_CHECK_STEPS steps that end it.
+        The steps after the last whole window are so judged with the ones before them, as any
+        window's: a tail of 700 steps of which every other sample was lost is gaps, as it is inside
+        the file (checked alone it showed half the rate, and a live recording whose device lost
+        every other line over its last 7 s was refused at its close and removed whole)."""
+        phase = self.phases[0]
+        before = np.empty(0)
+        if phase.windows == 0:
+            steps, start, n = phase.pending, phase.pending_where, len(phase.pending)
+            if not n:
+                return
+        else:
+            steps, before = self.last_steps[-RATE_CHECK_STEPS:], self.last_steps[:-RATE_CHECK_STEPS]
+            n, start = RATE_CHECK_STEPS, f"up to {self.last_where}"
+        median = float(typical_steps(steps[None, :], self.max_step_s, self.min_gaps_step_s)[0])
+        if self._off(median):
+            self._refuse(median, n, start, first=phase.windows == 0, last=phase.windows > 0)
+        if (n >= RATE_CHECK_STEPS // 2 and self._dense(steps.sum(), n)
+                and self._dense(steps.sum() + before.sum(), n + len(before))):
+            self._refuse_dense(float(steps.sum()), n, start)
 
     def _off(self, typical_s):
         """Whether each typical step is more than RATE_TOLERANCE off the rate's (NaN, no rate shown: not off)."""
@@ -148,17 +164,22 @@ class TimeCheck:
     def _refuse_dense(self, span_s, n, start):
         head = self.head
         raise RecordingError(
-            f"{head.path}: t's {n} steps from {start} span {span_s:.6g} s, but {n} sample intervals at "
+            f"{head.path}: t's {n} steps {_from(start)} span {span_s:.6g} s, but {n} sample intervals at "
             f"sample_rate_hz {head.sample_rate_hz:g} take {n / head.sample_rate_hz:.6g} s: more rows than the "
             f"rate has room for (rows repeated or inserted with their own t, or is sample_rate_hz wrong?)")
 
-    def _refuse(self, typical_s, n, start, first):
+    def _refuse(self, typical_s, n, start, first, last=False):
         head = self.head
-        which = "its first" if first else "the"
+        which = "its first" if first else "the last" if last else "the"
         raise RecordingError(
-            f"{head.path}: t steps by {typical_s:.6g} s (median of {which} {n} steps from {start}), "
+            f"{head.path}: t steps by {typical_s:.6g} s (median of {which} {n} steps {_from(start)}), "
             f"but sample_rate_hz {head.sample_rate_hz:g} means {1.0 / head.sample_rate_hz:.6g} s: more than "
             f"{RATE_TOLERANCE:.0%} apart ({self.why})")
+
+
+def _from(start):
+    """Where steps start as a message says it: "from line 12", or ``start`` as it is when it says "up to"."""
+    return start if start.startswith("up to ") else f"from {start}"
 
 
 class _WindowPhase:
@@ -169,10 +190,12 @@ class _WindowPhase:
         self.pending = np.empty(0)  # the steps after the last whole window
         self.pending_where = None  # where the first of them starts
         self.windows = 0  # the whole windows checked
+        self.before = np.empty(0)  # up to half a window of the steps just before the next window
 
     def add(self, step, step_start, check):
         first = min(self.skip, len(step))
         self.skip -= first
+        self.before = np.concatenate((self.before, step[:first]))[-(RATE_CHECK_STEPS // 2):]
         step = step[first:]
         if len(self.pending) == 0 and len(step):
             self.pending_where = step_start(first)
@@ -182,7 +205,11 @@ class _WindowPhase:
             windows = steps[:whole].reshape(-1, RATE_CHECK_STEPS)
             medians = typical_steps(windows, check.max_step_s, check.min_gaps_step_s)
             spans = windows.sum(axis=1)
-            wrong = np.flatnonzero(check._off(medians) | check._dense(spans, RATE_CHECK_STEPS))
+            half = RATE_CHECK_STEPS // 2  # each window with the half window before it (a stall's)
+            before_s = np.concatenate(([self.before.sum()], windows[:-1, half:].sum(axis=1)))
+            before_n = np.concatenate(([len(self.before)], np.full(len(windows) - 1, half)))
+            dense = check._dense(spans, RATE_CHECK_STEPS) & check._dense(spans + before_s, RATE_CHECK_STEPS + before_n)
+            wrong = np.flatnonzero(check._off(medians) | dense)
             if wrong.size:
                 j = int(wrong[0])
                 start = j * RATE_CHECK_STEPS - len(self.pending)
@@ -192,6 +219,7 @@ class _WindowPhase:
                 check._refuse(float(medians[j]), RATE_CHECK_STEPS, where,
                               first=self.windows + j == 0 and self.skip == 0 and first == 0)
             self.windows += len(medians)
+            self.before = windows[-1, RATE_CHECK_STEPS // 2:]
             if whole < len(steps):
                 self.pending_where = step_start(first + whole - len(self.pending))
         self.pending = steps[whole:]

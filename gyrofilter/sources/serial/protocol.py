@@ -32,8 +32,9 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
   and every later ``t`` shifted by 9 s; a line whose counter jumps therefore waits for the next
   line (or :meth:`LineParser.finish`) before it is a row. A counter that is not such an integer (negative,
   fractional, too large) refuses its line (counted in ``bad_lines``), and so does a gyro value
-  beyond +-``units.MAX_RATE_DPS`` (100000 deg/s) once converted to deg/s: no gyro reads it, and
-  the recording would refuse it (a corrupt line must not end a recording).
+  beyond +-``units.MAX_RATE_DPS`` (100000 deg/s) once converted to deg/s, or an accelerometer value
+  beyond +-``units.MAX_ACCEL_MPS2`` once in m/s^2: no sensor reads it, and the recording would
+  refuse it (a corrupt line must not end a recording).
 - Every line received is counted in ``stats["lines"]`` and in exactly one of
   :data:`LINE_OUTCOMES`: a sample delivered as a row (``samples``) or a line that is not one
   (a duplicate, a refused line, a header, ...). A run of more than :data:`MAX_LINE_BYTES` bytes
@@ -60,7 +61,8 @@ import numpy as np
 from ...errors import DeviceError, SettingsError
 from ...inputs import check_number, is_plain_number, parse_number, quote
 from ...recording import ACCEL_COLUMNS, COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
-from ...units import GYRO_UNITS, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz, to_dps
+from ...units import (GYRO_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz,
+                      to_dps, to_mps2)
 from ..mpu6050.chip import temperature_c
 from .fields import accel_units, parse_fields
 
@@ -549,9 +551,10 @@ class LineParser:
 
     def _refuse_beyond_range(self, values):
         """``values`` (per line, fields order) without the lines holding a gyro value beyond
-        +-MAX_RATE_DPS once in deg/s or a temperature outside TEMP_RANGE_C once in deg C (counted
-        in ``bad_lines``, the first noted): one vectorised check per chunk. A glitched line then
-        costs one sample, not the recording (the writers and the filter refuse such values)."""
+        +-MAX_RATE_DPS once in deg/s, a temperature outside TEMP_RANGE_C once in deg C or an
+        accelerometer value beyond +-MAX_ACCEL_MPS2 once in m/s^2 (counted in ``bad_lines``, the
+        first noted): one vectorised check per chunk. A glitched line then costs one sample, not
+        the recording (the writers and the filter refuse such values)."""
         gyro = values[:, [self.fields.index(name) for name in GYRO_COLUMNS]]
         with np.errstate(over="ignore"):  # 1e308 rad/s: inf deg/s, refused
             ok = (np.abs(to_dps(gyro, self.header["gyro_unit"], self._lsb_per_dps)) <= MAX_RATE_DPS).all(axis=1)
@@ -559,11 +562,17 @@ class LineParser:
                 temp = values[:, self.fields.index("temp")]
                 temp_c = temperature_c(temp) if self._temp_raw else temp
                 ok &= (temp_c >= TEMP_RANGE_C[0]) & (temp_c <= TEMP_RANGE_C[1])
+            if ACCEL_COLUMNS[0] in self.fields:  # 1e300 g: written, the recording would end at it
+                accel = values[:, [self.fields.index(name) for name in ACCEL_COLUMNS]]
+                lsb_per_g = self.header.get("lsb_per_g")
+                ok &= (np.abs(to_mps2(accel, self.header["accel_unit"], lsb_per_g and float(lsb_per_g)))
+                       <= MAX_ACCEL_MPS2).all(axis=1)
         if ok.all():
             return values
         shown = ",".join(map(format_number, values[np.argmin(ok)])).encode()
-        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s or a temperature outside "
-                  f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C", count=int(np.count_nonzero(~ok)), garbage_bytes=0)
+        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s, a temperature outside "
+                  f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C or an acceleration beyond +-{MAX_ACCEL_MPS2:g} m/s^2",
+                  count=int(np.count_nonzero(~ok)), garbage_bytes=0)
         return values[ok]
 
     def pop_notes(self):
