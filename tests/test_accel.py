@@ -49,6 +49,9 @@ GYRO_SHA256 = {1: "03dcd46c0c289381ecaed0bb2a21f4362aaf30a31ecfa2a866a341402355b
                2: "3b48b5384299d96f4655675749bd4616271c792f5c2d0992e7d57af496340c51"}
 
 
+@pytest.mark.skipif(np.lib.NumpyVersion(np.__version__) < "2.0.0",
+                    reason="pinned under numpy 2: numpy 1.24's float sums differ in their last bits, which move "
+                           "about 1 in 2000 quantized samples by 1 LSB (measured: 7 of 18000 values of 60 s, seed 1)")
 @pytest.mark.parametrize("seed", sorted(GYRO_SHA256))
 def test_the_default_models_gyro_samples_are_those_of_the_gyro_only_simulator(seed):
     rec = simulate(DEFAULT_MODEL, 60.0, seed=seed)
