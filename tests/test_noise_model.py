@@ -14,7 +14,7 @@ from gyrofilter.analysis.noise.fit import characterise, characterise_axis, fit, 
 from gyrofilter.analysis.noise.intervals import fitted_intervals, reduced_chi2
 from gyrofilter.analysis.noise.model import (ANGLE_RANDOM_WALK, FLICKER_FLOOR, QUANTIZATION, UNIT_FACTORS, arw_from_white_std,
                                              basis, convert, model_adev, white_std_from_arw)
-from support import RECORDINGS
+from support import RECORDINGS, tool
 
 SYMBOL_TERM = {"Q": QUANTIZATION, "N": ANGLE_RANDOM_WALK, "B": BIAS_INSTABILITY, "K": RATE_RANDOM_WALK, "R": RATE_RAMP}
 
@@ -513,27 +513,13 @@ def test_a_term_left_out_is_bounded_above_what_the_data_give_it():
 NOT_FIVE_TERMS = "the noise is not just Q/N/B/K/R"
 
 
-def _default_model_without_temperature():
-    """The default MPU6050 model (white noise, bias instability, quantization) without its
-    temperature profile and effect: records that hold only five-term noises."""
-    from gyrofilter.sim.model import load_model
-    from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
-
-    model = load_model(str(DEFAULT_MODEL_PATH))
-    model.pop("temperature")
-    model.pop("accelerometer", None)  # its temperature coefficients need the profile; the gyro is analysed
-    for axis in model["axes"].values():
-        axis["effects"] = [e for e in axis["effects"] if e["effect"] != "temperature"]
-    return model
-
-
 def test_ten_minutes_of_white_noise_and_bias_instability_are_not_called_more_than_five_terms():
     # the warning judged the model drawn, from which an unresolved B is dropped: it lay below the
     # intervals of the longest taus and the warning fired on 22 % of such records (seed 5, y: 32 %
     # of the taus outside); judged on the full fit, on under 1 % (tools/allan_consistency.py)
     simulate_dps = pytest.importorskip("gyrofilter.sim.simulate").simulate_dps
     axes = [r for seed in range(6)
-            for r in characterise(simulate_dps(_default_model_without_temperature(), 600.0, seed=seed)[0], 100.0).values()]
+            for r in characterise(simulate_dps(tool("allan_consistency").null_model(), 600.0, seed=seed)[0], 100.0).values()]
     assert not [w for r in axes for w in r.warnings if NOT_FIVE_TERMS in w]
     assert min(r.full_fit_consistency() for r in axes) >= 0.8
     # the case the rule is about: B fitted, then dropped as not resolved
