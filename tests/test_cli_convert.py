@@ -720,3 +720,24 @@ def test_a_log_without_rows_is_refused_once_its_blank_lines_pass_the_bound(tmp_p
     path.write_bytes(gzip.compress(b"time_s,gx_dps,gy_dps,gz_dps\n0,1,2,3\n" + b"\n" * (3 << 20) + b"0.01,1,2,3\n"))
     assert main(["convert", str(path), "--out", str(tmp_path / "rec.csv")]) == 0
     assert len(read_recording(tmp_path / "rec.csv")) == 2
+
+
+@pytest.mark.parametrize("zipped", [False, True])
+def test_a_last_line_cut_short_is_left_out_with_a_warning(tmp_path, capsys, zipped):
+    """Attack pass 12 (issue 37): a log whose writer was stopped mid-line (a logger killed, a
+    power cut) ends in a line without its line end, cut inside a number: ``...,-0.09736`` kept as
+    ``-0.09``, a plain decimal, so the sample was written with a wrong value and not a word. As the
+    recording reader does (docs/formats.md, section 1), the last line without its line end is
+    not used and a warning says so; every complete line is converted as before."""
+    rows = [f"{i / 100:.2f},{i % 7 - 3}.25,0.5,-0.09736" for i in range(301)]
+    data = ("time_s,gx_dps,gy_dps,gz_dps\n" + "\n".join(rows[:300]) + "\n" + rows[300][:-3]).encode()  # '-0.09'
+    src = tmp_path / ("cut.csv.gz" if zipped else "cut.csv")
+    src.write_bytes(gzip.compress(data) if zipped else data)
+    assert main(["convert", str(src), "--out", str(tmp_path / "rec.csv")]) == 0
+    err = " ".join(capsys.readouterr().err.split())  # a warning is wrapped at 100 columns
+    assert f"gyrofilter: warning: {src}: line 302: last line has no line end (log interrupted?); it is not used" in err
+    rec = read_recording(tmp_path / "rec.csv")
+    assert len(rec) == 300 and np.all(rec.gyro[:, 2] == -0.09736)
+    src.write_bytes(gzip.compress(data + b"\n") if zipped else data + b"\n")  # the line ended: a row like any
+    assert main(["convert", str(src), "--out", str(tmp_path / "rec.csv"), "--force"]) == 0
+    assert "warning" not in capsys.readouterr().err and len(read_recording(tmp_path / "rec.csv")) == 301

@@ -4,7 +4,8 @@ names, separators, time units, broken cells), and arbitrary text.
 Properties: ``gyrofilter convert LOG --out REC`` exits 0 with a REC that reads back holding the
 log's gyro values exactly (and ``t`` from its time stamps), or exits 2 with one line on stderr
 naming the log, and no REC; a log with a broken row (a cell that is not a plain number, a short
-row) is always refused, naming that row's line.
+row) is always refused, naming that row's line, unless it is a last line without its line end,
+which is left out (a log cut short), as every such line.
 """
 import contextlib
 import io
@@ -58,7 +59,10 @@ def logs(draw):
             broken = len(lines) + 1
         lines.append(sep.join(cells))
     options = [] if "(rad/s)" in names[1] else ["--unit", "rad/s"]
-    return "\n".join(lines) + draw(st.sampled_from(["\n", "\r\n", ""])), gyro, broken, options
+    end = draw(st.sampled_from(["\n", "\r\n", ""]))
+    if not end and n:  # a last line without its line end is left out (a log cut short), broken or not
+        gyro, broken = gyro[:-1], None if broken == len(lines) else broken
+    return "\n".join(lines) + end, gyro, broken, options
 
 
 def _run(text, options):

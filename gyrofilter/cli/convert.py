@@ -54,6 +54,7 @@ def run(args):
                 writer.write(rows)
     for line in foreign.summary:
         console.say(f"  {line}")
+    console.print_warnings(foreign.warnings)
     console.tell(f"wrote {args.out}: {foreign.rows} samples at {foreign.sample_rate_hz:g} Hz "
                  f"({foreign.rows / foreign.sample_rate_hz:g} s), gyro_unit {header['gyro_unit']}")
     return 0

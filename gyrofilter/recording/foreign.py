@@ -35,7 +35,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
 - **Refusals** name the file, the line and the column: a cell that is not a plain decimal
   number (:func:`~gyrofilter.inputs.is_plain_number`), a row of the wrong length, a time that does not increase,
   a rate beyond +-100000 deg/s. Comment lines (``#``, ``//``) and blank lines are skipped and
-  counted; nothing else is dropped.
+  counted; nothing else is dropped but a last line without its line end (a log cut short
+  mid-line: its last number may be cut too), left out with a warning as a recording's is.
 """
 from __future__ import annotations
 
@@ -83,13 +84,14 @@ class Foreign(Closable):
     ``header`` (ready to write), its ``columns``, the exact ``formats`` of their values (the
     writer's rule, :func:`~gyrofilter.recording.writer.exact_format`, applied to each whole
     column, so that the file is the one writing it in one go makes), ``rows``, and the
-    ``summary``, sentences saying what was read and how (columns, units, rate, jitter).
-    :meth:`chunks` reads the log again and yields its rows. Holds the log open (or its copy,
+    ``summary``, sentences saying what was read and how (columns, units, rate, jitter), and the
+    ``warnings`` (a last line cut short, left out). :meth:`chunks` reads the log again and yields its rows. Holds the log open (or its copy,
     when it is a pipe) until closed."""
 
-    def __init__(self, source, path, header, columns, formats, rows, summary, plan):
+    def __init__(self, source, path, header, columns, formats, rows, summary, plan, warnings):
         self._source, self.path, self._plan = source, path, plan
         self.header, self.columns, self.formats, self.rows, self.summary = header, columns, formats, rows, summary
+        self.warnings = warnings
 
     @property
     def sample_rate_hz(self):
@@ -225,11 +227,11 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
     columns ``plan.wanted`` as text, one list per column). Each row is checked (its length, its
     cells plain decimal numbers; ``again``: a pass after the first, which checked them, checks the
     length only, and :func:`_unchanged` the numbers); blank and comment lines are skipped,
-    counted in ``counts["skipped"]``."""
+    counted in ``counts["skipped"]``; a last line cut short is said in ``counts["warnings"]``."""
     names, wanted = plan.names, plan.wanted
     numbers, cells_of = [], [[] for _ in wanted]
     rows_seen = again
-    for number, text, lines in log_lines(raw, path):
+    for number, text, lines in log_lines(raw, path, None if counts is None else counts["warnings"]):
         if number <= plan.after_line:
             continue
         if not text.strip() or text.lstrip().startswith(_COMMENT):
@@ -399,7 +401,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     offset from the first stamp while the time unit is not known; then a pass over the time
     column computes the times in s). Every refusal comes in the order of reading it whole."""
     header_line, names, split, first_data, preamble = None, None, None, None, 0
-    counts = {"skipped": 0, "before_rows": 0}
+    counts = {"skipped": 0, "before_rows": 0, "warnings": []}
     for number, text, lines in log_lines(raw, path):
         if not text.strip() or text.lstrip().startswith(_COMMENT):
             _before_rows(counts, text, lines, path)
@@ -486,7 +488,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     if unit == "lsb":
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     header["converted_from"] = path
-    return Foreign(raw, path, header, out_columns, formats, rows, summary, plan)
+    return Foreign(raw, path, header, out_columns, formats, rows, summary, plan, counts["warnings"])
 
 
 def _gyro_unit(unit, stated, lsb_per_dps, path):

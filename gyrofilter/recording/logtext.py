@@ -16,6 +16,7 @@ import tempfile
 import zlib
 
 from ..errors import RecordingError
+from ..inputs import quote
 from .header import MAX_LINE_BYTES
 from .lines import open_input, refuse_nul
 
@@ -174,14 +175,17 @@ def _too_long(path, number):
     return RecordingError(f"{path}: line {number}: longer than {MAX_LINE_BYTES} bytes, not a line of a log")
 
 
-def log_lines(raw, path):
+def log_lines(raw, path, warnings=None):
     """(line number, text, lines) of the open log ``raw`` (the file ``path``; gzip when it starts
     with the gzip magic), from its start, line ends dropped, each line at most MAX_LINE_BYTES
     bytes and UTF-8; ``lines`` is 1, or for a run of empty lines (``\\n`` or ``\\r\\n`` alone) the
     number of them, one item with ``text`` "" numbered by the first (a line holding a NUL byte:
     :func:`~gyrofilter.recording.lines.refuse_nul`): a run is skipped in bulk
     (:func:`_skip_empty_lines`), so that 30 MB of line ends (30 kB of gzip) cost no more than a
-    few blocks, not a Python step each (17 s). The first bytes are peeked at, not read."""
+    few blocks, not a Python step each (17 s). The first bytes are peeked at, not read.
+    A last line without its line end (a log whose writer was stopped mid-line, cut inside a
+    number) is not used, unless it is the log's only line, and said in ``warnings`` (a list,
+    when given): the rule of a recording's (:func:`~gyrofilter.recording.lines.line_chunks`)."""
     raw.seek(0)
     try:
         zipped = raw.peek(2)[:2] == b"\x1f\x8b"
@@ -192,6 +196,11 @@ def log_lines(raw, path):
                 if not data:
                     return
                 number += 1
+                if number > 1 and not data.endswith(b"\n") and len(data) <= MAX_LINE_BYTES:
+                    if warnings is not None:
+                        warnings.append(f"{path}: line {number}: last line has no line end (log interrupted?); it is "
+                                        f"not used: {quote(data[:60].decode('utf-8', 'replace'))}")
+                    return
                 if data in (b"\n", b"\r\n"):
                     run = 1 + _skip_empty_lines(fh)
                     yield number, "", run
