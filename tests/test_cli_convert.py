@@ -741,3 +741,23 @@ def test_a_last_line_cut_short_is_left_out_with_a_warning(tmp_path, capsys, zipp
     src.write_bytes(gzip.compress(data + b"\n") if zipped else data + b"\n")  # the line ended: a row like any
     assert main(["convert", str(src), "--out", str(tmp_path / "rec.csv"), "--force"]) == 0
     assert "warning" not in capsys.readouterr().err and len(read_recording(tmp_path / "rec.csv")) == 301
+
+
+@pytest.mark.parametrize("name", ["rec.csv", "rec.csv.gz"])
+def test_a_gyrofilter_recording_is_refused_naming_its_header(tmp_path, capsys, name):
+    """Attack pass 12 (issue 37): convert read a recording of format v1 as a log whose header lines
+    were comments: ``gyro_unit: lsb`` and ``lsb_per_dps: 131`` skipped, ``--unit dps`` took LSB as
+    deg/s (131 times the rate) and a filtered output lost its ``filtered_from`` (filtered again,
+    its Kalibr yaml the filter's), without a word. A recording is read by every command as it is:
+    convert refuses it, naming the line of its version key, and writes nothing."""
+    text = ("# a note before it\n# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n"
+            "# lsb_per_dps: 131\nt,gx,gy,gz\n" + "".join(f"{i / 100:.2f},{i % 9 - 4},131,-262\n" for i in range(300)))
+    src = tmp_path / name
+    src.write_bytes(gzip.compress(text.encode()) if name.endswith(".gz") else text.encode())
+    dst = tmp_path / "out.csv"
+    assert main(["convert", str(src), "--unit", "dps", "--out", str(dst)]) == 2
+    assert capsys.readouterr().err == (f"gyrofilter: error: {src}: line 2: already a gyrofilter recording (format v1; "
+                                       "every command reads it as it is): convert is for other tools' logs\n")
+    assert not dst.exists()
+    src.write_text(text.replace("# gyrofilter-recording: 1", "# exported by gyrofilter-recording-tool 1"))
+    assert main(["convert", str(src), "--unit", "lsb", "--lsb-per-dps", "131", "--out", str(dst), "--force"]) == 0

@@ -32,7 +32,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
   (:class:`~gyrofilter.recording.checks.TimeCheck`: every window of 1000 steps within 5 %), so
   a file whose steps are not one rate is refused, naming the line. Without a time column the
   caller gives the rate.
-- **Refusals** name the file, the line and the column: a cell that is not a plain decimal
+- **Refusals** name the file, the line and the column: a recording of format v1 (its header
+  would be skipped as comments, its unit with it), a cell that is not a plain decimal
   number (:func:`~gyrofilter.inputs.is_plain_number`), a row of the wrong length, a time that does not increase,
   a rate beyond +-100000 deg/s. Comment lines (``#``, ``//``) and blank lines are skipped and
   counted; nothing else is dropped but a last line without its line end (a log cut short
@@ -255,6 +256,18 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
         yield numbers, cells_of
 
 
+def _refuse_recording(text, number, path):
+    """Refuse the log ``path`` when ``text``, its line ``number`` before the column row, is a
+    recording's version line (``# gyrofilter-recording: 1``, the header line of section 1): a
+    recording's header would be skipped as comments, its ``gyro_unit`` and ``lsb_per_dps`` with
+    it (``--unit dps`` on LSB: 131 times the rate) and a filtered output's ``filtered_from``, while
+    every command reads the recording as it is."""
+    body = text.lstrip()
+    if body.startswith("#") and body[1:].partition(":")[0].strip() == VERSION_KEY:
+        raise RecordingError(f"{path}: line {number}: already a gyrofilter recording (format v1; every command reads it "
+                             "as it is): convert is for other tools' logs")
+
+
 def _before_rows(counts, text, lines, path):
     """Count a blank or comment item of :func:`log_lines` (``text``, ``lines`` lines) read before
     the first data row in ``counts["before_rows"]`` (its bytes: the text and a line end per line,
@@ -404,6 +417,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     counts = {"skipped": 0, "before_rows": 0, "warnings": []}
     for number, text, lines in log_lines(raw, path):
         if not text.strip() or text.lstrip().startswith(_COMMENT):
+            _refuse_recording(text, number, path)
             _before_rows(counts, text, lines, path)
         else:
             preamble = number - 1  # the lines before it, blank or comments
