@@ -1,4 +1,5 @@
-"""What every reader of user input shares: one reader of numbers and one loader of JSON files.
+"""What every reader of user input shares: one reader of numbers, one loader of JSON files and
+one opener of input files.
 
 The rules (docs/formats.md, section 8):
 
@@ -13,6 +14,8 @@ The rules (docs/formats.md, section 8):
 - **JSON files** are read at most :data:`MAX_JSON_BYTES` bytes (a larger file or an endless
   one such as ``/dev/zero`` is refused), must be UTF-8, may nest at most :data:`MAX_JSON_DEPTH`
   levels, and hold no ``NaN``/``Infinity`` tokens and no key twice in one object.
+- **Input files** (a recording, a log, a JSON file) are opened by :func:`open_input` without
+  blocking: a FIFO nobody writes to is refused after :data:`PIPE_WAIT_S`, never waited for forever.
 - **Quoting** user text in an error: at most :data:`MAX_QUOTE_CHARS` characters (:func:`quote`).
 - **A mistyped name** (a command, an option, a setting) is refused with the closest known one
   (:func:`closest`, :func:`did_you_mean`): one rule for the command line and the Python settings.
@@ -20,19 +23,26 @@ The rules (docs/formats.md, section 8):
 from __future__ import annotations
 
 import difflib
+import errno
+import io
 import json
 import math
 import os
 import re
+import select
+import stat
+import time
 
 import numpy as np
 
-from .errors import SettingsError
+from .errors import RecordingError, SettingsError
 
 MAX_NUMBER_CHARS = 64
 MAX_JSON_BYTES = 16 * 1024 * 1024
 MAX_JSON_DEPTH = 32
 MAX_QUOTE_CHARS = 80
+#: bytes read from an input at a time
+READ_BYTES = 1 << 20
 
 #: how alike a mistyped name and a known one must be to be suggested (difflib's ratio; its own default cutoff)
 SUGGEST_RATIO = 0.6
@@ -249,7 +259,7 @@ def load_json(path, what, error=SettingsError):
     if not isinstance(path, (str, bytes, os.PathLike)):
         raise error(f"the {what} must be a file name, got {_short(path)}")
     try:
-        with open(path, "rb") as fh:
+        with open_input(path, error=error, what=what) as fh:  # a FIFO nobody writes to: refused, not waited for
             data = fh.read(MAX_JSON_BYTES + 1)
     except OSError as exc:
         raise error(f"{path}: cannot read the {what} file: {exc.strerror or exc}") from None
@@ -260,3 +270,97 @@ def load_json(path, what, error=SettingsError):
     except UnicodeDecodeError:
         raise error(f"{path}: not a {what} file: not UTF-8 text") from None
     return parse_json(text, f"{path}", error)
+
+
+def sibling_hint(path, exc):
+    """"; there is NAME" when ``exc`` says ``path`` does not exist but its sibling with or without
+    ``.gz`` does (``rec.csv`` for ``rec.csv.gz``, and the other way round), else ""."""
+    if not isinstance(exc, FileNotFoundError):
+        return ""
+    path = os.fspath(path)
+    sibling = path[:-3] if path.endswith(".gz") else path + ".gz"
+    return f"; there is {sibling}" if os.path.isfile(sibling) else ""
+
+
+#: seconds an input that is a pipe (a FIFO made by ``mkfifo``, ``<(zcat log.gz)``) is waited for:
+#: its writer's first bytes, or the writer itself
+PIPE_WAIT_S = 5.0
+
+
+def open_input(path, *, fd=None, error=RecordingError, what=None):
+    """The input file ``path`` open for reading (binary), the one place inputs are opened (a
+    recording, another tool's log, a JSON file: :func:`load_json`). Opening never blocks
+    (``O_NONBLOCK``: a FIFO that nobody writes to would block ``open`` forever): a regular file or a device is read as it is; a
+    pipe (a FIFO, ``<(zcat log.gz)``, the standard input given as ``fd``) is read once, as it
+    comes, when within :data:`PIPE_WAIT_S` s its writer is there (a read that would wait) or its
+    first bytes come, and refused as "not a regular file" otherwise, the bytes read meanwhile
+    kept; a folder is refused. ``fd``: the input open already (the standard input, whose writer
+    is the shell's pipeline: read as it is). ``error`` (RecordingError by default) naming ``path``
+    and, when given, ``what`` it was to be ("cannot read the calibration file: ...").""" 
+    given = fd is not None
+    cannot = f"{path}: cannot read" + (f" the {what} file" if what else "")
+    try:
+        if not given:
+            fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        mode = os.fstat(fd).st_mode
+    except OSError as exc:
+        raise error(f"{cannot}: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
+    if stat.S_ISDIR(mode):
+        os.close(fd)
+        raise error(f"{cannot}: {os.strerror(errno.EISDIR)}")
+    if given or not stat.S_ISFIFO(mode):
+        os.set_blocking(fd, True)
+        return open(fd, "rb")
+    try:
+        first = _first_pipe_bytes(fd, path, error)
+    except BaseException:
+        os.close(fd)
+        raise
+    os.set_blocking(fd, True)
+    return io.BufferedReader(_Prefixed(fd, first), READ_BYTES)
+
+
+def _first_pipe_bytes(fd, path, error):
+    """What the pipe ``fd`` (non-blocking) holds first: its first bytes, or b"" when its writer is
+    there but has written nothing yet; waited for :data:`PIPE_WAIT_S` s (a read that finds no
+    writer returns at once with nothing: the writer of a FIFO may come later), then refused."""
+    deadline = time.monotonic() + PIPE_WAIT_S
+    while True:
+        try:
+            first = os.read(fd, READ_BYTES)
+        except BlockingIOError:
+            return b""
+        if first:
+            return first
+        left = deadline - time.monotonic()
+        if left <= 0:
+            raise error(f"{path}: not a regular file (a pipe or FIFO) and nothing was written to it in "
+                                 f"{PIPE_WAIT_S:g} s; give the file itself")
+        select.select([fd], [], [], min(left, 0.05))
+
+
+class _Prefixed(io.RawIOBase):
+    """The pipe ``fd`` read as a raw stream, ``first`` (its bytes read already) ahead of the rest."""
+
+    def __init__(self, fd, first):
+        self.fd, self.first = fd, first
+
+    def readable(self):
+        return True
+
+    def readinto(self, buffer):
+        if self.first:
+            n = min(len(buffer), len(self.first))
+            buffer[:n], self.first = self.first[:n], self.first[n:]
+            return n
+        data = os.read(self.fd, len(buffer))
+        buffer[:len(data)] = data
+        return len(data)
+
+    def fileno(self):
+        return self.fd
+
+    def close(self):
+        if not self.closed:
+            os.close(self.fd)
+        super().close()

@@ -278,3 +278,36 @@ def test_a_json_file_saved_with_a_byte_order_mark_is_read(tmp_path):
     path.write_bytes(b' \xef\xbb\xbf{"a": 1}')
     with pytest.raises(SettingsError, match="not valid JSON"):
         inputs.load_json(str(path), "model")
+
+
+def test_a_json_fifo_nobody_writes_to_is_refused_and_one_written_is_read(tmp_path, monkeypatch, capsys):
+    """Attack pass 12 (issue 37): ``--calibration``, ``--model``, ``--temp-model`` and
+    ``GyroFilter(calibration=...)`` given a FIFO nobody writes to (``mkfifo cal.json``) waited
+    forever in open(), as recordings did before attack pass 6. JSON files are opened as every input
+    is (``inputs.open_input``): refused after PIPE_WAIT_S in one line; a writer that comes within
+    the wait, or a pipe (``<(cat cal.json)``), is read."""
+    import os
+    import re
+    import threading
+
+    from gyrofilter import GyroFilter
+    from gyrofilter.cli import main
+    monkeypatch.setattr(inputs, "PIPE_WAIT_S", 0.3)
+    fifo = tmp_path / "cal.json"
+    os.mkfifo(fifo)
+    said = f"{fifo}: not a regular file (a pipe or FIFO) and nothing was written to it in 0.3 s; give the file itself"
+    with pytest.raises(SettingsError, match=f"^{re.escape(said)}$"):
+        load_json(fifo, "model")
+    with pytest.raises(CalibrationError, match=f"^{re.escape(said)}$"):
+        GyroFilter(100.0, calibration=str(fifo))
+    assert main(["simulate", "--model", str(fifo), "--duration", "1", "--out", str(tmp_path / "o.csv")]) == 2
+    assert capsys.readouterr().err == f"gyrofilter: error: {said}\n"
+    monkeypatch.setattr(inputs, "PIPE_WAIT_S", 30.0)
+
+    def write_late():
+        with open(fifo, "w") as fh:
+            fh.write('{"a": [1, 2.5]}')
+    writer = threading.Timer(0.1, write_late)
+    writer.start()
+    assert load_json(fifo, "model") == {"a": [1, 2.5]}
+    writer.join()

@@ -780,9 +780,9 @@ def test_a_fifo_nobody_writes_to_is_refused_and_one_written_later_is_read(tmp_pa
     comes within the wait is read as a pipe, once (its first bytes kept); a folder is refused."""
     import threading
 
-    from gyrofilter.recording import lines
+    from gyrofilter import inputs
     from gyrofilter.recording.foreign import read_foreign
-    monkeypatch.setattr(lines, "PIPE_WAIT_S", 0.3)
+    monkeypatch.setattr(inputs, "PIPE_WAIT_S", 0.3)
     fifo = tmp_path / "x.csv"
     os.mkfifo(fifo)
     for read in (read_recording, read_foreign):
@@ -790,7 +790,7 @@ def test_a_fifo_nobody_writes_to_is_refused_and_one_written_later_is_read(tmp_pa
                                                            "was written to it in 0.3 s")):
             read(str(fifo))
     text = HEADER + "t,gx,gy,gz\n" + "".join(f"{i / 100:.2f},{i},-3,40\n" for i in range(50))
-    monkeypatch.setattr(lines, "PIPE_WAIT_S", 30.0)
+    monkeypatch.setattr(inputs, "PIPE_WAIT_S", 30.0)
 
     def write_late():
         with open(fifo, "w") as fh:

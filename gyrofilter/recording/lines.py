@@ -6,19 +6,13 @@ read. Damaged gzip data are an error; a stream cut short (an interrupted recordi
 """
 from __future__ import annotations
 
-import errno
-import io
 import os
-import select
-import stat
-import time
 import zlib
 
 from ..errors import RecordingError
-from ..inputs import MAX_QUOTE_CHARS, quote
+from ..inputs import MAX_QUOTE_CHARS, READ_BYTES, open_input, quote
 from .header import MAX_LINE_BYTES
 
-_READ_BYTES = 1 << 20   # bytes read from the file at a time
 #: most decompressed bytes at a time (a block of text: about 36 000 lines of five columns); the
 #: longest line, so that only the line the blocks so far have not ended needs a length check
 _TEXT_BYTES = MAX_LINE_BYTES
@@ -56,7 +50,7 @@ def _gzip_damage(path):
         return None
     try:
         with open(path, "rb") as fh:
-            raw = fh.read(_READ_BYTES)
+            raw = fh.read(READ_BYTES)
             if raw[:2] == _GZIP_MAGIC:
                 for _ in _gunzip(fh, raw, path, []):
                     pass
@@ -67,110 +61,18 @@ def _gzip_damage(path):
     return None
 
 
-def sibling_hint(path, exc):
-    """"; there is NAME" when ``exc`` says ``path`` does not exist but its sibling with or without
-    ``.gz`` does (``rec.csv`` for ``rec.csv.gz``, and the other way round), else ""."""
-    if not isinstance(exc, FileNotFoundError):
-        return ""
-    path = os.fspath(path)
-    sibling = path[:-3] if path.endswith(".gz") else path + ".gz"
-    return f"; there is {sibling}" if os.path.isfile(sibling) else ""
-
-
-#: seconds an input that is a pipe (a FIFO made by ``mkfifo``, ``<(zcat log.gz)``) is waited for:
-#: its writer's first bytes, or the writer itself
-PIPE_WAIT_S = 5.0
-
-
-def open_input(path, *, fd=None):
-    """The input file ``path`` open for reading (binary), the one place inputs are opened (a
-    recording, another tool's log). Opening never blocks (``O_NONBLOCK``: a FIFO that nobody
-    writes to would block ``open`` forever): a regular file or a device is read as it is; a
-    pipe (a FIFO, ``<(zcat log.gz)``, the standard input given as ``fd``) is read once, as it
-    comes, when within :data:`PIPE_WAIT_S` s its writer is there (a read that would wait) or its
-    first bytes come, and refused as "not a regular file" otherwise, the bytes read meanwhile
-    kept; a folder is refused. ``fd``: the input open already (the standard input, whose writer
-    is the shell's pipeline: read as it is). RecordingError naming ``path``."""
-    given = fd is not None
-    try:
-        if not given:
-            fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
-        mode = os.fstat(fd).st_mode
-    except OSError as exc:
-        raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}{sibling_hint(path, exc)}") from None
-    if stat.S_ISDIR(mode):
-        os.close(fd)
-        raise RecordingError(f"{path}: cannot read: {os.strerror(errno.EISDIR)}")
-    if given or not stat.S_ISFIFO(mode):
-        os.set_blocking(fd, True)
-        return open(fd, "rb")
-    try:
-        first = _first_pipe_bytes(fd, path)
-    except BaseException:
-        os.close(fd)
-        raise
-    os.set_blocking(fd, True)
-    return io.BufferedReader(_Prefixed(fd, first), _READ_BYTES)
-
-
-def _first_pipe_bytes(fd, path):
-    """What the pipe ``fd`` (non-blocking) holds first: its first bytes, or b"" when its writer is
-    there but has written nothing yet; waited for :data:`PIPE_WAIT_S` s (a read that finds no
-    writer returns at once with nothing: the writer of a FIFO may come later), then refused."""
-    deadline = time.monotonic() + PIPE_WAIT_S
-    while True:
-        try:
-            first = os.read(fd, _READ_BYTES)
-        except BlockingIOError:
-            return b""
-        if first:
-            return first
-        left = deadline - time.monotonic()
-        if left <= 0:
-            raise RecordingError(f"{path}: not a regular file (a pipe or FIFO) and nothing was written to it in "
-                                 f"{PIPE_WAIT_S:g} s; give the file itself")
-        select.select([fd], [], [], min(left, 0.05))
-
-
-class _Prefixed(io.RawIOBase):
-    """The pipe ``fd`` read as a raw stream, ``first`` (its bytes read already) ahead of the rest."""
-
-    def __init__(self, fd, first):
-        self.fd, self.first = fd, first
-
-    def readable(self):
-        return True
-
-    def readinto(self, buffer):
-        if self.first:
-            n = min(len(buffer), len(self.first))
-            buffer[:n], self.first = self.first[:n], self.first[n:]
-            return n
-        data = os.read(self.fd, len(buffer))
-        buffer[:len(data)] = data
-        return len(data)
-
-    def fileno(self):
-        return self.fd
-
-    def close(self):
-        if not self.closed:
-            os.close(self.fd)
-        super().close()
-
-
 def _byte_blocks(path, warnings):
-    """The file's bytes in blocks of at most ``_READ_BYTES``, gunzipped (:func:`_gunzip`) when it
+    """The file's bytes in blocks of at most ``READ_BYTES``, gunzipped (:func:`_gunzip`) when it
     starts with the gzip magic."""
     fh = open_input(path)
     with fh:
-        raw = fh.read(_READ_BYTES)
+        raw = fh.read(READ_BYTES)
         if raw[:2] == _GZIP_MAGIC:
             yield from _gunzip(fh, raw, path, warnings)
             return
         while raw:
             yield raw
-            raw = fh.read(_READ_BYTES)
+            raw = fh.read(READ_BYTES)
 
 
 def _gunzip(fh, raw, path, warnings):
@@ -194,7 +96,7 @@ def _gunzip(fh, raw, path, warnings):
             produced += len(out)
             yield out
         if d.eof:  # a member ended: another may follow
-            raw = d.unused_data or fh.read(_READ_BYTES)
+            raw = d.unused_data or fh.read(READ_BYTES)
             if not raw:
                 return
             if raw[:2] != _GZIP_MAGIC and not _GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
@@ -203,7 +105,7 @@ def _gunzip(fh, raw, path, warnings):
         elif d.unconsumed_tail:
             raw = d.unconsumed_tail
         elif raw or out:
-            raw = fh.read(_READ_BYTES)
+            raw = fh.read(READ_BYTES)
         else:
             warnings.append(f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it")
             return

@@ -16,9 +16,9 @@ import tempfile
 import zlib
 
 from ..errors import RecordingError
-from ..inputs import quote
+from ..inputs import open_input, quote
 from .header import MAX_LINE_BYTES
-from .lines import open_input, refuse_nul
+from .lines import refuse_nul
 
 #: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
 #: where it is): 4 GiB, a 1 kHz log of about 40 h
