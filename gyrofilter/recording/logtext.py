@@ -184,8 +184,8 @@ def log_lines(raw, path, warnings=None):
     (:func:`_skip_empty_lines`), so that 30 MB of line ends (30 kB of gzip) cost no more than a
     few blocks, not a Python step each (17 s). The first bytes are peeked at, not read.
     A last line without its line end (a log whose writer was stopped mid-line, cut inside a
-    number) is not used, unless it is the log's only line, and said in ``warnings`` (a list,
-    when given): the rule of a recording's (:func:`~gyrofilter.recording.lines.line_chunks`)."""
+    number) is not used, unless it is the log's only line or blank, and said in ``warnings`` (a
+    list, when given): the rule of a recording's (:func:`~gyrofilter.recording.lines.line_chunks`)."""
     raw.seek(0)
     try:
         zipped = raw.peek(2)[:2] == b"\x1f\x8b"
@@ -196,7 +196,7 @@ def log_lines(raw, path, warnings=None):
                 if not data:
                     return
                 number += 1
-                if number > 1 and not data.endswith(b"\n") and len(data) <= MAX_LINE_BYTES:
+                if number > 1 and not data.endswith(b"\n") and data.strip() and len(data) <= MAX_LINE_BYTES:
                     if warnings is not None:
                         warnings.append(f"{path}: line {number}: last line has no line end (log interrupted?); it is "
                                         f"not used: {quote(data[:60].decode('utf-8', 'replace'))}")
