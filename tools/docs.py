@@ -588,6 +588,12 @@ def gap_heavy_tails():
     return fence(out.replace(str(adis), "DIR"))
 
 
+@block("gap-tone-modulation", "docs/gap.md", "tools/tone_modulation.py --adis DIR (DIR: the ADIS16405 records)", slow=True)
+def gap_tone_modulation():
+    adis = data_dir("adis16405_long")
+    return tool("tone_modulation.py", "--adis", str(adis), prompt=False).strip()
+
+
 @block("robust-gmwm", "docs/gap.md", "tools/robust_gmwm.py", slow=True)
 def robust_gmwm():
     return fence(tool("robust_gmwm.py"))
