@@ -833,6 +833,27 @@ def test_nul_bytes_before_the_header_are_refused_naming_the_line(tmp_path, name)
     assert len(rec) == 50 and "last line has no line end" in rec.warnings[0]
 
 
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be"])
+def test_utf16_text_is_refused_as_utf16_not_as_binary(tmp_path, encoding):
+    """Attack pass 12: a recording or log saved as UTF-16 (Windows' "Unicode") was refused as "NUL
+    bytes (binary data, ... SD card)" or "not UTF-8": the line says what it is and what to do; a
+    power cut's NUL blocks are still called so."""
+    from gyrofilter.recording.foreign import read_foreign
+    rows = "".join(f"{i / 100:.2f},{i},-3,40\n" for i in range(50))
+    path = tmp_path / "u.csv"
+    path.write_bytes((HEADER + "t,gx,gy,gz\n" + rows).encode(encoding))
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: line 1: UTF-16 text") + ".*save it as UTF-8"):
+        read_recording(str(path))
+    log = tmp_path / "log.csv"
+    log.write_bytes(("time_s,x_dps,y_dps,z_dps\n" + rows).encode(encoding))
+    with pytest.raises(RecordingError, match=re.escape(f"{log}: line 1: UTF-16 text")):
+        read_foreign(str(log))
+    blocks = tmp_path / "b.csv"
+    blocks.write_bytes(b"\0" * 512 + (HEADER + "t,gx,gy,gz\n" + rows).encode())
+    with pytest.raises(RecordingError, match=re.escape(f"{blocks}: line 1: NUL bytes")):
+        read_recording(str(blocks))
+
+
 @pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
 def test_a_header_naming_an_input_rate_gets_the_same_rate_check(tmp_path, chunk_rows):
     """Issue 37 (attack 6): a file of samples whose t runs at half the header's rate was

@@ -167,7 +167,22 @@ def refuse_nul(data, path, first_line):
     at = data.find(b"\0")
     if at >= 0:
         line = first_line + data.count(b"\n", 0, at)
+        if looks_utf16(data[max(0, at - 64):at + 64]):
+            raise RecordingError(f"{path}: line {line}: UTF-16 text (every other byte NUL): save it as UTF-8")
         raise RecordingError(f"{path}: line {line}: NUL bytes (binary data, e.g. blocks a power cut left on an SD card), not text")
+
+
+def looks_utf16(data):
+    """Whether ``data`` reads as UTF-16 text (after a byte-order mark, if any): at least 90 % of its
+    bytes at even or at odd offsets are NUL while at most 10 % of the others are (ASCII as UTF-16
+    puts a NUL beside every character; a power cut's blocks are NUL throughout)."""
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        data = data[2:]
+    if len(data) < 8:
+        return False
+    even, odd = data[0::2], data[1::2]
+    share = lambda b: b.count(0) / len(b)  # noqa: E731
+    return (share(even) >= 0.9 and share(odd) <= 0.1) or (share(odd) >= 0.9 and share(even) <= 0.1)
 
 
 def _decode(data, path, first_line):
@@ -177,6 +192,8 @@ def _decode(data, path, first_line):
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = first_line + data[:exc.start].count(b"\n")
+        if looks_utf16(data[:64]):
+            raise RecordingError(f"{path}: line {line}: UTF-16 text: save it as UTF-8") from None
         raise RecordingError(f"{path}: line {line}: not UTF-8 text") from None
     refuse_nul(data, path, first_line)
     return text
