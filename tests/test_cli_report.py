@@ -144,6 +144,18 @@ def test_text_from_the_file_cannot_end_the_data_block(tmp_path, capsys):
     assert parse(out).scripts == ["application/json"]
 
 
+def test_control_characters_of_a_file_name_are_not_written_raw(tmp_path, capsys):
+    """Attack pass 12: a file name holding ESC and a line end reached the page raw (escaped for
+    HTML, but not for the controls the console and fleet.md escape): written as their escapes."""
+    rec = tmp_path / "odd\x1b[31m\nname.csv.gz"
+    rec.write_bytes(open(STATIC, "rb").read())
+    out, data = report(tmp_path, capsys, str(rec), "--sims", "10")
+    text = out.read_text(encoding="utf-8")
+    title = text[text.index("<title>"):text.index("</title>")]
+    assert "\x1b" not in text and "\n" not in title and "odd\\x1b[31m\\nname" in title
+    assert data["recording"]["name"] == str(rec)  # the data block keeps the name as it is (JSON escapes it)
+
+
 def check_shipped_report(path, data, capsys):
     """What every shipped recording's report (``data``, of the file ``path``) holds: all its samples, the
     Allan part or its error, the filter's rows or the refusal replay gives, the gap's three axes."""

@@ -12,7 +12,6 @@ A pure function of its arguments: numbers in, text out; nothing here reads a fil
 """
 from __future__ import annotations
 
-import html
 import json
 
 import numpy as np
@@ -23,7 +22,7 @@ from ..analysis.gap.report import (UNCERTAIN_HEADING, covariate_preamble, eviden
 from ..analysis.noise.export import ACCEL_JSON, GYRO_JSON
 from ..analysis.noise.model import TERMS, TERM_SLOPE, TERM_SYMBOL, basis, model_adev
 from ..units import AXES
-from .svg import Band, Line, figure
+from .svg import Band, Line, figure, html_text
 
 #: the format of the embedded data block (docs/formats.md, section 10)
 FORMAT = "gyrofilter-report 1"
@@ -76,11 +75,11 @@ def report_page(data, raw_envelope=None, filtered_envelope=None):
     title = f"gyrofilter sensor report: {rec['name']}"
     parts = ["<!DOCTYPE html>", "<html lang='en'><head><meta charset='utf-8'>",
              "<meta name='viewport' content='width=device-width, initial-scale=1'>",
-             f"<title>{_esc(title)}</title><style>{_STYLE}</style></head><body>",
-             f"<h1>{_esc(title)}</h1>",
+             f"<title>{html_text(title)}</title><style>{_STYLE}</style></head><body>",
+             f"<h1>{html_text(title)}</h1>",
              _summary(data), _warnings(data["warnings"]), _filter(data, raw_envelope, filtered_envelope),
              _allan(data), _gap(data), _allan_and_gap(data.get("allan_and_gap")),
-             "<p class='small'>Made by gyrofilter " + _esc(data["gyrofilter_version"]) + " (<code>gyrofilter report</code>). "
+             "<p class='small'>Made by gyrofilter " + html_text(data["gyrofilter_version"]) + " (<code>gyrofilter report</code>). "
              f"Every number above is in the JSON block <code>#{DATA_ID}</code> of this file (docs/formats.md, "
              "section 10): the documents of <code>allan --json</code> and <code>gap --json</code> as those commands "
              "write them, and replay's filter summary.</p>",
@@ -119,18 +118,18 @@ def _summary(data):
 def _warnings(warnings):
     if not warnings:
         return "<h2>Warnings</h2><p class='ok'>None: the record looks still, whole and unclipped.</p>"
-    return "<h2>Warnings</h2><ul class='warnings'>" + "".join(f"<li>{_esc(w)}</li>" for w in warnings) + "</ul>"
+    return "<h2>Warnings</h2><ul class='warnings'>" + "".join(f"<li>{html_text(w)}</li>" for w in warnings) + "</ul>"
 
 
 def _filter(data, raw_envelope, filtered_envelope):
     out = ["<h2>The default filter's effect</h2>"]
     s = data["filter"]
     if s is None:
-        return out[0] + f"<p>Not filtered: {_esc(data['filter_error'])}</p>"
+        return out[0] + f"<p>Not filtered: {html_text(data['filter_error'])}</p>"
     bias = ("start-up bias " + ", ".join(f"{b:+.4f}" for b in s["bias_dps"]) + f" deg/s ({s['calibration_samples']} "
             "samples)") if s["bias_dps"] is not None else "no start-up calibration"
-    out.append(f"<p>Preset <b>{_esc(s['preset'])}</b>, as <code>gyrofilter replay</code> runs it: {s['samples_in']} "
-               f"samples in at {_esc(_num(s['sample_rate_hz']))} Hz, {s['rows_out']} rows out at {_esc(_num(s['output_rate_hz']))} Hz; "
+    out.append(f"<p>Preset <b>{html_text(s['preset'])}</b>, as <code>gyrofilter replay</code> runs it: {s['samples_in']} "
+               f"samples in at {html_text(_num(s['sample_rate_hz']))} Hz, {s['rows_out']} rows out at {html_text(_num(s['output_rate_hz']))} Hz; "
                f"{bias}. Raw: the samples after the calibration window that made a row, bias included; filtered: "
                "the rows, bias removed (deg/s).</p>")
     rows = [(a, _num(s["raw_mean_dps"][i]), _num(s["raw_std_dps"][i]), _num(s["filtered_mean_dps"][i]),
@@ -158,11 +157,11 @@ def _allan(data):
     doc = data["allan"]
     out = ["<h2>Allan deviation and noise coefficients</h2>"]
     if doc is None:
-        return out[0] + f"<p>Not computed: {_esc(data['allan_error'])}</p>"
+        return out[0] + f"<p>Not computed: {html_text(data['allan_error'])}</p>"
     out.append("<p>Overlapping Allan deviation with its chi-square interval, the fitted five-term model "
                "(sigma<sup>2</sup> = 3Q<sup>2</sup>/tau<sup>2</sup> + N<sup>2</sup>/tau + (2 ln2/pi) B<sup>2</sup> + "
                "K<sup>2</sup> tau/3 + R<sup>2</sup> tau<sup>2</sup>/2) and each resolved term's line with its slope; "
-               f"as <code>gyrofilter allan</code> computes them. {_esc(doc['method']['interval'])}. The slope "
+               f"as <code>gyrofilter allan</code> computes them. {html_text(doc['method']['interval'])}. The slope "
                "read-off takes each term from where its slope meets the curve (IEEE Std 952 practice); the other terms "
                "add to the curve there, so it overstates the term: where the fit leaves a term not resolved, the "
                "fit's bound (&lt; value) is the tighter statement, even below the read-off.</p>")
@@ -176,7 +175,7 @@ def _allan(data):
                    "gravity, a constant on the axis that points up, does not enter the Allan deviation.</p>")
     for prefix, axes, sensor in sensors:
         for a, ax in axes.items():
-            out.append(f"<h3>{_esc(prefix)}axis {_esc(a)}</h3>")
+            out.append(f"<h3>{html_text(prefix)}axis {html_text(a)}</h3>")
             rows = []
             for t in TERMS:
                 d, ro = ax["details"][sensor.keys[t]], ax["readoff"][sensor.keys[t]]
@@ -236,13 +235,13 @@ def _gap(data):
     if not g["findings"]:
         out.append("<p>None: the baseline explains the record within the simulations' spread.</p>")
     if covariate_preamble(g["findings"]):
-        out.append(f"<p>{_esc(covariate_preamble(g['findings']))}</p>")
+        out.append(f"<p>{html_text(covariate_preamble(g['findings']))}</p>")
     out.append("<ul>" + "".join(_finding(f) for f in g["findings"]) + "</ul>")
     if g.get("uncertain"):
-        out.append(f"<h3>{_esc(UNCERTAIN_HEADING)}</h3><p>Not in the extended model.</p><ul>"
-                   + "".join(f"<li>{_esc(uncertain_text(e, sep=' = '))}.</li>" for e in g["uncertain"]) + "</ul>")
+        out.append(f"<h3>{html_text(UNCERTAIN_HEADING)}</h3><p>Not in the extended model.</p><ul>"
+                   + "".join(f"<li>{html_text(uncertain_text(e, sep=' = '))}.</li>" for e in g["uncertain"]) + "</ul>")
     if g.get("notes"):
-        out.append("<h3>Notes</h3><ul>" + "".join(f"<li>{_esc(note)}</li>" for note in g["notes"]) + "</ul>")
+        out.append("<h3>Notes</h3><ul>" + "".join(f"<li>{html_text(note)}</li>" for note in g["notes"]) + "</ul>")
     out.append("<h3>Extended model</h3>" + _extended(g.get("extended_model")))
     return "".join(out)
 
@@ -254,18 +253,18 @@ def _allan_and_gap(sentences):
         return ""
     return ("<h2>allan and gap</h2><p>The two analyses estimate N, B, K and R on their own: allan from the Allan "
             "curve's five-term fit, gap from its baseline and findings. Where they do not tell one story:</p><ul>"
-            + "".join(f"<li>{_esc(s['text'])}</li>" for s in sentences) + "</ul>")
+            + "".join(f"<li>{html_text(s['text'])}</li>" for s in sentences) + "</ul>")
 
 
 def _finding(f):
     ci = f.get("params_ci95") or {}
-    params = _esc(params_text(f, sep=" = "))  # the console's digits: enough to tell an interval's ends apart
-    text = (f"<li><b>{_esc(f['effect'])}</b> on <b>{_esc(f['axis'])}</b>: {params}"
-            + (" (95 % intervals in brackets)" if ci else "") + f". Gain: D {_esc(_num(f['gain']['before']))} -&gt; "
-            f"{_esc(_num(f['gain']['after']))}.")
+    params = html_text(params_text(f, sep=" = "))  # the console's digits: enough to tell an interval's ends apart
+    text = (f"<li><b>{html_text(f['effect'])}</b> on <b>{html_text(f['axis'])}</b>: {params}"
+            + (" (95 % intervals in brackets)" if ci else "") + f". Gain: D {html_text(_num(f['gain']['before']))} -&gt; "
+            f"{html_text(_num(f['gain']['after']))}.")
     if f.get("alternatives"):
-        text += f"<br>{_esc(indistinguishable_text(f))}."
-    return text + f"<br><span class='small'>Evidence: {_esc(evidence_text(f))}.</span></li>"
+        text += f"<br>{html_text(indistinguishable_text(f))}."
+    return text + f"<br><span class='small'>Evidence: {html_text(evidence_text(f))}.</span></li>"
 
 
 def _extended(model):
@@ -281,7 +280,7 @@ def _extended(model):
     table = _table(["axis", "bias (deg/s)", "ARW (deg/s/sqrt(Hz))", "effects"], rows, numeric_from=1, numeric_to=3)
     whole = [_term(name, model[name]) for name in ROWS if name in model]
     if whole:
-        table += f"<p>Effects of whole rows (every axis at once; top-level keys of the model): {_esc('; '.join(whole))}.</p>"
+        table += f"<p>Effects of whole rows (every axis at once; top-level keys of the model): {html_text('; '.join(whole))}.</p>"
     return table
 
 
@@ -302,12 +301,12 @@ def _table(headers, rows, *, numeric_from=None, numeric_to=None, header_row=True
     numeric_to - 1 right-aligned."""
     out = ["<table>"]
     if header_row:
-        out.append("<tr>" + "".join(f"<th>{_esc(h)}</th>" for h in headers) + "</tr>")
+        out.append("<tr>" + "".join(f"<th>{html_text(h)}</th>" for h in headers) + "</tr>")
     for row in rows:
         cells = []
         for j, cell in enumerate(row):
             numeric = numeric_from is not None and j >= numeric_from and (numeric_to is None or j < numeric_to)
-            cells.append(f"<td class='num'>{_esc(cell)}</td>" if numeric else f"<td>{_esc(cell)}</td>")
+            cells.append(f"<td class='num'>{html_text(cell)}</td>" if numeric else f"<td>{html_text(cell)}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
     return "".join(out) + "</table>"
 
@@ -329,5 +328,4 @@ def _slope(s):
     return {-1.0: "-1", -0.5: "-1/2", 0.0: "0", 0.5: "+1/2", 1.0: "+1"}[s]
 
 
-def _esc(text):
-    return html.escape(str(text), quote=True)
+

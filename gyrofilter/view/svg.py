@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..inputs import escape_controls
+
 #: the figure's size in px (it scales with the page: the SVG has a viewBox and width 100 %)
 WIDTH, HEIGHT = 400, 270
 _LEFT, _RIGHT, _TOP, _BOTTOM = 62, 12, 26, 40  # margins of the plot area (px)
@@ -67,8 +69,8 @@ def figure(layers, *, key, title, xlabel, ylabel, log_x=False, log_y=False, widt
     sy = _Scale(y_range, log_y, box[3], box[1])
     clip = f"clip-{_id(key)}"
     out = [f"<svg viewBox='0 0 {width} {total_height}' width='100%' "
-           f"role='img' aria-label='{_esc(title)}' class='figure'>",
-           f"<title>{_esc(title)}</title>",
+           f"role='img' aria-label='{html_text(title)}' class='figure'>",
+           f"<title>{html_text(title)}</title>",
            f"<defs><clipPath id='{clip}'><rect x='{box[0]}' y='{box[1]}' width='{box[2] - box[0]}' "
            f"height='{box[3] - box[1]}'/></clipPath></defs>",
            f"<rect x='{box[0]}' y='{box[1]}' width='{box[2] - box[0]}' height='{box[3] - box[1]}' fill='white' stroke='#888'/>"]
@@ -80,10 +82,10 @@ def figure(layers, *, key, title, xlabel, ylabel, log_x=False, log_y=False, widt
     if not xs.size or not ys.size:
         out.append(f"<text x='{(box[0] + box[2]) / 2}' y='{(box[1] + box[3]) / 2}' text-anchor='middle' {_FONT}>"
                    "no data to draw</text>")
-    out += [f"<text x='{(box[0] + box[2]) / 2}' y='16' text-anchor='middle' {_FONT} font-weight='bold'>{_esc(title)}</text>",
-            f"<text x='{(box[0] + box[2]) / 2}' y='{height - 6}' text-anchor='middle' {_FONT}>{_esc(xlabel)}</text>",
+    out += [f"<text x='{(box[0] + box[2]) / 2}' y='16' text-anchor='middle' {_FONT} font-weight='bold'>{html_text(title)}</text>",
+            f"<text x='{(box[0] + box[2]) / 2}' y='{height - 6}' text-anchor='middle' {_FONT}>{html_text(xlabel)}</text>",
             f"<text transform='translate(13 {(box[1] + box[3]) / 2}) rotate(-90)' text-anchor='middle' {_FONT}>"
-            f"{_esc(ylabel)}</text>"]
+            f"{html_text(ylabel)}</text>"]
     for i, layer in enumerate(labelled):
         out.append(_legend_entry(layer, box[0], height + _LEGEND_ROW * i + 4))
     out.append("</svg>")
@@ -210,11 +212,15 @@ def _legend_entry(layer, x, y):
         dash = f" stroke-dasharray='{layer.dash}'" if layer.dash else ""
         mark = (f"<line x1='{x}' y1='{y + 5}' x2='{x + 22}' y2='{y + 5}' stroke='{layer.colour}' "
                 f"stroke-width='{layer.width}'{dash}/>")
-    return mark + f"<text x='{x + 28}' y='{y + 9}' {_FONT}>{_esc(layer.label)}</text>"
+    return mark + f"<text x='{x + 28}' y='{y + 9}' {_FONT}>{html_text(layer.label)}</text>"
 
 
-def _esc(text):
-    return html.escape(str(text), quote=True)
+def html_text(text):
+    """``text`` as HTML text or an attribute's value: on one line (each control character written
+    as its escape, :func:`~gyrofilter.inputs.escape_controls`: a raw ESC or line end of a file
+    name has no place in a page), then ``& < > " '`` as entities (:func:`html.escape`). The one
+    rule of every text the report and its figures hold."""
+    return html.escape(escape_controls(str(text)), quote=True)
 
 
 def _id(key):
