@@ -73,7 +73,10 @@ class TimeCheck:
       at half the rate or less (a file of samples whose header names an input rate was so read
       at any rate). A shorter one shows no rate and passes (every block of the window lost a
       few samples: each step is longer than a row interval by the input samples lost, which
-      says nothing of the rate);
+      says nothing of the rate). After a step that showed the rate (one that is not a gap), a
+      window of gaps only is lost samples when its typical step is a whole number of input
+      sample intervals (:meth:`_wrong`): a device's counter gaps over the last 1000 steps or
+      more no longer look like a t at half the rate;
     - the rows of every such window (and of the last window) are not denser than the rate: its
       steps span at least (1 - RATE_TOLERANCE) times their number of sample intervals
       (:meth:`_dense`), or, with the half window of steps before it, the steps of both do (samples
@@ -98,6 +101,8 @@ class TimeCheck:
             (2.0 - RATE_TOLERANCE) / head.sample_rate_hz
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
+        self.steps_seen = 0  # the steps of the chunks added so far
+        self.rate_shown_at = None  # the index of the first step that is not a gap (it showed the rate)
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
         self.last_steps = np.empty(0)  # the last 1.5 RATE_CHECK_STEPS steps (:meth:`finish`'s last window and before it)
 
@@ -115,7 +120,10 @@ class TimeCheck:
             k = int(bad[0])
             raise RecordingError(f"{head.path}: {where(k + row0)}: t does not increase "
                                  f"({float(cur[k])!r} after {float(prev[k])!r})")
-        head.t_gaps += int(np.count_nonzero(step > self.max_step_s))
+        gaps = step > self.max_step_s
+        head.t_gaps += int(np.count_nonzero(gaps))
+        if self.rate_shown_at is None and not gaps.all():
+            self.rate_shown_at = self.steps_seen + int(np.argmin(gaps))
         last_where = self.last_where
 
         def step_start(i):  # where the sample a step of this chunk starts from is
@@ -125,6 +133,7 @@ class TimeCheck:
             phase.add(step, step_start, self)
         keep = RATE_CHECK_STEPS + RATE_CHECK_STEPS // 2
         self.last_steps = np.concatenate((self.last_steps, step[-keep:]))[-keep:]
+        self.steps_seen += len(step)
         self.t_last = float(t[-1])
         self.last_where = where(len(t) - 1)
 
@@ -144,12 +153,35 @@ class TimeCheck:
         else:
             steps, before = self.last_steps[-RATE_CHECK_STEPS:], self.last_steps[:-RATE_CHECK_STEPS]
             n, start = RATE_CHECK_STEPS, f"up to {self.last_where}"
-        median = float(typical_steps(steps[None, :], self.max_step_s, self.min_gaps_step_s)[0])
-        if self._off(median):
-            self._refuse(median, n, start, first=phase.windows == 0, last=phase.windows > 0)
+        median = typical_steps(steps[None, :], self.max_step_s, self.min_gaps_step_s)
+        if self._wrong(median, steps[None, :], self.steps_seen - n)[0]:
+            self._refuse(float(median[0]), n, start, first=phase.windows == 0, last=phase.windows > 0)
         if (n >= RATE_CHECK_STEPS // 2 and self._dense(steps.sum(), n)
                 and self._dense(steps.sum() + before.sum(), n + len(before))):
             self._refuse_dense(float(steps.sum()), n, start)
+
+    def _wrong(self, typical_s, windows, start):
+        """Whether each window's typical step ``typical_s`` (of :func:`typical_steps`) is off the rate;
+        ``windows`` (2-D) its steps, the first window starting at step ``start`` of the file (each
+        one RATE_CHECK_STEPS later). A window of gaps only after a step that showed the rate (one
+        not a gap) is lost samples when its typical step is a whole number of input sample
+        intervals, within RATE_TOLERANCE of each (:meth:`_off_whole`): a device that lost every
+        other sample over its last 10 s (counter gaps) looks just like a t at half the rate, but
+        the file showed its rate before; the file's first window, before any step showed it, is
+        compared with the rate as any other (a t at half the rate from its start is refused)."""
+        off = self._off(typical_s)
+        if self.rate_shown_at is not None:
+            starts = start + RATE_CHECK_STEPS * np.arange(len(windows))
+            lenient = (starts > self.rate_shown_at) & (windows > self.max_step_s).all(axis=1)
+            off[lenient] = self._off_whole(typical_s[lenient])
+        return off
+
+    def _off_whole(self, typical_s):
+        """Whether each typical step is more than RATE_TOLERANCE off every whole number k >= 1 of input
+        sample intervals, per interval: |typical_s / k - 1 / input_sample_rate_hz| with k the nearest."""
+        input_s = 1.0 / self.head.input_sample_rate_hz
+        per_s = typical_s / np.maximum(np.round(typical_s / input_s), 1.0)
+        return np.abs(per_s - input_s) > RATE_TOLERANCE * input_s
 
     def _off(self, typical_s):
         """Whether each typical step is more than RATE_TOLERANCE off the rate's (NaN, no rate shown: not off)."""
@@ -186,6 +218,7 @@ class _WindowPhase:
     """The whole windows of :data:`RATE_CHECK_STEPS` steps that start ``skip`` steps into the file."""
 
     def __init__(self, skip):
+        self.skip0 = skip  # the step of the file its first window starts at
         self.skip = skip  # steps still to pass before the first window
         self.pending = np.empty(0)  # the steps after the last whole window
         self.pending_where = None  # where the first of them starts
@@ -209,12 +242,13 @@ class _WindowPhase:
             before_s = np.concatenate(([self.before.sum()], windows[:-1, half:].sum(axis=1)))
             before_n = np.concatenate(([len(self.before)], np.full(len(windows) - 1, half)))
             dense = check._dense(spans, RATE_CHECK_STEPS) & check._dense(spans + before_s, RATE_CHECK_STEPS + before_n)
-            wrong = np.flatnonzero(check._off(medians) | dense)
+            off = check._wrong(medians, windows, self.skip0 + self.windows * RATE_CHECK_STEPS)
+            wrong = np.flatnonzero(off | dense)
             if wrong.size:
                 j = int(wrong[0])
                 start = j * RATE_CHECK_STEPS - len(self.pending)
                 where = self.pending_where if start < 0 else step_start(first + start)
-                if not check._off(medians[j]):
+                if not off[j]:
                     check._refuse_dense(float(spans[j]), RATE_CHECK_STEPS, where)
                 check._refuse(float(medians[j]), RATE_CHECK_STEPS, where,
                               first=self.windows + j == 0 and self.skip == 0 and first == 0)
