@@ -511,6 +511,26 @@ def test_a_recording_whose_last_12_s_lost_every_other_sample_is_kept_whole(tmp_p
     assert rec.t_gaps == n - 3000
 
 
+@pytest.mark.parametrize("cut", [b"", b"506,1,"])
+def test_a_line_held_at_ctrl_c_is_written(tmp_path, cut):
+    """A serial line whose counter jumped waits for the next line to tell a gap from a corrupt
+    counter; at Ctrl-C it was dropped without a word (pass 11), where a disconnect writes it.
+    A stop ends the stream as a disconnect does: the line is written, its gap noted and counted
+    in the summary; a line cut off by the stop is counted as a cut line."""
+    counters = [*range(500), 505]
+    lines = b"".join(b"%d,%d,0,0\n" % (c, c % 7) for c in counters) + cut
+    out = tmp_path / "held.csv"
+    primary, secondary = os.openpty()
+    proc = start_record(f"serial:{os.ttyname(secondary)}", out, "--quiet")
+    err = play_serial_then_stop(primary, secondary, proc, SERIAL_HEADER, lines, out, 500)
+    assert proc.returncode == 0, err
+    rec = read_recording(out)
+    np.testing.assert_array_equal(rec.t_s, np.array(counters) / 100.0)
+    assert rec.t_gaps == 1 and any(text.startswith("gap: 5 samples lost before t=5.05 s") for _, text in rec.notes)
+    assert "wrote 501 samples" in err and "lost 5 samples" in err, err
+    assert ("partial lines 1" in err) == bool(cut), err
+
+
 def test_a_live_file_refused_at_its_close_does_not_stay(tmp_path):
     """Issue 37 (attack 3): `run --out` from a device that loses samples wrote filtered rows whose
     steps (0.08 s at 20 Hz) the writer refuses at the close of a file shorter than one window,
