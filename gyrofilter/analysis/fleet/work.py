@@ -83,10 +83,9 @@ def _allan_part(path, settings, result):
         if text not in result["warnings"]:  # the gap part read the same file and said it already
             result["warnings"].append(text)
 
-    head, results, repeats, accel = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
-                                                           min_clusters=settings.min_clusters,
-                                                           keep_outliers=settings.keep_outliers, warn=warn,
-                                                           skip_constant=True)
+    head, results, repeats, accel, accel_left_out = characterise_recording(
+        path, axes=settings.axes, confidence=settings.confidence, min_clusters=settings.min_clusters,
+        keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True)
     sample_rate_hz = head.sample_rate_hz
     kalibr = None
     if "filtered_from" in head.header:  # the filter's output is analysed, but its noise is not the sensor's
@@ -103,7 +102,7 @@ def _allan_part(path, settings, result):
             result["warnings"].extend(text if text.startswith("axis ") else f"axis {prefix}{axis}: {text}"
                                       for text in r.warnings)
     result["allan"] = to_json(results, sample_rate_hz, recording=path, duration_s=head.rows / sample_rate_hz,
-                              repeated_rows=repeats, accelerometer=accel)
+                              repeated_rows=repeats, accelerometer=accel, accelerometer_left_out=accel_left_out)
     result["kalibr"] = kalibr
     result["sample_rate_hz"], result["duration_s"] = sample_rate_hz, head.rows / sample_rate_hz
 
