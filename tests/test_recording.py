@@ -475,7 +475,8 @@ def test_a_stretch_of_gaps_only_after_the_rate_was_shown_is_lost_samples(tmp_pat
     samples lost); inside the file such a window ended the recording. After a step that showed
     the rate, a window of gaps only is lost samples when its steps are whole sample intervals; a
     t at half the rate from its start, or at 40 Hz (2.5 intervals) after the rate was shown, is
-    still refused, by the reader and the writer alike."""
+    still refused, by the reader and the writer alike: the rate is shown by a window of 1000 steps
+    mostly one interval (a single such step at the start of a t at half the rate shows nothing)."""
     steps = np.concatenate((np.full(5000, 0.01), np.full(1200 if where == "tail" else 1500, lost_step_s),
                             np.full(0 if where == "tail" else 2000, 0.01)))
     head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
@@ -487,8 +488,10 @@ def test_a_stretch_of_gaps_only_after_the_rate_was_shown_is_lost_samples(tmp_pat
             part = t[i:i + (chunk_rows if chunk_rows > 1 else 7)]
             writer.write(np.column_stack((part, np.zeros((len(part), 3)))))
     np.testing.assert_array_equal(read_recording(path).t_s, t)
-    with pytest.raises(RecordingError, match=r"t steps by 0.02 s \(median of its first 1000 steps from line 5\)"):
-        _read_chunked(_dps_file(tmp_path, _t_body(np.full(3000, 0.02)), name="half.csv"), chunk_rows)
+    for first in ([], [0.01]):  # t at half the rate, a step of one interval at its start or not
+        with pytest.raises(RecordingError, match=r"t steps by 0.02 s \(median of "):
+            _read_chunked(_dps_file(tmp_path, _t_body(np.concatenate((first, np.full(3000, 0.02)))), name="half.csv"),
+                          chunk_rows)
     steps[steps > 0.015] = 0.025
     with pytest.raises(RecordingError, match=r"t steps by 0.025 s"):
         _read_chunked(_dps_file(tmp_path, _t_body(steps), name="40hz.csv"), chunk_rows)

@@ -73,10 +73,10 @@ class TimeCheck:
       at half the rate or less (a file of samples whose header names an input rate was so read
       at any rate). A shorter one shows no rate and passes (every block of the window lost a
       few samples: each step is longer than a row interval by the input samples lost, which
-      says nothing of the rate). After a step that showed the rate (one that is not a gap), a
-      window of gaps only is lost samples when its typical step is a whole number of input
-      sample intervals (:meth:`_wrong`): a device's counter gaps over the last 1000 steps or
-      more no longer look like a t at half the rate;
+      says nothing of the rate). After a window that showed the rate (most of its steps one
+      sample interval), a window of gaps only is lost samples when its typical step is a whole
+      number of input sample intervals (:meth:`_wrong`): a device's counter gaps over the last
+      1000 steps or more no longer look like a t at half the rate;
     - the rows of every such window (and of the last window) are not denser than the rate: its
       steps span at least (1 - RATE_TOLERANCE) times their number of sample intervals
       (:meth:`_dense`), or, with the half window of steps before it, the steps of both do (samples
@@ -102,7 +102,7 @@ class TimeCheck:
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
         self.steps_seen = 0  # the steps of the chunks added so far
-        self.rate_shown_at = None  # the index of the first step that is not a gap (it showed the rate)
+        self.rate_shown_at = None  # where the first window that showed the rate ends (:meth:`_note_rate_shown`)
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
         self.last_steps = np.empty(0)  # the last 1.5 RATE_CHECK_STEPS steps (:meth:`finish`'s last window and before it)
 
@@ -122,8 +122,7 @@ class TimeCheck:
                                  f"({float(cur[k])!r} after {float(prev[k])!r})")
         gaps = step > self.max_step_s
         head.t_gaps += int(np.count_nonzero(gaps))
-        if self.rate_shown_at is None and not gaps.all():
-            self.rate_shown_at = self.steps_seen + int(np.argmin(gaps))
+        self._note_rate_shown(step)
         last_where = self.last_where
 
         def step_start(i):  # where the sample a step of this chunk starts from is
@@ -136,6 +135,26 @@ class TimeCheck:
         self.steps_seen += len(step)
         self.t_last = float(t[-1])
         self.last_where = where(len(t) - 1)
+
+    def _note_rate_shown(self, step):
+        """Note where the file first showed its rate (``rate_shown_at``, a step index): the end of the
+        first window of RATE_CHECK_STEPS steps, ending at a multiple of half a window, whose lower
+        median of all its steps, gaps included, is the rate's step within RATE_TOLERANCE (most of
+        its steps one sample interval). ``step``: the steps of the chunk being added."""
+        if self.rate_shown_at is not None:
+            return
+        half = RATE_CHECK_STEPS // 2
+        start, end = self.steps_seen, self.steps_seen + len(step)
+        ends = np.arange(max(RATE_CHECK_STEPS, (start // half + 1) * half), end + 1, half)
+        if not len(ends):
+            return
+        before = self.last_steps[-RATE_CHECK_STEPS:]
+        steps = np.concatenate((before, step))
+        first = start - len(before)  # the file's step index of steps[0]
+        windows = np.lib.stride_tricks.sliding_window_view(steps, RATE_CHECK_STEPS)[ends - RATE_CHECK_STEPS - first]
+        shown = np.flatnonzero(~self._off(_lower_medians(windows)))
+        if shown.size:
+            self.rate_shown_at = int(ends[shown[0]])
 
     def finish(self):
         """At the end: a file shorter than one window on all its steps (their span only when half
@@ -163,16 +182,17 @@ class TimeCheck:
     def _wrong(self, typical_s, windows, start):
         """Whether each window's typical step ``typical_s`` (of :func:`typical_steps`) is off the rate;
         ``windows`` (2-D) its steps, the first window starting at step ``start`` of the file (each
-        one RATE_CHECK_STEPS later). A window of gaps only after a step that showed the rate (one
-        not a gap) is lost samples when its typical step is a whole number of input sample
+        one RATE_CHECK_STEPS later). A window of gaps only that starts after the file showed its
+        rate (:meth:`_note_rate_shown`: a window before it whose steps are mostly one sample
+        interval) is lost samples when its typical step is a whole number of input sample
         intervals, within RATE_TOLERANCE of each (:meth:`_off_whole`): a device that lost every
         other sample over its last 10 s (counter gaps) looks just like a t at half the rate, but
-        the file showed its rate before; the file's first window, before any step showed it, is
-        compared with the rate as any other (a t at half the rate from its start is refused)."""
+        the file showed its rate before. Before that, it is compared with the rate as any window
+        (a t at half the rate is refused, a few steps of one interval among its steps or not)."""
         off = self._off(typical_s)
         if self.rate_shown_at is not None:
             starts = start + RATE_CHECK_STEPS * np.arange(len(windows))
-            lenient = (starts > self.rate_shown_at) & (windows > self.max_step_s).all(axis=1)
+            lenient = (starts >= self.rate_shown_at) & (windows > self.max_step_s).all(axis=1)
             off[lenient] = self._off_whole(typical_s[lenient])
         return off
 
