@@ -389,7 +389,7 @@ def test_t_is_checked_against_the_rate_in_every_window_not_only_the_first(tmp_pa
     samples lost), read silently with the header's rate. Windows are steps 1-1000, 1001-2000, ...;
     the third (mostly late steps) starts at sample 2000, file line 2005. (Every other sample lost
     from step 2000 on reads, its gaps counted: a device's counter gaps look so,
-    test_a_stretch_of_gaps_only_after_the_rate_was_shown_is_lost_samples.)"""
+    test_a_stretch_of_gaps_only_where_the_file_shows_its_rate_is_lost_samples.)"""
     steps = np.full(4000, 0.01)
     steps[late_from:] = late_step_s
     path = _dps_file(tmp_path, _t_body(steps))
@@ -467,18 +467,20 @@ def test_a_tail_that_lost_every_other_sample_reads_as_gaps_as_it_does_inside_the
 
 
 @pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
-@pytest.mark.parametrize("lost_step_s, where", [(0.02, "tail"), (0.03, "tail"), (0.02, "inside")])
-def test_a_stretch_of_gaps_only_after_the_rate_was_shown_is_lost_samples(tmp_path, chunk_rows, lost_step_s, where):
+@pytest.mark.parametrize("lost_step_s, where", [(0.02, "tail"), (0.03, "tail"), (0.02, "inside"), (0.02, "start")])
+def test_a_stretch_of_gaps_only_where_the_file_shows_its_rate_is_lost_samples(tmp_path, chunk_rows, lost_step_s, where):
     """A device that lost every other sample (or two of three) over its last 12 s, its counter's
     gaps: the last window held gaps only and was compared with the rate as a t at half the rate,
     and the live recording was refused at its close and removed whole (attack pass 11: 50 s of
-    samples lost); inside the file such a window ended the recording. After a step that showed
-    the rate, a window of gaps only is lost samples when its steps are whole sample intervals; a
-    t at half the rate from its start, or at 40 Hz (2.5 intervals) after the rate was shown, is
-    still refused, by the reader and the writer alike: the rate is shown by a window of 1000 steps
-    mostly one interval (a single such step at the start of a t at half the rate shows nothing)."""
-    steps = np.concatenate((np.full(5000, 0.01), np.full(1200 if where == "tail" else 1500, lost_step_s),
-                            np.full(0 if where == "tail" else 2000, 0.01)))
+    samples lost); inside the file, or at its start, such a window ended the recording. Where
+    another window shows the rate (most of its steps one interval), a window of gaps only is lost
+    samples when its steps are whole sample intervals (up to 10); a t at half the rate throughout
+    (a step of one interval at its start or not), at 40 Hz (2.5 intervals) or 15 intervals apart
+    is still refused, by the reader and the writer alike."""
+    lost = np.full(1200 if where == "tail" else 1500, lost_step_s)
+    steps = {"tail": lambda: np.concatenate((np.full(5000, 0.01), lost)),
+             "inside": lambda: np.concatenate((np.full(5000, 0.01), lost, np.full(2000, 0.01))),
+             "start": lambda: np.concatenate((lost, np.full(5000, 0.01)))}[where]()
     head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
     assert len(data) == len(steps) + 1 and head.t_gaps == np.count_nonzero(steps > 0.015)
     path = tmp_path / "written.csv"
@@ -492,9 +494,10 @@ def test_a_stretch_of_gaps_only_after_the_rate_was_shown_is_lost_samples(tmp_pat
         with pytest.raises(RecordingError, match=r"t steps by 0.02 s \(median of "):
             _read_chunked(_dps_file(tmp_path, _t_body(np.concatenate((first, np.full(3000, 0.02)))), name="half.csv"),
                           chunk_rows)
-    steps[steps > 0.015] = 0.025
-    with pytest.raises(RecordingError, match=r"t steps by 0.025 s"):
-        _read_chunked(_dps_file(tmp_path, _t_body(steps), name="40hz.csv"), chunk_rows)
+    for odd_s in (0.025, 0.15):
+        steps[steps > 0.015] = odd_s
+        with pytest.raises(RecordingError, match=rf"t steps by {odd_s:g} s"):
+            _read_chunked(_dps_file(tmp_path, _t_body(steps), name="odd.csv"), chunk_rows)
 
 
 @pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])

@@ -73,10 +73,11 @@ class TimeCheck:
       at half the rate or less (a file of samples whose header names an input rate was so read
       at any rate). A shorter one shows no rate and passes (every block of the window lost a
       few samples: each step is longer than a row interval by the input samples lost, which
-      says nothing of the rate). After a window that showed the rate (most of its steps one
-      sample interval), a window of gaps only is lost samples when its typical step is a whole
-      number of input sample intervals (:meth:`_wrong`): a device's counter gaps over the last
-      1000 steps or more no longer look like a t at half the rate;
+      says nothing of the rate). A window of gaps only whose typical step is a whole number of
+      input sample intervals is lost samples where another window of the file showed the rate
+      (most of its steps one sample interval), and refused at the end where none did
+      (:meth:`_wrong`): a device's counter gaps over 1000 steps or more at the start or the end
+      of a recording no longer look like a t at half the rate;
     - the rows of every such window (and of the last window) are not denser than the rate: its
       steps span at least (1 - RATE_TOLERANCE) times their number of sample intervals
       (:meth:`_dense`), or, with the half window of steps before it, the steps of both do (samples
@@ -102,7 +103,8 @@ class TimeCheck:
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
         self.steps_seen = 0  # the steps of the chunks added so far
-        self.rate_shown_at = None  # where the first window that showed the rate ends (:meth:`_note_rate_shown`)
+        self.rate_shown = False  # a window showed the rate (:meth:`_note_rate_shown`)
+        self.deferred = None  # the refusal of the first window of gaps only judged at the end (:meth:`_wrong`)
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
         self.last_steps = np.empty(0)  # the last 1.5 RATE_CHECK_STEPS steps (:meth:`finish`'s last window and before it)
 
@@ -137,11 +139,11 @@ class TimeCheck:
         self.last_where = where(len(t) - 1)
 
     def _note_rate_shown(self, step):
-        """Note where the file first showed its rate (``rate_shown_at``, a step index): the end of the
-        first window of RATE_CHECK_STEPS steps, ending at a multiple of half a window, whose lower
-        median of all its steps, gaps included, is the rate's step within RATE_TOLERANCE (most of
-        its steps one sample interval). ``step``: the steps of the chunk being added."""
-        if self.rate_shown_at is not None:
+        """Note whether the file showed its rate (``rate_shown``): a window of RATE_CHECK_STEPS steps,
+        ending at a multiple of half a window, whose lower median of all its steps, gaps included,
+        is the rate's step within RATE_TOLERANCE (most of its steps one sample interval).
+        ``step``: the steps of the chunk being added."""
+        if self.rate_shown:
             return
         half = RATE_CHECK_STEPS // 2
         start, end = self.steps_seen, self.steps_seen + len(step)
@@ -152,9 +154,7 @@ class TimeCheck:
         steps = np.concatenate((before, step))
         first = start - len(before)  # the file's step index of steps[0]
         windows = np.lib.stride_tricks.sliding_window_view(steps, RATE_CHECK_STEPS)[ends - RATE_CHECK_STEPS - first]
-        shown = np.flatnonzero(~self._off(_lower_medians(windows)))
-        if shown.size:
-            self.rate_shown_at = int(ends[shown[0]])
+        self.rate_shown = bool((~self._off(_lower_medians(windows))).any())
 
     def finish(self):
         """At the end: a file shorter than one window on all its steps (their span only when half
@@ -173,35 +173,48 @@ class TimeCheck:
             steps, before = self.last_steps[-RATE_CHECK_STEPS:], self.last_steps[:-RATE_CHECK_STEPS]
             n, start = RATE_CHECK_STEPS, f"up to {self.last_where}"
         median = typical_steps(steps[None, :], self.max_step_s, self.min_gaps_step_s)
-        if self._wrong(median, steps[None, :], self.steps_seen - n)[0]:
+        off, deferred = self._wrong(median, steps[None, :])
+        if deferred[0] and self.deferred is None:
+            self.deferred = (float(median[0]), n, start, phase.windows == 0, phase.windows > 0)
+        if off[0]:
             self._refuse(float(median[0]), n, start, first=phase.windows == 0, last=phase.windows > 0)
+        if self.deferred is not None and not self.rate_shown:  # no window showed the rate: t at 1/k of it
+            self._refuse(*self.deferred[:3], first=self.deferred[3], last=self.deferred[4])
         if (n >= RATE_CHECK_STEPS // 2 and self._dense(steps.sum(), n)
                 and self._dense(steps.sum() + before.sum(), n + len(before))):
             self._refuse_dense(float(steps.sum()), n, start)
 
-    def _wrong(self, typical_s, windows, start):
-        """Whether each window's typical step ``typical_s`` (of :func:`typical_steps`) is off the rate;
-        ``windows`` (2-D) its steps, the first window starting at step ``start`` of the file (each
-        one RATE_CHECK_STEPS later). A window of gaps only that starts after the file showed its
-        rate (:meth:`_note_rate_shown`: a window before it whose steps are mostly one sample
-        interval) is lost samples when its typical step is a whole number of input sample
-        intervals, within RATE_TOLERANCE of each (:meth:`_off_whole`): a device that lost every
-        other sample over its last 10 s (counter gaps) looks just like a t at half the rate, but
-        the file showed its rate before. Before that, it is compared with the rate as any window
-        (a t at half the rate is refused, a few steps of one interval among its steps or not)."""
+    def _wrong(self, typical_s, windows):
+        """(whether each window is off the rate, whether it is a window of gaps only judged at the
+        end): ``typical_s`` the windows' typical steps (of :func:`typical_steps`), ``windows`` (2-D)
+        their steps. A window of gaps only whose typical step is a whole number of input sample
+        intervals, within RATE_TOLERANCE of each (:meth:`_off_whole`), is lost samples where the
+        file shows its rate (:meth:`_note_rate_shown`: a window whose steps are mostly one sample
+        interval, before or after it): a device that lost every other sample over its first or
+        last 10 s (counter gaps) looks just like a t at half the rate, but the rest of the file
+        shows the rate. Where it is off the rate as any window is, its refusal waits for the end
+        (:meth:`finish`: refused there when no window showed the rate: a t at half the rate, a
+        few steps of one interval among its steps or not). One that is no whole number of
+        intervals (2.5: t at 40 Hz in a 100-Hz file) is refused at once."""
         off = self._off(typical_s)
-        if self.rate_shown_at is not None:
-            starts = start + RATE_CHECK_STEPS * np.arange(len(windows))
-            lenient = (starts >= self.rate_shown_at) & (windows > self.max_step_s).all(axis=1)
-            off[lenient] = self._off_whole(typical_s[lenient])
-        return off
+        gaps_only = (windows > self.max_step_s).all(axis=1)
+        whole = gaps_only & ~self._off_whole(typical_s)
+        deferred = whole & off
+        off = off & ~whole
+        return off, deferred
 
     def _off_whole(self, typical_s):
-        """Whether each typical step is more than RATE_TOLERANCE off every whole number k >= 1 of input
-        sample intervals, per interval: |typical_s / k - 1 / input_sample_rate_hz| with k the nearest."""
+        """Whether each typical step is no whole number k of input sample intervals, more than
+        RATE_TOLERANCE off per interval (|typical_s / k - 1 / input_sample_rate_hz|, k the nearest),
+        or longer than 1 / (2 RATE_TOLERANCE) = 10 row intervals (1 / sample_rate_hz), where every
+        step of a file of samples is within RATE_TOLERANCE of some k (a step beyond a float's range too)."""
         input_s = 1.0 / self.head.input_sample_rate_hz
-        per_s = typical_s / np.maximum(np.round(typical_s / input_s), 1.0)
-        return np.abs(per_s - input_s) > RATE_TOLERANCE * input_s
+        with np.errstate(over="ignore", invalid="ignore"):
+            k = np.round(typical_s / input_s)
+            per_s = typical_s / np.maximum(k, 1.0)
+            whole = ((np.round(typical_s * self.head.sample_rate_hz) <= 0.5 / RATE_TOLERANCE)
+                     & (np.abs(per_s - input_s) <= RATE_TOLERANCE * input_s))
+        return ~whole
 
     def _off(self, typical_s):
         """Whether each typical step is more than RATE_TOLERANCE off the rate's (NaN, no rate shown: not off)."""
@@ -238,7 +251,6 @@ class _WindowPhase:
     """The whole windows of :data:`RATE_CHECK_STEPS` steps that start ``skip`` steps into the file."""
 
     def __init__(self, skip):
-        self.skip0 = skip  # the step of the file its first window starts at
         self.skip = skip  # steps still to pass before the first window
         self.pending = np.empty(0)  # the steps after the last whole window
         self.pending_where = None  # where the first of them starts
@@ -262,7 +274,13 @@ class _WindowPhase:
             before_s = np.concatenate(([self.before.sum()], windows[:-1, half:].sum(axis=1)))
             before_n = np.concatenate(([len(self.before)], np.full(len(windows) - 1, half)))
             dense = check._dense(spans, RATE_CHECK_STEPS) & check._dense(spans + before_s, RATE_CHECK_STEPS + before_n)
-            off = check._wrong(medians, windows, self.skip0 + self.windows * RATE_CHECK_STEPS)
+            off, deferred = check._wrong(medians, windows)
+            if deferred.any() and check.deferred is None:
+                j = int(np.argmax(deferred))
+                start = j * RATE_CHECK_STEPS - len(self.pending)
+                check.deferred = (float(medians[j]), RATE_CHECK_STEPS,
+                                  self.pending_where if start < 0 else step_start(first + start),
+                                  self.windows + j == 0 and self.skip == 0 and first == 0, False)
             wrong = np.flatnonzero(off | dense)
             if wrong.size:
                 j = int(wrong[0])
