@@ -467,7 +467,8 @@ def test_a_tail_that_lost_every_other_sample_reads_as_gaps_as_it_does_inside_the
 
 
 @pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
-@pytest.mark.parametrize("lost_step_s, where", [(0.02, "tail"), (0.03, "tail"), (0.02, "inside"), (0.02, "start")])
+@pytest.mark.parametrize("lost_step_s, where", [(0.02, "tail"), (0.03, "tail"), (0.02, "inside"), (0.02, "start"),
+                                                 (0.02, "start, the rate shown by the last window")])
 def test_a_stretch_of_gaps_only_where_the_file_shows_its_rate_is_lost_samples(tmp_path, chunk_rows, lost_step_s, where):
     """A device that lost every other sample (or two of three) over its last 12 s, its counter's
     gaps: the last window held gaps only and was compared with the rate as a t at half the rate,
@@ -480,7 +481,9 @@ def test_a_stretch_of_gaps_only_where_the_file_shows_its_rate_is_lost_samples(tm
     lost = np.full(1200 if where == "tail" else 1500, lost_step_s)
     steps = {"tail": lambda: np.concatenate((np.full(5000, 0.01), lost)),
              "inside": lambda: np.concatenate((np.full(5000, 0.01), lost, np.full(2000, 0.01))),
-             "start": lambda: np.concatenate((lost, np.full(5000, 0.01)))}[where]()
+             "start": lambda: np.concatenate((lost, np.full(5000, 0.01))),
+             "start, the rate shown by the last window": lambda: np.concatenate((lost[:1200], np.full(600, 0.01)))
+             }[where]()
     head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
     assert len(data) == len(steps) + 1 and head.t_gaps == np.count_nonzero(steps > 0.015)
     path = tmp_path / "written.csv"

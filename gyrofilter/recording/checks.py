@@ -162,7 +162,9 @@ class TimeCheck:
         The steps after the last whole window are so judged with the ones before them, as any
         window's: a tail of 700 steps of which every other sample was lost is gaps, as it is inside
         the file (checked alone it showed half the rate, and a live recording whose device lost
-        every other line over its last 7 s was refused at its close and removed whole)."""
+        every other line over its last 7 s was refused at its close and removed whole). The last
+        window may show the rate too; a window of gaps only whose refusal waited (:meth:`_wrong`)
+        is refused now when no window showed it."""
         phase = self.phases[0]
         before = np.empty(0)
         if phase.windows == 0:
@@ -173,6 +175,7 @@ class TimeCheck:
             steps, before = self.last_steps[-RATE_CHECK_STEPS:], self.last_steps[:-RATE_CHECK_STEPS]
             n, start = RATE_CHECK_STEPS, f"up to {self.last_where}"
         median = typical_steps(steps[None, :], self.max_step_s, self.min_gaps_step_s)
+        self.rate_shown = self.rate_shown or not self._off(_lower_medians(steps[None, :]))[0]  # the last window's
         off, deferred = self._wrong(median, steps[None, :])
         if deferred[0] and self.deferred is None:
             self.deferred = (float(median[0]), n, start, phase.windows == 0, phase.windows > 0)
