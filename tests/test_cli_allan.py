@@ -533,6 +533,36 @@ def test_a_spike_in_the_accelerometer_alone_leaves_it_out_and_keeps_the_gyros_do
     assert sorted(json.loads((tmp_path / "k.json").read_text())["accelerometer"]["axes"]) == ["x", "y", "z"]
 
 
+@pytest.mark.parametrize("cause", ["gravity", "spike", "constant"])
+def test_the_json_says_the_accelerometer_was_left_out_and_why(tmp_path, capsys, cause):
+    """An accelerometer left out whole (it reads 9.8 g at rest under a header that says g, a spike
+    of 500 m/s^2, every axis stuck) was said only on the console: the --json document had no
+    accelerometer block, as a gyro-only record's (attack pass 11). Its accelerometer_left_out
+    says why, the warning's words; the gyro's part is the same; a record whose accelerometer was
+    analysed has no such key."""
+    path, gyro = _six_axis(tmp_path / "six.csv", accel_unit="g" if cause == "gravity" else "m/s^2")
+    if cause == "spike":
+        text = open(path).read().splitlines(True)
+        text[-100] = ",".join(text[-100].split(",")[:-1] + ["500"]) + "\n"  # az: 500 m/s^2 for one sample
+        open(path, "w").write("".join(text))
+    elif cause == "constant":
+        write_recording(path, Recording.from_dps(gyro, 100.0, accel=np.tile([0.0, 0.0, 9.80665], (len(gyro), 1)),
+                                                 accel_unit="m/s^2"))
+    assert main(["allan", path, "--json", str(tmp_path / "left.json")]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    why = {"gravity": "the accelerometer reads 9.81 g at rest (the median |a|)", "spike": "az = 500 m/s^2 is a gross error",
+           "constant": "every accelerometer axis analysed (ax, ay, az) is constant"}[cause]
+    left = json.loads((tmp_path / "left.json").read_text())
+    assert "accelerometer" not in left and left["accelerometer_left_out"].startswith(f"{path}: ")
+    assert why in left["accelerometer_left_out"] and (cause == "constant" or left["accelerometer_left_out"] in err), err
+    assert main(["allan", _write(tmp_path / "gyro.csv", gyro, lsb=False), "--json", str(tmp_path / "gyro.json")]) == 0
+    alone = json.loads((tmp_path / "gyro.json").read_text())
+    assert {k: v for k, v in left.items() if k not in ("recording", "accelerometer_left_out")} == \
+        {k: v for k, v in alone.items() if k != "recording"}
+    assert main(["allan", _six_axis(tmp_path / "good.csv")[0], "--json", str(tmp_path / "good.json")]) == 0
+    assert "accelerometer_left_out" not in json.loads((tmp_path / "good.json").read_text())
+
+
 def test_accelerometer_columns_without_accel_unit_leave_the_gyro_as_it_was_and_one_note(tmp_path, capsys):
     path, gyro = _six_axis(tmp_path / "six.csv")
     stripped = tmp_path / "no_unit.csv"

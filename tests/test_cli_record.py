@@ -20,7 +20,7 @@ from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources.simulated import DEFAULT_MODEL, DEFAULT_MODEL_PATH
-from support import RECORDINGS, play_lossy_device
+from support import RECORDINGS, play_lossy_device, play_serial_then_stop
 
 SIM_SECONDS = 60.0  # the source's own length; the recording is stopped long before
 RATE_HZ = 500.0
@@ -485,6 +485,50 @@ def test_a_serial_device_that_loses_samples_is_recorded_whole_with_its_gaps(tmp_
     np.testing.assert_allclose(np.diff(rec.t_s), steps, atol=1e-9)
     gap_notes = sum(text.startswith("gap: 1 samples lost before") for _, text in rec.notes)
     assert rec.t_gaps == np.count_nonzero(steps > 0.015) and gap_notes >= rec.t_gaps  # notes may run ahead of the cut
+
+
+SERIAL_HEADER = b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100 fields=counter,gx,gy,gz\n"
+
+
+def test_a_recording_whose_last_12_s_lost_every_other_sample_is_kept_whole(tmp_path):
+    """Attack pass 11: a device (a real pseudo-terminal) that sent 30 s of samples, then lost
+    every other one for 12 s (its counter's gaps): the last 1000 steps held gaps only, the writer
+    judged them a t at half the rate at its close, and the recording was removed whole. Every
+    sample delivered is kept, its gaps counted (the last line, whose counter jumped, waits for
+    a next one: at the stop it is written too, test_a_line_held_at_ctrl_c_is_written)."""
+    counters = np.concatenate((np.arange(3000), 3000 + 2 * np.arange(1, 1201)))
+    lines = b"".join(b"%d,%d,0,0\n" % (c, c % 7) for c in counters.tolist())
+    out = tmp_path / "lossy.csv"
+    primary, secondary = os.openpty()
+    proc = start_record(f"serial:{os.ttyname(secondary)}", out, "--quiet")
+    err = play_serial_then_stop(primary, secondary, proc, SERIAL_HEADER, lines, out, len(counters) - 1)
+    assert proc.returncode == 0, err
+    rec = read_recording(out)
+    n = len(rec)
+    assert n >= len(counters) - 1
+    np.testing.assert_array_equal(rec.t_s, counters[:n] / 100.0)
+    np.testing.assert_array_equal(rec.gyro_dps[:, 0], counters[:n] % 7)
+    assert rec.t_gaps == n - 3000
+
+
+@pytest.mark.parametrize("cut", [b"", b"506,1,"])
+def test_a_line_held_at_ctrl_c_is_written(tmp_path, cut):
+    """A serial line whose counter jumped waits for the next line to tell a gap from a corrupt
+    counter; at Ctrl-C it was dropped without a word (pass 11), where a disconnect writes it.
+    A stop ends the stream as a disconnect does: the line is written, its gap noted and counted
+    in the summary; a line cut off by the stop is counted as a cut line."""
+    counters = [*range(500), 505]
+    lines = b"".join(b"%d,%d,0,0\n" % (c, c % 7) for c in counters) + cut
+    out = tmp_path / "held.csv"
+    primary, secondary = os.openpty()
+    proc = start_record(f"serial:{os.ttyname(secondary)}", out, "--quiet")
+    err = play_serial_then_stop(primary, secondary, proc, SERIAL_HEADER, lines, out, 500)
+    assert proc.returncode == 0, err
+    rec = read_recording(out)
+    np.testing.assert_array_equal(rec.t_s, np.array(counters) / 100.0)
+    assert rec.t_gaps == 1 and any(text.startswith("gap: 5 samples lost before t=5.05 s") for _, text in rec.notes)
+    assert "wrote 501 samples" in err and "lost 5 samples" in err, err
+    assert ("partial lines 1" in err) == bool(cut), err
 
 
 def test_a_live_file_refused_at_its_close_does_not_stay(tmp_path):

@@ -396,17 +396,25 @@ def test_fleet_reports_equal_the_single_file_commands(small_fleet, tmp_path):
     assert (tmp_path / "f" / "unit0.imu.yaml").read_bytes() == (tmp_path / "one.yaml").read_bytes()
 
 
-def test_the_fleets_imu_yaml_takes_allans_kalibr_range(small_fleet, tmp_path):
-    """--kalibr-tau-s reaches each unit's imu.yaml (the same bytes as the single-file command's);
-    a range beyond a unit's 2-minute record fails that unit, naming the file and the option."""
+def test_the_fleets_imu_yaml_takes_allans_kalibr_range(small_fleet, tmp_path, capsys):
+    """--kalibr-tau-s reaches each unit's imu.yaml (the same bytes as the single-file command's).
+    A range beyond a unit's 2-minute record failed that unit, its Allan results lost with the
+    yaml (attack pass 11): the unit keeps its Allan document (the single-file command's bytes),
+    only its imu.yaml is not written, and a warning names the unit and why."""
     args = ["--kalibr-tau-s", "0.05,5"]
     assert main(["allan", small_fleet[0], "--kalibr", str(tmp_path / "one.yaml")] + args) == 0
     assert main(["allan", small_fleet[0], small_fleet[1], "--fleet", str(tmp_path / "f"), "--jobs", "1"] + args) == 0
     assert (tmp_path / "f" / "unit0.imu.yaml").read_bytes() == (tmp_path / "one.yaml").read_bytes()
     assert "bounding pair over tau 0.05 .. 5 s" in (tmp_path / "one.yaml").read_text()
-    main(["allan", small_fleet[0], "--fleet", str(tmp_path / "g"), "--jobs", "1", "--kalibr-tau-s", "0.05,100"])
-    assert not (tmp_path / "g" / "unit0.imu.yaml").exists()
-    assert "--kalibr-tau-s 0.05,100 s lies outside the record's cluster times" in (tmp_path / "g" / "fleet.md").read_text()
+    assert main(["allan", small_fleet[0], "--json", str(tmp_path / "one.json")]) == 0
+    capsys.readouterr()
+    assert main(["allan", small_fleet[0], "--fleet", str(tmp_path / "g"), "--jobs", "1", "--kalibr-tau-s", "0.05,100"]) == 0
+    assert sorted(os.listdir(tmp_path / "g")) == ["fleet.csv", "fleet.md", "unit0.allan.json"]
+    assert (tmp_path / "g" / "unit0.allan.json").read_bytes() == (tmp_path / "one.json").read_bytes()
+    why = "--kalibr-tau-s 0.05,100 s lies outside the record's cluster times"
+    assert f"imu.yaml not written: {why}" in (tmp_path / "g" / "fleet.csv").read_text()
+    out = capsys.readouterr().out
+    assert "1 analysed, 0 failed" in out and f"  no imu.yaml: unit0: {why}" in out, out
 
 
 @pytest.mark.parametrize("args,message", [

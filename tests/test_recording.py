@@ -382,12 +382,14 @@ def _t_body(steps_s):
 
 @pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
 @pytest.mark.parametrize("late_step_s, late_from", [pytest.param(0.001, 2300, id="t runs 10x fast"),
-                                                     pytest.param(0.02, 2000, id="every other sample lost")])
+                                                     pytest.param(0.025, 2000, id="t at 40 Hz from step 2000")])
 def test_t_is_checked_against_the_rate_in_every_window_not_only_the_first(tmp_path, chunk_rows, late_step_s, late_from):
-    """Only the first 1000 steps were checked: a t that ran 10x fast from step 2300 on, or lost
-    every other sample from step 2000 on (a window of gaps only: it looks like a header at twice
-    t's rate), read silently with the header's rate. Windows are steps 1-1000, 1001-2000, ...;
-    the third (mostly late steps) starts at sample 2000, file line 2005."""
+    """Only the first 1000 steps were checked: a t that ran 10x fast from step 2300 on, or at
+    40 Hz from step 2000 on (a window of gaps only, each 2.5 sample intervals: no whole number of
+    samples lost), read silently with the header's rate. Windows are steps 1-1000, 1001-2000, ...;
+    the third (mostly late steps) starts at sample 2000, file line 2005. (Every other sample lost
+    from step 2000 on reads, its gaps counted: a device's counter gaps look so,
+    test_a_stretch_of_gaps_only_where_the_file_shows_its_rate_is_lost_samples.)"""
     steps = np.full(4000, 0.01)
     steps[late_from:] = late_step_s
     path = _dps_file(tmp_path, _t_body(steps))
@@ -464,6 +466,43 @@ def test_a_tail_that_lost_every_other_sample_reads_as_gaps_as_it_does_inside_the
                                 name="inserted.csv"), chunk_rows)
 
 
+@pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
+@pytest.mark.parametrize("lost_step_s, where", [(0.02, "tail"), (0.03, "tail"), (0.02, "inside"), (0.02, "start"),
+                                                 (0.02, "start, the rate shown by the last window")])
+def test_a_stretch_of_gaps_only_where_the_file_shows_its_rate_is_lost_samples(tmp_path, chunk_rows, lost_step_s, where):
+    """A device that lost every other sample (or two of three) over its last 12 s, its counter's
+    gaps: the last window held gaps only and was compared with the rate as a t at half the rate,
+    and the live recording was refused at its close and removed whole (attack pass 11: 50 s of
+    samples lost); inside the file, or at its start, such a window ended the recording. Where
+    another window shows the rate (most of its steps one interval), a window of gaps only is lost
+    samples when its steps are whole sample intervals (up to 10); a t at half the rate throughout
+    (a step of one interval at its start or not), at 40 Hz (2.5 intervals) or 15 intervals apart
+    is still refused, by the reader and the writer alike."""
+    lost = np.full(1200 if where == "tail" else 1500, lost_step_s)
+    steps = {"tail": lambda: np.concatenate((np.full(5000, 0.01), lost)),
+             "inside": lambda: np.concatenate((np.full(5000, 0.01), lost, np.full(2000, 0.01))),
+             "start": lambda: np.concatenate((lost, np.full(5000, 0.01))),
+             "start, the rate shown by the last window": lambda: np.concatenate((lost[:1200], np.full(600, 0.01)))
+             }[where]()
+    head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps)), chunk_rows)
+    assert len(data) == len(steps) + 1 and head.t_gaps == np.count_nonzero(steps > 0.015)
+    path = tmp_path / "written.csv"
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "dps"}, ["t", "gx", "gy", "gz"]) as writer:
+        for i in range(0, len(t), chunk_rows if chunk_rows > 1 else 7):
+            part = t[i:i + (chunk_rows if chunk_rows > 1 else 7)]
+            writer.write(np.column_stack((part, np.zeros((len(part), 3)))))
+    np.testing.assert_array_equal(read_recording(path).t_s, t)
+    for first in ([], [0.01]):  # t at half the rate, a step of one interval at its start or not
+        with pytest.raises(RecordingError, match=r"t steps by 0.02 s \(median of "):
+            _read_chunked(_dps_file(tmp_path, _t_body(np.concatenate((first, np.full(3000, 0.02)))), name="half.csv"),
+                          chunk_rows)
+    for odd_s in (0.025, 0.15):
+        steps[steps > 0.015] = odd_s
+        with pytest.raises(RecordingError, match=rf"t steps by {odd_s:g} s"):
+            _read_chunked(_dps_file(tmp_path, _t_body(steps), name="odd.csv"), chunk_rows)
+
+
 @pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
 def test_a_filtered_outputs_rows_whose_blocks_lost_samples_are_its_gaps(tmp_path, chunk_rows):
     """Issue 37 (attack 4): a filtered output (header input_sample_rate_hz, rows per block of 5
@@ -499,17 +538,17 @@ def test_a_stretch_at_another_rate_as_long_as_a_window_is_caught_wherever_it_lie
 def test_writers_refuse_a_t_the_reader_would_refuse(tmp_path):
     """What is written reads back: a t whose steps disagree with sample_rate_hz in some window."""
     steps = np.full(2999, 0.01)
-    steps[1000:] = 0.03  # a window of gaps only: nothing in it shows the header's rate
+    steps[1000:] = 0.025  # a window of gaps only, 2.5 sample intervals each: t at 40 Hz
     t = np.concatenate(([0.0], np.cumsum(steps)))
     rec = Recording.from_dps(np.zeros((3000, 3)), 100.0, t_s=t)
-    with pytest.raises(RecordingError, match=r"late.csv: t steps by 0.03 s \(median of the 1000 steps from row 1001 of "
+    with pytest.raises(RecordingError, match=r"late.csv: t steps by 0.025 s \(median of the 1000 steps from row 1001 of "
                                              r"the output\), .* \(not written: it would not read back\)"):
         write_recording(tmp_path / "late.csv", rec)
     assert not (tmp_path / "late.csv").exists()
     path = tmp_path / "live.csv"
     with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "dps"}, ["t", "gx", "gy", "gz"], name="mine.csv") as writer:
         writer.write(np.column_stack([t[:1200], np.zeros((1200, 3))]))
-        with pytest.raises(RecordingError, match=r"^mine.csv: t steps by 0.03 s \(median of the 1000 steps from row 1001 "
+        with pytest.raises(RecordingError, match=r"^mine.csv: t steps by 0.025 s \(median of the 1000 steps from row 1001 "
                                                  r"of the output\), .*\(not written: it would not read back\)$"):
             writer.write(np.column_stack([t[1200:], np.zeros((1800, 3))]))
     assert len(read_recording(path)) == 1200

@@ -79,10 +79,10 @@ def test_columns_without_accel_unit_are_not_analysed_and_said_so(tmp_path):
     text = open(path).read()
     stripped = tmp_path / "no_unit.csv"
     stripped.write_text("".join(line for line in text.splitlines(True) if not line.startswith("# accel_unit")))
-    head, results, _, accel = characterise_recording(str(stripped), warn=lambda text: None)
+    head, results, _, accel, _ = characterise_recording(str(stripped), warn=lambda text: None)
     assert accel is None and set(results) == set("xyz")
     assert "accel_unit" in accelerometer_note(head)
-    head, _, _, accel = characterise_recording(path, warn=lambda text: None)
+    head, _, _, accel, _ = characterise_recording(path, warn=lambda text: None)
     assert accelerometer_note(head) is None and set(accel) == set("xyz")
 
 
@@ -125,7 +125,7 @@ def test_an_accelerometer_whose_header_lies_about_its_unit_is_left_out_not_scale
         write_recording(str(tmp_path / f"{name}.csv"),
                         Recording.from_dps(gyro, 100.0, accel=values, accel_unit=unit, lsb_per_g=lsb_per_g))
         said.append([])
-        _, results, _, accel = characterise_recording(str(tmp_path / f"{name}.csv"), warn=said[-1].append)
+        _, results, _, accel, _ = characterise_recording(str(tmp_path / f"{name}.csv"), warn=said[-1].append)
         if name == "good":
             assert set(accel) == set("xyz") and not said[-1]
             gyro_results = results

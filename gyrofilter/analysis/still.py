@@ -188,7 +188,8 @@ LEFT_OUT = ": left out of the Allan analysis"
 def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
                            progress=None, skip_constant=False):
     """Read a still recording and characterise each of ``axes`` of every sensor it holds: (head,
-    {axis: AxisNoise}, the count of its repeated rows, the accelerometer's {axis: AxisNoise} or None).
+    {axis: AxisNoise}, the count of its repeated rows, the accelerometer's {axis: AxisNoise} or None,
+    why the record's accelerometer was left out whole or None).
 
     The one path from a file to its Allan results, for one recording and for a fleet
     (:mod:`gyrofilter.analysis.fleet`). The reader's warnings, missing samples and gross errors kept with
@@ -222,12 +223,15 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     costs no float64 precision. A constant accelerometer axis is left out, said through ``warn``,
     whatever ``skip_constant`` says: it never costs the gyro's results (None when every axis is);
     so is the whole accelerometer when its samples do not read gravity (:func:`gravity_unlike`).
+    The last item says why the whole accelerometer was left out (the warning's text without
+    :data:`LEFT_OUT`; ``allan --json``'s ``accelerometer_left_out``), None when it was not.
     """
     head, series, accel = read_axes(path, axes, with_accel=True)
     for text in head.warnings:
         warn(text)
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
+    left_out = None
     if accel is not None:
         unlike = gravity_unlike(accel, head)
         accel = {f"a{a}": accel[f"a{a}"] for a in axes}  # the axes analysed
@@ -237,7 +241,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
             unlike = str(exc)
         if unlike:  # or its unit is wrong: every coefficient would be off by the same factor
             warn(f"{unlike}{LEFT_OUT}")
-            accel = None
+            accel, left_out = None, unlike
     repeats = repeated_rows([series[a] for a in axes], 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
                             axes=axes)
     said = repeats_warning(repeats)
@@ -250,7 +254,9 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     if accel is not None:
         accel_results = _characterise_sensor({a: accel.pop(f"a{a}") for a in axes}, ACCEL_SENSOR, skip_constant=True,
                                              **settings) or None
-    return head, results, repeats, accel_results
+        if accel_results is None:
+            left_out = f"{path}: every accelerometer axis analysed ({', '.join('a' + a for a in axes)}) is constant"
+    return head, results, repeats, accel_results, left_out
 
 
 #: how :func:`characterise_recording` treats each sensor: the prefix of its axis names in messages,

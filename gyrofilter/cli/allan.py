@@ -96,9 +96,9 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     A result that is not finite raises AllanInputError naming the file; a stuck axis (not
     skipped) says which ``--axes`` analyse the others."""
     try:
-        head, results, repeats, accel = characterise_recording(path, axes=axes, confidence=confidence, min_clusters=min_clusters,
-                                               keep_outliers=keep_outliers, warn=warn, progress=progress,
-                                               skip_constant=skip_constant)
+        head, results, repeats, accel, accel_left_out = characterise_recording(
+            path, axes=axes, confidence=confidence, min_clusters=min_clusters, keep_outliers=keep_outliers, warn=warn,
+            progress=progress, skip_constant=skip_constant)
     except ConstantAxisError as exc:  # which --axes would run: the others that vary (all of them were "yz" of a file of equal rows)
         others = exc.varying
         advice = (f"; give --axes {others} to analyse the others" if others else
@@ -108,7 +108,8 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
         raise AllanInputError(f"{path}: {exc}") from None
     duration_s = head.rows / head.sample_rate_hz
     return head, results, to_json(results, head.sample_rate_hz, recording=path, duration_s=duration_s,
-                                  repeated_rows=repeats, accelerometer=accel), accel
+                                  repeated_rows=repeats, accelerometer=accel,
+                                  accelerometer_left_out=accel_left_out), accel
 
 
 def misfit_text(r):

@@ -135,11 +135,14 @@ def run(args, settings, paths):
         fh.write(table.fleet_csv(rows))
     with outputs.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
         fh.write(table.fleet_markdown(rows, stats, title=title))
-    return _summary(rows, fleet_files, written, time.perf_counter() - t0)
+    no_yaml = [f"{names[i]}: {w[len(work.NO_IMU_YAML):]}" for i, r in enumerate(results) for w in r["warnings"]
+               if w.startswith(work.NO_IMU_YAML)]
+    return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml)
 
 
-def _summary(rows, fleet_files, written, elapsed_s):
-    """Print the fleet's outcome on stdout; the exit code."""
+def _summary(rows, fleet_files, written, elapsed_s, no_yaml=()):
+    """Print the fleet's outcome on stdout; the exit code. ``no_yaml``: "UNIT: why" of each unit
+    analysed whose imu.yaml was not written (its Allan document was)."""
     failed, left_out = table.failed_rows(rows), table.left_out_rows(rows)
     units = len({r["unit"] for r in rows})
     done = len({r["unit"] for r in rows if r["status"] == "ok"})
@@ -151,6 +154,8 @@ def _summary(rows, fleet_files, written, elapsed_s):
         console.tell(f"  failed: {r['status']}")
     for r in left_out:
         console.tell(f"  left out: {r['status']}")
+    for text in no_yaml:
+        console.tell(f"  no imu.yaml: {text}")
     for r in flagged:
         for f in r["flag"]:
             console.tell(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")

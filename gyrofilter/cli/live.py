@@ -301,6 +301,7 @@ class LiveLoop:
         self._t_end = None  # samples at t >= this are beyond the duration (half a sample of margin)
         self.samples = 0
         self.ended = None  # SourceEnded, DeviceError or DURATION_REACHED
+        self._finished = False  # a stop signal came and the source's held rows were taken
         self._signals = StopSignals()
 
     def __enter__(self):
@@ -311,11 +312,17 @@ class LiveLoop:
         return self._signals.__exit__(*exc)
 
     def next(self):
-        """The next ``(rows, notes)``, or None when the loop is over."""
-        if self._signals.received is not None or self.ended is not None:
+        """The next ``(rows, notes)``, or None when the loop is over. A stop signal ends the
+        source's stream: its last step is the rows the source held back (``source.finish()``, a
+        serial line whose counter jumped, written as at a disconnect), within ``duration_s``."""
+        if self.ended is not None or self._finished:
             return None
         try:
-            rows = self.source.read()
+            if self._signals.received is not None:
+                self._finished = True
+                rows = self.source.finish()
+            else:
+                rows = self.source.read()
         except SourceEnded as exc:
             self.ended = exc
             return None

@@ -73,7 +73,11 @@ class TimeCheck:
       at half the rate or less (a file of samples whose header names an input rate was so read
       at any rate). A shorter one shows no rate and passes (every block of the window lost a
       few samples: each step is longer than a row interval by the input samples lost, which
-      says nothing of the rate);
+      says nothing of the rate). A window of gaps only whose typical step is a whole number of
+      input sample intervals is lost samples where another window of the file showed the rate
+      (most of its steps one sample interval), and refused at the end where none did
+      (:meth:`_wrong`): a device's counter gaps over 1000 steps or more at the start or the end
+      of a recording no longer look like a t at half the rate;
     - the rows of every such window (and of the last window) are not denser than the rate: its
       steps span at least (1 - RATE_TOLERANCE) times their number of sample intervals
       (:meth:`_dense`), or, with the half window of steps before it, the steps of both do (samples
@@ -98,6 +102,9 @@ class TimeCheck:
             (2.0 - RATE_TOLERANCE) / head.sample_rate_hz
         self.t_last = None
         self.last_where = None  # where the last sample of the previous chunk is
+        self.steps_seen = 0  # the steps of the chunks added so far
+        self.rate_shown = False  # a window showed the rate (:meth:`_note_rate_shown`)
+        self.deferred = None  # the refusal of the first window of gaps only judged at the end (:meth:`_wrong`)
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
         self.last_steps = np.empty(0)  # the last 1.5 RATE_CHECK_STEPS steps (:meth:`finish`'s last window and before it)
 
@@ -115,7 +122,9 @@ class TimeCheck:
             k = int(bad[0])
             raise RecordingError(f"{head.path}: {where(k + row0)}: t does not increase "
                                  f"({float(cur[k])!r} after {float(prev[k])!r})")
-        head.t_gaps += int(np.count_nonzero(step > self.max_step_s))
+        gaps = step > self.max_step_s
+        head.t_gaps += int(np.count_nonzero(gaps))
+        self._note_rate_shown(step)
         last_where = self.last_where
 
         def step_start(i):  # where the sample a step of this chunk starts from is
@@ -125,8 +134,27 @@ class TimeCheck:
             phase.add(step, step_start, self)
         keep = RATE_CHECK_STEPS + RATE_CHECK_STEPS // 2
         self.last_steps = np.concatenate((self.last_steps, step[-keep:]))[-keep:]
+        self.steps_seen += len(step)
         self.t_last = float(t[-1])
         self.last_where = where(len(t) - 1)
+
+    def _note_rate_shown(self, step):
+        """Note whether the file showed its rate (``rate_shown``): a window of RATE_CHECK_STEPS steps,
+        ending at a multiple of half a window, whose lower median of all its steps, gaps included,
+        is the rate's step within RATE_TOLERANCE (most of its steps one sample interval).
+        ``step``: the steps of the chunk being added."""
+        if self.rate_shown:
+            return
+        half = RATE_CHECK_STEPS // 2
+        start, end = self.steps_seen, self.steps_seen + len(step)
+        ends = np.arange(max(RATE_CHECK_STEPS, (start // half + 1) * half), end + 1, half)
+        if not len(ends):
+            return
+        before = self.last_steps[-RATE_CHECK_STEPS:]
+        steps = np.concatenate((before, step))
+        first = start - len(before)  # the file's step index of steps[0]
+        windows = np.lib.stride_tricks.sliding_window_view(steps, RATE_CHECK_STEPS)[ends - RATE_CHECK_STEPS - first]
+        self.rate_shown = bool((~self._off(_lower_medians(windows))).any())
 
     def finish(self):
         """At the end: a file shorter than one window on all its steps (their span only when half
@@ -134,7 +162,9 @@ class TimeCheck:
         The steps after the last whole window are so judged with the ones before them, as any
         window's: a tail of 700 steps of which every other sample was lost is gaps, as it is inside
         the file (checked alone it showed half the rate, and a live recording whose device lost
-        every other line over its last 7 s was refused at its close and removed whole)."""
+        every other line over its last 7 s was refused at its close and removed whole). The last
+        window may show the rate too; a window of gaps only whose refusal waited (:meth:`_wrong`)
+        is refused now when no window showed it."""
         phase = self.phases[0]
         before = np.empty(0)
         if phase.windows == 0:
@@ -144,12 +174,50 @@ class TimeCheck:
         else:
             steps, before = self.last_steps[-RATE_CHECK_STEPS:], self.last_steps[:-RATE_CHECK_STEPS]
             n, start = RATE_CHECK_STEPS, f"up to {self.last_where}"
-        median = float(typical_steps(steps[None, :], self.max_step_s, self.min_gaps_step_s)[0])
-        if self._off(median):
-            self._refuse(median, n, start, first=phase.windows == 0, last=phase.windows > 0)
+        median = typical_steps(steps[None, :], self.max_step_s, self.min_gaps_step_s)
+        self.rate_shown = self.rate_shown or not self._off(_lower_medians(steps[None, :]))[0]  # the last window's
+        off, deferred = self._wrong(median, steps[None, :])
+        if deferred[0] and self.deferred is None:
+            self.deferred = (float(median[0]), n, start, phase.windows == 0, phase.windows > 0)
+        if off[0]:
+            self._refuse(float(median[0]), n, start, first=phase.windows == 0, last=phase.windows > 0)
+        if self.deferred is not None and not self.rate_shown:  # no window showed the rate: t at 1/k of it
+            self._refuse(*self.deferred[:3], first=self.deferred[3], last=self.deferred[4])
         if (n >= RATE_CHECK_STEPS // 2 and self._dense(steps.sum(), n)
                 and self._dense(steps.sum() + before.sum(), n + len(before))):
             self._refuse_dense(float(steps.sum()), n, start)
+
+    def _wrong(self, typical_s, windows):
+        """(whether each window is off the rate, whether it is a window of gaps only judged at the
+        end): ``typical_s`` the windows' typical steps (of :func:`typical_steps`), ``windows`` (2-D)
+        their steps. A window of gaps only whose typical step is a whole number of input sample
+        intervals, within RATE_TOLERANCE of each (:meth:`_off_whole`), is lost samples where the
+        file shows its rate (:meth:`_note_rate_shown`: a window whose steps are mostly one sample
+        interval, before or after it): a device that lost every other sample over its first or
+        last 10 s (counter gaps) looks just like a t at half the rate, but the rest of the file
+        shows the rate. Where it is off the rate as any window is, its refusal waits for the end
+        (:meth:`finish`: refused there when no window showed the rate: a t at half the rate, a
+        few steps of one interval among its steps or not). One that is no whole number of
+        intervals (2.5: t at 40 Hz in a 100-Hz file) is refused at once."""
+        off = self._off(typical_s)
+        gaps_only = (windows > self.max_step_s).all(axis=1)
+        whole = gaps_only & ~self._off_whole(typical_s)
+        deferred = whole & off
+        off = off & ~whole
+        return off, deferred
+
+    def _off_whole(self, typical_s):
+        """Whether each typical step is no whole number k of input sample intervals, more than
+        RATE_TOLERANCE off per interval (|typical_s / k - 1 / input_sample_rate_hz|, k the nearest),
+        or longer than 1 / (2 RATE_TOLERANCE) = 10 row intervals (1 / sample_rate_hz), where every
+        step of a file of samples is within RATE_TOLERANCE of some k (a step beyond a float's range too)."""
+        input_s = 1.0 / self.head.input_sample_rate_hz
+        with np.errstate(over="ignore", invalid="ignore"):
+            k = np.round(typical_s / input_s)
+            per_s = typical_s / np.maximum(k, 1.0)
+            whole = ((np.round(typical_s * self.head.sample_rate_hz) <= 0.5 / RATE_TOLERANCE)
+                     & (np.abs(per_s - input_s) <= RATE_TOLERANCE * input_s))
+        return ~whole
 
     def _off(self, typical_s):
         """Whether each typical step is more than RATE_TOLERANCE off the rate's (NaN, no rate shown: not off)."""
@@ -209,12 +277,19 @@ class _WindowPhase:
             before_s = np.concatenate(([self.before.sum()], windows[:-1, half:].sum(axis=1)))
             before_n = np.concatenate(([len(self.before)], np.full(len(windows) - 1, half)))
             dense = check._dense(spans, RATE_CHECK_STEPS) & check._dense(spans + before_s, RATE_CHECK_STEPS + before_n)
-            wrong = np.flatnonzero(check._off(medians) | dense)
+            off, deferred = check._wrong(medians, windows)
+            if deferred.any() and check.deferred is None:
+                j = int(np.argmax(deferred))
+                start = j * RATE_CHECK_STEPS - len(self.pending)
+                check.deferred = (float(medians[j]), RATE_CHECK_STEPS,
+                                  self.pending_where if start < 0 else step_start(first + start),
+                                  self.windows + j == 0 and self.skip == 0 and first == 0, False)
+            wrong = np.flatnonzero(off | dense)
             if wrong.size:
                 j = int(wrong[0])
                 start = j * RATE_CHECK_STEPS - len(self.pending)
                 where = self.pending_where if start < 0 else step_start(first + start)
-                if not check._off(medians[j]):
+                if not off[j]:
                     check._refuse_dense(float(spans[j]), RATE_CHECK_STEPS, where)
                 check._refuse(float(medians[j]), RATE_CHECK_STEPS, where,
                               first=self.windows + j == 0 and self.skip == 0 and first == 0)

@@ -35,6 +35,9 @@ Every opened source is a :class:`gyrofilter.sources.base.Source`:
 - ``read()``: the rows available now, shape (n, len(columns)); waits at most about 0.1 s;
   shape (0, k) when nothing arrived; raises :class:`gyrofilter.errors.SourceEnded` at the end
   of a finite source (the exception's text says why it ended);
+- ``finish()``: at a stop (Ctrl-C), the rows the source held back waiting for more input (a
+  serial line whose counter jumped, :meth:`~gyrofilter.sources.serial.protocol.LineParser.finish`),
+  as at the end of its stream; none for the others;
 - ``pop_notes()``: events since the last call (gaps, restarts), written as annotation lines;
 - ``stats``: counters (``samples``, ``lost_samples``, ``garbage_bytes``, ...);
 - ``close()`` (also ``with source: ...``).

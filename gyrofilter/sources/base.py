@@ -1,6 +1,8 @@
 """The base of every live source: the protocol of :mod:`gyrofilter.sources` in one class."""
 from __future__ import annotations
 
+import numpy as np
+
 from ..closable import Closable
 from ..recording import GYRO_COLUMNS
 from ..units import to_dps
@@ -21,6 +23,11 @@ class Source(Closable):
     sample_rate_hz: float
     gyro_unit: str
     lsb_per_dps: float | None = None
+
+    def finish(self):
+        """The rows held back waiting for more input, given out at a stop as at the end of the
+        stream (shape (n, len(columns))); none unless a subclass holds some."""
+        return np.empty((0, len(self.columns)))
 
     def pop_notes(self):
         """Events since the last call (gaps, restarts, device messages), as one-line strings."""

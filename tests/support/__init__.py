@@ -11,8 +11,10 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import os
+import signal
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -58,6 +60,34 @@ def lsb_recording(tmp_path, name="rec.csv", n=2500, gap_at=None, gap=0, notes=()
     path = tmp_path / name
     write_recording(path, rec)
     return path, read_recording(path)
+
+
+def play_serial_then_stop(primary, secondary, proc, header, lines, out, rows, timeout_s=60.0):
+    """Play a serial device on the pseudo-terminal ``primary`` (its other end ``secondary``) for the
+    ``record`` or ``run`` process ``proc``: answer its ``?`` with the protocol ``header`` line, send
+    ``lines`` (bytes), wait until the plain-text ``out`` holds ``rows`` data rows (counted as text,
+    whatever the reader says of them), then stop it with SIGINT (Ctrl-C). Both ends are closed.
+    Returns the command's stderr."""
+    def feed():
+        with contextlib.suppress(OSError):  # the command ended and the port closed
+            os.write(primary, lines)
+
+    try:
+        assert os.read(primary, 1) == b"?"
+        os.write(primary, header)
+        threading.Thread(target=feed, daemon=True).start()
+        deadline = time.monotonic() + timeout_s
+        while proc.poll() is None and time.monotonic() < deadline:
+            with contextlib.suppress(OSError):
+                with open(out, "rb") as f:
+                    if sum(1 for ln in f if ln[:1] not in (b"#", b"t")) >= rows:
+                        break
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        return proc.communicate(timeout=timeout_s)[1]
+    finally:
+        os.close(primary)
+        os.close(secondary)
 
 
 def tool(name):

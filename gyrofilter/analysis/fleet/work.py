@@ -5,13 +5,16 @@ from __future__ import annotations
 import dataclasses
 import time
 
-from ...errors import one_line
+from ...errors import SettingsError, one_line
 from ...units import AXES
 from ..gap.pipeline import analyse_file
 from ..noise.allan import MIN_CLUSTERS
 from ..noise.export import kalibr_yaml, to_json
 from ..still import characterise_recording
 
+
+#: how a unit's warning that its imu.yaml was not written (and why) starts (the fleet's summary lists them)
+NO_IMU_YAML = "imu.yaml not written: "
 
 #: exceptions that make a file's row "failed": the same as the command line's one-line errors,
 #: and running out of memory (a worker with too large a file)
@@ -44,6 +47,8 @@ def analyse_recording(path, settings):
     document of docs/formats.md section 4, or None), ``kalibr`` (Kalibr's imu.yaml text, or
     None), ``gap`` (the gap report of section 3, or None) and ``runtime_s`` (wall time).
 
+    A unit whose record the imu.yaml's range (``kalibr_tau_s``) does not fit keeps its Allan
+    document; ``kalibr`` is None and a warning starting :data:`NO_IMU_YAML` says why.
     With ``settings.command == "gap"`` a failure of the Allan part (gross errors, a record too
     short for two cluster times) leaves ``allan`` None with the reason in ``warnings``, and the
     gap report stands.
@@ -78,24 +83,26 @@ def _allan_part(path, settings, result):
         if text not in result["warnings"]:  # the gap part read the same file and said it already
             result["warnings"].append(text)
 
-    head, results, repeats, accel = characterise_recording(path, axes=settings.axes, confidence=settings.confidence,
-                                                           min_clusters=settings.min_clusters,
-                                                           keep_outliers=settings.keep_outliers, warn=warn,
-                                                           skip_constant=True)
+    head, results, repeats, accel, accel_left_out = characterise_recording(
+        path, axes=settings.axes, confidence=settings.confidence, min_clusters=settings.min_clusters,
+        keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True)
     sample_rate_hz = head.sample_rate_hz
     kalibr = None
     if "filtered_from" in head.header:  # the filter's output is analysed, but its noise is not the sensor's
-        result["warnings"].append("imu.yaml not written: the recording is the filter's output (filtered_from), "
+        result["warnings"].append(f"{NO_IMU_YAML}the recording is the filter's output (filtered_from), "
                                   "not the sensor's samples")
     else:
-        kalibr = kalibr_yaml(results, sample_rate_hz, recording=path, tau_range_s=settings.kalibr_tau_s,
-                             accelerometer=accel, header=head.header, warnings=result["warnings"])  # may refuse the range
+        try:
+            kalibr = kalibr_yaml(results, sample_rate_hz, recording=path, tau_range_s=settings.kalibr_tau_s,
+                                 accelerometer=accel, header=head.header, warnings=result["warnings"])
+        except SettingsError as exc:  # --kalibr-tau-s beyond this unit's record: its Allan results stand
+            result["warnings"].append(NO_IMU_YAML + one_line(exc))
     for prefix, sensor in (("", results), ("a", accel or {})):
         for axis, r in sensor.items():
             result["warnings"].extend(text if text.startswith("axis ") else f"axis {prefix}{axis}: {text}"
                                       for text in r.warnings)
     result["allan"] = to_json(results, sample_rate_hz, recording=path, duration_s=head.rows / sample_rate_hz,
-                              repeated_rows=repeats, accelerometer=accel)
+                              repeated_rows=repeats, accelerometer=accel, accelerometer_left_out=accel_left_out)
     result["kalibr"] = kalibr
     result["sample_rate_hz"], result["duration_s"] = sample_rate_hz, head.rows / sample_rate_hz
 

@@ -62,14 +62,17 @@ def _details_json(c: Coefficient, model_value=None, sensor=GYRO_JSON):
     return d
 
 
-def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeated_rows=None, accelerometer=None):
+def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeated_rows=None, accelerometer=None,
+            accelerometer_left_out=None):
     """The ``gyrofilter allan --json`` document (docs/formats.md, section 4) of ``results``
     ({axis name: AxisNoise}, from :func:`characterise`) for a record at ``sample_rate_hz`` (Hz);
     ``recording`` (its name), ``duration_s`` (s) and ``repeated_rows`` (the record's
     :class:`~gyrofilter.analysis.repeats.RepeatedRows`, its block with the warning where it holds more
     repeated rows than chance) are written when given. ``accelerometer``: the accelerometer's
     {axis name: AxisNoise} (m/s^2), written as the block ``accelerometer`` (its axes as the gyro's, in
-    the m/s units of :data:`ACCEL_JSON_KEY`); None: no such block."""
+    the m/s units of :data:`ACCEL_JSON_KEY`); None: no such block. ``accelerometer_left_out``: why the
+    record's accelerometer was left out whole (it does not read gravity, a gross error, every axis
+    constant), written as ``accelerometer_left_out``; None: no such key."""
     doc = {"sample_rate_hz": float(sample_rate_hz)}
     if recording is not None:
         doc["recording"] = utf8_text(str(recording))
@@ -104,6 +107,8 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
                          "read-offs as the gyro's (method), with velocity in the place of the angle",
             "units": {ACCEL_JSON_KEY[t]: ACCEL_JSON_UNIT[t] for t in TERMS},
             "axes": {name: _axis_json(r, ACCEL_JSON) for name, r in accelerometer.items()}}
+    if accelerometer_left_out is not None:
+        doc["accelerometer_left_out"] = utf8_text(str(accelerometer_left_out))
     return doc
 
 

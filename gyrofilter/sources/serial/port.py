@@ -143,6 +143,15 @@ class SerialSource(Source):
             raise SourceEnded(f"{self.port_name}: {self._ended} after {self.stats['samples']} samples; everything received is kept")
         return self._receive()
 
+    def finish(self):
+        """At a stop (Ctrl-C), the stream ends here: the row of a last line whose counter jumped,
+        which waited for the next line, as at a disconnect (:meth:`LineParser.finish`; a cut
+        line counted), after any rows not yet read (those that came with the header); nothing
+        more after the port is gone (its held line was given out then)."""
+        rows = np.concatenate([*self._pending, self._parser.finish()])
+        self._pending = []
+        return rows
+
     def pop_notes(self):
         """Events since the last call (gaps, restarts, skipped lines, device messages)."""
         return self._parser.pop_notes()
