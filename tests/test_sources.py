@@ -389,8 +389,10 @@ def test_a_file_in_a_partitioned_folder_is_recorded(tmp_path, monkeypatch):
     rec = Recording.from_dps(np.random.default_rng(11).normal(0, 0.05, (500, 3)), 100.0)
     write_recording(folder / "imu.csv", rec)
     write_recording(tmp_path / "v=2", rec)
+    write_recording(tmp_path / "speed=2.csv", rec)  # named as a key of replay: the existing file wins (pass 12)
     monkeypatch.chdir(tmp_path)
-    for source in (f"replay:{folder / 'imu.csv'}", "date=2024-01-01/imu.csv", "replay:v=2,realtime=0"):
+    for source in (f"replay:{folder / 'imu.csv'}", "date=2024-01-01/imu.csv", "replay:v=2,realtime=0",
+                   "speed=2.csv", "replay:speed=2.csv,speed=3"):
         out = tmp_path / "out.csv"
         assert main(["record", "--source", source, "--out", str(out), "--force"]) == 0, source
         np.testing.assert_array_equal(read_recording(out).gyro_dps, rec.gyro_dps)

@@ -193,7 +193,7 @@ def parse_source(spec: str):
             continue
         key, eq, value = item.partition("=")
         key, value = key.strip().lower(), value.strip()
-        if index == 0 and positional_name is not None and key not in keys and (not eq or _names_a_file(item, key)):
+        if index == 0 and positional_name is not None and (os.path.isfile(item) or key not in keys and (not eq or _names_a_file(item, key))):
             kwargs[positional_name] = item
             given[positional_name] = f"the {positional_name}"
             continue
