@@ -159,5 +159,5 @@ def _summary(rows, fleet_files, written, elapsed_s, no_yaml=()):
     for r in flagged:
         for f in r["flag"]:
             console.tell(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
-    console.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report(s)")
+    console.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report file(s)")
     return EXIT_NOTHING_DONE if not done else 0
