@@ -104,23 +104,34 @@ def avar_correlation(m1, m2, alpha):
     return out
 
 
+@functools.lru_cache(maxsize=16)
+def _term_moments(n_samples, m):
+    """Per term (rows in TERMS order) at the cluster sizes ``m`` (a tuple) of ``n_samples``: the
+    relative standard deviation ``sqrt(2 / edf)`` of the Allan variance (SP 1065 EDF) and the
+    correlation matrix (:func:`avar_correlation`); kept, since the bounds' searches ask for the
+    covariance of many mixtures on the same taus."""
+    m = np.asarray(m, dtype=np.float64)
+    rel_sd = np.array([np.sqrt(2.0 / edf_oavar(n_samples, m, TERM_ALPHA[t])) for t in TERMS])
+    corr = np.array([avar_correlation(m[:, None], m[None, :], TERM_ALPHA[t]) for t in TERMS])
+    return rel_sd, corr
+
+
 def avar_covariance(tau_s, m, n_samples, theta_sq):
     """Approximate covariance matrix of the Allan variance estimates at ``m`` (cluster sizes; ``tau_s`` the cluster times, s; ``n_samples`` samples) for the noise
     mixture ``theta_sq`` (Q^2 ... R^2): standard deviations from the SP 1065 EDF of each term,
     summed (conservative), and correlations from :func:`avar_correlation`, averaged over the
     terms with weights sqrt(sd_ki sd_kj)."""
     m = np.asarray(m, dtype=np.float64)
-    shares = term_shares(theta_sq, tau_s)
-    sd_k = np.array([shares[k] * np.sqrt(2.0 / edf_oavar(n_samples, m, TERM_ALPHA[t]))
-                     for k, t in enumerate(TERMS)])
+    rel_sd, corr = _term_moments(int(n_samples), tuple(m.tolist()))
+    sd_k = term_shares(theta_sq, tau_s) * rel_sd
     sd = sd_k.sum(axis=0)
     num = np.zeros((m.size, m.size))
     den = np.zeros((m.size, m.size))
-    for k, t in enumerate(TERMS):
+    for k in range(len(TERMS)):
         if not np.any(sd_k[k] > 0):
             continue
         a = np.sqrt(np.outer(sd_k[k], sd_k[k]))
-        num += a * avar_correlation(m[:, None], m[None, :], TERM_ALPHA[t])
+        num += a * corr[k]
         den += a
     rho = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.eye(m.size))
     return sd, rho * np.outer(sd, sd)
@@ -167,7 +178,7 @@ def reduced_chi2(a, y, theta, w, cov_y, active):
     return x2 / dof, dof
 
 
-def fixed_fit(a, w, y, terms, u, t):
+def _fixed_fit(a, w, y, terms, u, t):
     """The weighted least-squares fit of ``terms`` (bool, 5) to ``y`` with term ``u`` (an index in
     ``terms``) held at ``theta_u = t``: the other terms are ``G (y - t a_u)`` with the gain ``G``
     (:func:`fitted_intervals`) of their columns of ``a`` and the weights ``w``. Returns
@@ -196,7 +207,7 @@ def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
     ``sd(t)^2 = g C(t) g'``: ``C(t) = cov_of(theta(t))`` (:func:`avar_covariance`) times the misfit
     scale of the fit with ``u`` forced in (``max(1, chi2_nu)``, :func:`reduced_chi2`, with ``widen``;
     the misfit of the fit without it holds the term's own share, which the hypothesis now
-    explains), ``theta(t)`` the other terms refitted with ``u`` held at ``t`` (:func:`fixed_fit`,
+    explains), ``theta(t)`` the other terms refitted with ``u`` held at ``t`` (:func:`_fixed_fit`,
     negative values taken as 0). Of it, ``s0^2 = sd(0)^2`` is the other terms' scatter, taken as
     normal (the estimate is a difference of Allan variances: it can be negative), and the rest,
     ``sd(t)^2 - s0^2``, the term's own, taken as ``t chi2(nu) / nu`` with
@@ -223,7 +234,7 @@ def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
     z = NormalDist().inv_cdf(1.0 - p)
 
     def var_at(t):
-        theta_t = fixed_fit(a, w, y, forced, u, t)[0]
+        theta_t = _fixed_fit(a, w, y, forced, u, t)[0]
         return max(float(g @ cov_of(np.maximum(theta_t, 0.0)) @ g), 0.0) * scale
 
     s0 = math.sqrt(var_at(0.0))
@@ -295,18 +306,26 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     :func:`upper_bound` (the test inverted, with the term forced in); a fit that is zero for every
     term has no covariance, hence no bounds.
 
-    **The profile over the terms not resolved.** The interval of a resolved term is conditional on
-    the fit's values of the others: a term dropped is held at 0, and a random walk K that the record
-    does not resolve, held at 0, puts its share of the long taus into B (on 30-min records of the
-    default MPU6050 model B's interval held the accelerometer's B on 18 of 30 axes, read 1.1-1.35x;
-    white noise and a random walk gave a B resolved where there is none). So each resolved term's
-    interval is the union of its intervals with every term ``u`` not resolved held at 0 and at its
-    upper bound ``U_u`` (:func:`fixed_fit`; the others refitted, the variance under that mixture),
-    each ``u`` in turn: the values of the term compatible with some value of ``u`` the data allow
-    (a profile over ``u``, Casella & Berger sec. 9.2.2 on nuisance parameters; the fit is linear in
-    ``theta_u``, so the ends of ``[0, U_u]`` give the extremes). Where the term reaches zero at one of
-    them (``theta_j - z sd_j <= 0``), it is not resolved: its bound is the largest
-    ``theta_j + z sd_j`` of those fits.
+    **The terms not resolved that rise with tau (K, R).** The interval of a resolved term is
+    conditional on the fit's values of the others: a term dropped is held at 0, and a random walk K
+    or a ramp R that the record does not resolve, held at 0, puts its share of the long taus into B
+    (on 30-min records of the default MPU6050 model B's interval held the accelerometer's B on 83 of
+    99 axes where resolved, read up to 1.35x; white noise and a random walk gave a B resolved where
+    there is none, on 13 of 240 axes at 30 and 60 min). So each resolved term's interval is the
+    union of its interval in the fit drawn and its interval in the fit with each such ``u`` forced
+    in, in turn: the unconstrained weighted least squares with ``u`` free (``G`` of the active terms
+    and ``u``; the covariance at that fit's mixture, negative values taken as 0, times the misfit
+    scale of that fit), whose ``cov(theta)`` holds the trade-off of the term with ``u``: its
+    marginal interval whatever ``u`` is (a nuisance parameter estimated, not fixed; Casella &
+    Berger sec. 9.2.2 on eliminating nuisance parameters). Where the term is within its
+    uncertainty of zero in one of those fits (``theta_j - z sd_j <= 0``), it is not resolved: its
+    bound is the largest ``theta_j + z sd_j`` of the fits. The terms not resolved that fall with tau
+    (Q, and N or B where dropped) are not so treated: N's interval conditional on Q = 0 held N on
+    95-97 % of the axes (``python tools/allan_coverage.py``), and freeing Q widened it 1.6-fold.
+    Holding the term at ``u``'s upper bound instead (a profile over ``[0, U_u]``) left B unresolved
+    on nearly every axis, even without a random walk (white noise and flicker: B's interval
+    widened 2-fold, resolved on 0 of 30 axes of 10-min records, where it was on 19): a 95 %
+    interval at a 97.5 % bound is far more than 95 %.
     Variances are computed in units of the largest fitted one, so any deviation a float holds works.
     """
     if not np.any(theta > 0):  # e.g. data whose deviation is exactly 0 at some cluster times
