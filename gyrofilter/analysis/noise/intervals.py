@@ -204,14 +204,17 @@ def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
     ``h = max(theta_u^, 0)``, with ``theta_u^`` the estimate of the fit with ``u`` forced in (the
     gain ``g`` of ``active`` and ``u``; the value the data give the term, so the bound is never below
     it). If ``theta_u`` were ``t``, that estimate would scatter with the variance
-    ``sd(t)^2 = g C(t) g'``: ``C(t) = cov_of(theta(t))`` (:func:`avar_covariance`) times the misfit
-    scale of the fit with ``u`` forced in (``max(1, chi2_nu)``, :func:`reduced_chi2`, with ``widen``;
-    the misfit of the fit without it holds the term's own share, which the hypothesis now
-    explains), ``theta(t)`` the other terms refitted with ``u`` held at ``t`` (:func:`_fixed_fit`,
-    negative values taken as 0). Of it, ``s0^2 = sd(0)^2`` is the other terms' scatter, taken as
-    normal (the estimate is a difference of Allan variances: it can be negative), and the rest,
-    ``sd(t)^2 - s0^2``, the term's own, taken as ``t chi2(nu) / nu`` with
-    ``nu = 2 t^2 / (sd(t)^2 - s0^2)`` (Satterthwaite, as the intervals: skewed, never below 0). The
+    ``sd(t)^2 = g C(t) g'``: ``C(t) = cov_of(theta(t))`` (:func:`avar_covariance`), ``theta(t)``
+    the other terms refitted with ``u`` held at ``t`` (:func:`_fixed_fit`, negative values taken as
+    0). Of it, ``sd(0)^2`` is the other terms' scatter, taken as normal (the estimate is a
+    difference of Allan variances: it can be negative) and multiplied by the misfit scale of the fit
+    with ``u`` forced in (``max(1, chi2_nu)``, :func:`reduced_chi2`, with ``widen``; the misfit of the
+    fit without ``u`` holds ``u``'s own share, which the hypothesis now explains):
+    ``s0^2 = scale sd(0)^2``. The rest, ``sd(t)^2 - sd(0)^2``, is the term's own, taken as
+    ``t chi2(nu) / nu`` with ``nu = 2 t^2 / (sd(t)^2 - sd(0)^2)`` (Satterthwaite, as the intervals:
+    skewed, never below 0; not scaled by the misfit, structure no term fits is not the term's own
+    scatter, and a ``nu`` so divided below 1 bounded K on a 655-s MPU6050 record at 190 times the
+    value the data allow, where its deviation would be 100 times the one measured). The
     two lower deviations at the one-sided level ``(1 - confidence) / 2`` are added in quadrature
     (exact for two normal parts), ``d(t) = sqrt((t - t chi2_p(nu) / nu)^2 + (z s0)^2)``, and ``t`` is
     excluded when ``h < t - d(t)``; the bound is the smallest ``t`` excluded (bisection).
@@ -235,12 +238,13 @@ def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
 
     def var_at(t):
         theta_t = _fixed_fit(a, w, y, forced, u, t)[0]
-        return max(float(g @ cov_of(np.maximum(theta_t, 0.0)) @ g), 0.0) * scale
+        return max(float(g @ cov_of(np.maximum(theta_t, 0.0)) @ g), 0.0)
 
-    s0 = math.sqrt(var_at(0.0))
+    var0 = var_at(0.0)
+    s0 = math.sqrt(var0 * scale)
 
     def excluded(t):
-        own = var_at(t) - s0 * s0
+        own = var_at(t) - var0
         low = t if own <= 0 else t * float(chi2_ppf(p, 2.0 * t * t / own)) / (2.0 * t * t / own)
         return h < t - math.hypot(t - low, z * s0)
 
