@@ -269,16 +269,29 @@ _BOUND_TOLERANCE = 1e-3
 
 
 def _point(theta, gain, terms, j, cov, z, confidence):
-    """(low, high, theta_j + z sd_j) of term ``j`` estimated as ``theta[j]`` by the rows ``gain`` of
-    the fitted ``terms`` under the covariance ``cov`` of the Allan variances: its chi-square
-    interval (``edf = 2 theta_j^2 / var_j``), low and high None where ``theta_j - z sd_j <= 0``."""
+    """``(low, high, sd)`` of term ``j`` estimated as ``theta[j]`` by the rows ``gain`` of the
+    fitted ``terms`` under the covariance ``cov`` of the Allan variances: its chi-square interval
+    (``edf = 2 theta_j^2 / var_j``), low and high None where ``theta_j - z sd_j <= 0``, and ``sd_j``."""
     row = gain[int(np.sum(terms[:j]))]
     sd = math.sqrt(max(float(row @ cov @ row), 1e-300))
     c2 = float(theta[j])
     if c2 - z * sd <= 0:
-        return None, None, max(c2, 0.0) + z * sd
+        return None, None, sd
     lo, hi = chi2_interval(c2, 2.0 * c2 ** 2 / sd ** 2, confidence)
-    return float(lo), float(hi), c2 + z * sd
+    return float(lo), float(hi), sd
+
+
+def _freed_points(a, w, y, active, freed, j, cov_of, z, confidence):
+    """The point estimate and ``_point`` of term ``j`` in the fit with each term of ``freed``
+    ({index: misfit scale}) forced in, in turn (:func:`fitted_intervals`): ``[(theta_j, point)]``."""
+    out = []
+    for u, scale in freed.items():
+        forced = active | (np.arange(a.shape[1]) == u)
+        gain = _gain(a, w, forced)
+        theta = np.zeros(a.shape[1])
+        theta[forced] = gain @ y
+        out.append((float(theta[j]), _point(theta, gain, forced, j, cov_of(np.maximum(theta, 0.0)) * scale, z, confidence)))
+    return out
 
 
 def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=True, profile=True):
@@ -355,50 +368,39 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
 
     gain = _gain(a, w, active)
     points = {j: _point(theta, gain, active, j, cov_y * scale, z, confidence) for j in np.flatnonzero(active)}
-    unresolved = [j for j in range(5) if not active[j] or points[j][0] is None]
     bounds, scales = {}, {}
-    for u in unresolved:
+    for u in (j for j in range(5) if not active[j] or points[j][0] is None):
         try:
             bounds[u], scales[u] = upper_bound(a, w, y, active, u, confidence, cov_of, widen)
         except np.linalg.LinAlgError:
             bounds[u] = None
+    freed = {u: scales[u] for u in bounds if u in scales and TERM_SLOPE[TERMS[u]] > 0} if profile else {}
     out = {}
     for j, term in enumerate(TERMS):
         sym, unit = TERM_SYMBOL[term], TERM_UNIT[term]
+        c2 = float(theta[j])
         if j in bounds:
             upper = None if bounds[j] is None else math.sqrt(bounds[j]) * root
-            if active[j]:
-                note = (f"not resolved: {sym} = {math.sqrt(theta[j]) * root:.3g} {unit} is within the "
-                        f"{confidence:.0%} uncertainty of zero")
-            else:
-                note = f"not resolved: {sym} is not needed to fit the data (fitted to 0 or not significant)"
+            note = (f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the {confidence:.0%} uncertainty "
+                    "of zero" if active[j] else
+                    f"not resolved: {sym} is not needed to fit the data (fitted to 0 or not significant)")
             if upper is not None:
                 note += f"; {confidence:.0%} upper bound {upper:.3g} {unit}"
             out[term] = Coefficient(term, None, upper=upper, note=note,
-                                    z_score=theta[j] / (points[j][2] - theta[j]) * z if active[j] else None)
+                                    z_score=c2 / points[j][2] if active[j] else None)
             continue
-        ends = [points[j]]
-        if profile:
-            for u in (u for u in bounds if TERM_SLOPE[TERMS[u]] > 0):
-                forced = active | (np.arange(5) == u)
-                gain_u = _gain(a, w, forced)
-                theta_u = np.zeros(5)
-                theta_u[forced] = gain_u @ y
-                cov_u = cov_of(np.maximum(theta_u, 0.0)) * scales.get(u, 1.0)
-                ends.append(_point(theta_u, gain_u, forced, j, cov_u, z, confidence))
-        c2 = float(theta[j])
-        z_score = c2 / (points[j][2] - c2) * z
-        if any(lo is None for lo, _, _ in ends):
-            upper = math.sqrt(max(e[2] for e in ends)) * root
-            held = ", ".join(TERM_SYMBOL[TERMS[u]] for u in bounds)
-            out[term] = Coefficient(term, None, upper=upper, z_score=z_score,
+        ends = [(c2, points[j])] + _freed_points(a, w, y, active, freed, j, cov_of, z, confidence)
+        if any(p[0] is None for _, p in ends):
+            upper = math.sqrt(max(max(v, 0.0) + z * p[2] for v, p in ends)) * root
+            free = " and ".join(TERM_SYMBOL[TERMS[u]] for u in freed)
+            out[term] = Coefficient(term, None, upper=upper, z_score=c2 / points[j][2],
                                     note=f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the "
-                                         f"{confidence:.0%} uncertainty of zero where {held} (not resolved) may be up "
-                                         f"to {'its' if len(bounds) == 1 else 'their'} upper bound; upper bound {upper:.3g}")
+                                         f"{confidence:.0%} uncertainty of zero once {free} (not resolved) is free; "
+                                         f"upper bound {upper:.3g}")
             continue
         # the tau where this term's share of the model is largest: where it is read
         share = a[:, j] * c2 / (a @ theta)
-        out[term] = Coefficient(term, math.sqrt(c2) * root, math.sqrt(min(e[0] for e in ends)) * root,
-                                math.sqrt(max(e[1] for e in ends)) * root,
-                                tau_s=float(tau_u[int(np.argmax(share))]), z_score=z_score)
+        out[term] = Coefficient(term, math.sqrt(c2) * root, math.sqrt(min(p[0] for _, p in ends)) * root,
+                                math.sqrt(max(p[1] for _, p in ends)) * root,
+                                tau_s=float(tau_u[int(np.argmax(share))]), z_score=c2 / points[j][2])
     return out, chi2_nu, dof
