@@ -183,20 +183,17 @@ def reduced_chi2(a, y, theta, w, cov_y, active):
 
 
 def _fixed_fit(a, w, y, terms, u, t):
-    """The weighted least-squares fit of ``terms`` (bool, 5) to ``y`` with term ``u`` (an index in
-    ``terms``) held at ``theta_u = t``: the other terms are ``G (y - t a_u)`` with the gain ``G``
-    (:func:`fitted_intervals`) of their columns of ``a`` and the weights ``w``. Returns
-    ``(theta, gain, others)``: the five values (``t`` at ``u``; unclipped, so a term the hypothesis
-    pushes below zero shows it), the gain and the mask of the other terms."""
+    """The five values of the weighted least-squares fit of ``terms`` (bool, 5) to ``y`` with term
+    ``u`` (an index in ``terms``) held at ``theta_u = t``: the others are ``G (y - t a_u)`` with the
+    gain ``G`` (:func:`fitted_intervals`) of their columns of ``a`` and the weights ``w``
+    (unclipped: a term the hypothesis pushes below zero shows it)."""
     others = terms.copy()
     others[u] = False
     theta = np.zeros(a.shape[1])
     theta[u] = t
-    gain = None
     if others.any():
-        gain = _gain(a, w, others)
-        theta[others] = gain @ (y - t * a[:, u])
-    return theta, gain, others
+        theta[others] = _gain(a, w, others) @ (y - t * a[:, u])
+    return theta
 
 
 def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
@@ -241,7 +238,7 @@ def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
     z = NormalDist().inv_cdf(1.0 - p)
 
     def var_at(t):
-        theta_t = _fixed_fit(a, w, y, forced, u, t)[0]
+        theta_t = _fixed_fit(a, w, y, forced, u, t)
         return max(float(g @ cov_of(np.maximum(theta_t, 0.0)) @ g), 0.0)
 
     var0 = var_at(0.0)
