@@ -290,7 +290,9 @@ def test_kalibr_yaml_uses_continuous_time_si_units_and_the_largest_axis():
     tau = res["x"].tau_s
     inside = (tau >= 0.1) & (tau <= 100.0)
     ratio = np.sqrt(nd ** 2 / tau[inside] + rw ** 2 * tau[inside] / 3) / np.max([r.adev[inside] for r in res.values()], axis=0)
-    assert 1 - 1e-6 <= ratio.min() < 1.01 and ratio.max() < 2  # on or above, close; K's loose bound is its floor
+    # on or above, close; K's loose bound is its floor: 200 s of white noise bound K at 1.4x the value
+    # the bound had before it was a covering one (intervals.upper_bound), the pair rising to 2.03x at 100 s
+    assert 1 - 1e-6 <= ratio.min() < 1.01 and ratio.max() < 2.5
     assert nd == pytest.approx(plain_nd * 180 / math.pi, rel=0.1)
     assert "upper bound: K not resolved" in text
     assert "the default range 0.1 .. 100 s cut to the record's 0.1 .. 22.22 s" in text
@@ -537,3 +539,15 @@ def test_a_tone_is_still_called_more_than_five_terms_on_its_axis_only():
     assert [a for a, r in res.items() if any(NOT_FIVE_TERMS in w for w in r.warnings)] == ["z"]
     doc = to_json(res, 100.0)["axes"]
     assert doc["z"]["full_fit_consistency"] == res["z"].full_fit_consistency() < 0.8 <= doc["x"]["full_fit_consistency"]
+
+
+def test_the_bound_of_a_random_walk_the_record_does_not_resolve_holds_it():
+    """An hour of white noise and a random walk (K = 5e-5, 1e-4, 2e-4 deg/s/sqrt(s) on x, y, z,
+    tools/allan_coverage.py's white + random walk case), seeds 1-6: K's interval, or its 95 % upper
+    bound where it is not resolved, holds the simulated K on at least 16 of the 18 axes (measured 18;
+    the bound at the fitted mixture held it on 14: 9 of the 13 not resolved), and no B is resolved."""
+    coverage = tool("allan_coverage")
+    rows = [row for seed in range(1, 7) for row in coverage.run(("white-rw", 60, seed))]
+    k = [row for row in rows if row["term"] == RATE_RANDOM_WALK]
+    assert sum(map(coverage.covered, k)) >= 16 and sum(row["value"] is None for row in k) >= 9
+    assert all(row["value"] is None for row in rows if row["term"] == BIAS_INSTABILITY)

@@ -27,13 +27,34 @@ def inside(c, value):
     return c.value is not None and c.low <= value <= c.high
 
 
-def test_the_default_models_velocity_random_walk_is_recovered_within_its_interval(tmp_path):
+@pytest.fixture(scope="module")
+def default_results(tmp_path_factory):
+    """{seed: the accelerometer's {axis: AxisNoise}} of the default model, seeds SEEDS."""
+    tmp = tmp_path_factory.mktemp("default")
+    return {seed: accel_results(tmp, DEFAULT_MODEL_PATH, seed) for seed in SEEDS}
+
+
+def test_the_default_models_velocity_random_walk_is_recovered_within_its_interval(default_results):
     """N (m/s/sqrt(s)) of the default MPU6050 model's accelerometer, 4 seeds x 3 axes: inside its 95 %
     interval on at least 11 of the 12 (measured on seeds 1-10: 29 of 30)."""
     spec = DEFAULT_MODEL["accelerometer"]["axes"]
     hits = sum(inside(r.fitted[ANGLE_RANDOM_WALK], spec[a]["vrw_mps_per_sqrt_s"])
-               for seed in SEEDS for a, r in accel_results(tmp_path, DEFAULT_MODEL_PATH, seed).items())
+               for results in default_results.values() for a, r in results.items())
     assert hits >= 11
+
+
+def test_the_default_models_bias_instability_is_held_by_its_interval_or_bound(default_results):
+    """B (m/s^2) of the default model's accelerometer with its random walk and temperature drift, which
+    30 min do not resolve: inside its 95 % interval where resolved, at or below its upper bound where
+    not, on at least 9 of 12 axes (measured 10; 26 of 30 on seeds 1-10, 115 of 120 on seeds 41-80,
+    `python tools/allan_coverage.py`). B's interval conditional on K = 0 held it on 7 of these 12
+    (the fit gave part of K and the drift to B, read 1.26x); with K (and R) free, its interval holds
+    their trade-off with B (gyrofilter.analysis.noise.intervals.fitted_intervals)."""
+    spec = DEFAULT_MODEL["accelerometer"]["axes"]
+    held = [c.low <= spec[a]["b_mps2"] <= c.high if c.resolved else spec[a]["b_mps2"] <= c.upper
+            for results in default_results.values() for a, r in results.items()
+            for c in [r.fitted[BIAS_INSTABILITY]]]
+    assert sum(held) >= 9
 
 
 def test_bias_instability_is_recovered_within_its_interval(tmp_path):

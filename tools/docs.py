@@ -463,6 +463,11 @@ def allan_consistency():
     return fence(tool("allan_consistency.py", "--jobs", "2"))
 
 
+@block("allan-coverage", "docs/allan.md", "tools/allan_coverage.py --seeds 41-80 --jobs 2", slow=True)
+def allan_coverage():
+    return fence(tool("allan_coverage.py", "--seeds", "41-80", "--jobs", "2"))
+
+
 @block("bench-allan", "docs/allan.md", "tools/bench_allan.py --day-file", slow=True)
 def bench_allan():
     return fence(tool("bench_allan.py", "--day-file"))

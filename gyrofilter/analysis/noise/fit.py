@@ -185,7 +185,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
                                        confidence=confidence)
         if full_theta is None:  # every term asked for: the model the adequacy warning judges
             full_theta = theta
-        fitted, _, _ = fitted_intervals(theta, tau, m, n, used, confidence, dev ** 2, widen=False)
+        fitted, _, _ = fitted_intervals(theta, tau, m, n, used, confidence, dev ** 2, widen=False, free=False)
         weak = [t for t in allowed if fitted[t].value is None and theta[TERMS.index(t)] > 0]
         if not weak:
             break

@@ -6,8 +6,12 @@ so ``cov(theta) = G C G'``. ``C`` (:func:`avar_covariance`) has the standard dev
 NIST SP 1065 Table 5 EDF for each noise type, summed over the fitted mixture (conservative, see
 :func:`gyrofilter.analysis.noise.allan.edf_mixture`), and the correlations between cluster times from the
 Allan transfer function (:func:`avar_correlation`). The interval is the chi-square interval with
-``edf = 2 theta_j^2 / var_j`` (Satterthwaite). The round-trip tests check that it covers the true
-coefficient in at least 90 % of simulated records (measured: 92-100 %).
+``edf = 2 theta_j^2 / var_j`` (Satterthwaite), spanning as well the fits with a random walk K or a
+ramp R that the record does not resolve forced in (:func:`fitted_intervals`). A term not resolved
+gets an upper bound by test inversion (:func:`upper_bound`). The round-trip tests check that the
+interval covers the true coefficient in at least 90 % of simulated records (measured: 94-100 %);
+``tools/allan_coverage.py`` measures intervals and bounds where K and a temperature drift are not
+resolved.
 """
 from __future__ import annotations
 
@@ -17,8 +21,8 @@ from statistics import NormalDist
 
 import numpy as np
 
-from .allan import chi2_interval, edf_oavar
-from .model import TERM_ALPHA, TERM_SYMBOL, TERM_UNIT, TERMS, Coefficient, basis, term_shares
+from .allan import chi2_interval, chi2_ppf, edf_oavar
+from .model import TERM_ALPHA, TERM_SLOPE, TERM_SYMBOL, TERM_UNIT, TERMS, Coefficient, basis, term_shares
 
 
 @functools.lru_cache(maxsize=None)
@@ -104,23 +108,34 @@ def avar_correlation(m1, m2, alpha):
     return out
 
 
+@functools.lru_cache(maxsize=16)
+def _term_moments(n_samples, m):
+    """Per term (rows in TERMS order) at the cluster sizes ``m`` (a tuple) of ``n_samples``: the
+    relative standard deviation ``sqrt(2 / edf)`` of the Allan variance (SP 1065 EDF) and the
+    correlation matrix (:func:`avar_correlation`); kept, since the bounds' searches ask for the
+    covariance of many mixtures on the same taus."""
+    m = np.asarray(m, dtype=np.float64)
+    rel_sd = np.array([np.sqrt(2.0 / edf_oavar(n_samples, m, TERM_ALPHA[t])) for t in TERMS])
+    corr = np.array([avar_correlation(m[:, None], m[None, :], TERM_ALPHA[t]) for t in TERMS])
+    return rel_sd, corr
+
+
 def avar_covariance(tau_s, m, n_samples, theta_sq):
     """Approximate covariance matrix of the Allan variance estimates at ``m`` (cluster sizes; ``tau_s`` the cluster times, s; ``n_samples`` samples) for the noise
     mixture ``theta_sq`` (Q^2 ... R^2): standard deviations from the SP 1065 EDF of each term,
     summed (conservative), and correlations from :func:`avar_correlation`, averaged over the
     terms with weights sqrt(sd_ki sd_kj)."""
     m = np.asarray(m, dtype=np.float64)
-    shares = term_shares(theta_sq, tau_s)
-    sd_k = np.array([shares[k] * np.sqrt(2.0 / edf_oavar(n_samples, m, TERM_ALPHA[t]))
-                     for k, t in enumerate(TERMS)])
+    rel_sd, corr = _term_moments(int(n_samples), tuple(m.tolist()))
+    sd_k = term_shares(theta_sq, tau_s) * rel_sd
     sd = sd_k.sum(axis=0)
     num = np.zeros((m.size, m.size))
     den = np.zeros((m.size, m.size))
-    for k, t in enumerate(TERMS):
+    for k in range(len(TERMS)):
         if not np.any(sd_k[k] > 0):
             continue
         a = np.sqrt(np.outer(sd_k[k], sd_k[k]))
-        num += a * avar_correlation(m[:, None], m[None, :], TERM_ALPHA[t])
+        num += a * corr[k]
         den += a
     rho = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.eye(m.size))
     return sd, rho * np.outer(sd, sd)
@@ -167,14 +182,129 @@ def reduced_chi2(a, y, theta, w, cov_y, active):
     return x2 / dof, dof
 
 
-def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=True):
+def _fixed_fit(a, w, y, terms, u, t):
+    """The five values of the weighted least-squares fit of ``terms`` (bool, 5) to ``y`` with term
+    ``u`` (an index in ``terms``) held at ``theta_u = t``: the others are ``G (y - t a_u)`` with the
+    gain ``G`` (:func:`fitted_intervals`) of their columns of ``a`` and the weights ``w``
+    (unclipped: a term the hypothesis pushes below zero shows it)."""
+    others = terms.copy()
+    others[u] = False
+    theta = np.zeros(a.shape[1])
+    theta[u] = t
+    if others.any():
+        theta[others] = _gain(a, w, others) @ (y - t * a[:, u])
+    return theta
+
+
+def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
+    """``(bound, scale)``: the upper bound of ``theta_u`` (a term not resolved; ``active``: the
+    fitted terms, bool 5) by inverting the one-sided test of its estimate (Neyman's construction;
+    Casella & Berger, *Statistical Inference*, 2nd ed., sec. 9.2.1), or None where no value is
+    excluded; and the misfit scale of the fit with ``u`` forced in.
+
+    ``h = max(theta_u^, 0)``, with ``theta_u^`` the estimate of the fit with ``u`` forced in (the
+    gain ``g`` of ``active`` and ``u``; the value the data give the term, so the bound is never below
+    it). If ``theta_u`` were ``t``, that estimate would scatter with the variance
+    ``sd(t)^2 = g C(t) g'``: ``C(t) = cov_of(theta(t))`` (:func:`avar_covariance`), ``theta(t)``
+    the other terms refitted with ``u`` held at ``t`` (:func:`_fixed_fit`, negative values taken as
+    0). Of it, ``sd(0)^2`` is the other terms' scatter, taken as normal (the estimate is a
+    difference of Allan variances: it can be negative) and multiplied by the misfit scale of the fit
+    with ``u`` forced in (``max(1, chi2_nu)``, :func:`reduced_chi2`, with ``widen``; the misfit of the
+    fit without ``u`` holds ``u``'s own share, which the hypothesis now explains):
+    ``s0^2 = scale sd(0)^2``. The rest, ``sd(t)^2 - sd(0)^2``, is the term's own, taken as
+    ``t chi2(nu) / nu`` with ``nu = 2 t^2 / (sd(t)^2 - sd(0)^2)`` (Satterthwaite, as the intervals:
+    skewed, never below 0; not scaled by the misfit, structure no term fits is not the term's own
+    scatter, and a ``nu`` so divided below 1 bounded K on a 655-s MPU6050 record at 190 times the
+    value the data allow, where its deviation would be 100 times the one measured). The
+    two lower deviations at the one-sided level ``(1 - confidence) / 2`` are added in quadrature
+    (exact for two normal parts), ``d(t) = sqrt((t - t chi2_p(nu) / nu)^2 + (z s0)^2)``, and ``t`` is
+    excluded when ``h < t - d(t)``; the bound is the smallest ``t`` excluded (bisection).
+    The bound ``h + z sd`` with ``sd`` at the fitted mixture (which lacks the term, or holds it
+    at its low estimate) held a simulated random walk K on 73 % of the axes where a 95 % bound
+    should hold it on 97.5 % (``python tools/allan_coverage.py``, white + random walk, 60 min: 68 of
+    93): it leaves out the scatter a real term adds to the long taus; and a normal quantile at
+    ``sd(t)`` excludes no value where the estimate's relative spread exceeds 1/z (a K that 30 minutes
+    do not resolve)."""
+    forced = active.copy()
+    forced[u] = True
+    gain = _gain(a, w, forced)
+    g = gain[int(np.sum(forced[:u]))]
+    h = max(float(g @ y), 0.0)
+    theta_f = np.zeros(a.shape[1])
+    theta_f[forced] = gain @ y
+    chi2_nu = reduced_chi2(a, y, theta_f, w, cov_of(np.maximum(theta_f, 0.0)), forced)[0]
+    scale = chi2_nu if widen and chi2_nu is not None and chi2_nu > 1.0 else 1.0
+    p = 0.5 - confidence / 2.0
+    z = NormalDist().inv_cdf(1.0 - p)
+
+    def var_at(t):
+        theta_t = _fixed_fit(a, w, y, forced, u, t)
+        return max(float(g @ cov_of(np.maximum(theta_t, 0.0)) @ g), 0.0)
+
+    var0 = var_at(0.0)
+    s0 = math.sqrt(var0 * scale)
+
+    def excluded(t):
+        own = var_at(t) - var0
+        low = t if own <= 0 else t * float(chi2_ppf(p, 2.0 * t * t / own)) / (2.0 * t * t / own)
+        return h < t - math.hypot(t - low, z * s0)
+
+    lo, hi = h, max(2.0 * h + 2.0 * z * s0, _SMALLEST_BOUND)
+    for _ in range(_STEPS):
+        if excluded(hi):
+            break
+        lo, hi = hi, 4.0 * hi
+    else:
+        return None, scale
+    while hi - lo > _BOUND_TOLERANCE * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if excluded(mid) else (mid, hi)
+    return hi, scale
+
+
+#: where the search for a bound starts, in units of the largest fitted variance, its most steps
+#: (each x4), and its relative precision
+_SMALLEST_BOUND = 1e-16
+_STEPS = 40
+_BOUND_TOLERANCE = 1e-3
+
+
+def _point(theta, gain, terms, j, cov, z, confidence):
+    """``(low, high, sd)`` of term ``j`` estimated as ``theta[j]`` by the rows ``gain`` of the
+    fitted ``terms`` under the covariance ``cov`` of the Allan variances: its chi-square interval
+    (``edf = 2 theta_j^2 / var_j``), low and high None where ``theta_j - z sd_j <= 0``, and ``sd_j``."""
+    row = gain[int(np.sum(terms[:j]))]
+    sd = math.sqrt(max(float(row @ cov @ row), 1e-300))
+    c2 = float(theta[j])
+    if c2 - z * sd <= 0:
+        return None, None, sd
+    lo, hi = chi2_interval(c2, 2.0 * c2 ** 2 / sd ** 2, confidence)
+    return float(lo), float(hi), sd
+
+
+def _freed_points(a, w, y, active, freed, j, cov_of, z, confidence):
+    """The point estimate and ``_point`` of term ``j`` in the fit with each term of ``freed``
+    ({index: misfit scale}) forced in, in turn (:func:`fitted_intervals`): ``[(theta_j, point)]``."""
+    out = []
+    for u, scale in freed.items():
+        forced = active | (np.arange(a.shape[1]) == u)
+        gain = _gain(a, w, forced)
+        theta = np.zeros(a.shape[1])
+        theta[forced] = gain @ y
+        out.append((float(theta[j]), _point(theta, gain, forced, j, cov_of(np.maximum(theta, 0.0)) * scale, z, confidence)))
+    return out
+
+
+def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=True, free=True):
     """Per-term value and interval of the fit (module docstring), and the fit's misfit:
     returns ``(coefficients, chi2_nu, dof)`` (:func:`reduced_chi2`; None, None without residual
     degrees of freedom).
 
     ``theta``: the fitted Q^2 .. R^2; ``tau``, ``m``: the cluster times (s) and sizes; ``used``:
     the taus fitted; ``avar``: the measured Allan variances at every tau ((deg/s)^2); ``widen``:
-    scale by the misfit (below; False: the intervals of the stated scatter alone).
+    scale by the misfit (below; False: the intervals of the stated scatter alone); ``free``:
+    each resolved term's interval spans the fits with a K or R not resolved forced in (below;
+    False: the intervals with those terms at their fitted values, the fit's drop decision).
     The fit is linear in the Allan variances on its active set: ``theta = G y`` with
     ``G = (A' W A)^-1 A' W``, so ``cov(theta) = G C G'`` with ``C`` from
     :func:`avar_covariance`. Where the fit's reduced chi-square exceeds 1, ``C`` (so every
@@ -189,11 +319,31 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     quantile of ``confidence``); its interval is the chi-square interval with
     ``edf_j = 2 theta_j^2 / var_j`` (Satterthwaite), which stays positive and is skewed like the
     Allan variance itself (scaling ``var_j`` by chi2_nu divides ``edf_j`` by it: the interval
-    widens by about sqrt(chi2_nu) on either scale, theta_j or its square root). A term left out
-    of the fit (fitted to zero, or dropped as not resolved) gets the upper bound
-    ``max(theta_j, 0) + z sd_j`` of the unconstrained fit with the term forced in (a dropped
-    term keeps the value the data give it: its bound is not below it); a fit that is zero for
-    every term has no covariance, hence no bounds.
+    widens by about sqrt(chi2_nu) on either scale, theta_j or its square root). A term not
+    resolved (fitted to zero, dropped, or within its uncertainty of zero) gets the upper bound of
+    :func:`upper_bound` (the test inverted, with the term forced in); a fit that is zero for every
+    term has no covariance, hence no bounds.
+
+    **The terms not resolved that rise with tau (K, R).** The interval of a resolved term is
+    conditional on the fit's values of the others: a term dropped is held at 0, and a random walk K
+    or a ramp R that the record does not resolve, held at 0, puts its share of the long taus into B
+    (on 30-min records of the default MPU6050 model B's interval held the accelerometer's B on 83 of
+    99 axes where resolved, read up to 1.35x; white noise and a random walk gave a B resolved where
+    there is none, on 13 of 240 axes at 30 and 60 min). So each resolved term's interval is the
+    union of its interval in the fit drawn and its interval in the fit with each such ``u`` forced
+    in, in turn: the unconstrained weighted least squares with ``u`` free (``G`` of the active terms
+    and ``u``; the covariance at that fit's mixture, negative values taken as 0, times the misfit
+    scale of that fit), whose ``cov(theta)`` holds the trade-off of the term with ``u``: its
+    marginal interval whatever ``u`` is (a nuisance parameter estimated, not fixed; Casella &
+    Berger sec. 9.2.2 on eliminating nuisance parameters). Where the term is within its
+    uncertainty of zero in one of those fits (``theta_j - z sd_j <= 0``), it is not resolved: its
+    bound is the largest ``theta_j + z sd_j`` of the fits. The terms not resolved that fall with tau
+    (Q, and N or B where dropped) are not so treated: N's interval conditional on Q = 0 held N on
+    95-97 % of the axes (``python tools/allan_coverage.py``), and freeing Q widened it 1.6-fold.
+    Holding the term at ``u``'s upper bound instead (a profile over ``[0, U_u]``) left B unresolved
+    on nearly every axis, even without a random walk (white noise and flicker: B's interval
+    widened 2-fold, resolved on 0 of 30 axes of 10-min records, where it was on 19): a 95 %
+    interval at a 97.5 % bound is far more than 95 %.
     Variances are computed in units of the largest fitted one, so any deviation a float holds works.
     """
     if not np.any(theta > 0):  # e.g. data whose deviation is exactly 0 at some cluster times
@@ -212,43 +362,46 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     active = theta > 0
     y = np.asarray(avar, dtype=np.float64)[used] / var_unit
     chi2_nu, dof = reduced_chi2(a, y, theta, w, cov_y, active)
-    if widen and chi2_nu is not None and chi2_nu > 1.0:
-        cov_y = cov_y * chi2_nu
+    scale = chi2_nu if widen and chi2_nu is not None and chi2_nu > 1.0 else 1.0
+
+    def cov_of(mixture):
+        return avar_covariance(tau_u, m_u, n_samples, mixture)[1]
+
+    gain = _gain(a, w, active)
+    points = {j: _point(theta, gain, active, j, cov_y * scale, z, confidence) for j in np.flatnonzero(active)}
+    bounds, scales = {}, {}
+    for u in (j for j in range(5) if not active[j] or points[j][0] is None):
+        try:
+            bounds[u], scales[u] = upper_bound(a, w, y, active, u, confidence, cov_of, widen)
+        except np.linalg.LinAlgError:
+            bounds[u] = None
+    freed = {u: scales[u] for u in bounds if u in scales and TERM_SLOPE[TERMS[u]] > 0} if free else {}
     out = {}
-    cov = np.zeros((5, 5))
-    if active.any():
-        g = _gain(a, w, active)
-        cov[np.ix_(active, active)] = g @ cov_y @ g.T
     for j, term in enumerate(TERMS):
         sym, unit = TERM_SYMBOL[term], TERM_UNIT[term]
-        if not active[j]:
-            forced = active.copy()
-            forced[j] = True
-            try:
-                g = _gain(a, w, forced)
-                pos = int(np.sum(forced[:j]))  # row of term j among the forced-in terms
-                var = float((g @ cov_y @ g.T)[pos, pos])
-                upper = math.sqrt(max(float(g[pos] @ y), 0.0) + z * math.sqrt(max(var, 0.0))) * root
-            except np.linalg.LinAlgError:
-                upper = None
-            note = f"not resolved: {sym} is not needed to fit the data (fitted to 0 or not significant)"
+        c2 = float(theta[j])
+        if j in bounds:
+            upper = None if bounds[j] is None else math.sqrt(bounds[j]) * root
+            note = (f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the {confidence:.0%} uncertainty "
+                    "of zero" if active[j] else
+                    f"not resolved: {sym} is not needed to fit the data (fitted to 0 or not significant)")
             if upper is not None:
                 note += f"; {confidence:.0%} upper bound {upper:.3g} {unit}"
-            out[term] = Coefficient(term, None, upper=upper, note=note)
+            out[term] = Coefficient(term, None, upper=upper, note=note,
+                                    z_score=c2 / points[j][2] if active[j] else None)
             continue
-        var = max(float(cov[j, j]), 1e-300)
-        sdj = math.sqrt(var)
-        c2 = float(theta[j])
-        upper = math.sqrt(c2 + z * sdj) * root
-        if c2 - z * sdj <= 0:
-            out[term] = Coefficient(term, None, upper=upper, z_score=c2 / sdj,
+        ends = [(c2, points[j])] + _freed_points(a, w, y, active, freed, j, cov_of, z, confidence)
+        if any(p[0] is None for _, p in ends):
+            upper = math.sqrt(max(max(v, 0.0) + z * p[2] for v, p in ends)) * root
+            free = " and ".join(TERM_SYMBOL[TERMS[u]] for u in freed)
+            out[term] = Coefficient(term, None, upper=upper, z_score=c2 / points[j][2],
                                     note=f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the "
-                                         f"{confidence:.0%} uncertainty of zero; upper bound {upper:.3g}")
+                                         f"{confidence:.0%} uncertainty of zero once {free} (not resolved) is free; "
+                                         f"upper bound {upper:.3g}")
             continue
-        edf = 2.0 * c2 ** 2 / var
-        lo, hi = chi2_interval(c2, edf, confidence)
         # the tau where this term's share of the model is largest: where it is read
         share = a[:, j] * c2 / (a @ theta)
-        out[term] = Coefficient(term, math.sqrt(c2) * root, math.sqrt(float(lo)) * root, math.sqrt(float(hi)) * root,
-                                tau_s=float(tau_u[int(np.argmax(share))]), z_score=c2 / sdj)
+        out[term] = Coefficient(term, math.sqrt(c2) * root, math.sqrt(min(p[0] for _, p in ends)) * root,
+                                math.sqrt(max(p[1] for _, p in ends)) * root,
+                                tau_s=float(tau_u[int(np.argmax(share))]), z_score=c2 / points[j][2])
     return out, chi2_nu, dof
