@@ -10,12 +10,13 @@ Cut out of the series by their DFT bins (the other bins zeroed), the flanks' sig
 * its **envelope line**: the power y² averaged over blocks of :data:`EXCURSION_BLOCK_S`, mean
   removed, its periodogram over :data:`EXCURSION_MODULATION_HZ`, the largest ordinate over the
   median ordinate, R, and its frequency (or, where a line at f / k, k = 2 to
-  :data:`EXCURSION_HARMONICS`, also reaches the threshold, the lowest such: the strongest line of
-  a pulse train may be its second or third harmonic, :func:`fundamental`). The ordinates of a stationary band's envelope are about
-  independent exponentials, whose median is ln 2 times their mean: over K ordinates R is about
-  (ln K + 0.58) / ln 2 on average (15 at K = 20 000), and R > r has probability about
-  K exp(-r ln 2) (Fisher's test of the largest periodogram ordinate, Priestley, Spectral Analysis
-  and Time Series, sec. 6.1.4, on the median's scale). An excursion that returns every P seconds
+  :data:`EXCURSION_HARMONICS`, also reaches the threshold, the lowest such: the strongest line
+  of a pulse train may be its second or third harmonic, :func:`fundamental`). The ordinates of
+  a stationary band's envelope are about independent exponentials, whose median is ln 2 times
+  their mean: over K ordinates R is about (ln K + 0.58) / ln 2 on average (15 at K = 20 000),
+  and R > r has probability about K 2^-r (the largest of K exponential ordinates, as in Fisher's
+  test of a periodogram's largest ordinate, Fisher 1929, Proc. R. Soc. A 125, 54, on the
+  median's scale). An excursion that returns every P seconds
   puts a line at 1 / P.
 
 An excursion is present where R >= :data:`~gyrofilter.analysis.gap.detectors.common.EXCURSION_LINE_RATIO`.
@@ -23,12 +24,9 @@ Its period is then refined by folding (epoch folding, Leahy et al. 1983, ApJ 266
 envelope folded in :data:`EXCURSION_BINS` phases over a grid of periods around 1 / f of the line
 (± one periodogram bin, steps that move the last cycle by a tenth of a phase bin), the period
 whose folded profile varies most. Its height and length come from the tone's frequency folded
-on that period: the peak frequency per short-time spectrum of about :data:`EXCURSION_FRAME_S`
-(:func:`~gyrofilter.analysis.gap.detectors.tone.peak_track`, searched over the band and its
-flanks), its mean per phase bin, minus the profile's median: the height h is the largest
-excess, the length D = (the excess summed over the bins above h / 2) (P / bins) / h, the area
-of a step of height h and length D smeared by the frames (a frame's peak is the tone's
-frequency in most of it).
+on that period (:func:`excursion_size`): the peak frequency per short-time spectrum of about
+:data:`EXCURSION_FRAME_S` (:func:`~gyrofilter.analysis.gap.detectors.tone.peak_track`, searched
+over the band and its flanks) less its running median (the slow wander), per phase bin.
 """
 from __future__ import annotations
 
