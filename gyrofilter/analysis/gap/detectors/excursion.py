@@ -65,9 +65,9 @@ def tone_flanks(center_hz, spread_hz, sample_rate_hz):
 
 def _cut(x, sample_rate_hz, keep):
     """``x`` (mean removed) with the DFT bins where ``keep(f)`` is False zeroed."""
-    f = np.fft.rfftfreq(x.size, 1.0 / sample_rate_hz)
     spec = np.fft.rfft(x - np.mean(x))
-    return np.fft.irfft(np.where(keep(f), spec, 0.0), x.size)
+    spec[~keep(np.fft.rfftfreq(x.size, 1.0 / sample_rate_hz))] = 0.0
+    return np.fft.irfft(spec, x.size)
 
 
 def flank_envelope(x_dps, sample_rate_hz, center_hz, spread_hz):
