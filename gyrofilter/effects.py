@@ -120,7 +120,8 @@ REGISTRY = (
            {"spread_ln": ("nonneg", 0.25)}, {"q": "log", "shock_rate_hz": "log", "shock_dps": "log"},
            defining="shock_dps"),
     Effect(WANDERING_TONE, "line", {"center_hz": "pos", "spread_hz": "nonneg", "wander_s": "pos", "amplitude_dps": "nonneg"},
-           {}, {"spread_hz": "log", "wander_s": "log", "amplitude_dps": "log"}, defining="amplitude_dps"),
+           {"excursion_hz": ("nonneg", 0.0), "excursion_period_s": ("pos", None), "excursion_s": ("pos", None)},
+           {"spread_hz": "log", "wander_s": "log", "amplitude_dps": "log"}, defining="amplitude_dps"),
 )
 #: name -> record, in the registry's order
 BY_NAME = {e.name: e for e in REGISTRY}

@@ -1,28 +1,25 @@
 """What a named wandering tone still misses: is the power beside the tone's band modulated in time?
 
-    python tools/tone_modulation.py --adis DIR [--sims 4] [--records adis16405_static_2,adis16405_static_3]
+    python tools/tone_modulation.py --adis DIR [--sims 4] [--null 40]
+                                    [--records adis16405_static_2,adis16405_static_3]
 
 For every axis on which ``analyse_gap`` (the command's defaults, no intervals) names a
-``wandering_tone``, the band beside the tone, the flanks ``[lo - w, lo)`` and ``(hi, hi + w]``
-of the tone's band ``[lo, hi]`` = centre +- 3.5 spread (``w = 2 (hi - lo)``, clipped to
-(0, f_s / 2)), is cut out of the series by its DFT bins, and:
+``wandering_tone``, the statistics of :mod:`gyrofilter.analysis.gap.detectors.excursion` (their
+one home): the flanks of the tone's band (centre +- 3.5 spreads, twice its width on each side)
+cut out of the series, their excess kurtosis (0 for Gaussian noise, above 0 where the band's
+power comes and goes) and their envelope line (the flank power over 0.1-s blocks, its
+periodogram over 0.01-2 Hz, the largest ordinate over the median one, and its period); on the
+record, the tone's band folded on that period (its least power over the median, the share of the
+cycle below 0.9 of it) and the excursion the analysis finds (its period, height and length,
+or none); and the tail statistic of the whole axis
+(:func:`gyrofilter.analysis.gap.detectors.tails_statistic`, the feature that departed).
 
-* its excess kurtosis ``mean y^4 / (mean y^2)^2 - 3`` (0 for Gaussian noise, whatever its spectrum;
-  above 0 where the band's power comes and goes);
-* the envelope's strongest period: the flank power averaged over 0.1-s blocks, its periodogram
-  over 0.01-2 Hz, the largest ordinate over the median ordinate (a stationary Gaussian band gives
-  ``ln(K) / ln 2`` on average over K ordinates, about 14 here) and its period;
-
-* the tail statistic of the whole axis (:func:`gyrofilter.analysis.gap.detectors.tails_statistic`,
-  the feature that departs);
-* on the record, the tone's band folded on that period: its power per twentieth of the cycle over
-  its median, the least (how much of the band's power the excursion takes) and the share of the
-  cycle below 0.9 of the median;
-
-the same (but the folding) for ``--sims`` runs of the extended model the analysis wrote (seeds 0, 1, ...), which
-holds the tone with its Gauss-Markov wander and no modulation. A flank whose kurtosis and
-envelope line stand far outside the runs' is power the tone's model does not hold: an excursion
-of the tone that returns with a period (docs/gap.md, "A tone whose frequency wanders").
+The same for ``--sims`` runs of the extended model the analysis wrote (seeds 0, 1, ...), with the
+tone's excursion where one was found and without it (the tone's Gauss-Markov wander alone).
+The false alarms of the excursion's threshold: the envelope line of ``--null`` hidden-effect
+wandering tones without excursion (:func:`gyrofilter.sim.hidden_effects.draw_case`, half of
+10 min and half of 30-60 min) and of the runs without it (docs/gap.md, "A tone whose
+frequency wanders").
 """
 from __future__ import annotations
 
@@ -36,33 +33,10 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-#: the envelope's block (s) and the band of modulation frequencies (Hz) searched
-ENVELOPE_BLOCK_S = 0.1
-MODULATION_HZ = (0.01, 2.0)
-#: the tone's band: its centre +- this many spreads (the detector's TONE_TRACK_SDS)
-TONE_SDS = 3.5
+from gyrofilter.effects import WANDERING_TONE  # noqa: E402
 
-
-def flank_statistics(x, sample_rate_hz, lo_hz, hi_hz):
-    """(excess kurtosis, envelope line ratio, its period in s, the ordinates K searched) of the
-    flanks of ``[lo_hz, hi_hz]`` in ``x`` (module docstring)."""
-    n = x.size
-    w = 2.0 * (hi_hz - lo_hz)
-    f = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
-    spec = np.fft.rfft(x - x.mean())
-    keep = ((f >= max(lo_hz - w, 0.0)) & (f < lo_hz)) | ((f > hi_hz) & (f <= min(hi_hz + w, sample_rate_hz / 2)))
-    y = np.fft.irfft(np.where(keep, spec, 0.0), n)
-    v = float(np.mean(y * y))
-    kurt = float(np.mean(y ** 4) / v ** 2 - 3.0)
-    block = max(1, int(round(ENVELOPE_BLOCK_S * sample_rate_hz)))
-    env = (y[: n // block * block] ** 2).reshape(-1, block).mean(axis=1)
-    env -= env.mean()
-    p = np.abs(np.fft.rfft(env)) ** 2
-    fe = np.fft.rfftfreq(env.size, block / sample_rate_hz)
-    sel = (fe >= MODULATION_HZ[0]) & (fe <= MODULATION_HZ[1])
-    j = int(np.argmax(p[sel]))
-    return kurt, float(p[sel][j] / np.median(p[sel])), float(1.0 / fe[sel][j]), int(sel.sum())
-
+#: the first seed of the hidden-effect tones of the false-alarm count (``--null``)
+NULL_SEED = 36100
 
 def tails(x, sample_rate_hz):
     """The gap analysis' tail statistic of ``x``."""
@@ -71,17 +45,40 @@ def tails(x, sample_rate_hz):
     return tails_statistic(x, sample_rate_hz, u=tail_residual(x, sample_rate_hz))
 
 
-def folded_band(x, sample_rate_hz, lo_hz, hi_hz, period_s, bins=20):
-    """(least power of ``[lo_hz, hi_hz]`` over its median, share of the cycle below 0.9 of the
-    median) of the band's power folded on ``period_s`` in ``bins`` phases."""
-    n = x.size
-    f = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
-    spec = np.fft.rfft(x - x.mean())
-    y = np.fft.irfft(np.where((f >= lo_hz) & (f <= hi_hz), spec, 0.0), n)
-    phase = ((np.arange(n) / sample_rate_hz / period_s) % 1.0 * bins).astype(int)
-    prof = np.bincount(phase, y * y, bins) / np.bincount(phase, None, bins)
-    prof /= np.median(prof)
-    return float(prof.min()), float(np.mean(prof < 0.9))
+def with_excursion(spec, i, exc=None):
+    """The validated model ``spec`` with the excursion of axis ``i``'s wandering tone set to the
+    estimate ``exc`` (:func:`gyrofilter.analysis.gap.detectors.tone_excursion`), or taken out
+    (``exc`` None, or no excursion present)."""
+    keys = ("excursion_hz", "excursion_period_s", "excursion_s")
+    given = {k: exc[k] for k in keys} if exc and exc["present"] else {"excursion_hz": 0.0, "excursion_period_s": None,
+                                                                      "excursion_s": None}
+    axis = spec["axes"]["xyz"[i]]
+    effects = [dict(e, **given) if e["effect"] == WANDERING_TONE else e for e in axis["effects"]]
+    return dict(spec, axes=dict(spec["axes"], **{"xyz"[i]: dict(axis, effects=effects)}))
+
+
+def null_ratios(count, first_seed=NULL_SEED):
+    """The envelope line R of ``count`` hidden-effect wandering tones without excursion
+    (:func:`gyrofilter.sim.hidden_effects.draw_case`, seeds from ``first_seed``; their duration,
+    half 10-min and half 30-60-min), at their true centre and spread."""
+    import gyrofilter.sim.hidden_effects as he
+    from gyrofilter.analysis.gap.baseline import axis_dps
+    from gyrofilter.analysis.gap.detectors import flank_envelope
+    from gyrofilter.sim.simulate import simulate
+
+    out = []
+    for k in range(count):
+        case = he.draw_case(first_seed + k, effect=WANDERING_TONE, duration_s=600.0 if k % 2 else None)
+        rec = simulate(case["model"], case["duration_s"], seed=case["sim_seed"])
+        x = np.asarray(axis_dps(rec, "xyz".index(case["axis"])), dtype=float)
+        p = case["params"]
+        out.append(flank_envelope(x, float(rec.sample_rate_hz), p["center_hz"], p["spread_hz"])["ratio"])
+    return out
+
+
+def span(values, fmt):
+    """``lo to hi`` of ``values`` in the format ``fmt``."""
+    return f"{format(min(values), fmt)} to {format(max(values), fmt)}"
 
 
 def main(argv=None):
@@ -89,44 +86,62 @@ def main(argv=None):
     ap.add_argument("--adis", required=True, help="folder of the ADIS16405 records")
     ap.add_argument("--records", default="adis16405_static_2,adis16405_static_3")
     ap.add_argument("--sims", type=int, default=4)
+    ap.add_argument("--null", type=int, default=40, help="hidden-effect tones without excursion for the false alarms")
     args = ap.parse_args(argv)
 
     from gyrofilter.analysis.gap.baseline import axis_dps, simulate_axis
+    from gyrofilter.analysis.gap.detectors import EXCURSION_LINE_RATIO, flank_envelope, folded_band, tone_excursion
     from gyrofilter.analysis.gap.pipeline import analyse_gap
     from gyrofilter.recording import read_recording
     from gyrofilter.sim.model import validate_model
 
-    print("| record | axis | tone (centre, spread) | flanks | kurtosis: record / model runs | envelope line: record (period) / model runs "
-          "| tone's band on that period: least power, cycle below 0.9 | tail statistic: record / model runs |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| record | axis | tone (centre, spread) | flanks | kurtosis: record / runs with / without the excursion "
+          "| envelope line: record (period) / runs with / without | tone's band on that period: least power, cycle below 0.9 "
+          "| excursion found: period, height, length | tail statistic: record / runs with / without |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    null_model = []
     for name in args.records.split(","):
         rec = read_recording(os.path.join(args.adis, f"{name}.csv.gz"))
         fs = float(rec.sample_rate_hz)
         rep = analyse_gap(rec, bootstrap=0)
         spec, _ = validate_model(rep["extended_model"])
         for finding in rep["findings"]:
-            if finding["effect"] != "wandering_tone":
+            if finding["effect"] != WANDERING_TONE:
                 continue
             axis = finding["axis"]
             i = "xyz".index(axis)
             c, s = finding["params"]["center_hz"], finding["params"]["spread_hz"]
-            lo, hi = c - TONE_SDS * s, c + TONE_SDS * s
             x = np.asarray(axis_dps(rec, i), dtype=float)
-            k, ratio, period, ordinates = flank_statistics(x, fs, lo, hi)
-            least, below = folded_band(x, fs, lo, hi, period)
+            env = flank_envelope(x, fs, c, s)
+            exc = tone_excursion(x, fs, c, s)
+            least, below = folded_band(x, fs, c, s, exc["excursion_period_s"] or env["period_s"])
             t_rec = tails(x, fs)
-            runs = []
+            runs, bare = [], []
             for seed in range(args.sims):
-                y = simulate_axis(spec, len(rec), fs, seed, i)
-                runs.append(flank_statistics(y, fs, lo, hi)[:2] + (tails(y, fs),))
-            ks, rs, ts = [r[0] for r in runs], [r[1] for r in runs], [r[2] for r in runs]
-            w = 2.0 * (hi - lo)
-            print(f"| {name} | {axis} | {c:.2f} Hz, {s:.2f} Hz | {max(lo - w, 0):.1f}-{lo:.1f} and {hi:.1f}-{min(hi + w, fs / 2):.1f} Hz "
-                  f"| {k:+.2f} / {min(ks):+.3f} to {max(ks):+.3f} | {ratio:.0f} ({period:.2f} s) / {min(rs):.0f} to {max(rs):.0f} "
-                  f"| {least:.2f}, {below:.0%} | {t_rec:+.4f} / {min(ts):+.4f} to {max(ts):+.4f} |")
-    print(f"\nmodel runs: {args.sims} simulations of the extended model the analysis wrote (its tone's wander "
-          f"Gauss-Markov); a stationary Gaussian band's envelope line is about ln(K)/ln 2 = "
-          f"{math.log(ordinates) / math.log(2):.0f} on average over the K = {ordinates} ordinates of the last record")
+                y = simulate_axis(with_excursion(spec, i, exc), len(rec), fs, seed, i)
+                e = flank_envelope(y, fs, c, s)
+                runs.append((e["kurtosis"], e["ratio"], tails(y, fs)))
+                y = simulate_axis(with_excursion(spec, i), len(rec), fs, seed, i)
+                e = flank_envelope(y, fs, c, s)
+                bare.append((e["kurtosis"], e["ratio"], tails(y, fs)))
+            null_model += [r[1] for r in bare]
+            ks, rs, ts = ([r[k] for r in runs + bare] for k in range(3))
+            n = len(runs)
+            lo_w, lo, hi, hi_w = env["flanks_hz"]
+            found = (f"{exc['excursion_period_s']:.2f} s, {exc['excursion_hz']:.2f} Hz, {exc['excursion_s']:.2f} s"
+                     if exc["present"] else "none")
+            print(f"| {name} | {axis} | {c:.2f} Hz, {s:.2f} Hz | {lo_w:.1f}-{lo:.1f} and {hi:.1f}-{hi_w:.1f} Hz "
+                  f"| {env['kurtosis']:+.2f} / {span(ks[:n], '+.3f')} / {span(ks[n:], '+.3f')} "
+                  f"| {env['ratio']:.0f} ({env['period_s']:.2f} s) / {span(rs[:n], '.0f')} / {span(rs[n:], '.0f')} "
+                  f"| {least:.2f}, {below:.0%} | {found} | {t_rec:+.4f} / {span(ts[:n], '+.4f')} / {span(ts[n:], '+.4f')} |")
+    null = null_ratios(args.null)
+    print(f"\nruns: {args.sims} simulations of the extended model the analysis wrote (seeds 0, 1, ...), with the tone's "
+          f"excursion found (its cycle's phase random per run) and without it; a stationary Gaussian band's envelope line is about ln(K)/ln 2 = "
+          f"{math.log(env['ordinates']) / math.log(2):.0f} on average over the K = {env['ordinates']} ordinates of the last "
+          f"record. False alarms at the threshold R >= {EXCURSION_LINE_RATIO:g}: {sum(r >= EXCURSION_LINE_RATIO for r in null)} "
+          f"of {len(null)} hidden-effect wandering tones without excursion (10-60 min; largest R {max(null):.0f}) and "
+          f"{sum(r >= EXCURSION_LINE_RATIO for r in null_model)} of the {len(null_model)} runs above without it "
+          f"(largest {max(null_model):.0f})")
 
 
 if __name__ == "__main__":

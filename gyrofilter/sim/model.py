@@ -396,7 +396,8 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     rate = model["sample_rate_hz"]
     top_hz = highest_frequency_hz(name, out)
     if top_hz is not None and rate is not None and top_hz > rate / 2.0:
-        warnings.append(f"model: {label}: {_HIGHEST_FREQUENCY[name][1]} {top_hz:g} Hz is above the Nyquist frequency "
+        what = _HIGHEST_FREQUENCY[name][1] + (" + excursion_hz" if out.get("excursion_hz") else "")
+        warnings.append(f"model: {label}: {what} {top_hz:g} Hz is above the Nyquist frequency "
                         f"{rate / 2.0:g} Hz and will alias")
     if name in (NARROWBAND, WANDERING_TONE) + RESONATORS and rate is not None:
         if out["center_hz"] >= rate / 2.0:
@@ -408,6 +409,8 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
         if name == NARROWBAND and not MIN_BANDWIDTH_PER_RATE * rate <= out["bandwidth_hz"] <= rate:
             _err(f"{label}.bandwidth_hz", f"expected a width in [{MIN_BANDWIDTH_PER_RATE * rate:g}, {rate:g}] Hz "
                                           f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")
+    if name == WANDERING_TONE:
+        _check_excursion(out, label)
     if name == ARMA and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:
         _err(f"{label}.phi", "expected a stationary AR part (every root of z^p - phi_1 z^(p-1) - ... - phi_p inside the unit circle)")
     if name == COLORED_NOISE and out["lag2"] is not None and nt.arma11_from_lags(out["lag1"], out["lag2"]) is None:
@@ -418,17 +421,32 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     return out
 
 
+def _check_excursion(tone, label):
+    """A wandering tone's periodic excursion (:mod:`gyrofilter.sim.tone`): ``excursion_period_s``
+    P and ``excursion_s`` D given together or not at all, D < P, and an ``excursion_hz`` above 0
+    needs them (SettingsError naming the key)."""
+    period_s, length_s = tone["excursion_period_s"], tone["excursion_s"]
+    if (period_s is None) != (length_s is None):
+        _err(f"{label}.{'excursion_s' if length_s is None else 'excursion_period_s'}",
+             "missing: excursion_period_s and excursion_s are given together (the excursion's period and length, s)")
+    if tone["excursion_hz"] > 0 and period_s is None:
+        _err(f"{label}.excursion_period_s", "missing: an excursion_hz above 0 needs excursion_period_s and excursion_s "
+                                            "(the excursion's period and length, s)")
+    if period_s is not None and not length_s < period_s:
+        _err(f"{label}.excursion_s", f"expected a length below excursion_period_s {period_s:g} s, got {length_s:g}")
+
+
 #: a wandering tone's frequency reaches its centre plus this many spread_hz (its instantaneous
 #: frequency is Gaussian: 3 standard deviations hold 99.7 % of the record)
 TONE_REACH_SPREADS = 3.0
 #: effect -> (its highest frequency (Hz) from its checked parameters, how a warning names it): the
 #: effects whose frequency can pass the Nyquist frequency and alias. A sinusoid's frequency; a
-#: wandering tone's centre plus :data:`TONE_REACH_SPREADS` spreads; a narrowband line's upper
+#: wandering tone's centre plus :data:`TONE_REACH_SPREADS` spreads and its excursion; a narrowband line's upper
 #: half-power edge (centre plus half its full width). The centres of these lines and of the
 #: resonators are refused at or above Nyquist (:func:`validate_model`).
 _HIGHEST_FREQUENCY = {
     SINUSOID: (lambda p: p["frequency_hz"], "frequency_hz"),
-    WANDERING_TONE: (lambda p: p["center_hz"] + TONE_REACH_SPREADS * p["spread_hz"],
+    WANDERING_TONE: (lambda p: p["center_hz"] + TONE_REACH_SPREADS * p["spread_hz"] + p.get("excursion_hz", 0.0),
                      f"center_hz + {TONE_REACH_SPREADS:g} spread_hz"),
     NARROWBAND: (lambda p: p["center_hz"] + 0.5 * p["bandwidth_hz"], "center_hz + bandwidth_hz / 2"),
 }

@@ -201,7 +201,8 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
                                  _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
         elif name == WANDERING_TONE:
             terms.append(WanderingTone(eff["amplitude_dps"], eff["center_hz"], eff["spread_hz"], eff["wander_s"],
-                                       sample_rate_hz, _stream(root, *key, 0)))
+                                       sample_rate_hz, _stream(root, *key, 0), eff["excursion_hz"],
+                                       eff["excursion_period_s"], eff["excursion_s"], _stream(root, *key, 1)))
         elif name == OUTLIERS:
             outliers.append(nt.Outliers(eff["rate"], eff["magnitude_dps"], _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
         # colored_noise and heavy_tails are part of the noise term

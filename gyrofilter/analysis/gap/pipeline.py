@@ -381,6 +381,7 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     if band is not None:  # the band, or the tone that wanders in it (with the sinusoid it holds)
         tone, folded = det.detect_wandering_tone(x, sample_rate_hz, band, line)
         if tone is not None:
+            tone = det.excursion_note(tone, x, sample_rate_hz)
             cands = [k for k in cands if not (folded and k is line)]
             rms = math.hypot(band.params["rms_dps"], line.params["amplitude_dps"] / math.sqrt(2.0)) if folded else None
             band = band if rms is None else replace(band, params=dict(band.params, rms_dps=rms))  # the sinusoid's power too

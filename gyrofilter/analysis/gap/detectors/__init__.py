@@ -72,7 +72,10 @@ ones found, because the effects are confusable:
    Gaussian reading, and the two are weighed on D
    (:func:`gyrofilter.analysis.gap.confound.weigh_tones`), each with the colored noise left beside
    its own line (:func:`tone_band`: the tone's variance A² / 2 in a line of its width; or the band as
-   measured).
+   measured). A named tone's flanks are searched for a periodic excursion of its frequency
+   (:mod:`~gyrofilter.analysis.gap.detectors.excursion`: the envelope line of the power beside
+   its band at :data:`EXCURSION_LINE_RATIO` times its median ordinate or more); one found is a note
+   of the tone's evidence (its period, height and length), not a term of the extended model.
 3. ``colored_noise`` -- the lag-1 autocorrelation ``r1 = sum e_i e_{i+1} / sum e_i^2`` of the
    high-passed noise ``e = x - moving_mean(x, W)``; white noise: ``r1 ~ N(-1/W, 1/N)``
    (Box & Jenkins). Slow effects barely move ``r1`` because ``W`` is short. Its lag-2 ``r2``
@@ -133,6 +136,7 @@ from .common import (  # noqa: F401
     Candidate,
     DETERMINISTIC_THRESHOLD,
     EXACT_GM_MARGIN,
+    EXCURSION_LINE_RATIO,
     GM_MAX_TAU_DIVISOR,
     HEAVY_TAILS_THRESHOLD,
     HEAVY_TAILS_Z,
@@ -203,6 +207,12 @@ from .tone import (  # noqa: F401
     detect_wandering_tone,
     tone_band,
     tone_estimate,
+)
+from .excursion import (  # noqa: F401
+    excursion_note,
+    flank_envelope,
+    folded_band,
+    tone_excursion,
 )
 from .colored import (  # noqa: F401
     colored_window,

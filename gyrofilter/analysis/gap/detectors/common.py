@@ -85,6 +85,13 @@ TONE_BLOCKS = 32
 #: a tone whose frequency track spreads less than this many bins of its short-time spectrum
 #: (f_s / L) keeps one frequency: a sinusoid, not a wandering tone
 TONE_MIN_SPREAD_BINS = 0.5
+#: a named wandering tone carries a periodic excursion of its frequency where the envelope line of
+#: the power beside its band (detectors/excursion.py) reaches this many times the median ordinate:
+#: a stationary band's is about 15 on average at 20 000 ordinates and passes 50 with probability
+#: about K 2^-50 (2e-11). Measured without excursion (tools/tone_modulation.py): on 40 hidden-effect
+#: wandering tones (10-60 min) the largest was 19, on 8 runs of the ADIS16405 z axes' extended
+#: models 17, so 50 sits 2.6 times above; the two ADIS16405 z axes read 427 and 1175
+EXCURSION_LINE_RATIO = 50.0
 #: repeated rows: the level of the one-sided binomial test of the rows equal to the previous one
 #: against their chance level (:mod:`gyrofilter.analysis.repeats`), for the gap's finding and for
 #: the warnings of ``allan`` and ``report``. Clean quantized 16-min records at 43 Hz (0.5-10 LSB of

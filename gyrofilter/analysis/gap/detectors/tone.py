@@ -81,7 +81,7 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     center_hz = min(max(center_hz, res), nyquist - res)  # a replicate's band past an edge: the band at it
     for _ in range(TONE_WIDENINGS + 1):  # a band narrower than the track's excursions is widened
         lo, hi = max(center_hz - half, res), min(center_hz + half, nyquist - res)
-        track = median_filter(_track(x - np.mean(x), sample_rate_hz, seg, lo, hi), size=TONE_MEDIAN_FRAMES, mode="nearest")
+        track = median_filter(peak_track(x - np.mean(x), sample_rate_hz, seg, lo, hi), size=TONE_MEDIAN_FRAMES, mode="nearest")
         wide = TONE_TRACK_SDS * _robust_sd(track)
         if not wide > 1.05 * half:
             break
@@ -117,7 +117,7 @@ def _robust_sd(v):
     return 1.4826 * float(np.median(np.abs(v - np.median(v)))) if v.size else 0.0
 
 
-def _track(y, sample_rate_hz, seg, lo, hi):
+def peak_track(y, sample_rate_hz, seg, lo, hi):
     """The peak frequency (Hz) of |Y|² within [lo, hi] per frame of ``seg`` samples of ``y``
     (mean removed; Hann, hop ``seg // 2``), parabola-refined on the log powers (:func:`tone_estimate`)."""
     step = seg // 2
