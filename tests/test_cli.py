@@ -195,6 +195,25 @@ def test_an_option_of_one_value_given_twice_is_refused(argv, said, capsys, tmp_p
                  "--out", "s.csv", "--force", "--force"]) == 0
 
 
+@pytest.mark.parametrize("argv, option, hint", [
+    (["allan", "r.csv", "--kalibr", "k.yaml", "--kalibr-tau-s", "-1,10"], "--kalibr-tau-s",
+     "; a value that starts with '-' goes after '=': --kalibr-tau-s=-1,10"),
+    (["gap", "r.csv", "--out-dir", "-reports"], "--fleet/--out-dir",
+     "; a value that starts with '-' goes after '=': --out-dir=-reports"),
+    (["allan", "r.csv", "--kalibr", "--force"], "--kalibr", ""),  # the next option: a value forgotten, no hint
+])
+def test_a_value_that_starts_with_a_dash_is_said_how_to_give(argv, option, hint, capsys):
+    """Issue 39 (trial): ``--kalibr-tau-s -1,10`` said only argparse's "expected one argument"
+    (``=-1,10`` works): the line says how to give such a value."""
+    from gyrofilter.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    assert capsys.readouterr().err == (f"gyrofilter: error: argument {option}: expected one argument{hint} "
+                                       f"(see gyrofilter {argv[0]} --help)\n")
+
+
 def test_running_out_of_memory_is_one_line_not_a_traceback(monkeypatch, capsys):
     """A MemoryError anywhere in a command (an input too large to analyse) ended in a traceback,
     exit 1 (attack pass 10); the recording reader names its file itself (tests/test_recording.py)."""
