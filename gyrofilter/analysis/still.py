@@ -305,9 +305,12 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     costs no float64 precision. A constant accelerometer axis is left out, said through ``warn``,
     whatever ``skip_constant`` says: it never costs the gyro's results (None when every axis is);
     so is the whole accelerometer when its samples do not read gravity (:func:`gravity_unlike`).
+    Columns ``ax, ay, az`` without the header's ``accel_unit`` are not analysed: a warning says so
+    (:func:`accelerometer_note`), after the reader's, for ``allan``, ``report`` and the fleet alike.
     """
     head, series, accel = read_axes(path, axes, with_accel=True, held=True)  # each axis converted when analysed
-    for text in head.warnings:
+    note = accelerometer_note(head)
+    for text in head.warnings + ([note] if note else []):
         warn(text)
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
