@@ -155,7 +155,7 @@ def read_axes(path, axes, with_t=False, with_accel=False, held=False):
     (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array}), and with
     ``with_t`` (head, {axis: array}, t): the ``t`` column (s), or None when the file has none.
     With ``with_accel`` the accelerations of all three axes follow (a still one's gravity is their
-    magnitude: :func:`gravity_unlike`), {column: array} in m/s^2
+    magnitude: :func:`gravity_unlike`), a :class:`HeldColumns` {column: array} taken in m/s^2
     (columns ``ax``...; :func:`gyrofilter.units.to_mps2` from the header's ``accel_unit``), or None
     when the file has no accelerometer it can read (:func:`accelerometer_note` says why).
 
@@ -164,8 +164,8 @@ def read_axes(path, axes, with_t=False, with_accel=False, held=False):
     :class:`~gyrofilter.recording.RecordingHead` after the whole file was read (its warnings,
     notes, ``t_gaps`` and ``sample_rate_hz`` in Hz); the arrays are converted from the file's
     ``gyro_unit``. RecordingError for a bad file or one without samples. With ``held`` the rates
-    and accelerations are :class:`HeldColumns` instead (the same numbers when taken, about half the
-    memory until then: an hour of six axes at 1 kHz), ``t`` float64 as always.
+    are a :class:`HeldColumns` too, and both are held as read (int16 or float32 where exact: the
+    same numbers when taken, a quarter to half the memory until then), ``t`` float64 as always.
     """
     axes = check_axes(axes)
     chunks = iter_recording(path)
@@ -184,10 +184,9 @@ def read_axes(path, axes, with_t=False, with_accel=False, held=False):
 
     if held:
         series = HeldColumns({a: columns.pop(f"g{a}") for a in axes}, dps)
-        accel_columns = HeldColumns({c: columns.pop(c) for c in accel}, mps2) if accel else None
     else:
         series = {a: dps(columns.pop(f"g{a}")) for a in axes}
-        accel_columns = {c: mps2(columns.pop(c)) for c in accel} or None
+    accel_columns = HeldColumns({c: columns.pop(c) for c in accel}, mps2) if accel else None
     out = (head, series) + ((None if not times else np.asarray(columns.pop("t"), dtype=float),) if with_t else ())
     return out + ((accel_columns,) if with_accel else ())
 
