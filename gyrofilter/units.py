@@ -195,18 +195,29 @@ def _python(value):
     return value
 
 
+def _scaled(converted, values, factor=1.0, divisor=None):
+    """``converted`` (``values`` as float64) times ``factor`` or divided by ``divisor``: in place when
+    ``converted`` is a copy of its own (``values`` was not float64), else a new array (the caller's
+    ``values`` stay as they are). The same numbers either way (one IEEE operation per element)."""
+    out = converted if isinstance(values, np.ndarray) and not np.may_share_memory(converted, values) else None
+    if divisor is not None:
+        return np.divide(converted, divisor, out=out)
+    return np.multiply(converted, factor, out=out)
+
+
 def to_dps(values, unit, lsb_per_dps=None):
     """Convert angular rate ``values`` from ``unit`` ('dps', 'rad/s' or 'lsb') to deg/s;
-    ``lsb_per_dps`` (LSB per deg/s, > 0) is needed for 'lsb'."""
-    values = np.asarray(values, dtype=float)
+    ``lsb_per_dps`` (LSB per deg/s, > 0) is needed for 'lsb'. The float64 copy of ``values`` that
+    is not float64 (a float32 column) is converted in place (:func:`_scaled`: one array, not two)."""
+    converted = np.asarray(values, dtype=float)
     if unit == "dps":
-        return values
+        return converted
     if unit == "rad/s":
-        return values * DEG_PER_RAD
+        return _scaled(converted, values, DEG_PER_RAD)
     if unit == "lsb":
         if not lsb_per_dps or lsb_per_dps <= 0:
             raise SettingsError(f"gyro_unit 'lsb' needs a positive lsb_per_dps, got {plain(lsb_per_dps)}")
-        return values / lsb_per_dps
+        return _scaled(converted, values, divisor=lsb_per_dps)
     raise SettingsError(f"unknown gyro unit {unit!r}; expected one of {', '.join(GYRO_UNITS)}")
 
 
@@ -228,14 +239,15 @@ def from_dps(values_dps, unit, lsb_per_dps=None):
 def to_mps2(values, accel_unit, lsb_per_g=None):
     """Convert acceleration ``values`` from ``accel_unit`` (one of :data:`ACCEL_UNITS`) to m/s^2:
     a = v (``m/s^2``), a = v g_n (``g``), a = v g_n / lsb_per_g (``lsb``), with g_n =
-    :data:`STANDARD_GRAVITY_MPS2`; ``lsb_per_g`` (LSB per g, > 0) is needed for 'lsb'."""
-    values = np.asarray(values, dtype=float)
+    :data:`STANDARD_GRAVITY_MPS2`; ``lsb_per_g`` (LSB per g, > 0) is needed for 'lsb'. A float64
+    copy is converted in place, as :func:`to_dps` does."""
+    converted = np.asarray(values, dtype=float)
     if accel_unit == "m/s^2":
-        return values
+        return converted
     if accel_unit == "g":
-        return values * STANDARD_GRAVITY_MPS2
+        return _scaled(converted, values, STANDARD_GRAVITY_MPS2)
     if accel_unit == "lsb":
         if not lsb_per_g or lsb_per_g <= 0:
             raise SettingsError(f"accel_unit 'lsb' needs a positive lsb_per_g, got {plain(lsb_per_g)}")
-        return values * (STANDARD_GRAVITY_MPS2 / lsb_per_g)
+        return _scaled(converted, values, STANDARD_GRAVITY_MPS2 / lsb_per_g)
     raise SettingsError(f"unknown accelerometer unit {plain(accel_unit)}; expected one of {', '.join(ACCEL_UNITS)}")

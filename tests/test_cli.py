@@ -130,9 +130,11 @@ def test_file_names_with_control_characters_print_escaped_on_their_own_line(tmp_
     rec = tmp_path / f"{_FAKING}.csv"
     lsb_recording(tmp_path, name=rec.name)
     out_json, out_rec = tmp_path / f"x{_FAKING}.json", tmp_path / f"c{_FAKING}.csv"
+    log = tmp_path / f"log{_FAKING}.csv"  # another tool's log (convert refuses a recording)
+    log.write_text("time_s,gx,gy,gz\n" + "".join(f"{i / 100:.2f},{i % 5},-3,40\n" for i in range(300)))
     assert main(["allan", str(rec), "--json", str(out_json)]) == 0
-    assert main(["convert", str(rec), "--out", str(out_rec), "--unit", "lsb", "--lsb-per-dps", "131"]) == 0
-    assert main(["convert", str(rec), "--out", str(out_rec), "--unit", "lsb", "--lsb-per-dps", "131"]) == 2  # exists
+    assert main(["convert", str(log), "--out", str(out_rec), "--unit", "lsb", "--lsb-per-dps", "131"]) == 0
+    assert main(["convert", str(log), "--out", str(out_rec), "--unit", "lsb", "--lsb-per-dps", "131"]) == 2  # exists
     said = capsys.readouterr()
     text = said.out + said.err
     assert "\x1b" not in text and "b\\x1b[31m" in text
@@ -193,6 +195,25 @@ def test_an_option_of_one_value_given_twice_is_refused(argv, said, capsys, tmp_p
     assert not list(tmp_path.iterdir())
     assert main(["simulate", "--model", str(REPO / "examples" / "models" / "sinusoid.json"), "--duration", "1",
                  "--out", "s.csv", "--force", "--force"]) == 0
+
+
+@pytest.mark.parametrize("argv, option, hint", [
+    (["allan", "r.csv", "--kalibr", "k.yaml", "--kalibr-tau-s", "-1,10"], "--kalibr-tau-s",
+     "; a value that starts with '-' goes after '=': --kalibr-tau-s=-1,10"),
+    (["gap", "r.csv", "--out-dir", "-reports"], "--fleet/--out-dir",
+     "; a value that starts with '-' goes after '=': --out-dir=-reports"),
+    (["allan", "r.csv", "--kalibr", "--force"], "--kalibr", ""),  # the next option: a value forgotten, no hint
+])
+def test_a_value_that_starts_with_a_dash_is_said_how_to_give(argv, option, hint, capsys):
+    """Issue 39 (trial): ``--kalibr-tau-s -1,10`` said only argparse's "expected one argument"
+    (``=-1,10`` works): the line says how to give such a value."""
+    from gyrofilter.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    assert capsys.readouterr().err == (f"gyrofilter: error: argument {option}: expected one argument{hint} "
+                                       f"(see gyrofilter {argv[0]} --help)\n")
 
 
 def test_running_out_of_memory_is_one_line_not_a_traceback(monkeypatch, capsys):

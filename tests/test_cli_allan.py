@@ -7,6 +7,7 @@ import shutil
 import numpy as np
 import pytest
 
+from gyrofilter.analysis.fleet import work
 from gyrofilter.cli import main
 from gyrofilter.cli.console import MAX_LINE_CHARS
 from gyrofilter.recording import Recording, write_recording
@@ -563,18 +564,23 @@ def test_the_json_says_the_accelerometer_was_left_out_and_why(tmp_path, capsys, 
     assert "accelerometer_left_out" not in json.loads((tmp_path / "good.json").read_text())
 
 
-def test_accelerometer_columns_without_accel_unit_leave_the_gyro_as_it_was_and_one_note(tmp_path, capsys):
+def test_accelerometer_columns_without_accel_unit_leave_the_gyro_as_it_was_and_one_warning(tmp_path, capsys):
+    """Issue 39 (trial): the missing accel_unit was a note on stdout in allan and a warning in
+    report; now one rule (characterise_recording warns), the same warning in allan, report and the fleet."""
     path, gyro = _six_axis(tmp_path / "six.csv")
     stripped = tmp_path / "no_unit.csv"
     stripped.write_text("".join(line for line in open(path).read().splitlines(True)
                                 if not line.startswith("# accel_unit")))
     assert main(["allan", str(stripped), "--json", str(tmp_path / "a.json"), "--kalibr", str(tmp_path / "k.yaml")]) == 0
-    out = capsys.readouterr().out
-    assert "accelerometer:" not in out
-    assert sum(line.startswith("note:") for line in out.splitlines()) == 1
-    assert "is not analysed: the header has no accel_unit" in " ".join(out.split())
+    captured = capsys.readouterr()
+    assert "accelerometer:" not in captured.out and "note:" not in captured.out
+    said = "the accelerometer (ax, ay, az) is not analysed: the header has no accel_unit"
+    warnings = [w for w in captured.err.split("gyrofilter: warning: ") if w]
+    assert sum(said in " ".join(w.split()) for w in warnings) == 1
     assert "accelerometer" not in json.loads((tmp_path / "a.json").read_text())
     assert "not estimated here" in (tmp_path / "k.yaml").read_text()
+    fleet = work.analyse_recording(str(stripped), work.FleetSettings("allan"))
+    assert sum(w.startswith(said) for w in fleet["warnings"]) == 1
 
 
 def test_kalibr_on_the_filters_output_is_refused_and_the_fleet_writes_no_yaml_for_it(tmp_path, capsys):

@@ -150,3 +150,17 @@ def test_the_readme_embedding_example_runs_in_a_folder_of_its_own(tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     assert (tmp_path / "cal.json").is_file()
     assert not (REPO / "cal.json").exists()
+
+
+def test_where_a_page_shows_record_from_the_sim_source_it_says_the_pacing():
+    """Issue 39 (trial): ``record --source sim`` records in real time (a 10-minute record takes 10
+    minutes) unless the source says ``realtime=0``; a user who met it in docs/simulate.md waited.
+    Every mention of it in README.md and docs/ says so within its paragraph."""
+    mentions = 0
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        for found in re.finditer(r"record\s+--source\s+`?sim\b", text):
+            paragraph = text[text.rfind("\n\n", 0, found.start()) + 2:text.find("\n\n", found.end())]
+            assert "realtime" in paragraph, f"{page.name}: {text[found.start():found.end() + 40]!r}"
+            mentions += 1
+    assert mentions >= 3

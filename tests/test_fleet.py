@@ -725,3 +725,75 @@ def test_a_six_axis_units_fleet_yaml_and_json_hold_the_accelerometer_as_the_sing
     assert "not estimated here" not in yaml
     assert (tmp_path / "f" / "six.allan.json").read_bytes() == (tmp_path / "one.json").read_bytes()
     assert "accelerometer" in json.loads((tmp_path / "one.json").read_text())
+
+
+def _six_axis(path, *, seed, accel_mps2=None, arw_scale=1.0):
+    """A still six-axis record of 60 s at 100 Hz at ``path``: white gyro noise, an accelerometer
+    reading gravity on z with white noise (``accel_mps2``: its (N, 3) columns instead), its VRW
+    times ``arw_scale``."""
+    rng = np.random.default_rng(seed)
+    gyro = rng.normal(0, 0.05, (6000, 3))
+    if accel_mps2 is None:
+        accel_mps2 = rng.normal(0, 0.04 * arw_scale, (6000, 3)) + [0.0, 0.0, 9.81]
+    write_recording(str(path), Recording.from_dps(gyro, 100.0, accel=accel_mps2, accel_unit="m/s^2"))
+    return str(path)
+
+
+def test_the_accelerometer_has_its_rows_in_the_fleet_table_as_allan_writes_it(tmp_path, capsys):
+    """Issue 39 (trial): fleet.csv and fleet.md said nothing of the accelerometer (only NAME.allan.json
+    had it); now its axes ax, ay, az are rows holding its coefficients, in its own columns and in the
+    m/s units allan prints, and a moving accelerometer's warning is on its row."""
+    moving = np.random.default_rng(2).normal(0, 0.04, (6000, 3)) + [0.0, 0.0, 9.81]
+    moving[3000:, 0] += 2.0  # ax steps by 2 m/s^2 halfway: a tilt, the gyro still
+    paths = [_six_axis(tmp_path / "still.csv", seed=1), _six_axis(tmp_path / "moved.csv", seed=2, accel_mps2=moving)]
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    rows = {(r["unit"], r["axis"]): r for r in _table(tmp_path / "f")}
+    assert [k for k in rows if k[0] == "still"] == [("still", a) for a in ("x", "y", "z", "ax", "ay", "az")]
+    doc = json.loads((tmp_path / "f" / "still.allan.json").read_text())
+    for a in "xyz":
+        details = doc["accelerometer"]["axes"][a]["details"]["vrw_mps2_per_sqrt_hz"]
+        row = rows[("still", "a" + a)]
+        assert row["status"] == "ok" and float(row["vrw_mps2_per_sqrt_hz"]) == details["value"]
+        assert float(row["vrw_mps2_per_sqrt_hz_low"]) == details["low"] and row["arw_dps_per_sqrt_hz"] == ""
+        assert rows[("still", a)]["vrw_mps2_per_sqrt_hz"] == ""
+    assert "axis ax: the acceleration moves by up to" in rows[("moved", "ax")]["warnings"]
+    assert "acceleration moves" not in rows[("moved", "x")]["warnings"] + rows[("moved", "ay")]["warnings"]
+    md = (tmp_path / "f" / "fleet.md").read_text()
+    accel = md.split("## Accelerometer, per recording and axis", 1)[1].split("##", 1)[0]
+    assert "| unit | axis | N (m/s/sqrt(s)) | B (m/s^2) | K (m/s^2/sqrt(s)) | R (m/s^3) |" in accel
+    assert len([ln for ln in accel.splitlines() if ln.startswith(("| still | a", "| moved | a"))]) == 6
+
+
+def test_an_accelerometer_axis_or_the_accelerometer_left_out_is_said_as_a_gyros(tmp_path, capsys):
+    """Issue 39 (trial): a stuck accelerometer axis, and an accelerometer whose samples do not read
+    gravity (the gravity check), were left out without a word in the fleet's table and summary."""
+    stuck = np.random.default_rng(3).normal(0, 0.04, (6000, 3)) + [0.0, 0.0, 9.81]
+    stuck[:, 1] = 0.5
+    paths = [_six_axis(tmp_path / "stuck.csv", seed=3, accel_mps2=stuck),
+             _six_axis(tmp_path / "nograv.csv", seed=4, accel_mps2=np.random.default_rng(4).normal(0, 0.04, (6000, 3)))]
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    rows = {(r["unit"], r["axis"]): r for r in _table(tmp_path / "f")}
+    assert rows[("stuck", "ay")]["status"].startswith(f"{paths[0]}: axis ay: all 6000 samples equal")
+    assert rows[("stuck", "ax")]["status"] == rows[("stuck", "y")]["status"] == "ok"
+    for a in ("ax", "ay", "az"):
+        assert rows[("nograv", a)]["status"].startswith(f"{paths[1]}: axis {a}: the accelerometer reads ")
+        assert "left out of the Allan analysis" in rows[("nograv", a)]["status"]
+    assert "the accelerometer reads" not in rows[("nograv", "x")]["warnings"]
+    assert "2 recording(s), 2 analysed, 0 failed, 4 axis/axes left out, " in out
+    assert len([ln for ln in out.splitlines() if ln.startswith("  left out: ")]) == 4
+
+
+def test_a_unit_with_a_noisier_accelerometer_stands_out_on_its_axis():
+    """Rule 1 holds for the accelerometer's coefficients, per axis ax, ay, az, in its units."""
+    def row(unit, vrw):
+        r = dict.fromkeys(fleet_table.COLUMNS)
+        r.update(unit=unit, axis="ay", status="ok", flag=[], vrw_mps2_per_sqrt_hz=vrw,
+                 vrw_mps2_per_sqrt_hz_low=0.98 * vrw, vrw_mps2_per_sqrt_hz_high=1.02 * vrw)
+        return r
+    rows = [row(f"u{i}", v) for i, v in enumerate([0.004, 0.0041, 0.0039, 0.004, 0.012])]
+    stats = fleet_table.flag_units(rows)
+    assert [(r["unit"], f["what"], f["direction"]) for r in rows for f in r["flag"]] == [("u4", "N", "high")]
+    assert "m/s/sqrt(s)" in rows[4]["flag"][0]["text"]
+    entry = next(s for s in stats if s["axis"] == "ay" and s["what"] == "N")
+    assert entry["units"] == 5 and entry["median"] == pytest.approx(0.004)

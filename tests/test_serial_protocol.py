@@ -1,9 +1,12 @@
 """The serial line protocol (gyrofilter.sources.serial.protocol.LineParser): rows however the bytes are
 split, the counter arithmetic, the refused lines and the counts that reconcile."""
+import re
+
 import numpy as np
 import pytest
 from gyrofilter.errors import DeviceError, SettingsError
 from gyrofilter.sources.serial.protocol import LineParser
+from support import REPO
 
 HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 sensor=MPU6050\n"
 
@@ -372,3 +375,45 @@ def test_a_real_gap_or_restart_as_the_last_line_waits_for_the_next_line_or_the_e
     np.testing.assert_allclose(rows[:, 0] * 100, [0, 1, 5, 6, 7])
     assert (p.stats["lost_samples"], p.stats["restarts"], p.stats["bad_lines"]) == (3, 1, 0)
     assert _reconciles(p)
+
+
+SKETCH = REPO / "tools" / "arduino" / "gyrofilter_stream" / "gyrofilter_stream.ino"
+
+
+def _sketch_output(frame):
+    """What tools/arduino/gyrofilter_stream prints: its header line, read off ``sendHeader``'s prints
+    (``F("...")`` literals; a #define, ``ARRAY[INDEX]`` of its constant arrays, ``chip_id`` 0x68),
+    and the data line of the FIFO ``frame`` ({variable: value}) in the order ``loop`` prints them."""
+    text = SKETCH.read_text()
+    names = dict(re.findall(r"^#define (\w+) (\S+)", text, re.M))
+    names["chip_id"] = "0x68"
+    for name, values in re.findall(r"static const \w+ (\w+)\[\d+\] = \{([^}]*)\}", text):
+        for i, v in enumerate(values.split(",")):
+            names[f"{name}[{i}]"] = v.strip()
+
+    def value(expr):
+        expr = re.sub(r"\[(\w+)\]", lambda m: f"[{names[m.group(1)]}]", expr.split(",")[0].strip())
+        return names[expr]
+
+    def prints(body):
+        return re.findall(r"Serial\.print(?:ln)?\((.*?)\);", body)
+
+    body = text.split("static void sendHeader() {", 1)[1].split("\n}", 1)[0]
+    header = "".join(p[3:-2] if p.startswith('F("') else value(p).removeprefix("0x") for p in prints(body))
+    loop = text.split("for (uint16_t f = 0; f < frames; f++) {", 1)[1].split("\n  }", 1)[0]
+    line = "".join("," if p == "','" else str(frame[p.rstrip("+")]) for p in prints(loop))
+    return header, line
+
+
+def test_the_arduino_sketch_sends_the_accelerometer_in_the_protocol():
+    """Issue 39 (trial): the sketch sent counter,gx,gy,gz,temp only; it sends ax, ay, az too, named by
+    its header's fields, with accel_unit=lsb and lsb_per_g of its range, in the order it prints them;
+    the header stays one line the parser takes (at most MAX_LINE_BYTES: 297 bytes were refused)."""
+    frame = {"counter": 7, "gx": -433, "gy": 151, "gz": -62, "temp": -1520, "ax": 312, "ay": -96, "az": 16544}
+    header, line = _sketch_output(frame)
+    p = LineParser()
+    rows = p.feed(f"{header}\n{line}\n".encode())
+    assert p.columns == ["t", "gx", "gy", "gz", "temp", "ax", "ay", "az"]
+    assert p.header["accel_unit"] == "lsb" and p.header["lsb_per_g"] == "16384" and p.stats["bad_lines"] == 0
+    np.testing.assert_allclose(rows[0][[1, 2, 3, 5, 6, 7]], [-433, 151, -62, 312, -96, 16544])
+    assert rows[0][4] == pytest.approx(-1520 / 340 + 36.53)

@@ -1,16 +1,19 @@
 """The accelerometer's part of gyrofilter.analysis.still.characterise_recording: its coefficients
 recovered from simulated six-axis records within their intervals, and gravity's offset costing no precision."""
 import json
+import tracemalloc
 
 import numpy as np
 import pytest
 
+from gyrofilter.analysis.noise.fit import characterise_axis
 from gyrofilter.analysis.noise.model import ANGLE_RANDOM_WALK
-from gyrofilter.analysis.still import accelerometer_note, characterise_recording
+from gyrofilter.analysis.still import HeldColumns, accelerometer_note, characterise_recording, narrowed
 from gyrofilter.cli import main
 from gyrofilter.effects import BIAS_INSTABILITY
-from gyrofilter.recording import Recording, write_recording
+from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.sources.simulated import DEFAULT_MODEL, DEFAULT_MODEL_PATH
+from gyrofilter.units import to_dps
 
 SEEDS = range(1, 5)
 
@@ -154,3 +157,54 @@ def test_an_accelerometer_whose_header_lies_about_its_unit_is_left_out_not_scale
     assert len(said[-1]) == 1 and f"reads {0.92 * factor:.3g} g at rest" in said[-1][0] and "left out" in said[-1][0]
     said = []  # an axis without gravity alone (--axes x): judged on all three all the same
     assert characterise_recording(str(tmp_path / "lies.csv"), axes="x", warn=said.append)[3] is None and len(said) == 1
+
+
+def test_held_columns_give_the_numbers_of_float64_columns_in_a_quarter_or_half_the_memory():
+    """Issue 39 (memory): the columns are held as read (int16 where every value is an int16 integer,
+    float32 where a float32) and converted when taken: the same float64 numbers as converting them at
+    once; a -0 or a fraction or a value beyond int16 keeps the wider type."""
+    rng = np.random.default_rng(7)
+    ints = np.rint(rng.normal(0, 3000, 1000)).astype(np.float32)
+    columns = {"int16": ints, "halves": ints / 2, "wide": ints * 100, "minus0": np.append(ints, np.float32(-0.0))}
+    held = HeldColumns(dict(columns), lambda x: to_dps(x, "lsb", 131.0))
+    assert {name: narrowed(c).dtype for name, c in columns.items()} == {
+        "int16": np.int16, "halves": np.float32, "wide": np.float32, "minus0": np.float32}
+    for name, column in columns.items():
+        want = np.asarray(column, dtype=float) / 131.0
+        got = held[name]
+        assert got.dtype == np.float64 and np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
+        assert np.array_equal(held.part(name, 10, 20), want[10:20])
+    assert np.array_equal(held.pop("int16"), np.asarray(ints, dtype=float) / 131.0) and "int16" not in held
+
+
+def test_a_six_axis_lsb_record_is_characterised_from_its_columns_as_float64_would_be(tmp_path):
+    """The held columns change no number: each axis's Allan deviation and coefficients equal those of
+    characterise_axis on the float64 columns of read_recording, converted at once."""
+    path = tmp_path / "six.csv.gz"
+    assert main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "60", "--seed", "5", "--out", str(path)]) == 0
+    _, gyro, _, accel, _ = characterise_recording(str(path), warn=lambda text: None)
+    rec = read_recording(str(path))
+    for sensor, values, unit, prefix in ((gyro, rec.gyro_dps, "deg/s", ""), (accel, rec.accel_mps2, "m/s^2", "a")):
+        for i, a in enumerate("xyz"):
+            want = characterise_axis(values[:, i], rec.sample_rate_hz, axis=prefix + a, unit=unit)
+            assert np.array_equal(sensor[a].adev, want.adev)
+            assert [c.value for c in sensor[a].fitted.values()] == [c.value for c in want.fitted.values()]
+
+
+def test_characterising_a_six_axis_record_holds_its_columns_as_read(tmp_path):
+    """Issue 39 (memory): allan on a six-axis hour at 1 kHz peaked at 275 MB (194 MB for the gyro's
+    hour). Measured here as the traced peak of characterise_recording on 5 min at 1 kHz of the default
+    model, in float64 columns of the record: 13.6 before (the six columns converted at once, np.std's
+    and the gravity check's copies), 8.5 with the columns held as read and taken one at a time
+    (tools/bench_reader.py has the commands' peak resident memory)."""
+    path = tmp_path / "five.csv.gz"
+    assert main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "300", "--sample-rate-hz", "1000",
+                 "--seed", "4", "--out", str(path)]) == 0
+    characterise_recording(str(path), warn=lambda text: None)  # the imports and caches first
+    tracemalloc.start()
+    try:
+        characterise_recording(str(path), warn=lambda text: None)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak / (8 * 300_000) < 10.5

@@ -1,5 +1,6 @@
 """Units helpers: conversions, the sample-rate check, and plain numbers in error messages."""
 import math
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -9,7 +10,7 @@ from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.recording import read_recording
 from gyrofilter.evaluation.reference import body_rate_from_quaternions
 from gyrofilter.filter.tempcomp import compensate
-from gyrofilter.units import MIN_SAMPLE_RATE_HZ, check_sample_rate_hz, from_dps, json_ready, plain, to_dps
+from gyrofilter.units import MIN_SAMPLE_RATE_HZ, check_sample_rate_hz, from_dps, json_ready, plain, to_dps, to_mps2
 
 
 def test_plain_writes_numpy_scalars_as_the_numbers_they_hold():
@@ -26,6 +27,27 @@ def test_lsb_round_trip_and_bad_unit():
     assert np.allclose(from_dps(to_dps(x, "lsb", 131.0), "lsb", 131.0), x)
     with pytest.raises(GyroFilterError, match="got -131.0$"):
         to_dps(x, "lsb", np.float64(-131.0))
+
+
+@pytest.mark.parametrize("convert, args", [(to_dps, ("lsb", 131.0)), (to_dps, ("rad/s",)), (to_mps2, ("g",)),
+                                            (to_mps2, ("lsb", 16384.0))])
+def test_a_conversion_spends_only_its_own_float64_copy(convert, args):
+    """A float32 or int16 column is converted in its float64 copy (one array, not two: issue 39's
+    memory); a float64 one, the caller's, is left as it was. The numbers are the same either way."""
+    x = np.array([131.0, -262.0, 3.0, 0.0])
+    want = convert(x.copy(), *args)
+    assert np.array_equal(x, [131.0, -262.0, 3.0, 0.0]) and want is not x
+    for narrow in (x.astype(np.float32), x.astype(np.int16)):
+        got = convert(narrow, *args)
+        assert got.dtype == np.float64 and np.array_equal(got, want) and narrow[0] == 131
+    column = np.ones(1_000_000, dtype=np.float32)
+    tracemalloc.start()
+    try:
+        convert(column, *args)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 1.1 * 8 * column.size  # one float64 array (two before)
 
 
 RECORDING_T_BACKWARDS = """# gyrofilter-recording: 1

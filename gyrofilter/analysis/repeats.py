@@ -167,8 +167,12 @@ def repeated_rows(gyro_dps, step_dps=None, axes=AXES):
 def _count(gyro_dps, step_dps, axes):
     """:func:`repeated_rows`'s work."""
     columns = (gyro_dps[:, i] for i in range(gyro_dps.shape[1])) if isinstance(gyro_dps, np.ndarray) else gyro_dps
+    columns = iter(columns)
     equal, log_p, var_log, steps = None, 0.0, 0.0, []
-    for a, x in zip(axes, columns):
+    for a in axes:  # not zip(axes, columns): zip's reused result tuple would keep each column alive past its del
+        x = next(columns, None)
+        if x is None:
+            break
         if equal is None:
             if len(x) < 3:
                 return RepeatedRows(False, "too few rows")

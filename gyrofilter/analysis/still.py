@@ -7,6 +7,7 @@ The one path from a file to the Allan results of ``gyrofilter allan``, ``gyrofil
 a fleet run (:mod:`gyrofilter.analysis.fleet`). Warnings go to the caller's ``warn(text)``;
 nothing here prints.
 """
+import collections.abc
 import math
 
 import numpy as np
@@ -66,8 +67,17 @@ def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):
     and ``what`` for another sensor than the gyro."""
     x = np.asarray(x_dps, dtype=float)
     with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: the analyses say so
-        return not_static(x, sample_rate_hz, float(np.std(np.diff(x))) / math.sqrt(2) if x.size > 1 else 0.0,
+        return not_static(x, sample_rate_hz, _spent_sd(np.diff(x)) / math.sqrt(2) if x.size > 1 else 0.0,
                           brief=brief, **sensor)
+
+
+def _spent_sd(d):
+    """``np.std(d)`` (ddof 0) by numpy's own steps (the mean, the deviations, the mean of their
+    squares, its square root), the deviations formed in ``d`` itself: the same number without
+    np.std's copy of ``d`` (29 MB for an hour at 1 kHz). ``d`` is spent."""
+    d -= d.mean()
+    np.multiply(d, d, out=d)
+    return math.sqrt(d.sum() / d.size)
 
 
 def clipped(gyro_dps, full_scale_dps, lsb_per_dps=None):
@@ -88,12 +98,64 @@ def clipped(gyro_dps, full_scale_dps, lsb_per_dps=None):
             "clipped there (the motion was faster than the sensor's range)")
 
 
-def read_axes(path, axes, with_t=False, with_accel=False):
+class HeldColumns(collections.abc.Mapping):
+    """Columns held as the file gave them, each converted to float64 in the analysis' unit only when
+    taken, one at a time: {name: array} (``convert(column)``, e.g. :func:`~gyrofilter.units.to_dps`).
+    Held as :func:`gyrofilter.recording.collect_columns` keeps them with ``compact``: float32 where
+    every value of the column is a float32 exactly (the integers of an ``lsb`` column), so
+    float64(held) is the file's value and a taken column holds the numbers of a float64 column
+    converted at once: the results are the same, the memory half the held columns' plus the one
+    taken; a float32 column whose values are all int16 integers (an ``lsb`` column: the sensor's
+    16-bit registers) is held as int16, a quarter. Each taking converts anew; :meth:`pop` frees the
+    column."""
+
+    def __init__(self, columns, convert):
+        self._columns, self._convert = {name: narrowed(c) for name, c in columns.items()}, convert
+
+    def __getitem__(self, name):
+        return self._convert(self._columns[name])
+
+    def __iter__(self):
+        return iter(self._columns)
+
+    def __len__(self):
+        return len(self._columns)
+
+    def pop(self, name):
+        """The column ``name`` converted, no longer held."""
+        return self._convert(self._columns.pop(name))
+
+    def part(self, name, start, stop):
+        """The rows ``start:stop`` of the column ``name``, converted (the same numbers as those rows of
+        the whole column's: the conversions are element-wise)."""
+        return self._convert(self._columns[name][start:stop])
+
+    def rows(self):
+        """The columns' length."""
+        return len(next(iter(self._columns.values()))) if self._columns else 0
+
+    def renamed(self, names):
+        """The columns of ``names`` ({new name: name}) taken out of this one into a new HeldColumns."""
+        return HeldColumns({new: self._columns.pop(old) for new, old in names.items()}, self._convert)
+
+
+def narrowed(column):
+    """``column`` as int16 when it is float32 and every value is an int16 integer exactly (float64 of
+    either is the same number; a -0 keeps the column float32), else as it is."""
+    if column.dtype != np.float32:
+        return column
+    with np.errstate(invalid="ignore"):  # a value beyond int16 casts to another: then not equal
+        small = column.astype(np.int16)
+    exact = np.array_equal(small, column) and not np.signbit(column[small == 0]).any()
+    return small if exact else column
+
+
+def read_axes(path, axes, with_t=False, with_accel=False, held=False):
     """The rates of ``axes`` (deg/s), one float64 array per axis, read in chunks
     (:func:`gyrofilter.recording.collect_columns`). Returns (head, {axis: array}), and with
     ``with_t`` (head, {axis: array}, t): the ``t`` column (s), or None when the file has none.
     With ``with_accel`` the accelerations of all three axes follow (a still one's gravity is their
-    magnitude: :func:`gravity_unlike`), {column: array} in m/s^2
+    magnitude: :func:`gravity_unlike`), a :class:`HeldColumns` {column: array} taken in m/s^2
     (columns ``ax``...; :func:`gyrofilter.units.to_mps2` from the header's ``accel_unit``), or None
     when the file has no accelerometer it can read (:func:`accelerometer_note` says why).
 
@@ -101,21 +163,32 @@ def read_axes(path, axes, with_t=False, with_accel=False):
     :data:`~gyrofilter.units.AXES` or ``"z"`` (columns ``gx``...). ``head`` is the
     :class:`~gyrofilter.recording.RecordingHead` after the whole file was read (its warnings,
     notes, ``t_gaps`` and ``sample_rate_hz`` in Hz); the arrays are converted from the file's
-    ``gyro_unit``. RecordingError for a bad file or one without samples.
+    ``gyro_unit``. RecordingError for a bad file or one without samples. With ``held`` the rates
+    are a :class:`HeldColumns` too, and both are held as read (int16 or float32 where exact: the
+    same numbers when taken, a quarter to half the memory until then), ``t`` float64 as always.
     """
     axes = check_axes(axes)
     chunks = iter_recording(path)
     head = next(chunks)
     times = ["t"] if with_t and "t" in head.names else []
     accel = list(ACCEL_COLUMNS) if with_accel and has_accelerometer(head) else []
-    columns = collect_columns(head, chunks, [f"g{a}" for a in axes] + times + accel)
+    columns = collect_columns(head, chunks, [f"g{a}" for a in axes] + times + accel, compact=held)
     if head.rows == 0:
         raise RecordingError(f"{path}: no samples (the file has a header only)")
-    series = {a: to_dps(columns.pop(f"g{a}"), head.gyro_unit, head.lsb_per_dps) for a in axes}
-    out = (head, series) + ((columns.get("t"),) if with_t else ())
-    if with_accel:
-        out += ({c: to_mps2(columns.pop(c), head.accel_unit, head.lsb_per_g) for c in accel} or None,)
-    return out
+
+    def dps(x):
+        return to_dps(x, head.gyro_unit, head.lsb_per_dps)
+
+    def mps2(x):
+        return to_mps2(x, head.accel_unit, head.lsb_per_g)
+
+    if held:
+        series = HeldColumns({a: columns.pop(f"g{a}") for a in axes}, dps)
+    else:
+        series = {a: dps(columns.pop(f"g{a}")) for a in axes}
+    accel_columns = HeldColumns({c: columns.pop(c) for c in accel}, mps2) if accel else None
+    out = (head, series) + ((None if not times else np.asarray(columns.pop("t"), dtype=float),) if with_t else ())
+    return out + ((accel_columns,) if with_accel else ())
 
 
 def has_accelerometer(head):
@@ -124,15 +197,24 @@ def has_accelerometer(head):
     return all(c in head.names for c in ACCEL_COLUMNS) and head.accel_unit is not None
 
 
+#: rows of the accelerometer's magnitude formed at a time (:func:`gravity_unlike`)
+GRAVITY_BLOCK_ROWS = 1 << 16
+
+
 def gravity_unlike(accel_mps2, head):
-    """Why the accelerometer's samples ``accel_mps2`` ({column: m/s^2} of ``ax, ay, az``) cannot be a
+    """Why the accelerometer's samples ``accel_mps2`` (:class:`HeldColumns` of ``ax, ay, az`` in m/s^2) cannot be a
     still sensor's in the unit its header states, or None. A still accelerometer reads gravity: the
     median over the samples of |a| = sqrt(ax^2 + ay^2 + az^2) lies within :data:`GRAVITY_RANGE_G`
     (motion and tilts move gravity between the axes, not its magnitude). A magnitude beyond them is
     a wrong ``accel_unit`` or ``lsb_per_g`` (every coefficient scaled by the same wrong factor, none
-    of them the sensor's) or an output with gravity removed. All three axes, whichever are analysed."""
+    of them the sensor's) or an output with gravity removed. All three axes, whichever are analysed;
+    |a| formed :data:`GRAVITY_BLOCK_ROWS` rows at a time (one float64 column in memory)."""
+    magnitude = np.empty(accel_mps2.rows())
     with np.errstate(over="ignore"):
-        g = float(np.median(np.sqrt(sum(np.square(accel_mps2[c]) for c in ACCEL_COLUMNS)))) / STANDARD_GRAVITY_MPS2
+        for start in range(0, magnitude.size, GRAVITY_BLOCK_ROWS):
+            stop = start + GRAVITY_BLOCK_ROWS
+            magnitude[start:stop] = np.sqrt(sum(np.square(accel_mps2.part(c, start, stop)) for c in ACCEL_COLUMNS))
+    g = float(np.median(magnitude)) / STANDARD_GRAVITY_MPS2
     low, high = GRAVITY_RANGE_G
     if low <= g <= high:
         return None
@@ -225,16 +307,19 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     so is the whole accelerometer when its samples do not read gravity (:func:`gravity_unlike`).
     The last item says why the whole accelerometer was left out (the warning's text without
     :data:`LEFT_OUT`; ``allan --json``'s ``accelerometer_left_out``), None when it was not.
+    Columns ``ax, ay, az`` without the header's ``accel_unit`` are not analysed: a warning says so
+    (:func:`accelerometer_note`), after the reader's, for ``allan``, ``report`` and the fleet alike.
     """
-    head, series, accel = read_axes(path, axes, with_accel=True)
-    for text in head.warnings:
+    head, series, accel = read_axes(path, axes, with_accel=True, held=True)  # each axis converted when analysed
+    note = accelerometer_note(head)
+    for text in head.warnings + ([note] if note else []):
         warn(text)
     warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     left_out = None
     if accel is not None:
         unlike = gravity_unlike(accel, head)
-        accel = {f"a{a}": accel[f"a{a}"] for a in axes}  # the axes analysed
+        accel = accel.renamed({f"a{a}": f"a{a}" for a in axes})  # the axes analysed
         try:
             refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
         except RecordingError as exc:  # the accelerometer's spikes cost it alone, not the gyro's results
@@ -242,7 +327,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
         if unlike:  # or its unit is wrong: every coefficient would be off by the same factor
             warn(f"{unlike}{LEFT_OUT}")
             accel, left_out = None, unlike
-    repeats = repeated_rows([series[a] for a in axes], 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
+    repeats = repeated_rows((series[a] for a in axes), 1.0 / head.lsb_per_dps if head.gyro_unit == "lsb" else None,
                             axes=axes)
     said = repeats_warning(repeats)
     if said:
@@ -252,7 +337,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     results = _characterise_sensor(series, GYRO_SENSOR, skip_constant=skip_constant, **settings)
     accel_results = None
     if accel is not None:
-        accel_results = _characterise_sensor({a: accel.pop(f"a{a}") for a in axes}, ACCEL_SENSOR, skip_constant=True,
+        accel_results = _characterise_sensor(accel.renamed({a: f"a{a}" for a in axes}), ACCEL_SENSOR, skip_constant=True,
                                              **settings) or None
         if accel_results is None:
             left_out = f"{path}: every accelerometer axis analysed ({', '.join('a' + a for a in axes)}) is constant"

@@ -56,6 +56,7 @@ class _OneLineParser(argparse.ArgumentParser):
     def parse_known_args(self, args=None, namespace=None):
         args = sys.argv[1:] if args is None else list(args)
         self._refuse_repeated(args)
+        self.argv = args  # for the error's hint (:meth:`error`)
         return super().parse_known_args(args, namespace)
 
     def _refuse_repeated(self, argv):
@@ -80,7 +81,23 @@ class _OneLineParser(argparse.ArgumentParser):
         choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
         if choice:  # a mistyped value of an option with choices (--preset papr): the closest one
             message += _did_you_mean(choice.group(1), [c.strip(" '\"") for c in choice.group(2).split(",")])
+        message += self._dashed_value_hint(message)
         self.exit(EXIT_BAD_INPUT, escape_controls(console.error_line(f"{message} (see {self.prog} --help)")) + "\n")
+
+
+    def _dashed_value_hint(self, message):
+        """How to give the value of an option that argparse took for an option because it starts
+        with "-" (``--kalibr-tau-s -1,10``: "expected one argument"; a plain negative number such as
+        ``-5`` is taken, and an option of the command after it is a value forgotten): "; a value that starts with '-' goes after '=': --kalibr-tau-s=-1,10", else ""."""
+        missing = re.match(r"argument (\S+): expected one argument$", message)
+        argv = getattr(self, "argv", [])
+        if missing:
+            names = missing.group(1).split("/")  # --fleet/--out-dir: one option
+            for word, value in zip(argv, argv[1:]):
+                if word in names and value.startswith("-") and value.split("=")[0] not in self._option_string_actions \
+                        and value != "--":  # not the next option (--kalibr --force: a value forgotten)
+                    return f"; a value that starts with '-' goes after '=': {word}={value}"
+        return ""
 
 
 class _Parser(_OneLineParser):

@@ -21,7 +21,7 @@ from ..analysis.noise.export import kalibr_yaml, to_json
 from ..analysis.noise.kalibr import DEFAULT_TAU_RANGE_S, check_tau_range_s, kalibr_sensor
 from ..analysis.noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS, TERMS, TERM_SYMBOL, convert
 from ..analysis.noise.plots import plot_allan
-from ..analysis.still import accelerometer_note, characterise_recording
+from ..analysis.still import characterise_recording
 from ..errors import SettingsError
 from ..plots import check_figure_path
 from ..units import AXES, check_axes
@@ -224,9 +224,6 @@ def run(args):
                           "up, does not enter the Allan deviation): Q velocity (m/s), N in m/s/sqrt(s) = "
                           "m/s^2/sqrt(Hz), B in m/s^2, K in m/s^2/sqrt(s), R in m/s^3", "  ")
         print_coefficients(accel, ACCELEROMETER_TERMS, args.confidence, args.min_clusters)
-    note = accelerometer_note(head)
-    if note:
-        console.paragraph(f"note: {note}")
     if args.kalibr:
         for sensor, unit in ((results, "deg/s"), (accel, "m/s^2")):
             if sensor is not None:

@@ -31,7 +31,7 @@ import time
 from .. import __version__
 from ..analysis.agreement import compare
 from ..analysis.gap.pipeline import analyse_file
-from ..analysis.still import accelerometer_note, clipped
+from ..analysis.still import clipped
 from ..errors import GyroFilterError, SettingsError, one_line
 from ..inputs import parse_number
 from ..recording import CHUNK_ROWS, iter_recording
@@ -126,7 +126,7 @@ def compute(path, *, sims, keep_outliers, warn, progress):
     progress("allan")
     allan_doc = allan_error = None
     try:
-        head, results, allan_doc, accel = allan.analyse(path, keep_outliers=keep_outliers, warn=warned,
+        _, results, allan_doc, accel = allan.analyse(path, keep_outliers=keep_outliers, warn=warned,
                                                         skip_constant=True)
     except GyroFilterError as exc:
         allan_error = one_line(exc)
@@ -139,8 +139,6 @@ def compute(path, *, sims, keep_outliers, warn, progress):
                 unresolved = allan.unresolved_text(r, allan.MIN_CLUSTERS)
                 if unresolved:
                     warned(f"axis {prefix}{a}: {unresolved} (the table gives their upper bounds)")
-        if accelerometer_note(head):
-            warned(accelerometer_note(head))
     progress("filter")
     filtered, filter_error = _filter(path)
     if filter_error:

@@ -5,7 +5,8 @@ recording and axis, the flag rules, fleet.csv and fleet.md. Numbers in, text out
 Iglewicz & Hoaglin, *How to Detect and Handle Outliers*, ASQC 1993, ch. 3: modified z-score,
 limit 3.5):
 
-1. *Coefficients N, B, K, R.* On the natural log of each unit's level (the fitted value when the
+1. *Coefficients N, B, K, R*, per axis of each sensor (the accelerometer's ``ax``, ``ay``, ``az``
+   too, :data:`SENSORS`). On the natural log of each unit's level (the fitted value when the
    term is resolved, else its 95 % upper bound): the fleet's median m and spread
    s = max(1.4826 MAD, 0.1). 1.4826 MAD is the standard deviation for normal data; the floor
    0.1 (10 %) is an assumed least unit-to-unit spread, for a small fleet whose units agree closer
@@ -69,13 +70,30 @@ from ...errors import SettingsError
 from ...recording.header import markdown_text
 from ...units import AXES, MAD_TO_SIGMA, utf8_text
 from ..gap.detectors import OUTSIDE_NULL_D
-from ..noise.export import JSON_KEY
-from ..noise.model import ANGLE_RANDOM_WALK, QUANTIZATION, TERM_SYMBOL, TERM_UNIT, TERMS
+from ..noise.export import ACCEL_JSON_KEY, JSON_KEY
+from ..noise.model import (ACCELEROMETER_TERMS, ANGLE_RANDOM_WALK, GYROSCOPE_TERMS, QUANTIZATION, TERM_SYMBOL,
+                           TERMS)
 from ..still import LEFT_OUT
 
 
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
 COEFFICIENTS = (ANGLE_RANDOM_WALK, BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP)
+
+
+#: a sensor of the fleet table: ``prefix`` of its axes' names (``x``; the accelerometer's ``ax``, as
+#: ``allan`` names them), ``block`` of the allan JSON that holds its axes (None: the document itself),
+#: ``keys`` of its coefficients (its fleet.csv columns, the JSON's keys) and ``terms``
+#: (:class:`~gyrofilter.analysis.noise.model.SensorTerms`: the units ``allan`` prints)
+FleetSensor = collections.namedtuple("FleetSensor", "prefix block keys terms")
+GYRO = FleetSensor("", None, JSON_KEY, GYROSCOPE_TERMS)
+ACCEL = FleetSensor("a", "accelerometer", ACCEL_JSON_KEY, ACCELEROMETER_TERMS)
+#: the sensors in the order of their rows and columns
+SENSORS = (GYRO, ACCEL)
+
+
+def sensor_of(axis):
+    """The :class:`FleetSensor` of a row's ``axis`` (``x``, ``ax``, ...)."""
+    return ACCEL if axis.startswith(ACCEL.prefix) else GYRO
 
 
 #: modified z-score beyond which a unit stands out (Iglewicz & Hoaglin 1993)
@@ -169,7 +187,7 @@ def _stem(filename):
 
 #: the columns of fleet.csv, in order (docs/formats.md, section 9)
 COLUMNS = (["unit", "recording", "axis", "status", "sample_rate_hz", "duration_s"]
-           + [f"{JSON_KEY[term]}{end}" for term in TERMS for end in ("", "_low", "_high", "_upper")]
+           + [f"{s.keys[term]}{end}" for s in SENSORS for term in TERMS for end in ("", "_low", "_high", "_upper")]
            + ["findings", "d_before", "d_after", "runtime_s", "flag", "warnings"])
 
 
@@ -177,7 +195,14 @@ def fleet_rows(names, results):
     """One row (a dict over :data:`COLUMNS`) per recording and axis of ``results`` (those of
     :func:`~gyrofilter.analysis.fleet.work.analyse_recording`, named by ``names``, e.g. :func:`unit_names`), in the order given; a
     failed recording has one row whose ``status`` is the one-line reason, and no axis. Numbers
-    are floats or None (not resolved, not analysed)."""
+    are floats or None (not resolved, not analysed). The gyro's rows (axes ``x``, ``y``, ``z``)
+    come first, then the accelerometer's (``ax``, ``ay``, ``az``, where the record has one), each
+    holding its own sensor's columns; an axis left out of the Allan analysis (a stuck axis; the
+    whole accelerometer when it does not read gravity or has gross errors,
+    :func:`~gyrofilter.analysis.still.characterise_recording`) is a row whose ``status`` says why.
+    A row's warnings are the recording's and its own axis's (``axis ax: ...``); the
+    accelerometer's as a whole (a warning ending in :data:`~gyrofilter.analysis.still.LEFT_OUT`
+    that names no axis) are on its rows only."""
     rows = []
     for name, res in zip(names, results):
         base = dict.fromkeys(COLUMNS)
@@ -187,27 +212,39 @@ def fleet_rows(names, results):
         if res["error"] is not None:
             rows.append(base)
             continue
-        allan_axes = (res["allan"] or {}).get("axes", {})
+        allan = res["allan"] or {}
         gap = res["gap"]
         idle = ((gap or {}).get("discrepancy") or {}).get("not_analysed", {})
-        stuck = {w[len("axis ")]: w for w in base["warnings"] if w.startswith("axis ") and w.endswith(LEFT_OUT)}
-        axes = [a for a in AXES if a in allan_axes or a in stuck or gap is not None]
+        per_axis = [w for w in base["warnings"] if w.startswith("axis ")]
+        stuck = {w[len("axis "):].split(":", 1)[0]: w for w in per_axis if w.endswith(LEFT_OUT)}
+        accel_out = [w for w in base["warnings"] if not w.startswith("axis ") and w.endswith(LEFT_OUT)]
+        shared = [w for w in base["warnings"] if not w.startswith("axis ") and w not in accel_out]
+        gyro_axes = allan.get("axes", {})
+        accel_axes = (allan.get(ACCEL.block) or {}).get("axes", {})
+        axes = [a for a in AXES if a in gyro_axes or a in stuck or gap is not None]
+        # the accelerometer's axes: those analysed or left out, the gyro's when it was left out as a whole
+        axes += [ACCEL.prefix + a for a in AXES if a in accel_axes or ACCEL.prefix + a in stuck
+                 or (accel_out and a in axes)]
         for axis in axes:
-            # the recording's warnings, and of the per-axis ones ("axis x: ...") only this axis's
+            sensor = sensor_of(axis)
             row = dict(base, axis=axis, flag=[],
-                       warnings=[w for w in base["warnings"] if not w.startswith("axis ") or w.startswith(f"axis {axis}:")])
-            if axis in stuck and gap is None:  # an Allan fleet's stuck axis: a row that says so, not none
-                row["status"] = f"{res['recording']}: {stuck[axis]}"
+                       warnings=shared + (accel_out if sensor is ACCEL else [])
+                       + [w for w in per_axis if w.startswith(f"axis {axis}:")])
+            if axis in stuck and gap is None or sensor is ACCEL and axis in stuck:
+                row["status"] = f"{res['recording']}: {stuck[axis]}"  # a stuck axis: a row that says so, not none
+            elif sensor is ACCEL and accel_out and axis[len(ACCEL.prefix):] not in accel_axes:
+                why = accel_out[0].removeprefix(f"{res['recording']}: ")  # the reason names the file
+                row["status"] = f"{res['recording']}: axis {axis}: {why}"
             if axis in idle:  # the gap had nothing to analyse there: its D (about 0) is no measurement
                 row["status"] = f"{res['recording']}: axis {axis}: {idle[axis]}, not analysed"
-            if axis in allan_axes:
-                details = allan_axes[axis]["details"]
+            analysed = (accel_axes if sensor is ACCEL else gyro_axes).get(axis[len(sensor.prefix):])
+            if analysed is not None:
                 for term in (QUANTIZATION,) + COEFFICIENTS:
-                    key = JSON_KEY[term]
-                    d = details[key]
+                    key = sensor.keys[term]
+                    d = analysed["details"][key]
                     row[key], row[f"{key}_low"], row[f"{key}_high"] = d["value"], d["low"], d["high"]
                     row[f"{key}_upper"] = None if d["resolved"] else d["upper_bound"]
-            if gap is not None and axis not in idle:
+            if gap is not None and axis not in idle and sensor is GYRO:
                 row["findings"] = [f for f in gap["findings"] if f["axis"] == axis]
                 d = gap.get("discrepancy", {})
                 row["d_before"] = d.get("before", {}).get(axis)
@@ -237,12 +274,19 @@ def flag_units(rows):
     "/"; ``compared``: False when too few units)."""
     stats = []
     ok = [r for r in rows if r["status"] == "ok"]
-    for axis in AXES:
-        on_axis = [r for r in ok if r["axis"] == axis]
-        for term in COEFFICIENTS:
-            stats.append(_flag_coefficient(axis, term, on_axis))
-        stats.extend(_flag_departures(axis, [r for r in on_axis if r["findings"] is not None]))
+    for sensor in _sensors(rows):
+        for axis in (sensor.prefix + a for a in AXES):
+            on_axis = [r for r in ok if r["axis"] == axis]
+            for term in COEFFICIENTS:
+                stats.append(_flag_coefficient(axis, term, on_axis))
+            if sensor is GYRO:  # the gap analyses the gyro
+                stats.extend(_flag_departures(axis, [r for r in on_axis if r["findings"] is not None]))
     return stats
+
+
+def _sensors(rows):
+    """The sensors of :data:`SENSORS` that ``rows`` hold: the gyro always, the accelerometer where a row is its."""
+    return [s for s in SENSORS if s is GYRO or any(r["axis"] and sensor_of(r["axis"]) is s for r in rows)]
 
 
 def _log_centre(values, floor):
@@ -253,8 +297,9 @@ def _log_centre(values, floor):
 
 
 def _flag_coefficient(axis, term, on_axis):
-    """Rule 1 on one coefficient ``term`` of the rows ``on_axis``; their statistics entry."""
-    key = JSON_KEY[term]
+    """Rule 1 on one coefficient ``term`` of the rows ``on_axis`` (of ``axis``); their statistics entry."""
+    sensor = sensor_of(axis)
+    key, unit = sensor.keys[term], sensor.terms.term_unit[term]
     have = [r for r in on_axis if (r[key] if r[key] is not None else r[f"{key}_upper"]) is not None]
     entry = {"axis": axis, "what": TERM_SYMBOL[term], "units": len(have), "compared": len(have) >= MIN_UNITS}
     if not entry["compared"]:
@@ -271,7 +316,7 @@ def _flag_coefficient(axis, term, on_axis):
                 r["flag"].append({
                     "kind": "coefficient", "what": TERM_SYMBOL[term], "direction": direction, "z": z,
                     "text": f"{TERM_SYMBOL[term]} {direction}: {r[key]:.3g} [{r[f'{key}_low']:.3g}, "
-                            f"{r[f'{key}_high']:.3g}] {TERM_UNIT[term]} against the fleet's median "
+                            f"{r[f'{key}_high']:.3g}] {unit} against the fleet's median "
                             f"{math.exp(median):.3g}: {z:.1f} spreads beyond (limit {FLAG_Z:g})"})
     return entry
 
@@ -376,10 +421,28 @@ def _coef_md(row, key):
     return f"< {upper:.2g}" if upper is not None else ""
 
 
+def _coefficient_table(rows, sensor, gap):
+    """The lines of fleet.md's table of ``sensor``'s coefficients (in the units ``allan`` prints), a
+    line per row of ``rows``; with ``gap`` the gap's findings and D columns."""
+    keys = [sensor.keys[t] for t in COEFFICIENTS]
+    head = " | ".join(f"{TERM_SYMBOL[t]} ({sensor.terms.term_unit[t]})" for t in COEFFICIENTS)
+    lines = [f"| unit | axis | {head} |" + (" findings | D before -> after |" if gap else "") + " runtime (s) | flags |",
+             "|---|---|" + "---|" * (len(keys) + 2 * gap) + "---|---|"]
+    for r in rows:
+        cells = [_coef_md(r, k) for k in keys]
+        if gap:
+            cells.append("" if r["findings"] is None else ("; ".join(finding_text(f) for f in r["findings"]) or "none"))
+            cells.append("" if r["d_before"] is None else f"{r['d_before']:.3g} -> {r['d_after']:.3g}")
+        cells += [f"{r['runtime_s']:.1f}", ", ".join(f"{f['what']} {f['direction']}" for f in r["flag"])]
+        lines.append(f"| {markdown_text(r['unit'])} | {r['axis']} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def fleet_markdown(rows, stats, *, title):
     """fleet.md, headed ``title``: the units that stand out, the failed files, a row per
     recording and axis (``rows``, :func:`fleet_rows`; the gap's findings and D columns only
-    when some row has gap results), and the fleet statistics ``stats`` (what
+    when some row has gap results; the accelerometer's rows in a table of their own, in its
+    units, when the fleet has one), and the fleet statistics ``stats`` (what
     :func:`flag_units` returns) with the rules."""
     units = list(dict.fromkeys(r["unit"] for r in rows))
     failed, left_out = failed_rows(rows), left_out_rows(rows)
@@ -399,25 +462,19 @@ def fleet_markdown(rows, stats, *, title):
             lines += ["", f"## {heading}", "", "| unit | recording | reason |", "|---|---|---|"]
             lines += [f"| {markdown_text(r['unit'])} | {markdown_text(r['recording'])} | {markdown_text(r['status'])} |"
                       for r in which]
-    keys = [JSON_KEY[t] for t in COEFFICIENTS]
-    head = " | ".join(f"{TERM_SYMBOL[t]} ({TERM_UNIT[t]})" for t in COEFFICIENTS)
     # the gap's columns only when the gap ran (a gap fleet); an allan fleet has none to show
     gap = any(r["findings"] is not None for r in rows if r["status"] == "ok")
     lines += ["", "## Per recording and axis", "",
               "Fit and 95 % interval, or < the upper bound when the record does not resolve the term"
               + ("; findings of the gap analysis; D = discrepancy against the baseline before and after the findings."
-                 if gap else "."), "",
-              f"| unit | axis | {head} |" + (" findings | D before -> after |" if gap else "") + " runtime (s) | flags |",
-              "|---|---|" + "---|" * (len(keys) + 2 * gap) + "---|---|"]
-    for r in rows:
-        if r["status"] != "ok":
-            continue
-        cells = [_coef_md(r, k) for k in keys]
-        if gap:
-            cells.append("" if r["findings"] is None else ("; ".join(finding_text(f) for f in r["findings"]) or "none"))
-            cells.append("" if r["d_before"] is None else f"{r['d_before']:.3g} -> {r['d_after']:.3g}")
-        cells += [f"{r['runtime_s']:.1f}", ", ".join(f"{f['what']} {f['direction']}" for f in r["flag"])]
-        lines.append(f"| {markdown_text(r['unit'])} | {r['axis']} | " + " | ".join(cells) + " |")
+                 if gap else "."), ""]
+    lines += _coefficient_table([r for r in rows if r["status"] == "ok" and sensor_of(r["axis"]) is GYRO], GYRO, gap)
+    accel = [r for r in rows if r["status"] == "ok" and sensor_of(r["axis"]) is ACCEL]
+    if accel:
+        lines += ["", "## Accelerometer, per recording and axis", "",
+                  f"The same of the acceleration (in {ACCEL.terms.unit}; the axes {', '.join(ACCEL.prefix + a for a in AXES)}"
+                  ", as allan names them): N the velocity random walk, K the acceleration random walk.", ""]
+        lines += _coefficient_table(accel, ACCEL, False)
     lines += ["", "## Fleet statistics", "",
               (f"Coefficients: median m over the units of the level (fit, or upper bound when not resolved) and "
                f"spread s = max({MAD_TO_SIGMA} MAD, {MIN_SPREAD_LN:g}) of its natural log; a unit is flagged when the "

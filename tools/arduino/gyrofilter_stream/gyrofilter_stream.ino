@@ -1,15 +1,15 @@
-// gyrofilter_stream: stream an MPU6050's gyro over serial in gyrofilter's line protocol.
+// gyrofilter_stream: stream an MPU6050's gyro and accelerometer over serial in gyrofilter's line protocol.
 //
 // Protocol (docs/live.md): one header line, sent at start-up and whenever a '?' arrives,
-//   # gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 ...
-// then one line per sample:  counter,gx,gy,gz,temp  (raw int16 LSB; temp raw, T = raw/340 + 36.53 C).
+//   # gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 ... accel_unit=lsb lsb_per_g=16384 ...
+// then one line per sample:  counter,gx,gy,gz,temp,ax,ay,az  (raw int16 LSB; temp raw, T = raw/340 + 36.53 C).
 // The counter is the sample index on the sensor's clock: samples lost in a FIFO overflow show as
 // a jump, which gyrofilter records as a gap. Lines starting with '#' are messages.
 //
 // Wiring (Arduino Uno/Nano): MPU6050 VCC-5V (GY-521 board has a regulator), GND-GND,
 // SDA-A4, SCL-A5, AD0-GND (address 0x68). Host side:
 //   gyrofilter record --source serial:/dev/ttyACM0,baud=115200 --out log.csv.gz
-// 115200 baud carries about 400 lines/s: for 1 kHz set SAMPLE_RATE_HZ 1000 and BAUD 1000000.
+// 115200 baud carries about 250 lines/s of eight fields: for 1 kHz set SAMPLE_RATE_HZ 1000 and BAUD 1000000.
 //
 // Registers and bit fields: MPU-6000/MPU-6050 Register Map and Descriptions rev 4.2.
 
@@ -20,12 +20,14 @@
 #define MPU_ADDR 0x68          // 0x69 with AD0 high
 #define SAMPLE_RATE_HZ 100     // 1000 / (1 + SMPLRT_DIV) with the DLPF on: 4..1000 Hz
 #define FS_SEL 0               // 0: +-250, 1: +-500, 2: +-1000, 3: +-2000 deg/s
+#define AFS_SEL 0              // 0: +-2, 1: +-4, 2: +-8, 3: +-16 g
 #define DLPF_CFG 3             // CONFIG bits 2:0; 3 = 44 Hz gyro bandwidth (1 kHz gyro output rate)
 
 // ----------------------------------------------------------------- registers (rev 4.2)
 #define REG_SMPLRT_DIV 0x19
 #define REG_CONFIG 0x1A
 #define REG_GYRO_CONFIG 0x1B
+#define REG_ACCEL_CONFIG 0x1C
 #define REG_FIFO_EN 0x23
 #define REG_INT_STATUS 0x3A
 #define REG_USER_CTRL 0x6A
@@ -34,8 +36,8 @@
 #define REG_FIFO_R_W 0x74
 #define REG_WHO_AM_I 0x75
 
-#define FIFO_EN_TEMP_GYRO 0xF0   // TEMP_FIFO_EN | XG | YG | ZG: 8 bytes per frame
-#define FRAME_BYTES 8
+#define FIFO_EN_TEMP_GYRO_ACCEL 0xF8   // TEMP_FIFO_EN | XG | YG | ZG | ACCEL_FIFO_EN: 14 bytes per frame
+#define FRAME_BYTES 14           // in register order (section 4.7): ax, ay, az, temp, gx, gy, gz
 #define FIFO_SIZE 1024
 #define INT_FIFO_OFLOW 0x10      // INT_STATUS bit 4
 #define USER_CTRL_FIFO_EN 0x40
@@ -45,6 +47,7 @@
 
 static const float LSB_PER_DPS[4] = {131.0, 65.5, 32.8, 16.4};
 static const int FULL_SCALE_DPS[4] = {250, 500, 1000, 2000};
+static const long LSB_PER_G[4] = {16384, 8192, 4096, 2048};   // +-2, 4, 8, 16 g: product spec rev 3.4, section 6.2
 
 static uint32_t counter = 0;        // sample index of the next frame
 static uint32_t fifo_started_us = 0;
@@ -79,19 +82,21 @@ static bool setReg(uint8_t reg, uint8_t value) {
 }
 
 // ----------------------------------------------------------------- protocol
+// The header is one line of at most 256 bytes (the protocol's limit; tests/test_serial_protocol.py
+// reads it off these prints): counter_bits is the default 32, the range follows from lsb_per_g.
 static void sendHeader() {
   Serial.print(F("# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps="));
   Serial.print(LSB_PER_DPS[FS_SEL], 1);
   Serial.print(F(" sample_rate_hz="));
   Serial.print(SAMPLE_RATE_HZ);
-  Serial.print(F(" fields=counter,gx,gy,gz,temp temp_unit=mpu6050_raw counter_bits=32 sensor=MPU6050 chip_id=0x"));
+  Serial.print(F(" fields=counter,gx,gy,gz,temp,ax,ay,az temp_unit=mpu6050_raw accel_unit=lsb lsb_per_g="));
+  Serial.print(LSB_PER_G[AFS_SEL]);
+  Serial.print(F(" sensor=MPU6050 chip_id=0x"));
   Serial.print(chip_id, HEX);
   Serial.print(F(" full_scale_dps="));
   Serial.print(FULL_SCALE_DPS[FS_SEL]);
   Serial.print(F(" dlpf_cfg="));
   Serial.print(DLPF_CFG);
-  Serial.print(F(" i2c_address=0x"));
-  Serial.print(MPU_ADDR, HEX);
   Serial.println(F(" firmware=gyrofilter_stream"));
 }
 
@@ -131,8 +136,9 @@ static bool startSensor() {
   bool ok = setReg(REG_PWR_MGMT_1, PWR_CLK_PLL_XGYRO)  // awake, clock from the X gyro PLL
          && setReg(REG_CONFIG, DLPF_CFG & 0x07)          // DLPF_CFG in bits 2:0
          && setReg(REG_GYRO_CONFIG, (FS_SEL & 0x03) << 3) // FS_SEL in bits 4:3
+         && setReg(REG_ACCEL_CONFIG, (AFS_SEL & 0x03) << 3) // AFS_SEL in bits 4:3
          && setReg(REG_SMPLRT_DIV, (uint8_t)(((DLPF_CFG == 0 || DLPF_CFG == 7) ? 8000 : 1000) / SAMPLE_RATE_HZ - 1))
-         && setReg(REG_FIFO_EN, FIFO_EN_TEMP_GYRO);
+         && setReg(REG_FIFO_EN, FIFO_EN_TEMP_GYRO_ACCEL);
   if (!ok) { fail(F("a configuration register did not read back as written")); return false; }
   delay(50);                                            // gyro start-up
   fifoRestart();
@@ -172,13 +178,16 @@ void loop() {
   if (readRegs(REG_FIFO_COUNT_H, cnt, 2) != 2) return;
   uint16_t n_bytes = ((uint16_t)cnt[0] << 8) | cnt[1];
   uint16_t frames = n_bytes / FRAME_BYTES;   // whole frames only: alignment is kept
-  for (uint16_t f = 0; f < frames; f++) {     // one 8-byte burst per frame (Wire buffer: 32)
+  for (uint16_t f = 0; f < frames; f++) {     // one 14-byte burst per frame (Wire buffer: 32)
     uint8_t b[FRAME_BYTES];
     if (readRegs(REG_FIFO_R_W, b, FRAME_BYTES) != FRAME_BYTES) { fifoRestart(); return; }
-    int16_t temp = (int16_t)((b[0] << 8) | b[1]);   // big-endian two's complement
-    int16_t gx = (int16_t)((b[2] << 8) | b[3]);
-    int16_t gy = (int16_t)((b[4] << 8) | b[5]);
-    int16_t gz = (int16_t)((b[6] << 8) | b[7]);
+    int16_t ax = (int16_t)((b[0] << 8) | b[1]);     // big-endian two's complement
+    int16_t ay = (int16_t)((b[2] << 8) | b[3]);
+    int16_t az = (int16_t)((b[4] << 8) | b[5]);
+    int16_t temp = (int16_t)((b[6] << 8) | b[7]);
+    int16_t gx = (int16_t)((b[8] << 8) | b[9]);
+    int16_t gy = (int16_t)((b[10] << 8) | b[11]);
+    int16_t gz = (int16_t)((b[12] << 8) | b[13]);
     Serial.print(counter++);
     Serial.print(',');
     Serial.print(gx);
@@ -187,6 +196,12 @@ void loop() {
     Serial.print(',');
     Serial.print(gz);
     Serial.print(',');
-    Serial.println(temp);                    // "\r\n": the host accepts both line ends
+    Serial.print(temp);
+    Serial.print(',');
+    Serial.print(ax);
+    Serial.print(',');
+    Serial.print(ay);
+    Serial.print(',');
+    Serial.println(az);                      // "\r\n": the host accepts both line ends
   }
 }
