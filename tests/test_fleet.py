@@ -424,6 +424,25 @@ def test_the_fleets_imu_yaml_takes_allans_kalibr_range(small_fleet, tmp_path, ca
     assert "1 analysed, 0 failed" in out and f"  no imu.yaml: unit0: {why}" in out, out
 
 
+def test_a_force_run_leaves_no_report_of_an_earlier_run_it_did_not_write(small_fleet, tmp_path, capsys):
+    """Attack pass 13: a --force run into the folder of an earlier one whose --kalibr-tau-s a unit
+    does not reach (or whose file now fails) said "no imu.yaml: unit0" and left the earlier run's
+    unit0.imu.yaml (another range) beside the new unit0.allan.json; a failed unit kept its old
+    reports. A recording's reports take their places together: a report this run does not write
+    for it is removed."""
+    out, copy = tmp_path / "f", tmp_path / "unit0.csv"
+    shutil.copyfile(small_fleet[0], copy)
+    assert main(["allan", str(copy), small_fleet[1], "--fleet", str(out), "--jobs", "1"]) == 0
+    assert (out / "unit0.imu.yaml").exists()
+    assert main(["allan", str(copy), small_fleet[1], "--fleet", str(out), "--jobs", "1", "--force",
+                 "--kalibr-tau-s", "0.05,100"]) == 0
+    assert sorted(os.listdir(out)) == ["fleet.csv", "fleet.md", "unit0.allan.json", "unit1.allan.json"]
+    copy.write_text("not a recording\n")
+    assert main(["allan", str(copy), small_fleet[1], "--fleet", str(out), "--jobs", "1", "--force"]) == 0
+    assert sorted(os.listdir(out)) == ["fleet.csv", "fleet.md", "unit1.allan.json", "unit1.imu.yaml"]
+    capsys.readouterr()
+
+
 @pytest.mark.parametrize("args,message", [
     (["allan", "A", "B"], "2 recordings: give --fleet DIR"),
     (["allan", "A", "--jobs", "2"], "--jobs works on a fleet: give --fleet DIR"),

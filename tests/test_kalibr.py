@@ -61,6 +61,27 @@ def test_the_pair_bounds_every_axis_with_the_least_largest_excess(seed, tau_rang
     assert b.excess > 1.05  # the flicker floor: the model cannot follow it (the test means something)
 
 
+def test_a_deviation_of_zero_bounds_nothing_and_the_yaml_holds_no_nan(tmp_path):
+    """Attack pass 13: a record whose cluster averages are all equal at some tau (a gyro that
+    alternates between two values: its deviation is 0 at every even cluster size) divided by that
+    0: the imu.yaml said `gyroscope_noise_density: nan` and the console "its model lies at nan ..
+    nanx". A deviation of 0 bounds nothing (every model lies on or above it): the pair is that of
+    the other taus."""
+    dev = flicker_curves(4)
+    zeroed = dev.copy()
+    zeroed[:, 25] = 0.0
+    b, without = bounding_pair(TAU_S, zeroed, (0.1, 100.0)), bounding_pair(np.delete(TAU_S, 25), np.delete(dev, 25, axis=1),
+                                                                              (0.1, 100.0))
+    assert (b.noise_density, b.random_walk, b.excess) == (without.noise_density, without.random_walk, without.excess)
+    assert TAU_S[25] not in b.tau_s
+    path, yaml_path = tmp_path / "alternating.csv", tmp_path / "imu.yaml"
+    rows = "".join(f"{v},{v},{v}\n" for v in [1, -1] * 2500)
+    path.write_text(f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n{rows}")
+    assert main(["allan", str(path), "--kalibr", str(yaml_path)]) == 0
+    values = yaml_values(yaml_path.read_text())
+    assert all(math.isfinite(float(values[f"gyroscope_{key}"])) for key in ("noise_density", "random_walk"))
+
+
 def test_the_default_range_is_cut_to_a_short_record_and_a_range_given_is_checked():
     tau = np.logspace(-2, math.log10(30.0), 36)
     assert tau_range(tau) == (DEFAULT_TAU_RANGE_S[0], pytest.approx(30.0), True)

@@ -97,6 +97,9 @@ def run(args, settings, paths):
     results = [work.failed(p, "no file matches") if glob.has_magic(p) and not os.path.exists(p) else None
                for p in paths]
     todo = [i for i, r in enumerate(results) if r is None]
+    for i, r in enumerate(results):
+        if r is not None:
+            _drop_unwritten(args.fleet, names[i], files, r)
     if args.scheduler:
         where = f"the Dask cluster at {args.scheduler}"
         stream = runner.run_dask([paths[i] for i in todo], settings, args.scheduler)
@@ -124,6 +127,7 @@ def run(args, settings, paths):
                         write(reports.enter_context(outputs.replacing(os.path.join(args.fleet, names[i] + suffix))),
                               result[key])
                         written += 1
+            _drop_unwritten(args.fleet, names[i], files, result)
             if show:
                 state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
                          else f"FAILED: {result['error']}")
@@ -138,6 +142,18 @@ def run(args, settings, paths):
     no_yaml = [f"{names[i]}: {w[len(work.NO_IMU_YAML):]}" for i, r in enumerate(results) for w in r["warnings"]
                if w.startswith(work.NO_IMU_YAML)]
     return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml)
+
+
+def _drop_unwritten(folder, name, files, result):
+    """Remove the reports of the recording ``name`` in ``folder`` that this run writes none of
+    (``result[key]`` None: a failed file, an imu.yaml whose range its record does not reach): an
+    earlier run's (there only under --force, checked with the rest), which would stand beside this
+    run's reports and fleet.csv as if they were its (another range's imu.yaml, a failed file's old
+    Allan document)."""
+    for suffix, key, _ in files:
+        if result[key] is None:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(os.path.join(folder, name + suffix))
 
 
 def _summary(rows, fleet_files, written, elapsed_s, no_yaml=()):

@@ -158,15 +158,18 @@ def bounding_pair(tau_s, adev, tau_range_s, *, adev_high=None, floor=(0.0, 0.0))
     upper bound adds the sampling error of each point, which grows to the long taus where few
     clusters are averaged, and would set rw by the record's length more than by the sensor; and
     the largest of the axes' noisy estimates at each tau already leans upward. ``upper_ratio``
-    states where the model stands against the upper bounds. Raises SettingsError when the range
-    holds fewer than two taus.
+    states where the model stands against the upper bounds. A tau where every axis's deviation is
+    0 (cluster averages all equal: a gyro that alternates between two values, at every even
+    cluster size) is left out: every model lies on or above it, and ``s_j`` = 0 would divide by
+    0. Raises SettingsError when the range holds fewer than two taus with a deviation above 0.
     """
     tau = np.asarray(tau_s, dtype=np.float64)
     dev = np.atleast_2d(np.asarray(adev, dtype=np.float64))
     low, high = tau_range_s
-    inside = _inside(tau, low, high)
+    inside = _inside(tau, low, high) & (np.max(dev, axis=0) > 0.0)  # a deviation of 0 bounds nothing
     if np.count_nonzero(inside) < 2:
-        raise SettingsError(f"the range {low:g} .. {high:g} s holds fewer than 2 cluster times; the bounding pair needs 2")
+        raise SettingsError(f"the range {low:g} .. {high:g} s holds fewer than 2 cluster times with a deviation above 0; "
+                            "the bounding pair needs 2")
     t = tau[inside]
     v = np.max(dev[:, inside], axis=0) ** 2
     white, walk = 1.0 / t / v, t / 3.0 / v            # g_j(p) = walk_j + p (white_j - walk_j)
