@@ -61,6 +61,41 @@ def test_the_pair_bounds_every_axis_with_the_least_largest_excess(seed, tau_rang
     assert b.excess > 1.05  # the flicker floor: the model cannot follow it (the test means something)
 
 
+@pytest.mark.parametrize("seed, which", [(1, 0), (1, 1), (2, 0), (2, 1), (3, 0), (3, 1)])
+def test_a_floor_that_binds_leaves_the_least_pair_above_it(seed, which):
+    """A new user's trial: with the random walk raised to its floor (the plain value) after the
+    optimum, the noise density kept the optimum's value and the model no longer touched the data
+    (its least ratio 1.1, a yaml 12 % higher than needed; --axes xz wrote a larger nd than all
+    three axes). With a floor that binds (the optimum's value doubled), the pair is the least
+    excess among the pairs at or above the floors (brute force over the free value on the
+    floor's line) and touches the data unless the floor alone lifts the model above it (the other
+    value 0)."""
+    dev = flicker_curves(seed)
+    free = bounding_pair(TAU_S, dev, (0.1, 100.0))
+    floor = [0.0, 0.0]
+    floor[which] = 2.0 * (free.noise_density, free.random_walk)[which]
+    b = bounding_pair(TAU_S, dev, (0.1, 100.0), floor=tuple(floor))
+    inside = (TAU_S >= 0.1) & (TAU_S <= 100.0)
+    t, env = TAU_S[inside], dev[:, inside].max(axis=0)
+    ratio = kalibr_adev(b.noise_density, b.random_walk, t) / env
+    assert (b.noise_density, b.random_walk)[which] == pytest.approx(floor[which], rel=1e-12)
+    assert ratio.max() == pytest.approx(b.excess, rel=1e-9)
+    other_value = (b.noise_density, b.random_walk)[1 - which]
+    assert ratio.min() == pytest.approx(1.0, rel=1e-9) or other_value == 0.0  # touches, or the floor alone bounds
+    best = math.inf
+    for other in np.geomspace(1e-3, 1e3, 40001) * (free.random_walk, free.noise_density)[which]:
+        pair = [0.0, 0.0]
+        pair[which], pair[1 - which] = floor[which] * (1 + 1e-12), other
+        r = kalibr_adev(pair[0], pair[1], t) / env
+        if r.min() >= 1.0:
+            best = min(best, r.max())
+    assert b.excess <= best * (1 + 1e-6)
+    old_rule = kalibr_adev(*(max(v, f) for v, f in zip((free.noise_density, free.random_walk), floor)), t) / env
+    assert b.excess <= old_rule.max() * (1 + 1e-12)
+    if old_rule.min() > 1.0 + 1e-9 and other_value > 0.0:  # the old rule left a gap: the new one is less
+        assert b.excess < old_rule.max()
+
+
 def test_a_deviation_of_zero_bounds_nothing_and_the_yaml_holds_no_nan(tmp_path):
     """Attack pass 13: a record whose cluster averages are all equal at some tau (a gyro that
     alternates between two values: its deviation is 0 at every even cluster size) divided by that

@@ -141,10 +141,12 @@ def bounding_pair(tau_s, adev, tau_range_s, *, adev_high=None, floor=(0.0, 0.0))
     Other rules weigh the two ends (e.g. the deviation at the range's ends, or one factor applied
     to the plain values) and overstate one end by more than F to spare the other.
 
-    ``floor`` (nd0, rw0), in the same units: each value is raised to at least its floor (the
-    plain values, :func:`kalibr_sensor`), which only lifts the model, and ``excess`` is that of the
-    pair returned. Without it a range the white noise dominates gives rw = 0 (a bias that never
-    moves, which Kalibr must not be told), and one that starts where flicker dominates nd = 0.
+    ``floor`` (nd0, rw0), in the same units: the pair is the least F with nd >= nd0 and rw >= rw0
+    (the plain values, :func:`kalibr_sensor`): where the optimum above lies below a floor, that
+    value is held at its floor and the other is the least that still bounds the data
+    (:func:`_floored`), so the model still touches the data. Without floors a range the white noise
+    dominates gives rw = 0 (a bias that never moves, which Kalibr must not be told), and one that
+    starts where flicker dominates nd = 0.
 
     Solution (exact): the ratios ``g_j = m^2(tau_j) / s_j^2`` are linear in (nd^2, rw^2) and
     homogeneous, so with the shape ``p = nd^2 / (nd^2 + rw^2)`` and the scale chosen so that
@@ -183,8 +185,7 @@ def bounding_pair(tau_s, adev, tau_range_s, *, adev_high=None, floor=(0.0, 0.0))
     spread = g.max(axis=1) / g.min(axis=1)
     best = int(np.argmin(spread))
     scale = 1.0 / g[best].min()
-    nd = max(float(np.sqrt(scale * p[best])), float(floor[0]))
-    rw = max(float(np.sqrt(scale * (1.0 - p[best]))), float(floor[1]))
+    nd, rw = _floored(white, walk, scale * p[best], scale * (1.0 - p[best]), *(float(f) ** 2 for f in floor))
     ratio = kalibr_adev(nd, rw, t) / np.sqrt(v)
     upper = None
     if adev_high is not None:
@@ -192,6 +193,23 @@ def bounding_pair(tau_s, adev, tau_range_s, *, adev_high=None, floor=(0.0, 0.0))
         upper = float(np.min(kalibr_adev(nd, rw, t) / top))
     touch = tuple(float(x) for x in t[np.isclose(ratio, ratio.min(), rtol=1e-9, atol=0.0)])
     return BoundingPair(nd, rw, float(ratio.max()), float(ratio.min()), touch, upper, tuple(float(x) for x in t))
+
+
+def _floored(white, walk, a, b, a0, b0):
+    """The least-F pair (nd, rw) with nd^2 >= ``a0`` and rw^2 >= ``b0``, given the unconstrained
+    optimum (``a``, ``b``) = (nd^2, rw^2) of :func:`bounding_pair` and its lines ``g_j = white_j a +
+    walk_j b`` (the model's variance over the data's at tau_j; every ``g_j >= 1`` bounds). ``max_j
+    g_j`` is convex and the bounding set is convex, so where (a, b) lies outside the floors the
+    optimum lies on a floor's line; along it every g_j grows with the other value, so the best
+    point there is the least value that keeps every g_j >= 1 (and its own floor):
+    ``a = max(a0, max_j (1 - walk_j b0) / white_j)`` on rw = rw0, alike for rw on nd = nd0. The
+    better of the feasible ones (least max g) is returned."""
+    if a >= a0 and b >= b0:
+        return float(np.sqrt(a)), float(np.sqrt(b))
+    on_walk = (max(a0, float(np.max((1.0 - walk * b0) / white))), b0)  # rw held at its floor
+    on_white = (a0, max(b0, float(np.max((1.0 - white * a0) / walk))))  # nd held at its floor
+    pa, pb = min((on_walk, on_white), key=lambda q: float(np.max(white * q[0] + walk * q[1])))
+    return float(np.sqrt(pa)), float(np.sqrt(pb))
 
 
 @dataclass(frozen=True)
