@@ -10,7 +10,7 @@ import pytest
 from gyrofilter.analysis.fleet import work
 from gyrofilter.cli import main
 from gyrofilter.cli.console import MAX_LINE_CHARS
-from gyrofilter.recording import Recording, write_recording
+from gyrofilter.recording import Recording, read_recording, write_recording
 
 
 def _write(path, gyro_dps, fs=100.0, lsb=True):
@@ -617,3 +617,23 @@ def test_the_kalibr_yaml_says_which_axes_and_what_warnings_its_values_carry(tmp_
     yaml = (tmp_path / "xz.yaml").read_text()
     assert "# gyroscope: only axes x, z analysed (of x, y, z)" in yaml
     assert "# accelerometer: only axes x, z analysed (of x, y, z)" in yaml
+
+
+def test_the_accelerometer_of_the_filters_output_is_left_out(tmp_path, capsys):
+    """A new user's trial: `run --out` keeps one raw accelerometer sample per output row (1 in 5 at
+    the default preset); allan read its density sqrt(5) times the sensor's (900 ug/sqrt(Hz) for 390)
+    with no word. It is left out, said, and named in the JSON; the raw record's is analysed."""
+    path, _ = _six_axis(tmp_path / "six.csv")
+    out = tmp_path / "run_out.csv"
+    assert main(["run", "--source", f"replay:{path}", "--out", str(out), "--quiet"]) == 0
+    head = read_recording(str(out))
+    assert "filtered_from" in head.header and all(c in head.columns for c in ("ax", "ay", "az"))
+    capsys.readouterr()
+    assert main(["allan", str(out), "--json", str(tmp_path / "out.json")]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    doc = json.loads((tmp_path / "out.json").read_text())
+    assert "accelerometer" not in doc and "not the sensor's" in doc["accelerometer_left_out"]
+    assert "1 in 5 of the sensor's samples" in doc["accelerometer_left_out"] and doc["accelerometer_left_out"] in err
+    assert main(["allan", path, "--json", str(tmp_path / "raw.json")]) == 0
+    raw = json.loads((tmp_path / "raw.json").read_text())
+    assert "accelerometer" in raw and "accelerometer_left_out" not in raw

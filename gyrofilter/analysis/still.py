@@ -224,6 +224,21 @@ def gravity_unlike(accel_mps2, head):
             "with gravity removed is not the sensor's)")
 
 
+def decimated_accelerometer(head):
+    """Why the accelerometer of the recording ``head`` is not the sensor's samples, or None: the
+    filter's output (``filtered_from``; ``run --out`` keeps the source's ``ax, ay, az``) keeps one raw
+    accelerometer sample per output row, every k-th of the sensor's (k = ``input_sample_rate_hz`` /
+    ``sample_rate_hz``): white noise kept every k-th sample at 1/k the rate reads a density
+    ``sigma / sqrt(f_s / k)``, sqrt(k) times the sensor's (a new user read 900 ug/sqrt(Hz) for the
+    sensor's 390 at k = 5)."""
+    if "filtered_from" not in head.header:
+        return None
+    rate_in = head.header.get("input_sample_rate_hz")
+    every = f"1 in {float(rate_in) / head.sample_rate_hz:.3g} of the sensor's samples" if rate_in else "one of each block"
+    return (f"{head.path}: the filter's output keeps one raw accelerometer sample per row ({every}): its noise is not "
+            f"the sensor's (the density reads sqrt(k) times it); analyse the recording it was filtered from")
+
+
 def accelerometer_note(head):
     """Why the accelerometer of the recording ``head`` is not analysed although it has the columns
     ``ax, ay, az`` (no ``accel_unit`` in its header: their unit is not known), or None (it has
@@ -318,7 +333,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     left_out = None
     if accel is not None:
-        unlike = gravity_unlike(accel, head)
+        unlike = decimated_accelerometer(head) or gravity_unlike(accel, head)
         accel = accel.renamed({f"a{a}": f"a{a}" for a in axes})  # the axes analysed
         try:
             refuse_gross_errors(head, accel, keep_outliers, warn=warn, unit="m/s^2", limit=MAX_ACCEL_MPS2)
