@@ -785,6 +785,20 @@ def resonance_width():
             f"simulated with `q` above {RESONANCE_MAX_Q:g} is reported, where the record shows it, as a `narrowband`.")
 
 
+@block("default-model", "docs/simulate.md", "`gyrofilter/data/mpu6050_model.json` (the default model's gyro axes)")
+def default_model():
+    from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
+
+    model = json.loads(Path(DEFAULT_MODEL_PATH).read_text(encoding="utf-8"))
+    rows = ["| axis | bias deg/s | N deg/s/sqrt(Hz) | effects |", "|---|---|---|---|"]
+    for axis, spec in model["axes"].items():
+        effects = "; ".join(e["effect"] + " " + ", ".join(f"{k} = {v:g}" for k, v in e.items() if k != "effect")
+                            for e in spec.get("effects", []))
+        rows.append(f"| {axis} | {spec['bias_dps']:g} | {spec['arw_dps_per_sqrt_hz']:g} | {effects} |")
+    return (f"The default model's gyro at {model['sample_rate_hz']:g} Hz, {model['lsb_per_dps']:g} LSB per deg/s "
+            f"(±{model['full_scale_dps']:g} deg/s), the values a record of it is checked against:\n\n" + "\n".join(rows))
+
+
 @block("bench-simulate", "docs/simulate.md", "tools/bench_simulate.py", slow=True)
 def bench_simulate():
     return fence(tool("bench_simulate.py"))
