@@ -511,6 +511,25 @@ def test_a_recording_whose_last_12_s_lost_every_other_sample_is_kept_whole(tmp_p
     assert rec.t_gaps == n - 3000
 
 
+def test_a_device_that_lost_every_other_sample_from_its_first_line_is_kept(tmp_path):
+    """Attack pass 14: a device (a real pseudo-terminal) whose counter stepped by 2 from its first
+    line, 15 s: no window showed the rate, the writer judged the whole file a t at half the rate
+    at its close and removed it (exit 2, every sample lost). Its header says t is the device's
+    counter (t_from), whose jumps are samples the device lost: kept, its gaps counted."""
+    counters = 2 * np.arange(1500)
+    lines = b"".join(b"%d,%d,0,0\n" % (c, c % 7) for c in counters.tolist())
+    out = tmp_path / "halved.csv"
+    primary, secondary = os.openpty()
+    proc = start_record(f"serial:{os.ttyname(secondary)}", out, "--quiet")
+    err = play_serial_then_stop(primary, secondary, proc, SERIAL_HEADER, lines, out, len(counters) - 1)
+    assert proc.returncode == 0, err
+    rec = read_recording(out)
+    n = len(rec)
+    assert n >= len(counters) - 1 and rec.header["t_from"] == "device counter"
+    np.testing.assert_array_equal(rec.t_s, counters[:n] / 100.0)
+    assert rec.t_gaps == n - 1
+
+
 @pytest.mark.parametrize("cut", [b"", b"506,1,"])
 def test_a_line_held_at_ctrl_c_is_written(tmp_path, cut):
     """A serial line whose counter jumped waits for the next line to tell a gap from a corrupt

@@ -590,6 +590,24 @@ def test_an_input_that_lost_samples_in_most_blocks_gives_rows_at_their_own_t_tha
     assert got.t_gaps == np.count_nonzero(np.diff(t_want) > 0.055) > len(got) / 2
 
 
+def test_a_device_counter_recording_that_lost_every_other_sample_replays_to_rows_that_read(tmp_path, capsys):
+    """Attack pass 14: a recording of a serial device's counter (t_from: device counter) that lost
+    every other sample throughout reads, its gaps counted; replay --out of it refused its rows at
+    the close (every block spans 10 sample intervals, 2 row intervals: a t at half the rate), exit 2.
+    The output carries the recording's t_from: its rows read, every step a gap."""
+    rng = np.random.default_rng(6)
+    t = 0.02 * np.arange(3000)
+    src = tmp_path / "counted.csv"
+    write_recording(src, Recording.from_dps(rng.normal(0, 0.05, (3000, 3)), 100.0, t_s=t,
+                                            header={"t_from": "device counter"}))
+    out = tmp_path / "out.csv"
+    assert main(["replay", str(src), "--out", str(out)]) == 0, capsys.readouterr().err
+    capsys.readouterr()
+    got = read_recording(out)
+    assert got.header["t_from"] == "device counter" and len(got) == (3000 - 200) // 5  # 2 s of calibration: 200 samples
+    assert got.t_gaps == len(got) - 1
+
+
 def test_realtime_rows_on_a_full_stdout_name_stdout(tmp_path, monkeypatch, capsys):
     """``replay --realtime > out.csv`` on a full disk: "[Errno 28] No space left on device", naming
     nothing (run named stdout; attack pass 10)."""

@@ -258,6 +258,27 @@ def test_run_from_a_device_that_loses_samples_writes_a_row_for_every_block_of_de
     assert got.t_gaps == np.count_nonzero(np.diff(t_want) > 0.055) > 0
 
 
+def test_run_from_a_device_that_lost_every_other_sample_from_its_first_line_keeps_its_rows(tmp_path):
+    """Attack pass 14: `run --out` from a device (a real pseudo-terminal) whose counter steps by 2
+    from its first line: every row's block spans 10 sample intervals, 2 row intervals, in every
+    window, and the writer refused the file at its close as a t at half the rate (exit 2, no
+    row kept). The output's header carries the source's t_from (t is the device's counter):
+    kept, every step a gap."""
+    pytest.importorskip("serial")
+    lines = b"".join(b"%d,0.1,0.2,0.3\n" % c for c in range(0, 4000, 2))
+    primary, secondary = os.openpty()
+    tty.setraw(secondary)
+    out = tmp_path / "run.csv"
+    proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "run", "--source", f"serial:{os.ttyname(secondary)}",
+                             "--out", str(out), "--quiet", "--duration", "12"], stderr=subprocess.PIPE, text=True)
+    err = play_lossy_device(primary, secondary, proc, lines, 1)
+    assert proc.returncode == 0, err
+    got = read_recording(out)
+    assert got.header["t_from"] == "device counter" and len(got) > 50, err
+    np.testing.assert_allclose(np.diff(got.t_s), 0.1, atol=1e-9)
+    assert got.t_gaps == len(got) - 1
+
+
 # ------------------------------------------------------------------------------ paced replay
 
 

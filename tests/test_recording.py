@@ -503,6 +503,33 @@ def test_a_stretch_of_gaps_only_where_the_file_shows_its_rate_is_lost_samples(tm
             _read_chunked(_dps_file(tmp_path, _t_body(steps), name="odd.csv"), chunk_rows)
 
 
+@pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
+@pytest.mark.parametrize("count", [3000, 600])
+def test_a_t_of_the_device_counter_at_whole_intervals_throughout_is_lost_samples(tmp_path, chunk_rows, count):
+    """Attack pass 14: a serial device that lost every other sample from its first line gives steps
+    of 2 intervals throughout, the same t as one at half the rate: no window shows the rate and
+    the writer refused the live recording at its close, removed whole. A header that says t is
+    the device's counter (t_from: device counter, written by record) makes them lost samples, its
+    gaps counted, by the reader and the writer alike; without it, or at 2.5 intervals, still
+    refused."""
+    steps = np.full(count, 0.02)
+    counted = "# t_from: device counter\n"
+    head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps), header=counted), chunk_rows)
+    assert len(data) == count + 1 and head.t_gaps == count
+    path = tmp_path / "written.csv"
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "dps", "t_from": "device counter"},
+                         ["t", "gx", "gy", "gz"]) as writer:
+        for i in range(0, len(t), chunk_rows if chunk_rows > 1 else 7):
+            part = t[i:i + (chunk_rows if chunk_rows > 1 else 7)]
+            writer.write(np.column_stack((part, np.zeros((len(part), 3)))))
+    np.testing.assert_array_equal(read_recording(path).t_s, t)
+    with pytest.raises(RecordingError, match=r"t steps by 0.02 s \(median of "):
+        _read_chunked(_dps_file(tmp_path, _t_body(steps), name="half.csv"), chunk_rows)
+    with pytest.raises(RecordingError, match=r"t steps by 0.025 s"):
+        _read_chunked(_dps_file(tmp_path, _t_body(np.full(count, 0.025)), header=counted, name="odd.csv"), chunk_rows)
+
+
 @pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
 def test_a_filtered_outputs_rows_whose_blocks_lost_samples_are_its_gaps(tmp_path, chunk_rows):
     """Issue 37 (attack 4): a filtered output (header input_sample_rate_hz, rows per block of 5

@@ -26,7 +26,7 @@ from .. import plots
 from ..errors import RecordingError, SampleError, SettingsError
 from ..filter.settings import SETTING_NAMES
 from ..filter.smoother import SMOOTHABLE_PRESETS, Smoother
-from ..recording import CHUNK_ROWS, COLUMNS, RecordingWriter, dps_header, format_number, header_text, iter_recording, note_line, warn_about_gaps
+from ..recording import CHUNK_ROWS, COLUMNS, T_FROM_KEY, RecordingWriter, dps_header, format_number, header_text, iter_recording, note_line, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
 from ..units import json_ready
 from . import console, filtering, options, outputs
@@ -254,6 +254,7 @@ class Replay:
             **({"calibration_from": self.calibration_from} if self.calibration_from else {}),
             "t_meaning": "time of the last input sample of each block (s)",
             "input_sample_rate_hz": format_number(filt.sample_rate_hz),
+            **({T_FROM_KEY: self.head.header[T_FROM_KEY]} if T_FROM_KEY in self.head.header else {}),
         }, filt.output_rate_hz)
 
     def stdout_header(self):

@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import SampleError, SettingsError
-from ..recording import ACCEL_COLUMNS, COLUMNS, END_NOTE, accel_header, dps_header, header_text, note_line
+from ..recording import ACCEL_COLUMNS, COLUMNS, END_NOTE, T_FROM_KEY, accel_header, dps_header, header_text, note_line
 from ..recording.writer import exact_format
 from . import console, filtering, live, options, outlets, outputs
 
@@ -125,7 +125,7 @@ def _run(args, source, sinks):
         "live_source": args.source,
         "filtered_from": args.source,
     }, filt.output_rate_hz)
-    for key in ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc",
+    for key in ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc", T_FROM_KEY,
                 "simulated_seed", "simulated_duration_s", "simulated_model"):
         if key in head:
             out_header[key] = head[key]

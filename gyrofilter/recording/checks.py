@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..units import MAX_ACCEL_MPS2, MAX_RATE_DPS, RATE_TOLERANCE
-from .header import ACCEL_COLUMNS, GYRO_COLUMNS, format_number
+from .header import ACCEL_COLUMNS, GYRO_COLUMNS, T_FROM_COUNTER, T_FROM_KEY, format_number
 
 
 def check_rates(data, head, where):
@@ -77,7 +77,11 @@ class TimeCheck:
       input sample intervals is lost samples where another window of the file showed the rate
       (most of its steps one sample interval), and refused at the end where none did
       (:meth:`_wrong`): a device's counter gaps over 1000 steps or more at the start or the end
-      of a recording no longer look like a t at half the rate;
+      of a recording no longer look like a t at half the rate. Where the header says ``t`` is the
+      device's sample counter (``t_from: device counter``, :data:`~gyrofilter.recording.header.T_FROM_KEY`:
+      ``record`` from a serial device), such a window is lost samples whatever the other windows
+      show: the device counted the samples it lost (one that lost every other sample from its
+      first line was refused at the close and its recording removed whole);
     - the rows of every such window (and of the last window) are not denser than the rate: its
       steps span at least (1 - RATE_TOLERANCE) times their number of sample intervals
       (:meth:`_dense`), or, with the half window of steps before it, the steps of both do (samples
@@ -105,6 +109,7 @@ class TimeCheck:
         self.steps_seen = 0  # the steps of the chunks added so far
         self.rate_shown = False  # a window showed the rate (:meth:`_note_rate_shown`)
         self.deferred = None  # the refusal of the first window of gaps only judged at the end (:meth:`_wrong`)
+        self.counted = head.header.get(T_FROM_KEY) == T_FROM_COUNTER  # t is the device's sample counter
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
         self.last_steps = np.empty(0)  # the last 1.5 RATE_CHECK_STEPS steps (:meth:`finish`'s last window and before it)
 
@@ -181,7 +186,7 @@ class TimeCheck:
             self.deferred = (float(median[0]), n, start, phase.windows == 0, phase.windows > 0)
         if off[0]:
             self._refuse(float(median[0]), n, start, first=phase.windows == 0, last=phase.windows > 0)
-        if self.deferred is not None and not self.rate_shown:  # no window showed the rate: t at 1/k of it
+        if self.deferred is not None and not self.rate_shown and not self.counted:  # t at 1/k of the rate
             self._refuse(*self.deferred[:3], first=self.deferred[3], last=self.deferred[4])
         if (n >= RATE_CHECK_STEPS // 2 and self._dense(steps.sum(), n)
                 and self._dense(steps.sum() + before.sum(), n + len(before))):

@@ -49,11 +49,15 @@ def one_line_text(text):
     return escape_controls(utf8_text(str(text))).strip()
 
 
+#: the header key and value of a recording whose ``t`` is the device's sample counter over the rate
+#: (``record`` from a serial device that sends ``counter``): a step of k sample intervals is k - 1
+#: samples the device counted and lost, never a t at 1/k of the rate (:class:`~gyrofilter.recording.checks.TimeCheck`)
+T_FROM_KEY, T_FROM_COUNTER = "t_from", "device counter"
 #: header keys gyrofilter writes to say where a recording's samples came from and what was done
 #: to them (docs/formats.md, section 1): a live device's header does not give them (the serial
 #: source drops them with a note), or a raw recording could say it is a filtered one
 #: (``filtered_from``, which replay refuses) or carry another time origin than its own
-PROVENANCE_KEYS = frozenset({"filtered_from", "filter_preset", "filter_settings", "bias_dps", "t_meaning",
+PROVENANCE_KEYS = frozenset({T_FROM_KEY, "filtered_from", "filter_preset", "filter_settings", "bias_dps", "t_meaning",
                              "calibration_from", "input_sample_rate_hz", "converted_from", "converted_by",
                              "time_origin", "simulated_seed", "simulated_duration_s", "simulated_model",
                              "simulated_model_name", "live_source", "recorded_by", "serial_port", "start_time_utc"})
