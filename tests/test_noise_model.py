@@ -539,6 +539,10 @@ def test_a_tone_is_still_called_more_than_five_terms_on_its_axis_only():
     assert [a for a, r in res.items() if any(NOT_FIVE_TERMS in w for w in r.warnings)] == ["z"]
     doc = to_json(res, 100.0)["axes"]
     assert doc["z"]["full_fit_consistency"] == res["z"].full_fit_consistency() < 0.8 <= doc["x"]["full_fit_consistency"]
+    # gap analyses the gyro only: the warning points there for the gyro, not for an accelerometer
+    assert [w for w in res["z"].warnings if NOT_FIVE_TERMS in w and "(see `gyrofilter gap`)" in w]
+    accel = characterise_axis(g[:, 2], 100.0, axis="az", unit="m/s^2").warnings
+    assert [w for w in accel if NOT_FIVE_TERMS in w] and not [w for w in accel if "gyrofilter gap" in w]
 
 
 def test_the_bound_of_a_random_walk_the_record_does_not_resolve_holds_it():
@@ -551,3 +555,37 @@ def test_the_bound_of_a_random_walk_the_record_does_not_resolve_holds_it():
     k = [row for row in rows if row["term"] == RATE_RANDOM_WALK]
     assert sum(map(coverage.covered, k)) >= 16 and sum(row["value"] is None for row in k) >= 9
     assert all(row["value"] is None for row in rows if row["term"] == BIAS_INSTABILITY)
+
+
+def test_the_bound_of_a_bias_instability_a_drift_fitted_as_k_takes_holds_it():
+    """The default MPU6050 gyro, 30 min, seeds 15-18 (the user's trial): its temperature drift is
+    fitted as a random walk K, which takes part of B's flat level once B is forced in; B's bound
+    from that fit alone missed B on 4 of the 6 axes where B was not resolved (0.87-1.0x; seed 15
+    x: 0.0013 for 0.0015). The bound is the largest over the fits with each K or R not resolved
+    forced in and each K or R that the fit with B does not resolve left out: it holds B on every
+    one, and stays within 2.5x of it."""
+    coverage = tool("allan_coverage")
+    rows = [row for seed in range(15, 19) for row in coverage.run(("default-gyro", 30, seed))
+            if row["term"] == BIAS_INSTABILITY and row["value"] is None]
+    assert len(rows) >= 5
+    assert all(coverage.covered(row) for row in rows), [(r["seed"], r["axis"], r["upper"] / r["true"]) for r in rows]
+    assert max(row["upper"] / row["true"] for row in rows) < 2.5
+
+
+def _default_record(minutes, seed):
+    from gyrofilter.sim.simulate import simulate as simulate_model
+    return simulate_model(tool("allan_coverage").default_model(), 60.0 * minutes, seed=seed, accelerometer=True)
+
+
+def test_the_accelerometers_notes_carry_its_units():
+    """The notes of an accelerometer's terms read '95% upper bound 3e-05 deg', 'R = 1.59e-05 deg/s^2'
+    where its unit fields said m/s, m/s^3: the notes take the sensor's units (default model, 30 min,
+    seed 15, az: B within its uncertainty of zero once K, not resolved, is free)."""
+    r = characterise_axis(_default_record(30, 15).accel_mps2[:, 2], 100.0, axis="az", unit="m/s^2")
+    notes = {term: c.note for term, c in r.fitted.items() if c.note}
+    assert len(notes) >= 3 and not [n for n in notes.values() if "deg" in n], notes
+    assert "m/s^2" in notes[BIAS_INSTABILITY] and "once K (not resolved) is free" in notes[BIAS_INSTABILITY]
+    assert r.fitted[BIAS_INSTABILITY].freed_by == (RATE_RANDOM_WALK,)
+    assert "m/s^2/sqrt(s)" in notes[RATE_RANDOM_WALK] and "m/s^3" in notes[RATE_RAMP]
+    with pytest.raises(SettingsError, match="unit must be"):
+        characterise_axis(np.arange(100.0), 100.0, unit="rad/s")

@@ -49,7 +49,7 @@ def test_the_default_models_velocity_random_walk_is_recovered_within_its_interva
 def test_the_default_models_bias_instability_is_held_by_its_interval_or_bound(default_results):
     """B (m/s^2) of the default model's accelerometer with its random walk and temperature drift, which
     30 min do not resolve: inside its 95 % interval where resolved, at or below its upper bound where
-    not, on at least 9 of 12 axes (measured 10; 26 of 30 on seeds 1-10, 115 of 120 on seeds 41-80,
+    not, on at least 9 of 12 axes (measured 11; 27 of 30 on seeds 1-10, 117 of 120 on seeds 41-80,
     `python tools/allan_coverage.py`). B's interval conditional on K = 0 held it on 7 of these 12
     (the fit gave part of K and the drift to B, read 1.26x); with K (and R) free, its interval holds
     their trade-off with B (gyrofilter.analysis.noise.intervals.fitted_intervals)."""

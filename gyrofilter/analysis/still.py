@@ -18,6 +18,7 @@ from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, to_
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
+from .noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS
 from .noise.screen import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
 from .gap.detectors.repeats import repeats_warning
 from .repeats import repeated_rows
@@ -361,9 +362,9 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
 
 #: how :func:`characterise_recording` treats each sensor: the prefix of its axis names in messages,
 #: its unit, the word for it and its stillness limit (:func:`not_static`)
-GYRO_SENSOR = {"prefix": "", "unit": "deg/s", "word": "gyro", "still": {}}
-ACCEL_SENSOR = {"prefix": "a", "unit": "m/s^2", "word": "accelerometer",
-                "still": {"limit": STATIC_LIMIT_MPS2, "unit": "m/s^2", "what": "acceleration"}}
+GYRO_SENSOR = {"prefix": "", "unit": GYROSCOPE_TERMS.unit, "word": "gyro", "still": {}}
+ACCEL_SENSOR = {"prefix": "a", "unit": ACCELEROMETER_TERMS.unit, "word": "accelerometer",
+                "still": {"limit": STATIC_LIMIT_MPS2, "unit": ACCELEROMETER_TERMS.unit, "what": "acceleration"}}
 
 
 def _characterise_sensor(series, sensor, *, path, head, confidence, min_clusters, warn, progress, skip_constant):

@@ -119,23 +119,32 @@ def misfit_text(r):
     return text + (f": intervals and bounds widened x{r.interval_widening:.3g}" if r.fit_reduced_chi2 > 1 else "")
 
 
-def unresolved_text(r, min_clusters):
+def unresolved_text(r, min_clusters, terms=GYROSCOPE_TERMS):
     """What the record ``r`` (an AxisNoise) does not resolve of the slow terms (B, K, R): those the
     fit left out, with the longest cluster time with ``min_clusters`` clusters (the record is too
-    short), and those the model holds whose interval, widened by the fit's misfit, reaches zero
-    (the curve holds what the five terms do not fit); "" when it resolves them all."""
+    short); those the model holds that are within their uncertainty of zero once a K or R the record
+    does not resolve is free (``Coefficient.freed_by``); and those the model holds whose interval,
+    widened by the fit's misfit, reaches zero (the curve holds what the five terms do not fit; the
+    advice to see ``gyrofilter gap`` where it analyses the sensor, ``terms.gap``); "" when it
+    resolves them all. ``terms``: the sensor's :class:`~gyrofilter.analysis.noise.model.SensorTerms`."""
     slow = [t for t in (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP) if r.fitted[t].value is None]
-    held = [TERM_SYMBOL[t] for t in slow if r.fit_values[TERMS.index(t)] > 0]
+    held = [t for t in slow if r.fit_values[TERMS.index(t)] > 0]
     missing = [TERM_SYMBOL[t] for t in slow if r.fit_values[TERMS.index(t)] == 0]
+    misfit = [TERM_SYMBOL[t] for t in held if not r.fitted[t].freed_by]
     out = []
     if missing:
         longest = r.tau_s[r.fit_used][-1]
         out.append(f"{', '.join(missing)} not resolved: the longest cluster time with {min_clusters} clusters is "
                    f"{longest:.3g} s; slower effects need a longer still recording")
-    if held:
-        out.append(f"{', '.join(held)} in the fitted model but not resolved: with the fit's misfit (reduced "
+    for t in (t for t in held if r.fitted[t].freed_by):
+        freed = r.fitted[t].freed_by
+        out.append(f"{TERM_SYMBOL[t]} in the fitted model but not resolved: within its uncertainty of zero once "
+                   f"{' and '.join(TERM_SYMBOL[f] for f in freed)} (not resolved) {'are' if len(freed) > 1 else 'is'} "
+                   "free")
+    if misfit:
+        out.append(f"{', '.join(misfit)} in the fitted model but not resolved: with the fit's misfit (reduced "
                    f"chi-square {r.fit_reduced_chi2:.3g}) the interval reaches zero; the curve holds what the "
-                   "five terms do not fit (see `gyrofilter gap`)")
+                   "five terms do not fit" + (" (see `gyrofilter gap`)" if terms.gap else ""))
     return "; ".join(out)
 
 
@@ -169,7 +178,7 @@ def print_coefficients(results, terms, confidence, min_clusters):
                   f"{_fmt(ro, base, interval=False)}".rstrip())
         for line in readoff_only(r, terms):
             console.paragraph(f"({line})", "    ")
-        missing = unresolved_text(r, min_clusters)
+        missing = unresolved_text(r, min_clusters, terms)
         if missing:
             console.paragraph(f"({missing}; the bounds above hold)", "    ")
         console.print_warnings(r.warnings)

@@ -31,6 +31,7 @@ import time
 from .. import __version__
 from ..analysis.agreement import compare
 from ..analysis.gap.pipeline import analyse_file
+from ..analysis.noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS
 from ..analysis.still import clipped
 from ..errors import GyroFilterError, SettingsError, one_line
 from ..inputs import parse_number
@@ -132,11 +133,11 @@ def compute(path, *, sims, keep_outliers, warn, progress):
         allan_error = one_line(exc)
         warned(f"no Allan deviation: {allan_error}")
     else:
-        for prefix, sensor in (("", results), ("a", accel or {})):
+        for prefix, sensor, terms in (("", results, GYROSCOPE_TERMS), ("a", accel or {}, ACCELEROMETER_TERMS)):
             for a, r in sensor.items():
                 for text in r.warnings:
                     warned(text)
-                unresolved = allan.unresolved_text(r, allan.MIN_CLUSTERS)
+                unresolved = allan.unresolved_text(r, allan.MIN_CLUSTERS, terms)
                 if unresolved:
                     warned(f"axis {prefix}{a}: {unresolved} (the table gives their upper bounds)")
     progress("filter")

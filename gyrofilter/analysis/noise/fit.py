@@ -40,7 +40,7 @@ import numpy as np
 from .allan import (MIN_CLUSTERS, AllanInputError, ConstantAxisError, chi2_interval, cluster_sizes, edf_mixture, rate_numbers,
                     edf_oavar, n_clusters, overlapping_adev, simple_interval)
 from .intervals import fitted_intervals
-from .model import TERM_ALPHA, TERMS, AxisNoise, basis, term_shares
+from .model import TERM_ALPHA, TERMS, AxisNoise, basis, sensor_terms, term_shares
 from .readoff import read_off
 from ...errors import SettingsError
 from ...units import AXES, MIN_NOISE_DPS, plain
@@ -148,8 +148,11 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
 
     The computation has no unit: a series in another ``unit`` (an accelerometer's in m/s^2,
     :data:`~gyrofilter.analysis.noise.model.ACCELEROMETER_TERMS`) gives its deviation in that unit and
-    the coefficients in the matching base units; ``unit`` only names it in the messages.
+    the coefficients in the matching base units; ``unit`` (``deg/s`` or ``m/s^2``,
+    :func:`~gyrofilter.analysis.noise.model.sensor_terms`) only names it and its terms' units in the
+    messages and notes.
     """
+    sensor = sensor_terms(unit)
     x = np.asarray(x_dps, dtype=np.float64)
     if x.ndim != 1:
         raise AllanInputError(f"axis {axis}: expected a 1-D rate series, got shape {x.shape}")
@@ -192,7 +195,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
         if len(allowed) == 1:
             break
         allowed.remove(min(weak, key=lambda t: fitted[t].z_score))
-    fitted, chi2_nu, dof = fitted_intervals(theta, tau, m, n, used, confidence, dev ** 2)
+    fitted, chi2_nu, dof = fitted_intervals(theta, tau, m, n, used, confidence, dev ** 2, term_unit=sensor.term_unit)
     # chi-square interval of every tau, EDF from the fitted noise mixture
     shares = term_shares(theta, tau)
     edf = edf_mixture(n, m, shares, [TERM_ALPHA[t] for t in TERMS])
@@ -214,7 +217,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
         res.warnings.append(
             f"axis {axis}: the five-term model (every term fitted) lies outside the {confidence:.0%} "
             f"interval at {1 - res.full_fit_consistency():.0%} of the fitted taus: the noise is not just "
-            "Q/N/B/K/R (see `gyrofilter gap`)")
+            "Q/N/B/K/R" + (" (see `gyrofilter gap`)" if sensor.gap else ""))
     return res
 
 

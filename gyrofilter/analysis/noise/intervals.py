@@ -269,6 +269,54 @@ _STEPS = 40
 _BOUND_TOLERANCE = 1e-3
 
 
+def _freed_bound(a, w, y, active, u, freed, bound, confidence, cov_of, widen):
+    """The bound of a term ``u`` not resolved, whatever K and R are (:func:`fitted_intervals`): the
+    largest of ``bound`` (:func:`upper_bound` of ``u`` in the fit of ``active``) and the bounds of
+    ``u`` in the fits (a) with each term of ``freed`` (K, R not resolved) that ``active`` lacks
+    forced in as well, in turn, and (b) without each K or R of ``active`` that the fit with ``u``
+    forced in does not resolve (``theta_v - z sd_v <= 0`` at that fit's mixture and misfit scale;
+    the fit's drop rule, :func:`~gyrofilter.analysis.noise.fit.characterise_axis`, would drop it
+    there), in turn; None where one of them excludes no value.
+
+    Why (b): a slow drift that is neither term (the default MPU6050 model's temperature) is fitted
+    as K, and K then takes part of B's flat level once B is forced in. The bound of the one fit
+    held the gyro's B on 70 of 75 axes where B was not resolved at 30 min and on 21 of 27 at 60 min
+    (seeds 101-160, ``python tools/allan_coverage.py``); this union on 72 of 75 and 26 of 27 (the
+    accelerometer's: 80 of 86 -> 85 of 86, 7 of 9 -> 9 of 9), for bounds a median 1.03-1.12x the
+    one fit's (1.3x for a random walk that 10 minutes do not resolve); no term's interval or
+    resolution changes. A term resolved in the fit drawn but not once K or R is free is bounded so
+    too (its bound was ``max(theta_j, 0) + z sd_j`` of the fits, the rule :func:`upper_bound`
+    replaced for the terms left out)."""
+    if bound is None:
+        return None
+    n = a.shape[1]
+    fits = [active | (np.arange(n) == v) for v in freed if not active[v]]
+    forced = active | (np.arange(n) == u)
+    gain = _gain(a, w, forced)
+    theta = np.zeros(n)
+    theta[forced] = gain @ y
+    chi2_nu = reduced_chi2(a, y, theta, w, cov_of(np.maximum(theta, 0.0)), forced)[0]
+    scale = chi2_nu if widen and chi2_nu is not None and chi2_nu > 1.0 else 1.0
+    z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
+    cov = cov_of(np.maximum(theta, 0.0)) * scale
+    fits += [active & (np.arange(n) != v) for v in np.flatnonzero(active)
+             if v != u and TERM_SLOPE[TERMS[v]] > 0 and _point(theta, gain, forced, v, cov, z, confidence)[0] is None]
+    for fit_terms in fits:
+        b, fit_scale = _bound_of(a, w, y, fit_terms, u, confidence, cov_of, widen)
+        if b is None and fit_scale is not None:  # this fit excludes no value (a singular one is skipped)
+            return None
+        bound = bound if b is None else max(bound, b)
+    return bound
+
+
+def _bound_of(a, w, y, active, u, confidence, cov_of, widen):
+    """:func:`upper_bound`'s ``(bound, scale)``, or ``(None, None)`` where the fit's matrix is singular."""
+    try:
+        return upper_bound(a, w, y, active, u, confidence, cov_of, widen)
+    except np.linalg.LinAlgError:
+        return None, None
+
+
 def _point(theta, gain, terms, j, cov, z, confidence):
     """``(low, high, sd)`` of term ``j`` estimated as ``theta[j]`` by the rows ``gain`` of the
     fitted ``terms`` under the covariance ``cov`` of the Allan variances: its chi-square interval
@@ -295,7 +343,7 @@ def _freed_points(a, w, y, active, freed, j, cov_of, z, confidence):
     return out
 
 
-def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=True, free=True):
+def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=True, free=True, term_unit=TERM_UNIT):
     """Per-term value and interval of the fit (module docstring), and the fit's misfit:
     returns ``(coefficients, chi2_nu, dof)`` (:func:`reduced_chi2`; None, None without residual
     degrees of freedom).
@@ -304,7 +352,9 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     the taus fitted; ``avar``: the measured Allan variances at every tau ((deg/s)^2); ``widen``:
     scale by the misfit (below; False: the intervals of the stated scatter alone); ``free``:
     each resolved term's interval spans the fits with a K or R not resolved forced in (below;
-    False: the intervals with those terms at their fitted values, the fit's drop decision).
+    False: the intervals with those terms at their fitted values, the fit's drop decision);
+    ``term_unit``: each term's unit, named in the notes (the sensor's
+    :class:`~gyrofilter.analysis.noise.model.SensorTerms` ``term_unit``; the fit itself has no unit).
     The fit is linear in the Allan variances on its active set: ``theta = G y`` with
     ``G = (A' W A)^-1 A' W``, so ``cov(theta) = G C G'`` with ``C`` from
     :func:`avar_covariance`. Where the fit's reduced chi-square exceeds 1, ``C`` (so every
@@ -336,8 +386,9 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     scale of that fit), whose ``cov(theta)`` holds the trade-off of the term with ``u``: its
     marginal interval whatever ``u`` is (a nuisance parameter estimated, not fixed; Casella &
     Berger sec. 9.2.2 on eliminating nuisance parameters). Where the term is within its
-    uncertainty of zero in one of those fits (``theta_j - z sd_j <= 0``), it is not resolved: its
-    bound is the largest ``theta_j + z sd_j`` of the fits. The terms not resolved that fall with tau
+    uncertainty of zero in one of those fits (``theta_j - z sd_j <= 0``), it is not resolved
+    (``Coefficient.freed_by``: those terms). Every bound is that union too (:func:`_freed_bound`).
+    The terms not resolved that fall with tau
     (Q, and N or B where dropped) are not so treated: N's interval conditional on Q = 0 held N on
     95-97 % of the axes (``python tools/allan_coverage.py``), and freeing Q widened it 1.6-fold.
     Holding the term at ``u``'s upper bound instead (a profile over ``[0, U_u]``) left B unresolved
@@ -371,14 +422,13 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     points = {j: _point(theta, gain, active, j, cov_y * scale, z, confidence) for j in np.flatnonzero(active)}
     bounds, scales = {}, {}
     for u in (j for j in range(5) if not active[j] or points[j][0] is None):
-        try:
-            bounds[u], scales[u] = upper_bound(a, w, y, active, u, confidence, cov_of, widen)
-        except np.linalg.LinAlgError:
-            bounds[u] = None
-    freed = {u: scales[u] for u in bounds if u in scales and TERM_SLOPE[TERMS[u]] > 0} if free else {}
+        bounds[u], scales[u] = _bound_of(a, w, y, active, u, confidence, cov_of, widen)
+    freed = {u: scales[u] for u in bounds if scales[u] is not None and TERM_SLOPE[TERMS[u]] > 0} if free else {}
+    for u in [u for u in bounds if u not in freed and bounds[u] is not None]:
+        bounds[u] = _freed_bound(a, w, y, active, u, freed, bounds[u], confidence, cov_of, widen)
     out = {}
     for j, term in enumerate(TERMS):
-        sym, unit = TERM_SYMBOL[term], TERM_UNIT[term]
+        sym, unit = TERM_SYMBOL[term], term_unit[term]
         c2 = float(theta[j])
         if j in bounds:
             upper = None if bounds[j] is None else math.sqrt(bounds[j]) * root
@@ -391,13 +441,17 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
                                     z_score=c2 / points[j][2] if active[j] else None)
             continue
         ends = [(c2, points[j])] + _freed_points(a, w, y, active, freed, j, cov_of, z, confidence)
-        if any(p[0] is None for _, p in ends):
-            upper = math.sqrt(max(max(v, 0.0) + z * p[2] for v, p in ends)) * root
-            free = " and ".join(TERM_SYMBOL[TERMS[u]] for u in freed)
-            out[term] = Coefficient(term, None, upper=upper, z_score=c2 / points[j][2],
+        freed_by = tuple(TERMS[u] for u, (_, p) in zip(freed, ends[1:]) if p[0] is None)
+        if freed_by:
+            bound = _bound_of(a, w, y, active, j, confidence, cov_of, widen)[0]
+            bound = _freed_bound(a, w, y, active, j, freed, bound, confidence, cov_of, widen)
+            upper = None if bound is None else math.sqrt(bound) * root
+            names = " and ".join(TERM_SYMBOL[t] for t in freed_by)
+            out[term] = Coefficient(term, None, upper=upper, z_score=c2 / points[j][2], freed_by=freed_by,
                                     note=f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the "
-                                         f"{confidence:.0%} uncertainty of zero once {free} (not resolved) is free; "
-                                         f"upper bound {upper:.3g}")
+                                         f"{confidence:.0%} uncertainty of zero once {names} (not resolved) "
+                                         f"{'are' if len(freed_by) > 1 else 'is'} free"
+                                         + ("" if upper is None else f"; {confidence:.0%} upper bound {upper:.3g} {unit}"))
             continue
         # the tau where this term's share of the model is largest: where it is read
         share = a[:, j] * c2 / (a @ theta)

@@ -132,7 +132,8 @@ class SensorTerms:
     """How one sensor's five terms are named and in which units: ``name`` (``gyroscope`` or
     ``accelerometer``), ``unit`` (its Allan deviation's unit: ``deg/s`` or ``m/s^2``), ``term_unit``
     (each term's base unit, the unit of its fitted value), ``customary_unit`` (shown beside it) and
-    ``term_name`` (each term's name in words). The fit is unit-free: the coefficients of a
+    ``term_name`` (each term's name in words); ``gap``: whether ``gyrofilter gap`` analyses it
+    (the gyro only), so that a message may point there. The fit is unit-free: the coefficients of a
     series in ``unit`` come out in ``term_unit``."""
 
     name: str
@@ -140,14 +141,24 @@ class SensorTerms:
     term_unit: dict
     customary_unit: dict
     term_name: dict
+    gap: bool = False
 
 
 GYROSCOPE_TERMS = SensorTerms("gyroscope", "deg/s", TERM_UNIT, CUSTOMARY_UNIT, {
     QUANTIZATION: "quantization", ANGLE_RANDOM_WALK: "angle random walk", BIAS_INSTABILITY: "bias instability",
-    RATE_RANDOM_WALK: "rate random walk", RATE_RAMP: "rate ramp"})
+    RATE_RANDOM_WALK: "rate random walk", RATE_RAMP: "rate ramp"}, gap=True)
 ACCELEROMETER_TERMS = SensorTerms("accelerometer", "m/s^2", ACCEL_TERM_UNIT, ACCEL_CUSTOMARY_UNIT, {
     QUANTIZATION: "quantization", ANGLE_RANDOM_WALK: "velocity random walk", BIAS_INSTABILITY: "bias instability",
     RATE_RANDOM_WALK: "acceleration random walk", RATE_RAMP: "acceleration ramp"})
+
+
+def sensor_terms(unit):
+    """The :class:`SensorTerms` of the sensor whose Allan deviation is in ``unit`` (``deg/s``: the gyro,
+    ``m/s^2``: the accelerometer); SettingsError for another unit."""
+    for terms in (GYROSCOPE_TERMS, ACCELEROMETER_TERMS):
+        if terms.unit == unit:
+            return terms
+    raise SettingsError(f"unit must be {GYROSCOPE_TERMS.unit} or {ACCELEROMETER_TERMS.unit}, got {unit!r}")
 
 
 def convert(value, term, unit, to_base=False):
@@ -196,6 +207,7 @@ class Coefficient:
     tau_s: float | None = None
     note: str = ""
     z_score: float | None = None   # fitted c^2 / its standard deviation (fit only)
+    freed_by: tuple = ()           # fit only: the terms not resolved (K, R) whose freeing leaves it unresolved
 
     @property
     def unit(self):
