@@ -190,3 +190,22 @@ def test_the_yaml_of_a_simulated_mpu6050_bounds_every_axis_by_simulation(tmp_pat
     measured = np.array([doc["axes"][a]["adev_dps"] for a in "xyz"])[:, inside]
     plain_model = kalibr_adev(plain[0] * to_dps, plain_rw * to_dps, tau[inside])
     assert np.any(plain_model < 0.9 * measured.max(axis=0))
+
+
+@pytest.mark.parametrize("n", [20, 25])
+def test_a_record_of_a_few_dozen_samples_is_one_line_naming_the_option(tmp_path, capsys, n):
+    """Attack pass 14 / the lead's check: `allan --kalibr` on 20 samples said "Singular matrix" (the
+    intervals' least squares with more active terms than cluster times; the same without
+    --kalibr), then "the range 0.1 .. 0.02 s holds 0 ..." (the default range cut past itself),
+    naming neither option nor file. allan alone analyses it; --kalibr says what to give."""
+    from gyrofilter.recording import Recording, write_recording
+
+    path = str(tmp_path / "short.csv")
+    write_recording(path, Recording.from_dps(np.random.default_rng(1).normal(0, 0.1, (n, 3)), 100.0))
+    assert main(["allan", path]) == 0
+    capsys.readouterr()
+    assert main(["allan", path, "--kalibr", str(tmp_path / "imu.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert "Singular" not in err and err.count("\n") == 1
+    assert "--kalibr: the record's cluster times (0.01 .. " in err and "--kalibr-tau-s within 0.01 .. " in err
+    assert not (tmp_path / "imu.yaml").exists()

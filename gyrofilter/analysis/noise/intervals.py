@@ -142,8 +142,15 @@ def avar_covariance(tau_s, m, n_samples, theta_sq):
 
 
 def _gain(a, w, active):
+    """The weighted least-squares gain ``(A' W A)^-1 A' W`` of the ``active`` columns of ``a``; where
+    ``A' W A`` is singular (more active terms than cluster times, on a record of a few dozen
+    samples: "Singular matrix" was all a user read), its pseudo-inverse, the least-norm solution."""
     aa = a[:, active]
-    return np.linalg.solve(aa.T @ (aa * w[:, None]), (aa * w[:, None]).T)
+    normal, right = aa.T @ (aa * w[:, None]), (aa * w[:, None]).T
+    try:
+        return np.linalg.solve(normal, right)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(normal) @ right
 
 
 def reduced_chi2(a, y, theta, w, cov_y, active):

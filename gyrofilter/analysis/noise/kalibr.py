@@ -112,9 +112,13 @@ def tau_range(tau_s, tau_range_s=None, what="--kalibr-tau-s"):
                                 "reaches longer times)")
     inside = _inside(tau, low, high)
     if np.count_nonzero(inside) < 2:
-        where = f"{what} {low:g},{high:g} s" if tau_range_s is not None else f"the range {low:g} .. {high:g} s"
-        raise SettingsError(f"{where} holds {np.count_nonzero(inside)} of the record's cluster times ({first:g} .. "
-                            f"{last:g} s); the bounding pair needs at least 2: give a wider range")
+        if tau_range_s is None:  # the default range cut to a record too short for it (low may pass high)
+            lo, hi = DEFAULT_TAU_RANGE_S
+            raise SettingsError(f"--kalibr: the record's cluster times ({first:g} .. {last:g} s) hold "
+                                f"{np.count_nonzero(inside)} of the default range {lo:g} .. {hi:g} s; the bounding pair "
+                                f"needs at least 2: a longer record, or {what} within {first:g} .. {last:g} s")
+        raise SettingsError(f"{what} {low:g},{high:g} s holds {np.count_nonzero(inside)} of the record's cluster times "
+                            f"({first:g} .. {last:g} s); the bounding pair needs at least 2: give a wider range")
     return low, high, cut
 
 
