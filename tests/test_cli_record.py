@@ -497,18 +497,24 @@ def test_a_recording_whose_last_12_s_lost_every_other_sample_is_kept_whole(tmp_p
     sample delivered is kept, its gaps counted (the last line, whose counter jumped, waits for
     a next one: at the stop it is written too, test_a_line_held_at_ctrl_c_is_written)."""
     counters = np.concatenate((np.arange(3000), 3000 + 2 * np.arange(1, 1201)))
+    rec = _record_device(tmp_path / "lossy.csv", counters)
+    np.testing.assert_array_equal(rec.gyro_dps[:, 0], counters[:len(rec)] % 7)
+    assert rec.t_gaps == len(rec) - 3000
+
+
+def _record_device(out, counters):
+    """`record` from a device on a real pseudo-terminal sending one line per counter (gx = counter
+    mod 7), stopped by Ctrl-C once the file holds all but the last; its recording, every row's t
+    the counter's, checked."""
     lines = b"".join(b"%d,%d,0,0\n" % (c, c % 7) for c in counters.tolist())
-    out = tmp_path / "lossy.csv"
     primary, secondary = os.openpty()
     proc = start_record(f"serial:{os.ttyname(secondary)}", out, "--quiet")
     err = play_serial_then_stop(primary, secondary, proc, SERIAL_HEADER, lines, out, len(counters) - 1)
     assert proc.returncode == 0, err
     rec = read_recording(out)
-    n = len(rec)
-    assert n >= len(counters) - 1
-    np.testing.assert_array_equal(rec.t_s, counters[:n] / 100.0)
-    np.testing.assert_array_equal(rec.gyro_dps[:, 0], counters[:n] % 7)
-    assert rec.t_gaps == n - 3000
+    assert len(rec) >= len(counters) - 1
+    np.testing.assert_array_equal(rec.t_s, counters[:len(rec)] / 100.0)
+    return rec
 
 
 def test_a_device_that_lost_every_other_sample_from_its_first_line_is_kept(tmp_path):
@@ -516,18 +522,8 @@ def test_a_device_that_lost_every_other_sample_from_its_first_line_is_kept(tmp_p
     line, 15 s: no window showed the rate, the writer judged the whole file a t at half the rate
     at its close and removed it (exit 2, every sample lost). Its header says t is the device's
     counter (t_from), whose jumps are samples the device lost: kept, its gaps counted."""
-    counters = 2 * np.arange(1500)
-    lines = b"".join(b"%d,%d,0,0\n" % (c, c % 7) for c in counters.tolist())
-    out = tmp_path / "halved.csv"
-    primary, secondary = os.openpty()
-    proc = start_record(f"serial:{os.ttyname(secondary)}", out, "--quiet")
-    err = play_serial_then_stop(primary, secondary, proc, SERIAL_HEADER, lines, out, len(counters) - 1)
-    assert proc.returncode == 0, err
-    rec = read_recording(out)
-    n = len(rec)
-    assert n >= len(counters) - 1 and rec.header["t_from"] == "device counter"
-    np.testing.assert_array_equal(rec.t_s, counters[:n] / 100.0)
-    assert rec.t_gaps == n - 1
+    rec = _record_device(tmp_path / "halved.csv", 2 * np.arange(1500))
+    assert rec.header["t_from"] == "device counter" and rec.t_gaps == len(rec) - 1
 
 
 @pytest.mark.parametrize("cut", [b"", b"506,1,"])
