@@ -189,6 +189,22 @@ def reduced_chi2(a, y, theta, w, cov_y, active):
     return x2 / dof, dof
 
 
+def _misfit_scale(chi2_nu, widen):
+    """The factor the covariance is scaled by: the misfit ``chi2_nu`` where ``widen`` and above 1."""
+    return chi2_nu if widen and chi2_nu is not None and chi2_nu > 1.0 else 1.0
+
+
+def _forced_fit(a, w, y, terms, cov_of, widen):
+    """The unconstrained weighted least-squares fit of ``terms`` (bool, 5): ``(gain, theta, cov,
+    scale)``, its gain (:func:`_gain`), the five values, the covariance of the Allan variances at
+    its mixture (negative values taken as 0; ``cov_of``) and its misfit scale (:func:`_misfit_scale`)."""
+    gain = _gain(a, w, terms)
+    theta = np.zeros(a.shape[1])
+    theta[terms] = gain @ y
+    cov = cov_of(np.maximum(theta, 0.0))
+    return gain, theta, cov, _misfit_scale(reduced_chi2(a, y, theta, w, cov, terms)[0], widen)
+
+
 def _fixed_fit(a, w, y, terms, u, t):
     """The five values of the weighted least-squares fit of ``terms`` (bool, 5) to ``y`` with term
     ``u`` (an index in ``terms``) held at ``theta_u = t``: the others are ``G (y - t a_u)`` with the
@@ -234,13 +250,9 @@ def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
     do not resolve)."""
     forced = active.copy()
     forced[u] = True
-    gain = _gain(a, w, forced)
+    gain, _, _, scale = _forced_fit(a, w, y, forced, cov_of, widen)
     g = gain[int(np.sum(forced[:u]))]
     h = max(float(g @ y), 0.0)
-    theta_f = np.zeros(a.shape[1])
-    theta_f[forced] = gain @ y
-    chi2_nu = reduced_chi2(a, y, theta_f, w, cov_of(np.maximum(theta_f, 0.0)), forced)[0]
-    scale = chi2_nu if widen and chi2_nu is not None and chi2_nu > 1.0 else 1.0
     p = 0.5 - confidence / 2.0
     z = NormalDist().inv_cdf(1.0 - p)
 
@@ -299,15 +311,11 @@ def _freed_bound(a, w, y, active, u, freed, bound, confidence, cov_of, widen):
     n = a.shape[1]
     fits = [active | (np.arange(n) == v) for v in freed if not active[v]]
     forced = active | (np.arange(n) == u)
-    gain = _gain(a, w, forced)
-    theta = np.zeros(n)
-    theta[forced] = gain @ y
-    chi2_nu = reduced_chi2(a, y, theta, w, cov_of(np.maximum(theta, 0.0)), forced)[0]
-    scale = chi2_nu if widen and chi2_nu is not None and chi2_nu > 1.0 else 1.0
+    gain, theta, cov, scale = _forced_fit(a, w, y, forced, cov_of, widen)
     z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
-    cov = cov_of(np.maximum(theta, 0.0)) * scale
     fits += [active & (np.arange(n) != v) for v in np.flatnonzero(active)
-             if v != u and TERM_SLOPE[TERMS[v]] > 0 and _point(theta, gain, forced, v, cov, z, confidence)[0] is None]
+             if v != u and TERM_SLOPE[TERMS[v]] > 0
+             and _point(theta, gain, forced, v, cov * scale, z, confidence)[0] is None]
     for fit_terms in fits:
         b, fit_scale = _bound_of(a, w, y, fit_terms, u, confidence, cov_of, widen)
         if b is None and fit_scale is not None:  # this fit excludes no value (a singular one is skipped)
@@ -420,7 +428,7 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     active = theta > 0
     y = np.asarray(avar, dtype=np.float64)[used] / var_unit
     chi2_nu, dof = reduced_chi2(a, y, theta, w, cov_y, active)
-    scale = chi2_nu if widen and chi2_nu is not None and chi2_nu > 1.0 else 1.0
+    scale = _misfit_scale(chi2_nu, widen)
 
     def cov_of(mixture):
         return avar_covariance(tau_u, m_u, n_samples, mixture)[1]
