@@ -410,6 +410,26 @@ def test_filter_timed_refuses_float16_times():
     assert len(rows) and np.all(np.diff(t_rows) > 0) and set(t_rows) <= set(t.astype(np.float32).astype(float))
 
 
+@pytest.mark.parametrize("kind", ["repeated", "decreasing"])
+def test_filter_timed_refuses_times_that_do_not_increase(kind):
+    """Issue 37 (attack passes 12-14): a repeated or decreasing time was taken and the rows stamped
+    with it (rows whose times repeat or go back). The first such time is refused naming its row,
+    the filter left as it was; also from the last time of the call before."""
+    f = GyroFilter(100.0, calibration_s=0.5)
+    t = np.arange(300) / 100.0
+    bad = t.copy()
+    bad[150] = bad[149] if kind == "repeated" else bad[149] - 0.5
+    with pytest.raises(ValueError, match=r"t_s row 150: t_s must increase strictly \(s\), got [0-9.]+ after row 149's 1\.49$"):
+        f.filter_timed(noisy(300), bad)
+    assert f.samples_in == 0
+    t_rows, rows = f.filter_timed(noisy(300), t)
+    assert f.samples_in == 300 and len(rows)
+    with pytest.raises(SampleError, match=r"t_s row 0: .* got [0-9.]+ after 2\.99, the last time of the previous call") as caught:
+        f.filter_timed(noisy(10), t[-10:] if kind == "repeated" else t[:10])
+    assert caught.value.row == 0 and f.samples_in == 300
+    assert len(f.filter_timed(noisy(300), t + 3.0)[1])
+
+
 def test_filter_timed_refuses_times_that_are_not_finite():
     f = GyroFilter(100.0, preset="paper")
     t = np.arange(300) / 100.0

@@ -27,6 +27,7 @@ from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line
 from .calibration import Calibration, calibrate, calibration_samples
 from ..errors import CalibrationError, SampleError, SettingsError
 from ..inputs import check_number, did_you_mean
+from ..recording.checks import first_step_back
 from .presets import DEFAULT_PRESET, PRESETS
 from .samples import as_numbers, check_sample, check_samples, check_temperature
 from .settings import MAX_CALIBRATION_SAMPLES, SETTING_NAMES, FilterSettings
@@ -106,6 +107,7 @@ class GyroFilter:
         self.fallback_blocks = np.zeros(3, dtype=np.int64)
         self.blocks_out = 0
         self.samples_in = 0  # every sample fed to update() or filter(), calibration included
+        self._t_last_s = None  # the last time given to filter_timed (s)
         self.calibration = None
         self._bias = (0.0, 0.0, 0.0)
         self._cal_needed = calibration_samples(self.sample_rate_hz, s.calibration_s)
@@ -339,6 +341,10 @@ class GyroFilter:
         significant bits space the times 1 ms apart from 1 s on, 1 s from 1024 s and 32 s near its
         largest, 65504 s, so the stamps of a 100-Hz record collapse onto each other within seconds
         (refused, not up-cast: the stamps are already rounded; float32 or float64 keep them).
+        Times increase strictly, as a recording's ``t`` does
+        (:func:`~gyrofilter.recording.checks.first_step_back`), also from the last time of the
+        previous call of this method: a repeated or decreasing time is refused (SampleError naming
+        its row, the filter left as it was), since the rows' times would repeat or go back.
         """
         x = check_samples(samples_dps)
         t = as_numbers(t_s, "t_s", "s")
@@ -351,7 +357,17 @@ class GyroFilter:
         if not finite.all():
             row = int(np.flatnonzero(~finite)[0])
             raise SampleError(f"t_s must be finite (s), got {t[row]!r}", row, f"t_s row {row}")
+        before = t[:0] if self._t_last_s is None else np.array([self._t_last_s])
+        row = first_step_back(np.diff(np.concatenate((before, t))))
+        if row is not None:
+            row += 1 - len(before)
+            earlier = f"row {row - 1}'s {float(t[row - 1])!r}" if row > 0 else \
+                f"{self._t_last_s!r}, the last time of the previous call"
+            raise SampleError(f"t_s must increase strictly (s), got {float(t[row])!r} after {earlier}",
+                              row, f"t_s row {row}")
         rows = self._filter(x, temp_c)
+        if len(t):
+            self._t_last_s = float(t[-1])
         return t[self.block_end_indices(len(rows)) - (self.samples_in - len(x))], rows
 
     def state_dict(self) -> dict:

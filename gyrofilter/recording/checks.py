@@ -39,6 +39,15 @@ def _refuse_beyond(ok, data, head, where, names, unit, limit):
                              f"{format_number(data[row, head.names.index(name)])} {unit}, beyond the {limit}")
 
 
+def first_step_back(step_s):
+    """The index of the first of the steps ``step_s`` (each time minus the one before it, s) that is
+    not positive, or None: times increase strictly, a repeated time being a step back as a
+    decreasing one is (two samples at one instant, or rows out of order). The rule of the ``t``
+    column (:class:`TimeCheck`) and of the times given to ``GyroFilter.filter_timed``."""
+    bad = np.flatnonzero(np.asarray(step_s) <= 0)
+    return int(bad[0]) if bad.size else None
+
+
 #: the number of consecutive steps of ``t`` in each window whose median is compared with ``1 / sample_rate_hz``
 RATE_CHECK_STEPS = 1000
 
@@ -122,9 +131,8 @@ class TimeCheck:
             prev, cur, row0 = np.concatenate(([self.t_last], t[:-1])), t, 0
         with np.errstate(over="ignore"):  # -1e308 to 1e308 steps by inf: a step off the rate, refused below
             step = cur - prev
-        bad = np.flatnonzero(step <= 0)
-        if bad.size:
-            k = int(bad[0])
+        k = first_step_back(step)
+        if k is not None:
             raise RecordingError(f"{head.path}: {where(k + row0)}: t does not increase "
                                  f"({float(cur[k])!r} after {float(prev[k])!r})")
         gaps = step > self.max_step_s
