@@ -139,7 +139,8 @@ def texts(draw, valid=False):
         del lines[draw(st.integers(0, 2))]
         broken = "missing key"
     elif mutation == "bad input rate":  # a filtered output's: a rate, and not below sample_rate_hz (100)
-        lines.insert(draw(st.integers(1, len(lines))), f"# input_sample_rate_hz: {draw(st.sampled_from(BAD_RATES + ['99.9']))}")
+        at = draw(st.integers(1, len(lines)))  # with filtered_from, without which the key alone is refused
+        lines[at:at] = ["# filtered_from: raw.csv", f"# input_sample_rate_hz: {draw(st.sampled_from(BAD_RATES + ['99.9']))}"]
         broken = "input rate"
     elif mutation == "nul":  # NUL bytes in a header or note line (an SD card after a power cut): refused
         lines.insert(draw(st.integers(1, len(lines))), "# " + "\x00" * draw(st.integers(1, 4)))

@@ -539,7 +539,7 @@ def test_a_filtered_outputs_rows_whose_blocks_lost_samples_are_its_gaps(tmp_path
     faster than its block, or an input rate below the rows', is refused."""
     steps = np.full(2500, 0.06)
     steps[::7] = 0.05  # a block that lost nothing now and then: its step shows the rate
-    filtered = "# input_sample_rate_hz: 100\n"
+    filtered = "# filtered_from: raw.csv\n# input_sample_rate_hz: 100\n"
     head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps), filtered, rate_hz=20), chunk_rows)
     assert len(data) == 2501 and head.t_gaps == np.count_nonzero(steps > 0.055)
     head, data = _read_chunked(_dps_file(tmp_path, _t_body(np.full(2500, 0.06)), filtered, rate_hz=20, name="all.csv"),
@@ -550,7 +550,24 @@ def test_a_filtered_outputs_rows_whose_blocks_lost_samples_are_its_gaps(tmp_path
     with pytest.raises(RecordingError, match=r"t steps by 0.04 s"):
         _read_chunked(_dps_file(tmp_path, _t_body(np.full(2500, 0.04)), filtered, rate_hz=20, name="fast.csv"), chunk_rows)
     with pytest.raises(RecordingError, match=r"input_sample_rate_hz 10 is below sample_rate_hz 20; a filtered output"):
-        _read_chunked(_dps_file(tmp_path, "", "# input_sample_rate_hz: 10\n", rate_hz=20, name="below.csv"), chunk_rows)
+        _read_chunked(_dps_file(tmp_path, "", "# filtered_from: raw.csv\n# input_sample_rate_hz: 10\n", rate_hz=20, name="below.csv"), chunk_rows)
+
+
+def test_an_input_rate_without_filtered_from_is_refused_naming_the_file_and_key(tmp_path):
+    """Issue 37 (attack passes 12-14): a file of samples whose header named input_sample_rate_hz
+    (but no filtered_from) was read as a filtered output: its t checked as rows of blocks (a t at
+    a tenth of the rate read, every step "a gap"). The key without filtered_from is refused,
+    reading and writing; with it, the file reads as a filtered output."""
+    tenth = _t_body(np.full(1500, 0.011))
+    path = _dps_file(tmp_path, tenth, "# input_sample_rate_hz: 1000\n", name="liar.csv")
+    with pytest.raises(RecordingError, match=r"liar.csv: header key 'input_sample_rate_hz' without 'filtered_from'"):
+        read_recording(path)
+    with pytest.raises(RecordingError, match=r"header key 'input_sample_rate_hz' without 'filtered_from'"):
+        write_recording(tmp_path / "out.csv", Recording.from_dps(np.zeros((3, 3)), 100.0,
+                                                                 header={"input_sample_rate_hz": "1000"}))
+    assert not (tmp_path / "out.csv").exists()
+    rec = read_recording(_dps_file(tmp_path, tenth, "# filtered_from: raw.csv\n# input_sample_rate_hz: 1000\n"))
+    assert len(rec) == 1501 and rec.header["filtered_from"] == "raw.csv"
 
 
 @pytest.mark.parametrize("runs", [[(1000, 0.01), (999, 0.001)], [(501, 0.01), (998, 0.001), (1501, 0.01)]])
@@ -931,14 +948,14 @@ def test_a_header_naming_an_input_rate_gets_the_same_rate_check(tmp_path, chunk_
     half_rate = _t_body(np.full(2500, 0.02))
     for input_hz in ("100", "200", "1000"):
         with pytest.raises(RecordingError, match=re.escape("t steps by 0.02 s (median of its first 1000 steps")):
-            _read_chunked(_dps_file(tmp_path, half_rate, f"# input_sample_rate_hz: {input_hz}\n", name=f"{input_hz}.csv"),
+            _read_chunked(_dps_file(tmp_path, half_rate, f"# filtered_from: raw.csv\n# input_sample_rate_hz: {input_hz}\n", name=f"{input_hz}.csv"),
                           chunk_rows)
     for input_hz in ("100.001", "150"):
         with pytest.raises(RecordingError, match=re.escape(f"input_sample_rate_hz {input_hz} is not a whole multiple of "
                                                            "sample_rate_hz 100")):
-            _read_chunked(_dps_file(tmp_path, half_rate, f"# input_sample_rate_hz: {input_hz}\n", name="odd.csv"), chunk_rows)
+            _read_chunked(_dps_file(tmp_path, half_rate, f"# filtered_from: raw.csv\n# input_sample_rate_hz: {input_hz}\n", name="odd.csv"), chunk_rows)
     lossy = _t_body(np.full(2500, 0.011))  # every block of 10 lost one input sample
-    head, data = _read_chunked(_dps_file(tmp_path, lossy, "# input_sample_rate_hz: 1000\n", name="lossy.csv"), chunk_rows)
+    head, data = _read_chunked(_dps_file(tmp_path, lossy, "# filtered_from: raw.csv\n# input_sample_rate_hz: 1000\n", name="lossy.csv"), chunk_rows)
     assert len(data) == 2501 and head.t_gaps == 2500
 
 

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import ACCEL_COLUMNS, collect_columns, iter_recording, warn_about_gaps
+from ..recording import ACCEL_COLUMNS, INPUT_RATE_KEY, collect_columns, filtered_from, iter_recording, warn_about_gaps
 from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, to_dps, to_mps2
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
@@ -232,9 +232,9 @@ def decimated_accelerometer(head):
     ``sample_rate_hz``): white noise kept every k-th sample at 1/k the rate reads a density
     ``sigma / sqrt(f_s / k)``, sqrt(k) times the sensor's (a new user read 900 ug/sqrt(Hz) for the
     sensor's 390 at k = 5)."""
-    if "filtered_from" not in head.header:
+    if filtered_from(head.header) is None:
         return None
-    rate_in = head.header.get("input_sample_rate_hz")
+    rate_in = head.header.get(INPUT_RATE_KEY)
     every = f"1 in {float(rate_in) / head.sample_rate_hz:.3g} of the sensor's samples" if rate_in else "one of each block"
     return (f"{head.path}: the filter's output keeps one raw accelerometer sample per row ({every}): its noise is not "
             f"the sensor's (the density reads sqrt(k) times it); analyse the recording it was filtered from")

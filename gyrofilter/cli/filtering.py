@@ -10,7 +10,7 @@ from ..filter.settings import SETTING_NAMES
 from ..filter.presets import DEFAULT_PRESET, PRESETS
 from ..filter.tempcomp import coefficients_from_model
 from ..inputs import did_you_mean, parse_json, quote
-from ..recording import EXACT_FORMAT, FILTERED_FORMAT
+from ..recording import EXACT_FORMAT, FILTERED_FORMAT, filtered_from
 from ..sim.model import load_model, validate_model
 from .console import bias_text
 from .options import decimal, file_name
@@ -142,9 +142,10 @@ def refuse_filtered_output(header, where):
     moved, or a second filter would average the averages. ``where`` names the file or source.
     The raw recording it came from is what to filter (``allan`` and ``gap`` take either: the
     noise of the output is a fair question). RecordingError; None for a raw recording."""
-    if "filtered_from" in header:
+    source = filtered_from(header)
+    if source is not None:
         raise RecordingError(f"{where} is a filtered output of gyrofilter (filtered_from: "
-                             f"{quote(header['filtered_from'])}), not a sensor's samples; filter the raw recording "
+                             f"{quote(source)}), not a sensor's samples; filter the raw recording "
                              "it came from")
 
 

@@ -26,7 +26,7 @@ from .. import plots
 from ..errors import RecordingError, SampleError, SettingsError
 from ..filter.settings import SETTING_NAMES
 from ..filter.smoother import SMOOTHABLE_PRESETS, Smoother
-from ..recording import CHUNK_ROWS, COLUMNS, T_FROM_KEY, RecordingWriter, dps_header, format_number, header_text, iter_recording, note_line, warn_about_gaps
+from ..recording import CHUNK_ROWS, COLUMNS, FILTERED_FROM_KEY, INPUT_RATE_KEY, T_FROM_KEY, RecordingWriter, dps_header, format_number, header_text, iter_recording, note_line, warn_about_gaps
 from ..streamstats import Envelope, RunningMoments
 from ..units import json_ready
 from . import console, filtering, options, outputs
@@ -246,14 +246,14 @@ class Replay:
         filt = self.filt
         return dps_header({
             "sensor": self.head.header.get("sensor", "unknown"),
-            "filtered_from": self.path,
+            FILTERED_FROM_KEY: self.path,
             "filter_preset": filt.preset,
             **({"smoothed": "forward-backward (two-filter) smoother over the whole recording"} if self.smoother else {}),
             "filter_settings": json.dumps({k: getattr(filt.settings, k) for k in SETTING_NAMES}, separators=(",", ":")),
             "bias_dps": json.dumps(list(filt.bias_dps or ())),
             **({"calibration_from": self.calibration_from} if self.calibration_from else {}),
             "t_meaning": "time of the last input sample of each block (s)",
-            "input_sample_rate_hz": format_number(filt.sample_rate_hz),
+            INPUT_RATE_KEY: format_number(filt.sample_rate_hz),
             **({T_FROM_KEY: self.head.header[T_FROM_KEY]} if T_FROM_KEY in self.head.header else {}),
         }, filt.output_rate_hz)
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import SampleError, SettingsError
-from ..recording import ACCEL_COLUMNS, COLUMNS, END_NOTE, T_FROM_KEY, accel_header, dps_header, header_text, note_line
+from ..recording import ACCEL_COLUMNS, COLUMNS, END_NOTE, FILTERED_FROM_KEY, INPUT_RATE_KEY, T_FROM_KEY, accel_header, dps_header, header_text, note_line
 from ..recording.writer import exact_format
 from . import console, filtering, live, options, outlets, outputs
 
@@ -123,13 +123,13 @@ def _run(args, source, sinks):
     out_header = dps_header({
         "description": f"gyrofilter {__version__} run: filtered rates, preset {filt.preset}, block of {block} samples; t = time of the block's last sample",
         "live_source": args.source,
-        "filtered_from": args.source,
+        FILTERED_FROM_KEY: args.source,
     }, filt.output_rate_hz)
     for key in ("sensor", "chip_id", "full_scale_dps", "dlpf_cfg", "start_time_utc", T_FROM_KEY,
                 "simulated_seed", "simulated_duration_s", "simulated_model"):
         if key in head:
             out_header[key] = head[key]
-    out_header["input_sample_rate_hz"] = head["sample_rate_hz"]
+    out_header[INPUT_RATE_KEY] = head["sample_rate_hz"]
     if args.calibration is not None:  # the bias is known from the start: the header names it and its file, as replay's
         out_header["bias_dps"] = json.dumps(list(filt.bias_dps))
         out_header["calibration_from"] = args.calibration

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..units import from_dps, to_dps, to_mps2
-from .header import ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, accel_units_header, dps_header, format_number
+from .header import ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY, VERSION_KEY, accel_units_header, dps_header, format_number
 
 
 class _HeaderFacts:
@@ -28,7 +28,7 @@ class _HeaderFacts:
     def input_sample_rate_hz(self) -> float:
         """The rate (Hz) of the samples the rows come from: the header's ``input_sample_rate_hz``
         (a filtered output's: a row per block of input samples) as a float, else ``sample_rate_hz``."""
-        return float(self.header.get("input_sample_rate_hz", self.header["sample_rate_hz"]))
+        return float(self.header.get(INPUT_RATE_KEY, self.header["sample_rate_hz"]))
 
     @property
     def gyro_unit(self) -> str:

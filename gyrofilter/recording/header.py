@@ -53,12 +53,28 @@ def one_line_text(text):
 #: (``record`` from a serial device that sends ``counter``): a step of k sample intervals is k - 1
 #: samples the device counted and lost, never a t at 1/k of the rate (:class:`~gyrofilter.recording.checks.TimeCheck`)
 T_FROM_KEY, T_FROM_COUNTER = "t_from", "device counter"
+#: the header key of a filtered output (``replay --out``, ``run --out``): the source its rows were
+#: filtered from (:func:`filtered_from`); such a header also names ``input_sample_rate_hz``
+FILTERED_FROM_KEY = "filtered_from"
+#: the header key of a filtered output's input rate (Hz): its rows are blocks of that many samples
+#: a second over ``sample_rate_hz`` (:func:`check_header`)
+INPUT_RATE_KEY = "input_sample_rate_hz"
+
+
+def filtered_from(header):
+    """The source the rows of a recording with ``header`` (key -> value text) were filtered from
+    (its ``filtered_from``, written by ``replay --out`` and ``run --out``), or None for a
+    sensor's samples. A filtered output's rows are bias-removed block means at 1/L of the input
+    rate, not the sensor's samples: replay and run refuse to filter it again, ``allan --kalibr``
+    and the fleet write no imu.yaml of it, and its accelerometer is one raw sample per row
+    (``analysis.still.decimated_accelerometer``). The one test of it; ``is not None`` is the predicate."""
+    return header.get(FILTERED_FROM_KEY)
 #: header keys gyrofilter writes to say where a recording's samples came from and what was done
 #: to them (docs/formats.md, section 1): a live device's header does not give them (the serial
 #: source drops them with a note), or a raw recording could say it is a filtered one
 #: (``filtered_from``, which replay refuses) or carry another time origin than its own
-PROVENANCE_KEYS = frozenset({T_FROM_KEY, "filtered_from", "filter_preset", "filter_settings", "bias_dps", "t_meaning",
-                             "calibration_from", "input_sample_rate_hz", "converted_from", "converted_by",
+PROVENANCE_KEYS = frozenset({T_FROM_KEY, FILTERED_FROM_KEY, "filter_preset", "filter_settings", "bias_dps", "t_meaning",
+                             "calibration_from", INPUT_RATE_KEY, "converted_from", "converted_by",
                              "time_origin", "simulated_seed", "simulated_duration_s", "simulated_model",
                              "simulated_model_name", "live_source", "recorded_by", "serial_port", "start_time_utc"})
 
@@ -190,7 +206,10 @@ def check_header(header, where):
     decimal number (:func:`~gyrofilter.inputs.parse_number`) checked by
     :func:`~gyrofilter.units.check_sample_rate_hz`, ``gyro_unit`` one of :data:`GYRO_UNITS`,
     ``lsb_per_dps`` with ``lsb``, checked by :func:`~gyrofilter.units.check_lsb_per_dps`; ``input_sample_rate_hz``,
-    when given, as ``sample_rate_hz`` and a whole multiple of it (a row per block of input samples).
+    when given, as ``sample_rate_hz`` and a whole multiple of it (a row per block of input samples),
+    and only with ``filtered_from`` (:func:`filtered_from`): a file of samples that names an input
+    rate lies about its rows (the check of its ``t`` would take its steps for blocks of samples,
+    its accelerometer for one raw sample per row), so the key without it is refused, not ignored.
     The one check of a header: the reader's and the writers' (:func:`header_text`)."""
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
@@ -202,9 +221,13 @@ def check_header(header, where):
         raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
     sample_rate_hz = parse_number(header["sample_rate_hz"], f"{where}: sample_rate_hz", error=RecordingError)
     check_sample_rate_hz(sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
-    if "input_sample_rate_hz" in header:  # a filtered output's: its rows are blocks of input samples, never more of them
-        input_hz = parse_number(header["input_sample_rate_hz"], f"{where}: input_sample_rate_hz", error=RecordingError)
-        check_sample_rate_hz(input_hz, f"{where}: input_sample_rate_hz", RecordingError)
+    if INPUT_RATE_KEY in header:  # a filtered output's: its rows are blocks of input samples, never more of them
+        if filtered_from(header) is None:
+            raise RecordingError(f"{where}: header key {INPUT_RATE_KEY!r} without {FILTERED_FROM_KEY!r}: only a filtered "
+                                 "output (run --out, replay --out) has rows that are blocks of input samples; remove "
+                                 f"the {INPUT_RATE_KEY} line of a file of samples")
+        input_hz = parse_number(header[INPUT_RATE_KEY], f"{where}: {INPUT_RATE_KEY}", error=RecordingError)
+        check_sample_rate_hz(input_hz, f"{where}: {INPUT_RATE_KEY}", RecordingError)
         block = input_hz / sample_rate_hz  # input samples a row: a whole number (filter.pipeline's block_len)
         if input_hz < sample_rate_hz or abs(block - round(block)) > 1e-9 * block:
             raise RecordingError(f"{where}: input_sample_rate_hz {header['input_sample_rate_hz']} is "

@@ -6,6 +6,7 @@ import dataclasses
 import time
 
 from ...errors import SettingsError, one_line
+from ...recording import filtered_from
 from ...units import AXES
 from ..gap.pipeline import analyse_file
 from ..noise.allan import MIN_CLUSTERS
@@ -88,7 +89,7 @@ def _allan_part(path, settings, result):
         keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True)
     sample_rate_hz = head.sample_rate_hz
     kalibr = None
-    if "filtered_from" in head.header:  # the filter's output is analysed, but its noise is not the sensor's
+    if filtered_from(head.header) is not None:  # the filter's output is analysed, but its noise is not the sensor's
         result["warnings"].append(f"{NO_IMU_YAML}the recording is the filter's output (filtered_from), "
                                   "not the sensor's samples")
     else:

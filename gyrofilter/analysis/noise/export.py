@@ -10,6 +10,7 @@ from .model import (ACCELEROMETER_TERMS, ANGLE_RANDOM_WALK, GYROSCOPE_TERMS, QUA
                     Coefficient, convert)
 from ..gap.detectors.repeats import repeats_warning
 from ...inputs import json_string
+from ...recording import filtered_from
 from ...errors import SettingsError
 from ...units import AXES, utf8_text
 
@@ -191,9 +192,10 @@ def kalibr_yaml(results, sample_rate_hz, *, recording=None, rostopic="/imu0", ta
     make the values wrong goes into the yaml, beside them: the axes of a sensor not analysed and
     every warning of the analysis (``warnings``: the recording's sentences, e.g. an axis left out
     or an acceleration that moves; and each axis result's own), one comment line each."""
-    if header is not None and "filtered_from" in header:
+    source = None if header is None else filtered_from(header)
+    if source is not None:
         raise SettingsError(f"--kalibr: {json_string(recording) if recording else 'the recording'} is the filter's output (filtered_from: "
-                            f"{json_string(header['filtered_from'])}), not the sensor's samples: Kalibr's noise model "
+                            f"{json_string(source)}), not the sensor's samples: Kalibr's noise model "
                             "describes the sensor; give the recording it was made from")
     sensors = [kalibr_sensor(results, "deg/s", tau_range_s)]
     if accelerometer is not None:
