@@ -76,10 +76,28 @@ def test_the_excursion_steps_the_frequency_up_for_its_length_every_period(seed):
     ({"excursion_hz": -1.0, "excursion_period_s": 10.0, "excursion_s": 1.0}, r"excursion_hz: expected a number >= 0"),
     ({"excursion_hz": 1.0, "excursion_period_s": 0.0, "excursion_s": 1.0}, r"excursion_period_s: expected a number > 0"),
     ({"excursion_hz": 1e9, "excursion_period_s": 10.0, "excursion_s": 1.0}, r"excursion_hz: expected a number <="),
+    # issue 37 (attack passes 12-14): at 100 Hz, a period or a length below a sample interval was taken
+    ({"excursion_hz": 2.0, "excursion_period_s": 0.001, "excursion_s": 0.0005},
+     r"excursion_period_s: expected two sample intervals or more \(0\.02 s at 100 Hz.*got 0\.001$"),
+    ({"excursion_hz": 2.0, "excursion_period_s": 0.015, "excursion_s": 0.005}, r"excursion_period_s: expected two sample"),
+    ({"excursion_hz": 2.0, "excursion_period_s": 10.0, "excursion_s": 0.002},
+     r"excursion_s: expected a length from one sample interval \(0\.01 s at 100 Hz\) to excursion_period_s less one "
+     r"\(9\.99 s\), got 0\.002$"),
+    ({"excursion_hz": 2.0, "excursion_period_s": 10.0, "excursion_s": 9.995}, r"excursion_s: expected a length from one"),
 ])
 def test_the_excursion_keys_are_checked(extra, match):
     with pytest.raises(SettingsError, match=r"axes\.z\.effects\[0\] \(wandering_tone\)\." + match):
         validate_model(_model(_tone(**extra)))
+
+
+def test_an_excursion_of_a_sample_and_a_cycle_of_two_are_taken():
+    """The bounds of the check above are inclusive, whatever the rounding of the difference
+    (0.03 - 0.02 s is 0.00999... s); the rate the check uses is the one given over the model's."""
+    for period_s, length_s in ((0.02, 0.01), (0.03, 0.02), (0.03, 0.01)):
+        validate_model(_model(_tone(excursion_hz=2.0, excursion_period_s=period_s, excursion_s=length_s)))
+    with pytest.raises(SettingsError, match=r"excursion_period_s: expected two sample intervals or more \(0\.04 s at 50 Hz"):
+        validate_model(_model(_tone(center_hz=10.0, excursion_hz=2.0, excursion_period_s=0.03, excursion_s=0.01)),
+                       sample_rate_hz=50.0)
 
 
 def test_an_excursion_past_nyquist_warns_that_it_aliases():

@@ -410,7 +410,7 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
             _err(f"{label}.bandwidth_hz", f"expected a width in [{MIN_BANDWIDTH_PER_RATE * rate:g}, {rate:g}] Hz "
                                           f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")
     if name == WANDERING_TONE:
-        _check_excursion(out, label)
+        _check_excursion(out, label, rate)
     if name == ARMA and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:
         _err(f"{label}.phi", "expected a stationary AR part (every root of z^p - phi_1 z^(p-1) - ... - phi_p inside the unit circle)")
     if name == COLORED_NOISE and out["lag2"] is not None and nt.arma11_from_lags(out["lag1"], out["lag2"]) is None:
@@ -421,10 +421,14 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
     return out
 
 
-def _check_excursion(tone, label):
+def _check_excursion(tone, label, rate):
     """A wandering tone's periodic excursion (:mod:`gyrofilter.sim.tone`): ``excursion_period_s``
     P and ``excursion_s`` D given together or not at all, D < P, and an ``excursion_hz`` above 0
-    needs them (SettingsError naming the key)."""
+    needs them (SettingsError naming the key). With the sample rate f_s (``rate``, Hz; None: not
+    known yet), the excursion and the rest of its cycle each last a sample interval or more,
+    D >= 1 / f_s and P - D >= 1 / f_s (so P >= 2 / f_s): the term samples the cycle at
+    k / f_s (``((k / f_s + t_0) mod P) < D``), so a shorter excursion is missed in most cycles
+    and a period below a sample interval is aliased into another one (P = 1 ms at 100 Hz)."""
     period_s, length_s = tone["excursion_period_s"], tone["excursion_s"]
     if (period_s is None) != (length_s is None):
         _err(f"{label}.{'excursion_s' if length_s is None else 'excursion_period_s'}",
@@ -434,6 +438,15 @@ def _check_excursion(tone, label):
                                             "(the excursion's period and length, s)")
     if period_s is not None and not length_s < period_s:
         _err(f"{label}.excursion_s", f"expected a length below excursion_period_s {period_s:g} s, got {length_s:g}")
+    if period_s is not None and rate is not None:
+        step_s = 1.0 / rate
+        slack = 1.0 - 1e-9  # in sample intervals: 0.03 - 0.02 s is 0.99999... of 0.01 s, one interval as written
+        if period_s * rate < 2.0 * slack:
+            _err(f"{label}.excursion_period_s", f"expected two sample intervals or more ({2.0 * step_s:g} s at "
+                                                f"{rate:g} Hz: a sample in the excursion and one out of it), got {period_s:g}")
+        if length_s * rate < slack or (period_s - length_s) * rate < slack:
+            _err(f"{label}.excursion_s", f"expected a length from one sample interval ({step_s:g} s at {rate:g} Hz) to "
+                                         f"excursion_period_s less one ({period_s - step_s:g} s), got {length_s:g}")
 
 
 #: a wandering tone's frequency reaches its centre plus this many spread_hz (its instantaneous
