@@ -8,6 +8,7 @@ import pytest
 from gyrofilter.analysis.noise.allan import overlapping_adev
 from gyrofilter.analysis.noise.export import kalibr_yaml
 from gyrofilter.analysis.noise.fit import characterise
+from gyrofilter.analysis.still import characterise_recording
 from gyrofilter.analysis.noise.kalibr import (DEFAULT_TAU_RANGE_S, bounding_pair, kalibr_adev, kalibr_sensor,
                                               tau_range)
 from gyrofilter.cli import main
@@ -115,6 +116,33 @@ def test_a_deviation_of_zero_bounds_nothing_and_the_yaml_holds_no_nan(tmp_path):
     assert main(["allan", str(path), "--kalibr", str(yaml_path)]) == 0
     values = yaml_values(yaml_path.read_text())
     assert all(math.isfinite(float(values[f"gyroscope_{key}"])) for key in ("noise_density", "random_walk"))
+
+
+def test_a_random_walk_no_plain_value_floors_is_the_records_bound_not_zero(tmp_path, capsys):
+    """Issue 37 (attack passes 12-14): a gyro alternating between two values (+-0.1 deg/s) has no
+    plain value (the fit resolves nothing) and its white noise alone bounds the data, so the yaml
+    said `gyroscope_random_walk: 0.000000e+00`: a bias that never moves, which Kalibr must not be
+    given. The value is the record's bound, the random walk whose own deviation rw sqrt(tau / 3)
+    reaches the largest axis's at the longest tau covered, said in the yaml and on the console."""
+    path, yaml_path = tmp_path / "alternating.csv", tmp_path / "imu.yaml"
+    rows = "".join(f"{v},{v / 2 + 0.2},{-v}\n" for v in [0.1, -0.1] * 30000)
+    path.write_text(f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n{rows}")
+    assert main(["allan", str(path), "--kalibr", str(yaml_path)]) == 0
+    text = yaml_path.read_text()
+    values = {key: float(v) for key, v in yaml_values(text).items() if key.startswith("gyroscope_")}
+    assert values["gyroscope_random_walk"] > 0.0 and values["gyroscope_noise_density"] > 0.0
+    results = characterise_recording(str(path), warn=lambda text: None)[1]
+    k = kalibr_sensor(results, "deg/s")
+    assert k.plain == (None, None) and k.held[0] is None and k.held[1] == k.bound.tau_s[-1]
+    tau = k.bound.tau_s[-1]
+    largest = max(float(r.adev[np.argmin(np.abs(r.tau_s - tau))]) for r in results.values())
+    assert k.random_walk == pytest.approx(largest * math.sqrt(3.0 / tau) * math.pi / 180.0, rel=1e-9)
+    assert values["gyroscope_random_walk"] == pytest.approx(k.random_walk, rel=1e-6)
+    assert kalibr_adev(k.bound.noise_density, k.bound.random_walk, tau) >= largest  # still a bound of the data
+    said = f"the record's bound, the random walk whose own deviation reaches the largest axis's at tau {tau:.4g} s"
+    assert f"# gyroscope_random_walk: no plain value and 0 bounds the data, which Kalibr cannot take: {said}" in text
+    assert "(plain -, the record's bound)" in text
+    assert said in " ".join(capsys.readouterr().out.split())
 
 
 def test_the_default_range_is_cut_to_a_short_record_and_a_range_given_is_checked():

@@ -151,7 +151,8 @@ def unresolved_text(r, min_clusters, terms=GYROSCOPE_TERMS):
 def kalibr_text_line(k):
     """One paragraph on the bounding pair of ``k`` (a :class:`~gyrofilter.analysis.noise.kalibr.KalibrValues`):
     the values written, their factors over the plain values and how far the model lies above the data."""
-    f_nd, f_rw = (f"{f:.3g}x the plain value" if f is not None else "no plain value" for f in k.factors())
+    f_nd, f_rw = (held if held is not None else f"{f:.3g}x the plain value" if f is not None else "no plain value"
+                  for f, held in zip(k.factors(), k.held_texts()))
     low, high = k.tau_range_s
     cut = (f" (the default {DEFAULT_TAU_RANGE_S[0]:g} .. {DEFAULT_TAU_RANGE_S[1]:g} s cut to the record)"
            if k.cut else "")

@@ -165,8 +165,11 @@ def _sensor_lines(k: KalibrValues, confidence):
               f"# {name}, bounding pair over tau {k.tau_range_s[0]:g} .. {k.tau_range_s[1]:g} s ({len(b.tau_s)} taus): "
               f"its model lies at {b.least:.3g} .. {b.excess:.3g}x the largest",
               f"#   axis's Allan deviation ({b.least:.3g} at tau {touch} s){upper}",
-              f"{name}_noise_density: {k.noise_density:.6e}   # {s.density_unit}, bounding (plain {_times(f_nd)})",
-              f"{name}_random_walk: {k.random_walk:.6e}   # {s.walk_unit}, bounding (plain {_times(f_rw)})"]
+              *(f"# {name}_{key}: {held}" for key, held in zip(("noise_density", "random_walk"), k.held_texts()) if held),
+              f"{name}_noise_density: {k.noise_density:.6e}   # {s.density_unit}, bounding (plain {_times(f_nd)}"
+              f"{', the record' + chr(39) + 's bound' if k.held[0] is not None else ''})",
+              f"{name}_random_walk: {k.random_walk:.6e}   # {s.walk_unit}, bounding (plain {_times(f_rw)}"
+              f"{', the record' + chr(39) + 's bound' if k.held[1] is not None else ''})"]
     return lines
 
 

@@ -223,7 +223,10 @@ class KalibrValues:
     pair (the largest over the axes; a value None where an axis has neither value nor bound),
     the ``bound`` (:class:`BoundingPair` in the Allan deviation's unit), ``noise_density`` and
     ``random_walk`` (the bounding pair in SI: what the yaml writes), the range covered
-    ``tau_range_s`` and whether the default range was ``cut`` to the record."""
+    ``tau_range_s``, whether the default range was ``cut`` to the record, and ``held`` (for the
+    noise density and the random walk): the tau (s) at which a value was held at the record's
+    bound (:func:`record_bounds`: no positive plain value floored it and the pair set it to 0),
+    else None."""
 
     sensor: KalibrSensor
     per_axis: dict
@@ -233,6 +236,14 @@ class KalibrValues:
     random_walk: float
     tau_range_s: tuple
     cut: bool
+    held: tuple = (None, None)
+
+    def held_texts(self):
+        """For the noise density and the random walk: why the value is the record's bound
+        (``held``), one short clause, or None."""
+        return tuple(None if at is None else f"no plain value and 0 bounds the data, which Kalibr cannot take: the record's "
+                     f"bound, the {what} whose own deviation reaches the largest axis's at tau {at:.4g} s"
+                     for at, what in zip(self.held, ("white noise", "random walk")))
 
     def factors(self):
         """(bounding / plain) for the noise density and the random walk; None where the plain value
@@ -254,12 +265,33 @@ def plain_values(r, sensor):
             "noise_density_is_upper_bound": n.value is None, "random_walk_is_upper_bound": k.value is None}
 
 
+def record_bounds(tau_s, adev, covered_tau_s):
+    """The record's bounds of the pair's two values, ``((nd0, tau_low), (rw0, tau_high))``: the
+    white noise whose own deviation ``nd0 / sqrt(tau)`` equals the largest axis's measured
+    deviation ``s`` at the shortest covered tau, and the random walk whose own deviation
+    ``rw0 sqrt(tau / 3)`` equals it at the longest (IEEE Std 952's N and K terms): a larger value
+    would lift the model's curve above the data there, so the record allows nothing above them.
+    ``tau_s`` and ``adev`` (k, n) as :func:`bounding_pair` takes them; ``covered_tau_s``: the taus
+    a :class:`BoundingPair` covers (each with a deviation above 0). :func:`kalibr_sensor` writes
+    them where the pair would set a value to 0 and no positive plain value floors it: Kalibr's
+    model needs both values positive (a white noise or a bias random walk of 0 is a sensor that
+    never errs or whose bias never moves), and the bound is the most the record allows."""
+    tau = np.asarray(tau_s, dtype=np.float64)
+    largest = np.max(np.atleast_2d(np.asarray(adev, dtype=np.float64)), axis=0)
+    low, high = covered_tau_s[0], covered_tau_s[-1]
+    s_low, s_high = (float(largest[np.argmin(np.abs(tau - t))]) for t in (low, high))
+    return (s_low * np.sqrt(low), low), (s_high * np.sqrt(3.0 / high), high)
+
+
 def kalibr_sensor(results, unit, tau_range_s=None):
     """One sensor's Kalibr values (a :class:`KalibrValues`) from its Allan results ``results``
     ({axis: AxisNoise}, the deviation in ``unit``, a key of :data:`KALIBR_SENSORS`: ``deg/s`` for
     a gyroscope, ``m/s^2`` for an accelerometer) over ``tau_range_s`` ((low, high) in s, or None:
     the default range cut to the record, :func:`tau_range`): the bounding pair with the plain
-    values as its floor (:func:`bounding_pair`)."""
+    values as its floor (:func:`bounding_pair`). A value that no positive plain value floors and
+    that the pair sets to 0 (the white noise alone bounds the range: a gyro that alternates
+    between two values, whose fit resolves nothing) is held at the record's bound instead
+    (:func:`record_bounds`), the other value then the least that bounds; ``held`` says so."""
     sensor = KALIBR_SENSORS[unit]
     axes = list(results.values())
     tau = axes[0].tau_s
@@ -269,7 +301,14 @@ def kalibr_sensor(results, unit, tau_range_s=None):
     per_axis = {a: plain_values(r, sensor) for a, r in results.items()}
     plain = tuple(None if any(v[key] is None for v in per_axis.values()) else max(v[key] for v in per_axis.values())
                   for key in ("noise_density", "random_walk"))
-    bound = bounding_pair(tau, [r.adev for r in axes], (low, high), adev_high=[r.ci_high for r in axes],
-                          floor=tuple(0.0 if v is None else v / sensor.to_si for v in plain))
+    adevs, highs = [r.adev for r in axes], [r.ci_high for r in axes]
+    floor = tuple(0.0 if v is None else v / sensor.to_si for v in plain)
+    bound = bounding_pair(tau, adevs, (low, high), adev_high=highs, floor=floor)
+    bounds = record_bounds(tau, adevs, bound.tau_s)
+    held = tuple(at if f <= 0.0 and value <= 0.0 else None
+                 for f, value, (_, at) in zip(floor, (bound.noise_density, bound.random_walk), bounds))
+    if any(at is not None for at in held):
+        floor = tuple(f if at is None else b for f, at, (b, _) in zip(floor, held, bounds))
+        bound = bounding_pair(tau, adevs, (low, high), adev_high=highs, floor=floor)
     return KalibrValues(sensor, per_axis, plain, bound, bound.noise_density * sensor.to_si,
-                        bound.random_walk * sensor.to_si, (low, high), cut)
+                        bound.random_walk * sensor.to_si, (low, high), cut, held)
