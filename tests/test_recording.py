@@ -553,6 +553,27 @@ def test_a_filtered_outputs_rows_whose_blocks_lost_samples_are_its_gaps(tmp_path
         _read_chunked(_dps_file(tmp_path, "", "# filtered_from: raw.csv\n# input_sample_rate_hz: 10\n", rate_hz=20, name="below.csv"), chunk_rows)
 
 
+@pytest.mark.parametrize("name", ["mac.csv", "mac.csv.gz"])
+@pytest.mark.parametrize("rows", [300, 120_000])
+def test_a_recording_whose_line_ends_are_cr_only_is_refused_naming_them(tmp_path, name, rows):
+    """Issue 37 (attack passes 12-14): a recording saved with CR-only line ends (classic Mac OS)
+    was one line: "line 1: missing header key(s) 'sample_rate_hz', 'gyro_unit' ... another tool's
+    log: gyrofilter convert" (convert then refused it too), or past 1 MB "line 1: longer than
+    1048576 bytes". Refused naming the file and the line ends, as convert refuses a log; the
+    same text with LF or CRLF line ends reads."""
+    body = "".join(f"{i / 100:.2f},0.1,-0.2,0.3\n" for i in range(rows))
+    text = f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n{body}"
+    for ends, path in (("\r", tmp_path / name), ("\r\n", tmp_path / f"dos-{name}"), ("\n", tmp_path / f"unix-{name}")):
+        data = text.replace("\n", ends).encode()
+        path.write_bytes(gzip.compress(data, compresslevel=1) if name.endswith(".gz") else data)
+    with pytest.raises(RecordingError, match=re.escape(f"{tmp_path / name}: line ends are CR only (old Mac): convert "
+                                                       "them to LF (e.g. tr '\\r' '\\n')")):
+        read_recording(tmp_path / name)
+    for kind in ("dos", "unix"):
+        rec = read_recording(tmp_path / f"{kind}-{name}")
+        assert len(rec) == rows and rec.gyro_dps[-1].tolist() == [0.1, -0.2, 0.3]
+
+
 def test_an_input_rate_without_filtered_from_is_refused_naming_the_file_and_key(tmp_path):
     """Issue 37 (attack passes 12-14): a file of samples whose header named input_sample_rate_hz
     (but no filtered_from) was read as a filtered output: its t checked as rows of blocks (a t at

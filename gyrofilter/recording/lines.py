@@ -7,6 +7,7 @@ read. Damaged gzip data are an error; a stream cut short (an interrupted recordi
 from __future__ import annotations
 
 import os
+import re
 import zlib
 
 from ..errors import RecordingError
@@ -129,13 +130,16 @@ def _without_bom(blocks):
 def line_chunks(path, chunk_rows, warnings):
     """(number of the first line, list of at most ``chunk_rows`` lines without their line ends),
     a block of the file at a time (lines are split at b"\\n" before decoding, which never cuts
-    a UTF-8 character). A last line without its line end is not used (warning), unless it is
-    the file's only line. A line longer than :data:`MAX_LINE_BYTES` is an error as soon as
+    a UTF-8 character); a file whose line ends are CR only is refused (:func:`refuse_cr_only`).
+    A last line without its line end is not used (warning), unless it is the file's only line.
+    A line longer than :data:`MAX_LINE_BYTES` is an error as soon as
     that many bytes are read (a line inside a block is shorter than the block, at most as
     long as the limit: only the line that the blocks so far have not ended needs a check)."""
     pending = b""
     first = 1  # number of the next line
     for block in _without_bom(_byte_blocks(path, warnings)):
+        if first == 1:  # a block before the first LF: up to it (all of it, when it holds none)
+            refuse_cr_only(block.partition(b"\n")[0], path)
         cut = block.rfind(b"\n")
         open_bytes = len(pending) + (len(block) if cut < 0 else block.find(b"\n"))  # of the line not yet ended
         if open_bytes > MAX_LINE_BYTES:
@@ -158,6 +162,20 @@ def line_chunks(path, chunk_rows, warnings):
                             f"it is not used: {quote(pending[:60].decode('utf-8', 'replace'))}")
         else:
             yield first, [_decode(pending, path, first)]
+
+
+#: a CR that ends no line (not before an LF, not the last byte read): a file whose line ends are CR only
+_BARE_CR = re.compile(rb"\r(?!\n|$)")
+
+
+def refuse_cr_only(first_line, path):
+    """Refuse the file ``path`` (a recording or another tool's log) when ``first_line``, the bytes
+    of its first line (or its first bytes, when no LF ends a line in them), holds a CR that ends
+    no line: line ends of CR only (classic Mac OS), where the whole file would read as one line
+    (a header missing its keys, one line of column names, or one too long). No first line holds
+    such a CR otherwise: a recording's header values write a control character as its escape."""
+    if _BARE_CR.search(first_line):
+        raise RecordingError(f"{path}: line ends are CR only (old Mac): convert them to LF (e.g. tr '\\r' '\\n')")
 
 
 def refuse_nul(data, path, first_line):

@@ -18,7 +18,7 @@ import zlib
 from ..errors import RecordingError
 from ..inputs import open_input, quote
 from .header import MAX_LINE_BYTES
-from .lines import refuse_nul
+from .lines import refuse_cr_only, refuse_nul
 
 #: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
 #: where it is): 4 GiB, a 1 kHz log of about 40 h
@@ -150,24 +150,12 @@ def _first_line_ends(start, path):
             text = zlib.decompressobj(31).decompress(start, MAX_LINE_BYTES + 1)
         except zlib.error as exc:
             raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
-    _refuse_cr_only(text.split(b"\n", 1)[0], path)
+    refuse_cr_only(text.split(b"\n", 1)[0], path)
     if b"\n" in text:
         return True
     if len(text) > MAX_LINE_BYTES:
         raise _too_long(path, 1)
     return False
-
-
-#: a CR that ends no line (not before an LF, not the last byte read): a log whose line ends are CR only
-_BARE_CR = re.compile(rb"\r(?!\n|$)")
-
-
-def _refuse_cr_only(text, path):
-    """Refuse the log ``path`` when ``text``, its first line (or its first bytes), holds a CR that
-    ends no line: line ends of CR only (classic Mac OS), where the whole log would read as one
-    line of column names."""
-    if _BARE_CR.search(text):
-        raise RecordingError(f"{path}: line ends are CR only (old Mac): convert them to LF (e.g. tr '\\r' '\\n')")
 
 
 def _too_long(path, number):
@@ -208,7 +196,7 @@ def log_lines(raw, path, warnings=None):
                     continue
                 refuse_nul(data, path, number)
                 if number == 1:
-                    _refuse_cr_only(data, path)
+                    refuse_cr_only(data, path)
                 if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
                     raise _too_long(path, number)
                 try:
