@@ -10,9 +10,11 @@ from gyrofilter.effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from gyrofilter.analysis.noise.allan import AllanInputError, cluster_sizes, default_cluster_sizes, overlapping_adev
 from gyrofilter.errors import GyroFilterError, SettingsError
 from gyrofilter.analysis.noise.export import kalibr_yaml, to_json
+from gyrofilter.cli.allan import print_coefficients
 from gyrofilter.analysis.noise.fit import characterise, characterise_axis, fit, nnls_weighted
 from gyrofilter.analysis.noise.intervals import fitted_intervals, reduced_chi2
-from gyrofilter.analysis.noise.model import (ANGLE_RANDOM_WALK, FLICKER_FLOOR, QUANTIZATION, UNIT_FACTORS, arw_from_white_std,
+from gyrofilter.analysis.noise.model import (ANGLE_RANDOM_WALK, FLICKER_FLOOR, GYROSCOPE_TERMS, QUANTIZATION, UNIT_FACTORS,
+                                             arw_from_white_std,
                                              basis, convert, model_adev, white_std_from_arw)
 from support import RECORDINGS, tool
 
@@ -420,6 +422,20 @@ def test_deviations_exactly_zero_give_a_result_not_a_failed_svd():
     assert np.all(res.adev[1::2][:2] == 0) and res.adev[0] == pytest.approx(math.sqrt(2))
     assert all(c.value is None for c in res.fitted.values())
     assert np.all(np.isfinite(res.ci_low)) and np.all(np.isfinite(res.ci_high)) and np.all(np.isfinite(res.edf))
+
+
+def test_a_read_off_of_a_deviation_of_zero_is_not_determined_not_a_bound_of_zero(capsys):
+    """Issue 37 (attack passes 12-14): +-0.1 alternating data (deviation 0 at every even cluster
+    size) had the slope read-off "B < 0": a bound of 0 (no bias instability) that a curve of 0
+    does not show. B is "not determined" there, in the JSON's note and on the console."""
+    res = characterise_axis(0.1 * (-1.0) ** np.arange(60_000), 100.0)
+    b = res.readoff[BIAS_INSTABILITY]
+    assert (b.value, b.upper) == (None, None) and b.note == (f"not determined: the Allan deviation is 0 at tau = "
+                                                           f"{b.tau_s:g} s (every cluster average equal there)")
+    assert res.adev[np.flatnonzero(res.tau_s == b.tau_s)[0]] == 0.0
+    print_coefficients({"x": res}, GYROSCOPE_TERMS, 0.95, 9)
+    row = next(line for line in capsys.readouterr().out.splitlines() if line.strip().startswith("B "))
+    assert row.endswith(" not determined") and "< 0" not in row
 
 
 # --- the fit's misfit (noise.intervals.reduced_chi2) widens its intervals --------------------

@@ -20,6 +20,7 @@ from ..analysis.fleet.work import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
 from ..analysis.noise.kalibr import DEFAULT_TAU_RANGE_S, check_tau_range_s, kalibr_sensor
 from ..analysis.noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS, TERMS, TERM_SYMBOL, convert
+from ..analysis.noise.readoff import NOT_DETERMINED
 from ..analysis.noise.plots import plot_allan
 from ..analysis.still import characterise_recording
 from ..errors import SettingsError
@@ -61,7 +62,10 @@ def add_arguments(parser):
 
 def _fmt(c, unit, interval=True):
     """A coefficient ``c`` in ``unit``: "value [low, high]" (the value alone without ``interval``),
-    "< bound" when not resolved, "-" when not resolved and unbounded."""
+    "< bound" when not resolved, "-" when not resolved and unbounded, "not determined" for a
+    read-off the curve cannot give (:data:`~gyrofilter.analysis.noise.readoff.NOT_DETERMINED`)."""
+    if c.value is None and c.note.startswith(NOT_DETERMINED):
+        return NOT_DETERMINED
     if c.value is None:
         up = convert(c.upper, c.term, unit)
         return f"< {up:.3g}" if up is not None else "-"

@@ -21,6 +21,11 @@ from ...effects import BIAS_INSTABILITY
 from .model import FLICKER_FLOOR, READ_TAU_S, TERM_SLOPE, TERMS, Coefficient
 
 
+#: the start of the note of a read-off the curve cannot give (its minimum is 0), which the console
+#: shows in its place
+NOT_DETERMINED = "not determined"
+
+
 def local_slopes(tau_s, adev_values, half_window=1):
     """d log sigma / d log tau at each tau of ``tau_s`` (s) for the deviations ``adev_values``, by a least-squares line over +-half_window points
     (read-offs use +-2: five points, half a decade)."""
@@ -57,7 +62,10 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15,
     ``c = sigma(tau_i) (tau_read / tau_i)^slope`` (e.g. N = sigma(tau_i) sqrt(tau_i), paper 002).
     B: the minimum of the curve, if the curve is flat there (slope within the tolerance of 0
     over ``min_run`` consecutive taus),
-    divided by 0.664 (paper 000; = sqrt(pi / (2 ln 2)) sigma_min, paper 002).
+    divided by 0.664 (paper 000; = sqrt(pi / (2 ln 2)) sigma_min, paper 002); where that minimum
+    is 0 (every cluster average equal at that tau: a gyro alternating between two values, at every
+    even cluster size) B is :data:`NOT_DETERMINED`, neither a value nor a bound (a bound of 0
+    would say there is no bias instability, which an interval of 0 does not show).
     The interval is the chi-square interval of the point used, moved the same way. Each value
     holds the other terms' share of the curve at its tau: an upper estimate of its term
     (module docstring), another estimator than :func:`fit`.
@@ -75,6 +83,11 @@ def read_off(tau_s, adev_values, ci_low, ci_high, used, *, slope_tolerance=0.15,
                 out[term] = Coefficient(term, None, note="no cluster time with enough clusters")
                 continue
             i = int(idx_all[np.argmin(dev[idx_all])])
+            if not dev[i] > 0.0:
+                out[term] = Coefficient(term, None, tau_s=float(tau[i]),
+                                        note=f"{NOT_DETERMINED}: the Allan deviation is 0 at tau = {tau[i]:g} s "
+                                             "(every cluster average equal there)")
+                continue
             flat = _runs(idx_all[np.abs(slopes[idx_all]) <= slope_tolerance], min_run)
             if i not in flat:
                 upper = ci_high[i] / FLICKER_FLOOR
