@@ -438,6 +438,26 @@ def test_a_constant_axis_enters_no_overall_discrepancy():
     assert set(d["not_analysed"]) == set("xyz") and d["overall_before"] is None and d["overall_after"] is None
 
 
+@pytest.mark.parametrize("n, amplitude", [(6000, 1.0), (200_000, 2.0)])
+def test_a_square_wave_at_the_nyquist_frequency_is_not_analysed_saying_why(n, amplitude):
+    """Issue 37 (attack passes 12-14): an axis alternating +a/-a (one line at f_s / 2, its
+    averages over an even number of samples all equal) made a detector take the log of a PSD of
+    0 ("axis x: detectors could not run (math domain error)"), another divide by a robust sd of 0
+    (the whole analysis lost: "could not run (ZeroDivisionError: float division by zero)"), and
+    the composite fit the log of a wavelet variance of 0 ("math domain error"). The axis is not
+    analysed, saying why; the other axes are."""
+    g = np.random.default_rng(2).normal(0, 0.05, (n, 3))
+    g[:, 0] = amplitude * (-1.0) ** np.arange(n)
+    report = analyse_gap(Recording.from_dps(g, 100.0), n_sims=4, bootstrap=0)
+    why = (f"a square wave at the Nyquist frequency, the samples alternating between {amplitude:g} and "
+           f"{-amplitude:g} deg/s: no noise")
+    assert report["discrepancy"]["not_analysed"] == {"x": why}
+    assert f"axis x: {why}, nothing to analyse" in report["notes"]
+    assert not any("could not run" in n or "domain" in n for n in report["notes"]), report["notes"]
+    d = report["discrepancy"]
+    assert d["overall_before"] == pytest.approx((d["before"]["y"] + d["before"]["z"]) / 2) and math.isfinite(d["overall_after"])
+
+
 def test_cli_on_a_too_short_recording_says_so_and_prints_no_nan(tmp_path, capsys):
     from gyrofilter.cli import main
 

@@ -230,3 +230,14 @@ def test_colored_lag1_is_resolved_so_noise_plus_line_have_the_measured_lag1():
     xc = x - x.mean()
     r1 = np.einsum("i,i->", xc[1:], xc[:-1]) / np.einsum("i,i->", xc, xc)
     assert abs(r1 - 0.15) < 0.02
+
+
+def test_a_wavelet_variance_of_zero_is_refused_saying_why():
+    """The GMWM fit's starts take the log of the first and the lowest scale's wavelet variance:
+    one of 0 (every average over the scale equal) is refused in words, not "math domain error"."""
+    wv = gmwm.haar_wv(np.tile([1.0, -1.0, 0.5, -0.5], 5000), 100.0, min_m=16)
+    assert wv.wv_dps2[0] == 0.0
+    with pytest.raises(ValueError, match=rf"the wavelet variance is 0 at tau = {wv.tau_s[0]:.3g} s: the series' averages "
+                                         "over that scale are all equal"):
+        gmwm.fit_model(wv)
+    assert gmwm.unfittable(gmwm.haar_wv(np.random.default_rng(1).normal(size=20000), 100.0)) is None

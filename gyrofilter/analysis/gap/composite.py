@@ -61,6 +61,10 @@ def composite_step(inp, state, scorer):
         models = state.axes[i]
         if state.after[i] <= det.OUTSIDE_NULL_D or models.wv is None:
             continue
+        why = gmwm.unfittable(models.wv)
+        if why is not None:
+            state = state.with_notes(f"axis {a}: no composite stochastic fit: {why}")
+            continue
         inp.say(f"composite stochastic fit on {a}")
         fit, comp = _composite_candidates(models.wv, inp.sample_rate_hz)
         if not comp:

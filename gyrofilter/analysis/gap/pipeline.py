@@ -283,10 +283,16 @@ def baseline_spread(setup, say):
 
 
 def nothing_to_analyse(x_dps):
-    """Why the axis samples ``x_dps`` have nothing for the detectors (a constant signal, or a
+    """Why the axis samples ``x_dps`` have nothing for the detectors (a constant signal, a square
+    wave at the Nyquist frequency: samples alternating between two values, c + a (-1)^n, whose
+    spectrum is one line at f_s / 2 and whose averages over any even number of samples are all
+    equal, so the detectors' spectra and wavelet variances are 0 and their logs undefined; or a
     standard deviation below :data:`~gyrofilter.units.MIN_NOISE_DPS`), or None."""
     if not np.ptp(x_dps) > 0:
         return "constant signal"
+    if x_dps.size >= 4 and not np.ptp(x_dps[0::2]) > 0 and not np.ptp(x_dps[1::2]) > 0:
+        return (f"a square wave at the Nyquist frequency, the samples alternating between {float(x_dps[0]):.6g} and "
+                f"{float(x_dps[1]):.6g} deg/s: no noise")
     if not np.std(x_dps) >= MIN_NOISE_DPS:
         return f"noise below {MIN_NOISE_DPS:g} deg/s (too small for the detectors in float64)"
     return None

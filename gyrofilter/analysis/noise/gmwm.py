@@ -284,10 +284,28 @@ def _starts(wv: WaveletVariance, terms, k_gm, rng, count):
     return [base] + [base + rng.normal(0.0, 1.0, base.size) for _ in range(count - 1)]
 
 
+def unfittable(wv: WaveletVariance):
+    """Why no model can be fitted to ``wv``, or None: a scale whose wavelet variance is 0 (the
+    series' averages over it all equal: a square wave at the Nyquist frequency, x[n] = +-a
+    alternately, at every scale of an even number of samples). Every term's variance is positive
+    at every scale, so none reaches 0, and the fit's starts (the white level from the first
+    scale, the flicker's from the lowest, on log-parameters) would take the log of 0."""
+    zero = np.flatnonzero(~(np.asarray(wv.wv_dps2) > 0.0))
+    if zero.size == 0:
+        return None
+    return (f"the wavelet variance is 0 at tau = {wv.tau_s[zero[0]]:.3g} s: the series' averages over that scale are "
+            "all equal (a square wave at the Nyquist frequency has them so), which no noise model gives")
+
+
 def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
     """GMWM fit of white noise + ``terms`` (subset of :data:`TERMS`) + ``k_gm``
-    Gauss-Markov terms to ``wv``: weighted least squares on log-parameters (module docstring)."""
+    Gauss-Markov terms to ``wv``: weighted least squares on log-parameters (module docstring).
+    A wavelet variance no model fits (:func:`unfittable`) raises ValueError saying why."""
     from scipy.optimize import least_squares
+
+    why = unfittable(wv)
+    if why is not None:
+        raise ValueError(why)
 
     sample_rate_hz, duration_s = wv.sample_rate_hz, wv.n_samples / wv.sample_rate_hz
     rng = np.random.default_rng(seed)
