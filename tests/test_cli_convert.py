@@ -743,6 +743,30 @@ def test_a_last_line_cut_short_is_left_out_with_a_warning(tmp_path, capsys, zipp
     assert "warning" not in capsys.readouterr().err and len(read_recording(tmp_path / "rec.csv")) == 301
 
 
+def test_a_gzip_log_cut_short_is_read_to_the_cut_with_a_warning_as_a_recording_is(tmp_path, capsys):
+    """Issue 37 (attack passes 12-14): a gzip log whose stream ends before its end marker (a logger
+    killed, a copy interrupted) was refused whole ("damaged gzip data (Compressed file ended before
+    the end-of-stream marker was reached)"), while a recording so cut is read with a warning. One
+    rule for both, the reader's: the complete lines before the cut are converted, a warning names
+    the file and the last line read; the recording written reads back those rows."""
+    rows = "".join(f"{i / 100:.2f},{i % 7 - 3}.25,0.5,-0.125\n" for i in range(20000))
+    data = gzip.compress(("time_s,gx_dps,gy_dps,gz_dps\n" + rows).encode(), compresslevel=1)
+    src, dst = tmp_path / "cut.csv.gz", tmp_path / "rec.csv"
+    src.write_bytes(data[:len(data) // 2])
+    lines = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(data[:len(data) // 2]).count(b"\n")  # complete lines
+    assert main(["convert", str(src), "--out", str(dst)]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    assert (f"gyrofilter: warning: {src}: gzip stream cut short (no end marker), as an interrupted recording leaves "
+            f"it; read to line {lines}") in err
+    rec = read_recording(dst)
+    assert len(rec) == lines - 1 and 1000 < len(rec) < 20000 and np.all(rec.gyro[:, 2] == -0.125)
+    cut_recording = tmp_path / "cut-rec.csv.gz"
+    whole = gzip.compress(dst.read_bytes(), compresslevel=1)
+    cut_recording.write_bytes(whole[:len(whole) // 2])
+    assert any(w.startswith(f"{cut_recording}: gzip stream cut short (no end marker), as an interrupted recording "
+                            "leaves it") for w in read_recording(cut_recording).warnings)
+
+
 @pytest.mark.parametrize("name", ["rec.csv", "rec.csv.gz"])
 def test_a_gyrofilter_recording_is_refused_naming_its_header(tmp_path, capsys, name):
     """Attack pass 12 (issue 37): convert read a recording of format v1 as a log whose header lines

@@ -108,8 +108,15 @@ def _gunzip(fh, raw, path, warnings):
         elif raw or out:
             raw = fh.read(READ_BYTES)
         else:
-            warnings.append(f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it")
+            warnings.append(cut_short_warning(path))
             return
+
+
+def cut_short_warning(path):
+    """The warning of a gzip file ``path`` whose stream ends before its end marker (an interrupted
+    recording or log): its text so far is read, complete lines only. The one rule of a recording
+    (:func:`line_chunks`) and of another tool's log (``logtext.log_lines``)."""
+    return f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it"
 
 
 def _without_bom(blocks):

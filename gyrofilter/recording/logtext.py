@@ -18,7 +18,7 @@ import zlib
 from ..errors import RecordingError
 from ..inputs import open_input, quote
 from .header import MAX_LINE_BYTES
-from .lines import refuse_cr_only, refuse_nul
+from .lines import cut_short_warning, refuse_cr_only, refuse_nul
 
 #: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
 #: where it is): 4 GiB, a 1 kHz log of about 40 h
@@ -173,12 +173,14 @@ def log_lines(raw, path, warnings=None):
     few blocks, not a Python step each (17 s). The first bytes are peeked at, not read.
     A last line without its line end (a log whose writer was stopped mid-line, cut inside a
     number) is not used, unless it is the log's only line or blank, and said in ``warnings`` (a
-    list, when given): the rule of a recording's (:func:`~gyrofilter.recording.lines.line_chunks`)."""
+    list, when given): the rule of a recording's (:func:`~gyrofilter.recording.lines.line_chunks`).
+    So is a gzip stream cut short (no end marker): its lines up to the cut are read, and
+    ``warnings`` says so (:func:`~gyrofilter.recording.lines.cut_short_warning`) with the last line read."""
     raw.seek(0)
+    number = 0
     try:
         zipped = raw.peek(2)[:2] == b"\x1f\x8b"
         with (gzip.GzipFile(fileobj=raw, mode="rb") if zipped else contextlib.nullcontext(raw)) as fh:
-            number = 0
             while True:
                 data = fh.readline(MAX_LINE_BYTES + 1)
                 if not data:
@@ -203,7 +205,10 @@ def log_lines(raw, path, warnings=None):
                     yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n"), 1
                 except UnicodeDecodeError:
                     raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
-    except (EOFError, gzip.BadGzipFile, zlib.error, OSError) as exc:
+    except EOFError:  # a gzip stream cut short (an interrupted log): its complete lines, as a recording's
+        if warnings is not None:
+            warnings.append(f"{cut_short_warning(path)}; read to line {number}")
+    except (gzip.BadGzipFile, zlib.error, OSError) as exc:
         if isinstance(exc, RecordingError):
             raise
         raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
