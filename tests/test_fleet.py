@@ -784,6 +784,25 @@ def test_the_accelerometer_has_its_rows_in_the_fleet_table_as_allan_writes_it(tm
     assert len([ln for ln in accel.splitlines() if ln.startswith(("| still | a", "| moved | a"))]) == 6
 
 
+def test_a_unit_whose_accelerometer_has_no_unit_is_said_on_the_console_as_allan_says_it(tmp_path, capsys):
+    """Issue 37 (attack passes 12-14): a unit whose recording has ax, ay, az but no accel_unit had
+    its accelerometer left out with a warning in fleet.csv and none on the console, where allan
+    on the file warns. The fleet's summary says it, one line naming the unit, with allan's words."""
+    rng = np.random.default_rng(6)
+    accel = rng.normal(0, 0.04, (6000, 3)) + [0.0, 0.0, 9.81]
+    bare = tmp_path / "bare.csv"
+    write_recording(str(bare), Recording.from_dps(rng.normal(0, 0.05, (6000, 3)), 100.0, accel=accel))
+    paths = [str(bare), _six_axis(tmp_path / "six.csv", seed=7)]
+    assert main(["allan", paths[0]]) == 0
+    said = " ".join(capsys.readouterr().err.split())
+    why = ("the header has no accel_unit, so its unit is not known (add '# accel_unit: m/s^2|g|lsb' to analyse it)")
+    assert f"warning: the accelerometer (ax, ay, az) is not analysed: {why}" in said
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert f"  accelerometer not analysed: bare: {why}\n" in out and "six:" not in out, out
+    assert why in (tmp_path / "f" / "fleet.csv").read_text()
+
+
 def test_an_accelerometer_axis_or_the_accelerometer_left_out_is_said_as_a_gyros(tmp_path, capsys):
     """Issue 39 (trial): a stuck accelerometer axis, and an accelerometer whose samples do not read
     gravity (the gravity check), were left out without a word in the fleet's table and summary."""

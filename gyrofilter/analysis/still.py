@@ -240,13 +240,17 @@ def decimated_accelerometer(head):
             f"the sensor's (the density reads sqrt(k) times it); analyse the recording it was filtered from")
 
 
+#: the start of :func:`accelerometer_note` (a fleet's console names the units it holds for)
+NO_ACCEL_UNIT = f"the accelerometer ({', '.join(ACCEL_COLUMNS)}) is not analysed: "
+
+
 def accelerometer_note(head):
     """Why the accelerometer of the recording ``head`` is not analysed although it has the columns
     ``ax, ay, az`` (no ``accel_unit`` in its header: their unit is not known), or None (it has
-    none, or it is analysed)."""
+    none, or it is analysed). It starts with :data:`NO_ACCEL_UNIT`."""
     if all(c in head.names for c in ACCEL_COLUMNS) and head.accel_unit is None:
-        return (f"the accelerometer ({', '.join(ACCEL_COLUMNS)}) is not analysed: the header has no accel_unit, so "
-                "its unit is not known (add '# accel_unit: m/s^2|g|lsb' to analyse it)")
+        return (f"{NO_ACCEL_UNIT}the header has no accel_unit, so its unit is not known (add "
+                "'# accel_unit: m/s^2|g|lsb' to analyse it)")
     return None
 
 

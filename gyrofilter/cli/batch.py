@@ -14,6 +14,7 @@ import sys
 import time
 
 from ..analysis.fleet import runner, table, work
+from ..analysis.still import NO_ACCEL_UNIT
 from ..errors import SettingsError
 from . import console, options, outputs
 
@@ -141,7 +142,9 @@ def run(args, settings, paths):
         fh.write(table.fleet_markdown(rows, stats, title=title))
     no_yaml = [f"{names[i]}: {w[len(work.NO_IMU_YAML):]}" for i, r in enumerate(results) for w in r["warnings"]
                if w.startswith(work.NO_IMU_YAML)]
-    return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml)
+    no_accel = [f"{names[i]}: {w[len(NO_ACCEL_UNIT):]}" for i, r in enumerate(results) for w in r["warnings"]
+                if w.startswith(NO_ACCEL_UNIT)]
+    return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml, no_accel)
 
 
 def _drop_unwritten(folder, name, files, result):
@@ -156,9 +159,11 @@ def _drop_unwritten(folder, name, files, result):
                 os.unlink(os.path.join(folder, name + suffix))
 
 
-def _summary(rows, fleet_files, written, elapsed_s, no_yaml=()):
+def _summary(rows, fleet_files, written, elapsed_s, no_yaml=(), no_accel=()):
     """Print the fleet's outcome on stdout; the exit code. ``no_yaml``: "UNIT: why" of each unit
-    analysed whose imu.yaml was not written (its Allan document was)."""
+    analysed whose imu.yaml was not written (its Allan document was); ``no_accel``: "UNIT: why"
+    of each unit whose accelerometer columns were not analysed (no ``accel_unit``: allan's
+    warning, :func:`~gyrofilter.analysis.still.accelerometer_note`), one line each as well."""
     failed, left_out = table.failed_rows(rows), table.left_out_rows(rows)
     units = len({r["unit"] for r in rows})
     done = len({r["unit"] for r in rows if r["status"] == "ok"})
@@ -172,6 +177,8 @@ def _summary(rows, fleet_files, written, elapsed_s, no_yaml=()):
         console.tell(f"  left out: {r['status']}")
     for text in no_yaml:
         console.tell(f"  no imu.yaml: {text}")
+    for text in no_accel:
+        console.tell(f"  accelerometer not analysed: {text}")
     for r in flagged:
         for f in r["flag"]:
             console.tell(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
