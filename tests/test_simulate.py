@@ -173,7 +173,7 @@ def test_rate_override_and_sample_count():
     (lambda m: m.pop("sample_rate_hz"), r"sample_rate_hz: missing"),
     (lambda m: m.update(full_scale_dps=0), r"full_scale_dps: expected a number > 0"),
     (lambda m: m.update(temperature={"end_c": 30}), r"temperature.start_c: missing"),
-    (lambda m: m.update(temperature={"t_s": [0, 0], "temp_c": [1, 2]}), r"temperature.t_s: expected strictly increasing"),
+    (lambda m: m.update(temperature={"t_s": [0, 0], "temp_c": [1, 2]}), r"temperature.t_s\[1\]: expected strictly increasing times, got 0 after 0$"),
     (lambda m: m.update(samplerate=3), r"samplerate: unknown key"),
 ])
 def test_bad_models_raise_one_clear_error(mutate, message):

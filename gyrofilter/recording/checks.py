@@ -43,7 +43,8 @@ def first_step_back(step_s):
     """The index of the first of the steps ``step_s`` (each time minus the one before it, s) that is
     not positive, or None: times increase strictly, a repeated time being a step back as a
     decreasing one is (two samples at one instant, or rows out of order). The rule of the ``t``
-    column (:class:`TimeCheck`) and of the times given to ``GyroFilter.filter_timed``."""
+    column (:class:`TimeCheck`), of the times given to ``GyroFilter.filter_timed`` and of a
+    simulator model's temperature table (``t_s``)."""
     bad = np.flatnonzero(np.asarray(step_s) <= 0)
     return int(bad[0]) if bad.size else None
 

@@ -20,6 +20,7 @@ from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARRO
                        SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
 from ..inputs import MAX_QUOTE_CHARS, closest, did_you_mean, load_json, quote
+from ..recording.checks import first_step_back
 from ..units import (AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, LSB_PER_G_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C,
                      check_sample_rate_hz, plain)
 
@@ -267,8 +268,9 @@ def _validate_temperature(spec):
         temp = [_number(v, f"{where}.temp_c[{i}]") for i, v in enumerate(spec["temp_c"])]
         if len(t) != len(temp):
             _err(where, f"t_s has {len(t)} values but temp_c has {len(temp)}")
-        if any(b <= a for a, b in zip(t, t[1:])):
-            _err(f"{where}.t_s", "expected strictly increasing times")
+        back = first_step_back(np.diff(t))  # the rule of a recording's t
+        if back is not None:
+            _err(f"{where}.t_s[{back + 1}]", f"expected strictly increasing times, got {t[back + 1]:g} after {t[back]:g}")
         out["t_s"], out["temp_c"] = np.array(t), np.array(temp)
         out["noise_c"] = _number(spec.get("noise_c", 0.0), f"{where}.noise_c", "nonneg")
         out["resolution_c"] = _number(spec.get("resolution_c", 0.0), f"{where}.resolution_c", "step")
