@@ -149,6 +149,10 @@ def _times(factor):
     return "-" if factor is None else f"x{factor:.3g}"
 
 
+#: the end of a key's comment whose value is the record's bound (KalibrValues.held)
+_RECORD_BOUND = ", the record's bound"
+
+
 def _sensor_lines(k: KalibrValues, confidence):
     """The comment lines and the two keys of one sensor's :class:`~gyrofilter.analysis.noise.kalibr.KalibrValues`."""
     name, s, b = k.sensor.name, k.sensor, k.bound
@@ -167,9 +171,9 @@ def _sensor_lines(k: KalibrValues, confidence):
               f"#   axis's Allan deviation ({b.least:.3g} at tau {touch} s){upper}",
               *(f"# {name}_{key}: {held}" for key, held in zip(("noise_density", "random_walk"), k.held_texts()) if held),
               f"{name}_noise_density: {k.noise_density:.6e}   # {s.density_unit}, bounding (plain {_times(f_nd)}"
-              f"{', the record' + chr(39) + 's bound' if k.held[0] is not None else ''})",
+              f"{_RECORD_BOUND if k.held[0] is not None else ''})",
               f"{name}_random_walk: {k.random_walk:.6e}   # {s.walk_unit}, bounding (plain {_times(f_rw)}"
-              f"{', the record' + chr(39) + 's bound' if k.held[1] is not None else ''})"]
+              f"{_RECORD_BOUND if k.held[1] is not None else ''})"]
     return lines
 
 
