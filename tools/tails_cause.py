@@ -17,8 +17,12 @@ For every axis on which ``analyse_gap`` (the command's defaults, no intervals) n
   + 4 E L H^3 + E H^4``. For a sum of independent terms whose spectra each lie in one of the two
   bands, or a Gaussian process whatever its spectrum, the cross terms are
   ``6 cum(L, L, H, H) = 6 (E L^2 H^2 - E L^2 E H^2) = 0`` and ``4 E L H^3 = 0`` (up to
-  the spread of the runs): a departure says that the low band's noise and the tone's band are
-  not independent.
+  the spread of the runs): a departure says that the low band's noise and the rest are not
+  independent;
+* finer, H split into ``T``, the tone's band (within 3 Hz of its centre), and ``R``, above it:
+  ``6 cum(T, T, R, R)`` and ``6 cum(L, L, R, R)`` (below 0 where R's power rises as the other's
+  falls) and R's own fourth cumulant ``E R^4 - 3 (E R^2)^2`` (above 0 where R's power comes in
+  bursts).
 
 The same for ``--sims`` runs of the extended model the analysis wrote (seeds 0, 1, ...), and
 for its variants: the tone's amplitude 10 % higher (more tone in ``u``), the tone's excursion
@@ -82,9 +86,15 @@ def moments(x, sample_rate_hz, center_hz):
     low = band(u, sample_rate_hz, 0.0, LOW_FRACTION * center_hz)
     high = u - low
     tone = band(u, sample_rate_hz, center_hz - TONE_HALF_WIDTH_HZ, center_hz + TONE_HALF_WIDTH_HZ)
+    above = high - tone
+
+    def pair(a, b):
+        return 6.0 * float(np.mean(a * a * b * b) - a.var() * b.var())
+
     return {"stat": stat, "kurt": float(np.mean(u ** 4) - 3.0), "tone": float(tone.var()),
-            "llhh": 6.0 * float(np.mean(low * low * high * high) - low.var() * high.var()),
-            "lhhh": 4.0 * float(np.mean(low * high ** 3))}
+            "llhh": pair(low, high), "lhhh": 4.0 * float(np.mean(low * high ** 3)),
+            "ttrr": pair(tone, above), "llrr": pair(low, above),
+            "r4": float(np.mean(above ** 4) - 3.0 * above.var() ** 2)}
 
 
 def compressed(x, sample_rate_hz, gamma, step_dps):
@@ -127,7 +137,8 @@ def mean_row(rows):
 
 def row_text(label, m, spread=None):
     stat = f"{m['stat']:+.4f}" if spread is None else f"{spread[0]:+.4f} to {spread[1]:+.4f}"
-    return f"| {label} | {stat} | {m['kurt']:+.4f} | {m['tone']:.3f} | {m['llhh']:+.4f} | {m['lhhh']:+.4f} |"
+    return (f"| {label} | {stat} | {m['kurt']:+.4f} | {m['tone']:.3f} | {m['llhh']:+.4f} | {m['lhhh']:+.4f} "
+            f"| {m['ttrr']:+.4f} | {m['llrr']:+.4f} | {m['r4']:+.4f} |")
 
 
 def main(argv=None):
@@ -148,8 +159,8 @@ def main(argv=None):
     from gyrofilter.sim.model import validate_model
 
     streams = [int(s) for s in args.streams.split(",")]
-    head = ("| run | tail statistic | kurtosis of u | tone's share of u | 6 cum(L, L, H, H) | 4 E L H^3 |\n"
-            "|---|---|---|---|---|---|")
+    head = ("| run | tail statistic | kurtosis of u | tone's share of u | 6 cum(L, L, H, H) | 4 E L H^3 "
+            "| 6 cum(T, T, R, R) | 6 cum(L, L, R, R) | cum4(R) |\n|---|---|---|---|---|---|---|---|---|")
     d_lines, gamma_lines = [], []
     for name in args.records.split(","):
         rec = read_recording(os.path.join(args.adis, f"{name}.csv.gz"))
@@ -183,7 +194,8 @@ def main(argv=None):
                          runs(with_excursion(model, i, exc)) if exc["present"] else by_gamma[0.0]),
                         ("no quantization", runs(without_quantization(model))),
                         (f"compressed, gamma = {gamma:.3f}", runs(model, gamma))]
-            print(f"\n{name}, axis {axis}: wandering tone at {c:.2f} Hz; L: u below {LOW_FRACTION * c:.1f} Hz\n")
+            print(f"\n{name}, axis {axis}: wandering tone at {c:.2f} Hz; L: u below {LOW_FRACTION * c:.1f} Hz, "
+                  f"T: {c - TONE_HALF_WIDTH_HZ:.1f}-{c + TONE_HALF_WIDTH_HZ:.1f} Hz, R: above\n")
             print(head)
             print(row_text("record", meas))
             for label, rows in variants:
