@@ -21,8 +21,10 @@ For every axis on which ``analyse_gap`` (the command's defaults, no intervals) n
   independent;
 * finer, H split into ``T``, the tone's band (within 3 Hz of its centre), and ``R``, above it:
   ``6 cum(T, T, R, R)`` and ``6 cum(L, L, R, R)`` (below 0 where R's power rises as the other's
-  falls) and R's own fourth cumulant ``E R^4 - 3 (E R^2)^2`` (above 0 where R's power comes in
-  bursts).
+  falls), R's own fourth cumulant ``E R^4 - 3 (E R^2)^2`` (above 0 where R's power comes in
+  bursts), and the terms of all three, ``12 (E L T^2 R + E L T R^2)``: 0 unless the bands are
+  locked in phase, R holding components at sums and differences of T's and L's frequencies
+  (intermodulation: a product of the tone and the noise, as a nonlinear transfer makes).
 
 The same for ``--sims`` runs of the extended model the analysis wrote (seeds 0, 1, ...), and
 for its variants: the tone's amplitude 10 % higher (more tone in ``u``), the tone's excursion
@@ -94,7 +96,8 @@ def moments(x, sample_rate_hz, center_hz):
     return {"stat": stat, "kurt": float(np.mean(u ** 4) - 3.0), "tone": float(tone.var()),
             "llhh": pair(low, high), "lhhh": 4.0 * float(np.mean(low * high ** 3)),
             "ttrr": pair(tone, above), "llrr": pair(low, above),
-            "r4": float(np.mean(above ** 4) - 3.0 * above.var() ** 2)}
+            "r4": float(np.mean(above ** 4) - 3.0 * above.var() ** 2),
+            "ltr": 12.0 * float(np.mean(low * tone * above * (tone + above)))}
 
 
 def compressed(x, sample_rate_hz, gamma, step_dps):
@@ -138,7 +141,7 @@ def mean_row(rows):
 def row_text(label, m, spread=None):
     stat = f"{m['stat']:+.4f}" if spread is None else f"{spread[0]:+.4f} to {spread[1]:+.4f}"
     return (f"| {label} | {stat} | {m['kurt']:+.4f} | {m['tone']:.3f} | {m['llhh']:+.4f} | {m['lhhh']:+.4f} "
-            f"| {m['ttrr']:+.4f} | {m['llrr']:+.4f} | {m['r4']:+.4f} |")
+            f"| {m['ttrr']:+.4f} | {m['llrr']:+.4f} | {m['r4']:+.4f} | {m['ltr']:+.4f} |")
 
 
 def main(argv=None):
@@ -160,7 +163,8 @@ def main(argv=None):
 
     streams = [int(s) for s in args.streams.split(",")]
     head = ("| run | tail statistic | kurtosis of u | tone's share of u | 6 cum(L, L, H, H) | 4 E L H^3 "
-            "| 6 cum(T, T, R, R) | 6 cum(L, L, R, R) | cum4(R) |\n|---|---|---|---|---|---|---|---|---|")
+            "| 6 cum(T, T, R, R) | 6 cum(L, L, R, R) | cum4(R) | 12 E L T R (T + R) |\n"
+            "|---|---|---|---|---|---|---|---|---|---|")
     d_lines, gamma_lines = [], []
     for name in args.records.split(","):
         rec = read_recording(os.path.join(args.adis, f"{name}.csv.gz"))
