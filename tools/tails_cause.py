@@ -114,12 +114,14 @@ def compressed(x, sample_rate_hz, gamma, step_dps):
 
 
 def without_quantization(spec):
+    """The model ``spec`` without its quantizer (``lsb_per_dps`` None)."""
     out = copy.deepcopy(spec)
     out["lsb_per_dps"] = None
     return out
 
 
 def with_amplitude(spec, axis, factor):
+    """The model ``spec`` with the wandering tone of ``axis`` ``factor`` times stronger."""
     out = copy.deepcopy(spec)
     for e in out["axes"][axis]["effects"]:
         if e["effect"] == WANDERING_TONE:
@@ -135,6 +137,7 @@ def fitted_gamma(stats_by_gamma, target):
 
 
 def mean_row(rows):
+    """The mean of each column of the runs' :func:`moments`."""
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
 
 
