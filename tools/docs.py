@@ -599,6 +599,12 @@ def gap_tone_modulation():
     return tool("tone_modulation.py", "--adis", str(adis), prompt=False).strip()
 
 
+@block("gap-tails-cause", "docs/gap.md", "tools/tails_cause.py --adis DIR (DIR: the ADIS16405 records)", slow=True)
+def gap_tails_cause():
+    adis = data_dir("adis16405_long")
+    return tool("tails_cause.py", "--adis", str(adis), prompt=False).strip()
+
+
 @block("robust-gmwm", "docs/gap.md", "tools/robust_gmwm.py", slow=True)
 def robust_gmwm():
     return fence(tool("robust_gmwm.py"))
