@@ -79,24 +79,46 @@ def _unit_circle(f, sample_rate_hz):
     return np.exp(-2j * math.pi * f / sample_rate_hz)
 
 
-def _hump_shape(z, centre, q, sample_rate_hz):
-    """``(|H|², Σ h²)`` of the resonator at ``centre``, ``q`` at the bins ``z`` (:func:`_unit_circle`)."""
-    b, a = band_pass(centre, q, sample_rate_hz)
-    gain2 = np.abs(b[0] + b[2] * z * z) ** 2 / np.abs(a[0] + a[1] * z + a[2] * z * z) ** 2
-    return gain2, band_pass_energy(centre, q, sample_rate_hz)
+def _hump_psd(z, centre, q, rms, sample_rate_hz, jacobian=False):
+    """One-sided PSD of the resonance of rms ``rms`` at the bins ``z`` (:func:`_unit_circle`),
+    2 rms² |H|² / (f_s Σ h²) for the resonator :func:`gyrofilter.sim.resonance.band_pass`
+    (b ∝ α (1, 0, -1), a ∝ (1 + α, -2 cos ω₀, 1 - α), α = sin ω₀ / (2Q), ω₀ = 2π f₀ / f_s) and its
+    energy Σ h² = α / (1 + α) (:func:`~gyrofilter.sim.resonance.band_pass_energy`), which reduce to
+    ``S = 2 rms² α (1 + α) |1 - z²|² / (f_s |D|²)``, ``D = 1 + α - 2 cos ω₀ z + (1 - α) z²``.
+    With ``jacobian``: ``(S, dS/d(f₀, ln Q, ln rms))`` (N x 3), by the chain rule through α and
+    ω₀ (dα/d ln Q = -α, dα/dω₀ = cos ω₀ / (2Q)), for the fit's least squares (a numerical
+    Jacobian cost it seven PSDs an iteration)."""
+    w = 2.0 * math.pi * centre / sample_rate_hz
+    alpha, cos_w = math.sin(w) / (2.0 * q), math.cos(w)
+    z2 = z * z
+    ends = np.abs(1.0 - z2) ** 2
+    d = (1.0 + alpha) - 2.0 * cos_w * z + (1.0 - alpha) * z2
+    dd = d.real ** 2 + d.imag ** 2
+    k = 2.0 * rms * rms / sample_rate_hz
+    g = alpha * (1.0 + alpha)
+    psd = k * g * ends / dd
+    if not jacobian:
+        return psd
+    conj_d = np.conj(d)
+    d_alpha = k * ends * ((1.0 + 2.0 * alpha) - g * 2.0 * (conj_d * (1.0 - z2)).real / dd) / dd
+    d_w = -psd * 4.0 * math.sin(w) * (conj_d * z).real / dd
+    d_centre = (d_alpha * cos_w / (2.0 * q) + d_w) * (2.0 * math.pi / sample_rate_hz)
+    return psd, np.column_stack([d_centre, -alpha * d_alpha, 2.0 * psd])
 
 
-def _hump_psd(z, centre, q, rms, sample_rate_hz, shape=None):
-    """One-sided PSD of the resonance of rms ``rms`` at the bins ``z`` (:func:`_unit_circle`):
-    2 rms² |H|² / (f_s Σ h²); ``shape``: its :func:`_hump_shape`, where already known."""
-    gain2, energy = _hump_shape(z, centre, q, sample_rate_hz) if shape is None else shape
-    return 2.0 * rms * rms * gain2 / (sample_rate_hz * energy)
-
-
-def _null_psd(p, f, z):
-    """The smooth null's PSD (module docstring) at the frequencies ``f``, ``z`` their :func:`_unit_circle`."""
+def _null_psd(p, f, z, jacobian=False):
+    """The smooth null's PSD (module docstring) at the frequencies ``f``, ``z`` their :func:`_unit_circle`,
+    for ``p = (ln c, φ, μ, ln d)``: ``c A + d / f``, ``A = |1 + μ z|² / |1 - φ z|²`` with
+    |1 + μ z|² = 1 + 2 μ cos θ + μ² and |1 - φ z|² = 1 - 2 φ cos θ + φ² on the unit circle
+    (cos θ = Re z). With ``jacobian``: ``(S, dS/dp)`` (N x 4)."""
     c, phi, mu, d = math.exp(p[0]), p[1], p[2], math.exp(p[3])
-    return c * np.abs(1.0 + mu * z) ** 2 / np.abs(1.0 - phi * z) ** 2 + d / f
+    cos_t = z.real
+    num, den = 1.0 + 2.0 * mu * cos_t + mu * mu, 1.0 - 2.0 * phi * cos_t + phi * phi
+    coloured, floor = c * num / den, d / f
+    psd = coloured + floor
+    if not jacobian:
+        return psd
+    return psd, np.column_stack([coloured, coloured * 2.0 * (cos_t - phi) / den, c * 2.0 * (cos_t + mu) / den, floor])
 
 
 def resonance_fit(x, sample_rate_hz, lines=()):
@@ -125,25 +147,29 @@ def resonance_fit(x, sample_rate_hz, lines=()):
     p0 = np.array([math.log(level), 0.0, 0.0, math.log(level * 1e-3 * fw[0])])
     lo0, hi0 = [p0[0] - 10, -0.95, -0.95, p0[3] - 30], [p0[0] + 10, 0.95, 0.95, p0[3] + 10]
 
+    def log_resid(psd):
+        return np.log(np.maximum(psd, 1e-300)) - logs
+
+    def log_jacobian(psd, d_psd):  # d log S / dp: 0 where the log's floor holds it
+        return d_psd * np.where(psd > 1e-300, 1.0 / np.maximum(psd, 1e-300), 0.0)[:, None]
+
     def null_resid(p):
-        return np.log(np.maximum(_null_psd(p, fw, zw) + known, 1e-300)) - logs
+        return log_resid(_null_psd(p, fw, zw) + known)
 
-    null = least_squares(null_resid, p0, bounds=(lo0, hi0), max_nfev=400)
+    def null_jac(p):
+        psd, d_psd = _null_psd(p, fw, zw, jacobian=True)
+        return log_jacobian(psd + known, d_psd)
+
+    null = least_squares(null_resid, p0, jac=null_jac, bounds=(lo0, hi0), max_nfev=400)
     rss0 = float(np.sum(null.fun ** 2))
-    # the PSDs by the parameters they depend on, for one descent: its numerical Jacobian moves one
-    # parameter at a time, so the null's stays put while the hump's move and the other way round
-    nulls, shapes = {}, {}
 
-    def resid(p):
-        key = (p[0], p[1], p[2], p[3])
-        null_psd = nulls.get(key)
-        if null_psd is None:
-            null_psd = nulls[key] = _null_psd(p[:4], fw, zw)
-        shape = shapes.get((p[4], p[5]))
-        if shape is None:
-            shape = shapes[(p[4], p[5])] = _hump_shape(zw, p[4], math.exp(p[5]), sample_rate_hz)
-        hump = _hump_psd(zw, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz, shape)
-        return np.log(np.maximum(null_psd + known + hump, 1e-300)) - logs
+    def psd_of(p):
+        return _null_psd(p[:4], fw, zw) + known + _hump_psd(zw, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz)
+
+    def jac(p):
+        null_psd, d_null = _null_psd(p[:4], fw, zw, jacobian=True)
+        hump, d_hump = _hump_psd(zw, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz, jacobian=True)
+        return log_jacobian(null_psd + known + hump, np.hstack([d_null, d_hump]))
 
     sd0 = math.sqrt(level * nyq)  # the rms of a hump as high as the level over the band
     best = None
@@ -151,11 +177,9 @@ def resonance_fit(x, sample_rate_hz, lines=()):
         start = np.r_[null.x, centre, math.log(2.0), math.log(0.1 * sd0)]
         lower = lo0 + [fw[0], math.log(Q_RANGE[0]), math.log(sd0) - 12]
         upper = hi0 + [fw[-1], math.log(Q_RANGE[1]), math.log(sd0) + 4]
-        nulls.clear()
-        shapes.clear()
         try:
-            res = least_squares(resid, np.clip(start, np.add(lower, 1e-9), np.subtract(upper, 1e-9)),
-                                bounds=(lower, upper), max_nfev=300)
+            res = least_squares(lambda p: log_resid(psd_of(p)), np.clip(start, np.add(lower, 1e-9), np.subtract(upper, 1e-9)),
+                                jac=jac, bounds=(lower, upper), max_nfev=300)
         except (ValueError, FloatingPointError):
             continue
         if best is None or res.cost < best.cost:
