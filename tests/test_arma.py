@@ -174,6 +174,24 @@ def test_normality_verdicts():
     assert laplace.jb_statistic > laplace.jb_critical_5pct
 
 
+@pytest.mark.parametrize("scale", [2.0 ** -300, 1e-90, 2.0 ** 300])
+def test_normality_is_the_same_at_any_scale_a_float_holds(scale):
+    """Attack pass 15: `arma` on noise of 1e-90 deg/s (above the noise floor every analysis takes)
+    printed "JB = nan ... -> rejected; excess kurtosis +nan" for normal noise: its fourth powers
+    were below the smallest float. The statistics are scale-free: the same verdicts and values
+    (the same bits at a power of two), and the dithered KS's too."""
+    rng = np.random.default_rng(4)
+    for x, quantum in ((rng.normal(size=5_000), None), (rng.laplace(size=5_000), None),
+                       (np.round(rng.normal(0, 3.0, 5_000)), 1.0)):
+        plain = arma_checks.normality_tests(x, quantum=quantum)
+        scaled = arma_checks.normality_tests(x * scale, quantum=None if quantum is None else quantum * scale)
+        if math.log2(scale).is_integer():
+            assert scaled == plain
+        else:
+            assert math.isfinite(scaled.jb_statistic) and math.isfinite(scaled.excess_kurtosis)
+            assert scaled.normal_jb == plain.normal_jb and scaled.jb_statistic == pytest.approx(plain.jb_statistic, rel=1e-6)
+
+
 def test_whiteness_verdicts():
     x = arma_fit.simulate_arma([0.6], [], 1.0, 5_000, seed=8)
     x = x - x.mean()

@@ -526,6 +526,15 @@ def test_a_device_that_lost_every_other_sample_from_its_first_line_is_kept(tmp_p
     assert rec.header["t_from"] == "device counter" and rec.t_gaps == len(rec) - 1
 
 
+def test_a_device_that_lost_10_of_every_11_samples_from_its_first_line_is_kept(tmp_path):
+    """Attack pass 15: a device whose counter stepped by 11 from its first line (a serial line too
+    slow for its rate) gave steps of 11 intervals, more than the 10 whose rate a window of gaps
+    only can tell: refused at the close as a t off the rate and removed whole (exit 2, every
+    sample lost). Its t is the device's counter (t_from): kept, every step a gap."""
+    rec = _record_device(tmp_path / "eleventh.csv", 11 * np.arange(1500))
+    assert rec.header["t_from"] == "device counter" and rec.t_gaps == len(rec) - 1
+
+
 @pytest.mark.parametrize("cut", [b"", b"506,1,"])
 def test_a_line_held_at_ctrl_c_is_written(tmp_path, cut):
     """A serial line whose counter jumped waits for the next line to tell a gap from a corrupt

@@ -2,6 +2,8 @@
 noise.screen, noise.export): model identities, NNLS oracle, seeded round trips on
 simulated noise with known coefficients, unit conversions, bad input, JSON and Kalibr export."""
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -16,7 +18,7 @@ from gyrofilter.analysis.noise.intervals import fitted_intervals, reduced_chi2
 from gyrofilter.analysis.noise.model import (ANGLE_RANDOM_WALK, FLICKER_FLOOR, GYROSCOPE_TERMS, QUANTIZATION, UNIT_FACTORS,
                                              arw_from_white_std,
                                              basis, convert, model_adev, white_std_from_arw)
-from support import RECORDINGS, tool
+from support import RECORDINGS, REPO, tool
 
 SYMBOL_TERM = {"Q": QUANTIZATION, "N": ANGLE_RANDOM_WALK, "B": BIAS_INSTABILITY, "K": RATE_RANDOM_WALK, "R": RATE_RAMP}
 
@@ -524,6 +526,28 @@ def test_a_term_left_out_is_bounded_above_what_the_data_give_it():
     ls = np.linalg.lstsq(a * np.sqrt(w)[:, None], avar[used] * np.sqrt(w), rcond=None)[0]
     assert coeffs[RATE_RANDOM_WALK].value is None
     assert coeffs[RATE_RANDOM_WALK].upper >= math.sqrt(ls[1]) > 0.5e-4
+
+
+def test_a_term_the_data_give_0_with_no_scatter_of_the_others_is_bounded_not_searched_for_ever():
+    """Attack pass 15: `allan` on 20 samples that switch between -32768 and 32767 LSB never ended
+    (axis z, 12 minutes and on): the bound's bisection of a term whose forced-in estimate is 0 while
+    the other terms' mixture is 0 (no scatter) excludes every value above 0, and halved its upper
+    end down to the smallest float, where half of it is 0 and the interval no longer shrinks. The
+    bound of such a term is the search's smallest value, at once. A subprocess, so that the old
+    code fails by its timeout instead of hanging the suite."""
+    code = ("import numpy as np\n"
+            "from gyrofilter.analysis.noise.intervals import avar_covariance, upper_bound\n"
+            "from gyrofilter.analysis.noise.model import basis\n"
+            "tau, m = np.array([0.01, 0.02, 0.04, 0.08]), np.array([1, 2, 4, 8])\n"
+            "active = np.array([False, True, False, False, False])\n"
+            "print(repr(upper_bound(basis(tau), np.ones(4), np.zeros(4), active, 3, 0.95,\n"
+            "                       lambda mix: avar_covariance(tau, m, 1000, mix)[1])[0]))\n")
+    try:
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=REPO)
+    except subprocess.TimeoutExpired:
+        pytest.fail("upper_bound searched for ever")
+    assert out.returncode == 0, out.stderr
+    assert 0.0 < float(out.stdout) <= 1e-16
 
 
 # --- the warning that the noise is not just Q/N/B/K/R ----------------------------------------

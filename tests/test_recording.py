@@ -530,6 +530,33 @@ def test_a_t_of_the_device_counter_at_whole_intervals_throughout_is_lost_samples
         _read_chunked(_dps_file(tmp_path, _t_body(np.full(count, 0.025)), header=counted, name="odd.csv"), chunk_rows)
 
 
+@pytest.mark.parametrize("chunk_rows", [1, 999, 1 << 16])
+@pytest.mark.parametrize("steps", [pytest.param(np.full(3000, 0.11), id="10 of 11 lost throughout"),
+                                   pytest.param(np.r_[np.full(2000, 0.01), np.full(1500, 0.19), np.full(2000, 0.01)],
+                                                id="18 of 19 lost over 1500 steps")])
+def test_a_t_of_the_device_counter_more_than_10_intervals_apart_is_lost_samples(tmp_path, chunk_rows, steps):
+    """Attack pass 15: a window of gaps only more than 10 intervals apart was refused at once
+    (every such step is within 5 % of a whole number of intervals, so that says nothing of the
+    rate), also where t is the device's counter: a device that lost 10 of every 11 samples from
+    its first line (a serial line too slow for its rate) had its live recording refused at the
+    close and removed whole, one that did so for 1500 lines mid-recording stopped there. Each
+    step of a device's counter is the whole number of samples it counted: lost samples, read and
+    written; without the key still refused."""
+    counted = "# t_from: device counter\n"
+    head, data = _read_chunked(_dps_file(tmp_path, _t_body(steps), header=counted), chunk_rows)
+    assert len(data) == len(steps) + 1 and head.t_gaps == np.count_nonzero(steps > 0.015)
+    path = tmp_path / "written.csv"
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    with RecordingWriter(path, {"sample_rate_hz": 100, "gyro_unit": "dps", "t_from": "device counter"},
+                         ["t", "gx", "gy", "gz"]) as writer:
+        for i in range(0, len(t), chunk_rows):
+            part = t[i:i + chunk_rows]
+            writer.write(np.column_stack((part, np.zeros((len(part), 3)))))
+    np.testing.assert_array_equal(read_recording(path).t_s, t)
+    with pytest.raises(RecordingError, match=r"t steps by 0.(11|19) s \(median of "):
+        _read_chunked(_dps_file(tmp_path, _t_body(steps), name="plain.csv"), chunk_rows)
+
+
 @pytest.mark.parametrize("chunk_rows", [1, 700, 1 << 16])
 def test_a_filtered_outputs_rows_whose_blocks_lost_samples_are_its_gaps(tmp_path, chunk_rows):
     """Issue 37 (attack 4): a filtered output (header input_sample_rate_hz, rows per block of 5

@@ -224,12 +224,15 @@ class TimeCheck:
         """Whether each typical step is no whole number k of input sample intervals, more than
         RATE_TOLERANCE off per interval (|typical_s / k - 1 / input_sample_rate_hz|, k the nearest),
         or longer than 1 / (2 RATE_TOLERANCE) = 10 row intervals (1 / sample_rate_hz), where every
-        step of a file of samples is within RATE_TOLERANCE of some k (a step beyond a float's range too)."""
+        step of a file of samples is within RATE_TOLERANCE of some k (a step beyond a float's range too).
+        Where ``t`` is the device's sample counter (``counted``) a longer one is whole too: each of
+        its steps is the whole number of samples the device counted (one that lost 10 of every 11
+        samples from its first line was refused at the close and its recording removed whole)."""
         input_s = 1.0 / self.head.input_sample_rate_hz
         with np.errstate(over="ignore", invalid="ignore"):
             k = np.round(typical_s / input_s)
             per_s = typical_s / np.maximum(k, 1.0)
-            whole = ((np.round(typical_s * self.head.sample_rate_hz) <= 0.5 / RATE_TOLERANCE)
+            whole = ((self.counted | (np.round(typical_s * self.head.sample_rate_hz) <= 0.5 / RATE_TOLERANCE))
                      & (np.abs(per_s - input_s) <= RATE_TOLERANCE * input_s))
         return ~whole
 

@@ -134,12 +134,17 @@ def normality_tests(x, alpha=DEFAULT_ALPHA, quantum=None, seed=0) -> Normality:
     conservative (Lilliefors), and on quantised data (MPU6050 LSB steps) KS also sees the steps:
     with ``quantum`` (the step, in the series' unit) KS is repeated on x + U(-quantum/2, quantum/2)
     (seeded dither, ``seed``), which removes the steps but not a non-normal shape. ``alpha``:
-    the significance level.
+    the significance level. The statistics are scale-free, so they are computed on ``x`` times the
+    power of two that brings its standard deviation near 1 (exact: the same bits at any scale a
+    fourth power holds; noise of 1e-90 deg/s, above the floor of ``units.MIN_NOISE_DPS``, had
+    fourth powers below the smallest float: JB and the kurtosis read nan and normality "rejected").
     """
     require_stats()
     from scipy import stats
 
     x = np.asarray(x, float)
+    exponent = int(np.frexp(x.std())[1])
+    x = np.ldexp(x, -exponent)
     z = (x - x.mean()) / x.std(ddof=1)
     ks = stats.kstest(z, "norm")
     jb = stats.jarque_bera(x)
@@ -157,7 +162,8 @@ def normality_tests(x, alpha=DEFAULT_ALPHA, quantum=None, seed=0) -> Normality:
         normal_jb=bool(jb.pvalue >= alpha),
     )
     if quantum:
-        xd = x + np.random.default_rng(seed).uniform(-quantum / 2, quantum / 2, n)
+        step = math.ldexp(quantum, -exponent)
+        xd = x + np.random.default_rng(seed).uniform(-step / 2, step / 2, n)
         ksd = stats.kstest((xd - xd.mean()) / xd.std(ddof=1), "norm")
         result.ks_dithered_statistic = float(ksd.statistic)
         result.ks_dithered_p_value = float(ksd.pvalue)

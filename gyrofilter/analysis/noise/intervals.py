@@ -275,14 +275,16 @@ def upper_bound(a, w, y, active, u, confidence, cov_of, widen=True):
         lo, hi = hi, 4.0 * hi
     else:
         return None, scale
-    while hi - lo > _BOUND_TOLERANCE * hi:
+    while hi - lo > _BOUND_TOLERANCE * hi and hi > _SMALLEST_BOUND:  # (h = s0 = 0: every t > 0 excluded)
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if excluded(mid) else (mid, hi)
     return hi, scale
 
 
-#: where the search for a bound starts, in units of the largest fitted variance, its most steps
-#: (each x4), and its relative precision
+#: where the search for a bound starts, in units of the largest fitted variance (and where the
+#: bisection stops: a term the data give 0 with no scatter of the others, every value above 0
+#: excluded, halved it down to the smallest float, then for ever), its most steps (each x4), and
+#: its relative precision
 _SMALLEST_BOUND = 1e-16
 _STEPS = 40
 _BOUND_TOLERANCE = 1e-3
