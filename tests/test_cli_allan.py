@@ -353,7 +353,7 @@ def test_a_kalibr_range_beyond_the_record_is_refused_before_any_output(static_re
     assert main(["allan", path, "--json", str(doc), "--kalibr", str(yaml), "--kalibr-tau-s", "0.1,100"]) == 2
     out, err = capsys.readouterr()
     assert out == "" and len(err.strip().splitlines()) == 1
-    assert "--kalibr-tau-s 0.1,100 s lies outside the record's cluster times 0.01 .. 33" in err
+    assert "--kalibr-tau-s 0.1,100 s reaches beyond the record's cluster times 0.01 .. 33" in err
     assert not doc.exists() and not yaml.exists()
     assert main(["allan", path, "--kalibr", str(yaml), "--kalibr-tau-s", "0.05,20"]) == 0
     assert "bounding pair over tau 0.05 .. 20 s" in yaml.read_text()
@@ -661,3 +661,24 @@ def test_a_term_unresolved_once_k_is_free_is_not_blamed_on_the_misfit():
     assert "the interval reaches zero" in allan.unresolved_text(r, 9, GYROSCOPE_TERMS)
     assert "(see `gyrofilter gap`)" in allan.unresolved_text(r, 9, GYROSCOPE_TERMS)
     assert "gyrofilter gap" not in allan.unresolved_text(r, 9, ACCELEROMETER_TERMS)
+
+
+def test_the_json_document_says_the_records_lost_samples(tmp_path, capsys):
+    """Attack pass 15: a record that lost samples gave an allan document with no word of it (only the
+    console warned), though its N reads off by sqrt(k) where one sample in k was kept: the document
+    carries the gaps' count and the console's sentence; a record without gaps has no such block."""
+    rng = np.random.default_rng(23)
+    steps = np.where(np.arange(5999) % 4 == 3, 0.02, 0.01)  # a sample lost after every third
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    gappy = tmp_path / "gaps.csv"
+    write_recording(gappy, Recording.from_dps(rng.normal(0.5, 0.1, (6000, 3)), 100.0, t_s=t))
+    assert main(["allan", str(gappy), "--json", str(tmp_path / "g.json")]) == 0
+    said = " ".join(capsys.readouterr().err.split())  # the console wraps its lines
+    doc = json.loads((tmp_path / "g.json").read_text())
+    assert doc["t_gaps"]["count"] == int(np.count_nonzero(steps > 0.015)) == 1499
+    assert doc["t_gaps"]["warning"].startswith(f"{gappy}: t shows 1499 gap(s)")
+    assert said.count(" ".join(doc["t_gaps"]["warning"].split())) == 1
+    plain = tmp_path / "plain.csv"
+    write_recording(plain, Recording.from_dps(rng.normal(0.5, 0.1, (6000, 3)), 100.0))
+    assert main(["allan", str(plain), "--json", str(tmp_path / "p.json")]) == 0
+    assert "t_gaps" not in json.loads((tmp_path / "p.json").read_text())

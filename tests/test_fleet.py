@@ -419,7 +419,7 @@ def test_the_fleets_imu_yaml_takes_allans_kalibr_range(small_fleet, tmp_path, ca
     assert main(["allan", small_fleet[0], "--fleet", str(tmp_path / "g"), "--jobs", "1", "--kalibr-tau-s", "0.05,100"]) == 0
     assert sorted(os.listdir(tmp_path / "g")) == ["fleet.csv", "fleet.md", "unit0.allan.json"]
     assert (tmp_path / "g" / "unit0.allan.json").read_bytes() == (tmp_path / "one.json").read_bytes()
-    why = "--kalibr-tau-s 0.05,100 s lies outside the record's cluster times"
+    why = "--kalibr-tau-s 0.05,100 s reaches beyond the record's cluster times"
     assert f"imu.yaml not written: {why}" in (tmp_path / "g" / "fleet.csv").read_text()
     out = capsys.readouterr().out
     assert "1 analysed, 0 failed" in out and f"  no imu.yaml: unit0: {why}" in out, out

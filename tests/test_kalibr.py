@@ -149,7 +149,7 @@ def test_the_default_range_is_cut_to_a_short_record_and_a_range_given_is_checked
     tau = np.logspace(-2, math.log10(30.0), 36)
     assert tau_range(tau) == (DEFAULT_TAU_RANGE_S[0], pytest.approx(30.0), True)
     assert tau_range(tau, (0.02, 20.0)) == (0.02, 20.0, False)
-    with pytest.raises(SettingsError, match=r"--kalibr-tau-s 0\.1,100 s lies outside the record's cluster times 0\.01 \.\. 30 s"):
+    with pytest.raises(SettingsError, match=r"--kalibr-tau-s 0\.1,100 s reaches beyond the record's cluster times 0\.01 \.\. 30 s"):
         tau_range(tau, (0.1, 100.0))
     with pytest.raises(SettingsError, match="0 < LOW < HIGH, got 5,1"):
         tau_range(tau, (5.0, 1.0))

@@ -287,6 +287,10 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", 
 LEFT_OUT = ": left out of the Allan analysis"
 
 
+#: what lost samples (the t column's gaps) mean for the Allan deviation: the end of their warning
+GAPS_CONSEQUENCE = "the Allan deviation assumes uniform samples"
+
+
 def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
                            progress=None, skip_constant=False):
     """Read a still recording and characterise each of ``axes`` of every sensor it holds: (head,
@@ -334,7 +338,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     note = accelerometer_note(head)
     for text in head.warnings + ([note] if note else []):
         warn(text)
-    warn_about_gaps(head, "the Allan deviation assumes uniform samples", warn)
+    warn_about_gaps(head, GAPS_CONSEQUENCE, warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     left_out = None
     if accel is not None:

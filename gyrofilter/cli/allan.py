@@ -22,9 +22,10 @@ from ..analysis.noise.kalibr import DEFAULT_TAU_RANGE_S, check_tau_range_s, kali
 from ..analysis.noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS, TERMS, TERM_SYMBOL, convert
 from ..analysis.noise.readoff import NOT_DETERMINED
 from ..analysis.noise.plots import plot_allan
-from ..analysis.still import characterise_recording
+from ..analysis.still import GAPS_CONSEQUENCE, characterise_recording
 from ..errors import SettingsError
 from ..plots import check_figure_path
+from ..recording import warn_about_gaps
 from ..units import AXES, check_axes
 from . import batch, console, options, outputs, still
 
@@ -95,7 +96,7 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     """What ``allan`` computes of one recording ``path``: (head, {axis: AxisNoise}, the ``--json``
     document of docs/formats.md section 4, the accelerometer's {axis: AxisNoise} or None), through :func:`~gyrofilter.analysis.still.characterise_recording`
     (its arguments, ``warn(text)``, ``progress(text)`` and ``skip_constant`` included) and
-    :func:`~gyrofilter.analysis.noise.export.to_json` (with the count of repeated rows); the
+    :func:`~gyrofilter.analysis.noise.export.to_json` (with the count of repeated rows and the t column's gaps); the
     duration is rows / sample rate (s).
     A result that is not finite raises AllanInputError naming the file; a stuck axis (not
     skipped) says which ``--axes`` analyse the others."""
@@ -111,9 +112,12 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     except AllanInputError as exc:  # the data of this file: name it
         raise AllanInputError(f"{path}: {exc}") from None
     duration_s = head.rows / head.sample_rate_hz
+    gaps = []
+    warn_about_gaps(head, GAPS_CONSEQUENCE, gaps.append)
     return head, results, to_json(results, head.sample_rate_hz, recording=path, duration_s=duration_s,
                                   repeated_rows=repeats, accelerometer=accel,
-                                  accelerometer_left_out=accel_left_out), accel
+                                  accelerometer_left_out=accel_left_out,
+                                  t_gaps=(head.t_gaps, gaps[0]) if gaps else None), accel
 
 
 def misfit_text(r):

@@ -107,7 +107,7 @@ def tau_range(tau_s, tau_range_s=None, what="--kalibr-tau-s"):
         low, high = check_tau_range_s(tau_range_s, what)
         cut = False
         if low < first * (1.0 - _TAU_SLACK) or high > last * (1.0 + _TAU_SLACK):
-            raise SettingsError(f"{what} {low:g},{high:g} s lies outside the record's cluster times {first:g} .. "
+            raise SettingsError(f"{what} {low:g},{high:g} s reaches beyond the record's cluster times {first:g} .. "
                                 f"{last:g} s (one sample to the longest tau with enough clusters; a longer record "
                                 "reaches longer times)")
     inside = _inside(tau, low, high)
