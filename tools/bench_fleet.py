@@ -81,6 +81,11 @@ def main(argv=None):
     p.add_argument("--repeat", type=int, default=1, help="runs per backend; the fastest counts (default 1)")
     p.add_argument("--no-dask", action="store_true", help="skip the LocalCluster run")
     args = p.parse_args(argv)
+    if not args.no_dask:  # before the minute of simulated recordings, not after it
+        try:
+            from dask.distributed import LocalCluster
+        except ImportError:
+            sys.exit('the LocalCluster run needs Dask: pip install -e ".[cluster]", or give --no-dask')
 
     from gyrofilter.analysis.fleet.runner import default_jobs
 
@@ -97,8 +102,6 @@ def main(argv=None):
         runs = [("--jobs 1", ["--jobs", "1"]), (f"--jobs {cores}", ["--jobs", str(cores)])]
         cluster = None
         if not args.no_dask:
-            from dask.distributed import LocalCluster
-
             t0 = time.perf_counter()
             cluster = LocalCluster(n_workers=cores, threads_per_worker=1, processes=True, dashboard_address=None)
             print(f"LocalCluster of {cores} single-threaded workers started in {time.perf_counter() - t0:.1f} s (not timed below)")
