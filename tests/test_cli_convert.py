@@ -632,6 +632,21 @@ def test_a_log_that_changes_between_the_passes_is_refused(tmp_path, change):
                 pass
 
 
+@pytest.mark.parametrize("how", ["file", "gzip"])
+def test_a_log_whose_line_ends_turn_cr_only_is_refused_from_that_line(tmp_path, capsys, how):
+    """Attack pass 16 (issue 37): LF lines, then CR-only ones with no LF after them: the rest read as
+    one last line an interruption cut, dropped with a warning ("log interrupted?"), 4 rows of 300
+    converted. Refused naming the line where the line ends turn."""
+    data = ("t,gx,gy,gz\n" + "".join(f"{i / 100:.2f},1,2,3\n" for i in range(4))
+            + "".join(f"{i / 100:.2f},1,2,3\r" for i in range(4, 300))).encode()
+    src = tmp_path / "late.csv"
+    src.write_bytes(gzip.compress(data) if how == "gzip" else data)
+    assert main(["convert", str(src), "--out", str(tmp_path / "rec.csv"), "--unit", "dps"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"gyrofilter: error: {src}: line 6: line ends are CR only from there on (old Mac): convert them to LF (e.g. tr '\\r' '\\n')"
+    assert not (tmp_path / "rec.csv").exists()
+
+
 @pytest.mark.parametrize("rows, how", [(3, "file"), (3, "gzip"), (120_000, "file"), (120_000, "pipe")])
 def test_a_log_of_cr_only_line_ends_is_refused_naming_them(tmp_path, capsys, rows, how):
     """Attack pass (issue 37): a log with CR-only line ends (classic Mac OS) read as one line of

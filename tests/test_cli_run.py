@@ -654,3 +654,20 @@ def test_run_whose_stdout_fills_names_it_and_says_what_it_kept(tmp_path, monkeyp
     assert 0 < len(rows) < 200 * 100 // 5
     err = capsys.readouterr().err.splitlines()
     assert err == [f"gyrofilter: error: stdout: No space left on device; kept the first {len(rows)} filtered rows"], err
+
+
+def test_run_into_head_stops_as_a_user_stop_and_saves_the_calibration(tmp_path):
+    """Attack pass 16 (issue 37): `run --save-calibration F | head`: the reader goes away; the run
+    stops as at Ctrl-C, F is written and stderr says why it stopped (it ended with exit 0 and no
+    word, F not written)."""
+    cal = tmp_path / "cal.json"
+    proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "run", "--source", "sim:seed=1,realtime=0", "--duration", "600",
+                             "--quiet", "--save-calibration", str(cal)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    for _ in range(40):  # the header and some rows (far fewer than the pipe's buffer holds of 600 s), then closed like `head`
+        proc.stdout.readline()
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err
+    assert "gyrofilter run: stdout was closed by its reader" in err
+    assert len(json.loads(cal.read_text())["bias_dps"]) == 3

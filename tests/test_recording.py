@@ -580,6 +580,20 @@ def test_a_filtered_outputs_rows_whose_blocks_lost_samples_are_its_gaps(tmp_path
         _read_chunked(_dps_file(tmp_path, "", "# filtered_from: raw.csv\n# input_sample_rate_hz: 10\n", rate_hz=20, name="below.csv"), chunk_rows)
 
 
+@pytest.mark.parametrize("name", ["late.csv", "late.csv.gz"])
+def test_a_recording_whose_line_ends_turn_cr_only_is_refused_from_that_line(tmp_path, name):
+    """Attack pass 16 (issue 37): LF lines, then CR-only ones (a classic-Mac log appended) with no LF
+    after them: the rest of the file read as one last line an interruption cut, dropped with a
+    warning ("recording interrupted?"): 5 rows of 300 kept. Refused naming the line where they turn."""
+    lf = "".join(f"{i / 100:.2f},0.1,-0.2,0.3\n" for i in range(5))
+    cr = "".join(f"{i / 100:.2f},0.1,-0.2,0.3\r" for i in range(5, 300))
+    data = f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n{lf}{cr}".encode()
+    (tmp_path / name).write_bytes(gzip.compress(data) if name.endswith(".gz") else data)
+    with pytest.raises(RecordingError, match=re.escape(f"{tmp_path / name}: line 10: line ends are CR only from there on "
+                                                       "(old Mac)")):
+        read_recording(tmp_path / name)
+
+
 @pytest.mark.parametrize("name", ["mac.csv", "mac.csv.gz"])
 @pytest.mark.parametrize("rows", [300, 120_000])
 def test_a_recording_whose_line_ends_are_cr_only_is_refused_naming_them(tmp_path, name, rows):

@@ -190,8 +190,7 @@ def _main(argv):
         return EXIT_INTERRUPTED
     except BrokenPipeError:
         # stdout closed early (e.g. piped into `head`): not an error worth a message
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        console.drop_stdout()
         return 0
     except (GyroFilterError, OSError, ValueError) as exc:
         console.say(console.error_line(one_line(exc)))

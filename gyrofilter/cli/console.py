@@ -3,6 +3,7 @@ data), the start-up bias as printed, and the summary table of a filtered recordi
 (a line that may name a file) goes through :func:`~gyrofilter.inputs.escape_controls` (``\\n``, ``\\x1b``: a file
 name cannot start a line of its own or colour the terminal)."""
 import math
+import os
 import re
 import sys
 import textwrap
@@ -13,6 +14,14 @@ from ..units import AXES
 
 #: the widest line the commands print on stdout (a terminal of 100 columns; every number is in --json)
 MAX_LINE_CHARS = 100
+
+
+def drop_stdout():
+    """Send what is left of stdout to the null device, its reader having gone away (``| head``, a
+    BrokenPipeError): what stays in its buffer, and the flush at exit, go nowhere, silently."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
 
 
 def tell(*lines):

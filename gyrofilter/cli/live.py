@@ -350,6 +350,10 @@ class LiveLoop:
                 self.samples += len(rows)
         return rows, notes
 
+    def stop(self, reason):
+        """End the loop for ``reason`` (words for :meth:`reason`): the next :meth:`next` is None."""
+        self.ended = reason
+
     def pop_notes(self):
         """The source's notes; its warnings (a replayed file cut short) also go to stderr, since
         they are otherwise seen only inside the output."""

@@ -15,7 +15,6 @@ the block means of the recording in memory (12 floats per block, and 3 for the o
 """
 import contextlib
 import json
-import os
 import sys
 import time
 from importlib import resources
@@ -221,9 +220,7 @@ class Replay:
             self.lines_printed += 1
         except BrokenPipeError:
             self.stdout_open = False
-            devnull = os.open(os.devnull, os.O_WRONLY)  # what is left in stdout's buffer goes nowhere, silently
-            os.dup2(devnull, sys.stdout.fileno())
-            os.close(devnull)
+            console.drop_stdout()
         except OSError as exc:  # a full disk under `> out.csv`: named, as run names it ("[Errno 28]" alone named nothing)
             raise OSError(exc.errno, f"{exc.strerror or exc}; {self.lines_printed} lines printed before it",
                           "stdout") from None

@@ -44,6 +44,10 @@ def add_arguments(parser):
     outlets.add_arguments(parser)
 
 
+#: why a run whose rows go to stdout stopped when that stream's reader went away
+READER_GONE = "stdout was closed by its reader"
+
+
 class _TextOut:
     """Recording format v1 as text on a stream (stdout), flushed by the caller; with ``stream``
     None the rows are only counted (a terminal whose rows a view shows). A failed write (a disk
@@ -57,6 +61,7 @@ class _TextOut:
         self.formats = formats  # a %-format per column, None for exact (as RecordingWriter's)
         self.rows_written = self.rows_flushed = 0
         self.write_failed = False  # an error writing stdout ends the command as it is
+        self.reader_gone = False  # stdout's reader went away (``| head``): the run stops, as at Ctrl-C
         self._write(header_text(header, columns, "stdout"))
         self.flush()
 
@@ -67,11 +72,15 @@ class _TextOut:
 
     @contextlib.contextmanager
     def _named(self):
-        """An OSError of the stream raised naming ``stdout`` (a closed reader, BrokenPipeError, as it is)."""
+        """An OSError of the stream raised naming ``stdout``; a closed reader (BrokenPipeError) sets
+        ``reader_gone`` and ends the printing, so that the run stops as a user's stop does (the
+        calibration saved, the summary said: it ended with exit 0 and no word, ``--save-calibration``
+        not written)."""
         try:
             yield
         except BrokenPipeError:
-            raise
+            self.reader_gone, self.stream = True, None
+            console.drop_stdout()
         except OSError as exc:
             self.write_failed = True
             raise OSError(exc.errno, exc.strerror or str(exc), self.path) from None
@@ -178,6 +187,8 @@ def _run(args, source, sinks):
                 if now - last_flush >= live.FLUSH_INTERVAL_S or not out_file:
                     writer.flush()
                     last_flush = now
+                if isinstance(writer, _TextOut) and writer.reader_gone:
+                    loop.stop(READER_GONE)
                 if status.due():
                     state = "calibrating" if filt.calibrating else f"{writer.rows_written} filtered rows"
                     status.show(loop.samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
@@ -210,7 +221,7 @@ def _run(args, source, sinks):
     if loop.failed():
         return live.EXIT_DISCONNECTED
     # a source that ended by itself before the first row is an error, as in replay; a user's stop is not
-    return 2 if nothing and not loop.interrupted else 0
+    return 2 if nothing and not (loop.interrupted or loop.ended == READER_GONE) else 0
 
 
 def _out_file(args):

@@ -165,6 +165,7 @@ def line_chunks(path, chunk_rows, warnings):
         first += len(lines)
     if pending:
         if first > 1:
+            refuse_cr_only(pending, path, first)
             warnings.append(f"{path}: line {first}: last line has no line end (recording interrupted?); "
                             f"it is not used: {quote(pending[:60].decode('utf-8', 'replace'))}")
         else:
@@ -175,14 +176,18 @@ def line_chunks(path, chunk_rows, warnings):
 _BARE_CR = re.compile(rb"\r(?!\n|$)")
 
 
-def refuse_cr_only(first_line, path):
+def refuse_cr_only(first_line, path, line=None):
     """Refuse the file ``path`` (a recording or another tool's log) when ``first_line``, the bytes
     of its first line (or its first bytes, when no LF ends a line in them), holds a CR that ends
     no line: line ends of CR only (classic Mac OS), where the whole file would read as one line
     (a header missing its keys, one line of column names, or one too long). No first line holds
-    such a CR otherwise: a recording's header values write a control character as its escape."""
+    such a CR otherwise: a recording's header values write a control character as its escape.
+    With ``line`` (its number), ``first_line`` is a last line that no LF ends: lines whose ends
+    turn CR only there (a log of CR lines appended to one of LF lines) are refused from that line,
+    not dropped as a line an interruption cut (they were, with all their rows)."""
     if _BARE_CR.search(first_line):
-        raise RecordingError(f"{path}: line ends are CR only (old Mac): convert them to LF (e.g. tr '\\r' '\\n')")
+        where = f"{path}: line {line}: line ends are CR only from there on" if line else f"{path}: line ends are CR only"
+        raise RecordingError(f"{where} (old Mac): convert them to LF (e.g. tr '\\r' '\\n')")
 
 
 def refuse_nul(data, path, first_line):

@@ -187,6 +187,7 @@ def log_lines(raw, path, warnings=None):
                     return
                 number += 1
                 if number > 1 and not data.endswith(b"\n") and data.strip() and len(data) <= MAX_LINE_BYTES:
+                    refuse_cr_only(data, path, number)
                     if warnings is not None:
                         warnings.append(f"{path}: line {number}: last line has no line end (log interrupted?); it is "
                                         f"not used: {quote(data[:60].decode('utf-8', 'replace'))}")

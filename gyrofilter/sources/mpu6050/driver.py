@@ -317,17 +317,21 @@ class MPU6050Source(Source):
             timespec="milliseconds").replace("+00:00", "Z")
 
     def _fifo_restart(self):
-        """Stop, reset and re-enable the FIFO; clear INT_STATUS; anchor the host clock to the next sample."""
+        """Stop, reset and re-enable the FIFO; clear INT_STATUS; anchor the host clock to the next
+        sample: the anchor is the moment the FIFO_EN write returned, the first sample the FIFO
+        keeps being the first produced after it (the read-back after it, and the reset and its
+        retries before it, take time in which samples are produced: kept after it, lost before)."""
         uc = R.USER_CTRL
         self._write_byte(uc, uc.put(0, "FIFO_RESET", 1))           # FIFO_RESET while FIFO_EN = 0
         self._wait_for(uc, lambda v: not v & uc.mask("FIFO_RESET"), "FIFO reset did not finish",
                        self.reset_timeout_s)
         self._read_byte(R.INT_STATUS)                               # clears FIFO_OFLOW_INT
         self._write_byte(uc, uc.put(0, "FIFO_EN", 1))
+        enabled_at = self._clock()
         if not (got := self._read_byte(uc)) & uc.mask("FIFO_EN"):
             raise DeviceError(f"{self.chip_name} at {self._where()}: register {uc} reads back 0x{got:02X} "
                               f"after writing 0x{uc.put(0, 'FIFO_EN', 1):02X}: the FIFO could not be (re)started")
-        self._anchor_time = self._clock()
+        self._anchor_time = enabled_at
         self._anchor_index = getattr(self, "_next_index", 0)
         self._next_index = self._anchor_index
         self._last_poll = self._anchor_time
@@ -397,18 +401,22 @@ class MPU6050Source(Source):
     def _gap(self, reason):
         """Reset the FIFO after an overflow or lost alignment and record the gap.
 
-        Samples lost = round((now - anchor) * rate) - (samples delivered since the anchor), where the
+        Samples lost = round((restart - anchor) * rate) - (samples delivered since the anchor), where the
         anchor is the last moment the FIFO was known to be drained (the FIFO_COUNT read of the last
-        complete poll, or the last FIFO restart): an estimate from the host clock at the configured
-        rate, uncertain by +-1 sample plus the sensor clock's tolerance (about +-1 % of nominal,
+        complete poll, or the last FIFO restart) and ``restart`` the moment the FIFO is enabled
+        again (:meth:`_fifo_restart`: the samples produced while it is reset, and its retries, are
+        lost too: counted to the failure, each gap's count came out 1 to 6 samples low, every
+        later ``t`` as much early). An estimate from the host clock at the configured rate,
+        uncertain by +-1 sample plus the sensor clock's tolerance (about +-1 % of nominal,
         product spec table 6.1) over the stall only, since the anchor is at most one poll old.
         """
-        now = self._clock()
-        produced = int(round((now - self._anchor_time) * self.sample_rate_hz))
-        lost = max(0, produced - (self._next_index - self._anchor_index))
+        since_s, delivered = self._anchor_time, self._next_index - self._anchor_index
         at_t = self._next_index / self.sample_rate_hz
+        self._fifo_restart()  # samples produced until the FIFO is enabled again are lost too
+        produced = int(round((self._anchor_time - since_s) * self.sample_rate_hz))
+        lost = max(0, produced - delivered)
         self._next_index, self.stats["lost_samples"] = self._next_index + lost, self.stats["lost_samples"] + lost
-        self._fifo_restart()
+        self._anchor_index = self._next_index
         self._notes.append(f"gap: {lost} samples lost before t={self._next_index / self.sample_rate_hz:.6g} s "
                            f"(last good sample at t={at_t - 1 / self.sample_rate_hz:.6g} s; {reason}; "
                            f"count estimated from the host clock)")
@@ -419,9 +427,10 @@ class MPU6050Source(Source):
         A FIFO data read that fails with EREMOTEIO (121: NACK, nothing transferred) is retried after
         re-reading INT_STATUS and FIFO_COUNT (a count below the bytes left: it took some, a gap); one
         that fails with EIO (5: may stop part-way, consuming bytes) resets the FIFO, a gap, so frames
-        never lose alignment. A FIFO_COUNT that is not a whole number of frames also resets it (a gap).
+        never lose alignment. A FIFO_COUNT that is not a whole number of frames also resets it (a gap),
+        and an overflow while the FIFO was read drops that read's frames, misaligned (a gap).
         Any other failure ends the source; frames read before it in the same poll are delivered
-        first (the next read() raises), so nothing read off the chip is dropped.
+        first (the next read() raises), so no good frame read off the chip is dropped.
         """
         self.stats["polls"] += 1
         self._last_poll = self._clock()
@@ -450,6 +459,8 @@ class MPU6050Source(Source):
             if count == 0:
                 return empty
             buf, exc = self._read_fifo(count)
+            if buf and self._overflowed_while_read():
+                return empty
             rows = self._rows(buf) if buf else empty
             if exc is None:
                 self._fifo_floor = None
@@ -475,6 +486,24 @@ class MPU6050Source(Source):
                 return rows
             raise failure
         return empty
+
+    def _overflowed_while_read(self):
+        """Whether the FIFO overflowed while it was read (INT_STATUS read again after the read):
+        the chip dropped the oldest bytes, the ones being read, and the frames read after that
+        start mid-frame (a read outlasts the margin's 10 ms of samples where the bus is slow for
+        the rate: 1 kHz of 14-byte frames is 126 kbit/s). Its frames are dropped, a gap. Where
+        INT_STATUS cannot be read the frames are delivered and the next read() raises."""
+        try:
+            status = self._read_byte(R.INT_STATUS)
+        except DeviceError as failure:
+            self._failure = self._failure or failure
+            return False
+        if not status & R.INT_STATUS.mask("FIFO_OFLOW_INT"):
+            return False
+        self.stats["overflows"] += 1
+        self._gap("FIFO overflow while it was read (the I2C bus too slow for the rate and frame?); "
+                  "the frames of that read dropped")
+        return True
 
     def _fifo_shrank(self, count, t_count):
         """A FIFO read that failed took bytes after all (a gap: whole frames keep the count aligned,
