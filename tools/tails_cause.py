@@ -155,13 +155,11 @@ def main(argv=None):
     ap.add_argument("--streams", default="0,1,2,3,4")
     args = ap.parse_args(argv)
 
-    from tone_modulation import with_excursion
+    from tone_modulation import tone_axes, with_excursion
 
     from gyrofilter.analysis.gap.baseline import axis_dps, default_n_sims, simulate_axis
     from gyrofilter.analysis.gap.detectors import tone_excursion
     from gyrofilter.analysis.gap.features import departures, discrepancy, feature_bands, feature_taus, features
-    from gyrofilter.analysis.gap.pipeline import analyse_gap
-    from gyrofilter.recording import read_recording
     from gyrofilter.sim.model import validate_model
 
     streams = [int(s) for s in args.streams.split(",")]
@@ -169,64 +167,54 @@ def main(argv=None):
             "| 6 cum(T, T, R, R) | 6 cum(L, L, R, R) | cum4(R) | 12 E L T R (T + R) |\n"
             "|---|---|---|---|---|---|---|---|---|---|")
     d_lines, gamma_lines = [], []
-    for name in args.records.split(","):
-        rec = read_recording(os.path.join(args.adis, f"{name}.csv.gz"))
-        fs, n = float(rec.sample_rate_hz), len(rec)
-        rep = analyse_gap(rec, bootstrap=0)
+    for name, rec, rep, i, c, s, x in tone_axes(args.adis, args.records):
+        fs, n, axis = float(rec.sample_rate_hz), len(rec), "xyz"[i]
         model = rep["extended_model"]
-        spec, _ = validate_model(model)
         step = 1.0 / model["lsb_per_dps"] if model.get("lsb_per_dps") else 0.0
         bare, _ = validate_model(without_quantization(model))
-        for finding in rep["findings"]:
-            if finding["effect"] != WANDERING_TONE:
+        meas = moments(x, fs, c)
+
+        def runs(variant, gamma=0.0, k=i):
+            vstep = 1.0 / variant["lsb_per_dps"] if variant.get("lsb_per_dps") else 0.0
+            vspec, _ = validate_model(without_quantization(variant))
+            return [moments(compressed(simulate_axis(vspec, n, fs, seed, k), fs, gamma, vstep), fs, c)
+                    for seed in range(args.sims)]
+
+        by_gamma = {g: runs(model, g) for g in GAMMAS}
+        gamma = fitted_gamma({g: [r["stat"] for r in rows] for g, rows in by_gamma.items()}, meas["stat"])
+        exc = tone_excursion(x, fs, c, s)
+        variants = [("extended model", by_gamma[0.0]),
+                    ("tone's amplitude x 1.1", runs(with_amplitude(model, axis, 1.1))),
+                    ("excursion found" if exc["present"] else "excursion (none found)",
+                     runs(with_excursion(model, i, exc)) if exc["present"] else by_gamma[0.0]),
+                    ("no quantization", runs(without_quantization(model))),
+                    (f"compressed, gamma = {gamma:.3f}", runs(model, gamma))]
+        print(f"\n{name}, axis {axis}: wandering tone at {c:.2f} Hz; L: u below {LOW_FRACTION * c:.1f} Hz, "
+              f"T: {c - TONE_HALF_WIDTH_HZ:.1f}-{c + TONE_HALF_WIDTH_HZ:.1f} Hz, R: above\n")
+        print(head)
+        print(row_text("record", meas))
+        for label, rows in variants:
+            stats = [r["stat"] for r in rows]
+            print(row_text(f"runs: {label}", mean_row(rows), (min(stats), max(stats))))
+        for k, other in enumerate("xyz"):
+            if k == i:
                 continue
-            axis = finding["axis"]
-            i = "xyz".index(axis)
-            c, s = finding["params"]["center_hz"], finding["params"]["spread_hz"]
-            x = np.asarray(axis_dps(rec, i), dtype=float)
-            meas = moments(x, fs, c)
-
-            def runs(variant, gamma=0.0, k=i):
-                vstep = 1.0 / variant["lsb_per_dps"] if variant.get("lsb_per_dps") else 0.0
-                vspec, _ = validate_model(without_quantization(variant))
-                return [moments(compressed(simulate_axis(vspec, n, fs, seed, k), fs, gamma, vstep), fs, c)
-                        for seed in range(args.sims)]
-
-            by_gamma = {g: runs(model, g) for g in GAMMAS}
-            gamma = fitted_gamma({g: [r["stat"] for r in rows] for g, rows in by_gamma.items()}, meas["stat"])
-            exc = tone_excursion(x, fs, c, s)
-            variants = [("extended model", by_gamma[0.0]),
-                        ("tone's amplitude x 1.1", runs(with_amplitude(model, axis, 1.1))),
-                        ("excursion found" if exc["present"] else "excursion (none found)",
-                         runs(with_excursion(model, i, exc)) if exc["present"] else by_gamma[0.0]),
-                        ("no quantization", runs(without_quantization(model))),
-                        (f"compressed, gamma = {gamma:.3f}", runs(model, gamma))]
-            print(f"\n{name}, axis {axis}: wandering tone at {c:.2f} Hz; L: u below {LOW_FRACTION * c:.1f} Hz, "
-                  f"T: {c - TONE_HALF_WIDTH_HZ:.1f}-{c + TONE_HALF_WIDTH_HZ:.1f} Hz, R: above\n")
-            print(head)
-            print(row_text("record", meas))
-            for label, rows in variants:
-                stats = [r["stat"] for r in rows]
-                print(row_text(f"runs: {label}", mean_row(rows), (min(stats), max(stats))))
-            for k, other in enumerate("xyz"):
-                if k == i:
-                    continue
-                rec_o = moments(np.asarray(axis_dps(rec, k), dtype=float), fs, c)["stat"]
-                plain = [r["stat"] for r in runs(model, 0.0, k)]
-                comp = [r["stat"] for r in runs(model, gamma, k)]
-                gamma_lines.append(f"{name} {other}: record {rec_o:+.4f}, runs {min(plain):+.4f} to {max(plain):+.4f}, "
-                                   f"compressed by gamma = {gamma:.3f}: {min(comp):+.4f} to {max(comp):+.4f}")
-            taus, bands = feature_taus(n, fs), feature_bands(n, fs)
-            meas_f = features(x, fs, taus, bands)
-            ds = {0.0: [], gamma: []}
-            for stream in streams:
-                seeds = np.random.default_rng(stream).integers(0, 2**31, size=default_n_sims(n))[:6]
-                for g in ds:
-                    sims = [features(compressed(simulate_axis(bare, n, fs, int(seed), i), fs, g, step), fs, taus, bands,
-                                     overwrite=True) for seed in seeds]
-                    ds[g].append(discrepancy(departures(meas_f, sims, n)))
-            d_lines.append(f"| {name} | {axis} | {' / '.join(f'{d:.2f}' for d in ds[0.0])} "
-                           f"| {gamma:.3f} | {' / '.join(f'{d:.2f}' for d in ds[gamma])} |")
+            rec_o = moments(np.asarray(axis_dps(rec, k), dtype=float), fs, c)["stat"]
+            plain = [r["stat"] for r in runs(model, 0.0, k)]
+            comp = [r["stat"] for r in runs(model, gamma, k)]
+            gamma_lines.append(f"{name} {other}: record {rec_o:+.4f}, runs {min(plain):+.4f} to {max(plain):+.4f}, "
+                               f"compressed by gamma = {gamma:.3f}: {min(comp):+.4f} to {max(comp):+.4f}")
+        taus, bands = feature_taus(n, fs), feature_bands(n, fs)
+        meas_f = features(x, fs, taus, bands)
+        ds = {0.0: [], gamma: []}
+        for stream in streams:
+            seeds = np.random.default_rng(stream).integers(0, 2**31, size=default_n_sims(n))[:6]
+            for g in ds:
+                sims = [features(compressed(simulate_axis(bare, n, fs, int(seed), i), fs, g, step), fs, taus, bands,
+                                 overwrite=True) for seed in seeds]
+                ds[g].append(discrepancy(departures(meas_f, sims, n)))
+        d_lines.append(f"| {name} | {axis} | {' / '.join(f'{d:.2f}' for d in ds[0.0])} "
+                       f"| {gamma:.3f} | {' / '.join(f'{d:.2f}' for d in ds[gamma])} |")
     print("\nthe other axes, the control (tail statistic; runs of the extended model, without and with the tone "
           "axis's compression):\n")
     for line in gamma_lines:

@@ -45,6 +45,25 @@ def tails(x, sample_rate_hz):
     return tails_statistic(x, sample_rate_hz, u=tail_residual(x, sample_rate_hz))
 
 
+def tone_axes(adis, records):
+    """Each axis of the records ``records`` (comma-separated names of .csv.gz files in the folder
+    ``adis``) on which ``analyse_gap`` (the command's defaults, no intervals) names a
+    ``wandering_tone``: ``(name, recording, gap report, axis index, the tone's centre_hz, its
+    spread_hz, the axis in deg/s)``."""
+    from gyrofilter.analysis.gap.baseline import axis_dps
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
+    from gyrofilter.recording import read_recording
+
+    for name in records.split(","):
+        rec = read_recording(os.path.join(adis, f"{name}.csv.gz"))
+        rep = analyse_gap(rec, bootstrap=0)
+        for finding in rep["findings"]:
+            if finding["effect"] == WANDERING_TONE:
+                i = "xyz".index(finding["axis"])
+                yield (name, rec, rep, i, finding["params"]["center_hz"], finding["params"]["spread_hz"],
+                       np.asarray(axis_dps(rec, i), dtype=float))
+
+
 def with_excursion(spec, i, exc=None):
     """The validated model ``spec`` with the excursion of axis ``i``'s wandering tone set to the
     estimate ``exc`` (:func:`gyrofilter.analysis.gap.detectors.tone_excursion`), or taken out
@@ -89,10 +108,8 @@ def main(argv=None):
     ap.add_argument("--null", type=int, default=40, help="hidden-effect tones without excursion for the false alarms")
     args = ap.parse_args(argv)
 
-    from gyrofilter.analysis.gap.baseline import axis_dps, simulate_axis
+    from gyrofilter.analysis.gap.baseline import simulate_axis
     from gyrofilter.analysis.gap.detectors import EXCURSION_LINE_RATIO, flank_envelope, folded_band, tone_excursion
-    from gyrofilter.analysis.gap.pipeline import analyse_gap
-    from gyrofilter.recording import read_recording
     from gyrofilter.sim.model import validate_model
 
     print("| record | axis | tone (centre, spread) | flanks | kurtosis: record / runs with / without the excursion "
@@ -100,40 +117,31 @@ def main(argv=None):
           "| excursion found: period, height, length | tail statistic: record / runs with / without |")
     print("|---|---|---|---|---|---|---|---|---|")
     null_model = []
-    for name in args.records.split(","):
-        rec = read_recording(os.path.join(args.adis, f"{name}.csv.gz"))
-        fs = float(rec.sample_rate_hz)
-        rep = analyse_gap(rec, bootstrap=0)
+    for name, rec, rep, i, c, s, x in tone_axes(args.adis, args.records):
+        fs, axis = float(rec.sample_rate_hz), "xyz"[i]
         spec, _ = validate_model(rep["extended_model"])
-        for finding in rep["findings"]:
-            if finding["effect"] != WANDERING_TONE:
-                continue
-            axis = finding["axis"]
-            i = "xyz".index(axis)
-            c, s = finding["params"]["center_hz"], finding["params"]["spread_hz"]
-            x = np.asarray(axis_dps(rec, i), dtype=float)
-            env = flank_envelope(x, fs, c, s)
-            exc = tone_excursion(x, fs, c, s)
-            least, below = folded_band(x, fs, c, s, exc["excursion_period_s"] or env["period_s"])
-            t_rec = tails(x, fs)
-            runs, bare = [], []
-            for seed in range(args.sims):
-                y = simulate_axis(with_excursion(spec, i, exc), len(rec), fs, seed, i)
-                e = flank_envelope(y, fs, c, s)
-                runs.append((e["kurtosis"], e["ratio"], tails(y, fs)))
-                y = simulate_axis(with_excursion(spec, i), len(rec), fs, seed, i)
-                e = flank_envelope(y, fs, c, s)
-                bare.append((e["kurtosis"], e["ratio"], tails(y, fs)))
-            null_model += [r[1] for r in bare]
-            ks, rs, ts = ([r[k] for r in runs + bare] for k in range(3))
-            n = len(runs)
-            lo_w, lo, hi, hi_w = env["flanks_hz"]
-            found = (f"{exc['excursion_period_s']:.2f} s, {exc['excursion_hz']:.2f} Hz, {exc['excursion_s']:.2f} s"
-                     if exc["present"] else "none")
-            print(f"| {name} | {axis} | {c:.2f} Hz, {s:.2f} Hz | {lo_w:.1f}-{lo:.1f} and {hi:.1f}-{hi_w:.1f} Hz "
-                  f"| {env['kurtosis']:+.2f} / {span(ks[:n], '+.3f')} / {span(ks[n:], '+.3f')} "
-                  f"| {env['ratio']:.0f} ({env['period_s']:.2f} s) / {span(rs[:n], '.0f')} / {span(rs[n:], '.0f')} "
-                  f"| {least:.2f}, {below:.0%} | {found} | {t_rec:+.4f} / {span(ts[:n], '+.4f')} / {span(ts[n:], '+.4f')} |")
+        env = flank_envelope(x, fs, c, s)
+        exc = tone_excursion(x, fs, c, s)
+        least, below = folded_band(x, fs, c, s, exc["excursion_period_s"] or env["period_s"])
+        t_rec = tails(x, fs)
+        runs, bare = [], []
+        for seed in range(args.sims):
+            y = simulate_axis(with_excursion(spec, i, exc), len(rec), fs, seed, i)
+            e = flank_envelope(y, fs, c, s)
+            runs.append((e["kurtosis"], e["ratio"], tails(y, fs)))
+            y = simulate_axis(with_excursion(spec, i), len(rec), fs, seed, i)
+            e = flank_envelope(y, fs, c, s)
+            bare.append((e["kurtosis"], e["ratio"], tails(y, fs)))
+        null_model += [r[1] for r in bare]
+        ks, rs, ts = ([r[k] for r in runs + bare] for k in range(3))
+        n = len(runs)
+        lo_w, lo, hi, hi_w = env["flanks_hz"]
+        found = (f"{exc['excursion_period_s']:.2f} s, {exc['excursion_hz']:.2f} Hz, {exc['excursion_s']:.2f} s"
+                 if exc["present"] else "none")
+        print(f"| {name} | {axis} | {c:.2f} Hz, {s:.2f} Hz | {lo_w:.1f}-{lo:.1f} and {hi:.1f}-{hi_w:.1f} Hz "
+              f"| {env['kurtosis']:+.2f} / {span(ks[:n], '+.3f')} / {span(ks[n:], '+.3f')} "
+              f"| {env['ratio']:.0f} ({env['period_s']:.2f} s) / {span(rs[:n], '.0f')} / {span(rs[n:], '.0f')} "
+              f"| {least:.2f}, {below:.0%} | {found} | {t_rec:+.4f} / {span(ts[:n], '+.4f')} / {span(ts[n:], '+.4f')} |")
     null = null_ratios(args.null)
     print(f"\nruns: {args.sims} simulations of the extended model the analysis wrote (seeds 0, 1, ...), with the tone's "
           f"excursion found (its cycle's phase random per run) and without it; a stationary Gaussian band's envelope line is about ln(K)/ln 2 = "
