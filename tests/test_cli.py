@@ -1,5 +1,6 @@
 """cli (the ``gyrofilter`` command): one-line refusals of unknown options with the closest
 option, and output that survives a file name that is not UTF-8."""
+import json
 import os
 import subprocess
 import sys
@@ -242,3 +243,27 @@ def test_a_deleted_current_folder_is_said_not_a_nameless_errno(tmp_path, monkeyp
     assert main(["replay", str(REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz"), "--out", "x.csv"]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [
         "gyrofilter: error: the current folder no longer exists (deleted?); cd to one that does"]
+
+
+@pytest.mark.parametrize("unbuffered", ["1", ""])
+@pytest.mark.parametrize("command, out_option, out_name", [
+    ("allan", "--json", "allan.json"), ("arma", "--json", "arma.json")])
+def test_a_closed_stdout_leaves_the_output_files_written(tmp_path, command, out_option, out_name, unbuffered):
+    """Attack pass 17 (issue 37): `allan --json F | head` (stdout's reader gone before the
+    console table was printed): F is written and the exit is clean. Unbuffered (PYTHONUNBUFFERED,
+    `python -u`) the first print's BrokenPipeError ended the command with exit 0 and no word, F not
+    written; buffered, F was written and the exit was 120 with 'Exception ignored ... BrokenPipeError'."""
+    rec, _ = lsb_recording(tmp_path, n=3000)
+    out = tmp_path / out_name
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader gone before the first line
+    env = {**os.environ, "PYTHONUNBUFFERED": unbuffered}
+    try:
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", command, str(rec), out_option, str(out)],
+                              stdout=write_end, stderr=subprocess.PIPE, env=env, timeout=300)
+    finally:
+        os.close(write_end)
+    err = proc.stderr.decode()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err and f"wrote {out}" in err
+    assert json.loads(out.read_text())
