@@ -7,6 +7,7 @@ import sys
 
 import pytest
 
+from gyrofilter.recording import read_recording
 from support import REPO, file_named_by_bytes, lsb_recording
 
 
@@ -267,3 +268,19 @@ def test_a_closed_stdout_leaves_the_output_files_written(tmp_path, command, out_
     assert proc.returncode == 0, err
     assert "Traceback" not in err and "BrokenPipe" not in err and f"wrote {out}" in err
     assert json.loads(out.read_text())
+
+
+def test_record_whose_stderr_reader_goes_away_records_to_the_end(tmp_path):
+    """Attack pass 17 (issue 37): `record --progress ... 2>&1 | head`: the status line's reader
+    goes away; the recording goes on to --duration (it stopped at the first status line after,
+    1.2 s of 3, exit 0, no word)."""
+    out = tmp_path / "rec.csv"
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", "record", "--source", "sim:seed=1", "--duration", "3",
+                               "--out", str(out), "--progress"], stdout=subprocess.DEVNULL, stderr=write_end, timeout=120)
+    finally:
+        os.close(write_end)
+    assert proc.returncode == 0
+    assert len(read_recording(out)) == 300
