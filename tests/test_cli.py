@@ -1,11 +1,13 @@
 """cli (the ``gyrofilter`` command): one-line refusals of unknown options with the closest
 option, and output that survives a file name that is not UTF-8."""
+import json
 import os
 import subprocess
 import sys
 
 import pytest
 
+from gyrofilter.recording import read_recording
 from support import REPO, file_named_by_bytes, lsb_recording
 
 
@@ -242,3 +244,43 @@ def test_a_deleted_current_folder_is_said_not_a_nameless_errno(tmp_path, monkeyp
     assert main(["replay", str(REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz"), "--out", "x.csv"]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [
         "gyrofilter: error: the current folder no longer exists (deleted?); cd to one that does"]
+
+
+@pytest.mark.parametrize("unbuffered", ["1", ""])
+@pytest.mark.parametrize("command, out_option, out_name", [
+    ("allan", "--json", "allan.json"), ("arma", "--json", "arma.json")])
+def test_a_closed_stdout_leaves_the_output_files_written(tmp_path, command, out_option, out_name, unbuffered):
+    """Attack pass 17 (issue 37): `allan --json F | head` (stdout's reader gone before the
+    console table was printed): F is written and the exit is clean. Unbuffered (PYTHONUNBUFFERED,
+    `python -u`) the first print's BrokenPipeError ended the command with exit 0 and no word, F not
+    written; buffered, F was written and the exit was 120 with 'Exception ignored ... BrokenPipeError'."""
+    rec, _ = lsb_recording(tmp_path, n=3000)
+    out = tmp_path / out_name
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader gone before the first line
+    env = {**os.environ, "PYTHONUNBUFFERED": unbuffered}
+    try:
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", command, str(rec), out_option, str(out)],
+                              stdout=write_end, stderr=subprocess.PIPE, env=env, timeout=300)
+    finally:
+        os.close(write_end)
+    err = proc.stderr.decode()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err and f"wrote {out}" in err
+    assert json.loads(out.read_text())
+
+
+def test_record_whose_stderr_reader_goes_away_records_to_the_end(tmp_path):
+    """Attack pass 17 (issue 37): `record --progress ... 2>&1 | head`: the status line's reader
+    goes away; the recording goes on to --duration (it stopped at the first status line after,
+    1.2 s of 3, exit 0, no word)."""
+    out = tmp_path / "rec.csv"
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", "record", "--source", "sim:seed=1", "--duration", "3",
+                               "--out", str(out), "--progress"], stdout=subprocess.DEVNULL, stderr=write_end, timeout=120)
+    finally:
+        os.close(write_end)
+    assert proc.returncode == 0
+    assert len(read_recording(out)) == 300

@@ -585,6 +585,30 @@ def test_fatal_error_part_way_through_a_fifo_read_delivers_the_frames_read_befor
         src.read()
 
 
+
+@pytest.mark.parametrize("fifo_errno", [errno.EIO, errno.EREMOTEIO])
+def test_frames_read_before_a_failed_read_survive_a_failing_follow_up(rig, fifo_errno):
+    """Attack pass 17 (issue 37): a FIFO read fails after its first two 30-byte blocks (EIO: the
+    FIFO reset that follows; EREMOTEIO: the FIFO_COUNT re-read) and the chip is gone for the
+    traffic after it: the 10 frames read off the chip are delivered, the next read raises (the
+    follow-up's failure was raised at once and they were lost)."""
+    clock, model, bus = rig(gyro_lsb=indexed_gyro(20_000))
+    src = open_src(clock, sample_rate_hz=1000, temperature=False, accel=False, transfer="smbus")
+    a, _ = read_for(src, clock, 0.1)
+    model.fail_fifo_read(fifo_errno, after_reads=2)
+    check = model.check_failure
+
+    def chip_gone_after_the_failed_read(reg, reading):
+        if model.injected_errors:
+            model.failures.append(errno.ENXIO)
+        return check(reg, reading)
+    model.check_failure = chip_gone_after_the_failed_read
+    b = src.read()
+    assert len(b) == 10
+    np.testing.assert_array_equal(np.diff(index_of(np.concatenate([a, b]))), 1)
+    with pytest.raises(DeviceError, match=r"errno 6"):
+        src.read()
+
 # ------------------------------------------------------------------------------------------ --sample-rate-hz
 
 

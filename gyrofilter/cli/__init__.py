@@ -11,6 +11,7 @@ Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors, running 
 and Ctrl-C become one line on stderr and a non-zero exit code; a traceback is a bug.
 """
 import argparse
+import contextlib
 import importlib
 import os
 import re
@@ -155,17 +156,22 @@ def main(argv=None):
     if threading.current_thread() is not threading.main_thread():
         signals = []
     saved = [(s, signal.signal(s, _interrupt)) for s in signals]
+    streams = sys.stdout, sys.stderr
+    for stream in streams:  # a file name that is not UTF-8 prints escaped, not as a crash
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
+    sys.stdout, sys.stderr = (console.ReaderAwareStream(stream) for stream in streams)
     try:
         return _main(argv)
     finally:
+        with contextlib.suppress(OSError):  # (another error of stdout: as before, at the exit's flush)
+            sys.stdout.flush()  # what stays in stdout's buffer, where its reader went away, goes nowhere
+        sys.stdout, sys.stderr = streams
         for s, handler in saved:
             signal.signal(s, handler)
 
 
 def _main(argv):
-    for stream in (sys.stdout, sys.stderr):  # a file name that is not UTF-8 prints escaped, not as a crash
-        if hasattr(stream, "reconfigure"):
-            stream.reconfigure(errors="backslashreplace")
     argv = sys.argv[1:] if argv is None else list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     try:
@@ -188,10 +194,6 @@ def _main(argv):
         unwritten = getattr(exc, "not_written", [])
         console.say(f"gyrofilter: interrupted{'; not written: ' + ', '.join(unwritten) if unwritten else ''}")
         return EXIT_INTERRUPTED
-    except BrokenPipeError:
-        # stdout closed early (e.g. piped into `head`): not an error worth a message
-        console.drop_stdout()
-        return 0
     except (GyroFilterError, OSError, ValueError) as exc:
         console.say(console.error_line(one_line(exc)))
         return EXIT_BAD_INPUT

@@ -16,12 +16,42 @@ from ..units import AXES
 MAX_LINE_CHARS = 100
 
 
-def drop_stdout():
-    """Send what is left of stdout to the null device, its reader having gone away (``| head``, a
-    BrokenPipeError): what stays in its buffer, and the flush at exit, go nowhere, silently."""
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, sys.stdout.fileno())
-    os.close(devnull)
+class ReaderAwareStream:
+    """stdout or stderr while a command runs: where its reader goes away (``| head``, a
+    BrokenPipeError) what is left of it goes to the null device, silently, and the command carries
+    on, its output files written (the error ended the command at its next print with exit 0 and no
+    word: ``allan --json F | head`` left no F); ``reader_gone`` tells the commands that stop then
+    (run, replay --realtime). Everything else is the stream's."""
+
+    def __init__(self, stream):
+        self.stream, self.reader_gone = stream, False
+
+    def write(self, text):
+        try:
+            return self.stream.write(text)
+        except BrokenPipeError:
+            self._drop()
+            return len(text)
+
+    def flush(self):
+        try:
+            self.stream.flush()
+        except BrokenPipeError:
+            self._drop()
+
+    def _drop(self):
+        self.reader_gone = True
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, self.stream.fileno())  # what stays in the buffer, and the flush at exit, go nowhere
+        os.close(devnull)
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
+
+
+def stdout_reader_gone():
+    """Whether stdout's reader went away while the command ran (:class:`ReaderAwareStream`)."""
+    return getattr(sys.stdout, "reader_gone", False)
 
 
 def tell(*lines):

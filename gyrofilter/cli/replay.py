@@ -217,13 +217,13 @@ class Replay:
             return
         try:
             print(text, flush=True)
-            self.lines_printed += 1
-        except BrokenPipeError:
-            self.stdout_open = False
-            console.drop_stdout()
         except OSError as exc:  # a full disk under `> out.csv`: named, as run names it ("[Errno 28]" alone named nothing)
             raise OSError(exc.errno, f"{exc.strerror or exc}; {self.lines_printed} lines printed before it",
                           "stdout") from None
+        if console.stdout_reader_gone():
+            self.stdout_open = False
+        else:
+            self.lines_printed += 1
 
     def _pass_on(self, t_s, rows):
         self.filtered.add(rows)

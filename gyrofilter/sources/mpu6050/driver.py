@@ -473,11 +473,12 @@ class MPU6050Source(Source):
                 self._fifo_floor = (count - len(buf), t_count)
                 if code == _errno.EIO:
                     self.stats["resyncs"] += 1
-                    self._gap(f"FIFO read failed part-way (errno {code}); FIFO reset to keep frame alignment")
+                    self._keeping(rows, lambda: self._gap(f"FIFO read failed part-way (errno {code}); "
+                                                          f"FIFO reset to keep frame alignment"))
                     return rows
                 self._sleep(self.retry_backoff_s * (2 ** attempt))
                 if len(rows):  # the frames read before it, once the count says whether it took bytes
-                    self._fifo_shrank(self._fifo_count(), self._clock())
+                    self._keeping(rows, lambda: self._fifo_shrank(self._fifo_count(), self._clock()))
                     return rows
                 continue
             failure = self._io_error(str(R.FIFO_R_W), exc, attempt + 1)
@@ -486,6 +487,16 @@ class MPU6050Source(Source):
                 return rows
             raise failure
         return empty
+
+    def _keeping(self, rows, step):
+        """Run ``step`` (bus traffic after a failed FIFO read) with ``rows`` read off the chip before
+        it: where it fails too, the rows are delivered and the next read() raises (they were lost)."""
+        try:
+            step()
+        except DeviceError as failure:
+            if not len(rows):
+                raise
+            self._failure = self._failure or failure
 
     def _overflowed_while_read(self):
         """Whether the FIFO overflowed while it was read (INT_STATUS read again after the read):
@@ -578,22 +589,7 @@ class MPU6050Source(Source):
 
 def open_mpu6050(bus=1, address=0x68, sample_rate_hz=100, range_dps=250, dlpf=None, temperature=True,
                  allow_chip=None, accel=True, accel_range_g=2, **options):
-    """Open, identify, reset and configure an MPU-6050; return a live source reading its FIFO.
-
-    bus: I2C bus number (``/dev/i2c-N``), a device path, or an smbus2-like bus object (not closed
-    by the source). address: 0x68 (AD0 low) or 0x69 (AD0 high). sample_rate_hz: sample rate, exactly
-    ``gyro_output_rate / (1 + SMPLRT_DIV)`` (8 kHz for DLPF_CFG 0, else 1 kHz). range_dps: full
-    scale 250/500/1000/2000 deg/s (131/65.5/32.8/16.4 LSB per deg/s). dlpf: CONFIG.DLPF_CFG 0..6 (7 is reserved),
-    None picks the widest bandwidth below sample_rate_hz/2. temperature: put TEMP_OUT in the FIFO and a
-    ``temp`` column (deg C) in the rows. allow_chip: None accepts only WHO_AM_I 0x68; a chip id, a
-    collection of ids, or True lets named relatives (MPU6500, MPU9250, ...) through. accel: put the
-    accelerometer in the FIFO and ``ax, ay, az`` columns (LSB) in the rows. accel_range_g: its full
-    scale 2/4/8/16 g (16384/8192/4096/2048 LSB per g, ACCEL_CONFIG.AFS_SEL).
-
-    Options (keyword only): transfer ('auto', 'smbus', 'rdwr'), clock/sleep/wall_clock (injected
-    time functions), poll_interval_s (0.02 s), max_wait_s (0.1 s), max_retries (5), retry_backoff_s
-    (0.001 s), reset_timeout_s (0.5 s), fifo_bytes (FIFO size override, bytes); see
-    :class:`MPU6050Source` for each. Returns the started :class:`MPU6050Source`.
-    """
+    """Open, identify, reset and configure an MPU-6050; return the started :class:`MPU6050Source`
+    reading its FIFO (the parameters and the keyword-only options are its own, described there)."""
     return MPU6050Source(bus, address, sample_rate_hz, range_dps, dlpf, temperature, allow_chip, accel, accel_range_g,
                          **options)
