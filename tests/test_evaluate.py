@@ -1,4 +1,5 @@
 """Evaluation harness (gyrofilter.evaluation.evaluate) and the evaluate command."""
+import dataclasses
 import math
 
 import numpy as np
@@ -149,3 +150,15 @@ def test_pareto_front_and_dominance_rules():
     assert not ok and "12.00" in fails[0]
 
 
+
+
+def test_the_console_table_without_broad_trials_prints_no_nan():
+    """Attack pass 17: without the BROAD recordings the console's last column read "nan / nan"."""
+    dyn = {"rmse_dps": 0.5, "worst_lag_s": 0.02}
+    ev = E.Evaluation(["paper001"], ["s"], {"paper001": {"s": np.array([3.0, 4, 5])}}, ["p"], {"paper001": {"p": dyn}},
+                      [], {"paper001": {}})
+    text = E.console_table(ev)
+    assert "nan" not in text and text.splitlines()[1].endswith("- (no trials)"), text
+    trial = {"rmse_motion_dps": 2.0, "rmse_rest_dps": 0.5}
+    ev = dataclasses.replace(ev, broad_names=["t"], broad={"paper001": {"t": trial}})
+    assert E.console_table(ev).splitlines()[1].endswith("2.00 / 0.50")

@@ -172,7 +172,8 @@ def format_table(ev):
 def console_table(ev):
     """A row per filter of the :class:`Evaluation` ``ev`` that fits a 100-column terminal: the
     static std reduction (min / geometric mean), the profiles' RMSE (geometric mean, deg/s) and
-    their worst lag, the BROAD trials' RMSE in motion and at rest (geometric means, deg/s). Every
+    their worst lag, the BROAD trials' RMSE in motion and at rest (geometric means, deg/s; "-" without
+    trials). Every
     number per profile and trial is in :func:`format_table`."""
     width = max([len("filter")] + [len(name) for name in ev.filters])
     lines = [f"{'filter':<{width}}  {'static min / geo':>16}  {'profiles RMSE':>13}  {'worst lag':>9}  "
@@ -180,11 +181,12 @@ def console_table(ev):
     for name in ev.filters:
         lags = [d["worst_lag_s"] for d in ev.dynamic[name].values() if math.isfinite(d["worst_lag_s"])]
         broad = [ev.broad[name][b] for b in ev.broad_names]
-        motion = float(np.exp(np.mean(np.log([d["rmse_motion_dps"] for d in broad])))) if broad else float("nan")
-        rest = float(np.exp(np.mean(np.log([d["rmse_rest_dps"] for d in broad])))) if broad else float("nan")
+        motion = float(np.exp(np.mean(np.log([d["rmse_motion_dps"] for d in broad])))) if broad else None
+        rest = float(np.exp(np.mean(np.log([d["rmse_rest_dps"] for d in broad])))) if broad else None
         lag = f"{max(lags) * 1e3:.0f} ms" if lags else "-"
+        trials = f"{motion:.2f} / {rest:.2f}" if broad else "- (no trials)"
         lines.append(f"{name:<{width}}  {f'{ev.static_min(name):.2f} / {ev.static_geomean(name):.2f}x':>16}  "
-                     f"{ev.dynamic_geomean(name):>13.3f}  {lag:>9}  {f'{motion:.2f} / {rest:.2f}':>19}")
+                     f"{ev.dynamic_geomean(name):>13.3f}  {lag:>9}  {trials:>19}")
     return "\n".join(lines)
 
 
