@@ -178,6 +178,10 @@ def test_units_stated_by_name_suffixes(tmp_path, capsys):
     rec = read_recording(dst)
     assert rec.gyro_unit == "dps" and rec.sample_rate_hz == 100 and rec.header["time_origin"] == "1000 ms (time_ms)"
     assert "(as its name states" in capsys.readouterr().err
+    # attack pass 17: the unit given by --time-unit was said to be the name's
+    rc, dst = _convert(tmp_path, "time,gyro_x_dps,gyro_y_dps,gyro_z_dps\n" + rows + "\n", "--time-unit", "ms", "--force")
+    err = capsys.readouterr().err
+    assert rc == 0 and "(as --time-unit states" in err and "name states" not in err, err
 
 
 def test_unit_deg_per_s_is_taken_as_dps(tmp_path, capsys):

@@ -470,7 +470,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
         def where(row):
             return f"line {line_of[row]}, column {time + 1} ({quote(names[time])})"
         stamps.check(where, path)
-        how = "as its name states"
+        how = "as --time-unit states" if time_unit is not None else "as its name states"
         if t_unit is None:
             offsets = np.concatenate(stamps.offsets)
             stamps.offsets = None
