@@ -117,6 +117,23 @@ def test_cli_a_non_finite_window_is_one_line_naming_the_option(capsys, option, v
     assert f"argument {option}: must be a plain decimal number (like 12, -0.5 or 1e-3), got '{value}'" in capsys.readouterr().err
 
 
+def test_the_gap_warning_counts_the_gaps_of_the_window_analysed(tmp_path, capsys):
+    """Attack pass 17: arma warned of the file's gaps where --start-s/--end-s left them out of the
+    window it fits; the count is the window's."""
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    steps = np.full(5999, 0.01)
+    steps[100:200:10] = 0.02  # ten samples lost in the first 2 s
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    path = tmp_path / "gaps.csv"
+    write_recording(path, Recording.from_dps(np.random.default_rng(3).normal(0.5, 0.1, (6000, 3)), 100.0, t_s=t))
+    assert main(["arma", str(path), "--axis", "x", "--max-n", "1", "--start-s", "10"]) == 0
+    assert "gap(s)" not in capsys.readouterr().err
+    assert main(["arma", str(path), "--axis", "x", "--max-n", "1", "--end-s", "30"]) == 0
+    assert "t shows 10 gap(s)" in " ".join(capsys.readouterr().err.split())
+
+
 def test_cli_selects_the_window_by_t_and_warns_about_gaps(tmp_path, capsys):
     """Case 1-3: with lost samples, --start-s 20 took sample 20 * rate (t near 25 s here), the
     printed and JSON durations came from the count, and nothing said the samples were not uniform."""
@@ -141,7 +158,8 @@ def test_cli_selects_the_window_by_t_and_warns_about_gaps(tmp_path, capsys):
     captured = capsys.readouterr()
     assert f"{last - first} samples at 100 Hz (40.0 s) from 20 s after the first sample" in captured.out
     warnings = " ".join(captured.err.split()).split("gyrofilter: warning: ")  # each wrapped at 100 columns
-    assert any(w.startswith(f"{path}: t shows 1499 gap(s)") and "ARMA" in w and "not meaningful" in w
+    in_window = int(np.count_nonzero(np.diff(t[first:last]) > 0.015))  # the window's gaps, not the file's 1499
+    assert any(w.startswith(f"{path}: t shows {in_window} gap(s)") and "ARMA" in w and "not meaningful" in w
                for w in warnings), captured.err
 
 

@@ -5,6 +5,7 @@ Gross errors (spikes far beyond the noise) are refused before any fit, as ``alla
 summarised in one line on stderr, not printed one by one. ``--json`` is refused when it exists (unless ``--force``) or is the recording, before
 any work, and written under a temporary name that takes its place when complete.
 """
+import dataclasses
 import math
 import sys
 
@@ -14,6 +15,7 @@ from ..analysis.arma import identify as arma
 from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
 from ..recording import warn_about_gaps
+from ..recording.checks import gap_step_s
 from ..units import AXES, MAX_DURATION_S
 from . import console, options, outputs, still
 
@@ -57,10 +59,12 @@ def run(args):
     axes = AXES if args.axis == "all" else (args.axis,)
     head, series, t_s = read_axes(args.recording, axes, with_t=True)
     console.print_warnings(head.warnings)
-    warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful",
-                    console.say_warning)
     fs = head.sample_rate_hz
     i0, i1 = _window(args, head.rows, fs, t_s)
+    if t_s is not None and (i0, i1) != (0, head.rows):  # the gaps of the window analysed, not of the file
+        head = dataclasses.replace(head, t_gaps=int(np.count_nonzero(np.diff(t_s[i0:i1]) > gap_step_s(head))))
+    warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful",
+                    console.say_warning)
     series = {a: x[i0:i1] for a, x in series.items()}
     refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
     progress = args.progress or sys.stderr.isatty()

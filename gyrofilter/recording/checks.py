@@ -53,6 +53,13 @@ def first_step_back(step_s):
 RATE_CHECK_STEPS = 1000
 
 
+def gap_step_s(head):
+    """The longest step of ``t`` (s) that spans no lost sample in a recording of ``head`` (its
+    ``sample_rate_hz`` and ``input_sample_rate_hz``): one sample interval plus half an input sample
+    interval (:class:`TimeCheck`); a longer step is a gap, counted in ``head.t_gaps``."""
+    return 1.0 / head.sample_rate_hz + 0.5 / head.input_sample_rate_hz
+
+
 class TimeCheck:
     """The checks of a recording's ``t`` column, chunk by chunk (:meth:`add`), cheap and vectorised;
     the reader and the writer share them, so that what is written reads back:
@@ -109,7 +116,7 @@ class TimeCheck:
     def __init__(self, head, why="is sample_rate_hz or t wrong, or were most samples lost here?"):
         self.head = head
         self.why = why
-        self.max_step_s = 1.0 / head.sample_rate_hz + 0.5 / head.input_sample_rate_hz
+        self.max_step_s = gap_step_s(head)
         # the typical step of a window of gaps only that is compared: any (a file of samples), or
         # half the input samples lost or more (a filtered output, whose rows are blocks)
         self.min_gaps_step_s = 0.0 if head.input_sample_rate_hz == head.sample_rate_hz else \
