@@ -284,3 +284,24 @@ def test_record_whose_stderr_reader_goes_away_records_to_the_end(tmp_path):
         os.close(write_end)
     assert proc.returncode == 0
     assert len(read_recording(out)) == 300
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device every write to fails, ENOSPC)")
+def test_a_console_that_cannot_be_written_does_not_stop_a_command(tmp_path):
+    """Attack pass 18 (issue 37): stderr that takes no write (`2>>LOG` on a full disk, ENOSPC; a
+    terminal gone, EIO) is a console no one reads: `record --progress 2>/dev/full` records to
+    --duration (it stopped at its first status line, 51 samples of 300, exit 1), and `allan --json
+    F --kalibr Y 2>/dev/full` writes F and Y (it stopped at "wrote F", no Y, exit 1)."""
+    rec_out = tmp_path / "rec.csv"
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", "record", "--source", "sim:seed=1,realtime=1",
+                               "--duration", "3", "--out", str(rec_out), "--progress"],
+                              stdout=subprocess.DEVNULL, stderr=full, timeout=120)
+        assert proc.returncode == 0
+        assert len(read_recording(rec_out)) == 300
+        rec, _ = lsb_recording(tmp_path, n=3000)
+        out, yaml = tmp_path / "allan.json", tmp_path / "allan.yaml"
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", "allan", str(rec), "--json", str(out), "--kalibr", str(yaml)],
+                              stdout=subprocess.DEVNULL, stderr=full, timeout=300)
+    assert proc.returncode == 0
+    assert json.loads(out.read_text()) and "gyroscope_noise_density" in yaml.read_text()

@@ -21,22 +21,26 @@ class ReaderAwareStream:
     BrokenPipeError) what is left of it goes to the null device, silently, and the command carries
     on, its output files written (the error ended the command at its next print with exit 0 and no
     word: ``allan --json F | head`` left no F); ``reader_gone`` tells the commands that stop then
-    (run, replay --realtime). Everything else is the stream's."""
+    (run, replay --realtime). ``lost``: the errors that mean so; stderr, which holds messages only,
+    takes every OSError (``2>>LOG`` on a full disk, ENOSPC; a terminal gone, EIO: a message no
+    one can read stopped ``record`` at its first status line, its recording cut short), stdout
+    the BrokenPipeError only (another error lost the command's result, and is one). Everything
+    else is the stream's."""
 
-    def __init__(self, stream):
-        self.stream, self.reader_gone = stream, False
+    def __init__(self, stream, lost=BrokenPipeError):
+        self.stream, self.lost, self.reader_gone = stream, lost, False
 
     def write(self, text):
         try:
             return self.stream.write(text)
-        except BrokenPipeError:
+        except self.lost:
             self._drop()
             return len(text)
 
     def flush(self):
         try:
             self.stream.flush()
-        except BrokenPipeError:
+        except self.lost:
             self._drop()
 
     def _drop(self):
