@@ -305,3 +305,17 @@ def test_a_console_that_cannot_be_written_does_not_stop_a_command(tmp_path):
                               stdout=subprocess.DEVNULL, stderr=full, timeout=300)
     assert proc.returncode == 0
     assert json.loads(out.read_text()) and "gyroscope_noise_density" in yaml.read_text()
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device every write to fails, ENOSPC)")
+def test_a_full_stdout_is_named(tmp_path):
+    """Attack pass 18: `simulate --out F > /dev/full`: F is written whole, the console's line is
+    not; the error names stdout (it read "[Errno 28] No space left on device" alone, as if F's
+    disk had filled)."""
+    out = tmp_path / "sim.csv"
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", "simulate", "--model", str(REPO / "examples" / "models" / "bias_step.json"),
+                               "--duration", "2", "--out", str(out)], stdout=full, stderr=subprocess.PIPE, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stderr.decode().splitlines() == ["gyrofilter: error: stdout: No space left on device"]
+    assert len(read_recording(out)) > 0

@@ -160,7 +160,7 @@ def main(argv=None):
     for stream in streams:  # a file name that is not UTF-8 prints escaped, not as a crash
         if hasattr(stream, "reconfigure"):
             stream.reconfigure(errors="backslashreplace")
-    sys.stdout, sys.stderr = console.ReaderAwareStream(streams[0]), console.ReaderAwareStream(streams[1], lost=OSError)
+    sys.stdout, sys.stderr = console.ReaderAwareStream(streams[0], "stdout"), console.ReaderAwareStream(streams[1], "stderr", lost=OSError)
     try:
         return _main(argv)
     finally:

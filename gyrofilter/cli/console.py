@@ -2,6 +2,7 @@
 data), the start-up bias as printed, and the summary table of a filtered recording. Every message
 (a line that may name a file) goes through :func:`~gyrofilter.inputs.escape_controls` (``\\n``, ``\\x1b``: a file
 name cannot start a line of its own or colour the terminal)."""
+import contextlib
 import math
 import os
 import re
@@ -24,24 +25,34 @@ class ReaderAwareStream:
     (run, replay --realtime). ``lost``: the errors that mean so; stderr, which holds messages only,
     takes every OSError (``2>>LOG`` on a full disk, ENOSPC; a terminal gone, EIO: a message no
     one can read stopped ``record`` at its first status line, its recording cut short), stdout
-    the BrokenPipeError only (another error lost the command's result, and is one). Everything
-    else is the stream's."""
+    the BrokenPipeError only (another error lost the command's result, and is one, raised naming
+    ``name``: "[Errno 28] No space left on device" alone read as the failure of an output file
+    the command had written whole). Everything else is the stream's."""
 
-    def __init__(self, stream, lost=BrokenPipeError):
-        self.stream, self.lost, self.reader_gone = stream, lost, False
+    def __init__(self, stream, name, lost=BrokenPipeError):
+        self.stream, self.name, self.lost, self.reader_gone = stream, name, lost, False
 
     def write(self, text):
-        try:
-            return self.stream.write(text)
-        except self.lost:
-            self._drop()
-            return len(text)
+        with self._named():
+            try:
+                return self.stream.write(text)
+            except self.lost:
+                self._drop()
+                return len(text)
 
     def flush(self):
+        with self._named():
+            try:
+                self.stream.flush()
+            except self.lost:
+                self._drop()
+
+    @contextlib.contextmanager
+    def _named(self):
         try:
-            self.stream.flush()
-        except self.lost:
-            self._drop()
+            yield
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), exc.filename or self.name) from None
 
     def _drop(self):
         self.reader_gone = True
