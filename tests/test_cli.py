@@ -319,3 +319,18 @@ def test_a_full_stdout_is_named(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.decode().splitlines() == ["gyrofilter: error: stdout: No space left on device"]
     assert len(read_recording(out)) > 0
+
+
+def test_a_console_closed_at_the_start_is_the_null_device(tmp_path):
+    """Attack pass 18 (issue 37): `gyrofilter allan F --json J >&- 2>&-` (a descriptor closed, as a
+    daemon or a cron line may start a command; Python's stdout and stderr None) and `record
+    --progress ... 2>&-`: the output files are written and the exit is clean (each ended with
+    exit 120 or 1 on an AttributeError, nothing written)."""
+    rec, _ = lsb_recording(tmp_path, n=3000)
+    out, rec_out = tmp_path / "allan.json", tmp_path / "recorded.csv"
+    allan = subprocess.run(["sh", "-c", f'"$0" -m gyrofilter allan "$1" --json "$2" >&- 2>&-', sys.executable, rec, out],
+                           timeout=300)
+    record = subprocess.run(["sh", "-c", f'"$0" -m gyrofilter record --source sim:seed=1 --duration 1 --progress --out "$1" 2>&-',
+                             sys.executable, rec_out], timeout=120)
+    assert (allan.returncode, record.returncode) == (0, 0)
+    assert json.loads(out.read_text()) and len(read_recording(rec_out)) == 100
