@@ -308,16 +308,23 @@ def test_a_console_that_cannot_be_written_does_not_stop_a_command(tmp_path):
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device every write to fails, ENOSPC)")
-def test_a_full_stdout_is_named(tmp_path):
-    """Attack pass 18: `simulate --out F > /dev/full`: F is written whole, the console's line is
-    not; the error names stdout (it read "[Errno 28] No space left on device" alone, as if F's
-    disk had filled)."""
+@pytest.mark.parametrize("unbuffered", ["1", ""])
+def test_a_full_stdout_is_an_error_naming_it(tmp_path, unbuffered):
+    """Attack pass 18: `arma F > FULL` (the table its result, on a full disk): exit 2 naming
+    stdout (buffered, it ended with exit 0 and no word, the table lost; `allan F` the same); `simulate --out F > FULL`: F is
+    written whole, the console's line is not, and the error names stdout (it read "[Errno 28] No
+    space left on device" alone, as if F's disk had filled; buffered, exit 120 and "Exception
+    ignored")."""
+    rec, _ = lsb_recording(tmp_path, n=3000)
     out = tmp_path / "sim.csv"
+    env = {**os.environ, "PYTHONUNBUFFERED": unbuffered}
     with open("/dev/full", "w") as full:
-        proc = subprocess.run([sys.executable, "-m", "gyrofilter", "simulate", "--model", str(REPO / "examples" / "models" / "bias_step.json"),
-                               "--duration", "2", "--out", str(out)], stdout=full, stderr=subprocess.PIPE, timeout=120)
-    assert proc.returncode == 2
-    assert proc.stderr.decode().splitlines() == ["gyrofilter: error: stdout: No space left on device"]
+        for args in (["arma", str(rec)], ["simulate", "--model", str(REPO / "examples" / "models" / "bias_step.json"),
+                                           "--duration", "2", "--out", str(out)]):
+            proc = subprocess.run([sys.executable, "-m", "gyrofilter", *args], stdout=full, stderr=subprocess.PIPE, env=env,
+                                  timeout=300)
+            assert proc.returncode == 2
+            assert proc.stderr.decode().splitlines()[-1] == "gyrofilter: error: stdout: No space left on device"
     assert len(read_recording(out)) > 0
 
 

@@ -195,7 +195,9 @@ def _main(argv):
             parser.print_help()
             return EXIT_BAD_INPUT
         module = importlib.import_module(COMMANDS[args.command][0])
-        return module.run(args) or 0
+        status = module.run(args) or 0
+        sys.stdout.flush()  # a failure of stdout where the buffer held the whole result is an error too
+        return status
     except KeyboardInterrupt as exc:
         unwritten = getattr(exc, "not_written", [])
         console.say(f"gyrofilter: interrupted{'; not written: ' + ', '.join(unwritten) if unwritten else ''}")

@@ -26,8 +26,10 @@ class ReaderAwareStream:
     takes every OSError (``2>>LOG`` on a full disk, ENOSPC; a terminal gone, EIO: a message no
     one can read stopped ``record`` at its first status line, its recording cut short), stdout
     the BrokenPipeError only (another error lost the command's result, and is one, raised naming
-    ``name``: "[Errno 28] No space left on device" alone read as the failure of an output file
-    the command had written whole). Everything else is the stream's."""
+    ``name`` once, the rest going nowhere: "[Errno 28] No space left on device" alone read as the
+    failure of an output file the command had written whole; the command's last
+    :meth:`flush` raises it too, where the buffer held the whole result: ``allan F > FULL``
+    ended with exit 0). Everything else is the stream's."""
 
     def __init__(self, stream, name, lost=BrokenPipeError):
         self.stream, self.name, self.lost, self.reader_gone = stream, name, lost, False
@@ -52,10 +54,14 @@ class ReaderAwareStream:
         try:
             yield
         except OSError as exc:
+            self._to_null()
             raise OSError(exc.errno, exc.strerror or str(exc), exc.filename or self.name) from None
 
     def _drop(self):
         self.reader_gone = True
+        self._to_null()
+
+    def _to_null(self):
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, self.stream.fileno())  # what stays in the buffer, and the flush at exit, go nowhere
         os.close(devnull)
