@@ -62,8 +62,12 @@ class ReaderAwareStream:
         self._to_null()
 
     def _to_null(self):
+        try:
+            fd = self.stream.fileno()
+        except (AttributeError, OSError):  # a stream of no descriptor (io.StringIO): no flush at exit either
+            return
         devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, self.stream.fileno())  # what stays in the buffer, and the flush at exit, go nowhere
+        os.dup2(devnull, fd)  # what stays in the buffer, and the flush at exit, go nowhere
         os.close(devnull)
 
     def __getattr__(self, name):
