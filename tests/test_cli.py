@@ -284,3 +284,60 @@ def test_record_whose_stderr_reader_goes_away_records_to_the_end(tmp_path):
         os.close(write_end)
     assert proc.returncode == 0
     assert len(read_recording(out)) == 300
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device every write to fails, ENOSPC)")
+def test_a_console_that_cannot_be_written_does_not_stop_a_command(tmp_path):
+    """Attack pass 18 (issue 37): stderr that takes no write (`2>>LOG` on a full disk, ENOSPC; a
+    terminal gone, EIO) is a console no one reads: `record --progress 2>/dev/full` records to
+    --duration (it stopped at its first status line, 51 samples of 300, exit 1), and `allan --json
+    F --kalibr Y 2>/dev/full` writes F and Y (it stopped at "wrote F", no Y, exit 1)."""
+    rec_out = tmp_path / "rec.csv"
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", "record", "--source", "sim:seed=1,realtime=1",
+                               "--duration", "3", "--out", str(rec_out), "--progress"],
+                              stdout=subprocess.DEVNULL, stderr=full, timeout=120)
+        assert proc.returncode == 0
+        assert len(read_recording(rec_out)) == 300
+        rec, _ = lsb_recording(tmp_path, n=3000)
+        out, yaml = tmp_path / "allan.json", tmp_path / "allan.yaml"
+        proc = subprocess.run([sys.executable, "-m", "gyrofilter", "allan", str(rec), "--json", str(out), "--kalibr", str(yaml)],
+                              stdout=subprocess.DEVNULL, stderr=full, timeout=300)
+    assert proc.returncode == 0
+    assert json.loads(out.read_text()) and "gyroscope_noise_density" in yaml.read_text()
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device every write to fails, ENOSPC)")
+@pytest.mark.parametrize("unbuffered", ["1", ""])
+def test_a_full_stdout_is_an_error_naming_it(tmp_path, unbuffered):
+    """Attack pass 18: `arma F > FULL` (the table its result, on a full disk): exit 2 naming
+    stdout (buffered, it ended with exit 0 and no word, the table lost; `allan F` the same); `simulate --out F > FULL`: F is
+    written whole, the console's line is not, and the error names stdout (it read "[Errno 28] No
+    space left on device" alone, as if F's disk had filled; buffered, exit 120 and "Exception
+    ignored")."""
+    rec, _ = lsb_recording(tmp_path, n=3000)
+    out = tmp_path / "sim.csv"
+    env = {**os.environ, "PYTHONUNBUFFERED": unbuffered}
+    with open("/dev/full", "w") as full:
+        for args in (["arma", str(rec)], ["simulate", "--model", str(REPO / "examples" / "models" / "bias_step.json"),
+                                           "--duration", "2", "--out", str(out)]):
+            proc = subprocess.run([sys.executable, "-m", "gyrofilter", *args], stdout=full, stderr=subprocess.PIPE, env=env,
+                                  timeout=300)
+            assert proc.returncode == 2
+            assert proc.stderr.decode().splitlines()[-1] == "gyrofilter: error: stdout: No space left on device"
+    assert len(read_recording(out)) > 0
+
+
+def test_a_console_closed_at_the_start_is_the_null_device(tmp_path):
+    """Attack pass 18 (issue 37): `gyrofilter allan F --json J >&- 2>&-` (a descriptor closed, as a
+    daemon or a cron line may start a command; Python's stdout and stderr None) and `record
+    --progress ... 2>&-`: the output files are written and the exit is clean (each ended with
+    exit 120 or 1 on an AttributeError, nothing written)."""
+    rec, _ = lsb_recording(tmp_path, n=3000)
+    out, rec_out = tmp_path / "allan.json", tmp_path / "recorded.csv"
+    allan = subprocess.run(["sh", "-c", f'"$0" -m gyrofilter allan "$1" --json "$2" >&- 2>&-', sys.executable, rec, out],
+                           timeout=300)
+    record = subprocess.run(["sh", "-c", f'"$0" -m gyrofilter record --source sim:seed=1 --duration 1 --progress --out "$1" 2>&-',
+                             sys.executable, rec_out], timeout=120)
+    assert (allan.returncode, record.returncode) == (0, 0)
+    assert json.loads(out.read_text()) and len(read_recording(rec_out)) == 100

@@ -157,16 +157,22 @@ def main(argv=None):
         signals = []
     saved = [(s, signal.signal(s, _interrupt)) for s in signals]
     streams = sys.stdout, sys.stderr
-    for stream in streams:  # a file name that is not UTF-8 prints escaped, not as a crash
+    # a descriptor closed at the start (`>&-`, `2>&-`: Python's stream None) is a console no one
+    # reads: the null device (it ended every command with exit 1 or 120, its files not written)
+    consoles = [stream if stream is not None else open(os.devnull, "w") for stream in streams]
+    for stream in consoles:  # a file name that is not UTF-8 prints escaped, not as a crash
         if hasattr(stream, "reconfigure"):
             stream.reconfigure(errors="backslashreplace")
-    sys.stdout, sys.stderr = (console.ReaderAwareStream(stream) for stream in streams)
+    sys.stdout, sys.stderr = console.ReaderAwareStream(consoles[0], "stdout"), console.ReaderAwareStream(consoles[1], "stderr", lost=OSError)
     try:
         return _main(argv)
     finally:
         with contextlib.suppress(OSError):  # (another error of stdout: as before, at the exit's flush)
             sys.stdout.flush()  # what stays in stdout's buffer, where its reader went away, goes nowhere
         sys.stdout, sys.stderr = streams
+        for stream, used in zip(streams, consoles):
+            if stream is None:
+                used.close()
         for s, handler in saved:
             signal.signal(s, handler)
 
@@ -189,7 +195,9 @@ def _main(argv):
             parser.print_help()
             return EXIT_BAD_INPUT
         module = importlib.import_module(COMMANDS[args.command][0])
-        return module.run(args) or 0
+        status = module.run(args) or 0
+        sys.stdout.flush()  # a failure of stdout where the buffer held the whole result is an error too
+        return status
     except KeyboardInterrupt as exc:
         unwritten = getattr(exc, "not_written", [])
         console.say(f"gyrofilter: interrupted{'; not written: ' + ', '.join(unwritten) if unwritten else ''}")

@@ -2,6 +2,7 @@
 data), the start-up bias as printed, and the summary table of a filtered recording. Every message
 (a line that may name a file) goes through :func:`~gyrofilter.inputs.escape_controls` (``\\n``, ``\\x1b``: a file
 name cannot start a line of its own or colour the terminal)."""
+import contextlib
 import math
 import os
 import re
@@ -21,28 +22,52 @@ class ReaderAwareStream:
     BrokenPipeError) what is left of it goes to the null device, silently, and the command carries
     on, its output files written (the error ended the command at its next print with exit 0 and no
     word: ``allan --json F | head`` left no F); ``reader_gone`` tells the commands that stop then
-    (run, replay --realtime). Everything else is the stream's."""
+    (run, replay --realtime). ``lost``: the errors that mean so; stderr, which holds messages only,
+    takes every OSError (``2>>LOG`` on a full disk, ENOSPC; a terminal gone, EIO: a message no
+    one can read stopped ``record`` at its first status line, its recording cut short), stdout
+    the BrokenPipeError only (another error lost the command's result, and is one, raised naming
+    ``name`` once, the rest going nowhere: "[Errno 28] No space left on device" alone read as the
+    failure of an output file the command had written whole; the command's last
+    :meth:`flush` raises it too, where the buffer held the whole result: ``allan F > FULL``
+    ended with exit 0). Everything else is the stream's."""
 
-    def __init__(self, stream):
-        self.stream, self.reader_gone = stream, False
+    def __init__(self, stream, name, lost=BrokenPipeError):
+        self.stream, self.name, self.lost, self.reader_gone = stream, name, lost, False
 
     def write(self, text):
-        try:
-            return self.stream.write(text)
-        except BrokenPipeError:
-            self._drop()
-            return len(text)
+        with self._named():
+            try:
+                return self.stream.write(text)
+            except self.lost:
+                self._drop()
+                return len(text)
 
     def flush(self):
+        with self._named():
+            try:
+                self.stream.flush()
+            except self.lost:
+                self._drop()
+
+    @contextlib.contextmanager
+    def _named(self):
         try:
-            self.stream.flush()
-        except BrokenPipeError:
-            self._drop()
+            yield
+        except OSError as exc:
+            self._to_null()
+            raise OSError(exc.errno, exc.strerror or str(exc), exc.filename or self.name) from None
 
     def _drop(self):
         self.reader_gone = True
+        self._to_null()
+
+    def _to_null(self):
+        try:
+            fd = self.stream.fileno()
+        except (AttributeError, OSError):  # a stream of no descriptor (io.StringIO): no flush at exit either
+            return
         devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, self.stream.fileno())  # what stays in the buffer, and the flush at exit, go nowhere
+        os.dup2(devnull, fd)  # what stays in the buffer, and the flush at exit, go nowhere
         os.close(devnull)
 
     def __getattr__(self, name):
