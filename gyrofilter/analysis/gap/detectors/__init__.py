@@ -133,6 +133,7 @@ from .common import (  # noqa: F401
     COLORED_MIN_LAG2_GAP,
     COLORED_Z,
     COMPOSITE_MIN_GAIN,
+    COMPRESSION_TAILS_Z,
     Candidate,
     DETERMINISTIC_THRESHOLD,
     EXACT_GM_MARGIN,
