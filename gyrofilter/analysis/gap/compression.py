@@ -19,7 +19,7 @@ Gaussian value ``(T(0) - T) / (8 sigma^2)`` (the excess kurtosis of a compressed
 about -24 gamma sigma^2, a log-kurtosis of -8 gamma sigma^2; the tail statistic's prewhitening
 spreads each sample's shape over a few and reads less), at most :data:`MAX_TRIALS` model
 evaluations (each the extended model's ``n_ext`` runs), stopping when T is within one sd of the
-runs; gamma at most :data:`~gyrofilter.sim.compression.MAX_COMPRESSION` / sigma^2 (the
+runs, then one more secant step, not evaluated; gamma at most :data:`~gyrofilter.sim.compression.MAX_COMPRESSION` / sigma^2 (the
 simulator's bound). **sigma** (``rms_dps``, which fixes the gain) is the rms of the record's fast
 part: its high-pass (:func:`~gyrofilter.analysis.gap.detectors.highpassed`) less the quantizer's
 q^2 / 12.
@@ -129,8 +129,10 @@ def _with_compression(inp, state, scorer, i, ks, tails):
 def fit_gamma(mean_tails, t0, target, sd, sigma_dps):
     """``(gamma, T(gamma), T'(gamma))``: gamma where the runs' mean tail statistic
     ``mean_tails(gamma)`` meets ``target`` (module docstring: secant steps from ``(0, t0)``, at
-    most :data:`MAX_TRIALS` evaluations, stopping within ``sd``), with the slope of the last
-    secant; ``(None, None, None)`` where the runs do not lighten (a slope >= 0)."""
+    most :data:`MAX_TRIALS` evaluations, stopping within ``sd``, then the last secant's step
+    taken without a further evaluation, so that the linearised re-estimator returns gamma itself on
+    the record), with T read off that secant and its slope; ``(None, None, None)`` where the runs
+    do not lighten (a slope >= 0)."""
     top = MAX_COMPRESSION / sigma_dps ** 2
     points = [(0.0, t0)]
     gamma = min((t0 - target) / (8.0 * sigma_dps ** 2), top)
@@ -147,4 +149,5 @@ def fit_gamma(mean_tails, t0, target, sd, sigma_dps):
             break
         gamma = step
     g, f = points[-1]
-    return g, f, slope
+    gamma = min(max(g + (target - f) / slope, 0.0), top)  # the last secant's own step, as the re-estimator reads
+    return gamma, f + slope * (gamma - g), slope
