@@ -11,7 +11,13 @@ fitted to their tail statistic it reproduces fourth-order cross terms it was not
 :data:`~gyrofilter.analysis.gap.detectors.OUTSIDE_NULL_D` and the record's tail statistic
 (:func:`~gyrofilter.analysis.gap.detectors.tails_statistic`, a feature of D) departs from the
 extended model's runs by z below :data:`~gyrofilter.analysis.gap.detectors.COMPRESSION_TAILS_Z`
-(lighter tails than the model's; its runs' spread as D pools it).
+(lighter tails than the model's; its runs' spread as D pools it), unless the record lies on a
+lattice of more than :data:`~gyrofilter.analysis.gap.detectors.TAILS_MAX_STEP_SD` noise sd
+(:func:`~gyrofilter.analysis.gap.detectors.tails.tail_step`): so coarse a quantizer makes the
+distribution lighter by itself, and where the model does not carry it (a record in deg/s or
+rad/s without its LSB) a compression would stand for it. The BROAD rest phases (36 s at 286 Hz,
+steps of 0.62-0.68 noise sd, no LSB in their header) had it named on 4 axes, 3 of them not on every
+stream, before this rule; the ADIS16405 records are at 0.11-0.15.
 
 **gamma** (1-D): the runs' mean tail statistic T(gamma) falls with gamma; gamma is where it meets
 the record's T, by secant steps from T(0) (the extended model's runs) and a first trial at the
@@ -50,6 +56,7 @@ from ...units import AXES
 from . import detectors as det
 from .baseline import MIN_SIMS, axis_dps
 from .confound import CONFOUNDED_SPREADS
+from .detectors.tails import tail_step
 from .features import d_shown
 from .state import Kept
 
@@ -77,6 +84,12 @@ def compression_step(inp, state, scorer):
         deps = scorer.departures(i, state.model(inp, i, ks), f"extended model on {a}") if ks else inp.deps[i]
         z, t0, sd = (float(v[0]) for v in deps["tails"])
         if not z < det.COMPRESSION_TAILS_Z:
+            continue
+        step = tail_step(axis_dps(inp.rec, i), inp.sample_rate_hz)
+        if step > det.TAILS_MAX_STEP_SD:
+            state = state.with_notes(f"axis {a}: its tails are lighter than the extended model's (z = {z:+.1f}), but the "
+                                     f"rate is quantized in steps of {step:.2g} noise sd: its distribution is the "
+                                     "quantizer's, no compression is fitted")
             continue
         inp.say(f"compression fit on {a}")
         state = _with_compression(inp, state, scorer, i, ks, (z, t0, max(sd, 1.0 / math.sqrt(inp.n))))
