@@ -31,6 +31,8 @@ The kinds, and the groups every module derives from them (never a list of its ow
   updates its registers; :data:`ROWS`). Not a term of an axis: a model gives it as a top-level
   key of its own name (docs/formats.md, section 2), because the axes are simulated
   independently and a per-axis term could not repeat the same rows on every axis.
+- ``transfer``: a transfer acting on the sum of an axis's fast terms (a cubic compression about
+  the slow level; :data:`TRANSFERS`): not a term added to the rate, a map of the others.
 
 The registry's **order** is the simulator's: each effect's random stream is keyed by its place
 (:mod:`gyrofilter.sim.simulate`), so a new effect is appended at the end.
@@ -56,8 +58,9 @@ REPEATED_SAMPLES = "repeated_samples"
 RESONANCE = "resonance"
 RINGING = "ringing"
 WANDERING_TONE = "wandering_tone"
+COMPRESSION = "compression"
 
-KINDS = ("wander", "shape", "covariate", "line", "noise", "tails", "rows")
+KINDS = ("wander", "shape", "covariate", "line", "noise", "tails", "rows", "transfer")
 
 
 @dataclass(frozen=True)
@@ -122,6 +125,8 @@ REGISTRY = (
     Effect(WANDERING_TONE, "line", {"center_hz": "pos", "spread_hz": "nonneg", "wander_s": "pos", "amplitude_dps": "nonneg"},
            {"excursion_hz": ("nonneg", 0.0), "excursion_period_s": ("pos", None), "excursion_s": ("pos", None)},
            {"spread_hz": "log", "wander_s": "log", "amplitude_dps": "log"}, defining="amplitude_dps"),
+    Effect(COMPRESSION, "transfer", {"gamma_per_dps2": "nonneg", "rms_dps": "pos"}, {},
+           {"gamma_per_dps2": "log", "rms_dps": "log"}, defining="gamma_per_dps2"),
 )
 #: name -> record, in the registry's order
 BY_NAME = {e.name: e for e in REGISTRY}
@@ -144,6 +149,8 @@ SLOW = of_kind("wander", "shape", "covariate")
 TAILS = of_kind("tails")
 #: the effects on whole rows (every axis at once): a model's top-level keys, not terms of an axis
 ROWS = of_kind("rows")
+#: the transfers acting on an axis's fast terms (a map of the terms, not a term)
+TRANSFERS = of_kind("transfer")
 #: the peaks of the spectrum: a sinusoid, a narrow band, a resonance's hump and its ringing, a
 #: wandering tone, alternative readings of one peak of the spectrum
 LINES = of_kind("line")

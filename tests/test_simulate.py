@@ -46,6 +46,7 @@ ALL_EFFECTS = [
     {"effect": "resonance", "center_hz": 12.0, "q": 3.0, "rms_dps": 0.02},
     {"effect": "ringing", "center_hz": 20.0, "q": 2.0, "shock_rate_hz": 0.5, "shock_dps": 0.5},
     {"effect": "wandering_tone", "center_hz": 19.7, "spread_hz": 0.8, "wander_s": 30.0, "amplitude_dps": 0.05},
+    {"effect": "compression", "gamma_per_dps2": 1.0, "rms_dps": 0.1},
 ]
 TEMP = {"start_c": 25.0, "end_c": 32.0, "tau_s": 60.0, "noise_c": 0.02, "resolution_c": 1 / 340}
 
@@ -58,7 +59,7 @@ def full_model(**kw):
 def test_every_effect_of_the_table_is_supported():
     assert list(EFFECTS) == ["bias_instability", "rate_random_walk", "rate_ramp", "gauss_markov", "sinusoid",
                              "temperature", "bias_step", "warmup", "outliers", "colored_noise", "narrowband", "arma",
-                             "heavy_tails", "repeated_samples", "resonance", "ringing", "wandering_tone"]
+                             "heavy_tails", "repeated_samples", "resonance", "ringing", "wandering_tone", "compression"]
     # the whole-row effects are top-level keys of a model (tests/test_repeats.py), not effects of an axis
     assert {e["effect"] for e in ALL_EFFECTS} == set(EFFECTS) - set(ROWS)
 

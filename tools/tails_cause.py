@@ -26,7 +26,8 @@ For every axis on which ``analyse_gap`` (the command's defaults, no intervals) n
   locked in phase, R holding components at sums and differences of T's and L's frequencies
   (intermodulation: a product of the tone and the noise, as a nonlinear transfer makes).
 
-The same for ``--sims`` runs of the extended model the analysis wrote (seeds 0, 1, ...), and
+The same for ``--sims`` runs of the extended model the analysis wrote, less the ``compression`` it
+may hold (seeds 0, 1, ...), and
 for its variants: the tone's amplitude 10 % higher (more tone in ``u``), the tone's excursion
 found (:func:`gyrofilter.analysis.gap.detectors.tone_excursion`; with ``tools/tone_modulation.py``'s
 ``with_excursion``), no quantization, and a **cubic compression** of the rate about its slow
@@ -38,8 +39,9 @@ level ``l`` (the series less the tail statistic's high pass, ``e = x - l``):
 ``O(gamma^2)``), applied before the quantizer: the run is drawn without the model's quantization,
 compressed, then rounded to the model's step (compressing a quantized run and rounding it again
 would put most samples back where they were); ``gamma`` (deg/s)^-2 fitted so that the runs'
-mean tail statistic equals the record's (linear interpolation over 0.01-0.05). A compression is a
-trial applied to the runs here, not a term of the simulator. The record's other axes are the
+mean tail statistic equals the record's (linear interpolation over 0.01-0.05). The compression is
+applied to the runs here as a trial (the simulator's ``compression`` term, which ``gap`` now fits,
+compresses the fast terms about the slow level before the quantizer as well). The record's other axes are the
 control: the same ``gamma`` applied to their runs.
 
 Then D of the tone's axis (:func:`gyrofilter.analysis.gap.features.discrepancy`, the mean
@@ -60,7 +62,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-from gyrofilter.effects import WANDERING_TONE  # noqa: E402
+from gyrofilter.effects import COMPRESSION, WANDERING_TONE  # noqa: E402
 
 #: the compressions over which gamma (deg/s)^-2 is interpolated
 GAMMAS = (0.0, 0.01, 0.02, 0.03, 0.04, 0.05)
@@ -120,6 +122,15 @@ def without_quantization(spec):
     return out
 
 
+def without_compression(spec):
+    """The model ``spec`` without the compression ``gap`` may have fitted (the cause this tool
+    measures is tried on the runs of the model without it)."""
+    out = copy.deepcopy(spec)
+    for entry in out["axes"].values():
+        entry["effects"] = [e for e in entry.get("effects", []) if e["effect"] != COMPRESSION]
+    return out
+
+
 def with_amplitude(spec, axis, factor):
     """The model ``spec`` with the wandering tone of ``axis`` ``factor`` times stronger."""
     out = copy.deepcopy(spec)
@@ -169,7 +180,7 @@ def main(argv=None):
     d_lines, gamma_lines = [], []
     for name, rec, rep, i, c, s, x in tone_axes(args.adis, args.records):
         fs, n, axis = float(rec.sample_rate_hz), len(rec), "xyz"[i]
-        model = rep["extended_model"]
+        model = without_compression(rep["extended_model"])
         step = 1.0 / model["lsb_per_dps"] if model.get("lsb_per_dps") else 0.0
         bare, _ = validate_model(without_quantization(model))
         meas = moments(x, fs, c)

@@ -16,8 +16,9 @@ import numpy as np
 
 from . import noise_terms as nt
 from .accel import accel_unit
-from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, HEAVY_TAILS, NARROWBAND, REGISTRY, RESONATORS, ROWS,
-                       SINUSOID, TEMPERATURE, WANDERING_TONE)
+from .compression import MAX_COMPRESSION
+from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, COMPRESSION, HEAVY_TAILS, NARROWBAND, REGISTRY, RESONATORS,
+                       ROWS, SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
 from ..inputs import MAX_QUOTE_CHARS, closest, did_you_mean, load_json, quote
 from ..recording.checks import first_step_back
@@ -342,7 +343,7 @@ def _validate_axis(spec, where, model, warnings, coefficients_only):
     _check_length(effects, f"{where}.effects", MAX_EFFECTS_PER_AXIS, "effects")
     for i, eff in enumerate(effects):
         out["effects"].append(_validate_effect(eff, f"{where}.effects[{i}]", model, warnings, coefficients_only))
-    for single in (COLORED_NOISE, HEAVY_TAILS):  # properties of the one white noise of the axis
+    for single in (COLORED_NOISE, HEAVY_TAILS, COMPRESSION):  # properties of the one white noise, the one transfer
         if sum(e["effect"] == single for e in out["effects"]) > 1:
             _err(f"{where}.effects", f"at most one {single} per axis")
     return out
@@ -413,6 +414,10 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
                                           f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")
     if name == WANDERING_TONE:
         _check_excursion(out, label, rate)
+    if name == COMPRESSION and out["gamma_per_dps2"] * out["rms_dps"] ** 2 > MAX_COMPRESSION:
+        _err(f"{label}.gamma_per_dps2", f"expected gamma_per_dps2 * rms_dps^2 <= {MAX_COMPRESSION:g} (the cubic's turning "
+                                        f"point at 3.3 rms or beyond), got {out['gamma_per_dps2']:g} * {out['rms_dps']:g}^2 = "
+                                        f"{out['gamma_per_dps2'] * out['rms_dps'] ** 2:.3g}")
     if name == ARMA and out["phi"] and np.abs(np.roots(np.r_[1.0, -np.asarray(out["phi"])])).max() >= 1.0:
         _err(f"{label}.phi", "expected a stationary AR part (every root of z^p - phi_1 z^(p-1) - ... - phi_p inside the unit circle)")
     if name == COLORED_NOISE and out["lag2"] is not None and nt.arma11_from_lags(out["lag1"], out["lag2"]) is None:

@@ -9,6 +9,8 @@ Per axis and sample n (t = n / f_s), in deg/s:
     ω[n] = b + e[n] + Σ_effects x_k[n]                (b = ``bias_dps``; e = white noise, N sqrt(f_s) w[n],
                                                        or its low-passed form with ``colored_noise``;
                                                        w[n] of unit variance, heavy-tailed with ``heavy_tails``)
+    ω[n] ← l[n] + g c(ω[n] - l[n])                   (``compression``: the fast terms compressed about the
+                                                       slow level l, the bias and the slow effects)
     ω[n] ← ω[n] + spikes[n]                           (``outliers``)
     ω[n] ← clip(ω[n], -FS, +FS)                       (``full_scale_dps``: saturation)
     ω[n] ← round(ω[n] · lsb_per_dps) / lsb_per_dps    (quantization, when ``lsb_per_dps`` is given)
@@ -18,7 +20,7 @@ then the rate is written in ``gyro_unit`` (``lsb``: the integers round(ω · lsb
 column, the temperature's and the accelerometer's too (:class:`gyrofilter.sim.noise_terms.RepeatedRows`); its stream is the
 record's, not an axis's, so one axis simulated alone (:func:`simulate_axis_dps`) repeats the same rows.
 Each effect term is documented, with its equation, in :mod:`gyrofilter.sim.noise_terms`
-(``wandering_tone`` in :mod:`gyrofilter.sim.tone`).
+(``wandering_tone`` in :mod:`gyrofilter.sim.tone`, ``compression`` in :mod:`gyrofilter.sim.compression`).
 
 ``colored_noise`` low-passes the white noise: with ``preserve="arw"`` (default)
 ``arw_dps_per_sqrt_hz`` keeps its Allan meaning (the white level for τ well beyond the filter's
@@ -57,10 +59,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..effects import (ARMA, BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND,
-                       OUTLIERS, RATE_RAMP, RATE_RANDOM_WALK, REPEATED_SAMPLES, RESONANCE, RINGING, SINUSOID, TEMPERATURE,
-                       WANDERING_TONE, WARMUP)
+from ..effects import (ARMA, BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, COMPRESSION, GAUSS_MARKOV, HEAVY_TAILS,
+                       NARROWBAND, OUTLIERS, RATE_RAMP, RATE_RANDOM_WALK, REPEATED_SAMPLES, RESONANCE, RINGING, SINUSOID,
+                       SLOW, TEMPERATURE, WANDERING_TONE, WARMUP)
 from . import noise_terms as nt
+from .compression import Compression
 from .resonance import Ringing, resonance_filter
 from .tone import WanderingTone
 from .accel import RANDOM_TERMS, Accelerometer
@@ -145,8 +148,22 @@ def _accelerometer(spec, sample_rate_hz, duration_s, root, temp_profile):
     return Accelerometer(accel, sample_rate_hz, duration_s, rngs, temp_profile.start_c() if temp_profile else None)
 
 
+class AxisTerms(NamedTuple):
+    """The generators of one axis: ``terms`` (additive; without a compression all of them, the
+    bias first, in the model's order; with one only the slow level's: the bias and
+    :data:`~gyrofilter.effects.SLOW`), ``noise`` (the white or colored noise), ``outliers``, the
+    ``compression`` (:class:`~gyrofilter.sim.compression.Compression`, or None) and the ``fast``
+    terms it compresses with the noise (empty without it)."""
+
+    terms: list
+    noise: object
+    outliers: list
+    compression: Compression | None = None
+    fast: list = []
+
+
 def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
-    """(additive terms, noise term, outlier terms) for one axis."""
+    """The :class:`AxisTerms` of one axis."""
     terms = [nt.Constant(spec["bias_dps"])]
     outliers = []
     colored = next((e for e in spec["effects"] if e["effect"] == COLORED_NOISE), None)
@@ -162,7 +179,7 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
         noise = nt.WhiteNoise(spec["arw_dps_per_sqrt_hz"], sample_rate_hz, draws,
                               lag1=colored["lag1"] if colored else 0.0,
                               preserve=colored["preserve"] if colored else "arw")
-    seen = {}
+    seen, slow = {}, [True]  # per term of ``terms``: part of the slow level (the bias is)
     for eff in spec["effects"]:
         name = eff["effect"]
         occ = seen[name] = seen.get(name, -1) + 1
@@ -205,8 +222,14 @@ def _axis_terms(ax_index, spec, sample_rate_hz, duration_s, root, temp_profile):
                                        eff["excursion_period_s"], eff["excursion_s"], _stream(root, *key, 1)))
         elif name == OUTLIERS:
             outliers.append(nt.Outliers(eff["rate"], eff["magnitude_dps"], _stream(root, *key, 0), _stream(root, *key, 1), eff["spread_ln"]))
-        # colored_noise and heavy_tails are part of the noise term
-    return terms, noise, outliers
+        # colored_noise and heavy_tails are part of the noise term, compression acts on the fast terms
+        slow += [name in SLOW] * (len(terms) - len(slow))
+    compression = next((e for e in spec["effects"] if e["effect"] == COMPRESSION), None)
+    if compression is None:
+        return AxisTerms(terms, noise, outliers)
+    return AxisTerms([t for t, s in zip(terms, slow) if s], noise, outliers,
+                     Compression(compression["gamma_per_dps2"], compression["rms_dps"]),
+                     [t for t, s in zip(terms, slow) if not s])
 
 
 def sample_count(duration_s, sample_rate_hz):
@@ -312,8 +335,12 @@ def simulate_chunks(model, duration_s, *, sample_rate_hz=None, chunk_samples=DEF
 def _axis_rate(axis_terms, t_s, true_c, spec):
     """One block of one axis in the model's ``gyro_unit``: the sum of the terms, saturation,
     quantization and the unit (the equations of the module docstring)."""
-    terms, noise, outliers = axis_terms
+    terms, noise, outliers, compression, fast = axis_terms
     rate = noise.next(t_s, true_c)
+    if compression is not None:
+        for term in fast:
+            rate += term.next(t_s, true_c)
+        compression.apply(rate)
     for term in terms:
         rate += term.next(t_s, true_c)
     for term in outliers:

@@ -39,7 +39,9 @@ hold the parts:
    :data:`~gyrofilter.analysis.gap.detectors.OUTSIDE_NULL_D`, a **composite stochastic part** is
    tried (:mod:`gyrofilter.analysis.gap.composite`: a GMWM-style fit of white noise, an optional
    rate random walk, an optional bias instability and 0-3 Gauss-Markov terms that replaces the axis's slow stochastic findings
-   when it lowers D enough).
+   when it lowers D enough); then, where D is still above it and the axis's tails are lighter than its
+   extended model's, a **compression** of its fast terms (:mod:`gyrofilter.analysis.gap.compression`),
+   kept by the composite's rule.
 5. The report: a JSON-ready dict with ``baseline``, ``findings`` (effect, axis, params,
    evidence, gain), ``extended_model`` (runs in ``gyrofilter simulate``), per-axis feature
    departures and the discrepancies; where an axis's D after is still above
@@ -76,6 +78,7 @@ from . import detectors as det
 from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
                        sim_features, temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
+from .compression import compression_step
 from .confound import (alternatives_entry, one_cause_of_spikes, ring_or_hump, suggested_temperature, weigh_lines,
                        weigh_readings, weigh_tones, weigh_wanders)
 from .features import (METRIC, departs_most, departure_summary, departures, discrepancy, feature_bands,
@@ -197,6 +200,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
         state = weigh_tones(inp, state, scorer)                         # 3., one line: a tone or a narrow band
         state = keep_findings(inp, state, scorer)                       # 4., gain per finding
         state = composite_step(inp, state, scorer)                      # 4., composite stochastic part where D stays high
+        state = compression_step(inp, state, scorer)                    # 4., a compression where the tails stay lighter
         found = bootstrap_intervals(inp, state, bootstrap, seed)        # 5., the parameters' intervals
         state = set_aside_uncertain(inp, state, scorer, found)          # 5., a finding the record does not determine
         state = weigh_repeats(inp, state, scorer)                       # 5., repeated rows: the whole record

@@ -46,6 +46,10 @@ The estimators, as in :mod:`gyrofilter.analysis.gap.detectors`:
   (:func:`~gyrofilter.analysis.gap.detectors.stochastic_fits`), ``gauss_markov`` by the exact
   Kalman-filter likelihood on at most 512 block means
   (:func:`~gyrofilter.analysis.gap.detectors.exact_stochastic_gain`);
+* ``compression``: the linearised re-estimator of :mod:`gyrofilter.analysis.gap.compression` on the
+  replicate as simulated (its tail statistic against the fit's calibration; gamma at or below 0
+  is none: the replicate's tails are not lighter), its rms by
+  :func:`~gyrofilter.analysis.gap.compression.fast_rms`;
 * the composite stochastic part: the GMWM fit with the finding's terms
   (:func:`gyrofilter.analysis.noise.gmwm.fit_model`) to the wavelet variance of the cleaned series,
   its Gauss-Markov terms matched by increasing tau.
@@ -56,8 +60,9 @@ import math
 
 import numpy as np
 
-from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND, OUTLIERS,
-                        RATE_RANDOM_WALK, RESONANCE, RINGING, SHAPES, SINUSOID, TEMPERATURE, WANDERING_TONE, WANDERS)
+from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, COMPRESSION, COVARIATES, GAUSS_MARKOV, HEAVY_TAILS, NARROWBAND,
+                        OUTLIERS, RATE_RANDOM_WALK, RESONANCE, RINGING, SHAPES, SINUSOID, TEMPERATURE, WANDERING_TONE,
+                        WANDERS)
 from .. import stats
 from . import detectors as det
 from ..noise import gmwm
@@ -67,11 +72,13 @@ from .detectors.tails import tail_fits, tail_residual, tail_step
 from .detectors.sinusoid import line_frequency
 from .baseline import effect_entry, extended_axis, wander_highpassed
 from .composite import COMPOSITE_TERMS, composite_lags, slow_wavelet_variance
+from .compression import fast_rms
 
 #: the slow deterministic shapes of :func:`gyrofilter.analysis.gap.detectors.detect_slow`
 DETERMINISTIC = SHAPES + COVARIATES
 #: the effects :func:`reestimate_axis` can estimate
-SUPPORTED = (RINGING, HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, WANDERING_TONE, RESONANCE, COLORED_NOISE) + DETERMINISTIC + WANDERS
+SUPPORTED = ((RINGING, HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, WANDERING_TONE, RESONANCE, COLORED_NOISE) + DETERMINISTIC
+             + WANDERS + (COMPRESSION,))
 
 
 def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False):
@@ -90,6 +97,9 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     for k, c in enumerate(cands):
         key = "composite" if c.composite and c.effect in WANDERS else c.effect
         by.setdefault(key, []).append(k)
+    if COMPRESSION in by:  # on the replicate as simulated, as the tail statistic of D reads it
+        k = by[COMPRESSION][0]
+        out[k] = _compression(x, sample_rate_hz, cands[k], q_dps)
     if RINGING in by and x.size >= 4096:
         found = det.ringing_estimate(x, sample_rate_hz)
         if found is not None:
@@ -149,6 +159,13 @@ def _resolved(xc, sample_rate_hz, cands, out, fit, q_dps):
     ext = extended_axis({"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0}, reps, xc, sample_rate_hz, q_dps)
     lags = next(c.params for c in reps if c.effect == COLORED_NOISE)
     return composite_lags(ext, {"arw_dps_per_sqrt_hz": fit.arw_dps_per_sqrt_hz}, lags)
+
+
+def _compression(x, sample_rate_hz, cand, q_dps):
+    """A compression's gamma and rms on the replicate ``x`` (module docstring)."""
+    t_gamma, slope = cand.calibration
+    gamma = cand.params["gamma_per_dps2"] + (det.tails_statistic(x, sample_rate_hz) - t_gamma) / slope
+    return {"gamma_per_dps2": gamma if gamma > 0 else None, "rms_dps": fast_rms(x, sample_rate_hz, q_dps)}
 
 
 def _heavy_tails(x, sample_rate_hz):

@@ -122,6 +122,11 @@ ones found, because the effects are confusable:
      reading without the temperature rides along as its alternative, and the gap weighs the two
      on D (:mod:`gyrofilter.analysis.gap.confound`).
 
+Not a detector of this order: ``compression`` (lighter tails than the extended model's, a
+transfer of the fast terms) is fitted after the composite stochastic part, against the extended
+model's runs, where an axis's D stays high (:mod:`gyrofilter.analysis.gap.compression`; its
+threshold :data:`COMPRESSION_TAILS_Z` lives in ``common`` with the others).
+
 The package holds one module per concern: ``common`` (every threshold of the gap analysis,
 :class:`Candidate`, helpers), ``repeats``, ``outliers``, ``tails``, ``ringing``, ``sinusoid``, ``narrowband``,
 ``resonance``, ``tone``, ``colored``
@@ -133,6 +138,7 @@ from .common import (  # noqa: F401
     COLORED_MIN_LAG2_GAP,
     COLORED_Z,
     COMPOSITE_MIN_GAIN,
+    COMPRESSION_TAILS_Z,
     Candidate,
     DETERMINISTIC_THRESHOLD,
     EXACT_GM_MARGIN,

@@ -135,8 +135,13 @@ RINGING_THRESHOLD = 50.0
 #: clean records of 27 s to 2.8 h, docs/gap_closure.md): an extended axis is then tried with a
 #: composite stochastic part, and the report says which feature still departs
 OUTSIDE_NULL_D = 2.0
-#: the factor a composite stochastic part must lower D by
+#: the factor a composite stochastic part must lower D by (and a compression: gap.compression)
 COMPOSITE_MIN_GAIN = 0.8
+#: the tail statistic's departure (z) from the extended model's runs below which an axis still
+#: outside the null band is tried with a ``compression`` (gap.compression): lighter tails than the
+#: model's by 4 sd of its runs, the mirror of HEAVY_TAILS_Z; a Gaussian record's z is about N(0, 1)
+#: against its own model (the ADIS16405 z axes: about -10)
+COMPRESSION_TAILS_Z = -4.0
 #: a finding's evidence names the feature furthest outside the baseline simulations' spread when
 #: it is at least this many standard deviations of that spread away
 REPORTED_DEPARTURE_Z = 3
@@ -181,6 +186,10 @@ class Candidate:
     in_place_of: tuple = ()
     #: what later steps add to the evidence, in order
     evidence_notes: tuple = ()
+    #: a compression's calibration (:mod:`gyrofilter.analysis.gap.compression`): the mean tail
+    #: statistic of the model's runs at its gamma and the slope of that mean in gamma, the
+    #: linearised re-estimator of its bootstrap (:mod:`gyrofilter.analysis.gap.reestimate`)
+    calibration: tuple = ()
 
     def plain_params(self):
         """The parameters as plain floats, as the report writes them."""
