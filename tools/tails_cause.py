@@ -62,7 +62,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-from gyrofilter.effects import COMPRESSION, WANDERING_TONE  # noqa: E402
+from gyrofilter.effects import WANDERING_TONE  # noqa: E402
 
 #: the compressions over which gamma (deg/s)^-2 is interpolated
 GAMMAS = (0.0, 0.01, 0.02, 0.03, 0.04, 0.05)
@@ -122,15 +122,6 @@ def without_quantization(spec):
     return out
 
 
-def without_compression(spec):
-    """The model ``spec`` without the compression ``gap`` may have fitted (the cause this tool
-    measures is tried on the runs of the model without it)."""
-    out = copy.deepcopy(spec)
-    for entry in out["axes"].values():
-        entry["effects"] = [e for e in entry.get("effects", []) if e["effect"] != COMPRESSION]
-    return out
-
-
 def with_amplitude(spec, axis, factor):
     """The model ``spec`` with the wandering tone of ``axis`` ``factor`` times stronger."""
     out = copy.deepcopy(spec)
@@ -166,7 +157,7 @@ def main(argv=None):
     ap.add_argument("--streams", default="0,1,2,3,4")
     args = ap.parse_args(argv)
 
-    from tone_modulation import tone_axes, with_excursion
+    from tone_modulation import tone_axes, with_excursion, without_compression
 
     from gyrofilter.analysis.gap.baseline import axis_dps, default_n_sims, simulate_axis
     from gyrofilter.analysis.gap.detectors import tone_excursion

@@ -14,8 +14,8 @@ cycle below 0.9 of it) and the excursion the analysis finds (its period, height 
 or none); and the tail statistic of the whole axis
 (:func:`gyrofilter.analysis.gap.detectors.tails_statistic`, the feature that departed).
 
-The same for ``--sims`` runs of the extended model the analysis wrote (seeds 0, 1, ...), with the
-tone's excursion where one was found and without it (the tone's Gauss-Markov wander alone).
+The same for ``--sims`` runs of the extended model the analysis wrote (seeds 0, 1, ...), less the
+compression ``gap`` may have fitted (:func:`without_compression`), with the tone's excursion where one was found and without it (the tone's Gauss-Markov wander alone).
 The false alarms of the excursion's threshold: the envelope line of ``--null`` hidden-effect
 wandering tones without excursion (:func:`gyrofilter.sim.hidden_effects.draw_case`, half of
 10 min and half of 30-60 min) and of the runs without it (docs/gap.md, "A tone whose
@@ -24,6 +24,7 @@ frequency wanders").
 from __future__ import annotations
 
 import argparse
+import copy
 import math
 import os
 import sys
@@ -33,7 +34,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-from gyrofilter.effects import WANDERING_TONE  # noqa: E402
+from gyrofilter.effects import COMPRESSION, WANDERING_TONE  # noqa: E402
 
 #: the first seed of the hidden-effect tones of the false-alarm count (``--null``)
 NULL_SEED = 36100
@@ -62,6 +63,15 @@ def tone_axes(adis, records):
                 i = "xyz".index(finding["axis"])
                 yield (name, rec, rep, i, finding["params"]["center_hz"], finding["params"]["spread_hz"],
                        np.asarray(axis_dps(rec, i), dtype=float))
+
+
+def without_compression(spec):
+    """The model ``spec`` without the compression ``gap`` may have fitted: the tools measure what the
+    tone and the rest of the model leave, on the runs of the model without it."""
+    out = copy.deepcopy(spec)
+    for entry in out["axes"].values():
+        entry["effects"] = [e for e in entry.get("effects", []) if e["effect"] != COMPRESSION]
+    return out
 
 
 def with_excursion(spec, i, exc=None):
@@ -119,7 +129,7 @@ def main(argv=None):
     null_model = []
     for name, rec, rep, i, c, s, x in tone_axes(args.adis, args.records):
         fs, axis = float(rec.sample_rate_hz), "xyz"[i]
-        spec, _ = validate_model(rep["extended_model"])
+        spec, _ = validate_model(without_compression(rep["extended_model"]))
         env = flank_envelope(x, fs, c, s)
         exc = tone_excursion(x, fs, c, s)
         least, below = folded_band(x, fs, c, s, exc["excursion_period_s"] or env["period_s"])
