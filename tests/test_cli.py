@@ -328,6 +328,24 @@ def test_a_full_stdout_is_an_error_naming_it(tmp_path, unbuffered):
     assert len(read_recording(out)) > 0
 
 
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device every write to fails, ENOSPC)")
+def test_a_program_running_the_commands_keeps_its_stdout(tmp_path):
+    """Attack pass 19 (issue 37): a program that runs `gyrofilter.cli.main` twice on a full stdout
+    gets exit 2 from each, and its descriptor 1 is its own file again after them (the first
+    failure left it on the null device for good: the second `arma` ended with exit 0, its table
+    lost, and the program's own writes after it went nowhere)."""
+    rec, _ = lsb_recording(tmp_path, n=3000)
+    script = ("import os, sys\n"
+              "from gyrofilter.cli import main\n"
+              "codes = [main(['arma', sys.argv[1]]) for _ in range(2)]\n"
+              "try:\n    os.write(1, b'x'); after = 'written'\n"
+              "except OSError as exc:\n    after = exc.strerror\n"
+              "print(codes, after, file=sys.stderr)\n")
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-c", script, str(rec)], stdout=full, stderr=subprocess.PIPE, timeout=300)
+    assert proc.stderr.decode().splitlines()[-1] == "[2, 2] No space left on device"
+
 def test_a_console_closed_at_the_start_is_the_null_device(tmp_path):
     """Attack pass 18 (issue 37): `gyrofilter allan F --json J >&- 2>&-` (a descriptor closed, as a
     daemon or a cron line may start a command; Python's stdout and stderr None) and `record

@@ -11,7 +11,6 @@ Library errors (:class:`gyrofilter.errors.GyroFilterError`), OS errors, running 
 and Ctrl-C become one line on stderr and a non-zero exit code; a traceback is a bug.
 """
 import argparse
-import contextlib
 import importlib
 import os
 import re
@@ -167,8 +166,8 @@ def main(argv=None):
     try:
         return _main(argv)
     finally:
-        with contextlib.suppress(OSError):  # (another error of stdout: as before, at the exit's flush)
-            sys.stdout.flush()  # what stays in stdout's buffer, where its reader went away, goes nowhere
+        for stream in (sys.stdout, sys.stderr):
+            stream.restore()
         sys.stdout, sys.stderr = streams
         for stream, used in zip(streams, consoles):
             if stream is None:

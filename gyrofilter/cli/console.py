@@ -29,10 +29,14 @@ class ReaderAwareStream:
     ``name`` once, the rest going nowhere: "[Errno 28] No space left on device" alone read as the
     failure of an output file the command had written whole; the command's last
     :meth:`flush` raises it too, where the buffer held the whole result: ``allan F > FULL``
-    ended with exit 0). Everything else is the stream's."""
+    ended with exit 0). The null device lasts until :meth:`restore`, at the command's end (a
+    program that runs the commands keeps its descriptor: a second command on a full stdout
+    ended with exit 0, its result lost, and the program's own prints after it went nowhere).
+    Everything else is the stream's."""
 
     def __init__(self, stream, name, lost=BrokenPipeError):
         self.stream, self.name, self.lost, self.reader_gone = stream, name, lost, False
+        self._saved_fd = None  # a duplicate of the descriptor sent to the null device
 
     def write(self, text):
         with self._named():
@@ -66,9 +70,21 @@ class ReaderAwareStream:
             fd = self.stream.fileno()
         except (AttributeError, OSError):  # a stream of no descriptor (io.StringIO): no flush at exit either
             return
+        if self._saved_fd is None:
+            self._saved_fd = os.dup(fd)
         devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, fd)  # what stays in the buffer, and the flush at exit, go nowhere
+        os.dup2(devnull, fd)  # what stays in the buffer goes nowhere
         os.close(devnull)
+
+    def restore(self):
+        """At the command's end: what stays in the buffer flushed (to the null device, if the stream
+        was sent there), then the descriptor given back its own file."""
+        with contextlib.suppress(OSError):  # (another error of stdout: as before, at the exit's flush)
+            self.stream.flush()
+        if self._saved_fd is not None:
+            os.dup2(self._saved_fd, self.stream.fileno())
+            os.close(self._saved_fd)
+            self._saved_fd = None
 
     def __getattr__(self, name):
         return getattr(self.stream, name)
