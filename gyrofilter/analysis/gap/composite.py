@@ -73,6 +73,18 @@ def composite_step(inp, state, scorer):
     return state
 
 
+def short_of_a_clear_gain(d_new, after, s_ext):
+    """Why a model's D ``d_new`` is not a clear gain on the axis's D after ``after`` (the rule of
+    this step and of the compression's: below :data:`~gyrofilter.analysis.gap.detectors.COMPOSITE_MIN_GAIN`
+    times it and by more than :data:`~gyrofilter.analysis.gap.confound.CONFOUNDED_SPREADS` null
+    spreads ``s_ext`` of D of the extended model), in parentheses; "" where it is one."""
+    spread = CONFOUNDED_SPREADS * s_ext
+    if d_new < det.COMPOSITE_MIN_GAIN * after and d_new < after - spread:
+        return ""
+    return (f"({d_shown(after)} -> {d_shown(d_new)}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times its value "
+            f"and by more than {CONFOUNDED_SPREADS:g} null spreads of D of the extended model, {spread:.2g})")
+
+
 def _with_composite(inp, state, scorer, i, fit, comp):
     """The state with axis ``i``'s slow stochastic findings replaced by the composite fit's
     candidates ``comp`` where that lowers D enough (:func:`composite_step`); the candidates are
@@ -108,12 +120,9 @@ def _with_composite(inp, state, scorer, i, fit, comp):
             trial = trial.with_candidate(colored_k[0], replace(trial.candidates[colored_k[0]][1], composite=False))
             keep_k = [k for k in keep_k if k not in colored_k]
             dropped_colored = True
-    spread = CONFOUNDED_SPREADS * s_ext
-    if not (d_comp < det.COMPOSITE_MIN_GAIN * after and d_comp < after - spread):
-        return state.with_notes(
-            f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough "
-            f"({d_shown(after)} -> {d_shown(d_comp)}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times "
-            f"its value and by more than {CONFOUNDED_SPREADS:g} null spreads of D of the extended model, {spread:.2g}); not used")
+    short = short_of_a_clear_gain(d_comp, after, s_ext)
+    if short:
+        return state.with_notes(f"axis {a}: a composite stochastic fit ({fit.name}) did not lower D enough {short}; not used")
     notes = []
     if dropped_colored:  # said only where the composite model is used
         notes.append(f"colored_noise on {a} dropped: the composite stochastic part explains the correlation without it")

@@ -55,7 +55,7 @@ from ...sim.compression import MAX_COMPRESSION
 from ...units import AXES
 from . import detectors as det
 from .baseline import MIN_SIMS, axis_dps
-from .confound import CONFOUNDED_SPREADS
+from .composite import short_of_a_clear_gain
 from .detectors.tails import tail_step
 from .features import d_shown
 from .state import Kept
@@ -126,12 +126,10 @@ def _with_compression(inp, state, scorer, i, ks, tails):
     state = state.with_candidate(k, cand)
     s_ext = scorer.null_spread(i, state.model(inp, i, ks) if ks else None, f"extended model on {a}")
     d_with = scorer.discrepancy(i, state.model(inp, i, ks + [k]), f"compression on {a}")
-    spread = CONFOUNDED_SPREADS * s_ext
-    if not (d_with < det.COMPOSITE_MIN_GAIN * after and d_with < after - spread):
-        return state.with_notes(
-            f"axis {a}: a compression (gamma = {gamma:.3g} (deg/s)^-2) matches the tails but did not lower D enough "
-            f"({d_shown(after)} -> {d_shown(d_with)}; it must fall below {det.COMPOSITE_MIN_GAIN:g} times its value "
-            f"and by more than {CONFOUNDED_SPREADS:g} null spreads of D of the extended model, {spread:.2g}); not used")
+    short = short_of_a_clear_gain(d_with, after, s_ext)
+    if short:
+        return state.with_notes(f"axis {a}: a compression (gamma = {gamma:.3g} (deg/s)^-2) matches the tails but did "
+                                f"not lower D enough {short}; not used")
     alone = scorer.discrepancy(i, state.model(inp, i, [k]), f"gain of the compression on {a}")
     return replace(state, kept=state.kept + (Kept(k, i, cand, alone),), single={**state.single, k: alone},
                    after=state.after[:i] + (d_with,) + state.after[i + 1:]).with_notes(
