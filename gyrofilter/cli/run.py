@@ -72,15 +72,16 @@ class _TextOut:
 
     @contextlib.contextmanager
     def _named(self):
-        """An OSError of the stream raised naming ``stdout``; a closed reader (``console.stdout_reader_gone``) sets
+        """An OSError of the stream (the console's, :class:`~gyrofilter.cli.console.ReaderAwareStream`,
+        which names ``stdout``) marks the write failed; a closed reader (``console.stdout_reader_gone``) sets
         ``reader_gone`` and ends the printing, so that the run stops as a user's stop does (the
         calibration saved, the summary said: it ended with exit 0 and no word, ``--save-calibration``
         not written)."""
         try:
             yield
-        except OSError as exc:
+        except OSError:
             self.write_failed = True
-            raise OSError(exc.errno, exc.strerror or str(exc), self.path) from None
+            raise
         if console.stdout_reader_gone():
             self.reader_gone, self.stream = True, None
 
