@@ -23,15 +23,13 @@ from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.units import AXES
 from gyrofilter.view.report import FORMAT
 from support import REPO, RECORDINGS
-from support.report_page import parse
+from support.report_page import check_shipped_report, parse
 
 STATIC = str(RECORDINGS / "mpu6050_static_100s.csv.gz")
 MULTIPOSE = str(RECORDINGS / "mpu6050_multipose_102s.csv.gz")  # saturates: x 12 samples, z 6 (its header says)
-#: the one shipped recording whose report the default run makes here (a moving record: no filter); the other
-#: tests report on the 100 s still one and the multipose one (and hold them to what the shipped ones are held
-#: to: not again here), and the rest run with -m slow
+#: the one shipped recording whose report the default run makes here besides the 100 s still one and the
+#: multipose one (a moving record: no filter); the browser test reports on every shipped recording
 FAST = {"mpu6050_rotate_z_24s"}
-ELSEWHERE = {os.path.basename(STATIC), os.path.basename(MULTIPOSE)}
 
 
 def without_wall_times(gap_doc):
@@ -156,29 +154,15 @@ def test_control_characters_of_a_file_name_are_not_written_raw(tmp_path, capsys)
     assert data["recording"]["name"] == str(rec)  # the data block keeps the name as it is (JSON escapes it)
 
 
-def check_shipped_report(path, data, capsys):
-    """What every shipped recording's report (``data``, of the file ``path``) holds: all its samples, the
-    Allan part or its error, the filter's rows or the refusal replay gives, the gap's three axes."""
-    rec = read_recording(path)
-    assert data["recording"]["samples"] == len(rec)
-    assert (data["allan"] is None) == (data["allan_error"] is not None)
-    if data["allan"] is None:  # a moving record: allan refuses its gross errors, and the report says so
-        assert "gross error" in data["allan_error"] and any("no Allan deviation" in w for w in data["warnings"])
-    if data["filter"] is None:  # a record that moves in the start-up window: replay refuses it too
-        assert "calibration: the sensor moved" in data["filter_error"]
-        assert main(["replay", str(path)]) == 2
-        assert data["filter_error"] in capsys.readouterr().err
-    else:
-        assert data["filter"]["rows_out"] > 0
-    assert len(data["gap"]["baseline"]["axes"]) == 3
-
-
-@pytest.mark.parametrize("name", [pytest.param(p.name[:-len(".csv.gz")],
-                                               marks=[] if p.name[:-len(".csv.gz")] in FAST else [pytest.mark.slow])
-                                  for p in sorted(RECORDINGS.glob("*.csv.gz")) if p.name not in ELSEWHERE])
-def test_every_shipped_recording_yields_a_report(tmp_path, capsys, name):
+def test_the_shipped_moving_recording_yields_a_report(tmp_path, capsys):
+    """Every shipped recording's report, made with the defaults a user gets, is held to
+    :func:`~support.report_page.check_shipped_report` in the browser test that opens it
+    (``tests/test_cli_report_browser.py``, CI's browser stage); here the one of the moving record
+    (no filter), with --sims 10, so that the default run holds a refusal's page too."""
+    (name,) = FAST
     path = RECORDINGS / f"{name}.csv.gz"
     _, data = report(tmp_path, capsys, str(path), "--sims", "10")
+    assert data["filter"] is None
     check_shipped_report(path, data, capsys)
 
 

@@ -1,6 +1,8 @@
 """The report in a real browser: headless Debian chromium (selenium) opens the file a user attaches,
 from the disk, with no server and no network, for every shipped recording: every section and
-figure is there, the data block reads, and the console has no error.
+figure is there, the data block reads and holds what a shipped recording's report must
+(``support.report_page.check_shipped_report``: the only test that makes the slower recordings'
+reports, with the defaults a user gets), and the console has no error.
 
 Marked ``browser`` (``pytest -m browser``; CI's browser stage); they skip with the reason when
 chromium, its driver or selenium is missing. ``GYROFILTER_REPORT_SCREENSHOT=docs/figures/report.png
@@ -16,6 +18,7 @@ from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 from gyrofilter.view.report import DATA_ID
 from support import REPO
 from support.browser import browser, console_errors, missing  # noqa: F401 (browser: the fixture)
+from support.report_page import check_shipped_report
 
 pytestmark = [pytest.mark.browser, pytest.mark.skipif(missing() is not None, reason=str(missing()))]
 
@@ -33,6 +36,7 @@ def test_chromium_opens_the_report(browser, tmp_path, capsys, monkeypatch, name)
     browser.get(out.as_uri())
     assert browser.title.startswith("gyrofilter sensor report: ")
     data = json.loads(browser.execute_script(f"return document.getElementById('{DATA_ID}').textContent"))
+    check_shipped_report(f"recordings/{name}.csv.gz", data, capsys)  # the page's data block as the command wrote it
     # "allan and gap" only where the two disagree (its sentences in the data block)
     assert [h.text for h in browser.find_elements("css selector", "h2")] == \
         list(SECTIONS) + ["allan and gap"] * bool(data.get("allan_and_gap"))

@@ -1,7 +1,9 @@
 """Reading a report page (``gyrofilter report``) as a test must: every tag with its attributes,
-the scripts' types and the text of the data block."""
+the scripts' types and the text of the data block; and what every shipped recording's report holds."""
 from html.parser import HTMLParser
 
+from gyrofilter.cli import main
+from gyrofilter.recording import read_recording
 from gyrofilter.view.report import DATA_ID
 
 
@@ -34,3 +36,20 @@ def parse(path):
     page.feed(open(path, encoding="utf-8").read())
     page.close()
     return page
+
+
+def check_shipped_report(path, data, capsys):
+    """What every shipped recording's report (``data``, of the file ``path``) holds: all its samples, the
+    Allan part or its error, the filter's rows or the refusal replay gives, the gap's three axes."""
+    rec = read_recording(path)
+    assert data["recording"]["samples"] == len(rec)
+    assert (data["allan"] is None) == (data["allan_error"] is not None)
+    if data["allan"] is None:  # a moving record: allan refuses its gross errors, and the report says so
+        assert "gross error" in data["allan_error"] and any("no Allan deviation" in w for w in data["warnings"])
+    if data["filter"] is None:  # a record that moves in the start-up window: replay refuses it too
+        assert "calibration: the sensor moved" in data["filter_error"]
+        assert main(["replay", str(path)]) == 2
+        assert data["filter_error"] in capsys.readouterr().err
+    else:
+        assert data["filter"]["rows_out"] > 0
+    assert len(data["gap"]["baseline"]["axes"]) == 3
