@@ -6,7 +6,7 @@ The colored-noise detector names a lag-1 autocorrelation of the high-passed nois
 :data:`~gyrofilter.analysis.gap.detectors.COLORED_Z` = 6 standard errors (1/sqrt(N)) or more: in
 a 2.8-h record that is 0.004, in 18 s at 286 Hz 0.08. The BROAD rest phases' x axes hold a
 negative lag-1 of -0.05 to -0.08 with a lag-2 of about 0 (white noise plus a differenced part of
-about a tenth of its variance), 3-5.6 standard errors on 16-18 s: unnamed, the white model's
+about a tenth of its variance), 3.1-5.7 standard errors on 16-37 s: unnamed, the white model's
 Haar wavelet variance is too low at one sample and too high by 3-8 % at 2-32 samples, the
 lag-1 departs most from the model's runs and D stays above 2 (docs/gap_closure.md, held out).
 
