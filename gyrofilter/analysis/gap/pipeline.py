@@ -36,7 +36,7 @@ hold the parts:
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a
    finding is kept only if ``after < before`` (a real gain). The overall figure uses the model
    extended by every kept finding. Where an axis's D after is still above
-   :data:`~gyrofilter.analysis.gap.detectors.OUTSIDE_NULL_D` and its lag-1 departs, a colored
+   :data:`~gyrofilter.analysis.gap.detectors.OUTSIDE_NULL_D` and its lag-1 departs most, a colored
    noise below the detector's threshold is weighed (:mod:`gyrofilter.analysis.gap.late_colored`);
    where D is still above it, a **composite stochastic part** is
    tried (:mod:`gyrofilter.analysis.gap.composite`: a GMWM-style fit of white noise, an optional
@@ -202,7 +202,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
         state = weigh_lines(inp, state, scorer)                         # 3., one line: sinusoid or narrow band
         state = weigh_tones(inp, state, scorer)                         # 3., one line: a tone or a narrow band
         state = keep_findings(inp, state, scorer)                       # 4., gain per finding
-        state = late_colored_step(inp, state, scorer)                   # 4., a weak colored noise where the lag-1 departs
+        state = late_colored_step(inp, state, scorer)                   # 4., a weak colored noise where the lag-1 departs most
         state = composite_step(inp, state, scorer)                      # 4., composite stochastic part where D stays high
         state = compression_step(inp, state, scorer)                    # 4., a compression where the tails stay lighter
         found = bootstrap_intervals(inp, state, bootstrap, seed)        # 5., the parameters' intervals
