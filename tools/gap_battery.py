@@ -60,7 +60,7 @@ def run_synthetic(args):
         if args.verbose:
             got = "; ".join(f"{f['axis']}:{f['effect']} " + ", ".join(f"{a}={v:.3g}" for a, v in f["params"].items())
                             for f in rep["findings"])
-            true = ", ".join(f"{a}={v:.3g}" for a, v in case["params"].items())
+            true = ", ".join(f"{a}={v:.3g}" if isinstance(v, (int, float)) else f"{a}={v}" for a, v in case["params"].items())
             print(f"case {seed:4d} {effect:17s} {case['axis'] or '-'} {true:55s} -> "
                   f"{'OK ' if ok else ('nam' if named else '---')} [{got}] {dt:.1f}s", flush=True)
     summarise(rows, time.perf_counter() - t_all, args.d_after)

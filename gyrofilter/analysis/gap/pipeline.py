@@ -36,7 +36,9 @@ hold the parts:
    runs (``before``) and against runs of the baseline extended by one finding (``after``); a
    finding is kept only if ``after < before`` (a real gain). The overall figure uses the model
    extended by every kept finding. Where an axis's D after is still above
-   :data:`~gyrofilter.analysis.gap.detectors.OUTSIDE_NULL_D`, a **composite stochastic part** is
+   :data:`~gyrofilter.analysis.gap.detectors.OUTSIDE_NULL_D` and its lag-1 departs most, a colored
+   noise below the detector's threshold is weighed (:mod:`gyrofilter.analysis.gap.late_colored`);
+   where D is still above it, a **composite stochastic part** is
    tried (:mod:`gyrofilter.analysis.gap.composite`: a GMWM-style fit of white noise, an optional
    rate random walk, an optional bias instability and 0-3 Gauss-Markov terms that replaces the axis's slow stochastic findings
    when it lowers D enough); then, where D is still above it and the axis's tails are lighter than its
@@ -87,6 +89,7 @@ from .intervals import MAX_BOOTSTRAP, MIN_REPLICATES, bootstrap_intervals
 from .rows import rows_findings, weigh_repeats
 from .scoring import Scorer
 from .keep import keep_findings, set_aside_uncertain
+from .late_colored import late_colored_step
 from .state import AxisModels, GapInput, GapState, OtherReading
 
 #: minimum samples for any analysis
@@ -199,6 +202,7 @@ def _analyse_gap(rec, *, seed, n_sims, progress, recording_name, bootstrap):
         state = weigh_lines(inp, state, scorer)                         # 3., one line: sinusoid or narrow band
         state = weigh_tones(inp, state, scorer)                         # 3., one line: a tone or a narrow band
         state = keep_findings(inp, state, scorer)                       # 4., gain per finding
+        state = late_colored_step(inp, state, scorer)                   # 4., a weak colored noise where the lag-1 departs most
         state = composite_step(inp, state, scorer)                      # 4., composite stochastic part where D stays high
         state = compression_step(inp, state, scorer)                    # 4., a compression where the tails stay lighter
         found = bootstrap_intervals(inp, state, bootstrap, seed)        # 5., the parameters' intervals
@@ -318,12 +322,12 @@ def detect(inp, notes):
         x = axis_dps(inp.rec, i)
         owned = not np.shares_memory(x, inp.rec.columns[GYRO_COLUMNS[i]])  # a converted copy, not the column
         try:
-            cands, xc, alt, slow_stats = _detect_axis(x, inp.sample_rate_hz, inp.temp,
-                                                      tails_z=float(inp.deps[i]["tails"][0][0]), notes=notes, axis=a,
-                                                      owned=owned, q_dps=inp.q or 0.0, repeated_fraction=repeated_fraction)
+            cands, xc, alt, slow_stats, reserve = _detect_axis(
+                x, inp.sample_rate_hz, inp.temp, tails_z=float(inp.deps[i]["tails"][0][0]), notes=notes, axis=a,
+                owned=owned, q_dps=inp.q or 0.0, repeated_fraction=repeated_fraction)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:  # never crash
             notes.append(f"axis {a}: detectors could not run ({exc})")
-            cands, xc, alt, slow_stats = [], axis_dps(inp.rec, i), None, {}  # x may have been cleaned in place
+            cands, xc, alt, slow_stats, reserve = [], axis_dps(inp.rec, i), None, {}, None  # x may have been cleaned in place
         suggested = suggested_temperature(slow_stats, a)
         if suggested is not None:
             uncertain.append(suggested)
@@ -341,7 +345,7 @@ def detect(inp, notes):
                                        wv=slow_wavelet_variance(xa, inp.sample_rate_hz, fast))
             del xa
         axes.append(AxisModels(ext=extended_axis(inp.base["axes"][a], cands, xc, inp.sample_rate_hz, inp.q),
-                               wv=slow_wavelet_variance(xc, inp.sample_rate_hz, cands)))
+                               wv=slow_wavelet_variance(xc, inp.sample_rate_hz, cands), reserve=reserve))
         del x, xc
     return GapState(candidates=tuple(candidates), axes=tuple(axes), readings=readings, after=tuple(inp.before),
                     notes=tuple(notes), uncertain=tuple(uncertain))
@@ -354,7 +358,11 @@ def _with_reference(cands, temp):
 
 def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", owned=False, q_dps=0.0, repeated_fraction=0.0):
     """Run the detectors of one axis in the decision order; returns (candidates, cleaned x,
-    alternative, the slow detector's statistics): ``alternative`` is None or, where the slow
+    alternative, the slow detector's statistics, reserve): ``reserve`` is a colored noise below
+    :data:`~gyrofilter.analysis.gap.detectors.COLORED_Z` but at
+    :data:`~gyrofilter.analysis.gap.detectors.COLORED_LATE_Z` or more (not beside a wandering tone,
+    whose readings carry their own), for the late step (:mod:`gyrofilter.analysis.gap.late_colored`),
+    or None; ``alternative`` is None or, where the slow
     effects have a covariate and a time reading (:func:`gyrofilter.analysis.gap.detectors.detect_slow`),
     ``(the other reading's candidates, x cleaned of those instead)``. Each finding's component is subtracted from a private copy of
     ``x`` (``x`` itself when ``owned``: the caller's to change) and then dropped, so the axis costs
@@ -401,10 +409,10 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     slow, slow_stats = det.detect_slow(x, sample_rate_hz, temp)
     wander = next((s for s in slow if s.effect in WANDERS), None)
 
-    def colored_beside(found, bands, say):  # and beside the wander's own correlation (its high-frequency part)
+    def colored_beside(found, bands, say, z_min=det.COLORED_Z):  # and beside the wander's own correlation (its high-frequency part)
         if found is not None and wander is not None:
-            found = det.detect_colored(x, sample_rate_hz, bands,
-                                       wander_highpassed(effect_entry(wander), sample_rate_hz, x.size), repeated_fraction)
+            found = det.detect_colored(x, sample_rate_hz, bands, wander_highpassed(effect_entry(wander), sample_rate_hz, x.size),
+                                       repeated_fraction, z_min=z_min)
             if found is None and say and notes is not None:
                 notes.append(f"axis {axis}: the lag-1 correlation is the {wander.effect}'s own (its high-frequency "
                              "part); no colored noise")
@@ -417,6 +425,9 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
         cands = [replace(c, band_alternative=band_reading) if c is tone else c for c in cands]
     if colored is not None:
         cands.append(colored)
+    reserve = None if colored is not None or tone is not None else colored_beside(
+        det.detect_colored(x, sample_rate_hz, measured, repeated_fraction=repeated_fraction, z_min=det.COLORED_LATE_Z),
+        measured, False, det.COLORED_LATE_Z)
     cands.extend(slow)
     alt = slow[0].other_reading if slow else None
     if alt is not None:
@@ -429,7 +440,7 @@ def _detect_axis(x, sample_rate_hz, temp, tails_z=None, notes=None, axis="", own
     for s in slow:
         if s.component is not None:
             x, owned = _subtract_component(x, s, owned), True
-    return cands, x, alt, slow_stats
+    return cands, x, alt, slow_stats, reserve
 
 
 def _subtract_component(x, cand, owned):

@@ -77,6 +77,9 @@ class AxisModels:
     lags: dict | None = None
     #: the Haar wavelet variance of the cleaned series at the composite's scales, or None
     wv: object = None
+    #: a colored noise measured below the detector's threshold, for the late step
+    #: (:mod:`gyrofilter.analysis.gap.late_colored`), or None
+    reserve: object = None
 
 
 @dataclass(frozen=True)

@@ -134,6 +134,7 @@ and ``slow`` (+ ``covariate``, the temperature first, and ``flicker``, a shape a
 ``gyrofilter.analysis.gap.detectors`` as before.
 """
 from .common import (  # noqa: F401
+    COLORED_LATE_Z,
     COLORED_MIN_LAG1,
     COLORED_MIN_LAG2_GAP,
     COLORED_Z,

@@ -123,7 +123,7 @@ def lags_without_repeats(r1, r2, f, iterations=4):
     return rho1, rho2
 
 
-def detect_colored(x, sample_rate_hz, bands=(), wander=None, repeated_fraction=0.0):
+def detect_colored(x, sample_rate_hz, bands=(), wander=None, repeated_fraction=0.0, z_min=COLORED_Z):
     """Colored-noise candidate: ``lag1`` (and ``lag2`` where the noise is not a first-order low
     pass) from the high-passed r1, r2, less the correlation of the band candidates ``bands``
     (``narrowband``, ``wandering_tone``, ``resonance``: noise still in ``x``;
@@ -142,7 +142,11 @@ def detect_colored(x, sample_rate_hz, bands=(), wander=None, repeated_fraction=0
     below W, would inflate it.
 
     ``repeated_fraction``: the record's rows repeated beyond chance (f, the ``repeated_samples``
-    finding), whose correlation is taken out of r1 and r2 first (:func:`lags_without_repeats`)."""
+    finding), whose correlation is taken out of r1 and r2 first (:func:`lags_without_repeats`).
+
+    ``z_min``: the z the lag-1 must reach (:data:`COLORED_Z`; the late step's
+    :data:`~gyrofilter.analysis.gap.detectors.common.COLORED_LATE_Z` where the axis does not close
+    and its lag-1 departs most, :mod:`gyrofilter.analysis.gap.late_colored`)."""
     n = x.size
     if n < 32:
         return None
@@ -158,7 +162,7 @@ def detect_colored(x, sample_rate_hz, bands=(), wander=None, repeated_fraction=0
     if left is None:  # the wander holds nearly all the high-passed variance
         return None
     z = left[0] * math.sqrt(n)
-    if abs(z) < COLORED_Z:  # the correlation of the noise as measured (less a wander's)
+    if abs(z) < z_min:  # the correlation of the noise as measured (less a wander's)
         return None
     band_lags, band_var = band_correlation(bands, sample_rate_hz)  # the bands' own correlation: the colored noise's is what is left
     band_lags, band_share = other_correlation(den / n, band_lags, band_var, wander)
@@ -189,7 +193,7 @@ def detect_colored(x, sample_rate_hz, bands=(), wander=None, repeated_fraction=0
         effect=COLORED_NOISE,
         params={"lag1": lag1, "lag2": lag2} if arma else {"lag1": lag1},
         statistic=abs(z),
-        threshold=COLORED_Z,
+        threshold=z_min,
         statistic_name="|lag-1 autocorrelation| in units of 1/sqrt(N)",
         evidence=evidence,
     )

@@ -34,6 +34,10 @@ SINUSOID_ALPHA = 1e-4
 #: |lag1| reported (smaller correlations are real but immaterial)
 COLORED_Z = 6.0
 COLORED_MIN_LAG1 = 0.03
+#: the z (units of 1/sqrt(N)) of a colored noise proposed late (:mod:`gyrofilter.analysis.gap.late_colored`):
+#: on an axis that does not close (D after above OUTSIDE_NULL_D) whose largest departure from the
+#: extended model is the lag-1 autocorrelation, by at least this many sd of its runs
+COLORED_LATE_Z = 3.0
 #: the colored noise's lag-2 is reported (a first-order ARMA instead of the low pass) when it
 #: falls below lag1^2 (the AR(1) value) by COLORED_Z standard errors and by at least this much
 COLORED_MIN_LAG2_GAP = 0.01
