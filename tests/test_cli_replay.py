@@ -417,6 +417,9 @@ def test_realtime_into_head_still_writes_the_whole_out_file(tmp_path):
 @pytest.mark.parametrize("rows, args, message", [
     ("", [], "no samples (the file has a header only)"),
     ("".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(150)), [], "end inside the start-up calibration window (2 s)"),
+    # attack pass 20: the window filled, then 4 samples, fewer than a block: a header-only file, exit 0
+    ("".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(204)), [],
+     "end 4 sample(s) after the start-up calibration window (2 s), fewer than a block of 5"),
 ])
 def test_nothing_to_filter_is_an_error_and_writes_nothing(tmp_path, capsys, rows, args, message):
     path = tmp_path / "short.csv"

@@ -435,6 +435,21 @@ def test_run_that_stops_inside_the_calibration_says_nothing_was_filtered(tmp_pat
     assert "no calibration to save" in err and not out.exists() and not (tmp_path / "c.json").exists()
 
 
+def test_run_that_stops_before_its_first_block_after_the_calibration_writes_no_file(tmp_path, capsys):
+    """Attack pass 20: a source that ended 2 samples after the calibration window (fewer than a
+    block) left a header-only --out file, exit 0: a file every reader refuses ("no samples"), and
+    with --force one that replaced a good output."""
+    path = tmp_path / "short.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n"
+                    + "".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(202)))
+    out = tmp_path / "out.csv"
+    out.write_text("a good output\n")
+    assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out), "--force"]) == 2
+    err = capsys.readouterr().err
+    assert "nothing filtered: it stopped 2 sample(s) after the start-up calibration window (2 s), fewer than a block of 5" in err
+    assert out.read_text() == "a good output\n"
+
+
 def test_run_and_replay_write_the_same_output_rate(tmp_path, capsys):
     """A rate that is not a round number (99.3171 / 5) is written exactly by both commands."""
     src = tmp_path / "odd.csv"
