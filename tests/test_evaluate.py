@@ -162,3 +162,15 @@ def test_the_console_table_without_broad_trials_prints_no_nan():
     trial = {"rmse_motion_dps": 2.0, "rmse_rest_dps": 0.5}
     ev = dataclasses.replace(ev, broad_names=["t"], broad={"paper001": {"t": trial}})
     assert E.console_table(ev).splitlines()[1].endswith("2.00 / 0.50")
+
+
+def test_a_recordings_folder_whose_name_is_a_glob_pattern_is_read_as_named(tmp_path):
+    """Attack pass 20: `evaluate --recordings 'rec[1]'` evaluated the recordings of the folder
+    rec1 (the name read as a glob pattern: [1] a class of one character), exit 0, its own unread."""
+    for folder, name in (("rec[1]", "mpu6050_static_a.csv"), ("rec1", "mpu6050_static_b.csv"),
+                         ("rec[1]", "broad_01.csv"), ("rec1", "broad_02.csv")):
+        (tmp_path / folder).mkdir(exist_ok=True)
+        (tmp_path / folder / name).write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n"
+                                              "# sensor: MPU6050\nt,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n")
+    assert [r.path for r in D.find_static_recordings(str(tmp_path / "rec[1]"))] == [str(tmp_path / "rec[1]" / "mpu6050_static_a.csv")]
+    assert [r.path for r in D.find_broad_recordings(str(tmp_path / "rec[1]"))] == [str(tmp_path / "rec[1]" / "broad_01.csv")]

@@ -24,7 +24,7 @@ def find_static_recordings(recordings_dir):
     """Real static MPU6050 recordings in the folder ``recordings_dir``: sensor MPU6050 and a
     description starting with 'static' (or, without a description, 'static' in the file name)."""
     out = []
-    for path in sorted(glob.glob(os.path.join(recordings_dir, "*.csv*"))):
+    for path in _files(recordings_dir, "*.csv*"):
         rec = read_recording(path)
         if "mpu6050" not in rec.header.get("sensor", "").lower():
             continue
@@ -36,7 +36,13 @@ def find_static_recordings(recordings_dir):
 
 def find_broad_recordings(recordings_dir):
     """The BROAD trials (``broad_*.csv*``, with optical reference) in the folder ``recordings_dir``, read."""
-    return [read_recording(p) for p in sorted(glob.glob(os.path.join(recordings_dir, "broad_*.csv*")))]
+    return [read_recording(p) for p in _files(recordings_dir, "broad_*.csv*")]
+
+
+def _files(folder, pattern):
+    """The files of ``folder`` whose names match ``pattern``, sorted: the folder's name taken as it is
+    (``glob.escape``: ``rec[1]`` is no pattern that matches the folder ``rec1``)."""
+    return sorted(glob.glob(os.path.join(glob.escape(folder), pattern)))
 
 
 def noise_segments(static_recs, duration_s=NOISE_SEGMENT_S, names=None):
