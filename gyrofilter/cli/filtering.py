@@ -181,5 +181,6 @@ def nothing_filtered(filt):
     window = f"the start-up calibration window ({filt.settings.calibration_s:g} s)"
     if filt.calibrating:
         return f"inside {window}"
-    after = f" after {window}" if filt.samples_in > filt.pending_samples else ""
-    return f"{filt.pending_samples} sample(s){after}, fewer than a block of {filt.settings.block_len}"
+    if filt.samples_in > filt.pending_samples:
+        return f"{filt.pending_samples} sample(s) after {window}, fewer than a block of {filt.settings.block_len}"
+    return f"before a block of {filt.settings.block_len} was full ({filt.pending_samples} sample(s))"  # a saved calibration

@@ -113,9 +113,10 @@ def _refuse_nothing_filtered(path, head, filt):
         raise RecordingError(f"{path}: no samples (the file has a header only); nothing to filter")
     where = filtering.nothing_filtered(filt)
     if where:
+        advice = (": give a shorter --calibration-s or a saved calibration (--calibration FILE)"
+                  if filt.calibrating or filt.samples_in > filt.pending_samples else "")  # a window took samples
         raise RecordingError(f"{path}: its {filt.samples_in} samples ({filt.samples_in / head.sample_rate_hz:.2f} s) end "
-                             f"{where}; nothing filtered: give a shorter --calibration-s or a saved calibration "
-                             "(--calibration FILE)")
+                             f"{where}; nothing filtered{advice}")
 
 
 class Replay:
