@@ -12,6 +12,14 @@ def pyplot():
     return require("matplotlib.pyplot", "figures")
 
 
+def plain_text(text):
+    """``text`` (a file name, a title holding one) as matplotlib shows it unchanged: each ``$``
+    escaped (``\\$``), so that no pair of them reads as mathtext (a name ``x$\\foo$.csv`` failed
+    to draw with "Unknown symbol", ``z$x$.csv`` showed "zx.csv"). The one rule of the text a
+    figure takes from the user."""
+    return str(text).replace("$", r"\$")
+
+
 def save_figure(fig, path, dpi=110):
     """Write the matplotlib figure ``fig`` to ``path`` and close it. A write error that names no
     file (a full disk or a file size limit met inside the image writer, which then removes the file
@@ -57,6 +65,6 @@ def plot_filtered(path, raw, filtered, *, title=""):
     axes[0].legend(loc="upper right", ncol=2, fontsize="small")
     axes[-1].set_xlabel("time (s)")
     if title:
-        axes[0].set_title(title)
+        axes[0].set_title(plain_text(title))
     fig.tight_layout()
     save_figure(fig, path)

@@ -1,4 +1,6 @@
 import json
+import math
+import re
 
 import numpy as np
 import pytest
@@ -103,6 +105,24 @@ def test_save_load_round_trip_and_bad_files(tmp_path):
         Calibration.load(path)
     path.write_text(json.dumps(good))
     assert Calibration.load(path) == Calibration((1.0, 2.0, 3.0), (0.1, 0.1, 0.1), 200, 100.0)
+
+
+@pytest.mark.parametrize("bias_dps, message", [
+    ((math.nan, 0.0, 0.0), "bias_dps x must be a finite number"),
+    ((0.0, 1e9, 0.0), "bias_dps y must be in [-100000, 100000]"),
+])
+def test_saving_a_calibration_made_in_code_writes_only_what_loads(tmp_path, bias_dps, message):
+    """Attack pass 20: ``Calibration((nan, 0, 0), ...).save(path)`` wrote ``NaN`` (not JSON) and a
+    bias of 1e9 deg/s, files that ``load`` refuses; it is now refused naming the key, and no file
+    is written. The bias is held to the widest ``max_bias_dps`` a filter takes (a filter set to a
+    wider one saves biases beyond the default 20)."""
+    path = tmp_path / "cal.json"
+    with pytest.raises(CalibrationError, match=re.escape(message)):
+        Calibration(bias_dps, (0.1, 0.1, 0.1), 200, 100.0).save(path)
+    assert not path.exists()
+    wide = Calibration((30.0, 0.0, 0.0), (0.1, 0.1, 0.1), 200, 100.0)
+    wide.save(path)
+    assert Calibration.load(path, max_bias_dps=50.0) == wide
 
 
 @pytest.mark.parametrize("version", [2, 0, 1.0, True, "1", None])

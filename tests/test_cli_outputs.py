@@ -337,6 +337,31 @@ def test_an_output_that_appears_while_the_command_runs_is_not_replaced(tmp_path)
     assert out.read_text() == "theirs again"
 
 
+def test_force_keeps_the_permissions_of_the_file_it_replaces(tmp_path, capsys):
+    """Attack pass 20: `replay --out private.csv --force` over a file kept private (mode 0600)
+    left one every user could read (0644: the temporary file's mode under the umask took its
+    place); the output now keeps the replaced file's permission bits, as `sed -i` does."""
+    from gyrofilter.cli import main
+
+    out, cal = tmp_path / "private.csv", tmp_path / "private.json"
+    for path in (out, cal):
+        path.write_text("old")
+        path.chmod(0o600)
+    rec = str(RECORDINGS / "mpu6050_static_100s.csv.gz")
+    assert main(["replay", rec, "--out", str(out), "--save-calibration", str(cal), "--force"]) == 0
+    for path in (out, cal):
+        assert stat.S_IMODE(path.stat().st_mode) == 0o600 and path.read_text() != "old"
+    new = tmp_path / "new.csv"
+    assert main(["replay", rec, "--out", str(new)]) == 0  # a new file: the umask's mode, as before
+    assert stat.S_IMODE(new.stat().st_mode) == 0o666 & ~_umask()
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def test_a_file_name_that_is_not_utf8_is_written_escaped_in_every_output(tmp_path, monkeypatch):
     """The name in a header value, a JSON document, a Kalibr file and the fleet table crashed
     after all the work ("'utf-8' codec can't encode character '\\udcff'"): it is written escaped,

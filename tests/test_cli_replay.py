@@ -414,9 +414,31 @@ def test_realtime_into_head_still_writes_the_whole_out_file(tmp_path):
     assert closed and 0 < int(closed.group(1)) < (4000 - 200) // 5, err  # rows, after the header lines
 
 
+@pytest.mark.parametrize("name", ["x$\\foo$.csv", "y$^{{{$.csv", "z$x$.csv"])
+def test_a_figure_titled_by_a_file_name_with_dollars_shows_the_name(tmp_path, monkeypatch, capsys, name):
+    """Attack pass 20: matplotlib read a file name's $...$ as mathtext: `replay 'x$\\foo$.csv' --plot
+    p.png` (and `allan --plot`) exited 2 with "\\foo ^ ParseFatalException: Unknown symbol", naming
+    nothing, and 'z$x$.csv' was titled "zx.csv" with an italic x. The title is the name as it is."""
+    matplotlib = pytest.importorskip("matplotlib")
+    from matplotlib.axes import Axes
+    from matplotlib.cbook import is_math_text
+    from support import RECORDINGS
+
+    titles, draw = [], Axes.set_title
+    monkeypatch.setattr(Axes, "set_title", lambda ax, text, *a, **k: titles.append(text) or draw(ax, text, *a, **k))
+    path = tmp_path / name
+    path.write_bytes((RECORDINGS / "mpu6050_static_100s.csv.gz").read_bytes())
+    assert main(["replay", str(path), "--plot", str(tmp_path / "p.png")]) == 0, capsys.readouterr().err
+    assert not is_math_text(titles[0]) and titles[0].replace("\\$", "$") == f"{path} (raw minus start-up bias)"
+    assert main(["allan", str(path), "--plot", str(tmp_path / "a.png")]) == 0, capsys.readouterr().err
+
+
 @pytest.mark.parametrize("rows, args, message", [
     ("", [], "no samples (the file has a header only)"),
     ("".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(150)), [], "end inside the start-up calibration window (2 s)"),
+    # attack pass 20: the window filled, then 4 samples, fewer than a block: a header-only file, exit 0
+    ("".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(204)), [],
+     "end 4 sample(s) after the start-up calibration window (2 s), fewer than a block of 5"),
 ])
 def test_nothing_to_filter_is_an_error_and_writes_nothing(tmp_path, capsys, rows, args, message):
     path = tmp_path / "short.csv"

@@ -11,6 +11,7 @@ register-level model (gyrofilter/sources/mpu6050/model.py) on a virtual clock; p
 pseudo-terminal; the replay source paced by the host's clock.
 """
 import errno
+import io
 import json
 import os
 import re
@@ -434,6 +435,21 @@ def test_run_that_stops_inside_the_calibration_says_nothing_was_filtered(tmp_pat
     assert "no calibration to save" in err and not out.exists() and not (tmp_path / "c.json").exists()
 
 
+def test_run_that_stops_before_its_first_block_after_the_calibration_writes_no_file(tmp_path, capsys):
+    """Attack pass 20: a source that ended 2 samples after the calibration window (fewer than a
+    block) left a header-only --out file, exit 0: a file every reader refuses ("no samples"), and
+    with --force one that replaced a good output."""
+    path = tmp_path / "short.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n"
+                    + "".join(f"{i / 100:.2f},0.1,0.2,0.3\n" for i in range(202)))
+    out = tmp_path / "out.csv"
+    out.write_text("a good output\n")
+    assert main(["run", "--source", f"replay:{path}", "--quiet", "--out", str(out), "--force"]) == 2
+    err = capsys.readouterr().err
+    assert "nothing filtered: it stopped 2 sample(s) after the start-up calibration window (2 s), fewer than a block of 5" in err
+    assert out.read_text() == "a good output\n"
+
+
 def test_run_and_replay_write_the_same_output_rate(tmp_path, capsys):
     """A rate that is not a round number (99.3171 / 5) is written exactly by both commands."""
     src = tmp_path / "odd.csv"
@@ -620,6 +636,31 @@ def test_the_status_line_fits_the_terminal_it_is_rewritten_on():
         os.close(slave)
     shown = text.replace("\r\n", "\n").split("\r")[-1].split("\x1b[K")[0]
     assert "samples/s" in shown and len(shown) <= 59, repr(text)
+
+
+def test_the_first_status_line_measures_a_whole_interval_from_the_first_sample(monkeypatch):
+    """Attack pass 20: every ``run --source sim`` began with "296.2 samples/s (nominal 100) ...
+    CPU 21437.1%": the start-up (2 s here) made the first line due 20 ms after the first sample,
+    and 3 samples over 20 ms, and the start-up's CPU over them, were its numbers. The first line
+    now waits a whole interval from where it measures."""
+    import types
+    from gyrofilter.cli import live
+
+    clock = types.SimpleNamespace(wall=0.0, cpu=0.0)
+    monkeypatch.setattr(live, "time", types.SimpleNamespace(monotonic=lambda: clock.wall, process_time=lambda: clock.cpu))
+    stream = io.StringIO()
+    status = live.Status(True, 100.0, stream=stream)
+    clock.wall = clock.cpu = 2.0  # the start-up: the first block simulated, the filter compiled
+    first_sample_wall = clock.wall
+    for samples in range(1, 301):  # a sample every 10 ms, 0.1 ms of CPU each
+        clock.wall, clock.cpu = first_sample_wall + (samples - 1) * 0.01 + 0.002, clock.cpu + 1e-4
+        if status.due():
+            status.show(samples, "calibrating", first_sample_wall)
+    lines = stream.getvalue().splitlines()
+    assert lines, "no status line in 3 s"
+    for line in lines:
+        rate, cpu = map(float, re.fullmatch(r" *([0-9.]+) samples/s .*CPU +([0-9.]+)%", line).groups())
+        assert 95 <= rate <= 105 and cpu <= 2, line
 
 
 class _FillingStdout:

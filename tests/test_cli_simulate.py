@@ -253,5 +253,5 @@ def test_one_model_file_works_for_simulate_the_sim_source_and_temp_model(tmp_pat
             out = tmp_path / "rec.csv"
             assert main(["record", "--source", spec + ",seed=3,duration=2,realtime=0", "--out", str(out), "--force"]) == 0
             np.testing.assert_array_equal(read_recording(out).gyro, expected)
-    assert main(["replay", str(sim), "--temp-model", mine]) == 0
+    assert main(["replay", str(sim), "--temp-model", mine, "--calibration-s", "1"]) == 0  # 2 s: a row after the window
     assert "unknown key" not in capsys.readouterr().err

@@ -1,6 +1,7 @@
 """Evaluation harness (gyrofilter.evaluation.evaluate) and the evaluate command."""
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ from gyrofilter.evaluation import datasets as D
 from gyrofilter.evaluation import evaluate as E
 from gyrofilter.evaluation import filters as F
 from gyrofilter.evaluation import metrics as M
+from gyrofilter.errors import RecordingError
 from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.profiles import get_profile
 
@@ -162,3 +164,31 @@ def test_the_console_table_without_broad_trials_prints_no_nan():
     trial = {"rmse_motion_dps": 2.0, "rmse_rest_dps": 0.5}
     ev = dataclasses.replace(ev, broad_names=["t"], broad={"paper001": {"t": trial}})
     assert E.console_table(ev).splitlines()[1].endswith("2.00 / 0.50")
+
+
+def test_a_recordings_folder_whose_name_is_a_glob_pattern_is_read_as_named(tmp_path):
+    """Attack pass 20: `evaluate --recordings 'rec[1]'` evaluated the recordings of the folder
+    rec1 (the name read as a glob pattern: [1] a class of one character), exit 0, its own unread."""
+    for folder, name in (("rec[1]", "mpu6050_static_a.csv"), ("rec1", "mpu6050_static_b.csv"),
+                         ("rec[1]", "broad_01.csv"), ("rec1", "broad_02.csv")):
+        (tmp_path / folder).mkdir(exist_ok=True)
+        rows = ("t,gx,gy,gz,ref_x,ref_y,ref_z,movement\n0,1,2,3,1,2,3,0\n0.01,1,2,3,1,2,3,1\n" if name.startswith("broad")
+                else "t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n")
+        (tmp_path / folder / name).write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n"
+                                              "# sensor: MPU6050\n" + rows)
+    assert [r.path for r in D.find_static_recordings(str(tmp_path / "rec[1]"))] == [str(tmp_path / "rec[1]" / "mpu6050_static_a.csv")]
+    assert [r.path for r in D.find_broad_recordings(str(tmp_path / "rec[1]"))] == [str(tmp_path / "rec[1]" / "broad_01.csv")]
+
+
+@pytest.mark.parametrize("columns, row, message", [
+    ("t,gx,gy,gz", "1,2,3", "has no column(s) ref_x, ref_y, ref_z, movement that a BROAD trial has"),
+    ("t,gx,gy,gz,ref_x,ref_y,ref_z,movement", "1,2,3,1,2,3,0", "its movement column is never 1"),
+])
+def test_a_broad_file_without_the_trials_columns_is_refused_naming_it(tmp_path, columns, row, message):
+    """Attack pass 20: a user's own recording named broad_*.csv in the --recordings folder ended
+    evaluate with a traceback (KeyError: 'movement'; with the column but no movement, IndexError)."""
+    path = tmp_path / "broad_mine.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n" + columns + "\n"
+                    + "".join(f"{i / 100:.2f},{row}\n" for i in range(300)))
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: {message}")):
+        D.find_broad_recordings(str(tmp_path))

@@ -39,6 +39,20 @@ def test_the_fit_meets_the_target_on_a_linear_response():
     assert fit_gamma(lambda g: -0.01 + g, -0.01, -0.05, 0.002, 0.37) == (None, None, None)
 
 
+@pytest.mark.parametrize("sigma_dps", [0.37, 0.11])
+def test_a_fit_at_the_bound_is_a_gamma_the_model_takes(sigma_dps):
+    """Attack pass 20: `gap --allow-motion` (and `report`) of a record with a step stopped on its own
+    extended model, "model: axes.z.effects[2] (compression).gamma_per_dps2: expected gamma_per_dps2 *
+    rms_dps^2 <= 0.03 ..., got 0.631195 * 0.218011^2 = 0.03": the fit's bound 0.03 / sigma^2 gives,
+    for about one sigma in eight, a gamma whose gamma sigma^2 is 1 ulp above 0.03."""
+    from gyrofilter.sim.model import validate_model
+
+    gamma, _, _ = fit_gamma(lambda g: -0.01 - 0.4 * g, -0.01, -1e6, 1e-9, sigma_dps)
+    assert gamma * sigma_dps ** 2 == pytest.approx(0.03)  # at the bound
+    validate_model({"sample_rate_hz": 100.0, "axes": {"z": {"effects": [
+        {"effect": COMPRESSION, "gamma_per_dps2": gamma, "rms_dps": sigma_dps}]}}})
+
+
 def compressed_case(seed):
     """A record with a tone and a compression on an axis drawn at random, gamma drawn at random
     (kappa = gamma sigma^2 in 0.015-0.03): ``(axis, gamma, the compression's findings, the report)``."""

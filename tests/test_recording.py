@@ -816,6 +816,23 @@ def test_a_users_own_csv_is_told_what_a_recording_needs_in_one_go(tmp_path):
     assert read_recording(path).columns["ref_time_offset"].tolist() == [4.0]
 
 
+@pytest.mark.parametrize("names, shown", [
+    ("\ufefft,gx,gy,gz", r"'\\ufefft' holds the invisible character U\+FEFF \(ZERO WIDTH NO-BREAK SPACE"),
+    ("t\u200b,gx,gy,gz", r"'t\\u200b' holds the invisible character U\+200B \(ZERO WIDTH SPACE"),
+    ("t,gx,gy,gz,\u2066temp", r"'\\u2066temp' holds the invisible character U\+2066 \(LEFT-TO-RIGHT ISOLATE"),
+])
+def test_a_column_name_with_an_invisible_character_is_refused(tmp_path, names, shown):
+    """Attack pass 20: a header written by hand with an Excel "CSV UTF-8" export appended (its
+    byte-order mark now before the column row) read '\\ufefft' as an extra column: its times
+    ignored without a word (the samples taken as uniform, gaps and all), as a 'time' column was."""
+    path = tmp_path / "joined.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n" + names + "\n"
+                    + "".join(f"{i / 100 + (1.0 if i > 4 else 0.0):.2f},1,2,3,25\n" for i in range(10)).replace(
+                        ",25\n", ",25\n" if names.count(",") == 4 else "\n"), encoding="utf-8")
+    with pytest.raises(RecordingError, match=r"joined.csv: line 4: column " + shown):
+        read_recording(path)
+
+
 def test_compact_reading_keeps_the_numbers_and_the_columns_asked_for(tmp_path):
     """``read_recording(..., columns=, compact=True)``: an lsb column of integers is float32, a
     column that turns out not to be exact after two chunks is float64 from its start, and every

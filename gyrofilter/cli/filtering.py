@@ -168,3 +168,19 @@ def save_calibration(path, filt, outputs):
                             "so there is no calibration to save")
     filt.calibration.save(outputs.enter_context(replacing(path)))
     return True
+
+
+def nothing_filtered(filt):
+    """Where ``filt`` (a :class:`~gyrofilter.filter.pipeline.GyroFilter` fed a whole source) stopped
+    when it gave no row, as words after "ended" or "stopped": inside the start-up calibration
+    window, or fewer samples than a block after it (or after a saved calibration); None once it gave
+    a row. The one rule of ``replay``'s and ``run``'s refusal of a source that filtered nothing:
+    an output without rows is a header no reader takes ("no samples")."""
+    if filt.blocks_out:
+        return None
+    window = f"the start-up calibration window ({filt.settings.calibration_s:g} s)"
+    if filt.calibrating:
+        return f"inside {window}"
+    if filt.samples_in > filt.pending_samples:
+        return f"{filt.pending_samples} sample(s) after {window}, fewer than a block of {filt.settings.block_len}"
+    return f"before a block of {filt.settings.block_len} was full ({filt.pending_samples} sample(s))"  # a saved calibration

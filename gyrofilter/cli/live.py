@@ -248,9 +248,15 @@ class Status:
     def show(self, samples, text, first_sample_wall=None):
         """``samples`` = total so far; ``text`` = the rest of the line; ``first_sample_wall``: when
         (time.monotonic) the first sample came, where the first rate is measured from: a source's
-        start-up (a simulator's first block, a device's reset) is no rate it delivers at."""
+        start-up (a simulator's first block, a device's reset) is no rate it delivers at. Where
+        that start-up made the line due less than half a STATUS_INTERVAL_S after the first sample,
+        this call only starts the measurement (a few samples over milliseconds, and the start-up's
+        CPU over them, read 500 samples/s and CPU 100000 %): the first line comes an interval later."""
         wall, cpu = time.monotonic(), time.process_time()
         if self._samples == 0 and first_sample_wall is not None:
+            if wall - first_sample_wall < STATUS_INTERVAL_S / 2:
+                self._wall, self._cpu, self._samples = wall, cpu, samples
+                return
             self._wall = max(self._wall, first_sample_wall)
         dt = max(wall - self._wall, 1e-9)
         rate = (samples - self._samples) / dt

@@ -134,11 +134,14 @@ def commit(tmp, path):
     :func:`check_outputs` let ``--force`` replace that very file; a file that appeared meanwhile
     (another command, the user) is left as it is: FileExistsError, raised before any of the
     command's pending outputs lands. The check and the rename are one step (``os.link`` fails on
-    an existing name) where the file system has hard links."""
+    an existing name) where the file system has hard links. A replaced file's permission bits
+    go to its successor (a file kept private, mode 0600, stays so; as ``sed -i`` keeps them)."""
     for other in _pending:
         _may_land(other)
     _may_land(path)
     if os.path.lexists(path):  # the very file --force was given for
+        with contextlib.suppress(OSError):  # a file system without modes (vfat): nothing to keep
+            os.chmod(tmp, stat.S_IMODE(os.lstat(path).st_mode))
         os.replace(tmp, path)
         return
     try:

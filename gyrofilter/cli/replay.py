@@ -106,15 +106,17 @@ def feed_recording(replay, chunks, realtime=False):
 
 
 def _refuse_nothing_filtered(path, head, filt):
-    """A recording without samples, or one that ends inside the start-up calibration window,
+    """A recording without samples, or one that ends before the filter's first row (inside the
+    start-up calibration window, or less than a block after it: :func:`filtering.nothing_filtered`),
     has nothing to filter: an error (no output is kept), not an empty result."""
     if filt.samples_in == 0:
         raise RecordingError(f"{path}: no samples (the file has a header only); nothing to filter")
-    if filt.calibrating:
-        needed_s = filt.settings.calibration_s
+    where = filtering.nothing_filtered(filt)
+    if where:
+        advice = (": give a shorter --calibration-s or a saved calibration (--calibration FILE)"
+                  if filt.calibrating or filt.samples_in > filt.pending_samples else "")  # a window took samples
         raise RecordingError(f"{path}: its {filt.samples_in} samples ({filt.samples_in / head.sample_rate_hz:.2f} s) end "
-                             f"inside the start-up calibration window ({needed_s:g} s); nothing filtered: give a "
-                             "shorter --calibration-s or a saved calibration (--calibration FILE)")
+                             f"{where}; nothing filtered{advice}")
 
 
 class Replay:

@@ -204,8 +204,8 @@ def _run(args, source, sinks):
     except BaseException as exc:
         live.close_after_failure(writer, exc, "gyrofilter run")
         raise
-    nothing = filt.calibrating  # it stopped inside the start-up window: an output without rows goes
-    left = writer.close(loop.failed() or nothing)
+    nothing = filtering.nothing_filtered(filt)  # it stopped before the first row: an output without rows goes
+    left = writer.close(loop.failed() or nothing is not None)
     reason = loop.reason()
     bias = "" if filt.bias_dps is None else f" bias {console.bias_text(filt.bias_dps)};"
     console.say(
@@ -215,13 +215,12 @@ def _run(args, source, sinks):
         f"  lost {source.stats.get('lost_samples', 0)} samples"
         + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else ""),
         *([f"  {out_file}: {left}"] if left else []),
-        *([f"  nothing filtered: it stopped inside the start-up calibration window ({filt.settings.calibration_s:g} s)"]
-          if nothing else []),
+        *([f"  nothing filtered: it stopped {nothing}"] if nothing is not None else []),
     )
     if loop.failed():
         return live.EXIT_DISCONNECTED
     # a source that ended by itself before the first row is an error, as in replay; a user's stop is not
-    return 2 if nothing and not (loop.interrupted or loop.ended == READER_GONE) else 0
+    return 2 if nothing is not None and not (loop.interrupted or loop.ended == READER_GONE) else 0
 
 
 def _out_file(args):

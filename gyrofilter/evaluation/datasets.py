@@ -7,9 +7,14 @@ from __future__ import annotations
 import glob
 import os
 
+import numpy as np
+
+from ..errors import RecordingError
 from ..recording import read_recording
 
 NOISE_SEGMENT_S = 90.0
+#: the columns a BROAD trial has beside the gyro's: the optical reference rate and the movement flag
+BROAD_COLUMNS = ("ref_x", "ref_y", "ref_z", "movement")
 
 
 def stem(path):
@@ -24,7 +29,7 @@ def find_static_recordings(recordings_dir):
     """Real static MPU6050 recordings in the folder ``recordings_dir``: sensor MPU6050 and a
     description starting with 'static' (or, without a description, 'static' in the file name)."""
     out = []
-    for path in sorted(glob.glob(os.path.join(recordings_dir, "*.csv*"))):
+    for path in _files(recordings_dir, "*.csv*"):
         rec = read_recording(path)
         if "mpu6050" not in rec.header.get("sensor", "").lower():
             continue
@@ -35,8 +40,27 @@ def find_static_recordings(recordings_dir):
 
 
 def find_broad_recordings(recordings_dir):
-    """The BROAD trials (``broad_*.csv*``, with optical reference) in the folder ``recordings_dir``, read."""
-    return [read_recording(p) for p in sorted(glob.glob(os.path.join(recordings_dir, "broad_*.csv*")))]
+    """The BROAD trials (``broad_*.csv*``, with optical reference) in the folder ``recordings_dir``,
+    read; RecordingError naming a file without the columns of :data:`BROAD_COLUMNS` or without a
+    movement phase (a user's own recording so named), which the metrics need."""
+    trials = []
+    for path in _files(recordings_dir, "broad_*.csv*"):
+        rec = read_recording(path)
+        missing = [c for c in BROAD_COLUMNS if c not in rec.columns]
+        if missing:
+            raise RecordingError(f"{path}: has no column(s) {', '.join(missing)} that a BROAD trial has "
+                                 "(recordings/README_broad.md); rename a recording of your own")
+        if not np.any(np.asarray(rec.columns["movement"]) == 1):
+            raise RecordingError(f"{path}: its movement column is never 1: a BROAD trial has a movement phase "
+                                 "between rests (recordings/README_broad.md)")
+        trials.append(rec)
+    return trials
+
+
+def _files(folder, pattern):
+    """The files of ``folder`` whose names match ``pattern``, sorted: the folder's name taken as it is
+    (``glob.escape``: ``rec[1]`` is no pattern that matches the folder ``rec1``)."""
+    return sorted(glob.glob(os.path.join(glob.escape(folder), pattern)))
 
 
 def noise_segments(static_recs, duration_s=NOISE_SEGMENT_S, names=None):

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import CalibrationError, SettingsError
 from ..inputs import check_number, load_json, quote
-from ..units import AXES, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
+from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
 
 
 def calibration_samples(sample_rate_hz, calibration_s):
@@ -72,24 +72,29 @@ class Calibration:
     temp_c: float | None = None
 
     def to_json(self) -> str:
-        """The calibration as JSON text (docs/formats.md, section 5)."""
+        """The calibration as JSON text (docs/formats.md, section 5): only what :meth:`load` reads
+        back, held to :meth:`checked` with the widest ``max_bias_dps`` a filter takes (a
+        calibration made in code with a NaN bias was written as ``NaN``, not JSON), else
+        CalibrationError naming the key."""
+        cal = self.checked("calibration to save", max_bias_dps=MAX_RATE_DPS)
         return json.dumps(
             {
                 "gyrofilter-calibration": 1,
-                "bias_dps": list(self.bias_dps),
-                "noise_std_dps": list(self.noise_std_dps),
-                "samples": self.samples,
-                "sample_rate_hz": self.sample_rate_hz,
-                **({} if self.temp_c is None else {"temp_c": self.temp_c}),
+                "bias_dps": list(cal.bias_dps),
+                "noise_std_dps": list(cal.noise_std_dps),
+                "samples": cal.samples,
+                "sample_rate_hz": cal.sample_rate_hz,
+                **({} if cal.temp_c is None else {"temp_c": cal.temp_c}),
                 "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
             },
-            indent=2,
+            indent=2, allow_nan=False,
         )
 
     def save(self, path):
-        """Write :meth:`to_json` to the file ``path``."""
+        """Write :meth:`to_json` to the file ``path`` (nothing written when it refuses)."""
+        text = self.to_json() + "\n"
         with open(path, "w", encoding="utf-8") as fh:
-            fh.write(self.to_json() + "\n")
+            fh.write(text)
 
     def checked(self, where, *, max_bias_dps=MAX_BIAS_DPS) -> "Calibration":
         """This calibration with plain float/int fields, held to the limits of a start-up calibration

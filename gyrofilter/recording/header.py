@@ -7,6 +7,7 @@ the header (:func:`format_number`).
 from __future__ import annotations
 
 import re
+import unicodedata
 
 from ..errors import RecordingError
 from ..inputs import CONTROL_CHARACTER, escape_controls, json_string, parse_number, quote
@@ -251,9 +252,17 @@ TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s
 def check_columns(names, where):
     """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
     lack ``gx, gy, gz`` or look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
-    case: ``T`` too); ``where`` is the file and line."""
+    case: ``T`` too) or hold an invisible character (a control or format character, Unicode
+    categories Cc, Cf, Zl, Zp: a byte-order mark of a file joined on after the header made
+    ``\ufefft`` an extra column, its times ignored); ``where`` is the file and line."""
     if any(not n for n in names):
         raise RecordingError(f"{where}: empty column name in {quote(','.join(names))}")
+    for n in names:
+        hidden = next((c for c in n if unicodedata.category(c) in ("Cc", "Cf", "Zl", "Zp")), None)
+        if hidden is not None:
+            raise RecordingError(f"{where}: column {quote(n)} holds the invisible character U+{ord(hidden):04X} "
+                                 f"({unicodedata.name(hidden, 'a control character')}); remove it (a byte-order mark "
+                                 "there comes from a file joined on after the header)")
     seen = set()
     dupes = sorted({n for n in names if n in seen or seen.add(n)})
     if dupes:

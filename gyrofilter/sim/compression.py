@@ -38,10 +38,25 @@ import numpy as np
 MAX_COMPRESSION = 0.03
 
 
+def compression_kappa(gamma_per_dps2, rms_dps):
+    """κ = γ σ² (module docstring), as the model's validation holds it to :data:`MAX_COMPRESSION`."""
+    return float(gamma_per_dps2) * float(rms_dps) ** 2
+
+
+def max_gamma_per_dps2(rms_dps):
+    """The largest γ ((deg/s)⁻²) a model takes at σ = ``rms_dps``: κ = :func:`compression_kappa`
+    <= :data:`MAX_COMPRESSION`. MAX_COMPRESSION / σ² alone rounds, for about one σ in eight, to
+    a γ whose γ σ² is 1 ulp above the bound: a model the validation refuses."""
+    gamma = MAX_COMPRESSION / float(rms_dps) ** 2
+    while compression_kappa(gamma, rms_dps) > MAX_COMPRESSION:
+        gamma = math.nextafter(gamma, 0.0)
+    return gamma
+
+
 def compression_gain(gamma_per_dps2, rms_dps):
     """g = 1 / sqrt(1 - 6 κ + 15 κ²), κ = γ σ²: the gain that keeps the variance of a Gaussian
     of rms σ through e - γ e³ (module docstring)."""
-    kappa = float(gamma_per_dps2) * float(rms_dps) ** 2
+    kappa = compression_kappa(gamma_per_dps2, rms_dps)
     return 1.0 / math.sqrt(1.0 - 6.0 * kappa + 15.0 * kappa * kappa)
 
 

@@ -25,8 +25,8 @@ Gaussian value ``(T(0) - T) / (8 sigma^2)`` (the excess kurtosis of a compressed
 about -24 gamma sigma^2, a log-kurtosis of -8 gamma sigma^2; the tail statistic's prewhitening
 spreads each sample's shape over a few and reads less), at most :data:`MAX_TRIALS` model
 evaluations (each the extended model's ``n_ext`` runs), stopping when T is within one sd of the
-runs, then one more secant step, not evaluated; gamma at most :data:`~gyrofilter.sim.compression.MAX_COMPRESSION` / sigma^2 (the
-simulator's bound). **sigma** (``rms_dps``, which fixes the gain) is the rms of the record's fast
+runs, then one more secant step, not evaluated; gamma at most
+:func:`~gyrofilter.sim.compression.max_gamma_per_dps2` (MAX_COMPRESSION / sigma^2, the simulator's bound). **sigma** (``rms_dps``, which fixes the gain) is the rms of the record's fast
 part: its high-pass (:func:`~gyrofilter.analysis.gap.detectors.highpassed`) less the quantizer's
 q^2 / 12.
 
@@ -51,7 +51,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...effects import COMPRESSION
-from ...sim.compression import MAX_COMPRESSION
+from ...sim.compression import max_gamma_per_dps2
 from ...units import AXES
 from . import detectors as det
 from .baseline import MIN_SIMS, axis_dps
@@ -144,7 +144,7 @@ def fit_gamma(mean_tails, t0, target, sd, sigma_dps):
     taken without a further evaluation, so that the linearised re-estimator returns gamma itself on
     the record), with T read off that secant and its slope; ``(None, None, None)`` where the runs
     do not lighten (a slope >= 0)."""
-    top = MAX_COMPRESSION / sigma_dps ** 2
+    top = max_gamma_per_dps2(sigma_dps)
     points = [(0.0, t0)]
     gamma = min((t0 - target) / (8.0 * sigma_dps ** 2), top)
     for _ in range(MAX_TRIALS):

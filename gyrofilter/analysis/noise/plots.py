@@ -13,7 +13,7 @@ import numpy as np
 
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from .model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SLOPE, TERM_SYMBOL, basis
-from ...plots import pyplot, save_figure
+from ...plots import plain_text, pyplot, save_figure
 
 AXIS_COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
 TERM_STYLE = {QUANTIZATION: ":", ANGLE_RANDOM_WALK: "--", BIAS_INSTABILITY: "-.", RATE_RANDOM_WALK: (0, (5, 2, 1, 2)),
@@ -68,7 +68,7 @@ def allan_figure(plt, results, title=""):
         ax.set_title(f"axis {name}", fontsize=10)
     axes[0][0].set_ylabel("Allan deviation (deg/s)")
     if title:
-        fig.suptitle(title, fontsize=10)
+        fig.suptitle(plain_text(title), fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -82,7 +82,7 @@ def plot_before_after(path, curves, title=""):
         ax.loglog(tau, dev, style, color=colour, ms=3, label=label)
     _label(ax, "Allan deviation (deg/s)", legend_size=7)
     if title:
-        ax.set_title(title, fontsize=9)
+        ax.set_title(plain_text(title), fontsize=9)
     return _save(fig, path)
 
 
