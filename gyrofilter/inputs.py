@@ -51,9 +51,16 @@ _INTEGER = re.compile(r"[+-]?[0-9]+")
 _DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # [0-9]: \d takes any script's digits
 
 
+#: the Unicode bidirectional formatting characters (Unicode Standard Annex #9, section 2: the
+#: embeddings, overrides and isolates, the marks): shown as they are, U+202E reverses the text after
+#: it on a terminal or a page ("Trojan Source", CVE-2021-42574), so a file name or a header value
+#: can show another name than it holds
+BIDI_FORMATTING = "\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069"
+
 #: a control character: the C0 controls (line ends, tab, escape), DEL, the C1 controls (0x9b starts
-#: a terminal's control sequence too), the Unicode line and paragraph separators
-CONTROL_CHARACTER = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+#: a terminal's control sequence too), the Unicode line and paragraph separators, the bidirectional
+#: formatting characters (:data:`BIDI_FORMATTING`)
+CONTROL_CHARACTER = re.compile(f"[\x00-\x1f\x7f-\x9f\u2028\u2029{BIDI_FORMATTING}]")
 
 
 def escape_controls(text):
@@ -66,8 +73,9 @@ def escape_controls(text):
 
 #: what :func:`json_string` writes as ``\\uXXXX`` besides JSON's own escapes: DEL, the C1 controls,
 #: the line and paragraph separators (JSON leaves them as they are; YAML 1.1 reads U+0085 as a line
-#: end) and lone surrogates (a file name that is not UTF-8: no UTF-8 text holds them)
-_NOT_LITERAL_IN_JSON = re.compile("[\x7f-\x9f\u2028\u2029\ud800-\udfff]")
+#: end), the bidirectional formatting characters and lone surrogates (a file name that is not
+#: UTF-8: no UTF-8 text holds them)
+_NOT_LITERAL_IN_JSON = re.compile(f"[\x7f-\x9f\u2028\u2029{BIDI_FORMATTING}\ud800-\udfff]")
 
 
 def json_string(text):

@@ -2,6 +2,7 @@
 option, and output that survives a file name that is not UTF-8."""
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -148,6 +149,24 @@ def test_file_names_with_control_characters_print_escaped_on_their_own_line(tmp_
     # a refusal's whitespace is collapsed to one line (errors.one_line), its other controls escaped
     assert f"gyrofilter: error: {tmp_path}/ca b\\x1b[31m.csv: exists (use --force to overwrite)" in lines
     assert not any(line.startswith(("b\x1b", "b\\x1b")) for line in lines)  # no line begins inside a name
+
+
+def test_a_file_name_that_reverses_the_text_after_it_prints_escaped(tmp_path, capsys):
+    """Attack pass 20: a right-to-left override (U+202E) in a file name or a header value went to the
+    console and the report as it is, so that ``x\u202egpj.csv`` showed as ``xvsc.jpg`` (Trojan
+    Source, CVE-2021-42574); the bidirectional formatting characters are escaped as the other
+    controls are (gyrofilter.inputs.BIDI_FORMATTING), in printed lines and in JSON strings."""
+    from gyrofilter.cli import main
+    from gyrofilter.inputs import BIDI_FORMATTING, escape_controls, json_string
+
+    rec = tmp_path / "x\u202egpj.csv"
+    lsb_recording(tmp_path, name=rec.name)
+    assert main(["allan", str(rec)]) == 0
+    text = capsys.readouterr().out
+    assert "\u202e" not in text and f"recording: {tmp_path}/x\\u202egpj.csv" in text.splitlines()
+    every = "".join(chr(c) for c in range(0x2000, 0x2100)) + "\u061c"
+    for shown in (json_string(every), escape_controls(every)):
+        assert not re.search(f"[{BIDI_FORMATTING}]", shown) and json.loads(json_string(every)) == every
 
 
 def test_a_wrapped_console_line_keeps_a_value_with_its_label(capsys):
