@@ -211,7 +211,10 @@ def check_header(header, where):
     and only with ``filtered_from`` (:func:`filtered_from`): a file of samples that names an input
     rate lies about its rows (the check of its ``t`` would take its steps for blocks of samples,
     its accelerometer for one raw sample per row), so the key without it is refused, not ignored.
+    A key holding an invisible character is refused (:func:`refuse_invisible`).
     The one check of a header: the reader's and the writers' (:func:`header_text`)."""
+    for key in header:
+        refuse_invisible(key, "header key", where)
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
         raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
@@ -249,6 +252,19 @@ TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s
                              "stamp", "stamps"})
 
 
+def refuse_invisible(name, what, where):
+    """Refuse a column name or header key (``what``) that holds an invisible character (a control
+    or format character, Unicode categories Cc, Cf, Zl, Zp), with RecordingError naming ``where``
+    (the file and line), the name and the character: such a name differs from the one it shows
+    (``\ufefft`` is not ``t``; ``lsb_per_dps\u200b`` is not ``lsb_per_dps``, a repeated key that
+    is not refused as one). The one rule of the names a recording's header holds."""
+    hidden = next((c for c in name if unicodedata.category(c) in ("Cc", "Cf", "Zl", "Zp")), None)
+    if hidden is not None:
+        raise RecordingError(f"{where}: {what} {quote(name)} holds the invisible character U+{ord(hidden):04X} "
+                             f"({unicodedata.name(hidden, 'a control character')}); remove it (a byte-order mark "
+                             "there comes from a file joined on after the header)")
+
+
 def check_columns(names, where):
     """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
     lack ``gx, gy, gz`` or look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
@@ -258,11 +274,7 @@ def check_columns(names, where):
     if any(not n for n in names):
         raise RecordingError(f"{where}: empty column name in {quote(','.join(names))}")
     for n in names:
-        hidden = next((c for c in n if unicodedata.category(c) in ("Cc", "Cf", "Zl", "Zp")), None)
-        if hidden is not None:
-            raise RecordingError(f"{where}: column {quote(n)} holds the invisible character U+{ord(hidden):04X} "
-                                 f"({unicodedata.name(hidden, 'a control character')}); remove it (a byte-order mark "
-                                 "there comes from a file joined on after the header)")
+        refuse_invisible(n, "column", where)
     seen = set()
     dupes = sorted({n for n in names if n in seen or seen.add(n)})
     if dupes:
