@@ -7,10 +7,9 @@ the header (:func:`format_number`).
 from __future__ import annotations
 
 import re
-import unicodedata
 
 from ..errors import RecordingError
-from ..inputs import CONTROL_CHARACTER, escape_controls, json_string, parse_number, quote
+from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, json_string, parse_number, quote
 from ..units import ACCEL_UNITS, AXES, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
 
 #: the first header key of every recording; its value is the format version
@@ -253,15 +252,13 @@ TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s
 
 
 def refuse_invisible(name, what, where):
-    """Refuse a column name or header key (``what``) that holds an invisible character (a control
-    or format character, Unicode categories Cc, Cf, Zl, Zp), with RecordingError naming ``where``
-    (the file and line), the name and the character: such a name differs from the one it shows
-    (``\ufefft`` is not ``t``; ``lsb_per_dps\u200b`` is not ``lsb_per_dps``, a repeated key that
-    is not refused as one). The one rule of the names a recording's header holds."""
-    hidden = next((c for c in name if unicodedata.category(c) in ("Cc", "Cf", "Zl", "Zp")), None)
-    if hidden is not None:
-        raise RecordingError(f"{where}: {what} {quote(name)} holds the invisible character U+{ord(hidden):04X} "
-                             f"({unicodedata.name(hidden, 'a control character')}); remove it (a byte-order mark "
+    """Refuse a column name or header key (``what``) that holds an invisible character
+    (:func:`~gyrofilter.inputs.invisible_character`), with RecordingError naming ``where`` (the
+    file and line), the name and the character: ``\\ufefft`` is not ``t``; ``lsb_per_dps\\u200b``
+    is not ``lsb_per_dps``, a repeated key that was not refused as one."""
+    hidden = invisible_character(name)
+    if hidden:
+        raise RecordingError(f"{where}: {what} {quote(name)} {hidden}; remove it (a byte-order mark "
                              "there comes from a file joined on after the header)")
 
 
