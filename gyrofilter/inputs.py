@@ -13,7 +13,8 @@ The rules (docs/formats.md, section 8):
   OverflowError), and inside the caller's bounds.
 - **JSON files** are read at most :data:`MAX_JSON_BYTES` bytes (a larger file or an endless
   one such as ``/dev/zero`` is refused), must be UTF-8, may nest at most :data:`MAX_JSON_DEPTH`
-  levels, and hold no ``NaN``/``Infinity`` tokens and no key twice in one object.
+  levels, and hold no ``NaN``/``Infinity`` tokens and no key twice in one object (nor one
+  holding an invisible character).
 - **Input files** (a recording, a log, a JSON file) are opened by :func:`open_input` without
   blocking: a FIFO nobody writes to is refused after :data:`PIPE_WAIT_S`, never waited for forever.
 - **Quoting** user text in an error: at most :data:`MAX_QUOTE_CHARS` characters (:func:`quote`).
