@@ -192,3 +192,17 @@ def test_a_broad_file_without_the_trials_columns_is_refused_naming_it(tmp_path, 
                     + "".join(f"{i / 100:.2f},{row}\n" for i in range(300)))
     with pytest.raises(RecordingError, match=re.escape(f"{path}: {message}")):
         D.find_broad_recordings(str(tmp_path))
+
+
+def test_a_filtered_output_in_the_recordings_folder_is_refused_naming_it(tmp_path):
+    """Attack pass 21: `replay --out` of a static recording keeps its `sensor: MPU6050`, so a
+    filtered output saved beside the recordings (mpu6050_static_123s_filtered.csv) was taken as
+    a static recording of the sensor: its bias-removed block means at 1/5 of the rate evaluated
+    as raw noise (on the shipped 123-s record it stopped at the calibration, "the sensor moved",
+    naming no file)."""
+    path = tmp_path / "mpu6050_static_filtered.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# filtered_from: mpu6050_static_a.csv\n"
+                    "# input_sample_rate_hz: 100\n# sample_rate_hz: 20\n# gyro_unit: dps\nt,gx,gy,gz\n"
+                    + "".join(f"{i / 20:.2f},0.001,0.002,0.003\n" for i in range(40)))
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: is a filtered output (filtered_from 'mpu6050_static_a.csv')")):
+        D.find_static_recordings(str(tmp_path))

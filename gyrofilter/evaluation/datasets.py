@@ -10,7 +10,8 @@ import os
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import read_recording
+from ..inputs import quote
+from ..recording import filtered_from, read_recording
 
 NOISE_SEGMENT_S = 90.0
 #: the columns a BROAD trial has beside the gyro's: the optical reference rate and the movement flag
@@ -27,12 +28,18 @@ def stem(path):
 
 def find_static_recordings(recordings_dir):
     """Real static MPU6050 recordings in the folder ``recordings_dir``: sensor MPU6050 and a
-    description starting with 'static' (or, without a description, 'static' in the file name)."""
+    description starting with 'static' (or, without a description, 'static' in the file name).
+    RecordingError naming a filtered output of the sensor (:func:`~gyrofilter.recording.filtered_from`:
+    ``replay --out`` keeps the ``sensor`` key), whose rows are bias-removed block means, not samples."""
     out = []
     for path in _files(recordings_dir, "*.csv*"):
         rec = read_recording(path)
         if "mpu6050" not in rec.header.get("sensor", "").lower():
             continue
+        source = filtered_from(rec.header)
+        if source is not None:
+            raise RecordingError(f"{path}: is a filtered output (filtered_from {quote(source)}), not the sensor's samples "
+                                 "that evaluate compares the filters on; move it out of the recordings folder")
         desc = rec.header.get("description", "").strip().lower()
         if desc.startswith("static") or (not desc and "static" in os.path.basename(path).lower()):
             out.append(rec)
