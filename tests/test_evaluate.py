@@ -173,7 +173,7 @@ def test_a_recordings_folder_whose_name_is_a_glob_pattern_is_read_as_named(tmp_p
                          ("rec[1]", "broad_01.csv"), ("rec1", "broad_02.csv")):
         (tmp_path / folder).mkdir(exist_ok=True)
         rows = ("t,gx,gy,gz,ref_x,ref_y,ref_z,movement\n0,1,2,3,1,2,3,0\n0.01,1,2,3,1,2,3,1\n" if name.startswith("broad")
-                else "t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n")
+                else "t,gx,gy,gz\n0,1,2,3\n0.01,2,3,4\n")
         (tmp_path / folder / name).write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n"
                                               "# sensor: MPU6050\n" + rows)
     assert [r.path for r in D.find_static_recordings(str(tmp_path / "rec[1]"))] == [str(tmp_path / "rec[1]" / "mpu6050_static_a.csv")]
@@ -205,4 +205,15 @@ def test_a_filtered_output_in_the_recordings_folder_is_refused_naming_it(tmp_pat
                     "# input_sample_rate_hz: 100\n# sample_rate_hz: 20\n# gyro_unit: dps\nt,gx,gy,gz\n"
                     + "".join(f"{i / 20:.2f},0.001,0.002,0.003\n" for i in range(40)))
     with pytest.raises(RecordingError, match=re.escape(f"{path}: is a filtered output (filtered_from 'mpu6050_static_a.csv')")):
+        D.find_static_recordings(str(tmp_path))
+
+
+def test_a_static_recording_with_a_stuck_axis_is_refused_naming_it(tmp_path):
+    """Attack pass 21: a static recording whose axis reads one value throughout (a stuck or
+    unconnected axis) was evaluated, exit 0: the raw filter's reduction None (0 / 0), the
+    geometric means 'infx', the hold preset's 'reduction' 242x (a ratio of rounding residues)."""
+    path = tmp_path / "mpu6050_static_stuck.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: lsb\n"
+                    "# lsb_per_dps: 131\nt,gx,gy,gz\n" + "".join(f"{i / 100:.2f},{i % 3},-3,{i % 2}\n" for i in range(300)))
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: axis y: all 300 samples equal")):
         D.find_static_recordings(str(tmp_path))

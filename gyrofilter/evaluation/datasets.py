@@ -12,6 +12,7 @@ import numpy as np
 from ..errors import RecordingError
 from ..inputs import quote
 from ..recording import filtered_from, read_recording
+from ..units import AXES
 
 NOISE_SEGMENT_S = 90.0
 #: the columns a BROAD trial has beside the gyro's: the optical reference rate and the movement flag
@@ -42,8 +43,20 @@ def find_static_recordings(recordings_dir):
                                  "that evaluate compares the filters on; move it out of the recordings folder")
         desc = rec.header.get("description", "").strip().lower()
         if desc.startswith("static") or (not desc and "static" in os.path.basename(path).lower()):
+            _refuse_stuck(rec, path)
             out.append(rec)
     return out
+
+
+def _refuse_stuck(rec, path):
+    """RecordingError naming ``path`` and the axis of ``rec`` whose samples are all equal (a stuck or
+    unconnected axis, as ``allan`` refuses it): its std reduction would be 0 / 0, or a ratio of the
+    rounding residues of two means."""
+    gyro = rec.gyro_dps
+    for i, axis in enumerate(AXES):
+        if len(gyro) and np.ptp(gyro[:, i]) == 0:
+            raise RecordingError(f"{path}: axis {axis}: all {len(gyro)} samples equal {gyro[0, i]:g} deg/s (a stuck "
+                                 "axis): no noise for the filters to reduce; move it out of the recordings folder")
 
 
 def find_broad_recordings(recordings_dir):
