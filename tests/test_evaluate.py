@@ -217,3 +217,17 @@ def test_a_static_recording_with_a_stuck_axis_is_refused_naming_it(tmp_path):
                     "# lsb_per_dps: 131\nt,gx,gy,gz\n" + "".join(f"{i / 100:.2f},{i % 3},-3,{i % 2}\n" for i in range(300)))
     with pytest.raises(RecordingError, match=re.escape(f"{path}: axis y: all 300 samples equal")):
         D.find_static_recordings(str(tmp_path))
+
+
+def test_a_static_recording_that_moves_in_its_calibration_window_is_named(tmp_path):
+    """Attack pass 21: evaluate of a folder whose static recording turns in its first 2 s
+    ended with "calibration: the sensor moved (axis x: ...)", naming no file."""
+    from gyrofilter.errors import CalibrationError
+
+    rng = np.random.default_rng(1)
+    x = rng.normal(0, 0.1, size=(400, 3)) + np.where(np.arange(400) >= 100, 5.0, 0.0)[:, None]
+    path = tmp_path / "mpu6050_static_turned.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n"
+                    + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in x.tolist()))
+    with pytest.raises(CalibrationError, match=re.escape(f"{path}: calibration: the sensor moved (axis x")):
+        E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path), profiles=[])

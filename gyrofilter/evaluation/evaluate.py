@@ -20,7 +20,7 @@ import numpy as np
 from .datasets import NOISE_SEGMENT_S, find_broad_recordings, find_static_recordings, noise_segments, stem
 from .filters import default_filters
 from .metrics import broad_metrics, dynamic_metrics, static_reduction
-from ..errors import SettingsError
+from ..errors import CalibrationError, SettingsError
 from ..plots import pyplot, save_figure
 from ..sim.profiles import PROFILES
 
@@ -101,9 +101,7 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
     for spec in filters:
         if progress:
             progress(f"evaluating {spec.name}")
-        ev.static[spec.name] = {
-            stem(r.path): static_reduction(spec, r.gyro_dps, r.sample_rate_hz) for r in static_recs
-        }
+        ev.static[spec.name] = {stem(r.path): _static_reduction(spec, r) for r in static_recs}
         ev.dynamic[spec.name] = {}
         for p in profiles:
             d = dynamic_metrics(spec, p, segments, with_lag=with_lag)
@@ -111,6 +109,15 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
             ev.dynamic[spec.name][p] = d
         ev.broad[spec.name] = {stem(r.path): broad_metrics(spec, r) for r in broad_recs}
     return ev
+
+
+def _static_reduction(spec, rec):
+    """:func:`static_reduction` of the filter ``spec`` on the static recording ``rec``; its
+    CalibrationError (the sensor moved in the window) names the file."""
+    try:
+        return static_reduction(spec, rec.gyro_dps, rec.sample_rate_hz)
+    except CalibrationError as exc:
+        raise CalibrationError(f"{rec.path}: {exc}") from None
 
 
 def dominates(ev, candidate, reference="paper001", claim=PAPER_CLAIM_REDUCTION, static_only=None,
