@@ -231,3 +231,23 @@ def test_a_static_recording_that_moves_in_its_calibration_window_is_named(tmp_pa
                     + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in x.tolist()))
     with pytest.raises(CalibrationError, match=re.escape(f"{path}: calibration: the sensor moved (axis x")):
         E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path), profiles=[])
+
+
+def test_a_broad_trial_that_moves_in_its_calibration_window_is_named(tmp_path):
+    """Attack pass 21: as a static recording's, a BROAD trial's "the sensor moved" named no file."""
+    from gyrofilter.errors import CalibrationError
+
+    rng = np.random.default_rng(2)
+    x = rng.normal(0, 0.1, size=(600, 3))
+    move = (np.arange(600) >= 50) & (np.arange(600) < 500)
+    x[:, 0] += 30.0 * move
+    rows = "".join(f"{a!r},{b!r},{c!r},{30.0 * m},0,0,{int(m)}\n" for (a, b, c), m in zip(x.tolist(), move))
+    (tmp_path / "broad_99.csv").write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n"
+                                           "gx,gy,gz,ref_x,ref_y,ref_z,movement\n" + rows)
+    still = rng.normal(0, 0.1, size=(400, 3))
+    (tmp_path / "mpu6050_static_a.csv").write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n"
+                                                   "# gyro_unit: dps\ngx,gy,gz\n"
+                                                   + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in still.tolist()))
+    with pytest.raises(CalibrationError, match=re.escape(f"{tmp_path / 'broad_99.csv'}: calibration: the sensor moved")):
+        E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path),
+                   profiles=[])

@@ -101,21 +101,22 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
     for spec in filters:
         if progress:
             progress(f"evaluating {spec.name}")
-        ev.static[spec.name] = {stem(r.path): _static_reduction(spec, r) for r in static_recs}
+        ev.static[spec.name] = {stem(r.path): _naming(r, static_reduction, spec, r.gyro_dps, r.sample_rate_hz)
+                                for r in static_recs}
         ev.dynamic[spec.name] = {}
         for p in profiles:
             d = dynamic_metrics(spec, p, segments, with_lag=with_lag)
             d.pop("runs")
             ev.dynamic[spec.name][p] = d
-        ev.broad[spec.name] = {stem(r.path): broad_metrics(spec, r) for r in broad_recs}
+        ev.broad[spec.name] = {stem(r.path): _naming(r, broad_metrics, spec, r) for r in broad_recs}
     return ev
 
 
-def _static_reduction(spec, rec):
-    """:func:`static_reduction` of the filter ``spec`` on the static recording ``rec``; its
-    CalibrationError (the sensor moved in the window) names the file."""
+def _naming(rec, metric, *args):
+    """``metric(*args)`` of the recording ``rec`` (a static recording or a BROAD trial); its
+    CalibrationError (the sensor moved in the start-up window) names the file."""
     try:
-        return static_reduction(spec, rec.gyro_dps, rec.sample_rate_hz)
+        return metric(*args)
     except CalibrationError as exc:
         raise CalibrationError(f"{rec.path}: {exc}") from None
 
