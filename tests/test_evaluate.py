@@ -251,3 +251,18 @@ def test_a_broad_trial_that_moves_in_its_calibration_window_is_named(tmp_path):
     with pytest.raises(CalibrationError, match=re.escape(f"{tmp_path / 'broad_99.csv'}: calibration: the sensor moved")):
         E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path),
                    profiles=[])
+
+
+def test_a_static_recording_shorter_than_the_calibration_window_is_named(tmp_path):
+    """Attack pass 21: evaluate(filters=[the recommended preset]) of a 1.5-s static recording gave
+    its reduction as NaN, exit 0 (the CLI's first filter stopped: "calibration of 2.0 s needs
+    1..150 samples, got 200", naming no file)."""
+    from gyrofilter.errors import SettingsError
+
+    x = np.random.default_rng(3).normal(0, 0.1, size=(150, 3))
+    path = tmp_path / "mpu6050_static_short.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n"
+                    + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in x.tolist()))
+    with pytest.raises(SettingsError, match=re.escape(f"{path}: 150 samples (1.5 s) leave 0 filtered row(s)")):
+        E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path),
+                   profiles=[])

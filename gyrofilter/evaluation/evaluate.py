@@ -114,11 +114,12 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
 
 def _naming(rec, metric, *args):
     """``metric(*args)`` of the recording ``rec`` (a static recording or a BROAD trial); its
-    CalibrationError (the sensor moved in the start-up window) names the file."""
+    CalibrationError (the sensor moved in the start-up window) or SettingsError (a recording
+    shorter than the window) names the file."""
     try:
         return metric(*args)
-    except CalibrationError as exc:
-        raise CalibrationError(f"{rec.path}: {exc}") from None
+    except (CalibrationError, SettingsError) as exc:
+        raise (CalibrationError if isinstance(exc, CalibrationError) else SettingsError)(f"{rec.path}: {exc}") from None
 
 
 def dominates(ev, candidate, reference="paper001", claim=PAPER_CLAIM_REDUCTION, static_only=None,
