@@ -13,7 +13,8 @@ The rules (docs/formats.md, section 8):
   OverflowError), and inside the caller's bounds.
 - **JSON files** are read at most :data:`MAX_JSON_BYTES` bytes (a larger file or an endless
   one such as ``/dev/zero`` is refused), must be UTF-8, may nest at most :data:`MAX_JSON_DEPTH`
-  levels, and hold no ``NaN``/``Infinity`` tokens and no key twice in one object.
+  levels, and hold no ``NaN``/``Infinity`` tokens and no key twice in one object (nor one
+  holding an invisible character).
 - **Input files** (a recording, a log, a JSON file) are opened by :func:`open_input` without
   blocking: a FIFO nobody writes to is refused after :data:`PIPE_WAIT_S`, never waited for forever.
 - **Quoting** user text in an error: at most :data:`MAX_QUOTE_CHARS` characters (:func:`quote`).
@@ -32,6 +33,7 @@ import re
 import select
 import stat
 import time
+import unicodedata
 
 import numpy as np
 
@@ -211,11 +213,27 @@ def _refuse_constant(name):
     raise ValueError(f"{name} is not a JSON number")
 
 
+def invisible_character(name):
+    """What makes ``name`` (a key, a column name) differ from the name it shows, as words: "holds
+    the invisible character U+200B (ZERO WIDTH SPACE)" for its first control or format character
+    (Unicode categories Cc, Cf, Zl, Zp), None when it holds none. ``bias_dps\u200b`` is not
+    ``bias_dps``: a second key of that name, shown as a repeat, was read as another one. The one
+    rule of the names a file's keys and columns may not hold."""
+    hidden = next((c for c in str(name) if unicodedata.category(c) in ("Cc", "Cf", "Zl", "Zp")), None)
+    if hidden is None:
+        return None
+    return f"holds the invisible character U+{ord(hidden):04X} ({unicodedata.name(hidden, 'a control character')})"
+
+
 def _unique_keys(pairs):
     """An object's pairs as a dict, or ValueError for a key given twice (json keeps the last one
-    silently: a second bias_dps would win unseen)."""
+    silently: a second bias_dps would win unseen) or holding an invisible character
+    (:func:`invisible_character`: a key that shows as another one)."""
     doc = {}
     for key, value in pairs:
+        hidden = invisible_character(key)
+        if hidden:
+            raise ValueError(f"key {quote(key)} {hidden}")
         if key in doc:
             raise ValueError(f"key {quote(key)} given twice")
         doc[key] = value

@@ -173,7 +173,7 @@ def test_a_recordings_folder_whose_name_is_a_glob_pattern_is_read_as_named(tmp_p
                          ("rec[1]", "broad_01.csv"), ("rec1", "broad_02.csv")):
         (tmp_path / folder).mkdir(exist_ok=True)
         rows = ("t,gx,gy,gz,ref_x,ref_y,ref_z,movement\n0,1,2,3,1,2,3,0\n0.01,1,2,3,1,2,3,1\n" if name.startswith("broad")
-                else "t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n")
+                else "t,gx,gy,gz\n0,1,2,3\n0.01,2,3,4\n")
         (tmp_path / folder / name).write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n"
                                               "# sensor: MPU6050\n" + rows)
     assert [r.path for r in D.find_static_recordings(str(tmp_path / "rec[1]"))] == [str(tmp_path / "rec[1]" / "mpu6050_static_a.csv")]
@@ -192,3 +192,77 @@ def test_a_broad_file_without_the_trials_columns_is_refused_naming_it(tmp_path, 
                     + "".join(f"{i / 100:.2f},{row}\n" for i in range(300)))
     with pytest.raises(RecordingError, match=re.escape(f"{path}: {message}")):
         D.find_broad_recordings(str(tmp_path))
+
+
+def test_a_filtered_output_in_the_recordings_folder_is_refused_naming_it(tmp_path):
+    """Attack pass 21: `replay --out` of a static recording keeps its `sensor: MPU6050`, so a
+    filtered output saved beside the recordings (mpu6050_static_123s_filtered.csv) was taken as
+    a static recording of the sensor: its bias-removed block means at 1/5 of the rate evaluated
+    as raw noise (on the shipped 123-s record it stopped at the calibration, "the sensor moved",
+    naming no file)."""
+    path = tmp_path / "mpu6050_static_filtered.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# filtered_from: mpu6050_static_a.csv\n"
+                    "# input_sample_rate_hz: 100\n# sample_rate_hz: 20\n# gyro_unit: dps\nt,gx,gy,gz\n"
+                    + "".join(f"{i / 20:.2f},0.001,0.002,0.003\n" for i in range(40)))
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: is a filtered output (filtered_from 'mpu6050_static_a.csv')")):
+        D.find_static_recordings(str(tmp_path))
+
+
+def test_a_static_recording_with_a_stuck_axis_is_refused_naming_it(tmp_path):
+    """Attack pass 21: a static recording whose axis reads one value throughout (a stuck or
+    unconnected axis) was evaluated, exit 0: the raw filter's reduction None (0 / 0), the
+    geometric means 'infx', the hold preset's 'reduction' 242x (a ratio of rounding residues)."""
+    path = tmp_path / "mpu6050_static_stuck.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: lsb\n"
+                    "# lsb_per_dps: 131\nt,gx,gy,gz\n" + "".join(f"{i / 100:.2f},{i % 3},-3,{i % 2}\n" for i in range(300)))
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: axis y: all 300 samples equal")):
+        D.find_static_recordings(str(tmp_path))
+
+
+def test_a_static_recording_that_moves_in_its_calibration_window_is_named(tmp_path):
+    """Attack pass 21: evaluate of a folder whose static recording turns in its first 2 s
+    ended with "calibration: the sensor moved (axis x: ...)", naming no file."""
+    from gyrofilter.errors import CalibrationError
+
+    rng = np.random.default_rng(1)
+    x = rng.normal(0, 0.1, size=(400, 3)) + np.where(np.arange(400) >= 100, 5.0, 0.0)[:, None]
+    path = tmp_path / "mpu6050_static_turned.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n"
+                    + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in x.tolist()))
+    with pytest.raises(CalibrationError, match=re.escape(f"{path}: calibration: the sensor moved (axis x")):
+        E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path), profiles=[])
+
+
+def test_a_broad_trial_that_moves_in_its_calibration_window_is_named(tmp_path):
+    """Attack pass 21: as a static recording's, a BROAD trial's "the sensor moved" named no file."""
+    from gyrofilter.errors import CalibrationError
+
+    rng = np.random.default_rng(2)
+    x = rng.normal(0, 0.1, size=(600, 3))
+    move = (np.arange(600) >= 50) & (np.arange(600) < 500)
+    x[:, 0] += 30.0 * move
+    rows = "".join(f"{a!r},{b!r},{c!r},{30.0 * m},0,0,{int(m)}\n" for (a, b, c), m in zip(x.tolist(), move))
+    (tmp_path / "broad_99.csv").write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n"
+                                           "gx,gy,gz,ref_x,ref_y,ref_z,movement\n" + rows)
+    still = rng.normal(0, 0.1, size=(400, 3))
+    (tmp_path / "mpu6050_static_a.csv").write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n"
+                                                   "# gyro_unit: dps\ngx,gy,gz\n"
+                                                   + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in still.tolist()))
+    with pytest.raises(CalibrationError, match=re.escape(f"{tmp_path / 'broad_99.csv'}: calibration: the sensor moved")):
+        E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path),
+                   profiles=[])
+
+
+def test_a_static_recording_shorter_than_the_calibration_window_is_named(tmp_path):
+    """Attack pass 21: evaluate(filters=[the recommended preset]) of a 1.5-s static recording gave
+    its reduction as NaN, exit 0 (the CLI's first filter stopped: "calibration of 2.0 s needs
+    1..150 samples, got 200", naming no file)."""
+    from gyrofilter.errors import SettingsError
+
+    x = np.random.default_rng(3).normal(0, 0.1, size=(150, 3))
+    path = tmp_path / "mpu6050_static_short.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n"
+                    + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in x.tolist()))
+    with pytest.raises(SettingsError, match=re.escape(f"{path}: 150 samples (1.5 s) leave 0 filtered row(s)")):
+        E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path),
+                   profiles=[])

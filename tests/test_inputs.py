@@ -216,6 +216,23 @@ def test_a_key_given_twice_in_a_json_object_is_refused():
     assert parse_json('[{"a": 1}, {"a": 2}]', "doc") == [{"a": 1}, {"a": 2}]
 
 
+def test_a_json_key_with_an_invisible_character_is_refused(tmp_path):
+    """Attack pass 21: a calibration holding "bias_dps\u200b" beside "bias_dps" shows a key
+    given twice, which is refused; it was read as another key and ignored (the bias taken from
+    the other one without a word)."""
+    with pytest.raises(SettingsError, match=r"doc: not valid JSON: key 'bias_dps\\u200b' holds the invisible "
+                                            r"character U\+200B \(ZERO WIDTH SPACE\)"):
+        parse_json('{"bias_dps": [0, 0, 0], "bias_dps\u200b": [10, 10, 10]}', "doc")
+    from gyrofilter.filter.calibration import Calibration, CalibrationError
+
+    path = tmp_path / "cal.json"
+    path.write_text('{"bias_dps\ufeff": [9, 9, 9], "bias_dps": [0.1, 0.2, 0.3], "noise_std_dps": [0.1, 0.1, 0.1], '
+                    '"samples": 200, "sample_rate_hz": 100}', encoding="utf-8")
+    with pytest.raises(CalibrationError, match=r"cal.json: .*key 'bias_dps\\ufeff' holds the invisible character U\+FEFF"):
+        Calibration.load(path)
+    assert parse_json('{"note": "a\u200bb"}', "doc") == {"note": "a\u200bb"}  # a value is text as it is
+
+
 @pytest.mark.parametrize("path", [2, 0, True, {"bias_dps": [0, 0, 0]}, None, 1.5])
 def test_load_json_takes_only_a_file_name(path):
     """An int was taken by open() as a file descriptor and closed (calibration=2 closed stderr)."""

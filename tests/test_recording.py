@@ -833,6 +833,26 @@ def test_a_column_name_with_an_invisible_character_is_refused(tmp_path, names, s
         read_recording(path)
 
 
+@pytest.mark.parametrize("lines, shown", [
+    ("# lsb_per_dps\u200b: 131\n# lsb_per_dps: 65.5\n", r"'lsb_per_dps\\u200b' holds the invisible character U\+200B"),
+    ("# sample_rate_hz\ufeff: 50\n# lsb_per_dps: 131\n", r"'sample_rate_hz\\ufeff' holds the invisible character U\+FEFF"),
+])
+def test_a_header_key_with_an_invisible_character_is_refused(tmp_path, lines, shown):
+    """Attack pass 21 (pass 20's column rule, for the keys): 'lsb_per_dps\\u200b: 131' before
+    'lsb_per_dps: 65.5' shows as a repeated key, which is refused; it was read as another key,
+    kept, and the rates taken at 65.5 LSB per deg/s without a word. The writer refuses it too."""
+    path = tmp_path / "keys.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n" + lines + "t,gx,gy,gz\n"
+                    + "".join(f"{i / 100:.2f},1,2,3\n" for i in range(10)), encoding="utf-8")
+    with pytest.raises(RecordingError, match=r"keys.csv: line [45]: header key " + shown):
+        read_recording(path)
+    key = lines[2:lines.index(":")]
+    with pytest.raises(RecordingError, match=r"out.csv: header key " + shown):
+        write_recording(tmp_path / "out.csv", Recording({c: np.zeros(2) for c in ("gx", "gy", "gz")},
+                                                        {"sample_rate_hz": "100", "gyro_unit": "dps", key: "1"}))
+    assert not (tmp_path / "out.csv").exists()
+
+
 def test_compact_reading_keeps_the_numbers_and_the_columns_asked_for(tmp_path):
     """``read_recording(..., columns=, compact=True)``: an lsb column of integers is float32, a
     column that turns out not to be exact after two chunks is float64 from its start, and every

@@ -10,7 +10,9 @@ import os
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import read_recording
+from ..inputs import quote
+from ..recording import filtered_from, read_recording
+from ..units import AXES
 
 NOISE_SEGMENT_S = 90.0
 #: the columns a BROAD trial has beside the gyro's: the optical reference rate and the movement flag
@@ -27,16 +29,34 @@ def stem(path):
 
 def find_static_recordings(recordings_dir):
     """Real static MPU6050 recordings in the folder ``recordings_dir``: sensor MPU6050 and a
-    description starting with 'static' (or, without a description, 'static' in the file name)."""
+    description starting with 'static' (or, without a description, 'static' in the file name).
+    RecordingError naming a filtered output of the sensor (:func:`~gyrofilter.recording.filtered_from`:
+    ``replay --out`` keeps the ``sensor`` key), whose rows are bias-removed block means, not samples."""
     out = []
     for path in _files(recordings_dir, "*.csv*"):
         rec = read_recording(path)
         if "mpu6050" not in rec.header.get("sensor", "").lower():
             continue
+        source = filtered_from(rec.header)
+        if source is not None:
+            raise RecordingError(f"{path}: is a filtered output (filtered_from {quote(source)}), not the sensor's samples "
+                                 "that evaluate compares the filters on; move it out of the recordings folder")
         desc = rec.header.get("description", "").strip().lower()
         if desc.startswith("static") or (not desc and "static" in os.path.basename(path).lower()):
+            _refuse_stuck(rec, path)
             out.append(rec)
     return out
+
+
+def _refuse_stuck(rec, path):
+    """RecordingError naming ``path`` and the axis of ``rec`` whose samples are all equal (a stuck or
+    unconnected axis, as ``allan`` refuses it): its std reduction would be 0 / 0, or a ratio of the
+    rounding residues of two means."""
+    gyro = rec.gyro_dps
+    for i, axis in enumerate(AXES):
+        if len(gyro) and np.ptp(gyro[:, i]) == 0:
+            raise RecordingError(f"{path}: axis {axis}: all {len(gyro)} samples equal {gyro[0, i]:g} deg/s (a stuck "
+                                 "axis): no noise for the filters to reduce; move it out of the recordings folder")
 
 
 def find_broad_recordings(recordings_dir):

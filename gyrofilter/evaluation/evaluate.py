@@ -20,7 +20,7 @@ import numpy as np
 from .datasets import NOISE_SEGMENT_S, find_broad_recordings, find_static_recordings, noise_segments, stem
 from .filters import default_filters
 from .metrics import broad_metrics, dynamic_metrics, static_reduction
-from ..errors import SettingsError
+from ..errors import CalibrationError, SettingsError
 from ..plots import pyplot, save_figure
 from ..sim.profiles import PROFILES
 
@@ -101,16 +101,25 @@ def evaluate(filters=None, recordings_dir="recordings", profiles=None, with_lag=
     for spec in filters:
         if progress:
             progress(f"evaluating {spec.name}")
-        ev.static[spec.name] = {
-            stem(r.path): static_reduction(spec, r.gyro_dps, r.sample_rate_hz) for r in static_recs
-        }
+        ev.static[spec.name] = {stem(r.path): _naming(r, static_reduction, spec, r.gyro_dps, r.sample_rate_hz)
+                                for r in static_recs}
         ev.dynamic[spec.name] = {}
         for p in profiles:
             d = dynamic_metrics(spec, p, segments, with_lag=with_lag)
             d.pop("runs")
             ev.dynamic[spec.name][p] = d
-        ev.broad[spec.name] = {stem(r.path): broad_metrics(spec, r) for r in broad_recs}
+        ev.broad[spec.name] = {stem(r.path): _naming(r, broad_metrics, spec, r) for r in broad_recs}
     return ev
+
+
+def _naming(rec, metric, *args):
+    """``metric(*args)`` of the recording ``rec`` (a static recording or a BROAD trial); its
+    CalibrationError (the sensor moved in the start-up window) or SettingsError (a recording
+    shorter than the window) names the file."""
+    try:
+        return metric(*args)
+    except (CalibrationError, SettingsError) as exc:
+        raise (CalibrationError if isinstance(exc, CalibrationError) else SettingsError)(f"{rec.path}: {exc}") from None
 
 
 def dominates(ev, candidate, reference="paper001", claim=PAPER_CLAIM_REDUCTION, static_only=None,

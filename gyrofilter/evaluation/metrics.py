@@ -37,6 +37,7 @@ import math
 
 import numpy as np
 
+from ..errors import SettingsError
 from .reference import block_mean_masked, reference_from_recording
 from ..sim.profiles import get_profile
 
@@ -50,8 +51,13 @@ DEFAULT_CALIBRATION_S = 2.0
 def static_reduction(spec, x_dps, sample_rate_hz, calibration_s=DEFAULT_CALIBRATION_S):
     """Per-axis std(raw after calibration, bias removed) / std(filtered) of the filter ``spec``
     (a FilterSpec) run on ``x_dps`` ((N, 3), deg/s, at ``sample_rate_hz``, Hz) with a
-    calibration of ``calibration_s`` (s)."""
+    calibration of ``calibration_s`` (s). SettingsError when fewer than 2 rows follow the
+    calibration (a record not much longer than its window: the standard deviations would be NaN)."""
     out = spec.run(x_dps, sample_rate_hz, calibration_s)
+    if len(out.y_dps) < 2:
+        raise SettingsError(f"{len(x_dps)} samples ({len(x_dps) / sample_rate_hz:g} s) leave {len(out.y_dps)} filtered "
+                            f"row(s) of {spec.name} after its {calibration_s:g}-s calibration: too short to measure a "
+                            "reduction")
     raw_std = np.std(x_dps[out.start :], axis=0)
     return raw_std / np.std(out.y_dps, axis=0)
 

@@ -7,10 +7,9 @@ the header (:func:`format_number`).
 from __future__ import annotations
 
 import re
-import unicodedata
 
 from ..errors import RecordingError
-from ..inputs import CONTROL_CHARACTER, escape_controls, json_string, parse_number, quote
+from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, json_string, parse_number, quote
 from ..units import ACCEL_UNITS, AXES, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
 
 #: the first header key of every recording; its value is the format version
@@ -211,7 +210,10 @@ def check_header(header, where):
     and only with ``filtered_from`` (:func:`filtered_from`): a file of samples that names an input
     rate lies about its rows (the check of its ``t`` would take its steps for blocks of samples,
     its accelerometer for one raw sample per row), so the key without it is refused, not ignored.
+    A key holding an invisible character is refused (:func:`refuse_invisible`).
     The one check of a header: the reader's and the writers' (:func:`header_text`)."""
+    for key in header:
+        refuse_invisible(key, "header key", where)
     missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
     if missing:
         raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
@@ -249,6 +251,17 @@ TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s
                              "stamp", "stamps"})
 
 
+def refuse_invisible(name, what, where):
+    """Refuse a column name or header key (``what``) that holds an invisible character
+    (:func:`~gyrofilter.inputs.invisible_character`), with RecordingError naming ``where`` (the
+    file and line), the name and the character: ``\\ufefft`` is not ``t``; ``lsb_per_dps\\u200b``
+    is not ``lsb_per_dps``, a repeated key that was not refused as one."""
+    hidden = invisible_character(name)
+    if hidden:
+        raise RecordingError(f"{where}: {what} {quote(name)} {hidden}; remove it (a byte-order mark "
+                             "there comes from a file joined on after the header)")
+
+
 def check_columns(names, where):
     """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
     lack ``gx, gy, gz`` or look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
@@ -258,11 +271,7 @@ def check_columns(names, where):
     if any(not n for n in names):
         raise RecordingError(f"{where}: empty column name in {quote(','.join(names))}")
     for n in names:
-        hidden = next((c for c in n if unicodedata.category(c) in ("Cc", "Cf", "Zl", "Zp")), None)
-        if hidden is not None:
-            raise RecordingError(f"{where}: column {quote(n)} holds the invisible character U+{ord(hidden):04X} "
-                                 f"({unicodedata.name(hidden, 'a control character')}); remove it (a byte-order mark "
-                                 "there comes from a file joined on after the header)")
+        refuse_invisible(n, "column", where)
     seen = set()
     dupes = sorted({n for n in names if n in seen or seen.add(n)})
     if dupes:
