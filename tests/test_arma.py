@@ -310,3 +310,33 @@ def test_an_exactly_predictable_series_is_refused_naming_the_axis(signal):
     x = (-1.0) ** np.arange(2000) if signal == "alternating" else np.sin(0.3 * np.arange(2000))
     with pytest.raises(GyroFilterError, match=r"axis z: ARMA\(\d, \d\) predicts the series exactly"):
         arma.analyze_axis(x, 100.0, axis="z")
+
+
+@pytest.mark.parametrize("n", [3, 20, 199])
+def test_a_series_shorter_than_the_minimum_is_refused(n):
+    """Attack pass 22: 20 samples ended in statsmodels' ValueError ("maxlag must be less than
+    (nobs/2 - 1 - ntrend)"), not a GyroFilterError; the command refused fewer than 200 itself."""
+    x = np.random.default_rng(5).normal(size=n)
+    with pytest.raises(GyroFilterError, match=rf"axis x: {n} samples; the analysis needs at least 200"):
+        arma.analyze_axis(x, 100.0, axis="x")
+
+
+def test_rates_beyond_any_gyro_are_refused():
+    """Attack pass 22: a series of 1e160 deg/s ended in scipy's ValueError ("Invalid input, x is constant")."""
+    x = np.random.default_rng(5).normal(size=1000) * 1e160
+    with pytest.raises(GyroFilterError, match=r"sample 0: .* deg/s is beyond the \+-100000 deg/s any gyro reads"):
+        arma.analyze_axis(x, 100.0, axis="x")
+
+
+@pytest.mark.parametrize("kind", ["masked", "complex", "bool", "str"])
+def test_what_is_not_rates_is_refused(kind):
+    """Attack pass 22: a masked value was taken as data (a hidden 1e4 made the std 316 deg/s, exit
+    without a word), complex numbers lost their imaginary part, booleans and strings were read as
+    numbers; the Allan functions and the filter refuse them (inputs.number_array)."""
+    x = np.random.default_rng(5).normal(size=1000)
+    if kind == "masked":
+        x = np.ma.masked_array(x, mask=np.arange(1000) == 10)
+        x.data[10] = 1e4
+    values = {"masked": x, "complex": x + 1j, "bool": x > 0, "str": [str(v) for v in x]}[kind]
+    with pytest.raises(GyroFilterError, match="series"):
+        arma.analyze_axis(values, 100.0, axis="x")

@@ -1125,3 +1125,32 @@ def test_rows_the_rate_has_no_room_for_are_refused_even_when_the_typical_step_is
     with pytest.raises(RecordingError, match=r"t's 1000 steps from line \d+ span [\d.]+ s, but 1000 sample intervals "
                                              r"at sample_rate_hz 100 take 10 s: more rows than the rate has room for"):
         _read_chunked(_dps_file(tmp_path, body), chunk_rows)
+
+
+def _masked_at_10(shape):
+    values = np.ma.masked_array(np.ones(shape), mask=np.zeros(shape, bool))
+    values.mask[10] = True
+    values.data[10] = 1e4
+    return values
+
+
+@pytest.mark.parametrize("argument", ["gyro_dps", "t_s", "temp_c", "accel", "extra"])
+def test_from_dps_refuses_a_masked_value(argument):
+    """Attack pass 22: Recording.from_dps took a masked value's hidden number as data (the mask
+    dropped: every analysis of the recording used it), as the Allan functions and the filter
+    refuse it (inputs.number_array)."""
+    n = 100
+    args = {"gyro_dps": np.zeros((n, 3)), "t_s": np.arange(n) / 100.0, "temp_c": np.full(n, 25.0),
+            "accel": np.ones((n, 3)), "extra": {"ref_x": np.zeros(n)}}
+    args[argument] = ({"ref_x": _masked_at_10(n)} if argument == "extra" else
+                      _masked_at_10(args[argument].shape))
+    gyro = args.pop("gyro_dps")
+    with pytest.raises(RecordingError, match="masked value.* row 10"):
+        Recording.from_dps(gyro, 100.0, accel_unit="g", **args)
+
+
+@pytest.mark.parametrize("values", [np.zeros((5, 3)) + 1j, np.zeros((5, 3), bool), [["1", "2", "3"]] * 5])
+def test_from_dps_refuses_what_is_not_numbers(values):
+    """Attack pass 22: complex rates lost their imaginary part, booleans and strings were read as numbers."""
+    with pytest.raises(RecordingError, match="gyro_dps must be numbers"):
+        Recording.from_dps(values, 100.0)

@@ -19,7 +19,6 @@ from ..recording.checks import gap_step_s
 from ..units import AXES, MAX_DURATION_S
 from . import console, options, outputs, still
 
-MIN_SAMPLES = 200  # fewer leave the tests and the order search without power
 MAX_MAX_N = 10  # ARMA(20, 19): the longest model the simulator takes (20 coefficients each side)
 MAX_MAX_SAMPLES = 10**8  # samples fitted; ARMA fits of more take hours and gain nothing
 PAPER_003 = "paper 003 (ADIS16405 z gyro): ADF -110.18; KS and JB reject normality; ARMA(1, 1): x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}"
@@ -119,16 +118,16 @@ def _window(args, n, sample_rate_hz, t_s=None):
         after_s = t_s - t_s[0]
         i0 = int(np.searchsorted(after_s, start_s - 0.5 / sample_rate_hz))
         i1 = n if args.end_s is None else int(np.searchsorted(after_s, args.end_s - 0.5 / sample_rate_hz))
-    if i1 - i0 >= MIN_SAMPLES:
+    if i1 - i0 >= arma.MIN_SAMPLES:
         return i0, i1
     length = f"{n} samples ({_span_s(0, n, sample_rate_hz, t_s):g} s at {sample_rate_hz:g} Hz)"
     given = " and ".join(f"--{name.replace('_', '-')} {value:g}" for name, value in
                          (("start_s", args.start_s), ("end_s", args.end_s)) if value is not None)
     if not given:
-        raise SettingsError(f"{args.recording}: {length}; the analysis needs at least {MIN_SAMPLES}")
+        raise SettingsError(f"{args.recording}: {length}; the analysis needs at least {arma.MIN_SAMPLES}")
     verb = "leave" if " and " in given else "leaves"
     raise SettingsError(f"{given} {verb} {max(0, i1 - i0)} of the {length} of {args.recording}; "
-                        f"the analysis needs at least {MIN_SAMPLES}")
+                        f"the analysis needs at least {arma.MIN_SAMPLES}")
 
 
 def _start_s(i0, sample_rate_hz, t_s):

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RecordingError
+from ..inputs import number_array
 from ..units import from_dps, to_dps, to_mps2
 from .header import ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY, VERSION_KEY, accel_units_header, dps_header, format_number
 
@@ -157,7 +158,7 @@ class Recording(_HeaderFacts):
         temperatures (deg C), ``accel`` (N, 3) accelerometer columns ``ax, ay, az`` in ``accel_unit``
         (``m/s^2``, ``g``, or ``lsb`` with ``lsb_per_g``: header keys), ``extra`` further columns
         (name -> (N,) array) and ``header`` keys."""
-        gyro_dps = np.asarray(gyro_dps, dtype=float)
+        gyro_dps = _numbers(gyro_dps, "gyro_dps")
         if gyro_dps.ndim != 2 or gyro_dps.shape[1] != 3:
             raise RecordingError(f"gyro_dps must have shape (N, 3), got {gyro_dps.shape}")
         head = {VERSION_KEY: FORMAT_VERSION}
@@ -165,23 +166,40 @@ class Recording(_HeaderFacts):
         head.update(accel_units_header(accel_unit, lsb_per_g))
         columns = {}
         if t_s is not None:
-            columns["t"] = np.asarray(t_s, dtype=float)
+            columns["t"] = _numbers(t_s, "t_s")
         for i, name in enumerate(GYRO_COLUMNS):
             columns[name] = gyro_dps[:, i].copy()
         if temp_c is not None:
-            columns["temp"] = np.asarray(temp_c, dtype=float)
+            columns["temp"] = _numbers(temp_c, "temp_c")
         if accel is not None:
-            accel = np.asarray(accel, dtype=float)
+            accel = _numbers(accel, "accel")
             if accel.ndim != 2 or accel.shape[1] != 3:
                 raise RecordingError(f"accel must have shape (N, 3), got {accel.shape}")
             for i, name in enumerate(ACCEL_COLUMNS):
                 columns[name] = accel[:, i].copy()
         for name, values in (extra or {}).items():
-            columns[name] = np.asarray(values, dtype=float)
+            columns[name] = _numbers(values, f"extra column {name!r}")
         for name, values in columns.items():
             if len(values) != len(gyro_dps):
                 raise RecordingError(f"column {name!r} has {len(values)} values, gyro has {len(gyro_dps)}")
         return cls(columns=columns, header=head)
+
+
+def _numbers(values, name):
+    """``values`` (an argument ``name`` of :meth:`Recording.from_dps`) as a float array, or
+    RecordingError: a masked value (converting would drop the mask and take the number behind it
+    as data), complex numbers, booleans, strings, objects or a ragged list (the rule:
+    :func:`gyrofilter.inputs.number_array`)."""
+    array, problem = number_array(values)
+    if problem is None:
+        return array
+    kind, detail = problem
+    if kind == "masked":
+        raise RecordingError(f"{name} has a masked value, the first at row {detail}; give the measured values only "
+                             "(drop the masked rows, or fill them with np.ma.filled if a value is meant)")
+    if kind == "ragged":
+        raise RecordingError(f"{name} must be an array of numbers, got a {type(values).__name__} that is none")
+    raise RecordingError(f"{name} must be numbers, got an array of {detail}")
 
 
 @dataclass

@@ -67,9 +67,13 @@ from .checks import (DEFAULT_ADF_MAXLAG, DEFAULT_ALPHA, WHITENESS_LAGS, Normalit
                           adf_test, normality_tests, whiteness)
 from .fit import ArmaFit, fit_arma, require_stats, simulate_arma
 from ...errors import SettingsError
-from ...units import MIN_NOISE_DPS, check_sample_rate_hz, json_ready, plain
+from ...inputs import number_array
+from ...units import MAX_RATE_DPS, MIN_NOISE_DPS, check_sample_rate_hz, json_ready, plain
 
 DEFAULT_MAX_SAMPLES = 200_000
+#: fewest samples of an axis the analysis takes: fewer leave the tests and the order search without
+#: power (and below about 30 statsmodels' ADF test fails on its own lags)
+MIN_SAMPLES = 200
 DEFAULT_MAX_N = 4  # up to ARMA(8, 7)
 CRITERIA = ("f", "aic", "bic")
 DEFAULT_CRITERION = "bic"  # see select_order for why not the paper's F rule
@@ -178,13 +182,19 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
 
     Paper 003: "static output minus its constant". Longer than ``max_samples``: non-overlapping
     block means over the smallest factor k with N / k <= max_samples (the tail that does not
-    fill a block is dropped).
+    fill a block is dropped). SettingsError for what is not rates (:func:`_rates`), a value that
+    is not finite or one beyond :data:`~gyrofilter.units.MAX_RATE_DPS` (whose squares overflowed
+    the tests near 1e154 deg/s).
     """
-    x = np.asarray(x, dtype=float)
+    x = _rates(x)
     if x.ndim != 1:
         raise SettingsError(f"series must be 1-D, got shape {x.shape}")
     if not np.all(np.isfinite(x)):
         raise SettingsError("series holds NaN or infinite values")
+    beyond = np.flatnonzero(np.abs(x) > MAX_RATE_DPS)
+    if beyond.size:
+        raise SettingsError(f"series sample {int(beyond[0])}: {float(x[beyond[0]]):.6g} deg/s is beyond the "
+                            f"+-{MAX_RATE_DPS:g} deg/s any gyro reads; are the rates in deg/s?")
     check_sample_rate_hz(sample_rate_hz)
     if max_samples < 100:
         raise SettingsError(f"max_samples must be at least 100, got {plain(max_samples)}")
@@ -194,6 +204,21 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
         x = x[:n].reshape(-1, k).mean(axis=1)
     mean = float(x.mean())
     return x - mean, k, sample_rate_hz / k, mean
+
+
+def _rates(values):
+    """``values`` as a float array, or SettingsError: a masked value (converting would drop the
+    mask and take the number behind it as data), complex numbers, booleans, strings, objects or a
+    ragged list (the rule: :func:`gyrofilter.inputs.number_array`)."""
+    array, problem = number_array(values)
+    if problem is None:
+        return array
+    kind, detail = problem
+    if kind == "masked":
+        raise SettingsError(f"series has a masked value, the first at sample {detail}; give the measured values only")
+    if kind == "ragged":
+        raise SettingsError(f"series must be an array of numbers (deg/s), got a {type(values).__name__} that is none")
+    raise SettingsError(f"series must be numbers (deg/s), got an array of {detail}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -352,8 +377,10 @@ def summarise_warnings(caught):
 
 
 def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_maxlag, lags, quantum_dps, criterion):
-    x_raw = np.asarray(x_dps, float)
-    series, k, rate, mean = prepare_series(x_raw, sample_rate_hz, max_samples)
+    series, k, rate, mean = prepare_series(x_dps, sample_rate_hz, max_samples)
+    x_raw = _rates(x_dps)
+    if len(x_raw) < MIN_SAMPLES:  # statsmodels' ADF test failed on 20 (ValueError: maxlag)
+        raise SettingsError(f"axis {axis}: {len(x_raw)} samples; the analysis needs at least {MIN_SAMPLES}")
     if np.ptp(x_raw) == 0:
         raise SettingsError(f"axis {axis}: constant ({mean:g} deg/s) over all {len(x_raw)} samples: "
                             "no noise to model (is the axis stuck or saturated?)")
