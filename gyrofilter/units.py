@@ -215,10 +215,16 @@ def to_dps(values, unit, lsb_per_dps=None):
     if unit == "rad/s":
         return _scaled(converted, values, DEG_PER_RAD)
     if unit == "lsb":
-        if not lsb_per_dps or lsb_per_dps <= 0:
-            raise SettingsError(f"gyro_unit 'lsb' needs a positive lsb_per_dps, got {plain(lsb_per_dps)}")
-        return _scaled(converted, values, divisor=lsb_per_dps)
+        return _scaled(converted, values, divisor=_lsb_per_dps(lsb_per_dps))
     raise SettingsError(f"unknown gyro unit {unit!r}; expected one of {', '.join(GYRO_UNITS)}")
+
+
+def _lsb_per_dps(lsb_per_dps):
+    """The scale of :func:`to_dps` and :func:`from_dps` for 'lsb' (:func:`check_lsb_per_dps`: NaN
+    made every rate NaN, inf every rate 0 deg/s), or SettingsError; None: the unit needs one."""
+    if lsb_per_dps is None:
+        raise SettingsError("gyro_unit 'lsb' needs a positive lsb_per_dps, got None")
+    return check_lsb_per_dps(lsb_per_dps)
 
 
 def from_dps(values_dps, unit, lsb_per_dps=None):
@@ -230,9 +236,7 @@ def from_dps(values_dps, unit, lsb_per_dps=None):
     if unit == "rad/s":
         return values_dps / DEG_PER_RAD
     if unit == "lsb":
-        if not lsb_per_dps or lsb_per_dps <= 0:
-            raise SettingsError(f"gyro_unit 'lsb' needs a positive lsb_per_dps, got {plain(lsb_per_dps)}")
-        return values_dps * lsb_per_dps
+        return values_dps * _lsb_per_dps(lsb_per_dps)
     raise SettingsError(f"unknown gyro unit {unit!r}; expected one of {', '.join(GYRO_UNITS)}")
 
 
@@ -247,7 +251,7 @@ def to_mps2(values, accel_unit, lsb_per_g=None):
     if accel_unit == "g":
         return _scaled(converted, values, STANDARD_GRAVITY_MPS2)
     if accel_unit == "lsb":
-        if not lsb_per_g or lsb_per_g <= 0:
-            raise SettingsError(f"accel_unit 'lsb' needs a positive lsb_per_g, got {plain(lsb_per_g)}")
-        return _scaled(converted, values, STANDARD_GRAVITY_MPS2 / lsb_per_g)
+        if lsb_per_g is None:
+            raise SettingsError("accel_unit 'lsb' needs a positive lsb_per_g, got None")
+        return _scaled(converted, values, STANDARD_GRAVITY_MPS2 / check_lsb_per_g(lsb_per_g))
     raise SettingsError(f"unknown accelerometer unit {plain(accel_unit)}; expected one of {', '.join(ACCEL_UNITS)}")

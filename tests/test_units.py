@@ -139,3 +139,14 @@ def test_every_sample_rate_taker_refuses_it_with_the_one_check(where, rate):
 
 def test_the_lowest_sample_rate_is_accepted():
     assert check_sample_rate_hz(MIN_SAMPLE_RATE_HZ) == 0.001
+
+
+@pytest.mark.parametrize("scale", [float("nan"), float("inf"), 1e-300, 1e300])
+@pytest.mark.parametrize("convert", ["to_dps", "from_dps", "to_mps2"])
+def test_a_scale_no_sensor_has_is_refused_by_the_conversions(convert, scale):
+    """Attack pass 22: convert_gyro(rec, "lsb", nan) gave a recording of NaN rates, an lsb_per_dps of
+    inf read every sample as 0 deg/s, 1e-300 as 6e-303 LSB: the conversions took any scale that is
+    not <= 0, where the headers and options take LSB_PER_DPS_RANGE / LSB_PER_G_RANGE."""
+    function = {"to_dps": to_dps, "from_dps": from_dps, "to_mps2": to_mps2}[convert]
+    with pytest.raises(SettingsError, match="must be a number of LSB per"):
+        function(np.ones((4, 3)), "lsb", scale)
