@@ -48,12 +48,13 @@ import numpy as np
 from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
                       RATE_RANDOM_WALK, REPEATED_SAMPLES, RESONANCE, RINGING, ROWS, SINUSOID, TEMPERATURE, WANDERING_TONE,
                       WARMUP)
-from .model import TEMPERATURE_PROFILE
+from .model import TEMPERATURE_PROFILE, validate_model
 from .noise_terms import RepeatedRows, colored_noise_filter, filter_variance
 from .resonance import band_pass
 from .simulate import simulate
 from ..recording import Recording
-from ..units import AXES
+from ..errors import SettingsError
+from ..units import AXES, plain
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
            TEMPERATURE, BIAS_STEP, WARMUP, OUTLIERS, COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES, RESONANCE, RINGING,
@@ -181,7 +182,10 @@ def simulate_case(case):
 def hide_in_recording(rec, effect, axis, params, *, seed=0):
     """Add one effect to a real recording (real noise as the baseline): the effect is simulated
     alone (no white noise, no bias, no quantization) at the recording's rate and length and
-    added to the rate in deg/s; the result is a deg/s recording with the same temp column."""
+    added to the rate in deg/s; the result is a deg/s recording with the same temp column.
+    SettingsError for an ``axis`` that is none of x, y, z, or ``params`` the simulator's model
+    refuses (:func:`~gyrofilter.sim.model.validate_model`; a colored noise of lag1 NaN made the
+    axis NaN)."""
     sample_rate_hz = rec.sample_rate_hz
     n = len(rec)
     model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",
@@ -193,6 +197,11 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         t = np.arange(n) / sample_rate_hz
         step = max(1, n // 500)
         model[TEMPERATURE_PROFILE] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
+    if effect != REPEATED_SAMPLES:  # checked as the simulator checks it, also where it is not simulated
+        if axis not in AXES:
+            raise SettingsError(f"axis must be one of {', '.join(AXES)}, got {plain(axis)}")
+        validate_model({**model, "axes": {**model["axes"], axis: {**model["axes"][axis],
+                                                                   "effects": [{"effect": effect, **params}]}}})
     gyro = rec.gyro_dps.copy()
     if effect == COLORED_NOISE:
         # a property of the noise, not an additive term: filter the real noise of the axis by

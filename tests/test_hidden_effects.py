@@ -1,0 +1,32 @@
+"""gyrofilter.sim.hidden_effects: hiding one effect in a recording built in code refuses what the
+simulator's model refuses (attack pass 22: a colored noise of lag1 NaN gave a recording of NaN
+rates, an axis 'w' a KeyError, lag1 1.5 a math domain error)."""
+import numpy as np
+import pytest
+
+from gyrofilter.effects import COLORED_NOISE, HEAVY_TAILS
+from gyrofilter.errors import SettingsError
+from gyrofilter.recording import Recording
+from gyrofilter.sim.hidden_effects import hide_in_recording
+
+
+def record():
+    return Recording.from_dps(np.random.default_rng(0).normal(size=(500, 3)), 100.0)
+
+
+@pytest.mark.parametrize("effect,params", [(COLORED_NOISE, {"lag1": float("nan")}), (COLORED_NOISE, {"lag1": 1.5}),
+                                           (HEAVY_TAILS, {"fraction": 2.0, "scale_ratio": 3.0}),
+                                           (HEAVY_TAILS, {"fraction": float("nan"), "scale_ratio": 3.0})])
+def test_parameters_the_model_refuses_are_refused(effect, params):
+    with pytest.raises(SettingsError, match=rf"model: axes.x.effects\[0\] \({effect}\)"):
+        hide_in_recording(record(), effect, "x", params)
+
+
+def test_an_axis_that_is_none_is_refused():
+    with pytest.raises(SettingsError, match="axis must be one of x, y, z, got 'w'"):
+        hide_in_recording(record(), COLORED_NOISE, "w", {"lag1": 0.3})
+
+
+def test_a_valid_colored_noise_keeps_the_axis_finite():
+    out = hide_in_recording(record(), COLORED_NOISE, "x", {"lag1": 0.3})
+    assert np.all(np.isfinite(out.gyro_dps))
