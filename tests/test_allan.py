@@ -195,3 +195,16 @@ def test_a_masked_sample_of_three_axes_is_refused_not_taken_as_data():
     g[mask] = 1e4
     with pytest.raises(AllanInputError, match="gyro_dps has masked values, the first at sample 1234"):
         characterise(np.ma.masked_array(g, mask=mask), 100.0)
+
+
+def test_a_masked_sample_of_one_axis_is_refused_not_taken_as_data():
+    """Attack pass 22: characterise_axis(), the one-axis entry, still converted with asarray: a
+    masked 1e4 in 0.05 deg/s noise was taken as data, exit without a word (characterise() refused it)."""
+    from gyrofilter.analysis.noise.fit import characterise_axis
+
+    x = np.random.default_rng(5).normal(0, 0.05, 6000)
+    x[1234] = 1e4
+    with pytest.raises(AllanInputError, match="axis z: x_dps has masked values, the first at sample 1234"):
+        characterise_axis(np.ma.masked_array(x, mask=np.arange(6000) == 1234), 100.0, axis="z")
+    with pytest.raises(AllanInputError, match="axis z: x_dps must be numbers"):
+        characterise_axis(x + 1j, 100.0, axis="z")

@@ -144,7 +144,8 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     ``x_dps``: 1-D rate series in deg/s, sampled at ``sample_rate_hz`` (Hz); ``taus_s``: the
     cluster times (s; default grid); ``min_clusters``: fewest clusters a fitted tau needs;
     ``confidence``: of the intervals; ``terms``: the terms fitted; ``axis``: its name. Raises :class:`AllanInputError` for constant data
-    (nothing to characterise), NaN, or a record too short for a fit.
+    (nothing to characterise), NaN, a masked value or what is not numbers
+    (:func:`~gyrofilter.analysis.noise.allan.rate_numbers`), or a record too short for a fit.
 
     The computation has no unit: a series in another ``unit`` (an accelerometer's in m/s^2,
     :data:`~gyrofilter.analysis.noise.model.ACCELEROMETER_TERMS`) gives its deviation in that unit and
@@ -153,7 +154,10 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     messages and notes.
     """
     sensor = sensor_terms(unit)
-    x = np.asarray(x_dps, dtype=np.float64)
+    try:  # a masked value is not taken as data (the rule: inputs.number_array)
+        x = rate_numbers(x_dps, "x_dps")
+    except AllanInputError as exc:
+        raise AllanInputError(f"axis {axis}: {exc}") from None
     if x.ndim != 1:
         raise AllanInputError(f"axis {axis}: expected a 1-D rate series, got shape {x.shape}")
     if x.size and np.all(np.isfinite(x)) and np.ptp(x) == 0:
