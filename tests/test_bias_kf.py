@@ -127,3 +127,24 @@ def test_bad_settings():
         BiasKalmanFilter(FS, calibration_s=0.05)
     with pytest.raises(SettingsError, match="shape"):
         BiasKalmanFilter(FS).run(np.zeros((10, 2)))
+
+
+def test_samples_after_the_calibration_are_checked_as_the_filter_checks_them():
+    """Attack pass 22: the calibration window refused a NaN, but one NaN after it made every later
+    rate and bias NaN (2500 of 2500 rows, no word); a masked 1e4 was filtered as data, an inf taken."""
+    from gyrofilter.errors import SampleError
+
+    x = np.random.default_rng(0).normal(0, 0.05, (3000, 3))
+    bad = x.copy()
+    bad[500, 0] = np.nan
+    with pytest.raises(SampleError, match="row 500"):
+        BiasKalmanFilter(FS).run(bad)
+    masked = np.ma.masked_array(x, mask=np.arange(x.size).reshape(x.shape) == 1500)
+    with pytest.raises(SampleError, match="row 500 is masked"):
+        BiasKalmanFilter(FS).run(masked)
+    f = BiasKalmanFilter(FS)
+    for row in x[:400]:
+        f.update(row)
+    with pytest.raises(SampleError, match="finite"):
+        f.update([math.inf, 0.0, 0.0])
+    assert all(math.isfinite(v) for v in f.update(x[400]))

@@ -48,8 +48,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...filter.calibration import Calibration, calibrate, calibration_samples
+from ...filter.samples import as_numbers, check_sample
 from ...errors import SettingsError
-from ...units import check_sample_rate_hz, plain
+from ...units import check_rates_dps, check_sample_rate_hz, plain
 
 RESUM_EVERY = 10_000  # samples between exact recomputations of the window sums
 
@@ -206,8 +207,10 @@ class BiasKalmanFilter:
 
     def update(self, sample_dps):
         """One sample ``sample_dps`` (gx, gy, gz) in deg/s -> None while calibrating, else the rate
-        estimate (3-tuple, deg/s)."""
-        z = np.asarray(sample_dps, dtype=float).reshape(3)
+        estimate (3-tuple, deg/s). SampleError, the filter's (:func:`~gyrofilter.filter.samples.check_sample`),
+        for a sample that is not 3 finite numbers within +-MAX_RATE_DPS: a NaN after the calibration
+        window made every later estimate NaN."""
+        z = np.array(check_sample(sample_dps), dtype=float)
         if self.calibration is None:
             self._cal_buffer.append(z)
             if len(self._cal_buffer) == self._n_cal:
@@ -222,10 +225,12 @@ class BiasKalmanFilter:
 
     def run(self, samples_dps) -> BiasKFTrace:
         """Batch: ``samples_dps`` (N, 3) deg/s -> per-sample trace after the calibration window (same
-        numbers as update)."""
-        x = np.asarray(samples_dps, dtype=float)
+        numbers as update); the samples are checked as ``GyroFilter.filter()`` checks them (a masked
+        value, one that is not finite or beyond +-MAX_RATE_DPS: SampleError naming its row)."""
+        x = as_numbers(samples_dps, "samples_dps", "deg/s")
         if x.ndim != 2 or x.shape[1] != 3:
             raise SettingsError(f"samples must have shape (N, 3), got {x.shape}")
+        x = check_rates_dps(x, "samples_dps")
         rates, biases, stds, still = [], [], [], []
         for row in x:
             if self.calibration is None:
