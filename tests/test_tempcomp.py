@@ -99,3 +99,21 @@ def test_by_hand_and_the_pipeline_applies_the_same_correction():
     assert np.allclose(inside, before, rtol=0, atol=1e-9)
     with pytest.raises(SettingsError):
         tempcomp.compensate(np.zeros((3, 2)), np.zeros(3), C, 25.0)
+
+
+def test_what_is_not_finite_is_refused_not_carried_into_the_rates():
+    """Attack pass 22: compensate() with a reference temperature of NaN gave NaN rates, fit_coefficient()
+    with a NaN temperature (or rate) NaN coefficients, without a word; compensate() refused a NaN temp_c."""
+    rng = np.random.default_rng(0)
+    g = rng.normal(0, 0.05, (1000, 3))
+    t = 25 + np.linspace(0, 3, 1000)
+    with pytest.raises(SettingsError, match="reference_temp_c"):
+        tempcomp.compensate(g, t, [0.01, 0.01, 0.01], float("nan"))
+    t_nan = t.copy()
+    t_nan[5] = np.nan
+    with pytest.raises(SettingsError, match="temp_c holds NaN"):
+        tempcomp.fit_coefficient(g, t_nan)
+    g_nan = g.copy()
+    g_nan[7, 1] = np.inf
+    with pytest.raises(SettingsError, match="gyro_dps holds NaN"):
+        tempcomp.fit_coefficient(g_nan, t)

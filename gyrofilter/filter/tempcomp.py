@@ -22,7 +22,8 @@ import numpy as np
 
 from ..effects import TEMPERATURE
 from ..errors import SettingsError
-from ..units import AXES, plain
+from ..inputs import check_number
+from ..units import AXES, TEMP_RANGE_C, plain
 
 
 def _coefficients(coefficient_dps_per_c):
@@ -36,7 +37,8 @@ def compensate(gyro_dps, temp_c, coefficient_dps_per_c, reference_temp_c):
     """y = x - c (T - T0) per axis, in deg/s.
 
     ``gyro_dps``: x, (N, 3) or (3,) in deg/s; ``temp_c``: T, (N,) or a scalar, deg C;
-    ``coefficient_dps_per_c``: c, one value or 3 (deg/s per deg C); ``reference_temp_c``: T0 (deg C).
+    ``coefficient_dps_per_c``: c, one value or 3 (deg/s per deg C); ``reference_temp_c``: T0 (deg C,
+    within :data:`~gyrofilter.units.TEMP_RANGE_C`: a NaN made every rate NaN). SettingsError otherwise.
     """
     x = np.asarray(gyro_dps, dtype=float)
     t = np.asarray(temp_c, dtype=float)
@@ -45,7 +47,8 @@ def compensate(gyro_dps, temp_c, coefficient_dps_per_c, reference_temp_c):
     if not np.all(np.isfinite(t)):
         raise SettingsError("temp_c holds NaN or infinite values")
     c = _coefficients(coefficient_dps_per_c)
-    return x - c * (t[..., None] - float(reference_temp_c))
+    t0 = check_number(reference_temp_c, "reference_temp_c (deg C)", low=TEMP_RANGE_C[0], high=TEMP_RANGE_C[1])
+    return x - c * (t[..., None] - t0)
 
 
 def coefficients_from_model(model: dict):
@@ -67,12 +70,16 @@ def fit_coefficient(gyro_dps, temp_c):
     """Least-squares slope c per axis of a static record: x = b + c (T - mean T) + noise.
 
     ``gyro_dps``: x, (N, 3) in deg/s; ``temp_c``: T, (N,) in deg C. Returns (c (3,), standard error (3,)). Meaningless unless the temperature actually varied
-    (raises when its spread is below one 0.1 C step).
+    (raises when its spread is below one 0.1 C step, or a value is not finite: a NaN gave NaN coefficients).
     """
     x = np.asarray(gyro_dps, dtype=float)
     t = np.asarray(temp_c, dtype=float)
     if x.ndim != 2 or x.shape[1] != 3 or len(t) != len(x):
         raise SettingsError(f"need gyro_dps (N, 3) and temp_c (N,), got {x.shape} and {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise SettingsError("temp_c holds NaN or infinite values")
+    if not np.all(np.isfinite(x)):
+        raise SettingsError("gyro_dps holds NaN or infinite values")
     dt = t - t.mean()
     sxx = float(dt @ dt)
     if np.ptp(t) < 0.1:
