@@ -62,12 +62,11 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..noise.allan import overlapping_adev
+from ..noise.allan import overlapping_adev, rate_numbers
 from .checks import (DEFAULT_ADF_MAXLAG, DEFAULT_ALPHA, WHITENESS_LAGS, Normality, Stationarity, Whiteness,
                           adf_test, normality_tests, whiteness)
 from .fit import ArmaFit, fit_arma, require_stats, simulate_arma
 from ...errors import SettingsError
-from ...inputs import number_array
 from ...units import MAX_RATE_DPS, MIN_NOISE_DPS, check_sample_rate_hz, json_ready, plain
 
 DEFAULT_MAX_SAMPLES = 200_000
@@ -182,11 +181,12 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
 
     Paper 003: "static output minus its constant". Longer than ``max_samples``: non-overlapping
     block means over the smallest factor k with N / k <= max_samples (the tail that does not
-    fill a block is dropped). SettingsError for what is not rates (:func:`_rates`), a value that
+    fill a block is dropped). SettingsError (AllanInputError for what is not rates:
+    :func:`~gyrofilter.analysis.noise.allan.rate_numbers`), a value that
     is not finite or one beyond :data:`~gyrofilter.units.MAX_RATE_DPS` (whose squares overflowed
     the tests near 1e154 deg/s).
     """
-    x = _rates(x)
+    x = rate_numbers(x, "series")
     if x.ndim != 1:
         raise SettingsError(f"series must be 1-D, got shape {x.shape}")
     if not np.all(np.isfinite(x)):
@@ -204,21 +204,6 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
         x = x[:n].reshape(-1, k).mean(axis=1)
     mean = float(x.mean())
     return x - mean, k, sample_rate_hz / k, mean
-
-
-def _rates(values):
-    """``values`` as a float array, or SettingsError: a masked value (converting would drop the
-    mask and take the number behind it as data), complex numbers, booleans, strings, objects or a
-    ragged list (the rule: :func:`gyrofilter.inputs.number_array`)."""
-    array, problem = number_array(values)
-    if problem is None:
-        return array
-    kind, detail = problem
-    if kind == "masked":
-        raise SettingsError(f"series has a masked value, the first at sample {detail}; give the measured values only")
-    if kind == "ragged":
-        raise SettingsError(f"series must be an array of numbers (deg/s), got a {type(values).__name__} that is none")
-    raise SettingsError(f"series must be numbers (deg/s), got an array of {detail}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -378,7 +363,7 @@ def summarise_warnings(caught):
 
 def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_maxlag, lags, quantum_dps, criterion):
     series, k, rate, mean = prepare_series(x_dps, sample_rate_hz, max_samples)
-    x_raw = _rates(x_dps)
+    x_raw = rate_numbers(x_dps, "series")
     if len(x_raw) < MIN_SAMPLES:  # statsmodels' ADF test failed on 20 (ValueError: maxlag)
         raise SettingsError(f"axis {axis}: {len(x_raw)} samples; the analysis needs at least {MIN_SAMPLES}")
     if np.ptp(x_raw) == 0:
