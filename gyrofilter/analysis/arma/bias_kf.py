@@ -48,9 +48,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...filter.calibration import Calibration, calibrate, calibration_samples
-from ...filter.samples import as_numbers, check_sample
+from ...filter.samples import check_sample, check_samples
 from ...errors import SettingsError
-from ...units import check_rates_dps, check_sample_rate_hz, plain
+from ...units import check_sample_rate_hz, plain
 
 RESUM_EVERY = 10_000  # samples between exact recomputations of the window sums
 
@@ -227,10 +227,7 @@ class BiasKalmanFilter:
         """Batch: ``samples_dps`` (N, 3) deg/s -> per-sample trace after the calibration window (same
         numbers as update); the samples are checked as ``GyroFilter.filter()`` checks them (a masked
         value, one that is not finite or beyond +-MAX_RATE_DPS: SampleError naming its row)."""
-        x = as_numbers(samples_dps, "samples_dps", "deg/s")
-        if x.ndim != 2 or x.shape[1] != 3:
-            raise SettingsError(f"samples must have shape (N, 3), got {x.shape}")
-        x = check_rates_dps(x, "samples_dps")
+        x = check_samples(samples_dps)
         rates, biases, stds, still = [], [], [], []
         for row in x:
             if self.calibration is None:
