@@ -213,13 +213,29 @@ def _refuse_constant(name):
     raise ValueError(f"{name} is not a JSON number")
 
 
+#: characters that show as nothing or as a blank but are neither controls nor format characters:
+#: the default-ignorable code points of other categories (Unicode's DerivedCoreProperties: the
+#: combining grapheme joiner, the Hangul fillers, the Khmer inherent vowels, the Mongolian free
+#: variation selectors, the variation selectors) and the Braille pattern blank U+2800
+BLANK_LOOKING = re.compile("[\u034f\u115f\u1160\u17b4\u17b5\u180b-\u180d\u2800\u3164\ufe00-\ufe0f\uffa0"
+                           "\U000e0100-\U000e01ef]")
+
+
+def _invisible(c):
+    """Whether the character ``c`` shows as nothing or as another blank than the space: Unicode
+    categories Cc, Cf, Zl, Zp, a space separator (Zs) other than U+0020, or :data:`BLANK_LOOKING`."""
+    category = unicodedata.category(c)
+    return category in ("Cc", "Cf", "Zl", "Zp") or (category == "Zs" and c != " ") or bool(BLANK_LOOKING.match(c))
+
+
 def invisible_character(name):
     """What makes ``name`` (a key, a column name) differ from the name it shows, as words: "holds
-    the invisible character U+200B (ZERO WIDTH SPACE)" for its first control or format character
-    (Unicode categories Cc, Cf, Zl, Zp), None when it holds none. ``bias_dps\u200b`` is not
-    ``bias_dps``: a second key of that name, shown as a repeat, was read as another one. The one
-    rule of the names a file's keys and columns may not hold."""
-    hidden = next((c for c in str(name) if unicodedata.category(c) in ("Cc", "Cf", "Zl", "Zp")), None)
+    the invisible character U+200B (ZERO WIDTH SPACE)" for its first character that shows as
+    nothing or as another blank (:func:`_invisible`: controls, format characters, no-break and
+    other spaces, Hangul fillers, the Braille blank), None when it holds none. ``bias_dps\u200b``
+    is not ``bias_dps``: a second key of that name, shown as a repeat, was read as another one.
+    The one rule of the names a file's keys and columns may not hold."""
+    hidden = next((c for c in str(name) if _invisible(c)), None)
     if hidden is None:
         return None
     return f"holds the invisible character U+{ord(hidden):04X} ({unicodedata.name(hidden, 'a control character')})"
