@@ -129,23 +129,27 @@ def _bounds_text(low, high, low_open, high_open):
     return f"{'<' if high_open else '<='} {high:g}"
 
 
-def number_array(values):
+def number_array(values, name, unit=""):
     """The one rule for an array of numbers handed to the API (the filter's samples, the Allan
-    functions' rates): ``(array, None)``, ``array`` float64 (not copied when it is one already),
-    where ``values`` holds ints or floats; else ``(None, (problem, detail))``: ``("masked", row)``
-    for a masked array with a masked value (converting it would drop the mask and take the value
-    behind it as data; ``row`` the first such row), ``("ragged", values)`` for what numpy cannot make
-    an array of, ``("kind", dtype)`` for complex numbers (converting drops the imaginary part),
-    booleans, strings or objects. Each caller words its own error."""
+    functions' and ARMA's rates, a Recording built in code) and its words: ``(array, None)``,
+    ``array`` float64 (not copied when it is one already), where ``values`` holds ints or floats;
+    else ``(None, (words, row))``, the refusal naming the argument ``name`` (and ``unit``, if
+    given) for the caller's own error: a masked array with a masked value (converting it would
+    drop the mask and take the value behind it as data; ``row`` the first such row, else None),
+    what numpy cannot make an array of (a ragged list), complex numbers (converting drops the
+    imaginary part), booleans, strings or objects."""
+    in_unit = f" in {unit}" if unit else ""
     mask = np.ma.getmask(values)
     if mask is not np.ma.nomask and mask.any():
-        return None, ("masked", int(np.flatnonzero(mask.reshape(len(mask), -1).any(axis=1))[0]) if mask.ndim else 0)
+        row = int(np.flatnonzero(mask.reshape(len(mask), -1).any(axis=1))[0]) if mask.ndim else 0
+        return None, (f"{name} row {row} is masked; a masked value is no measurement: give the measured values only "
+                      "(cut the record at it, or fill it with np.ma.filled if a value is meant)", row)
     try:
         array = np.asarray(values)
     except (ValueError, TypeError):  # a ragged list
-        return None, ("ragged", values)
+        return None, (f"{name} must be an array of numbers{in_unit}, got {_short(values)}", None)
     if array.dtype.kind not in "iuf":
-        return None, ("kind", array.dtype)
+        return None, (f"{name} must be numbers{in_unit}, got an array of {array.dtype}", None)
     return array.astype(np.float64, copy=False), None
 
 
@@ -213,13 +217,29 @@ def _refuse_constant(name):
     raise ValueError(f"{name} is not a JSON number")
 
 
+#: characters that show as nothing or as a blank but are neither controls nor format characters:
+#: the default-ignorable code points of other categories (Unicode's DerivedCoreProperties: the
+#: combining grapheme joiner, the Hangul fillers, the Khmer inherent vowels, the Mongolian free
+#: variation selectors, the variation selectors) and the Braille pattern blank U+2800
+BLANK_LOOKING = re.compile("[\u034f\u115f\u1160\u17b4\u17b5\u180b-\u180d\u2800\u3164\ufe00-\ufe0f\uffa0"
+                           "\U000e0100-\U000e01ef]")
+
+
+def _invisible(c):
+    """Whether the character ``c`` shows as nothing or as another blank than the space: Unicode
+    categories Cc, Cf, Zl, Zp, a space separator (Zs) other than U+0020, or :data:`BLANK_LOOKING`."""
+    category = unicodedata.category(c)
+    return category in ("Cc", "Cf", "Zl", "Zp") or (category == "Zs" and c != " ") or bool(BLANK_LOOKING.match(c))
+
+
 def invisible_character(name):
     """What makes ``name`` (a key, a column name) differ from the name it shows, as words: "holds
-    the invisible character U+200B (ZERO WIDTH SPACE)" for its first control or format character
-    (Unicode categories Cc, Cf, Zl, Zp), None when it holds none. ``bias_dps\u200b`` is not
-    ``bias_dps``: a second key of that name, shown as a repeat, was read as another one. The one
-    rule of the names a file's keys and columns may not hold."""
-    hidden = next((c for c in str(name) if unicodedata.category(c) in ("Cc", "Cf", "Zl", "Zp")), None)
+    the invisible character U+200B (ZERO WIDTH SPACE)" for its first character that shows as
+    nothing or as another blank (:func:`_invisible`: controls, format characters, no-break and
+    other spaces, Hangul fillers, the Braille blank), None when it holds none. ``bias_dps\u200b``
+    is not ``bias_dps``: a second key of that name, shown as a repeat, was read as another one.
+    The one rule of the names a file's keys and columns may not hold."""
+    hidden = next((c for c in str(name) if _invisible(c)), None)
     if hidden is None:
         return None
     return f"holds the invisible character U+{ord(hidden):04X} ({unicodedata.name(hidden, 'a control character')})"

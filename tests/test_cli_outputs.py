@@ -356,6 +356,36 @@ def test_force_keeps_the_permissions_of_the_file_it_replaces(tmp_path, capsys):
     assert stat.S_IMODE(new.stat().st_mode) == 0o666 & ~_umask()
 
 
+def test_the_successor_of_a_private_file_is_private_while_it_is_written(tmp_path, monkeypatch):
+    """Attack pass 20's notes: the temporary file (``.partial-*``) that replaces a file of mode
+    0600 was made with the umask's mode (0644): readable by every user for as long as the command
+    wrote it (minutes of `record`); commit gave it the mode only at the end. It is now made with
+    the replaced file's mode before a byte is written: by `replacing` and by the live writers."""
+    from gyrofilter.cli import live, main
+
+    out = tmp_path / "private.csv"
+    out.write_text("old")
+    out.chmod(0o600)
+    outputs.check_outputs([str(out)], force=True)
+    with outputs.replacing(str(out)) as tmp:
+        assert stat.S_IMODE(os.stat(tmp).st_mode) == 0o600
+        with open(tmp, "w") as fh:
+            fh.write("new")
+    assert out.read_text() == "new" and stat.S_IMODE(out.stat().st_mode) == 0o600
+    seen = []
+    real = live.RecordingWriter
+
+    def spying(path, *args, **kwargs):
+        writer = real(path, *args, **kwargs)
+        seen.append(stat.S_IMODE(os.stat(path).st_mode))
+        return writer
+
+    monkeypatch.setattr(live, "RecordingWriter", spying)
+    rec = str(RECORDINGS / "mpu6050_static_100s.csv.gz")
+    assert main(["record", "--source", f"replay:{rec}", "--duration", "1", "--out", str(out), "--force"]) == 0
+    assert seen == [0o600] and stat.S_IMODE(out.stat().st_mode) == 0o600
+
+
 def _umask():
     mask = os.umask(0)
     os.umask(mask)

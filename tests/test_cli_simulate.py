@@ -49,6 +49,19 @@ def test_cli_writes_the_same_numbers_as_simulate_in_small_chunks(tmp_path, capsy
     assert json.loads(rec.header["simulated_model"])["axes"]["x"]["effects"][0]["tau_s"] == 3.0
 
 
+def test_the_file_is_the_same_text_whatever_the_chunk(tmp_path):
+    """Attack pass 22's notes: with --chunk 1 the first row's t (0) was written "0", as an
+    integer column (the writer chooses a column's format per block), and "0.0" otherwise."""
+    for model_path in (write_json(tmp_path / "m.json", MODEL), str(DEFAULT_MODEL_PATH)):  # the default: six axes
+        texts = []
+        for chunk in ("1", "7", "65536"):
+            out = tmp_path / f"sim{chunk}.csv"
+            assert main(["simulate", "--model", model_path, "--duration", "0.5", "--seed", "3", "--out", str(out),
+                         "--chunk", chunk, "--force"]) == 0
+            texts.append(out.read_text())
+        assert texts[0] == texts[1] == texts[2] and "\n0.0," in texts[0]
+
+
 def test_cli_without_a_seed_draws_one_and_writes_it_so_the_run_can_be_repeated(tmp_path):
     model_path = write_json(tmp_path / "m.json", MODEL)
     a, b, again = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "again.csv"

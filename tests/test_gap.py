@@ -1160,3 +1160,20 @@ def test_a_line_at_nyquist_is_named_a_sinusoid_at_half_the_rate(n):
     assert abs(abs(finding["params"]["phase_rad"]) - math.pi / 2) < 1e-9
     assert report["discrepancy"]["after"]["z"] < 2.0
     assert det.detect_sinusoid(gyro[:, 0], 100.0) is None
+
+
+@pytest.mark.parametrize("value, shown", [(2e5, "200000"), (np.inf, "inf"), (-1e6, "-1e\\+06")])
+def test_a_rate_beyond_the_simulators_range_is_refused_naming_the_record(value, shown):
+    """Attack pass 22's notes: a Recording built in code at 2e5 deg/s was refused with the
+    simulator's words about its own model ("model: axes.x.bias_dps: expected a number <=
+    100000"), naming neither the record nor the sample."""
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
+
+    g = np.random.default_rng(0).normal(0, 0.1, (3000, 3))
+    g[1234, 1] = value
+    from gyrofilter.errors import RecordingError
+
+    rec = Recording({c: g[:, i] for i, c in enumerate(("gx", "gy", "gz"))}, {"sample_rate_hz": "100", "gyro_unit": "dps"})
+    with pytest.raises(RecordingError, match=f"^recording: gy sample 1235: {shown} deg/s is not a rate the gap analysis "
+                                             r"can model \(finite, within \+-100000\)$"):
+        analyse_gap(rec, n_sims=3)

@@ -241,3 +241,14 @@ def test_a_wavelet_variance_of_zero_is_refused_saying_why():
                                          "over that scale are all equal"):
         gmwm.fit_model(wv)
     assert gmwm.unfittable(gmwm.haar_wv(np.random.default_rng(1).normal(size=20000), 100.0)) is None
+
+
+@pytest.mark.parametrize("n", [0, 2, 8])
+def test_a_record_too_short_for_two_scales_is_refused_in_words(n):
+    """Attack pass 22's notes: haar_wv on 2 samples raised a plain ValueError (not the package's
+    error, so a program catching GyroFilterError, as the docs say, got a traceback)."""
+    from gyrofilter.errors import GyroFilterError
+
+    with pytest.raises(GyroFilterError, match=f"x_dps has {n} samples; a wavelet-variance fit needs at least 11"):
+        gmwm.haar_wv(np.ones(n), FS)
+    assert len(gmwm.haar_wv(np.random.default_rng(0).normal(size=11), FS).tau_s) == 2

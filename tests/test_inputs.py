@@ -230,6 +230,12 @@ def test_a_json_key_with_an_invisible_character_is_refused(tmp_path):
                     '"samples": 200, "sample_rate_hz": 100}', encoding="utf-8")
     with pytest.raises(CalibrationError, match=r"cal.json: .*key 'bias_dps\\ufeff' holds the invisible character U\+FEFF"):
         Calibration.load(path)
+    # pass 22's notes: letter-like blanks show as nothing too (attack pass 23's lead fix)
+    for key, shown in (("bias_dps\u3164", "U\\+3164 \\(HANGUL FILLER\\)"), ("bias_dps\u2800", "U\\+2800 \\(BRAILLE"),
+                       ("bias\u034f_dps", "U\\+034F \\(COMBINING GRAPHEME JOINER\\)"), ("bias_dps\u3000", "U\\+3000")):
+        with pytest.raises(SettingsError, match="holds the invisible character " + shown):
+            parse_json('{"bias_dps": [0, 0, 0], "%s": [10, 10, 10]}' % key, "doc")
+    assert parse_json('{"bias dps": 1, "b\u00e4r": 2}', "doc") == {"bias dps": 1, "b\u00e4r": 2}  # a space, a letter
     assert parse_json('{"note": "a\u200bb"}', "doc") == {"note": "a\u200bb"}  # a value is text as it is
 
 

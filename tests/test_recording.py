@@ -820,6 +820,8 @@ def test_a_users_own_csv_is_told_what_a_recording_needs_in_one_go(tmp_path):
     ("\ufefft,gx,gy,gz", r"'\\ufefft' holds the invisible character U\+FEFF \(ZERO WIDTH NO-BREAK SPACE"),
     ("t\u200b,gx,gy,gz", r"'t\\u200b' holds the invisible character U\+200B \(ZERO WIDTH SPACE"),
     ("t,gx,gy,gz,\u2066temp", r"'\\u2066temp' holds the invisible character U\+2066 \(LEFT-TO-RIGHT ISOLATE"),
+    ("t,gx,gy,gz,temp\u3164", r"'temp\u3164' holds the invisible character U\+3164 \(HANGUL FILLER"),
+    ("t,gx,gy,gz,te\xa0mp", r"'te\\xa0mp' holds the invisible character U\+00A0 \(NO-BREAK SPACE"),
 ])
 def test_a_column_name_with_an_invisible_character_is_refused(tmp_path, names, shown):
     """Attack pass 20: a header written by hand with an Excel "CSV UTF-8" export appended (its
@@ -836,6 +838,7 @@ def test_a_column_name_with_an_invisible_character_is_refused(tmp_path, names, s
 @pytest.mark.parametrize("lines, shown", [
     ("# lsb_per_dps\u200b: 131\n# lsb_per_dps: 65.5\n", r"'lsb_per_dps\\u200b' holds the invisible character U\+200B"),
     ("# sample_rate_hz\ufeff: 50\n# lsb_per_dps: 131\n", r"'sample_rate_hz\\ufeff' holds the invisible character U\+FEFF"),
+    ("# lsb_per_dps\u2800: 131\n# lsb_per_dps: 65.5\n", r"'lsb_per_dps\u2800' holds the invisible character U\+2800"),
 ])
 def test_a_header_key_with_an_invisible_character_is_refused(tmp_path, lines, shown):
     """Attack pass 21 (pass 20's column rule, for the keys): 'lsb_per_dps\\u200b: 131' before
@@ -1145,7 +1148,7 @@ def test_from_dps_refuses_a_masked_value(argument):
     args[argument] = ({"ref_x": _masked_at_10(n)} if argument == "extra" else
                       _masked_at_10(args[argument].shape))
     gyro = args.pop("gyro_dps")
-    with pytest.raises(RecordingError, match="masked value.* row 10"):
+    with pytest.raises(RecordingError, match="row 10 is masked"):
         Recording.from_dps(gyro, 100.0, accel_unit="g", **args)
 
 

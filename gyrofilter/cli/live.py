@@ -72,6 +72,7 @@ class LiveOutput:
         outputs.remove_stale_partials(self._folder)
         self._tmp = outputs.partial_path(path)
         try:
+            outputs.start_partial(self._tmp, path)
             self._writer = RecordingWriter(self._tmp, header, columns, formats=formats, flush_interval_s=None, name=path)
         except OSError as exc:  # named by the user's name, not the temporary one
             self._discard()

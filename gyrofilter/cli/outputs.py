@@ -181,6 +181,20 @@ def _file_key(path):
     return (st.st_dev, st.st_ino)
 
 
+def start_partial(tmp, path):
+    """Make the empty temporary file ``tmp`` with the permission bits of the regular file ``path``
+    it will replace, where there is one (``O_EXCL``: a new file), so that a private file's
+    successor is private from its first byte, not only once :func:`commit` renames it (with the
+    umask's mode, a 0600 file's successor was readable by every user for as long as a `record`
+    wrote it). The writer then opens ``tmp`` as it is; no file there: nothing made."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return
+    if stat.S_ISREG(st.st_mode):
+        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, stat.S_IMODE(st.st_mode)))
+
+
 @contextlib.contextmanager
 def replacing(path):
     """Write a whole file at once: yields a temporary path beside ``path`` (its folder created if
@@ -191,6 +205,7 @@ def replacing(path):
         _pending.append(path)
         try:
             with _naming(tmp, path), _unwritten_on_interrupt(path):
+                start_partial(tmp, path)
                 yield tmp
                 commit(tmp, path)
         finally:

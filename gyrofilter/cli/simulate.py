@@ -13,7 +13,7 @@ from ..errors import SettingsError
 from ..recording import RecordingWriter
 from ..sim.model import ACCELEROMETER, load_model, validate_model
 from ..sim.simulate import (MAX_SAMPLES, block_rows, check_sample_count, check_seed, draw_seed, recording_columns,
-                            recording_header, simulate_chunks)
+                            recording_formats, recording_header, simulate_chunks)
 from ..effects import REGISTRY, ROWS
 from ..units import MAX_DURATION_S, check_duration_s
 from . import console, options, outputs
@@ -64,7 +64,8 @@ def run(args):
     done = 0
     last = time.monotonic()
     with outputs.replacing(args.out) as tmp, \
-            RecordingWriter(tmp, header, columns, flush_interval_s=None, fsync=False) as writer:
+            RecordingWriter(tmp, header, columns, formats=recording_formats(spec), flush_interval_s=None,
+                            fsync=False) as writer:
         for block in simulate_chunks(model, args.duration, chunk_samples=args.chunk, seed=seed, validated=spec):
             writer.write(block_rows(block))
             done += len(block.t_s)

@@ -56,17 +56,12 @@ def as_numbers(values, name, unit):
     """``values`` as a float array when they are numbers (ints or floats: no strings, bools,
     objects or ragged lists), else SampleError naming ``name``. A masked array with a masked
     value is refused, naming its row: converting it would drop the mask and filter the value
-    behind it as data (the rule: :func:`gyrofilter.inputs.number_array`)."""
-    x, problem = number_array(values)
-    if problem is None:
-        return x
-    kind, detail = problem
-    if kind == "masked":
-        raise SampleError(f"{name} row {detail} is masked; give the measured values only (drop the masked rows, or "
-                          "fill them with np.ma.filled if a value is meant)", detail)
-    if kind == "ragged":
-        raise SampleError(f"{name} must be an array of numbers in {unit}, got {shown(values)}")
-    raise SampleError(f"{name} must be numbers in {unit}, got an array of {detail}")
+    behind it as data (the rule and its words: :func:`gyrofilter.inputs.number_array`)."""
+    x, problem = number_array(values, name, unit)
+    if problem is not None:
+        words, row = problem
+        raise SampleError(words, row or 0)
+    return x
 
 
 def check_temperature(value, required, where, row=0):

@@ -190,16 +190,10 @@ def _numbers(values, name):
     RecordingError: a masked value (converting would drop the mask and take the number behind it
     as data), complex numbers, booleans, strings, objects or a ragged list (the rule:
     :func:`gyrofilter.inputs.number_array`)."""
-    array, problem = number_array(values)
-    if problem is None:
-        return array
-    kind, detail = problem
-    if kind == "masked":
-        raise RecordingError(f"{name} has a masked value, the first at row {detail}; give the measured values only "
-                             "(drop the masked rows, or fill them with np.ma.filled if a value is meant)")
-    if kind == "ragged":
-        raise RecordingError(f"{name} must be an array of numbers, got a {type(values).__name__} that is none")
-    raise RecordingError(f"{name} must be numbers, got an array of {detail}")
+    array, problem = number_array(values, name)
+    if problem is not None:
+        raise RecordingError(problem[0])
+    return array
 
 
 @dataclass

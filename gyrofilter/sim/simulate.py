@@ -70,7 +70,7 @@ from .accel import RANDOM_TERMS, Accelerometer
 from .flicker import BiasInstability
 from .model import ACCELEROMETER, EFFECTS, TEMPERATURE_PROFILE, validate_model
 from ..errors import SettingsError
-from ..recording import ACCEL_COLUMNS, COLUMNS, FORMAT_VERSION, VERSION_KEY, Recording, accel_units_header, format_number, units_header
+from ..recording import ACCEL_COLUMNS, COLUMNS, EXACT_FORMAT, FORMAT_VERSION, VERSION_KEY, Recording, accel_units_header, format_number, units_header
 from ..units import AXES, DEG_PER_RAD, check_duration_s, plain, to_dps
 
 DEFAULT_CHUNK_SAMPLES = 65536
@@ -442,6 +442,20 @@ def recording_columns(model_or_spec):
     has_temp = model_or_spec.get(TEMPERATURE_PROFILE) is not None
     has_accel = model_or_spec.get(ACCELEROMETER) is not None
     return list(COLUMNS) + (["temp"] if has_temp else []) + (list(ACCEL_COLUMNS) if has_accel else [])
+
+
+def recording_formats(spec):
+    """The %-formats of :func:`recording_columns` for a writer fed in blocks: ``%d`` for the
+    columns in LSB (integers by construction), :data:`~gyrofilter.recording.EXACT_FORMAT` for the
+    others, so that the text does not depend on the block size (a writer left to choose per block
+    wrote a one-row block's t of 0 as ``0``, the next block's as ``0.0``). ``spec``: the
+    validated model (:func:`validate_model`)."""
+    def fmt(unit):
+        return "%d" if unit == "lsb" else EXACT_FORMAT
+
+    accel = spec.get(ACCELEROMETER)
+    return [EXACT_FORMAT] + [fmt(spec["gyro_unit"])] * 3 + ([EXACT_FORMAT] if spec.get(TEMPERATURE_PROFILE) is not None
+                                                             else []) + ([fmt(accel["accel_unit"])] * 3 if accel else [])
 
 
 def simulate(model: dict, duration_s: float, *, sample_rate_hz=None, rng=None, seed=None,

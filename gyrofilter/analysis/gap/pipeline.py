@@ -74,7 +74,7 @@ from ...inputs import check_number
 from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
 from ...sim.simulate import check_seed
-from ...units import AXES, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
+from ...units import AXES, MAX_RATE_DPS, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
 from ..still import moved, not_static
 from . import detectors as det
 from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
@@ -228,9 +228,14 @@ def prepare(rec, *, seed, n_sims, recording_name):
         "sample_rate_hz": sample_rate_hz, "duration_s": n / sample_rate_hz,
         "baseline": {"description": _BASELINE_DESCRIPTION, "axes": {a: {} for a in AXES}},
         "findings": [], "uncertain": [], "extended_model": {}, "notes": []}
-    if not all(np.isfinite(to_dps(rec.columns[c][lo:lo + (1 << 16)], rec.gyro_unit, rec.lsb_per_dps)).all()
-               for c in GYRO_COLUMNS for lo in range(0, n, 1 << 16)):  # in deg/s, a pass at a time
-        raise RecordingError(f"{where}: gyro columns hold non-finite values")
+    for c in GYRO_COLUMNS:  # in deg/s, a pass at a time: finite and within the simulator's range
+        for lo in range(0, n, 1 << 16):
+            v = to_dps(rec.columns[c][lo:lo + (1 << 16)], rec.gyro_unit, rec.lsb_per_dps)
+            bad = ~(np.abs(v) <= MAX_RATE_DPS)
+            if bad.any():
+                k = int(np.flatnonzero(bad)[0])
+                raise RecordingError(f"{where}: {c} sample {lo + k + 1}: {float(v[k]):g} deg/s is not a rate the gap "
+                                     f"analysis can model (finite, within +-{MAX_RATE_DPS:g})")
     base = baseline_model(rec)
     report["baseline"]["model"] = base
     q = 1.0 / base["lsb_per_dps"] if base.get("lsb_per_dps") else None

@@ -59,17 +59,11 @@ def rate_numbers(x, name="x"):
     """``x`` as a float64 array when it holds numbers (ints or floats), else AllanInputError naming
     ``name``: a masked value (converting would drop the mask and take the value behind it as
     data), complex numbers (converting drops the imaginary part), booleans, strings, objects or
-    ragged lists (the rule: :func:`gyrofilter.inputs.number_array`)."""
-    array, problem = number_array(x)
-    if problem is None:
-        return array
-    kind, detail = problem
-    if kind == "masked":
-        raise AllanInputError(f"{name} has masked values, the first at sample {detail}; "
-                              "the Allan deviation needs evenly spaced measured samples (fill or cut gaps first)")
-    if kind == "ragged":
-        raise AllanInputError(f"{name} must be an array of numbers (rates), got a {type(x).__name__} that is none")
-    raise AllanInputError(f"{name} must be numbers (rates), got an array of {detail}")
+    ragged lists (the rule and its words: :func:`gyrofilter.inputs.number_array`)."""
+    array, problem = number_array(x, name)
+    if problem is not None:
+        raise AllanInputError(problem[0])
+    return array
 
 
 def _check_series(x, name="x"):

@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...effects import BIAS_INSTABILITY, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK
-from .allan import overlapping_adev
+from .allan import AllanInputError, overlapping_adev
 from .model import QUANTIZATION
 from .wv_robust import ROBUST_EFFICIENCY, robust_wv
 from ...sim.model import validate_model
@@ -127,7 +127,10 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
         m.append(2**j)
         j += 1
     if len(m) < 2:
-        raise ValueError(f"record too short for a wavelet-variance fit ({n} samples)")
+        second = 2 ** (max(0, int(math.ceil(math.log2(max(min_m, 1))))) + 1)  # the second scale, samples
+        raise AllanInputError(f"x_dps has {n} samples; a wavelet-variance fit needs at least "
+                              f"{math.ceil(min_edf * 2 * second + 2 * second - 1)} (two scales of {min_edf:g} "
+                              "equivalent degrees of freedom)")
     m = np.array(m, dtype=np.int64)
     efficiency = ROBUST_EFFICIENCY if robust is True else float(robust)
     edf = np.maximum((n - 2 * m + 1) / (2.0 * m), 1.0) * (efficiency or 1.0)
