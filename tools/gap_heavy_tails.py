@@ -119,6 +119,7 @@ def stand_in_seeds(args, first):
           f"two-term fit's = ratio; in-sample (both fitted on the draw and scored on it) and held out (fitted on the "
           f"draw, scored on its twin of seed + {TWIN_SEED}, and the other way round, mean of both)")
     rows = {"in-sample": [], "held out": []}
+    curves = []
     for seed in seeds:
         rec = simulate(XSENS_LIKE, args.duration, seed=seed)
         if seed == args.seed:
@@ -127,6 +128,7 @@ def stand_in_seeds(args, first):
             rows["in-sample"].append((model_distance(gap.analyse_gap(rec, seed=seed), rec, 2),
                                       two_term(rec.gyro_dps[:, 2], seed)[1]))
         twin = simulate(XSENS_LIKE, args.duration, seed=seed + TWIN_SEED)
+        curves += [gmwm.haar_wv(r.gyro_dps[:, 2], 100.0) for r in (rec, twin)]
         rows["held out"].append(cross_scores(rec, twin, seed, axes=(2,), composite=lambda wv: two_term_fit(wv, seed))[0])
         print(f"    seed {seed}: " + "; ".join(f"{key} {r[-1][0]:.3g} / {r[-1][1]:.3g} = {r[-1][0] / r[-1][1]:.2f}"
                                               for key, r in rows.items()), flush=True)
@@ -135,6 +137,21 @@ def stand_in_seeds(args, first):
         print(f"{key}: ratio {min(ratios):.2f}-{max(ratios):.2f}, at most {RATIO_BOUND:g} on "
               f"{sum(r <= RATIO_BOUND for r in ratios)} of {len(ratios)}; largest distance "
               f"{max(max(p) for p in pairs):.2g}")
+    r = spread(curves)
+    print(f"the {len(curves)} draws' and twins' wavelet variance spreads " + ", ".join(f"{v:.2g}" for v in r[:4])
+          + f" times the Gaussian standard error the distance divides by at {curves[0].tau_s[0]:.2g}-"
+          f"{curves[0].tau_s[3]:.2g} s, {r[5:].min():.2g}-{r[5:].max():.2g} from {curves[0].tau_s[5]:.2g} s on: "
+          f"a model that follows one draw's curve scores about 2 mean(spread^2) = {2 * np.mean(r ** 2):.2g} held out")
+
+
+def spread(curves):
+    """Per scale, the sample sd of ν̂² over ``curves`` (wavelet variances of independent draws of one
+    process) over the mean of the Gaussian standard error ν̂² sqrt(2/η) that
+    :func:`gyrofilter.analysis.noise.gmwm.wv_distance` divides by. Held out, a model fitted on one
+    draw and scored on another has E d ≈ (1/J) Σ_j (s²_j + s²_fit,j) / SE²_j, about 2 mean(spread²)
+    where the fit follows its draw's curve."""
+    w = np.array([c.wv_dps2 for c in curves])
+    return w.std(axis=0, ddof=1) / np.mean([c.sd_dps2 for c in curves], axis=0)
 
 
 def real(args):
