@@ -585,11 +585,11 @@ def gap_coverage():
                       keep=lambda line: not line.startswith(("case ", "  "))))
 
 
-@block("gap-heavy-tails", "docs/gap.md", "tools/gap_heavy_tails.py --stand-ins 5 --real --adis DIR (DIR: the ADIS16405 records)",
+@block("gap-heavy-tails", "docs/gap.md", "tools/gap_heavy_tails.py --stand-ins 10 --real --adis DIR (DIR: the ADIS16405 records)",
        slow=True)
 def gap_heavy_tails():
     adis = data_dir("adis16405_long")
-    out = tool("gap_heavy_tails.py", "--stand-ins", "5", "--real", "--adis", str(adis))
+    out = tool("gap_heavy_tails.py", "--stand-ins", "10", "--real", "--adis", str(adis))
     return fence(out.replace(str(adis), "DIR"))
 
 

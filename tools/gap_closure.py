@@ -142,28 +142,42 @@ def distances(rec, rep, seed):
 
 
 def held_out(rec, seed):
-    """Per axis (extended model, GMWM-style fit): the distance of each, fitted on one half of
-    ``rec``, to the wavelet variance of the other half, mean of the two directions."""
+    """Per axis (extended model, GMWM-style fit): :func:`cross_scores` of the two halves of ``rec``."""
+    import numpy as np
+
+    from gyrofilter.recording import Recording
+
+    half = len(rec) // 2
+    a, b = (Recording(columns={k: np.asarray(v)[part] for k, v in rec.columns.items()}, header=dict(rec.header),
+                      path=rec.path) for part in (slice(0, half), slice(half, 2 * half)))
+    return cross_scores(a, b, seed)
+
+
+def cross_scores(a, b, seed, *, axes=(0, 1, 2), composite=None):
+    """Per axis of ``axes`` (extended model, composite fit): each model fitted on one of the records
+    ``a``, ``b`` and scored by :func:`gyrofilter.analysis.noise.gmwm.wv_distance` against the other's
+    Haar wavelet variance, the mean of the two directions,
+    d = ½ [d(ν̂²_b, ν²(θ̂_a)) + d(ν̂²_a, ν²(θ̂_b))] (cross-validation, Stone 1974). The extended model
+    is ``analyse_gap``'s (no intervals), its curve the mean of ``gmwm.MODEL_CURVE_RUNS`` simulations
+    of the scored record's length; the composite fit is ``composite(wv)`` of the fitting record's
+    wavelet variance (default: the GMWM-style selection ``gmwm.select_model``)."""
     import numpy as np
 
     from gyrofilter.analysis.noise import gmwm
     from gyrofilter.analysis.gap.pipeline import analyse_gap
-    from gyrofilter.recording import Recording
 
-    half = len(rec) // 2
-    parts = [slice(0, half), slice(half, 2 * half)]
-    sums = np.zeros((3, 2))
-    for fit, score in ((0, 1), (1, 0)):
-        sub = Recording(columns={k: np.asarray(v)[parts[fit]] for k, v in rec.columns.items()},
-                        header=dict(rec.header), path=rec.path)
-        rep = analyse_gap(sub, seed=seed, bootstrap=0)
-        for i in range(3):
-            x_fit = np.asarray(sub.gyro_dps[:, i], dtype=float)
-            y = np.asarray(rec.gyro_dps[parts[score], i], dtype=float)
-            wv = gmwm.haar_wv(y, rec.sample_rate_hz)
+    if composite is None:
+        def composite(wv):
+            return gmwm.select_model(wv, starts=3, seed=seed)[0]
+    sums = np.zeros((len(axes), 2))
+    for fit, score in ((a, b), (b, a)):
+        rep = analyse_gap(fit, seed=seed, bootstrap=0)
+        for k, i in enumerate(axes):
+            y = np.asarray(score.gyro_dps[:, i], dtype=float)
+            wv = gmwm.haar_wv(y, score.sample_rate_hz)
             ext = gmwm.simulated_wv(rep["extended_model"], i, y.size, seeds=range(2000 + seed, 2000 + seed + gmwm.MODEL_CURVE_RUNS))
-            best, _ = gmwm.select_model(gmwm.haar_wv(x_fit, rec.sample_rate_hz), starts=3, seed=seed)
-            sums[i] += (gmwm.wv_distance(wv, ext.wv_dps2), gmwm.wv_distance(wv, best.wv(wv.tau_s)))
+            best = composite(gmwm.haar_wv(np.asarray(fit.gyro_dps[:, i], dtype=float), fit.sample_rate_hz))
+            sums[k] += (gmwm.wv_distance(wv, ext.wv_dps2), gmwm.wv_distance(wv, best.wv(wv.tau_s)))
     return [tuple(row / 2) for row in sums]
 
 
