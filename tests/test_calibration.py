@@ -227,3 +227,13 @@ def test_a_window_with_a_non_finite_or_absurd_sample_is_refused_not_averaged():
         with pytest.raises(SettingsError) as info:
             calibrate(bad, 100.0)
         assert str(info.value) == f"calibration window row 17: gz (deg/s) {got}"
+
+
+def test_a_bias_beyond_the_plausible_says_the_unit_may_be_wrong():
+    """A new user's trial: raw counts declared as deg/s (or a wrong lsb_per_dps) read as a bias of
+    -427 deg/s; the refusal asked only "is the sensor turning?", never about the unit."""
+    window = np.random.default_rng(0).normal((-427.0, 130.0, -60.0), 8.0, (200, 3)).round()
+    with pytest.raises(CalibrationError, match=r"axis x reads -42[78] deg/s on average, beyond the plausible bias of 20 "
+                                               r"deg/s: is the sensor turning, or are the rates in another unit \(raw "
+                                               r"counts read as deg/s, a wrong lsb_per_dps\)\?"):
+        calibrate(window, 100.0)

@@ -836,3 +836,22 @@ def test_a_unit_with_a_noisier_accelerometer_stands_out_on_its_axis():
     assert "m/s/sqrt(s)" in rows[4]["flag"][0]["text"]
     entry = next(s for s in stats if s["axis"] == "ay" and s["what"] == "N")
     assert entry["units"] == 5 and entry["median"] == pytest.approx(0.004)
+
+
+def test_a_unit_that_moved_and_stands_out_is_said_to_have_moved(tmp_path, capsys):
+    """A new user's trial: `gap recordings/* --fleet DIR` analysed the moving recordings (as the
+    fleet always does) and said "stands out: broad_02_slow x: K high ..." without a word that the
+    unit moved (only a comment in fleet.csv did): a rotation read as the sensor's noise."""
+    rng = np.random.default_rng(3)
+    paths = []
+    for u in range(6):
+        g = rng.normal(0, 0.05, (6000, 3))
+        if u == 5:  # turned back and forth about x, up to 20 deg/s
+            g[:, 0] += 20.0 * np.sin(2 * np.pi * np.arange(6000) / 3000)
+        path = tmp_path / f"unit{u}.csv"
+        write_recording(path, Recording.from_dps(g, 100.0))
+        paths.append(str(path))
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("  stands out: ")]
+    assert lines and all(line.startswith("  stands out: unit5 x: ") for line in lines), lines
+    assert all(line.endswith("; it moved: this describes the motion, not the sensor") for line in lines), lines

@@ -808,12 +808,21 @@ def test_a_users_own_csv_is_told_what_a_recording_needs_in_one_go(tmp_path):
                            ("gx,gy,gz,Timestamp", r"column 'Timestamp' looks like time stamps"),
                            ("T,gx,gy,gz", r"column 'T' looks like time stamps"),
                            ("t,GX,GY,GZ", r"missing column\(s\) gx, gy, gz .*; names are lower case"),
-                           ("t;gx;gy;gz", r"missing column\(s\) gx, gy, gz .*; columns are separated by commas")):
+                           ("t;gx;gy;gz", r"missing column\(s\) gx, gy, gz .*; columns are separated by commas"),
+                           # a new user's trial: their own names under a right header got no pointer to convert
+                           ("time_ms,GyroX,GyroY,GyroZ", r"missing column\(s\) gx, gy, gz \(have .*\); another tool's "
+                                                         r"log: gyrofilter convert"),
+                           # a new user's trial: a temp_c column was carried along unread, no word
+                           ("t,gx,gy,gz,temp_c", r"column 'temp_c' looks like a temperature, .* named 'temp' \(deg C\)"),
+                           ("t,gx,gy,gz,Temperature", r"column 'Temperature' looks like a temperature"),
+                           ("t,gx,gy,gz,TEMP", r"column 'TEMP' looks like a temperature")):
         path.write_text(header + names + "\n" + "0.00,1,2,3\n")
         with pytest.raises(RecordingError, match=message):
             read_recording(path)
     path.write_text(header + "t,gx,gy,gz,ref_time_offset\n0.00,1,2,3,4\n")  # a name that merely contains 'time' is kept
     assert read_recording(path).columns["ref_time_offset"].tolist() == [4.0]
+    path.write_text(header + "t,gx,gy,gz,temp,board_temp_c\n0.00,1,2,3,25,30\n")  # and one that merely contains 'temp'
+    assert read_recording(path).temp_c.tolist() == [25.0] and read_recording(path).columns["board_temp_c"].tolist() == [30.0]
 
 
 @pytest.mark.parametrize("names, shown", [

@@ -38,6 +38,11 @@ STATIC_BLOCKS = 512
 GRAVITY_RANGE_G = (1 / 1.5, 1.5)
 
 
+#: how :func:`not_static` ends its reason: the mark of a record that moved in every warning that
+#: carries the reason (the fleet's summary looks for it)
+NOT_STATIC = "the recording does not look static"
+
+
 def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATIC_LIMIT_DPS, unit="deg/s",
                what="rate"):
     """Why a still gyro's record ``x_dps`` (deg/s) looks moved, or None when it looks still
@@ -58,7 +63,7 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     if brief:
         return f"it moves by up to {excursion:.3g} {unit}"
     return (f"the {what} moves by up to {excursion:.3g} {unit} (averages over {length / sample_rate_hz:.2g} s): "
-            "the recording does not look static")
+            f"{NOT_STATIC}")
 
 
 def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):

@@ -14,7 +14,7 @@ import sys
 import time
 
 from ..analysis.fleet import runner, table, work
-from ..analysis.still import NO_ACCEL_UNIT
+from ..analysis.still import NO_ACCEL_UNIT, NOT_STATIC
 from ..errors import SettingsError
 from . import console, options, outputs
 
@@ -180,7 +180,9 @@ def _summary(rows, fleet_files, written, elapsed_s, no_yaml=(), no_accel=()):
     for text in no_accel:
         console.tell(f"  accelerometer not analysed: {text}")
     for r in flagged:
+        moved = any(NOT_STATIC in w for w in r["warnings"])
         for f in r["flag"]:
-            console.tell(f"  stands out: {r['unit']} {r['axis']}: {f['text']}")
+            console.tell(f"  stands out: {r['unit']} {r['axis']}: {f['text']}"
+                         + ("; it moved: this describes the motion, not the sensor" if moved else ""))
     console.say(f"wrote {fleet_files[0]}, {fleet_files[1]} and {written} report file(s)")
     return EXIT_NOTHING_DONE if not done else 0

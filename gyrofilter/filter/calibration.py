@@ -192,7 +192,8 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
         if abs(bias[i]) > max_bias_dps:
             raise CalibrationError(
                 f"calibration: axis {axis} reads {bias[i]:.3g} deg/s on average, beyond the plausible bias "
-                f"of {max_bias_dps:g} deg/s: is the sensor turning? Keep it still while calibrating"
+                f"of {max_bias_dps:g} deg/s: is the sensor turning, or are the rates in another unit (raw counts read as "
+                "deg/s, a wrong lsb_per_dps)? Keep it still while calibrating"
             )
         if z[i] > stillness_threshold:
             raise CalibrationError(

@@ -251,6 +251,13 @@ TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s
                              "stamp", "stamps"})
 
 
+#: column names that look like a temperature but are not ``temp``: refused as the time-like ones
+#: are, so that a user's own ``temp_c`` column is not carried along unread (no compensation, the gap
+#: analysis reading a temperature drift as a drift in time) while the file reads without a word
+TEMPERATURE_LIKE_NAMES = frozenset({"temp", "temps", "temp_c", "tempc", "temp_degc", "temp_deg_c", "temperature",
+                                    "temperature_c", "temperature_degc", "die_temp", "die_temp_c", "celsius"})
+
+
 def refuse_invisible(name, what, where):
     """Refuse a column name or header key (``what``) that holds an invisible character
     (:func:`~gyrofilter.inputs.invisible_character`), with RecordingError naming ``where`` (the
@@ -264,8 +271,8 @@ def refuse_invisible(name, what, where):
 
 def check_columns(names, where):
     """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
-    lack ``gx, gy, gz`` or look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
-    case: ``T`` too) or hold an invisible character (a control or format character, Unicode
+    lack ``gx, gy, gz``, look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
+    case: ``T`` too) or like a temperature not named ``temp`` (:data:`TEMPERATURE_LIKE_NAMES`) or hold an invisible character (a control or format character, Unicode
     categories Cc, Cf, Zl, Zp: a byte-order mark of a file joined on after the header made
     ``\ufefft`` an extra column, its times ignored); ``where`` is the file and line."""
     if any(not n for n in names):
@@ -279,13 +286,19 @@ def check_columns(names, where):
     missing = [c for c in GYRO_COLUMNS if c not in seen]
     if missing:
         hint = ("; columns are separated by commas" if len(names) == 1 and any(c in names[0] for c in ";\t ") else
-                "; names are lower case" if all(c.upper() in map(str.upper, names) for c in missing) else "")
+                "; names are lower case" if all(c.upper() in map(str.upper, names) for c in missing) else
+                "; another tool's log: gyrofilter convert")
         raise RecordingError(f"{where}: missing column(s) {', '.join(missing)} (have {quote(', '.join(names))}){hint}")
     times = [n for n in names if n.lower() in TIME_LIKE_NAMES or n == "T"]
     if times:
         raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
                              "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
                              "it as an extra column; another tool's log: gyrofilter convert")
+    temps = [n for n in names if n.lower() in TEMPERATURE_LIKE_NAMES and n != "temp"]
+    if temps:
+        raise RecordingError(f"{where}: column {quote(temps[0])} looks like a temperature, which a recording holds "
+                             "in a column named 'temp' (deg C); rename it temp to use it, or to something else to "
+                             "keep it as an extra column")
 
 
 def check_accelerometer(header, names, where, line_of, columns_line):
