@@ -1177,3 +1177,13 @@ def test_a_rate_beyond_the_simulators_range_is_refused_naming_the_record(value, 
     with pytest.raises(RecordingError, match=f"^recording: gy sample 1235: {shown} deg/s is not a rate the gap analysis "
                                              r"can model \(finite, within \+-100000\)$"):
         analyse_gap(rec, n_sims=3)
+
+
+def test_a_short_records_note_says_how_short_in_numbers_that_are_not_zero():
+    """A new user's trial: a 4-s record was "cannot be told apart from white noise beyond tau ~ 0 s"."""
+    from gyrofilter.analysis.gap.pipeline import analyse_gap
+
+    rec = Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (400, 3)), 100.0)
+    (note,) = [n for n in analyse_gap(rec, n_sims=3, bootstrap=0)["notes"] if "slow bias effects" in n]
+    assert note == ("record of 4 s: too short to tell slow bias effects (drift, random walk, bias instability) from "
+                    "white noise at any tau (beyond 0.4 s)")

@@ -529,8 +529,11 @@ def write_findings(inp, state, scorer, report, found):
             report["baseline"]["axes"][a]["params_ci95"] = ci
     n, sample_rate_hz = inp.n, inp.sample_rate_hz
     if n / sample_rate_hz < 300:
-        report["notes"].append(f"record of {n / sample_rate_hz:.0f} s: slow bias effects (drift, random walk, bias instability) "
-                               "cannot be told apart from white noise beyond tau ~ {:.0f} s".format(n / sample_rate_hz / 9))
+        length_s, tau_s = n / sample_rate_hz, n / sample_rate_hz / 9
+        report["notes"].append(f"record of {length_s:.0f} s: slow bias effects (drift, random walk, bias instability) "
+                               f"cannot be told apart from white noise beyond tau ~ {tau_s:.0f} s" if tau_s >= 1 else
+                               f"record of {length_s:.2g} s: too short to tell slow bias effects (drift, random walk, "
+                               f"bias instability) from white noise at any tau (beyond {tau_s:.1g} s)")
     report["notes"] += found.notes
 
 
