@@ -794,6 +794,17 @@ def test_a_rate_no_gyro_reads_is_refused_naming_its_line(tmp_path, unit, extra, 
         read_recording(path)
 
 
+@pytest.mark.parametrize("unit, meant", [("deg/s", " \\(write 'deg/s' as dps\\)$"), ("degrees", "$")])
+def test_a_gyro_unit_of_another_spelling_is_refused_naming_the_one_meant(tmp_path, unit, meant):
+    """A new user's trial: `convert --unit deg/s` is taken, a header's `gyro_unit: deg/s` was refused
+    listing the units without saying which one it means."""
+    path = tmp_path / "unit.csv"
+    path.write_text(f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: {unit}\nt,gx,gy,gz\n0,1,2,3\n",
+                    encoding="utf-8")
+    with pytest.raises(RecordingError, match=f"gyro_unit '{unit}' is not one of dps, rad/s, lsb" + meant):
+        read_recording(path)
+
+
 def test_a_users_own_csv_is_told_what_a_recording_needs_in_one_go(tmp_path):
     """A spreadsheet export (time,gx,gy,gz, no header) was told one missing key per try, and once
     the keys were there its 'time' column was carried along unused: uniform samples at the header's

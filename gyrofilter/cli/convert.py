@@ -10,12 +10,11 @@ from .. import __version__
 from ..recording import RecordingWriter
 from ..recording.foreign import TIME_UNITS, read_foreign
 from ..recording.logtext import MAX_PIPE_COPY_BYTES
-from ..units import GYRO_UNITS
+from ..units import GYRO_UNIT_SPELLINGS, GYRO_UNITS
 from . import console, options, outputs
 
 
 #: other spellings of a unit that --unit takes (the recording format's name is dps)
-UNIT_SPELLINGS = {"deg/s": "dps"}
 
 
 def add_arguments(parser):
@@ -25,7 +24,7 @@ def add_arguments(parser):
                                                     "half its free space)")
     parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name,
                         help="output recording (" + options.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--unit", choices=GYRO_UNITS, default=None, type=lambda text: UNIT_SPELLINGS.get(text, text),
+    parser.add_argument("--unit", choices=GYRO_UNITS, default=None, type=lambda text: GYRO_UNIT_SPELLINGS.get(text, text),
                         help="unit of the gyro columns: dps (also deg/s), rad/s or lsb (default: the one their names "
                              "state, e.g. 'gyro_x (rad/s)'; never guessed)")
     parser.add_argument("--lsb-per-dps", type=options.lsb_per_dps, default=None, metavar="X",
