@@ -18,7 +18,7 @@ import numpy as np
 
 from ..closable import Closable
 from ..errors import RecordingError
-from ..inputs import quote
+from ..inputs import number_array, quote
 from .checks import TimeCheck, check_rates
 from .content import Recording, RecordingHead
 from .header import header_text, note_line
@@ -62,6 +62,24 @@ def _check_finite(rows, columns, where):
         row, col = (int(i) for i in bad[0])
         raise RecordingError(f"{where}: column {quote(columns[col])} of row {row + 1} of the rows to write is "
                              f"{float(rows[row, col])!r}; a recording holds finite numbers only (those rows not written)")
+
+
+def _rows_of_numbers(rows, where):
+    """``rows`` for :meth:`RecordingWriter.write` as an array: an object array (text cells) as
+    it is, anything else as numbers (:func:`gyrofilter.inputs.number_array`), or RecordingError:
+    a masked value (converting would drop the mask and write the number behind it as a sample),
+    complex numbers (their imaginary part dropped), booleans or strings."""
+    if isinstance(rows, np.ndarray) and rows.dtype == object:
+        return rows
+    values, problem = number_array(rows)
+    if problem is None:
+        return values
+    kind, detail = problem
+    if kind == "masked":
+        raise RecordingError(f"{where}: the rows to write have a masked value, the first at row {detail + 1}; give the "
+                             "measured values only (none of them written)")
+    shown = f"an array of {detail}" if kind == "kind" else f"a {type(rows).__name__} that is none"
+    raise RecordingError(f"{where}: rows to write must be numbers, got {shown} (none of them written)")
 
 
 class RecordingWriter(Closable):
@@ -159,7 +177,7 @@ class RecordingWriter(Closable):
         """Append rows, shape (n, number of columns), in the columns' order; RecordingError (and
         none of them written) when one holds NaN or +-inf. The cells of an object array (text a
         converter formatted itself, say) go through their formats as they are, once checked as numbers."""
-        rows = np.asarray(rows)
+        rows = _rows_of_numbers(rows, self.name)
         if rows.size == 0:
             return
         if rows.ndim != 2 or rows.shape[1] != len(self.columns):
