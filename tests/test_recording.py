@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from gyrofilter.errors import RecordingError
+from gyrofilter.errors import RecordingError, SettingsError
 from gyrofilter.recording import Recording, RecordingWriter, iter_recording, read_recording, write_recording
 
 HEADER = "# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
@@ -1192,3 +1192,12 @@ def test_recording_writer_refuses_masked_or_complex_rows(tmp_path, rows):
         with pytest.raises(RecordingError, match="rows to write (have a masked value, the first at row 11|must be numbers)"):
             writer.write(rows)
     assert read_recording(path).gyro_dps.shape == (0, 3)
+
+
+@pytest.mark.parametrize("keep", [["gx", "gx"], ["gx", "nope"], "gx"])
+def test_read_recording_refuses_columns_to_keep_that_are_not_the_files(tmp_path, keep):
+    """Attack pass 23: a column given twice ended in a KeyError, a name the file does not have
+    (or a string, taken letter by letter) in list.index's "'nope' is not in list"."""
+    path = _dps_file(tmp_path, "".join(f"{k * 0.01!r},1,2,3\n" for k in range(20)))
+    with pytest.raises(SettingsError, match=r"r.csv: the columns to keep must be distinct columns of the file \(t, gx, gy, gz\), got"):
+        read_recording(path, columns=lambda names: keep)
