@@ -129,20 +129,21 @@ def _bounds_text(low, high, low_open, high_open):
     return f"{'<' if high_open else '<='} {high:g}"
 
 
-def number_array(values, name, unit=""):
+def number_array(values, name, unit="", first_row=0):
     """The one rule for an array of numbers handed to the API (the filter's samples, the Allan
     functions' and ARMA's rates, a Recording built in code) and its words: ``(array, None)``,
     ``array`` float64 (not copied when it is one already), where ``values`` holds ints or floats;
     else ``(None, (words, row))``, the refusal naming the argument ``name`` (and ``unit``, if
     given) for the caller's own error: a masked array with a masked value (converting it would
-    drop the mask and take the value behind it as data; ``row`` the first such row, else None),
+    drop the mask and take the value behind it as data; ``row`` the first such row's index, else
+    None; the words count rows from ``first_row``),
     what numpy cannot make an array of (a ragged list), complex numbers (converting drops the
     imaginary part), booleans, strings or objects."""
     in_unit = f" in {unit}" if unit else ""
     mask = np.ma.getmask(values)
     if mask is not np.ma.nomask and mask.any():
         row = int(np.flatnonzero(mask.reshape(len(mask), -1).any(axis=1))[0]) if mask.ndim else 0
-        return None, (f"{name} row {row} is masked; a masked value is no measurement: give the measured values only "
+        return None, (f"{name} row {row + first_row} is masked; a masked value is no measurement: give the measured values only "
                       "(cut the record at it, or fill it with np.ma.filled if a value is meant)", row)
     try:
         array = np.asarray(values)

@@ -208,3 +208,14 @@ def test_a_masked_sample_of_one_axis_is_refused_not_taken_as_data():
         characterise_axis(np.ma.masked_array(x, mask=np.arange(6000) == 1234), 100.0, axis="z")
     with pytest.raises(AllanInputError, match="axis z: x_dps must be numbers"):
         characterise_axis(x + 1j, 100.0, axis="z")
+
+
+@pytest.mark.parametrize("axes", [("x", "x"), (0, 1)])
+def test_characterise_refuses_axes_that_are_not_distinct_axis_names(axes):
+    """Attack pass 23: axes ("x", "x") analysed both columns and returned one, the second's,
+    named x (the first column lost without a word); (0, 1) keyed the result by numbers."""
+    from gyrofilter.analysis.noise.fit import characterise
+
+    g = np.random.default_rng(5).normal(0, 0.05, (3000, 2))
+    with pytest.raises(AllanInputError, match=r"axes must be distinct names of x, y, z, got"):
+        characterise(g, 100.0, axes=axes)

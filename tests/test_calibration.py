@@ -237,3 +237,21 @@ def test_a_bias_beyond_the_plausible_says_the_unit_may_be_wrong():
                                                r"deg/s: is the sensor turning, or are the rates in another unit \(raw "
                                                r"counts read as deg/s, a wrong lsb_per_dps\)\?"):
         calibrate(window, 100.0)
+
+
+def test_calibrate_refuses_a_masked_value_and_temperatures_that_are_not_the_windows():
+    """Attack pass 23: calibrate() took a masked value's hidden number as a sample (a masked 3.0
+    in 600 samples of 0.05 deg/s noise: the bias of x off by 0.005 deg/s, its noise 0.13 deg/s for
+    0.05), complex samples without their imaginary part; 5 temperatures for a window of 200 gave
+    the window the mean of those 5; strings ended in numpy's TypeError."""
+    window = np.ma.masked_array(still(600), mask=np.zeros((600, 3), bool))
+    window.mask[5, 0] = True
+    window.data[5, 0] = 3.0
+    with pytest.raises(SettingsError, match="calibration window row 5 is masked"):
+        calibrate(window, 100.0)
+    with pytest.raises(SettingsError, match="calibration window must be numbers in deg/s, got an array of complex128"):
+        calibrate(still(200) + 0j, 100.0)
+    with pytest.raises(SettingsError, match=r"temp_c must have shape \(200,\), one temperature per sample, got \(5,\)"):
+        calibrate(still(200), 100.0, temp_c=np.full(5, 25.0))
+    with pytest.raises(SettingsError, match="temp_c must be numbers in deg C, got an array of <U2"):
+        calibrate(still(200), 100.0, temp_c=np.full(200, "25"))

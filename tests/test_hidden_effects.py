@@ -4,7 +4,7 @@ rates, an axis 'w' a KeyError, lag1 1.5 a math domain error)."""
 import numpy as np
 import pytest
 
-from gyrofilter.effects import COLORED_NOISE, HEAVY_TAILS
+from gyrofilter.effects import COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import Recording
 from gyrofilter.sim.hidden_effects import hide_in_recording
@@ -30,3 +30,13 @@ def test_an_axis_that_is_none_is_refused():
 def test_a_valid_colored_noise_keeps_the_axis_finite():
     out = hide_in_recording(record(), COLORED_NOISE, "x", {"lag1": 0.3})
     assert np.all(np.isfinite(out.gyro_dps))
+
+
+@pytest.mark.parametrize("params", [{"fraction": 5.0}, {"fraction": float("nan")}, {"fraction": -1.0}, {},
+                                    {"fraction": 0.1, "pattern": "bogus"}, {"fraction": "0.1"}])
+def test_repeated_samples_parameters_the_model_refuses_are_refused(params):
+    """Attack pass 23: pass 22's check skipped the whole-row effect: a fraction of 5 repeated
+    every row, NaN or -1 none, a pattern 'bogus' ran as 'random', a string was taken as a
+    number, and no fraction ended in a KeyError."""
+    with pytest.raises(SettingsError, match=r"model: repeated_samples"):
+        hide_in_recording(record(), REPEATED_SAMPLES, "xyz", params)

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from gyrofilter.errors import RecordingError
+from gyrofilter.errors import RecordingError, SettingsError
 from gyrofilter.recording import Recording, RecordingWriter, iter_recording, read_recording, write_recording
 
 HEADER = "# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
@@ -1177,3 +1177,50 @@ def test_from_dps_refuses_what_is_not_numbers(values):
     """Attack pass 22: complex rates lost their imaginary part, booleans and strings were read as numbers."""
     with pytest.raises(RecordingError, match="gyro_dps must be numbers"):
         Recording.from_dps(values, 100.0)
+
+
+def test_a_recording_built_in_code_refuses_a_masked_column():
+    """Attack pass 23: pass 22's rule of from_dps for the Recording built from its columns
+    (a public class): a masked 1e4 in gx was its gyro_dps (the mask dropped by column_stack) and
+    write_recording wrote it to the file as a sample."""
+    with pytest.raises(RecordingError, match="column 'gx' row 10 is masked"):
+        Recording(columns={"gx": _masked_at_10(100), "gy": np.zeros(100), "gz": np.zeros(100)},
+                  header={"sample_rate_hz": "100", "gyro_unit": "dps"})
+
+
+@pytest.mark.parametrize("values", [np.zeros(5) + 1j, np.zeros(5, bool), ["1"] * 5])
+def test_a_recording_built_in_code_refuses_what_is_not_numbers(values):
+    """Attack pass 23: a complex column was written without its imaginary part (one ComplexWarning)."""
+    with pytest.raises(RecordingError, match="column 'gy' must be numbers"):
+        Recording(columns={"gx": np.zeros(5), "gy": values, "gz": np.zeros(5)},
+                  header={"sample_rate_hz": "100", "gyro_unit": "dps"})
+
+
+def test_a_recording_built_in_code_refuses_columns_of_other_lengths():
+    """Attack pass 23: write_recording ended in numpy's ValueError (column_stack) naming no column."""
+    with pytest.raises(RecordingError, match="column 'gz' has 4 values, column 'gx' has 5"):
+        Recording(columns={"gx": np.zeros(5), "gy": np.zeros(5), "gz": np.zeros(4)},
+                  header={"sample_rate_hz": "100", "gyro_unit": "dps"})
+
+
+@pytest.mark.parametrize("rows", [np.ma.masked_array(np.zeros((20, 3)), mask=np.eye(20, 3, k=-10, dtype=bool)),
+                                  np.zeros((20, 3)) + 1j])
+def test_recording_writer_refuses_masked_or_complex_rows(tmp_path, rows):
+    """Attack pass 23: RecordingWriter.write wrote a masked value's hidden number and the real part
+    of complex rows as samples."""
+    if np.ma.isMaskedArray(rows):
+        rows.data[10, 0] = 5e4
+    path = tmp_path / "rec.csv"
+    with RecordingWriter(path, {"sample_rate_hz": "100", "gyro_unit": "dps"}, ["gx", "gy", "gz"]) as writer:
+        with pytest.raises(RecordingError, match="rows to write: (row 11 is masked; a masked value is no measurement|must be numbers)"):
+            writer.write(rows)
+    assert read_recording(path).gyro_dps.shape == (0, 3)
+
+
+@pytest.mark.parametrize("keep", [["gx", "gx"], ["gx", "nope"], "gx"])
+def test_read_recording_refuses_columns_to_keep_that_are_not_the_files(tmp_path, keep):
+    """Attack pass 23: a column given twice ended in a KeyError, a name the file does not have
+    (or a string, taken letter by letter) in list.index's "'nope' is not in list"."""
+    path = _dps_file(tmp_path, "".join(f"{k * 0.01!r},1,2,3\n" for k in range(20)))
+    with pytest.raises(SettingsError, match=r"r.csv: the columns to keep must be distinct columns of the file \(t, gx, gy, gz\), got"):
+        read_recording(path, columns=lambda names: keep)

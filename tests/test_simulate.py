@@ -18,7 +18,7 @@ from gyrofilter.errors import SettingsError
 from gyrofilter.recording import read_recording, write_recording
 from gyrofilter.effects import ROWS
 from gyrofilter.sim.model import EFFECTS, validate_model
-from gyrofilter.sim.simulate import simulate, simulate_chunks
+from gyrofilter.sim.simulate import simulate, simulate_axis_dps, simulate_chunks
 from gyrofilter.units import DEG_PER_RAD
 
 
@@ -616,3 +616,13 @@ def test_a_run_held_whole_equals_its_blocks():
     assert np.array_equal(rec.t_s, np.concatenate([p[0] for p in parts]))
     assert np.array_equal(rec.gyro, np.concatenate([p[1] for p in parts]))
     assert np.array_equal(rec.temp_c, np.concatenate([p[2] for p in parts]))
+
+
+@pytest.mark.parametrize("axis, chunk_samples", [(1.7, 100), (True, 100), ("x", 100), (3, 100), (-1, 100), (0, 0.5), (0, "8")])
+def test_simulate_axis_dps_refuses_an_axis_or_chunk_that_is_not_one(axis, chunk_samples):
+    """Attack pass 23: axis 1.7 (or True) simulated y, "x" ended in int()'s ValueError, 3 in an
+    IndexError and -1 in numpy's "expected non-negative integer"; a chunk_samples of 0.5 was
+    refused as "got 0" and "8" was taken as 8."""
+    model = {"sample_rate_hz": 100.0, "axes": {"x": {"arw_dps_per_sqrt_hz": 0.01}}}
+    with pytest.raises(SettingsError, match=r"simulate: (axis \(0, 1 or 2: x, y, z\)|chunk_samples) must be"):
+        next(simulate_axis_dps(model, 1.0, axis, seed=1, chunk_samples=chunk_samples))

@@ -117,3 +117,44 @@ def test_what_is_not_finite_is_refused_not_carried_into_the_rates():
     g_nan[7, 1] = np.inf
     with pytest.raises(SettingsError, match="gyro_dps holds NaN"):
         tempcomp.fit_coefficient(g_nan, t)
+
+
+def _masked_at_5(values):
+    values = np.ma.masked_array(values, mask=np.zeros(np.shape(values), bool))
+    values.mask[5] = True
+    values.data[5] = 1e4
+    return values
+
+
+def test_what_is_not_a_rate_or_a_temperature_is_refused():
+    """Attack pass 23: pass 22's rule for the arrays: a masked value's hidden 1e4 was taken as data
+    (fit_coefficient's x coefficient -9.8 deg/s/C, not 0.03; compensate gave row 5 as 1e4 deg/s
+    or -300 deg/s), complex temperatures lost their imaginary part, a temperature of 1e12 C (beyond
+    TEMP_RANGE_C, which the reference and the filter keep to) gave rates of -3e10 deg/s and one of
+    1e200 an overflow: refused, naming the argument."""
+    t, temp, x = warmup(0, duration_s=20.0)
+    for gyro, temps, name in ((_masked_at_5(x), temp, "gyro_dps"), (x, _masked_at_5(temp), "temp_c")):
+        with pytest.raises(SettingsError, match=f"{name} row 5 is masked"):
+            tempcomp.fit_coefficient(gyro, temps)
+        with pytest.raises(SettingsError, match=f"{name} row 5 is masked"):
+            tempcomp.compensate(gyro, temps, C, 25.0)
+    with pytest.raises(SettingsError, match="temp_c must be numbers in deg C, got an array of complex128"):
+        tempcomp.fit_coefficient(x, temp + 0j)
+    for huge in (1e12, 1e200):
+        with pytest.raises(SettingsError, match=r"temp_c row 0: temp_c \(deg C\) must be in \[-100, 200\]"):
+            tempcomp.compensate(x, temp * 0 + huge, C, 25.0)
+        with pytest.raises(SettingsError, match=r"temp_c row 0: temp_c \(deg C\) must be in \[-100, 200\]"):
+            tempcomp.fit_coefficient(x, np.r_[huge, temp[1:]])
+    x[3, 1] = 1e6
+    with pytest.raises(SettingsError, match=r"gyro_dps row 3: gy \(deg/s\) must be in \[-100000, 100000\]"):
+        tempcomp.fit_coefficient(x, temp)
+
+
+def test_too_few_samples_or_temperatures_of_another_length_are_refused():
+    """Attack pass 23: fit_coefficient on 2 samples gave a standard error of NaN, on 0 numpy's
+    "zero-size array" ValueError; compensate with 5 temperatures for 4 samples a broadcasting error."""
+    for n in (0, 2):
+        with pytest.raises(SettingsError, match=f"fit_coefficient needs at least 3 samples, got {n}"):
+            tempcomp.fit_coefficient(np.zeros((n, 3)), 20.0 + np.arange(n))
+    with pytest.raises(SettingsError, match=r"temp_c must be one temperature or one per sample, shape \(4,\), got \(5,\)"):
+        tempcomp.compensate(np.zeros((4, 3)), np.full(5, 30.0), C, 25.0)

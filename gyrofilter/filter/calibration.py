@@ -38,6 +38,7 @@ import numpy as np
 from ..errors import CalibrationError, SettingsError
 from ..inputs import check_number, load_json, quote
 from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
+from .samples import as_numbers
 
 
 def calibration_samples(sample_rate_hz, calibration_s):
@@ -169,14 +170,15 @@ def stillness_z(window_dps) -> np.ndarray:
 def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=MAX_BIAS_DPS, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
-    ``window_dps`` is (n, 3) in deg/s, n >= MIN_SAMPLES (3), each finite and within +-MAX_RATE_DPS
+    ``window_dps`` is (n, 3) in deg/s, n >= MIN_SAMPLES (3), numbers (no masked value:
+    :func:`~gyrofilter.filter.samples.as_numbers`), each finite and within +-MAX_RATE_DPS
     (:func:`gyrofilter.units.check_rates_dps`), sampled at ``sample_rate_hz`` (Hz);
     ``stillness_threshold``: the largest stillness statistic z accepted (noise units, see
     :func:`stillness_z`); ``max_bias_dps``: the largest plausible bias (deg/s); ``temp_c``
-    optionally the window's n temperatures (deg C), whose mean is kept. Raises CalibrationError
+    optionally the window's n temperatures (deg C, shape (n,)), whose mean is kept. Raises CalibrationError
     naming the axis and the statistic when the window is not still.
     """
-    x = np.asarray(window_dps, dtype=float)
+    x = as_numbers(window_dps, "calibration window", "deg/s")  # a masked value is refused, not averaged
     if x.ndim != 2 or x.shape[1] != 3:
         raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")
     check_rates_dps(x, "calibration window")  # a NaN would make a NaN bias that passes every test
@@ -208,6 +210,10 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
                 "plausible for a still sensor"
             )
     low_c, high_c = TEMP_RANGE_C
+    if temp_c is not None:
+        temp_c = as_numbers(temp_c, "temp_c", "deg C")
+        if temp_c.shape != (len(x),):
+            raise SettingsError(f"temp_c must have shape ({len(x)},), one temperature per sample, got {temp_c.shape}")
     temp = None if temp_c is None else check_number(
         float(np.mean(temp_c)), "calibration: the mean temperature (deg C)", low=low_c, high=high_c, error=CalibrationError)
     return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz), temp)

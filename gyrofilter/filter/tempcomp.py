@@ -23,7 +23,8 @@ import numpy as np
 from ..effects import TEMPERATURE
 from ..errors import SettingsError
 from ..inputs import check_number
-from ..units import AXES, TEMP_RANGE_C, plain
+from ..units import AXES, TEMP_RANGE_C, check_rates_dps, plain
+from .samples import as_numbers, check_temperature
 
 
 def _coefficients(coefficient_dps_per_c):
@@ -33,19 +34,40 @@ def _coefficients(coefficient_dps_per_c):
     return c
 
 
+def _rates_and_temperatures(gyro_dps, temp_c):
+    """``gyro_dps`` and ``temp_c`` as float arrays, checked as GyroFilter checks what it is fed
+    (:mod:`gyrofilter.filter.samples`): numbers (a masked value, complex numbers, booleans or
+    strings refused: :func:`~gyrofilter.filter.samples.as_numbers`), each finite, rates within
+    +-MAX_RATE_DPS (a gyro_dps whose last axis is not 3 is left to the caller's shape check) and
+    temperatures within TEMP_RANGE_C; SettingsError (a SampleError) naming the first refused."""
+    x = as_numbers(gyro_dps, "gyro_dps", "deg/s")
+    t = as_numbers(temp_c, "temp_c", "deg C")
+    if not np.all(np.isfinite(t)):
+        raise SettingsError("temp_c holds NaN or infinite values")
+    if not np.all(np.isfinite(x)):
+        raise SettingsError("gyro_dps holds NaN or infinite values")
+    if x.shape[-1:] == (3,):
+        check_rates_dps(x.reshape(-1, 3), "gyro_dps")
+    ok = (t >= TEMP_RANGE_C[0]) & (t <= TEMP_RANGE_C[1])
+    if not ok.all():
+        row = int(np.flatnonzero(~ok.ravel())[0])
+        check_temperature(float(t.ravel()[row]), True, f"temp_c row {row}", row)
+    return x, t
+
+
 def compensate(gyro_dps, temp_c, coefficient_dps_per_c, reference_temp_c):
     """y = x - c (T - T0) per axis, in deg/s.
 
     ``gyro_dps``: x, (N, 3) or (3,) in deg/s; ``temp_c``: T, (N,) or a scalar, deg C;
     ``coefficient_dps_per_c``: c, one value or 3 (deg/s per deg C); ``reference_temp_c``: T0 (deg C,
-    within :data:`~gyrofilter.units.TEMP_RANGE_C`: a NaN made every rate NaN). SettingsError otherwise.
+    within :data:`~gyrofilter.units.TEMP_RANGE_C`: a NaN made every rate NaN). SettingsError otherwise,
+    and for what :func:`_rates_and_temperatures` refuses.
     """
-    x = np.asarray(gyro_dps, dtype=float)
-    t = np.asarray(temp_c, dtype=float)
+    x, t = _rates_and_temperatures(gyro_dps, temp_c)
     if x.shape[-1:] != (3,):
         raise SettingsError(f"gyro_dps must have shape (N, 3) or (3,), got {x.shape}")
-    if not np.all(np.isfinite(t)):
-        raise SettingsError("temp_c holds NaN or infinite values")
+    if t.shape not in ((), x.shape[:-1]):
+        raise SettingsError(f"temp_c must be one temperature or one per sample, shape {x.shape[:-1]}, got {t.shape}")
     c = _coefficients(coefficient_dps_per_c)
     t0 = check_number(reference_temp_c, "reference_temp_c (deg C)", low=TEMP_RANGE_C[0], high=TEMP_RANGE_C[1])
     return x - c * (t[..., None] - t0)
@@ -70,16 +92,14 @@ def fit_coefficient(gyro_dps, temp_c):
     """Least-squares slope c per axis of a static record: x = b + c (T - mean T) + noise.
 
     ``gyro_dps``: x, (N, 3) in deg/s; ``temp_c``: T, (N,) in deg C. Returns (c (3,), standard error (3,)). Meaningless unless the temperature actually varied
-    (raises when its spread is below one 0.1 C step, or a value is not finite: a NaN gave NaN coefficients).
+    (raises when its spread is below one 0.1 C step, or a value is not finite: a NaN gave NaN coefficients,
+    and for what :func:`_rates_and_temperatures` refuses).
     """
-    x = np.asarray(gyro_dps, dtype=float)
-    t = np.asarray(temp_c, dtype=float)
-    if x.ndim != 2 or x.shape[1] != 3 or len(t) != len(x):
+    x, t = _rates_and_temperatures(gyro_dps, temp_c)
+    if x.ndim != 2 or x.shape[1] != 3 or t.shape != (len(x),):
         raise SettingsError(f"need gyro_dps (N, 3) and temp_c (N,), got {x.shape} and {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise SettingsError("temp_c holds NaN or infinite values")
-    if not np.all(np.isfinite(x)):
-        raise SettingsError("gyro_dps holds NaN or infinite values")
+    if len(x) < 3:  # the standard error has N - 2 degrees of freedom (2 samples: NaN)
+        raise SettingsError(f"fit_coefficient needs at least 3 samples, got {len(x)}")
     dt = t - t.mean()
     sxx = float(dt @ dt)
     if np.ptp(t) < 0.1:

@@ -112,6 +112,24 @@ class Recording(_HeaderFacts):
     notes: list = field(default_factory=list)
     t_gaps: int = 0
 
+    def __post_init__(self):
+        """Hold what a file holds: every column one number per row (shape (N,)), all of one
+        length, or RecordingError naming the column. A masked value is refused (``gyro_dps``'s
+        column_stack drops the mask: the number behind it would be a sample, and
+        :func:`~gyrofilter.recording.write_recording` would write it), so are complex numbers,
+        booleans, strings and objects (:func:`gyrofilter.inputs.number_array`). The reader's
+        columns (int or float arrays) are kept as they are, float32 of ``compact`` too."""
+        columns = {}
+        for name, values in self.columns.items():
+            plain = type(values) is np.ndarray and values.dtype.kind in "iuf"
+            values = columns[name] = values if plain else _numbers(values, f"column {name!r}")
+            if values.ndim != 1:
+                raise RecordingError(f"column {name!r} must hold one number per row, shape (N,), got shape {values.shape}")
+            first = next(iter(columns))
+            if len(values) != len(columns[first]):
+                raise RecordingError(f"column {name!r} has {len(values)} values, column {first!r} has {len(columns[first])}")
+        self.columns = columns
+
     def __len__(self):
         return len(self.columns[GYRO_COLUMNS[0]])
 
@@ -179,9 +197,6 @@ class Recording(_HeaderFacts):
                 columns[name] = accel[:, i].copy()
         for name, values in (extra or {}).items():
             columns[name] = _numbers(values, f"extra column {name!r}")
-        for name, values in columns.items():
-            if len(values) != len(gyro_dps):
-                raise RecordingError(f"column {name!r} has {len(values)} values, gyro has {len(gyro_dps)}")
         return cls(columns=columns, header=head)
 
 

@@ -54,8 +54,12 @@ def collect_columns(head, chunks, names, compact=False):
     one chunk.
 
     A recording that does not fit in memory (a few MB of gzip can hold 10^9 rows) is a
-    RecordingError naming the file and the rows read, not a MemoryError's traceback.
+    RecordingError naming the file and the rows read, not a MemoryError's traceback. ``names``
+    that are not distinct columns of the file: SettingsError naming them.
     """
+    if len(set(names)) != len(names) or not set(names) <= set(head.names):
+        raise SettingsError(f"{head.path}: the columns to keep must be distinct columns of the file "
+                            f"({', '.join(head.names)}), got {names!r}")
     try:
         return _gather(head, chunks, names, compact)
     except MemoryError:

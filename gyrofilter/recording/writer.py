@@ -18,7 +18,7 @@ import numpy as np
 
 from ..closable import Closable
 from ..errors import RecordingError
-from ..inputs import quote
+from ..inputs import number_array, quote
 from .checks import TimeCheck, check_rates
 from .content import Recording, RecordingHead
 from .header import header_text, note_line
@@ -62,6 +62,19 @@ def _check_finite(rows, columns, where):
         row, col = (int(i) for i in bad[0])
         raise RecordingError(f"{where}: column {quote(columns[col])} of row {row + 1} of the rows to write is "
                              f"{float(rows[row, col])!r}; a recording holds finite numbers only (those rows not written)")
+
+
+def _rows_of_numbers(rows, where):
+    """``rows`` for :meth:`RecordingWriter.write` as an array: an object array (text cells) as
+    it is, anything else as numbers (:func:`gyrofilter.inputs.number_array`), or RecordingError:
+    a masked value (converting would drop the mask and write the number behind it as a sample),
+    complex numbers (their imaginary part dropped), booleans or strings."""
+    if isinstance(rows, np.ndarray) and rows.dtype == object:
+        return rows
+    values, problem = number_array(rows, f"{where}: the rows to write:", first_row=1)
+    if problem is not None:
+        raise RecordingError(f"{problem[0]} (none of them written)")
+    return values
 
 
 class RecordingWriter(Closable):
@@ -159,7 +172,7 @@ class RecordingWriter(Closable):
         """Append rows, shape (n, number of columns), in the columns' order; RecordingError (and
         none of them written) when one holds NaN or +-inf. The cells of an object array (text a
         converter formatted itself, say) go through their formats as they are, once checked as numbers."""
-        rows = np.asarray(rows)
+        rows = _rows_of_numbers(rows, self.name)
         if rows.size == 0:
             return
         if rows.ndim != 2 or rows.shape[1] != len(self.columns):

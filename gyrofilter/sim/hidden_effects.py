@@ -185,7 +185,8 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     added to the rate in deg/s; the result is a deg/s recording with the same temp column.
     SettingsError for an ``axis`` that is none of x, y, z, or ``params`` the simulator's model
     refuses (:func:`~gyrofilter.sim.model.validate_model`; a colored noise of lag1 NaN made the
-    axis NaN)."""
+    axis NaN; ``repeated_samples``, a whole-row effect with no axis, as the model's top-level key:
+    a fraction of 5 repeated every row)."""
     sample_rate_hz = rec.sample_rate_hz
     n = len(rec)
     model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",
@@ -197,7 +198,9 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         t = np.arange(n) / sample_rate_hz
         step = max(1, n // 500)
         model[TEMPERATURE_PROFILE] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
-    if effect != REPEATED_SAMPLES:  # checked as the simulator checks it, also where it is not simulated
+    if effect == REPEATED_SAMPLES:  # checked as the simulator checks it, also where it is not simulated
+        validate_model({**model, REPEATED_SAMPLES: params})  # a whole-row effect: a top-level key
+    else:
         if axis not in AXES:
             raise SettingsError(f"axis must be one of {', '.join(AXES)}, got {plain(axis)}")
         validate_model({**model, "axes": {**model["axes"], axis: {**model["axes"][axis],

@@ -70,6 +70,7 @@ from .accel import RANDOM_TERMS, Accelerometer
 from .flicker import BiasInstability
 from .model import ACCELEROMETER, EFFECTS, TEMPERATURE_PROFILE, validate_model
 from ..errors import SettingsError
+from ..inputs import check_number
 from ..recording import ACCEL_COLUMNS, COLUMNS, EXACT_FORMAT, FORMAT_VERSION, VERSION_KEY, Recording, accel_units_header, format_number, units_header
 from ..units import AXES, DEG_PER_RAD, check_duration_s, plain, to_dps
 
@@ -255,10 +256,7 @@ def check_sample_count(duration_s, sample_rate_hz, name="simulate: duration_s"):
 
 def _check_chunk_samples(chunk_samples):
     """``chunk_samples`` as an int >= 1, else SettingsError."""
-    chunk_samples = int(chunk_samples)
-    if chunk_samples < 1:
-        raise SettingsError(f"simulate: chunk_samples must be >= 1, got {chunk_samples}")
-    return chunk_samples
+    return check_number(chunk_samples, "simulate: chunk_samples", low=1, integer=True)
 
 
 class Block(NamedTuple):
@@ -379,7 +377,7 @@ def simulate_axis_dps(model, duration_s, axis, *, seed=None, chunk_samples=DEFAU
     n_total = sample_count(duration_s, sample_rate_hz)
     root = _root_seed(seed, None)
     temp = nt.TemperatureProfile(spec[TEMPERATURE_PROFILE], _stream(root, 3, 0, 0, 0)) if spec[TEMPERATURE_PROFILE] else None
-    axis = int(axis)
+    axis = check_number(axis, "simulate: axis (0, 1 or 2: x, y, z)", low=0, high=len(AXES) - 1, integer=True)
     terms = _axis_terms(axis, spec["axes"][AXES[axis]], sample_rate_hz, n_total / sample_rate_hz, root, temp)
     repeats, last = _repeats(spec, root), None
     for start in range(0, n_total, chunk_samples):

@@ -229,6 +229,8 @@ def characterise(gyro_dps, sample_rate_hz, *, axes=AXES, **kwargs):
     """:func:`characterise_axis` for each column of ``gyro_dps`` (shape (N, 3), deg/s) at
     ``sample_rate_hz`` (Hz) named in ``axes`` (a subset of :data:`~gyrofilter.units.AXES`); ``kwargs`` go to
     :func:`characterise_axis`; returns {axis name: AxisNoise}."""
+    if len(set(axes)) != len(axes) or not set(axes) <= set(AXES):  # a repeated name kept one column of two
+        raise AllanInputError(f"axes must be distinct names of {', '.join(AXES)}, got {plain(tuple(axes))}")
     g = rate_numbers(gyro_dps, "gyro_dps")
     if g.ndim != 2 or g.shape[1] != len(axes):
         got = g.shape if g.ndim else "a scalar"
