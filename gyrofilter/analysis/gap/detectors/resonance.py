@@ -74,9 +74,9 @@ def _welch(x, sample_rate_hz):
     return f, s, n_seg
 
 
-class Bins(NamedTuple):
+class _Bins(NamedTuple):
     """The bins a fit evaluates its PSDs at hundreds of times, and what the PSDs take from them
-    that no parameter changes, computed once per fit (:func:`fit_bins`): the frequencies ``f``,
+    that no parameter changes, computed once per fit (:func:`_fit_bins`): the frequencies ``f``,
     ``z = e^{-j2πf/f_s}``, ``cos_t = Re z``, ``z2 = z²``, ``ends = |1 - z²|²``, ``rise = 1 - z²``."""
 
     f: np.ndarray
@@ -87,16 +87,16 @@ class Bins(NamedTuple):
     rise: np.ndarray
 
 
-def fit_bins(f, sample_rate_hz):
-    """The :class:`Bins` of the frequencies ``f``."""
+def _fit_bins(f, sample_rate_hz):
+    """The :class:`_Bins` of the frequencies ``f``."""
     z = np.exp(-2j * math.pi * f / sample_rate_hz)
     z2 = z * z
     rise = 1.0 - z2
-    return Bins(f, z, np.ascontiguousarray(z.real), z2, np.abs(rise) ** 2, rise)
+    return _Bins(f, z, np.ascontiguousarray(z.real), z2, np.abs(rise) ** 2, rise)
 
 
 def _hump_psd(bins, centre, q, rms, sample_rate_hz, jacobian=False):
-    """One-sided PSD of the resonance of rms ``rms`` at the :class:`Bins` ``bins``,
+    """One-sided PSD of the resonance of rms ``rms`` at the :class:`_Bins` ``bins``,
     2 rms² |H|² / (f_s Σ h²) for the resonator :func:`gyrofilter.sim.resonance.band_pass`
     (b ∝ α (1, 0, -1), a ∝ (1 + α, -2 cos ω₀, 1 - α), α = sin ω₀ / (2Q), ω₀ = 2π f₀ / f_s) and its
     energy Σ h² = α / (1 + α) (:func:`~gyrofilter.sim.resonance.band_pass_energy`), which reduce to
@@ -132,7 +132,7 @@ def _hump_jacobian(bins, q, sample_rate_hz, parts):
 
 
 def _null_psd(p, bins, jacobian=False):
-    """The smooth null's PSD (module docstring) at the :class:`Bins` ``bins`` (frequencies ``f``),
+    """The smooth null's PSD (module docstring) at the :class:`_Bins` ``bins`` (frequencies ``f``),
     for ``p = (ln c, φ, μ, ln d)``: ``c A + d / f``, ``A = |1 + μ z|² / |1 - φ z|²`` with
     |1 + μ z|² = 1 + 2 μ cos θ + μ² and |1 - φ z|² = 1 - 2 φ cos θ + φ² on the unit circle
     (cos θ = Re z). With ``jacobian``: ``(S, dS/dp)`` (N x 4)."""
@@ -177,7 +177,7 @@ def resonance_fit(x, sample_rate_hz, lines=()):
     fw, logs = f[sel], np.log(np.maximum(s[sel], 1e-300))
     known = sum((2.0 * filter_psd(*narrowband_filter(rms, centre, width, sample_rate_hz), fw, sample_rate_hz)
                  for centre, width, rms in lines), np.zeros(fw.size))
-    bins = fit_bins(fw, sample_rate_hz)
+    bins = _fit_bins(fw, sample_rate_hz)
     level = float(np.median(s[sel]))
     p0 = np.array([math.log(level), 0.0, 0.0, math.log(level * 1e-3 * fw[0])])
     lo0, hi0 = [p0[0] - 10, -0.95, -0.95, p0[3] - 30], [p0[0] + 10, 0.95, 0.95, p0[3] + 10]
@@ -235,7 +235,7 @@ def resonance_fit(x, sample_rate_hz, lines=()):
     rss1 = float(np.sum(best.fun ** 2))
     dof = max(fw.size - 7, 1)
     centre, q, rms = float(best.x[4]), float(math.exp(best.x[5])), float(math.exp(best.x[6]))
-    at = fit_bins(np.array([centre]), sample_rate_hz)
+    at = _fit_bins(np.array([centre]), sample_rate_hz)
     peak = _hump_psd(at, centre, q, rms, sample_rate_hz)[0] / _null_psd(best.x[:4], at)[0]
     return {"center_hz": centre, "q": q, "rms_dps": rms, "statistic": (rss0 - rss1) / (rss1 / dof) if rss1 > 0 else 0.0,
             "peak_ratio": float(peak), "segments": int(n_seg)}
