@@ -123,6 +123,25 @@ def test_moving_mean_and_spike_mask_equal_their_index_formulas():
         assert mask.any() and np.array_equal(mask, (a > k * sd_r) & (a >= left) & (a >= right))
 
 
+def test_running_medians_equal_the_median_of_each_window_and_the_median_filter():
+    """stats.window_medians (the narrow-band background's running median, O(log W) a bin) gives
+    np.median of each window exactly: windows that slide, that shrink from the left (the edge
+    background's) and that jump, on values with ties (a quantized spectrum); and over the series
+    extended by its end values, scipy's median filter of mode "nearest"."""
+    from scipy.ndimage import median_filter
+
+    rng = np.random.default_rng(8)
+    for values in (rng.exponential(size=300), np.round(rng.normal(size=300) * 2.0) / 2.0):
+        spans = [(i, i + 41) for i in range(100)] + [(120 + 2 * k, 201) for k in range(30)] + [(250, 261), (260, 299)]
+        assert np.array_equal(stats.window_medians(values, spans), [np.median(values[lo:hi]) for lo, hi in spans])
+        padded = np.concatenate((np.full(20, values[0]), values, np.full(20, values[-1])))
+        assert np.array_equal(stats.window_medians(padded, [(i, i + 41) for i in range(300)]),
+                              median_filter(values, size=41, mode="nearest"))
+    for spans in ([(0, 4)], [(5, 10), (4, 11)], [(0, 11), (1, 10)]):
+        with pytest.raises(ValueError, match="even length or moves back"):
+            stats.window_medians(np.arange(20.0), spans)
+
+
 def test_least_squares_and_detrend_equal_lstsq():
     rng = np.random.default_rng(8)
     n = 2 * det.CHUNK_SAMPLES + 12_345  # the normal equations are summed over three pieces

@@ -1,9 +1,10 @@
 """Statistics the analysis families share (the gap's detectors, the stillness check, the
-gross-error screen): a robust scale, block means, chunked detrending and moving means, an
-exact dot product and a golden-section search. Numbers in, numbers out."""
+gross-error screen): a robust scale, block means, chunked detrending, moving means and running
+medians, an exact dot product and a golden-section search. Numbers in, numbers out."""
 
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -119,6 +120,32 @@ def moving_mean(x, window):
     tail = np.arange(i1, n)
     suffix = np.cumsum(x[::-1][:n - i1 + half])[::-1]  # suffix[k] = sum x[i1 - half + k:]
     out[i1:] = suffix[tail - i1] / (n - tail + half)
+    return out
+
+
+def window_medians(values, spans):
+    """The medians of ``values[lo:hi]`` for each ``(lo, hi)`` of ``spans``, each of odd length
+    and neither end moving back from one span to the next (a running median): the middle value
+    of a sorted copy of the window, which each span updates by what leaves and enters it
+    (bisection, O(log W) comparisons and one move of at most W values per value, where a
+    median of each window anew costs O(W) each). The middle of an odd count is one of the
+    values, so the result equals ``np.median(values[lo:hi])`` exactly. ``values`` must be
+    finite (NaN has no place in the order)."""
+    vals = np.asarray(values, dtype=float).tolist()
+    window, cur_lo, cur_hi = [], 0, 0
+    out = np.empty(len(spans))
+    for k, (lo, hi) in enumerate(spans):
+        if (hi - lo) % 2 == 0 or lo < cur_lo or hi < cur_hi:
+            raise ValueError(f"window_medians: span {k} ({lo}, {hi}) is of even length or moves back")
+        if lo >= cur_hi:  # no value in common with the last window
+            window = sorted(vals[lo:hi])
+        else:
+            for v in vals[cur_lo:lo]:
+                del window[bisect.bisect_left(window, v)]
+            for v in vals[cur_hi:hi]:
+                bisect.insort(window, v)
+        cur_lo, cur_hi = lo, hi
+        out[k] = window[len(window) // 2]
     return out
 
 

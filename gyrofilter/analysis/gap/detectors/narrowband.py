@@ -8,7 +8,7 @@ import numpy as np
 
 from ....effects import NARROWBAND
 from .common import NARROWBAND_THRESHOLD, Candidate
-from ...stats import dot
+from ...stats import dot, window_medians
 from ....sim.noise_terms import filter_psd, narrowband_filter
 from ....units import check_sample_rate_hz
 
@@ -91,7 +91,7 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     shows, ``smooth_bins`` Δf) and ``segments`` (K, the number of Welch segments). With ``fit``
     the centre, width and rms are then refined by :func:`_resonator_fit`.
     """
-    from scipy.ndimage import median_filter, uniform_filter1d
+    from scipy.ndimage import uniform_filter1d
 
     x = np.asarray(x_dps, dtype=float)
     seg = int(min(nperseg, 2 ** int(math.log2(max(x.size // 16, 16)))))
@@ -104,10 +104,11 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     if seg % 2 == 0:
         s = s.copy()
         s[-1] *= 2.0  # the one-sided Nyquist bin is not doubled: make S continuous there
-    back = median_filter(s, size=width, mode="nearest")
     half = min(width // 2, s.size - 1)
+    back = np.empty(s.size)
     edge_hz = min(BAND_EDGE_HZ, sample_rate_hz / 40.0)
     back[s.size - half:] = _edge_background(s, half, min(half, max(4, int(round(edge_hz / df)))))
+    back[:s.size - half] = _running_median(s, width, s.size - half)
     excess = s - back
     smooth = uniform_filter1d(excess, smooth_bins, mode="mirror")
     ratio = 1.0 + smooth / np.maximum(back, 1e-300)
@@ -136,6 +137,18 @@ def band_estimate(x_dps, sample_rate_hz, *, nperseg=8192, smooth_bins=15, fit=Tr
     return out
 
 
+def _running_median(s, width, count):
+    """The running median of ``s`` over ``width`` (odd) bins, ``s`` extended by its end bins, for
+    its first ``count`` bins: ``scipy.ndimage.median_filter(s, size=width, mode="nearest")[:count]``,
+    exactly (:func:`~gyrofilter.analysis.stats.window_medians`)."""
+    h = width // 2
+    if not np.isfinite(s).all():  # no order to keep: the filter's own
+        from scipy.ndimage import median_filter
+        return median_filter(s, size=width, mode="nearest")[:count]
+    padded = np.concatenate((np.full(h, s[0]), s, np.full(h, s[-1])))
+    return window_medians(padded, [(i, i + width) for i in range(count)])
+
+
 def _edge_background(s, half, edge_half):
     """Running median of ``s`` for its last ``half`` bins, whose ±``half`` window would pass the
     Nyquist bin: the window narrows to the bins left, ±max(d, ``edge_half``) at d bins from the
@@ -144,13 +157,16 @@ def _edge_background(s, half, edge_half):
     the mirrored part is at most ±``edge_half`` bins, so the bias of a spectrum that peaks at
     f_s / 2 (an AR(1) with negative lag1) is that of a median over ``edge_half`` bins."""
     top = s.size - 1
-    out = np.empty(half)
-    for j in range(top - half + 1, top + 1):
-        h = max(top - j, edge_half)
-        idx = np.arange(j - h, j + h + 1)
-        idx = np.abs(np.where(idx > top, 2 * top - idx, idx))  # mirrored about f_s / 2 (and 0 Hz)
-        out[j - (top - half + 1)] = np.median(s[idx])
-    return out
+    if half < 1:
+        return np.empty(0)
+    centres = np.arange(top - half + 1, top + 1)
+    h = np.maximum(top - centres, edge_half)
+    first = int(centres[0] - h[0])
+    idx = np.arange(first, top + edge_half + 1)
+    idx = np.abs(np.where(idx > top, 2 * top - idx, idx))  # mirrored about f_s / 2 (and 0 Hz)
+    if not np.isfinite(s).all():  # no order to keep: each window's median anew
+        return np.array([np.median(s[idx[c - w - first:c + w + 1 - first]]) for c, w in zip(centres, h)])
+    return window_medians(s[idx], list(zip((centres - h - first).tolist(), (centres + h + 1 - first).tolist())))
 
 
 def _resonator_fit(f, s, band, sample_rate_hz):

@@ -40,6 +40,7 @@ one hump, named ``resonance``.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -73,14 +74,29 @@ def _welch(x, sample_rate_hz):
     return f, s, n_seg
 
 
-def _unit_circle(f, sample_rate_hz):
-    """z = e^{-j2πf/f_s} at the frequencies ``f``: the fits evaluate their PSDs at the same bins
-    hundreds of times, so it is computed once per fit."""
-    return np.exp(-2j * math.pi * f / sample_rate_hz)
+class _Bins(NamedTuple):
+    """The bins a fit evaluates its PSDs at hundreds of times, and what the PSDs take from them
+    that no parameter changes, computed once per fit (:func:`_fit_bins`): the frequencies ``f``,
+    ``z = e^{-j2πf/f_s}``, ``cos_t = Re z``, ``z2 = z²``, ``ends = |1 - z²|²``, ``rise = 1 - z²``."""
+
+    f: np.ndarray
+    z: np.ndarray
+    cos_t: np.ndarray
+    z2: np.ndarray
+    ends: np.ndarray
+    rise: np.ndarray
 
 
-def _hump_psd(z, centre, q, rms, sample_rate_hz, jacobian=False):
-    """One-sided PSD of the resonance of rms ``rms`` at the bins ``z`` (:func:`_unit_circle`),
+def _fit_bins(f, sample_rate_hz):
+    """The :class:`_Bins` of the frequencies ``f``."""
+    z = np.exp(-2j * math.pi * f / sample_rate_hz)
+    z2 = z * z
+    rise = 1.0 - z2
+    return _Bins(f, z, np.ascontiguousarray(z.real), z2, np.abs(rise) ** 2, rise)
+
+
+def _hump_psd(bins, centre, q, rms, sample_rate_hz, jacobian=False):
+    """One-sided PSD of the resonance of rms ``rms`` at the :class:`_Bins` ``bins``,
     2 rms² |H|² / (f_s Σ h²) for the resonator :func:`gyrofilter.sim.resonance.band_pass`
     (b ∝ α (1, 0, -1), a ∝ (1 + α, -2 cos ω₀, 1 - α), α = sin ω₀ / (2Q), ω₀ = 2π f₀ / f_s) and its
     energy Σ h² = α / (1 + α) (:func:`~gyrofilter.sim.resonance.band_pass_energy`), which reduce to
@@ -88,36 +104,55 @@ def _hump_psd(z, centre, q, rms, sample_rate_hz, jacobian=False):
     With ``jacobian``: ``(S, dS/d(f₀, ln Q, ln rms))`` (N x 3), by the chain rule through α and
     ω₀ (dα/d ln Q = -α, dα/dω₀ = cos ω₀ / (2Q)), for the fit's least squares (a numerical
     Jacobian cost it seven PSDs an iteration)."""
+    parts = _hump_parts(bins, centre, q, rms, sample_rate_hz)
+    return _hump_jacobian(bins, q, sample_rate_hz, parts) if jacobian else parts[0]
+
+
+def _hump_parts(bins, centre, q, rms, sample_rate_hz):
+    """:func:`_hump_psd`'s ``S`` and what its Jacobian takes from the same step: ``(S, D, |D|², α,
+    ω₀, k = 2 rms² / f_s, g = α (1 + α))``."""
     w = 2.0 * math.pi * centre / sample_rate_hz
     alpha, cos_w = math.sin(w) / (2.0 * q), math.cos(w)
-    z2 = z * z
-    ends = np.abs(1.0 - z2) ** 2
-    d = (1.0 + alpha) - 2.0 * cos_w * z + (1.0 - alpha) * z2
+    d = (1.0 + alpha) - 2.0 * cos_w * bins.z + (1.0 - alpha) * bins.z2
     dd = d.real ** 2 + d.imag ** 2
     k = 2.0 * rms * rms / sample_rate_hz
     g = alpha * (1.0 + alpha)
-    psd = k * g * ends / dd
-    if not jacobian:
-        return psd
+    return k * g * bins.ends / dd, d, dd, alpha, w, k, g
+
+
+def _hump_jacobian(bins, q, sample_rate_hz, parts):
+    """``(S, dS/d(f₀, ln Q, ln rms))`` of :func:`_hump_psd` from its :func:`_hump_parts` ``parts``."""
+    psd, d, dd, alpha, w, k, g = parts
+    cos_w = math.cos(w)
     conj_d = np.conj(d)
-    d_alpha = k * ends * ((1.0 + 2.0 * alpha) - g * 2.0 * (conj_d * (1.0 - z2)).real / dd) / dd
-    d_w = -psd * 4.0 * math.sin(w) * (conj_d * z).real / dd
+    d_alpha = k * bins.ends * ((1.0 + 2.0 * alpha) - g * 2.0 * (conj_d * bins.rise).real / dd) / dd
+    d_w = -psd * 4.0 * math.sin(w) * (conj_d * bins.z).real / dd
     d_centre = (d_alpha * cos_w / (2.0 * q) + d_w) * (2.0 * math.pi / sample_rate_hz)
     return psd, np.column_stack([d_centre, -alpha * d_alpha, 2.0 * psd])
 
 
-def _null_psd(p, f, z, jacobian=False):
-    """The smooth null's PSD (module docstring) at the frequencies ``f``, ``z`` their :func:`_unit_circle`,
+def _null_psd(p, bins, jacobian=False):
+    """The smooth null's PSD (module docstring) at the :class:`_Bins` ``bins`` (frequencies ``f``),
     for ``p = (ln c, φ, μ, ln d)``: ``c A + d / f``, ``A = |1 + μ z|² / |1 - φ z|²`` with
     |1 + μ z|² = 1 + 2 μ cos θ + μ² and |1 - φ z|² = 1 - 2 φ cos θ + φ² on the unit circle
     (cos θ = Re z). With ``jacobian``: ``(S, dS/dp)`` (N x 4)."""
+    parts = _null_parts(p, bins)
+    return _null_jacobian(p, bins, parts) if jacobian else parts[0]
+
+
+def _null_parts(p, bins):
+    """:func:`_null_psd`'s ``S`` and what its Jacobian takes from the same step: ``(S, c, c A, |1 - φ z|², d / f)``."""
     c, phi, mu, d = math.exp(p[0]), p[1], p[2], math.exp(p[3])
-    cos_t = z.real
+    cos_t = bins.cos_t
     num, den = 1.0 + 2.0 * mu * cos_t + mu * mu, 1.0 - 2.0 * phi * cos_t + phi * phi
-    coloured, floor = c * num / den, d / f
-    psd = coloured + floor
-    if not jacobian:
-        return psd
+    coloured, floor = c * num / den, d / bins.f
+    return coloured + floor, c, coloured, den, floor
+
+
+def _null_jacobian(p, bins, parts):
+    """``(S, dS/dp)`` of :func:`_null_psd` from its :func:`_null_parts` ``parts``."""
+    psd, c, coloured, den, floor = parts
+    phi, mu, cos_t = p[1], p[2], bins.cos_t
     return psd, np.column_stack([coloured, coloured * 2.0 * (cos_t - phi) / den, c * 2.0 * (cos_t + mu) / den, floor])
 
 
@@ -142,7 +177,7 @@ def resonance_fit(x, sample_rate_hz, lines=()):
     fw, logs = f[sel], np.log(np.maximum(s[sel], 1e-300))
     known = sum((2.0 * filter_psd(*narrowband_filter(rms, centre, width, sample_rate_hz), fw, sample_rate_hz)
                  for centre, width, rms in lines), np.zeros(fw.size))
-    zw = _unit_circle(fw, sample_rate_hz)
+    bins = _fit_bins(fw, sample_rate_hz)
     level = float(np.median(s[sel]))
     p0 = np.array([math.log(level), 0.0, 0.0, math.log(level * 1e-3 * fw[0])])
     lo0, hi0 = [p0[0] - 10, -0.95, -0.95, p0[3] - 30], [p0[0] + 10, 0.95, 0.95, p0[3] + 10]
@@ -154,22 +189,33 @@ def resonance_fit(x, sample_rate_hz, lines=()):
         return d_psd * np.where(psd > 1e-300, 1.0 / np.maximum(psd, 1e-300), 0.0)[:, None]
 
     def null_resid(p):
-        return log_resid(_null_psd(p, fw, zw) + known)
+        return log_resid(_null_psd(p, bins) + known)
 
     def null_jac(p):
-        psd, d_psd = _null_psd(p, fw, zw, jacobian=True)
+        psd, d_psd = _null_psd(p, bins, jacobian=True)
         return log_jacobian(psd + known, d_psd)
 
     null = least_squares(null_resid, p0, jac=null_jac, bounds=(lo0, hi0), max_nfev=400)
     rss0 = float(np.sum(null.fun ** 2))
 
+    last = {}
+
+    def parts(p):  # least squares asks for the Jacobian at the point it evaluated last: its terms are kept
+        key = p.tobytes()
+        if last.get("key") != key:
+            last.update(key=key, null=_null_parts(p[:4], bins),
+                        hump=_hump_parts(bins, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz))
+        return last["null"], last["hump"]
+
     def psd_of(p):
-        return _null_psd(p[:4], fw, zw) + known + _hump_psd(zw, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz)
+        null, hump = parts(p)
+        return null[0] + known + hump[0]
 
     def jac(p):
-        null_psd, d_null = _null_psd(p[:4], fw, zw, jacobian=True)
-        hump, d_hump = _hump_psd(zw, p[4], math.exp(p[5]), math.exp(p[6]), sample_rate_hz, jacobian=True)
-        return log_jacobian(null_psd + known + hump, np.hstack([d_null, d_hump]))
+        null, hump = parts(p)
+        null_psd, d_null = _null_jacobian(p[:4], bins, null)
+        hump_psd, d_hump = _hump_jacobian(bins, math.exp(p[5]), sample_rate_hz, hump)
+        return log_jacobian(null_psd + known + hump_psd, np.hstack([d_null, d_hump]))
 
     sd0 = math.sqrt(level * nyq)  # the rms of a hump as high as the level over the band
     best = None
@@ -189,8 +235,8 @@ def resonance_fit(x, sample_rate_hz, lines=()):
     rss1 = float(np.sum(best.fun ** 2))
     dof = max(fw.size - 7, 1)
     centre, q, rms = float(best.x[4]), float(math.exp(best.x[5])), float(math.exp(best.x[6]))
-    at, z_at = np.array([centre]), _unit_circle(np.array([centre]), sample_rate_hz)
-    peak = _hump_psd(z_at, centre, q, rms, sample_rate_hz)[0] / _null_psd(best.x[:4], at, z_at)[0]
+    at = _fit_bins(np.array([centre]), sample_rate_hz)
+    peak = _hump_psd(at, centre, q, rms, sample_rate_hz)[0] / _null_psd(best.x[:4], at)[0]
     return {"center_hz": centre, "q": q, "rms_dps": rms, "statistic": (rss0 - rss1) / (rss1 / dof) if rss1 > 0 else 0.0,
             "peak_ratio": float(peak), "segments": int(n_seg)}
 

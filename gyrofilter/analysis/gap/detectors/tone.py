@@ -79,14 +79,16 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     res = sample_rate_hz / seg
     half = max(TONE_HALF_WIDTHS * bandwidth_hz, TONE_MIN_HALF_BINS * res)
     center_hz = min(max(center_hz, res), nyquist - res)  # a replicate's band past an edge: the band at it
+    xc = x - np.mean(x)
     for _ in range(TONE_WIDENINGS + 1):  # a band narrower than the track's excursions is widened
         lo, hi = max(center_hz - half, res), min(center_hz + half, nyquist - res)
-        track = median_filter(peak_track(x - np.mean(x), sample_rate_hz, seg, lo, hi), size=TONE_MEDIAN_FRAMES, mode="nearest")
+        track = median_filter(peak_track(xc, sample_rate_hz, seg, lo, hi), size=TONE_MEDIAN_FRAMES, mode="nearest")
         wide = TONE_TRACK_SDS * _robust_sd(track)
         if not wide > 1.05 * half:
             break
         center_hz, half = min(max(float(np.mean(track)), res), nyquist - res), wide
-    spec = np.fft.rfft(x - np.mean(x))
+    spec = np.fft.rfft(xc)
+    del xc
     f = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
     spec[(f < lo) | (f > hi)] = 0.0
     y = np.fft.irfft(spec, n)
@@ -94,11 +96,13 @@ def tone_estimate(x_dps, sample_rate_hz, center_hz, bandwidth_hz):
     fw, psd, _ = welch_psd(x, sample_rate_hz, seg)
     flank = ((fw >= lo - half) & (fw < lo) & (fw > 0)) | ((fw > hi) & (fw <= hi + half) & (fw < nyquist))
     level = float(np.median(psd[flank])) if flank.any() else 0.0
-    v = float(np.mean(y * y))
+    y2, y4 = y * y, y ** 4  # once: the record's moments and its blocks' are means of their slices
+    del y
+    v = float(np.mean(y2))
     share = min(max(1.0 - level * (hi - lo) / v, 0.0), 1.0) if v > 0 else 0.0
-    kurt = float(np.mean(y ** 4) / v ** 2 - 3.0) if v > 0 else 0.0
-    blocks = np.array_split(y, TONE_BLOCKS)
-    per = np.array([np.mean(b ** 4) / np.mean(b * b) ** 2 - 3.0 for b in blocks])
+    kurt = float(np.mean(y4) / v ** 2 - 3.0) if v > 0 else 0.0
+    per = np.array([np.mean(b4) / np.mean(b2) ** 2 - 3.0
+                    for b4, b2 in zip(np.array_split(y4, TONE_BLOCKS), np.array_split(y2, TONE_BLOCKS))])
     se = float(np.std(per, ddof=1) / math.sqrt(len(per)))
     dev = track - track.mean()
     wander_s, spread2 = _wander(dev, max(_robust_sd(track) ** 2 - 0.5 * _robust_sd(np.diff(track)) ** 2, 0.0),
