@@ -1,5 +1,6 @@
 """Evaluation harness (gyrofilter.evaluation.evaluate) and the evaluate command."""
 import dataclasses
+import gzip
 import math
 import re
 
@@ -266,3 +267,22 @@ def test_a_static_recording_shorter_than_the_calibration_window_is_named(tmp_pat
     with pytest.raises(SettingsError, match=re.escape(f"{path}: 150 samples (1.5 s) leave 0 filtered row(s)")):
         E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path),
                    profiles=[])
+
+
+
+@pytest.mark.parametrize("pattern, names", [("static", ("mpu6050_static_a.csv", "mpu6050_static_a.csv.gz")),
+                                            ("broad", ("broad_01.csv", "broad_01.csv.gz"))])
+def test_two_recordings_of_one_name_are_refused_naming_both(tmp_path, pattern, names):
+    """Attack pass 24: a.csv beside a.csv.gz (a copy unpacked, or another record so named) are
+    one name in evaluate's results (the file's stem): the second's results replaced the first's,
+    exit 0, the table's minimum and geometric mean over one of the two recordings listed."""
+    rows = "".join(f"{i / 100:.2f},{i % 3},{i % 5},{i % 2},1,2,3,{i % 2}\n" for i in range(30))
+    text = ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n# sensor: MPU6050\n"
+            "t,gx,gy,gz,ref_x,ref_y,ref_z,movement\n" + rows)
+    (tmp_path / names[0]).write_text(text)
+    with gzip.open(tmp_path / names[1], "wt") as fh:
+        fh.write(text)
+    find = D.find_static_recordings if pattern == "static" else D.find_broad_recordings
+    with pytest.raises(RecordingError, match=re.escape(f"{tmp_path / names[0]} and {tmp_path / names[1]}: "
+                                                       f"both named {names[0][:-4]!r}")):
+        find(str(tmp_path))
