@@ -11,7 +11,7 @@ from gyrofilter.evaluation import datasets as D
 from gyrofilter.evaluation import evaluate as E
 from gyrofilter.evaluation import filters as F
 from gyrofilter.evaluation import metrics as M
-from gyrofilter.errors import RecordingError
+from gyrofilter.errors import RecordingError, SettingsError
 from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.profiles import get_profile
 
@@ -139,6 +139,27 @@ def test_broad_metrics_against_reference(tmp_path):
     # a filter that ignores the motion has the motion's rms as error
     zero = F.FilterSpec("zero", "baseline", "", lambda x, fs, c: F.FilterOutput(np.zeros((len(x) - int(c * fs), 3)), 1, int(c * fs)))
     assert M.broad_metrics(zero, rec)["rmse_motion_dps"] > 30
+
+
+
+@pytest.mark.parametrize("case", ["no reference in motion", "no rest after the motion"])
+def test_a_broad_trial_without_motion_or_rest_to_score_is_refused(tmp_path, case):
+    """Attack pass 24: a trial whose optical reference is missing wherever it moves (ref_x, ref_y,
+    ref_z 0 and ref_valid 0), or that ends in motion (no rest after the calibration), had no block
+    to score: evaluate wrote 'nan' in evaluate_table.md and on the console, exit 0, and still
+    found filters that dominate paper001."""
+    fs = 200.0
+    t = np.arange(int(20 * fs)) / fs
+    move = ((t >= 5) & ((t < 15) if case == "no reference in motion" else True)).astype(float)
+    true = np.column_stack([np.sin(t), np.cos(t), t * 0]) * move[:, None]
+    gyro = true + np.random.default_rng(5).normal(scale=0.001, size=(len(t), 3))
+    valid = 1 - move if case == "no reference in motion" else np.ones(len(t))
+    rec = Recording(columns={"t": t, "gx": gyro[:, 0], "gy": gyro[:, 1], "gz": gyro[:, 2], "ref_x": true[:, 0] * valid,
+                             "ref_y": true[:, 1] * valid, "ref_z": true[:, 2] * valid, "ref_valid": valid, "movement": move},
+                    header={"sample_rate_hz": "200", "gyro_unit": "rad/s", "sensor": "synthetic"})
+    with pytest.raises(SettingsError, match="no block in motion with a complete optical reference"
+                       if case == "no reference in motion" else "no block at rest with a complete optical reference"):
+        M.broad_metrics(F.FilterSpec("raw", "baseline", "", F.run_raw), rec)
 
 
 def test_pareto_front_and_dominance_rules():
