@@ -4,6 +4,7 @@ files written under a temporary name that take their own name only when whole (:
 (:func:`remove_stale_partials`), and the writers of the JSON and text reports."""
 import contextlib
 import errno
+import hashlib
 import json
 import os
 import re
@@ -289,6 +290,8 @@ def output_folder(path):
 NAME_MAX_BYTES = 255
 #: the characters at the end of an output's name a shortened partial name keeps (its extension)
 _KEPT_END_CHARS = 16
+#: the hexadecimal digits of the whole name's digest in a shortened partial name
+_DIGEST_CHARS = 16
 
 
 def partial_path(path):
@@ -296,17 +299,19 @@ def partial_path(path):
     own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
     extension, by which writers choose the format, is kept. A NAME too long to take the prefix
     within :data:`NAME_MAX_BYTES` keeps its last characters and as much of its start as fits,
-    joined by ``~`` (a legal name of 240 bytes made every command fail after its work, naming
-    the partial). A process killed before the rename leaves it behind;
-    :func:`remove_stale_partials` removes it later."""
+    joined by ``~`` and a digest of the whole name (a legal name of 240 bytes made every command
+    fail after its work, naming the partial; without the digest two outputs whose names differ
+    only in the part left out shared one partial, and one of them took the other's text). A
+    process killed before the rename leaves it behind; :func:`remove_stale_partials` removes it later."""
     prefix = f"{_PARTIAL_PREFIX}{_OWNER}-"
     name = os.path.basename(path)
     room = NAME_MAX_BYTES - len(os.fsencode(prefix))
     if len(os.fsencode(name)) > room:
         head, end = name[:-_KEPT_END_CHARS], name[-_KEPT_END_CHARS:]
-        while head and len(os.fsencode(f"{head}~{end}")) > room:
+        digest = hashlib.sha256(os.fsencode(name)).hexdigest()[:_DIGEST_CHARS]
+        while head and len(os.fsencode(f"{head}~{digest}~{end}")) > room:
             head = head[:-1]
-        name = f"{head}~{end}"
+        name = f"{head}~{digest}~{end}"
     return os.path.join(output_folder(path), prefix + name)
 
 
