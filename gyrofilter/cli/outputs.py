@@ -25,7 +25,8 @@ def check_outputs(outputs, inputs=(), force=False):
     the inputs is refused even with ``force``, and so is a name ending in a path separator (a
     folder's, existing or not), and ``-`` (:func:`refuse_standard_output`); so is one that exists as anything but a regular
     file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
-    replaced. An output that exists is refused without ``force``; two outputs naming one file are
+    replaced; so is a name longer than the file systems take (:func:`long_name`: a fleet's report
+    named after a long recording name). An output that exists is refused without ``force``; two outputs naming one file are
     refused; so is one whose folder (the nearest that exists: the others are made) cannot be
     written, so that a long run does not end in a file it cannot write, and one whose missing
     folders would be made through a symbolic link that leads nowhere (``d -> nowhere``: ``d/x.csv``
@@ -40,6 +41,9 @@ def check_outputs(outputs, inputs=(), force=False):
             raise SettingsError(f"{out}: is a folder; give a file name for the output")
         if out.endswith(tuple(filter(None, (os.sep, os.altsep)))):
             raise SettingsError(f"{out}: ends in {out[-1]}, so it names a folder; give a file name for the output")
+        too_long = long_name(out)
+        if too_long:  # a name derived from an input's (a fleet's reports), the option's own checked already
+            raise SettingsError(f"{out}: {too_long}")
         key = _file_key(out)
         if key in inputs:
             raise SettingsError(f"{out}: is an input of this command; write the output to another file")
@@ -66,6 +70,14 @@ def check_outputs(outputs, inputs=(), force=False):
         if not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
         _replaceable.add(_identity(os.lstat(out)))
+
+
+def long_name(path):
+    """Why ``path`` cannot be made, when its last part is longer than the file systems take
+    (:data:`NAME_MAX_BYTES`), else None: said before any work, not after it."""
+    if len(os.fsencode(os.path.basename(os.fspath(path).rstrip("/")))) > NAME_MAX_BYTES:
+        return f"a name longer than {NAME_MAX_BYTES} bytes, more than a file system takes"
+    return None
 
 
 def refuse_standard_output(path, option=None):
