@@ -524,6 +524,22 @@ def test_an_output_below_a_symbolic_link_to_a_missing_place_is_refused_not_made(
     assert os.listdir(tmp_path) == ["d"]
 
 
+def test_two_long_names_that_differ_where_the_partial_cuts_have_two_partials(tmp_path, monkeypatch, capsys):
+    """Attack pass 24: two outputs of one command whose long names (240 bytes) differ only in the
+    middle that a partial's name leaves out shared one partial: `replay --out A --save-calibration B`
+    wrote both into it, B took it and A failed ("No such file or directory; not written"), exit 2
+    with B landed alone (had A been renamed first, it would have held B's text)."""
+    from gyrofilter.cli import main
+
+    names = [("a" * 222 + digit + "a" * 17 + ".csv") for digit in "12"]
+    assert outputs.partial_path(str(tmp_path / names[0])) != outputs.partial_path(str(tmp_path / names[1]))
+    monkeypatch.chdir(tmp_path)
+    write_recording("in.csv", Recording.from_dps(np.random.default_rng(1).normal(0, 0.05, (300, 3)), 100.0))
+    assert main(["replay", "in.csv", "--out", names[0], "--save-calibration", names[1]]) == 0
+    assert read_recording(tmp_path / names[0]).header["filtered_from"] == "in.csv"
+    assert json.loads((tmp_path / names[1]).read_text())["gyrofilter-calibration"] == 1
+
+
 @pytest.mark.parametrize("name", ["y" * 236 + ".csv.gz", "é" * 118 + ".json"])  # 243 and 241 bytes: legal names
 def test_a_long_legal_name_is_written_and_one_too_long_is_refused_before_any_work(tmp_path, capsys, name):
     """Issue 37 (attack 6): a legal output name of 240 bytes failed every command after its work

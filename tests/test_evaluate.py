@@ -1,5 +1,6 @@
 """Evaluation harness (gyrofilter.evaluation.evaluate) and the evaluate command."""
 import dataclasses
+import gzip
 import math
 import re
 
@@ -10,7 +11,7 @@ from gyrofilter.evaluation import datasets as D
 from gyrofilter.evaluation import evaluate as E
 from gyrofilter.evaluation import filters as F
 from gyrofilter.evaluation import metrics as M
-from gyrofilter.errors import RecordingError
+from gyrofilter.errors import RecordingError, SettingsError
 from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.profiles import get_profile
 
@@ -140,6 +141,27 @@ def test_broad_metrics_against_reference(tmp_path):
     assert M.broad_metrics(zero, rec)["rmse_motion_dps"] > 30
 
 
+
+@pytest.mark.parametrize("case", ["no reference in motion", "no rest after the motion"])
+def test_a_broad_trial_without_motion_or_rest_to_score_is_refused(tmp_path, case):
+    """Attack pass 24: a trial whose optical reference is missing wherever it moves (ref_x, ref_y,
+    ref_z 0 and ref_valid 0), or that ends in motion (no rest after the calibration), had no block
+    to score: evaluate wrote 'nan' in evaluate_table.md and on the console, exit 0, and still
+    found filters that dominate paper001."""
+    fs = 200.0
+    t = np.arange(int(20 * fs)) / fs
+    move = ((t >= 5) & ((t < 15) if case == "no reference in motion" else True)).astype(float)
+    true = np.column_stack([np.sin(t), np.cos(t), t * 0]) * move[:, None]
+    gyro = true + np.random.default_rng(5).normal(scale=0.001, size=(len(t), 3))
+    valid = 1 - move if case == "no reference in motion" else np.ones(len(t))
+    rec = Recording(columns={"t": t, "gx": gyro[:, 0], "gy": gyro[:, 1], "gz": gyro[:, 2], "ref_x": true[:, 0] * valid,
+                             "ref_y": true[:, 1] * valid, "ref_z": true[:, 2] * valid, "ref_valid": valid, "movement": move},
+                    header={"sample_rate_hz": "200", "gyro_unit": "rad/s", "sensor": "synthetic"})
+    with pytest.raises(SettingsError, match="no block in motion with a complete optical reference"
+                       if case == "no reference in motion" else "no block at rest with a complete optical reference"):
+        M.broad_metrics(F.FilterSpec("raw", "baseline", "", F.run_raw), rec)
+
+
 def test_pareto_front_and_dominance_rules():
     pts = [(1.0, 10.0), (2.0, 20.0), (2.0, 5.0), (0.5, 1.0), (3.0, 20.0)]
     assert E.pareto_front(pts) == [0, 1, 3]
@@ -266,3 +288,22 @@ def test_a_static_recording_shorter_than_the_calibration_window_is_named(tmp_pat
     with pytest.raises(SettingsError, match=re.escape(f"{path}: 150 samples (1.5 s) leave 0 filtered row(s)")):
         E.evaluate(filters=[f for f in F.default_filters() if f.name == "recommended preset"], recordings_dir=str(tmp_path),
                    profiles=[])
+
+
+
+@pytest.mark.parametrize("pattern, names", [("static", ("mpu6050_static_a.csv", "mpu6050_static_a.csv.gz")),
+                                            ("broad", ("broad_01.csv", "broad_01.csv.gz"))])
+def test_two_recordings_of_one_name_are_refused_naming_both(tmp_path, pattern, names):
+    """Attack pass 24: a.csv beside a.csv.gz (a copy unpacked, or another record so named) are
+    one name in evaluate's results (the file's stem): the second's results replaced the first's,
+    exit 0, the table's minimum and geometric mean over one of the two recordings listed."""
+    rows = "".join(f"{i / 100:.2f},{i % 3},{i % 5},{i % 2},1,2,3,{i % 2}\n" for i in range(30))
+    text = ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n# sensor: MPU6050\n"
+            "t,gx,gy,gz,ref_x,ref_y,ref_z,movement\n" + rows)
+    (tmp_path / names[0]).write_text(text)
+    with gzip.open(tmp_path / names[1], "wt") as fh:
+        fh.write(text)
+    find = D.find_static_recordings if pattern == "static" else D.find_broad_recordings
+    with pytest.raises(RecordingError, match=re.escape(f"{tmp_path / names[0]} and {tmp_path / names[1]}: "
+                                                       f"both named {names[0][:-4]!r}")):
+        find(str(tmp_path))

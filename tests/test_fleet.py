@@ -855,3 +855,16 @@ def test_a_unit_that_moved_and_stands_out_is_said_to_have_moved(tmp_path, capsys
     lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("  stands out: ")]
     assert lines and all(line.startswith("  stands out: unit5 x: ") for line in lines), lines
     assert all(line.endswith("; it moved: this describes the motion, not the sensor") for line in lines), lines
+
+
+def test_a_unit_whose_report_name_is_too_long_is_refused_before_any_work(tmp_path, capsys):
+    """Attack pass 24: a recording of a 246-byte name (legal) gave reports of 257 bytes: the fleet
+    analysed every unit, then ended in "File name too long; not written", exit 2, its folder and
+    every report gone. Refused before any work, naming the report."""
+    long = tmp_path / ("a" * 246 + ".csv")
+    write_recording(long, Recording.from_dps(np.random.default_rng(5).normal(0, 0.05, (500, 3)), 100.0))
+    out = tmp_path / "f"
+    assert main(["allan", str(long), str(long), "--fleet", str(out), "--jobs", "1"]) == 2
+    assert capsys.readouterr().err == (f"gyrofilter: error: {out / ('a' * 246 + '.allan.json')}: a name longer than "
+                                       "255 bytes, more than a file system takes\n")
+    assert not out.exists()

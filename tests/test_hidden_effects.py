@@ -6,7 +6,7 @@ import pytest
 
 from gyrofilter.effects import COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES
 from gyrofilter.errors import SettingsError
-from gyrofilter.recording import Recording
+from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.hidden_effects import hide_in_recording
 
 
@@ -40,3 +40,14 @@ def test_repeated_samples_parameters_the_model_refuses_are_refused(params):
     number, and no fraction ended in a KeyError."""
     with pytest.raises(SettingsError, match=r"model: repeated_samples"):
         hide_in_recording(record(), REPEATED_SAMPLES, "xyz", params)
+
+
+def test_a_six_axis_record_gives_a_recording_that_writes(tmp_path):
+    """Attack pass 24: a six-axis record's effect-added copy (gyro and temp only) kept the header's
+    accel_unit without its columns ax, ay, az: write_recording refused the recording it made."""
+    rng = np.random.default_rng(3)
+    rec = Recording.from_dps(rng.normal(0, 0.1, (300, 3)), 100.0, accel=rng.normal(0, 1, (300, 3)), accel_unit="lsb",
+                             lsb_per_g=16384, temp_c=np.full(300, 25.0))
+    out = hide_in_recording(rec, "sinusoid", "x", {"frequency_hz": 1.0, "amplitude_dps": 0.1})
+    write_recording(tmp_path / "hidden.csv", out)
+    assert "accel_unit" not in out.header and "lsb_per_g" not in out.header

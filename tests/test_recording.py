@@ -1224,3 +1224,21 @@ def test_read_recording_refuses_columns_to_keep_that_are_not_the_files(tmp_path,
     path = _dps_file(tmp_path, "".join(f"{k * 0.01!r},1,2,3\n" for k in range(20)))
     with pytest.raises(SettingsError, match=r"r.csv: the columns to keep must be distinct columns of the file \(t, gx, gy, gz\), got"):
         read_recording(path, columns=lambda names: keep)
+
+
+@pytest.mark.parametrize("cell, formats", [(True, ["%s"] * 3), ("1_000", ["%s"] * 3), ("\uff11\uff12", ["%s"] * 3),
+                                           (b"1", ["%s"] * 3), ("12", None)])
+def test_recording_writer_writes_text_cells_only_as_the_reader_reads_them(tmp_path, cell, formats):
+    """Attack pass 24: an object array's cells were checked by float(), which takes True, '1_000',
+    full-width digits and b'1': written as they are ('True', '1_000', ...), a file that does not
+    read; a text cell in an integral column without a format ended in a TypeError of '%d'."""
+    path = tmp_path / "rec.csv"
+    rows = np.array([[cell, 1, 2]] * 3, dtype=object)
+    with RecordingWriter(path, {"sample_rate_hz": "100", "gyro_unit": "dps"}, ["gx", "gy", "gz"], formats=formats) as writer:
+        if cell == "12":
+            writer.write(rows)
+        else:
+            with pytest.raises(RecordingError, match=r"rec.csv: the rows to write: row 1, column 'gx' holds .*, "
+                                                     r"not a number as a recording writes it \(none of them written\)"):
+                writer.write(rows)
+    assert read_recording(path).columns["gx"].tolist() == ([12.0] * 3 if cell == "12" else [])

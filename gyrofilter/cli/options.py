@@ -1,7 +1,6 @@
 """The argparse types of the commands' options (plain decimal numbers, whole numbers, file names)
 and the options several commands share: ``--sample-rate-hz``, ``--force``, a recording's ``--out``."""
 import argparse
-import os
 
 from ..errors import SettingsError
 from ..inputs import parse_number, quote
@@ -77,8 +76,9 @@ def file_name(text):
     before any work, not after it); the error names the option."""
     if not text.strip():
         raise argparse.ArgumentTypeError("an empty name; give a file or folder name")
-    if len(os.fsencode(os.path.basename(text.rstrip("/")))) > outputs.NAME_MAX_BYTES:
-        raise argparse.ArgumentTypeError(f"a name longer than {outputs.NAME_MAX_BYTES} bytes, more than a file system takes")
+    too_long = outputs.long_name(text)
+    if too_long:
+        raise argparse.ArgumentTypeError(too_long)
     return text
 
 

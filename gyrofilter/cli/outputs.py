@@ -4,6 +4,7 @@ files written under a temporary name that take their own name only when whole (:
 (:func:`remove_stale_partials`), and the writers of the JSON and text reports."""
 import contextlib
 import errno
+import hashlib
 import json
 import os
 import re
@@ -24,7 +25,8 @@ def check_outputs(outputs, inputs=(), force=False):
     the inputs is refused even with ``force``, and so is a name ending in a path separator (a
     folder's, existing or not), and ``-`` (:func:`refuse_standard_output`); so is one that exists as anything but a regular
     file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
-    replaced. An output that exists is refused without ``force``; two outputs naming one file are
+    replaced; so is a name longer than the file systems take (:func:`long_name`: a fleet's report
+    named after a long recording name). An output that exists is refused without ``force``; two outputs naming one file are
     refused; so is one whose folder (the nearest that exists: the others are made) cannot be
     written, so that a long run does not end in a file it cannot write, and one whose missing
     folders would be made through a symbolic link that leads nowhere (``d -> nowhere``: ``d/x.csv``
@@ -39,6 +41,9 @@ def check_outputs(outputs, inputs=(), force=False):
             raise SettingsError(f"{out}: is a folder; give a file name for the output")
         if out.endswith(tuple(filter(None, (os.sep, os.altsep)))):
             raise SettingsError(f"{out}: ends in {out[-1]}, so it names a folder; give a file name for the output")
+        too_long = long_name(out)
+        if too_long:  # a name derived from an input's (a fleet's reports), the option's own checked already
+            raise SettingsError(f"{out}: {too_long}")
         key = _file_key(out)
         if key in inputs:
             raise SettingsError(f"{out}: is an input of this command; write the output to another file")
@@ -65,6 +70,14 @@ def check_outputs(outputs, inputs=(), force=False):
         if not force:
             raise FileExistsError(17, "exists (use --force to overwrite)", out)
         _replaceable.add(_identity(os.lstat(out)))
+
+
+def long_name(path):
+    """Why ``path`` cannot be made, when its last part is longer than the file systems take
+    (:data:`NAME_MAX_BYTES`), else None: said before any work, not after it."""
+    if len(os.fsencode(os.path.basename(os.fspath(path).rstrip("/")))) > NAME_MAX_BYTES:
+        return f"a name longer than {NAME_MAX_BYTES} bytes, more than a file system takes"
+    return None
 
 
 def refuse_standard_output(path, option=None):
@@ -289,6 +302,8 @@ def output_folder(path):
 NAME_MAX_BYTES = 255
 #: the characters at the end of an output's name a shortened partial name keeps (its extension)
 _KEPT_END_CHARS = 16
+#: the hexadecimal digits of the whole name's digest in a shortened partial name
+_DIGEST_CHARS = 16
 
 
 def partial_path(path):
@@ -296,17 +311,19 @@ def partial_path(path):
     own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
     extension, by which writers choose the format, is kept. A NAME too long to take the prefix
     within :data:`NAME_MAX_BYTES` keeps its last characters and as much of its start as fits,
-    joined by ``~`` (a legal name of 240 bytes made every command fail after its work, naming
-    the partial). A process killed before the rename leaves it behind;
-    :func:`remove_stale_partials` removes it later."""
+    joined by ``~`` and a digest of the whole name (a legal name of 240 bytes made every command
+    fail after its work, naming the partial; without the digest two outputs whose names differ
+    only in the part left out shared one partial, and one of them took the other's text). A
+    process killed before the rename leaves it behind; :func:`remove_stale_partials` removes it later."""
     prefix = f"{_PARTIAL_PREFIX}{_OWNER}-"
     name = os.path.basename(path)
     room = NAME_MAX_BYTES - len(os.fsencode(prefix))
     if len(os.fsencode(name)) > room:
         head, end = name[:-_KEPT_END_CHARS], name[-_KEPT_END_CHARS:]
-        while head and len(os.fsencode(f"{head}~{end}")) > room:
+        digest = hashlib.sha256(os.fsencode(name)).hexdigest()[:_DIGEST_CHARS]
+        while head and len(os.fsencode(f"{head}~{digest}~{end}")) > room:
             head = head[:-1]
-        name = f"{head}~{end}"
+        name = f"{head}~{digest}~{end}"
     return os.path.join(output_folder(path), prefix + name)
 
 

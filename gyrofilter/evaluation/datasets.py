@@ -79,8 +79,17 @@ def find_broad_recordings(recordings_dir):
 
 def _files(folder, pattern):
     """The files of ``folder`` whose names match ``pattern``, sorted: the folder's name taken as it is
-    (``glob.escape``: ``rec[1]`` is no pattern that matches the folder ``rec1``)."""
-    return sorted(glob.glob(os.path.join(glob.escape(folder), pattern)))
+    (``glob.escape``: ``rec[1]`` is no pattern that matches the folder ``rec1``). RecordingError
+    naming two of one :func:`stem` (``a.csv`` and ``a.csv.gz``): the results know a recording by
+    its stem, so the second's replaced the first's."""
+    paths = sorted(glob.glob(os.path.join(glob.escape(folder), pattern)))
+    seen = {}
+    for path in paths:
+        other = seen.setdefault(stem(path), path)
+        if other != path:
+            raise RecordingError(f"{other} and {path}: both named {quote(stem(path))} in the results; "
+                                 "move one of them out of the recordings folder")
+    return paths
 
 
 def noise_segments(static_recs, duration_s=NOISE_SEGMENT_S, names=None):

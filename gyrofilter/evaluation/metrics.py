@@ -191,7 +191,9 @@ def broad_metrics(spec, rec):
     motion, rest, all valid blocks.
 
     motion: blocks entirely flagged as movement; rest: blocks entirely at rest and more than
-    REST_GUARD_S from a flag change; all: every block with a complete reference.
+    REST_GUARD_S from a flag change; all: every block with a complete reference. SettingsError
+    (which evaluate names the file in) for a trial with no block in motion or none at rest to
+    score: its RMSE there would be NaN, 'nan' in the table.
     """
     sample_rate_hz = rec.sample_rate_hz
     cal_s = broad_calibration_s(rec)
@@ -206,6 +208,12 @@ def broad_metrics(spec, rec):
     rest_b = block_mean_masked(rest_s, out.block_len, start=out.start, n_blocks=m) == 1
     valid = np.isfinite(ref_b).all(axis=1)
     err = out.y_dps - ref_b
+    if not (valid & (move_b == 1)).any():
+        raise SettingsError("no block in motion with a complete optical reference (ref_x, ref_y, ref_z) after the "
+                            "calibration: nothing to score the filters on in motion")
+    if not (valid & rest_b).any():
+        raise SettingsError(f"no block at rest with a complete optical reference after the calibration, {REST_GUARD_S:g} s "
+                            "or more from a change of the movement flag: nothing to score the filters on at rest")
     res = {}
     for key, sel in (("motion", valid & (move_b == 1)), ("rest", valid & rest_b), ("all", valid)):
         res[f"rmse_{key}_dps"] = float(np.sqrt(np.mean(err[sel] ** 2))) if sel.any() else float("nan")

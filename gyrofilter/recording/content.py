@@ -14,7 +14,8 @@ import numpy as np
 from ..errors import RecordingError
 from ..inputs import number_array
 from ..units import from_dps, to_dps, to_mps2
-from .header import ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY, VERSION_KEY, accel_units_header, dps_header, format_number
+from .header import (ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY, VERSION_KEY, accel_header, accel_units_header,
+                     dps_header, format_number)
 
 
 class _HeaderFacts:
@@ -175,12 +176,15 @@ class Recording(_HeaderFacts):
         in deg/s, at ``sample_rate_hz`` (Hz); optional ``t_s`` (N,) times (s), ``temp_c`` (N,)
         temperatures (deg C), ``accel`` (N, 3) accelerometer columns ``ax, ay, az`` in ``accel_unit``
         (``m/s^2``, ``g``, or ``lsb`` with ``lsb_per_g``: header keys), ``extra`` further columns
-        (name -> (N,) array) and ``header`` keys."""
+        (name -> (N,) array) and ``header`` keys; the accelerometer's unit keys come from ``accel_unit``
+        and ``lsb_per_g`` only (a source's header gave ``accel_unit`` to a copy without ``ax, ay, az``,
+        which the writer refused)."""
         gyro_dps = _numbers(gyro_dps, "gyro_dps")
         if gyro_dps.ndim != 2 or gyro_dps.shape[1] != 3:
             raise RecordingError(f"gyro_dps must have shape (N, 3), got {gyro_dps.shape}")
         head = {VERSION_KEY: FORMAT_VERSION}
-        head.update(dps_header(header or {}, sample_rate_hz))
+        head.update(dps_header({k: v for k, v in (header or {}).items() if k not in accel_header(header or {})},
+                               sample_rate_hz))
         head.update(accel_units_header(accel_unit, lsb_per_g))
         columns = {}
         if t_s is not None:

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..closable import Closable
 from ..errors import RecordingError
-from ..inputs import number_array, quote
+from ..inputs import is_plain_number, number_array, quote
 from .checks import TimeCheck, check_rates
 from .content import Recording, RecordingHead
 from .header import header_text, note_line
@@ -64,17 +64,35 @@ def _check_finite(rows, columns, where):
                              f"{float(rows[row, col])!r}; a recording holds finite numbers only (those rows not written)")
 
 
-def _rows_of_numbers(rows, where):
+def _rows_of_numbers(rows, where, columns):
     """``rows`` for :meth:`RecordingWriter.write` as an array: an object array (text cells) as
-    it is, anything else as numbers (:func:`gyrofilter.inputs.number_array`), or RecordingError:
-    a masked value (converting would drop the mask and write the number behind it as a sample),
-    complex numbers (their imaginary part dropped), booleans or strings."""
+    it is, once each cell is a number as the file will hold it (:func:`_written_as_read`),
+    anything else as numbers (:func:`gyrofilter.inputs.number_array`), or RecordingError naming
+    the first cell that is not (its row, its column of ``columns``): a masked value (converting
+    would drop the mask and write the number behind it as a sample), complex numbers (their
+    imaginary part dropped), booleans or strings."""
     if isinstance(rows, np.ndarray) and rows.dtype == object:
+        for (row, col), cell in np.ndenumerate(rows if rows.ndim == 2 else rows.reshape(-1, 1)):
+            if not _written_as_read(cell):
+                name = quote(columns[col]) if rows.ndim == 2 and col < len(columns) else str(col + 1)
+                shown = quote(cell if isinstance(cell, str) else repr(cell))
+                raise RecordingError(f"{where}: the rows to write: row {row + 1}, column {name} holds {shown}, "
+                                     "not a number as a recording writes it (none of them written)")
         return rows
     values, problem = number_array(rows, f"{where}: the rows to write:", first_row=1)
     if problem is not None:
         raise RecordingError(f"{problem[0]} (none of them written)")
     return values
+
+
+def _written_as_read(cell):
+    """Whether the object-array ``cell`` is written as a number the reader reads: an int or a float
+    (numpy's too, not a boolean), or text in plain decimal syntax with no blank around it
+    (:func:`gyrofilter.inputs.is_plain_number`). ``float()`` takes more (``True``, ``'1_000'``,
+    full-width digits, ``b'1'``), which the writer wrote as they are, in a file that did not read."""
+    if isinstance(cell, str):
+        return cell == cell.strip() and is_plain_number(cell)
+    return type(cell) in (int, float) or isinstance(cell, (np.integer, np.floating))
 
 
 class RecordingWriter(Closable):
@@ -171,8 +189,9 @@ class RecordingWriter(Closable):
     def write(self, rows):
         """Append rows, shape (n, number of columns), in the columns' order; RecordingError (and
         none of them written) when one holds NaN or +-inf. The cells of an object array (text a
-        converter formatted itself, say) go through their formats as they are, once checked as numbers."""
-        rows = _rows_of_numbers(rows, self.name)
+        converter formatted itself, say) go through their formats as they are (``%s`` where a column has
+        none), once checked as numbers the reader reads (:func:`_written_as_read`)."""
+        rows = _rows_of_numbers(rows, self.name, self.columns)
         if rows.size == 0:
             return
         if rows.ndim != 2 or rows.shape[1] != len(self.columns):
@@ -185,7 +204,8 @@ class RecordingWriter(Closable):
         check_rates(values, self._head, lambda row: f"row {row + 1} of the rows to write")
         if self._times is not None:
             self._times.add(self._head.column(values, "t"), lambda row: f"row {self.rows_written + row + 1} of the output")
-        fmt = ",".join(f if f is not None else exact_format(values[:, i]) for i, f in enumerate(self._formats)) + "\n"
+        fmt = ",".join(f if f is not None else EXACT_FORMAT if rows.dtype == object else exact_format(values[:, i])
+                       for i, f in enumerate(self._formats)) + "\n"
         self._emit("".join(fmt % tuple(r) for r in (rows if rows.dtype == object else values).tolist()))
         self.rows_written += len(rows)
         if self._flush_interval_s is not None and time.monotonic() - self._last_flush >= self._flush_interval_s:

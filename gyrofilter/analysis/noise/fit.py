@@ -43,7 +43,7 @@ from .intervals import fitted_intervals
 from .model import TERM_ALPHA, TERMS, AxisNoise, basis, sensor_terms, term_shares
 from .readoff import read_off
 from ...errors import SettingsError
-from ...units import AXES, MIN_NOISE_DPS, plain
+from ...units import AXES, MIN_NOISE_DPS, check_axes, plain
 
 
 def nnls_weighted(a, y, w, allowed=None):
@@ -228,9 +228,13 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
 def characterise(gyro_dps, sample_rate_hz, *, axes=AXES, **kwargs):
     """:func:`characterise_axis` for each column of ``gyro_dps`` (shape (N, 3), deg/s) at
     ``sample_rate_hz`` (Hz) named in ``axes`` (a subset of :data:`~gyrofilter.units.AXES`); ``kwargs`` go to
-    :func:`characterise_axis`; returns {axis name: AxisNoise}."""
-    if len(set(axes)) != len(axes) or not set(axes) <= set(AXES):  # a repeated name kept one column of two
-        raise AllanInputError(f"axes must be distinct names of {', '.join(AXES)}, got {plain(tuple(axes))}")
+    :func:`characterise_axis`; returns {axis name: AxisNoise}. ``axes`` in order, checked by
+    :func:`~gyrofilter.units.check_axes` (a repeated name kept one column of two; a set named the
+    columns in its hash order), else AllanInputError."""
+    try:
+        axes = check_axes(axes)
+    except SettingsError as exc:
+        raise AllanInputError(str(exc)) from None
     g = rate_numbers(gyro_dps, "gyro_dps")
     if g.ndim != 2 or g.shape[1] != len(axes):
         got = g.shape if g.ndim else "a scalar"
