@@ -14,9 +14,6 @@ from ..units import GYRO_UNIT_SPELLINGS, GYRO_UNITS
 from . import console, options, outputs
 
 
-#: other spellings of a unit that --unit takes (the recording format's name is dps)
-
-
 def add_arguments(parser):
     parser.add_argument("input", metavar="IN", help="the log: CSV or blank-separated text (gzip too), time and gyro "
                                                     "columns; - reads the standard input (a pipe is read twice from a "

@@ -120,13 +120,12 @@ class Recording(_HeaderFacts):
         :func:`~gyrofilter.recording.write_recording` would write it), so are complex numbers,
         booleans, strings and objects (:func:`gyrofilter.inputs.number_array`). The reader's
         columns (int or float arrays) are kept as they are, float32 of ``compact`` too."""
-        columns = {}
-        for name, values in self.columns.items():
-            plain = type(values) is np.ndarray and values.dtype.kind in "iuf"
-            values = columns[name] = values if plain else _numbers(values, f"column {name!r}")
+        columns = {name: values if type(values) is np.ndarray and values.dtype.kind in "iuf"
+                   else _numbers(values, f"column {name!r}") for name, values in self.columns.items()}
+        first = next(iter(columns), None)
+        for name, values in columns.items():
             if values.ndim != 1:
                 raise RecordingError(f"column {name!r} must hold one number per row, shape (N,), got shape {values.shape}")
-            first = next(iter(columns))
             if len(values) != len(columns[first]):
                 raise RecordingError(f"column {name!r} has {len(values)} values, column {first!r} has {len(columns[first])}")
         self.columns = columns

@@ -274,9 +274,10 @@ def refuse_invisible(name, what, where):
 def check_columns(names, where):
     """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
     lack ``gx, gy, gz``, look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
-    case: ``T`` too) or like a temperature not named ``temp`` (:data:`TEMPERATURE_LIKE_NAMES`) or hold an invisible character (a control or format character, Unicode
-    categories Cc, Cf, Zl, Zp: a byte-order mark of a file joined on after the header made
-    ``\ufefft`` an extra column, its times ignored); ``where`` is the file and line."""
+    case: ``T`` too) or like a temperature not named ``temp`` (:data:`TEMPERATURE_LIKE_NAMES`),
+    or hold an invisible character (:func:`refuse_invisible`: a byte-order mark of a file joined
+    on after the header made ``\ufefft`` an extra column, its times ignored); ``where`` is the
+    file and line."""
     if any(not n for n in names):
         raise RecordingError(f"{where}: empty column name in {quote(','.join(names))}")
     for n in names:
