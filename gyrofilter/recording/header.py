@@ -69,6 +69,14 @@ def filtered_from(header):
     and the fleet write no imu.yaml of it, and its accelerometer is one raw sample per row
     (``analysis.still.decimated_accelerometer``). The one test of it; ``is not None`` is the predicate."""
     return header.get(FILTERED_FROM_KEY)
+
+
+def filtered_words(header):
+    """The words that say a recording with ``header`` is the filter's output, for every command's
+    refusal or warning of one: ``"the filter's output (filtered_from 'SOURCE'), not the sensor's
+    samples"``, or None for a sensor's samples (:func:`filtered_from`)."""
+    source = filtered_from(header)
+    return None if source is None else f"the filter's output (filtered_from {quote(source)}), not the sensor's samples"
 #: header keys gyrofilter writes to say where a recording's samples came from and what was done
 #: to them (docs/formats.md, section 1): a live device's header does not give them (the serial
 #: source drops them with a note), or a raw recording could say it is a filtered one
