@@ -114,7 +114,7 @@ class FilterSettings:
 
     On qr_window: paper 001 computes Q and R over the last 10 blocks. A long window (0, all; or
     hundreds of blocks) keeps Q at its value at rest, so the LS prediction is trusted far past a
-    turn's onset: with ``preset="paper"`` (the guard off) a 30 deg/s step overshot to 340 deg/s
+    turn's onset: with ``preset="paper"`` (the guard off) a 30 deg/s step overshot by 310 deg/s
     before it settled (10 blocks: at most the step itself, a lag of a few blocks). The guard
     (``guard_blocks``) re-seeds such a filter; the default preset does not need it.
 
