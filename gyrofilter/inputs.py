@@ -159,7 +159,9 @@ def check_number(value, what, *, low=None, high=None, low_open=False, high_open=
     """``value`` (from JSON or Python code) as a float (an int when ``integer``), or ``error`` whose
     message names ``what``: a bool, a string, None, NaN, +-inf, an int beyond a float's range, a
     fraction where ``integer`` is asked for, or a value outside [low, high] (open ends with
-    ``low_open``/``high_open``) is refused. An int stays that int (exact beyond 2**53: a seed)."""
+    ``low_open``/``high_open``) is refused. An int stays that int (exact beyond 2**53: a seed). A
+    0-d array is the number it holds (:func:`scalar`)."""
+    value = scalar(value)
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     number = math.nan
     if ok:
@@ -181,6 +183,14 @@ def check_number(value, what, *, low=None, high=None, low_open=False, high_open=
     if below or above:
         raise error(f"{what} must be {_bounds_text(low, high, low_open, high_open)}, got {_short(value)}")
     return number
+
+
+def scalar(value):
+    """The number a 0-d numpy array of numbers holds (``np.array(25.0)``, what ``x[()]`` or a
+    reduction with ``keepdims`` gives: numpy's scalars in all but type), else ``value`` as it is."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        return value[()]
+    return value
 
 
 def _short(value):

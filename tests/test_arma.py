@@ -240,9 +240,9 @@ def test_bias_model_recovers_gauss_markov_plus_white():
 
 def test_block_averaging_of_long_series_is_reported():
     x = np.arange(1_000, dtype=float)
-    series, k, rate, mean = arma.prepare_series(x, 100.0, max_samples=300)
-    assert k == 4 and rate == 25.0 and len(series) == 250
-    assert series[0] + mean == pytest.approx(1.5)  # mean of 0..3
+    series, k, rate, mean = arma.prepare_series(x, 100.0, max_samples=400)
+    assert k == 3 and rate == pytest.approx(100 / 3) and len(series) == 333
+    assert series[0] + mean == pytest.approx(1.0)  # mean of 0..2
     assert np.mean(series) == pytest.approx(0.0, abs=1e-9)
 
 

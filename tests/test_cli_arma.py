@@ -1,4 +1,7 @@
 """`gyrofilter arma`: the JSON document, one-line errors naming the options, the window by t, warnings."""
+import json
+import os
+
 import numpy as np
 import pytest
 from support import RECORDINGS
@@ -43,7 +46,9 @@ def test_cli_writes_json_and_reports_bad_input(tmp_path, capsys):
     (["--start-s", "0.2", "--end-s", "1.2"], "--start-s 0.2 and --end-s 1.2 leave 100 of the 150 samples"),
     (["--start-s", "1", "--end-s", "1"], "--end-s 1 must be after --start-s 1"),
     (["--max-n", "0"], "--max-n must be at least 1, got 0"),
-    (["--max-samples", "50"], "--max-samples must be at least 100, got 50"),
+    (["--max-samples", "50"], "--max-samples must be at least 400 (block means of a longer series are more than half "
+                              "of it, and the analysis needs 200), got 50"),
+    (["--max-samples", "150"], "--max-samples must be at least 400"),
 ])
 def test_cli_errors_name_the_options_the_user_gave(tmp_path, capsys, options, expected):
     from gyrofilter.cli import main
@@ -170,3 +175,21 @@ def _static_recording(tmp_path, n, name="static.csv"):
     path = tmp_path / name
     write_recording(path, Recording.from_dps(rng.normal(0.5, 0.1, (n, 3)), 100.0))
     return str(path)
+
+
+def test_the_filters_output_is_analysed_saying_whose_noise_the_model_describes(tmp_path, capsys):
+    """Attack pass 24's note: `arma` on `replay --out`'s output (bias-removed block means) modelled it
+    as a sensor's bias noise without a word; it says so on stderr and in the JSON's warnings."""
+    from gyrofilter.cli import main
+
+    raw = _static_recording(tmp_path, 3000)
+    filtered, out = str(tmp_path / "filtered.csv"), tmp_path / "arma.json"
+    assert main(["replay", raw, "--out", filtered]) == 0
+    for path, expected in ((raw, []), (filtered, ["filtered.csv: is the filter's output (filtered_from "])):
+        capsys.readouterr()
+        assert main(["arma", path, "--axis", "x", "--json", str(out), "--force"]) == 0
+        err = " ".join(capsys.readouterr().err.split())  # the console folds long lines
+        warnings = json.loads(out.read_text())["warnings"]
+        assert [w[w.index(os.path.basename(path)):][:len(e)] for w in warnings for e in expected] == expected
+        assert all(w.endswith("this one describes the filter's output") for w in warnings)
+        assert err.count("this one describes the filter's output") == len(expected)

@@ -582,7 +582,7 @@ def test_replaying_a_filtered_output_is_refused_naming_where_it_came_from(tmp_pa
     assert main(["replay", str(filtered), "--out", str(out), *options]) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err == (
-        f"gyrofilter: error: {filtered} is a filtered output of gyrofilter (filtered_from: '{src}'), not a sensor's "
+        f"gyrofilter: error: {filtered} is the filter's output (filtered_from '{src}'), not the sensor's "
         "samples; filter the raw recording it came from\n")
     assert not out.exists()
     assert main(["allan", str(filtered)]) == 0

@@ -560,7 +560,7 @@ def test_run_refuses_to_filter_a_filtered_output_and_its_own_output_says_it_is_o
         assert main(argv) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "Traceback" not in err, err
-        assert f"{filtered} is a filtered output of gyrofilter (filtered_from: '{still}')" in err
+        assert f"{filtered} is the filter's output (filtered_from '{still}'), not the sensor's samples; filter the raw recording" in err
         assert "filter the raw recording it came from" in err and not out.exists()
 
 

@@ -226,7 +226,7 @@ def test_a_filtered_output_in_the_recordings_folder_is_refused_naming_it(tmp_pat
     path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# filtered_from: mpu6050_static_a.csv\n"
                     "# input_sample_rate_hz: 100\n# sample_rate_hz: 20\n# gyro_unit: dps\nt,gx,gy,gz\n"
                     + "".join(f"{i / 20:.2f},0.001,0.002,0.003\n" for i in range(40)))
-    with pytest.raises(RecordingError, match=re.escape(f"{path}: is a filtered output (filtered_from 'mpu6050_static_a.csv')")):
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: is the filter's output (filtered_from 'mpu6050_static_a.csv'), not the sensor's samples that evaluate")):
         D.find_static_recordings(str(tmp_path))
 
 

@@ -21,7 +21,7 @@ from hypothesis import given, settings, strategies as st
 from gyrofilter.analysis import stats
 from gyrofilter.analysis.gap import detectors as det
 from gyrofilter.analysis.gap import report as gap_report
-from gyrofilter.analysis.gap.pipeline import analyse_gap
+from gyrofilter.analysis.gap.pipeline import analyse_file, analyse_gap
 from gyrofilter.analysis.gap.features import D_FAR, d_shown, departures, discrepancy
 from gyrofilter.cli import main
 from gyrofilter.recording import Recording, read_recording, write_recording
@@ -1187,3 +1187,16 @@ def test_a_short_records_note_says_how_short_in_numbers_that_are_not_zero():
     (note,) = [n for n in analyse_gap(rec, n_sims=3, bootstrap=0)["notes"] if "slow bias effects" in n]
     assert note == ("record of 4 s: too short to tell slow bias effects (drift, random walk, bias instability) from "
                     "white noise at any tau (beyond 0.4 s)")
+
+
+def test_the_gap_analysis_of_the_filters_output_says_whose_noise_its_findings_describe(tmp_path):
+    """Attack pass 24's note: `gap` (and the fleet, through the one path) analysed `replay --out`'s
+    output, bias-removed block means, as a sensor's samples without a word; its first note says so."""
+    raw, filtered = tmp_path / "raw.csv", str(tmp_path / "filtered.csv")
+    write_recording(str(raw), Recording.from_dps(np.random.default_rng(3).normal(0.2, 0.1, (3000, 3)), 100.0))
+    assert main(["replay", str(raw), "--out", filtered]) == 0
+    for path, expected in ((str(raw), False), (filtered, True)):
+        _, report = analyse_file(path, n_sims=10, bootstrap=0, warn=lambda text: None)
+        said = [note for note in report["notes"] if "filter's output" in note]
+        assert said == ([report["notes"][0]] if expected else [])
+        assert not expected or said[0].startswith("the recording is the filter's output (filtered_from ")

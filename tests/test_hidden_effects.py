@@ -44,10 +44,38 @@ def test_repeated_samples_parameters_the_model_refuses_are_refused(params):
 
 def test_a_six_axis_record_gives_a_recording_that_writes(tmp_path):
     """Attack pass 24: a six-axis record's effect-added copy (gyro and temp only) kept the header's
-    accel_unit without its columns ax, ay, az: write_recording refused the recording it made."""
+    accel_unit without its columns ax, ay, az: write_recording refused the recording it made. The
+    copy keeps the accelerometer now, with its unit keys (pass 24's note)."""
     rng = np.random.default_rng(3)
     rec = Recording.from_dps(rng.normal(0, 0.1, (300, 3)), 100.0, accel=rng.normal(0, 1, (300, 3)), accel_unit="lsb",
                              lsb_per_g=16384, temp_c=np.full(300, 25.0))
     out = hide_in_recording(rec, "sinusoid", "x", {"frequency_hz": 1.0, "amplitude_dps": 0.1})
     write_recording(tmp_path / "hidden.csv", out)
-    assert "accel_unit" not in out.header and "lsb_per_g" not in out.header
+    assert out.accel_unit == "lsb" and out.lsb_per_g == 16384 and np.array_equal(out.accel_mps2, rec.accel_mps2)
+
+
+@pytest.mark.parametrize("effect, axis, params", [("sinusoid", "y", {"amplitude_dps": 0.1, "frequency_hz": 3.0}),
+                                                  (HEAVY_TAILS, "z", {"fraction": 0.05, "scale_ratio": 4.0}),
+                                                  (REPEATED_SAMPLES, None, {"fraction": 0.2})])
+def test_the_other_columns_and_notes_are_kept(tmp_path, effect, axis, params):
+    """Attack pass 24's note: hide_in_recording dropped `t`, the accelerometer and any other column
+    (and the notes); they are kept, repeated with the rates where whole rows are repeated, `t` and a
+    counter as they were (the logger's clock goes on), and the result writes."""
+    rng = np.random.default_rng(5)
+    n = 1500
+    accel = rng.normal(0, 1, (n, 3)) + [0, 0, 9.8]
+    rec = Recording.from_dps(rng.normal(0, 0.1, (n, 3)), 100.0, t_s=np.arange(n) / 100 + 7, temp_c=np.linspace(25, 26, n),
+                             accel=accel, accel_unit="m/s^2", extra={"count": np.arange(n, dtype=float)})
+    rec.notes = [("line", "moved the cable")]
+    out = hide_in_recording(rec, effect, axis, params, seed=2)
+    assert list(out.columns) == ["t", "gx", "gy", "gz", "temp", "ax", "ay", "az", "count"]
+    assert out.header["accel_unit"] == "m/s^2" and [n[1] for n in out.notes] == ["moved the cable"]
+    assert np.array_equal(out.columns["t"], rec.columns["t"]) and np.array_equal(out.columns["count"], rec.columns["count"])
+    held = out.accel_mps2
+    if effect == REPEATED_SAMPLES:
+        repeated = np.flatnonzero(np.all(np.diff(out.gyro_dps, axis=0) == 0, axis=1)) + 1
+        assert repeated.size > 0.1 * n and np.array_equal(held[repeated], held[repeated - 1])
+        assert np.array_equal(out.temp_c[repeated], out.temp_c[repeated - 1])
+    else:
+        assert np.array_equal(held, accel) and np.array_equal(out.temp_c, rec.temp_c)
+    write_recording(tmp_path / "out.csv", out)

@@ -334,3 +334,33 @@ def test_a_json_fifo_nobody_writes_to_is_refused_and_one_written_is_read(tmp_pat
     writer.start()
     assert load_json(fifo, "model") == {"a": [1, 2.5]}
     writer.join()
+
+
+def test_api_refusals_of_passes_23_and_24_now_take_what_is_right_and_name_what_is_not(tmp_path):
+    """Passes 23 and 24's notes: `iter_recording(chunk_rows=np.int64(7))` was refused as "not a whole
+    number >= 1" (and True taken as 1); `update(temp_c=np.array(25.0))` as "not a finite number";
+    `parse_source(b"sim")` as an "empty source"; `read_foreign(columns=[1, 2, 3])` a TypeError."""
+    from gyrofilter import GyroFilter
+    from gyrofilter.errors import RecordingError
+    from gyrofilter.recording import Recording, iter_recording, write_recording
+    from gyrofilter.recording.foreign import read_foreign
+    from gyrofilter.sources import parse_source
+
+    path = tmp_path / "r.csv"
+    write_recording(path, Recording.from_dps(np.zeros((20, 3)), 100.0))
+    sizes = [len(chunk) for chunk in list(iter_recording(path, chunk_rows=np.int64(7)))[1:]]
+    assert sum(sizes) == 20 and max(sizes) == 7
+    with pytest.raises(SettingsError, match="chunk_rows must be a finite number \\(a whole number\\), got True"):
+        next(iter_recording(path, chunk_rows=True))
+    zero_d, plain = GyroFilter(sample_rate_hz=100.0), GyroFilter(sample_rate_hz=100.0)
+    rates = np.random.default_rng(1).normal(0.5, 0.1, (800, 3))
+    out = [(zero_d.update(r, temp_c=np.array(25.0 + i / 100)), plain.update(r, temp_c=25.0 + i / 100)) for i, r in enumerate(rates)]
+    assert sum(a is not None for a, _ in out) > 100 and all(np.array_equal(a, b) for a, b in out if a is not None)
+    with pytest.raises(SettingsError, match="a source is text .*, got bytes$"):
+        parse_source(b"sim")
+    foreign = tmp_path / "log.csv"
+    foreign.write_text("time_ms,wx,wy,wz\n" + "".join(f"{10 * i},{i},2,3\n" for i in range(50)))
+    assert read_foreign(foreign, columns=[1, 2, 3, 4], unit="dps").columns == read_foreign(
+        foreign, columns=["1", "2", "3", "4"], unit="dps").columns
+    with pytest.raises(RecordingError, match="got the text 'wx'"):
+        read_foreign(foreign, columns="wx", unit="dps")

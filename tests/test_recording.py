@@ -1203,6 +1203,34 @@ def test_a_recording_built_in_code_refuses_columns_of_other_lengths():
                   header={"sample_rate_hz": "100", "gyro_unit": "dps"})
 
 
+@pytest.mark.parametrize("header, expected", [
+    ({"gyro_unit": "dps"}, "recording: header key(s) 'sample_rate_hz' missing: a recording's header states"),
+    ({"sample_rate_hz": "100"}, "recording: header key(s) 'gyro_unit' missing"),
+    ({"sample_rate_hz": "0", "gyro_unit": "dps"}, "recording: sample_rate_hz must be a number of Hz in"),
+    ({"sample_rate_hz": "fast", "gyro_unit": "dps"}, "recording: sample_rate_hz must be a plain decimal number"),
+    ({"sample_rate_hz": "100", "gyro_unit": "deg/s"}, "recording: gyro_unit 'deg/s' is not one of dps, rad/s, lsb (write"),
+    ({"sample_rate_hz": "100", "gyro_unit": "lsb"}, "recording: gyro_unit is lsb but header key 'lsb_per_dps' is missing"),
+])
+def test_a_recording_built_in_code_refuses_a_header_without_its_rate_and_units(header, expected):
+    """Attack pass 24's note: a Recording built without gyro_unit or sample_rate_hz was taken and
+    failed later, in an analysis, with a KeyError naming a key; its header is checked as a file's
+    is (the version aside), naming what is missing or wrong."""
+    with pytest.raises(RecordingError) as error:
+        Recording(columns={c: np.zeros(5) for c in ("gx", "gy", "gz")}, header=header)
+    assert str(error.value).startswith(expected)
+
+
+def test_a_recording_without_a_gyro_column_has_a_length_and_says_what_it_lacks(tmp_path):
+    """Attack pass 24's note: `read_recording(path, columns=...)` keeping only temp gave a Recording
+    whose len() and gyro_dps were KeyErrors; its length is its columns' and gyro_dps names the columns."""
+    path = tmp_path / "r.csv"
+    write_recording(path, Recording.from_dps(np.zeros((7, 3)), 100.0, temp_c=np.full(7, 25.0)))
+    rec = read_recording(path, columns=lambda names: ["temp"])
+    assert len(rec) == 7 and rec.temp_c.tolist() == [25.0] * 7
+    with pytest.raises(RecordingError, match=f"^{re.escape(str(path))}: no gyro column\\(s\\) gx, gy, gz$"):
+        rec.gyro_dps
+
+
 @pytest.mark.parametrize("rows", [np.ma.masked_array(np.zeros((20, 3)), mask=np.eye(20, 3, k=-10, dtype=bool)),
                                   np.zeros((20, 3)) + 1j])
 def test_recording_writer_refuses_masked_or_complex_rows(tmp_path, rows):
@@ -1242,3 +1270,22 @@ def test_recording_writer_writes_text_cells_only_as_the_reader_reads_them(tmp_pa
                                                      r"not a number as a recording writes it \(none of them written\)"):
                 writer.write(rows)
     assert read_recording(path).columns["gx"].tolist() == ([12.0] * 3 if cell == "12" else [])
+
+
+def test_write_recording_puts_each_note_back_before_its_sample(tmp_path):
+    """Attack pass 24's note: write_recording wrote every note after the data, so a recording read
+    and written again (hide_in_recording's, a tool's copy) moved "# moved the board" to the end."""
+    src, copy = tmp_path / "src.csv", tmp_path / "copy.csv"
+    with RecordingWriter(src, {"gyrofilter-recording": "1", "sample_rate_hz": "100", "gyro_unit": "dps"},
+                         ["gx", "gy", "gz"]) as writer:
+        writer.note("first")
+        writer.write(np.zeros((3, 3)))
+        writer.note("moved the board")
+        writer.note("and again")
+        writer.write(np.ones((2, 3)))
+        writer.note("last")
+    rec = read_recording(src)
+    write_recording(copy, rec)
+    again = read_recording(copy)
+    assert [(n.text, n.row) for n in again.notes] == [("first", 0), ("moved the board", 3), ("and again", 3), ("last", 5)]
+    assert copy.read_text() == src.read_text()

@@ -14,13 +14,12 @@ import numpy as np
 from ..analysis.arma import identify as arma
 from ..analysis.still import read_axes, refuse_gross_errors
 from ..errors import SettingsError
-from ..recording import warn_about_gaps
+from ..recording import filtered_words, warn_about_gaps
 from ..recording.checks import gap_step_s
 from ..units import AXES, MAX_DURATION_S
 from . import console, options, outputs, still
 
 MAX_MAX_N = 10  # ARMA(20, 19): the longest model the simulator takes (20 coefficients each side)
-MAX_MAX_SAMPLES = 10**8  # samples fitted; ARMA fits of more take hours and gain nothing
 PAPER_003 = "paper 003 (ADIS16405 z gyro): ADF -110.18; KS and JB reject normality; ARMA(1, 1): x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}"
 
 
@@ -51,13 +50,15 @@ def run(args):
         raise SettingsError(f"--max-n must be at least 1, got {args.max_n}")
     if args.max_n > MAX_MAX_N:
         raise SettingsError(f"--max-n must be at most {MAX_MAX_N} (ARMA({2 * MAX_MAX_N}, {2 * MAX_MAX_N - 1})), got {args.max_n}")
-    if args.max_samples < 100:
-        raise SettingsError(f"--max-samples must be at least 100, got {args.max_samples}")
-    if args.max_samples > MAX_MAX_SAMPLES:
-        raise SettingsError(f"--max-samples must be at most {MAX_MAX_SAMPLES}, got {args.max_samples}")
+    arma.check_max_samples(args.max_samples, "--max-samples")
     axes = AXES if args.axis == "all" else (args.axis,)
     head, series, t_s = read_axes(args.recording, axes, with_t=True)
-    console.print_warnings(head.warnings)
+    warnings = list(head.warnings)
+    filtered = filtered_words(head.header)
+    if filtered:  # analysed, as allan analyses it, but said: the model is the output's, not the sensor's bias
+        warnings.append(f"{args.recording}: is {filtered}: paper 003's model describes a sensor's bias noise; this "
+                        "one describes the filter's output")
+    console.print_warnings(warnings)
     fs = head.sample_rate_hz
     i0, i1 = _window(args, head.rows, fs, t_s)
     if t_s is not None and (i0, i1) != (0, head.rows):  # the gaps of the window analysed, not of the file
@@ -90,7 +91,8 @@ def run(args):
         console.print_warnings(["scipy/statsmodels warned during the fits (check the results above): " + "; ".join(warned)])
     if args.json:
         out = {"recording": args.recording, "sample_rate_hz": fs, "start_s": start_s, "duration_s": span_s, "n_samples": n,
-               "alpha": args.alpha, "axes": {k: v.to_dict() for k, v in reports.items()}}
+               "alpha": args.alpha, "axes": {k: v.to_dict() for k, v in reports.items()},
+               "warnings": warnings}
         with outputs.replacing(args.json) as tmp:
             outputs.write_json(tmp, out)
         console.say(f"wrote {args.json}")

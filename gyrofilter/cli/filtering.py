@@ -10,7 +10,7 @@ from ..filter.settings import SETTING_NAMES
 from ..filter.presets import DEFAULT_PRESET, PRESETS
 from ..filter.tempcomp import coefficients_from_model
 from ..inputs import did_you_mean, parse_json, quote
-from ..recording import EXACT_FORMAT, FILTERED_FORMAT, filtered_from
+from ..recording import EXACT_FORMAT, FILTERED_FORMAT, filtered_words
 from ..sim.model import load_model, validate_model
 from .console import bias_text
 from .options import decimal, file_name
@@ -140,13 +140,12 @@ def refuse_filtered_output(header, where):
     ``filtered_from`` (written by ``replay --out`` and ``run``) holds bias-removed block means at
     the output rate, not a sensor's samples, so the start-up calibration would call the sensor
     moved, or a second filter would average the averages. ``where`` names the file or source.
-    The raw recording it came from is what to filter (``allan`` and ``gap`` take either: the
-    noise of the output is a fair question). RecordingError; None for a raw recording."""
-    source = filtered_from(header)
-    if source is not None:
-        raise RecordingError(f"{where} is a filtered output of gyrofilter (filtered_from: "
-                             f"{quote(source)}), not a sensor's samples; filter the raw recording "
-                             "it came from")
+    The raw recording it came from is what to filter (``allan``, ``gap`` and ``arma`` take either:
+    the noise of the output is a fair question, and ``gap`` and ``arma`` say whose noise they
+    describe). RecordingError; None for a raw recording."""
+    filtered = filtered_words(header)
+    if filtered:
+        raise RecordingError(f"{where} is {filtered}; filter the raw recording it came from")
 
 
 def check_temperature(filt, available, where):

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import quote
-from ..recording import filtered_from, read_recording
+from ..recording import filtered_words, read_recording
 from ..units import AXES
 
 NOISE_SEGMENT_S = 90.0
@@ -37,10 +37,10 @@ def find_static_recordings(recordings_dir):
         rec = read_recording(path)
         if "mpu6050" not in rec.header.get("sensor", "").lower():
             continue
-        source = filtered_from(rec.header)
-        if source is not None:
-            raise RecordingError(f"{path}: is a filtered output (filtered_from {quote(source)}), not the sensor's samples "
-                                 "that evaluate compares the filters on; move it out of the recordings folder")
+        filtered = filtered_words(rec.header)
+        if filtered:
+            raise RecordingError(f"{path}: is {filtered} that evaluate compares the filters on; move it out of the "
+                                 "recordings folder")
         desc = rec.header.get("description", "").strip().lower()
         if desc.startswith("static") or (not desc and "static" in os.path.basename(path).lower()):
             _refuse_stuck(rec, path)

@@ -12,7 +12,7 @@ from functools import partial
 import numpy as np
 
 from ..errors import SampleError
-from ..inputs import check_number, number_array
+from ..inputs import check_number, number_array, scalar
 from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, shown
 
 _UPDATE_TAKES = f"update() takes one sample (gx, gy, gz): 3 finite numbers in deg/s within +-{MAX_RATE_DPS:g}"
@@ -67,6 +67,7 @@ def as_numbers(values, name, unit):
 def check_temperature(value, required, where, row=0):
     """A sample's temperature as a float in TEMP_RANGE_C (deg C), or NaN when it has
     none (None or NaN), which ``required`` (compensating) refuses; SampleError says why."""
+    value = scalar(value)
     if value is None or isinstance(value, (float, np.floating)) and math.isnan(value):
         if required:
             raise SampleError("temperature compensation is on: it needs temp_c, a temperature (deg C), with every sample",

@@ -112,6 +112,12 @@ class FilterSettings:
     Every number must lie in its range in :data:`SETTING_RANGES` (a bool is not a number), the
     temperature coefficients within +-:data:`MAX_TEMP_COEFFICIENT_DPS_PER_C`.
 
+    On qr_window: paper 001 computes Q and R over the last 10 blocks. A long window (0, all; or
+    hundreds of blocks) keeps Q at its value at rest, so the LS prediction is trusted far past a
+    turn's onset: with ``preset="paper"`` (the guard off) a 30 deg/s step overshot by 310 deg/s
+    before it settled (10 blocks: at most the step itself, a lag of a few blocks). The guard
+    (``guard_blocks``) re-seeds such a filter; the default preset does not need it.
+
     ``preset="hold"`` is ``tracker="block_mean", hold=True``; ``preset="adaptive_kalman"`` (= the
     default ``"recommended"``) is ``kalman_noise="adaptive"`` with the guard on (gyrofilter.filter.presets).
 

@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import RecordingError
 from ..inputs import number_array
 from ..units import from_dps, to_dps, to_mps2
-from .header import (ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY, VERSION_KEY, accel_header, accel_units_header,
+from .header import (ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY, VERSION_KEY, accel_header, accel_units_header, check_facts,
                      dps_header, format_number)
 
 
@@ -119,7 +119,10 @@ class Recording(_HeaderFacts):
         column_stack drops the mask: the number behind it would be a sample, and
         :func:`~gyrofilter.recording.write_recording` would write it), so are complex numbers,
         booleans, strings and objects (:func:`gyrofilter.inputs.number_array`). The reader's
-        columns (int or float arrays) are kept as they are, float32 of ``compact`` too."""
+        columns (int or float arrays) are kept as they are, float32 of ``compact`` too. The header
+        states the sample rate and units the properties read, checked as a file's are
+        (:func:`~gyrofilter.recording.header.check_facts`: the version aside)."""
+        check_facts(self.header, self.path or "recording")
         columns = {name: values if type(values) is np.ndarray and values.dtype.kind in "iuf"
                    else _numbers(values, f"column {name!r}") for name, values in self.columns.items()}
         first = next(iter(columns), None)
@@ -131,11 +134,15 @@ class Recording(_HeaderFacts):
         self.columns = columns
 
     def __len__(self):
-        return len(self.columns[GYRO_COLUMNS[0]])
+        return len(next(iter(self.columns.values()), ()))  # the columns are of one length
 
     @property
     def gyro(self) -> np.ndarray:
-        """Angular rate, shape (N, 3), in the file's ``gyro_unit``."""
+        """Angular rate, shape (N, 3), in the file's ``gyro_unit``; RecordingError naming the
+        recording without the columns ``gx, gy, gz`` (read with ``columns=`` that left one out)."""
+        missing = [c for c in GYRO_COLUMNS if c not in self.columns]
+        if missing:
+            raise RecordingError(f"{self.path or 'recording'}: no gyro column(s) {', '.join(missing)}")
         return np.column_stack([self.columns[c] for c in GYRO_COLUMNS])
 
     @property

@@ -69,6 +69,14 @@ def filtered_from(header):
     and the fleet write no imu.yaml of it, and its accelerometer is one raw sample per row
     (``analysis.still.decimated_accelerometer``). The one test of it; ``is not None`` is the predicate."""
     return header.get(FILTERED_FROM_KEY)
+
+
+def filtered_words(header):
+    """The words that say a recording with ``header`` is the filter's output, for every command's
+    refusal or warning of one: ``"the filter's output (filtered_from 'SOURCE'), not the sensor's
+    samples"``, or None for a sensor's samples (:func:`filtered_from`)."""
+    source = filtered_from(header)
+    return None if source is None else f"the filter's output (filtered_from {quote(source)}), not the sensor's samples"
 #: header keys gyrofilter writes to say where a recording's samples came from and what was done
 #: to them (docs/formats.md, section 1): a live device's header does not give them (the serial
 #: source drops them with a note), or a raw recording could say it is a filtered one
@@ -211,10 +219,11 @@ def check_header(header, where):
     rate lies about its rows (the check of its ``t`` would take its steps for blocks of samples,
     its accelerometer for one raw sample per row), so the key without it is refused, not ignored.
     A key holding an invisible character is refused (:func:`refuse_invisible`).
-    The one check of a header: the reader's and the writers' (:func:`header_text`)."""
+    The one check of a header: the reader's and the writers' (:func:`header_text`); the facts
+    without the version are :func:`check_facts`, a :class:`~gyrofilter.recording.Recording`'s."""
     for key in header:
         refuse_invisible(key, "header key", where)
-    missing = [key for key in (VERSION_KEY, "sample_rate_hz", "gyro_unit") if key not in header]
+    missing = [key for key in (VERSION_KEY, *FACT_KEYS) if key not in header]
     if missing:
         raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
                              "'# gyrofilter-recording: 1', '# sample_rate_hz: RATE', '# gyro_unit: dps|rad/s|lsb'; "
@@ -222,6 +231,22 @@ def check_header(header, where):
     version = header[VERSION_KEY]
     if version != FORMAT_VERSION:
         raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
+    check_facts(header, where)
+
+
+#: the header keys every recording states, a file's and one built in code (:func:`check_facts`)
+FACT_KEYS = ("sample_rate_hz", "gyro_unit")
+
+
+def check_facts(header, where):
+    """Refuse a ``header`` whose sample rate and units are missing or not a recording's, with
+    RecordingError naming ``where``: the keys :data:`FACT_KEYS` present, and each, and
+    ``input_sample_rate_hz`` and ``lsb_per_dps``, as :func:`check_header` says. What a
+    :class:`~gyrofilter.recording.Recording` built in code needs (its header carries no version)."""
+    missing = [key for key in FACT_KEYS if key not in header]
+    if missing:
+        raise RecordingError(f"{where}: header key(s) {', '.join(map(repr, missing))} missing: a recording's header "
+                             "states 'sample_rate_hz' (Hz) and 'gyro_unit' (dps, rad/s or lsb)")
     sample_rate_hz = parse_number(header["sample_rate_hz"], f"{where}: sample_rate_hz", error=RecordingError)
     check_sample_rate_hz(sample_rate_hz, f"{where}: sample_rate_hz", RecordingError)
     if INPUT_RATE_KEY in header:  # a filtered output's: its rows are blocks of input samples, never more of them

@@ -11,7 +11,7 @@ import os
 import numpy as np
 
 from ..errors import RecordingError, SettingsError
-from ..inputs import is_plain_number, quote
+from ..inputs import check_number, is_plain_number, quote
 from .checks import TimeCheck, check_rates
 from .content import Note, Recording, RecordingHead
 from .header import (MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, check_accelerometer, check_columns, check_header,
@@ -123,8 +123,7 @@ def iter_recording(path, chunk_rows=CHUNK_ROWS):
     :data:`~gyrofilter.recording.header.MAX_BYTES_BEFORE_ROWS` before any row is refused then.
     """
     path = os.fspath(path)
-    if not (isinstance(chunk_rows, int) and chunk_rows >= 1):
-        raise SettingsError(f"chunk_rows must be a whole number >= 1, got {chunk_rows!r}")
+    chunk_rows = check_number(chunk_rows, "chunk_rows", low=1, integer=True)
     warnings = []
     parts = line_chunks(path, chunk_rows, warnings)
     try:

@@ -36,7 +36,9 @@ _NOT_WRITTEN = "not written: it would not read back"
 
 def write_recording(path, rec: Recording, *, compresslevel=6):
     """Write ``rec`` to ``path`` (gzip at ``compresslevel`` when the name ends in ``.gz``), whole, in
-    one go: every value exactly (it reads back as the same float), the notes after the data.
+    one go: every value exactly (it reads back as the same float), each note before the sample
+    it preceded (its ``row``, :class:`~gyrofilter.recording.Note`; a plain ``(line, text)`` pair
+    after the data), so that the file reads back with its notes where they were.
     The header, the values and ``t`` are checked before the file is created (:class:`RecordingWriter`)."""
     names = list(rec.columns)
     data = np.column_stack([rec.columns[c] for c in names]) if names else np.empty((0, 0))
@@ -50,9 +52,13 @@ def write_recording(path, rec: Recording, *, compresslevel=6):
             times.add(head.column(data, "t"), lambda row: f"row {row + 1} of the output")
             times.finish()
     with RecordingWriter(path, rec.header, names, flush_interval_s=None, compresslevel=compresslevel) as writer:
-        writer.write(data)
-        for line, text in rec.notes:
+        done = 0
+        for row, text in sorted(((min(getattr(note, "row", len(data)), len(data)), note[1]) for note in rec.notes),
+                                key=lambda note: note[0]):  # stable: notes of one row keep their order
+            writer.write(data[done:row])
             writer.note(text)
+            done = row
+        writer.write(data[done:])
 
 
 def _check_finite(rows, columns, where):

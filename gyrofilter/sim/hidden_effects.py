@@ -52,7 +52,7 @@ from .model import TEMPERATURE_PROFILE, validate_model
 from .noise_terms import RepeatedRows, colored_noise_filter, filter_variance
 from .resonance import band_pass
 from .simulate import simulate
-from ..recording import Recording
+from ..recording import ACCEL_COLUMNS, GYRO_COLUMNS, Recording
 from ..errors import SettingsError
 from ..units import AXES, plain
 
@@ -182,7 +182,10 @@ def simulate_case(case):
 def hide_in_recording(rec, effect, axis, params, *, seed=0):
     """Add one effect to a real recording (real noise as the baseline): the effect is simulated
     alone (no white noise, no bias, no quantization) at the recording's rate and length and
-    added to the rate in deg/s; the result is a deg/s recording with the same temp column.
+    added to the rate in deg/s; the result is a deg/s recording with the recording's other
+    columns (``t``, ``temp``, ``ax, ay, az`` with their unit, any other) and its notes as they
+    were (``repeated_samples`` repeats whole rows of the sensor: ``temp`` and ``ax, ay, az`` with
+    the rates, ``t`` and the others as they were: the logger's clock goes on).
     SettingsError for an ``axis`` that is none of x, y, z, or ``params`` the simulator's model
     refuses (:func:`~gyrofilter.sim.model.validate_model`; a colored noise of lag1 NaN made the
     axis NaN; ``repeated_samples``, a whole-row effect with no axis, as the model's top-level key:
@@ -191,7 +194,7 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     n = len(rec)
     model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",
              "axes": {a: {"bias_dps": 0.0, "arw_dps_per_sqrt_hz": 0.0, "effects": []} for a in AXES}}
-    temp = rec.temp_c
+    temp, accel = rec.temp_c, _accelerometer(rec)
     if effect == TEMPERATURE:
         if temp is None:
             raise ValueError("temperature needs a temp column")
@@ -233,12 +236,25 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         mask = repeats.next_mask(n)
         gyro = np.column_stack([repeats.apply(gyro[:, i], mask, None)[0] for i in range(3)])
         temp = None if temp is None else repeats.apply(np.asarray(temp, dtype=float), mask, None)[0]
+        accel = None if accel is None else np.column_stack([repeats.apply(accel[:, i], mask, None)[0] for i in range(3)])
     else:
         model["axes"][axis]["effects"].append({"effect": effect, **params})
         sim = simulate(model, n / sample_rate_hz, seed=seed)
         gyro = gyro + sim.gyro_dps[:n]
     header = {k: v for k, v in rec.header.items() if k not in ("gyro_unit", "lsb_per_dps")}
-    return Recording.from_dps(gyro, sample_rate_hz, temp_c=temp, header=header)
+    others = {name: values for name, values in rec.columns.items() if name not in ("t", "temp", *GYRO_COLUMNS, *ACCEL_COLUMNS)}
+    hidden = Recording.from_dps(gyro, sample_rate_hz, t_s=rec.columns.get("t"), temp_c=temp, accel=accel,
+                                accel_unit=rec.accel_unit if accel is not None else None,
+                                lsb_per_g=rec.lsb_per_g if accel is not None else None, extra=others, header=header)
+    hidden.notes = list(rec.notes)
+    return hidden
+
+
+def _accelerometer(rec):
+    """The columns ``ax, ay, az`` of ``rec`` as an (N, 3) array in their file unit, or None."""
+    if not all(c in rec.columns for c in ACCEL_COLUMNS):
+        return None
+    return np.column_stack([np.asarray(rec.columns[c], dtype=float) for c in ACCEL_COLUMNS])
 
 
 def _within(kind, tol, est, true, duration_s):

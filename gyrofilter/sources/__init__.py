@@ -161,7 +161,9 @@ def parse_source(spec: str):
     >>> parse_source("sim,seed=3")
     ('sim', {'seed': 3})
     """
-    if not isinstance(spec, str) or not spec.strip():
+    if not isinstance(spec, str):
+        raise SettingsError(f"a source is text ({_SYNTAX}), got {type(spec).__name__}")
+    if not spec.strip():
         raise SettingsError(f"empty source ({_SYNTAX})")
     spec = spec.strip()
     where = f"source {quote(spec)}"

@@ -73,6 +73,10 @@ DEFAULT_MAX_SAMPLES = 200_000
 #: fewest samples of an axis the analysis takes: fewer leave the tests and the order search without
 #: power (and below about 30 statsmodels' ADF test fails on its own lags)
 MIN_SAMPLES = 200
+#: the range of ``max_samples``: at least twice :data:`MIN_SAMPLES`, so that the block means of a
+#: longer series (``N / k``, ``k = ceil(N / max_samples)``: more than ``max_samples / 2``) are never
+#: fewer than the analysis takes; at most 1e8 (ARMA fits of more take hours and gain nothing)
+MAX_SAMPLES_RANGE = (2 * MIN_SAMPLES, 10**8)
 DEFAULT_MAX_N = 4  # up to ARMA(8, 7)
 CRITERIA = ("f", "aic", "bic")
 DEFAULT_CRITERION = "bic"  # see select_order for why not the paper's F rule
@@ -175,6 +179,16 @@ class AxisReport:
 # preparation
 
 
+def check_max_samples(max_samples, name="max_samples"):
+    """Refuse a ``max_samples`` outside :data:`MAX_SAMPLES_RANGE` (SettingsError naming ``name``,
+    the option or argument given): the one check of it, the command's and the function's."""
+    low, high = MAX_SAMPLES_RANGE
+    if not low <= max_samples <= high:
+        bound = f"at least {low} (block means of a longer series are more than half of it, and the analysis needs {MIN_SAMPLES})" \
+            if max_samples < low else f"at most {high}"
+        raise SettingsError(f"{name} must be {bound}, got {plain(max_samples)}")
+
+
 def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
     """Zero-mean series for the analysis: ``(series, decimation, analysis_rate_hz, mean)``, from
     ``x`` (1-D, deg/s) sampled at ``sample_rate_hz`` (Hz).
@@ -196,8 +210,7 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
         raise SettingsError(f"series sample {int(beyond[0])}: {float(x[beyond[0]]):.6g} deg/s is beyond the "
                             f"+-{MAX_RATE_DPS:g} deg/s any gyro reads; are the rates in deg/s?")
     check_sample_rate_hz(sample_rate_hz)
-    if max_samples < 100:
-        raise SettingsError(f"max_samples must be at least 100, got {plain(max_samples)}")
+    check_max_samples(max_samples)
     k = max(1, math.ceil(len(x) / max_samples))
     if k > 1:
         n = (len(x) // k) * k

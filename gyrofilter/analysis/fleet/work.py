@@ -6,7 +6,7 @@ import dataclasses
 import time
 
 from ...errors import SettingsError, one_line
-from ...recording import filtered_from
+from ...recording import filtered_words
 from ...units import AXES
 from ..gap.pipeline import analyse_file
 from ..noise.allan import MIN_CLUSTERS
@@ -89,9 +89,9 @@ def _allan_part(path, settings, result):
         keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True)
     sample_rate_hz = head.sample_rate_hz
     kalibr = None
-    if filtered_from(head.header) is not None:  # the filter's output is analysed, but its noise is not the sensor's
-        result["warnings"].append(f"{NO_IMU_YAML}the recording is the filter's output (filtered_from), "
-                                  "not the sensor's samples")
+    filtered = filtered_words(head.header)
+    if filtered:  # the filter's output is analysed, but its noise is not the sensor's
+        result["warnings"].append(f"{NO_IMU_YAML}the recording is {filtered}")
     else:
         try:
             kalibr = kalibr_yaml(results, sample_rate_hz, recording=path, tau_range_s=settings.kalibr_tau_s,

@@ -71,7 +71,7 @@ import numpy as np
 from ...effects import SLOW, TEMPERATURE, WANDERS
 from ...errors import GyroFilterError, RecordingError, SettingsError
 from ...inputs import check_number
-from ...recording import GYRO_COLUMNS, read_recording, warn_about_gaps
+from ...recording import GYRO_COLUMNS, filtered_words, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
 from ...sim.simulate import check_seed
 from ...units import AXES, MAX_RATE_DPS, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
@@ -120,7 +120,8 @@ def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refu
     it) raises RecordingError with ``refuse_motion``, else is the first warning. The reader's
     warnings and the gaps in ``t`` go to ``warn(text)``, the steps to ``progress(text)``. Only the
     columns the analysis uses are kept, integer (``lsb``) readings as float32, which holds them
-    exactly (:func:`gap_columns`)."""
+    exactly (:func:`gap_columns`). The filter's output (``filtered_from``) is analysed, as ``allan``
+    analyses it, with a first note saying that the findings describe it, not the sensor."""
     say = progress or (lambda text: None)
     rec = read_recording(path, columns=gap_columns, compact=True)
     motion = [(a, why) for i, a in enumerate(AXES) if (why := moved(axis_dps(rec, i), rec.sample_rate_hz))]
@@ -133,8 +134,12 @@ def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refu
         warn(text)
     warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)
     say(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
-    return rec, analyse_gap(rec, seed=COMMAND_SEED, n_sims=n_sims, progress=progress, recording_name=path,
-                            bootstrap=bootstrap)
+    report = analyse_gap(rec, seed=COMMAND_SEED, n_sims=n_sims, progress=progress, recording_name=path, bootstrap=bootstrap)
+    filtered = filtered_words(rec.header)
+    if filtered:  # analysed, as allan analyses it, but said where the findings are read
+        report["notes"].insert(0, f"the recording is {filtered}: the gap analysis models a sensor's samples, so its "
+                                  "findings describe the filter's output")
+    return rec, report
 
 
 def analyse_gap(rec, *, seed=0, n_sims=None, progress=None, recording_name=None, bootstrap=None):
