@@ -1289,3 +1289,16 @@ def test_write_recording_puts_each_note_back_before_its_sample(tmp_path):
     again = read_recording(copy)
     assert [(n.text, n.row) for n in again.notes] == [("first", 0), ("moved the board", 3), ("and again", 3), ("last", 5)]
     assert copy.read_text() == src.read_text()
+
+
+def test_notes_built_in_code_at_any_row_leave_every_sample_written_once(tmp_path):
+    """The lead's attack on the notes put back at their rows: a note built in code at row -5 or
+    beyond the data (or a plain pair) is written at the nearest end, never slicing a sample twice."""
+    from gyrofilter.recording import Note
+
+    rec = Recording.from_dps(np.arange(30.0).reshape(10, 3), 100.0)
+    rec.notes = [Note(1, "before", -5), Note(2, "at three", 3), ("line", "plain"), Note(3, "far", 99)]
+    write_recording(tmp_path / "n.csv", rec)
+    back = read_recording(tmp_path / "n.csv")
+    assert np.array_equal(back.gyro, rec.gyro)
+    assert [(n.text, n.row) for n in back.notes] == [("before", 0), ("at three", 3), ("plain", 10), ("far", 10)]

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..closable import Closable
 from ..errors import RecordingError
-from ..inputs import is_plain_number, number_array, quote
+from ..inputs import check_number, is_plain_number, number_array, quote
 from .checks import TimeCheck, check_rates
 from .content import Recording, RecordingHead
 from .header import header_text, note_line
@@ -53,12 +53,21 @@ def write_recording(path, rec: Recording, *, compresslevel=6):
             times.finish()
     with RecordingWriter(path, rec.header, names, flush_interval_s=None, compresslevel=compresslevel) as writer:
         done = 0
-        for row, text in sorted(((min(getattr(note, "row", len(data)), len(data)), note[1]) for note in rec.notes),
+        for row, text in sorted(((_note_row(note, len(data)), note[1]) for note in rec.notes),
                                 key=lambda note: note[0]):  # stable: notes of one row keep their order
             writer.write(data[done:row])
             writer.note(text)
             done = row
         writer.write(data[done:])
+
+
+def _note_row(note, rows):
+    """The sample a note of a recording of ``rows`` samples goes before: its ``row`` within [0, rows]
+    (a plain ``(line, text)`` pair: ``rows``, after the data), so that every sample is written once
+    whatever a note built in code says."""
+    row = check_number(getattr(note, "row", rows), f"the row of the note {quote(note[1])}", integer=True,
+                       error=RecordingError)
+    return max(0, min(row, rows))
 
 
 def _check_finite(rows, columns, where):
