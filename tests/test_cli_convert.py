@@ -804,3 +804,26 @@ def test_a_gyrofilter_recording_is_refused_naming_its_header(tmp_path, capsys, n
     assert not dst.exists()
     src.write_text(text.replace("# gyrofilter-recording: 1", "# exported by gyrofilter-recording-tool 1"))
     assert main(["convert", str(src), "--unit", "lsb", "--lsb-per-dps", "131", "--out", str(dst), "--force"]) == 0
+
+
+def test_a_column_named_twice_is_refused_when_columns_names_it(tmp_path, capsys):
+    """Attack pass 25: a log of ``time,x,y,z,x,y,z`` (gyro, then accelerometer) is refused by name
+    (two candidates for x), and the refusal says to name the three in --columns; ``--columns
+    time,x,y,z`` then took the first of each pair without a word. Refused: give its number."""
+    rows = "".join(f"{i / 100},{i},{-i},1,9.81,0.1,0.2\n" for i in range(20))
+    rc, dst = _convert(tmp_path, "time,x,y,z,x,y,z\n" + rows, "--unit", "dps", "--columns", "time,x,y,z")
+    assert rc == 2 and not dst.exists()
+    assert "--columns: 'x' names columns 2 and 5; give its number" in capsys.readouterr().err
+    rc, dst = _convert(tmp_path, "time,x,y,z,x,y,z\n" + rows, "--unit", "dps", "--columns", "1,2,3,4")
+    assert rc == 0, capsys.readouterr().err
+
+
+def test_a_time_unit_the_name_states_and_convert_does_not_know_is_refused(tmp_path, capsys):
+    """Attack pass 25: ``time (min)`` was read as s (the first unit giving 5 Hz or more): 100 Hz written as 6000 Hz."""
+    rows = "".join(f"{i / 6000:.8f},{i % 7},1,2\n" for i in range(600))
+    rc, dst = _convert(tmp_path, "time (min),gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows)
+    assert rc == 2 and not dst.exists()
+    assert "time column 'time (min)' states the unit 'min'" in capsys.readouterr().err
+    rows = "".join(f"{10 * i},{i % 7},1,2\n" for i in range(600))
+    rc, dst = _convert(tmp_path, "time (msec),gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows)
+    assert rc == 0 and "in ms (as its name states" in capsys.readouterr().err

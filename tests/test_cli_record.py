@@ -381,12 +381,19 @@ def _header_only_serial(out, *extra):
     return proc, primary, port, secondary
 
 
-def test_a_stop_before_the_first_sample_says_what_stopped_it_not_the_duration(tmp_path):
+@pytest.mark.parametrize("lines, counts", [(b"", "lines 1, headers 1"),
+                                           (b"".join(b"%d,99999999,0,0\n" % i for i in range(50)),
+                                            "lines 51, bad lines 50, headers 1")])
+def test_a_stop_before_the_first_sample_says_what_stopped_it_not_the_duration(tmp_path, lines, counts):
     """A --duration of 60 s that a SIGTERM ends before the device sent a sample said "no sample
-    was recorded in --duration 60 s", as if the duration had run out: the line names the stop."""
+    was recorded in --duration 60 s", as if the duration had run out: the line names the stop.
+    Attack pass 25: and the source's counts: a device whose every line is refused (here a rate
+    beyond +-100000 deg/s; a raw temperature sent without ``temp_unit`` alike) said no more, the
+    file and its notes saying why not kept."""
     out = tmp_path / "r.csv"
     proc, primary, port, secondary = _header_only_serial(out, "--duration", "60")
     try:
+        os.write(primary, lines)
         time.sleep(1.0)  # a stop before the first sample, whenever it comes
         proc.send_signal(signal.SIGTERM)
         err = proc.communicate(timeout=30)[1]
@@ -395,7 +402,8 @@ def test_a_stop_before_the_first_sample_says_what_stopped_it_not_the_duration(tm
         os.close(secondary)
     assert proc.returncode == 2, err
     assert err.strip().splitlines() == [
-        f"gyrofilter: error: serial:{port},header_timeout=20: no sample was recorded (stopped by SIGTERM); the empty {out} is not kept"]
+        f"gyrofilter: error: serial:{port},header_timeout=20: no sample was recorded (stopped by SIGTERM); "
+        f"{counts}; the empty {out} is not kept"]
     assert os.listdir(tmp_path) == []
 
 

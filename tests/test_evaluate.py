@@ -307,3 +307,17 @@ def test_two_recordings_of_one_name_are_refused_naming_both(tmp_path, pattern, n
     with pytest.raises(RecordingError, match=re.escape(f"{tmp_path / names[0]} and {tmp_path / names[1]}: "
                                                        f"both named {names[0][:-4]!r}")):
         find(str(tmp_path))
+
+
+@pytest.mark.parametrize("pattern, name", [("static", "mpu6050_static_a"), ("broad", "broad_01")])
+def test_a_backup_copy_beside_a_recording_is_not_a_recording(tmp_path, pattern, name):
+    """Attack pass 25: ``*.csv*`` took ``a.csv.gz.bak`` or ``a.csv~`` (a backup copy) for a third
+    recording of its own name: the copy's results counted twice in the geometric means, exit 0.
+    A recording's name ends in .csv or .csv.gz (the reader's formats); other names are not read."""
+    rows = "".join(f"{i / 100:.2f},{i % 3},{i % 5},{i % 2},1,2,3,{i % 2}\n" for i in range(30))
+    text = ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n# sensor: MPU6050\n"
+            "t,gx,gy,gz,ref_x,ref_y,ref_z,movement\n" + rows)
+    for suffix in (".csv", ".csv~", ".csv.bak", ".csv.gz.orig"):
+        (tmp_path / (name + suffix)).write_text(text)
+    find = D.find_static_recordings if pattern == "static" else D.find_broad_recordings
+    assert [rec.path for rec in find(str(tmp_path))] == [str(tmp_path / (name + ".csv"))]

@@ -5,7 +5,7 @@ import re
 import numpy as np
 import pytest
 from gyrofilter.errors import DeviceError, SettingsError
-from gyrofilter.sources.serial.protocol import LineParser
+from gyrofilter.sources.serial.protocol import LineParser, UnitsConflict
 from support import REPO
 
 HEADER = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 sensor=MPU6050\n"
@@ -222,6 +222,17 @@ def test_parser_header_changing_units_mid_stream_is_refused():
     q.feed(HEADER)
     q.feed(b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=1\xff1\n")  # garbled repeat: skipped
     assert q.stats["bad_lines"] == 1
+
+
+def test_a_header_changing_the_units_hands_out_the_rows_before_it_in_its_chunk():
+    """Attack pass 25: the rows of the lines before a header that changes the units, in the same
+    chunk of bytes, were lost with the UnitsConflict (300 sent, 296 written)."""
+    p = LineParser()
+    p.feed(HEADER + _lines([0]))
+    with pytest.raises(UnitsConflict, match="changed the units") as info:
+        p.feed(_lines([1, 2, 3]) + HEADER.replace(b"131", b"65.5") + _lines([4]))
+    np.testing.assert_array_equal(info.value.rows[:, 1:4], _expected([1, 2, 3]))
+    np.testing.assert_allclose(info.value.rows[:, 0], [0.01, 0.02, 0.03])
 
 
 def test_parser_first_header_errors():

@@ -16,6 +16,7 @@ import pytest
 from gyrofilter.errors import DeviceError, SourceEnded
 from gyrofilter.recording import read_recording
 from gyrofilter.sources import open_source
+from gyrofilter.sources.serial.port import SerialSource
 
 pytest.importorskip("serial")
 
@@ -199,6 +200,40 @@ def test_record_from_serial_keeps_everything_when_the_cable_is_pulled(pty_pair, 
     assert rec.header["sensor"] == "MPU6050" and rec.header["serial_port"] == name
     err = capsys.readouterr().err
     assert f"wrote {len(good)} samples" in err and "lost 1 samples" in err
+
+
+class _Port:
+    """A port that has ``data`` waiting at once, then nothing."""
+
+    def __init__(self, data):
+        self.data = data
+
+    @property
+    def in_waiting(self):
+        return len(self.data)
+
+    def read(self, n):
+        out, self.data = self.data[:n], self.data[n:]
+        return out
+
+    def write(self, data):
+        pass
+
+    def close(self):
+        pass
+
+
+def test_a_header_changing_the_units_ends_the_source_after_the_rows_before_it():
+    """Attack pass 25: the samples that came in one read with a header changing the units were lost."""
+    head = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100\n"
+    data = head + b"".join(b"%d,%d,1,2\n" % (i, i) for i in range(5))
+    src = SerialSource("fake", serial_port=_Port(data), header_timeout_s=1)
+    src._port.data = b"".join(b"%d,%d,1,2\n" % (i, i) for i in range(5, 9)) + head.replace(b"131", b"65.5")
+    rows = [src.read()]
+    with pytest.raises(DeviceError, match="changed the units"):
+        for _ in range(3):
+            rows.append(src.read())
+    np.testing.assert_array_equal(np.concatenate(rows)[:, 1], np.arange(9))
 
 
 def test_record_from_serial_skips_a_value_beyond_the_range_and_goes_on(pty_pair, tmp_path, capsys):

@@ -106,7 +106,8 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
     left = writer.close(loop.failed() or empty)
     if empty:
         within = f" in --duration {duration_s:g} s" if loop.ended == live.DURATION_REACHED else f" ({reason})"
-        raise SettingsError(f"{spec}: no sample was recorded{within}; "
+        counts = live.source_summary(source.stats)  # lines received and refused: the notes saying why go with the file
+        raise SettingsError(f"{spec}: no sample was recorded{within}{'; ' + counts if counts else ''}; "
                             + (f"{out} is left as it was" if existed else f"the empty {out} is not kept"))
     stats = source.stats
     console.say(

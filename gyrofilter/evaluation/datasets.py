@@ -17,11 +17,14 @@ from ..units import AXES
 NOISE_SEGMENT_S = 90.0
 #: the columns a BROAD trial has beside the gyro's: the optical reference rate and the movement flag
 BROAD_COLUMNS = ("ref_x", "ref_y", "ref_z", "movement")
+#: how a recording's name ends (the reader's two formats); a name that ends otherwise (``a.csv~``,
+#: ``a.csv.gz.bak``: a backup copy) is no recording of the folder
+RECORDING_ENDINGS = (".csv.gz", ".csv")
 
 
 def stem(path):
     name = os.path.basename(path)
-    for ext in (".csv.gz", ".csv"):
+    for ext in RECORDING_ENDINGS:
         if name.endswith(ext):
             return name[: -len(ext)]
     return name
@@ -78,11 +81,12 @@ def find_broad_recordings(recordings_dir):
 
 
 def _files(folder, pattern):
-    """The files of ``folder`` whose names match ``pattern``, sorted: the folder's name taken as it is
+    """The files of ``folder`` whose names match ``pattern`` and end as a recording's
+    (:data:`RECORDING_ENDINGS`), sorted: the folder's name taken as it is
     (``glob.escape``: ``rec[1]`` is no pattern that matches the folder ``rec1``). RecordingError
     naming two of one :func:`stem` (``a.csv`` and ``a.csv.gz``): the results know a recording by
     its stem, so the second's replaced the first's."""
-    paths = sorted(glob.glob(os.path.join(glob.escape(folder), pattern)))
+    paths = sorted(p for p in glob.glob(os.path.join(glob.escape(folder), pattern)) if p.endswith(RECORDING_ENDINGS))
     seen = {}
     for path in paths:
         other = seen.setdefault(stem(path), path)

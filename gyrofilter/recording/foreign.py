@@ -77,7 +77,8 @@ _WORD_UNITS = {"millis": "ms", "micros": "us", "nanos": "ns", "%time": "ns", "se
                "secs": "s", "sec": "s"}
 _UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s": "rad/s", "rad s^-1": "rad/s",
                "deg/s": "dps", "dps": "dps", "°/s": "dps", "degs": "dps", "deg_s": "dps", "deg_per_s": "dps",
-               "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns"}
+               "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns",
+               "msec": "ms", "usec": "us", "nsec": "ns"}
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
 class Foreign(Closable):
@@ -171,7 +172,10 @@ def _pick(names, path, columns, time_unit):
         raise RecordingError(f"{path}: the gyro columns state different units ({', '.join(sorted(units))})")
     stated = units.pop() if units else None
     unit = time_unit or (None if time is None else _name_unit(normal[time], TIME_NAME))
-    return time, (unit if unit in TIME_UNITS else None), gyro, stated
+    if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
+        raise RecordingError(f"{path}: the time column {quote(names[time])} states the unit {quote(unit)}, not one of "
+                             f"{', '.join(TIME_UNITS)}; give --time-unit")
+    return time, unit, gyro, stated
 
 
 def _name_unit(normal, pattern):
@@ -187,11 +191,16 @@ def _name_unit(normal, pattern):
 def _column_index(text, names, path):
     """The index of the column ``text`` of ``--columns``: a name of the column row, or a 1-based number
     in ASCII digits (as every number a user gives: :mod:`gyrofilter.inputs`; ``１`` or ``¹`` is no number),
-    or, from code, that number as an int."""
+    or, from code, that number as an int. A name that several columns have is refused: which one
+    is meant is not guessed."""
     if isinstance(text, (int, np.integer)) and not isinstance(text, (bool, np.bool_)):
         text = str(int(text))
     if not isinstance(text, str):
         raise RecordingError(f"{path}: --columns: {text!r} is neither a column name nor a 1-based number")
+    if names.count(text) > 1:
+        where = [str(i + 1) for i, n in enumerate(names) if n == text]
+        raise RecordingError(f"{path}: --columns: {quote(text)} names columns {', '.join(where[:-1])} and {where[-1]}; "
+                             "give its number")
     if text in names:
         return names.index(text)
     if re.fullmatch(r"[0-9]+", text) and 1 <= int(text) <= len(names):

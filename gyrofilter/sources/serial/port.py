@@ -16,7 +16,7 @@ from ...errors import DeviceError, SourceEnded, one_line
 from ...inputs import check_number
 from ...recording import T_FROM_COUNTER, T_FROM_KEY
 from ..base import Source
-from .protocol import LineParser
+from .protocol import LineParser, UnitsConflict
 
 MAX_WAIT_S = 0.1
 MIN_BAUD, MAX_BAUD = 50, 12_000_000  # bit/s: the slowest standard rate to the fastest USB-serial chips
@@ -64,6 +64,7 @@ class SerialSource(Source):
         self._ended = None
         self._disconnected = False
         self._pending = []
+        self._conflict = None  # a UnitsConflict raised by read() once the rows before it are out
         if serial_port is None:
             try:
                 import serial
@@ -89,6 +90,8 @@ class SerialSource(Source):
                 rows = self._receive()
                 if len(rows):
                     self._pending.append(rows)
+                if self._conflict is not None:
+                    raise self._conflict
                 if self._ended is not None:
                     raise DeviceError(f"{self.port_name}: {self._ended} before the stream started")
                 if clock() > deadline:
@@ -128,7 +131,13 @@ class SerialSource(Source):
             self._ended = f"serial port disconnected ({one_line(exc)})"
             self._disconnected = True
             return self._parser.finish()
-        return self._parser.feed(data) if data else self._parser._empty()
+        if not data:
+            return self._parser._empty()
+        try:
+            return self._parser.feed(data)
+        except UnitsConflict as exc:  # the stream ends at the header: the rows before it first
+            self._conflict = exc
+            return exc.rows
 
     def read(self):
         """Rows that arrived (waits at most 0.1 s); SourceEnded once the port is gone.
@@ -141,6 +150,8 @@ class SerialSource(Source):
             rows = np.concatenate(self._pending)
             self._pending = []
             return rows
+        if self._conflict is not None:
+            raise self._conflict
         if self._ended is not None:
             self.stats["disconnects"] = int(self._disconnected)
             raise SourceEnded(f"{self.port_name}: {self._ended} after {self.stats['samples']} samples; everything received is kept")

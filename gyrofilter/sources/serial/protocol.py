@@ -90,7 +90,11 @@ _TEXT = b"0123456789+-.,eEnaifNAIF \t"
 
 
 class UnitsConflict(DeviceError):
-    """The device's header disagrees with the units already in use (options or an earlier header)."""
+    """The device's header disagrees with the units already in use (options or an earlier header).
+    ``rows``: the rows of the lines before it in the bytes fed with it (the samples received in
+    the units in use, for the caller to keep: :meth:`LineParser.feed`)."""
+
+    rows = None
 
 
 def _plain_cell(n_fields):
@@ -293,7 +297,7 @@ class LineParser:
         counter and ``sample_rate_hz``, gyro in the header's ``gyro_unit``, temp in deg C (converted
         from TEMP_OUT with ``temp_unit=mpu6050_raw``), accelerometer as sent (``accel_unit``). Raises only for a header line: DeviceError or
         SettingsError when the first one is unreadable or lacks a unit, :class:`UnitsConflict`
-        when one changes the units (and DeviceError when a tiny ``sample_rate_hz`` and the
+        when one changes the units (its ``rows``: those of the lines before it; and DeviceError when a tiny ``sample_rate_hz`` and the
         counter's jumps carry ``t`` beyond a float); other lines are counted in :attr:`stats`
         (the module docstring) and the bad ones noted.
         """
@@ -378,7 +382,8 @@ class LineParser:
                     pending = []
                 try:
                     self._header_line(line)
-                except UnitsConflict:
+                except UnitsConflict as exc:
+                    exc.rows = np.concatenate(out) if out else self._empty()
                     raise
                 except (DeviceError, SettingsError) as exc:
                     if self.header is None:
