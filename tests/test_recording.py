@@ -1203,6 +1203,24 @@ def test_a_recording_built_in_code_refuses_columns_of_other_lengths():
                   header={"sample_rate_hz": "100", "gyro_unit": "dps"})
 
 
+@pytest.mark.parametrize("column, refusal", [(_masked_at_10(100), "column 'gx' row 10 is masked"),
+                                               (np.zeros(40), "column 'gx' has 40 values, column 't' has 100"),
+                                               (np.array(["1"] * 100), "column 'gx' must be numbers")])
+def test_a_recording_whose_column_is_replaced_later_is_checked_when_written_or_read(tmp_path, column, refusal):
+    """Attack pass 25: the check of a Recording's columns ran when it was built only: a column
+    replaced afterwards (``rec.columns["gx"] = ...``, a mutable dict) by a masked array had its
+    hidden 1e4 written to the file as a sample by write_recording and taken by gyro_dps, exit 0;
+    a shorter or a text column ended in numpy's ValueError or TypeError. Checked where used."""
+    rec = Recording.from_dps(np.zeros((100, 3)), 100.0, t_s=np.arange(100) / 100.0)
+    rec.columns["gx"] = column
+    path = tmp_path / "rec.csv"
+    with pytest.raises(RecordingError, match=re.escape(refusal)):
+        write_recording(path, rec)
+    assert not path.exists()
+    with pytest.raises(RecordingError, match=re.escape(refusal)):
+        rec.gyro_dps
+
+
 @pytest.mark.parametrize("rows", [np.ma.masked_array(np.zeros((20, 3)), mask=np.eye(20, 3, k=-10, dtype=bool)),
                                   np.zeros((20, 3)) + 1j])
 def test_recording_writer_refuses_masked_or_complex_rows(tmp_path, rows):
@@ -1242,3 +1260,18 @@ def test_recording_writer_writes_text_cells_only_as_the_reader_reads_them(tmp_pa
                                                      r"not a number as a recording writes it \(none of them written\)"):
                 writer.write(rows)
     assert read_recording(path).columns["gx"].tolist() == ([12.0] * 3 if cell == "12" else [])
+
+
+@pytest.mark.parametrize("fmt", ["%d", "%.3f", "%g"])
+def test_recording_writer_refuses_a_text_cell_its_columns_format_takes_no_text_for(tmp_path, fmt):
+    """Attack pass 25: a text cell of an object array in a column given a number's format ended in
+    Python's TypeError ("%d format: a real number is required, not str") and an unclosed file."""
+    path = tmp_path / "rec.csv"
+    rows = np.array([["1", "2", 3]] * 3, dtype=object)
+    with RecordingWriter(path, {"sample_rate_hz": "100", "gyro_unit": "dps"}, ["gx", "gy", "gz"],
+                         formats=[fmt, None, fmt]) as writer:
+        with pytest.raises(RecordingError, match=f"rec.csv: the rows to write: row 1, column 'gx' holds the text '1', "
+                                                 f"which its format {re.escape(repr(fmt))} takes no text for"):
+            writer.write(rows)
+        writer.write(np.array([[1, "2", 3.5]], dtype=object))
+    assert read_recording(path).gyro_dps.shape == (1, 3)

@@ -114,21 +114,9 @@ class Recording(_HeaderFacts):
     t_gaps: int = 0
 
     def __post_init__(self):
-        """Hold what a file holds: every column one number per row (shape (N,)), all of one
-        length, or RecordingError naming the column. A masked value is refused (``gyro_dps``'s
-        column_stack drops the mask: the number behind it would be a sample, and
-        :func:`~gyrofilter.recording.write_recording` would write it), so are complex numbers,
-        booleans, strings and objects (:func:`gyrofilter.inputs.number_array`). The reader's
-        columns (int or float arrays) are kept as they are, float32 of ``compact`` too."""
-        columns = {name: values if type(values) is np.ndarray and values.dtype.kind in "iuf"
-                   else _numbers(values, f"column {name!r}") for name, values in self.columns.items()}
-        first = next(iter(columns), None)
-        for name, values in columns.items():
-            if values.ndim != 1:
-                raise RecordingError(f"column {name!r} must hold one number per row, shape (N,), got shape {values.shape}")
-            if len(values) != len(columns[first]):
-                raise RecordingError(f"column {name!r} has {len(values)} values, column {first!r} has {len(columns[first])}")
-        self.columns = columns
+        """Hold what a file holds (:func:`checked_columns`); the reader's columns (int or float
+        arrays) are kept as they are, float32 of ``compact`` too."""
+        self.columns = checked_columns(self.columns)
 
     def __len__(self):
         return len(self.columns[GYRO_COLUMNS[0]])
@@ -136,7 +124,8 @@ class Recording(_HeaderFacts):
     @property
     def gyro(self) -> np.ndarray:
         """Angular rate, shape (N, 3), in the file's ``gyro_unit``."""
-        return np.column_stack([self.columns[c] for c in GYRO_COLUMNS])
+        columns = checked_columns(self.columns)  # a column may have been replaced since (a mutable dict)
+        return np.column_stack([columns[c] for c in GYRO_COLUMNS])
 
     @property
     def gyro_dps(self) -> np.ndarray:
@@ -148,8 +137,9 @@ class Recording(_HeaderFacts):
         """Acceleration, shape (N, 3), in m/s^2 (:func:`~gyrofilter.units.to_mps2`); RecordingError
         naming the file when the recording has no ``ax, ay, az`` or no ``accel_unit``
         (:meth:`require_accelerometer`)."""
-        self.require_accelerometer(self.columns)
-        return to_mps2(np.column_stack([self.columns[c] for c in ACCEL_COLUMNS]), self.accel_unit, self.lsb_per_g)
+        columns = checked_columns(self.columns)
+        self.require_accelerometer(columns)
+        return to_mps2(np.column_stack([columns[c] for c in ACCEL_COLUMNS]), self.accel_unit, self.lsb_per_g)
 
     @property
     def t_s(self):
@@ -201,6 +191,25 @@ class Recording(_HeaderFacts):
         for name, values in (extra or {}).items():
             columns[name] = _numbers(values, f"extra column {name!r}")
         return cls(columns=columns, header=head)
+
+
+def checked_columns(columns):
+    """The columns of a :class:`Recording` (name -> values) as a file holds them: every column
+    one number per row (shape (N,)), all of one length, or RecordingError naming the column. A
+    masked value is refused (``gyro_dps``'s column_stack drops the mask: the number behind it
+    would be a sample, and :func:`~gyrofilter.recording.write_recording` would write it), so are
+    complex numbers, booleans, strings and objects (:func:`gyrofilter.inputs.number_array`).
+    Int and float arrays are kept as they are. Run when a Recording is built and again where its
+    columns are used (``gyro``, ``accel_mps2``, the writer): ``columns`` is a mutable dict."""
+    columns = {name: values if type(values) is np.ndarray and values.dtype.kind in "iuf"
+               else _numbers(values, f"column {name!r}") for name, values in columns.items()}
+    first = next(iter(columns), None)
+    for name, values in columns.items():
+        if values.ndim != 1:
+            raise RecordingError(f"column {name!r} must hold one number per row, shape (N,), got shape {values.shape}")
+        if len(values) != len(columns[first]):
+            raise RecordingError(f"column {name!r} has {len(values)} values, column {first!r} has {len(columns[first])}")
+    return columns
 
 
 def _numbers(values, name):
