@@ -1179,6 +1179,16 @@ def test_from_dps_refuses_what_is_not_numbers(values):
         Recording.from_dps(values, 100.0)
 
 
+@pytest.mark.parametrize("name, kwargs", [("gx", {}), ("temp", {"temp_c": np.full(5, 25.0)}),
+                                          ("t", {"t_s": np.arange(5) / 100.0})])
+def test_from_dps_refuses_an_extra_column_named_as_one_of_its_own(name, kwargs):
+    """Attack pass 25: ``extra={"gx": ...}`` replaced the x rates given in ``gyro_dps`` (and an
+    extra ``temp`` or ``t`` the ``temp_c`` or ``t_s`` given) without a word: the recording held
+    the extra column's values as the rates."""
+    with pytest.raises(RecordingError, match=f"extra column '{name}' is a column from_dps makes"):
+        Recording.from_dps(np.zeros((5, 3)), 100.0, extra={name: np.ones(5)}, **kwargs)
+
+
 def test_a_recording_built_in_code_refuses_a_masked_column():
     """Attack pass 23: pass 22's rule of from_dps for the Recording built from its columns
     (a public class): a masked 1e4 in gx was its gyro_dps (the mask dropped by column_stack) and

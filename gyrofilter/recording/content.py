@@ -165,7 +165,7 @@ class Recording(_HeaderFacts):
         in deg/s, at ``sample_rate_hz`` (Hz); optional ``t_s`` (N,) times (s), ``temp_c`` (N,)
         temperatures (deg C), ``accel`` (N, 3) accelerometer columns ``ax, ay, az`` in ``accel_unit``
         (``m/s^2``, ``g``, or ``lsb`` with ``lsb_per_g``: header keys), ``extra`` further columns
-        (name -> (N,) array) and ``header`` keys; the accelerometer's unit keys come from ``accel_unit``
+        (name -> (N,) array, none named as a column made from the other arguments) and ``header`` keys; the accelerometer's unit keys come from ``accel_unit``
         and ``lsb_per_g`` only (a source's header gave ``accel_unit`` to a copy without ``ax, ay, az``,
         which the writer refused)."""
         gyro_dps = _numbers(gyro_dps, "gyro_dps")
@@ -189,6 +189,9 @@ class Recording(_HeaderFacts):
             for i, name in enumerate(ACCEL_COLUMNS):
                 columns[name] = accel[:, i].copy()
         for name, values in (extra or {}).items():
+            if name in columns:  # it would replace the rates, times or temperatures given
+                raise RecordingError(f"extra column {name!r} is a column from_dps makes ({', '.join(columns)}); "
+                                     "give its values through its own argument")
             columns[name] = _numbers(values, f"extra column {name!r}")
         return cls(columns=columns, header=head)
 
