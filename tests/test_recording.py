@@ -1227,8 +1227,9 @@ def test_a_recording_whose_column_is_replaced_later_is_checked_when_written_or_r
     with pytest.raises(RecordingError, match=re.escape(refusal)):
         write_recording(path, rec)
     assert not path.exists()
-    with pytest.raises(RecordingError, match=re.escape(refusal)):
-        rec.gyro_dps
+    for used in ("gyro_dps", "t_s", "temp_c"):
+        with pytest.raises(RecordingError, match=re.escape(refusal)):
+            getattr(rec, used)
 
 
 @pytest.mark.parametrize("rows", [np.ma.masked_array(np.zeros((20, 3)), mask=np.eye(20, 3, k=-10, dtype=bool)),

@@ -144,14 +144,15 @@ class Recording(_HeaderFacts):
     @property
     def t_s(self):
         """Sample times in seconds: the ``t`` column, or uniform times from the sample rate."""
-        if "t" in self.columns:
-            return self.columns["t"]
+        columns = checked_columns(self.columns)
+        if "t" in columns:
+            return columns["t"]
         return np.arange(len(self)) / self.sample_rate_hz
 
     @property
     def temp_c(self):
         """Sensor temperature in deg C, or None without a ``temp`` column."""
-        return self.columns.get("temp")
+        return checked_columns(self.columns).get("temp")
 
     @property
     def duration_s(self) -> float:
@@ -203,7 +204,7 @@ def checked_columns(columns):
     would be a sample, and :func:`~gyrofilter.recording.write_recording` would write it), so are
     complex numbers, booleans, strings and objects (:func:`gyrofilter.inputs.number_array`).
     Int and float arrays are kept as they are. Run when a Recording is built and again where its
-    columns are used (``gyro``, ``accel_mps2``, the writer): ``columns`` is a mutable dict."""
+    columns are used (``gyro``, ``accel_mps2``, ``t_s``, ``temp_c``, the writer): ``columns`` is a mutable dict."""
     columns = {name: values if type(values) is np.ndarray and values.dtype.kind in "iuf"
                else _numbers(values, f"column {name!r}") for name, values in columns.items()}
     first = next(iter(columns), None)
