@@ -410,6 +410,18 @@ def test_filter_timed_refuses_float16_times():
     assert len(rows) and np.all(np.diff(t_rows) > 0) and set(t_rows) <= set(t.astype(np.float32).astype(float))
 
 
+def test_filter_timed_names_float32_when_its_times_repeat():
+    """Attack pass 25: float32 times of a later hour or of the epoch (1.7e9 s, 128 s apart in
+    float32) repeat; the refusal said only "must increase strictly", of times that increased
+    before the caller's conversion (the docstring said float32 keeps them)."""
+    f = GyroFilter(sample_rate_hz=100.0, calibration_s=0.5)
+    t = 1.7e9 + np.arange(300) / 100.0
+    with pytest.raises(SampleError, match="t_s is float32, whose 24 significant bits space times 128 s apart here: "
+                                          "give them as float64"):
+        f.filter_timed(noisy(300), t.astype(np.float32))
+    assert f.samples_in == 0
+
+
 @pytest.mark.parametrize("kind", ["repeated", "decreasing"])
 def test_filter_timed_refuses_times_that_do_not_increase(kind):
     """Issue 37 (attack passes 12-14): a repeated or decreasing time was taken and the rows stamped

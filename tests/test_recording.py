@@ -1179,6 +1179,16 @@ def test_from_dps_refuses_what_is_not_numbers(values):
         Recording.from_dps(values, 100.0)
 
 
+@pytest.mark.parametrize("name, kwargs", [("gx", {}), ("temp", {"temp_c": np.full(5, 25.0)}),
+                                          ("t", {"t_s": np.arange(5) / 100.0})])
+def test_from_dps_refuses_an_extra_column_named_as_one_of_its_own(name, kwargs):
+    """Attack pass 25: ``extra={"gx": ...}`` replaced the x rates given in ``gyro_dps`` (and an
+    extra ``temp`` or ``t`` the ``temp_c`` or ``t_s`` given) without a word: the recording held
+    the extra column's values as the rates."""
+    with pytest.raises(RecordingError, match=f"extra column '{name}' is a column from_dps makes"):
+        Recording.from_dps(np.zeros((5, 3)), 100.0, extra={name: np.ones(5)}, **kwargs)
+
+
 def test_a_recording_built_in_code_refuses_a_masked_column():
     """Attack pass 23: pass 22's rule of from_dps for the Recording built from its columns
     (a public class): a masked 1e4 in gx was its gyro_dps (the mask dropped by column_stack) and
@@ -1229,6 +1239,25 @@ def test_a_recording_without_a_gyro_column_has_a_length_and_says_what_it_lacks(t
     assert len(rec) == 7 and rec.temp_c.tolist() == [25.0] * 7
     with pytest.raises(RecordingError, match=f"^{re.escape(str(path))}: no gyro column\\(s\\) gx, gy, gz$"):
         rec.gyro_dps
+
+
+@pytest.mark.parametrize("column, refusal", [(_masked_at_10(100), "column 'gx' row 10 is masked"),
+                                               (np.zeros(40), "column 'gx' has 40 values, column 't' has 100"),
+                                               (np.array(["1"] * 100), "column 'gx' must be numbers")])
+def test_a_recording_whose_column_is_replaced_later_is_checked_when_written_or_read(tmp_path, column, refusal):
+    """Attack pass 25: the check of a Recording's columns ran when it was built only: a column
+    replaced afterwards (``rec.columns["gx"] = ...``, a mutable dict) by a masked array had its
+    hidden 1e4 written to the file as a sample by write_recording and taken by gyro_dps, exit 0;
+    a shorter or a text column ended in numpy's ValueError or TypeError. Checked where used."""
+    rec = Recording.from_dps(np.zeros((100, 3)), 100.0, t_s=np.arange(100) / 100.0)
+    rec.columns["gx"] = column
+    path = tmp_path / "rec.csv"
+    with pytest.raises(RecordingError, match=re.escape(refusal)):
+        write_recording(path, rec)
+    assert not path.exists()
+    for used in ("gyro_dps", "t_s", "temp_c"):
+        with pytest.raises(RecordingError, match=re.escape(refusal)):
+            getattr(rec, used)
 
 
 @pytest.mark.parametrize("rows", [np.ma.masked_array(np.zeros((20, 3)), mask=np.eye(20, 3, k=-10, dtype=bool)),
@@ -1302,3 +1331,18 @@ def test_notes_built_in_code_at_any_row_leave_every_sample_written_once(tmp_path
     back = read_recording(tmp_path / "n.csv")
     assert np.array_equal(back.gyro, rec.gyro)
     assert [(n.text, n.row) for n in back.notes] == [("before", 0), ("at three", 3), ("plain", 10), ("far", 10)]
+
+
+@pytest.mark.parametrize("fmt", ["%d", "%.3f", "%g"])
+def test_recording_writer_refuses_a_text_cell_its_columns_format_takes_no_text_for(tmp_path, fmt):
+    """Attack pass 25: a text cell of an object array in a column given a number's format ended in
+    Python's TypeError ("%d format: a real number is required, not str") and an unclosed file."""
+    path = tmp_path / "rec.csv"
+    rows = np.array([["1", "2", 3]] * 3, dtype=object)
+    with RecordingWriter(path, {"sample_rate_hz": "100", "gyro_unit": "dps"}, ["gx", "gy", "gz"],
+                         formats=[fmt, None, fmt]) as writer:
+        with pytest.raises(RecordingError, match=f"rec.csv: the rows to write: row 1, column 'gx' holds the text '1', "
+                                                 f"which its format {re.escape(repr(fmt))} takes no text for"):
+            writer.write(rows)
+        writer.write(np.array([[1, "2", 3.5]], dtype=object))
+    assert read_recording(path).gyro_dps.shape == (1, 3)

@@ -99,6 +99,29 @@ def test_a_filter_fed_sample_by_sample_smooths_as_one_call(seed):
     np.testing.assert_array_equal(s.smooth(), whole)
 
 
+def test_a_filter_fed_block_by_block_logs_a_block_in_about_the_documented_memory():
+    """Attack pass 25: the log kept four small arrays per kernel call, so a filter fed by update()
+    (one call per block, a live source) held about 640 bytes per block and one fed by filter() in
+    5-sample reads about 1700, against the 12 floats (96 bytes) of the module docstring: a day at
+    100 Hz would have taken 1-3 GB, not 0.17."""
+    import tracemalloc
+    rng = np.random.default_rng(0)
+    x = 0.05 * rng.standard_normal((210 + 5 * 2000, 3))
+    f = GyroFilter(100.0)
+    s = Smoother(f)
+    for row in x[:210]:  # the calibration and two blocks: a kernel compiled by numba, once
+        f.update(row)
+    tracemalloc.start()
+    try:
+        for row in x[210:]:
+            f.update(row)
+        held, _ = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert f.blocks_out == 2002 and held / 2000 < 2 * 96
+    np.testing.assert_array_equal(s.smooth(), smooth(x, 100.0))
+
+
 def test_combine_is_the_inverse_variance_mean():
     np.testing.assert_allclose(combine(np.array([1.0]), np.array([1.0]), np.array([3.0]), np.array([3.0])), [1.5])
     np.testing.assert_allclose(combine(np.array([2.0]), np.array([0.5]), np.array([-4.0]), np.array([0.5])), [-1.0])

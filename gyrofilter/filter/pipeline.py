@@ -340,7 +340,8 @@ class GyroFilter:
         the first that is not, and the filter is left as it was) and not float16: its 11
         significant bits space the times 1 ms apart from 1 s on, 1 s from 1024 s and 32 s near its
         largest, 65504 s, so the stamps of a 100-Hz record collapse onto each other within seconds
-        (refused, not up-cast: the stamps are already rounded; float32 or float64 keep them).
+        (refused, not up-cast: the stamps are already rounded; float64 keeps them, float32's 24 bits
+        to 1 ms from 8192 s on, 1 s from 8.4e6 s: epoch times repeat, refused as below, saying so).
         Times increase strictly, as a recording's ``t`` does
         (:func:`~gyrofilter.recording.checks.first_step_back`), also from the last time of the
         previous call of this method: a repeated or decreasing time is refused (SampleError naming
@@ -363,7 +364,10 @@ class GyroFilter:
             row += 1 - len(before)
             earlier = f"row {row - 1}'s {float(t[row - 1])!r}" if row > 0 else \
                 f"{self._t_last_s!r}, the last time of the previous call"
-            raise SampleError(f"t_s must increase strictly (s), got {float(t[row])!r} after {earlier}",
+            why = "" if np.asarray(t_s).dtype != np.float32 else \
+                (f"; t_s is float32, whose 24 significant bits space times {float(np.spacing(np.float32(t[row]))):g} s "
+                 "apart here: give them as float64")
+            raise SampleError(f"t_s must increase strictly (s), got {float(t[row])!r} after {earlier}{why}",
                               row, f"t_s row {row}")
         rows = self._filter(x, temp_c)
         if len(t):

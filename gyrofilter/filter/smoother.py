@@ -48,21 +48,47 @@ SMOOTHABLE_PRESETS = tuple(name for name, chosen in PRESETS.items()
 BACKWARD_CHUNK = 65536
 
 
+#: blocks a :class:`BlockLog` gathers before it keeps them as one chunk
+LOG_CHUNK = 1024
+
+
 class BlockLog:
     """What a forward filter handed its adaptive Kalman stage and got back: the block means y and
     y_motion (M, 3; see :func:`gyrofilter.filter.adaptive_kalman.run_blocks_adaptive`), the posteriors x and
-    their variances P (M, 3), kept in the chunks the filter ran (joined by :meth:`arrays`)."""
+    their variances P (M, 3), joined by :meth:`arrays`. A kernel call's blocks are gathered in a
+    buffer of :data:`LOG_CHUNK` blocks and kept a buffer at a time (a call of that many or more
+    as it is): 12 floats a block, also for a filter fed by ``update()``, one call a block (four
+    arrays a call cost 640 bytes a block)."""
 
     def __init__(self):
         self._chunks = ([], [], [], [])
+        self._buffer = np.empty((len(self._chunks), LOG_CHUNK, 3))
+        self._filled = 0
 
     def append(self, y, y_motion, x, trace):
         """One call of the kernel: its inputs, outputs and trace (M, 3, 3)."""
-        for chunks, values in zip(self._chunks, (y, y_motion, x, trace[:, adaptive_kalman.POST_VAR])):
-            chunks.append(np.array(values))
+        values = (y, y_motion, x, trace[:, adaptive_kalman.POST_VAR])
+        n = len(y)
+        if self._filled + n > LOG_CHUNK:
+            self._keep_buffer()
+        if n >= LOG_CHUNK:
+            for chunks, v in zip(self._chunks, values):
+                chunks.append(np.array(v))
+            return
+        for buffer, v in zip(self._buffer, values):
+            buffer[self._filled : self._filled + n] = v
+        self._filled += n
+
+    def _keep_buffer(self):
+        """The buffered blocks as a chunk of their own (in order: before any later call's)."""
+        if self._filled:
+            for chunks, buffer in zip(self._chunks, self._buffer):
+                chunks.append(buffer[: self._filled].copy())
+            self._filled = 0
 
     def arrays(self):
         """(y, y_motion, x, P) of every block so far, each joined into one array."""
+        self._keep_buffer()
         if not self._chunks[0]:
             return tuple(np.empty((0, 3)) for _ in self._chunks)
         for chunks in self._chunks:

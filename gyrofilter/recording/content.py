@@ -114,24 +114,12 @@ class Recording(_HeaderFacts):
     t_gaps: int = 0
 
     def __post_init__(self):
-        """Hold what a file holds: every column one number per row (shape (N,)), all of one
-        length, or RecordingError naming the column. A masked value is refused (``gyro_dps``'s
-        column_stack drops the mask: the number behind it would be a sample, and
-        :func:`~gyrofilter.recording.write_recording` would write it), so are complex numbers,
-        booleans, strings and objects (:func:`gyrofilter.inputs.number_array`). The reader's
-        columns (int or float arrays) are kept as they are, float32 of ``compact`` too. The header
-        states the sample rate and units the properties read, checked as a file's are
+        """Hold what a file holds (:func:`checked_columns`); the reader's columns (int or float
+        arrays) are kept as they are, float32 of ``compact`` too. The header states the sample
+        rate and units the properties read, checked as a file's are
         (:func:`~gyrofilter.recording.header.check_facts`: the version aside)."""
         check_facts(self.header, self.path or "recording")
-        columns = {name: values if type(values) is np.ndarray and values.dtype.kind in "iuf"
-                   else _numbers(values, f"column {name!r}") for name, values in self.columns.items()}
-        first = next(iter(columns), None)
-        for name, values in columns.items():
-            if values.ndim != 1:
-                raise RecordingError(f"column {name!r} must hold one number per row, shape (N,), got shape {values.shape}")
-            if len(values) != len(columns[first]):
-                raise RecordingError(f"column {name!r} has {len(values)} values, column {first!r} has {len(columns[first])}")
-        self.columns = columns
+        self.columns = checked_columns(self.columns)
 
     def __len__(self):
         return len(next(iter(self.columns.values()), ()))  # the columns are of one length
@@ -140,10 +128,11 @@ class Recording(_HeaderFacts):
     def gyro(self) -> np.ndarray:
         """Angular rate, shape (N, 3), in the file's ``gyro_unit``; RecordingError naming the
         recording without the columns ``gx, gy, gz`` (read with ``columns=`` that left one out)."""
-        missing = [c for c in GYRO_COLUMNS if c not in self.columns]
+        columns = checked_columns(self.columns)  # a column may have been replaced since (a mutable dict)
+        missing = [c for c in GYRO_COLUMNS if c not in columns]
         if missing:
             raise RecordingError(f"{self.path or 'recording'}: no gyro column(s) {', '.join(missing)}")
-        return np.column_stack([self.columns[c] for c in GYRO_COLUMNS])
+        return np.column_stack([columns[c] for c in GYRO_COLUMNS])
 
     @property
     def gyro_dps(self) -> np.ndarray:
@@ -155,20 +144,22 @@ class Recording(_HeaderFacts):
         """Acceleration, shape (N, 3), in m/s^2 (:func:`~gyrofilter.units.to_mps2`); RecordingError
         naming the file when the recording has no ``ax, ay, az`` or no ``accel_unit``
         (:meth:`require_accelerometer`)."""
-        self.require_accelerometer(self.columns)
-        return to_mps2(np.column_stack([self.columns[c] for c in ACCEL_COLUMNS]), self.accel_unit, self.lsb_per_g)
+        columns = checked_columns(self.columns)
+        self.require_accelerometer(columns)
+        return to_mps2(np.column_stack([columns[c] for c in ACCEL_COLUMNS]), self.accel_unit, self.lsb_per_g)
 
     @property
     def t_s(self):
         """Sample times in seconds: the ``t`` column, or uniform times from the sample rate."""
-        if "t" in self.columns:
-            return self.columns["t"]
+        columns = checked_columns(self.columns)
+        if "t" in columns:
+            return columns["t"]
         return np.arange(len(self)) / self.sample_rate_hz
 
     @property
     def temp_c(self):
         """Sensor temperature in deg C, or None without a ``temp`` column."""
-        return self.columns.get("temp")
+        return checked_columns(self.columns).get("temp")
 
     @property
     def duration_s(self) -> float:
@@ -182,7 +173,7 @@ class Recording(_HeaderFacts):
         in deg/s, at ``sample_rate_hz`` (Hz); optional ``t_s`` (N,) times (s), ``temp_c`` (N,)
         temperatures (deg C), ``accel`` (N, 3) accelerometer columns ``ax, ay, az`` in ``accel_unit``
         (``m/s^2``, ``g``, or ``lsb`` with ``lsb_per_g``: header keys), ``extra`` further columns
-        (name -> (N,) array) and ``header`` keys; the accelerometer's unit keys come from ``accel_unit``
+        (name -> (N,) array, none named as a column made from the other arguments) and ``header`` keys; the accelerometer's unit keys come from ``accel_unit``
         and ``lsb_per_g`` only (a source's header gave ``accel_unit`` to a copy without ``ax, ay, az``,
         which the writer refused)."""
         gyro_dps = _numbers(gyro_dps, "gyro_dps")
@@ -206,8 +197,30 @@ class Recording(_HeaderFacts):
             for i, name in enumerate(ACCEL_COLUMNS):
                 columns[name] = accel[:, i].copy()
         for name, values in (extra or {}).items():
+            if name in columns:  # it would replace the rates, times or temperatures given
+                raise RecordingError(f"extra column {name!r} is a column from_dps makes ({', '.join(columns)}); "
+                                     "give its values through its own argument")
             columns[name] = _numbers(values, f"extra column {name!r}")
         return cls(columns=columns, header=head)
+
+
+def checked_columns(columns):
+    """The columns of a :class:`Recording` (name -> values) as a file holds them: every column
+    one number per row (shape (N,)), all of one length, or RecordingError naming the column. A
+    masked value is refused (``gyro_dps``'s column_stack drops the mask: the number behind it
+    would be a sample, and :func:`~gyrofilter.recording.write_recording` would write it), so are
+    complex numbers, booleans, strings and objects (:func:`gyrofilter.inputs.number_array`).
+    Int and float arrays are kept as they are. Run when a Recording is built and again where its
+    columns are used (``gyro``, ``accel_mps2``, ``t_s``, ``temp_c``, the writer): ``columns`` is a mutable dict."""
+    columns = {name: values if type(values) is np.ndarray and values.dtype.kind in "iuf"
+               else _numbers(values, f"column {name!r}") for name, values in columns.items()}
+    first = next(iter(columns), None)
+    for name, values in columns.items():
+        if values.ndim != 1:
+            raise RecordingError(f"column {name!r} must hold one number per row, shape (N,), got shape {values.shape}")
+        if len(values) != len(columns[first]):
+            raise RecordingError(f"column {name!r} has {len(values)} values, column {first!r} has {len(columns[first])}")
+    return columns
 
 
 def _numbers(values, name):

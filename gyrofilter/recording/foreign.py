@@ -191,10 +191,8 @@ def _name_unit(normal, pattern):
 def _column_index(text, names, path):
     """The index of the column ``text`` of ``--columns``: a name of the column row, or a 1-based number
     in ASCII digits (as every number a user gives: :mod:`gyrofilter.inputs`; ``１`` or ``¹`` is no number),
-    or, from code, that number as an int. A name that several columns have is refused: which one
-    is meant is not guessed."""
-    if isinstance(text, (int, np.integer)) and not isinstance(text, (bool, np.bool_)):
-        text = str(int(text))
+    or, from code, that number as an int. A name that several columns have is refused (not guessed)."""
+    text = str(int(text)) if isinstance(text, (int, np.integer)) and not isinstance(text, (bool, np.bool_)) else text
     if not isinstance(text, str):
         raise RecordingError(f"{path}: --columns: {text!r} is neither a column name nor a 1-based number")
     if names.count(text) > 1:
@@ -413,8 +411,7 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
     if time_unit is not None and time_unit not in TIME_UNITS:
         raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
     if isinstance(columns, str):  # its letters would be taken for column names one by one
-        raise RecordingError(f"--columns takes a list of 3 or 4 column names or 1-based numbers, got the text {quote(columns)}"
-                             " (a list: e.g. columns=['time', 'wx', 'wy', 'wz'])")
+        raise RecordingError(f"--columns takes a list of 3 or 4 column names or 1-based numbers, got the text {quote(columns)}")
     if sample_rate_hz is not None:
         sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
     raw = open_log(path, on_line=_FirstRow(path))

@@ -20,7 +20,7 @@ from ..closable import Closable
 from ..errors import RecordingError
 from ..inputs import check_number, is_plain_number, number_array, quote
 from .checks import TimeCheck, check_rates
-from .content import Recording, RecordingHead
+from .content import Recording, RecordingHead, checked_columns
 from .header import header_text, note_line
 
 #: %-format of a value written exactly: ``str`` of a float (a numpy scalar too) is the shortest
@@ -40,8 +40,9 @@ def write_recording(path, rec: Recording, *, compresslevel=6):
     it preceded (its ``row``, :class:`~gyrofilter.recording.Note`; a plain ``(line, text)`` pair
     after the data), so that the file reads back with its notes where they were.
     The header, the values and ``t`` are checked before the file is created (:class:`RecordingWriter`)."""
-    names = list(rec.columns)
-    data = np.column_stack([rec.columns[c] for c in names]) if names else np.empty((0, 0))
+    columns = checked_columns(rec.columns)  # as built, or a column replaced since
+    names = list(columns)
+    data = np.column_stack([columns[c] for c in names]) if names else np.empty((0, 0))
     _check_finite(data, names, path)
     header_text(rec.header, names, path)
     if len(data):
@@ -79,25 +80,40 @@ def _check_finite(rows, columns, where):
                              f"{float(rows[row, col])!r}; a recording holds finite numbers only (those rows not written)")
 
 
-def _rows_of_numbers(rows, where, columns):
+def _rows_of_numbers(rows, where, columns, formats):
     """``rows`` for :meth:`RecordingWriter.write` as an array: an object array (text cells) as
     it is, once each cell is a number as the file will hold it (:func:`_written_as_read`),
     anything else as numbers (:func:`gyrofilter.inputs.number_array`), or RecordingError naming
     the first cell that is not (its row, its column of ``columns``): a masked value (converting
     would drop the mask and write the number behind it as a sample), complex numbers (their
-    imaginary part dropped), booleans or strings."""
+    imaginary part dropped), booleans or strings, or a text cell whose column's format (of
+    ``formats``, None for exact) takes no text (``%d``: a TypeError of Python's)."""
     if isinstance(rows, np.ndarray) and rows.dtype == object:
         for (row, col), cell in np.ndenumerate(rows if rows.ndim == 2 else rows.reshape(-1, 1)):
+            name = quote(columns[col]) if rows.ndim == 2 and col < len(columns) else str(col + 1)
             if not _written_as_read(cell):
-                name = quote(columns[col]) if rows.ndim == 2 and col < len(columns) else str(col + 1)
                 shown = quote(cell if isinstance(cell, str) else repr(cell))
                 raise RecordingError(f"{where}: the rows to write: row {row + 1}, column {name} holds {shown}, "
                                      "not a number as a recording writes it (none of them written)")
+            fmt = formats[col] if rows.ndim == 2 and col < len(formats) else None
+            if isinstance(cell, str) and fmt is not None and not _takes_text(fmt, cell):
+                raise RecordingError(f"{where}: the rows to write: row {row + 1}, column {name} holds the text "
+                                     f"{quote(cell)}, which its format {fmt!r} takes no text for (a text cell is "
+                                     "written as it is: give the column no format, or '%s'; none of them written)")
         return rows
     values, problem = number_array(rows, f"{where}: the rows to write:", first_row=1)
     if problem is not None:
         raise RecordingError(f"{problem[0]} (none of them written)")
     return values
+
+
+def _takes_text(fmt, cell):
+    """Whether the %-format ``fmt`` formats the text ``cell`` (``%s`` does, ``%d`` and ``%g`` do not)."""
+    try:
+        fmt % cell
+    except (TypeError, ValueError):
+        return False
+    return True
 
 
 def _written_as_read(cell):
@@ -206,7 +222,7 @@ class RecordingWriter(Closable):
         none of them written) when one holds NaN or +-inf. The cells of an object array (text a
         converter formatted itself, say) go through their formats as they are (``%s`` where a column has
         none), once checked as numbers the reader reads (:func:`_written_as_read`)."""
-        rows = _rows_of_numbers(rows, self.name, self.columns)
+        rows = _rows_of_numbers(rows, self.name, self.columns, self._formats)
         if rows.size == 0:
             return
         if rows.ndim != 2 or rows.shape[1] != len(self.columns):
