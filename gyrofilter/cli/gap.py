@@ -22,7 +22,7 @@ from ..analysis.fleet.work import FleetSettings
 from ..analysis.gap.baseline import MAX_SIMS, MIN_SIMS
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
-from ..errors import SettingsError
+from ..errors import RecordingError, SettingsError
 from ..plots import pyplot
 from ..sim.simulate import check_seed
 from ..units import AXES
@@ -90,6 +90,11 @@ def run(args):
         pyplot()  # a missing matplotlib is said now, not after the analysis
     rec, report = analyse_file(args.recording, n_sims=args.sims, bootstrap=args.bootstrap,
                                warn=console.say_warning, progress=progress, refuse_motion=not args.allow_motion)
+    d = report.get("discrepancy")
+    if not d or d["overall_before"] is None:  # nothing analysed: not a result that exit 0 could vouch for
+        why = ("; ".join(f"{a}: {text}" for a, text in d["not_analysed"].items()) if d
+               else report["notes"][0] if report["notes"] else "no discrepancy computed")
+        raise RecordingError(f"{args.recording}: no axis analysed ({why}); nothing written")
     with contextlib.ExitStack() as files:
         if args.json is not None:
             outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
@@ -98,19 +103,16 @@ def run(args):
             gap_report.write_report(report, rec, files.enter_context(outputs.replacing_in(args.report)))
     written = json_files + ([os.path.join(args.report, gap_report.REPORT_NAME)] if args.report else [])
     console.say(f"wrote {' and '.join(written)}" if written else "(every number of the analysis: --json OUT.json)")
-    d = report.get("discrepancy")
-    gain = ("no discrepancy computed (see the notes)" if not d else
-            "no axis analysed (see the notes)" if d["overall_before"] is None else
-            f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}"
+    gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}"
             + (f" over {', '.join(a for a in AXES if a not in d['not_analysed'])}" if d["not_analysed"] else ""))
     console.paragraph(f"{args.recording}: {_count(len(report['findings']), 'finding')}; {gain} "
                       f"({report.get('runtime_s', time.perf_counter() - t0):.1f} s)")
     rows = [f for f in report["findings"] if f["axis"] not in AXES]  # whole rows: every axis at once
     for axis in AXES:
         found = [f for f in report["findings"] if f["axis"] == axis]
-        if d and axis in d["not_analysed"]:
+        if axis in d["not_analysed"]:
             console.paragraph(f"{axis}: not analysed ({d['not_analysed'][axis]})", "  ")
-        elif d:
+        else:
             before = gap_report.d_text(d["before"][axis], d.get("before_se", {}).get(axis, 0.0))
             after = gap_report.d_text(d["after"][axis], d.get("after_se", {}).get(axis, 0.0))
             console.paragraph(f"{axis}: D {before}" + (f" -> {after} with {_count(len(found), 'finding')}"
@@ -130,9 +132,8 @@ def run(args):
             console.paragraph(gap_report.uncertain_text(entry), "    ")
     for note in report.get("notes", []):
         console.paragraph(f"note: {note}", "  ")
-    if d:
-        console.paragraph("(D: mean squared z-score of the record's features against the model's simulations; about 1 "
-                          "where the model explains the record; +- its sampling error over the simulations)", "  ")
+    console.paragraph("(D: mean squared z-score of the record's features against the model's simulations; about 1 "
+                      "where the model explains the record; +- its sampling error over the simulations)", "  ")
     return 0
 
 

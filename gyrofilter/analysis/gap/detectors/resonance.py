@@ -164,7 +164,8 @@ def resonance_fit(x, sample_rate_hz, lines=()):
     fits' background, so a tall line's tails are not taken for a hump. Returns a dict with
     ``center_hz``, ``q``, ``rms_dps`` (the hump's), ``statistic`` (F), ``peak_ratio`` (the hump's
     PSD over the null's at f₀) and ``segments``; None where the record is too short (fewer than
-    32 bins to fit)."""
+    32 bins to fit) or its spectrum is 0 in most of them (a quiet sensor on one code, a few other
+    samples: no background to fit a hump against; its log was a math domain error)."""
     from scipy.optimize import least_squares
 
     f, s, n_seg = _welch(x, sample_rate_hz)
@@ -179,6 +180,8 @@ def resonance_fit(x, sample_rate_hz, lines=()):
                  for centre, width, rms in lines), np.zeros(fw.size))
     bins = _fit_bins(fw, sample_rate_hz)
     level = float(np.median(s[sel]))
+    if not level > 0.0:
+        return None
     p0 = np.array([math.log(level), 0.0, 0.0, math.log(level * 1e-3 * fw[0])])
     lo0, hi0 = [p0[0] - 10, -0.95, -0.95, p0[3] - 30], [p0[0] + 10, 0.95, 0.95, p0[3] + 10]
 
