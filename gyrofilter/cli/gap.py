@@ -14,7 +14,6 @@ when everything is written, so a failed run leaves none of them.
 """
 import contextlib
 import os
-import sys
 import time
 
 from ..analysis.gap import report as gap_report
@@ -47,7 +46,7 @@ def add_arguments(parser):
     parser.add_argument("--allow-motion", action="store_true",
                         help="analyse a recording that does not look still (refused by default: the analysis models a "
                              "still gyro, so its findings would describe the motion)")
-    parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
+    console.add_progress_argument(parser)
     batch.add_arguments(parser)
     options.add_force_argument(parser)
 
@@ -79,13 +78,8 @@ def run(args):
     json_files = [args.json] if args.json is not None else []
     outputs.check_output_folder(args.report, "--report", json_files)
     outputs.check_outputs(json_files + report_files, [args.recording], args.force)
-    show = args.progress or sys.stderr.isatty()
     t0 = time.perf_counter()
-
-    def progress(text):
-        if show:
-            console.say(f"gap [{time.perf_counter() - t0:5.1f} s] {text}", flush=True)
-
+    progress = console.ProgressLines(args.progress, "gap")
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis
     rec, report = analyse_file(args.recording, n_sims=args.sims, bootstrap=args.bootstrap,
