@@ -212,7 +212,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
     findings = [{"effect": "temperature", "axis": a, "params": {"coefficient_dps_per_c": 0.02},
                  "gain": {"before": 15.0, "after": 3.0},
                  "evidence": f"the bias follows the temperature on {a}; so this record cannot tell them apart. "
-                             f"{WHY_THE_COVARIATE}; baseline simulations: largest departure on {a}",
+                             f"{WHY_THE_COVARIATE}; axis {a} as a whole departs most from the baseline simulations in the spike count",
                  "alternatives": [{"effect": "warmup", "params": {"amplitude_dps": 0.06, "tau_s": 840.0}, "D": 0.84}]}
                 for a in AXES]
     page = _gap({"options": {}, "gap": {"n_simulations": 24, "baseline": {"axes": {a: axis for a in AXES}},
@@ -225,7 +225,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
         item = item[:item.index("</li>")]
         assert item.index("Indistinguishable") < item.index("Evidence:")
         assert "figure" not in item  # the page's rate in time is the filter's trace: it shows no reading
-        assert f"cannot tell them apart; baseline simulations: largest departure on {a}." in item
+        assert f"cannot tell them apart; axis {a} as a whole departs most from the baseline simulations in the spike count." in item
     assert "<h3>Notes</h3><ul><li>first note</li><li>second note</li></ul>" in page
 
 
