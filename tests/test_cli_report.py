@@ -404,3 +404,19 @@ def test_repeated_rows_are_warned_and_named(tmp_path, capsys):
     page = out.read_text()
     table = page[page.index("<h3>Extended model</h3>"):]
     assert f"{REPEATED_SAMPLES}: fraction = {fraction:.4g}" in table[:table.index("</p>")]
+
+
+@pytest.mark.parametrize("sims, samples, ran, said", [
+    (None, 10_000, 24, "--sims 24 (gap's default for 10000 samples per axis: 24 up to 200000, fewer above"),
+    (None, 400_000, 12, "--sims 12 (gap's default for 400000 samples per axis: 24 up to 200000, fewer above"),
+    (10, 10_000, 10, "--sims 10"),
+])
+def test_the_summary_says_the_number_of_simulations_gap_ran(sims, samples, ran, said):
+    """A new user's trial: the options row said "--sims as gap chooses", which a reader of the page
+    cannot know. It says the number the analysis ran and, where gap chose it, why."""
+    from gyrofilter.view.report import _summary
+
+    data = {"recording": {"name": "r.csv", "samples": samples, "duration_s": samples / 100, "header": {}},
+            "options": {"sims": sims, "keep_outliers": False}, "gap": {"n_simulations": ran}}
+    page = _summary(data)
+    assert "as gap chooses" not in page and html.escape(said) in page, page

@@ -18,7 +18,7 @@ import time
 
 from ..analysis.gap import report as gap_report
 from ..analysis.fleet.work import FleetSettings
-from ..analysis.gap.baseline import MAX_SIMS, MIN_SIMS
+from ..analysis.gap.baseline import DEFAULT_SIMS, FEWEST_DEFAULT_SIMS, MAX_SIMS, MIN_SIMS, SIMS_IN_FULL_UP_TO
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import SettingsError
@@ -38,7 +38,8 @@ def add_arguments(parser):
                         help="no effect, kept for older scripts: the analysis draws its simulations from fixed "
                              "streams, so its answer does not depend on a seed (docs/gap.md, \"How stable\")")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
-                        help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; {MIN_SIMS} to {MAX_SIMS})")
+                        help=f"baseline simulations (default {DEFAULT_SIMS}; {FEWEST_DEFAULT_SIMS}-{DEFAULT_SIMS} above "
+                             f"{SIMS_IN_FULL_UP_TO:,} samples per axis; {MIN_SIMS} to {MAX_SIMS})")
     parser.add_argument("--bootstrap", type=options.whole_number, default=None, metavar="N",
                         help=f"bootstrap runs per axis with findings for the parameters' 95 %% intervals (default "
                              f"{DEFAULT_BOOTSTRAP}; 10-{DEFAULT_BOOTSTRAP} above {FEWER_BOOTSTRAP_FROM:,} samples per axis; "
