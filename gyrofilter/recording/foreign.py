@@ -52,11 +52,11 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import is_plain_number, quote
-from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz, to_dps
+from ..units import AXES, GYRO_UNITS, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .foreign_extras import find_extras
+from .foreign_extras import find_extras, gyro_out_of_range
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
@@ -449,9 +449,9 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     t_parts, line_parts = [], []
     for numbers, cells in _row_chunks(raw, path, plan, counts):
         gyro_values = [np.array([float(c) for c in col]) for col in cells[:3]]
-        out_of_range = out_of_range or _out_of_range(gyro_values, unit, lsb_per_dps, numbers, gyro, names, path)
+        beyond = extras.check(cells[len(wanted) - len(extras.indices):], numbers, names, path)  # every chunk: formats
+        out_of_range = out_of_range or gyro_out_of_range(gyro_values, unit, lsb_per_dps, numbers, gyro, names, path) or beyond
         integral = [whole and exact_format(v) == "%d" for whole, v in zip(integral, gyro_values)]
-        extras.check(cells[len(wanted) - len(extras.indices):], numbers, names, path)
         if stamps is not None:
             line_parts.append(np.array(numbers))
             if stamps.far is None and stamps.add(cells[3], lambda i: f"{path}: line {numbers[i]}, column {time + 1} "
@@ -528,17 +528,6 @@ def _gyro_unit(unit, stated, lsb_per_dps, path):
         raise RecordingError(f"--lsb-per-dps goes with --unit lsb, not {unit}")
     return unit
 
-
-def _out_of_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
-    """The refusal of the first gyro value beyond +-MAX_RATE_DPS, naming its line and column, or None."""
-    with np.errstate(over="ignore"):
-        dps = to_dps(np.column_stack(values), unit, lsb_per_dps)
-    bad = np.argwhere(~(np.abs(dps) <= MAX_RATE_DPS))
-    if not bad.size:
-        return None
-    row, axis = (int(i) for i in bad[0])
-    return (f"{path}: line {line_of[row]}, column {gyro[axis] + 1} ({quote(names[gyro[axis]])}): "
-            f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
 
 
 def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution_s):

@@ -1,4 +1,5 @@
-"""The temperature and accelerometer columns of another tool's log (``gyrofilter convert``).
+"""The temperature and accelerometer columns of another tool's log (``gyrofilter convert``), and
+the range check of its values, the gyro's too (:func:`gyro_out_of_range`).
 
 :func:`find_extras` picks them among the columns the gyro and the time leave
 (:mod:`gyrofilter.recording.foreign` reads the log and passes the names):
@@ -11,7 +12,8 @@
   ``temp_c``, ``Temperature (°C)``: deg C; ``(raw)``: counts). A column whose unit neither says
   is left out with a warning naming ``--temp-unit`` (raw counts written as deg C would be
   silently wrong); ``none`` leaves it out. A value beyond :data:`~gyrofilter.units.TEMP_RANGE_C`
-  is refused naming its line and column (raw counts in a column named in deg C).
+  is refused naming its line and column (raw counts in a column named in deg C), after the pass
+  over the rows, as a rate beyond :data:`~gyrofilter.units.MAX_RATE_DPS` is.
 - **Accelerometer.** Columns named like an accelerometer's axis (:data:`ACCEL_NAME`: ``ax``,
   ``AccX``, ``acc_x``, ``accel_x``, ``accelerometer_x``, ``linear_acceleration.x`` of a ROS
   export, which includes gravity) become ``ax, ay, az`` with the header's ``accel_unit``: the
@@ -32,8 +34,8 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import quote
-from ..units import (ACCEL_UNITS, AXES, MAX_ACCEL_MPS2, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C, TEMP_RANGE_C,
-                     check_lsb_per_g, to_mps2)
+from ..units import (ACCEL_UNITS, AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
+                     TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2)
 from .header import ACCEL_COLUMNS, TEMPERATURE_LIKE_NAMES, accel_units_header, format_number
 from .writer import EXACT_FORMAT, exact_format
 
@@ -84,9 +86,9 @@ class Extras:
         return out
 
     def check(self, cells, lines, names, path):
-        """Refuse the first temperature beyond :data:`TEMP_RANGE_C` or acceleration beyond
-        :data:`MAX_ACCEL_MPS2` of a chunk's ``cells``, naming its line (``lines``) and column;
-        keep each column's integrality."""
+        """The refusal of the first temperature beyond :data:`TEMP_RANGE_C` or acceleration beyond
+        :data:`MAX_ACCEL_MPS2` of a chunk's ``cells``, naming its line (``lines``) and column, or
+        None; keeps each column's integrality."""
         values = self.values(cells)
         self.integral = [whole and exact_format(v) == "%d" for whole, v in zip(self.integral or [True] * len(values), values)]
         for k, v in enumerate(values):
@@ -101,12 +103,26 @@ class Extras:
             what = (f"{value} deg C is beyond {TEMP_RANGE_C[0]:g} .. {TEMP_RANGE_C[1]:g} deg C, no gyro's die"
                     + ("" if self.temp_unit == "mpu6050" else "; raw MPU6050 counts? give --temp-unit mpu6050") if temp else
                     f"{value} {self.accel_unit} is beyond the +-{MAX_ACCEL_MPS2:g} m/s^2 any accelerometer reads")
-            raise RecordingError(f"{path}: line {lines[bad[0]]}, column {i + 1} ({quote(names[i])}): {what}")
+            return f"{path}: line {lines[bad[0]]}, column {i + 1} ({quote(names[i])}): {what}"
+        return None
 
     def formats(self):
         """The writer's formats of the columns: ``%d`` where every value is integral, else
         :data:`~gyrofilter.recording.writer.EXACT_FORMAT` (the writer's rule, :func:`exact_format`)."""
         return ["%d" if whole else EXACT_FORMAT for whole in (self.integral or [True] * len(self.columns))]
+
+
+def gyro_out_of_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
+    """The refusal of the first gyro value (``values``: the x, y, z columns of a chunk in ``unit``)
+    beyond +-MAX_RATE_DPS, naming its line and column (``gyro``: their indices), or None."""
+    with np.errstate(over="ignore"):
+        dps = to_dps(np.column_stack(values), unit, lsb_per_dps)
+    bad = np.argwhere(~(np.abs(dps) <= MAX_RATE_DPS))
+    if not bad.size:
+        return None
+    row, axis = (int(i) for i in bad[0])
+    return (f"{path}: line {line_of[row]}, column {gyro[axis] + 1} ({quote(names[gyro[axis]])}): "
+            f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
 
 
 def find_extras(names, normal, taken, path, *, temp_unit=None, accel_unit=None, lsb_per_g=None):
