@@ -28,6 +28,10 @@ MAX_SAMPLE_RATE_HZ = 100_000.0  # far above any MEMS gyro (the MPU6050 samples a
 #: the plausible temperatures (deg C) of a gyro's die, ends included, for a sample and a calibration:
 #: beyond any MEMS part (the MPU6050's TEMP_OUT register spans -60 to +133 deg C)
 TEMP_RANGE_C = (-100.0, 200.0)
+#: the MPU6050's temperature register (register map section 4.18): T / degC = TEMP_OUT / 340 + 36.53
+#: (the device's driver and ``convert --temp-unit mpu6050`` of a log of raw counts)
+MPU6050_TEMP_LSB_PER_C = 340.0
+MPU6050_TEMP_OFFSET_C = 36.53
 #: largest |angular rate| a sample may have (deg/s): 50x the MPU6050's widest full scale (2000 deg/s)
 #: and 7x the widest MEMS gyros' (about 14 000 deg/s); it keeps every square the filters take finite
 MAX_RATE_DPS = 100_000.0

@@ -378,3 +378,35 @@ def test_a_console_closed_at_the_start_is_the_null_device(tmp_path):
                              sys.executable, rec_out], timeout=120)
     assert (allan.returncode, record.returncode) == (0, 0)
     assert json.loads(out.read_text()) and len(read_recording(rec_out)) == 100
+
+
+def test_progress_in_a_log_is_a_line_a_while_and_every_line_said_always(capsys):
+    """A new user's trial: `allan --fleet` under nohup printed nothing for 8 minutes (progress only
+    on a terminal). In a log (stderr not a terminal, no --progress) the rule of every command is
+    one line per LOG_PROGRESS_EVERY_S (none in a short run: a refusal stays one line) and every line
+    said with always=True (a fleet's recording); with --progress, every line, as on a terminal."""
+    from gyrofilter.cli.console import LOG_PROGRESS_EVERY_S, ProgressLines
+    now = [0.0]
+    logged = ProgressLines(False, "gap", clock=lambda: now[0])
+    for t in (0.0, 1.0, LOG_PROGRESS_EVERY_S - 1, LOG_PROGRESS_EVERY_S + 0.5, LOG_PROGRESS_EVERY_S + 2,
+              2 * LOG_PROGRESS_EVERY_S + 1):
+        now[0] = t
+        logged(f"at {t:g}")
+    logged("a unit done", always=True)
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"gap [{LOG_PROGRESS_EVERY_S + 0.5:5.1f} s] at {LOG_PROGRESS_EVERY_S + 0.5:g}",
+                   f"gap [{2 * LOG_PROGRESS_EVERY_S + 1:5.1f} s] at {2 * LOG_PROGRESS_EVERY_S + 1:g}",
+                   f"gap [{2 * LOG_PROGRESS_EVERY_S + 1:5.1f} s] a unit done"]
+    forced = ProgressLines(True, clock=lambda: now[0])
+    for k in range(5):
+        forced(f"line {k}")
+    assert capsys.readouterr().err.splitlines() == [f"line {k}" for k in range(5)]
+
+
+def test_no_command_decides_alone_whether_progress_shows():
+    """One rule (console.ProgressLines): no command of gyrofilter/cli asks stderr whether it is a
+    terminal for its progress (each did, and each showed nothing in a log)."""
+    cli = os.path.join(REPO, "gyrofilter", "cli")
+    asking = [name for name in sorted(os.listdir(cli)) if name.endswith(".py") and name != "console.py"
+              and "stderr.isatty" in open(os.path.join(cli, name), encoding="utf-8").read()]
+    assert asking == ["record.py"]  # record's status line every second is a live display (live.Status), not progress

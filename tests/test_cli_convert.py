@@ -827,3 +827,92 @@ def test_a_time_unit_the_name_states_and_convert_does_not_know_is_refused(tmp_pa
     rows = "".join(f"{10 * i},{i % 7},1,2\n" for i in range(600))
     rc, dst = _convert(tmp_path, "time (msec),gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows)
     assert rc == 0 and "in ms (as its name states" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------ temperature and accelerometer
+
+def _six_axis_log(temp_name="TempC", temp=None, accel_names=("AccX (g)", "AccY (g)", "AccZ (g)"), n=400, seed=3):
+    """An Arduino-like log at 100 Hz in ms: t, three gyro columns in deg/s, a temperature and three
+    accelerometer columns; (text, gyro, temp, accel)."""
+    rng = np.random.default_rng(seed)
+    gyro = np.round(rng.normal(0, 0.1, (n, 3)), 4)
+    temp = np.round(25 + 0.01 * np.arange(n) / n, 3) if temp is None else temp
+    accel = np.round(np.array([0.0, 0.0, 1.0]) + 0.002 * rng.standard_normal((n, 3)), 5)
+    names = ["time_ms", "gx", "gy", "gz"] + ([temp_name] if temp_name else []) + list(accel_names)
+    rows = [",".join([str(10 * i)] + [repr(v) for v in gyro[i].tolist()] + ([repr(float(temp[i]))] if temp_name else [])
+                     + [repr(v) for v in accel[i].tolist()]) for i in range(n)]
+    return ",".join(f'"{c}"' if " " in c else c for c in names) + "\n" + "\n".join(rows) + "\n", gyro, temp, accel
+
+
+def test_a_temperature_in_deg_c_and_the_accelerometer_are_kept(tmp_path, capsys):
+    """A new user's trial: convert said "left out: TempC" (and the accelerometer): the temperature
+    compensation and the gap analysis's temperature reading had nothing to read. A column named
+    like a temperature in deg C is the recording's temp, AccX/AccY/AccZ in g its ax, ay, az with
+    accel_unit g: the values as they are."""
+    text, gyro, temp, accel = _six_axis_log()
+    rc, dst = _convert(tmp_path, text, "--unit", "dps")
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    rec = read_recording(dst)
+    assert np.array_equal(rec.gyro, gyro) and np.array_equal(rec.temp_c, temp)
+    assert rec.accel_unit == "g" and np.array_equal(np.column_stack([rec.columns[c] for c in ("ax", "ay", "az")]), accel)
+    assert "left out" not in err and "temp 'TempC' in deg C" in err and "ax 'AccX (g)'" in err, err
+
+
+def test_raw_mpu6050_temperature_counts_need_their_unit_said(tmp_path, capsys):
+    """TEMP of raw MPU6050 counts has no unit in its name: left out, a warning naming --temp-unit
+    (never written as deg C); with --temp-unit mpu6050, deg C = counts / 340 + 36.53 (register map 4.18)."""
+    counts = np.arange(-2600, -2600 + 400, dtype=float)
+    text, gyro, _, _ = _six_axis_log("TEMP", temp=counts, accel_names=("ax", "ay", "az"))
+    text = text.replace(repr(-2600.0), "-2600")
+    rc, dst = _convert(tmp_path, text, "--unit", "dps")
+    err = capsys.readouterr().err
+    assert rc == 0 and "temp" not in read_recording(dst).columns, err
+    assert "'TEMP' left out: its unit is not stated" in err and "--temp-unit mpu6050" in err
+    assert "--accel-unit" in err and "ax" not in read_recording(dst).columns  # ax, ay, az in no stated unit either
+    rc, dst = _convert(tmp_path, text, "--unit", "dps", "--temp-unit", "mpu6050", "--accel-unit", "g", out="raw.csv")
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    np.testing.assert_allclose(rec.temp_c, counts / 340 + 36.53, rtol=0, atol=1e-12)
+    assert rec.accel_unit == "g"
+
+
+@pytest.mark.parametrize("names, options, said", [
+    (("temp_c", "TEMP"), [], "columns 'temp_c', 'TEMP' could each be the temperature"),
+    (("TempC",), ["--temp-unit", "mpu6050"], "--temp-unit mpu6050, but column 'TempC' states deg C"),
+    (("gz_dummy",), ["--temp-unit", "c"], "--temp-unit c: no temperature column"),
+    (("TempC", "acc_x"), [], "columns 'AccX (g)', 'acc_x' could each be the accelerometer's x"),
+    (("TempC",), ["--accel-unit", "lsb"], "--accel-unit lsb, but the accelerometer columns state g"),
+    (("TempC",), ["--lsb-per-g", "16384"], "--lsb-per-g goes with an accelerometer in lsb, not g"),
+])
+def test_ambiguous_temperature_and_accelerometer_columns_are_refused_naming_them(tmp_path, capsys, names, options, said):
+    text, _, _, _ = _six_axis_log(names[0])
+    if len(names) > 1:  # a second candidate, a copy of the first
+        head, rest = text.split("\n", 1)
+        text = head + f",{names[1]}\n" + "\n".join(f"{row},{row.split(',')[4]}" for row in rest.splitlines()) + "\n"
+    rc, dst = _convert(tmp_path, text, "--unit", "dps", *options)
+    err = capsys.readouterr().err
+    assert rc == 2 and not dst.exists() and err.count("\n") == 1 and said in err, err
+
+
+def test_a_temperature_beyond_any_die_is_refused_naming_its_line(tmp_path, capsys):
+    """Raw counts in a column named in deg C (TempC of -2600) would be written as -2600 deg C."""
+    text, _, _, _ = _six_axis_log(temp=np.full(400, -2600.0))
+    rc, dst = _convert(tmp_path, text, "--unit", "dps")
+    err = capsys.readouterr().err
+    assert rc == 2 and not dst.exists() and err.count("\n") == 1, err
+    assert "line 2, column 5 ('TempC'): -2600 deg C is beyond" in err and "--temp-unit mpu6050" in err, err
+
+
+def test_an_accelerometer_in_lsb_needs_its_scale_and_a_partial_one_is_left_out_saying_so(tmp_path, capsys):
+    text, _, _, _ = _six_axis_log(accel_names=("ax_lsb", "ay_lsb", "az_lsb"))
+    rc, _ = _convert(tmp_path, text, "--unit", "dps")
+    assert rc == 2 and "give --lsb-per-g" in capsys.readouterr().err
+    rc, dst = _convert(tmp_path, text, "--unit", "dps", "--lsb-per-g", "16384")
+    assert rc == 0 and read_recording(dst).lsb_per_g == 16384 and read_recording(dst).accel_unit == "lsb"
+    capsys.readouterr()
+    text, _, _, _ = _six_axis_log(accel_names=("AccX (g)", "AccY (g)", "other"))
+    rc, dst = _convert(tmp_path, text, "--unit", "dps", out="partial.csv")
+    err = capsys.readouterr().err
+    assert rc == 0 and "ax" not in read_recording(dst).columns
+    assert "accelerometer column(s) 'AccX (g)', 'AccY (g)' left out: no column for its z" in err, err

@@ -212,7 +212,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
     findings = [{"effect": "temperature", "axis": a, "params": {"coefficient_dps_per_c": 0.02},
                  "gain": {"before": 15.0, "after": 3.0},
                  "evidence": f"the bias follows the temperature on {a}; so this record cannot tell them apart. "
-                             f"{WHY_THE_COVARIATE}; baseline simulations: largest departure on {a}",
+                             f"{WHY_THE_COVARIATE}; axis {a} as a whole departs most from the baseline simulations in the spike count",
                  "alternatives": [{"effect": "warmup", "params": {"amplitude_dps": 0.06, "tau_s": 840.0}, "D": 0.84}]}
                 for a in AXES]
     page = _gap({"options": {}, "gap": {"n_simulations": 24, "baseline": {"axes": {a: axis for a in AXES}},
@@ -225,7 +225,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
         item = item[:item.index("</li>")]
         assert item.index("Indistinguishable") < item.index("Evidence:")
         assert "figure" not in item  # the page's rate in time is the filter's trace: it shows no reading
-        assert f"cannot tell them apart; baseline simulations: largest departure on {a}." in item
+        assert f"cannot tell them apart; axis {a} as a whole departs most from the baseline simulations in the spike count." in item
     assert "<h3>Notes</h3><ul><li>first note</li><li>second note</li></ul>" in page
 
 
@@ -404,3 +404,19 @@ def test_repeated_rows_are_warned_and_named(tmp_path, capsys):
     page = out.read_text()
     table = page[page.index("<h3>Extended model</h3>"):]
     assert f"{REPEATED_SAMPLES}: fraction = {fraction:.4g}" in table[:table.index("</p>")]
+
+
+@pytest.mark.parametrize("sims, samples, ran, said", [
+    (None, 10_000, 24, "--sims 24 (gap's default for 10000 samples per axis: 24 up to 200000, fewer above"),
+    (None, 400_000, 12, "--sims 12 (gap's default for 400000 samples per axis: 24 up to 200000, fewer above"),
+    (10, 10_000, 10, "--sims 10"),
+])
+def test_the_summary_says_the_number_of_simulations_gap_ran(sims, samples, ran, said):
+    """A new user's trial: the options row said "--sims as gap chooses", which a reader of the page
+    cannot know. It says the number the analysis ran and, where gap chose it, why."""
+    from gyrofilter.view.report import _summary
+
+    data = {"recording": {"name": "r.csv", "samples": samples, "duration_s": samples / 100, "header": {}},
+            "options": {"sims": sims, "keep_outliers": False}, "gap": {"n_simulations": ran}}
+    page = _summary(data)
+    assert "as gap chooses" not in page and html.escape(said) in page, page

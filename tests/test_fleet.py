@@ -397,6 +397,15 @@ def test_a_failing_file_is_its_own_row_and_the_rest_go_on(small_fleet, tmp_path,
     assert "## Failed" in (out / "fleet.md").read_text()
 
 
+def test_a_fleet_in_a_log_says_each_recording_as_it_is_done(small_fleet, tmp_path, capsys):
+    """Without --progress and not on a terminal (capsys: a log, nohup, systemd), a fleet still says
+    its start and one line per recording (a new user's 8-minute fleet said nothing until its end)."""
+    assert main(["allan", small_fleet[0], small_fleet[1], "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "allan: 2 recording(s); 2 on 1 worker process(es)" in err
+    assert re.search(r"allan \[1/2, \d+ s\] .*unit0.csv.gz: done in", err) and "allan [2/2, " in err
+
+
 def test_fleet_reports_equal_the_single_file_commands(small_fleet, tmp_path):
     assert main(["allan", small_fleet[0], "--json", str(tmp_path / "one.json"), "--kalibr", str(tmp_path / "one.yaml")]) == 0
     assert main(["allan", small_fleet[0], small_fleet[1], "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0

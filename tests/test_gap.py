@@ -223,6 +223,19 @@ def test_colored_noise_tells_a_two_tap_average_from_a_low_pass(seed):
         assert abs(c.params["lag2"] - lag2) < 0.02
 
 
+def test_the_largest_departure_is_said_to_be_the_axiss_not_a_findings():
+    """A new user's trial: "...; baseline simulations: largest departure in the Allan deviation at
+    tau = 7.17 s, z = +6.1 sd" ended the evidence of a spectral band at 20 Hz, as if the band
+    departed there. The sentence names the axis as a whole."""
+    from gyrofilter.analysis.gap.features import strongest
+    flat = lambda z: (np.asarray(z, float), None, None)  # noqa: E731
+    deps = {"adev": flat([0.5, 6.1, -2.0]), "band": flat([1.0, 0.2]), "line": flat([3.0]), "lag1": flat([0.1]),
+            "spikes": flat([0.0]), "tails": flat([0.3])}
+    assert strongest(deps, [0.1, 7.17, 50.0], [1.0, 2.0, 3.0], "x") == (
+        "axis x as a whole departs most from the baseline simulations in the Allan deviation at tau = 7.17 s, "
+        "z = +6.1 sd of the simulated spread")
+
+
 def test_discrepancy_is_mean_squared_z():
     meas = {"adev": np.array([1.0, 2.0]), "band": np.array([0.0]), "line": np.array([0.0]),
             "lag1": np.array([0.0]), "spikes": np.array([0.0])}
@@ -299,6 +312,9 @@ def test_cli_writes_contract_json_and_report(tmp_path):
     for f in rep["findings"]:
         assert f["effect"] in he.EFFECTS and f["axis"] in ("x", "y", "z")
         assert {"before", "after", "metric"} <= set(f["gain"]) and f["evidence"]
+        # the axis's largest departure, under each of its findings, says it is the axis's (a new user read it as the finding's)
+        assert "baseline simulations: largest" not in f["evidence"]
+        assert f"axis {f['axis']} as a whole departs most from the baseline simulations in the " in f["evidence"], f
     spec, _ = validate_model(rep["extended_model"])  # runs in `simulate`
     # the console: per axis D before -> after with all its findings, then each finding's own gain
     d = rep["discrepancy"]

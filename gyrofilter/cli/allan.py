@@ -12,7 +12,6 @@ far beyond the noise, or rates beyond any MEMS full scale: :func:`gyrofilter.ana
 are refused before any computation unless ``--keep-outliers`` is given; they are never dropped.
 Output files are written only once every result is finite, each whole or not at all.
 """
-import sys
 
 from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
 from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
@@ -53,7 +52,7 @@ def add_arguments(parser):
     parser.add_argument("--min-clusters", type=options.whole_number, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
     still.add_keep_outliers_argument(parser)
-    parser.add_argument("--progress", action="store_true", help="report progress on stderr")
+    console.add_progress_argument(parser)
     batch.add_arguments(parser)
     options.add_force_argument(parser)
 
@@ -213,7 +212,7 @@ def run(args):
     outputs.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
     if args.plot:
         check_figure_path(args.plot)
-    progress = console.say if args.progress or sys.stderr.isatty() else None
+    progress = console.ProgressLines(args.progress)
     said = []  # the analysis' warnings, also written into the yaml
 
     def warn(text):

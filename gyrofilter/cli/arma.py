@@ -7,7 +7,6 @@ any work, and written under a temporary name that takes its place when complete.
 """
 import dataclasses
 import math
-import sys
 
 import numpy as np
 
@@ -36,7 +35,7 @@ def add_arguments(parser):
     parser.add_argument("--criterion", choices=("f", "aic", "bic"), default="bic",
                         help="what decides each order step: BIC (default; the F test and AIC over-select on simulated ARMA(1,1)), "
                              "the F test (paper 003's rule) or AIC; all three are printed")
-    parser.add_argument("--progress", action="store_true", help="report progress on stderr even when it is not a terminal")
+    console.add_progress_argument(parser)
     still.add_keep_outliers_argument(parser)
     options.add_force_argument(parser)
 
@@ -67,7 +66,7 @@ def run(args):
                     console.say_warning)
     series = {a: x[i0:i1] for a, x in series.items()}
     refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
-    progress = args.progress or sys.stderr.isatty()
+    progress = console.ProgressLines(args.progress)
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0
     start_s, span_s = _start_s(i0, fs, t_s), _span_s(i0, i1, fs, t_s)
@@ -76,8 +75,7 @@ def run(args):
     print(f"  {n} samples at {fs:g} Hz ({span_s:.1f} s) from {start_s:g} s after the first sample, unit {head.gyro_unit}; "
           "each axis minus its mean")
     for name in axes:
-        if progress:
-            console.say(f"arma: axis {name}: tests and Pandit-Wu order search ...")
+        progress(f"arma: axis {name}: tests and Pandit-Wu order search ...")
         try:
             rep = arma.analyze_axis(series[name], fs, axis=name, max_samples=args.max_samples,
                                     max_n=args.max_n, alpha=args.alpha, quantum_dps=quantum, criterion=args.criterion)

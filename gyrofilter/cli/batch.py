@@ -10,7 +10,6 @@ say why); 2 when nothing could be done (bad input before any work, or no recordi
 import contextlib
 import glob
 import os
-import sys
 import time
 
 from ..analysis.fleet import runner, table, work
@@ -108,15 +107,14 @@ def run(args, settings, paths):
         jobs = max(1, min(args.jobs or runner.default_jobs(), len(todo)))
         where = f"{jobs} worker process(es)"
         stream = runner.run_local([paths[i] for i in todo], settings, jobs)
-    show = args.progress or sys.stderr.isatty()
+    progress = console.ProgressLines(args.progress)  # in a log as well: the start and a line per recording
     t0 = time.perf_counter()
-    if show:
-        unmatched = len(paths) - len(todo)
-        console.say(f"{settings.command}: {len(paths)} recording(s)" + (f", {unmatched} matching no file" if unmatched else "")
-                    + f"; {len(todo)} on {where}")
-        for r in results:
-            if r is not None:
-                console.say(f"{settings.command}: FAILED: {r['error']}")
+    unmatched = len(paths) - len(todo)
+    progress(f"{settings.command}: {len(paths)} recording(s)" + (f", {unmatched} matching no file" if unmatched else "")
+             + f"; {len(todo)} on {where}", always=True)
+    for r in results:
+        if r is not None:
+            progress(f"{settings.command}: FAILED: {r['error']}", always=True)
     written = 0
     with contextlib.closing(stream):
         for done, (k, result) in enumerate(stream, 1):
@@ -129,10 +127,9 @@ def run(args, settings, paths):
                               result[key])
                         written += 1
             _drop_unwritten(args.fleet, names[i], files, result)
-            if show:
-                state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
-                         else f"FAILED: {result['error']}")
-                console.say(f"{settings.command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}")
+            state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
+                     else f"FAILED: {result['error']}")
+            progress(f"{settings.command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}", always=True)
     rows = table.fleet_rows(names, results)
     stats = table.flag_units(rows)
     title = f"Fleet: gyrofilter {settings.command}, {len(paths)} recordings"

@@ -8,6 +8,7 @@ import os
 import re
 import sys
 import textwrap
+import time
 
 from ..inputs import escape_controls
 from ..units import AXES
@@ -122,6 +123,42 @@ def say(*lines, flush=False):
     """Messages for the user, one line each (:func:`~gyrofilter.inputs.escape_controls`), on stderr, so that stdout stays data."""
     for line in lines:
         print(escape_controls(line), file=sys.stderr, flush=flush)
+
+
+#: in a log (stderr not a terminal: a pipe, a file, nohup, systemd) and without --progress: at most
+#: one progress line per this many seconds, so that the log shows the command alive without filling
+#: up (gap's simulations say their state every 2 s: 240 lines in 8 minutes)
+LOG_PROGRESS_EVERY_S = 60.0
+
+#: the help of every long command's --progress (:func:`add_progress_argument`)
+PROGRESS_HELP = ("every progress line on stderr even when it is not a terminal (default: every line on a terminal; "
+                 f"in a log a line every {LOG_PROGRESS_EVERY_S:g} s of a long run, and one per recording of a fleet)")
+
+
+def add_progress_argument(parser):
+    parser.add_argument("--progress", action="store_true", help=PROGRESS_HELP)
+
+
+class ProgressLines:
+    """The progress of a long command on stderr, one rule for every command: on a terminal, or
+    with ``--progress`` (``forced``), every line (:attr:`every_line`); else (a log) the first
+    line said at least :data:`LOG_PROGRESS_EVERY_S` after the last one shown (or the start: a
+    short command, or one refused in its one line, says nothing more in a log than before), and
+    every line said with ``always=True`` (a fleet's line per recording). ``prefix`` ("gap") heads
+    each line with the seconds since the start: "gap [ 12.3 s] text"; ``clock``: seconds
+    (``time.perf_counter``)."""
+
+    def __init__(self, forced, prefix=None, *, clock=time.perf_counter):
+        self.every_line = bool(forced) or sys.stderr.isatty()
+        self.prefix, self.clock = prefix, clock
+        self.t0 = self.last = clock()
+
+    def __call__(self, text, *, always=False):
+        now = self.clock()
+        if not (self.every_line or always or now - self.last >= LOG_PROGRESS_EVERY_S):
+            return
+        self.last = now
+        say(text if self.prefix is None else f"{self.prefix} [{now - self.t0:5.1f} s] {text}", flush=True)
 
 
 #: how every refusal of a command starts, whichever part refuses (argparse, a command, the library):

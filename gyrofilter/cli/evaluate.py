@@ -7,7 +7,6 @@ when they exist (unless ``--force``), before any work, and are written into a te
 from which they take their places once all three are written (:func:`outputs.replacing_in`).
 """
 import os
-import sys
 
 from ..evaluation import evaluate as E
 from ..plots import pyplot
@@ -24,7 +23,7 @@ def add_arguments(parser):
     parser.add_argument("--split", choices=("all", "tune", "holdout"), default="all",
                         help="evaluate on all data (default), or only the tuning or the held-out part (gyrofilter.evaluation.evaluate.TUNE_SPLIT)")
     parser.add_argument("--no-lag", action="store_true", help="skip the lag estimates (faster)")
-    parser.add_argument("--progress", action="store_true", help="report progress on stderr (default: only on a terminal)")
+    console.add_progress_argument(parser)
     options.add_force_argument(parser)
 
 
@@ -46,8 +45,7 @@ def run(args):
     outputs.check_outputs([os.path.join(args.out, name) for name in OUTPUT_NAMES], force=args.force)
     rec_dir = _recordings_dir(args.recordings)
     pyplot()  # a missing matplotlib is said now, not after the evaluation
-    show = args.progress or sys.stderr.isatty()
-    progress = (lambda text: console.say(text, flush=True)) if show else None
+    progress = console.ProgressLines(args.progress)
     split = {"all": {}, "tune": E.TUNE_SPLIT, "holdout": E.HOLDOUT_SPLIT}[args.split]
     ev = E.evaluate(
         recordings_dir=rec_dir,

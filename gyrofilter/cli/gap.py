@@ -14,12 +14,11 @@ when everything is written, so a failed run leaves none of them.
 """
 import contextlib
 import os
-import sys
 import time
 
 from ..analysis.gap import report as gap_report
 from ..analysis.fleet.work import FleetSettings
-from ..analysis.gap.baseline import MAX_SIMS, MIN_SIMS
+from ..analysis.gap.baseline import DEFAULT_SIMS, FEWEST_DEFAULT_SIMS, MAX_SIMS, MIN_SIMS, SIMS_IN_FULL_UP_TO
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.gap.intervals import DEFAULT_BOOTSTRAP, FEWER_BOOTSTRAP_FROM, MAX_BOOTSTRAP, MIN_REPLICATES
 from ..errors import RecordingError, SettingsError
@@ -39,7 +38,8 @@ def add_arguments(parser):
                         help="no effect, kept for older scripts: the analysis draws its simulations from fixed "
                              "streams, so its answer does not depend on a seed (docs/gap.md, \"How stable\")")
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
-                        help=f"baseline simulations (default 24; 12-24 above 200 000 samples per axis; {MIN_SIMS} to {MAX_SIMS})")
+                        help=f"baseline simulations (default {DEFAULT_SIMS}; {FEWEST_DEFAULT_SIMS}-{DEFAULT_SIMS} above "
+                             f"{SIMS_IN_FULL_UP_TO:,} samples per axis; {MIN_SIMS} to {MAX_SIMS})")
     parser.add_argument("--bootstrap", type=options.whole_number, default=None, metavar="N",
                         help=f"bootstrap runs per axis with findings for the parameters' 95 %% intervals (default "
                              f"{DEFAULT_BOOTSTRAP}; 10-{DEFAULT_BOOTSTRAP} above {FEWER_BOOTSTRAP_FROM:,} samples per axis; "
@@ -47,7 +47,7 @@ def add_arguments(parser):
     parser.add_argument("--allow-motion", action="store_true",
                         help="analyse a recording that does not look still (refused by default: the analysis models a "
                              "still gyro, so its findings would describe the motion)")
-    parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
+    console.add_progress_argument(parser)
     batch.add_arguments(parser)
     options.add_force_argument(parser)
 
@@ -79,13 +79,8 @@ def run(args):
     json_files = [args.json] if args.json is not None else []
     outputs.check_output_folder(args.report, "--report", json_files)
     outputs.check_outputs(json_files + report_files, [args.recording], args.force)
-    show = args.progress or sys.stderr.isatty()
     t0 = time.perf_counter()
-
-    def progress(text):
-        if show:
-            console.say(f"gap [{time.perf_counter() - t0:5.1f} s] {text}", flush=True)
-
+    progress = console.ProgressLines(args.progress, "gap")
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis
     rec, report = analyse_file(args.recording, n_sims=args.sims, bootstrap=args.bootstrap,

@@ -25,8 +25,6 @@ The report is written under a temporary name and takes its name when whole.
 import argparse
 import contextlib
 import os
-import sys
-import time
 
 from .. import __version__
 from ..analysis.agreement import compare
@@ -63,7 +61,7 @@ def add_arguments(parser):
     parser.add_argument("--sims", type=options.whole_number, default=None, metavar="N",
                         help="baseline simulations of the gap analysis (as gap --sims)")
     still.add_keep_outliers_argument(parser)
-    parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
+    console.add_progress_argument(parser)
     options.add_force_argument(parser)
 
 
@@ -76,18 +74,12 @@ def default_recording_path(out):
 def run(args):
     gap.check_options(args.seed, args.sims)
     _check_source_options(args)
-    show = args.progress or sys.stderr.isatty()
-    t0 = time.perf_counter()
-
-    def progress(text):
-        if show:
-            console.say(f"report [{time.perf_counter() - t0:5.1f} s] {text}", flush=True)
-
+    progress = console.ProgressLines(args.progress, "report")
     if args.source is not None:
         path = args.recording_out or default_recording_path(args.out)
         live.check_duration(args.duration)
         outputs.check_outputs([args.out, path], live.source_files(args.source), args.force)  # before the recording
-        status = _record_first(args, path, show)
+        status = _record_first(args, path, progress.every_line)
         if status:
             return status
     else:

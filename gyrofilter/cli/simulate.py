@@ -35,7 +35,7 @@ def add_arguments(parser):
                              "header, simulated_seed, so the run can be repeated)")
     parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name, help="output recording (" + options.RECORDING_FILE_HELP + ")")
     parser.add_argument("--chunk", type=options.whole_number, default=65536, metavar="N", help=f"samples per block written (default 65536, at most {MAX_CHUNK})")
-    parser.add_argument("--progress", action="store_true", help="show progress on stderr even when it is not a terminal")
+    console.add_progress_argument(parser)
     options.add_force_argument(parser)
 
 
@@ -60,7 +60,8 @@ def run(args):
     seed = draw_seed() if args.seed is None else args.seed
     header = recording_header(model, args.duration, seed=seed, validated=spec)
     columns = recording_columns(spec)
-    show = args.progress or sys.stderr.isatty()
+    progress = console.ProgressLines(args.progress)
+    show = progress.every_line  # a status line rewritten in place; in a log, a line now and then
     done = 0
     last = time.monotonic()
     with outputs.replacing(args.out) as tmp, \
@@ -72,6 +73,8 @@ def run(args):
             if show and (time.monotonic() - last > 1.0 or done == n_total):
                 last = time.monotonic()
                 print(f"\rsimulate: {done}/{n_total} samples ({100.0 * done / n_total:.0f} %)", end="", file=sys.stderr)
+            elif not show:
+                progress(f"simulate: {done}/{n_total} samples ({100.0 * done / n_total:.0f} %)")
     if show:
         print(file=sys.stderr)
     accel = spec[ACCELEROMETER]

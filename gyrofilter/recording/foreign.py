@@ -52,10 +52,11 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import is_plain_number, quote
-from ..units import AXES, GYRO_UNITS, MAX_RATE_DPS, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz, to_dps
+from ..units import AXES, GYRO_UNITS, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
+from .foreign_extras import find_extras, gyro_out_of_range
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
@@ -109,7 +110,8 @@ class Foreign(Closable):
                 raise RecordingError(f"{self.path}: changed while it was read (more than {self.rows} rows now)")
             with _unchanged(self.path):
                 gyro = [np.array([float(c) for c in col]) for col in cells[:3]]
-            yield np.column_stack(([t_s[done:done + len(numbers)]] if t_s is not None else []) + gyro)
+            yield np.column_stack(([t_s[done:done + len(numbers)]] if t_s is not None else []) + gyro
+                                  + self._plan.extras.values(cells[3 + (t_s is not None):]))
             done += len(numbers)
         if done != self.rows:
             raise RecordingError(f"{self.path}: changed while it was read ({done} rows now, {self.rows} before)")
@@ -122,13 +124,15 @@ class Foreign(Closable):
 class _Plan:
     """How the data rows of a log are read: its column ``names``, how a line is ``split``, the
     line with the names (None without), the columns ``wanted`` (x, y, z, then the time's), the
-    line the data start after; ``t_s``, once known."""
+    line the data start after; the ``extras`` kept (temperature, accelerometer:
+    :mod:`~gyrofilter.recording.foreign_extras`), after those; ``t_s``, once known."""
 
     names: list
     split: object
     header_line: object
     wanted: list
     after_line: int
+    extras: object
     t_s: object = None
 
 
@@ -397,13 +401,14 @@ def _infer_time_unit(steps, path, name):
     raise RecordingError(f"{path}: the time column {quote(name)} does not step forward; give --time-unit or --sample-rate-hz")
 
 
-def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate_hz=None, time_unit=None):
+def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate_hz=None, time_unit=None, **extras):
     """Read another tool's gyro log ``path`` (see the module's rules) as a :class:`Foreign`.
 
     ``unit``: ``dps``, ``rad/s`` or ``lsb`` (None: the one the column names state);
     ``lsb_per_dps``: LSB per deg/s, with ``lsb``; ``columns``: 3 or 4 column names or 1-based
     numbers (None: found by name); ``sample_rate_hz``: the rate (Hz; None: from the time
-    column); ``time_unit``: ``s``, ``ms``, ``us`` or ``ns`` (None: stated by the name or inferred).
+    column); ``time_unit``: ``s``, ``ms``, ``us`` or ``ns`` (None: stated by the name or inferred);
+    ``extras``: ``temp_unit``, ``accel_unit``, ``lsb_per_g`` of :func:`~gyrofilter.recording.foreign_extras.find_extras`.
     RecordingError naming the file, line and column for what cannot be read, SettingsError for a bad argument."""
     path = str(path)
     if unit is not None and unit not in GYRO_UNITS:
@@ -416,13 +421,13 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
         sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
     raw = open_log(path, on_line=_FirstRow(path))
     try:
-        return _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit)
+        return _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, extras)
     except BaseException:
         raw.close()
         raise
 
 
-def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
+def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, options):
     """:func:`read_foreign` on the open log ``raw``: the column row, then a first pass over the
     rows that checks each and keeps 16 bytes a row (a row's line number and its time, or its
     offset from the first stamp while the time unit is not known; then a pass over the time
@@ -449,15 +454,17 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
                              "e.g. --columns 1,2,3,4 (time, x, y, z) or --columns 2,3,4 (x, y, z)")
     time, t_unit, gyro, stated = _pick(names, path, columns, time_unit)
     unit = _gyro_unit(unit, stated, lsb_per_dps, path)
-    wanted = gyro + ([time] if time is not None else [])
-    plan = _Plan(names, split, header_line, wanted, after_line=header_line or first_data - 1)
+    extras = find_extras(names, [_normal(n) for n in names], set(gyro) | {time}, path, **options)
+    wanted = gyro + ([time] if time is not None else []) + extras.indices
+    plan = _Plan(names, split, header_line, wanted, after_line=header_line or first_data - 1, extras=extras)
     counts["skipped"] = preamble
     rows, integral, out_of_range = 0, [True] * 3, None
     stamps = _Stamps(keep=t_unit is None) if time is not None else None
     t_parts, line_parts = [], []
     for numbers, cells in _row_chunks(raw, path, plan, counts):
         gyro_values = [np.array([float(c) for c in col]) for col in cells[:3]]
-        out_of_range = out_of_range or _out_of_range(gyro_values, unit, lsb_per_dps, numbers, gyro, names, path)
+        beyond = extras.check(cells[len(wanted) - len(extras.indices):], numbers, names, path)  # every chunk: formats
+        out_of_range = out_of_range or gyro_out_of_range(gyro_values, unit, lsb_per_dps, numbers, gyro, names, path) or beyond
         integral = [whole and exact_format(v) == "%d" for whole, v in zip(integral, gyro_values)]
         if stamps is not None:
             line_parts.append(np.array(numbers))
@@ -473,9 +480,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     summary = [f"columns: x {quote(names[gyro[0]])}, y {quote(names[gyro[1]])}, z {quote(names[gyro[2]])} "
                f"in {unit}{' (as the names state)' if stated else ''}; {rows} rows"
                + (f", {skipped} blank or comment line(s) skipped" if skipped else "")]
-    left = [n for i, n in enumerate(names) if i not in wanted]
-    if left:
-        summary.append(f"left out: {', '.join(left)}")
+    summary += extras.summary + ([f"left out: {', '.join(n for i, n in enumerate(names) if i not in wanted)}"]
+                                 if len(wanted) < len(names) else [])
     header = {VERSION_KEY: FORMAT_VERSION}
     out_columns, formats = list(GYRO_COLUMNS), ["%d" if whole else EXACT_FORMAT for whole in integral]
     if time is not None:
@@ -515,8 +521,9 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit):
     header["gyro_unit"] = unit
     if unit == "lsb":
         header["lsb_per_dps"] = format_number(lsb_per_dps)
-    header["converted_from"] = path
-    return Foreign(raw, path, header, out_columns, formats, rows, summary, plan, counts["warnings"])
+    header.update(extras.header, converted_from=path)
+    return Foreign(raw, path, header, out_columns + extras.columns, formats + extras.formats(), rows, summary,
+                   plan, counts["warnings"] + extras.warnings)
 
 
 def _gyro_unit(unit, stated, lsb_per_dps, path):
@@ -535,17 +542,6 @@ def _gyro_unit(unit, stated, lsb_per_dps, path):
         raise RecordingError(f"--lsb-per-dps goes with --unit lsb, not {unit}")
     return unit
 
-
-def _out_of_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
-    """The refusal of the first gyro value beyond +-MAX_RATE_DPS, naming its line and column, or None."""
-    with np.errstate(over="ignore"):
-        dps = to_dps(np.column_stack(values), unit, lsb_per_dps)
-    bad = np.argwhere(~(np.abs(dps) <= MAX_RATE_DPS))
-    if not bad.size:
-        return None
-    row, axis = (int(i) for i in bad[0])
-    return (f"{path}: line {line_of[row]}, column {gyro[axis] + 1} ({quote(names[gyro[axis]])}): "
-            f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
 
 
 def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution_s):

@@ -65,10 +65,25 @@ SUB_LSB_PROBE = 1 << 17
 SUB_LSB_PROBE_MARGIN = 0.05
 
 
+#: gap's default baseline runs: DEFAULT_SIMS up to SIMS_IN_FULL_UP_TO samples per axis, then fewer
+#: in proportion, at least FEWEST_DEFAULT_SIMS (:func:`default_n_sims`)
+DEFAULT_SIMS = 24
+SIMS_IN_FULL_UP_TO = 200_000
+FEWEST_DEFAULT_SIMS = 12
+
+
 def default_n_sims(n_samples):
     """Baseline runs: 24 up to 200 000 samples per axis, then fewer (at least 12) so that
-    hours of data stay fast; the spread of a feature is estimated to about +-20 % from 12 runs."""
-    return int(max(12, min(24, round(24 * 200_000 / max(n_samples, 1)))))
+    hours of data stay fast; the spread of a feature is estimated to about +-20 % from 12 runs:
+    ``max(12, min(24, round(24 * 200 000 / n)))``."""
+    return int(max(FEWEST_DEFAULT_SIMS, min(DEFAULT_SIMS, round(DEFAULT_SIMS * SIMS_IN_FULL_UP_TO / max(n_samples, 1)))))
+
+
+def default_n_sims_why(n_samples):
+    """Why gap ran :func:`default_n_sims` baseline runs on ``n_samples`` samples per axis, for a
+    reader who gave no ``--sims``."""
+    return (f"gap's default for {n_samples} samples per axis: {DEFAULT_SIMS} up to {SIMS_IN_FULL_UP_TO}, fewer above "
+            f"(at least {FEWEST_DEFAULT_SIMS}) so that hours of data stay fast")
 
 
 def axis_dps(rec, i, pass_samples=1 << 16):

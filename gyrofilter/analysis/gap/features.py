@@ -240,13 +240,16 @@ def _furthest(deps, taus, bands):
     return key, z, j, where
 
 
-def strongest(deps, taus, bands):
-    """A sentence on where the measurement is furthest outside the simulations' spread ("" below
-    :data:`~gyrofilter.analysis.gap.detectors.REPORTED_DEPARTURE_Z` sd)."""
+def strongest(deps, taus, bands, axis):
+    """A sentence on where the measurement of ``axis`` is furthest outside the simulations' spread
+    ("" below :data:`~gyrofilter.analysis.gap.detectors.REPORTED_DEPARTURE_Z` sd). It ends the
+    evidence of each finding of the axis, so it names the axis as a whole: "largest departure in
+    the Allan deviation at tau = 7.17 s" under a band at 20 Hz read as the band's."""
     _, z, _, where = _furthest(deps, taus, bands)
     if abs(z) < det.REPORTED_DEPARTURE_Z:
         return ""
-    return f"largest departure in the {where}, z = {z:+.1f} sd of the simulated spread"
+    return (f"axis {axis} as a whole departs most from the baseline simulations in the {where}, "
+            f"z = {z:+.1f} sd of the simulated spread")
 
 
 def departs_most(deps, taus, bands):

@@ -482,11 +482,11 @@ def write_findings(inp, state, scorer, report, found):
     report["extended_model"] = ext
     for row in kept:
         i, c = row.axis, row.cand
-        z_info = strongest(inp.deps[i], inp.taus, inp.bands)
+        z_info = strongest(inp.deps[i], inp.taus, inp.bands, AXES[i])
         report["findings"].append({
             "effect": c.effect, "axis": AXES[i],
             "params": c.plain_params(),
-            "evidence": c.evidence_text(*([f"baseline simulations: {z_info}"] if z_info else [])),
+            "evidence": c.evidence_text(*([z_info] if z_info else [])),
             "gain": {"metric": "discrepancy D (" + METRIC + ")", "before": before[i], "after": row.after},
             "statistic": {"name": c.statistic_name, "value": float(c.statistic), "threshold": float(c.threshold)},
             "alternatives": alternatives_entry(c, {r.cand.effect for r in kept if r.axis == i}),

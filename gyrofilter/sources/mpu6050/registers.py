@@ -11,6 +11,8 @@ one-line difference that the tests pin.
 """
 from dataclasses import dataclass, field
 
+from ...units import MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C
+
 
 @dataclass(frozen=True)
 class Register:
@@ -116,6 +118,6 @@ DLPF = {0: (256.0, 0.98, 8000.0), 1: (188.0, 1.9, 1000.0), 2: (98.0, 2.8, 1000.0
 # (accelerometer 0x3B-0x40, temperature 0x41-0x42, gyro 0x43-0x48: register map section 4.6)
 FIFO_SIZE_BYTES = 1024
 
-# Temperature (register map section 4.18): T / degC = TEMP_OUT / 340 + 36.53
-TEMP_LSB_PER_C = 340.0
-TEMP_OFFSET_C = 36.53
+# Temperature (register map section 4.18): T / degC = TEMP_OUT / 340 + 36.53 (their home: gyrofilter.units)
+TEMP_LSB_PER_C = MPU6050_TEMP_LSB_PER_C
+TEMP_OFFSET_C = MPU6050_TEMP_OFFSET_C

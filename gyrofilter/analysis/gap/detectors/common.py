@@ -146,8 +146,9 @@ COMPOSITE_MIN_GAIN = 0.8
 #: model's by 4 sd of its runs, the mirror of HEAVY_TAILS_Z; a Gaussian record's z is about N(0, 1)
 #: against its own model (the ADIS16405 z axes: about -10)
 COMPRESSION_TAILS_Z = -4.0
-#: a finding's evidence names the feature furthest outside the baseline simulations' spread when
-#: it is at least this many standard deviations of that spread away
+#: each finding's evidence names the feature where its axis (as a whole, not the finding) departs
+#: most from the baseline simulations when it is at least this many standard deviations of their
+#: spread away
 REPORTED_DEPARTURE_Z = 3
 
 

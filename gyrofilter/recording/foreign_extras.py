@@ -1,0 +1,230 @@
+"""The temperature and accelerometer columns of another tool's log (``gyrofilter convert``), and
+the range check of its values, the gyro's too (:func:`gyro_out_of_range`).
+
+:func:`find_extras` picks them among the columns the gyro and the time leave
+(:mod:`gyrofilter.recording.foreign` reads the log and passes the names):
+
+- **Temperature.** A column named like a temperature
+  (:data:`~gyrofilter.recording.header.TEMPERATURE_LIKE_NAMES`: ``TempC``, ``temp_c``,
+  ``Temperature``, ``TEMP``, ...) becomes the recording's ``temp`` in deg C. Its unit is
+  ``temp_unit`` (``c``, or ``mpu6050``: raw counts of the MPU6050's TEMP_OUT, T / degC =
+  counts / 340 + 36.53, register map section 4.18) or the one its name states (``TempC``,
+  ``temp_c``, ``Temperature (°C)``: deg C; ``(raw)``: counts). A column whose unit neither says
+  is left out with a warning naming ``--temp-unit`` (raw counts written as deg C would be
+  silently wrong); ``none`` leaves it out. A value beyond :data:`~gyrofilter.units.TEMP_RANGE_C`
+  is refused naming its line and column (raw counts in a column named in deg C), after the pass
+  over the rows, as a rate beyond :data:`~gyrofilter.units.MAX_RATE_DPS` is.
+- **Accelerometer.** Columns named like an accelerometer's axis (:data:`ACCEL_NAME`: ``ax``,
+  ``AccX``, ``acc_x``, ``accel_x``, ``accelerometer_x``, ``linear_acceleration.x`` of a ROS
+  export, which includes gravity) become ``ax, ay, az`` with the header's ``accel_unit``: the
+  ``accel_unit`` given (``m/s^2``, ``g``, ``lsb`` with ``lsb_per_g``) or the one the names state
+  (``(m/s^2)``, ``[g]``, ``_g``, ``_mps2``, ``_lsb``); the values as they are. Without a unit, or
+  without one of the three axes, they are left out with a warning saying why; ``none`` leaves
+  them out. A value beyond :data:`~gyrofilter.units.MAX_ACCEL_MPS2` is refused naming its line.
+- **Refused** in one line naming the columns: two candidates for the temperature or for one
+  axis of the accelerometer, a unit given that contradicts the names', columns that state
+  different units, an option given for a column the log does not have.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import RecordingError
+from ..inputs import quote
+from ..units import (ACCEL_UNITS, AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
+                     TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2)
+from .header import ACCEL_COLUMNS, TEMPERATURE_LIKE_NAMES, accel_units_header, format_number
+from .writer import EXACT_FORMAT, exact_format
+
+#: the units of a log's temperature column (``convert --temp-unit``): deg C, raw MPU6050 counts,
+#: or ``none`` (left out)
+TEMP_UNITS = ("c", "mpu6050", "none")
+#: the units of a log's accelerometer columns (``convert --accel-unit``): the recording's, or ``none``
+ACCEL_UNIT_CHOICES = ACCEL_UNITS + ("none",)
+#: an accelerometer column's name once normalised (``foreign``'s rule), its axis in ``axis``, an
+#: optional unit at the end
+ACCEL_NAME = re.compile(r"(?:.*_)?(?:a|acc|accl|accel|acceleration|accelerometer|linear_acceleration|"
+                        r"linearacceleration)_?(?P<axis>[xyz])(?:_(?P<unit>m_?s_?2|mps2|g|lsb|raw))?")
+#: temperature names that state deg C
+_CELSIUS_NAMES = {"temp_c", "tempc", "temp_degc", "temp_deg_c", "temperature_c", "temperature_degc", "die_temp_c",
+                  "celsius"}
+#: a unit in brackets or at a name's end -> the unit it states (temperature: "c" or "raw")
+_UNIT_TEXT = {"c": "c", "°c": "c", "degc": "c", "deg_c": "c", "degreesc": "c", "celsius": "c", "℃": "c",
+              "raw": "raw", "lsb": "raw", "counts": "raw",
+              "m/s^2": "m/s^2", "m/s2": "m/s^2", "m/s²": "m/s^2", "ms2": "m/s^2", "m_s2": "m/s^2", "m_s_2": "m/s^2",
+              "mps2": "m/s^2", "ms^-2": "m/s^2", "g": "g"}
+#: what each --temp-unit says of a name's unit
+_TEMP_STATES = {"c": "c", "mpu6050": "raw"}
+
+
+@dataclass
+class Extras:
+    """The temperature and accelerometer columns kept: their ``indices`` in the log, the
+    recording's ``columns`` (``temp``, ``ax, ay, az``), the ``header`` keys they need, the
+    ``summary`` and ``warnings`` to say, the units read (``temp_unit``, ``accel_unit``,
+    ``lsb_per_g``) and, per column, whether every value so far is integral (the writer's format)."""
+
+    indices: list = field(default_factory=list)
+    columns: list = field(default_factory=list)
+    header: dict = field(default_factory=dict)
+    summary: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+    temp_unit: str = None
+    accel_unit: str = None
+    lsb_per_g: float = None
+    integral: list = field(default_factory=list)
+
+    def values(self, cells):
+        """The columns' values (floats; the temperature in deg C) of the cells of one chunk, one
+        list of texts per column in :attr:`columns`' order."""
+        out = [np.array([float(c) for c in col]) for col in cells]
+        if self.temp_unit == "mpu6050":
+            out[0] = out[0] / MPU6050_TEMP_LSB_PER_C + MPU6050_TEMP_OFFSET_C
+        return out
+
+    def check(self, cells, lines, names, path):
+        """The refusal of the first temperature beyond :data:`TEMP_RANGE_C` or acceleration beyond
+        :data:`MAX_ACCEL_MPS2` of a chunk's ``cells``, naming its line (``lines``) and column, or
+        None; keeps each column's integrality."""
+        values = self.values(cells)
+        self.integral = [whole and exact_format(v) == "%d" for whole, v in zip(self.integral or [True] * len(values), values)]
+        for k, v in enumerate(values):
+            temp = self.columns[k] == "temp"
+            with np.errstate(over="ignore"):
+                ok = ((v >= TEMP_RANGE_C[0]) & (v <= TEMP_RANGE_C[1]) if temp else
+                      np.abs(to_mps2(v, self.accel_unit, self.lsb_per_g)) <= MAX_ACCEL_MPS2)
+            bad = np.flatnonzero(~ok)
+            if not bad.size:
+                continue
+            i, value = self.indices[k], format_number(v[bad[0]])
+            what = (f"{value} deg C is beyond {TEMP_RANGE_C[0]:g} .. {TEMP_RANGE_C[1]:g} deg C, no gyro's die"
+                    + ("" if self.temp_unit == "mpu6050" else "; raw MPU6050 counts? give --temp-unit mpu6050") if temp else
+                    f"{value} {self.accel_unit} is beyond the +-{MAX_ACCEL_MPS2:g} m/s^2 any accelerometer reads")
+            return f"{path}: line {lines[bad[0]]}, column {i + 1} ({quote(names[i])}): {what}"
+        return None
+
+    def formats(self):
+        """The writer's formats of the columns: ``%d`` where every value is integral, else
+        :data:`~gyrofilter.recording.writer.EXACT_FORMAT` (the writer's rule, :func:`exact_format`)."""
+        return ["%d" if whole else EXACT_FORMAT for whole in (self.integral or [True] * len(self.columns))]
+
+
+def gyro_out_of_range(values, unit, lsb_per_dps, line_of, gyro, names, path):
+    """The refusal of the first gyro value (``values``: the x, y, z columns of a chunk in ``unit``)
+    beyond +-MAX_RATE_DPS, naming its line and column (``gyro``: their indices), or None."""
+    with np.errstate(over="ignore"):
+        dps = to_dps(np.column_stack(values), unit, lsb_per_dps)
+    bad = np.argwhere(~(np.abs(dps) <= MAX_RATE_DPS))
+    if not bad.size:
+        return None
+    row, axis = (int(i) for i in bad[0])
+    return (f"{path}: line {line_of[row]}, column {gyro[axis] + 1} ({quote(names[gyro[axis]])}): "
+            f"{format_number(values[axis][row])} {unit} is beyond the +-{MAX_RATE_DPS:g} deg/s any gyro reads")
+
+
+def find_extras(names, normal, taken, path, *, temp_unit=None, accel_unit=None, lsb_per_g=None):
+    """The :class:`Extras` of a log whose column ``names`` are ``normal`` once normalised (key,
+    unit in brackets or None), the columns ``taken`` (gyro, time) aside; see the module's rules."""
+    if temp_unit is not None and temp_unit not in TEMP_UNITS:
+        raise RecordingError(f"--temp-unit must be one of {', '.join(TEMP_UNITS)}, got {quote(temp_unit)}")
+    if accel_unit is not None and accel_unit not in ACCEL_UNIT_CHOICES:
+        raise RecordingError(f"--accel-unit must be one of {', '.join(ACCEL_UNIT_CHOICES)}, got {quote(accel_unit)}")
+    free = [i for i in range(len(names)) if i not in taken]
+    extras = Extras()
+    _temperature(extras, [i for i in free if normal[i][0] in TEMPERATURE_LIKE_NAMES], names, normal, temp_unit, path)
+    _accelerometer(extras, [i for i in free if i not in extras.indices], names, normal, accel_unit, lsb_per_g, path)
+    return extras
+
+
+def _stated(key, bracket, word):
+    """The unit a name states: its brackets' or the word at its end (``word``, the pattern's), mapped by
+    :data:`_UNIT_TEXT` (an unknown text as it is), or None."""
+    text = bracket if bracket is not None else word
+    return None if text is None else _UNIT_TEXT.get(text.lower().replace(" ", ""), text)
+
+
+def _temperature(extras, found, names, normal, temp_unit, path):
+    if temp_unit == "none":  # the summary's "left out" names them
+        return
+    if len(found) > 1:
+        raise RecordingError(f"{path}: line with the column names: columns {', '.join(quote(names[i]) for i in found)} "
+                             "could each be the temperature; keep one in the log, or give --temp-unit none")
+    if not found:
+        if temp_unit is not None:
+            raise RecordingError(f"{path}: --temp-unit {temp_unit}: no temperature column among "
+                                 f"{quote(', '.join(names))} (a name such as TempC, temp_c, Temperature)")
+        return
+    i = found[0]
+    key, bracket = normal[i]
+    stated = _stated(key, bracket, "c" if key in _CELSIUS_NAMES else None)
+    if temp_unit is not None and stated is not None and stated != _TEMP_STATES[temp_unit]:
+        raise RecordingError(f"{path}: --temp-unit {temp_unit}, but column {quote(names[i])} states "
+                             + ("deg C" if stated == "c" else "raw counts" if stated == "raw" else quote(stated)))
+    unit = temp_unit or ("c" if stated == "c" else None)
+    if unit is None:
+        extras.warnings.append(f"column {quote(names[i])} left out: its unit is not stated"
+                               + (f" ({quote(stated)})" if stated not in (None, "raw") else "")
+                               + " (deg C, or raw MPU6050 counts?); give --temp-unit c or --temp-unit mpu6050 to keep "
+                                 "it as the recording's temp, --temp-unit none to leave it out without a word")
+        return
+    extras.indices.append(i)
+    extras.columns.append("temp")
+    extras.temp_unit = unit
+    extras.summary.append(f"temp {quote(names[i])} in " + ("deg C" if unit == "c" else
+                          f"raw MPU6050 counts (deg C = counts / {MPU6050_TEMP_LSB_PER_C:g} + {MPU6050_TEMP_OFFSET_C:g})")
+                          + (" (as its name states)" if stated and temp_unit is None else ""))
+
+
+def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
+    per_axis = {a: [i for i in free if (m := ACCEL_NAME.fullmatch(normal[i][0])) and m["axis"] == a] for a in AXES}
+    found = [i for a in AXES for i in per_axis[a]]
+    if accel_unit == "none":  # the summary's "left out" names them
+        return
+    for a in AXES:
+        if len(per_axis[a]) > 1:
+            raise RecordingError(f"{path}: line with the column names: columns "
+                                 f"{', '.join(quote(names[i]) for i in per_axis[a])} could each be the accelerometer's "
+                                 f"{a}; keep one in the log, or give --accel-unit none")
+    if not found and (accel_unit is not None or lsb_per_g is not None):
+        raise RecordingError(f"{path}: --{'accel-unit' if accel_unit else 'lsb-per-g'}: no accelerometer columns among "
+                             f"{quote(', '.join(names))} (names such as ax, AccX, acc_x, accel_x)")
+    if not found:
+        return
+    stated = {_stated(normal[i][0], normal[i][1], ACCEL_NAME.fullmatch(normal[i][0])["unit"]) for i in found} - {None}
+    stated = {"lsb" if s == "raw" else s for s in stated}
+    if len(stated) > 1:
+        raise RecordingError(f"{path}: the accelerometer columns state different units ({', '.join(sorted(stated))})")
+    stated = stated.pop() if stated else None
+    if accel_unit is not None and stated is not None and accel_unit != stated:
+        raise RecordingError(f"{path}: --accel-unit {accel_unit}, but the accelerometer columns state {stated}")
+    unit = accel_unit or stated
+    if unit is not None and unit not in ACCEL_UNITS:
+        raise RecordingError(f"{path}: the accelerometer columns state the unit {quote(unit)}; give --accel-unit "
+                             f"{', '.join(ACCEL_UNITS)} (or none to leave them out)")
+    if lsb_per_g is not None and unit != "lsb":
+        raise RecordingError(f"--lsb-per-g goes with an accelerometer in lsb, not {unit or 'one of no stated unit'}")
+    listed = ", ".join(quote(names[i]) for i in found)
+    if len(found) < len(AXES):
+        missing = ", ".join(a for a in AXES if not per_axis[a])
+        extras.warnings.append(f"accelerometer column(s) {listed} left out: no column for its {missing} (a recording "
+                               "holds ax, ay, az together)")
+        return
+    if unit is None:
+        extras.warnings.append(f"accelerometer columns {listed} left out: their unit is not stated; give --accel-unit "
+                               "m/s^2, g or lsb (with --lsb-per-g) to keep them, --accel-unit none to leave them out "
+                               "without a word")
+        return
+    if unit == "lsb":
+        if lsb_per_g is None:
+            raise RecordingError(f"{path}: the accelerometer columns are in lsb: give --lsb-per-g (LSB per g; the "
+                                 "MPU6050 at +-2 g: 16384)")
+        check_lsb_per_g(lsb_per_g, "--lsb-per-g", RecordingError)
+    extras.indices += found
+    extras.columns += list(ACCEL_COLUMNS)
+    extras.accel_unit, extras.lsb_per_g = unit, lsb_per_g
+    extras.header.update(accel_units_header(unit, lsb_per_g))
+    extras.summary.append(", ".join(f"{c} {quote(names[i])}" for c, i in zip(ACCEL_COLUMNS, found)) + f" in {unit}"
+                          + (" (as the names state)" if stated and accel_unit is None else ""))
