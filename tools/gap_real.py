@@ -80,12 +80,17 @@ def table(reps):
 
 
 def evidence(reps):
-    """Evidence, gain per finding, and the notes of every report, one bullet each."""
+    """Evidence, gain per finding, the suggested (``uncertain``) and the notes of every report, one
+    bullet each."""
+    from gyrofilter.analysis.gap.report import uncertain_text
+
     lines = []
     for name, (rep, _) in reps.items():
         for f in rep["findings"]:
             lines.append(f"- `{name}`, {f['axis']}: **{f['effect']}** ({_fmt_params(f['params'])}); "
                          f"D {f['gain']['before']:.2f} -> {f['gain']['after']:.2f}. {f['evidence']}.")
+        lines += [f"- `{name}`: suggested, not named: {uncertain_text(u, ' = ')}."
+                  for u in rep.get("uncertain", [])]
         lines += [f"- `{name}`: {note}." for note in rep.get("notes", [])]
     return "\n".join(lines)
 

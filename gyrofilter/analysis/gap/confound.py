@@ -46,6 +46,17 @@ power-up, an exponential in time does not (:data:`WHY_THE_COVARIATE`). Three pla
   ``SUGGESTED_Z2``) is not named: the wander could have drawn that trend. The report lists it
   under ``uncertain`` with its GLS interval, so that a record too short to decide still says
   what it suggests.
+* *Not named where its interval holds 0* (:func:`unnamed_temperature`): a temperature is named
+  where the record establishes it, by its own GLS test or by the settling it explains established
+  against flicker (above), **and** its coefficient's 95 % interval (the bootstrap's,
+  :mod:`gyrofilter.analysis.gap.intervals`) does not hold 0: a named cause whose interval holds 0
+  contradicts itself (the shipped 655-s log's y axis named -0.0123 deg/s per deg C, its interval
+  [-0.045, 0.011], for a settling the temperature explained at GLS z = 0.7). Such a finding moves
+  to ``uncertain`` after the bootstrap (:func:`gyrofilter.analysis.gap.keep.set_aside_uncertain`),
+  its axis's other findings stay, and D of the axis is re-scored without it (a note says so). The
+  GLS interval the detector has at hand is no earlier stand-in: beside the wander it is computed
+  under the wander fitted to what the least-squares fit leaves, and on the default model's records
+  it held 0 where the bootstrap's did not and the other way round (docs/gap.md).
 * *Keeping without a gain alone* (:func:`kept_without_gain`): a finding with no gain alone is kept
   when the axis's other findings do better with it, or where D with it is within the allowance of
   D without it, with the axis's other findings or, alone on its axis, against the baseline: D
@@ -202,6 +213,19 @@ def suggested_temperature(stats, axis):
                     f"{math.sqrt(z2):.1f} standard errors from 0, not the {math.sqrt(threshold_z2):.0f} the gap "
                     "analysis requires: a wander could have drawn this trend; a longer record, or one where the "
                     "temperature moves otherwise, decides")}
+
+
+def unnamed_temperature(cand, ends):
+    """Why the kept finding ``cand`` is not named (module docstring, 1.): a temperature whose
+    coefficient's 95 % interval ``ends`` (``[low, high]``) holds 0; None where it is no
+    temperature, has no interval (``--bootstrap 0``; not determined: set aside by that rule) or
+    its interval does not hold 0."""
+    if cand.effect != TEMPERATURE or not ends or not ends[0] <= 0.0 <= ends[1]:
+        return None
+    why = ("its coefficient's 95 % interval holds 0: the record does not establish that the bias follows the "
+           "temperature, and a cause is named only where its interval does not hold 0")
+    return why + "".join(f"; the time reading {_show(c)} explains this record about as well (D {d:.3g})"
+                         for c, d in cand.alternatives[:1])
 
 
 def allowance_text(spread):

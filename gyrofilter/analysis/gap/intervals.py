@@ -62,7 +62,10 @@ by its detector's own test of exactly that parameter against 0, at a calibrated 
 (the clean batteries, docs/gap.md) and far beyond 95 %, and confirmed by the gain in D; a second,
 looser two-sided test on the bootstrap would overrule a calibrated decision with an uncalibrated
 one, while the interval, even across 0, still bounds the effect's size, which a two-decade span
-of a scale parameter does not.
+of a scale parameter does not. The temperature is the exception, a rule of the confounded causes
+(:func:`gyrofilter.analysis.gap.confound.unnamed_temperature`): below its GLS test it may be named
+for a settling it explains, which tests the settling, not the coefficient, so one whose interval
+holds 0 is not named.
 
 A finding whose **defining** parameter (:attr:`gyrofilter.effects.Effect.defining`, its size) is
 not determined is not named: :func:`gyrofilter.analysis.gap.keep.set_aside_uncertain` moves it

@@ -1,14 +1,15 @@
 """Steps 4 and 5 of the gap analysis (:mod:`gyrofilter.analysis.gap.pipeline`): which findings
 are kept. A finding is kept on its gain alone, or where D cannot tell without it, less one that
 makes its axis worse with the others (the rules: :mod:`gyrofilter.analysis.gap.confound`); a kept
-finding whose defining parameter the record does not determine is set aside as uncertain."""
+finding whose defining parameter the record does not determine, or a temperature whose interval
+holds 0, is set aside as uncertain."""
 from __future__ import annotations
 
 from dataclasses import replace
 
 from ...effects import BY_NAME
 from ...units import AXES
-from .confound import kept_without_gain, worse_together
+from .confound import kept_without_gain, unnamed_temperature, worse_together
 from .features import d_shown
 from .state import Kept
 
@@ -86,25 +87,36 @@ def keep_findings(inp, state, scorer):
 
 
 def set_aside_uncertain(inp, state, scorer, found):
-    """Step 5: a kept finding whose defining parameter (:attr:`gyrofilter.effects.Effect.defining`)
-    the record does not determine (``found``: the
-    :class:`~gyrofilter.analysis.gap.intervals.Intervals`, whose ``undetermined`` says so and why)
-    is not named: it moves from ``kept`` to ``uncertain``, and D after of its axis is that of the
-    axis extended by the findings that stay (the baseline's where none does)."""
-    moved = [(row, found.undetermined[row.k][BY_NAME[row.cand.effect].defining]) for row in state.kept
-             if BY_NAME[row.cand.effect].defining in found.undetermined.get(row.k, {})]
+    """Step 5: a kept finding the record does not establish is not named: one whose defining
+    parameter (:attr:`gyrofilter.effects.Effect.defining`) the record does not determine
+    (``found``: the :class:`~gyrofilter.analysis.gap.intervals.Intervals`, whose ``undetermined``
+    says so and why), or a temperature whose coefficient's interval holds 0
+    (:func:`gyrofilter.analysis.gap.confound.unnamed_temperature`, a note saying so). It moves
+    from ``kept`` to ``uncertain``, and D after of its axis is that of the axis extended by the
+    findings that stay (the baseline's where none does), which keep the parameters and intervals
+    fitted beside it."""
+    moved, holding_zero = [], set()
+    for row in state.kept:
+        defining = BY_NAME[row.cand.effect].defining
+        if defining in found.undetermined.get(row.k, {}):
+            moved.append((row, f"its defining parameter {defining} is not determined by this record "
+                               f"({found.undetermined[row.k][defining]})"))
+        elif (why := unnamed_temperature(row.cand, found.findings.get(row.k, {}).get(defining))) is not None:
+            moved.append((row, why))
+            holding_zero.add(row.k)
     if not moved:
         return state
     gone = {row.k for row, _ in moved}
     state = replace(state, kept=tuple(row for row in state.kept if row.k not in gone),
                     uncertain=state.uncertain + tuple(
-                        {"effect": row.cand.effect, "axis": AXES[row.axis],
-                         "params": row.cand.plain_params(),
-                         "params_ci95": found.findings[row.k],
-                         "why": (f"its defining parameter {BY_NAME[row.cand.effect].defining} is not determined by "
-                                 f"this record ({why})")} for row, why in moved))
+                        {"effect": row.cand.effect, "axis": AXES[row.axis], "params": row.cand.plain_params(),
+                         "params_ci95": found.findings[row.k], "why": why} for row, why in moved))
     after = list(state.after)
     for i in sorted({row.axis for row, _ in moved}):
         ks = state.kept_on(i)
         after[i] = scorer.discrepancy(i, state.model(inp, i, ks), f"extended model on {AXES[i]}") if ks else inp.before[i]
+        state = state.with_notes(*(
+            f"{row.cand.effect} on {AXES[i]} not named, its interval holding 0: D of the axis re-scored without it, "
+            f"{d_shown(state.after[i])} -> {d_shown(after[i])}; its other findings keep the parameters and intervals "
+            f"fitted beside it" for row, _ in moved if row.axis == i and row.k in holding_zero))
     return replace(state, after=tuple(after))
