@@ -60,6 +60,8 @@ with fewer, no unit is flagged on it and :func:`flag_units` says so in its stati
 from __future__ import annotations
 
 import collections
+import csv
+import io
 import math
 import os
 
@@ -407,6 +409,20 @@ def fleet_csv(rows):
                           for c in COLUMNS] for row in rows]
     text = "".join(",".join(_quoted(cell) for cell in line) + "\n" for line in lines)
     return utf8_text(text)  # names and reasons hold file names, which may not be UTF-8
+
+
+def listed_units(csv_text):
+    """The unit cells of a fleet.csv's text (:func:`fleet_csv`), as a set: what
+    :func:`lists_unit` looks a unit up in."""
+    rows = csv.reader(io.StringIO(csv_text, newline=""))
+    next(rows, None)
+    return {row[0] for row in rows if row}
+
+
+def lists_unit(listed, unit):
+    """Whether the unit cells ``listed`` (:func:`listed_units`) hold the unit named ``unit``, as
+    :func:`fleet_csv` writes its name."""
+    return utf8_text(_cell(unit)) in listed
 
 
 def _quoted(cell):
