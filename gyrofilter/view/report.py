@@ -17,8 +17,8 @@ import json
 import numpy as np
 
 from ..effects import ROWS
-from ..analysis.gap.report import (UNCERTAIN_HEADING, covariate_preamble, evidence_text, indistinguishable_text, params_text,
-                                   uncertain_text)
+from ..analysis.gap.report import (UNCERTAIN_HEADING, covariate_preamble, evidence_text, indistinguishable_text,
+                                   no_findings_text, params_text, uncertain_text)
 from ..analysis.gap.baseline import default_n_sims, default_n_sims_why
 from ..analysis.noise.export import ACCEL_JSON, GYRO_JSON
 from ..analysis.noise.model import TERMS, TERM_SLOPE, TERM_SYMBOL, basis, model_adev
@@ -235,7 +235,7 @@ def _gap(data):
                        "D extended"], rows, numeric_from=1))
     out.append("<h3>Findings</h3>")
     if not g["findings"]:
-        out.append("<p>None: the baseline explains the record within the simulations' spread.</p>")
+        out.append(f"<p>{html_text(no_findings_text(g))}</p>")
     if covariate_preamble(g["findings"]):
         out.append(f"<p>{html_text(covariate_preamble(g['findings']))}</p>")
     out.append("<ul>" + "".join(_finding(f) for f in g["findings"]) + "</ul>")

@@ -153,6 +153,19 @@ def covariate_preamble(findings):
     return f"Some findings below cannot be told apart in this record from a reading in time (shown under them). {WHY_THE_COVARIATE}."
 
 
+def no_findings_text(report):
+    """What a report says where the gap ``report`` has no finding: that the baseline explains the
+    axes analysed, or, where none was (each constant, too short: the ``not_analysed`` reasons,
+    ``gyrofilter gap`` exits 2 there), that nothing was compared with the baseline."""
+    disc = report.get("discrepancy") or {}
+    idle = disc.get("not_analysed", {})
+    if disc and disc.get("overall_before") is None:
+        why = "; ".join(f"{a}: {text}" for a, text in idle.items()) or "no discrepancy computed"
+        return f"None: no axis was analysed ({why}); nothing was compared with the baseline."
+    over = f" on the axes analysed ({', '.join(a for a in AXES if a not in idle)})" if idle else ""
+    return f"None: the baseline explains the measurement{over} within the simulations' spread."
+
+
 def evidence_text(finding):
     """A finding's evidence less the sentence :func:`covariate_preamble` says once for all."""
     return finding["evidence"].replace(f". {WHY_THE_COVARIATE}", "")
@@ -272,7 +285,7 @@ def write_report(report, rec, out_dir):
         lines += [f"Each parameter with its {100 * intervals['confidence']:.0f} % interval in brackets "
                   f"({intervals['bootstrap_runs']} bootstrap runs per axis with findings; docs/gap.md).", ""]
     if not report["findings"]:
-        lines.append("None: the baseline explains the measurement within the simulations' spread.")
+        lines.append(no_findings_text(report))
     if covariate_preamble(report["findings"]):
         lines += [covariate_preamble(report["findings"]), ""]
     for f in report["findings"]:
