@@ -176,7 +176,7 @@ def _pick(names, path, columns, time_unit):
         raise RecordingError(f"{path}: the gyro columns state different units ({', '.join(sorted(units))})")
     stated = units.pop() if units else None
     unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME),
-                      TIME_UNITS, f"the time column {quote(names[time]) if time is not None else ''} states")
+                      f"the time column {quote(names[time]) if time is not None else ''} states", known=TIME_UNITS)
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
         raise RecordingError(f"{path}: the time column {quote(names[time])} states the unit {quote(unit)}, not one of "
                              f"{', '.join(TIME_UNITS)}; give --time-unit")
@@ -529,7 +529,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
 
 def _gyro_unit(unit, stated, lsb_per_dps, path):
     """The gyro unit: the caller's, which must agree with the names', or the names'; never guessed."""
-    unit = given_unit(path, "--unit", unit, stated, GYRO_UNITS, "the column names say")
+    unit = given_unit(path, "--unit", unit, stated, "the column names say")
     if unit not in GYRO_UNITS:
         raise RecordingError(f"{path}: the gyro unit is not stated{f' ({quote(stated)})' if stated else ''}; "
                              "give --unit dps, rad/s or lsb (with --lsb-per-dps)")

@@ -139,14 +139,14 @@ def find_extras(names, normal, taken, path, *, temp_unit=None, accel_unit=None, 
     return extras
 
 
-def given_unit(path, option, given, stated, known, whose, words=None):
+def given_unit(path, option, given, stated, whose, words=None, known=None):
     """The unit of a log's column(s): the one ``given`` in ``option``, which must agree with the
-    unit ``stated`` by their names where that is one of the ``known`` units (``time_ms`` with
-    ``--time-unit s`` is refused, naming ``whose`` names state it), else the stated one (or None).
-    A stated text that is no unit of ``known`` (``time (min)``, ``(deg/sec)``) is what the option
-    is for: the refusal of such a name asks for it. The one rule of the gyro, time, temperature
-    and accelerometer units of :mod:`gyrofilter.recording.foreign`; ``words``: how a stated unit is said."""
-    if given is not None and stated in known and given != stated:
+    unit ``stated`` by their names (``time_ms`` with ``--time-unit s`` is refused, naming ``whose``
+    names state it), else the stated one (or None). With ``known``, a stated text that is none of
+    those units (``time (min)``, ``(secs)``) takes the unit given: the time column's refusal of
+    such a name asks for ``--time-unit``. The one rule of the gyro, time, temperature and
+    accelerometer units of :mod:`gyrofilter.recording.foreign`; ``words``: how a stated unit is said."""
+    if given is not None and stated is not None and given != stated and (known is None or stated in known):
         raise RecordingError(f"{path}: {option} {given}, but {whose} {(words or {}).get(stated, stated)}")
     return given if given is not None else stated
 
@@ -172,8 +172,8 @@ def _temperature(extras, found, names, normal, temp_unit, path):
     i = found[0]
     key, bracket = normal[i]
     stated = _stated(key, bracket, "c" if key in _CELSIUS_NAMES else None)
-    given_unit(path, "--temp-unit", temp_unit, _STATED_TEMP.get(stated, stated), ("c", "mpu6050"),
-               f"column {quote(names[i])} states", {"c": "deg C", "mpu6050": "raw counts"})
+    given_unit(path, "--temp-unit", temp_unit, _STATED_TEMP.get(stated, stated), f"column {quote(names[i])} states",
+               {"c": "deg C", "mpu6050": "raw counts"})
     unit = temp_unit or ("c" if stated == "c" else None)
     if unit is None:
         extras.warnings.append(f"column {quote(names[i])} left out: its unit is not stated"
@@ -209,7 +209,7 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
     if len(stated) > 1:
         raise RecordingError(f"{path}: the accelerometer columns state different units ({', '.join(sorted(stated))})")
     stated = stated.pop() if stated else None
-    unit = given_unit(path, "--accel-unit", accel_unit, stated, ACCEL_UNITS, "the accelerometer columns state")
+    unit = given_unit(path, "--accel-unit", accel_unit, stated, "the accelerometer columns state")
     if unit is not None and unit not in ACCEL_UNITS:
         raise RecordingError(f"{path}: the accelerometer columns state the unit {quote(unit)}; give --accel-unit "
                              f"{', '.join(ACCEL_UNITS)} (or none to leave them out)")
