@@ -896,5 +896,5 @@ def test_a_fleet_run_over_an_earlier_ones_folder_leaves_only_its_own_outputs(tmp
     (out / "notes.txt").write_text("mine")
     capsys.readouterr()
     assert main(["allan", paths[0], "--fleet", str(out), "--jobs", "1", "--force"]) == 2
-    assert f"{out / 'notes.txt'}: not written by a fleet run" in capsys.readouterr().err
+    assert f"{out / 'notes.txt'}: not an output of this run, nor a report of a unit" in capsys.readouterr().err
     assert (out / "u1.allan.json").exists() and (out / "notes.txt").read_text() == "mine"

@@ -172,8 +172,9 @@ def _earlier_outputs(folder, own):
         path = os.path.join(folder, name)
         unit = next((name[:-len(s)] for s in suffixes if name.endswith(s)), None)
         if unit is None or not table.lists_unit(listed, unit) or os.path.islink(path) or not os.path.isfile(path):
-            raise SettingsError(f"{path}: not written by a fleet run (the fleet.csv there lists no such report), and "
-                                "--fleet DIR holds the run's own files only: give a new or empty folder, or move it")
+            raise SettingsError(f"{path}: not an output of this run, nor a report of a unit the {FLEET_CSV} there lists; "
+                                "--fleet DIR holds the run's own files only, and no other file is removed: give a new "
+                                "or empty folder, or move it")
         earlier.append(path)
     return earlier
 
