@@ -898,3 +898,16 @@ def test_a_fleet_run_over_an_earlier_ones_folder_leaves_only_its_own_outputs(tmp
     assert main(["allan", paths[0], "--fleet", str(out), "--jobs", "1", "--force"]) == 2
     assert f"{out / 'notes.txt'}: not an output of this run, nor a report of a unit" in capsys.readouterr().err
     assert (out / "u1.allan.json").exists() and (out / "notes.txt").read_text() == "mine"
+
+
+def test_a_gap_fleet_unit_too_short_for_the_gap_analysis_is_not_analysed(tmp_path, capsys):
+    """Attack pass 26: ``gap two.csv`` (2 samples) exits 2, "no axis analysed (only 2 samples ...)",
+    while ``gap --fleet`` called the unit analysed, its rows "ok" without a finding (read: the model
+    explains it), exit 0; its rows say why it was not analysed, as a constant axis's do."""
+    src = tmp_path / "two.csv"
+    write_recording(src, Recording.from_dps(np.array([[1.0, 2, 3], [1.1, 2, 3]]), 100.0))
+    assert main(["gap", str(src), "--fleet", str(tmp_path / "out"), "--jobs", "1", "--sims", "10"]) == 2
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "out" / "fleet.csv").read_text())))
+    assert [r["status"] for r in rows] == [f"{src}: axis {a}: only 2 samples (< 256): too short to tell anything "
+                                           "beyond the baseline, not analysed" for a in "xyz"]
+    assert "fleet: 1 recording(s), 0 analysed" in capsys.readouterr().out

@@ -72,6 +72,7 @@ from ...errors import SettingsError
 from ...recording.header import markdown_text
 from ...units import AXES, MAD_TO_SIGMA, utf8_text
 from ..gap.detectors import OUTSIDE_NULL_D
+from ..gap.report import not_analysed_why
 from ..noise.export import ACCEL_JSON_KEY, JSON_KEY
 from ..noise.model import (ACCELEROMETER_TERMS, ANGLE_RANDOM_WALK, GYROSCOPE_TERMS, QUANTIZATION, TERM_SYMBOL,
                            TERMS)
@@ -217,6 +218,8 @@ def fleet_rows(names, results):
         allan = res["allan"] or {}
         gap = res["gap"]
         idle = ((gap or {}).get("discrepancy") or {}).get("not_analysed", {})
+        if gap is not None and not gap.get("discrepancy"):  # too short for the gap: no axis analysed, as gap says
+            idle = dict.fromkeys(AXES, not_analysed_why(gap))
         per_axis = [w for w in base["warnings"] if w.startswith("axis ")]
         stuck = {w[len("axis "):].split(":", 1)[0]: w for w in per_axis if w.endswith(LEFT_OUT)}
         accel_out = [w for w in base["warnings"] if not w.startswith("axis ") and w.endswith(LEFT_OUT)]
