@@ -162,7 +162,7 @@ def _earlier_outputs(folder, own):
     listed = set()
     with contextlib.suppress(OSError, UnicodeDecodeError, csv.Error):
         with open(os.path.join(folder, FLEET_CSV), encoding="utf-8", newline="") as fh:
-            listed = table.listed_units(fh.read())
+            listed = table.listed_units(fh)
     own = {os.path.basename(p) for p in own}
     suffixes = [suffix for suffix, _, _ in report_files("gap")]  # every command's reports
     earlier = []

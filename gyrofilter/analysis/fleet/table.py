@@ -61,7 +61,6 @@ from __future__ import annotations
 
 import collections
 import csv
-import io
 import math
 import os
 
@@ -414,10 +413,11 @@ def fleet_csv(rows):
     return utf8_text(text)  # names and reasons hold file names, which may not be UTF-8
 
 
-def listed_units(csv_text):
-    """The unit cells of a fleet.csv's text (:func:`fleet_csv`), as a set: what
+def listed_units(lines):
+    """The unit cells of a fleet.csv (:func:`fleet_csv`), read from ``lines`` (its text's lines as
+    a file opened with ``newline=""`` yields them, a row at a time), as a set: what
     :func:`lists_unit` looks a unit up in."""
-    rows = csv.reader(io.StringIO(csv_text, newline=""))
+    rows = csv.reader(lines)
     next(rows, None)
     return {row[0] for row in rows if row}
 
