@@ -417,7 +417,8 @@ def test_the_summary_says_the_number_of_simulations_gap_ran(sims, samples, ran, 
     from gyrofilter.view.report import _summary
 
     data = {"recording": {"name": "r.csv", "samples": samples, "duration_s": samples / 100, "header": {}},
-            "options": {"sims": sims, "keep_outliers": False}, "gap": {"n_simulations": ran}}
+            "options": {"sims": sims, "keep_outliers": False},
+            "gap": {"n_simulations": ran, "discrepancy": {"overall_before": 1.0, "not_analysed": {}}}}  # analysed
     page = _summary(data)
     assert "as gap chooses" not in page and html.escape(said) in page, page
 
