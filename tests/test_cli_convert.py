@@ -673,7 +673,7 @@ def test_a_log_of_cr_only_line_ends_is_refused_naming_them(tmp_path, capsys, row
 
 
 @pytest.mark.parametrize("zipped", [False, True])
-@pytest.mark.parametrize("head", [b"", b"time_s,gx_dps,gy_dps,gz_dps\n# a comment\r\n"])
+@pytest.mark.parametrize("head", [b"", b"time_ms,gx_dps,gy_dps,gz_dps\n# a comment\r\n"])
 def test_a_piped_log_without_rows_is_refused_as_it_is_copied(tmp_path, capsys, monkeypatch, head, zipped):
     """Attack pass 8 (issue 37's leftover): ``convert -`` copied a pipe whole (up to 4 GiB) before
     the bound on blank and comment lines before the first data row applied; the lines are now
@@ -708,7 +708,7 @@ def test_a_piped_log_without_rows_is_refused_as_it_is_copied(tmp_path, capsys, m
     assert refused_before_the_end and said == [2] and not dst.exists()
     assert capsys.readouterr().err == (f"gyrofilter: error: /dev/fd/{read_end}: no data rows in the first 1 MB (only "
                                        "blank or comment lines); not a log of rates\n")
-    text = head or b"time_s,gx_dps,gy_dps,gz_dps\n"
+    text = head or b"time_ms,gx_dps,gy_dps,gz_dps\n"  # _convert_pipe gives --time-unit ms
     rc, dst = _convert_pipe(tmp_path, text + b"\n" * (900 << 10) + b"0,1,2,3\n0.01,1,2,3\n" + b"\n" * (3 << 20))
     assert rc == 0 and len(read_recording(dst)) == 2
 
@@ -916,3 +916,18 @@ def test_an_accelerometer_in_lsb_needs_its_scale_and_a_partial_one_is_left_out_s
     err = capsys.readouterr().err
     assert rc == 0 and "ax" not in read_recording(dst).columns
     assert "accelerometer column(s) 'AccX (g)', 'AccY (g)' left out: no column for its z" in err, err
+
+
+def test_a_time_unit_given_that_contradicts_the_name_is_refused_as_the_gyro_unit_is(tmp_path, capsys):
+    """Attack pass 26: ``--time-unit s`` on ``time_ms`` overrode the name without a word (10 ms
+    steps read as 10 s: 0.1 Hz written); a ``--unit`` that contradicts the names is refused, and so is this."""
+    rows = "".join(f"{10 * i},{i % 7},1,2\n" for i in range(600))
+    rc, dst = _convert(tmp_path, "time_ms,gx_dps,gy_dps,gz_dps\n" + rows, "--time-unit", "s")
+    assert rc == 2 and not dst.exists()
+    assert "--time-unit s, but the time column 'time_ms' states ms" in capsys.readouterr().err
+    rc, dst = _convert(tmp_path, "time_ms,gx_dps,gy_dps,gz_dps\n" + rows, "--time-unit", "ms")
+    assert rc == 0, capsys.readouterr().err
+    # a unit the name states and convert does not know is what the option is for (its refusal asks for it)
+    rows = "".join(f"{i / 100:.2f},{i % 7},1,2\n" for i in range(600))
+    rc, dst = _convert(tmp_path, "time (sek),gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows, "--time-unit", "s", "--force")
+    assert rc == 0 and read_recording(dst).sample_rate_hz == 100, capsys.readouterr().err

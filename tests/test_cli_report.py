@@ -417,6 +417,25 @@ def test_the_summary_says_the_number_of_simulations_gap_ran(sims, samples, ran, 
     from gyrofilter.view.report import _summary
 
     data = {"recording": {"name": "r.csv", "samples": samples, "duration_s": samples / 100, "header": {}},
-            "options": {"sims": sims, "keep_outliers": False}, "gap": {"n_simulations": ran}}
+            "options": {"sims": sims, "keep_outliers": False},
+            "gap": {"n_simulations": ran, "discrepancy": {"overall_before": 1.0, "not_analysed": {}}}}  # analysed
     page = _summary(data)
     assert "as gap chooses" not in page and html.escape(said) in page, page
+
+
+def test_a_report_on_a_record_of_no_axis_analysed_does_not_say_the_baseline_explains_it(tmp_path):
+    """Attack pass 26: on a record whose every axis is constant (gap exits 2: "no axis analysed") the
+    report's gap section said "None: the baseline explains the record within the simulations'
+    spread", the reading gap's exit 2 is there to prevent; it says that no axis was analysed, and why;
+    and on a record too short for any, its options said "--sims 24" of a gap that ran none."""
+    src, out = tmp_path / "const.csv", tmp_path / "r.html"
+    write_recording(src, Recording.from_dps(np.full((3000, 3), 0.5), 100.0))
+    assert main(["report", str(src), "--out", str(out)]) == 0
+    text = " ".join(html.unescape(out.read_text()).split())
+    assert "explains" not in text.split("<h3>Findings</h3>")[1].split("</p>")[0]
+    assert "None: no axis was analysed (x: constant signal; y: constant signal; z: constant signal)" in text
+    write_recording(src, Recording.from_dps(np.array([[1.0, 2, 3], [1.1, 2, 3]]), 100.0))  # too short: no gap run
+    assert main(["report", str(src), "--out", str(out), "--force"]) == 0
+    text = " ".join(html.unescape(out.read_text()).split())
+    assert "None: no axis was analysed (only 2 samples" in text and "--sims 24" not in text
+    assert "no gap simulation ran (no axis analysed)" in text

@@ -877,3 +877,37 @@ def test_a_unit_whose_report_name_is_too_long_is_refused_before_any_work(tmp_pat
     assert capsys.readouterr().err == (f"gyrofilter: error: {out / ('a' * 246 + '.allan.json')}: a name longer than "
                                        "255 bytes, more than a file system takes\n")
     assert not out.exists()
+
+
+def test_a_fleet_run_over_an_earlier_ones_folder_leaves_only_its_own_outputs(tmp_path, capsys):
+    """Attack pass 26: ``allan --fleet DIR --force`` over the folder of an earlier run of more units
+    left their reports beside a fleet.csv that does not list them. The earlier run's reports
+    (of units its fleet.csv lists) go; a file no fleet run wrote is never removed: refused, named."""
+    rng = np.random.default_rng(7)
+    paths = [str(tmp_path / f"u{i}.csv") for i in range(3)]
+    for i, path in enumerate(paths):
+        write_recording(path, simulate(unit_model(rng), 30.0, seed=700 + i))
+    out = tmp_path / "out"
+    assert main(["allan", *paths, "--fleet", str(out), "--jobs", "1"]) == 0
+    assert (out / "u2.allan.json").exists()
+    assert main(["allan", *paths[:2], "--fleet", str(out), "--jobs", "1", "--force"]) == 0
+    assert sorted(os.listdir(out)) == ["fleet.csv", "fleet.md", "u0.allan.json", "u0.imu.yaml", "u1.allan.json",
+                                       "u1.imu.yaml"]
+    (out / "notes.txt").write_text("mine")
+    capsys.readouterr()
+    assert main(["allan", paths[0], "--fleet", str(out), "--jobs", "1", "--force"]) == 2
+    assert f"{out / 'notes.txt'}: not an output of this run, nor a report of a unit" in capsys.readouterr().err
+    assert (out / "u1.allan.json").exists() and (out / "notes.txt").read_text() == "mine"
+
+
+def test_a_gap_fleet_unit_too_short_for_the_gap_analysis_is_not_analysed(tmp_path, capsys):
+    """Attack pass 26: ``gap two.csv`` (2 samples) exits 2, "no axis analysed (only 2 samples ...)",
+    while ``gap --fleet`` called the unit analysed, its rows "ok" without a finding (read: the model
+    explains it), exit 0; its rows say why it was not analysed, as a constant axis's do."""
+    src = tmp_path / "two.csv"
+    write_recording(src, Recording.from_dps(np.array([[1.0, 2, 3], [1.1, 2, 3]]), 100.0))
+    assert main(["gap", str(src), "--fleet", str(tmp_path / "out"), "--jobs", "1", "--sims", "10"]) == 2
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "out" / "fleet.csv").read_text())))
+    assert [r["status"] for r in rows] == [f"{src}: axis {a}: only 2 samples (< 256): too short to tell anything "
+                                           "beyond the baseline, not analysed" for a in "xyz"]
+    assert "fleet: 1 recording(s), 0 analysed" in capsys.readouterr().out

@@ -428,3 +428,20 @@ def test_the_arduino_sketch_sends_the_accelerometer_in_the_protocol():
     assert p.header["accel_unit"] == "lsb" and p.header["lsb_per_g"] == "16384" and p.stats["bad_lines"] == 0
     np.testing.assert_allclose(rows[0][[1, 2, 3, 5, 6, 7]], [-433, 151, -62, 312, -96, 16544])
     assert rows[0][4] == pytest.approx(-1520 / 340 + 36.53)
+
+
+def test_a_header_that_changes_a_key_that_is_no_unit_mid_stream_is_noted_at_its_row():
+    """Attack pass 26: a repeated header that said ``sensor=ICM20602`` mid-stream was kept without
+    a word (the recording's header keeps the first, MPU6050). The samples keep their units, so the
+    stream goes on, and a note says what the device said and after how many samples; a header
+    repeated as it was says nothing."""
+    p = LineParser()
+    p.feed(HEADER + _lines([0, 1, 2]))
+    p.pop_notes()
+    changed = HEADER.replace(b"sensor=MPU6050", b"sensor=ICM20602 dlpf_cfg=3")
+    rows = p.feed(changed + _lines([3, 4]) + changed + HEADER + _lines([5]))
+    assert len(rows) == 3 and p.stats["samples"] == 6
+    assert p.pop_notes() == ["serial: the device's header says sensor=ICM20602, dlpf_cfg=3 after sample 3 (the "
+                             "recording's header keeps sensor=MPU6050, no dlpf_cfg)",
+                             "serial: the device's header says sensor=MPU6050, no dlpf_cfg after sample 5 (the "
+                             "recording's header keeps sensor=MPU6050, no dlpf_cfg)"]

@@ -8,6 +8,7 @@ the units that stand out. Exit 0 when the command ran, even if some files failed
 say why); 2 when nothing could be done (bad input before any work, or no recording analysed).
 """
 import contextlib
+import csv
 import glob
 import os
 import time
@@ -94,6 +95,7 @@ def run(args, settings, paths):
     report_paths = [os.path.join(args.fleet, name + suffix) for name in names for suffix, _, _ in files]
     fleet_files = [os.path.join(args.fleet, FLEET_CSV), os.path.join(args.fleet, FLEET_MD)]
     outputs.check_outputs(report_paths + fleet_files, paths, args.force)
+    earlier = _earlier_outputs(args.fleet, report_paths + fleet_files)
     results = [work.failed(p, "no file matches") if glob.has_magic(p) and not os.path.exists(p) else None
                for p in paths]
     todo = [i for i, r in enumerate(results) if r is None]
@@ -133,6 +135,9 @@ def run(args, settings, paths):
     rows = table.fleet_rows(names, results)
     stats = table.flag_units(rows)
     title = f"Fleet: gyrofilter {settings.command}, {len(paths)} recordings"
+    for path in earlier:  # the folder holds this run's outputs only
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(path)
     with outputs.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
         fh.write(table.fleet_csv(rows))
     with outputs.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
@@ -142,6 +147,36 @@ def run(args, settings, paths):
     no_accel = [f"{names[i]}: {w[len(NO_ACCEL_UNIT):]}" for i, r in enumerate(results) for w in r["warnings"]
                 if w.startswith(NO_ACCEL_UNIT)]
     return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml, no_accel)
+
+
+def _earlier_outputs(folder, own):
+    """The files in ``folder`` that an earlier fleet run wrote and this run (its outputs ``own``)
+    does not: reports of the units the earlier fleet.csv lists (there only under --force, which
+    its fleet.csv needs), removed when this run's fleet.csv is written, so that no report stands
+    beside a table that does not list it. Any other file (a file of one's own, a recording, a
+    folder, a link) is never removed: refused, named, before any work; partials aside."""
+    try:
+        names = sorted(os.listdir(folder))
+    except (FileNotFoundError, NotADirectoryError):
+        return []
+    listed = set()
+    with contextlib.suppress(OSError, UnicodeDecodeError, csv.Error):
+        with open(os.path.join(folder, FLEET_CSV), encoding="utf-8", newline="") as fh:
+            listed = table.listed_units(fh)
+    own = {os.path.basename(p) for p in own}
+    suffixes = [suffix for suffix, _, _ in report_files("gap")]  # every command's reports
+    earlier = []
+    for name in names:
+        if name in own or outputs.is_partial(name):
+            continue
+        path = os.path.join(folder, name)
+        unit = next((name[:-len(s)] for s in suffixes if name.endswith(s)), None)
+        if unit is None or not table.lists_unit(listed, unit) or os.path.islink(path) or not os.path.isfile(path):
+            raise SettingsError(f"{path}: not an output of this run, nor a report of a unit the {FLEET_CSV} there lists; "
+                                "--fleet DIR holds the run's own files only, and no other file is removed: give a new "
+                                "or empty folder, or move it")
+        earlier.append(path)
+    return earlier
 
 
 def _drop_unwritten(folder, name, files, result):

@@ -85,10 +85,8 @@ def run(args):
         pyplot()  # a missing matplotlib is said now, not after the analysis
     rec, report = analyse_file(args.recording, n_sims=args.sims, bootstrap=args.bootstrap,
                                warn=console.say_warning, progress=progress, refuse_motion=not args.allow_motion)
-    d = report.get("discrepancy")
-    if not d or d["overall_before"] is None:  # nothing analysed: not a result that exit 0 could vouch for
-        why = ("; ".join(f"{a}: {text}" for a, text in d["not_analysed"].items()) if d
-               else report["notes"][0] if report["notes"] else "no discrepancy computed")
+    d, why = report.get("discrepancy"), gap_report.not_analysed_why(report)
+    if why is not None:  # nothing analysed: not a result that exit 0 could vouch for
         raise RecordingError(f"{args.recording}: no axis analysed ({why}); nothing written")
     with contextlib.ExitStack() as files:
         if args.json is not None:

@@ -340,6 +340,12 @@ STALE_AFTER_S = 600.0
 _swept = set()  # folders whose stale partials this process removed already
 
 
+def is_partial(name):
+    """Whether the file name ``name`` is a partial's (:func:`partial_path`, :func:`replacing_in`),
+    of any process or host: an output being written, not yet a file of its folder."""
+    return _PARTIAL.fullmatch(name) is not None
+
+
 def remove_stale_partials(folder):
     """Remove from ``folder`` the temporary files and folders (``.partial-PID-...``, see
     :func:`partial_path`) of processes that died before renaming them (SIGKILL, a power cut):

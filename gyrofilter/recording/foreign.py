@@ -56,7 +56,7 @@ from ..units import AXES, GYRO_UNITS, RATE_TOLERANCE, check_lsb_per_dps, check_s
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .foreign_extras import find_extras, gyro_out_of_range
+from .foreign_extras import find_extras, given_unit, gyro_out_of_range
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
@@ -175,7 +175,8 @@ def _pick(names, path, columns, time_unit):
     if len(units) > 1:
         raise RecordingError(f"{path}: the gyro columns state different units ({', '.join(sorted(units))})")
     stated = units.pop() if units else None
-    unit = time_unit or (None if time is None else _name_unit(normal[time], TIME_NAME))
+    unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME),
+                      f"the time column {quote(names[time]) if time is not None else ''} states", known=TIME_UNITS)
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
         raise RecordingError(f"{path}: the time column {quote(names[time])} states the unit {quote(unit)}, not one of "
                              f"{', '.join(TIME_UNITS)}; give --time-unit")
@@ -478,7 +479,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     if out_of_range:
         raise RecordingError(out_of_range)
     summary = [f"columns: x {quote(names[gyro[0]])}, y {quote(names[gyro[1]])}, z {quote(names[gyro[2]])} "
-               f"in {unit}{' (as the names state)' if stated else ''}; {rows} rows"
+               f"in {unit}{' (as the names state)' if stated == unit else ''}; {rows} rows"
                + (f", {skipped} blank or comment line(s) skipped" if skipped else "")]
     summary += extras.summary + ([f"left out: {', '.join(n for i, n in enumerate(names) if i not in wanted)}"]
                                  if len(wanted) < len(names) else [])
@@ -495,7 +496,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
             offsets = np.concatenate(stamps.offsets)
             stamps.offsets = None
             t_unit, how = _infer_time_unit(np.diff(offsets), path, names[time]), \
-                f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more"
+                f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more; --time-unit to say otherwise"
             del offsets
             with _unchanged(path):
                 t_parts = [_seconds(cells[3], stamps.origin, TIME_UNITS[t_unit])
@@ -528,9 +529,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
 
 def _gyro_unit(unit, stated, lsb_per_dps, path):
     """The gyro unit: the caller's, which must agree with the names', or the names'; never guessed."""
-    if unit is not None and stated is not None and unit != stated:
-        raise RecordingError(f"{path}: --unit {unit}, but the column names say {stated}")
-    unit = unit or stated
+    unit = given_unit(path, "--unit", unit, stated, "the column names say")
     if unit not in GYRO_UNITS:
         raise RecordingError(f"{path}: the gyro unit is not stated{f' ({quote(stated)})' if stated else ''}; "
                              "give --unit dps, rad/s or lsb (with --lsb-per-dps)")
@@ -565,7 +564,7 @@ def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution
     taken as given."""
     step_s = np.diff(t_s)
     median_s = float(np.median(step_s))
-    text = f"time: column {quote(name)} in {t_unit} ({how}; --time-unit to say otherwise)"
+    text = f"time: column {quote(name)} in {t_unit} ({how})"
     gap = step_s > 1.5 * median_s
     kept = ~gap & (step_s >= 0.5 * median_s)
     kept = kept if kept.any() else ~gap  # none near the median (steps of 1 us and 10 ms by turns): refused below

@@ -57,7 +57,7 @@ _UNIT_TEXT = {"c": "c", "°c": "c", "degc": "c", "deg_c": "c", "degreesc": "c", 
               "m/s^2": "m/s^2", "m/s2": "m/s^2", "m/s²": "m/s^2", "ms2": "m/s^2", "m_s2": "m/s^2", "m_s_2": "m/s^2",
               "mps2": "m/s^2", "ms^-2": "m/s^2", "g": "g"}
 #: what each --temp-unit says of a name's unit
-_TEMP_STATES = {"c": "c", "mpu6050": "raw"}
+_STATED_TEMP = {"c": "c", "raw": "mpu6050"}  # the --temp-unit a temperature column's name states
 
 
 @dataclass
@@ -139,6 +139,18 @@ def find_extras(names, normal, taken, path, *, temp_unit=None, accel_unit=None, 
     return extras
 
 
+def given_unit(path, option, given, stated, whose, words=None, known=None):
+    """The unit of a log's column(s): the one ``given`` in ``option``, which must agree with the
+    unit ``stated`` by their names (``time_ms`` with ``--time-unit s`` is refused, naming ``whose``
+    names state it), else the stated one (or None). With ``known``, a stated text that is none of
+    those units (``time (min)``, ``(secs)``) takes the unit given: the time column's refusal of
+    such a name asks for ``--time-unit``. The one rule of the gyro, time, temperature and
+    accelerometer units of :mod:`gyrofilter.recording.foreign`; ``words``: how a stated unit is said."""
+    if given is not None and stated is not None and given != stated and (known is None or stated in known):
+        raise RecordingError(f"{path}: {option} {given}, but {whose} {(words or {}).get(stated, stated)}")
+    return given if given is not None else stated
+
+
 def _stated(key, bracket, word):
     """The unit a name states: its brackets' or the word at its end (``word``, the pattern's), mapped by
     :data:`_UNIT_TEXT` (an unknown text as it is), or None."""
@@ -160,9 +172,8 @@ def _temperature(extras, found, names, normal, temp_unit, path):
     i = found[0]
     key, bracket = normal[i]
     stated = _stated(key, bracket, "c" if key in _CELSIUS_NAMES else None)
-    if temp_unit is not None and stated is not None and stated != _TEMP_STATES[temp_unit]:
-        raise RecordingError(f"{path}: --temp-unit {temp_unit}, but column {quote(names[i])} states "
-                             + ("deg C" if stated == "c" else "raw counts" if stated == "raw" else quote(stated)))
+    given_unit(path, "--temp-unit", temp_unit, _STATED_TEMP.get(stated, stated), f"column {quote(names[i])} states",
+               {"c": "deg C", "mpu6050": "raw counts"})
     unit = temp_unit or ("c" if stated == "c" else None)
     if unit is None:
         extras.warnings.append(f"column {quote(names[i])} left out: its unit is not stated"
@@ -198,9 +209,7 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
     if len(stated) > 1:
         raise RecordingError(f"{path}: the accelerometer columns state different units ({', '.join(sorted(stated))})")
     stated = stated.pop() if stated else None
-    if accel_unit is not None and stated is not None and accel_unit != stated:
-        raise RecordingError(f"{path}: --accel-unit {accel_unit}, but the accelerometer columns state {stated}")
-    unit = accel_unit or stated
+    unit = given_unit(path, "--accel-unit", accel_unit, stated, "the accelerometer columns state")
     if unit is not None and unit not in ACCEL_UNITS:
         raise RecordingError(f"{path}: the accelerometer columns state the unit {quote(unit)}; give --accel-unit "
                              f"{', '.join(ACCEL_UNITS)} (or none to leave them out)")

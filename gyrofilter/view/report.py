@@ -17,8 +17,8 @@ import json
 import numpy as np
 
 from ..effects import ROWS
-from ..analysis.gap.report import (UNCERTAIN_HEADING, covariate_preamble, evidence_text, indistinguishable_text, params_text,
-                                   uncertain_text)
+from ..analysis.gap.report import (UNCERTAIN_HEADING, covariate_preamble, evidence_text, indistinguishable_text,
+                                   no_findings_text, not_analysed_why, params_text, uncertain_text)
 from ..analysis.gap.baseline import default_n_sims, default_n_sims_why
 from ..analysis.noise.export import ACCEL_JSON, GYRO_JSON
 from ..analysis.noise.model import TERMS, TERM_SLOPE, TERM_SYMBOL, basis, model_adev
@@ -111,9 +111,11 @@ def _summary(data):
             rows.append((key, text if len(text) <= _LONG_TEXT else text[:_LONG_TEXT] + " ..."))
     if rec.get("t_gaps"):
         rows.append(("gaps in t", f"{rec['t_gaps']} step(s) longer than 1.5 sample intervals"))
-    ran = (data.get("gap") or {}).get("n_simulations") or opts["sims"] or default_n_sims(rec["samples"])
-    rows.append(("options", f"--sims {ran}" + ("" if opts["sims"] else f" ({default_n_sims_why(rec['samples'])})")
-                            + (", --keep-outliers" if opts["keep_outliers"] else "")))
+    gap = data.get("gap")
+    ran = (gap or {}).get("n_simulations") or opts["sims"] or default_n_sims(rec["samples"])
+    sims = ("no gap simulation ran (no axis analysed)" if gap and not_analysed_why(gap) is not None else
+            "--sims " + (f"{ran}" if opts["sims"] else f"{ran} ({default_n_sims_why(rec['samples'])})"))
+    rows.append(("options", sims + (", --keep-outliers" if opts["keep_outliers"] else "")))
     return "<h2>Recording</h2>" + _table(["", ""], rows, header_row=False)
 
 
@@ -235,7 +237,7 @@ def _gap(data):
                        "D extended"], rows, numeric_from=1))
     out.append("<h3>Findings</h3>")
     if not g["findings"]:
-        out.append("<p>None: the baseline explains the record within the simulations' spread.</p>")
+        out.append(f"<p>{html_text(no_findings_text(g))}</p>")
     if covariate_preamble(g["findings"]):
         out.append(f"<p>{html_text(covariate_preamble(g['findings']))}</p>")
     out.append("<ul>" + "".join(_finding(f) for f in g["findings"]) + "</ul>")

@@ -60,6 +60,7 @@ with fewer, no unit is flagged on it and :func:`flag_units` says so in its stati
 from __future__ import annotations
 
 import collections
+import csv
 import math
 import os
 
@@ -70,6 +71,7 @@ from ...errors import SettingsError
 from ...recording.header import markdown_text
 from ...units import AXES, MAD_TO_SIGMA, utf8_text
 from ..gap.detectors import OUTSIDE_NULL_D
+from ..gap.report import not_analysed_why
 from ..noise.export import ACCEL_JSON_KEY, JSON_KEY
 from ..noise.model import (ACCELEROMETER_TERMS, ANGLE_RANDOM_WALK, GYROSCOPE_TERMS, QUANTIZATION, TERM_SYMBOL,
                            TERMS)
@@ -215,6 +217,8 @@ def fleet_rows(names, results):
         allan = res["allan"] or {}
         gap = res["gap"]
         idle = ((gap or {}).get("discrepancy") or {}).get("not_analysed", {})
+        if gap is not None and not gap.get("discrepancy"):  # too short for the gap: no axis analysed, as gap says
+            idle = dict.fromkeys(AXES, not_analysed_why(gap))
         per_axis = [w for w in base["warnings"] if w.startswith("axis ")]
         stuck = {w[len("axis "):].split(":", 1)[0]: w for w in per_axis if w.endswith(LEFT_OUT)}
         accel_out = [w for w in base["warnings"] if not w.startswith("axis ") and w.endswith(LEFT_OUT)]
@@ -407,6 +411,21 @@ def fleet_csv(rows):
                           for c in COLUMNS] for row in rows]
     text = "".join(",".join(_quoted(cell) for cell in line) + "\n" for line in lines)
     return utf8_text(text)  # names and reasons hold file names, which may not be UTF-8
+
+
+def listed_units(lines):
+    """The unit cells of a fleet.csv (:func:`fleet_csv`), read from ``lines`` (its text's lines as
+    a file opened with ``newline=""`` yields them, a row at a time), as a set: what
+    :func:`lists_unit` looks a unit up in."""
+    rows = csv.reader(lines)
+    next(rows, None)
+    return {row[0] for row in rows if row}
+
+
+def lists_unit(listed, unit):
+    """Whether the unit cells ``listed`` (:func:`listed_units`) hold the unit named ``unit``, as
+    :func:`fleet_csv` writes its name."""
+    return utf8_text(_cell(unit)) in listed
 
 
 def _quoted(cell):

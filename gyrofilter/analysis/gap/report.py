@@ -153,6 +153,27 @@ def covariate_preamble(findings):
     return f"Some findings below cannot be told apart in this record from a reading in time (shown under them). {WHY_THE_COVARIATE}."
 
 
+def not_analysed_why(report):
+    """Why the gap ``report`` analysed no axis (each axis's reason, or the analysis's first note: a
+    record too short), or None where one was: ``gyrofilter gap`` exits 2 there, and a report says so."""
+    d = report.get("discrepancy")
+    if d and d["overall_before"] is not None:
+        return None
+    return ("; ".join(f"{a}: {text}" for a, text in d["not_analysed"].items()) if d
+            else report["notes"][0] if report.get("notes") else "no discrepancy computed")
+
+
+def no_findings_text(report):
+    """What a report says where the gap ``report`` has no finding: that the baseline explains the
+    axes analysed, or, where none was (:func:`not_analysed_why`), that nothing was compared with it."""
+    why = not_analysed_why(report)
+    if why is not None:
+        return f"None: no axis was analysed ({why}); nothing was compared with the baseline."
+    idle = report["discrepancy"]["not_analysed"]
+    over = f" on the axes analysed ({', '.join(a for a in AXES if a not in idle)})" if idle else ""
+    return f"None: the baseline explains the measurement{over} within the simulations' spread."
+
+
 def evidence_text(finding):
     """A finding's evidence less the sentence :func:`covariate_preamble` says once for all."""
     return finding["evidence"].replace(f". {WHY_THE_COVARIATE}", "")
@@ -272,7 +293,7 @@ def write_report(report, rec, out_dir):
         lines += [f"Each parameter with its {100 * intervals['confidence']:.0f} % interval in brackets "
                   f"({intervals['bootstrap_runs']} bootstrap runs per axis with findings; docs/gap.md).", ""]
     if not report["findings"]:
-        lines.append("None: the baseline explains the measurement within the simulations' spread.")
+        lines.append(no_findings_text(report))
     if covariate_preamble(report["findings"]):
         lines += [covariate_preamble(report["findings"]), ""]
     for f in report["findings"]:

@@ -55,3 +55,19 @@ def accel_units(values, fields, where):
     lsb_per_g = check_lsb_per_g(parse_number(values["lsb_per_g"], what, low=0, low_open=True, error=DeviceError), what,
                                 DeviceError)
     return {"accel_unit": unit, "lsb_per_g": format_number(lsb_per_g)}
+
+
+def other_keys_note(previous, header, first, unit_keys, samples):
+    """The note of a repeated header (a dict of the recording header's keys) whose keys other than
+    the ``unit_keys`` (``sensor``, ``dlpf_cfg``, ...) differ from the ``previous`` one's, or None:
+    the samples keep their units, so the stream goes on, and the recording's header keeps the
+    ``first`` header's; the note says what the device said, after how many ``samples``, and what
+    the recording's header holds (a units change is refused instead: the parser's ``_apply``)."""
+    other = [k for k in dict.fromkeys([*previous, *header]) if k not in unit_keys]
+    changed = [k for k in other if previous.get(k) != header.get(k)]
+    if not changed:
+        return None
+
+    def said(values):
+        return ", ".join(f"{k}={values[k]}" if k in values else f"no {k}" for k in changed)
+    return f"serial: the device's header says {said(header)} after sample {samples} (the recording's header keeps {said(first)})"

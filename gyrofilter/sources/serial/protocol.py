@@ -64,7 +64,7 @@ from ...recording import ACCEL_COLUMNS, COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, 
 from ...units import (GYRO_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz,
                       to_dps, to_mps2)
 from ..mpu6050.chip import temperature_c
-from .fields import accel_units, parse_fields
+from .fields import accel_units, other_keys_note, parse_fields
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
 PROTOCOL_VERSION = "1"
@@ -149,6 +149,8 @@ class LineParser:
         self._held = None  # a line whose counter jumped, waiting for the next to judge it (_out_of_sequence)
         self._last_index = -1
         self._options = None
+        self._device_header = None  # the first header the device sent, once it has (the recording's)
+        self._changed_headers = 0
         if gyro_unit is not None or sample_rate_hz is not None or lsb_per_dps is not None:
             self._options = self._make_units({"gyro_unit": gyro_unit, "lsb_per_dps": lsb_per_dps,
                                                "sample_rate_hz": sample_rate_hz}, "source options")
@@ -204,6 +206,15 @@ class LineParser:
         self.header = dict(header)
         self.sample_rate_hz = float(header["sample_rate_hz"])
         self._lsb_per_dps = float(header["lsb_per_dps"]) if "lsb_per_dps" in header else None
+
+    def _note_other_keys(self, previous, header):
+        """Note a repeated header's other keys (:func:`.fields.other_keys_note`), :data:`MAX_DETAILED_NOTES` times at most."""
+        note = None if previous is None else other_keys_note(previous, header, self._device_header, _UNIT_KEYS,
+                                                             self.stats["samples"])
+        self._device_header = self._device_header or dict(header)
+        self._changed_headers += note is not None
+        if note is not None and self._changed_headers <= MAX_DETAILED_NOTES:
+            self.notes.append(note)
 
     def _header_words(self, line):
         """The ``key=value`` words of a header line as a dict; DeviceError for anything else."""
@@ -261,7 +272,9 @@ class LineParser:
         if temp_unit not in ("c", "mpu6050_raw"):
             raise DeviceError(f"{self.where}: temp_unit {quote(temp_unit, 40)} is not c or mpu6050_raw")
         header.update(accel_units(values, fields, self.where))
+        previous = self.header if self._device_header else None
         self._apply(header)  # a repeated header must agree; the counter tells restarts
+        self._note_other_keys(previous, header)
         self.fields, self._counter_mod, self._temp_raw = fields, counter_mod, temp_unit == "mpu6050_raw"
         self._skip_first_line = False
 
