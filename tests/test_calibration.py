@@ -255,3 +255,25 @@ def test_calibrate_refuses_a_masked_value_and_temperatures_that_are_not_the_wind
         calibrate(still(200), 100.0, temp_c=np.full(5, 25.0))
     with pytest.raises(SettingsError, match="temp_c must be numbers in deg C, got an array of <U2"):
         calibrate(still(200), 100.0, temp_c=np.full(200, "25"))
+
+
+def test_a_save_that_fails_keeps_the_calibration_that_was_there(tmp_path):
+    """Attack pass 26: save wrote in place; a write that failed (a full disk; here the file size
+    limit) left a truncated file where a good calibration was, and its partial is not left behind."""
+    import resource
+    import signal
+    good = calibrate(still(500), 100.0)
+    path = tmp_path / "cal.json"
+    good.save(path)
+    before = path.read_bytes()
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    old = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (40, hard))
+    try:
+        with pytest.raises(OSError):
+            calibrate(still(500, seed=1), 100.0).save(path)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, old)
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cal.json"]
