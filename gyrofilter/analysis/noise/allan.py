@@ -55,6 +55,16 @@ class ConstantAxisError(AllanInputError):
         self.varying = None
 
 
+def refuse_constant(x, where, *, unit="deg/s", axis=None):
+    """ConstantAxisError (of ``axis``) whose message starts with ``where`` when the finite series
+    ``x`` (a float array) holds one value only: the one wording of a constant series' refusal
+    (the Allan fit, the wavelet variance)."""
+    if x.size and np.all(np.isfinite(x)) and np.ptp(x) == 0:
+        raise ConstantAxisError(
+            f"{where}: all {x.size} samples equal {x.flat[0]:g} {unit} (constant data): no noise to "
+            "characterise (sensor not connected, or a saturated/stuck axis?)", axis)
+
+
 def rate_numbers(x, name="x"):
     """``x`` as a float64 array when it holds numbers (ints or floats), else AllanInputError naming
     ``name``: a masked value (converting would drop the mask and take the value behind it as

@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...effects import BIAS_INSTABILITY, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK
-from .allan import AllanInputError, overlapping_adev
+from .allan import AllanInputError, overlapping_adev, rate_numbers, refuse_constant
 from .model import QUANTIZATION
 from .wv_robust import ROBUST_EFFICIENCY, robust_wv
 from ...sim.model import validate_model
@@ -119,8 +119,11 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
     :data:`~gyrofilter.analysis.noise.wv_robust.ROBUST_EFFICIENCY` for True, else the number given),
     Fisher-consistent at the heavy-tailed white noise ``tails`` = (fraction, scale_ratio) when given;
     ``tails`` also makes the WVIC's bootstrap (:func:`bootstrap_cov`) simulate that noise.
+    A constant series (no model fits a wavelet variance of 0) is refused as the Allan fit refuses
+    it (:func:`~gyrofilter.analysis.noise.allan.refuse_constant`).
     """
-    n = int(np.asarray(x_dps).size)
+    x_dps = rate_numbers(x_dps, "x_dps")
+    n = int(x_dps.size)
     m = []
     j = max(0, int(math.ceil(math.log2(max(min_m, 1)))))
     while (n - 2 * 2**j + 1) / (2.0 * 2**j) >= min_edf:
@@ -131,6 +134,7 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
         raise AllanInputError(f"x_dps has {n} samples; a wavelet-variance fit needs at least "
                               f"{math.ceil(min_edf * 2 * second + 2 * second - 1)} (two scales of {min_edf:g} "
                               "equivalent degrees of freedom)")
+    refuse_constant(x_dps, "x_dps")
     m = np.array(m, dtype=np.int64)
     efficiency = ROBUST_EFFICIENCY if robust is True else float(robust)
     edf = np.maximum((n - 2 * m + 1) / (2.0 * m), 1.0) * (efficiency or 1.0)
