@@ -1346,3 +1346,16 @@ def test_recording_writer_refuses_a_text_cell_its_columns_format_takes_no_text_f
             writer.write(rows)
         writer.write(np.array([[1, "2", 3.5]], dtype=object))
     assert read_recording(path).gyro_dps.shape == (1, 3)
+
+
+def test_an_empty_array_of_the_wrong_width_is_refused_as_a_full_one_is(tmp_path):
+    """Attack pass 26: write(np.empty((0, 5))) to a writer of 4 columns was taken without a word."""
+    from gyrofilter.recording.writer import RecordingWriter
+    header = {"gyrofilter-recording": 1, "gyro_unit": "dps", "sample_rate_hz": 100}
+    with RecordingWriter(tmp_path / "r.csv", header, ["t", "gx", "gy", "gz"]) as writer:
+        writer.write(np.empty((0, 4)))  # nothing, of the right width
+        for rows, shape in ((np.empty((0, 5)), r"\(0, 5\)"), (np.empty((0,)), r"\(0,\)"), ([], r"\(0,\)")):
+            with pytest.raises(RecordingError, match=rf"rows must have shape \(n, 4\), got {shape}"):
+                writer.write(rows)
+        writer.write(np.array([[0.0, 1, 2, 3]]))
+    assert len(read_recording(tmp_path / "r.csv")) == 1

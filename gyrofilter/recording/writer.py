@@ -218,15 +218,15 @@ class RecordingWriter(Closable):
             raise
 
     def write(self, rows):
-        """Append rows, shape (n, number of columns), in the columns' order; RecordingError (and
-        none of them written) when one holds NaN or +-inf. The cells of an object array (text a
+        """Append rows, shape (n, number of columns), in the columns' order (n may be 0; another
+        shape is refused); RecordingError (and none of them written) when one holds NaN or +-inf. The cells of an object array (text a
         converter formatted itself, say) go through their formats as they are (``%s`` where a column has
         none), once checked as numbers the reader reads (:func:`_written_as_read`)."""
         rows = _rows_of_numbers(rows, self.name, self.columns, self._formats)
+        if rows.ndim != 2 or rows.shape[1] != len(self.columns):  # none of the right width, too
+            raise RecordingError(f"{self.name}: rows must have shape (n, {len(self.columns)}), got {rows.shape}")
         if rows.size == 0:
             return
-        if rows.ndim != 2 or rows.shape[1] != len(self.columns):
-            raise RecordingError(f"{self.name}: rows must have shape (n, {len(self.columns)}), got {rows.shape}")
         try:
             values = rows.astype(float)
         except (TypeError, ValueError):
