@@ -1359,3 +1359,21 @@ def test_an_empty_array_of_the_wrong_width_is_refused_as_a_full_one_is(tmp_path)
                 writer.write(rows)
         writer.write(np.array([[0.0, 1, 2, 3]]))
     assert len(read_recording(tmp_path / "r.csv")) == 1
+
+
+@pytest.mark.parametrize("key, value, said", [("sample_rate_hz", "0", "sample_rate_hz"), ("sample_rate_hz", "nan", "sample_rate_hz"),
+                                              ("sample_rate_hz", "-100", "sample_rate_hz"), ("sample_rate_hz", "abc", "sample_rate_hz"),
+                                              ("gyro_unit", "deg/s", "gyro_unit"), ("sample_rate_hz", None, "missing")])
+def test_a_header_changed_after_the_recording_was_built_is_checked_where_read(key, value, said):
+    """Attack pass 26: the header is a mutable dict; a rate changed to 0, nan or -100 after the
+    Recording was built gave a ZeroDivisionError, nan or a negative duration (header.check_facts
+    ran in __post_init__ only)."""
+    rec = Recording.from_dps(np.zeros((100, 3)), 100.0)
+    if value is None:
+        del rec.header[key]
+    else:
+        rec.header[key] = value
+    for read in (lambda: rec.sample_rate_hz, lambda: rec.duration_s, lambda: rec.t_s, lambda: rec.gyro_dps,
+                 lambda: rec.input_sample_rate_hz):
+        with pytest.raises(RecordingError, match=f"recording: .*{said}"):
+            read()

@@ -19,28 +19,38 @@ from .header import (ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY
 
 
 class _HeaderFacts:
-    """Sample rate and units as the ``header`` of a recording states them."""
+    """Sample rate and units as the ``header`` of a recording states them, checked where they are
+    read (:meth:`_facts`): the header is a mutable dict, changed perhaps since it was checked."""
+
+    def _facts(self) -> dict:
+        """The header, held to :func:`~gyrofilter.recording.header.check_facts` (RecordingError
+        naming the recording): a rate set to 0, nan or -100 after the recording was built gave a
+        ZeroDivisionError, nan or a negative duration. A few microseconds a call; the properties
+        are read per recording or per chunk, never per sample."""
+        check_facts(self.header, getattr(self, "path", None) or "recording")
+        return self.header
 
     @property
     def sample_rate_hz(self) -> float:
         """The header's ``sample_rate_hz`` as a float (Hz)."""
-        return float(self.header["sample_rate_hz"])
+        return float(self._facts()["sample_rate_hz"])
 
     @property
     def input_sample_rate_hz(self) -> float:
         """The rate (Hz) of the samples the rows come from: the header's ``input_sample_rate_hz``
         (a filtered output's: a row per block of input samples) as a float, else ``sample_rate_hz``."""
-        return float(self.header.get(INPUT_RATE_KEY, self.header["sample_rate_hz"]))
+        header = self._facts()
+        return float(header.get(INPUT_RATE_KEY, header["sample_rate_hz"]))
 
     @property
     def gyro_unit(self) -> str:
         """The header's ``gyro_unit``: ``dps``, ``rad/s`` or ``lsb`` (the gyro columns' unit)."""
-        return self.header["gyro_unit"]
+        return self._facts()["gyro_unit"]
 
     @property
     def lsb_per_dps(self):
         """The header's ``lsb_per_dps`` as a float (LSB per deg/s), or None when absent."""
-        value = self.header.get("lsb_per_dps")
+        value = self._facts().get("lsb_per_dps")
         return None if value is None else float(value)
 
     @property
