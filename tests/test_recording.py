@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from gyrofilter.errors import RecordingError, SettingsError
-from gyrofilter.recording import Recording, RecordingWriter, iter_recording, read_recording, write_recording
+from gyrofilter.recording import Note, Recording, RecordingWriter, iter_recording, read_recording, write_recording
 
 HEADER = "# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
 
@@ -1377,3 +1377,14 @@ def test_a_header_changed_after_the_recording_was_built_is_checked_where_read(ke
                  lambda: rec.input_sample_rate_hz):
         with pytest.raises(RecordingError, match=f"recording: .*{said}"):
             read()
+
+
+@pytest.mark.parametrize("note", ["just text", ("only",), (1, 5), (1, "x", 3), (1, b"bytes")])
+def test_a_note_that_is_no_line_and_text_pair_is_refused(tmp_path, note):
+    """Attack pass 26: write_recording took a note's text as note[1]: a string note 'just text'
+    was written as '# u', (1, 5) as '# 5', (1, 'x', 3) after the data, ('only',) an IndexError."""
+    rec = Recording.from_dps(np.zeros((5, 3)), 100.0)
+    rec.notes = [Note(1, "kept", row=2), note]
+    with pytest.raises(RecordingError, match=r"r.csv: note 2 of the recording, .* is not a \(line, text\) pair"):
+        write_recording(tmp_path / "r.csv", rec)
+    assert not (tmp_path / "r.csv").exists()
