@@ -1388,3 +1388,16 @@ def test_a_note_that_is_no_line_and_text_pair_is_refused(tmp_path, note):
     with pytest.raises(RecordingError, match=r"r.csv: note 2 of the recording, .* is not a \(line, text\) pair"):
         write_recording(tmp_path / "r.csv", rec)
     assert not (tmp_path / "r.csv").exists()
+
+
+def test_read_recording_takes_the_columns_as_names_too(tmp_path):
+    """Attack pass 26: read_recording(columns=["t", "gx"]) ended in "'list' object is not callable"
+    (a function of the file's names was the only form); a list of names is taken, a text refused."""
+    path = tmp_path / "r.csv"
+    write_recording(path, Recording.from_dps(np.ones((4, 3)), 100.0, t_s=np.arange(4) / 100.0))
+    assert list(read_recording(path, columns=["t", "gx"]).columns) == ["t", "gx"]
+    assert list(read_recording(path, columns=lambda names: names[1:]).columns) == ["gx", "gy", "gz"]
+    with pytest.raises(SettingsError, match="columns to keep .* got the text 'gx'"):
+        read_recording(path, columns="gx")
+    with pytest.raises(SettingsError, match="distinct columns of the file"):
+        read_recording(path, columns=["gx", "nope"])
