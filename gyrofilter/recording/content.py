@@ -19,15 +19,12 @@ from .header import (ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY
 
 
 class _HeaderFacts:
-    """Sample rate and units as the ``header`` of a recording states them, checked where they are
-    read (:meth:`_facts`): the header is a mutable dict, changed perhaps since it was checked."""
+    """Sample rate and units as the ``header`` of a recording states them, read through
+    :meth:`_facts` (a :class:`Recording` checks them there: its header is a mutable dict, changed
+    perhaps since it was built)."""
 
     def _facts(self) -> dict:
-        """The header, held to :func:`~gyrofilter.recording.header.check_facts` (RecordingError
-        naming the recording): a rate set to 0, nan or -100 after the recording was built gave a
-        ZeroDivisionError, nan or a negative duration. A few microseconds a call; the properties
-        are read per recording or per chunk, never per sample."""
-        check_facts(self.header, getattr(self, "path", None) or "recording")
+        """The header the properties read (a :class:`Recording`'s checked again, see there)."""
         return self.header
 
     @property
@@ -130,6 +127,16 @@ class Recording(_HeaderFacts):
         (:func:`~gyrofilter.recording.header.check_facts`: the version aside)."""
         check_facts(self.header, self.path or "recording")
         self.columns = checked_columns(self.columns)
+
+    def _facts(self) -> dict:
+        """The header, held to :func:`~gyrofilter.recording.header.check_facts` (RecordingError
+        naming the recording) where the properties read it: a rate set to 0, nan or -100 after the
+        recording was built gave a ZeroDivisionError, nan or a negative duration. A few
+        microseconds a call; the properties are read per recording, never per sample. (A
+        :class:`RecordingHead`'s header is the reader's, checked as the file is read, or a
+        partial one of a time check's.)"""
+        check_facts(self.header, self.path or "recording")
+        return self.header
 
     def __len__(self):
         return len(next(iter(self.columns.values()), ()))  # the columns are of one length
