@@ -1401,3 +1401,11 @@ def test_read_recording_takes_the_columns_as_names_too(tmp_path):
         read_recording(path, columns="gx")
     with pytest.raises(SettingsError, match="distinct columns of the file"):
         read_recording(path, columns=["gx", "nope"])
+
+
+def test_a_writer_refuses_its_columns_in_a_set(tmp_path):
+    """Attack pass 26: RecordingWriter(path, header, {"gx", "gy", "gz"}) named the columns in the
+    set's order (the hash seed's): rows written by position landed under other axes, exit 0."""
+    with pytest.raises(RecordingError, match="the columns are a list in the rows' order, got a set"):
+        RecordingWriter(tmp_path / "r.csv", {"sample_rate_hz": 100, "gyro_unit": "dps"}, {"gx", "gy", "gz"})
+    assert not (tmp_path / "r.csv").exists()

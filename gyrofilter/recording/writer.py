@@ -18,7 +18,7 @@ import numpy as np
 
 from ..closable import Closable
 from ..errors import RecordingError
-from ..inputs import MAX_QUOTE_CHARS, check_number, is_plain_number, number_array, quote
+from ..inputs import MAX_QUOTE_CHARS, check_number, is_plain_number, number_array, quote, refuse_unordered
 from .checks import TimeCheck, check_rates
 from .content import Recording, RecordingHead, checked_columns
 from .header import header_text, note_line
@@ -185,6 +185,7 @@ class RecordingWriter(Closable):
                  compresslevel=6, name=None):
         self.path = os.fspath(path)
         self.name = self.path if name is None else os.fspath(name)
+        refuse_unordered(columns, f"{self.name}: the columns are a list in the rows' order", RecordingError)
         self.columns = list(columns)
         text = header_text(header, self.columns, self.name)
         self._head = RecordingHead(header={k: str(v) for k, v in header.items()}, names=self.columns, path=self.name)
