@@ -6,6 +6,7 @@ import hashlib
 import os
 import re
 import socket
+import stat
 
 from .errors import naming_file
 
@@ -57,18 +58,33 @@ def partial_path(path):
 def write_text_whole(path, text):
     """Write ``text`` (UTF-8) to the file ``path`` whole or not at all: under :func:`partial_path`
     first, then renamed (``os.replace``, atomic), so that a failed write (a full disk, a file
-    size limit) leaves the file that was there as it was; the partial is removed on any failure.
-    An OSError names ``path``."""
-    path = os.fspath(path)
-    tmp = partial_path(path)
+    size limit) leaves the file that was there as it was (its permission bits kept); the partial
+    is removed on any failure. A symbolic link's target is written (the link kept); what is no
+    regular file (``/dev/null``, a FIFO, a terminal) is written to as it is, never replaced (a
+    rename over ``/dev/null`` made it a file). An OSError names ``path``."""
+    path = os.fsdecode(os.fspath(path))
+    target = os.path.realpath(path)
     try:
-        with naming_file(path):
+        mode = os.stat(target).st_mode
+    except OSError:  # not there yet (or not reachable: the write says why)
+        mode = None
+    with naming_file(path):
+        if mode is not None and not stat.S_ISREG(mode):
+            with open(target, "w", encoding="utf-8") as fh:
+                fh.write(text)
+            return
+        tmp = partial_path(target)
+        try:
             with open(tmp, "w", encoding="utf-8") as fh:
                 fh.write(text)
-            os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:  # never made, or gone: never hides the error
-            pass
-        raise
+            if mode is not None:
+                os.chmod(tmp, stat.S_IMODE(mode))
+            os.replace(tmp, target)
+        except BaseException as exc:
+            try:
+                os.unlink(tmp)
+            except OSError:  # never made, or gone: never hides the error
+                pass
+            if isinstance(exc, OSError):
+                raise OSError(exc.errno, exc.strerror or str(exc), path) from None
+            raise

@@ -277,3 +277,36 @@ def test_a_save_that_fails_keeps_the_calibration_that_was_there(tmp_path):
         signal.signal(signal.SIGXFSZ, old)
     assert path.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cal.json"]
+
+
+def test_a_save_through_a_link_or_to_a_fifo_writes_what_the_name_leads_to(tmp_path):
+    """Attack pass 26: the whole-or-nothing save (a rename) replaced a symbolic link by a file (its
+    target left as it was) and a device by a file (``/dev/null`` became one); the link's target
+    is written, what is no regular file written to as it is, a file's permission bits kept."""
+    import os
+    import stat
+    import threading
+    cal = calibrate(still(500), 100.0)
+    target, link = tmp_path / "target.json", tmp_path / "link.json"
+    target.write_text("old")
+    os.chmod(target, 0o600)
+    os.symlink(target.name, link)
+    cal.save(link)
+    assert link.is_symlink() and Calibration.load(target) == cal
+    assert stat.S_IMODE(os.stat(target).st_mode) == 0o600
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_text()))
+    reader.start()
+    cal.save(fifo)
+    reader.join(10)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode) and got and got[0].startswith('{\n  "gyrofilter-calibration": 1')
+    with pytest.raises(OSError, match="Is a directory") as info:
+        cal.save(tmp_path)
+    assert info.value.filename == str(tmp_path)
+    with pytest.raises(FileNotFoundError) as info:
+        cal.save(tmp_path / "missing" / "cal.json")
+    assert info.value.filename == str(tmp_path / "missing" / "cal.json")
+    cal.save(os.fsencode(tmp_path / "bytes.json"))
+    assert Calibration.load(tmp_path / "bytes.json") == cal
