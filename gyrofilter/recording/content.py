@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import number_array
-from ..units import from_dps, to_dps, to_mps2
+from ..units import ACCEL_UNITS, check_lsb_per_g, from_dps, to_dps, to_mps2
 from .header import (ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY, VERSION_KEY, accel_header, accel_units_header, check_facts,
                      dps_header, format_number)
 
@@ -199,6 +199,7 @@ class Recording(_HeaderFacts):
         head = {VERSION_KEY: FORMAT_VERSION}
         head.update(dps_header({k: v for k, v in (header or {}).items() if k not in accel_header(header or {})},
                                sample_rate_hz))
+        _check_accel_arguments(accel, accel_unit, lsb_per_g)
         head.update(accel_units_header(accel_unit, lsb_per_g))
         columns = {}
         if t_s is not None:
@@ -219,6 +220,19 @@ class Recording(_HeaderFacts):
                                      "give its values through its own argument")
             columns[name] = _numbers(values, f"extra column {name!r}")
         return cls(columns=columns, header=head)
+
+
+def _check_accel_arguments(accel, accel_unit, lsb_per_g):
+    """Refuse :meth:`Recording.from_dps`'s accelerometer arguments that do not go together
+    (RecordingError): a unit or scale without ``accel``, a unit not in ACCEL_UNITS, ``lsb``
+    without a ``lsb_per_g`` in its range (with another unit it is not written, as a file's
+    ``lsb_per_g`` beside ``accel_unit: g`` is not copied)."""
+    if accel is None and (accel_unit is not None or lsb_per_g is not None):
+        raise RecordingError("from_dps: accel_unit and lsb_per_g go with accel (the columns ax, ay, az); give accel too")
+    if accel_unit is not None and accel_unit not in ACCEL_UNITS:
+        raise RecordingError(f"from_dps: accel_unit {accel_unit!r} is not one of {', '.join(ACCEL_UNITS)}")
+    if accel_unit == "lsb":
+        check_lsb_per_g(lsb_per_g, "from_dps: lsb_per_g", RecordingError)
 
 
 def checked_columns(columns):
