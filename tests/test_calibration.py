@@ -297,7 +297,7 @@ def test_a_save_through_a_link_or_to_a_fifo_writes_what_the_name_leads_to(tmp_pa
     fifo = tmp_path / "fifo"
     os.mkfifo(fifo)
     got = []
-    reader = threading.Thread(target=lambda: got.append(fifo.read_text()))
+    reader = threading.Thread(target=lambda: got.append(fifo.read_text()), daemon=True)
     reader.start()
     cal.save(fifo)
     reader.join(10)
