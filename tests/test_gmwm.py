@@ -85,7 +85,7 @@ def test_flicker_closed_form_matches_the_simulated_bias_instability_and_simulate
     flicker, at every scale with 8 or more degrees of freedom; flat at B² ln 2 / π mid-band."""
     b, duration_s = 0.004, 2000.0
     n = int(duration_s * FS)
-    wv = gmwm.haar_wv(np.random.default_rng(0).normal(size=n), FS)  # the scales only (n samples)
+    wv = gmwm.haar_wv(series([], 0.0, duration_s, seed=0) + 1.0, FS)  # the scales only
     keep = wv.edf >= 8
     closed = gmwm.wv_flicker(wv.tau_s, b, FS, duration_s)
     mid = (wv.tau_s > 0.2) & (wv.tau_s < duration_s / 9)

@@ -60,9 +60,13 @@ def refuse_constant(x, where, *, unit="deg/s", axis=None):
     ``x`` (a float array) holds one value only: the one wording of a constant series' refusal
     (the Allan fit, the wavelet variance)."""
     if x.size and np.all(np.isfinite(x)) and np.ptp(x) == 0:
-        raise ConstantAxisError(
-            f"{where}: all {x.size} samples equal {x.flat[0]:g} {unit} (constant data): no noise to "
-            "characterise (sensor not connected, or a saturated/stuck axis?)", axis)
+        raise ConstantAxisError(constant_words(where, x.size, x.flat[0], unit), axis)
+
+
+def constant_words(where, n, value, unit="deg/s"):
+    """The words of :func:`refuse_constant`: ``where``, the ``n`` samples and their one ``value``."""
+    return (f"{where}: all {n} samples equal {value:g} {unit} (constant data): no noise to characterise "
+            "(sensor not connected, or a saturated/stuck axis?)")
 
 
 def rate_numbers(x, name="x"):
