@@ -193,6 +193,14 @@ def scalar(value):
     return value
 
 
+def refuse_unordered(values, what, error=SettingsError):
+    """Refuse, with ``error`` whose message is ``what`` and the reason, a set (or frozenset) where
+    an order is meant (columns by position): its order is the hash seed's, so that the columns
+    were written or read in another order from run to run without a word."""
+    if isinstance(values, (set, frozenset)):
+        raise error(f"{what}, got a set, which has no order")
+
+
 def _short(value):
     """A value for a message, long ints and floats included, at most MAX_QUOTE_CHARS characters."""
     if isinstance(value, (np.generic,)):

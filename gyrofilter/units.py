@@ -10,7 +10,7 @@ from functools import partial
 import numpy as np
 
 from .errors import SampleError, SettingsError
-from .inputs import MAX_QUOTE_CHARS, check_number
+from .inputs import MAX_QUOTE_CHARS, check_number, scalar
 
 DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
@@ -92,8 +92,10 @@ def check_lsb_per_g(value, name="lsb_per_g", error=SettingsError):
 
 def _check_scale(value, bounds, unit, span, name, error):
     """``value`` as a float when it is a number (not a bool) within ``bounds``, else ``error``
-    naming ``name``, the ``unit`` and the ``span`` of real parts."""
+    naming ``name``, the ``unit`` and the ``span`` of real parts (a 0-d array: the number it holds,
+    :func:`~gyrofilter.inputs.scalar`)."""
     low, high = bounds
+    value = scalar(value)
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     try:
         ok = ok and low <= float(value) <= high  # NaN fails the comparison
@@ -112,8 +114,10 @@ def check_sample_rate_hz(value, name="sample_rate_hz", error=SettingsError):
     (0.001 Hz: 1 / rate overflows the analyses long before zero) or an implausibly high one (which
     would size buffers beyond memory) raises ``error`` (a :class:`~gyrofilter.errors.GyroFilterError` class;
     :class:`~gyrofilter.errors.RecordingError` for a file's header) with a message that names
-    ``name`` (the keyword, option or header key, with its file if any) and the value.
+    ``name`` (the keyword, option or header key, with its file if any) and the value. A 0-d array
+    is the number it holds (:func:`~gyrofilter.inputs.scalar`).
     """
+    value = scalar(value)
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
     if ok:
         try:

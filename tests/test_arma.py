@@ -12,7 +12,7 @@ pytest.importorskip("scipy")
 from gyrofilter.analysis.arma import identify as arma  # noqa: E402
 from gyrofilter.analysis.arma import checks as arma_checks  # noqa: E402
 from gyrofilter.analysis.arma import fit as arma_fit  # noqa: E402
-from gyrofilter.errors import GyroFilterError  # noqa: E402
+from gyrofilter.errors import GyroFilterError, SettingsError  # noqa: E402
 
 PHI, THETA, SIGMA = 0.9, 0.5, 0.1
 
@@ -343,3 +343,14 @@ def test_what_is_not_rates_is_refused(kind):
     with pytest.raises(GyroFilterError, match=shown) as info:
         arma.analyze_axis(values, 100.0, axis="x")
     assert "Allan" not in str(info.value)  # pass 22's notes: the shared rule spoke of the Allan deviation
+
+
+def test_max_samples_that_is_no_whole_number_is_refused_in_words():
+    """Attack pass 26: prepare_series(max_samples=None or '500') ended in Python's TypeError,
+    nan was "must be at most 100000000" and True "at least 400, got True"."""
+    from gyrofilter.analysis.arma.identify import check_max_samples, prepare_series
+    x = np.random.default_rng(0).normal(size=1000)
+    for bad in (None, "500", float("nan"), True, 1000.5):
+        with pytest.raises(SettingsError, match="max_samples must be a (finite|whole) number"):
+            prepare_series(x, 100.0, bad)
+    assert check_max_samples(np.array(500)) == 500 and len(prepare_series(x, 100.0, 500.0)[0]) == 500

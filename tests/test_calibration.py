@@ -255,3 +255,58 @@ def test_calibrate_refuses_a_masked_value_and_temperatures_that_are_not_the_wind
         calibrate(still(200), 100.0, temp_c=np.full(5, 25.0))
     with pytest.raises(SettingsError, match="temp_c must be numbers in deg C, got an array of <U2"):
         calibrate(still(200), 100.0, temp_c=np.full(200, "25"))
+
+
+def test_a_save_that_fails_keeps_the_calibration_that_was_there(tmp_path):
+    """Attack pass 26: save wrote in place; a write that failed (a full disk; here the file size
+    limit) left a truncated file where a good calibration was, and its partial is not left behind."""
+    import resource
+    import signal
+    good = calibrate(still(500), 100.0)
+    path = tmp_path / "cal.json"
+    good.save(path)
+    before = path.read_bytes()
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    old = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (40, hard))
+    try:
+        with pytest.raises(OSError):
+            calibrate(still(500, seed=1), 100.0).save(path)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, old)
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cal.json"]
+
+
+def test_a_save_through_a_link_or_to_a_fifo_writes_what_the_name_leads_to(tmp_path):
+    """Attack pass 26: the whole-or-nothing save (a rename) replaced a symbolic link by a file (its
+    target left as it was) and a device by a file (``/dev/null`` became one); the link's target
+    is written, what is no regular file written to as it is, a file's permission bits kept."""
+    import os
+    import stat
+    import threading
+    cal = calibrate(still(500), 100.0)
+    target, link = tmp_path / "target.json", tmp_path / "link.json"
+    target.write_text("old")
+    os.chmod(target, 0o600)
+    os.symlink(target.name, link)
+    cal.save(link)
+    assert link.is_symlink() and Calibration.load(target) == cal
+    assert stat.S_IMODE(os.stat(target).st_mode) == 0o600
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_text()), daemon=True)
+    reader.start()
+    cal.save(fifo)
+    reader.join(10)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode) and got and got[0].startswith('{\n  "gyrofilter-calibration": 1')
+    with pytest.raises(OSError, match="Is a directory") as info:
+        cal.save(tmp_path)
+    assert info.value.filename == str(tmp_path)
+    with pytest.raises(FileNotFoundError) as info:
+        cal.save(tmp_path / "missing" / "cal.json")
+    assert info.value.filename == str(tmp_path / "missing" / "cal.json")
+    cal.save(os.fsencode(tmp_path / "bytes.json"))
+    assert Calibration.load(tmp_path / "bytes.json") == cal

@@ -10,6 +10,7 @@ import time
 import numpy as np
 import pytest
 
+from gyrofilter import files
 from gyrofilter.cli import outputs
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import Recording, read_recording, write_recording
@@ -273,7 +274,7 @@ def _stale(path, age_s=outputs.STALE_AFTER_S + 60):
 def test_stale_partials_of_dead_processes_go_at_the_next_write_to_their_folder(tmp_path):
     """Issue 22 (26): a SIGKILL left .partial-PID-* files that nothing removed. Only this host's,
     of a dead process, untouched for STALE_AFTER_S, go: a shared folder holds other machines'."""
-    dead, host = _dead_pid(), outputs._HOST
+    dead, host = _dead_pid(), files.HOST
     stale_file = tmp_path / f".partial-{dead}.{host}-old.csv"
     stale_file.write_text("half")
     stale_folder = tmp_path / f".partial-{dead}.{host}-k3j4h5g6"  # what replacing_in makes
@@ -304,7 +305,7 @@ def test_stale_partials_of_dead_processes_go_at_the_next_write_to_their_folder(t
 def test_a_command_writing_to_a_folder_removes_its_stale_partials(tmp_path, command):
     from gyrofilter.cli import main
 
-    stale = tmp_path / f".partial-{_dead_pid()}.{outputs._HOST}-killed.csv"
+    stale = tmp_path / f".partial-{_dead_pid()}.{files.HOST}-killed.csv"
     stale.write_text("# gyrofilter-recording: 1\n")
     _stale(stale)
     model = str(DEFAULT_MODEL_PATH)

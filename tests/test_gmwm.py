@@ -274,3 +274,15 @@ def test_a_record_too_short_for_two_scales_is_refused_in_words(n):
     with pytest.raises(GyroFilterError, match=f"x_dps has {n} samples; a wavelet-variance fit needs at least 11"):
         gmwm.haar_wv(np.ones(n), FS)
     assert len(gmwm.haar_wv(np.random.default_rng(0).normal(size=11), FS).tau_s) == 2
+
+
+def test_a_constant_series_is_refused_as_the_allan_functions_refuse_it():
+    """Attack pass 26: select_model of a constant series' wavelet variance ended in a plain
+    ValueError about a square wave; the words of every constant-series refusal, at haar_wv."""
+    from gyrofilter.analysis.noise.allan import AllanInputError, ConstantAxisError
+    with pytest.raises(ConstantAxisError) as info:
+        gmwm.select_model(gmwm.haar_wv(np.full(600, 0.25), 100.0))
+    with pytest.raises(AllanInputError) as allan:
+        characterise_axis(np.full(600, 0.25), 100.0, axis="x")
+    assert str(allan.value) == "axis x: " + str(info.value).split(": ", 1)[1]
+    assert str(info.value).startswith("x_dps: all 600 samples equal 0.25 deg/s (constant data)")

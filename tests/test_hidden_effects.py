@@ -79,3 +79,13 @@ def test_the_other_columns_and_notes_are_kept(tmp_path, effect, axis, params):
     else:
         assert np.array_equal(held, accel) and np.array_equal(out.temp_c, rec.temp_c)
     write_recording(tmp_path / "out.csv", out)
+
+
+def test_a_temperature_hidden_in_a_recording_without_one_is_the_package_s_refusal():
+    """Attack pass 26: hide_in_recording(rec without temp, "temperature", ...) raised a plain
+    ValueError (a program catching GyroFilterError got a traceback)."""
+    from gyrofilter.errors import GyroFilterError
+    from gyrofilter.recording import Recording
+    rec = Recording.from_dps(np.zeros((100, 3)), 100.0)
+    with pytest.raises(GyroFilterError, match="recording: the effect temperature needs a temp column"):
+        hide_in_recording(rec, "temperature", "x", {"coefficient_dps_per_c": 0.5})

@@ -364,3 +364,16 @@ def test_api_refusals_of_passes_23_and_24_now_take_what_is_right_and_name_what_i
         foreign, columns=["1", "2", "3", "4"], unit="dps").columns
     with pytest.raises(RecordingError, match="got the text 'wx'"):
         read_foreign(foreign, columns="wx", unit="dps")
+
+
+def test_read_foreign_refuses_columns_in_a_set(tmp_path):
+    """Attack pass 26: read_foreign(columns={"time_ms", "wx", "wy", "wz"}) took them in the set's
+    order, the hash seed's: the time read as a rate, axes swapped, without a word."""
+    from gyrofilter.errors import RecordingError
+    from gyrofilter.recording.foreign import read_foreign
+
+    foreign = tmp_path / "log.csv"
+    foreign.write_text("time_ms,wx,wy,wz\n" + "".join(f"{10 * i},{i},2,3\n" for i in range(50)))
+    for columns in ({"time_ms", "wx", "wy", "wz"}, frozenset({2, 3, 4})):
+        with pytest.raises(RecordingError, match=r"--columns takes a list .* in order \(time, x, y, z\), got a set"):
+            read_foreign(foreign, columns=columns, unit="dps")

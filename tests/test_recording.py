@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from gyrofilter.errors import RecordingError, SettingsError
-from gyrofilter.recording import Recording, RecordingWriter, iter_recording, read_recording, write_recording
+from gyrofilter.recording import Note, Recording, RecordingWriter, iter_recording, read_recording, write_recording
 
 HEADER = "# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
 
@@ -1346,3 +1346,66 @@ def test_recording_writer_refuses_a_text_cell_its_columns_format_takes_no_text_f
             writer.write(rows)
         writer.write(np.array([[1, "2", 3.5]], dtype=object))
     assert read_recording(path).gyro_dps.shape == (1, 3)
+
+
+def test_an_empty_array_of_the_wrong_width_is_refused_as_a_full_one_is(tmp_path):
+    """Attack pass 26: write(np.empty((0, 5))) to a writer of 4 columns was taken without a word."""
+    from gyrofilter.recording.writer import RecordingWriter
+    header = {"gyrofilter-recording": 1, "gyro_unit": "dps", "sample_rate_hz": 100}
+    with RecordingWriter(tmp_path / "r.csv", header, ["t", "gx", "gy", "gz"]) as writer:
+        writer.write(np.empty((0, 4)))  # nothing, of the right width
+        for rows, shape in ((np.empty((0, 5)), r"\(0, 5\)"), (np.empty((0,)), r"\(0,\)"), ([], r"\(0,\)")):
+            with pytest.raises(RecordingError, match=rf"rows must have shape \(n, 4\), got {shape}"):
+                writer.write(rows)
+        writer.write(np.array([[0.0, 1, 2, 3]]))
+    assert len(read_recording(tmp_path / "r.csv")) == 1
+
+
+@pytest.mark.parametrize("key, value, said", [("sample_rate_hz", "0", "sample_rate_hz"), ("sample_rate_hz", "nan", "sample_rate_hz"),
+                                              ("sample_rate_hz", "-100", "sample_rate_hz"), ("sample_rate_hz", "abc", "sample_rate_hz"),
+                                              ("gyro_unit", "deg/s", "gyro_unit"), ("sample_rate_hz", None, "missing")])
+def test_a_header_changed_after_the_recording_was_built_is_checked_where_read(key, value, said):
+    """Attack pass 26: the header is a mutable dict; a rate changed to 0, nan or -100 after the
+    Recording was built gave a ZeroDivisionError, nan or a negative duration (header.check_facts
+    ran in __post_init__ only)."""
+    rec = Recording.from_dps(np.zeros((100, 3)), 100.0)
+    if value is None:
+        del rec.header[key]
+    else:
+        rec.header[key] = value
+    for read in (lambda: rec.sample_rate_hz, lambda: rec.duration_s, lambda: rec.t_s, lambda: rec.gyro_dps,
+                 lambda: rec.input_sample_rate_hz):
+        with pytest.raises(RecordingError, match=f"recording: .*{said}"):
+            read()
+
+
+@pytest.mark.parametrize("note", ["just text", ("only",), (1, 5), (1, "x", 3), (1, b"bytes")])
+def test_a_note_that_is_no_line_and_text_pair_is_refused(tmp_path, note):
+    """Attack pass 26: write_recording took a note's text as note[1]: a string note 'just text'
+    was written as '# u', (1, 5) as '# 5', (1, 'x', 3) after the data, ('only',) an IndexError."""
+    rec = Recording.from_dps(np.zeros((5, 3)), 100.0)
+    rec.notes = [Note(1, "kept", row=2), note]
+    with pytest.raises(RecordingError, match=r"r.csv: note 2 of the recording, .* is not a \(line, text\) pair"):
+        write_recording(tmp_path / "r.csv", rec)
+    assert not (tmp_path / "r.csv").exists()
+
+
+def test_read_recording_takes_the_columns_as_names_too(tmp_path):
+    """Attack pass 26: read_recording(columns=["t", "gx"]) ended in "'list' object is not callable"
+    (a function of the file's names was the only form); a list of names is taken, a text refused."""
+    path = tmp_path / "r.csv"
+    write_recording(path, Recording.from_dps(np.ones((4, 3)), 100.0, t_s=np.arange(4) / 100.0))
+    assert list(read_recording(path, columns=["t", "gx"]).columns) == ["t", "gx"]
+    assert list(read_recording(path, columns=lambda names: names[1:]).columns) == ["gx", "gy", "gz"]
+    with pytest.raises(SettingsError, match="columns to keep .* got the text 'gx'"):
+        read_recording(path, columns="gx")
+    with pytest.raises(SettingsError, match="distinct columns of the file"):
+        read_recording(path, columns=["gx", "nope"])
+
+
+def test_a_writer_refuses_its_columns_in_a_set(tmp_path):
+    """Attack pass 26: RecordingWriter(path, header, {"gx", "gy", "gz"}) named the columns in the
+    set's order (the hash seed's): rows written by position landed under other axes, exit 0."""
+    with pytest.raises(RecordingError, match="the columns are a list in the rows' order, got a set"):
+        RecordingWriter(tmp_path / "r.csv", {"sample_rate_hz": 100, "gyro_unit": "dps"}, {"gx", "gy", "gz"})
+    assert not (tmp_path / "r.csv").exists()

@@ -292,3 +292,16 @@ def test_record_keeps_the_sources_accelerometer_and_its_unit(tmp_path, capsys):
     for name in ("t", "gx", "gy", "gz", "temp", *ACCEL_COLUMNS):
         np.testing.assert_array_equal(recorded.columns[name], rec.columns[name])
     np.testing.assert_array_equal(recorded.accel_mps2, accel * (9.80665 / 16384))
+
+
+@pytest.mark.parametrize("kwargs, said", [
+    ({"accel": np.zeros((5, 3)), "accel_unit": "lsb"}, "lsb_per_g must be a number of LSB per g"),
+    ({"accel_unit": "g"}, "accel_unit and lsb_per_g go with accel"),
+    ({"lsb_per_g": 16384}, "accel_unit and lsb_per_g go with accel"),
+    ({"accel": np.zeros((5, 3)), "accel_unit": "furlong"}, "accel_unit 'furlong' is not one of")])
+def test_from_dps_checks_the_accelerometer_s_arguments_together(kwargs, said):
+    """Attack pass 26: from_dps(accel=..., accel_unit="lsb") without lsb_per_g ended in Python's
+    TypeError; accel_unit without accel built a recording the writer refused, lsb_per_g alone was
+    dropped without a word."""
+    with pytest.raises(RecordingError, match=f"from_dps: {said}"):
+        Recording.from_dps(np.zeros((5, 3)), 100.0, **kwargs)

@@ -150,3 +150,15 @@ def test_a_scale_no_sensor_has_is_refused_by_the_conversions(convert, scale):
     function = {"to_dps": to_dps, "from_dps": from_dps, "to_mps2": to_mps2}[convert]
     with pytest.raises(SettingsError, match="must be a number of LSB per"):
         function(np.ones((4, 3)), "lsb", scale)
+
+
+def test_a_rate_or_scale_in_a_0d_array_is_the_number_it_holds():
+    """Attack pass 26: GyroFilter(np.array(100.0)) said "sample_rate_hz must be a number of Hz in
+    [0.001, 100000], got array(100.)" while calibration_s=np.array(2.0) was taken (inputs.scalar)."""
+    from gyrofilter import GyroFilter
+    from gyrofilter.units import check_lsb_per_g, check_sample_rate_hz
+    assert check_sample_rate_hz(np.array(100.0)) == 100.0 and type(check_sample_rate_hz(np.array(100))) is float
+    assert GyroFilter(np.array(100.0)).sample_rate_hz == 100.0
+    assert check_lsb_per_g(np.array(16384.0), "lsb_per_g") == 16384.0
+    with pytest.raises(SettingsError, match=r"got array\(\[100\.\]\)"):
+        check_sample_rate_hz(np.array([100.0]))

@@ -72,7 +72,7 @@ def whole_number(text):
 
 def file_name(text):
     """argparse type of an output option: any name but an empty one, or one whose last part is
-    longer than the file systems take (:data:`~gyrofilter.cli.outputs.NAME_MAX_BYTES`: refused
+    longer than the file systems take (:data:`~gyrofilter.files.NAME_MAX_BYTES`: refused
     before any work, not after it); the error names the option."""
     if not text.strip():
         raise argparse.ArgumentTypeError("an empty name; give a file or folder name")

@@ -4,17 +4,16 @@ files written under a temporary name that take their own name only when whole (:
 (:func:`remove_stale_partials`), and the writers of the JSON and text reports."""
 import contextlib
 import errno
-import hashlib
 import json
 import os
 import re
 import shutil
-import socket
 import stat
 import tempfile
 import time
 
 from ..errors import GyroFilterError, SettingsError
+from ..files import HOST, NAME_MAX_BYTES, OWNER, PARTIAL_PREFIX, output_folder, partial_path
 from ..units import json_ready
 
 
@@ -233,7 +232,7 @@ def replacing_in(folder):
     ``folder``; on any failure the temporary folder goes, with the files of it that landed before
     the failure, and any folder this call created while it is empty (:func:`_folder`)."""
     with _folder(folder):
-        tmp = tempfile.mkdtemp(prefix=f"{_PARTIAL_PREFIX}{_OWNER}-", dir=folder)
+        tmp = tempfile.mkdtemp(prefix=f"{PARTIAL_PREFIX}{OWNER}-", dir=folder)
         landed = []
         try:
             with _naming(tmp, folder), _unwritten_on_interrupt(f"the files of {folder}"):
@@ -290,50 +289,8 @@ def _naming(tmp, path):
         raise
 
 
-def output_folder(path):
-    """The folder the system writes ``path`` into: its folder part resolved as the system resolves
-    it, a symbolic link before a ``..`` followed first (``link/..`` is the link target's parent;
-    ``abspath`` would drop both), so that a temporary file made there is renamed within one
-    file system."""
-    return os.path.realpath(os.path.dirname(path) or os.curdir)
-
-
-#: the longest file name the usual file systems take (ext4, vfat, exFAT, NFS), in bytes
-NAME_MAX_BYTES = 255
-#: the characters at the end of an output's name a shortened partial name keeps (its extension)
-_KEPT_END_CHARS = 16
-#: the hexadecimal digits of the whole name's digest in a shortened partial name
-_DIGEST_CHARS = 16
-
-
-def partial_path(path):
-    """The temporary name beside ``path`` under which a file is written until it may take its
-    own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
-    extension, by which writers choose the format, is kept. A NAME too long to take the prefix
-    within :data:`NAME_MAX_BYTES` keeps its last characters and as much of its start as fits,
-    joined by ``~`` and a digest of the whole name (a legal name of 240 bytes made every command
-    fail after its work, naming the partial; without the digest two outputs whose names differ
-    only in the part left out shared one partial, and one of them took the other's text). A
-    process killed before the rename leaves it behind; :func:`remove_stale_partials` removes it later."""
-    prefix = f"{_PARTIAL_PREFIX}{_OWNER}-"
-    name = os.path.basename(path)
-    room = NAME_MAX_BYTES - len(os.fsencode(prefix))
-    if len(os.fsencode(name)) > room:
-        head, end = name[:-_KEPT_END_CHARS], name[-_KEPT_END_CHARS:]
-        digest = hashlib.sha256(os.fsencode(name)).hexdigest()[:_DIGEST_CHARS]
-        while head and len(os.fsencode(f"{head}~{digest}~{end}")) > room:
-            head = head[:-1]
-        name = f"{head}~{digest}~{end}"
-    return os.path.join(output_folder(path), prefix + name)
-
-
-_PARTIAL_PREFIX = ".partial-"
-#: the host in a partial name: a folder shared over the network (a fleet's reports on NFS) holds
-#: other machines' partials, whose process numbers mean nothing here
-_HOST = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname()) or "host"
-_OWNER = f"{os.getpid()}.{_HOST}"
 # what partial_path and replacing_in make: the process number and the host
-_PARTIAL = re.compile(re.escape(_PARTIAL_PREFIX) + r"([0-9]+)\.([A-Za-z0-9_]+)-.+", re.DOTALL)
+_PARTIAL = re.compile(re.escape(PARTIAL_PREFIX) + r"([0-9]+)\.([A-Za-z0-9_]+)-.+", re.DOTALL)
 #: a partial untouched for this long (s) may be stale: record and run flush every 0.5 s, and the
 #: other commands write theirs at the end, in seconds
 STALE_AFTER_S = 600.0
@@ -360,7 +317,7 @@ def remove_stale_partials(folder):
     with contextlib.suppress(OSError):
         for entry in os.scandir(folder):
             match = _PARTIAL.fullmatch(entry.name)
-            if (not match or match.group(2) != _HOST or _process_runs(int(match.group(1)))
+            if (not match or match.group(2) != HOST or _process_runs(int(match.group(1)))
                     or time.time() - entry.stat(follow_symlinks=False).st_mtime < STALE_AFTER_S):
                 continue
             if entry.is_dir(follow_symlinks=False):

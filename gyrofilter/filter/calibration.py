@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import CalibrationError, SettingsError
+from ..files import write_text_whole
 from ..inputs import check_number, load_json, quote
 from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
 from .samples import as_numbers
@@ -92,10 +93,10 @@ class Calibration:
         )
 
     def save(self, path):
-        """Write :meth:`to_json` to the file ``path`` (nothing written when it refuses)."""
-        text = self.to_json() + "\n"
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write(text)
+        """Write :meth:`to_json` to the file ``path`` (nothing written when it refuses), whole or
+        not at all (:func:`~gyrofilter.files.write_text_whole`: a failed write keeps the file that
+        was there)."""
+        write_text_whole(path, self.to_json() + "\n")
 
     def checked(self, where, *, max_bias_dps=MAX_BIAS_DPS) -> "Calibration":
         """This calibration with plain float/int fields, held to the limits of a start-up calibration

@@ -13,34 +13,41 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import number_array
-from ..units import from_dps, to_dps, to_mps2
+from ..units import ACCEL_UNITS, check_lsb_per_g, from_dps, to_dps, to_mps2
 from .header import (ACCEL_COLUMNS, FORMAT_VERSION, GYRO_COLUMNS, INPUT_RATE_KEY, VERSION_KEY, accel_header, accel_units_header, check_facts,
                      dps_header, format_number)
 
 
 class _HeaderFacts:
-    """Sample rate and units as the ``header`` of a recording states them."""
+    """Sample rate and units as the ``header`` of a recording states them, read through
+    :meth:`_facts` (a :class:`Recording` checks them there: its header is a mutable dict, changed
+    perhaps since it was built)."""
+
+    def _facts(self) -> dict:
+        """The header the properties read (a :class:`Recording`'s checked again, see there)."""
+        return self.header
 
     @property
     def sample_rate_hz(self) -> float:
         """The header's ``sample_rate_hz`` as a float (Hz)."""
-        return float(self.header["sample_rate_hz"])
+        return float(self._facts()["sample_rate_hz"])
 
     @property
     def input_sample_rate_hz(self) -> float:
         """The rate (Hz) of the samples the rows come from: the header's ``input_sample_rate_hz``
         (a filtered output's: a row per block of input samples) as a float, else ``sample_rate_hz``."""
-        return float(self.header.get(INPUT_RATE_KEY, self.header["sample_rate_hz"]))
+        header = self._facts()
+        return float(header.get(INPUT_RATE_KEY, header["sample_rate_hz"]))
 
     @property
     def gyro_unit(self) -> str:
         """The header's ``gyro_unit``: ``dps``, ``rad/s`` or ``lsb`` (the gyro columns' unit)."""
-        return self.header["gyro_unit"]
+        return self._facts()["gyro_unit"]
 
     @property
     def lsb_per_dps(self):
         """The header's ``lsb_per_dps`` as a float (LSB per deg/s), or None when absent."""
-        value = self.header.get("lsb_per_dps")
+        value = self._facts().get("lsb_per_dps")
         return None if value is None else float(value)
 
     @property
@@ -121,6 +128,16 @@ class Recording(_HeaderFacts):
         check_facts(self.header, self.path or "recording")
         self.columns = checked_columns(self.columns)
 
+    def _facts(self) -> dict:
+        """The header, held to :func:`~gyrofilter.recording.header.check_facts` (RecordingError
+        naming the recording) where the properties read it: a rate set to 0, nan or -100 after the
+        recording was built gave a ZeroDivisionError, nan or a negative duration. A few
+        microseconds a call; the properties are read per recording, never per sample. (A
+        :class:`RecordingHead`'s header is the reader's, checked as the file is read, or a
+        partial one of a time check's.)"""
+        check_facts(self.header, self.path or "recording")
+        return self.header
+
     def __len__(self):
         return len(next(iter(self.columns.values()), ()))  # the columns are of one length
 
@@ -182,6 +199,7 @@ class Recording(_HeaderFacts):
         head = {VERSION_KEY: FORMAT_VERSION}
         head.update(dps_header({k: v for k, v in (header or {}).items() if k not in accel_header(header or {})},
                                sample_rate_hz))
+        _check_accel_arguments(accel, accel_unit, lsb_per_g)
         head.update(accel_units_header(accel_unit, lsb_per_g))
         columns = {}
         if t_s is not None:
@@ -202,6 +220,19 @@ class Recording(_HeaderFacts):
                                      "give its values through its own argument")
             columns[name] = _numbers(values, f"extra column {name!r}")
         return cls(columns=columns, header=head)
+
+
+def _check_accel_arguments(accel, accel_unit, lsb_per_g):
+    """Refuse :meth:`Recording.from_dps`'s accelerometer arguments that do not go together
+    (RecordingError): a unit or scale without ``accel``, a unit not in ACCEL_UNITS, ``lsb``
+    without a ``lsb_per_g`` in its range (with another unit it is not written, as a file's
+    ``lsb_per_g`` beside ``accel_unit: g`` is not copied)."""
+    if accel is None and (accel_unit is not None or lsb_per_g is not None):
+        raise RecordingError("from_dps: accel_unit and lsb_per_g go with accel (the columns ax, ay, az); give accel too")
+    if accel_unit is not None and accel_unit not in ACCEL_UNITS:
+        raise RecordingError(f"from_dps: accel_unit {accel_unit!r} is not one of {', '.join(ACCEL_UNITS)}")
+    if accel_unit == "lsb":
+        check_lsb_per_g(lsb_per_g, "from_dps: lsb_per_g", RecordingError)
 
 
 def checked_columns(columns):

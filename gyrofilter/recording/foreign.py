@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RecordingError
-from ..inputs import is_plain_number, quote
+from ..inputs import is_plain_number, quote, refuse_unordered
 from ..units import AXES, GYRO_UNITS, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz
 from .checks import TimeCheck
 from ..closable import Closable
@@ -418,6 +418,8 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
         raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
     if isinstance(columns, str):  # its letters would be taken for column names one by one
         raise RecordingError(f"--columns takes a list of 3 or 4 column names or 1-based numbers, got the text {quote(columns)}")
+    refuse_unordered(columns, "--columns takes a list of 3 or 4 column names or 1-based numbers in order (time, x, y, z)",
+                     RecordingError)
     if sample_rate_hz is not None:
         sample_rate_hz = check_sample_rate_hz(sample_rate_hz, "--sample-rate-hz")
     raw = open_log(path, on_line=_FirstRow(path))

@@ -27,14 +27,18 @@ def read_recording(path, *, columns=None, compact=False) -> Recording:
     """Read a format-v1 recording (``.csv`` or gzip, detected by content) from ``path``: the
     chunks of :func:`iter_recording` gathered by :func:`collect_columns`.
 
-    ``columns``: None (every column), or a function of the file's column names that returns the
-    names to keep (every line is still read and checked; the other columns are dropped as they
-    are read). ``compact``: keep a column in float32 where every value of it reads back exactly
+    ``columns``: None (every column), the names to keep, or a function of the file's column names
+    that returns them (every line is still read and checked; the other columns are dropped as
+    they are read; a text is refused: its letters are no list of names). ``compact``: keep a column in float32 where every value of it reads back exactly
     from float32 (:func:`collect_columns`): an analysis that needs only some columns of a long
     record holds half the memory, with the same numbers."""
     chunks = iter_recording(path)
     head = next(chunks)
-    names = head.names if columns is None else list(columns(list(head.names)))
+    if isinstance(columns, (str, bytes)):
+        chunks.close()
+        raise SettingsError(f"{head.path}: the columns to keep are a list of names or a function of the file's names, "
+                            f"got the text {quote(columns)}")
+    names = head.names if columns is None else list(columns(list(head.names)) if callable(columns) else columns)
     return Recording(columns=collect_columns(head, chunks, names, compact=compact), header=head.header, path=head.path,
                      warnings=head.warnings, notes=head.notes, t_gaps=head.t_gaps)
 

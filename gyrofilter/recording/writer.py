@@ -18,7 +18,7 @@ import numpy as np
 
 from ..closable import Closable
 from ..errors import RecordingError
-from ..inputs import check_number, is_plain_number, number_array, quote
+from ..inputs import MAX_QUOTE_CHARS, check_number, is_plain_number, number_array, quote, refuse_unordered
 from .checks import TimeCheck, check_rates
 from .content import Recording, RecordingHead, checked_columns
 from .header import header_text, note_line
@@ -52,23 +52,30 @@ def write_recording(path, rec: Recording, *, compresslevel=6):
             times = TimeCheck(head, _NOT_WRITTEN)
             times.add(head.column(data, "t"), lambda row: f"row {row + 1} of the output")
             times.finish()
+    notes = sorted((_note_place(path, k, note, len(data)) for k, note in enumerate(rec.notes)),
+                   key=lambda note: note[0])  # stable: notes of one row keep their order
     with RecordingWriter(path, rec.header, names, flush_interval_s=None, compresslevel=compresslevel) as writer:
         done = 0
-        for row, text in sorted(((_note_row(note, len(data)), note[1]) for note in rec.notes),
-                                key=lambda note: note[0]):  # stable: notes of one row keep their order
+        for row, text in notes:
             writer.write(data[done:row])
             writer.note(text)
             done = row
         writer.write(data[done:])
 
 
-def _note_row(note, rows):
-    """The sample a note of a recording of ``rows`` samples goes before: its ``row`` within [0, rows]
-    (a plain ``(line, text)`` pair: ``rows``, after the data), so that every sample is written once
-    whatever a note built in code says."""
+def _note_place(path, k, note, rows):
+    """``(row, text)`` of the ``k``-th note of a recording (to write to ``path``) of ``rows`` samples: the sample it goes
+    before, its ``row`` within [0, rows] (a plain ``(line, text)`` pair: ``rows``, after the data),
+    so that every sample is written once whatever a note built in code says. A note that is no
+    ``(line, text)`` pair with a text (a string note was written as its second letter, a
+    triple's third item taken for nothing) is refused, nothing written."""
+    if not (isinstance(note, (tuple, list)) and len(note) == 2 and isinstance(note[1], str)):
+        raise RecordingError(f"{os.fspath(path)}: note {k + 1} of the recording, {repr(note)[:MAX_QUOTE_CHARS]}, is not a "
+                             "(line, text) pair "
+                             "(a Note, or a tuple of a line number and the text); nothing written")
     row = check_number(getattr(note, "row", rows), f"the row of the note {quote(note[1])}", integer=True,
                        error=RecordingError)
-    return max(0, min(row, rows))
+    return max(0, min(row, rows)), note[1]
 
 
 def _check_finite(rows, columns, where):
@@ -178,6 +185,7 @@ class RecordingWriter(Closable):
                  compresslevel=6, name=None):
         self.path = os.fspath(path)
         self.name = self.path if name is None else os.fspath(name)
+        refuse_unordered(columns, f"{self.name}: the columns are a list in the rows' order", RecordingError)
         self.columns = list(columns)
         text = header_text(header, self.columns, self.name)
         self._head = RecordingHead(header={k: str(v) for k, v in header.items()}, names=self.columns, path=self.name)
@@ -218,15 +226,15 @@ class RecordingWriter(Closable):
             raise
 
     def write(self, rows):
-        """Append rows, shape (n, number of columns), in the columns' order; RecordingError (and
-        none of them written) when one holds NaN or +-inf. The cells of an object array (text a
+        """Append rows, shape (n, number of columns), in the columns' order (n may be 0; another
+        shape is refused); RecordingError (and none of them written) when one holds NaN or +-inf. The cells of an object array (text a
         converter formatted itself, say) go through their formats as they are (``%s`` where a column has
         none), once checked as numbers the reader reads (:func:`_written_as_read`)."""
         rows = _rows_of_numbers(rows, self.name, self.columns, self._formats)
+        if rows.ndim != 2 or rows.shape[1] != len(self.columns):  # none of the right width, too
+            raise RecordingError(f"{self.name}: rows must have shape (n, {len(self.columns)}), got {rows.shape}")
         if rows.size == 0:
             return
-        if rows.ndim != 2 or rows.shape[1] != len(self.columns):
-            raise RecordingError(f"{self.name}: rows must have shape (n, {len(self.columns)}), got {rows.shape}")
         try:
             values = rows.astype(float)
         except (TypeError, ValueError):

@@ -197,7 +197,8 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     temp, accel = rec.temp_c, _accelerometer(rec)
     if effect == TEMPERATURE:
         if temp is None:
-            raise ValueError("temperature needs a temp column")
+            raise SettingsError(f"{rec.path or 'recording'}: the effect {TEMPERATURE} needs a temp column (deg C), "
+                                "which this recording has not")
         t = np.arange(n) / sample_rate_hz
         step = max(1, n // 500)
         model[TEMPERATURE_PROFILE] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}

@@ -67,6 +67,7 @@ from .checks import (DEFAULT_ADF_MAXLAG, DEFAULT_ALPHA, WHITENESS_LAGS, Normalit
                           adf_test, normality_tests, whiteness)
 from .fit import ArmaFit, fit_arma, require_stats, simulate_arma
 from ...errors import SettingsError
+from ...inputs import check_number
 from ...units import MAX_RATE_DPS, MIN_NOISE_DPS, check_sample_rate_hz, json_ready, plain
 
 DEFAULT_MAX_SAMPLES = 200_000
@@ -180,13 +181,16 @@ class AxisReport:
 
 
 def check_max_samples(max_samples, name="max_samples"):
-    """Refuse a ``max_samples`` outside :data:`MAX_SAMPLES_RANGE` (SettingsError naming ``name``,
-    the option or argument given): the one check of it, the command's and the function's."""
+    """``max_samples`` as an int, or SettingsError naming ``name`` (the option or argument given)
+    for one that is no whole number (:func:`~gyrofilter.inputs.check_number`) or is outside
+    :data:`MAX_SAMPLES_RANGE`: the one check of it, the command's and the function's."""
     low, high = MAX_SAMPLES_RANGE
+    max_samples = check_number(max_samples, name, integer=True)
     if not low <= max_samples <= high:
         bound = f"at least {low} (block means of a longer series are more than half of it, and the analysis needs {MIN_SAMPLES})" \
             if max_samples < low else f"at most {high}"
         raise SettingsError(f"{name} must be {bound}, got {plain(max_samples)}")
+    return max_samples
 
 
 def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
@@ -210,7 +214,7 @@ def prepare_series(x, sample_rate_hz, max_samples=DEFAULT_MAX_SAMPLES):
         raise SettingsError(f"series sample {int(beyond[0])}: {float(x[beyond[0]]):.6g} deg/s is beyond the "
                             f"+-{MAX_RATE_DPS:g} deg/s any gyro reads; are the rates in deg/s?")
     check_sample_rate_hz(sample_rate_hz)
-    check_max_samples(max_samples)
+    max_samples = check_max_samples(max_samples)
     k = max(1, math.ceil(len(x) / max_samples))
     if k > 1:
         n = (len(x) // k) * k

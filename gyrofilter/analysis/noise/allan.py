@@ -55,6 +55,20 @@ class ConstantAxisError(AllanInputError):
         self.varying = None
 
 
+def refuse_constant(x, where, *, unit="deg/s", axis=None):
+    """ConstantAxisError (of ``axis``) whose message starts with ``where`` when the finite series
+    ``x`` (a float array) holds one value only: the one wording of a constant series' refusal
+    (the Allan fit, the wavelet variance)."""
+    if x.size and np.all(np.isfinite(x)) and np.ptp(x) == 0:
+        raise ConstantAxisError(constant_words(where, x.size, x.flat[0], unit), axis)
+
+
+def constant_words(where, n, value, unit="deg/s"):
+    """The words of :func:`refuse_constant`: ``where``, the ``n`` samples and their one ``value``."""
+    return (f"{where}: all {n} samples equal {value:g} {unit} (constant data): no noise to characterise "
+            "(sensor not connected, or a saturated/stuck axis?)")
+
+
 def rate_numbers(x, name="x"):
     """``x`` as a float64 array when it holds numbers (ints or floats), else AllanInputError naming
     ``name``: a masked value (converting would drop the mask and take the value behind it as

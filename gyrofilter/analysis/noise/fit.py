@@ -37,8 +37,8 @@ import itertools
 
 import numpy as np
 
-from .allan import (MIN_CLUSTERS, AllanInputError, ConstantAxisError, chi2_interval, cluster_sizes, edf_mixture, rate_numbers,
-                    edf_oavar, n_clusters, overlapping_adev, simple_interval)
+from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture, rate_numbers, edf_oavar,
+                    refuse_constant, n_clusters, overlapping_adev, simple_interval)
 from .intervals import fitted_intervals
 from .model import TERM_ALPHA, TERMS, AxisNoise, basis, sensor_terms, term_shares
 from .readoff import read_off
@@ -160,10 +160,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
         raise AllanInputError(f"axis {axis}: {exc}") from None
     if x.ndim != 1:
         raise AllanInputError(f"axis {axis}: expected a 1-D rate series, got shape {x.shape}")
-    if x.size and np.all(np.isfinite(x)) and np.ptp(x) == 0:
-        raise ConstantAxisError(
-            f"axis {axis}: all {x.size} samples equal {x[0]:g} {unit} (constant data): no noise to "
-            "characterise (sensor not connected, or a saturated/stuck axis?)", axis)
+    refuse_constant(x, f"axis {axis}", unit=unit, axis=axis)
     if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
         raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
     for t in terms:

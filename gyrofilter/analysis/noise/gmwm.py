@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...effects import BIAS_INSTABILITY, GAUSS_MARKOV, RATE_RAMP, RATE_RANDOM_WALK
-from .allan import AllanInputError, overlapping_adev
+from .allan import AllanInputError, ConstantAxisError, constant_words, overlapping_adev, rate_numbers
 from .model import QUANTIZATION
 from .wv_robust import ROBUST_EFFICIENCY, robust_wv
 from ...sim.model import validate_model
@@ -90,7 +90,9 @@ TIE = 0.5
 class WaveletVariance:
     """Haar wavelet variance at dyadic scales: ``tau_s``, ``wv_dps2`` (ν², (deg/s)²), ``edf`` (η;
     of a robust estimate, η times its Gaussian efficiency), ``robust`` (the Gaussian efficiency
-    of the M-estimate, :mod:`gyrofilter.analysis.noise.wv_robust`; 0 for the classical estimate)."""
+    of the M-estimate, :mod:`gyrofilter.analysis.noise.wv_robust`; 0 for the classical estimate),
+    ``constant_dps`` (the one value of a constant series, whose ν² is 0 at every scale; else None:
+    :func:`fit_model` refuses it in the Allan fit's words)."""
 
     sample_rate_hz: float
     n_samples: int
@@ -99,6 +101,7 @@ class WaveletVariance:
     edf: np.ndarray
     robust: float = 0.0
     tails: tuple = None  # (fraction, scale_ratio) of a heavy-tailed white noise (the robust estimate is consistent at it)
+    constant_dps: float = None
 
     @property
     def m(self):
@@ -119,8 +122,10 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
     :data:`~gyrofilter.analysis.noise.wv_robust.ROBUST_EFFICIENCY` for True, else the number given),
     Fisher-consistent at the heavy-tailed white noise ``tails`` = (fraction, scale_ratio) when given;
     ``tails`` also makes the WVIC's bootstrap (:func:`bootstrap_cov`) simulate that noise.
+    A constant series (no model fits a wavelet variance of 0) is marked (``constant_dps``).
     """
-    n = int(np.asarray(x_dps).size)
+    x_dps = rate_numbers(x_dps, "x_dps")
+    n = int(x_dps.size)
     m = []
     j = max(0, int(math.ceil(math.log2(max(min_m, 1)))))
     while (n - 2 * 2**j + 1) / (2.0 * 2**j) >= min_edf:
@@ -131,12 +136,13 @@ def haar_wv(x_dps, sample_rate_hz, *, min_edf=2.0, min_m=1, robust=False, tails=
         raise AllanInputError(f"x_dps has {n} samples; a wavelet-variance fit needs at least "
                               f"{math.ceil(min_edf * 2 * second + 2 * second - 1)} (two scales of {min_edf:g} "
                               "equivalent degrees of freedom)")
+    constant = float(x_dps.flat[0]) if np.all(np.isfinite(x_dps)) and np.ptp(x_dps) == 0 else None
     m = np.array(m, dtype=np.int64)
     efficiency = ROBUST_EFFICIENCY if robust is True else float(robust)
     edf = np.maximum((n - 2 * m + 1) / (2.0 * m), 1.0) * (efficiency or 1.0)
     values = _wv_values(x_dps, sample_rate_hz, m, efficiency, tails)
     return WaveletVariance(float(sample_rate_hz), n, m / float(sample_rate_hz), values, edf, robust=efficiency,
-                           tails=tails)
+                           constant_dps=constant, tails=tails)
 
 
 def _wv_values(x_dps, sample_rate_hz, m, efficiency=0.0, tails=None):
@@ -303,9 +309,12 @@ def unfittable(wv: WaveletVariance):
 def fit_model(wv: WaveletVariance, terms=(), k_gm=0, *, starts=4, seed=0):
     """GMWM fit of white noise + ``terms`` (subset of :data:`TERMS`) + ``k_gm``
     Gauss-Markov terms to ``wv``: weighted least squares on log-parameters (module docstring).
-    A wavelet variance no model fits (:func:`unfittable`) raises ValueError saying why."""
+    A wavelet variance no model fits (:func:`unfittable`) raises ValueError saying why, a constant
+    series's ConstantAxisError in the Allan fit's words (:func:`~gyrofilter.analysis.noise.allan.refuse_constant`)."""
     from scipy.optimize import least_squares
 
+    if wv.constant_dps is not None:
+        raise ConstantAxisError(constant_words("x_dps", wv.n_samples, wv.constant_dps), None)
     why = unfittable(wv)
     if why is not None:
         raise ValueError(why)

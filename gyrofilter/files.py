@@ -1,0 +1,90 @@
+"""Files written whole or not at all: the temporary name beside a file under which it is written
+until it may take its own name (:func:`partial_path`), and the library's one atomic write of a
+small text file (:func:`write_text_whole`). The commands build their outputs' rules on these
+(gyrofilter.cli.outputs: the checks before any work, ``--force``, outputs that land together)."""
+import hashlib
+import os
+import re
+import socket
+import stat
+
+from .errors import naming_file
+
+#: the longest file name the usual file systems take (ext4, vfat, exFAT, NFS), in bytes
+NAME_MAX_BYTES = 255
+#: the characters at the end of an output's name a shortened partial name keeps (its extension)
+_KEPT_END_CHARS = 16
+#: the hexadecimal digits of the whole name's digest in a shortened partial name
+_DIGEST_CHARS = 16
+PARTIAL_PREFIX = ".partial-"
+#: the host in a partial name: a folder shared over the network (a fleet's reports on NFS) holds
+#: other machines' partials, whose process numbers mean nothing here
+HOST = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname()) or "host"
+#: what a partial name carries: the process number and the host
+OWNER = f"{os.getpid()}.{HOST}"
+
+
+def output_folder(path):
+    """The folder the system writes ``path`` into: its folder part resolved as the system resolves
+    it, a symbolic link before a ``..`` followed first (``link/..`` is the link target's parent;
+    ``abspath`` would drop both), so that a temporary file made there is renamed within one
+    file system."""
+    return os.path.realpath(os.path.dirname(path) or os.curdir)
+
+
+def partial_path(path):
+    """The temporary name beside ``path`` under which a file is written until it may take its
+    own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
+    extension, by which writers choose the format, is kept. A NAME too long to take the prefix
+    within :data:`NAME_MAX_BYTES` keeps its last characters and as much of its start as fits,
+    joined by ``~`` and a digest of the whole name (a legal name of 240 bytes made every command
+    fail after its work, naming the partial; without the digest two outputs whose names differ
+    only in the part left out shared one partial, and one of them took the other's text). A
+    process killed before the rename leaves it behind; the commands remove it later
+    (gyrofilter.cli.outputs.remove_stale_partials)."""
+    path = os.fspath(path)
+    prefix = f"{PARTIAL_PREFIX}{OWNER}-"
+    name = os.path.basename(path)
+    room = NAME_MAX_BYTES - len(os.fsencode(prefix))
+    if len(os.fsencode(name)) > room:
+        head, end = name[:-_KEPT_END_CHARS], name[-_KEPT_END_CHARS:]
+        digest = hashlib.sha256(os.fsencode(name)).hexdigest()[:_DIGEST_CHARS]
+        while head and len(os.fsencode(f"{head}~{digest}~{end}")) > room:
+            head = head[:-1]
+        name = f"{head}~{digest}~{end}"
+    return os.path.join(output_folder(path), prefix + name)
+
+
+def write_text_whole(path, text):
+    """Write ``text`` (UTF-8) to the file ``path`` whole or not at all: under :func:`partial_path`
+    first, then renamed (``os.replace``, atomic), so that a failed write (a full disk, a file
+    size limit) leaves the file that was there as it was (its permission bits kept); the partial
+    is removed on any failure. A symbolic link's target is written (the link kept); what is no
+    regular file (``/dev/null``, a FIFO, a terminal) is written to as it is, never replaced (a
+    rename over ``/dev/null`` made it a file). An OSError names ``path``."""
+    path = os.fsdecode(os.fspath(path))
+    target = os.path.realpath(path)
+    try:
+        mode = os.stat(target).st_mode
+    except OSError:  # not there yet (or not reachable: the write says why)
+        mode = None
+    with naming_file(path):
+        if mode is not None and not stat.S_ISREG(mode):
+            with open(target, "w", encoding="utf-8") as fh:
+                fh.write(text)
+            return
+        tmp = partial_path(target)
+        try:
+            with open(tmp, "w", encoding="utf-8") as fh:
+                fh.write(text)
+            if mode is not None:
+                os.chmod(tmp, stat.S_IMODE(mode))
+            os.replace(tmp, target)
+        except BaseException as exc:
+            try:
+                os.unlink(tmp)
+            except OSError:  # never made, or gone: never hides the error
+                pass
+            if isinstance(exc, OSError):
+                raise OSError(exc.errno, exc.strerror or str(exc), path) from None
+            raise
