@@ -2,6 +2,7 @@
 until it may take its own name (:func:`partial_path`), and the library's one atomic write of a
 small text file (:func:`write_text_whole`). The commands build their outputs' rules on these
 (gyrofilter.cli.outputs: the checks before any work, ``--force``, outputs that land together)."""
+import contextlib
 import hashlib
 import itertools
 import os
@@ -63,7 +64,8 @@ def write_text_whole(path, text):
     """Write ``text`` (UTF-8) to the file ``path`` whole or not at all: under :func:`partial_path`
     first (one of its own per call: two threads saving one file never mix), then renamed
     (``os.replace``, atomic), so that a failed write (a full disk, a file size limit) leaves the
-    file that was there as it was (its permission bits kept); the partial is removed on any
+    file that was there as it was (its permission bits kept, and its owner where the caller may
+    give it away: root saving a user's file made it root's); the partial is removed on any
     failure. A file the caller may not write (read-only) is refused as opening it is, never
     replaced. A symbolic link's target is written (the link kept; a loop of links refused, not
     replaced); what is no regular file (``/dev/null``, a FIFO, a terminal), and a name ending in
@@ -79,9 +81,10 @@ def write_text_whole(path, text):
 def _write_whole(path, target, text):
     """:func:`write_text_whole` of ``path``, whose link is resolved to ``target``."""
     try:
-        mode = os.stat(target).st_mode
+        st = os.stat(target)
     except FileNotFoundError:  # not there yet (or its folder: the write says so)
-        mode = None
+        st = None
+    mode = None if st is None else st.st_mode
     if (mode is not None and not stat.S_ISREG(mode)) or path.endswith(("/", os.sep)):
         with open(path, "w", encoding="utf-8") as fh:
             fh.write(text)
@@ -92,7 +95,10 @@ def _write_whole(path, target, text):
     try:
         with open(tmp, "w", encoding="utf-8") as fh:
             fh.write(text)
-        if mode is not None:
+        if st is not None:
+            if (st.st_uid, st.st_gid) != (os.getuid(), os.getgid()):
+                with contextlib.suppress(PermissionError):  # only root may give a file away
+                    os.chown(tmp, st.st_uid, st.st_gid)
             os.chmod(tmp, stat.S_IMODE(mode))
         os.replace(tmp, target)
     except BaseException:

@@ -316,7 +316,8 @@ def test_a_save_refuses_a_read_only_file_a_loop_of_links_and_a_name_ending_in_a_
     """Attack pass 27: the whole-or-nothing save renamed over a read-only calibration (``chmod
     444``, which writing in place refuses; here ``os.open`` refusing as it does for a user who
     is not root), replaced a loop of symbolic links by a file and wrote ``cal.json/`` to
-    ``cal.json``: each is refused as writing in place is, the file kept."""
+    ``cal.json``: each is refused as writing in place is, the file kept. Root saving a user's
+    file gave it to root: its owner is kept."""
     import os
     cal = calibrate(still(500), 100.0)
     kept = tmp_path / "kept.json"
@@ -342,6 +343,10 @@ def test_a_save_refuses_a_read_only_file_a_loop_of_links_and_a_name_ending_in_a_
         cal.save(f"{kept}/")
     assert kept.read_text() == "keep"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.json", "loop1", "loop2"]
+    if os.getuid() == 0:  # root saving a user's calibration gave it to root
+        os.chown(kept, 65534, 65534)
+        cal.save(kept)
+        assert (os.stat(kept).st_uid, os.stat(kept).st_gid) == (65534, 65534) and Calibration.load(kept) == cal
 
 
 def test_two_threads_saving_one_file_leave_one_whole_calibration(tmp_path, monkeypatch):
