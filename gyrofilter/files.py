@@ -2,13 +2,14 @@
 until it may take its own name (:func:`partial_path`), and the library's one atomic write of a
 small text file (:func:`write_text_whole`). The commands build their outputs' rules on these
 (gyrofilter.cli.outputs: the checks before any work, ``--force``, outputs that land together)."""
+import contextlib
 import hashlib
+import itertools
 import os
 import re
 import socket
 import stat
 
-from .errors import naming_file
 
 #: the longest file name the usual file systems take (ext4, vfat, exFAT, NFS), in bytes
 NAME_MAX_BYTES = 255
@@ -22,6 +23,9 @@ PARTIAL_PREFIX = ".partial-"
 HOST = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname()) or "host"
 #: what a partial name carries: the process number and the host
 OWNER = f"{os.getpid()}.{HOST}"
+#: numbers each :func:`write_text_whole` call's partial, so that two threads saving one file
+#: never share one (the second truncated the first's; the first renamed a mix of both)
+_CALLS = itertools.count()
 
 
 def output_folder(path):
@@ -32,7 +36,7 @@ def output_folder(path):
     return os.path.realpath(os.path.dirname(path) or os.curdir)
 
 
-def partial_path(path):
+def partial_path(path, tag=""):
     """The temporary name beside ``path`` under which a file is written until it may take its
     own name: ``.partial-PID.HOST-NAME`` in the same folder, so that the rename is atomic and the
     extension, by which writers choose the format, is kept. A NAME too long to take the prefix
@@ -41,9 +45,10 @@ def partial_path(path):
     fail after its work, naming the partial; without the digest two outputs whose names differ
     only in the part left out shared one partial, and one of them took the other's text). A
     process killed before the rename leaves it behind; the commands remove it later
-    (gyrofilter.cli.outputs.remove_stale_partials)."""
+    (gyrofilter.cli.outputs.remove_stale_partials). ``tag`` (``"7-"``) goes after the owner, so
+    that one process's writes of one name at once have partials of their own."""
     path = os.fspath(path)
-    prefix = f"{PARTIAL_PREFIX}{OWNER}-"
+    prefix = f"{PARTIAL_PREFIX}{OWNER}-{tag}"
     name = os.path.basename(path)
     room = NAME_MAX_BYTES - len(os.fsencode(prefix))
     if len(os.fsencode(name)) > room:
@@ -57,34 +62,48 @@ def partial_path(path):
 
 def write_text_whole(path, text):
     """Write ``text`` (UTF-8) to the file ``path`` whole or not at all: under :func:`partial_path`
-    first, then renamed (``os.replace``, atomic), so that a failed write (a full disk, a file
-    size limit) leaves the file that was there as it was (its permission bits kept); the partial
-    is removed on any failure. A symbolic link's target is written (the link kept); what is no
-    regular file (``/dev/null``, a FIFO, a terminal) is written to as it is, never replaced (a
-    rename over ``/dev/null`` made it a file). An OSError names ``path``."""
+    first (one of its own per call: two threads saving one file never mix), then renamed
+    (``os.replace``, atomic), so that a failed write (a full disk, a file size limit) leaves the
+    file that was there as it was (its permission bits kept, and its owner where the caller may
+    give it away: root saving a user's file made it root's); the partial is removed on any
+    failure. A file the caller may not write (read-only) is refused as opening it is, never
+    replaced. A symbolic link's target is written (the link kept; a loop of links refused, not
+    replaced); what is no regular file (``/dev/null``, a FIFO, a terminal), and a name ending in
+    ``/``, is written to as it is, never replaced (a rename over ``/dev/null`` made it a file;
+    ``cal.json/`` wrote ``cal.json``). An OSError names ``path``."""
     path = os.fsdecode(os.fspath(path))
-    target = os.path.realpath(path)
     try:
-        mode = os.stat(target).st_mode
-    except OSError:  # not there yet (or not reachable: the write says why)
-        mode = None
-    with naming_file(path):
-        if mode is not None and not stat.S_ISREG(mode):
-            with open(target, "w", encoding="utf-8") as fh:
-                fh.write(text)
-            return
-        tmp = partial_path(target)
+        _write_whole(path, os.path.realpath(path), text)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror or str(exc), path) from None
+
+
+def _write_whole(path, target, text):
+    """:func:`write_text_whole` of ``path``, whose link is resolved to ``target``."""
+    try:
+        st = os.stat(target)
+    except FileNotFoundError:  # not there yet (or its folder: the write says so)
+        st = None
+    mode = None if st is None else st.st_mode
+    if (mode is not None and not stat.S_ISREG(mode)) or path.endswith(("/", os.sep)):
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        return
+    if mode is not None:  # refused as writing in place is (read-only): the rename is not
+        os.close(os.open(target, os.O_WRONLY))
+    tmp = partial_path(target, tag=f"{next(_CALLS)}-")
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        if st is not None:
+            if (st.st_uid, st.st_gid) != (os.getuid(), os.getgid()):
+                with contextlib.suppress(PermissionError):  # only root may give a file away
+                    os.chown(tmp, st.st_uid, st.st_gid)
+            os.chmod(tmp, stat.S_IMODE(mode))
+        os.replace(tmp, target)
+    except BaseException:
         try:
-            with open(tmp, "w", encoding="utf-8") as fh:
-                fh.write(text)
-            if mode is not None:
-                os.chmod(tmp, stat.S_IMODE(mode))
-            os.replace(tmp, target)
-        except BaseException as exc:
-            try:
-                os.unlink(tmp)
-            except OSError:  # never made, or gone: never hides the error
-                pass
-            if isinstance(exc, OSError):
-                raise OSError(exc.errno, exc.strerror or str(exc), path) from None
-            raise
+            os.unlink(tmp)
+        except OSError:  # never made, or gone: never hides the error
+            pass
+        raise

@@ -310,3 +310,78 @@ def test_a_save_through_a_link_or_to_a_fifo_writes_what_the_name_leads_to(tmp_pa
     assert info.value.filename == str(tmp_path / "missing" / "cal.json")
     cal.save(os.fsencode(tmp_path / "bytes.json"))
     assert Calibration.load(tmp_path / "bytes.json") == cal
+
+
+def test_a_save_refuses_a_read_only_file_a_loop_of_links_and_a_name_ending_in_a_slash(tmp_path, monkeypatch):
+    """Attack pass 27: the whole-or-nothing save renamed over a read-only calibration (``chmod
+    444``, which writing in place refuses; here ``os.open`` refusing as it does for a user who
+    is not root), replaced a loop of symbolic links by a file and wrote ``cal.json/`` to
+    ``cal.json``: each is refused as writing in place is, the file kept. Root saving a user's
+    file gave it to root: its owner is kept."""
+    import os
+    cal = calibrate(still(500), 100.0)
+    kept = tmp_path / "kept.json"
+    kept.write_text("keep")
+    real_open = os.open
+
+    def read_only(name, flags, *args, **kwargs):
+        if os.fspath(name) == str(kept) and flags & (os.O_WRONLY | os.O_RDWR):
+            raise PermissionError(13, "Permission denied", name)
+        return real_open(name, flags, *args, **kwargs)
+    monkeypatch.setattr(os, "open", read_only)
+    with pytest.raises(PermissionError) as info:
+        cal.save(kept)
+    assert info.value.filename == str(kept)
+    monkeypatch.undo()
+    assert kept.read_text() == "keep"
+    os.symlink("loop2", tmp_path / "loop1")
+    os.symlink("loop1", tmp_path / "loop2")
+    with pytest.raises(OSError, match="symbolic links"):
+        cal.save(tmp_path / "loop1")
+    assert (tmp_path / "loop1").is_symlink()
+    with pytest.raises(OSError):
+        cal.save(f"{kept}/")
+    assert kept.read_text() == "keep"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.json", "loop1", "loop2"]
+    if os.getuid() == 0:  # root saving a user's calibration gave it to root
+        os.chown(kept, 65534, 65534)
+        cal.save(kept)
+        assert (os.stat(kept).st_uid, os.stat(kept).st_gid) == (65534, 65534) and Calibration.load(kept) == cal
+
+
+def test_two_threads_saving_one_file_leave_one_whole_calibration(tmp_path, monkeypatch):
+    """Attack pass 27: two threads saving one file shared one partial: the second's open emptied
+    the first's, the first renamed it and the second then wrote into the saved file (a mix of
+    both, the first told it saved) and failed. Each save has a partial of its own. Here the
+    first waits, its partial open, until the second has opened its own (which waits for it)."""
+    import threading
+    from gyrofilter import files
+    path = tmp_path / "cal.json"
+    one, other = calibrate(still(500), 100.0), calibrate(still(500, seed=1), 100.0)
+    first_opened, opened = threading.Event(), threading.Event()
+    real_open = open
+
+    def paced_open(name, *args, **kwargs):
+        if threading.current_thread().name == "first":
+            fh = real_open(name, *args, **kwargs)
+            first_opened.set()
+            opened.wait(10)
+            return fh
+        first_opened.wait(10)
+        fh = real_open(name, *args, **kwargs)
+        opened.set()
+        return fh
+    monkeypatch.setattr(files, "open", paced_open, raising=False)
+    errors = []
+
+    def save(cal):
+        try:
+            cal.save(path)
+        except OSError as exc:
+            errors.append(exc)
+    first = threading.Thread(target=save, args=(one,), name="first")
+    first.start()
+    save(other)
+    first.join(20)
+    assert not errors and Calibration.load(path) in (one, other)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cal.json"]

@@ -931,3 +931,16 @@ def test_a_time_unit_given_that_contradicts_the_name_is_refused_as_the_gyro_unit
     rows = "".join(f"{i / 100:.2f},{i % 7},1,2\n" for i in range(600))
     rc, dst = _convert(tmp_path, "time (sek),gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows, "--time-unit", "s", "--force")
     assert rc == 0 and read_recording(dst).sample_rate_hz == 100, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name, stated", [("time (seconds)", "s"), ("timestamp (millis)", "ms"),
+                                          ("t [microseconds]", "us"), ("time (\u03bcs)", "us")])
+def test_a_time_unit_spelled_out_in_brackets_is_the_unit_it_states(tmp_path, capsys, name, stated):
+    """Attack pass 27: ``time (seconds)`` with ``--time-unit ms`` was read in ms (1000 x the rate,
+    exit 0): a bracket's whole word (``seconds``, ``millis``, the Greek mu's ``μs``) was no unit
+    convert knew, so the option took it over; it states its unit as ``time (s)`` does."""
+    other = "ms" if stated != "ms" else "s"
+    rows = "".join(f"{i},{i % 7},1,2\n" for i in range(600))
+    rc, dst = _convert(tmp_path, f"{name},gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows, "--time-unit", other)
+    assert rc == 2 and not dst.exists()
+    assert f"--time-unit {other}, but the time column '{name}' states {stated}" in capsys.readouterr().err

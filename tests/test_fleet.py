@@ -900,6 +900,22 @@ def test_a_fleet_run_over_an_earlier_ones_folder_leaves_only_its_own_outputs(tmp
     assert (out / "u1.allan.json").exists() and (out / "notes.txt").read_text() == "mine"
 
 
+def test_a_fleet_csv_of_another_tool_lists_no_report_to_remove(tmp_path, capsys):
+    """Attack pass 27: a folder holding another tool's fleet.csv (``camera,serial`` / ``cam,123``)
+    and one's own ``cam.imu.yaml``: ``allan u0.csv --fleet DIR --force`` removed the yaml as a
+    report of a unit that fleet.csv lists, exit 0. A table of another header lists no unit: the
+    file is refused, named, and kept."""
+    src = tmp_path / "u0.csv"
+    write_recording(src, simulate(unit_model(np.random.default_rng(7)), 30.0, seed=700))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "fleet.csv").write_text("camera,serial\ncam,123\n")
+    (out / "cam.imu.yaml").write_text("mine")
+    assert main(["allan", str(src), "--fleet", str(out), "--jobs", "1", "--force"]) == 2
+    assert f"{out / 'cam.imu.yaml'}: not an output of this run" in capsys.readouterr().err
+    assert (out / "cam.imu.yaml").read_text() == "mine"
+
+
 def test_a_gap_fleet_unit_too_short_for_the_gap_analysis_is_not_analysed(tmp_path, capsys):
     """Attack pass 26: ``gap two.csv`` (2 samples) exits 2, "no axis analysed (only 2 samples ...)",
     while ``gap --fleet`` called the unit analysed, its rows "ok" without a finding (read: the model

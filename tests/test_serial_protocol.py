@@ -430,6 +430,21 @@ def test_the_arduino_sketch_sends_the_accelerometer_in_the_protocol():
     assert rows[0][4] == pytest.approx(-1520 / 340 + 36.53)
 
 
+def test_header_changes_beyond_the_noted_ones_are_said_to_go_unnoted():
+    """Attack pass 27: after 20 notes of a header's changed ``sensor=``, later changes were dropped
+    without a word (the last note's sensor read as the device's to the end); the next change says
+    that changes from there on are not noted."""
+    p = LineParser()
+    p.feed(HEADER + _lines([0]))
+    p.pop_notes()
+    for k in range(1, 25):
+        p.feed(HEADER.replace(b"sensor=MPU6050", b"sensor=S%d" % k) + _lines([k]))
+    notes = p.pop_notes()
+    assert len(notes) == 21 and notes[19].startswith("serial: the device's header says sensor=S20 after sample 20")
+    assert notes[20] == ("serial: the device's header changed again after sample 21; after 20 such notes, its "
+                         "changes from here on are not noted")
+
+
 def test_a_header_that_changes_a_key_that_is_no_unit_mid_stream_is_noted_at_its_row():
     """Attack pass 26: a repeated header that said ``sensor=ICM20602`` mid-stream was kept without
     a word (the recording's header keeps the first, MPU6050). The samples keep their units, so the

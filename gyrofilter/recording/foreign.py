@@ -79,7 +79,9 @@ _WORD_UNITS = {"millis": "ms", "micros": "us", "nanos": "ns", "%time": "ns", "se
 _UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s": "rad/s", "rad s^-1": "rad/s",
                "deg/s": "dps", "dps": "dps", "°/s": "dps", "degs": "dps", "deg_s": "dps", "deg_per_s": "dps",
                "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns",
-               "msec": "ms", "usec": "us", "nsec": "ns"}
+               "msec": "ms", "usec": "us", "nsec": "ns", "μs": "us", "secs": "s", "second": "s", "seconds": "s",
+               "millis": "ms", "millisecond": "ms", "milliseconds": "ms", "micros": "us", "microsecond": "us",
+               "microseconds": "us", "nanos": "ns", "nanosecond": "ns", "nanoseconds": "ns"}
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
 class Foreign(Closable):

@@ -416,9 +416,12 @@ def fleet_csv(rows):
 def listed_units(lines):
     """The unit cells of a fleet.csv (:func:`fleet_csv`), read from ``lines`` (its text's lines as
     a file opened with ``newline=""`` yields them, a row at a time), as a set: what
-    :func:`lists_unit` looks a unit up in."""
+    :func:`lists_unit` looks a unit up in. A table whose header is not :data:`COLUMNS` (another
+    tool's fleet.csv, its first column "camera") lists none: its cells named no report of ours,
+    yet a file ``cam.imu.yaml`` of one's own beside it was removed as an earlier run's."""
     rows = csv.reader(lines)
-    next(rows, None)
+    if next(rows, None) != COLUMNS:
+        return set()
     return {row[0] for row in rows if row}
 
 

@@ -57,16 +57,22 @@ def accel_units(values, fields, where):
     return {"accel_unit": unit, "lsb_per_g": format_number(lsb_per_g)}
 
 
-def other_keys_note(previous, header, first, unit_keys, samples):
+def other_keys_note(previous, header, first, unit_keys, samples, noted):
     """The note of a repeated header (a dict of the recording header's keys) whose keys other than
     the ``unit_keys`` (``sensor``, ``dlpf_cfg``, ...) differ from the ``previous`` one's, or None:
     the samples keep their units, so the stream goes on, and the recording's header keeps the
     ``first`` header's; the note says what the device said, after how many ``samples``, and what
-    the recording's header holds (a units change is refused instead: the parser's ``_apply``)."""
+    the recording's header holds (a units change is refused instead: the parser's ``_apply``).
+    ``noted``: (changes noted so far, the most noted); beyond it, that changes go unnoted from
+    here (later ones were dropped without a word: the last note's ``sensor=`` read as the
+    device's to the end)."""
     other = [k for k in dict.fromkeys([*previous, *header]) if k not in unit_keys]
     changed = [k for k in other if previous.get(k) != header.get(k)]
     if not changed:
         return None
+    if noted[0] >= noted[1]:
+        return (f"serial: the device's header changed again after sample {samples}; after {noted[1]} such notes, its "
+                "changes from here on are not noted")
 
     def said(values):
         return ", ".join(f"{k}={values[k]}" if k in values else f"no {k}" for k in changed)

@@ -210,10 +210,10 @@ class LineParser:
     def _note_other_keys(self, previous, header):
         """Note a repeated header's other keys (:func:`.fields.other_keys_note`), :data:`MAX_DETAILED_NOTES` times at most."""
         note = None if previous is None else other_keys_note(previous, header, self._device_header, _UNIT_KEYS,
-                                                             self.stats["samples"])
+                                                             self.stats["samples"], (self._changed_headers, MAX_DETAILED_NOTES))
         self._device_header = self._device_header or dict(header)
         self._changed_headers += note is not None
-        if note is not None and self._changed_headers <= MAX_DETAILED_NOTES:
+        if note is not None and self._changed_headers <= MAX_DETAILED_NOTES + 1:  # the last: the rest go unnoted
             self.notes.append(note)
 
     def _header_words(self, line):
