@@ -28,7 +28,8 @@ each BROAD trial (``recordings/``; movement flag 0, less 1.5 s at both ends, the
   the extended model is the closer one, each way.
 
 Every gap run here is made without the parameters' intervals (``bootstrap=0``): the table uses
-none. Prints a Markdown table; the null bands take most of the time (about 20 gap runs per record).
+none, so its findings are those before the intervals' rule (a temperature whose coefficient's
+interval holds 0 is listed here, where ``gyrofilter gap`` lists it as uncertain). Prints a Markdown table; the null bands take most of the time (about 20 gap runs per record).
 """
 from __future__ import annotations
 
