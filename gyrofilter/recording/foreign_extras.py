@@ -21,6 +21,8 @@ the range check of its values, the gyro's too (:func:`gyro_out_of_range`).
   (``(m/s^2)``, ``[g]``, ``_g``, ``_mps2``, ``_lsb``); the values as they are. Without a unit, or
   without one of the three axes, they are left out with a warning saying why; ``none`` leaves
   them out. A value beyond :data:`~gyrofilter.units.MAX_ACCEL_MPS2` is refused naming its line.
+- **Units** a name states are read from the one table of
+  :mod:`~gyrofilter.recording.unit_words` (deg F and K converted to deg C, mg to g, exactly).
 - **Refused** in one line naming the columns: two candidates for the temperature or for one
   axis of the accelerometer, a unit given that contradicts the names', columns that state
   different units, an option given for a column the log does not have.
