@@ -4,6 +4,7 @@ recordings that read back with the very values of the log; every refusal is one 
 file, the line and the column, exit 2, no output."""
 import contextlib
 import errno
+from fractions import Fraction
 import gzip
 import io
 import json
@@ -901,7 +902,7 @@ def test_a_temperature_beyond_any_die_is_refused_naming_its_line(tmp_path, capsy
     rc, dst = _convert(tmp_path, text, "--unit", "dps")
     err = capsys.readouterr().err
     assert rc == 2 and not dst.exists() and err.count("\n") == 1, err
-    assert "line 2, column 5 ('TempC'): -2600 deg C is beyond" in err and "--temp-unit mpu6050" in err, err
+    assert "line 2, column 5 ('TempC'): -2600 deg C is beyond" in err and "--temp-unit none" in err, err
 
 
 def test_an_accelerometer_in_lsb_needs_its_scale_and_a_partial_one_is_left_out_saying_so(tmp_path, capsys):
@@ -944,3 +945,110 @@ def test_a_time_unit_spelled_out_in_brackets_is_the_unit_it_states(tmp_path, cap
     rc, dst = _convert(tmp_path, f"{name},gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows, "--time-unit", other)
     assert rc == 2 and not dst.exists()
     assert f"--time-unit {other}, but the time column '{name}' states {stated}" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------ unit spellings (issue 37 follow-up)
+
+def _unit_log(names, cells, n=300):
+    """A log at 100 Hz in ms of the columns ``names`` after ``time_ms``, every row the ``cells``."""
+    return "time_ms," + ",".join(f'"{c}"' if " " in c or "," in c else c for c in names) + "\n" + "".join(
+        f"{10 * i}," + ",".join(cells) + "\n" for i in range(n))
+
+
+_GYRO = ["gx", "gy", "gz"]
+
+
+def _gyro_named(unit):
+    return [f"{g} ({unit})" for g in _GYRO]
+
+
+@pytest.mark.parametrize("names, unit", [
+    (_gyro_named("rad/sec"), "rad/s"), (_gyro_named("deg/sec"), "dps"), (["gyro_x (deg/sec)", "gyro_y (deg/sec)",
+                                                                        "gyro_z (deg/sec)"], "dps"),
+    (_gyro_named("°/s"), "dps"), (_gyro_named("°/sec"), "dps"), (_gyro_named("deg s-1"), "dps"),
+    (_gyro_named("degrees/s"), "dps"), (_gyro_named("rad*s^-1"), "rad/s"), (_gyro_named("rad s^-1"), "rad/s"),
+    ([f"{g} [rad s-1]" for g in _GYRO], "rad/s"), (["gx_deg_sec", "gy_deg_sec", "gz_deg_sec"], "dps"),
+    (["gyro_x_rad_per_sec", "gyro_y_rad_per_sec", "gyro_z_rad_per_sec"], "rad/s"),
+])
+def test_common_spellings_of_a_gyro_unit_are_read_and_agree_with_the_option(tmp_path, capsys, names, unit):
+    """Issue 37 follow-up: ``gx (rad/sec)``, ``gyro_x (deg/sec)``, ``gx [rad s-1]`` were "not stated",
+    and the --unit the refusal asked for was then refused as contradicting them (a dead end)."""
+    text = _unit_log(names, ["0.1", "0.2", "0.3"])
+    rc, dst = _convert(tmp_path, text)
+    assert rc == 0 and read_recording(dst).gyro_unit == unit, capsys.readouterr().err
+    rc, dst = _convert(tmp_path, text, "--unit", unit, out="given.csv")
+    assert rc == 0 and read_recording(dst).gyro_unit == unit, capsys.readouterr().err
+
+
+def test_units_convert_converts_are_converted_exactly_and_said(tmp_path, capsys):
+    """mg (ADXL/LIS logs) -> g, mdps (ST's) -> dps by 10^-3, deg F -> deg C by (F - 32) * 5/9, K by
+    K - 273.15: each decimal converted exactly and rounded once (98.6 degF is 37, not 36.99999999999999)."""
+    names = _gyro_named("mdps") + ["Temp (degF)", "ax (mg)", "ay (mg)", "az (mg)"]
+    rc, dst = _convert(tmp_path, _unit_log(names, ["1500", "-0.3", "7", "98.6", "1", "-2", "1000.5"]))
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    rec = read_recording(dst)
+    assert rec.gyro_unit == "dps" and rec.accel_unit == "g"
+    assert rec.gyro[0].tolist() == [1.5, -0.0003, 0.007] and rec.temp_c[0] == 37.0
+    assert [rec.columns[c][0] for c in ("ax", "ay", "az")] == [0.001, -0.002, 1.0005]
+    assert "in dps (mdps, converted to dps: / 1000)" in err and "in g (mg, converted to g: / 1000)" in err
+    assert "temp 'Temp (degF)' in deg F, converted to deg C: (F - 32) * 5/9" in err, err
+    rc, dst = _convert(tmp_path, _unit_log(_GYRO + ["Temp (°F)"], ["1", "2", "3", "212"]), "--unit", "dps",
+                       out="f.csv")
+    assert rc == 0 and read_recording(dst).temp_c[0] == 100.0, capsys.readouterr().err
+    rc, dst = _convert(tmp_path, _unit_log(_GYRO + ["temperature (K)"], ["1", "2", "3", "300.15"]), "--unit", "dps",
+                       out="k.csv")
+    assert rc == 0 and read_recording(dst).temp_c[0] == 27.0, capsys.readouterr().err
+
+
+def test_an_ambiguous_temperature_unit_is_resolved_by_the_option(tmp_path, capsys):
+    """Issue 37 follow-up: ``temp (deg)`` asked for --temp-unit c, then refused it as contradicting "deg"."""
+    text = _unit_log(_GYRO + ["temp (deg)"], ["1", "2", "3", "25.5"])
+    rc, dst = _convert(tmp_path, text, "--unit", "dps")
+    err = capsys.readouterr().err
+    assert rc == 0 and "temp" not in read_recording(dst).columns and "--temp-unit c, f or k" in err, err
+    rc, dst = _convert(tmp_path, text, "--unit", "dps", "--temp-unit", "c", out="c.csv")
+    assert rc == 0 and read_recording(dst).temp_c[0] == 25.5, capsys.readouterr().err
+    rc, dst = _convert(tmp_path, text, "--unit", "dps", "--temp-unit", "f", out="f.csv")
+    assert rc == 0 and read_recording(dst).temp_c[0] == float((Fraction("25.5") - 32) * 5 / 9), capsys.readouterr().err
+
+
+_ROW = ["1", "2", "3"]
+
+
+@pytest.mark.parametrize("names, cells, options, suggested", [
+    # the gyro: a unit not in the table, a unit given that contradicts the names', lsb without its scale
+    (_gyro_named("rpm"), _ROW, [], ["--unit", "dps"]),
+    (_gyro_named("deg/sec"), _ROW, ["--unit", "rad/s"], ["--unit", "dps"]),
+    (_GYRO, _ROW, ["--unit", "lsb"], ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    # the time
+    (_gyro_named("dps"), _ROW, ["--time-unit", "s"], ["--time-unit", "ms"]),
+    # the temperature: contradicted, beyond any die (stated, given), two candidates
+    (_GYRO + ["TempC"], _ROW + ["25"], ["--unit", "dps", "--temp-unit", "mpu6050"], ["--unit", "dps", "--temp-unit", "c"]),
+    (_GYRO + ["Temp (degF)"], _ROW + ["77"], ["--unit", "dps", "--temp-unit", "c"], ["--unit", "dps", "--temp-unit", "f"]),
+    (_GYRO + ["TempC"], _ROW + ["-2600"], ["--unit", "dps"], ["--unit", "dps", "--temp-unit", "none"]),
+    (_GYRO + ["TEMP"], _ROW + ["-2600"], ["--unit", "dps", "--temp-unit", "c"], ["--unit", "dps", "--temp-unit", "mpu6050"]),
+    (_GYRO + ["temp_c", "TEMP"], _ROW + ["25", "25"], ["--unit", "dps"], ["--unit", "dps", "--temp-unit", "none"]),
+    # the accelerometer: contradicted, a unit not in the table, units that differ, two candidates, lsb
+    (_GYRO + ["ax (mg)", "ay (mg)", "az (mg)"], _ROW * 2, ["--unit", "dps", "--accel-unit", "g"],
+     ["--unit", "dps", "--accel-unit", "mg"]),
+    (_GYRO + ["ax (furlong)", "ay (furlong)", "az (furlong)"], _ROW * 2, ["--unit", "dps"],
+     ["--unit", "dps", "--accel-unit", "m/s^2"]),
+    (_GYRO + ["ax (g)", "ay (mg)", "az (g)"], _ROW * 2, ["--unit", "dps"], ["--unit", "dps", "--accel-unit", "none"]),
+    (_GYRO + ["ax", "ay", "az", "acc_x"], _ROW * 2 + ["1"], ["--unit", "dps"], ["--unit", "dps", "--accel-unit", "none"]),
+    (_GYRO + ["ax_lsb", "ay_lsb", "az_lsb"], _ROW * 2, ["--unit", "dps"], ["--unit", "dps", "--lsb-per-g", "16384"]),
+])
+def test_every_refusal_of_a_unit_names_an_option_that_is_then_taken(tmp_path, capsys, names, cells, options, suggested):
+    """No dead ends (issue 37 follow-up): a refusal of the unit rules names an option and a value
+    (``suggested``'s last option and value are in its line; a scale's value as its example), and the command with them is taken
+    (or leaves the column out). Before: ``TempC`` of raw counts asked for --temp-unit mpu6050,
+    then refused it as contradicting the name's deg C; ``ax (mg)`` asked for --accel-unit g, then refused it."""
+    text = _unit_log(names, cells)
+    rc, dst = _convert(tmp_path, text, *options)
+    err = capsys.readouterr().err
+    assert rc == 2 and not dst.exists() and err.count("\n") == 1, err
+    said = f"{suggested[-2]} (LSB per" if "lsb-per" in suggested[-2] else " ".join(suggested[-2:])  # a scale: an example
+    assert said in err and suggested[-1] in err, err
+    rc, dst = _convert(tmp_path, text, *suggested, out="taken.csv")
+    assert rc == 0, capsys.readouterr().err
+    assert suggested[-1] != "none" or not {"temp", "ax"} & set(read_recording(dst).columns)

@@ -12,6 +12,7 @@ import contextlib
 import io
 import os
 import tempfile
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -29,9 +30,11 @@ STYLES = [("timestamp", "gyro_x", "gyro_y", "gyro_z"), ("t", "gx", "gy", "gz"), 
           "Gyroscope y (rad/s)", "Gyroscope z (rad/s)"), ("millis", "wx", "wy", "wz"), ("time_us", "omega_x", "omega_y", "omega_z")]
 TIME_SECONDS = {"timestamp": None, "t": None, "%time": 1e-9, "Time (s)": 1.0, "millis": 1e-3, "time_us": 1e-6}
 BROKEN_CELLS = ["", "nan", "inf", "x", "1_0", "0x10", "1.2.3", "--1"]
-#: temperature columns named in deg C, and accelerometer columns named with their unit (the unit)
-TEMPERATURES = ["TempC", "temp_c", "Temperature (C)", "TEMP [°C]"]
+#: temperature columns named in deg C (or deg F, converted exactly), and accelerometer columns named
+#: with their unit (the unit; mg converted exactly to g)
+TEMPERATURES = ["TempC", "temp_c", "Temperature (C)", "TEMP [°C]", "Temp (°F)"]
 ACCELEROMETERS = [(("AccX (g)", "AccY (g)", "AccZ (g)"), "g"), (("ax_mps2", "ay_mps2", "az_mps2"), "m/s^2"),
+                  (("acc_x_mg", "acc_y_mg", "acc_z_mg"), "mg"),
                   (("field.linear_acceleration.x", "field.linear_acceleration.y", "field.linear_acceleration.z"), None)]
 
 
@@ -75,6 +78,10 @@ def logs(draw):
     end = draw(st.sampled_from(["\n", "\r\n", ""]))
     if not end and n:  # a last line without its line end is left out (a log cut short), broken or not
         gyro, temp, accel, broken = gyro[:-1], temp[:-1], accel[:-1], None if broken == len(lines) else broken
+    if temp_name and "°F" in temp_name:
+        temp = np.array([float((Fraction(repr(float(v))) - 32) * 5 / 9) for v in temp])
+    if accel_unit == "mg":
+        accel, accel_unit = np.array([[float(Fraction(repr(v)) / 1000) for v in row] for row in accel.tolist()]), "g"
     return ("\n".join(lines) + end, gyro, broken, options, temp if temp_name else None,
             (accel, accel_unit or "m/s^2") if accel_names else None)
 

@@ -1409,3 +1409,26 @@ def test_a_writer_refuses_its_columns_in_a_set(tmp_path):
     with pytest.raises(RecordingError, match="the columns are a list in the rows' order, got a set"):
         RecordingWriter(tmp_path / "r.csv", {"sample_rate_hz": 100, "gyro_unit": "dps"}, {"gx", "gy", "gz"})
     assert not (tmp_path / "r.csv").exists()
+
+
+def test_the_unit_spellings_table_is_one_reading_of_each_spelling():
+    """recording/unit_words.py, the one table of the units a log's column names state: each spelling
+    (and its form at the end of a normalised name: ``rad/s`` -> ``rad_s``) means one unit of its
+    quantity, each unit is an option's value, and a converted unit is converted exactly."""
+    import re
+    from fractions import Fraction
+    from gyrofilter.recording import unit_words as uw
+    for quantity, words in uw.UNIT_WORDS.items():
+        forms = {}
+        for text, unit in words.items():
+            assert text == uw.spelling(text) and (unit is None or unit in uw.units_of(quantity))
+            form = re.sub(r"[^a-z0-9%]+", "_", text).strip("_")
+            if text.isascii() and form:
+                assert forms.setdefault(form, unit) == unit, (quantity, text, form)
+                assert uw.known_unit(quantity, form) == unit
+        assert re.fullmatch(f"(?:{uw.name_units(quantity)})", "rad_s" if quantity == "rate" else "ms" if quantity == "time"
+                            else "degc" if quantity == "temp" else "m_s_2")
+    assert uw.stated_unit("temp", "deg") == "deg" and uw.stated_unit("rate", "Deg / Sec") == "dps"
+    assert uw.to_floats(["98.6", "-40", "212"], "f").tolist() == [37.0, -40.0, 100.0]
+    assert uw.to_floats(["1", "0.3"], "mg").tolist() == [0.001, float(Fraction("0.3") / 1000)]
+    assert uw.to_floats(["300.15"], "k").tolist() == [27.0] and uw.recorded("mdps") == "dps"

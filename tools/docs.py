@@ -57,6 +57,7 @@ from gyrofilter.evaluation import evaluate as E
 from gyrofilter.filter.settings import SETTING_RANGES, FilterSettings
 from gyrofilter.filter.presets import DEFAULT_PRESET, PRESETS
 from gyrofilter.recording import read_recording
+from gyrofilter.recording.unit_words import CONVERTED, UNIT_WORDS
 from gyrofilter.sim.resonance import band_pass
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -214,6 +215,20 @@ def settings_table():
         if written not in (str(f.default), f"{f.default:g}" if isinstance(f.default, float) else None):
             raise ValueError(f"FilterSettings' docstring gives {f.name} the default {written}, the field {f.default!r}")
         rows.append(f"| `{f.name}` | {_value(f.default)} | {meaning} |")
+    return "\n".join(rows)
+
+
+@block("unit-spellings", "docs/formats.md", "`gyrofilter.recording.unit_words.UNIT_WORDS`")
+def unit_spellings_table():
+    options = {"time": "--time-unit", "rate": "--unit", "temp": "--temp-unit", "accel": "--accel-unit"}
+    rows = ["| column | option value | spellings a name states it by (any case, blanks aside) |", "|---|---|---|"]
+    for quantity, words in UNIT_WORDS.items():
+        for unit in dict.fromkeys(words.values()):
+            said = ", ".join(f"`{w}`" for w, u in words.items() if u == unit)
+            value = ("none: ambiguous, the option says which" if unit is None else f"`{options[quantity]} {unit}`"
+                     + (f" (converted to {CONVERTED[unit][0].replace('c', '°C')}: {CONVERTED[unit][1]})"
+                        if unit in CONVERTED else ""))
+            rows.append(f"| {quantity} | {value} | {said} |")
     return "\n".join(rows)
 
 

@@ -12,7 +12,7 @@ from ..recording import RecordingWriter
 from ..recording.foreign import TIME_UNITS, read_foreign
 from ..recording.foreign_extras import ACCEL_UNIT_CHOICES, TEMP_UNITS
 from ..recording.logtext import MAX_PIPE_COPY_BYTES
-from ..units import GYRO_UNIT_SPELLINGS, GYRO_UNITS
+from ..recording.unit_words import known_unit, units_of
 from . import console, options, outputs
 
 
@@ -23,9 +23,10 @@ def add_arguments(parser):
                                                     "half its free space)")
     parser.add_argument("--out", required=True, metavar="FILE", type=options.file_name,
                         help="output recording (" + options.RECORDING_FILE_HELP + ")")
-    parser.add_argument("--unit", choices=GYRO_UNITS, default=None, type=lambda text: GYRO_UNIT_SPELLINGS.get(text, text),
-                        help="unit of the gyro columns: dps (also deg/s), rad/s or lsb (default: the one their names "
-                             "state, e.g. 'gyro_x (rad/s)'; never guessed)")
+    parser.add_argument("--unit", choices=units_of("rate"), default=None,
+                        type=lambda text: known_unit("rate", text) or text,
+                        help="unit of the gyro columns: dps (also deg/s), rad/s, mdps (converted to dps) or lsb "
+                             "(default: the one their names state, e.g. 'gyro_x (rad/s)'; never guessed)")
     parser.add_argument("--lsb-per-dps", type=options.lsb_per_dps, default=None, metavar="X",
                         help="LSB per deg/s, with --unit lsb (MPU6050: 131 at +-250 deg/s)")
     parser.add_argument("--columns", default=None, metavar="NAMES",
@@ -38,11 +39,11 @@ def add_arguments(parser):
                              "ns giving 5 Hz or more)")
     parser.add_argument("--temp-unit", choices=TEMP_UNITS, default=None,
                         help="unit of the temperature column (TempC, temp_c, Temperature, TEMP ...), written as the "
-                             "recording's temp in deg C: c, or mpu6050 (raw counts: counts / 340 + 36.53); none leaves "
+                             "recording's temp in deg C: c, f or k (converted), or mpu6050 (raw counts: counts / 340 + 36.53); none leaves "
                              "it out (default: the one its name states, e.g. TempC; else it is left out, saying so)")
     parser.add_argument("--accel-unit", choices=ACCEL_UNIT_CHOICES, default=None,
-                        help="unit of the accelerometer columns (ax, AccX, acc_x ...), written as ax, ay, az: m/s^2, g "
-                             "or lsb (with --lsb-per-g); none leaves them out (default: the one their names state, "
+                        help="unit of the accelerometer columns (ax, AccX, acc_x ...), written as ax, ay, az: m/s^2, g, "
+                             "mg (converted to g) or lsb (with --lsb-per-g); none leaves them out (default: the one their names state, "
                              "e.g. 'AccX (g)'; else they are left out, saying so)")
     parser.add_argument("--lsb-per-g", type=options.decimal, default=None, metavar="X",
                         help="LSB per g of an accelerometer in lsb (MPU6050: 16384 at +-2 g)")

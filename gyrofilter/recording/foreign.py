@@ -52,14 +52,15 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import is_plain_number, quote, refuse_unordered
-from ..units import AXES, GYRO_UNITS, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz
+from ..units import AXES, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .foreign_extras import find_extras, given_unit, gyro_out_of_range
+from .foreign_extras import find_extras, gyro_out_of_range
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
+from .unit_words import converted_text, given_unit, known_unit, name_units, recorded, stated_unit, to_floats, units_of
 from .writer import EXACT_FORMAT, exact_format
 
 #: time units of a time column and their length in s
@@ -68,20 +69,14 @@ TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 MIN_INFERRED_RATE_HZ = 5.0
 #: a time column's name once normalised (:func:`_normal`), with its unit when the name states it
 TIME_NAME = re.compile(r"(?:header_)?(?P<word>t|time|times|timestamp|time_stamp|stamp|%time|seconds_elapsed|elapsed|"
-                       r"elapsed_time|seconds|secs|sec|millis|micros|nanos)(?:_(?P<unit>s|sec|ms|us|ns))?")
+                       r"elapsed_time|seconds|secs|sec|millis|micros|nanos)" rf"(?:_(?P<unit>{name_units('time')}))?")
 #: a gyro column's name once normalised, its axis in ``axis``, an optional unit at the end
 GYRO_NAME = re.compile(r"(?:.*_)?(?:g|gyr|gyro|gyroscope|w|omega|angular_velocity|angularvelocity|rotation_rate|"
-                       r"rotationrate|rot|rate)_?(?P<axis>[xyz])(?:_(?P<unit>rad_?s|rad_per_s|dps|deg_?s|deg_per_s|lsb|raw))?")
+                       r"rotationrate|rot|rate)_?(?P<axis>[xyz])" rf"(?:_(?P<unit>{name_units('rate')}))?")
 #: a bare axis name (``x``: the phone loggers' gyroscope files), taken where no gyro-named column exists
 BARE_AXIS = re.compile(r"(?P<axis>[xyz])")
-_WORD_UNITS = {"millis": "ms", "micros": "us", "nanos": "ns", "%time": "ns", "seconds_elapsed": "s", "seconds": "s",
-               "secs": "s", "sec": "s"}
-_UNIT_WORDS = {"rad/s": "rad/s", "rads": "rad/s", "rad_s": "rad/s", "rad_per_s": "rad/s", "rad s^-1": "rad/s",
-               "deg/s": "dps", "dps": "dps", "°/s": "dps", "degs": "dps", "deg_s": "dps", "deg_per_s": "dps",
-               "lsb": "lsb", "raw": "lsb", "s": "s", "sec": "s", "ms": "ms", "us": "us", "µs": "us", "ns": "ns",
-               "msec": "ms", "usec": "us", "nsec": "ns", "μs": "us", "secs": "s", "second": "s", "seconds": "s",
-               "millis": "ms", "millisecond": "ms", "milliseconds": "ms", "micros": "us", "microsecond": "us",
-               "microseconds": "us", "nanos": "ns", "nanosecond": "ns", "nanoseconds": "ns"}
+#: time columns whose name, not a unit word (:mod:`~gyrofilter.recording.unit_words`), states their unit
+_NAME_TIME_UNITS = {"%time": "ns", "seconds_elapsed": "s"}
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
 class Foreign(Closable):
@@ -111,7 +106,7 @@ class Foreign(Closable):
             if done + len(numbers) > self.rows:
                 raise RecordingError(f"{self.path}: changed while it was read (more than {self.rows} rows now)")
             with _unchanged(self.path):
-                gyro = [np.array([float(c) for c in col]) for col in cells[:3]]
+                gyro = [to_floats(col, self._plan.gyro_read) for col in cells[:3]]
             yield np.column_stack(([t_s[done:done + len(numbers)]] if t_s is not None else []) + gyro
                                   + self._plan.extras.values(cells[3 + (t_s is not None):]))
             done += len(numbers)
@@ -126,7 +121,7 @@ class Foreign(Closable):
 class _Plan:
     """How the data rows of a log are read: its column ``names``, how a line is ``split``, the
     line with the names (None without), the columns ``wanted`` (x, y, z, then the time's), the
-    line the data start after; the ``extras`` kept (temperature, accelerometer:
+    line the data start after; the gyro unit read (``gyro_read``: mdps is written in dps); the ``extras`` kept (temperature, accelerometer:
     :mod:`~gyrofilter.recording.foreign_extras`), after those; ``t_s``, once known."""
 
     names: list
@@ -134,19 +129,20 @@ class _Plan:
     header_line: object
     wanted: list
     after_line: int
+    gyro_read: str
     extras: object
     t_s: object = None
 
 
 def _normal(name):
-    """A column name as the patterns match it, and the unit its brackets state (or None):
-    ``"Gyroscope x (rad/s)"`` -> ``("gyroscope_x", "rad/s")``, ``"field.angular_velocity.x"`` ->
+    """A column name as the patterns match it, and the text in its brackets (or None), the unit
+    it states: ``"Gyroscope x (rad/s)"`` -> ``("gyroscope_x", "rad/s")``, ``"field.angular_velocity.x"`` ->
     ``("angular_velocity_x", None)``."""
     name = name.strip().strip('"').strip()
     unit = None
     bracket = _BRACKET.search(name)
     if bracket:
-        unit = _UNIT_WORDS.get(bracket.group(1).lower().replace(" ", ""), bracket.group(1))
+        unit = bracket.group(1)
         name = name[:bracket.start()]
     key = re.sub(r"[^a-z0-9%]+", "_", name.lower()).strip("_")
     return key.removeprefix("field_"), unit
@@ -173,26 +169,28 @@ def _pick(names, path, columns, time_unit):
     else:
         gyro = [_gyro_column(normal, names, axis, path) for axis in AXES]
         time = _time_column(normal, gyro)
-    units = {_name_unit(normal[i], GYRO_NAME) for i in gyro} - {None}
+    units = {_name_unit(normal[i], GYRO_NAME, "rate") for i in gyro} - {None}
     if len(units) > 1:
         raise RecordingError(f"{path}: the gyro columns state different units ({', '.join(sorted(units))})")
     stated = units.pop() if units else None
-    unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME),
-                      f"the time column {quote(names[time]) if time is not None else ''} states", known=TIME_UNITS)
+    unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME, "time"),
+                      f"the time column {quote(names[time]) if time is not None else ''} states", "time")
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
         raise RecordingError(f"{path}: the time column {quote(names[time])} states the unit {quote(unit)}, not one of "
-                             f"{', '.join(TIME_UNITS)}; give --time-unit")
+                             f"{', '.join(TIME_UNITS)}; give --time-unit {', '.join(TIME_UNITS)}")
     return time, unit, gyro, stated
 
 
-def _name_unit(normal, pattern):
-    """The unit a column's name (as :func:`_normal` gives it) states: in brackets, as the unit at
-    the end of its ``pattern`` (``gyro_x_dps``, ``time_ms``), or by its word (``millis``); else None."""
+def _name_unit(normal, pattern, quantity):
+    """The unit of ``quantity`` a column's name (as :func:`_normal` gives it) states
+    (:func:`~gyrofilter.recording.unit_words.stated_unit`): in brackets, as the unit at the end of
+    its ``pattern`` (``gyro_x_dps``, ``time_ms``), or by its word (``millis``); else None."""
     key, bracket = normal
     match = pattern.fullmatch(key)
     if bracket or match is None:
-        return bracket
-    return _UNIT_WORDS.get(match["unit"] or "") or _WORD_UNITS.get(match.groupdict().get("word"))
+        return stated_unit(quantity, bracket)
+    word = match.groupdict().get("word") or ""
+    return stated_unit(quantity, match["unit"]) or known_unit(quantity, word) or _NAME_TIME_UNITS.get(word)
 
 
 def _column_index(text, names, path):
@@ -230,7 +228,7 @@ def _gyro_column(normal, names, axis, path):
 def _time_column(normal, gyro):
     """The time column: the first whose name states its unit, else the first named like a time; None without one."""
     candidates = [i for i, (key, _) in enumerate(normal) if i not in gyro and TIME_NAME.fullmatch(key)]
-    stated = [i for i in candidates if _name_unit(normal[i], TIME_NAME) in TIME_UNITS]
+    stated = [i for i in candidates if _name_unit(normal[i], TIME_NAME, "time") in TIME_UNITS]
     return (stated or candidates or [None])[0]
 
 
@@ -414,8 +412,8 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
     ``extras``: ``temp_unit``, ``accel_unit``, ``lsb_per_g`` of :func:`~gyrofilter.recording.foreign_extras.find_extras`.
     RecordingError naming the file, line and column for what cannot be read, SettingsError for a bad argument."""
     path = str(path)
-    if unit is not None and unit not in GYRO_UNITS:
-        raise RecordingError(f"--unit must be one of {', '.join(GYRO_UNITS)}, got {quote(unit)}")
+    if unit is not None and unit not in units_of("rate"):
+        raise RecordingError(f"--unit must be one of {', '.join(units_of('rate'))}, got {quote(unit)}")
     if time_unit is not None and time_unit not in TIME_UNITS:
         raise RecordingError(f"--time-unit must be one of {', '.join(TIME_UNITS)}, got {quote(time_unit)}")
     if isinstance(columns, str):  # its letters would be taken for column names one by one
@@ -458,16 +456,18 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
         raise RecordingError(f"{path}: line {first_data}: numbers but no column names; give the columns by number, "
                              "e.g. --columns 1,2,3,4 (time, x, y, z) or --columns 2,3,4 (x, y, z)")
     time, t_unit, gyro, stated = _pick(names, path, columns, time_unit)
-    unit = _gyro_unit(unit, stated, lsb_per_dps, path)
+    read_unit = _gyro_unit(unit, stated, lsb_per_dps, path)
+    unit = recorded(read_unit)
     extras = find_extras(names, [_normal(n) for n in names], set(gyro) | {time}, path, **options)
     wanted = gyro + ([time] if time is not None else []) + extras.indices
-    plan = _Plan(names, split, header_line, wanted, after_line=header_line or first_data - 1, extras=extras)
+    plan = _Plan(names, split, header_line, wanted, after_line=header_line or first_data - 1,
+                 gyro_read=read_unit, extras=extras)
     counts["skipped"] = preamble
     rows, integral, out_of_range = 0, [True] * 3, None
     stamps = _Stamps(keep=t_unit is None) if time is not None else None
     t_parts, line_parts = [], []
     for numbers, cells in _row_chunks(raw, path, plan, counts):
-        gyro_values = [np.array([float(c) for c in col]) for col in cells[:3]]
+        gyro_values = [to_floats(col, read_unit) for col in cells[:3]]
         beyond = extras.check(cells[len(wanted) - len(extras.indices):], numbers, names, path)  # every chunk: formats
         out_of_range = out_of_range or gyro_out_of_range(gyro_values, unit, lsb_per_dps, numbers, gyro, names, path) or beyond
         integral = [whole and exact_format(v) == "%d" for whole, v in zip(integral, gyro_values)]
@@ -483,7 +483,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     if out_of_range:
         raise RecordingError(out_of_range)
     summary = [f"columns: x {quote(names[gyro[0]])}, y {quote(names[gyro[1]])}, z {quote(names[gyro[2]])} "
-               f"in {unit}{' (as the names state)' if stated == unit else ''}; {rows} rows"
+               f"in {unit}{converted_text(read_unit)}{' (as the names state)' if stated == read_unit else ''}; {rows} rows"
                + (f", {skipped} blank or comment line(s) skipped" if skipped else "")]
     summary += extras.summary + ([f"left out: {', '.join(n for i, n in enumerate(names) if i not in wanted)}"]
                                  if len(wanted) < len(names) else [])
@@ -533,10 +533,10 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
 
 def _gyro_unit(unit, stated, lsb_per_dps, path):
     """The gyro unit: the caller's, which must agree with the names', or the names'; never guessed."""
-    unit = given_unit(path, "--unit", unit, stated, "the column names say")
-    if unit not in GYRO_UNITS:
+    unit = given_unit(path, "--unit", unit, stated, "the column names say", "rate")
+    if unit not in units_of("rate"):
         raise RecordingError(f"{path}: the gyro unit is not stated{f' ({quote(stated)})' if stated else ''}; "
-                             "give --unit dps, rad/s or lsb (with --lsb-per-dps)")
+                             f"give --unit {', '.join(units_of('rate')[:-1])} or lsb (with --lsb-per-dps)")
     if unit == "lsb":
         if lsb_per_dps is None:
             raise RecordingError("--unit lsb needs --lsb-per-dps (LSB per deg/s; the MPU6050 at +-250 deg/s: 131)")

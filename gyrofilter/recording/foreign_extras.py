@@ -21,6 +21,8 @@ the range check of its values, the gyro's too (:func:`gyro_out_of_range`).
   (``(m/s^2)``, ``[g]``, ``_g``, ``_mps2``, ``_lsb``); the values as they are. Without a unit, or
   without one of the three axes, they are left out with a warning saying why; ``none`` leaves
   them out. A value beyond :data:`~gyrofilter.units.MAX_ACCEL_MPS2` is refused naming its line.
+- **Units** a name states are read from the one table of
+  :mod:`~gyrofilter.recording.unit_words` (deg F and K converted to deg C, mg to g, exactly).
 - **Refused** in one line naming the columns: two candidates for the temperature or for one
   axis of the accelerometer, a unit given that contradicts the names', columns that state
   different units, an option given for a column the log does not have.
@@ -34,38 +36,34 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..inputs import quote
-from ..units import (ACCEL_UNITS, AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
+from ..units import (AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
                      TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2)
 from .header import ACCEL_COLUMNS, TEMPERATURE_LIKE_NAMES, accel_units_header, format_number
+from .unit_words import CONVERTED, converted_text, given_unit, name_units, recorded, stated_unit, to_floats, units_of
 from .writer import EXACT_FORMAT, exact_format
 
-#: the units of a log's temperature column (``convert --temp-unit``): deg C, raw MPU6050 counts,
-#: or ``none`` (left out)
-TEMP_UNITS = ("c", "mpu6050", "none")
-#: the units of a log's accelerometer columns (``convert --accel-unit``): the recording's, or ``none``
-ACCEL_UNIT_CHOICES = ACCEL_UNITS + ("none",)
+#: the units of a log's temperature column (``convert --temp-unit``): deg C, deg F (converted),
+#: raw MPU6050 counts, or ``none`` (left out)
+TEMP_UNITS = units_of("temp") + ("none",)
+#: the units of a log's accelerometer columns (``convert --accel-unit``): the recording's, mg
+#: (converted to g), or ``none``
+ACCEL_UNIT_CHOICES = units_of("accel") + ("none",)
 #: an accelerometer column's name once normalised (``foreign``'s rule), its axis in ``axis``, an
 #: optional unit at the end
 ACCEL_NAME = re.compile(r"(?:.*_)?(?:a|acc|accl|accel|acceleration|accelerometer|linear_acceleration|"
-                        r"linearacceleration)_?(?P<axis>[xyz])(?:_(?P<unit>m_?s_?2|mps2|g|lsb|raw))?")
-#: temperature names that state deg C
-_CELSIUS_NAMES = {"temp_c", "tempc", "temp_degc", "temp_deg_c", "temperature_c", "temperature_degc", "die_temp_c",
-                  "celsius"}
-#: a unit in brackets or at a name's end -> the unit it states (temperature: "c" or "raw")
-_UNIT_TEXT = {"c": "c", "°c": "c", "degc": "c", "deg_c": "c", "degreesc": "c", "celsius": "c", "℃": "c",
-              "raw": "raw", "lsb": "raw", "counts": "raw",
-              "m/s^2": "m/s^2", "m/s2": "m/s^2", "m/s²": "m/s^2", "ms2": "m/s^2", "m_s2": "m/s^2", "m_s_2": "m/s^2",
-              "mps2": "m/s^2", "ms^-2": "m/s^2", "g": "g"}
-#: what each --temp-unit says of a name's unit
-_STATED_TEMP = {"c": "c", "raw": "mpu6050"}  # the --temp-unit a temperature column's name states
+                        r"linearacceleration)_?(?P<axis>[xyz])" rf"(?:_(?P<unit>{name_units('accel')}))?")
+#: the end of a temperature-like name (:data:`TEMPERATURE_LIKE_NAMES`) that states its unit (``TempC``, ``temp_degc``, ``celsius``)
+_TEMP_NAME = re.compile(rf"(?:.*_|temp|temperature)?(?P<unit>{name_units('temp')})")
+#: how a summary or refusal says a temperature unit
+_TEMP_WORDS = {"c": "deg C", "f": "deg F", "k": "K", "mpu6050": "raw counts"}
 
 
 @dataclass
 class Extras:
     """The temperature and accelerometer columns kept: their ``indices`` in the log, the
     recording's ``columns`` (``temp``, ``ax, ay, az``), the ``header`` keys they need, the
-    ``summary`` and ``warnings`` to say, the units read (``temp_unit``, ``accel_unit``,
-    ``lsb_per_g``) and, per column, whether every value so far is integral (the writer's format)."""
+    ``summary`` and ``warnings`` to say, the units read (``temp_unit``, stated by its name where ``temp_named``; ``accel_read``; ``accel_unit``,
+    the recording's, and ``lsb_per_g``) and, per column, whether every value so far is integral (the writer's format)."""
 
     indices: list = field(default_factory=list)
     columns: list = field(default_factory=list)
@@ -73,14 +71,17 @@ class Extras:
     summary: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
     temp_unit: str = None
+    temp_named: bool = False
     accel_unit: str = None
+    accel_read: str = None
     lsb_per_g: float = None
     integral: list = field(default_factory=list)
 
     def values(self, cells):
-        """The columns' values (floats; the temperature in deg C) of the cells of one chunk, one
+        """The columns' values (floats; the temperature in deg C, the accelerometer in the recording's
+        unit: :func:`~gyrofilter.recording.unit_words.to_floats`) of the cells of one chunk, one
         list of texts per column in :attr:`columns`' order."""
-        out = [np.array([float(c) for c in col]) for col in cells]
+        out = [to_floats(col, self.temp_unit if name == "temp" else self.accel_read) for name, col in zip(self.columns, cells)]
         if self.temp_unit == "mpu6050":
             out[0] = out[0] / MPU6050_TEMP_LSB_PER_C + MPU6050_TEMP_OFFSET_C
         return out
@@ -101,7 +102,8 @@ class Extras:
                 continue
             i, value = self.indices[k], format_number(v[bad[0]])
             what = (f"{value} deg C is beyond {TEMP_RANGE_C[0]:g} .. {TEMP_RANGE_C[1]:g} deg C, no gyro's die"
-                    + ("" if self.temp_unit == "mpu6050" else "; raw MPU6050 counts? give --temp-unit mpu6050") if temp else
+                    + ("; raw MPU6050 counts? give --temp-unit mpu6050" if not self.temp_named and self.temp_unit != "mpu6050"
+                       else "; --temp-unit none leaves the column out") if temp else
                     f"{value} {self.accel_unit} is beyond the +-{MAX_ACCEL_MPS2:g} m/s^2 any accelerometer reads")
             return f"{path}: line {lines[bad[0]]}, column {i + 1} ({quote(names[i])}): {what}"
         return None
@@ -139,25 +141,6 @@ def find_extras(names, normal, taken, path, *, temp_unit=None, accel_unit=None, 
     return extras
 
 
-def given_unit(path, option, given, stated, whose, words=None, known=None):
-    """The unit of a log's column(s): the one ``given`` in ``option``, which must agree with the
-    unit ``stated`` by their names (``time_ms`` with ``--time-unit s`` is refused, naming ``whose``
-    names state it), else the stated one (or None). With ``known``, a stated text that is none of
-    those units (``time (min)``, ``(secs)``) takes the unit given: the time column's refusal of
-    such a name asks for ``--time-unit``. The one rule of the gyro, time, temperature and
-    accelerometer units of :mod:`gyrofilter.recording.foreign`; ``words``: how a stated unit is said."""
-    if given is not None and stated is not None and given != stated and (known is None or stated in known):
-        raise RecordingError(f"{path}: {option} {given}, but {whose} {(words or {}).get(stated, stated)}")
-    return given if given is not None else stated
-
-
-def _stated(key, bracket, word):
-    """The unit a name states: its brackets' or the word at its end (``word``, the pattern's), mapped by
-    :data:`_UNIT_TEXT` (an unknown text as it is), or None."""
-    text = bracket if bracket is not None else word
-    return None if text is None else _UNIT_TEXT.get(text.lower().replace(" ", ""), text)
-
-
 def _temperature(extras, found, names, normal, temp_unit, path):
     if temp_unit == "none":  # the summary's "left out" names them
         return
@@ -171,21 +154,21 @@ def _temperature(extras, found, names, normal, temp_unit, path):
         return
     i = found[0]
     key, bracket = normal[i]
-    stated = _stated(key, bracket, "c" if key in _CELSIUS_NAMES else None)
-    given_unit(path, "--temp-unit", temp_unit, _STATED_TEMP.get(stated, stated), f"column {quote(names[i])} states",
-               {"c": "deg C", "mpu6050": "raw counts"})
-    unit = temp_unit or ("c" if stated == "c" else None)
-    if unit is None:
+    ending = _TEMP_NAME.fullmatch(key)
+    stated = stated_unit("temp", bracket if bracket is not None else ending and ending["unit"])
+    unit = given_unit(path, "--temp-unit", temp_unit, stated, f"column {quote(names[i])} states", "temp", _TEMP_WORDS)
+    if unit not in units_of("temp"):
         extras.warnings.append(f"column {quote(names[i])} left out: its unit is not stated"
-                               + (f" ({quote(stated)})" if stated not in (None, "raw") else "")
-                               + " (deg C, or raw MPU6050 counts?); give --temp-unit c or --temp-unit mpu6050 to keep "
-                                 "it as the recording's temp, --temp-unit none to leave it out without a word")
+                               + (f" ({quote(stated)})" if stated is not None else "")
+                               + " (deg C, deg F, K or raw MPU6050 counts?); give --temp-unit c, f or k (converted to deg C) or "
+                                 "--temp-unit mpu6050 to keep it as the recording's temp, --temp-unit none to leave it out without a word")
         return
     extras.indices.append(i)
     extras.columns.append("temp")
-    extras.temp_unit = unit
-    extras.summary.append(f"temp {quote(names[i])} in " + ("deg C" if unit == "c" else
-                          f"raw MPU6050 counts (deg C = counts / {MPU6050_TEMP_LSB_PER_C:g} + {MPU6050_TEMP_OFFSET_C:g})")
+    extras.temp_unit, extras.temp_named = unit, temp_unit is None
+    extras.summary.append(f"temp {quote(names[i])} in " + (
+        f"raw MPU6050 counts (deg C = counts / {MPU6050_TEMP_LSB_PER_C:g} + {MPU6050_TEMP_OFFSET_C:g})"
+        if unit == "mpu6050" else _TEMP_WORDS[unit] + (f", converted to deg C: {CONVERTED[unit][1]}" if unit in CONVERTED else ""))
                           + (" (as its name states)" if stated and temp_unit is None else ""))
 
 
@@ -204,15 +187,16 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
                              f"{quote(', '.join(names))} (names such as ax, AccX, acc_x, accel_x)")
     if not found:
         return
-    stated = {_stated(normal[i][0], normal[i][1], ACCEL_NAME.fullmatch(normal[i][0])["unit"]) for i in found} - {None}
-    stated = {"lsb" if s == "raw" else s for s in stated}
+    stated = {stated_unit("accel", normal[i][1] if normal[i][1] is not None else ACCEL_NAME.fullmatch(normal[i][0])["unit"])
+              for i in found} - {None}
     if len(stated) > 1:
-        raise RecordingError(f"{path}: the accelerometer columns state different units ({', '.join(sorted(stated))})")
+        raise RecordingError(f"{path}: the accelerometer columns state different units ({', '.join(sorted(stated))}); "
+                             "--accel-unit none leaves them out")
     stated = stated.pop() if stated else None
-    unit = given_unit(path, "--accel-unit", accel_unit, stated, "the accelerometer columns state")
-    if unit is not None and unit not in ACCEL_UNITS:
+    unit = given_unit(path, "--accel-unit", accel_unit, stated, "the accelerometer columns state", "accel")
+    if unit is not None and unit not in units_of("accel"):
         raise RecordingError(f"{path}: the accelerometer columns state the unit {quote(unit)}; give --accel-unit "
-                             f"{', '.join(ACCEL_UNITS)} (or none to leave them out)")
+                             f"{', '.join(units_of('accel'))} (or none to leave them out)")
     if lsb_per_g is not None and unit != "lsb":
         raise RecordingError(f"--lsb-per-g goes with an accelerometer in lsb, not {unit or 'one of no stated unit'}")
     listed = ", ".join(quote(names[i]) for i in found)
@@ -223,7 +207,7 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
         return
     if unit is None:
         extras.warnings.append(f"accelerometer columns {listed} left out: their unit is not stated; give --accel-unit "
-                               "m/s^2, g or lsb (with --lsb-per-g) to keep them, --accel-unit none to leave them out "
+                               f"{', '.join(units_of('accel')[:-1])} or lsb (with --lsb-per-g) to keep them, --accel-unit none to leave them out "
                                "without a word")
         return
     if unit == "lsb":
@@ -233,7 +217,8 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
         check_lsb_per_g(lsb_per_g, "--lsb-per-g", RecordingError)
     extras.indices += found
     extras.columns += list(ACCEL_COLUMNS)
-    extras.accel_unit, extras.lsb_per_g = unit, lsb_per_g
-    extras.header.update(accel_units_header(unit, lsb_per_g))
-    extras.summary.append(", ".join(f"{c} {quote(names[i])}" for c, i in zip(ACCEL_COLUMNS, found)) + f" in {unit}"
+    extras.accel_read, extras.accel_unit, extras.lsb_per_g = unit, recorded(unit), lsb_per_g
+    extras.header.update(accel_units_header(extras.accel_unit, lsb_per_g))
+    extras.summary.append(", ".join(f"{c} {quote(names[i])}" for c, i in zip(ACCEL_COLUMNS, found))
+                          + f" in {extras.accel_unit}{converted_text(unit)}"
                           + (" (as the names state)" if stated and accel_unit is None else ""))
