@@ -21,8 +21,15 @@ PARTIAL_PREFIX = ".partial-"
 #: the host in a partial name: a folder shared over the network (a fleet's reports on NFS) holds
 #: other machines' partials, whose process numbers mean nothing here
 HOST = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname()) or "host"
-#: what a partial name carries: the process number and the host
-OWNER = f"{os.getpid()}.{HOST}"
+
+
+def owner():
+    """What a partial name carries: the process number and the host. Asked at each write, not
+    at import: a process forked after ``import gyrofilter`` (multiprocessing's default on Linux)
+    named its partials as its parent did, and two of them saving one file shared one."""
+    return f"{os.getpid()}.{HOST}"
+
+
 #: numbers each :func:`write_text_whole` call's partial, so that two threads saving one file
 #: never share one (the second truncated the first's; the first renamed a mix of both)
 _CALLS = itertools.count()
@@ -48,7 +55,7 @@ def partial_path(path, tag=""):
     (gyrofilter.cli.outputs.remove_stale_partials). ``tag`` (``"7-"``) goes after the owner, so
     that one process's writes of one name at once have partials of their own."""
     path = os.fspath(path)
-    prefix = f"{PARTIAL_PREFIX}{OWNER}-{tag}"
+    prefix = f"{PARTIAL_PREFIX}{owner()}-{tag}"
     name = os.path.basename(path)
     room = NAME_MAX_BYTES - len(os.fsencode(prefix))
     if len(os.fsencode(name)) > room:
