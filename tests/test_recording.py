@@ -1409,3 +1409,36 @@ def test_a_writer_refuses_its_columns_in_a_set(tmp_path):
     with pytest.raises(RecordingError, match="the columns are a list in the rows' order, got a set"):
         RecordingWriter(tmp_path / "r.csv", {"sample_rate_hz": 100, "gyro_unit": "dps"}, {"gx", "gy", "gz"})
     assert not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.parametrize("name", ["rec.csv", "rec.csv.gz"])
+def test_write_recording_that_fails_keeps_the_recording_that_was_there(tmp_path, monkeypatch, name):
+    """Attack pass 28b: write_recording over a recording wrote in place: a write that failed (a
+    full disk, a file size limit) left the header alone where the earlier recording was, a
+    file that read as a recording of 0 samples without a word. It writes whole or not at all
+    (gyrofilter.files, as Calibration.save does): the earlier file kept, no partial left."""
+    import errno
+    path = tmp_path / name
+    write_recording(path, Recording.from_dps(np.arange(30.0).reshape(10, 3), 100.0))
+    before = path.read_bytes()
+
+    def full_disk(self, rows):
+        raise OSError(errno.ENOSPC, "No space left on device", self.name)
+    monkeypatch.setattr(RecordingWriter, "write", full_disk)
+    with pytest.raises(OSError, match="No space") as info:
+        write_recording(path, Recording.from_dps(np.ones((50, 3)), 100.0))
+    assert info.value.filename == str(path)
+    assert path.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == [name]
+    monkeypatch.undo()
+    os.chmod(path, 0o640)
+    write_recording(path, Recording.from_dps(np.ones((50, 3)), 100.0))
+    assert len(read_recording(path)) == 50 and os.stat(path).st_mode & 0o777 == 0o640
+
+
+def test_write_recording_through_a_link_compresses_by_the_name_given(tmp_path):
+    """Attack pass 28b: written whole, through a partial beside a link's target, the format is
+    still the one the name given states (``.gz``), whatever the target's name."""
+    os.symlink("target.dat", tmp_path / "rec.csv.gz")
+    write_recording(os.fsencode(tmp_path / "rec.csv.gz"), Recording.from_dps(np.ones((5, 3)), 100.0))
+    assert (tmp_path / "target.dat").read_bytes()[:2] == b"\x1f\x8b" and (tmp_path / "rec.csv.gz").is_symlink()
+    assert len(read_recording(tmp_path / "rec.csv.gz")) == 5
