@@ -1442,3 +1442,28 @@ def test_write_recording_through_a_link_compresses_by_the_name_given(tmp_path):
     write_recording(os.fsencode(tmp_path / "rec.csv.gz"), Recording.from_dps(np.ones((5, 3)), 100.0))
     assert (tmp_path / "target.dat").read_bytes()[:2] == b"\x1f\x8b" and (tmp_path / "rec.csv.gz").is_symlink()
     assert len(read_recording(tmp_path / "rec.csv.gz")) == 5
+
+
+def test_a_blank_line_after_every_row_keeps_the_reader_in_bounded_memory(tmp_path):
+    """Attack pass 28b: iter_recording kept a (row, line) pair for every place where the file's
+    lines and samples fell out of step: a logger that ends each row with a blank line (or a
+    note) made it keep about 120 bytes a sample (a 75 kB .gz of 10^6 rows: 120 MB; a day at
+    100 Hz: 1 GB), while its memory is one chunk whatever the length. A regular spacing is one
+    entry; every sample still has its line."""
+    import tracemalloc
+    rows = 30_000
+    path = tmp_path / "blank.csv.gz"
+    with gzip.open(path, "wt", compresslevel=1) as fh:
+        fh.write("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n")
+        fh.write("0.1,0.2,0.3\n\n" * rows)
+    tracemalloc.start()
+    try:
+        chunks = iter_recording(path, chunk_rows=10_000)
+        head = next(chunks)
+        before = tracemalloc.get_traced_memory()[0]
+        assert sum(len(c) for c in chunks) == rows
+        kept = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert kept < 300_000, kept
+    assert [head.line_of_row(r) for r in (0, 1, rows - 1)] == [5, 7, 5 + 2 * (rows - 1)]
