@@ -170,5 +170,5 @@ def test_a_numpy_number_as_the_temperature_coefficient_is_the_number_it_holds(co
     x, temp = np.zeros((210, 3)), np.full(210, 25.0)
     assert len(f.filter(x, temp)) == 10 // f.settings.block_len
     plain = f.settings.temp_coefficient_dps_per_c
-    assert all(type(v) is float for v in (plain if isinstance(plain, (tuple, list)) else [plain]))
+    assert all(type(v) in (int, float) for v in (plain if isinstance(plain, (tuple, list)) else [plain]))
     json.dumps(f.state_dict())
