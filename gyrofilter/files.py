@@ -21,8 +21,15 @@ PARTIAL_PREFIX = ".partial-"
 #: the host in a partial name: a folder shared over the network (a fleet's reports on NFS) holds
 #: other machines' partials, whose process numbers mean nothing here
 HOST = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname()) or "host"
-#: what a partial name carries: the process number and the host
-OWNER = f"{os.getpid()}.{HOST}"
+
+
+def owner():
+    """What a partial name carries: the process number and the host. Asked at each write, not
+    at import: a process forked after ``import gyrofilter`` (multiprocessing's default on Linux)
+    named its partials as its parent did, and two of them saving one file shared one."""
+    return f"{os.getpid()}.{HOST}"
+
+
 #: numbers each :func:`write_text_whole` call's partial, so that two threads saving one file
 #: never share one (the second truncated the first's; the first renamed a mix of both)
 _CALLS = itertools.count()
@@ -48,7 +55,7 @@ def partial_path(path, tag=""):
     (gyrofilter.cli.outputs.remove_stale_partials). ``tag`` (``"7-"``) goes after the owner, so
     that one process's writes of one name at once have partials of their own."""
     path = os.fspath(path)
-    prefix = f"{PARTIAL_PREFIX}{OWNER}-{tag}"
+    prefix = f"{PARTIAL_PREFIX}{owner()}-{tag}"
     name = os.path.basename(path)
     room = NAME_MAX_BYTES - len(os.fsencode(prefix))
     if len(os.fsencode(name)) > room:
@@ -61,40 +68,49 @@ def partial_path(path, tag=""):
 
 
 def write_text_whole(path, text):
-    """Write ``text`` (UTF-8) to the file ``path`` whole or not at all: under :func:`partial_path`
-    first (one of its own per call: two threads saving one file never mix), then renamed
-    (``os.replace``, atomic), so that a failed write (a full disk, a file size limit) leaves the
-    file that was there as it was (its permission bits kept, and its owner where the caller may
-    give it away: root saving a user's file made it root's); the partial is removed on any
-    failure. A file the caller may not write (read-only) is refused as opening it is, never
-    replaced. A symbolic link's target is written (the link kept; a loop of links refused, not
-    replaced); what is no regular file (``/dev/null``, a FIFO, a terminal), and a name ending in
-    ``/``, is written to as it is, never replaced (a rename over ``/dev/null`` made it a file;
-    ``cal.json/`` wrote ``cal.json``). An OSError names ``path``."""
+    """Write ``text`` (UTF-8) to the file ``path`` whole or not at all (:func:`written_whole`)."""
+    with written_whole(path) as name, open(name, "w", encoding="utf-8") as fh:
+        fh.write(text)
+
+
+@contextlib.contextmanager
+def written_whole(path):
+    """Yields the name under which to write the file ``path`` whole or not at all: under
+    :func:`partial_path` first (one of its own per call: two threads saving one file never mix),
+    renamed to ``path`` (``os.replace``, atomic) when the block ends without an exception, so that
+    a failed write (a full disk, a file size limit) leaves the file that was there as it was (its
+    permission bits kept, and its owner where the caller may give it away: root saving a user's
+    file made it root's); the partial is removed on any failure. A file the caller may not write
+    (read-only) is refused as opening it is, never replaced. A symbolic link's target is written
+    (the link kept; a loop of links refused, not replaced); what is no regular file
+    (``/dev/null``, a FIFO, a terminal), and a name ending in ``/``, is yielded as it is, written
+    in place, never replaced (a rename over ``/dev/null`` made it a file; ``cal.json/`` wrote
+    ``cal.json``). An OSError names ``path``. The one home of the rule: :func:`write_text_whole`
+    (``Calibration.save``) and ``write_recording`` write through it."""
     path = os.fsdecode(os.fspath(path))
     try:
-        _write_whole(path, os.path.realpath(path), text)
+        with _whole(path, os.path.realpath(path)) as name:
+            yield name
     except OSError as exc:
         raise OSError(exc.errno, exc.strerror or str(exc), path) from None
 
 
-def _write_whole(path, target, text):
-    """:func:`write_text_whole` of ``path``, whose link is resolved to ``target``."""
+@contextlib.contextmanager
+def _whole(path, target):
+    """:func:`written_whole` of ``path``, whose link is resolved to ``target``."""
     try:
         st = os.stat(target)
     except FileNotFoundError:  # not there yet (or its folder: the write says so)
         st = None
     mode = None if st is None else st.st_mode
     if (mode is not None and not stat.S_ISREG(mode)) or path.endswith(("/", os.sep)):
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write(text)
+        yield path
         return
     if mode is not None:  # refused as writing in place is (read-only): the rename is not
         os.close(os.open(target, os.O_WRONLY))
     tmp = partial_path(target, tag=f"{next(_CALLS)}-")
     try:
-        with open(tmp, "w", encoding="utf-8") as fh:
-            fh.write(text)
+        yield tmp
         if st is not None:
             if (st.st_uid, st.st_gid) != (os.getuid(), os.getgid()):
                 with contextlib.suppress(PermissionError):  # only root may give a file away

@@ -159,7 +159,7 @@ def plain(value):
     array) as ``repr`` writes it, cut to MAX_QUOTE_CHARS characters (with the full length) when
     longer. The one place error messages turn a user's value into text.
     """
-    text = repr(_python(value))
+    text = repr(python_value(value))
     return text if len(text) <= MAX_QUOTE_CHARS else f"{text[:MAX_QUOTE_CHARS]}... ({len(text)} characters)"
 
 
@@ -198,11 +198,13 @@ def json_ready(value):
     return value
 
 
-def _python(value):
+def python_value(value):
+    """``value`` with numpy scalars as the Python int or float they hold (lists and tuples element
+    by element, kept lists and tuples); anything else as it is."""
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, (list, tuple)):
-        return type(value)(_python(v) for v in value)
+        return type(value)(python_value(v) for v in value)
     return value
 
 

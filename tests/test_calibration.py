@@ -385,3 +385,24 @@ def test_two_threads_saving_one_file_leave_one_whole_calibration(tmp_path, monke
     first.join(20)
     assert not errors and Calibration.load(path) in (one, other)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cal.json"]
+
+
+def test_a_forked_process_saving_one_file_has_partials_of_its_own(tmp_path):
+    """Attack pass 28b: the partial's owner was the process number at import, so a process forked
+    after ``import gyrofilter`` (multiprocessing's default on Linux) named its partials as its
+    parent did, and the counter of calls went on from the same number in both: two of them saving
+    one calibration at once shared one partial (one save failed, "No such file", or the saved file
+    held a mix of both). The owner is the process that writes."""
+    import os
+    from gyrofilter import files
+    path = tmp_path / "cal.json"
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: its partial's name, then out without the parent's clean-up
+        os.write(write, files.partial_path(path, tag="0-").encode())
+        os._exit(0)
+    os.close(write)
+    os.waitpid(pid, 0)
+    with os.fdopen(read) as fh:
+        child = fh.read()
+    assert child != files.partial_path(path, tag="0-") and f"-{pid}." in child.replace("partial-", "-")

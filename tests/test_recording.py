@@ -1432,3 +1432,61 @@ def test_the_unit_spellings_table_is_one_reading_of_each_spelling():
     assert uw.to_floats(["98.6", "-40", "212"], "f").tolist() == [37.0, -40.0, 100.0]
     assert uw.to_floats(["1", "0.3"], "mg").tolist() == [0.001, float(Fraction("0.3") / 1000)]
     assert uw.to_floats(["300.15"], "k").tolist() == [27.0] and uw.recorded("mdps") == "dps"
+
+
+@pytest.mark.parametrize("name", ["rec.csv", "rec.csv.gz"])
+def test_write_recording_that_fails_keeps_the_recording_that_was_there(tmp_path, monkeypatch, name):
+    """Attack pass 28b: write_recording over a recording wrote in place: a write that failed (a
+    full disk, a file size limit) left the header alone where the earlier recording was, a
+    file that read as a recording of 0 samples without a word. It writes whole or not at all
+    (gyrofilter.files, as Calibration.save does): the earlier file kept, no partial left."""
+    import errno
+    path = tmp_path / name
+    write_recording(path, Recording.from_dps(np.arange(30.0).reshape(10, 3), 100.0))
+    before = path.read_bytes()
+
+    def full_disk(self, rows):
+        raise OSError(errno.ENOSPC, "No space left on device", self.name)
+    monkeypatch.setattr(RecordingWriter, "write", full_disk)
+    with pytest.raises(OSError, match="No space") as info:
+        write_recording(path, Recording.from_dps(np.ones((50, 3)), 100.0))
+    assert info.value.filename == str(path)
+    assert path.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == [name]
+    monkeypatch.undo()
+    os.chmod(path, 0o640)
+    write_recording(path, Recording.from_dps(np.ones((50, 3)), 100.0))
+    assert len(read_recording(path)) == 50 and os.stat(path).st_mode & 0o777 == 0o640
+
+
+def test_write_recording_through_a_link_compresses_by_the_name_given(tmp_path):
+    """Attack pass 28b: written whole, through a partial beside a link's target, the format is
+    still the one the name given states (``.gz``), whatever the target's name."""
+    os.symlink("target.dat", tmp_path / "rec.csv.gz")
+    write_recording(os.fsencode(tmp_path / "rec.csv.gz"), Recording.from_dps(np.ones((5, 3)), 100.0))
+    assert (tmp_path / "target.dat").read_bytes()[:2] == b"\x1f\x8b" and (tmp_path / "rec.csv.gz").is_symlink()
+    assert len(read_recording(tmp_path / "rec.csv.gz")) == 5
+
+
+def test_a_blank_line_after_every_row_keeps_the_reader_in_bounded_memory(tmp_path):
+    """Attack pass 28b: iter_recording kept a (row, line) pair for every place where the file's
+    lines and samples fell out of step: a logger that ends each row with a blank line (or a
+    note) made it keep about 120 bytes a sample (a 75 kB .gz of 10^6 rows: 120 MB; a day at
+    100 Hz: 1 GB), while its memory is one chunk whatever the length. A regular spacing is one
+    entry; every sample still has its line."""
+    import tracemalloc
+    rows = 30_000
+    path = tmp_path / "blank.csv.gz"
+    with gzip.open(path, "wt", compresslevel=1) as fh:
+        fh.write("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n")
+        fh.write("0.1,0.2,0.3\n\n" * rows)
+    tracemalloc.start()
+    try:
+        chunks = iter_recording(path, chunk_rows=10_000)
+        head = next(chunks)
+        before = tracemalloc.get_traced_memory()[0]
+        assert sum(len(c) for c in chunks) == rows
+        kept = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert kept < 300_000, kept
+    assert [head.line_of_row(r) for r in (0, 1, rows - 1)] == [5, 7, 5 + 2 * (rows - 1)]

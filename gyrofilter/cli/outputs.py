@@ -13,7 +13,7 @@ import tempfile
 import time
 
 from ..errors import GyroFilterError, SettingsError
-from ..files import HOST, NAME_MAX_BYTES, OWNER, PARTIAL_PREFIX, output_folder, partial_path
+from ..files import HOST, NAME_MAX_BYTES, PARTIAL_PREFIX, output_folder, owner, partial_path
 from ..units import json_ready
 
 
@@ -232,7 +232,7 @@ def replacing_in(folder):
     ``folder``; on any failure the temporary folder goes, with the files of it that landed before
     the failure, and any folder this call created while it is empty (:func:`_folder`)."""
     with _folder(folder):
-        tmp = tempfile.mkdtemp(prefix=f"{PARTIAL_PREFIX}{OWNER}-", dir=folder)
+        tmp = tempfile.mkdtemp(prefix=f"{PARTIAL_PREFIX}{owner()}-", dir=folder)
         landed = []
         try:
             with _naming(tmp, folder), _unwritten_on_interrupt(f"the files of {folder}"):

@@ -14,7 +14,7 @@ from .hold import DEFAULTS as HOLD_DEFAULTS
 from ..errors import SettingsError
 from ..inputs import check_number
 from .predictor import closed_loop_radius, stable_gain_threshold
-from ..units import MAX_RATE_DPS, shown
+from ..units import MAX_RATE_DPS, python_value, shown
 
 
 #: longest start-up still window (s), and most samples in it (an hour at 1 kHz, 115 MB with the
@@ -157,7 +157,7 @@ class FilterSettings:
     def temp_coefficients(self):
         """The temperature coefficients as a tuple of 3 floats (deg/s per deg C)."""
         c = self.temp_coefficient_dps_per_c
-        return (float(c),) * 3 if isinstance(c, (int, float)) else tuple(float(v) for v in c)
+        return tuple(float(v) for v in c) if isinstance(c, (tuple, list)) else (float(c),) * 3
 
     def validate(self) -> "FilterSettings":
         """Check every setting and return them with the numbers as plain Python ints and floats
@@ -173,7 +173,8 @@ class FilterSettings:
                    for name, bounds in SETTING_RANGES.items()}
         checked = replace(self, **numbers)
         checked._validate_choices(need)
-        return checked
+        # np.float32(0.01) was taken, then iterated over as if it were 3
+        return replace(checked, temp_coefficient_dps_per_c=python_value(checked.temp_coefficient_dps_per_c))
 
     def _validate_choices(self, need):
         """The checks beyond the ranges: the named choices and the settings that depend on each other."""

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..closable import Closable
 from ..errors import RecordingError
+from ..files import written_whole
 from ..inputs import MAX_QUOTE_CHARS, check_number, is_plain_number, number_array, quote, refuse_unordered
 from .checks import TimeCheck, check_rates
 from .content import Recording, RecordingHead, checked_columns
@@ -35,9 +36,10 @@ _NOT_WRITTEN = "not written: it would not read back"
 
 
 def write_recording(path, rec: Recording, *, compresslevel=6):
-    """Write ``rec`` to ``path`` (gzip at ``compresslevel`` when the name ends in ``.gz``), whole, in
-    one go: every value exactly (it reads back as the same float), each note before the sample
-    it preceded (its ``row``, :class:`~gyrofilter.recording.Note`; a plain ``(line, text)`` pair
+    """Write ``rec`` to ``path`` (gzip at ``compresslevel`` when the name ends in ``.gz``), whole or
+    not at all (:func:`~gyrofilter.files.written_whole`: a failed write keeps the file that was
+    there; it left a header alone, a recording of 0 samples), in one go: every value exactly (it
+    reads back as the same float), each note before the sample it preceded (its ``row``, :class:`~gyrofilter.recording.Note`; a plain ``(line, text)`` pair
     after the data), so that the file reads back with its notes where they were.
     The header, the values and ``t`` are checked before the file is created (:class:`RecordingWriter`)."""
     columns = checked_columns(rec.columns)  # as built, or a column replaced since
@@ -54,7 +56,8 @@ def write_recording(path, rec: Recording, *, compresslevel=6):
             times.finish()
     notes = sorted((_note_place(path, k, note, len(data)) for k, note in enumerate(rec.notes)),
                    key=lambda note: note[0])  # stable: notes of one row keep their order
-    with RecordingWriter(path, rec.header, names, flush_interval_s=None, compresslevel=compresslevel) as writer:
+    with written_whole(path) as name, RecordingWriter(name, rec.header, names, flush_interval_s=None,
+                                                      compresslevel=compresslevel, name=path) as writer:
         done = 0
         for row, text in notes:
             writer.write(data[done:row])
@@ -154,7 +157,7 @@ class RecordingWriter(Closable):
     Parameters
     ----------
     path : str or path-like
-        The file to create (overwritten); gzip-compressed when the name ends in ``.gz``.
+        The file to create (overwritten); gzip-compressed when ``name`` (default: ``path``) ends in ``.gz``.
     header : dict
         Header keys -> values (written as text); needs ``sample_rate_hz`` (Hz) and ``gyro_unit`` (``dps``,
         ``rad/s`` or ``lsb``), and ``lsb_per_dps`` (LSB per deg/s) with ``lsb``. A
@@ -173,7 +176,8 @@ class RecordingWriter(Closable):
     compresslevel : int
         gzip level 1-9 for ``.gz`` files.
     name : str, optional
-        The file as messages name it (default ``path``; a writer to a temporary file names the user's).
+        The file as messages name it, and whose ``.gz`` ending chooses gzip (default ``path``; a writer
+        to a temporary file names the user's).
 
     RecordingError for a bad header, column list or value, and for a ``t`` column the reader
     would refuse (:class:`TimeCheck`, rows named "row N of the output"): a window refused as
@@ -197,7 +201,7 @@ class RecordingWriter(Closable):
         self._fsync = fsync
         self._raw = open(self.path, "wb")
         self._gz = gzip.GzipFile(fileobj=self._raw, mode="wb", mtime=0,
-                                 compresslevel=compresslevel) if self.path.endswith(".gz") else None
+                                 compresslevel=compresslevel) if os.fsdecode(self.name).endswith(".gz") else None
         self._last_flush = time.monotonic()
         self.rows_written = 0
         self.rows_flushed = 0  # the rows in the file at the last flush: what a failed write keeps
