@@ -54,6 +54,12 @@ class GyroFilter:
         Any :class:`FilterSettings` field (units in its table); explicit keyword settings
         override the ``preset``.
 
+    One stream, one thread at a time: the filter is the running state of one stream of samples in
+    time order, without a lock (it would cost every sample); two threads feeding one filter
+    interleave their samples and lose counter updates, without an error. A second stream or
+    thread gets a filter of its own (``GyroFilter(rate_hz, calibration=f.calibration)`` starts it
+    with the first's calibration).
+
     >>> f = GyroFilter(sample_rate_hz=100.0, calibration_s=2.0)
     >>> f.update((0.01, -0.02, 0.0)) is None      # calibrating
     True
