@@ -1021,6 +1021,9 @@ _ROW = ["1", "2", "3"]
     (_gyro_named("rpm"), _ROW, [], ["--unit", "dps"]),
     (_gyro_named("deg/sec"), _ROW, ["--unit", "rad/s"], ["--unit", "dps"]),
     (_GYRO, _ROW, ["--unit", "lsb"], ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    # one gyro name's text no unit of the table (a typo, an invisible character): the option says it (pass 28c: a dead end)
+    (["gx (dps)", "gy (dps)", "gz (dsp)"], _ROW, [], ["--unit", "dps"]),
+    (["gx (dps)", "gy (d\u200bps)", "gz (dps)"], _ROW, ["--unit", "rad/s"], ["--unit", "dps"]),
     # the time
     (_gyro_named("dps"), _ROW, ["--time-unit", "s"], ["--time-unit", "ms"]),
     # the temperature: contradicted, beyond any die (stated, given), two candidates
@@ -1035,6 +1038,7 @@ _ROW = ["1", "2", "3"]
     (_GYRO + ["ax (furlong)", "ay (furlong)", "az (furlong)"], _ROW * 2, ["--unit", "dps"],
      ["--unit", "dps", "--accel-unit", "m/s^2"]),
     (_GYRO + ["ax (g)", "ay (mg)", "az (g)"], _ROW * 2, ["--unit", "dps"], ["--unit", "dps", "--accel-unit", "none"]),
+    (_GYRO + ["ax (m/s^2)", "ay (m/ss)", "az (m/s^2)"], _ROW * 2, ["--unit", "dps"], ["--unit", "dps", "--accel-unit", "m/s^2"]),
     (_GYRO + ["ax", "ay", "az", "acc_x"], _ROW * 2 + ["1"], ["--unit", "dps"], ["--unit", "dps", "--accel-unit", "none"]),
     (_GYRO + ["ax_lsb", "ay_lsb", "az_lsb"], _ROW * 2, ["--unit", "dps"], ["--unit", "dps", "--lsb-per-g", "16384"]),
 ])

@@ -39,7 +39,7 @@ from ..inputs import quote
 from ..units import (AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
                      TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2)
 from .header import ACCEL_COLUMNS, TEMPERATURE_LIKE_NAMES, accel_units_header, format_number
-from .unit_words import CONVERTED, converted_text, given_unit, name_units, recorded, stated_unit, to_floats, units_of
+from .unit_words import CONVERTED, columns_stated, converted_text, given_unit, name_units, recorded, stated_unit, to_floats, units_of
 from .writer import EXACT_FORMAT, exact_format
 
 #: the units of a log's temperature column (``convert --temp-unit``): deg C, deg F (converted),
@@ -187,12 +187,9 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
                              f"{quote(', '.join(names))} (names such as ax, AccX, acc_x, accel_x)")
     if not found:
         return
-    stated = {stated_unit("accel", normal[i][1] if normal[i][1] is not None else ACCEL_NAME.fullmatch(normal[i][0])["unit"])
-              for i in found} - {None}
-    if len(stated) > 1:
-        raise RecordingError(f"{path}: the accelerometer columns state different units ({', '.join(sorted(stated))}); "
-                             "--accel-unit none leaves them out")
-    stated = stated.pop() if stated else None
+    stated = columns_stated(path, "accel", [stated_unit("accel", normal[i][1] if normal[i][1] is not None else
+                                                        ACCEL_NAME.fullmatch(normal[i][0])["unit"]) for i in found],
+                            accel_unit, "the accelerometer columns state", "; --accel-unit none leaves them out")
     unit = given_unit(path, "--accel-unit", accel_unit, stated, "the accelerometer columns state", "accel")
     if unit is not None and unit not in units_of("accel"):
         raise RecordingError(f"{path}: the accelerometer columns state the unit {quote(unit)}; give --accel-unit "
