@@ -1056,3 +1056,15 @@ def test_every_refusal_of_a_unit_names_an_option_that_is_then_taken(tmp_path, ca
     rc, dst = _convert(tmp_path, text, *suggested, out="taken.csv")
     assert rc == 0, capsys.readouterr().err
     assert suggested[-1] != "none" or not {"temp", "ax"} & set(read_recording(dst).columns)
+
+
+@pytest.mark.parametrize("name, cell, options, temp_c", [
+    ("TempF", "98.6", [], 37.0), ("temp_k", "300.15", [], 27.0), ("Temperature_Fahrenheit", "212", [], 100.0),
+    ("temp_k", "300.15", ["--temp-unit", "k"], 27.0)])
+def test_a_temperature_named_in_f_or_k_is_converted(tmp_path, capsys, name, cell, options, temp_c):
+    """Attack pass 28c: ``TempC`` was a temperature but ``TempF`` and ``temp_k`` were left out (the
+    summary's "left out"), and ``--temp-unit k`` for ``temp_k`` was refused: "no temperature column
+    among ..., temp_k" (a dead end: no command kept it)."""
+    rc, dst = _convert(tmp_path, _unit_log(_GYRO + [name], _ROW + [cell]), "--unit", "dps", *options)
+    err = capsys.readouterr().err
+    assert rc == 0 and read_recording(dst).temp_c[0] == temp_c, err

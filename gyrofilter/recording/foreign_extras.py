@@ -6,7 +6,7 @@ the range check of its values, the gyro's too (:func:`gyro_out_of_range`).
 
 - **Temperature.** A column named like a temperature
   (:data:`~gyrofilter.recording.header.TEMPERATURE_LIKE_NAMES`: ``TempC``, ``temp_c``,
-  ``Temperature``, ``TEMP``, ...) becomes the recording's ``temp`` in deg C. Its unit is
+  ``Temperature``, ``TEMP``, ...; or :data:`TEMP_UNIT_NAME`: ``TempF``, ``temp_k``) becomes the recording's ``temp`` in deg C. Its unit is
   ``temp_unit`` (``c``, or ``mpu6050``: raw counts of the MPU6050's TEMP_OUT, T / degC =
   counts / 340 + 36.53, register map section 4.18) or the one its name states (``TempC``,
   ``temp_c``, ``Temperature (°C)``: deg C; ``(raw)``: counts). A column whose unit neither says
@@ -54,6 +54,9 @@ ACCEL_NAME = re.compile(r"(?:.*_)?(?:a|acc|accl|accel|acceleration|accelerometer
                         r"linearacceleration)_?(?P<axis>[xyz])" rf"(?:_(?P<unit>{name_units('accel')}))?")
 #: the end of a temperature-like name (:data:`TEMPERATURE_LIKE_NAMES`) that states its unit (``TempC``, ``temp_degc``, ``celsius``)
 _TEMP_NAME = re.compile(rf"(?:.*_|temp|temperature)?(?P<unit>{name_units('temp')})")
+#: a temperature's name once normalised that ends in a unit of the table (``TempF``, ``temp_k``,
+#: ``Temperature_Fahrenheit``): a temperature as those of :data:`TEMPERATURE_LIKE_NAMES` are
+TEMP_UNIT_NAME = re.compile(rf"(?:die_)?temp(?:erature)?_?(?:{name_units('temp')})")
 #: how a summary or refusal says a temperature unit
 _TEMP_WORDS = {"c": "deg C", "f": "deg F", "k": "K", "mpu6050": "raw counts"}
 
@@ -136,7 +139,8 @@ def find_extras(names, normal, taken, path, *, temp_unit=None, accel_unit=None, 
         raise RecordingError(f"--accel-unit must be one of {', '.join(ACCEL_UNIT_CHOICES)}, got {quote(accel_unit)}")
     free = [i for i in range(len(names)) if i not in taken]
     extras = Extras()
-    _temperature(extras, [i for i in free if normal[i][0] in TEMPERATURE_LIKE_NAMES], names, normal, temp_unit, path)
+    _temperature(extras, [i for i in free if normal[i][0] in TEMPERATURE_LIKE_NAMES or TEMP_UNIT_NAME.fullmatch(normal[i][0])],
+                 names, normal, temp_unit, path)
     _accelerometer(extras, [i for i in free if i not in extras.indices], names, normal, accel_unit, lsb_per_g, path)
     return extras
 
