@@ -1068,3 +1068,5 @@ def test_a_temperature_named_in_f_or_k_is_converted(tmp_path, capsys, name, cell
     rc, dst = _convert(tmp_path, _unit_log(_GYRO + [name], _ROW + [cell]), "--unit", "dps", *options)
     err = capsys.readouterr().err
     assert rc == 0 and read_recording(dst).temp_c[0] == temp_c, err
+    rc, dst = _convert(tmp_path, _unit_log(_GYRO + ["temp_raw"], _ROW + ["1335"]), "--unit", "dps", out="raw.csv")
+    assert rc == 0 and "temp" not in read_recording(dst).columns, capsys.readouterr().err  # no die's counts guessed

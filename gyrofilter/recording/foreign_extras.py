@@ -54,9 +54,10 @@ ACCEL_NAME = re.compile(r"(?:.*_)?(?:a|acc|accl|accel|acceleration|accelerometer
                         r"linearacceleration)_?(?P<axis>[xyz])" rf"(?:_(?P<unit>{name_units('accel')}))?")
 #: the end of a temperature-like name (:data:`TEMPERATURE_LIKE_NAMES`) that states its unit (``TempC``, ``temp_degc``, ``celsius``)
 _TEMP_NAME = re.compile(rf"(?:.*_|temp|temperature)?(?P<unit>{name_units('temp')})")
-#: a temperature's name once normalised that ends in a unit of the table (``TempF``, ``temp_k``,
-#: ``Temperature_Fahrenheit``): a temperature as those of :data:`TEMPERATURE_LIKE_NAMES` are
-TEMP_UNIT_NAME = re.compile(rf"(?:die_)?temp(?:erature)?_?(?:{name_units('temp')})")
+#: a temperature's name once normalised that ends in deg C, deg F or K of the table (``TempF``,
+#: ``temp_k``, ``Temperature_Fahrenheit``): a temperature as those of :data:`TEMPERATURE_LIKE_NAMES`
+#: are (not ``temp_raw``: raw counts of another die than the MPU6050's are not its counts)
+TEMP_UNIT_NAME = re.compile(rf"(?:die_)?temp(?:erature)?_?(?:{name_units('temp', ('c', 'f', 'k'))})")
 #: how a summary or refusal says a temperature unit
 _TEMP_WORDS = {"c": "deg C", "f": "deg F", "k": "K", "mpu6050": "raw counts"}
 

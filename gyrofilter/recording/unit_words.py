@@ -84,10 +84,12 @@ def stated_unit(quantity, text):
     return None if text is None else known_unit(quantity, text) or text
 
 
-def name_units(quantity):
-    """A regular expression of the spellings of ``quantity``'s units as they end a column name once
-    normalised (runs of other characters than ``a-z0-9%`` made ``_``: ``gyro_x_rad_s``), ASCII only."""
-    return "|".join(re.escape(f) for f in sorted(set(_FORMS[quantity]) - {""}, key=lambda f: (-len(f), f)))
+def name_units(quantity, units=None):
+    """A regular expression of the spellings of ``quantity``'s units (or of those of ``units``) as
+    they end a column name once normalised (runs of other characters than ``a-z0-9%`` made ``_``:
+    ``gyro_x_rad_s``), ASCII only."""
+    forms = {f for f, unit in _FORMS[quantity].items() if f and (units is None or unit in units)}
+    return "|".join(re.escape(f) for f in sorted(forms, key=lambda f: (-len(f), f)))
 
 
 def recorded(unit):
