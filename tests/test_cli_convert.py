@@ -1021,6 +1021,9 @@ _ROW = ["1", "2", "3"]
     (_gyro_named("rpm"), _ROW, [], ["--unit", "dps"]),
     (_gyro_named("deg/sec"), _ROW, ["--unit", "rad/s"], ["--unit", "dps"]),
     (_GYRO, _ROW, ["--unit", "lsb"], ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    # one gyro name's text no unit of the table (a typo, an invisible character): the option says it (pass 28c: a dead end)
+    (["gx (dps)", "gy (dps)", "gz (dsp)"], _ROW, [], ["--unit", "dps"]),
+    (["gx (dps)", "gy (d\u200bps)", "gz (dps)"], _ROW, ["--unit", "rad/s"], ["--unit", "dps"]),
     # the time
     (_gyro_named("dps"), _ROW, ["--time-unit", "s"], ["--time-unit", "ms"]),
     # the temperature: contradicted, beyond any die (stated, given), two candidates
@@ -1035,6 +1038,7 @@ _ROW = ["1", "2", "3"]
     (_GYRO + ["ax (furlong)", "ay (furlong)", "az (furlong)"], _ROW * 2, ["--unit", "dps"],
      ["--unit", "dps", "--accel-unit", "m/s^2"]),
     (_GYRO + ["ax (g)", "ay (mg)", "az (g)"], _ROW * 2, ["--unit", "dps"], ["--unit", "dps", "--accel-unit", "none"]),
+    (_GYRO + ["ax (m/s^2)", "ay (m/ss)", "az (m/s^2)"], _ROW * 2, ["--unit", "dps"], ["--unit", "dps", "--accel-unit", "m/s^2"]),
     (_GYRO + ["ax", "ay", "az", "acc_x"], _ROW * 2 + ["1"], ["--unit", "dps"], ["--unit", "dps", "--accel-unit", "none"]),
     (_GYRO + ["ax_lsb", "ay_lsb", "az_lsb"], _ROW * 2, ["--unit", "dps"], ["--unit", "dps", "--lsb-per-g", "16384"]),
 ])
@@ -1052,3 +1056,17 @@ def test_every_refusal_of_a_unit_names_an_option_that_is_then_taken(tmp_path, ca
     rc, dst = _convert(tmp_path, text, *suggested, out="taken.csv")
     assert rc == 0, capsys.readouterr().err
     assert suggested[-1] != "none" or not {"temp", "ax"} & set(read_recording(dst).columns)
+
+
+@pytest.mark.parametrize("name, cell, options, temp_c", [
+    ("TempF", "98.6", [], 37.0), ("temp_k", "300.15", [], 27.0), ("Temperature_Fahrenheit", "212", [], 100.0),
+    ("temp_k", "300.15", ["--temp-unit", "k"], 27.0)])
+def test_a_temperature_named_in_f_or_k_is_converted(tmp_path, capsys, name, cell, options, temp_c):
+    """Attack pass 28c: ``TempC`` was a temperature but ``TempF`` and ``temp_k`` were left out (the
+    summary's "left out"), and ``--temp-unit k`` for ``temp_k`` was refused: "no temperature column
+    among ..., temp_k" (a dead end: no command kept it)."""
+    rc, dst = _convert(tmp_path, _unit_log(_GYRO + [name], _ROW + [cell]), "--unit", "dps", *options)
+    err = capsys.readouterr().err
+    assert rc == 0 and read_recording(dst).temp_c[0] == temp_c, err
+    rc, dst = _convert(tmp_path, _unit_log(_GYRO + ["temp_raw"], _ROW + ["1335"]), "--unit", "dps", out="raw.csv")
+    assert rc == 0 and "temp" not in read_recording(dst).columns, capsys.readouterr().err  # no die's counts guessed

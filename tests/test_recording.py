@@ -1490,3 +1490,15 @@ def test_a_blank_line_after_every_row_keeps_the_reader_in_bounded_memory(tmp_pat
         tracemalloc.stop()
     assert kept < 300_000, kept
     assert [head.line_of_row(r) for r in (0, 1, rows - 1)] == [5, 7, 5 + 2 * (rows - 1)]
+
+
+def test_a_converted_cell_beyond_a_float_is_infinite_not_a_traceback():
+    """Attack pass 28c: ``1e400`` in an mg, mdps, deg F or K column ended in Python's OverflowError
+    (the exact fraction too large for a float), and ``1e-999999999`` built a fraction of 10^999999999
+    (minutes a cell). Beyond a float's range a cell is +-inf (refused by the range checks, as an
+    unconverted ``1e400`` is); far below it, zero."""
+    from gyrofilter.recording import unit_words as uw
+    assert uw.to_floats(["1e400", "-1e400", "1E999999999"], "mg").tolist() == [np.inf, -np.inf, np.inf]
+    assert uw.to_floats(["1e-999999999", "-1e-999999999"], "mdps").tolist() == [0.0, 0.0]
+    assert uw.to_floats(["-1e-999999999"], "f").tolist() == uw.to_floats(["0"], "f").tolist()
+    assert uw.to_floats(["1e400", "0e999999999", "-0e-999999999"], "k").tolist() == [np.inf, -273.15, -273.15]

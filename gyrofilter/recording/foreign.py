@@ -60,7 +60,7 @@ from .foreign_extras import find_extras, gyro_out_of_range
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
-from .unit_words import converted_text, given_unit, known_unit, name_units, recorded, stated_unit, to_floats, units_of
+from .unit_words import columns_stated, converted_text, given_unit, known_unit, name_units, recorded, stated_unit, to_floats, units_of
 from .writer import EXACT_FORMAT, exact_format
 
 #: time units of a time column and their length in s
@@ -156,7 +156,7 @@ def _splitter(line):
     return lambda text: text.split()
 
 
-def _pick(names, path, columns, time_unit):
+def _pick(names, path, columns, time_unit, unit):
     """(index of the time column or None, its unit or None, [indices of x, y, z], unit the names
     state or None), from the column ``names`` by :data:`TIME_NAME`/:data:`GYRO_NAME` or from ``columns``."""
     normal = [_normal(n) for n in names]
@@ -169,10 +169,8 @@ def _pick(names, path, columns, time_unit):
     else:
         gyro = [_gyro_column(normal, names, axis, path) for axis in AXES]
         time = _time_column(normal, gyro)
-    units = {_name_unit(normal[i], GYRO_NAME, "rate") for i in gyro} - {None}
-    if len(units) > 1:
-        raise RecordingError(f"{path}: the gyro columns state different units ({', '.join(sorted(units))})")
-    stated = units.pop() if units else None
+    stated = columns_stated(path, "rate", [_name_unit(normal[i], GYRO_NAME, "rate") for i in gyro], unit,
+                            "the gyro columns state")
     unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME, "time"),
                       f"the time column {quote(names[time]) if time is not None else ''} states", "time")
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
@@ -455,7 +453,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     if header_line is None and columns is None:
         raise RecordingError(f"{path}: line {first_data}: numbers but no column names; give the columns by number, "
                              "e.g. --columns 1,2,3,4 (time, x, y, z) or --columns 2,3,4 (x, y, z)")
-    time, t_unit, gyro, stated = _pick(names, path, columns, time_unit)
+    time, t_unit, gyro, stated = _pick(names, path, columns, time_unit, unit)
     read_unit = _gyro_unit(unit, stated, lsb_per_dps, path)
     unit = recorded(read_unit)
     extras = find_extras(names, [_normal(n) for n in names], set(gyro) | {time}, path, **options)

@@ -6,7 +6,7 @@ the range check of its values, the gyro's too (:func:`gyro_out_of_range`).
 
 - **Temperature.** A column named like a temperature
   (:data:`~gyrofilter.recording.header.TEMPERATURE_LIKE_NAMES`: ``TempC``, ``temp_c``,
-  ``Temperature``, ``TEMP``, ...) becomes the recording's ``temp`` in deg C. Its unit is
+  ``Temperature``, ``TEMP``, ...; or :data:`TEMP_UNIT_NAME`: ``TempF``, ``temp_k``) becomes the recording's ``temp`` in deg C. Its unit is
   ``temp_unit`` (``c``, or ``mpu6050``: raw counts of the MPU6050's TEMP_OUT, T / degC =
   counts / 340 + 36.53, register map section 4.18) or the one its name states (``TempC``,
   ``temp_c``, ``Temperature (°C)``: deg C; ``(raw)``: counts). A column whose unit neither says
@@ -39,7 +39,7 @@ from ..inputs import quote
 from ..units import (AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
                      TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2)
 from .header import ACCEL_COLUMNS, TEMPERATURE_LIKE_NAMES, accel_units_header, format_number
-from .unit_words import CONVERTED, converted_text, given_unit, name_units, recorded, stated_unit, to_floats, units_of
+from .unit_words import CONVERTED, columns_stated, converted_text, given_unit, name_units, recorded, stated_unit, to_floats, units_of
 from .writer import EXACT_FORMAT, exact_format
 
 #: the units of a log's temperature column (``convert --temp-unit``): deg C, deg F (converted),
@@ -54,6 +54,10 @@ ACCEL_NAME = re.compile(r"(?:.*_)?(?:a|acc|accl|accel|acceleration|accelerometer
                         r"linearacceleration)_?(?P<axis>[xyz])" rf"(?:_(?P<unit>{name_units('accel')}))?")
 #: the end of a temperature-like name (:data:`TEMPERATURE_LIKE_NAMES`) that states its unit (``TempC``, ``temp_degc``, ``celsius``)
 _TEMP_NAME = re.compile(rf"(?:.*_|temp|temperature)?(?P<unit>{name_units('temp')})")
+#: a temperature's name once normalised that ends in deg C, deg F or K of the table (``TempF``,
+#: ``temp_k``, ``Temperature_Fahrenheit``): a temperature as those of :data:`TEMPERATURE_LIKE_NAMES`
+#: are (not ``temp_raw``: raw counts of another die than the MPU6050's are not its counts)
+TEMP_UNIT_NAME = re.compile(rf"(?:die_)?temp(?:erature)?_?(?:{name_units('temp', ('c', 'f', 'k'))})")
 #: how a summary or refusal says a temperature unit
 _TEMP_WORDS = {"c": "deg C", "f": "deg F", "k": "K", "mpu6050": "raw counts"}
 
@@ -136,7 +140,8 @@ def find_extras(names, normal, taken, path, *, temp_unit=None, accel_unit=None, 
         raise RecordingError(f"--accel-unit must be one of {', '.join(ACCEL_UNIT_CHOICES)}, got {quote(accel_unit)}")
     free = [i for i in range(len(names)) if i not in taken]
     extras = Extras()
-    _temperature(extras, [i for i in free if normal[i][0] in TEMPERATURE_LIKE_NAMES], names, normal, temp_unit, path)
+    _temperature(extras, [i for i in free if normal[i][0] in TEMPERATURE_LIKE_NAMES or TEMP_UNIT_NAME.fullmatch(normal[i][0])],
+                 names, normal, temp_unit, path)
     _accelerometer(extras, [i for i in free if i not in extras.indices], names, normal, accel_unit, lsb_per_g, path)
     return extras
 
@@ -187,12 +192,9 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
                              f"{quote(', '.join(names))} (names such as ax, AccX, acc_x, accel_x)")
     if not found:
         return
-    stated = {stated_unit("accel", normal[i][1] if normal[i][1] is not None else ACCEL_NAME.fullmatch(normal[i][0])["unit"])
-              for i in found} - {None}
-    if len(stated) > 1:
-        raise RecordingError(f"{path}: the accelerometer columns state different units ({', '.join(sorted(stated))}); "
-                             "--accel-unit none leaves them out")
-    stated = stated.pop() if stated else None
+    stated = columns_stated(path, "accel", [stated_unit("accel", normal[i][1] if normal[i][1] is not None else
+                                                        ACCEL_NAME.fullmatch(normal[i][0])["unit"]) for i in found],
+                            accel_unit, "the accelerometer columns state", "; --accel-unit none leaves them out")
     unit = given_unit(path, "--accel-unit", accel_unit, stated, "the accelerometer columns state", "accel")
     if unit is not None and unit not in units_of("accel"):
         raise RecordingError(f"{path}: the accelerometer columns state the unit {quote(unit)}; give --accel-unit "

@@ -16,9 +16,9 @@ that ``98.6`` degF is written ``37``, not ``36.99999999999999``.
 """
 from __future__ import annotations
 
+import math
 import re
 from decimal import Decimal
-from fractions import Fraction
 
 import numpy as np
 
@@ -55,8 +55,10 @@ _FORMS = {quantity: {re.sub(r"[^a-z0-9%]+", "_", s).strip("_"): unit for s, unit
           for quantity, words in UNIT_WORDS.items()}  # the spellings as a normalised column name ends in them
 #: the units convert reads but a recording does not hold -> (the recording's unit, how it is converted)
 CONVERTED = {"mdps": ("dps", "/ 1000"), "mg": ("g", "/ 1000"), "f": ("c", "(F - 32) * 5/9"), "k": ("c", "K - 273.15")}
-_EXACT = {"mdps": lambda x: x / 1000, "mg": lambda x: x / 1000, "f": lambda x: (x - 32) * 5 / 9,
-          "k": lambda x: x - Fraction("273.15")}
+#: each converted unit's conversion of a fraction n / d, as (numerator, denominator): 273.15 = 5463 / 20
+_EXACT = {"mdps": lambda n, d: (n, 1000 * d), "mg": lambda n, d: (n, 1000 * d), "f": lambda n, d: ((n - 32 * d) * 5, 9 * d),
+          "k": lambda n, d: (20 * n - 5463 * d, 20 * d)}
+_MAX_EXPONENT = 400  # a float's range is 4.9e-324 .. 1.8e308: a decimal exponent beyond +-400 is outside it either way
 
 
 def spelling(text):
@@ -82,10 +84,12 @@ def stated_unit(quantity, text):
     return None if text is None else known_unit(quantity, text) or text
 
 
-def name_units(quantity):
-    """A regular expression of the spellings of ``quantity``'s units as they end a column name once
-    normalised (runs of other characters than ``a-z0-9%`` made ``_``: ``gyro_x_rad_s``), ASCII only."""
-    return "|".join(re.escape(f) for f in sorted(set(_FORMS[quantity]) - {""}, key=lambda f: (-len(f), f)))
+def name_units(quantity, units=None):
+    """A regular expression of the spellings of ``quantity``'s units (or of those of ``units``) as
+    they end a column name once normalised (runs of other characters than ``a-z0-9%`` made ``_``:
+    ``gyro_x_rad_s``), ASCII only."""
+    forms = {f for f, unit in _FORMS[quantity].items() if f and (units is None or unit in units)}
+    return "|".join(re.escape(f) for f in sorted(forms, key=lambda f: (-len(f), f)))
 
 
 def recorded(unit):
@@ -104,7 +108,37 @@ def to_floats(texts, unit):
     if unit not in _EXACT:
         return np.array([float(t) for t in texts])
     exact = _EXACT[unit]
-    return np.array([float(exact(Fraction(Decimal(t)))) for t in texts])
+    return np.array([_exact_float(Decimal(t), exact) for t in texts])
+
+
+def _exact_float(number, exact):
+    """``exact`` of the decimal ``number`` as a fraction (integers), rounded once to a float; +-inf beyond a
+    float's range (``1e400``: the range checks refuse it, as an unconverted one), and a number of
+    more than :data:`_MAX_EXPONENT` decimal places taken as 0 (its fraction would hold 10^exponent:
+    ``1e-999999999`` took minutes; the offset of F and K is then exact, mg's product 0)."""
+    if number and number.adjusted() < -_MAX_EXPONENT:
+        number = Decimal(0)
+    if number and number.adjusted() > _MAX_EXPONENT:
+        return math.copysign(math.inf, number)
+    numerator, denominator = exact(*number.as_integer_ratio())
+    try:
+        return numerator / denominator  # Python's int / int: correctly rounded, once (a Fraction's float is, 10 x slower)
+    except OverflowError:  # beyond a float (1.8e308)
+        return math.copysign(math.inf, number)
+
+
+def columns_stated(path, quantity, stated, given, whose, then=""):
+    """The unit several columns' names state together (``stated``: each one's :func:`stated_unit`,
+    None aside), as :func:`given_unit` takes it: two units of the table are refused (``whose``
+    names state them, ``then``: what to do); a text that is no unit of the table (``gz (dsp)``, a typo, ``d\u200bps``)
+    states none, so that without the option it is the one stated (its refusal asks for the
+    option), and with it the table's unit beside it is the one the option must agree with."""
+    stated = set(stated) - {None}
+    known = sorted(s for s in stated if s in units_of(quantity))
+    if len(known) > 1:
+        raise RecordingError(f"{path}: {whose} different units ({', '.join(known)}){then}")
+    other = sorted(stated - set(known))
+    return other[0] if other and (given is None or not known) else (known or [None])[0]
 
 
 def given_unit(path, option, given, stated, whose, quantity, words=None):
