@@ -824,7 +824,8 @@ def test_a_time_unit_the_name_states_and_convert_does_not_know_is_refused(tmp_pa
     rows = "".join(f"{i / 6000:.8f},{i % 7},1,2\n" for i in range(600))
     rc, dst = _convert(tmp_path, "time (min),gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows)
     assert rc == 2 and not dst.exists()
-    assert "time column 'time (min)' states the unit 'min'" in capsys.readouterr().err
+    assert "time column 'time (min)' states 'min', a unit convert does not read; give --time-unit s, ms, us, ns only if" \
+        in capsys.readouterr().err
     rows = "".join(f"{10 * i},{i % 7},1,2\n" for i in range(600))
     rc, dst = _convert(tmp_path, "time (msec),gx (deg/s),gy (deg/s),gz (deg/s)\n" + rows)
     assert rc == 0 and "in ms (as its name states" in capsys.readouterr().err
@@ -999,6 +1000,21 @@ def test_units_convert_converts_are_converted_exactly_and_said(tmp_path, capsys)
     rc, dst = _convert(tmp_path, _unit_log(_GYRO + ["temperature (K)"], ["1", "2", "3", "300.15"]), "--unit", "dps",
                        out="k.csv")
     assert rc == 0 and read_recording(dst).temp_c[0] == 27.0, capsys.readouterr().err
+
+
+def test_milliradians_per_second_are_converted_and_an_unread_unit_is_said_as_one(tmp_path, capsys):
+    """Attack pass 28c's note: ``gx (mrad/s)`` was refused as "the gyro unit is not stated", asking for
+    --unit rad/s, which then wrote the values 1000 times too large. mrad/s is read (/ 1000 to rad/s),
+    and a unit convert does not read is named as stated, --unit taken only as what it means."""
+    rc, dst = _convert(tmp_path, _unit_log(_gyro_named("mrad/s"), ["1500", "-0.3", "7"]))
+    err = capsys.readouterr().err
+    assert rc == 0 and "in rad/s (mrad/s, converted to rad/s: / 1000)" in err, err
+    rec = read_recording(dst)
+    assert rec.gyro_unit == "rad/s" and rec.gyro[0].tolist() == [1.5, -0.0003, 0.007]
+    rc, dst = _convert(tmp_path, _unit_log(_gyro_named("krad/s"), ["1", "2", "3"]), out="k.csv")
+    assert rc == 2 and not dst.exists()
+    assert "the gyro columns state 'krad/s', a unit convert does not read; give --unit dps, rad/s, mdps, mrad/s or " \
+        "lsb (with --lsb-per-dps) only if it means one of them" in capsys.readouterr().err
 
 
 def test_an_ambiguous_temperature_unit_is_resolved_by_the_option(tmp_path, capsys):

@@ -25,7 +25,7 @@ def add_arguments(parser):
                         help="output recording (" + options.RECORDING_FILE_HELP + ")")
     parser.add_argument("--unit", choices=units_of("rate"), default=None,
                         type=lambda text: known_unit("rate", text) or text,
-                        help="unit of the gyro columns: dps (also deg/s), rad/s, mdps (converted to dps) or lsb "
+                        help="unit of the gyro columns: dps (also deg/s), rad/s, mdps or mrad/s (converted to dps, rad/s) or lsb "
                              "(default: the one their names state, e.g. 'gyro_x (rad/s)'; never guessed)")
     parser.add_argument("--lsb-per-dps", type=options.lsb_per_dps, default=None, metavar="X",
                         help="LSB per deg/s, with --unit lsb (MPU6050: 131 at +-250 deg/s)")

@@ -174,8 +174,8 @@ def _pick(names, path, columns, time_unit, unit):
     unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME, "time"),
                       f"the time column {quote(names[time]) if time is not None else ''} states", "time")
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
-        raise RecordingError(f"{path}: the time column {quote(names[time])} states the unit {quote(unit)}, not one of "
-                             f"{', '.join(TIME_UNITS)}; give --time-unit {', '.join(TIME_UNITS)}")
+        raise RecordingError(f"{path}: the time column {quote(names[time])} states {quote(unit)}, a unit convert does "
+                             f"not read; give --time-unit {', '.join(TIME_UNITS)} only if it means one of them")
     return time, unit, gyro, stated
 
 
@@ -533,8 +533,9 @@ def _gyro_unit(unit, stated, lsb_per_dps, path):
     """The gyro unit: the caller's, which must agree with the names', or the names'; never guessed."""
     unit = given_unit(path, "--unit", unit, stated, "the column names say", "rate")
     if unit not in units_of("rate"):
-        raise RecordingError(f"{path}: the gyro unit is not stated{f' ({quote(stated)})' if stated else ''}; "
-                             f"give --unit {', '.join(units_of('rate')[:-1])} or lsb (with --lsb-per-dps)")
+        raise RecordingError(f"{path}: " + (f"the gyro columns state {quote(stated)}, a unit convert does not read"
+                             if stated else "the gyro unit is not stated") + f"; give --unit {', '.join(units_of('rate')[:-1])}"
+                             " or lsb (with --lsb-per-dps)" + (" only if it means one of them" if stated else ""))
     if unit == "lsb":
         if lsb_per_dps is None:
             raise RecordingError("--unit lsb needs --lsb-per-dps (LSB per deg/s; the MPU6050 at +-250 deg/s: 131)")

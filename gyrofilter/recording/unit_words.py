@@ -9,7 +9,7 @@ the option resolves. Every place of :mod:`gyrofilter.recording.foreign` and
 or at the end of the name (:func:`name_units`), reads it here.
 
 Units a recording does not hold are converted exactly as they are read (:data:`CONVERTED`,
-:func:`to_floats`): milli-g to g and millidegrees/s to deg/s by 10^-3 (SI prefix milli, NIST SP
+:func:`to_floats`): milli-g to g, millidegrees/s to deg/s and milliradians/s to rad/s by 10^-3 (SI prefix milli, NIST SP
 330, 2019, section 3), deg F to deg C by T/degC = (T/degF - 32) * 5/9 and kelvin by
 T/degC = T/K - 273.15 (NIST SP 811, 2008, appendix B.9); each decimal cell scaled exactly (as a fraction) and rounded once to a float, so
 that ``98.6`` degF is written ``37``, not ``36.99999999999999``.
@@ -36,6 +36,7 @@ _SPELLINGS = {  # quantity -> unit (None: ambiguous) -> its spellings, lower cas
                        "rads-1", "rad*s^-1", "rad.s^-1", "rad.s-1", "radian/s", "radians/s", "radians/sec",
                        "radians/second", "radians_per_second"),
              "mdps": ("mdps", "mdeg/s", "mdeg/sec", "millidegrees/s", "m°/s"),
+             "mrad/s": ("mrad/s", "mrad/sec", "mrads", "mrad_s", "mrads^-1", "mrads-1", "millirad/s", "milliradians/s"),
              "lsb": ("lsb", "raw", "counts")},
     "temp": {"c": ("c", "°c", "degc", "deg_c", "degreesc", "degreec", "celsius", "℃", "°celsius"),
              "f": ("f", "°f", "degf", "deg_f", "degreesf", "degreef", "fahrenheit", "℉"),
@@ -54,9 +55,11 @@ UNIT_WORDS = {quantity: {s: unit for unit, spellings in units.items() for s in s
 _FORMS = {quantity: {re.sub(r"[^a-z0-9%]+", "_", s).strip("_"): unit for s, unit in words.items() if s.isascii()}
           for quantity, words in UNIT_WORDS.items()}  # the spellings as a normalised column name ends in them
 #: the units convert reads but a recording does not hold -> (the recording's unit, how it is converted)
-CONVERTED = {"mdps": ("dps", "/ 1000"), "mg": ("g", "/ 1000"), "f": ("c", "(F - 32) * 5/9"), "k": ("c", "K - 273.15")}
+CONVERTED = {"mdps": ("dps", "/ 1000"), "mrad/s": ("rad/s", "/ 1000"), "mg": ("g", "/ 1000"), "f": ("c", "(F - 32) * 5/9"),
+             "k": ("c", "K - 273.15")}
 #: each converted unit's conversion of a fraction n / d, as (numerator, denominator): 273.15 = 5463 / 20
-_EXACT = {"mdps": lambda n, d: (n, 1000 * d), "mg": lambda n, d: (n, 1000 * d), "f": lambda n, d: ((n - 32 * d) * 5, 9 * d),
+_EXACT = {"mdps": lambda n, d: (n, 1000 * d), "mrad/s": lambda n, d: (n, 1000 * d), "mg": lambda n, d: (n, 1000 * d),
+          "f": lambda n, d: ((n - 32 * d) * 5, 9 * d),
           "k": lambda n, d: (20 * n - 5463 * d, 20 * d)}
 _MAX_EXPONENT = 400  # a float's range is 4.9e-324 .. 1.8e308: a decimal exponent beyond +-400 is outside it either way
 
