@@ -622,3 +622,15 @@ def test_files_of_a_folder_output_land_all_or_none_when_a_commit_fails_midway(tm
         for name in "abc":
             open(os.path.join(tmp, f"{name}.png"), "w").write("mine")
     assert sorted(os.listdir(folder)) == ["c.png"] and (folder / "c.png").read_text() == "another command's"
+
+
+def test_a_gzip_output_stores_no_name_of_its_partial(tmp_path, capsys):
+    """gzip's header held the partial's name (``.partial-PID.HOST-a.csv``): ``gunzip -N`` made a
+    hidden file of another name, the host and process were written into the data, and two runs
+    of one seed differed by bytes (mtime is 0 for that). No name is stored (as ``gzip -n``)."""
+    from gyrofilter.cli import main
+    out = tmp_path / "a.csv.gz"
+    assert main(["simulate", "--model", str(DEFAULT_MODEL_PATH), "--duration", "0.5", "--seed", "1",
+                 "--out", str(out)]) == 0
+    head = out.read_bytes()[:10]
+    assert head[:2] == b"\x1f\x8b" and head[3] & 0x08 == 0  # FLG.FNAME unset

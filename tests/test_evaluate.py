@@ -2,6 +2,7 @@
 import dataclasses
 import gzip
 import math
+import os
 import re
 
 import numpy as np
@@ -321,3 +322,19 @@ def test_a_backup_copy_beside_a_recording_is_not_a_recording(tmp_path, pattern, 
         (tmp_path / (name + suffix)).write_text(text)
     find = D.find_static_recordings if pattern == "static" else D.find_broad_recordings
     assert [rec.path for rec in find(str(tmp_path))] == [str(tmp_path / (name + ".csv"))]
+
+
+@pytest.mark.parametrize("pattern, name", [("static", "mpu6050_static_a"), ("broad", "broad_01")])
+@pytest.mark.parametrize("link", ["symlink", "hard"])
+def test_a_link_to_a_recording_beside_it_is_refused_naming_both(tmp_path, pattern, name, link):
+    """Attack pass 28a: a link in the recordings folder (``latest.csv.gz`` to a recording beside it)
+    was read as another recording: the one file's results counted twice in the geometric means, exit 0."""
+    rows = "".join(f"{i / 100:.2f},{i % 3},{i % 5},{i % 2},1,2,3,{i % 2}\n" for i in range(30))
+    text = ("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n# sensor: MPU6050\n"
+            "t,gx,gy,gz,ref_x,ref_y,ref_z,movement\n" + rows)
+    (tmp_path / (name + ".csv")).write_text(text)
+    (os.symlink if link == "symlink" else os.link)(tmp_path / (name + ".csv"), tmp_path / (name + "_b.csv"))
+    find = D.find_static_recordings if pattern == "static" else D.find_broad_recordings
+    with pytest.raises(RecordingError, match=re.escape(f"{tmp_path / (name + '.csv')} and {tmp_path / (name + '_b.csv')}: "
+                                                       "one file")):
+        find(str(tmp_path))

@@ -236,6 +236,18 @@ def test_a_header_changing_the_units_ends_the_source_after_the_rows_before_it():
     np.testing.assert_array_equal(np.concatenate(rows)[:, 1], np.arange(9))
 
 
+def test_a_header_changing_the_units_in_the_first_read_ends_the_source_after_the_rows_before_it():
+    """Attack pass 28a: pass 25's case in the read that brought the first header (a device that sends a
+    burst on connecting): the source refused at its opening, its samples lost (no file, exit 2)."""
+    head = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100\n"
+    data = head + b"".join(b"%d,%d,1,2\n" % (i, i) for i in range(5)) + head.replace(b"131", b"65.5")
+    src = SerialSource("fake", serial_port=_Port(data), header_timeout_s=1)
+    rows = [src.read()]
+    with pytest.raises(DeviceError, match="changed the units"):
+        src.read()
+    np.testing.assert_array_equal(np.concatenate(rows)[:, 1], np.arange(5))
+
+
 def test_record_from_serial_skips_a_value_beyond_the_range_and_goes_on(pty_pair, tmp_path, capsys):
     """One corrupt line with a value beyond +-100000 deg/s ended the whole recording (exit 2,
     no end note, every later line lost); it is a bad line like any other: skipped, counted."""

@@ -4,6 +4,7 @@ synthetic motion is added to.
 """
 from __future__ import annotations
 
+import contextlib
 import glob
 import os
 
@@ -85,7 +86,8 @@ def _files(folder, pattern):
     (:data:`RECORDING_ENDINGS`), sorted: the folder's name taken as it is
     (``glob.escape``: ``rec[1]`` is no pattern that matches the folder ``rec1``). RecordingError
     naming two of one :func:`stem` (``a.csv`` and ``a.csv.gz``): the results know a recording by
-    its stem, so the second's replaced the first's."""
+    its stem, so the second's replaced the first's; and naming two paths of one file (a symbolic or
+    hard link beside its recording), whose results would count twice."""
     paths = sorted(p for p in glob.glob(os.path.join(glob.escape(folder), pattern)) if p.endswith(RECORDING_ENDINGS))
     seen = {}
     for path in paths:
@@ -93,6 +95,14 @@ def _files(folder, pattern):
         if other != path:
             raise RecordingError(f"{other} and {path}: both named {quote(stem(path))} in the results; "
                                  "move one of them out of the recordings folder")
+    files = {}
+    for path in paths:
+        with contextlib.suppress(OSError):  # an unreadable one is named by its reading
+            st = os.stat(path)
+            other = files.setdefault((st.st_dev, st.st_ino), path)
+            if other != path:
+                raise RecordingError(f"{other} and {path}: one file (a link), whose results would count twice; "
+                                     "move the link out of the recordings folder")
     return paths
 
 

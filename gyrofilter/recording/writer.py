@@ -200,7 +200,8 @@ class RecordingWriter(Closable):
         self._flush_interval_s = flush_interval_s
         self._fsync = fsync
         self._raw = open(self.path, "wb")
-        self._gz = gzip.GzipFile(fileobj=self._raw, mode="wb", mtime=0,
+        # no name stored (filename="", as gzip -n): the file object's is a partial's (.partial-PID.HOST-...)
+        self._gz = gzip.GzipFile(filename="", fileobj=self._raw, mode="wb", mtime=0,
                                  compresslevel=compresslevel) if os.fsdecode(self.name).endswith(".gz") else None
         self._last_flush = time.monotonic()
         self.rows_written = 0

@@ -90,8 +90,10 @@ class SerialSource(Source):
                 rows = self._receive()
                 if len(rows):
                     self._pending.append(rows)
-                if self._conflict is not None:
-                    raise self._conflict
+                if self._conflict is not None:  # the units changed in this read: its rows first (read())
+                    if not self._pending:
+                        raise self._conflict
+                    break
                 if self._ended is not None:
                     raise DeviceError(f"{self.port_name}: {self._ended} before the stream started")
                 if clock() > deadline:
