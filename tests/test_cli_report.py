@@ -167,6 +167,8 @@ def test_the_shipped_moving_recording_yields_a_report(tmp_path, capsys):
     check_shipped_report(path, data, capsys)
 
 
+@pytest.mark.slow  # about a minute (a gap of the moving record); test_the_shipped_moving_recording_yields_a_report
+# reports it in the fast run
 def test_warnings_clipping_and_a_moving_record(tmp_path, capsys, static_report):
     out, data = report(tmp_path, capsys, MULTIPOSE, "--sims", "10")
     check_shipped_report(MULTIPOSE, data, capsys)

@@ -120,9 +120,13 @@ MPU6050_CASES = {
     # 1 kHz polled every 2 ms (low latency), 2 samples per read
     "1kHz-2ms-polls": (1000, 6, {"rate_error": 0.003, "driver_kwargs": {"poll_interval_s": 0.002}}),
 }
+# the 1-kHz cases (10,000 and 6,000 samples recorded and run through the register model: about a
+# minute each) run once, in the slow run
+SLOW_MPU6050_CASES = ("1kHz-nacks", "1kHz-2ms-polls")
 
 
-@pytest.mark.parametrize("case", MPU6050_CASES)
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW_MPU6050_CASES else c
+                                  for c in MPU6050_CASES])
 def test_run_on_the_mpu6050_writes_the_rows_replay_writes(tmp_path, monkeypatch, capsys, case):
     rate_hz, seconds, model_kwargs = MPU6050_CASES[case]
     source = f"mpu6050:rate={rate_hz},range=500"

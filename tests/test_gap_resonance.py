@@ -148,6 +148,7 @@ def _hump_named(seed, fraction):
     return report["discrepancy"]["after"][axis]
 
 
+@pytest.mark.slow  # about a minute: the fast run names humps in test_the_example_hump_read_a_little_narrow_is_still_the_hump
 def test_a_hump_is_named_with_its_centre_in_its_interval():
     assert _hump_named(0, 0.2) <= 2.0
 
