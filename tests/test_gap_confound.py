@@ -16,6 +16,7 @@ import re
 import numpy as np
 import pytest
 
+from gyrofilter import GyroFilter
 from gyrofilter.analysis.gap import detectors as det
 from gyrofilter.analysis.gap.detectors.covariate import detect_slow
 from gyrofilter.analysis.gap import report as gap_report
@@ -94,6 +95,12 @@ def test_example_model_names_temperature_with_the_warmup_as_alternative(tmp_path
     assert any(e["effect"] == "warmup" for alt in alts for e in alt)
     temp = next(f for f in report["findings"] if "alternatives" in f)
     assert "cannot tell them apart" in temp["evidence"] and WHY_THE_COVARIATE in temp["evidence"]
+    # a new user's trial: gap said nothing of what to do with a named temperature; a note gives the filter's setting
+    (hint,) = [n for n in report["notes"] if "--set temp_coefficient_dps_per_c=" in n]
+    given = [float(v) for v in re.search(r"temp_coefficient_dps_per_c=(\S+)", hint)[1].split(",")]
+    named = {f["axis"]: f["params"]["coefficient_dps_per_c"] for f in report["findings"] if f["effect"] == "temperature"}
+    assert given == pytest.approx([named.get(a, 0.0) for a in "xyz"], rel=1e-3) and any(given)
+    assert GyroFilter(10.0, temp_coefficient_dps_per_c=tuple(given)).settings.temp_coefficient_dps_per_c == tuple(given)
     if importlib.util.find_spec("matplotlib"):  # the Markdown report says why once, not per finding
         gap_report.write_report(report, rec, str(tmp_path))
         md = (tmp_path / gap_report.REPORT_NAME).read_text()
@@ -340,6 +347,8 @@ def test_a_temperature_whose_interval_holds_0_is_not_named():
     assert [f["effect"] for f in report["findings"] if f["axis"] == "y"] == ["bias_instability"]
     assert "temperature" not in report["extended_model"]  # the temperature profile goes with the finding
     assert all(e["effect"] != "temperature" for e in report["extended_model"]["axes"]["y"]["effects"])
+    # a new user's trial: the weighing's note said "the temperature is named" above the note that it is not
+    assert not [n for n in report["notes"] if "temperature is named" in n or "temp_coefficient_dps_per_c" in n]
     (note,) = [n for n in report["notes"] if n.startswith("temperature on y not named, its interval holding 0")]
     assert note.endswith(f"-> {d_shown(report['discrepancy']['after']['y'])}; its other findings keep the parameters "
                          "and intervals fitted beside it"), note

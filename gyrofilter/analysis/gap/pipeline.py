@@ -495,6 +495,7 @@ def write_findings(inp, state, scorer, report, found):
             report["findings"][-1]["params_ci95"] = found.findings.get(row.k, dict.fromkeys(c.params))
     report["findings"] += rows_findings(state)
     report["uncertain"] = [dict(entry) for entry in state.uncertain]
+    report["notes"] += _compensation_hint(report["findings"])
 
     def extended_deps(i):
         return scorer.departures(i, state.extended(inp, i), f"extended model on {AXES[i]}")
@@ -540,6 +541,18 @@ def write_findings(inp, state, scorer, report, found):
                                f"record of {length_s:.2g} s: too short to tell slow bias effects (drift, random walk, "
                                f"bias instability) from white noise at any tau (beyond {tau_s:.1g} s)")
     report["notes"] += found.notes
+
+
+def _compensation_hint(findings):
+    """What to do with a named temperature: the filter subtracts c (T - T0) per axis (its setting
+    ``temp_coefficient_dps_per_c``, :class:`gyrofilter.filter.settings.FilterSettings`), the
+    coefficients the gap found (0 on an axis without one); [] without a named temperature."""
+    found = {f["axis"]: f["params"]["coefficient_dps_per_c"] for f in findings if f["effect"] == TEMPERATURE}
+    if not found:
+        return []
+    values = ",".join(f"{found.get(a, 0.0):.4g}" for a in AXES)
+    return [f"the filter removes the named temperature effect: replay or run with --set temp_coefficient_dps_per_c="
+            f"{values} (deg/s per deg C, x,y,z; the recording's temp column, or the sensor's, gives T)"]
 
 
 def _mean_or_none(values):

@@ -462,7 +462,8 @@ def _flicker_reading(shape, p_value, table, delta_s, n):
         f"the block means depart from white noise as a {shape.replace('_', ' ')} would, but white noise with "
         f"flicker (1/f) draws such a {shape.replace('_', ' ')} as clearly in {100 * p_value:.0f} % of records "
         f"(parametric bootstrap, {FLICKER_REPLICATES} records; a shape is named below {100 * FLICKER_ALPHA:g} %): "
-        "the wander is the reading named. " + cand.evidence))
+        "the wander is the reading named" + (", though its own test alone would not name it"
+                                             if cand.statistic < cand.threshold else "") + f" ({cand.evidence})"))
 
 
 def _rw_or_gm(name, table, y, delta_s):
