@@ -200,9 +200,11 @@ def json_ready(value):
 
 def python_value(value):
     """``value`` with numpy scalars as the Python int or float they hold (lists and tuples element
-    by element, kept lists and tuples); anything else as it is."""
+    by element, kept lists and tuples); anything else as it is. A ``longdouble`` is the float
+    nearest it (its ``item()`` is itself, which ``json`` does not write)."""
     if isinstance(value, np.generic):
-        return value.item()
+        item = value.item()
+        return float(item) if isinstance(item, np.floating) else item
     if isinstance(value, (list, tuple)):
         return type(value)(python_value(v) for v in value)
     return value
