@@ -54,6 +54,7 @@ from .resonance import band_pass
 from .simulate import simulate
 from ..recording import ACCEL_COLUMNS, GYRO_COLUMNS, Recording
 from ..errors import SettingsError
+from ..streamstats import moving_mean
 from ..units import AXES, plain
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
@@ -238,7 +239,7 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         p, c = float(params["fraction"]), float(params["scale_ratio"])
         k0 = 1.0 / math.sqrt(1.0 - p + p * c * c)
         k = np.where(np.random.default_rng(seed).random(n) < p, c * k0, k0)
-        fast = gyro[:, i] - _moving_mean(gyro[:, i], _FAST_WINDOW)
+        fast = gyro[:, i] - moving_mean(gyro[:, i], _FAST_WINDOW)  # clipped at the ends: zeros beyond them scaled the bias
         gyro[:, i] += (k - 1.0) * fast
     elif effect == REPEATED_SAMPLES:  # whole rows of the real record, the temperature's too
         repeats = RepeatedRows(params["fraction"], params.get("pattern", "random"), np.random.default_rng(seed))
@@ -261,18 +262,6 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
 
 #: the samples of the moving mean whose residual is a record's fast noise (heavy tails hidden in it)
 _FAST_WINDOW = 64
-
-
-def _moving_mean(x, window):
-    """The mean of ``x`` over ``window`` samples centred on each (``numpy.convolve``'s ``same``
-    alignment), over the samples of the window within the record: zeros beyond its ends made the
-    first and last ``window / 2`` means about half the record's level (the residual there held
-    half the bias, scaled as noise), and a record shorter than the window gave ``window`` means."""
-    ones = np.ones(window)
-    lead = (window - 1) // 2
-    sums = np.convolve(x, ones)[lead:lead + len(x)]
-    counts = np.convolve(np.ones(len(x)), ones)[lead:lead + len(x)]
-    return sums / counts
 
 
 def _accelerometer(rec):
