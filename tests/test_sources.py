@@ -413,3 +413,12 @@ def test_a_numpy_speed_is_the_number_it_holds(tmp_path, speed, said):
     else:
         with pytest.raises(SettingsError, match=said):
             ReplaySource(path, speed=speed)
+
+
+@pytest.mark.parametrize("duration", ["5", True, 0, -0.0, float("nan"), 1e300])
+def test_a_simulated_source_checks_its_duration_as_simulate_does(duration):
+    """Attack pass 29b: SimulatedSource(duration_s="5") ended in Python's "must be real number,
+    not str", and True ran 1 s."""
+    from gyrofilter.sources.simulated import SimulatedSource
+    with pytest.raises(SettingsError, match="sim: duration_s must be"):
+        SimulatedSource(duration_s=duration, realtime=False, seed=1)
