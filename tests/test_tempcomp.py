@@ -175,4 +175,3 @@ def test_a_numpy_number_as_the_temperature_coefficient_is_the_number_it_holds(co
     plain = f.settings.temp_coefficient_dps_per_c
     assert all(type(v) in (int, float) for v in (plain if isinstance(plain, (tuple, list)) else [plain]))
     json.dumps(f.state_dict())
-
