@@ -83,9 +83,10 @@ def written_whole(path):
     file made it root's); the partial is removed on any failure. A file the caller may not write
     (read-only) is refused as opening it is, never replaced. A symbolic link's target is written
     (the link kept; a loop of links refused, not replaced); what is no regular file
-    (``/dev/null``, a FIFO, a terminal), and a name ending in ``/``, is yielded as it is, written
-    in place, never replaced (a rename over ``/dev/null`` made it a file; ``cal.json/`` wrote
-    ``cal.json``). An OSError names ``path``. The one home of the rule: :func:`write_text_whole`
+    (``/dev/null``, a FIFO, a terminal), and a name the system takes for no file of a folder
+    (ending in ``/``, ``/.`` or ``/..``; a folder part that is none), is yielded as it is, written
+    in place (or refused there), never replaced (a rename over ``/dev/null`` made it a file;
+    ``cal.json/`` and ``cal.json/.`` wrote ``cal.json``). An OSError names ``path``. The one home of the rule: :func:`write_text_whole`
     (``Calibration.save``) and ``write_recording`` write through it."""
     path = os.fsdecode(os.fspath(path))
     try:
@@ -93,6 +94,14 @@ def written_whole(path):
             yield name
     except OSError as exc:
         raise OSError(exc.errno, exc.strerror or str(exc), path) from None
+
+
+def _not_a_file_name(path):
+    """Whether the system takes ``path`` for no file of a folder it reaches: a name ending in
+    ``/``, ``.`` or ``..``, or a folder part that is no folder (``missing/..``, which
+    ``realpath`` drops by its text: ``cal.json/.`` replaced ``cal.json``, ``missing/../cal.json``
+    wrote it, where opening either fails)."""
+    return os.path.basename(path) in ("", os.curdir, os.pardir) or not os.path.isdir(os.path.dirname(path) or os.curdir)
 
 
 @contextlib.contextmanager
@@ -103,7 +112,7 @@ def _whole(path, target):
     except FileNotFoundError:  # not there yet (or its folder: the write says so)
         st = None
     mode = None if st is None else st.st_mode
-    if (mode is not None and not stat.S_ISREG(mode)) or path.endswith(("/", os.sep)):
+    if (mode is not None and not stat.S_ISREG(mode)) or _not_a_file_name(path):
         yield path
         return
     if mode is not None:  # refused as writing in place is (read-only): the rename is not

@@ -191,8 +191,8 @@ def json_ready(value):
         return utf8_text(value)
     if isinstance(value, (list, tuple)):
         return [json_ready(v) for v in value]
-    if isinstance(value, (np.generic, np.ndarray)):
-        return json_ready(value.tolist())
+    if isinstance(value, (np.generic, np.ndarray)):  # a longdouble's tolist() is itself (it recursed without end)
+        return json_ready(python_value(value) if isinstance(value, np.generic) else value.tolist())
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
@@ -200,11 +200,15 @@ def json_ready(value):
 
 def python_value(value):
     """``value`` with numpy scalars as the Python int or float they hold (lists and tuples element
-    by element, kept lists and tuples); anything else as it is."""
+    by element, as plain lists and tuples: a namedtuple of 3 coefficients ended in a TypeError);
+    anything else as it is. A ``longdouble`` is the float nearest it (its ``item()`` is itself,
+    which ``json`` does not write; a ``clongdouble`` the complex)."""
     if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, (list, tuple)):
-        return type(value)(python_value(v) for v in value)
+        item = value.item()
+        return float(item) if isinstance(item, np.floating) else complex(item) if isinstance(item, np.complexfloating) else item
+    if isinstance(value, (list, tuple)):  # a plain list or tuple: a namedtuple's type takes no generator
+        plain_values = [python_value(v) for v in value]
+        return plain_values if isinstance(value, list) else tuple(plain_values)
     return value
 
 

@@ -406,3 +406,18 @@ def test_a_forked_process_saving_one_file_has_partials_of_its_own(tmp_path):
     with os.fdopen(read) as fh:
         child = fh.read()
     assert child != files.partial_path(path, tag="0-") and f"-{pid}." in child.replace("partial-", "-")
+
+
+@pytest.mark.parametrize("name", ["kept.json/.", "new.json/.", "missing/../kept.json", "kept.json/.."])
+def test_a_save_to_a_name_the_system_refuses_is_refused(tmp_path, name):
+    """Attack pass 29b: ``cal.json/.`` replaced ``cal.json``, ``new.json/.`` made a file
+    ``new.json`` and ``missing/../cal.json`` wrote ``cal.json``, where opening each name fails
+    (not a directory; no such folder): the partial's place was the name's ``realpath``, which
+    drops ``.`` and ``missing/..`` by their text. Refused as writing in place is, nothing written."""
+    import os
+    kept = tmp_path / "kept.json"
+    kept.write_text("keep")
+    with pytest.raises(OSError) as info:
+        calibrate(still(500), 100.0).save(os.path.join(tmp_path, name))
+    assert info.value.filename == os.path.join(tmp_path, name)
+    assert kept.read_text() == "keep" and sorted(p.name for p in tmp_path.iterdir()) == ["kept.json"]

@@ -263,3 +263,12 @@ def test_samples_up_to_the_bound_give_finite_rows(preset, backend, pattern, repe
 @given(pattern=_patterns, repeats=st.integers(1, 5_000), calibration=_calibrations)
 def test_samples_up_to_the_bound_give_finite_rows_many(preset, backend, pattern, repeats, calibration):
     _rows_are_finite(preset, backend, pattern, repeats, calibration, n_max=50_000)
+
+
+def test_a_numpy_bool_as_hold_is_the_bool_it_holds():
+    """Attack pass 29b: ``GyroFilter(preset="hold", hold=np.bool_(True))`` was refused as
+    "setting hold=True: must be True or False"; the settings hold a plain bool (state_dict is JSON)."""
+    import json
+    f = GyroFilter(100.0, preset="hold", hold=np.bool_(True))
+    assert f.settings.hold is True
+    json.dumps(f.state_dict())

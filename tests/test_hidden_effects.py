@@ -89,3 +89,36 @@ def test_a_temperature_hidden_in_a_recording_without_one_is_the_package_s_refusa
     rec = Recording.from_dps(np.zeros((100, 3)), 100.0)
     with pytest.raises(GyroFilterError, match="recording: the effect temperature needs a temp column"):
         hide_in_recording(rec, "temperature", "x", {"coefficient_dps_per_c": 0.5})
+
+
+@pytest.mark.parametrize("rows", [1, 30, 63])
+def test_heavy_tails_in_a_record_shorter_than_its_window(rows):
+    """Attack pass 29b: heavy tails hidden in a record of fewer than 64 samples (the moving
+    mean's window) ended in numpy's "operands could not be broadcast together"."""
+    rec = Recording.from_dps(np.random.default_rng(1).normal(size=(rows, 3)), 100.0)
+    out = hide_in_recording(rec, HEAVY_TAILS, "x", {"fraction": 0.5, "scale_ratio": 4.0})
+    assert len(out) == rows and np.all(np.isfinite(out.gyro_dps))
+
+
+def test_heavy_tails_scale_the_noise_not_the_bias_at_the_ends():
+    """Attack pass 29b: the fast noise was the rate less its moving mean over 64 samples taken
+    with zeros beyond the record: within 32 samples of either end it held about half the bias,
+    scaled as noise (a -3.3 deg/s bias: changes of 1.9 deg/s there, 0.19 elsewhere)."""
+    rng = np.random.default_rng(0)
+    rec = Recording.from_dps(-3.3 + rng.normal(0, 0.05, (2000, 3)), 100.0)
+    change = hide_in_recording(rec, HEAVY_TAILS, "x", {"fraction": 0.2, "scale_ratio": 10.0}, seed=3).gyro_dps[:, 0] \
+        - rec.gyro_dps[:, 0]
+    middle = np.abs(change[100:-100]).max()
+    assert np.abs(change[:100]).max() < 2 * middle and np.abs(change[-100:]).max() < 2 * middle
+
+
+@pytest.mark.parametrize("effect, axis, params, named", [
+    (COLORED_NOISE, "x", {"lag1": 0.3, "lag_2": 0.2}, "unknown parameter 'lag_2'; did you mean lag2"),
+    (REPEATED_SAMPLES, None, {"fraction": 0.2, "patern": "beat"}, "unknown parameter 'patern'"),
+    (COLORED_NOISE, "x", {"lag1": 0.3, "preserve": "arw"}, "preserve \"std\"")])
+def test_parameters_hiding_would_not_use_are_refused(effect, axis, params, named):
+    """Attack pass 29b: a misspelt optional parameter was dropped without a word (the model's
+    warning went nowhere): the default's effect was hidden (no lag2, the random pattern), and a
+    colored noise's preserve "arw" was filtered keeping the variance."""
+    with pytest.raises(SettingsError, match=named):
+        hide_in_recording(record(), effect, axis, params)

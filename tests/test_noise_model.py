@@ -629,3 +629,19 @@ def test_the_accelerometers_notes_carry_its_units():
     assert "m/s^2/sqrt(s)" in notes[RATE_RANDOM_WALK] and "m/s^3" in notes[RATE_RAMP]
     with pytest.raises(SettingsError, match="unit must be"):
         characterise_axis(np.arange(100.0), 100.0, unit="rad/s")
+
+
+@pytest.mark.parametrize("settings, said", [({"confidence": np.float32(0.9)}, None), ({"confidence": np.array(0.9)}, None),
+                                            ({"min_clusters": "9"}, "min_clusters must be a finite number"),
+                                            ({"min_clusters": None}, "min_clusters must be a finite number"),
+                                            ({"min_clusters": 0}, r"min_clusters must be >= 2"),
+                                            ({"min_clusters": 2.5}, "min_clusters must be a whole number")])
+def test_numpy_numbers_taken_and_min_clusters_checked(settings, said):
+    """Attack pass 29b: characterise_axis refused a float32 confidence of 0.9 as "not between 0
+    and 1"; min_clusters "9" or None ended in numpy's or Python's TypeError, 0 or 2.5 taken."""
+    x = np.random.default_rng(0).normal(0, 0.05, 2000)
+    if said is None:
+        assert characterise_axis(x, 100.0, **settings).confidence == pytest.approx(0.9)
+    else:
+        with pytest.raises(SettingsError, match=said):
+            characterise_axis(x, 100.0, **settings)

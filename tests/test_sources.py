@@ -396,3 +396,29 @@ def test_a_file_in_a_partitioned_folder_is_recorded(tmp_path, monkeypatch):
         out = tmp_path / "out.csv"
         assert main(["record", "--source", source, "--out", str(out), "--force"]) == 0, source
         np.testing.assert_array_equal(read_recording(out).gyro_dps, rec.gyro_dps)
+
+
+@pytest.mark.parametrize("speed, said", [(np.float32(2.0), None), (np.array(2.0), None), (0, "replay speed must be > 0"),
+                                         (float("nan"), "replay speed must be a finite number"),
+                                         (True, "replay speed must be a finite number"), ("2", "replay speed must be a finite number")])
+def test_a_numpy_speed_is_the_number_it_holds(tmp_path, speed, said):
+    """Attack pass 29b: ReplaySource(speed=np.float32(2.0)) was refused as "must be a positive
+    number, got 2.0"; True was taken as 1."""
+    from gyrofilter.sources.replay import ReplaySource
+    path = tmp_path / "r.csv"
+    write_recording(path, Recording.from_dps(np.zeros((20, 3)), 100.0))
+    if said is None:
+        with ReplaySource(path, realtime=True, speed=speed) as source:
+            assert source.speed == 2.0
+    else:
+        with pytest.raises(SettingsError, match=said):
+            ReplaySource(path, speed=speed)
+
+
+@pytest.mark.parametrize("duration", ["5", True, 0, -0.0, float("nan"), 1e300])
+def test_a_simulated_source_checks_its_duration_as_simulate_does(duration):
+    """Attack pass 29b: SimulatedSource(duration_s="5") ended in Python's "must be real number,
+    not str", and True ran 1 s."""
+    from gyrofilter.sources.simulated import SimulatedSource
+    with pytest.raises(SettingsError, match="sim: duration_s must be"):
+        SimulatedSource(duration_s=duration, realtime=False, seed=1)

@@ -160,11 +160,14 @@ def test_too_few_samples_or_temperatures_of_another_length_are_refused():
         tempcomp.compensate(np.zeros((4, 3)), np.full(5, 30.0), C, 25.0)
 
 
-@pytest.mark.parametrize("coef", [np.float32(0.01), np.int64(0), [np.float32(0.01), 0, np.int8(0)]])
+@pytest.mark.parametrize("coef", [np.float32(0.01), np.int64(0), [np.float32(0.01), 0, np.int8(0)], np.longdouble(0.01),
+                                  __import__("collections").namedtuple("Axes", "x y z")(0.01, 0, 0)])
 def test_a_numpy_number_as_the_temperature_coefficient_is_the_number_it_holds(coef):
     """Attack pass 28b: ``temp_coefficient_dps_per_c=np.float32(0.01)`` (or ``np.int64(0)``) passed
     the settings' check and ended in Python's "'numpy.float32' object is not iterable"; the
-    settings hold it as plain floats (``state_dict`` is plain Python, as its docstring says)."""
+    settings hold it as plain floats (``state_dict`` is plain Python, as its docstring says).
+    Attack pass 29b: an ``np.longdouble`` stayed one (its ``item()`` is itself): not JSON; a
+    namedtuple of 3 ended in a TypeError (its type was called on a generator)."""
     import json
     f = GyroFilter(100.0, temp_coefficient_dps_per_c=coef)
     x, temp = np.zeros((210, 3)), np.full(210, 25.0)

@@ -90,6 +90,15 @@ def test_json_ready_gives_what_strict_json_takes():
     assert json.loads(text) == {"1": [None, None, None], "a": [0, 1], "b": [0.5, True, None, "s"]}
 
 
+def test_json_ready_takes_a_longdouble():
+    """Attack pass 29b: a longdouble's ``tolist()`` is itself: json_ready recursed until Python's
+    RecursionError (an array of them too)."""
+    import json
+
+    value = {"a": np.longdouble(1.5), "b": np.array([np.longdouble(0.25), np.longdouble("inf")])}
+    assert json.loads(json.dumps(json_ready(value), allow_nan=False)) == {"a": 1.5, "b": [0.25, None]}
+
+
 @pytest.mark.parametrize("value, shown", [(float("inf"), "inf"), (-float("inf"), "-inf"), (float("nan"), "nan"), (0, "0.0"),
                                           (0.0, "0.0"), (-100.0, "-100.0"), (np.float64(-2.5), "-2.5"), ("100", "'100'"),
                                           (True, "True"), (1e6, "1000000.0"), (1e-320, "1e-320"), (0.0009, "0.0009"),

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from ..streamstats import PASS_SAMPLES, moving_mean  # noqa: F401 (moving_mean: the analyses' name for it)
 from ..units import MAD_TO_SIGMA
 
 #: number of blocks the slow-effect detectors and the stillness check work on (at most)
@@ -54,9 +55,6 @@ def dot(a, b):
     return np.einsum("i,i->", a, b)
 
 
-#: samples per pass of the chunked series helpers (:func:`detrend_line`, :func:`moving_mean`): their
-#: temporaries are a few MB whatever the record's length
-PASS_SAMPLES = 1 << 16
 
 
 def detrend_line(x, out=None):
@@ -83,43 +81,6 @@ def detrend_line(x, out=None):
         np.multiply(table[:part.size], slope, out=t)
         t += mean + slope * (lo - centre)
         np.subtract(part, t, out=out[lo:lo + part.size])
-    return out
-
-
-def moving_mean(x, window):
-    """Centred moving mean with window ``window`` samples: sample ``i`` averages
-    ``x[i - W//2 : i - W//2 + W]``, clipped to the series at the edges (shorter windows), from
-    differences of cumulative sums made :data:`PASS_SAMPLES` at a time, each pass's sums started
-    at 0 (a difference ``c_{j+W} - c_j`` does not need the total before the pass, and its
-    rounding is that of the pass's sums, not of the record's), so the only N-sample array is the
-    result."""
-    window = max(1, int(window))
-    n = x.size
-    half = window // 2
-    if window >= n:
-        c = np.concatenate(([0.0], np.cumsum(x)))
-        lo = np.clip(np.arange(n) - half, 0, n)
-        hi = np.clip(np.arange(n) - half + window, 0, n)
-        return (c[hi] - c[lo]) / (hi - lo)
-    out = np.empty(n)
-    # interior: out[j + half] = (c[j + W] - c[j]) / W for j in [0, n - W], a pass of j at a time,
-    # c the sums from the pass's first sample
-    last = n - window + 1
-    c = np.empty(min(last, PASS_SAMPLES) + window)
-    c[0] = 0.0
-    for j0 in range(0, last, PASS_SAMPLES):
-        j1 = min(last, j0 + PASS_SAMPLES)
-        np.cumsum(x[j0:j1 + window - 1], out=c[1:j1 - j0 + window])
-        part = out[j0 + half:j1 + half]
-        np.subtract(c[window:j1 - j0 + window], c[:j1 - j0], out=part)
-        part /= window
-    head = np.arange(half)  # i < half: c[i - half + W] / (i - half + W)
-    c_head = np.cumsum(x[:window])
-    out[:half] = c_head[head - half + window - 1] / (head - half + window)
-    i1 = n - window + half + 1  # i >= i1: (c[n] - c[i - half]) / (n - i + half), from the sums of the last samples
-    tail = np.arange(i1, n)
-    suffix = np.cumsum(x[::-1][:n - i1 + half])[::-1]  # suffix[k] = sum x[i1 - half + k:]
-    out[i1:] = suffix[tail - i1] / (n - tail + half)
     return out
 
 

@@ -172,6 +172,8 @@ class FilterSettings:
         numbers = {name: check_number(getattr(self, name), f"setting {name}", **bounds)
                    for name, bounds in SETTING_RANGES.items()}
         checked = replace(self, **numbers)
+        if isinstance(checked.hold, np.bool_):  # numpy's True is True ("hold=True: must be True or False")
+            checked = replace(checked, hold=bool(checked.hold))
         checked._validate_choices(need)
         # np.float32(0.01) was taken, then iterated over as if it were 3
         return replace(checked, temp_coefficient_dps_per_c=python_value(checked.temp_coefficient_dps_per_c))

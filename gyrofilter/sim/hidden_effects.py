@@ -54,6 +54,7 @@ from .resonance import band_pass
 from .simulate import simulate
 from ..recording import ACCEL_COLUMNS, GYRO_COLUMNS, Recording
 from ..errors import SettingsError
+from ..streamstats import moving_mean
 from ..units import AXES, plain
 
 EFFECTS = (BIAS_INSTABILITY, RATE_RANDOM_WALK, RATE_RAMP, GAUSS_MARKOV, SINUSOID,
@@ -189,7 +190,10 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     SettingsError for an ``axis`` that is none of x, y, z, or ``params`` the simulator's model
     refuses (:func:`~gyrofilter.sim.model.validate_model`; a colored noise of lag1 NaN made the
     axis NaN; ``repeated_samples``, a whole-row effect with no axis, as the model's top-level key:
-    a fraction of 5 repeated every row)."""
+    a fraction of 5 repeated every row); a parameter the effect does not take (a misspelt
+    ``lag2`` or ``pattern`` was dropped without a word, the default's effect hidden), and a colored
+    noise's ``preserve`` other than ``"std"`` (the recording's noise is filtered keeping its
+    variance), are refused."""
     sample_rate_hz = rec.sample_rate_hz
     n = len(rec)
     model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",
@@ -203,12 +207,17 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         step = max(1, n // 500)
         model[TEMPERATURE_PROFILE] = {"t_s": t[::step].tolist(), "temp_c": np.asarray(temp)[::step].tolist()}
     if effect == REPEATED_SAMPLES:  # checked as the simulator checks it, also where it is not simulated
-        validate_model({**model, REPEATED_SAMPLES: params})  # a whole-row effect: a top-level key
+        _, ignored = validate_model({**model, REPEATED_SAMPLES: params})  # a whole-row effect: a top-level key
     else:
         if axis not in AXES:
             raise SettingsError(f"axis must be one of {', '.join(AXES)}, got {plain(axis)}")
-        validate_model({**model, "axes": {**model["axes"], axis: {**model["axes"][axis],
-                                                                   "effects": [{"effect": effect, **params}]}}})
+        _, ignored = validate_model({**model, "axes": {**model["axes"], axis: {**model["axes"][axis],
+                                                                              "effects": [{"effect": effect, **params}]}}})
+    if ignored:  # no warning reaches a caller here: a misspelt optional parameter hid the default's effect
+        raise SettingsError(f"{ignored[0].replace(' ignored', '', 1)} (nothing hidden)")
+    if effect == COLORED_NOISE and params.get("preserve", "std") != "std":
+        raise SettingsError(f"{rec.path or 'recording'}: a colored noise hidden in a recording keeps the "
+                            f"recording's noise variance (preserve \"std\"), not {plain(params['preserve'])}")
     gyro = rec.gyro_dps.copy()
     if effect == COLORED_NOISE:
         # a property of the noise, not an additive term: filter the real noise of the axis by
@@ -230,7 +239,7 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         p, c = float(params["fraction"]), float(params["scale_ratio"])
         k0 = 1.0 / math.sqrt(1.0 - p + p * c * c)
         k = np.where(np.random.default_rng(seed).random(n) < p, c * k0, k0)
-        fast = gyro[:, i] - np.convolve(gyro[:, i], np.full(64, 1.0 / 64), mode="same")
+        fast = gyro[:, i] - moving_mean(gyro[:, i], _FAST_WINDOW)  # clipped at the ends: zeros beyond them scaled the bias
         gyro[:, i] += (k - 1.0) * fast
     elif effect == REPEATED_SAMPLES:  # whole rows of the real record, the temperature's too
         repeats = RepeatedRows(params["fraction"], params.get("pattern", "random"), np.random.default_rng(seed))
@@ -249,6 +258,10 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
                                 lsb_per_g=rec.lsb_per_g if accel is not None else None, extra=others, header=header)
     hidden.notes = list(rec.notes)
     return hidden
+
+
+#: the samples of the moving mean whose residual is a record's fast noise (heavy tails hidden in it)
+_FAST_WINDOW = 64
 
 
 def _accelerometer(rec):

@@ -20,9 +20,9 @@ import time
 
 import numpy as np
 
-from ..errors import SettingsError, SourceEnded
+from ..errors import SourceEnded
+from ..inputs import check_number
 from ..recording import CHUNK_ROWS, COLUMNS, END_NOTE, VERSION_KEY, format_number, iter_recording
-from ..units import plain
 from .base import WARNING_PREFIX, Source
 
 CHUNK_SAMPLES = 1000  # rows per read() when not paced
@@ -53,8 +53,7 @@ class ReplaySource(Source):
     """
 
     def __init__(self, path, realtime=False, speed=1.0, *, clock=time.monotonic, sleep=time.sleep, chunk_rows=CHUNK_ROWS):
-        if not isinstance(speed, (int, float)) or not speed > 0 or not math.isfinite(speed):
-            raise SettingsError(f"replay speed must be a positive number, got {plain(speed)}")
+        speed = check_number(speed, "replay speed", low=0.0, low_open=True)  # numpy's numbers too (a float32 was refused)
         self._chunks = iter_recording(path, chunk_rows)
         head = self._head = next(self._chunks)
         self.path = str(path)

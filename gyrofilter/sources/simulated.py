@@ -22,6 +22,7 @@ from ..errors import SettingsError, SourceEnded
 from ..recording import VERSION_KEY
 from ..sim.model import load_model, validate_model
 from ..sim.simulate import block_rows, check_seed, draw_seed, recording_columns, recording_header, simulate_chunks
+from ..units import check_duration_s
 from .base import Source
 
 MAX_WAIT_S = 0.1
@@ -73,8 +74,8 @@ class SimulatedSource(Source):
             spec, self.warnings = validate_model(model, sample_rate_hz=sample_rate_hz)
         except SettingsError as exc:
             raise SettingsError(f"sim: {self.model_name}: {exc}") from None
-        if duration_s is not None and (not math.isfinite(duration_s) or duration_s <= 0):
-            raise SettingsError(f"sim: duration must be > 0 s, got {duration_s!r}")
+        if duration_s is not None:  # the one check of a run's length: a text ended in Python's TypeError, True was 1 s
+            duration_s = check_duration_s(duration_s, "sim: duration_s")
         self.seed = draw_seed() if seed is None else check_seed(seed)
         self.sample_rate_hz, self.gyro_unit = spec["sample_rate_hz"], spec["gyro_unit"]
         self.lsb_per_dps = spec["lsb_per_dps"] if self.gyro_unit == "lsb" else None

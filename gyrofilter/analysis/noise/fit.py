@@ -43,6 +43,7 @@ from .intervals import fitted_intervals
 from .model import TERM_ALPHA, TERMS, AxisNoise, basis, sensor_terms, term_shares
 from .readoff import read_off
 from ...errors import SettingsError
+from ...inputs import check_number
 from ...units import AXES, MIN_NOISE_DPS, check_axes, plain
 
 
@@ -142,7 +143,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     """Overlapping Allan deviation, intervals and both coefficient estimates for one axis.
 
     ``x_dps``: 1-D rate series in deg/s, sampled at ``sample_rate_hz`` (Hz); ``taus_s``: the
-    cluster times (s; default grid); ``min_clusters``: fewest clusters a fitted tau needs;
+    cluster times (s; default grid); ``min_clusters``: fewest clusters a fitted tau needs (a whole number >= 2);
     ``confidence``: of the intervals; ``terms``: the terms fitted; ``axis``: its name. Raises :class:`AllanInputError` for constant data
     (nothing to characterise), NaN, a masked value or what is not numbers
     (:func:`~gyrofilter.analysis.noise.allan.rate_numbers`), or a record too short for a fit.
@@ -161,8 +162,11 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     if x.ndim != 1:
         raise AllanInputError(f"axis {axis}: expected a 1-D rate series, got shape {x.shape}")
     refuse_constant(x, f"axis {axis}", unit=unit, axis=axis)
-    if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
-        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
+    try:  # numpy's numbers too (a float32 0.9 was "not between 0 and 1"); a text or None in min_clusters was numpy's TypeError
+        confidence = check_number(confidence, "confidence", low=0.0, high=1.0, low_open=True, high_open=True)
+    except SettingsError:
+        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}") from None
+    min_clusters = check_number(min_clusters, "min_clusters", low=2, integer=True)
     for t in terms:
         if t not in TERMS:
             raise SettingsError(f"unknown noise term {t!r}; expected some of {', '.join(TERMS)}")
