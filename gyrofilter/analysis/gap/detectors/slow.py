@@ -457,13 +457,12 @@ def slow_reading(x, sample_rate_hz, shapes=SHAPES, temp_c=None, stats=None):
 def _flicker_reading(shape, p_value, table, delta_s, n):
     """The bias instability named in the place of a shape that flicker draws as often as
     ``p_value`` (:func:`flicker_p_value`), its evidence saying so."""
-    cand = _stochastic_candidate(BIAS_INSTABILITY, table[BIAS_INSTABILITY], delta_s, n)
+    cand, shape = _stochastic_candidate(BIAS_INSTABILITY, table[BIAS_INSTABILITY], delta_s, n), shape.replace('_', ' ')
     return replace(cand, evidence=(
-        f"the block means depart from white noise as a {shape.replace('_', ' ')} would, but white noise with "
-        f"flicker (1/f) draws such a {shape.replace('_', ' ')} as clearly in {100 * p_value:.0f} % of records "
-        f"(parametric bootstrap, {FLICKER_REPLICATES} records; a shape is named below {100 * FLICKER_ALPHA:g} %): "
-        "the wander is the reading named" + (", though its own test alone would not name it"
-                                             if cand.statistic < cand.threshold else "") + f" ({cand.evidence})"))
+        f"the block means depart from white noise as a {shape} would, but white noise with flicker (1/f) draws "
+        f"such a {shape} as clearly in {100 * p_value:.0f} % of records (parametric bootstrap, {FLICKER_REPLICATES} "
+        f"records; a shape is named below {100 * FLICKER_ALPHA:g} %): the wander is the reading named" + (
+            ", though its own test alone would not name it" if cand.statistic < cand.threshold else "") + f" ({cand.evidence})"))
 
 
 def _rw_or_gm(name, table, y, delta_s):
