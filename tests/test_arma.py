@@ -174,6 +174,16 @@ def test_normality_verdicts():
     assert laplace.jb_statistic > laplace.jb_critical_5pct
 
 
+@pytest.mark.parametrize("alpha", [0.01, 0.05, 1e-300])
+def test_normality_critical_values_are_the_5_percent_ones_their_names_state(alpha):
+    """Attack pass 29a: `jb_critical_5pct` (printed "5 % critical") was the chi2(2) quantile at
+    1 - alpha: 9.21 with `--alpha 0.01`, inf (null in the JSON) with 1e-300; KS's was the 5 % one."""
+    x = np.random.default_rng(4).normal(size=2_000)
+    n = arma_checks.normality_tests(x, alpha=alpha)
+    assert n.jb_critical_5pct == pytest.approx(5.991, abs=1e-3)
+    assert n.ks_critical_5pct == pytest.approx(1.358 / np.sqrt(x.size))
+
+
 @pytest.mark.parametrize("scale", [2.0 ** -300, 1e-90, 2.0 ** 300])
 def test_normality_is_the_same_at_any_scale_a_float_holds(scale):
     """Attack pass 15: `arma` on noise of 1e-90 deg/s (above the noise floor every analysis takes)

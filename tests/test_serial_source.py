@@ -326,3 +326,18 @@ def test_record_from_a_six_axis_device_writes_the_accelerometer(pty_pair, tmp_pa
     np.testing.assert_array_equal(np.column_stack([rec.columns[c] for c in ("ax", "ay", "az")]), accel_values(good))
     assert (rec.header["accel_unit"], rec.header["lsb_per_g"]) == ("lsb", "16384")
     capsys.readouterr()
+
+
+@pytest.mark.parametrize("before", [0, 3])
+def test_a_sensor_change_in_the_first_read_leaves_the_recording_header_the_first_headers(before):
+    """Attack pass 29a: a device's burst on connecting whose second header changed `sensor=` (after 0 or 3
+    samples) gave the recording's header the second header's sensor, while the note said it keeps the first's."""
+    head = b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100 sensor=A\n"
+    lines = [b"%d,%d,1,2\n" % (i, i) for i in range(6)]
+    data = head + b"".join(lines[:before]) + head.replace(b"=A", b"=B") + b"".join(lines[before:])
+    src = SerialSource("fake", serial_port=_Port(data), header_timeout_s=1)
+    rows = src.read()
+    np.testing.assert_array_equal(rows[:, 1], np.arange(6))
+    assert src.header["sensor"] == "A"
+    assert src.pop_notes() == [f"serial: the device's header says sensor=B after sample {before} "
+                               "(the recording's header keeps sensor=A)"]

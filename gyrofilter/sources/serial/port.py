@@ -107,7 +107,8 @@ class SerialSource(Source):
         except BaseException:
             self._close_port()
             raise
-        self.header = dict(self._parser.header)
+        # the device's first header (a later one in the same burst changed `sensor=`...: noted), else the options'
+        self.header = dict(self._parser.device_header or self._parser.header)
         self.sample_rate_hz = self._parser.sample_rate_hz
         self.gyro_unit = self.header["gyro_unit"]
         self.lsb_per_dps = float(self.header["lsb_per_dps"]) if self.gyro_unit == "lsb" else None

@@ -149,7 +149,7 @@ class LineParser:
         self._held = None  # a line whose counter jumped, waiting for the next to judge it (_out_of_sequence)
         self._last_index = -1
         self._options = None
-        self._device_header = None  # the first header the device sent, once it has (the recording's)
+        self.device_header = None  # the first header the device sent, once it has: the recording's (the port)
         self._changed_headers = 0
         if gyro_unit is not None or sample_rate_hz is not None or lsb_per_dps is not None:
             self._options = self._make_units({"gyro_unit": gyro_unit, "lsb_per_dps": lsb_per_dps,
@@ -209,9 +209,9 @@ class LineParser:
 
     def _note_other_keys(self, previous, header):
         """Note a repeated header's other keys (:func:`.fields.other_keys_note`), :data:`MAX_DETAILED_NOTES` times at most."""
-        note = None if previous is None else other_keys_note(previous, header, self._device_header, _UNIT_KEYS,
+        note = None if previous is None else other_keys_note(previous, header, self.device_header, _UNIT_KEYS,
                                                              self.stats["samples"], (self._changed_headers, MAX_DETAILED_NOTES))
-        self._device_header = self._device_header or dict(header)
+        self.device_header = self.device_header or dict(header)
         self._changed_headers += note is not None
         if note is not None and self._changed_headers <= MAX_DETAILED_NOTES + 1:  # the last: the rest go unnoted
             self.notes.append(note)
@@ -272,7 +272,7 @@ class LineParser:
         if temp_unit not in ("c", "mpu6050_raw"):
             raise DeviceError(f"{self.where}: temp_unit {quote(temp_unit, 40)} is not c or mpu6050_raw")
         header.update(accel_units(values, fields, self.where))
-        previous = self.header if self._device_header else None
+        previous = self.header if self.device_header else None
         self._apply(header)  # a repeated header must agree; the counter tells restarts
         self._note_other_keys(previous, header)
         self.fields, self._counter_mod, self._temp_raw = fields, counter_mod, temp_unit == "mpu6050_raw"
