@@ -96,12 +96,22 @@ def written_whole(path):
         raise OSError(exc.errno, exc.strerror or str(exc), path) from None
 
 
+_MAX_LINK_HOPS = 40  # Linux's limit on the links one name resolves through (ELOOP beyond)
+
+
 def _not_a_file_name(path):
     """Whether the system takes ``path`` for no file of a folder it reaches: a name ending in
     ``/``, ``.`` or ``..``, or a folder part that is no folder (``missing/..``, which
     ``realpath`` drops by its text: ``cal.json/.`` replaced ``cal.json``, ``missing/../cal.json``
-    wrote it, where opening either fails)."""
-    return os.path.basename(path) in ("", os.curdir, os.pardir) or not os.path.isdir(os.path.dirname(path) or os.curdir)
+    wrote it, where opening either fails); a symbolic link's text is such a name too, hop by hop
+    (a link to ``cal.json/.`` replaced ``cal.json``: ``realpath`` drops it alike)."""
+    for _ in range(_MAX_LINK_HOPS):
+        if os.path.basename(path) in ("", os.curdir, os.pardir) or not os.path.isdir(os.path.dirname(path) or os.curdir):
+            return True
+        if not os.path.islink(path):
+            return False
+        path = os.path.join(os.path.dirname(path), os.readlink(path))
+    return False  # a loop of links: refused by its stat (ELOOP)
 
 
 @contextlib.contextmanager

@@ -364,3 +364,29 @@ def test_max_samples_that_is_no_whole_number_is_refused_in_words():
         with pytest.raises(SettingsError, match="max_samples must be a (finite|whole) number"):
             prepare_series(x, 100.0, bad)
     assert check_max_samples(np.array(500)) == 500 and len(prepare_series(x, 100.0, 500.0)[0]) == 500
+
+
+def test_the_adf_verdict_is_at_alpha_where_it_has_no_tabled_critical_value():
+    """Attack pass 30b: the ADF verdict read the critical value of ``round(alpha * 100)`` %, and
+    the 5 % one where statsmodels has none: at ``--alpha 0.001`` a series of p = 0.038 was
+    "stationary" (rejected at 5 %) while at 0.01 it was not, and at 0.3 a p of 0.063 was not
+    while at 0.1 it was. Between the tabled 1, 5 and 10 % the verdict is p < alpha."""
+    e = np.random.default_rng(0).normal(size=2000)
+    x = np.zeros(2000)
+    for i in range(1, 2000):
+        x[i] = 0.99 * x[i - 1] + e[i]
+    s = {a: arma_checks.adf_test(x, alpha=a) for a in (0.001, 0.01, 0.02, 0.05, 0.1, 0.3)}
+    assert 0.02 < s[0.05].p_value < 0.05 and s[0.05].stationary and not s[0.01].stationary
+    assert [s[a].stationary for a in (0.001, 0.02, 0.3)] == [False, False, True]
+
+
+def test_the_f_tests_critical_value_is_finite_at_a_tiny_alpha():
+    """Attack pass 30b: ``arma --alpha 1e-17`` (taken: in (0, 0.5)) gave every F test the critical
+    value inf (``f.ppf(1 - alpha)``, 1 - 1e-17 being 1.0: "critical inf", null in the JSON), so no
+    larger model was ever significant: F's upper quantile at alpha, from its beta law."""
+    from types import SimpleNamespace
+
+    small = SimpleNamespace(order=(1, 0), n_params=1, n_residuals=5003, rss=1.0)
+    large = SimpleNamespace(order=(2, 1), n_params=3, n_residuals=5003, rss=0.9)
+    assert arma.f_test(small, large, alpha=1e-17).f_critical == pytest.approx(39.452002, rel=1e-6)
+    assert arma.f_test(small, large, alpha=0.05).f_critical == pytest.approx(2.9975279, rel=1e-7)

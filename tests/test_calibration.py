@@ -421,3 +421,19 @@ def test_a_save_to_a_name_the_system_refuses_is_refused(tmp_path, name):
         calibrate(still(500), 100.0).save(os.path.join(tmp_path, name))
     assert info.value.filename == os.path.join(tmp_path, name)
     assert kept.read_text() == "keep" and sorted(p.name for p in tmp_path.iterdir()) == ["kept.json"]
+
+
+@pytest.mark.parametrize("text", ["kept.json/.", "missing/../kept.json", "missing/../new.json", "hop"])
+def test_a_save_through_a_link_to_a_name_the_system_refuses_is_refused(tmp_path, text):
+    """Attack pass 30b: a symbolic link whose text is such a name (``cal.json/.``,
+    ``missing/../cal.json``, or a link to one) replaced or made the file its ``realpath`` names,
+    where opening the link fails. Refused as writing in place is, nothing written."""
+    import os
+    kept = tmp_path / "kept.json"
+    kept.write_text("keep")
+    os.symlink("kept.json/.", tmp_path / "hop")
+    os.symlink(text, tmp_path / "link")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(OSError):
+        calibrate(still(500), 100.0).save(os.path.join(tmp_path, "link"))
+    assert kept.read_text() == "keep" and sorted(p.name for p in tmp_path.iterdir()) == before

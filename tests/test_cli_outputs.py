@@ -76,6 +76,21 @@ def test_an_output_named_as_a_folder_that_does_not_exist_is_refused_before_any_w
     assert sorted(os.listdir(tmp_path)) == ["in.csv"]
 
 
+def test_an_output_named_dot_in_a_folder_that_does_not_exist_is_refused_before_any_work(tmp_path, capsys):
+    """Attack pass 30b: ``--out newdir/.`` (no ``newdir``) was refused only after the work, as a
+    file that "appeared or changed while this command ran (rerun with --force ...)", --force given
+    or not (the folder made for it, the file then not linked there): a name ending in ``/.`` names a
+    folder as one ending in ``/`` does (``newdir/..`` was refused before the work already)."""
+    from gyrofilter.cli import main
+
+    src = str(tmp_path / "in.csv")
+    write_recording(src, Recording.from_dps(np.random.default_rng(0).normal(size=(600, 3)) * 0.05, 100.0))
+    assert main(["replay", src, "--out", os.path.join(tmp_path, "newdir", "."), "--force"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "newdir/.: ends in /., so it names a folder" in err[0], err
+    assert sorted(os.listdir(tmp_path)) == ["in.csv"]
+
+
 def test_an_output_past_a_missing_folder_and_dotdot_is_refused_before_any_work(tmp_path, monkeypatch, capsys):
     """``--json rel/../rel2/x.json`` with no ``rel``: the check read the path as written without
     ``rel/..`` (it passed), the system does not (the analysis ran, then "No such file or directory")."""

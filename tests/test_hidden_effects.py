@@ -4,7 +4,7 @@ rates, an axis 'w' a KeyError, lag1 1.5 a math domain error)."""
 import numpy as np
 import pytest
 
-from gyrofilter.effects import COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES
+from gyrofilter.effects import COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES, SINUSOID
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.hidden_effects import hide_in_recording
@@ -122,3 +122,12 @@ def test_parameters_hiding_would_not_use_are_refused(effect, axis, params, named
     colored noise's preserve "arw" was filtered keeping the variance."""
     with pytest.raises(SettingsError, match=named):
         hide_in_recording(record(), effect, axis, params)
+
+
+def test_parameters_naming_another_effect_are_refused():
+    """Attack pass 30b: ``params`` holding ``"effect": "warmup"`` (a model's effect entry) hid a
+    warm-up where a sinusoid was asked for (the entry's key replaced the argument), exit 0."""
+    with pytest.raises(SettingsError, match="params name the effect 'warmup', not 'sinusoid'"):
+        hide_in_recording(record(), SINUSOID, "x", {"effect": "warmup", "amplitude_dps": 1.0, "tau_s": 5.0})
+    entry = {"effect": SINUSOID, "frequency_hz": 1.0, "amplitude_dps": 0.1}  # a model's entry of that effect: taken
+    assert hide_in_recording(record(), SINUSOID, "x", entry).gyro_dps.shape == record().gyro_dps.shape

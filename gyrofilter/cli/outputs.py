@@ -21,8 +21,8 @@ def check_outputs(outputs, inputs=(), force=False):
     """Refuse, before any work, to write where a user's data would be lost.
 
     ``outputs`` and ``inputs`` are paths (None entries are skipped). An output that is one of
-    the inputs is refused even with ``force``, and so is a name ending in a path separator (a
-    folder's, existing or not), and ``-`` (:func:`refuse_standard_output`); so is one that exists as anything but a regular
+    the inputs is refused even with ``force``, and so is a name ending in a path separator or
+    ``/.`` (a folder's, existing or not), and ``-`` (:func:`refuse_standard_output`); so is one that exists as anything but a regular
     file (a symbolic link, a device such as /dev/null, a FIFO, a socket): only regular files are
     replaced; so is a name longer than the file systems take (:func:`long_name`: a fleet's report
     named after a long recording name). An output that exists is refused without ``force``; two outputs naming one file are
@@ -40,6 +40,8 @@ def check_outputs(outputs, inputs=(), force=False):
             raise SettingsError(f"{out}: is a folder; give a file name for the output")
         if out.endswith(tuple(filter(None, (os.sep, os.altsep)))):
             raise SettingsError(f"{out}: ends in {out[-1]}, so it names a folder; give a file name for the output")
+        if os.path.basename(out) == os.curdir:  # `newdir/.`: its folder made, the file never linked there
+            raise SettingsError(f"{out}: ends in {out[-2:]}, so it names a folder; give a file name for the output")
         too_long = long_name(out)
         if too_long:  # a name derived from an input's (a fleet's reports), the option's own checked already
             raise SettingsError(f"{out}: {too_long}")

@@ -193,7 +193,9 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     a fraction of 5 repeated every row); a parameter the effect does not take (a misspelt
     ``lag2`` or ``pattern`` was dropped without a word, the default's effect hidden), and a colored
     noise's ``preserve`` other than ``"std"`` (the recording's noise is filtered keeping its
-    variance), are refused."""
+    variance), and an ``"effect"`` in ``params`` other than ``effect`` (it replaced it), are refused."""
+    if isinstance(params, dict) and params.get("effect", effect) != effect:  # a model's entry of another effect replaced it
+        raise SettingsError(f"params name the effect {plain(params['effect'])}, not {plain(effect)} (nothing hidden)")
     sample_rate_hz = rec.sample_rate_hz
     n = len(rec)
     model = {"sample_rate_hz": sample_rate_hz, "gyro_unit": "dps",

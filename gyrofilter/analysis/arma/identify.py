@@ -231,7 +231,9 @@ def f_test(small: ArmaFit, large: ArmaFit, alpha=DEFAULT_ALPHA) -> OrderStep:
     """Pandit-Wu F test: does ``large`` reduce the RSS significantly against ``small``?
 
     F = ((A_1 - A_0) / s) / (A_0 / (N - r)), s = extra parameters, r = parameters of ``large``;
-    significance ``alpha``.
+    significance ``alpha``: the critical value is F(s, N - r)'s upper alpha quantile, (d2 / d1)
+    b / (1 - b) of the beta law's b = B^-1(1 - alpha; s / 2, (N - r) / 2) (d1 X / (d1 X + d2) of
+    an F variate X is beta: Abramowitz and Stegun 26.6.4), taken from the upper tail (exact at any alpha).
     """
     from scipy import stats
 
@@ -239,7 +241,8 @@ def f_test(small: ArmaFit, large: ArmaFit, alpha=DEFAULT_ALPHA) -> OrderStep:
     n = min(small.n_residuals, large.n_residuals)
     dof = n - large.n_params
     f = ((small.rss - large.rss) / s) / (large.rss / dof)
-    crit = float(stats.f.ppf(1 - alpha, s, dof))
+    b = float(stats.beta.isf(alpha, s / 2, dof / 2))  # 1 - alpha is 1.0 below 1.1e-16: f.ppf gave inf
+    crit = dof / s * b / (1 - b)
     return OrderStep(small.order, large.order, float(f), crit, bool(f > crit))
 
 
