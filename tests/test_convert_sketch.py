@@ -64,3 +64,13 @@ def test_an_accelerometer_unit_convert_does_not_read_is_refused_as_the_gyros_is(
     assert main(["convert", str(path), "--unit", "dps", "--out", str(tmp_path / "o.csv.gz")]) == 2
     err = capsys.readouterr().err
     assert "'ft/s^2', a unit convert does not read" in err and "only if it means one of them" in err
+
+
+def test_whole_numbers_given_as_deg_per_s_are_said_to_look_like_raw_counts(tmp_path, capsys):
+    """A new user's trial: the sketch's raw counts (mean about -427) given as --unit dps converted without a word."""
+    path = _log(tmp_path)
+    assert main(["convert", path, "--out", str(tmp_path / "o.csv.gz"), "--unit", "dps", "--columns", "millis,GyX,GyY,GyZ"]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    assert "every value of the gyro columns 'GyX', 'GyY', 'GyZ' is a whole number" in err and "--unit lsb" in err
+    assert main(["convert", path, "--out", str(tmp_path / "o.csv.gz"), "--force", "--unit", "lsb", "--lsb-per-dps", "131"]) == 0
+    assert "whole number" not in capsys.readouterr().err

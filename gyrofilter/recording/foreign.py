@@ -56,7 +56,7 @@ from ..units import AXES, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_h
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .foreign_extras import columns_example, find_extras, gyro_out_of_range, left_out_line
+from .foreign_extras import columns_example, find_extras, gyro_out_of_range, left_out_line, whole_rates
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
@@ -527,7 +527,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     header.update(extras.header, converted_from=path)
     return Foreign(raw, path, header, out_columns + extras.columns, formats + extras.formats(), rows, summary,
-                   plan, counts["warnings"] + extras.warnings)
+                   plan, counts["warnings"] + whole_rates(integral, read_unit, gyro, names) + extras.warnings)
 
 
 def _gyro_unit(unit, stated, lsb_per_dps, path):

@@ -256,3 +256,15 @@ def columns_example(names, normal, time):
     plain = [i for i in others if not extra(i)]
     three = (plain if len(plain) >= 3 else others)[:3]
     return ",".join(names[i] for i in ([time] if time is not None else []) + three)
+
+
+def whole_rates(integral, unit, gyro, names):
+    """The warning (a list of none or one) of gyro columns (``gyro``: their indices) read in ``unit``
+    whose every value is a whole number (``integral``: per column): raw counts, as a sketch prints an
+    MPU6050's registers, taken as deg/s read 131 times too large (+-250 deg/s). Not refused: a log in
+    whole deg/s exists."""
+    if unit == "lsb" or not all(integral):
+        return []
+    return [f"every value of the gyro columns {', '.join(quote(names[i]) for i in gyro)} is a whole number, as "
+            f"raw counts are: if they are the sensor's counts, not {unit}, give --unit lsb --lsb-per-dps X (the "
+            "MPU6050 at +-250 deg/s: 131)"]
