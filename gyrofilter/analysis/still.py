@@ -289,22 +289,23 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", 
     warn(f"{text}: analysed as they are (--keep-outliers)")
 
 
-def refuse_large_mean(head, series, allow, *, warn):
+def refuse_large_mean(path, gyro_unit, series, allow, *, warn):
     """Refuse a still-sensor analysis (allan, arma, gap, report) of data whose mean rate on an axis is
     beyond any MEMS bias (:func:`gyrofilter.filter.calibration.implausible_bias`, the rule replay's
     start-up calibration applies): a still gyro's mean rate is its bias, so such a mean says the
     sensor turned or the rates are in another unit (deg/s labelled rad/s reads 57.3 times too large),
     and every coefficient would be as wrong. With ``allow`` (``--allow-large-mean``: the mean is
-    real; ``report``, whose page lists its warnings) only warn (``warn(text)``). ``head``: the file's RecordingHead; ``series``: axis letter ->
-    rates (deg/s). Returns None; raises RecordingError naming the file when refusing."""
+    real; ``report``, whose page lists its warnings) only warn (``warn(text)``). ``path``: the file;
+    ``gyro_unit``: the unit it states; ``series``: axis letter -> rates (deg/s). Returns None;
+    raises RecordingError naming the file when refusing."""
     for axis, x in series.items():
-        text = implausible_bias(axis, float(np.mean(x)), unit=head.gyro_unit)
+        text = implausible_bias(axis, float(np.mean(x)), unit=gyro_unit)
         if text is None:
             continue
         if not allow:
-            raise RecordingError(f"{head.path}: {text}? Fix the unit (gyrofilter convert --unit), or rerun with "
+            raise RecordingError(f"{path}: {text}? Fix the unit (gyrofilter convert --unit), or rerun with "
                                  "--allow-large-mean if the mean is real")
-        warn(f"{head.path}: {text}? Analysed as it is: its coefficients hold only if the mean is real")
+        warn(f"{path}: {text}? Analysed as it is: its coefficients hold only if the mean is real")
 
 
 #: what ends the warning of an axis :func:`characterise_recording` leaves out ("axis x: ...")
@@ -365,7 +366,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
         warn(text)
     warn_about_gaps(head, GAPS_CONSEQUENCE, warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
-    refuse_large_mean(head, series, allow_large_mean, warn=warn)
+    refuse_large_mean(head.path, head.gyro_unit, series, allow_large_mean, warn=warn)
     left_out = None
     if accel is not None:
         unlike = decimated_accelerometer(head) or gravity_unlike(accel, head)

@@ -67,7 +67,7 @@ def run(args):
                     console.say_warning)
     series = {a: x[i0:i1] for a, x in series.items()}
     refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
-    refuse_large_mean(head, series, args.allow_large_mean, warn=console.say_warning)
+    refuse_large_mean(head.path, head.gyro_unit, series, args.allow_large_mean, warn=console.say_warning)
     progress = console.ProgressLines(args.progress)
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0

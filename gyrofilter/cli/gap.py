@@ -85,9 +85,10 @@ def run(args):
     progress = console.ProgressLines(args.progress, "gap")
     if args.report:
         pyplot()  # a missing matplotlib is said now, not after the analysis
-    still.check_mean(args.recording, args.allow_large_mean, warn=console.say_warning)
     rec, report = analyse_file(args.recording, n_sims=args.sims, bootstrap=args.bootstrap,
                                warn=console.say_warning, progress=progress, refuse_motion=not args.allow_motion)
+    # --allow-motion: the sensor turned, so its mean is real
+    still.check_mean(args.recording, rec, args.allow_large_mean or args.allow_motion, warn=console.say_warning)
     d, why = report.get("discrepancy"), gap_report.not_analysed_why(report)
     if why is not None:  # nothing analysed: not a result that exit 0 could vouch for
         raise RecordingError(f"{args.recording}: no axis analysed ({why}); nothing written")

@@ -110,7 +110,7 @@ def compute(path, *, sims, keep_outliers, warn, progress):
             warn(text)
 
     rec, gap_doc = analyse_file(path, n_sims=sims, warn=warned, progress=progress)
-    still.check_mean(path, True, warn=warned)  # a moving record's report is made too: its page says so
+    still.check_mean(path, rec, True, warn=warned)  # a moving record's report is made too: its page says so
     clip = clipped(rec.gyro_dps, _full_scale_dps(rec.header, warned), rec.lsb_per_dps if rec.gyro_unit == "lsb" else None)
     if clip:
         warned(clip)

@@ -2,7 +2,7 @@
 ``--keep-outliers`` option, the way past :func:`gyrofilter.analysis.still.refuse_gross_errors`, and
 ``--allow-large-mean``, the way past :func:`gyrofilter.analysis.still.refuse_large_mean`."""
 from ..analysis.noise.screen import GROSS_LIMIT_DPS, GROSS_Z
-from ..analysis.still import read_axes, refuse_large_mean
+from ..analysis.still import refuse_large_mean
 from ..errors import SettingsError
 from ..filter.calibration import MAX_BIAS_DPS
 from ..units import AXES
@@ -21,12 +21,12 @@ def add_allow_large_mean_argument(parser):
                              "are in another unit, such as deg/s labelled rad/s)")
 
 
-def check_mean(path, allow, *, warn):
-    """Read the recording ``path`` and refuse it (RecordingError) when an axis's mean rate is
-    beyond any bias (:func:`~gyrofilter.analysis.still.refuse_large_mean`; with ``allow`` only
-    ``warn(text)``): for the commands whose analysis reads the file itself (gap, report)."""
-    head, series = read_axes(path, AXES)
-    refuse_large_mean(head, series, allow, warn=warn)
+def check_mean(path, rec, allow, *, warn):
+    """Refuse the recording ``path``, read as ``rec`` (a Recording) by the gap analysis, when an axis's
+    mean rate is beyond any bias (:func:`~gyrofilter.analysis.still.refuse_large_mean`, RecordingError;
+    with ``allow`` only ``warn(text)``): for the commands whose analysis reads the file itself (gap,
+    report), after it, so that a file it cannot read or a moving record is refused in its words."""
+    refuse_large_mean(path, rec.gyro_unit, {a: rec.gyro_dps[:, i] for i, a in enumerate(AXES)}, allow, warn=warn)
 
 
 def refuse_allow_large_mean_in_fleet(args):
