@@ -410,8 +410,12 @@ def test_realtime_into_head_still_writes_the_whole_out_file(tmp_path):
     assert proc.wait(timeout=60) == 0, err
     assert "Traceback" not in err and "BrokenPipe" not in err
     assert len(read_recording(out)) == (4000 - 200) // 5
-    closed = re.search(r"gyrofilter: warning: stdout was closed by its reader after (\d+) lines: the rest of the rows", err)
-    assert closed and 0 < int(closed.group(1)) < (4000 - 200) // 5, err  # rows, after the header lines
+    closed = re.search(r"gyrofilter: warning: stdout was closed by its reader; (\d+) lines were written to it \((\d+) of "
+                       r"them filtered rows\): the rest of the rows", " ".join(err.split()))
+    # lines, the header's and the calibration note's too (a new user's `| head -20` was told "after 11 lines"):
+    # the 20 read, and those written before the reader closed the pipe
+    assert closed and 20 <= int(closed.group(1)) < (4000 - 200) // 5, err
+    assert int(closed.group(2)) == int(closed.group(1)) - 11, err  # 10 header lines, the calibration note
 
 
 @pytest.mark.parametrize("name", ["x$\\foo$.csv", "y$^{{{$.csv", "z$x$.csv"])

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from ..errors import RecordingError
+from ..filter.calibration import implausible_bias
 from ..recording import ACCEL_COLUMNS, INPUT_RATE_KEY, collect_columns, filtered_from, iter_recording, warn_about_gaps
 from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, to_dps, to_mps2
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
@@ -288,6 +289,25 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", 
     warn(f"{text}: analysed as they are (--keep-outliers)")
 
 
+def refuse_large_mean(path, gyro_unit, series, allow, *, warn):
+    """Refuse a still-sensor analysis (allan, arma, gap, report) of data whose mean rate on an axis is
+    beyond any MEMS bias (:func:`gyrofilter.filter.calibration.implausible_bias`, the rule replay's
+    start-up calibration applies): a still gyro's mean rate is its bias, so such a mean says the
+    sensor turned or the rates are in another unit (deg/s labelled rad/s reads 57.3 times too large),
+    and every coefficient would be as wrong. With ``allow`` (``--allow-large-mean``: the mean is
+    real; ``report``, whose page lists its warnings) only warn (``warn(text)``). ``path``: the file;
+    ``gyro_unit``: the unit it states; ``series``: axis letter -> rates (deg/s). Returns None;
+    raises RecordingError naming the file when refusing."""
+    for axis, x in series.items():
+        text = implausible_bias(axis, float(np.mean(x)), unit=gyro_unit)
+        if text is None:
+            continue
+        if not allow:
+            raise RecordingError(f"{path}: {text}? Fix the unit (gyrofilter convert --unit), or rerun with "
+                                 "--allow-large-mean if the mean is real")
+        warn(f"{path}: {text}? Analysed as it is: its coefficients hold only if the mean is real")
+
+
 #: what ends the warning of an axis :func:`characterise_recording` leaves out ("axis x: ...")
 LEFT_OUT = ": left out of the Allan analysis"
 
@@ -297,7 +317,7 @@ GAPS_CONSEQUENCE = "the Allan deviation assumes uniform samples"
 
 
 def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
-                           progress=None, skip_constant=False):
+                           progress=None, skip_constant=False, allow_large_mean=False):
     """Read a still recording and characterise each of ``axes`` of every sensor it holds: (head,
     {axis: AxisNoise}, the count of its repeated rows, the accelerometer's {axis: AxisNoise} or None,
     why the record's accelerometer was left out whole or None).
@@ -305,7 +325,8 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     The one path from a file to its Allan results, for one recording and for a fleet
     (:mod:`gyrofilter.analysis.fleet`). The reader's warnings, missing samples and gross errors kept with
     ``keep_outliers`` go to ``warn(text)`` as they are found; gross errors otherwise raise
-    RecordingError, and a result that is not finite raises AllanInputError (both name the file).
+    RecordingError, as does a mean rate beyond any bias unless ``allow_large_mean``
+    (:func:`refuse_large_mean`), and a result that is not finite raises AllanInputError (both name the file).
     ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings (a record
     that does not look static, :func:`not_static`; a poor fit) stay in their results
     (``AxisNoise.warnings``, the JSON document's ``warnings``).
@@ -345,6 +366,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
         warn(text)
     warn_about_gaps(head, GAPS_CONSEQUENCE, warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
+    refuse_large_mean(head.path, head.gyro_unit, series, allow_large_mean, warn=warn)
     left_out = None
     if accel is not None:
         unlike = decimated_accelerometer(head) or gravity_unlike(accel, head)

@@ -52,6 +52,7 @@ def add_arguments(parser):
     parser.add_argument("--min-clusters", type=options.whole_number, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
     still.add_keep_outliers_argument(parser)
+    still.add_allow_large_mean_argument(parser)
     console.add_progress_argument(parser)
     batch.add_arguments(parser)
     options.add_force_argument(parser)
@@ -91,10 +92,10 @@ def readoff_only(r, terms=GYROSCOPE_TERMS):
 
 
 def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn, progress=None,
-            skip_constant=False):
+            skip_constant=False, allow_large_mean=False):
     """What ``allan`` computes of one recording ``path``: (head, {axis: AxisNoise}, the ``--json``
     document of docs/formats.md section 4, the accelerometer's {axis: AxisNoise} or None), through :func:`~gyrofilter.analysis.still.characterise_recording`
-    (its arguments, ``warn(text)``, ``progress(text)`` and ``skip_constant`` included) and
+    (its arguments, ``warn(text)``, ``progress(text)``, ``skip_constant`` and ``allow_large_mean`` included) and
     :func:`~gyrofilter.analysis.noise.export.to_json` (with the count of repeated rows and the t column's gaps); the
     duration is rows / sample rate (s).
     A result that is not finite raises AllanInputError naming the file; a stuck axis (not
@@ -102,7 +103,7 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     try:
         head, results, repeats, accel, accel_left_out = characterise_recording(
             path, axes=axes, confidence=confidence, min_clusters=min_clusters, keep_outliers=keep_outliers, warn=warn,
-            progress=progress, skip_constant=skip_constant)
+            progress=progress, skip_constant=skip_constant, allow_large_mean=allow_large_mean)
     except ConstantAxisError as exc:  # which --axes would run: the others that vary (all of them were "yz" of a file of equal rows)
         others = exc.varying
         advice = (f"; give --axes {others} to analyse the others" if others else
@@ -205,6 +206,7 @@ def run(args):
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])
+        still.refuse_allow_large_mean_in_fleet(args)
         settings = FleetSettings("allan", axes=axes, confidence=args.confidence, min_clusters=args.min_clusters,
                                  keep_outliers=args.keep_outliers, kalibr_tau_s=args.kalibr_tau_s)
         return batch.run(args, settings, paths)
@@ -221,7 +223,7 @@ def run(args):
 
     head, results, document, accel = analyse(args.recording, axes=axes, confidence=args.confidence,
                                              min_clusters=args.min_clusters, keep_outliers=args.keep_outliers,
-                                             warn=warn, progress=progress)
+                                             warn=warn, progress=progress, allow_large_mean=args.allow_large_mean)
     sample_rate_hz = head.sample_rate_hz
     duration_s = head.rows / sample_rate_hz
     # before anything is printed or written: a --kalibr-tau-s beyond the record is refused in one line

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..analysis.arma import identify as arma
-from ..analysis.still import read_axes, refuse_gross_errors
+from ..analysis.still import read_axes, refuse_gross_errors, refuse_large_mean
 from ..errors import SettingsError
 from ..recording import filtered_words, warn_about_gaps
 from ..recording.checks import gap_step_s
@@ -37,6 +37,7 @@ def add_arguments(parser):
                              "the F test (paper 003's rule) or AIC; all three are printed")
     console.add_progress_argument(parser)
     still.add_keep_outliers_argument(parser)
+    still.add_allow_large_mean_argument(parser)
     options.add_force_argument(parser)
 
 
@@ -66,6 +67,7 @@ def run(args):
                     console.say_warning)
     series = {a: x[i0:i1] for a, x in series.items()}
     refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
+    refuse_large_mean(head.path, head.gyro_unit, series, args.allow_large_mean, warn=console.say_warning)
     progress = console.ProgressLines(args.progress)
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0

@@ -25,7 +25,7 @@ from ..errors import RecordingError, SettingsError
 from ..plots import pyplot
 from ..sim.simulate import check_seed
 from ..units import AXES
-from . import batch, console, options, outputs
+from . import batch, console, options, outputs, still
 
 
 
@@ -47,6 +47,7 @@ def add_arguments(parser):
     parser.add_argument("--allow-motion", action="store_true",
                         help="analyse a recording that does not look still (refused by default: the analysis models a "
                              "still gyro, so its findings would describe the motion)")
+    still.add_allow_large_mean_argument(parser)
     console.add_progress_argument(parser)
     batch.add_arguments(parser)
     options.add_force_argument(parser)
@@ -73,6 +74,7 @@ def run(args):
     paths = batch.expand(args.recordings)
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--report"])
+        still.refuse_allow_large_mean_in_fleet(args)
         return batch.run(args, FleetSettings("gap", sims=args.sims), paths)
     args.recording = batch.single(args, paths)
     report_files = [os.path.join(args.report, name) for name in gap_report.report_file_names()] if args.report else []
@@ -85,6 +87,8 @@ def run(args):
         pyplot()  # a missing matplotlib is said now, not after the analysis
     rec, report = analyse_file(args.recording, n_sims=args.sims, bootstrap=args.bootstrap,
                                warn=console.say_warning, progress=progress, refuse_motion=not args.allow_motion)
+    # --allow-motion: the sensor turned, so its mean is real
+    still.check_mean(args.recording, rec, args.allow_large_mean or args.allow_motion, warn=console.say_warning)
     d, why = report.get("discrepancy"), gap_report.not_analysed_why(report)
     if why is not None:  # nothing analysed: not a result that exit 0 could vouch for
         raise RecordingError(f"{args.recording}: no axis analysed ({why}); nothing written")

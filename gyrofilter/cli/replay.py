@@ -79,8 +79,9 @@ def run(args):
     with contextlib.redirect_stdout(sys.stderr) if args.realtime else contextlib.nullcontext():  # stdout has the rows
         console.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
     if args.realtime and not replay.stdout_open:
-        console.say_warning(f"stdout was closed by its reader after {replay.lines_printed} lines: the rest of the "
-                            "rows were filtered (the summary counts them) but not printed")
+        console.say_warning(f"stdout was closed by its reader; {replay.lines_printed} lines were written to it "
+                            f"({replay.rows_printed} of them filtered rows): the rest of the rows were filtered (the "
+                            "summary counts them) but not printed")
     if saved:
         console.say(f"saved the calibration to {args.save_calibration}")
     if args.out:
@@ -141,7 +142,7 @@ class Replay:
         self._t_tail = np.empty(0)
         self._wall_start = None
         self.stdout_open = True  # False once the reader of --realtime's rows went away (| head)
-        self.lines_printed = 0
+        self.lines_printed = self.rows_printed = 0  # lines written to stdout, header lines included; of them, rows
 
     @staticmethod
     def _envelope(buckets):
@@ -209,12 +210,13 @@ class Replay:
             if row is not None:  # a row comes out when its block's last sample, this one, goes in
                 rows.append(row)
                 t_rows.append(t)
-                self.print_rows(filtering.ROW_FORMAT % (t, *row))
+                self.print_rows(filtering.ROW_FORMAT % (t, *row), rows=1)
         return np.array(t_rows, dtype=float), np.array(rows).reshape(-1, 3)
 
-    def print_rows(self, text):
-        """Print ``text`` on stdout at once; when its reader went away (``| head``), stop printing
-        and pacing, and finish the rest (the --out file, the summary) without them."""
+    def print_rows(self, text, rows=0):
+        """Print ``text`` (one line or several, ``rows`` of them filtered rows) on stdout at once; when its
+        reader went away (``| head``), stop printing and pacing, and finish the rest (the --out file,
+        the summary) without them. The lines and rows written while the reader was there are counted."""
         if not self.stdout_open:
             return
         try:
@@ -225,7 +227,8 @@ class Replay:
         if console.stdout_reader_gone():
             self.stdout_open = False
         else:
-            self.lines_printed += 1
+            self.lines_printed += text.count("\n") + 1
+            self.rows_printed += rows
 
     def _pass_on(self, t_s, rows):
         self.filtered.add(rows)

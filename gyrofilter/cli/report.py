@@ -110,6 +110,7 @@ def compute(path, *, sims, keep_outliers, warn, progress):
             warn(text)
 
     rec, gap_doc = analyse_file(path, n_sims=sims, warn=warned, progress=progress)
+    still.check_mean(path, rec, True, warn=warned)  # a moving record's report is made too: its page says so
     clip = clipped(rec.gyro_dps, _full_scale_dps(rec.header, warned), rec.lsb_per_dps if rec.gyro_unit == "lsb" else None)
     if clip:
         warned(clip)
@@ -119,7 +120,7 @@ def compute(path, *, sims, keep_outliers, warn, progress):
     progress("allan")
     allan_doc = allan_error = None
     try:
-        _, results, allan_doc, accel = allan.analyse(path, keep_outliers=keep_outliers, warn=warned,
+        _, results, allan_doc, accel = allan.analyse(path, keep_outliers=keep_outliers, warn=warned, allow_large_mean=True,
                                                         skip_constant=True)
     except GyroFilterError as exc:
         allan_error = one_line(exc)

@@ -168,6 +168,23 @@ def stillness_z(window_dps) -> np.ndarray:
     return spread / scale
 
 
+def implausible_bias(axis, mean_dps, *, max_bias_dps=MAX_BIAS_DPS, unit=None):
+    """The one rule for a still gyro's mean rate: it is its bias, |b| <= ``max_bias_dps`` (deg/s;
+    default :data:`MAX_BIAS_DPS`, the MPU6050 datasheet's +-20 deg/s zero-rate output). Returns
+    None for a plausible mean, else the sentence (no final "?") that names the ``axis``, the mean
+    (deg/s) and the likely mistake: the sensor turning, or the rates in another unit. ``unit``: the
+    unit the file gives (``rad/s``: deg/s numbers labelled rad/s read 180/pi = 57.3 times too large,
+    said when the mean / 57.3 is a plausible bias)."""
+    if abs(mean_dps) <= max_bias_dps:
+        return None
+    if unit == "rad/s" and abs(mean_dps) * math.pi / 180.0 <= max_bias_dps:
+        likely = f"deg/s written as rad/s: {mean_dps * math.pi / 180.0:.3g} deg/s if the numbers are deg/s"
+    else:
+        likely = "raw counts read as deg/s, a wrong lsb_per_dps"
+    return (f"axis {axis} reads {mean_dps:.3g} deg/s on average, beyond the plausible bias of {max_bias_dps:g} "
+            f"deg/s: is the sensor turning, or are the rates in another unit ({likely})")
+
+
 def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=MAX_BIAS_DPS, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
@@ -192,12 +209,9 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     z = stillness_z(x)
     sigma = white_noise_std(x)
     for i, axis in enumerate(AXES):
-        if abs(bias[i]) > max_bias_dps:
-            raise CalibrationError(
-                f"calibration: axis {axis} reads {bias[i]:.3g} deg/s on average, beyond the plausible bias "
-                f"of {max_bias_dps:g} deg/s: is the sensor turning, or are the rates in another unit (raw counts read as "
-                "deg/s, a wrong lsb_per_dps)? Keep it still while calibrating"
-            )
+        implausible = implausible_bias(axis, bias[i], max_bias_dps=max_bias_dps)
+        if implausible:
+            raise CalibrationError(f"calibration: {implausible}? Keep it still while calibrating")
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "

@@ -56,11 +56,12 @@ from ..units import AXES, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_h
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .foreign_extras import find_extras, gyro_out_of_range
+from .foreign_extras import columns_example, find_extras, gyro_out_of_range, left_out_line, whole_rates
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
-from .unit_words import columns_stated, converted_text, given_unit, known_unit, name_units, recorded, stated_unit, to_floats, units_of
+from .unit_words import (columns_stated, converted_text, given_unit, known_unit, name_units, recorded, stated_unit, to_floats,
+                         units_of, unread_unit)
 from .writer import EXACT_FORMAT, exact_format
 
 #: time units of a time column and their length in s
@@ -71,7 +72,7 @@ MIN_INFERRED_RATE_HZ = 5.0
 TIME_NAME = re.compile(r"(?:header_)?(?P<word>t|time|times|timestamp|time_stamp|stamp|%time|seconds_elapsed|elapsed|"
                        r"elapsed_time|seconds|secs|sec|millis|micros|nanos)" rf"(?:_(?P<unit>{name_units('time')}))?")
 #: a gyro column's name once normalised, its axis in ``axis``, an optional unit at the end
-GYRO_NAME = re.compile(r"(?:.*_)?(?:g|gyr|gyro|gyroscope|w|omega|angular_velocity|angularvelocity|rotation_rate|"
+GYRO_NAME = re.compile(r"(?:.*_)?(?:g|gy|gyr|gyro|gyroscope|w|omega|angular_velocity|angularvelocity|rotation_rate|"
                        r"rotationrate|rot|rate)_?(?P<axis>[xyz])" rf"(?:_(?P<unit>{name_units('rate')}))?")
 #: a bare axis name (``x``: the phone loggers' gyroscope files), taken where no gyro-named column exists
 BARE_AXIS = re.compile(r"(?P<axis>[xyz])")
@@ -174,8 +175,7 @@ def _pick(names, path, columns, time_unit, unit):
     unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME, "time"),
                       f"the time column {quote(names[time]) if time is not None else ''} states", "time")
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
-        raise RecordingError(f"{path}: the time column {quote(names[time])} states {quote(unit)}, a unit convert does "
-                             f"not read; give --time-unit {', '.join(TIME_UNITS)} only if it means one of them")
+        raise unread_unit(path, f"the time column {quote(names[time])} states", unit, "--time-unit", ", ".join(TIME_UNITS))
     return time, unit, gyro, stated
 
 
@@ -219,8 +219,9 @@ def _gyro_column(normal, names, axis, path):
         if len(found) > 1:
             raise RecordingError(f"{path}: line with the column names: columns {', '.join(quote(names[i]) for i in found)} "
                                  f"could each be the gyro's {axis}; name the three in --columns")
+    example = columns_example(names, normal, _time_column(normal, []))
     raise RecordingError(f"{path}: no column for the gyro's {axis} among {quote(', '.join(names))}; name the three "
-                         "(or the time and the three) in --columns, e.g. --columns time,wx,wy,wz")
+                         f"(or the time and the three) in --columns, e.g. --columns {example}")
 
 
 def _time_column(normal, gyro):
@@ -483,8 +484,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     summary = [f"columns: x {quote(names[gyro[0]])}, y {quote(names[gyro[1]])}, z {quote(names[gyro[2]])} "
                f"in {unit}{converted_text(read_unit)}{' (as the names state)' if stated == read_unit else ''}; {rows} rows"
                + (f", {skipped} blank or comment line(s) skipped" if skipped else "")]
-    summary += extras.summary + ([f"left out: {', '.join(n for i, n in enumerate(names) if i not in wanted)}"]
-                                 if len(wanted) < len(names) else [])
+    left_out = left_out_line(names, wanted, extras.why, lambda i: TIME_NAME.fullmatch(_normal(names[i])[0]))
+    summary += extras.summary + ([left_out] if left_out else [])
     header = {VERSION_KEY: FORMAT_VERSION}
     out_columns, formats = list(GYRO_COLUMNS), ["%d" if whole else EXACT_FORMAT for whole in integral]
     if time is not None:
@@ -526,16 +527,17 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     header.update(extras.header, converted_from=path)
     return Foreign(raw, path, header, out_columns + extras.columns, formats + extras.formats(), rows, summary,
-                   plan, counts["warnings"] + extras.warnings)
+                   plan, counts["warnings"] + whole_rates(integral, read_unit, gyro, names) + extras.warnings)
 
 
 def _gyro_unit(unit, stated, lsb_per_dps, path):
     """The gyro unit: the caller's, which must agree with the names', or the names'; never guessed."""
     unit = given_unit(path, "--unit", unit, stated, "the column names say", "rate")
+    choices = f"{', '.join(units_of('rate')[:-1])} or lsb (with --lsb-per-dps)"
+    if unit not in units_of("rate") and stated:
+        raise unread_unit(path, "the gyro columns state", stated, "--unit", choices)
     if unit not in units_of("rate"):
-        raise RecordingError(f"{path}: " + (f"the gyro columns state {quote(stated)}, a unit convert does not read"
-                             if stated else "the gyro unit is not stated") + f"; give --unit {', '.join(units_of('rate')[:-1])}"
-                             " or lsb (with --lsb-per-dps)" + (" only if it means one of them" if stated else ""))
+        raise RecordingError(f"{path}: the gyro unit is not stated; give --unit {choices}")
     if unit == "lsb":
         if lsb_per_dps is None:
             raise RecordingError("--unit lsb needs --lsb-per-dps (LSB per deg/s; the MPU6050 at +-250 deg/s: 131)")

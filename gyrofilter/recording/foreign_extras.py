@@ -29,6 +29,7 @@ the range check of its values, the gyro's too (:func:`gyro_out_of_range`).
 """
 from __future__ import annotations
 
+import itertools
 import re
 from dataclasses import dataclass, field
 
@@ -39,7 +40,8 @@ from ..inputs import quote
 from ..units import (AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
                      TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2)
 from .header import ACCEL_COLUMNS, TEMPERATURE_LIKE_NAMES, accel_units_header, format_number
-from .unit_words import CONVERTED, columns_stated, converted_text, given_unit, name_units, recorded, stated_unit, to_floats, units_of
+from .unit_words import (CONVERTED, columns_stated, converted_text, given_unit, name_units, recorded, stated_unit, to_floats,
+                         units_of, unread_unit)
 from .writer import EXACT_FORMAT, exact_format
 
 #: the units of a log's temperature column (``convert --temp-unit``): deg C, deg F (converted),
@@ -50,7 +52,7 @@ TEMP_UNITS = units_of("temp") + ("none",)
 ACCEL_UNIT_CHOICES = units_of("accel") + ("none",)
 #: an accelerometer column's name once normalised (``foreign``'s rule), its axis in ``axis``, an
 #: optional unit at the end
-ACCEL_NAME = re.compile(r"(?:.*_)?(?:a|acc|accl|accel|acceleration|accelerometer|linear_acceleration|"
+ACCEL_NAME = re.compile(r"(?:.*_)?(?:a|ac|acc|accl|accel|acceleration|accelerometer|linear_acceleration|"
                         r"linearacceleration)_?(?P<axis>[xyz])" rf"(?:_(?P<unit>{name_units('accel')}))?")
 #: the end of a temperature-like name (:data:`TEMPERATURE_LIKE_NAMES`) that states its unit (``TempC``, ``temp_degc``, ``celsius``)
 _TEMP_NAME = re.compile(rf"(?:.*_|temp|temperature)?(?P<unit>{name_units('temp')})")
@@ -66,7 +68,7 @@ _TEMP_WORDS = {"c": "deg C", "f": "deg F", "k": "K", "mpu6050": "raw counts"}
 class Extras:
     """The temperature and accelerometer columns kept: their ``indices`` in the log, the
     recording's ``columns`` (``temp``, ``ax, ay, az``), the ``header`` keys they need, the
-    ``summary`` and ``warnings`` to say, the units read (``temp_unit``, stated by its name where ``temp_named``; ``accel_read``; ``accel_unit``,
+    ``summary`` and ``warnings`` to say, ``why`` each column found is left out (index -> reason), the units read (``temp_unit``, stated by its name where ``temp_named``; ``accel_read``; ``accel_unit``,
     the recording's, and ``lsb_per_g``) and, per column, whether every value so far is integral (the writer's format)."""
 
     indices: list = field(default_factory=list)
@@ -74,6 +76,7 @@ class Extras:
     header: dict = field(default_factory=dict)
     summary: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
+    why: dict = field(default_factory=dict)
     temp_unit: str = None
     temp_named: bool = False
     accel_unit: str = None
@@ -148,6 +151,7 @@ def find_extras(names, normal, taken, path, *, temp_unit=None, accel_unit=None, 
 
 def _temperature(extras, found, names, normal, temp_unit, path):
     if temp_unit == "none":  # the summary's "left out" names them
+        extras.why.update((i, "--temp-unit none") for i in found)
         return
     if len(found) > 1:
         raise RecordingError(f"{path}: line with the column names: columns {', '.join(quote(names[i]) for i in found)} "
@@ -167,6 +171,7 @@ def _temperature(extras, found, names, normal, temp_unit, path):
                                + (f" ({quote(stated)})" if stated is not None else "")
                                + " (deg C, deg F, K or raw MPU6050 counts?); give --temp-unit c, f or k (converted to deg C) or "
                                  "--temp-unit mpu6050 to keep it as the recording's temp, --temp-unit none to leave it out without a word")
+        extras.why[i] = "unit not stated: --temp-unit"
         return
     extras.indices.append(i)
     extras.columns.append("temp")
@@ -181,6 +186,7 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
     per_axis = {a: [i for i in free if (m := ACCEL_NAME.fullmatch(normal[i][0])) and m["axis"] == a] for a in AXES}
     found = [i for a in AXES for i in per_axis[a]]
     if accel_unit == "none":  # the summary's "left out" names them
+        extras.why.update((i, "--accel-unit none") for i in found)
         return
     for a in AXES:
         if len(per_axis[a]) > 1:
@@ -197,8 +203,8 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
                             accel_unit, "the accelerometer columns state", "; --accel-unit none leaves them out")
     unit = given_unit(path, "--accel-unit", accel_unit, stated, "the accelerometer columns state", "accel")
     if unit is not None and unit not in units_of("accel"):
-        raise RecordingError(f"{path}: the accelerometer columns state the unit {quote(unit)}; give --accel-unit "
-                             f"{', '.join(units_of('accel'))} (or none to leave them out)")
+        raise unread_unit(path, "the accelerometer columns state", unit, "--accel-unit",
+                          f"{', '.join(units_of('accel')[:-1])} or lsb (with --lsb-per-g)", "; --accel-unit none leaves them out")
     if lsb_per_g is not None and unit != "lsb":
         raise RecordingError(f"--lsb-per-g goes with an accelerometer in lsb, not {unit or 'one of no stated unit'}")
     listed = ", ".join(quote(names[i]) for i in found)
@@ -206,11 +212,13 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
         missing = ", ".join(a for a in AXES if not per_axis[a])
         extras.warnings.append(f"accelerometer column(s) {listed} left out: no column for its {missing} (a recording "
                                "holds ax, ay, az together)")
+        extras.why.update((i, f"accelerometer without its {missing}") for i in found)
         return
     if unit is None:
         extras.warnings.append(f"accelerometer columns {listed} left out: their unit is not stated; give --accel-unit "
                                f"{', '.join(units_of('accel')[:-1])} or lsb (with --lsb-per-g) to keep them, --accel-unit none to leave them out "
                                "without a word")
+        extras.why.update((i, "unit not stated: --accel-unit") for i in found)
         return
     if unit == "lsb":
         if lsb_per_g is None:
@@ -224,3 +232,39 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
     extras.summary.append(", ".join(f"{c} {quote(names[i])}" for c, i in zip(ACCEL_COLUMNS, found))
                           + f" in {extras.accel_unit}{converted_text(unit)}"
                           + (" (as the names state)" if stated and accel_unit is None else ""))
+
+
+def left_out_line(names, wanted, why, time_like):
+    """The summary's line of the log's columns left out, each with why (``why``: index -> reason, of
+    :class:`Extras`; a time-like name, ``time_like(index)``, is another time column; any other is a
+    name convert does not read), or None when every column of ``names`` is ``wanted``."""
+    def reason(i):
+        return why.get(i) or ("another time column" if time_like(i) else "not a column convert reads")
+    left = [i for i in range(len(names)) if i not in wanted]
+    runs = [", ".join(quote(names[i]) for i in run) + f" ({why})" for why, run in itertools.groupby(left, reason)]
+    return f"left out: {', '.join(runs)}" if left else None
+
+
+def columns_example(names, normal, time):
+    """An example of ``--columns`` in this log's own ``names`` (``normal``: once normalised; ``time``:
+    the time column's index or None): the time, then the first three columns named like no
+    accelerometer or temperature (else the first three others)."""
+    def extra(i):
+        key = normal[i][0]
+        return ACCEL_NAME.fullmatch(key) or key in TEMPERATURE_LIKE_NAMES or TEMP_UNIT_NAME.fullmatch(key)
+    others = [i for i in range(len(names)) if i != time]
+    plain = [i for i in others if not extra(i)]
+    three = (plain if len(plain) >= 3 else others)[:3]
+    return ",".join(names[i] for i in ([time] if time is not None else []) + three)
+
+
+def whole_rates(integral, unit, gyro, names):
+    """The warning (a list of none or one) of gyro columns (``gyro``: their indices) read in ``unit``
+    whose every value is a whole number (``integral``: per column): raw counts, as a sketch prints an
+    MPU6050's registers, taken as deg/s read 131 times too large (+-250 deg/s). Not refused: a log in
+    whole deg/s exists."""
+    if unit == "lsb" or not all(integral):
+        return []
+    return [f"every value of the gyro columns {', '.join(quote(names[i]) for i in gyro)} is a whole number, as "
+            f"raw counts are: if they are the sensor's counts, not {unit}, give --unit lsb --lsb-per-dps X (the "
+            "MPU6050 at +-250 deg/s: 131)"]

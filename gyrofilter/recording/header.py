@@ -282,7 +282,8 @@ TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s
 #: are, so that a user's own ``temp_c`` column is not carried along unread (no compensation, the gap
 #: analysis reading a temperature drift as a drift in time) while the file reads without a word
 TEMPERATURE_LIKE_NAMES = frozenset({"temp", "temps", "temp_c", "tempc", "temp_degc", "temp_deg_c", "temperature",
-                                    "temperature_c", "temperature_degc", "die_temp", "die_temp_c", "celsius"})
+                                    "temperature_c", "temperature_degc", "die_temp", "die_temp_c", "celsius",
+                                    "tmp"})  # the Arduino MPU6050 sketch's Tmp (raw counts)
 
 
 def refuse_invisible(name, what, where):

@@ -23,6 +23,7 @@ from decimal import Decimal
 import numpy as np
 
 from ..errors import RecordingError
+from ..inputs import quote
 
 _SPELLINGS = {  # quantity -> unit (None: ambiguous) -> its spellings, lower case, without blanks
     "time": {"s": ("s", "sec", "secs", "second", "seconds"),
@@ -156,3 +157,13 @@ def given_unit(path, option, given, stated, whose, quantity, words=None):
         raise RecordingError(f"{path}: {option} {given}, but {whose} {(words or {}).get(stated, stated)}; "
                              f"give {option} {stated}, or leave {option} out")
     return given if given is not None else stated
+
+
+def unread_unit(path, whose, stated, option, choices, then=""):
+    """The refusal (RecordingError) of a unit ``stated`` by a log's names that convert does not read
+    (``whose``: the names that state it, ``option``: the option that gives the unit, ``choices``:
+    its units as said): the one wording of the gyro, time and accelerometer columns, asking for the
+    option only where the unit means one of the choices (``time (min)`` read as s is 60 x the rate);
+    ``then``: another way out, said after."""
+    return RecordingError(f"{path}: {whose} {quote(stated)}, a unit convert does not read; give {option} {choices} "
+                          f"only if it means one of them{then}")

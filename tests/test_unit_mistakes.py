@@ -1,0 +1,48 @@
+"""A new user's unit mistakes: deg/s written as rad/s is refused by every still analysis
+(allan, arma, gap, report) as replay's calibration refuses it, not analysed 57 times too large."""
+import math
+
+import numpy as np
+import pytest
+
+from gyrofilter.cli import main
+from gyrofilter.recording import Recording, convert_gyro, write_recording
+
+
+@pytest.fixture(scope="module")
+def dps_as_rad(tmp_path_factory):
+    """20 s at 50 Hz of a still gyro (bias 4.5, 0.1, 1.2 deg/s) whose deg/s numbers are labelled rad/s."""
+    rng = np.random.default_rng(7)
+    g = np.array([4.5, 0.1, 1.2]) + rng.normal(size=(1000, 3)) * 0.05
+    rec = convert_gyro(Recording.from_dps(g, 50.0), "rad/s")
+    for c in ("gx", "gy", "gz"):
+        rec.columns[c] = g[:, "xyz".index(c[1])]  # the deg/s numbers, read as rad/s
+    path = tmp_path_factory.mktemp("u") / "dps_as_rad.csv.gz"
+    write_recording(str(path), rec)
+    return str(path)
+
+
+@pytest.mark.parametrize("command", [["allan"], ["arma"], ["gap", "--sims", "20", "--bootstrap", "0"]])
+def test_a_mean_beyond_any_bias_is_refused(dps_as_rad, command, capsys):
+    assert main(command + [dps_as_rad]) == 2
+    err = capsys.readouterr().err
+    assert dps_as_rad in err and "axis x reads 258 deg/s on average" in err
+    assert "deg/s written as rad/s" in err and "--allow-large-mean" in err
+
+
+def test_allow_large_mean_analyses_it_with_a_warning(dps_as_rad, capsys):
+    assert main(["allan", dps_as_rad, "--allow-large-mean"]) == 0
+    err = " ".join(capsys.readouterr().err.split())  # warnings are wrapped
+    assert "axis x reads 258 deg/s on average" in err and "4.5 deg/s if the numbers are deg/s" in err
+
+
+def test_report_says_it_among_its_warnings(dps_as_rad, tmp_path, capsys):
+    """A report is made of a moving record too (its page lists the warnings): the mean is said, not refused."""
+    assert main(["report", dps_as_rad, "--out", str(tmp_path / "r.html"), "--sims", "10"]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    assert "axis x reads 258 deg/s on average" in err and "deg/s written as rad/s" in err
+
+
+def test_a_fleet_refuses_allow_large_mean(dps_as_rad, tmp_path, capsys):
+    assert main(["allan", dps_as_rad, dps_as_rad, "--fleet", str(tmp_path / "f"), "--allow-large-mean"]) == 2
+    assert "--allow-large-mean is for one recording" in capsys.readouterr().err
