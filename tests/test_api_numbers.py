@@ -279,3 +279,23 @@ def test_the_cases_of_pass_29b_stay_fixed():
     for bad in ("9", None, True, 2.5):
         with pytest.raises(GyroFilterError, match="min_clusters"):
             _characterised(min_clusters=bad)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(5))
+def test_drawn_settings_in_every_numpy_form(seed):
+    """The bigger sweep: values drawn in and beyond each setting's range (seeded), every form gives
+    the plain value's settings or its refusal in its words."""
+    rng = np.random.default_rng(seed)
+    for name, bounds in SETTING_RANGES.items():
+        low, high = bounds.get("low", -1e6), bounds.get("high", 1e6)
+        for _ in range(4):
+            value = float(rng.uniform(low - 0.1 * (high - low), high + 0.1 * (high - low)))
+            value = round(value) if bounds.get("integer") and rng.random() < 0.8 else value
+            call = lambda v, name=name: GyroFilter(100.0, **{name: v}).state_dict()  # noqa: E731
+            plain = outcome(call, value)
+            for form, given in forms(value).items():
+                held = np.asarray(given).item()
+                held = float(held) if isinstance(held, np.floating) else held
+                assert outcome(call, given) == (plain if type(held) is type(value) else outcome(call, held)), \
+                    f"{name} given {form}({value!r})"
