@@ -10,7 +10,8 @@ The rules (docs/formats.md, section 8):
   :data:`MAX_NUMBER_CHARS`. Every number is finite, and where the caller gives bounds, inside them.
 - **Numbers** in JSON or from Python code (a calibration file, a model, ``update()``) are an int
   or a float, never a bool, finite (an int too large for a float is refused, not an
-  OverflowError), and inside the caller's bounds.
+  OverflowError), and inside the caller's bounds. numpy's numbers and 0-d arrays are the numbers
+  (or bools) they hold (:func:`scalar`), kept and shown as Python's (:func:`python_value`).
 - **JSON files** are read at most :data:`MAX_JSON_BYTES` bytes (a larger file or an endless
   one such as ``/dev/zero`` is refused), must be UTF-8, may nest at most :data:`MAX_JSON_DEPTH`
   levels, and hold no ``NaN``/``Infinity`` tokens and no key twice in one object (nor one
@@ -186,10 +187,27 @@ def check_number(value, what, *, low=None, high=None, low_open=False, high_open=
 
 
 def scalar(value):
-    """The number a 0-d numpy array of numbers holds (``np.array(25.0)``, what ``x[()]`` or a
-    reduction with ``keepdims`` gives: numpy's scalars in all but type), else ``value`` as it is."""
-    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+    """The number or bool a 0-d numpy array of them holds (``np.array(25.0)``, what ``x[()]`` or a
+    reduction with ``keepdims`` gives: numpy's scalars in all but type), else ``value`` as it is.
+    A bool stays a bool (``np.bool_``), refused where a number is asked (:func:`check_number`)."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "biuf":
         return value[()]
+    return value
+
+
+def python_value(value):
+    """``value`` with numpy scalars as the Python int or float they hold (lists and tuples element
+    by element, as plain lists and tuples: a namedtuple of 3 coefficients ended in a TypeError);
+    anything else as it is. A ``longdouble`` is the float nearest it (its ``item()`` is itself,
+    which ``json`` does not write; a ``clongdouble`` the complex); a 0-d array of numbers or bools
+    as what it holds (:func:`scalar`: ``np.array(0.5)`` is 0.5, not an array)."""
+    value = scalar(value)
+    if isinstance(value, np.generic):
+        item = value.item()
+        return float(item) if isinstance(item, np.floating) else complex(item) if isinstance(item, np.complexfloating) else item
+    if isinstance(value, (list, tuple)):  # a plain list or tuple: a namedtuple's type takes no generator
+        plain_values = [python_value(v) for v in value]
+        return plain_values if isinstance(value, list) else tuple(plain_values)
     return value
 
 
@@ -203,9 +221,7 @@ def refuse_unordered(values, what, error=SettingsError):
 
 def _short(value):
     """A value for a message, long ints and floats included, at most MAX_QUOTE_CHARS characters."""
-    if isinstance(value, (np.generic,)):
-        value = value.item()
-    text = repr(value)
+    text = repr(python_value(value))
     return text if len(text) <= MAX_QUOTE_CHARS else f"{text[:MAX_QUOTE_CHARS]}... ({len(text)} characters)"
 
 

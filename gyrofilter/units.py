@@ -10,7 +10,7 @@ from functools import partial
 import numpy as np
 
 from .errors import SampleError, SettingsError
-from .inputs import MAX_QUOTE_CHARS, check_number, scalar
+from .inputs import MAX_QUOTE_CHARS, check_number, python_value, scalar
 
 DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
@@ -166,6 +166,7 @@ def plain(value):
 def shown(value):
     """:func:`plain`, but an array by its shape (``an array of shape (4,)``): a user's value that
     may be an array of samples, as an error message shows it."""
+    value = scalar(value)  # a 0-d array of numbers is the number it holds
     return f"an array of shape {value.shape}" if isinstance(value, np.ndarray) else plain(value)
 
 
@@ -195,20 +196,6 @@ def json_ready(value):
         return json_ready(python_value(value) if isinstance(value, np.generic) else value.tolist())
     if isinstance(value, float) and not math.isfinite(value):
         return None
-    return value
-
-
-def python_value(value):
-    """``value`` with numpy scalars as the Python int or float they hold (lists and tuples element
-    by element, as plain lists and tuples: a namedtuple of 3 coefficients ended in a TypeError);
-    anything else as it is. A ``longdouble`` is the float nearest it (its ``item()`` is itself,
-    which ``json`` does not write; a ``clongdouble`` the complex)."""
-    if isinstance(value, np.generic):
-        item = value.item()
-        return float(item) if isinstance(item, np.floating) else complex(item) if isinstance(item, np.complexfloating) else item
-    if isinstance(value, (list, tuple)):  # a plain list or tuple: a namedtuple's type takes no generator
-        plain_values = [python_value(v) for v in value]
-        return plain_values if isinstance(value, list) else tuple(plain_values)
     return value
 
 

@@ -12,9 +12,9 @@ from .averaging import AVERAGERS
 from .calibration import MAX_BIAS_DPS
 from .hold import DEFAULTS as HOLD_DEFAULTS
 from ..errors import SettingsError
-from ..inputs import check_number
+from ..inputs import check_number, python_value
 from .predictor import closed_loop_radius, stable_gain_threshold
-from ..units import MAX_RATE_DPS, python_value, shown
+from ..units import MAX_RATE_DPS, shown
 
 
 #: longest start-up still window (s), and most samples in it (an hour at 1 kHz, 115 MB with the
@@ -171,12 +171,16 @@ class FilterSettings:
 
         numbers = {name: check_number(getattr(self, name), f"setting {name}", **bounds)
                    for name, bounds in SETTING_RANGES.items()}
-        checked = replace(self, **numbers)
-        if isinstance(checked.hold, np.bool_):  # numpy's True is True ("hold=True: must be True or False")
-            checked = replace(checked, hold=bool(checked.hold))
+        # every other setting as the Python value it holds (units.python_value): numpy's True is True
+        # ("hold=True: must be True or False"), np.float32(0.01) or np.array(0.01) one coefficient
+        # (one was iterated over as if it were 3, the other refused as an array)
+        plain_values = {f.name: python_value(getattr(self, f.name)) for f in fields(self) if f.name not in numbers}
+        c = plain_values["temp_coefficient_dps_per_c"]
+        if isinstance(c, np.ndarray) and c.ndim == 1:  # an array of 3 coefficients: refused as "an array of shape (3,)"
+            plain_values["temp_coefficient_dps_per_c"] = tuple(python_value(list(c)))
+        checked = replace(self, **numbers, **plain_values)
         checked._validate_choices(need)
-        # np.float32(0.01) was taken, then iterated over as if it were 3
-        return replace(checked, temp_coefficient_dps_per_c=python_value(checked.temp_coefficient_dps_per_c))
+        return checked
 
     def _validate_choices(self, need):
         """The checks beyond the ranges: the named choices and the settings that depend on each other."""

@@ -23,15 +23,19 @@ import numpy as np
 from ..effects import TEMPERATURE
 from ..errors import SettingsError
 from ..inputs import check_number
-from ..units import AXES, TEMP_RANGE_C, check_rates_dps, plain
+from ..units import AXES, TEMP_RANGE_C, check_rates_dps, shown
 from .samples import as_numbers, check_temperature
 
 
 def _coefficients(coefficient_dps_per_c):
-    c = np.broadcast_to(np.asarray(coefficient_dps_per_c, dtype=float), (3,))
-    if not np.all(np.isfinite(c)):
-        raise SettingsError(f"coefficient_dps_per_c must be finite, got {plain(coefficient_dps_per_c)}")
-    return c
+    """c as 3 floats (x, y, z) from one number or 3, each a finite number as
+    :func:`~gyrofilter.inputs.check_number` takes it (True was taken as 1, a string ended in
+    numpy's ValueError); SettingsError naming it otherwise."""
+    c = coefficient_dps_per_c
+    several = isinstance(c, (tuple, list)) or isinstance(c, np.ndarray) and c.ndim == 1
+    if several and len(c) != 3:
+        raise SettingsError(f"coefficient_dps_per_c must be one number or 3 (x, y, z), got {shown(c)}")
+    return np.array([check_number(v, "coefficient_dps_per_c") for v in (c if several else (c,) * 3)], dtype=float)
 
 
 def _rates_and_temperatures(gyro_dps, temp_c):

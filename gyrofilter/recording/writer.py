@@ -174,7 +174,9 @@ class RecordingWriter(Closable):
     fsync : bool
         Also ``os.fsync`` at each flush (the data reach the disk, not just the OS).
     compresslevel : int
-        gzip level 1-9 for ``.gz`` files.
+        gzip level 0-9 for ``.gz`` files (0: stored uncompressed); a whole number as
+        :func:`~gyrofilter.inputs.check_number` takes it (10 ended in zlib's ValueError, 9.0 in a
+        TypeError, True was taken as 1), as ``flush_interval_s`` (>= 0) is.
     name : str, optional
         The file as messages name it, and whose ``.gz`` ending chooses gzip (default ``path``; a writer
         to a temporary file names the user's).
@@ -197,8 +199,9 @@ class RecordingWriter(Closable):
         self._formats = list(formats) if formats is not None else [None] * len(self.columns)
         if len(self._formats) != len(self.columns):
             raise RecordingError(f"{self.name}: {len(self._formats)} formats for {len(self.columns)} columns")
-        self._flush_interval_s = flush_interval_s
+        self._flush_interval_s = None if flush_interval_s is None else check_number(flush_interval_s, "flush_interval_s", low=0)
         self._fsync = fsync
+        compresslevel = check_number(compresslevel, "compresslevel", low=0, high=9, integer=True)
         self._raw = open(self.path, "wb")
         # no name stored (filename="", as gzip -n): the file object's is a partial's (.partial-PID.HOST-...)
         self._gz = gzip.GzipFile(filename="", fileobj=self._raw, mode="wb", mtime=0,

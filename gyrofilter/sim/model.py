@@ -20,7 +20,7 @@ from .compression import MAX_COMPRESSION, compression_kappa
 from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, COMPRESSION, HEAVY_TAILS, NARROWBAND, REGISTRY, RESONATORS,
                        ROWS, SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
-from ..inputs import MAX_QUOTE_CHARS, closest, did_you_mean, load_json, quote
+from ..inputs import MAX_QUOTE_CHARS, closest, did_you_mean, load_json, quote, scalar
 from ..recording.checks import first_step_back
 from ..units import (AXES, GYRO_UNITS, LSB_PER_DPS_RANGE, LSB_PER_G_RANGE, MAX_RATE_DPS, MAX_SAMPLE_RATE_HZ, TEMP_RANGE_C,
                      check_sample_rate_hz, plain)
@@ -135,7 +135,9 @@ def _expected(key, kind):
 
 def _number(value, where, kind="any"):
     """``value`` as a float, or SettingsError naming ``where``: a number (not a bool) of the kind
-    ``kind`` (:data:`_KINDS`) inside the limits of its key (:func:`_limits`)."""
+    ``kind`` (:data:`_KINDS`) inside the limits of its key (:func:`_limits`); a 0-d array the
+    number it holds (:func:`~gyrofilter.inputs.scalar`)."""
+    value = scalar(value)
     number = math.nan
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)):
         try:

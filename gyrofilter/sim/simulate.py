@@ -70,7 +70,7 @@ from .accel import RANDOM_TERMS, Accelerometer
 from .flicker import BiasInstability
 from .model import ACCELEROMETER, EFFECTS, TEMPERATURE_PROFILE, validate_model
 from ..errors import SettingsError
-from ..inputs import check_number
+from ..inputs import check_number, python_value, scalar
 from ..recording import ACCEL_COLUMNS, COLUMNS, EXACT_FORMAT, FORMAT_VERSION, VERSION_KEY, Recording, accel_units_header, format_number, units_header
 from ..units import AXES, DEG_PER_RAD, check_duration_s, plain, to_dps
 
@@ -106,7 +106,9 @@ MAX_SEED = 2**63 - 1
 def check_seed(seed, name="simulate: seed"):
     """``seed`` as an int, or SettingsError naming ``name``: a seed is an integer in [0, MAX_SEED]
     (numpy's SeedSequence takes any integer >= 0; the bound keeps it one that reads back). The
-    one check of a seed: the library's, the ``sim`` source's and the ``--seed`` options'."""
+    one check of a seed: the library's, the ``sim`` source's and the ``--seed`` options'. A 0-d
+    array is the integer it holds (:func:`~gyrofilter.inputs.scalar`)."""
+    seed = scalar(seed)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed <= MAX_SEED:
         shown = plain(seed) if not isinstance(seed, (int, np.integer)) or abs(seed) < 10**20 else \
             f"an integer of {len(str(abs(int(seed))))} digits"
@@ -424,8 +426,8 @@ def recording_header(model, duration_s, *, sample_rate_hz=None, seed=None, valid
 def _json_default(value):
     if isinstance(value, np.ndarray):
         return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
+    if isinstance(value, np.generic):  # a longdouble's item() is itself: json_default recursed without end
+        return python_value(value)
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 

@@ -50,7 +50,9 @@ import numpy as np
 from ...filter.calibration import Calibration, calibrate, calibration_samples
 from ...filter.samples import check_sample, check_samples
 from ...errors import SettingsError
-from ...units import check_sample_rate_hz, plain
+from ...filter.settings import MAX_CALIBRATION_S
+from ...inputs import check_number, python_value
+from ...units import MAX_RATE_DPS, check_sample_rate_hz, plain
 
 RESUM_EVERY = 10_000  # samples between exact recomputations of the window sums
 
@@ -73,6 +75,16 @@ class BiasKFSettings:
     still_gate_sigma: float = 4.0  # per-sample gate for the zero-rate update
     initial_bias_std_dps: float | None = None  # None: sigma / sqrt(calibration samples)
     engine: str = "numpy"  # or "filterpy"
+
+    def checked(self) -> "BiasKFSettings":
+        """The settings with every number a plain Python float (a per-axis one a float or a tuple
+        of 3), or SettingsError naming the first bad one: each a number (never a bool: True was
+        taken as 1; numpy's numbers and 0-d arrays are the numbers they hold), finite and in its
+        range of :data:`SETTING_RANGES` (``bias_tau_s`` > 0 or inf, a random walk; a negative
+        ``bias_sigma_dps`` or ``still_window_s`` was taken without a word); the rule:
+        :func:`~gyrofilter.inputs.check_number`."""
+        numbers = {name: _checked_value(getattr(self, name), name, bounds) for name, bounds in SETTING_RANGES.items()}
+        return replace(self, **numbers, engine=python_value(self.engine))
 
     @classmethod
     def from_bias_model(cls, model, **overrides):
@@ -101,6 +113,42 @@ class BiasKFTrace:
     calibration: Calibration = field(default=None)
 
 
+#: the range of each number of :class:`BiasKFSettings` (the bounds of
+#: :func:`~gyrofilter.inputs.check_number`); ``per_axis``: one number or 3 (x, y, z); ``none``: None
+#: is taken (from the calibration); ``inf``: +inf is taken
+SETTING_RANGES = {
+    "calibration_s": dict(low=0, high=MAX_CALIBRATION_S),
+    "bias_tau_s": dict(low=0, low_open=True, per_axis=True, inf=True),
+    "bias_sigma_dps": dict(low=0, high=MAX_RATE_DPS, per_axis=True),
+    "bias_walk_dps_per_sqrt_s": dict(low=0, high=MAX_RATE_DPS, per_axis=True),
+    "rate_walk_dps_per_sqrt_s": dict(low=0, high=MAX_RATE_DPS),
+    "noise_std_dps": dict(low=0, high=MAX_RATE_DPS, per_axis=True, none=True),
+    "zero_rate_std_dps": dict(low=0, high=MAX_RATE_DPS),
+    "still_window_s": dict(low=0, low_open=True, high=MAX_CALIBRATION_S),
+    "still_enter_ratio": dict(low=0, low_open=True, high=1e6),
+    "still_exit_ratio": dict(low=0, low_open=True, high=1e6),
+    "still_max_offset_dps": dict(low=0, high=MAX_RATE_DPS),
+    "still_gate_sigma": dict(low=0, low_open=True, high=1e6),
+    "initial_bias_std_dps": dict(low=0, high=MAX_RATE_DPS, none=True),
+}
+
+
+def _checked_value(value, name, bounds):
+    """One setting of :data:`SETTING_RANGES` checked (see :meth:`BiasKFSettings.checked`)."""
+    bounds = dict(bounds)
+    per_axis, none, inf = bounds.pop("per_axis", False), bounds.pop("none", False), bounds.pop("inf", False)
+    value = python_value(value)
+    if value is None and none:
+        return None
+    if per_axis and isinstance(value, (tuple, list)):
+        if len(value) != 3:
+            raise SettingsError(f"{name} must be a number or 3 numbers, got {plain(value)}")
+        return tuple(_checked_value(v, name, {**bounds, "inf": inf}) for v in value)
+    if inf and value == math.inf and not isinstance(value, bool):
+        return math.inf
+    return float(check_number(value, name, **bounds))
+
+
 def _per_axis(value, name):
     arr = np.broadcast_to(np.asarray(value, dtype=float), (3,)).copy()
     if arr.shape != (3,):
@@ -122,7 +170,7 @@ class BiasKalmanFilter:
 
     def __init__(self, sample_rate_hz, settings: BiasKFSettings | None = None, *, calibration: Calibration | None = None, **kw):
         self.sample_rate_hz = check_sample_rate_hz(sample_rate_hz)
-        self.settings = s = replace(settings or BiasKFSettings(), **kw)
+        self.settings = s = replace(settings or BiasKFSettings(), **kw).checked()
         if s.engine not in ("numpy", "filterpy"):
             raise SettingsError(f"engine must be 'numpy' or 'filterpy', got {s.engine!r}")
         if not s.still_exit_ratio > s.still_enter_ratio > 0:

@@ -28,7 +28,7 @@ from statistics import NormalDist
 import numpy as np
 
 from ...errors import GyroFilterError, SettingsError
-from ...inputs import number_array
+from ...inputs import check_number, number_array
 from ...units import check_sample_rate_hz, plain
 
 #: cluster count below which a deviation (and any fit using it) is flagged: paper 002 needs
@@ -335,6 +335,17 @@ def chi2_ppf(p, dof):
     return chdtri(dof, 1.0 - p)
 
 
+def check_confidence(confidence):
+    """``confidence`` as a float in (0, 1), or SettingsError: a number as
+    :func:`~gyrofilter.inputs.check_number` takes it (numpy's and 0-d arrays the numbers they hold,
+    never a bool; a longdouble ended in scipy's TypeError, a text in Python's). The one check of a
+    confidence of the Allan intervals."""
+    try:
+        return check_number(confidence, "confidence", low=0.0, high=1.0, low_open=True, high_open=True)
+    except SettingsError:
+        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}") from None
+
+
 def chi2_interval(avar, edf, confidence=0.95):
     """Two-sided interval for the Allan *variance* (NIST SP 1065 eq. 41, p. 42)::
 
@@ -343,8 +354,7 @@ def chi2_interval(avar, edf, confidence=0.95):
     ``avar``: s^2, the estimates ((deg/s)^2); ``edf``: their degrees of freedom; ``confidence``:
     c, in (0, 1). Returns (low, high).
     """
-    if not 0.0 < confidence < 1.0:
-        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}")
+    confidence = check_confidence(confidence)
     avar = np.asarray(avar, dtype=np.float64)
     edf = np.asarray(edf, dtype=np.float64)
     low = edf * avar / chi2_ppf(0.5 + confidence / 2.0, edf)

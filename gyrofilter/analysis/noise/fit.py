@@ -37,7 +37,7 @@ import itertools
 
 import numpy as np
 
-from .allan import (MIN_CLUSTERS, AllanInputError, chi2_interval, cluster_sizes, edf_mixture, rate_numbers, edf_oavar,
+from .allan import (MIN_CLUSTERS, AllanInputError, check_confidence, chi2_interval, cluster_sizes, edf_mixture, rate_numbers, edf_oavar,
                     refuse_constant, n_clusters, overlapping_adev, simple_interval)
 from .intervals import fitted_intervals
 from .model import TERM_ALPHA, TERMS, AxisNoise, basis, sensor_terms, term_shares
@@ -162,10 +162,8 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
     if x.ndim != 1:
         raise AllanInputError(f"axis {axis}: expected a 1-D rate series, got shape {x.shape}")
     refuse_constant(x, f"axis {axis}", unit=unit, axis=axis)
-    try:  # numpy's numbers too (a float32 0.9 was "not between 0 and 1"); a text or None in min_clusters was numpy's TypeError
-        confidence = check_number(confidence, "confidence", low=0.0, high=1.0, low_open=True, high_open=True)
-    except SettingsError:
-        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}") from None
+    # numpy's numbers too (a float32 0.9 was "not between 0 and 1"); a text or None in min_clusters was numpy's TypeError
+    confidence = check_confidence(confidence)
     min_clusters = check_number(min_clusters, "min_clusters", low=2, integer=True)
     for t in terms:
         if t not in TERMS:

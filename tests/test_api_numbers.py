@@ -1,0 +1,301 @@
+"""Numbers as an embedding programmer passes them (issue 37, attack pass 30a): every numeric or
+boolean parameter of the documented Python API (docs/formats.md section 7, docs/settings.md,
+docs/simulate.md, docs/allan.md, docs/live.md) given as numpy's scalars or a 0-d array gives what
+the plain Python value gives (the same numbers, the same JSON-ready state), a value refused is
+refused in the same words, and True/False are refused where a number is asked (the rule:
+``inputs.check_number``, ``inputs.scalar``, ``inputs.python_value``). One seed, about 5 s."""
+import dataclasses
+import functools
+import json
+from collections import namedtuple
+
+import numpy as np
+import pytest
+
+from gyrofilter import GyroFilter, GyroFilterError, smooth
+from gyrofilter.analysis.arma.bias_kf import BiasKalmanFilter
+from gyrofilter.analysis.noise.allan import adev, chi2_interval, overlapping_adev
+from gyrofilter.analysis.noise.fit import characterise_axis
+from gyrofilter.filter.calibration import Calibration
+from gyrofilter.filter.settings import FilterSettings, SETTING_RANGES
+from gyrofilter.filter.tempcomp import compensate
+from gyrofilter.errors import SettingsError, SourceEnded
+from gyrofilter.recording import RecordingWriter, iter_recording, read_recording, write_recording
+from gyrofilter.sim.hidden_effects import hide_in_recording
+from gyrofilter.sim.simulate import simulate, simulate_chunks
+from gyrofilter.sources import open_source
+from gyrofilter.sources.replay import ReplaySource
+from gyrofilter.sources.simulated import SimulatedSource
+
+RNG = np.random.default_rng(30)
+STILL_DPS = np.array([-3.3, 1.1, -0.5]) + 0.1 * RNG.standard_normal((300, 3))
+
+
+def model(bias_dps=0.5, **effect):
+    """A small simulator model (docs/formats.md section 2), one effect on x when given."""
+    axes = {a: {"bias_dps": bias_dps, "arw_dps_per_sqrt_hz": 0.01, "effects": []} for a in "xyz"}
+    if effect:
+        axes["x"]["effects"].append(effect)
+    return {"sample_rate_hz": 50.0, "gyro_unit": "dps", "axes": axes}
+
+
+MODEL = model()
+
+
+def forms(value):
+    """``value`` (a plain Python number or bool) as an embedding programmer may pass it: numpy's
+    scalars of each kind that holds it exactly, and a 0-d array."""
+    if isinstance(value, bool):
+        return {"np.bool_": np.bool_(value)}
+    out = {"np.float64": np.float64(value), "np.longdouble": np.longdouble(value), "0-d array": np.array(value)}
+    if float(np.float32(value)) == value:
+        out["np.float32"] = np.float32(value)
+    if float(value).is_integer():
+        out["np.int64"] = np.int64(value)
+        if abs(value) < 2**31:
+            out["np.int32"] = np.int32(value)
+        if 0 <= value < 256:
+            out["np.uint8"] = np.uint8(value)
+    return out
+
+
+def outcome(call, value):
+    """What ``call(value)`` gives, comparable: ("ok", its result as JSON text) or ("refused", the
+    error's type and words). JSON text: a result that holds a numpy scalar where Python's would
+    hold a float (a settings dict) fails to be written, as it fails a user's ``json.dumps``."""
+    try:
+        result = call(value)
+    except GyroFilterError as exc:
+        return ("refused", type(exc).__name__, str(exc))
+    return ("ok", json.dumps(result, sort_keys=True, default=_array))
+
+
+def _array(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
+
+
+def _filter(**kw):
+    f = GyroFilter(100.0, **{"calibration_s": 1.0, **kw})
+    return {"state": f.state_dict(), "rows": f.filter(STILL_DPS)}
+
+
+def _cal(**kw):
+    """A calibration given in code: its file's text and a filter started from it."""
+    args = dict(bias_dps=(-3.3, 1.1, -0.5), noise_std_dps=(0.1, 0.1, 0.1), samples=200, sample_rate_hz=100.0)
+    cal = Calibration(**{**args, **kw})
+    f = GyroFilter(100.0, calibration=cal)
+    saved = json.loads(cal.to_json())
+    saved.pop("created_utc")  # the clock's
+    return {"file": saved, "rows": f.filter(STILL_DPS), "state": f.state_dict()}
+
+
+@functools.lru_cache(maxsize=1)
+def _recording():
+    """A 2-s recording of MODEL (seeded), made once."""
+    return simulate(MODEL, 2.0, seed=1)
+
+
+def _replay(tmp, **kw):
+    src = ReplaySource(_written(tmp), **kw)
+    try:
+        return {"rate": src.sample_rate_hz, "rows": np.asarray(src.read()).tolist()}
+    finally:
+        src.close()
+
+
+def _written(tmp):
+    path = tmp / "rec.csv"
+    if not path.exists():
+        write_recording(path, _recording())
+    return path
+
+
+def _read(tmp, **kw):
+    rec = read_recording(_written(tmp), **kw)
+    return {"header": rec.header, "gx": rec.columns["gx"]}
+
+
+def _rewritten(tmp, **kw):
+    path = tmp / "rewritten.csv.gz"
+    write_recording(path, _recording(), **kw)
+    return {"gx": read_recording(path).columns["gx"]}
+
+
+def _writer(tmp, **kw):
+    path = tmp / "writer.csv.gz"
+    rec = _recording()
+    with RecordingWriter(path, rec.header, list(rec.columns), **kw) as w:
+        w.write(np.column_stack([rec.columns[c] for c in rec.columns]))
+    return {"gx": read_recording(path).columns["gx"]}
+
+
+def _opened(spec, **defaults):
+    with open_source(spec, **defaults) as src:
+        return {"rate": src.sample_rate_hz, "rows": np.asarray(src.read()).tolist()}
+
+
+def _simulated(**kw):
+    src = SimulatedSource(model=MODEL, **{"seed": 1, "realtime": False, "duration_s": 1.0, **kw})
+    try:
+        chunks = []
+        try:
+            while True:
+                chunks.append(np.asarray(src.read()).tolist())
+        except SourceEnded:
+            return chunks
+    finally:
+        src.close()
+
+
+def _filter_setting_cases():
+    """Every numeric and boolean setting of FilterSettings: its default (and True/False for a bool)."""
+    for field in dataclasses.fields(FilterSettings):
+        if isinstance(field.default, bool):
+            for v in (True, False):
+                yield f"GyroFilter({field.name})", (lambda name: lambda v: _filter(**{name: v}))(field.name), v, None
+        elif field.name in SETTING_RANGES and isinstance(field.default, (int, float)):
+            bounds = SETTING_RANGES[field.name]
+            bad = bounds["high"] * 2 if bounds.get("high") is not None else -1
+            yield f"GyroFilter({field.name})", (lambda name: lambda v: _filter(**{name: v}))(field.name), field.default, bad
+
+
+def cases(tmp):
+    """(name, call of one value, a valid value, an invalid value or None). Small and fast."""
+    yield from _filter_setting_cases()
+    yield "GyroFilter(sample_rate_hz)", lambda v: GyroFilter(v, calibration_s=1.0).filter(STILL_DPS), 100, 0
+    yield "GyroFilter(calibration_s, positional)", lambda v: GyroFilter(100.0, v).filter(STILL_DPS), 1, -1
+    yield "GyroFilter(temp_coefficient_dps_per_c)", lambda v: GyroFilter(100.0, 1.0, temp_coefficient_dps_per_c=v).state_dict(), 0.5, 100
+    yield "GyroFilter.update(sample)", lambda v: _update_rows(lambda s, last: (v, s[1], s[2]) if last else s), 1, 1e9
+    yield "GyroFilter.update(temp_c)", lambda v: _update_rows(lambda s, last: s, temp_c=v), 25, 1000
+    yield "GyroFilter.filter(temp_c)", lambda v: GyroFilter(100.0, 1.0).filter(STILL_DPS, temp_c=np.full(len(STILL_DPS), v)), 25, 1000
+    yield "GyroFilter.block_end_indices(n)", lambda v: _filtered().block_end_indices(v), 3, -1
+    yield "smooth(sample_rate_hz)", lambda v: smooth(STILL_DPS, v, 1.0), 100, 0
+    yield "smooth(calibration_s)", lambda v: smooth(STILL_DPS, 100.0, v), 1, -1
+    yield "Calibration(samples)", lambda v: _cal(samples=v), 200, -1
+    yield "Calibration(sample_rate_hz)", lambda v: _cal(sample_rate_hz=v), 100, 0
+    yield "Calibration(temp_c)", lambda v: _cal(temp_c=v), 25, 1000
+    yield "BiasKalmanFilter(sample_rate_hz)", lambda v: BiasKalmanFilter(v).filter(STILL_DPS), 100, 0
+    for name, good in (("calibration_s", 1), ("bias_sigma_dps", 0.5), ("still_window_s", 0.5), ("still_gate_sigma", 4)):
+        yield f"BiasKalmanFilter({name})", (lambda n: lambda v: dataclasses.asdict(BiasKalmanFilter(100.0, **{n: v}).settings))(name), good, -1
+    yield "simulate(model bias_dps)", lambda v: simulate(model(bias_dps=v), 1.0, seed=1).gyro_dps, 2, None
+    yield "simulate(model effect)", lambda v: simulate(model(effect="sinusoid", frequency_hz=v, amplitude_dps=0.1),
+                                                       1.0, seed=1).gyro_dps, 5, -1
+    yield "simulate(duration_s)", lambda v: simulate(MODEL, v, seed=1).gyro_dps, 1, -1
+    yield "simulate(seed)", lambda v: simulate(MODEL, 1.0, seed=v).gyro_dps, 7, -1
+    yield "simulate(sample_rate_hz)", lambda v: simulate(MODEL, 1.0, seed=1, sample_rate_hz=v).gyro_dps, 25, -1
+    yield "simulate(chunk_samples)", lambda v: simulate(MODEL, 1.0, seed=1, chunk_samples=v).gyro_dps, 16, 0
+    yield "simulate(accelerometer)", lambda v: simulate(MODEL, 1.0, seed=1, accelerometer=v).gyro_dps, False, None
+    yield "simulate_chunks(chunk_samples)", lambda v: [c.gyro for c in simulate_chunks(MODEL, 1.0, seed=1, chunk_samples=v)], 16, 0
+    yield "SimulatedSource(seed)", lambda v: _simulated(seed=v), 3, -1
+    yield "SimulatedSource(duration_s)", lambda v: _simulated(duration_s=v), 1, -1
+    yield "SimulatedSource(sample_rate_hz)", lambda v: _simulated(sample_rate_hz=v), 25, 0
+    yield "SimulatedSource(realtime)", lambda v: _simulated(realtime=v, sleep=lambda s: None), False, None
+    yield "ReplaySource(speed)", lambda v: _replay(tmp, speed=v), 2, -1
+    yield "ReplaySource(realtime)", lambda v: _replay(tmp, realtime=v, sleep=lambda s: None), False, None
+    yield "ReplaySource(chunk_rows)", lambda v: _replay(tmp, chunk_rows=v), 16, 0
+    yield "open_source(sim, seed=)", lambda v: _opened("sim:realtime=0,duration=1", seed=v), 3, -1
+    yield "open_source(sim, sample_rate_hz=)", lambda v: _opened("sim:realtime=0,duration=1,seed=1", sample_rate_hz=v), 25, 0
+    yield "read_recording(compact)", lambda v: _read(tmp, compact=v), True, None
+    yield "iter_recording(chunk_rows)", lambda v: list(iter_recording(_written(tmp), chunk_rows=v))[1:], 16, 0
+    yield "write_recording(compresslevel)", lambda v: _rewritten(tmp, compresslevel=v), 9, 10
+    yield "RecordingWriter(flush_interval_s)", lambda v: _writer(tmp, flush_interval_s=v), 2, -1
+    yield "RecordingWriter(fsync)", lambda v: _writer(tmp, fsync=v), False, None
+    yield "RecordingWriter(compresslevel)", lambda v: _writer(tmp, compresslevel=v), 1, 10
+    yield "compensate(coefficient_dps_per_c)", lambda v: compensate(STILL_DPS, np.full(len(STILL_DPS), 30.0), v, 25.0), 0.5, np.nan
+    yield "compensate(reference_temp_c)", lambda v: compensate(STILL_DPS, np.full(len(STILL_DPS), 30.0), 0.5, v), 25, np.nan
+    yield "overlapping_adev(sample_rate_hz)", lambda v: overlapping_adev(STILL_DPS[:, 0], v), 100, 0
+    yield "adev(sample_rate_hz)", lambda v: adev(STILL_DPS[:, 0], v), 100, 0
+    yield "chi2_interval(confidence)", lambda v: chi2_interval(np.array([1.0, 2.0]), np.array([5.0, 9.0]), v), 0.5, 2
+    yield "characterise_axis(sample_rate_hz)", lambda v: _characterised(sample_rate_hz=v), 100, 0
+    yield "characterise_axis(confidence)", lambda v: _characterised(confidence=v), 0.5, 2
+    yield "characterise_axis(min_clusters)", lambda v: _characterised(min_clusters=v), 9, 1
+    yield "hide_in_recording(seed)", lambda v: hide_in_recording(_recording(), "outliers", "x",
+                                                                 {"rate": 0.01, "magnitude_dps": 2.0}, seed=v).gyro_dps, 3, -1
+    yield "hide_in_recording(params)", lambda v: hide_in_recording(_recording(), "outliers", "x",
+                                                                   {"rate": 0.01, "magnitude_dps": v}, seed=1).gyro_dps, 2, -1
+
+
+def _update_rows(sample_of, temp_c=None):
+    f = GyroFilter(100.0, 1.0)
+    rows = [f.update(sample_of(tuple(s), i == len(STILL_DPS) - 1), temp_c) for i, s in enumerate(STILL_DPS)]
+    return [r for r in rows if r is not None], f.state_dict()
+
+
+def _filtered():
+    f = GyroFilter(100.0, 1.0)
+    f.filter(STILL_DPS)
+    return f
+
+
+def _characterised(**kw):
+    kw = {"sample_rate_hz": 100.0, **kw}
+    x = 0.1 * np.random.default_rng(2).standard_normal(2000)
+    result = characterise_axis(x, kw.pop("sample_rate_hz"), **kw)
+    return result if isinstance(result, (dict, list)) else repr(result)
+
+
+def _ids(tmp):
+    return [c[0] for c in cases(tmp)]
+
+
+@pytest.fixture(scope="module")
+def tmp(tmp_path_factory):
+    return tmp_path_factory.mktemp("numbers")
+
+
+@pytest.mark.parametrize("index", range(len(_ids(None))), ids=_ids(None))
+def test_numpy_numbers_are_the_numbers_they_hold(tmp, index):
+    name, call, good, bad = list(cases(tmp))[index]
+    for value in (good, bad) if bad is not None else (good,):
+        plain = outcome(call, value)
+        if value is good:
+            assert plain[0] == "ok", f"{name}={value!r} (plain Python) refused: {plain}"
+        else:
+            assert plain[0] == "refused", f"{name}={value!r} (out of range) taken"
+        for form, given in forms(value).items():
+            held = np.asarray(given).item()  # the Python number it holds: an int for np.int64(2.0)
+            held = float(held) if isinstance(held, np.floating) else held  # a longdouble's item() is itself
+            expected = plain if type(held) is type(value) else outcome(call, held)
+            assert outcome(call, given) == expected, f"{name} given {form}({value!r})"
+    if not isinstance(good, bool):
+        for flag in (True, False, np.bool_(True)):
+            got = outcome(call, flag)
+            assert got[0] == "refused", f"{name}={flag!r} taken as a number: {got[1][:200]}"
+
+
+def test_the_cases_of_pass_29b_stay_fixed():
+    """Pass 29b's numbers, one by one: a longdouble and a namedtuple of coefficients kept in the
+    settings (json.dumps failed; a TypeError), a text duration and minimum of clusters (Python's or
+    numpy's TypeError), numpy's True for hold (refused as "hold=True")."""
+    xyz = namedtuple("xyz", "x y z")
+    for c in (np.longdouble(0.01), xyz(0.01, 0.02, np.float32(0.5)), np.array([0.01, 0.02, 0.5])):
+        json.dumps(GyroFilter(100.0, temp_coefficient_dps_per_c=c).state_dict())
+    assert GyroFilter(100.0, hold=np.array(True)).settings.hold is True
+    for bad in ("5", True, -1):
+        with pytest.raises(SettingsError, match="duration_s"):
+            SimulatedSource(model=MODEL, duration_s=bad, realtime=False)
+    for bad in ("9", None, True, 2.5):
+        with pytest.raises(GyroFilterError, match="min_clusters"):
+            _characterised(min_clusters=bad)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(5))
+def test_drawn_settings_in_every_numpy_form(seed):
+    """The bigger sweep: values drawn in and beyond each setting's range (seeded), every form gives
+    the plain value's settings or its refusal in its words."""
+    rng = np.random.default_rng(seed)
+    for name, bounds in SETTING_RANGES.items():
+        low, high = bounds.get("low", -1e6), bounds.get("high", 1e6)
+        for _ in range(4):
+            value = float(rng.uniform(low - 0.1 * (high - low), high + 0.1 * (high - low)))
+            value = round(value) if bounds.get("integer") and rng.random() < 0.8 else value
+            call = lambda v, name=name: GyroFilter(100.0, **{name: v}).state_dict()  # noqa: E731
+            plain = outcome(call, value)
+            for form, given in forms(value).items():
+                held = np.asarray(given).item()
+                held = float(held) if isinstance(held, np.floating) else held
+                assert outcome(call, given) == (plain if type(held) is type(value) else outcome(call, held)), \
+                    f"{name} given {form}({value!r})"
