@@ -252,8 +252,8 @@ def no_gyro_column(path, names, normal, time, axis):
     example = columns_example(names, normal, time)
     if example is None:
         return (f"{path}: no column for the gyro's {axis} among {quote(', '.join(names))}: the line with the column "
-                f"names holds {len(names) - (time is not None)} besides the time, and a gyro has three (is the column "
-                "row further down, after a preamble?)")
+                f"names holds {len(names) - (time is not None)}{' besides the time' if time is not None else ''}, and a gyro "
+                "has three (is the column row further down, after a preamble?)")
     return (f"{path}: no column for the gyro's {axis} among {quote(', '.join(names))}; name the three (or the time "
             f"and the three) in --columns, e.g. --columns {example}")
 
