@@ -74,3 +74,15 @@ def test_whole_numbers_given_as_deg_per_s_are_said_to_look_like_raw_counts(tmp_p
     assert "every value of the gyro columns 'GyX', 'GyY', 'GyZ' is a whole number" in err and "--unit lsb" in err
     assert main(["convert", path, "--out", str(tmp_path / "o.csv.gz"), "--force", "--unit", "lsb", "--lsb-per-dps", "131"]) == 0
     assert "whole number" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("first", ["Fs,100", "time,a,b"])
+def test_no_gyro_column_among_too_few_suggests_no_columns_that_cannot_be_the_gyro(tmp_path, capsys, first):
+    """Attack pass 31a: a log whose first line holds fewer than three columns besides the time (a preamble
+    ``Fs,100`` before the column row, as an MPU6050 calibration logger writes) was told ``e.g. --columns Fs,100``
+    (refused: 2 columns) or ``--columns time,a,b``, which reads the time column as the gyro's x."""
+    path = tmp_path / "log.csv"
+    path.write_text(first + "\nax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n")
+    assert main(["convert", str(path), "--out", str(tmp_path / "o.csv")]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "e.g. --columns" not in err and "a gyro has three" in err, err

@@ -46,3 +46,18 @@ def test_report_says_it_among_its_warnings(dps_as_rad, tmp_path, capsys):
 def test_a_fleet_refuses_allow_large_mean(dps_as_rad, tmp_path, capsys):
     assert main(["allan", dps_as_rad, dps_as_rad, "--fleet", str(tmp_path / "f"), "--allow-large-mean"]) == 2
     assert "--allow-large-mean is for one recording" in capsys.readouterr().err
+
+
+def test_the_refusal_names_a_way_out_that_is_taken(dps_as_rad, tmp_path, capsys):
+    """Attack pass 31a: the refusal said "Fix the unit (gyrofilter convert --unit)", and convert refuses a
+    recording ("already a gyrofilter recording"): the way out is the header's gyro_unit (or the log converted
+    again), and the recording with its header fixed is analysed."""
+    import gzip
+    assert main(["allan", dps_as_rad]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "header's gyro_unit" in err, err
+    with gzip.open(dps_as_rad, "rt") as f:
+        text = f.read()
+    fixed = tmp_path / "fixed.csv"
+    fixed.write_text(text.replace("# gyro_unit: rad/s", "# gyro_unit: dps"))
+    assert main(["allan", str(fixed)]) == 0

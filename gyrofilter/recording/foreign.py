@@ -56,7 +56,7 @@ from ..units import AXES, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_h
 from .checks import TimeCheck
 from ..closable import Closable
 from .content import RecordingHead
-from .foreign_extras import columns_example, find_extras, gyro_out_of_range, left_out_line, whole_rates
+from .foreign_extras import find_extras, gyro_out_of_range, left_out_line, no_gyro_column, whole_rates
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
@@ -219,9 +219,7 @@ def _gyro_column(normal, names, axis, path):
         if len(found) > 1:
             raise RecordingError(f"{path}: line with the column names: columns {', '.join(quote(names[i]) for i in found)} "
                                  f"could each be the gyro's {axis}; name the three in --columns")
-    example = columns_example(names, normal, _time_column(normal, []))
-    raise RecordingError(f"{path}: no column for the gyro's {axis} among {quote(', '.join(names))}; name the three "
-                         f"(or the time and the three) in --columns, e.g. --columns {example}")
+    raise RecordingError(no_gyro_column(path, names, normal, _time_column(normal, []), axis))
 
 
 def _time_column(normal, gyro):

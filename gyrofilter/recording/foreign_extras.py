@@ -245,14 +245,30 @@ def left_out_line(names, wanted, why, time_like):
     return f"left out: {', '.join(runs)}" if left else None
 
 
+def no_gyro_column(path, names, normal, time, axis):
+    """The refusal of a log with no column for the gyro's ``axis`` (``names``, ``normal`` and ``time`` as
+    :func:`columns_example` takes them), with an example of ``--columns`` in the log's own names, or,
+    where it has fewer than three besides the time, why none (a preamble line before the column row)."""
+    example = columns_example(names, normal, time)
+    if example is None:
+        return (f"{path}: no column for the gyro's {axis} among {quote(', '.join(names))}: the line with the column "
+                f"names holds {len(names) - (time is not None)}{' besides the time' if time is not None else ''}, and a gyro "
+                "has three (is the column row further down, after a preamble?)")
+    return (f"{path}: no column for the gyro's {axis} among {quote(', '.join(names))}; name the three (or the time "
+            f"and the three) in --columns, e.g. --columns {example}")
+
+
 def columns_example(names, normal, time):
     """An example of ``--columns`` in this log's own ``names`` (``normal``: once normalised; ``time``:
     the time column's index or None): the time, then the first three columns named like no
-    accelerometer or temperature (else the first three others)."""
+    accelerometer or temperature (else the first three others); None when the log has fewer than three
+    columns besides the time (an example of fewer is refused, and time plus two reads the time as x)."""
     def extra(i):
         key = normal[i][0]
         return ACCEL_NAME.fullmatch(key) or key in TEMPERATURE_LIKE_NAMES or TEMP_UNIT_NAME.fullmatch(key)
     others = [i for i in range(len(names)) if i != time]
+    if len(others) < 3:
+        return None
     plain = [i for i in others if not extra(i)]
     three = (plain if len(plain) >= 3 else others)[:3]
     return ",".join(names[i] for i in ([time] if time is not None else []) + three)
