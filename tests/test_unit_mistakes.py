@@ -61,3 +61,25 @@ def test_the_refusal_names_a_way_out_that_is_taken(dps_as_rad, tmp_path, capsys)
     fixed = tmp_path / "fixed.csv"
     fixed.write_text(text.replace("# gyro_unit: rad/s", "# gyro_unit: dps"))
     assert main(["allan", str(fixed)]) == 0
+
+
+@pytest.mark.parametrize("command", [["allan", "--axes", "y"], ["allan", "--axes", "zy"], ["arma", "--axis", "y"]])
+def test_the_axes_not_analysed_count_too(dps_as_rad, command, capsys):
+    """Attack pass 31a's note: ``allan --axes y`` checked the mean of y alone (0.1 "rad/s" reads 5.7 deg/s,
+    a plausible bias) and printed y's Allan deviation 57 times too large, exit 0; a unit mistake is the
+    whole file's: x's 258 deg/s refuses it, whichever axes are analysed."""
+    assert main(command[:1] + [dps_as_rad] + command[1:]) == 2
+    assert "axis x reads 258 deg/s on average" in capsys.readouterr().err
+
+
+def test_an_axis_not_analysed_leaves_the_results_of_the_others_as_they_were(tmp_path, capsys):
+    """Reading every axis for the mean changes nothing of the axes analysed (their order included)."""
+    import json
+    rng = np.random.default_rng(3)
+    path = str(tmp_path / "still.csv")
+    write_recording(path, Recording.from_dps(np.array([1.0, -2.0, 0.5]) + 0.05 * rng.normal(size=(3000, 3)), 100.0))
+    out = {}
+    for axes in ("xyz", "zx"):
+        assert main(["allan", path, "--axes", axes, "--json", str(tmp_path / f"{axes}.json")]) == 0
+        out[axes] = json.loads((tmp_path / f"{axes}.json").read_text())["axes"]
+    assert list(out["zx"]) == ["z", "x"] and all(out["zx"][a] == out["xyz"][a] for a in "zx")

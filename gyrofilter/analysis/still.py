@@ -7,6 +7,7 @@ The one path from a file to the Allan results of ``gyrofilter allan``, ``gyrofil
 a fleet run (:mod:`gyrofilter.analysis.fleet`). Warnings go to the caller's ``warn(text)``;
 nothing here prints.
 """
+import collections
 import collections.abc
 import math
 
@@ -289,6 +290,13 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", 
     warn(f"{text}: analysed as they are (--keep-outliers)")
 
 
+def not_analysed(axes):
+    """The axes of :data:`~gyrofilter.units.AXES` not in ``axes``, in order: the ones whose means
+    :func:`refuse_large_mean` checks too (a unit mistake is the whole file's: ``allan --axes x`` of
+    deg/s labelled rad/s passed on x at 11.5 "deg/s" while z read 229)."""
+    return tuple(a for a in AXES if a not in axes)
+
+
 def refuse_large_mean(path, gyro_unit, series, allow, *, warn):
     """Refuse a still-sensor analysis (allan, arma, gap, report) of data whose mean rate on an axis is
     beyond any MEMS bias (:func:`gyrofilter.filter.calibration.implausible_bias`, the rule replay's
@@ -297,9 +305,10 @@ def refuse_large_mean(path, gyro_unit, series, allow, *, warn):
     and every coefficient would be as wrong. With ``allow`` (``--allow-large-mean``: the mean is
     real; ``report``, whose page lists its warnings) only warn (``warn(text)``). ``path``: the file;
     ``gyro_unit``: the unit it states; ``series``: axis letter -> rates (deg/s). Returns None;
-    raises RecordingError naming the file when refusing."""
-    for axis, x in series.items():
-        text = implausible_bias(axis, float(np.mean(x)), unit=gyro_unit)
+    raises RecordingError naming the file when refusing. The callers give every gyro axis of the
+    file (:func:`not_analysed`), not only the ones analysed."""
+    for axis in sorted(series):  # one converted column at a time
+        text = implausible_bias(axis, float(np.mean(series[axis])), unit=gyro_unit)
         if text is None:
             continue
         if not allow:
@@ -360,13 +369,16 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     Columns ``ax, ay, az`` without the header's ``accel_unit`` are not analysed: a warning says so
     (:func:`accelerometer_note`), after the reader's, for ``allan``, ``report`` and the fleet alike.
     """
-    head, series, accel = read_axes(path, axes, with_accel=True, held=True)  # each axis converted when analysed
+    axes = check_axes(axes)
+    head, series, accel = read_axes(path, axes + not_analysed(axes), with_accel=True, held=True)  # converted when taken
+    others = {a: series.pop(a) for a in not_analysed(axes)}  # their means too: a unit mistake is the file's
     note = accelerometer_note(head)
     for text in head.warnings + ([note] if note else []):
         warn(text)
     warn_about_gaps(head, GAPS_CONSEQUENCE, warn)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
-    refuse_large_mean(head.path, head.gyro_unit, series, allow_large_mean, warn=warn)
+    refuse_large_mean(head.path, head.gyro_unit, collections.ChainMap(series, others), allow_large_mean, warn=warn)
+    del others
     left_out = None
     if accel is not None:
         unlike = decimated_accelerometer(head) or gravity_unlike(accel, head)

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..analysis.arma import identify as arma
-from ..analysis.still import read_axes, refuse_gross_errors, refuse_large_mean
+from ..analysis.still import not_analysed, read_axes, refuse_gross_errors, refuse_large_mean
 from ..errors import SettingsError
 from ..recording import filtered_words, warn_about_gaps
 from ..recording.checks import gap_step_s
@@ -52,7 +52,7 @@ def run(args):
         raise SettingsError(f"--max-n must be at most {MAX_MAX_N} (ARMA({2 * MAX_MAX_N}, {2 * MAX_MAX_N - 1})), got {args.max_n}")
     arma.check_max_samples(args.max_samples, "--max-samples")
     axes = AXES if args.axis == "all" else (args.axis,)
-    head, series, t_s = read_axes(args.recording, axes, with_t=True)
+    head, series, t_s = read_axes(args.recording, axes + not_analysed(axes), with_t=True)  # the others' means too
     warnings = list(head.warnings)
     filtered = filtered_words(head.header)
     if filtered:  # analysed, as allan analyses it, but said: the model is the output's, not the sensor's bias
@@ -65,9 +65,10 @@ def run(args):
         head = dataclasses.replace(head, t_gaps=int(np.count_nonzero(np.diff(t_s[i0:i1]) > gap_step_s(head))))
     warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful",
                     console.say_warning)
-    series = {a: x[i0:i1] for a, x in series.items()}
+    refuse_large_mean(head.path, head.gyro_unit, {a: x[i0:i1] for a, x in series.items()}, args.allow_large_mean,
+                      warn=console.say_warning)
+    series = {a: series[a][i0:i1] for a in axes}
     refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
-    refuse_large_mean(head.path, head.gyro_unit, series, args.allow_large_mean, warn=console.say_warning)
     progress = console.ProgressLines(args.progress)
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0
