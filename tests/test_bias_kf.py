@@ -148,3 +148,16 @@ def test_samples_after_the_calibration_are_checked_as_the_filter_checks_them():
     with pytest.raises(SampleError, match="finite"):
         f.update([math.inf, 0.0, 0.0])
     assert all(math.isfinite(v) for v in f.update(x[400]))
+
+
+@pytest.mark.parametrize("name", ["bias_tau_s", "bias_sigma_dps", "bias_walk_dps_per_sqrt_s", "noise_std_dps"])
+def test_an_array_of_3_per_axis_values_is_the_3_numbers(name):
+    """Attack pass 31b: a per-axis setting given as a numpy array of 3 ended in numpy's "truth
+    value of an array ... is ambiguous" (``bias_tau_s``) or was refused as "a finite number"
+    (the others; taken before pass 30a): the 3 numbers, as a tuple of them is; an array of
+    another shape refused, naming the setting."""
+    as_tuple = BiasKalmanFilter(100.0, **{name: (10.0, 20.0, 30.0)}).settings
+    assert BiasKalmanFilter(100.0, **{name: np.array([10.0, 20.0, 30.0])}).settings == as_tuple
+    for bad in (np.ones((1, 3)), np.array([1.0, 2.0])):
+        with pytest.raises(SettingsError, match=name):
+            BiasKalmanFilter(100.0, **{name: bad})
