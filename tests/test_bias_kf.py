@@ -161,3 +161,20 @@ def test_an_array_of_3_per_axis_values_is_the_3_numbers(name):
     for bad in (np.ones((1, 3)), np.array([1.0, 2.0])):
         with pytest.raises(SettingsError, match=name):
             BiasKalmanFilter(100.0, **{name: bad})
+
+
+@pytest.mark.parametrize("field, value", [("bias_dps", (math.nan, 0.0, 0.0)), ("noise_std_dps", (math.nan, 0.1, 0.1)),
+                                          ("bias_dps", (500.0, 0.0, 0.0)), ("noise_std_dps", (-1.0, 0.1, 0.1)),
+                                          ("samples", 0), ("bias_dps", "abc"), ("bias_dps", np.array(1.0))])
+def test_a_calibration_given_in_code_is_checked_as_the_filters_is(field, value):
+    """Attack pass 31b: ``BiasKalmanFilter(calibration=...)`` took a Calibration made in code as it
+    was: a NaN bias or noise gave NaN rates, a 500 deg/s bias or a negative noise were used, a
+    text ended in numpy's ValueError (GyroFilter refuses each: ``Calibration.checked``, one check),
+    and a 0-d array of a bias in Python's "len() of unsized object" in both filters."""
+    from gyrofilter import GyroFilter
+    from gyrofilter.errors import CalibrationError
+    args = dict(bias_dps=(0.5, 0.5, 0.5), noise_std_dps=(0.1, 0.1, 0.1), samples=200, sample_rate_hz=100.0)
+    cal = Calibration(**{**args, field: value})
+    for make in (BiasKalmanFilter, GyroFilter):
+        with pytest.raises(CalibrationError, match=field):
+            make(100.0, calibration=cal)

@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import CalibrationError, SettingsError
 from ..files import write_text_whole
 from ..inputs import check_number, load_json, quote
-from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
+from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, shown
 from .samples import as_numbers
 
 
@@ -110,9 +110,10 @@ class Calibration:
             return check_number(value, f"{where}: {key}", error=CalibrationError, **bounds)
 
         def triple(key, values, **bounds):
-            if not isinstance(values, (list, tuple, np.ndarray)) or len(values) != len(AXES):
-                shown = quote(json.dumps(values)) if isinstance(values, (int, float, str, dict)) else plain(values)
-                raise CalibrationError(f"{where}: {key} must be a list of 3 numbers (x, y, z), got {shown}")
+            if (not isinstance(values, (list, tuple, np.ndarray)) or isinstance(values, np.ndarray) and values.ndim != 1
+                    or len(values) != len(AXES)):
+                got = quote(json.dumps(values)) if isinstance(values, (int, float, str, dict)) else shown(values)
+                raise CalibrationError(f"{where}: {key} must be a list of 3 numbers (x, y, z), got {got}")
             return tuple(number(f"{key} {axis}", v, **bounds) for axis, v in zip(AXES, values))
 
         low_c, high_c = TEMP_RANGE_C

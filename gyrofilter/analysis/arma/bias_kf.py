@@ -195,8 +195,8 @@ class BiasKalmanFilter:
         self._still = False
         self.calibration = None
         self._kfs = None
-        if calibration is not None:
-            self._start(calibration)
+        if calibration is not None:  # held to a start-up calibration's limits, as GyroFilter holds one
+            self._start(calibration.checked("the calibration"))
         elif self._n_cal < 20:
             raise SettingsError(f"calibration_s = {s.calibration_s} s gives {self._n_cal} samples; need 20, or pass calibration=")
 
