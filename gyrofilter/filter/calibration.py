@@ -197,6 +197,7 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     optionally the window's n temperatures (deg C, shape (n,)), whose mean is kept. Raises CalibrationError
     naming the axis and the statistic when the window is not still.
     """
+    sample_rate_hz = check_sample_rate_hz(sample_rate_hz)  # True was taken as 1 Hz, 0 kept in the calibration
     x = as_numbers(window_dps, "calibration window", "deg/s")  # a masked value is refused, not averaged
     if x.ndim != 2 or x.shape[1] != 3:
         raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")
