@@ -238,3 +238,12 @@ def test_a_confidence_too_near_1_is_refused_not_an_infinite_interval(confidence)
         characterise_axis(0.1 * np.random.default_rng(2).standard_normal(500), 100.0, confidence=confidence)
     low, high = chi2_interval(np.array([1.0]), np.array([1.0]), MAX_CONFIDENCE)
     assert 0 < low[0] < 1 < high[0] < np.inf
+
+
+@pytest.mark.parametrize("taus_s", [[True], "0.1", ["a"], np.array([True])])
+def test_taus_that_are_no_numbers_are_refused(taus_s):
+    """Attack pass 31b: ``adev(x, fs, taus_s=[True])`` took tau 1 s, ``"0.1"`` 0.1 s, and ``["a"]``
+    ended in numpy's ValueError: numbers only (``inputs.number_array``), naming ``taus_s``."""
+    x = 0.1 * np.random.default_rng(2).standard_normal(500)
+    with pytest.raises(SettingsError, match="taus_s"):
+        adev(x, 100.0, taus_s=taus_s)

@@ -126,7 +126,10 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
     rate = check_sample_rate_hz(sample_rate_hz)
     if taus_s is None:
         return default_cluster_sizes(n_samples)
-    taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
+    taus, refused = number_array(taus_s, "taus_s", "s")  # numbers only: [True] was 1 s, "0.1" 0.1 s, ["a"] a ValueError
+    if refused:
+        raise SettingsError(refused[0])
+    taus = np.atleast_1d(taus)
     if taus.ndim != 1 or taus.size == 0 or not np.all(np.isfinite(taus)):
         raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {plain(taus_s)}")
     with np.errstate(over="ignore"):  # compared as floats: a tau of 1e300 s is no int64, 1e308 s at 100 Hz inf
