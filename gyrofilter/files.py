@@ -104,14 +104,15 @@ def _not_a_file_name(path):
     ``/``, ``.`` or ``..``, or a folder part that is no folder (``missing/..``, which
     ``realpath`` drops by its text: ``cal.json/.`` replaced ``cal.json``, ``missing/../cal.json``
     wrote it, where opening either fails); a symbolic link's text is such a name too, hop by hop
-    (a link to ``cal.json/.`` replaced ``cal.json``: ``realpath`` drops it alike)."""
-    for _ in range(_MAX_LINK_HOPS):
+    (a link to ``cal.json/.`` replaced ``cal.json``: ``realpath`` drops it alike), and a chain of
+    more than :data:`_MAX_LINK_HOPS` links or a loop (ELOOP; ``realpath`` follows any chain)."""
+    for _ in range(_MAX_LINK_HOPS + 1):  # the text of the last of 40 links is judged too
         if os.path.basename(path) in ("", os.curdir, os.pardir) or not os.path.isdir(os.path.dirname(path) or os.curdir):
             return True
         if not os.path.islink(path):
             return False
         path = os.path.join(os.path.dirname(path), os.readlink(path))
-    return False  # a loop of links: refused by its stat (ELOOP)
+    return True  # beyond Linux's limit (a loop too): opening the name fails (ELOOP)
 
 
 @contextlib.contextmanager

@@ -211,6 +211,18 @@ def python_value(value):
     return value
 
 
+def axis_values(value):
+    """``value`` as :func:`python_value` gives it, a 1-d numpy array of numbers (3 per-axis
+    values, ``np.array([0.01, 0.02, 0.5])``) as the tuple of the Python numbers it holds, as a
+    tuple of them is taken: the one rule of a setting that is one number or one per axis
+    (``temp_coefficient_dps_per_c``; ``BiasKalmanFilter``'s ``bias_tau_s``, ... : an array of 3
+    was refused as "an array of shape (3,)", or ended in numpy's "truth value ... ambiguous")."""
+    value = python_value(value)
+    if isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "iuf":
+        return tuple(value.tolist())
+    return value
+
+
 def refuse_unordered(values, what, error=SettingsError):
     """Refuse, with ``error`` whose message is ``what`` and the reason, a set (or frozenset) where
     an order is meant (columns by position): its order is the hash seed's, so that the columns

@@ -221,3 +221,29 @@ def test_characterise_refuses_axes_that_are_not_distinct_axis_names(axes):
     g = np.random.default_rng(5).normal(0, 0.05, (3000, 2))
     with pytest.raises(AllanInputError, match=r"axes must be a subset of xyz such as xz, got"):
         characterise(g, 100.0, axes=axes)
+
+
+@pytest.mark.parametrize("confidence", [0.9999999999999999, 1 - 1e-12])
+def test_a_confidence_too_near_1_is_refused_not_an_infinite_interval(confidence):
+    """Attack pass 31b: ``chi2_interval(..., 0.9999999999999999)`` returned (0, inf) with a
+    RuntimeWarning (0.5 + c / 2 rounds to 1) and ``characterise_axis`` ended in statistics'
+    StatisticsError; ``allan --confidence`` stopped at 0.9999 in a rule of its own. The library's
+    one check (``check_confidence``) holds the command's bound."""
+    from gyrofilter.analysis.noise.allan import MAX_CONFIDENCE, chi2_interval
+    from gyrofilter.analysis.noise.fit import characterise_axis
+    from gyrofilter.errors import SettingsError
+    with pytest.raises(SettingsError, match="confidence"):
+        chi2_interval(np.array([1.0]), np.array([1.0]), confidence)
+    with pytest.raises(SettingsError, match="confidence"):
+        characterise_axis(0.1 * np.random.default_rng(2).standard_normal(500), 100.0, confidence=confidence)
+    low, high = chi2_interval(np.array([1.0]), np.array([1.0]), MAX_CONFIDENCE)
+    assert 0 < low[0] < 1 < high[0] < np.inf
+
+
+@pytest.mark.parametrize("taus_s", [[True], "0.1", ["a"], np.array([True])])
+def test_taus_that_are_no_numbers_are_refused(taus_s):
+    """Attack pass 31b: ``adev(x, fs, taus_s=[True])`` took tau 1 s, ``"0.1"`` 0.1 s, and ``["a"]``
+    ended in numpy's ValueError: numbers only (``inputs.number_array``), naming ``taus_s``."""
+    x = 0.1 * np.random.default_rng(2).standard_normal(500)
+    with pytest.raises(SettingsError, match="taus_s"):
+        adev(x, 100.0, taus_s=taus_s)

@@ -16,11 +16,11 @@ from gyrofilter import GyroFilter, GyroFilterError, smooth
 from gyrofilter.analysis.arma.bias_kf import BiasKalmanFilter
 from gyrofilter.analysis.noise.allan import adev, chi2_interval, overlapping_adev
 from gyrofilter.analysis.noise.fit import characterise_axis
-from gyrofilter.filter.calibration import Calibration
+from gyrofilter.filter.calibration import Calibration, calibrate
 from gyrofilter.filter.settings import FilterSettings, SETTING_RANGES
 from gyrofilter.filter.tempcomp import compensate
 from gyrofilter.errors import SettingsError, SourceEnded
-from gyrofilter.recording import RecordingWriter, iter_recording, read_recording, write_recording
+from gyrofilter.recording import Recording, RecordingWriter, iter_recording, read_recording, write_recording
 from gyrofilter.sim.hidden_effects import hide_in_recording
 from gyrofilter.sim.simulate import simulate, simulate_chunks
 from gyrofilter.sources import open_source
@@ -176,8 +176,18 @@ def cases(tmp):
     yield "Calibration(samples)", lambda v: _cal(samples=v), 200, -1
     yield "Calibration(sample_rate_hz)", lambda v: _cal(sample_rate_hz=v), 100, 0
     yield "Calibration(temp_c)", lambda v: _cal(temp_c=v), 25, 1000
+    yield "Calibration(bias_dps x)", lambda v: _cal(bias_dps=(v, 1.1, -0.5)), -3, 100
+    yield "Calibration(noise_std_dps x)", lambda v: _cal(noise_std_dps=(v, 0.1, 0.1)), 0.5, -1
+    # attack pass 31b: calibrate's rate and Recording.from_dps's were taken as True (1 Hz), calibrate's as 0
+    yield "calibrate(sample_rate_hz)", lambda v: dataclasses.asdict(calibrate(STILL_DPS, v)), 100, 0
+    yield "calibrate(stillness_threshold)", lambda v: dataclasses.asdict(calibrate(STILL_DPS, 100.0, stillness_threshold=v)), 6, -1
+    yield "calibrate(max_bias_dps)", lambda v: dataclasses.asdict(calibrate(STILL_DPS, 100.0, max_bias_dps=v)), 20, -1
+    yield "Recording.from_dps(sample_rate_hz)", lambda v: Recording.from_dps(STILL_DPS, v).header, 100, 0
     yield "BiasKalmanFilter(sample_rate_hz)", lambda v: BiasKalmanFilter(v).filter(STILL_DPS), 100, 0
-    for name, good in (("calibration_s", 1), ("bias_sigma_dps", 0.5), ("still_window_s", 0.5), ("still_gate_sigma", 4)):
+    for name, good in (("calibration_s", 1), ("bias_sigma_dps", 0.5), ("still_window_s", 0.5), ("still_gate_sigma", 4),
+                       ("bias_tau_s", 100), ("bias_walk_dps_per_sqrt_s", 0.01), ("rate_walk_dps_per_sqrt_s", 50),
+                       ("noise_std_dps", 0.1), ("zero_rate_std_dps", 0.002), ("still_enter_ratio", 2), ("still_exit_ratio", 3),
+                       ("still_max_offset_dps", 1), ("initial_bias_std_dps", 0.01)):
         yield f"BiasKalmanFilter({name})", (lambda n: lambda v: dataclasses.asdict(BiasKalmanFilter(100.0, **{n: v}).settings))(name), good, -1
     yield "simulate(model bias_dps)", lambda v: simulate(model(bias_dps=v), 1.0, seed=1).gyro_dps, 2, None
     yield "simulate(model effect)", lambda v: simulate(model(effect="sinusoid", frequency_hz=v, amplitude_dps=0.1),

@@ -148,3 +148,33 @@ def test_samples_after_the_calibration_are_checked_as_the_filter_checks_them():
     with pytest.raises(SampleError, match="finite"):
         f.update([math.inf, 0.0, 0.0])
     assert all(math.isfinite(v) for v in f.update(x[400]))
+
+
+@pytest.mark.parametrize("name", ["bias_tau_s", "bias_sigma_dps", "bias_walk_dps_per_sqrt_s", "noise_std_dps"])
+def test_an_array_of_3_per_axis_values_is_the_3_numbers(name):
+    """Attack pass 31b: a per-axis setting given as a numpy array of 3 ended in numpy's "truth
+    value of an array ... is ambiguous" (``bias_tau_s``) or was refused as "a finite number"
+    (the others; taken before pass 30a): the 3 numbers, as a tuple of them is; an array of
+    another shape refused, naming the setting."""
+    as_tuple = BiasKalmanFilter(100.0, **{name: (10.0, 20.0, 30.0)}).settings
+    assert BiasKalmanFilter(100.0, **{name: np.array([10.0, 20.0, 30.0])}).settings == as_tuple
+    for bad in (np.ones((1, 3)), np.array([1.0, 2.0])):
+        with pytest.raises(SettingsError, match=name):
+            BiasKalmanFilter(100.0, **{name: bad})
+
+
+@pytest.mark.parametrize("field, value", [("bias_dps", (math.nan, 0.0, 0.0)), ("noise_std_dps", (math.nan, 0.1, 0.1)),
+                                          ("bias_dps", (500.0, 0.0, 0.0)), ("noise_std_dps", (-1.0, 0.1, 0.1)),
+                                          ("samples", 0), ("bias_dps", "abc"), ("bias_dps", np.array(1.0))])
+def test_a_calibration_given_in_code_is_checked_as_the_filters_is(field, value):
+    """Attack pass 31b: ``BiasKalmanFilter(calibration=...)`` took a Calibration made in code as it
+    was: a NaN bias or noise gave NaN rates, a 500 deg/s bias or a negative noise were used, a
+    text ended in numpy's ValueError (GyroFilter refuses each: ``Calibration.checked``, one check),
+    and a 0-d array of a bias in Python's "len() of unsized object" in both filters."""
+    from gyrofilter import GyroFilter
+    from gyrofilter.errors import CalibrationError
+    args = dict(bias_dps=(0.5, 0.5, 0.5), noise_std_dps=(0.1, 0.1, 0.1), samples=200, sample_rate_hz=100.0)
+    cal = Calibration(**{**args, field: value})
+    for make in (BiasKalmanFilter, GyroFilter):
+        with pytest.raises(CalibrationError, match=field):
+            make(100.0, calibration=cal)

@@ -437,3 +437,31 @@ def test_a_save_through_a_link_to_a_name_the_system_refuses_is_refused(tmp_path,
     with pytest.raises(OSError):
         calibrate(still(500), 100.0).save(os.path.join(tmp_path, "link"))
     assert kept.read_text() == "keep" and sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize("links, text", [(40, "kept.json/."), (40, "missing/../kept.json"), (41, "kept.json")])
+def test_a_save_through_a_long_chain_of_links_is_refused_where_opening_is(tmp_path, links, text):
+    """Attack pass 31b: the link walk stopped after 40 hops without judging the 40th link's
+    text (a chain of 40 links ending in ``kept.json/.`` replaced ``kept.json``), and a chain of
+    41 links, which the system refuses (ELOOP), was written through ``realpath``, which follows
+    any number. Refused as opening the name is, nothing written."""
+    import os
+    kept = tmp_path / "kept.json"
+    kept.write_text("keep")
+    for i in range(1, links):
+        os.symlink(f"L{i + 1}", tmp_path / f"L{i}")
+    os.symlink(text, tmp_path / f"L{links}")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(OSError):
+        calibrate(still(500), 100.0).save(os.path.join(tmp_path, "L1"))
+    assert kept.read_text() == "keep" and sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_a_save_through_39_links_writes_the_target(tmp_path):
+    """Attack pass 31b: 39 links and the target (40 hops, Linux's limit) are written through."""
+    import os
+    for i in range(1, 40):
+        os.symlink(f"L{i + 1}", tmp_path / f"L{i}")
+    os.symlink("kept.json", tmp_path / "L40")
+    calibrate(still(500), 100.0).save(os.path.join(tmp_path, "L1"))
+    assert (tmp_path / "kept.json").read_text().startswith("{") and os.path.islink(tmp_path / "L1")

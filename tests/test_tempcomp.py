@@ -175,3 +175,13 @@ def test_a_numpy_number_as_the_temperature_coefficient_is_the_number_it_holds(co
     plain = f.settings.temp_coefficient_dps_per_c
     assert all(type(v) in (int, float) for v in (plain if isinstance(plain, (tuple, list)) else [plain]))
     json.dumps(f.state_dict())
+
+
+@pytest.mark.parametrize("coef", [1e308, (0.0, 0.0, -1e308), 1e300, 10.5])
+def test_a_coefficient_beyond_the_filters_bound_is_refused_not_infinite_rates(coef):
+    """Attack pass 31b: ``compensate(x, 200.0, 1e308, -100.0)`` returned inf rates (numpy's
+    overflow warning only), 1e300 rates of 3e302 deg/s: the filter's bound,
+    +-MAX_TEMP_COEFFICIENT_DPS_PER_C, one rule for both (``GyroFilter`` refused 1e308 already)."""
+    with pytest.raises(SettingsError, match="coefficient_dps_per_c"):
+        tempcomp.compensate(np.zeros((2, 3)), np.array([30.0, 200.0]), coef, -100.0)
+    assert np.all(np.isfinite(tempcomp.compensate(np.zeros((2, 3)), np.array([30.0, 200.0]), 10.0, -100.0)))

@@ -341,7 +341,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     (``AxisNoise.warnings``, the JSON document's ``warnings``).
 
     ``path``: the recording; ``axes``: axis letters (default all, :data:`~gyrofilter.units.AXES`); ``confidence``: level of the
-    Allan deviation's confidence intervals (0..1, 0.95 = 95 %); ``min_clusters``: fewest
+    Allan deviation's confidence intervals (0 to MAX_CONFIDENCE 0.9999, 0.95 = 95 %); ``min_clusters``: fewest
     clusters an averaging time tau needs to be used; ``keep_outliers``: analyse gross errors
     instead of refusing. Each :class:`~gyrofilter.analysis.noise.model.AxisNoise` holds the
     Allan deviation (deg/s) against tau (s) and the fitted coefficients (N in deg/sqrt(s) = deg/s/sqrt(Hz),

@@ -14,7 +14,7 @@ Output files are written only once every result is finite, each whole or not at 
 """
 
 from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
-from ..analysis.noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
+from ..analysis.noise.allan import MAX_CONFIDENCE, MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from ..analysis.fleet.work import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
 from ..analysis.noise.kalibr import DEFAULT_TAU_RANGE_S, check_tau_range_s, kalibr_sensor
@@ -197,8 +197,8 @@ def run(args):
     axes = "".join(check_axes(args.axes, "--axes"))
     if not 2 <= args.min_clusters <= MAX_MIN_CLUSTERS:
         raise SettingsError(f"--min-clusters must be in [2, {MAX_MIN_CLUSTERS}], got {args.min_clusters}")
-    if not 0.5 <= args.confidence <= 0.9999:  # every value inside works (0.9999999999999999 failed in the intervals)
-        raise SettingsError(f"--confidence must be in [0.5, 0.9999] (e.g. 0.95), got {args.confidence!r}")
+    if not 0.5 <= args.confidence <= MAX_CONFIDENCE:  # the library's highest (analysis.noise.allan.check_confidence)
+        raise SettingsError(f"--confidence must be in [0.5, {MAX_CONFIDENCE:g}] (e.g. 0.95), got {args.confidence!r}")
     if args.kalibr_tau_s is not None:
         check_tau_range_s(args.kalibr_tau_s)
         if not args.kalibr and args.fleet is None:

@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import CalibrationError, SettingsError
 from ..files import write_text_whole
 from ..inputs import check_number, load_json, quote
-from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain
+from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, shown
 from .samples import as_numbers
 
 
@@ -110,9 +110,10 @@ class Calibration:
             return check_number(value, f"{where}: {key}", error=CalibrationError, **bounds)
 
         def triple(key, values, **bounds):
-            if not isinstance(values, (list, tuple, np.ndarray)) or len(values) != len(AXES):
-                shown = quote(json.dumps(values)) if isinstance(values, (int, float, str, dict)) else plain(values)
-                raise CalibrationError(f"{where}: {key} must be a list of 3 numbers (x, y, z), got {shown}")
+            if (not isinstance(values, (list, tuple, np.ndarray)) or isinstance(values, np.ndarray) and values.ndim != 1
+                    or len(values) != len(AXES)):
+                got = quote(json.dumps(values)) if isinstance(values, (int, float, str, dict)) else shown(values)
+                raise CalibrationError(f"{where}: {key} must be a list of 3 numbers (x, y, z), got {got}")
             return tuple(number(f"{key} {axis}", v, **bounds) for axis, v in zip(AXES, values))
 
         low_c, high_c = TEMP_RANGE_C
@@ -196,6 +197,7 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     optionally the window's n temperatures (deg C, shape (n,)), whose mean is kept. Raises CalibrationError
     naming the axis and the statistic when the window is not still.
     """
+    sample_rate_hz = check_sample_rate_hz(sample_rate_hz)  # True was taken as 1 Hz, 0 kept in the calibration
     x = as_numbers(window_dps, "calibration window", "deg/s")  # a masked value is refused, not averaged
     if x.ndim != 2 or x.shape[1] != 3:
         raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")

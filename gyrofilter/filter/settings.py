@@ -12,7 +12,7 @@ from .averaging import AVERAGERS
 from .calibration import MAX_BIAS_DPS
 from .hold import DEFAULTS as HOLD_DEFAULTS
 from ..errors import SettingsError
-from ..inputs import check_number, python_value
+from ..inputs import axis_values, check_number, python_value
 from .predictor import closed_loop_radius, stable_gain_threshold
 from ..units import MAX_RATE_DPS, shown
 
@@ -175,9 +175,7 @@ class FilterSettings:
         # ("hold=True: must be True or False"), np.float32(0.01) or np.array(0.01) one coefficient
         # (one was iterated over as if it were 3, the other refused as an array)
         plain_values = {f.name: python_value(getattr(self, f.name)) for f in fields(self) if f.name not in numbers}
-        c = plain_values["temp_coefficient_dps_per_c"]
-        if isinstance(c, np.ndarray) and c.ndim == 1:  # an array of 3 coefficients: refused as "an array of shape (3,)"
-            plain_values["temp_coefficient_dps_per_c"] = tuple(python_value(list(c)))
+        plain_values["temp_coefficient_dps_per_c"] = axis_values(self.temp_coefficient_dps_per_c)
         checked = replace(self, **numbers, **plain_values)
         checked._validate_choices(need)
         return checked

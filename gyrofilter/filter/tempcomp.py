@@ -22,20 +22,23 @@ import numpy as np
 
 from ..effects import TEMPERATURE
 from ..errors import SettingsError
-from ..inputs import check_number
+from ..inputs import axis_values, check_number
 from ..units import AXES, TEMP_RANGE_C, check_rates_dps, shown
 from .samples import as_numbers, check_temperature
+from .settings import MAX_TEMP_COEFFICIENT_DPS_PER_C
 
 
 def _coefficients(coefficient_dps_per_c):
-    """c as 3 floats (x, y, z) from one number or 3, each a finite number as
-    :func:`~gyrofilter.inputs.check_number` takes it (True was taken as 1, a string ended in
-    numpy's ValueError); SettingsError naming it otherwise."""
-    c = coefficient_dps_per_c
-    several = isinstance(c, (tuple, list)) or isinstance(c, np.ndarray) and c.ndim == 1
+    """c as 3 floats (x, y, z) from one number or 3 (an array of 3: :func:`~gyrofilter.inputs.axis_values`),
+    each a number as :func:`~gyrofilter.inputs.check_number` takes it (True was taken as 1, a
+    string ended in numpy's ValueError) within the filter's +-MAX_TEMP_COEFFICIENT_DPS_PER_C (1e308
+    made inf rates, 1e300 rates of 3e302 deg/s); SettingsError naming it otherwise."""
+    c = axis_values(coefficient_dps_per_c)
+    several = isinstance(c, (tuple, list))
     if several and len(c) != 3:
         raise SettingsError(f"coefficient_dps_per_c must be one number or 3 (x, y, z), got {shown(c)}")
-    return np.array([check_number(v, "coefficient_dps_per_c") for v in (c if several else (c,) * 3)], dtype=float)
+    return np.array([check_number(v, "coefficient_dps_per_c", low=-MAX_TEMP_COEFFICIENT_DPS_PER_C,
+                                  high=MAX_TEMP_COEFFICIENT_DPS_PER_C) for v in (c if several else (c,) * 3)], dtype=float)
 
 
 def _rates_and_temperatures(gyro_dps, temp_c):
@@ -63,7 +66,8 @@ def compensate(gyro_dps, temp_c, coefficient_dps_per_c, reference_temp_c):
     """y = x - c (T - T0) per axis, in deg/s.
 
     ``gyro_dps``: x, (N, 3) or (3,) in deg/s; ``temp_c``: T, (N,) or a scalar, deg C;
-    ``coefficient_dps_per_c``: c, one value or 3 (deg/s per deg C); ``reference_temp_c``: T0 (deg C,
+    ``coefficient_dps_per_c``: c, one value or 3 (deg/s per deg C, each within the filter's
+    +-MAX_TEMP_COEFFICIENT_DPS_PER_C); ``reference_temp_c``: T0 (deg C,
     within :data:`~gyrofilter.units.TEMP_RANGE_C`: a NaN made every rate NaN). SettingsError otherwise,
     and for what :func:`_rates_and_temperatures` refuses.
     """

@@ -139,8 +139,9 @@ def units_header(sample_rate_hz, gyro_unit, lsb_per_dps=None, accel_unit=None, l
     """The header keys that state a recording's units, as text (:func:`format_number`):
     ``sample_rate_hz`` (Hz), ``gyro_unit`` (``dps``, ``rad/s`` or ``lsb``) and, with ``lsb``,
     ``lsb_per_dps`` (LSB per deg/s); with ``accel_unit`` (a six-axis recording: ``m/s^2``, ``g``
-    or ``lsb``) that key and, with ``lsb``, ``lsb_per_g`` (LSB per g)."""
-    head = {"sample_rate_hz": format_number(float(sample_rate_hz)), "gyro_unit": gyro_unit}
+    or ``lsb``) that key and, with ``lsb``, ``lsb_per_g`` (LSB per g). The rate is checked
+    (:func:`~gyrofilter.units.check_sample_rate_hz`: ``Recording.from_dps(x, True)`` wrote 1 Hz)."""
+    head = {"sample_rate_hz": format_number(check_sample_rate_hz(sample_rate_hz)), "gyro_unit": gyro_unit}
     if gyro_unit == "lsb":
         head["lsb_per_dps"] = format_number(float(lsb_per_dps))
     head.update(accel_units_header(accel_unit, lsb_per_g))

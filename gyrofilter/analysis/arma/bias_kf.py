@@ -51,7 +51,7 @@ from ...filter.calibration import Calibration, calibrate, calibration_samples
 from ...filter.samples import check_sample, check_samples
 from ...errors import SettingsError
 from ...filter.settings import MAX_CALIBRATION_S
-from ...inputs import check_number, python_value
+from ...inputs import axis_values, check_number, python_value
 from ...units import MAX_RATE_DPS, check_sample_rate_hz, plain
 
 RESUM_EVERY = 10_000  # samples between exact recomputations of the window sums
@@ -137,14 +137,14 @@ def _checked_value(value, name, bounds):
     """One setting of :data:`SETTING_RANGES` checked (see :meth:`BiasKFSettings.checked`)."""
     bounds = dict(bounds)
     per_axis, none, inf = bounds.pop("per_axis", False), bounds.pop("none", False), bounds.pop("inf", False)
-    value = python_value(value)
+    value = axis_values(value) if per_axis else python_value(value)
     if value is None and none:
         return None
     if per_axis and isinstance(value, (tuple, list)):
         if len(value) != 3:
             raise SettingsError(f"{name} must be a number or 3 numbers, got {plain(value)}")
         return tuple(_checked_value(v, name, {**bounds, "inf": inf}) for v in value)
-    if inf and value == math.inf and not isinstance(value, bool):
+    if inf and isinstance(value, float) and value == math.inf:
         return math.inf
     return float(check_number(value, name, **bounds))
 
@@ -195,8 +195,8 @@ class BiasKalmanFilter:
         self._still = False
         self.calibration = None
         self._kfs = None
-        if calibration is not None:
-            self._start(calibration)
+        if calibration is not None:  # held to a start-up calibration's limits, as GyroFilter holds one
+            self._start(calibration.checked("the calibration"))
         elif self._n_cal < 20:
             raise SettingsError(f"calibration_s = {s.calibration_s} s gives {self._n_cal} samples; need 20, or pass calibration=")
 

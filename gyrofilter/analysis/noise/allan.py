@@ -126,7 +126,10 @@ def cluster_sizes(n_samples, sample_rate_hz, taus_s=None):
     rate = check_sample_rate_hz(sample_rate_hz)
     if taus_s is None:
         return default_cluster_sizes(n_samples)
-    taus = np.atleast_1d(np.asarray(taus_s, dtype=np.float64))
+    taus, refused = number_array(taus_s, "taus_s", "s")  # numbers only: [True] was 1 s, "0.1" 0.1 s, ["a"] a ValueError
+    if refused:
+        raise SettingsError(refused[0])
+    taus = np.atleast_1d(taus)
     if taus.ndim != 1 or taus.size == 0 or not np.all(np.isfinite(taus)):
         raise SettingsError(f"taus_s must be a 1-D list of finite cluster times in s, got {plain(taus_s)}")
     with np.errstate(over="ignore"):  # compared as floats: a tau of 1e300 s is no int64, 1e308 s at 100 Hz inf
@@ -335,15 +338,21 @@ def chi2_ppf(p, dof):
     return chdtri(dof, 1.0 - p)
 
 
-def check_confidence(confidence):
-    """``confidence`` as a float in (0, 1), or SettingsError: a number as
-    :func:`~gyrofilter.inputs.check_number` takes it (numpy's and 0-d arrays the numbers they hold,
-    never a bool; a longdouble ended in scipy's TypeError, a text in Python's). The one check of a
-    confidence of the Allan intervals."""
+#: the highest confidence of the Allan intervals: nearer 1 the quantiles' probabilities
+#: 0.5 +- c / 2 round to 0 or 1 (0.9999999999999999 gave the interval (0, inf) and ended in
+#: statistics' StatisticsError in the fitted intervals; ``allan --confidence`` stopped here)
+MAX_CONFIDENCE = 0.9999
+
+
+def check_confidence(confidence, what="confidence"):
+    """``confidence`` as a float in (0, :data:`MAX_CONFIDENCE`], or SettingsError naming ``what``:
+    a number as :func:`~gyrofilter.inputs.check_number` takes it (numpy's and 0-d arrays the
+    numbers they hold, never a bool; a longdouble ended in scipy's TypeError, a text in Python's).
+    The one check of a confidence of the Allan intervals."""
     try:
-        return check_number(confidence, "confidence", low=0.0, high=1.0, low_open=True, high_open=True)
+        return check_number(confidence, what, low=0.0, high=MAX_CONFIDENCE, low_open=True)
     except SettingsError:
-        raise SettingsError(f"confidence must be between 0 and 1 (e.g. 0.95), got {plain(confidence)}") from None
+        raise SettingsError(f"{what} must be in (0, {MAX_CONFIDENCE:g}] (e.g. 0.95), got {plain(confidence)}") from None
 
 
 def chi2_interval(avar, edf, confidence=0.95):
