@@ -16,9 +16,6 @@ DEG_PER_RAD = 180.0 / math.pi
 AXES = ("x", "y", "z")  # the axes of every three-axis array, its columns in this order
 MAD_TO_SIGMA = 1.4826  # sigma = 1.4826 MAD for Gaussian data (1 / Phi^-1(3/4); Hampel 1974)
 GYRO_UNITS = ("dps", "rad/s", "lsb")
-#: other spellings of :data:`GYRO_UNITS` that people write: `convert --unit` takes them, a
-#: recording's header names the one it means in its refusal
-GYRO_UNIT_SPELLINGS = {"deg/s": "dps", "°/s": "dps", "rad s^-1": "rad/s"}
 #: the units of a recording's accelerometer columns ``ax, ay, az`` (its header's ``accel_unit``)
 ACCEL_UNITS = ("m/s^2", "g", "lsb")
 #: standard gravity g_n in m/s^2, exact by definition (3rd CGPM 1901; NIST SP 330, 2019, section 2.3.4):

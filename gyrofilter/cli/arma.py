@@ -65,9 +65,9 @@ def run(args):
         head = dataclasses.replace(head, t_gaps=int(np.count_nonzero(np.diff(t_s[i0:i1]) > gap_step_s(head))))
     warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful",
                     console.say_warning)
-    refuse_large_mean(head.path, head.gyro_unit, {a: x[i0:i1] for a, x in series.items()}, args.allow_large_mean,
-                      warn=console.say_warning)
-    series = {a: series[a][i0:i1] for a in axes}
+    series = {a: x[i0:i1] for a, x in series.items()}
+    refuse_large_mean(head.path, head.gyro_unit, series, args.allow_large_mean, warn=console.say_warning)
+    series = {a: series[a] for a in axes}
     refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
     progress = console.ProgressLines(args.progress)
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None

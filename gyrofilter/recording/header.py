@@ -10,7 +10,8 @@ import re
 
 from ..errors import RecordingError
 from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, json_string, parse_number, quote
-from ..units import ACCEL_UNITS, AXES, GYRO_UNIT_SPELLINGS, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
+from .unit_words import known_unit
+from ..units import ACCEL_UNITS, AXES, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
 
 #: the first header key of every recording; its value is the format version
 VERSION_KEY = "gyrofilter-recording"
@@ -263,7 +264,8 @@ def check_facts(header, where):
                                  f"{'below' if input_hz < sample_rate_hz else 'not a whole multiple of'} sample_rate_hz "
                                  f"{header['sample_rate_hz']}; a filtered output has one row per block of input samples")
     if header["gyro_unit"] not in GYRO_UNITS:
-        meant = GYRO_UNIT_SPELLINGS.get(header["gyro_unit"])
+        meant = known_unit("rate", header["gyro_unit"])  # the one table of spellings (convert's)
+        meant = meant if meant in GYRO_UNITS else None
         raise RecordingError(f"{where}: gyro_unit {quote(header['gyro_unit'])} is not one of {', '.join(GYRO_UNITS)}"
                              + (f" (write {quote(header['gyro_unit'])} as {meant})" if meant else ""))
     if header["gyro_unit"] == "lsb":
