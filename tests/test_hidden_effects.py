@@ -4,7 +4,7 @@ rates, an axis 'w' a KeyError, lag1 1.5 a math domain error)."""
 import numpy as np
 import pytest
 
-from gyrofilter.effects import COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES, SINUSOID
+from gyrofilter.effects import COLORED_NOISE, COMPRESSION, HEAVY_TAILS, REPEATED_SAMPLES, SINUSOID
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.hidden_effects import hide_in_recording
@@ -131,3 +131,18 @@ def test_parameters_naming_another_effect_are_refused():
         hide_in_recording(record(), SINUSOID, "x", {"effect": "warmup", "amplitude_dps": 1.0, "tau_s": 5.0})
     entry = {"effect": SINUSOID, "frequency_hz": 1.0, "amplitude_dps": 0.1}  # a model's entry of that effect: taken
     assert hide_in_recording(record(), SINUSOID, "x", entry).gyro_dps.shape == record().gyro_dps.shape
+
+
+def test_a_compression_hidden_in_a_recording_compresses_its_noise():
+    """Attack pass 32a: a compression acts on the axis's fast terms, of which the simulated part
+    has none (no white noise): the recording came back unchanged, nothing hidden, no word. It
+    compresses the recording's fast noise about its slow level, as heavy tails scale it: the
+    tails lighter (excess kurtosis about -24 gamma sigma^2), the bias and the other axes kept."""
+    rng = np.random.default_rng(0)
+    rec = Recording.from_dps(np.array([-3.3, 1.1, -0.5]) + rng.normal(0, 0.3, (4000, 3)), 100.0)
+    out = hide_in_recording(rec, COMPRESSION, "x", {"gamma_per_dps2": 0.3, "rms_dps": 0.3}).gyro_dps
+    before, after = rec.gyro_dps[:, 0], out[:, 0]
+    kurtosis = [np.mean((v - v.mean()) ** 4) / np.var(v) ** 2 - 3 for v in (before, after)]
+    assert kurtosis[1] < kurtosis[0] - 0.4
+    assert abs(after.mean() - before.mean()) < 0.01 and abs(after.std() / before.std() - 1) < 0.05
+    assert np.array_equal(out[:, 1:], rec.gyro_dps[:, 1:])
