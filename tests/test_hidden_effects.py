@@ -146,3 +146,10 @@ def test_a_compression_hidden_in_a_recording_compresses_its_noise():
     assert kurtosis[1] < kurtosis[0] - 0.4
     assert abs(after.mean() - before.mean()) < 0.01 and abs(after.std() / before.std() - 1) < 0.05
     assert np.array_equal(out[:, 1:], rec.gyro_dps[:, 1:])
+
+
+def test_a_colored_noise_s_lag2_of_none_is_its_default():
+    """Attack pass 32a: the model takes ``lag2: null`` as not given (lag1 squared); hidden in a
+    recording it ended in Python's TypeError (``float(None)``)."""
+    given = hide_in_recording(record(), COLORED_NOISE, "x", {"lag1": 0.5, "lag2": None, "preserve": "std"}).gyro_dps
+    assert np.array_equal(given, hide_in_recording(record(), COLORED_NOISE, "x", {"lag1": 0.5}).gyro_dps)

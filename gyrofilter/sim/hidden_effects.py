@@ -231,7 +231,7 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
 
         i = AXES.index(axis)
         rho = float(params["lag1"])
-        if "lag2" in params:
+        if params.get("lag2") is not None:  # null: not given, as the model takes it
             b, a = colored_noise_filter(1.0, 1.0, rho, params["lag2"], preserve="std")
         else:  # y_k = rho y_{k-1} + sqrt(1 - rho^2) e_k
             b, a = [math.sqrt(1 - rho * rho)], [1.0, -rho]
