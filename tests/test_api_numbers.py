@@ -7,7 +7,9 @@ refused in the same words, and True/False are refused where a number is asked (t
 import dataclasses
 import functools
 import json
+import math
 from collections import namedtuple
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -421,3 +423,29 @@ def test_a_bool_among_the_numbers_of_a_list_is_refused(where):
              "Recording.from_dps": lambda: Recording.from_dps(rows, 100.0)}
     with pytest.raises(GyroFilterError, match="row 7.*True"):
         calls[where]()
+
+
+#: attack pass 32a: numbers of other kinds than Python's and numpy's, and values no setting takes
+OTHER_KINDS = {"Fraction": Fraction, "text": str, "complex": complex, "nan": lambda v: math.nan, "inf": lambda v: math.inf,
+               "an int beyond a float": lambda v: 10**400}
+
+
+@pytest.mark.parametrize("index", range(len(_ids(None))), ids=_ids(None))
+def test_other_kinds_of_number_are_refused_or_the_number(tmp, index):
+    """Attack pass 32a: a Fraction, a text, a complex, NaN, inf or an int beyond a float's range
+    gives the plain value's result or a refusal (GyroFilterError), never a traceback; NaN only
+    where it means "none" (a temperature), with no NaN in the result. ``calibrate``'s
+    ``stillness_threshold`` took NaN (every window still), inf and a complex, and ended in numpy's
+    UFuncTypeError for a text (``max_bias_dps`` alike): checked as the settings ``stillness_z``
+    and ``max_bias_dps`` are."""
+    name, call, good, _ = list(cases(tmp))[index]
+    if isinstance(good, bool):
+        return
+    for kind, make in OTHER_KINDS.items():
+        if kind == "inf" and name == "BiasKalmanFilter(bias_tau_s)":
+            continue  # inf is a random walk (its default)
+        got = outcome(call, make(good))
+        if got[0] == "ok" and kind == "nan":
+            assert "NaN" not in got[1], f"{name} given NaN: NaN in its result"
+        elif got[0] == "ok":
+            assert got == outcome(call, good), f"{name} given {kind} ({make(good)!r}) taken as another value"
