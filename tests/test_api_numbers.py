@@ -449,3 +449,31 @@ def test_other_kinds_of_number_are_refused_or_the_number(tmp, index):
             assert "NaN" not in got[1], f"{name} given NaN: NaN in its result"
         elif got[0] == "ok":
             assert got == outcome(call, good), f"{name} given {kind} ({make(good)!r}) taken as another value"
+
+
+DTYPES = ("float16", "float32", "int8", "uint8", "int64", "uint64", "object", "complex128", "datetime64[s]", "bool")
+
+
+@pytest.mark.parametrize("where", ["filter samples", "filter temp_c", "filter_timed t_s", "smooth temp_c"])
+def test_arrays_of_every_dtype_are_their_numbers_or_refused(where):
+    """Attack pass 32a: an array given to the filter (samples, temperatures, times) in any dtype
+    gives what its float64 copy gives, or a refusal (GyroFilterError) naming the argument: an
+    object, complex (even of 0 imaginary part), datetime or bool array is refused, float16
+    times are refused (docs/formats.md section 7)."""
+    whole = np.round(STILL_DPS)  # whole numbers: every numeric dtype holds them
+    calls = {"filter samples": lambda a: GyroFilter(100.0, 1.0).filter(a),
+             "filter temp_c": lambda a: GyroFilter(100.0, 1.0, temp_coefficient_dps_per_c=0.1).filter(STILL_DPS, a),
+             "filter_timed t_s": lambda a: GyroFilter(100.0, 1.0).filter_timed(STILL_DPS, a),
+             "smooth temp_c": lambda a: smooth(STILL_DPS, 100.0, 1.0, temp_c=a, temp_coefficient_dps_per_c=0.1)}
+    values = {"filter samples": np.abs(whole), "filter temp_c": np.full(len(STILL_DPS), 25.0),
+              "filter_timed t_s": np.arange(len(STILL_DPS), dtype=float) + 1, "smooth temp_c": np.full(len(STILL_DPS), 25.0)}
+    plain = outcome(calls[where], values[where])
+    assert plain[0] == "ok"
+    for dtype in DTYPES:
+        given = values[where].astype(np.int64).astype(dtype) if dtype.startswith("datetime") else values[where].astype(dtype)
+        got = outcome(calls[where], given)
+        if dtype in ("object", "complex128", "datetime64[s]", "bool") or (dtype == "float16" and where == "filter_timed t_s") \
+                or (dtype in ("int8", "uint8") and where == "filter_timed t_s"):  # 300 times wrap around: not increasing
+            assert got[0] == "refused" and ("t_s" in got[2] or "temp_c" in got[2] or "samples_dps" in got[2]), (dtype, got)
+        else:
+            assert got == plain, f"{where} as {dtype}"
