@@ -153,3 +153,10 @@ def test_a_colored_noise_s_lag2_of_none_is_its_default():
     recording it ended in Python's TypeError (``float(None)``)."""
     given = hide_in_recording(record(), COLORED_NOISE, "x", {"lag1": 0.5, "lag2": None, "preserve": "std"}).gyro_dps
     assert np.array_equal(given, hide_in_recording(record(), COLORED_NOISE, "x", {"lag1": 0.5}).gyro_dps)
+
+
+def test_repeated_samples_hidden_in_a_record_of_no_rows():
+    """Attack pass 32a: repeated rows hidden in a recording of 0 samples (built in code) ended in
+    numpy's IndexError (the first row repeated where there is none): no rows, none repeated."""
+    rec = Recording.from_dps(np.zeros((0, 3)), 100.0, temp_c=np.zeros(0))
+    assert len(hide_in_recording(rec, REPEATED_SAMPLES, None, {"fraction": 0.3})) == 0
