@@ -156,10 +156,13 @@ def number_array(values, name, unit="", first_row=0):
         return None, (f"{name} must be numbers{in_unit}, got an array of {array.dtype}", None)
     if isinstance(values, (list, tuple)) and array.size:  # numpy takes a True among numbers as 1
         held = np.asarray(values, dtype=object)
-        if not {bool, np.bool_}.isdisjoint(map(type, held.flat)):  # the types once each: fast
-            at = np.argwhere(np.frompyfunc(lambda v: isinstance(v, (bool, np.bool_)), 1, 1)(held).astype(bool))[0]
-            row = int(at[0])
-            return None, (f"{name} row {row + first_row} holds {_short(held[tuple(at)])}, a bool: give numbers{in_unit}", row)
+        if not {bool, np.bool_, np.ndarray}.isdisjoint(map(type, held.flat)):  # the types once each: fast
+            is_bool = np.frompyfunc(lambda v: isinstance(v, (bool, np.bool_)) or isinstance(v, np.ndarray) and v.dtype.kind == "b",
+                                    1, 1)(held).astype(bool)  # a 0-d array of a bool too
+            if is_bool.any():
+                at = np.argwhere(is_bool)[0]
+                row = int(at[0])
+                return None, (f"{name} row {row + first_row} holds {_short(held[tuple(at)])}, a bool: give numbers{in_unit}", row)
     return array.astype(np.float64, copy=False), None
 
 

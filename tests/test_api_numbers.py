@@ -418,7 +418,8 @@ def test_a_bool_among_the_numbers_of_a_list_is_refused(where):
     calls = {"filter": lambda: GyroFilter(100.0, 1.0).filter(rows),
              "filter temp_c": lambda: GyroFilter(100.0, 1.0, temp_coefficient_dps_per_c=0.1).filter(STILL_DPS, temps),
              "filter_timed t_s": lambda: GyroFilter(100.0, 1.0).filter_timed(STILL_DPS, times),
-             "smooth temp_c": lambda: smooth(STILL_DPS, 100.0, 1.0, temp_c=temps, temp_coefficient_dps_per_c=0.1),
+             "smooth temp_c": lambda: smooth(STILL_DPS, 100.0, 1.0, temp_c=temps[:7] + [np.array(True)] + temps[8:],
+                                             temp_coefficient_dps_per_c=0.1),  # a 0-d array of a bool
              "overlapping_adev": lambda: overlapping_adev([r[1] for r in rows], 100.0),
              "Recording.from_dps": lambda: Recording.from_dps(rows, 100.0)}
     with pytest.raises(GyroFilterError, match="row 7.*True"):
