@@ -3,6 +3,7 @@ until it may take its own name (:func:`partial_path`), and the library's one ato
 small text file (:func:`write_text_whole`). The commands build their outputs' rules on these
 (gyrofilter.cli.outputs: the checks before any work, ``--force``, outputs that land together)."""
 import contextlib
+import errno
 import hashlib
 import itertools
 import os
@@ -105,7 +106,14 @@ def _not_a_file_name(path):
     ``realpath`` drops by its text: ``cal.json/.`` replaced ``cal.json``, ``missing/../cal.json``
     wrote it, where opening either fails); a symbolic link's text is such a name too, hop by hop
     (a link to ``cal.json/.`` replaced ``cal.json``: ``realpath`` drops it alike), and a chain of
-    more than :data:`_MAX_LINK_HOPS` links or a loop (ELOOP; ``realpath`` follows any chain)."""
+    more than :data:`_MAX_LINK_HOPS` links or a loop (ELOOP; ``realpath`` follows any chain), the
+    links of its folder part counted too (the system's limit is on all the links one name
+    resolves through: 39 folder links and 2 to the file replaced the file, where opening fails)."""
+    try:
+        os.stat(path)
+    except OSError as exc:  # the system's own count (a dangling name: ENOENT, judged below)
+        if exc.errno == errno.ELOOP:
+            return True
     for _ in range(_MAX_LINK_HOPS + 1):  # the text of the last of 40 links is judged too
         if os.path.basename(path) in ("", os.curdir, os.pardir) or not os.path.isdir(os.path.dirname(path) or os.curdir):
             return True

@@ -139,7 +139,9 @@ def number_array(values, name, unit="", first_row=0):
     drop the mask and take the value behind it as data; ``row`` the first such row's index, else
     None; the words count rows from ``first_row``),
     what numpy cannot make an array of (a ragged list), complex numbers (converting drops the
-    imaginary part), booleans, strings or objects."""
+    imaginary part), booleans, strings or objects, and a list of numbers holding a bool (numpy
+    takes ``[25.0, True]`` as ``[25.0, 1.0]``: a temperature of 1 deg C, where ``update`` refuses
+    True; ``row`` its row)."""
     in_unit = f" in {unit}" if unit else ""
     mask = np.ma.getmask(values)
     if mask is not np.ma.nomask and mask.any():
@@ -152,6 +154,15 @@ def number_array(values, name, unit="", first_row=0):
         return None, (f"{name} must be an array of numbers{in_unit}, got {_short(values)}", None)
     if array.dtype.kind not in "iuf":
         return None, (f"{name} must be numbers{in_unit}, got an array of {array.dtype}", None)
+    if isinstance(values, (list, tuple)) and array.size:  # numpy takes a True among numbers as 1
+        held = np.asarray(values, dtype=object)
+        if not {bool, np.bool_, np.ndarray}.isdisjoint(map(type, held.flat)):  # the types once each: fast
+            is_bool = np.frompyfunc(lambda v: isinstance(v, (bool, np.bool_)) or isinstance(v, np.ndarray) and v.dtype.kind == "b",
+                                    1, 1)(held).astype(bool)  # a 0-d array of a bool too
+            if is_bool.any():
+                at = np.argwhere(is_bool)[0]
+                row = int(at[0])
+                return None, (f"{name} row {row + first_row} holds {_short(held[tuple(at)])}, a bool: give numbers{in_unit}", row)
     return array.astype(np.float64, copy=False), None
 
 

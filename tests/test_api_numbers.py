@@ -7,7 +7,9 @@ refused in the same words, and True/False are refused where a number is asked (t
 import dataclasses
 import functools
 import json
+import math
 from collections import namedtuple
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -225,6 +227,95 @@ def cases(tmp):
                                                                  {"rate": 0.01, "magnitude_dps": 2.0}, seed=v).gyro_dps, 3, -1
     yield "hide_in_recording(params)", lambda v: hide_in_recording(_recording(), "outliers", "x",
                                                                    {"rate": 0.01, "magnitude_dps": v}, seed=1).gyro_dps, 2, -1
+    yield from _model_cases()
+    yield from _hidden_cases()
+    # attack pass 32a: one element of the arrays smooth and filter_timed take
+    yield "smooth(temp_c element)", lambda v: smooth(STILL_DPS, 100.0, 1.0, temp_c=[25.0] * 299 + [v],
+                                                     temp_coefficient_dps_per_c=0.1), 30, 1000
+    yield "GyroFilter.filter_timed(t_s element)", lambda v: _timed(v), 3.5, -1
+
+
+#: attack pass 32a: every number of the simulator's model (docs/formats.md section 2), by effect:
+#: (its parameters, a valid value), one case a parameter; the invalid value 1e9 is beyond the limits
+#: of all but times (-1 for them)
+EFFECT_PARAMS = {
+    "bias_instability": {"b_dps": 0.01, "tau_min_s": 0.1, "tau_max_s": 10, "per_decade": 2},
+    "rate_random_walk": {"k_dps_per_sqrt_s": 0.01}, "rate_ramp": {"r_dps_per_s": 0.01},
+    "gauss_markov": {"sigma_dps": 0.02, "tau_s": 3}, "sinusoid": {"frequency_hz": 5, "amplitude_dps": 0.1, "phase_rad": 0.5},
+    "temperature": {"coefficient_dps_per_c": 0.02, "reference_c": 25}, "bias_step": {"time_s": 0.5, "size_dps": 0.2},
+    "warmup": {"amplitude_dps": 0.5, "tau_s": 2}, "outliers": {"rate": 0.05, "magnitude_dps": 2, "spread_ln": 0.25},
+    "colored_noise": {"lag1": 0.5, "lag2": 0.25}, "narrowband": {"center_hz": 10, "bandwidth_hz": 1, "rms_dps": 0.1},
+    "heavy_tails": {"fraction": 0.125, "scale_ratio": 5},
+    "wandering_tone": {"center_hz": 10, "spread_hz": 0.5, "wander_s": 1, "amplitude_dps": 0.1,
+                       "excursion_hz": 1, "excursion_s": 0.25, "excursion_period_s": 0.5},
+    "arma": {"sigma_a_dps": 0.1, "phi": [0.5], "theta": [0.25]}, "resonance": {"center_hz": 10, "q": 2, "rms_dps": 0.1},
+    "ringing": {"center_hz": 10, "q": 2, "shock_rate_hz": 1, "shock_dps": 1},
+    "compression": {"gamma_per_dps2": 0.5, "rms_dps": 0.125}}
+TEMPERATURE = {"start_c": 24.5, "end_c": 27.5, "tau_s": 1, "cycle_amplitude_c": 0.5, "cycle_period_s": 0.5, "noise_c": 0.03,
+               "resolution_c": 0.5}
+ACCEL_AXIS = {"bias_mps2": 0.25, "vrw_mps_per_sqrt_s": 0.01, "b_mps2": 0.01, "k_mps2_per_sqrt_s": 0.01,
+              "coefficient_mps2_per_c": 0.01}
+
+
+def _with(path, value, doc):
+    """``doc`` (a JSON-like model, copied) with the number at ``path`` (keys and list indices) set to ``value``."""
+    doc = json.loads(json.dumps(doc))
+    *parents, last = path
+    node = functools.reduce(lambda d, k: d[k], parents, doc)
+    node[last] = value
+    return doc
+
+
+def _simulated_model(doc):
+    rec = simulate(doc, 0.5, seed=1)
+    return {name: rec.columns[name] for name in rec.columns}
+
+
+def _model_cases():
+    """One case a number of the model: the top-level keys, the temperature profile (both
+    forms), the accelerometer, an axis and every effect's parameters (an element of a list)."""
+    warm = {**model(), "temperature": TEMPERATURE}
+    top = [(("sample_rate_hz",), 50, model()), (("lsb_per_dps",), 131, {**model(), "gyro_unit": "lsb", "lsb_per_dps": 131}),
+           (("full_scale_dps",), 250, model()), (("repeated_samples", "fraction"), 0.125, {**model(), "repeated_samples": {}}),
+           (("axes", "y", "bias_dps"), 0.5, model()), (("axes", "y", "arw_dps_per_sqrt_hz"), 0.01, model()),
+           (("temperature", "t_s", 1), 0.25, {**model(), "temperature": {"t_s": [0, 0.25], "temp_c": [25, 26]}}),
+           (("temperature", "temp_c", 1), 26, {**model(), "temperature": {"t_s": [0, 0.25], "temp_c": [25, 26]}}),
+           (("accelerometer", "lsb_per_g", ), 16384, {**warm, "accelerometer": {}})]
+    top += [(("temperature", key), value, warm) for key, value in TEMPERATURE.items()]
+    top += [(("accelerometer", "axes", "x", key), value, {**warm, "accelerometer": {"axes": {"x": {}}}})
+            for key, value in ACCEL_AXIS.items()]
+    for effect, params in EFFECT_PARAMS.items():
+        doc = model(**{"effect": effect, **params}) if effect != "temperature" else \
+            {**model(**{"effect": effect, **params}), "temperature": TEMPERATURE}
+        for key, value in params.items():
+            path = ("axes", "x", "effects", 0, key) + ((0,) if isinstance(value, list) else ())
+            top.append((path, value[0] if isinstance(value, list) else value, doc))
+    for path, good, doc in top:
+        call = (lambda p, d: lambda v: _simulated_model(_with(p, v, d)))(path, doc)
+        # times (a table's, a time constant's) take any length, a lsb_per_g up to 3e9
+        bad = -1 if path[-2:] == ("t_s", 1) or str(path[-1]).endswith("_s") and "per_s" not in str(path[-1]) else 0.1 if path[-1] == "lsb_per_g" else 1e9
+        yield f"simulate(model {'.'.join(map(str, path))})", call, good, bad
+
+
+def _hidden_cases():
+    """hide_in_recording's parameters of the effects it hides in a recording's own noise, and
+    of an effect it simulates (an element of a list): one case a parameter."""
+    hidden = {"colored_noise": {"lag1": 0.5, "lag2": 0.25}, "heavy_tails": {"fraction": 0.125, "scale_ratio": 5},
+              "compression": {"gamma_per_dps2": 0.5, "rms_dps": 0.125}, "arma": {"sigma_a_dps": 0.1, "phi": [0.5], "theta": [0.25]},
+              "repeated_samples": {"fraction": 0.125}}
+    for effect, params in hidden.items():
+        for key, value in params.items():
+            def call(v, effect=effect, key=key, params=params):
+                given = {**params, key: [v] if isinstance(params[key], list) else v}
+                return hide_in_recording(_recording(), effect, "x", given, seed=1).gyro_dps
+            yield f"hide_in_recording({effect} {key})", call, value[0] if isinstance(value, list) else value, 1e9
+
+
+def _timed(t_last):
+    """filter_timed of STILL_DPS with its last time ``t_last`` (s), the others 0.01 s apart."""
+    t_s = [i / 100.0 for i in range(len(STILL_DPS) - 1)] + [t_last]
+    t_rows_s, rows = GyroFilter(100.0, 1.0).filter_timed(STILL_DPS, t_s)
+    return {"t": t_rows_s, "rows": rows}
 
 
 def _update_rows(sample_of, temp_c=None):
@@ -309,3 +400,81 @@ def test_drawn_settings_in_every_numpy_form(seed):
                 held = float(held) if isinstance(held, np.floating) else held
                 assert outcome(call, given) == (plain if type(held) is type(value) else outcome(call, held)), \
                     f"{name} given {form}({value!r})"
+
+
+@pytest.mark.parametrize("where", ["filter", "filter temp_c", "filter_timed t_s", "smooth temp_c", "overlapping_adev",
+                                   "Recording.from_dps"])
+def test_a_bool_among_the_numbers_of_a_list_is_refused(where):
+    """Attack pass 32a: ``update((1.0, True, 0.5))`` is refused (True is no number), but a list
+    of numbers holding one True was taken as 1 where an array is asked (numpy makes it 1.0): a
+    temperature of 1 deg C compensated, a rate of 1 deg/s filtered, without a word. Refused
+    naming the row, as a bool array is (``inputs.number_array``)."""
+    rows = STILL_DPS.tolist()
+    rows[7] = [rows[7][0], True, rows[7][2]]
+    temps = [25.0] * len(rows)
+    temps[7] = np.bool_(True)
+    times = [i / 100.0 for i in range(len(rows))]
+    times[7] = True
+    calls = {"filter": lambda: GyroFilter(100.0, 1.0).filter(rows),
+             "filter temp_c": lambda: GyroFilter(100.0, 1.0, temp_coefficient_dps_per_c=0.1).filter(STILL_DPS, temps),
+             "filter_timed t_s": lambda: GyroFilter(100.0, 1.0).filter_timed(STILL_DPS, times),
+             "smooth temp_c": lambda: smooth(STILL_DPS, 100.0, 1.0, temp_c=temps[:7] + [np.array(True)] + temps[8:],
+                                             temp_coefficient_dps_per_c=0.1),  # a 0-d array of a bool
+             "overlapping_adev": lambda: overlapping_adev([r[1] for r in rows], 100.0),
+             "Recording.from_dps": lambda: Recording.from_dps(rows, 100.0)}
+    with pytest.raises(GyroFilterError, match="row 7.*True"):
+        calls[where]()
+
+
+#: attack pass 32a: numbers of other kinds than Python's and numpy's, and values no setting takes
+OTHER_KINDS = {"Fraction": Fraction, "text": str, "complex": complex, "nan": lambda v: math.nan, "inf": lambda v: math.inf,
+               "an int beyond a float": lambda v: 10**400}
+
+
+@pytest.mark.parametrize("index", range(len(_ids(None))), ids=_ids(None))
+def test_other_kinds_of_number_are_refused_or_the_number(tmp, index):
+    """Attack pass 32a: a Fraction, a text, a complex, NaN, inf or an int beyond a float's range
+    gives the plain value's result or a refusal (GyroFilterError), never a traceback; NaN only
+    where it means "none" (a temperature), with no NaN in the result. ``calibrate``'s
+    ``stillness_threshold`` took NaN (every window still), inf and a complex, and ended in numpy's
+    UFuncTypeError for a text (``max_bias_dps`` alike): checked as the settings ``stillness_z``
+    and ``max_bias_dps`` are."""
+    name, call, good, _ = list(cases(tmp))[index]
+    if isinstance(good, bool):
+        return
+    for kind, make in OTHER_KINDS.items():
+        if kind == "inf" and name == "BiasKalmanFilter(bias_tau_s)":
+            continue  # inf is a random walk (its default)
+        got = outcome(call, make(good))
+        if got[0] == "ok" and kind == "nan":
+            assert "NaN" not in got[1], f"{name} given NaN: NaN in its result"
+        elif got[0] == "ok":
+            assert got == outcome(call, good), f"{name} given {kind} ({make(good)!r}) taken as another value"
+
+
+DTYPES = ("float16", "float32", "int8", "uint8", "int64", "uint64", "object", "complex128", "datetime64[s]", "bool")
+
+
+@pytest.mark.parametrize("where", ["filter samples", "filter temp_c", "filter_timed t_s", "smooth temp_c"])
+def test_arrays_of_every_dtype_are_their_numbers_or_refused(where):
+    """Attack pass 32a: an array given to the filter (samples, temperatures, times) in any dtype
+    gives what its float64 copy gives, or a refusal (GyroFilterError) naming the argument: an
+    object, complex (even of 0 imaginary part), datetime or bool array is refused, float16
+    times are refused (docs/formats.md section 7)."""
+    whole = np.round(STILL_DPS)  # whole numbers: every numeric dtype holds them
+    calls = {"filter samples": lambda a: GyroFilter(100.0, 1.0).filter(a),
+             "filter temp_c": lambda a: GyroFilter(100.0, 1.0, temp_coefficient_dps_per_c=0.1).filter(STILL_DPS, a),
+             "filter_timed t_s": lambda a: GyroFilter(100.0, 1.0).filter_timed(STILL_DPS, a),
+             "smooth temp_c": lambda a: smooth(STILL_DPS, 100.0, 1.0, temp_c=a, temp_coefficient_dps_per_c=0.1)}
+    values = {"filter samples": np.abs(whole), "filter temp_c": np.full(len(STILL_DPS), 25.0),
+              "filter_timed t_s": np.arange(len(STILL_DPS), dtype=float) + 1, "smooth temp_c": np.full(len(STILL_DPS), 25.0)}
+    plain = outcome(calls[where], values[where])
+    assert plain[0] == "ok"
+    for dtype in DTYPES:
+        given = values[where].astype(np.int64).astype(dtype) if dtype.startswith("datetime") else values[where].astype(dtype)
+        got = outcome(calls[where], given)
+        if dtype in ("object", "complex128", "datetime64[s]", "bool") or (dtype == "float16" and where == "filter_timed t_s") \
+                or (dtype in ("int8", "uint8") and where == "filter_timed t_s"):  # 300 times wrap around: not increasing
+            assert got[0] == "refused" and ("t_s" in got[2] or "temp_c" in got[2] or "samples_dps" in got[2]), (dtype, got)
+        else:
+            assert got == plain, f"{where} as {dtype}"

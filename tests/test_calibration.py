@@ -465,3 +465,32 @@ def test_a_save_through_39_links_writes_the_target(tmp_path):
     os.symlink("kept.json", tmp_path / "L40")
     calibrate(still(500), 100.0).save(os.path.join(tmp_path, "L1"))
     assert (tmp_path / "kept.json").read_text().startswith("{") and os.path.islink(tmp_path / "L1")
+
+
+@pytest.mark.parametrize("folder_links, file_links, written", [(39, 2, False), (20, 21, False), (38, 2, True)])
+def test_links_of_the_folder_part_count_toward_the_limit(tmp_path, folder_links, file_links, written):
+    """Attack pass 32a: Linux's 40 counts every link one name resolves through, its folder
+    part's too; the walk counted the last part's: 39 folder links and 2 to the file (opening
+    fails, ELOOP) replaced the file ``realpath`` found. Refused as opening is; 38 and 2 written."""
+    import os
+    os.mkdir(tmp_path / "real")
+    kept = tmp_path / "real" / "kept.json"
+    kept.write_text("keep")
+    folder = "real"
+    for i in range(folder_links):
+        os.symlink(folder, tmp_path / f"F{i}")
+        folder = f"F{i}"
+    name = "kept.json"
+    for i in range(file_links):
+        os.symlink(name, tmp_path / "real" / f"L{i}")
+        name = f"L{i}"
+    before = sorted(p.name for p in (tmp_path / "real").iterdir())
+    cal = calibrate(still(500), 100.0)
+    if written:
+        cal.save(os.path.join(tmp_path, folder, name))
+        assert Calibration.load(kept) == cal and os.path.islink(tmp_path / "real" / name)
+    else:
+        with pytest.raises(OSError, match="symbolic links"):
+            cal.save(os.path.join(tmp_path, folder, name))
+        assert kept.read_text() == "keep"
+    assert sorted(p.name for p in (tmp_path / "real").iterdir()) == before

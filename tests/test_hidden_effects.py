@@ -4,7 +4,7 @@ rates, an axis 'w' a KeyError, lag1 1.5 a math domain error)."""
 import numpy as np
 import pytest
 
-from gyrofilter.effects import COLORED_NOISE, HEAVY_TAILS, REPEATED_SAMPLES, SINUSOID
+from gyrofilter.effects import COLORED_NOISE, COMPRESSION, HEAVY_TAILS, REPEATED_SAMPLES, SINUSOID
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.hidden_effects import hide_in_recording
@@ -131,3 +131,32 @@ def test_parameters_naming_another_effect_are_refused():
         hide_in_recording(record(), SINUSOID, "x", {"effect": "warmup", "amplitude_dps": 1.0, "tau_s": 5.0})
     entry = {"effect": SINUSOID, "frequency_hz": 1.0, "amplitude_dps": 0.1}  # a model's entry of that effect: taken
     assert hide_in_recording(record(), SINUSOID, "x", entry).gyro_dps.shape == record().gyro_dps.shape
+
+
+def test_a_compression_hidden_in_a_recording_compresses_its_noise():
+    """Attack pass 32a: a compression acts on the axis's fast terms, of which the simulated part
+    has none (no white noise): the recording came back unchanged, nothing hidden, no word. It
+    compresses the recording's fast noise about its slow level, as heavy tails scale it: the
+    tails lighter (excess kurtosis about -24 gamma sigma^2), the bias and the other axes kept."""
+    rng = np.random.default_rng(0)
+    rec = Recording.from_dps(np.array([-3.3, 1.1, -0.5]) + rng.normal(0, 0.3, (4000, 3)), 100.0)
+    out = hide_in_recording(rec, COMPRESSION, "x", {"gamma_per_dps2": 0.3, "rms_dps": 0.3}).gyro_dps
+    before, after = rec.gyro_dps[:, 0], out[:, 0]
+    kurtosis = [np.mean((v - v.mean()) ** 4) / np.var(v) ** 2 - 3 for v in (before, after)]
+    assert kurtosis[1] < kurtosis[0] - 0.4
+    assert abs(after.mean() - before.mean()) < 0.01 and abs(after.std() / before.std() - 1) < 0.05
+    assert np.array_equal(out[:, 1:], rec.gyro_dps[:, 1:])
+
+
+def test_a_colored_noise_s_lag2_of_none_is_its_default():
+    """Attack pass 32a: the model takes ``lag2: null`` as not given (lag1 squared); hidden in a
+    recording it ended in Python's TypeError (``float(None)``)."""
+    given = hide_in_recording(record(), COLORED_NOISE, "x", {"lag1": 0.5, "lag2": None, "preserve": "std"}).gyro_dps
+    assert np.array_equal(given, hide_in_recording(record(), COLORED_NOISE, "x", {"lag1": 0.5}).gyro_dps)
+
+
+def test_repeated_samples_hidden_in_a_record_of_no_rows():
+    """Attack pass 32a: repeated rows hidden in a recording of 0 samples (built in code) ended in
+    numpy's IndexError (the first row repeated where there is none): no rows, none repeated."""
+    rec = Recording.from_dps(np.zeros((0, 3)), 100.0, temp_c=np.zeros(0))
+    assert len(hide_in_recording(rec, REPEATED_SAMPLES, None, {"fraction": 0.3})) == 0

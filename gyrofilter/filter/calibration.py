@@ -186,6 +186,12 @@ def implausible_bias(axis, mean_dps, *, max_bias_dps=MAX_BIAS_DPS, unit=None):
             f"deg/s: is the sensor turning, or are the rates in another unit ({likely})")
 
 
+#: the ranges of :func:`calibrate`'s ``stillness_threshold`` and ``max_bias_dps`` (the settings
+#: ``stillness_z`` and ``max_bias_dps``: gyrofilter.filter.settings.SETTING_RANGES reads them here)
+STILLNESS_Z_RANGE = dict(low=0, low_open=True, high=1e6)
+MAX_BIAS_RANGE = dict(low=0, low_open=True, high=MAX_RATE_DPS)
+
+
 def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=MAX_BIAS_DPS, temp_c=None) -> Calibration:
     """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
 
@@ -198,6 +204,9 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     naming the axis and the statistic when the window is not still.
     """
     sample_rate_hz = check_sample_rate_hz(sample_rate_hz)  # True was taken as 1 Hz, 0 kept in the calibration
+    # NaN passed every window as still, a text ended in numpy's UFuncTypeError
+    stillness_threshold = check_number(stillness_threshold, "stillness_threshold", **STILLNESS_Z_RANGE)
+    max_bias_dps = check_number(max_bias_dps, "max_bias_dps (deg/s)", **MAX_BIAS_RANGE)
     x = as_numbers(window_dps, "calibration window", "deg/s")  # a masked value is refused, not averaged
     if x.ndim != 2 or x.shape[1] != 3:
         raise SettingsError(f"calibration window must have shape (n, 3), got {x.shape}")

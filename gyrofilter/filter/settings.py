@@ -9,7 +9,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from .averaging import AVERAGERS
-from .calibration import MAX_BIAS_DPS
+from .calibration import MAX_BIAS_DPS, MAX_BIAS_RANGE, STILLNESS_Z_RANGE
 from .hold import DEFAULTS as HOLD_DEFAULTS
 from ..errors import SettingsError
 from ..inputs import axis_values, check_number, python_value
@@ -33,8 +33,8 @@ MAX_TEMP_COEFFICIENT_DPS_PER_C = 10.0
 SETTING_RANGES = {
     "calibration_s": dict(low=0, high=MAX_CALIBRATION_S),
     "calibration_retry_s": dict(low=0, high=86_400.0),
-    "stillness_z": dict(low=0, low_open=True, high=1e6),
-    "max_bias_dps": dict(low=0, low_open=True, high=MAX_RATE_DPS),
+    "stillness_z": STILLNESS_Z_RANGE,
+    "max_bias_dps": MAX_BIAS_RANGE,
     "block_len": dict(low=1, high=100, integer=True),
     "outlier_q_dps": dict(low=0, low_open=True, high=MAX_RATE_DPS),
     "fifo_depth": dict(low=1, high=100, integer=True),

@@ -45,9 +45,10 @@ import math
 
 import numpy as np
 
-from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
+from ..effects import (BIAS_INSTABILITY, BIAS_STEP, COLORED_NOISE, COMPRESSION, GAUSS_MARKOV, HEAVY_TAILS, OUTLIERS, RATE_RAMP,
                       RATE_RANDOM_WALK, REPEATED_SAMPLES, RESONANCE, RINGING, ROWS, SINUSOID, TEMPERATURE, WANDERING_TONE,
                       WARMUP)
+from .compression import Compression
 from .model import TEMPERATURE_PROFILE, validate_model
 from .noise_terms import RepeatedRows, colored_noise_filter, filter_variance
 from .resonance import band_pass
@@ -193,7 +194,9 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     a fraction of 5 repeated every row); a parameter the effect does not take (a misspelt
     ``lag2`` or ``pattern`` was dropped without a word, the default's effect hidden), and a colored
     noise's ``preserve`` other than ``"std"`` (the recording's noise is filtered keeping its
-    variance), and an ``"effect"`` in ``params`` other than ``effect`` (it replaced it), are refused."""
+    variance), and an ``"effect"`` in ``params`` other than ``effect`` (it replaced it), are refused.
+    A ``compression`` compresses the recording's fast noise (the rate less its moving mean, as
+    ``heavy_tails`` scales it) about that mean: the simulated part has no noise to compress."""
     if isinstance(params, dict) and params.get("effect", effect) != effect:  # a model's entry of another effect replaced it
         raise SettingsError(f"params name the effect {plain(params['effect'])}, not {plain(effect)} (nothing hidden)")
     sample_rate_hz = rec.sample_rate_hz
@@ -228,7 +231,7 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
 
         i = AXES.index(axis)
         rho = float(params["lag1"])
-        if "lag2" in params:
+        if params.get("lag2") is not None:  # null: not given, as the model takes it
             b, a = colored_noise_filter(1.0, 1.0, rho, params["lag2"], preserve="std")
         else:  # y_k = rho y_{k-1} + sqrt(1 - rho^2) e_k
             b, a = [math.sqrt(1 - rho * rho)], [1.0, -rho]
@@ -243,6 +246,12 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         k = np.where(np.random.default_rng(seed).random(n) < p, c * k0, k0)
         fast = gyro[:, i] - moving_mean(gyro[:, i], _FAST_WINDOW)  # clipped at the ends: zeros beyond them scaled the bias
         gyro[:, i] += (k - 1.0) * fast
+    elif effect == COMPRESSION:
+        # a map of the fast terms about the slow level, of which the simulated part has none (no
+        # white noise: the record came back unchanged): the real fast noise, as heavy tails take it
+        i = AXES.index(axis)
+        slow = moving_mean(gyro[:, i], _FAST_WINDOW)
+        gyro[:, i] = slow + Compression(params["gamma_per_dps2"], params["rms_dps"]).apply(gyro[:, i] - slow)
     elif effect == REPEATED_SAMPLES:  # whole rows of the real record, the temperature's too
         repeats = RepeatedRows(params["fraction"], params.get("pattern", "random"), np.random.default_rng(seed))
         mask = repeats.next_mask(n)

@@ -516,7 +516,8 @@ class RepeatedRows:
         previous block's last value, used by a repeat at the block's first row; None for the first
         block). Returns ``(new values, this block's last value)``."""
         src = np.maximum.accumulate(np.where(mask, -1, np.arange(mask.size)))
-        out = np.where(src >= 0, values[np.maximum(src, 0)], last if last is not None else values[0])
+        first = last if last is not None else values[0] if values.size else 0.0  # no rows: none repeated (an IndexError)
+        out = np.where(src >= 0, values[np.maximum(src, 0)], first)
         return out, (out[-1] if out.size else last)
 
 
