@@ -48,6 +48,15 @@ def test_a_fleet_refuses_allow_large_mean(dps_as_rad, tmp_path, capsys):
     assert "--allow-large-mean is for one recording" in capsys.readouterr().err
 
 
+def test_a_fleets_failure_names_a_way_out_that_is_taken(dps_as_rad, tmp_path, capsys):
+    """Attack pass 32b: a fleet's failure line said "rerun with --allow-large-mean", which a fleet refuses:
+    it says to analyse the file alone with it, which is taken."""
+    assert main(["allan", dps_as_rad, "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "analyse the file alone with --allow-large-mean" in err, err
+    assert main(["allan", dps_as_rad, "--allow-large-mean"]) == 0
+
+
 def test_the_refusal_names_a_way_out_that_is_taken(dps_as_rad, tmp_path, capsys):
     """Attack pass 31a: the refusal said "Fix the unit (gyrofilter convert --unit)", and convert refuses a
     recording ("already a gyrofilter recording"): the way out is the header's gyro_unit (or the log converted
