@@ -1086,3 +1086,28 @@ def test_a_temperature_named_in_f_or_k_is_converted(tmp_path, capsys, name, cell
     assert rc == 0 and read_recording(dst).temp_c[0] == temp_c, err
     rc, dst = _convert(tmp_path, _unit_log(_GYRO + ["temp_raw"], _ROW + ["1335"]), "--unit", "dps", out="raw.csv")
     assert rc == 0 and "temp" not in read_recording(dst).columns, capsys.readouterr().err  # no die's counts guessed
+
+
+@pytest.mark.parametrize("names, given, stated, taken, unit, row", [
+    (["gyro1_x_mdps", "gyro1_y_mdps", "gyro1_z_mdps"], ["--unit", "dps"], "the column names say mdps", [], "dps",
+     [0.001, 0.001, 0.002]),
+    (["AngVelX_rad_s", "AngVelY_rad_s", "AngVelZ_rad_s"], ["--unit", "dps"], "the column names say rad/s", [], "rad/s",
+     [1, 1, 2]),
+    (["host_time_ms", "gx", "gy", "gz"], ["--unit", "dps", "--time-unit", "s"], "'host_time_ms' states ms",
+     ["--unit", "dps"], "dps", [1, 1, 2]),
+])
+def test_a_unit_ending_a_name_given_in_columns_agrees_with_the_option(tmp_path, capsys, names, given, stated, taken,
+                                                                      unit, row):
+    """Attack pass 32b: a column named in --columns that convert's patterns do not read (``gyro1_x_mdps``
+    of a log of two gyros, ``AngVelX_rad_s``, ``host_time_ms``) had its unit at the end unread: "the gyro
+    unit is not stated", and ``--unit dps`` wrote millidegrees as degrees (``--time-unit s``: 0.1 Hz),
+    exit 0, where ``gx (mdps)`` or ``gx_mdps`` are refused. The name's unit is read and must agree."""
+    columns = ",".join(names if len(names) == 4 else ["time_ms"] + names)
+    text = columns + "\n" + "".join(f"{10 * i},{i % 7},1,2\n" for i in range(300))
+    rc, dst = _convert(tmp_path, text, "--columns", columns, *given)
+    assert rc == 2 and not dst.exists()
+    assert stated in capsys.readouterr().err
+    rc, dst = _convert(tmp_path, text, "--columns", columns, *taken)
+    assert rc == 0, capsys.readouterr().err
+    rec = read_recording(dst)
+    assert rec.gyro_unit == unit and rec.sample_rate_hz == 100 and rec.gyro[1].tolist() == row

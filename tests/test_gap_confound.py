@@ -20,7 +20,7 @@ from gyrofilter import GyroFilter
 from gyrofilter.analysis.gap import detectors as det
 from gyrofilter.analysis.gap.detectors.covariate import detect_slow
 from gyrofilter.analysis.gap import report as gap_report
-from gyrofilter.analysis.gap.pipeline import analyse_gap
+from gyrofilter.analysis.gap.pipeline import analyse_gap, compensation_hint
 from gyrofilter.analysis.gap.confound import WHY_THE_COVARIATE
 from gyrofilter.sim import hidden_effects as he
 from gyrofilter.sim.model import EFFECTS
@@ -365,3 +365,21 @@ def test_only_a_temperature_whose_interval_holds_0_is_unnamed():
     assert unnamed_temperature(temp, None) is None  # no interval (--bootstrap 0, or not determined)
     ramp = det.Candidate(effect="rate_ramp", params={"r_dps_per_s": 1e-5}, statistic=30.0, threshold=25.0, evidence="")
     assert unnamed_temperature(ramp, [-1e-5, 2e-5]) is None  # a shape's interval holding 0 is no such rule
+
+
+@pytest.mark.parametrize("coefficients, taken", [({"x": 0.03044, "z": -0.015}, True), ({"x": 14.98}, False),
+                                                 ({"y": -10.00004}, True), ({"y": -10.05}, False)])
+def test_the_temperature_hint_gives_a_setting_the_filter_takes(coefficients, taken):
+    """Attack pass 32b: a temperature named with a coefficient beyond the filter's +-10 deg/s per deg C
+    (a temp column that barely varies, 0.05 deg C under a 0.75 deg/s settling: 14.98) was given as
+    ``--set temp_coefficient_dps_per_c=14.98,0,0``, which replay refuses; the note says what it found
+    instead. The setting given is the one checked (rounded as printed)."""
+    findings = [{"axis": a, "effect": "temperature", "params": {"coefficient_dps_per_c": c}}
+                for a, c in coefficients.items()]
+    (hint,) = compensation_hint(findings)
+    if not taken:
+        assert "--set temp_coefficient_dps_per_c=" not in hint and "beyond the +-10 deg/s per deg C the filter takes" in hint, hint
+        return
+    given = tuple(float(v) for v in re.search(r"temp_coefficient_dps_per_c=(\S+)", hint)[1].split(","))
+    assert GyroFilter(10.0, temp_coefficient_dps_per_c=given).settings.temp_coefficient_dps_per_c == given
+    assert given == pytest.approx([coefficients.get(a, 0.0) for a in AXES], rel=1e-3)

@@ -48,6 +48,15 @@ def test_a_fleet_refuses_allow_large_mean(dps_as_rad, tmp_path, capsys):
     assert "--allow-large-mean is for one recording" in capsys.readouterr().err
 
 
+def test_a_fleets_failure_names_a_way_out_that_is_taken(dps_as_rad, tmp_path, capsys):
+    """Attack pass 32b: a fleet's failure line said "rerun with --allow-large-mean", which a fleet refuses:
+    it says to analyse the file alone with it, which is taken."""
+    assert main(["allan", dps_as_rad, "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "analyse the file alone with --allow-large-mean" in err, err
+    assert main(["allan", dps_as_rad, "--allow-large-mean"]) == 0
+
+
 def test_the_refusal_names_a_way_out_that_is_taken(dps_as_rad, tmp_path, capsys):
     """Attack pass 31a: the refusal said "Fix the unit (gyrofilter convert --unit)", and convert refuses a
     recording ("already a gyrofilter recording"): the way out is the header's gyro_unit (or the log converted
@@ -83,3 +92,15 @@ def test_an_axis_not_analysed_leaves_the_results_of_the_others_as_they_were(tmp_
         assert main(["allan", path, "--axes", axes, "--json", str(tmp_path / f"{axes}.json")]) == 0
         out[axes] = json.loads((tmp_path / f"{axes}.json").read_text())["axes"]
     assert list(out["zx"]) == ["z", "x"] and all(out["zx"][a] == out["xyz"][a] for a in "zx")
+
+
+def test_replays_refusal_of_a_large_bias_names_its_way_through(tmp_path, capsys):
+    """Attack pass 32b: a real bias beyond 20 deg/s (20.5, a gyro beyond its datasheet) was refused by
+    replay's start-up calibration with "Keep it still while calibrating" alone, as allan names its
+    --allow-large-mean: the setting that takes it is named (replay's --set takes it)."""
+    g = np.array([20.5, 0.1, 1.2]) + np.random.default_rng(3).normal(size=(500, 3)) * 0.05
+    path = str(tmp_path / "big_bias.csv")
+    write_recording(path, Recording.from_dps(g, 50.0))
+    assert main(["replay", path]) == 2
+    assert "raise the filter's setting max_bias_dps (to 21)" in capsys.readouterr().err
+    assert main(["replay", path, "--set", "max_bias_dps=21"]) == 0

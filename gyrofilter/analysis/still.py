@@ -313,7 +313,8 @@ def refuse_large_mean(path, gyro_unit, series, allow, *, warn):
             continue
         if not allow:
             raise RecordingError(f"{path}: {text}? Fix the unit (the header's gyro_unit or lsb_per_dps, or convert the "
-                                 "log again with its --unit), or rerun with --allow-large-mean if the mean is real")
+                                 "log again with its --unit), or analyse the file alone with --allow-large-mean "
+                                 "if the mean is real")
         warn(f"{path}: {text}? Analysed as it is: its coefficients hold only if the mean is real")
 
 

@@ -222,7 +222,8 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     for i, axis in enumerate(AXES):
         implausible = implausible_bias(axis, bias[i], max_bias_dps=max_bias_dps)
         if implausible:
-            raise CalibrationError(f"calibration: {implausible}? Keep it still while calibrating")
+            raise CalibrationError(f"calibration: {implausible}? Keep it still while calibrating, or, if the bias is real, "
+                                   f"raise the filter's setting max_bias_dps (to {math.ceil(abs(bias[i]))})")
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "

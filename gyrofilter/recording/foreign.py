@@ -60,8 +60,8 @@ from .foreign_extras import find_extras, gyro_out_of_range, left_out_line, no_gy
 from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from .logtext import log_lines, open_log
 from .reader import CHUNK_ROWS
-from .unit_words import (columns_stated, converted_text, given_unit, known_unit, name_units, recorded, stated_unit, to_floats,
-                         units_of, unread_unit)
+from .unit_words import (columns_stated, converted_text, ending_unit, given_unit, known_unit, name_units, recorded,
+                         stated_unit, to_floats, units_of, unread_unit)
 from .writer import EXACT_FORMAT, exact_format
 
 #: time units of a time column and their length in s
@@ -182,11 +182,11 @@ def _pick(names, path, columns, time_unit, unit):
 def _name_unit(normal, pattern, quantity):
     """The unit of ``quantity`` a column's name (as :func:`_normal` gives it) states
     (:func:`~gyrofilter.recording.unit_words.stated_unit`): in brackets, as the unit at the end of
-    its ``pattern`` (``gyro_x_dps``, ``time_ms``), or by its word (``millis``); else None."""
+    its ``pattern`` (``gyro_x_dps``, ``time_ms``) or of a name it does not match, or by its word (``millis``); else None."""
     key, bracket = normal
     match = pattern.fullmatch(key)
-    if bracket or match is None:
-        return stated_unit(quantity, bracket)
+    if bracket or match is None:  # a name no pattern reads (given in --columns): the unit it ends in
+        return stated_unit(quantity, bracket) if bracket else ending_unit(quantity, key)
     word = match.groupdict().get("word") or ""
     return stated_unit(quantity, match["unit"]) or known_unit(quantity, word) or _NAME_TIME_UNITS.get(word)
 

@@ -96,6 +96,14 @@ def name_units(quantity, units=None):
     return "|".join(re.escape(f) for f in sorted(forms, key=lambda f: (-len(f), f)))
 
 
+def ending_unit(quantity, key):
+    """The unit of ``quantity`` a normalised column name ``key`` ends in after a ``_``, the longest
+    spelling of :func:`name_units` (``gyro1_x_mdps``: mdps; ``host_time_ms``: ms), or None: the unit of
+    a column ``--columns`` names that convert's patterns do not read, which the option must agree with."""
+    match = re.search(rf"_({name_units(quantity)})$", key)
+    return _FORMS[quantity][match.group(1)] if match else None
+
+
 def recorded(unit):
     """The unit a recording holds of ``unit``: itself, or the one :data:`CONVERTED` converts it to."""
     return CONVERTED.get(unit, (unit,))[0]
