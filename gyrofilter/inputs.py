@@ -141,7 +141,7 @@ def number_array(values, name, unit="", first_row=0):
     what numpy cannot make an array of (a ragged list), complex numbers (converting drops the
     imaginary part), booleans, strings or objects, and a list of numbers holding a bool (numpy
     takes ``[25.0, True]`` as ``[25.0, 1.0]``: a temperature of 1 deg C, where ``update`` refuses
-    True; ``row`` its row)."""
+    True; ``row`` its row): a list, a tuple, a deque, whatever has no dtype of its own."""
     in_unit = f" in {unit}" if unit else ""
     mask = np.ma.getmask(values)
     if mask is not np.ma.nomask and mask.any():
@@ -154,7 +154,7 @@ def number_array(values, name, unit="", first_row=0):
         return None, (f"{name} must be an array of numbers{in_unit}, got {_short(values)}", None)
     if array.dtype.kind not in "iuf":
         return None, (f"{name} must be numbers{in_unit}, got an array of {array.dtype}", None)
-    if isinstance(values, (list, tuple)) and array.size:  # numpy takes a True among numbers as 1
+    if not hasattr(values, "dtype") and array.size:  # numpy takes a True among numbers as 1 (a deque's too)
         held = np.asarray(values, dtype=object)
         if not {bool, np.bool_, np.ndarray}.isdisjoint(map(type, held.flat)):  # the types once each: fast
             is_bool = np.frompyfunc(lambda v: isinstance(v, (bool, np.bool_)) or isinstance(v, np.ndarray) and v.dtype.kind == "b",

@@ -4,6 +4,7 @@ docs/simulate.md, docs/allan.md, docs/live.md) given as numpy's scalars or a 0-d
 the plain Python value gives (the same numbers, the same JSON-ready state), a value refused is
 refused in the same words, and True/False are refused where a number is asked (the rule:
 ``inputs.check_number``, ``inputs.scalar``, ``inputs.python_value``). One seed, about 5 s."""
+import collections
 import dataclasses
 import functools
 import json
@@ -424,6 +425,16 @@ def test_a_bool_among_the_numbers_of_a_list_is_refused(where):
              "Recording.from_dps": lambda: Recording.from_dps(rows, 100.0)}
     with pytest.raises(GyroFilterError, match="row 7.*True"):
         calls[where]()
+
+
+def test_a_bool_in_another_sequence_of_numbers_is_refused():
+    """Attack pass 33a: the bool check read lists and tuples only; a ``collections.deque`` (or
+    any sequence numpy converts) of temperatures holding a True was compensated as 1 deg C,
+    without a word. What is not already an array (no dtype of its own) is checked alike."""
+    temps = collections.deque([25.0] * len(STILL_DPS))
+    temps[7] = True
+    with pytest.raises(GyroFilterError, match="row 7.*True"):
+        GyroFilter(100.0, 1.0, temp_coefficient_dps_per_c=0.1).filter(STILL_DPS, temps)
 
 
 #: attack pass 32a: numbers of other kinds than Python's and numpy's, and values no setting takes
