@@ -170,25 +170,31 @@ def _pick(names, path, columns, time_unit, unit):
     else:
         gyro = [_gyro_column(normal, names, axis, path) for axis in AXES]
         time = _time_column(normal, gyro)
-    stated = columns_stated(path, "rate", [_name_unit(normal[i], GYRO_NAME, "rate") for i in gyro], unit,
+    stated = columns_stated(path, "rate", [u for i in gyro for u in _name_units(normal[i], GYRO_NAME, "rate")], unit,
                             "the gyro columns state")
-    unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME, "time"),
-                      f"the time column {quote(names[time]) if time is not None else ''} states", "time")
+    whose = f"the time column {quote(names[time]) if time is not None else ''} states"
+    unit = given_unit(path, "--time-unit", time_unit, None if time is None else columns_stated(
+        path, "time", _name_units(normal[time], TIME_NAME, "time"), time_unit, whose), whose, "time")
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
         raise unread_unit(path, f"the time column {quote(names[time])} states", unit, "--time-unit", ", ".join(TIME_UNITS))
     return time, unit, gyro, stated
 
 
-def _name_unit(normal, pattern, quantity):
-    """The unit of ``quantity`` a column's name (as :func:`_normal` gives it) states
-    (:func:`~gyrofilter.recording.unit_words.stated_unit`): in brackets, as the unit at the end of
-    its ``pattern`` (``gyro_x_dps``, ``time_ms``) or of a name it does not match, or by its word (``millis``); else None."""
+def _name_units(normal, pattern, quantity):
+    """The units of ``quantity`` a column's name (as :func:`_normal` gives it) states, as
+    :func:`~gyrofilter.recording.unit_words.columns_stated` takes them: the text in its brackets
+    (:func:`~gyrofilter.recording.unit_words.stated_unit`) and the unit at the end of its
+    ``pattern`` (``gyro_x_dps``, ``time_ms``) or of a name it does not match, or its word
+    (``millis``); None for each it does not state. Both count: a text in brackets hid the unit
+    ending the name (``gyro_x_mdps (filtered)`` with ``--unit dps`` wrote millidegrees as degrees),
+    and a name stating two (``time_ms (s)``) is refused there, not read in one."""
     key, bracket = normal
     match = pattern.fullmatch(key)
-    if bracket or match is None:  # a name no pattern reads (given in --columns): the unit it ends in
-        return stated_unit(quantity, bracket) if bracket else ending_unit(quantity, key)
+    if match is None:  # a name no pattern reads (given in --columns): the unit it ends in
+        return [stated_unit(quantity, bracket), ending_unit(quantity, key)]
     word = match.groupdict().get("word") or ""
-    return stated_unit(quantity, match["unit"]) or known_unit(quantity, word) or _NAME_TIME_UNITS.get(word)
+    return [stated_unit(quantity, bracket),
+            stated_unit(quantity, match["unit"]) or known_unit(quantity, word) or _NAME_TIME_UNITS.get(word)]
 
 
 def _column_index(text, names, path):
@@ -225,7 +231,7 @@ def _gyro_column(normal, names, axis, path):
 def _time_column(normal, gyro):
     """The time column: the first whose name states its unit, else the first named like a time; None without one."""
     candidates = [i for i, (key, _) in enumerate(normal) if i not in gyro and TIME_NAME.fullmatch(key)]
-    stated = [i for i in candidates if _name_unit(normal[i], TIME_NAME, "time") in TIME_UNITS]
+    stated = [i for i in candidates if set(_name_units(normal[i], TIME_NAME, "time")) & set(TIME_UNITS)]
     return (stated or candidates or [None])[0]
 
 
