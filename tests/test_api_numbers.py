@@ -302,7 +302,7 @@ def _hidden_cases():
     """hide_in_recording's parameters of the effects it hides in a recording's own noise, and
     of an effect it simulates (an element of a list): one case a parameter."""
     hidden = {"colored_noise": {"lag1": 0.5, "lag2": 0.25}, "heavy_tails": {"fraction": 0.125, "scale_ratio": 5},
-              "compression": {"gamma_per_dps2": 0.5, "rms_dps": 0.125}, "arma": {"sigma_a_dps": 0.1, "phi": [0.5], "theta": [0.25]},
+              "compression": {"gamma_per_dps2": 0.5, "rms_dps": 0.0625}, "arma": {"sigma_a_dps": 0.1, "phi": [0.5], "theta": [0.25]},
               "repeated_samples": {"fraction": 0.125}}
     for effect, params in hidden.items():
         for key, value in params.items():
