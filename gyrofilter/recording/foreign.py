@@ -228,7 +228,7 @@ def _gyro_column(normal, names, axis, path):
 def _time_column(normal, gyro):
     """The time column: the first whose name states its unit, else the first named like a time; None without one."""
     candidates = [i for i, (key, _) in enumerate(normal) if i not in gyro and TIME_NAME.fullmatch(key)]
-    stated = [i for i in candidates if set(_name_units(normal[i], TIME_NAME, "time")) & set(TIME_UNITS)]
+    stated = [i for i in candidates if set(TIME_UNITS) >= set(_name_units(normal[i], TIME_NAME, "time")) - {None} != set()]
     return (stated or candidates or [None])[0]
 
 
