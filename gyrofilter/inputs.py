@@ -141,7 +141,7 @@ def number_array(values, name, unit="", first_row=0):
     what numpy cannot make an array of (a ragged list), complex numbers (converting drops the
     imaginary part), booleans, strings or objects, and a list of numbers holding a bool (numpy
     takes ``[25.0, True]`` as ``[25.0, 1.0]``: a temperature of 1 deg C, where ``update`` refuses
-    True; ``row`` its row)."""
+    True; ``row`` its row): a list, a tuple, a deque, whatever has no dtype of its own."""
     in_unit = f" in {unit}" if unit else ""
     mask = np.ma.getmask(values)
     if mask is not np.ma.nomask and mask.any():
@@ -154,7 +154,7 @@ def number_array(values, name, unit="", first_row=0):
         return None, (f"{name} must be an array of numbers{in_unit}, got {_short(values)}", None)
     if array.dtype.kind not in "iuf":
         return None, (f"{name} must be numbers{in_unit}, got an array of {array.dtype}", None)
-    if isinstance(values, (list, tuple)) and array.size:  # numpy takes a True among numbers as 1
+    if _of_python_objects(values) and array.size:  # numpy takes a True among numbers as 1 (a deque's too)
         held = np.asarray(values, dtype=object)
         if not {bool, np.bool_, np.ndarray}.isdisjoint(map(type, held.flat)):  # the types once each: fast
             is_bool = np.frompyfunc(lambda v: isinstance(v, (bool, np.bool_)) or isinstance(v, np.ndarray) and v.dtype.kind == "b",
@@ -164,6 +164,19 @@ def number_array(values, name, unit="", first_row=0):
                 row = int(at[0])
                 return None, (f"{name} row {row + first_row} holds {_short(held[tuple(at)])}, a bool: give numbers{in_unit}", row)
     return array.astype(np.float64, copy=False), None
+
+
+def _of_python_objects(values):
+    """Whether ``values`` holds Python objects, one of which may be a bool (a list, a tuple, a
+    deque): not an array (a dtype of its own), a buffer of numbers (``array.array``, a
+    memoryview) or a range, whose numbers are no bools (made objects, 1e6 of them took 2 s)."""
+    if hasattr(values, "dtype") or isinstance(values, range):
+        return False
+    try:
+        memoryview(values)
+    except TypeError:
+        return True
+    return False
 
 
 def check_number(value, what, *, low=None, high=None, low_open=False, high_open=False, integer=False,

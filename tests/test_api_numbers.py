@@ -4,6 +4,7 @@ docs/simulate.md, docs/allan.md, docs/live.md) given as numpy's scalars or a 0-d
 the plain Python value gives (the same numbers, the same JSON-ready state), a value refused is
 refused in the same words, and True/False are refused where a number is asked (the rule:
 ``inputs.check_number``, ``inputs.scalar``, ``inputs.python_value``). One seed, about 5 s."""
+import collections
 import dataclasses
 import functools
 import json
@@ -301,7 +302,7 @@ def _hidden_cases():
     """hide_in_recording's parameters of the effects it hides in a recording's own noise, and
     of an effect it simulates (an element of a list): one case a parameter."""
     hidden = {"colored_noise": {"lag1": 0.5, "lag2": 0.25}, "heavy_tails": {"fraction": 0.125, "scale_ratio": 5},
-              "compression": {"gamma_per_dps2": 0.5, "rms_dps": 0.125}, "arma": {"sigma_a_dps": 0.1, "phi": [0.5], "theta": [0.25]},
+              "compression": {"gamma_per_dps2": 0.5, "rms_dps": 0.0625}, "arma": {"sigma_a_dps": 0.1, "phi": [0.5], "theta": [0.25]},
               "repeated_samples": {"fraction": 0.125}}
     for effect, params in hidden.items():
         for key, value in params.items():
@@ -424,6 +425,16 @@ def test_a_bool_among_the_numbers_of_a_list_is_refused(where):
              "Recording.from_dps": lambda: Recording.from_dps(rows, 100.0)}
     with pytest.raises(GyroFilterError, match="row 7.*True"):
         calls[where]()
+
+
+def test_a_bool_in_another_sequence_of_numbers_is_refused():
+    """Attack pass 33a: the bool check read lists and tuples only; a ``collections.deque`` (or
+    any sequence numpy converts) of temperatures holding a True was compensated as 1 deg C,
+    without a word. What is not already an array (no dtype of its own) is checked alike."""
+    temps = collections.deque([25.0] * len(STILL_DPS))
+    temps[7] = True
+    with pytest.raises(GyroFilterError, match="row 7.*True"):
+        GyroFilter(100.0, 1.0, temp_coefficient_dps_per_c=0.1).filter(STILL_DPS, temps)
 
 
 #: attack pass 32a: numbers of other kinds than Python's and numpy's, and values no setting takes

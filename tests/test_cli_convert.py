@@ -1111,3 +1111,25 @@ def test_a_unit_ending_a_name_given_in_columns_agrees_with_the_option(tmp_path, 
     assert rc == 0, capsys.readouterr().err
     rec = read_recording(dst)
     assert rec.gyro_unit == unit and rec.sample_rate_hz == 100 and rec.gyro[1].tolist() == row
+
+
+@pytest.mark.parametrize("names, given, said", [
+    (["t_ms", "gyro_x_mdps (filtered)", "gyro_y_mdps (filtered)", "gyro_z_mdps (filtered)"], ["--unit", "dps"],
+     "the column names say mdps"),
+    (["t_ms", "gx_mdps (v2)", "gy_mdps (v2)", "gz_mdps (v2)"], ["--unit", "dps"], "the column names say mdps"),
+    (["t_ms", "gyro_x_mdps (deg/s)", "gyro_y_mdps (deg/s)", "gyro_z_mdps (deg/s)"], [], "different units (dps, mdps)"),
+    (["time_ms (s)", "gx", "gy", "gz"], ["--unit", "dps"], "'time_ms (s)' states different units (ms, s)"),
+    (["t_ms", "gx", "gy", "gz", "temp_c (F)"], ["--unit", "dps"], "'temp_c (F)' states different units (c, f)"),
+    (["t_ms", "gx", "gy", "gz", "ax_g (mg)", "ay_g (mg)", "az_g (mg)"], ["--unit", "dps"], "different units (g, mg)"),
+])
+def test_a_unit_in_brackets_does_not_hide_the_unit_ending_the_name(tmp_path, capsys, names, given, said):
+    """Attack pass 33a: a name with a text in brackets had the unit ending it unread (``gyro_x_mdps
+    (filtered)`` with ``--unit dps`` wrote millidegrees as degrees, exit 0, where ``gyro_x_mdps`` is
+    refused), and a name stating two units (``gyro_x_mdps (deg/s)``, ``time_ms (s)``, ``temp_c (F)``)
+    was read in the one in brackets: both are the name's, and must agree."""
+    columns = ",".join(names[:4])
+    extra = {4: "", 5: ",25", 7: ",0,0,1"}[len(names)]  # a temperature, an accelerometer
+    text = ",".join(names) + "\n" + "".join(f"{10 * i},{i % 7},1,2{extra}\n" for i in range(300))
+    rc, dst = _convert(tmp_path, text, "--columns", columns, *given)
+    assert rc == 2 and not dst.exists()
+    assert said in capsys.readouterr().err

@@ -148,6 +148,24 @@ def test_a_compression_hidden_in_a_recording_compresses_its_noise():
     assert np.array_equal(out[:, 1:], rec.gyro_dps[:, 1:])
 
 
+def test_a_compression_s_rms_is_the_recording_s_own():
+    """Attack pass 33a: the gain and the model's bound (gamma rms^2 <= 0.03: the cubic's turning
+    point at 3.3 rms or beyond) read the stated ``rms_dps``, but what is compressed is the
+    recording's noise: stated 0.05 on a noise of rms 0.3, the turning point fell at 0.55 rms and
+    most samples were clipped (the std 0.305 made 0.115), without a word. A stated rms off the
+    recording's fast noise's by more than 5 % is refused naming it; that one is taken."""
+    rng = np.random.default_rng(0)
+    rec = Recording.from_dps(np.array([-3.3, 1.1, -0.5]) + rng.normal(0, 0.3, (4000, 3)), 100.0)
+    with pytest.raises(SettingsError, match=r"rms_dps 0.05 .* give rms_dps=0.30") as refused:
+        hide_in_recording(rec, COMPRESSION, "x", {"gamma_per_dps2": 11.9, "rms_dps": 0.05})
+    rms = float(str(refused.value).split("give rms_dps=")[1].split()[0])
+    out = hide_in_recording(rec, COMPRESSION, "x", {"gamma_per_dps2": 0.3, "rms_dps": rms}).gyro_dps
+    assert abs(out[:, 0].std() / rec.gyro_dps[:, 0].std() - 1) < 0.01
+    flat = Recording.from_dps(np.ones((50, 3)), 100.0)
+    with pytest.raises(SettingsError, match="no fast noise on x"):
+        hide_in_recording(flat, COMPRESSION, "x", {"gamma_per_dps2": 0.3, "rms_dps": 0.3})
+
+
 def test_a_colored_noise_s_lag2_of_none_is_its_default():
     """Attack pass 32a: the model takes ``lag2: null`` as not given (lag1 squared); hidden in a
     recording it ended in Python's TypeError (``float(None)``)."""

@@ -104,3 +104,15 @@ def test_replays_refusal_of_a_large_bias_names_its_way_through(tmp_path, capsys)
     assert main(["replay", path]) == 2
     assert "raise the filter's setting max_bias_dps (to 21)" in capsys.readouterr().err
     assert main(["replay", path, "--set", "max_bias_dps=21"]) == 0
+
+
+def test_the_max_bias_named_takes_every_axis(tmp_path, capsys):
+    """Attack pass 33a: the refusal named the value that takes the first axis beyond max_bias_dps
+    (x 20.5: "to 21"), and followed, the calibration was refused again for y (-25.3: "to 26"):
+    the value named takes every axis."""
+    g = np.array([20.5, -25.3, 1.2]) + np.random.default_rng(3).normal(size=(500, 3)) * 0.05
+    path = str(tmp_path / "big_biases.csv")
+    write_recording(path, Recording.from_dps(g, 50.0))
+    assert main(["replay", path]) == 2
+    assert "axis x reads 20.5" in (err := capsys.readouterr().err) and "max_bias_dps (to 26)" in err
+    assert main(["replay", path, "--set", "max_bias_dps=26"]) == 0

@@ -221,9 +221,9 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     sigma = white_noise_std(x)
     for i, axis in enumerate(AXES):
         implausible = implausible_bias(axis, bias[i], max_bias_dps=max_bias_dps)
-        if implausible:
+        if implausible:  # the value named takes every axis: the first's alone (x 20.5: 21) was refused for y (-25.3)
             raise CalibrationError(f"calibration: {implausible}? Keep it still while calibrating, or, if the bias is real, "
-                                   f"raise the filter's setting max_bias_dps (to {math.ceil(abs(bias[i]))})")
+                                   f"raise the filter's setting max_bias_dps (to {math.ceil(float(np.max(np.abs(bias))))})")
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "

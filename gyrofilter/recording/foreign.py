@@ -170,25 +170,28 @@ def _pick(names, path, columns, time_unit, unit):
     else:
         gyro = [_gyro_column(normal, names, axis, path) for axis in AXES]
         time = _time_column(normal, gyro)
-    stated = columns_stated(path, "rate", [_name_unit(normal[i], GYRO_NAME, "rate") for i in gyro], unit,
+    stated = columns_stated(path, "rate", [u for i in gyro for u in _name_units(normal[i], GYRO_NAME, "rate")], unit,
                             "the gyro columns state")
-    unit = given_unit(path, "--time-unit", time_unit, None if time is None else _name_unit(normal[time], TIME_NAME, "time"),
-                      f"the time column {quote(names[time]) if time is not None else ''} states", "time")
+    whose, units = f"the time column {quote(names[time]) if time is not None else ''} states", [None]
+    units = units if time is None else _name_units(normal[time], TIME_NAME, "time")
+    unit = given_unit(path, "--time-unit", time_unit, columns_stated(path, "time", units, time_unit, whose), whose, "time")
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
         raise unread_unit(path, f"the time column {quote(names[time])} states", unit, "--time-unit", ", ".join(TIME_UNITS))
     return time, unit, gyro, stated
 
 
-def _name_unit(normal, pattern, quantity):
-    """The unit of ``quantity`` a column's name (as :func:`_normal` gives it) states
-    (:func:`~gyrofilter.recording.unit_words.stated_unit`): in brackets, as the unit at the end of
-    its ``pattern`` (``gyro_x_dps``, ``time_ms``) or of a name it does not match, or by its word (``millis``); else None."""
+def _name_units(normal, pattern, quantity):
+    """The units of ``quantity`` a column's name (:func:`_normal`) states, for :func:`columns_stated`: the
+    text in its brackets and the unit ending its ``pattern`` (``gyro_x_dps``, ``time_ms``) or a name it
+    does not match, or its word (``millis``); None for each not stated. Both count: a bracket hid the
+    unit ending the name (``gyro_x_mdps (filtered)`` with ``--unit dps`` wrote millidegrees as degrees)."""
     key, bracket = normal
     match = pattern.fullmatch(key)
-    if bracket or match is None:  # a name no pattern reads (given in --columns): the unit it ends in
-        return stated_unit(quantity, bracket) if bracket else ending_unit(quantity, key)
+    if match is None:  # a name no pattern reads (given in --columns): the unit it ends in
+        return [stated_unit(quantity, bracket), ending_unit(quantity, key)]
     word = match.groupdict().get("word") or ""
-    return stated_unit(quantity, match["unit"]) or known_unit(quantity, word) or _NAME_TIME_UNITS.get(word)
+    return [stated_unit(quantity, bracket), stated_unit(quantity, match["unit"]) or known_unit(quantity, word)
+            or _NAME_TIME_UNITS.get(word)]
 
 
 def _column_index(text, names, path):
@@ -225,7 +228,7 @@ def _gyro_column(normal, names, axis, path):
 def _time_column(normal, gyro):
     """The time column: the first whose name states its unit, else the first named like a time; None without one."""
     candidates = [i for i, (key, _) in enumerate(normal) if i not in gyro and TIME_NAME.fullmatch(key)]
-    stated = [i for i in candidates if _name_unit(normal[i], TIME_NAME, "time") in TIME_UNITS]
+    stated = [i for i in candidates if set(TIME_UNITS) >= set(_name_units(normal[i], TIME_NAME, "time")) - {None} != set()]
     return (stated or candidates or [None])[0]
 
 
@@ -543,7 +546,6 @@ def _gyro_unit(unit, stated, lsb_per_dps, path):
     elif lsb_per_dps is not None:
         raise RecordingError(f"--lsb-per-dps goes with --unit lsb, not {unit}")
     return unit
-
 
 
 def _time_axis(t_s, t_unit, how, sample_rate_hz, name, path, summary, resolution_s):

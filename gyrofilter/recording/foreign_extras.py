@@ -164,7 +164,8 @@ def _temperature(extras, found, names, normal, temp_unit, path):
     i = found[0]
     key, bracket = normal[i]
     ending = _TEMP_NAME.fullmatch(key)
-    stated = stated_unit("temp", bracket if bracket is not None else ending and ending["unit"])
+    stated = columns_stated(path, "temp", [stated_unit("temp", bracket), stated_unit("temp", ending and ending["unit"])],
+                            temp_unit, f"column {quote(names[i])} states", "; --temp-unit none leaves it out")
     unit = given_unit(path, "--temp-unit", temp_unit, stated, f"column {quote(names[i])} states", "temp", _TEMP_WORDS)
     if unit not in units_of("temp"):
         extras.warnings.append(f"column {quote(names[i])} left out: its unit is not stated"
@@ -198,8 +199,8 @@ def _accelerometer(extras, free, names, normal, accel_unit, lsb_per_g, path):
                              f"{quote(', '.join(names))} (names such as ax, AccX, acc_x, accel_x)")
     if not found:
         return
-    stated = columns_stated(path, "accel", [stated_unit("accel", normal[i][1] if normal[i][1] is not None else
-                                                        ACCEL_NAME.fullmatch(normal[i][0])["unit"]) for i in found],
+    stated = columns_stated(path, "accel", [stated_unit("accel", text) for i in found  # in brackets, ending the name
+                                            for text in (normal[i][1], ACCEL_NAME.fullmatch(normal[i][0])["unit"])],
                             accel_unit, "the accelerometer columns state", "; --accel-unit none leaves them out")
     unit = given_unit(path, "--accel-unit", accel_unit, stated, "the accelerometer columns state", "accel")
     if unit is not None and unit not in units_of("accel"):

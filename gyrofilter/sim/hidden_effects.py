@@ -196,7 +196,8 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
     noise's ``preserve`` other than ``"std"`` (the recording's noise is filtered keeping its
     variance), and an ``"effect"`` in ``params`` other than ``effect`` (it replaced it), are refused.
     A ``compression`` compresses the recording's fast noise (the rate less its moving mean, as
-    ``heavy_tails`` scales it) about that mean: the simulated part has no noise to compress."""
+    ``heavy_tails`` scales it) about that mean: the simulated part has no noise to compress; its
+    ``rms_dps`` is that noise's rms (within :data:`FAST_RMS_TOLERANCE`, else refused naming it)."""
     if isinstance(params, dict) and params.get("effect", effect) != effect:  # a model's entry of another effect replaced it
         raise SettingsError(f"params name the effect {plain(params['effect'])}, not {plain(effect)} (nothing hidden)")
     sample_rate_hz = rec.sample_rate_hz
@@ -251,7 +252,10 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
         # white noise: the record came back unchanged): the real fast noise, as heavy tails take it
         i = AXES.index(axis)
         slow = moving_mean(gyro[:, i], _FAST_WINDOW)
-        gyro[:, i] = slow + Compression(params["gamma_per_dps2"], params["rms_dps"]).apply(gyro[:, i] - slow)
+        fast = gyro[:, i] - slow
+        if n:
+            _check_fast_rms(rec, axis, float(params["rms_dps"]), float(np.sqrt(np.mean(fast * fast))))
+        gyro[:, i] = slow + Compression(params["gamma_per_dps2"], params["rms_dps"]).apply(fast)
     elif effect == REPEATED_SAMPLES:  # whole rows of the real record, the temperature's too
         repeats = RepeatedRows(params["fraction"], params.get("pattern", "random"), np.random.default_rng(seed))
         mask = repeats.next_mask(n)
@@ -273,6 +277,26 @@ def hide_in_recording(rec, effect, axis, params, *, seed=0):
 
 #: the samples of the moving mean whose residual is a record's fast noise (heavy tails hidden in it)
 _FAST_WINDOW = 64
+#: how far a compression's stated ``rms_dps`` may be from the rms of the recording's fast noise it
+#: compresses (relative): 5 % keeps gamma rms^2 within 0.033 of the model's 0.03 (the turning point
+#: at 3.2 rms or beyond) and the variance within 2 %
+FAST_RMS_TOLERANCE = 0.05
+
+
+def _check_fast_rms(rec, axis, stated_dps, rms_dps):
+    """Refuse (SettingsError) a compression whose stated rms ``stated_dps`` is not the rms
+    ``rms_dps`` of the recording's fast noise on ``axis`` within :data:`FAST_RMS_TOLERANCE`: the
+    gain g = 1 / sqrt(1 - 6 kappa + 15 kappa^2) and the bound kappa = gamma sigma^2 <= 0.03
+    (:mod:`gyrofilter.sim.compression`) hold for the sigma of what is compressed, the recording's
+    noise (stated 0.05 on a noise of 0.3: the turning point at 0.55 rms, the std 0.305 made 0.115)."""
+    where = rec.path or "recording"
+    if rms_dps == 0.0:
+        raise SettingsError(f"{where}: no fast noise on {axis} (the rate less its moving mean over {_FAST_WINDOW} samples "
+                            "is 0): nothing to compress")
+    if abs(stated_dps / rms_dps - 1.0) > FAST_RMS_TOLERANCE:
+        raise SettingsError(f"{where}: compression rms_dps {stated_dps:g} is not the rms of the recording's fast noise "
+                            f"on {axis} (the rate less its moving mean over {_FAST_WINDOW} samples), which it compresses: "
+                            f"give rms_dps={rms_dps:.4g} (deg/s)")
 
 
 def _accelerometer(rec):
