@@ -338,3 +338,21 @@ def test_a_link_to_a_recording_beside_it_is_refused_naming_both(tmp_path, patter
     with pytest.raises(RecordingError, match=re.escape(f"{tmp_path / (name + '.csv')} and {tmp_path / (name + '_b.csv')}: "
                                                        "one file")):
         find(str(tmp_path))
+
+
+def test_a_static_reduction_without_measure_is_refused_naming_the_axis():
+    """Attack pass 34a: an axis stuck after the calibration window (0 / 0) or one whose filtered
+    rows are constant (a pattern of the block's period: every block's mean equal) gave the
+    reduction None in evaluate.json and 'infx' in the table, exit 0."""
+    rng = np.random.default_rng(2)
+    x = rng.normal(0, 0.1, size=(400, 3))
+    frozen = x.copy()
+    frozen[200:, 2] = 0.25  # calibration window (2 s) moves, then the axis reads one value
+    spec = F.FilterSpec("block", "baseline", "", F.run_block_mean)
+    with pytest.raises(SettingsError, match=re.escape("axis z: the 200 samples after the calibration all equal 0.25 deg/s")):
+        M.static_reduction(spec, frozen, FS)
+    periodic = x.copy()
+    periodic[:, 1] = np.tile([0.5, 1.0, 0.5, 0.0, 0.5], 80)  # every block of 5 has the mean 0.5
+    with pytest.raises(SettingsError, match=re.escape("axis y: the rows of block are constant (std 0 deg/s")):
+        M.static_reduction(spec, periodic, FS)
+    assert np.all(np.isfinite(M.static_reduction(spec, x, FS)))

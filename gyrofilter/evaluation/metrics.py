@@ -40,8 +40,11 @@ import numpy as np
 from ..errors import SettingsError
 from .reference import block_mean_masked, reference_from_recording
 from ..sim.profiles import get_profile
+from ..units import AXES
 
 DEFAULT_CALIBRATION_S = 2.0
+#: a static std reduction beyond this is no filter's: the rows are constant but for the float's rounding
+MAX_STATIC_REDUCTION = 1e6
 
 
 # ---------------------------------------------------------------------------------------------
@@ -52,14 +55,24 @@ def static_reduction(spec, x_dps, sample_rate_hz, calibration_s=DEFAULT_CALIBRAT
     """Per-axis std(raw after calibration, bias removed) / std(filtered) of the filter ``spec``
     (a FilterSpec) run on ``x_dps`` ((N, 3), deg/s, at ``sample_rate_hz``, Hz) with a
     calibration of ``calibration_s`` (s). SettingsError when fewer than 2 rows follow the
-    calibration (a record not much longer than its window: the standard deviations would be NaN)."""
+    calibration (a record not much longer than its window: the standard deviations would be NaN), an
+    axis whose samples after the calibration are all equal (0 / 0) and rows constant on an axis
+    whose samples are not (a std of 0 or rounding: beyond :data:`MAX_STATIC_REDUCTION`)."""
     out = spec.run(x_dps, sample_rate_hz, calibration_s)
     if len(out.y_dps) < 2:
         raise SettingsError(f"{len(x_dps)} samples ({len(x_dps) / sample_rate_hz:g} s) leave {len(out.y_dps)} filtered "
                             f"row(s) of {spec.name} after its {calibration_s:g}-s calibration: too short to measure a "
                             "reduction")
-    raw_std = np.std(x_dps[out.start :], axis=0)
-    return raw_std / np.std(out.y_dps, axis=0)
+    after = x_dps[out.start :]
+    raw_std, filt_std = np.std(after, axis=0), np.std(out.y_dps, axis=0)
+    for i, axis in enumerate(AXES):  # a stuck axis is refused whole (datasets); stuck after the window is 0 / 0
+        if np.ptp(after[:, i]) == 0:
+            raise SettingsError(f"axis {axis}: the {len(after)} samples after the calibration all equal {after[0, i]:g} "
+                                "deg/s (a stuck axis): no noise for the filters to reduce")
+        if not filt_std[i] * MAX_STATIC_REDUCTION > raw_std[i]:  # 'infx' in the table, None in the JSON
+            raise SettingsError(f"axis {axis}: the rows of {spec.name} are constant (std {filt_std[i]:.3g} deg/s, the "
+                                f"samples' {raw_std[i]:.3g}): no reduction to measure")
+    return raw_std / filt_std
 
 
 def truth_blocks(rate_fn, sample_rate_hz, n_samples, out, shift_s=0.0):
