@@ -14,7 +14,7 @@ import numpy as np
 
 from ...errors import DeviceError, SourceEnded, one_line
 from ...inputs import check_number
-from ...recording import T_FROM_COUNTER, T_FROM_KEY
+from ...recording import T_FROM_COUNTER, T_FROM_KEY, T_FROM_LINES
 from ..base import Source
 from .protocol import LineParser, UnitsConflict
 
@@ -114,8 +114,8 @@ class SerialSource(Source):
         self.lsb_per_dps = float(self.header["lsb_per_dps"]) if self.gyro_unit == "lsb" else None
         self.header.setdefault("sensor", "serial device")
         self.header["serial_port"] = self.port_name
-        if "counter" in (self._parser.fields or ()):  # t = counter / rate: its jumps are samples the device lost
-            self.header[T_FROM_KEY] = T_FROM_COUNTER
+        if self._parser.fields:  # t = counter / rate, or lines of a sample / rate: its jumps are samples the device lost
+            self.header[T_FROM_KEY] = T_FROM_COUNTER if "counter" in self._parser.fields else T_FROM_LINES
         self.header["start_time_utc"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
         self.columns = self._parser.columns
         self.stats = self._parser.stats
