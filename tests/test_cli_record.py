@@ -607,3 +607,43 @@ def test_a_live_file_refused_at_its_close_does_not_stay(tmp_path):
     with pytest.raises(RecordingError, match="not written: it would not read back"):
         writer.close(failed=False)
     assert not out.exists() and not out.parent.exists()
+
+
+
+@pytest.mark.parametrize("command, case", [("record", "exists"), ("run", "exists"), ("record", "is the output"),
+                                           ("run", "is an input")])
+def test_a_spy_url_file_is_an_output_checked_before_the_port_opens(tmp_path, capsys, command, case):
+    """Attack pass 33b: `serial:spy://PORT?file=F` (pyserial's spy) emptied F without --force:
+    pyserial opens F for writing before the port opens, so F was truncated even when the port then
+    failed, and F was never checked against the command's files. F is an output like --out: an
+    existing F needs --force, F may be neither the output nor an input; refused in one line naming
+    F, before the port opens, F as it was."""
+    pytest.importorskip("serial")
+    out, calibration = tmp_path / "out.csv", tmp_path / "cal.json"
+    spy = {"exists": tmp_path / "spy.txt", "is the output": out, "is an input": calibration}[case]
+    spy.write_text("keep me\n")
+    primary, secondary = os.openpty()
+    try:
+        assert main([command, "--source", f"serial:spy://{os.ttyname(secondary)}?file={spy},header_timeout=0.5",
+                     "--out", str(out), *(["--force"] if case != "exists" else []),
+                     *(["--calibration", str(calibration)] if case == "is an input" else [])]) == 2
+    finally:
+        os.close(primary)
+        os.close(secondary)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(spy) in err[0], err
+    assert spy.read_text() == "keep me\n"
+
+
+def test_a_spy_url_file_that_exists_is_replaced_with_force(tmp_path):
+    """The spy file is an output like --out: with --force an existing one is replaced by the spy's
+    log of the session, and the recording is written."""
+    pytest.importorskip("serial")
+    out, spy = tmp_path / "out.csv", tmp_path / "spy.txt"
+    spy.write_text("old\n")
+    primary, secondary = os.openpty()
+    proc = start_record(f"serial:spy://{os.ttyname(secondary)}?file={spy}", out, "--quiet", "--force")
+    lines = b"".join(b"%d,1,0,0\n" % c for c in range(50))
+    err = play_serial_then_stop(primary, secondary, proc, SERIAL_HEADER, lines, out, 49)
+    assert proc.returncode == 0, err
+    assert len(read_recording(out)) >= 49 and " TX " in spy.read_text() and "old" not in spy.read_text()

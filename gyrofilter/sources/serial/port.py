@@ -9,6 +9,7 @@ with the reason) after the rows received so far.
 from __future__ import annotations
 
 import time
+import urllib.parse
 
 import numpy as np
 
@@ -185,6 +186,15 @@ class SerialSource(Source):
         self._close_port()
         if self._ended is None:
             self._ended = "source closed"
+
+
+def written_files(port):
+    """The files opening ``port`` writes: a pyserial ``spy://`` URL's ``file=`` (its first, as
+    pyserial reads it: ``serial.urlhandler.protocol_spy``), which pyserial opens for writing, emptying
+    it, before the port opens; none for any other port. The commands check it as an output."""
+    if "://" not in port or port.lower().split("://", 1)[0] != "spy":  # pyserial's own test of a URL's protocol
+        return []
+    return urllib.parse.parse_qs(urllib.parse.urlsplit(port).query, True).get("file", [])[:1]
 
 
 def _port_exceptions():
