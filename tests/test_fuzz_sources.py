@@ -67,8 +67,8 @@ def model(lines, tail, fields, bits, temp_raw):
         wait for the next."""
         nonlocal last, index, unsent
         step = 1
-        if "counter" not in fields and index >= 0 and unsent:
-            step, unsent = 1 + unsent, 0
+        if "counter" not in fields:  # refused lines before the first row shift no t (a counter's neither)
+            step, unsent = 1 + unsent * (index >= 0), 0
             stats["lost_samples"] += step - 1
         if "counter" in fields:
             if not c < mod:  # a header between changed counter_bits
