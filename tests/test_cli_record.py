@@ -467,12 +467,19 @@ def test_a_disk_that_fills_at_the_last_flush_names_the_file_and_what_it_kept(tmp
 
 
 
-@pytest.mark.parametrize("lines, delivered, steps_s, duration_s", [
-    pytest.param(b"5,0,0,0\n6,nan,0,0\n7,0.1,0.2,0.3\n", [[0, 0, 0], [0.1, 0.2, 0.3]], [0.02, 0.01], 3,
+@pytest.mark.parametrize("lines, delivered, steps_s, duration_s, fields", [
+    pytest.param(b"5,0,0,0\n6,nan,0,0\n7,0.1,0.2,0.3\n", [[0, 0, 0], [0.1, 0.2, 0.3]], [0.02, 0.01], 3, b"",
                  id="one of three lost, a short file"),
     pytest.param(b"5,0,0,0\n6,nan,0,0\n7,0.1,0.2,0.3\n8,nan,0,0\n9,0.4,0.5,0.6\n",
-                 [[0, 0, 0], [0.1, 0.2, 0.3], [0.4, 0.5, 0.6]], [0.02, 0.02, 0.01], 22, id="two of five lost, windows")])
-def test_a_serial_device_that_loses_samples_is_recorded_whole_with_its_gaps(tmp_path, lines, delivered, steps_s, duration_s):
+                 [[0, 0, 0], [0.1, 0.2, 0.3], [0.4, 0.5, 0.6]], [0.02, 0.02, 0.01], 22, b"",
+                 id="two of five lost, windows"),
+    # attack pass 33b: without a counter a refused line of the full width is a lost sample too (not
+    # dropped with every later t one interval early); a line of another width changes no t
+    pytest.param(b"0,0,0\nnan,0,0\n0.1,0.2,0.3\n200000,0,0\n0.4,0.5,0.6\n1,2\n0.7,0.8,0.9\n1.2.3,0,0\n",
+                 [[0, 0, 0], [0.1, 0.2, 0.3], [0.4, 0.5, 0.6], [0.7, 0.8, 0.9]], [0.02, 0.02, 0.01, 0.02], 3,
+                 b"gx,gy,gz", id="no counter, three of seven lost")])
+def test_a_serial_device_that_loses_samples_is_recorded_whole_with_its_gaps(tmp_path, lines, delivered, steps_s, duration_s,
+                                                                            fields):
     """Issue 37 (attack 3): a device on a real pseudo-terminal that sends counters 5, 6 (a NaN
     line, refused), 7, ... over and over (samples lost, then a restart) gave a t whose steps were
     mostly 0.02 s in a 100-Hz file; record exited 2 ("t steps by 0.02 s ... not written") and kept
@@ -483,7 +490,7 @@ def test_a_serial_device_that_loses_samples_is_recorded_whole_with_its_gaps(tmp_
     port = os.ttyname(secondary)
     proc = start_record(f"serial:{port}", out, "--quiet", "--duration", str(duration_s))
 
-    err = play_lossy_device(primary, secondary, proc, lines, int(2 * duration_s / sum(steps_s)))
+    err = play_lossy_device(primary, secondary, proc, lines, int(2 * duration_s / sum(steps_s)), fields)
     assert proc.returncode == 0, err
     rec = read_recording(out)
     n = len(rec)
@@ -493,6 +500,8 @@ def test_a_serial_device_that_loses_samples_is_recorded_whole_with_its_gaps(tmp_
     np.testing.assert_allclose(np.diff(rec.t_s), steps, atol=1e-9)
     gap_notes = sum(text.startswith("gap: 1 samples lost before") for _, text in rec.notes)
     assert rec.t_gaps == np.count_nonzero(steps > 0.015) and gap_notes >= rec.t_gaps  # notes may run ahead of the cut
+    lost = int(re.search(r"lost (\d+) samples", err).group(1))
+    assert lost >= round(np.sum(steps) * 100) - (n - 1), err  # the summary counts the samples t skips
 
 
 SERIAL_HEADER = b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100 fields=counter,gx,gy,gz\n"
@@ -543,6 +552,24 @@ def test_a_device_that_lost_10_of_every_11_samples_from_its_first_line_is_kept(t
     assert rec.header["t_from"] == "device counter" and rec.t_gaps == len(rec) - 1
 
 
+def test_a_device_without_a_counter_that_lost_every_other_line_from_its_first_is_kept(tmp_path):
+    """Attack pass 33b: without a counter, a refused line of the full width is a lost sample, so a
+    device whose every other line was refused (NaN) from its first gives steps of 2 intervals in
+    every window: without the header's t_from (t counts the lines the device sent) the writer
+    judged it a t at half the rate at its close and removed it whole (exit 2). Kept, every step a gap."""
+    out = tmp_path / "halved.csv"
+    lines = b"".join(b"%d,0,0\nnan,0,0\n" % (i % 7) for i in range(1500))
+    primary, secondary = os.openpty()
+    proc = start_record(f"serial:{os.ttyname(secondary)}", out, "--quiet")
+    header = SERIAL_HEADER.replace(b"counter,", b"")
+    err = play_serial_then_stop(primary, secondary, proc, header, lines, out, 1499)
+    assert proc.returncode == 0, err
+    rec = read_recording(out)
+    assert rec.header["t_from"] == "device lines" and len(rec) >= 1499 and rec.t_gaps == len(rec) - 1, err
+    np.testing.assert_array_equal(rec.t_s, 2 * np.arange(len(rec)) / 100.0)
+    assert re.search(r"lost (\d+) samples", err).group(1) == str(len(rec) - 1), err
+
+
 @pytest.mark.parametrize("cut", [b"", b"506,1,"])
 def test_a_line_held_at_ctrl_c_is_written(tmp_path, cut):
     """A serial line whose counter jumped waits for the next line to tell a gap from a corrupt
@@ -580,3 +607,43 @@ def test_a_live_file_refused_at_its_close_does_not_stay(tmp_path):
     with pytest.raises(RecordingError, match="not written: it would not read back"):
         writer.close(failed=False)
     assert not out.exists() and not out.parent.exists()
+
+
+
+@pytest.mark.parametrize("command, case", [("record", "exists"), ("run", "exists"), ("record", "is the output"),
+                                           ("run", "is an input")])
+def test_a_spy_url_file_is_an_output_checked_before_the_port_opens(tmp_path, capsys, command, case):
+    """Attack pass 33b: `serial:spy://PORT?file=F` (pyserial's spy) emptied F without --force:
+    pyserial opens F for writing before the port opens, so F was truncated even when the port then
+    failed, and F was never checked against the command's files. F is an output like --out: an
+    existing F needs --force, F may be neither the output nor an input; refused in one line naming
+    F, before the port opens, F as it was."""
+    pytest.importorskip("serial")
+    out, calibration = tmp_path / "out.csv", tmp_path / "cal.json"
+    spy = {"exists": tmp_path / "spy.txt", "is the output": out, "is an input": calibration}[case]
+    spy.write_text("keep me\n")
+    primary, secondary = os.openpty()
+    try:
+        assert main([command, "--source", f"serial:spy://{os.ttyname(secondary)}?file={spy},header_timeout=0.5",
+                     "--out", str(out), *(["--force"] if case != "exists" else []),
+                     *(["--calibration", str(calibration)] if case == "is an input" else [])]) == 2
+    finally:
+        os.close(primary)
+        os.close(secondary)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(spy) in err[0], err
+    assert spy.read_text() == "keep me\n"
+
+
+def test_a_spy_url_file_that_exists_is_replaced_with_force(tmp_path):
+    """The spy file is an output like --out: with --force an existing one is replaced by the spy's
+    log of the session, and the recording is written."""
+    pytest.importorskip("serial")
+    out, spy = tmp_path / "out.csv", tmp_path / "spy.txt"
+    spy.write_text("old\n")
+    primary, secondary = os.openpty()
+    proc = start_record(f"serial:spy://{os.ttyname(secondary)}?file={spy}", out, "--quiet", "--force")
+    lines = b"".join(b"%d,1,0,0\n" % c for c in range(50))
+    err = play_serial_then_stop(primary, secondary, proc, SERIAL_HEADER, lines, out, 49)
+    assert proc.returncode == 0, err
+    assert len(read_recording(out)) >= 49 and " TX " in spy.read_text() and "old" not in spy.read_text()

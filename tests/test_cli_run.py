@@ -233,12 +233,17 @@ def test_run_on_a_serial_port_writes_the_rows_replay_writes(tmp_path, capsys):
     assert_same_rows(read_recording(out), replayed(tmp_path, recorded, capsys), rows_due(recorded))
 
 
-@pytest.mark.parametrize("lines, delivered, steps_s", [
-    pytest.param(b"5,0,0,0\n6,nan,0,0\n7,0.1,0.2,0.3\n", [[0, 0, 0], [0.1, 0.2, 0.3]], [0.02, 0.01], id="one of three lost"),
+@pytest.mark.parametrize("lines, delivered, steps_s, fields", [
+    pytest.param(b"5,0,0,0\n6,nan,0,0\n7,0.1,0.2,0.3\n", [[0, 0, 0], [0.1, 0.2, 0.3]], [0.02, 0.01], b"",
+                 id="one of three lost"),
     pytest.param(b"1,0.2,0,0\n2,0,0.4,0\n3,nan,0,0\n4,0,0,0.1\n5,0.3,0.1,0\n",
-                 [[0.2, 0, 0], [0, 0.4, 0], [0, 0, 0.1], [0.3, 0.1, 0]], [0.01, 0.02, 0.01, 0.01], id="one of five lost")])
+                 [[0.2, 0, 0], [0, 0.4, 0], [0, 0, 0.1], [0.3, 0.1, 0]], [0.01, 0.02, 0.01, 0.01], b"", id="one of five lost"),
+    # attack pass 33b: without a counter a refused line of the full width is a lost sample (t keeps its place)
+    pytest.param(b"0.2,0,0\n0,0.4,0\n1e9,0,0\n0,0,0.1\n1,2\n0.3,0.1,0\n",
+                 [[0.2, 0, 0], [0, 0.4, 0], [0, 0, 0.1], [0.3, 0.1, 0]], [0.01, 0.02, 0.01, 0.01], b"gx,gy,gz",
+                 id="no counter, one of five lost", marks=pytest.mark.slow)])
 def test_run_from_a_device_that_loses_samples_writes_a_row_for_every_block_of_delivered_samples(tmp_path, lines,
-                                                                                                 delivered, steps_s):
+                                                                                                 delivered, steps_s, fields):
     """Issue 37 (task A of attack 4): `run --out` from a device on a real pseudo-terminal that
     loses samples (a NaN line, refused; the counter restarts) exited 2 ("t steps by 0.07 s ... not
     written") and kept nothing: a row's t is its block's last sample's, so blocks that span lost
@@ -250,7 +255,7 @@ def test_run_from_a_device_that_loses_samples_writes_a_row_for_every_block_of_de
     proc = subprocess.Popen([sys.executable, "-m", "gyrofilter", "run", "--source", f"serial:{os.ttyname(secondary)}",
                              "--out", str(out), "--quiet", "--duration", "12"], stderr=subprocess.PIPE, text=True)
 
-    err = play_lossy_device(primary, secondary, proc, lines, 4000)
+    err = play_lossy_device(primary, secondary, proc, lines, 4000, fields)
     assert proc.returncode == 0, err
     n = int(re.search(r"(\d+) samples in", err).group(1))
     x = np.tile(np.asarray(delivered, float), (n // len(delivered) + 1, 1))[:n]

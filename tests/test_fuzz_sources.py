@@ -54,13 +54,22 @@ def model(lines, tail, fields, bits, temp_raw):
     stats = Counter({k: 0 for k in ("lines", "lost_samples", "counter_jumps", "restarts") + LINE_OUTCOMES})
     rows, mod, last, index, have_header = [], 2 ** bits, None, -1, False
     held = None  # (values, counter) of a line whose counter jumped, judged by the next one
+    unsent = 0  # without a counter: refused lines of the full width since the last row, samples lost
+
+    def refuse(kind, cells):
+        nonlocal unsent
+        stats[kind] += 1
+        unsent += "counter" not in fields and len(cells) == len(fields)
 
     def sample(values, c, next_c=None):
         """The counter rules for a line with counter ``c``; ``next_c``: the next such line's (a
         jump whose next line lies between the last counter and it is a corrupt counter). False:
         wait for the next."""
-        nonlocal last, index
+        nonlocal last, index, unsent
         step = 1
+        if "counter" not in fields:  # refused lines before the first row shift no t (a counter's neither)
+            step, unsent = 1 + unsent * (index >= 0), 0
+            stats["lost_samples"] += step - 1
         if "counter" in fields:
             if not c < mod:  # a header between changed counter_bits
                 stats["bad_lines"] += 1
@@ -118,24 +127,24 @@ def model(lines, tail, fields, bits, temp_raw):
             continue
         cells = line.split(b",")
         if set(line) - _TEXT or len(cells) > len(fields):
-            stats["bad_lines"] += 1
+            refuse("bad_lines", cells)
             continue
         if len(cells) < len(fields) or any(not c.strip() for c in cells):
-            stats["partial_lines"] += 1
+            refuse("partial_lines", cells)
             continue
         if not all(len(c.strip()) <= 64 and _PLAIN.fullmatch(c.strip()) for c in cells):
-            stats["bad_lines"] += 1
+            refuse("bad_lines", cells)
             continue
         values = dict(zip(fields, map(float, cells)))
         if not all(math.isfinite(v) for v in values.values()):
-            stats["bad_lines"] += 1
+            refuse("bad_lines", cells)
             continue
         if (any(abs(values[g] / 131) > MAX_RATE_DPS for g in ("gx", "gy", "gz"))  # lsb_per_dps=131
                 or any(abs(values[a] / 16384 * STANDARD_GRAVITY_MPS2) > MAX_ACCEL_MPS2  # lsb_per_g=16384
                        for a in ("ax", "ay", "az") if a in values)
                 or not TEMP_RANGE_C[0] <= (values.get("temp", 25.0) / 340.0 + 36.53 if temp_raw and "temp" in values
                                            else values.get("temp", 25.0)) <= TEMP_RANGE_C[1]):
-            stats["bad_lines"] += 1
+            refuse("bad_lines", cells)
             continue
         c = None
         if held is not None and not held[1] < mod:  # a header between changed counter_bits

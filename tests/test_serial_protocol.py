@@ -460,3 +460,30 @@ def test_a_header_that_changes_a_key_that_is_no_unit_mid_stream_is_noted_at_its_
                              "recording's header keeps sensor=MPU6050, no dlpf_cfg)",
                              "serial: the device's header says sensor=MPU6050, no dlpf_cfg after sample 5 (the "
                              "recording's header keeps sensor=MPU6050, no dlpf_cfg)"]
+
+
+COUNTERLESS = b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100 fields=gx,gy,gz\n"
+# each refused line of the full width (nan, beyond the range, a bad cell, garbage, an empty cell) between good ones
+REFUSED_SAMPLES = [b"nan,0,0", b"200000,0,0", b"1.2.3,0,0", b"1x,0,0", b"1,,0"]
+
+
+@pytest.mark.parametrize("chunked", [False, True])
+def test_a_refused_line_of_the_full_width_without_a_counter_is_a_lost_sample_not_shifted_times(chunked):
+    """Attack pass 33b: with fields=gx,gy,gz (no counter) a refused line of the full width was
+    dropped and every later sample's t came one interval early ("lost 0 samples"); with a counter
+    the same line is a gap. It is a sample the device sent: a gap in t, counted lost, its bad line
+    noted; a line of another width (a message, a cut line) changes no t; before the first row
+    none does (a counter's t starts at its first row too)."""
+    lines = [b"nan,0,0", b"0,0,0"]
+    for i, bad in enumerate(REFUSED_SAMPLES, start=1):
+        lines += [bad, b"%d,0,0" % i, b"1,2"]
+    data = COUNTERLESS + b"\n".join(lines) + b"\n"
+    parser = LineParser()
+    parts = [parser.feed(data[i:i + 7]) for i in range(0, len(data), 7)] if chunked else [parser.feed(data)]
+    rows = np.concatenate([*parts, parser.finish()])
+    np.testing.assert_array_equal(rows[:, 1], np.arange(6))
+    np.testing.assert_allclose(rows[:, 0], 2 * np.arange(6) / 100.0)  # a refused sample before each good line
+    s = parser.stats
+    assert s["lost_samples"] == 5 and s["samples"] == 6 and s["bad_lines"] + s["partial_lines"] == 11, s
+    notes = parser.pop_notes()
+    assert sum(n.startswith("gap: 1 samples lost before t=") for n in notes) == 5, notes

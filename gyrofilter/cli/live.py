@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import DeviceError, GyroFilterError, RecordingError, SourceEnded, one_line
 from ..recording import RecordingWriter
-from ..sources import SOURCE_HELP, open_source, parse_source
+from ..sources import SOURCE_HELP, open_source, parse_source, source_outputs
 from ..sources.base import WARNING_PREFIX
 from ..units import GYRO_UNITS, check_duration_s
 from . import console, options, outputs
@@ -47,6 +47,13 @@ def source_files(spec):
     """The files SOURCE reads (a replayed recording, a simulation model, a serial device): never outputs."""
     _, kwargs = parse_source(spec)
     return [kwargs.get(key) for key in ("path", "model", "port")]
+
+
+def check_outputs(outs, spec, inputs=(), force=False):
+    """:func:`outputs.check_outputs` of a command that reads SOURCE ``spec``: its outputs ``outs``
+    and the files the source writes (:func:`~gyrofilter.sources.source_outputs`: a ``spy://`` URL's
+    ``file=``, emptied as the port opens), never the source's files nor the other ``inputs``."""
+    outputs.check_outputs([*outs, *source_outputs(spec)], [*source_files(spec), *inputs], force)
 
 
 class LiveOutput:

@@ -19,7 +19,7 @@ import time
 from .. import __version__
 from ..errors import SettingsError
 from ..recording import END_NOTE
-from . import console, live, options, outputs
+from . import console, live, options
 
 # header keys first in this order, the rest as the source gives them
 _HEADER_ORDER = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_per_g", "sensor", "chip_id",
@@ -51,7 +51,7 @@ def recording_header(source, spec):
 
 def run(args):
     live.check_duration(args.duration)
-    outputs.check_outputs([args.out], live.source_files(args.source), args.force)
+    live.check_outputs([args.out], args.source, force=args.force)
     source = live.open_from_args(args)
     try:
         return record(source, args.source, args.out, args.duration,

@@ -78,7 +78,7 @@ def run(args):
     if args.source is not None:
         path = args.recording_out or default_recording_path(args.out)
         live.check_duration(args.duration)
-        outputs.check_outputs([args.out, path], live.source_files(args.source), args.force)  # before the recording
+        live.check_outputs([args.out, path], args.source, force=args.force)  # before the recording
         status = _record_first(args, path, progress.every_line)
         if status:
             return status

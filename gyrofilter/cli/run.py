@@ -25,7 +25,7 @@ from .. import __version__
 from ..errors import SampleError, SettingsError
 from ..recording import ACCEL_COLUMNS, COLUMNS, END_NOTE, FILTERED_FROM_KEY, INPUT_RATE_KEY, T_FROM_KEY, accel_header, dps_header, header_text, note_line
 from ..recording.writer import exact_format
-from . import console, filtering, live, options, outlets, outputs
+from . import console, filtering, live, options, outlets
 
 
 
@@ -109,8 +109,8 @@ class _TextOut:
 
 def run(args):
     live.check_duration(args.duration)
-    outputs.check_outputs([_out_file(args), args.save_calibration],
-                          live.source_files(args.source) + [args.calibration, args.temp_model], args.force)
+    live.check_outputs([_out_file(args), args.save_calibration], args.source, [args.calibration, args.temp_model],
+                       args.force)
     with outlets.Outlets.open(args) as sinks:  # --serve, --udp: a bad value is refused before any output
         source = live.open_from_args(args)
         try:

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..units import MAX_ACCEL_MPS2, MAX_RATE_DPS, RATE_TOLERANCE
-from .header import ACCEL_COLUMNS, GYRO_COLUMNS, T_FROM_COUNTER, T_FROM_KEY, format_number
+from .header import ACCEL_COLUMNS, GYRO_COLUMNS, T_FROM_COUNTER, T_FROM_KEY, T_FROM_LINES, format_number
 
 
 def check_rates(data, head, where):
@@ -96,7 +96,8 @@ class TimeCheck:
       (:meth:`_wrong`): a device's counter gaps over 1000 steps or more at the start or the end
       of a recording no longer look like a t at half the rate. Where the header says ``t`` is the
       device's sample counter (``t_from: device counter``, :data:`~gyrofilter.recording.header.T_FROM_KEY`:
-      ``record`` from a serial device), such a window is lost samples whatever the other windows
+      ``record`` from a serial device; ``device lines`` without a counter, its refused lines of a sample
+      counted), such a window is lost samples whatever the other windows
       show: the device counted the samples it lost (one that lost every other sample from its
       first line was refused at the close and its recording removed whole);
     - the rows of every such window (and of the last window) are not denser than the rate: its
@@ -126,7 +127,7 @@ class TimeCheck:
         self.steps_seen = 0  # the steps of the chunks added so far
         self.rate_shown = False  # a window showed the rate (:meth:`_note_rate_shown`)
         self.deferred = None  # the refusal of the first window of gaps only judged at the end (:meth:`_wrong`)
-        self.counted = head.header.get(T_FROM_KEY) == T_FROM_COUNTER  # t is the device's sample counter
+        self.counted = head.header.get(T_FROM_KEY) in (T_FROM_COUNTER, T_FROM_LINES)  # t counts the device's samples
         self.phases = [_WindowPhase(0), _WindowPhase(RATE_CHECK_STEPS // 2)]
         self.last_steps = np.empty(0)  # the last 1.5 RATE_CHECK_STEPS steps (:meth:`finish`'s last window and before it)
 

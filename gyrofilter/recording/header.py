@@ -54,6 +54,9 @@ def one_line_text(text):
 #: (``record`` from a serial device that sends ``counter``): a step of k sample intervals is k - 1
 #: samples the device counted and lost, never a t at 1/k of the rate (:class:`~gyrofilter.recording.checks.TimeCheck`)
 T_FROM_KEY, T_FROM_COUNTER = "t_from", "device counter"
+#: the value of ``t_from`` whose ``t`` counts the lines of a sample the device sent (a serial device without
+#: a counter: a refused line of the full width is a lost sample): its steps are lost samples as a counter's
+T_FROM_LINES = "device lines"
 #: the header key of a filtered output (``replay --out``, ``run --out``): the source its rows were
 #: filtered from (:func:`filtered_from`); such a header also names ``input_sample_rate_hz``
 FILTERED_FROM_KEY = "filtered_from"

@@ -54,10 +54,10 @@ from ..inputs import check_number, parse_number, quote
 from ..units import GYRO_UNITS
 from .mpu6050 import driver as mpu6050_driver
 from .replay import ReplaySource
-from .serial.port import SerialSource
+from .serial.port import SerialSource, written_files
 from .simulated import SimulatedSource
 
-__all__ = ["open_source", "parse_source", "SOURCE_HELP", "KINDS"]
+__all__ = ["open_source", "parse_source", "source_outputs", "SOURCE_HELP", "KINDS"]
 
 SOURCE_HELP = (
     "SOURCE is KIND[:ARG][,key=value...]: "
@@ -228,6 +228,13 @@ _OWN_UNITS = {
     "replay": "a replayed recording's header gives its sample rate and units",
     "sim": "the simulator model gives the units",
 }
+
+
+def source_outputs(spec: str):
+    """The files opening SOURCE ``spec`` writes (a serial ``spy://`` URL's ``file=``:
+    :func:`~gyrofilter.sources.serial.port.written_files`): outputs of the command that reads it."""
+    kind, kwargs = parse_source(spec)
+    return written_files(kwargs["port"]) if kind == "serial" else []
 
 
 def open_source(spec: str, *, options=None, **defaults):

@@ -101,11 +101,11 @@ def tool(name):
     return sys.modules[key]
 
 
-def play_lossy_device(primary, secondary, proc, lines, repeats):
+def play_lossy_device(primary, secondary, proc, lines, repeats, fields=b""):
     """Play a serial device on the pseudo-terminal ``primary`` (its other end ``secondary``) for the
     command ``proc`` (a ``subprocess.Popen`` reading it): answer its first byte (``?``) with the
-    protocol header of a 100-Hz device in deg/s, then send ``lines`` (bytes) ``repeats`` times
-    until the command ends; both ends are closed. Returns the command's stderr."""
+    protocol header of a 100-Hz device in deg/s (its ``fields=`` word, if given), then send ``lines``
+    (bytes) ``repeats`` times until the command ends; both ends are closed. Returns the command's stderr."""
     def feed():
         with contextlib.suppress(OSError):  # the command ended and the port closed
             for _ in range(repeats):
@@ -113,7 +113,7 @@ def play_lossy_device(primary, secondary, proc, lines, repeats):
 
     try:
         assert os.read(primary, 1) == b"?"
-        os.write(primary, b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
+        os.write(primary, b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100" + (b" fields=" + fields if fields else b"") + b"\n")
         threading.Thread(target=feed, daemon=True).start()
         return proc.communicate(timeout=60)[1]
     finally:

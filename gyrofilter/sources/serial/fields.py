@@ -1,14 +1,66 @@
-"""The serial line protocol's header words that name the fields of a line and the accelerometer's
-units (:mod:`gyrofilter.sources.serial.protocol`, whose module docstring states the protocol)."""
+"""The serial line protocol's header words, those that name the fields of a line and the accelerometer's
+units, and the ranges a line's values must lie in (:mod:`gyrofilter.sources.serial.protocol`, whose
+module docstring states the protocol)."""
 from __future__ import annotations
+
+import re
+
+import numpy as np
 
 from ...errors import DeviceError
 from ...inputs import parse_number, quote
 from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS, format_number
-from ...units import ACCEL_UNITS, check_lsb_per_g
+from ...units import ACCEL_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2
+from ..mpu6050.chip import temperature_c
+
+HEADER_PREFIX = b"# gyrofilter-serial:"
+PROTOCOL_VERSION = "1"
+_HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
+_PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
 
 #: the fields a line may hold, in any order given by the header's ``fields=``
 KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp", *ACCEL_COLUMNS)
+
+
+def header_words(line, where):
+    """The ``key=value`` words of a header ``line`` (bytes, from :data:`HEADER_PREFIX`) as a dict;
+    DeviceError naming ``where`` for anything else."""
+    if line.translate(None, _PRINTABLE):
+        raise DeviceError(f"{where}: the header line holds bytes that are not printable ASCII")
+    text = line[len(HEADER_PREFIX):].decode("ascii").split()
+    if not text or text[0] != PROTOCOL_VERSION:
+        raise DeviceError(f"{where}: unsupported serial protocol version {quote(text[0] if text else '', 20)} "
+                          f"(this reader speaks {PROTOCOL_VERSION})")
+    values = {}
+    for word in text[1:]:
+        key, eq, value = word.partition("=")
+        if not eq or not _HEADER_KEY.fullmatch(key) or not value:
+            raise DeviceError(f"{where}: header word {quote(word, 40)} is not key=value "
+                              "(a key of letters, digits and _, a value)")
+        if key in values:
+            raise DeviceError(f"{where}: the header gives {key} twice")
+        values[key] = value
+    return values
+
+
+def in_range(values, fields, header, temp_raw):
+    """Mask of the lines of ``values`` (per line, in ``fields`` order; units of the recording
+    ``header``) within the ranges: each gyro value within +-MAX_RATE_DPS once in deg/s, a temperature
+    in TEMP_RANGE_C once in deg C (``temp_raw``: TEMP_OUT, converted), an accelerometer value within
+    +-MAX_ACCEL_MPS2 once in m/s^2. No sensor reads beyond, and the recording would refuse it."""
+    gyro = values[:, [fields.index(name) for name in GYRO_COLUMNS]]
+    lsb_per_dps, lsb_per_g = header.get("lsb_per_dps"), header.get("lsb_per_g")
+    with np.errstate(over="ignore"):  # 1e308 rad/s: inf deg/s, refused
+        ok = (np.abs(to_dps(gyro, header["gyro_unit"], lsb_per_dps and float(lsb_per_dps))) <= MAX_RATE_DPS).all(axis=1)
+        if "temp" in fields:
+            temp = values[:, fields.index("temp")]
+            temp_c = temperature_c(temp) if temp_raw else temp
+            ok &= (temp_c >= TEMP_RANGE_C[0]) & (temp_c <= TEMP_RANGE_C[1])
+        if ACCEL_COLUMNS[0] in fields:  # 1e300 g: written, the recording would end at it
+            accel = values[:, [fields.index(name) for name in ACCEL_COLUMNS]]
+            ok &= (np.abs(to_mps2(accel, header["accel_unit"], lsb_per_g and float(lsb_per_g)))
+                   <= MAX_ACCEL_MPS2).all(axis=1)
+    return ok
 
 
 def parse_fields(text, where):

@@ -9,12 +9,13 @@ with the reason) after the rows received so far.
 from __future__ import annotations
 
 import time
+import urllib.parse
 
 import numpy as np
 
 from ...errors import DeviceError, SourceEnded, one_line
 from ...inputs import check_number
-from ...recording import T_FROM_COUNTER, T_FROM_KEY
+from ...recording import T_FROM_COUNTER, T_FROM_KEY, T_FROM_LINES
 from ..base import Source
 from .protocol import LineParser, UnitsConflict
 
@@ -114,8 +115,8 @@ class SerialSource(Source):
         self.lsb_per_dps = float(self.header["lsb_per_dps"]) if self.gyro_unit == "lsb" else None
         self.header.setdefault("sensor", "serial device")
         self.header["serial_port"] = self.port_name
-        if "counter" in (self._parser.fields or ()):  # t = counter / rate: its jumps are samples the device lost
-            self.header[T_FROM_KEY] = T_FROM_COUNTER
+        if self._parser.fields:  # t = counter / rate, or lines of a sample / rate: its jumps are samples the device lost
+            self.header[T_FROM_KEY] = T_FROM_COUNTER if "counter" in self._parser.fields else T_FROM_LINES
         self.header["start_time_utc"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
         self.columns = self._parser.columns
         self.stats = self._parser.stats
@@ -185,6 +186,15 @@ class SerialSource(Source):
         self._close_port()
         if self._ended is None:
             self._ended = "source closed"
+
+
+def written_files(port):
+    """The files opening ``port`` writes: a pyserial ``spy://`` URL's ``file=`` (its first, as
+    pyserial reads it: ``serial.urlhandler.protocol_spy``), which pyserial opens for writing, emptying
+    it, before the port opens; none for any other port. The commands check it as an output."""
+    if "://" not in port or port.lower().split("://", 1)[0] != "spy":  # pyserial's own test of a URL's protocol
+        return []
+    return urllib.parse.parse_qs(urllib.parse.urlsplit(port).query, True).get("file", [])[:1]
 
 
 def _port_exceptions():

@@ -34,7 +34,8 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
   fractional, too large) refuses its line (counted in ``bad_lines``), and so does a gyro value
   beyond +-``units.MAX_RATE_DPS`` (100000 deg/s) once converted to deg/s, or an accelerometer value
   beyond +-``units.MAX_ACCEL_MPS2`` once in m/s^2: no sensor reads it, and the recording would
-  refuse it (a corrupt line must not end a recording).
+  refuse it (a corrupt line must not end a recording). Without a counter, a refused line of the full
+  width is a sample the device sent: the next row's ``t`` keeps its place, the sample counted lost.
 - Every line received is counted in ``stats["lines"]`` and in exactly one of
   :data:`LINE_OUTCOMES`: a sample delivered as a row (``samples``) or a line that is not one
   (a duplicate, a refused line, a header, ...). A run of more than :data:`MAX_LINE_BYTES` bytes
@@ -61,13 +62,10 @@ import numpy as np
 from ...errors import DeviceError, SettingsError
 from ...inputs import check_number, is_plain_number, parse_number, quote
 from ...recording import ACCEL_COLUMNS, COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
-from ...units import (GYRO_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz,
-                      to_dps, to_mps2)
+from ...units import GYRO_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz
 from ..mpu6050.chip import temperature_c
-from .fields import accel_units, other_keys_note, parse_fields
+from .fields import HEADER_PREFIX, accel_units, header_words, in_range, other_keys_note, parse_fields
 
-HEADER_PREFIX = b"# gyrofilter-serial:"
-PROTOCOL_VERSION = "1"
 MAX_LINE_BYTES = 256  # a longer line (bytes before its "\n") is refused
 MAX_DETAILED_NOTES = 20  # bad-line notes per source; later ones are only counted
 COUNTER_BITS = (8, 32)  # the counter_bits a header may give: a byte counter up to a 32-bit one
@@ -77,8 +75,6 @@ LINE_OUTCOMES = ("samples", "duplicates", "partial_lines", "bad_lines", "empty_l
                  "headers", "lines_before_header")
 _PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
 _UNIT_KEYS = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_per_g")  # a repeated header keeps them
-_HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
-_PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
 # a cell of the numpy path (:func:`_plain_cell`): a plain decimal of at most 2 d + 2 characters
 # (sign, d digits, a point, d digits; d = 24 up to 5 fields, fewer for more), so that a line of
 # its cells, commas and "\r" stays within MAX_LINE_BYTES, and strictly one: numpy 1.24's
@@ -147,6 +143,7 @@ class LineParser:
         self.sample_rate_hz = None
         self._last_counter = None
         self._held = None  # a line whose counter jumped, waiting for the next to judge it (_out_of_sequence)
+        self._unsent = 0  # without a counter: refused lines of the full width since the last row (_uncounted)
         self._last_index = -1
         self._options = None
         self.device_header = None  # the first header the device sent, once it has: the recording's (the port)
@@ -205,7 +202,6 @@ class LineParser:
                                     "start a new recording")
         self.header = dict(header)
         self.sample_rate_hz = float(header["sample_rate_hz"])
-        self._lsb_per_dps = float(header["lsb_per_dps"]) if "lsb_per_dps" in header else None
 
     def _note_other_keys(self, previous, header):
         """Note a repeated header's other keys (:func:`.fields.other_keys_note`), :data:`MAX_DETAILED_NOTES` times at most."""
@@ -216,29 +212,10 @@ class LineParser:
         if note is not None and self._changed_headers <= MAX_DETAILED_NOTES + 1:  # the last: the rest go unnoted
             self.notes.append(note)
 
-    def _header_words(self, line):
-        """The ``key=value`` words of a header line as a dict; DeviceError for anything else."""
-        if line.translate(None, _PRINTABLE):
-            raise DeviceError(f"{self.where}: the header line holds bytes that are not printable ASCII")
-        text = line[len(HEADER_PREFIX):].decode("ascii").split()
-        if not text or text[0] != PROTOCOL_VERSION:
-            raise DeviceError(f"{self.where}: unsupported serial protocol version {quote(text[0] if text else '', 20)} "
-                              f"(this reader speaks {PROTOCOL_VERSION})")
-        values = {}
-        for word in text[1:]:
-            key, eq, value = word.partition("=")
-            if not eq or not _HEADER_KEY.fullmatch(key) or not value:
-                raise DeviceError(f"{self.where}: header word {quote(word, 40)} is not key=value "
-                                  "(a key of letters, digits and _, a value)")
-            if key in values:
-                raise DeviceError(f"{self.where}: the header gives {key} twice")
-            values[key] = value
-        return values
-
     def _header_line(self, line):
         """Read a header line and apply it, all or nothing: DeviceError/SettingsError (nothing
         changed) when it is unreadable, :class:`UnitsConflict` when it changes the units."""
-        values = self._header_words(line)
+        values = header_words(line, self.where)
         where = "header line"
         if "gyro_unit" not in values and self._options is not None:
             values = {**self._options, **values}
@@ -420,7 +397,7 @@ class LineParser:
                 self.notes.append("serial: first line discarded (the port may have opened mid-line)")
                 continue
             if line.translate(None, _TEXT):
-                self._bad(line, "bad_lines", "garbage bytes")
+                self._refused(line, "bad_lines", "garbage bytes", out, pending)
                 continue
             cells = line.decode("ascii").split(",")  # ASCII: the bytes were checked above
             if self.fields is None:
@@ -435,14 +412,14 @@ class LineParser:
                 self._bad(line, kind, f"{len(cells)} values, expected {nf}")
                 continue
             if any(not c.strip() for c in cells):
-                self._bad(line, "partial_lines", "empty value")
+                self._refused(line, "partial_lines", "empty value", out, pending)
                 continue
             if not all(map(is_plain_number, cells)):
-                self._bad(line, "bad_lines", "not a plain decimal number")
+                self._refused(line, "bad_lines", "not a plain decimal number", out, pending)
                 continue
             values = list(map(float, cells))
             if not all(map(math.isfinite, values)):
-                self._bad(line, "bad_lines", "not a finite number")
+                self._refused(line, "bad_lines", "not a finite number", out, pending)
                 continue
             pending.append(values)
         if pending:
@@ -450,6 +427,33 @@ class LineParser:
         if not out:
             return self._empty()
         return np.concatenate(out) if len(out) > 1 else out[0]
+
+    def _refused(self, line, kind, reason, out, pending):
+        """Count the refused ``line`` (:meth:`_bad`); without a counter one of the full width is a sample
+        the device sent: the rows of the lines before it are made (into ``out``) and it is counted in
+        ``_unsent``, so that the next row's t keeps its place (:meth:`_uncounted`)."""
+        self._bad(line, kind, reason)
+        if self.fields and "counter" not in self.fields and line.count(b",") + 1 == len(self.fields):
+            if pending:
+                out.append(self._rows(np.array(pending)))
+                pending.clear()
+            self._unsent += 1
+
+    def _uncounted(self, ok):
+        """Sample indices of the rows of a chunk of lines without a counter, ``ok`` the lines not refused.
+        Each line of the full width is a sample the device sent: t = index / sample_rate_hz counts the
+        refused ones (``~ok`` and ``_unsent``) as lost samples, a gap noted at the next row, as a counter's
+        jump is; before the first row none is (t starts at the first row, as with a counter)."""
+        index = self._last_index + 1 + self._unsent + np.flatnonzero(ok)
+        if self._last_index < 0 and len(index):
+            index -= index[0]
+        step = np.diff(index, prepend=self._last_index)
+        for i in np.flatnonzero(step > 1):
+            lost = int(step[i] - 1)
+            self.stats["lost_samples"] += lost
+            self.notes.append(f"gap: {lost} samples lost before t={index[i] / self.sample_rate_hz:.6g} s (refused lines)")
+        self._unsent = len(ok) - 1 - int(np.flatnonzero(ok)[-1]) if ok.any() else self._unsent + len(ok)
+        return index
 
     def _consecutive(self, counter):
         """True when the counters continue the last one by exactly 1 each (in range, no wrap)."""
@@ -469,7 +473,9 @@ class LineParser:
         [0, 2**counter_bits), refuses its line (``bad_lines``). Counters are at most 2**32 and the
         sample index an int64, so no step overflows."""
         fields = self.fields
-        values = self._refuse_beyond_range(values)
+        ok = self._in_range(values)
+        index = None if "counter" in fields else self._uncounted(ok)
+        values = values[ok]
         if self._held is not None and len(values):  # judged with the next line in range
             values, self._held = np.vstack((self._held, values)), None
         n = len(values)
@@ -518,10 +524,8 @@ class LineParser:
                         self.notes.append(f"gap: {lost} samples lost before t={t[i]:.6g} s (counter {int(prev[i])} -> {int(counter[i])})")
                 self._last_counter = int(counter[-1])
                 self._last_index = int(index[-1])
-        else:
-            index = self._last_index + 1 + np.arange(n)
-            if n:
-                self._last_index = int(index[-1])
+        elif n:
+            self._last_index = int(index[-1])
         if n == 0:
             return self._empty()
         columns = self.columns
@@ -567,31 +571,17 @@ class LineParser:
                     todo.insert(0, i + 1)
         return keep
 
-    def _refuse_beyond_range(self, values):
-        """``values`` (per line, fields order) without the lines holding a gyro value beyond
-        +-MAX_RATE_DPS once in deg/s, a temperature outside TEMP_RANGE_C once in deg C or an
-        accelerometer value beyond +-MAX_ACCEL_MPS2 once in m/s^2 (counted in ``bad_lines``, the
-        first noted): one vectorised check per chunk. A glitched line then costs one sample, not
-        the recording (the writers and the filter refuse such values)."""
-        gyro = values[:, [self.fields.index(name) for name in GYRO_COLUMNS]]
-        with np.errstate(over="ignore"):  # 1e308 rad/s: inf deg/s, refused
-            ok = (np.abs(to_dps(gyro, self.header["gyro_unit"], self._lsb_per_dps)) <= MAX_RATE_DPS).all(axis=1)
-            if "temp" in self.fields:
-                temp = values[:, self.fields.index("temp")]
-                temp_c = temperature_c(temp) if self._temp_raw else temp
-                ok &= (temp_c >= TEMP_RANGE_C[0]) & (temp_c <= TEMP_RANGE_C[1])
-            if ACCEL_COLUMNS[0] in self.fields:  # 1e300 g: written, the recording would end at it
-                accel = values[:, [self.fields.index(name) for name in ACCEL_COLUMNS]]
-                lsb_per_g = self.header.get("lsb_per_g")
-                ok &= (np.abs(to_mps2(accel, self.header["accel_unit"], lsb_per_g and float(lsb_per_g)))
-                       <= MAX_ACCEL_MPS2).all(axis=1)
-        if ok.all():
-            return values
-        shown = ",".join(map(format_number, values[np.argmin(ok)])).encode()
-        self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s, a temperature outside "
-                  f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C or an acceleration beyond +-{MAX_ACCEL_MPS2:g} m/s^2",
-                  count=int(np.count_nonzero(~ok)), garbage_bytes=0)
-        return values[ok]
+    def _in_range(self, values):
+        """Which lines of ``values`` (per line, fields order) to keep (:func:`.fields.in_range`): the others are
+        counted in ``bad_lines``, the first noted; one vectorised check per chunk. A glitched line then costs
+        one sample, not the recording (the writers and the filter refuse such values)."""
+        ok = in_range(values, self.fields, self.header, self._temp_raw)
+        if not ok.all():
+            shown = ",".join(map(format_number, values[np.argmin(ok)])).encode()
+            self._bad(shown, "bad_lines", f"a gyro value beyond +-{MAX_RATE_DPS:g} deg/s, a temperature outside "
+                      f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C or an acceleration beyond +-{MAX_ACCEL_MPS2:g} m/s^2",
+                      count=int(np.count_nonzero(~ok)), garbage_bytes=0)
+        return ok
 
     def pop_notes(self):
         """Events since the last call (gaps, restarts, skipped lines, device messages), as a list
