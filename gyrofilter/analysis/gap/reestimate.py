@@ -265,11 +265,11 @@ def _slow(x, sample_rate_hz, temp_c, cands, slow_det, slow_sto, out):
             group = max(1, int(math.ceil(n / 512)))
             m = n // group
             yg = series[: m * group].reshape(m, group).mean(axis=1)
-            fits_g, _ = det.stochastic_fits(yg, delta_s * group)
-            exact = det.exact_stochastic_gain(yg, fits_g, delta_s * group)
+            fits_g, _ = det.stochastic_fits(yg, delta_s * group, (name,))  # its fits alone: the others' are not read
+            exact = det.exact_stochastic_gain(yg, fits_g, delta_s * group, (name,))
             out[k] = stochastic_params(name, exact[name][1], delta_s * group)
         else:
-            fits, _ = det.stochastic_fits(series, delta_s)
+            fits, _ = det.stochastic_fits(series, delta_s, (name,))
             out[k] = stochastic_params(name, fits[name][1], delta_s)
     return x
 

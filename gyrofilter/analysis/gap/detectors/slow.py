@@ -158,13 +158,15 @@ def _whittle(spec, omega, model, delta_s, s0_start, white_shape=None, rw_shape=N
     return best[0], theta, s0
 
 
+#: the wanders :func:`exact_stochastic_gain` fits in the time domain
+EXACT_MODELS = (RATE_RANDOM_WALK, GAUSS_MARKOV)
 #: the parameters each slow effect's fit estimates (a penalty per parameter)
 N_PARAMS = {name: BY_NAME[name].n_params for name in SLOW}
 
 
-def stochastic_fits(y, delta_s):
-    """Whittle fits of each stochastic model to the block means ``y`` (bridge periodogram,
-    :func:`_periodogram`).
+def stochastic_fits(y, delta_s, models=WANDERS):
+    """Whittle fits of each stochastic model of ``models`` to the block means ``y`` (bridge periodogram,
+    :func:`_periodogram`): each fit its own, so one asked for alone is the same as among the others.
 
     Returns ``{model: (two_delta_loglik, theta, s0)}`` and the white-only level. A fit no better
     than white noise alone (``2 Delta log L <= 0``) is the maximum likelihood estimate on the
@@ -186,7 +188,7 @@ def stochastic_fits(y, delta_s):
     nll0 = float(np.sum(np.log(s0_white * wsh) + spec / (s0_white * wsh)))
     s0_hf = float(spec[spec.size // 2:].mean())
     out = {}
-    for model in WANDERS:
+    for model in models:
         nll, theta, s0 = _whittle(spec, omega, model, delta_s, s0_hf, wsh, gsh)
         if nll >= nll0:
             theta, s0 = (0.0,) + tuple(theta[1:]), s0_white
@@ -304,11 +306,12 @@ def _kf_nll(y, phi, q, s0, mean):
     return total
 
 
-def exact_stochastic_gain(y, sto, delta_s):
-    """2 Delta log L of the exact (time-domain) random-walk and Gauss-Markov models over
-    white noise with a constant mean, on the block means *with* their trend, started from the
-    Whittle estimates. Used to compare a deterministic shape with a stochastic wander on the
-    same data (the Whittle fits see the detrended series only)."""
+def exact_stochastic_gain(y, sto, delta_s, models=EXACT_MODELS):
+    """2 Delta log L of the exact (time-domain) random-walk and Gauss-Markov models (those of
+    ``models``) over white noise with a constant mean, on the block means *with* their trend,
+    started from the Whittle estimates ``sto`` (:func:`stochastic_fits` of those models). Used to
+    compare a deterministic shape with a stochastic wander on the same data (the Whittle fits see
+    the detrended series only)."""
     from scipy.optimize import minimize
 
     y = np.asarray(y, dtype=float)
@@ -318,14 +321,17 @@ def exact_stochastic_gain(y, sto, delta_s):
     base = n * math.log(var0) + n  # white noise, MLE variance
     values = y.tolist()  # the Kalman filters' loops run on floats (_kf_nll)
     out = {}
-    q0 = max(sto[RATE_RANDOM_WALK][1][0], 1e-12 * var0)
-    s00 = max(sto[RATE_RANDOM_WALK][2], 1e-12 * var0)
-    res = minimize(lambda p: _kf_nll(values, 1.0, math.exp(p[0]), math.exp(p[1]), mean),
-                   [math.log(q0), math.log(s00)], method="Nelder-Mead",
-                   options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 200})
-    # the diffuse start drops one observation: add the white model's term for it back
-    out[RATE_RANDOM_WALK] = (max(0.0, base - (res.fun + math.log(var0) + 1)),
-                               (math.exp(res.x[0]),), math.exp(res.x[1]))
+    if RATE_RANDOM_WALK in models:
+        q0 = max(sto[RATE_RANDOM_WALK][1][0], 1e-12 * var0)
+        s00 = max(sto[RATE_RANDOM_WALK][2], 1e-12 * var0)
+        res = minimize(lambda p: _kf_nll(values, 1.0, math.exp(p[0]), math.exp(p[1]), mean),
+                       [math.log(q0), math.log(s00)], method="Nelder-Mead",
+                       options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 200})
+        # the diffuse start drops one observation: add the white model's term for it back
+        out[RATE_RANDOM_WALK] = (max(0.0, base - (res.fun + math.log(var0) + 1)),
+                                 (math.exp(res.x[0]),), math.exp(res.x[1]))
+    if GAUSS_MARKOV not in models:
+        return out
     var_g, phi_g = sto[GAUSS_MARKOV][1]
     s0g = max(sto[GAUSS_MARKOV][2], 1e-12 * var0)
     phi_g = min(max(phi_g, 0.5), 0.9999)
@@ -424,7 +430,7 @@ def slow_reading(x, sample_rate_hz, shapes=SHAPES, temp_c=None, stats=None):
             fit = float(np.dot(gg, ygc)) ** 2 / max(float(np.dot(gg, gg)), 1e-300)
             rss1 = max(rss0 - fit, 1e-300)
             two_dl_det = m * math.log(rss0 / rss1)
-            sto_g, _ = stochastic_fits(yg, delta_s * group)
+            sto_g, _ = stochastic_fits(yg, delta_s * group, EXACT_MODELS)
             exact = exact_stochastic_gain(yg, sto_g, delta_s * group)
             group_delta = delta_s * group
             score_det = two_dl_det - N_PARAMS[det_name] * STOCHASTIC_PENALTY
@@ -479,7 +485,7 @@ def _rw_or_gm(name, table, y, delta_s):
     group = max(1, int(math.ceil(n / 512)))
     m = n // group
     yg = y[: m * group].reshape(m, group).mean(axis=1)
-    sto_g, _ = stochastic_fits(yg, delta_s * group)
+    sto_g, _ = stochastic_fits(yg, delta_s * group, EXACT_MODELS)
     exact = exact_stochastic_gain(yg, sto_g, delta_s * group)
     gm = exact[GAUSS_MARKOV]
     tau = stochastic_params(GAUSS_MARKOV, gm[1], delta_s * group)["tau_s"]
