@@ -158,8 +158,6 @@ def _whittle(spec, omega, model, delta_s, s0_start, white_shape=None, rw_shape=N
     return best[0], theta, s0
 
 
-#: the wanders :func:`exact_stochastic_gain` fits in the time domain
-EXACT_MODELS = (RATE_RANDOM_WALK, GAUSS_MARKOV)
 #: the parameters each slow effect's fit estimates (a penalty per parameter)
 N_PARAMS = {name: BY_NAME[name].n_params for name in SLOW}
 
@@ -306,12 +304,11 @@ def _kf_nll(y, phi, q, s0, mean):
     return total
 
 
-def exact_stochastic_gain(y, sto, delta_s, models=EXACT_MODELS):
-    """2 Delta log L of the exact (time-domain) random-walk and Gauss-Markov models (those of
-    ``models``) over white noise with a constant mean, on the block means *with* their trend,
-    started from the Whittle estimates ``sto`` (:func:`stochastic_fits` of those models). Used to
-    compare a deterministic shape with a stochastic wander on the same data (the Whittle fits see
-    the detrended series only)."""
+def exact_stochastic_gain(y, sto, delta_s, models=(RATE_RANDOM_WALK, GAUSS_MARKOV)):
+    """2 Delta log L of the exact (time-domain) random-walk and Gauss-Markov models (of ``models``) over
+    white noise with a constant mean, on the block means *with* their trend, started from the Whittle
+    estimates ``sto``. Used to compare a deterministic shape with a stochastic wander on the
+    same data (the Whittle fits see the detrended series only)."""
     from scipy.optimize import minimize
 
     y = np.asarray(y, dtype=float)
@@ -322,25 +319,22 @@ def exact_stochastic_gain(y, sto, delta_s, models=EXACT_MODELS):
     values = y.tolist()  # the Kalman filters' loops run on floats (_kf_nll)
     out = {}
     if RATE_RANDOM_WALK in models:
-        q0 = max(sto[RATE_RANDOM_WALK][1][0], 1e-12 * var0)
-        s00 = max(sto[RATE_RANDOM_WALK][2], 1e-12 * var0)
+        q0, s00 = max(sto[RATE_RANDOM_WALK][1][0], 1e-12 * var0), max(sto[RATE_RANDOM_WALK][2], 1e-12 * var0)
         res = minimize(lambda p: _kf_nll(values, 1.0, math.exp(p[0]), math.exp(p[1]), mean),
                        [math.log(q0), math.log(s00)], method="Nelder-Mead",
                        options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 200})
         # the diffuse start drops one observation: add the white model's term for it back
-        out[RATE_RANDOM_WALK] = (max(0.0, base - (res.fun + math.log(var0) + 1)),
-                                 (math.exp(res.x[0]),), math.exp(res.x[1]))
-    if GAUSS_MARKOV not in models:
-        return out
-    var_g, phi_g = sto[GAUSS_MARKOV][1]
-    s0g = max(sto[GAUSS_MARKOV][2], 1e-12 * var0)
-    phi_g = min(max(phi_g, 0.5), 0.9999)
-    res = minimize(lambda p: _kf_nll(values, 1 / (1 + math.exp(-p[1])), math.exp(p[0]), math.exp(p[2]), mean),
-                   [math.log(max(var_g * (1 - phi_g ** 2), 1e-12 * var0)), math.log(phi_g / (1 - phi_g)), math.log(s0g)],
-                   method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 300})
-    phi = 1 / (1 + math.exp(-res.x[1]))
-    qg = math.exp(res.x[0])
-    out[GAUSS_MARKOV] = (max(0.0, base - res.fun), (qg / max(1 - phi * phi, 1e-12), phi), math.exp(res.x[2]))
+        out[RATE_RANDOM_WALK] = (max(0.0, base - (res.fun + math.log(var0) + 1)), (math.exp(res.x[0]),), math.exp(res.x[1]))
+    if GAUSS_MARKOV in models:
+        var_g, phi_g = sto[GAUSS_MARKOV][1]
+        s0g = max(sto[GAUSS_MARKOV][2], 1e-12 * var0)
+        phi_g = min(max(phi_g, 0.5), 0.9999)
+        res = minimize(lambda p: _kf_nll(values, 1 / (1 + math.exp(-p[1])), math.exp(p[0]), math.exp(p[2]), mean),
+                       [math.log(max(var_g * (1 - phi_g ** 2), 1e-12 * var0)), math.log(phi_g / (1 - phi_g)), math.log(s0g)],
+                       method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 300})
+        phi = 1 / (1 + math.exp(-res.x[1]))
+        qg = math.exp(res.x[0])
+        out[GAUSS_MARKOV] = (max(0.0, base - res.fun), (qg / max(1 - phi * phi, 1e-12), phi), math.exp(res.x[2]))
     return out
 
 
@@ -430,7 +424,7 @@ def slow_reading(x, sample_rate_hz, shapes=SHAPES, temp_c=None, stats=None):
             fit = float(np.dot(gg, ygc)) ** 2 / max(float(np.dot(gg, gg)), 1e-300)
             rss1 = max(rss0 - fit, 1e-300)
             two_dl_det = m * math.log(rss0 / rss1)
-            sto_g, _ = stochastic_fits(yg, delta_s * group, EXACT_MODELS)
+            sto_g, _ = stochastic_fits(yg, delta_s * group)
             exact = exact_stochastic_gain(yg, sto_g, delta_s * group)
             group_delta = delta_s * group
             score_det = two_dl_det - N_PARAMS[det_name] * STOCHASTIC_PENALTY
@@ -485,7 +479,7 @@ def _rw_or_gm(name, table, y, delta_s):
     group = max(1, int(math.ceil(n / 512)))
     m = n // group
     yg = y[: m * group].reshape(m, group).mean(axis=1)
-    sto_g, _ = stochastic_fits(yg, delta_s * group, EXACT_MODELS)
+    sto_g, _ = stochastic_fits(yg, delta_s * group)
     exact = exact_stochastic_gain(yg, sto_g, delta_s * group)
     gm = exact[GAUSS_MARKOV]
     tau = stochastic_params(GAUSS_MARKOV, gm[1], delta_s * group)["tau_s"]
