@@ -426,3 +426,28 @@ def test_a_wandering_tone_read_short_takes_the_step_of_test_inversion_and_its_ce
     plain = _hit(case, analyse_gap(rec, seed=16001, n_sims=SIMS))
     assert not _inside(case["params"]["spread_hz"], plain["params_ci95"]["spread_hz"], "spread_hz")
     assert plain["params_ci95"]["center_hz"] == f["params_ci95"]["center_hz"]
+
+
+def test_the_inversion_runs_only_the_estimators_its_finding_reads(monkeypatch):
+    """The test inversion reads one finding's replicates (gap.intervals): ``reestimate_axis`` with
+    ``wanted`` gives those findings the estimates of the full run, without the estimators they do not
+    read (the resonance's fit beside a wandering tone), and still with the ones they do (the colored
+    noise's lags read the bands')."""
+    import scipy.signal
+
+    from gyrofilter.analysis.gap import detectors as det
+    from gyrofilter.analysis.gap.reestimate import reestimate_axis
+
+    rng = np.random.default_rng(3)
+    t = np.arange(8192) / 100.0
+    tone = 0.3 * np.sin(2 * np.pi * (20.0 * t + 0.5 * np.sin(2 * np.pi * t / 30.0)))
+    x = scipy.signal.lfilter([1.0], [1.0, -0.5], 0.3 * rng.standard_normal(t.size)) + tone + 0.2 * np.sin(2 * np.pi * 3.1 * t)
+    cands = [det.Candidate(effect, params, 0.0, 0.0, "") for effect, params in
+             [("sinusoid", {"frequency_hz": 3.1}), ("wandering_tone", {}), ("resonance", {}), ("colored_noise", {"lag1": 0.2})]]
+    full = reestimate_axis(x, 100.0, None, cands)
+    assert all(e is not None for e in full), full
+    assert reestimate_axis(x, 100.0, None, cands, wanted=[3]) == full  # the lags read every band
+    fits = []
+    monkeypatch.setattr(det, "resonance_fit", lambda *args, **kwargs: fits.append(args))
+    assert reestimate_axis(x, 100.0, None, cands, wanted=[1]) == [full[0], full[1], None, None]
+    assert fits == []

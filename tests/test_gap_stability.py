@@ -232,3 +232,19 @@ def test_an_alternative_says_which_findings_of_the_named_reading_it_replaces():
     assert check(case, {"findings": [finding, wander]})[2] == []
     finding["alternatives"] = alternatives_entry(temp, {"temperature"})
     assert check(case, {"findings": [finding, wander]})[2] == [wander]  # a wander outside the reading is a false cause
+
+
+def test_a_wander_fitted_alone_is_fitted_as_among_the_others():
+    """The bootstrap re-estimates one wander per finding (gap.reestimate): its Whittle fit, and a
+    Gauss-Markov's exact time-domain fit, asked for alone are those of the fits of every wander,
+    bit for bit (each fit is its own), and the others are not made."""
+    from gyrofilter.analysis.gap.detectors.slow import exact_stochastic_gain, stochastic_fits
+
+    rng = np.random.default_rng(8)
+    y = np.cumsum(0.002 * rng.standard_normal(400)) + 0.01 * rng.standard_normal(400)
+    every, s0 = stochastic_fits(y, 1.0)
+    exact = exact_stochastic_gain(y, every, 1.0)
+    for name in ("bias_instability", "rate_random_walk", "gauss_markov"):
+        assert stochastic_fits(y, 1.0, (name,)) == ({name: every[name]}, s0)
+    alone, _ = stochastic_fits(y, 1.0, ("gauss_markov",))
+    assert exact_stochastic_gain(y, alone, 1.0, ("gauss_markov",)) == {"gauss_markov": exact["gauss_markov"]}

@@ -244,7 +244,7 @@ def _invert(inp, state, i, cands, j, effect, params, reps, seeds):
     ``i`` (an ``effect`` with estimates ``params``; ``reps``: its replicates' estimates at them):
     ``{name: Interval}``, its ends re-made with replicates simulated at its lower and at its upper ends."""
     def replicates_at(at):
-        return [e[j] for e in _replicates(inp, state, i, cands, seeds, {j: at})["findings"]]
+        return [e[j] for e in _replicates(inp, state, i, cands, seeds, {j: at}, wanted=[j])["findings"]]
 
     return inversion_step(params, reps, replicates_at, SCALES.get(effect, {}),
                           {name: param_bounds(effect, name) for name in params})
@@ -295,11 +295,13 @@ def inversion_step(params, replicates, replicates_at, scales, bounds=None):
     return out
 
 
-def _replicates(inp, state, i, cands, seeds, at=None):
+def _replicates(inp, state, i, cands, seeds, at=None, wanted=None):
     """Axis ``i`` of the extended model simulated once per seed: each run's finding estimates
     (a list per run, in the order of ``cands``) and the baseline's ``bias_dps`` and
     ``arw_dps_per_sqrt_hz``. ``at``: ``{index into cands: params}`` simulated in place of those
-    findings' estimates."""
+    findings' estimates. ``wanted``: only these findings' estimates are read (the others' may be
+    None: :func:`~gyrofilter.analysis.gap.reestimate.reestimate_axis`), and not the baseline's
+    (left empty)."""
     a = AXES[i]
     model = copy.deepcopy(inp.base)
     model["axes"][a] = state.spec(inp, i, state.kept_on(i))
@@ -314,10 +316,12 @@ def _replicates(inp, state, i, cands, seeds, at=None):
     bar = Progress(inp.say, f"intervals on {a}: bootstrap runs", len(seeds))
     for k, s in enumerate(seeds):
         x = simulate_axis(spec, inp.n, inp.sample_rate_hz, s, i)
-        out["bias_dps"].append(float(np.mean(x)))
-        out["arw_dps_per_sqrt_hz"].append(noise_sigma(x, inp.sample_rate_hz, inp.q or 0.0) / math.sqrt(inp.sample_rate_hz))
+        if wanted is None:
+            out["bias_dps"].append(float(np.mean(x)))
+            out["arw_dps_per_sqrt_hz"].append(noise_sigma(x, inp.sample_rate_hz, inp.q or 0.0) / math.sqrt(inp.sample_rate_hz))
         try:
-            out["findings"].append(reestimate_axis(x, inp.sample_rate_hz, temp, cands, resolved, inp.q or 0.0, owned=True))
+            out["findings"].append(reestimate_axis(x, inp.sample_rate_hz, temp, cands, resolved, inp.q or 0.0, owned=True,
+                                                   wanted=wanted))
         except (ValueError, ArithmeticError):  # a fit that cannot run on this replicate
             out["findings"].append([None] * len(cands))
         del x  # the next run is made while this one would still be held: two series of the record's length

@@ -81,7 +81,7 @@ SUPPORTED = ((RINGING, HEAVY_TAILS, OUTLIERS, SINUSOID, NARROWBAND, WANDERING_TO
              + WANDERS + (COMPRESSION,))
 
 
-def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False):
+def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps=0.0, owned=False, wanted=None):
     """Parameters of each finding of ``cands`` (the axis's kept
     :class:`~gyrofilter.analysis.gap.detectors.Candidate` s) estimated on the replicate ``x`` (deg/s);
     returns a list of dicts (or None where the estimator has nothing to estimate), in the order
@@ -90,13 +90,19 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
     for a composite model (:func:`gyrofilter.analysis.gap.composite.composite_lags`), and are so
     on the replicate, from its extended white level (the quantization step ``q_dps``) and its
     composite fit's. ``owned``: ``x`` is the caller's to lose (a bootstrap replicate): the
-    findings' components are taken out of it in place, else out of one copy."""
+    findings' components are taken out of it in place, else out of one copy. ``wanted``: the indices
+    into ``cands`` whose estimates the caller reads (None: all); an estimator that neither they nor
+    the series they are estimated on depend on (:func:`_needed`) is not run, its entry None (the
+    intervals' test inversion reads one finding's; the others' estimators were half its time)."""
     x = x if owned else np.array(x, dtype=float)
     out = [None] * len(cands)
     by = {}
     for k, c in enumerate(cands):
         key = "composite" if c.composite and c.effect in WANDERS else c.effect
         by.setdefault(key, []).append(k)
+    if wanted is not None:
+        run = _needed({key for key, ks in by.items() if set(ks) & set(wanted)}, resolved_lags)
+        by = {key: ks for key, ks in by.items() if key in run}
     if COMPRESSION in by:  # on the replicate as simulated, as the tail statistic of D reads it
         k = by[COMPRESSION][0]
         out[k] = _compression(x, sample_rate_hz, cands[k], q_dps)
@@ -148,6 +154,22 @@ def reestimate_axis(x, sample_rate_hz, temp_c, cands, resolved_lags=False, q_dps
         if resolved_lags and k is not None and out[k] is not None and fit is not None:
             out[k] = _resolved(x, sample_rate_hz, cands, out, fit, q_dps)
     return out
+
+
+def _needed(keys, resolved_lags):
+    """The estimators (keys of :func:`reestimate_axis`'s ``by``: effects, or ``composite``) that the
+    estimates of ``keys`` read, ``keys`` included: a resonance the narrow band's line, a colored
+    noise the bands' spectra (and, ``resolved_lags``, the composite fit); every estimator the
+    series less the ringing's rings, the spikes and the line, and the slow stochastic ones and the
+    composite the block means less the slow shapes."""
+    keys = set(keys)
+    if COLORED_NOISE in keys:
+        keys |= {NARROWBAND, WANDERING_TONE, RESONANCE} | ({"composite"} if resolved_lags else set())
+    if RESONANCE in keys:
+        keys.add(NARROWBAND)
+    if keys & set(DETERMINISTIC + WANDERS + ("composite",)):
+        keys |= set(DETERMINISTIC)
+    return keys | {RINGING, OUTLIERS, SINUSOID}
 
 
 def _resolved(xc, sample_rate_hz, cands, out, fit, q_dps):
@@ -243,11 +265,11 @@ def _slow(x, sample_rate_hz, temp_c, cands, slow_det, slow_sto, out):
             group = max(1, int(math.ceil(n / 512)))
             m = n // group
             yg = series[: m * group].reshape(m, group).mean(axis=1)
-            fits_g, _ = det.stochastic_fits(yg, delta_s * group)
-            exact = det.exact_stochastic_gain(yg, fits_g, delta_s * group)
+            fits_g, _ = det.stochastic_fits(yg, delta_s * group, (name,))  # its fits alone: the others' are not read
+            exact = det.exact_stochastic_gain(yg, fits_g, delta_s * group, (name,))
             out[k] = stochastic_params(name, exact[name][1], delta_s * group)
         else:
-            fits, _ = det.stochastic_fits(series, delta_s)
+            fits, _ = det.stochastic_fits(series, delta_s, (name,))
             out[k] = stochastic_params(name, fits[name][1], delta_s)
     return x
 

@@ -162,9 +162,9 @@ def _whittle(spec, omega, model, delta_s, s0_start, white_shape=None, rw_shape=N
 N_PARAMS = {name: BY_NAME[name].n_params for name in SLOW}
 
 
-def stochastic_fits(y, delta_s):
-    """Whittle fits of each stochastic model to the block means ``y`` (bridge periodogram,
-    :func:`_periodogram`).
+def stochastic_fits(y, delta_s, models=WANDERS):
+    """Whittle fits of each stochastic model of ``models`` to the block means ``y`` (bridge periodogram,
+    :func:`_periodogram`): each fit its own, so one asked for alone is the same as among the others.
 
     Returns ``{model: (two_delta_loglik, theta, s0)}`` and the white-only level. A fit no better
     than white noise alone (``2 Delta log L <= 0``) is the maximum likelihood estimate on the
@@ -186,7 +186,7 @@ def stochastic_fits(y, delta_s):
     nll0 = float(np.sum(np.log(s0_white * wsh) + spec / (s0_white * wsh)))
     s0_hf = float(spec[spec.size // 2:].mean())
     out = {}
-    for model in WANDERS:
+    for model in models:
         nll, theta, s0 = _whittle(spec, omega, model, delta_s, s0_hf, wsh, gsh)
         if nll >= nll0:
             theta, s0 = (0.0,) + tuple(theta[1:]), s0_white
@@ -304,10 +304,10 @@ def _kf_nll(y, phi, q, s0, mean):
     return total
 
 
-def exact_stochastic_gain(y, sto, delta_s):
-    """2 Delta log L of the exact (time-domain) random-walk and Gauss-Markov models over
-    white noise with a constant mean, on the block means *with* their trend, started from the
-    Whittle estimates. Used to compare a deterministic shape with a stochastic wander on the
+def exact_stochastic_gain(y, sto, delta_s, models=(RATE_RANDOM_WALK, GAUSS_MARKOV)):
+    """2 Delta log L of the exact (time-domain) random-walk and Gauss-Markov models (of ``models``) over
+    white noise with a constant mean, on the block means *with* their trend, started from the Whittle
+    estimates ``sto``. Used to compare a deterministic shape with a stochastic wander on the
     same data (the Whittle fits see the detrended series only)."""
     from scipy.optimize import minimize
 
@@ -318,23 +318,23 @@ def exact_stochastic_gain(y, sto, delta_s):
     base = n * math.log(var0) + n  # white noise, MLE variance
     values = y.tolist()  # the Kalman filters' loops run on floats (_kf_nll)
     out = {}
-    q0 = max(sto[RATE_RANDOM_WALK][1][0], 1e-12 * var0)
-    s00 = max(sto[RATE_RANDOM_WALK][2], 1e-12 * var0)
-    res = minimize(lambda p: _kf_nll(values, 1.0, math.exp(p[0]), math.exp(p[1]), mean),
-                   [math.log(q0), math.log(s00)], method="Nelder-Mead",
-                   options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 200})
-    # the diffuse start drops one observation: add the white model's term for it back
-    out[RATE_RANDOM_WALK] = (max(0.0, base - (res.fun + math.log(var0) + 1)),
-                               (math.exp(res.x[0]),), math.exp(res.x[1]))
-    var_g, phi_g = sto[GAUSS_MARKOV][1]
-    s0g = max(sto[GAUSS_MARKOV][2], 1e-12 * var0)
-    phi_g = min(max(phi_g, 0.5), 0.9999)
-    res = minimize(lambda p: _kf_nll(values, 1 / (1 + math.exp(-p[1])), math.exp(p[0]), math.exp(p[2]), mean),
-                   [math.log(max(var_g * (1 - phi_g ** 2), 1e-12 * var0)), math.log(phi_g / (1 - phi_g)), math.log(s0g)],
-                   method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 300})
-    phi = 1 / (1 + math.exp(-res.x[1]))
-    qg = math.exp(res.x[0])
-    out[GAUSS_MARKOV] = (max(0.0, base - res.fun), (qg / max(1 - phi * phi, 1e-12), phi), math.exp(res.x[2]))
+    if RATE_RANDOM_WALK in models:
+        q0, s00 = max(sto[RATE_RANDOM_WALK][1][0], 1e-12 * var0), max(sto[RATE_RANDOM_WALK][2], 1e-12 * var0)
+        res = minimize(lambda p: _kf_nll(values, 1.0, math.exp(p[0]), math.exp(p[1]), mean),
+                       [math.log(q0), math.log(s00)], method="Nelder-Mead",
+                       options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 200})
+        # the diffuse start drops one observation: add the white model's term for it back
+        out[RATE_RANDOM_WALK] = (max(0.0, base - (res.fun + math.log(var0) + 1)), (math.exp(res.x[0]),), math.exp(res.x[1]))
+    if GAUSS_MARKOV in models:
+        var_g, phi_g = sto[GAUSS_MARKOV][1]
+        s0g = max(sto[GAUSS_MARKOV][2], 1e-12 * var0)
+        phi_g = min(max(phi_g, 0.5), 0.9999)
+        res = minimize(lambda p: _kf_nll(values, 1 / (1 + math.exp(-p[1])), math.exp(p[0]), math.exp(p[2]), mean),
+                       [math.log(max(var_g * (1 - phi_g ** 2), 1e-12 * var0)), math.log(phi_g / (1 - phi_g)), math.log(s0g)],
+                       method="Nelder-Mead", options={"xatol": 1e-2, "fatol": 0.05, "maxiter": 300})
+        phi = 1 / (1 + math.exp(-res.x[1]))
+        qg = math.exp(res.x[0])
+        out[GAUSS_MARKOV] = (max(0.0, base - res.fun), (qg / max(1 - phi * phi, 1e-12), phi), math.exp(res.x[2]))
     return out
 
 
