@@ -202,7 +202,10 @@ def raise_max_bias(bias_dps):
     if (not isinstance(bias_dps, (list, tuple)) or len(bias_dps) != len(AXES)
             or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bias_dps)):
         return None
-    largest = max(abs(float(b)) for b in bias_dps)
+    try:
+        largest = max(abs(float(b)) for b in bias_dps)
+    except OverflowError:  # an integer of 400 digits (a JSON file may hold one)
+        return None
     if not math.isfinite(largest) or math.ceil(largest) > MAX_BIAS_RANGE["high"]:
         return None
     return f"raise the filter's setting max_bias_dps (to {math.ceil(largest)})"
