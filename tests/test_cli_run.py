@@ -266,6 +266,9 @@ def test_run_from_a_device_that_loses_samples_writes_a_row_for_every_block_of_de
     np.testing.assert_allclose(got.gyro_dps, want, rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(got.t_s - got.t_s[0], t_want - t_want[0], atol=1e-9)
     assert got.t_gaps == np.count_nonzero(np.diff(t_want) > 0.055) > 0
+    # attack pass 33c: the summary counted the lost samples of lines read past the --duration cut too
+    lost = round((t[-1] - t[0]) * 100) - (n - 1)
+    assert int(re.search(r"lost (\d+) samples", err).group(1)) == lost > 0, err
 
 
 def test_run_from_a_device_that_lost_every_other_sample_from_its_first_line_keeps_its_rows(tmp_path):

@@ -116,3 +116,18 @@ def test_the_max_bias_named_takes_every_axis(tmp_path, capsys):
     assert main(["replay", path]) == 2
     assert "axis x reads 20.5" in (err := capsys.readouterr().err) and "max_bias_dps (to 26)" in err
     assert main(["replay", path, "--set", "max_bias_dps=26"]) == 0
+
+
+def test_a_saved_calibration_with_a_large_bias_names_its_way_through(tmp_path, capsys):
+    """Attack pass 33c: --calibration FILE whose saved bias is beyond 20 deg/s (x 20.5, y -25.3) was
+    refused with "bias_dps x must be in [-20, 20]" alone, where the start-up calibration's refusal
+    names the setting that takes it: the same words, the value taking every axis (26), which --set takes."""
+    g = np.array([20.5, -25.3, 1.2]) + np.random.default_rng(3).normal(size=(500, 3)) * 0.05
+    path, cal = str(tmp_path / "big_biases.csv"), str(tmp_path / "cal.json")
+    write_recording(path, Recording.from_dps(g, 50.0))
+    assert main(["replay", path, "--set", "max_bias_dps=26", "--save-calibration", cal]) == 0
+    capsys.readouterr()
+    assert main(["replay", path, "--calibration", cal]) == 2
+    err = capsys.readouterr().err
+    assert f"{cal}: bias_dps x must be in [-20, 20]" in err and "raise the filter's setting max_bias_dps (to 26)" in err
+    assert main(["replay", path, "--calibration", cal, "--set", "max_bias_dps=26"]) == 0

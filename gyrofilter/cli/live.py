@@ -314,6 +314,7 @@ class LiveLoop:
         self.first_wall = None  # when (time.monotonic) the first sample came
         self._t_end = None  # samples at t >= this are beyond the duration (half a sample of margin)
         self.samples = 0
+        self.lost_samples = self.gaps = 0  # in the t of the samples kept (see stats)
         self.ended = None  # SourceEnded, DeviceError or DURATION_REACHED
         self._finished = False  # a stop signal came and the source's held rows were taken
         self._signals = StopSignals()
@@ -360,9 +361,31 @@ class LiveLoop:
                 elif t[-1] + 1.0 / self.sample_rate_hz >= self._t_end:
                     self.ended = DURATION_REACHED
             if len(rows):
+                self._count_gaps(rows[:, self.t_col])
                 self.last_t = float(rows[-1, self.t_col])
                 self.samples += len(rows)
         return rows, notes
+
+    def _count_gaps(self, t):
+        """Count the samples lost within the kept samples of times ``t`` (s) (after ``last_t``): a step of
+        k = rint(dt * sample_rate_hz) > 1 intervals is a gap of k - 1 lost samples, as replay counts them
+        in the file (``sources.replay``) and as every source makes its t (a sample index over the rate)."""
+        prev = t[0] if self.last_t is None else self.last_t
+        step = np.rint(np.diff(t, prepend=prev) * self.sample_rate_hz)
+        gap = step > 1
+        self.lost_samples += int((step[gap] - 1).sum())
+        self.gaps += int(gap.sum())
+
+    @property
+    def stats(self):
+        """The source's counters, with its samples and lost samples (and its gap counters, ``gaps`` or
+        ``counter_jumps``) those of the samples kept: lines read past a ``duration_s`` cut (whose samples
+        are not written) count in the source's, not in what a summary or the file states."""
+        stats = dict(self.source.stats, samples=self.samples, lost_samples=self.lost_samples)
+        for key in ("gaps", "counter_jumps"):
+            if key in stats:
+                stats[key] = self.gaps
+        return stats
 
     def stop(self, reason):
         """End the loop for ``reason`` (words for :meth:`reason`): the next :meth:`next` is None."""

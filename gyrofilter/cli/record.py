@@ -91,13 +91,13 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
                     writer.flush()
                     last_flush, dirty = now, False
                 if status.due():
-                    status.show(loop.samples, f"{loop.samples} recorded, {source.stats.get('lost_samples', 0)} lost",
+                    status.show(loop.samples, f"{loop.samples} recorded, {loop.lost_samples} lost",
                                 loop.first_wall)
             status.end()
             for text in loop.pop_notes():
                 writer.note(text)
             reason = loop.reason()
-            writer.note(f"{END_NOTE}{reason}; {loop.samples} samples; " + (live.source_summary(source.stats) or "no losses"))
+            writer.note(f"{END_NOTE}{reason}; {loop.samples} samples; " + (live.source_summary(loop.stats) or "no losses"))
     except BaseException as exc:
         live.close_after_failure(writer, exc, command)
         raise
@@ -106,10 +106,10 @@ def record(source, spec, out, duration_s, *, show_status, command="gyrofilter re
     left = writer.close(loop.failed() or empty)
     if empty:
         within = f" in --duration {duration_s:g} s" if loop.ended == live.DURATION_REACHED else f" ({reason})"
-        counts = live.source_summary(source.stats)  # lines received and refused: the notes saying why go with the file
+        counts = live.source_summary(loop.stats)  # lines received and refused: the notes saying why go with the file
         raise SettingsError(f"{spec}: no sample was recorded{within}{'; ' + counts if counts else ''}; "
                             + (f"{out} is left as it was" if existed else f"the empty {out} is not kept"))
-    stats = source.stats
+    stats = loop.stats
     console.say(
         f"{command}: {reason}",
         f"  wrote {loop.samples} samples ({loop.span_s:.2f} s at {loop.sample_rate_hz:g} Hz, {time.monotonic() - wall0:.1f} s wall) to {out}",

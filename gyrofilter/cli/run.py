@@ -191,7 +191,7 @@ def _run(args, source, sinks):
                     loop.stop(READER_GONE)
                 if status.due():
                     state = "calibrating" if filt.calibrating else f"{writer.rows_written} filtered rows"
-                    status.show(loop.samples, f"{state}, lost {source.stats.get('lost_samples', 0)}, "
+                    status.show(loop.samples, f"{state}, lost {loop.lost_samples}, "
                                               f"rejected outliers {int(filt.rejected.sum())}", loop.first_wall)
             status.end()
             for text in loop.pop_notes():
@@ -212,8 +212,7 @@ def _run(args, source, sinks):
         f"gyrofilter run: {reason}",
         f"  {loop.samples} samples in, {writer.rows_written} filtered rows out ({filt.output_rate_hz:g} Hz);{bias} "
         f"rejected outliers {int(filt.rejected.sum())} (x, y, z: {', '.join(str(int(v)) for v in filt.rejected)})",
-        f"  lost {source.stats.get('lost_samples', 0)} samples"
-        + (f"; {live.source_summary(source.stats)}" if live.source_summary(source.stats) else ""),
+        f"  lost {loop.lost_samples} samples" + (f"; {live.source_summary(loop.stats)}" if live.source_summary(loop.stats) else ""),
         *([f"  {out_file}: {left}"] if left else []),
         *([f"  nothing filtered: it stopped {nothing}"] if nothing is not None else []),
     )

@@ -117,8 +117,15 @@ class Calibration:
             return tuple(number(f"{key} {axis}", v, **bounds) for axis, v in zip(AXES, values))
 
         low_c, high_c = TEMP_RANGE_C
+        try:
+            bias = triple("bias_dps", self.bias_dps, low=-max_bias_dps, high=max_bias_dps)
+        except CalibrationError as exc:  # a real bias beyond the setting: name the value that takes it, as calibrate does
+            way = raise_max_bias(self.bias_dps)
+            if way is None:
+                raise
+            raise CalibrationError(f"{exc}; if the bias is real, {way}") from None
         return Calibration(
-            triple("bias_dps", self.bias_dps, low=-max_bias_dps, high=max_bias_dps),
+            bias,
             triple("noise_std_dps", self.noise_std_dps, low=0.0, high=MAX_NOISE_STD_DPS),
             number("samples", self.samples, low=MIN_SAMPLES, high=MAX_SAMPLES, integer=True),
             check_sample_rate_hz(number("sample_rate_hz", self.sample_rate_hz), f"{where}: sample_rate_hz",
@@ -186,6 +193,24 @@ def implausible_bias(axis, mean_dps, *, max_bias_dps=MAX_BIAS_DPS, unit=None):
             f"deg/s: is the sensor turning, or are the rates in another unit ({likely})")
 
 
+def raise_max_bias(bias_dps):
+    """The way through for a real bias beyond ``max_bias_dps``: the words naming the filter's setting and
+    the value that takes every axis, ceil(max |b|) (deg/s); None when ``bias_dps`` is not 3 finite
+    numbers (not bools) that such a setting takes (|b| <= MAX_BIAS_RANGE's high), so none is offered."""
+    if isinstance(bias_dps, np.ndarray):
+        bias_dps = bias_dps.tolist()
+    if (not isinstance(bias_dps, (list, tuple)) or len(bias_dps) != len(AXES)
+            or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bias_dps)):
+        return None
+    try:
+        largest = max(abs(float(b)) for b in bias_dps)
+    except OverflowError:  # an integer of 400 digits (a JSON file may hold one)
+        return None
+    if not math.isfinite(largest) or math.ceil(largest) > MAX_BIAS_RANGE["high"]:
+        return None
+    return f"raise the filter's setting max_bias_dps (to {math.ceil(largest)})"
+
+
 #: the ranges of :func:`calibrate`'s ``stillness_threshold`` and ``max_bias_dps`` (the settings
 #: ``stillness_z`` and ``max_bias_dps``: gyrofilter.filter.settings.SETTING_RANGES reads them here)
 STILLNESS_Z_RANGE = dict(low=0, low_open=True, high=1e6)
@@ -223,7 +248,7 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
         implausible = implausible_bias(axis, bias[i], max_bias_dps=max_bias_dps)
         if implausible:  # the value named takes every axis: the first's alone (x 20.5: 21) was refused for y (-25.3)
             raise CalibrationError(f"calibration: {implausible}? Keep it still while calibrating, or, if the bias is real, "
-                                   f"raise the filter's setting max_bias_dps (to {math.ceil(float(np.max(np.abs(bias))))})")
+                                   f"{raise_max_bias(bias)}")
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
