@@ -32,7 +32,13 @@ class RecordingError(GyroFilterError, ValueError):
 
 
 class CalibrationError(GyroFilterError):
-    """Start-up bias calibration failed (for example the sensor moved while calibrating)."""
+    """Start-up bias calibration failed (for example the sensor moved while calibrating).
+    ``max_bias_dps``: the value of the filter setting that takes a bias refused as beyond it (the message's
+    way through, :func:`gyrofilter.filter.calibration.raise_max_bias`), or None."""
+
+    def __init__(self, message, max_bias_dps=None):
+        super().__init__(message)
+        self.max_bias_dps = max_bias_dps
 
 
 class MissingExtraError(GyroFilterError):

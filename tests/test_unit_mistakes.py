@@ -131,3 +131,30 @@ def test_a_saved_calibration_with_a_large_bias_names_its_way_through(tmp_path, c
     err = capsys.readouterr().err
     assert f"{cal}: bias_dps x must be in [-20, 20]" in err and "raise the filter's setting max_bias_dps (to 26)" in err
     assert main(["replay", path, "--calibration", cal, "--set", "max_bias_dps=26"]) == 0
+
+
+def test_a_large_bias_in_report_and_evaluate_names_the_commands_that_take_it(tmp_path, capsys):
+    """Attack pass 35: report (its filter part, a warning) and evaluate (a refusal) said "raise the filter's
+    setting max_bias_dps (to 26)" for a real bias beyond 20 deg/s, and neither takes a filter setting
+    (``report --set`` is refused as unrecognised): they name the commands whose --set takes it (taken: tested)."""
+    from gyrofilter.errors import CalibrationError
+    from gyrofilter.evaluation import evaluate as E
+    from gyrofilter.evaluation.filters import default_filters
+
+    g = np.array([20.5, -25.3, 1.2]) + np.random.default_rng(3).normal(size=(500, 3)) * 0.05
+    path = str(tmp_path / "big_biases.csv")
+    write_recording(path, Recording.from_dps(g, 50.0))
+    assert main(["report", path, "--out", str(tmp_path / "r.html"), "--sims", "10"]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    assert "raise the filter's setting" not in err and "replay and run take --set max_bias_dps=26" in err
+    assert main(["replay", path, "--set", "max_bias_dps=26"]) == 0
+    folder = tmp_path / "recordings"
+    folder.mkdir()
+    write_recording(str(folder / "mpu6050_static_10s.csv"),
+                    Recording.from_dps(g, 50.0, header={"sensor": "MPU6050", "description": "static: big bias"}))
+    paper = [spec for spec in default_filters() if spec.name == "paper001"]
+    with pytest.raises(CalibrationError) as refused:
+        E.evaluate(paper, str(folder), profiles=[], with_lag=False)
+    text = str(refused.value)
+    assert "raise the filter's setting" not in text and "move it out of the recordings folder" in text
+    assert "replay and run take --set max_bias_dps=26" in text

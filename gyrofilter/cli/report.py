@@ -31,7 +31,8 @@ from ..analysis.agreement import compare
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS
 from ..analysis.still import clipped
-from ..errors import GyroFilterError, SettingsError, one_line
+from ..errors import CalibrationError, GyroFilterError, SettingsError, one_line
+from ..filter.calibration import without_settings
 from ..inputs import parse_number
 from ..recording import CHUNK_ROWS, iter_recording
 from ..units import json_ready
@@ -160,6 +161,8 @@ def _filter(path):
             filt = filtering.make_filter(defaults.parse_args([]), head.sample_rate_hz)
             run = replay.Replay(path, head, filt, plot=True, plot_buckets=TRACE_BUCKETS)
             replay.feed_recording(run, chunks)
+    except CalibrationError as exc:  # its way through a setting is replay's and run's (--set): a report takes none
+        return None, one_line(without_settings(exc, "report filters with the default settings"))
     except GyroFilterError as exc:
         return None, one_line(exc)
     return run, None

@@ -21,6 +21,7 @@ from .datasets import NOISE_SEGMENT_S, find_broad_recordings, find_static_record
 from .filters import default_filters
 from .metrics import broad_metrics, dynamic_metrics, static_reduction
 from ..errors import CalibrationError, SettingsError
+from ..filter.calibration import without_settings
 from ..plots import pyplot, save_figure
 from ..sim.profiles import PROFILES
 
@@ -118,8 +119,11 @@ def _naming(rec, metric, *args):
     shorter than the window) names the file."""
     try:
         return metric(*args)
-    except (CalibrationError, SettingsError) as exc:
-        raise (CalibrationError if isinstance(exc, CalibrationError) else SettingsError)(f"{rec.path}: {exc}") from None
+    except CalibrationError as exc:  # a large bias's way through is a setting, which evaluate does not take
+        raise CalibrationError(f"{rec.path}: " + without_settings(
+            exc, "evaluate runs each filter at its own settings: move it out of the recordings folder")) from None
+    except SettingsError as exc:
+        raise SettingsError(f"{rec.path}: {exc}") from None
 
 
 def dominates(ev, candidate, reference="paper001", claim=PAPER_CLAIM_REDUCTION, static_only=None,

@@ -120,10 +120,10 @@ class Calibration:
         try:
             bias = triple("bias_dps", self.bias_dps, low=-max_bias_dps, high=max_bias_dps)
         except CalibrationError as exc:  # a real bias beyond the setting: name the value that takes it, as calibrate does
-            way = raise_max_bias(self.bias_dps)
-            if way is None:
+            value = max_bias_needed(self.bias_dps)
+            if value is None:
                 raise
-            raise CalibrationError(f"{exc}; if the bias is real, {way}") from None
+            raise CalibrationError(f"{exc}; if the bias is real, {raise_max_bias(value)}", value) from None
         return Calibration(
             bias,
             triple("noise_std_dps", self.noise_std_dps, low=0.0, high=MAX_NOISE_STD_DPS),
@@ -193,10 +193,10 @@ def implausible_bias(axis, mean_dps, *, max_bias_dps=MAX_BIAS_DPS, unit=None):
             f"deg/s: is the sensor turning, or are the rates in another unit ({likely})")
 
 
-def raise_max_bias(bias_dps):
-    """The way through for a real bias beyond ``max_bias_dps``: the words naming the filter's setting and
-    the value that takes every axis, ceil(max |b|) (deg/s); None when ``bias_dps`` is not 3 finite
-    numbers (not bools) that such a setting takes (|b| <= MAX_BIAS_RANGE's high), so none is offered."""
+def max_bias_needed(bias_dps):
+    """The value of the filter's setting ``max_bias_dps`` that takes the bias ``bias_dps`` on every axis,
+    ceil(max |b|) (deg/s); None when ``bias_dps`` is not 3 finite numbers (not bools) that such a
+    setting takes (|b| <= MAX_BIAS_RANGE's high), so no way through is offered."""
     if isinstance(bias_dps, np.ndarray):
         bias_dps = bias_dps.tolist()
     if (not isinstance(bias_dps, (list, tuple)) or len(bias_dps) != len(AXES)
@@ -208,7 +208,24 @@ def raise_max_bias(bias_dps):
         return None
     if not math.isfinite(largest) or math.ceil(largest) > MAX_BIAS_RANGE["high"]:
         return None
-    return f"raise the filter's setting max_bias_dps (to {math.ceil(largest)})"
+    return math.ceil(largest)
+
+
+def raise_max_bias(value):
+    """The way through for a real bias beyond ``max_bias_dps``: the words naming the filter's setting and
+    ``value`` (:func:`max_bias_needed`), which ``replay`` and ``run`` take with ``--set``."""
+    return f"raise the filter's setting max_bias_dps (to {value})"
+
+
+def without_settings(exc, instead):
+    """The message of the CalibrationError ``exc`` for a command that takes no filter setting
+    (``report``'s filter part, ``evaluate``): its way through a setting (:func:`raise_max_bias`, which
+    that command would refuse) replaced by ``instead``, words that say why the command does not take it,
+    then the commands that do ("replay and run take --set max_bias_dps=26"); as it is without one."""
+    if exc.max_bias_dps is None:
+        return str(exc)
+    return str(exc).replace(raise_max_bias(exc.max_bias_dps),
+                            f"{instead}; replay and run take --set max_bias_dps={exc.max_bias_dps}")
 
 
 #: the ranges of :func:`calibrate`'s ``stillness_threshold`` and ``max_bias_dps`` (the settings
@@ -247,8 +264,9 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     for i, axis in enumerate(AXES):
         implausible = implausible_bias(axis, bias[i], max_bias_dps=max_bias_dps)
         if implausible:  # the value named takes every axis: the first's alone (x 20.5: 21) was refused for y (-25.3)
+            value = max_bias_needed(bias)
             raise CalibrationError(f"calibration: {implausible}? Keep it still while calibrating, or, if the bias is real, "
-                                   f"{raise_max_bias(bias)}")
+                                   f"{raise_max_bias(value)}", value)
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
