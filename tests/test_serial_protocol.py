@@ -487,3 +487,20 @@ def test_a_refused_line_of_the_full_width_without_a_counter_is_a_lost_sample_not
     assert s["lost_samples"] == 5 and s["samples"] == 6 and s["bad_lines"] + s["partial_lines"] == 11, s
     notes = parser.pop_notes()
     assert sum(n.startswith("gap: 1 samples lost before t=") for n in notes) == 5, notes
+
+
+@pytest.mark.parametrize("chunked", [False, True])
+def test_a_line_of_words_alone_without_a_counter_is_a_message_not_a_lost_sample(chunked):
+    """Attack pass 35: a device message of the full width sent without its "#" (``ERR,i2c,timeout``
+    on fields=gx,gy,gz) was counted as a lost sample, a gap in t where the device lost none. A line
+    in which no cell is a number is not a sample: refused and counted, t unshifted; a line of the
+    full width with a number in it (``1x,0,0``, ``nan,0,0``) stays a lost sample."""
+    lines = [b"0,0,0", b"ERR,i2c,timeout", b"1,0,0", b"ok,,", b"2,0,0", b"1x,0,0", b"3,0,0"]
+    data = COUNTERLESS + b"\n".join(lines) + b"\n"
+    parser = LineParser()
+    parts = [parser.feed(data[i:i + 5]) for i in range(0, len(data), 5)] if chunked else [parser.feed(data)]
+    rows = np.concatenate([*parts, parser.finish()])
+    np.testing.assert_array_equal(rows[:, 1], np.arange(4))
+    np.testing.assert_allclose(rows[:, 0], np.array([0, 1, 2, 4]) / 100.0)  # only 1x,0,0 was a sample
+    s = parser.stats
+    assert s["lost_samples"] == 1 and s["bad_lines"] + s["partial_lines"] == 3, s

@@ -35,7 +35,8 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
   beyond +-``units.MAX_RATE_DPS`` (100000 deg/s) once converted to deg/s, or an accelerometer value
   beyond +-``units.MAX_ACCEL_MPS2`` once in m/s^2: no sensor reads it, and the recording would
   refuse it (a corrupt line must not end a recording). Without a counter, a refused line of the full
-  width is a sample the device sent: the next row's ``t`` keeps its place, the sample counted lost.
+  width with a number among its cells is a sample the device sent: the next row's ``t`` keeps its
+  place, the sample counted lost (a line of words alone is a message sent without its ``#``).
 - Every line received is counted in ``stats["lines"]`` and in exactly one of
   :data:`LINE_OUTCOMES`: a sample delivered as a row (``samples``) or a line that is not one
   (a duplicate, a refused line, a header, ...). A run of more than :data:`MAX_LINE_BYTES` bytes
@@ -429,11 +430,15 @@ class LineParser:
         return np.concatenate(out) if len(out) > 1 else out[0]
 
     def _refused(self, line, kind, reason, out, pending):
-        """Count the refused ``line`` (:meth:`_bad`); without a counter one of the full width is a sample
-        the device sent: the rows of the lines before it are made (into ``out``) and it is counted in
-        ``_unsent``, so that the next row's t keeps its place (:meth:`_uncounted`)."""
+        """Count the refused ``line`` (:meth:`_bad`); without a counter one of the full width with a
+        number among its cells is a sample the device sent: the rows of the lines before it are made
+        (into ``out``) and it is counted in ``_unsent``, so that the next row's t keeps its place
+        (:meth:`_uncounted`). A line of words alone (``ERR,i2c,timeout``) is a message sent without its
+        ``#`` (attack pass 35), not a sample."""
         self._bad(line, kind, reason)
-        if self.fields and "counter" not in self.fields and line.count(b",") + 1 == len(self.fields):
+        cells = line.decode("latin-1").split(",")
+        if (self.fields and "counter" not in self.fields and len(cells) == len(self.fields)
+                and any(map(is_plain_number, cells))):
             if pending:
                 out.append(self._rows(np.array(pending)))
                 pending.clear()
