@@ -360,6 +360,24 @@ def _freed_points(a, w, y, active, freed, j, cov_of, z, confidence):
     return out
 
 
+def _freed_terms(bounds, scales):
+    """The terms not resolved whose value the others' intervals are taken whatever
+    (:func:`fitted_intervals`): ``{index: misfit scale}`` of those of ``bounds`` (the terms not
+    resolved) that do not fall with tau (``TERM_SLOPE >= 0``: B, K, R) and whose fit with the term
+    forced in is not singular (``scales``: :func:`_bound_of`'s).
+
+    B is freed as K and R are (issue 37): held at 0, an unresolved B leaves its flat share of the
+    long taus to a resolved K, whose interval then sits above the truth. On 10-min, 100 Hz records
+    with N = 0.01, B = 0.005 deg/s and K = 0.003 together (attack pass 34a), K's interval, or its
+    bound where not resolved, held K on 109 of 130 seeds (84 %), on 34 of 40 with K = 0.002; with B
+    freed too, on 124 of 130 and 39 of 40 (white noise and K alone: 39 -> 40 of 40), for K's
+    interval a median 1.00-1.17x as wide where resolved, N's unchanged (1.09x with white noise and
+    K alone), B's coverage unchanged (112 of 130). The bounds of the terms the fit drawn does not
+    resolve stay the union over K and R alone (:func:`_freed_bound`; B's own bound among them); a
+    term resolved there but not once B is free is bounded by the union with B forced in as well."""
+    return {u: scales[u] for u in bounds if scales[u] is not None and TERM_SLOPE[TERMS[u]] >= 0}
+
+
 def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=True, free=True, term_unit=TERM_UNIT):
     """Per-term value and interval of the fit (module docstring), and the fit's misfit:
     returns ``(coefficients, chi2_nu, dof)`` (:func:`reduced_chi2`; None, None without residual
@@ -406,16 +424,7 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     uncertainty of zero in one of those fits (``theta_j - z sd_j <= 0``), it is not resolved
     (``Coefficient.freed_by``: those terms). Every bound is that union too (:func:`_freed_bound`).
 
-    **A bias instability not resolved (B) is freed too** (flat in tau: ``TERM_SLOPE >= 0``). Held
-    at 0, B leaves its flat share of the long taus to a resolved K, whose interval then sits above
-    the truth: on 10-min, 100 Hz records with N = 0.01, B = 0.005 deg/s and K = 0.003 together
-    (attack pass 34a, issue 37) K's interval, or its bound where not resolved, held K on 109 of 130
-    seeds (84 %), on 34 of 40 with K = 0.002; with B freed too, on 124 of 130 and 39 of 40 (white
-    noise and K alone: 39 -> 40 of 40), for K's interval a median 1.00-1.17x as wide where resolved,
-    N's unchanged (1.09x with white noise and K alone), B's coverage unchanged (112 of 130). The
-    bounds of the terms the fit drawn does not resolve stay as they were, the union over K and R
-    alone (:func:`_freed_bound`; B's own bound among them); a term resolved there but not once B is
-    free is bounded by the union with B forced in as well.
+    A bias instability B not resolved is freed too (:func:`_freed_terms`: why, and the bounds).
     The terms not resolved that fall with tau
     (Q, and N where dropped) are not so treated: N's interval conditional on Q = 0 held N on
     95-97 % of the axes (``python tools/allan_coverage.py``), and freeing Q widened it 1.6-fold.
@@ -451,7 +460,7 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     bounds, scales = {}, {}
     for u in (j for j in range(5) if not active[j] or points[j][0] is None):
         bounds[u], scales[u] = _bound_of(a, w, y, active, u, confidence, cov_of, widen)
-    freed = {u: scales[u] for u in bounds if scales[u] is not None and TERM_SLOPE[TERMS[u]] >= 0} if free else {}
+    freed = _freed_terms(bounds, scales) if free else {}
     rising = {u: s for u, s in freed.items() if TERM_SLOPE[TERMS[u]] > 0}  # the bounds: whatever K and R are
     for u in [u for u in bounds if u not in rising and bounds[u] is not None]:
         bounds[u] = _freed_bound(a, w, y, active, u, rising, bounds[u], confidence, cov_of, widen)
