@@ -15,7 +15,10 @@ given with its two-sided 95 % Clopper-Pearson interval. The cases (100 Hz):
 * ``white-rw``: white noise and a rate random walk only, K = 5e-5, 1e-4, 2e-4 deg/s/sqrt(s) on
   x, y, z (the default model's ARW), so that K goes from unresolved to resolved over 10-60 min;
 * ``white-flicker``: the default gyro model without its temperature (white noise, bias instability,
-  quantization; K = 0): where a rule for an unresolved K must not widen B much.
+  quantization; K = 0): where a rule for an unresolved K must not widen B much;
+* ``white-flicker-rw``: white noise, flicker and a random walk together, N = 0.01 deg/s/sqrt(Hz),
+  B = 0.005 deg/s, K = 0.003 deg/s/sqrt(s) on every axis: where B, not resolved on short records,
+  leaves its share of the long taus to K unless it is freed too (issue 37).
 
 ``--rows`` writes every axis's numbers (JSON); ``--before`` reads such a file written by the
 code before a change and prints, per case and term, the median ratio of the interval widths
@@ -42,6 +45,8 @@ SAMPLE_RATE_HZ = 100.0
 TERMS = (ANGLE_RANDOM_WALK, BIAS_INSTABILITY, RATE_RANDOM_WALK)
 #: the white + random walk case's K per axis (deg/s/sqrt(s))
 WHITE_RW_K = {"x": 5e-5, "y": 1e-4, "z": 2e-4}
+#: the white + flicker + random walk case's N (deg/s/sqrt(Hz)), B (deg/s) and K (deg/s/sqrt(s)), every axis
+WHITE_FLICKER_RW = {"arw_dps_per_sqrt_hz": 0.01, "b_dps": 0.005, "k_dps_per_sqrt_s": 0.003}
 
 
 def default_model():
@@ -66,6 +71,15 @@ def white_flicker_model():
     return model
 
 
+def white_flicker_rw_model():
+    """No quantization (no ``lsb_per_dps``), as attack pass 34a measured it."""
+    effects = [{"effect": BIAS_INSTABILITY, "b_dps": WHITE_FLICKER_RW["b_dps"]},
+               {"effect": RATE_RANDOM_WALK, "k_dps_per_sqrt_s": WHITE_FLICKER_RW["k_dps_per_sqrt_s"]}]
+    return {"sample_rate_hz": SAMPLE_RATE_HZ, "gyro_unit": "dps",
+            "axes": {axis: {"bias_dps": 0.5, "arw_dps_per_sqrt_hz": WHITE_FLICKER_RW["arw_dps_per_sqrt_hz"],
+                            "effects": copy.deepcopy(effects)} for axis in "xyz"}}
+
+
 def gyro_truth(model):
     """{axis: {term: simulated value}} of a gyro model (deg/s units)."""
     out = {}
@@ -87,7 +101,8 @@ def accel_truth(model):
 CASES = {"default-gyro": (default_model, "gyro", gyro_truth),
          "default-accel": (default_model, "accel", accel_truth),
          "white-rw": (white_rw_model, "gyro", gyro_truth),
-         "white-flicker": (white_flicker_model, "gyro", gyro_truth)}
+         "white-flicker": (white_flicker_model, "gyro", gyro_truth),
+         "white-flicker-rw": (white_flicker_rw_model, "gyro", gyro_truth)}
 
 
 def run(job):
@@ -132,7 +147,7 @@ def cell(rows):
 
 def table(rows):
     """Coverage per case, minutes and term: resolved (interval) and not resolved (upper bound)."""
-    lines = [f"{'case':>14s} {'min':>4s} {'term':>4s}  {'resolved: inside interval':>26s}  "
+    lines = [f"{'case':>16s} {'min':>4s} {'term':>4s}  {'resolved: inside interval':>26s}  "
              f"{'not resolved: true <= upper':>28s}  {'all':>22s}"]
     keys = sorted({(r["case"], r["minutes"], r["term"]) for r in rows},
                   key=lambda k: (list(CASES).index(k[0]), k[1], TERMS.index(k[2])))
@@ -142,7 +157,7 @@ def table(rows):
             continue  # K = 0: an upper bound always holds it, a resolved K is the drift's
         res = [r for r in sel if r["value"] is not None]
         unres = [r for r in sel if r["value"] is None]
-        lines.append(f"{case:>14s} {minutes:4d} {TERM_SYMBOL[term]:>4s}  {cell(res):>26s}  {cell(unres):>28s}  "
+        lines.append(f"{case:>16s} {minutes:4d} {TERM_SYMBOL[term]:>4s}  {cell(res):>26s}  {cell(unres):>28s}  "
                      f"{cell(sel):>22s}")
     return lines
 
@@ -157,7 +172,7 @@ def width_ratios(rows, before):
             continue
         out.setdefault((r["case"], TERM_SYMBOL[r["term"]]), []).append(
             np.log(r["high"] / r["low"]) / np.log(b["high"] / b["low"]))
-    return [f"{case:>14s} {sym}: median width ratio (log high/low) after/before {np.median(v):.2f} "
+    return [f"{case:>16s} {sym}: median width ratio (log high/low) after/before {np.median(v):.2f} "
             f"(quartiles {np.quantile(v, 0.25):.2f}-{np.quantile(v, 0.75):.2f}, {len(v)} axes)"
             for (case, sym), v in sorted(out.items())]
 

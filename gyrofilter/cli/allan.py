@@ -130,8 +130,8 @@ def misfit_text(r):
 def unresolved_text(r, min_clusters, terms=GYROSCOPE_TERMS):
     """What the record ``r`` (an AxisNoise) does not resolve of the slow terms (B, K, R): those the
     fit left out, with the longest cluster time with ``min_clusters`` clusters (the record is too
-    short); those the model holds that are within their uncertainty of zero once a K or R the record
-    does not resolve is free (``Coefficient.freed_by``); and those the model holds whose interval,
+    short); those the model holds that are within their uncertainty of zero once a B, K or R the
+    record does not resolve is free (``Coefficient.freed_by``); and those the model holds whose interval,
     widened by the fit's misfit, reaches zero (the curve holds what the five terms do not fit; the
     advice to see ``gyrofilter gap`` where it analyses the sensor, ``terms.gap``); "" when it
     resolves them all. ``terms``: the sensor's :class:`~gyrofilter.analysis.noise.model.SensorTerms`."""

@@ -207,7 +207,7 @@ class Coefficient:
     tau_s: float | None = None
     note: str = ""
     z_score: float | None = None   # fitted c^2 / its standard deviation (fit only)
-    freed_by: tuple = ()           # fit only: the terms not resolved (K, R) whose freeing leaves it unresolved
+    freed_by: tuple = ()           # fit only: the terms not resolved (B, K, R) whose freeing leaves it unresolved
 
     @property
     def unit(self):
