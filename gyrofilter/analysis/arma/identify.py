@@ -350,7 +350,7 @@ def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz, block=1) -> BiasModel:
     return BiasModel(tau, math.sqrt(s2eta / (1 - phi * phi)), walk, arw, True, "")
 
 
-def _block_bias_model(phi_block, theta, s2a, rate_hz, block):
+def _block_bias_model(phi_block, theta, s2a, sample_rate_hz, block):
     """:func:`bias_model_from_arma11` of means of ``block`` samples (0 < ``phi_block`` < 1; module docstring)."""
     gamma0 = s2a * (1 - 2 * phi_block * theta + theta * theta) / (1 - phi_block**2)
     gamma1 = s2a * (1 - phi_block * theta) * (phi_block - theta) / (1 - phi_block**2)
@@ -360,10 +360,10 @@ def _block_bias_model(phi_block, theta, s2a, rate_hz, block):
     lag0 = (block + 2 * np.sum((block - np.arange(1, block)) * powers[1:])) / block**2
     s2b = gamma1 / lag1
     s2w = block * (gamma0 - s2b * lag0)  # per sample of the sensor
-    fs = rate_hz * block
+    fs = sample_rate_hz * block
     arw = math.sqrt(max(s2w, 0.0) / fs)
     if not (gamma1 >= 0 and s2w > 0):
-        return BiasModel(math.inf, 0.0, 0.0, math.sqrt(s2a / rate_hz), False,
+        return BiasModel(math.inf, 0.0, 0.0, math.sqrt(s2a / sample_rate_hz), False,
                          f"phi={phi_block:.6f}, theta={theta:.6f} of means of {block} samples: no Gauss-Markov + white "
                          "decomposition (the white part's variance would be <= 0 or the bias's < 0); treated as white noise")
     tau = -1.0 / (fs * math.log(phi))
