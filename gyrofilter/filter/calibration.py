@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import CalibrationError, SettingsError
 from ..files import write_text_whole
 from ..inputs import check_number, load_json, python_value, quote
-from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, shown
+from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain, shown
 from .samples import as_numbers
 
 
@@ -46,6 +46,17 @@ def calibration_samples(sample_rate_hz, calibration_s):
     """Samples in the calibration window: round(``calibration_s`` (s) * ``sample_rate_hz`` (Hz))
     (paper 001 section 2.1: the first seconds of the still sensor give the bias)."""
     return int(round(calibration_s * sample_rate_hz))
+
+
+def noise_calibration_samples(sample_rate_hz, calibration_s):
+    """:func:`calibration_samples` of a calibration that measures the noise as well as the bias:
+    SettingsError naming the setting when the window holds fewer than :data:`MIN_SAMPLES` (a
+    variance of one sample is NaN, of two hardly a measurement)."""
+    c = calibration_samples(sample_rate_hz, calibration_s)
+    if c < MIN_SAMPLES:
+        raise SettingsError(f"setting calibration_s={plain(calibration_s)} gives {c} sample(s) at "
+                            f"{float(sample_rate_hz):g} Hz; the calibration needs at least {MIN_SAMPLES} to measure the noise")
+    return c
 
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
