@@ -228,15 +228,23 @@ def raise_max_bias(value):
     return f"raise the filter's setting max_bias_dps (to {value})"
 
 
+#: the way through for a sensor that moved in its calibration window, in the words of GyroFilter, replay and run
+SAVED_CALIBRATION_WAY = (", or use a saved calibration of this sensor (GyroFilter(calibration=...), --calibration FILE "
+                         "from --save-calibration on a still recording)")
+
+
 def without_settings(exc, instead):
-    """The message of the CalibrationError ``exc`` for a command that takes no filter setting
-    (``report``'s filter part, ``evaluate``): its way through a setting (:func:`raise_max_bias`, which
-    that command would refuse) replaced by ``instead``, words that say why the command does not take it,
-    then the commands that do ("replay and run take --set max_bias_dps=26"); as it is without one."""
-    if exc.max_bias_dps is None:
-        return str(exc)
-    return str(exc).replace(raise_max_bias(exc.max_bias_dps),
+    """The message of the CalibrationError ``exc`` for a command that takes no filter setting and no
+    saved calibration (``report``'s filter part, ``evaluate``): its way through a setting
+    (:func:`raise_max_bias`) or a saved calibration (:data:`SAVED_CALIBRATION_WAY`), which that command
+    would refuse, replaced by ``instead``, words that say why the command does not take it, then the
+    commands that do ("replay and run take --set max_bias_dps=26"); as it is without one."""
+    text = str(exc)
+    if exc.max_bias_dps is not None:
+        text = text.replace(raise_max_bias(exc.max_bias_dps),
                             f"{instead}; replay and run take --set max_bias_dps={exc.max_bias_dps}")
+    return text.replace(SAVED_CALIBRATION_WAY, f"; {instead}; replay and run take a saved calibration (--calibration "
+                                                "FILE from --save-calibration on a still recording)")
 
 
 #: the ranges of :func:`calibrate`'s ``stillness_threshold`` and ``max_bias_dps`` (the settings
@@ -281,10 +289,8 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
-                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s, "
-                f"or use a saved calibration of this sensor (GyroFilter(calibration=...), --calibration FILE from "
-                f"--save-calibration on a still recording)"
-            )
+                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
+                f"{SAVED_CALIBRATION_WAY}")
         if sigma[i] > MAX_NOISE_STD_DPS:
             raise CalibrationError(
                 f"calibration: axis {axis} has a noise of {sigma[i]:.3g} deg/s, beyond the {MAX_NOISE_STD_DPS:g} deg/s "
