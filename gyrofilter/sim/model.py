@@ -16,7 +16,7 @@ import numpy as np
 
 from . import noise_terms as nt
 from .accel import accel_unit
-from .compression import MAX_COMPRESSION, compression_kappa
+from .compression import MAX_COMPRESSION, compression_kappa, compression_too_strong
 from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, COMPRESSION, HEAVY_TAILS, NARROWBAND, REGISTRY, RESONATORS,
                        ROWS, SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
@@ -448,7 +448,7 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
                                           f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")
     if name == WANDERING_TONE:
         _check_excursion(out, label, rate)
-    if name == COMPRESSION and compression_kappa(out["gamma_per_dps2"], out["rms_dps"]) > MAX_COMPRESSION:
+    if name == COMPRESSION and compression_too_strong(out["gamma_per_dps2"], out["rms_dps"]):
         _err(f"{label}.gamma_per_dps2", f"expected gamma_per_dps2 * rms_dps^2 <= {MAX_COMPRESSION:g} (the cubic's turning "
                                         f"point at 3.3 rms or beyond), got {out['gamma_per_dps2']:g} * {out['rms_dps']:g}^2 = "
                                         f"{compression_kappa(out['gamma_per_dps2'], out['rms_dps']):.3g}")
