@@ -203,10 +203,11 @@ def test_parser_temperature_raw_and_celsius():
 
 def test_parser_units_from_options_drop_the_first_line_and_check_a_later_header():
     p = LineParser(gyro_unit="dps", sample_rate_hz=50)
-    rows = p.feed(b"3,4.5,1,1\n" + b"0,0.25,0.5,-0.125\n1,1,1,1\n")
+    more = b"".join(b"%d,1,1,1\n" % i for i in range(2, 8))  # 8 lines: the first value counts (no header)
+    rows = p.feed(b"3,4.5,1,1\n" + b"0,0.25,0.5,-0.125\n1,1,1,1\n" + more)
     assert p.stats["partial_lines"] == 1  # the first line may be cut: not used
-    np.testing.assert_array_equal(rows[:, 1:4], [[0.25, 0.5, -0.125], [1, 1, 1]])
-    np.testing.assert_allclose(rows[:, 0], [0, 0.02])
+    np.testing.assert_array_equal(rows[:2, 1:4], [[0.25, 0.5, -0.125], [1, 1, 1]])
+    np.testing.assert_allclose(rows[:2, 0], [0, 0.02])
     with pytest.raises(DeviceError, match="sample_rate_hz"):
         p.feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100\n")
 

@@ -1,16 +1,17 @@
-"""The serial line protocol's header words, those that name the fields of a line and the accelerometer's
-units, and the ranges a line's values must lie in (:mod:`gyrofilter.sources.serial.protocol`, whose
-module docstring states the protocol)."""
+"""The serial line protocol's header words, the units they (or the source options) give, those that name the
+fields of a line (or, without them, the fields its width implies) and the accelerometer's units, and the ranges a
+line's values must lie in (:mod:`gyrofilter.sources.serial.protocol`, whose module docstring states the protocol)."""
 from __future__ import annotations
 
 import re
 
 import numpy as np
 
-from ...errors import DeviceError
-from ...inputs import parse_number, quote
-from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS, format_number
-from ...units import ACCEL_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2
+from ...errors import DeviceError, SettingsError
+from ...inputs import check_number, parse_number, quote
+from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS, format_number, units_header
+from ...units import (ACCEL_UNITS, GYRO_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps,
+                      check_lsb_per_g, check_sample_rate_hz, to_dps, to_mps2)
 from ..mpu6050.chip import temperature_c
 
 HEADER_PREFIX = b"# gyrofilter-serial:"
@@ -20,6 +21,12 @@ _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
 
 #: the fields a line may hold, in any order given by the header's ``fields=``
 KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp", *ACCEL_COLUMNS)
+
+
+def inferred_fields(width):
+    """The fields of a line of ``width`` values when no header names them: ``counter,gx,gy,gz`` (4) or
+    ``counter,gx,gy,gz,temp`` (5); None for any other width."""
+    return ["counter", *GYRO_COLUMNS] + (["temp"] if width == 5 else []) if width in (4, 5) else None
 
 
 def header_words(line, where):
@@ -41,6 +48,43 @@ def header_words(line, where):
             raise DeviceError(f"{where}: the header gives {key} twice")
         values[key] = value
     return values
+
+
+
+
+def make_units(values, where):
+    """Checked recording-header units from header words (text: DeviceError for a bad value) or source options
+    (numbers: SettingsError), messages naming ``where``."""
+    unit = values.get("gyro_unit")
+    if unit is None:
+        raise SettingsError(f"{where}: gyro unit missing (unit=dps|rad/s|lsb)")
+    if unit not in GYRO_UNITS:
+        raise SettingsError(f"{where}: gyro_unit {quote(unit)} is not one of {', '.join(GYRO_UNITS)}")
+    sample_rate_hz = _positive(values, "sample_rate_hz", where, "rate=HZ")
+    lsb_per_dps = None
+    if unit == "lsb" or values.get("lsb_per_dps") is not None:  # checked whenever given: a header keeps it
+        lsb_per_dps = _positive(values, "lsb_per_dps", where, "gyro_unit lsb needs lsb_per_dps")
+    if unit != "lsb":
+        lsb_per_dps = None
+    return units_header(sample_rate_hz, unit, lsb_per_dps)
+
+
+def _positive(values, key, where, hint):
+    """``values[key]`` (header text or an option's number) as a positive number (a float): a sample rate within
+    :func:`gyrofilter.units.check_sample_rate_hz`'s range, an ``lsb_per_dps`` within
+    :func:`gyrofilter.units.check_lsb_per_dps`'s."""
+    value = values.get(key)
+    if value is None:
+        raise SettingsError(f"{where}: {key} missing ({hint})")
+    what = f"{where}: {key}"
+    error = DeviceError if isinstance(value, str) else SettingsError
+    number = (parse_number(value, what, error=error) if isinstance(value, str)
+              else check_number(value, what, error=error))
+    if key == "sample_rate_hz":
+        number = check_sample_rate_hz(number, what, error)
+    else:
+        number = check_lsb_per_dps(number, what, error)
+    return float(number)
 
 
 def in_range(values, fields, header, temp_raw):

@@ -17,6 +17,7 @@ from ...errors import DeviceError, SourceEnded, one_line
 from ...inputs import check_number
 from ...recording import T_FROM_COUNTER, T_FROM_KEY, T_FROM_LINES
 from ..base import Source
+from .counter import COUNTING_LINES
 from .protocol import LINE_OUTCOMES, LineParser, UnitsConflict
 
 MAX_WAIT_S = 0.1
@@ -132,6 +133,10 @@ class SerialSource(Source):
             return ""
         counts = ", ".join(f"{stats[kind]} {kind.replace('_', ' ')}" for kind in LINE_OUTCOMES if stats.get(kind))
         skipped = next((note for note in self._parser.notes if note.startswith("serial: skipped")), None)
+        waiting = self._parser.waiting_lines
+        if waiting:  # lines of 4 or 5 values without a header: rows once their first value counts over COUNTING_LINES
+            counts += (", " if counts else "") + (f"{waiting} waiting, without a header, until {COUNTING_LINES} "
+                                                  "show their first value counting")
         return f" ({stats['lines']} lines received, none a sample: {counts}{'; ' + skipped if skipped else ''})"
 
     def _receive(self):

@@ -44,13 +44,19 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
 
 Without a header, the units come from the source options (``unit=``, ``lsb_per_dps=``,
 ``rate=``; ``gyrofilter record --gyro-unit ...``) and the first line is discarded, since the
-port may have been opened in the middle of a line.
+port may have been opened in the middle of a line. The fields are then inferred from the width
+(``counter,gx,gy,gz[,temp]``), and the lines wait, no row made, until the first values of the first
+:data:`.counter.COUNTING_LINES` (8) lines count (:func:`.counter.first_value_counts`: integers stepping
+by 1, modulo the wrap, in all steps but one, a loss); else DeviceError, one line naming the values seen
+and the header line that names the fields (``gx,gy,gz,temp`` lines read as ``counter,gx,gy,gz`` made the
+temperature gz and gx a counter "lost" and "restarted": attack pass 37b). A header that comes while they
+wait makes them rows if it names those fields or none, else lines before the header.
 
 The parser splits each chunk of bytes into complete lines and converts them all at once with
 numpy when they are all plain CSV; a chunk with anything else goes through a line-by-line parser
 that counts and skips bad lines (partial lines, garbage bytes, cells that are not plain decimal
-numbers). Nothing in the input makes it raise except an unreadable first header or a header that
-changes the units mid-stream. The rows do not depend on how the bytes are split into chunks.
+numbers). Nothing in the input makes it raise except an unreadable first header, a header that
+changes the units mid-stream, or headerless lines whose first value does not count. The rows do not depend on how the bytes are split into chunks.
 """
 from __future__ import annotations
 
@@ -61,11 +67,13 @@ import warnings
 import numpy as np
 
 from ...errors import DeviceError, SettingsError
-from ...inputs import check_number, is_plain_number, parse_number, quote
-from ...recording import ACCEL_COLUMNS, COLUMNS, GYRO_COLUMNS, PROVENANCE_KEYS, format_number, units_header
-from ...units import GYRO_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps, check_sample_rate_hz
+from ...inputs import is_plain_number, parse_number, quote
+from ...recording import ACCEL_COLUMNS, COLUMNS, PROVENANCE_KEYS, format_number
+from ...units import MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C
 from ..mpu6050.chip import temperature_c
-from .fields import HEADER_PREFIX, accel_units, header_words, in_range, other_keys_note, parse_fields
+from .counter import COUNTING_LINES, first_value_counts, not_counting, out_of_sequence
+from .fields import (HEADER_PREFIX, accel_units, header_words, in_range, inferred_fields, make_units, other_keys_note,
+                     parse_fields)
 
 MAX_LINE_BYTES = 256  # a longer line (bytes before its "\n") is refused
 MAX_DETAILED_NOTES = 20  # bad-line notes per source; later ones are only counted
@@ -139,6 +147,8 @@ class LineParser:
         self._overlong = False  # the bytes up to the next line end belong to a line already refused
         self.header = None
         self.fields = None  # list of names per line once known
+        self._inferred = None  # the fields a line's width implies while its first value has not yet shown it counts
+        self._waiting = []  # those lines' values (:meth:`_made`)
         self._counter_mod = 2 ** DEFAULT_COUNTER_BITS
         self._temp_raw = False
         self.sample_rate_hz = None
@@ -150,47 +160,14 @@ class LineParser:
         self.device_header = None  # the first header the device sent, once it has: the recording's (the port)
         self._changed_headers = 0
         if gyro_unit is not None or sample_rate_hz is not None or lsb_per_dps is not None:
-            self._options = self._make_units({"gyro_unit": gyro_unit, "lsb_per_dps": lsb_per_dps,
-                                               "sample_rate_hz": sample_rate_hz}, "source options")
+            self._options = make_units({"gyro_unit": gyro_unit, "lsb_per_dps": lsb_per_dps, "sample_rate_hz": sample_rate_hz},
+                                        f"{where}: source options")
             self._apply(dict(self._options))
             self._skip_first_line = True
         else:
             self._skip_first_line = False
 
     # ------------------------------------------------------------------ header
-
-    def _make_units(self, values, where):
-        """Checked recording-header units from header words (text: DeviceError for a bad value)
-        or source options (numbers: SettingsError)."""
-        unit = values.get("gyro_unit")
-        if unit is None:
-            raise SettingsError(f"{self.where}: {where}: gyro unit missing (unit=dps|rad/s|lsb)")
-        if unit not in GYRO_UNITS:
-            raise SettingsError(f"{self.where}: {where}: gyro_unit {quote(unit)} is not one of {', '.join(GYRO_UNITS)}")
-        sample_rate_hz = self._positive(values, "sample_rate_hz", where, "rate=HZ")
-        lsb_per_dps = None
-        if unit == "lsb" or values.get("lsb_per_dps") is not None:  # checked whenever given: a header keeps it
-            lsb_per_dps = self._positive(values, "lsb_per_dps", where, "gyro_unit lsb needs lsb_per_dps")
-        if unit != "lsb":
-            lsb_per_dps = None
-        return units_header(sample_rate_hz, unit, lsb_per_dps)
-
-    def _positive(self, values, key, where, hint):
-        """``values[key]`` (header text or an option's number) as a positive number (a float): a
-        sample rate within :func:`gyrofilter.units.check_sample_rate_hz`'s range, an ``lsb_per_dps``
-        within :func:`gyrofilter.units.check_lsb_per_dps`'s."""
-        value = values.get(key)
-        if value is None:
-            raise SettingsError(f"{self.where}: {where}: {key} missing ({hint})")
-        what = f"{self.where}: {where}: {key}"
-        error = DeviceError if isinstance(value, str) else SettingsError
-        number = (parse_number(value, what, error=error) if isinstance(value, str)
-                  else check_number(value, what, error=error))
-        if key == "sample_rate_hz":
-            number = check_sample_rate_hz(number, what, error)
-        else:
-            number = check_lsb_per_dps(number, what, error)
-        return float(number)
 
     def _apply(self, header):
         units = {k: header[k] for k in _UNIT_KEYS if k in header}
@@ -220,7 +197,7 @@ class LineParser:
         where = "header line"
         if "gyro_unit" not in values and self._options is not None:
             values = {**self._options, **values}
-        units = self._make_units(values, where)
+        units = make_units(values, f"{self.where}: {where}")
         if self._options is not None:
             for key, value in self._options.items():
                 if key == "gyro_unit":
@@ -289,7 +266,7 @@ class LineParser:
         from TEMP_OUT with ``temp_unit=mpu6050_raw``), accelerometer as sent (``accel_unit``). Raises only for a header line: DeviceError or
         SettingsError when the first one is unreadable or lacks a unit, :class:`UnitsConflict`
         when one changes the units (its ``rows``: those of the lines before it; and DeviceError when a tiny ``sample_rate_hz`` and the
-        counter's jumps carry ``t`` beyond a float); other lines are counted in :attr:`stats`
+        counter's jumps carry ``t`` beyond a float; DeviceError when lines without a header do not count: :meth:`_made`); other lines are counted in :attr:`stats`
         (the module docstring) and the bad ones noted.
         """
         if self._overlong:  # the tail of a line refused as too long: up to its line end
@@ -320,7 +297,44 @@ class LineParser:
             self._bad(self._buf, "partial_lines", "cut off at the end of the stream")
         self._buf, self._overlong = b"", False
         held, self._held = self._held, None
+        if self.fields is None:
+            return self._made([], final=True)
         return self._rows(held[None, :], final=True) if held is not None else self._empty()
+
+    @property
+    def waiting_lines(self):
+        """Lines received whose fields were inferred from their width, waiting until their first values show
+        they count (:meth:`_made`); no rows until then."""
+        return len(self._waiting)
+
+    def _made(self, pending, final=False):
+        """The rows of ``pending`` lines (values in fields order). While the fields are inferred from a line's
+        width (no header named them), the lines wait until :data:`.counter.COUNTING_LINES` have come (or the
+        stream ended: ``final``) and the first values of those lines count (:func:`.counter.first_value_counts`):
+        else DeviceError (:func:`.counter.not_counting`), before any row is made."""
+        if self.fields is None:
+            self._waiting.extend(pending)
+            if not self._waiting or (len(self._waiting) < COUNTING_LINES and not final):
+                return self._empty()
+            first = [line[0] for line in self._waiting[:COUNTING_LINES]]
+            if not first_value_counts(first, self._counter_mod):
+                self.stats["bad_lines"] += len(self._waiting)
+                raise DeviceError(not_counting(self.where, first, self._inferred))
+            self.fields, pending, self._waiting = self._inferred, self._waiting, []
+        return self._rows(np.array(pending), final=final) if len(pending) else self._empty()
+
+    def _header_named_fields(self):
+        """After a header: the lines waiting (:meth:`_made`) are rows if it named the fields their width implied or
+        none (its default: those), else counted as lines before the header (read with no fields known)."""
+        if not self._waiting:
+            return self._empty()
+        waiting, self._waiting = self._waiting, []
+        if self.fields is None or self.fields == self._inferred:
+            self.fields = self._inferred
+            return self._rows(np.array(waiting))
+        self.stats["lines_before_header"] += len(waiting)
+        self.notes.append(f"serial: {len(waiting)} lines before the header named the fields dropped (fields unknown)")
+        return self._empty()
 
     def _empty(self):
         cols = self.columns
@@ -369,7 +383,7 @@ class LineParser:
                 continue
             if line.startswith(HEADER_PREFIX):
                 if pending:
-                    out.append(self._rows(np.array(pending)))
+                    out.append(self._made(pending))
                     pending = []
                 try:
                     self._header_line(line)
@@ -382,6 +396,7 @@ class LineParser:
                     self._bad(line, "bad_lines", f"unreadable repeated header: {exc}")
                     continue
                 self.stats["headers"] += 1
+                out.append(self._header_named_fields())
                 continue
             if line.startswith(b"#"):
                 self.stats["device_messages"] += 1
@@ -401,15 +416,16 @@ class LineParser:
                 self._refused(line, "bad_lines", "garbage bytes", out, pending)
                 continue
             cells = line.decode("ascii").split(",")  # ASCII: the bytes were checked above
-            if self.fields is None:
-                if len(cells) in (4, 5):
-                    self.fields = ["counter", *GYRO_COLUMNS] + (["temp"] if len(cells) == 5 else [])
-                else:
+            if self.fields is None and self._inferred is None:
+                self._inferred = inferred_fields(len(cells))
+                if self._inferred is None:
                     self._bad(line, "bad_lines", f"{len(cells)} values before the field count is known, expected 4 or 5: "
                                                         "counter,gx,gy,gz[,temp]; without a counter a header names the "
                                                         "fields, e.g. fields=gx,gy,gz")
                     continue
-            nf = len(self.fields)
+            if self.fields is None and self.device_header is not None:  # a header's default (no fields=)
+                self.fields = self._inferred
+            nf = len(self.fields or self._inferred)
             if len(cells) != nf:
                 kind = "partial_lines" if len(cells) < nf else "bad_lines"
                 self._bad(line, kind, f"{len(cells)} values, expected {nf}")
@@ -426,7 +442,8 @@ class LineParser:
                 continue
             pending.append(values)
         if pending:
-            out.append(self._rows(np.array(pending)))
+            out.append(self._made(pending))
+        out = [rows for rows in out if len(rows)]
         if not out:
             return self._empty()
         return np.concatenate(out) if len(out) > 1 else out[0]
@@ -546,36 +563,15 @@ class LineParser:
         return rows
 
     def _out_of_sequence(self, counter, values, final):
-        """The lines to keep of ``counter`` (valid counters, in order): False for a corrupt line, a
-        counter that jumps from the last kept one while the next line's lies between the two (999,
-        1900, 1001; 999, 100, 1001; 999, 1901, 1002 with 1000 lost: a corrupt digit; a real gap or
-        restart goes on from the counter it jumped to; refused, ``bad_lines``), and for the
-        last line when its counter jumps (forwards or back) and ``final`` is False: it is held
-        (``_held``) until the next line tells. Jumps are rare: a loop over them only."""
-        mod, n = self._counter_mod, len(counter)
-        keep = np.ones(n, dtype=bool)
-        before = np.empty(n, dtype=np.int64)
-        before[0] = counter[0] - 1 if self._last_counter is None else self._last_counter
-        before[1:] = counter[:-1]
-        todo = sorted(np.flatnonzero((counter - before) % mod > 1).tolist())
-        while todo:
-            i = todo.pop(0)
-            j = i - 1
-            while j >= 0 and not keep[j]:
-                j -= 1
-            prev = int(counter[j]) if j >= 0 else self._last_counter
-            jump = None if prev is None else (int(counter[i]) - prev) % mod
-            if jump is None or jump <= 1:
-                continue
-            if i + 1 == n:
-                if not final:
-                    keep[i], self._held = False, values[i].copy()
-            elif 0 < (int(counter[i + 1]) - prev) % mod < jump:
-                keep[i] = False
-                self._bad(str(int(counter[i])).encode(), "bad_lines",
-                          f"out of sequence between {prev} and {int(counter[i + 1])}: a corrupt counter", garbage_bytes=0)
-                if i + 1 not in todo:
-                    todo.insert(0, i + 1)
+        """The lines to keep of ``counter`` (valid counters, in order: :func:`.counter.out_of_sequence`): the
+        corrupt ones refused (``bad_lines``), and the last line, when its counter jumps and ``final`` is False,
+        held (``_held``) until the next line tells."""
+        keep, corrupt, last_jumps = out_of_sequence(counter, self._last_counter, self._counter_mod)
+        for i, prev, after in corrupt:
+            self._bad(str(int(counter[i])).encode(), "bad_lines",
+                      f"out of sequence between {prev} and {after}: a corrupt counter", garbage_bytes=0)
+        if last_jumps and not final:
+            keep[-1], self._held = False, values[-1].copy()
         return keep
 
     def _in_range(self, values):
