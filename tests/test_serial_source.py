@@ -247,6 +247,25 @@ def test_lines_that_give_no_sample_before_the_stream_starts_are_named(ends):
     assert "3 values before the field count is known, expected 4 or 5:" in text and "fields=gx,gy,gz" in text
 
 
+def test_a_slow_headerless_counter_waiting_past_the_deadline_is_told_the_timeout_that_lets_it_start():
+    """fix37c: headerless lines make rows once COUNTING_LINES of them count; a device slower than
+    COUNTING_LINES / header_timeout_s reaches the deadline with lines waiting: the refusal names the option that
+    lets it start, and that option does."""
+    from gyrofilter.sources.serial.counter import COUNTING_LINES
+
+    data = b"".join(b"%d,%d,%d,1\n" % (i, i, -i) for i in range(COUNTING_LINES + 1))
+    ticks = iter(range(100))  # one second per read: one line per second
+    slow = type("Slow", (_Port,), {"read": lambda self, n: _Port.read(self, min(n, self.data.index(b"\n") + 1))})
+    with pytest.raises(DeviceError) as info:
+        SerialSource("fake", serial_port=slow(data), gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=1,
+                     header_timeout_s=5, clock=lambda: next(ticks))
+    assert "header_timeout=" in str(info.value) and "waiting" in str(info.value)
+    ticks = iter(range(100))
+    source = SerialSource("fake", serial_port=slow(data), gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=1,
+                          header_timeout_s=2 * COUNTING_LINES, clock=lambda: next(ticks))
+    assert source.sample_rate_hz == 1
+
+
 def test_a_header_changing_the_units_ends_the_source_after_the_rows_before_it():
     """Attack pass 25: the samples that came in one read with a header changing the units were lost."""
     head = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100\n"

@@ -136,7 +136,7 @@ class SerialSource(Source):
         waiting = self._parser.waiting_lines
         if waiting:  # lines of 4 or 5 values without a header: rows once their first value counts over COUNTING_LINES
             counts += (", " if counts else "") + (f"{waiting} waiting, without a header, until {COUNTING_LINES} "
-                                                  "show their first value counting")
+                                                  "show their first value counting; a device this slow: header_timeout=SECONDS")
         return f" ({stats['lines']} lines received, none a sample: {counts}{'; ' + skipped if skipped else ''})"
 
     def _receive(self):
