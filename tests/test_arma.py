@@ -410,3 +410,46 @@ def test_bias_model_of_block_averaged_gauss_markov():
     assert model.tau_s == pytest.approx(tau, rel=0.3)
     assert model.bias_sigma_dps == pytest.approx(sigma_b, rel=0.2)
     assert model.white_noise_dps_per_sqrt_hz * math.sqrt(fs) == pytest.approx(sigma_w, rel=0.15)
+
+
+def _gauss_markov(tau_s, fs, n, seed, white_dps, sigma_dps=1.0):
+    """n samples at fs (Hz) of a stationary Gauss-Markov bias (sigma_dps, tau_s) plus white noise."""
+    from scipy.signal import lfilter
+
+    phi = math.exp(-1 / (fs * tau_s))
+    rng = np.random.default_rng(seed)
+    drive = rng.normal(0, sigma_dps * math.sqrt(1 - phi**2), n)
+    bias = lfilter([1.0], [1.0, -phi], drive, zi=[phi * sigma_dps * rng.normal()])[0]
+    return bias + rng.normal(0, white_dps, n)
+
+
+def test_a_tau_beyond_the_record_is_not_determined_but_its_random_walk_is():
+    # issue 37: 200 samples (0.025 s at 8000 Hz, two correlation times) of a 0.0124-s bias of sigma 1 deg/s;
+    # seed 45's ARMA(1,1) gives tau 0.12 s (5 records) and sigma 3 deg/s; the record determines only
+    # K = sigma sqrt(2 / tau) = 12.7 deg/s/sqrt(s)
+    fs, tau = 8000.0, 0.0124
+    rep = arma.analyze_axis(_gauss_markov(tau, fs, 200, 45, 0.1), fs, max_n=1)
+    b = rep.bias_model
+    assert b.valid and not b.tau_determined and b.record_s == pytest.approx(0.025)
+    assert math.isinf(b.tau_s) and math.isinf(b.bias_sigma_dps)
+    assert b.bias_walk_dps_per_sqrt_s == pytest.approx(math.sqrt(2 / tau), rel=0.2)
+    d = rep.to_dict()["bias_model"]
+    assert d["tau_s"] is None and d["bias_sigma_dps"] is None and d["tau_determined"] is False
+    assert "not determined" in d["note"] and "random walk of K = 12.27 deg/s/sqrt(s)" in d["note"]
+    assert 0 < rep.arma11.phi[0] < 1  # phi itself is kept
+    assert b.discrete(fs)[0] == 1.0  # a filter given this model takes the random walk
+
+
+def test_a_tau_well_inside_the_record_is_unchanged():
+    fs, tau, sigma_b, sigma_w = 100.0, 0.5, 0.05, 0.1
+    x = _gauss_markov(tau, fs, 10_000, 12, sigma_w, sigma_b)
+    fit = arma_fit.fit_arma(x - x.mean(), 1, 1)
+    plain_model = arma.bias_model_from_arma11(fit, fs)
+    model = arma.bias_model_from_arma11(fit, fs, record_s=100.0)
+    assert model.tau_determined and model.record_s == 100.0 and model.note == ""
+    assert (model.tau_s, model.bias_sigma_dps, model.bias_walk_dps_per_sqrt_s) == \
+        (plain_model.tau_s, plain_model.bias_sigma_dps, plain_model.bias_walk_dps_per_sqrt_s)
+    assert model.tau_s == pytest.approx(tau, rel=0.3) and model.bias_sigma_dps == pytest.approx(sigma_b, rel=0.2)
+    # the threshold: 0.2 of the record (identify.TAU_RECORD_FRACTION); 2.5 s is over it, 5 s not
+    assert not arma.bias_model_from_arma11(fit, fs, record_s=model.tau_s / 0.21).tau_determined
+    assert arma.bias_model_from_arma11(fit, fs, record_s=model.tau_s / 0.19).tau_determined

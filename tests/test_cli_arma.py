@@ -193,3 +193,29 @@ def test_the_filters_output_is_analysed_saying_whose_noise_the_model_describes(t
         assert [w[w.index(os.path.basename(path)):][:len(e)] for w in warnings for e in expected] == expected
         assert all(w.endswith("this one describes the filter's output") for w in warnings)
         assert err.count("this one describes the filter's output") == len(expected)
+
+
+def test_cli_says_a_tau_beyond_the_record_is_not_determined(tmp_path, capsys):
+    # issue 37: "Gauss-Markov tau 1.2e6 s, bias sigma 730 deg/s" from 0.025 s of a 0.0124-s bias
+    import math
+
+    from gyrofilter.cli import main
+    from gyrofilter.recording import Recording, write_recording
+
+    fs, tau, n = 8000.0, 0.0124, 200
+    phi = math.exp(-1 / (fs * tau))
+    rng = np.random.default_rng(35)
+    from scipy.signal import lfilter
+
+    bias = lfilter([1.0], [1.0, -phi], rng.normal(0, math.sqrt(1 - phi**2), n), zi=[phi * rng.normal()])[0]
+    gyro = np.column_stack([rng.normal(0, 0.1, n), rng.normal(0, 0.1, n), bias + rng.normal(0, 0.1, n)])
+    path = tmp_path / "gm.csv"
+    write_recording(path, Recording.from_dps(gyro, fs))
+    out = tmp_path / "gm.json"
+    assert main(["arma", str(path), "--axis", "z", "--max-n", "1", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Gauss-Markov tau and bias sigma not determined (the fitted tau is longer than 0.2 x the record, 0.025 s): " \
+           "within it a random walk of K = " in text, text
+    b = json.loads(out.read_text())["axes"]["z"]["bias_model"]
+    assert b["tau_s"] is None and b["bias_sigma_dps"] is None and b["tau_determined"] is False
+    assert b["bias_walk_dps_per_sqrt_s"] == pytest.approx(math.sqrt(2 / tau), rel=0.3)

@@ -272,6 +272,7 @@ def report(results, n_seeds):
         a11 = d["arma11"]
         if b["valid"]:
             tau = "inf" if b["tau_s"] is None else f"{b['tau_s']:.0f} s"
+            tau = tau if b.get("tau_determined", True) else f"not determined (> {arma.TAU_RECORD_FRACTION:g} x {b['record_s']:.0f} s)"
             bm = f"tau {tau}, drive {b['bias_walk_dps_per_sqrt_s']:.2g} deg/s/sqrt(s)"
         else:
             bm = "none (theta > phi or phi < 0: white noise)"

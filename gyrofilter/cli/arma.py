@@ -175,7 +175,10 @@ def _print_axis(rep, alpha):
     print(f"  residuals: {w.outside_band} of {len(w.lags)} ACF lags outside +-{w.band:.4f}; Ljung-Box Q({w.ljung_box_lag}) = "
           f"{w.ljung_box_q:.1f}, p = {w.ljung_box_p_value:.3g} -> {'white' if w.white else 'not white'}")
     b = rep.bias_model
-    if b.valid:
+    if b.valid and not b.tau_determined:
+        print(f"  bias model from ARMA(1,1) (phi {rep.arma11.phi[0]:.6f}): {b.note}; "
+              f"white noise {b.white_noise_dps_per_sqrt_hz:.4g} deg/s/sqrt(Hz)")
+    elif b.valid:
         tau = "inf (random walk)" if math.isinf(b.tau_s) else f"{b.tau_s:.4g} s"
         sigma = "-" if math.isinf(b.bias_sigma_dps) else f"{b.bias_sigma_dps:.4g} deg/s"
         print(f"  bias model from ARMA(1,1): Gauss-Markov tau {tau}, bias sigma {sigma}, drive {b.bias_walk_dps_per_sqrt_s:.4g} deg/s/sqrt(s); "

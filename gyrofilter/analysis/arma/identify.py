@@ -49,7 +49,9 @@ phi b_{t-1} + eta_t plus white noise w_t, with (matching lag-0 and lag-1 autocov
     sigma_w^2 = theta sigma_a^2 / phi,   sigma_eta^2 = sigma_a^2 (1 + theta^2) - sigma_w^2 (1 + phi^2)
 
 so tau = -dt / ln(phi), bias sigma = sigma_eta / sqrt(1 - phi^2); for phi -> 1 the bias is a
-random walk with K = sigma_eta sqrt(fs). Block means of L samples (phi_L the ARMA's phi, phi =
+random walk with K = sigma_eta sqrt(fs). A tau longer than a fraction of the record
+(:data:`TAU_RECORD_FRACTION`) is not determined by it: the record holds the random walk K =
+sigma sqrt(2 / tau), not sigma and tau apart (:func:`bias_model_within_record`). Block means of L samples (phi_L the ARMA's phi, phi =
 phi_L^(1/L) per sample, S = sum_{m<L} phi^m) have the autocovariances of the ARMA(1, 1),
 gamma_0 = sigma_a^2 (1 - 2 phi_L theta + theta^2) / (1 - phi_L^2) and gamma_1 = sigma_a^2 (1 - phi_L theta)
 (phi_L - theta) / (1 - phi_L^2), where the bias gives gamma_1 = sigma_b^2 phi S^2 / L^2 and gamma_0 =
@@ -65,7 +67,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -88,6 +90,14 @@ MAX_SAMPLES_RANGE = (2 * MIN_SAMPLES, 10**8)
 DEFAULT_MAX_N = 4  # up to ARMA(8, 7)
 CRITERIA = ("f", "aic", "bic")
 DEFAULT_CRITERION = "bic"  # see select_order for why not the paper's F rule
+#: a fitted Gauss-Markov tau longer than this fraction of the record is not determined by it
+#: (:func:`bias_model_within_record`). Measured (Gauss-Markov + white noise of 0, 0.3 and 1 bias
+#: sigma, N = 200 and 4000, 5 seeds, ARMA(1, 1) of the mean-removed record): for T / tau >= 10
+#: the fitted tau is at most 0.16 T (median tau_hat / tau 0.85-1.0); for T / tau <= 5 it stops
+#: tracking (median 0.7 at 5, 0.35 at 2, 0.02 at 0.1) and saturates at 0.04-0.5 T (up to 1.25 T
+#: and phi = 1 at N = 200) whatever the true tau: a tau_hat above T / 5 came only from records
+#: with T / tau <= 5.
+TAU_RECORD_FRACTION = 0.2
 
 
 # ---------------------------------------------------------------------------------------------
@@ -112,6 +122,10 @@ class BiasModel:
     Rate-independent: the same numbers describe the series at any sample rate.
     ``tau_s`` is ``inf`` when phi >= 1 (random walk, then ``bias_walk_dps_per_sqrt_s`` holds K).
     ``valid`` is False when the ARMA(1, 1) has no such decomposition (theta <= 0 or theta > phi).
+    ``tau_determined`` is False when the fitted tau is longer than :data:`TAU_RECORD_FRACTION` of
+    the record (``record_s``, s; None: not compared, :func:`bias_model_within_record`): then
+    ``tau_s`` and ``bias_sigma_dps`` are ``inf`` (``null`` in JSON) and the bias is, within the
+    record, the random walk ``bias_walk_dps_per_sqrt_s``.
     """
 
     tau_s: float
@@ -120,6 +134,8 @@ class BiasModel:
     white_noise_dps_per_sqrt_hz: float  # angle random walk N of the white part
     valid: bool
     note: str = ""
+    tau_determined: bool = True
+    record_s: float | None = None  # the record's length the fitted tau was compared with (s)
 
     def discrete(self, sample_rate_hz):
         """(phi, sigma_eta_dps, sigma_w_dps) of the bias model at ``sample_rate_hz``.
@@ -326,10 +342,33 @@ def select_order(x, *, max_n=DEFAULT_MAX_N, alpha=DEFAULT_ALPHA, reduce=True, cr
     return chosen, adequate.order, list(fits.values()), steps
 
 
-def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz, block=1) -> BiasModel:
+def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz, block=1, record_s=None) -> BiasModel:
     """Gauss-Markov bias + white noise equivalent to the ARMA(1, 1) ``fit`` (module docstring) of a
     series at ``sample_rate_hz`` (Hz) whose every value is the mean of ``block`` samples of the
-    sensor (the analysis's block averaging; 1: the samples themselves)."""
+    sensor (the analysis's block averaging; 1: the samples themselves). ``record_s``: the record's
+    length (s), for :func:`bias_model_within_record`; None: tau is not compared with it."""
+    return bias_model_within_record(_decomposed(fit, sample_rate_hz, block), record_s)
+
+
+def bias_model_within_record(model: BiasModel, record_s) -> BiasModel:
+    """``model`` with its tau and bias sigma "not determined" (``inf``, ``tau_determined`` False)
+    when its tau exceeds :data:`TAU_RECORD_FRACTION` of the record's ``record_s`` (s; None: ``model``
+    as it is). Such a bias is, within the record, a random walk: for b_{k+1} = phi b_k + eta_k,
+    var(eta) = sigma^2 (1 - phi^2), and as phi -> 1 (tau >> T) sigma^2 (1 - phi^2) -> 2 sigma^2 dt
+    / tau while neither sigma nor tau alone shows in T; the record determines the increment, K =
+    sqrt(var(eta) / dt) = sigma sqrt(2 / tau) (``bias_walk_dps_per_sqrt_s``, kept)."""
+    if record_s is None or not model.valid:
+        return model
+    record_s = float(record_s)
+    if model.tau_s <= TAU_RECORD_FRACTION * record_s:
+        return replace(model, record_s=record_s)
+    note = (f"Gauss-Markov tau and bias sigma not determined (the fitted tau is longer than {TAU_RECORD_FRACTION:g} x the "
+            f"record, {record_s:.4g} s): within it a random walk of K = {model.bias_walk_dps_per_sqrt_s:.4g} deg/s/sqrt(s)")
+    return replace(model, tau_s=math.inf, bias_sigma_dps=math.inf, tau_determined=False, record_s=record_s, note=note)
+
+
+def _decomposed(fit: ArmaFit, sample_rate_hz, block) -> BiasModel:
+    """:func:`bias_model_from_arma11` before the record's length is considered."""
     if fit.order != (1, 1):
         raise SettingsError(f"bias model needs an ARMA(1, 1) fit, got ARMA{fit.order}")
     phi, theta = fit.phi[0], fit.theta[0]
@@ -438,7 +477,7 @@ def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_ma
     if not any(f is arma11 for f in fits):
         fits.append(arma11)
     white = whiteness(chosen.residuals, chosen.n_params, lags=lags, alpha=alpha)
-    bias = bias_model_from_arma11(arma11, rate, block=k)
+    bias = bias_model_from_arma11(arma11, rate, block=k, record_s=len(x_raw) / float(sample_rate_hz))
     if not bias.valid:
         notes.append(bias.note)
     elif bias.tau_s < 10.0 / rate:
