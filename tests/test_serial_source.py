@@ -266,6 +266,27 @@ def test_a_slow_headerless_counter_waiting_past_the_deadline_is_told_the_timeout
     assert source.sample_rate_hz == 1
 
 
+def test_a_headerless_counter_that_disconnects_before_the_counting_lines_keeps_its_samples():
+    """Attack pass 37c: a device without a header that sent fewer than COUNTING_LINES lines of
+    counter,gx,gy,gz and went away had them counted as samples at the disconnect (its first values count) but
+    refused: "before the stream started (6 lines received, none a sample: 5 samples, ...)", exit 2, no file.
+    They are rows, then the end: "... after 5 samples; everything received is kept"."""
+    data = b"".join(b"%d,%d,%d,1\n" % (100 + i, 10 * i, -i) for i in range(6))
+
+    class Gone(_Port):
+        def read(self, n):
+            if not self.data:
+                raise OSError("device reports readiness to read but returned no data")
+            return super().read(n)
+
+    source = SerialSource("fake", serial_port=Gone(data), gyro_unit="dps", sample_rate_hz=100, header_timeout_s=5)
+    rows = source.read()
+    np.testing.assert_array_equal(rows[:, 1], [10, 20, 30, 40, 50])  # the first line dropped (the port may open mid-line)
+    np.testing.assert_allclose(rows[:, 0], np.arange(5) / 100)  # t from the first counter kept
+    with pytest.raises(SourceEnded, match="after 5 samples; everything received is kept"):
+        source.read()
+
+
 def test_a_header_changing_the_units_ends_the_source_after_the_rows_before_it():
     """Attack pass 25: the samples that came in one read with a header changing the units were lost."""
     head = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100\n"

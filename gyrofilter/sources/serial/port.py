@@ -97,6 +97,8 @@ class SerialSource(Source):
                         raise self._conflict
                     break
                 if self._ended is not None:
+                    if self._pending:  # headerless lines that counted at the end (fewer than COUNTING_LINES): read()
+                        break
                     raise DeviceError(f"{self.port_name}: {self._ended} before the stream started{self._no_sample()}")
                 if clock() > deadline:
                     if self._parser.header is None:
