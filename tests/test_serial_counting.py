@@ -44,6 +44,21 @@ def test_headerless_gx_gy_gz_temp_lines_are_refused_naming_the_header_that_names
     assert parser.stats["samples"] == 0
 
 
+def test_a_millis_time_stamp_first_is_told_the_fields_a_header_may_name_and_one_line_is_not_called_not_counting():
+    """Attack pass 37c: a `millis,gx,gy,gz` device was told to send a header naming its fields, which no header can
+    (no time stamp field); a single line then an end was said "does not count" (one value shows nothing)."""
+    parser = LineParser(**OPTIONS)
+    with pytest.raises(DeviceError) as info:
+        parser.feed(b"".join(b"%d,1,2,3\n" % (1000 + 10 * i) for i in range(20)))
+    assert "the fields a header may name: counter, gx, gy, gz, temp, ax, ay, az" in str(info.value)
+    parser = LineParser(**OPTIONS)
+    parser.feed(b"cut line\n10,1,2,3\n")
+    with pytest.raises(DeviceError) as info:
+        parser.finish()
+    assert "ended after one line (10 first): one value cannot show a counter counting" in str(info.value)
+    assert "does not count" not in str(info.value)
+
+
 @pytest.mark.parametrize("temp", [False, True])
 @pytest.mark.parametrize("jump_at", [None, 1, 3, 7])
 def test_a_headerless_counter_is_accepted_also_with_a_loss_among_its_first_lines(temp, jump_at):

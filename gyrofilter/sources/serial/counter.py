@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...recording import format_number
+from .fields import KNOWN_FIELDS
 
 #: lines whose first value must count (:func:`first_value_counts`) before inferred fields make rows
 COUNTING_LINES = 8
@@ -34,10 +35,13 @@ def not_counting(where, first, fields):
     """The refusal of a stream whose lines' ``first`` values do not count (:func:`first_value_counts`) while
     ``fields`` (:func:`.fields.inferred_fields`) were inferred from their width: what was seen and the way through."""
     shown = ", ".join(format_number(v) for v in first[:4]) + (", ..." if len(first) > 4 else "")
-    return (f"{where}: the first value of the lines does not count ({shown}; a counter steps by 1): without a header "
-            f"naming the fields, {len(fields)} values are {','.join(fields)}; a device sending other fields (e.g. "
-            "gx,gy,gz,temp) must send a header line naming them first, `# gyrofilter-serial: 1 fields=gx,gy,gz,temp` "
-            "(with gyro_unit=... sample_rate_hz=... in it, or the units as options)")
+    seen = (f"the first value of the lines does not count ({shown}; a counter steps by 1)" if len(first) > 1 else
+            f"the stream ended after one line ({shown} first): one value cannot show a counter counting")
+    return (f"{where}: {seen}: without a header naming the fields, {len(fields)} values are {','.join(fields)}; a "
+            "device sending other fields (e.g. gx,gy,gz,temp) must send a header line naming them first, "
+            "`# gyrofilter-serial: 1 fields=gx,gy,gz,temp` (with gyro_unit=... sample_rate_hz=... in it, or the units "
+            f"as options; the fields a header may name: {', '.join(KNOWN_FIELDS)}: a time stamp is not one, a device "
+            "sends a sample counter)")
 
 
 def out_of_sequence(counter, last_counter, mod):
