@@ -455,11 +455,10 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     stated scatter is not taken as a reason to narrow the intervals).
     Every statement below uses the scaled ``var_j``: the resolution test, the interval, the bound.
     A term is resolved when ``theta_j - z sd_j > 0`` (z: the normal
-    quantile of ``confidence``); its interval is the test of ``theta_j`` inverted with the variance
-    at each hypothesis (:func:`_interval`: the others' share normal, the term's own a chi-square
-    with ``edf = 2 t^2 / var_own``, Satterthwaite), which stays positive and, where the term's own
-    share dominates, is skewed like the Allan variance itself (scaling by chi2_nu widens it by about
-    sqrt(chi2_nu) on either scale, theta_j or its square root). A term not
+    quantile of ``confidence``); its interval inverts the test of ``theta_j`` with the variance at
+    each hypothesis (:func:`_interval`: the others' share normal, the term's own chi-square), which
+    stays positive, is skewed like the Allan variance where the term's own share dominates, and
+    widens by about sqrt(chi2_nu) with the misfit (either scale, theta_j or its root). A term not
     resolved (fitted to zero, dropped, or within its uncertainty of zero) gets the upper bound of
     :func:`upper_bound` (the test inverted, with the term forced in); a fit that is zero for every
     term has no covariance, hence no bounds.
