@@ -390,3 +390,23 @@ def test_the_f_tests_critical_value_is_finite_at_a_tiny_alpha():
     large = SimpleNamespace(order=(2, 1), n_params=3, n_residuals=5003, rss=0.9)
     assert arma.f_test(small, large, alpha=1e-17).f_critical == pytest.approx(39.452002, rel=1e-6)
     assert arma.f_test(small, large, alpha=0.05).f_critical == pytest.approx(2.9975279, rel=1e-7)
+
+
+def test_bias_model_of_block_averaged_gauss_markov():
+    """Attack pass 36: block means of a Gauss-Markov bias are smoother than a Gauss-Markov sampled at the
+    block rate (their ARMA(1,1) has theta < 0), so the plain decomposition found no bias ("treated as white
+    noise", bias sigma 0); the block length enters the decomposition."""
+    from scipy.signal import lfilter
+
+    fs, tau, sigma_b, sigma_w, block = 100.0, 2.0, 0.05, 0.01, 10
+    phi = math.exp(-1 / (fs * tau))
+    rng = np.random.default_rng(36)
+    n = 60_000
+    x = lfilter([1.0], [1.0, -phi], rng.normal(0, sigma_b * math.sqrt(1 - phi**2), n)) + rng.normal(0, sigma_w, n)
+    series, k, rate, _ = arma.prepare_series(x, fs, max_samples=n // block)
+    assert k == block
+    model = arma.bias_model_from_arma11(arma_fit.fit_arma(series, 1, 1), rate, block=k)
+    assert model.valid
+    assert model.tau_s == pytest.approx(tau, rel=0.3)
+    assert model.bias_sigma_dps == pytest.approx(sigma_b, rel=0.2)
+    assert model.white_noise_dps_per_sqrt_hz * math.sqrt(fs) == pytest.approx(sigma_w, rel=0.15)

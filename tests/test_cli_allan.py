@@ -147,6 +147,18 @@ def test_confidence_at_the_ends_of_its_range_gives_finite_intervals(static_recor
     assert all(0 < lo < hi for lo, hi in zip(z["adev_low_dps"], z["adev_high_dps"]))
 
 
+@pytest.mark.parametrize("confidence, label", [("0.9999", "99.99%"), ("0.683", "68.3%")])
+def test_the_confidence_is_named_as_given(static_recording, tmp_path, capsys, confidence, label):
+    """Attack pass 36: --confidence 0.9999 was labelled a "100% interval" (rounded to a whole percent) on
+    stdout, in the warnings and the JSON's descriptions; 0.683 a 68% one."""
+    path, _ = static_recording
+    out = tmp_path / "c.json"
+    assert main(["allan", path, "--axes", "z", "--confidence", confidence, "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert f"[{label} interval]" in printed and "100%" not in printed
+    assert json.loads(out.read_text())["method"]["interval"].startswith(f"{label} two-sided")
+
+
 @pytest.mark.parametrize("confidence", ["0.4999", "0.99991", "0.9999999999999999", "0", "1"])
 def test_confidence_outside_its_range_is_one_line_naming_the_range(static_recording, capsys, confidence):
     """0.9999999999999999 passed the check (0, 1) and failed inside the intervals with a message of

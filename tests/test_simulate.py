@@ -225,8 +225,18 @@ def test_a_frequency_past_nyquist_warns_that_it_aliases(effect, reach):
     assert warnings == [f"model: axes.x.effects[0] ({effect['effect']}): {reach} is above the Nyquist frequency 50 Hz "
                         "and will alias"]
     key = {"sinusoid": "frequency_hz", "wandering_tone": "spread_hz", "narrowband": "bandwidth_hz"}[effect["effect"]]
-    below = dict(effect, **{key: {"sinusoid": 50.0, "wandering_tone": 13.0, "narrowband": 10.0}[effect["effect"]]})
+    below = dict(effect, **{key: {"sinusoid": 49.99, "wandering_tone": 13.0, "narrowband": 10.0}[effect["effect"]]})
     assert validate_model(model([below], axes="x", fs=100.0))[1] == []
+
+
+@pytest.mark.parametrize("phase_rad, peak", [(0.0, "0"), (0.5236, "0.05")])
+def test_a_sinusoid_at_nyquist_says_what_its_samples_hold(phase_rad, peak):
+    """Attack pass 36: a sinusoid at exactly f_s / 2 (1 deg/s at 50 Hz, 100 Hz) samples A sin(phase) (-1)^n:
+    at the default phase 0 every sample was 0, the effect gone without a word (only above it warned)."""
+    effect = {"effect": "sinusoid", "frequency_hz": 50.0, "amplitude_dps": 0.1, "phase_rad": phase_rad}
+    _, warnings = validate_model(model([effect], axes="x", fs=100.0))
+    assert warnings == ["model: axes.x.effects[0] (sinusoid): frequency_hz 50 Hz is the Nyquist frequency: its samples "
+                        f"are amplitude_dps sin(phase_rad) (-1)^n, {peak} deg/s peak, not 0.1"]
 
 
 @pytest.mark.parametrize("duration", [0.0, -1.0, float("nan"), 1e308, 1e10])

@@ -14,7 +14,7 @@ Output files are written only once every result is finite, each whole or not at 
 """
 
 from ..effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
-from ..analysis.noise.allan import MAX_CONFIDENCE, MIN_CLUSTERS, AllanInputError, ConstantAxisError
+from ..analysis.noise.allan import MAX_CONFIDENCE, MIN_CLUSTERS, AllanInputError, ConstantAxisError, confidence_text
 from ..analysis.fleet.work import FleetSettings
 from ..analysis.noise.export import kalibr_yaml, to_json
 from ..analysis.noise.kalibr import DEFAULT_TAU_RANGE_S, check_tau_range_s, kalibr_sensor
@@ -179,7 +179,7 @@ def print_coefficients(results, terms, confidence, min_clusters):
         print(f"  axis {a}:")
         if r.fit_reduced_chi2 is not None:
             print(f"    {misfit_text(r)}")
-        print(f"    {'':<16}{'fit [' + format(confidence, '.0%') + ' interval]':<32}{'= customary unit':<25}slope read-off")
+        print(f"    {'':<16}{'fit [' + confidence_text(confidence) + ' interval]':<32}{'= customary unit':<25}slope read-off")
         for t in TERMS:
             c, ro = r.fitted[t], r.readoff[t]
             base, cust = terms.term_unit[t], terms.customary_unit[t]
@@ -232,7 +232,7 @@ def run(args):
     console.tell(f"recording: {args.recording}")
     print(f"  {head.rows} samples at {sample_rate_hz:g} Hz ({duration_s:.1f} s); unit {head.gyro_unit}; "
           f"taus {results[axes[0]].tau_s[0]:g} .. {results[axes[0]].tau_s[-1]:g} s")
-    console.paragraph(f"coefficients: weighted NNLS fit of the five-term Allan model, value [{args.confidence:.0%} interval], and "
+    console.paragraph(f"coefficients: weighted NNLS fit of the five-term Allan model, value [{confidence_text(args.confidence)} interval], and "
          "its customary unit; slope read-off: the slope method of papers 000/002, another estimator, for "
          "comparison: the curve at one tau, which every term adds to, so an upper estimate of its term "
          "(<: not resolved, at most; -: not resolved; every interval: --json)", "  ")

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import CalibrationError, SettingsError
 from ..files import write_text_whole
-from ..inputs import check_number, load_json, quote
+from ..inputs import check_number, load_json, python_value, quote
 from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, shown
 from .samples import as_numbers
 
@@ -195,10 +195,10 @@ def implausible_bias(axis, mean_dps, *, max_bias_dps=MAX_BIAS_DPS, unit=None):
 
 def max_bias_needed(bias_dps):
     """The value of the filter's setting ``max_bias_dps`` that takes the bias ``bias_dps`` on every axis,
-    ceil(max |b|) (deg/s); None when ``bias_dps`` is not 3 finite numbers (not bools) that such a
+    ceil(max |b|) (deg/s); None when ``bias_dps`` is not 3 finite numbers (not bools; numpy numbers as
+    the numbers they hold, :func:`~gyrofilter.inputs.python_value`) that such a
     setting takes (|b| <= MAX_BIAS_RANGE's high), so no way through is offered."""
-    if isinstance(bias_dps, np.ndarray):
-        bias_dps = bias_dps.tolist()
+    bias_dps = python_value(bias_dps.tolist() if isinstance(bias_dps, np.ndarray) else bias_dps)  # numpy numbers too
     if (not isinstance(bias_dps, (list, tuple)) or len(bias_dps) != len(AXES)
             or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bias_dps)):
         return None

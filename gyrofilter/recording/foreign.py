@@ -172,8 +172,8 @@ def _pick(names, path, columns, time_unit, unit):
         time = _time_column(normal, gyro)
     stated = columns_stated(path, "rate", [u for i in gyro for u in _name_units(normal[i], GYRO_NAME, "rate")], unit,
                             "the gyro columns state")
-    whose, units = f"the time column {quote(names[time]) if time is not None else ''} states", [None]
-    units = units if time is None else _name_units(normal[time], TIME_NAME, "time")
+    whose = f"the time column {quote(names[time]) if time is not None else ''} states"
+    units = [None] if time is None else _name_units(normal[time], TIME_NAME, "time")
     unit = given_unit(path, "--time-unit", time_unit, columns_stated(path, "time", units, time_unit, whose), whose, "time")
     if unit is not None and unit not in TIME_UNITS:  # stated, not guessed over: "time (min)" read as s is 60 x the rate
         raise unread_unit(path, f"the time column {quote(names[time])} states", unit, "--time-unit", ", ".join(TIME_UNITS))
@@ -228,7 +228,7 @@ def _gyro_column(normal, names, axis, path):
 def _time_column(normal, gyro):
     """The time column: the first whose name states its unit, else the first named like a time; None without one."""
     candidates = [i for i, (key, _) in enumerate(normal) if i not in gyro and TIME_NAME.fullmatch(key)]
-    stated = [i for i in candidates if set(TIME_UNITS) >= set(_name_units(normal[i], TIME_NAME, "time")) - {None} != set()]
+    stated = [i for i in candidates if (units := {*_name_units(normal[i], TIME_NAME, "time")} - {None}) and units <= set(TIME_UNITS)]
     return (stated or candidates or [None])[0]
 
 

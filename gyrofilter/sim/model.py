@@ -404,6 +404,10 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
         what = _HIGHEST_FREQUENCY[name][1] + (" + excursion_hz" if out.get("excursion_hz") else "")
         warnings.append(f"model: {label}: {what} {top_hz:g} Hz is above the Nyquist frequency "
                         f"{rate / 2.0:g} Hz and will alias")
+    elif name == SINUSOID and rate is not None and top_hz == rate / 2.0:  # sin(pi n + phi) = (-1)^n sin(phi)
+        peak = abs(out["amplitude_dps"] * math.sin(out["phase_rad"]))
+        warnings.append(f"model: {label}: frequency_hz {top_hz:g} Hz is the Nyquist frequency: its samples are "
+                        f"amplitude_dps sin(phase_rad) (-1)^n, {peak:.3g} deg/s peak, not {out['amplitude_dps']:g}")
     if name in (NARROWBAND, WANDERING_TONE) + RESONATORS and rate is not None:
         if out["center_hz"] >= rate / 2.0:
             _err(f"{label}.center_hz", f"expected a frequency below the Nyquist frequency {rate / 2.0:g} Hz, "

@@ -35,9 +35,11 @@ order search, the bias model and the whole procedure for one axis (:func:`analyz
 Long series: CSS costs O(N) per evaluation, so a 10-minute 100 Hz log (65 000 samples) is fitted
 at full rate in about a second. Series longer than ``max_samples`` are block-averaged by the
 smallest integer factor k that brings them under the limit, and every result says so
-(``decimation``, ``analysis_rate_hz``). Block averaging keeps the bias model's physical
-parameters (correlation time, bias sigma, white-noise density) but not the per-sample
-ARMA coefficients: those belong to the analysis rate.
+(``decimation``, ``analysis_rate_hz``). The per-sample ARMA coefficients belong to the
+analysis rate; the bias model's physical parameters (correlation time, bias sigma, white-noise
+density) are those of the sensor's samples: the decomposition below takes the block length L
+into account (block means of a Gauss-Markov bias are smoother than the bias sampled at the block
+rate, an ARMA(1, 1) with theta < 0 that the plain decomposition would call white noise).
 
 The ARMA(1, 1) also maps onto the bias model a Kalman filter needs: ARMA(1, 1) with
 0 < theta <= phi < 1 has the autocovariances of a first-order Gauss-Markov bias b_t =
@@ -47,7 +49,12 @@ phi b_{t-1} + eta_t plus white noise w_t, with (matching lag-0 and lag-1 autocov
     sigma_w^2 = theta sigma_a^2 / phi,   sigma_eta^2 = sigma_a^2 (1 + theta^2) - sigma_w^2 (1 + phi^2)
 
 so tau = -dt / ln(phi), bias sigma = sigma_eta / sqrt(1 - phi^2); for phi -> 1 the bias is a
-random walk with K = sigma_eta sqrt(fs). Paper 003's x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}
+random walk with K = sigma_eta sqrt(fs). Block means of L samples (phi_L the ARMA's phi, phi =
+phi_L^(1/L) per sample, S = sum_{m<L} phi^m) have the autocovariances of the ARMA(1, 1),
+gamma_0 = sigma_a^2 (1 - 2 phi_L theta + theta^2) / (1 - phi_L^2) and gamma_1 = sigma_a^2 (1 - phi_L theta)
+(phi_L - theta) / (1 - phi_L^2), where the bias gives gamma_1 = sigma_b^2 phi S^2 / L^2 and gamma_0 =
+sigma_b^2 (L + 2 sum_{m=1}^{L-1} (L - m) phi^m) / L^2 plus sigma_w^2 / L (Box-Jenkins' autocovariances of
+an ARMA(1, 1); the block sums of an AR(1)): solved for sigma_b^2 and sigma_w^2 (L = 1: the equations above). Paper 003's x_t - 1.0000 x_{t-1} = a_t - 0.9994 a_{t-1}
 is that limit: sigma_eta = (1 - theta) sigma_a = 0.0006 sigma_a per sample.
 
 statsmodels is the optional ``stats`` extra (``pip install "gyrofilter[stats]"``,
@@ -319,13 +326,17 @@ def select_order(x, *, max_n=DEFAULT_MAX_N, alpha=DEFAULT_ALPHA, reduce=True, cr
     return chosen, adequate.order, list(fits.values()), steps
 
 
-def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz) -> BiasModel:
-    """Gauss-Markov bias + white noise equivalent to the ARMA(1, 1) ``fit`` (module docstring), at ``sample_rate_hz`` (Hz)."""
+def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz, block=1) -> BiasModel:
+    """Gauss-Markov bias + white noise equivalent to the ARMA(1, 1) ``fit`` (module docstring) of a
+    series at ``sample_rate_hz`` (Hz) whose every value is the mean of ``block`` samples of the
+    sensor (the analysis's block averaging; 1: the samples themselves)."""
     if fit.order != (1, 1):
         raise SettingsError(f"bias model needs an ARMA(1, 1) fit, got ARMA{fit.order}")
     phi, theta = fit.phi[0], fit.theta[0]
     s2a = fit.sigma_a**2
     sample_rate_hz = float(sample_rate_hz)
+    if block > 1 and 0 < phi < 1.0 - 1e-12:
+        return _block_bias_model(phi, theta, s2a, sample_rate_hz, int(block))
     if not (phi > 0 and 0 < theta <= phi):
         return BiasModel(math.inf, 0.0, 0.0, fit.sigma_a / math.sqrt(sample_rate_hz), False,
                          f"phi={phi:.6f}, theta={theta:.6f}: no Gauss-Markov + white decomposition (needs 0 < theta <= phi); treated as white noise")
@@ -337,6 +348,26 @@ def bias_model_from_arma11(fit: ArmaFit, sample_rate_hz) -> BiasModel:
         return BiasModel(math.inf, math.inf, walk, arw, True, "phi = 1: random-walk bias")
     tau = -1.0 / (sample_rate_hz * math.log(phi))
     return BiasModel(tau, math.sqrt(s2eta / (1 - phi * phi)), walk, arw, True, "")
+
+
+def _block_bias_model(phi_block, theta, s2a, sample_rate_hz, block):
+    """:func:`bias_model_from_arma11` of means of ``block`` samples (0 < ``phi_block`` < 1; module docstring)."""
+    gamma0 = s2a * (1 - 2 * phi_block * theta + theta * theta) / (1 - phi_block**2)
+    gamma1 = s2a * (1 - phi_block * theta) * (phi_block - theta) / (1 - phi_block**2)
+    phi = phi_block ** (1.0 / block)
+    powers = phi ** np.arange(block)
+    lag1 = phi * powers.sum() ** 2 / block**2  # gamma_1 of the block means per unit bias variance
+    lag0 = (block + 2 * np.sum((block - np.arange(1, block)) * powers[1:])) / block**2
+    s2b = gamma1 / lag1
+    s2w = block * (gamma0 - s2b * lag0)  # per sample of the sensor
+    fs = sample_rate_hz * block
+    arw = math.sqrt(max(s2w, 0.0) / fs)
+    if not (gamma1 >= 0 and s2w > 0):
+        return BiasModel(math.inf, 0.0, 0.0, math.sqrt(s2a / sample_rate_hz), False,
+                         f"phi={phi_block:.6f}, theta={theta:.6f} of means of {block} samples: no Gauss-Markov + white "
+                         "decomposition (the white part's variance would be <= 0 or the bias's < 0); treated as white noise")
+    tau = -1.0 / (fs * math.log(phi))
+    return BiasModel(tau, math.sqrt(s2b), math.sqrt(s2b * (1 - phi * phi) * fs), arw, True, "")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -407,7 +438,7 @@ def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_ma
     if not any(f is arma11 for f in fits):
         fits.append(arma11)
     white = whiteness(chosen.residuals, chosen.n_params, lags=lags, alpha=alpha)
-    bias = bias_model_from_arma11(arma11, rate)
+    bias = bias_model_from_arma11(arma11, rate, block=k)
     if not bias.valid:
         notes.append(bias.note)
     elif bias.tau_s < 10.0 / rate:

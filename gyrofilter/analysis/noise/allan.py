@@ -355,6 +355,12 @@ def check_confidence(confidence, what="confidence"):
         raise SettingsError(f"{what} must be in (0, {MAX_CONFIDENCE:g}] (e.g. 0.95), got {plain(confidence)}") from None
 
 
+def confidence_text(confidence):
+    """A confidence as the percent it is, to its last given digit: 0.95 -> '95%', 0.9999 -> '99.99%'
+    (a whole percent named 0.9999 a 100% interval); the one text of a confidence of the Allan intervals."""
+    return f"{100.0 * float(confidence):.6g}%"
+
+
 def chi2_interval(avar, edf, confidence=0.95):
     """Two-sided interval for the Allan *variance* (NIST SP 1065 eq. 41, p. 42)::
 

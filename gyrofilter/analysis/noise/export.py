@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
+from .allan import confidence_text
 from .kalibr import ACCELEROMETER, DEFAULT_TAU_RANGE_S, GYROSCOPE, KalibrValues, kalibr_sensor, plain_values
 from .model import (ACCELEROMETER_TERMS, ANGLE_RANDOM_WALK, GYROSCOPE_TERMS, QUANTIZATION, TERMS, TERM_SYMBOL, AxisNoise,
                     Coefficient, convert)
@@ -86,13 +87,13 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
         "deviation": "overlapping Allan deviation of the rate in deg/s (NIST SP 1065 eq. 11)",
         "coefficients": "weighted non-negative least squares of sigma^2 = 3Q^2/tau^2 + N^2/tau + "
                         "(2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2 over taus with >= 9 clusters",
-        "interval": f"{any_axis.confidence:.0%} two-sided: the test of c^2 inverted with var(c^2) at each "
+        "interval": f"{confidence_text(any_axis.confidence)} two-sided: the test of c^2 inverted with var(c^2) at each "
                     "value (the others' share normal, c's own chi-square with edf = 2 c^2 / var_own), "
                     "var from cov = G C G' of the linear fit (C: Allan-variance covariance from the NIST SP "
                     "1065 Table 5 EDFs and the Allan transfer function), times the fit's reduced chi-square "
                     "where it exceeds 1 (fit_reduced_chi2: the misfit widens every interval and bound by "
                     "its square root); low/high bound the value",
-        "curve_interval": f"adev_low_dps/adev_high_dps: {any_axis.confidence:.0%} chi-square interval of each "
+        "curve_interval": f"adev_low_dps/adev_high_dps: {confidence_text(any_axis.confidence)} chi-square interval of each "
                           "point (NIST SP 1065 eq. 41, EDF for the fitted noise mixture); paper000_relative_error: "
                           "1/sqrt(2 (N/m - 1))",
         "null": "not resolved by the data (fitted to zero, or within its uncertainty of zero; then dropped "
@@ -169,7 +170,7 @@ def _sensor_lines(k: KalibrValues, confidence):
                      f"{' (upper bound: K not resolved)' if v['random_walk_is_upper_bound'] else ''}")
     f_nd, f_rw = k.factors()
     touch = ", ".join(f"{t:.3g}" for t in b.touch_tau_s)
-    upper = "" if b.upper_ratio is None else f", at least {b.upper_ratio:.3g}x its {confidence:.0%} upper confidence bound"
+    upper = "" if b.upper_ratio is None else f", at least {b.upper_ratio:.3g}x its {confidence_text(confidence)} upper confidence bound"
     lines += [f"# {name}, plain (largest over the axes): noise_density {_e(k.plain[0])}, random_walk {_e(k.plain[1])}",
               f"# {name}, bounding pair over tau {k.tau_range_s[0]:g} .. {k.tau_range_s[1]:g} s ({len(b.tau_s)} taus): "
               f"its model lies at {b.least:.3g} .. {b.excess:.3g}x the largest",

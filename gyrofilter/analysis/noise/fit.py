@@ -37,7 +37,7 @@ import itertools
 
 import numpy as np
 
-from .allan import (MIN_CLUSTERS, AllanInputError, check_confidence, chi2_interval, cluster_sizes, edf_mixture, rate_numbers, edf_oavar,
+from .allan import (MIN_CLUSTERS, AllanInputError, check_confidence, chi2_interval, confidence_text, cluster_sizes, edf_mixture, rate_numbers, edf_oavar,
                     refuse_constant, n_clusters, overlapping_adev, simple_interval)
 from .intervals import fitted_intervals
 from .model import TERM_ALPHA, TERMS, AxisNoise, basis, sensor_terms, term_shares
@@ -218,7 +218,7 @@ def characterise_axis(x_dps, sample_rate_hz, *, taus_s=None, min_clusters=MIN_CL
                     fit_dof=dof, warnings=warnings)
     if res.full_fit_consistency() < MIN_FULL_FIT_CONSISTENCY:
         res.warnings.append(
-            f"axis {axis}: the five-term model (every term fitted) lies outside the {confidence:.0%} "
+            f"axis {axis}: the five-term model (every term fitted) lies outside the {confidence_text(confidence)} "
             f"interval at {1 - res.full_fit_consistency():.0%} of the fitted taus: the noise is not just "
             "Q/N/B/K/R" + (" (see `gyrofilter gap`)" if sensor.gap else ""))
     return res

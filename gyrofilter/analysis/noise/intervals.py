@@ -22,7 +22,7 @@ from statistics import NormalDist
 
 import numpy as np
 
-from .allan import chi2_ppf, edf_oavar
+from .allan import chi2_ppf, confidence_text, edf_oavar
 from .model import TERM_ALPHA, TERM_SLOPE, TERM_SYMBOL, TERM_UNIT, TERMS, Coefficient, basis, term_shares
 
 
@@ -524,11 +524,11 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
         c2 = float(theta[j])
         if j in bounds:
             upper = None if bounds[j] is None else math.sqrt(bounds[j]) * root
-            note = (f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the {confidence:.0%} uncertainty "
+            note = (f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the {confidence_text(confidence)} uncertainty "
                     "of zero" if active[j] else
                     f"not resolved: {sym} is not needed to fit the data (fitted to 0 or not significant)")
             if upper is not None:
-                note += f"; {confidence:.0%} upper bound {upper:.3g} {unit}"
+                note += f"; {confidence_text(confidence)} upper bound {upper:.3g} {unit}"
             out[term] = Coefficient(term, None, upper=upper, note=note,
                                     z_score=c2 / points[j][1] if active[j] else None)
             continue
@@ -542,9 +542,9 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
             names = " and ".join(TERM_SYMBOL[t] for t in freed_by)
             out[term] = Coefficient(term, None, upper=upper, z_score=c2 / points[j][1], freed_by=freed_by,
                                     note=f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the "
-                                         f"{confidence:.0%} uncertainty of zero once {names} (not resolved) "
+                                         f"{confidence_text(confidence)} uncertainty of zero once {names} (not resolved) "
                                          f"{'are' if len(freed_by) > 1 else 'is'} free"
-                                         + ("" if upper is None else f"; {confidence:.0%} upper bound {upper:.3g} {unit}"))
+                                         + ("" if upper is None else f"; {confidence_text(confidence)} upper bound {upper:.3g} {unit}"))
             continue
         # the tau where this term's share of the model is largest: where it is read
         share = a[:, j] * c2 / (a @ theta)

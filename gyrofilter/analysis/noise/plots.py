@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ...effects import BIAS_INSTABILITY, RATE_RAMP, RATE_RANDOM_WALK
+from .allan import confidence_text
 from .model import ANGLE_RANDOM_WALK, QUANTIZATION, TERMS, TERM_SLOPE, TERM_SYMBOL, basis
 from ...plots import plain_text, pyplot, save_figure
 
@@ -36,7 +37,7 @@ def allan_figure(plt, results, title=""):
         colour = AXIS_COLOURS.get(name, "k")
         ok = r.n_clusters >= 9
         ax.fill_between(r.tau_s, r.ci_low, r.ci_high, color=colour, alpha=0.2, lw=0,
-                        label=f"{r.confidence:.0%} chi-square interval")
+                        label=f"{confidence_text(r.confidence)} chi-square interval")
         ax.loglog(r.tau_s[ok], r.adev[ok], "o-", ms=3, color=colour, label=f"{name}: overlapping ADEV")
         if np.any(~ok):
             ax.loglog(r.tau_s[~ok], r.adev[~ok], "o", ms=3, mfc="none", color=colour,
