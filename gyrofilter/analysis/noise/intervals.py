@@ -356,9 +356,9 @@ def _interval(a, w, y, terms, j, confidence, cov_of, scale):
     and the two deviations added in quadrature, ``t`` is too high where
     ``h < t - sqrt((t - t chi2_p(nu) / nu)^2 + (z s0)^2)``, too low where
     ``h > t + sqrt((t chi2_(1-p)(nu) / nu - t)^2 + (z s0)^2)``; the interval lies between (bisection).
-    Its low end is 0 where ``t ~ 0`` is not too low: the others' spread with ``theta_j = 0``
-    refitted holds ``h`` though the spread at the estimate does not (Q once in 240 resolved
-    10-min ``white-quant`` axes of ``tools/allan_coverage.py``).
+    None where ``t ~ 0`` is not too low (the low end would be 0): the others' spread with
+    ``theta_j = 0`` refitted holds ``h`` though the spread at the estimate does not; the term is
+    then not resolved (Q on 1 of 88 resolved 10-min ``white-quant`` axes, ``tools/allan_coverage.py``).
 
     The rule before, the chi-square interval with ``edf = 2 theta_j^2 / var_j`` at the estimate,
     is right where the estimate is a scaled chi-square (variance ~ theta_j^2). B's is mostly the
@@ -397,7 +397,7 @@ def _interval(a, w, y, terms, j, confidence, cov_of, scale):
         lo, hi = (lo, mid) if h < mid - ends(mid)[0] else (mid, hi)
     high, lo, hi = hi, 0.0, h
     if not h > _BOUND_TOLERANCE * h + ends(_BOUND_TOLERANCE * h)[1]:  # the others' spread at t ~ 0 holds h
-        return 0.0, high
+        return None
     while hi - lo > _BOUND_TOLERANCE * hi:  # t ~ 0 is too low (h > z s0)
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if h > mid + ends(mid)[1] else (lo, mid)
@@ -459,11 +459,11 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     Introduction, "Unconstrained averaging"); below 1 nothing changes (a fit better than its
     stated scatter is not taken as a reason to narrow the intervals).
     Every statement below uses the scaled ``var_j``: the resolution test, the interval, the bound.
-    A term is resolved when ``theta_j - z sd_j > 0`` (z: the normal
-    quantile of ``confidence``); its interval inverts the test of ``theta_j`` with the variance at
-    each hypothesis (:func:`_interval`: the others' share normal, the term's own chi-square), which
-    stays positive, is skewed like the Allan variance where the term's own share dominates, and
-    widens by about sqrt(chi2_nu) with the misfit (either scale, theta_j or its root). A term not
+    A term is resolved when ``theta_j - z sd_j > 0`` (z: the normal quantile of ``confidence``)
+    and its interval's low end is above 0; the interval inverts the test of ``theta_j`` with the
+    variance at each hypothesis (:func:`_interval`: the others' share normal, the term's own
+    chi-square), skewed like the Allan variance where the term's own share dominates, widening
+    by about sqrt(chi2_nu) with the misfit (either scale, theta_j or its root). A term not
     resolved (fitted to zero, dropped, or within its uncertainty of zero) gets the upper bound of
     :func:`upper_bound` (the test inverted, with the term forced in); a fit that is zero for every
     term has no covariance, hence no bounds.
@@ -516,8 +516,9 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
 
     gain = _gain(a, w, active)
     points = {j: _resolved(theta, gain, active, j, cov_y * scale, z) for j in np.flatnonzero(active)}
+    own = {j: _interval(a, w, y, active, j, confidence, cov_of, scale) for j in points if points[j][0]}
     bounds, scales = {}, {}
-    for u in (j for j in range(5) if not active[j] or not points[j][0]):
+    for u in (j for j in range(5) if own.get(j) is None):
         bounds[u], scales[u] = _bound_of(a, w, y, active, u, confidence, cov_of, widen)
     freed = _freed_terms(bounds, scales) if free else {}
     rising = {u: s for u, s in freed.items() if TERM_SLOPE[TERMS[u]] > 0}  # the bounds: whatever K and R are
@@ -537,8 +538,7 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
             out[term] = Coefficient(term, None, upper=upper, note=note,
                                     z_score=c2 / points[j][1] if active[j] else None)
             continue
-        ends = [_interval(a, w, y, active, j, confidence, cov_of, scale)] + _freed_points(
-            a, w, y, active, freed, j, cov_of, z, confidence)
+        ends = [own[j]] + _freed_points(a, w, y, active, freed, j, cov_of, z, confidence)
         freed_by = tuple(TERMS[u] for u, end in zip(freed, ends[1:]) if end is None)
         if freed_by:
             bound = _bound_of(a, w, y, active, j, confidence, cov_of, widen)[0]
