@@ -187,8 +187,8 @@ def table(rows):
                   key=lambda k: (list(CASES).index(k[0]), k[1], TERMS.index(k[2])))
     for case, minutes, term in keys:
         sel = [r for r in rows if (r["case"], r["minutes"], r["term"]) == (case, minutes, term)]
-        if all(r["true"] == 0 for r in sel) and term in (RATE_RANDOM_WALK, BIAS_INSTABILITY):
-            continue  # K or B = 0: an upper bound always holds it, a resolved K is the drift's
+        if all(r["true"] == 0 for r in sel) and term == RATE_RANDOM_WALK:
+            continue  # K = 0: an upper bound always holds it, a resolved K is the drift's
         res = [r for r in sel if r["value"] is not None]
         unres = [r for r in sel if r["value"] is None]
         lines.append(f"{case:>16s} {minutes:4d} {TERM_SYMBOL[term]:>4s}  {cell(res):>26s}  {cell(unres):>28s}  "
