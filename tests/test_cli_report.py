@@ -441,3 +441,32 @@ def test_a_report_on_a_record_of_no_axis_analysed_does_not_say_the_baseline_expl
     text = " ".join(html.unescape(out.read_text()).split())
     assert "None: no axis was analysed (only 2 samples" in text and "--sims 24" not in text
     assert "no gap simulation ran (no axis analysed)" in text
+
+
+def test_a_record_shorter_than_the_calibration_window_names_the_command_that_takes_the_way_through(tmp_path, capsys):
+    """Attack pass 37a: report's warning for a record that ends inside the start-up calibration window
+    (1.5 s of a 2-s window) said "give a shorter --calibration-s or a saved calibration (--calibration
+    FILE)", replay's way through, which report refuses as unrecognised arguments."""
+    g = np.random.default_rng(13).normal(0, 0.05, (150, 3))
+    path = str(tmp_path / "short.csv")
+    write_recording(path, Recording.from_dps(g, 100.0))
+    _, data = report(tmp_path, capsys, path, "--sims", "10")
+    said = " ".join(data["filter_error"].split())
+    assert "end inside the start-up calibration window" in said, said
+    assert said.endswith("report filters with the default settings; replay takes a shorter --calibration-s or a saved "
+                         "calibration (--calibration FILE)"), said
+    assert main(["replay", path, "--calibration-s", "1"]) == 0
+
+
+def test_a_record_that_moves_in_the_calibration_window_names_the_commands_that_take_a_saved_calibration(tmp_path, capsys):
+    """Attack pass 37a: report's warning for a record that turns in its start-up calibration window
+    advised "use a saved calibration of this sensor (GyroFilter(calibration=...), --calibration FILE
+    from --save-calibration ...)", and report takes no --calibration (an unrecognised argument)."""
+    g = np.random.default_rng(14).normal(0, 0.1, (400, 3)) + np.where(np.arange(400) >= 100, 5.0, 0.0)[:, None]
+    path = str(tmp_path / "turned.csv")
+    write_recording(path, Recording.from_dps(g, 100.0))
+    _, data = report(tmp_path, capsys, path, "--sims", "10")
+    said = " ".join(data["filter_error"].split())
+    assert said.startswith("calibration: the sensor moved (axis x"), said
+    assert said.endswith("keep it still for the first 2.0 s; report filters with the default settings; replay and run "
+                         "take a saved calibration (--calibration FILE from --save-calibration on a still recording)"), said

@@ -91,3 +91,17 @@ def test_the_slow_level_is_left_out_of_the_cubic():
 def test_a_model_out_of_bounds_is_refused_naming_the_key(effects, key):
     with pytest.raises(SettingsError, match=key):
         simulate(model(effects), 1.0, seed=1)
+
+
+@pytest.mark.parametrize("gamma, rms", [(3.0, 0.1), (0.75, 0.2), (30.0, 0.1 ** 0.5 / 10)])
+def test_a_compression_at_the_documented_bound_is_taken(gamma, rms):
+    """Attack pass 37a: gamma_per_dps2 3 with rms_dps 0.1 (gamma sigma^2 = 0.03, the bound the docs give as "at most
+    0.03") was refused as "expected gamma_per_dps2 * rms_dps^2 <= 0.03, got 3 * 0.1^2 = 0.03": 3 * 0.01 is
+    0.030000000000000002 in floats."""
+    from gyrofilter.sim.model import validate_model
+
+    validate_model({"sample_rate_hz": 100.0, "axes": {"x": {"arw_dps_per_sqrt_hz": 0.01, "effects": [
+        {"effect": "compression", "gamma_per_dps2": gamma, "rms_dps": rms}]}}})
+    with pytest.raises(SettingsError, match="gamma_per_dps2"):
+        validate_model({"sample_rate_hz": 100.0, "axes": {"x": {"effects": [
+            {"effect": "compression", "gamma_per_dps2": gamma * (1 + 1e-6), "rms_dps": rms}]}}})

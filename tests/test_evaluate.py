@@ -292,6 +292,26 @@ def test_a_static_recording_shorter_than_the_calibration_window_is_named(tmp_pat
 
 
 
+def test_a_static_recording_whose_calibration_window_holds_one_sample_is_named(tmp_path):
+    """Attack pass 37a: a static recording at 0.5 Hz (its 2-s calibration window one sample) made the
+    CV Kalman baseline's noise variance NaN (a variance of one sample): evaluate ended with numpy's
+    RuntimeWarnings and "array must not contain infs or NaNs" (scipy's Riccati solver), naming no file."""
+    import warnings
+
+    from gyrofilter.errors import SettingsError
+
+    x = np.random.default_rng(4).normal(0, 0.1, size=(20, 3))
+    path = tmp_path / "mpu6050_static_slow.csv"
+    path.write_text("# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 0.5\n# gyro_unit: dps\ngx,gy,gz\n"
+                    + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in x.tolist()))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(SettingsError, match=re.escape(f"{path}: setting calibration_s=2.0 gives 1 sample(s) at 0.5 Hz; "
+                                                          "the calibration needs at least 3 to measure the noise")):
+            E.evaluate(filters=[f for f in F.default_filters() if f.name == "CV Kalman q=1e2"],
+                       recordings_dir=str(tmp_path), profiles=[])
+
+
 @pytest.mark.parametrize("pattern, names", [("static", ("mpu6050_static_a.csv", "mpu6050_static_a.csv.gz")),
                                             ("broad", ("broad_01.csv", "broad_01.csv.gz"))])
 def test_two_recordings_of_one_name_are_refused_naming_both(tmp_path, pattern, names):

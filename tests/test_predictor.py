@@ -24,6 +24,18 @@ def test_weights_reproduce_polynomials_and_noise_gain():
     assert (w**2).sum() == pytest.approx(1.3833, abs=1e-3)
 
 
+@pytest.mark.parametrize("n,order", [(100, 10), (64, 9), (30, 10), (50, 8)])
+def test_weights_reproduce_polynomials_at_the_largest_settings(n, order):
+    """fifo_depth <= 100 and fit_order <= 10 are allowed settings: the weights must still reproduce a
+    constant and every polynomial up to the order (attack pass 37b: the raw Vandermonde of t = 0..99
+    to the 10th power lost them in pinv, sum(w) = 0.26 for (100, 10), 1.61 for (64, 9), so the
+    paper preset at fifo_depth=64, fit_order=9 read a constant 10 deg/s as 10.12)."""
+    w = extrapolation_weights(n, order)
+    t = np.arange(n) / n  # scaled so that every power is of order 1
+    for k in range(order + 1):
+        assert w @ t**k == pytest.approx(1.0, abs=1e-9)
+
+
 def test_weight_table_rows_match_and_bad_args():
     table = weight_table(10, 2)
     for k in range(1, 11):

@@ -223,6 +223,30 @@ class _Port:
         pass
 
 
+@pytest.mark.parametrize("ends", ["deadline", "disconnect"])
+def test_lines_that_give_no_sample_before_the_stream_starts_are_named(ends):
+    """Attack pass 37b: a device without a header sending gx,gy,gz lines (no counter), units given as options,
+    was refused with "no data lines within 5 s after the header" (no header came; 800 lines did) or
+    "serial port disconnected ... before the stream started": the refusal says what came instead."""
+    data = b"".join(b"%d,%d,1\r\n" % (i, -i) for i in range(50))
+    ticks = iter(range(100))
+
+    class Gone(_Port):
+        def read(self, n):
+            if not self.data:
+                raise OSError("device reports readiness to read but returned no data")
+            return super().read(n)
+
+    port = (_Port if ends == "deadline" else Gone)(data)
+    with pytest.raises(DeviceError) as info:
+        SerialSource("fake", serial_port=port, gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=100,
+                     header_timeout_s=5, clock=lambda: next(ticks))
+    text = str(info.value)
+    assert "no data lines" not in text and "after the header" not in text
+    assert "50 lines received, none a sample: 1 partial lines, 49 bad lines" in text  # the first: the port may open mid-line
+    assert "3 values before the field count is known, expected 4 or 5:" in text and "fields=gx,gy,gz" in text
+
+
 def test_a_header_changing_the_units_ends_the_source_after_the_rows_before_it():
     """Attack pass 25: the samples that came in one read with a header changing the units were lost."""
     head = b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100\n"

@@ -239,6 +239,19 @@ def test_a_sinusoid_at_nyquist_says_what_its_samples_hold(phase_rad, peak):
                         f"are amplitude_dps sin(phase_rad) (-1)^n, {peak} deg/s peak, not 0.1"]
 
 
+@pytest.mark.parametrize("effect, words", [({"effect": "colored_noise", "lag1": 0.6}, "lag1 and lag2 are autocorrelations"),
+                                           ({"effect": "arma", "sigma_a_dps": 0.1, "phi": [0.9]}, "phi and theta are coefficients")])
+def test_a_per_sample_effect_at_another_rate_than_the_models_is_said(effect, words):
+    """Attack pass 37a: `simulate --sample-rate-hz 1000` of a model stated at 100 Hz (simulate.md's example runs a gap
+    report's extended model so) applied a colored noise's lag1 0.9 (or an arma's phi) per sample of the new rate: its
+    correlation time 10 times shorter than the model's (lag 10 at 1000 Hz 0.34, not 0.9), without a word."""
+    m = model([effect], axes="x", fs=100.0, arw=0.01)
+    assert validate_model(m)[1] == [] and validate_model(m, sample_rate_hz=100.0)[1] == []
+    _, warnings = validate_model(m, sample_rate_hz=1000.0)
+    assert warnings == [f"model: axes.x.effects[0] ({effect['effect']}): {words} per sample, stated at the model's "
+                        "sample_rate_hz 100 Hz: at 1000 Hz they describe a time scale 0.1 times the model's"]
+
+
 @pytest.mark.parametrize("duration", [0.0, -1.0, float("nan"), 1e308, 1e10])
 def test_bad_duration(duration):
     with pytest.raises(SettingsError, match="duration"):

@@ -422,3 +422,20 @@ def test_a_simulated_source_checks_its_duration_as_simulate_does(duration):
     from gyrofilter.sources.simulated import SimulatedSource
     with pytest.raises(SettingsError, match="sim: duration_s must be"):
         SimulatedSource(duration_s=duration, realtime=False, seed=1)
+
+
+def test_a_simulated_sources_model_warnings_reach_the_user(tmp_path, capsys):
+    """Attack pass 37a: `record`/`run`/`report --source sim:MODEL` kept the model's warnings (a misspelt parameter
+    ignored, a frequency that aliases, per-sample parameters at another rate) in the source and never said them:
+    `phase_radd` ran the sinusoid at phase 0 without a word, where `simulate` warns. They are the source's first notes,
+    warnings on stderr and in the file, as a replayed file's are."""
+    from gyrofilter.cli import main
+
+    model = tmp_path / "typo.json"
+    model.write_text('{"sample_rate_hz": 100, "axes": {"x": {"arw_dps_per_sqrt_hz": 0.01, "effects": [{"effect": '
+                     '"sinusoid", "frequency_hz": 7, "amplitude_dps": 1, "phase_radd": 1.5}]}}}')
+    out = tmp_path / "r.csv"
+    assert main(["record", "--source", f"sim:{model},seed=1,realtime=0", "--duration", "1", "--out", str(out)]) == 0
+    said = f"sim: {model}: model: axes.x.effects[0] (sinusoid): unknown parameter 'phase_radd' ignored; did you mean phase_rad?"
+    assert said in " ".join(capsys.readouterr().err.split())
+    assert f"# warning: {said}" in out.read_text()

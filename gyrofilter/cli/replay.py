@@ -91,22 +91,27 @@ def run(args):
     return 0
 
 
-def feed_recording(replay, chunks, realtime=False):
+#: the options that let a recording shorter than the start-up calibration window be filtered
+CALIBRATION_WAYS = "a shorter --calibration-s or a saved calibration (--calibration FILE)"
+
+
+def feed_recording(replay, chunks, realtime=False, way_through=f"give {CALIBRATION_WAYS}"):
     """Feed the rest of the recording's ``chunks`` (:func:`~gyrofilter.recording.iter_recording`
     after its head) through ``replay`` (a :class:`Replay`, paced with ``realtime``) and finish it.
     RecordingError naming the file's line of a sample the filter refuses, and when nothing was
-    filtered (:func:`_refuse_nothing_filtered`)."""
+    filtered (:func:`_refuse_nothing_filtered`; ``way_through``: what its message advises where the
+    calibration window took the samples, the words of the caller's command)."""
     path, head, filt = replay.path, replay.head, replay.filt
     for chunk in chunks:
         try:
             replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in), head.column(chunk, "temp"), realtime)
         except SampleError as exc:  # the filter refused a sample (beyond its range): name the file's line
             raise RecordingError(f"{path}: line {head.line_of_row(filt.samples_in + exc.row)}: {exc.reason}") from None
-    _refuse_nothing_filtered(path, head, filt)
+    _refuse_nothing_filtered(path, head, filt, way_through)
     replay.finish()
 
 
-def _refuse_nothing_filtered(path, head, filt):
+def _refuse_nothing_filtered(path, head, filt, way_through):
     """A recording without samples, or one that ends before the filter's first row (inside the
     start-up calibration window, or less than a block after it: :func:`filtering.nothing_filtered`),
     has nothing to filter: an error (no output is kept), not an empty result."""
@@ -114,8 +119,7 @@ def _refuse_nothing_filtered(path, head, filt):
         raise RecordingError(f"{path}: no samples (the file has a header only); nothing to filter")
     where = filtering.nothing_filtered(filt)
     if where:
-        advice = (": give a shorter --calibration-s or a saved calibration (--calibration FILE)"
-                  if filt.calibrating or filt.samples_in > filt.pending_samples else "")  # a window took samples
+        advice = (f": {way_through}" if filt.calibrating or filt.samples_in > filt.pending_samples else "")  # a window took samples
         raise RecordingError(f"{path}: its {filt.samples_in} samples ({filt.samples_in / head.sample_rate_hz:.2f} s) end "
                              f"{where}; nothing filtered{advice}")
 

@@ -160,7 +160,8 @@ def _filter(path):
             filtering.refuse_filtered_output(head.header, path)
             filt = filtering.make_filter(defaults.parse_args([]), head.sample_rate_hz)
             run = replay.Replay(path, head, filt, plot=True, plot_buckets=TRACE_BUCKETS)
-            replay.feed_recording(run, chunks)
+            replay.feed_recording(run, chunks, way_through=f"report filters with the default settings; replay takes "
+                                                           f"{replay.CALIBRATION_WAYS}")
     except CalibrationError as exc:  # its way through a setting is replay's and run's (--set): a report takes none
         return None, one_line(without_settings(exc, "report filters with the default settings"))
     except GyroFilterError as exc:

@@ -18,7 +18,7 @@ import numpy as np
 
 from .reference import block_mean_masked
 from ..errors import SettingsError
-from ..filter.calibration import calibration_samples
+from ..filter.calibration import calibration_samples, noise_calibration_samples
 from ..filter.pipeline import GyroFilter
 from ..filter.smoother import Smoother
 
@@ -142,6 +142,7 @@ def cv_kalman(q_spectral_density, order=2):
     def run(x_dps, sample_rate_hz, calibration_s):
         from scipy.signal import lfilter, ss2tf
 
+        noise_calibration_samples(sample_rate_hz, calibration_s)  # R is the window's variance
         bias, c = startup_bias(x_dps, sample_rate_hz, calibration_s)
         z = x_dps[c:] - bias
         var = np.maximum(np.var(x_dps[:c], axis=0, ddof=1), 1e-12)

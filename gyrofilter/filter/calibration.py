@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import CalibrationError, SettingsError
 from ..files import write_text_whole
 from ..inputs import check_number, load_json, python_value, quote
-from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, shown
+from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain, shown
 from .samples import as_numbers
 
 
@@ -46,6 +46,17 @@ def calibration_samples(sample_rate_hz, calibration_s):
     """Samples in the calibration window: round(``calibration_s`` (s) * ``sample_rate_hz`` (Hz))
     (paper 001 section 2.1: the first seconds of the still sensor give the bias)."""
     return int(round(calibration_s * sample_rate_hz))
+
+
+def noise_calibration_samples(sample_rate_hz, calibration_s):
+    """:func:`calibration_samples` of a calibration that measures the noise as well as the bias:
+    SettingsError naming the setting when the window holds fewer than :data:`MIN_SAMPLES` (a
+    variance of one sample is NaN, of two hardly a measurement)."""
+    c = calibration_samples(sample_rate_hz, calibration_s)
+    if c < MIN_SAMPLES:
+        raise SettingsError(f"setting calibration_s={plain(calibration_s)} gives {c} sample(s) at "
+                            f"{float(sample_rate_hz):g} Hz; the calibration needs at least {MIN_SAMPLES} to measure the noise")
+    return c
 
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
@@ -217,15 +228,23 @@ def raise_max_bias(value):
     return f"raise the filter's setting max_bias_dps (to {value})"
 
 
+#: the way through for a sensor that moved in its calibration window, in the words of GyroFilter, replay and run
+SAVED_CALIBRATION_WAY = (", or use a saved calibration of this sensor (GyroFilter(calibration=...), --calibration FILE "
+                         "from --save-calibration on a still recording)")
+
+
 def without_settings(exc, instead):
-    """The message of the CalibrationError ``exc`` for a command that takes no filter setting
-    (``report``'s filter part, ``evaluate``): its way through a setting (:func:`raise_max_bias`, which
-    that command would refuse) replaced by ``instead``, words that say why the command does not take it,
-    then the commands that do ("replay and run take --set max_bias_dps=26"); as it is without one."""
-    if exc.max_bias_dps is None:
-        return str(exc)
-    return str(exc).replace(raise_max_bias(exc.max_bias_dps),
+    """The message of the CalibrationError ``exc`` for a command that takes no filter setting and no
+    saved calibration (``report``'s filter part, ``evaluate``): its way through a setting
+    (:func:`raise_max_bias`) or a saved calibration (:data:`SAVED_CALIBRATION_WAY`), which that command
+    would refuse, replaced by ``instead``, words that say why the command does not take it, then the
+    commands that do ("replay and run take --set max_bias_dps=26"); as it is without one."""
+    text = str(exc)
+    if exc.max_bias_dps is not None:
+        text = text.replace(raise_max_bias(exc.max_bias_dps),
                             f"{instead}; replay and run take --set max_bias_dps={exc.max_bias_dps}")
+    return text.replace(SAVED_CALIBRATION_WAY, f"; {instead}; replay and run take a saved calibration (--calibration "
+                                                "FILE from --save-calibration on a still recording)")
 
 
 #: the ranges of :func:`calibrate`'s ``stillness_threshold`` and ``max_bias_dps`` (the settings
@@ -270,10 +289,8 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
-                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s, "
-                f"or use a saved calibration of this sensor (GyroFilter(calibration=...), --calibration FILE from "
-                f"--save-calibration on a still recording)"
-            )
+                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
+                f"{SAVED_CALIBRATION_WAY}")
         if sigma[i] > MAX_NOISE_STD_DPS:
             raise CalibrationError(
                 f"calibration: axis {axis} has a noise of {sigma[i]:.3g} deg/s, beyond the {MAX_NOISE_STD_DPS:g} deg/s "

@@ -24,7 +24,7 @@ import numpy as np
 from . import adaptive_kalman, kalman
 from .hold import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
-from .calibration import Calibration, calibrate, calibration_samples
+from .calibration import Calibration, calibrate, calibration_samples, noise_calibration_samples
 from ..errors import CalibrationError, SampleError, SettingsError
 from ..inputs import check_number, did_you_mean
 from ..recording.checks import first_step_back
@@ -117,9 +117,8 @@ class GyroFilter:
         self.calibration = None
         self._bias = (0.0, 0.0, 0.0)
         self._cal_needed = calibration_samples(self.sample_rate_hz, s.calibration_s)
-        if calibration is None and s.calibration_s > 0 and self._cal_needed < 3:
-            raise SettingsError(f"setting calibration_s={plain(s.calibration_s)} gives {self._cal_needed} sample(s) at "
-                                f"{self.sample_rate_hz:g} Hz; the calibration needs at least 3 to measure the noise")
+        if calibration is None and s.calibration_s > 0:
+            noise_calibration_samples(self.sample_rate_hz, s.calibration_s)
         if calibration is None and self._cal_needed > MAX_CALIBRATION_SAMPLES:
             raise SettingsError(f"setting calibration_s={plain(s.calibration_s)} gives {self._cal_needed} samples at "
                                 f"{self.sample_rate_hz:g} Hz; the still window is held in memory: at most "

@@ -16,7 +16,7 @@ import numpy as np
 
 from . import noise_terms as nt
 from .accel import accel_unit
-from .compression import MAX_COMPRESSION, compression_kappa
+from .compression import MAX_COMPRESSION, compression_kappa, compression_too_strong
 from ..effects import (ARMA, BIAS_INSTABILITY, COLORED_NOISE, COMPRESSION, HEAVY_TAILS, NARROWBAND, REGISTRY, RESONATORS,
                        ROWS, SINUSOID, TEMPERATURE, WANDERING_TONE)
 from ..errors import SettingsError
@@ -250,7 +250,35 @@ def validate_model(model, *, sample_rate_hz=None, coefficients_only=False):
     out["axes"] = {}
     for name in AXES:
         out["axes"][name] = _validate_axis(axes.get(name, {}), f"axes.{name}", out, warnings, coefficients_only)
+    warnings += _per_sample_at_another_rate(out, model.get("sample_rate_hz"))
     return out, warnings
+
+
+#: effects whose parameters are per sample (an autocorrelation, an ARMA coefficient): the time
+#: scale they describe is the model's sample rate's, so at another rate it changes by the ratio
+PER_SAMPLE_PARAMETERS = {COLORED_NOISE: "lag1 and lag2 are autocorrelations", ARMA: "phi and theta are coefficients"}
+
+
+def _per_sample_at_another_rate(spec, stated_rate):
+    """Warnings for the effects of :data:`PER_SAMPLE_PARAMETERS` of the checked model ``spec`` when its
+    sample rate (an override: ``simulate --sample-rate-hz``, a source's ``rate=``) is not the model's
+    ``stated_rate`` (Hz, as the model file gives it, or None): per sample of the new rate they
+    describe a time scale stated / new times the model's (a colored noise's correlation time
+    -1 / (f_s ln lag1); an AR pole's likewise)."""
+    rate = spec["sample_rate_hz"]
+    per_sample = [(axis, i, eff["effect"]) for axis in AXES for i, eff in enumerate(spec["axes"][axis]["effects"])
+                  if eff["effect"] in PER_SAMPLE_PARAMETERS]
+    if stated_rate is None or rate is None or not per_sample:
+        return []
+    try:
+        stated = check_sample_rate_hz(stated_rate, "model: sample_rate_hz")
+    except SettingsError:  # not a rate: the override is the only one (as before)
+        return []
+    if stated == rate:
+        return []
+    return [f"model: axes.{axis}.effects[{i}] ({name}): {PER_SAMPLE_PARAMETERS[name]} per sample, stated at the model's "
+            f"sample_rate_hz {stated:g} Hz: at {rate:g} Hz they describe a time scale {stated / rate:.3g} times the model's"
+            for axis, i, name in per_sample]
 
 
 def _validate_temperature(spec):
@@ -420,7 +448,7 @@ def _validate_effect(eff, where, model, warnings, coefficients_only):
                                           f"({MIN_BANDWIDTH_PER_RATE:g} to 1 times the sample rate), got {out['bandwidth_hz']:g}")
     if name == WANDERING_TONE:
         _check_excursion(out, label, rate)
-    if name == COMPRESSION and compression_kappa(out["gamma_per_dps2"], out["rms_dps"]) > MAX_COMPRESSION:
+    if name == COMPRESSION and compression_too_strong(out["gamma_per_dps2"], out["rms_dps"]):
         _err(f"{label}.gamma_per_dps2", f"expected gamma_per_dps2 * rms_dps^2 <= {MAX_COMPRESSION:g} (the cubic's turning "
                                         f"point at 3.3 rms or beyond), got {out['gamma_per_dps2']:g} * {out['rms_dps']:g}^2 = "
                                         f"{compression_kappa(out['gamma_per_dps2'], out['rms_dps']):.3g}")

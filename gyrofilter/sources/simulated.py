@@ -23,7 +23,7 @@ from ..recording import VERSION_KEY
 from ..sim.model import load_model, validate_model
 from ..sim.simulate import block_rows, check_seed, draw_seed, recording_columns, recording_header, simulate_chunks
 from ..units import check_duration_s
-from .base import Source
+from .base import WARNING_PREFIX, Source
 
 MAX_WAIT_S = 0.1
 POLL_S = 0.02  # paced reads return at most this often (batches, like a device's FIFO poll)
@@ -96,7 +96,9 @@ class SimulatedSource(Source):
         self._start = None
         self._last = -math.inf
         self._exhausted = False
-        self._notes = []  # a simulation has no events
+        # a simulation has no events; the model's warnings (a parameter ignored, a frequency that aliases) are its
+        # first notes, warnings as a replayed file's are (said on stderr and written to the file)
+        self._notes = [f"{WARNING_PREFIX}sim: {self.model_name}: {text}" for text in self.warnings]
         self.stats = {"samples": 0, "lost_samples": 0}
 
     def _more(self):

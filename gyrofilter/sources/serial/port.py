@@ -17,7 +17,7 @@ from ...errors import DeviceError, SourceEnded, one_line
 from ...inputs import check_number
 from ...recording import T_FROM_COUNTER, T_FROM_KEY, T_FROM_LINES
 from ..base import Source
-from .protocol import LineParser, UnitsConflict
+from .protocol import LINE_OUTCOMES, LineParser, UnitsConflict
 
 MAX_WAIT_S = 0.1
 MIN_BAUD, MAX_BAUD = 50, 12_000_000  # bit/s: the slowest standard rate to the fastest USB-serial chips
@@ -96,7 +96,7 @@ class SerialSource(Source):
                         raise self._conflict
                     break
                 if self._ended is not None:
-                    raise DeviceError(f"{self.port_name}: {self._ended} before the stream started")
+                    raise DeviceError(f"{self.port_name}: {self._ended} before the stream started{self._no_sample()}")
                 if clock() > deadline:
                     if self._parser.header is None:
                         raise DeviceError(
@@ -104,7 +104,8 @@ class SerialSource(Source):
                             "give the units as options (unit=lsb,lsb_per_dps=131,rate=100 or --gyro-unit/--lsb-per-dps/--sample-rate-hz) "
                             "or check the baud rate and the sketch"
                         )
-                    raise DeviceError(f"{self.port_name}: no data lines within {header_timeout_s:g} s after the header")
+                    raise DeviceError(f"{self.port_name}: no sample within {header_timeout_s:g} s"
+                                      f"{self._no_sample() or ': no data line came'}")
         except BaseException:
             self._close_port()
             raise
@@ -121,6 +122,17 @@ class SerialSource(Source):
         self.columns = self._parser.columns
         self.stats = self._parser.stats
         self.stats.setdefault("disconnects", 0)
+
+    def _no_sample(self):
+        """What the lines received before the stream started were, none of them a sample (the parser's counts,
+        :data:`~gyrofilter.sources.serial.protocol.LINE_OUTCOMES`, and its first note of a skipped line), or ''
+        when no line came: "no data lines after the header" was said of 800 lines of gx,gy,gz and no header."""
+        stats = self._parser.stats
+        if not stats.get("lines"):
+            return ""
+        counts = ", ".join(f"{stats[kind]} {kind.replace('_', ' ')}" for kind in LINE_OUTCOMES if stats.get(kind))
+        skipped = next((note for note in self._parser.notes if note.startswith("serial: skipped")), None)
+        return f" ({stats['lines']} lines received, none a sample: {counts}{'; ' + skipped if skipped else ''})"
 
     def _receive(self):
         """One chunk from the port through the parser; a port error ends the stream."""

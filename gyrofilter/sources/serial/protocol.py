@@ -405,7 +405,9 @@ class LineParser:
                 if len(cells) in (4, 5):
                     self.fields = ["counter", *GYRO_COLUMNS] + (["temp"] if len(cells) == 5 else [])
                 else:
-                    self._bad(line, "bad_lines", f"{len(cells)} values before the field count is known, expected 4 or 5")
+                    self._bad(line, "bad_lines", f"{len(cells)} values before the field count is known, expected 4 or 5: "
+                                                        "counter,gx,gy,gz[,temp]; without a counter a header names the "
+                                                        "fields, e.g. fields=gx,gy,gz")
                     continue
             nf = len(self.fields)
             if len(cells) != nf:
