@@ -356,7 +356,8 @@ def _interval(a, w, y, terms, j, confidence, cov_of, scale):
     and the two deviations added in quadrature, ``t`` is too high where
     ``h < t - sqrt((t - t chi2_p(nu) / nu)^2 + (z s0)^2)``, too low where
     ``h > t + sqrt((t chi2_(1-p)(nu) / nu - t)^2 + (z s0)^2)``; the interval lies between (bisection).
-    None where ``t ~ 0`` is not too low (the low end would be 0): the others' spread with
+    None where the estimate ``h`` is not above 0 (a singular fit's least-norm one, :func:`_gain`) or where
+    ``t ~ 0`` is not too low (the low end would be 0): the others' spread with
     ``theta_j = 0`` refitted holds ``h`` though the spread at the estimate does not; the term is
     then not resolved (Q on 1 of 88 resolved 10-min ``white-quant`` axes, ``tools/allan_coverage.py``).
 
@@ -372,6 +373,8 @@ def _interval(a, w, y, terms, j, confidence, cov_of, scale):
     """
     g = _gain(a, w, terms)[int(np.sum(terms[:j]))]
     h = float(g @ y)
+    if not h > 0:  # (a singular fit's least-norm estimate, fewer taus than terms: the bisections never ended)
+        return None
     p = 0.5 - confidence / 2.0
     z = NormalDist().inv_cdf(1.0 - p)
 
