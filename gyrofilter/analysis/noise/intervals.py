@@ -425,9 +425,16 @@ def _freed_points(a, w, y, active, freed, j, cov_of, z, confidence):
 def _freed_terms(bounds, scales):
     """The terms not resolved whose value the others' intervals are taken whatever
     (:func:`fitted_intervals`): ``{index: misfit scale}`` of those of ``bounds`` (the terms not
-    resolved) that do not fall with tau (``TERM_SLOPE >= 0``: B, K, R; why not Q:
-    :func:`fitted_intervals`) and whose fit with the term forced in is not singular (``scales``:
-    :func:`_bound_of`'s).
+    resolved) that do not fall with tau (``TERM_SLOPE >= 0``: B, K, R) and whose fit with the term
+    forced in is not singular (``scales``: :func:`_bound_of`'s).
+
+    Not Q: N's interval conditional on Q = 0 held N on 96-98 % of the axes without a Q
+    (``python tools/allan_coverage.py``, seeds 41-80, 10 min), and freeing Q widened it a median
+    1.6-fold there. The price: a Q the fit drops is held at 0 and N takes its share of the shortest
+    taus (``white-quant``, Q = 1e-4 deg on x, dropped on 24 of 40 10-min axes: N held on 13 of
+    them; on 105 of the case's 120 axes). Freed, N held on 115 of 120; freed on one side only (the
+    low end of N's interval with Q free: a Q above 0 lowers N), 115 of 120 too, for N's intervals a
+    median 1.25-1.30x as wide on the cases without Q.
 
     B is freed as K and R are (issue 37): held at 0, an unresolved B leaves its flat share of the
     long taus to a resolved K, whose interval then sits above the truth. On 10-min, 100 Hz records
@@ -489,15 +496,8 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     uncertainty of zero in one of those fits (``theta_j - z sd_j <= 0``), it is not resolved
     (``Coefficient.freed_by``: those terms). Every bound is that union too (:func:`_freed_bound`).
 
-    A bias instability B not resolved is freed too (:func:`_freed_terms`: why, and the bounds).
-    The terms not resolved that fall with tau
-    (Q, and N where dropped) are not so treated: N's interval conditional on Q = 0 held N on
-    96-98 % of the axes without a Q (``python tools/allan_coverage.py``, seeds 41-80, 10 min), and
-    freeing Q widened it a median 1.6-fold there. The price: a Q the fit drops is held at 0 and N
-    takes its share of the shortest taus (``white-quant``, Q = 1e-4 deg on x, dropped on 24 of 40
-    10-min axes: N held on 13 of them; on 105 of the case's 120 axes). Freed, N held on 115 of
-    120; freed on one side only (the low end of N's interval with Q free: a Q above 0 lowers N),
-    115 of 120 too, for N's intervals a median 1.25-1.30x as wide on the cases without Q.
+    A bias instability B not resolved is freed too; the terms that fall with tau (Q, and N where
+    dropped) are not (:func:`_freed_terms`: why, and the bounds).
     Holding the term at ``u``'s upper bound instead (a profile over ``[0, U_u]``) left B unresolved
     on nearly every axis, even without a random walk (white noise and flicker: B's interval
     widened 2-fold, resolved on 0 of 30 axes of 10-min records, where it was on 19): a 95 %
