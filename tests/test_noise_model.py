@@ -625,6 +625,35 @@ def test_a_random_walk_with_a_bias_instability_not_resolved_is_covered_on_short_
     assert held[RATE_RANDOM_WALK] >= 38 and held[ANGLE_RANDOM_WALK] >= 40 and held[BIAS_INSTABILITY] >= 38, held
 
 
+def test_a_resolved_bias_instability_read_high_is_held_by_its_interval():
+    """Issue 37: 10 min of N = 0.01, B = 0.005, K = 0.003 (tools/allan_coverage.py's
+    white-flicker-rw case), seed 44, x: B is resolved and read high (0.0065), and its variance is
+    mostly N's and K's; the chi-square interval with its edf at that estimate, [0.00506, 0.00917],
+    sat above the truth. Inverted with the variance at each hypothesis, it reaches 0.0044 and holds it."""
+    from gyrofilter.sim.simulate import simulate as simulate_model
+    coverage = tool("allan_coverage")
+    fitted = characterise_axis(simulate_model(coverage.white_flicker_rw_model(), 600.0, seed=44).gyro_dps[:, 0],
+                               100.0).fitted
+    b, true_b = fitted[BIAS_INSTABILITY], coverage.WHITE_FLICKER_RW["b_dps"]
+    assert b.value is not None and b.value > 1.2 * true_b
+    assert b.low <= true_b <= b.high, (b.low, b.high)
+
+
+@pytest.mark.slow
+def test_a_resolved_bias_instability_is_held_by_its_interval_on_short_records():
+    """Issue 37: the white-flicker-rw case, 10 min, seeds 41-80 (docs/allan.md's table): where B
+    is resolved, its interval holds B on at least 90 % of the axes (measured 56 of 61; 47 of 61
+    with the chi-square interval at the estimate, every miss above the truth), and N's and K's
+    intervals or bounds hold them as often as before (115 and 116 of 120)."""
+    coverage = tool("allan_coverage")
+    rows = [row for seed in range(41, 81) for row in coverage.run(("white-flicker-rw", 10, seed))]
+    b = [r for r in rows if r["term"] == BIAS_INSTABILITY and r["value"] is not None]
+    assert sum(map(coverage.covered, b)) >= 0.9 * len(b) and len(b) >= 40, (sum(map(coverage.covered, b)), len(b))
+    held = {term: sum(coverage.covered(r) for r in rows if r["term"] == term)
+            for term in (ANGLE_RANDOM_WALK, RATE_RANDOM_WALK)}
+    assert held[ANGLE_RANDOM_WALK] >= 115 and held[RATE_RANDOM_WALK] >= 116, held
+
+
 def test_the_bound_of_a_bias_instability_a_drift_fitted_as_k_takes_holds_it():
     """The default MPU6050 gyro, 30 min, seeds 15-18 (the user's trial): its temperature drift is
     fitted as a random walk K, which takes part of B's flat level once B is forced in; B's bound

@@ -1,4 +1,4 @@
-"""How often the fit's intervals and upper bounds of N, B and K hold the simulated coefficient,
+"""How often the fit's intervals and upper bounds of Q, N, B and K hold the simulated coefficient,
 where the rate random walk K and a slow temperature drift are not resolved by the record.
 
     python tools/allan_coverage.py [--seeds 1-10] [--minutes 10,30,60] [--cases NAME,...]
@@ -18,7 +18,13 @@ given with its two-sided 95 % Clopper-Pearson interval. The cases (100 Hz):
   quantization; K = 0): where a rule for an unresolved K must not widen B much;
 * ``white-flicker-rw``: white noise, flicker and a random walk together, N = 0.01 deg/s/sqrt(Hz),
   B = 0.005 deg/s, K = 0.003 deg/s/sqrt(s) on every axis: where B, not resolved on short records,
-  leaves its share of the long taus to K unless it is freed too (issue 37).
+  leaves its share of the long taus to K unless it is freed too (issue 37);
+* ``white-quant``: white noise N = 0.01 deg/s/sqrt(Hz) and angle quantization: the rate is the
+  first difference of an angle whose quantization error is uniform and independent from sample to
+  sample, of step q, so Q = q / sqrt(12) (IEEE Std 952-1997 C.1; El-Sheimy et al. 2008, eq. 8:
+  sigma^2 = 3 Q^2 / tau^2), Q = 1e-4, 2e-4, 5e-4 deg on x, y, z (x's resolved on 7, 30 and
+  39 of seeds 41-80 at 10, 30 and 60 min) (the simulator's own
+  ``lsb_per_dps`` rounds the rate, white noise in rate: N, not Q).
 
 ``--rows`` writes every axis's numbers (JSON); ``--before`` reads such a file written by the
 code before a change and prints, per case and term, the median ratio of the interval widths
@@ -35,18 +41,21 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from gyrofilter.analysis.noise.fit import characterise
-from gyrofilter.analysis.noise.model import ANGLE_RANDOM_WALK, TERM_SYMBOL
+from gyrofilter.analysis.noise.model import ANGLE_RANDOM_WALK, QUANTIZATION, TERM_SYMBOL
 from gyrofilter.effects import BIAS_INSTABILITY, RATE_RANDOM_WALK, TEMPERATURE
 from gyrofilter.sim.model import load_model
 from gyrofilter.sim.simulate import simulate
 from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 
 SAMPLE_RATE_HZ = 100.0
-TERMS = (ANGLE_RANDOM_WALK, BIAS_INSTABILITY, RATE_RANDOM_WALK)
+TERMS = (QUANTIZATION, ANGLE_RANDOM_WALK, BIAS_INSTABILITY, RATE_RANDOM_WALK)
 #: the white + random walk case's K per axis (deg/s/sqrt(s))
 WHITE_RW_K = {"x": 5e-5, "y": 1e-4, "z": 2e-4}
 #: the white + flicker + random walk case's N (deg/s/sqrt(Hz)), B (deg/s) and K (deg/s/sqrt(s)), every axis
 WHITE_FLICKER_RW = {"arw_dps_per_sqrt_hz": 0.01, "b_dps": 0.005, "k_dps_per_sqrt_s": 0.003}
+#: the white + quantization case's N (deg/s/sqrt(Hz), every axis) and Q per axis (deg)
+WHITE_QUANT_N = 0.01
+WHITE_QUANT_Q = {"x": 1e-4, "y": 2e-4, "z": 5e-4}
 
 
 def default_model():
@@ -80,6 +89,28 @@ def white_flicker_rw_model():
                             "effects": copy.deepcopy(effects)} for axis in "xyz"}}
 
 
+def white_quant_model():
+    return {"sample_rate_hz": SAMPLE_RATE_HZ, "gyro_unit": "dps",
+            "axes": {axis: {"bias_dps": 0.5, "arw_dps_per_sqrt_hz": WHITE_QUANT_N, "effects": []} for axis in "xyz"}}
+
+
+def quantize_angle(rate_dps, seed):
+    """The rate plus the first difference of an angle quantization error (deg), uniform on
+    [-q/2, q/2] with q = sqrt(12) Q, independent per sample: rate + (e[n] - e[n-1]) f_s."""
+    rng = np.random.default_rng([seed, 952])
+    out = np.array(rate_dps, dtype=float)
+    for i, axis in enumerate("xyz"):
+        step = np.sqrt(12.0) * WHITE_QUANT_Q[axis]
+        e = rng.uniform(-step / 2, step / 2, len(out) + 1)
+        out[:, i] += np.diff(e) * SAMPLE_RATE_HZ
+    return out
+
+
+def quant_truth(model):
+    return {axis: {QUANTIZATION: WHITE_QUANT_Q[axis], ANGLE_RANDOM_WALK: WHITE_QUANT_N,
+                   BIAS_INSTABILITY: 0.0, RATE_RANDOM_WALK: 0.0} for axis in model["axes"]}
+
+
 def gyro_truth(model):
     """{axis: {term: simulated value}} of a gyro model (deg/s units)."""
     out = {}
@@ -102,7 +133,8 @@ CASES = {"default-gyro": (default_model, "gyro", gyro_truth),
          "default-accel": (default_model, "accel", accel_truth),
          "white-rw": (white_rw_model, "gyro", gyro_truth),
          "white-flicker": (white_flicker_model, "gyro", gyro_truth),
-         "white-flicker-rw": (white_flicker_rw_model, "gyro", gyro_truth)}
+         "white-flicker-rw": (white_flicker_rw_model, "gyro", gyro_truth),
+         "white-quant": (white_quant_model, "quant", quant_truth)}
 
 
 def run(job):
@@ -112,10 +144,12 @@ def run(job):
     model = make()
     rec = simulate(copy.deepcopy(model), 60.0 * minutes, seed=seed, accelerometer=sensor == "accel")
     data = rec.accel_mps2 if sensor == "accel" else rec.gyro_dps
+    if sensor == "quant":
+        data = quantize_angle(data, seed)
     truth = truth_of(model)
     rows = []
     for axis, r in characterise(data, SAMPLE_RATE_HZ).items():
-        for term in TERMS:
+        for term in (t for t in TERMS if t in truth[axis]):
             c = r.fitted[term]
             rows.append({"case": case, "minutes": minutes, "seed": seed, "axis": axis, "term": term,
                          "true": truth[axis][term], "value": c.value, "low": c.low, "high": c.high, "upper": c.upper})
@@ -168,7 +202,7 @@ def width_ratios(rows, before):
     out = {}
     for r in rows:
         b = old.get((r["case"], r["minutes"], r["seed"], r["axis"], r["term"]))
-        if b is None or r["value"] is None or b["value"] is None:
+        if b is None or r["value"] is None or b["value"] is None or not (r["low"] > 0 and b["low"] > 0):
             continue
         out.setdefault((r["case"], TERM_SYMBOL[r["term"]]), []).append(
             np.log(r["high"] / r["low"]) / np.log(b["high"] / b["low"]))

@@ -87,7 +87,8 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
         "deviation": "overlapping Allan deviation of the rate in deg/s (NIST SP 1065 eq. 11)",
         "coefficients": "weighted non-negative least squares of sigma^2 = 3Q^2/tau^2 + N^2/tau + "
                         "(2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2 over taus with >= 9 clusters",
-        "interval": f"{confidence_text(any_axis.confidence)} two-sided: chi-square interval with edf = 2 c^2 / var(c^2), "
+        "interval": f"{confidence_text(any_axis.confidence)} two-sided: the test of c^2 inverted with var(c^2) at each "
+                    "value (the others' share normal, c's own chi-square with edf = 2 c^2 / var_own), "
                     "var from cov = G C G' of the linear fit (C: Allan-variance covariance from the NIST SP "
                     "1065 Table 5 EDFs and the Allan transfer function), times the fit's reduced chi-square "
                     "where it exceeds 1 (fit_reduced_chi2: the misfit widens every interval and bound by "

@@ -5,8 +5,9 @@ linear in the Allan variances on its active set, ``theta = G y`` with ``G = (A' 
 so ``cov(theta) = G C G'``. ``C`` (:func:`avar_covariance`) has the standard deviations of the
 NIST SP 1065 Table 5 EDF for each noise type, summed over the fitted mixture (conservative, see
 :func:`gyrofilter.analysis.noise.allan.edf_mixture`), and the correlations between cluster times from the
-Allan transfer function (:func:`avar_correlation`). The interval is the chi-square interval with
-``edf = 2 theta_j^2 / var_j`` (Satterthwaite), spanning as well the fits with a bias instability B,
+Allan transfer function (:func:`avar_correlation`). The interval inverts the test of the estimate with
+that variance at each value of the term (:func:`_interval`: the others' share normal, the term's own
+a chi-square with ``edf = 2 theta_j^2 / var_own`` (Satterthwaite)), spanning as well the fits with a bias instability B,
 a random walk K or a ramp R that the record does not resolve forced in (:func:`fitted_intervals`). A term not resolved
 gets an upper bound by test inversion (:func:`upper_bound`). The round-trip tests check that the
 interval covers the true coefficient in at least 90 % of simulated records (measured: 94-100 %);
@@ -21,7 +22,7 @@ from statistics import NormalDist
 
 import numpy as np
 
-from .allan import chi2_interval, chi2_ppf, confidence_text, edf_oavar
+from .allan import chi2_ppf, confidence_text, edf_oavar
 from .model import TERM_ALPHA, TERM_SLOPE, TERM_SYMBOL, TERM_UNIT, TERMS, Coefficient, basis, term_shares
 
 
@@ -317,7 +318,7 @@ def _freed_bound(a, w, y, active, u, freed, bound, confidence, cov_of, widen):
     z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
     fits += [active & (np.arange(n) != v) for v in np.flatnonzero(active)
              if v != u and TERM_SLOPE[TERMS[v]] > 0
-             and _point(theta, gain, forced, v, cov * scale, z, confidence)[0] is None]
+             and not _resolved(theta, gain, forced, v, cov * scale, z)[0]]
     for fit_terms in fits:
         b, fit_scale = _bound_of(a, w, y, fit_terms, u, confidence, cov_of, widen)
         if b is None and fit_scale is not None:  # this fit excludes no value (a singular one is skipped)
@@ -334,29 +335,90 @@ def _bound_of(a, w, y, active, u, confidence, cov_of, widen):
         return None, None
 
 
-def _point(theta, gain, terms, j, cov, z, confidence):
-    """``(low, high, sd)`` of term ``j`` estimated as ``theta[j]`` by the rows ``gain`` of the
-    fitted ``terms`` under the covariance ``cov`` of the Allan variances: its chi-square interval
-    (``edf = 2 theta_j^2 / var_j``), low and high None where ``theta_j - z sd_j <= 0``, and ``sd_j``."""
+def _resolved(theta, gain, terms, j, cov, z):
+    """``(resolved, sd_j)`` of term ``j`` estimated as ``theta[j]`` by the rows ``gain`` of the fitted
+    ``terms`` under the covariance ``cov`` of the Allan variances: ``sd_j = sqrt(g_j C g_j')`` and
+    resolved when ``theta_j - z sd_j > 0``."""
     row = gain[int(np.sum(terms[:j]))]
     sd = math.sqrt(max(float(row @ cov @ row), 1e-300))
-    c2 = float(theta[j])
-    if c2 - z * sd <= 0:
-        return None, None, sd
-    lo, hi = chi2_interval(c2, 2.0 * c2 ** 2 / sd ** 2, confidence)
-    return float(lo), float(hi), sd
+    return float(theta[j]) - z * sd > 0, sd
+
+
+def _interval(a, w, y, terms, j, confidence, cov_of, scale):
+    """``(low, high)`` of a resolved term ``j`` of the weighted least-squares fit of ``terms``
+    (bool, 5) to ``y``: the test of its estimate ``h = g y`` (``g`` its row of the gain,
+    :func:`_gain`) inverted at each ``theta_j = t`` (Neyman's construction, as :func:`upper_bound`;
+    Casella & Berger sec. 9.2.1). At ``t`` the others are refitted (:func:`_fixed_fit`, negative
+    values taken as 0): ``theta(t)``. The estimate's variance ``g C(theta(t)) g'``
+    (:func:`avar_covariance`, times ``scale``, the misfit scale) splits into the others' part
+    ``s0(t)^2`` (the same with ``theta_j = 0``), taken as normal, and the term's own, the rest,
+    taken as ``t chi2(nu) / nu`` with ``nu = 2 t^2 / own`` (Satterthwaite). With ``p = (1 - confidence) / 2``
+    and the two deviations added in quadrature, ``t`` is too high where
+    ``h < t - sqrt((t - t chi2_p(nu) / nu)^2 + (z s0)^2)``, too low where
+    ``h > t + sqrt((t chi2_(1-p)(nu) / nu - t)^2 + (z s0)^2)``; the interval lies between (bisection).
+    None where the estimate ``h`` is not above 0 (a singular fit's least-norm one, :func:`_gain`) or where
+    ``t ~ 0`` is not too low (the low end would be 0): the others' spread with
+    ``theta_j = 0`` refitted holds ``h`` though the spread at the estimate does not; the term is
+    then not resolved (Q on 1 of 88 resolved 10-min ``white-quant`` axes, ``tools/allan_coverage.py``).
+
+    The rule before, the chi-square interval with ``edf = 2 theta_j^2 / var_j`` at the estimate,
+    is right where the estimate is a scaled chi-square (variance ~ theta_j^2). B's is mostly the
+    others': on 10-min records of N = 0.01, B = 0.005, K = 0.003 (``tools/allan_coverage.py``,
+    ``white-flicker-rw``, seeds 41-80) three quarters of the variance of B^2 in the fit of N, B and
+    K are N's and K's. A scatter that does not grow with B, read at a high estimate, gives a large
+    edf and a lower end ``h^2 / (h + z sd)`` above ``h - z sd``: in that fit it left the true B
+    out on 15 of 120 axes, every one below the interval (a normal interval: 6), and on 14 of the 61
+    axes where the fit drawn resolves B (the high estimates); with the variance at the hypothesis,
+    on 5 of 61, for intervals a median 1.16x as wide (log high/low; K's 1.06x, N's 1.03x).
+    """
+    g = _gain(a, w, terms)[int(np.sum(terms[:j]))]
+    h = float(g @ y)
+    if not h > 0:  # (a singular fit's least-norm estimate, fewer taus than terms: the bisections never ended)
+        return None
+    p = 0.5 - confidence / 2.0
+    z = NormalDist().inv_cdf(1.0 - p)
+
+    def ends(t):  # t - low and high - t of the estimate's spread at t
+        mix = np.maximum(_fixed_fit(a, w, y, terms, j, t), 0.0)
+        var = max(float(g @ cov_of(mix) @ g), 0.0) * scale
+        mix[j] = 0.0
+        s0 = z * math.sqrt(max(float(g @ cov_of(mix) @ g), 0.0) * scale) if mix.any() else 0.0
+        own = var - (s0 / z) ** 2
+        if not own > 0:  # no share of its own at t (or t = 0): the others' spread alone
+            return s0, s0
+        nu = 2.0 * t * t / own
+        return (math.hypot(t - t * float(chi2_ppf(p, nu)) / nu, s0),
+                math.hypot(t * float(chi2_ppf(1.0 - p, nu)) / nu - t, s0))
+
+    lo, hi = h, 2.0 * h + 2.0 * ends(h)[1]
+    for _ in range(_STEPS):  # (the own part grows as t^2: some t is too high)
+        if h < hi - ends(hi)[0]:
+            break
+        lo, hi = hi, 4.0 * hi
+    while hi - lo > _BOUND_TOLERANCE * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if h < mid - ends(mid)[0] else (mid, hi)
+    high, lo, hi = hi, 0.0, h
+    if not h > _BOUND_TOLERANCE * h + ends(_BOUND_TOLERANCE * h)[1]:  # the others' spread at t ~ 0 holds h
+        return None
+    while hi - lo > _BOUND_TOLERANCE * hi:  # t ~ 0 is too low (h > z s0)
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if h > mid + ends(mid)[1] else (lo, mid)
+    return lo, high
 
 
 def _freed_points(a, w, y, active, freed, j, cov_of, z, confidence):
-    """The point estimate and ``_point`` of term ``j`` in the fit with each term of ``freed``
-    ({index: misfit scale}) forced in, in turn (:func:`fitted_intervals`): ``[(theta_j, point)]``."""
+    """The interval (:func:`_interval`) of term ``j`` in the fit with each term of ``freed``
+    ({index: misfit scale}) forced in, in turn (:func:`fitted_intervals`), None where ``j`` is not
+    resolved there (:func:`_resolved`): a list."""
     out = []
     for u, scale in freed.items():
         forced = active | (np.arange(a.shape[1]) == u)
         gain = _gain(a, w, forced)
         theta = np.zeros(a.shape[1])
         theta[forced] = gain @ y
-        out.append((float(theta[j]), _point(theta, gain, forced, j, cov_of(np.maximum(theta, 0.0)) * scale, z, confidence)))
+        resolved = _resolved(theta, gain, forced, j, cov_of(np.maximum(theta, 0.0)) * scale, z)[0]
+        out.append(_interval(a, w, y, forced, j, confidence, cov_of, scale) if resolved else None)
     return out
 
 
@@ -366,13 +428,23 @@ def _freed_terms(bounds, scales):
     resolved) that do not fall with tau (``TERM_SLOPE >= 0``: B, K, R) and whose fit with the term
     forced in is not singular (``scales``: :func:`_bound_of`'s).
 
+    Not Q: N's interval conditional on Q = 0 held N on 96-98 % of the axes without a Q
+    (``python tools/allan_coverage.py``, seeds 41-80, 10 min), and freeing Q widened it a median
+    1.6-fold there. The price: a Q the fit drops is held at 0 and N takes its share of the shortest
+    taus (``white-quant``, Q = 1e-4 deg on x, dropped on 24 of 40 10-min axes: N held on 13 of
+    them; on 105 of the case's 120 axes). Freed, N held on 115 of 120; freed on one side only (the
+    low end of N's interval with Q free: a Q above 0 lowers N), 115 of 120 too, for N's intervals a
+    median 1.25-1.30x as wide on the cases without Q.
+
     B is freed as K and R are (issue 37): held at 0, an unresolved B leaves its flat share of the
     long taus to a resolved K, whose interval then sits above the truth. On 10-min, 100 Hz records
     with N = 0.01, B = 0.005 deg/s and K = 0.003 together (attack pass 34a), K's interval, or its
     bound where not resolved, held K on 109 of 130 seeds (84 %), on 34 of 40 with K = 0.002; with B
     freed too, on 124 of 130 and 39 of 40 (white noise and K alone: 39 -> 40 of 40), for K's
     interval a median 1.00-1.17x as wide where resolved, N's unchanged (1.09x with white noise and
-    K alone), B's coverage unchanged (112 of 130). The bounds of the terms the fit drawn does not
+    K alone; these with the chi-square interval at the estimate that :func:`_interval` replaced:
+    with it, ``tools/allan_coverage.py`` ``white-flicker-rw``, seeds 41-80, 10 min, holds B on 56
+    of the 61 axes that resolve it, 47 before). The bounds of the terms the fit drawn does not
     resolve stay the union over K and R alone (:func:`_freed_bound`; B's own bound among them); a
     term resolved there but not once B is free is bounded by the union with B forced in as well."""
     return {u: scales[u] for u in bounds if scales[u] is not None and TERM_SLOPE[TERMS[u]] >= 0}
@@ -400,11 +472,11 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     Introduction, "Unconstrained averaging"); below 1 nothing changes (a fit better than its
     stated scatter is not taken as a reason to narrow the intervals).
     Every statement below uses the scaled ``var_j``: the resolution test, the interval, the bound.
-    A term is resolved when ``theta_j - z sd_j > 0`` (z: the normal
-    quantile of ``confidence``); its interval is the chi-square interval with
-    ``edf_j = 2 theta_j^2 / var_j`` (Satterthwaite), which stays positive and is skewed like the
-    Allan variance itself (scaling ``var_j`` by chi2_nu divides ``edf_j`` by it: the interval
-    widens by about sqrt(chi2_nu) on either scale, theta_j or its square root). A term not
+    A term is resolved when ``theta_j - z sd_j > 0`` (z: the normal quantile of ``confidence``)
+    and its interval's low end is above 0; the interval inverts the test of ``theta_j`` with the
+    variance at each hypothesis (:func:`_interval`: the others' share normal, the term's own
+    chi-square), skewed like the Allan variance where the term's own share dominates, widening
+    by about sqrt(chi2_nu) with the misfit (either scale, theta_j or its root). A term not
     resolved (fitted to zero, dropped, or within its uncertainty of zero) gets the upper bound of
     :func:`upper_bound` (the test inverted, with the term forced in); a fit that is zero for every
     term has no covariance, hence no bounds.
@@ -424,10 +496,8 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
     uncertainty of zero in one of those fits (``theta_j - z sd_j <= 0``), it is not resolved
     (``Coefficient.freed_by``: those terms). Every bound is that union too (:func:`_freed_bound`).
 
-    A bias instability B not resolved is freed too (:func:`_freed_terms`: why, and the bounds).
-    The terms not resolved that fall with tau
-    (Q, and N where dropped) are not so treated: N's interval conditional on Q = 0 held N on
-    95-97 % of the axes (``python tools/allan_coverage.py``), and freeing Q widened it 1.6-fold.
+    A bias instability B not resolved is freed too; the terms that fall with tau (Q, and N where
+    dropped) are not (:func:`_freed_terms`: why, and the bounds).
     Holding the term at ``u``'s upper bound instead (a profile over ``[0, U_u]``) left B unresolved
     on nearly every axis, even without a random walk (white noise and flicker: B's interval
     widened 2-fold, resolved on 0 of 30 axes of 10-min records, where it was on 19): a 95 %
@@ -456,9 +526,10 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
         return avar_covariance(tau_u, m_u, n_samples, mixture)[1]
 
     gain = _gain(a, w, active)
-    points = {j: _point(theta, gain, active, j, cov_y * scale, z, confidence) for j in np.flatnonzero(active)}
+    points = {j: _resolved(theta, gain, active, j, cov_y * scale, z) for j in np.flatnonzero(active)}
+    own = {j: _interval(a, w, y, active, j, confidence, cov_of, scale) for j in points if points[j][0]}
     bounds, scales = {}, {}
-    for u in (j for j in range(5) if not active[j] or points[j][0] is None):
+    for u in (j for j in range(5) if own.get(j) is None):
         bounds[u], scales[u] = _bound_of(a, w, y, active, u, confidence, cov_of, widen)
     freed = _freed_terms(bounds, scales) if free else {}
     rising = {u: s for u, s in freed.items() if TERM_SLOPE[TERMS[u]] > 0}  # the bounds: whatever K and R are
@@ -476,16 +547,16 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
             if upper is not None:
                 note += f"; {confidence_text(confidence)} upper bound {upper:.3g} {unit}"
             out[term] = Coefficient(term, None, upper=upper, note=note,
-                                    z_score=c2 / points[j][2] if active[j] else None)
+                                    z_score=c2 / points[j][1] if active[j] else None)
             continue
-        ends = [(c2, points[j])] + _freed_points(a, w, y, active, freed, j, cov_of, z, confidence)
-        freed_by = tuple(TERMS[u] for u, (_, p) in zip(freed, ends[1:]) if p[0] is None)
+        ends = [own[j]] + _freed_points(a, w, y, active, freed, j, cov_of, z, confidence)
+        freed_by = tuple(TERMS[u] for u, end in zip(freed, ends[1:]) if end is None)
         if freed_by:
             bound = _bound_of(a, w, y, active, j, confidence, cov_of, widen)[0]
             bound = _freed_bound(a, w, y, active, j, freed, bound, confidence, cov_of, widen)
             upper = None if bound is None else math.sqrt(bound) * root
             names = " and ".join(TERM_SYMBOL[t] for t in freed_by)
-            out[term] = Coefficient(term, None, upper=upper, z_score=c2 / points[j][2], freed_by=freed_by,
+            out[term] = Coefficient(term, None, upper=upper, z_score=c2 / points[j][1], freed_by=freed_by,
                                     note=f"not resolved: {sym} = {math.sqrt(c2) * root:.3g} {unit} is within the "
                                          f"{confidence_text(confidence)} uncertainty of zero once {names} (not resolved) "
                                          f"{'are' if len(freed_by) > 1 else 'is'} free"
@@ -493,7 +564,7 @@ def fitted_intervals(theta, tau, m, n_samples, used, confidence, avar, widen=Tru
             continue
         # the tau where this term's share of the model is largest: where it is read
         share = a[:, j] * c2 / (a @ theta)
-        out[term] = Coefficient(term, math.sqrt(c2) * root, math.sqrt(min(p[0] for _, p in ends)) * root,
-                                math.sqrt(max(p[1] for _, p in ends)) * root,
-                                tau_s=float(tau_u[int(np.argmax(share))]), z_score=c2 / points[j][2])
+        out[term] = Coefficient(term, math.sqrt(c2) * root, math.sqrt(min(e[0] for e in ends)) * root,
+                                math.sqrt(max(e[1] for e in ends)) * root,
+                                tau_s=float(tau_u[int(np.argmax(share))]), z_score=c2 / points[j][1])
     return out, chi2_nu, dof
