@@ -804,6 +804,23 @@ def test_cli_warns_that_lost_samples_make_the_analysis_not_meaningful(tmp_path, 
     assert read_recording(path).t_gaps == 59
 
 
+def test_the_written_gap_report_keeps_the_lost_samples_caveat(tmp_path, capsys):
+    """Attack 37d: the caveat that findings across gaps in t are not meaningful went to stderr only:
+    `gap --json` and `--report` (what is kept and read later) presented the findings without it
+    (`allan --json` keeps it, as t_gaps). Now it is the report's first note."""
+    from gyrofilter.cli import main
+
+    t = np.concatenate(([0.0], np.cumsum(np.where(np.arange(299) % 5 == 4, 0.02, 0.01))))
+    path = tmp_path / "gaps.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (300, 3)), 100.0, t_s=t))
+    out = tmp_path / "g.json"
+    assert main(["gap", str(path), "--sims", "10", "--json", str(out), "--report", str(tmp_path / "rep")]) == 0
+    capsys.readouterr()
+    said = f"{path}: t shows 59 gap(s) longer than 1.5 sample intervals; the gap analysis models uniform samples"
+    assert json.loads(out.read_text())["notes"][0].startswith(said)
+    assert said in (tmp_path / "rep" / "gap_report.md").read_text()
+
+
 #: the last commit before issue 24 (version 0.2.0): docs/gap.md compares the harder battery with it
 REGRESSION_BASE = "c82287b"
 

@@ -824,3 +824,20 @@ def test_accelerometer_frames_stay_aligned_after_failed_reads(rig):
     assert np.all(np.diff(idx) >= 1) and src.stats["resyncs"] == 2
     np.testing.assert_array_equal(rows[:, 1:4], gyro[idx])
     np.testing.assert_array_equal(rows[:, 5:8], accel[idx])
+
+
+@pytest.mark.parametrize("rate_hz", [100, 1000 / 256])
+def test_a_chip_that_resets_itself_mid_stream_ends_the_source(rig, rate_hz):
+    """Attack 37d: a chip reset mid-stream (a power dip: it comes back asleep, its FIFO off) left
+    FIFO_COUNT at 0 and read() returning nothing for ever: `record --duration 5` ran on without a
+    word (5 virtual hours seen). Now a source quiet for 1 s (10 sample intervals where longer)
+    ends with DeviceError naming the registers that lost the configuration; the rows before it are kept."""
+    clock, model, bus = rig(gyro_lsb=indexed_gyro(5000))
+    src = open_src(clock, sample_rate_hz=rate_hz)
+    rows, notes = read_for(src, clock, 3.0)
+    assert len(rows) >= 2 and not notes
+    model.write(R.PWR_MGMT_1.address, [0x80])  # DEVICE_RESET: the register state of a power-up
+    reset_at = clock.now()
+    with pytest.raises(DeviceError, match=r"no sample for .* lost its configuration \(PWR_MGMT_1 \(0x6B\) 0x40"):
+        read_for(src, clock, 60.0)
+    assert clock.now() - reset_at < max(1.0, 10 / rate_hz) + 1.0

@@ -122,7 +122,8 @@ def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refu
     warnings and the gaps in ``t`` go to ``warn(text)``, the steps to ``progress(text)``. Only the
     columns the analysis uses are kept, integer (``lsb``) readings as float32, which holds them
     exactly (:func:`gap_columns`). The filter's output (``filtered_from``) is analysed, as ``allan``
-    analyses it, with a first note saying that the findings describe it, not the sensor."""
+    analyses it, with a first note saying that the findings describe it, not the sensor; the warning
+    of gaps in ``t`` is a note too (after that one), as ``allan --json`` keeps it."""
     say = progress or (lambda text: None)
     rec = read_recording(path, columns=gap_columns, compact=True)
     motion = [(a, why) for i, a in enumerate(AXES) if (why := moved(axis_dps(rec, i), rec.sample_rate_hz))]
@@ -133,9 +134,14 @@ def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refu
         warn(f"{path}: axis {a}: {why}; the gap analysis models a still gyro, so its findings describe the motion")
     for text in rec.warnings:
         warn(text)
-    warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful", warn)
+    gaps = []  # said now, and kept as the report's first note (its findings are read later)
+    warn_about_gaps(rec, "the gap analysis models uniform samples: its findings across the gaps are not meaningful",
+                    gaps.append)
+    for text in gaps:
+        warn(text)
     say(f"read {len(rec)} samples at {rec.sample_rate_hz:g} Hz")
     report = analyse_gap(rec, seed=COMMAND_SEED, n_sims=n_sims, progress=progress, recording_name=path, bootstrap=bootstrap)
+    report["notes"][:0] = gaps
     filtered = filtered_words(rec.header)
     if filtered:  # analysed, as allan analyses it, but said where the findings are read
         report["notes"].insert(0, f"the recording is {filtered}: the gap analysis models a sensor's samples, so its "

@@ -165,3 +165,25 @@ def temperature_c(raw, lsb_per_c=R.TEMP_LSB_PER_C, offset_c=R.TEMP_OFFSET_C):
     (:data:`CHIPS`). Returns the temperature in deg C as floats, the shape of ``raw``.
     """
     return np.asarray(raw, dtype=float) / lsb_per_c + offset_c
+
+
+#: a source with no frame for this long (s), or for 10 sample intervals where that is longer, has
+#: stopped: a chip reset by a power dip comes back asleep with its FIFO off, FIFO_COUNT 0 for ever
+STALL_S = 1.0
+
+
+def stall_s(sample_rate_hz):
+    """How long (s) a source at ``sample_rate_hz`` (Hz) may go without a frame: max(:data:`STALL_S`, 10 / f_s)."""
+    return max(STALL_S, 10.0 / sample_rate_hz)
+
+
+def stall_text(where, quiet_s, last_t_s, registers):
+    """The DeviceError text of a source quiet for ``quiet_s`` (s) after its sample at ``last_t_s``
+    (s): ``registers`` holds (register, value read now, value written) of each the driver configured;
+    those that differ say the chip lost its configuration (a reset, e.g. by a power dip, after
+    which the bias is another power-up's: the record cannot go on as one)."""
+    lost = [f"{reg} 0x{got:02X} (0x{put:02X} written)" for reg, got, put in registers if got != put]
+    why = (f"the chip lost its configuration ({', '.join(lost)}): it was reset, e.g. by a power dip, and its bias "
+           "after a new power-up differs; record again" if lost else
+           "its registers hold the configuration; check its power, wiring and clock")
+    return f"{where}: no sample for {quiet_s:.3g} s after t={last_t_s:.6g} s; {why}"

@@ -43,7 +43,7 @@ from . import registers as R
 from ..base import Source
 from .bus import as_int, bus_name, bus_number, open_bus
 from .chip import (CHIPS, MPU6050_ID, auto_dlpf_cfg, chip_ids, decode_fifo, frame_layout, frame_values,
-                   lsb_per_dps_for, lsb_per_g_for, sample_rate_settings)
+                   lsb_per_dps_for, lsb_per_g_for, sample_rate_settings, stall_s, stall_text)
 
 __all__ = ["open_mpu6050", "MPU6050Source"]
 
@@ -306,6 +306,8 @@ class MPU6050Source(Source):
         # read every written register back (its last value); refuse to start on a mismatch
         final = {reg.address: (reg, value) for reg, value in writes}
         final[pm1.address] = (pm1, pm1.put(0, "CLKSEL", R.CLKSEL_PLL_XGYRO))
+        # what a chip reset undoes, read where the frames stop (:meth:`_poll`)
+        self._watched = [(pm1, final[pm1.address][1]), (R.FIFO_EN, fifo_en), (R.USER_CTRL, R.USER_CTRL.mask("FIFO_EN"))]
         for reg, value in final.values():
             got = self._read_byte(reg)
             if got != value:
@@ -457,6 +459,9 @@ class MPU6050Source(Source):
                           f"FIFO reset")
                 return empty
             if count == 0:
+                if (quiet_s := t_count - self._anchor_time) > stall_s(self.sample_rate_hz):  # stopped for good
+                    raise DeviceError(stall_text(f"{self.chip_name} at {self._where()}", quiet_s, (self._next_index - 1) /
+                                      self.sample_rate_hz, [(r, self._read_byte(r), v) for r, v in self._watched]))
                 return empty
             buf, exc = self._read_fifo(count)
             if buf and self._overflowed_while_read():
