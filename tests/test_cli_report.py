@@ -470,3 +470,16 @@ def test_a_record_that_moves_in_the_calibration_window_names_the_commands_that_t
     assert said.startswith("calibration: the sensor moved (axis x"), said
     assert said.endswith("keep it still for the first 2.0 s; report filters with the default settings; replay and run "
                          "take a saved calibration (--calibration FILE from --save-calibration on a still recording)"), said
+
+
+def test_a_record_with_gaps_in_t_says_the_gap_caveat_once_on_the_page(tmp_path, capsys):
+    """Attack pass 37d made the caveat of gaps in t the gap report's first note; the page showed it twice,
+    under Warnings and under the gap analysis's notes: said once, under Warnings."""
+    t = np.concatenate(([0.0], np.cumsum(np.where(np.arange(2999) % 50 == 49, 0.02, 0.01))))
+    path = tmp_path / "gaps.csv"
+    write_recording(str(path), Recording.from_dps(np.random.default_rng(0).normal(0, 0.1, (3000, 3)), 100.0, t_s=t))
+    out, data = report(tmp_path, capsys, str(path), "--sims", "10")
+    caveat = "the gap analysis models uniform samples"
+    assert any(caveat in note for note in data["gap"]["notes"])  # the document keeps it, as gap --json does
+    page = out.read_text().split("<script")[0]
+    assert page.count(html.escape(caveat, quote=True)) == 1

@@ -244,8 +244,9 @@ def _gap(data):
     if g.get("uncertain"):
         out.append(f"<h3>{html_text(UNCERTAIN_HEADING)}</h3><p>Not in the extended model.</p><ul>"
                    + "".join(f"<li>{html_text(uncertain_text(e, sep=' = '))}.</li>" for e in g["uncertain"]) + "</ul>")
-    if g.get("notes"):
-        out.append("<h3>Notes</h3><ul>" + "".join(f"<li>{html_text(note)}</li>" for note in g["notes"]) + "</ul>")
+    notes = [note for note in g.get("notes") or () if note not in data["warnings"]]  # (said once, under Warnings)
+    if notes:
+        out.append("<h3>Notes</h3><ul>" + "".join(f"<li>{html_text(note)}</li>" for note in notes) + "</ul>")
     out.append("<h3>Extended model</h3>" + _extended(g.get("extended_model")))
     return "".join(out)
 
