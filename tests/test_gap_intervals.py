@@ -451,3 +451,54 @@ def test_the_inversion_runs_only_the_estimators_its_finding_reads(monkeypatch):
     monkeypatch.setattr(det, "resonance_fit", lambda *args, **kwargs: fits.append(args))
     assert reestimate_axis(x, 100.0, None, cands, wanted=[1]) == [full[0], full[1], None, None]
     assert fits == []
+
+
+#: the package's model (gyrofilter/data/mpu6050_model.json): a bias instability and a temperature
+#: coefficient on every axis
+PACKAGE_MODEL = REPO / "gyrofilter" / "data" / "mpu6050_model.json"
+
+
+def _true_effect(model, axis, effect, name):
+    return next(e[name] for e in model["axes"][axis]["effects"] if e["effect"] == effect)
+
+
+def test_a_temperature_findings_replicates_carry_the_wander_its_axis_holds_but_does_not_name():
+    """Issue 37: the bootstrap of a temperature finding on an axis that names no wander simulated
+    white noise about the coefficient, and the axis's bias instability (real, unnamed) was missing
+    from its spread. The replicates now carry the wander's maximum likelihood level: on x of the
+    package model's 10-minute record, seed 4 (b_dps 0.0015), the fitted B is within a factor 3 of
+    the truth; none where the axis names a wander or has no temperature finding."""
+    from types import SimpleNamespace
+
+    from gyrofilter.analysis.gap.detectors.common import Candidate
+
+    model = json.loads(PACKAGE_MODEL.read_text())
+    rec = simulate(model, 600.0, seed=4, accelerometer=False)
+    temp = np.asarray(rec.temp_c, dtype=float)
+    coefficient = _true_effect(model, "x", "temperature", "coefficient_dps_per_c")
+    temperature = Candidate("temperature", {"coefficient_dps_per_c": coefficient}, 0.0, 0.0, "",
+                            component=coefficient * (temp - temp.mean()))
+    inp = SimpleNamespace(rec=rec, sample_rate_hz=rec.sample_rate_hz)
+    (wander,) = gi.unnamed_wander(inp, 0, [temperature])
+    b_dps = _true_effect(model, "x", "bias_instability", "b_dps")
+    assert wander["effect"] == "bias_instability" and b_dps / 3 < wander["b_dps"] < 3 * b_dps, wander
+    named = Candidate("bias_instability", {"b_dps": b_dps}, 0.0, 0.0, "")
+    assert gi.unnamed_wander(inp, 0, [temperature, named]) == []
+    assert gi.unnamed_wander(inp, 0, [Candidate("rate_ramp", {"r_dps_per_s": 1e-5}, 0.0, 0.0, "")]) == []
+
+
+@pytest.mark.slow
+def test_temperature_coefficients_of_the_package_model_lie_inside_their_intervals():
+    """Issue 37: the package model's 10-minute records, seeds 0-7: the temperature coefficient named
+    on an axis lies inside its interval on at least 90 % of the findings. Before the replicates
+    carried the unnamed wander, 16 of 19 (seed 2's y, seed 4's x and y missed: x 0.02 outside
+    [0.0161, 0.0188]); measured after, on seeds 0-19: 44 of 45 (98 %; before, 35 of 45)."""
+    model = json.loads(PACKAGE_MODEL.read_text())
+    ok = n = 0
+    for seed in range(8):
+        report = analyse_gap(simulate(model, 600.0, seed=seed, accelerometer=False))  # as the commands run it
+        for f in report["findings"]:
+            if f["effect"] == "temperature":
+                low, high = f["params_ci95"]["coefficient_dps_per_c"]
+                ok, n = ok + (low <= _true_effect(model, f["axis"], "temperature", "coefficient_dps_per_c") <= high), n + 1
+    assert n >= 12 and ok >= 0.9 * n, (ok, n)
