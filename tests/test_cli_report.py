@@ -217,7 +217,7 @@ def test_the_gap_section_says_why_the_covariate_is_named_once():
                              f"{WHY_THE_COVARIATE}; axis {a} as a whole departs most from the baseline simulations in the spike count",
                  "alternatives": [{"effect": "warmup", "params": {"amplitude_dps": 0.06, "tau_s": 840.0}, "D": 0.84}]}
                 for a in AXES]
-    page = _gap({"options": {}, "gap": {"n_simulations": 24, "baseline": {"axes": {a: axis for a in AXES}},
+    page = _gap({"options": {}, "warnings": [], "gap": {"n_simulations": 24, "baseline": {"axes": {a: axis for a in AXES}},
                                                  "findings": findings, "notes": ["first note", "second note"],
                                                  "extended_model": None}})
     assert page.count(html.escape(WHY_THE_COVARIATE)) == 1
