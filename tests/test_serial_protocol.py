@@ -236,6 +236,22 @@ def test_a_header_changing_the_units_hands_out_the_rows_before_it_in_its_chunk()
     np.testing.assert_allclose(info.value.rows[:, 0], [0.01, 0.02, 0.03])
 
 
+@pytest.mark.parametrize("split", [False, True])
+def test_a_header_changing_the_units_hands_out_a_line_whose_counter_jumped_before_it(split):
+    """Attack pass 37e: the last line before a header that changes the units, whose counter jumped (held for the
+    next line to judge it), was dropped with the UnitsConflict: 20 samples sent, 19 written, and the line counted
+    in no outcome. The header ends the stream in those units: that line is judged as at the stream's end."""
+    p = LineParser()
+    p.feed(HEADER + _lines([0, 1, 2]))
+    rows = [p.feed(_lines([3, 50]))] if split else []
+    with pytest.raises(UnitsConflict, match="changed the units") as info:
+        p.feed(_lines([] if split else [3, 50]) + HEADER.replace(b"131", b"65.5") + _lines([51]))
+    rows = np.concatenate(rows + [info.value.rows])
+    np.testing.assert_array_equal(rows[:, 1:4], _expected([3, 50]))
+    np.testing.assert_allclose(rows[:, 0], [0.03, 0.5])
+    assert p.stats["samples"] == 5 and p.stats["lost_samples"] == 46
+
+
 def test_parser_first_header_errors():
     with pytest.raises(DeviceError, match="version"):
         LineParser().feed(b"# gyrofilter-serial: 2 gyro_unit=dps sample_rate_hz=1\n")

@@ -296,9 +296,15 @@ class LineParser:
             self.stats["lines"] += 1
             self._bad(self._buf, "partial_lines", "cut off at the end of the stream")
         self._buf, self._overlong = b"", False
-        held, self._held = self._held, None
         if self.fields is None:
             return self._made([], final=True)
+        return self._released()
+
+    def _released(self):
+        """The row of a line whose counter jumped, held for the next line to judge it (:meth:`_out_of_sequence`),
+        judged as the stream's last: the stream ends (:meth:`finish`) or ends in its units (a header changing
+        them: attack pass 37e, that line was dropped with the UnitsConflict)."""
+        held, self._held = self._held, None
         return self._rows(held[None, :], final=True) if held is not None else self._empty()
 
     @property
@@ -388,7 +394,8 @@ class LineParser:
                 try:
                     self._header_line(line)
                 except UnitsConflict as exc:
-                    exc.rows = np.concatenate(out) if out else self._empty()
+                    out.append(self._released())
+                    exc.rows = np.concatenate(out)
                     raise
                 except (DeviceError, SettingsError) as exc:
                     if self.header is None:
