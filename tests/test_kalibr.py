@@ -157,6 +157,17 @@ def test_the_default_range_is_cut_to_a_short_record_and_a_range_given_is_checked
         tau_range(tau, (tau[20] * 0.99, tau[20] * 1.01))
 
 
+def test_a_range_given_as_the_cluster_times_are_printed_is_taken():
+    """Attack pass 37f: at 7.3 Hz the record's cluster times run from 1/7.3 = 0.1369863.. s, printed
+    (refusal, yaml comment "cut to the record's 0.136986 .. 100 s") to 6 digits; --kalibr-tau-s
+    0.136986,100, the printed numbers, was refused as "reaching beyond ... 0.136986 .. 333.288 s"."""
+    tau = np.array([1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 2433]) / 7.3
+    assert tau_range(tau, (float(f"{tau[0]:g}"), 100.0)) == (float(f"{tau[0]:g}"), 100.0, False)
+    assert tau_range(tau, (1.0, float(f"{tau[-1]:g}")))[:2] == (1.0, float(f"{tau[-1]:g}"))
+    with pytest.raises(SettingsError, match="reaches beyond"):  # a tenth of a per mille beyond still is
+        tau_range(tau, (tau[0] * (1 - 1e-4), 100.0))
+
+
 def test_an_accelerometer_is_written_in_its_own_keys_and_units():
     """Sensor-agnostic: the same results as an accelerometer's (m/s^2) give accelerometer keys in
     m/s^2/sqrt(Hz) and m/s^3/sqrt(Hz), the numbers not converted (SI already); the gyroscope's

@@ -29,8 +29,10 @@ from .model import ANGLE_RANDOM_WALK, RATE_RANDOM_WALK
 #: the default range of integration times (s) the bounding pair covers (issue 39: 0.1-100 s, the
 #: camera-IMU intervals of a visual-inertial system up to a long stand-still)
 DEFAULT_TAU_RANGE_S = (0.1, 100.0)
-#: relative slack when a tau is compared with a range end (the taus are m / sample_rate_hz)
-_TAU_SLACK = 1e-9
+#: relative slack when a tau is compared with a range end (the taus are m / sample_rate_hz): 1e-5, beyond
+#: the 5e-6 of a tau printed to 6 digits (%g, as the refusals and the yaml give them), so that a range
+#: given as printed is the one it names (at 7.3 Hz, 0.136986 for 1/7.3 = 0.1369863.. s, which 1e-9 refused)
+_TAU_SLACK = 1e-5
 
 
 @dataclass(frozen=True)
