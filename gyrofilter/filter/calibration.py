@@ -58,6 +58,7 @@ def noise_calibration_samples(sample_rate_hz, calibration_s):
                             f"{float(sample_rate_hz):g} Hz; the calibration needs at least {MIN_SAMPLES} to measure the noise")
     return c
 
+
 N_SUB_WINDOWS = 10
 NOISE_FLOOR_DPS = 1e-9  # noise scale used for perfectly constant input, where sigma is 0
 MAX_BIAS_DPS = 20.0  # the largest plausible bias (deg/s): the MPU6050's initial zero-rate-output tolerance

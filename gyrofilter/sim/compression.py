@@ -55,12 +55,9 @@ def compression_too_strong(gamma_per_dps2, rms_dps):
 
 
 def max_gamma_per_dps2(rms_dps):
-    """The largest γ ((deg/s)⁻²) a model takes at σ = ``rms_dps``: not :func:`compression_too_strong`,
-    at most MAX_COMPRESSION / σ²."""
-    gamma = MAX_COMPRESSION / float(rms_dps) ** 2
-    while compression_too_strong(gamma, rms_dps):
-        gamma = math.nextafter(gamma, 0.0)
-    return gamma
+    """The largest γ ((deg/s)⁻²) a model takes at σ = ``rms_dps``: MAX_COMPRESSION / σ², whose γ σ² is
+    within a few ulps of the bound, inside :func:`compression_too_strong`'s rounding slack."""
+    return MAX_COMPRESSION / float(rms_dps) ** 2
 
 
 def compression_gain(gamma_per_dps2, rms_dps):

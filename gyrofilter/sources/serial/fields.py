@@ -50,8 +50,6 @@ def header_words(line, where):
     return values
 
 
-
-
 def make_units(values, where):
     """Checked recording-header units from header words (text: DeviceError for a bad value) or source options
     (numbers: SettingsError), messages naming ``where``."""
