@@ -57,9 +57,13 @@ def test_short_windows_of_low_sample_rates():
         calibrate(x, 5.0)
     # 3 samples (3 s at 1 Hz): the mean and the noise level; too few to compare sub-windows
     x = still(3)
-    x[2] += 1.0
+    x[2] += 0.5  # within q of the others: a sample, averaged in
     cal = calibrate(x, 1.0)
-    assert cal.samples == 3 and min(cal.noise_std_dps) > 0
+    assert cal.samples == 3 and min(cal.noise_std_dps) > 0 and cal.bias_dps == pytest.approx(tuple(x.mean(axis=0)))
+    x[2] += 2.5  # a gross error: a window this short may leave out none (10 % of 3), so it is refused
+    with pytest.raises(CalibrationError, match=r"axis x: 1 of 3 samples lie beyond 1 deg/s of the window's median, "
+                                               r"more than the 0 gross errors"):
+        calibrate(x, 1.0)
 
 
 @pytest.mark.parametrize("preset", ["paper", "recommended"])

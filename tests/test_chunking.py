@@ -141,7 +141,7 @@ def test_filter_timed_stamps_each_row_with_its_blocks_last_sample(size):
 def test_first_block_index_follows_a_calibration_retry():
     """A first window that moved is refused: the blocks start after the second window (400)."""
     x = 0.3 + 0.05 * np.random.default_rng(5).standard_normal((1000, 3))
-    x[50:60] += 50.0  # a jolt in the first calibration window
+    x[50:80] += 50.0  # a jolt in the first calibration window (0.3 s: beyond the 10 % of gross errors it leaves out)
     f = GyroFilter(RATE_HZ, preset="paper", calibration_retry_s=4.0)
     rows = f.filter(x[:700])
     assert f.first_block_index == 400 and len(rows) == 60

@@ -187,6 +187,14 @@ def bias_text(bias_dps):
     return ", ".join(f"{b:+.4f}" for b in bias_dps) + " deg/s"
 
 
+def gross_errors_text(rejected):
+    """The calibration's gross errors left out per axis (``Calibration.rejected``) as the commands
+    say them after its bias: ", gross errors left out: x 0, y 1, z 0", or "" when there were none."""
+    if not any(rejected):
+        return ""
+    return ", gross errors left out: " + ", ".join(f"{axis} {k}" for axis, k in zip(AXES, rejected))
+
+
 def print_summary(path, head, filt, raw, filtered, calibration_from=None, smoothed=False):
     """The per-axis table: raw and filtered mean/std (:class:`~gyrofilter.streamstats.RunningMoments`),
     std ratio, rejected samples. ``calibration_from``: the file the bias was loaded from, if any;
@@ -196,6 +204,7 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None, smooth
     cal = filt.calibration
     if cal is not None:
         source = f"loaded from {calibration_from}" if calibration_from else f"start-up calibration, {cal.samples} samples"
+        source += gross_errors_text(cal.rejected)
         tell(f"  bias ({source}): " + ", ".join(_number(b, 0, sign=True) for b in cal.bias_dps) + " deg/s")
     how = ", smoothed forward-backward" if smoothed else ""
     if filt.compensates_temperature:

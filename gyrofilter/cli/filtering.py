@@ -12,7 +12,7 @@ from ..filter.tempcomp import coefficients_from_model
 from ..inputs import did_you_mean, parse_json, quote
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT, filtered_words
 from ..sim.model import load_model, validate_model
-from .console import bias_text
+from .console import bias_text, gross_errors_text
 from .options import decimal, file_name
 from .outputs import replacing
 
@@ -23,9 +23,10 @@ ROW_FORMATS = [EXACT_FORMAT] + [FILTERED_FORMAT] * 3
 ROW_FORMAT = ",".join(ROW_FORMATS)
 
 
-def calibrated_note(bias_dps):
-    """The note a live output gets when the start-up calibration is done (its header cannot have the bias)."""
-    return "calibrated: bias " + bias_text(bias_dps)
+def calibrated_note(filt):
+    """The note a live output gets when the start-up calibration of the filter ``filt`` is done (its
+    header cannot have the bias): the bias and the gross errors its window left out."""
+    return "calibrated: bias " + bias_text(filt.bias_dps) + gross_errors_text(filt.calibration.rejected)
 
 
 def add_filter_arguments(parser):

@@ -154,7 +154,8 @@ class Replay:
 
     def summary(self):
         """The numbers of replay's summary table (:func:`~gyrofilter.cli.console.print_summary`),
-        JSON-ready: the preset, rates (Hz), the start-up bias (deg/s, None without a calibration),
+        JSON-ready: the preset, rates (Hz), the start-up bias (deg/s, None without a calibration) and
+        the gross errors its window left out per axis,
         rows, and per axis the raw and filtered mean and standard deviation (deg/s; None where
         undefined), their std ratio and the rejected samples."""
         filt, raw, filtered = self.filt, self.raw, self.filtered
@@ -166,6 +167,7 @@ class Replay:
             "samples_in": filt.samples_in, "rows_out": filtered.count,
             "bias_dps": None if cal is None else list(cal.bias_dps),
             "calibration_samples": None if cal is None else cal.samples,
+            "calibration_rejected": None if cal is None else list(cal.rejected),
             "raw_mean_dps": raw.mean, "raw_std_dps": raw.std, "filtered_mean_dps": filtered.mean,
             "filtered_std_dps": filtered.std, "std_ratio": ratio, "rejected": [int(n) for n in filt.rejected]})
 
@@ -210,7 +212,7 @@ class Replay:
             calibrating = filt.calibrating
             row = filt.update(sample, temp)
             if calibrating and not filt.calibrating:  # the bias the --out header has, as run notes it
-                self.print_rows(note_line(filtering.calibrated_note(filt.bias_dps)).rstrip("\n"))
+                self.print_rows(note_line(filtering.calibrated_note(filt)).rstrip("\n"))
             if row is not None:  # a row comes out when its block's last sample, this one, goes in
                 rows.append(row)
                 t_rows.append(t)

@@ -177,7 +177,7 @@ def _run(args, source, sinks):
                     except SampleError as exc:  # a sample beyond the filter's range: name the source and the sample
                         raise SettingsError(f"source {args.source}: sample {filt.samples_in + exc.row}: {exc.reason}") from None
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
-                        writer.note(filtering.calibrated_note(filt.bias_dps))
+                        writer.note(filtering.calibrated_note(filt))
                     if len(out):
                         ends = filt.block_end_indices(len(out)) - (filt.samples_in - len(rows))
                         writer.write(np.column_stack([t_out, out, rows[ends][:, accel_idx]]))

@@ -18,7 +18,7 @@ import numpy as np
 
 from .reference import block_mean_masked
 from ..errors import SettingsError
-from ..filter.calibration import calibration_samples, noise_calibration_samples
+from ..filter.calibration import calibration_samples, noise_calibration_samples, without_gross_errors
 from ..filter.pipeline import GyroFilter
 from ..filter.smoother import Smoother
 
@@ -43,13 +43,21 @@ class FilterSpec:
     run: Callable = field(repr=False)
 
 
-def startup_bias(x_dps, sample_rate_hz, calibration_s):
-    """Bias = mean of the first ``calibration_s`` seconds of ``x_dps`` ((N, 3), deg/s, sampled at
-    ``sample_rate_hz``, Hz) (paper 001, 2.1): (bias (3,) in deg/s, samples)."""
+def startup_window(x_dps, sample_rate_hz, calibration_s):
+    """The first ``calibration_s`` seconds of ``x_dps`` ((N, 3), deg/s, sampled at ``sample_rate_hz``,
+    Hz) with their gross errors left out as the package's calibration leaves them out
+    (:func:`~gyrofilter.filter.calibration.without_gross_errors`, paper 001's q): (window (c, 3) in
+    deg/s, c). Its mean is the bias (paper 001, 2.1)."""
     c = calibration_samples(sample_rate_hz, calibration_s)
     if c < 1 or c > len(x_dps):
         raise SettingsError(f"calibration of {calibration_s} s needs 1..{len(x_dps)} samples, got {c}")
-    return x_dps[:c].mean(axis=0), c
+    return without_gross_errors(x_dps[:c])[0], c
+
+
+def startup_bias(x_dps, sample_rate_hz, calibration_s):
+    """(bias (3,) in deg/s, samples c): the mean of :func:`startup_window` (arguments as there)."""
+    window, c = startup_window(x_dps, sample_rate_hz, calibration_s)
+    return window.mean(axis=0), c
 
 
 def run_raw(x_dps, sample_rate_hz, calibration_s):
@@ -143,9 +151,9 @@ def cv_kalman(q_spectral_density, order=2):
         from scipy.signal import lfilter, ss2tf
 
         noise_calibration_samples(sample_rate_hz, calibration_s)  # R is the window's variance
-        bias, c = startup_bias(x_dps, sample_rate_hz, calibration_s)
-        z = x_dps[c:] - bias
-        var = np.maximum(np.var(x_dps[:c], axis=0, ddof=1), 1e-12)
+        window, c = startup_window(x_dps, sample_rate_hz, calibration_s)
+        z = x_dps[c:] - window.mean(axis=0)
+        var = np.maximum(np.var(window, axis=0, ddof=1), 1e-12)
         y = np.empty_like(z)
         for a in range(3):
             _, A, K, H = cv_kalman_design(sample_rate_hz, var[a], q_spectral_density, order)

@@ -50,6 +50,9 @@ import numpy as np
 from ..units import MAD_TO_SIGMA
 
 MAD_LIMIT = 4 * MAD_TO_SIGMA  # median_slope: threshold in robust-sigma units of the residuals
+#: paper 001's gross-error threshold q (deg/s): the default of the filter's setting outlier_q_dps
+#: (gyrofilter.filter.settings says why) and of the start-up calibration's gross errors
+PAPER_Q_DPS = 1.0
 
 
 def average_block(values, q):

@@ -8,6 +8,23 @@ the mean per axis and subtract it from every later sample:
 A wrong bias is worse than none, so the window is checked before it is accepted. Under
 stillness the window is a constant plus noise. The check, per axis:
 
+0. Gross errors (paper 001's single-sample spikes of more than 200 LSB) are found by the rule of
+   the block averaging (section 2.2), over the whole window and centred on its median, which one
+   spike cannot move:
+
+       c = median(x),  s = 1.4826 median|x_i - c|,  x_i is a gross error when |x_i - c| > max(q, 6 s)
+
+   (q: the filter's ``outlier_q_dps``, 1 deg/s; 6 s keeps the noise of a sensor noisier than q).
+   Each is replaced by the mean of the axis's other samples before anything below is computed, so
+   the bias is the mean of the samples that are not gross errors and a spike neither moves it nor
+   raises the noise (its differences that touch a gross error are left out too);
+   ``Calibration.rejected`` counts them. An axis with more than :data:`MAX_GROSS_FRACTION` (10 %)
+   of its samples beyond the limit is refused: that is motion (a turn) or a faulty sensor, not a few
+   spikes (a sensor with 4 % spikes holds more than 10 % in a 200-sample window with a probability
+   of 1e-4). (One spike of 30 deg/s in 2 s at 100 Hz moved the bias
+   by 0.15 deg/s and the noise from 0.05 to 2.1 deg/s before; the stillness statistic below scales
+   with the same noise, so it let the window pass whatever the spike's size.)
+
 1. White-noise level from first differences, insensitive to slow changes:
    sigma = std(x[i+1] - x[i]) / sqrt(2).
 2. Split the window into ``n_sub`` = min(10, n // 2) equal sub-windows of m samples and take their means
@@ -38,7 +55,8 @@ import numpy as np
 from ..errors import CalibrationError, SettingsError
 from ..files import write_text_whole
 from ..inputs import check_number, load_json, python_value, quote
-from ..units import AXES, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain, shown
+from ..units import AXES, MAD_TO_SIGMA, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain, shown
+from .averaging import PAPER_Q_DPS
 from .samples import as_numbers
 
 
@@ -69,6 +87,10 @@ MIN_SAMPLES = 3  # fewer samples cannot measure the noise
 #: the most samples a calibration window holds: 1e9, beyond an hour (settings.MAX_CALIBRATION_S) at
 #: the highest sample rate (units.MAX_SAMPLE_RATE_HZ), 3.6e8
 MAX_SAMPLES = 10**9
+#: a still window's sample is a gross error beyond max(q, GROSS_ERROR_Z robust sigmas) of its median
+GROSS_ERROR_Z = 6.0
+#: the most gross errors a still window may hold per axis, as a fraction of its samples (module docstring)
+MAX_GROSS_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
@@ -77,6 +99,8 @@ class Calibration:
 
     ``temp_c`` is the mean temperature of the window (deg C) when temperatures were given: the
     reference T0 of temperature compensation (gyrofilter.filter.tempcomp), None otherwise.
+    ``rejected``: the gross errors per axis that the window's bias and noise leave out (module
+    docstring, step 0).
     """
 
     bias_dps: tuple
@@ -84,6 +108,7 @@ class Calibration:
     samples: int
     sample_rate_hz: float
     temp_c: float | None = None
+    rejected: tuple = (0, 0, 0)
 
     def to_json(self) -> str:
         """The calibration as JSON text (docs/formats.md, section 5): only what :meth:`load` reads
@@ -99,6 +124,7 @@ class Calibration:
                 "samples": cal.samples,
                 "sample_rate_hz": cal.sample_rate_hz,
                 **({} if cal.temp_c is None else {"temp_c": cal.temp_c}),
+                "rejected": list(cal.rejected),
                 "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
             },
             indent=2, allow_nan=False,
@@ -116,7 +142,8 @@ class Calibration:
         ``bias_dps`` 3 numbers in [-max_bias_dps, max_bias_dps] (the pipeline passes its setting),
         ``noise_std_dps`` 3 numbers in [0, MAX_NOISE_STD_DPS], ``samples`` a whole number in
         [MIN_SAMPLES, MAX_SAMPLES], ``sample_rate_hz`` as :func:`gyrofilter.units.check_sample_rate_hz`
-        takes it, ``temp_c`` None or in ``units.TEMP_RANGE_C``. The one check of a calibration,
+        takes it, ``temp_c`` None or in ``units.TEMP_RANGE_C``, ``rejected`` 3 whole numbers in
+        [0, samples]. The one check of a calibration,
         loaded (:meth:`load`) or given in code (``GyroFilter(calibration=...)``)."""
         def number(key, value, **bounds):
             return check_number(value, f"{where}: {key}", error=CalibrationError, **bounds)
@@ -129,6 +156,7 @@ class Calibration:
             return tuple(number(f"{key} {axis}", v, **bounds) for axis, v in zip(AXES, values))
 
         low_c, high_c = TEMP_RANGE_C
+        samples = number("samples", self.samples, low=MIN_SAMPLES, high=MAX_SAMPLES, integer=True)
         try:
             bias = triple("bias_dps", self.bias_dps, low=-max_bias_dps, high=max_bias_dps)
         except CalibrationError as exc:  # a real bias beyond the setting: name the value that takes it, as calibrate does
@@ -139,17 +167,19 @@ class Calibration:
         return Calibration(
             bias,
             triple("noise_std_dps", self.noise_std_dps, low=0.0, high=MAX_NOISE_STD_DPS),
-            number("samples", self.samples, low=MIN_SAMPLES, high=MAX_SAMPLES, integer=True),
+            samples,
             check_sample_rate_hz(number("sample_rate_hz", self.sample_rate_hz), f"{where}: sample_rate_hz",
                                  CalibrationError),
             None if self.temp_c is None else number("temp_c", self.temp_c, low=low_c, high=high_c),
+            triple("rejected", self.rejected, low=0, high=samples, integer=True),
         )
 
     @classmethod
     def load(cls, path, *, max_bias_dps=MAX_BIAS_DPS) -> "Calibration":
         """Read a calibration saved by :meth:`save` from the file ``path`` (through
         :func:`gyrofilter.inputs.load_json`): its ``gyrofilter-calibration`` key, when present, is
-        the integer 1 (the only version); the fields are held to the limits of :meth:`checked`;
+        the integer 1 (the only version); ``rejected`` may be left out (files written before it: none);
+        the fields are held to the limits of :meth:`checked`;
         CalibrationError names the file, the key and what is wrong."""
         data = load_json(path, "calibration", CalibrationError)
         if not isinstance(data, dict):
@@ -161,17 +191,47 @@ class Calibration:
         missing = [k for k in ("bias_dps", "noise_std_dps", "samples", "sample_rate_hz") if k not in data]
         if missing:
             raise CalibrationError(f"{path}: the calibration lacks {', '.join(missing)}")
-        fields = (data["bias_dps"], data["noise_std_dps"], data["samples"], data["sample_rate_hz"], data.get("temp_c"))
+        fields = (data["bias_dps"], data["noise_std_dps"], data["samples"], data["sample_rate_hz"], data.get("temp_c"),
+                  data.get("rejected", (0, 0, 0)))
         return cls(*fields).checked(path, max_bias_dps=max_bias_dps)
 
 
-def white_noise_std(window_dps) -> np.ndarray:
+def white_noise_std(window_dps, gross=None) -> np.ndarray:
     """sigma = std(x[i+1] - x[i]) / sqrt(2) per axis (deg/s) of ``window_dps``, an (n, 3) window
-    in deg/s; 0 below 3 samples."""
+    in deg/s; 0 below 3 samples. ``gross``: an (n, 3) mask of gross errors (:func:`without_gross_errors`)
+    whose differences are left out (0 where fewer than 2 are left)."""
     x = np.asarray(window_dps, dtype=float)
     if len(x) < 3:
         return np.zeros(x.shape[1:])
-    return np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
+    d = np.diff(x, axis=0)
+    if gross is None:
+        return np.std(d, axis=0, ddof=1) / math.sqrt(2.0)
+    clean = ~(gross[1:] | gross[:-1])
+    return np.array([np.std(d[clean[:, a], a], ddof=1) if clean[:, a].sum() >= 2 else 0.0
+                     for a in range(x.shape[1])]) / math.sqrt(2.0)
+
+
+def gross_error_limits(window_dps, q_dps=PAPER_Q_DPS) -> tuple[np.ndarray, np.ndarray]:
+    """(median c, limit) per axis of ``window_dps``, an (n, 3) still window in deg/s: a sample x_i is
+    a gross error when |x_i - c| > limit = max(q, GROSS_ERROR_Z * 1.4826 median|x_i - c|), ``q_dps``
+    paper 001's threshold q (deg/s; module docstring, step 0)."""
+    x = np.asarray(window_dps, dtype=float)
+    center = np.median(x, axis=0)
+    spread = MAD_TO_SIGMA * np.median(np.abs(x - center), axis=0)
+    return center, np.maximum(q_dps, GROSS_ERROR_Z * spread)
+
+
+def without_gross_errors(window_dps, q_dps=PAPER_Q_DPS) -> tuple[np.ndarray, np.ndarray]:
+    """(window, gross): ``window_dps`` ((n, 3), deg/s) with each gross error (:func:`gross_error_limits`,
+    ``q_dps`` in deg/s) replaced by the mean of its axis's other samples, and the (n, 3) mask of those
+    replaced. The window's mean is then the mean of the samples that are not gross errors (module
+    docstring, step 0); a copy, the input is left as it is."""
+    x = np.array(window_dps, dtype=float)
+    center, limit = gross_error_limits(x, q_dps)
+    gross = np.abs(x - center) > limit
+    for a in np.flatnonzero(gross.any(axis=0)):
+        x[gross[:, a], a] = x[~gross[:, a], a].mean()  # never all: at least the median's samples are kept
+    return x, gross
 
 
 def stillness_z(window_dps) -> np.ndarray:
@@ -254,16 +314,19 @@ STILLNESS_Z_RANGE = dict(low=0, low_open=True, high=1e6)
 MAX_BIAS_RANGE = dict(low=0, low_open=True, high=MAX_RATE_DPS)
 
 
-def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=MAX_BIAS_DPS, temp_c=None) -> Calibration:
-    """Bias = mean of a still window (paper 001, 2.1), after the stillness check.
+def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_dps=MAX_BIAS_DPS, temp_c=None,
+              outlier_q_dps=PAPER_Q_DPS) -> Calibration:
+    """Bias = mean of a still window (paper 001, 2.1) without its gross errors, after the stillness check.
 
     ``window_dps`` is (n, 3) in deg/s, n >= MIN_SAMPLES (3), numbers (no masked value:
     :func:`~gyrofilter.filter.samples.as_numbers`), each finite and within +-MAX_RATE_DPS
     (:func:`gyrofilter.units.check_rates_dps`), sampled at ``sample_rate_hz`` (Hz);
     ``stillness_threshold``: the largest stillness statistic z accepted (noise units, see
     :func:`stillness_z`); ``max_bias_dps``: the largest plausible bias (deg/s); ``temp_c``
-    optionally the window's n temperatures (deg C, shape (n,)), whose mean is kept. Raises CalibrationError
-    naming the axis and the statistic when the window is not still.
+    optionally the window's n temperatures (deg C, shape (n,)), whose mean is kept; ``outlier_q_dps``:
+    paper 001's gross-error threshold q (deg/s), the floor of :func:`gross_error_limits`. Gross errors are
+    left out (:func:`without_gross_errors`) before the bias, the noise and the checks. Raises
+    CalibrationError naming the axis and the statistic when the window is not still.
     """
     sample_rate_hz = check_sample_rate_hz(sample_rate_hz)  # True was taken as 1 Hz, 0 kept in the calibration
     # NaN passed every window as still, a text ended in numpy's UFuncTypeError
@@ -278,15 +341,25 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
             f"calibration needs at least {MIN_SAMPLES} samples to measure the noise, got {len(x)} "
             f"({len(x) / sample_rate_hz:g} s at {sample_rate_hz:g} Hz); raise calibration_s"
         )
-    bias = x.mean(axis=0)
-    z = stillness_z(x)
-    sigma = white_noise_std(x)
+    outlier_q_dps = check_number(outlier_q_dps, "outlier_q_dps (deg/s)", low=0, low_open=True, high=MAX_RATE_DPS)
+    kept, gross = without_gross_errors(x, outlier_q_dps)
+    rejected = gross.sum(axis=0)
+    bias = kept.mean(axis=0)
+    z = stillness_z(kept)
+    sigma = white_noise_std(x, gross)
+    most_rejected = int(MAX_GROSS_FRACTION * len(x))
     for i, axis in enumerate(AXES):
         implausible = implausible_bias(axis, bias[i], max_bias_dps=max_bias_dps)
         if implausible:  # the value named takes every axis: the first's alone (x 20.5: 21) was refused for y (-25.3)
             value = max_bias_needed(bias)
             raise CalibrationError(f"calibration: {implausible}? Keep it still while calibrating, or, if the bias is real, "
                                    f"{raise_max_bias(value)}", value)
+        if rejected[i] > most_rejected:
+            raise CalibrationError(
+                f"calibration: the sensor moved (axis {axis}: {rejected[i]} of {len(x)} samples lie beyond "
+                f"{gross_error_limits(x, outlier_q_dps)[1][i]:.3g} deg/s of the window's median, more than the "
+                f"{most_rejected} gross errors it may leave out); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
+                f"{SAVED_CALIBRATION_WAY}")
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
@@ -304,4 +377,5 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
             raise SettingsError(f"temp_c must have shape ({len(x)},), one temperature per sample, got {temp_c.shape}")
     temp = None if temp_c is None else check_number(
         float(np.mean(temp_c)), "calibration: the mean temperature (deg C)", low=low_c, high=high_c, error=CalibrationError)
-    return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz), temp)
+    return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz), temp,
+                       tuple(map(int, rejected)))

@@ -24,7 +24,7 @@ import numpy as np
 from . import adaptive_kalman, kalman
 from .hold import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
-from .calibration import Calibration, calibrate, calibration_samples, noise_calibration_samples
+from .calibration import Calibration, calibrate, calibration_samples, noise_calibration_samples, without_gross_errors
 from ..errors import CalibrationError, SampleError, SettingsError
 from ..inputs import check_number, did_you_mean
 from ..recording.checks import first_step_back
@@ -433,7 +433,7 @@ class GyroFilter:
         try:
             temps = self._cal_temp if np.isfinite(self._cal_temp).all() else None
             cal = calibrate(self._cal_buf, self.sample_rate_hz, stillness_threshold=s.stillness_z,
-                            max_bias_dps=s.max_bias_dps, temp_c=temps)
+                            max_bias_dps=s.max_bias_dps, temp_c=temps, outlier_q_dps=s.outlier_q_dps)
         except CalibrationError:
             self._cal_fill = 0  # the window is dropped: the next sample starts a new one
             if self._cal_tries_left <= 0:
@@ -441,10 +441,11 @@ class GyroFilter:
             self._cal_tries_left -= 1
             return
         self.calibration = cal
-        self._start_kalman(block_noise_std(self._cal_buf, s.block_len), still_blocks=self._cal_needed // s.block_len)
+        window = without_gross_errors(self._cal_buf, s.outlier_q_dps)[0]  # the window the calibration measured
+        self._start_kalman(block_noise_std(window, s.block_len), still_blocks=self._cal_needed // s.block_len)
         if s.hold:
             # the window passed the stillness check: start holding, sigma_b from its block means
-            self._hold = self._make_hold(calibration_window_dps=self._cal_buf)
+            self._hold = self._make_hold(calibration_window_dps=window)
         self._apply_calibration(cal)
 
     def _start_kalman(self, sigma_b_dps, still_blocks):

@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from .averaging import AVERAGERS
+from .averaging import AVERAGERS, PAPER_Q_DPS
 from .calibration import MAX_BIAS_DPS, MAX_BIAS_RANGE, STILLNESS_Z_RANGE
 from .hold import DEFAULTS as HOLD_DEFAULTS
 from ..errors import SettingsError
@@ -132,7 +132,7 @@ class FilterSettings:
     stillness_z: float = 6.0
     max_bias_dps: float = MAX_BIAS_DPS
     block_len: int = 5
-    outlier_q_dps: float = 1.0
+    outlier_q_dps: float = PAPER_Q_DPS
     fifo_depth: int = 10
     fit_order: int = 2
     p0_dps2: float = 1.0

@@ -10,7 +10,8 @@ from filterpy.kalman import KalmanFilter
 def plain_filter(samples_dps, sample_rate_hz, calibration_s=2.0, block_len=5, q_dps=1.0, depth=10, order=2, p0=1.0, window=10, use_std=False):
     """Paper 001's preset="paper" pipeline on ``samples_dps`` (N, 3) deg/s sampled at ``sample_rate_hz``.
 
-    ``calibration_s`` of still start-up data give the bias; blocks of ``block_len`` samples are
+    ``calibration_s`` of still start-up data give the bias and the noise, their gross errors (farther
+    than max(``q_dps``, 6 robust sigmas) from their median) and their differences left out; blocks of ``block_len`` samples are
     averaged over the samples within ``q_dps`` deg/s of the block mean (of the median where
     none is); a Kalman filter per axis predicts with a degree-``order`` least-squares
     fit over the last ``depth`` posteriors, starts from P = ``p0``, and takes Q and R as the
@@ -20,8 +21,13 @@ def plain_filter(samples_dps, sample_rate_hz, calibration_s=2.0, block_len=5, q_
     x = np.asarray(samples_dps, dtype=float)
     n_cal = int(round(calibration_s * sample_rate_hz))
     cal = x[:n_cal]
-    bias = cal.mean(axis=0)
-    noise = np.std(np.diff(cal, axis=0), axis=0, ddof=1) / np.sqrt(2.0)
+    bias, noise = np.empty(3), np.empty(3)
+    for a in range(3):  # gross errors: beyond max(q, 6 x 1.4826 MAD) of the median, left out of both
+        c = np.median(cal[:, a])
+        ok = np.abs(cal[:, a] - c) <= max(q_dps, 6 * 1.4826 * np.median(np.abs(cal[:, a] - c)))
+        bias[a] = cal[ok, a].mean()
+        pairs = ok[1:] & ok[:-1]
+        noise[a] = np.std(np.diff(cal[:, a])[pairs], ddof=1) / np.sqrt(2.0)
     r0 = np.maximum(noise**2 / block_len, 1e-12)
     if use_std:
         r0 = np.sqrt(r0)

@@ -47,7 +47,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ...filter.calibration import Calibration, calibrate, calibration_samples
+from ...filter.calibration import Calibration, calibrate, calibration_samples, without_gross_errors
 from ...filter.samples import check_sample, check_samples
 from ...errors import SettingsError
 from ...filter.settings import MAX_CALIBRATION_S
@@ -264,7 +264,8 @@ class BiasKalmanFilter:
             if len(self._cal_buffer) == self._n_cal:
                 self._start(calibrate(np.array(self._cal_buffer), self.sample_rate_hz))
                 self._ring_count = 0
-                for row in self._cal_buffer[-self._window:]:
+                window = without_gross_errors(self._cal_buffer)[0]  # as the calibration measured it
+                for row in window[-self._window:]:
                     self._push(row)
                 self._cal_buffer = []
             return None
