@@ -34,7 +34,19 @@ that region (0.6: radius 0.91, and the loop's white-noise variance gain sum h_j^
 its minimum over K); the constant-rate model is stable for any K in (0, 1].
 
 Switching (per axis, the tests of :mod:`gyrofilter.filter.hold`): constant-rate -> LS when a
-two-sided CUSUM of d_k = (y_k - x-_k) / sigma_b passes h (drift ``kappa``, Page 1954);
+two-sided CUSUM (Page 1954) of the Huber-clipped (Huber 1964) innovation passes h,
+
+    d_k = clip((y_k - x-_k) / sigma_b, -c, c),  g+_k = max(0, g+_(k-1) + d_k - kappa),
+    g-_k = max(0, g-_(k-1) - d_k - kappa),  switch when g+_k > h or g-_k > h;
+
+c = ``cusum_clip`` = 6 with kappa = 0.5, h = 10: one block adds at most c - kappa = 5.5 < h,
+two consecutive blocks beyond c add 11 > h. A single outlying block (two gross errors in one
+block of 5 defeat paper 001's rule; its mean is then ~30 sigma_b off) no longer knocks the axis
+out of rest; the price is that a change is detected one block later (the first block's output
+is still the rest estimate). After such a block g is 5.5 and white noise (drift -kappa) adds
+the missing 4.5 with probability about 1 % (simulated: 0.9 %; Brownian approximation
+exp(-2 kappa 4.5) = 1.1 %).
+On white noise |d| > 6 is rare, so the false-alarm rate is that of the unclipped test.
 LS -> constant-rate when the last W block means are a constant plus white noise
 ((W - 1) s^2 / R below ``chi2_limit``) and x_k is within ``agree_z`` sigma_b of their mean m:
 then x_k = m, P_k = R / W. On the switch to the LS model C = P + R.
@@ -66,7 +78,7 @@ NO_USED = np.empty((0, 3), dtype=np.int64)
 
 
 def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring, r, gain_min, forgetting, prior_var_max,
-                        kappa, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run, trace, used):
+                        kappa, clip, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run, trace, used):
     """Adaptive Kalman filter over the block means y (M, 3) -> out (M, 3); state updated in place.
 
     Measurement per block and axis: y[k, a] while the axis is in the constant-rate model at the
@@ -114,7 +126,7 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
             p_prior = 0.0
             if istate[MODE + a] == REST:
                 prior = fifo[a, (head - 1) % depth] if n > 0 else 0.0
-                d = (ya - prior) / sigma
+                d = max(-clip, min(clip, (ya - prior) / sigma))
                 fstate[G_POS, a] = max(0.0, fstate[G_POS, a] + d - kappa)
                 fstate[G_NEG, a] = max(0.0, fstate[G_NEG, a] - d - kappa)
                 if fstate[G_POS, a] > h or fstate[G_NEG, a] > h:
@@ -206,7 +218,7 @@ class AdaptiveKalman:
         self._args = (
             weight_table(s.fifo_depth, s.fit_order), self.fifo, self.p, self.fstate, self.istate, self.ring, self.r_dps2,
             float(s.gain_min), float(s.innovation_forgetting), float(s.prior_var_max_r), DEFAULTS["cusum_kappa"],
-            float(s.hold_h), chi2_quantile(DEFAULTS["accept_p"], s.hold_window - 1), DEFAULTS["agree_z"],
+            DEFAULTS["cusum_clip"], float(s.hold_h), chi2_quantile(DEFAULTS["accept_p"], s.hold_window - 1), DEFAULTS["agree_z"],
             s.hold_max_blocks, float(s.guard_k_sigma), s.guard_blocks, self.guard_run,
         )
 

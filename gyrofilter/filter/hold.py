@@ -57,6 +57,7 @@ from ..units import plain
 #: and hold_max_blocks take theirs from here, and the adaptive Kalman filter's switch the rest)
 DEFAULTS = {
     "cusum_kappa": 0.5,
+    "cusum_clip": 6.0,  # the adaptive Kalman filter's only (gyrofilter.filter.adaptive_kalman: Huber clip of d_k)
     "cusum_h": 10.0,
     "window_blocks": 20,
     "max_blocks": 400,
