@@ -66,8 +66,21 @@ def test_recommended_holds_at_rest_and_follows_a_step_within_a_block():
     paper = GyroFilter(100.0, preset="paper").filter(x)
     rest = slice(100, 1500)
     assert np.all(out[rest].std(axis=0) < paper[rest].std(axis=0) / 3)
-    np.testing.assert_allclose(out[1561:1565], 10.0, atol=0.2)  # the block after the step
+    np.testing.assert_allclose(out[1560:1565], 10.0, atol=0.2)  # from the step's own block on (a step > 3 q: no clip)
     np.testing.assert_allclose(out[1700:].mean(axis=0), 10.0, atol=0.02)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_one_block_with_two_gross_errors_does_not_knock_the_default_out_of_rest(backend):
+    x = noisy(6000, seed=5, sigma=0.05)  # sigma_b = 0.022 deg/s
+    # two 1.6-deg/s spikes in block (3000 - 200) / 5 = 560: each is 0.96 deg/s from the block's mean, within
+    # q = 1, so paper 001's rule keeps both and the block mean is 0.64 deg/s (29 sigma_b) off
+    x[3001] += 1.6
+    x[3003] += 1.6
+    out = GyroFilter(100.0, backend=backend).filter(x)
+    rest_mean = out[400:550].mean(axis=0)
+    # out of rest the output would follow the block means for 20 blocks, 0.64 deg/s off at block 560
+    assert np.abs(out[550:700] - rest_mean).max() < 0.01
 
 
 def test_hold_needs_a_calibration():

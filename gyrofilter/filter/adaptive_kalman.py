@@ -34,7 +34,23 @@ that region (0.6: radius 0.91, and the loop's white-noise variance gain sum h_j^
 its minimum over K); the constant-rate model is stable for any K in (0, 1].
 
 Switching (per axis, the tests of :mod:`gyrofilter.filter.hold`): constant-rate -> LS when a
-two-sided CUSUM of d_k = (y_k - x-_k) / sigma_b passes h (drift ``kappa``, Page 1954);
+two-sided CUSUM (Page 1954) of the innovation, Huber-clipped (Huber 1964) where gross errors can
+explain it, passes h:
+
+    e_k = y_k - x-_k,  d_k = e_k / sigma_b, clipped to [-c, c] if |e_k| <= b,
+    g+_k = max(0, g+_(k-1) + d_k - kappa),  g-_k = max(0, g-_(k-1) - d_k - kappa),
+    switch when g+_k > h or g-_k > h.
+
+c = ``cusum_clip`` = 6 with kappa = 0.5, h = 10: one such block adds at most c - kappa = 5.5 < h,
+two consecutive ones 11 > h. b = ``cusum_clip_within_q`` q = 3 q: paper 001's rule keeps a sample
+within q of its block's mean, so j equal gross errors s kept in a block of L (the clean samples
+rejected) need s (1 - j / L) <= q and move the block mean by at most q L / (L - j): 2.5 q for
+3 of 5. Where two or three gross errors in one block defeat the rule (its mean then ~30 sigma_b
+off), that single block no longer knocks the axis out of rest; a change of more than b (a step,
+a fast sine) is still caught in its first block, a slower onset (a ramp) one block later. After
+one clipped block g is at most 5.5 and white noise (drift -kappa) adds the missing 4.5 with
+probability about 1 % (simulated: 0.9 %; Brownian approximation exp(-2 kappa 4.5) = 1.1 %).
+On white noise |d| > 6 is rare: the false-alarm rate is that of the unclipped test.
 LS -> constant-rate when the last W block means are a constant plus white noise
 ((W - 1) s^2 / R below ``chi2_limit``) and x_k is within ``agree_z`` sigma_b of their mean m:
 then x_k = m, P_k = R / W. On the switch to the LS model C = P + R.
@@ -66,7 +82,8 @@ NO_USED = np.empty((0, 3), dtype=np.int64)
 
 
 def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring, r, gain_min, forgetting, prior_var_max,
-                        kappa, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run, trace, used):
+                        kappa, clip, clip_within_dps, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run,
+                        trace, used):
     """Adaptive Kalman filter over the block means y (M, 3) -> out (M, 3); state updated in place.
 
     Measurement per block and axis: y[k, a] while the axis is in the constant-rate model at the
@@ -115,6 +132,8 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
             if istate[MODE + a] == REST:
                 prior = fifo[a, (head - 1) % depth] if n > 0 else 0.0
                 d = (ya - prior) / sigma
+                if abs(ya - prior) <= clip_within_dps:
+                    d = max(-clip, min(clip, d))
                 fstate[G_POS, a] = max(0.0, fstate[G_POS, a] + d - kappa)
                 fstate[G_NEG, a] = max(0.0, fstate[G_NEG, a] - d - kappa)
                 if fstate[G_POS, a] > h or fstate[G_NEG, a] > h:
@@ -206,7 +225,8 @@ class AdaptiveKalman:
         self._args = (
             weight_table(s.fifo_depth, s.fit_order), self.fifo, self.p, self.fstate, self.istate, self.ring, self.r_dps2,
             float(s.gain_min), float(s.innovation_forgetting), float(s.prior_var_max_r), DEFAULTS["cusum_kappa"],
-            float(s.hold_h), chi2_quantile(DEFAULTS["accept_p"], s.hold_window - 1), DEFAULTS["agree_z"],
+            DEFAULTS["cusum_clip"], DEFAULTS["cusum_clip_within_q"] * float(s.outlier_q_dps), float(s.hold_h),
+            chi2_quantile(DEFAULTS["accept_p"], s.hold_window - 1), DEFAULTS["agree_z"],
             s.hold_max_blocks, float(s.guard_k_sigma), s.guard_blocks, self.guard_run,
         )
 

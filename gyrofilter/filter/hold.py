@@ -57,6 +57,10 @@ from ..units import plain
 #: and hold_max_blocks take theirs from here, and the adaptive Kalman filter's switch the rest)
 DEFAULTS = {
     "cusum_kappa": 0.5,
+    # the adaptive Kalman filter's only (gyrofilter.filter.adaptive_kalman): the Huber clip c of d_k, applied where
+    # |y_k - x-_k| <= this many q (gross errors that paper 001's rule keeps move a block mean up to 2.5 q)
+    "cusum_clip": 6.0,
+    "cusum_clip_within_q": 3.0,
     "cusum_h": 10.0,
     "window_blocks": 20,
     "max_blocks": 400,
