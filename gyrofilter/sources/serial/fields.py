@@ -125,10 +125,17 @@ def parse_fields(text, where):
     return fields
 
 
+#: the note of a header's accelerometer units where its fields name no accelerometer (:func:`accel_units`)
+ACCEL_IGNORED_NOTE = "serial: the device's header gives accel_unit but its fields name no accelerometer (ax, ay, az): ignored"
+
+
 def accel_units(values, fields, where):
     """The header's ``accel_unit`` and ``lsb_per_g`` words (checked; {} when not given) for a
-    stream whose ``fields`` (None: not known yet) name the accelerometer or not: the unit is
-    required with the accelerometer fields, ``lsb_per_g`` (> 0) with ``lsb``. DeviceError otherwise."""
+    stream whose ``fields`` (None: not known yet, the width's, never the accelerometer) name the accelerometer or
+    not: the unit is required with the accelerometer fields, ``lsb_per_g`` (> 0) with ``lsb``. DeviceError
+    otherwise. {} too for a stream without those fields (a six-axis firmware with its accelerometer off): units
+    of no column, which a recording refuses (attack pass 37g: `record` exited 2 on such a device, naming the
+    recording's line); the caller notes them ignored (:data:`ACCEL_IGNORED_NOTE`)."""
     if "accel_unit" not in values:
         if fields is not None and ACCEL_COLUMNS[0] in fields:
             raise DeviceError(f"{where}: fields name {', '.join(ACCEL_COLUMNS)} but the header gives no accel_unit "
@@ -139,16 +146,17 @@ def accel_units(values, fields, where):
     unit = values["accel_unit"]
     if unit not in ACCEL_UNITS:
         raise DeviceError(f"{where}: accel_unit {quote(unit, 40)} is not one of {', '.join(ACCEL_UNITS)}")
+    units = {"accel_unit": unit}
     if unit != "lsb":
         if "lsb_per_g" in values:
             raise DeviceError(f"{where}: the header gives lsb_per_g with accel_unit={unit}: it belongs to lsb only")
-        return {"accel_unit": unit}
-    if "lsb_per_g" not in values:
+    elif "lsb_per_g" not in values:
         raise DeviceError(f"{where}: accel_unit=lsb needs lsb_per_g (LSB per g, e.g. 16384 for an MPU6050 at +-2 g)")
-    what = f"{where}: header line: lsb_per_g"
-    lsb_per_g = check_lsb_per_g(parse_number(values["lsb_per_g"], what, low=0, low_open=True, error=DeviceError), what,
-                                DeviceError)
-    return {"accel_unit": unit, "lsb_per_g": format_number(lsb_per_g)}
+    else:
+        what = f"{where}: header line: lsb_per_g"
+        units["lsb_per_g"] = format_number(check_lsb_per_g(parse_number(values["lsb_per_g"], what, low=0, low_open=True,
+                                                                        error=DeviceError), what, DeviceError))
+    return units if fields is not None and ACCEL_COLUMNS[0] in fields else {}
 
 
 def other_keys_note(previous, header, first, unit_keys, samples, noted):
