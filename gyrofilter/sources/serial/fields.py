@@ -19,6 +19,30 @@ PROTOCOL_VERSION = "1"
 _HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
 _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
 
+class UnitsConflict(DeviceError):
+    """The device's header disagrees with the units already in use (options or an earlier header).
+    ``rows``: the rows of the lines before it in the bytes fed with it (the samples received in
+    the units in use, for the caller to keep: :meth:`.protocol.LineParser.feed`)."""
+
+    rows = None
+
+
+def temp_unit_raw(values, where, in_use):
+    """Whether the header's ``temp_unit`` word (``c``, the default, or ``mpu6050_raw``) says TEMP_OUT counts
+    (T = raw / 340 + 36.53 deg C, register map rev 4.2 section 4.18); DeviceError for another word.
+    ``in_use``: the reading of the samples with a temperature made so far (None: none yet); a header that
+    changes it is :class:`UnitsConflict`, as one changing the gyro's units: a restarted device's banner without
+    the first one's ``temp_unit`` read the temperatures after it in the other unit, 30 deg C then 36.6 in one
+    column, without a word (attack pass 37g)."""
+    unit = values.get("temp_unit", "c")
+    if unit not in ("c", "mpu6050_raw"):
+        raise DeviceError(f"{where}: temp_unit {quote(unit, 40)} is not c or mpu6050_raw")
+    if in_use is not None and in_use != (unit == "mpu6050_raw"):
+        raise UnitsConflict(f"{where}: the device's header changed temp_unit mid-stream "
+                            f"({'mpu6050_raw' if in_use else 'c'} -> {unit}); start a new recording")
+    return unit == "mpu6050_raw"
+
+
 #: the fields a line may hold, in any order given by the header's ``fields=``
 KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp", *ACCEL_COLUMNS)
 
