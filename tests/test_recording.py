@@ -106,6 +106,44 @@ def test_writer_flushes_readable_data_before_close_and_keeps_notes(tmp_path):
     assert read_recording(path).warnings == []
 
 
+def test_a_write_interrupted_midway_leaves_the_file_as_at_its_last_flush(tmp_path, monkeypatch):
+    """A second Ctrl-C (an immediate exit: KeyboardInterrupt) between gzip compressing a write and writing its
+    bytes: the close wrote the rest of a stream whose compressor had taken data the file never got, garbage
+    from there on ("line 24223: 16 values"), and the whole recording was refused, while `record` said it kept
+    the first 26000 samples (attack pass 37g). The close now cuts the file back to its last flush, as after a
+    failed write: it reads, a gzip one saying it was cut short, and keeps what was flushed."""
+    import zlib
+
+    real, trip = zlib.compressobj, []
+
+    class Interrupted:  # compresses, then the signal arrives before the bytes are written
+        def __init__(self, *args, **kwargs):
+            self._compressor = real(*args, **kwargs)
+
+        def compress(self, data):
+            out = self._compressor.compress(data)
+            if trip:
+                raise trip.pop()
+            return out
+
+        def flush(self, *args):
+            return self._compressor.flush(*args)
+
+    monkeypatch.setattr(zlib, "compressobj", Interrupted)
+    rows = np.column_stack([np.arange(3000) / 100, np.random.default_rng(1).integers(-30000, 30000, (3000, 3))])
+    w = RecordingWriter(tmp_path / "live.csv.gz", {"sample_rate_hz": 100, "gyro_unit": "lsb", "lsb_per_dps": 131}, ["t", "gx", "gy", "gz"])
+    with pytest.raises(KeyboardInterrupt):
+        with w:
+            w.write(rows[:1000])
+            w.flush()
+            w.write(rows[1000:2000])
+            trip.append(KeyboardInterrupt())
+            w.write(rows[2000:])
+    rec = read_recording(tmp_path / "live.csv.gz")
+    np.testing.assert_array_equal(rec.gyro, rows[:1000, 1:])
+    assert w.rows_flushed == 1000 and any("cut short" in x for x in rec.warnings)
+
+
 def test_blank_lines_are_not_samples(tmp_path):
     rec = read_recording(write(tmp_path, HEADER + "gx,gy,gz\n1,2,3\n\n4,5,6\n"))
     np.testing.assert_array_equal(rec.columns["gx"], [1, 4])

@@ -347,6 +347,40 @@ def test_parser_refuses_a_line_with_an_acceleration_beyond_the_range_like_any_ba
         assert any("acceleration beyond +-1e+07 m/s^2): 2,1,2,3,0," in note for note in p.pop_notes())
 
 
+@pytest.mark.parametrize("words", [b"accel_unit=lsb lsb_per_g=16384", b"accel_unit=g", b"fields=counter,gx,gy,gz accel_unit=g"])
+def test_parser_drops_accelerometer_units_of_a_stream_without_its_fields(tmp_path, words):
+    """A six-axis firmware with the accelerometer off still saying ``accel_unit``: its units went into the
+    header without ``ax, ay, az`` columns, so `record` exited 2 before its first row with the recording's
+    words ("header key 'accel_unit' is given but the column row (line 13) has no accelerometer columns") about
+    a file it never wrote, while `run` took the same device (attack pass 37g): they describe no field, ignored."""
+    from gyrofilter.recording import RecordingWriter, read_recording
+    p = LineParser()
+    rows = p.feed(HEADER.replace(b"\n", b" " + words + b"\n") + b"0,1,2,3\n1,4,5,6\n")
+    assert "accel_unit" not in p.header and "lsb_per_g" not in p.header and p.columns == ["t", "gx", "gy", "gz"]
+    assert any("accel_unit" in note and "ignored" in note for note in p.pop_notes())
+    with RecordingWriter(tmp_path / "r.csv", p.device_header, p.columns) as out:
+        out.write(rows)
+    np.testing.assert_array_equal(read_recording(tmp_path / "r.csv").gyro, [[1, 2, 3], [4, 5, 6]])
+
+
+@pytest.mark.parametrize("first, second", [(b" temp_unit=c", b" temp_unit=mpu6050_raw"), (b" temp_unit=mpu6050_raw", b""),
+                                           (b"", b" temp_unit=mpu6050_raw")])
+def test_parser_header_changing_the_temperature_unit_mid_stream_is_refused(first, second):
+    """A restarted device's banner without the first one's temp_unit=mpu6050_raw (or with it where the first had
+    none): the temperatures after it were read in the other unit, 30 deg C then 36.6 in one column, without a
+    word (attack pass 37g). As a change of the gyro's units, it stops the stream, the rows before it kept."""
+    head = HEADER.replace(b"\n", b" fields=counter,gx,gy,gz,temp")
+    p = LineParser()
+    rows = p.feed(head + first + b"\n0,1,2,3,30\n1,1,2,3,30\n")
+    p.feed(head + first + b"\n")  # the same header again: fine
+    with pytest.raises(UnitsConflict, match="changed temp_unit mid-stream") as info:
+        p.feed(b"2,1,2,3,30\n" + head + second + b"\n3,1,2,3,30\n")
+    np.testing.assert_array_equal(np.concatenate([rows, info.value.rows])[:, 4], [rows[0, 4]] * 3)
+    fresh = LineParser()  # before any sample the header may still say it
+    fresh.feed(head + first + b"\n")
+    assert fresh.feed(head + second + b"\n0,1,2,3,30\n").shape == (1, 5)
+
+
 def test_parser_header_changing_the_accelerometer_unit_mid_stream_is_refused():
     p = LineParser()
     p.feed(HEADER.replace(b"\n", b" " + ACCEL + b"\n") + b"0,1,2,3,4,5,6\n")

@@ -143,7 +143,7 @@ class RecordingWriter(Closable):
     interval is lost, and the file still reads (the reader accepts a cut last line and a gzip
     stream without its end marker). ``close()`` (or leaving the ``with`` block, also on
     KeyboardInterrupt) ends the file cleanly. A write or flush that fails (an OSError: disk full,
-    file size limit) sets ``write_failed``; ``close()`` then cuts the file back to its last
+    file size limit) or that an exception stops midway (KeyboardInterrupt) sets ``write_failed``; ``close()`` then cuts the file back to its last
     complete flush, so that it keeps whole lines and reads, ``rows_flushed`` rows of them, and
     writes nothing more. Header keys are written in the order given, after the version line
     (:func:`header_text`). ``compresslevel`` (1-9) applies to ``.gz`` files: 6, gzip's own default,
@@ -222,7 +222,11 @@ class RecordingWriter(Closable):
     @contextlib.contextmanager
     def _failing(self):
         """Refuse to write after a failed write; note a new failure (``write_failed``), naming the
-        file when the system's error does not (a write's or a close's)."""
+        file when the system's error does not (a write's or a close's). A write that anything else
+        stops midway (KeyboardInterrupt: a second Ctrl-C, an immediate exit) is a failed one too: gzip
+        may have taken bytes into its compressor that never reached the file, and closing that stream
+        wrote garbage after them, a file refused whole (attack pass 37g); so the close cuts it back to
+        its last flush."""
         if self.write_failed:
             raise OSError(errno.EIO, "an earlier write failed", self.name)
         try:
@@ -231,6 +235,9 @@ class RecordingWriter(Closable):
             self.write_failed = True
             if exc.filename is None:
                 raise OSError(exc.errno, exc.strerror or str(exc), self.name) from None
+            raise
+        except BaseException:  # a second Ctrl-C inside a write: gzip may have compressed bytes it never wrote
+            self.write_failed = True
             raise
 
     def write(self, rows):
@@ -294,7 +301,7 @@ class RecordingWriter(Closable):
                 if self._gz is not None:
                     self._gz.close()
                 self._raw.flush()
-        except OSError:
+        except BaseException:  # an OSError, or a signal's KeyboardInterrupt inside gzip's last writes
             self._cut_to_last_flush()
             raise
         self._raw.close()
@@ -311,9 +318,9 @@ class RecordingWriter(Closable):
                 if closing is not None:
                     with contextlib.suppress(OSError):  # whatever it writes is cut below
                         closing.close()
+        finally:  # also when a signal stops a close
             if self._flushed_bytes is not None:
                 os.ftruncate(fd, self._flushed_bytes)
-        finally:
             os.close(fd)
 
 

@@ -19,6 +19,30 @@ PROTOCOL_VERSION = "1"
 _HEADER_KEY = re.compile(r"[A-Za-z0-9_]+")
 _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\t"
 
+class UnitsConflict(DeviceError):
+    """The device's header disagrees with the units already in use (options or an earlier header).
+    ``rows``: the rows of the lines before it in the bytes fed with it (the samples received in
+    the units in use, for the caller to keep: :meth:`.protocol.LineParser.feed`)."""
+
+    rows = None
+
+
+def temp_unit_raw(values, where, in_use):
+    """Whether the header's ``temp_unit`` word (``c``, the default, or ``mpu6050_raw``) says TEMP_OUT counts
+    (T = raw / 340 + 36.53 deg C, register map rev 4.2 section 4.18); DeviceError for another word.
+    ``in_use``: the reading of the samples with a temperature made so far (None: none yet); a header that
+    changes it is :class:`UnitsConflict`, as one changing the gyro's units: a restarted device's banner without
+    the first one's ``temp_unit`` read the temperatures after it in the other unit, 30 deg C then 36.6 in one
+    column, without a word (attack pass 37g)."""
+    unit = values.get("temp_unit", "c")
+    if unit not in ("c", "mpu6050_raw"):
+        raise DeviceError(f"{where}: temp_unit {quote(unit, 40)} is not c or mpu6050_raw")
+    if in_use is not None and in_use != (unit == "mpu6050_raw"):
+        raise UnitsConflict(f"{where}: the device's header changed temp_unit mid-stream "
+                            f"({'mpu6050_raw' if in_use else 'c'} -> {unit}); start a new recording")
+    return unit == "mpu6050_raw"
+
+
 #: the fields a line may hold, in any order given by the header's ``fields=``
 KNOWN_FIELDS = ("counter", *GYRO_COLUMNS, "temp", *ACCEL_COLUMNS)
 
@@ -125,10 +149,17 @@ def parse_fields(text, where):
     return fields
 
 
+#: the note of a header's accelerometer units where its fields name no accelerometer (:func:`accel_units`)
+ACCEL_IGNORED_NOTE = "serial: the device's header gives accel_unit but its fields name no accelerometer (ax, ay, az): ignored"
+
+
 def accel_units(values, fields, where):
     """The header's ``accel_unit`` and ``lsb_per_g`` words (checked; {} when not given) for a
-    stream whose ``fields`` (None: not known yet) name the accelerometer or not: the unit is
-    required with the accelerometer fields, ``lsb_per_g`` (> 0) with ``lsb``. DeviceError otherwise."""
+    stream whose ``fields`` (None: not known yet, the width's, never the accelerometer) name the accelerometer or
+    not: the unit is required with the accelerometer fields, ``lsb_per_g`` (> 0) with ``lsb``. DeviceError
+    otherwise. {} too for a stream without those fields (a six-axis firmware with its accelerometer off): units
+    of no column, which a recording refuses (attack pass 37g: `record` exited 2 on such a device, naming the
+    recording's line); the caller notes them ignored (:data:`ACCEL_IGNORED_NOTE`)."""
     if "accel_unit" not in values:
         if fields is not None and ACCEL_COLUMNS[0] in fields:
             raise DeviceError(f"{where}: fields name {', '.join(ACCEL_COLUMNS)} but the header gives no accel_unit "
@@ -139,16 +170,17 @@ def accel_units(values, fields, where):
     unit = values["accel_unit"]
     if unit not in ACCEL_UNITS:
         raise DeviceError(f"{where}: accel_unit {quote(unit, 40)} is not one of {', '.join(ACCEL_UNITS)}")
+    units = {"accel_unit": unit}
     if unit != "lsb":
         if "lsb_per_g" in values:
             raise DeviceError(f"{where}: the header gives lsb_per_g with accel_unit={unit}: it belongs to lsb only")
-        return {"accel_unit": unit}
-    if "lsb_per_g" not in values:
+    elif "lsb_per_g" not in values:
         raise DeviceError(f"{where}: accel_unit=lsb needs lsb_per_g (LSB per g, e.g. 16384 for an MPU6050 at +-2 g)")
-    what = f"{where}: header line: lsb_per_g"
-    lsb_per_g = check_lsb_per_g(parse_number(values["lsb_per_g"], what, low=0, low_open=True, error=DeviceError), what,
-                                DeviceError)
-    return {"accel_unit": unit, "lsb_per_g": format_number(lsb_per_g)}
+    else:
+        what = f"{where}: header line: lsb_per_g"
+        units["lsb_per_g"] = format_number(check_lsb_per_g(parse_number(values["lsb_per_g"], what, low=0, low_open=True,
+                                                                        error=DeviceError), what, DeviceError))
+    return units if fields is not None and ACCEL_COLUMNS[0] in fields else {}
 
 
 def other_keys_note(previous, header, first, unit_keys, samples, noted):

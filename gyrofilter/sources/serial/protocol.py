@@ -16,8 +16,8 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
   deg C, MPU-6000/6050 register map rev 4.2 section 4.18); ``accel_unit`` (``m/s^2``, ``g`` or
   ``lsb``) and ``lsb_per_g`` (with lsb, a number > 0), required when ``fields`` names the
   accelerometer fields ``ax, ay, az`` (all three or none; only through ``fields``, so a stream
-  with an accelerometer sends a header), and written into the recording header; any other key (``sensor``,
-  ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header. The header
+  with an accelerometer sends a header), and written into the recording header (without those fields: ignored,
+  noted); any other key (``sensor``, ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header. The header
   line is printable ASCII; keys are names (letters, digits, ``_``), each given once, each with a
   value; numbers are plain decimals (:func:`gyrofilter.inputs.parse_number`), ``sample_rate_hz``
   in (0, 100000] Hz, ``lsb_per_dps`` > 0.
@@ -56,7 +56,7 @@ The parser splits each chunk of bytes into complete lines and converts them all 
 numpy when they are all plain CSV; a chunk with anything else goes through a line-by-line parser
 that counts and skips bad lines (partial lines, garbage bytes, cells that are not plain decimal
 numbers). Nothing in the input makes it raise except an unreadable first header, a header that
-changes the units mid-stream, or headerless lines whose first value does not count. The rows do not depend on how the bytes are split into chunks.
+changes the units mid-stream (``temp_unit`` too, once temperatures were read), or headerless lines whose first value does not count. The rows do not depend on how the bytes are split into chunks.
 """
 from __future__ import annotations
 
@@ -67,13 +67,13 @@ import warnings
 import numpy as np
 
 from ...errors import DeviceError, SettingsError
-from ...inputs import is_plain_number, parse_number, quote
+from ...inputs import is_plain_number, parse_number
 from ...recording import ACCEL_COLUMNS, COLUMNS, PROVENANCE_KEYS, format_number
 from ...units import MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C
 from ..mpu6050.chip import temperature_c
 from .counter import COUNTING_LINES, first_value_counts, not_counting, out_of_sequence
-from .fields import (HEADER_PREFIX, accel_units, header_words, in_range, inferred_fields, make_units, other_keys_note,
-                     parse_fields)
+from .fields import (ACCEL_IGNORED_NOTE, HEADER_PREFIX, UnitsConflict, accel_units, header_words, in_range,
+                     inferred_fields, make_units, other_keys_note, parse_fields, temp_unit_raw)
 
 MAX_LINE_BYTES = 256  # a longer line (bytes before its "\n") is refused
 MAX_DETAILED_NOTES = 20  # bad-line notes per source; later ones are only counted
@@ -82,7 +82,7 @@ DEFAULT_COUNTER_BITS = 32
 #: every line received (``stats["lines"]``) is counted in exactly one of these
 LINE_OUTCOMES = ("samples", "duplicates", "partial_lines", "bad_lines", "empty_lines", "device_messages",
                  "headers", "lines_before_header")
-_PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit")
+_PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit", "accel_unit", "lsb_per_g")  # the last two: accel_units()
 _UNIT_KEYS = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_per_g")  # a repeated header keeps them
 # a cell of the numpy path (:func:`_plain_cell`): a plain decimal of at most 2 d + 2 characters
 # (sign, d digits, a point, d digits; d = 24 up to 5 fields, fewer for more), so that a line of
@@ -92,14 +92,6 @@ _UNIT_KEYS = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_p
 _PLAIN_LINES = {}  # field count -> compiled pattern of a block of plain CSV number lines
 # bytes a data line may hold at all (the rest is garbage): also exponents, blanks, nan/inf
 _TEXT = b"0123456789+-.,eEnaifNAIF \t"
-
-
-class UnitsConflict(DeviceError):
-    """The device's header disagrees with the units already in use (options or an earlier header).
-    ``rows``: the rows of the lines before it in the bytes fed with it (the samples received in
-    the units in use, for the caller to keep: :meth:`LineParser.feed`)."""
-
-    rows = None
 
 
 def _plain_cell(n_fields):
@@ -207,10 +199,8 @@ class LineParser:
                 if not same:
                     raise UnitsConflict(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
         header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS and k not in PROVENANCE_KEYS}
-        for key in sorted(PROVENANCE_KEYS & values.keys()):
-            note = f"serial: the device's header key {key} is gyrofilter's own (where the samples came from): ignored"
-            if note not in self.notes:
-                self.notes.append(note)
+        ignored = [f"serial: the device's header key {key} is gyrofilter's own (where the samples came from): ignored"
+                   for key in sorted(PROVENANCE_KEYS & values.keys())]
         header.update(units)
         fields = self.fields
         if "fields" in values:
@@ -223,14 +213,15 @@ class LineParser:
             bits = parse_number(values["counter_bits"], f"{self.where}: header line: counter_bits",
                                 low=low, high=high, integer=True, error=DeviceError)
             counter_mod = 2 ** bits
-        temp_unit = values.get("temp_unit", "c")
-        if temp_unit not in ("c", "mpu6050_raw"):
-            raise DeviceError(f"{self.where}: temp_unit {quote(temp_unit, 40)} is not c or mpu6050_raw")
-        header.update(accel_units(values, fields, self.where))
+        sampled = self.stats["samples"] and "temp" in (self.fields or ())  # temperatures read: their unit stays
+        temp_raw = temp_unit_raw(values, self.where, self._temp_raw if sampled else None)
+        header.update(accel := accel_units(values, fields, self.where))
+        ignored += [] if accel or "accel_unit" not in values else [ACCEL_IGNORED_NOTE]
         previous = self.header if self.device_header else None
         self._apply(header)  # a repeated header must agree; the counter tells restarts
         self._note_other_keys(previous, header)
-        self.fields, self._counter_mod, self._temp_raw = fields, counter_mod, temp_unit == "mpu6050_raw"
+        self.notes += [note for note in ignored if note not in self.notes]
+        self.fields, self._counter_mod, self._temp_raw = fields, counter_mod, temp_raw
         self._skip_first_line = False
 
     # ------------------------------------------------------------------ lines
