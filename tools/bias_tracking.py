@@ -39,7 +39,9 @@ SIM_FS = 100.0
 def arma_settings(x_rest_dps, fs, fallback: BiasKFSettings):
     """Settings whose bias model is the ARMA(1, 1) of a still stretch (paper 003 via gyrofilter.analysis.arma.identify).
 
-    Per axis; an axis whose ARMA(1, 1) has no Gauss-Markov decomposition keeps the fallback's model.
+    Per axis; an axis whose ARMA(1, 1) has no Gauss-Markov decomposition keeps the fallback's model;
+    one whose fitted tau the stretch does not determine (longer than 0.2 x the stretch,
+    ``identify.bias_model_within_record``) is the random walk the stretch does determine (tau inf).
     Returns (settings, description).
     """
     from gyrofilter.analysis.arma import identify as arma
@@ -49,12 +51,13 @@ def arma_settings(x_rest_dps, fs, fallback: BiasKFSettings):
     for i, name in enumerate("xyz"):
         x = x_rest_dps[:, i] - x_rest_dps[:, i].mean()
         fit = arma_fit.fit_arma(x, 1, 1)
-        m = arma.bias_model_from_arma11(fit, fs)
+        m = arma.bias_model_from_arma11(fit, fs, record_s=len(x) / fs)
         if m.valid:
             taus.append(m.tau_s)
             sigmas.append(0.0 if math.isinf(m.bias_sigma_dps) else m.bias_sigma_dps)
             walks.append(m.bias_walk_dps_per_sqrt_s)
-            desc.append(f"{name}: phi {fit.phi[0]:.5f}, theta {fit.theta[0]:.5f} -> tau {m.tau_s:.3g} s, drive {m.bias_walk_dps_per_sqrt_s:.2g} deg/s/sqrt(s)")
+            tau = f"tau {m.tau_s:.3g} s" if m.tau_determined else f"tau not determined in {len(x) / fs:.0f} s: random walk"
+            desc.append(f"{name}: phi {fit.phi[0]:.5f}, theta {fit.theta[0]:.5f} -> {tau}, drive {m.bias_walk_dps_per_sqrt_s:.2g} deg/s/sqrt(s)")
         else:
             taus.append(fallback.bias_tau_s)
             sigmas.append(fallback.bias_sigma_dps)
