@@ -308,6 +308,20 @@ def without_settings(exc, instead):
                                                 "FILE from --save-calibration on a still recording)")
 
 
+def keep_still(samples, sample_rate_hz):
+    """The advice of a window refused as moving: "keep it still for the first T s", T = ``samples`` /
+    ``sample_rate_hz`` (Hz) in s, to 0.1 s from 1 s up (2.0 s) and to 2 digits below (0.03 s: a window of 3
+    samples at 100 Hz read "0.0 s", attack pass 37h)."""
+    seconds = samples / sample_rate_hz
+    return f"keep it still for the first {seconds:.1f} s" if seconds >= 1 else f"keep it still for the first {seconds:.2g} s"
+
+
+#: the way through for a still window too short to leave out one gross error (MAX_GROSS_FRACTION of fewer than
+#: 10 samples is none): a longer window
+TOO_SHORT_FOR_GROSS_ERRORS = (f"; a window of fewer than {round(1 / MAX_GROSS_FRACTION)} samples can leave out no "
+                              "gross error: raise calibration_s")
+
+
 #: the ranges of :func:`calibrate`'s ``stillness_threshold`` and ``max_bias_dps`` (the settings
 #: ``stillness_z`` and ``max_bias_dps``: gyrofilter.filter.settings.SETTING_RANGES reads them here)
 STILLNESS_Z_RANGE = dict(low=0, low_open=True, high=1e6)
@@ -358,13 +372,12 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: {rejected[i]} of {len(x)} samples lie beyond "
                 f"{gross_error_limits(x, outlier_q_dps)[1][i]:.3g} deg/s of the window's median, more than the "
-                f"{most_rejected} gross errors it may leave out); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
-                f"{SAVED_CALIBRATION_WAY}")
+                f"{most_rejected} gross errors it may leave out); {keep_still(len(x), sample_rate_hz)}{SAVED_CALIBRATION_WAY}"
+                f"{'' if most_rejected else TOO_SHORT_FOR_GROSS_ERRORS}")
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
-                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
-                f"{SAVED_CALIBRATION_WAY}")
+                f"units, limit {stillness_threshold:g}); {keep_still(len(x), sample_rate_hz)}{SAVED_CALIBRATION_WAY}")
         if sigma[i] > MAX_NOISE_STD_DPS:
             raise CalibrationError(
                 f"calibration: axis {axis} has a noise of {sigma[i]:.3g} deg/s, beyond the {MAX_NOISE_STD_DPS:g} deg/s "
