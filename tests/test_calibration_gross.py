@@ -15,7 +15,7 @@ from gyrofilter.analysis.arma.bias_kf import BiasKalmanFilter
 from gyrofilter.cli import main
 from gyrofilter.errors import CalibrationError
 from gyrofilter.evaluation.filters import startup_bias
-from gyrofilter.filter.calibration import Calibration, calibrate, white_noise_std
+from gyrofilter.filter.calibration import Calibration, calibrate, white_noise_std, without_settings
 from gyrofilter.recording import Recording, write_recording
 
 
@@ -136,5 +136,8 @@ def test_a_window_too_short_to_leave_out_a_spike_says_its_length_and_to_raise_ca
     x = still(n, np.random.default_rng(n))
     x[1, 0] += 30.0
     with pytest.raises(CalibrationError, match=f"keep it still for the first {length}.*fewer than 10 samples "
-                                               "can leave out no gross error: raise calibration_s"):
+                                               "can leave out no gross error: raise calibration_s") as info:
         calibrate(x, rate_hz)
+    # report and evaluate take no calibration_s: the words name the commands that do
+    assert without_settings(info.value, "report filters with the default settings").endswith(
+        "can leave out no gross error: replay and run take --calibration-s")

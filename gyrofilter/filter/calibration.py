@@ -302,11 +302,14 @@ def without_settings(exc, instead):
     saved calibration (``report``'s filter part, ``evaluate``): its way through a setting
     (:func:`raise_max_bias`) or a saved calibration (:data:`SAVED_CALIBRATION_WAY`), which that command
     would refuse, replaced by ``instead``, words that say why the command does not take it, then the
-    commands that do ("replay and run take --set max_bias_dps=26"); as it is without one."""
+    commands that do ("replay and run take --set max_bias_dps=26", "--calibration-s" for a window too short to
+    leave out a gross error); as it is without one."""
     text = str(exc)
     if exc.max_bias_dps is not None:
         text = text.replace(raise_max_bias(exc.max_bias_dps),
                             f"{instead}; replay and run take --set max_bias_dps={exc.max_bias_dps}")
+    text = text.replace(TOO_SHORT_FOR_GROSS_ERRORS, TOO_SHORT_FOR_GROSS_ERRORS.replace("raise calibration_s",
+                                                                                      "replay and run take --calibration-s"))
     return text.replace(SAVED_CALIBRATION_WAY, f"; {instead}; replay and run take a saved calibration (--calibration "
                                                 "FILE from --save-calibration on a still recording)")
 
