@@ -15,7 +15,7 @@ from gyrofilter.analysis.arma.bias_kf import BiasKalmanFilter
 from gyrofilter.cli import main
 from gyrofilter.errors import CalibrationError
 from gyrofilter.evaluation.filters import startup_bias
-from gyrofilter.filter.calibration import Calibration, calibrate, white_noise_std
+from gyrofilter.filter.calibration import Calibration, calibrate, white_noise_std, without_settings
 from gyrofilter.recording import Recording, write_recording
 
 
@@ -127,3 +127,17 @@ def test_replay_says_how_many_it_left_out(tmp_path, capsys):
         " deg/s, gross errors left out: x 0, y 1, z 0\n" in out
     assert main(["replay", str(src), "--calibration-s", "0.04"]) == 0
     assert "start-up calibration, 200 samples, gross errors left out: x 0, y 1, z 0)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("n, rate_hz, length", [(3, 100.0, "0.03 s"), (9, 1000.0, "0.009 s"), (5, 1.0, "5.0 s")])
+def test_a_window_too_short_to_leave_out_a_spike_says_its_length_and_to_raise_calibration_s(n, rate_hz, length):
+    """A still window of fewer than 10 samples may leave out no gross error (10 %): one spike refused it saying
+    "keep it still for the first 0.0 s" at 100 Hz (attack pass 37h), advice a still sensor cannot follow."""
+    x = still(n, np.random.default_rng(n))
+    x[1, 0] += 30.0
+    with pytest.raises(CalibrationError, match=f"keep it still for the first {length}.*fewer than 10 samples "
+                                               "can leave out no gross error: raise calibration_s") as info:
+        calibrate(x, rate_hz)
+    # report and evaluate take no calibration_s: the words name the commands that do
+    assert without_settings(info.value, "report filters with the default settings").endswith(
+        "can leave out no gross error: replay and run take --calibration-s")

@@ -23,7 +23,10 @@ stillness the window is a constant plus noise. The check, per axis:
    spikes (a sensor with 4 % spikes holds more than 10 % in a 200-sample window with a probability
    of 1e-4). (One spike of 30 deg/s in 2 s at 100 Hz moved the bias
    by 0.15 deg/s and the noise from 0.05 to 2.1 deg/s before; the stillness statistic below scales
-   with the same noise, so it let the window pass whatever the spike's size.)
+   with the same noise, so it let the window pass whatever the spike's size.) A window of fewer
+   than 10 samples may leave out none, and the median absolute deviation of so few is a poor scale:
+   a still window of 3-9 samples of 0.5 deg/s white noise is refused 6-13 % of the time (2000
+   simulated windows each; 0.4 % at 10 samples, none at 40); the refusal says to raise ``calibration_s``.
 
 1. White-noise level from first differences, insensitive to slow changes:
    sigma = std(x[i+1] - x[i]) / sqrt(2).
@@ -299,13 +302,30 @@ def without_settings(exc, instead):
     saved calibration (``report``'s filter part, ``evaluate``): its way through a setting
     (:func:`raise_max_bias`) or a saved calibration (:data:`SAVED_CALIBRATION_WAY`), which that command
     would refuse, replaced by ``instead``, words that say why the command does not take it, then the
-    commands that do ("replay and run take --set max_bias_dps=26"); as it is without one."""
+    commands that do ("replay and run take --set max_bias_dps=26", "--calibration-s" for a window too short to
+    leave out a gross error); as it is without one."""
     text = str(exc)
     if exc.max_bias_dps is not None:
         text = text.replace(raise_max_bias(exc.max_bias_dps),
                             f"{instead}; replay and run take --set max_bias_dps={exc.max_bias_dps}")
+    text = text.replace(TOO_SHORT_FOR_GROSS_ERRORS, TOO_SHORT_FOR_GROSS_ERRORS.replace("raise calibration_s",
+                                                                                      "replay and run take --calibration-s"))
     return text.replace(SAVED_CALIBRATION_WAY, f"; {instead}; replay and run take a saved calibration (--calibration "
                                                 "FILE from --save-calibration on a still recording)")
+
+
+def keep_still(samples, sample_rate_hz):
+    """The advice of a window refused as moving: "keep it still for the first T s", T = ``samples`` /
+    ``sample_rate_hz`` (Hz) in s, to 0.1 s from 1 s up (2.0 s) and to 2 digits below (0.03 s: a window of 3
+    samples at 100 Hz read "0.0 s", attack pass 37h)."""
+    seconds = samples / sample_rate_hz
+    return f"keep it still for the first {seconds:.1f} s" if seconds >= 1 else f"keep it still for the first {seconds:.2g} s"
+
+
+#: the way through for a still window too short to leave out one gross error (MAX_GROSS_FRACTION of fewer than
+#: 10 samples is none): a longer window
+TOO_SHORT_FOR_GROSS_ERRORS = (f"; a window of fewer than {round(1 / MAX_GROSS_FRACTION)} samples can leave out no "
+                              "gross error: raise calibration_s")
 
 
 #: the ranges of :func:`calibrate`'s ``stillness_threshold`` and ``max_bias_dps`` (the settings
@@ -358,13 +378,12 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: {rejected[i]} of {len(x)} samples lie beyond "
                 f"{gross_error_limits(x, outlier_q_dps)[1][i]:.3g} deg/s of the window's median, more than the "
-                f"{most_rejected} gross errors it may leave out); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
-                f"{SAVED_CALIBRATION_WAY}")
+                f"{most_rejected} gross errors it may leave out); {keep_still(len(x), sample_rate_hz)}{SAVED_CALIBRATION_WAY}"
+                f"{'' if most_rejected else TOO_SHORT_FOR_GROSS_ERRORS}")
         if z[i] > stillness_threshold:
             raise CalibrationError(
                 f"calibration: the sensor moved (axis {axis}: sub-window means spread {z[i]:.1f} noise "
-                f"units, limit {stillness_threshold:g}); keep it still for the first {len(x) / sample_rate_hz:.1f} s"
-                f"{SAVED_CALIBRATION_WAY}")
+                f"units, limit {stillness_threshold:g}); {keep_still(len(x), sample_rate_hz)}{SAVED_CALIBRATION_WAY}")
         if sigma[i] > MAX_NOISE_STD_DPS:
             raise CalibrationError(
                 f"calibration: axis {axis} has a noise of {sigma[i]:.3g} deg/s, beyond the {MAX_NOISE_STD_DPS:g} deg/s "
