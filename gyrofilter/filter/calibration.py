@@ -206,11 +206,10 @@ def white_noise_std(window_dps, gross=None) -> np.ndarray:
     x = np.asarray(window_dps, dtype=float)
     if len(x) < 3:
         return np.zeros(x.shape[1:])
-    d = np.diff(x, axis=0)
     if gross is None:
-        return np.std(d, axis=0, ddof=1) / math.sqrt(2.0)
+        return np.std(np.diff(x, axis=0), axis=0, ddof=1) / math.sqrt(2.0)
     clean = ~(gross[1:] | gross[:-1])
-    return np.array([np.std(d[clean[:, a], a], ddof=1) if clean[:, a].sum() >= 2 else 0.0
+    return np.array([np.std(np.diff(x[:, a])[clean[:, a]], ddof=1) if clean[:, a].sum() >= 2 else 0.0
                      for a in range(x.shape[1])]) / math.sqrt(2.0)
 
 
@@ -219,33 +218,39 @@ def gross_error_limits(window_dps, q_dps=PAPER_Q_DPS) -> tuple[np.ndarray, np.nd
     a gross error when |x_i - c| > limit = max(q, GROSS_ERROR_Z * 1.4826 median|x_i - c|), ``q_dps``
     paper 001's threshold q (deg/s; module docstring, step 0)."""
     x = np.asarray(window_dps, dtype=float)
-    center = np.median(x, axis=0)
-    spread = MAD_TO_SIGMA * np.median(np.abs(x - center), axis=0)
-    return center, np.maximum(q_dps, GROSS_ERROR_Z * spread)
+    center, limit = np.empty(x.shape[1]), np.empty(x.shape[1])
+    for a in range(x.shape[1]):  # an axis at a time: an hour's window at 1 kHz is 86 MB, a Pi 3 has 1 GB
+        center[a] = np.median(x[:, a])
+        spread = MAD_TO_SIGMA * np.median(np.abs(x[:, a] - center[a]), overwrite_input=True)
+        limit[a] = max(q_dps, GROSS_ERROR_Z * spread)
+    return center, limit
 
 
-def without_gross_errors(window_dps, q_dps=PAPER_Q_DPS) -> tuple[np.ndarray, np.ndarray]:
+def without_gross_errors(window_dps, q_dps=PAPER_Q_DPS, *, in_place=False) -> tuple[np.ndarray, np.ndarray]:
     """(window, gross): ``window_dps`` ((n, 3), deg/s) with each gross error (:func:`gross_error_limits`,
     ``q_dps`` in deg/s) replaced by the mean of its axis's other samples, and the (n, 3) mask of those
     replaced. The window's mean is then the mean of the samples that are not gross errors (module
-    docstring, step 0); a copy, the input is left as it is."""
-    x = np.array(window_dps, dtype=float)
+    docstring, step 0); a copy, the input left as it is, unless ``in_place`` (a float array the caller
+    owns and drops: the pipeline's calibration buffer)."""
+    x = window_dps if in_place else np.array(window_dps, dtype=float)
     center, limit = gross_error_limits(x, q_dps)
-    gross = np.abs(x - center) > limit
-    for a in np.flatnonzero(gross.any(axis=0)):
-        x[gross[:, a], a] = x[~gross[:, a], a].mean()  # never all: at least the median's samples are kept
+    gross = np.empty(x.shape, dtype=bool)
+    for a in range(x.shape[1]):
+        gross[:, a] = np.abs(x[:, a] - center[a]) > limit[a]
+        if gross[:, a].any():  # never all: at least the median's samples are kept
+            x[gross[:, a], a] = x[~gross[:, a], a].mean()
     return x, gross
 
 
 def stillness_z(window_dps) -> np.ndarray:
     """The stillness statistic z per axis (noise units; see the module docstring) of
-    ``window_dps``, an (n, 3) window in deg/s."""
+    ``window_dps``, an (n, 3) window in deg/s (or (n, k): k axes)."""
     x = np.asarray(window_dps, dtype=float)
     n_sub = min(N_SUB_WINDOWS, len(x) // 2)
     if n_sub < 2:
         return np.zeros(x.shape[1:])
     m = len(x) // n_sub
-    sub_means = x[: m * n_sub].reshape(n_sub, m, 3).mean(axis=1)
+    sub_means = x[: m * n_sub].reshape(n_sub, m, -1).mean(axis=1)
     spread = np.abs(sub_means - x.mean(axis=0)).max(axis=0)
     scale = np.maximum(white_noise_std(x) / math.sqrt(m), NOISE_FLOOR_DPS)
     return spread / scale
@@ -362,11 +367,11 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
             f"({len(x) / sample_rate_hz:g} s at {sample_rate_hz:g} Hz); raise calibration_s"
         )
     outlier_q_dps = check_number(outlier_q_dps, "outlier_q_dps (deg/s)", low=0, low_open=True, high=MAX_RATE_DPS)
-    kept, gross = without_gross_errors(x, outlier_q_dps)
-    rejected = gross.sum(axis=0)
-    bias = kept.mean(axis=0)
-    z = stillness_z(kept)
-    sigma = white_noise_std(x, gross)
+    bias, sigma, z, rejected = np.empty(3), np.empty(3), np.empty(3), np.empty(3, dtype=int)
+    for a in range(3):  # an axis at a time: an hour's window at 1 kHz is 86 MB, a Pi 3 has 1 GB
+        kept, gross = without_gross_errors(x[:, a:a + 1], outlier_q_dps)
+        bias[a], z[a], rejected[a] = kept.mean(), stillness_z(kept)[0], gross.sum()
+        sigma[a] = white_noise_std(x[:, a:a + 1], gross)[0]
     most_rejected = int(MAX_GROSS_FRACTION * len(x))
     for i, axis in enumerate(AXES):
         implausible = implausible_bias(axis, bias[i], max_bias_dps=max_bias_dps)
