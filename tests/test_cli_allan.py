@@ -652,6 +652,7 @@ def test_the_accelerometer_of_the_filters_output_is_left_out(tmp_path, capsys):
     doc = json.loads((tmp_path / "out.json").read_text())
     assert "accelerometer" not in doc and "not the sensor's" in doc["accelerometer_left_out"]
     assert "1 in 5 of the sensor's samples" in doc["accelerometer_left_out"] and doc["accelerometer_left_out"] in err
+    assert "the density reads sqrt(5) = 2.24 times it" in err  # a new user's second trial: k was not said
     assert main(["allan", path, "--json", str(tmp_path / "raw.json")]) == 0
     raw = json.loads((tmp_path / "raw.json").read_text())
     assert "accelerometer" in raw and "accelerometer_left_out" not in raw

@@ -573,7 +573,7 @@ def test_run_refuses_to_filter_a_filtered_output_and_its_own_output_says_it_is_o
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "Traceback" not in err, err
         assert f"{filtered} is the filter's output (filtered_from '{still}'), not the sensor's samples; filter the raw recording" in err
-        assert "filter the raw recording it came from" in err and not out.exists()
+        assert "filter the raw recording it came from (from a live source: `record` it, then replay)" in err and not out.exists()
 
 
 def test_run_on_a_replay_equals_the_batch_filter(tmp_path, capsys):

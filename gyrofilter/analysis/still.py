@@ -242,9 +242,11 @@ def decimated_accelerometer(head):
     if filtered_from(head.header) is None:
         return None
     rate_in = head.header.get(INPUT_RATE_KEY)
-    every = f"1 in {float(rate_in) / head.sample_rate_hz:.3g} of the sensor's samples" if rate_in else "one of each block"
+    k = float(rate_in) / head.sample_rate_hz if rate_in else None
+    every = f"1 in {k:.3g} of the sensor's samples" if k else "one of each block"
+    times = f"sqrt({k:.3g}) = {math.sqrt(k):.3g} times it" if k else "sqrt(block length) times it"
     return (f"{head.path}: the filter's output keeps one raw accelerometer sample per row ({every}): its noise is not "
-            f"the sensor's (the density reads sqrt(k) times it); analyse the recording it was filtered from")
+            f"the sensor's (the density reads {times}); analyse the recording it was filtered from")
 
 
 #: the start of :func:`accelerometer_note` (a fleet's console names the units it holds for)

@@ -146,7 +146,8 @@ def refuse_filtered_output(header, where):
     describe). RecordingError; None for a raw recording."""
     filtered = filtered_words(header)
     if filtered:
-        raise RecordingError(f"{where} is {filtered}; filter the raw recording it came from")
+        raise RecordingError(f"{where} is {filtered}; filter the raw recording it came from (from a live source: "
+                             "`record` it, then replay)")
 
 
 def check_temperature(filt, available, where):
