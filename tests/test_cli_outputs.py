@@ -649,3 +649,25 @@ def test_a_gzip_output_stores_no_name_of_its_partial(tmp_path, capsys):
                  "--out", str(out)]) == 0
     head = out.read_bytes()[:10]
     assert head[:2] == b"\x1f\x8b" and head[3] & 0x08 == 0  # FLG.FNAME unset
+
+
+def test_gap_report_force_removes_the_figures_of_an_earlier_run_it_does_not_draw(tmp_path, capsys):
+    """Attack pass 37i (issue 37): ``gap A --report rep`` (A with a temperature column: three
+    temperature_*.png), then ``gap B --report rep --force`` (B without one) left A's temperature
+    figures beside B's report, as if they were B's (the fleet removes an earlier run's reports it
+    does not write; a single report folder kept them). Now the folder holds this run's files only;
+    a file of no name the report writes stays."""
+    from gyrofilter.cli import main
+    from gyrofilter.analysis.gap import report as gap_report
+
+    rec = tmp_path / "b.csv"
+    write_recording(rec, Recording.from_dps(np.random.default_rng(37).normal(0, 0.05, (3000, 3)), 100.0))
+    rep = tmp_path / "rep"
+    rep.mkdir()
+    for name in gap_report.report_file_names() + ["mine.txt"]:  # an earlier run's files, and the user's
+        (rep / name).write_text("earlier")
+    assert main(["gap", str(rec), "--sims", "10", "--bootstrap", "0", "--report", str(rep), "--force"]) == 0
+    capsys.readouterr()
+    left = sorted(os.listdir(rep))
+    assert "mine.txt" in left and not any(name.startswith("temperature_") for name in left)
+    assert all((rep / name).read_text(errors="replace") != "earlier" for name in left if name != "mine.txt")

@@ -1540,3 +1540,24 @@ def test_a_converted_cell_beyond_a_float_is_infinite_not_a_traceback():
     assert uw.to_floats(["1e-999999999", "-1e-999999999"], "mdps").tolist() == [0.0, 0.0]
     assert uw.to_floats(["-1e-999999999"], "f").tolist() == uw.to_floats(["0"], "f").tolist()
     assert uw.to_floats(["1e400", "0e999999999", "-0e-999999999"], "k").tolist() == [np.inf, -273.15, -273.15]
+
+
+@pytest.mark.parametrize("name", ["twice.csv.gz", "junk.csv"])
+def test_binary_bytes_holding_a_cr_are_not_called_cr_only_line_ends(tmp_path, name):
+    """Attack pass 37i (issue 37): a recording gzipped twice (`gzip rec.csv.gz`, renamed back), or
+    an xz file, was refused as "line ends are CR only (old Mac): convert them to LF (e.g. tr '\\r'
+    '\\n')", advice that cannot help: its bytes are no text, a CR among them by chance. Bytes that
+    are not UTF-8 text are refused as such; a last line without its line end that is no text
+    (junk a power cut left) is dropped with the interruption's warning, as one without a CR."""
+    body = "".join(f"{i / 100:.2f},0.1,-0.2,0.3\n" for i in range(300))
+    text = f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\nt,gx,gy,gz\n{body}".encode()
+    if name == "twice.csv.gz":
+        inner = bytearray(gzip.compress(text, mtime=0))
+        inner[4] = ord("\r")  # the gzip header's time stamp holds a CR byte before any LF
+        (tmp_path / name).write_bytes(gzip.compress(bytes(inner), mtime=0))
+        with pytest.raises(RecordingError, match=re.escape(f"{tmp_path / name}: line 1: not UTF-8 text")):
+            read_recording(tmp_path / name)
+        return
+    (tmp_path / name).write_bytes(text + b"\xff\xfe\r\x01\x02")
+    rec = read_recording(tmp_path / name)
+    assert len(rec) == 300 and any("line 305: last line has no line end" in w for w in rec.warnings)

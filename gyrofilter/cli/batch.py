@@ -185,10 +185,7 @@ def _drop_unwritten(folder, name, files, result):
     earlier run's (there only under --force, checked with the rest), which would stand beside this
     run's reports and fleet.csv as if they were its (another range's imu.yaml, a failed file's old
     Allan document)."""
-    for suffix, key, _ in files:
-        if result[key] is None:
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(os.path.join(folder, name + suffix))
+    outputs.remove_earlier(folder, [name + suffix for suffix, key, _ in files if result[key] is None])
 
 
 def _summary(rows, fleet_files, written, elapsed_s, no_yaml=(), no_accel=()):

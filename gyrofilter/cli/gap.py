@@ -97,7 +97,11 @@ def run(args):
             outputs.write_json(files.enter_context(outputs.replacing(args.json)), report)
         if args.report:
             progress("report")
-            gap_report.write_report(report, rec, files.enter_context(outputs.replacing_in(args.report)))
+            folder = files.enter_context(outputs.replacing_in(args.report))
+            gap_report.write_report(report, rec, folder)
+            drawn = set(os.listdir(folder))
+    if args.report:  # an earlier run's figures this report does not draw (a temperature column it lacks)
+        outputs.remove_earlier(args.report, [name for name in gap_report.report_file_names() if name not in drawn])
     written = json_files + ([os.path.join(args.report, gap_report.REPORT_NAME)] if args.report else [])
     console.say(f"wrote {' and '.join(written)}" if written else "(every number of the analysis: --json OUT.json)")
     gain = (f"discrepancy {d['overall_before']:.3g} -> {d['overall_after']:.3g}"

@@ -329,6 +329,16 @@ def remove_stale_partials(folder):
                     os.unlink(entry.path)
 
 
+def remove_earlier(folder, names):
+    """Remove the files ``names`` from ``folder`` where an earlier run left them: files a command
+    may write there but this run did not (found only under --force, checked with the rest), which
+    would stand beside this run's outputs as if they were its (another recording's figures, a
+    failed unit's old report). Call it once this run's files have landed."""
+    for name in names:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(os.path.join(folder, name))
+
+
 def _process_runs(pid):
     """Whether the process ``pid`` may exist (True when it cannot be told)."""
     if pid <= 0:

@@ -6,6 +6,7 @@ read. Damaged gzip data are an error; a stream cut short (an interrupted recordi
 """
 from __future__ import annotations
 
+import codecs
 import os
 import re
 import zlib
@@ -184,10 +185,23 @@ def refuse_cr_only(first_line, path, line=None):
     such a CR otherwise: a recording's header values write a control character as its escape.
     With ``line`` (its number), ``first_line`` is a last line that no LF ends: lines whose ends
     turn CR only there (a log of CR lines appended to one of LF lines) are refused from that line,
-    not dropped as a line an interruption cut (they were, with all their rows)."""
-    if _BARE_CR.search(first_line):
+    not dropped as a line an interruption cut (they were, with all their rows). Bytes that are no
+    text (NUL bytes, not UTF-8: a file gzipped twice, an xz file, junk a power cut left) hold a CR
+    by chance, not as a line end: they are left to the refusals of binary data (or the warning of
+    a cut last line), whose words help where "convert them to LF" cannot."""
+    if _BARE_CR.search(first_line) and _is_text(first_line):
         where = f"{path}: line {line}: line ends are CR only from there on" if line else f"{path}: line ends are CR only"
         raise RecordingError(f"{where} (old Mac): convert them to LF (e.g. tr '\\r' '\\n')")
+
+
+def _is_text(data):
+    """Whether ``data`` (a file's first bytes, perhaps cut inside a UTF-8 character at its end)
+    reads as UTF-8 text without NUL bytes."""
+    try:
+        codecs.getincrementaldecoder("utf-8")().decode(data, final=False)
+    except UnicodeDecodeError:
+        return False
+    return b"\0" not in data
 
 
 def refuse_nul(data, path, first_line):
