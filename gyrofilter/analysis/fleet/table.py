@@ -268,17 +268,17 @@ def fleet_rows(names, results):
 def failed_rows(rows):
     """The rows of ``rows`` (:func:`fleet_rows`) of recordings that failed: their one row, no axis
     (the skipped ones aside, :func:`skipped_rows`)."""
-    return [r for r in rows if r["status"] != "ok" and r["axis"] is None and not r["skipped"]]
+    return [r for r in rows if r["status"] != "ok" and r["axis"] is None and not r.get("skipped")]
 
 
 def skipped_rows(rows):
     """The rows of ``rows`` (:func:`fleet_rows`) of recordings not analysed because their gyro moved."""
-    return [r for r in rows if r["skipped"]]
+    return [r for r in rows if r.get("skipped")]
 
 
 def moved_units(rows):
     """The units of ``rows`` (:func:`fleet_rows`) analysed although their gyro moved, in order."""
-    return list(dict.fromkeys(r["unit"] for r in rows if r["moved"] and r["status"] == "ok"))
+    return list(dict.fromkeys(r["unit"] for r in rows if r.get("moved") and r["status"] == "ok"))
 
 
 def left_out_rows(rows):
@@ -298,7 +298,7 @@ def flag_units(rows):
     with ``--allow-motion``) is kept out: its numbers describe the motion, and would widen the
     fleet's spread and hide the still units' flags; it is not flagged either."""
     stats = []
-    ok = [r for r in rows if r["status"] == "ok" and not r["moved"]]
+    ok = [r for r in rows if r["status"] == "ok" and not r.get("moved")]
     for sensor in _sensors(rows):
         for axis in (sensor.prefix + a for a in AXES):
             on_axis = [r for r in ok if r["axis"] == axis]
