@@ -31,6 +31,11 @@ class RecordingError(GyroFilterError, ValueError):
     """A recording file is malformed: the message names the file, the line and the reason."""
 
 
+class NotStillError(RecordingError):
+    """A still-sensor analysis refused a recording whose gyro moved
+    (:func:`gyrofilter.analysis.still.refuse_moved`): a fleet skips it as not still, not as failed."""
+
+
 class CalibrationError(GyroFilterError):
     """Start-up bias calibration failed (for example the sensor moved while calibrating).
     ``max_bias_dps``: the value of the filter setting that takes a bias refused as beyond it (the message's

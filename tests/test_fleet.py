@@ -702,7 +702,7 @@ def test_the_fleet_counts_as_failed_the_lines_it_labels_failed(tmp_path, capsys)
     assert len(failed) == 1 and str(bad) in failed[0]
     assert len(left_out) == 1 and left_out[0].startswith(f"  left out: {path}: axis x: all 6000 samples equal")
     md = (tmp_path / "f" / "fleet.md").read_text()
-    assert "2 recordings: 1 analysed, 1 failed, 1 axis/axes left out;" in md
+    assert "2 recording(s), 1 analysed, 1 failed, 1 axis/axes left out, 0 stand(s) out." in md
     failed_md = md.split("## Failed", 1)[1].split("##", 1)[0]
     assert "bad" in failed_md and "stuckx" not in failed_md
     assert "axis x: all 6000 samples equal" in md.split("## Axes left out", 1)[1].split("##", 1)[0]
@@ -847,10 +847,11 @@ def test_a_unit_with_a_noisier_accelerometer_stands_out_on_its_axis():
     assert entry["units"] == 5 and entry["median"] == pytest.approx(0.004)
 
 
-def test_a_unit_that_moved_and_stands_out_is_said_to_have_moved(tmp_path, capsys):
+def test_a_unit_that_moved_is_not_analysed_and_never_stands_out(tmp_path, capsys):
     """A new user's trial: `gap recordings/* --fleet DIR` analysed the moving recordings (as the
-    fleet always does) and said "stands out: broad_02_slow x: K high ..." without a word that the
-    unit moved (only a comment in fleet.csv did): a rotation read as the sensor's noise."""
+    fleet always did) and said "stands out: broad_02_slow x: K high ..." without a word that the
+    unit moved (only a comment in fleet.csv did): a rotation read as the sensor's noise. Now the
+    fleet skips it as not still, and with --allow-motion analyses it apart from the comparison."""
     rng = np.random.default_rng(3)
     paths = []
     for u in range(6):
@@ -861,9 +862,11 @@ def test_a_unit_that_moved_and_stands_out_is_said_to_have_moved(tmp_path, capsys
         write_recording(path, Recording.from_dps(g, 100.0))
         paths.append(str(path))
     assert main(["allan", *paths, "--fleet", str(tmp_path / "f"), "--jobs", "1"]) == 0
-    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("  stands out: ")]
-    assert lines and all(line.startswith("  stands out: unit5 x: ") for line in lines), lines
-    assert all(line.endswith("; it moved: this describes the motion, not the sensor") for line in lines), lines
+    out = capsys.readouterr().out
+    assert "  stands out: " not in out and f"  not still: {paths[5]}: axis x is not still" in out
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "g"), "--jobs", "1", "--allow-motion"]) == 0
+    out = capsys.readouterr().out
+    assert "  stands out: " not in out and "kept out of the comparison: unit5" in out
 
 
 def test_a_unit_whose_report_name_is_too_long_is_refused_before_any_work(tmp_path, capsys):

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..errors import RecordingError
+from ..errors import NotStillError, RecordingError
 from ..filter.calibration import implausible_bias
 from ..recording import ACCEL_COLUMNS, INPUT_RATE_KEY, collect_columns, filtered_from, iter_recording, warn_about_gaps
 from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, to_dps, to_mps2
@@ -77,6 +77,15 @@ def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):
     with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: the analyses say so
         return not_static(x, sample_rate_hz, _spent_sd(np.diff(x)) / math.sqrt(2) if x.size > 1 else 0.0,
                           brief=brief, **sensor)
+
+
+def refuse_moved(path, axis, x_dps, sample_rate_hz):
+    """Raise NotStillError, one short line naming ``path`` and ``axis``, when the gyro axis's record
+    ``x_dps`` (deg/s) looks moved (:func:`moved`): the refusal of ``gap`` and of a fleet's records
+    (``--allow-motion`` analyses them anyway)."""
+    why = moved(x_dps, sample_rate_hz, brief=True)
+    if why:
+        raise NotStillError(f"{path}: axis {axis} is not still ({why}); --allow-motion analyses it anyway")
 
 
 def _spent_sd(d):
@@ -329,7 +338,7 @@ GAPS_CONSEQUENCE = "the Allan deviation assumes uniform samples"
 
 
 def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, keep_outliers=False, warn,
-                           progress=None, skip_constant=False, allow_large_mean=False):
+                           progress=None, skip_constant=False, allow_large_mean=False, refuse_motion=False):
     """Read a still recording and characterise each of ``axes`` of every sensor it holds: (head,
     {axis: AxisNoise}, the count of its repeated rows, the accelerometer's {axis: AxisNoise} or None,
     why the record's accelerometer was left out whole or None).
@@ -341,7 +350,8 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     (:func:`refuse_large_mean`), and a result that is not finite raises AllanInputError (both name the file).
     ``progress(text)``, if given, is told each axis as it starts; the axes' own warnings (a record
     that does not look static, :func:`not_static`; a poor fit) stay in their results
-    (``AxisNoise.warnings``, the JSON document's ``warnings``).
+    (``AxisNoise.warnings``, the JSON document's ``warnings``); with ``refuse_motion`` (a fleet's
+    records) a gyro axis that looks moved raises NotStillError instead (:func:`refuse_moved`).
 
     ``path``: the recording; ``axes``: axis letters (default all, :data:`~gyrofilter.units.AXES`); ``confidence``: level of the
     Allan deviation's confidence intervals (0 to MAX_CONFIDENCE 0.9999, 0.95 = 95 %); ``min_clusters``: fewest
@@ -379,6 +389,9 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     for text in head.warnings + ([note] if note else []):
         warn(text)
     warn_about_gaps(head, GAPS_CONSEQUENCE, warn)
+    if refuse_motion:  # before the spikes and the mean: a turning gyro's are the motion's
+        for a in axes:
+            refuse_moved(path, a, series[a], head.sample_rate_hz)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     refuse_large_mean(head.path, head.gyro_unit, collections.ChainMap(series, others), allow_large_mean, warn=warn)
     del others

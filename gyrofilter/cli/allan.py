@@ -52,6 +52,9 @@ def add_arguments(parser):
     parser.add_argument("--min-clusters", type=options.whole_number, default=MIN_CLUSTERS,
                         help=f"fit only taus with at least this many clusters (default {MIN_CLUSTERS}, paper 002; lower values are flagged)")
     still.add_keep_outliers_argument(parser)
+    parser.add_argument("--allow-motion", action="store_true",
+                        help="with --fleet: analyse the recordings whose gyro does not look still (skipped by default: "
+                             "their Allan deviation describes the motion), kept out of the fleet's comparison")
     still.add_allow_large_mean_argument(parser)
     console.add_progress_argument(parser)
     batch.add_arguments(parser)
@@ -208,8 +211,12 @@ def run(args):
         batch.refuse_single_file_outputs(args, ["--json", "--plot", "--kalibr"])
         still.refuse_allow_large_mean_in_fleet(args)
         settings = FleetSettings("allan", axes=axes, confidence=args.confidence, min_clusters=args.min_clusters,
-                                 keep_outliers=args.keep_outliers, kalibr_tau_s=args.kalibr_tau_s)
+                                 keep_outliers=args.keep_outliers, kalibr_tau_s=args.kalibr_tau_s,
+                                 allow_motion=args.allow_motion)
         return batch.run(args, settings, paths)
+    if args.allow_motion:
+        raise SettingsError("--allow-motion works on a fleet (--fleet DIR); a single recording that moved is "
+                            "analysed, with a warning that its Allan deviation describes the motion")
     args.recording = batch.single(args, paths)
     outputs.check_outputs([args.json, args.plot, args.kalibr], [args.recording], args.force)
     if args.plot:

@@ -10,12 +10,14 @@ say why); 2 when nothing could be done (bad input before any work, or no recordi
 import contextlib
 import csv
 import glob
+import gzip
 import os
 import time
 
 from ..analysis.fleet import runner, table, work
 from ..analysis.still import NO_ACCEL_UNIT, NOT_STATIC
 from ..errors import SettingsError
+from ..recording import VERSION_KEY
 from . import console, options, outputs
 
 FLEET_CSV = "fleet.csv"
@@ -51,6 +53,33 @@ def expand(patterns):
                 seen.add(key)
                 paths.append(path)
     return paths
+
+
+#: the names a recording has (docs/formats.md section 1); another name is a recording only if its first line says so
+RECORDING_SUFFIXES = (".csv", ".csv.gz")
+
+
+def not_a_recording(path):
+    """Why ``path`` is no recording, for a fleet to skip it (not counted, not failed), or None: a
+    folder, or a file whose name ends in neither of :data:`RECORDING_SUFFIXES` and whose first line
+    (gzip or not) is not the recording's version line ``# gyrofilter-recording:`` (a README, a
+    licence beside the logs that ``recordings/*`` matches). A ``.csv`` or ``.csv.gz`` file that
+    cannot be read, or a path that does not exist, is a recording that fails with its reason."""
+    if os.path.isdir(path):
+        return "a folder"
+    if path.endswith(RECORDING_SUFFIXES) or not os.path.isfile(path):
+        return None
+    try:
+        with open(path, "rb") as fh:
+            start = fh.read(2)
+        with (gzip.open if start == b"\x1f\x8b" else open)(path, "rb") as fh:
+            first = fh.readline(200)
+    except (OSError, EOFError):
+        return None  # the reader says what is wrong with it
+    if first.lstrip(b"# ").startswith(VERSION_KEY.encode()):
+        return None
+    return f"not a recording (the name ends in neither {' nor '.join(RECORDING_SUFFIXES)} and the first line is not " \
+           f"'# {VERSION_KEY}: 1')"
 
 
 def single(args, paths):
@@ -90,6 +119,11 @@ def run(args, settings, paths):
     if args.jobs is not None and args.scheduler:
         raise SettingsError("--jobs and --scheduler: give one (the cluster's workers set the parallelism)")
     outputs.check_output_folder(args.fleet, "--fleet")
+    not_recordings = [(p, why) for p in paths if (why := not_a_recording(p))]
+    paths = [p for p in paths if not any(p == q for q, _ in not_recordings)]
+    if not paths:
+        raise SettingsError(f"no recording among the {len(not_recordings)} path(s) given: "
+                            f"{not_recordings[0][0]}: {not_recordings[0][1]}")
     names = table.unit_names(paths)
     files = report_files(settings.command)
     report_paths = [os.path.join(args.fleet, name + suffix) for name in names for suffix, _, _ in files]
@@ -113,6 +147,7 @@ def run(args, settings, paths):
     t0 = time.perf_counter()
     unmatched = len(paths) - len(todo)
     progress(f"{settings.command}: {len(paths)} recording(s)" + (f", {unmatched} matching no file" if unmatched else "")
+             + (f" ({len(not_recordings)} other path(s) skipped: not recordings)" if not_recordings else "")
              + f"; {len(todo)} on {where}", always=True)
     for r in results:
         if r is not None:
@@ -130,7 +165,7 @@ def run(args, settings, paths):
                         written += 1
             _drop_unwritten(args.fleet, names[i], files, result)
             state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
-                     else f"FAILED: {result['error']}")
+                     else f"NOT STILL, skipped: {result['error']}" if result["skipped"] else f"FAILED: {result['error']}")
             progress(f"{settings.command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}", always=True)
     rows = table.fleet_rows(names, results)
     stats = table.flag_units(rows)
@@ -141,12 +176,12 @@ def run(args, settings, paths):
     with outputs.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
         fh.write(table.fleet_csv(rows))
     with outputs.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(table.fleet_markdown(rows, stats, title=title))
+        fh.write(table.fleet_markdown(rows, stats, title=title, not_recordings=not_recordings))
     no_yaml = [f"{names[i]}: {w[len(work.NO_IMU_YAML):]}" for i, r in enumerate(results) for w in r["warnings"]
                if w.startswith(work.NO_IMU_YAML)]
     no_accel = [f"{names[i]}: {w[len(NO_ACCEL_UNIT):]}" for i, r in enumerate(results) for w in r["warnings"]
                 if w.startswith(NO_ACCEL_UNIT)]
-    return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml, no_accel)
+    return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml, no_accel, not_recordings)
 
 
 def _earlier_outputs(folder, own):
@@ -188,18 +223,23 @@ def _drop_unwritten(folder, name, files, result):
     outputs.remove_earlier(folder, [name + suffix for suffix, key, _ in files if result[key] is None])
 
 
-def _summary(rows, fleet_files, written, elapsed_s, no_yaml=(), no_accel=()):
+def _summary(rows, fleet_files, written, elapsed_s, no_yaml=(), no_accel=(), not_recordings=()):
     """Print the fleet's outcome on stdout; the exit code. ``no_yaml``: "UNIT: why" of each unit
     analysed whose imu.yaml was not written (its Allan document was); ``no_accel``: "UNIT: why"
     of each unit whose accelerometer columns were not analysed (no ``accel_unit``: allan's
-    warning, :func:`~gyrofilter.analysis.still.accelerometer_note`), one line each as well."""
+    warning, :func:`~gyrofilter.analysis.still.accelerometer_note`), one line each as well;
+    ``not_recordings``: (path, why) of the paths skipped as no recordings, one line each."""
     failed, left_out = table.failed_rows(rows), table.left_out_rows(rows)
-    units = len({r["unit"] for r in rows})
     done = len({r["unit"] for r in rows if r["status"] == "ok"})
     flagged = [r for r in rows if r["flag"]]
-    console.tell(f"fleet: {units} recording(s), {done} analysed, {len(failed)} failed, "
-                 + (f"{len(left_out)} axis/axes left out, " if left_out else "")
-                 + f"{len({r['unit'] for r in flagged})} stand(s) out ({elapsed_s:.1f} s)")
+    console.tell(f"fleet: {table.outcome_text(rows)} ({elapsed_s:.1f} s)")
+    for r in table.skipped_rows(rows):
+        console.tell(f"  not still: {r['status']}")
+    moving = table.moved_units(rows)
+    if moving:
+        console.tell(f"  moving, analysed (--allow-motion) but kept out of the comparison: {', '.join(moving)}")
+    for path, why in not_recordings:
+        console.tell(f"  skipped, not a recording: {path}: {why}")
     for r in failed:
         console.tell(f"  failed: {r['status']}")
     for r in left_out:

@@ -46,7 +46,8 @@ def add_arguments(parser):
                              f"0: no intervals; else {MIN_REPLICATES} to {MAX_BOOTSTRAP})")
     parser.add_argument("--allow-motion", action="store_true",
                         help="analyse a recording that does not look still (refused by default: the analysis models a "
-                             "still gyro, so its findings would describe the motion)")
+                             "still gyro, so its findings would describe the motion; a fleet skips such recordings, "
+                             "and with this analyses them but keeps them out of its comparison)")
     still.add_allow_large_mean_argument(parser)
     console.add_progress_argument(parser)
     batch.add_arguments(parser)
@@ -75,7 +76,7 @@ def run(args):
     if args.fleet is not None:
         batch.refuse_single_file_outputs(args, ["--json", "--report"])
         still.refuse_allow_large_mean_in_fleet(args)
-        return batch.run(args, FleetSettings("gap", sims=args.sims), paths)
+        return batch.run(args, FleetSettings("gap", sims=args.sims, allow_motion=args.allow_motion), paths)
     args.recording = batch.single(args, paths)
     report_files = [os.path.join(args.report, name) for name in gap_report.report_file_names()] if args.report else []
     json_files = [args.json] if args.json is not None else []

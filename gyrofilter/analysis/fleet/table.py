@@ -75,7 +75,7 @@ from ..gap.report import not_analysed_why
 from ..noise.export import ACCEL_JSON_KEY, JSON_KEY
 from ..noise.model import (ACCELEROMETER_TERMS, ANGLE_RANDOM_WALK, GYROSCOPE_TERMS, QUANTIZATION, TERM_SYMBOL,
                            TERMS)
-from ..still import LEFT_OUT
+from ..still import LEFT_OUT, NOT_STATIC
 
 
 #: the Allan coefficients in the fleet table: N, B, K, R (Q, the quantization, is left out)
@@ -204,13 +204,21 @@ def fleet_rows(names, results):
     :func:`~gyrofilter.analysis.still.characterise_recording`) is a row whose ``status`` says why.
     A row's warnings are the recording's and its own axis's (``axis ax: ...``); the
     accelerometer's as a whole (a warning ending in :data:`~gyrofilter.analysis.still.LEFT_OUT`
-    that names no axis) are on its rows only."""
+    that names no axis) are on its rows only.
+
+    Two keys beyond the columns: ``skipped`` (the recording was not analysed because its gyro
+    moved: its one row, a record the still-sensor analysis refuses, not a failed file) and
+    ``moved`` (analysed with ``--allow-motion`` although its gyro moved: a warning of the record
+    or of a gyro axis says :data:`~gyrofilter.analysis.still.NOT_STATIC`; kept out of the
+    comparison, :func:`flag_units`)."""
     rows = []
     for name, res in zip(names, results):
         base = dict.fromkeys(COLUMNS)
         base.update(unit=name, recording=res["recording"], status="ok" if res["error"] is None else res["error"],
                     sample_rate_hz=res["sample_rate_hz"], duration_s=res["duration_s"],
-                    runtime_s=res["runtime_s"], warnings=list(res["warnings"]), flag=[])
+                    runtime_s=res["runtime_s"], warnings=list(res["warnings"]), flag=[],
+                    skipped=bool(res.get("skipped")),
+                    moved=any(NOT_STATIC in w and not w.startswith(f"axis {ACCEL.prefix}") for w in res["warnings"]))
         if res["error"] is not None:
             rows.append(base)
             continue
@@ -258,8 +266,19 @@ def fleet_rows(names, results):
 
 
 def failed_rows(rows):
-    """The rows of ``rows`` (:func:`fleet_rows`) of recordings that failed: their one row, no axis."""
-    return [r for r in rows if r["status"] != "ok" and r["axis"] is None]
+    """The rows of ``rows`` (:func:`fleet_rows`) of recordings that failed: their one row, no axis
+    (the skipped ones aside, :func:`skipped_rows`)."""
+    return [r for r in rows if r["status"] != "ok" and r["axis"] is None and not r.get("skipped")]
+
+
+def skipped_rows(rows):
+    """The rows of ``rows`` (:func:`fleet_rows`) of recordings not analysed because their gyro moved."""
+    return [r for r in rows if r.get("skipped")]
+
+
+def moved_units(rows):
+    """The units of ``rows`` (:func:`fleet_rows`) analysed although their gyro moved, in order."""
+    return list(dict.fromkeys(r["unit"] for r in rows if r.get("moved") and r["status"] == "ok"))
 
 
 def left_out_rows(rows):
@@ -275,9 +294,11 @@ def flag_units(rows):
     ``z`` or ``share``, ``text``) and returns the fleet statistics: a list of dicts per axis and
     quantity (``units``: how many had a number; ``median``/``spread`` of the log levels (of the
     coefficients and of "D before"), or ``having`` for a departure, ``what`` its labels joined by
-    "/"; ``compared``: False when too few units)."""
+    "/"; ``compared``: False when too few units). A unit whose gyro moved (``moved``, analysed
+    with ``--allow-motion``) is kept out: its numbers describe the motion, and would widen the
+    fleet's spread and hide the still units' flags; it is not flagged either."""
     stats = []
-    ok = [r for r in rows if r["status"] == "ok"]
+    ok = [r for r in rows if r["status"] == "ok" and not r.get("moved")]
     for sensor in _sensors(rows):
         for axis in (sensor.prefix + a for a in AXES):
             on_axis = [r for r in ok if r["axis"] == axis]
@@ -460,30 +481,47 @@ def _coefficient_table(rows, sensor, gap):
     return lines
 
 
-def fleet_markdown(rows, stats, *, title):
+def outcome_text(rows):
+    """The fleet's outcome in one line (fleet.md's and the summary's): recordings, analysed (and of
+    them moving), not still, failed, axes left out, units that stand out."""
+    failed, left_out, skipped = failed_rows(rows), left_out_rows(rows), skipped_rows(rows)
+    done = len({r["unit"] for r in rows if r["status"] == "ok"})
+    moved = moved_units(rows)
+    return (f"{len({r['unit'] for r in rows})} recording(s), {done} analysed"
+            + (f" ({len(moved)} of them moving: kept out of the comparison)" if moved else "")
+            + (f", {len(skipped)} not still (not analysed)" if skipped else "")
+            + f", {len(failed)} failed" + (f", {len(left_out)} axis/axes left out" if left_out else "")
+            + f", {len({r['unit'] for r in rows if r['flag']})} stand(s) out")
+
+
+def fleet_markdown(rows, stats, *, title, not_recordings=()):
     """fleet.md, headed ``title``: the units that stand out, the failed files, a row per
     recording and axis (``rows``, :func:`fleet_rows`; the gap's findings and D columns only
     when some row has gap results; the accelerometer's rows in a table of their own, in its
     units, when the fleet has one), and the fleet statistics ``stats`` (what
-    :func:`flag_units` returns) with the rules."""
-    units = list(dict.fromkeys(r["unit"] for r in rows))
-    failed, left_out = failed_rows(rows), left_out_rows(rows)
-    done = len({r["unit"] for r in rows if r["status"] == "ok"})
+    :func:`flag_units` returns) with the rules. ``not_recordings``: (path, why) of the paths given
+    that are no recordings (a folder, a README), skipped and not counted."""
+    failed, left_out, skipped = failed_rows(rows), left_out_rows(rows), skipped_rows(rows)
     flagged = [r for r in rows if r["flag"]]
-    lines = [f"# {title}", "",
-             (f"{len(units)} recordings: {done} analysed, {len(failed)} failed"
-              + (f", {len(left_out)} axis/axes left out" if left_out else "")
-              + f"; {len({r['unit'] for r in flagged})} stand out."), "", "## Units that stand out", ""]
+    lines = [f"# {title}", "", outcome_text(rows) + ".", "", "## Units that stand out", ""]
     if flagged:
         lines += ["| unit | axis | why |", "|---|---|---|"]
         lines += [f"| {markdown_text(r['unit'])} | {r['axis']} | {f['text']} |" for r in flagged for f in r["flag"]]
     else:
         lines.append("None.")
-    for heading, which in (("Failed", failed), ("Axes left out", left_out)):
+    moved = moved_units(rows)
+    if moved:
+        lines += ["", f"Analysed although the gyro moved (--allow-motion), kept out of the comparison: "
+                      f"{', '.join(markdown_text(u) for u in moved)}."]
+    for heading, which in (("Not still (not analysed; --allow-motion analyses them)", skipped), ("Failed", failed),
+                           ("Axes left out", left_out)):
         if which:
             lines += ["", f"## {heading}", "", "| unit | recording | reason |", "|---|---|---|"]
             lines += [f"| {markdown_text(r['unit'])} | {markdown_text(r['recording'])} | {markdown_text(r['status'])} |"
                       for r in which]
+    if not_recordings:
+        lines += ["", "## Not recordings (skipped, not counted)", "", "| path | why |", "|---|---|"]
+        lines += [f"| {markdown_text(path)} | {markdown_text(why)} |" for path, why in not_recordings]
     # the gap's columns only when the gap ran (a gap fleet); an allan fleet has none to show
     gap = any(r["findings"] is not None for r in rows if r["status"] == "ok")
     lines += ["", "## Per recording and axis", "",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import time
 
-from ...errors import SettingsError, one_line
+from ...errors import NotStillError, SettingsError, one_line
 from ...recording import filtered_words
 from ...units import AXES
 from ..gap.pipeline import analyse_file
@@ -29,6 +29,9 @@ class FleetSettings:
     ``command``: ``"allan"`` (the Allan part only) or ``"gap"`` (the gap analysis and the Allan
     part). The Allan part uses ``axes``, ``confidence``, ``min_clusters``, ``keep_outliers`` and
     ``kalibr_tau_s`` as ``gyrofilter allan`` does; the gap part ``sims`` as ``gyrofilter gap``.
+    A record whose gyro moved is not analysed (skipped, :func:`analyse_recording`) unless
+    ``allow_motion``, which also allows its mean rate (a turning gyro's mean is real), as
+    ``gyrofilter gap --allow-motion`` does.
     """
 
     command: str
@@ -38,13 +41,16 @@ class FleetSettings:
     keep_outliers: bool = False
     sims: int | None = None
     kalibr_tau_s: tuple | None = None  # the imu.yaml's range (s), as allan's --kalibr-tau-s; None: the default
+    allow_motion: bool = False  # --allow-motion: analyse records whose gyro moved (kept out of the comparison)
 
 
 def analyse_recording(path, settings):
     """The per-file work of a fleet run: a dict of plain data.
 
     Keys: ``recording`` (``path``), ``error`` (None, or the one-line reason the file could not be
-    analysed), ``warnings`` (sentences), ``sample_rate_hz``, ``duration_s``, ``allan`` (the Allan
+    analysed), ``skipped`` (True when that reason is that the gyro moved, NotStillError: a record
+    the still-sensor analysis refuses, not a failed file), ``warnings`` (sentences),
+    ``sample_rate_hz``, ``duration_s``, ``allan`` (the Allan
     document of docs/formats.md section 4, or None), ``kalibr`` (Kalibr's imu.yaml text, or
     None), ``gap`` (the gap report of section 3, or None) and ``runtime_s`` (wall time).
 
@@ -55,8 +61,8 @@ def analyse_recording(path, settings):
     gap report stands.
     """
     t0 = time.perf_counter()
-    result = {"recording": path, "error": None, "warnings": [], "sample_rate_hz": None, "duration_s": None,
-              "allan": None, "kalibr": None, "gap": None}
+    result = {"recording": path, "error": None, "skipped": False, "warnings": [], "sample_rate_hz": None,
+              "duration_s": None, "allan": None, "kalibr": None, "gap": None}
     try:
         if settings.command == "gap":
             result["gap"] = _gap_report(path, settings, result["warnings"])
@@ -71,12 +77,13 @@ def analyse_recording(path, settings):
     except FILE_ERRORS as exc:
         reason = "out of memory" if isinstance(exc, MemoryError) else one_line(exc)
         result["error"] = reason if reason.startswith(path) else f"{path}: {reason}"
+        result["skipped"] = isinstance(exc, NotStillError)
     result["runtime_s"] = time.perf_counter() - t0
     return result
 
 
 def _gap_report(path, settings, warnings):
-    return analyse_file(path, n_sims=settings.sims, warn=warnings.append)[1]
+    return analyse_file(path, n_sims=settings.sims, warn=warnings.append, refuse_motion=not settings.allow_motion)[1]
 
 
 def _allan_part(path, settings, result):
@@ -86,7 +93,9 @@ def _allan_part(path, settings, result):
 
     head, results, repeats, accel, accel_left_out = characterise_recording(
         path, axes=settings.axes, confidence=settings.confidence, min_clusters=settings.min_clusters,
-        keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True)
+        keep_outliers=settings.keep_outliers, warn=warn, skip_constant=True,
+        # gap's part judged the motion already
+        refuse_motion=settings.command == "allan" and not settings.allow_motion, allow_large_mean=settings.allow_motion)
     sample_rate_hz = head.sample_rate_hz
     kalibr = None
     filtered = filtered_words(head.header)
@@ -111,5 +120,6 @@ def _allan_part(path, settings, result):
 def failed(path, reason):
     """The result of a file whose work never ran or never returned (a glob that matched nothing,
     a worker that died): its ``error`` names the file ``path`` and ``reason``."""
-    return {"recording": path, "error": f"{path}: {reason}", "warnings": [], "sample_rate_hz": None, "duration_s": None,
+    return {"recording": path, "error": f"{path}: {reason}", "skipped": False, "warnings": [], "sample_rate_hz": None,
+            "duration_s": None,
             "allan": None, "kalibr": None, "gap": None, "runtime_s": None}

@@ -76,7 +76,7 @@ from ...recording import GYRO_COLUMNS, filtered_words, read_recording, warn_abou
 from ...sim.model import TEMPERATURE_PROFILE
 from ...sim.simulate import check_seed
 from ...units import AXES, MAX_RATE_DPS, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
-from ..still import moved, not_static
+from ..still import moved, not_static, refuse_moved
 from . import detectors as det
 from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
                        sim_features, temperature_table, wander_highpassed)
@@ -118,7 +118,7 @@ def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refu
     analyses a file (``gap``, ``report``, the fleet): returns ``(the Recording, the gap report)``
     (:func:`analyse_gap` with :data:`COMMAND_SEED`, ``n_sims``, ``bootstrap``). The analysis models a still
     gyro: an axis that looks moved (:func:`gyrofilter.analysis.still.moved`, as ``allan`` judges
-    it) raises RecordingError with ``refuse_motion``, else is the first warning. The reader's
+    it) raises NotStillError with ``refuse_motion``, else is the first warning. The reader's
     warnings and the gaps in ``t`` go to ``warn(text)``, the steps to ``progress(text)``. Only the
     columns the analysis uses are kept, integer (``lsb``) readings as float32, which holds them
     exactly (:func:`gap_columns`). The filter's output (``filtered_from``) is analysed, as ``allan``
@@ -128,8 +128,7 @@ def analyse_file(path, *, n_sims=None, bootstrap=None, warn, progress=None, refu
     rec = read_recording(path, columns=gap_columns, compact=True)
     motion = [(a, why) for i, a in enumerate(AXES) if (why := moved(axis_dps(rec, i), rec.sample_rate_hz))]
     if motion and refuse_motion:  # one short line: the warning of --allow-motion says the rest
-        a, why = motion[0][0], moved(axis_dps(rec, AXES.index(motion[0][0])), rec.sample_rate_hz, brief=True)
-        raise RecordingError(f"{path}: axis {a} is not still ({why}); --allow-motion analyses it anyway")
+        refuse_moved(path, motion[0][0], axis_dps(rec, AXES.index(motion[0][0])), rec.sample_rate_hz)
     for a, why in motion:
         warn(f"{path}: axis {a}: {why}; the gap analysis models a still gyro, so its findings describe the motion")
     for text in rec.warnings:
