@@ -533,13 +533,19 @@ def test_a_temperature_named_on_a_short_record_holds_its_truth_in_its_interval()
     assert axis == "x" and low <= truth <= high, found
 
 
+#: the seeds of 0-199 whose 2-minute record of the package model named a temperature before the unnamed
+#: wander was taken at its upper bound (the others name none, before or after: 200 records take 15 minutes)
+SHORT_TEMPERATURE_SEEDS = (3, 5, 7, 32, 33, 35, 41, 53, 57, 58, 62, 69, 70, 71, 73, 80, 86, 89, 114, 122, 130, 147,
+                           148, 149, 153, 157, 173, 176, 178, 190, 199)
+
+
 @pytest.mark.slow
 def test_temperatures_named_on_short_records_hold_their_truth_at_about_the_nominal_rate():
-    """Issue 37: the package model's 2-minute records, seeds 0-99: a named temperature coefficient
-    lies inside its interval on at least 80 % of the findings. Before the unnamed wander was taken
-    at its upper bound, 8 of 18; after, 10 of 12, six more moved to uncertain (seeds 0-199: 16 of 31
-    before, 16 of 18 after)."""
+    """Issue 37: the package model's 2-minute records: a named temperature coefficient lies inside its
+    interval on at least 80 % of the findings. Seeds 0-199: before the unnamed wander was taken at its
+    upper bound, 16 of 31 (52 %); after, 16 of 18 (89 %), 13 moved to uncertain. Run on the seeds that
+    named one before (:data:`SHORT_TEMPERATURE_SEEDS`)."""
     model = json.loads(PACKAGE_MODEL.read_text())
-    found = _named_temperatures(model, 120.0, range(100))
+    found = _named_temperatures(model, 120.0, SHORT_TEMPERATURE_SEEDS)
     inside = [low <= truth <= high for _, _, truth, (low, high) in found]
-    assert len(found) >= 8 and sum(inside) >= 0.8 * len(found), found
+    assert len(found) >= 12 and sum(inside) >= 0.8 * len(found), found
