@@ -465,12 +465,16 @@ def _true_effect(model, axis, effect, name):
 def test_a_temperature_findings_replicates_carry_the_wander_its_axis_holds_but_does_not_name():
     """Issue 37: the bootstrap of a temperature finding on an axis that names no wander simulated
     white noise about the coefficient, and the axis's bias instability (real, unnamed) was missing
-    from its spread. The replicates now carry the wander's maximum likelihood level: on x of the
-    package model's 10-minute record, seed 4 (b_dps 0.0015), the fitted B is within a factor 3 of
-    the truth; none where the axis names a wander or has no temperature finding."""
+    from its spread. The replicates now carry the wander at the upper end of its confidence set: on x
+    of the package model's 10-minute record, seed 4 (b_dps 0.0015), that B is within a factor 3 of
+    the truth and not below the maximum likelihood estimate; none where the axis names a wander or
+    has no temperature finding."""
     from types import SimpleNamespace
 
+    from gyrofilter.analysis.gap.baseline import axis_dps
     from gyrofilter.analysis.gap.detectors.common import Candidate
+    from gyrofilter.analysis.gap.detectors.slow import stochastic_fits
+    from gyrofilter.analysis.stats import block_means
 
     model = json.loads(PACKAGE_MODEL.read_text())
     rec = simulate(model, 600.0, seed=4, accelerometer=False)
@@ -482,6 +486,9 @@ def test_a_temperature_findings_replicates_carry_the_wander_its_axis_holds_but_d
     (wander,) = gi.unnamed_wander(inp, 0, [temperature])
     b_dps = _true_effect(model, "x", "bias_instability", "b_dps")
     assert wander["effect"] == "bias_instability" and b_dps / 3 < wander["b_dps"] < 3 * b_dps, wander
+    y, length = block_means(axis_dps(rec, 0).astype(float) - temperature.component)
+    mle = stochastic_fits(y, length / rec.sample_rate_hz, ("bias_instability",))[0]["bias_instability"][1][0]
+    assert wander["b_dps"] >= math.sqrt(mle), (wander, math.sqrt(mle))
     named = Candidate("bias_instability", {"b_dps": b_dps}, 0.0, 0.0, "")
     assert gi.unnamed_wander(inp, 0, [temperature, named]) == []
     assert gi.unnamed_wander(inp, 0, [Candidate("rate_ramp", {"r_dps_per_s": 1e-5}, 0.0, 0.0, "")]) == []
@@ -502,3 +509,43 @@ def test_temperature_coefficients_of_the_package_model_lie_inside_their_interval
                 low, high = f["params_ci95"]["coefficient_dps_per_c"]
                 ok, n = ok + (low <= _true_effect(model, f["axis"], "temperature", "coefficient_dps_per_c") <= high), n + 1
     assert n >= 12 and ok >= 0.9 * n, (ok, n)
+
+
+def _named_temperatures(model, duration_s, seeds):
+    """``[(seed, axis, truth, [low, high])]`` of the temperature findings named on the package
+    model's records of ``duration_s``, as the commands run them."""
+    out = []
+    for seed in seeds:
+        report = analyse_gap(simulate(model, duration_s, seed=seed, accelerometer=False))
+        out.extend((seed, f["axis"], _true_effect(model, f["axis"], "temperature", "coefficient_dps_per_c"),
+                    f["params_ci95"]["coefficient_dps_per_c"]) for f in report["findings"] if f["effect"] == "temperature")
+    return out
+
+
+def test_a_temperature_named_on_a_short_record_holds_its_truth_in_its_interval():
+    """Issue 37: on the package model's 2-minute records the unnamed wander's estimate is mostly 0
+    (the coefficient's fit takes its drift), so the replicates were white noise about the selected
+    large coefficient: seed 41's x named 0.040 deg/s per deg C with [0.0278, 0.0505], the truth 0.02
+    outside. The replicates now carry the wander at the upper end of its confidence set."""
+    model = json.loads(PACKAGE_MODEL.read_text())
+    (found,) = _named_temperatures(model, 120.0, [41])
+    _, axis, truth, (low, high) = found
+    assert axis == "x" and low <= truth <= high, found
+
+
+#: the seeds of 0-199 whose 2-minute record of the package model named a temperature before the unnamed
+#: wander was taken at its upper bound (the others name none, before or after: 200 records take 15 minutes)
+SHORT_TEMPERATURE_SEEDS = (3, 5, 7, 32, 33, 35, 41, 53, 57, 58, 62, 69, 70, 71, 73, 80, 86, 89, 114, 122, 130, 147,
+                           148, 149, 153, 157, 173, 176, 178, 190, 199)
+
+
+@pytest.mark.slow
+def test_temperatures_named_on_short_records_hold_their_truth_at_about_the_nominal_rate():
+    """Issue 37: the package model's 2-minute records: a named temperature coefficient lies inside its
+    interval on at least 80 % of the findings. Seeds 0-199: before the unnamed wander was taken at its
+    upper bound, 16 of 31 (52 %); after, 16 of 18 (89 %), 13 moved to uncertain. Run on the seeds that
+    named one before (:data:`SHORT_TEMPERATURE_SEEDS`)."""
+    model = json.loads(PACKAGE_MODEL.read_text())
+    found = _named_temperatures(model, 120.0, SHORT_TEMPERATURE_SEEDS)
+    inside = [low <= truth <= high for _, _, truth, (low, high) in found]
+    assert len(found) >= 12 and sum(inside) >= 0.8 * len(found), found
