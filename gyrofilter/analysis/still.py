@@ -83,14 +83,17 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
 
 
 def motion_free_of(x):
-    """The indices of the samples of ``x`` that the stillness check (:func:`not_static`) leaves out: the
-    screen's spikes (:func:`~gyrofilter.analysis.noise.screen.gross_errors` beyond :data:`GROSS_Z`
+    """The indices (sorted) of the samples of ``x`` that the stillness check (:func:`not_static`) leaves out:
+    the screen's spikes (:func:`~gyrofilter.analysis.noise.screen.gross_errors` beyond :data:`GROSS_Z`
     robust sigmas of the second-difference residual), whatever their size, the same rule in any
     unit (no absolute limit: a whole record beyond a full scale is a unit's mistake, which
-    :func:`refuse_large_mean` names). A turn's rate steps by less than 50 noise sigmas per
+    :func:`refuse_large_mean` names), and the two samples on either side of each: of two spikes
+    side by side the screen finds one sample of four whose residuals are alike (the pair's and
+    their neighbours', half a spike each), whichever it is the pair is left out. A turn's rate steps by less than 50 noise sigmas per
     sample, or moves a block's mean through many samples: it stays."""
     with np.errstate(over="ignore", invalid="ignore"):
-        return gross_errors(x, limit_dps=np.inf)
+        gross = gross_errors(x, limit_dps=np.inf)
+    return np.unique(np.clip(np.r_[gross - 2, gross - 1, gross, gross + 1, gross + 2], 0, max(x.size - 1, 0)))
 
 
 def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):
@@ -104,7 +107,7 @@ def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):
     with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: the analyses say so
         d = np.diff(x)
         if gross.size and d.size:
-            d = np.delete(d, np.unique(np.clip(np.r_[gross - 1, gross], 0, d.size - 1)))
+            d = np.delete(d, np.unique(np.clip(np.r_[gross - 1, gross], 0, d.size - 1)))  # beside one
         return not_static(x, sample_rate_hz, _spent_sd(d) / math.sqrt(2) if d.size else 0.0,
                           brief=brief, gross=gross, **sensor)
 
