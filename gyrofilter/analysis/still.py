@@ -21,7 +21,7 @@ from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
 from .noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS
-from .noise.screen import GROSS_LIMIT_DPS, GROSS_Z, gross_errors
+from .noise.screen import GROSS_LIMIT_DPS, GROSS_Z, gross_and_beside, gross_errors
 from .gap.detectors.repeats import repeats_warning
 from .repeats import repeated_rows
 
@@ -57,15 +57,16 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     instability). An accelerometer's record is judged the same way with ``limit`` =
     :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name in the text).
 
-    The record is judged without its spikes (:func:`motion_free_of`, or ``gross``: their indices when
-    the caller has them): a block's mean is that of its other samples. A spike is a gross error, not
+    The record is judged without its spikes and the samples beside them
+    (:func:`~gyrofilter.analysis.noise.screen.gross_and_beside`, or ``gross``: their indices when the
+    caller has them): a block's mean is that of its other samples. A spike is a gross error, not
     motion: one of 150 deg/s moved a 117-sample block's mean by 1.28 deg/s, and a still 600-s record
     at 100 Hz with 1 to 10 spikes of 5 to 500 deg/s read "moved" in 157 of 200 seeds (0 without)."""
     x = np.asarray(x_dps, dtype=float)
     y, length = block_means(x, STATIC_BLOCKS)
     if y.size == 0:
         return None
-    gross = motion_free_of(x) if gross is None else gross
+    gross = gross_and_beside(x) if gross is None else gross
     gross = gross[gross < y.size * length]
     if gross.size:  # each block's mean over its other samples: sum(x) - sum(spikes) over L - count
         block = gross // length
@@ -82,28 +83,14 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
             f"{NOT_STATIC}")
 
 
-def motion_free_of(x):
-    """The indices (sorted) of the samples of ``x`` that the stillness check (:func:`not_static`) leaves out:
-    the screen's spikes (:func:`~gyrofilter.analysis.noise.screen.gross_errors` beyond :data:`GROSS_Z`
-    robust sigmas of the second-difference residual), whatever their size, the same rule in any
-    unit (no absolute limit: a whole record beyond a full scale is a unit's mistake, which
-    :func:`refuse_large_mean` names), and the two samples on either side of each: of two spikes
-    side by side the screen finds one sample of four whose residuals are alike (the pair's and
-    their neighbours', half a spike each), whichever it is the pair is left out. A turn's rate steps by less than 50 noise sigmas per
-    sample, or moves a block's mean through many samples: it stays."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        gross = gross_errors(x, limit_dps=np.inf)
-    return np.unique(np.clip(np.r_[gross - 2, gross - 1, gross, gross + 1, gross + 2], 0, max(x.size - 1, 0)))
-
-
 def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):
     """:func:`not_static` of the series ``x_dps`` (deg/s) with its white level from the first
     differences, ``sd(diff x) / sqrt(2)``, as every still-sensor analysis (allan, gap, report)
-    judges it: why it looks moved, or None; both without the spikes (:func:`motion_free_of`: the
+    judges it: why it looks moved, or None; both without the spikes (:func:`not_static`: the
     differences beside one are left out). ``sensor``: :func:`not_static`'s ``limit``, ``unit``
     and ``what`` for another sensor than the gyro."""
     x = np.asarray(x_dps, dtype=float)
-    gross = motion_free_of(x)
+    gross = gross_and_beside(x)
     with np.errstate(over="ignore", invalid="ignore"):  # values too large for float64: the analyses say so
         d = np.diff(x)
         if gross.size and d.size:
