@@ -61,3 +61,19 @@ def gross_errors(x_dps, *, z=GROSS_Z, limit_dps=GROSS_LIMIT_DPS):
             beside = absurd[np.maximum(i - 1, 0)] | absurd[np.minimum(i + 1, seg.size - 1)]
             found.append(np.flatnonzero(absurd[i] | (spike & ~beside)) + start)
     return np.concatenate(found)
+
+
+def gross_and_beside(x_dps):
+    """The indices (sorted) of the spikes of ``x_dps`` and the two samples on either side of each: the
+    samples of :func:`gross_errors` beyond ``GROSS_Z`` robust sigmas of the second-difference residual,
+    whatever their size, in any unit (no absolute limit: a whole record beyond a full scale is a
+    unit's mistake, not a spike). Of two spikes side by side the screen finds one sample of four
+    whose residuals are alike (the pair's and their neighbours', half a spike each); whichever it is,
+    the pair lies within two samples of it. What the stillness check
+    (:func:`gyrofilter.analysis.still.not_static`) and the gap analysis' high pass
+    (:func:`gyrofilter.analysis.gap.detectors.tails.tail_residual`) leave out, so that one spike
+    moves neither a block's mean nor a moving mean's W samples."""
+    x = np.asarray(x_dps, dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        gross = gross_errors(x, limit_dps=np.inf)
+    return np.unique(np.clip(np.r_[gross - 2, gross - 1, gross, gross + 1, gross + 2], 0, max(x.size - 1, 0)))

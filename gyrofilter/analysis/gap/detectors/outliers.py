@@ -9,6 +9,7 @@ import numpy as np
 
 from ....effects import OUTLIERS
 from .common import Candidate, OUTLIER_FALSE_PER_AXIS, OUTLIER_MIN_COUNT
+from ...noise.screen import GROSS_Z
 from ...stats import robust_sigma
 
 
@@ -45,6 +46,21 @@ def outlier_statistic(x, q_dps=0.0):
     right = np.where(big < n - 1, a[np.minimum(big + 1, n - 1)], 0.0)
     mask[big[(a[big] >= left) & (a[big] >= right)]] = True
     return mask, k, sd_r
+
+
+def gross_spikes(x, mask, sd_r):
+    """The spikes of ``mask`` (a boolean mask over ``x``) that are gross errors as the screen defines
+    them: their second-difference residual beyond :data:`~gyrofilter.analysis.noise.screen.GROSS_Z`
+    robust sd ``sd_r`` (:func:`outlier_statistic`'s), which white Gaussian noise never reaches
+    (P below 1e-500 a sample), a mask. One such sample is a spike however few there are: ``allan``
+    refuses it, ``gap`` names it (a single 40-sigma spike, 33 sd of the residual, stays below: three
+    are needed then). The others of fewer than three are the noise's own exceedances."""
+    out = np.zeros(mask.size, dtype=bool)
+    idx = np.flatnonzero(mask[1:-1]) + 1
+    if idx.size and sd_r > 0:
+        r = np.abs(x[idx] - 0.5 * (x[idx - 1] + x[idx + 1]))
+        out[idx[r > GROSS_Z * sd_r]] = True
+    return out
 
 
 def clean_spikes(x, mask, in_place=False):
@@ -90,15 +106,24 @@ def _spike_model(m_dps, sd_r, thr):
 def detect_outliers(x, q_dps=0.0):
     """Outlier (spike) candidate (``q_dps``: the recorded unit's step, :func:`outlier_statistic`).
 
-    Spikes below the threshold are missed, so the parameters are fitted to the detected ones:
-    the median magnitude ``m`` is the one whose detected spikes (``|s| = m exp(0.25 z)`` plus
-    the second-difference noise, thresholded like the data) have the observed mean log|r|,
-    and ``rate = count / (N P_detect(m))`` (P_detect floored at 0.2).
+    Spikes of two sizes count, each against its own false alarms: those beyond ``k`` robust sd of
+    the second difference where there are at least
+    :data:`~gyrofilter.analysis.gap.detectors.common.OUTLIER_MIN_COUNT` of them besides the gross
+    errors (white noise: 0.05 expected, so 3 happen by chance at 2e-5 per axis), else only the gross
+    errors (:func:`gross_spikes`, beyond ``GROSS_Z`` robust sd: one is a spike, however few; the
+    noise's own one or two exceedances beside them would drag the fitted size to theirs). Spikes
+    below the threshold used (``k`` or ``GROSS_Z`` robust sd) are missed, so the parameters are
+    fitted to the detected ones: the median magnitude ``m`` is the one whose detected spikes
+    (``|s| = m exp(0.25 z)`` plus the second-difference noise, thresholded like the data) have the
+    observed mean log|r|, and ``rate = count / (N P_detect(m))`` (P_detect floored at 0.2).
     """
     mask, k, sd_r = outlier_statistic(x, q_dps)
+    gross = gross_spikes(x, mask, sd_r)
+    if int(mask.sum()) - int(gross.sum()) < OUTLIER_MIN_COUNT:  # too few below: only the gross errors
+        mask, k = gross, GROSS_Z
+        if not mask.any():
+            return None, mask
     count = int(mask.sum())
-    if count < OUTLIER_MIN_COUNT:
-        return None, mask
     idx = np.flatnonzero(mask)
     mags = np.abs(x[idx] - _replacements(x, mask, idx))  # the spikes' sizes, as clean_spikes removes them
     thr = k * sd_r
@@ -115,12 +140,12 @@ def detect_outliers(x, q_dps=0.0):
     magnitude = math.exp(0.5 * (lo + hi))
     p_det = max(_spike_model(magnitude, sd_r, thr)[0], 0.2)
     rate = count / x.size / p_det
-    expected = OUTLIER_FALSE_PER_AXIS
+    expected = OUTLIER_FALSE_PER_AXIS if k < GROSS_Z else 0.0
     cand = Candidate(
         effect=OUTLIERS,
         params={"rate": rate, "magnitude_dps": magnitude},
         statistic=float(count),
-        threshold=float(OUTLIER_MIN_COUNT),
+        threshold=float(OUTLIER_MIN_COUNT if k < GROSS_Z else 1),
         statistic_name="spikes beyond %.1f robust sd of the second difference" % k,
         evidence=(f"{count} isolated spikes beyond {k:.1f} robust standard deviations of the "
                   f"second difference (white noise expects {expected:g}); median spike "

@@ -71,8 +71,9 @@ from ....effects import HEAVY_TAILS
 from .colored import colored_window
 from ..confound import tails_or_spikes
 from .common import Candidate, HEAVY_TAILS_THRESHOLD, HEAVY_TAILS_Z, TAILS_MAX_STEP_SD, TAILS_WINSOR_SD
+from ...noise.screen import gross_and_beside
 from ...stats import dot, moving_mean, robust_sigma
-from .outliers import OUTLIER_SPREAD_LN
+from .outliers import OUTLIER_SPREAD_LN, clean_spikes
 
 _GH_Z, _GH_W = np.polynomial.hermite_e.hermegauss(16)
 _GH_W = _GH_W / _GH_W.sum()
@@ -98,18 +99,38 @@ def tail_residual(x, sample_rate_hz, e=None):
     """``u``: the high-passed, AR(2)-prewhitened residual over its robust sd (module docstring);
     an empty array when the series is too short or constant. ``e``: ``x - moving_mean(x, W)``
     when the caller has it (it becomes ``u``'s storage). The prewhitening runs in place, a pass
-    at a time from the end, so the residual costs one N-sample array."""
+    at a time from the end, so the residual costs one N-sample array. Where a sample could shift its
+    W neighbours by more than :data:`LEAK_SD` noise sd through the moving mean, the screen's spikes
+    and the two samples beside each (:func:`~gyrofilter.analysis.noise.screen.gross_and_beside`) are
+    replaced by their neighbours in the mean and left out of ``u`` (a copy then): gross errors are
+    isolated spikes, the outliers detector's, not the noise's tails (one spike of 150 deg/s was named
+    ``heavy_tails``)."""
     if x.size < 64:
         return np.zeros(0)
     w = colored_window(x.size, sample_rate_hz)
     if e is None:
         e = moving_mean(x, w)
         np.subtract(x, e, out=e)
+    # a spike of S sd shifts the W samples around it by S / W sd each through the moving mean (one of
+    # 1900 sd at W = 64 made 100 samples of 30 sd: a "heavy tail" of 0.17 % of the record): where one
+    # sample could shift its neighbours by more than LEAK_SD, the mean is taken of the series with the
+    # screen's spikes (noise.screen.gross_and_beside) replaced by their neighbours (clean_spikes). Then
     # the moving mean of the samples clipped to +-4 robust sd: a wide sample would shift the W
     # samples around it by 1/W of itself and so widen the core (by 20 % at 8 % of 20 times the
     # sd); not needed where fewer than 1e-3 of the samples are beyond (a Gaussian: 6e-5)
     clip = 4.0 * robust_sigma(e, max_count=20_000)
-    beyond = sum(int(np.count_nonzero(np.abs(e[lo:lo + _PASS]) > clip)) for lo in range(0, e.size, _PASS))
+    beyond = largest = 0
+    for lo in range(0, e.size, _PASS):
+        part = np.abs(e[lo:lo + _PASS])
+        beyond, largest = beyond + int(np.count_nonzero(part > clip)), max(largest, float(part.max()))
+    spikes = None
+    if largest > LEAK_SD / 4.0 * clip * w:
+        spikes = np.zeros(x.size, dtype=bool)
+        spikes[gross_and_beside(x)] = True
+        if spikes.any():
+            np.subtract(x, moving_mean(clean_spikes(x, spikes), w), out=e)
+        else:
+            spikes = None
     if beyond > 1e-3 * e.size:
         level = x - e
         np.clip(e, -clip, clip, out=e)
@@ -117,6 +138,8 @@ def tail_residual(x, sample_rate_hz, e=None):
         level = moving_mean(e, w)
         np.subtract(x, level, out=e)
         del level
+    if spikes is not None:  # the gross errors are the outliers detector's, not the noise's tails: left out
+        e[spikes] = 0.0
     c0 = float(dot(e, e))
     if not c0 > 0:
         return np.zeros(0)
@@ -129,7 +152,7 @@ def tail_residual(x, sample_rate_hz, e=None):
         part = e[lo:hi] - a1 * e[lo - 1:hi - 1]
         part -= a2 * e[lo - 2:hi - 2]
         e[lo:hi] = part
-    u = e[2:]
+    u = e[2:] if spikes is None else e[2:][~spikes[2:]]
     s = robust_sigma(u, max_count=20_000)
     if not s > 0:
         return np.zeros(0)
@@ -138,6 +161,9 @@ def tail_residual(x, sample_rate_hz, e=None):
 
 
 _PASS = 1 << 16
+#: the shift (in noise sd) a sample's leak through the high pass's moving mean may put on each of
+#: its W neighbours before the mean is taken of the clipped samples (:func:`tail_residual`)
+LEAK_SD = 0.25
 
 
 def _lattice_step(x, count=100_000):
