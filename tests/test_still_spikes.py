@@ -93,6 +93,18 @@ def test_two_or_three_spikes_of_spread_sizes_are_outliers(sizes):
     assert tails is None and spikes is not None and spikes.statistic == len(sizes)
 
 
+@pytest.mark.parametrize("at", [0, -1])
+def test_a_spike_on_the_first_or_last_sample_is_outliers(at):
+    """Attack pass 37j: a 100 deg/s first or last sample (a start-up read's garbage) was no outlier (the
+    gross errors were judged inner samples only); gap named it a bias_step of 100 deg/s at the record's
+    end, or a warm-up of 11 deg/s."""
+    x = _gap_axis(5)
+    x[at] += 100.0
+    spikes, tails = _tails_and_spikes(x)
+    assert tails is None and spikes is not None and spikes.statistic == 1
+    assert 60 < spikes.params["magnitude_dps"] < 160, spikes.params
+
+
 def test_real_heavy_tails_stay_heavy_tails():
     """Student-t noise (3 degrees of freedom) and 1 % of the samples at 10 times the noise: heavy tails."""
     rng = np.random.default_rng(4)

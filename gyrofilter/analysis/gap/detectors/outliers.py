@@ -54,11 +54,15 @@ def gross_spikes(x, mask, sd_r):
     robust sd ``sd_r`` (:func:`outlier_statistic`'s), which white Gaussian noise never reaches
     (P below 1e-500 a sample), a mask. One such sample is a spike however few there are: ``allan``
     refuses it, ``gap`` names it (a single 40-sigma spike, 33 sd of the residual, stays below: three
-    are needed then). The others of fewer than three are the noise's own exceedances."""
+    are needed then). The others of fewer than three are the noise's own exceedances. The first and
+    last samples' residuals are their difference from their one neighbour (:func:`outlier_statistic`'s,
+    the screen's): a start-up read's garbage is a spike too, not a warm-up nor a step at the end."""
     out = np.zeros(mask.size, dtype=bool)
-    idx = np.flatnonzero(mask[1:-1]) + 1
-    if idx.size and sd_r > 0:
-        r = np.abs(x[idx] - 0.5 * (x[idx - 1] + x[idx + 1]))
+    idx = np.flatnonzero(mask)
+    if idx.size and sd_r > 0 and mask.size > 1:
+        n = mask.size
+        before, after = np.where(idx > 0, idx - 1, idx + 1), np.where(idx < n - 1, idx + 1, idx - 1)
+        r = np.abs(x[idx] - 0.5 * (x[before] + x[after]))
         out[idx[r > GROSS_Z * sd_r]] = True
     return out
 
