@@ -13,6 +13,7 @@ import glob
 import gzip
 import os
 import time
+import zlib
 
 from ..analysis.fleet import runner, table, work
 from ..analysis.still import NO_ACCEL_UNIT, NOT_STATIC
@@ -74,7 +75,7 @@ def not_a_recording(path):
             start = fh.read(2)
         with (gzip.open if start == b"\x1f\x8b" else open)(path, "rb") as fh:
             first = fh.readline(200)
-    except (OSError, EOFError):
+    except (OSError, EOFError, zlib.error):  # damaged gzip data raises zlib.error, no OSError
         return None  # the reader says what is wrong with it
     if first.lstrip(b"# ").startswith(VERSION_KEY.encode()):
         return None
