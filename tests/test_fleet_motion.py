@@ -56,3 +56,33 @@ def test_with_allow_motion_the_moving_records_are_analysed_but_kept_out_of_the_c
     assert "stands out: unit0 x: N high" in out and "stands out: moving" not in out
     md = (tmp_path / "out" / "fleet.md").read_text()
     assert "| x | N | 6 |" in md  # the statistics over the six still units only
+
+
+def test_a_damaged_gzip_file_beside_the_recordings_fails_alone(tmp_path, capsys):
+    """Attack pass 37j: a damaged gzip file named neither .csv nor .csv.gz (its deflate data broken) ended
+    the fleet run in a traceback (zlib.error while its first line was read to tell whether it is a
+    recording); it fails alone, with the reader's reason."""
+    import gzip
+
+    rng = np.random.default_rng(1)
+    for u in range(2):
+        _write(tmp_path / f"unit{u}.csv", rng, 0.1, seconds=20.0)
+    data = gzip.compress(b"# gyrofilter-recording: 1\n" * 100)
+    (tmp_path / "notes.gz").write_bytes(data[:10] + b"\xff" * 30 + data[40:])
+    paths = sorted(str(p) for p in tmp_path.iterdir())
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "out"), "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "3 recording(s), 2 analysed" in out and "1 failed" in out and "damaged gzip data" in out
+
+
+def test_a_recording_with_a_byte_order_mark_named_txt_is_analysed(tmp_path, capsys):
+    """Attack pass 37j: a recording saved by a Windows editor (a UTF-8 byte-order mark first) as .txt, which
+    every command reads, was skipped as "not a recording (... the first line is not '# gyrofilter-recording:
+    1')" and lost from the fleet."""
+    rng = np.random.default_rng(1)
+    for u in range(2):
+        _write(tmp_path / f"unit{u}.csv", rng, 0.1, seconds=20.0)
+    (tmp_path / "unit2.txt").write_bytes(b"\xef\xbb\xbf" + (tmp_path / "unit1.csv").read_bytes())
+    paths = sorted(str(p) for p in tmp_path.iterdir())
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "out"), "--jobs", "1"]) == 0
+    assert "3 recording(s), 3 analysed" in capsys.readouterr().out

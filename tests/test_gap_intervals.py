@@ -462,6 +462,18 @@ def _true_effect(model, axis, effect, name):
     return next(e[name] for e in model["axes"][axis]["effects"] if e["effect"] == effect)
 
 
+def _package_temperature(duration_s):
+    """The package model's record of ``duration_s`` (seed 4) and its x temperature finding at the true coefficient."""
+    from gyrofilter.analysis.gap.detectors.common import Candidate
+
+    model = json.loads(PACKAGE_MODEL.read_text())
+    rec = simulate(model, duration_s, seed=4, accelerometer=False)
+    temp = np.asarray(rec.temp_c, dtype=float)
+    coefficient = _true_effect(model, "x", "temperature", "coefficient_dps_per_c")
+    return model, rec, Candidate("temperature", {"coefficient_dps_per_c": coefficient}, 0.0, 0.0, "",
+                                 component=coefficient * (temp - temp.mean()))
+
+
 def test_a_temperature_findings_replicates_carry_the_wander_its_axis_holds_but_does_not_name():
     """Issue 37: the bootstrap of a temperature finding on an axis that names no wander simulated
     white noise about the coefficient, and the axis's bias instability (real, unnamed) was missing
@@ -476,12 +488,7 @@ def test_a_temperature_findings_replicates_carry_the_wander_its_axis_holds_but_d
     from gyrofilter.analysis.gap.detectors.slow import stochastic_fits
     from gyrofilter.analysis.stats import block_means
 
-    model = json.loads(PACKAGE_MODEL.read_text())
-    rec = simulate(model, 600.0, seed=4, accelerometer=False)
-    temp = np.asarray(rec.temp_c, dtype=float)
-    coefficient = _true_effect(model, "x", "temperature", "coefficient_dps_per_c")
-    temperature = Candidate("temperature", {"coefficient_dps_per_c": coefficient}, 0.0, 0.0, "",
-                            component=coefficient * (temp - temp.mean()))
+    model, rec, temperature = _package_temperature(600.0)
     inp = SimpleNamespace(rec=rec, sample_rate_hz=rec.sample_rate_hz)
     (wander,) = gi.unnamed_wander(inp, 0, [temperature])
     b_dps = _true_effect(model, "x", "bias_instability", "b_dps")
@@ -492,6 +499,24 @@ def test_a_temperature_findings_replicates_carry_the_wander_its_axis_holds_but_d
     named = Candidate("bias_instability", {"b_dps": b_dps}, 0.0, 0.0, "")
     assert gi.unnamed_wander(inp, 0, [temperature, named]) == []
     assert gi.unnamed_wander(inp, 0, [Candidate("rate_ramp", {"r_dps_per_s": 1e-5}, 0.0, 0.0, "")]) == []
+
+
+def test_the_unnamed_wander_is_judged_without_the_spikes_its_axis_names():
+    """Attack pass 37j: one 150 deg/s spike (named outliers) stayed in the block means the unnamed
+    wander's upper bound is read from: B 0.0011 -> 0.017 deg/s on a 300-s record, and the temperature
+    finding's replicates, simulated with that wander, moved it to uncertain (coefficient 0.029 [0.023,
+    0.034] -> [-0.042, 0.093]). The spikes are cleaned as the replicates' estimators clean them."""
+    from types import SimpleNamespace
+
+    from gyrofilter.analysis.gap import detectors as det
+
+    _, rec, temperature = _package_temperature(300.0)
+    inp = SimpleNamespace(rec=rec, sample_rate_hz=rec.sample_rate_hz, q=1.0 / rec.lsb_per_dps)
+    (clean,) = gi.unnamed_wander(inp, 0, [temperature])
+    rec.columns["gx"][15_000] += 150.0 * rec.lsb_per_dps
+    spikes, _ = det.detect_outliers(np.asarray(rec.columns["gx"], dtype=float) / rec.lsb_per_dps, inp.q)
+    (spiked,) = gi.unnamed_wander(inp, 0, [spikes, temperature])
+    assert spiked["b_dps"] == pytest.approx(clean["b_dps"], rel=0.05), (spiked, clean)
 
 
 @pytest.mark.slow

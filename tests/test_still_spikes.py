@@ -93,6 +93,18 @@ def test_two_or_three_spikes_of_spread_sizes_are_outliers(sizes):
     assert tails is None and spikes is not None and spikes.statistic == len(sizes)
 
 
+@pytest.mark.parametrize("at", [0, -1])
+def test_a_spike_on_the_first_or_last_sample_is_outliers(at):
+    """Attack pass 37j: a 100 deg/s first or last sample (a start-up read's garbage) was no outlier (the
+    gross errors were judged inner samples only); gap named it a bias_step of 100 deg/s at the record's
+    end, or a warm-up of 11 deg/s."""
+    x = _gap_axis(5)
+    x[at] += 100.0
+    spikes, tails = _tails_and_spikes(x)
+    assert tails is None and spikes is not None and spikes.statistic == 1
+    assert 60 < spikes.params["magnitude_dps"] < 160, spikes.params
+
+
 def test_real_heavy_tails_stay_heavy_tails():
     """Student-t noise (3 degrees of freedom) and 1 % of the samples at 10 times the noise: heavy tails."""
     rng = np.random.default_rng(4)
@@ -118,3 +130,24 @@ def test_few_spikes_of_any_size_are_outliers_and_heavy_tails_stay_over_seeds():
         noise = (0.08 * rng.standard_t(3 + seed % 3, 60_000),
                  0.08 * rng.normal(size=60_000) * np.where(rng.random(60_000) < 0.01, 10, 1))
         assert all(_tails_and_spikes(x)[1] is not None for x in noise), seed
+
+
+@pytest.mark.parametrize("kind", ["vibrating turn", "short turn"])
+def test_a_turn_made_of_spikes_still_reads_as_motion(kind):
+    """Attack pass 37j: a 5-s turn at 10 deg/s (50 degrees) under a 10-Hz vibration of 100 deg/s, and a
+    50-degree turn in 5 samples (1000 deg/s), were left out whole as "spikes and the samples beside
+    them" and read still (gap analysed the turn as ringing and narrowband). Only isolated spikes (a
+    run of at most a pair's four alike and two beside) are left out; a longer run is judged."""
+    x = still(np.random.default_rng(1))
+    if kind == "vibrating turn":
+        x[30_000:30_500] += 10.0 + 100.0 * np.cos(2 * np.pi * 10.0 * np.arange(500) / FS_HZ)
+    else:
+        x[30_000:30_005] += 1000.0
+    assert "does not look static" in moved(x, FS_HZ)
+
+
+def test_a_pair_of_unequal_spikes_is_left_out():
+    x = still(np.random.default_rng(3))
+    x[20_000], x[20_001] = x[20_000] + 150.0, x[20_001] + 140.0  # the screen finds two of the four
+    x[40_000:40_002] += 300.0
+    assert moved(x, FS_HZ) is None

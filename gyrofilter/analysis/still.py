@@ -61,12 +61,13 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     (:func:`~gyrofilter.analysis.noise.screen.gross_and_beside`, or ``gross``: their indices when the
     caller has them): a block's mean is that of its other samples. A spike is a gross error, not
     motion: one of 150 deg/s moved a 117-sample block's mean by 1.28 deg/s, and a still 600-s record
-    at 100 Hz with 1 to 10 spikes of 5 to 500 deg/s read "moved" in 157 of 200 seeds (0 without)."""
+    at 100 Hz with 1 to 10 spikes of 5 to 500 deg/s read "moved" in 157 of 200 seeds (0 without).
+    Only isolated ones (:func:`isolated`): a longer run of them is motion, judged with its samples."""
     x = np.asarray(x_dps, dtype=float)
     y, length = block_means(x, STATIC_BLOCKS)
     if y.size == 0:
         return None
-    gross = gross_and_beside(x) if gross is None else gross
+    gross = isolated(gross_and_beside(x) if gross is None else gross)
     gross = gross[gross < y.size * length]
     if gross.size:  # each block's mean over its other samples: sum(x) - sum(spikes) over L - count
         block = gross // length
@@ -83,6 +84,27 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
         return f"it moves by up to {excursion:.3g} {unit}"
     return (f"the {what} moves by up to {excursion:.3g} {unit} (averages over {length / sample_rate_hz:.2g} s): "
             f"{NOT_STATIC}")
+
+
+#: the longest run of consecutive samples an isolated spike or pair leaves out (:func:`isolated`): a pair's
+#: four residuals alike (its two samples and one beside each, :func:`gross_errors` finds any of them) and
+#: two samples beside either end
+SPIKE_RUN = 8
+
+
+def isolated(gross):
+    """The indices of ``gross`` (sorted: spikes and the samples beside them,
+    :func:`~gyrofilter.analysis.noise.screen.gross_and_beside`) in runs of consecutive samples of at most
+    :data:`SPIKE_RUN`: those of isolated spikes and pairs. A longer run is no spike but motion made of
+    them: a turn in 5 samples or more leaves out 9 or more (a 3- or 4-sample one may look like a pair),
+    a turn under a vibration of f_s/10 or faster every sample of it (a 5-s turn at 10 deg/s under 100
+    deg/s at 10 Hz read still)."""
+    gross = np.asarray(gross)
+    if gross.size == 0:
+        return gross
+    ends = np.flatnonzero(np.diff(gross) != 1) + 1
+    runs = np.diff(np.r_[0, ends, gross.size])
+    return gross[np.repeat(runs <= SPIKE_RUN, runs)]
 
 
 def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..analysis.arma import identify as arma
-from ..analysis.still import not_analysed, read_axes, refuse_gross_errors, refuse_large_mean
+from ..analysis.still import moved, not_analysed, read_axes, refuse_gross_errors, refuse_large_mean
 from ..errors import SettingsError
 from ..recording import filtered_words, warn_about_gaps
 from ..recording.checks import gap_step_s
@@ -69,6 +69,12 @@ def run(args):
     refuse_large_mean(head.path, head.gyro_unit, series, args.allow_large_mean, warn=console.say_warning)
     series = {a: series[a] for a in axes}
     refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
+    for name in axes:  # as allan says it: the model of a moving gyro's record is the motion's
+        motion = moved(series[name], head.sample_rate_hz)
+        if motion:
+            warnings.append(f"{args.recording}: axis {name}: {motion}; paper 003's model of a moving gyro "
+                            "describes the motion, not the bias")
+            console.say_warning(warnings[-1])
     progress = console.ProgressLines(args.progress)
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0

@@ -7,12 +7,14 @@ it finishes, show progress over the files, then write ``fleet.csv`` and ``fleet.
 the units that stand out. Exit 0 when the command ran, even if some files failed (their rows
 say why); 2 when nothing could be done (bad input before any work, or no recording analysed).
 """
+import codecs
 import contextlib
 import csv
 import glob
 import gzip
 import os
 import time
+import zlib
 
 from ..analysis.fleet import runner, table, work
 from ..analysis.still import NO_ACCEL_UNIT, NOT_STATIC
@@ -74,9 +76,9 @@ def not_a_recording(path):
             start = fh.read(2)
         with (gzip.open if start == b"\x1f\x8b" else open)(path, "rb") as fh:
             first = fh.readline(200)
-    except (OSError, EOFError):
+    except (OSError, EOFError, zlib.error):  # damaged gzip data raises zlib.error, no OSError
         return None  # the reader says what is wrong with it
-    if first.lstrip(b"# ").startswith(VERSION_KEY.encode()):
+    if first.removeprefix(codecs.BOM_UTF8).lstrip(b"# ").startswith(VERSION_KEY.encode()):  # a BOM: as the reader
         return None
     return f"not a recording (the name ends in neither {' nor '.join(RECORDING_SUFFIXES)} and the first line is not " \
            f"'# {VERSION_KEY}: 1')"

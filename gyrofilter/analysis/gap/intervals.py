@@ -144,9 +144,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...effects import BIAS_INSTABILITY, COLORED_NOISE, GAUSS_MARKOV, REGISTRY, TEMPERATURE, WANDERS, WANDERING_TONE
+from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, GAUSS_MARKOV, OUTLIERS, REGISTRY, TEMPERATURE, WANDERS,
+                        WANDERING_TONE)
 from ..stats import block_means
 from .baseline import Progress, axis_dps, simulate_axis, noise_sigma, temperature_table
+from .detectors.outliers import clean_spikes, detect_outliers
 from .detectors.slow import periodogram_detrended
 from .reestimate import SUPPORTED, reestimate_axis
 from ...sim.model import TEMPERATURE_PROFILE, param_bounds, validate_model
@@ -369,11 +371,13 @@ def unnamed_wander(inp, i, cands):
     """The slow wander a temperature finding's replicates of axis ``i`` are simulated with where
     its findings ``cands`` name none (module docstring): ``[{"effect": "bias_instability",
     "b_dps": B}]``, ``B^2`` the largest level the record does not rule out (:func:`wander_upper`)
-    on the block means of the axis less its findings' components; ``[]`` where the axis has no
+    on the block means of the axis less its findings' components and its named spikes; ``[]`` where the axis has no
     temperature finding, names a wander, or the record rules out any (B = 0)."""
     if not any(c.effect == TEMPERATURE for c in cands) or any(c.effect in WANDERS for c in cands):
         return []
     x = axis_dps(inp.rec, i).astype(float)  # a new array: the findings' components come off in place
+    if any(c.effect == OUTLIERS for c in cands):  # the spikes too, as the replicates' estimators take them off
+        x = clean_spikes(x, detect_outliers(x, inp.q or 0.0)[1], in_place=True)
     for c in cands:
         if c.component is not None:
             x -= c.component

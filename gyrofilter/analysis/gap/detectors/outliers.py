@@ -54,13 +54,22 @@ def gross_spikes(x, mask, sd_r):
     robust sd ``sd_r`` (:func:`outlier_statistic`'s), which white Gaussian noise never reaches
     (P below 1e-500 a sample), a mask. One such sample is a spike however few there are: ``allan``
     refuses it, ``gap`` names it (a single 40-sigma spike, 33 sd of the residual, stays below: three
-    are needed then). The others of fewer than three are the noise's own exceedances."""
+    are needed then). The others of fewer than three are the noise's own exceedances. The first and
+    last samples' residuals are their difference from their one neighbour (:func:`outlier_statistic`'s,
+    the screen's): a start-up read's garbage is a spike too, not a warm-up nor a step at the end."""
     out = np.zeros(mask.size, dtype=bool)
-    idx = np.flatnonzero(mask[1:-1]) + 1
-    if idx.size and sd_r > 0:
-        r = np.abs(x[idx] - 0.5 * (x[idx - 1] + x[idx + 1]))
-        out[idx[r > GROSS_Z * sd_r]] = True
+    idx = np.flatnonzero(mask)
+    if idx.size and sd_r > 0 and mask.size > 1:
+        out[idx[residuals(x, idx) > GROSS_Z * sd_r]] = True
     return out
+
+
+def residuals(x, idx):
+    """``|r_i|`` of the samples ``idx`` of ``x`` (at least two samples): ``x_i - (x_{i-1} + x_{i+1}) / 2``,
+    at the first and last sample their difference from their one neighbour (:func:`outlier_statistic`'s)."""
+    n = x.size
+    before, after = np.where(idx > 0, idx - 1, idx + 1), np.where(idx < n - 1, idx + 1, idx - 1)
+    return np.abs(x[idx] - 0.5 * (x[before] + x[after]))
 
 
 def clean_spikes(x, mask, in_place=False):
@@ -127,9 +136,7 @@ def detect_outliers(x, q_dps=0.0):
     idx = np.flatnonzero(mask)
     mags = np.abs(x[idx] - _replacements(x, mask, idx))  # the spikes' sizes, as clean_spikes removes them
     thr = k * sd_r
-    inner = np.flatnonzero(mask[1:-1]) + 1  # |second difference| at the spikes with two neighbours
-    r_abs = np.abs(x[inner] - 0.5 * (x[inner - 1] + x[inner + 1]))
-    observed = float(np.mean(np.log(r_abs))) if inner.size else float(np.log(np.median(mags)))
+    observed = float(np.mean(np.log(residuals(x, idx))))  # the spikes' |second difference|, ends included
     lo, hi = math.log(0.3 * thr), math.log(max(100 * thr, 10 * float(np.max(mags))))
     for _ in range(40):
         mid = 0.5 * (lo + hi)
