@@ -587,7 +587,7 @@ def test_replaying_a_filtered_output_is_refused_naming_where_it_came_from(tmp_pa
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err == (
         f"gyrofilter: error: {filtered} is the filter's output (filtered_from '{src}'), not the sensor's "
-        "samples; filter the raw recording it came from\n")
+        "samples; filter the raw recording it came from (from a live source: `record` it, then replay)\n")
     assert not out.exists()
     assert main(["allan", str(filtered)]) == 0
 
