@@ -86,3 +86,26 @@ def test_a_recording_with_a_byte_order_mark_named_txt_is_analysed(tmp_path, caps
     paths = sorted(str(p) for p in tmp_path.iterdir())
     assert main(["allan", *paths, "--fleet", str(tmp_path / "out"), "--jobs", "1"]) == 0
     assert "3 recording(s), 3 analysed" in capsys.readouterr().out
+
+
+def test_a_sharp_turn_is_skipped_with_advice_that_analyses_it(tmp_path, capsys):
+    """Attack pass 37k: allan's fleet said a record with a sharp turn "--allow-motion analyses it anyway",
+    and with --allow-motion refused the turn's edges as gross errors; the skip names --keep-outliers too,
+    and the advice as given analyses it."""
+    rng = np.random.default_rng(3)
+    for u in range(2):
+        _write(tmp_path / f"unit{u}.csv", rng, 0.1, seconds=20.0)
+    t = np.arange(2000) / RATE_HZ
+    g = rng.standard_normal((t.size, 3)) * 0.1
+    g[800:900, 2] += 200.0  # a 1-s turn at 200 deg/s, its edges one sample each
+    rows = "".join(f"{a:.6f},{b:.6f},{c:.6f}\n" for a, b, c in g)
+    (tmp_path / "turn.csv").write_text(f"# gyrofilter-recording: 1\n# sample_rate_hz: {RATE_HZ:g}\n# gyro_unit: dps\n"
+                                       f"gx,gy,gz\n{rows}")
+    paths = sorted(str(p) for p in tmp_path.iterdir())
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "out"), "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    advice = "--allow-motion --keep-outliers analyses it anyway (its motion reads as gross errors)"
+    assert "turn.csv: axis z is not still" in out and advice in out
+    assert main(["allan", *paths, "--fleet", str(tmp_path / "out2"), "--jobs", "1", "--allow-motion",
+                 "--keep-outliers"]) == 0
+    assert "3 analysed (1 of them moving: kept out of the comparison), 0 failed" in capsys.readouterr().out

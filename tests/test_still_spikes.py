@@ -151,3 +151,37 @@ def test_a_pair_of_unequal_spikes_is_left_out():
     x[20_000], x[20_001] = x[20_000] + 150.0, x[20_001] + 140.0  # the screen finds two of the four
     x[40_000:40_002] += 300.0
     assert moved(x, FS_HZ) is None
+
+
+@pytest.mark.parametrize("apart", [3, 4, 5, 6, 9])
+def test_two_spikes_a_few_samples_apart_are_left_out(apart):
+    """Attack pass 37k: two 150 deg/s spikes 4 or 5 samples apart made one run of 9 or 10 samples beside
+    them, longer than a pair's, and the still record read "moved" (gap refused it, the fleet skipped it)."""
+    x = still(np.random.default_rng(apart))
+    x[30_000] += 150.0
+    x[30_000 + apart] -= 150.0 if apart % 2 else -150.0
+    x[40_000:40_002] += 120.0  # a pair and a spike 4 samples after it
+    x[40_005] += 200.0
+    assert moved(x, FS_HZ) is None
+
+
+@pytest.mark.parametrize("samples", [5, 6, 7, 10])
+def test_a_short_fast_turn_still_reads_as_motion(samples):
+    """A turn at 150 deg/s in 5 or more samples: its edges are the spikes the screen finds, a run of 9
+    or more; its plateau is raised, so the run is motion, not two spikes."""
+    x = still(np.random.default_rng(samples))
+    x[30_000:30_000 + samples] += 150.0
+    assert "does not look static" in moved(x, FS_HZ)
+
+
+def test_simulated_outliers_never_make_a_still_record_moved():
+    """Attack pass 37k: the simulator's outliers at a rate of 0.005 (spikes of about 100 deg/s) made 8 of
+    10 still 600-s records read "moved": spikes a few samples apart joined into runs longer than a pair's."""
+    rng = np.random.default_rng(37)
+    found = []
+    for seed in range(10):
+        x = still(np.random.default_rng(seed))
+        at = np.flatnonzero(rng.random(N) < 0.005)
+        x[at] += rng.choice([-1, 1], at.size) * 100.0 * np.exp(rng.normal(0, 0.5, at.size))
+        found.append(moved(x, FS_HZ))
+    assert found == [None] * 10

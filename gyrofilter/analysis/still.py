@@ -21,7 +21,7 @@ from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
 from .noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS
-from .noise.screen import GROSS_LIMIT_DPS, GROSS_Z, gross_and_beside, gross_errors
+from .noise.screen import GROSS_LIMIT_DPS, GROSS_Z, gross_and_beside, gross_errors, residual_sigma
 from .gap.detectors.repeats import repeats_warning
 from .repeats import repeated_rows
 
@@ -67,7 +67,7 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     y, length = block_means(x, STATIC_BLOCKS)
     if y.size == 0:
         return None
-    gross = isolated(gross_and_beside(x) if gross is None else gross)
+    gross = isolated(x, gross_and_beside(x) if gross is None else gross)
     gross = gross[gross < y.size * length]
     if gross.size:  # each block's mean over its other samples: sum(x) - sum(spikes) over L - count
         block = gross // length
@@ -90,21 +90,53 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
 #: four residuals alike (its two samples and one beside each, :func:`gross_errors` finds any of them) and
 #: two samples beside either end
 SPIKE_RUN = 8
+#: how far (in robust sigmas of the second-difference residual, :func:`residual_sigma`) a sample of a longer
+#: run must stand from the samples around the run to be raised (:func:`isolated`): a fifth of the spike
+#: threshold GROSS_Z. White noise reaches it (12 sigma) never; the plateau of a turn whose edges the screen
+#: found stands at least 2 GROSS_Z from it (an edge's residual is half the turn's rate)
+RAISED_Z = GROSS_Z / 5
+#: samples on each side of a run whose median is the baseline its samples are judged against
+BASELINE_SAMPLES = SPIKE_RUN
 
 
-def isolated(gross):
+def isolated(x_dps, gross):
     """The indices of ``gross`` (sorted: spikes and the samples beside them,
-    :func:`~gyrofilter.analysis.noise.screen.gross_and_beside`) in runs of consecutive samples of at most
-    :data:`SPIKE_RUN`: those of isolated spikes and pairs. A longer run is no spike but motion made of
-    them: a turn in 5 samples or more leaves out 9 or more (a 3- or 4-sample one may look like a pair),
-    a turn under a vibration of f_s/10 or faster every sample of it (a 5-s turn at 10 deg/s under 100
-    deg/s at 10 Hz read still)."""
+    :func:`~gyrofilter.analysis.noise.screen.gross_and_beside`) that are isolated spikes and pairs, not
+    motion made of them; ``x_dps``: the record (deg/s, or any unit) they index.
+
+    ``gross`` falls into runs of consecutive samples. A run of at most :data:`SPIKE_RUN` is a spike or a
+    pair (a 3- or 4-sample turn may look like one: a detection limit). A longer run is judged by its
+    content: its raised samples, |x_i - m| > :data:`RAISED_Z` sigma_r (m: the median of the
+    :data:`BASELINE_SAMPLES` samples on either side of the run; sigma_r: :func:`residual_sigma`), come
+    in groups of at most two consecutive samples (spikes and pairs, at the baseline between them:
+    two spikes 4 or 5 samples apart make a run of 9 or 10), or it is motion: a turn in 5 samples or
+    more raises them all (its edges are the spikes the screen found), and so does a turn under a
+    vibration of f_s/10 or faster (a 5-s turn at 10 deg/s under 100 deg/s at 10 Hz)."""
     gross = np.asarray(gross)
     if gross.size == 0:
         return gross
     ends = np.flatnonzero(np.diff(gross) != 1) + 1
-    runs = np.diff(np.r_[0, ends, gross.size])
-    return gross[np.repeat(runs <= SPIKE_RUN, runs)]
+    starts = np.r_[0, ends]
+    runs = np.diff(np.r_[starts, gross.size])
+    spikes = runs <= SPIKE_RUN
+    if not spikes.all():
+        spikes[~spikes] = _raised_alone(np.asarray(x_dps, dtype=float), gross[starts[~spikes]], runs[~spikes])
+    return gross[np.repeat(spikes, runs)]
+
+
+def _raised_alone(x, first, length):
+    """For each run of samples ``first[k] .. first[k] + length[k] - 1`` of ``x``: True when its raised
+    samples (:func:`isolated`) come in groups of at most two."""
+    side = np.arange(1, BASELINE_SAMPLES + 1)
+    around = np.clip(np.c_[first[:, None] - side, (first + length - 1)[:, None] + side], 0, x.size - 1)
+    with np.errstate(over="ignore", invalid="ignore"):
+        base = np.median(x[around], axis=1)
+        run = np.repeat(np.arange(first.size), length)
+        at = np.repeat(first - np.r_[0, np.cumsum(length)[:-1]], length) + np.arange(length.sum())
+        raised = ~(np.abs(x[at] - base[run]) <= RAISED_Z * residual_sigma(x))
+    # three raised in a row within one run: x_i, x_{i+1}, x_{i+2} of the same run
+    three = raised[:-2] & raised[1:-1] & raised[2:] & (run[:-2] == run[2:])
+    return np.bincount(run[:-2][three], minlength=first.size) == 0
 
 
 def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):
@@ -123,13 +155,19 @@ def moved(x_dps, sample_rate_hz, *, brief=False, **sensor):
                           brief=brief, gross=gross, **sensor)
 
 
-def refuse_moved(path, axis, x_dps, sample_rate_hz):
+def refuse_moved(path, axis, x_dps, sample_rate_hz, *, gross_refused=False):
     """Raise NotStillError, one short line naming ``path`` and ``axis``, when the gyro axis's record
     ``x_dps`` (deg/s) looks moved (:func:`moved`): the refusal of ``gap`` and of a fleet's records
-    (``--allow-motion`` analyses them anyway)."""
-    why = moved(x_dps, sample_rate_hz, brief=True)
+    (``--allow-motion`` analyses them anyway). With ``gross_refused`` (the caller refuses gross errors
+    next, :func:`refuse_gross_errors`: allan's fleet) the advice names ``--keep-outliers`` too when the
+    record has them (:func:`gross_errors`: a turn's fast edges read as spikes)."""
+    x = np.asarray(x_dps, dtype=float)
+    why = moved(x, sample_rate_hz, brief=True)
     if why:
-        raise NotStillError(f"{path}: axis {axis} is not still ({why}); --allow-motion analyses it anyway")
+        advice = "--allow-motion analyses it anyway"
+        if gross_refused and gross_errors(x).size:
+            advice = "--allow-motion --keep-outliers analyses it anyway (its motion reads as gross errors)"
+        raise NotStillError(f"{path}: axis {axis} is not still ({why}); {advice}")
 
 
 def _spent_sd(d):
@@ -435,7 +473,7 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     warn_about_gaps(head, GAPS_CONSEQUENCE, warn)
     if refuse_motion:  # before the spikes and the mean: a turning gyro's are the motion's
         for a in axes:
-            refuse_moved(path, a, series[a], head.sample_rate_hz)
+            refuse_moved(path, a, series[a], head.sample_rate_hz, gross_refused=not keep_outliers)
     refuse_gross_errors(head, series, keep_outliers, warn=warn)
     refuse_large_mean(head.path, head.gyro_unit, collections.ChainMap(series, others), allow_large_mean, warn=warn)
     del others

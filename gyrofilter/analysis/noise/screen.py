@@ -39,9 +39,7 @@ def gross_errors(x_dps, *, z=GROSS_Z, limit_dps=GROSS_LIMIT_DPS):
     with np.errstate(over="ignore", invalid="ignore"):
         if n < MIN_SCREENED:  # too few residuals for a robust sigma: only the absolute limit applies
             return np.flatnonzero(~(np.abs(x) <= limit_dps))
-        step = max(1, n // 100_000)
-        mid = np.arange(1, n - 1, step)
-        threshold = z * robust_sigma(x[mid] - 0.5 * (x[mid - 1] + x[mid + 1]))
+        threshold = z * residual_sigma(x)
         found = []
         for start in range(0, n, _GROSS_BLOCK):
             stop = min(n, start + _GROSS_BLOCK)
@@ -61,6 +59,17 @@ def gross_errors(x_dps, *, z=GROSS_Z, limit_dps=GROSS_LIMIT_DPS):
             beside = absurd[np.maximum(i - 1, 0)] | absurd[np.minimum(i + 1, seg.size - 1)]
             found.append(np.flatnonzero(absurd[i] | (spike & ~beside)) + start)
     return np.concatenate(found)
+
+
+def residual_sigma(x_dps):
+    """The robust sigma (1.4826 MAD, :func:`~gyrofilter.analysis.stats.robust_sigma`) of the
+    second-difference residual ``r_i = x_i - (x_{i-1} + x_{i+1}) / 2`` of ``x_dps`` (at least 3
+    samples), over an evenly strided subsample of about 100 000 residuals: the scale
+    :func:`gross_errors` judges spikes against (white noise of sigma gives sqrt(1.5) sigma)."""
+    x = np.asarray(x_dps, dtype=np.float64)
+    mid = np.arange(1, x.size - 1, max(1, x.size // 100_000))
+    with np.errstate(over="ignore", invalid="ignore"):
+        return robust_sigma(x[mid] - 0.5 * (x[mid - 1] + x[mid + 1]))
 
 
 def gross_and_beside(x_dps):
