@@ -16,7 +16,7 @@ from gyrofilter.cli import main
 from gyrofilter.errors import CalibrationError
 from gyrofilter.evaluation.filters import startup_bias
 from gyrofilter.filter.calibration import Calibration, calibrate, white_noise_std, without_settings
-from gyrofilter.recording import Recording, write_recording
+from gyrofilter.recording import Recording, read_recording, write_recording
 
 
 def still(n, rng, bias=(0.3, -1.2, 0.8), sigma=0.05):
@@ -141,3 +141,15 @@ def test_a_window_too_short_to_leave_out_a_spike_says_its_length_and_to_raise_ca
     # report and evaluate take no calibration_s: the words name the commands that do
     assert without_settings(info.value, "report filters with the default settings").endswith(
         "can leave out no gross error: replay and run take --calibration-s")
+
+
+def test_replay_out_header_names_the_samples_left_out(tmp_path):
+    """Pass 37h: replay --out's header named the bias but not the gross errors left out of it."""
+    x = still(1000, np.random.default_rng(9))
+    x[50, 2] -= 40.0
+    src, out = tmp_path / "still.csv", tmp_path / "out.csv"
+    write_recording(src, Recording.from_dps(x, 1000.0))
+    assert main(["replay", str(src), "--calibration-s", "0.2", "--out", str(out)]) == 0
+    header = read_recording(out).header
+    assert json.loads(header["calibration_rejected"]) == [0, 0, 1]
+    assert json.loads(header["bias_dps"]) == pytest.approx(list(calibrate(x[:200], 1000.0).bias_dps))

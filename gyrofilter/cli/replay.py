@@ -259,6 +259,8 @@ class Replay:
             **({"smoothed": "forward-backward (two-filter) smoother over the whole recording"} if self.smoother else {}),
             "filter_settings": json.dumps({k: getattr(filt.settings, k) for k in SETTING_NAMES}, separators=(",", ":")),
             "bias_dps": json.dumps(list(filt.bias_dps or ())),
+            **({"calibration_rejected": json.dumps([int(r) for r in filt.calibration.rejected])}
+               if filt.calibration is not None else {}),
             **({"calibration_from": self.calibration_from} if self.calibration_from else {}),
             "t_meaning": "time of the last input sample of each block (s)",
             INPUT_RATE_KEY: format_number(filt.sample_rate_hz),
@@ -267,7 +269,7 @@ class Replay:
 
     def stdout_header(self):
         """The header of the --out file but the bias, which is known only once the calibration is done."""
-        return {k: v for k, v in self._out_header().items() if k != "bias_dps"}
+        return {k: v for k, v in self._out_header().items() if k not in ("bias_dps", "calibration_rejected")}
 
     def finish(self):
         """Smooth and pass on the rows (with a smoother); write the output's header even when no

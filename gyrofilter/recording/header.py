@@ -86,7 +86,7 @@ def filtered_words(header):
 #: source drops them with a note), or a raw recording could say it is a filtered one
 #: (``filtered_from``, which replay refuses) or carry another time origin than its own
 PROVENANCE_KEYS = frozenset({T_FROM_KEY, FILTERED_FROM_KEY, "filter_preset", "filter_settings", "bias_dps", "t_meaning",
-                             "calibration_from", INPUT_RATE_KEY, "converted_from", "converted_by",
+                             "calibration_from", "calibration_rejected", INPUT_RATE_KEY, "converted_from", "converted_by",
                              "time_origin", "simulated_seed", "simulated_duration_s", "simulated_model",
                              "simulated_model_name", "live_source", "recorded_by", "serial_port", "start_time_utc"})
 
