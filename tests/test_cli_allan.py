@@ -576,8 +576,9 @@ def test_the_json_says_the_accelerometer_was_left_out_and_why(tmp_path, capsys, 
     assert why in left["accelerometer_left_out"] and (cause == "constant" or left["accelerometer_left_out"] in err), err
     assert main(["allan", _write(tmp_path / "gyro.csv", gyro, lsb=False), "--json", str(tmp_path / "gyro.json")]) == 0
     alone = json.loads((tmp_path / "gyro.json").read_text())
-    assert {k: v for k, v in left.items() if k not in ("recording", "accelerometer_left_out")} == \
-        {k: v for k, v in alone.items() if k != "recording"}
+    assert {k: v for k, v in left.items() if k not in ("recording", "accelerometer_left_out", "warnings")} == \
+        {k: v for k, v in alone.items() if k not in ("recording", "warnings")}
+    assert alone["warnings"] == [] and any(w.endswith("left out of the Allan analysis") for w in left["warnings"])
     assert main(["allan", _six_axis(tmp_path / "good.csv")[0], "--json", str(tmp_path / "good.json")]) == 0
     assert "accelerometer_left_out" not in json.loads((tmp_path / "good.json").read_text())
 

@@ -158,3 +158,14 @@ def test_a_large_bias_in_report_and_evaluate_names_the_commands_that_take_it(tmp
     text = str(refused.value)
     assert "raise the filter's setting" not in text and "move it out of the recordings folder" in text
     assert "replay and run take --set max_bias_dps=26" in text
+
+
+@pytest.mark.parametrize("command", ["allan", "arma"])
+def test_allow_large_mean_warning_is_in_the_json_document(dps_as_rad, tmp_path, command):
+    """Attack pass 37k: the warning of --allow-large-mean (and every other of the file's) was said on stderr
+    but missing from allan's and arma's --json document, which a reader of the file alone sees."""
+    import json
+    out = tmp_path / "out.json"
+    assert main([command, dps_as_rad, "--allow-large-mean", "--json", str(out)]) == 0
+    warnings = json.loads(out.read_text())["warnings"]
+    assert any("axis x reads 258 deg/s on average" in w and "Analysed as it is" in w for w in warnings), warnings

@@ -103,9 +103,15 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     duration is rows / sample rate (s).
     A result that is not finite raises AllanInputError naming the file; a stuck axis (not
     skipped) says which ``--axes`` analyse the others."""
+    told = []
+
+    def tell(text):
+        told.append(text)
+        warn(text)
+
     try:
         head, results, repeats, accel, accel_left_out = characterise_recording(
-            path, axes=axes, confidence=confidence, min_clusters=min_clusters, keep_outliers=keep_outliers, warn=warn,
+            path, axes=axes, confidence=confidence, min_clusters=min_clusters, keep_outliers=keep_outliers, warn=tell,
             progress=progress, skip_constant=skip_constant, allow_large_mean=allow_large_mean)
     except ConstantAxisError as exc:  # which --axes would run: the others that vary (all of them were "yz" of a file of equal rows)
         others = exc.varying
@@ -120,7 +126,7 @@ def analyse(path, *, axes=ALL_AXES, confidence=0.95, min_clusters=MIN_CLUSTERS, 
     return head, results, to_json(results, head.sample_rate_hz, recording=path, duration_s=duration_s,
                                   repeated_rows=repeats, accelerometer=accel,
                                   accelerometer_left_out=accel_left_out,
-                                  t_gaps=(head.t_gaps, gaps[0]) if gaps else None), accel
+                                  t_gaps=(head.t_gaps, gaps[0]) if gaps else None, warnings=told), accel
 
 
 def misfit_text(r):

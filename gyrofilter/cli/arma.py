@@ -59,22 +59,25 @@ def run(args):
         warnings.append(f"{args.recording}: is {filtered}: paper 003's model describes a sensor's bias noise; this "
                         "one describes the filter's output")
     console.print_warnings(warnings)
+
+    def warn(text):  # said, and in the --json document
+        warnings.append(text)
+        console.say_warning(text)
+
     fs = head.sample_rate_hz
     i0, i1 = _window(args, head.rows, fs, t_s)
     if t_s is not None and (i0, i1) != (0, head.rows):  # the gaps of the window analysed, not of the file
         head = dataclasses.replace(head, t_gaps=int(np.count_nonzero(np.diff(t_s[i0:i1]) > gap_step_s(head))))
-    warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful",
-                    console.say_warning)
+    warn_about_gaps(head, "an ARMA model assumes uniform samples: its fit across the gaps is not meaningful", warn)
     series = {a: x[i0:i1] for a, x in series.items()}
-    refuse_large_mean(head.path, head.gyro_unit, series, args.allow_large_mean, warn=console.say_warning)
+    refuse_large_mean(head.path, head.gyro_unit, series, args.allow_large_mean, warn=warn)
     series = {a: series[a] for a in axes}
-    refuse_gross_errors(head, series, args.keep_outliers, warn=console.say_warning, first_row=i0)
+    refuse_gross_errors(head, series, args.keep_outliers, warn=warn, first_row=i0)
     for name in axes:  # as allan says it: the model of a moving gyro's record is the motion's
         motion = moved(series[name], head.sample_rate_hz)
         if motion:
-            warnings.append(f"{args.recording}: axis {name}: {motion}; paper 003's model of a moving gyro "
-                            "describes the motion, not the bias")
-            console.say_warning(warnings[-1])
+            warn(f"{args.recording}: axis {name}: {motion}; paper 003's model of a moving gyro describes the "
+                 "motion, not the bias")
     progress = console.ProgressLines(args.progress)
     quantum = 1.0 / head.lsb_per_dps if head.lsb_per_dps else None
     n = i1 - i0

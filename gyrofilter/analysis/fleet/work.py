@@ -87,7 +87,10 @@ def _gap_report(path, settings, warnings):
 
 
 def _allan_part(path, settings, result):
+    told = []  # the Allan document's own, as allan --json writes them
+
     def warn(text):
+        told.append(text)
         if text not in result["warnings"]:  # the gap part read the same file and said it already
             result["warnings"].append(text)
 
@@ -112,7 +115,8 @@ def _allan_part(path, settings, result):
             result["warnings"].extend(text if text.startswith("axis ") else f"axis {prefix}{axis}: {text}"
                                       for text in r.warnings)
     result["allan"] = to_json(results, sample_rate_hz, recording=path, duration_s=head.rows / sample_rate_hz,
-                              repeated_rows=repeats, accelerometer=accel, accelerometer_left_out=accel_left_out)
+                              repeated_rows=repeats, accelerometer=accel, accelerometer_left_out=accel_left_out,
+                              warnings=told)
     result["kalibr"] = kalibr
     result["sample_rate_hz"], result["duration_s"] = sample_rate_hz, head.rows / sample_rate_hz
 

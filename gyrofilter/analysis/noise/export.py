@@ -65,7 +65,7 @@ def _details_json(c: Coefficient, model_value=None, sensor=GYRO_JSON):
 
 
 def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeated_rows=None, accelerometer=None,
-            accelerometer_left_out=None, t_gaps=None):
+            accelerometer_left_out=None, t_gaps=None, warnings=None):
     """The ``gyrofilter allan --json`` document (docs/formats.md, section 4) of ``results``
     ({axis name: AxisNoise}, from :func:`characterise`) for a record at ``sample_rate_hz`` (Hz);
     ``recording`` (its name), ``duration_s`` (s) and ``repeated_rows`` (the record's
@@ -76,7 +76,9 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
     record's accelerometer was left out whole (it does not read gravity, a gross error, every axis
     constant), written as ``accelerometer_left_out``; None: no such key. ``t_gaps``: ``(count, warning)``
     of the steps of ``t`` that span lost samples, written as the block ``t_gaps`` where the count is
-    above 0 (the deviation assumes uniform samples: a reader of the document alone must see it)."""
+    above 0 (the deviation assumes uniform samples: a reader of the document alone must see it).
+    ``warnings``: the record's own warnings (sentences: the reader's, gross errors kept, a mean allowed),
+    written as the list ``warnings`` when given; an axis's own are its ``warnings``."""
     doc = {"sample_rate_hz": float(sample_rate_hz)}
     if recording is not None:
         doc["recording"] = utf8_text(str(recording))
@@ -116,6 +118,8 @@ def to_json(results, sample_rate_hz, *, recording=None, duration_s=None, repeate
         doc["accelerometer_left_out"] = utf8_text(str(accelerometer_left_out))
     if t_gaps is not None and t_gaps[0] > 0:
         doc["t_gaps"] = {"count": int(t_gaps[0]), "warning": utf8_text(str(t_gaps[1]))}
+    if warnings is not None:
+        doc["warnings"] = [utf8_text(str(w)) for w in warnings]
     return doc
 
 
