@@ -1279,6 +1279,22 @@ def test_temperature_read_glitches_do_not_flip_the_temperature_finding(glitches)
                      f"20001 (value -59.85 C)"] if glitches else [])
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [2, 3, 4, 5])
+@pytest.mark.parametrize("glitches", [1, 3, 5])
+def test_temperature_read_glitches_leave_the_finding_as_without_them(seed, glitches):
+    """The seeds the attack pass swept (and runs up to the screen's half-width): the findings and their
+    intervals are those of the clean record (to the interpolated samples' few 1e-6)."""
+    def named(rec):
+        found = analyse_gap(rec, bootstrap=10)["findings"]
+        numbers = [v for f in found for k in sorted(f["params"]) for v in
+                   [f["params"][k], *f.get("params_ci95", {}).get(k, [])]]
+        return [(f["axis"], f["effect"]) for f in found], numbers
+    (effects, numbers), (clean_effects, clean_numbers) = named(_warming_record(glitches, seed)), named(_warming_record(0, seed))
+    assert ("x", "temperature") in clean_effects and effects == clean_effects
+    assert numbers == pytest.approx(clean_numbers, rel=1e-4)
+
+
 def test_a_temp_column_of_glitches_is_not_analysed_and_json_and_report_say_so(tmp_path):
     """More than 1 % of the temp column read glitches: the temperature is left out, and the note
     reaches the JSON and the Markdown report."""
