@@ -63,19 +63,25 @@ def temp_glitches(temp_c, sample_rate_hz, *, z=TEMP_GLITCH_Z, floor_c=TEMP_GLITC
     if k < 1:
         return np.zeros(0, dtype=np.intp)
     w = 2 * k + 1
-    i = np.arange(n)
-    s = np.clip(i - k, 0, n - w)
     med = np.empty(n - w + 1)
     for lo in range(0, n - w + 1, _BLOCK):  # the median of each window, a block of windows at a time
         hi = min(n - w + 1, lo + _BLOCK)
         med[lo:hi] = np.median(np.lib.stride_tricks.sliding_window_view(t[lo:hi + w - 1], w), axis=1)
-    d = t - med[s]
+    d = np.empty(n)  # T_i - the median of its window: centred inside, shifted inward within k of the ends
+    np.subtract(t[k:n - k], med, out=d[k:n - k])
+    d[:k], d[n - k:] = t[:k] - med[0], t[n - k:] - med[-1]
+    del med
     step = max(1, n // 100_000)
     some = np.abs(d[::step])
     sigma = MAD_TO_SIGMA * float(np.median(np.abs(d[::step] - np.median(d[::step]))))
     code = float(some[some > 0].min()) if np.any(some > 0) else 0.0
-    limit = max(floor_c, TEMP_GLITCH_CODES * code, z * sigma) + MAX_DIE_RATE_C_PER_S * np.abs(i - (s + k)) / float(sample_rate_hz)
-    return np.flatnonzero(~(np.abs(d) <= limit))
+    np.abs(d, out=d)
+    limit = max(floor_c, TEMP_GLITCH_CODES * code, z * sigma)
+    e = np.r_[np.arange(k, 0, -1), np.arange(1, k + 1)]  # e_i of the first k and the last k samples
+    ends = np.r_[np.arange(k), np.arange(n - k, n)]
+    far = ~(d <= limit)
+    far[ends] = ~(d[ends] <= limit + MAX_DIE_RATE_C_PER_S * e / float(sample_rate_hz))
+    return np.flatnonzero(far)
 
 
 def replace_glitches(temp_c, glitches):
