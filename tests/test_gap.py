@@ -1249,3 +1249,63 @@ def test_the_gap_analysis_of_the_filters_output_says_whose_noise_its_findings_de
         said = [note for note in report["notes"] if "filter's output" in note]
         assert said == ([report["notes"][0]] if expected else [])
         assert not expected or said[0].startswith("the recording is the filter's output (filtered_from ")
+
+
+def _warming_record(glitches, seed=1):
+    """300 s at 100 Hz of a still gyro whose x follows a warming die at 0.03 deg/s per deg C, with
+    ``glitches`` TEMP_OUT = 0x8000 reads (-32768 / 340 + 36.53 = -59.85 deg C) from sample 20001 on."""
+    rng = np.random.default_rng(seed)
+    n = 30000
+    t = np.arange(n) / 100.0
+    temp = 24.5 + 6 * (1 - np.exp(-t / 100)) + rng.normal(0, 0.03, n)
+    g = rng.normal(0, 0.1, (n, 3)) + [-1.0, 0.5, 0.2]
+    g[:, 0] += 0.03 * (temp - temp[0])
+    temp[20000:20000 + glitches] = -32768 / 340 + 36.53
+    return Recording.from_dps(g, 100.0, temp_c=temp)
+
+
+@pytest.mark.parametrize("glitches", [0, 1, 3])
+def test_temperature_read_glitches_do_not_flip_the_temperature_finding(glitches):
+    """Attack pass (37k): three TEMP_OUT = 0x8000 reads among 30 000 samples (inside TEMP_RANGE_C) flipped
+    the temperature finding on x to a warm-up and one skewed its interval; now the glitches are replaced
+    by their neighbours' interpolation, said in a note, and the temperature is named with 0.03 inside."""
+    report = analyse_gap(_warming_record(glitches), bootstrap=10)
+    found = {f["axis"]: f for f in report["findings"]}
+    assert found["x"]["effect"] == "temperature", report["findings"]
+    low, high = found["x"]["params_ci95"]["coefficient_dps_per_c"]
+    assert low < 0.03 < high
+    said = [n for n in report["notes"] if n.startswith("temp column:")]
+    assert said == ([f"temp column: {glitches} glitch(es) replaced by their neighbours' interpolation, first at sample "
+                     f"20001 (value -59.85 C)"] if glitches else [])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [2, 3, 4, 5])
+@pytest.mark.parametrize("glitches", [1, 3, 5])
+def test_temperature_read_glitches_leave_the_finding_as_without_them(seed, glitches):
+    """The seeds the attack pass swept (and runs up to the screen's half-width): the findings and their
+    intervals are those of the clean record (to the interpolated samples' few 1e-6)."""
+    def named(rec):
+        found = analyse_gap(rec, bootstrap=10)["findings"]
+        numbers = [v for f in found for k in sorted(f["params"]) for v in
+                   [f["params"][k], *f.get("params_ci95", {}).get(k, [])]]
+        return [(f["axis"], f["effect"]) for f in found], numbers
+    (effects, numbers), (clean_effects, clean_numbers) = named(_warming_record(glitches, seed)), named(_warming_record(0, seed))
+    assert ("x", "temperature") in clean_effects and effects == clean_effects
+    assert numbers == pytest.approx(clean_numbers, rel=1e-4)
+
+
+def test_a_temp_column_of_glitches_is_not_analysed_and_json_and_report_say_so(tmp_path):
+    """More than 1 % of the temp column read glitches: the temperature is left out, and the note
+    reaches the JSON and the Markdown report."""
+    rng = np.random.default_rng(5)
+    temp = np.linspace(25.0, 30.0, 6000)
+    temp[rng.choice(6000, 90, replace=False)] = -59.85
+    path = tmp_path / "glitchy.csv"
+    write_recording(str(path), Recording.from_dps(rng.normal(0, 0.05, (6000, 3)), 100.0, temp_c=temp))
+    assert main(["gap", str(path), "--sims", "10", "--bootstrap", "0", "--json", str(tmp_path / "g.json"),
+                 "--report", str(tmp_path / "rep")]) == 0
+    notes = json.loads((tmp_path / "g.json").read_text())["notes"]
+    said = [n for n in notes if n.startswith("temp column:")]
+    assert len(said) == 1 and said[0].endswith("temperature not analysed") and "90 read glitches" in said[0], notes
+    assert said[0] in (tmp_path / "rep" / gap_report.REPORT_NAME).read_text()

@@ -59,6 +59,7 @@ from ..errors import CalibrationError, SettingsError
 from ..files import write_text_whole
 from ..inputs import check_number, load_json, python_value, quote
 from ..units import AXES, MAD_TO_SIGMA, MAX_RATE_DPS, TEMP_RANGE_C, check_rates_dps, check_sample_rate_hz, plain, shown
+from ..tempscreen import temp_glitches
 from .averaging import PAPER_Q_DPS
 from .samples import as_numbers
 
@@ -348,7 +349,8 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
     (:func:`gyrofilter.units.check_rates_dps`), sampled at ``sample_rate_hz`` (Hz);
     ``stillness_threshold``: the largest stillness statistic z accepted (noise units, see
     :func:`stillness_z`); ``max_bias_dps``: the largest plausible bias (deg/s); ``temp_c``
-    optionally the window's n temperatures (deg C, shape (n,)), whose mean is kept; ``outlier_q_dps``:
+    optionally the window's n temperatures (deg C, shape (n,)), whose mean without its read glitches
+    (:func:`gyrofilter.tempscreen.temp_glitches`) is kept, the reference T0; ``outlier_q_dps``:
     paper 001's gross-error threshold q (deg/s), the floor of :func:`gross_error_limits`. Gross errors are
     left out (:func:`without_gross_errors`) before the bias, the noise and the checks. Raises
     CalibrationError naming the axis and the statistic when the window is not still.
@@ -399,6 +401,8 @@ def calibrate(window_dps, sample_rate_hz, *, stillness_threshold=6.0, max_bias_d
         temp_c = as_numbers(temp_c, "temp_c", "deg C")
         if temp_c.shape != (len(x),):
             raise SettingsError(f"temp_c must have shape ({len(x)},), one temperature per sample, got {temp_c.shape}")
+        if np.isfinite(temp_c).all():  # a read glitch (a die's temperature is smooth) would move T0: left out
+            temp_c = np.delete(temp_c, temp_glitches(temp_c, sample_rate_hz))
     temp = None if temp_c is None else check_number(
         float(np.mean(temp_c)), "calibration: the mean temperature (deg C)", low=low_c, high=high_c, error=CalibrationError)
     return Calibration(tuple(map(float, bias)), tuple(map(float, sigma)), len(x), float(sample_rate_hz), temp,

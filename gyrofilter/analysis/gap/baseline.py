@@ -331,9 +331,12 @@ def start_bias(mean_bias_dps, cands, duration_s):
     return b
 
 
-def temperature_table(rec, max_points=1000):
+def temperature_table(rec, temp_c, max_points=1000):
+    """The simulations' temperature profile: ``temp_c`` (the record's column as the analysis took it,
+    its read glitches replaced: :func:`gyrofilter.tempscreen.screened_temp`) against ``rec``'s times,
+    in block means of at most ``max_points`` points."""
     t = rec.t_s - rec.t_s[0] if "t" in rec.columns else np.arange(len(rec)) / rec.sample_rate_hz
-    temp = np.asarray(rec.temp_c, dtype=float)
+    temp = np.asarray(temp_c, dtype=float)
     step = max(1, temp.size // max_points)
     # block means keep the quantized column's level without its read noise
     n = (temp.size // step) * step

@@ -346,7 +346,7 @@ def _replicates(inp, state, i, cands, seeds, at=None, wanted=None):
     for j, params in (at or {}).items():
         model["axes"][a]["effects"][j].update(params)
     if any(c.effect == TEMPERATURE for c in cands):
-        model[TEMPERATURE_PROFILE] = temperature_table(inp.rec)
+        model[TEMPERATURE_PROFILE] = temperature_table(inp.rec, inp.temp)
     spec, _ = validate_model(model)
     temp = inp.temp if any(c.effect == TEMPERATURE for c in cands) else None
     resolved = bool(state.axes[i].lags) and any(c.effect == COLORED_NOISE and c.composite for c in cands)

@@ -75,6 +75,7 @@ from ...inputs import check_number
 from ...recording import GYRO_COLUMNS, filtered_words, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
 from ...sim.simulate import check_seed
+from ...tempscreen import screened_temp
 from ...units import AXES, MAX_RATE_DPS, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
 from ..still import moved, not_static, refuse_moved
 from . import detectors as det
@@ -267,6 +268,9 @@ def prepare(rec, *, seed, n_sims, recording_name):
         report["notes"].append(f"temp column has values outside [{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] deg C "
                                f"(sample {row + 1}: {temp[row]:g}): temperature not analysed")
         temp = None
+    if temp is not None:  # read glitches (a die's temperature is smooth) replaced, or the column left out
+        temp, note = screened_temp(temp, sample_rate_hz)
+        report["notes"] += [note] if note else []
     report["notes"] += _static_notes(rec, base, sample_rate_hz)
     m = default_n_sims(n) if n_sims is None else int(n_sims)
     return report, {"rec": rec, "sample_rate_hz": sample_rate_hz, "n": n, "temp": temp, "base": base, "q": q,
@@ -482,7 +486,7 @@ def write_findings(inp, state, scorer, report, found):
         if ks:
             ext["axes"][a] = state.spec(inp, i, ks)
     if any(row.cand.effect == TEMPERATURE for row in kept):
-        ext[TEMPERATURE_PROFILE] = temperature_table(inp.rec)
+        ext[TEMPERATURE_PROFILE] = temperature_table(inp.rec, inp.temp)
     if state.rows is not None:
         ext.update(state.rows.entry)
     report["extended_model"] = ext

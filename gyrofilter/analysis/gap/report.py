@@ -26,6 +26,7 @@ from ...effects import BIAS_STEP, COVARIATES, RATE_RAMP, SHAPES, TEMPERATURE, WA
 from ...errors import naming_file
 from ...plots import pyplot, save_figure
 from ...recording.header import markdown_text
+from ...tempscreen import screened_temp
 from ...units import AXES, utf8_text
 from .confound import CONFOUNDED_SPREADS, NAMED_BECAUSE, WHY_THE_COVARIATE, effect_shown
 from .features import D_FAR, d_shown
@@ -270,7 +271,7 @@ def write_report(report, rec, out_dir):
     os.makedirs(out_dir, exist_ok=True)
     g = rec.gyro_dps
     sample_rate_hz = rec.sample_rate_hz
-    temp = rec.temp_c
+    temp = None if rec.temp_c is None else screened_temp(rec.temp_c, sample_rate_hz)[0]  # as the analysis took it
     lines = [f"# Model-gap report: {markdown_text(report['recording'])}", "",
              f"{report['duration_s']:.1f} s at {report['sample_rate_hz']:g} Hz; "
              f"{report.get('n_simulations', 0)} baseline simulations; "

@@ -45,7 +45,7 @@ class Scorer:
             model.update(copy.deepcopy(rows))
             model["axes"][AXES[i]] = spec
             if with_temperature:
-                model[TEMPERATURE_PROFILE] = temperature_table(inp.rec)
+                model[TEMPERATURE_PROFILE] = temperature_table(inp.rec, inp.temp)
             sims = sim_features(model, inp.n, inp.sample_rate_hz, inp.seeds[:inp.n_ext], [i], inp.taus, inp.bands,
                                 inp.say, label)[i]
             self._deps[key] = departures(inp.meas_feats[i], sims, inp.n, (inp.deps[i], inp.n_sims))
