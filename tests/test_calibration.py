@@ -501,11 +501,13 @@ def test_links_of_the_folder_part_count_toward_the_limit(tmp_path, folder_links,
 
 
 @pytest.mark.parametrize("glitches", [1, 3])
-def test_temperature_read_glitches_stay_out_of_the_reference_t0(glitches):
+@pytest.mark.parametrize("noise_c", [0.01, 0.0])
+def test_temperature_read_glitches_stay_out_of_the_reference_t0(glitches, noise_c):
     """Attack pass (37k): a TEMP_OUT = 0x8000 read (-59.85 deg C, inside TEMP_RANGE_C) in a 2-s window moved
-    T0 by 84 / 200 deg C per glitch, and with it every compensated sample; now it is left out of the mean."""
+    T0 by 84 / 200 deg C per glitch, and with it every compensated sample; now it is left out of the mean.
+    Pass 37l: on a die that read one code throughout (noise_c 0) the glitch was still averaged in."""
     rng = np.random.default_rng(2)
-    temp = 30.0 + np.round(rng.normal(0, 0.01, 200) * 340) / 340  # a still die, on MPU6050 codes
+    temp = 30.0 + np.round(rng.normal(0, noise_c, 200) * 340) / 340  # a still die, on MPU6050 codes
     clean = calibrate(rng.normal(0, 0.05, (200, 3)), 100.0, temp_c=temp).temp_c
     temp[100:100 + glitches] = -32768 / 340 + 36.53
     assert calibrate(rng.normal(0, 0.05, (200, 3)), 100.0, temp_c=temp).temp_c == pytest.approx(clean, abs=0.002)

@@ -4,6 +4,7 @@ import pytest
 
 from gyrofilter import GyroFilter
 from gyrofilter.filter import tempcomp
+from gyrofilter.tempscreen import running_medians, temperature_history
 from gyrofilter.errors import SettingsError
 
 FS = 100.0
@@ -93,9 +94,12 @@ def test_by_hand_and_the_pipeline_applies_the_same_correction():
     y = tempcomp.compensate([[1.0, 2.0, 3.0]], [30.0], [0.1, 0.2, 0.3], 25.0)
     assert np.allclose(y, [[0.5, 1.0, 1.5]])
     _, temp, x = warmup(2, duration_s=60.0)
-    # GyroFilter compensates after its calibration window, with T0 = the window's mean temperature
+    # GyroFilter compensates after its calibration window (calibrated on the raw samples), with T0 = the
+    # window's mean temperature and T the running median of the latest 11 temperatures
     inside = GyroFilter(FS, preset="recommended", temp_coefficient_dps_per_c=tuple(C)).filter(x, temp)
-    before = GyroFilter(FS, preset="recommended").filter(tempcomp.compensate(x, temp, C, temp[:200].mean()))
+    t_med = running_medians(temperature_history(), temp)
+    by_hand = np.concatenate([x[:200], tempcomp.compensate(x[200:], t_med[200:], C, temp[:200].mean())])
+    before = GyroFilter(FS, preset="recommended").filter(by_hand)
     assert np.allclose(inside, before, rtol=0, atol=1e-9)
     with pytest.raises(SettingsError):
         tempcomp.compensate(np.zeros((3, 2)), np.zeros(3), C, 25.0)
@@ -185,3 +189,34 @@ def test_a_coefficient_beyond_the_filters_bound_is_refused_not_infinite_rates(co
     with pytest.raises(SettingsError, match="coefficient_dps_per_c"):
         tempcomp.compensate(np.zeros((2, 3)), np.array([30.0, 200.0]), coef, -100.0)
     assert np.all(np.isfinite(tempcomp.compensate(np.zeros((2, 3)), np.array([30.0, 200.0]), 10.0, -100.0)))
+
+
+@pytest.mark.parametrize("preset", ["recommended", "paper", "hold"])
+@pytest.mark.parametrize("run", [1, 2, 3, 5])
+def test_read_glitches_in_the_temperature_do_not_move_the_rates(preset, run):
+    """Attack passes 37l/37m: the compensation took each temperature as read, so TEMP_OUT = 0x8000
+    (-59.85 deg C) moved that sample by c x 85 deg C: 2 glitches moved the paper preset's y by 0.28 deg/s
+    (8 times its filtered sd) for 600 rows; 3 in a block read 4.5 deg/s where the rate was -0.18. T is the
+    running median of the latest 11 temperatures: runs of up to 5 glitches move nothing."""
+    rng = np.random.default_rng(run)
+    n, c = 6000, (0.03, -0.015, 0.1)
+    temp = 25 + np.arange(n) / n + rng.normal(0, 0.01, n)
+    x = np.array([-3.3, 1.1, -0.5]) + 0.1 * rng.standard_normal((n, 3)) + np.outer(temp - 25, c)
+    glitched = temp.copy()
+    glitched[3000:3000 + run] = -32768 / 340 + 36.53
+    clean = GyroFilter(FS, preset=preset, temp_coefficient_dps_per_c=c)
+    hit = GyroFilter(FS, preset=preset, temp_coefficient_dps_per_c=c)
+    a, b = clean.filter(x, temp), hit.filter(x, glitched)
+    assert np.abs(a - b).max() < 0.002  # c x a neighbour's temperature noise, not c x 85 deg C
+    assert hit.rejected.tolist() == clean.rejected.tolist()
+
+
+def test_fit_coefficient_leaves_out_read_glitches():
+    """Attack pass 37l: one TEMP_OUT of 0x8000 (-59.85 deg C) took the fitted coefficient from 0.0300 to
+    0.0248, five to 0.0137."""
+    _, temp, x = warmup(1)
+    c, _ = tempcomp.fit_coefficient(x, temp)
+    for at in ([len(temp) // 2], [0, 7, 1000, 2000, len(temp) - 1]):
+        hit = temp.copy()
+        hit[at] = -32768 / 340 + 36.53
+        assert np.allclose(tempcomp.fit_coefficient(x, hit)[0], c, rtol=0, atol=1e-4), at

@@ -111,3 +111,15 @@ def test_any_column_gets_valid_indices_and_a_replacement_within_its_good_values(
     good = np.delete(temp, found)
     if good.size and found.size:
         assert good.min() <= fixed.min() and fixed.max() <= good.max()
+
+
+@pytest.mark.parametrize("column", ["constant", "staircase"])
+def test_a_glitch_on_a_column_that_never_departs_is_found(column):
+    """Attack pass 37l: on a column on one code, or a noise-free staircase of 0.1 deg C codes, the only
+    nonzero departures were the glitches', taken as the column's code: the limit became 4 times the
+    glitch and nothing was found (gap's temperature flipped to warmup, a saved calibration's T0 moved)."""
+    n = 30_000
+    t = np.full(n, 25.0) if column == "constant" else np.round(20 + 10 * (1 - np.exp(-np.arange(n) / 20_000)), 1)
+    at = [8000, 16000, 24000]
+    t[at] = -32768 / 340 + 36.53
+    assert temp_glitches(t, 100.0).tolist() == at

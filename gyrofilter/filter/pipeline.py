@@ -32,6 +32,7 @@ from .presets import DEFAULT_PRESET, PRESETS
 from .samples import as_numbers, check_sample, check_samples, check_temperature
 from .settings import MAX_CALIBRATION_SAMPLES, SETTING_NAMES, FilterSettings
 from .tempcomp import compensate
+from ..tempscreen import TEMP_MEDIAN_SAMPLES, latest_median, running_medians, temperature_history
 from ..units import RATE_TOLERANCE, TEMP_RANGE_C, check_sample_rate_hz, plain, shown
 
 
@@ -93,6 +94,7 @@ class GyroFilter:
         self._temp_coef = s.temp_coefficients()
         self._temp_on = any(self._temp_coef)
         self._temp_ref = None  # T0 of the temperature compensation: the calibration's mean temperature
+        self._temp_seen = temperature_history()  # the latest temperatures: T is their running median
         self._y1 = np.zeros((1, 3))
         self._y1_motion = np.zeros((1, 3))  # outlier_rule="by_model": the motion rule's block mean
         self._out1 = np.zeros((1, 3))
@@ -237,7 +239,7 @@ class GyroFilter:
                 self._finish_calibration()
             return None
         if self._temp_on:
-            c, dt = self._temp_coef, temp_c - self._temp_ref
+            c, dt = self._temp_coef, latest_median(self._temp_seen, temp_c) - self._temp_ref
             sample = (sample[0] - c[0] * dt, sample[1] - c[1] * dt, sample[2] - c[2] * dt)
         block = self._block
         block.append(sample)
@@ -300,7 +302,7 @@ class GyroFilter:
             if row is not None:
                 outputs.append(np.array([row]))
         if self._temp_on and i < len(x):
-            x = compensate(x[i:], temps[i:], self._temp_coef, self._temp_ref)
+            x = compensate(x[i:], running_medians(self._temp_seen, temps[i:]), self._temp_coef, self._temp_ref)
             i = 0
         length = self.settings.block_len
         n_blocks = (len(x) - i) // length
@@ -472,6 +474,8 @@ class GyroFilter:
                                     "and this calibration has none (its samples came without temperatures): "
                                     "calibrate again from a source with temperatures")
             self._temp_ref = cal.temp_c
+            if self._cal_temp is not None:  # the window's latest temperatures start the running median
+                self._temp_seen.extend(self._cal_temp[-TEMP_MEDIAN_SAMPLES:].tolist())
         self._bias = tuple(float(b) for b in cal.bias_dps)
         if not self._adaptive:  # paper 001's initial Q and R: the variance of a block mean of the calibration's white noise
             self._pkf.start(cal.noise_std_dps)
