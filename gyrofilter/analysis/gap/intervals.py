@@ -144,9 +144,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...effects import (BIAS_INSTABILITY, COLORED_NOISE, GAUSS_MARKOV, OUTLIERS, REGISTRY, TEMPERATURE, WANDERS,
+from ...effects import (BIAS_INSTABILITY, BY_NAME, COLORED_NOISE, GAUSS_MARKOV, OUTLIERS, REGISTRY, TEMPERATURE, WANDERS,
                         WANDERING_TONE)
 from ..stats import block_means
+from .confound import unnamed_temperature
 from .baseline import Progress, axis_dps, simulate_axis, noise_sigma, temperature_table
 from .detectors.outliers import clean_spikes, detect_outliers
 from .detectors.slow import periodogram_detrended
@@ -169,6 +170,11 @@ MIN_REPLICATES = 5
 MIN_SHARE = 0.5
 #: a positive (log-scale) parameter whose interval spans more than this factor is not determined
 MAX_SPAN_RATIO = 100
+#: a naming decided by an interval end against 0 (the temperature's) within this many of the end's
+#: Monte Carlo standard errors takes more bootstrap runs (:func:`unclear_decision`) ...
+MC_CLEAR_K = 2.0
+#: ... doubling them up to this many times B (and :data:`MAX_BOOTSTRAP`)
+MC_MOST = 4
 #: the profile-likelihood drop of the unnamed wander's upper bound (:func:`wander_upper`): chi^2_1's
 #: 90 % point, the one-sided 95 % bound of a level on its boundary (Self & Liang 1987)
 WANDER_LEVEL = 2.705543
@@ -234,7 +240,11 @@ def bootstrap_intervals(inp, state, n_boot, seed):
         found.block["method"] = "none: --bootstrap 0 asked for no intervals"
         return found
     found.block["method"] = METHOD
-    seeds = np.random.default_rng([int(seed), 24]).integers(0, 2**31, size=int(n_boot))
+    found.block["bootstrap_runs_by_axis"] = {}
+    seeds_all = np.random.default_rng([int(seed), 24]).integers(0, 2**31, size=int(n_boot))
+    most = max(int(n_boot), min(MC_MOST * int(n_boot), MAX_BOOTSTRAP))  # the runs an unclear decision may take
+    # ... drawn from a stream of their own after the first B, which stay the same (:func:`unclear_decision`)
+    seeds_all = np.concatenate((seeds_all, np.random.default_rng([int(seed), 24, 1]).integers(0, 2**31, size=most - n_boot)))
     for i, a in enumerate(AXES):
         here = [row for row in state.kept if row.axis == i]
         if not here:
@@ -245,11 +255,22 @@ def bootstrap_intervals(inp, state, n_boot, seed):
             if row.cand.effect not in SUPPORTED:
                 found.notes.append(f"intervals: no estimator for {row.cand.effect} on {a}; its parameters have no interval")
         cands = [row.cand for row in here]
+        seeds = seeds_all[:n_boot]
         try:
             estimates = _replicates(inp, state, i, cands, seeds)
+            while len(seeds) < most and (unclear := [row.cand.effect for j, row in enumerate(here) if unclear_decision(
+                    row.cand, [e[j] for e in estimates["findings"]]) is not None]):
+                added = seeds_all[len(seeds):min(2 * len(seeds), most)]
+                found.notes.append(f"intervals on {a}: the {unclear[0]} interval's end lies within {MC_CLEAR_K:g} Monte Carlo "
+                                   f"standard errors of 0, which decides its naming: bootstrap runs {len(seeds)} -> "
+                                   f"{len(seeds) + len(added)}")
+                extra = _replicates(inp, state, i, cands, added)
+                estimates = {key: estimates[key] + extra[key] for key in estimates}
+                seeds = seeds_all[:len(seeds) + len(added)]
         except (ValueError, ArithmeticError) as exc:  # a singular fit: never lose the findings for it
             found.notes.append(f"intervals on {a}: the bootstrap could not run ({exc}); no intervals")
             continue
+        found.block["bootstrap_runs_by_axis"][a] = int(len(seeds))
         for j, row in enumerate(here):
             if row.cand.effect not in SUPPORTED:
                 continue
@@ -263,6 +284,10 @@ def bootstrap_intervals(inp, state, n_boot, seed):
                 got = {**_invert(inp, state, i, cands, j, c.effect, params, reps, seeds),
                        **{name: got[name] for name in LOCATED.get(c.effect, ())}}
             found.findings[row.k] = {name: g.ends for name, g in got.items()}
+            if (wide := unclear_decision(c, reps)) is not None:  # still unclear after the most runs: its conservative side
+                found.findings[row.k][BY_NAME[c.effect].defining] = wide
+                found.notes.append(f"{c.effect} on {a}: its interval's end is still within {MC_CLEAR_K:g} Monte Carlo standard "
+                                   f"errors of 0 after {len(seeds)} bootstrap runs; the interval is widened by them")
             for name, g in got.items():
                 if g.ends is None:
                     found.undetermined.setdefault(row.k, {})[name] = g.why
@@ -274,6 +299,57 @@ def bootstrap_intervals(inp, state, n_boot, seed):
                            for name, g in got.items() if g.ends is None)
     found.block["runtime_s"] = time.perf_counter() - t0
     return found
+
+
+def end_mc_error(half, b):
+    """The Monte Carlo standard error of an end ``u_hat - bias +- half`` of the interval of the
+    module docstring from ``b`` replicates (``half = t_{0.975, b-1} sqrt(1 + 1/b) s``): the ends
+    move with the replicates drawn, not with the record. The bias ``mean(u*)`` has Monte Carlo
+    variance ``s^2 / b`` and the spread ``s`` has ``s^2 / (2 (b - 1))`` (normal replicates; the two
+    are independent), so
+
+        se_end = sqrt(s^2 / b + half^2 / (2 (b - 1))),   s = half / (t_{0.975, b-1} sqrt(1 + 1/b)),
+
+    0.41 s with b = 20, 0.19 s with b = 80 (Efron & Tibshirani 1993, ch. 19, the Monte Carlo error
+    of a bootstrap estimate as the replicates' own sampling error; Andrews & Buchinsky 2000, "A
+    three-step method for choosing the number of bootstrap repetitions", Econometrica 68: 23-51,
+    who choose b from that error)."""
+    from scipy.stats import t as student_t
+
+    factor = float(student_t.ppf(0.5 + CONFIDENCE / 2, b - 1)) * math.sqrt(1 + 1 / b)
+    s = half / factor
+    return math.sqrt(s * s / b + half * half / (2 * (b - 1)))
+
+
+def unclear_decision(cand, replicates, decides=unnamed_temperature):
+    """The defining parameter's interval widened by its Monte Carlo error (below), or None where
+    the decision is clear: where the naming of the finding ``cand`` rests on its defining parameter's interval
+    (``decides(cand, ends)``, None where it is named: the temperature's rule,
+    :func:`~gyrofilter.analysis.gap.confound.unnamed_temperature`, whether the interval holds 0)
+    and that decision is within the Monte Carlo error of the ``replicates`` (its estimates per
+    run, dicts or None): the interval's ends moved out by :data:`MC_CLEAR_K` times their Monte
+    Carlo standard error (:func:`end_mc_error`) and moved in by as much (at most to its centre)
+    decide differently. The bootstrap then takes more runs (:func:`bootstrap_intervals`, doubling
+    up to :data:`MC_MOST` times B): a verdict that flips with the seed of the replicates is the
+    simulation's, not the record's (Andrews & Buchinsky 2000). Where it is still unclear after
+    them, the decision takes the widened interval (module docstring)."""
+    name = BY_NAME[cand.effect].defining
+    value = cand.plain_params().get(name)
+    if value is None:
+        return False
+    values = [r.get(name) if r else None for r in replicates]
+    spread = _spread(value, values, SCALES.get(cand.effect, {}).get(name, "linear"))
+    if isinstance(spread, str):
+        return False
+    scale, u_hat, bias, half = spread
+    b = int(np.isfinite(_forward([np.nan if v is None else float(v) for v in values], scale)).sum())
+    k_se = MC_CLEAR_K * end_mc_error(half, b)
+    bounds = param_bounds(cand.effect, name)
+    wide, narrow = (_finish(u_hat - bias - h, u_hat - bias + h, value, scale, bounds).ends
+                    for h in (half + k_se, max(half - k_se, 0.0)))
+    if wide is None or narrow is None or (decides(cand, wide) is None) == (decides(cand, narrow) is None):
+        return None
+    return wide
 
 
 def _invert(inp, state, i, cands, j, effect, params, reps, seeds):
