@@ -329,7 +329,8 @@ def end_mc_error(half, b):
 
 def unclear_decision(cand, replicates, decides=unnamed_temperature, widen=False):
     """The defining parameter's interval widened by its Monte Carlo error (below), or None where
-    the decision is clear (``widen``: wherever an interval decides the naming): where the naming of the finding ``cand`` rests on its defining parameter's interval
+    the decision is clear (``widen``: wherever an interval decides the naming). Unclear: the naming
+    of the finding ``cand`` rests on its defining parameter's interval
     (``decides(cand, ends)``, None where it is named: the temperature's rule,
     :func:`~gyrofilter.analysis.gap.confound.unnamed_temperature`, whether the interval holds 0)
     and that decision is within the Monte Carlo error of the ``replicates`` (its estimates per
