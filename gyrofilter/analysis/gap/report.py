@@ -292,7 +292,9 @@ def write_report(report, rec, out_dir):
     intervals = report.get("intervals") or {}
     if report["findings"] and intervals.get("bootstrap_runs"):
         lines += [f"Each parameter with its {100 * intervals['confidence']:.0f} % interval in brackets "
-                  f"({intervals['bootstrap_runs']} bootstrap runs per axis with findings; docs/gap.md).", ""]
+                  f"({intervals['bootstrap_runs']} bootstrap runs per axis with findings"
+                  + "".join(f", {n} on {a}" for a, n in (intervals.get("bootstrap_runs_by_axis") or {}).items()
+                            if n != intervals["bootstrap_runs"]) + "; docs/gap.md).", ""]
     if not report["findings"]:
         lines.append(no_findings_text(report))
     if covariate_preamble(report["findings"]):
