@@ -34,6 +34,10 @@ MAX_CODE_C = 1.0
 #: fastest a die's temperature moves (deg C/s), an assumption kept generous: the MPU6050's whole
 #: operating range (-40 to +85 deg C, product specification section 6.2) crossed in about 6 s
 MAX_DIE_RATE_C_PER_S = 20.0
+#: the most that allowance grants (deg C): twice the fastest warm-up at hand (10 deg C in 20 s) over the 5
+#: samples from an end at 1 Hz; uncapped it granted 100 deg C at 1 Hz, and a glitch of -59.85 deg C on the
+#: first or last sample of a 1-Hz log went through (attack pass 37n)
+MAX_END_ALLOWANCE_C = 5.0
 #: a column with more glitches than this fraction is not screened into use but left out
 MAX_GLITCH_FRACTION = 0.01
 _BLOCK = 1 << 16
@@ -47,7 +51,8 @@ def temp_glitches(temp_c, sample_rate_hz, *, z=TEMP_GLITCH_Z, floor_c=TEMP_GLITC
     the 2k + 1 samples ``T[s_i .. s_i + 2k]`` around it, ``s_i = clip(i - k, 0, N - 2k - 1)`` (the
     window is shifted inward at the ends): ``d_i = T_i - median``. It is a glitch when
 
-        |d_i| > max(floor_c, TEMP_GLITCH_CODES * q, z * 1.4826 MAD(d)) + MAX_DIE_RATE_C_PER_S * e_i / sample_rate_hz,
+        |d_i| > max(floor_c, TEMP_GLITCH_CODES * q, z * 1.4826 MAD(d)) + min(MAX_DIE_RATE_C_PER_S * e_i / sample_rate_hz,
+                                                                       MAX_END_ALLOWANCE_C),
 
     ``e_i = |i - (s_i + k)|`` the samples from i to its window's centre (0 but within k of the ends),
     ``q`` the smallest nonzero ``|d_i|`` (one code of a quantized column), at most :data:`MAX_CODE_C`,
@@ -93,7 +98,8 @@ def temp_glitches(temp_c, sample_rate_hz, *, z=TEMP_GLITCH_Z, floor_c=TEMP_GLITC
     if sample_rate_hz is not None:
         e = np.r_[np.arange(k, 0, -1), np.arange(1, k + 1)]  # e_i of the first k and the last k samples
         ends = np.r_[np.arange(k), np.arange(n - k, n)]
-        far[ends] = ~(d[ends] <= limit + MAX_DIE_RATE_C_PER_S * e / float(sample_rate_hz))
+        allowance = np.minimum(MAX_DIE_RATE_C_PER_S * e / float(sample_rate_hz), MAX_END_ALLOWANCE_C)
+        far[ends] = ~(d[ends] <= limit + allowance)
     return np.flatnonzero(far)
 
 

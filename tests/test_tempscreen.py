@@ -123,3 +123,17 @@ def test_a_glitch_on_a_column_that_never_departs_is_found(column):
     at = [8000, 16000, 24000]
     t[at] = -32768 / 340 + 36.53
     assert temp_glitches(t, 100.0).tolist() == at
+
+
+@pytest.mark.parametrize("at", [0, 1, 3598, 3599])
+def test_a_glitch_at_either_end_of_a_slow_log_is_found(at):
+    """Attack pass 37n: at 1 Hz the end allowance (20 deg C/s x 5 samples) granted 100 deg C, and a
+    -59.85 deg C read on the first or last sample of a warming 1-Hz log went through (gap's temperature
+    interval left out the true coefficient, or the finding turned into a warm-up and a step)."""
+    t = np.arange(3600.0)
+    temp = 25 + 8 * (1 - np.exp(-t / 600)) + np.random.default_rng(at).normal(0, 0.02, t.size)
+    clean = temp_glitches(temp, 1.0).tolist()
+    temp[at] = -32768 / 340 + 36.53
+    assert temp_glitches(temp, 1.0).tolist() == sorted(clean + [at])
+    temp[at] = temp[at - 1 if at else 1] + 11.5  # a read 11.5 deg C off (a zero read of a die at 25 deg C), at 5 Hz
+    assert at in temp_glitches(temp, 5.0).tolist()
