@@ -144,20 +144,27 @@ def temperature_history():
     return collections.deque(maxlen=TEMP_MEDIAN_SAMPLES)
 
 
-def latest_median(seen, temp_c):
+def latest_median(seen, temp_c, reference_c):
     """:func:`running_medians` of one temperature ``temp_c`` (deg C), pure Python (a stream fed a
     sample at a time): ``seen`` (:func:`temperature_history`) takes it, and the median of what it holds
-    is returned, the lower middle one of an even count."""
+    is returned; of an even count (at a stream's start, fewer than :data:`TEMP_MEDIAN_SAMPLES` seen: a
+    run from a loaded calibration) the middle one nearer the reference ``reference_c`` (T0), not the
+    lower: that one was a -59.85 deg C read on the first or second sample (2.5 deg/s on a row, attack
+    pass 37n). The first sample alone is its own median."""
     seen.append(temp_c)
     ordered = sorted(seen)
-    return ordered[(len(ordered) - 1) // 2]
+    middle = len(ordered) // 2
+    if len(ordered) % 2 == 0 and abs(ordered[middle - 1] - reference_c) <= abs(ordered[middle] - reference_c):
+        middle -= 1
+    return ordered[middle]
 
 
-def running_medians(seen, temps_c):
+def running_medians(seen, temps_c, reference_c):
     """The running median of a stream's temperatures: for each of ``temps_c`` (deg C), the median of
     it and the :data:`TEMP_MEDIAN_SAMPLES` - 1 temperatures before it (Tukey 1977, running medians),
     fewer at the stream's start (those ``seen`` holds: :func:`temperature_history`, which takes
-    ``temps_c`` too). A run of up to :data:`TEMP_GLITCH_HALF_WIDTH` read glitches moves it by no
+    ``temps_c`` too; of an even count the middle one nearer the reference T0 ``reference_c``,
+    :func:`latest_median`). A run of up to :data:`TEMP_GLITCH_HALF_WIDTH` read glitches moves it by no
     glitch (the median is a good sample's), where a glitch of -59.85 deg C compensated as read moved
     the rate by c x 85 deg C (attack pass 37m); a monotone warm-up passes it unchanged, delayed by
     TEMP_GLITCH_HALF_WIDTH samples (0.05 s at 100 Hz: c x 0.01 deg C at the fastest warm-up at hand,
@@ -167,7 +174,7 @@ def running_medians(seen, temps_c):
     out = np.empty(t.size)
     j = 0
     while j < t.size and len(seen) < TEMP_MEDIAN_SAMPLES - 1:
-        out[j] = latest_median(seen, float(t[j]))
+        out[j] = latest_median(seen, float(t[j]), reference_c)
         j += 1
     if j < t.size:
         z = np.concatenate([np.array(seen, dtype=np.float64)[-(TEMP_MEDIAN_SAMPLES - 1):], t[j:]])

@@ -97,7 +97,7 @@ def test_by_hand_and_the_pipeline_applies_the_same_correction():
     # GyroFilter compensates after its calibration window (calibrated on the raw samples), with T0 = the
     # window's mean temperature and T the running median of the latest 11 temperatures
     inside = GyroFilter(FS, preset="recommended", temp_coefficient_dps_per_c=tuple(C)).filter(x, temp)
-    t_med = running_medians(temperature_history(), temp)
+    t_med = running_medians(temperature_history(), temp, temp[:200].mean())
     by_hand = np.concatenate([x[:200], tempcomp.compensate(x[200:], t_med[200:], C, temp[:200].mean())])
     before = GyroFilter(FS, preset="recommended").filter(by_hand)
     assert np.allclose(inside, before, rtol=0, atol=1e-9)
@@ -220,3 +220,22 @@ def test_fit_coefficient_leaves_out_read_glitches():
         hit = temp.copy()
         hit[at] = -32768 / 340 + 36.53
         assert np.allclose(tempcomp.fit_coefficient(x, hit)[0], c, rtol=0, atol=1e-4), at
+
+
+@pytest.mark.parametrize("at", [1, 2, 3])
+def test_a_glitch_right_after_a_loaded_calibration_moves_nothing(at):
+    """Attack pass 37n: after a loaded calibration the running median of T starts with fewer temperatures,
+    and a glitch on the second sample (the lower middle of two) was the T compensated: a row moved by
+    2.5 deg/s. Of an even count the middle one nearer T0 is taken (the first sample alone is its own)."""
+    rng = np.random.default_rng(at)
+    n, c = 3000, (0.01, -0.005, 0.008)  # c x 85 deg C under q = 1 deg/s: into the block mean, not rejected
+    temp = 25 + np.arange(n) / n + rng.normal(0, 0.01, n)
+    x = np.array([-3.3, 1.1, -0.5]) + 0.1 * rng.standard_normal((n, 3)) + np.outer(temp - 25, c)
+    cal = GyroFilter(FS, temp_coefficient_dps_per_c=c)
+    cal.filter(x[:200], temp[:200])
+    glitched = temp.copy()
+    glitched[200 + at] = -32768 / 340 + 36.53
+    filters = [GyroFilter(FS, calibration=cal.calibration, temp_coefficient_dps_per_c=c) for _ in range(2)]
+    rows = [f.filter(x[200:], t[200:]) for f, t in zip(filters, (temp, glitched))]
+    assert np.abs(rows[0] - rows[1]).max() < 0.001
+    assert filters[0].rejected.tolist() == filters[1].rejected.tolist()

@@ -239,7 +239,7 @@ class GyroFilter:
                 self._finish_calibration()
             return None
         if self._temp_on:
-            c, dt = self._temp_coef, latest_median(self._temp_seen, temp_c) - self._temp_ref
+            c, dt = self._temp_coef, latest_median(self._temp_seen, temp_c, self._temp_ref) - self._temp_ref
             sample = (sample[0] - c[0] * dt, sample[1] - c[1] * dt, sample[2] - c[2] * dt)
         block = self._block
         block.append(sample)
@@ -302,7 +302,7 @@ class GyroFilter:
             if row is not None:
                 outputs.append(np.array([row]))
         if self._temp_on and i < len(x):
-            x = compensate(x[i:], running_medians(self._temp_seen, temps[i:]), self._temp_coef, self._temp_ref)
+            x = compensate(x[i:], running_medians(self._temp_seen, temps[i:], self._temp_ref), self._temp_coef, self._temp_ref)
             i = 0
         length = self.settings.block_len
         n_blocks = (len(x) - i) // length
