@@ -54,6 +54,15 @@ SPREAD_BLOCKS = 64
 SPREAD_MARGIN = 1.25
 
 
+#: block means merged into one mean of :func:`not_static`'s slow scale (16 L samples; about 1 s over 30 s
+#: at 100 Hz): a vibration's leftover in block means falls as 1 / L, the white limit as 1 / sqrt(L), while
+#: a turn of a few of its blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: L = 6, the limit
+#: 24.8 deg/s let a 5-s turn of 20 deg/s pass; at 16 L it is 6.2)
+SLOW_MERGE = 16
+#: fewest means of the slow scale (the record's at least SLOW_MERGE x SLOW_BLOCKS block means: 256 samples)
+SLOW_BLOCKS = 16
+
+
 def means_spread(y):
     """The scatter of the block means ``y`` as their own adjacent differences tell it,
     s_y = sd(y_{k+1} - y_k) / sqrt(2); infinite with fewer than :data:`SPREAD_BLOCKS` of them.
@@ -109,13 +118,26 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
         y = y[kept > 0]
         if y.size == 0:  # every block all spikes (a square wave at f_s / 2 reads so): nothing to judge here
             return None
-    excursion = float(np.max(np.abs(y - np.median(y))))
-    if excursion <= max(limit, 8 * min(white_std_dps / math.sqrt(length), SPREAD_MARGIN * means_spread(y))):
+    excursion = _beyond(y, length, white_std_dps, limit)
+    if excursion is None and y.size >= SLOW_MERGE * SLOW_BLOCKS:  # the slow scale: means of SLOW_MERGE blocks
+        length *= SLOW_MERGE
+        excursion = _beyond(y[:y.size // SLOW_MERGE * SLOW_MERGE].reshape(-1, SLOW_MERGE).mean(axis=1), length,
+                            white_std_dps, limit)
+    if excursion is None:
         return None
     if brief:
         return f"it moves by up to {excursion:.3g} {unit}"
     return (f"the {what} moves by up to {excursion:.3g} {unit} (averages over {length / sample_rate_hz:.2g} s): "
             f"{NOT_STATIC}")
+
+
+def _beyond(y, length, white_std_dps, limit):
+    """The excursion of the block means ``y`` (of ``length`` samples) from their median when beyond
+    :func:`not_static`'s limit at that scale, else None."""
+    excursion = float(np.max(np.abs(y - np.median(y))))
+    if excursion <= max(limit, 8 * min(white_std_dps / math.sqrt(length), SPREAD_MARGIN * means_spread(y))):
+        return None
+    return excursion
 
 
 #: the longest run of consecutive samples an isolated spike or pair leaves out (:func:`isolated`): a pair's
