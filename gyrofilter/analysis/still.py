@@ -95,7 +95,12 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     :data:`SPREAD_MARGIN`), below sigma / sqrt(L) when a vibration raises sigma but averages out in the
     blocks: 10 deg/s at 23.7 Hz sampled at 100 Hz raised 8 sigma / sqrt(L) to 11.1 deg/s over 120 s, and
     a 50-degree turn at 10 deg/s read still (8 s_y: 4.9). Never more permissive than sigma / sqrt(L)
-    alone. An accelerometer's record is judged the same way with ``limit`` =
+    alone. The same rule judges a slow scale too, the means of :data:`SLOW_MERGE` consecutive blocks
+    (16 L samples; with at least :data:`SLOW_BLOCKS` of them): too few for their own spread, but a
+    vibration's leftover falls as 1 / L there while sigma / sqrt(16 L) is a quarter of sigma / sqrt(L),
+    and a turn over several blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: L = 6 and
+    too few means for s_y, a 5-s turn of 20 deg/s read still under 24.8 deg/s; at 16 L the limit is
+    6.2). An accelerometer's record is judged the same way with ``limit`` =
     :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name in the text).
 
     The record is judged without its spikes and the samples beside them
