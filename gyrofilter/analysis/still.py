@@ -54,13 +54,8 @@ SPREAD_BLOCKS = 64
 SPREAD_MARGIN = 1.25
 
 
-#: block means merged into one mean of :func:`not_static`'s slow scale (16 L samples; about 1 s over 30 s
-#: at 100 Hz): a vibration's leftover in block means falls as 1 / L, the white limit as 1 / sqrt(L), while
-#: a turn of a few of its blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: L = 6, the limit
-#: 24.8 deg/s let a 5-s turn of 20 deg/s pass; at 16 L it is 6.2)
-SLOW_MERGE = 16
-#: fewest means of the slow scale (the record's at least SLOW_MERGE x SLOW_BLOCKS block means: 256 samples)
-SLOW_BLOCKS = 16
+#: block means in one mean of :func:`not_static`'s slow scale, and the fewest such means it judges (256 samples)
+SLOW_MERGE = SLOW_BLOCKS = 16
 
 
 def means_spread(y):
@@ -87,21 +82,18 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     """Why a still gyro's record ``x_dps`` (deg/s) looks moved, or None when it looks still
     (``brief``: only how far it moves, for a refusal that must stay one short line).
 
-    The means of at most 512 consecutive blocks of L samples; the largest distance of one
-    from their median is the excursion. A still gyro's block means scatter by its white noise
-    sigma / sqrt(L) (``white_std_dps``: the per-sample sigma, deg/s) plus slow bias wander;
-    more than max(1 deg/s, 8 min(sigma / sqrt(L), 1.25 s_y)) is motion (or a bias far beyond any MEMS
-    gyro's instability). s_y: the block means' own scatter (:func:`means_spread`; 1.25:
-    :data:`SPREAD_MARGIN`), below sigma / sqrt(L) when a vibration raises sigma but averages out in the
-    blocks: 10 deg/s at 23.7 Hz sampled at 100 Hz raised 8 sigma / sqrt(L) to 11.1 deg/s over 120 s, and
-    a 50-degree turn at 10 deg/s read still (8 s_y: 4.9). Never more permissive than sigma / sqrt(L)
-    alone. The same rule judges a slow scale too, the means of :data:`SLOW_MERGE` consecutive blocks
-    (16 L samples; with at least :data:`SLOW_BLOCKS` of them): too few for their own spread, but a
-    vibration's leftover falls as 1 / L there while sigma / sqrt(16 L) is a quarter of sigma / sqrt(L),
-    and a turn over several blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: L = 6 and
-    too few means for s_y, a 5-s turn of 20 deg/s read still under 24.8 deg/s; at 16 L the limit is
-    6.2). An accelerometer's record is judged the same way with ``limit`` =
-    :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name in the text).
+    The means of at most 512 consecutive blocks of L samples; the largest distance of one from their median is the
+    excursion. A still gyro's block means scatter by its white noise sigma / sqrt(L) (``white_std_dps``: the
+    per-sample sigma, deg/s) plus slow bias wander; more than max(1 deg/s, 8 min(sigma / sqrt(L), 1.25 s_y)) is
+    motion (or a bias far beyond any MEMS gyro's instability). s_y: the block means' own scatter
+    (:func:`means_spread`; 1.25: :data:`SPREAD_MARGIN`), below sigma / sqrt(L) when a vibration raises sigma but
+    averages out in the blocks: 10 deg/s at 23.7 Hz sampled at 100 Hz raised 8 sigma / sqrt(L) to 11.1 deg/s over
+    120 s, and a 50-degree turn at 10 deg/s read still (8 s_y: 4.9). Never more permissive than sigma / sqrt(L)
+    alone. The same rule judges the means of :data:`SLOW_MERGE` consecutive blocks (16 L samples, at least
+    :data:`SLOW_BLOCKS` of them) too: a vibration's leftover falls as 1 / L, the limit as 1 / sqrt(L), and a turn
+    over several blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: a 5-s turn of 20 deg/s read still at
+    L = 6, 8 min(3.10, 5.82) = 24.8 deg/s; 6.2 at 16 L). An accelerometer's record is judged the same way with
+    ``limit`` = :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name).
 
     The record is judged without its spikes and the samples beside them
     (:func:`~gyrofilter.analysis.noise.screen.gross_and_beside`, or ``gross``: their indices when the
@@ -123,26 +115,19 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
         y = y[kept > 0]
         if y.size == 0:  # every block all spikes (a square wave at f_s / 2 reads so): nothing to judge here
             return None
-    excursion = _beyond(y, length, white_std_dps, limit)
-    if excursion is None and y.size >= SLOW_MERGE * SLOW_BLOCKS:  # the slow scale: means of SLOW_MERGE blocks
-        length *= SLOW_MERGE
-        excursion = _beyond(y[:y.size // SLOW_MERGE * SLOW_MERGE].reshape(-1, SLOW_MERGE).mean(axis=1), length,
-                            white_std_dps, limit)
-    if excursion is None:
+    scales = [(y, length)]
+    if y.size >= SLOW_MERGE * SLOW_BLOCKS:  # the slow scale: means of SLOW_MERGE blocks
+        scales.append((y[:y.size // SLOW_MERGE * SLOW_MERGE].reshape(-1, SLOW_MERGE).mean(axis=1), length * SLOW_MERGE))
+    for y, length in scales:
+        excursion = float(np.max(np.abs(y - np.median(y))))
+        if excursion > max(limit, 8 * min(white_std_dps / math.sqrt(length), SPREAD_MARGIN * means_spread(y))):
+            break
+    else:
         return None
     if brief:
         return f"it moves by up to {excursion:.3g} {unit}"
     return (f"the {what} moves by up to {excursion:.3g} {unit} (averages over {length / sample_rate_hz:.2g} s): "
             f"{NOT_STATIC}")
-
-
-def _beyond(y, length, white_std_dps, limit):
-    """The excursion of the block means ``y`` (of ``length`` samples) from their median when beyond
-    :func:`not_static`'s limit at that scale, else None."""
-    excursion = float(np.max(np.abs(y - np.median(y))))
-    if excursion <= max(limit, 8 * min(white_std_dps / math.sqrt(length), SPREAD_MARGIN * means_spread(y))):
-        return None
-    return excursion
 
 
 #: the longest run of consecutive samples an isolated spike or pair leaves out (:func:`isolated`): a pair's
