@@ -54,6 +54,10 @@ SPREAD_BLOCKS = 64
 SPREAD_MARGIN = 1.25
 
 
+#: block means in one mean of :func:`not_static`'s slow scale, and the fewest such means it judges (256 samples)
+SLOW_MERGE = SLOW_BLOCKS = 16
+
+
 def means_spread(y):
     """The scatter of the block means ``y`` as their own adjacent differences tell it,
     s_y = sd(y_{k+1} - y_k) / sqrt(2); infinite with fewer than :data:`SPREAD_BLOCKS` of them.
@@ -78,16 +82,18 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     """Why a still gyro's record ``x_dps`` (deg/s) looks moved, or None when it looks still
     (``brief``: only how far it moves, for a refusal that must stay one short line).
 
-    The means of at most 512 consecutive blocks of L samples; the largest distance of one
-    from their median is the excursion. A still gyro's block means scatter by its white noise
-    sigma / sqrt(L) (``white_std_dps``: the per-sample sigma, deg/s) plus slow bias wander;
-    more than max(1 deg/s, 8 min(sigma / sqrt(L), 1.25 s_y)) is motion (or a bias far beyond any MEMS
-    gyro's instability). s_y: the block means' own scatter (:func:`means_spread`; 1.25:
-    :data:`SPREAD_MARGIN`), below sigma / sqrt(L) when a vibration raises sigma but averages out in the
-    blocks: 10 deg/s at 23.7 Hz sampled at 100 Hz raised 8 sigma / sqrt(L) to 11.1 deg/s over 120 s, and
-    a 50-degree turn at 10 deg/s read still (8 s_y: 4.9). Never more permissive than sigma / sqrt(L)
-    alone. An accelerometer's record is judged the same way with ``limit`` =
-    :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name in the text).
+    The means of at most 512 consecutive blocks of L samples; the largest distance of one from their median is the
+    excursion. A still gyro's block means scatter by its white noise sigma / sqrt(L) (``white_std_dps``: the
+    per-sample sigma, deg/s) plus slow bias wander; more than max(1 deg/s, 8 min(sigma / sqrt(L), 1.25 s_y)) is
+    motion (or a bias far beyond any MEMS gyro's instability). s_y: the block means' own scatter
+    (:func:`means_spread`; 1.25: :data:`SPREAD_MARGIN`), below sigma / sqrt(L) when a vibration raises sigma but
+    averages out in the blocks: 10 deg/s at 23.7 Hz sampled at 100 Hz raised 8 sigma / sqrt(L) to 11.1 deg/s over
+    120 s, and a 50-degree turn at 10 deg/s read still (8 s_y: 4.9). Never more permissive than sigma / sqrt(L)
+    alone. The same rule judges the means of :data:`SLOW_MERGE` consecutive blocks (16 L samples, at least
+    :data:`SLOW_BLOCKS` of them) too: a vibration's leftover falls as 1 / L, the limit as 1 / sqrt(L), and a turn
+    over several blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: a 5-s turn of 20 deg/s read still at
+    L = 6, 8 min(3.10, 5.82) = 24.8 deg/s; 6.2 at 16 L). An accelerometer's record is judged the same way with
+    ``limit`` = :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name).
 
     The record is judged without its spikes and the samples beside them
     (:func:`~gyrofilter.analysis.noise.screen.gross_and_beside`, or ``gross``: their indices when the
@@ -109,8 +115,14 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
         y = y[kept > 0]
         if y.size == 0:  # every block all spikes (a square wave at f_s / 2 reads so): nothing to judge here
             return None
-    excursion = float(np.max(np.abs(y - np.median(y))))
-    if excursion <= max(limit, 8 * min(white_std_dps / math.sqrt(length), SPREAD_MARGIN * means_spread(y))):
+    scales = [(y, length)]
+    if y.size >= SLOW_MERGE * SLOW_BLOCKS:  # the slow scale: means of SLOW_MERGE blocks
+        scales.append((y[:y.size // SLOW_MERGE * SLOW_MERGE].reshape(-1, SLOW_MERGE).mean(axis=1), length * SLOW_MERGE))
+    for y, length in scales:
+        excursion = float(np.max(np.abs(y - np.median(y))))
+        if excursion > max(limit, 8 * min(white_std_dps / math.sqrt(length), SPREAD_MARGIN * means_spread(y))):
+            break
+    else:
         return None
     if brief:
         return f"it moves by up to {excursion:.3g} {unit}"
