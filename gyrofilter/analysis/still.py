@@ -88,10 +88,11 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     motion (or a bias far beyond any MEMS gyro's instability). s_y: the block means' own scatter
     (:func:`means_spread`; 1.25: :data:`SPREAD_MARGIN`), below sigma / sqrt(L) when a vibration raises sigma but
     averages out in the blocks: 10 deg/s at 23.7 Hz sampled at 100 Hz raised 8 sigma / sqrt(L) to 11.1 deg/s over
-    120 s, and a 50-degree turn at 10 deg/s read still (8 s_y: 4.9). Never more permissive than sigma / sqrt(L)
-    alone. The same rule judges the means of :data:`SLOW_MERGE` consecutive blocks (16 L samples, at least
-    :data:`SLOW_BLOCKS` of them) too: a vibration's leftover falls as 1 / L, the limit as 1 / sqrt(L), and a turn
-    over several blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: a 5-s turn of 20 deg/s read still at
+    120 s, and a 50-degree turn at 10 deg/s read still (8 s_y: 4.9). Never more permissive than sigma / sqrt(L).
+    The same rule judges the means of :data:`SLOW_MERGE` consecutive blocks (16 L samples, at least
+    :data:`SLOW_BLOCKS` of them; at most 32, fewer than SPREAD_BLOCKS, so there the limit is max(limit, 8 sigma /
+    sqrt(16 L))) too: a vibration's leftover falls as 1 / L, the limit as 1 / sqrt(L), and a turn over several
+    blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: a 5-s turn of 20 deg/s read still at
     L = 6, 8 min(3.10, 5.82) = 24.8 deg/s; 6.2 at 16 L). An accelerometer's record is judged the same way with
     ``limit`` = :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name).
 
