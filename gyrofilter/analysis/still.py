@@ -92,9 +92,8 @@ def not_static(x_dps, sample_rate_hz, white_std_dps, *, brief=False, limit=STATI
     The same rule judges the means of :data:`SLOW_MERGE` consecutive blocks (16 L samples, at least
     :data:`SLOW_BLOCKS` of them; at most 32, fewer than SPREAD_BLOCKS, so there the limit is max(limit, 8 sigma /
     sqrt(16 L))) too: a vibration's leftover falls as 1 / L, the limit as 1 / sqrt(L), and a turn over several
-    blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: a 5-s turn of 20 deg/s read still at
-    L = 6, 8 min(3.10, 5.82) = 24.8 deg/s; 6.2 at 16 L). An accelerometer's record is judged the same way with
-    ``limit`` = :data:`STATIC_LIMIT_MPS2` in ``unit`` m/s^2 (``what``: the quantity's name).
+    blocks keeps its height (100 Hz, 30 s, 20 deg/s at 12.4 Hz: a 5-s turn of 20 deg/s read still at L = 6, 8 min(3.10,
+    5.82) = 24.8 deg/s; 6.2 at 16 L). An accelerometer is judged so with ``limit`` = :data:`STATIC_LIMIT_MPS2` in m/s^2.
 
     The record is judged without its spikes and the samples beside them
     (:func:`~gyrofilter.analysis.noise.screen.gross_and_beside`, or ``gross``: their indices when the
