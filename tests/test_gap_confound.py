@@ -20,7 +20,8 @@ from gyrofilter import GyroFilter
 from gyrofilter.analysis.gap import detectors as det
 from gyrofilter.analysis.gap.detectors.covariate import detect_slow
 from gyrofilter.analysis.gap import report as gap_report
-from gyrofilter.analysis.gap.pipeline import analyse_gap, compensation_hint
+from gyrofilter.analysis.gap.advice import compensation_hint
+from gyrofilter.analysis.gap.pipeline import analyse_gap
 from gyrofilter.analysis.gap.confound import WHY_THE_COVARIATE
 from gyrofilter.sim import hidden_effects as he
 from gyrofilter.sim.model import EFFECTS
@@ -383,3 +384,18 @@ def test_the_temperature_hint_gives_a_setting_the_filter_takes(coefficients, tak
     given = tuple(float(v) for v in re.search(r"temp_coefficient_dps_per_c=(\S+)", hint)[1].split(","))
     assert GyroFilter(10.0, temp_coefficient_dps_per_c=given).settings.temp_coefficient_dps_per_c == given
     assert given == pytest.approx([coefficients.get(a, 0.0) for a in AXES], rel=1e-3)
+
+
+def test_a_named_line_comes_with_what_it_is_and_what_the_filter_needs():
+    """A new user's trial: docs/gap.md says the notes tell what to do about a spectral line (a vibration or a
+    resonance of the mount), and the program said nothing; a 20-Hz vibration of 3 deg/s swings by 6 deg/s, beyond
+    the filter's q = 1 deg/s, and biased the default filter's rows (-0.74 deg/s on a still sensor)."""
+    from gyrofilter.analysis.gap.advice import mount_hint
+    findings = [{"axis": "x", "effect": "sinusoid", "params": {"frequency_hz": 20.0, "amplitude_dps": 3.0}},
+                {"axis": "z", "effect": "narrowband", "params": {"center_hz": 31.4, "bandwidth_hz": 0.3, "rms_dps": 0.06}},
+                {"axis": "y", "effect": "bias_instability", "params": {"b_dps": 0.003}}]
+    x, z = mount_hint(findings)
+    assert x.startswith("axis x: the line(s) named (sinusoid at 20 Hz) are most often a vibration or a resonance")
+    assert "swing by about 6 deg/s" in x and "--set outlier_q_dps=9" in x
+    assert z.startswith("axis z:") and "narrowband at 31.4 Hz" in z and "outlier_q_dps" not in z  # 0.36 deg/s
+    assert mount_hint(findings[2:]) == []

@@ -70,7 +70,6 @@ import numpy as np
 
 from ...effects import SLOW, TEMPERATURE, WANDERS
 from ...errors import GyroFilterError, RecordingError, SettingsError
-from ...filter.settings import MAX_TEMP_COEFFICIENT_DPS_PER_C
 from ...inputs import check_number
 from ...recording import GYRO_COLUMNS, filtered_words, read_recording, warn_about_gaps
 from ...sim.model import TEMPERATURE_PROFILE
@@ -79,6 +78,7 @@ from ...tempscreen import screened_temp
 from ...units import AXES, MAX_RATE_DPS, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
 from ..still import moved, not_static, refuse_moved
 from . import detectors as det
+from .advice import compensation_hint, mount_hint
 from .baseline import (MAX_SIMS, MIN_SIMS, axis_dps, baseline_model, default_n_sims, effect_entry, extended_axis,
                        sim_features, temperature_table, wander_highpassed)
 from .composite import composite_step, slow_wavelet_variance
@@ -505,7 +505,7 @@ def write_findings(inp, state, scorer, report, found):
             report["findings"][-1]["params_ci95"] = found.findings.get(row.k, dict.fromkeys(c.params))
     report["findings"] += rows_findings(state)
     report["uncertain"] = [dict(entry) for entry in state.uncertain]
-    report["notes"] += compensation_hint(report["findings"])
+    report["notes"] += compensation_hint(report["findings"]) + mount_hint(report["findings"])
 
     def extended_deps(i):
         return scorer.departures(i, state.extended(inp, i), f"extended model on {AXES[i]}")
@@ -551,25 +551,6 @@ def write_findings(inp, state, scorer, report, found):
                                f"record of {length_s:.2g} s: too short to tell slow bias effects (drift, random walk, "
                                f"bias instability) from white noise at any tau (beyond {tau_s:.1g} s)")
     report["notes"] += found.notes
-
-
-def compensation_hint(findings):
-    """What to do with a named temperature: the filter subtracts c (T - T0) per axis (its setting
-    ``temp_coefficient_dps_per_c``, :class:`gyrofilter.filter.settings.FilterSettings`), the
-    coefficients the gap found (0 on an axis without one), as printed; a coefficient beyond the
-    setting's +-:data:`~gyrofilter.filter.settings.MAX_TEMP_COEFFICIENT_DPS_PER_C` (which the filter
-    refuses) is said instead; [] without a named temperature."""
-    found = {f["axis"]: float(f"{f['params']['coefficient_dps_per_c']:.4g}") for f in findings if f["effect"] == TEMPERATURE}
-    if not found:
-        return []
-    beyond = ", ".join(f"{a}: {c:g}" for a, c in found.items() if abs(c) > MAX_TEMP_COEFFICIENT_DPS_PER_C)
-    if beyond:
-        return [f"the named temperature's coefficient ({beyond}) is beyond the +-{MAX_TEMP_COEFFICIENT_DPS_PER_C:g} deg/s "
-                "per deg C the filter takes (--set temp_coefficient_dps_per_c): is the temp column in deg C, and does "
-                "it vary enough to measure it?"]
-    values = ",".join(f"{found.get(a, 0.0):g}" for a in AXES)
-    return [f"the filter removes the named temperature effect: replay or run with --set temp_coefficient_dps_per_c="
-            f"{values} (deg/s per deg C, x,y,z; the recording's temp column, or the sensor's, gives T)"]
 
 
 def _mean_or_none(values):
