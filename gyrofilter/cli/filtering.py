@@ -12,7 +12,7 @@ from ..filter.tempcomp import coefficients_from_model
 from ..inputs import did_you_mean, parse_json, quote
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT, filtered_words
 from ..sim.model import load_model, validate_model
-from .console import bias_text, gross_errors_text
+from .console import bias_text, gross_errors_text, say_warning
 from .options import decimal, file_name
 from .outputs import replacing
 
@@ -51,6 +51,13 @@ def rejected_warning(filt):
             f"{filt.settings.block_len} samples (a vibration, which `gyrofilter gap` names, or motion faster than the "
             f"blocks), the block means of what is left are biased: raise q above the swing (--set outlier_q_dps=VALUE), "
             f"and mount a vibrating sensor firmly")
+
+
+def warn_if_many_rejected(filt):
+    """Say :func:`rejected_warning` of the filter ``filt`` on stderr when it has one (replay's and run's ends)."""
+    text = rejected_warning(filt)
+    if text:
+        say_warning(text)
 
 
 def add_filter_arguments(parser):

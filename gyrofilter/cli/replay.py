@@ -78,9 +78,7 @@ def run(args):
     warn_about_gaps(head, "the filter treats the samples as uniform", console.say_warning)
     with contextlib.redirect_stdout(sys.stderr) if args.realtime else contextlib.nullcontext():  # stdout has the rows
         console.print_summary(path, head, filt, replay.raw, replay.filtered, calibration_from=args.calibration, smoothed=args.smooth)
-    too_many = filtering.rejected_warning(filt)
-    if too_many:
-        console.say_warning(too_many)
+    filtering.warn_if_many_rejected(filt)
     if args.realtime and not replay.stdout_open:
         console.say_warning(f"stdout was closed by its reader; {replay.lines_printed} lines were written to it "
                             f"({replay.rows_printed} of them filtered rows): the rest of the rows were filtered (the "

@@ -216,9 +216,7 @@ def _run(args, source, sinks):
         *([f"  {out_file}: {left}"] if left else []),
         *([f"  nothing filtered: it stopped {nothing}"] if nothing is not None else []),
     )
-    too_many = filtering.rejected_warning(filt)
-    if too_many:
-        console.say_warning(too_many)
+    filtering.warn_if_many_rejected(filt)
     if loop.failed():
         return live.EXIT_DISCONNECTED
     # a source that ended by itself before the first row is an error, as in replay; a user's stop is not
