@@ -7,7 +7,7 @@ import argparse
 from ..errors import RecordingError, SettingsError
 from ..filter.pipeline import GyroFilter
 from ..filter.settings import SETTING_NAMES
-from ..filter.presets import DEFAULT_PRESET, PRESETS
+from ..filter.presets import DEFAULT_PRESET, PRESETS, VIBRATION_RANGE_K
 from ..filter.tempcomp import coefficients_from_model
 from ..inputs import did_you_mean, parse_json, quote
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT, filtered_words
@@ -40,17 +40,22 @@ def rejected_warning(filt):
     samples as gross errors, or None. A rate that swings by more than q (``outlier_q_dps``) within a block (a
     vibration) loses its extremes to the rule, and the mean of what is left is not the block's: a still sensor on a
     20-Hz, 3-deg/s vibration sampled at 100 Hz read -0.74 deg/s with 80 % rejected and no word (a new user's trial);
-    with q above the swing, 0.00."""
+    with q above the swing, 0.00. The default preset's q follows the swing (``outlier_range_k``,
+    gyrofilter.filter.threshold) and reads 0.00; ``preset="paper"`` keeps paper 001's fixed q and this warning."""
     share = filt.rejected / max(filt.blocks_out * filt.settings.block_len, 1)
     over = [f"{axis} {100 * v:.0f} %" for axis, v in zip("xyz", share) if v > REJECTED_WARN_FRACTION]
     if not over:
         return None
     q = filt.settings.outlier_q_dps
-    return (f"the filter rejected many samples as gross errors ({', '.join(over)} of them; beyond q = {q:g} deg/s of "
+    remedy = "raise q above the swing (--set outlier_q_dps=VALUE)"
+    q_text = f"{q:g} deg/s" if not filt.settings.outlier_range_k else f"{q:g} deg/s or more, following the blocks' range"
+    if not filt.settings.outlier_range_k:
+        remedy = (f"let q follow the swing (--set outlier_range_k={VIBRATION_RANGE_K:g}, as the default preset does) or "
+                  f"{remedy}")
+    return (f"the filter rejected many samples as gross errors ({', '.join(over)} of them; beyond q = {q_text} of "
             f"their block): if they are spikes, the rows are right; if the rate swings by more than q within a block of "
             f"{filt.settings.block_len} samples (a vibration, which `gyrofilter gap` names, or motion faster than the "
-            f"blocks), the block means of what is left are biased: raise q above the swing (--set outlier_q_dps=VALUE), "
-            f"and mount a vibrating sensor firmly")
+            f"blocks), the block means of what is left are biased: {remedy}, and mount a vibrating sensor firmly")
 
 
 def warn_if_many_rejected(filt):
