@@ -12,10 +12,9 @@ from gyrofilter.recording import Recording, read_recording, write_recording
 FS = 100.0
 
 
-def _vibrating(path, amplitude_dps, seed=0):
-    """A still 300-s record at 100 Hz: bias, white noise of 0.05 deg/s and a 20-Hz vibration after a still 2 s."""
+def _vibrating(path, amplitude_dps, seed=0, n=30_000):
+    """A still record at 100 Hz (300 s): bias, white noise of 0.05 deg/s and a 20-Hz vibration after a still 2 s."""
     rng = np.random.default_rng(seed)
-    n = 30_000
     t = np.arange(n) / FS
     x = np.array([0.8, -1.2, 0.3]) + rng.normal(0, 0.05, (n, 3))
     x[200:] += amplitude_dps * np.sin(2 * np.pi * 20.0 * t[200:, None] + np.array([0.0, 1.0, 2.0]))
@@ -25,11 +24,14 @@ def _vibrating(path, amplitude_dps, seed=0):
 
 def _means(path):
     rows = read_recording(str(path))
-    return np.array([float(np.mean(rows.columns[c][100:])) for c in ("gx", "gy", "gz")])
+    return np.array([float(np.mean(rows.columns[c][20:])) for c in ("gx", "gy", "gz")])  # after q has followed
 
 
-def test_the_default_filter_reads_a_vibrating_still_sensor_right(tmp_path, capsys):
-    path = _vibrating(tmp_path / "vib.csv", 3.0)
+@pytest.mark.parametrize("seconds", [5, 10, 300])
+def test_the_default_filter_reads_a_vibrating_still_sensor_right(tmp_path, capsys, seconds):
+    """Short records too: the 60 samples the vibration's onset costs before q follows it are no reason to warn
+    (attack pass 38: 4-6 % of a 10-s record, the rows right)."""
+    path = _vibrating(tmp_path / "vib.csv", 3.0, n=100 * seconds)
     assert main(["replay", path, "--out", str(tmp_path / "a.csv")]) == 0
     assert "rejected many samples" not in capsys.readouterr().err
     assert np.abs(_means(tmp_path / "a.csv")).max() < 0.01
