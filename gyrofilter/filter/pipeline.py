@@ -447,6 +447,7 @@ class GyroFilter:
             return
         self.calibration = cal
         window = without_gross_errors(self._cal_buf, s.outlier_q_dps, in_place=True)[0]  # as the calibration measured it
+        self._threshold.seed(window, s.block_len)
         self._start_kalman(block_noise_std(window, s.block_len), still_blocks=self._cal_needed // s.block_len)
         if s.hold:
             # the window passed the stillness check: start holding, sigma_b from its block means

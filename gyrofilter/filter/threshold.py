@@ -11,8 +11,11 @@ and the means of what was left were biased (-0.74 deg/s through the default filt
 
 r_j the range of block j's samples and r_(k,low) the lower quartile of the ranges of the last
 N = ``outlier_range_blocks`` blocks, this one included: the (floor((N - 1) / 4) + 1)-th
-smallest (the 4th of 15). Ranges not yet seen (the first N - 1 blocks after the calibration)
-count as 0. k_r = 0 is paper 001's fixed q (``preset="paper"``).
+smallest (the 4th of 15). Before the first block the last N - 1 blocks of the start-up
+calibration's window stand in (:meth:`RangeThreshold.seed`: a vibration from power-up is
+followed from the first block; without them, 12 blocks were judged with q and their bias held
+at rest for seconds, a new user's trial), or zeros after a loaded calibration.
+k_r = 0 is paper 001's fixed q (``preset="paper"``).
 
 Why it holds (measured: ``python tools/vibration.py``, docs/evaluate.md):
 
@@ -54,6 +57,19 @@ class RangeThreshold:
         self._over = [0, 0, 0]
         self._rank = (n_blocks - 1) // 4  # the lower quartile, counted from 0
         self._needed = n_blocks - self._rank  # ranges with k r > q that put the quartile's k r over q
+
+    def seed(self, window_dps, block_len):
+        """Take the ranges of the last N - 1 blocks of ``block_len`` samples of ``window_dps`` ((n, 3), deg/s:
+        the calibration window, gross errors left out) as the blocks seen before the first; fewer blocks, fewer."""
+        n_seen = self._seen[0].maxlen
+        count = min(n_seen, len(window_dps) // block_len)
+        if not count:
+            return
+        blocks = np.asarray(window_dps[len(window_dps) - count * block_len:], dtype=float).reshape(count, block_len, 3)
+        ranges = blocks.max(axis=1) - blocks.min(axis=1)
+        for a, seen in enumerate(self._seen):
+            seen.extend(ranges[:, a].tolist())
+            self._over[a] = sum(self.k * r > self.q for r in seen)
 
     def one(self, columns):
         """``columns``: one block's L samples per axis (3 sequences, deg/s) -> its threshold per axis (3 floats)."""
