@@ -13,13 +13,14 @@ N = 720  # 2 s of calibration + 520 samples: 104 blocks of 5
 
 
 def _signal(seed, n=N):
-    """Still for the calibration, then a turn with spikes: every stage (rejection, fallback, hold) acts."""
+    """Still for the calibration, then a turn, a vibration and spikes: every stage (rejection, the range-following
+    q, fallback, hold) acts."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) / RATE_HZ
     x = 0.3 + 0.05 * rng.standard_normal((n, 3))
     moving = t > 3.0
     x[moving, 0] += 40 * np.sin(2 * np.pi * 0.7 * (t[moving] - 3.0))
-    x[moving, 2] += 12.0
+    x[moving, 2] += 12.0 + 4 * np.sin(2 * np.pi * 19.0 * t[moving])  # a vibration: the range-following q acts
     spikes = (rng.random((n, 3)) < 0.03) & (t >= 2.0)[:, None]  # none in the calibration window, which must pass as still
     x[spikes] += rng.choice([-1, 1], spikes.sum()) * rng.uniform(2, 30, spikes.sum())
     temp = 25 + 0.5 * t / t[-1] + 0.01 * rng.standard_normal(n)
@@ -32,6 +33,7 @@ CASES = [(name, {}) for name in PRESETS] + [
     ("paper", {"temp_coefficient_dps_per_c": (0.02, -0.01, 0.005)}),
     ("recommended", {"temp_coefficient_dps_per_c": 0.03}),
     ("paper", {"block_len": 7, "qr_window": 0}),
+    ("paper", {"outlier_range_k": 2.0, "outlier_range_blocks": 5}),
 ]
 
 

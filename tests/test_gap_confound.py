@@ -396,6 +396,6 @@ def test_a_named_line_comes_with_what_it_is_and_what_the_filter_needs():
                 {"axis": "y", "effect": "bias_instability", "params": {"b_dps": 0.003}}]
     x, z = mount_hint(findings)
     assert x.startswith("axis x: the line(s) named (sinusoid at 20 Hz) are most often a vibration or a resonance")
-    assert "swing by about 6 deg/s" in x and "--set outlier_q_dps=9" in x
-    assert z.startswith("axis z:") and "narrowband at 31.4 Hz" in z and "outlier_q_dps" not in z  # 0.36 deg/s
+    assert "swing by about 6 deg/s" in x and "--set outlier_range_k=2" in x and "--set outlier_q_dps=9" in x
+    assert z.startswith("axis z:") and "narrowband at 31.4 Hz" in z and "outlier_" not in z  # 0.36 deg/s
     assert mount_hint(findings[2:]) == []

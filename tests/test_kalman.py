@@ -68,13 +68,13 @@ def test_the_adaptive_filter_recovers_by_itself_and_its_guard_reseeds():
     y = block_means(x)
     # a FIFO of posteriors running away quadratically, the LS model in use: the prior is 10^5 deg/s
     # off; the data are still, so the constancy test puts the axis back in the constant-rate model
-    # with the mean of the last 20 block means in that very block
+    # with the mean of the latest 10 of its last 20 block means in that very block (hold.recent_mean)
     f = GyroFilter(FS, preset="adaptive_kalman", guard_blocks=0, backend="python")
     f.filter(x[: CAL + 5 * 30])
     f._akf.fifo[0, :] = np.roll(1e3 * np.arange(10.0) ** 2, f._akf.istate[adaptive_kalman.A_HEAD])
     f._akf.istate[adaptive_kalman.MODE] = adaptive_kalman.MOTION
     out = f.filter(x[CAL + 5 * 30 :])
-    assert out[0, 0] == pytest.approx(y[11:31, 0].mean(), abs=1e-12)
+    assert out[0, 0] == pytest.approx(y[21:31, 0].mean(), abs=1e-12)
     assert np.all(np.abs(out[:, 0] - y[30:, 0]) < 0.1)
     # the guard's re-seed path of the adaptive kernel: a limit so tight that every block counts
     g = GyroFilter(FS, preset="adaptive_kalman", guard_blocks=3, guard_k_sigma=1e-9, backend="python")

@@ -25,8 +25,9 @@ def test_by_model_keeps_the_paper_rule_at_rest_and_the_median_slope_rule_in_moti
     t = np.arange(moving) / FS
     truth = 30.0 * np.sin(2 * np.pi * 1.0 * t)  # a 1-Hz sine: the rate changes by ~4 deg/s within a block
     x[cal + rest :, 1] += truth
-    by_model = GyroFilter(FS, preset="adaptive_kalman", backend="python")
-    paper_rule = GyroFilter(FS, preset="adaptive_kalman", outlier_rule="paper", backend="python")
+    # q fixed (outlier_range_k=0): a q that follows the range keeps the sine's samples by itself
+    by_model = GyroFilter(FS, preset="adaptive_kalman", backend="python", outlier_range_k=0)
+    paper_rule = GyroFilter(FS, preset="adaptive_kalman", outlier_rule="paper", backend="python", outlier_range_k=0)
     out_m, out_p = by_model.filter(x), paper_rule.filter(x)
     m_rest = rest // 5
     # at rest: the same numbers as the paper's rule (the filter stays in its constant-rate model)

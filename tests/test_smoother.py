@@ -25,14 +25,15 @@ def block_means(x):
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_at_rest_every_block_gets_the_mean_of_the_whole_rest_phase(seed):
     # forward: running mean from P = R / n0 (n0 = 40 calibration blocks of 0); backward: the LS
-    # model for 20 blocks, then the mean of those 20 and a running mean. Their combination is
-    # the mean of the n0 zeros and every block mean, wherever the backward filter is at rest
+    # model for 20 blocks, then the mean of the latest 10 of those 20 (hold.recent_mean) and a
+    # running mean. Their combination is the mean of the n0 zeros and every block mean but the
+    # last 10 (the backward filter's first), wherever the backward filter is at rest
     m = 300
     x = still(CAL + 5 * m, seed)
     n0 = CAL // 5
     out = smooth(x, FS, backend="python")
     y = block_means(x)
-    expected = y.sum(axis=0) / (n0 + m)
+    expected = y[: m - 10].sum(axis=0) / (n0 + m - 10)
     np.testing.assert_allclose(out[: m - 20], np.broadcast_to(expected, (m - 20, 3)), rtol=0, atol=1e-12)
 
 

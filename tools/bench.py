@@ -28,9 +28,10 @@ from gyrofilter.filter.jit import numba_available
 
 RATE_HZ = 100.0
 # the faithful filter and the default (adaptive_kalman), at rest and in motion; the default with
-# paper 001's gross-error rule in motion too (the cost of outlier_rule="by_model")
-PRESETS_BENCHED = (("paper", {}, "rest"), ("recommended", {}, "rest"), ("recommended", {}, "moving"),
-                   ("recommended", {"outlier_rule": "paper"}, "moving"))
+# paper 001's gross-error rule in motion too (the cost of outlier_rule="by_model") and with q fixed
+# at rest (the cost of the threshold that follows the blocks' range, outlier_range_k)
+PRESETS_BENCHED = (("paper", {}, "rest"), ("recommended", {}, "rest"), ("recommended", {"outlier_range_k": 0}, "rest"),
+                   ("recommended", {}, "moving"), ("recommended", {"outlier_rule": "paper"}, "moving"))
 
 
 def best_of(fn, repeats=3):
@@ -84,7 +85,7 @@ def pipeline():
 
         t_stream = best_of(run_stream)
         t_batch = best_of(lambda: make().filter(data))
-        rule = ", paper's rule" if settings else ""
+        rule = "".join({"outlier_rule": ", paper's rule", "outlier_range_k": ", q fixed"}[name] for name in settings)
         label = f"{preset}{rule}{', in motion' if data is moving else ''}"
         if label not in peaks:
             peaks[label] = traced_peak(lambda: make().filter(data))

@@ -431,6 +431,11 @@ def tune_adaptive_kalman():
     return fence(tool("tune_adaptive_kalman.py"))
 
 
+@block("vibration", "docs/evaluate.md", "tools/vibration.py")
+def vibration():
+    return no_headings(tool("vibration.py", prompt=False))
+
+
 # ---------------------------------------------------------------------------------------------
 # docs/allan.md
 

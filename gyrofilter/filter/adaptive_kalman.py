@@ -53,7 +53,8 @@ probability about 1 % (simulated: 0.9 %; Brownian approximation exp(-2 kappa 4.5
 On white noise |d| > 6 is rare: the false-alarm rate is that of the unclipped test.
 LS -> constant-rate when the last W block means are a constant plus white noise
 ((W - 1) s^2 / R below ``chi2_limit``) and x_k is within ``agree_z`` sigma_b of their mean m:
-then x_k = m, P_k = R / W. On the switch to the LS model C = P + R.
+then x_k = the mean of the latest W / 2 of them, P_k = R / (W / 2) (the hold's rule,
+:func:`gyrofilter.filter.hold.recent_mean`). On the switch to the LS model C = P + R.
 
 Written in the subset of Python that numba compiles (:mod:`gyrofilter.filter.jit`), like
 :func:`gyrofilter.filter.kalman.run_blocks`: the streaming and the batch filter execute the same
@@ -63,7 +64,7 @@ import math
 
 import numpy as np
 
-from .hold import DEFAULTS, chi2_quantile
+from .hold import DEFAULTS, chi2_quantile, recent_mean
 from .jit import choose_kernel
 from .kalman import guard
 from .predictor import weight_table
@@ -177,8 +178,8 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
                     if ss / ra < chi2_limit and abs(x - m) < agree_z * sigma:
                         istate[MODE + a] = REST
                         istate[SWITCHES + a] += 1
-                        x = m
-                        p_post = ra / window
+                        x = recent_mean(ring, a, rh)
+                        p_post = ra / (window // 2)
             if guard_n > 0 and guard(x, ya, a, guard_k * sigma, guard_n, guard_run):
                 x = ya
                 p_post = ra

@@ -87,7 +87,8 @@ def _median(values):
 
 def average_blocks(blocks, q):
     """Vectorised :func:`average_block` over the first axis of ``blocks`` (M, L[, ...]), deg/s,
-    threshold ``q`` (deg/s).
+    threshold ``q`` (deg/s; one, or one per block and axis, (M[, ...]): the vectorised averagers
+    all take either).
 
     Returns (outputs (M[, ...]), rejected counts (M[, ...]), fallback mask (M[, ...])).
     """
@@ -183,7 +184,7 @@ def average_blocks_line_if_cut(blocks, q, paper=None):
     out, rejected = out.copy(), rejected.copy()
     rows = np.flatnonzero(cut.reshape(len(cut), -1).any(axis=1))
     if rows.size:
-        line, replaced, _ = average_blocks_median_slope(blocks[rows], q)
+        line, replaced, _ = average_blocks_median_slope(blocks[rows], q if np.ndim(q) == 0 else q[rows])
         out[rows] = np.where(cut[rows], line, out[rows])
         rejected[rows] = np.where(cut[rows], replaced, rejected[rows])
     return out, rejected, np.zeros(out.shape, dtype=bool)

@@ -32,6 +32,7 @@ from .presets import DEFAULT_PRESET, PRESETS
 from .samples import as_numbers, check_sample, check_samples, check_temperature
 from .settings import MAX_CALIBRATION_SAMPLES, SETTING_NAMES, FilterSettings
 from .tempcomp import compensate
+from .threshold import RangeThreshold
 from ..tempscreen import TEMP_MEDIAN_SAMPLES, latest_median, running_medians, temperature_history
 from ..units import RATE_TOLERANCE, TEMP_RANGE_C, check_sample_rate_hz, plain, shown
 
@@ -111,6 +112,7 @@ class GyroFilter:
             self._guard_run = self._pkf.guard_run
         # block and calibration state
         self._block = []
+        self._threshold = RangeThreshold(s.outlier_q_dps, s.outlier_range_k, s.outlier_range_blocks)
         self.rejected = np.zeros(3, dtype=np.int64)
         self.fallback_blocks = np.zeros(3, dtype=np.int64)
         self.blocks_out = 0
@@ -246,13 +248,14 @@ class GyroFilter:
         if len(block) < self.settings.block_len:
             return None
         self._block = []
-        q = self.settings.outlier_q_dps
+        columns = tuple(zip(*block))
+        q = self._threshold.one(columns)
         y1 = self._y1
         modes = self._akf.modes() if self._by_model else None
-        for a, values in enumerate(zip(*block)):
-            paper = mean, rejected, fallback = self._average_one(values, q)
+        for a, values in enumerate(columns):
+            paper = mean, rejected, fallback = self._average_one(values, q[a])
             if self._by_model:  # both rules' block means: the kernel takes one by its model (a smoother logs both)
-                motion_mean, motion_rejected, _ = average_block_line_if_cut(values, q, paper)
+                motion_mean, motion_rejected, _ = average_block_line_if_cut(values, q[a], paper)
                 self._y1_motion[0, a] = motion_mean - self._bias[a]
                 if modes[a] != adaptive_kalman.REST:
                     rejected, fallback = motion_rejected, False
@@ -308,7 +311,7 @@ class GyroFilter:
         n_blocks = (len(x) - i) // length
         if n_blocks:
             blocks = x[i : i + n_blocks * length].reshape(n_blocks, length, 3)
-            q = self.settings.outlier_q_dps
+            q = self._threshold.many(blocks)
             y, rejected, fallback = paper = self._average_many(blocks, q)
             bias = np.asarray(self._bias)
             out = np.empty_like(y)
@@ -444,6 +447,7 @@ class GyroFilter:
             return
         self.calibration = cal
         window = without_gross_errors(self._cal_buf, s.outlier_q_dps, in_place=True)[0]  # as the calibration measured it
+        self._threshold.seed(window, s.block_len)
         self._start_kalman(block_noise_std(window, s.block_len), still_blocks=self._cal_needed // s.block_len)
         if s.hold:
             # the window passed the stillness check: start holding, sigma_b from its block means

@@ -37,6 +37,8 @@ SETTING_RANGES = {
     "max_bias_dps": MAX_BIAS_RANGE,
     "block_len": dict(low=1, high=100, integer=True),
     "outlier_q_dps": dict(low=0, low_open=True, high=MAX_RATE_DPS),
+    "outlier_range_k": dict(low=0, high=100),
+    "outlier_range_blocks": dict(low=1, high=999, integer=True),
     "fifo_depth": dict(low=1, high=100, integer=True),
     "fit_order": dict(low=0, high=10, integer=True),
     "p0_dps2": dict(low=0, low_open=True, high=MAX_RATE_DPS ** 2),
@@ -69,6 +71,12 @@ class FilterSettings:
     max_bias_dps                 20.0      largest plausible bias (deg/s; MPU6050 datasheet)
     block_len                    5         L, samples per non-sliding block (001: 5)
     outlier_q_dps                1.0       q, gross-error threshold |x_i - mean| (deg/s)
+    outlier_range_k              0         k_r: a block's q is max(q, k_r x the lower quartile
+                                           of the ranges of the last outlier_range_blocks
+                                           blocks), per axis, so a vibration is not cut as
+                                           gross errors (gyrofilter.filter.threshold);
+                                           0 = q (001)
+    outlier_range_blocks         15        N, blocks of that quartile (<= 999)
     outlier_rule                 paper     "paper" (|x_i - mean| > q), "median_slope" (robust
                                            line per block; see averaging) or "by_model"
                                            (paper in the adaptive filter's constant-rate
@@ -133,6 +141,8 @@ class FilterSettings:
     max_bias_dps: float = MAX_BIAS_DPS
     block_len: int = 5
     outlier_q_dps: float = PAPER_Q_DPS
+    outlier_range_k: float = 0.0
+    outlier_range_blocks: int = 15
     fifo_depth: int = 10
     fit_order: int = 2
     p0_dps2: float = 1.0

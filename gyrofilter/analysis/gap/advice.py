@@ -3,6 +3,7 @@
 line with what it most often is and what the filter needs (:func:`mount_hint`)."""
 from ...effects import BY_NAME, TEMPERATURE
 from ...filter.averaging import PAPER_Q_DPS
+from ...filter.presets import VIBRATION_RANGE_K
 from ...filter.settings import MAX_TEMP_COEFFICIENT_DPS_PER_C
 from ...units import AXES
 
@@ -35,7 +36,8 @@ def mount_hint(findings, q_dps=PAPER_Q_DPS):
     line swings by more than the filter's gross-error threshold q (``q_dps``, the default filter's
     ``outlier_q_dps``) within a block, 2 x its peak (:data:`_PEAK`), paper 001's rule takes its extremes for
     gross errors and the block means of what is left are biased (a still sensor under 3 deg/s at 20 Hz read
-    -0.74 deg/s through the default filter): the setting that keeps it (--set outlier_q_dps); [] without one."""
+    -0.74 deg/s through it): the default filter's q follows the swing (``outlier_range_k``,
+    gyrofilter.filter.threshold), the paper preset's does not: the settings that keep it there; [] without a line."""
     notes = []
     for a in AXES:
         lines = [f for f in findings if f["axis"] == a and BY_NAME[f["effect"]].kind == "line"]
@@ -47,8 +49,9 @@ def mount_hint(findings, q_dps=PAPER_Q_DPS):
         text = (f"axis {a}: the line(s) named ({where}) are most often a vibration or a resonance of the mount, not "
                 "the sensor's noise: mount it firmly, away from fans and motors")
         if swing > q_dps:
-            text += (f"; they swing by about {swing:.2g} deg/s, more than the filter's gross-error threshold q = "
-                     f"{q_dps:g} deg/s, which would take their extremes for gross errors and bias the rows: replay or "
-                     f"run with --set outlier_q_dps={swing * 1.5:.2g}")
+            text += (f"; they swing by about {swing:.2g} deg/s, more than paper 001's gross-error threshold q = "
+                     f"{q_dps:g} deg/s: the default filter's q follows the swing, but --preset paper would take their "
+                     f"extremes for gross errors and bias the rows: with it add --set outlier_range_k={VIBRATION_RANGE_K:g} "
+                     f"(or --set outlier_q_dps={swing * 1.5:.2g})")
         notes.append(text)
     return notes
