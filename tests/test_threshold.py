@@ -128,3 +128,12 @@ def test_the_calibration_window_seeds_the_ranges():
         out = GyroFilter(100.0).filter(x)
         worst = max(worst, abs(out[:40, 2].mean()))
     assert worst < 0.03
+
+
+def test_an_array_longer_than_a_chunk_gives_the_numbers_of_the_equation(monkeypatch):
+    """many() works through the blocks a chunk at a time (memory): the chunks' seams change nothing."""
+    from gyrofilter.filter import threshold
+    monkeypatch.setattr(threshold, "_CHUNK_BLOCKS", 7)
+    rng = np.random.default_rng(9)
+    blocks = rng.normal(0, 1, (100, 5, 3)) * rng.uniform(0.01, 5, (100, 1, 3))
+    np.testing.assert_array_equal(RangeThreshold(1.0, 2.0, 15).many(blocks), _reference(blocks, 1.0, 2.0, 15))
