@@ -12,8 +12,8 @@ and the means of what was left were biased (-0.74 deg/s through the default filt
 r_j the range of block j's samples and r_(k,low) the lower quartile of the ranges of the last
 N = ``outlier_range_blocks`` blocks, this one included: the (floor((N - 1) / 4) + 1)-th
 smallest (the 4th of 15). Before the first block the last N - 1 blocks of the start-up
-calibration's window stand in (:meth:`RangeThreshold.seed`: a vibration from power-up is
-followed from the first block; without them, 12 blocks were judged with q and their bias held
+calibration's window stand in, repeated where it has fewer (:meth:`RangeThreshold.seed`: a
+vibration from power-up is followed from the first block; without them, 12 blocks were judged with q and their bias held
 at rest for seconds, a new user's trial), or zeros after a loaded calibration.
 k_r = 0 is paper 001's fixed q (``preset="paper"``).
 
@@ -42,6 +42,16 @@ import numpy as np
 _CHUNK_BLOCKS = 16_384
 
 
+def onset_samples(settings):
+    """The samples per axis a vibration that begins after the calibration can have rejected before q follows it:
+    (N - rank) blocks of L with k_r > 0 (60 for the presets), 0 with paper 001's fixed q. ``settings``: a
+    :class:`gyrofilter.filter.settings.FilterSettings`."""
+    if not settings.outlier_range_k:
+        return 0
+    n = settings.outlier_range_blocks
+    return (n - (n - 1) // 4) * settings.block_len
+
+
 class RangeThreshold:
     """The gross-error threshold of each block of a three-axis stream (module docstring): ``q``
     (deg/s), ``k`` (k_r, 0: q itself), ``n_blocks`` (N).
@@ -61,13 +71,15 @@ class RangeThreshold:
 
     def seed(self, window_dps, block_len):
         """Take the ranges of the last N - 1 blocks of ``block_len`` samples of ``window_dps`` ((n, 3), deg/s:
-        the calibration window, gross errors left out) as the blocks seen before the first; fewer blocks, fewer."""
+        the calibration window, gross errors left out) as the blocks seen before the first; where it has fewer
+        blocks, they stand in again, oldest first (zeros left for N = 60 and more of a 2-s window: a vibration from
+        power-up was cut for 28 s at N = 999, attack pass 39)."""
         n_seen = self._seen[0].maxlen
         count = min(n_seen, len(window_dps) // block_len)
         if not count:
             return
         blocks = np.asarray(window_dps[len(window_dps) - count * block_len:], dtype=float).reshape(count, block_len, 3)
-        ranges = blocks.max(axis=1) - blocks.min(axis=1)
+        ranges = (blocks.max(axis=1) - blocks.min(axis=1))[np.arange(-n_seen, 0) % count]
         for a, seen in enumerate(self._seen):
             seen.extend(ranges[:, a].tolist())
             self._over[a] = sum(self.k * r > self.q for r in seen)
