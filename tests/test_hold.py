@@ -151,3 +151,36 @@ def test_after_a_turn_under_a_vibration_the_rest_reads_still(preset):
         t_rows, rows = GyroFilter(fs, preset=preset).filter_timed(x, t)
         worst = max(worst, abs(rows[(t_rows > 13) & (t_rows <= 20), 2].mean()))
     assert worst < 0.06
+
+
+@pytest.mark.parametrize("preset", ["recommended", "hold"])
+@pytest.mark.parametrize("peak_dps,seconds,freq_hz", [(20.0, 3.0, 33.0), (5.0, 1.0, 45.0), (10.0, 2.0, 23.0)])
+def test_after_a_ramp_under_a_vibration_the_rest_reads_still(preset, peak_dps, seconds, freq_hz):
+    """Attack pass 39: a rate ramp down to 0 under a 5-deg/s vibration, then rest. sigma_b from the vibrating
+    calibration window was the white-noise level of the samples (2.2 deg/s at 45 Hz) though the blocks average the
+    vibration out, and the chi-square constancy test has no power against a ramp at that level: the rest read +0.25
+    and +0.36 deg/s 3-10 s after. sigma_b is now capped at the 95 % bound of the block means' own spread, and the
+    constancy test also asks for no trend (hold.trend_free)."""
+    rng = np.random.default_rng(1)
+    t = np.arange(3000) / 100.0
+    x = np.array([0.8, -1.2, 0.4]) + 0.02 * rng.standard_normal((3000, 3))
+    x[:, 2] += 5.0 * np.sin(2 * np.pi * freq_hz * t + rng.uniform(0, 2 * np.pi))
+    ramp = (t >= 7) & (t < 7 + seconds)
+    x[ramp, 2] += peak_dps * (1 - (t[ramp] - 7) / seconds)
+    t_rows, rows = GyroFilter(100.0, preset=preset).filter_timed(x, t)
+    after = (t_rows > 7 + seconds + 3) & (t_rows <= 7 + seconds + 10)
+    assert abs(rows[after, 2].mean()) < 0.05
+
+
+def test_sigma_b_of_a_vibrating_window_is_the_block_means_spread_within_its_bound():
+    """block_noise_std: white noise keeps sigma_w / sqrt(L) (its blocks' spread is within the bound); a 45-Hz
+    vibration's sample differences are large while its block means are not, and sigma_b is their spread's 95 % bound."""
+    rng = np.random.default_rng(2)
+    white = rng.normal(0, 0.1, (200, 3))
+    np.testing.assert_allclose(block_noise_std(white, 5), np.std(np.diff(white, axis=0), axis=0, ddof=1) / math.sqrt(2 * 5),
+                               rtol=0.25)
+    t = np.arange(200) / 100.0
+    vib = white + 5.0 * np.sin(2 * np.pi * 45.0 * t)[:, None]
+    spread = vib.reshape(40, 5, 3).mean(axis=1).std(axis=0, ddof=1)
+    sigma_b = block_noise_std(vib, 5)
+    assert np.all(sigma_b >= spread) and np.all(sigma_b <= 1.3 * spread)

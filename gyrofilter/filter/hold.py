@@ -34,7 +34,8 @@ at once. A step of 1 deg/s (20 sigma_b) is caught in the same block and a 2 deg/
 
 Constancy test (track -> hold): the last W = ``window_blocks`` block means are consistent with a
 constant plus white noise of sigma_b, (W - 1) s^2 / sigma_b^2 below the chi-square quantile
-(probability ``accept_p``, Wilson-Hilferty approximation), and the tracking output agrees with
+(probability ``accept_p``, Wilson-Hilferty approximation), their least-squares slope is within
+``agree_z`` of its standard error (:func:`trend_free`), and the tracking output agrees with
 their mean within ``agree_z`` standard errors. Then m = the mean of the latest W / 2 of them
 (:func:`recent_mean`), n = W / 2: under a vibration sigma_b is large and the test passes with the
 tail of a turn still in the window's older half, whose mean then stayed in the held value (a
@@ -74,6 +75,7 @@ DEFAULTS = {
 
 SIGMA_B_FLOOR_DPS = 1e-6  # a perfectly constant (simulated) input must not give sigma_b = 0
 
+_Z_LOWER_5_PERCENT = -1.6449  # the normal quantile of probability 0.05
 _Z_BY_P = {0.9: 1.2816, 0.95: 1.6449, 0.99: 2.3263, 0.999: 3.0902, 0.9999: 3.7190}
 
 
@@ -83,7 +85,11 @@ def chi2_quantile(p, dof):
     dof (1 - 2/(9 dof) + z sqrt(2/(9 dof)))^3."""
     if p not in _Z_BY_P:
         raise SettingsError(f"accept_p must be one of {sorted(_Z_BY_P)}, got {plain(p)}")
-    z = _Z_BY_P[p]
+    return _wilson_hilferty(_Z_BY_P[p], dof)
+
+
+def _wilson_hilferty(z, dof):
+    """The chi-square quantile whose normal quantile is ``z``, ``dof`` degrees of freedom (:func:`chi2_quantile`)."""
     a = 2.0 / (9.0 * dof)
     return dof * (1.0 - a + z * math.sqrt(a)) ** 3
 
@@ -108,6 +114,23 @@ def recent_mean(ring, a, head):
     for j in range(half):
         total += ring[a, (head - j) % window]
     return total / half
+
+
+def trend_free(ring, a, head, sigma, z):
+    """Whether the block means of axis ``a`` in ``ring`` (3, W), the latest at ``head``, have no trend: their
+    least-squares slope within ``z`` of its standard error for white noise of std ``sigma``,
+
+        |sum_j (j - (W - 1) / 2) y_j| < z sigma sqrt(W (W^2 - 1) / 12)     (j = 0 the oldest)
+
+    The chi-square of the constancy test has little power against a ramp where sigma_b is large (a vibration):
+    a ramp of 20 -> 0 deg/s in 3 s under 5 deg/s at 33 Hz passed it, and the rest read +0.25 deg/s for 10 s
+    (attack pass 39); on white noise this test rejects a window 1 time in 16 000 (z = 4)."""
+    window = ring.shape[1]
+    centre = (window - 1) / 2.0
+    total = 0.0
+    for j in range(window):
+        total += (j - centre) * ring[a, (head + 1 + j) % window]
+    return abs(total) < z * sigma * math.sqrt(window * (window * window - 1) / 12.0)
 
 
 def hold_blocks(y, x, out, sigma, ring, mean, g_pos, g_neg, ints, kappa, h, max_blocks, chi2_limit, agree_z):
@@ -161,7 +184,7 @@ def hold_blocks(y, x, out, sigma, ring, mean, g_pos, g_neg, ints, kappa, h, max_
                     ss = 0.0
                     for j in range(window):
                         ss += (ring[a, j] - m) * (ring[a, j] - m)
-                    if ss / (s * s) < chi2_limit and abs(xa - m) < agree_z * s:
+                    if ss / (s * s) < chi2_limit and abs(xa - m) < agree_z * s and trend_free(ring, a, head, s, agree_z):
                         ints[HOLDING + a] = 1
                         ints[SWITCHES + a] += 1
                         mean[a] = recent_mean(ring, a, head)
@@ -268,11 +291,15 @@ def block_noise_std(window_dps, block_len):
     """Standard deviation of a block mean at rest (deg/s), per axis, from ``window_dps``, a still
     (n, 3) window in deg/s, for blocks of L = ``block_len`` samples.
 
-    sigma_b = max(std of the means of the window's complete blocks, sigma_w / sqrt(L)), where
-    sigma_w = std(first differences) / sqrt(2) is the white-noise level: the first term sees
-    correlated noise (a low-pass stage makes block means noisier than sigma_w / sqrt(L)), the
-    second keeps a short window's few blocks from underestimating sigma_b. A window of fewer
-    than 2 blocks (a low sample rate) has only the second.
+    sigma_b = max(s_b, min(sigma_w / sqrt(L), s_b sqrt((m - 1) / chi2_0.05(m - 1)))), where s_b is the
+    std of the means of the window's m complete blocks and sigma_w = std(first differences) / sqrt(2)
+    the white-noise level: s_b sees correlated noise (a low-pass stage makes block means noisier than
+    sigma_w / sqrt(L)), and sigma_w / sqrt(L) keeps a short window's few blocks from underestimating
+    sigma_b, up to the 95 % upper bound of s_b: a vibration makes sigma_w large while the blocks
+    average it out (5 deg/s at 45 Hz, 100 Hz: sigma_w / sqrt(L) 2.2 deg/s, s_b 0.5), and a sigma_b that
+    large kept the rest model from seeing that it held a motion's tail (+0.36 deg/s for 7 s after a
+    small ramp, attack pass 39). A window of fewer than 2 blocks (a low sample rate) has only
+    sigma_w / sqrt(L).
     """
     x = np.asarray(window_dps, dtype=float)
     L = int(block_len)
@@ -282,7 +309,8 @@ def block_noise_std(window_dps, block_len):
         return sw / math.sqrt(L)
     means = x[: m * L].reshape(m, L, 3).mean(axis=1)
     sb_blocks = means.std(axis=0, ddof=1)
-    return np.maximum(sb_blocks, sw / math.sqrt(L))
+    upper = sb_blocks * math.sqrt((m - 1) / _wilson_hilferty(_Z_LOWER_5_PERCENT, m - 1))
+    return np.maximum(sb_blocks, np.minimum(sw / math.sqrt(L), upper))
 
 
 def make_hold(block_len, *, calibration_window_dps=None, noise_std_dps=None, **options):
