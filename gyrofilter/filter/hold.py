@@ -75,7 +75,6 @@ DEFAULTS = {
 
 SIGMA_B_FLOOR_DPS = 1e-6  # a perfectly constant (simulated) input must not give sigma_b = 0
 
-_Z_LOWER_5_PERCENT = -1.6449  # the normal quantile of probability 0.05
 _Z_BY_P = {0.9: 1.2816, 0.95: 1.6449, 0.99: 2.3263, 0.999: 3.0902, 0.9999: 3.7190}
 
 
@@ -85,11 +84,7 @@ def chi2_quantile(p, dof):
     dof (1 - 2/(9 dof) + z sqrt(2/(9 dof)))^3."""
     if p not in _Z_BY_P:
         raise SettingsError(f"accept_p must be one of {sorted(_Z_BY_P)}, got {plain(p)}")
-    return _wilson_hilferty(_Z_BY_P[p], dof)
-
-
-def _wilson_hilferty(z, dof):
-    """The chi-square quantile whose normal quantile is ``z``, ``dof`` degrees of freedom (:func:`chi2_quantile`)."""
+    z = _Z_BY_P[p]
     a = 2.0 / (9.0 * dof)
     return dof * (1.0 - a + z * math.sqrt(a)) ** 3
 
@@ -291,15 +286,18 @@ def block_noise_std(window_dps, block_len):
     """Standard deviation of a block mean at rest (deg/s), per axis, from ``window_dps``, a still
     (n, 3) window in deg/s, for blocks of L = ``block_len`` samples.
 
-    sigma_b = max(s_b, min(sigma_w / sqrt(L), s_b sqrt((m - 1) / chi2_0.05(m - 1)))), where s_b is the
-    std of the means of the window's m complete blocks and sigma_w = std(first differences) / sqrt(2)
-    the white-noise level: s_b sees correlated noise (a low-pass stage makes block means noisier than
-    sigma_w / sqrt(L)), and sigma_w / sqrt(L) keeps a short window's few blocks from underestimating
-    sigma_b, up to the 95 % upper bound of s_b: a vibration makes sigma_w large while the blocks
-    average it out (5 deg/s at 45 Hz, 100 Hz: sigma_w / sqrt(L) 2.2 deg/s, s_b 0.5), and a sigma_b that
-    large kept the rest model from seeing that it held a motion's tail (+0.36 deg/s for 7 s after a
-    small ramp, attack pass 39). A window of fewer than 2 blocks (a low sample rate) has only
-    sigma_w / sqrt(L).
+    sigma_b = max(std of the means of the window's complete blocks, sigma_w / sqrt(L)), where
+    sigma_w = std(first differences) / sqrt(2) is the white-noise level: the first term sees
+    correlated noise (a low-pass stage makes block means noisier than sigma_w / sqrt(L)), the
+    second keeps a short window's few blocks from underestimating sigma_b. A window of fewer
+    than 2 blocks (a low sample rate) has only the second.
+
+    Under a vibration sigma_w / sqrt(L) is large while the blocks average the vibration out (5 deg/s
+    at 45 Hz, 100 Hz: 2.2 deg/s against a block-mean spread of 0.5), and the rest model's tests see
+    less; capping it at the block means' spread was tried (attack pass 39) and dropped (pass 40): the
+    spread of a short window's few blocks is 0 for a quiet quantised sensor (sigma_b at its floor:
+    no averaging at all), and a 2-s window misses the slow beat of a vibration near a multiple of
+    the block rate, which a small sigma_b then follows (2-5x the output std).
     """
     x = np.asarray(window_dps, dtype=float)
     L = int(block_len)
@@ -309,8 +307,7 @@ def block_noise_std(window_dps, block_len):
         return sw / math.sqrt(L)
     means = x[: m * L].reshape(m, L, 3).mean(axis=1)
     sb_blocks = means.std(axis=0, ddof=1)
-    upper = sb_blocks * math.sqrt((m - 1) / _wilson_hilferty(_Z_LOWER_5_PERCENT, m - 1))
-    return np.maximum(sb_blocks, np.minimum(sw / math.sqrt(L), upper))
+    return np.maximum(sb_blocks, sw / math.sqrt(L))
 
 
 def make_hold(block_len, *, calibration_window_dps=None, noise_std_dps=None, **options):
