@@ -61,3 +61,12 @@ def test_run_says_it_too(tmp_path, capsys):
     path = _vibrating(tmp_path / "vib.csv", 3.0)
     assert main(["run", "--source", f"replay:{path}", "--preset", "paper", "--out", str(tmp_path / "r.csv")]) == 0
     assert "the filter rejected many samples as gross errors" in " ".join(capsys.readouterr().err.split())
+
+
+def test_a_short_paper_preset_record_is_warned_of_too(tmp_path, capsys):
+    """Attack pass 39: a 3.2-s record under the paper preset had 80 % of its samples rejected and its rows up to
+    0.9 deg/s off, but no axis had the 100 rejected samples a floor asked for. The floor is the onset a q that follows
+    the range costs (threshold.onset_samples): 0 with the paper's fixed q."""
+    path = _vibrating(tmp_path / "short.csv", 3.0, n=320)
+    assert main(["replay", path, "--preset", "paper", "--out", str(tmp_path / "a.csv")]) == 0
+    assert "the filter rejected many samples as gross errors" in " ".join(capsys.readouterr().err.split())

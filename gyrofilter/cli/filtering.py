@@ -9,6 +9,7 @@ from ..filter.pipeline import GyroFilter
 from ..filter.settings import SETTING_NAMES
 from ..filter.presets import DEFAULT_PRESET, PRESETS, VIBRATION_RANGE_K
 from ..filter.tempcomp import coefficients_from_model
+from ..filter.threshold import onset_samples
 from ..inputs import did_you_mean, parse_json, quote
 from ..recording import EXACT_FORMAT, FILTERED_FORMAT, filtered_words
 from ..sim.model import load_model, validate_model
@@ -33,22 +34,20 @@ def calibrated_note(filt):
 #: paper 001's gross errors are occasional (pure noise at 1 kHz: ~0.1 %), while a vibration that swings by more than
 #: q within a block had 2-80 % rejected (20 Hz at 100 Hz, 1-3 deg/s), and the block means of what is left biased
 REJECTED_WARN_FRACTION = 0.02
-#: and more than this many of them: where q follows the blocks' range (``outlier_range_k``), a vibration's onset costs
-#: up to 12 blocks of 5 samples (60 per axis) before q has followed it, 6 % of a 10-s record at 100 Hz whose rows are
-#: right (attack pass 38); the paper preset's 20-80 % on such a record is hundreds
-REJECTED_WARN_MIN_SAMPLES = 100
 
 
 def rejected_warning(filt):
     """The warning of a run whose filter ``filt`` rejected more than :data:`REJECTED_WARN_FRACTION` of an axis's
-    samples (and more than :data:`REJECTED_WARN_MIN_SAMPLES`) as gross errors, or None. A rate that swings by more than q (``outlier_q_dps``) within a block (a
+    samples as gross errors, and more than the onset of a vibration costs where q follows it
+    (:func:`gyrofilter.filter.threshold.onset_samples`: short records whose rows were right were warned of, attack
+    pass 38; with paper 001's fixed q every such share counts, pass 39), or None. A rate that swings by more than q (``outlier_q_dps``) within a block (a
     vibration) loses its extremes to the rule, and the mean of what is left is not the block's: a still sensor on a
     20-Hz, 3-deg/s vibration sampled at 100 Hz read -0.74 deg/s with 80 % rejected and no word (a new user's trial);
     with q above the swing, 0.00. The default preset's q follows the swing (``outlier_range_k``,
     gyrofilter.filter.threshold) and reads 0.00; ``preset="paper"`` keeps paper 001's fixed q and this warning."""
     share = filt.rejected / max(filt.blocks_out * filt.settings.block_len, 1)
     over = [f"{axis} {100 * v:.0f} %" for axis, v, n in zip("xyz", share, filt.rejected)
-            if v > REJECTED_WARN_FRACTION and n > REJECTED_WARN_MIN_SAMPLES]
+            if v > REJECTED_WARN_FRACTION and n > onset_samples(filt.settings)]
     if not over:
         return None
     q = filt.settings.outlier_q_dps

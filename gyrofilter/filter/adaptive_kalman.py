@@ -52,7 +52,8 @@ one clipped block g is at most 5.5 and white noise (drift -kappa) adds the missi
 probability about 1 % (simulated: 0.9 %; Brownian approximation exp(-2 kappa 4.5) = 1.1 %).
 On white noise |d| > 6 is rare: the false-alarm rate is that of the unclipped test.
 LS -> constant-rate when the last W block means are a constant plus white noise
-((W - 1) s^2 / R below ``chi2_limit``) and x_k is within ``agree_z`` sigma_b of their mean m:
+((W - 1) s^2 / R below ``chi2_limit``, no trend: :func:`gyrofilter.filter.hold.trend_free`) and x_k
+is within ``agree_z`` sigma_b of their mean m:
 then x_k = the mean of the latest W / 2 of them, P_k = R / (W / 2) (the hold's rule,
 :func:`gyrofilter.filter.hold.recent_mean`). On the switch to the LS model C = P + R.
 
@@ -64,7 +65,7 @@ import math
 
 import numpy as np
 
-from .hold import DEFAULTS, chi2_quantile, recent_mean
+from .hold import DEFAULTS, chi2_quantile, recent_mean, trend_free
 from .jit import choose_kernel
 from .kalman import guard
 from .predictor import weight_table
@@ -175,7 +176,7 @@ def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring
                     ss = 0.0
                     for j in range(window):
                         ss += (ring[a, j] - m) * (ring[a, j] - m)
-                    if ss / ra < chi2_limit and abs(x - m) < agree_z * sigma:
+                    if ss / ra < chi2_limit and abs(x - m) < agree_z * sigma and trend_free(ring, a, rh, sigma, agree_z):
                         istate[MODE + a] = REST
                         istate[SWITCHES + a] += 1
                         x = recent_mean(ring, a, rh)

@@ -34,7 +34,8 @@ at once. A step of 1 deg/s (20 sigma_b) is caught in the same block and a 2 deg/
 
 Constancy test (track -> hold): the last W = ``window_blocks`` block means are consistent with a
 constant plus white noise of sigma_b, (W - 1) s^2 / sigma_b^2 below the chi-square quantile
-(probability ``accept_p``, Wilson-Hilferty approximation), and the tracking output agrees with
+(probability ``accept_p``, Wilson-Hilferty approximation), their least-squares slope is within
+``agree_z`` of its standard error (:func:`trend_free`), and the tracking output agrees with
 their mean within ``agree_z`` standard errors. Then m = the mean of the latest W / 2 of them
 (:func:`recent_mean`), n = W / 2: under a vibration sigma_b is large and the test passes with the
 tail of a turn still in the window's older half, whose mean then stayed in the held value (a
@@ -110,6 +111,23 @@ def recent_mean(ring, a, head):
     return total / half
 
 
+def trend_free(ring, a, head, sigma, z):
+    """Whether the block means of axis ``a`` in ``ring`` (3, W), the latest at ``head``, have no trend: their
+    least-squares slope within ``z`` of its standard error for white noise of std ``sigma``,
+
+        |sum_j (j - (W - 1) / 2) y_j| < z sigma sqrt(W (W^2 - 1) / 12)     (j = 0 the oldest)
+
+    The chi-square of the constancy test has little power against a ramp where sigma_b is large (a vibration):
+    a ramp of 20 -> 0 deg/s in 3 s under 5 deg/s at 33 Hz passed it, and the rest read +0.25 deg/s for 10 s
+    (attack pass 39); on white noise this test rejects a window 1 time in 16 000 (z = 4)."""
+    window = ring.shape[1]
+    centre = (window - 1) / 2.0
+    total = 0.0
+    for j in range(window):
+        total += (j - centre) * ring[a, (head + 1 + j) % window]
+    return abs(total) < z * sigma * math.sqrt(window * (window * window - 1) / 12.0)
+
+
 def hold_blocks(y, x, out, sigma, ring, mean, g_pos, g_neg, ints, kappa, h, max_blocks, chi2_limit, agree_z):
     """The stage over M blocks: y (M, 3) block means, x (M, 3) tracking outputs -> out (M, 3), deg/s.
 
@@ -161,7 +179,7 @@ def hold_blocks(y, x, out, sigma, ring, mean, g_pos, g_neg, ints, kappa, h, max_
                     ss = 0.0
                     for j in range(window):
                         ss += (ring[a, j] - m) * (ring[a, j] - m)
-                    if ss / (s * s) < chi2_limit and abs(xa - m) < agree_z * s:
+                    if ss / (s * s) < chi2_limit and abs(xa - m) < agree_z * s and trend_free(ring, a, head, s, agree_z):
                         ints[HOLDING + a] = 1
                         ints[SWITCHES + a] += 1
                         mean[a] = recent_mean(ring, a, head)
@@ -273,6 +291,13 @@ def block_noise_std(window_dps, block_len):
     correlated noise (a low-pass stage makes block means noisier than sigma_w / sqrt(L)), the
     second keeps a short window's few blocks from underestimating sigma_b. A window of fewer
     than 2 blocks (a low sample rate) has only the second.
+
+    Under a vibration sigma_w / sqrt(L) is large while the blocks average the vibration out (5 deg/s
+    at 45 Hz, 100 Hz: 2.2 deg/s against a block-mean spread of 0.5), and the rest model's tests see
+    less; capping it at the block means' spread was tried (attack pass 39) and dropped (pass 40): the
+    spread of a short window's few blocks is 0 for a quiet quantised sensor (sigma_b at its floor:
+    no averaging at all), and a 2-s window misses the slow beat of a vibration near a multiple of
+    the block rate, which a small sigma_b then follows (2-5x the output std).
     """
     x = np.asarray(window_dps, dtype=float)
     L = int(block_len)

@@ -12,8 +12,8 @@ and the means of what was left were biased (-0.74 deg/s through the default filt
 r_j the range of block j's samples and r_(k,low) the lower quartile of the ranges of the last
 N = ``outlier_range_blocks`` blocks, this one included: the (floor((N - 1) / 4) + 1)-th
 smallest (the 4th of 15). Before the first block the last N - 1 blocks of the start-up
-calibration's window stand in (:meth:`RangeThreshold.seed`: a vibration from power-up is
-followed from the first block; without them, 12 blocks were judged with q and their bias held
+calibration's window stand in, repeated where it has fewer (:meth:`RangeThreshold.seed`: a
+vibration from power-up is followed from the first block; without them, 12 blocks were judged with q and their bias held
 at rest for seconds, a new user's trial), or zeros after a loaded calibration.
 k_r = 0 is paper 001's fixed q (``preset="paper"``).
 
@@ -37,8 +37,19 @@ import collections
 
 import numpy as np
 
-#: blocks of ranges the vectorised order statistic looks at in one go (3 axes x N doubles each: 5 MB for N = 15)
+#: blocks :meth:`RangeThreshold.many` works through at a time (its temporaries: about 100 bytes a block, and N
+#: doubles a block and axis that sorts: under 6 MB for N = 15)
 _CHUNK_BLOCKS = 16_384
+
+
+def onset_samples(settings):
+    """The samples per axis a vibration that begins after the calibration can have rejected before q follows it:
+    (N - rank) blocks of L with k_r > 0 (60 for the presets), 0 with paper 001's fixed q. ``settings``: a
+    :class:`gyrofilter.filter.settings.FilterSettings`."""
+    if not settings.outlier_range_k:
+        return 0
+    n = settings.outlier_range_blocks
+    return (n - (n - 1) // 4) * settings.block_len
 
 
 class RangeThreshold:
@@ -60,13 +71,15 @@ class RangeThreshold:
 
     def seed(self, window_dps, block_len):
         """Take the ranges of the last N - 1 blocks of ``block_len`` samples of ``window_dps`` ((n, 3), deg/s:
-        the calibration window, gross errors left out) as the blocks seen before the first; fewer blocks, fewer."""
+        the calibration window, gross errors left out) as the blocks seen before the first; where it has fewer
+        blocks, they stand in again, oldest first (zeros left for N = 60 and more of a 2-s window: a vibration from
+        power-up was cut for 28 s at N = 999, attack pass 39)."""
         n_seen = self._seen[0].maxlen
         count = min(n_seen, len(window_dps) // block_len)
         if not count:
             return
         blocks = np.asarray(window_dps[len(window_dps) - count * block_len:], dtype=float).reshape(count, block_len, 3)
-        ranges = blocks.max(axis=1) - blocks.min(axis=1)
+        ranges = (blocks.max(axis=1) - blocks.min(axis=1))[np.arange(-n_seen, 0) % count]
         for a, seen in enumerate(self._seen):
             seen.extend(ranges[:, a].tolist())
             self._over[a] = sum(self.k * r > self.q for r in seen)
@@ -90,9 +103,17 @@ class RangeThreshold:
 
     def many(self, blocks):
         """``blocks``: (M, L, 3) samples in deg/s -> the threshold of each block, (M, 3), or q alone
-        when k = 0."""
+        when k = 0. Worked through :data:`_CHUNK_BLOCKS` blocks at a time (the temporaries of an hour at
+        1 kHz in one call were 70 MB)."""
         if not self.k:
             return self.q
+        out = np.empty((len(blocks), 3))
+        for start in range(0, len(blocks), _CHUNK_BLOCKS):
+            out[start : start + _CHUNK_BLOCKS] = self._many(blocks[start : start + _CHUNK_BLOCKS])
+        return out
+
+    def _many(self, blocks):
+        """:meth:`many` of at most a chunk of blocks."""
         high, low = blocks[:, 0].copy(), blocks[:, 0].copy()
         for i in range(1, blocks.shape[1]):  # sample by sample: numpy reduces a short middle axis 10x slower
             np.maximum(high, blocks[:, i], out=high)
@@ -104,10 +125,8 @@ class RangeThreshold:
         sort = over[n:] - over[:-n] >= self._needed  # (M, 3): the blocks whose quartile puts k r over q
         out = np.full(ranges.shape, self.q)
         rows, axes = np.nonzero(sort)
-        for start in range(0, len(rows), _CHUNK_BLOCKS):
-            r, a = rows[start : start + _CHUNK_BLOCKS], axes[start : start + _CHUNK_BLOCKS]
-            windows = joined[r[:, None] + np.arange(n), a[:, None]]  # (K, N): each block's last N ranges
-            out[r, a] = np.maximum(self.q, self.k * np.partition(windows, self._rank, axis=1)[:, self._rank])
+        windows = joined[rows[:, None] + np.arange(n), axes[:, None]]  # (K, N): each such block's last N ranges
+        out[rows, axes] = np.maximum(self.q, self.k * np.partition(windows, self._rank, axis=1)[:, self._rank])
         for a, seen in enumerate(self._seen):
             seen.extend(joined[len(joined) - (n - 1):, a].tolist())
             self._over[a] = int(over[-1, a] - over[len(over) - n, a])
