@@ -40,14 +40,15 @@ def rejected_warning(filt):
     """The warning of a run whose filter ``filt`` rejected more than :data:`REJECTED_WARN_FRACTION` of an axis's
     samples as gross errors, and more than the onset of a vibration costs where q follows it
     (:func:`gyrofilter.filter.threshold.onset_samples`: short records whose rows were right were warned of, attack
-    pass 38; with paper 001's fixed q every such share counts, pass 39), or None. A rate that swings by more than q (``outlier_q_dps``) within a block (a
-    vibration) loses its extremes to the rule, and the mean of what is left is not the block's: a still sensor on a
+    pass 38; with paper 001's fixed q every such share counts, pass 39), or None. A rate that swings by more than q
+    (``outlier_q_dps``) within a block (a vibration) loses its extremes to the rule, and the mean of what is left is not the block's: a still sensor on a
     20-Hz, 3-deg/s vibration sampled at 100 Hz read -0.74 deg/s with 80 % rejected and no word (a new user's trial);
     with q above the swing, 0.00. The default preset's q follows the swing (``outlier_range_k``,
     gyrofilter.filter.threshold) and reads 0.00; ``preset="paper"`` keeps paper 001's fixed q and this warning."""
     share = filt.rejected / max(filt.blocks_out * filt.settings.block_len, 1)
+    onset = onset_samples(filt.settings)
     over = [f"{axis} {100 * v:.0f} %" for axis, v, n in zip("xyz", share, filt.rejected)
-            if v > REJECTED_WARN_FRACTION and n > onset_samples(filt.settings)]
+            if v > REJECTED_WARN_FRACTION and n > onset]
     if not over:
         return None
     q = filt.settings.outlier_q_dps

@@ -248,7 +248,7 @@ class GyroFilter:
         if len(block) < self.settings.block_len:
             return None
         self._block = []
-        columns = tuple(zip(*block))
+        columns = list(zip(*block))
         q = self._threshold.one(columns)
         y1 = self._y1
         modes = self._akf.modes() if self._by_model else None

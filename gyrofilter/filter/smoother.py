@@ -23,7 +23,8 @@ What it does in each model: at rest (constant-rate model) the forward posterior 
 the blocks since the rest began and the backward prior the mean of the blocks until it ends, so
 x^s_k is the mean of the whole rest phase (within the memory of ``hold_max_blocks`` on each
 side; where a filter entered rest from motion, its rest mean starts from the latest half of its
-window, :func:`gyrofilter.filter.hold.recent_mean`: the older half, 10 blocks, is left out); in motion the forward filter's lag and the backward filter's lead cancel to first order.
+window, :func:`gyrofilter.filter.hold.recent_mean`: the older half, 10 blocks, is left out); in
+motion the forward filter's lag and the backward filter's lead cancel to first order.
 
 The backward filter starts in the LS model with P = P0 (nothing is known of the motion at the
 end of a recording), as the forward one does after a loaded calibration. Memory: the block means

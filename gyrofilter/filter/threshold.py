@@ -13,8 +13,9 @@ r_j the range of block j's samples and r_(k,low) the lower quartile of the range
 N = ``outlier_range_blocks`` blocks, this one included: the (floor((N - 1) / 4) + 1)-th
 smallest (the 4th of 15). Before the first block the last N - 1 blocks of the start-up
 calibration's window stand in, repeated where it has fewer (:meth:`RangeThreshold.seed`: a
-vibration from power-up is followed from the first block; without them, 12 blocks were judged with q and their bias held
-at rest for seconds, a new user's trial), or zeros after a loaded calibration.
+vibration from power-up is followed from the first block; without them, 12 blocks were judged
+with q and their bias held at rest for seconds, a new user's trial), or zeros after a loaded
+calibration.
 k_r = 0 is paper 001's fixed q (``preset="paper"``).
 
 Why it holds (measured: ``python tools/vibration.py``, docs/evaluate.md):
@@ -79,7 +80,7 @@ class RangeThreshold:
         if not count:
             return
         blocks = np.asarray(window_dps[len(window_dps) - count * block_len:], dtype=float).reshape(count, block_len, 3)
-        ranges = (blocks.max(axis=1) - blocks.min(axis=1))[np.arange(-n_seen, 0) % count]
+        ranges = _ranges(blocks)[np.arange(-n_seen, 0) % count]
         for a, seen in enumerate(self._seen):
             seen.extend(ranges[:, a].tolist())
             self._over[a] = sum(self.k * r > self.q for r in seen)
@@ -95,10 +96,9 @@ class RangeThreshold:
             r = max(values) - min(values)
             over = self._over[a] + (k * r > q)
             out.append(max(q, k * sorted((*seen, r))[self._rank]) if over >= self._needed else q)
-            if seen.maxlen:
-                over -= k * seen[0] > q
+            if seen.maxlen:  # N = 1 keeps no range: its count stays 0
+                self._over[a] = over - (k * seen[0] > q)
                 seen.append(r)
-            self._over[a] = over if seen.maxlen else 0
         return tuple(out)
 
     def many(self, blocks):
@@ -114,11 +114,7 @@ class RangeThreshold:
 
     def _many(self, blocks):
         """:meth:`many` of at most a chunk of blocks."""
-        high, low = blocks[:, 0].copy(), blocks[:, 0].copy()
-        for i in range(1, blocks.shape[1]):  # sample by sample: numpy reduces a short middle axis 10x slower
-            np.maximum(high, blocks[:, i], out=high)
-            np.minimum(low, blocks[:, i], out=low)
-        ranges = high - low
+        ranges = _ranges(blocks)
         joined = np.concatenate((np.array(self._seen).T.reshape(-1, 3), ranges))  # (N - 1 + M, 3)
         n = len(joined) - len(ranges) + 1
         over = np.cumsum(np.concatenate((np.zeros((1, 3), dtype=np.int64), self.k * joined > self.q)), axis=0)
@@ -131,3 +127,13 @@ class RangeThreshold:
             seen.extend(joined[len(joined) - (n - 1):, a].tolist())
             self._over[a] = int(over[-1, a] - over[len(over) - n, a])
         return out
+
+
+def _ranges(blocks):
+    """max - min of each block's samples, (M, L, 3) -> (M, 3); sample by sample, as numpy reduces a short middle
+    axis 10x slower."""
+    high, low = blocks[:, 0].copy(), blocks[:, 0].copy()
+    for i in range(1, blocks.shape[1]):
+        np.maximum(high, blocks[:, i], out=high)
+        np.minimum(low, blocks[:, i], out=low)
+    return high - low
