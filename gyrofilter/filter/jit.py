@@ -3,6 +3,8 @@
 A kernel is a plain function written in the subset of Python that numba compiles. Without
 numba it runs interpreted, with the same arithmetic and so the same numbers.
 """
+import hashlib
+import inspect
 import types
 
 from ..errors import SettingsError
@@ -32,7 +34,12 @@ def choose_kernel(fn, backend):
 
 def _compile(fn):
     """njit(cache=True) of ``fn``, with the plain functions of this package (gyrofilter.filter) that
-    it calls compiled and bound."""
+    it calls compiled and bound.
+
+    numba's cache is keyed on the source of ``fn``'s own file only: a helper changed in another file
+    (an upgrade that changes gyrofilter.filter.hold but not adaptive_kalman) would load the kernel
+    compiled with the old helper. The compiled function's name carries :func:`helpers_fingerprint`, so
+    the cache file of a kernel is named by its helpers' code too."""
     if fn not in _compiled:
         import numba
 
@@ -46,5 +53,16 @@ def _compile(fn):
         if helpers:
             namespace.update(helpers)
             target = types.FunctionType(fn.__code__, namespace, fn.__name__)
+            target.__qualname__ = f"{fn.__qualname__}_{helpers_fingerprint(helpers)}"
         _compiled[fn] = numba.njit(cache=True)(target)
     return _compiled[fn]
+
+
+def helpers_fingerprint(helpers):
+    """12 hex digits of the SHA-256 of the compiled helpers' names and sources (a helper's own name carries
+    its helpers' fingerprint, so the digest covers every level)."""
+    digest = hashlib.sha256()
+    for name in sorted(helpers):
+        py_func = helpers[name].py_func
+        digest.update(f"{name}\0{py_func.__qualname__}\0{inspect.getsource(py_func)}\0".encode())
+    return digest.hexdigest()[:12]
