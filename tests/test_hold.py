@@ -211,6 +211,26 @@ def test_sigma_b_of_a_white_window_is_its_white_noise_level_and_of_a_vibrating_o
         assert np.all(sigma_b >= 0.5 * level - 1e-12) and np.all(sigma_b < 0.7 * level)
 
 
+def test_sigma_b_of_the_shipped_recordings_windows_is_the_plain_rule():
+    """The vibration rule must not touch a still sensor's window: a chi-square significance test (tried) took the
+    real 655-s log's z window (block means' scatter 0.61 of the white level) for a vibration, and its copy with
+    spikes lost a fifth of its static reduction (docs/results.md, second table)."""
+    from pathlib import Path
+
+    from gyrofilter.filter.calibration import white_noise_std, without_gross_errors
+    from gyrofilter.recording import read_recording
+
+    paths = sorted((Path(__file__).resolve().parents[1] / "recordings").glob("*static*.csv.gz"))
+    assert len(paths) >= 5
+    for path in paths:
+        rec = read_recording(path)
+        window = without_gross_errors(rec.gyro_dps[: int(2 * rec.sample_rate_hz)], 1.0)[0]
+        m = len(window) // 5
+        plain = np.maximum(window[: 5 * m].reshape(m, 5, 3).mean(axis=1).std(axis=0, ddof=1),
+                           white_noise_std(window) / math.sqrt(5))
+        np.testing.assert_array_equal(block_noise_std(window, 5), plain, err_msg=path.name)
+
+
 def test_sigma_b_of_a_window_whose_few_block_means_are_equal_is_its_white_noise_level():
     """Attack pass 40: a cap of sigma_b at the block means' spread (tried) gave 0 for a short window of a quantised
     sensor whose two block means were equal, and the filter stopped averaging (20x the output std). sigma_b keeps
