@@ -4,7 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from gyrofilter.filter.hold import ConstantRateHold, block_noise_std, chi2_quantile, cusum_false_alarm_blocks
+from gyrofilter.filter.hold import (ConstantRateHold, block_noise_std, chi2_lower_quantile, chi2_quantile,
+                                   cusum_false_alarm_blocks)
 from gyrofilter import GyroFilter
 from gyrofilter.errors import SettingsError
 
@@ -17,6 +18,9 @@ def test_chi2_quantile_matches_scipy():
     for dof in (9, 19, 39):
         for p in (0.99, 0.999):
             assert chi2_quantile(p, dof) == pytest.approx(chi2.ppf(p, dof), rel=0.01)
+    for dof in (19, 39, 99):  # the lower tail as block_noise_std uses it (m >= 20 blocks); at 9 dof it is 8 % low
+        for p in (0.95, 0.999):
+            assert chi2_lower_quantile(p, dof) == pytest.approx(chi2.ppf(1 - p, dof), rel=0.02)
 
 
 def test_siegmund_run_length_by_hand():
@@ -159,7 +163,7 @@ def test_after_a_ramp_under_a_vibration_the_rest_reads_still(preset, peak_dps, s
     """Attack pass 39: a rate ramp down to 0 under a 5-deg/s vibration, then rest. The chi-square constancy test has
     no power against a ramp where sigma_b is large (the vibrating calibration window's): the rest read +0.25 deg/s
     3-10 s after a 20 -> 0 deg/s ramp under 33 Hz. The constancy test also asks for no trend (hold.trend_free).
-    (A small ramp, 5 -> 0 in 1 s under 45 Hz, still reads +0.36: docs/evaluate.md.)"""
+    Smaller ramps: test_after_a_small_ramp_under_a_vibration_the_rest_reads_still."""
     rng = np.random.default_rng(1)
     t = np.arange(3000) / 100.0
     x = np.array([0.8, -1.2, 0.4]) + 0.02 * rng.standard_normal((3000, 3))
@@ -169,6 +173,62 @@ def test_after_a_ramp_under_a_vibration_the_rest_reads_still(preset, peak_dps, s
     t_rows, rows = GyroFilter(100.0, preset=preset).filter_timed(x, t)
     after = (t_rows > 7 + seconds + 3) & (t_rows <= 7 + seconds + 10)
     assert abs(rows[after, 2].mean()) < 0.05
+
+
+@pytest.mark.parametrize("preset", ["recommended", "hold"])
+@pytest.mark.parametrize("peak_dps,seconds,freq_hz", [(5.0, 1.0, 45.0), (5.0, 1.0, 33.0), (10.0, 2.0, 45.0)])
+def test_after_a_small_ramp_under_a_vibration_the_rest_reads_still(preset, peak_dps, seconds, freq_hz):
+    """Attack pass 40: under a 5-deg/s vibration from power-up that the blocks average out, sigma_w / sqrt(L) of the
+    calibration window is 4x the block means' scatter (2.2 against 0.5 deg/s at 45 Hz); the rest model missed the
+    tail of a small ramp and read +0.36 deg/s 3-10 s after 5 -> 0 deg/s in 1 s, on every seed. sigma_b now
+    follows the block means' scatter where it is significantly below the white-noise level (block_noise_std).
+    One seed of five at 45 Hz still reads 0.14 (the window that holds the whole ramp passes: docs/evaluate.md)."""
+    t = np.arange(3000) / 100.0
+    after = []
+    for seed in range(1, 6):
+        rng = np.random.default_rng(seed)
+        x = np.array([0.8, -1.2, 0.4]) + 0.02 * rng.standard_normal((3000, 3))
+        x[:, 2] += 5.0 * np.sin(2 * np.pi * freq_hz * t + rng.uniform(0, 2 * np.pi))
+        ramp = (t >= 7) & (t < 7 + seconds)
+        x[ramp, 2] += peak_dps * (1 - (t[ramp] - 7) / seconds)
+        t_rows, rows = GyroFilter(100.0, preset=preset).filter_timed(x, t)
+        after.append(abs(rows[(t_rows > 7 + seconds + 3) & (t_rows <= 7 + seconds + 10), 2].mean()))
+    assert np.median(after) < 0.03 and max(after) < 0.2
+
+
+def test_sigma_b_of_a_white_window_is_its_white_noise_level_and_of_a_vibrating_one_at_most_halved():
+    """block_noise_std: white noise keeps max(s_b, sigma_w / sqrt(L)) on every seed; a 45-Hz vibration's window gets
+    the block means' scatter, never below half the white-noise level."""
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        white = rng.normal(0, 0.1, (200, 3))
+        np.testing.assert_allclose(block_noise_std(white, 5), 0.1 / math.sqrt(5), rtol=0.35)
+    t = np.arange(200) / 100.0
+    for amplitude in (1.0, 5.0):
+        vibrating = rng.normal(0, 0.02, (200, 3)) + amplitude * np.sin(2 * np.pi * 45.0 * t[:, None] + [0, 1, 2])
+        level = np.std(np.diff(vibrating, axis=0), axis=0, ddof=1) / math.sqrt(2 * 5)
+        sigma_b = block_noise_std(vibrating, 5)
+        assert np.all(sigma_b >= 0.5 * level - 1e-12) and np.all(sigma_b < 0.7 * level)
+
+
+def test_sigma_b_of_the_shipped_recordings_windows_is_the_plain_rule():
+    """The vibration rule must not touch a still sensor's window: a chi-square significance test (tried) took the
+    real 655-s log's z window (block means' scatter 0.61 of the white level) for a vibration, and its copy with
+    spikes lost a fifth of its static reduction (docs/results.md, second table)."""
+    from pathlib import Path
+
+    from gyrofilter.filter.calibration import white_noise_std, without_gross_errors
+    from gyrofilter.recording import read_recording
+
+    paths = sorted((Path(__file__).resolve().parents[1] / "recordings").glob("*static*.csv.gz"))
+    assert len(paths) >= 5
+    for path in paths:
+        rec = read_recording(path)
+        window = without_gross_errors(rec.gyro_dps[: int(2 * rec.sample_rate_hz)], 1.0)[0]
+        m = len(window) // 5
+        plain = np.maximum(window[: 5 * m].reshape(m, 5, 3).mean(axis=1).std(axis=0, ddof=1),
+                           white_noise_std(window) / math.sqrt(5))
+        np.testing.assert_array_equal(block_noise_std(window, 5), plain, err_msg=path.name)
 
 
 def test_sigma_b_of_a_window_whose_few_block_means_are_equal_is_its_white_noise_level():
