@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from gyrofilter.filter.averaging import average_block, average_blocks, within_variance, within_variances
+from gyrofilter.filter.averaging import average_block, average_blocks
 
 PAPER_RAW = [67, 49, 55, -233, 21, 17, 23, 63]  # paper 001 section 1.2, raw LSB
 
@@ -43,25 +43,3 @@ def test_vectorised_equals_scalar_bit_for_bit():
             o, r, f = average_block(tuple(blocks[k, :, a].tolist()), 1.0)
             assert o == out[k, a] and r == rejected[k, a] and f == fallback[k, a]
     assert fallback[:50].all() and rejected.sum() > 100
-
-
-@pytest.mark.parametrize("length", [2, 3, 5, 8])
-def test_within_variance_vectorised_equals_scalar_bit_for_bit(length):
-    blocks = np.random.default_rng(length).normal(size=(500, length, 3)) * 0.7 + 3.0
-    v = within_variances(blocks)
-    for k in range(len(blocks)):
-        for a in range(3):
-            assert within_variance(tuple(blocks[k, :, a].tolist())) == v[k, a]
-
-
-def test_within_variance_is_a_block_means_white_noise_variance_and_blind_to_a_smooth_motion():
-    """White noise of std s: E v = s^2 / L (the residual variance about the block's line, over L); a fast ramp or
-    turn leaves only the noise (a block's rate changing by 50 deg/s); a 45-Hz vibration leaves its swing."""
-    rng = np.random.default_rng(4)
-    noise = rng.normal(0, 0.2, (20000, 5, 3))
-    assert within_variances(noise).mean() == pytest.approx(0.04 / 5, rel=0.03)
-    ramp = noise + (np.arange(5) * 12.5)[None, :, None] + rng.uniform(-300, 300, (20000, 1, 3))
-    np.testing.assert_allclose(within_variances(ramp), within_variances(noise), rtol=1e-6, atol=1e-9)
-    t = np.arange(20000 * 5) / 100.0
-    tone = 5.0 * np.sin(2 * np.pi * 45.0 * t).reshape(20000, 5, 1) + noise
-    assert within_variances(tone).mean() > 100 * within_variances(noise).mean()

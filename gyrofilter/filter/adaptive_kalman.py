@@ -37,13 +37,9 @@ Switching (per axis, the tests of :mod:`gyrofilter.filter.hold`): constant-rate 
 two-sided CUSUM (Page 1954) of the innovation, Huber-clipped (Huber 1964) where gross errors can
 explain it, passes h:
 
-    e_k = y_k - x-_k,  d_k = e_k / s_k, clipped to [-c, c] if |e_k| <= b,
+    e_k = y_k - x-_k,  d_k = e_k / sigma_b, clipped to [-c, c] if |e_k| <= b,
     g+_k = max(0, g+_(k-1) + d_k - kappa),  g-_k = max(0, g-_(k-1) - d_k - kappa),
-    switch when g+_k > h or g-_k > h,
-
-s_k the constant-rate model's noise scale: sigma_b = sqrt(R) at start, from each switch to the model on the
-scale of the window that passed the test below (:func:`gyrofilter.filter.hold.rest_scale`: sigma_b, or more
-where a vibration grew or began after the calibration); the divergence guard's limit in this model is k s_k.
+    switch when g+_k > h or g-_k > h.
 
 c = ``cusum_clip`` = 6 with kappa = 0.5, h = 10: one such block adds at most c - kappa = 5.5 < h,
 two consecutive ones 11 > h. b = ``cusum_clip_within_q`` q = 3 q: paper 001's rule keeps a sample
@@ -55,9 +51,9 @@ a fast sine) is still caught in its first block, a slower onset (a ramp) one blo
 one clipped block g is at most 5.5 and white noise (drift -kappa) adds the missing 4.5 with
 probability about 1 % (simulated: 0.9 %; Brownian approximation exp(-2 kappa 4.5) = 1.1 %).
 On white noise |d| > 6 is rare: the false-alarm rate is that of the unclipped test.
-LS -> constant-rate when the last W block means are a constant plus white noise of the scale s
-(:func:`gyrofilter.filter.hold.rest_scale`; (W - 1) var / s^2 below ``chi2_limit``, no trend:
-:func:`gyrofilter.filter.hold.trend_free`) and x_k is within ``agree_z`` s of their mean m:
+LS -> constant-rate when the last W block means are a constant plus white noise
+((W - 1) s^2 / R below ``chi2_limit``, no trend: :func:`gyrofilter.filter.hold.trend_free`) and x_k
+is within ``agree_z`` sigma_b of their mean m:
 then x_k = the mean of the latest W / 2 of them, P_k = R / (W / 2) (the hold's rule,
 :func:`gyrofilter.filter.hold.recent_mean`). On the switch to the LS model C = P + R.
 
@@ -69,13 +65,13 @@ import math
 
 import numpy as np
 
-from .hold import DEFAULTS, chi2_quantile, recent_mean, rest_scale, trend_free
+from .hold import DEFAULTS, chi2_quantile, recent_mean, trend_free
 from .jit import choose_kernel
 from .kalman import guard
 from .predictor import weight_table
 
 # rows of the float state fstate (3 rows, one column per axis)
-C_HAT, G_POS, G_NEG, SCALE = range(4)
+C_HAT, G_POS, G_NEG = range(3)
 # indices into the int state istate (A_INTS,)
 A_COUNT, A_HEAD, R_FILLED, R_RING_HEAD = range(4)
 MODE, SWITCHES = 4, 7  # istate[MODE + a]: 0 = constant-rate model (rest, steady turn), 1 = LS model
@@ -87,29 +83,25 @@ NO_TRACE = np.empty((0, 3, 3))
 NO_USED = np.empty((0, 3), dtype=np.int64)
 
 
-def run_blocks_adaptive(y, y_motion, v, out, w_table, fifo, p, fstate, istate, ring, within, r, gain_min, forgetting,
-                        prior_var_max, kappa, clip, clip_within_dps, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run,
+def run_blocks_adaptive(y, y_motion, out, w_table, fifo, p, fstate, istate, ring, r, gain_min, forgetting, prior_var_max,
+                        kappa, clip, clip_within_dps, h, chi2_limit, agree_z, max_blocks, guard_k, guard_n, guard_run,
                         trace, used):
     """Adaptive Kalman filter over the block means y (M, 3) -> out (M, 3); state updated in place.
 
     Measurement per block and axis: y[k, a] while the axis is in the constant-rate model at the
     start of block k, ``y_motion[k, a]`` while it is in the LS model (the block means of two
     gross-error rules, ``outlier_rule="by_model"``; pass y twice for one rule). ``used``: (M, 3)
-    int64 to receive that model per block and axis (REST / MOTION), or :data:`NO_USED`. ``v`` (M, 3): each
-    block's :func:`~gyrofilter.filter.averaging.within_variance`, for the noise scale of the constant-rate
-    model (:func:`gyrofilter.filter.hold.rest_scale`).
+    int64 to receive that model per block and axis (REST / MOTION), or :data:`NO_USED`.
 
     The equations and the switching are in the module docstring.
 
-    Divergence guard: :func:`gyrofilter.filter.kalman.guard` (limit ``guard_k`` sigma_b, in the constant-rate model
-    ``guard_k`` times its noise scale; run length ``guard_n``; 0 = off);
+    Divergence guard: :func:`gyrofilter.filter.kalman.guard` (limit ``guard_k`` sigma_b, run length ``guard_n``; 0 = off);
     a re-seed also puts the axis in the LS model with C = R. ``w_table``: the LS extrapolation
     weights (:func:`gyrofilter.filter.predictor.weight_table`).
 
-    State (fixed size): fifo (3, D) posteriors, p (3,), fstate (4, 3) rows C, g+, g-, the constant-rate model's
-    noise scale (sigma_b at start, :func:`~gyrofilter.filter.hold.rest_scale` from each switch to it); istate
+    State (fixed size): fifo (3, D) posteriors, p (3,), fstate (3, 3) rows C, g+, g-; istate
     (10,) int64 (FIFO count and head, block-mean ring fill and head, model and switch count per
-    axis); ring (3, W) block means, within (3, W) their v; guard_run (6,) int64.
+    axis); ring (3, W) block means; guard_run (6,) int64.
 
     ``trace``: (M, 3, 3) to be filled with trace[k, POST_VAR | PRIOR | PRIOR_VAR, axis] (P_k,
     x-_k, P-_k of the model in use; for the forward-backward smoother,
@@ -125,7 +117,6 @@ def run_blocks_adaptive(y, y_motion, v, out, w_table, fifo, p, fstate, istate, r
         rh = istate[R_RING_HEAD]
         for a in range(3):
             ring[a, rh] = y[k, a] if istate[MODE + a] == REST else y_motion[k, a]
-            within[a, rh] = v[k, a]
             if telling:
                 used[k, a] = istate[MODE + a]
         istate[R_RING_HEAD] = (rh + 1) % window
@@ -142,7 +133,7 @@ def run_blocks_adaptive(y, y_motion, v, out, w_table, fifo, p, fstate, istate, r
             p_prior = 0.0
             if istate[MODE + a] == REST:
                 prior = fifo[a, (head - 1) % depth] if n > 0 else 0.0
-                d = (ya - prior) / fstate[SCALE, a]
+                d = (ya - prior) / sigma
                 if abs(ya - prior) <= clip_within_dps:
                     d = max(-clip, min(clip, d))
                 fstate[G_POS, a] = max(0.0, fstate[G_POS, a] + d - kappa)
@@ -178,7 +169,6 @@ def run_blocks_adaptive(y, y_motion, v, out, w_table, fifo, p, fstate, istate, r
                 x = prior + gain * nu
                 p_post = (1.0 - gain) * (1.0 - gain) * p_prior + gain * gain * ra
                 if istate[R_FILLED] == window:
-                    scale = rest_scale(ring, within, a, rh, sigma)
                     m = 0.0
                     for j in range(window):
                         m += ring[a, j]
@@ -186,16 +176,12 @@ def run_blocks_adaptive(y, y_motion, v, out, w_table, fifo, p, fstate, istate, r
                     ss = 0.0
                     for j in range(window):
                         ss += (ring[a, j] - m) * (ring[a, j] - m)
-                    if (ss / (scale * scale) < chi2_limit and abs(x - m) < agree_z * scale
-                            and trend_free(ring, a, rh, scale, agree_z)):
+                    if ss / ra < chi2_limit and abs(x - m) < agree_z * sigma and trend_free(ring, a, rh, sigma, agree_z):
                         istate[MODE + a] = REST
                         istate[SWITCHES + a] += 1
-                        fstate[SCALE, a] = scale
                         x = recent_mean(ring, a, rh)
                         p_post = ra / (window // 2)
-            # the guard's limit: k sigma_b, k times the noise scale at rest (rest_scale: a vibration after the calibration)
-            limit = guard_k * (fstate[SCALE, a] if istate[MODE + a] == REST else sigma)
-            if guard_n > 0 and guard(x, ya, a, limit, guard_n, guard_run):
+            if guard_n > 0 and guard(x, ya, a, guard_k * sigma, guard_n, guard_run):
                 x = ya
                 p_post = ra
                 for j in range(depth):
@@ -231,17 +217,15 @@ class AdaptiveKalman:
         self.settings = s
         self.fifo = np.zeros((3, s.fifo_depth))
         self.p = np.zeros(3)
-        self.fstate = np.zeros((4, 3))
+        self.fstate = np.zeros((3, 3))
         self.istate = np.zeros(A_INTS, dtype=np.int64)
         self.ring = np.zeros((3, s.hold_window))
-        self.within = np.zeros((3, s.hold_window))
         self.r_dps2 = np.ones(3)
         self.guard_run = np.zeros(6, dtype=np.int64)
         self._kernel = choose_kernel(run_blocks_adaptive, s.backend)
         # bound once: the arrays are updated in place
         self._args = (
-            weight_table(s.fifo_depth, s.fit_order), self.fifo, self.p, self.fstate, self.istate, self.ring, self.within,
-            self.r_dps2,
+            weight_table(s.fifo_depth, s.fit_order), self.fifo, self.p, self.fstate, self.istate, self.ring, self.r_dps2,
             float(s.gain_min), float(s.innovation_forgetting), float(s.prior_var_max_r), DEFAULTS["cusum_kappa"],
             DEFAULTS["cusum_clip"], DEFAULTS["cusum_clip_within_q"] * float(s.outlier_q_dps), float(s.hold_h),
             chi2_quantile(DEFAULTS["accept_p"], s.hold_window - 1), DEFAULTS["agree_z"],
@@ -255,7 +239,6 @@ class AdaptiveKalman:
         C = P0 + R."""
         s = self.settings
         self.r_dps2[:] = np.asarray(sigma_b_dps, dtype=float) ** 2
-        self.fstate[SCALE] = np.sqrt(self.r_dps2)
         if still_blocks > 0:
             self.istate[A_COUNT] = s.fifo_depth
             self.istate[MODE : MODE + 3] = REST
@@ -265,12 +248,10 @@ class AdaptiveKalman:
             self.p[:] = s.p0_dps2
             self.fstate[C_HAT] = s.p0_dps2 + self.r_dps2
 
-    def run(self, y, out, trace=NO_TRACE, y_motion=None, used=NO_USED, v=None):
-        """Block means y (M, 3) -> out (M, 3); ``trace``, ``y_motion`` (default: y), ``used`` and ``v`` (default:
-        R, the noise scale staying sigma_b) as in :func:`run_blocks_adaptive`."""
-        if v is None:
-            v = np.ascontiguousarray(np.broadcast_to(self.r_dps2, y.shape))
-        self._kernel(y, y if y_motion is None else y_motion, v, out, *self._args, trace, used)
+    def run(self, y, out, trace=NO_TRACE, y_motion=None, used=NO_USED):
+        """Block means y (M, 3) -> out (M, 3); ``trace``, ``y_motion`` (default: y) and ``used`` as
+        in :func:`run_blocks_adaptive`."""
+        self._kernel(y, y if y_motion is None else y_motion, out, *self._args, trace, used)
 
     def modes(self):
         """Per axis: the model the next block starts in (REST or MOTION), a list of 3 ints."""

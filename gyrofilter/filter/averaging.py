@@ -190,57 +190,6 @@ def average_blocks_line_if_cut(blocks, q, paper=None):
     return out, rejected, np.zeros(out.shape, dtype=bool)
 
 
-def within_variance(values):
-    """The white-noise variance of a block's mean that the block's own samples imply, (deg/s)^2: their residual
-    variance about their least-squares line over L, with o_i = i - (L - 1) / 2,
-
-        v = (sum_i (x_i - m)^2 - (sum_i o_i x_i)^2 / sum_i o_i^2) / ((L - 2) L),    m = (1/L) sum_i x_i
-
-    (0 for L < 3). A smooth motion, however fast, leaves only the sensor's noise about the line; a vibration
-    leaves its swing. It bounds the noise scale the rest model may take from the block means
-    (:func:`gyrofilter.filter.hold.rest_scale`), so that a fast motion is never taken for noise.
-    ``values``: one block's samples (a sequence of floats, deg/s); :func:`within_variances` is the vectorised
-    form, with the same arithmetic."""
-    n = len(values)
-    if n < 3:
-        return 0.0
-    total = 0.0
-    for v in values:
-        total += v
-    mean = total / n
-    ss = 0.0
-    sxy = 0.0
-    sxx = 0.0
-    for i, v in enumerate(values):
-        o = i - (n - 1) / 2
-        ss += (v - mean) * (v - mean)
-        sxy += o * v
-        sxx += o * o
-    return max(ss - sxy * sxy / sxx, 0.0) / ((n - 2) * n)
-
-
-def within_variances(blocks):
-    """Vectorised :func:`within_variance` over the first axis of ``blocks`` (M, L[, ...]), deg/s -> (M[, ...])."""
-    blocks = np.asarray(blocks, dtype=float)
-    n = blocks.shape[1]
-    if n < 3:
-        return np.zeros(blocks.shape[:1] + blocks.shape[2:])
-    total = np.zeros(blocks.shape[:1] + blocks.shape[2:])
-    for i in range(n):
-        total += blocks[:, i]
-    mean = total / n
-    ss = np.zeros_like(mean)
-    sxy = np.zeros_like(mean)
-    sxx = 0.0
-    for i in range(n):
-        o = i - (n - 1) / 2
-        d = blocks[:, i] - mean
-        ss += d * d
-        sxy += o * blocks[:, i]
-        sxx += o * o
-    return np.maximum(ss - sxy * sxy / sxx, 0.0) / ((n - 2) * n)
-
-
 AVERAGERS = {
     "paper": (average_block, average_blocks),
     "median_slope": (average_block_median_slope, average_blocks_median_slope),

@@ -20,13 +20,11 @@ averages while the rate is constant and the unchanged paper-001 output as soon a
 Change detection (hold -> track), per axis: a two-sided CUSUM (Page 1954) of the normalised
 innovation of the held value,
 
-    d_k = (y_k - m_(k-1)) / s
+    d_k = (y_k - m_(k-1)) / sigma_b
     g+_k = max(0, g+_(k-1) + d_k - kappa),   g-_k = max(0, g-_(k-1) - d_k - kappa)
     change when g+_k > h or g-_k > h,
 
-with s the noise scale of the hold: sigma_b, the standard deviation of a block mean at rest (from the start-up
-calibration), at start, and from each switch to hold on, the scale of the window that passed the constancy test
-(:func:`rest_scale`: sigma_b, or more where a vibration grew or began after the calibration).
+with sigma_b the standard deviation of a block mean at rest (from the start-up calibration).
 kappa = 0.5 and h = 10 give an average run length between false alarms on white noise of about
 1e5 blocks per side (simulated; Siegmund's approximation (exp(2 kappa b) - 2 kappa b - 1) /
 (2 kappa^2), b = h + 1.166, gives 1.4e5), i.e. over an hour per axis and side at 20 blocks/s;
@@ -35,7 +33,7 @@ at once. A step of 1 deg/s (20 sigma_b) is caught in the same block and a 2 deg/
 3-4 blocks.
 
 Constancy test (track -> hold): the last W = ``window_blocks`` block means are consistent with a
-constant plus white noise of s = :func:`rest_scale`, (W - 1) var / s^2 below the chi-square quantile
+constant plus white noise of sigma_b, (W - 1) s^2 / sigma_b^2 below the chi-square quantile
 (probability ``accept_p``, Wilson-Hilferty approximation), their least-squares slope is within
 ``agree_z`` of its standard error (:func:`trend_free`), and the tracking output agrees with
 their mean within ``agree_z`` standard errors. Then m = the mean of the latest W / 2 of them
@@ -138,58 +136,14 @@ def trend_free(ring, a, head, sigma, z):
     return abs(total) < z * sigma * math.sqrt(window * (window * window - 1) / 12.0)
 
 
-#: median |y_j - y_(j-1)| of white noise of std sigma, over sigma: sqrt(2) x the normal quartile 0.6745 (rest_scale)
-MEDIAN_STEP_PER_SIGMA = 0.9539
-
-
-def rest_scale(ring, within, a, head, sigma):
-    """The noise scale of the constant-rate model: max(``sigma``, min(s_d, s_w)) for axis ``a``, with s_d the
-    median step between successive block means y_j in ``ring`` (3, W), the latest at ``head``, over its value
-    for white noise of std 1, and s_w^2 the mean over the same blocks of the block-mean variance their own samples
-    imply (``within`` (3, W): :func:`gyrofilter.filter.averaging.within_variance`):
-
-        s_d = median_j |y_j - y_(j-1)| / 0.9539,   s_w^2 = (1/W) sum_j v_j          (j = 0 the oldest)
-
-    White noise gives s_d ~ s_w ~ sigma. A vibration that grew after the calibration, or began after it, raises
-    both (s_d with the block means' scatter, s_w with its swing within the blocks), where sigma alone, from the
-    calibration window, kept the axis out of rest for good (attack pass 41: a vibration 3.5x the calibration's
-    after a turn, 1-3 deg/s rms at rest until power-off; one from power-off, the block means' 0.3-1.7). A smooth
-    motion, however fast, raises s_d but not s_w: its trend still fails the test. The median keeps a block mean
-    that a gross error biased (a sample cut from a vibrating block) from raising s_d: the mean square (tried)
-    then let such a window pass with its biased block, and the held rate read +0.07 deg/s for a minute."""
-    window = ring.shape[1]
-    within_total = 0.0
-    for j in range(window):
-        within_total += within[a, j]
-    w = math.sqrt(within_total / window)
-    if w <= sigma:
-        return sigma  # min(s_d, s_w) <= sigma: no need of the median
-    steps = np.empty(window - 1)
-    previous = ring[a, (head + 1) % window]
-    for j in range(1, window):
-        v = ring[a, (head + 1 + j) % window]
-        steps[j - 1] = abs(v - previous)
-        previous = v
-    steps.sort()
-    mid = (window - 1) // 2
-    median = steps[mid] if (window - 1) % 2 else (steps[mid - 1] + steps[mid]) / 2.0
-    s = median / MEDIAN_STEP_PER_SIGMA
-    if w < s:
-        s = w
-    return s if s > sigma else sigma
-
-
-def hold_blocks(y, x, v, out, sigma, scale, ring, within, mean, g_pos, g_neg, ints, kappa, h, max_blocks, chi2_limit,
-                agree_z):
+def hold_blocks(y, x, out, sigma, ring, mean, g_pos, g_neg, ints, kappa, h, max_blocks, chi2_limit, agree_z):
     """The stage over M blocks: y (M, 3) block means, x (M, 3) tracking outputs -> out (M, 3), deg/s.
 
     ``sigma``: sigma_b per axis (deg/s); ``kappa``, ``h``: the CUSUM's allowance and threshold;
     ``max_blocks``: memory of the held mean; ``chi2_limit``: the constancy test's chi-square
     quantile; ``agree_z``: the agreement limit (standard errors); see the module docstring.
 
-    ``v`` (M, 3): each block's :func:`~gyrofilter.filter.averaging.within_variance` (:func:`rest_scale`).
-    State arrays are updated in place (ring (3, W) of block means, within (3, W) of their v, scale (3,): the
-    noise scale of the CUSUM, set from :func:`rest_scale` when a hold starts, mean, g_pos, g_neg (3,),
+    State arrays are updated in place (ring (3, W) of block means, mean, g_pos, g_neg (3,),
     ints (11,) int64: filled, head, holding[3], count[3], switches[3]). Written in the subset of
     Python numba compiles; :class:`ConstantRateHold` calls it one block at a time (streaming) or
     once for all blocks (batch), so both give the same numbers.
@@ -199,16 +153,16 @@ def hold_blocks(y, x, v, out, sigma, scale, ring, within, mean, g_pos, g_neg, in
         head = ints[HEAD]
         for a in range(3):
             ring[a, head] = y[k, a]
-            within[a, head] = v[k, a]
         ints[HEAD] = (head + 1) % window
         if ints[FILLED] < window:
             ints[FILLED] += 1
         for a in range(3):
             ya = y[k, a]
             xa = x[k, a]
+            s = sigma[a]
             if ints[HOLDING + a] == 1:
                 # hold: two-sided CUSUM of the innovation of the held value
-                d = (ya - mean[a]) / scale[a]
+                d = (ya - mean[a]) / s
                 g_pos[a] = max(0.0, g_pos[a] + d - kappa)
                 g_neg[a] = max(0.0, g_neg[a] - d - kappa)
                 if g_pos[a] > h or g_neg[a] > h:
@@ -226,7 +180,6 @@ def hold_blocks(y, x, v, out, sigma, scale, ring, within, mean, g_pos, g_neg, in
                 out[k, a] = xa
                 if ints[FILLED] == window:
                     # track: are the last W block means a constant plus white noise?
-                    s = rest_scale(ring, within, a, head, sigma[a])
                     m = 0.0
                     for j in range(window):
                         m += ring[a, j]
@@ -237,7 +190,6 @@ def hold_blocks(y, x, v, out, sigma, scale, ring, within, mean, g_pos, g_neg, in
                     if ss / (s * s) < chi2_limit and abs(xa - m) < agree_z * s and trend_free(ring, a, head, s, agree_z):
                         ints[HOLDING + a] = 1
                         ints[SWITCHES + a] += 1
-                        scale[a] = s
                         mean[a] = recent_mean(ring, a, head)
                         ints[COUNT + a] = window // 2
                         g_pos[a] = 0.0
@@ -277,14 +229,12 @@ class ConstantRateHold:
         if backend not in ("auto", "python", "numba"):
             raise SettingsError(f"setting backend={backend!r}: must be 'auto', 'python' or 'numba'")
         self.sigma = sigma.copy()
-        self.scale = sigma.copy()
         self.kappa = float(cusum_kappa)
         self.h = float(cusum_h)
         self.max_blocks = int(max_blocks)
         self.chi2_limit = chi2_quantile(accept_p, int(window_blocks) - 1)
         self.agree_z = float(agree_z)
         self.ring = np.zeros((3, int(window_blocks)))
-        self.within = np.zeros((3, int(window_blocks)))
         self.mean = np.zeros(3)
         self.g_pos = np.zeros(3)
         self.g_neg = np.zeros(3)
@@ -294,11 +244,10 @@ class ConstantRateHold:
             self.ints[COUNT : COUNT + 3] = min(int(initial_blocks), self.max_blocks)
         self._kernel = choose_kernel(hold_blocks, backend)
         # the kernel's state arguments, bound once: the arrays are updated in place
-        self._args = (self.sigma, self.scale, self.ring, self.within, self.mean, self.g_pos, self.g_neg, self.ints,
+        self._args = (self.sigma, self.ring, self.mean, self.g_pos, self.g_neg, self.ints,
                       self.kappa, self.h, self.max_blocks, self.chi2_limit, self.agree_z)
         self._y1 = np.zeros((1, 3))
         self._x1 = np.zeros((1, 3))
-        self._v1 = np.zeros((1, 3))
         self._o1 = np.zeros((1, 3))
 
     @property
@@ -311,36 +260,33 @@ class ConstantRateHold:
         """Per axis: number of hold <-> track switches so far."""
         return [int(v) for v in self.ints[SWITCHES : SWITCHES + 3]]
 
-    def step(self, y_dps, x_dps, v_dps2, out_dps):
-        """Fast path for a pipeline: (M, 3) float64 C arrays in (``v_dps2``: each block's
-        :func:`~gyrofilter.filter.averaging.within_variance`), ``out_dps`` (M, 3) written in
+    def _call(self, y, x, out):
+        return self._kernel(y, x, out, *self._args)
+
+    def step(self, y_dps, x_dps, out_dps):
+        """Fast path for a pipeline: (M, 3) float64 C arrays in, ``out_dps`` (M, 3) written in
         place (it may be ``x_dps`` or ``y_dps`` itself: each element is read before it is
         written); no checks, no allocation."""
-        self._kernel(y_dps, x_dps, v_dps2, out_dps, *self._args)
+        self._kernel(y_dps, x_dps, out_dps, *self._args)
 
-    def update(self, y_block_dps, x_track_dps, within_dps2=None):
+    def update(self, y_block_dps, x_track_dps):
         """One block: the block mean y = ``y_block_dps`` (3,) and the tracking filter's output
-        x = ``x_track_dps`` (3,), deg/s -> output (3,), deg/s. ``within_dps2``: the block's
-        :func:`~gyrofilter.filter.averaging.within_variance` per axis, (deg/s)^2 (default sigma_b^2: the noise
-        scale stays sigma_b)."""
+        x = ``x_track_dps`` (3,), deg/s -> output (3,), deg/s."""
         self._y1[0] = y_block_dps
         self._x1[0] = x_track_dps
-        self._v1[0] = self.sigma**2 if within_dps2 is None else within_dps2
-        self.step(self._y1, self._x1, self._v1, self._o1)
+        self._call(self._y1, self._x1, self._o1)
         return tuple(self._o1[0].tolist())
 
-    def run(self, y_blocks_dps, x_track_dps, within_dps2=None):
+    def run(self, y_blocks_dps, x_track_dps):
         """Batch form: ``y_blocks_dps`` (M, 3) block means and ``x_track_dps`` (M, 3) tracking
-        outputs, deg/s, ``within_dps2`` (M, 3) as in :meth:`update` -> (M, 3); same numbers as update()."""
+        outputs, deg/s -> (M, 3); same numbers as update()."""
         y = np.ascontiguousarray(y_blocks_dps, dtype=float)
         x = np.ascontiguousarray(x_track_dps, dtype=float)
         if y.shape != x.shape or y.ndim != 2 or y.shape[1] != 3:
             raise SettingsError(f"block means {y.shape} and tracking output {x.shape} must both be (M, 3)")
-        v = np.ascontiguousarray(np.broadcast_to(self.sigma**2 if within_dps2 is None else within_dps2, y.shape),
-                                 dtype=float)
         out = np.empty_like(y)
         if len(y):
-            self.step(y, x, v, out)
+            self._call(y, x, out)
         return out
 
 

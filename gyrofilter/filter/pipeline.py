@@ -23,7 +23,7 @@ import numpy as np
 
 from . import adaptive_kalman, kalman
 from .hold import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
-from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut, within_variance, within_variances
+from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
 from .calibration import Calibration, calibrate, calibration_samples, noise_calibration_samples, without_gross_errors
 from ..errors import CalibrationError, SampleError, SettingsError
 from ..inputs import check_number, did_you_mean
@@ -97,7 +97,6 @@ class GyroFilter:
         self._temp_ref = None  # T0 of the temperature compensation: the calibration's mean temperature
         self._temp_seen = temperature_history()  # the latest temperatures: T is their running median
         self._y1 = np.zeros((1, 3))
-        self._v1 = np.zeros((1, 3))  # the block's within-block variances (averaging.within_variance)
         self._y1_motion = np.zeros((1, 3))  # outlier_rule="by_model": the motion rule's block mean
         self._out1 = np.zeros((1, 3))
         self._hold = None  # constant-rate hold stage (gyrofilter.filter.hold), built after calibration
@@ -252,7 +251,6 @@ class GyroFilter:
         columns = list(zip(*block))
         q = self._threshold.one(columns)
         y1 = self._y1
-        v1 = self._v1
         modes = self._akf.modes() if self._by_model else None
         for a, values in enumerate(columns):
             paper = mean, rejected, fallback = self._average_one(values, q[a])
@@ -265,8 +263,7 @@ class GyroFilter:
                 self.rejected[a] += rejected
                 self.fallback_blocks[a] += fallback
             y1[0, a] = mean - self._bias[a]
-            v1[0, a] = within_variance(values)
-        self._track(y1, v1, self._out1, self._y1_motion if self._by_model else None)
+        self._track(y1, self._out1, self._y1_motion if self._by_model else None)
         self.blocks_out += 1
         x, y, z = self._out1[0].tolist()
         return (x, y, z)
@@ -316,7 +313,6 @@ class GyroFilter:
             blocks = x[i : i + n_blocks * length].reshape(n_blocks, length, 3)
             q = self._threshold.many(blocks)
             y, rejected, fallback = paper = self._average_many(blocks, q)
-            v = within_variances(blocks)
             bias = np.asarray(self._bias)
             out = np.empty_like(y)
             if self._by_model:  # both rules' block means; the kernel takes one by its model, and says which
@@ -324,13 +320,13 @@ class GyroFilter:
                 y -= bias
                 y_motion -= bias
                 used = np.empty((n_blocks, 3), dtype=np.int64)
-                self._track(y, v, out, y_motion, used)
+                self._track(y, out, y_motion, used)
                 motion = used == adaptive_kalman.MOTION
                 rejected = np.where(motion, rejected_motion, rejected)
                 fallback = fallback & ~motion
             else:
                 y -= bias
-                self._track(y, v, out)
+                self._track(y, out)
             self.rejected += rejected.sum(axis=0)
             self.fallback_blocks += fallback.sum(axis=0)
             self.blocks_out += n_blocks
@@ -421,21 +417,21 @@ class GyroFilter:
             check_temperature(float(t[row]), self._temp_on, f"temp_c row {row}", row)
         return t
 
-    def _track(self, y, v, out, y_motion=None, used=adaptive_kalman.NO_USED):
-        """Block means y (M, 3) and their within-block variances v (M, 3) -> output (M, 3): the tracker, then the
-        hold stage if enabled. ``y_motion``, ``used``: the adaptive filter's (adaptive_kalman.run_blocks_adaptive)."""
+    def _track(self, y, out, y_motion=None, used=adaptive_kalman.NO_USED):
+        """Block means y (M, 3) -> output (M, 3): the tracker, then the hold stage if enabled.
+        ``y_motion``, ``used``: the adaptive filter's (adaptive_kalman.run_blocks_adaptive)."""
         if self.settings.tracker != "kalman":
             out[:] = y
         elif not self._adaptive:
             self._pkf.run(y, out)
         elif self.block_log is None:
-            self._akf.run(y, out, adaptive_kalman.NO_TRACE, y_motion, used, v)
+            self._akf.run(y, out, adaptive_kalman.NO_TRACE, y_motion, used)
         else:
             trace = np.empty((len(y), 3, 3))
-            self._akf.run(y, out, trace, y_motion, used, v)
-            self.block_log.append(y, y if y_motion is None else y_motion, v, out, trace)
+            self._akf.run(y, out, trace, y_motion, used)
+            self.block_log.append(y, y if y_motion is None else y_motion, out, trace)
         if self._hold is not None:
-            self._hold.step(y, out, v, out)
+            self._hold.step(y, out, out)
 
     def _finish_calibration(self):
         s = self.settings

@@ -28,8 +28,9 @@ blocks' range (``outlier_range_k`` = :data:`VIBRATION_RANGE_K`, gyrofilter.filte
 vibration that swings by more than q within a block is kept, not cut as gross errors.
 
 ``recommended`` is ``adaptive_kalman``: on both halves of the split it reduces the static std as
-much as the hold (held out: >= 18.7x on every axis, 18.70x against the hold's 18.71x on the worst,
-``mpu6050_static_449s`` z: docs/evaluate.md), and its RMSE is no higher than the hold's on every
+much as the hold (held out: >= 17.3x on every axis, 17.27x against the hold's 17.31x on the worst;
+17.7x before the rest mean after motion started from the latest half of its window, which a turn
+under a vibration needed: docs/evaluate.md), and its RMSE is no higher than the hold's on every
 profile and BROAD trial: lower on the slow ``paper001`` profile
 (the LS prior), on the 1-Hz sine, the chirp and every BROAD trial (the rule by model), equal on
 the steps.

@@ -56,21 +56,20 @@ LOG_CHUNK = 1024
 
 class BlockLog:
     """What a forward filter handed its adaptive Kalman stage and got back: the block means y and
-    y_motion and the blocks' within-block variances v (M, 3; see
-    :func:`gyrofilter.filter.adaptive_kalman.run_blocks_adaptive`), the posteriors x and
+    y_motion (M, 3; see :func:`gyrofilter.filter.adaptive_kalman.run_blocks_adaptive`), the posteriors x and
     their variances P (M, 3), joined by :meth:`arrays`. A kernel call's blocks are gathered in a
     buffer of :data:`LOG_CHUNK` blocks and kept a buffer at a time (a call of that many or more
-    as it is): 15 floats a block, also for a filter fed by ``update()``, one call a block (five
-    arrays a call cost 800 bytes a block)."""
+    as it is): 12 floats a block, also for a filter fed by ``update()``, one call a block (four
+    arrays a call cost 640 bytes a block)."""
 
     def __init__(self):
-        self._chunks = ([], [], [], [], [])
+        self._chunks = ([], [], [], [])
         self._buffer = np.empty((len(self._chunks), LOG_CHUNK, 3))
         self._filled = 0
 
-    def append(self, y, y_motion, v, x, trace):
+    def append(self, y, y_motion, x, trace):
         """One call of the kernel: its inputs, outputs and trace (M, 3, 3)."""
-        values = (y, y_motion, v, x, trace[:, adaptive_kalman.POST_VAR])
+        values = (y, y_motion, x, trace[:, adaptive_kalman.POST_VAR])
         n = len(y)
         if self._filled + n > LOG_CHUNK:
             self._keep_buffer()
@@ -90,7 +89,7 @@ class BlockLog:
             self._filled = 0
 
     def arrays(self):
-        """(y, y_motion, v, x, P) of every block so far, each joined into one array."""
+        """(y, y_motion, x, P) of every block so far, each joined into one array."""
         self._keep_buffer()
         if not self._chunks[0]:
             return tuple(np.empty((0, 3)) for _ in self._chunks)
@@ -138,7 +137,7 @@ class Smoother:
         The backward filter runs over the reversed block means ``BACKWARD_CHUNK`` blocks at a
         time, each chunk combined with the forward results as it comes, so the backward pass
         adds a fixed amount of memory."""
-        y, y_motion, v, x_f, p_f = self.log.arrays()
+        y, y_motion, x_f, p_f = self.log.arrays()
         backward = adaptive_kalman.AdaptiveKalman(self.filter.settings)
         backward.start(np.sqrt(self.filter._akf.r_dps2), still_blocks=0)
         smoothed = np.empty_like(x_f)
@@ -146,8 +145,7 @@ class Smoother:
             start = max(end - BACKWARD_CHUNK, 0)
             rows = slice(start, end)
             trace = np.empty((end - start, 3, 3))
-            backward.run(y[rows][::-1].copy(), np.empty((end - start, 3)), trace, y_motion[rows][::-1].copy(),
-                         v=v[rows][::-1].copy())
+            backward.run(y[rows][::-1].copy(), np.empty((end - start, 3)), trace, y_motion[rows][::-1].copy())
             trace = trace[::-1]
             smoothed[rows] = combine(x_f[rows], p_f[rows], trace[:, adaptive_kalman.PRIOR], trace[:, adaptive_kalman.PRIOR_VAR])
         return smoothed
