@@ -196,9 +196,9 @@ def test_after_a_small_ramp_under_a_vibration_the_rest_reads_still(preset, peak_
     assert np.median(after) < 0.03 and max(after) < 0.2
 
 
-def test_sigma_b_of_a_white_window_is_its_white_noise_level_and_of_a_vibrating_one_at_most_halved():
+def test_sigma_b_of_a_white_window_is_its_white_noise_level_and_of_a_vibrating_one_its_block_means_scatter():
     """block_noise_std: white noise keeps max(s_b, sigma_w / sqrt(L)) on every seed; a 45-Hz vibration's window gets
-    the block means' scatter, never below half the white-noise level."""
+    the upper 95 % bound of its block means' scatter, never below a quarter of the white-noise level."""
     rng = np.random.default_rng(3)
     for _ in range(20):
         white = rng.normal(0, 0.1, (200, 3))
@@ -207,8 +207,10 @@ def test_sigma_b_of_a_white_window_is_its_white_noise_level_and_of_a_vibrating_o
     for amplitude in (1.0, 5.0):
         vibrating = rng.normal(0, 0.02, (200, 3)) + amplitude * np.sin(2 * np.pi * 45.0 * t[:, None] + [0, 1, 2])
         level = np.std(np.diff(vibrating, axis=0), axis=0, ddof=1) / math.sqrt(2 * 5)
-        sigma_b = block_noise_std(vibrating, 5)
-        assert np.all(sigma_b >= 0.5 * level - 1e-12) and np.all(sigma_b < 0.7 * level)
+        means = vibrating.reshape(40, 5, 3).mean(axis=1).std(axis=0, ddof=1)
+        bound = means * math.sqrt(39 / chi2_lower_quantile(0.95, 39))
+        np.testing.assert_allclose(block_noise_std(vibrating, 5), np.maximum(bound, 0.25 * level))
+        assert np.all(block_noise_std(vibrating, 5) < 0.5 * level)
 
 
 def test_sigma_b_of_the_shipped_recordings_windows_is_the_plain_rule():
