@@ -216,7 +216,9 @@ def test_sigma_b_of_a_white_window_is_its_white_noise_level_and_of_a_vibrating_o
 def test_sigma_b_of_the_shipped_recordings_windows_is_the_plain_rule():
     """The vibration rule must not touch a still sensor's window: a chi-square significance test (tried) took the
     real 655-s log's z window (block means' scatter 0.61 of the white level) for a vibration, and its copy with
-    spikes lost a fifth of its static reduction (docs/results.md, second table)."""
+    spikes lost a fifth of its static reduction; a trigger at 0.5 with 20 blocks (attack pass 43) took the same
+    log's z at sample 55000 for one (0.49: 4 false switches, 3x the output std). Every 50th 2-s window of the shipped
+    static logs keeps the plain rule."""
     from pathlib import Path
 
     from gyrofilter.filter.calibration import white_noise_std, without_gross_errors
@@ -226,11 +228,13 @@ def test_sigma_b_of_the_shipped_recordings_windows_is_the_plain_rule():
     assert len(paths) >= 5
     for path in paths:
         rec = read_recording(path)
-        window = without_gross_errors(rec.gyro_dps[: int(2 * rec.sample_rate_hz)], 1.0)[0]
-        m = len(window) // 5
-        plain = np.maximum(window[: 5 * m].reshape(m, 5, 3).mean(axis=1).std(axis=0, ddof=1),
-                           white_noise_std(window) / math.sqrt(5))
-        np.testing.assert_array_equal(block_noise_std(window, 5), plain, err_msg=path.name)
+        n = int(2 * rec.sample_rate_hz)
+        for start in [*range(0, len(rec.gyro_dps) - n, 50), 55000][: None if "655s" in path.name else -1]:
+            window = without_gross_errors(rec.gyro_dps[start : start + n], 1.0)[0]
+            m = len(window) // 5
+            plain = np.maximum(window[: 5 * m].reshape(m, 5, 3).mean(axis=1).std(axis=0, ddof=1),
+                               white_noise_std(window) / math.sqrt(5))
+            np.testing.assert_array_equal(block_noise_std(window, 5), plain, err_msg=f"{path.name} at {start}")
 
 
 def test_sigma_b_of_a_window_whose_few_block_means_are_equal_is_its_white_noise_level():

@@ -38,3 +38,15 @@ def test_a_kernel_is_compiled_anew_when_a_helper_in_another_file_changes(tmp_pat
         answers.append(float(done.stdout))
     assert answers == [2.0, 3.0]
     assert any((tmp_path / "__pycache__").glob("*.nbi"))  # the cache was used, not bypassed
+
+
+def test_a_kernel_is_compiled_anew_when_a_constant_its_helper_reads_changes(tmp_path):
+    """numba freezes a module constant a helper reads into the kernel; the helper's own source does not change
+    (attack pass 43: kalman.guard reads kalman's GUARD_RUN)."""
+    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
+    answers = []
+    for increment in ("1.0", "2.0"):
+        (tmp_path / "helper.py").write_text(f"STEP = {increment}\n\n\ndef step(x):\n    return x + STEP\n")
+        done = subprocess.run([sys.executable, "-c", RUN, str(tmp_path)], capture_output=True, text=True, check=True)
+        answers.append(float(done.stdout))
+    assert answers == [2.0, 3.0]

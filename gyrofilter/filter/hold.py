@@ -291,9 +291,9 @@ class ConstantRateHold:
 
 
 #: the calibration window's blocks from which a vibration's scatter of the block means is trusted (block_noise_std)
-VIBRATION_MIN_BLOCKS = 20
+VIBRATION_MIN_BLOCKS = 36
 #: the block means' scatter, over sigma_w / sqrt(L), below which the window is a vibration's (block_noise_std)
-VIBRATION_SCATTER = 0.5
+VIBRATION_SCATTER = 0.4
 #: how far below sigma_w / sqrt(L) a vibration can bring sigma_b (block_noise_std)
 VIBRATION_SIGMA_FLOOR = 0.25
 
@@ -310,16 +310,20 @@ def block_noise_std(window_dps, block_len):
 
     A vibration the blocks average out makes sigma_w / sqrt(L) far larger than the block means' scatter
     (5 deg/s at 45 Hz, 100 Hz: 2.2 deg/s against s_b = 0.5), and the rest model then misses a small motion and
-    holds the tail of it (+0.36 deg/s for seconds after 5 -> 0 deg/s in 1 s). Where the window has m >= 20
-    blocks and s_b < sigma_w / (2 sqrt(L)) (white noise: chi-square probability 4e-4 at m = 20, 5e-7 at 40),
+    holds the tail of it (+0.36 deg/s for seconds after 5 -> 0 deg/s in 1 s). Where the window has m >= 36
+    blocks (the default 2-s calibration from 90 Hz: a "100-Hz" MPU6050 log at 99.3 Hz has 39) and
+    s_b < 0.4 sigma_w / sqrt(L),
 
         sigma_b = max(s_b sqrt((m - 1) / chi2_0.05(m - 1)), sigma_w / (4 sqrt(L))),
 
     the upper 95 % bound of the block means' scatter, down to a quarter of the white-noise level (a half, tried
     first, still missed small turns under a vibration: a 1-deg/s turn under 10 deg/s at 45 Hz cost up to 5 degrees
-    of heading, a quarter 3.6; the block means 0.3: docs/evaluate.md). A significance
-    test alone (chi-square probability 0.001) was tried: the real 655-s MPU6050 log's z window has s_b 0.61 of
-    the white level, and its copy with spikes lost a fifth of its static reduction. The limits are from attack
+    of heading, a quarter 3.6; the block means 0.3: docs/evaluate.md). A tone's block means scatter at 0.18-0.41
+    of the white level (23-49 Hz at 100 Hz; 10-13 Hz, half a period a block, far above it). A still sensor's
+    never fell below 0.45 with 39-40 blocks (every 10th start of the five static MPU6050 logs, every 50th of two
+    ADIS16405 logs: 53 000 windows), but to 0.33 with 20 (attack pass 43: at 0.5 with 20 blocks a still log's
+    z got a sigma_b of 0.6, 4 false switches and 3x the output std); a chi-square test at probability 0.001
+    (tried first) took the 655-s log's z window at 0.61. The limits are also from attack
     pass 40, where sigma_b = the bound alone failed: a quiet quantised sensor's few blocks (m = 2-10) can have
     equal means (sigma_b 0: no averaging at all), and a 2-s window misses the slow beat of a vibration near a
     multiple of the block rate (49.9 Hz at 100 Hz), which a small sigma_b then follows.

@@ -4,7 +4,6 @@ A kernel is a plain function written in the subset of Python that numba compiles
 numba it runs interpreted, with the same arithmetic and so the same numbers.
 """
 import hashlib
-import inspect
 import types
 
 from ..errors import SettingsError
@@ -59,10 +58,13 @@ def _compile(fn):
 
 
 def helpers_fingerprint(helpers):
-    """12 hex digits of the SHA-256 of the compiled helpers' names and sources (a helper's own name carries
-    its helpers' fingerprint, so the digest covers every level)."""
+    """12 hex digits of the SHA-256 of the compiled helpers' names and the source files that define them
+    (the module, not the function: numba freezes the module constants a helper reads, such as kalman's guard
+    indices, into the kernel; attack pass 43). A helper's own name carries its helpers' fingerprint, so the
+    digest covers every level."""
     digest = hashlib.sha256()
     for name in sorted(helpers):
         py_func = helpers[name].py_func
-        digest.update(f"{name}\0{py_func.__qualname__}\0{inspect.getsource(py_func)}\0".encode())
+        with open(py_func.__code__.co_filename, "rb") as source:
+            digest.update(f"{name}\0{py_func.__qualname__}\0".encode() + source.read() + b"\0")
     return digest.hexdigest()[:12]
