@@ -26,27 +26,27 @@ RUN = textwrap.dedent("""
 """)
 
 
+def _answers(tmp_path, helper_source):
+    """The kernel's answer to 1.0 in a fresh process, once with each helper source (``helper_source`` formatted
+    with the increments 1.0 and 2.0), the kernel's own file unchanged."""
+    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
+    answers = []
+    for increment in ("1.0", "2.0"):
+        (tmp_path / "helper.py").write_text(helper_source.format(increment=increment))
+        done = subprocess.run([sys.executable, "-c", RUN, str(tmp_path)], capture_output=True, text=True, check=True)
+        answers.append(float(done.stdout))
+    return answers
+
+
 def test_a_kernel_is_compiled_anew_when_a_helper_in_another_file_changes(tmp_path):
     """As after an upgrade that changed gyrofilter.filter.hold but not adaptive_kalman: numba's cache is keyed on
     the kernel's own file, and served the kernel compiled with the old helper (seen: the rest model's old trend
     test after hold.trend_free changed)."""
-    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
-    answers = []
-    for increment in ("1.0", "2.0"):
-        (tmp_path / "helper.py").write_text(f"def step(x):\n    return x + {increment}\n")
-        done = subprocess.run([sys.executable, "-c", RUN, str(tmp_path)], capture_output=True, text=True, check=True)
-        answers.append(float(done.stdout))
-    assert answers == [2.0, 3.0]
+    assert _answers(tmp_path, "def step(x):\n    return x + {increment}\n") == [2.0, 3.0]
     assert any((tmp_path / "__pycache__").glob("*.nbi"))  # the cache was used, not bypassed
 
 
 def test_a_kernel_is_compiled_anew_when_a_constant_its_helper_reads_changes(tmp_path):
     """numba freezes a module constant a helper reads into the kernel; the helper's own source does not change
     (attack pass 43: kalman.guard reads kalman's GUARD_RUN)."""
-    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
-    answers = []
-    for increment in ("1.0", "2.0"):
-        (tmp_path / "helper.py").write_text(f"STEP = {increment}\n\n\ndef step(x):\n    return x + STEP\n")
-        done = subprocess.run([sys.executable, "-c", RUN, str(tmp_path)], capture_output=True, text=True, check=True)
-        answers.append(float(done.stdout))
-    assert answers == [2.0, 3.0]
+    assert _answers(tmp_path, "STEP = {increment}\n\n\ndef step(x):\n    return x + STEP\n") == [2.0, 3.0]
