@@ -41,6 +41,31 @@ def test_the_bundled_recordings_figure_is_titled_by_its_name_not_the_package_pat
     assert titles == ["mpu6050_static_100s.csv.gz (bundled) (raw minus start-up bias)"]
 
 
+def test_a_replay_without_a_start_up_calibration_says_so_in_its_figure_and_table(tmp_path, monkeypatch, capsys):
+    """A new user's trial: with --calibration FILE (the moving mpu6050_rotate_z_24s needs one) the figure's title
+    still said "raw minus start-up bias" and the table's note "the samples after the calibration window", though
+    no window was taken; with --calibration-s 0 nothing is removed at all."""
+    import gyrofilter.plots
+
+    titles = []
+    monkeypatch.setattr(gyrofilter.plots, "plot_filtered", lambda path, raw, filtered, title: titles.append(title)
+                        or open(path, "wb").close())
+    monkeypatch.setattr(gyrofilter.plots, "check_figure_path", lambda path: None)
+    cal = tmp_path / "cal.json"
+    assert main(["replay", "--save-calibration", str(cal)]) == 0
+    notes = []
+    for extra in (["--calibration", str(cal)], ["--calibration-s", "0", "--preset", "paper"], []):
+        capsys.readouterr()
+        assert main(["replay", "--plot", str(tmp_path / f"r{len(notes)}.png"), *extra]) == 0
+        notes.append(capsys.readouterr().out.split("(deg/s; ")[1])
+    assert titles == [f"mpu6050_static_100s.csv.gz (bundled) (raw minus the bias loaded from {cal})",
+                      "mpu6050_static_100s.csv.gz (bundled) (raw)",
+                      "mpu6050_static_100s.csv.gz (bundled) (raw minus start-up bias)"]
+    assert [("after the calibration window" in n, "no bias removed" in n) for n in notes] == [
+        (False, False), (False, True), (True, False)]
+    assert all("rejected = samples left out of their block's mean as gross errors" in n for n in notes)
+
+
 def test_a_missing_csv_whose_gz_exists_names_it(tmp_path, capsys):
     """Issue 38: a .csv/.csv.gz mix-up said only "No such file"."""
     write_recording(tmp_path / "rec.csv.gz", Recording.from_dps(np.zeros((10, 3)), 100.0))

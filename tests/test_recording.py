@@ -819,6 +819,20 @@ def test_long_values_in_errors_are_quoted_short(tmp_path):
     assert len(str(info.value)) < 300
 
 
+@pytest.mark.parametrize("first, hint", [("# gyrofilter\n\nReal-time filtering\n", True), ("# notes\n", True),
+                                         ("# gyrofilter-recording: 1\n# sample_rate_hz 100\n", False)])
+def test_a_file_whose_first_line_is_not_a_header_key_says_how_a_recording_starts(tmp_path, first, hint):
+    """A new user's trial: `replay README.md` said only "line 1: header line is not 'key: value'", where a CSV
+    of another tool got the recording's first lines and `gyrofilter convert`; a bad line further down is the
+    recording's own, named alone."""
+    path = tmp_path / "some.md"
+    path.write_text(first + "0,1,2,3\n")
+    with pytest.raises(RecordingError, match="header line is not 'key: value'") as info:
+        read_recording(path)
+    assert ("a recording starts with '# gyrofilter-recording: 1'" in str(info.value)) is hint
+    assert ("gyrofilter convert" in str(info.value)) is hint
+
+
 @pytest.mark.parametrize("unit, extra, cell", [("rad/s", "", "1e308"), ("dps", "", "-100000.5"),
                                                ("lsb", "# lsb_per_dps: 0.1\n", "10000.1")])
 def test_a_rate_no_gyro_reads_is_refused_naming_its_line(tmp_path, unit, extra, cell):

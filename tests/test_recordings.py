@@ -178,3 +178,27 @@ def test_converter_refuses_values_off_the_lsb_grid(tmp_path):
     bad = good + np.array([[0.0, 0.0, 1e-6]])
     with pytest.raises(conv.ConversionError, match=r"x.csv: data row 1, gyro column 2"):
         conv.quantize_lossless(bad, 131, "gyro", "x.csv")
+
+
+def test_the_readmes_commands_filter_the_recording_that_turns_from_its_first_sample(tmp_path, monkeypatch, capsys):
+    """A new user's trial: `gyrofilter replay recordings/mpu6050_rotate_z_24s.csv.gz` is refused ("the sensor
+    moved": it turns from its first sample) and recordings/README.md did not say what to do. Its commands (run
+    word for word from the repository) save a calibration from a still recording and filter the turning one
+    with it: two turns of 360 degrees about z (the upstream's "two 360-degree CCW turns")."""
+    import shlex
+
+    from gyrofilter.cli import main
+
+    text = (RECORDINGS / "README.md").read_text(encoding="utf-8")
+    commands = [shlex.split(line) for line in text.split("```sh\n", 1)[1].split("```", 1)[0].splitlines()]
+    assert [c[:2] for c in commands] == [["gyrofilter", "replay"]] * 2
+    monkeypatch.chdir(REPO)
+    out = tmp_path / "rows.csv"
+    names = {"cal655.json": str(tmp_path / "cal655.json")}  # the README's file, written outside the repository
+    assert main(["replay", commands[1][2]]) == 2
+    assert "the sensor moved" in capsys.readouterr().err
+    for command in commands:
+        assert main([names.get(a, a) for a in command[1:]] + (["--out", str(out)] if command is commands[1] else [])) == 0
+    rows = read_recording(out)
+    turned = rows.gyro_dps[:, 2].sum() / rows.sample_rate_hz
+    assert 690 < turned < 730, turned

@@ -222,8 +222,10 @@ def print_summary(path, head, filt, raw, filtered, calibration_from=None, smooth
         print(f"  {name}    {_number(raw.mean[a], 9, sign=True)}  {_number(raw_std[a], 9)}  {_number(filtered.mean[a], 9, sign=True)}"
               f"  {_number(f_std[a], 9)}  {ratio}  {int(filt.rejected[a]):8d}")
     removed = "bias removed" if cal is not None else "no calibration, so no bias removed"
-    print("  (deg/s; raw = the samples after the calibration window that the filter consumed, bias included;\n"
-          f"   filt = the filtered rows, {removed}; n/a = undefined)")
+    consumed = "after the calibration window " if cal is not None and not calibration_from else ""
+    print(f"  (deg/s; raw = the samples {consumed}that the filter consumed, bias included;\n"
+          f"   filt = the filtered rows, {removed}; n/a = undefined;\n"
+          "   rejected = samples left out of their block's mean as gross errors: docs/filter.md, step 3)")
 
 
 def _number(value, width, sign=False, decimals=4):

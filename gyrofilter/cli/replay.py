@@ -72,7 +72,7 @@ def run(args):
         # every output goes through replacing(): all land when the command succeeds, none when it fails
         if args.plot:
             plots.plot_filtered(files.enter_context(outputs.replacing(args.plot)), replay.raw_envelope,
-                                replay.filtered_envelope, title=f"{args.recording or BUNDLED + ' (bundled)'} (raw minus start-up bias)")
+                                replay.filtered_envelope, title=f"{args.recording or BUNDLED + ' (bundled)'} ({raw_words(filt, args.calibration)})")
         saved = filtering.save_calibration(args.save_calibration, filt, files)
     console.print_warnings(head.warnings)
     warn_about_gaps(head, "the filter treats the samples as uniform", console.say_warning)
@@ -123,6 +123,14 @@ def _refuse_nothing_filtered(path, head, filt, way_through):
         advice = (f": {way_through}" if filt.calibrating or filt.samples_in > filt.pending_samples else "")  # a window took samples
         raise RecordingError(f"{path}: its {filt.samples_in} samples ({filt.samples_in / head.sample_rate_hz:.2f} s) end "
                              f"{where}; nothing filtered{advice}")
+
+
+def raw_words(filt, calibration_from):
+    """What replay's plot calls its raw curve: the samples minus the bias the filter ``filt`` removed (from its start-up
+    calibration, or loaded from ``calibration_from``), or the plain samples without a calibration."""
+    if filt.calibration is None:
+        return "raw"
+    return "raw minus " + ("the bias loaded from " + calibration_from if calibration_from else "start-up bias")
 
 
 class Replay:

@@ -213,6 +213,11 @@ def header_text(header, columns, where):
     return "\n".join(lines) + "\n"
 
 
+#: what an error on a file that is not a recording adds: how one starts, and where another tool's log goes
+NOT_A_RECORDING = ("a recording starts with '# gyrofilter-recording: 1', '# sample_rate_hz: RATE', "
+                   "'# gyro_unit: dps|rad/s|lsb'; another tool's log: gyrofilter convert")
+
+
 def check_header(header, where):
     """Refuse a header (key -> value text) that is not one of format v1, with RecordingError
     naming ``where`` (the file): the version, the required keys, ``sample_rate_hz`` a plain
@@ -230,9 +235,7 @@ def check_header(header, where):
         refuse_invisible(key, "header key", where)
     missing = [key for key in (VERSION_KEY, *FACT_KEYS) if key not in header]
     if missing:
-        raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; a recording starts with "
-                             "'# gyrofilter-recording: 1', '# sample_rate_hz: RATE', '# gyro_unit: dps|rad/s|lsb'; "
-                             "another tool's log: gyrofilter convert")
+        raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; {NOT_A_RECORDING}")
     version = header[VERSION_KEY]
     if version != FORMAT_VERSION:
         raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")

@@ -14,8 +14,8 @@ from ..errors import RecordingError, SettingsError
 from ..inputs import check_number, is_plain_number, quote
 from .checks import TimeCheck, check_rates
 from .content import Note, Recording, RecordingHead
-from .header import (MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, check_accelerometer, check_columns, check_header,
-                     refuse_invisible, refuse_rowless)
+from .header import (MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, NOT_A_RECORDING, check_accelerometer, check_columns,
+                     check_header, refuse_invisible, refuse_rowless)
 from .lines import blame_gzip_damage, line_chunks
 
 #: most lines per chunk of :func:`iter_recording` (a chunk also ends with each block of text)
@@ -203,7 +203,8 @@ def _parse_header(lines, path):
         key, sep, value = body.partition(":")
         key = key.strip()
         if not sep or not key:
-            raise RecordingError(f"{path}: line {i + 1}: header line is not 'key: value': {quote(ln)}")
+            hint = f"; {NOT_A_RECORDING}" if i == 0 else ""  # line 1 is the version's: another file altogether
+            raise RecordingError(f"{path}: line {i + 1}: header line is not 'key: value': {quote(ln)}{hint}")
         refuse_invisible(key, "header key", f"{path}: line {i + 1}")  # before the repeat: 'k\u200b' shows as 'k'
         if key in header:
             raise RecordingError(f"{path}: line {i + 1}: header key {quote(key)} repeated (first on line {line_of[key]})")

@@ -347,8 +347,8 @@ def weigh_readings(inp, state, scorer):
         if d_other > d_first + spread:
             state = state.with_notes(weighed + f": {first_named} is clearly better, {other_named} is not listed")
             continue
-        why = ("the temperature is kept (named where its coefficient's interval does not hold 0), the time reading "
-               "listed as its alternatives" if covariate_first else
+        why = ("the temperature reading is preferred, the time reading listed as its alternatives (the temperature "
+               "itself is named only where its coefficient's interval does not hold 0)" if covariate_first else
                "the time reading is named (the temperature reading needs a wander besides, the time reading does "
                "not), the temperature reading listed as its alternatives")
         state = state.with_notes(weighed + f": the record cannot tell them apart; {why}")
