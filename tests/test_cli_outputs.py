@@ -14,7 +14,7 @@ from gyrofilter import files
 from gyrofilter.cli import outputs
 from gyrofilter.errors import SettingsError
 from gyrofilter.recording import Recording, read_recording, write_recording
-from support import REPO, RECORDINGS, file_named_by_bytes
+from support import REPO, RECORDINGS, UNDER_A_SIZE_LIMIT, file_named_by_bytes
 from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 
 
@@ -458,16 +458,6 @@ def test_outputs_land_together_or_none_when_one_name_was_taken_meanwhile(tmp_pat
     assert sorted(os.listdir(tmp_path)) == ["a.json"]
 
 
-_UNDER_A_SIZE_LIMIT = """
-import json, resource, signal, sys
-from gyrofilter.cli import main
-signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[1]), int(sys.argv[1])))
-for argv in json.loads(sys.argv[2]):
-    print("exit", main(argv), flush=True)
-"""
-
-
 def test_a_write_that_fails_names_the_file_and_says_it_was_not_written(tmp_path):
     """Issue 37 (9): under a file size limit (a full disk alike) every command that writes a whole
     file says "FILE: File too large; not written" (docs/formats.md section 8), leaves nothing behind
@@ -481,7 +471,7 @@ def test_a_write_that_fails_names_the_file_and_says_it_was_not_written(tmp_path)
                 "kalibr.yaml": ["allan", str(rec), "--kalibr"],
                 "report.html": ["report", str(rec), "--sims", "10"]}
     argvs = [argv + ([] if argv[-1].startswith("--") else ["--out"]) + [str(out / name)] for name, argv in commands.items()]
-    proc = subprocess.run([sys.executable, "-c", _UNDER_A_SIZE_LIMIT, "200", json.dumps(argvs)],
+    proc = subprocess.run([sys.executable, "-c", UNDER_A_SIZE_LIMIT, "200", json.dumps(argvs)],
                           capture_output=True, text=True, timeout=120, cwd=REPO)
     assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * len(commands)
     lines = [line for line in proc.stderr.splitlines() if not line.startswith(("gyrofilter: warning", "  "))]  # a warning's lines
@@ -500,7 +490,7 @@ def test_convert_and_arma_under_a_size_limit_say_what_was_not_written(tmp_path):
     out = tmp_path / "out"
     argvs = [["convert", str(log), "--out", str(out / "c.csv.gz")], ["convert", str(log), "--out", str(out / "c.csv")],
              ["arma", str(rec), "--axis", "x", "--max-n", "1", "--json", str(out / "a.json")]]
-    proc = subprocess.run([sys.executable, "-c", _UNDER_A_SIZE_LIMIT, "100", json.dumps(argvs)],
+    proc = subprocess.run([sys.executable, "-c", UNDER_A_SIZE_LIMIT, "100", json.dumps(argvs)],
                           capture_output=True, text=True, timeout=120, cwd=REPO)
     assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * 3, proc.stderr
     lines = [line for line in proc.stderr.splitlines() if line.startswith("gyrofilter: error")]
@@ -517,7 +507,7 @@ def test_a_figure_that_fails_names_the_figure_not_its_folder(tmp_path):
     out = tmp_path / "out"
     argvs = [["gap", str(rec), "--sims", "10", "--bootstrap", "0", "--report", str(out / "rep")],
              ["allan", str(rec), "--plot", str(out / "allan.png")]]
-    proc = subprocess.run([sys.executable, "-c", _UNDER_A_SIZE_LIMIT, "2000", json.dumps(argvs)],
+    proc = subprocess.run([sys.executable, "-c", UNDER_A_SIZE_LIMIT, "2000", json.dumps(argvs)],
                           capture_output=True, text=True, timeout=120, cwd=REPO)
     assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * 2
     lines = [line for line in proc.stderr.splitlines() if not line.startswith(("gyrofilter: warning", "  "))]  # a warning's lines

@@ -27,6 +27,7 @@ from gyrofilter.sources.simulated import DEFAULT_MODEL_PATH
 from gyrofilter.cli.batch import expand
 from gyrofilter.recording import Recording, write_recording
 from gyrofilter.sim.simulate import simulate
+from support import REPO, UNDER_A_SIZE_LIMIT
 
 #: per-axis white noise of the simulated units (the 449-s MPU6050 recording), deg/s/sqrt(Hz)
 NOMINAL_ARW = {"x": 0.0075, "y": 0.011, "z": 0.0093}
@@ -451,6 +452,64 @@ def test_a_force_run_leaves_no_report_of_an_earlier_run_it_did_not_write(small_f
     assert main(["allan", str(copy), small_fleet[1], "--fleet", str(out), "--jobs", "1", "--force"]) == 0
     assert sorted(os.listdir(out)) == ["fleet.csv", "fleet.md", "unit1.allan.json", "unit1.imu.yaml"]
     capsys.readouterr()
+
+
+def test_a_run_that_fails_midway_leaves_its_finished_reports_alone_not_beside_an_earlier_run(tmp_path):
+    """Attack pass 45: a --force rerun whose second unit's report hit a file size limit (a full disk alike) left the
+    first unit's new reports beside the earlier run's fleet.csv and fleet.md (the first unit's N 5x off there) and
+    the earlier run's reports of the second unit, and said only "w2.allan.json: File too large; not written". The
+    folder now holds this run's finished reports alone, as a new folder does, and the line says so."""
+    rng = np.random.default_rng(45)
+    w1, w2 = tmp_path / "w1.csv", tmp_path / "w2.csv"
+    write_recording(w1, Recording.from_dps(rng.normal(0, 0.1, (6000, 3)), 100.0))
+    write_recording(w2, Recording.from_dps(rng.normal(0, 0.1, (120000, 3)), 100.0))  # more taus: a longer report
+    out, fresh = tmp_path / "fl", tmp_path / "new"
+    argv = ["allan", str(w1), str(w2), "--jobs", "1"]
+    assert main(argv + ["--fleet", str(out)]) == 0
+    earlier = (out / "w1.allan.json").read_text()
+    sizes = [(out / f"{w}.allan.json").stat().st_size for w in ("w1", "w2")]
+    limit = sum(sizes) // 2
+    assert sizes[0] + 200 < limit < sizes[1] - 200, sizes  # w1's report fits under it, w2's does not
+    write_recording(w1, Recording.from_dps(rng.normal(0, 0.5, (6000, 3)), 100.0))  # new data: N 5x larger
+    runs = [argv + ["--fleet", str(out), "--force"], argv + ["--fleet", str(fresh)]]
+    proc = subprocess.run([sys.executable, "-c", UNDER_A_SIZE_LIMIT, str(limit), json.dumps(runs)],
+                          capture_output=True, text=True, timeout=300, cwd=REPO)
+    assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * 2, proc.stderr
+    errors = [line for line in proc.stderr.splitlines() if line.startswith("gyrofilter: error")]
+    assert errors == [f"gyrofilter: error: {folder / 'w2.allan.json'}: File too large; not written; {folder} holds "
+                      "this run's reports of 1 unit(s) only (w1), without fleet.csv and fleet.md: run it again to "
+                      "finish" for folder in (out, fresh)], proc.stderr
+    for folder in (out, fresh):
+        assert sorted(os.listdir(folder)) == ["w1.allan.json", "w1.imu.yaml"]
+    assert (out / "w1.allan.json").read_text() != earlier
+    assert (out / "w1.allan.json").read_text() == (fresh / "w1.allan.json").read_text()
+
+
+def test_a_rerun_stopped_after_a_unit_leaves_its_finished_reports_alone(tmp_path):
+    """The interrupt of the case above (Ctrl-C, SIGTERM): a --force rerun stopped once its first unit's reports
+    landed removes the earlier run's fleet.csv, fleet.md and reports of the unit it did not reach, and says so."""
+    rng = np.random.default_rng(46)
+    w1, w2 = tmp_path / "w1.csv", tmp_path / "w2.csv"
+    write_recording(w1, Recording.from_dps(rng.normal(0, 0.1, (6000, 3)), 100.0))
+    write_recording(w2, Recording.from_dps(rng.normal(0, 0.1, (600_000, 3)), 100.0))  # a second of analysis or more
+    out = tmp_path / "fl"
+    argv = [sys.executable, "-m", "gyrofilter", "allan", str(w1), str(w2), "--jobs", "1", "--fleet", str(out)]
+    assert subprocess.run(argv, capture_output=True, timeout=300).returncode == 0
+    run = subprocess.Popen(argv + ["--force"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        lines = []
+        while not (lines and "[1/2" in lines[-1]) and run.poll() is None:
+            lines.append(run.stderr.readline())
+        assert run.poll() is None, "the fleet run ended before it could be stopped"
+        run.send_signal(signal.SIGTERM)
+        rest = run.communicate(timeout=60)[1]
+    finally:
+        run.kill()
+        run.wait()
+    assert run.returncode == 130
+    assert rest.splitlines()[-1] == (f"gyrofilter: interrupted; not written: fleet.csv and fleet.md ({out} holds this "
+                                     "run's reports of 1 unit(s) only (w1); run it again to finish)")
+    assert sorted(os.listdir(out)) == ["w1.allan.json", "w1.imu.yaml"]
 
 
 @pytest.mark.parametrize("args,message", [

@@ -18,7 +18,7 @@ import zlib
 
 from ..analysis.fleet import runner, table, work
 from ..analysis.still import NO_ACCEL_UNIT, NOT_STATIC
-from ..errors import SettingsError
+from ..errors import GyroFilterError, SettingsError
 from ..recording import VERSION_KEY
 from . import console, options, outputs
 
@@ -154,6 +154,36 @@ def run(args, settings, paths):
     for r in results:
         if r is not None:
             progress(f"{settings.command}: FAILED: {r['error']}", always=True)
+    finished = []  # the units whose reports this run has put in place (or removed: a failed file's)
+    try:
+        written = _analyse_and_write(stream, todo, results, names, paths, files, args.fleet, settings.command,
+                                     progress, t0, finished)
+        rows = table.fleet_rows(names, results)
+        stats = table.flag_units(rows)
+        title = f"Fleet: gyrofilter {settings.command}, {len(paths)} recordings"
+        for path in earlier:  # the folder holds this run's outputs only
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(path)
+        with outputs.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write(table.fleet_csv(rows))
+        with outputs.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(table.fleet_markdown(rows, stats, title=title, not_recordings=not_recordings))
+    except (OSError, GyroFilterError, KeyboardInterrupt) as exc:
+        if not finished:  # the folder is as the earlier run left it
+            raise
+        unreached = [os.path.join(args.fleet, name + suffix) for name in names if name not in finished
+                     for suffix, _, _ in files]
+        raise _stopped(exc, args.fleet, finished, earlier + fleet_files + unreached) from None
+    no_yaml = [f"{names[i]}: {w[len(work.NO_IMU_YAML):]}" for i, r in enumerate(results) for w in r["warnings"]
+               if w.startswith(work.NO_IMU_YAML)]
+    no_accel = [f"{names[i]}: {w[len(NO_ACCEL_UNIT):]}" for i, r in enumerate(results) for w in r["warnings"]
+                if w.startswith(NO_ACCEL_UNIT)]
+    return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml, no_accel, not_recordings)
+
+
+def _analyse_and_write(stream, todo, results, names, paths, files, folder, command, progress, t0, finished):
+    """Take each recording's result from ``stream`` as it comes, put its reports in ``folder`` (together) and
+    say so; append its unit name to ``finished`` once they are in place. Returns the number of reports written."""
     written = 0
     with contextlib.closing(stream):
         for done, (k, result) in enumerate(stream, 1):
@@ -162,28 +192,36 @@ def run(args, settings, paths):
             with contextlib.ExitStack() as reports:  # a recording's reports take their places together
                 for suffix, key, write in files:
                     if result[key] is not None:
-                        write(reports.enter_context(outputs.replacing(os.path.join(args.fleet, names[i] + suffix))),
+                        write(reports.enter_context(outputs.replacing(os.path.join(folder, names[i] + suffix))),
                               result[key])
                         written += 1
-            _drop_unwritten(args.fleet, names[i], files, result)
+            _drop_unwritten(folder, names[i], files, result)
+            finished.append(names[i])
             state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
                      else f"NOT STILL, skipped: {result['error']}" if result["skipped"] else f"FAILED: {result['error']}")
-            progress(f"{settings.command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}", always=True)
-    rows = table.fleet_rows(names, results)
-    stats = table.flag_units(rows)
-    title = f"Fleet: gyrofilter {settings.command}, {len(paths)} recordings"
-    for path in earlier:  # the folder holds this run's outputs only
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(path)
-    with outputs.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
-        fh.write(table.fleet_csv(rows))
-    with outputs.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(table.fleet_markdown(rows, stats, title=title, not_recordings=not_recordings))
-    no_yaml = [f"{names[i]}: {w[len(work.NO_IMU_YAML):]}" for i, r in enumerate(results) for w in r["warnings"]
-               if w.startswith(work.NO_IMU_YAML)]
-    no_accel = [f"{names[i]}: {w[len(NO_ACCEL_UNIT):]}" for i, r in enumerate(results) for w in r["warnings"]
-                if w.startswith(NO_ACCEL_UNIT)]
-    return _summary(rows, fleet_files, written, time.perf_counter() - t0, no_yaml, no_accel, not_recordings)
+            progress(f"{command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}", always=True)
+    return written
+
+
+def _stopped(exc, folder, finished, stale):
+    """``exc``, a failure or Ctrl-C after this run put the reports of the units ``finished`` in ``folder``, with what
+    the folder then holds: the earlier run's files that would stand beside them (``stale``: its fleet.csv and
+    fleet.md, whose numbers are not these reports', and its reports of the units this run did not reach; there only
+    under --force) are removed, so that the folder holds this run's finished reports alone, as a new folder would
+    (attack pass 45: a rerun whose second unit's report hit a file-size limit left the first unit's new reports
+    beside the earlier fleet.csv, 5x off, and the earlier reports of the rest, without a word)."""
+    outputs.remove_earlier(folder, [os.path.basename(p) for p in stale])
+    holds = (f"{folder} holds this run's reports of {len(finished)} unit(s) only ({', '.join(finished[:3])}"
+             f"{', ...' if len(finished) > 3 else ''})")
+    if isinstance(exc, KeyboardInterrupt):
+        exc.not_written = [*getattr(exc, "not_written", []), f"{FLEET_CSV} and {FLEET_MD} ({holds}; run it again "
+                                                               "to finish)"]
+        return exc
+    said = f"{holds}, without {FLEET_CSV} and {FLEET_MD}: run it again to finish"
+    if isinstance(exc, OSError):
+        return OSError(exc.errno, f"{exc.strerror or exc}; {said}", exc.filename)
+    exc.args = (f"{exc.args[0] if exc.args else exc}; {said}", *exc.args[1:])
+    return exc
 
 
 def _earlier_outputs(folder, own):

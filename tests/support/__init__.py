@@ -119,3 +119,15 @@ def play_lossy_device(primary, secondary, proc, lines, repeats, fields=b""):
     finally:
         os.close(primary)
         os.close(secondary)
+
+
+#: ``python -c UNDER_A_SIZE_LIMIT BYTES ARGVS_JSON``: each command line of ARGVS_JSON through gyrofilter's main under
+#: a file size limit of BYTES (a full disk alike: every write beyond it fails with EFBIG), printing "exit N" for each
+UNDER_A_SIZE_LIMIT = """
+import json, resource, signal, sys
+from gyrofilter.cli import main
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[1]), int(sys.argv[1])))
+for argv in json.loads(sys.argv[2]):
+    print("exit", main(argv), flush=True)
+"""
