@@ -819,6 +819,21 @@ def test_long_values_in_errors_are_quoted_short(tmp_path):
     assert len(str(info.value)) < 300
 
 
+@pytest.mark.parametrize("key, both", [("Gyro_Unit: rad/s", True), ("SAMPLE_RATE_HZ: 200", True),
+                                       ("gyrofilter_recording: 1", True), ("Accel_Unit: g", False),
+                                       ("Filtered-From: x.csv", False)])
+def test_a_header_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_it(tmp_path, key, both):
+    """Attack pass 45: `Gyro_Unit: rad/s` beside `gyro_unit: dps` was kept as an unrelated key without a word (the
+    samples read as deg/s); alone, `Accel_Unit` left the accelerometer without its unit. Keys are case-sensitive:
+    a key gyrofilter reads, spelt in another case or with "-" for "_", is refused, naming both spellings."""
+    name = key.split(":")[0]
+    meant = "gyrofilter-recording" if name == "gyrofilter_recording" else name.lower().replace("-", "_")
+    path = _dps_file(tmp_path, "0,1,2,3\n", header=f"# {key}\n")
+    with pytest.raises(RecordingError, match=re.escape(f"header key '{name}': gyrofilter reads '{meant}', spelt exactly "
+                                                       "so" + (" (the file has both)" if both else ""))):
+        read_recording(path)
+
+
 @pytest.mark.parametrize("first, hint", [("# gyrofilter\n\nReal-time filtering\n", True), ("# notes\n", True),
                                          ("# gyrofilter-recording: 1\n# sample_rate_hz 100\n", False)])
 def test_a_file_whose_first_line_is_not_a_header_key_says_how_a_recording_starts(tmp_path, first, hint):

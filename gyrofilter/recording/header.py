@@ -233,6 +233,10 @@ def check_header(header, where):
     without the version are :func:`check_facts`, a :class:`~gyrofilter.recording.Recording`'s."""
     for key in header:
         refuse_invisible(key, "header key", where)
+        meant = _READ_KEYS.get(key.lower().replace("-", "_"))
+        if meant is not None and meant != key:
+            raise RecordingError(f"{where}: header key {quote(key)}: gyrofilter reads {quote(meant)}, spelt exactly so"
+                                 f"{' (the file has both)' if meant in header else ''}; rename or remove it")
     missing = [key for key in (VERSION_KEY, *FACT_KEYS) if key not in header]
     if missing:
         raise RecordingError(f"{where}: line 1: missing header key(s) {', '.join(map(repr, missing))}; {NOT_A_RECORDING}")
@@ -244,6 +248,10 @@ def check_header(header, where):
 
 #: the header keys every recording states, a file's and one built in code (:func:`check_facts`)
 FACT_KEYS = ("sample_rate_hz", "gyro_unit")
+#: the keys gyrofilter reads, by their spelling in lower case with "_" for "-": a key spelt another way
+#: (``Gyro_Unit: rad/s`` beside ``gyro_unit: dps``, attack pass 45) would be kept as an unrelated key without a word
+_READ_KEYS = {k.lower().replace("-", "_"): k for k in (VERSION_KEY, *FACT_KEYS, "lsb_per_dps", "accel_unit", "lsb_per_g",
+                                                        "sensor", "full_scale_dps", *PROVENANCE_KEYS)}
 
 
 def check_facts(header, where):
