@@ -512,6 +512,39 @@ def test_a_rerun_stopped_after_a_unit_leaves_its_finished_reports_alone(tmp_path
     assert sorted(os.listdir(out)) == ["w1.allan.json", "w1.imu.yaml"]
 
 
+def test_a_run_stopped_keeps_the_files_a_user_saved_in_its_folder_meanwhile(tmp_path):
+    """Attack pass 46: the clean-up of a stopped or failed fleet run removed by name, so a fleet.md, or a report of
+    a unit not reached, that the user saved in DIR while the run went was removed too (no --force given); and a
+    unit that failed was counted among those whose reports DIR holds. Only files an earlier run left, as --force
+    found them, are removed."""
+    rng = np.random.default_rng(47)
+    w1, w2, bad = tmp_path / "w1.csv", tmp_path / "w2.csv", tmp_path / "bad.csv"
+    write_recording(w1, Recording.from_dps(rng.normal(0, 0.1, (6000, 3)), 100.0))
+    write_recording(w2, Recording.from_dps(rng.normal(0, 0.1, (600_000, 3)), 100.0))
+    bad.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\ngx,gy,gz\n0.1,x,0.3\n")
+    out = tmp_path / "fl"
+    run = subprocess.Popen([sys.executable, "-m", "gyrofilter", "allan", str(w1), str(bad), str(w2), "--jobs", "1",
+                            "--fleet", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    mine = {"fleet.md": "my notes\n", "w2.imu.yaml": "my own file\n"}
+    try:
+        lines = []
+        while not (lines and "[2/3" in lines[-1]) and run.poll() is None:
+            lines.append(run.stderr.readline())
+        assert run.poll() is None, "the fleet run ended before it could be stopped"
+        for name, text in mine.items():
+            (out / name).write_text(text)
+        run.send_signal(signal.SIGTERM)
+        rest = run.communicate(timeout=60)[1]
+    finally:
+        run.kill()
+        run.wait()
+    assert "FAILED" in lines[-1] and "bad.csv" in lines[-1], lines
+    assert rest.splitlines()[-1] == (f"gyrofilter: interrupted; not written: fleet.csv ({out} holds this run's "
+                                     "reports of 1 unit(s) only (w1); run it again to finish)")
+    assert sorted(os.listdir(out)) == ["fleet.md", "w1.allan.json", "w1.imu.yaml", "w2.imu.yaml"]
+    assert {name: (out / name).read_text() for name in mine} == mine
+
+
 @pytest.mark.parametrize("args,message", [
     (["allan", "A", "B"], "2 recordings: give --fleet DIR"),
     (["allan", "A", "--jobs", "2"], "--jobs works on a fleet: give --fleet DIR"),

@@ -821,17 +821,28 @@ def test_long_values_in_errors_are_quoted_short(tmp_path):
 
 @pytest.mark.parametrize("key, both", [("Gyro_Unit: rad/s", True), ("SAMPLE_RATE_HZ: 200", True),
                                        ("gyrofilter_recording: 1", True), ("Accel_Unit: g", False),
-                                       ("Filtered-From: x.csv", False)])
+                                       ("Filtered-From: x.csv", False), ("gyro unit: rad/s", True),
+                                       ("ＧＹＲＯ＿ＵＮＩＴ: rad/s", True)])
 def test_a_header_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_it(tmp_path, key, both):
     """Attack pass 45: `Gyro_Unit: rad/s` beside `gyro_unit: dps` was kept as an unrelated key without a word (the
     samples read as deg/s); alone, `Accel_Unit` left the accelerometer without its unit. Keys are case-sensitive:
     a key gyrofilter reads, spelt in another case or with "-" for "_", is refused, naming both spellings."""
+    import unicodedata
+
     name = key.split(":")[0]
-    meant = "gyrofilter-recording" if name == "gyrofilter_recording" else name.lower().replace("-", "_")
+    shape = unicodedata.normalize("NFKC", name).lower().replace("-", "_").replace(" ", "_")
+    meant = "gyrofilter-recording" if shape == "gyrofilter_recording" else shape
     path = _dps_file(tmp_path, "0,1,2,3\n", header=f"# {key}\n")
     with pytest.raises(RecordingError, match=re.escape(f"header key '{name}': gyrofilter reads '{meant}', spelt exactly "
                                                        "so" + (" (the file has both)" if both else ""))):
         read_recording(path)
+
+
+def test_a_descriptive_key_in_another_case_is_a_key_of_its_own(tmp_path):
+    """Attack pass 46: a serial device's `Sensor=MPU6050` was written beside gyrofilter's `sensor` and the files
+    recorded so were refused after pass 45's key check; descriptive keys are not among the keys it compares."""
+    path = _dps_file(tmp_path, "0,1,2,3\n", header="# sensor: serial device\n# Sensor: MPU6050\n# Full_Scale_DPS: 250\n")
+    assert read_recording(path).header["Sensor"] == "MPU6050"
 
 
 @pytest.mark.parametrize("first, hint", [("# gyrofilter\n\nReal-time filtering\n", True), ("# notes\n", True),

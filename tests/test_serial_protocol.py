@@ -281,6 +281,19 @@ def test_a_device_cannot_give_the_keys_gyrofilter_writes_about_provenance():
         "serial: the device's header key time_origin is gyrofilter's own (where the samples came from): ignored"]
 
 
+@pytest.mark.parametrize("word", [b"Gyro_Unit=rad/s", b"SAMPLE_RATE_HZ=200", b"Lsb_Per_Dps=65.5"])
+def test_a_device_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_the_header_line(word):
+    """Attack pass 46: a recording's header refuses a key it reads spelt in another case; from a device the
+    refusal named the output file (record --out rec.csv) and asked to rename a key the firmware sends. A device's
+    descriptive key in another case (``Sensor=MPU6050``) is its own key, kept beside gyrofilter's."""
+    key = word.split(b"=")[0].decode()
+    with pytest.raises(DeviceError, match=re.escape(f"header line: key '{key}': gyrofilter reads")):
+        LineParser().feed(HEADER.rstrip(b"\n") + b" " + word + b"\n")
+    p = LineParser()
+    p.feed(HEADER.rstrip(b"\n") + b" Sensor=MPU6050-2\n" + _lines([0, 1]))
+    assert p.header["Sensor"] == "MPU6050-2" and p.header["sensor"] == "MPU6050"
+
+
 def test_parser_with_options_uses_a_header_that_comes_first():
     p = LineParser(gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=100)
     rows = p.feed(HEADER + _lines([0, 1]))  # the header is a whole line: nothing is dropped

@@ -132,6 +132,7 @@ def run(args, settings, paths):
     fleet_files = [os.path.join(args.fleet, FLEET_CSV), os.path.join(args.fleet, FLEET_MD)]
     outputs.check_outputs(report_paths + fleet_files, paths, args.force)
     earlier = _earlier_outputs(args.fleet, report_paths + fleet_files)
+    outputs.may_remove(earlier)
     results = [work.failed(p, "no file matches") if glob.has_magic(p) and not os.path.exists(p) else None
                for p in paths]
     todo = [i for i, r in enumerate(results) if r is None]
@@ -154,16 +155,14 @@ def run(args, settings, paths):
     for r in results:
         if r is not None:
             progress(f"{settings.command}: FAILED: {r['error']}", always=True)
-    finished = []  # the units whose reports this run has put in place (or removed: a failed file's)
+    finished = []  # (unit, whether it has reports) of the units whose reports this run put in place or removed
     try:
         written = _analyse_and_write(stream, todo, results, names, paths, files, args.fleet, settings.command,
                                      progress, t0, finished)
         rows = table.fleet_rows(names, results)
         stats = table.flag_units(rows)
         title = f"Fleet: gyrofilter {settings.command}, {len(paths)} recordings"
-        for path in earlier:  # the folder holds this run's outputs only
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(path)
+        outputs.remove_earlier(args.fleet, [os.path.basename(p) for p in earlier])  # DIR holds this run's outputs only
         with outputs.replacing(fleet_files[0]) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
             fh.write(table.fleet_csv(rows))
         with outputs.replacing(fleet_files[1]) as tmp, open(tmp, "w", encoding="utf-8") as fh:
@@ -171,7 +170,8 @@ def run(args, settings, paths):
     except (OSError, GyroFilterError, KeyboardInterrupt) as exc:
         if not finished:  # the folder is as the earlier run left it
             raise
-        unreached = [os.path.join(args.fleet, name + suffix) for name in names if name not in finished
+        done = {name for name, _ in finished}
+        unreached = [os.path.join(args.fleet, name + suffix) for name in names if name not in done
                      for suffix, _, _ in files]
         raise _stopped(exc, args.fleet, finished, earlier + fleet_files + unreached) from None
     no_yaml = [f"{names[i]}: {w[len(work.NO_IMU_YAML):]}" for i, r in enumerate(results) for w in r["warnings"]
@@ -183,12 +183,14 @@ def run(args, settings, paths):
 
 def _analyse_and_write(stream, todo, results, names, paths, files, folder, command, progress, t0, finished):
     """Take each recording's result from ``stream`` as it comes, put its reports in ``folder`` (together) and
-    say so; append its unit name to ``finished`` once they are in place. Returns the number of reports written."""
+    say so; append (its unit name, whether it has reports) to ``finished`` once they are in place. Returns the
+    number of reports written."""
     written = 0
     with contextlib.closing(stream):
         for done, (k, result) in enumerate(stream, 1):
             i = todo[k]
             results[i] = result
+            before = written
             with contextlib.ExitStack() as reports:  # a recording's reports take their places together
                 for suffix, key, write in files:
                     if result[key] is not None:
@@ -196,7 +198,7 @@ def _analyse_and_write(stream, todo, results, names, paths, files, folder, comma
                               result[key])
                         written += 1
             _drop_unwritten(folder, names[i], files, result)
-            finished.append(names[i])
+            finished.append((names[i], written > before))
             state = (f"{paths[i]}: done in {result['runtime_s']:.1f} s" if result["error"] is None
                      else f"NOT STILL, skipped: {result['error']}" if result["skipped"] else f"FAILED: {result['error']}")
             progress(f"{command} [{done}/{len(todo)}, {time.perf_counter() - t0:.0f} s] {state}", always=True)
@@ -204,20 +206,23 @@ def _analyse_and_write(stream, todo, results, names, paths, files, folder, comma
 
 
 def _stopped(exc, folder, finished, stale):
-    """``exc``, a failure or Ctrl-C after this run put the reports of the units ``finished`` in ``folder``, with what
-    the folder then holds: the earlier run's files that would stand beside them (``stale``: its fleet.csv and
-    fleet.md, whose numbers are not these reports', and its reports of the units this run did not reach; there only
-    under --force) are removed, so that the folder holds this run's finished reports alone, as a new folder would
-    (attack pass 45: a rerun whose second unit's report hit a file-size limit left the first unit's new reports
-    beside the earlier fleet.csv, 5x off, and the earlier reports of the rest, without a word)."""
+    """``exc``, a failure or Ctrl-C after this run put in place (or removed: a failed file's) the reports of the
+    units ``finished`` ((unit, whether it has reports)) in ``folder``, with what the folder then holds: the earlier
+    run's files that would stand beside them (``stale``: its fleet.csv and fleet.md, whose numbers are not these
+    reports', and its reports of the units this run did not reach; there only under --force) are removed, so that
+    the folder holds this run's finished reports alone, as a new folder would (attack pass 45: a rerun whose second
+    unit's report hit a file-size limit left the first unit's new reports beside the earlier fleet.csv, 5x off, and
+    the earlier reports of the rest, without a word). A file that appeared or changed meanwhile stays
+    (:func:`~gyrofilter.cli.outputs.remove_earlier`)."""
     outputs.remove_earlier(folder, [os.path.basename(p) for p in stale])
-    holds = (f"{folder} holds this run's reports of {len(finished)} unit(s) only ({', '.join(finished[:3])}"
-             f"{', ...' if len(finished) > 3 else ''})")
+    reported = [name for name, has_reports in finished if has_reports]
+    holds = (f"{folder} holds this run's reports of {len(reported)} unit(s) only ({', '.join(reported[:3])}"
+             f"{', ...' if len(reported) > 3 else ''})" if reported else f"{folder} holds no report of this run")
+    tables = " and ".join(t for t in (FLEET_CSV, FLEET_MD) if not os.path.lexists(os.path.join(folder, t)))
     if isinstance(exc, KeyboardInterrupt):
-        exc.not_written = [*getattr(exc, "not_written", []), f"{FLEET_CSV} and {FLEET_MD} ({holds}; run it again "
-                                                               "to finish)"]
+        exc.not_written = [*getattr(exc, "not_written", []), f"{tables} ({holds}; run it again to finish)"]
         return exc
-    said = f"{holds}, without {FLEET_CSV} and {FLEET_MD}: run it again to finish"
+    said = f"{holds}{', without ' + tables if tables else ''}: run it again to finish"
     if isinstance(exc, OSError):
         return OSError(exc.errno, f"{exc.strerror or exc}; {said}", exc.filename)
     exc.args = (f"{exc.args[0] if exc.args else exc}; {said}", *exc.args[1:])

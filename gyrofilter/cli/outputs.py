@@ -329,14 +329,26 @@ def remove_stale_partials(folder):
                     os.unlink(entry.path)
 
 
+def may_remove(paths):
+    """Let :func:`remove_earlier` remove the files ``paths`` as they are now: files an earlier run left that this
+    one removes but does not write (a fleet's reports of units it no longer analyses; found only under --force)."""
+    for path in paths:
+        _replaceable.add(_identity(os.lstat(path)))
+
+
 def remove_earlier(folder, names):
     """Remove the files ``names`` from ``folder`` where an earlier run left them: files a command
-    may write there but this run did not (found only under --force, checked with the rest), which
-    would stand beside this run's outputs as if they were its (another recording's figures, a
-    failed unit's old report). Call it once this run's files have landed."""
+    may write there but this run did not (found only under --force, checked with the rest, or
+    :func:`may_remove`), which would stand beside this run's outputs as if they were its (another
+    recording's figures, a failed unit's old report). Only the very files --force was given for
+    go: one that appeared or changed while the command ran (a user's, this run's own) is left as
+    it is (attack pass 46: a fleet's clean-up after a failure removed a fleet.md the user saved
+    meanwhile). Call it once this run's files have landed, or when it stops."""
     for name in names:
+        path = os.path.join(folder, name)
         with contextlib.suppress(FileNotFoundError):
-            os.unlink(os.path.join(folder, name))
+            if _identity(os.lstat(path)) in _replaceable:
+                os.unlink(path)
 
 
 def _process_runs(pid):

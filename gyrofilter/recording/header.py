@@ -7,6 +7,7 @@ the header (:func:`format_number`).
 from __future__ import annotations
 
 import re
+import unicodedata
 
 from ..errors import RecordingError
 from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, json_string, parse_number, quote
@@ -233,8 +234,8 @@ def check_header(header, where):
     without the version are :func:`check_facts`, a :class:`~gyrofilter.recording.Recording`'s."""
     for key in header:
         refuse_invisible(key, "header key", where)
-        meant = _READ_KEYS.get(key.lower().replace("-", "_"))
-        if meant is not None and meant != key:
+        meant = misspelt_key(key)
+        if meant is not None:
             raise RecordingError(f"{where}: header key {quote(key)}: gyrofilter reads {quote(meant)}, spelt exactly so"
                                  f"{' (the file has both)' if meant in header else ''}; rename or remove it")
     missing = [key for key in (VERSION_KEY, *FACT_KEYS) if key not in header]
@@ -248,10 +249,24 @@ def check_header(header, where):
 
 #: the header keys every recording states, a file's and one built in code (:func:`check_facts`)
 FACT_KEYS = ("sample_rate_hz", "gyro_unit")
-#: the keys gyrofilter reads, by their spelling in lower case with "_" for "-": a key spelt another way
-#: (``Gyro_Unit: rad/s`` beside ``gyro_unit: dps``, attack pass 45) would be kept as an unrelated key without a word
-_READ_KEYS = {k.lower().replace("-", "_"): k for k in (VERSION_KEY, *FACT_KEYS, "lsb_per_dps", "accel_unit", "lsb_per_g",
-                                                        "sensor", "full_scale_dps", *PROVENANCE_KEYS)}
+def _key_shape(key):
+    """``key`` in the form :func:`misspelt_key` compares: NFKC, case folded, every run of other characters than
+    letters and digits one ``_`` (``Gyro-Unit``, ``gyro unit``, ``GYRO_UNIT`` all read ``gyro_unit``)."""
+    return re.sub(r"[\W_]+", "_", unicodedata.normalize("NFKC", key).casefold()).strip("_")
+
+
+#: the keys that decide how a file's numbers read, by their :func:`_key_shape`: a key spelt another way (``Gyro_Unit:
+#: rad/s`` beside ``gyro_unit: dps``, attack pass 45; ``gyro unit``, pass 46) would be kept as an unrelated key without
+#: a word. Descriptive keys (``sensor``, ...) are not among them: a device's ``Sensor=MPU6050`` is its own key (pass 46)
+_READ_KEYS = {_key_shape(k): k for k in (VERSION_KEY, *FACT_KEYS, "lsb_per_dps", "accel_unit", "lsb_per_g", INPUT_RATE_KEY,
+                                         FILTERED_FROM_KEY, T_FROM_KEY)}
+
+
+def misspelt_key(key):
+    """The header key gyrofilter reads that ``key`` spells otherwise (another case, blanks or dashes for ``_``), or
+    None: the one check of a header's keys (:func:`check_header`) and of a serial device's."""
+    meant = _READ_KEYS.get(_key_shape(key))
+    return meant if meant is not None and meant != key else None
 
 
 def check_facts(header, where):

@@ -67,8 +67,8 @@ import warnings
 import numpy as np
 
 from ...errors import DeviceError, SettingsError
-from ...inputs import is_plain_number, parse_number
-from ...recording import ACCEL_COLUMNS, COLUMNS, PROVENANCE_KEYS, format_number
+from ...inputs import is_plain_number, parse_number, quote
+from ...recording import ACCEL_COLUMNS, COLUMNS, PROVENANCE_KEYS, format_number, misspelt_key
 from ...units import MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C
 from ..mpu6050.chip import temperature_c
 from .counter import COUNTING_LINES, first_value_counts, not_counting, out_of_sequence
@@ -187,6 +187,10 @@ class LineParser:
         changed) when it is unreadable, :class:`UnitsConflict` when it changes the units."""
         values = header_words(line, self.where)
         where = "header line"
+        for key in values:  # a recording's header would refuse it, naming the output file (attack pass 46)
+            if (meant := misspelt_key(key)) is not None:
+                raise DeviceError(f"{self.where}: {where}: key {quote(key)}: gyrofilter reads {quote(meant)}, spelt "
+                                  "exactly so; the device must send it so")
         if "gyro_unit" not in values and self._options is not None:
             values = {**self._options, **values}
         units = make_units(values, f"{self.where}: {where}")
