@@ -1,4 +1,5 @@
 """The numba kernels' cache (gyrofilter.filter.jit): a helper changed in another file is compiled anew."""
+import resource
 import subprocess
 import sys
 import textwrap
@@ -26,6 +27,10 @@ RUN = textwrap.dedent("""
 """)
 
 
+def _limit_files_to_one_byte():
+    resource.setrlimit(resource.RLIMIT_FSIZE, (1, 1))  # Python ignores SIGXFSZ: a write past it is OSError EFBIG
+
+
 def _answers(tmp_path, helper_source):
     """The kernel's answer to 1.0 in a fresh process, once with each helper source (``helper_source`` formatted
     with the increments 1.0 and 2.0), the kernel's own file unchanged."""
@@ -50,3 +55,14 @@ def test_a_kernel_is_compiled_anew_when_a_constant_its_helper_reads_changes(tmp_
     """numba freezes a module constant a helper reads into the kernel; the helper's own source does not change
     (attack pass 43: kalman.guard reads kalman's GUARD_RUN)."""
     assert _answers(tmp_path, "STEP = {increment}\n\n\ndef step(x):\n    return x + STEP\n") == [2.0, 3.0]
+
+
+def test_a_cache_that_cannot_be_written_costs_the_compile_not_the_run(tmp_path):
+    """A file-size limit or a full disk under numba's cache: the first run's kernel still runs (attack pass 47:
+    ``replay --save-calibration`` failed with a bare ``[Errno 27] File too large`` from numba's cache write)."""
+    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
+    (tmp_path / "helper.py").write_text("def step(x):\n    return x + 1.0\n")
+    done = subprocess.run([sys.executable, "-c", RUN, str(tmp_path)], capture_output=True, text=True,
+                          preexec_fn=_limit_files_to_one_byte)
+    assert (done.returncode, done.stdout.strip(), done.stderr) == (0, "2.0", "")
+    assert not [p for p in (tmp_path / "__pycache__").glob("*") if p.stat().st_size > 1]  # nothing half written kept

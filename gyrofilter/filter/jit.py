@@ -38,7 +38,11 @@ def _compile(fn):
     numba's cache is keyed on the source of ``fn``'s own file only: a helper changed in another file
     (an upgrade that changes gyrofilter.filter.hold but not adaptive_kalman) would load the kernel
     compiled with the old helper. The compiled function's name carries :func:`helpers_fingerprint`, so
-    the cache file of a kernel is named by its helpers' code too."""
+    the cache file of a kernel is named by its helpers' code too.
+
+    A cache that cannot be written (a full disk, a file-size limit: numba raises the OSError from deep
+    in the first call, attack pass 47) is skipped (:func:`_save_or_skip`): it costs the next run its
+    compile, not this run its output."""
     if fn not in _compiled:
         import numba
 
@@ -53,8 +57,21 @@ def _compile(fn):
             namespace.update(helpers)
             target = types.FunctionType(fn.__code__, namespace, fn.__name__)
             target.__qualname__ = f"{fn.__qualname__}_{helpers_fingerprint(helpers)}"
-        _compiled[fn] = numba.njit(cache=True)(target)
+        kernel = numba.njit(cache=True)(target)
+        kernel._cache.save_overload = _save_or_skip(kernel._cache.save_overload)
+        _compiled[fn] = kernel
     return _compiled[fn]
+
+
+def _save_or_skip(save_overload):
+    """numba's ``FunctionCache.save_overload`` with an OSError of the write (ENOSPC, EFBIG, EROFS) ignored:
+    numba removes its own partial file (``_open_for_write``) and the compiled kernel runs the same."""
+    def save(sig, data):
+        try:
+            save_overload(sig, data)
+        except OSError:
+            pass
+    return save
 
 
 def helpers_fingerprint(helpers):
