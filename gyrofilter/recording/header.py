@@ -249,23 +249,38 @@ def check_header(header, where):
 
 #: the header keys every recording states, a file's and one built in code (:func:`check_facts`)
 FACT_KEYS = ("sample_rate_hz", "gyro_unit")
+
+
 def _key_shape(key):
-    """``key`` in the form :func:`misspelt_key` compares: NFKC, case folded, every run of other characters than
+    """``key`` in the form :func:`misspelt_key` compares: NFKC, case folded, accents dropped (NFKD's combining
+    marks: ``gyró_unit``, and the dot of the ``İ`` a Turkish keyboard gives), every run of other characters than
     letters and digits one ``_`` (``Gyro-Unit``, ``gyro unit``, ``GYRO_UNIT`` all read ``gyro_unit``)."""
-    return re.sub(r"[\W_]+", "_", unicodedata.normalize("NFKC", key).casefold()).strip("_")
+    folded = unicodedata.normalize("NFKD", unicodedata.normalize("NFKC", key).casefold())
+    bare = "".join(c for c in folded if not unicodedata.combining(c))
+    return re.sub(r"[\W_]+", "_", bare).strip("_")
 
 
-#: the keys that decide how a file's numbers read, by their :func:`_key_shape`: a key spelt another way (``Gyro_Unit:
-#: rad/s`` beside ``gyro_unit: dps``, attack pass 45; ``gyro unit``, pass 46) would be kept as an unrelated key without
-#: a word. Descriptive keys (``sensor``, ...) are not among them: a device's ``Sensor=MPU6050`` is its own key (pass 46)
+#: the keys that decide how a file's numbers read or are checked, by their :func:`_key_shape`: a key spelt another
+#: way (``Gyro_Unit: rad/s`` beside ``gyro_unit: dps``, attack pass 45; ``gyro unit``, pass 46; ``Full-Scale-DPS``,
+#: which report's clipping check reads, pass 47) would be kept as an unrelated key without a word. Descriptive keys
+#: (``sensor``, ...) are not among them: a device's ``Sensor=MPU6050`` is its own key (pass 46)
 _READ_KEYS = {_key_shape(k): k for k in (VERSION_KEY, *FACT_KEYS, "lsb_per_dps", "accel_unit", "lsb_per_g", INPUT_RATE_KEY,
-                                         FILTERED_FROM_KEY, T_FROM_KEY)}
+                                         FILTERED_FROM_KEY, T_FROM_KEY, "full_scale_dps")}
 
 
-def misspelt_key(key):
-    """The header key gyrofilter reads that ``key`` spells otherwise (another case, blanks or dashes for ``_``), or
-    None: the one check of a header's keys (:func:`check_header`) and of a serial device's."""
-    meant = _READ_KEYS.get(_key_shape(key))
+def misspelt_key(key, also=()):
+    """The header key gyrofilter reads (or of ``also``: a serial device's protocol keys) that ``key`` spells
+    otherwise, or None: another case, blanks or dashes for ``_``, accents, or a few letters outside ASCII that look
+    like its own (``gyrо_unit`` with a Cyrillic о, ``τ_from``, attack pass 47: each such letter may stand for any
+    one; a key mostly of other letters, ``温度``, is its own). The one check of a header's keys
+    (:func:`check_header`) and of a serial device's."""
+    known = {**_READ_KEYS, **{_key_shape(k): k for k in also}}
+    shape = _key_shape(key)
+    meant = known.get(shape)
+    foreign = sum(not c.isascii() for c in shape)
+    if meant is None and 0 < foreign < sum(c.isascii() and c.isalnum() for c in shape):
+        alike = re.compile("".join(re.escape(c) if c.isascii() else "." for c in shape))
+        meant = next((k for s, k in known.items() if alike.fullmatch(s)), None)
     return meant if meant is not None and meant != key else None
 
 

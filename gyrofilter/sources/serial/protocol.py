@@ -188,7 +188,7 @@ class LineParser:
         values = header_words(line, self.where)
         where = "header line"
         for key in values:  # a recording's header would refuse it, naming the output file (attack pass 46)
-            if (meant := misspelt_key(key)) is not None:
+            if (meant := misspelt_key(key, also=_PROTOCOL_KEYS)) is not None:  # Fields= swapped axes (pass 47)
                 raise DeviceError(f"{self.where}: {where}: key {quote(key)}: gyrofilter reads {quote(meant)}, spelt "
                                   "exactly so; the device must send it so")
         if "gyro_unit" not in values and self._options is not None:
