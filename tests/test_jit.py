@@ -66,3 +66,22 @@ def test_a_cache_that_cannot_be_written_costs_the_compile_not_the_run(tmp_path):
                           preexec_fn=_limit_files_to_one_byte)
     assert (done.returncode, done.stdout.strip(), done.stderr) == (0, "2.0", "")
     assert not [p for p in (tmp_path / "__pycache__").glob("*") if p.stat().st_size > 1]  # nothing half written kept
+
+
+@pytest.mark.parametrize("pattern, size", [("*.nbi", 10), ("*.nbi", 0), ("*.nbc", 100)])
+def test_a_damaged_cache_is_compiled_anew_and_saved_again(tmp_path, pattern, size):
+    """Attack pass 48: a truncated index or data file of numba's cache ended the command with a traceback
+    (``UnpicklingError: pickle data was truncated``, ``EOFError``). It is a miss: compiled anew, saved again."""
+    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
+    (tmp_path / "helper.py").write_text("def step(x):\n    return x + 1.0\n")
+    answers = []
+    for damage in (False, True, False):
+        if damage:
+            for path in (tmp_path / "__pycache__").glob(pattern):
+                with open(path, "r+b") as cut:
+                    cut.truncate(size)
+        done = subprocess.run([sys.executable, "-c", RUN, str(tmp_path)], capture_output=True, text=True)
+        answers.append((done.returncode, done.stdout.strip(), done.stderr))
+        sizes = {p.name: p.stat().st_size for p in (tmp_path / "__pycache__").glob("*.nb[ic]")}
+    assert answers == [(0, "2.0", "")] * 3
+    assert sizes and min(sizes.values()) > size  # saved whole again

@@ -3,7 +3,9 @@
 A kernel is a plain function written in the subset of Python that numba compiles. Without
 numba it runs interpreted, with the same arithmetic and so the same numbers.
 """
+import contextlib
 import hashlib
+import os
 import types
 
 from ..errors import SettingsError
@@ -40,9 +42,9 @@ def _compile(fn):
     compiled with the old helper. The compiled function's name carries :func:`helpers_fingerprint`, so
     the cache file of a kernel is named by its helpers' code too.
 
-    A cache that cannot be written (a full disk, a file-size limit: numba raises the OSError from deep
-    in the first call, attack pass 47) is skipped (:func:`_save_or_skip`): it costs the next run its
-    compile, not this run its output."""
+    A cache is only a saving of time (:func:`_tolerant`): one that cannot be written (a full disk, a
+    file-size limit: numba raised the OSError from deep in the first call, attack pass 47) or read (a
+    truncated or damaged file: UnpicklingError, EOFError, pass 48) costs a compile, not the run."""
     if fn not in _compiled:
         import numba
 
@@ -58,20 +60,30 @@ def _compile(fn):
             target = types.FunctionType(fn.__code__, namespace, fn.__name__)
             target.__qualname__ = f"{fn.__qualname__}_{helpers_fingerprint(helpers)}"
         kernel = numba.njit(cache=True)(target)
-        kernel._cache.save_overload = _save_or_skip(kernel._cache.save_overload)
+        _tolerant(kernel._cache)
         _compiled[fn] = kernel
     return _compiled[fn]
 
 
-def _save_or_skip(save_overload):
-    """numba's ``FunctionCache.save_overload`` with an OSError of the write (ENOSPC, EFBIG, EROFS) ignored:
-    numba removes its own partial file (``_open_for_write``) and the compiled kernel runs the same."""
-    def save(sig, data):
+def _tolerant(cache):
+    """Make numba's ``FunctionCache`` ``cache`` take a file it cannot read for a miss, removing its index so that
+    the kernel compiled anew is saved in its place, and skip a write that fails (ENOSPC, EFBIG, EROFS: numba removes
+    its own partial file, ``_open_for_write``). Either way the kernel compiled runs the same."""
+    load_overload, save_overload = cache.load_overload, cache.save_overload
+
+    def load(sig, target_context):
         try:
+            return load_overload(sig, target_context)
+        except Exception:  # whatever unpickling a damaged file raises
+            with contextlib.suppress(OSError):
+                os.remove(cache._cache_file._index_path)
+            return None
+
+    def save(sig, data):
+        with contextlib.suppress(OSError):
             save_overload(sig, data)
-        except OSError:
-            pass
-    return save
+
+    cache.load_overload, cache.save_overload = load, save
 
 
 def helpers_fingerprint(helpers):
