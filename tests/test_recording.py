@@ -827,12 +827,16 @@ def test_long_values_in_errors_are_quoted_short(tmp_path):
     # letters outside ASCII that look like its own (attack pass 47): Cyrillic о, dotless ı, Turkish İ, an accent
     ("gyr\u043e_unit: rad/s", "gyro_unit", True), ("gyro_un\u0131t: rad/s", "gyro_unit", True),
     ("GYRO_UN\u0130T: rad/s", "gyro_unit", True), ("gyro\u0301_unit: rad/s", "gyro_unit", True),
-    ("\u03c4_from: device counter", "t_from", False)])
+    ("\u03c4_from: device counter", "t_from", False),
+    # with nothing for "_" (pass 48): camelCase, run together
+    ("GyroUnit: dps", "gyro_unit", True), ("sampleRateHz: 200", "sample_rate_hz", True),
+    ("fullScaleDps: 2000", "full_scale_dps", False), ("lsbperdps: 65.5", "lsb_per_dps", False)])
 def test_a_header_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_it(tmp_path, key, meant, both):
     """Attack pass 45: `Gyro_Unit: rad/s` beside `gyro_unit: dps` was kept as an unrelated key without a word (the
     samples read as deg/s); alone, `Accel_Unit` left the accelerometer without its unit. Keys are case-sensitive:
     a key gyrofilter reads, spelt in another case or with "-" for "_", is refused, naming both spellings. Pass 47:
-    `Full-Scale-DPS` was ignored by report's clipping check; look-alike letters kept `gyrо_unit` as another key."""
+    `Full-Scale-DPS` was ignored by report's clipping check; look-alike letters kept `gyrо_unit` as another key.
+    Pass 48: `GyroUnit: dps` beside `gyro_unit: lsb` was kept as another key."""
     name = key.split(":")[0]
     path = _dps_file(tmp_path, "0,1,2,3\n", header=f"# {key}\n")
     with pytest.raises(RecordingError, match=re.escape(f"header key '{name}': gyrofilter reads '{meant}', spelt exactly "

@@ -253,11 +253,10 @@ FACT_KEYS = ("sample_rate_hz", "gyro_unit")
 
 def _key_shape(key):
     """``key`` in the form :func:`misspelt_key` compares: NFKC, case folded, accents dropped (NFKD's combining
-    marks: ``gyró_unit``, and the dot of the ``İ`` a Turkish keyboard gives), every run of other characters than
-    letters and digits one ``_`` (``Gyro-Unit``, ``gyro unit``, ``GYRO_UNIT`` all read ``gyro_unit``)."""
+    marks: ``gyró_unit``, and the dot of the ``İ`` a Turkish keyboard gives), only its letters and digits
+    (``Gyro-Unit``, ``gyro unit``, ``GYRO_UNIT``, ``GyroUnit`` all read ``gyrounit``, attack pass 48)."""
     folded = unicodedata.normalize("NFKD", unicodedata.normalize("NFKC", key).casefold())
-    bare = "".join(c for c in folded if not unicodedata.combining(c))
-    return re.sub(r"[\W_]+", "_", bare).strip("_")
+    return re.sub(r"[\W_]+", "", "".join(c for c in folded if not unicodedata.combining(c)))
 
 
 #: the keys that decide how a file's numbers read or are checked, by their :func:`_key_shape`: a key spelt another
@@ -270,15 +269,15 @@ _READ_KEYS = {_key_shape(k): k for k in (VERSION_KEY, *FACT_KEYS, "lsb_per_dps",
 
 def misspelt_key(key, also=()):
     """The header key gyrofilter reads (or of ``also``: a serial device's protocol keys) that ``key`` spells
-    otherwise, or None: another case, blanks or dashes for ``_``, accents, or a few letters outside ASCII that look
-    like its own (``gyrо_unit`` with a Cyrillic о, ``τ_from``, attack pass 47: each such letter may stand for any
-    one; a key mostly of other letters, ``温度``, is its own). The one check of a header's keys
+    otherwise, or None: another case, blanks, dashes or nothing for ``_``, accents, or a few letters outside ASCII
+    that look like its own (``gyrо_unit`` with a Cyrillic о, ``τ_from``, attack pass 47: each such letter may stand
+    for any one; a key mostly of other letters, ``温度``, is its own). The one check of a header's keys
     (:func:`check_header`) and of a serial device's."""
     known = {**_READ_KEYS, **{_key_shape(k): k for k in also}}
     shape = _key_shape(key)
     meant = known.get(shape)
     foreign = sum(not c.isascii() for c in shape)
-    if meant is None and 0 < foreign < sum(c.isascii() and c.isalnum() for c in shape):
+    if meant is None and 0 < foreign < len(shape) - foreign:
         alike = re.compile("".join(re.escape(c) if c.isascii() else "." for c in shape))
         meant = next((k for s, k in known.items() if alike.fullmatch(s)), None)
     return meant if meant is not None and meant != key else None
