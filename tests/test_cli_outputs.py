@@ -506,12 +506,13 @@ def test_a_figure_that_fails_names_the_figure_not_its_folder(tmp_path):
     write_recording(rec, Recording.from_dps(np.random.default_rng(37).normal(0, 0.05, (3000, 3)), 100.0))
     out = tmp_path / "out"
     argvs = [["gap", str(rec), "--sims", "10", "--bootstrap", "0", "--report", str(out / "rep")],
+             ["gap", str(rec), "--sims", "10", "--bootstrap", "0", "--report", str(out / "rep") + os.sep],  # pass 48: rep//adev_x.png
              ["allan", str(rec), "--plot", str(out / "allan.png")]]
     proc = subprocess.run([sys.executable, "-c", UNDER_A_SIZE_LIMIT, "2000", json.dumps(argvs)],
                           capture_output=True, text=True, timeout=120, cwd=REPO)
-    assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * 2
+    assert [line for line in proc.stdout.splitlines() if line.startswith("exit")] == ["exit 2"] * 3
     lines = [line for line in proc.stderr.splitlines() if not line.startswith(("gyrofilter: warning", "  "))]  # a warning's lines
-    assert lines == [f"gyrofilter: error: {out / 'rep' / 'adev_x.png'}: File too large; not written",
+    assert lines == [f"gyrofilter: error: {out / 'rep' / 'adev_x.png'}: File too large; not written"] * 2 + [
                      f"gyrofilter: error: {out / 'allan.png'}: File too large; not written"], proc.stderr
     assert not out.exists()
 

@@ -277,17 +277,18 @@ def _naming(tmp, path):
     and says that it was not written ("PATH: No space left on device; not written"): an OSError
     naming ``tmp`` or ``path``, or no file with an errno of :data:`WRITE_ERRNOS`; and the text of a
     GyroFilterError (a writer's refusal, same class)."""
+    folder = path.rstrip(os.sep) or path  # a folder given as DIR/: its files are DIR/NAME, not DIR//NAME
     try:
         yield
     except OSError as exc:
         name = exc.filename
         if isinstance(name, str) and name.startswith(tmp):
-            raise OSError(exc.errno, f"{exc.strerror or exc}; not written", path + name[len(tmp):]) from None
+            raise OSError(exc.errno, f"{exc.strerror or exc}; not written", folder + name[len(tmp):]) from None
         if name == path or (name is None and exc.errno in WRITE_ERRNOS):  # a writer that names the user's file
             raise OSError(exc.errno, f"{exc.strerror or exc}; not written", path) from None
         raise
     except GyroFilterError as exc:
-        exc.args = tuple(a.replace(tmp, path) if isinstance(a, str) else a for a in exc.args)
+        exc.args = tuple(a.replace(tmp, folder) if isinstance(a, str) else a for a in exc.args)
         raise
 
 
