@@ -1,4 +1,5 @@
 """The numba kernels' cache (gyrofilter.filter.jit): a helper changed in another file is compiled anew."""
+import os
 import resource
 import subprocess
 import sys
@@ -7,6 +8,7 @@ import textwrap
 import pytest
 
 from gyrofilter.filter.jit import numba_available
+from support import RECORDINGS
 
 pytestmark = pytest.mark.skipif(not numba_available(), reason="needs numba (the fast extra)")
 
@@ -85,3 +87,20 @@ def test_a_damaged_cache_is_compiled_anew_and_saved_again(tmp_path, pattern, siz
         sizes = {p.name: p.stat().st_size for p in (tmp_path / "__pycache__").glob("*.nb[ic]")}
     assert answers == [(0, "2.0", "")] * 3
     assert sizes and min(sizes.values()) > size  # saved whole again
+
+
+def test_a_cache_file_of_another_kernel_is_compiled_anew(tmp_path):
+    """Attack pass 49: a data file copied over another kernel's loads without complaint (numba does not check
+    whose it is) and was called with the wrong arguments (``TypeError: recent_mean expected 3 arguments, got
+    25``). As a user meets it: ``replay`` with the default filter, the kernels' cache in NUMBA_CACHE_DIR."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    replay = [sys.executable, "-m", "gyrofilter", "replay", str(RECORDINGS / "mpu6050_static_100s.csv.gz")]
+    outputs = []
+    for swap in (False, True, False):
+        if swap:
+            (kernel,), (other,) = (tmp_path / "cache").rglob("adaptive_kalman.*.nbc"), (tmp_path / "cache").rglob("hold.recent_mean*.nbc")
+            kernel.write_bytes(other.read_bytes())
+        done = subprocess.run(replay, capture_output=True, text=True, env=env)
+        outputs.append((done.returncode, done.stdout, done.stderr))
+    assert outputs[0][0] == 0 and outputs == [outputs[0]] * 3
+    assert kernel.read_bytes() != other.read_bytes()  # saved again, its own

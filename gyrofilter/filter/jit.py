@@ -66,18 +66,24 @@ def _compile(fn):
 
 
 def _tolerant(cache):
-    """Make numba's ``FunctionCache`` ``cache`` take a file it cannot read for a miss, removing its index so that
-    the kernel compiled anew is saved in its place, and skip a write that fails (ENOSPC, EFBIG, EROFS: numba removes
-    its own partial file, ``_open_for_write``). Either way the kernel compiled runs the same."""
+    """Make numba's ``FunctionCache`` ``cache`` take a file it cannot read, or one that holds another function
+    (a data file copied over another kernel's: numba does not check, and called it with the wrong arguments,
+    attack pass 49), for a miss, removing its index so that the kernel compiled anew is saved in its place; and
+    skip a write that fails (ENOSPC, EFBIG, EROFS: numba removes its own partial file, ``_open_for_write``).
+    Either way the kernel compiled runs the same."""
     load_overload, save_overload = cache.load_overload, cache.save_overload
+    own = cache._py_func.__module__, cache._py_func.__qualname__
 
     def load(sig, target_context):
         try:
-            return load_overload(sig, target_context)
+            loaded = load_overload(sig, target_context)
+            if loaded is None or (loaded.fndesc.modname, loaded.fndesc.qualname) == own:
+                return loaded
         except Exception:  # whatever unpickling a damaged file raises
-            with contextlib.suppress(OSError):
-                os.remove(cache._cache_file._index_path)
-            return None
+            pass
+        with contextlib.suppress(OSError):
+            os.remove(cache._cache_file._index_path)
+        return None
 
     def save(sig, data):
         with contextlib.suppress(OSError):
