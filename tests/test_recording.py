@@ -830,7 +830,10 @@ def test_long_values_in_errors_are_quoted_short(tmp_path):
     ("\u03c4_from: device counter", "t_from", False),
     # with nothing for "_" (pass 48): camelCase, run together
     ("GyroUnit: dps", "gyro_unit", True), ("sampleRateHz: 200", "sample_rate_hz", True),
-    ("fullScaleDps: 2000", "full_scale_dps", False), ("lsbperdps: 65.5", "lsb_per_dps", False)])
+    ("fullScaleDps: 2000", "full_scale_dps", False), ("lsbperdps: 65.5", "lsb_per_dps", False),
+    # half its letters look-alikes; a letter more or fewer (pass 49)
+    ("\u0455\u0430m\u0440l\u0435_r\u0430t\u0435_hz: 50", "sample_rate_hz", True), ("gyro_units: rad/s", "gyro_unit", True),
+    ("accel_unt: g", "accel_unit", False)])
 def test_a_header_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_it(tmp_path, key, meant, both):
     """Attack pass 45: `Gyro_Unit: rad/s` beside `gyro_unit: dps` was kept as an unrelated key without a word (the
     samples read as deg/s); alone, `Accel_Unit` left the accelerometer without its unit. Keys are case-sensitive:
@@ -844,10 +847,11 @@ def test_a_header_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_it(tmp_
         read_recording(path)
 
 
-@pytest.mark.parametrize("key", ["Gerät", "温度", "传感器的型号和序列号", "gyro_units", "τ"])
+@pytest.mark.parametrize("key", ["Gerät", "温度", "传感器的型号和序列号", "τ", "sample_rate", "gyro_units_note", "lsb_per_deg",
+                                 "from", "t_offset", "sensor_serial", "full_scale", "temperature"])
 def test_a_key_of_its_own_outside_ascii_is_kept(tmp_path, key):
     """Pass 47's look-alike check refuses a few foreign letters standing in a key gyrofilter reads, not every key
-    outside ASCII: unknown keys are kept."""
+    outside ASCII, and pass 49's a letter more or fewer in a long key, not every key like one: unknown keys are kept."""
     path = _dps_file(tmp_path, "0,1,2,3\n", header=f"# {key}: x\n")
     assert read_recording(path).header[key] == "x"
 

@@ -283,13 +283,15 @@ def test_a_device_cannot_give_the_keys_gyrofilter_writes_about_provenance():
 
 @pytest.mark.parametrize("word", [b"Gyro_Unit=rad/s", b"SAMPLE_RATE_HZ=200", b"Lsb_Per_Dps=65.5",
                                   b"Fields=counter,gz,gy,gx", b"Temp_Unit=mpu6050_raw", b"Counter_Bits=8",
-                                  b"TempUnit=mpu6050_raw", b"counterBits=16", b"GyroUnit=rad/s"])
+                                  b"TempUnit=mpu6050_raw", b"counterBits=16", b"GyroUnit=rad/s",
+                                  b"temp_units=mpu6050_raw", b"temperature_unit=mpu6050_raw"])
 def test_a_device_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_the_header_line(word):
     """Attack pass 46: a recording's header refuses a key it reads spelt in another case; from a device the
     refusal named the output file (record --out rec.csv) and asked to rename a key the firmware sends. A device's
     descriptive key in another case (``Sensor=MPU6050``) is its own key, kept beside gyrofilter's. Pass 47: the
     protocol's own keys too (``Fields=counter,gz,gy,gx`` was ignored and x and z swapped without a word); pass 48:
-    with nothing for ``_`` (``TempUnit=mpu6050_raw`` read raw temperature counts as deg C)."""
+    with nothing for ``_`` (``TempUnit=mpu6050_raw`` read raw temperature counts as deg C); pass 49: plural, or
+    ``temperature`` for ``temp``."""
     key = word.split(b"=")[0].decode()
     with pytest.raises(DeviceError, match=re.escape(f"header line: key '{key}': gyrofilter reads")):
         LineParser().feed(HEADER.rstrip(b"\n") + b" " + word + b"\n")

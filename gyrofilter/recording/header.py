@@ -254,9 +254,25 @@ FACT_KEYS = ("sample_rate_hz", "gyro_unit")
 def _key_shape(key):
     """``key`` in the form :func:`misspelt_key` compares: NFKC, case folded, accents dropped (NFKD's combining
     marks: ``gyró_unit``, and the dot of the ``İ`` a Turkish keyboard gives), only its letters and digits
-    (``Gyro-Unit``, ``gyro unit``, ``GYRO_UNIT``, ``GyroUnit`` all read ``gyrounit``, attack pass 48)."""
+    (``Gyro-Unit``, ``gyro unit``, ``GYRO_UNIT``, ``GyroUnit`` all read ``gyrounit``, attack pass 48), and
+    ``temperature`` read ``temp`` (``temperature_unit=mpu6050_raw``, pass 49)."""
     folded = unicodedata.normalize("NFKD", unicodedata.normalize("NFKC", key).casefold())
-    return re.sub(r"[\W_]+", "", "".join(c for c in folded if not unicodedata.combining(c)))
+    return re.sub(r"[\W_]+", "", "".join(c for c in folded if not unicodedata.combining(c))).replace("temperature", "temp")
+
+
+def _reads_as(shape, known):
+    """Whether a key of :func:`_key_shape` ``shape`` reads as the known key's ``known``: each letter outside ASCII
+    may stand for any one (a look-alike: ``gyrо_unit`` with a Cyrillic о, ``τ_from``, pass 47), when at least a
+    third of its letters are ASCII (``温度`` is a key of its own); and a known key of 8 letters or more with one letter
+    more, fewer or other (``temp_units``, ``gyro_unt``, pass 49)."""
+    foreign = sum(not c.isascii() for c in shape)
+    if foreign:
+        return 2 * (len(shape) - foreign) >= foreign > 0 and len(shape) == len(known) and all(
+            a == b or not a.isascii() for a, b in zip(shape, known))
+    if len(known) < 8 or abs(len(shape) - len(known)) > 1:
+        return False
+    i = next((i for i, (a, b) in enumerate(zip(shape, known)) if a != b), min(len(shape), len(known)))
+    return shape[i + 1:] in (known[i + 1:], known[i:]) or shape[i:] == known[i + 1:]
 
 
 #: the keys that decide how a file's numbers read or are checked, by their :func:`_key_shape`: a key spelt another
@@ -269,17 +285,12 @@ _READ_KEYS = {_key_shape(k): k for k in (VERSION_KEY, *FACT_KEYS, "lsb_per_dps",
 
 def misspelt_key(key, also=()):
     """The header key gyrofilter reads (or of ``also``: a serial device's protocol keys) that ``key`` spells
-    otherwise, or None: another case, blanks, dashes or nothing for ``_``, accents, or a few letters outside ASCII
-    that look like its own (``gyrо_unit`` with a Cyrillic о, ``τ_from``, attack pass 47: each such letter may stand
-    for any one; a key mostly of other letters, ``温度``, is its own). The one check of a header's keys
-    (:func:`check_header`) and of a serial device's."""
+    otherwise, or None: another case, blanks, dashes or nothing for ``_``, accents (:func:`_key_shape`), a few
+    look-alike letters outside ASCII, a letter more, fewer or other (:func:`_reads_as`). The one check of a
+    header's keys (:func:`check_header`) and of a serial device's."""
     known = {**_READ_KEYS, **{_key_shape(k): k for k in also}}
     shape = _key_shape(key)
-    meant = known.get(shape)
-    foreign = sum(not c.isascii() for c in shape)
-    if meant is None and 0 < foreign < len(shape) - foreign:
-        alike = re.compile("".join(re.escape(c) if c.isascii() else "." for c in shape))
-        meant = next((k for s, k in known.items() if alike.fullmatch(s)), None)
+    meant = known.get(shape) or next((k for s, k in known.items() if _reads_as(shape, s)), None)
     return meant if meant is not None and meant != key else None
 
 
