@@ -833,7 +833,9 @@ def test_long_values_in_errors_are_quoted_short(tmp_path):
     ("fullScaleDps: 2000", "full_scale_dps", False), ("lsbperdps: 65.5", "lsb_per_dps", False),
     # half its letters look-alikes; a letter more or fewer (pass 49)
     ("\u0455\u0430m\u0440l\u0435_r\u0430t\u0435_hz: 50", "sample_rate_hz", True), ("gyro_units: rad/s", "gyro_unit", True),
-    ("accel_unt: g", "accel_unit", False)])
+    ("accel_unt: g", "accel_unit", False),
+    # two letters swapped (pass 50: report's clipping check was silently skipped)
+    ("full_scale_dsp: 250", "full_scale_dps", False), ("gyro_uint: rad/s", "gyro_unit", True)])
 def test_a_header_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_it(tmp_path, key, meant, both):
     """Attack pass 45: `Gyro_Unit: rad/s` beside `gyro_unit: dps` was kept as an unrelated key without a word (the
     samples read as deg/s); alone, `Accel_Unit` left the accelerometer without its unit. Keys are case-sensitive:
@@ -848,7 +850,8 @@ def test_a_header_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_it(tmp_
 
 
 @pytest.mark.parametrize("key", ["Gerät", "温度", "传感器的型号和序列号", "τ", "sample_rate", "gyro_units_note", "lsb_per_deg",
-                                 "from", "t_offset", "sensor_serial", "full_scale", "temperature"])
+                                 "from", "t_offset", "sensor_serial", "full_scale", "temperature", "gyro2_unit",
+                                 "sample_rate_hz2"])
 def test_a_key_of_its_own_outside_ascii_is_kept(tmp_path, key):
     """Pass 47's look-alike check refuses a few foreign letters standing in a key gyrofilter reads, not every key
     outside ASCII, and pass 49's a letter more or fewer in a long key, not every key like one: unknown keys are kept."""

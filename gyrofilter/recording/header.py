@@ -264,7 +264,8 @@ def _reads_as(shape, known):
     """Whether a key of :func:`_key_shape` ``shape`` reads as the known key's ``known``: each letter outside ASCII
     may stand for any one (a look-alike: ``gyrо_unit`` with a Cyrillic о, ``τ_from``, pass 47), when at least a
     third of its letters are ASCII (``温度`` is a key of its own); and a known key of 8 letters or more with one letter
-    more, fewer or other (``temp_units``, ``gyro_unt``, pass 49)."""
+    more, fewer or other, or two swapped (``temp_units``, ``gyro_unt``, pass 49; ``full_scale_dsp``, pass 50), not
+    a digit more or other (``gyro2_unit``: a second sensor's)."""
     foreign = sum(not c.isascii() for c in shape)
     if foreign:
         return 2 * (len(shape) - foreign) >= foreign > 0 and len(shape) == len(known) and all(
@@ -272,7 +273,10 @@ def _reads_as(shape, known):
     if len(known) < 8 or abs(len(shape) - len(known)) > 1:
         return False
     i = next((i for i, (a, b) in enumerate(zip(shape, known)) if a != b), min(len(shape), len(known)))
-    return shape[i + 1:] in (known[i + 1:], known[i:]) or shape[i:] == known[i + 1:]
+    if shape[i:i + 1].isdigit():
+        return False
+    swapped = shape[i:i + 2] == known[i:i + 2][::-1] and shape[i + 2:] == known[i + 2:]
+    return swapped or shape[i + 1:] in (known[i + 1:], known[i:]) or shape[i:] == known[i + 1:]
 
 
 #: the keys that decide how a file's numbers read or are checked, by their :func:`_key_shape`: a key spelt another
