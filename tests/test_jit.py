@@ -33,6 +33,12 @@ def _limit_files_to_one_byte():
     resource.setrlimit(resource.RLIMIT_FSIZE, (1, 1))  # Python ignores SIGXFSZ: a write past it is OSError EFBIG
 
 
+def _kernel_adding_one(tmp_path):
+    """A kernel and its helper in ``tmp_path`` (RUN's files): the kernel's answer to 1.0 is 2.0."""
+    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
+    (tmp_path / "helper.py").write_text("def step(x):\n    return x + 1.0\n")
+
+
 def _answers(tmp_path, helper_source):
     """The kernel's answer to 1.0 in a fresh process, once with each helper source (``helper_source`` formatted
     with the increments 1.0 and 2.0), the kernel's own file unchanged."""
@@ -62,8 +68,7 @@ def test_a_kernel_is_compiled_anew_when_a_constant_its_helper_reads_changes(tmp_
 def test_a_cache_that_cannot_be_written_costs_the_compile_not_the_run(tmp_path):
     """A file-size limit or a full disk under numba's cache: the first run's kernel still runs (attack pass 47:
     ``replay --save-calibration`` failed with a bare ``[Errno 27] File too large`` from numba's cache write)."""
-    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
-    (tmp_path / "helper.py").write_text("def step(x):\n    return x + 1.0\n")
+    _kernel_adding_one(tmp_path)
     done = subprocess.run([sys.executable, "-c", RUN, str(tmp_path)], capture_output=True, text=True,
                           preexec_fn=_limit_files_to_one_byte)
     assert (done.returncode, done.stdout.strip(), done.stderr) == (0, "2.0", "")
@@ -74,8 +79,7 @@ def test_a_cache_that_cannot_be_written_costs_the_compile_not_the_run(tmp_path):
 def test_a_damaged_cache_is_compiled_anew_and_saved_again(tmp_path, pattern, size):
     """Attack pass 48: a truncated index or data file of numba's cache ended the command with a traceback
     (``UnpicklingError: pickle data was truncated``, ``EOFError``). It is a miss: compiled anew, saved again."""
-    (tmp_path / "kernel.py").write_text("def run(x):\n    return step(x)\n")
-    (tmp_path / "helper.py").write_text("def step(x):\n    return x + 1.0\n")
+    _kernel_adding_one(tmp_path)
     answers = []
     for damage in (False, True, False):
         if damage:

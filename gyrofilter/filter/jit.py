@@ -60,19 +60,19 @@ def _compile(fn):
             target = types.FunctionType(fn.__code__, namespace, fn.__name__)
             target.__qualname__ = f"{fn.__qualname__}_{helpers_fingerprint(helpers)}"
         kernel = numba.njit(cache=True)(target)
-        _tolerant(kernel._cache)
+        _tolerant(kernel._cache, kernel.py_func)
         _compiled[fn] = kernel
     return _compiled[fn]
 
 
-def _tolerant(cache):
-    """Make numba's ``FunctionCache`` ``cache`` take a file it cannot read, or one that holds another function
+def _tolerant(cache, py_func):
+    """Make numba's ``FunctionCache`` ``cache`` of ``py_func`` take a file it cannot read, or one that holds another function
     (a data file copied over another kernel's: numba does not check, and called it with the wrong arguments,
     attack pass 49), for a miss, removing its index so that the kernel compiled anew is saved in its place; and
     skip a write that fails (ENOSPC, EFBIG, EROFS: numba removes its own partial file, ``_open_for_write``).
     Either way the kernel compiled runs the same."""
     load_overload, save_overload = cache.load_overload, cache.save_overload
-    own = cache._py_func.__module__, cache._py_func.__qualname__
+    own = py_func.__module__, py_func.__qualname__
 
     def load(sig, target_context):
         try:
