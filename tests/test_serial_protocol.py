@@ -300,6 +300,31 @@ def test_a_device_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_the_hea
     assert p.header["Sensor"] == "MPU6050-2" and p.header["sensor"] == "MPU6050"
 
 
+@pytest.mark.parametrize("word,meant", [
+    (b"field=counter,gz,gy,gx", "fields"), (b"Field=counter,gz,gy,gx", "fields"), (b"feilds=counter,gz,gy,gx", "fields"),
+    (b"fileds=counter,gz,gy,gx", "fields"), (b"fieldz=counter,gz,gy,gx", "fields"),
+    (b"fields_list=counter,gz,gy,gx", "fields"), (b"field_names=counter,gz,gy,gx", "fields"),
+    (b"columns=counter,gz,gy,gx", "fields"), (b"temprature_unit=mpu6050_raw", "temp_unit"),
+    (b"temperture_unit=mpu6050_raw", "temp_unit"), (b"t_unit=mpu6050_raw", "temp_unit"), (b"temp_scale=c", "temp_unit"),
+    (b"temp_fmt=c", "temp_unit"), (b"raw_temp=mpu6050_raw", "temp_unit"), (b"count_bits=8", "counter_bits"),
+    (b"cnt_bits=8", "counter_bits"), (b"ctr_bits=8", "counter_bits"), (b"counter_width=8", "counter_bits")])
+def test_a_device_word_that_means_a_protocol_key_is_refused(word, meant):
+    """Attack pass 51: a device's word kept as a descriptive key changed nothing without a word: ``field=`` or
+    ``field_names=counter,gz,gy,gx`` left the default order (x and z swapped), ``temprature_unit=mpu6050_raw`` read
+    counts as deg C, ``count_bits=8`` read a byte counter's wrap as a restart. Refused, naming the key meant; the
+    same stream with the protocol's key reads, and descriptive keys like them stay the device's own."""
+    key = word.split(b"=")[0].decode()
+    with pytest.raises(DeviceError, match=re.escape(f"header line: key '{key}': gyrofilter reads '{meant}'")):
+        LineParser().feed(HEADER.rstrip(b"\n") + b" " + word + b"\n")
+    p = LineParser()
+    p.feed(HEADER.rstrip(b"\n") + b" " + meant.encode() + b"=" + word.split(b"=")[1] + b"\n")
+    assert p.header is not None
+    own = b"temp_offset=1.5 sample_count=9 temp_sensor=die temp2_unit=c counter=yes adc_bits=16 mag_field_ut=50"
+    p = LineParser()
+    p.feed(HEADER.rstrip(b"\n") + b" " + own + b"\n" + _lines([0, 1]))
+    assert {w.split(b"=")[0].decode() for w in own.split()} <= set(p.header)
+
+
 def test_parser_with_options_uses_a_header_that_comes_first():
     p = LineParser(gyro_unit="lsb", lsb_per_dps=131, sample_rate_hz=100)
     rows = p.feed(HEADER + _lines([0, 1]))  # the header is a whole line: nothing is dropped

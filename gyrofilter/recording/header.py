@@ -260,17 +260,17 @@ def _key_shape(key):
     return re.sub(r"[\W_]+", "", "".join(c for c in folded if not unicodedata.combining(c))).replace("temperature", "temp")
 
 
-def _reads_as(shape, known):
+def _reads_as(shape, known, floor=8):
     """Whether a key of :func:`_key_shape` ``shape`` reads as the known key's ``known``: each letter outside ASCII
     may stand for any one (a look-alike: ``gyrо_unit`` with a Cyrillic о, ``τ_from``, pass 47), when at least a
-    third of its letters are ASCII (``温度`` is a key of its own); and a known key of 8 letters or more with one letter
-    more, fewer or other, or two swapped (``temp_units``, ``gyro_unt``, pass 49; ``full_scale_dsp``, pass 50), not
-    a digit more or other (``gyro2_unit``: a second sensor's)."""
+    third of its letters are ASCII (``温度`` is a key of its own); and a known key of ``floor`` letters or more with
+    one letter more, fewer or other, or two swapped (``temp_units``, ``gyro_unt``, pass 49; ``full_scale_dsp``, pass
+    50), not a digit more or other (``gyro2_unit``: a second sensor's)."""
     foreign = sum(not c.isascii() for c in shape)
     if foreign:
         return 2 * (len(shape) - foreign) >= foreign > 0 and len(shape) == len(known) and all(
             a == b or not a.isascii() for a, b in zip(shape, known))
-    if len(known) < 8 or abs(len(shape) - len(known)) > 1:
+    if len(known) < floor or abs(len(shape) - len(known)) > 1:
         return False
     i = next((i for i, (a, b) in enumerate(zip(shape, known)) if a != b), min(len(shape), len(known)))
     if shape[i:i + 1].isdigit():
@@ -290,11 +290,13 @@ _READ_KEYS = {_key_shape(k): k for k in (VERSION_KEY, *FACT_KEYS, "lsb_per_dps",
 def misspelt_key(key, also=()):
     """The header key gyrofilter reads (or of ``also``: a serial device's protocol keys) that ``key`` spells
     otherwise, or None: another case, blanks, dashes or nothing for ``_``, accents (:func:`_key_shape`), a few
-    look-alike letters outside ASCII, a letter more, fewer or other (:func:`_reads_as`). The one check of a
-    header's keys (:func:`check_header`) and of a serial device's."""
-    known = {**_READ_KEYS, **{_key_shape(k): k for k in also}}
+    look-alike letters outside ASCII, a letter more, fewer or other (:func:`_reads_as`; in a key of ``also`` of
+    5 letters or more: ``Field``, ``feilds``, attack pass 51). The one check of a header's keys
+    (:func:`check_header`) and of a serial device's."""
+    also = {_key_shape(k): k for k in also}
+    known = {**_READ_KEYS, **also}
     shape = _key_shape(key)
-    meant = known.get(shape) or next((k for s, k in known.items() if _reads_as(shape, s)), None)
+    meant = known.get(shape) or next((k for s, k in known.items() if _reads_as(shape, s, 5 if s in also else 8)), None)
     return meant if meant is not None and meant != key else None
 
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...errors import DeviceError, SettingsError
 from ...inputs import check_number, parse_number, quote
-from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS, format_number, units_header
+from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS, format_number, misspelt_key, units_header
 from ...units import (ACCEL_UNITS, GYRO_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps,
                       check_lsb_per_g, check_sample_rate_hz, to_dps, to_mps2)
 from ..mpu6050.chip import temperature_c
@@ -72,6 +72,40 @@ def header_words(line, where):
             raise DeviceError(f"{where}: the header gives {key} twice")
         values[key] = value
     return values
+
+
+#: the protocol's own keys, beside the recording header's that a device may send (:func:`meant_key`)
+PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit", "accel_unit", "lsb_per_g")
+# keys (lower case, letters and digits) that name a temperature's unit or a counter's width but are not the protocol's
+_TEMP_UNIT_LIKE = re.compile(r"t(?:e?mp[a-z]*)?(?:units?|scale|fmt|format)")
+_COUNTER_BITS_LIKE = re.compile(r"(?:count|cnt|ctr)[a-z]*(?:bits?|width|size|wrap)")
+
+
+def meant_key(key, value):
+    """The key gyrofilter reads that a device's header word ``key=value`` means but spells otherwise, or None.
+
+    Kept as a descriptive key it would change nothing, without a word (attack pass 51): ``field=`` or
+    ``field_names=counter,gz,gy,gx`` left the default field order (x and z swapped), ``temprature_unit=mpu6050_raw``
+    read raw counts as deg C, ``count_bits=8`` left a byte counter's wrap read as a restart. So a word means
+
+    - a key gyrofilter reads (or of :data:`PROTOCOL_KEYS`) spelt otherwise (:func:`~gyrofilter.recording.misspelt_key`);
+    - ``fields`` when its value lists ``gx``, ``gy`` and ``gz``;
+    - ``temp_unit`` when its value is ``mpu6050_raw`` or its key names a temperature's unit (``t_unit``,
+      ``temp_scale``, ``tmp_fmt``, ``temprature_unit``);
+    - ``counter_bits`` when its key names a counter's width (``cnt_bits``, ``counter_width``).
+
+    A digit in the key makes it another sensor's (``temp2_unit``), and other descriptive keys stay the device's
+    own (``temp_offset``, ``sample_count``, ``temp_sensor``).
+    """
+    meant = misspelt_key(key, also=PROTOCOL_KEYS)
+    if meant is not None or key in PROTOCOL_KEYS:
+        return meant
+    name = re.sub(r"[^a-z0-9]", "", key.lower())
+    if set(GYRO_COLUMNS) <= {cell.strip().lower() for cell in value.split(",")}:
+        return "fields"
+    if value.lower() == "mpu6050_raw" or _TEMP_UNIT_LIKE.fullmatch(name):
+        return "temp_unit"
+    return "counter_bits" if _COUNTER_BITS_LIKE.fullmatch(name) else None
 
 
 def make_units(values, where):

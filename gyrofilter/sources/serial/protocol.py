@@ -17,7 +17,8 @@ Line protocol (``docs/live.md``; ``tools/arduino/gyrofilter_stream`` speaks it):
   ``lsb``) and ``lsb_per_g`` (with lsb, a number > 0), required when ``fields`` names the
   accelerometer fields ``ax, ay, az`` (all three or none; only through ``fields``, so a stream
   with an accelerometer sends a header), and written into the recording header (without those fields: ignored,
-  noted); any other key (``sensor``, ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header. The header
+  noted); any other key (``sensor``, ``chip_id``, ``full_scale_dps``, ``dlpf_cfg``, ...) goes into the recording header,
+  except one that means a key gyrofilter reads, spelt otherwise (:func:`.fields.meant_key`: refused). The header
   line is printable ASCII; keys are names (letters, digits, ``_``), each given once, each with a
   value; numbers are plain decimals (:func:`gyrofilter.inputs.parse_number`), ``sample_rate_hz``
   in (0, 100000] Hz, ``lsb_per_dps`` > 0.
@@ -68,12 +69,12 @@ import numpy as np
 
 from ...errors import DeviceError, SettingsError
 from ...inputs import is_plain_number, parse_number, quote
-from ...recording import ACCEL_COLUMNS, COLUMNS, PROVENANCE_KEYS, format_number, misspelt_key
+from ...recording import ACCEL_COLUMNS, COLUMNS, PROVENANCE_KEYS, format_number
 from ...units import MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C
 from ..mpu6050.chip import temperature_c
 from .counter import COUNTING_LINES, first_value_counts, not_counting, out_of_sequence
-from .fields import (ACCEL_IGNORED_NOTE, HEADER_PREFIX, UnitsConflict, accel_units, header_words, in_range,
-                     inferred_fields, make_units, other_keys_note, parse_fields, temp_unit_raw)
+from .fields import (ACCEL_IGNORED_NOTE, HEADER_PREFIX, PROTOCOL_KEYS, UnitsConflict, accel_units, header_words,
+                     in_range, inferred_fields, make_units, meant_key, other_keys_note, parse_fields, temp_unit_raw)
 
 MAX_LINE_BYTES = 256  # a longer line (bytes before its "\n") is refused
 MAX_DETAILED_NOTES = 20  # bad-line notes per source; later ones are only counted
@@ -82,7 +83,6 @@ DEFAULT_COUNTER_BITS = 32
 #: every line received (``stats["lines"]``) is counted in exactly one of these
 LINE_OUTCOMES = ("samples", "duplicates", "partial_lines", "bad_lines", "empty_lines", "device_messages",
                  "headers", "lines_before_header")
-_PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit", "accel_unit", "lsb_per_g")  # the last two: accel_units()
 _UNIT_KEYS = ("sample_rate_hz", "gyro_unit", "lsb_per_dps", "accel_unit", "lsb_per_g")  # a repeated header keeps them
 # a cell of the numpy path (:func:`_plain_cell`): a plain decimal of at most 2 d + 2 characters
 # (sign, d digits, a point, d digits; d = 24 up to 5 fields, fewer for more), so that a line of
@@ -187,8 +187,8 @@ class LineParser:
         changed) when it is unreadable, :class:`UnitsConflict` when it changes the units."""
         values = header_words(line, self.where)
         where = "header line"
-        for key in values:  # a recording's header would refuse it, naming the output file (attack pass 46)
-            if (meant := misspelt_key(key, also=_PROTOCOL_KEYS)) is not None:  # Fields= swapped axes (pass 47)
+        for key, value in values.items():  # a recording's header would refuse it, naming the output file (pass 46)
+            if (meant := meant_key(key, value)) is not None:  # Fields= swapped axes (pass 47)
                 raise DeviceError(f"{self.where}: {where}: key {quote(key)}: gyrofilter reads {quote(meant)}, spelt "
                                   "exactly so; the device must send it so")
         if "gyro_unit" not in values and self._options is not None:
@@ -202,7 +202,7 @@ class LineParser:
                     same = key in units and float(units[key]) == float(value)
                 if not same:
                     raise UnitsConflict(f"{self.where}: the device's header says {key}={units.get(key)} but the options say {value}")
-        header = {k: v for k, v in values.items() if k not in _PROTOCOL_KEYS and k not in PROVENANCE_KEYS}
+        header = {k: v for k, v in values.items() if k not in PROTOCOL_KEYS and k not in PROVENANCE_KEYS}
         ignored = [f"serial: the device's header key {key} is gyrofilter's own (where the samples came from): ignored"
                    for key in sorted(PROVENANCE_KEYS & values.keys())]
         header.update(units)
