@@ -935,6 +935,47 @@ def test_a_users_own_csv_is_told_what_a_recording_needs_in_one_go(tmp_path):
     assert read_recording(path).temp_c.tolist() == [25.0] and read_recording(path).columns["board_temp_c"].tolist() == [30.0]
 
 
+@pytest.mark.parametrize("names, refused", [
+    ("time_ms,gx,gy,gz", "time_ms"), ("gx,gy,gz,timestamp_ms", "timestamp_ms"), ("t_ms,gx,gy,gz", "t_ms"),
+    ("t_us,gx,gy,gz", "t_us"), ("TimeStamp_ns,gx,gy,gz", "TimeStamp_ns"), ("Time(s),gx,gy,gz", "Time(s)"),
+    ("t_sec,gx,gy,gz", "t_sec"), ("ts,gx,gy,gz", "ts"), ("elapsed_s,gx,gy,gz", "elapsed_s"),
+    ("t,gx,gy,gz,Temperature(C)", "Temperature(C)"), ("t,gx,gy,gz,die_temperature", "die_temperature"),
+    ("t,gx,gy,gz,imu_temp", "imu_temp"), ("t,gx,gy,gz,TempF", "TempF"), ("t,gx,gy,gz,temp_raw", "temp_raw"),
+    ("t,gx,gy,gz,temperature_k", "temperature_k")])
+def test_a_column_with_a_word_of_time_stamps_or_a_temperature_is_refused_where_none_is_read(tmp_path, names, refused):
+    """Attack pass 52: ``time_ms`` (and ``t_us``, ``elapsed_s``, ...) was carried along as an extra column, the
+    samples taken as uniform at the header's rate: 5 s of lost samples vanished, every later one shifted; ``imu_temp``
+    or ``TempF`` were carried along unread. A column with a word of time stamps where none is ``t`` (of a
+    temperature where none is ``temp``) is refused; beside ``t`` (``temp``) it is an extra column."""
+    path = tmp_path / "own.csv"
+    header = "# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n"
+    path.write_text(header + names + "\n" + ",".join("1" for _ in names.split(",")) + "\n")
+    with pytest.raises(RecordingError, match=r"line 4: column " + re.escape(repr(refused)) + " looks like"):
+        read_recording(path)
+    beside = ("t,gx,gy,gz,temp," if names.startswith("t,") else "t,gx,gy,gz,") + refused
+    path.write_text(header + beside + "\n" + ",".join("1" for _ in beside.split(",")) + "\n")
+    assert read_recording(path).columns[refused].tolist() == [1.0]
+
+
+@pytest.mark.parametrize("line", ["unit: rad/s", "sample_rate: 200", "rate_hz: 200", "rate: 200", "gyro: rad/s",
+                                  "odr_hz: 200", "rate_khz: 0.2", "units: deg/s"])
+def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line):
+    """Attack pass 52: ``# unit: rad/s`` beside ``gyro_unit: dps`` (``# rate: 200`` beside ``sample_rate_hz: 100``)
+    was kept as an unrelated key and the file read in the other without a word. Refused, naming both; the same
+    rate or unit, and keys of the chip's own rates or a filter's, are kept."""
+    path = tmp_path / "rec.csv"
+    unit = "rad/s" if "deg/s" in line else "dps"
+    head = f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: {unit}\n"
+    path.write_text(head + f"# {line}\nt,gx,gy,gz\n0,1,2,3\n")
+    key = line.split(":")[0]
+    with pytest.raises(RecordingError, match=re.escape(f"header key '{key}' says ") + ".* gyrofilter reads the"):
+        read_recording(path)
+    kept = ["unit: dps", "rate: 100", "rate_khz: 0.1", "gyro_output_rate_hz: 8000", "dlpf_bandwidth_hz: 44",
+            "baud_rate: 115200", "rate2_hz: 200"]
+    path.write_text(head.replace(unit, "dps") + "".join(f"# {k}\n" for k in kept) + "t,gx,gy,gz\n0,1,2,3\n")
+    assert read_recording(path).header["gyro_output_rate_hz"] == "8000"
+
+
 @pytest.mark.parametrize("names, shown", [
     ("\ufefft,gx,gy,gz", r"'\\ufefft' holds the invisible character U\+FEFF \(ZERO WIDTH NO-BREAK SPACE"),
     ("t\u200b,gx,gy,gz", r"'t\\u200b' holds the invisible character U\+200B \(ZERO WIDTH SPACE"),

@@ -307,22 +307,46 @@ def test_a_device_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_the_hea
     (b"columns=counter,gz,gy,gx", "fields"), (b"temprature_unit=mpu6050_raw", "temp_unit"),
     (b"temperture_unit=mpu6050_raw", "temp_unit"), (b"t_unit=mpu6050_raw", "temp_unit"), (b"temp_scale=c", "temp_unit"),
     (b"temp_fmt=c", "temp_unit"), (b"raw_temp=mpu6050_raw", "temp_unit"), (b"count_bits=8", "counter_bits"),
-    (b"cnt_bits=8", "counter_bits"), (b"ctr_bits=8", "counter_bits"), (b"counter_width=8", "counter_bits")])
+    (b"cnt_bits=8", "counter_bits"), (b"ctr_bits=8", "counter_bits"), (b"counter_width=8", "counter_bits"),
+    (b"seq_bits=8", "counter_bits"), (b"counter_modulo=256", "counter_bits"), (b"counter_type=uint8", "counter_bits"),
+    (b"counter_max=255", "counter_bits"), (b"wrap_bits=8", "counter_bits"), (b"idx_bits=8", "counter_bits"),
+    (b"order=counter;gz;gy;gx", "fields"), (b"axis_order=zyx", "fields"), (b"axes=z,y,x", "fields"),
+    (b"temp_raw=1", "temp_unit"), (b"raw_temp=true", "temp_unit"), (b"temp_mode=raw", "temp_unit"),
+    (b"temp=raw", "temp_unit")])
 def test_a_device_word_that_means_a_protocol_key_is_refused(word, meant):
     """Attack pass 51: a device's word kept as a descriptive key changed nothing without a word: ``field=`` or
     ``field_names=counter,gz,gy,gx`` left the default order (x and z swapped), ``temprature_unit=mpu6050_raw`` read
-    counts as deg C, ``count_bits=8`` read a byte counter's wrap as a restart. Refused, naming the key meant; the
+    counts as deg C, ``count_bits=8`` read a byte counter's wrap as a restart; pass 52: ``seq_bits=8`` and
+    ``counter_max=255`` too. Refused, naming the key meant; the
     same stream with the protocol's key reads, and descriptive keys like them stay the device's own."""
     key = word.split(b"=")[0].decode()
     with pytest.raises(DeviceError, match=re.escape(f"header line: key '{key}': gyrofilter reads '{meant}'")):
         LineParser().feed(HEADER.rstrip(b"\n") + b" " + word + b"\n")
+    valid = {"fields": b"counter,gz,gy,gx", "temp_unit": b"mpu6050_raw", "counter_bits": b"8"}[meant]
     p = LineParser()
-    p.feed(HEADER.rstrip(b"\n") + b" " + meant.encode() + b"=" + word.split(b"=")[1] + b"\n")
+    p.feed(HEADER.rstrip(b"\n") + b" " + meant.encode() + b"=" + valid + b"\n")
     assert p.header is not None
-    own = b"temp_offset=1.5 sample_count=9 temp_sensor=die temp2_unit=c counter=yes adc_bits=16 mag_field_ut=50"
+    own = (b"temp_offset=1.5 sample_count=9 temp_sensor=die temp2_unit=c counter=yes adc_bits=16 mag_field_ut=50 "
+           b"sensor_index=0 baud_rate=115200 gyro_output_rate_hz=8000")
     p = LineParser()
     p.feed(HEADER.rstrip(b"\n") + b" " + own + b"\n" + _lines([0, 1]))
     assert {w.split(b"=")[0].decode() for w in own.split()} <= set(p.header)
+
+
+@pytest.mark.parametrize("word", [b"unit=rad/s", b"rate=200", b"odr_hz=200", b"gyro=rad/s", b"units=rad/s"])
+def test_a_device_word_that_states_another_unit_or_rate_stops_the_stream(word):
+    """Attack pass 52: with the units given as options (``serial:PORT,unit=dps,rate=100``), a device's ``unit=rad/s``
+    was kept as a descriptive key and the rows read as deg/s, without a word. Its first header stops the stream,
+    the rows before it kept, as one that changes the units does; without options it is refused too."""
+    p = LineParser(gyro_unit="dps", sample_rate_hz=100)
+    with pytest.raises(UnitsConflict, match=re.escape(f"header key '{word.split(b'=')[0].decode()}' says")) as caught:
+        p.feed(_lines(range(9)) + b"# gyrofilter-serial: 1 sample_rate_hz=100 " + word + b"\n9,1,2,3\n")
+    assert len(caught.value.rows) == 8  # the first line discarded (the port may open mid-line)
+    with pytest.raises(DeviceError, match="gyrofilter reads the"):
+        LineParser().feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100 " + word + b"\n")
+    p = LineParser(gyro_unit="dps", sample_rate_hz=100)
+    p.feed(b"# gyrofilter-serial: 1 sample_rate_hz=100 unit=dps rate=100\n0,1,2,3\n")
+    assert p.header["unit"] == "dps"
 
 
 def test_parser_with_options_uses_a_header_that_comes_first():

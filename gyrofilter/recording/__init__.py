@@ -45,14 +45,14 @@ reader and the writers), ``reader`` and ``writer``. This package presents their 
 from .content import Note, Recording, RecordingHead, convert_gyro, warn_about_gaps
 from .header import (ACCEL_COLUMNS, COLUMNS, END_NOTE, FORMAT_VERSION, GYRO_COLUMNS, MAX_HEADER_LINES, MAX_LINE_BYTES,
                      MAX_NOTE_CHARS, PROVENANCE_KEYS, FILTERED_FROM_KEY, INPUT_RATE_KEY, T_FROM_COUNTER, T_FROM_KEY, T_FROM_LINES,
-                     TIME_LIKE_NAMES, VERSION_KEY,
+                     TIME_WORDS, VERSION_KEY,
                      accel_header, accel_units_header,
-                     dps_header, filtered_from, filtered_words, format_number, header_text, misspelt_key, note_line, note_text, one_line_text, units_header)
+                     contradiction, dps_header, filtered_from, filtered_words, format_number, header_text, misspelt_key, name_words, note_line, note_text, one_line_text, units_header)
 from .reader import CHUNK_ROWS, collect_columns, iter_recording, read_recording
 from .writer import EXACT_FORMAT, FILTERED_FORMAT, RecordingWriter, write_recording
 
 __all__ = ["ACCEL_COLUMNS", "CHUNK_ROWS", "COLUMNS", "END_NOTE", "EXACT_FORMAT", "FILTERED_FORMAT", "FILTERED_FROM_KEY", "FORMAT_VERSION", "GYRO_COLUMNS",
            "INPUT_RATE_KEY", "MAX_HEADER_LINES", "MAX_LINE_BYTES", "MAX_NOTE_CHARS", "Note", "PROVENANCE_KEYS", "Recording", "RecordingHead",
-           "RecordingWriter", "T_FROM_COUNTER", "T_FROM_KEY", "T_FROM_LINES", "TIME_LIKE_NAMES", "VERSION_KEY", "accel_header", "accel_units_header", "collect_columns",
-           "convert_gyro", "dps_header", "filtered_from", "filtered_words", "format_number", "header_text", "iter_recording", "misspelt_key", "note_line", "note_text", "one_line_text",
+           "RecordingWriter", "T_FROM_COUNTER", "T_FROM_KEY", "T_FROM_LINES", "TIME_WORDS", "VERSION_KEY", "accel_header", "accel_units_header", "collect_columns",
+           "contradiction", "convert_gyro", "dps_header", "filtered_from", "filtered_words", "format_number", "header_text", "iter_recording", "misspelt_key", "name_words", "note_line", "note_text", "one_line_text",
            "read_recording", "units_header", "warn_about_gaps", "write_recording"]

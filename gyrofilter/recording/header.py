@@ -10,7 +10,7 @@ import re
 import unicodedata
 
 from ..errors import RecordingError
-from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, json_string, parse_number, quote
+from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, is_plain_number, json_string, parse_number, quote
 from .unit_words import known_unit
 from ..units import ACCEL_UNITS, AXES, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
 
@@ -245,6 +245,8 @@ def check_header(header, where):
     if version != FORMAT_VERSION:
         raise RecordingError(f"{where}: unsupported recording version {quote(version)} (this gyrofilter reads version {FORMAT_VERSION})")
     check_facts(header, where)
+    if (stated := contradiction(header)) is not None:
+        raise RecordingError(f"{where}: {stated}; correct or remove it")
 
 
 #: the header keys every recording states, a file's and one built in code (:func:`check_facts`)
@@ -300,6 +302,42 @@ def misspelt_key(key, also=()):
     return meant if meant is not None and meant != key else None
 
 
+#: a header key of only these words (:func:`name_words`), one of them a rate's, states a sample rate: ``sample_rate``,
+#: ``rate_hz``, ``odr_hz``, ``data_rate``; ``gyro_output_rate_hz`` (the chip's own) and ``cutoff_hz`` do not
+_RATE_KEY_WORDS = frozenset({"sample", "samples", "sampling", "rate", "hz", "khz", "odr", "fs", "sps", "data", "output",
+                             "frequency", "freq"})
+_RATE_WORDS = frozenset({"rate", "odr", "fs", "sps", "sampling", "frequency", "freq"})
+#: a header key of only these words states the gyro's unit: ``unit``, ``gyro``, ``rate_unit``, ``units``
+_UNIT_KEY_WORDS = frozenset({"gyro", "gyroscope", "rate", "angular", "unit", "units"})
+
+
+def contradiction(header):
+    """What a key of ``header`` (text values, with ``sample_rate_hz`` and ``gyro_unit`` checked) states of the sample
+    rate or the gyro's unit otherwise than the key gyrofilter reads it from, as a phrase naming both, or None.
+
+    Kept as an unrelated key, ``# unit: rad/s`` beside ``gyro_unit: dps`` or ``# rate: 200`` beside
+    ``sample_rate_hz: 100`` (or a device's ``unit=rad/s`` beside the source's option ``unit=dps``) read the file in
+    the other without a word (attack pass 52). A key of only rate words (:data:`_RATE_KEY_WORDS`) with a number
+    other than ``sample_rate_hz`` (or ``input_sample_rate_hz``; ``khz`` in thousands), or of only unit words
+    (:data:`_UNIT_KEY_WORDS`) with another rate unit (:func:`~gyrofilter.recording.unit_words.known_unit`), is one;
+    the same number or unit is not, nor a key with a digit (``rate2_hz``: another sensor's)."""
+    rates = [float(parse_number(header[k], k, error=RecordingError)) for k in ("sample_rate_hz", INPUT_RATE_KEY) if k in header]
+    for key, value in header.items():
+        words = set(name_words(key))
+        if key in _READ_KEYS.values() or not words or any(c.isdigit() for c in key):
+            continue
+        if words <= _RATE_KEY_WORDS and words & _RATE_WORDS and is_plain_number(value):
+            stated = float(value) * (1000 if "khz" in words else 1)
+            if not any(abs(stated - rate) <= 1e-9 * rate for rate in rates):
+                return (f"header key {quote(key)} says {quote(value)}, but sample_rate_hz is "
+                        f"{quote(header['sample_rate_hz'])}: gyrofilter reads the sample rate only from sample_rate_hz")
+        unit = known_unit("rate", value)
+        if words <= _UNIT_KEY_WORDS and unit in GYRO_UNITS and unit != header["gyro_unit"]:
+            return (f"header key {quote(key)} says {quote(value)}, but gyro_unit is {quote(header['gyro_unit'])}: "
+                    "gyrofilter reads the gyro's unit only from gyro_unit")
+    return None
+
+
 def check_facts(header, where):
     """Refuse a ``header`` whose sample rate and units are missing or not a recording's, with
     RecordingError naming ``where``: the keys :data:`FACT_KEYS` present, and each, and
@@ -335,15 +373,27 @@ def check_facts(header, where):
                           f"{where}: lsb_per_dps", RecordingError)
 
 
-#: column names that look like time stamps but are not ``t``: refused, so that a user's own file
-#: with a "time" column is not read as uniform samples at the header's rate with its times ignored
-TIME_LIKE_NAMES = frozenset({"time", "times", "timestamp", "timestamps", "time_s", "t_s", "seconds", "secs", "sec",
-                             "stamp", "stamps"})
+def name_words(name):
+    """The words of a column name or header key, lower case: its runs of ASCII letters, split where a lower-case
+    letter meets an upper-case one (``TimeStamp_ns``: time, stamp, ns; ``Temperature(C)``: temperature, c;
+    ``temp2_unit``: temp, unit)."""
+    return re.findall(r"[a-z]+", re.sub(r"([a-z])([A-Z])", r"\1 \2", name).lower())
 
 
-#: column names that look like a temperature but are not ``temp``: refused as the time-like ones
-#: are, so that a user's own ``temp_c`` column is not carried along unread (no compensation, the gap
-#: analysis reading a temperature drift as a drift in time) while the file reads without a word
+#: words that make a column name one of time stamps (:func:`name_words`), as ``t`` alone does (``T``); such a column,
+#: where none is ``t``, is refused, so that a user's own file with a ``time`` column (or ``time_ms``, ``t_us``,
+#: ``TimeStamp_ns``, ``elapsed_s``, attack pass 52) is not read as uniform samples at the header's rate with its
+#: times, and its gaps, ignored. ``t`` beside another word is not one (``host_t``: an arrival time, kept unread)
+TIME_WORDS = frozenset({"time", "times", "timestamp", "timestamps", "stamp", "stamps", "ts", "elapsed", "sec",
+                        "secs", "second", "seconds", "ms", "us", "ns", "millis", "micros", "epoch"})
+
+#: words that make a column name one of a temperature: such a column, where none is ``temp``, is refused as the time-like
+#: ones are, so that a user's own ``temp_c`` (``imu_temp``, ``TempF``, ``Temperature(C)``, pass 52) is not carried
+#: along unread (no compensation, the gap analysis reading a temperature drift as a drift in time)
+TEMPERATURE_WORDS = frozenset({"temp", "temps", "tmp", "temperature", "temperatures", "celsius", "degc",
+                               "fahrenheit", "kelvin"})
+
+#: the names ``convert`` takes for a temperature column, as it normalises them (:mod:`.foreign_extras`)
 TEMPERATURE_LIKE_NAMES = frozenset({"temp", "temps", "temp_c", "tempc", "temp_degc", "temp_deg_c", "temperature",
                                     "temperature_c", "temperature_degc", "die_temp", "die_temp_c", "celsius",
                                     "tmp"})  # the Arduino MPU6050 sketch's Tmp (raw counts)
@@ -362,8 +412,9 @@ def refuse_invisible(name, what, where):
 
 def check_columns(names, where):
     """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
-    lack ``gx, gy, gz``, look like time stamps not named ``t`` (:data:`TIME_LIKE_NAMES`, any
-    case: ``T`` too) or like a temperature not named ``temp`` (:data:`TEMPERATURE_LIKE_NAMES`),
+    lack ``gx, gy, gz``, look like time stamps where none is named ``t`` (a word of :data:`TIME_WORDS`, any
+    case: ``T`` too; beside ``t`` such a column is an extra one, ``ref_time_offset``) or like a temperature where
+    none is named ``temp`` (a word of :data:`TEMPERATURE_WORDS`; ``board_temp_c`` beside ``temp``),
     or hold an invisible character (:func:`refuse_invisible`: a byte-order mark of a file joined
     on after the header made ``\ufefft`` an extra column, its times ignored); ``where`` is the
     file and line."""
@@ -381,12 +432,12 @@ def check_columns(names, where):
                 "; names are lower case" if all(c.upper() in map(str.upper, names) for c in missing) else
                 "; another tool's log: gyrofilter convert")
         raise RecordingError(f"{where}: missing column(s) {', '.join(missing)} (have {quote(', '.join(names))}){hint}")
-    times = [n for n in names if n.lower() in TIME_LIKE_NAMES or n == "T"]
+    times = [n for n in names if "t" not in names and (name_words(n) == ["t"] or TIME_WORDS.intersection(name_words(n)))]
     if times:
         raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
                              "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
                              "it as an extra column; another tool's log: gyrofilter convert")
-    temps = [n for n in names if n.lower() in TEMPERATURE_LIKE_NAMES and n != "temp"]
+    temps = [n for n in names if "temp" not in names and TEMPERATURE_WORDS.intersection(name_words(n))]
     if temps:
         raise RecordingError(f"{where}: column {quote(temps[0])} looks like a temperature, which a recording holds "
                              "in a column named 'temp' (deg C); rename it temp to use it, or to something else to "

@@ -8,8 +8,8 @@ import re
 import numpy as np
 
 from ...errors import DeviceError, SettingsError
-from ...inputs import check_number, parse_number, quote
-from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS, format_number, misspelt_key, units_header
+from ...inputs import check_number, is_plain_number, parse_number, quote
+from ...recording import ACCEL_COLUMNS, GYRO_COLUMNS, format_number, misspelt_key, name_words, units_header
 from ...units import (ACCEL_UNITS, GYRO_UNITS, MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C, check_lsb_per_dps,
                       check_lsb_per_g, check_sample_rate_hz, to_dps, to_mps2)
 from ..mpu6050.chip import temperature_c
@@ -76,36 +76,53 @@ def header_words(line, where):
 
 #: the protocol's own keys, beside the recording header's that a device may send (:func:`meant_key`)
 PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit", "accel_unit", "lsb_per_g")
-# keys (lower case, letters and digits) that name a temperature's unit or a counter's width but are not the protocol's
-_TEMP_UNIT_LIKE = re.compile(r"t(?:e?mp[a-z]*)?(?:units?|scale|fmt|format)")
-_COUNTER_BITS_LIKE = re.compile(r"(?:count|cnt|ctr)[a-z]*(?:bits?|width|size|wrap)")
+# the words (recording.name_words) of a device's key that name what a protocol key states (meant_key)
+_FIELD_WORDS = frozenset({"field", "fields", "order", "column", "columns", "cols", "axes", "axis", "layout"})
+_COUNTER_WORDS = frozenset({"counter", "count", "cnt", "cntr", "ctr", "seq", "sequence", "idx", "index", "wrap",
+                            "rollover"})
+_WIDTH_WORDS = frozenset({"bits", "bit", "bytes", "byte", "width", "size", "len", "length", "max", "modulo", "modulus",
+                          "mod", "wrap", "wraps", "rollover", "type", "range", "limit", "period"})
+_TEMP_UNIT_WORDS = frozenset({"unit", "units", "scale", "fmt", "format", "raw", "mode", "type"})
+_TEMP_UNIT_VALUES = frozenset({"c", "f", "k", "raw", "celsius", "degc", "fahrenheit", "kelvin", "counts", "lsb"})
 
 
 def meant_key(key, value):
     """The key gyrofilter reads that a device's header word ``key=value`` means but spells otherwise, or None.
 
-    Kept as a descriptive key it would change nothing, without a word (attack pass 51): ``field=`` or
+    Kept as a descriptive key it would change nothing, without a word (attack passes 51, 52): ``field=`` or
     ``field_names=counter,gz,gy,gx`` left the default field order (x and z swapped), ``temprature_unit=mpu6050_raw``
-    read raw counts as deg C, ``count_bits=8`` left a byte counter's wrap read as a restart. So a word means
+    read raw counts as deg C, ``count_bits=8`` or ``seq_bits=8`` left a byte counter's wrap read as a restart. So a
+    word means
 
     - a key gyrofilter reads (or of :data:`PROTOCOL_KEYS`) spelt otherwise (:func:`~gyrofilter.recording.misspelt_key`);
-    - ``fields`` when its value lists ``gx``, ``gy`` and ``gz``;
-    - ``temp_unit`` when its value is ``mpu6050_raw`` or its key names a temperature's unit (``t_unit``,
-      ``temp_scale``, ``tmp_fmt``, ``temprature_unit``);
-    - ``counter_bits`` when its key names a counter's width (``cnt_bits``, ``counter_width``).
+    - ``fields`` when its value lists ``gx``, ``gy`` and ``gz`` (``columns=counter;gz;gy;gx``), or its key has a word
+      of a line's layout (:data:`_FIELD_WORDS`: ``axis_order=zyx``) and its value is not a number (``mag_field_ut=50``
+      is the device's own);
+    - ``temp_unit`` when its value is ``mpu6050_raw``, or its key has a word of a temperature (``t``, ``temp...``,
+      ``tmp``) and a word of a unit (:data:`_TEMP_UNIT_WORDS`: ``t_unit``, ``temp_raw``, ``temprature_unit``) or
+      a unit's value (``temp=raw``);
+    - ``counter_bits`` when its key has a word of a counter and one of its width (``seq_bits``, ``counter_max``,
+      ``counter_type``).
 
-    A digit in the key makes it another sensor's (``temp2_unit``), and other descriptive keys stay the device's
-    own (``temp_offset``, ``sample_count``, ``temp_sensor``).
+    A digit in the key makes it another sensor's (``temp2_unit``), and other descriptive keys stay the device's own
+    (``temp_offset``, ``sample_count``, ``temp_sensor``, ``adc_bits``).
     """
     meant = misspelt_key(key, also=PROTOCOL_KEYS)
     if meant is not None or key in PROTOCOL_KEYS:
         return meant
-    name = re.sub(r"[^a-z0-9]", "", key.lower())
-    if set(GYRO_COLUMNS) <= {cell.strip().lower() for cell in value.split(",")}:
+    if {"gx", "gy", "gz"} <= set(re.split(r"[^a-z0-9]+", value.lower())):
         return "fields"
-    if value.lower() == "mpu6050_raw" or _TEMP_UNIT_LIKE.fullmatch(name):
+    if value.lower() == "mpu6050_raw":
         return "temp_unit"
-    return "counter_bits" if _COUNTER_BITS_LIKE.fullmatch(name) else None
+    words = set(name_words(key))
+    if any(c.isdigit() for c in key):
+        return None
+    if words & _FIELD_WORDS and not is_plain_number(value):
+        return "fields"
+    if any(w == "t" or w.startswith(("tem", "tmp")) for w in words) and (
+            words & _TEMP_UNIT_WORDS or value.lower() in _TEMP_UNIT_VALUES):
+        return "temp_unit"
+    return "counter_bits" if words & _COUNTER_WORDS and words & _WIDTH_WORDS else None
 
 
 def make_units(values, where):
@@ -113,7 +130,8 @@ def make_units(values, where):
     (numbers: SettingsError), messages naming ``where``."""
     unit = values.get("gyro_unit")
     if unit is None:
-        raise SettingsError(f"{where}: gyro unit missing (unit=dps|rad/s|lsb)")
+        raise SettingsError(f"{where}: gyro unit missing (a header's gyro_unit=dps|rad/s|lsb, or the source option "
+                            "unit=dps|rad/s|lsb)")
     if unit not in GYRO_UNITS:
         raise SettingsError(f"{where}: gyro_unit {quote(unit)} is not one of {', '.join(GYRO_UNITS)}")
     sample_rate_hz = _positive(values, "sample_rate_hz", where, "rate=HZ")

@@ -69,7 +69,7 @@ import numpy as np
 
 from ...errors import DeviceError, SettingsError
 from ...inputs import is_plain_number, parse_number, quote
-from ...recording import ACCEL_COLUMNS, COLUMNS, PROVENANCE_KEYS, format_number
+from ...recording import ACCEL_COLUMNS, COLUMNS, PROVENANCE_KEYS, contradiction, format_number
 from ...units import MAX_ACCEL_MPS2, MAX_RATE_DPS, TEMP_RANGE_C
 from ..mpu6050.chip import temperature_c
 from .counter import COUNTING_LINES, first_value_counts, not_counting, out_of_sequence
@@ -206,6 +206,8 @@ class LineParser:
         ignored = [f"serial: the device's header key {key} is gyrofilter's own (where the samples came from): ignored"
                    for key in sorted(PROVENANCE_KEYS & values.keys())]
         header.update(units)
+        if (stated := contradiction(header)) is not None:  # unit=rad/s beside the option unit=dps (attack pass 52)
+            raise DeviceError(f"{self.where}: {where}: {stated}; the device must not send it so")
         fields = self.fields
         if "fields" in values:
             fields = parse_fields(values["fields"], self.where)
@@ -395,6 +397,11 @@ class LineParser:
                 except (DeviceError, SettingsError) as exc:
                     if self.header is None:
                         raise
+                    if self.device_header is None:  # its first, the units from the options: it ends the stream as
+                        out.append(self._released())  # the first does without them (unit=rad/s, attack pass 52)
+                        conflict = UnitsConflict(str(exc))
+                        conflict.rows = np.concatenate(out)
+                        raise conflict from None
                     self._bad(line, "bad_lines", f"unreadable repeated header: {exc}")
                     continue
                 self.stats["headers"] += 1
