@@ -958,7 +958,7 @@ def test_a_column_with_a_word_of_time_stamps_or_a_temperature_is_refused_where_n
 
 
 @pytest.mark.parametrize("line", ["unit: rad/s", "sample_rate: 200", "rate_hz: 200", "rate: 200", "gyro: rad/s",
-                                  "odr_hz: 200", "rate_khz: 0.2", "units: deg/s"])
+                                  "odr_hz: 200", "rate_khz: 0.2", "units: deg/s", "rate: 200 Hz", "sample_rate: 0.2kHz"])
 def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line):
     """Attack pass 52: ``# unit: rad/s`` beside ``gyro_unit: dps`` (``# rate: 200`` beside ``sample_rate_hz: 100``)
     was kept as an unrelated key and the file read in the other without a word. Refused, naming both; the same
@@ -970,7 +970,7 @@ def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line
     key = line.split(":")[0]
     with pytest.raises(RecordingError, match=re.escape(f"header key '{key}' says ") + ".* gyrofilter reads the"):
         read_recording(path)
-    kept = ["unit: dps", "rate: 100", "rate_khz: 0.1", "gyro_output_rate_hz: 8000", "dlpf_bandwidth_hz: 44",
+    kept = ["unit: dps", "rate: 100", "rate_khz: 0.1", "data_rate: 100 Hz", "odr: fast", "gyro_output_rate_hz: 8000", "dlpf_bandwidth_hz: 44",
             "baud_rate: 115200", "rate2_hz: 200"]
     path.write_text(head.replace(unit, "dps") + "".join(f"# {k}\n" for k in kept) + "t,gx,gy,gz\n0,1,2,3\n")
     assert read_recording(path).header["gyro_output_rate_hz"] == "8000"

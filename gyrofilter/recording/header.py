@@ -318,7 +318,7 @@ def contradiction(header):
     Kept as an unrelated key, ``# unit: rad/s`` beside ``gyro_unit: dps`` or ``# rate: 200`` beside
     ``sample_rate_hz: 100`` (or a device's ``unit=rad/s`` beside the source's option ``unit=dps``) read the file in
     the other without a word (attack pass 52). A key of only rate words (:data:`_RATE_KEY_WORDS`) with a number
-    other than ``sample_rate_hz`` (or ``input_sample_rate_hz``; ``khz`` in thousands), or of only unit words
+    other than ``sample_rate_hz`` (or ``input_sample_rate_hz``; ``khz`` in thousands; ``200 Hz`` too), or of only unit words
     (:data:`_UNIT_KEY_WORDS`) with another rate unit (:func:`~gyrofilter.recording.unit_words.known_unit`), is one;
     the same number or unit is not, nor a key with a digit (``rate2_hz``: another sensor's)."""
     rates = [float(parse_number(header[k], k, error=RecordingError)) for k in ("sample_rate_hz", INPUT_RATE_KEY) if k in header]
@@ -326,8 +326,9 @@ def contradiction(header):
         words = set(name_words(key))
         if key in _READ_KEYS.values() or not words or any(c.isdigit() for c in key):
             continue
-        if words <= _RATE_KEY_WORDS and words & _RATE_WORDS and is_plain_number(value):
-            stated = float(value) * (1000 if "khz" in words else 1)
+        number = re.fullmatch(r"\s*(\S+?)\s*(k?hz)?\s*", value, re.IGNORECASE)  # 200, 200 Hz, 0.2kHz
+        if words <= _RATE_KEY_WORDS and words & _RATE_WORDS and number and is_plain_number(number[1]):
+            stated = float(number[1]) * (1000 if "khz" in words or (number[2] or "").lower() == "khz" else 1)
             if not any(abs(stated - rate) <= 1e-9 * rate for rate in rates):
                 return (f"header key {quote(key)} says {quote(value)}, but sample_rate_hz is "
                         f"{quote(header['sample_rate_hz'])}: gyrofilter reads the sample rate only from sample_rate_hz")

@@ -390,16 +390,12 @@ class LineParser:
                     pending = []
                 try:
                     self._header_line(line)
-                except UnitsConflict as exc:
-                    out.append(self._released())
-                    exc.rows = np.concatenate(out)
-                    raise
                 except (DeviceError, SettingsError) as exc:
                     if self.header is None:
                         raise
-                    if self.device_header is None:  # its first, the units from the options: it ends the stream as
-                        out.append(self._released())  # the first does without them (unit=rad/s, attack pass 52)
-                        conflict = UnitsConflict(str(exc))
+                    if isinstance(exc, UnitsConflict) or self.device_header is None:  # the device's first, the units
+                        out.append(self._released())  # the options': it ends the stream (unit=rad/s, attack pass 52)
+                        conflict = exc if isinstance(exc, UnitsConflict) else UnitsConflict(str(exc))
                         conflict.rows = np.concatenate(out)
                         raise conflict from None
                     self._bad(line, "bad_lines", f"unreadable repeated header: {exc}")
