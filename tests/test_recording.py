@@ -849,12 +849,13 @@ def test_a_header_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_it(tmp_
         read_recording(path)
 
 
-@pytest.mark.parametrize("key", ["Gerät", "温度", "传感器的型号和序列号", "τ", "sample_rate", "gyro_units_note", "lsb_per_deg",
+@pytest.mark.parametrize("key", ["Gerät", "温度", "传感器的型号和序列号", "τ", "gyro_units_note", "lsb_per_deg",
                                  "from", "t_offset", "sensor_serial", "full_scale", "temperature", "gyro2_unit",
                                  "sample_rate_hz2"])
 def test_a_key_of_its_own_outside_ascii_is_kept(tmp_path, key):
     """Pass 47's look-alike check refuses a few foreign letters standing in a key gyrofilter reads, not every key
-    outside ASCII, and pass 49's a letter more or fewer in a long key, not every key like one: unknown keys are kept."""
+    outside ASCII, and pass 49's a letter more or fewer in a long key, not every key like one: unknown keys are kept
+    (``sample_rate: x`` no longer: a key of rate words must state the file's rate, pass 53)."""
     path = _dps_file(tmp_path, "0,1,2,3\n", header=f"# {key}: x\n")
     assert read_recording(path).header[key] == "x"
 
@@ -941,7 +942,10 @@ def test_a_users_own_csv_is_told_what_a_recording_needs_in_one_go(tmp_path):
     ("t_sec,gx,gy,gz", "t_sec"), ("ts,gx,gy,gz", "ts"), ("elapsed_s,gx,gy,gz", "elapsed_s"),
     ("t,gx,gy,gz,Temperature(C)", "Temperature(C)"), ("t,gx,gy,gz,die_temperature", "die_temperature"),
     ("t,gx,gy,gz,imu_temp", "imu_temp"), ("t,gx,gy,gz,TempF", "TempF"), ("t,gx,gy,gz,temp_raw", "temp_raw"),
-    ("t,gx,gy,gz,temperature_k", "temperature_k")])
+    ("t,gx,gy,gz,temperature_k", "temperature_k"), ("t(s),gx,gy,gz", "t(s)"), ("t[s],gx,gy,gz", "t[s]"),
+    ("gx,gy,gz,zeit", "zeit"), ("tstamp,gx,gy,gz", "tstamp"), ("uptime,gx,gy,gz", "uptime"), ("dt,gx,gy,gz", "dt"),
+    ("t,gx,gy,gz,degC", "degC"), ("t,gx,gy,gz,°C", "°C"), ("t,gx,gy,gz,t_c", "t_c"), ("t,gx,gy,gz,T_imu", "T_imu"),
+    ("t,gx,gy,gz,temperatura", "temperatura"), ("t,gx,gy,gz,thermistor", "thermistor")])
 def test_a_column_with_a_word_of_time_stamps_or_a_temperature_is_refused_where_none_is_read(tmp_path, names, refused):
     """Attack pass 52: ``time_ms`` (and ``t_us``, ``elapsed_s``, ...) was carried along as an extra column, the
     samples taken as uniform at the header's rate: 5 s of lost samples vanished, every later one shifted; ``imu_temp``
@@ -958,21 +962,28 @@ def test_a_column_with_a_word_of_time_stamps_or_a_temperature_is_refused_where_n
 
 
 @pytest.mark.parametrize("line", ["unit: rad/s", "sample_rate: 200", "rate_hz: 200", "rate: 200", "gyro: rad/s",
-                                  "odr_hz: 200", "rate_khz: 0.2", "units: deg/s", "rate: 200 Hz", "sample_rate: 0.2kHz"])
+                                  "odr_hz: 200", "rate_khz: 0.2", "units: deg/s", "rate: 200 Hz", "sample_rate: 0.2kHz",
+                                  "rate: 0xC8", "rate: ２００", "rate: 200,0", "odr: fast", "dt: 0.005",
+                                  "sampling_period_ms: 5", "Ts: 0.005 s", "samplerate: 200", "hz: 200", "imu_rate: 200",
+                                  "gyro_scale: rad/s", "omega_unit: rad/s", "lsb_per_deg: 65.5",
+                                  "gyro_sensitivity: 65.5 LSB/(deg/s)", "scale_factor: 65.5", "acc_unit: m/s^2"])
 def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line):
     """Attack pass 52: ``# unit: rad/s`` beside ``gyro_unit: dps`` (``# rate: 200`` beside ``sample_rate_hz: 100``)
-    was kept as an unrelated key and the file read in the other without a word. Refused, naming both; the same
-    rate or unit, and keys of the chip's own rates or a filter's, are kept."""
+    was kept as an unrelated key and the file read in the other without a word; pass 53: with its unit (``200 Hz``),
+    as a period (``dt``), a sensitivity (``lsb_per_deg`` beside ``lsb_per_dps``), the accelerometer's unit. Refused,
+    naming both, and so is a value that does not read (``0xC8``); the same rate, period or unit, and keys of the
+    chip's own rates or a filter's, are kept."""
     path = tmp_path / "rec.csv"
-    unit = "rad/s" if "deg/s" in line else "dps"
-    head = f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: {unit}\n"
-    path.write_text(head + f"# {line}\nt,gx,gy,gz\n0,1,2,3\n")
+    unit = "lsb\n# lsb_per_dps: 131" if "65.5" in line else "rad/s" if "deg/s" in line else "dps"
+    head = f"# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: {unit}\n# accel_unit: g\n"
+    path.write_text(head + f"# {line}\nt,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n")
     key = line.split(":")[0]
-    with pytest.raises(RecordingError, match=re.escape(f"header key '{key}' says ") + ".* gyrofilter reads the"):
+    with pytest.raises(RecordingError, match=re.escape(f"header key '{key}' says ") + ".* gyrofilter reads it only from"):
         read_recording(path)
-    kept = ["unit: dps", "rate: 100", "rate_khz: 0.1", "data_rate: 100 Hz", "odr: fast", "gyro_output_rate_hz: 8000", "dlpf_bandwidth_hz: 44",
-            "baud_rate: 115200", "rate2_hz: 200"]
-    path.write_text(head.replace(unit, "dps") + "".join(f"# {k}\n" for k in kept) + "t,gx,gy,gz\n0,1,2,3\n")
+    kept = ["unit: dps", "rate: 100", "rate_khz: 0.1", "data_rate: 100 Hz", "dt: 0.01", "sample_period_ms: 10",
+            "gyro_output_rate_hz: 8000", "dlpf_bandwidth_hz: 44", "baud_rate: 115200", "rate2_hz: 200", "rate_dps: 90",
+            "gyro: MPU6050", "gyro_sensitivity: 65.5", "acc_unit: g", "time: 2024-01-01"]
+    path.write_text(head.replace(unit, "dps") + "".join(f"# {k}\n" for k in kept) + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n")
     assert read_recording(path).header["gyro_output_rate_hz"] == "8000"
 
 

@@ -312,7 +312,8 @@ def test_a_device_key_gyrofilter_reads_spelt_otherwise_is_refused_naming_the_hea
     (b"counter_max=255", "counter_bits"), (b"wrap_bits=8", "counter_bits"), (b"idx_bits=8", "counter_bits"),
     (b"order=counter;gz;gy;gx", "fields"), (b"axis_order=zyx", "fields"), (b"axes=z,y,x", "fields"),
     (b"temp_raw=1", "temp_unit"), (b"raw_temp=true", "temp_unit"), (b"temp_mode=raw", "temp_unit"),
-    (b"temp=raw", "temp_unit")])
+    (b"temp=raw", "temp_unit"), (b"names=counter,gyro_z,gyro_y,gyro_x", "fields"), (b"fmt=seq,z,y,x,t", "fields"),
+    (b"remap=zyx", "fields"), (b"orientation=zyx", "fields"), (b"swap_xy=1", "fields"), (b"invert_z=1", "fields")])
 def test_a_device_word_that_means_a_protocol_key_is_refused(word, meant):
     """Attack pass 51: a device's word kept as a descriptive key changed nothing without a word: ``field=`` or
     ``field_names=counter,gz,gy,gx`` left the default order (x and z swapped), ``temprature_unit=mpu6050_raw`` read
@@ -333,7 +334,8 @@ def test_a_device_word_that_means_a_protocol_key_is_refused(word, meant):
     assert {w.split(b"=")[0].decode() for w in own.split()} <= set(p.header)
 
 
-@pytest.mark.parametrize("word", [b"unit=rad/s", b"rate=200", b"odr_hz=200", b"gyro=rad/s", b"units=rad/s"])
+@pytest.mark.parametrize("word", [b"unit=rad/s", b"rate=200", b"odr_hz=200", b"gyro=rad/s", b"units=rad/s",
+                                  b"rate=200Hz", b"period_ms=5", b"samplerate=200", b"dt=0.005", b"gyro_scale=rad/s"])
 def test_a_device_word_that_states_another_unit_or_rate_stops_the_stream(word):
     """Attack pass 52: with the units given as options (``serial:PORT,unit=dps,rate=100``), a device's ``unit=rad/s``
     was kept as a descriptive key and the rows read as deg/s, without a word. Its first header stops the stream,
@@ -342,7 +344,7 @@ def test_a_device_word_that_states_another_unit_or_rate_stops_the_stream(word):
     with pytest.raises(UnitsConflict, match=re.escape(f"header key '{word.split(b'=')[0].decode()}' says")) as caught:
         p.feed(_lines(range(9)) + b"# gyrofilter-serial: 1 sample_rate_hz=100 " + word + b"\n9,1,2,3\n")
     assert len(caught.value.rows) == 8  # the first line discarded (the port may open mid-line)
-    with pytest.raises(DeviceError, match="gyrofilter reads the"):
+    with pytest.raises(DeviceError, match="gyrofilter reads it only from"):
         LineParser().feed(b"# gyrofilter-serial: 1 gyro_unit=dps sample_rate_hz=100 " + word + b"\n")
     p = LineParser(gyro_unit="dps", sample_rate_hz=100)
     p.feed(b"# gyrofilter-serial: 1 sample_rate_hz=100 unit=dps rate=100\n0,1,2,3\n")

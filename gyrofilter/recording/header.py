@@ -302,41 +302,84 @@ def misspelt_key(key, also=()):
     return meant if meant is not None and meant != key else None
 
 
-#: a header key of only these words (:func:`name_words`), one of them a rate's, states a sample rate: ``sample_rate``,
-#: ``rate_hz``, ``odr_hz``, ``data_rate``; ``gyro_output_rate_hz`` (the chip's own) and ``cutoff_hz`` do not
-_RATE_KEY_WORDS = frozenset({"sample", "samples", "sampling", "rate", "hz", "khz", "odr", "fs", "sps", "data", "output",
-                             "frequency", "freq"})
-_RATE_WORDS = frozenset({"rate", "odr", "fs", "sps", "sampling", "frequency", "freq"})
-#: a header key of only these words states the gyro's unit: ``unit``, ``gyro``, ``rate_unit``, ``units``
-_UNIT_KEY_WORDS = frozenset({"gyro", "gyroscope", "rate", "angular", "unit", "units"})
+#: what a header key states, by its words (:func:`name_words`): a key of only a kind's words and at least one of its
+#: own states the sample rate (``sample_rate``, ``rate_hz``, ``odr``, ``imu_rate``, ``samplerate``), the sample
+#: period (``dt``, ``sample_period_ms``, ``Ts``), the gyro's unit (``unit``, ``gyro_scale``, ``rate_unit``; also
+#: ``gyro: rad/s``, a value that is a unit), its sensitivity (``lsb_per_deg``, ``gyro_sensitivity``,
+#: ``scale_factor``: a number) or the accelerometer's unit (``acc_unit``). ``gyro_output_rate_hz`` (the chip's own),
+#: ``cutoff_hz``, ``baud_rate`` and ``rate_dps`` are none of them
+_STATES = {  # kind: (the other words its key may hold, its own words)
+    "rate": ({"sample", "samples", "data", "output", "update", "imu", "khz"},
+             {"rate", "samplerate", "odr", "fs", "sps", "sampling", "frequency", "freq", "hz"}),
+    "period": ({"sample", "sampling", "time", "s", "sec", "ms", "us", "ns"}, {"period", "interval", "dt", "ts", "step"}),
+    "unit": ({"gyro", "gyroscope", "rate", "angular", "velocity", "omega", "measurement"}, {"unit", "units", "scale"}),
+    "sensitivity": ({"gyro", "per", "dps", "deg", "degree", "degrees", "s", "factor"}, {"lsb", "sensitivity", "scale"}),
+    "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
+}
+_SECONDS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+
+
+def _kinds(words, value):
+    """The kinds of :data:`_STATES` a key of ``words`` with ``value`` states, most telling first."""
+    kinds = [kind for kind, (others, own) in _STATES.items() if words & own and words <= others | own]
+    if kind := ("unit" if words <= _STATES["unit"][0] | _STATES["unit"][1] and known_unit("rate", value) else None):
+        kinds.insert(0, kind)  # gyro: rad/s
+    if "accel_unit" in kinds and not words & _STATES["accel_unit"][0]:
+        kinds.remove("accel_unit")
+    return kinds
 
 
 def contradiction(header):
     """What a key of ``header`` (text values, with ``sample_rate_hz`` and ``gyro_unit`` checked) states of the sample
-    rate or the gyro's unit otherwise than the key gyrofilter reads it from, as a phrase naming both, or None.
+    rate, the gyro's unit or sensitivity, or the accelerometer's unit, otherwise than the key gyrofilter reads it
+    from, as a phrase naming both, or None.
 
     Kept as an unrelated key, ``# unit: rad/s`` beside ``gyro_unit: dps`` or ``# rate: 200`` beside
     ``sample_rate_hz: 100`` (or a device's ``unit=rad/s`` beside the source's option ``unit=dps``) read the file in
-    the other without a word (attack pass 52). A key of only rate words (:data:`_RATE_KEY_WORDS`) with a number
-    other than ``sample_rate_hz`` (or ``input_sample_rate_hz``; ``khz`` in thousands; ``200 Hz`` too), or of only unit words
-    (:data:`_UNIT_KEY_WORDS`) with another rate unit (:func:`~gyrofilter.recording.unit_words.known_unit`), is one;
-    the same number or unit is not, nor a key with a digit (``rate2_hz``: another sensor's)."""
+    the other without a word (attack passes 52, 53: ``rate: 200 Hz``, ``dt: 0.005``, ``gyro_scale: rad/s``,
+    ``lsb_per_deg: 65.5`` beside ``lsb_per_dps: 131``, ``acc_unit: m/s^2`` beside ``accel_unit: g``). A key that
+    states one of them (:data:`_STATES`) must state the same: a rate in Hz (``khz`` in the key or the value in
+    thousands) equal to ``sample_rate_hz`` or ``input_sample_rate_hz``, a period (s, or ``ms``, ``us``, ``ns``) of
+    one over it, the unit (:func:`~gyrofilter.recording.unit_words.known_unit`), ``lsb_per_dps`` (where
+    ``gyro_unit`` is lsb; the value may end in a unit of deg/s), ``accel_unit`` (where the header has one); one that
+    does not, or whose value does not read so (``0xC8``, ``200,0``), is one. A key with a digit (``rate2_hz``:
+    another sensor's) is not read."""
     rates = [float(parse_number(header[k], k, error=RecordingError)) for k in ("sample_rate_hz", INPUT_RATE_KEY) if k in header]
     for key, value in header.items():
         words = set(name_words(key))
         if key in _READ_KEYS.values() or not words or any(c.isdigit() for c in key):
             continue
-        number = re.fullmatch(r"\s*(\S+?)\s*(k?hz)?\s*", value, re.IGNORECASE)  # 200, 200 Hz, 0.2kHz
-        if words <= _RATE_KEY_WORDS and words & _RATE_WORDS and number and is_plain_number(number[1]):
-            stated = float(number[1]) * (1000 if "khz" in words or (number[2] or "").lower() == "khz" else 1)
-            if not any(abs(stated - rate) <= 1e-9 * rate for rate in rates):
-                return (f"header key {quote(key)} says {quote(value)}, but sample_rate_hz is "
-                        f"{quote(header['sample_rate_hz'])}: gyrofilter reads the sample rate only from sample_rate_hz")
-        unit = known_unit("rate", value)
-        if words <= _UNIT_KEY_WORDS and unit in GYRO_UNITS and unit != header["gyro_unit"]:
-            return (f"header key {quote(key)} says {quote(value)}, but gyro_unit is {quote(header['gyro_unit'])}: "
-                    "gyrofilter reads the gyro's unit only from gyro_unit")
+        kinds = _kinds(words, value)
+        if kinds and (meant := _contradicts(kinds[0], words, unicodedata.normalize("NFKC", value), header, rates)):
+            return (f"header key {quote(key)} says {quote(value)}, but {meant} is {quote(header[meant])}: "
+                    f"gyrofilter reads it only from {meant}")
     return None
+
+
+def _contradicts(kind, words, value, header, rates):
+    """The key gyrofilter reads that a key of ``kind`` (:data:`_STATES`) stating ``value`` contradicts, or None."""
+    number = re.fullmatch(r"\s*(\S+?)\s*([a-zA-Z°/()^]*)\s*", value)
+    amount = float(number[1]) if number and is_plain_number(number[1]) else None
+    suffix = number[2].lower() if number else ""
+    if kind in ("rate", "period"):
+        if kind == "rate" and amount is not None and suffix in ("", "hz", "khz"):
+            stated = amount * (1000 if "khz" in words or suffix == "khz" else 1)
+        elif kind == "period" and amount and suffix in ("", *_SECONDS):
+            scale = _SECONDS.get(suffix) or next((_SECONDS[w] for w in ("ms", "us", "ns") if w in words), 1.0)
+            stated = 1.0 / (amount * scale)
+        else:
+            stated = None
+        return None if stated is not None and any(abs(stated - r) <= 1e-9 * r for r in rates) else "sample_rate_hz"
+    if kind == "unit":
+        return None if known_unit("rate", value) == header["gyro_unit"] else "gyro_unit"
+    if kind == "sensitivity":
+        if header["gyro_unit"] != "lsb":
+            return None
+        per_dps = suffix == "" or "dps" in suffix or "deg" in suffix.replace("°", "deg")  # 131 LSB/(deg/s)
+        return None if per_dps and amount == float(parse_number(header["lsb_per_dps"], "lsb_per_dps")) else "lsb_per_dps"
+    if "accel_unit" not in header:
+        return None
+    return None if known_unit("accel", value) == header["accel_unit"] else "accel_unit"
 
 
 def check_facts(header, where):
@@ -381,18 +424,36 @@ def name_words(name):
     return re.findall(r"[a-z]+", re.sub(r"([a-z])([A-Z])", r"\1 \2", name).lower())
 
 
-#: words that make a column name one of time stamps (:func:`name_words`), as ``t`` alone does (``T``); such a column,
-#: where none is ``t``, is refused, so that a user's own file with a ``time`` column (or ``time_ms``, ``t_us``,
-#: ``TimeStamp_ns``, ``elapsed_s``, attack pass 52) is not read as uniform samples at the header's rate with its
-#: times, and its gaps, ignored. ``t`` beside another word is not one (``host_t``: an arrival time, kept unread)
-TIME_WORDS = frozenset({"time", "times", "timestamp", "timestamps", "stamp", "stamps", "ts", "elapsed", "sec",
-                        "secs", "second", "seconds", "ms", "us", "ns", "millis", "micros", "epoch"})
+#: words that make a column name one of time stamps (:func:`name_words`), as ``t`` alone does (``T``) or with a unit
+#: of time (``t_s``, ``t(s)``, ``t[ms]``); such a column, where none is ``t``, is refused, so that a user's own file
+#: with a ``time`` column (``time_ms``, ``TimeStamp_ns``, ``elapsed_s``, attack pass 52; ``t(s)``, ``zeit``,
+#: ``tstamp``, pass 53) is not read as uniform samples at the header's rate with its times, and its gaps, ignored.
+#: ``t`` after another word is not one (``host_t``: an arrival time, kept unread)
+TIME_WORDS = frozenset({"time", "times", "timestamp", "timestamps", "stamp", "stamps", "ts", "tstamp", "elapsed", "sec",
+                        "secs", "second", "seconds", "ms", "us", "ns", "millis", "micros", "epoch", "uptime", "tick",
+                        "ticks", "dt", "zeit", "zeitstempel", "tiempo", "horodatage"})
+_TIME_UNITS = frozenset({"s", "sec", "secs", "ms", "us", "ns"})
 
-#: words that make a column name one of a temperature: such a column, where none is ``temp``, is refused as the time-like
-#: ones are, so that a user's own ``temp_c`` (``imu_temp``, ``TempF``, ``Temperature(C)``, pass 52) is not carried
-#: along unread (no compensation, the gap analysis reading a temperature drift as a drift in time)
-TEMPERATURE_WORDS = frozenset({"temp", "temps", "tmp", "temperature", "temperatures", "celsius", "degc",
-                               "fahrenheit", "kelvin"})
+#: words that make a column name one of a temperature, as a unit of one alone does (``degC``, ``°C``) or after
+#: ``t`` (``t_c``, ``T_imu``); such a column, where none is ``temp``, is refused as the time-like ones are, so that a
+#: user's own ``temp_c`` (``imu_temp``, ``TempF``, ``Temperature(C)``, pass 52; ``temperatura``, pass 53) is not
+#: carried along unread (no compensation, the gap analysis reading a temperature drift as a drift in time)
+TEMPERATURE_WORDS = frozenset({"temp", "temps", "tmp", "temperature", "temperatures", "celsius", "degc", "degf",
+                               "fahrenheit", "kelvin", "temperatura", "temperatur", "thermistor", "tdie"})
+_TEMPERATURE_UNITS = frozenset({"c", "f", "k", "deg", "degc", "degf"})
+
+
+def looks_like(name):
+    """``"t"`` when a column ``name`` looks like time stamps (:data:`TIME_WORDS`), ``"temp"`` when like a
+    temperature (:data:`TEMPERATURE_WORDS`), else None."""
+    words = name_words(name)
+    if TIME_WORDS.intersection(words) or words[:1] == ["t"] and _TIME_UNITS.issuperset(words[1:]):
+        return "t"
+    if TEMPERATURE_WORDS.intersection(words) or words and (_TEMPERATURE_UNITS.issuperset(words) or words[0] == "t" and (
+            _TEMPERATURE_UNITS | {"imu", "die", "chip", "mpu", "sensor", "board"}).issuperset(words[1:])):
+        return "temp"
+    return None
+
 
 #: the names ``convert`` takes for a temperature column, as it normalises them (:mod:`.foreign_extras`)
 TEMPERATURE_LIKE_NAMES = frozenset({"temp", "temps", "temp_c", "tempc", "temp_degc", "temp_deg_c", "temperature",
@@ -413,9 +474,9 @@ def refuse_invisible(name, what, where):
 
 def check_columns(names, where):
     """Refuse column names (as read: split at commas, spaces dropped) that are empty, repeated,
-    lack ``gx, gy, gz``, look like time stamps where none is named ``t`` (a word of :data:`TIME_WORDS`, any
+    lack ``gx, gy, gz``, look like time stamps where none is named ``t`` (:func:`looks_like`, any
     case: ``T`` too; beside ``t`` such a column is an extra one, ``ref_time_offset``) or like a temperature where
-    none is named ``temp`` (a word of :data:`TEMPERATURE_WORDS`; ``board_temp_c`` beside ``temp``),
+    none is named ``temp`` (``board_temp_c`` beside ``temp``),
     or hold an invisible character (:func:`refuse_invisible`: a byte-order mark of a file joined
     on after the header made ``\ufefft`` an extra column, its times ignored); ``where`` is the
     file and line."""
@@ -433,12 +494,12 @@ def check_columns(names, where):
                 "; names are lower case" if all(c.upper() in map(str.upper, names) for c in missing) else
                 "; another tool's log: gyrofilter convert")
         raise RecordingError(f"{where}: missing column(s) {', '.join(missing)} (have {quote(', '.join(names))}){hint}")
-    times = [n for n in names if "t" not in names and (name_words(n) == ["t"] or TIME_WORDS.intersection(name_words(n)))]
+    times = [n for n in names if "t" not in names and looks_like(n) == "t"]
     if times:
         raise RecordingError(f"{where}: column {quote(times[0])} looks like time stamps, which a recording holds "
                              "in a column named 't' (seconds); rename it t to use them, or to something else to keep "
                              "it as an extra column; another tool's log: gyrofilter convert")
-    temps = [n for n in names if "temp" not in names and TEMPERATURE_WORDS.intersection(name_words(n))]
+    temps = [n for n in names if "temp" not in names and looks_like(n) == "temp"]
     if temps:
         raise RecordingError(f"{where}: column {quote(temps[0])} looks like a temperature, which a recording holds "
                              "in a column named 'temp' (deg C); rename it temp to use it, or to something else to "

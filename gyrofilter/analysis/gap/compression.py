@@ -52,6 +52,7 @@ import numpy as np
 
 from ...effects import COMPRESSION
 from ...sim.compression import max_gamma_per_dps2
+from ...sim.model import param_bounds
 from ...units import AXES
 from . import detectors as det
 from .baseline import MIN_SIMS, axis_dps
@@ -143,8 +144,9 @@ def fit_gamma(mean_tails, t0, target, sd, sigma_dps):
     most :data:`MAX_TRIALS` evaluations, stopping within ``sd``, then the last secant's step
     taken without a further evaluation, so that the linearised re-estimator returns gamma itself on
     the record), with T read off that secant and its slope; ``(None, None, None)`` where the runs
-    do not lighten (a slope >= 0)."""
-    top = max_gamma_per_dps2(sigma_dps)
+    do not lighten (a slope >= 0). Gamma stays within the model's bound of its key as well (a record of 1e-12 deg/s
+    asked for 7e21 and the model refused it, naming no file: attack pass 53)."""
+    top = min(max_gamma_per_dps2(sigma_dps), param_bounds(COMPRESSION, "gamma_per_dps2")[1])
     points = [(0.0, t0)]
     gamma = min((t0 - target) / (8.0 * sigma_dps ** 2), top)
     for _ in range(MAX_TRIALS):

@@ -77,7 +77,9 @@ def header_words(line, where):
 #: the protocol's own keys, beside the recording header's that a device may send (:func:`meant_key`)
 PROTOCOL_KEYS = ("fields", "counter_bits", "temp_unit", "accel_unit", "lsb_per_g")
 # the words (recording.name_words) of a device's key that name what a protocol key states (meant_key)
-_FIELD_WORDS = frozenset({"field", "fields", "order", "column", "columns", "cols", "axes", "axis", "layout"})
+_FIELD_WORDS = frozenset({"field", "fields", "order", "column", "columns", "cols", "axes", "axis", "layout", "names",
+                          "fmt", "format", "remap", "map", "mapping", "orientation"})
+_AXIS_WORDS = frozenset({"swap", "invert", "inverted", "flip", "sign", "signs", "mirror"})  # swap_xy=1, invert_z=1
 _COUNTER_WORDS = frozenset({"counter", "count", "cnt", "cntr", "ctr", "seq", "sequence", "idx", "index", "wrap",
                             "rollover"})
 _WIDTH_WORDS = frozenset({"bits", "bit", "bytes", "byte", "width", "size", "len", "length", "max", "modulo", "modulus",
@@ -95,9 +97,10 @@ def meant_key(key, value):
     word means
 
     - a key gyrofilter reads (or of :data:`PROTOCOL_KEYS`) spelt otherwise (:func:`~gyrofilter.recording.misspelt_key`);
-    - ``fields`` when its value lists ``gx``, ``gy`` and ``gz`` (``columns=counter;gz;gy;gx``), or its key has a word
-      of a line's layout (:data:`_FIELD_WORDS`: ``axis_order=zyx``) and its value is not a number (``mag_field_ut=50``
-      is the device's own);
+    - ``fields`` when its value lists ``gx``, ``gy`` and ``gz``, or ``x``, ``y`` and ``z`` (``columns=counter;gz;gy;gx``,
+      ``names=counter,gyro_z,gyro_y,gyro_x``, ``remap=zyx``), or its key has a word of a line's layout
+      (:data:`_FIELD_WORDS`: ``axis_order=zyx``) and its value is not a number (``mag_field_ut=50`` is the device's
+      own), or a word of an axis's swap or sign (``swap_xy=1``, ``invert_z=1``: the fields are the device's as sent);
     - ``temp_unit`` when its value is ``mpu6050_raw``, or its key has a word of a temperature (``t``, ``temp...``,
       ``tmp``) and a word of a unit (:data:`_TEMP_UNIT_WORDS`: ``t_unit``, ``temp_raw``, ``temprature_unit``) or
       a unit's value (``temp=raw``);
@@ -110,18 +113,19 @@ def meant_key(key, value):
     meant = misspelt_key(key, also=PROTOCOL_KEYS)
     if meant is not None or key in PROTOCOL_KEYS:
         return meant
-    if {"gx", "gy", "gz"} <= set(re.split(r"[^a-z0-9]+", value.lower())):
+    listed = set(name_words(value.lower()))  # gyro_z,gyro_y,gyro_x; seq,z,y,x; zyx
+    if {"gx", "gy", "gz"} <= listed or {"x", "y", "z"} <= listed or sorted(value.lower()) == ["x", "y", "z"]:
         return "fields"
     if value.lower() == "mpu6050_raw":
         return "temp_unit"
     words = set(name_words(key))
     if any(c.isdigit() for c in key):
         return None
-    if words & _FIELD_WORDS and not is_plain_number(value):
-        return "fields"
     if any(w == "t" or w.startswith(("tem", "tmp")) for w in words) and (
             words & _TEMP_UNIT_WORDS or value.lower() in _TEMP_UNIT_VALUES):
         return "temp_unit"
+    if words & _FIELD_WORDS and not is_plain_number(value) or words & _AXIS_WORDS:
+        return "fields"
     return "counter_bits" if words & _COUNTER_WORDS and words & _WIDTH_WORDS else None
 
 
