@@ -959,6 +959,8 @@ def test_a_column_with_a_word_of_time_stamps_or_a_temperature_is_refused_where_n
     beside = ("t,gx,gy,gz,temp," if names.startswith("t,") else "t,gx,gy,gz,") + refused
     path.write_text(header + beside + "\n" + ",".join("1" for _ in beside.split(",")) + "\n")
     assert read_recording(path).columns[refused].tolist() == [1.0]
+    path.write_text(header + "t,gx,gy,gz,k,c,f,K,deg\n0,1,2,3,4,5,6,7,8\n")  # pass 54: a letter alone is no unit
+    assert read_recording(path).columns["K"].tolist() == [7.0]
 
 
 @pytest.mark.parametrize("line", ["unit: rad/s", "sample_rate: 200", "rate_hz: 200", "rate: 200", "gyro: rad/s",
@@ -982,9 +984,13 @@ def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line
         read_recording(path)
     kept = ["unit: dps", "rate: 100", "rate_khz: 0.1", "data_rate: 100 Hz", "dt: 0.01", "sample_period_ms: 10",
             "gyro_output_rate_hz: 8000", "dlpf_bandwidth_hz: 44", "baud_rate: 115200", "rate2_hz: 200", "rate_dps: 90",
-            "gyro: MPU6050", "gyro_sensitivity: 65.5", "acc_unit: g", "time: 2024-01-01"]
+            "gyro: MPU6050", "gyro_sensitivity: 65.5", "acc_unit: g", "time: 2024-01-01", "odr: 100 sps",
+            "ts: 2026-01-01T00:00:00", "step: 1"]  # pass 54: no false refusals
     path.write_text(head.replace(unit, "dps") + "".join(f"# {k}\n" for k in kept) + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n")
     assert read_recording(path).header["gyro_output_rate_hz"] == "8000"
+    path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
+                    "# gyro_scale: 131\ngx,gy,gz\n1,2,3\n")  # the same sensitivity, a number: no unit (pass 54)
+    assert read_recording(path).header["gyro_scale"] == "131"
 
 
 @pytest.mark.parametrize("names, shown", [

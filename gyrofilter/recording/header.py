@@ -311,7 +311,7 @@ def misspelt_key(key, also=()):
 _STATES = {  # kind: (the other words its key may hold, its own words)
     "rate": ({"sample", "samples", "data", "output", "update", "imu", "khz"},
              {"rate", "samplerate", "odr", "fs", "sps", "sampling", "frequency", "freq", "hz"}),
-    "period": ({"sample", "sampling", "time", "s", "sec", "ms", "us", "ns"}, {"period", "interval", "dt", "ts", "step"}),
+    "period": ({"sample", "sampling", "time", "s", "sec", "ms", "us", "ns"}, {"period", "interval", "dt", "ts"}),
     "unit": ({"gyro", "gyroscope", "rate", "angular", "velocity", "omega", "measurement"}, {"unit", "units", "scale"}),
     "sensitivity": ({"gyro", "per", "dps", "deg", "degree", "degrees", "s", "factor"}, {"lsb", "sensitivity", "scale"}),
     "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
@@ -326,6 +326,8 @@ def _kinds(words, value):
         kinds.insert(0, kind)  # gyro: rad/s
     if "accel_unit" in kinds and not words & _STATES["accel_unit"][0]:
         kinds.remove("accel_unit")
+    if is_plain_number(value.split()[0] if value.split() else value):  # gyro_scale: 131, a sensitivity (pass 54)
+        kinds = [kind for kind in kinds if kind not in ("unit", "accel_unit")]
     return kinds
 
 
@@ -351,35 +353,42 @@ def contradiction(header):
             continue
         kinds = _kinds(words, value)
         if kinds and (meant := _contradicts(kinds[0], words, unicodedata.normalize("NFKC", value), header, rates)):
-            return (f"header key {quote(key)} says {quote(value)}, but {meant} is {quote(header[meant])}: "
-                    f"gyrofilter reads it only from {meant}")
+            meant, unread = meant
+            return (f"header key {quote(key)} says {quote(value)}, "
+                    + (f"which gyrofilter does not read as {unread};" if unread else "but")
+                    + f" {meant} is {quote(header[meant])}: gyrofilter reads it only from {meant}")
     return None
 
 
 def _contradicts(kind, words, value, header, rates):
-    """The key gyrofilter reads that a key of ``kind`` (:data:`_STATES`) stating ``value`` contradicts, or None."""
+    """``(the key gyrofilter reads that a key of kind ``kind`` (:data:`_STATES`) stating ``value`` contradicts, what
+    the value does not read as or None)``, or None where it states the same (a period that does not read: None, as
+    ``ts: 2026-01-01`` is a time, not one)."""
     number = re.fullmatch(r"\s*(\S+?)\s*([a-zA-Z°/()^]*)\s*", value)
     amount = float(number[1]) if number and is_plain_number(number[1]) else None
     suffix = number[2].lower() if number else ""
-    if kind in ("rate", "period"):
-        if kind == "rate" and amount is not None and suffix in ("", "hz", "khz"):
-            stated = amount * (1000 if "khz" in words or suffix == "khz" else 1)
-        elif kind == "period" and amount and suffix in ("", *_SECONDS):
-            scale = _SECONDS.get(suffix) or next((_SECONDS[w] for w in ("ms", "us", "ns") if w in words), 1.0)
-            stated = 1.0 / (amount * scale)
-        else:
-            stated = None
-        return None if stated is not None and any(abs(stated - r) <= 1e-9 * r for r in rates) else "sample_rate_hz"
+    if kind == "rate":
+        if amount is None or suffix not in ("", "hz", "khz", "sps", "samples/s", "s/s"):
+            return "sample_rate_hz", "a rate (Hz)"
+        stated = amount * (1000 if "khz" in words or suffix == "khz" else 1)
+        return None if any(abs(stated - r) <= 1e-9 * r for r in rates) else ("sample_rate_hz", None)
+    if kind == "period":
+        if not amount or suffix not in ("", *_SECONDS):
+            return None
+        stated = 1.0 / (amount * (_SECONDS.get(suffix) or next((_SECONDS[w] for w in ("ms", "us", "ns") if w in words), 1.0)))
+        return None if any(abs(stated - r) <= 1e-9 * r for r in rates) else ("sample_rate_hz", None)
     if kind == "unit":
-        return None if known_unit("rate", value) == header["gyro_unit"] else "gyro_unit"
+        return None if known_unit("rate", value) == header["gyro_unit"] else ("gyro_unit", None)
     if kind == "sensitivity":
         if header["gyro_unit"] != "lsb":
             return None
         per_dps = suffix == "" or "dps" in suffix or "deg" in suffix.replace("°", "deg")  # 131 LSB/(deg/s)
-        return None if per_dps and amount == float(parse_number(header["lsb_per_dps"], "lsb_per_dps")) else "lsb_per_dps"
+        if amount is None or not per_dps:
+            return "lsb_per_dps", "a sensitivity (LSB per deg/s)"
+        return None if amount == float(parse_number(header["lsb_per_dps"], "lsb_per_dps")) else ("lsb_per_dps", None)
     if "accel_unit" not in header:
         return None
-    return None if known_unit("accel", value) == header["accel_unit"] else "accel_unit"
+    return None if known_unit("accel", value) == header["accel_unit"] else ("accel_unit", None)
 
 
 def check_facts(header, where):
@@ -434,13 +443,13 @@ TIME_WORDS = frozenset({"time", "times", "timestamp", "timestamps", "stamp", "st
                         "ticks", "dt", "zeit", "zeitstempel", "tiempo", "horodatage"})
 _TIME_UNITS = frozenset({"s", "sec", "secs", "ms", "us", "ns"})
 
-#: words that make a column name one of a temperature, as a unit of one alone does (``degC``, ``°C``) or after
-#: ``t`` (``t_c``, ``T_imu``); such a column, where none is ``temp``, is refused as the time-like ones are, so that a
+#: words that make a column name one of a temperature, as ``degC``, ``°...`` and a unit of one after ``t`` (``t_c``,
+#: ``T_imu``) do, not a letter alone (``k``, ``c``: an index, a counter, pass 54); such a column, where none is ``temp``, is refused as the time-like ones are, so that a
 #: user's own ``temp_c`` (``imu_temp``, ``TempF``, ``Temperature(C)``, pass 52; ``temperatura``, pass 53) is not
 #: carried along unread (no compensation, the gap analysis reading a temperature drift as a drift in time)
 TEMPERATURE_WORDS = frozenset({"temp", "temps", "tmp", "temperature", "temperatures", "celsius", "degc", "degf",
                                "fahrenheit", "kelvin", "temperatura", "temperatur", "thermistor", "tdie"})
-_TEMPERATURE_UNITS = frozenset({"c", "f", "k", "deg", "degc", "degf"})
+_TEMPERATURE_UNITS = frozenset({"c", "f", "k", "degc", "degf"})
 
 
 def looks_like(name):
@@ -449,8 +458,8 @@ def looks_like(name):
     words = name_words(name)
     if TIME_WORDS.intersection(words) or words[:1] == ["t"] and _TIME_UNITS.issuperset(words[1:]):
         return "t"
-    if TEMPERATURE_WORDS.intersection(words) or words and (_TEMPERATURE_UNITS.issuperset(words) or words[0] == "t" and (
-            _TEMPERATURE_UNITS | {"imu", "die", "chip", "mpu", "sensor", "board"}).issuperset(words[1:])):
+    if TEMPERATURE_WORDS.intersection(words) or "°" in name or words in (["deg", "c"], ["deg", "f"]) or (
+            words[:1] == ["t"] and (_TEMPERATURE_UNITS | {"imu", "die", "chip", "mpu", "sensor", "board"}).issuperset(words[1:])):
         return "temp"
     return None
 
