@@ -322,11 +322,11 @@ _SECONDS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 def _kinds(words, value):
     """The kinds of :data:`_STATES` a key of ``words`` with ``value`` states, most telling first."""
     kinds = [kind for kind, (others, own) in _STATES.items() if words & own and words <= others | own]
-    if kind := ("unit" if words <= _STATES["unit"][0] | _STATES["unit"][1] and known_unit("rate", value) else None):
-        kinds.insert(0, kind)  # gyro: rad/s
-    if "accel_unit" in kinds and not words & _STATES["accel_unit"][0]:
-        kinds.remove("accel_unit")
-    if is_plain_number(value.split()[0] if value.split() else value):  # gyro_scale: 131, a sensitivity (pass 54)
+    if words <= set().union(*_STATES["unit"]) and known_unit("rate", value):
+        kinds.insert(0, "unit")  # gyro: rad/s
+    if not words & _STATES["accel_unit"][0]:
+        kinds = [kind for kind in kinds if kind != "accel_unit"]
+    if is_plain_number((value.split() or [value])[0]):  # gyro_scale: 131, a sensitivity (pass 54)
         kinds = [kind for kind in kinds if kind not in ("unit", "accel_unit")]
     return kinds
 
@@ -444,9 +444,9 @@ TIME_WORDS = frozenset({"time", "times", "timestamp", "timestamps", "stamp", "st
 _TIME_UNITS = frozenset({"s", "sec", "secs", "ms", "us", "ns"})
 
 #: words that make a column name one of a temperature, as ``degC``, ``°...`` and a unit of one after ``t`` (``t_c``,
-#: ``T_imu``) do, not a letter alone (``k``, ``c``: an index, a counter, pass 54); such a column, where none is ``temp``, is refused as the time-like ones are, so that a
-#: user's own ``temp_c`` (``imu_temp``, ``TempF``, ``Temperature(C)``, pass 52; ``temperatura``, pass 53) is not
-#: carried along unread (no compensation, the gap analysis reading a temperature drift as a drift in time)
+#: ``T_imu``) do, not a letter alone (``k``, ``c``: an index, a counter, pass 54); such a column, where none is
+#: ``temp``, is refused as the time-like ones are, so that a user's own ``temp_c`` (``imu_temp``, ``TempF``,
+#: ``Temperature(C)``, pass 52; ``temperatura``, pass 53) is not carried along unread (no compensation, the gap analysis reading a temperature drift as a drift in time)
 TEMPERATURE_WORDS = frozenset({"temp", "temps", "tmp", "temperature", "temperatures", "celsius", "degc", "degf",
                                "fahrenheit", "kelvin", "temperatura", "temperatur", "thermistor", "tdie"})
 _TEMPERATURE_UNITS = frozenset({"c", "f", "k", "degc", "degf"})
