@@ -1133,3 +1133,51 @@ def test_a_unit_in_brackets_does_not_hide_the_unit_ending_the_name(tmp_path, cap
     rc, dst = _convert(tmp_path, text, "--columns", columns, *given)
     assert rc == 2 and not dst.exists()
     assert said in capsys.readouterr().err
+
+
+_STATED = {  # fact: (its spellings in a comment, (a value that agrees, one that does not), options, time column)
+    "given rate": (["sample_rate_hz", "Sample rate", "rate", "odr_hz", "samplerate"], ("100", "200 Hz"),
+                   ["--sample-rate-hz", "100", "--unit", "dps"], False),
+    "stamped rate": (["sample_rate_hz", "Sampling frequency", "rate_hz"], ("100 Hz", "50"), ["--unit", "dps"], True),
+    "period": (["dt", "sample_period_ms", "Ts"], (None, "0.02"), ["--sample-rate-hz", "100", "--unit", "dps"], False),
+    "given unit": (["gyro_unit", "unit", "Gyro units", "gyro_scale"], ("deg/s", "rad/s"),
+                   ["--sample-rate-hz", "100", "--unit", "dps"], False),
+    "sensitivity": (["lsb_per_dps", "gyro_sensitivity", "lsb_per_deg"], ("131", "65.5"),
+                    ["--sample-rate-hz", "100", "--unit", "lsb", "--lsb-per-dps", "131"], False),
+}
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_line(tmp_path, capsys, seed):
+    """Attack pass 53, item 11 (issue 37): a log's comment ``# sample_rate_hz: 200`` or ``# gyro_unit: rad/s`` was
+    skipped beside ``--sample-rate-hz 100 --unit dps`` (the summary: "2 comment lines skipped"), the file written at
+    the options' rate and unit. A comment before the first data row whose key states the rate, a period, the unit or
+    the sensitivity must state what is written (the time column's rate within 5 %); its fact, key, style and line
+    are drawn at random. Prose, a value that does not read and a comment after the first row are not read."""
+    rng = np.random.default_rng(seed)
+    fact = list(_STATED)[seed % len(_STATED)]
+    keys, (agrees, disagrees), options, stamped = _STATED[fact]
+    key, style = rng.choice(keys), rng.choice(["# {}: {}", "// {} = {}", "## {}:{}", "#{} = {}"])
+    prose = ["# logged at 200 Hz in rad/s", "# note: the rate may be fast", "# rate: fast", "# date: 2026-12-02"]
+    before, after = [str(p) for p in rng.permutation(prose)[:rng.integers(0, 3)]], rng.integers(0, 2)
+    rows = ["".join((f"{i / 100:.2f}," if stamped else "") + f"{i % 7 - 3},131,-262\n" for i in part)
+            for part in (range(300), range(300, 600))]
+    names = ("t," if stamped else "") + "gx,gy,gz\n"
+
+    def log(value):
+        comment = style.format(key, value) + "\n"
+        head = "\n".join(before) + ("\n" if before else "")
+        return head + (names + comment if after else comment + names) + rows[0] + "# rate: 50\n" + rows[1]
+
+    line = len(before) + 1 + after
+    code, dst = _convert(tmp_path, log(disagrees), *options)
+    err = capsys.readouterr().err
+    assert code == 2 and not dst.exists()
+    assert err.startswith(f"gyrofilter: error: {tmp_path / 'log.csv'}: line {line}: the comment "
+                          f"'{key}: {disagrees}' disagrees with the conversion's "), err
+    assert ("(from the time column's steps); correct the comment line" if stamped else
+            "; correct the option or the comment line") in err.splitlines()[0]
+    if agrees is not None:
+        code, dst = _convert(tmp_path, log(agrees), *options)
+        assert code == 0, capsys.readouterr().err
+        assert read_recording(dst).sample_rate_hz == 100.0

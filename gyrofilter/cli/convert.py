@@ -9,8 +9,7 @@ file takes its name only when whole) and says what it read.
 """
 from .. import __version__
 from ..recording import RecordingWriter
-from ..recording.foreign import TIME_UNITS, read_foreign
-from ..recording.foreign_extras import ACCEL_UNIT_CHOICES, TEMP_UNITS
+from ..recording.foreign import ACCEL_UNIT_CHOICES, TEMP_UNITS, TIME_UNITS, read_foreign
 from ..recording.logtext import MAX_PIPE_COPY_BYTES
 from ..recording.unit_words import known_unit, units_of
 from . import console, options, outputs

@@ -339,20 +339,12 @@ def contradiction(header):
     Kept as an unrelated key, ``# unit: rad/s`` beside ``gyro_unit: dps`` or ``# rate: 200`` beside
     ``sample_rate_hz: 100`` (or a device's ``unit=rad/s`` beside the source's option ``unit=dps``) read the file in
     the other without a word (attack passes 52, 53: ``rate: 200 Hz``, ``dt: 0.005``, ``gyro_scale: rad/s``,
-    ``lsb_per_deg: 65.5`` beside ``lsb_per_dps: 131``, ``acc_unit: m/s^2`` beside ``accel_unit: g``). A key that
-    states one of them (:data:`_STATES`) must state the same: a rate in Hz (``khz`` in the key or the value in
-    thousands) equal to ``sample_rate_hz`` or ``input_sample_rate_hz``, a period (s, or ``ms``, ``us``, ``ns``) of
-    one over it, the unit (:func:`~gyrofilter.recording.unit_words.known_unit`), ``lsb_per_dps`` (where
-    ``gyro_unit`` is lsb; the value may end in a unit of deg/s), ``accel_unit`` (where the header has one); one that
-    does not, or whose value does not read so (``0xC8``, ``200,0``), is one. A key with a digit (``rate2_hz``:
-    another sensor's) is not read."""
-    rates = [float(parse_number(header[k], k, error=RecordingError)) for k in ("sample_rate_hz", INPUT_RATE_KEY) if k in header]
+    ``lsb_per_deg: 65.5`` beside ``lsb_per_dps: 131``, ``acc_unit: m/s^2`` beside ``accel_unit: g``): each key but
+    the read ones is judged by :func:`contradicts`."""
+    rates = header_rates(header)
     for key, value in header.items():
-        words = set(name_words(key))
-        if key in _READ_KEYS.values() or not words or any(c.isdigit() for c in key):
-            continue
-        kinds = _kinds(words, value)
-        if kinds and (meant := _contradicts(kinds[0], words, unicodedata.normalize("NFKC", value), header, rates)):
+        meant = None if key in _READ_KEYS.values() else contradicts(key, value, header, rates)
+        if meant:
             meant, unread = meant
             return (f"header key {quote(key)} says {quote(value)}, "
                     + (f"which gyrofilter does not read as {unread};" if unread else "but")
@@ -360,10 +352,43 @@ def contradiction(header):
     return None
 
 
-def _contradicts(kind, words, value, header, rates):
-    """``(the key gyrofilter reads that a key of kind ``kind`` (:data:`_STATES`) stating ``value`` contradicts, what
-    the value does not read as or None)``, or None where it states the same (a period that does not read: None, as
-    ``ts: 2026-01-01`` is a time, not one)."""
+def header_rates(header):
+    """The rates in Hz a ``header`` (checked) states: ``sample_rate_hz`` and ``input_sample_rate_hz``."""
+    return [float(parse_number(header[k], k, error=RecordingError)) for k in ("sample_rate_hz", INPUT_RATE_KEY) if k in header]
+
+
+#: what each key gyrofilter reads of :data:`_STATES` states (a foreign log's comment ``# sample_rate_hz: 200``)
+_READ_KINDS = {"sample_rate_hz": "rate", "gyro_unit": "unit", "lsb_per_dps": "sensitivity", "accel_unit": "accel_unit"}
+
+
+def contradicts(key, value, header, rates, tolerance=1e-9):
+    """``(the key of ``header`` that ``key: value`` contradicts, what ``value`` does not read as or None)``, or None.
+
+    A key that states the sample rate, the gyro's unit or sensitivity or the accelerometer's unit (:data:`_STATES`
+    by its words; a key gyrofilter reads, or one spelt otherwise, :func:`misspelt_key`, states its own) must state
+    the same: a rate in Hz (``khz`` in the key or the value in thousands) within ``tolerance`` (relative) of one of
+    ``rates``, a period (s, or ``ms``, ``us``, ``ns``) of one over it, the unit
+    (:func:`~gyrofilter.recording.unit_words.known_unit`), ``lsb_per_dps`` (where ``gyro_unit`` is lsb; the value may
+    end in a unit of deg/s), ``accel_unit`` (where the header has one); one that does not, or whose value does not
+    read so (``0xC8``, ``200,0``), contradicts it. A key with a digit (``rate2_hz``: another sensor's) is not read."""
+    stated = statement(key, value)
+    return _contradicts(*stated, unicodedata.normalize("NFKC", value), header, rates, tolerance) if stated else None
+
+
+def statement(key, value):
+    """``(the kind of :data:`_STATES` that ``key: value`` states, the key's words)``, or None (:func:`contradicts`)."""
+    read = key if key in _READ_KEYS.values() else misspelt_key(key)
+    words = set(name_words(read or key))
+    if read is not None:
+        kinds = [_READ_KINDS[read]] if read in _READ_KINDS else []
+    else:
+        kinds = [] if not words or any(c.isdigit() for c in key) else _kinds(words, value)
+    return (kinds[0], words) if kinds else None
+
+
+def _contradicts(kind, words, value, header, rates, tolerance):
+    """:func:`contradicts` for a key of kind ``kind`` (:data:`_STATES`) stating ``value`` (a period that does not
+    read: None, as ``ts: 2026-01-01`` is a time, not one)."""
     number = re.fullmatch(r"\s*(\S+?)\s*([a-zA-Z°/()^]*)\s*", value)
     amount = float(number[1]) if number and is_plain_number(number[1]) else None
     suffix = number[2].lower() if number else ""
@@ -371,12 +396,12 @@ def _contradicts(kind, words, value, header, rates):
         if amount is None or suffix not in ("", "hz", "khz", "sps", "samples/s", "s/s"):
             return "sample_rate_hz", "a rate (Hz)"
         stated = amount * (1000 if "khz" in words or suffix == "khz" else 1)
-        return None if any(abs(stated - r) <= 1e-9 * r for r in rates) else ("sample_rate_hz", None)
+        return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
     if kind == "period":
         if not amount or suffix not in ("", *_SECONDS):
             return None
         stated = 1.0 / (amount * (_SECONDS.get(suffix) or next((_SECONDS[w] for w in ("ms", "us", "ns") if w in words), 1.0)))
-        return None if any(abs(stated - r) <= 1e-9 * r for r in rates) else ("sample_rate_hz", None)
+        return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
     if kind == "unit":
         return None if known_unit("rate", value) == header["gyro_unit"] else ("gyro_unit", None)
     if kind == "sensitivity":
@@ -464,7 +489,7 @@ def looks_like(name):
     return None
 
 
-#: the names ``convert`` takes for a temperature column, as it normalises them (:mod:`.foreign_extras`)
+#: the names ``convert`` takes for a temperature column, as it normalises them (:mod:`.foreign.extras`)
 TEMPERATURE_LIKE_NAMES = frozenset({"temp", "temps", "temp_c", "tempc", "temp_degc", "temp_deg_c", "temperature",
                                     "temperature_c", "temperature_degc", "die_temp", "die_temp_c", "celsius",
                                     "tmp"})  # the Arduino MPU6050 sketch's Tmp (raw counts)

@@ -5,7 +5,7 @@ quantity (``time``, ``rate``, ``temp``, ``accel``) to the unit it means, spelled
 that gives that unit takes it (``--time-unit``, ``--unit``, ``--temp-unit``, ``--accel-unit``),
 or to None where the spelling is ambiguous (``deg`` of a temperature: deg C or deg F?), which
 the option resolves. Every place of :mod:`gyrofilter.recording.foreign` and
-:mod:`~gyrofilter.recording.foreign_extras` that reads a unit from a column name, in brackets
+:mod:`~gyrofilter.recording.foreign.extras` that reads a unit from a column name, in brackets
 or at the end of the name (:func:`name_units`), reads it here.
 
 Units a recording does not hold are converted exactly as they are read (:data:`CONVERTED`,

@@ -35,7 +35,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
 - **Refusals** name the file, the line and the column: a recording of format v1 (its header
   would be skipped as comments, its unit with it), a cell that is not a plain decimal
   number (:func:`~gyrofilter.inputs.is_plain_number`), a row of the wrong length, a time that does not increase,
-  a rate beyond +-100000 deg/s. Comment lines (``#``, ``//``) and blank lines are skipped and
+  a rate beyond +-100000 deg/s, a comment before the first row that states the rate or a unit
+  otherwise (:mod:`~gyrofilter.recording.foreign.comments`). Comment lines (``#``, ``//``) and blank lines are skipped and
   counted; nothing else is dropped but a last line without its line end (a log cut short
   mid-line: its last number may be cut too), left out with a warning as a recording's is.
 """
@@ -50,19 +51,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import RecordingError
-from ..inputs import is_plain_number, quote, refuse_unordered
-from ..units import AXES, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz
-from .checks import TimeCheck
-from ..closable import Closable
-from .content import RecordingHead
-from .foreign_extras import find_extras, gyro_out_of_range, left_out_line, no_gyro_column, whole_rates
-from .header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
-from .logtext import log_lines, open_log
-from .reader import CHUNK_ROWS
-from .unit_words import (columns_stated, converted_text, ending_unit, given_unit, known_unit, name_units, recorded,
+from ...errors import RecordingError
+from ...inputs import is_plain_number, quote, refuse_unordered
+from ...units import AXES, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz
+from ..checks import TimeCheck
+from ...closable import Closable
+from ..content import RecordingHead
+from .comments import Comments, refuse_recording
+from .extras import find_extras, gyro_out_of_range, left_out_line, no_gyro_column, whole_rates
+from ..header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
+from ..logtext import log_lines, open_log
+from ..reader import CHUNK_ROWS
+from ..unit_words import (columns_stated, converted_text, ending_unit, given_unit, known_unit, name_units, recorded,
                          stated_unit, to_floats, units_of, unread_unit)
-from .writer import EXACT_FORMAT, exact_format
+from ..writer import EXACT_FORMAT, exact_format
 
 #: time units of a time column and their length in s
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
@@ -123,7 +125,7 @@ class _Plan:
     """How the data rows of a log are read: its column ``names``, how a line is ``split``, the
     line with the names (None without), the columns ``wanted`` (x, y, z, then the time's), the
     line the data start after; the gyro unit read (``gyro_read``: mdps is written in dps); the ``extras`` kept (temperature, accelerometer:
-    :mod:`~gyrofilter.recording.foreign_extras`), after those; ``t_s``, once known."""
+    :mod:`~gyrofilter.recording.foreign.extras`), after those; ``t_s``, once known."""
 
     names: list
     split: object
@@ -257,6 +259,7 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
                 counts["skipped"] += lines
             if not rows_seen:
                 _before_rows(counts, text, lines, path)
+                counts["comments"].add(number, text)
             continue
         rows_seen = True
         cells = plan.split(text)
@@ -271,18 +274,6 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
             numbers, cells_of = [], [[] for _ in wanted]
     if numbers:
         yield numbers, cells_of
-
-
-def _refuse_recording(text, number, path):
-    """Refuse the log ``path`` when ``text``, its line ``number`` before the column row, is a
-    recording's version line (``# gyrofilter-recording: 1``, the header line of section 1): a
-    recording's header would be skipped as comments, its ``gyro_unit`` and ``lsb_per_dps`` with
-    it (``--unit dps`` on LSB: 131 times the rate) and a filtered output's ``filtered_from``, while
-    every command reads the recording as it is."""
-    body = text.lstrip()
-    if body.startswith("#") and body[1:].partition(":")[0].strip() == VERSION_KEY:
-        raise RecordingError(f"{path}: line {number}: already a gyrofilter recording (format v1; every command reads it "
-                             "as it is): convert is for other tools' logs")
 
 
 def _before_rows(counts, text, lines, path):
@@ -409,7 +400,7 @@ def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate
     ``lsb_per_dps``: LSB per deg/s, with ``lsb``; ``columns``: 3 or 4 column names or 1-based
     numbers (None: found by name); ``sample_rate_hz``: the rate (Hz; None: from the time
     column); ``time_unit``: ``s``, ``ms``, ``us`` or ``ns`` (None: stated by the name or inferred);
-    ``extras``: ``temp_unit``, ``accel_unit``, ``lsb_per_g`` of :func:`~gyrofilter.recording.foreign_extras.find_extras`.
+    ``extras``: ``temp_unit``, ``accel_unit``, ``lsb_per_g`` of :func:`~gyrofilter.recording.foreign.extras.find_extras`.
     RecordingError naming the file, line and column for what cannot be read, SettingsError for a bad argument."""
     path = str(path)
     if unit is not None and unit not in units_of("rate"):
@@ -436,11 +427,14 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     offset from the first stamp while the time unit is not known; then a pass over the time
     column computes the times in s). Every refusal comes in the order of reading it whole."""
     header_line, names, split, first_data, preamble = None, None, None, None, 0
-    counts = {"skipped": 0, "before_rows": 0, "warnings": []}
+    counts = {"skipped": 0, "before_rows": 0, "warnings": [], "comments": Comments()}
+    given = {key for key, option in (("sample_rate_hz", sample_rate_hz), ("gyro_unit", unit), ("lsb_per_dps", lsb_per_dps),
+                                     ("accel_unit", options.get("accel_unit"))) if option is not None}
     for number, text, lines in log_lines(raw, path):
         if not text.strip() or text.lstrip().startswith(_COMMENT):
-            _refuse_recording(text, number, path)
+            refuse_recording(text, number, path)
             _before_rows(counts, text, lines, path)
+            counts["comments"].add(number, text)
         else:
             preamble = number - 1  # the lines before it, blank or comments
             split = _splitter(text)
@@ -527,6 +521,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     if unit == "lsb":
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     header.update(extras.header, converted_from=path)
+    counts["comments"].check(header, path, given)
     return Foreign(raw, path, header, out_columns + extras.columns, formats + extras.formats(), rows, summary,
                    plan, counts["warnings"] + whole_rates(integral, read_unit, gyro, names) + extras.warnings)
 

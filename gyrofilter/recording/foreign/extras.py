@@ -35,14 +35,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import RecordingError
-from ..inputs import quote
-from ..units import (AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
+from ...errors import RecordingError
+from ...inputs import quote
+from ...units import (AXES, MAX_ACCEL_MPS2, MAX_RATE_DPS, MPU6050_TEMP_LSB_PER_C, MPU6050_TEMP_OFFSET_C,
                      TEMP_RANGE_C, check_lsb_per_g, to_dps, to_mps2)
-from .header import ACCEL_COLUMNS, TEMPERATURE_LIKE_NAMES, accel_units_header, format_number
-from .unit_words import (CONVERTED, columns_stated, converted_text, given_unit, name_units, recorded, stated_unit, to_floats,
+from ..header import ACCEL_COLUMNS, TEMPERATURE_LIKE_NAMES, accel_units_header, format_number
+from ..unit_words import (CONVERTED, columns_stated, converted_text, given_unit, name_units, recorded, stated_unit, to_floats,
                          units_of, unread_unit)
-from .writer import EXACT_FORMAT, exact_format
+from ..writer import EXACT_FORMAT, exact_format
 
 #: the units of a log's temperature column (``convert --temp-unit``): deg C, deg F (converted),
 #: raw MPU6050 counts, or ``none`` (left out)
