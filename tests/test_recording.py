@@ -968,7 +968,8 @@ def test_a_column_with_a_word_of_time_stamps_or_a_temperature_is_refused_where_n
                                   "rate: 0xC8", "rate: ２００", "rate: 200,0", "odr: fast", "dt: 0.005",
                                   "sampling_period_ms: 5", "Ts: 0.005 s", "samplerate: 200", "hz: 200", "imu_rate: 200",
                                   "gyro_scale: rad/s", "omega_unit: rad/s", "lsb_per_deg: 65.5",
-                                  "gyro_sensitivity: 65.5 LSB/(deg/s)", "scale_factor: 65.5", "acc_unit: m/s^2"])
+                                  "gyro_sensitivity: 65.5 LSB/(deg/s)", "scale_factor: 65.5", "acc_unit: m/s^2",
+                                  "gyr_scale: rad/s", "gyr\u043e_units: rad/s"])  # two slips: a Cyrillic o, an s
 def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line):
     """Attack pass 52: ``# unit: rad/s`` beside ``gyro_unit: dps`` (``# rate: 200`` beside ``sample_rate_hz: 100``)
     was kept as an unrelated key and the file read in the other without a word; pass 53: with its unit (``200 Hz``),

@@ -312,8 +312,8 @@ _STATES = {  # kind: (the other words its key may hold, its own words)
     "rate": ({"sample", "samples", "data", "output", "update", "imu", "khz"},
              {"rate", "samplerate", "odr", "fs", "sps", "sampling", "frequency", "freq", "hz"}),
     "period": ({"sample", "sampling", "time", "s", "sec", "ms", "us", "ns"}, {"period", "interval", "dt", "ts"}),
-    "unit": ({"gyro", "gyroscope", "rate", "angular", "velocity", "omega", "measurement"}, {"unit", "units", "scale"}),
-    "sensitivity": ({"gyro", "per", "dps", "deg", "degree", "degrees", "s", "factor"}, {"lsb", "sensitivity", "scale"}),
+    "unit": ({"gyro", "gyr", "gyroscope", "rate", "angular", "velocity", "omega", "measurement"}, {"unit", "units", "scale"}),
+    "sensitivity": ({"gyro", "gyr", "per", "dps", "deg", "degree", "degrees", "s", "factor"}, {"lsb", "sensitivity", "scale"}),
     "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
 }
 _SECONDS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
