@@ -130,7 +130,7 @@ def test_arduino_blank_separated_raw_lsb_without_column_names(tmp_path, capsys):
     ("t,gx,gy,gz\n0,1,2,3\n0.01,1,,3\n", ["--unit", "dps"], "line 3, column 3 ('gy'): not a plain decimal number: ''"),
     ("t,gx,gy,gz\n0,1,2,3\n0.01,1,3\n", ["--unit", "dps"], "line 3: 3 values, but 4 columns (line 1)"),
     ("t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n0.01,1,2,3\n", ["--unit", "dps"], "line 4, column 1 ('t'): t does not increase"),
-    ("t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n", [], "the gyro unit is not stated; give --unit"),
+    ("t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n", [], "the gyro unit is not stated by --unit or the column names (a comment is not read as one); give --unit"),
     ("t,gx,gy,gz\n0,1,2,3\n0.01,1,2,3\n", ["--unit", "lsb"], "--unit lsb needs --lsb-per-dps"),
     ("a,b,c\n0,1,2\n1,2,3\n", ["--unit", "dps"], "no column for the gyro's x among 'a, b, c'; name the three"),
     ("gyro_x,wx,gy,gz\n0,1,2,3\n1,2,3,4\n", ["--unit", "dps"], "columns 'gyro_x', 'wx' could each be the gyro's x"),
@@ -538,7 +538,8 @@ def test_steps_with_none_near_their_median_are_one_refusal(tmp_path, capsys, rat
     src.write_text("micros,gx,gy,gz\n" + "".join(f"{s},1,2,3\n" for s in stamps))
     assert main(["convert", str(src), "--unit", "dps", "--out", str(tmp_path / "rec.csv"), *rate]) == 2
     err = capsys.readouterr().err
-    assert err.count("gyrofilter: error: ") == 1 and "give the rate in --sample-rate-hz" in err, err
+    said = "not at --sample-rate-hz (without it, the stamps' rate is taken)" if rate else "give the rate in --sample-rate-hz"
+    assert err.count("gyrofilter: error: ") == 1 and said in err, err  # a new user's trial: not to give what was given
 
 
 def test_a_given_rate_is_said_beside_the_stamps_rate(tmp_path, capsys):
@@ -1174,10 +1175,50 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     err = capsys.readouterr().err
     assert code == 2 and not dst.exists()
     assert err.startswith(f"gyrofilter: error: {tmp_path / 'log.csv'}: line {line}: the comment "
-                          f"'{key}: {disagrees}' disagrees with the conversion's "), err
+                          f"'{style.format(key, disagrees)}' disagrees with the conversion's "), err  # as in the file
     assert ("(from the time column's steps); correct the comment line" if stamped else
             "; correct the option or the comment line") in err.splitlines()[0]
     if agrees is not None:
         code, dst = _convert(tmp_path, log(agrees), *options)
         assert code == 0, capsys.readouterr().err
         assert read_recording(dst).sample_rate_hz == 100.0
+
+
+@pytest.mark.parametrize("comment, options", [
+    ("# gyro_unit: dps", ["--unit", "mdps"]), ("# Gyro units: rad/s", ["--unit", "mrad/s"]),  # the unit read, not written
+    ("# Sample Rate (samples/s): 200", []), ("# Sampling rate [1/s]: 200", []), ("# Sample rate in Hz: 200", []),
+    ("# Sample rate: 200 Hz (nominal)", []), ("# Sample rate: ~200 Hz", []), ("# Sample rate: 200 Hz.", []),
+    ("# Sample rate: 200/s", []), ("# Sample rate: 200 samples per second", []), ("# fs=200 Hz; unit=rad/s", []),
+    ("# Sampling frequency: 200,0 Hz", []), ('# sample_rate_hz: "200"', []), ("# sample_rate_hz: 200 # in firmware", []),
+    ("# sample_rate_hz\uff1a200", []), ("# sample_rate_hz := 200", []), ('# {"sample_rate_hz": 200}', []),
+    ("# Sample period: 5000 \u00b5s", []), ("# Logging rate: 200 Hz", []), ("# Acquisition rate: 200 Hz", []),
+    ("# Gyro sample rate: 200 Hz", []), ("# \uff33\uff41\uff4d\uff50\uff4c\uff45\uff32\uff41\uff54\uff45: 200", []),
+    ("# sensor_odr: 200 Hz", []), ("# sample_rate_hz_nominal: 200", []),
+])
+def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
+    """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
+    without a word: the unit compared was the one written (dps for mdps: 1000 times), and a value with a remark, a
+    unit in the key's brackets, another separator or a full-width key did not read."""
+    rows = "".join(f"{i % 5 / 10},0.2,-0.1\n" for i in range(50))
+    code, dst = _convert(tmp_path, f"{comment}\ngx,gy,gz\n{rows}", "--sample-rate-hz", "100", *(options or ["--unit", "dps"]))
+    err = capsys.readouterr().err
+    assert code == 2 and not dst.exists() and err.startswith(f"gyrofilter: error: {tmp_path / 'log.csv'}: line 1: the "
+                                                             f"comment '{comment}' "), err
+
+
+@pytest.mark.parametrize("comment, options", [
+    ("# gyro_unit: mdps", ["--unit", "mdps"]), ("# Gyro units: mrad/s", ["--unit", "mrad/s"]),
+    ("# Sample period (\u00b5s): 10000", []), ("# units: s, deg/s, g", []), ("# Gyro scale: \u00b12000 dps", []),
+    ("# TS: 1700000000", []), ("# Unit: IMU-07", []), ("# units: SI", []), ("# Sampling rate: Fastest", []),
+    ("# Sample rate: 100 Hz (DLPF 44 Hz)", []), ("# sample_rate: 1e2", []), ("# Gyro range set to: +- 500 deg/s", []),
+    ("# Units: rad/s (gyro), m/s^2 (accel)", ["--unit", "rad/s"]),
+    ("# Gyro scale: 2000 dps", ["--unit", "lsb", "--lsb-per-dps", "16.4"]),
+    ("# gyro_sensitivity: 131 LSB/(deg/s)", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+])
+def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
+    """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read
+    as s), a list of units, a full scale (not a sensitivity), a time stamp (not a period), a device name."""
+    rows = "".join(f"{i % 5 / 10},0.2,-0.1\n" for i in range(50))
+    code, dst = _convert(tmp_path, f"{comment}\ngx,gy,gz\n{rows}", "--sample-rate-hz", "100", *(options or ["--unit", "dps"]))
+    assert code == 0, capsys.readouterr().err
+    assert read_recording(dst).sample_rate_hz == 100.0

@@ -969,7 +969,10 @@ def test_a_column_with_a_word_of_time_stamps_or_a_temperature_is_refused_where_n
                                   "sampling_period_ms: 5", "Ts: 0.005 s", "samplerate: 200", "hz: 200", "imu_rate: 200",
                                   "gyro_scale: rad/s", "omega_unit: rad/s", "lsb_per_deg: 65.5",
                                   "gyro_sensitivity: 65.5 LSB/(deg/s)", "scale_factor: 65.5", "acc_unit: m/s^2",
-                                  "gyr_scale: rad/s", "gyr\u043e_units: rad/s"])  # two slips: a Cyrillic o, an s
+                                  "gyr_scale: rad/s", "gyr\u043e_units: rad/s",  # two slips: a Cyrillic o, an s
+                                  "logging_rate: 200", "sample_rate_hz_nominal: 200", "sensor_odr: 200 Hz",  # pass 55
+                                  "\uff52\uff41\uff54\uff45: 200", "Sample Rate (samples/s): 200",
+                                  "sample_period: 5000 \u00b5s", "rotation_rate_unit: rad/s"])
 def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line):
     """Attack pass 52: ``# unit: rad/s`` beside ``gyro_unit: dps`` (``# rate: 200`` beside ``sample_rate_hz: 100``)
     was kept as an unrelated key and the file read in the other without a word; pass 53: with its unit (``200 Hz``),
@@ -986,11 +989,13 @@ def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line
     kept = ["unit: dps", "rate: 100", "rate_khz: 0.1", "data_rate: 100 Hz", "dt: 0.01", "sample_period_ms: 10",
             "gyro_output_rate_hz: 8000", "dlpf_bandwidth_hz: 44", "baud_rate: 115200", "rate2_hz: 200", "rate_dps: 90",
             "gyro: MPU6050", "gyro_sensitivity: 65.5", "acc_unit: g", "time: 2024-01-01", "odr: 100 sps",
-            "ts: 2026-01-01T00:00:00", "step: 1"]  # pass 54: no false refusals
+            "ts: 2026-01-01T00:00:00", "step: 1",  # pass 54: no false refusals
+            "units: s, dps", "TS: 1700000000", "Unit: Unit-7", "gyro_range: \u00b1250 dps"]  # pass 55
     path.write_text(head.replace(unit, "dps") + "".join(f"# {k}\n" for k in kept) + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n")
     assert read_recording(path).header["gyro_output_rate_hz"] == "8000"
     path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
-                    "# gyro_scale: 131\ngx,gy,gz\n1,2,3\n")  # the same sensitivity, a number: no unit (pass 54)
+                    "# gyro_scale: 131\n# scale: \u00b1250 dps\ngx,gy,gz\n1,2,3\n")  # the same sensitivity, a number:
+    # no unit (pass 54); a full scale, no sensitivity (pass 55)
     assert read_recording(path).header["gyro_scale"] == "131"
 
 

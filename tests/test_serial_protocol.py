@@ -335,7 +335,8 @@ def test_a_device_word_that_means_a_protocol_key_is_refused(word, meant):
 
 
 @pytest.mark.parametrize("word", [b"unit=rad/s", b"rate=200", b"odr_hz=200", b"gyro=rad/s", b"units=rad/s",
-                                  b"rate=200Hz", b"period_ms=5", b"samplerate=200", b"dt=0.005", b"gyro_scale=rad/s"])
+                                  b"rate=200Hz", b"period_ms=5", b"samplerate=200", b"dt=0.005", b"gyro_scale=rad/s",
+                                  b"logging_rate=200", b"sensor_odr=200"])  # pass 55
 def test_a_device_word_that_states_another_unit_or_rate_stops_the_stream(word):
     """Attack pass 52: with the units given as options (``serial:PORT,unit=dps,rate=100``), a device's ``unit=rad/s``
     was kept as a descriptive key and the rows read as deg/s, without a word. Its first header stops the stream,
@@ -349,6 +350,9 @@ def test_a_device_word_that_states_another_unit_or_rate_stops_the_stream(word):
     p = LineParser(gyro_unit="dps", sample_rate_hz=100)
     p.feed(b"# gyrofilter-serial: 1 sample_rate_hz=100 unit=dps rate=100\n0,1,2,3\n")
     assert p.header["unit"] == "dps"
+    p = LineParser()  # a full scale is no sensitivity (pass 55)
+    p.feed(b"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=131 sample_rate_hz=100 gyro_scale=2000dps\n0,1,2,3\n")
+    assert p.header["gyro_scale"] == "2000dps"
 
 
 def test_parser_with_options_uses_a_header_that_comes_first():

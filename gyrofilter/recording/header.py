@@ -6,11 +6,13 @@ the header (:func:`format_number`).
 """
 from __future__ import annotations
 
+import functools
 import re
 import unicodedata
 
 from ..errors import RecordingError
-from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, is_plain_number, json_string, parse_number, quote
+from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, json_string, parse_number, quote
+from .statements import judge, key_unit, stated_kind
 from .unit_words import known_unit
 from ..units import ACCEL_UNITS, AXES, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
 
@@ -268,8 +270,8 @@ def _reads_as(shape, known, floor=8):
     third of its letters are ASCII (``温度`` is a key of its own); and a known key of ``floor`` letters or more with
     one letter more, fewer or other, or two swapped (``temp_units``, ``gyro_unt``, pass 49; ``full_scale_dsp``, pass
     50), not a digit more or other (``gyro2_unit``: a second sensor's)."""
-    foreign = sum(not c.isascii() for c in shape)
-    if foreign:
+    if not shape.isascii():
+        foreign = sum(not c.isascii() for c in shape)
         return 2 * (len(shape) - foreign) >= foreign > 0 and len(shape) == len(known) and all(
             a == b or not a.isascii() for a, b in zip(shape, known))
     if len(known) < floor or abs(len(shape) - len(known)) > 1:
@@ -302,35 +304,6 @@ def misspelt_key(key, also=()):
     return meant if meant is not None and meant != key else None
 
 
-#: what a header key states, by its words (:func:`name_words`): a key of only a kind's words and at least one of its
-#: own states the sample rate (``sample_rate``, ``rate_hz``, ``odr``, ``imu_rate``, ``samplerate``), the sample
-#: period (``dt``, ``sample_period_ms``, ``Ts``), the gyro's unit (``unit``, ``gyro_scale``, ``rate_unit``; also
-#: ``gyro: rad/s``, a value that is a unit), its sensitivity (``lsb_per_deg``, ``gyro_sensitivity``,
-#: ``scale_factor``: a number) or the accelerometer's unit (``acc_unit``). ``gyro_output_rate_hz`` (the chip's own),
-#: ``cutoff_hz``, ``baud_rate`` and ``rate_dps`` are none of them
-_STATES = {  # kind: (the other words its key may hold, its own words)
-    "rate": ({"sample", "samples", "data", "output", "update", "imu", "khz"},
-             {"rate", "samplerate", "odr", "fs", "sps", "sampling", "frequency", "freq", "hz"}),
-    "period": ({"sample", "sampling", "time", "s", "sec", "ms", "us", "ns"}, {"period", "interval", "dt", "ts"}),
-    "unit": ({"gyro", "gyr", "gyroscope", "rate", "angular", "velocity", "omega", "measurement"}, {"unit", "units", "scale"}),
-    "sensitivity": ({"gyro", "gyr", "per", "dps", "deg", "degree", "degrees", "s", "factor"}, {"lsb", "sensitivity", "scale"}),
-    "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
-}
-_SECONDS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
-
-
-def _kinds(words, value):
-    """The kinds of :data:`_STATES` a key of ``words`` with ``value`` states, most telling first."""
-    kinds = [kind for kind, (others, own) in _STATES.items() if words & own and words <= others | own]
-    if words <= set().union(*_STATES["unit"]) and known_unit("rate", value):
-        kinds.insert(0, "unit")  # gyro: rad/s
-    if not words & _STATES["accel_unit"][0]:
-        kinds = [kind for kind in kinds if kind != "accel_unit"]
-    if is_plain_number((value.split() or [value])[0]):  # gyro_scale: 131, a sensitivity (pass 54)
-        kinds = [kind for kind in kinds if kind not in ("unit", "accel_unit")]
-    return kinds
-
-
 def contradiction(header):
     """What a key of ``header`` (text values, with ``sample_rate_hz`` and ``gyro_unit`` checked) states of the sample
     rate, the gyro's unit or sensitivity, or the accelerometer's unit, otherwise than the key gyrofilter reads it
@@ -357,63 +330,45 @@ def header_rates(header):
     return [float(parse_number(header[k], k, error=RecordingError)) for k in ("sample_rate_hz", INPUT_RATE_KEY) if k in header]
 
 
-#: what each key gyrofilter reads of :data:`_STATES` states (a foreign log's comment ``# sample_rate_hz: 200``)
+#: what each key gyrofilter reads of :data:`~gyrofilter.recording.statements.STATES` states (a foreign log's comment ``# sample_rate_hz: 200``)
 _READ_KINDS = {"sample_rate_hz": "rate", "gyro_unit": "unit", "lsb_per_dps": "sensitivity", "accel_unit": "accel_unit"}
 
 
 def contradicts(key, value, header, rates, tolerance=1e-9):
     """``(the key of ``header`` that ``key: value`` contradicts, what ``value`` does not read as or None)``, or None.
 
-    A key that states the sample rate, the gyro's unit or sensitivity or the accelerometer's unit (:data:`_STATES`
-    by its words; a key gyrofilter reads, or one spelt otherwise, :func:`misspelt_key`, states its own) must state
-    the same: a rate in Hz (``khz`` in the key or the value in thousands) within ``tolerance`` (relative) of one of
-    ``rates``, a period (s, or ``ms``, ``us``, ``ns``) of one over it, the unit
-    (:func:`~gyrofilter.recording.unit_words.known_unit`), ``lsb_per_dps`` (where ``gyro_unit`` is lsb; the value may
-    end in a unit of deg/s), ``accel_unit`` (where the header has one); one that does not, or whose value does not
-    read so (``0xC8``, ``200,0``), contradicts it. A key with a digit (``rate2_hz``: another sensor's) is not read."""
+    A key that states the sample rate, the gyro's unit or sensitivity or the accelerometer's unit
+    (:func:`statement`) must state the same (:func:`~gyrofilter.recording.statements.judge`): a rate within
+    ``tolerance`` (relative) of one of ``rates``, a period of one over it, the unit, ``lsb_per_dps`` (where
+    ``gyro_unit`` is lsb), ``accel_unit`` (where the header has one); one that does not, or whose rate or sensitivity
+    does not read so (``0xC8``, ``200,0``), contradicts it."""
     stated = statement(key, value)
-    return _contradicts(*stated, unicodedata.normalize("NFKC", value), header, rates, tolerance) if stated else None
+    return judge(*stated, header, rates, tolerance) if stated else None
+
+
+def _key_words(key):
+    """``(the key gyrofilter reads that ``key`` is or spells otherwise, or None; the words of that or of ``key``)``."""
+    read = key if key in _READ_KEYS.values() else misspelt_key(key)
+    return read, frozenset(name_words(read or key))
+
+
+#: :func:`_key_words` of a short key, cached: a log's comments repeat their keys
+_short_key_words = functools.lru_cache(maxsize=4096)(_key_words)
 
 
 def statement(key, value):
-    """``(the kind of :data:`_STATES` that ``key: value`` states, the key's words)``, or None (:func:`contradicts`)."""
-    read = key if key in _READ_KEYS.values() else misspelt_key(key)
-    words = set(name_words(read or key))
+    """``(the kind of fact ``key: value`` states, the key's words, the value as read)`` or None: a key gyrofilter
+    reads, or one spelt otherwise (:func:`misspelt_key`), states its own; another by its words
+    (:func:`~gyrofilter.recording.statements.stated_kind`; NFKC first: ``ＳａｍｐｌｅＲａｔｅ``; a unit in brackets
+    at its end read as the value's: ``Sample period (µs): 5000``). A key with a digit (``rate2_hz``: another
+    sensor's) states nothing."""
+    key, value = key_unit(unicodedata.normalize("NFKC", key), unicodedata.normalize("NFKC", value))
+    read, words = (_short_key_words if len(key) <= 64 else _key_words)(key)
     if read is not None:
-        kinds = [_READ_KINDS[read]] if read in _READ_KINDS else []
+        kind = _READ_KINDS.get(read)
     else:
-        kinds = [] if not words or any(c.isdigit() for c in key) else _kinds(words, value)
-    return (kinds[0], words) if kinds else None
-
-
-def _contradicts(kind, words, value, header, rates, tolerance):
-    """:func:`contradicts` for a key of kind ``kind`` (:data:`_STATES`) stating ``value`` (a period that does not
-    read: None, as ``ts: 2026-01-01`` is a time, not one)."""
-    number = re.fullmatch(r"\s*(\S+?)\s*([a-zA-Z°/()^]*)\s*", value)
-    amount = float(number[1]) if number and is_plain_number(number[1]) else None
-    suffix = number[2].lower() if number else ""
-    if kind == "rate":
-        if amount is None or suffix not in ("", "hz", "khz", "sps", "samples/s", "s/s"):
-            return "sample_rate_hz", "a rate (Hz)"
-        stated = amount * (1000 if "khz" in words or suffix == "khz" else 1)
-        return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
-    if kind == "period":
-        if not amount or suffix not in ("", *_SECONDS):
-            return None
-        stated = 1.0 / (amount * (_SECONDS.get(suffix) or next((_SECONDS[w] for w in ("ms", "us", "ns") if w in words), 1.0)))
-        return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
-    if kind == "unit":
-        return None if known_unit("rate", value) == header["gyro_unit"] else ("gyro_unit", None)
-    if kind == "sensitivity":
-        if header["gyro_unit"] != "lsb":
-            return None
-        per_dps = suffix == "" or "dps" in suffix or "deg" in suffix.replace("°", "deg")  # 131 LSB/(deg/s)
-        if amount is None or not per_dps:
-            return "lsb_per_dps", "a sensitivity (LSB per deg/s)"
-        return None if amount == float(parse_number(header["lsb_per_dps"], "lsb_per_dps")) else ("lsb_per_dps", None)
-    if "accel_unit" not in header:
-        return None
-    return None if known_unit("accel", value) == header["accel_unit"] else ("accel_unit", None)
+        kind = None if not words or any(c.isdigit() for c in key) else stated_kind(words, value)
+    return (kind, words, value) if kind else None
 
 
 def check_facts(header, where):

@@ -2,26 +2,34 @@
 
 A log's comments may state what the conversion is told otherwise: ``# sample_rate_hz: 200`` above a
 log converted with ``--sample-rate-hz 100``, ``# gyro_unit: rad/s`` with ``--unit dps``. Skipped, the
-file was written at the option's rate or unit without a word (attack pass 53, item 11). A comment
-``key: value`` or ``key = value`` (after ``#`` or ``//``) before the first data row whose key states the
-sample rate, the gyro's unit or sensitivity, or the accelerometer's unit (the one rule of a recording's
-header keys, :func:`~gyrofilter.recording.header.contradicts`) must state what the conversion writes:
-the rate given exactly, or within :data:`~gyrofilter.units.RATE_TOLERANCE` of the one the time column's
-steps give (a logger's nominal rate beside its clock's). A comment whose value does not read as one
-(``# rate: fast``) is prose and not judged, nor is a line of no key (``# logged at 200 Hz``) or a
-comment after the first data row.
+file was written at the option's rate or unit without a word (attack pass 53, item 11). Each
+``key: value`` of a comment (after ``#`` or ``//``; also ``key = value``, ``:=``, ``=>``, several split
+by ``;``, NFKC first) before the first data row whose key states the sample rate, the gyro's unit or
+sensitivity, or the accelerometer's unit (the one rule of a recording's header keys,
+:func:`~gyrofilter.recording.header.contradicts`) must state the unit read (``mdps``, not the ``dps`` it
+is written in) and the rate given exactly, or within :data:`~gyrofilter.units.RATE_TOLERANCE` of the one
+the time column's steps give (a logger's nominal rate beside its clock's). A value that does not read
+(``# rate: fast``; one with a digit that does not read as a rate is refused) is prose, as is a line of
+no key (``# logged at 200 Hz``) and a comment after the first data row. At most :data:`MAX_STATEMENTS`
+different ones are kept (a preamble of millions is refused, not held).
 """
 from __future__ import annotations
 
+import functools
 import re
+import unicodedata
 
 from ...errors import RecordingError
 from ...inputs import quote
 from ...units import RATE_TOLERANCE
 from ..header import VERSION_KEY, contradicts, header_rates, statement
 
-#: a comment line's ``key: value`` (or ``key = value``)
-_KEY_VALUE = re.compile(r"\s*(?:#|//)[#/]*\s*(?P<key>[^:=]{1,64}?)\s*[:=]\s*(?P<value>.*?)\s*")
+#: a comment's ``key: value`` (or ``key = value``), one of those split by ``;``
+_KEY_VALUE = re.compile(r"\s*[\"'{]*(?P<key>[^:=\"'{}]{1,64}?)[\"'}]*\s*(?::=|=>|[:=])\s*(?P<value>.*?)\s*")
+#: the comment marks (``#``, ``//``, ``##``, ``# *``) before a comment's text
+_MARK = re.compile(r"\s*(?:#|//)[#/!*\-\s]*")
+#: most different statements kept from a log's comments
+MAX_STATEMENTS = 1000
 #: the option that gives each header key a comment may contradict, and where it comes from without it
 _SOURCES = {"sample_rate_hz": ("--sample-rate-hz", "the time column's steps"), "gyro_unit": ("--unit", "the column names"),
             "lsb_per_dps": ("--lsb-per-dps", "--lsb-per-dps"), "accel_unit": ("--accel-unit", "the column names")}
@@ -39,28 +47,48 @@ def refuse_recording(text, number, path):
                              "as it is): convert is for other tools' logs")
 
 
-class Comments:
-    """The comments before a log's first data row that state a fact of the conversion (only those: a few
-    tuples however long the preamble), :meth:`check`-ed against the header written."""
+def _statements(text):
+    """The ``(key, value)`` of comment ``text`` that state a fact (:func:`~gyrofilter.recording.header.statement`)."""
+    return _short_statements(text) if len(text) <= 256 else _read_statements(text)
 
-    def __init__(self):
-        self.stated = []
+
+def _read_statements(text):
+    """:func:`_statements`, each different piece read once."""
+    body = _MARK.sub("", unicodedata.normalize("NFKC", text), count=1)
+    pairs = [_KEY_VALUE.fullmatch(piece) for piece in dict.fromkeys(body.split(";"))]
+    return tuple((p["key"], p["value"]) for p in pairs if p and p["value"] and statement(p["key"], p["value"]))
+
+
+#: :func:`_read_statements` of a short line, cached: a preamble of one line repeated costs one reading
+_short_statements = functools.lru_cache(maxsize=4096)(_read_statements)
+
+
+class Comments:
+    """The comments before a log's first data row that state a fact of the conversion (only those, each
+    different one once), :meth:`check`-ed against the header written."""
+
+    def __init__(self, path):
+        self.path, self.stated = path, {}
 
     def add(self, number, text):
-        """Keep the comment line ``number`` (``text``) if its ``key: value`` states a fact."""
-        match = _KEY_VALUE.fullmatch(text)
-        if match and statement(match["key"], match["value"]):
-            self.stated.append((number, match["key"], match["value"]))
+        """Keep the comment line ``number`` (``text``) if it states a fact."""
+        for pair in _statements(text):
+            if pair not in self.stated:
+                if len(self.stated) == MAX_STATEMENTS:
+                    raise RecordingError(f"{self.path}: line {number}: more than {MAX_STATEMENTS} different comments "
+                                         "before the first data row state the rate or a unit; remove them")
+                self.stated[pair] = number, text.strip()
 
-    def check(self, header, path, given):
-        """Refuse with RecordingError naming the file, line and option where a comment contradicts ``header``, the
-        conversion's, whose keys ``given`` (a set) the caller's options gave."""
+    def check(self, header, given):
+        """Refuse with RecordingError naming the file, line and option where a comment contradicts ``header`` (the
+        conversion's, with the units read: ``mdps``, not ``dps``), whose keys ``given`` (a set) the options gave."""
         tolerance = 1e-9 if "sample_rate_hz" in given else RATE_TOLERANCE
-        for number, key, value in self.stated:
+        for (key, value), (number, text) in self.stated.items():
             meant = contradicts(key, value, header, header_rates(header), tolerance)
-            if meant and meant[1] is None:
-                option, otherwise = _SOURCES[meant[0]]
-                source = option if meant[0] in given else otherwise
-                raise RecordingError(f"{path}: line {number}: the comment {quote(f'{key}: {value}')} disagrees with the "
-                                     f"conversion's {meant[0]} {quote(header[meant[0]])} (from {source}); correct "
-                                     + ("the option or " if meant[0] in given else "") + "the comment line")
+            if meant and (meant[1] is None or re.search(r"\d", value)):  # rate: fast is prose, 200,0 Hz is not
+                fact, unread = meant
+                option, otherwise = _SOURCES[fact]
+                said = f"states {unread} gyrofilter does not read, beside" if unread else "disagrees with"
+                raise RecordingError(f"{self.path}: line {number}: the comment {quote(text[:100])} {said} the conversion's "
+                                     f"{fact} {quote(header[fact])} (from {option if fact in given else otherwise}); correct "
+                                     + ("the option or " if fact in given else "") + "the comment line")

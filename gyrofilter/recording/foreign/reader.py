@@ -427,7 +427,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     offset from the first stamp while the time unit is not known; then a pass over the time
     column computes the times in s). Every refusal comes in the order of reading it whole."""
     header_line, names, split, first_data, preamble = None, None, None, None, 0
-    counts = {"skipped": 0, "before_rows": 0, "warnings": [], "comments": Comments()}
+    counts = {"skipped": 0, "before_rows": 0, "warnings": [], "comments": Comments(path)}
     given = {key for key, option in (("sample_rate_hz", sample_rate_hz), ("gyro_unit", unit), ("lsb_per_dps", lsb_per_dps),
                                      ("accel_unit", options.get("accel_unit"))) if option is not None}
     for number, text, lines in log_lines(raw, path):
@@ -478,7 +478,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
         raise RecordingError(out_of_range)
     summary = [f"columns: x {quote(names[gyro[0]])}, y {quote(names[gyro[1]])}, z {quote(names[gyro[2]])} "
                f"in {unit}{converted_text(read_unit)}{' (as the names state)' if stated == read_unit else ''}; {rows} rows"
-               + (f", {skipped} blank or comment line(s) skipped" if skipped else "")]
+               + (f", {skipped} blank or comment line(s) skipped" if skipped else "")
+               + (f" ({len(counts['comments'].stated)} stating the rate or a unit: checked)" if counts["comments"].stated else "")]
     left_out = left_out_line(names, wanted, extras.why, lambda i: TIME_NAME.fullmatch(_normal(names[i])[0]))
     summary += extras.summary + ([left_out] if left_out else [])
     header = {VERSION_KEY: FORMAT_VERSION}
@@ -504,8 +505,10 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
         resolution_s = 10.0 ** stamps.exponent * TIME_UNITS[t_unit] if stamps.exponent is not None else 0.0
         rate_hz = _time_axis(t_s, t_unit, how, sample_rate_hz, names[time], path, summary, resolution_s)
         head = RecordingHead(header={"sample_rate_hz": format_number(rate_hz)}, names=["t"], path=path)
-        check = TimeCheck(head, "the time column's steps are not one rate; give the rate in --sample-rate-hz "
-                                "if they are, or split the file where it changes")
+        check = TimeCheck(head, "the time column's steps are not at --sample-rate-hz (without it, the stamps' rate is "
+                                "taken) or not one rate (split the file where it changes)" if sample_rate_hz is not None else
+                          "the time column's steps are not one rate; give the rate in --sample-rate-hz if they are, or "
+                          "split the file where it changes")
         check.add(t_s, where)
         check.finish()
         plan.t_s = t_s
@@ -521,7 +524,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     if unit == "lsb":
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     header.update(extras.header, converted_from=path)
-    counts["comments"].check(header, path, given)
+    counts["comments"].check({**header, "gyro_unit": read_unit, **({"accel_unit": extras.accel_read} if extras.accel_read else {})},
+                             given)
     return Foreign(raw, path, header, out_columns + extras.columns, formats + extras.formats(), rows, summary,
                    plan, counts["warnings"] + whole_rates(integral, read_unit, gyro, names) + extras.warnings)
 
@@ -533,7 +537,8 @@ def _gyro_unit(unit, stated, lsb_per_dps, path):
     if unit not in units_of("rate") and stated:
         raise unread_unit(path, "the gyro columns state", stated, "--unit", choices)
     if unit not in units_of("rate"):
-        raise RecordingError(f"{path}: the gyro unit is not stated; give --unit {choices}")
+        raise RecordingError(f"{path}: the gyro unit is not stated by --unit or the column names (a comment is not read as one); "
+                             f"give --unit {choices}")
     if unit == "lsb":
         if lsb_per_dps is None:
             raise RecordingError("--unit lsb needs --lsb-per-dps (LSB per deg/s; the MPU6050 at +-250 deg/s: 131)")
