@@ -1189,18 +1189,26 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# Sample Rate (samples/s): 200", []), ("# Sampling rate [1/s]: 200", []), ("# Sample rate in Hz: 200", []),
     ("# Sample rate: 200 Hz (nominal)", []), ("# Sample rate: ~200 Hz", []), ("# Sample rate: 200 Hz.", []),
     ("# Sample rate: 200/s", []), ("# Sample rate: 200 samples per second", []), ("# fs=200 Hz; unit=rad/s", []),
-    ("# Sampling frequency: 200,0 Hz", []), ('# sample_rate_hz: "200"', []), ("# sample_rate_hz: 200 # in firmware", []),
+    ('# sample_rate_hz: "200"', []), ("# sample_rate_hz: 200 # in firmware", []),
     ("# sample_rate_hz\uff1a200", []), ("# sample_rate_hz := 200", []), ('# {"sample_rate_hz": 200}', []),
     ("# Sample period: 5000 \u00b5s", []), ("# Logging rate: 200 Hz", []), ("# Acquisition rate: 200 Hz", []),
     ("# Gyro sample rate: 200 Hz", []), ("# \uff33\uff41\uff4d\uff50\uff4c\uff45\uff32\uff41\uff54\uff45: 200", []),
     ("# sensor_odr: 200 Hz", []), ("# sample_rate_hz_nominal: 200", []),
+    ("# Sensitivity: 8.75 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "8.75"]),  # pass 56: 114.29 LSB per deg/s
+    ("# Rate: 200 Hz, FS: 2000 dps", []), ("# settings: fs=200 Hz", []), ("# IMU config: rate=200Hz; unit=dps", []),
+    ("# unit=dps rate=200", []), ("# Sample period (us): ~20000", []), ("# Sample period (msec): 20", []),
+    ("# Sample rate: approx. 200 Hz", []), ("# Update rate: 5 ms", []),
+    ("# lsb_per_g: 8192", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
+    ("# accel: m/s^2", ["--unit", "dps", "--accel-unit", "g"]),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
     without a word: the unit compared was the one written (dps for mdps: 1000 times), and a value with a remark, a
     unit in the key's brackets, another separator or a full-width key did not read."""
-    rows = "".join(f"{i % 5 / 10},0.2,-0.1\n" for i in range(50))
-    code, dst = _convert(tmp_path, f"{comment}\ngx,gy,gz\n{rows}", "--sample-rate-hz", "100", *(options or ["--unit", "dps"]))
+    accel = "--accel-unit" in options
+    rows = "".join(f"{i % 5 / 10},0.2,-0.1" + (",0,0,1" if accel else "") + "\n" for i in range(50))
+    names = "gx,gy,gz" + (",ax,ay,az" if accel else "")
+    code, dst = _convert(tmp_path, f"{comment}\n{names}\n{rows}", "--sample-rate-hz", "100", *(options or ["--unit", "dps"]))
     err = capsys.readouterr().err
     assert code == 2 and not dst.exists() and err.startswith(f"gyrofilter: error: {tmp_path / 'log.csv'}: line 1: the "
                                                              f"comment '{comment}' "), err
@@ -1214,6 +1222,12 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# Units: rad/s (gyro), m/s^2 (accel)", ["--unit", "rad/s"]),
     ("# Gyro scale: 2000 dps", ["--unit", "lsb", "--lsb-per-dps", "16.4"]),
     ("# gyro_sensitivity: 131 LSB/(deg/s)", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# Sensitivity: 8.75 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "114.2857"]),  # pass 56
+    ("# Rate: 100 Hz, FS: 2000 dps", []), ("# Sample rate (Hz): 100 (nominal)", []), ('# Sample rate [Hz]: "100"', []),
+    ("# Sample rate (kHz): ~0.1", []), ("# Target rate: 100 dps", []), ("# Sample rate: approx. 100 Hz", []),
+    ("# Sample rate: 100 Hz +/- 1%", []), ("# Sample rate: 100 Hz, 16 bit", []), ("# Update rate: 10 ms", []),
+    ("# Data rate: 115200 bps", []), ("# Sampling: 16x oversampling", []), ("# baud rate: 115200", []),
+    ("# Date: 2026-01-01 12:00:00", []), ("# unit=dps rate=100", []),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read

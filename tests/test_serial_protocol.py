@@ -336,7 +336,7 @@ def test_a_device_word_that_means_a_protocol_key_is_refused(word, meant):
 
 @pytest.mark.parametrize("word", [b"unit=rad/s", b"rate=200", b"odr_hz=200", b"gyro=rad/s", b"units=rad/s",
                                   b"rate=200Hz", b"period_ms=5", b"samplerate=200", b"dt=0.005", b"gyro_scale=rad/s",
-                                  b"logging_rate=200", b"sensor_odr=200"])  # pass 55
+                                  b"logging_rate=200", b"sensor_odr=200", b"dt=20msec"])  # passes 55, 56
 def test_a_device_word_that_states_another_unit_or_rate_stops_the_stream(word):
     """Attack pass 52: with the units given as options (``serial:PORT,unit=dps,rate=100``), a device's ``unit=rad/s``
     was kept as a descriptive key and the rows read as deg/s, without a word. Its first header stops the stream,

@@ -331,7 +331,8 @@ def header_rates(header):
 
 
 #: what each key gyrofilter reads of :data:`~gyrofilter.recording.statements.STATES` states (a foreign log's comment ``# sample_rate_hz: 200``)
-_READ_KINDS = {"sample_rate_hz": "rate", "gyro_unit": "unit", "lsb_per_dps": "sensitivity", "accel_unit": "accel_unit"}
+_READ_KINDS = {"sample_rate_hz": "rate", "gyro_unit": "unit", "lsb_per_dps": "sensitivity", "accel_unit": "accel_unit",
+               "lsb_per_g": "accel_sensitivity"}
 
 
 def contradicts(key, value, header, rates, tolerance=1e-9):

@@ -1,16 +1,19 @@
 """What a header key, a serial device's word or a log's comment states of the sample rate, the gyro's unit or
-sensitivity, or the accelerometer's unit, by its words (:func:`~gyrofilter.recording.header.name_words`), and
-whether its value states the same as the header (:func:`judge`): the one rule behind
-:func:`~gyrofilter.recording.header.contradiction` and ``convert``'s comments
+sensitivity, or the accelerometer's unit or sensitivity, by its words
+(:func:`~gyrofilter.recording.header.name_words`), and whether its value states the same as the header
+(:func:`judge`): the one rule behind :func:`~gyrofilter.recording.header.contradiction` and ``convert``'s comments
 (:mod:`~gyrofilter.recording.foreign.comments`). Pure: words and text in, a kind or a verdict out.
 
-A value is read as people write it (attack pass 55): quotes, a ``~``, a closing ``.`` or ``;``, a remark in
-brackets or after ``#`` aside (``"200"``, ``~200 Hz``, ``200 Hz (nominal)``, ``200 # set in firmware``); a rate
-in Hz, kHz, ``sps``, ``/s`` or samples per second; a period in s, ms, us (``µs``) or ns, one that would mean a
-rate outside :data:`~gyrofilter.units.MIN_SAMPLE_RATE_HZ` .. :data:`~gyrofilter.units.MAX_SAMPLE_RATE_HZ` being
-a time stamp (``ts: 1700000000``), not a period; a unit among other words (``units: s, deg/s, g``), none named
-being no statement (``unit: IMU-07``, ``units: SI``); a number with a unit of deg/s, or after ``±``, a full
-scale (``gyro_scale: ±2000 dps``), not a unit or a sensitivity.
+A value is read as people write it (attack passes 55, 56): its first number, after quotes, ``~``, ``approx.``,
+``about`` or ``±``, and the word right after it (``200 Hz (nominal)``, ``100 Hz, 16 bit``, ``"200"``,
+``200/s``); a rate in Hz, kHz, ``sps``, ``/s`` or samples, or a period (``Update rate: 10 ms``); a period in s, ms,
+us (``µs``, ``usec``) or ns, one that would mean a rate outside :data:`~gyrofilter.units.MIN_SAMPLE_RATE_HZ` ..
+:data:`~gyrofilter.units.MAX_SAMPLE_RATE_HZ` being a time stamp (``TS: 1700000000``); a rate in deg/s or bps
+is a rate of turn or a baud rate, not a sample rate (``Target rate: 100 dps``); a sensitivity in LSB per deg/s or
+its inverse (``8.75 mdps/LSB``: 114.29), a number in deg/s or after ``±`` a full scale
+(``gyro_scale: ±2000 dps``); a unit among other words (``units: s, deg/s, g``), none named being no statement
+(``unit: IMU-07``). A number with a decimal comma (``200,0``) does not read. :func:`pairs` splits a text into its
+``key: value`` pairs (``fs=200 Hz; unit=rad/s``, ``Rate: 100 Hz, FS: 2000 dps``, ``settings: fs=200``).
 """
 from __future__ import annotations
 
@@ -24,9 +27,9 @@ from .unit_words import known_unit
 #: (``sample_rate``, ``rate_hz``, ``odr``, ``imu_rate``, ``samplerate``, ``logging_rate``, ``sensor_odr``), the
 #: sample period (``dt``, ``sample_period_ms``, ``Ts``), the gyro's unit (``unit``, ``gyro_scale``, ``rate_unit``;
 #: also ``gyro: rad/s``, a value that is a unit), its sensitivity (``lsb_per_deg``, ``gyro_sensitivity``,
-#: ``scale_factor``: a number) or the accelerometer's unit (``acc_unit``). ``gyro_output_rate_hz`` (the chip's own),
-#: ``cutoff_hz``, ``baud_rate``, ``rate_dps`` and ``gyro_rate`` (a rate of turn) are none of them; a sample rate
-#: may name the gyro (``Gyro sample rate``)
+#: ``scale_factor``: a number), the accelerometer's unit (``acc_unit``; ``accel: m/s^2``) or sensitivity
+#: (``acc_lsb_per_g``). ``gyro_output_rate_hz`` (the chip's own), ``cutoff_hz``, ``baud_rate``, ``rate_dps`` and
+#: ``gyro_rate`` (a rate of turn) are none of them; a sample rate may name the gyro (``Gyro sample rate``)
 STATES = {  # kind: (the other words its key may hold, its own words)
     "rate": ({"sample", "samples", "data", "output", "update", "imu", "khz", "logging", "log", "acquisition", "polling",
               "nominal", "sensor", "in", "target", "actual"},
@@ -37,24 +40,47 @@ STATES = {  # kind: (the other words its key may hold, its own words)
              {"unit", "units", "scale"}),
     "sensitivity": ({"gyro", "gyr", "per", "dps", "deg", "degree", "degrees", "s", "factor"}, {"lsb", "sensitivity", "scale"}),
     "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
+    "accel_sensitivity": ({"acc", "accel", "accelerometer", "acceleration", "per", "g", "factor"}, {"lsb", "sensitivity"}),
 }
+_ACCEL_WORDS = STATES["accel_unit"][0]
 _SAMPLING = {"sample", "samples", "sampling", "odr"}
-_SECONDS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "μs": 1e-6, "ns": 1e-9}
-_RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samplespersecond", "persecond",
-                  "hertz"}
-#: a number as it opens a value: a sign of range or of about (``±``, ``+-``, ``~``) before it
-_NUMBER = re.compile(r"\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*(?P<number>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)(?P<rest>.*)")
+_SECONDS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3, "msec": 1e-3, "us": 1e-6,
+            "μs": 1e-6, "usec": 1e-6, "ns": 1e-9, "nsec": 1e-9}
+_RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samples", "hertz"}
+#: a value's first number (a sign of range or about before it) and the word right after it
+_NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
+                     r"(?P<number>(?>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?))(?![,.]\d)\s*(?P<suffix>[a-zA-Zμ°/^()\d-]*)(?P<rest>.*)")
 #: a key's unit in brackets at its end (``Sample rate (samples/s)``, ``Sample period [µs]``)
 _BRACKETED = re.compile(r"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*")
+#: where a text holds another ``key: value`` pair: at ``;``, at ``,`` before a key and its separator, at blanks
+#: before ``key=`` (``unit=dps rate=200``)
+_PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[A-Za-z_][\w.()\[\]/ -]{0,40}?\s*(?::=|=>|[:=]))|\s+(?=[A-Za-z_][\w.]*\s*=)")
+#: a piece's ``key: value`` (or ``key = value``, ``:=``, ``=>``), quotes and braces aside
+_KEY_VALUE = re.compile(r"\s*[\"'{]*(?P<key>[^:=\"'{}]{1,64}?)[\"'}]*\s*(?::=|=>|[:=])\s*(?P<value>.*?)\s*")
+
+
+def pairs(text):
+    """The ``(key, value)`` pairs of ``text`` (a comment's body, a header value): split where another pair starts
+    (:data:`_PIECES`), a value that holds pairs of its own read too (``settings: fs=200 Hz``)."""
+    found = []
+    for piece in dict.fromkeys(_PIECES.split(text)):
+        match = _KEY_VALUE.fullmatch(piece) if piece else None
+        if match and match["value"]:
+            found.append((match["key"], match["value"]))
+            if re.search(r"[:=]", match["value"]):
+                found += [p for p in pairs(match["value"]) if p != (match["key"], match["value"])]
+    return found
 
 
 def key_unit(key, value):
     """``(key, value)`` with a unit in brackets at the key's end moved to a value that is a number alone
-    (``Sample rate (Hz): 200``: ``Sample rate``, ``200 Hz``)."""
+    (``Sample rate (Hz): ~200``: ``Sample rate``, ``~200 Hz``)."""
     bracketed = _BRACKETED.fullmatch(key)
     if not bracketed or not bracketed["key"]:
         return key, value
-    return bracketed["key"], f"{value} {bracketed['unit']}" if is_plain_number(clean(value)) else value
+    number = _NUMBER.fullmatch(clean(value))
+    alone = number and not number["suffix"] and not number["rest"].strip()
+    return bracketed["key"], f"{clean(value)} {bracketed['unit']}" if alone else value
 
 
 def stated_kind(words, value):
@@ -64,19 +90,20 @@ def stated_kind(words, value):
              if words & own and words <= others | own | (gyro if kind == "rate" else set())]
     if words <= set().union(*STATES["unit"]) and known_unit("rate", value):
         kinds.insert(0, "unit")  # gyro: rad/s
-    if not words & STATES["accel_unit"][0]:
-        kinds = [kind for kind in kinds if kind != "accel_unit"]
+    if words <= _ACCEL_WORDS | STATES["accel_unit"][1] and known_unit("accel", value):
+        kinds.insert(0, "accel_unit")  # accel: m/s^2
+    if not words & _ACCEL_WORDS:
+        kinds = [kind for kind in kinds if not kind.startswith("accel")]
     if _NUMBER.match(clean(value)):  # gyro_scale: 131, a sensitivity (pass 54); ±2000 dps, a full scale
         kinds = [kind for kind in kinds if kind not in ("unit", "accel_unit")]
     return kinds[0] if kinds else None
 
 
 def clean(value):
-    """``value`` without quotes, a ``~`` or a closing ``.``, ``;`` or ``,``, a remark in brackets at its end or after
-    ``#`` or ``//``: ``"200"``, ``200 Hz (nominal)``, ``200 # set in firmware`` read ``200``, ``200 Hz``."""
+    """``value`` without quotes, a closing ``.``, ``;`` or ``,``, a remark in brackets at its end or after ``#`` or
+    ``//``: ``"200"``, ``200 Hz (nominal)``, ``200 # set in firmware`` read ``200``, ``200 Hz``."""
     value = re.split(r"\s(?:#|//)", value)[0].strip().strip("\"'{}[] ")
-    value = re.sub(r"\s+\([^()]*\)$", "", value)
-    return value.rstrip(".;, ").strip("\"' ")
+    return re.sub(r"\s+\([^()]*\)$", "", value).rstrip(".;, ").strip("\"' ")
 
 
 def judge(kind, words, value, facts, rates, tolerance):
@@ -84,12 +111,16 @@ def judge(kind, words, value, facts, rates, tolerance):
     contradicts, what the value does not read as or None)``, or None where it states the same or nothing: a rate in
     Hz (``khz`` in the key or the value in thousands) within ``tolerance`` (relative) of one of ``rates``, a period of
     one over it, the unit (:func:`~gyrofilter.recording.unit_words.known_unit`), ``lsb_per_dps`` (where ``gyro_unit``
-    is lsb; the value may end in a unit of deg/s), ``accel_unit`` (where the header has one)."""
+    is lsb), ``accel_unit`` (where the header has one), ``lsb_per_g`` (where ``accel_unit`` is lsb)."""
     value = clean(value)
     number = _NUMBER.fullmatch(value)
     amount = float(number["number"]) if number and is_plain_number(number["number"]) else None
-    suffix = re.sub(r"\s+", "", number["rest"]).lower() if number else ""
+    suffix = number["suffix"].lower() if number else ""
+    if kind == "rate" and suffix in _SECONDS and not ({"khz", "hz"} & words):
+        kind = "period"  # Update rate: 10 ms
     if kind == "rate":
+        if amount is not None and (known_unit("rate", suffix) or suffix in ("bps", "baud", "rpm")):
+            return None  # a rate of turn (Target rate: 100 dps), a baud rate
         if amount is None or suffix not in _RATE_SUFFIXES:
             return "sample_rate_hz", "a rate (Hz)"
         stated = amount * (1000 if "khz" in words or suffix == "khz" else 1)
@@ -101,16 +132,28 @@ def judge(kind, words, value, facts, rates, tolerance):
         if not MIN_SAMPLE_RATE_HZ <= stated <= MAX_SAMPLE_RATE_HZ:
             return None  # a time stamp (ts: 1700000000), not a period
         return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
-    if kind == "sensitivity":
-        if facts["gyro_unit"] != "lsb" or number and (number["range"] or known_unit("rate", suffix)):
-            return None  # gyro_scale: ±2000 dps, a full scale
-        per_dps = suffix == "" or "dps" in suffix or "deg" in suffix.replace("°", "deg")  # 131 LSB/(deg/s)
-        if amount is None or not per_dps:
-            return "lsb_per_dps", "a sensitivity (LSB per deg/s)"
-        return None if amount == float(facts["lsb_per_dps"]) else ("lsb_per_dps", None)
+    if kind in ("sensitivity", "accel_sensitivity"):
+        return _sensitivity(kind, amount, number, suffix, facts)
     key, quantity = ("gyro_unit", "rate") if kind == "unit" else ("accel_unit", "accel")
     if key not in facts:
         return None
     named = {known_unit(quantity, value)} | {known_unit(quantity, word) for word in re.split(r"[\s,;()]+", value)}
     named.discard(None)
     return None if not named or facts[key] in named else (key, None)
+
+
+def _sensitivity(kind, amount, number, suffix, facts):
+    """:func:`judge` of a sensitivity: LSB per deg/s (``131``, ``131 LSB/(deg/s)``, ``8.75 mdps/LSB``: 114.29) where
+    ``gyro_unit`` is lsb, LSB per g (``16384``, ``16384 LSB/g``, ``0.061 mg/LSB``) where ``accel_unit`` is."""
+    unit_key, key, quantity = ("gyro_unit", "lsb_per_dps", "rate") if kind == "sensitivity" else ("accel_unit", "lsb_per_g", "accel")
+    if facts.get(unit_key) != "lsb" or number and (number["range"] or known_unit(quantity, suffix)):
+        return None  # gyro_scale: ±2000 dps, a full scale
+    inverse = re.fullmatch(r"(m?)(?:dps|deg/s|°/s|g)/(?:lsb|digit)", suffix)
+    if inverse and amount:
+        amount = 1.0 / (amount * (1e-3 if inverse[1] else 1.0))
+    per = suffix == "" or inverse or ("dps" in suffix or "deg" in suffix.replace("°", "deg") if kind == "sensitivity"
+                                     else suffix in ("lsb/g", "lsb/(g)"))
+    if amount is None or not per:
+        return key, f"a sensitivity (LSB per {'deg/s' if kind == 'sensitivity' else 'g'})"
+    stated, held = amount, float(facts[key])
+    return None if abs(stated - held) <= 1e-3 * held else (key, None)

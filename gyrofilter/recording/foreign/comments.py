@@ -3,14 +3,14 @@
 A log's comments may state what the conversion is told otherwise: ``# sample_rate_hz: 200`` above a
 log converted with ``--sample-rate-hz 100``, ``# gyro_unit: rad/s`` with ``--unit dps``. Skipped, the
 file was written at the option's rate or unit without a word (attack pass 53, item 11). Each
-``key: value`` of a comment (after ``#`` or ``//``; also ``key = value``, ``:=``, ``=>``, several split
-by ``;``, NFKC first) before the first data row whose key states the sample rate, the gyro's unit or
+``key: value`` of a comment (after ``#`` or ``//``; also ``key = value``, ``:=``, ``=>``, several in one
+line, :func:`~gyrofilter.recording.statements.pairs`; NFKC first) before the first data row whose key states the sample rate, the gyro's unit or
 sensitivity, or the accelerometer's unit (the one rule of a recording's header keys,
 :func:`~gyrofilter.recording.header.contradicts`) must state the unit read (``mdps``, not the ``dps`` it
 is written in) and the rate given exactly, or within :data:`~gyrofilter.units.RATE_TOLERANCE` of the one
 the time column's steps give (a logger's nominal rate beside its clock's). A value that does not read
-(``# rate: fast``; one with a digit that does not read as a rate is refused) is prose, as is a line of
-no key (``# logged at 200 Hz``) and a comment after the first data row. At most :data:`MAX_STATEMENTS`
+(``# Sampling rate: Fastest``, ``200,0 Hz``) is prose, as is a line of no key (``# logged at 200 Hz``) and a
+comment after the first data row: a comment is a check, never a source of the conversion's facts. At most :data:`MAX_STATEMENTS`
 different ones are kept (a preamble of millions is refused, not held).
 """
 from __future__ import annotations
@@ -23,16 +23,16 @@ from ...errors import RecordingError
 from ...inputs import quote
 from ...units import RATE_TOLERANCE
 from ..header import VERSION_KEY, contradicts, header_rates, statement
+from ..statements import pairs
 
-#: a comment's ``key: value`` (or ``key = value``), one of those split by ``;``
-_KEY_VALUE = re.compile(r"\s*[\"'{]*(?P<key>[^:=\"'{}]{1,64}?)[\"'}]*\s*(?::=|=>|[:=])\s*(?P<value>.*?)\s*")
 #: the comment marks (``#``, ``//``, ``##``, ``# *``) before a comment's text
 _MARK = re.compile(r"\s*(?:#|//)[#/!*\-\s]*")
 #: most different statements kept from a log's comments
 MAX_STATEMENTS = 1000
 #: the option that gives each header key a comment may contradict, and where it comes from without it
 _SOURCES = {"sample_rate_hz": ("--sample-rate-hz", "the time column's steps"), "gyro_unit": ("--unit", "the column names"),
-            "lsb_per_dps": ("--lsb-per-dps", "--lsb-per-dps"), "accel_unit": ("--accel-unit", "the column names")}
+            "lsb_per_dps": ("--lsb-per-dps", "--lsb-per-dps"), "accel_unit": ("--accel-unit", "the column names"),
+            "lsb_per_g": ("--lsb-per-g", "--lsb-per-g")}
 
 
 def refuse_recording(text, number, path):
@@ -53,10 +53,9 @@ def _statements(text):
 
 
 def _read_statements(text):
-    """:func:`_statements`, each different piece read once."""
+    """:func:`_statements`, each different pair read once."""
     body = _MARK.sub("", unicodedata.normalize("NFKC", text), count=1)
-    pairs = [_KEY_VALUE.fullmatch(piece) for piece in dict.fromkeys(body.split(";"))]
-    return tuple((p["key"], p["value"]) for p in pairs if p and p["value"] and statement(p["key"], p["value"]))
+    return tuple((key, value) for key, value in dict.fromkeys(pairs(body)) if statement(key, value))
 
 
 #: :func:`_read_statements` of a short line, cached: a preamble of one line repeated costs one reading
@@ -85,10 +84,9 @@ class Comments:
         tolerance = 1e-9 if "sample_rate_hz" in given else RATE_TOLERANCE
         for (key, value), (number, text) in self.stated.items():
             meant = contradicts(key, value, header, header_rates(header), tolerance)
-            if meant and (meant[1] is None or re.search(r"\d", value)):  # rate: fast is prose, 200,0 Hz is not
-                fact, unread = meant
+            if meant and meant[1] is None:  # a value that does not read (Sampling rate: Fastest) is prose
+                fact = meant[0]
                 option, otherwise = _SOURCES[fact]
-                said = f"states {unread} gyrofilter does not read, beside" if unread else "disagrees with"
-                raise RecordingError(f"{self.path}: line {number}: the comment {quote(text[:100])} {said} the conversion's "
+                raise RecordingError(f"{self.path}: line {number}: the comment {quote(text[:100])} disagrees with the conversion's "
                                      f"{fact} {quote(header[fact])} (from {option if fact in given else otherwise}); correct "
                                      + ("the option or " if fact in given else "") + "the comment line")
