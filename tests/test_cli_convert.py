@@ -1236,3 +1236,22 @@ def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, com
     code, dst = _convert(tmp_path, f"{comment}\ngx,gy,gz\n{rows}", "--sample-rate-hz", "100", *(options or ["--unit", "dps"]))
     assert code == 0, capsys.readouterr().err
     assert read_recording(dst).sample_rate_hz == 100.0
+
+
+def test_a_comment_or_header_value_with_a_long_run_of_blanks_is_read_in_one_pass(tmp_path):
+    """Attack pass 56: ``# note: start`` + 300 000 blanks + ``end`` (a third of the 1 MB a line may hold) held convert,
+    and replay on such a header value, for minutes: regular expressions over the run, tried at each blank. Runs of
+    blanks read as one; the run in a subprocess is bounded, so that the old behaviour fails here, not hangs CI."""
+    noise = np.round(np.random.default_rng(5).normal(0.0, 0.1, (300, 3)), 4)
+    rows = "".join(f"{i / 100:.2f},{x},{y},{z}\n" for i, (x, y, z) in enumerate(noise))
+    log = tmp_path / "log.csv"
+    log.write_text("# note: start" + " " * 300_000 + "end\n# rate" + " " * 100_000 + ": 200\nt,gx,gy,gz\n" + rows)
+    run = subprocess.run([sys.executable, "-m", "gyrofilter", "convert", str(log), "--unit", "dps", "--out",
+                          str(tmp_path / "rec.csv")], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2 and "line 2: the comment '# rate" in run.stderr  # read, and its 200 Hz refused
+    rec = tmp_path / "own.csv"
+    rec.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: dps\n# note: start" + " " * 300_000
+                   + "end\nt,gx,gy,gz\n" + rows)
+    run = subprocess.run([sys.executable, "-m", "gyrofilter", "allan", str(rec), "--json", str(tmp_path / "a.json")],
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr

@@ -362,8 +362,8 @@ def statement(key, value):
     reads, or one spelt otherwise (:func:`misspelt_key`), states its own; another by its words
     (:func:`~gyrofilter.recording.statements.stated_kind`; NFKC first: ``ＳａｍｐｌｅＲａｔｅ``; a unit in brackets
     at its end read as the value's: ``Sample period (µs): 5000``). A key with a digit (``rate2_hz``: another
-    sensor's) states nothing."""
-    key, value = key_unit(unicodedata.normalize("NFKC", key), unicodedata.normalize("NFKC", value))
+    sensor's) states nothing. Runs of blanks read as one (a regular expression over 300 kB of blanks took minutes)."""
+    key, value = key_unit(*(" ".join(unicodedata.normalize("NFKC", text).split()) for text in (key, value)))
     read, words = (_short_key_words if len(key) <= 64 else _key_words)(key)
     if read is not None:
         kind = _READ_KINDS.get(read)

@@ -59,16 +59,16 @@ _PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[A-Za-z_][\w.()\[\]/ -]{0,40}?\s*(?::=|
 _KEY_VALUE = re.compile(r"\s*[\"'{]*(?P<key>[^:=\"'{}]{1,64}?)[\"'}]*\s*(?::=|=>|[:=])\s*(?P<value>.*?)\s*")
 
 
-def pairs(text):
-    """The ``(key, value)`` pairs of ``text`` (a comment's body, a header value): split where another pair starts
-    (:data:`_PIECES`), a value that holds pairs of its own read too (``settings: fs=200 Hz``)."""
+def pairs(text, inner=True):
+    """The ``(key, value)`` pairs of ``text`` (a comment's body): split where another pair starts (:data:`_PIECES`),
+    a value that holds pairs of its own read too, one level deep (``settings: fs=200 Hz``)."""
     found = []
     for piece in dict.fromkeys(_PIECES.split(text)):
         match = _KEY_VALUE.fullmatch(piece) if piece else None
         if match and match["value"]:
             found.append((match["key"], match["value"]))
-            if re.search(r"[:=]", match["value"]):
-                found += [p for p in pairs(match["value"]) if p != (match["key"], match["value"])]
+            if inner and re.search(r"[:=]", match["value"]):
+                found += [p for p in pairs(match["value"], inner=False) if p != (match["key"], match["value"])]
     return found
 
 

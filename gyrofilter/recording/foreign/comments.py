@@ -54,7 +54,7 @@ def _statements(text):
 
 def _read_statements(text):
     """:func:`_statements`, each different pair read once."""
-    body = _MARK.sub("", unicodedata.normalize("NFKC", text), count=1)
+    body = _MARK.sub("", " ".join(unicodedata.normalize("NFKC", text).split()), count=1)  # runs of blanks as one
     return tuple((key, value) for key, value in dict.fromkeys(pairs(body)) if statement(key, value))
 
 
