@@ -1200,6 +1200,7 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# Sample rate: approx. 200 Hz", []), ("# Update rate: 5 ms", []),
     ("# lsb_per_g: 8192", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
     ("# accel: m/s^2", ["--unit", "dps", "--accel-unit", "g"]),
+    ("# Units: s, deg/s, m/s^2", ["--unit", "dps", "--accel-unit", "g"]),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1227,7 +1228,7 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# Sample rate (kHz): ~0.1", []), ("# Target rate: 100 dps", []), ("# Sample rate: approx. 100 Hz", []),
     ("# Sample rate: 100 Hz +/- 1%", []), ("# Sample rate: 100 Hz, 16 bit", []), ("# Update rate: 10 ms", []),
     ("# Data rate: 115200 bps", []), ("# Sampling: 16x oversampling", []), ("# baud rate: 115200", []),
-    ("# Date: 2026-01-01 12:00:00", []), ("# unit=dps rate=100", []),
+    ("# Date: 2026-01-01 12:00:00", []), ("# unit=dps rate=100", []), ("# TS: 512.3", []),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read

@@ -7,8 +7,8 @@ sensitivity, or the accelerometer's unit or sensitivity, by its words
 A value is read as people write it (attack passes 55, 56): its first number, after quotes, ``~``, ``approx.``,
 ``about`` or ``±``, and the word right after it (``200 Hz (nominal)``, ``100 Hz, 16 bit``, ``"200"``,
 ``200/s``); a rate in Hz, kHz, ``sps``, ``/s`` or samples, or a period (``Update rate: 10 ms``); a period in s, ms,
-us (``µs``, ``usec``) or ns, one that would mean a rate outside :data:`~gyrofilter.units.MIN_SAMPLE_RATE_HZ` ..
-:data:`~gyrofilter.units.MAX_SAMPLE_RATE_HZ` being a time stamp (``TS: 1700000000``); a rate in deg/s or bps
+us (``µs``, ``usec``) or ns, one that would mean a rate below 1 Hz or above
+:data:`~gyrofilter.units.MAX_SAMPLE_RATE_HZ` being a time stamp (``TS: 1700000000``, ``TS: 512.3``); a rate in deg/s or bps
 is a rate of turn or a baud rate, not a sample rate (``Target rate: 100 dps``); a sensitivity in LSB per deg/s or
 its inverse (``8.75 mdps/LSB``: 114.29), a number in deg/s or after ``±`` a full scale
 (``gyro_scale: ±2000 dps``); a unit among other words (``units: s, deg/s, g``), none named being no statement
@@ -20,7 +20,7 @@ from __future__ import annotations
 import re
 
 from ..inputs import is_plain_number
-from ..units import MAX_SAMPLE_RATE_HZ, MIN_SAMPLE_RATE_HZ
+from ..units import MAX_SAMPLE_RATE_HZ
 from .unit_words import known_unit
 
 #: what a key states, by its words: a key of only a kind's words and at least one of its own states the sample rate
@@ -44,6 +44,9 @@ STATES = {  # kind: (the other words its key may hold, its own words)
 }
 _ACCEL_WORDS = STATES["accel_unit"][0]
 _SAMPLING = {"sample", "samples", "sampling", "odr"}
+#: the slowest rate a period states: a longer one is a time stamp (``TS: 512.3``, s since boot), as no gyro samples
+#: once a second or slower (convert infers no rate below 5 Hz)
+_MIN_PERIOD_RATE_HZ = 1.0
 _SECONDS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3, "msec": 1e-3, "us": 1e-6,
             "μs": 1e-6, "usec": 1e-6, "ns": 1e-9, "nsec": 1e-9}
 _RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samples", "hertz"}
@@ -129,17 +132,17 @@ def judge(kind, words, value, facts, rates, tolerance):
         if not amount or suffix not in ("", *_SECONDS):
             return None
         stated = 1.0 / (amount * (_SECONDS.get(suffix) or next((_SECONDS[w] for w in ("ms", "us", "ns") if w in words), 1.0)))
-        if not MIN_SAMPLE_RATE_HZ <= stated <= MAX_SAMPLE_RATE_HZ:
-            return None  # a time stamp (ts: 1700000000), not a period
+        if not _MIN_PERIOD_RATE_HZ <= stated <= MAX_SAMPLE_RATE_HZ:
+            return None  # a time stamp (ts: 1700000000, TS: 512.3 s since boot), not a period
         return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
     if kind in ("sensitivity", "accel_sensitivity"):
         return _sensitivity(kind, amount, number, suffix, facts)
-    key, quantity = ("gyro_unit", "rate") if kind == "unit" else ("accel_unit", "accel")
-    if key not in facts:
-        return None
-    named = {known_unit(quantity, value)} | {known_unit(quantity, word) for word in re.split(r"[\s,;()]+", value)}
-    named.discard(None)
-    return None if not named or facts[key] in named else (key, None)
+    for key, quantity in (("gyro_unit", "rate"), ("accel_unit", "accel")) if kind == "unit" else (("accel_unit", "accel"),):
+        named = {known_unit(quantity, value)} | {known_unit(quantity, word) for word in re.split(r"[\s,;()]+", value)}
+        named.discard(None)
+        if key in facts and named and facts[key] not in named:
+            return key, None  # units: s, deg/s, m/s^2 states both
+    return None
 
 
 def _sensitivity(kind, amount, number, suffix, facts):
