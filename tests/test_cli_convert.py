@@ -1201,6 +1201,8 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# lsb_per_g: 8192", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
     ("# accel: m/s^2", ["--unit", "dps", "--accel-unit", "g"]),
     ("# Units: s, deg/s, m/s^2", ["--unit", "dps", "--accel-unit", "g"]),
+    ('# {"device": "MPU6050", "sample_rate": 200, "units": "dps"}', []), ('# metadata = {"fs": 200}', []),
+    ("# imu_node: {rate: 200, frame_id: imu}", []),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through

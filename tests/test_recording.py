@@ -335,7 +335,7 @@ def test_a_gzip_whose_checksum_fails_is_an_error_not_a_wrong_value(tmp_path):
     assert str(info.value).startswith(f"{path}: ") and "\n" not in str(info.value)
 
 
-@pytest.mark.parametrize("what", ["trailing garbage", "corrupt deflate"])
+@pytest.mark.parametrize("what", ["trailing garbage", "corrupt deflate", "zeros, then garbage"])
 def test_any_damaged_gzip_data_are_an_error(tmp_path, what):
     body = "".join(f"{i / 100:.2f},{i % 7},1,2\n" for i in range(30000))
     path = _dps_file(tmp_path, "", name="r.csv.gz")
@@ -343,11 +343,25 @@ def test_any_damaged_gzip_data_are_an_error(tmp_path, what):
     data = bytearray(gzip.compress(text))
     if what == "trailing garbage":
         data += b"not gzip"
+    elif what.startswith("zeros"):
+        data += bytes(70_000) + b"x"  # past a read block: the byte after the zeros is seen
     else:
         data[len(data) // 2] ^= 0x55
     path.write_bytes(bytes(data))
     with pytest.raises(RecordingError, match=f"{path}: damaged gzip data"):
         read_recording(path)
+
+
+@pytest.mark.parametrize("zeros", [1, 4096, 200_000])
+def test_zero_bytes_after_a_gzip_stream_are_block_padding_read_with_a_warning(tmp_path, zeros):
+    """Attack pass 56: a whole gzip recording with an SD card's block padding (zero bytes) after it was refused as
+    damaged, while gzip -t accepts it: its rows are read, every one, with a warning naming the zeros."""
+    body = "".join(f"{i / 100:.2f},{i},1,2\n" for i in range(3000))
+    path = _dps_file(tmp_path, body, name="r.csv.gz")
+    path.write_bytes(path.read_bytes() + bytes(zeros))
+    rec = read_recording(path)
+    np.testing.assert_array_equal(rec.columns["gx"], np.arange(3000))
+    assert f"{path}: {zeros} zero bytes after the end of the gzip stream ignored" in " ".join(rec.warnings)
 
 
 def test_a_gzip_cut_short_is_still_a_warning_and_a_prefix(tmp_path):

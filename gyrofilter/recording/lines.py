@@ -84,7 +84,8 @@ def _gunzip(fh, raw, path, warnings):
     A stream that ends before its end marker (an interrupted recording) ends the text with a
     warning. Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a
     checksum or length that does not match (the text may look fine: a changed digit in a
-    stored block), or bytes after a member that do not start another member."""
+    stored block), or bytes after a member that do not start another member and are not zero
+    bytes only (block padding: read, with a warning)."""
     d = zlib.decompressobj(16 + zlib.MAX_WBITS)
     produced = 0  # bytes of text so far
     while True:
@@ -101,6 +102,9 @@ def _gunzip(fh, raw, path, warnings):
             raw = d.unused_data or fh.read(READ_BYTES)
             if not raw:
                 return
+            if not raw.strip(b"\0"):  # zeros after the stream (an SD card's block padding): gzip ignores them too
+                _zeros_only(fh, raw, path, warnings, produced)
+                return
             if raw[:2] != _GZIP_MAGIC and not _GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
                 raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
             d = zlib.decompressobj(16 + zlib.MAX_WBITS)
@@ -111,6 +115,18 @@ def _gunzip(fh, raw, path, warnings):
         else:
             warnings.append(cut_short_warning(path))
             return
+
+
+def _zeros_only(fh, raw, path, warnings, produced):
+    """Read the rest of the gzip file ``fh`` after its stream (``raw``: zero bytes read so far): zero bytes only are
+    padding, said in ``warnings``; any other byte is damage (:class:`_GzipDamage`)."""
+    zeros = 0
+    while raw:
+        if raw.strip(b"\0"):
+            raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
+        zeros += len(raw)
+        raw = fh.read(READ_BYTES)
+    warnings.append(f"{path}: {zeros} zero bytes after the end of the gzip stream ignored (block padding, as gzip ignores it)")
 
 
 def cut_short_warning(path):

@@ -57,7 +57,7 @@ _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/
 _BRACKETED = re.compile(r"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*")
 #: where a text holds another ``key: value`` pair: at ``;``, at ``,`` before a key and its separator, at blanks
 #: before ``key=`` (``unit=dps rate=200``)
-_PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[A-Za-z_][\w.()\[\]/ -]{0,40}?\s*(?::=|=>|[:=]))|\s+(?=[A-Za-z_][\w.]*\s*=)")
+_PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[\"']?[A-Za-z_][\w.()\[\]/ -]{0,40}?[\"']?\s*(?::=|=>|[:=]))|\s+(?=[A-Za-z_][\w.]*\s*=)")
 #: a piece's ``key: value`` (or ``key = value``, ``:=``, ``=>``), quotes and braces aside
 _KEY_VALUE = re.compile(r"\s*[\"'{]*(?P<key>[^:=\"'{}]{1,64}?)[\"'}]*\s*(?::=|=>|[:=])\s*(?P<value>.*?)\s*")
 
