@@ -1202,7 +1202,8 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# accel: m/s^2", ["--unit", "dps", "--accel-unit", "g"]),
     ("# Units: s, deg/s, m/s^2", ["--unit", "dps", "--accel-unit", "g"]),
     ('# {"device": "MPU6050", "sample_rate": 200, "units": "dps"}', []), ('# metadata = {"fs": 200}', []),
-    ("# imu_node: {rate: 200, frame_id: imu}", []),
+    ("# imu_node: {rate: 200, frame_id: imu}", []), ("# dt: 20 msec", []), ("# sampling period: 20 millis", []),
+    ("# Recording rate: 200 Hz", []), ("# Sampling rate of IMU: 200 Hz", []),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1258,3 +1259,16 @@ def test_a_comment_or_header_value_with_a_long_run_of_blanks_is_read_in_one_pass
     run = subprocess.run([sys.executable, "-m", "gyrofilter", "allan", str(rec), "--json", str(tmp_path / "a.json")],
                          capture_output=True, text=True, timeout=60)
     assert run.returncode == 0, run.stderr
+
+
+def test_a_log_on_the_standard_input_is_not_overwritten_by_its_conversion(tmp_path):
+    """Attack pass 56: ``convert - --out log.csv --force < log.csv`` wrote over the log it read (its accelerometer
+    columns gone); ``-`` is the file the standard input reads, refused as an output as every input is."""
+    log = tmp_path / "log.csv"
+    log.write_text("gx,gy,gz,ax,ay,az\n" + "".join(f"{i % 5 / 10},0.2,-0.1,0,0,1\n" for i in range(50)))
+    before = log.read_bytes()
+    with open(log, "rb") as stdin:
+        run = subprocess.run([sys.executable, "-m", "gyrofilter", "convert", "-", "--unit", "dps", "--sample-rate-hz",
+                              "100", "--out", str(log), "--force"], stdin=stdin, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2 and run.stderr == f"gyrofilter: error: {log}: is an input of this command; write the output to another file\n"
+    assert log.read_bytes() == before

@@ -187,9 +187,11 @@ def check_output_folder(folder, option, files=()):
 def _file_key(path):
     """What names one file: device and inode of a file that exists (links and bind mounts
     included), else the path with its symbolic links resolved. Keys, not pairwise
-    comparisons, so that a fleet's thousands of outputs are checked in linear time."""
+    comparisons, so that a fleet's thousands of outputs are checked in linear time. ``-`` (an input read from
+    the standard input) is the file the standard input reads (``convert - --out log.csv < log.csv``, attack
+    pass 56: the log was overwritten by its own conversion)."""
     try:
-        st = os.stat(path)
+        st = os.fstat(0) if path == "-" else os.stat(path)
     except OSError:  # does not exist yet
         return os.path.realpath(path)
     return (st.st_dev, st.st_ino)

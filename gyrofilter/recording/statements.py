@@ -32,10 +32,10 @@ from .unit_words import known_unit
 #: ``gyro_rate`` (a rate of turn) are none of them; a sample rate may name the gyro (``Gyro sample rate``)
 STATES = {  # kind: (the other words its key may hold, its own words)
     "rate": ({"sample", "samples", "data", "output", "update", "imu", "khz", "logging", "log", "acquisition", "polling",
-              "nominal", "sensor", "in", "target", "actual"},
+              "nominal", "sensor", "in", "target", "actual", "recording", "publish", "of"},
              {"rate", "samplerate", "odr", "fs", "sps", "sampling", "frequency", "freq", "hz"}),
-    "period": ({"sample", "sampling", "time", "s", "sec", "ms", "us", "ns", "in", "nominal", "logging", "log"},
-               {"period", "interval", "dt", "ts"}),
+    "period": ({"sample", "sampling", "time", "s", "sec", "ms", "us", "ns", "in", "nominal", "logging", "log", "of"},
+               {"period", "interval", "dt", "ts", "timestep"}),
     "unit": ({"gyro", "gyr", "gyroscope", "rate", "angular", "velocity", "omega", "measurement", "rotation", "turn"},
              {"unit", "units", "scale"}),
     "sensitivity": ({"gyro", "gyr", "per", "dps", "deg", "degree", "degrees", "s", "factor"}, {"lsb", "sensitivity", "scale"}),
@@ -47,8 +47,9 @@ _SAMPLING = {"sample", "samples", "sampling", "odr"}
 #: the slowest rate a period states: a longer one is a time stamp (``TS: 512.3``, s since boot), as no gyro samples
 #: once a second or slower (convert infers no rate below 5 Hz)
 _MIN_PERIOD_RATE_HZ = 1.0
-_SECONDS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3, "msec": 1e-3, "us": 1e-6,
-            "μs": 1e-6, "usec": 1e-6, "ns": 1e-9, "nsec": 1e-9}
+_SECONDS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3, "msec": 1e-3, "msecs": 1e-3,
+            "millis": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3, "us": 1e-6, "μs": 1e-6, "usec": 1e-6, "usecs": 1e-6,
+            "micros": 1e-6, "microseconds": 1e-6, "ns": 1e-9, "nsec": 1e-9, "nanoseconds": 1e-9}
 _RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samples", "hertz"}
 #: a value's first number (a sign of range or about before it) and the word right after it
 _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
