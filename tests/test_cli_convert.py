@@ -1204,6 +1204,11 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ('# {"device": "MPU6050", "sample_rate": 200, "units": "dps"}', []), ('# metadata = {"fs": 200}', []),
     ("# imu_node: {rate: 200, frame_id: imu}", []), ("# dt: 20 msec", []), ("# sampling period: 20 millis", []),
     ("# Recording rate: 200 Hz", []), ("# Sampling rate of IMU: 200 Hz", []),
+    ("# sample_rate: 200/sec", []), ("# Rate: 200 Sa/s", []), ("# Sample rate: 200 per second", []),  # pass 57
+    ("# ---- sample_rate: 200 ----", []), ("# ===== sample_rate: 200 =====", []), ("# Sample time (ms): 5", []),
+    ("# LSB per dps = 65.5", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# Gyro sensitivity: 65.5 LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# Accel: range=2g, sensitivity=8192", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1232,12 +1237,17 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# Sample rate: 100 Hz +/- 1%", []), ("# Sample rate: 100 Hz, 16 bit", []), ("# Update rate: 10 ms", []),
     ("# Data rate: 115200 bps", []), ("# Sampling: 16x oversampling", []), ("# baud rate: 115200", []),
     ("# Date: 2026-01-01 12:00:00", []), ("# unit=dps rate=100", []), ("# TS: 512.3", []),
+    ("# Gyro range: 250 LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 57: its accelerometer's, not the gyro's
+    ("# Accel: range=2g, sensitivity=16384", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
+    ("# accel sensitivity = 16384", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read
     as s), a list of units, a full scale (not a sensitivity), a time stamp (not a period), a device name."""
-    rows = "".join(f"{i % 5 / 10},0.2,-0.1\n" for i in range(50))
-    code, dst = _convert(tmp_path, f"{comment}\ngx,gy,gz\n{rows}", "--sample-rate-hz", "100", *(options or ["--unit", "dps"]))
+    accel = "--accel-unit" in options
+    rows = "".join(f"{i % 5 / 10},0.2,-0.1" + (",0,0,1" if accel else "") + "\n" for i in range(50))
+    names = "gx,gy,gz" + (",ax,ay,az" if accel else "")
+    code, dst = _convert(tmp_path, f"{comment}\n{names}\n{rows}", "--sample-rate-hz", "100", *(options or ["--unit", "dps"]))
     assert code == 0, capsys.readouterr().err
     assert read_recording(dst).sample_rate_hz == 100.0
 

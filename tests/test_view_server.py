@@ -108,6 +108,8 @@ def test_a_client_that_connects_later_gets_the_history_first(live):
     (b"GET / HTTP/1.1\r\nHost: attacker.example:8000\r\n\r\n", 421),
     (b"GET / HTTP/1.1\r\nHost: localhost:80@evil.example\r\n\r\n", 421),
     (b"GET / HTTP/1.1\r\nHost: [::1]@evil.example\r\n\r\n", 421),
+    (b"GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\nHost: evil.example\r\n\r\n", 400),  # pass 57: the first one
+    (b"GET /status HTTP/1.1\r\nHost: evil.example\r\nHost: 127.0.0.1\r\n\r\n", 400),  # was taken
     (b"\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03garbage\r\n\r\n", 400),
 ])
 def test_what_is_refused(idle, raw, code):

@@ -70,14 +70,50 @@ def _byte_blocks(path, warnings):
     with fh:
         raw = fh.read(READ_BYTES)
         if raw[:2] == _GZIP_MAGIC:
-            yield from _gunzip(fh, raw, path, warnings)
+            end, padding = _padding_end(fh)
+            yield from _gunzip(_Upto(fh, end) if padding else fh, raw[:end], path, warnings, padding)
             return
         while raw:
             yield raw
             raw = fh.read(READ_BYTES)
 
 
-def _gunzip(fh, raw, path, warnings):
+#: the shortest run of zero bytes at a gzip file's end read as padding, not data: an SD card's block (512 bytes)
+MIN_PADDING_BYTES = 512
+
+
+def _padding_end(fh):
+    """``(where the data of the gzip file ``fh`` end, the zero bytes after them)`` when a run of
+    :data:`MIN_PADDING_BYTES` zero bytes or more ends it (a power cut leaves an SD card's last blocks so,
+    after a stream cut short: zlib read them as more data, refused as damaged), else ``(None, 0)`` (no such
+    run, or a pipe); ``fh``'s position kept. The run may hold the last zero bytes of a whole stream's
+    length (:func:`_gunzip` gives them back)."""
+    try:
+        position, size = fh.tell(), fh.seek(0, os.SEEK_END)
+    except (OSError, ValueError):
+        return None, 0
+    end = size
+    while end > 0:
+        fh.seek(max(0, end - READ_BYTES))
+        data = fh.read(end - max(0, end - READ_BYTES)).rstrip(b"\0")
+        end = max(0, end - READ_BYTES) + len(data)
+        if data:
+            break
+    fh.seek(position)
+    return (end, size - end) if size - end >= MIN_PADDING_BYTES else (None, 0)
+
+
+class _Upto:
+    """The file ``fh`` read up to the offset ``end`` (:func:`_padding_end`)."""
+
+    def __init__(self, fh, end):
+        self.fh, self.end = fh, end
+
+    def read(self, size):
+        return self.fh.read(max(0, min(size, self.end - self.fh.tell())))
+
+
+def _gunzip(fh, raw, path, warnings, padding=0):
     """The text of the gzip file ``fh`` (``raw``: its first bytes, already read), every member,
     in blocks of at most ``_TEXT_BYTES`` (a gzip bomb never holds more).
 
@@ -85,7 +121,8 @@ def _gunzip(fh, raw, path, warnings):
     warning. Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a
     checksum or length that does not match (the text may look fine: a changed digit in a
     stored block), or bytes after a member that do not start another member and are not zero
-    bytes only (block padding: read, with a warning)."""
+    bytes only (block padding: read, with a warning). ``padding``: the zero bytes :func:`_padding_end` left
+    out; at the end, a stream whose last bytes of length were among them is whole (:func:`_padded_end`)."""
     d = zlib.decompressobj(16 + zlib.MAX_WBITS)
     produced = 0  # bytes of text so far
     while True:
@@ -113,8 +150,29 @@ def _gunzip(fh, raw, path, warnings):
         elif raw or out:
             raw = fh.read(READ_BYTES)
         else:
-            warnings.append(cut_short_warning(path))
+            whole, out = _padded_end(d, padding)
+            if out:
+                yield out
+            if padding:
+                warnings.append(_padding_warning(path, padding - whole, whole))
+            if not whole:
+                warnings.append(cut_short_warning(path))
             return
+
+
+def _padded_end(d, padding):
+    """``(how many of the ``padding`` zero bytes the stream of the decompressor ``d`` takes to end whole, its last
+    text)``: the high bytes of its length (ISIZE, RFC 1952) are zeros; or ``(0, b"")`` where it does not end so (cut
+    short: zeros read as its data would be garbage, or damage)."""
+    for taken in range(1, min(8, padding) + 1):
+        trial = d.copy()
+        try:
+            out = trial.decompress(bytes(taken))
+        except zlib.error:
+            return 0, b""
+        if trial.eof:
+            return taken, out
+    return 0, b""
 
 
 def _zeros_only(fh, raw, path, warnings, produced):
@@ -126,7 +184,14 @@ def _zeros_only(fh, raw, path, warnings, produced):
             raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
         zeros += len(raw)
         raw = fh.read(READ_BYTES)
-    warnings.append(f"{path}: {zeros} zero bytes after the end of the gzip stream ignored (block padding, as gzip ignores it)")
+    warnings.append(_padding_warning(path, zeros, True))
+
+
+def _padding_warning(path, zeros, after_stream):
+    """The warning of ``zeros`` zero bytes left out at the end of the gzip file ``path``, ``after_stream`` a whole one
+    or after one cut short."""
+    return (f"{path}: {zeros} zero bytes " + ("after the end of the gzip stream ignored (block padding, as gzip ignores it)"
+                                                if after_stream else "at its end ignored (block padding, as a power cut leaves an SD card)"))
 
 
 def cut_short_warning(path):

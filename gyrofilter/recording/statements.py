@@ -50,29 +50,46 @@ _MIN_PERIOD_RATE_HZ = 1.0
 _SECONDS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3, "msec": 1e-3, "msecs": 1e-3,
             "millis": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3, "us": 1e-6, "μs": 1e-6, "usec": 1e-6, "usecs": 1e-6,
             "micros": 1e-6, "microseconds": 1e-6, "ns": 1e-9, "nsec": 1e-9, "nanoseconds": 1e-9}
-_RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samples", "hertz"}
+_RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samples", "hertz", "/sec",
+                  "samples/second", "sa/s", "per"}  # 200 per second
 #: a value's first number (a sign of range or about before it) and the word right after it
 _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
                      r"(?P<number>(?>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?))(?![,.]\d)\s*(?P<suffix>[a-zA-Zμ°/^()\d-]*)(?P<rest>.*)")
 #: a key's unit in brackets at its end (``Sample rate (samples/s)``, ``Sample period [µs]``)
 _BRACKETED = re.compile(r"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*")
-#: where a text holds another ``key: value`` pair: at ``;``, at ``,`` before a key and its separator, at blanks
-#: before ``key=`` (``unit=dps rate=200``)
-_PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[\"']?[A-Za-z_][\w.()\[\]/ -]{0,40}?[\"']?\s*(?::=|=>|[:=]))|\s+(?=[A-Za-z_][\w.]*\s*=)")
+#: where a text holds another ``key: value`` pair: at ``;``, at ``,`` before a key and its ``:`` (``Rate: 100 Hz, FS:
+#: 2000 dps``); within a value, at ``,`` before ``key=`` too (``Accel: range=2g, sensitivity=16384``: the accelerometer's)
+_PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[\"']?[A-Za-z_][\w.()\[\]/ -]{0,40}?[\"']?\s*(?::=|:))")
+_INNER_PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[\"']?[A-Za-z_][\w.()\[\]/ -]{0,40}?[\"']?\s*(?::=|=>|[:=]))")
+#: where a piece may hold another pair: at blanks before ``key=`` (``unit=dps rate=200``); a part that is no pair
+#: belongs to the next (``accel sensitivity = 16384``, ``LSB per dps = 65.5``: one key of several words)
+_BLANK_PIECES = re.compile(r"\s+(?=[A-Za-z_][\w.]*\s*=)")
 #: a piece's ``key: value`` (or ``key = value``, ``:=``, ``=>``), quotes and braces aside
 _KEY_VALUE = re.compile(r"\s*[\"'{]*(?P<key>[^:=\"'{}]{1,64}?)[\"'}]*\s*(?::=|=>|[:=])\s*(?P<value>.*?)\s*")
 
 
-def pairs(text, inner=True):
+def pairs(text, outer=None):
     """The ``(key, value)`` pairs of ``text`` (a comment's body): split where another pair starts (:data:`_PIECES`),
-    a value that holds pairs of its own read too, one level deep (``settings: fs=200 Hz``)."""
-    found = []
-    for piece in dict.fromkeys(_PIECES.split(text)):
-        match = _KEY_VALUE.fullmatch(piece) if piece else None
+    a value that holds pairs of its own read too, one level deep (``settings: fs=200 Hz``), its keys named for the
+    accelerometer where the ``outer`` key is (``Accel: sensitivity=16384``: ``accel sensitivity``)."""
+    found, pieces = [], []
+    for piece in (_PIECES if outer is None else _INNER_PIECES).split(text):
+        carried, first = "", re.search(r":=|=>|[:=]", piece)
+        for part in _BLANK_PIECES.split(piece) if first and first[0] == "=" else [piece]:  # Accel: range=2g, ...
+            joined = f"{carried} {part}" if carried else part
+            if _KEY_VALUE.fullmatch(joined):
+                pieces.append(joined)
+            elif _KEY_VALUE.fullmatch(part):  # the words before it are too long for a key: a piece of no pair
+                pieces += [carried, part]
+            carried = "" if _KEY_VALUE.fullmatch(joined) or _KEY_VALUE.fullmatch(part) else joined
+        pieces.append(carried)  # no pair: read as none
+    accel = "accel " if outer is not None and _ACCEL_WORDS & set(re.findall(r"[a-z]+", outer.lower())) else ""
+    for piece in dict.fromkeys(pieces):
+        match = _KEY_VALUE.fullmatch(piece)
         if match and match["value"]:
-            found.append((match["key"], match["value"]))
-            if inner and re.search(r"[:=]", match["value"]):
-                found += [p for p in pairs(match["value"], inner=False) if p != (match["key"], match["value"])]
+            found.append((accel + match["key"], match["value"]))
+            if outer is None and re.search(r"[:=]", match["value"]):
+                found += [p for p in pairs(match["value"], match["key"]) if p != (match["key"], match["value"])]
     return found
 
 
@@ -92,6 +109,8 @@ def stated_kind(words, value):
     gyro = {"gyro", "gyroscope"} if words & _SAMPLING else set()  # Gyro sample rate
     kinds = [kind for kind, (others, own) in STATES.items()
              if words & own and words <= others | own | (gyro if kind == "rate" else set())]
+    if {"sample", "time"} <= words <= STATES["period"][0]:
+        kinds.append("period")  # sample_time: 5 ms (Simulink's name of the period)
     if words <= set().union(*STATES["unit"]) and known_unit("rate", value):
         kinds.insert(0, "unit")  # gyro: rad/s
     if words <= _ACCEL_WORDS | STATES["accel_unit"][1] and known_unit("accel", value):
@@ -107,7 +126,7 @@ def clean(value):
     """``value`` without quotes, a closing ``.``, ``;`` or ``,``, a remark in brackets at its end or after ``#`` or
     ``//``: ``"200"``, ``200 Hz (nominal)``, ``200 # set in firmware`` read ``200``, ``200 Hz``."""
     value = re.split(r"\s(?:#|//)", value)[0].strip().strip("\"'{}[] ")
-    return re.sub(r"\s+\([^()]*\)$", "", value).rstrip(".;, ").strip("\"' ")
+    return re.sub(r"\s+\([^()]*\)$", "", value).rstrip(".;, -=*#~_").strip("\"' ")  # sample_rate: 200 ----
 
 
 def judge(kind, words, value, facts, rates, tolerance):
@@ -150,12 +169,12 @@ def _sensitivity(kind, amount, number, suffix, facts):
     """:func:`judge` of a sensitivity: LSB per deg/s (``131``, ``131 LSB/(deg/s)``, ``8.75 mdps/LSB``: 114.29) where
     ``gyro_unit`` is lsb, LSB per g (``16384``, ``16384 LSB/g``, ``0.061 mg/LSB``) where ``accel_unit`` is."""
     unit_key, key, quantity = ("gyro_unit", "lsb_per_dps", "rate") if kind == "sensitivity" else ("accel_unit", "lsb_per_g", "accel")
-    if facts.get(unit_key) != "lsb" or number and (number["range"] or known_unit(quantity, suffix)):
-        return None  # gyro_scale: ±2000 dps, a full scale
+    if facts.get(unit_key) != "lsb" or number and (number["range"] or known_unit(quantity, suffix) not in (None, "lsb")):
+        return None  # gyro_scale: ±2000 dps, a full scale (65.5 LSB, 65.5 LSB per dps: a sensitivity)
     inverse = re.fullmatch(r"(m?)(?:dps|deg/s|°/s|g)/(?:lsb|digit)", suffix)
     if inverse and amount:
         amount = 1.0 / (amount * (1e-3 if inverse[1] else 1.0))
-    per = suffix == "" or inverse or ("dps" in suffix or "deg" in suffix.replace("°", "deg") if kind == "sensitivity"
+    per = suffix in ("", "lsb") or inverse or ("dps" in suffix or "deg" in suffix.replace("°", "deg") if kind == "sensitivity"
                                      else suffix in ("lsb/g", "lsb/(g)"))
     if amount is None or not per:
         return key, f"a sensitivity (LSB per {'deg/s' if kind == 'sensitivity' else 'g'})"

@@ -380,7 +380,11 @@ class _Handler(http.server.BaseHTTPRequestHandler):
             self._reply(405, b"405 read-only: GET or HEAD\n", TEXT_TYPE, extra=(("Allow", "GET, HEAD"),))
             return False
         live = self.server.live
-        if live.loopback_only and not _loopback_host(self.headers.get("Host"), live.host_names):
+        hosts = self.headers.get_all("Host") or [None]  # two: 400, as RFC 9112 3.2 says (attack pass 57)
+        if len(hosts) > 1:
+            self._reply(400, b"400 more than one Host header\n", TEXT_TYPE)
+            return False
+        if live.loopback_only and not _loopback_host(hosts[0], live.host_names):
             self._reply(421, b"421 this view answers requests for localhost only\n", TEXT_TYPE)
             return False
         return True

@@ -26,7 +26,7 @@ from ..header import VERSION_KEY, contradicts, header_rates, statement
 from ..statements import pairs
 
 #: the comment marks (``#``, ``//``, ``##``, ``# *``) before a comment's text
-_MARK = re.compile(r"\s*(?:#|//)[#/!*\-\s]*")
+_MARK = re.compile(r"\s*(?:#|//)[#/!*\-=\s]*")
 #: most different statements kept from a log's comments
 MAX_STATEMENTS = 1000
 #: the option that gives each header key a comment may contradict, and where it comes from without it
