@@ -1209,6 +1209,8 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# LSB per dps = 65.5", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# Gyro sensitivity: 65.5 LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# Accel: range=2g, sensitivity=8192", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
+    ("# gyro_mdps_per_lsb: 15.27", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 58: 65.5 LSB per deg/s
+    ("# accel scale factor: 16384", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "4096"]),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1240,6 +1242,7 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# Gyro range: 250 LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 57: its accelerometer's, not the gyro's
     ("# Accel: range=2g, sensitivity=16384", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
     ("# accel sensitivity = 16384", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
+    ("# gyro_mdps_per_lsb: 7.633", ["--unit", "lsb", "--lsb-per-dps", "131"]),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read
@@ -1282,3 +1285,25 @@ def test_a_log_on_the_standard_input_is_not_overwritten_by_its_conversion(tmp_pa
                               "100", "--out", str(log), "--force"], stdin=stdin, capture_output=True, text=True, timeout=60)
     assert run.returncode == 2 and run.stderr == f"gyrofilter: error: {log}: is an input of this command; write the output to another file\n"
     assert log.read_bytes() == before
+
+
+@pytest.mark.parametrize("zeros", [1, 100, 4096])
+def test_a_gzip_log_cut_short_then_padded_with_zeros_is_refused_not_read_on(tmp_path, capsys, zeros):
+    """Attack pass 58: a gzip log cut by a power cut and padded with zero bytes was converted with rows zlib made of
+    the zeros (back-references copying earlier text: 15 samples invented), with only the "cut short" warning. Python's
+    gzip reads on into the zeros, so convert refuses such a log, saying to remove them; without the zeros it converts
+    to its cut."""
+    text = "gx,gy,gz\n" + "".join(f"{i},{i % 7},{i % 3}\n" for i in range(3000))
+    data = gzip.compress(text.encode())[:2126]
+    src = tmp_path / "log.csv.gz"
+    src.write_bytes(data + bytes(zeros))
+    dst = tmp_path / "rec.csv"
+    assert main(["convert", str(src), "--unit", "lsb", "--lsb-per-dps", "131", "--sample-rate-hz", "100", "--out", str(dst)]) == 2
+    assert capsys.readouterr().err == (f"gyrofilter: error: {src}: a gzip stream cut short, then zero bytes (an SD card's "
+                                       "block padding after a power cut), read as more of the stream: its last rows "
+                                       "cannot be trusted; remove the zero bytes at its end and convert it again\n")
+    assert not dst.exists()
+    src.write_bytes(data)
+    assert main(["convert", str(src), "--unit", "lsb", "--lsb-per-dps", "131", "--sample-rate-hz", "100", "--out", str(dst)]) == 0
+    rec = read_recording(dst)
+    np.testing.assert_array_equal(rec.gyro[:, 0], np.arange(len(rec)))  # every row its own, none invented

@@ -54,7 +54,7 @@ def _gzip_damage(path):
         with open(path, "rb") as fh:
             raw = fh.read(READ_BYTES)
             if raw[:2] == _GZIP_MAGIC:
-                for _ in _gunzip(fh, raw, path, []):
+                for _ in _gunzip(_ZeroHeld(fh, raw), path, []):
                     pass
     except _GzipDamage as exc:
         return exc.reason
@@ -70,61 +70,51 @@ def _byte_blocks(path, warnings):
     with fh:
         raw = fh.read(READ_BYTES)
         if raw[:2] == _GZIP_MAGIC:
-            end, padding = _padding_end(fh)
-            yield from _gunzip(_Upto(fh, end) if padding else fh, raw[:end], path, warnings, padding)
+            yield from _gunzip(_ZeroHeld(fh, raw), path, warnings)
             return
         while raw:
             yield raw
             raw = fh.read(READ_BYTES)
 
 
-#: the shortest run of zero bytes at a gzip file's end read as padding, not data: an SD card's block (512 bytes)
-MIN_PADDING_BYTES = 512
+class _ZeroHeld:
+    """The bytes of the file ``fh`` (``first``: its first, already read) in blocks, each run of zero bytes held back
+    until a byte that is not zero follows it: zero bytes at the file's end (an SD card's block padding after a
+    power cut) are never given to zlib, which reads them after a stream cut short as more data (back-references
+    that copy earlier text: rows invented, attack pass 58), whatever their count, from a pipe too. ``held``: the
+    zero bytes held at the end."""
+
+    def __init__(self, fh, first):
+        self.fh, self.next, self.held = fh, first, 0
+
+    def read(self):
+        """The next block with the zero bytes it ends in held back (those held before it given first), or b"" at
+        the end (``held`` then counts the zeros left)."""
+        while True:
+            raw = self.next if self.next is not None else self.fh.read(READ_BYTES)
+            self.next = None
+            if not raw:
+                return b""
+            data = raw.rstrip(b"\0")
+            if data:
+                out, self.held = bytes(self.held) + data, len(raw) - len(data)
+                return out
+            self.held += len(raw)
 
 
-def _padding_end(fh):
-    """``(where the data of the gzip file ``fh`` end, the zero bytes after them)`` when a run of
-    :data:`MIN_PADDING_BYTES` zero bytes or more ends it (a power cut leaves an SD card's last blocks so,
-    after a stream cut short: zlib read them as more data, refused as damaged), else ``(None, 0)`` (no such
-    run, or a pipe); ``fh``'s position kept. The run may hold the last zero bytes of a whole stream's
-    length (:func:`_gunzip` gives them back)."""
-    try:
-        position, size = fh.tell(), fh.seek(0, os.SEEK_END)
-    except (OSError, ValueError):
-        return None, 0
-    end = size
-    while end > 0:
-        fh.seek(max(0, end - READ_BYTES))
-        data = fh.read(end - max(0, end - READ_BYTES)).rstrip(b"\0")
-        end = max(0, end - READ_BYTES) + len(data)
-        if data:
-            break
-    fh.seek(position)
-    return (end, size - end) if size - end >= MIN_PADDING_BYTES else (None, 0)
-
-
-class _Upto:
-    """The file ``fh`` read up to the offset ``end`` (:func:`_padding_end`)."""
-
-    def __init__(self, fh, end):
-        self.fh, self.end = fh, end
-
-    def read(self, size):
-        return self.fh.read(max(0, min(size, self.end - self.fh.tell())))
-
-
-def _gunzip(fh, raw, path, warnings, padding=0):
-    """The text of the gzip file ``fh`` (``raw``: its first bytes, already read), every member,
-    in blocks of at most ``_TEXT_BYTES`` (a gzip bomb never holds more).
+def _gunzip(source, path, warnings):
+    """The text of the gzip file read by ``source`` (:class:`_ZeroHeld`), every member, in blocks of at most
+    ``_TEXT_BYTES`` (a gzip bomb never holds more).
 
     A stream that ends before its end marker (an interrupted recording) ends the text with a
     warning. Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a
     checksum or length that does not match (the text may look fine: a changed digit in a
-    stored block), or bytes after a member that do not start another member and are not zero
-    bytes only (block padding: read, with a warning). ``padding``: the zero bytes :func:`_padding_end` left
-    out; at the end, a stream whose last bytes of length were among them is whole (:func:`_padded_end`)."""
+    stored block), or bytes after a member that do not start another member. Zero bytes at the end are block
+    padding, left out with a warning; a whole stream whose last bytes of length are zeros takes them back
+    (:func:`_padded_end`)."""
     d = zlib.decompressobj(16 + zlib.MAX_WBITS)
     produced = 0  # bytes of text so far
+    raw = source.read()
     while True:
         try:
             out = d.decompress(raw, _TEXT_BYTES)
@@ -136,11 +126,10 @@ def _gunzip(fh, raw, path, warnings, padding=0):
             produced += len(out)
             yield out
         if d.eof:  # a member ended: another may follow
-            raw = d.unused_data or fh.read(READ_BYTES)
+            raw = d.unused_data or source.read()
             if not raw:
-                return
-            if not raw.strip(b"\0"):  # zeros after the stream (an SD card's block padding): gzip ignores them too
-                _zeros_only(fh, raw, path, warnings, produced)
+                if source.held:
+                    warnings.append(_padding_warning(path, source.held, True))
                 return
             if raw[:2] != _GZIP_MAGIC and not _GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
                 raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
@@ -148,13 +137,13 @@ def _gunzip(fh, raw, path, warnings, padding=0):
         elif d.unconsumed_tail:
             raw = d.unconsumed_tail
         elif raw or out:
-            raw = fh.read(READ_BYTES)
+            raw = source.read()
         else:
-            whole, out = _padded_end(d, padding)
+            whole, out = _padded_end(d, source.held)
             if out:
                 yield out
-            if padding:
-                warnings.append(_padding_warning(path, padding - whole, whole))
+            if source.held > whole:
+                warnings.append(_padding_warning(path, source.held - whole, whole))
             if not whole:
                 warnings.append(cut_short_warning(path))
             return
@@ -173,18 +162,6 @@ def _padded_end(d, padding):
         if trial.eof:
             return taken, out
     return 0, b""
-
-
-def _zeros_only(fh, raw, path, warnings, produced):
-    """Read the rest of the gzip file ``fh`` after its stream (``raw``: zero bytes read so far): zero bytes only are
-    padding, said in ``warnings``; any other byte is damage (:class:`_GzipDamage`)."""
-    zeros = 0
-    while raw:
-        if raw.strip(b"\0"):
-            raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
-        zeros += len(raw)
-        raw = fh.read(READ_BYTES)
-    warnings.append(_padding_warning(path, zeros, True))
 
 
 def _padding_warning(path, zeros, after_stream):

@@ -207,12 +207,28 @@ def log_lines(raw, path, warnings=None):
                 except UnicodeDecodeError:
                     raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
     except EOFError:  # a gzip stream cut short (an interrupted log): its complete lines, as a recording's
+        if _ends_in_zeros(raw):  # zlib read them as more of the stream: rows copied from earlier text (pass 58)
+            raise RecordingError(f"{path}: a gzip stream cut short, then zero bytes (an SD card's block padding after a "
+                                 "power cut), read as more of the stream: its last rows cannot be trusted; remove the "
+                                 "zero bytes at its end and convert it again") from None
         if warnings is not None:
             warnings.append(f"{cut_short_warning(path)}; read to line {number}")
     except (gzip.BadGzipFile, zlib.error, OSError) as exc:
         if isinstance(exc, RecordingError):
             raise
         raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
+
+
+def _ends_in_zeros(raw):
+    """Whether the seekable log ``raw`` (a file, or a pipe's copy) ends in a zero byte; its position kept."""
+    position = raw.tell()
+    try:
+        raw.seek(-1, os.SEEK_END)
+        return raw.read(1) == b"\0"
+    except (OSError, ValueError):
+        return False
+    finally:
+        raw.seek(position)
 
 
 _EMPTY_LINES = re.compile(rb"(?:\r?\n)+")

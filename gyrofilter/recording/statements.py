@@ -38,9 +38,11 @@ STATES = {  # kind: (the other words its key may hold, its own words)
                {"period", "interval", "dt", "ts", "timestep"}),
     "unit": ({"gyro", "gyr", "gyroscope", "rate", "angular", "velocity", "omega", "measurement", "rotation", "turn"},
              {"unit", "units", "scale"}),
-    "sensitivity": ({"gyro", "gyr", "per", "dps", "deg", "degree", "degrees", "s", "factor"}, {"lsb", "sensitivity", "scale"}),
+    "sensitivity": ({"gyro", "gyr", "per", "dps", "mdps", "deg", "degree", "degrees", "s", "factor"},
+                    {"lsb", "sensitivity", "scale"}),
     "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
-    "accel_sensitivity": ({"acc", "accel", "accelerometer", "acceleration", "per", "g", "factor"}, {"lsb", "sensitivity"}),
+    "accel_sensitivity": ({"acc", "accel", "accelerometer", "acceleration", "per", "g", "mg", "factor"},
+                          {"lsb", "sensitivity", "scale"}),
 }
 _ACCEL_WORDS = STATES["accel_unit"][0]
 _SAMPLING = {"sample", "samples", "sampling", "odr"}
@@ -55,8 +57,10 @@ _RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samp
 #: a value's first number (a sign of range or about before it) and the word right after it
 _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
                      r"(?P<number>(?>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?))(?![,.]\d)\s*(?P<suffix>[a-zA-Zμ°/^()\d-]*)(?P<rest>.*)")
-#: a key's unit in brackets at its end (``Sample rate (samples/s)``, ``Sample period [µs]``)
-_BRACKETED = re.compile(r"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*")
+#: a key's unit in brackets at its end (``Sample rate (samples/s)``, ``Sample period [µs]``), or a sensitivity's
+#: in words (``gyro_sensitivity_mdps_per_lsb``: mdps/lsb)
+_BRACKETED = re.compile(r"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*|"
+                        r"(?P<per_key>.*?)[_\s]+(?P<per>m?(?:dps|g)[_\s]+per[_\s]+lsb)", re.IGNORECASE)
 #: where a text holds another ``key: value`` pair: at ``;``, at ``,`` before a key and its ``:`` (``Rate: 100 Hz, FS:
 #: 2000 dps``); within a value, at ``,`` before ``key=`` too (``Accel: range=2g, sensitivity=16384``: the accelerometer's)
 _PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[\"']?[A-Za-z_][\w.()\[\]/ -]{0,40}?[\"']?\s*(?::=|:))")
@@ -97,11 +101,13 @@ def key_unit(key, value):
     """``(key, value)`` with a unit in brackets at the key's end moved to a value that is a number alone
     (``Sample rate (Hz): ~200``: ``Sample rate``, ``~200 Hz``)."""
     bracketed = _BRACKETED.fullmatch(key)
-    if not bracketed or not bracketed["key"]:
+    stem = bracketed and (bracketed["key"] or bracketed["per_key"])
+    if not stem:
         return key, value
+    unit = bracketed["unit"] if bracketed["key"] else re.sub(r"[_\s]+per[_\s]+", "/", bracketed["per"])
     number = _NUMBER.fullmatch(clean(value))
     alone = number and not number["suffix"] and not number["rest"].strip()
-    return bracketed["key"], f"{clean(value)} {bracketed['unit']}" if alone else value
+    return stem + ("" if bracketed["key"] else " sensitivity"), f"{clean(value)} {unit}" if alone else value
 
 
 def stated_kind(words, value):
