@@ -85,7 +85,10 @@ def pairs(text, outer=None):
                 pieces.append(joined)
             elif _KEY_VALUE.fullmatch(part):  # the words before it are too long for a key: a piece of no pair
                 pieces += [carried, part]
-            carried = "" if _KEY_VALUE.fullmatch(joined) or _KEY_VALUE.fullmatch(part) else joined
+            else:
+                carried = joined
+                continue
+            carried = ""
         pieces.append(carried)  # no pair: read as none
     accel = "accel " if outer is not None and _ACCEL_WORDS & set(re.findall(r"[a-z]+", outer.lower())) else ""
     for piece in dict.fromkeys(pieces):

@@ -81,9 +81,9 @@ class Comments:
     def check(self, header, given):
         """Refuse with RecordingError naming the file, line and option where a comment contradicts ``header`` (the
         conversion's, with the units read: ``mdps``, not ``dps``), whose keys ``given`` (a set) the options gave."""
-        tolerance = 1e-9 if "sample_rate_hz" in given else RATE_TOLERANCE
+        tolerance, rates = 1e-9 if "sample_rate_hz" in given else RATE_TOLERANCE, header_rates(header)
         for (key, value), (number, text) in self.stated.items():
-            meant = contradicts(key, value, header, header_rates(header), tolerance)
+            meant = contradicts(key, value, header, rates, tolerance)
             if meant and meant[1] is None:  # a value that does not read (Sampling rate: Fastest) is prose
                 fact = meant[0]
                 option, otherwise = _SOURCES[fact]
