@@ -1288,22 +1288,26 @@ def test_a_log_on_the_standard_input_is_not_overwritten_by_its_conversion(tmp_pa
 
 
 @pytest.mark.parametrize("zeros", [1, 100, 4096])
-def test_a_gzip_log_cut_short_then_padded_with_zeros_is_refused_not_read_on(tmp_path, capsys, zeros):
+@pytest.mark.parametrize("piped", [False, True])
+def test_a_gzip_log_cut_short_then_padded_with_zeros_is_read_to_its_cut(tmp_path, zeros, piped):
     """Attack pass 58: a gzip log cut by a power cut and padded with zero bytes was converted with rows zlib made of
-    the zeros (back-references copying earlier text: 15 samples invented), with only the "cut short" warning. Python's
-    gzip reads on into the zeros, so convert refuses such a log, saying to remove them; without the zeros it converts
-    to its cut."""
+    the zeros (back-references copying earlier text: 15 samples invented), with only the "cut short" warning; then it
+    was refused (Python's gzip reads on into the zeros), and from a pipe refused as "5 values, but 4 columns". convert
+    now reads gzip as the recording reader does (``recording.lines.gunzipped``): the zeros are left out with a warning,
+    the rows up to the cut are converted, each its own, as many as without the zeros."""
     text = "gx,gy,gz\n" + "".join(f"{i},{i % 7},{i % 3}\n" for i in range(3000))
     data = gzip.compress(text.encode())[:2126]
-    src = tmp_path / "log.csv.gz"
+    complete = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(data).count(b"\n") - 1  # whole rows before the cut
+    src, dst = tmp_path / "log.csv.gz", tmp_path / "rec.csv"
     src.write_bytes(data + bytes(zeros))
-    dst = tmp_path / "rec.csv"
-    assert main(["convert", str(src), "--unit", "lsb", "--lsb-per-dps", "131", "--sample-rate-hz", "100", "--out", str(dst)]) == 2
-    assert capsys.readouterr().err == (f"gyrofilter: error: {src}: a gzip stream cut short, then zero bytes (an SD card's "
-                                       "block padding after a power cut), read as more of the stream: its last rows "
-                                       "cannot be trusted; remove the zero bytes at its end and convert it again\n")
-    assert not dst.exists()
-    src.write_bytes(data)
-    assert main(["convert", str(src), "--unit", "lsb", "--lsb-per-dps", "131", "--sample-rate-hz", "100", "--out", str(dst)]) == 0
+    args = ["--unit", "lsb", "--lsb-per-dps", "131", "--sample-rate-hz", "100", "--out", str(dst)]
+    run = subprocess.run([sys.executable, "-m", "gyrofilter", "convert", "-" if piped else str(src), *args],
+                         input=src.read_bytes() if piped else b"", capture_output=True, timeout=120)
+    err = " ".join(run.stderr.decode().split())
+    name = "-" if piped else str(src)
+    assert run.returncode == 0, err
+    assert f"{name}: {zeros} zero bytes at its end ignored (block padding, as a power cut leaves an SD card)" in err
+    assert f"{name}: gzip stream cut short (no end marker), as an interrupted recording leaves it; read to line {complete + 1}" in err
     rec = read_recording(dst)
-    np.testing.assert_array_equal(rec.gyro[:, 0], np.arange(len(rec)))  # every row its own, none invented
+    assert len(rec) == complete > 100
+    np.testing.assert_array_equal(rec.gyro[:, 0], np.arange(complete))  # every row its own (LSB), none invented

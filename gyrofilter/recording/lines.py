@@ -54,7 +54,7 @@ def _gzip_damage(path):
         with open(path, "rb") as fh:
             raw = fh.read(READ_BYTES)
             if raw[:2] == _GZIP_MAGIC:
-                for _ in _gunzip(_ZeroHeld(fh, raw), path, []):
+                for _ in gunzipped(fh, raw, path, []):
                     pass
     except _GzipDamage as exc:
         return exc.reason
@@ -70,11 +70,17 @@ def _byte_blocks(path, warnings):
     with fh:
         raw = fh.read(READ_BYTES)
         if raw[:2] == _GZIP_MAGIC:
-            yield from _gunzip(_ZeroHeld(fh, raw), path, warnings)
+            yield from gunzipped(fh, raw, path, warnings)
             return
         while raw:
             yield raw
             raw = fh.read(READ_BYTES)
+
+
+def gunzipped(fh, first, path, warnings):
+    """The text of the gzip file ``path`` open as ``fh`` (``first``: its first bytes, already read), every member, in
+    blocks (:func:`_gunzip`): the one gzip reader of recordings and of other tools' logs (``logtext.log_lines``)."""
+    return _gunzip(_ZeroHeld(fh, first), path, warnings)
 
 
 class _ZeroHeld:

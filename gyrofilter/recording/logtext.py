@@ -5,9 +5,8 @@ checked for length and UTF-8, the first for line ends of CR only, runs of empty 
 """
 from __future__ import annotations
 
-import contextlib
 import errno
-import gzip
+import io
 import os
 import re
 import shutil
@@ -16,9 +15,9 @@ import tempfile
 import zlib
 
 from ..errors import RecordingError
-from ..inputs import open_input, quote
+from ..inputs import READ_BYTES, open_input, quote
 from .header import MAX_LINE_BYTES
-from .lines import cut_short_warning, refuse_cr_only, refuse_nul
+from .lines import cut_short_warning, gunzipped, refuse_cr_only, refuse_nul
 
 #: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
 #: where it is): 4 GiB, a 1 kHz log of about 40 h
@@ -174,61 +173,72 @@ def log_lines(raw, path, warnings=None):
     A last line without its line end (a log whose writer was stopped mid-line, cut inside a
     number) is not used, unless it is the log's only line or blank, and said in ``warnings`` (a
     list, when given): the rule of a recording's (:func:`~gyrofilter.recording.lines.line_chunks`).
-    So is a gzip stream cut short (no end marker): its lines up to the cut are read, and
-    ``warnings`` says so (:func:`~gyrofilter.recording.lines.cut_short_warning`) with the last line read."""
+    gzip is read by the recording's reader (:func:`~gyrofilter.recording.lines.gunzipped`): a stream
+    cut short (no end marker) has its lines up to the cut read, and ``warnings`` says so with the last
+    line read; zero bytes at its end (block padding) are left out, never read as more of the stream."""
     raw.seek(0)
+    gzip_notes = []
+    zipped = raw.peek(2)[:2] == b"\x1f\x8b"
+    fh = io.BufferedReader(_Blocks(gunzipped(raw, raw.read(READ_BYTES), path, gzip_notes)), PIPE_BLOCK_BYTES) if zipped else raw
+    last = 0  # the number of the last line read
+    for number, text, lines in _numbered(fh, path, warnings):
+        yield number, text, lines
+        last = number + lines - 1
+    if warnings is not None:
+        warnings.extend(f"{note}; read to line {last}" if note == cut_short_warning(path) else note for note in gzip_notes)
+
+
+def _numbered(fh, path, warnings):
+    """The items of :func:`log_lines` read from ``fh``, the log's text."""
     number = 0
-    try:
-        zipped = raw.peek(2)[:2] == b"\x1f\x8b"
-        with (gzip.GzipFile(fileobj=raw, mode="rb") if zipped else contextlib.nullcontext(raw)) as fh:
-            while True:
-                data = fh.readline(MAX_LINE_BYTES + 1)
-                if not data:
-                    return
-                number += 1
-                if number > 1 and not data.endswith(b"\n") and data.strip() and len(data) <= MAX_LINE_BYTES:
-                    refuse_cr_only(data, path, number)
-                    if warnings is not None:
-                        warnings.append(f"{path}: line {number}: last line has no line end (log interrupted?); it is "
-                                        f"not used: {quote(data[:60].decode('utf-8', 'replace'))}")
-                    return
-                if data in (b"\n", b"\r\n"):
-                    run = 1 + _skip_empty_lines(fh)
-                    yield number, "", run
-                    number += run - 1
-                    continue
-                refuse_nul(data, path, number)
-                if number == 1:
-                    refuse_cr_only(data, path)
-                if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
-                    raise _too_long(path, number)
-                try:
-                    yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n"), 1
-                except UnicodeDecodeError:
-                    raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
-    except EOFError:  # a gzip stream cut short (an interrupted log): its complete lines, as a recording's
-        if _ends_in_zeros(raw):  # zlib read them as more of the stream: rows copied from earlier text (pass 58)
-            raise RecordingError(f"{path}: a gzip stream cut short, then zero bytes (an SD card's block padding after a "
-                                 "power cut), read as more of the stream: its last rows cannot be trusted; remove the "
-                                 "zero bytes at its end and convert it again") from None
-        if warnings is not None:
-            warnings.append(f"{cut_short_warning(path)}; read to line {number}")
-    except (gzip.BadGzipFile, zlib.error, OSError) as exc:
-        if isinstance(exc, RecordingError):
-            raise
-        raise RecordingError(f"{path}: damaged gzip data ({exc})") from None
+    while True:
+        data = fh.readline(MAX_LINE_BYTES + 1)
+        if not data:
+            return
+        number += 1
+        if number > 1 and not data.endswith(b"\n") and data.strip() and len(data) <= MAX_LINE_BYTES:
+            refuse_cr_only(data, path, number)
+            if warnings is not None:
+                warnings.append(f"{path}: line {number}: last line has no line end (log interrupted?); it is "
+                                f"not used: {quote(data[:60].decode('utf-8', 'replace'))}")
+            return
+        if data in (b"\n", b"\r\n"):
+            run = 1 + _skip_empty_lines(fh)
+            yield number, "", run
+            number += run - 1
+            continue
+        refuse_nul(data, path, number)
+        if number == 1:
+            refuse_cr_only(data, path)
+        if len(data.rstrip(b"\r\n")) > MAX_LINE_BYTES:
+            raise _too_long(path, number)
+        try:
+            yield number, data.decode("utf-8-sig" if number == 1 else "utf-8").rstrip("\r\n"), 1
+        except UnicodeDecodeError:
+            raise RecordingError(f"{path}: line {number}: not UTF-8 text") from None
 
 
-def _ends_in_zeros(raw):
-    """Whether the seekable log ``raw`` (a file, or a pipe's copy) ends in a zero byte; its position kept."""
-    position = raw.tell()
-    try:
-        raw.seek(-1, os.SEEK_END)
-        return raw.read(1) == b"\0"
-    except (OSError, ValueError):
-        return False
-    finally:
-        raw.seek(position)
+class _Blocks(io.RawIOBase):
+    """A readable stream of the byte blocks ``blocks`` yields (a gzip file's text), for a buffered reader's
+    ``readline`` and ``peek``."""
+
+    def __init__(self, blocks):
+        super().__init__()
+        self.blocks, self.block, self.at = blocks, b"", 0
+
+    def readable(self):
+        return True
+
+    def readinto(self, buffer):
+        while self.at >= len(self.block):
+            self.block, self.at = next(self.blocks, None), 0
+            if self.block is None:
+                self.block = b""
+                return 0
+        n = min(len(buffer), len(self.block) - self.at)
+        buffer[:n] = memoryview(self.block)[self.at:self.at + n]
+        self.at += n
+        return n
 
 
 _EMPTY_LINES = re.compile(rb"(?:\r?\n)+")
