@@ -1243,6 +1243,8 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# Accel: range=2g, sensitivity=16384", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
     ("# accel sensitivity = 16384", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
     ("# gyro_mdps_per_lsb: 7.633", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# Sample rate: 6000 per minute", []), ("# Sample rate: 6000 samples per minute", []),  # not read as 6000 Hz
+    ("# Sample rate: 100 Hz per axis", []),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read

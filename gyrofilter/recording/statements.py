@@ -54,6 +54,11 @@ _SECONDS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "m
             "micros": 1e-6, "microseconds": 1e-6, "ns": 1e-9, "nsec": 1e-9, "nanoseconds": 1e-9}
 _RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samples", "hertz", "/sec",
                   "samples/second", "sa/s", "per"}  # 200 per second
+#: after a rate's number and word, a time other than the second (``200 per minute``, ``200 samples per ms``)
+_PER_OTHER = re.compile(r"\s*(?:per\s+|/\s*)(?:min|minutes?|h|hr|hours?|d|days?|ms|msec|milliseconds?|[uµμ]s|usec)\b",
+                        re.IGNORECASE)
+#: a second, after ``per`` (``200 per second``)
+_SECOND = re.compile(r"\s*(?:s|sec|secs|seconds?)\b", re.IGNORECASE)
 #: a value's first number (a sign of range or about before it) and the word right after it
 _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
                      r"(?P<number>(?>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?))(?![,.]\d)\s*(?P<suffix>[a-zA-Zμ°/^()\d-]*)(?P<rest>.*)")
@@ -153,8 +158,9 @@ def judge(kind, words, value, facts, rates, tolerance):
     if kind == "rate":
         if amount is not None and (known_unit("rate", suffix) or suffix in ("bps", "baud", "rpm")):
             return None  # a rate of turn (Target rate: 100 dps), a baud rate
-        if amount is None or suffix not in _RATE_SUFFIXES:
-            return "sample_rate_hz", "a rate (Hz)"
+        if (amount is None or suffix not in _RATE_SUFFIXES or _PER_OTHER.match(number["rest"])
+                or (suffix == "per" and not _SECOND.match(number["rest"]))):
+            return "sample_rate_hz", "a rate (Hz)"  # 200 per minute, 200 samples per minute: not read
         stated = amount * (1000 if "khz" in words or suffix == "khz" else 1)
         return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
     if kind == "period":
