@@ -1289,13 +1289,34 @@ def test_a_log_on_the_standard_input_is_not_overwritten_by_its_conversion(tmp_pa
     assert log.read_bytes() == before
 
 
+def test_a_gzip_log_cut_short_then_zeros_then_a_byte_converts_no_row_zlib_made_of_them(tmp_path):
+    """Attack pass 59: a log cut short, 7 zero bytes and 0x01 after it, was converted with its last row changed
+    ((0.09, 0.7433, 0.5, -0.567), written (0.09, 0.743, -0.581, -0.569)). The reader holds the text after a run of
+    padding until its stream proves whole: cut short, every row converted is a row written."""
+    rng = np.random.default_rng(59)
+    values = np.round(rng.normal(0.0, 0.5, (400, 3)), 3)
+    text = "t,gx,gy,gz\n" + "".join(f"{i / 100:.2f},{a:.3f},{b:.3f},{c:.3f}\n" for i, (a, b, c) in enumerate(values))
+    data = gzip.compress(text.encode())
+    src, dst = tmp_path / "log.csv.gz", tmp_path / "rec.csv"
+    converted = 0
+    for cut in rng.integers(len(data) // 4, len(data) - 20, 12):
+        src.write_bytes(data[:cut] + bytes(7) + b"\x01")
+        dst.unlink(missing_ok=True)
+        if main(["convert", str(src), "--unit", "dps", "--out", str(dst)]) == 2:  # junk refused as damage
+            continue
+        rec = read_recording(dst)
+        np.testing.assert_array_equal(rec.gyro_dps, values[:len(rec)])
+        converted += 1
+    assert converted >= 6
+
+
 @pytest.mark.parametrize("zeros", [1, 100, 4096])
 @pytest.mark.parametrize("piped", [False, True])
 def test_a_gzip_log_cut_short_then_padded_with_zeros_is_read_to_its_cut(tmp_path, zeros, piped):
     """Attack pass 58: a gzip log cut by a power cut and padded with zero bytes was converted with rows zlib made of
     the zeros (back-references copying earlier text: 15 samples invented), with only the "cut short" warning; then it
     was refused (Python's gzip reads on into the zeros), and from a pipe refused as "5 values, but 4 columns". convert
-    now reads gzip as the recording reader does (``recording.lines.gunzipped``): the zeros are left out with a warning,
+    now reads gzip as the recording reader does (``recording.gzipped.gunzipped``): the zeros are left out with a warning,
     the rows up to the cut are converted, each its own, as many as without the zeros."""
     text = "gx,gy,gz\n" + "".join(f"{i},{i % 7},{i % 3}\n" for i in range(3000))
     data = gzip.compress(text.encode())[:2126]

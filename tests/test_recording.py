@@ -3,7 +3,9 @@ import os
 import threading
 import json
 import re
+import sys
 import warnings
+import zlib
 
 import numpy as np
 import pytest
@@ -12,6 +14,7 @@ from hypothesis import strategies as st
 
 from gyrofilter.errors import RecordingError, SettingsError
 from gyrofilter.recording import Note, Recording, RecordingWriter, iter_recording, read_recording, write_recording
+from support import REPO
 
 HEADER = "# gyrofilter-recording: 1\n# sensor: MPU6050\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
 
@@ -389,6 +392,83 @@ def test_a_gzip_cut_short_then_padded_with_zeros_reads_to_the_cut(tmp_path, zero
     np.testing.assert_array_equal(rec.columns["gx"], np.arange(len(rec)))
     assert 1000 < len(rec) < 30000 and any("cut short" in w for w in rec.warnings)
     assert any(f"{zeros} zero bytes at its end ignored" in w for w in rec.warnings)
+
+
+def _synced_gzip(text, every):
+    """``text`` as ``gyrofilter record`` writes it: gzip, a sync flush every ``every`` lines."""
+    z = zlib.compressobj(6, zlib.DEFLATED, 16 + zlib.MAX_WBITS)
+    lines = text.encode().splitlines(keepends=True)
+    parts = [z.compress(b"".join(lines[i:i + every])) + z.flush(zlib.Z_SYNC_FLUSH) for i in range(0, len(lines), every)]
+    return b"".join(parts) + z.flush()
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_gzip_cut_short_then_padding_then_other_bytes_invents_no_row(tmp_path, seed):
+    """Attack pass 59: a recording cut short, padded with zero bytes (or 0xFF, as erased flash reads) and then a byte
+    that is not padding (a newline ``echo >>`` adds, stale data) came back with its last row changed (row 774 read
+    (7.74, 29, 44, -327), written (7.74, 29, 443, 137)) or one more, with only "cut short" said: the zeros, once a byte
+    followed them, went to zlib as more of the stream. Text made of bytes after a run of padding is now held until
+    its stream proves whole; a stream cut short there ends at the run, the text left out with a warning. Cut points,
+    padding and the byte after it drawn at random: every row read is the row written, none beyond what the cut
+    stream holds."""
+    rng = np.random.default_rng(seed)
+    values = rng.integers(-999, 1000, (3000, 3))
+    body = "".join(f"{i / 100:.2f},{a},{b},{c}\n" for i, (a, b, c) in enumerate(values))
+    data = _synced_gzip(_dps_file(tmp_path, body).read_text(), int(rng.choice([1, 20, 1000])))
+    path = tmp_path / "r.csv.gz"
+    for _ in range(25):
+        cut = int(rng.integers(len(data) // 10, len(data) - 20))
+        pad = bytes([int(rng.choice([0, 0xFF]))]) * int(rng.choice([5, 7, 64, 512, 4096]))
+        tail = bytes(rng.integers(1, 255, int(rng.choice([1, 2, 40]))).astype(np.uint8))
+        path.write_bytes(data[:cut] + pad + tail)
+        decodable = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(data[:cut]).count(b"\n") - 4  # rows, header aside
+        try:
+            rec = read_recording(path)
+        except RecordingError as exc:  # junk that no stream holds may be refused as damage, never read
+            assert "damaged gzip data" in str(exc), exc
+            continue
+        assert len(rec) <= decodable, (cut, pad[:1], len(pad), tail)
+        np.testing.assert_array_equal(rec.gyro_dps, values[:len(rec)])
+        assert any("cut short" in w or "(padding), then bytes that are not the stream's" in w for w in rec.warnings)
+
+
+@pytest.mark.parametrize("count", [5, 16, 512, 70_000])
+def test_0xff_padding_after_a_gzip_stream_is_left_out_with_a_warning(tmp_path, count):
+    """Attack pass 59: a recording cut short and padded with 0xFF (erased flash) gained an invented or altered last
+    row (51 rows read where zlib decodes 50, the last (0.5041, 12, -3, 40), written (0.50, 13, -2, 41)); after a
+    whole stream such padding was refused as damage. A run of 0xFF at the end is padding, as zeros are."""
+    body = "".join(f"{i / 100:.2f},{i},1,2\n" for i in range(3000))
+    whole = _dps_file(tmp_path, body, name="r.csv.gz").read_bytes()
+    path = tmp_path / "p.csv.gz"
+    for data, cut in ((whole, False), (whole[:len(whole) // 2], True)):
+        path.write_bytes(data + b"\xff" * count)
+        rec = read_recording(path)
+        np.testing.assert_array_equal(rec.columns["gx"], np.arange(len(rec)))
+        assert (len(rec) < 3000) == cut and any(f"{count} 0xFF bytes" in w for w in rec.warnings)
+
+
+def test_an_empty_gzip_member_after_a_recording_adds_no_warning(tmp_path):
+    """Attack pass 59: a whole recording followed by an empty gzip member (``gzip < /dev/null >> rec.csv.gz``) was read
+    with "9 zero bytes ... ignored" and "gzip stream cut short": the member's last nine bytes are zeros."""
+    body = "".join(f"{i / 100:.2f},{i},1,2\n" for i in range(300))
+    path = _dps_file(tmp_path, body, name="r.csv.gz")
+    path.write_bytes(path.read_bytes() + gzip.compress(b"", mtime=0) + gzip.compress(b"", mtime=0))
+    rec = read_recording(path)
+    assert len(rec) == 300 and rec.warnings == []
+
+
+def test_no_run_in_the_compressed_data_of_a_recording_is_as_long_as_padding():
+    """``recording.gzipped.RUN_BYTES``, the shortest run of 0x00 or 0xFF read as padding, is longer than any run in
+    deflate data of recordings (tools/gzip_runs.py measures it on more rows): shorter, a real recording's text would
+    be held as after padding (4 zeros come in the block headers of constant rows)."""
+    sys.path.insert(0, str(REPO / "tools"))
+    try:
+        import gzip_runs
+    finally:
+        sys.path.remove(str(REPO / "tools"))
+    from gyrofilter.recording.gzipped import RUN_BYTES
+    longest = gzip_runs.longest_runs(4000)
+    assert max(longest.values()) == RUN_BYTES - 1, longest
 
 
 def test_a_gzip_cut_short_is_still_a_warning_and_a_prefix(tmp_path):

@@ -7,181 +7,28 @@ read. Damaged gzip data are an error; a stream cut short (an interrupted recordi
 from __future__ import annotations
 
 import codecs
-import os
 import re
-import zlib
 
 from ..errors import RecordingError
 from ..inputs import MAX_QUOTE_CHARS, READ_BYTES, open_input, quote
+from .gzipped import GZIP_MAGIC, gunzipped
 from .header import MAX_LINE_BYTES
 
-#: most decompressed bytes at a time (a block of text: about 36 000 lines of five columns); the
-#: longest line, so that only the line the blocks so far have not ended needs a length check
-_TEXT_BYTES = MAX_LINE_BYTES
 _BOM = b"\xef\xbb\xbf"
-_GZIP_MAGIC = b"\x1f\x8b"
-
-
-class _GzipDamage(RecordingError):
-    """Damaged gzip data: what was read from them cannot be trusted. ``reason``: what zlib said."""
-
-    def __init__(self, path, reason, produced):
-        super().__init__(f"{path}: damaged gzip data ({reason}) after {produced} bytes of text; "
-                         "nothing read from it is trusted")
-        self.reason = reason
-
-
-def blame_gzip_damage(path, exc):
-    """``exc`` (a bad line), or, when ``path`` is a gzip file whose data are damaged (its
-    checksum or its compressed blocks wrong), an error saying so: the bad line is then text
-    the damage made, not what was written."""
-    if isinstance(exc, _GzipDamage):
-        return exc
-    damage = _gzip_damage(path)
-    if damage is None:
-        return exc
-    where = str(exc).removeprefix(path + ": ").partition(": ")[0]
-    return RecordingError(f"{path}: damaged gzip data ({damage}); the text read from it is garbage (first noticed at {where})")
-
-
-def _gzip_damage(path):
-    """The zlib error decompressing the whole gzip file ``path`` (every member) meets, or None
-    (not gzip, intact, or only cut short as an interrupted recording leaves it). Memory: one
-    block at a time, as when reading."""
-    if not os.path.isfile(path):  # a pipe was read once, as it came
-        return None
-    try:
-        with open(path, "rb") as fh:
-            raw = fh.read(READ_BYTES)
-            if raw[:2] == _GZIP_MAGIC:
-                for _ in gunzipped(fh, raw, path, []):
-                    pass
-    except _GzipDamage as exc:
-        return exc.reason
-    except OSError:
-        pass
-    return None
 
 
 def _byte_blocks(path, warnings):
-    """The file's bytes in blocks of at most ``READ_BYTES``, gunzipped (:func:`_gunzip`) when it
+    """The file's bytes in blocks of at most ``READ_BYTES``, gunzipped (:func:`~gyrofilter.recording.gzipped.gunzipped`) when it
     starts with the gzip magic."""
     fh = open_input(path)
     with fh:
         raw = fh.read(READ_BYTES)
-        if raw[:2] == _GZIP_MAGIC:
+        if raw[:2] == GZIP_MAGIC:
             yield from gunzipped(fh, raw, path, warnings)
             return
         while raw:
             yield raw
             raw = fh.read(READ_BYTES)
-
-
-def gunzipped(fh, first, path, warnings):
-    """The text of the gzip file ``path`` open as ``fh`` (``first``: its first bytes, already read), every member, in
-    blocks (:func:`_gunzip`): the one gzip reader of recordings and of other tools' logs (``logtext.log_lines``)."""
-    return _gunzip(_ZeroHeld(fh, first), path, warnings)
-
-
-class _ZeroHeld:
-    """The bytes of the file ``fh`` (``first``: its first, already read) in blocks, each run of zero bytes held back
-    until a byte that is not zero follows it: zero bytes at the file's end (an SD card's block padding after a
-    power cut) are never given to zlib, which reads them after a stream cut short as more data (back-references
-    that copy earlier text: rows invented, attack pass 58), whatever their count, from a pipe too. ``held``: the
-    zero bytes held at the end."""
-
-    def __init__(self, fh, first):
-        self.fh, self.next, self.held = fh, first, 0
-
-    def read(self):
-        """The next block with the zero bytes it ends in held back (those held before it given first), or b"" at
-        the end (``held`` then counts the zeros left)."""
-        while True:
-            raw = self.next if self.next is not None else self.fh.read(READ_BYTES)
-            self.next = None
-            if not raw:
-                return b""
-            data = raw.rstrip(b"\0")
-            if data:
-                out, self.held = bytes(self.held) + data, len(raw) - len(data)
-                return out
-            self.held += len(raw)
-
-
-def _gunzip(source, path, warnings):
-    """The text of the gzip file read by ``source`` (:class:`_ZeroHeld`), every member, in blocks of at most
-    ``_TEXT_BYTES`` (a gzip bomb never holds more).
-
-    A stream that ends before its end marker (an interrupted recording) ends the text with a
-    warning. Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a
-    checksum or length that does not match (the text may look fine: a changed digit in a
-    stored block), or bytes after a member that do not start another member. Zero bytes at the end are block
-    padding, left out with a warning; a whole stream whose last bytes of length are zeros takes them back
-    (:func:`_padded_end`)."""
-    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-    produced = 0  # bytes of text so far
-    raw = source.read()
-    while True:
-        try:
-            out = d.decompress(raw, _TEXT_BYTES)
-            if not raw and not out and not d.eof:  # the file ended: what zlib still holds, then the verdict
-                out = d.flush()
-        except zlib.error as exc:
-            raise _GzipDamage(path, str(exc), produced) from None
-        if out:
-            produced += len(out)
-            yield out
-        if d.eof:  # a member ended: another may follow
-            raw = d.unused_data or source.read()
-            if not raw:
-                if source.held:
-                    warnings.append(_padding_warning(path, source.held, True))
-                return
-            if raw[:2] != _GZIP_MAGIC and not _GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
-                raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
-            d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-        elif d.unconsumed_tail:
-            raw = d.unconsumed_tail
-        elif raw or out:
-            raw = source.read()
-        else:
-            whole, out = _padded_end(d, source.held)
-            if out:
-                yield out
-            if source.held > whole:
-                warnings.append(_padding_warning(path, source.held - whole, whole))
-            if not whole:
-                warnings.append(cut_short_warning(path))
-            return
-
-
-def _padded_end(d, padding):
-    """``(how many of the ``padding`` zero bytes the stream of the decompressor ``d`` takes to end whole, its last
-    text)``: the high bytes of its length (ISIZE, RFC 1952) are zeros; or ``(0, b"")`` where it does not end so (cut
-    short: zeros read as its data would be garbage, or damage)."""
-    for taken in range(1, min(8, padding) + 1):
-        trial = d.copy()
-        try:
-            out = trial.decompress(bytes(taken))
-        except zlib.error:
-            return 0, b""
-        if trial.eof:
-            return taken, out
-    return 0, b""
-
-
-def _padding_warning(path, zeros, after_stream):
-    """The warning of ``zeros`` zero bytes left out at the end of the gzip file ``path``, ``after_stream`` a whole one
-    or after one cut short."""
-    return (f"{path}: {zeros} zero bytes " + ("after the end of the gzip stream ignored (block padding, as gzip ignores it)"
-                                                if after_stream else "at its end ignored (block padding, as a power cut leaves an SD card)"))
-
-
-def cut_short_warning(path):
-    """The warning of a gzip file ``path`` whose stream ends before its end marker (an interrupted
-    recording or log): its text so far is read, complete lines only. The one rule of a recording
-    (:func:`line_chunks`) and of another tool's log (``logtext.log_lines``)."""
-    return f"{path}: gzip stream cut short (no end marker), as an interrupted recording leaves it"
 
 
 def _without_bom(blocks):

@@ -17,7 +17,8 @@ import zlib
 from ..errors import RecordingError
 from ..inputs import READ_BYTES, open_input, quote
 from .header import MAX_LINE_BYTES
-from .lines import cut_short_warning, gunzipped, refuse_cr_only, refuse_nul
+from .gzipped import cut_short_warning, gunzipped
+from .lines import refuse_cr_only, refuse_nul
 
 #: most bytes of a pipe copied to the temporary folder (a pipe cannot be read twice; a file is read
 #: where it is): 4 GiB, a 1 kHz log of about 40 h
@@ -173,7 +174,7 @@ def log_lines(raw, path, warnings=None):
     A last line without its line end (a log whose writer was stopped mid-line, cut inside a
     number) is not used, unless it is the log's only line or blank, and said in ``warnings`` (a
     list, when given): the rule of a recording's (:func:`~gyrofilter.recording.lines.line_chunks`).
-    gzip is read by the recording's reader (:func:`~gyrofilter.recording.lines.gunzipped`): a stream
+    gzip is read by the recording's reader (:func:`~gyrofilter.recording.gzipped.gunzipped`): a stream
     cut short (no end marker) has its lines up to the cut read, and ``warnings`` says so with the last
     line read; zero bytes at its end (block padding) are left out, never read as more of the stream."""
     raw.seek(0)

@@ -16,7 +16,8 @@ from .checks import TimeCheck, check_rates
 from .content import Note, Recording, RecordingHead
 from .header import (MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, NOT_A_RECORDING, check_accelerometer, check_columns,
                      check_header, refuse_invisible, refuse_rowless)
-from .lines import blame_gzip_damage, line_chunks
+from .gzipped import blame_gzip_damage
+from .lines import line_chunks
 
 #: most lines per chunk of :func:`iter_recording` (a chunk also ends with each block of text)
 CHUNK_ROWS = 1 << 16

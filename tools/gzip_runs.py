@@ -1,0 +1,93 @@
+#!/usr/bin/env python3
+"""Runs of one byte, 0x00 or 0xFF, in the deflate data of recordings: what ``gyrofilter.recording.gzipped`` may
+take for padding (``RUN_BYTES``). A power cut pads a gzip file with zeros (an SD card) or 0xFF (erased flash);
+the reader tells such runs from compressed data by their length, so no run in real compressed data may be as long.
+
+    python tools/gzip_runs.py [--rows 300000]
+
+For five kinds of recording text (constant rates with and without a time column, noise, raw counts with a
+temperature, six axes), gzip levels 1, 6 and 9, and a sync flush (as ``gyrofilter record`` does each second) every
+1, 10, 100, 1000 lines or none: how many runs of each byte and length the reader's pieces hold (the gzip header's,
+a flush's marker and a member header's zeros aside, as the reader sets them aside). Today: runs of 4 zeros in the
+block headers of constant text, none longer; ``RUN_BYTES`` is 5.
+"""
+import argparse
+import collections
+import io
+import os
+import random
+import sys
+import zlib
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from gyrofilter.recording.gzipped import RUN_BYTES, _pieces  # noqa: E402
+
+HEADER = "# gyrofilter-recording: 1\n# sample_rate_hz: 1000\n# gyro_unit: dps\n"
+FLUSHES = (1, 10, 100, 1000, None)
+LEVELS = (1, 6, 9)
+
+
+def kinds(seed=1):
+    """name -> (column row, row maker of the sample index)."""
+    rng = random.Random(seed)
+    small = lambda n: rng.randint(-n, n)  # noqa: E731
+    return {
+        "constant": ("t,gx,gy,gz", lambda i: f"{i / 1000:.3f},-3.3,0.0,1.2"),
+        "constant, counts": ("t,gx,gy,gz", lambda i: f"{i / 1000:.3f},12,-3,40"),
+        "noise": ("t,gx,gy,gz", lambda i: f"{i / 1000:.3f},{rng.gauss(0, 0.05):.4f},{rng.gauss(0, 0.05):.4f},"
+                                          f"{rng.gauss(0, 0.05):.4f}"),
+        "counts, temp": ("t,gx,gy,gz,temp", lambda i: f"{i / 1000:.3f},{small(3)},{small(3)},{small(3)},"
+                                                      f"{36.5 + rng.randint(0, 2) / 340:.4f}"),
+        "six axes": ("t,gx,gy,gz,ax,ay,az", lambda i: f"{i / 1000:.3f},{small(30)},{small(3)},{small(3)},{small(100)},"
+                                                      f"{small(100)},{16384 + small(100)}"),
+    }
+
+
+def compressed(lines, level, every):
+    """The gzip bytes of ``lines`` (bytes, no line ends) at ``level``, sync-flushed every ``every`` lines (None:
+    never)."""
+    z = zlib.compressobj(level, zlib.DEFLATED, 16 + zlib.MAX_WBITS)
+    step, out = every or len(lines), []
+    for k in range(0, len(lines), step):
+        out.append(z.compress(b"\n".join(lines[k:k + step]) + b"\n"))
+        if every:
+            out.append(z.flush(zlib.Z_SYNC_FLUSH))
+    return b"".join(out) + z.flush()
+
+
+def runs(rows, seed=1, shortest=2):
+    """Counter of (kind, byte, length) of the runs of at least ``shortest`` bytes that the reader's pieces hold (not
+    set aside as a flush's marker or a member header's zeros) in every kind's gzip data, every level and flush."""
+    found = collections.Counter()
+    for name, (columns, row) in kinds(seed).items():
+        lines = (HEADER + columns).encode().split(b"\n") + [row(i).encode() for i in range(rows)]
+        for level in LEVELS:
+            for every in FLUSHES:
+                for kind, byte, count in _pieces(io.BytesIO(b""), compressed(lines, level, every), shortest):
+                    if kind == "run":
+                        found[name, byte, count] += 1
+    return found
+
+
+def longest_runs(rows, seed=1):
+    """kind -> the longest run of 0x00 or 0xFF in its gzip data (0: none of 2 bytes or more)."""
+    longest = dict.fromkeys(kinds(seed), 0)
+    for name, _, count in runs(rows, seed):
+        longest[name] = max(longest[name], count)
+    return longest
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rows", type=int, default=300000, help="rows of each kind (default 300000)")
+    args = parser.parse_args()
+    longest = longest_runs(args.rows)
+    print(f"runs of 0x00 or 0xFF in deflate data of recordings ({args.rows} rows each, levels {LEVELS}, "
+          f"sync flush every {FLUSHES} lines), flush markers and member headers aside")
+    for name in kinds():
+        print(f"  {name:18s} longest run: {longest[name] or 'none'}")
+    print(f"the reader's RUN_BYTES (shortest run read as padding): {RUN_BYTES}")
+
+
+if __name__ == "__main__":
+    main()
