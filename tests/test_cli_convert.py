@@ -1211,6 +1211,13 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# Accel: range=2g, sensitivity=8192", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "16384"]),
     ("# gyro_mdps_per_lsb: 15.27", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 58: 65.5 LSB per deg/s
     ("# accel scale factor: 16384", ["--unit", "dps", "--accel-unit", "lsb", "--lsb-per-g", "4096"]),
+    ("# Sampling time: 5 ms", []), ("# time step: 0.005 s", []), ("# Sample rate (nominal): 200", []),  # pass 59
+    ("# f_s = 200 Hz", []), ("# Sample rate: 200/second", []), ("# sample rate: 200 readings/s", []),
+    ("# gyro rate: 200 Hz", []), ("# unit: radians per second", []), ("# unit: rad per s", []),
+    ("# units: \u00ba/s", ["--unit", "rad/s"]), ("# units: t[s], gyro[rad/s]", []),
+    ("# counts per deg/s: 65.5", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# gyro sensitivity = 65.5 LSB/(\u00ba/s)", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# sensitivity: 0.000266 rad/s/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1245,6 +1252,8 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# gyro_mdps_per_lsb: 7.633", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# Sample rate: 6000 per minute", []), ("# Sample rate: 6000 samples per minute", []),  # not read as 6000 Hz
     ("# Sample rate: 100 Hz per axis", []),
+    ("# Sample rate (nominal): 100", []), ("# unit: degrees per second", []), ("# gyro rate: 100 dps", []),  # pass 59
+    ("# sensitivity: 0.0001332 rad/s/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]), ("# counts: 5000", []),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read
@@ -1255,6 +1264,25 @@ def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, com
     code, dst = _convert(tmp_path, f"{comment}\n{names}\n{rows}", "--sample-rate-hz", "100", *(options or ["--unit", "dps"]))
     assert code == 0, capsys.readouterr().err
     assert read_recording(dst).sample_rate_hz == 100.0
+
+
+@pytest.mark.parametrize("comment, options, refused", [
+    ("# temp unit: F", [], True), ("# Temperature units: K", ["--temp-unit", "c"], True),
+    ("# temp unit: degC", [], False), ("# temp unit: F", ["--temp-unit", "f"], False),
+    ("# temp: raw", ["--temp-unit", "mpu6050"], False), ("# temp sensor: on-die", [], False),
+])
+def test_a_comment_stating_another_temperature_unit_is_refused(tmp_path, capsys, comment, options, refused):
+    """Attack pass 59: a comment stating the temperature's unit is checked against the unit read, as the gyro's is."""
+    rows = "".join(f"{i / 100:.2f},0.1,0.2,0.3,{25 + i % 3}\n" for i in range(60))
+    column = "temp" if options else "temp_c"  # a unit stated by the option or the name
+    code, dst = _convert(tmp_path, f"{comment}\nt,gx,gy,gz,{column}\n{rows}", "--unit", "dps", *options)
+    err = capsys.readouterr().err
+    if refused:
+        assert code == 2 and not dst.exists() and err.startswith(
+            f"gyrofilter: error: {tmp_path / 'log.csv'}: line 1: the comment '{comment}' disagrees with the "
+            "conversion's temp_unit "), err
+    else:
+        assert code == 0, err
 
 
 def test_a_comment_or_header_value_with_a_long_run_of_blanks_is_read_in_one_pass(tmp_path):

@@ -480,6 +480,22 @@ def test_a_gzip_cut_short_is_still_a_warning_and_a_prefix(tmp_path):
     assert 2000 < len(rec) < 3000 and any("cut short" in w for w in rec.warnings)
 
 
+@pytest.mark.parametrize("line, refused", [("temp_unit: F", True), ("temperature_unit: K", True),
+                                           ("Temp units: fahrenheit", True), ("temp: raw", True),
+                                           ("temp_unit: C", False), ("temp_unit: degC", False),
+                                           ("temp_sensor: on-die", False), ("temp_offset: 36.53", False)])
+def test_a_header_key_stating_another_temperature_unit_is_refused(tmp_path, line, refused):
+    """Attack pass 59: ``# temp_unit: F`` above a temp column of 77 read as 77 deg C, without a word: a recording's
+    ``temp`` is in deg C, and a key that says otherwise is refused as the rate's and the units' are."""
+    path = _dps_file(tmp_path, "".join(f"{i / 100:.2f},0.1,0.2,0.3,77\n" for i in range(50)), header=f"# {line}\n")
+    path.write_text(path.read_text().replace("t,gx,gy,gz\n", "t,gx,gy,gz,temp\n"))
+    if refused:
+        with pytest.raises(RecordingError, match=f"header key .* but a recording's temp column is in deg C"):
+            read_recording(path)
+    else:
+        assert read_recording(path).columns["temp"][0] == 77.0
+
+
 @pytest.mark.parametrize("key", ["gyro_unit", "sample_rate_hz", "sensor"])
 def test_a_repeated_header_key_is_refused_naming_its_line(tmp_path, key):
     value = {"gyro_unit": "rad/s", "sample_rate_hz": "50", "sensor": "b"}[key]

@@ -12,7 +12,7 @@ import unicodedata
 
 from ..errors import RecordingError
 from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, json_string, parse_number, quote
-from .statements import judge, key_unit, stated_kind
+from .statements import judge, key_unit, normal_text, stated_kind
 from .unit_words import known_unit
 from ..units import ACCEL_UNITS, AXES, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
 
@@ -306,8 +306,9 @@ def misspelt_key(key, also=()):
 
 def contradiction(header):
     """What a key of ``header`` (text values, with ``sample_rate_hz`` and ``gyro_unit`` checked) states of the sample
-    rate, the gyro's unit or sensitivity, or the accelerometer's unit, otherwise than the key gyrofilter reads it
-    from, as a phrase naming both, or None.
+    rate, the gyro's unit or sensitivity, the accelerometer's unit, or the temperature's (``temp_unit: F``: a
+    recording's ``temp`` is in deg C), otherwise than the key gyrofilter reads it from, as a phrase naming both, or
+    None.
 
     Kept as an unrelated key, ``# unit: rad/s`` beside ``gyro_unit: dps`` or ``# rate: 200`` beside
     ``sample_rate_hz: 100`` (or a device's ``unit=rad/s`` beside the source's option ``unit=dps``) read the file in
@@ -315,10 +316,13 @@ def contradiction(header):
     ``lsb_per_deg: 65.5`` beside ``lsb_per_dps: 131``, ``acc_unit: m/s^2`` beside ``accel_unit: g``): each key but
     the read ones is judged by :func:`contradicts`."""
     rates = header_rates(header)
+    facts = {**header, "temp_unit": "c"}
     for key, value in header.items():
-        meant = None if key in _READ_KEYS.values() else contradicts(key, value, header, rates)
+        meant = None if key in _READ_KEYS.values() else contradicts(key, value, facts, rates)
         if meant:
             meant, unread = meant
+            if meant == "temp_unit":  # temp_unit: F (attack pass 59)
+                return f"header key {quote(key)} says {quote(value)}, but a recording's temp column is in deg C, whatever a key says"
             return (f"header key {quote(key)} says {quote(value)}, "
                     + (f"which gyrofilter does not read as {unread};" if unread else "but")
                     + f" {meant} is {quote(header[meant])}: gyrofilter reads it only from {meant}")
@@ -360,10 +364,11 @@ _short_key_words = functools.lru_cache(maxsize=4096)(_key_words)
 def statement(key, value):
     """``(the kind of fact ``key: value`` states, the key's words, the value as read)`` or None: a key gyrofilter
     reads, or one spelt otherwise (:func:`misspelt_key`), states its own; another by its words
-    (:func:`~gyrofilter.recording.statements.stated_kind`; NFKC first: ``ＳａｍｐｌｅＲａｔｅ``; a unit in brackets
+    (:func:`~gyrofilter.recording.statements.stated_kind`; :func:`~gyrofilter.recording.statements.normal_text` first:
+    ``ＳａｍｐｌｅＲａｔｅ``, ``º/s``; a unit in brackets
     at its end read as the value's: ``Sample period (µs): 5000``). A key with a digit (``rate2_hz``: another
     sensor's) states nothing. Runs of blanks read as one (a regular expression over 300 kB of blanks took minutes)."""
-    key, value = key_unit(*(" ".join(unicodedata.normalize("NFKC", text).split()) for text in (key, value)))
+    key, value = key_unit(normal_text(key), normal_text(value))
     read, words = (_short_key_words if len(key) <= 64 else _key_words)(key)
     if read is not None:
         kind = _READ_KINDS.get(read)

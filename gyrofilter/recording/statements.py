@@ -17,7 +17,9 @@ its inverse (``8.75 mdps/LSB``: 114.29), a number in deg/s or after ``±`` a ful
 """
 from __future__ import annotations
 
+import math
 import re
+import unicodedata
 
 from ..inputs import is_plain_number
 from ..units import MAX_SAMPLE_RATE_HZ
@@ -43,7 +45,9 @@ STATES = {  # kind: (the other words its key may hold, its own words)
     "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
     "accel_sensitivity": ({"acc", "accel", "accelerometer", "acceleration", "per", "g", "mg", "factor"},
                           {"lsb", "sensitivity", "scale"}),
+    "temp_unit": ({"temp", "temps", "temperature", "tmp", "die", "imu", "sensor", "chip"}, {"unit", "units", "scale"}),
 }
+_TEMP_WORDS = {"temp", "temps", "temperature", "tmp"}
 _ACCEL_WORDS = STATES["accel_unit"][0]
 _SAMPLING = {"sample", "samples", "sampling", "odr"}
 #: the slowest rate a period states: a longer one is a time stamp (``TS: 512.3``, s since boot), as no gyro samples
@@ -53,12 +57,20 @@ _SECONDS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "m
             "millis": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3, "us": 1e-6, "μs": 1e-6, "usec": 1e-6, "usecs": 1e-6,
             "micros": 1e-6, "microseconds": 1e-6, "ns": 1e-9, "nsec": 1e-9, "nanoseconds": 1e-9}
 _RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samples", "hertz", "/sec",
+                  "/second", "readings/s", "readings/sec", "readings", "samples/second", "readings/second",
                   "samples/second", "sa/s", "per"}  # 200 per second
 #: after a rate's number and word, a time other than the second (``200 per minute``, ``200 samples per ms``)
 _PER_OTHER = re.compile(r"\s*(?:per\s+|/\s*)(?:min|minutes?|h|hr|hours?|d|days?|ms|msec|milliseconds?|[uµμ]s|usec)\b",
                         re.IGNORECASE)
 #: a second, after ``per`` (``200 per second``)
 _SECOND = re.compile(r"\s*(?:s|sec|secs|seconds?)\b", re.IGNORECASE)
+#: words in a key's brackets that remark on its value, not its unit
+_REMARKS = {"nominal", "approx", "approximately", "typ", "typical", "actual", "measured", "set", "target", "configured",
+            "default", "expected", "requested"}
+#: a value in Hz (``gyro rate: 200 Hz`` is a sample rate; ``gyro rate: 200`` may be a rate of turn)
+_IN_HZ = re.compile(r"\d\s*k?hz\b", re.IGNORECASE)
+#: ``per`` between the words of a unit (``radians per second``, ``rad per s``)
+_PER_WORD = re.compile(r"\s+per\s+", re.IGNORECASE)
 #: a value's first number (a sign of range or about before it) and the word right after it
 _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
                      r"(?P<number>(?>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?))(?![,.]\d)\s*(?P<suffix>[a-zA-Zμ°/^()\d-]*)(?P<rest>.*)")
@@ -105,6 +117,12 @@ def pairs(text, outer=None):
     return found
 
 
+def normal_text(text):
+    """``text`` as statements are read: NFKC (``ＳａｍｐｌｅＲａｔｅ``: ``SampleRate``), the ordinal ``º`` as ``°`` (NFKC
+    makes it an ``o``: ``º/s``), runs of blanks as one (a regular expression over 300 kB of blanks took minutes)."""
+    return " ".join(unicodedata.normalize("NFKC", text.replace("º", "°")).split())
+
+
 def key_unit(key, value):
     """``(key, value)`` with a unit in brackets at the key's end moved to a value that is a number alone
     (``Sample rate (Hz): ~200``: ``Sample rate``, ``~200 Hz``)."""
@@ -112,6 +130,8 @@ def key_unit(key, value):
     stem = bracketed and (bracketed["key"] or bracketed["per_key"])
     if not stem:
         return key, value
+    if bracketed["key"] and bracketed["unit"].strip(" .").lower() in _REMARKS:
+        return stem, value  # Sample rate (nominal): 200
     unit = bracketed["unit"] if bracketed["key"] else re.sub(r"[_\s]+per[_\s]+", "/", bracketed["per"])
     number = _NUMBER.fullmatch(clean(value))
     alone = number and not number["suffix"] and not number["rest"].strip()
@@ -120,19 +140,27 @@ def key_unit(key, value):
 
 def stated_kind(words, value):
     """The kind of :data:`STATES` a key of ``words`` (a set) with ``value`` states, the most telling, or None."""
-    gyro = {"gyro", "gyroscope"} if words & _SAMPLING else set()  # Gyro sample rate
+    gyro = {"gyro", "gyroscope"} if words & _SAMPLING or _IN_HZ.search(value) else set()  # Gyro sample rate, gyro rate: 200 Hz
     kinds = [kind for kind, (others, own) in STATES.items()
              if words & own and words <= others | own | (gyro if kind == "rate" else set())]
-    if {"sample", "time"} <= words <= STATES["period"][0]:
-        kinds.append("period")  # sample_time: 5 ms (Simulink's name of the period)
+    if ({"sample", "time"} <= words or {"sampling", "time"} <= words) and words <= STATES["period"][0] or words == {"time", "step"}:
+        kinds.append("period")  # sample_time: 5 ms (Simulink's name of the period), Sampling time, time step
+    if words == {"f", "s"}:
+        kinds.append("rate")  # f_s = 200 Hz
+    if {"counts", "per"} <= words <= STATES["sensitivity"][0] | {"counts"}:
+        kinds.append("sensitivity")  # counts per deg/s: 65.5
     if words <= set().union(*STATES["unit"]) and known_unit("rate", value):
         kinds.insert(0, "unit")  # gyro: rad/s
     if words <= _ACCEL_WORDS | STATES["accel_unit"][1] and known_unit("accel", value):
         kinds.insert(0, "accel_unit")  # accel: m/s^2
+    if words & _TEMP_WORDS and words <= set().union(*STATES["temp_unit"]) and known_unit("temp", value):
+        kinds.insert(0, "temp_unit")  # temp: F
     if not words & _ACCEL_WORDS:
         kinds = [kind for kind in kinds if not kind.startswith("accel")]
+    if not words & _TEMP_WORDS:
+        kinds = [kind for kind in kinds if kind != "temp_unit"]
     if _NUMBER.match(clean(value)):  # gyro_scale: 131, a sensitivity (pass 54); ±2000 dps, a full scale
-        kinds = [kind for kind in kinds if kind not in ("unit", "accel_unit")]
+        kinds = [kind for kind in kinds if kind not in ("unit", "accel_unit", "temp_unit")]
     return kinds[0] if kinds else None
 
 
@@ -172,8 +200,11 @@ def judge(kind, words, value, facts, rates, tolerance):
         return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
     if kind in ("sensitivity", "accel_sensitivity"):
         return _sensitivity(kind, amount, number, suffix, facts)
-    for key, quantity in (("gyro_unit", "rate"), ("accel_unit", "accel")) if kind == "unit" else (("accel_unit", "accel"),):
-        named = {known_unit(quantity, value)} | {known_unit(quantity, word) for word in re.split(r"[\s,;()]+", value)}
+    units = {"unit": (("gyro_unit", "rate"), ("accel_unit", "accel")), "accel_unit": (("accel_unit", "accel"),),
+             "temp_unit": (("temp_unit", "temp"),)}[kind]
+    for key, quantity in units:
+        value = _PER_WORD.sub("/", value)  # radians per second
+        named = {known_unit(quantity, value)} | {known_unit(quantity, word) for word in re.split(r"[\s,;()\[\]]+", value)}
         named.discard(None)
         if key in facts and named and facts[key] not in named:
             return key, None  # units: s, deg/s, m/s^2 states both
@@ -186,9 +217,9 @@ def _sensitivity(kind, amount, number, suffix, facts):
     unit_key, key, quantity = ("gyro_unit", "lsb_per_dps", "rate") if kind == "sensitivity" else ("accel_unit", "lsb_per_g", "accel")
     if facts.get(unit_key) != "lsb" or number and (number["range"] or known_unit(quantity, suffix) not in (None, "lsb")):
         return None  # gyro_scale: ±2000 dps, a full scale (65.5 LSB, 65.5 LSB per dps: a sensitivity)
-    inverse = re.fullmatch(r"(m?)(?:dps|deg/s|°/s|g)/(?:lsb|digit)", suffix)
-    if inverse and amount:
-        amount = 1.0 / (amount * (1e-3 if inverse[1] else 1.0))
+    inverse = re.fullmatch(r"(m?)(dps|deg/s|°/s|rad/s|g)/(?:lsb|digit)", suffix)
+    if inverse and amount:  # 8.75 mdps/LSB, 0.000266 rad/s/LSB
+        amount = 1.0 / (amount * (1e-3 if inverse[1] else 1.0) * (180.0 / math.pi if inverse[2] == "rad/s" else 1.0))
     per = suffix in ("", "lsb") or inverse or ("dps" in suffix or "deg" in suffix.replace("°", "deg") if kind == "sensitivity"
                                      else suffix in ("lsb/g", "lsb/(g)"))
     if amount is None or not per:

@@ -17,13 +17,12 @@ from __future__ import annotations
 
 import functools
 import re
-import unicodedata
 
 from ...errors import RecordingError
 from ...inputs import quote
 from ...units import RATE_TOLERANCE
 from ..header import VERSION_KEY, contradicts, header_rates, statement
-from ..statements import pairs
+from ..statements import normal_text, pairs
 
 #: the comment marks (``#``, ``//``, ``##``, ``# *``) before a comment's text
 _MARK = re.compile(r"\s*(?:#|//)[#/!*\-=\s]*")
@@ -32,7 +31,7 @@ MAX_STATEMENTS = 1000
 #: the option that gives each header key a comment may contradict, and where it comes from without it
 _SOURCES = {"sample_rate_hz": ("--sample-rate-hz", "the time column's steps"), "gyro_unit": ("--unit", "the column names"),
             "lsb_per_dps": ("--lsb-per-dps", "--lsb-per-dps"), "accel_unit": ("--accel-unit", "the column names"),
-            "lsb_per_g": ("--lsb-per-g", "--lsb-per-g")}
+            "lsb_per_g": ("--lsb-per-g", "--lsb-per-g"), "temp_unit": ("--temp-unit", "the column's name, else deg C")}
 
 
 def refuse_recording(text, number, path):
@@ -54,7 +53,7 @@ def _statements(text):
 
 def _read_statements(text):
     """:func:`_statements`, each different pair read once."""
-    body = _MARK.sub("", " ".join(unicodedata.normalize("NFKC", text).split()), count=1)  # runs of blanks as one
+    body = _MARK.sub("", normal_text(text), count=1)
     return tuple((key, value) for key, value in dict.fromkeys(pairs(body)) if statement(key, value))
 
 

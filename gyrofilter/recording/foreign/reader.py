@@ -429,8 +429,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     header_line, names, split, first_data, preamble = None, None, None, None, 0
     counts = {"skipped": 0, "before_rows": 0, "warnings": [], "comments": Comments(path)}
     given = {key for key, option in (("sample_rate_hz", sample_rate_hz), ("gyro_unit", unit), ("lsb_per_dps", lsb_per_dps),
-                                     ("accel_unit", options.get("accel_unit")), ("lsb_per_g", options.get("lsb_per_g")))
-             if option is not None}
+                                     *((key, options.get(key)) for key in ("accel_unit", "lsb_per_g", "temp_unit"))) if option is not None}
     for number, text, lines in log_lines(raw, path):
         if not text.strip() or text.lstrip().startswith(_COMMENT):
             refuse_recording(text, number, path)
@@ -525,7 +524,8 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     if unit == "lsb":
         header["lsb_per_dps"] = format_number(lsb_per_dps)
     header.update(extras.header, converted_from=path)
-    counts["comments"].check({**header, "gyro_unit": read_unit, **({"accel_unit": extras.accel_read} if extras.accel_read else {})}, given)
+    read = {"gyro_unit": read_unit, "accel_unit": extras.accel_read, "temp_unit": extras.temp_unit}  # the units read
+    counts["comments"].check({**header, **{key: unit for key, unit in read.items() if unit}}, given)
     return Foreign(raw, path, header, out_columns + extras.columns, formats + extras.formats(), rows, summary,
                    plan, counts["warnings"] + whole_rates(integral, read_unit, gyro, names) + extras.warnings)
 
