@@ -45,9 +45,9 @@ STATES = {  # kind: (the other words its key may hold, its own words)
     "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
     "accel_sensitivity": ({"acc", "accel", "accelerometer", "acceleration", "per", "g", "mg", "factor"},
                           {"lsb", "sensitivity", "scale"}),
-    "temp_unit": ({"temp", "temps", "temperature", "tmp", "die", "imu", "sensor", "chip"}, {"unit", "units", "scale"}),
 }
-_TEMP_WORDS = {"temp", "temps", "temperature", "tmp"}
+#: the other words of a key stating the temperature's unit, besides a word of a temperature (:func:`_temperature`)
+_TEMP_UNIT_WORDS = ({"die", "imu", "sensor", "chip"}, {"unit", "units", "scale"})
 _ACCEL_WORDS = STATES["accel_unit"][0]
 _SAMPLING = {"sample", "samples", "sampling", "odr"}
 #: the slowest rate a period states: a longer one is a time stamp (``TS: 512.3``, s since boot), as no gyro samples
@@ -153,15 +153,20 @@ def stated_kind(words, value):
         kinds.insert(0, "unit")  # gyro: rad/s
     if words <= _ACCEL_WORDS | STATES["accel_unit"][1] and known_unit("accel", value):
         kinds.insert(0, "accel_unit")  # accel: m/s^2
-    if words & _TEMP_WORDS and words <= set().union(*STATES["temp_unit"]) and known_unit("temp", value):
-        kinds.insert(0, "temp_unit")  # temp: F
+    temperature = {word for word in words if _temperature(word)}
+    if temperature and words - temperature <= set().union(*_TEMP_UNIT_WORDS) and (
+            words & _TEMP_UNIT_WORDS[1] or known_unit("temp", value)):
+        kinds.insert(0, "temp_unit")  # temp_unit: F, Temperature units: K, temp: F
     if not words & _ACCEL_WORDS:
         kinds = [kind for kind in kinds if not kind.startswith("accel")]
-    if not words & _TEMP_WORDS:
-        kinds = [kind for kind in kinds if kind != "temp_unit"]
     if _NUMBER.match(clean(value)):  # gyro_scale: 131, a sensitivity (pass 54); ±2000 dps, a full scale
         kinds = [kind for kind in kinds if kind not in ("unit", "accel_unit", "temp_unit")]
     return kinds[0] if kinds else None
+
+
+def _temperature(word):
+    """Whether a key's ``word`` names a temperature: ``temp...`` (``temp``, ``temps``, its long form) or ``tmp``."""
+    return word.startswith("temp") or word == "tmp"
 
 
 def clean(value):
