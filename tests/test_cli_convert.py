@@ -21,6 +21,7 @@ import pytest
 
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
+from gyrofilter.recording.foreign import TIME_UNITS
 from support import REPO
 
 N = 1500  # 15 s at 100 Hz: past the filter's 2 s start-up calibration
@@ -208,6 +209,34 @@ def test_damaged_gzip_log_is_one_refusal_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "damaged gzip data" in err and str(src) in err and len(err.strip().splitlines()) == 1
     assert not dst.exists()
+
+
+@pytest.mark.parametrize("step, name", [(1, "t"), (0.5, "time"), (1, "timestamp"), (500, "stamp")])
+def test_a_time_column_whose_steps_read_in_two_units_is_refused(tmp_path, capsys, step, name):
+    """Attack pass 59: a 1 Hz log stamped in s (``t`` = 0, 1, 2 ...) was written at 1000 Hz (3 s), the stamps inferred
+    to be ms, every Allan time 1000 times off: steps of 1 are 1 Hz in s or 1 kHz in ms (500: 2 Hz in ms or 2 kHz
+    in us). Such a log is refused, naming both; --time-unit decides."""
+    rows = "".join(f"{i * step:g},0.1,0.2,0.3\n" for i in range(300))
+    code, dst = _convert(tmp_path, f"{name},gx,gy,gz\n{rows}", "--unit", "dps")
+    err = capsys.readouterr().err
+    slow, fast = ("s", "ms") if step < 100 else ("ms", "us")
+    assert code == 2 and not dst.exists() and err.startswith(
+        f"gyrofilter: error: {tmp_path / 'log.csv'}: the time column '{name}' steps by {step:g}: "), err
+    assert f"; give --time-unit {slow} or {fast}\n" in err
+    code, dst = _convert(tmp_path, f"{name},gx,gy,gz\n{rows}", "--unit", "dps", "--time-unit", slow)
+    assert code == 0 and read_recording(dst).sample_rate_hz == pytest.approx(1.0 / (step * TIME_UNITS[slow]))
+    capsys.readouterr()
+    code, dst = _convert(tmp_path, f"{name},gx,gy,gz\n" + rows.replace(f"{step:g},", f"{step * 10:g},", 1), "--unit",
+                         "dps", out="again.csv")
+    assert code == 2  # one step changed, the median the same
+
+
+def test_a_time_column_in_ms_at_100_hz_is_still_inferred(tmp_path, capsys):
+    """Steps of 10 are 0.1 Hz in s (no gyro logs so slowly) or 100 Hz in ms: ms, said in the summary."""
+    rows = "".join(f"{i * 10},0.1,0.2,0.3\n" for i in range(300))
+    code, dst = _convert(tmp_path, f"time,gx,gy,gz\n{rows}", "--unit", "dps")
+    assert code == 0 and read_recording(dst).sample_rate_hz == 100.0
+    assert "column 'time' in ms (inferred" in capsys.readouterr().err
 
 
 def test_decimal_epoch_seconds_are_subtracted_exactly(tmp_path, capsys):

@@ -35,7 +35,7 @@ def add_arguments(parser):
                                                   "required without a time column)")
     parser.add_argument("--time-unit", choices=tuple(TIME_UNITS), default=None,
                         help="unit of the time column (default: the one its name states, else the first of s, ms, us, "
-                             "ns giving 5 Hz or more)")
+                             "ns giving 5 Hz or more, where the unit before it does not give 1 Hz or more)")
     parser.add_argument("--temp-unit", choices=TEMP_UNITS, default=None,
                         help="unit of the temperature column (TempC, temp_c, Temperature, TEMP ...), written as the "
                              "recording's temp in deg C: c, f or k (converted), or mpu6050 (raw counts: counts / 340 + 36.53); none leaves "

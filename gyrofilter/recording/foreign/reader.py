@@ -25,7 +25,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
 - **Time.** The time column's unit (s, ms, us, ns) is the caller's, the name's (``time_ms``,
   ``millis``, ``%time`` of a ROS export in ns, ``seconds_elapsed``) or, failing both, the
   first of s, ms, us, ns in which the typical step means :data:`MIN_INFERRED_RATE_HZ` or more
-  (a gyro logs at 5 Hz or faster), said in the summary. ``t`` counts from the first time stamp
+  (a gyro logs at 5 Hz or faster), said in the summary; refused where the unit before it means 1 Hz or more
+  (steps of 1: 1 Hz in s or 1 kHz in ms). ``t`` counts from the first time stamp
   (stamps are subtracted exactly, as decimals: ns or s since 1970 keep every nanosecond); the first
   stamp is kept in the header (``time_origin``). The rate is the caller's or 1 / the mean
   step, gaps aside (refused where the gaps are ambiguous: :func:`_time_axis`); either way ``t`` is held to it as the reader holds a recording's
@@ -43,10 +44,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
 from __future__ import annotations
 
 import contextlib
-import decimal
 import math
 import re
-import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,6 +58,7 @@ from ...closable import Closable
 from ..content import RecordingHead
 from .comments import Comments, refuse_recording
 from .extras import find_extras, gyro_out_of_range, left_out_line, no_gyro_column, whole_rates
+from .stamps import MIN_INFERRED_RATE_HZ, TIME_UNITS, Stamps, infer_time_unit, seconds_from
 from ..header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from ..logtext import log_lines, open_log
 from ..reader import CHUNK_ROWS
@@ -66,10 +66,6 @@ from ..unit_words import (columns_stated, converted_text, ending_unit, given_uni
                          stated_unit, to_floats, units_of, unread_unit)
 from ..writer import EXACT_FORMAT, exact_format
 
-#: time units of a time column and their length in s
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
-#: the slowest rate a time unit is inferred for: a gyro logs at 5 Hz or faster (the MPU6050's slowest is 3.9 Hz)
-MIN_INFERRED_RATE_HZ = 5.0
 #: a time column's name once normalised (:func:`_normal`), with its unit when the name states it
 TIME_NAME = re.compile(r"(?:header_)?(?P<word>t|time|times|timestamp|time_stamp|stamp|%time|seconds_elapsed|elapsed|"
                        r"elapsed_time|seconds|secs|sec|millis|micros|nanos)" rf"(?:_(?P<unit>{name_units('time')}))?")
@@ -313,86 +309,6 @@ def _unchanged(path):
         raise RecordingError(f"{path}: changed while it was read (a cell checked before is no number now)") from None
 
 
-class _Stamps:
-    """The time column's cells, a chunk at a time (:meth:`add`), as offsets from the first stamp.
-    The cells are subtracted as decimals, exactly, before they become floats: a phone's stamps
-    in s since 1970 with 9 decimals (or ns since 1970) keep every ns, which floats of the stamps
-    themselves (2.4e-7 s apart near 1.7e9) would not. Kept: the offsets as floats (8 bytes a row;
-    the time unit is inferred from their median step) when ``keep``, and the first stamp beyond a
-    float's range and the first offset beyond it, refused by :meth:`check` as the first in the
-    file (a first stamp of 1e400 is blamed, not the next row, whose offset from it is what overflows)."""
-
-    def __init__(self, keep):
-        self.first, self.origin, self.offsets = None, None, [] if keep else None
-        self.huge = self.far = None  # (row, text) of the first stamp beyond a float / offset beyond one
-        self.rows = 0
-        self.last = None  # (offset, text) of the last stamp taken
-        self.exponent = None  # the place of the finest last digit of a stamp (-3: 0.001 of the unit)
-
-    def add(self, texts, where):
-        """Take the next chunk's cells; False once a stamp or offset is beyond a float. A stamp
-        that does not increase is refused at once (``where(i)`` names the chunk's row i): a gzip
-        bomb of equal rows, "0,0,0,0" 150 million times in 1.8 MB, was read whole first (16 bytes a row: 2.4 GB)."""
-        if self.first is None:
-            self.origin = texts[0]
-            self.first = decimal.Decimal(texts[0])
-            if not math.isfinite(float(self.first)):
-                self.huge = (0, texts[0])  # blamed when an offset from it is beyond a float
-        with decimal.localcontext() as ctx:
-            ctx.traps[decimal.Overflow] = False  # 1e99999 - 0 is Infinity, refused by check()
-            stamps = [decimal.Decimal(t) for t in texts]
-            offsets = np.array([float(d - self.first) for d in stamps])
-        places = [d.as_tuple().exponent for d in stamps if d.is_finite()]
-        if places:
-            self.exponent = min(places + ([self.exponent] if self.exponent is not None else []))
-        bad = np.flatnonzero(~np.isfinite(offsets))
-        if bad.size and self.far is None:
-            self.far = (self.rows + int(bad[0]), texts[int(bad[0])])
-            for row in range(int(bad[0]) + 1):  # a stamp itself beyond a float comes at or before its offset
-                if self.huge is None and not math.isfinite(float(decimal.Decimal(texts[row]))):
-                    self.huge = (self.rows + row, texts[row])
-        with np.errstate(invalid="ignore"):  # inf - inf: an offset beyond a float
-            steps = np.diff(offsets) if self.last is None else np.diff(np.r_[self.last[0], offsets])
-            back = np.flatnonzero((steps <= 0) & np.isfinite(steps))  # an offset beyond a float: refused by check()
-        if back.size:
-            i = int(back[0]) + (1 if self.last is None else 0)
-            before = texts[i - 1] if i > 0 else self.last[1]
-            raise RecordingError(f"{where(i)}: t does not increase ({quote(texts[i])} after {quote(before)})")
-        if self.offsets is not None:
-            self.offsets.append(offsets)
-        self.rows += len(texts)
-        self.last = (float(offsets[-1]), texts[-1])
-        return self.far is None
-
-    def check(self, where, path):
-        """Refuse the first stamp beyond a float's range, or too far from the first for a float;
-        ``where(row)`` names a row."""
-        if self.far is None:
-            return
-        row, text = self.huge or self.far
-        why = (f"is beyond the range of a float ({sys.float_info.max:.3g})" if self.huge else
-               f"is too far from the first ({quote(self.origin)}) to be a time of this log")
-        raise RecordingError(f"{path}: {where(row)}: time stamp {quote(text)} {why}")
-
-
-def _seconds(texts, origin, unit_s):
-    """The time column's cells as seconds from the first stamp ``origin`` (text): the exact decimal
-    offsets (:class:`_Stamps`) scaled exactly, then rounded once to a float, so that a stamp
-    39966971 ns after the first is written 0.039966971, not 0.039966971000000004."""
-    scale = decimal.Decimal(repr(unit_s))
-    first = decimal.Decimal(origin)
-    return np.array([float((decimal.Decimal(t) - first) * scale) for t in texts])
-
-
-def _infer_time_unit(steps, path, name):
-    """The first time unit in which the median step means MIN_INFERRED_RATE_HZ or more."""
-    median = float(np.median(steps))
-    for unit, seconds in TIME_UNITS.items():
-        if median > 0 and 1.0 / (median * seconds) >= MIN_INFERRED_RATE_HZ:
-            return unit
-    raise RecordingError(f"{path}: the time column {quote(name)} does not step forward; give --time-unit or --sample-rate-hz")
-
-
 def read_foreign(path, *, unit=None, lsb_per_dps=None, columns=None, sample_rate_hz=None, time_unit=None, **extras):
     """Read another tool's gyro log ``path`` (see the module's rules) as a :class:`Foreign`.
 
@@ -458,7 +374,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
                  gyro_read=read_unit, extras=extras)
     counts["skipped"] = preamble
     rows, integral, out_of_range = 0, [True] * 3, None
-    stamps = _Stamps(keep=t_unit is None) if time is not None else None
+    stamps = Stamps(keep=t_unit is None) if time is not None else None
     t_parts, line_parts = [], []
     for numbers, cells in _row_chunks(raw, path, plan, counts):
         gyro_values = [to_floats(col, read_unit) for col in cells[:3]]
@@ -469,7 +385,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
             line_parts.append(np.array(numbers))
             if stamps.far is None and stamps.add(cells[3], lambda i: f"{path}: line {numbers[i]}, column {time + 1} "
                                                                    f"({quote(names[time])})") and t_unit is not None:
-                t_parts.append(_seconds(cells[3], stamps.origin, TIME_UNITS[t_unit]))
+                t_parts.append(seconds_from(cells[3], stamps.origin, TIME_UNITS[t_unit]))
         rows += len(numbers)
     skipped = counts["skipped"]
     if rows < 2:
@@ -494,11 +410,11 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
         if t_unit is None:
             offsets = np.concatenate(stamps.offsets)
             stamps.offsets = None
-            t_unit, how = _infer_time_unit(np.diff(offsets), path, names[time]), \
+            t_unit, how = infer_time_unit(np.diff(offsets), path, names[time]), \
                 f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more; --time-unit to say otherwise"
             del offsets
             with _unchanged(path):
-                t_parts = [_seconds(cells[3], stamps.origin, TIME_UNITS[t_unit])
+                t_parts = [seconds_from(cells[3], stamps.origin, TIME_UNITS[t_unit])
                            for _, cells in _row_chunks(raw, path, plan, again=True)]
         t_s = np.concatenate(t_parts)
         del t_parts
