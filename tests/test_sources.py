@@ -398,12 +398,13 @@ def test_a_file_in_a_partitioned_folder_is_recorded(tmp_path, monkeypatch):
         np.testing.assert_array_equal(read_recording(out).gyro_dps, rec.gyro_dps)
 
 
-@pytest.mark.parametrize("speed, said", [(np.float32(2.0), None), (np.array(2.0), None), (0, "replay speed must be > 0"),
+@pytest.mark.parametrize("speed, said", [(np.float32(2.0), None), (np.array(2.0), None), (0, "replay speed must be >= 0.001"),
+                                         (1e-300, "replay speed must be >= 0.001, got 1e-300"),
                                          (float("nan"), "replay speed must be a finite number"),
                                          (True, "replay speed must be a finite number"), ("2", "replay speed must be a finite number")])
 def test_a_numpy_speed_is_the_number_it_holds(tmp_path, speed, said):
     """Attack pass 29b: ReplaySource(speed=np.float32(2.0)) was refused as "must be a positive
-    number, got 2.0"; True was taken as 1."""
+    number, got 2.0"; True was taken as 1. Pass 59: speed=1e-300 waited 1e298 s for the first sample."""
     from gyrofilter.sources.replay import ReplaySource
     path = tmp_path / "r.csv"
     write_recording(path, Recording.from_dps(np.zeros((20, 3)), 100.0))

@@ -30,6 +30,11 @@ MAX_WAIT_S = 0.1
 POLL_S = 0.02  # paced reads return at most this often (batches, like a device's FIFO poll)
 
 
+#: the slowest pace of a replay: a thousand times slower than recorded (a speed of 1e-300 waited 1e298 s for the
+#: first sample without a word, attack pass 59)
+MIN_SPEED = 1e-3
+
+
 class ReplaySource(Source):
     """Replay ``path`` (format v1) as a source; ``realtime`` paces it at ``speed`` x real time.
 
@@ -41,7 +46,7 @@ class ReplaySource(Source):
         Pace the samples: the sample with time ``t`` (s) is delivered ``(t - t0) / speed``
         seconds after the first ``read()``; False hands them out as fast as they are read.
     speed : float
-        Pace factor with ``realtime`` (> 0, finite; 2 = twice as fast as recorded).
+        Pace factor with ``realtime`` (at least :data:`MIN_SPEED`, finite; 2 = twice as fast as recorded).
     clock, sleep : callable
         Monotonic clock (s) and sleep(s) for the pacing (test seams).
     chunk_rows : int
@@ -53,7 +58,7 @@ class ReplaySource(Source):
     """
 
     def __init__(self, path, realtime=False, speed=1.0, *, clock=time.monotonic, sleep=time.sleep, chunk_rows=CHUNK_ROWS):
-        speed = check_number(speed, "replay speed", low=0.0, low_open=True)  # numpy's numbers too (a float32 was refused)
+        speed = check_number(speed, "replay speed", low=MIN_SPEED)  # numpy's numbers too (a float32 was refused)
         self._chunks = iter_recording(path, chunk_rows)
         head = self._head = next(self._chunks)
         self.path = str(path)
