@@ -70,3 +70,30 @@ def test_evaluate_command_refuses_existing_outputs_and_a_failure_leaves_none(tmp
     assert main(["evaluate", "--recordings", str(rec_dir), "--out", str(fresh), "--no-lag"]) == 2
     assert "simulated failure" in capsys.readouterr().err
     assert not fresh.exists()  # no table or JSON without the figure, and no empty folder
+
+
+@pytest.mark.slow
+def test_a_file_size_limit_names_the_file_that_failed(tmp_path):
+    """Attack pass 59: under a file size limit of 3000 bytes, evaluate said "ev3: File too large; not written",
+    naming the folder, not its table (written with open(), whose close failed without a file name)."""
+    pytest.importorskip("matplotlib")
+    import resource
+    import subprocess
+    import sys
+
+    rng = np.random.default_rng(8)
+    rec_dir = tmp_path / "recordings"
+    rec_dir.mkdir()
+    write_recording(rec_dir / "mpu6050_static_91s.csv.gz",
+                    Recording.from_dps(rng.normal(scale=0.1, size=(9100, 3)), 100.0,
+                                       header={"sensor": "MPU6050", "description": "static: synthetic"}))
+    out = tmp_path / "ev"
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (3000, 3000))
+
+    run = subprocess.run([sys.executable, "-m", "gyrofilter", "evaluate", "--recordings", str(rec_dir), "--out", str(out),
+                          "--no-lag"], preexec_fn=limit, capture_output=True, text=True, timeout=900)
+    assert run.returncode == 2
+    assert run.stderr.splitlines()[-1] == f"gyrofilter: error: {out / 'evaluate_table.md'}: File too large; not written"
+    assert not out.exists() or os.listdir(out) == []

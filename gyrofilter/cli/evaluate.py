@@ -86,8 +86,7 @@ def run(args):
            "dynamic": ev.dynamic, "broad": ev.broad}
     table_name, json_name, png_name = OUTPUT_NAMES
     with outputs.replacing_in(args.out) as tmp:
-        with open(os.path.join(tmp, table_name), "w", encoding="utf-8") as fh:
-            fh.write(text)
+        outputs.write_text(os.path.join(tmp, table_name), text)  # a full disk names the file (attack pass 59)
         outputs.write_json(os.path.join(tmp, json_name), doc)
         E.plot_pareto(ev, os.path.join(tmp, png_name))
     console.say(f"wrote {', '.join(os.path.join(args.out, name) for name in OUTPUT_NAMES)}")
