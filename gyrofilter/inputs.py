@@ -391,10 +391,13 @@ def load_json(path, what, error=SettingsError):
 
 def sibling_hint(path, exc):
     """"; there is NAME" when ``exc`` says ``path`` does not exist but its sibling with or without
-    ``.gz`` does (``rec.csv`` for ``rec.csv.gz``, and the other way round), else ""."""
+    ``.gz`` does (``rec.csv`` for ``rec.csv.gz``, and the other way round); for ``-`` (no such file), how to give
+    the standard input (``cat rec.csv | gyrofilter replay -`` said only "No such file", attack pass 59); else ""."""
     if not isinstance(exc, FileNotFoundError):
         return ""
     path = os.fspath(path)
+    if path == "-":
+        return "; to read the standard input give /dev/stdin (convert alone reads it as -)"
     sibling = path[:-3] if path.endswith(".gz") else path + ".gz"
     return f"; there is {sibling}" if os.path.isfile(sibling) else ""
 
