@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .units import one_value
+
 #: samples per pass of the chunked series helpers (:func:`moving_mean`, ``analysis.stats.detrend_line``): their
 #: temporaries are a few MB whatever the record's length
 PASS_SAMPLES = 1 << 16
@@ -60,11 +62,11 @@ class RunningMoments:
 
     @property
     def std(self):
-        """Sample standard deviation (ddof = 1), exactly 0 where every value is the same; NaN
-        with fewer than 2 rows."""
+        """Sample standard deviation (ddof = 1), exactly 0 where every value is one
+        (:func:`~gyrofilter.units.one_value`: the same up to float64 rounding); NaN with fewer than 2 rows."""
         if self.count < 2:
             return np.full_like(self.mean, np.nan)
-        return np.where(self._low == self._high, 0.0, np.sqrt(self._m2 / (self.count - 1)))
+        return np.where(one_value(self._low, self._high), 0.0, np.sqrt(self._m2 / (self.count - 1)))
 
 
 class Envelope:

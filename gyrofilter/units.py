@@ -40,6 +40,19 @@ MAX_ACCEL_MPS2 = 1e7
 #: (arma) stays below it is refused. No gyro is that quiet (a unit error?), and the fits' fourth
 #: powers of it stay normal float64 numbers (a noise of 1e-300 deg/s ended in a failed SVD)
 MIN_NOISE_DPS = 1e-100
+#: float64 spacings within which samples are one value (the rounding of a unit's conversion or of a sum, not noise):
+#: a stuck axis reading 19.99 deg/s and the float after it, at random, is stuck (its std 1e-15 gave ratios of 10000x
+#: and an N of 1e-16, attack pass 59)
+ROUNDING_ULPS = 16
+
+
+def one_value(low, high):
+    """Whether the values from ``low`` to ``high`` (numbers or arrays: the least and greatest of a series) are one
+    value up to float64 rounding: ``high - low <= ROUNDING_ULPS * spacing(max(|low|, |high|))``. The one test of a
+    constant (stuck) axis."""
+    return high - low <= ROUNDING_ULPS * np.spacing(np.maximum(np.abs(low), np.abs(high)))
+
+
 #: one sample per 1000 s: far below any gyro's output (the MPU6050's slowest is 1 kHz / 256 = 3.9 Hz)
 #: and below any filter's output rate from it, while 1 / rate and the Allan cluster times stay ordinary
 #: floats (a rate of 1e-300 Hz ended in a failed SVD deep in the fit)

@@ -11,6 +11,7 @@ from gyrofilter import GyroFilter
 from gyrofilter.cli import main
 from gyrofilter.cli.filtering import ROW_FORMATS
 from gyrofilter.recording import Recording, RecordingWriter, dps_header, read_recording, write_recording
+from support import REPO
 
 
 def test_replay_without_argument_filters_the_bundled_recording(capsys):
@@ -73,6 +74,16 @@ def test_a_missing_csv_whose_gz_exists_names_it(tmp_path, capsys):
     assert capsys.readouterr().err.rstrip().endswith(f"No such file or directory; there is {tmp_path / 'rec.csv.gz'}")
     assert main(["convert", str(tmp_path / "rec.csv"), "--out", str(tmp_path / "o.csv")]) == 2
     assert f"; there is {tmp_path / 'rec.csv.gz'}" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["replay", "allan"])
+def test_a_dash_for_the_standard_input_says_how_to_give_it(tmp_path, command):
+    """Attack pass 59: ``cat f | gyrofilter replay -`` said only "-: cannot read: No such file or directory"."""
+    with open(REPO / "recordings" / "mpu6050_static_100s.csv.gz", "rb") as stdin:
+        run = subprocess.run([sys.executable, "-m", "gyrofilter", command, "-"], stdin=stdin, cwd=tmp_path,
+                             capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and run.stderr == ("gyrofilter: error: -: cannot read: No such file or directory; to read "
+                                                  "the standard input give /dev/stdin (convert alone reads it as -)\n")
 
 
 def test_replay_out_writes_the_filtered_series(tmp_path, capsys):
@@ -354,6 +365,40 @@ def test_a_stuck_sensor_has_no_std_ratio(tmp_path, capsys, value_dps):
     assert main(["replay", str(src)]) == 0
     rows = [ln for ln in capsys.readouterr().out.splitlines() if ln.strip()[:2] in ("x ", "y ", "z ")]
     assert len(rows) == 3 and all(ln.split()[5] == "n/a" for ln in rows), rows
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_stuck_sensor_whose_samples_differ_by_rounding_is_stuck_everywhere(tmp_path, capsys, seed):
+    """Attack pass 59: every sample 19.99 deg/s or the float after it (rounding in a logger's unit conversion) gave
+    std ratios of 10000x in replay, N = 1.8e-16 in allan, six gap findings per axis, exit 0: the constant-axis test
+    wanted exactly equal samples. Samples a few float64 spacings apart are one value (``units.one_value``): replay
+    says n/a, allan, gap and arma refuse the axis as constant. Value, sign, spread and stuck axis drawn per seed;
+    noise a million spacings wide is noise."""
+    pytest.importorskip("statsmodels")
+    from gyrofilter.analysis.arma.identify import analyze_axis
+    from gyrofilter.analysis.gap.pipeline import nothing_to_analyse
+    from gyrofilter.analysis.noise.fit import characterise_axis
+    from gyrofilter.units import ROUNDING_ULPS
+
+    rng = np.random.default_rng(seed)
+    value = float(rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-6, 1.2))  # within the plausible bias (20 deg/s)
+    stuck = int(rng.integers(3))
+    gyro = rng.normal(0.0, 0.05, (3000, 3))
+    steps = rng.integers(0, ROUNDING_ULPS // 2 + 1, 3000)  # floats above the value, a few spacings at most
+    gyro[:, stuck] = value + steps * np.spacing(abs(value))
+    assert np.ptp(gyro[:, stuck]) > 0
+    src = tmp_path / "stuck.csv"
+    write_recording(src, Recording.from_dps(gyro, 100.0))
+    assert main(["replay", str(src)]) == 0
+    rows = [ln.split() for ln in capsys.readouterr().out.splitlines() if ln.strip()[:2] in ("x ", "y ", "z ")]
+    assert [row[5] == "n/a" for row in rows] == [axis == stuck for axis in range(3)], rows
+    with pytest.raises(ValueError, match="constant"):
+        characterise_axis(gyro[:, stuck], 100.0)
+    with pytest.raises(ValueError, match="constant"):
+        analyze_axis(gyro[:, stuck], 100.0)
+    assert nothing_to_analyse(gyro[:, stuck]) == "constant signal"
+    noisy = value + rng.normal(0.0, 1e6 * np.spacing(abs(value)), 3000)
+    assert nothing_to_analyse(noisy) is None
 
 
 def test_outputs_are_checked_before_any_work(tmp_path, capsys):

@@ -16,7 +16,7 @@ import numpy as np
 from ..errors import NotStillError, RecordingError
 from ..filter.calibration import implausible_bias
 from ..recording import ACCEL_COLUMNS, INPUT_RATE_KEY, collect_columns, filtered_from, iter_recording, warn_about_gaps
-from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, to_dps, to_mps2
+from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, one_value, to_dps, to_mps2
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
 from .noise.fit import characterise_axis
@@ -573,7 +573,7 @@ def _characterise_sensor(series, sensor, *, path, head, confidence, min_clusters
                                                min_clusters=min_clusters, unit=sensor["unit"])
         except ConstantAxisError as exc:
             if not skip_constant or (a == axes[-1] and not results and not sensor["prefix"]):
-                exc.varying = "".join(results) + "".join(b for b in axes[axes.index(a) + 1:] if np.ptp(series[b]) > 0)
+                exc.varying = "".join(results) + "".join(b for b in axes[axes.index(a) + 1:] if not one_value(series[b].min(), series[b].max()))
                 raise
             warn(f"{exc}{LEFT_OUT}")
             continue

@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import RecordingError
 from ..inputs import quote
 from ..recording import filtered_words, read_recording
-from ..units import AXES
+from ..units import AXES, one_value
 
 NOISE_SEGMENT_S = 90.0
 #: the columns a BROAD trial has beside the gyro's: the optical reference rate and the movement flag
@@ -58,7 +58,7 @@ def _refuse_stuck(rec, path):
     rounding residues of two means."""
     gyro = rec.gyro_dps
     for i, axis in enumerate(AXES):
-        if len(gyro) and np.ptp(gyro[:, i]) == 0:
+        if len(gyro) and one_value(gyro[:, i].min(), gyro[:, i].max()):
             raise RecordingError(f"{path}: axis {axis}: all {len(gyro)} samples equal {gyro[0, i]:g} deg/s (a stuck "
                                  "axis): no noise for the filters to reduce; move it out of the recordings folder")
 

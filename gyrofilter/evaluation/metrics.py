@@ -40,7 +40,7 @@ import numpy as np
 from ..errors import SettingsError
 from .reference import block_mean_masked, reference_from_recording
 from ..sim.profiles import get_profile
-from ..units import AXES
+from ..units import AXES, one_value
 
 DEFAULT_CALIBRATION_S = 2.0
 #: a static std reduction beyond this is no filter's: the rows are constant but for the float's rounding
@@ -66,7 +66,7 @@ def static_reduction(spec, x_dps, sample_rate_hz, calibration_s=DEFAULT_CALIBRAT
     after = x_dps[out.start :]
     raw_std, filt_std = np.std(after, axis=0), np.std(out.y_dps, axis=0)
     for i, axis in enumerate(AXES):  # a stuck axis is refused whole (datasets); stuck after the window is 0 / 0
-        if np.ptp(after[:, i]) == 0:
+        if one_value(after[:, i].min(), after[:, i].max()):
             raise SettingsError(f"axis {axis}: the {len(after)} samples after the calibration all equal {after[0, i]:g} "
                                 "deg/s (a stuck axis): no noise for the filters to reduce")
         if not filt_std[i] * MAX_STATIC_REDUCTION > raw_std[i]:  # 'infx' in the table, None in the JSON

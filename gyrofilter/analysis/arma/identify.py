@@ -77,7 +77,7 @@ from .checks import (DEFAULT_ADF_MAXLAG, DEFAULT_ALPHA, WHITENESS_LAGS, Normalit
 from .fit import ArmaFit, fit_arma, require_stats, simulate_arma
 from ...errors import SettingsError
 from ...inputs import check_number
-from ...units import MAX_RATE_DPS, MIN_NOISE_DPS, check_sample_rate_hz, json_ready, plain
+from ...units import MAX_RATE_DPS, MIN_NOISE_DPS, check_sample_rate_hz, json_ready, one_value, plain
 
 DEFAULT_MAX_SAMPLES = 200_000
 #: fewest samples of an axis the analysis takes: fewer leave the tests and the order search without
@@ -456,7 +456,7 @@ def _analyze_axis(x_dps, sample_rate_hz, axis, max_samples, max_n, alpha, adf_ma
     x_raw = rate_numbers(x_dps, "series")
     if len(x_raw) < MIN_SAMPLES:  # statsmodels' ADF test failed on 20 (ValueError: maxlag)
         raise SettingsError(f"axis {axis}: {len(x_raw)} samples; the analysis needs at least {MIN_SAMPLES}")
-    if np.ptp(x_raw) == 0:
+    if one_value(x_raw.min(), x_raw.max()):
         raise SettingsError(f"axis {axis}: constant ({mean:g} deg/s) over all {len(x_raw)} samples: "
                             "no noise to model (is the axis stuck or saturated?)")
     spread = float(np.std(series))

@@ -75,7 +75,7 @@ from ...recording import GYRO_COLUMNS, filtered_words, read_recording, warn_abou
 from ...sim.model import TEMPERATURE_PROFILE
 from ...sim.simulate import check_seed
 from ...tempscreen import screened_temp
-from ...units import AXES, MAX_RATE_DPS, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, to_dps
+from ...units import AXES, MAX_RATE_DPS, MIN_NOISE_DPS, TEMP_RANGE_C, check_sample_rate_hz, one_value, to_dps
 from ..still import moved, not_static, refuse_moved
 from . import detectors as det
 from .advice import compensation_hint, mount_hint
@@ -316,7 +316,7 @@ def nothing_to_analyse(x_dps):
     spectrum is one line at f_s / 2 and whose averages over any even number of samples are all
     equal, so the detectors' spectra and wavelet variances are 0 and their logs undefined; or a
     standard deviation below :data:`~gyrofilter.units.MIN_NOISE_DPS`), or None."""
-    if not np.ptp(x_dps) > 0:
+    if one_value(x_dps.min(), x_dps.max()):
         return "constant signal"
     if x_dps.size >= 4 and not np.ptp(x_dps[0::2]) > 0 and not np.ptp(x_dps[1::2]) > 0:
         return (f"a square wave at the Nyquist frequency, the samples alternating between {float(x_dps[0]):.6g} and "

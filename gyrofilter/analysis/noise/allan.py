@@ -29,7 +29,7 @@ import numpy as np
 
 from ...errors import GyroFilterError, SettingsError
 from ...inputs import check_number, number_array
-from ...units import check_sample_rate_hz, plain
+from ...units import check_sample_rate_hz, one_value, plain
 
 #: cluster count below which a deviation (and any fit using it) is flagged: paper 002 needs
 #: N/m >= 9 for an error under 25 %.
@@ -57,9 +57,9 @@ class ConstantAxisError(AllanInputError):
 
 def refuse_constant(x, where, *, unit="deg/s", axis=None):
     """ConstantAxisError (of ``axis``) whose message starts with ``where`` when the finite series
-    ``x`` (a float array) holds one value only: the one wording of a constant series' refusal
+    ``x`` (a float array) holds one value only (up to float64 rounding, :func:`~gyrofilter.units.one_value`): the one wording of a constant series' refusal
     (the Allan fit, the wavelet variance)."""
-    if x.size and np.all(np.isfinite(x)) and np.ptp(x) == 0:
+    if x.size and np.all(np.isfinite(x)) and one_value(x.min(), x.max()):
         raise ConstantAxisError(constant_words(where, x.size, x.flat[0], unit), axis)
 
 
