@@ -104,7 +104,8 @@ def sum_of_ar1_filter(phis, gains):
     N(z) = Σ_i g_i² P_i(z⁻¹) P_i(z), P_i = Π_{j≠i} (1 - φ_j z⁻¹), a symmetric Laurent polynomial of
     degree k - 1 positive on |z| = 1. Spectral factorization (Box & Jenkins, Time Series Analysis,
     sec. 4.2.3): N(z) = s² B(z⁻¹) B(z) with B(z⁻¹) = Π (1 - r_j z⁻¹) over the k - 1 roots of N
-    inside the unit circle and s² = N(1) / B(1)². A stationary Gaussian process is fixed by its
+    inside the unit circle (``np.roots``, polished by two Newton steps: its eigenvalues alone missed the check by
+    LAPACK build, CI 2026-12-02) and s² = N(1) / B(1)². A stationary Gaussian process is fixed by its
     spectrum, so (b, a) = (s B, A) driven by one white noise has the sum's law (its spectrum to
     :data:`SPECTRUM_RTOL`, checked on 513 frequencies): one draw and one recursion per sample instead
     of k. ``phis``, ``gains``: the φ_i and g_i (deg/s)."""
@@ -118,6 +119,9 @@ def sum_of_ar1_filter(phis, gains):
         part = np.atleast_1d(np.poly(np.delete(phis, i)))  # np.poly of no roots is the scalar 1
         num += gains[i] ** 2 * np.convolve(part, part[::-1])
     roots = np.roots(num) if k > 1 else np.zeros(0)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for _ in range(2):  # Newton steps: np.roots' eigenvalues of roots near the unit circle hold ~1e-6 (a check failed)
+            roots = roots - np.polyval(num, roots) / np.polyval(np.polyder(num), roots)
     inside = roots[np.abs(roots) < 1.0]
     if inside.size != k - 1:
         return None
