@@ -429,7 +429,7 @@ def test_a_gzip_cut_short_then_padding_then_other_bytes_invents_no_row(tmp_path,
             continue
         assert len(rec) <= decodable, (cut, pad[:1], len(pad), tail)
         np.testing.assert_array_equal(rec.gyro_dps, values[:len(rec)])
-        assert any("cut short" in w or "(padding), then bytes that are not the stream's" in w for w in rec.warnings)
+        assert any("cut short" in w for w in rec.warnings)
 
 
 @pytest.mark.parametrize("count", [5, 16, 512, 70_000])
@@ -457,10 +457,12 @@ def test_an_empty_gzip_member_after_a_recording_adds_no_warning(tmp_path):
     assert len(rec) == 300 and rec.warnings == []
 
 
-def test_no_run_in_the_compressed_data_of_a_recording_is_as_long_as_padding():
-    """``recording.gzipped.RUN_BYTES``, the shortest run of 0x00 or 0xFF read as padding, is longer than any run in
-    deflate data of recordings (tools/gzip_runs.py measures it on more rows): shorter, a real recording's text would
-    be held as after padding (4 zeros come in the block headers of constant rows)."""
+def test_no_run_in_the_compressed_data_of_a_recording_with_a_time_column_is_as_long_as_padding():
+    """``recording.gzipped.RUN_BYTES``, the shortest run of 0x00 or 0xFF from which a stream is on trial, is longer
+    than any run in deflate data of recordings with a time column (tools/gzip_runs.py measures it on more rows):
+    shorter, such a recording cut short would be read only to the run (4 zeros come in the block headers of constant
+    rows). Constant rows without a time column hold long runs (attack pass 60: a stream of them cut short is read to
+    its first run, tests/test_gzip_trial.py)."""
     sys.path.insert(0, str(REPO / "tools"))
     try:
         import gzip_runs
@@ -468,7 +470,8 @@ def test_no_run_in_the_compressed_data_of_a_recording_is_as_long_as_padding():
         sys.path.remove(str(REPO / "tools"))
     from gyrofilter.recording.gzipped import RUN_BYTES
     longest = gzip_runs.longest_runs(4000)
-    assert max(longest.values()) == RUN_BYTES - 1, longest
+    assert max(n for name, n in longest.items() if gzip_runs.timed(name)) == RUN_BYTES - 1, longest
+    assert min(n for name, n in longest.items() if not gzip_runs.timed(name)) > 10 * RUN_BYTES, longest
 
 
 def test_a_gzip_cut_short_is_still_a_warning_and_a_prefix(tmp_path):

@@ -1,15 +1,18 @@
 #!/usr/bin/env python3
 """Runs of one byte, 0x00 or 0xFF, in the deflate data of recordings: what ``gyrofilter.recording.gzipped`` may
 take for padding (``RUN_BYTES``). A power cut pads a gzip file with zeros (an SD card) or 0xFF (erased flash);
-the reader tells such runs from compressed data by their length, so no run in real compressed data may be as long.
+from such a run on, the reader uses a stream's text only once the stream ends whole: a stream cut short after a run
+in its own data is read to the run. So no run in the compressed data of a recording with a time column may be as
+long; constant rows without one hold long runs (zeros are deflate's code for "the same again").
 
     python tools/gzip_runs.py [--rows 300000]
 
-For five kinds of recording text (constant rates with and without a time column, noise, raw counts with a
-temperature, six axes), gzip levels 1, 6 and 9, and a sync flush (as ``gyrofilter record`` does each second) every
+For seven kinds of recording text (constant rates, noise, raw counts with a temperature, six axes: all with a time
+column; constant rates and counts without one), gzip levels 1, 6 and 9, and a sync flush (as ``gyrofilter record`` does each second) every
 1, 10, 100, 1000 lines or none: how many runs of each byte and length the reader's pieces hold (the gzip header's,
-a flush's marker and a member header's zeros aside, as the reader sets them aside). Today: runs of 4 zeros in the
-block headers of constant text, none longer; ``RUN_BYTES`` is 5.
+a flush's marker and a member header's zeros aside, as the reader sets them aside). Today: with a time column, runs
+of 4 zeros in the block headers of constant text, none longer (``RUN_BYTES`` is 5); without one, constant rows hold
+runs of hundreds to thousands of zeros.
 """
 import argparse
 import collections
@@ -40,7 +43,14 @@ def kinds(seed=1):
                                                       f"{36.5 + rng.randint(0, 2) / 340:.4f}"),
         "six axes": ("t,gx,gy,gz,ax,ay,az", lambda i: f"{i / 1000:.3f},{small(30)},{small(3)},{small(3)},{small(100)},"
                                                       f"{small(100)},{16384 + small(100)}"),
+        "constant, no time": ("gx,gy,gz", lambda i: "-3.3,0.0,1.2"),
+        "counts, no time": ("gx,gy,gz", lambda i: "11,-1,-1"),
     }
+
+
+def timed(name, seed=1):
+    """Whether the kind ``name`` has a time column."""
+    return kinds(seed)[name][0].startswith("t,")
 
 
 def compressed(lines, level, every):
@@ -86,7 +96,9 @@ def main():
           f"sync flush every {FLUSHES} lines), flush markers and member headers aside")
     for name in kinds():
         print(f"  {name:18s} longest run: {longest[name] or 'none'}")
-    print(f"the reader's RUN_BYTES (shortest run read as padding): {RUN_BYTES}")
+    print(f"with a time column, the longest: {max(n for k, n in longest.items() if timed(k))}; without: "
+          f"{min(n for k, n in longest.items() if not timed(k))} or more")
+    print(f"the reader's RUN_BYTES (the shortest run from which a stream is on trial): {RUN_BYTES}")
 
 
 if __name__ == "__main__":

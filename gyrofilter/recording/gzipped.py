@@ -1,16 +1,21 @@
 """The text of a gzip file (a recording, another tool's log), a block at a time, every member, as a power cut leaves it.
 
 A stream cut short (no end marker: a recorder killed) is read to its cut, with a warning. Damaged data (corrupt
-blocks, a checksum or length that does not match) are an error. Padding is told apart from the stream: a run of
-at least :data:`RUN_BYTES` bytes 0x00 or 0xFF (an SD card's unwritten blocks read as zeros, erased flash as 0xFF;
-deflate data of text hold no such run, but for the empty stored block of a flush, ``00 00 FF FF`` after a zero
-or two, and the zeros of a member's header). Padding at the file's end is never given to zlib (which reads it
-after a cut stream as more data: back-references that copy earlier text, rows invented, attack pass 58); text
-that zlib makes of bytes after a run of padding, in a stream that then ends cut short or does not decompress, is
-left out (zeros, then a byte, attack pass 59): it is not the recorder's.
+blocks, a checksum or length that does not match) are an error. Padding (an SD card's unwritten blocks read as
+zeros, erased flash as 0xFF) is told apart from the stream, for zlib reads it as more of a stream cut short (zeros
+in a block of constant rows are its code for "the same again": rows invented, attack passes 58 and 60):
+
+- padding the file ends in is never given to zlib (but the zeros a whole stream's trailer takes: :func:`_padded_end`);
+- padding after a whole member is left out, with a warning; a member after it is read;
+- from a run of at least :data:`RUN_BYTES` bytes 0x00 or 0xFF that more bytes follow, inside a stream, the stream
+  is on trial (:func:`_member`): its text is used only once it ends whole (checked by zlib: its checksum and
+  length), else it ends at the run, a stream cut short. The compressed data of recordings with a time column hold
+  no such run (``tools/gzip_runs.py``, a flush's marker and a member's header aside); constant rows without a time
+  column do, and a stream of them cut short is read to its first run, with a warning.
 """
 from __future__ import annotations
 
+import collections
 import os
 import re
 import zlib
@@ -23,15 +28,14 @@ from .header import MAX_LINE_BYTES
 #: longest line, so that only the line the blocks so far have not ended needs a length check
 _TEXT_BYTES = MAX_LINE_BYTES
 GZIP_MAGIC = b"\x1f\x8b"
-#: the shortest run of one byte, 0x00 or 0xFF, that is padding, not compressed data (deflate data of text, levels
-#: 1-9, flushed every 1 to 1000 lines, hold none, but for a flush's marker, a member's header and 4 zeros in the
-#: block headers of highly repetitive text: measured, tools/bench_reader.py --gzip-runs)
+#: the shortest run of one byte, 0x00 or 0xFF, that starts a trial (deflate data of recordings with a time column,
+#: levels 1-9, flushed every 1 to 1000 lines, hold none, but for a flush's marker, a member's header and 4 zeros
+#: in the block headers of constant rows: measured, tools/gzip_runs.py)
 RUN_BYTES = 5
-#: compressed bytes, or bytes of text, after a run of padding that, once they decompress, make its stream's text
-#: trusted again (junk after padding fails within tens of bytes and makes a line or two; a run inside a real stream,
-#: as highly repetitive text makes, costs at most this much text of a stream cut short after it)
-TRUST_BYTES = 1024
-TRUST_TEXT_BYTES = 1 << 16
+#: most compressed bytes (runs aside, which are counted), and bytes of text, of a stream on trial: the bytes are
+#: kept to be read again once it ends whole
+TRIAL_BYTES = 64 << 20
+TRIAL_TEXT_BYTES = 1 << 30
 #: a flush's empty stored block after a run of zeros (LEN 00 00, NLEN FF FF), not more FF
 _FLUSH_MARK = re.compile(rb"\xff\xff(?!\xff)")
 #: a member's start before its header's zeros (magic, method, perhaps its flags)
@@ -74,7 +78,7 @@ def _gzip_damage(path):
                     pass
     except _GzipDamage as exc:
         return exc.reason
-    except OSError:
+    except (OSError, RecordingError):  # not damage (a stream too long on trial)
         pass
     return None
 
@@ -89,42 +93,48 @@ def gunzipped(fh, first, path, warnings):
 def _pieces(fh, first, shortest=RUN_BYTES):
     """The file's bytes (``first``, then ``fh``'s blocks) as ``(kind, byte or bytes, count)``: ``("data", bytes,
     0)``; ``("run", byte, count)``, a run of at least ``shortest`` bytes of one byte 0x00 or 0xFF that more bytes
-    follow (not a flush's marker, not a member header's zeros); ``("end", byte, count)``, the run of zeros (any
-    count) or of 0xFF (at least ``shortest``) the file ends in. A run is counted, never held: a GB of zeros costs a
-    block. Each block is scanned once, by a regular expression."""
+    follow (not a flush's marker, not a member header's zeros: :func:`_run_ends`, told by the bytes around it, across
+    blocks too); ``("end", byte, count)``, the run of zeros (any count) or of 0xFF (at least ``shortest``) the file
+    ends in. A run is counted, never held: a GB of zeros costs a block. Each block is scanned once, by
+    ``bytes.find``; the next is read before it is given (its first bytes may tell a run's kind)."""
     run_byte, run_count, before = None, 0, b""  # the run the last block ended in (any count), the 4 bytes before it
-    block = first
+    last4, block = b"", first  # the 4 bytes before ``block``
     while block:
-        at = 0
+        nxt, at = fh.read(READ_BYTES), 0
         if run_count:  # does the run go on?
             at = len(block) - len(block.lstrip(run_byte))
             run_count += at
             if at == len(block):
-                block = fh.read(READ_BYTES)
+                last4, block = block[-4:], nxt
                 continue
-            yield from _run_ends(run_byte, run_count, before, block[at:at + 3], shortest)
+            yield from _run_ends(run_byte, run_count, before, (block[at:at + 3] + nxt[:3])[:3], shortest)
             run_count = 0
         for start, end in _runs(block, at, shortest):
             if end == len(block):
                 break  # it may go on in the next block
             if start > at:
                 yield "data", block[at:start], 0
-            yield from _run_ends(block[start:start + 1], end - start, block[max(0, start - 4):start],
-                                 block[end:end + 3], shortest)
+            yield from _run_ends(block[start:start + 1], end - start, _before(last4, block, start),
+                                 (block[end:end + 3] + nxt[:3])[:3], shortest)
             at = end
         tail = block[at:]
         last = tail[-1:]
         if last in (b"\0", b"\xff"):  # the run the block ends in, any count: it may go on
             kept = tail.rstrip(last)
-            run_byte, run_count, before = last, len(tail) - len(kept), kept[-4:]
-            tail = kept
+            run_byte, run_count = last, len(tail) - len(kept)
+            before, tail = _before(last4, block, len(block) - run_count), kept
         if tail:
             yield "data", tail, 0
-        block = fh.read(READ_BYTES)
+        last4, block = (last4 + block[-4:])[-4:], nxt
     if run_count >= shortest or run_byte == b"\0" and run_count:
         yield "end", run_byte, run_count
     elif run_count:
         yield "data", run_byte * run_count, 0  # a flush's FF FF, the file's last bytes
+
+
+def _before(last4, block, start):
+    """The 4 bytes before ``block[start]``, ``last4`` those before ``block``."""
+    return block[start - 4:start] if start >= 4 else (last4 + block[:start])[-4:]
 
 
 #: a run of one byte, from where it starts
@@ -156,99 +166,230 @@ def _run_ends(byte, count, before, after, shortest):
 
 
 class _Padded:
-    """The bytes of a gzip file for :func:`_gunzip`, in blocks (:func:`_pieces`): ``read()`` gives the next (b"" at
-    the end), ``offset`` counts those given, ``runs`` the runs of padding more bytes followed, ``run`` the last
-    (offset, byte, count); ``held`` and ``held_byte``: the padding the file ends in, never given."""
+    """The bytes of a gzip file for :func:`_gunzip`, a piece of :func:`_pieces` (of a run: a block) at a time.
+
+    ``read()`` gives the next bytes (b"" at the end) and sets ``run`` to (offset, byte, count) when they start a run
+    of padding that more bytes follow, else None; ``offset`` counts the bytes given; ``end_run`` is (byte, count) of
+    the padding the file ends in, never given. ``keep()``, just after a run starts, keeps the pieces given from it on
+    (``kept_bytes``: their bytes, runs aside, which are counted) and ``rewind()`` gives them again."""
 
     def __init__(self, fh, first):
-        self.pieces = _pieces(fh, first)
-        self.offset, self.runs, self.run, self.held, self.held_byte = 0, 0, None, 0, b"\0"
-        self._left = 0  # bytes of the current run still to give
+        self._pieces = _pieces(fh, first)
+        self._again = collections.deque()  # pieces to give again, before the file's next
+        self._kept, self._from = None, None  # the pieces given since keep() (None: not kept), the run they start with
+        self.kept_bytes, self.offset, self.run, self.end_run = 0, 0, None, None
+        self._byte, self._left = b"\0", 0  # the run being given, its bytes still to give
 
     def read(self):
-        if self._left:
-            out = self.run[1] * min(self._left, READ_BYTES)
-            self._left -= len(out)
-        else:
-            kind, data, count = next(self.pieces, (None, b"", 0))
-            if kind is None:  # read past the end
+        self.run = None
+        if not self._left:
+            piece = self._again.popleft() if self._again else next(self._pieces, None)
+            if piece is None:
                 return b""
+            kind, data, count = piece
+            if self._kept is not None:
+                self._kept.append(piece)
+                self.kept_bytes += len(data) if kind == "data" else 0
             if kind == "end":
-                self.held, self.held_byte = count, data
+                self.end_run = data, count
                 return b""
-            if kind == "run":
-                self.runs, self.run, self._left = self.runs + 1, (self.offset, data, count), count
-                return self.read()
-            out = data
+            if kind == "data":
+                self.offset += len(data)
+                return data
+            self.run, self._byte, self._left = (self.offset, data, count), data, count
+        out = self._byte * min(self._left, READ_BYTES)
+        self._left -= len(out)
         self.offset += len(out)
         return out
 
+    def keep(self):
+        """Keep the pieces given from the run the last ``read()`` started (``run``) on; returns that run."""
+        offset, byte, count = self._from = self.run
+        self._kept, self.kept_bytes = [("run", byte, count)], 0
+        return self._from
+
+    def rewind(self):
+        """Give the pieces kept since ``keep()`` again, from the run's first byte; keep no more."""
+        self._again.extendleft(reversed(self._kept))
+        self.offset, self._left, self.end_run = self._from[0], 0, None
+        self._kept, self.kept_bytes = None, 0
+
 
 def _gunzip(source, path, warnings):
-    """The text of the gzip file read by ``source`` (:class:`_Padded`), every member, in blocks of at most
-    ``_TEXT_BYTES``.
-
-    A stream that ends before its end marker (an interrupted recording) ends the text with a
-    warning. Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a
-    checksum or length that does not match (the text may look fine: a changed digit in a
-    stored block), or bytes after a member that do not start another member. Padding at the end is left out with a
-    warning; a whole stream whose last bytes of length are zeros takes them back (:func:`_padded_end`). Text made
-    of the bytes after a run of padding is held until its stream ends whole (checked by zlib) or TRUST_BYTES more
-    bytes decompress (or make TRUST_TEXT_BYTES of text); a stream that ends cut short or does not decompress before then ends at the run, its held
-    text left out with a warning (:func:`_after_run_warning`)."""
-    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-    produced, trusted, held = 0, 0, []  # bytes of text so far; source.runs trusted; text after a run not yet trusted
-    raw = source.read()
+    """The text of the gzip file read by ``source`` (:class:`_Padded`), every member (:func:`_member`), in blocks of
+    at most ``_TEXT_BYTES``. Padding (bytes 0x00, 0xFF) after a member, or between two, is left out with a warning;
+    other bytes after it that do not start a member are damage (:class:`_GzipDamage`)."""
+    produced, raw = 0, source.read()
     while True:
+        raw, produced = yield from _member(source, raw, path, warnings, produced)
+        if raw is None:  # the file ended inside the member
+            return
+        count, seen, raw = _skip_padding(source, raw)
+        if not raw:
+            if count:
+                warnings.append(_padding_warning(path, count, seen, True))
+            return
+        if raw[:2] != GZIP_MAGIC and not GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
+            raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
+        if count:
+            warnings.append(f"{path}: {count} {_named(seen)} between gzip members ignored (block padding)")
+
+
+def _member(source, raw, path, warnings, produced):
+    """The text of the gzip member whose first bytes are ``raw``, the rest read from ``source``; returns (the bytes
+    after it, None when the file ends inside it; the bytes of text so far, ``produced`` those before it).
+
+    A member that ends before its end marker (an interrupted recording) ends the text with a warning
+    (:func:`_cut_end`). Damaged data are an error (:class:`_GzipDamage`): corrupt compressed blocks, a checksum or
+    length that does not match (the text may look fine: a changed digit in a stored block). From a run of padding
+    (``source.run``) on, the member is on trial: decompressed on, its text not used, its bytes kept, until it ends
+    whole (its checksum and length, RFC 1952, checked by zlib: then read again from the run, every byte its own) or
+    not (it ends at the run: :func:`_trial_failed`); at most :data:`TRIAL_BYTES` compressed bytes and
+    :data:`TRIAL_TEXT_BYTES` of text are tried (more: an error, :func:`_trial_too_long`)."""
+    d, line = zlib.decompressobj(16 + zlib.MAX_WBITS), _LastLine()
+    first, trial, tried, sure, run = produced, None, 0, False, None  # trial: (d before the run, the run)
+    while True:
+        if run and trial is None and not sure:
+            trial, tried = (d.copy(), source.keep()), 0
         try:
             out = d.decompress(raw, _TEXT_BYTES)
         except zlib.error as exc:
-            if source.runs == trusted:
+            if trial is None:
                 raise _GzipDamage(path, str(exc), produced) from None
-            warnings.append(_after_run_warning(path, source.run, held, "does not decompress"))
-            return
-        if source.runs > trusted:
-            held.append(out)
-            if (d.eof or source.offset - source.run[0] - source.run[2] >= TRUST_BYTES
-                    or sum(map(len, held)) >= TRUST_TEXT_BYTES):
-                out, held, trusted = b"".join(held), [], source.runs
-        if out and source.runs == trusted:
+            after = _trial_failed(source, trial[1], path, warnings, produced > first, f"does not decompress ({exc})")
+            yield from line.end(after is not None, path, warnings)
+            return after, produced
+        if trial is None:
             produced += len(out)
-            yield out
-        if d.eof:  # a member ended: another may follow
-            raw = d.unused_data or source.read()
-            if not raw:
-                if source.held:
-                    warnings.append(_padding_warning(path, source.held, source.held_byte, True))
-                return
-            if raw[:2] != GZIP_MAGIC and not GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
-                raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
-            d = zlib.decompressobj(16 + zlib.MAX_WBITS)
-        elif d.unconsumed_tail or len(out) == _TEXT_BYTES:  # (text zlib holds back is the input's before more)
-            raw = d.unconsumed_tail
-        elif raw := source.read():
-            continue
+            yield from line.blocks(out)
         else:
-            yield from _cut_end(d, source, path, warnings, held if source.runs > trusted else None)
-            return
+            tried += len(out)
+            if source.kept_bytes > TRIAL_BYTES or tried > TRIAL_TEXT_BYTES:
+                raise RecordingError(_trial_too_long(path, trial[1]))
+        run = None
+        if not d.eof:
+            if d.unconsumed_tail or len(out) == _TEXT_BYTES:  # (text zlib holds back is the input's before more)
+                raw = d.unconsumed_tail
+                continue
+            raw = source.read()
+            if raw:
+                run = source.run
+                continue
+            if trial is None:
+                out = _cut_end(d, source, path, warnings)
+                yield from line.blocks(out)
+                yield from line.end(False, path, warnings)
+                return None, produced + len(out)
+            if not _padded_end(d, _end_zeros(source))[0]:
+                after = _trial_failed(source, trial[1], path, warnings, produced > first, "ends cut short")
+                yield from line.end(after is not None, path, warnings)
+                return after, produced
+        if trial is None:
+            yield from line.end(False, path, warnings)
+            return d.unused_data, produced
+        d, trial, sure = trial[0], None, True  # it ends whole: read again from the run, every byte its own
+        source.rewind()
+        raw = source.read()
 
 
-def _cut_end(d, source, path, warnings, held):
-    """The end of the file ``source`` read, inside the stream of the decompressor ``d``: the text it takes from
-    zero padding to end whole (:func:`_padded_end`), or the warnings of a stream cut short; ``held``: the text
-    after a run of padding not yet trusted (None: none), left out."""
-    whole, out = _padded_end(d, source.held if source.held_byte == b"\0" else 0)
-    if held is not None:
-        if whole:
-            yield b"".join(held) + out
-        else:
-            warnings.append(_after_run_warning(path, source.run, held, "ends cut short"))
-    elif out:
-        yield out
-    if source.held > whole:
-        warnings.append(_padding_warning(path, source.held - whole, source.held_byte, whole))
+class _LastLine:
+    """The text of a member after its last line end, held until the member ends: a member cut short before another
+    member (a recorder started again) would join it to that member's first line, a row made of two."""
+
+    def __init__(self):
+        self.parts, self.size = [], 0
+
+    def blocks(self, out):
+        """The blocks of text to give for ``out``, the member's next: up to its last line end (a line too long to hold
+        is given: the reader refuses it), each at most ``_TEXT_BYTES``."""
+        cut = out.rfind(b"\n") + 1
+        if not cut and self.size + len(out) <= _TEXT_BYTES:
+            self.parts.append(out)
+            self.size += len(out)
+            return []
+        cut = cut or len(out)
+        blocks = [b"".join(self.parts), out[:cut]]
+        self.parts, self.size = [out[cut:]], len(out) - cut
+        return [block for block in blocks if block]
+
+    def end(self, dropped, path, warnings):
+        """The text held, at the member's end; none when ``dropped`` (said in ``warnings``)."""
+        held, self.parts, self.size = b"".join(self.parts), [], 0
+        if held and dropped:
+            warnings.append(f"{path}: the last {len(held)} bytes of text of that stream (a line without its end) left "
+                            "out: the next member's text does not go on from them")
+        return [held] if held and not dropped else []
+
+
+def _skip_padding(source, rest):
+    """(count, byte values) of the padding (bytes 0x00 and 0xFF) that ``rest``, then the file read by ``source``,
+    start with, and the bytes after it (b"": the file ends)."""
+    count, seen = 0, set()
+    while True:
+        kept = rest.lstrip(b"\0\xff")
+        skipped = rest[:len(rest) - len(kept)]
+        count += len(skipped)
+        seen |= {byte for byte in (0, 0xFF) if bytes([byte]) in skipped}
+        if kept:
+            return count, seen, kept
+        rest = source.read()
+        if not rest:
+            if source.end_run:
+                count += source.end_run[1]
+                seen.add(source.end_run[0][0])
+            return count, seen, b""
+
+
+def _end_zeros(source):
+    """How many zero bytes the file read by ``source`` ends in (its padding, never given)."""
+    return source.end_run[1] if source.end_run and source.end_run[0] == b"\0" else 0
+
+
+def _trial_failed(source, run, path, warnings, had_text, how):
+    """The member on trial since the run of padding ``run`` (offset, byte, count) ``how`` (ends cut short, does not
+    decompress): it ends at the run, a stream cut short, with a warning. Returns the bytes of the member that starts
+    after the padding (a recorder started again), or None: the file ends in padding, or other bytes follow, left out
+    (damage, when the member made no text before the run: nothing in it to keep)."""
+    source.rewind()
+    count, seen, raw = _skip_padding(source, b"")
+    offset, byte, run_count = run
+    if raw[:3] == GZIP_MAGIC + b"\x08":
+        warnings.append(f"{path}: gzip stream cut short (no end marker) at byte {offset}, where {count} {_named(seen)} "
+                        "(padding, as a power cut leaves an SD card) and another gzip member begin")
+        return raw
+    if not raw:
+        warnings.append(_padding_warning(path, count, seen, False))
+    elif not had_text:
+        raise _GzipDamage(path, f"{run_count} {_named({byte[0]})} at byte {offset}, then a stream that {how}", 0)
+    else:
+        warnings.append(f"{path}: {run_count} {_named({byte[0]})} at byte {offset}, then more bytes, in a gzip stream "
+                        f"that {how}: without its end marker its own bytes cannot be told from padding (as a power cut "
+                        f"leaves an SD card) and what follows it, so its text is read to byte {offset} (zcat reads on, "
+                        "unchecked)")
+    warnings.append(cut_short_warning(path))
+    return None
+
+
+def _trial_too_long(path, run):
+    """The error of a member on trial since the run of padding ``run`` (offset, byte, count) that goes on for more
+    than :data:`TRIAL_BYTES` (or :data:`TRIAL_TEXT_BYTES` of text) before its end tells whether it is padding."""
+    offset, byte, count = run
+    return (f"{path}: {count} {_named({byte[0]})} at byte {offset} inside a gzip stream, then more than "
+            f"{TRIAL_BYTES >> 20} MiB of it ({TRIAL_TEXT_BYTES >> 20} MiB of text) before its end marker, which alone tells "
+            "padding from the stream's own bytes: not read (zcat reads it, unchecked)")
+
+
+def _cut_end(d, source, path, warnings):
+    """The last text of the member of the decompressor ``d`` at the end of the file ``source`` read: what it makes
+    of the zero padding it takes to end whole (:func:`_padded_end`); the padding left out and a stream cut short
+    said in ``warnings``."""
+    byte, count = source.end_run or (b"\0", 0)
+    whole, out = _padded_end(d, _end_zeros(source))
+    if count > whole:
+        warnings.append(_padding_warning(path, count - whole, {byte[0]}, whole))
     if not whole:
         warnings.append(cut_short_warning(path))
+    return out
 
 
 def _padded_end(d, padding):
@@ -266,21 +407,16 @@ def _padded_end(d, padding):
     return 0, b""
 
 
-def _padding_warning(path, count, byte, after_stream):
-    """The warning of ``count`` bytes ``byte`` (0x00 or 0xFF) left out at the end of the gzip file ``path``,
-    ``after_stream`` a whole one or after one cut short."""
-    what = "zero bytes" if byte == b"\0" else "0xFF bytes"
-    return (f"{path}: {count} {what} " + ("after the end of the gzip stream ignored (block padding, as gzip ignores it)"
-                                          if after_stream else "at its end ignored (block padding, as a power cut leaves an SD card)"))
+def _named(seen):
+    """Bytes of the values ``seen`` (0x00, 0xFF) named."""
+    return {frozenset({0}): "zero bytes", frozenset({0xFF}): "0xFF bytes"}.get(frozenset(seen), "bytes 0x00 and 0xFF")
 
 
-def _after_run_warning(path, run, held, how):
-    """The warning of the text after the run of padding ``run`` (offset, byte, count) in a stream that then ``how``
-    (ends cut short, does not decompress): ``held``, its text made of the bytes after the run, left out."""
-    offset, byte, count = run
-    text = sum(map(len, held))
-    return (f"{path}: {count} bytes 0x{byte[0]:02X} at byte {offset} (padding), then bytes that are not the stream's: "
-            f"it {how} there; {text} bytes of text zlib made of them not used")
+def _padding_warning(path, count, seen, after_stream):
+    """The warning of ``count`` bytes of padding (of the values ``seen``: 0x00, 0xFF) left out at the end of the gzip
+    file ``path``, ``after_stream`` a whole one or after one cut short."""
+    return (f"{path}: {count} {_named(seen)} " + ("after the end of the gzip stream ignored (block padding, as gzip ignores it)"
+                                                  if after_stream else "at its end ignored (block padding, as a power cut leaves an SD card)"))
 
 
 def cut_short_warning(path):

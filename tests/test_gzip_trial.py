@@ -1,0 +1,253 @@
+"""The gzip reader from a run of padding on (``recording.gzipped``): a stream is on trial, its text used only once
+it ends whole (attack pass 60). Cut points, padding, the bytes after it and the rows are drawn at random, seeded."""
+import gzip
+import os
+import struct
+import threading
+import zlib
+
+import numpy as np
+import pytest
+
+from gyrofilter.errors import RecordingError
+from gyrofilter.inputs import READ_BYTES
+from gyrofilter.recording import gzipped, read_recording
+from gyrofilter.recording.gzipped import _pieces
+
+HEADER = "# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
+
+
+def _rows_decoded(data):
+    """Whole rows zlib decodes from the gzip bytes ``data`` (the first member), header and column lines aside."""
+    return zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(data).count(b"\n") - HEADER.count("\n") - 1
+
+
+def _constant_rows(rng, rows, level=9):
+    """(values, gzip bytes at ``level``) of ``rows`` rows of one constant row without a time column, of 7, 9, 13 or
+    17 bytes with its line end (a stuck sensor): deflate data of such rows hold long runs of zeros (drawn until they
+    do: rows of other lengths may not)."""
+    while True:
+        sizes = rng.multinomial(int(rng.choice([7, 9, 13, 17])) - 6, [1 / 3] * 3) + 1  # characters of each value
+        row = [_value(rng, n) for n in sizes]
+        text = (HEADER + "gx,gy,gz\n" + (",".join(map(str, row)) + "\n") * rows).encode()
+        data = gzip.compress(text, compresslevel=level, mtime=0)
+        if any(kind == "run" for _, (kind, _, _) in _offsets(data)):
+            return np.tile(row, (rows, 1)), data
+
+
+def _value(rng, chars):
+    """An integer of ``chars`` characters, sign and digits."""
+    if chars > 1 and rng.random() < 0.5:
+        return -int(rng.integers(10 ** (chars - 2), 10 ** (chars - 1)))
+    return int(rng.integers(10 ** (chars - 1), 10 ** chars))
+
+
+def _timed_rows(rng, rows, start=0):
+    values = rng.integers(-999, 1000, (rows, 3))
+    body = "".join(f"{(start + i) / 100:.2f},{a},{b},{c}\n" for i, (a, b, c) in enumerate(values))
+    return values, body
+
+
+def _read(path):
+    """(the recording, None), or (None, the error) where it is refused as damaged gzip data."""
+    try:
+        return read_recording(path), None
+    except RecordingError as exc:
+        assert "damaged gzip data" in str(exc), exc
+        return None, exc
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_constant_rows_cut_short_then_padded_invent_no_row(tmp_path, seed):
+    """Attack pass 60: a recording of constant rows without a time column, cut short, padded with zeros and a byte
+    after them, was read with 156549 rows zlib made of the zeros (in a block of constant rows they are its code for
+    "the same again"): the text after the run was trusted once 64 KiB of it decompressed. Now it is used only once its
+    stream ends whole: every row read is one zlib decodes from the bytes before the cut."""
+    rng = np.random.default_rng(seed)
+    path = tmp_path / "r.csv.gz"
+    for _ in range(6):
+        values, data = _constant_rows(rng, int(rng.integers(20_000, 200_000)), int(rng.integers(4, 10)))
+        cut = int(rng.integers(len(data) // 10, len(data) - 9))
+        pad = bytes([int(rng.choice([0, 0xFF]))]) * int(rng.choice([5, 64, 4096, 70_000]))
+        path.write_bytes(data[:cut] + pad + bytes(rng.integers(1, 255, int(rng.integers(1, 4))).astype(np.uint8)))
+        rec, _ = _read(path)
+        if rec is not None:
+            assert len(rec) <= max(_rows_decoded(data[:cut]), 0), (seed, cut, len(pad))
+            np.testing.assert_array_equal(rec.columns["gx"], values[:len(rec), 0])
+            assert any("cut short" in w for w in rec.warnings)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_whole_stream_with_runs_of_zeros_in_it_is_read_whole(tmp_path, seed):
+    """The runs of zeros in the deflate data of constant rows (hundreds of bytes: tools/gzip_runs.py) put the stream
+    on trial; it ends whole, so every row is read, none twice, with no warning, from a file and from a pipe, one
+    member or several."""
+    rng = np.random.default_rng(100 + seed)
+    values, data = _constant_rows(rng, 100_000)
+    if seed % 2:
+        data += gzip.compress((",".join(map(str, values[0])) + "\n").encode() * 50_000, mtime=0)
+        values = np.vstack([values, values[:50_000]])
+    path = tmp_path / "r.csv.gz"
+    path.write_bytes(data)
+    if seed >= 2:
+        fifo = tmp_path / "fifo"
+        os.mkfifo(fifo)
+        feeder = threading.Thread(target=lambda: fifo.write_bytes(data))
+        feeder.start()
+        rec = read_recording(fifo)
+        feeder.join()
+    else:
+        rec = read_recording(path)
+    assert len(rec) == len(values) and rec.warnings == []
+    np.testing.assert_array_equal(rec.columns["gz"], values[:, 2])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_constant_rows_cut_short_after_a_run_of_their_own_are_read_to_it_with_a_warning(tmp_path, seed):
+    """Attack pass 60 read a run in a stream's own data, in a stream later cut short, as padding: rows after it left
+    out. Without the end marker the run cannot be told from padding (the case above): the stream is read to it, and
+    the warning says so, names its byte and that zcat reads on; every row read is the row written."""
+    rng = np.random.default_rng(200 + seed)
+    lines = [f"{int(v)},1,2\n" for v in rng.integers(-99, 100, 3000)]
+    text = (HEADER + "gx,gy,gz\n" + "".join(lines[:1500]) + "11,-1,-1\n" * 100_000 + "".join(lines[1500:])).encode()
+    data = gzip.compress(text, compresslevel=9, mtime=0)
+    run = next((offset, count) for offset, (kind, _, count) in _offsets(data) if kind == "run")
+    path = tmp_path / "r.csv.gz"
+    path.write_bytes(data[:len(data) - 40])  # cut short among the last rows, after the run
+    rec = read_recording(path)
+    written = np.array([int(line.split(",")[0]) for line in lines[:1500]] + [11] * 100_000)
+    assert len(rec) <= 1500 + 100_000
+    np.testing.assert_array_equal(rec.columns["gx"], written[:len(rec)])
+    assert f"{run[1]} zero bytes at byte {run[0]}, then more bytes, in a gzip stream that ends cut short" in " ".join(rec.warnings)
+    assert "zcat reads on" in " ".join(rec.warnings)
+
+
+def _offsets(data):
+    """(byte offset, piece) of each piece of the gzip bytes ``data``."""
+    offset = 0
+    for piece in _pieces(open(os.devnull, "rb"), data):
+        yield offset, piece
+        offset += len(piece[1]) if piece[0] == "data" else piece[2]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_recording_cut_short_then_long_padding_then_bytes_keeps_every_row_before_the_cut(tmp_path, seed):
+    """Attack pass 60: a recording cut short, 32 KiB or more of zeros and then any byte, was refused (zlib's text of
+    the zeros, garbage, was trusted after 64 KiB and made a bad line); zeros and then 0xFF at the end were refused
+    too. Every row zlib decodes before the cut is read, with a warning, whatever follows the padding."""
+    rng = np.random.default_rng(300 + seed)
+    values, body = _timed_rows(rng, 20_000)
+    data = gzip.compress((HEADER + "t,gx,gy,gz\n" + body).encode(), mtime=0)
+    path = tmp_path / "r.csv.gz"
+    for _ in range(4):
+        cut = int(rng.integers(len(data) // 10, len(data) - 20))
+        byte = bytes([int(rng.choice([0, 0xFF]))])
+        after = [b"\x07", bytes(rng.integers(0, 256, 40).astype(np.uint8)), b"\xff" * 20_000, b"\0" * 3 + b"\xff" * 50]
+        path.write_bytes(data[:cut] + byte * int(rng.choice([32_768, 100_000])) + after[int(rng.integers(0, 4))])
+        rec = read_recording(path)
+        assert len(rec) == _rows_decoded(data[:cut])
+        np.testing.assert_array_equal(rec.gyro, values[:len(rec)])
+        assert any("cut short" in w for w in rec.warnings)
+
+
+def test_a_member_header_at_a_block_boundary_is_no_padding(tmp_path):
+    """Attack pass 60: a member whose header's first bytes (1f 8b 08) ended a read block had its header's zeros, at
+    the next block's start, read as padding (the bytes before a run were looked for in its block only): a member cut
+    short soon after lost every row. The bytes before a run are those of the blocks before too."""
+    rng = np.random.default_rng(4)
+    values, body = _timed_rows(rng, 3000)
+    first = gzip.compress((HEADER + "t,gx,gy,gz\n" + body[:body.index("10.00,")]).encode(), mtime=0)
+    second = gzip.compress(body[body.index("10.00,"):].encode(), compresslevel=9, mtime=0)[:700]
+    for shift in (-2, 0, 1, 2):
+        data = first + _empty_members(READ_BYTES - len(first) - 3 + shift) + second
+        assert data[READ_BYTES - 3 + shift:READ_BYTES + shift] == b"\x1f\x8b\x08"
+        path = tmp_path / "r.csv.gz"
+        path.write_bytes(data)
+        rec = read_recording(path)
+        assert len(rec) == 1000 + zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(second).count(b"\n"), shift
+        np.testing.assert_array_equal(rec.gyro, values[:len(rec)])
+
+
+def _empty_members(size):
+    """Empty gzip members of ``size`` bytes in all, an extra field (RFC 1952 FEXTRA) of 'a's filling each."""
+    out = b""
+    while size:
+        n = size if size < 60_000 else 50_000
+        extra = n - 22
+        out += b"\x1f\x8b\x08\x04" + bytes(5) + b"\xff" + struct.pack("<H", extra) + b"a" * extra + b"\x03\x00" + bytes(8)
+        size -= n
+    return out
+
+
+def test_padding_after_and_between_whole_members_is_left_out_with_a_warning(tmp_path):
+    """Attack pass 60: a whole recording, 50 zeros and 50 0xFF after it, was refused ("bytes after the end of the gzip
+    stream that are not gzip"). Padding of both bytes after a member is left out with a warning; between members too,
+    the next member read."""
+    rng = np.random.default_rng(5)
+    values, body = _timed_rows(rng, 2000)
+    text = (HEADER + "t,gx,gy,gz\n" + body).encode()
+    half = text.index(b"10.00,")
+    path = tmp_path / "r.csv.gz"
+    path.write_bytes(gzip.compress(text) + bytes(50) + b"\xff" * 50)
+    rec = read_recording(path)
+    assert len(rec) == 2000 and rec.warnings == [f"{path}: 100 bytes 0x00 and 0xFF after the end of the gzip stream "
+                                                 "ignored (block padding, as gzip ignores it)"]
+    path.write_bytes(gzip.compress(text[:half]) + bytes(700) + gzip.compress(text[half:]))
+    rec = read_recording(path)
+    np.testing.assert_array_equal(rec.gyro, values)
+    assert rec.warnings == [f"{path}: 700 zero bytes between gzip members ignored (block padding)"]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_member_after_a_stream_cut_short_and_its_padding_is_read(tmp_path, seed):
+    """A recorder started again after a power cut: a stream cut short, padding, a new member. The cut stream is read to
+    its last whole line (its last line, cut, would join the new member's first), the new member after it; both said."""
+    rng = np.random.default_rng(400 + seed)
+    values, body = _timed_rows(rng, 4000)
+    split = body.index("20.00,")
+    first = gzip.compress((HEADER + "t,gx,gy,gz\n" + body[:split]).encode(), mtime=0)
+    first = first[:int(rng.integers(len(first) // 2, len(first) - 20))]
+    kept = _rows_decoded(first)
+    path = tmp_path / "r.csv.gz"
+    path.write_bytes(first + bytes(int(rng.choice([5, 512, 4096]))) + gzip.compress(body[split:].encode(), mtime=0))
+    rec = read_recording(path)
+    np.testing.assert_array_equal(rec.gyro, np.vstack([values[:kept], values[2000:]]))
+    said = " ".join(rec.warnings)
+    assert "and another gzip member begin" in said and "a line without its end) left out" in said
+
+
+def test_many_short_runs_after_a_cut_are_read_to_the_cut(tmp_path):
+    """Attack pass 60: 800 kB of 5 zeros and a line end after a stream cut short took 42 s (20 MB: more than 11 min)
+    and ended in a bad line. The stream is on trial from the first run: read to it, with a warning."""
+    rng = np.random.default_rng(6)
+    values, body = _timed_rows(rng, 20_000)
+    data = gzip.compress((HEADER + "t,gx,gy,gz\n" + body).encode(), mtime=0)
+    cut = len(data) // 2
+    path = tmp_path / "r.csv.gz"
+    path.write_bytes(data[:cut] + (bytes(5) + b"\n") * 300_000)
+    rec = read_recording(path)
+    assert len(rec) == _rows_decoded(data[:cut])
+    np.testing.assert_array_equal(rec.gyro, values[:len(rec)])
+
+
+def test_a_stream_on_trial_past_its_bound_is_refused_naming_the_run(tmp_path, monkeypatch):
+    """A stream whose end, which alone tells its run from padding, comes after more text than a trial holds is refused,
+    naming the run and zcat, not read unchecked (the bounds are small here)."""
+    monkeypatch.setattr(gzipped, "TRIAL_TEXT_BYTES", 1 << 20)
+    rng = np.random.default_rng(7)
+    _, data = _constant_rows(rng, 400_000)
+    path = tmp_path / "r.csv.gz"
+    path.write_bytes(data)
+    run = next((offset, count) for offset, (kind, _, count) in _offsets(data) if kind == "run")
+    with pytest.raises(RecordingError, match=f"{run[1]} zero bytes at byte {run[0]} inside a gzip stream, then more "
+                                             r"than 64 MiB of it \(1 MiB of text\)"):
+        read_recording(path)
+
+
+def test_the_documented_bounds_of_a_trial_are_the_readers():
+    """docs/formats.md section 1 states the run length and a trial's bounds; they are the reader's constants."""
+    from support import REPO
+
+    text = " ".join((REPO / "docs" / "formats.md").read_text().split())
+    assert f"From a run of {gzipped.RUN_BYTES} or more zero or 0xFF bytes" in text
+    assert f"at most {gzipped.TRIAL_BYTES >> 20} MiB, and {gzipped.TRIAL_TEXT_BYTES >> 30} GiB of text" in text
