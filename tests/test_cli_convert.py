@@ -211,11 +211,14 @@ def test_damaged_gzip_log_is_one_refusal_line(tmp_path, capsys):
     assert not dst.exists()
 
 
-@pytest.mark.parametrize("step, name", [(1, "t"), (0.5, "time"), (1, "timestamp"), (500, "stamp")])
+@pytest.mark.parametrize("step, name", [(1, "t"), (0.5, "time"), (1, "timestamp"), (500, "stamp"), (200, "time"),
+                                        (125, "stamp"), (100, "t"), (0.2, "time"), (0.125, "t")])
 def test_a_time_column_whose_steps_read_in_two_units_is_refused(tmp_path, capsys, step, name):
     """Attack pass 59: a 1 Hz log stamped in s (``t`` = 0, 1, 2 ...) was written at 1000 Hz (3 s), the stamps inferred
     to be ms, every Allan time 1000 times off: steps of 1 are 1 Hz in s or 1 kHz in ms (500: 2 Hz in ms or 2 kHz
-    in us). Such a log is refused, naming both; --time-unit decides."""
+    in us). Pass 60: only the unit before the one taken was looked at: the MPU6050's 8 kHz in us (steps of 125) was
+    written at 8 Hz, read as ms, and 5 Hz in ms (0.2) at 5 Hz in s. Such a log is refused, naming both; --time-unit
+    decides."""
     rows = "".join(f"{i * step:g},0.1,0.2,0.3\n" for i in range(300))
     code, dst = _convert(tmp_path, f"{name},gx,gy,gz\n{rows}", "--unit", "dps")
     err = capsys.readouterr().err

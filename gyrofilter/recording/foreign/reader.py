@@ -25,8 +25,8 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
 - **Time.** The time column's unit (s, ms, us, ns) is the caller's, the name's (``time_ms``,
   ``millis``, ``%time`` of a ROS export in ns, ``seconds_elapsed``) or, failing both, the
   first of s, ms, us, ns in which the typical step means :data:`MIN_INFERRED_RATE_HZ` or more
-  (a gyro logs at 5 Hz or faster), said in the summary; refused where the unit before it means 1 Hz or more
-  (steps of 1: 1 Hz in s or 1 kHz in ms). ``t`` counts from the first time stamp
+  (a gyro logs at 5 Hz or faster), said in the summary; refused where another unit means a rate a gyro logs at too,
+  1 Hz to 32 kHz (steps of 1: 1 Hz in s or 1 kHz in ms; of 125: 8 Hz in ms or 8 kHz in us). ``t`` counts from the first time stamp
   (stamps are subtracted exactly, as decimals: ns or s since 1970 keep every nanosecond); the first
   stamp is kept in the header (``time_origin``). The rate is the caller's or 1 / the mean
   step, gaps aside (refused where the gaps are ambiguous: :func:`_time_axis`); either way ``t`` is held to it as the reader holds a recording's

@@ -16,6 +16,9 @@ from ...inputs import quote
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 #: the slowest rate a time unit is inferred for: a gyro logs at 5 Hz or faster (the MPU6050's slowest is 3.9 Hz)
 MIN_INFERRED_RATE_HZ = 5.0
+#: the fastest rate a gyro outputs (the ICM-42688-P's 32 kHz; the MPU6050's 8 kHz): a time unit in which the steps
+#: mean a rate from 1 Hz to this one is a unit the log may be in
+FASTEST_GYRO_HZ = 32_000.0
 
 
 class Stamps:
@@ -90,17 +93,16 @@ def seconds_from(texts, origin, unit_s):
 
 
 def infer_time_unit(steps, path, name):
-    """The first time unit in which the median step means MIN_INFERRED_RATE_HZ or more; refused where the unit
-    before it means 1 Hz or more (steps of 1: 1 Hz in s or 1 kHz in ms, a slow logger's or a fast one's; read as ms,
-    a 1 Hz log was written at 1000 Hz without a word, attack pass 59)."""
+    """The first time unit in which the median step means MIN_INFERRED_RATE_HZ or more; refused where another unit
+    means a rate a gyro may log at too, 1 Hz to :data:`FASTEST_GYRO_HZ` (steps of 1: 1 Hz in s or 1 kHz in ms, a 1 Hz
+    log written at 1000 Hz, attack pass 59; steps of 125: 8 Hz in ms or the MPU6050's 8 kHz in us, pass 60)."""
     median = float(np.median(steps))
-    before = None
-    for unit, seconds in TIME_UNITS.items():
-        if median > 0 and 1.0 / (median * seconds) >= MIN_INFERRED_RATE_HZ:
-            if before is not None and 1.0 / (median * TIME_UNITS[before]) >= 1.0:
-                raise RecordingError(f"{path}: the time column {quote(name)} steps by {median:g}: "
-                                     f"{1.0 / (median * TIME_UNITS[before]):g} Hz in {before} or "
-                                     f"{1.0 / (median * seconds):g} Hz in {unit}; give --time-unit {before} or {unit}")
-            return unit
-        before = unit
-    raise RecordingError(f"{path}: the time column {quote(name)} does not step forward; give --time-unit or --sample-rate-hz")
+    rates = {unit: 1.0 / (median * seconds) for unit, seconds in TIME_UNITS.items()} if median > 0 else {}
+    unit = next((unit for unit, rate in rates.items() if rate >= MIN_INFERRED_RATE_HZ), None)
+    if unit is None:
+        raise RecordingError(f"{path}: the time column {quote(name)} does not step forward; give --time-unit or --sample-rate-hz")
+    both = [other for other, rate in rates.items() if other == unit or 1.0 <= rate <= FASTEST_GYRO_HZ]
+    if len(both) > 1:
+        raise RecordingError(f"{path}: the time column {quote(name)} steps by {median:g}: "
+                             + " or ".join(f"{rates[u]:g} Hz in {u}" for u in both) + f"; give --time-unit {' or '.join(both)}")
+    return unit
