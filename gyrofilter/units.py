@@ -46,11 +46,16 @@ MIN_NOISE_DPS = 1e-100
 ROUNDING_ULPS = 16
 
 
+def rounding(value):
+    """The float64 rounding of numbers near ``value`` (a number or an array): ``ROUNDING_ULPS * spacing(|value|)``."""
+    return ROUNDING_ULPS * np.spacing(np.abs(value))
+
+
 def one_value(low, high):
     """Whether the values from ``low`` to ``high`` (numbers or arrays: the least and greatest of a series) are one
-    value up to float64 rounding: ``high - low <= ROUNDING_ULPS * spacing(max(|low|, |high|))``. The one test of a
-    constant (stuck) axis."""
-    return high - low <= ROUNDING_ULPS * np.spacing(np.maximum(np.abs(low), np.abs(high)))
+    value up to float64 rounding: ``high - low <= rounding(max(|low|, |high|))``. The one test of a constant (stuck)
+    axis."""
+    return high - low <= rounding(np.maximum(np.abs(low), np.abs(high)))
 
 
 #: one sample per 1000 s: far below any gyro's output (the MPU6050's slowest is 1 kHz / 256 = 3.9 Hz)

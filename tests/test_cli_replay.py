@@ -401,6 +401,39 @@ def test_a_stuck_sensor_whose_samples_differ_by_rounding_is_stuck_everywhere(tmp
     assert nothing_to_analyse(noisy) is None
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_a_stuck_axis_is_filtered_to_zero_not_to_rounding(tmp_path, capsys, seed):
+    """Attack pass 60: replay --out of a stuck axis (19.99 deg/s and the float after it) wrote 0 and +-7e-16 deg/s,
+    the bias's rounding, which gap analysed (three findings) and allan called a gross error, or fitted (N = 1.8e-16).
+    A block mean within the bias's float64 rounding of it is 0: the output of a stuck axis is 0 exactly, and allan
+    refuses it as constant, suggesting the others; the noisy axes are filtered as before, to the last bit. Value,
+    stuck axis and chunk sizes drawn per seed."""
+    from gyrofilter import GyroFilter
+    from gyrofilter.units import ROUNDING_ULPS
+
+    rng = np.random.default_rng(600 + seed)
+    value = float(rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-3, 1.2))
+    stuck = int(rng.integers(3))
+    gyro = rng.normal(0.0, 0.05, (6000, 3))
+    gyro[:, stuck] = value + rng.integers(0, ROUNDING_ULPS // 2 + 1, 6000) * np.spacing(abs(value))
+    whole = GyroFilter(100.0).filter(gyro)
+    assert len(whole) > 1000 and not np.any(whole[:, stuck]) and np.all(np.std(np.delete(whole, stuck, 1), axis=0) > 1e-4)
+    chunked, filt, at = [], GyroFilter(100.0), 0
+    while at < len(gyro):
+        step = int(rng.integers(1, 400))
+        chunked += [filt.filter(gyro[at:at + step])] if step > 1 else [np.array([r]) for r in [filt.update(gyro[at])] if r]
+        at += step
+    np.testing.assert_array_equal(np.vstack(chunked), whole)
+    src, out = tmp_path / "stuck.csv", tmp_path / "out.csv"
+    write_recording(src, Recording.from_dps(gyro, 100.0))
+    assert main(["replay", str(src), "--out", str(out)]) == 0
+    assert not np.any(read_recording(out).gyro_dps[:, stuck])
+    capsys.readouterr()
+    assert main(["allan", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "constant" in err and "--axes " + "".join(a for i, a in enumerate("xyz") if i != stuck) in err, err
+
+
 def test_outputs_are_checked_before_any_work(tmp_path, capsys):
     rng = np.random.default_rng(11)
     src = tmp_path / "in.csv"

@@ -34,7 +34,7 @@ from .settings import MAX_CALIBRATION_SAMPLES, SETTING_NAMES, FilterSettings
 from .tempcomp import compensate
 from .threshold import RangeThreshold
 from ..tempscreen import TEMP_MEDIAN_SAMPLES, latest_median, running_medians, temperature_history
-from ..units import RATE_TOLERANCE, TEMP_RANGE_C, check_sample_rate_hz, plain, shown
+from ..units import RATE_TOLERANCE, TEMP_RANGE_C, check_sample_rate_hz, plain, rounding, shown
 
 
 class GyroFilter:
@@ -120,6 +120,7 @@ class GyroFilter:
         self._t_last_s = None  # the last time given to filter_timed (s)
         self.calibration = None
         self._bias = (0.0, 0.0, 0.0)
+        self._rounding = np.zeros(3)  # units.rounding of the bias: block means within it are 0
         self._cal_needed = calibration_samples(self.sample_rate_hz, s.calibration_s)
         if calibration is None and s.calibration_s > 0:
             noise_calibration_samples(self.sample_rate_hz, s.calibration_s)
@@ -419,7 +420,13 @@ class GyroFilter:
 
     def _track(self, y, out, y_motion=None, used=adaptive_kalman.NO_USED):
         """Block means y (M, 3) -> output (M, 3): the tracker, then the hold stage if enabled.
-        ``y_motion``, ``used``: the adaptive filter's (adaptive_kalman.run_blocks_adaptive)."""
+        ``y_motion``, ``used``: the adaptive filter's (adaptive_kalman.run_blocks_adaptive). A block mean less than the
+        bias's float64 rounding from it (``units.rounding``, 16 spacings: 6e-14 deg/s at 20 deg/s) is 0: a stuck
+        axis reading the bias and the float after it is filtered to 0, not to rounding (7e-16 deg/s, which the
+        analyses took for noise, attack pass 60)."""
+        for means in (y, y_motion):
+            if means is not None:
+                np.copyto(means, 0.0, where=np.abs(means) <= self._rounding)
         if self.settings.tracker != "kalman":
             out[:] = y
         elif not self._adaptive:
@@ -481,6 +488,7 @@ class GyroFilter:
             if self._cal_temp is not None:  # the window's latest temperatures start the running median
                 self._temp_seen.extend(self._cal_temp[-TEMP_MEDIAN_SAMPLES:].tolist())
         self._bias = tuple(float(b) for b in cal.bias_dps)
+        self._rounding = rounding(np.asarray(self._bias))
         if not self._adaptive:  # paper 001's initial Q and R: the variance of a block mean of the calibration's white noise
             self._pkf.start(cal.noise_std_dps)
         self._cal_buf = None
