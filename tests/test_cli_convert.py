@@ -1250,6 +1250,9 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# counts per deg/s: 65.5", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# gyro sensitivity = 65.5 LSB/(\u00ba/s)", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# sensitivity: 0.000266 rad/s/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# gyro: radians per second", []), ("# counts per degree per second: 65.5", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# gyro sensitivity: 0.0153 deg/s per LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 60
+    ("# Sample rate (nom.): 200", []), ("# rate: 200 s^-1", []), ("# Sample rate (per channel): 200", []),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1286,6 +1289,14 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# Sample rate: 100 Hz per axis", []),
     ("# Sample rate (nominal): 100", []), ("# unit: degrees per second", []), ("# gyro rate: 100 dps", []),  # pass 59
     ("# sensitivity: 0.0001332 rad/s/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]), ("# counts: 5000", []),
+    ("# sensitivity: 0.0153 dps/LSB", ["--unit", "lsb", "--lsb-per-dps", "65.5"]),  # pass 60: datasheets' rounding
+    ("# sensitivity: 15.3 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "65.5"]),
+    ("# Gyro sensitivity: 7.6 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# sensitivity: 3.8 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "262.4"]),
+    ("# sensitivity: 0.000266 rad/s/LSB", ["--unit", "lsb", "--lsb-per-dps", "65.5"]),
+    ("# gyro sensitivity: 0.0153 deg/s per LSB", ["--unit", "lsb", "--lsb-per-dps", "65.5"]),
+    ("# counts per degree per second: 131", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# Sample rate (nom.): 100", []), ("# Sample rate (per channel): 100", []), ("# rate: 100 s^-1", []),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read
@@ -1302,6 +1313,7 @@ def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, com
     ("# temp unit: F", [], True), ("# Temperature units: K", ["--temp-unit", "c"], True),
     ("# temp unit: degC", [], False), ("# temp unit: F", ["--temp-unit", "f"], False),
     ("# temp: raw", ["--temp-unit", "mpu6050"], False), ("# temp sensor: on-die", [], False),
+    ("# units: s, deg/s, \u00b0F", [], True), ("# units: s, deg/s, \u00b0C", [], False),  # pass 60
 ])
 def test_a_comment_stating_another_temperature_unit_is_refused(tmp_path, capsys, comment, options, refused):
     """Attack pass 59: a comment stating the temperature's unit is checked against the unit read, as the gyro's is."""

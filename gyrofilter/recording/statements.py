@@ -17,6 +17,7 @@ its inverse (``8.75 mdps/LSB``: 114.29), a number in deg/s or after ``±`` a ful
 """
 from __future__ import annotations
 
+import decimal
 import math
 import re
 import unicodedata
@@ -40,7 +41,7 @@ STATES = {  # kind: (the other words its key may hold, its own words)
                {"period", "interval", "dt", "ts", "timestep"}),
     "unit": ({"gyro", "gyr", "gyroscope", "rate", "angular", "velocity", "omega", "measurement", "rotation", "turn"},
              {"unit", "units", "scale"}),
-    "sensitivity": ({"gyro", "gyr", "per", "dps", "mdps", "deg", "degree", "degrees", "s", "factor"},
+    "sensitivity": ({"gyro", "gyr", "per", "dps", "mdps", "deg", "degree", "degrees", "s", "sec", "second", "factor"},
                     {"lsb", "sensitivity", "scale"}),
     "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
     "accel_sensitivity": ({"acc", "accel", "accelerometer", "acceleration", "per", "g", "mg", "factor"},
@@ -58,7 +59,7 @@ _SECONDS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "m
             "micros": 1e-6, "microseconds": 1e-6, "ns": 1e-9, "nsec": 1e-9, "nanoseconds": 1e-9}
 _RATE_SUFFIXES = {"", "hz", "khz", "sps", "samples/s", "s/s", "/s", "1/s", "samples/sec", "samples", "hertz", "/sec",
                   "/second", "readings/s", "readings/sec", "readings", "samples/second", "readings/second",
-                  "samples/second", "sa/s", "per"}  # 200 per second
+                  "samples/second", "sa/s", "s^-1", "s-1", "per"}  # 200 per second, 200 s^-1
 #: after a rate's number and word, a time other than the second (``200 per minute``, ``200 samples per ms``)
 _PER_OTHER = re.compile(r"\s*(?:per\s+|/\s*)(?:min|minutes?|h|hr|hours?|d|days?|ms|msec|milliseconds?|[uµμ]s|usec)\b",
                         re.IGNORECASE)
@@ -66,7 +67,7 @@ _PER_OTHER = re.compile(r"\s*(?:per\s+|/\s*)(?:min|minutes?|h|hr|hours?|d|days?|
 _SECOND = re.compile(r"\s*(?:s|sec|secs|seconds?)\b", re.IGNORECASE)
 #: words in a key's brackets that remark on its value, not its unit
 _REMARKS = {"nominal", "approx", "approximately", "typ", "typical", "actual", "measured", "set", "target", "configured",
-            "default", "expected", "requested"}
+            "default", "expected", "requested", "nom", "per channel", "per axis"}
 #: a value in Hz (``gyro rate: 200 Hz`` is a sample rate; ``gyro rate: 200`` may be a rate of turn)
 _IN_HZ = re.compile(r"\d\s*k?hz\b", re.IGNORECASE)
 #: ``per`` between the words of a unit (``radians per second``, ``rad per s``)
@@ -149,9 +150,9 @@ def stated_kind(words, value):
         kinds.append("rate")  # f_s = 200 Hz
     if {"counts", "per"} <= words <= STATES["sensitivity"][0] | {"counts"}:
         kinds.append("sensitivity")  # counts per deg/s: 65.5
-    if words <= set().union(*STATES["unit"]) and known_unit("rate", value):
-        kinds.insert(0, "unit")  # gyro: rad/s
-    if words <= _ACCEL_WORDS | STATES["accel_unit"][1] and known_unit("accel", value):
+    if words <= set().union(*STATES["unit"]) and known_unit("rate", _PER_WORD.sub("/", value)):
+        kinds.insert(0, "unit")  # gyro: rad/s, gyro: radians per second
+    if words <= _ACCEL_WORDS | STATES["accel_unit"][1] and known_unit("accel", _PER_WORD.sub("/", value)):
         kinds.insert(0, "accel_unit")  # accel: m/s^2
     temperature = {word for word in words if _temperature(word)}
     if temperature and words - temperature <= set().union(*_TEMP_UNIT_WORDS) and (
@@ -183,6 +184,8 @@ def judge(kind, words, value, facts, rates, tolerance):
     one over it, the unit (:func:`~gyrofilter.recording.unit_words.known_unit`), ``lsb_per_dps`` (where ``gyro_unit``
     is lsb), ``accel_unit`` (where the header has one), ``lsb_per_g`` (where ``accel_unit`` is lsb)."""
     value = clean(value)
+    if kind in ("sensitivity", "accel_sensitivity"):
+        value = _PER_WORD.sub("/", value)  # 0.0153 deg/s per LSB
     number = _NUMBER.fullmatch(value)
     amount = float(number["number"]) if number and is_plain_number(number["number"]) else None
     suffix = number["suffix"].lower() if number else ""
@@ -205,7 +208,7 @@ def judge(kind, words, value, facts, rates, tolerance):
         return None if any(abs(stated - r) <= tolerance * r for r in rates) else ("sample_rate_hz", None)
     if kind in ("sensitivity", "accel_sensitivity"):
         return _sensitivity(kind, amount, number, suffix, facts)
-    units = {"unit": (("gyro_unit", "rate"), ("accel_unit", "accel")), "accel_unit": (("accel_unit", "accel"),),
+    units = {"unit": (("gyro_unit", "rate"), ("accel_unit", "accel"), ("temp_unit", "temp")), "accel_unit": (("accel_unit", "accel"),),
              "temp_unit": (("temp_unit", "temp"),)}[kind]
     for key, quantity in units:
         value = _PER_WORD.sub("/", value)  # radians per second
@@ -218,16 +221,21 @@ def judge(kind, words, value, facts, rates, tolerance):
 
 def _sensitivity(kind, amount, number, suffix, facts):
     """:func:`judge` of a sensitivity: LSB per deg/s (``131``, ``131 LSB/(deg/s)``, ``8.75 mdps/LSB``: 114.29) where
-    ``gyro_unit`` is lsb, LSB per g (``16384``, ``16384 LSB/g``, ``0.061 mg/LSB``) where ``accel_unit`` is."""
+    ``gyro_unit`` is lsb, LSB per g (``16384``, ``16384 LSB/g``, ``0.061 mg/LSB``) where ``accel_unit`` is. The
+    number stands for all it rounds to as printed, within 0.1 % (a datasheet's ``0.0153 dps/LSB`` is 1 / 65.5, its
+    ``7.6 mdps/LSB`` 1 / 131, attack pass 60)."""
     unit_key, key, quantity = ("gyro_unit", "lsb_per_dps", "rate") if kind == "sensitivity" else ("accel_unit", "lsb_per_g", "accel")
     if facts.get(unit_key) != "lsb" or number and (number["range"] or known_unit(quantity, suffix) not in (None, "lsb")):
         return None  # gyro_scale: ±2000 dps, a full scale (65.5 LSB, 65.5 LSB per dps: a sensitivity)
     inverse = re.fullmatch(r"(m?)(dps|deg/s|°/s|rad/s|g)/(?:lsb|digit)", suffix)
-    if inverse and amount:  # 8.75 mdps/LSB, 0.000266 rad/s/LSB
-        amount = 1.0 / (amount * (1e-3 if inverse[1] else 1.0) * (180.0 / math.pi if inverse[2] == "rad/s" else 1.0))
     per = suffix in ("", "lsb") or inverse or ("dps" in suffix or "deg" in suffix.replace("°", "deg") if kind == "sensitivity"
                                      else suffix in ("lsb/g", "lsb/(g)"))
     if amount is None or not per:
         return key, f"a sensitivity (LSB per {'deg/s' if kind == 'sensitivity' else 'g'})"
-    stated, held = amount, float(facts[key])
-    return None if abs(stated - held) <= 1e-3 * held else (key, None)
+    half = 0.5 * 10.0 ** decimal.Decimal(number["number"]).as_tuple().exponent  # the number as printed, rounded
+    low, high = amount - half, amount + half
+    if inverse:  # 8.75 mdps/LSB, 0.000266 rad/s/LSB: 1 / (the number in deg/s)
+        scale = (1e-3 if inverse[1] else 1.0) * (180.0 / math.pi if inverse[2] == "rad/s" else 1.0)
+        low, high = 1.0 / (high * scale), (1.0 / (low * scale) if low > 0 else math.inf)
+    held = float(facts[key])
+    return None if low * (1 - 1e-3) <= held <= high * (1 + 1e-3) else (key, None)
