@@ -602,6 +602,25 @@ def test_accelerometer_columns_without_accel_unit_leave_the_gyro_as_it_was_and_o
     assert sum(w.startswith(said) for w in fleet["warnings"]) == 1
 
 
+def test_a_jump_of_the_filters_output_is_named_the_filters_not_a_spike(tmp_path, capsys):
+    """Attack pass 60: allan on replay --out of six example models (bias instability, warm-up, ...) was refused as
+    gross errors, "a spike beyond 50 robust sigmas", unexplained: the output is smooth, and where the adaptive filter
+    follows the bias it jumps. The refusal names the filter's output and the recording to analyse; a sensor's own
+    spike is refused as before, without it."""
+    rng = np.random.default_rng(60)
+    x = np.cumsum(rng.normal(0.0, 1e-5, (4000, 3)), axis=0)  # smooth, as block means after the Kalman filter are
+    x[2000:, 1] -= 0.03  # where it follows the bias at once
+    raw, filtered = tmp_path / "raw.csv", tmp_path / "filtered.csv"
+    write_recording(raw, Recording.from_dps(x, 20.0))
+    write_recording(filtered, Recording.from_dps(x, 20.0, header={"filtered_from": "rec.csv", "input_sample_rate_hz": "100"}))
+    assert main(["allan", str(filtered)]) == 2
+    _assert_one_line_error(capsys, "filtered.csv: line", "gross error", "this is the filter's output (filtered_from "
+                           "'rec.csv')", "analyse the recording it was filtered from", "--keep-outliers")
+    assert main(["allan", str(raw)]) == 2
+    err = capsys.readouterr().err
+    assert "gross error" in err and "filtered_from" not in err
+
+
 def test_kalibr_on_the_filters_output_is_refused_and_the_fleet_writes_no_yaml_for_it(tmp_path, capsys):
     """A new user's `run --out` then `allan --kalibr` wrote gyroscope_noise_density 3.8e-7 for the
     sensor's 2.4e-4 (block means of bias-removed rates), silently: the filter's output is not the

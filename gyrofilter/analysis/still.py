@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import NotStillError, RecordingError
 from ..filter.calibration import implausible_bias
-from ..recording import ACCEL_COLUMNS, INPUT_RATE_KEY, collect_columns, filtered_from, iter_recording, warn_about_gaps
+from ..recording import ACCEL_COLUMNS, INPUT_RATE_KEY, collect_columns, filtered_from, filtered_words, iter_recording, warn_about_gaps
 from ..units import AXES, MAX_ACCEL_MPS2, STANDARD_GRAVITY_MPS2, check_axes, one_value, to_dps, to_mps2
 from .noise.allan import MIN_CLUSTERS, AllanInputError, ConstantAxisError
 from .stats import block_means
@@ -409,7 +409,8 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", 
     refusing (``--keep-outliers``); ``first_row``: file sample index (0-based) of ``series[...][0]``.
     A gross error is a spike beyond ``GROSS_Z`` robust sigmas or beyond ``limit`` (default
     ``GROSS_LIMIT_DPS``, deg/s; an accelerometer's series in ``unit`` m/s^2 take
-    :data:`~gyrofilter.units.MAX_ACCEL_MPS2`). Returns None; raises RecordingError when refusing.
+    :data:`~gyrofilter.units.MAX_ACCEL_MPS2`). A filter's output (``filtered_from``) is named so: its jumps are the
+    filter following the bias. Returns None; raises RecordingError when refusing.
     """
     found = {a: idx for a, idx in ((a, gross_errors(x, limit_dps=limit)) for a, x in series.items()) if idx.size}
     if not found:
@@ -422,6 +423,10 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", 
             f"error (a spike beyond {GROSS_Z:g} robust sigmas of the noise, or beyond {limit:g} {unit}), and "
             f"{sum(idx.size for idx in found.values())} such sample(s) in all ({counts}); the analysis assumes a still "
             "sensor without spikes (if the sensor moved, record it at rest)")
+    filtered = filtered_words(head.header)
+    if filtered:  # attack pass 60: six example models' replay outputs refused so, unexplained
+        text += (f"; this is {filtered}: a jump in it is the filter following the bias (its adaptive gain), not a "
+                 "spike; analyse the recording it was filtered from")
     if not keep:
         raise RecordingError(f"{text}: fix the data, or rerun with --keep-outliers to analyse them as they are")
     warn(f"{text}: analysed as they are (--keep-outliers)")
