@@ -1253,6 +1253,7 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# gyro: radians per second", []), ("# counts per degree per second: 65.5", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# gyro sensitivity: 0.0153 deg/s per LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 60
     ("# Sample rate (nom.): 200", []), ("# rate: 200 s^-1", []), ("# Sample rate (per channel): 200", []),
+    ("# Sample rate: 200 Hz (DLPF 44 Hz)", []), ("# Frequency: 200 Hz", []),  # a sample rate whatever the remark
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1297,6 +1298,7 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# gyro sensitivity: 0.0153 deg/s per LSB", ["--unit", "lsb", "--lsb-per-dps", "65.5"]),
     ("# counts per degree per second: 131", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# Sample rate (nom.): 100", []), ("# Sample rate (per channel): 100", []), ("# rate: 100 s^-1", []),
+    ("# Frequency: 42 Hz (DLPF)", []), ("# frequency: 20 Hz (low-pass filter)", []),  # a filter's cut-off
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read

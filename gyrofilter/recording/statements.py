@@ -68,6 +68,8 @@ _SECOND = re.compile(r"\s*(?:s|sec|secs|seconds?)\b", re.IGNORECASE)
 #: words in a key's brackets that remark on its value, not its unit
 _REMARKS = {"nominal", "approx", "approximately", "typ", "typical", "actual", "measured", "set", "target", "configured",
             "default", "expected", "requested", "nom", "per channel", "per axis"}
+#: a remark in brackets at a value's end that names a filter (``Frequency: 42 Hz (DLPF)``: its cut-off, not a sample rate)
+_FILTER_REMARK = re.compile(r"\([^()]*\b(?:dlpf|lpf|low[- ]?pass|cut-?off|bandwidth|bw|filter)\b[^()]*\)\s*$", re.IGNORECASE)
 #: a value in Hz (``gyro rate: 200 Hz`` is a sample rate; ``gyro rate: 200`` may be a rate of turn)
 _IN_HZ = re.compile(r"\d\s*k?hz\b", re.IGNORECASE)
 #: ``per`` between the words of a unit (``radians per second``, ``rad per s``)
@@ -183,6 +185,8 @@ def judge(kind, words, value, facts, rates, tolerance):
     Hz (``khz`` in the key or the value in thousands) within ``tolerance`` (relative) of one of ``rates``, a period of
     one over it, the unit (:func:`~gyrofilter.recording.unit_words.known_unit`), ``lsb_per_dps`` (where ``gyro_unit``
     is lsb), ``accel_unit`` (where the header has one), ``lsb_per_g`` (where ``accel_unit`` is lsb)."""
+    if kind == "rate" and not words & _SAMPLING and _FILTER_REMARK.search(value):
+        return None  # Frequency: 42 Hz (DLPF): a filter's, not the sample rate
     value = clean(value)
     if kind in ("sensitivity", "accel_sensitivity"):
         value = _PER_WORD.sub("/", value)  # 0.0153 deg/s per LSB
