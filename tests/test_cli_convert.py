@@ -225,13 +225,29 @@ def test_a_time_column_whose_steps_read_in_two_units_is_refused(tmp_path, capsys
     slow, fast = ("s", "ms") if step < 100 else ("ms", "us")
     assert code == 2 and not dst.exists() and err.startswith(
         f"gyrofilter: error: {tmp_path / 'log.csv'}: the time column '{name}' steps by {step:g}: "), err
-    assert f"; give --time-unit {slow} or {fast}\n" in err
+    assert f"; give --time-unit {slow} or {fast} (or --sample-rate-hz)\n" in err
     code, dst = _convert(tmp_path, f"{name},gx,gy,gz\n{rows}", "--unit", "dps", "--time-unit", slow)
     assert code == 0 and read_recording(dst).sample_rate_hz == pytest.approx(1.0 / (step * TIME_UNITS[slow]))
     capsys.readouterr()
     code, dst = _convert(tmp_path, f"{name},gx,gy,gz\n" + rows.replace(f"{step:g},", f"{step * 10:g},", 1), "--unit",
                          "dps", out="again.csv")
     assert code == 2  # one step changed, the median the same
+
+
+def test_a_32_khz_log_stamped_in_whole_us_is_refused_and_the_sample_rate_settles_the_unit(tmp_path, capsys):
+    """A new user's 32 kHz log stamped in whole us (steps of 31 and 32: 32.3 kHz) was written at 32 Hz, read as ms:
+    32.3 kHz was above the fastest gyro's 32 kHz. The band of a gyro's rates is held within 5 %, as a rate's
+    statements are; --sample-rate-hz, which only one unit gives, settles the unit (it was refused too)."""
+    rows = "".join(f"{round(i * 31.25)},0.1,0.2,0.3\n" for i in range(3000))
+    code, dst = _convert(tmp_path, f"time,gx,gy,gz\n{rows}", "--unit", "dps")
+    err = capsys.readouterr().err
+    assert code == 2 and "steps by 31: 32.2581 Hz in ms or 32258.1 Hz in us; give --time-unit ms or us" in err, err
+    code, dst = _convert(tmp_path, f"time,gx,gy,gz\n{rows}", "--unit", "dps", "--sample-rate-hz", "32000")
+    err = capsys.readouterr().err
+    assert code == 0 and read_recording(dst).sample_rate_hz == 32000.0 and "in us (inferred: the unit giving " \
+        "--sample-rate-hz" in " ".join(err.split()), err
+    code, dst = _convert(tmp_path, f"time,gx,gy,gz\n{rows}", "--unit", "dps", "--sample-rate-hz", "100", out="b.csv")
+    assert code == 2 and "not at --sample-rate-hz" in capsys.readouterr().err
 
 
 def test_a_time_column_in_ms_at_100_hz_is_still_inferred(tmp_path, capsys):
@@ -1254,6 +1270,7 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# gyro sensitivity: 0.0153 deg/s per LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 60
     ("# Sample rate (nom.): 200", []), ("# rate: 200 s^-1", []), ("# Sample rate (per channel): 200", []),
     ("# Sample rate: 200 Hz (DLPF 44 Hz)", []), ("# Frequency: 200 Hz", []),  # a sample rate whatever the remark
+    ("# sensitivity: 0.02 dps/LSB", ["--unit", "lsb", "--lsb-per-dps", "65.5"]),  # one digit: not within 1 %
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1403,7 +1420,7 @@ def test_a_gzip_log_cut_short_then_padded_with_zeros_is_read_to_its_cut(tmp_path
     err = " ".join(run.stderr.decode().split())
     name = "-" if piped else str(src)
     assert run.returncode == 0, err
-    assert f"{name}: {zeros} zero bytes at its end ignored (block padding, as a power cut leaves an SD card)" in err
+    assert f"{name}: {zeros} zero byte{'s' * (zeros > 1)} at its end ignored (block padding, as a power cut leaves an SD card)" in err
     assert f"{name}: gzip stream cut short (no end marker), as an interrupted recording leaves it; read to line {complete + 1}" in err
     rec = read_recording(dst)
     assert len(rec) == complete > 100

@@ -365,7 +365,7 @@ def test_zero_bytes_after_a_gzip_stream_are_block_padding_read_with_a_warning(tm
     path.write_bytes(path.read_bytes() + bytes(zeros))
     rec = read_recording(path)
     np.testing.assert_array_equal(rec.columns["gx"], np.arange(3000))
-    assert f"{path}: {zeros} zero bytes after the end of the gzip stream ignored" in " ".join(rec.warnings)
+    assert f"{path}: {zeros} zero byte{'s' * (zeros > 1)} after the end of the gzip stream ignored" in " ".join(rec.warnings)
 
 
 @pytest.mark.parametrize("zeros, piped", [(1, False), (100, False), (511, False), (512, False), (4096, False),
@@ -391,7 +391,7 @@ def test_a_gzip_cut_short_then_padded_with_zeros_reads_to_the_cut(tmp_path, zero
         feeder.join()
     np.testing.assert_array_equal(rec.columns["gx"], np.arange(len(rec)))
     assert 1000 < len(rec) < 30000 and any("cut short" in w for w in rec.warnings)
-    assert any(f"{zeros} zero bytes at its end ignored" in w for w in rec.warnings)
+    assert any(f"{zeros} zero byte{'s' * (zeros > 1)} at its end ignored" in w for w in rec.warnings)
 
 
 def _synced_gzip(text, every):

@@ -409,8 +409,8 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", 
     refusing (``--keep-outliers``); ``first_row``: file sample index (0-based) of ``series[...][0]``.
     A gross error is a spike beyond ``GROSS_Z`` robust sigmas or beyond ``limit`` (default
     ``GROSS_LIMIT_DPS``, deg/s; an accelerometer's series in ``unit`` m/s^2 take
-    :data:`~gyrofilter.units.MAX_ACCEL_MPS2`). A filter's output (``filtered_from``) is named so: its jumps are the
-    filter following the bias. Returns None; raises RecordingError when refusing.
+    :data:`~gyrofilter.units.MAX_ACCEL_MPS2`). A filter's output (``filtered_from``) is named so: its jumps may be
+    the filter's own. Returns None; raises RecordingError when refusing.
     """
     found = {a: idx for a, idx in ((a, gross_errors(x, limit_dps=limit)) for a, x in series.items()) if idx.size}
     if not found:
@@ -424,9 +424,10 @@ def refuse_gross_errors(head, series, keep, *, warn, first_row=0, unit="deg/s", 
             f"{sum(idx.size for idx in found.values())} such sample(s) in all ({counts}); the analysis assumes a still "
             "sensor without spikes (if the sensor moved, record it at rest)")
     filtered = filtered_words(head.header)
-    if filtered:  # attack pass 60: six example models' replay outputs refused so, unexplained
-        text += (f"; this is {filtered}: a jump in it is the filter following the bias (its adaptive gain), not a "
-                 "spike; analyse the recording it was filtered from")
+    if filtered and not keep:  # attack pass 60: six example models' replay outputs refused so, unexplained
+        raise RecordingError(f"{text}; this is {filtered}, whose jumps may be the filter's own (following the bias, "
+                             "passing a vibration) or the sensor's: analyse the recording it was filtered from, or rerun "
+                             "with --keep-outliers to analyse the output as it is")
     if not keep:
         raise RecordingError(f"{text}: fix the data, or rerun with --keep-outliers to analyse them as they are")
     warn(f"{text}: analysed as they are (--keep-outliers)")
@@ -516,8 +517,11 @@ def characterise_recording(path, *, axes=AXES, confidence=0.95, min_clusters=MIN
     axes = check_axes(axes)
     head, series, accel = read_axes(path, axes + not_analysed(axes), with_accel=True, held=True)  # converted when taken
     others = {a: series.pop(a) for a in not_analysed(axes)}  # their means too: a unit mistake is the file's
-    note = accelerometer_note(head)
-    for text in head.warnings + ([note] if note else []):
+    filtered = filtered_words(head.header)  # a new user read the output's N of 2.8e-5, a resolved K, as the sensor's
+    notes = [accelerometer_note(head), filtered and (f"{path}: is {filtered}: its Allan deviation is the filter's "
+                                                     "(block means, bias removed, smoothed), not the sensor's noise; "
+                                                     "analyse the recording it was filtered from")]
+    for text in head.warnings + [note for note in notes if note]:
         warn(text)
     warn_about_gaps(head, GAPS_CONSEQUENCE, warn)
     if refuse_motion:  # before the spikes and the mean: a turning gyro's are the motion's

@@ -34,8 +34,9 @@ def add_arguments(parser):
     options.add_sample_rate_argument(parser, help="sample rate in Hz (default: from the time column's mean step, gaps aside; "
                                                   "required without a time column)")
     parser.add_argument("--time-unit", choices=tuple(TIME_UNITS), default=None,
-                        help="unit of the time column (default: the one its name states, else the first of s, ms, us, "
-                             "ns giving 5 Hz or more, where the unit before it does not give 1 Hz or more)")
+                        help="unit of the time column (default: the one its name states, else the one in which the "
+                             "median step gives --sample-rate-hz, else the first of s, ms, us, ns giving 5 Hz or more, "
+                             "where no other gives a rate a gyro logs at, 1 Hz to 32 kHz)")
     parser.add_argument("--temp-unit", choices=TEMP_UNITS, default=None,
                         help="unit of the temperature column (TempC, temp_c, Temperature, TEMP ...), written as the "
                              "recording's temp in deg C: c, f or k (converted), or mpu6050 (raw counts: counts / 340 + 36.53); none leaves "

@@ -33,7 +33,8 @@ GZIP_MAGIC = b"\x1f\x8b"
 #: in the block headers of constant rows: measured, tools/gzip_runs.py)
 RUN_BYTES = 5
 #: most compressed bytes (runs aside, which are counted), and bytes of text, of a stream on trial: the bytes are
-#: kept to be read again once it ends whole
+#: kept to be read again once it ends whole; a stream longer on trial ends at its run (zeros after a cut decode to
+#: up to 2 kB of text a byte: 4 GB of them, TBs)
 TRIAL_BYTES = 64 << 20
 TRIAL_TEXT_BYTES = 1 << 30
 #: a flush's empty stored block after a run of zeros (LEN 00 00, NLEN FF FF), not more FF
@@ -232,7 +233,7 @@ def _gunzip(source, path, warnings):
         if raw[:2] != GZIP_MAGIC and not GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
             raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
         if count:
-            warnings.append(f"{path}: {count} {_named(seen)} between gzip members ignored (block padding)")
+            warnings.append(f"{path}: {_counted(count, seen)} between gzip members ignored (block padding)")
 
 
 def _member(source, raw, path, warnings, produced):
@@ -245,7 +246,7 @@ def _member(source, raw, path, warnings, produced):
     (``source.run``) on, the member is on trial: decompressed on, its text not used, its bytes kept, until it ends
     whole (its checksum and length, RFC 1952, checked by zlib: then read again from the run, every byte its own) or
     not (it ends at the run: :func:`_trial_failed`); at most :data:`TRIAL_BYTES` compressed bytes and
-    :data:`TRIAL_TEXT_BYTES` of text are tried (more: an error, :func:`_trial_too_long`)."""
+    :data:`TRIAL_TEXT_BYTES` of text are tried (more: it ends at the run too, the rest unchecked)."""
     d, line = zlib.decompressobj(16 + zlib.MAX_WBITS), _LastLine()
     first, trial, tried, sure, run = produced, None, 0, False, None  # trial: (d before the run, the run)
     while True:
@@ -264,8 +265,11 @@ def _member(source, raw, path, warnings, produced):
             yield from line.blocks(out)
         else:
             tried += len(out)
-            if source.kept_bytes > TRIAL_BYTES or tried > TRIAL_TEXT_BYTES:
-                raise RecordingError(_trial_too_long(path, trial[1]))
+            if source.kept_bytes > TRIAL_BYTES or tried > TRIAL_TEXT_BYTES:  # (zeros after a cut may make TBs of text)
+                how = f"goes on for more than {TRIAL_BYTES >> 20} MiB ({TRIAL_TEXT_BYTES >> 30} GiB of text), unchecked"
+                after = _trial_failed(source, trial[1], path, warnings, True, how)
+                yield from line.end(after is not None, path, warnings)
+                return after, produced
         run = None
         if not d.eof:
             if d.unconsumed_tail or len(out) == _TEXT_BYTES:  # (text zlib holds back is the input's before more)
@@ -354,29 +358,20 @@ def _trial_failed(source, run, path, warnings, had_text, how):
     count, seen, raw = _skip_padding(source, b"")
     offset, byte, run_count = run
     if raw[:3] == GZIP_MAGIC + b"\x08":
-        warnings.append(f"{path}: gzip stream cut short (no end marker) at byte {offset}, where {count} {_named(seen)} "
+        warnings.append(f"{path}: gzip stream cut short (no end marker) at byte {offset}, where {_counted(count, seen)} "
                         "(padding, as a power cut leaves an SD card) and another gzip member begin")
         return raw
     if not raw:
         warnings.append(_padding_warning(path, count, seen, False))
     elif not had_text:
-        raise _GzipDamage(path, f"{run_count} {_named({byte[0]})} at byte {offset}, then a stream that {how}", 0)
+        raise _GzipDamage(path, f"{_counted(run_count, {byte[0]})} at byte {offset}, then a stream that {how}", 0)
     else:
-        warnings.append(f"{path}: {run_count} {_named({byte[0]})} at byte {offset}, then more bytes, in a gzip stream "
+        warnings.append(f"{path}: {_counted(run_count, {byte[0]})} at byte {offset}, then more bytes, in a gzip stream "
                         f"that {how}: without its end marker its own bytes cannot be told from padding (as a power cut "
                         f"leaves an SD card) and what follows it, so its text is read to byte {offset} (zcat reads on, "
                         "unchecked)")
     warnings.append(cut_short_warning(path))
     return None
-
-
-def _trial_too_long(path, run):
-    """The error of a member on trial since the run of padding ``run`` (offset, byte, count) that goes on for more
-    than :data:`TRIAL_BYTES` (or :data:`TRIAL_TEXT_BYTES` of text) before its end tells whether it is padding."""
-    offset, byte, count = run
-    return (f"{path}: {count} {_named({byte[0]})} at byte {offset} inside a gzip stream, then more than "
-            f"{TRIAL_BYTES >> 20} MiB of it ({TRIAL_TEXT_BYTES >> 20} MiB of text) before its end marker, which alone tells "
-            "padding from the stream's own bytes: not read (zcat reads it, unchecked)")
 
 
 def _cut_end(d, source, path, warnings):
@@ -407,15 +402,16 @@ def _padded_end(d, padding):
     return 0, b""
 
 
-def _named(seen):
-    """Bytes of the values ``seen`` (0x00, 0xFF) named."""
-    return {frozenset({0}): "zero bytes", frozenset({0xFF}): "0xFF bytes"}.get(frozenset(seen), "bytes 0x00 and 0xFF")
+def _counted(count, seen):
+    """``count`` bytes of the values ``seen`` (0x00, 0xFF), in words: ``5 zero bytes``, ``1 0xFF byte``."""
+    name = {frozenset({0}): "zero byte", frozenset({0xFF}): "0xFF byte"}.get(frozenset(seen), "byte 0x00 and 0xFF")
+    return f"{count} " + name.replace("byte", "byte" if count == 1 else "bytes", 1)
 
 
 def _padding_warning(path, count, seen, after_stream):
     """The warning of ``count`` bytes of padding (of the values ``seen``: 0x00, 0xFF) left out at the end of the gzip
     file ``path``, ``after_stream`` a whole one or after one cut short."""
-    return (f"{path}: {count} {_named(seen)} " + ("after the end of the gzip stream ignored (block padding, as gzip ignores it)"
+    return (f"{path}: {_counted(count, seen)} " + ("after the end of the gzip stream ignored (block padding, as gzip ignores it)"
                                                   if after_stream else "at its end ignored (block padding, as a power cut leaves an SD card)"))
 
 

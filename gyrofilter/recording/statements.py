@@ -226,8 +226,8 @@ def judge(kind, words, value, facts, rates, tolerance):
 def _sensitivity(kind, amount, number, suffix, facts):
     """:func:`judge` of a sensitivity: LSB per deg/s (``131``, ``131 LSB/(deg/s)``, ``8.75 mdps/LSB``: 114.29) where
     ``gyro_unit`` is lsb, LSB per g (``16384``, ``16384 LSB/g``, ``0.061 mg/LSB``) where ``accel_unit`` is. The
-    number stands for all it rounds to as printed, within 0.1 % (a datasheet's ``0.0153 dps/LSB`` is 1 / 65.5, its
-    ``7.6 mdps/LSB`` 1 / 131, attack pass 60)."""
+    number stands for all it rounds from as printed, 0.1 % to 1 % (a datasheet's ``0.0153 dps/LSB`` is 1 / 65.5, its
+    ``7.6 mdps/LSB`` 1 / 131, attack pass 60; ``0.02 dps/LSB``, one digit, is not 1 / 65.5)."""
     unit_key, key, quantity = ("gyro_unit", "lsb_per_dps", "rate") if kind == "sensitivity" else ("accel_unit", "lsb_per_g", "accel")
     if facts.get(unit_key) != "lsb" or number and (number["range"] or known_unit(quantity, suffix) not in (None, "lsb")):
         return None  # gyro_scale: ±2000 dps, a full scale (65.5 LSB, 65.5 LSB per dps: a sensitivity)
@@ -236,10 +236,11 @@ def _sensitivity(kind, amount, number, suffix, facts):
                                      else suffix in ("lsb/g", "lsb/(g)"))
     if amount is None or not per:
         return key, f"a sensitivity (LSB per {'deg/s' if kind == 'sensitivity' else 'g'})"
-    half = 0.5 * 10.0 ** decimal.Decimal(number["number"]).as_tuple().exponent  # the number as printed, rounded
+    half = 0.5 * 10.0 ** decimal.Decimal(number["number"]).as_tuple().exponent  # the number as printed, rounded,
+    half = min(max(half, 1e-3 * abs(amount)), 1e-2 * abs(amount))  # within 0.1 % to 1 % (0.02 dps/LSB is not 65.5)
     low, high = amount - half, amount + half
     if inverse:  # 8.75 mdps/LSB, 0.000266 rad/s/LSB: 1 / (the number in deg/s)
         scale = (1e-3 if inverse[1] else 1.0) * (180.0 / math.pi if inverse[2] == "rad/s" else 1.0)
         low, high = 1.0 / (high * scale), (1.0 / (low * scale) if low > 0 else math.inf)
     held = float(facts[key])
-    return None if low * (1 - 1e-3) <= held <= high * (1 + 1e-3) else (key, None)
+    return None if low <= held <= high else (key, None)

@@ -23,10 +23,11 @@ tab or blank separated, gzip too) and returns a :class:`Foreign` whose rows a
   values are written as they are, with their unit in the header (``gyro_unit``), so that
   nothing is rounded.
 - **Time.** The time column's unit (s, ms, us, ns) is the caller's, the name's (``time_ms``,
-  ``millis``, ``%time`` of a ROS export in ns, ``seconds_elapsed``) or, failing both, the
-  first of s, ms, us, ns in which the typical step means :data:`MIN_INFERRED_RATE_HZ` or more
-  (a gyro logs at 5 Hz or faster), said in the summary; refused where another unit means a rate a gyro logs at too,
-  1 Hz to 32 kHz (steps of 1: 1 Hz in s or 1 kHz in ms; of 125: 8 Hz in ms or 8 kHz in us). ``t`` counts from the first time stamp
+  ``millis``, ``%time`` of a ROS export in ns, ``seconds_elapsed``) or, failing both, the one in
+  which the median step means ``--sample-rate-hz``, else the first of s, ms, us, ns in which it means
+  :data:`~gyrofilter.recording.foreign.stamps.MIN_INFERRED_RATE_HZ` or more (a gyro logs at 5 Hz or faster), said in
+  the summary; refused where another unit means a rate a gyro logs at too, 1 Hz to 32 kHz (steps of 1: 1 Hz in s or
+  1 kHz in ms; of 125: 8 Hz in ms or 8 kHz in us: :func:`~gyrofilter.recording.foreign.stamps.infer_time_unit`). ``t`` counts from the first time stamp
   (stamps are subtracted exactly, as decimals: ns or s since 1970 keep every nanosecond); the first
   stamp is kept in the header (``time_origin``). The rate is the caller's or 1 / the mean
   step, gaps aside (refused where the gaps are ambiguous: :func:`_time_axis`); either way ``t`` is held to it as the reader holds a recording's
@@ -58,7 +59,7 @@ from ...closable import Closable
 from ..content import RecordingHead
 from .comments import Comments, refuse_recording
 from .extras import find_extras, gyro_out_of_range, left_out_line, no_gyro_column, whole_rates
-from .stamps import MIN_INFERRED_RATE_HZ, TIME_UNITS, Stamps, infer_time_unit, seconds_from
+from .stamps import TIME_UNITS, Stamps, infer_time_unit, seconds_from
 from ..header import FORMAT_VERSION, GYRO_COLUMNS, VERSION_KEY, format_number, refuse_rowless
 from ..logtext import log_lines, open_log
 from ..reader import CHUNK_ROWS
@@ -410,8 +411,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
         if t_unit is None:
             offsets = np.concatenate(stamps.offsets)
             stamps.offsets = None
-            t_unit, how = infer_time_unit(np.diff(offsets), path, names[time]), \
-                f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more; --time-unit to say otherwise"
+            t_unit, how = infer_time_unit(np.diff(offsets), path, names[time], sample_rate_hz)
             del offsets
             with _unchanged(path):
                 t_parts = [seconds_from(cells[3], stamps.origin, TIME_UNITS[t_unit])

@@ -11,6 +11,7 @@ import numpy as np
 
 from ...errors import RecordingError
 from ...inputs import quote
+from ...units import RATE_TOLERANCE
 
 #: time units of a time column and their length in s
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
@@ -92,17 +93,23 @@ def seconds_from(texts, origin, unit_s):
     return np.array([float((decimal.Decimal(t) - first) * scale) for t in texts])
 
 
-def infer_time_unit(steps, path, name):
-    """The first time unit in which the median step means MIN_INFERRED_RATE_HZ or more; refused where another unit
-    means a rate a gyro may log at too, 1 Hz to :data:`FASTEST_GYRO_HZ` (steps of 1: 1 Hz in s or 1 kHz in ms, a 1 Hz
-    log written at 1000 Hz, attack pass 59; steps of 125: 8 Hz in ms or the MPU6050's 8 kHz in us, pass 60)."""
+def infer_time_unit(steps, path, name, sample_rate_hz=None):
+    """(The time unit of stamps whose steps are ``steps``, how it was found, in words): the one in which their median means ``sample_rate_hz`` (the
+    caller's, None: not given) within RATE_TOLERANCE, else the first in which it means MIN_INFERRED_RATE_HZ or more;
+    refused where another unit means a rate a gyro may log at too, 1 Hz to :data:`FASTEST_GYRO_HZ` (within
+    RATE_TOLERANCE: 32 kHz stamped in whole us steps by 31) (steps of 1: 1 Hz in s or 1 kHz in ms, a 1 Hz log written
+    at 1000 Hz, attack pass 59; steps of 125: 8 Hz in ms or the MPU6050's 8 kHz in us, pass 60)."""
     median = float(np.median(steps))
     rates = {unit: 1.0 / (median * seconds) for unit, seconds in TIME_UNITS.items()} if median > 0 else {}
+    given = [unit for unit, rate in rates.items() if sample_rate_hz and abs(rate - sample_rate_hz) <= RATE_TOLERANCE * sample_rate_hz]
+    if len(given) == 1:
+        return given[0], "inferred: the unit giving --sample-rate-hz; --time-unit to say otherwise"
     unit = next((unit for unit, rate in rates.items() if rate >= MIN_INFERRED_RATE_HZ), None)
     if unit is None:
         raise RecordingError(f"{path}: the time column {quote(name)} does not step forward; give --time-unit or --sample-rate-hz")
-    both = [other for other, rate in rates.items() if other == unit or 1.0 <= rate <= FASTEST_GYRO_HZ]
+    both = [other for other, rate in rates.items() if other == unit or 1.0 <= rate <= FASTEST_GYRO_HZ * (1 + RATE_TOLERANCE)]
     if len(both) > 1:
         raise RecordingError(f"{path}: the time column {quote(name)} steps by {median:g}: "
-                             + " or ".join(f"{rates[u]:g} Hz in {u}" for u in both) + f"; give --time-unit {' or '.join(both)}")
-    return unit
+                             + " or ".join(f"{rates[u]:g} Hz in {u}" for u in both) + f"; give --time-unit {' or '.join(both)}"
+                             + " (or --sample-rate-hz)")
+    return unit, f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more; --time-unit to say otherwise"
