@@ -1339,6 +1339,7 @@ def test_nul_bytes_before_the_header_are_refused_naming_the_line(tmp_path, name)
     path = put(recording + b"\0" * 512, "tail_" + name)
     rec = read_recording(path)
     assert len(rec) == 50 and "last line has no line end" in rec.warnings[0]
+    assert rec.warnings[0].endswith("... (512 characters)")  # its length, not the quote's (a new user read 60)
 
 
 @pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be"])

@@ -79,7 +79,7 @@ def line_chunks(path, chunk_rows, warnings):
         if first > 1:
             refuse_cr_only(pending, path, first)
             warnings.append(f"{path}: line {first}: last line has no line end (recording interrupted?); "
-                            f"it is not used: {quote(pending[:60].decode('utf-8', 'replace'))}")
+                            f"it is not used: {quote(pending.decode('utf-8', 'replace'), 60)}")
         else:
             yield first, [_decode(pending, path, first)]
 

@@ -201,7 +201,7 @@ def _numbered(fh, path, warnings):
             refuse_cr_only(data, path, number)
             if warnings is not None:
                 warnings.append(f"{path}: line {number}: last line has no line end (log interrupted?); it is "
-                                f"not used: {quote(data[:60].decode('utf-8', 'replace'))}")
+                                f"not used: {quote(data.decode('utf-8', 'replace'), 60)}")
             return
         if data in (b"\n", b"\r\n"):
             run = 1 + _skip_empty_lines(fh)
