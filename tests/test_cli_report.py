@@ -18,7 +18,7 @@ import pytest
 
 from gyrofilter.analysis.agreement import compare
 from gyrofilter.analysis.gap.report import params_text
-from gyrofilter.analysis.still import clipped
+from gyrofilter.analysis.clipping import clipped
 from gyrofilter.cli import main
 from gyrofilter.recording import Recording, read_recording, write_recording
 from gyrofilter.units import AXES

@@ -30,7 +30,7 @@ from .. import __version__
 from ..analysis.agreement import compare
 from ..analysis.gap.pipeline import analyse_file
 from ..analysis.noise.model import ACCELEROMETER_TERMS, GYROSCOPE_TERMS
-from ..analysis.still import clipped
+from ..analysis.clipping import clipped
 from ..errors import CalibrationError, GyroFilterError, SettingsError, one_line
 from ..filter.calibration import without_settings
 from ..inputs import parse_number
