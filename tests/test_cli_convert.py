@@ -1271,6 +1271,11 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# Sample rate (nom.): 200", []), ("# rate: 200 s^-1", []), ("# Sample rate (per channel): 200", []),
     ("# Sample rate: 200 Hz (DLPF 44 Hz)", []), ("# Frequency: 200 Hz", []),  # a sample rate whatever the remark
     ("# sensitivity: 0.02 dps/LSB", ["--unit", "lsb", "--lsb-per-dps", "65.5"]),  # one digit: not within 1 %
+    ("# unit: radian per second", []), ("# unit: millidegrees per second", []),  # pass 61: a singular, milli-
+    ("# unit: degree per second", ["--unit", "rad/s"]), ("# unit: milliradians per second", ["--unit", "rad/s"]),
+    ("# gyro_sensitivity: -70 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # a sign passed any
+    ("# gyro_sensitivity: 0 dps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # no sensitivity is 0
+    ("# gyro_sensitivity: 1e2", ["--unit", "lsb", "--lsb-per-dps", "131"]), ("# scale_factor: 1E+2", ["--unit", "lsb", "--lsb-per-dps", "131"]),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1316,6 +1321,8 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# counts per degree per second: 131", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# Sample rate (nom.): 100", []), ("# Sample rate (per channel): 100", []), ("# rate: 100 s^-1", []),
     ("# Frequency: 42 Hz (DLPF)", []), ("# frequency: 20 Hz (low-pass filter)", []),  # a filter's cut-off
+    ("# gyro_sensitivity: -7.6 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # an axis the other way round
+    ("# gyro_sensitivity: 1.31e2", ["--unit", "lsb", "--lsb-per-dps", "131"]), ("# unit: degree per second", []),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read

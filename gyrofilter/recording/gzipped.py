@@ -37,6 +37,9 @@ RUN_BYTES = 5
 #: up to 2 kB of text a byte: 4 GB of them, TBs)
 TRIAL_BYTES = 64 << 20
 TRIAL_TEXT_BYTES = 1 << 30
+#: memory a kept piece costs beside its bytes (a tuple and a bytes object, in CPython): counted against TRIAL_BYTES
+#: (a run of 5 zeros and a byte, repeated, held 27 bytes a byte, attack pass 61)
+_PIECE_BYTES = 100
 #: a flush's empty stored block after a run of zeros (LEN 00 00, NLEN FF FF), not more FF
 _FLUSH_MARK = re.compile(rb"\xff\xff(?!\xff)")
 #: a member's start before its header's zeros (magic, method, perhaps its flags)
@@ -172,7 +175,7 @@ class _Padded:
     ``read()`` gives the next bytes (b"" at the end) and sets ``run`` to (offset, byte, count) when they start a run
     of padding that more bytes follow, else None; ``offset`` counts the bytes given; ``end_run`` is (byte, count) of
     the padding the file ends in, never given. ``keep()``, just after a run starts, keeps the pieces given from it on
-    (``kept_bytes``: their bytes, runs aside, which are counted) and ``rewind()`` gives them again."""
+    (``kept_bytes``: the memory they take, runs counted, not held) and ``rewind()`` gives them again."""
 
     def __init__(self, fh, first):
         self._pieces = _pieces(fh, first)
@@ -190,7 +193,7 @@ class _Padded:
             kind, data, count = piece
             if self._kept is not None:
                 self._kept.append(piece)
-                self.kept_bytes += len(data) if kind == "data" else 0
+                self.kept_bytes += (len(data) if kind == "data" else 0) + _PIECE_BYTES
             if kind == "end":
                 self.end_run = data, count
                 return b""
@@ -252,12 +255,15 @@ def _member(source, raw, path, warnings, produced):
     while True:
         if run and trial is None and not sure:
             trial, tried = (d.copy(), source.keep()), 0
+        prior = d.copy() if trial else None
         try:
             out = d.decompress(raw, _TEXT_BYTES)
         except zlib.error as exc:
             if trial is None:
                 raise _GzipDamage(path, str(exc), produced) from None
-            after = _trial_failed(source, trial[1], path, warnings, produced > first, f"does not decompress ({exc})")
+            ended = "incorrect data check" in str(exc) and _states_length(prior, raw, produced - first + tried, source)
+            after = _trial_failed(source, trial[1], path, warnings, produced > first, f"does not decompress ({exc})",
+                                  (str(exc), produced) if ended else None)
             yield from line.end(after is not None, path, warnings)
             return after, produced
         if trial is None:
@@ -325,6 +331,26 @@ class _LastLine:
         return [held] if held and not dropped else []
 
 
+def _states_length(prior, raw, length, source):
+    """Whether the gzip trailer whose checksum zlib found wrong in ``raw`` (fed to the decompressor ``prior``, which
+    had made ``length`` bytes of the member's text) states the member's length (RFC 1952: ISIZE, the 4 bytes after the
+    checksum, the text's length mod 2^32): the stream's own end, its text damaged (a changed digit before a run of
+    zeros was read with a warning, attack pass 61), not bytes after padding that zlib read on to an end (their ISIZE
+    is that length 1 time in 2^32; the bytes after ``raw`` read from ``source``). Fed a byte at a time, only on such a
+    failure."""
+    probe = prior.copy()
+    for i in range(len(raw)):
+        try:
+            length += len(probe.decompress(raw[i:i + 1]))
+        except zlib.error:
+            stated = raw[i + 1:i + 5]
+            while len(stated) < 4 and (more := source.read()):  # (kept: the trial's end rewinds them)
+                stated += more[:4 - len(stated)]
+            stated += bytes(min(4 - len(stated), _end_zeros(source)))  # its high bytes of zeros, read as padding
+            return len(stated) == 4 and int.from_bytes(stated, "little") == length % (1 << 32)
+    return False
+
+
 def _skip_padding(source, rest):
     """(count, byte values) of the padding (bytes 0x00 and 0xFF) that ``rest``, then the file read by ``source``,
     start with, and the bytes after it (b"": the file ends)."""
@@ -349,11 +375,13 @@ def _end_zeros(source):
     return source.end_run[1] if source.end_run and source.end_run[0] == b"\0" else 0
 
 
-def _trial_failed(source, run, path, warnings, had_text, how):
+def _trial_failed(source, run, path, warnings, had_text, how, damage=None):
     """The member on trial since the run of padding ``run`` (offset, byte, count) ``how`` (ends cut short, does not
-    decompress): it ends at the run, a stream cut short, with a warning. Returns the bytes of the member that starts
-    after the padding (a recorder started again), or None: the file ends in padding, or other bytes follow, left out
-    (damage, when the member made no text before the run: nothing in it to keep)."""
+    decompress): it ends at the run, a stream cut short, with a warning. Returns the bytes of a member that starts
+    after padding (a recorder started again: right after the run, or after padding further on), or None: the file
+    ends in padding, or other bytes follow, left out. Damage (:class:`_GzipDamage`) when the member made no text before
+    the run (nothing in it to keep), or when it reached its end and failed its checks (``damage``: (zlib's words, the
+    bytes of text so far)) with no member after padding (whose bytes zlib read on into, to an end)."""
     source.rewind()
     count, seen, raw = _skip_padding(source, b"")
     offset, byte, run_count = run
@@ -362,16 +390,29 @@ def _trial_failed(source, run, path, warnings, had_text, how):
                         "(padding, as a power cut leaves an SD card) and another gzip member begin")
         return raw
     if not raw:
-        warnings.append(_padding_warning(path, count, seen, False))
-    elif not had_text:
+        warnings += [_padding_warning(path, count, seen, False), cut_short_warning(path)]
+        return None
+    if not had_text:
         raise _GzipDamage(path, f"{_counted(run_count, {byte[0]})} at byte {offset}, then a stream that {how}", 0)
-    else:
-        warnings.append(f"{path}: {_counted(run_count, {byte[0]})} at byte {offset}, then more bytes, in a gzip stream "
-                        f"that {how}: without its end marker its own bytes cannot be told from padding (as a power cut "
-                        f"leaves an SD card) and what follows it, so its text is read to byte {offset} (zcat reads on, "
-                        "unchecked)")
-    warnings.append(cut_short_warning(path))
-    return None
+    after, at = _member_after_padding(source)  # its own run came first, the padding later (pass 61: the member lost)
+    if damage and not after:
+        raise _GzipDamage(path, *damage)
+    warnings += [f"{path}: {_counted(run_count, {byte[0]})} at byte {offset}, then more bytes, in a gzip stream that "
+                 f"{how}: without its end marker its own bytes cannot be told from padding (as a power cut leaves an "
+                 f"SD card) and what follows it, so its text is read to byte {offset} (zcat reads on, unchecked)",
+                 cut_short_warning(path)] + ([f"{path}: another gzip member at byte {at}, after padding: read"] if after else [])
+    return after or None
+
+
+def _member_after_padding(source):
+    """(the first bytes of a gzip member that comes after a run of padding further on in the file read by ``source``,
+    the member's byte offset), the bytes before it passed over; or (b"", None): none."""
+    while chunk := source.read():
+        if source.run:
+            _, _, raw = _skip_padding(source, chunk)
+            if raw[:3] == GZIP_MAGIC + b"\x08":
+                return raw, source.offset - len(raw)
+    return b"", None
 
 
 def _cut_end(d, source, path, warnings):

@@ -236,6 +236,9 @@ def _sensitivity(kind, amount, number, suffix, facts):
                                      else suffix in ("lsb/g", "lsb/(g)"))
     if amount is None or not per:
         return key, f"a sensitivity (LSB per {'deg/s' if kind == 'sensitivity' else 'g'})"
+    if amount == 0:
+        return key, None  # no sensitivity is 0
+    amount = abs(amount)  # -70 mdps/LSB: an axis the other way round, 70 (attack pass 61: any passed)
     half = 0.5 * 10.0 ** decimal.Decimal(number["number"]).as_tuple().exponent  # the number as printed, rounded,
     half = min(max(half, 1e-3 * abs(amount)), 1e-2 * abs(amount))  # within 0.1 % to 1 % (0.02 dps/LSB is not 65.5)
     low, high = amount - half, amount + half
