@@ -276,36 +276,41 @@ def test_a_damaged_digit_before_a_run_of_the_streams_own_is_damage(tmp_path, cap
     zeros, one stored digit changed: the stream on trial from the run failed its checksum at its end, and that was
     read as padding, a warning, the changed digit used (convert wrote it without a word). A stream that reaches its end
     and fails its checksum while its trailer states its length is damage; junk after padding that zlib reads to an
-    end states another length (the test above keeps such a recording's rows)."""
+    end states another length (the test above keeps such a recording's rows); a digit inserted, the length wrong too:
+    the stream's end is where the file's is."""
     from gyrofilter.cli import main
 
     rng = np.random.default_rng(700 + seed)
-    rows = int(rng.integers(50_000, 300_000))
+    rows, damage = int(rng.integers(50_000, 300_000)), ["digit", "inserted"][seed % 2]
     path, log = tmp_path / "r.csv.gz", tmp_path / "log.csv.gz"
     for name, top in ((path, HEADER + "gx,gy,gz\n"), (log, "gx,gy,gz\n")):  # a recording, another tool's log
-        name.write_bytes(_damaged_before_a_run(np.random.default_rng(seed), top, rows, damage=True))
+        name.write_bytes(_damaged_before_a_run(np.random.default_rng(seed), top, rows, damage))
     assert any(kind == "run" for _, (kind, _, _) in _offsets(path.read_bytes()))
     with pytest.raises(RecordingError, match="damaged gzip data .*incorrect data check"):
         read_recording(path)
     assert main(["convert", str(log), "--unit", "lsb", "--lsb-per-dps", "131", "--sample-rate-hz", "100",
                  "--out", str(tmp_path / "out.csv")]) == 2
     assert "damaged gzip data" in capsys.readouterr().err and not (tmp_path / "out.csv").exists()
-    path.write_bytes(_damaged_before_a_run(np.random.default_rng(seed), HEADER + "gx,gy,gz\n", rows, damage=False))
+    path.write_bytes(_damaged_before_a_run(np.random.default_rng(seed), HEADER + "gx,gy,gz\n", rows, None))
     assert len(read_recording(path)) == 3000 + 10 + rows  # undamaged: read whole
 
 
 def _damaged_before_a_run(rng, top, rows, damage):
     """gzip bytes of ``top``, 3000 rows in stored blocks, then 10 rows and ``rows`` constant rows in deflate data that
-    hold a run of zeros, with one stored digit changed (``damage``) after the checksum was taken."""
+    hold a run of zeros, damaged after the checksum and length were taken (``damage``): a stored digit changed
+    (``"digit"``: the length the trailer states holds) or one inserted (``"inserted"``: it does not), or None."""
     first = (top + "".join(f"{int(v)},0,0\n" for v in rng.integers(1, 10, 3000))).encode()
     z = zlib.compressobj(9, zlib.DEFLATED, -15)
     stuck = b"12,3,4\n" * 10 + b"11,-1,-1\n" * rows  # (a few other rows first: their deflate data hold a run)
     text = bytearray(first + stuck)
     trailer = struct.pack("<II", zlib.crc32(bytes(text)), len(text) & 0xFFFFFFFF)
-    if damage:
-        at = len(top) + 6 * int(rng.integers(10, 2000))  # the digit of a row (6 bytes each): another digit
+    at = len(top) + 6 * int(rng.integers(10, 2000))  # the digit of a row (6 bytes each)
+    if damage == "digit":
         text[at] = ord("1") + (text[at] - ord("1") + 1) % 9
-    return b"\x1f\x8b\x08\x00" + bytes(5) + b"\xff" + _stored(bytes(text[:len(first)])) + z.compress(stuck) + z.flush() + trailer
+    elif damage == "inserted":
+        text[at:at] = b"7"
+    stored = bytes(text[:len(text) - len(stuck)])
+    return b"\x1f\x8b\x08\x00" + bytes(5) + b"\xff" + _stored(stored) + z.compress(stuck) + z.flush() + trailer
 
 
 def test_a_member_after_padding_after_a_run_of_the_cut_streams_own_is_read(tmp_path):

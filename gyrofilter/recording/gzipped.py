@@ -261,7 +261,7 @@ def _member(source, raw, path, warnings, produced):
         except zlib.error as exc:
             if trial is None:
                 raise _GzipDamage(path, str(exc), produced) from None
-            ended = "incorrect data check" in str(exc) and _states_length(prior, raw, produced - first + tried, source)
+            ended = "incorrect data check" in str(exc) and _own_end(prior, raw, produced - first + tried, source)
             after = _trial_failed(source, trial[1], path, warnings, produced > first, f"does not decompress ({exc})",
                                   (str(exc), produced) if ended else None)
             yield from line.end(after is not None, path, warnings)
@@ -331,23 +331,27 @@ class _LastLine:
         return [held] if held and not dropped else []
 
 
-def _states_length(prior, raw, length, source):
-    """Whether the gzip trailer whose checksum zlib found wrong in ``raw`` (fed to the decompressor ``prior``, which
-    had made ``length`` bytes of the member's text) states the member's length (RFC 1952: ISIZE, the 4 bytes after the
-    checksum, the text's length mod 2^32): the stream's own end, its text damaged (a changed digit before a run of
-    zeros was read with a warning, attack pass 61), not bytes after padding that zlib read on to an end (their ISIZE
-    is that length 1 time in 2^32; the bytes after ``raw`` read from ``source``). Fed a byte at a time, only on such a
-    failure."""
+def _own_end(prior, raw, length, source):
+    """Whether the end of a gzip member whose checksum zlib found wrong in ``raw`` (fed to the decompressor ``prior``,
+    which had made ``length`` bytes of the member's text; the bytes after ``raw`` read from ``source``) is the
+    stream's own, its text damaged (a changed digit before a run of zeros was read with a warning, attack pass 61),
+    not bytes after padding that zlib read on to an end by chance (random bytes end a block of fixed codes one time in
+    128): its trailer states the member's length (RFC 1952: ISIZE, the 4 bytes after the checksum, the text's length
+    mod 2^32; 1 time in 2^32 by chance), or it ends where the file, its padding or another member begins. Fed a byte
+    at a time, only on such a failure."""
     probe = prior.copy()
     for i in range(len(raw)):
         try:
             length += len(probe.decompress(raw[i:i + 1]))
         except zlib.error:
-            stated = raw[i + 1:i + 5]
-            while len(stated) < 4 and (more := source.read()):  # (kept: the trial's end rewinds them)
-                stated += more[:4 - len(stated)]
-            stated += bytes(min(4 - len(stated), _end_zeros(source)))  # its high bytes of zeros, read as padding
-            return len(stated) == 4 and int.from_bytes(stated, "little") == length % (1 << 32)
+            after, padding = raw[i + 1:], False  # its ISIZE, then what follows it
+            while len(after) < 6 and (more := source.read()):  # (kept: the trial's end rewinds them)
+                padding = padding or source.run is not None and len(after) <= 4  # padding from its ISIZE's end on
+                after += more
+            after += bytes(max(0, min(4 - len(after), _end_zeros(source))))  # its high bytes of zeros, held as padding
+            stated, follows = after[:4], after[4:]
+            return len(stated) == 4 and (int.from_bytes(stated, "little") == length % (1 << 32) or padding
+                                         or not follows or follows[:2] == GZIP_MAGIC)
     return False
 
 
