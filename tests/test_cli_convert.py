@@ -247,7 +247,8 @@ def test_a_32_khz_log_stamped_in_whole_us_is_refused_and_the_sample_rate_settles
     assert code == 0 and read_recording(dst).sample_rate_hz == 32000.0 and "in us (inferred: the unit giving " \
         "--sample-rate-hz" in " ".join(err.split()), err
     code, dst = _convert(tmp_path, f"time,gx,gy,gz\n{rows}", "--unit", "dps", "--sample-rate-hz", "100", out="b.csv")
-    assert code == 2 and "not at --sample-rate-hz" in capsys.readouterr().err
+    err = " ".join(capsys.readouterr().err.split())  # pass 62: it asked for the --sample-rate-hz it was given
+    assert code == 2 and "give --time-unit ms or us (--sample-rate-hz 100 is neither: is it right?)" in err, err
 
 
 def test_a_time_column_in_ms_at_100_hz_is_still_inferred(tmp_path, capsys):
@@ -1276,6 +1277,11 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# gyro_sensitivity: -70 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # a sign passed any
     ("# gyro_sensitivity: 0 dps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # no sensitivity is 0
     ("# gyro_sensitivity: 1e2", ["--unit", "lsb", "--lsb-per-dps", "131"]), ("# scale_factor: 1E+2", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# gyro_sensitivity: 1e400", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 62: a traceback (OverflowError)
+    ("# gyro_sensitivity: 1e309 dps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# gyro_sensitivity: 4.9e-324 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # (ZeroDivisionError)
+    ("# update rate: 200 Hz (low-pass 42 Hz)", []), ("# data rate: 200 Hz (DLPF on)", []),  # a rate, the remark aside
+    ("# sensitivity: 131 deg/sec/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # 1/131 LSB per deg/s
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1323,6 +1329,11 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
     ("# Frequency: 42 Hz (DLPF)", []), ("# frequency: 20 Hz (low-pass filter)", []),  # a filter's cut-off
     ("# gyro_sensitivity: -7.6 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # an axis the other way round
     ("# gyro_sensitivity: 1.31e2", ["--unit", "lsb", "--lsb-per-dps", "131"]), ("# unit: degree per second", []),
+    ("# sensitivity: 0.00763 (deg/s)/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # pass 62: inverse spellings
+    ("# sensitivity: 0.00763 deg/sec/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# sensitivity: 7.63 mdps/count", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# sensitivity: 7.63 millidegrees per second per LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# units: s, deg/s, counts", []),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read

@@ -1103,6 +1103,19 @@ def test_a_column_with_a_word_of_time_stamps_or_a_temperature_is_refused_where_n
     assert read_recording(path).columns["K"].tolist() == [7.0]
 
 
+@pytest.mark.parametrize("line", ["gyro_sensitivity: 1e400", "gyro_sensitivity: 1e309 dps/LSB",
+                                  "gyro_sensitivity: 4.9e-324 mdps/LSB", "acc_lsb_per_g: 1e309", "accel sensitivity: 1e400"])
+def test_a_sensitivity_beyond_a_float_is_refused_not_a_traceback(tmp_path, line):
+    """Attack pass 62: ``gyro_sensitivity: 1e400`` in an lsb recording's header ended replay in an OverflowError
+    (the rounding of the printed number, 10 ** 400), ``4.9e-324 mdps/LSB`` in a ZeroDivisionError: refused as another
+    sensitivity, naming the key."""
+    path = tmp_path / "rec.csv"
+    head = "# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n# accel_unit: lsb\n# lsb_per_g: 16384\n"
+    path.write_text(head + f"# {line}\nt,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n")
+    with pytest.raises(RecordingError, match=re.escape(f"header key '{line.split(':')[0]}' says ")):
+        read_recording(path)
+
+
 @pytest.mark.parametrize("line", ["unit: rad/s", "sample_rate: 200", "rate_hz: 200", "rate: 200", "gyro: rad/s",
                                   "odr_hz: 200", "rate_khz: 0.2", "units: deg/s", "rate: 200 Hz", "sample_rate: 0.2kHz",
                                   "rate: 0xC8", "rate: ２００", "rate: 200,0", "odr: fast", "dt: 0.005",
@@ -1130,7 +1143,7 @@ def test_a_header_key_that_states_another_rate_or_unit_is_refused(tmp_path, line
             "gyro_output_rate_hz: 8000", "dlpf_bandwidth_hz: 44", "baud_rate: 115200", "rate2_hz: 200", "rate_dps: 90",
             "gyro: MPU6050", "gyro_sensitivity: 65.5", "acc_unit: g", "time: 2024-01-01", "odr: 100 sps",
             "ts: 2026-01-01T00:00:00", "step: 1",  # pass 54: no false refusals
-            "units: s, dps", "TS: 1700000000", "Unit: Unit-7", "gyro_range: \u00b1250 dps"]  # pass 55
+            "units: s, dps, counts", "TS: 1700000000", "Unit: Unit-7", "gyro_range: \u00b1250 dps"]  # pass 55, 62
     path.write_text(head.replace(unit, "dps") + "".join(f"# {k}\n" for k in kept) + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n")
     assert read_recording(path).header["gyro_output_rate_hz"] == "8000"
     path.write_text("# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"

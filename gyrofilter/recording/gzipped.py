@@ -16,6 +16,7 @@ in a block of constant rows are its code for "the same again": rows invented, at
 from __future__ import annotations
 
 import collections
+import math
 import os
 import re
 import zlib
@@ -37,6 +38,8 @@ RUN_BYTES = 5
 #: up to 2 kB of text a byte: 4 GB of them, TBs)
 TRIAL_BYTES = 64 << 20
 TRIAL_TEXT_BYTES = 1 << 30
+#: the most bytes of a member's header looked at (a name or comment longer than this ends it there)
+_MAX_HEADER_BYTES = 1 << 20
 #: memory a kept piece costs beside its bytes (a tuple and a bytes object, in CPython): counted against TRIAL_BYTES
 #: (a run of 5 zeros and a byte, repeated, held 27 bytes a byte, attack pass 61)
 _PIECE_BYTES = 100
@@ -89,9 +92,37 @@ def _gzip_damage(path):
 
 def gunzipped(fh, first, path, warnings):
     """The text of the gzip file ``path`` open as ``fh`` (``first``: its first bytes, already read), every member, in
-    blocks of at most ``_TEXT_BYTES`` (a gzip bomb never holds more); what was left out said in ``warnings``. The
-    one gzip reader of recordings and of other tools' logs (``logtext.log_lines``)."""
-    return _gunzip(_Padded(fh, first), path, warnings)
+    blocks of at most ``_TEXT_BYTES`` (a gzip bomb never holds more); what was left out said in ``warnings``, the
+    first :data:`MAX_WARNINGS` of them (100 000 members cut short made 17 MB of warnings, attack pass 62). The one
+    gzip reader of recordings and of other tools' logs (``logtext.log_lines``)."""
+    notes = _Notes()
+    try:
+        yield from _gunzip(_Padded(fh, first), path, notes)
+    finally:
+        warnings.extend(notes + ([f"{path}: {notes.more} more warnings of its gzip data like these"] if notes.more else []))
+
+
+#: the most warnings of one gzip file kept (the rest counted)
+MAX_WARNINGS = 20
+
+
+class _Notes(list):
+    """A gzip file's warnings: the first :data:`MAX_WARNINGS` kept, the rest counted (``more``)."""
+
+    more = 0
+
+    def append(self, text):
+        if len(self) < MAX_WARNINGS:
+            super().append(text)
+        else:
+            self.more += 1
+
+    def extend(self, texts):
+        for text in texts:
+            self.append(text)
+        return self
+
+    __iadd__ = extend
 
 
 def _pieces(fh, first, shortest=RUN_BYTES):
@@ -250,10 +281,10 @@ def _member(source, raw, path, warnings, produced):
     whole (its checksum and length, RFC 1952, checked by zlib: then read again from the run, every byte its own) or
     not (it ends at the run: :func:`_trial_failed`); at most :data:`TRIAL_BYTES` compressed bytes and
     :data:`TRIAL_TEXT_BYTES` of text are tried (more: it ends at the run too, the rest unchecked)."""
-    d, line = zlib.decompressobj(16 + zlib.MAX_WBITS), _LastLine()
-    first, trial, tried, sure, run = produced, None, 0, False, None  # trial: (d before the run, the run)
+    d, line, header = zlib.decompressobj(16 + zlib.MAX_WBITS), _LastLine(), _Header()
+    first, trial, tried, sure, run, at = produced, None, 0, False, None, header.add(raw)  # trial: (d before the run, the run)
     while True:
-        if run and trial is None and not sure:
+        if run and trial is None and not sure and not header.holds(at):
             trial, tried = (d.copy(), source.keep()), 0
         prior = d.copy() if trial else None
         try:
@@ -272,7 +303,8 @@ def _member(source, raw, path, warnings, produced):
         else:
             tried += len(out)
             if source.kept_bytes > TRIAL_BYTES or tried > TRIAL_TEXT_BYTES:  # (zeros after a cut may make TBs of text)
-                how = f"goes on for more than {TRIAL_BYTES >> 20} MiB ({TRIAL_TEXT_BYTES >> 30} GiB of text), unchecked"
+                how = (f"goes on past what a trial holds ({TRIAL_BYTES >> 20} MiB of kept pieces or "
+                       f"{TRIAL_TEXT_BYTES >> 30} GiB of text), unchecked")
                 after = _trial_failed(source, trial[1], path, warnings, True, how)
                 yield from line.end(after is not None, path, warnings)
                 return after, produced
@@ -283,7 +315,7 @@ def _member(source, raw, path, warnings, produced):
                 continue
             raw = source.read()
             if raw:
-                run = source.run
+                run, at = source.run, header.add(raw)
                 continue
             if trial is None:
                 out = _cut_end(d, source, path, warnings)
@@ -300,6 +332,42 @@ def _member(source, raw, path, warnings, produced):
         d, trial, sure = trial[0], None, True  # it ends whole: read again from the run, every byte its own
         source.rewind()
         raw = source.read()
+
+
+class _Header:
+    """Where a gzip member's header ends (RFC 1952, 2.3.1: 10 bytes, then the fields its flags name: FEXTRA, FNAME,
+    FCOMMENT, FHCRC), from its bytes as they come (:meth:`add`): zeros in it are its fields (a modification time of
+    90 s, an extra field of zeros), never padding (attack pass 62: such a member cut short was refused)."""
+
+    def __init__(self):
+        self.start, self.fed, self.end = b"", 0, None
+
+    def add(self, chunk):
+        """Note the member's next bytes ``chunk``; returns their offset in the member."""
+        at, self.fed = self.fed, self.fed + len(chunk)
+        if self.end is None:
+            self.start += chunk[:_MAX_HEADER_BYTES - len(self.start)]
+            self.end = _header_length(self.start) or (len(self.start) if len(self.start) >= _MAX_HEADER_BYTES else None)
+        return at
+
+    def holds(self, at):
+        """Whether the member's byte ``at`` is (or may be) in its header."""
+        return self.end is None or at < self.end
+
+
+def _header_length(start):
+    """The length of the gzip header that ``start`` begins with, or None while ``start`` does not hold all of it."""
+    if len(start) < 10:
+        return None
+    flags, end = start[3], 10
+    if flags & 4:  # FEXTRA: its length, then it
+        end = 12 + int.from_bytes(start[10:12], "little") if len(start) >= 12 else math.inf
+    for flag in (8, 16):  # FNAME, FCOMMENT: zero-terminated
+        if flags & flag:
+            nul = start.find(b"\0", end) if end < len(start) else -1
+            end = nul + 1 if nul >= 0 else math.inf
+    end += 2 if flags & 2 else 0  # FHCRC
+    return end if end <= len(start) else None
 
 
 class _LastLine:
@@ -384,8 +452,10 @@ def _trial_failed(source, run, path, warnings, had_text, how, damage=None):
     decompress): it ends at the run, a stream cut short, with a warning. Returns the bytes of a member that starts
     after padding (a recorder started again: right after the run, or after padding further on), or None: the file
     ends in padding, or other bytes follow, left out. Damage (:class:`_GzipDamage`) when the member made no text before
-    the run (nothing in it to keep), or when it reached its end and failed its checks (``damage``: (zlib's words, the
-    bytes of text so far)) with no member after padding (whose bytes zlib read on into, to an end)."""
+    the run (nothing in it to keep), or when it reached its own end and failed its checks (``damage``: (zlib's words,
+    the bytes of text so far), :func:`_own_end`)."""
+    if damage:  # it reached its own end: whatever follows (attack pass 62: a member after padding excused it)
+        raise _GzipDamage(path, *damage)
     source.rewind()
     count, seen, raw = _skip_padding(source, b"")
     offset, byte, run_count = run
@@ -399,8 +469,6 @@ def _trial_failed(source, run, path, warnings, had_text, how, damage=None):
     if not had_text:
         raise _GzipDamage(path, f"{_counted(run_count, {byte[0]})} at byte {offset}, then a stream that {how}", 0)
     after, at = _member_after_padding(source)  # its own run came first, the padding later (pass 61: the member lost)
-    if damage and not after:
-        raise _GzipDamage(path, *damage)
     warnings += [f"{path}: {_counted(run_count, {byte[0]})} at byte {offset}, then more bytes, in a gzip stream that "
                  f"{how}: without its end marker its own bytes cannot be told from padding (as a power cut leaves an "
                  f"SD card) and what follows it, so its text is read to byte {offset} (zcat reads on, unchecked)",

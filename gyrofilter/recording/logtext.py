@@ -5,6 +5,7 @@ checked for length and UTF-8, the first for line ends of CR only, runs of empty 
 """
 from __future__ import annotations
 
+import contextlib
 import errno
 import io
 import os
@@ -61,10 +62,13 @@ def _copy_pipe(raw, path, watch):
     instead = "save the log to a file and convert that (a file is read where it is, not copied), or set TMPDIR to a roomier folder"
     copy = tempfile.TemporaryFile()
     try:
-        copied, start = 0, b""  # start: the first blocks, until the first line is checked
+        copied, start, check_at = 0, b"", 0  # start: the first blocks, until the first line is checked, when it doubles
         while block := raw.read1(PIPE_BLOCK_BYTES):  # what has come, at most a block
             if start is not None:
-                start = None if _first_line_ends(start + block, path) else start + block
+                start += block
+                if len(start) >= check_at:  # (each check reads start anew: when it doubles, not each block, pass 62)
+                    start = None if _first_line_ends(start, path) or len(start) > MAX_FIRST_CHECK_BYTES else start
+                    check_at = 2 * check_at or PIPE_BLOCK_BYTES
             watch.feed(block)
             copied += len(block)
             if copied > limit:
@@ -139,6 +143,11 @@ class _LineWatch:
         self.done = self.done or len(self.rest) > MAX_LINE_BYTES
 
 
+#: the most bytes of a pipe its first line is checked in as they come (gzip of zeros, padding after a cut in line 1,
+#: holds no text: past this the reading decides, after the copy)
+MAX_FIRST_CHECK_BYTES = 1 << 26
+
+
 def _first_line_ends(start, path):
     """True when ``start``, the first bytes of a log (gzip-compressed or not), holds the end of
     its first line within MAX_LINE_BYTES + 1 bytes of text; False while it holds fewer bytes of
@@ -151,6 +160,11 @@ def _first_line_ends(start, path):
             text += block
             if b"\n" in text or len(text) > MAX_LINE_BYTES:
                 break
+        if b"\n" not in text and len(text) <= MAX_LINE_BYTES:  # its text after a run of padding is on trial: zlib's
+            with contextlib.suppress(zlib.error):                # alone refuses it where it holds no line either way
+                plain = zlib.decompressobj(31).decompress(start, MAX_LINE_BYTES + 1)  # (gzip of NUL bytes holds runs)
+                text = plain if b"\n" not in plain and len(plain) > MAX_LINE_BYTES else text
+        text = text[:MAX_LINE_BYTES + 1]
     refuse_cr_only(text.split(b"\n", 1)[0], path)
     if b"\n" in text:
         return True

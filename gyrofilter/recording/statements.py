@@ -68,6 +68,11 @@ _SECOND = re.compile(r"\s*(?:s|sec|secs|seconds?)\b", re.IGNORECASE)
 #: words in a key's brackets that remark on its value, not its unit
 _REMARKS = {"nominal", "approx", "approximately", "typ", "typical", "actual", "measured", "set", "target", "configured",
             "default", "expected", "requested", "nom", "per channel", "per axis"}
+#: units any column may be in (a gyro's, an accelerometer's, a temperature's, a counter's): not read in a list of units
+_ANY_COLUMNS = {"counts", "raw", "lsb"}
+#: deg/s (g) per unit of a sensitivity written inverse, per LSB (``8.75 mdps/LSB``, ``0.000266 rad/s/LSB``, ``0.061 mg/LSB``)
+_PER_LSB_SCALES = {"rate": {"dps": 1.0, "mdps": 1e-3, "rad/s": 180.0 / math.pi, "mrad/s": 0.18 / math.pi},
+                   "accel": {"g": 1.0, "mg": 1e-3}}
 #: a remark in brackets at a value's end that names a filter (``Frequency: 42 Hz (DLPF)``: its cut-off, not a sample rate)
 _FILTER_REMARK = re.compile(r"\([^()]*\b(?:dlpf|lpf|low[- ]?pass|cut-?off|bandwidth|bw|filter)\b[^()]*\)\s*$", re.IGNORECASE)
 #: a value in Hz (``gyro rate: 200 Hz`` is a sample rate; ``gyro rate: 200`` may be a rate of turn)
@@ -185,7 +190,7 @@ def judge(kind, words, value, facts, rates, tolerance):
     Hz (``khz`` in the key or the value in thousands) within ``tolerance`` (relative) of one of ``rates``, a period of
     one over it, the unit (:func:`~gyrofilter.recording.unit_words.known_unit`), ``lsb_per_dps`` (where ``gyro_unit``
     is lsb), ``accel_unit`` (where the header has one), ``lsb_per_g`` (where ``accel_unit`` is lsb)."""
-    if kind == "rate" and not words & _SAMPLING and _FILTER_REMARK.search(value):
+    if kind == "rate" and words <= {"frequency", "freq"} and _FILTER_REMARK.search(value):
         return None  # Frequency: 42 Hz (DLPF): a filter's, not the sample rate
     value = clean(value)
     if kind in ("sensitivity", "accel_sensitivity"):
@@ -214,9 +219,12 @@ def judge(kind, words, value, facts, rates, tolerance):
         return _sensitivity(kind, amount, number, suffix, facts)
     units = {"unit": (("gyro_unit", "rate"), ("accel_unit", "accel"), ("temp_unit", "temp")), "accel_unit": (("accel_unit", "accel"),),
              "temp_unit": (("temp_unit", "temp"),)}[kind]
+    value = _PER_WORD.sub("/", value)  # radians per second
+    words = [word for word in re.split(r"[\s,;()\[\]]+", value) if word]
+    if len(words) > 1:  # units: s, deg/s, counts: counts, raw, lsb among units may be any column's (attack pass 62)
+        words = [word for word in words if word.lower() not in _ANY_COLUMNS]
     for key, quantity in units:
-        value = _PER_WORD.sub("/", value)  # radians per second
-        named = {known_unit(quantity, value)} | {known_unit(quantity, word) for word in re.split(r"[\s,;()\[\]]+", value)}
+        named = {known_unit(quantity, value)} | {known_unit(quantity, word) for word in words}
         named.discard(None)
         if key in facts and named and facts[key] not in named:
             return key, None  # units: s, deg/s, m/s^2 states both
@@ -231,19 +239,21 @@ def _sensitivity(kind, amount, number, suffix, facts):
     unit_key, key, quantity = ("gyro_unit", "lsb_per_dps", "rate") if kind == "sensitivity" else ("accel_unit", "lsb_per_g", "accel")
     if facts.get(unit_key) != "lsb" or number and (number["range"] or known_unit(quantity, suffix) not in (None, "lsb")):
         return None  # gyro_scale: ±2000 dps, a full scale (65.5 LSB, 65.5 LSB per dps: a sensitivity)
-    inverse = re.fullmatch(r"(m?)(dps|deg/s|°/s|rad/s|g)/(?:lsb|digit)", suffix)
-    per = suffix in ("", "lsb") or inverse or ("dps" in suffix or "deg" in suffix.replace("°", "deg") if kind == "sensitivity"
-                                     else suffix in ("lsb/g", "lsb/(g)"))
+    over = re.fullmatch(r"\(?(.+?)\)?/(?:lsb|digits?|counts?)", suffix)  # 8.75 mdps/LSB, (deg/s)/LSB, mdps/count
+    scale = _PER_LSB_SCALES[quantity].get(known_unit(quantity, over[1])) if over else None
+    per = suffix in ("", "lsb") or scale or ("dps" in suffix or "deg" in suffix.replace("°", "deg") if kind == "sensitivity"
+                                           else suffix in ("lsb/g", "lsb/(g)"))
     if amount is None or not per:
         return key, f"a sensitivity (LSB per {'deg/s' if kind == 'sensitivity' else 'g'})"
-    if amount == 0:
-        return key, None  # no sensitivity is 0
+    if not 0 < abs(amount) < math.inf:
+        return key, None  # no sensitivity is 0, or beyond a float (1e400: attack pass 62, a traceback)
     amount = abs(amount)  # -70 mdps/LSB: an axis the other way round, 70 (attack pass 61: any passed)
-    half = 0.5 * 10.0 ** decimal.Decimal(number["number"]).as_tuple().exponent  # the number as printed, rounded,
-    half = min(max(half, 1e-3 * abs(amount)), 1e-2 * abs(amount))  # within 0.1 % to 1 % (0.02 dps/LSB is not 65.5)
+    half = 0.5 * float(decimal.Decimal(1).scaleb(decimal.Decimal(number["number"]).as_tuple().exponent))  # as printed
+    half = min(max(half, 1e-3 * amount), 1e-2 * amount)  # within 0.1 % to 1 % (0.02 dps/LSB is not 65.5)
     low, high = amount - half, amount + half
-    if inverse:  # 8.75 mdps/LSB, 0.000266 rad/s/LSB: 1 / (the number in deg/s)
-        scale = (1e-3 if inverse[1] else 1.0) * (180.0 / math.pi if inverse[2] == "rad/s" else 1.0)
-        low, high = 1.0 / (high * scale), (1.0 / (low * scale) if low > 0 else math.inf)
+    if scale:  # 8.75 mdps/LSB, 0.000266 rad/s/LSB: 1 / (the number in deg/s)
+        if not high * scale > 0:
+            return key, None  # 4.9e-324 mdps/LSB: 0
+        low, high = 1.0 / (high * scale), (1.0 / (low * scale) if low * scale > 0 else math.inf)
     held = float(facts[key])
     return None if low <= held <= high else (key, None)

@@ -109,7 +109,9 @@ def infer_time_unit(steps, path, name, sample_rate_hz=None):
         raise RecordingError(f"{path}: the time column {quote(name)} does not step forward; give --time-unit or --sample-rate-hz")
     both = [other for other, rate in rates.items() if other == unit or 1.0 <= rate <= FASTEST_GYRO_HZ * (1 + RATE_TOLERANCE)]
     if len(both) > 1:
+        settle = (" (or --sample-rate-hz)" if not sample_rate_hz else
+                  f" (--sample-rate-hz {sample_rate_hz:g} is neither: is it right?)")  # attack pass 62
         raise RecordingError(f"{path}: the time column {quote(name)} steps by {median:g}: "
                              + " or ".join(f"{rates[u]:g} Hz in {u}" for u in both) + f"; give --time-unit {' or '.join(both)}"
-                             + " (or --sample-rate-hz)")
+                             + settle)
     return unit, f"inferred: the first unit giving {MIN_INFERRED_RATE_HZ:g} Hz or more; --time-unit to say otherwise"
