@@ -45,8 +45,6 @@ _MAX_HEADER_BYTES = 1 << 20
 _PIECE_BYTES = 100
 #: a flush's empty stored block after a run of zeros (LEN 00 00, NLEN FF FF), not more FF
 _FLUSH_MARK = re.compile(rb"\xff\xff(?!\xff)")
-#: a member's start before its header's zeros (magic, method, perhaps its flags)
-_MEMBER_START = re.compile(rb"\x1f\x8b\x08.?\Z", re.DOTALL)
 
 
 class _GzipDamage(RecordingError):
@@ -128,48 +126,40 @@ class _Notes(list):
 def _pieces(fh, first, shortest=RUN_BYTES):
     """The file's bytes (``first``, then ``fh``'s blocks) as ``(kind, byte or bytes, count)``: ``("data", bytes,
     0)``; ``("run", byte, count)``, a run of at least ``shortest`` bytes of one byte 0x00 or 0xFF that more bytes
-    follow (not a flush's marker, not a member header's zeros: :func:`_run_ends`, told by the bytes around it, across
-    blocks too); ``("end", byte, count)``, the run of zeros (any count) or of 0xFF (at least ``shortest``) the file
+    follow (not a flush's marker: :func:`_run_ends`, told by the bytes after it, across blocks too); ``("end", byte,
+    count)``, the run of zeros (any count) or of 0xFF (at least ``shortest``) the file
     ends in. A run is counted, never held: a GB of zeros costs a block. Each block is scanned once, by
     ``bytes.find``; the next is read before it is given (its first bytes may tell a run's kind)."""
-    run_byte, run_count, before = None, 0, b""  # the run the last block ended in (any count), the 4 bytes before it
-    last4, block = b"", first  # the 4 bytes before ``block``
+    run_byte, run_count, block = None, 0, first  # the run the last block ended in (any count)
     while block:
         nxt, at = fh.read(READ_BYTES), 0
         if run_count:  # does the run go on?
             at = len(block) - len(block.lstrip(run_byte))
             run_count += at
             if at == len(block):
-                last4, block = block[-4:], nxt
+                block = nxt
                 continue
-            yield from _run_ends(run_byte, run_count, before, (block[at:at + 3] + nxt[:3])[:3], shortest)
+            yield from _run_ends(run_byte, run_count, (block[at:at + 3] + nxt[:3])[:3], shortest)
             run_count = 0
         for start, end in _runs(block, at, shortest):
             if end == len(block):
                 break  # it may go on in the next block
             if start > at:
                 yield "data", block[at:start], 0
-            yield from _run_ends(block[start:start + 1], end - start, _before(last4, block, start),
-                                 (block[end:end + 3] + nxt[:3])[:3], shortest)
+            yield from _run_ends(block[start:start + 1], end - start, (block[end:end + 3] + nxt[:3])[:3], shortest)
             at = end
         tail = block[at:]
         last = tail[-1:]
         if last in (b"\0", b"\xff"):  # the run the block ends in, any count: it may go on
             kept = tail.rstrip(last)
-            run_byte, run_count = last, len(tail) - len(kept)
-            before, tail = _before(last4, block, len(block) - run_count), kept
+            run_byte, run_count, tail = last, len(tail) - len(kept), kept
         if tail:
             yield "data", tail, 0
-        last4, block = (last4 + block[-4:])[-4:], nxt
+        block = nxt
     if run_count >= shortest or run_byte == b"\0" and run_count:
         yield "end", run_byte, run_count
     elif run_count:
         yield "data", run_byte * run_count, 0  # a flush's FF FF, the file's last bytes
-
-
-def _before(last4, block, start):
-    """The 4 bytes before ``block[start]``, ``last4`` those before ``block``."""
-    return block[start - 4:start] if start >= 4 else (last4 + block[:start])[-4:]
 
 
 #: a run of one byte, from where it starts
@@ -190,11 +180,11 @@ def _runs(block, at, shortest):
                 found[other] = block.find(bytes([other]) * shortest, end)
 
 
-def _run_ends(byte, count, before, after, shortest):
-    """The piece of a run of ``count`` bytes ``byte`` between the bytes ``before`` and ``after`` (their first
-    three): data when shorter than ``shortest``, a zero run before a flush's marker (at most 6 zeros: a header byte,
-    LEN, perhaps data bytes of zeros) or in a member's header, else a run."""
-    if count < shortest or byte == b"\0" and (count <= 6 and _FLUSH_MARK.match(after) or _MEMBER_START.search(before)):
+def _run_ends(byte, count, after, shortest):
+    """The piece of a run of ``count`` bytes ``byte`` before the bytes ``after`` (their first three): data when
+    shorter than ``shortest`` or a zero run before a flush's marker (at most 6 zeros: a header byte, LEN, perhaps data
+    bytes of zeros), else a run (a member header's zeros are told by :class:`_Header`)."""
+    if count < shortest or byte == b"\0" and count <= 6 and _FLUSH_MARK.match(after):
         yield "data", byte * count, 0
     else:
         yield "run", byte, count

@@ -119,9 +119,10 @@ def sum_of_ar1_filter(phis, gains):
         part = np.atleast_1d(np.poly(np.delete(phis, i)))  # np.poly of no roots is the scalar 1
         num += gains[i] ** 2 * np.convolve(part, part[::-1])
     roots = np.roots(num) if k > 1 else np.zeros(0)
+    slope = np.polyder(num)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for _ in range(2):  # Newton steps: np.roots' eigenvalues of roots near the unit circle hold ~1e-6 (a check failed)
-            roots = roots - np.polyval(num, roots) / np.polyval(np.polyder(num), roots)
+            roots = roots - np.polyval(num, roots) / np.polyval(slope, roots)
     inside = roots[np.abs(roots) < 1.0]
     if inside.size != k - 1:
         return None
