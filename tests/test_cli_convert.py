@@ -1296,6 +1296,23 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
                                                              f"comment '{comment}' "), err
 
 
+@pytest.mark.parametrize("comment, options, said", [
+    ("# sensitivity: 0.0153", ["--lsb-per-dps", "65.5"], True), ("# lsb_per_g: 0.061", ["--lsb-per-g", "16384"], True),
+    ("# sensitivity: 0.0153 dps/LSB", ["--lsb-per-dps", "131"], False),
+])
+def test_a_sensitivity_without_a_unit_says_how_it_was_read(tmp_path, capsys, comment, options, said):
+    """A new user's ``# sensitivity: 0.0153`` (deg/s per LSB meant) was refused beside --lsb-per-dps 65.5 without
+    saying that a number alone is read as LSB per deg/s (so 0.0153, not 65.4)."""
+    accel = "--lsb-per-g" in options
+    rows = "".join(f"{i % 5},2,-1" + (",0,0,1" if accel else "") + "\n" for i in range(50))
+    unit = ["--unit", "dps", "--accel-unit", "lsb"] if accel else ["--unit", "lsb"]
+    code, dst = _convert(tmp_path, f"{comment}\ngx,gy,gz{',ax,ay,az' if accel else ''}\n{rows}", "--sample-rate-hz",
+                         "100", *unit, *options)
+    err = capsys.readouterr().err
+    assert code == 2 and not dst.exists() and err.count("\n") == 1
+    assert ("a sensitivity without a unit read as LSB per " + ("g" if accel else "deg/s") in err) == said, err
+
+
 @pytest.mark.parametrize("comment, options", [
     ("# gyro_unit: mdps", ["--unit", "mdps"]), ("# Gyro units: mrad/s", ["--unit", "mrad/s"]),
     ("# Sample period (\u00b5s): 10000", []), ("# units: s, deg/s, g", []), ("# Gyro scale: \u00b12000 dps", []),

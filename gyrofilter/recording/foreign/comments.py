@@ -19,7 +19,7 @@ import functools
 import re
 
 from ...errors import RecordingError
-from ...inputs import quote
+from ...inputs import is_plain_number, quote
 from ...units import RATE_TOLERANCE
 from ..header import VERSION_KEY, contradicts, header_rates, statement
 from ..statements import normal_text, pairs
@@ -32,6 +32,9 @@ MAX_STATEMENTS = 1000
 _SOURCES = {"sample_rate_hz": ("--sample-rate-hz", "the time column's steps"), "gyro_unit": ("--unit", "the column names"),
             "lsb_per_dps": ("--lsb-per-dps", "--lsb-per-dps"), "accel_unit": ("--accel-unit", "the column names"),
             "lsb_per_g": ("--lsb-per-g", "--lsb-per-g"), "temp_unit": ("--temp-unit", "the column's name, else deg C")}
+#: how a sensitivity written without a unit is read (``# sensitivity: 0.0153``: 0.0153 LSB per deg/s, not 1 / 0.0153)
+_BARE_SENSITIVITY = {"lsb_per_dps": ", a sensitivity without a unit read as LSB per deg/s",
+                     "lsb_per_g": ", a sensitivity without a unit read as LSB per g"}
 
 
 def refuse_recording(text, number, path):
@@ -87,5 +90,6 @@ class Comments:
                 fact = meant[0]
                 option, otherwise = _SOURCES[fact]
                 raise RecordingError(f"{self.path}: line {number}: the comment {quote(text[:100])} disagrees with the conversion's "
-                                     f"{fact} {quote(header[fact])} (from {option if fact in given else otherwise}); correct "
-                                     + ("the option or " if fact in given else "") + "the comment line")
+                                     f"{fact} {quote(header[fact])} (from {option if fact in given else otherwise})"
+                                     + _BARE_SENSITIVITY.get(fact, "") * is_plain_number(normal_text(value).strip())
+                                     + "; correct " + ("the option or " if fact in given else "") + "the comment line")
