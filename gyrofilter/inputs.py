@@ -41,6 +41,10 @@ import numpy as np
 from .errors import RecordingError, SettingsError
 
 MAX_NUMBER_CHARS = 64
+#: the blanks around a number or a cell (a CRLF line's CR, a value's line end): no other character is taken for one (Python's
+#: ``str.strip`` and numpy's ``loadtxt`` take the controls 0x1c-0x1f, 0x0b, 0x0c, U+0085 and U+3000 for blanks:
+#: a damaged gzip stream's ``\x1f5`` read as 5, attack pass 63)
+BLANKS = " \t\r\n"
 MAX_JSON_BYTES = 16 * 1024 * 1024
 MAX_JSON_DEPTH = 32
 MAX_QUOTE_CHARS = 80
@@ -264,7 +268,7 @@ def _short(value):
 def parse_number(text, what, *, error=SettingsError, **bounds):
     """``text`` in plain decimal syntax as a float (see the module's rules), or ``error`` naming
     ``what``; ``bounds`` as :func:`check_number` takes them (``low``, ``high``, ``integer`` ...)."""
-    stripped = str(text).strip()
+    stripped = str(text).strip(BLANKS)
     if len(stripped) > MAX_NUMBER_CHARS or not _DECIMAL.fullmatch(stripped):
         raise error(f"{what} must be a plain decimal number (like 12, -0.5 or 1e-3), got {quote(text)}")
     number = float(stripped)
@@ -280,7 +284,7 @@ def parse_number(text, what, *, error=SettingsError, **bounds):
 
 def is_plain_number(text) -> bool:
     """Whether ``text`` is a number in plain decimal syntax (no bounds checked)."""
-    stripped = str(text).strip()
+    stripped = str(text).strip(BLANKS)
     return len(stripped) <= MAX_NUMBER_CHARS and _DECIMAL.fullmatch(stripped) is not None
 
 

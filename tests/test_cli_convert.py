@@ -1460,3 +1460,15 @@ def test_a_gzip_log_cut_short_then_padded_with_zeros_is_read_to_its_cut(tmp_path
     rec = read_recording(dst)
     assert len(rec) == complete > 100
     np.testing.assert_array_equal(rec.gyro[:, 0], np.arange(complete))  # every row its own (LSB), none invented
+
+
+@pytest.mark.parametrize("sep", [",", ";", " ", "\t"])
+@pytest.mark.parametrize("blank", ["\x1f", "\x0b", "\u3000"])
+def test_a_control_beside_a_number_in_a_log_is_refused(tmp_path, capsys, sep, blank):
+    """Attack pass 63: convert read ``\\x1f7`` as 7 (Python's strip and split take controls for blanks); in a log split
+    at blanks a leading control was a separator, its row read."""
+    rows = [f"{i / 100}{sep}1{sep}2{sep}3" for i in range(50)]
+    rows[30] = f"0.3{sep}{blank}7{sep}2{sep}3"
+    code, dst = _convert(tmp_path, sep.join(["t", "gx", "gy", "gz"]) + "\n" + "\n".join(rows) + "\n", "--unit", "dps")
+    err = capsys.readouterr().err
+    assert code == 2 and not dst.exists() and "line 32" in err and err.count("\n") == 1, err

@@ -1840,3 +1840,29 @@ def test_binary_bytes_holding_a_cr_are_not_called_cr_only_line_ends(tmp_path, na
     (tmp_path / name).write_bytes(text + b"\xff\xfe\r\x01\x02")
     rec = read_recording(tmp_path / name)
     assert len(rec) == 300 and any("line 305: last line has no line end" in w for w in rec.warnings)
+
+
+@pytest.mark.parametrize("blank", ["\x1f", "\x1c", "\x0b", "\x0c", "\x85", "\u2028", "\u3000", "\u00a0"])
+@pytest.mark.parametrize("where", ["before", "after"])
+@pytest.mark.parametrize("rows", [3, 3000])  # one line's own parse, numpy's loadtxt of a chunk
+def test_a_control_or_other_blank_beside_a_number_is_refused(tmp_path, blank, where, rows):
+    """Attack pass 63: Python's strip and numpy's loadtxt take controls (0x1c-0x1f, 0x0b, 0x0c, U+0085) and other
+    blanks for spaces: a damaged gzip stream's ``\\x1f5`` was read as 5. Only spaces, tabs and a CRLF's CR are blanks."""
+    cell = blank + "5" if where == "before" else "5" + blank
+    body = "".join(f"{i / 100},1,2,3\n" for i in range(rows - 1)) + f"9,{cell},2,3\n"
+    path = write(tmp_path, HEADER + "t,gx,gy,gz\n" + body)
+    with pytest.raises(RecordingError, match=rf"line {6 + rows}: column 'gx' is not a"):
+        read_recording(path)
+
+
+@pytest.mark.parametrize("blank", ["\x1f", "\x0b", "\u3000"])
+def test_a_control_in_a_header_value_is_refused(tmp_path, blank):
+    """Attack pass 63: ``sample_rate_hz: \\x1f100``, ``lsb_per_dps: 131\\x0b`` read as 100 and 131."""
+    for text in (HEADER.replace("100", blank + "100"), HEADER.replace("131", "131" + blank)):
+        with pytest.raises(RecordingError, match="must be a plain decimal number"):
+            read_recording(write(tmp_path, text + "t,gx,gy,gz\n0,1,2,3\n"))
+
+
+def test_spaces_tabs_and_crlf_around_numbers_still_read(tmp_path):
+    path = write(tmp_path, (HEADER + "t,gx,gy,gz\n0, 1 ,\t2,3\n0.01,4 , 5\t,6\n").replace("\n", "\r\n"))
+    np.testing.assert_array_equal(read_recording(path).gyro, [[1, 2, 3], [4, 5, 6]])

@@ -7,11 +7,12 @@ from __future__ import annotations
 
 import math
 import os
+import re
 
 import numpy as np
 
 from ..errors import RecordingError, SettingsError
-from ..inputs import check_number, is_plain_number, quote
+from ..inputs import BLANKS, check_number, is_plain_number, quote
 from .checks import TimeCheck, check_rates
 from .content import Note, Recording, RecordingHead
 from .header import (MAX_HEADER_LINES, MAX_LINE_BYTES, MAX_NOTES, NOT_A_RECORDING, check_accelerometer, check_columns,
@@ -198,7 +199,7 @@ def _parse_header(lines, path):
     for i, ln in enumerate(lines):
         if not ln.startswith("#"):
             break
-        body = ln[1:].strip()
+        body = ln[1:].strip(BLANKS)
         if not body:
             continue
         key, sep, value = body.partition(":")
@@ -209,7 +210,7 @@ def _parse_header(lines, path):
         refuse_invisible(key, "header key", f"{path}: line {i + 1}")  # before the repeat: 'k\u200b' shows as 'k'
         if key in header:
             raise RecordingError(f"{path}: line {i + 1}: header key {quote(key)} repeated (first on line {line_of[key]})")
-        header[key], line_of[key] = value.strip(), i + 1
+        header[key], line_of[key] = value.strip(BLANKS), i + 1
     check_header(header, path)
     return header, line_of
 
@@ -253,8 +254,14 @@ def _parse_chunk(lines, first, head):
     return data, numbers
 
 
+#: a character no data line's numbers, commas and blanks hold
+_NOT_PLAIN = re.compile(r"[^0-9eE+\-., \t\r]")
+
+
 def _loadtxt(lines, n):
     """``numpy.loadtxt`` of data lines with n columns, or None unless it gives len(lines) finite rows."""
+    if _NOT_PLAIN.search("".join(lines)):
+        return None  # (loadtxt takes controls for blanks: \x1f5 as 5) each line on its own says which cell
     try:
         data = np.loadtxt(lines, delimiter=",", comments=None, ndmin=2, dtype=np.float64)
     except ValueError:
@@ -272,7 +279,7 @@ def _parse_line(ln, line, head):
                              f"({quote(','.join(names))})")
     values = []
     for name, cell in zip(names, cells):
-        text = cell.strip()
+        text = cell.strip(BLANKS)
         if not text:
             raise RecordingError(f"{path}: line {line}: column {quote(name)} is empty")
         plain = is_plain_number(text)

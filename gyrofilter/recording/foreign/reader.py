@@ -52,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import RecordingError
-from ...inputs import is_plain_number, quote, refuse_unordered
+from ...inputs import BLANKS, is_plain_number, quote, refuse_unordered
 from ...units import AXES, RATE_TOLERANCE, check_lsb_per_dps, check_sample_rate_hz
 from ..checks import TimeCheck
 from ...closable import Closable
@@ -77,6 +77,8 @@ GYRO_NAME = re.compile(r"(?:.*_)?(?:g|gy|gyr|gyro|gyroscope|w|omega|angular_velo
 BARE_AXIS = re.compile(r"(?P<axis>[xyz])")
 #: time columns whose name, not a unit word (:mod:`~gyrofilter.recording.unit_words`), states their unit
 _NAME_TIME_UNITS = {"%time": "ns", "seconds_elapsed": "s"}
+#: the blanks between the cells of a log split at blanks (:data:`~gyrofilter.inputs.BLANKS`)
+_BLANK_RUN = re.compile(r"[ \t\r]+")
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
 class Foreign(Closable):
@@ -152,8 +154,8 @@ def _splitter(line):
     """How the cells of ``line`` are split: at commas, else semicolons, else at runs of blanks and tabs."""
     for sep in (",", ";"):
         if sep in line:
-            return lambda text, sep=sep: [c.strip().strip('"') for c in text.split(sep)]
-    return lambda text: text.split()
+            return lambda text, sep=sep: [c.strip(BLANKS).strip('"') for c in text.split(sep)]
+    return lambda text: _BLANK_RUN.split(text.strip(BLANKS))
 
 
 def _pick(names, path, columns, time_unit, unit):
@@ -232,7 +234,7 @@ def _time_column(normal, gyro):
 
 
 def _cell(cells, index, line, names, path):
-    text = cells[index].strip()
+    text = cells[index].strip(BLANKS)
     if not is_plain_number(text):
         raise RecordingError(f"{path}: line {line}, column {index + 1} ({quote(names[index])}): "
                              f"not a plain decimal number: {quote(text)}")
@@ -264,7 +266,7 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
             raise RecordingError(f"{path}: line {number}: {len(cells)} values, but {len(names)} columns "
                                  f"({'line ' + str(plan.header_line) if plan.header_line else 'the first row'})")
         for store, index in zip(cells_of, wanted):
-            store.append(cells[index].strip() if again else _cell(cells, index, number, names, path))
+            store.append(cells[index].strip(BLANKS) if again else _cell(cells, index, number, names, path))
         numbers.append(number)
         if len(numbers) == CHUNK_ROWS:
             yield numbers, cells_of
