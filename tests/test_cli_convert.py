@@ -1282,6 +1282,9 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# gyro_sensitivity: 4.9e-324 mdps/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # (ZeroDivisionError)
     ("# update rate: 200 Hz (low-pass 42 Hz)", []), ("# data rate: 200 Hz (DLPF on)", []),  # a rate, the remark aside
     ("# sensitivity: 131 deg/sec/LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),  # 1/131 LSB per deg/s
+    ("# mdps_per_lsb: 70", ["--unit", "lsb", "--lsb-per-dps", "70"]),  # pass 63: the key's unit, 14.3 LSB per deg/s
+    ("# counts per mdps: 14.2857", ["--unit", "lsb", "--lsb-per-dps", "14.2857"]),
+    ("# sensitivity: 131 LSB/mdps", ["--unit", "lsb", "--lsb-per-dps", "131"]),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1297,8 +1300,8 @@ def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment,
 
 
 @pytest.mark.parametrize("comment, options, said", [
-    ("# sensitivity: 0.0153", ["--lsb-per-dps", "65.5"], True), ("# lsb_per_g: 0.061", ["--lsb-per-g", "16384"], True),
-    ("# sensitivity: 0.0153 dps/LSB", ["--lsb-per-dps", "131"], False),
+    ("# sensitivity: 0.0153", ["--lsb-per-dps", "65.5"], True), ("# accel sensitivity: 0.061", ["--lsb-per-g", "16384"], True),
+    ("# sensitivity: 0.0153 dps/LSB", ["--lsb-per-dps", "131"], False), ("# mdps_per_lsb: 70", ["--lsb-per-dps", "70"], False),
 ])
 def test_a_sensitivity_without_a_unit_says_how_it_was_read(tmp_path, capsys, comment, options, said):
     """A new user's ``# sensitivity: 0.0153`` (deg/s per LSB meant) was refused beside --lsb-per-dps 65.5 without
@@ -1351,6 +1354,8 @@ def test_a_sensitivity_without_a_unit_says_how_it_was_read(tmp_path, capsys, com
     ("# sensitivity: 7.63 mdps/count", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# sensitivity: 7.63 millidegrees per second per LSB", ["--unit", "lsb", "--lsb-per-dps", "131"]),
     ("# units: s, deg/s, counts", []),
+    ("# mdps_per_lsb: 70", ["--unit", "lsb", "--lsb-per-dps", "14.2857"]),  # pass 63: an L3GD20 at 2000 deg/s
+    ("# dps/LSB: 0.07", ["--unit", "lsb", "--lsb-per-dps", "14.2857"]),
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read

@@ -1866,3 +1866,33 @@ def test_a_control_in_a_header_value_is_refused(tmp_path, blank):
 def test_spaces_tabs_and_crlf_around_numbers_still_read(tmp_path):
     path = write(tmp_path, (HEADER + "t,gx,gy,gz\n0, 1 ,\t2,3\n0.01,4 , 5\t,6\n").replace("\n", "\r\n"))
     np.testing.assert_array_equal(read_recording(path).gyro, [[1, 2, 3], [4, 5, 6]])
+
+
+_L3GD20 = "# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 14.2857\n"
+
+
+@pytest.mark.parametrize("same, other", [
+    ("mdps_per_lsb: 70", "mdps_per_lsb: 14.2857"), ("mdps per LSB: 70", "mdps per LSB: 14.2857"),
+    ("mdps/LSB: 70", "mdps/LSB: 14.2857"), ("dps_per_lsb: 0.07", "dps_per_lsb: 14.2857"),
+    ("deg_s_per_lsb: 0.07", "deg_s_per_lsb: 14.2857"), ("deg_per_lsb: 0.07", "deg_per_lsb: 14.2857"),
+    ("counts per mdps: 0.0142857", "counts per mdps: 14.2857"), ("lsb_per_deg: 14.2857", "lsb_per_deg: 0.07"),
+    ("sensitivity in mdps/LSB: 70", "sensitivity in mdps/LSB: 14.2857"),
+    ("sensitivity: 0.0142857 LSB/mdps", "sensitivity: 14.2857 LSB/mdps"),
+    ("sensitivity: 0.0142857 counts per millidegree per second", "sensitivity: 14.2857 counts per millidegree per second"),
+    ("sensitivity: 818.5 LSB/(rad/s)", "sensitivity: 14.2857 LSB/(rad/s)"),
+])
+def test_a_sensitivity_key_or_value_is_read_the_way_round_it_is_written(tmp_path, same, other):
+    """Attack pass 63: ``mdps_per_lsb: 70`` (an L3GD20 at 2000 deg/s: 14.3 LSB per deg/s) was read as 70 LSB per
+    deg/s, and ``131 LSB/mdps`` as 131 LSB per deg/s: the unit in a key was not read, the one under LSB not scaled."""
+    body = "t,gx,gy,gz\n" + "".join(f"{i / 100},1,2,3\n" for i in range(20))
+    assert len(read_recording(write(tmp_path, _L3GD20 + f"# {same}\n" + body))) == 20
+    with pytest.raises(RecordingError, match="but lsb_per_dps is '14.2857'"):
+        read_recording(write(tmp_path, _L3GD20 + f"# {other}\n" + body))
+
+
+@pytest.mark.parametrize("written", ["131 LSB/kdps", "131 LSB/(deg/min)", "131 LSB/deg/h", "131 LSB/(°/h)"])
+def test_a_sensitivity_per_an_unknown_unit_is_not_read_as_per_deg_s(tmp_path, written):
+    """Attack pass 63: any unit under LSB holding ``dps`` or ``deg`` was taken for deg/s."""
+    body = "t,gx,gy,gz\n" + "".join(f"{i / 100},1,2,3\n" for i in range(20))
+    with pytest.raises(RecordingError, match="does not read as a sensitivity"):
+        read_recording(write(tmp_path, HEADER + f"# gyro_sensitivity: {written}\n" + body))

@@ -323,8 +323,9 @@ def contradiction(header):
             meant, unread = meant
             if meant == "temp_unit":  # temp_unit: F (attack pass 59)
                 return f"header key {quote(key)} says {quote(value)}, but a recording's temp column is in deg C, whatever a key says"
-            return (f"header key {quote(key)} says {quote(value)}, "
-                    + (f"which gyrofilter does not read as {unread};" if unread else "but")
+            read = key_unit(normal_text(key), normal_text(value))[1]  # mdps_per_lsb: 70 says 70 mdps/lsb
+            return (f"header key {quote(key)} says {quote(value)}" + (f" ({read})" if read != normal_text(value) else "")
+                    + (f", which gyrofilter does not read as {unread};" if unread else ", but")
                     + f" {meant} is {quote(header[meant])}: gyrofilter reads it only from {meant}")
     return None
 

@@ -73,6 +73,8 @@ _ANY_COLUMNS = {"counts", "raw", "lsb"}
 #: deg/s (g) per unit of a sensitivity written inverse, per LSB (``8.75 mdps/LSB``, ``0.000266 rad/s/LSB``, ``0.061 mg/LSB``)
 _PER_LSB_SCALES = {"rate": {"dps": 1.0, "mdps": 1e-3, "rad/s": 180.0 / math.pi, "mrad/s": 0.18 / math.pi},
                    "accel": {"g": 1.0, "mg": 1e-3}}
+#: a sensitivity's word after its number that is an LSB (``65.5 LSB``, ``131 counts``)
+_LSB_WORDS = {"", "lsb", "lsbs", "count", "counts", "digit", "digits"}
 #: a remark in brackets at a value's end that names a filter (``Frequency: 42 Hz (DLPF)``: its cut-off, not a sample rate)
 _FILTER_REMARK = re.compile(r"\([^()]*\b(?:dlpf|lpf|low[- ]?pass|cut-?off|bandwidth|bw|filter)\b[^()]*\)\s*$", re.IGNORECASE)
 #: a value in Hz (``gyro rate: 200 Hz`` is a sample rate; ``gyro rate: 200`` may be a rate of turn)
@@ -82,10 +84,18 @@ _PER_WORD = re.compile(r"\s+per\s+", re.IGNORECASE)
 #: a value's first number (a sign of range or about before it) and the word right after it
 _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
                      r"(?P<number>(?>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?))(?![,.]\d)\s*(?P<suffix>[a-zA-Zμ°/^()\d-]*)(?P<rest>.*)")
+#: a rate's or an acceleration's unit in a sensitivity's key (``mdps``, ``deg_s``, ``deg``: deg/s, ``mg``), an LSB's
+#: word, and ``per`` between them
+_UNIT_IN_KEY = r"m?(?:dps|deg|rad|g)(?:[_\s/](?:s|sec))?"
+_LSB_IN_KEY = r"(?:lsbs?|counts?|digits?)"
+_PER_IN_KEY = r"(?:[_\s]+per[_\s]+|\s*/\s*)"
 #: a key's unit in brackets at its end (``Sample rate (samples/s)``, ``Sample period [µs]``), or a sensitivity's
-#: in words (``gyro_sensitivity_mdps_per_lsb``: mdps/lsb)
-_BRACKETED = re.compile(r"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*|"
-                        r"(?P<per_key>.*?)[_\s]+(?P<per>m?(?:dps|g)[_\s]+per[_\s]+lsb)", re.IGNORECASE)
+#: in words, either way round, with other words before it or none (``gyro_sensitivity_mdps_per_lsb``, ``mdps_per_lsb``,
+#: ``deg_s/LSB``: mdps/lsb, deg/s/lsb; ``counts_per_mdps``: lsb/mdps; ``sensitivity in mdps/LSB``; attack pass 63: ``mdps_per_lsb: 70``, 14.3 LSB
+#: per deg/s, was read as 70, ``counts per mdps: 14.3`` as 14.3)
+_BRACKETED = re.compile(rf"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*|(?:(?P<per_key>.*?)(?:[_\s]+in)?[_\s]+)?"
+                        rf"(?:(?P<over>{_UNIT_IN_KEY}){_PER_IN_KEY}{_LSB_IN_KEY}|{_LSB_IN_KEY}{_PER_IN_KEY}(?P<under>{_UNIT_IN_KEY}))",
+                        re.IGNORECASE)
 #: where a text holds another ``key: value`` pair: at ``;``, at ``,`` before a key and its ``:`` (``Rate: 100 Hz, FS:
 #: 2000 dps``); within a value, at ``,`` before ``key=`` too (``Accel: range=2g, sensitivity=16384``: the accelerometer's)
 _PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[\"']?[A-Za-z_][\w.()\[\]/ -]{0,40}?[\"']?\s*(?::=|:))")
@@ -135,15 +145,21 @@ def key_unit(key, value):
     """``(key, value)`` with a unit in brackets at the key's end moved to a value that is a number alone
     (``Sample rate (Hz): ~200``: ``Sample rate``, ``~200 Hz``)."""
     bracketed = _BRACKETED.fullmatch(key)
-    stem = bracketed and (bracketed["key"] or bracketed["per_key"])
-    if not stem:
+    if not bracketed or not (bracketed["key"] or bracketed["over"] or bracketed["under"]):
         return key, value
-    if bracketed["key"] and bracketed["unit"].strip(" .").lower() in _REMARKS:
-        return stem, value  # Sample rate (nominal): 200
-    unit = bracketed["unit"] if bracketed["key"] else re.sub(r"[_\s]+per[_\s]+", "/", bracketed["per"])
+    if bracketed["key"]:
+        if bracketed["unit"].strip(" .").lower() in _REMARKS:
+            return bracketed["key"], value  # Sample rate (nominal): 200
+        stem, unit = bracketed["key"], bracketed["unit"]
+    else:  # mdps_per_lsb, accel_mg_per_lsb, lsb_per_deg: a sensitivity, the accelerometer's in g
+        named = re.sub(r"[_\s]+", "/", (bracketed["over"] or bracketed["under"]).lower())
+        named += "/s" if named in ("deg", "mdeg") else ""  # lsb_per_deg: per deg/s
+        accel = "accel " if named in ("g", "mg") and not bracketed["per_key"] else ""
+        stem = f"{bracketed['per_key'] or ''} {accel}sensitivity".strip()
+        unit = f"{named}/lsb" if bracketed["over"] else f"lsb/{named}"
     number = _NUMBER.fullmatch(clean(value))
     alone = number and not number["suffix"] and not number["rest"].strip()
-    return stem + ("" if bracketed["key"] else " sensitivity"), f"{clean(value)} {unit}" if alone else value
+    return stem, f"{clean(value)} {unit}" if alone else value
 
 
 def stated_kind(words, value):
@@ -241,16 +257,16 @@ def _sensitivity(kind, amount, number, suffix, facts):
         return None  # gyro_scale: ±2000 dps, a full scale (65.5 LSB, 65.5 LSB per dps: a sensitivity)
     over = re.fullmatch(r"\(?(.+?)\)?/(?:lsb|digits?|counts?)", suffix)  # 8.75 mdps/LSB, (deg/s)/LSB, mdps/count
     scale = _PER_LSB_SCALES[quantity].get(known_unit(quantity, over[1])) if over else None
-    per = suffix in ("", "lsb") or scale or ("dps" in suffix or "deg" in suffix.replace("°", "deg") if kind == "sensitivity"
-                                           else suffix in ("lsb/g", "lsb/(g)"))
-    if amount is None or not per:
+    under = re.fullmatch(r"(?:lsbs?|digits?|counts?)/\(?(.+?)\)?", suffix)  # 65.5 LSB/(deg/s), 131 LSB/mdps: 131 000
+    per = _PER_LSB_SCALES[quantity].get(known_unit(quantity, under[1])) if under else (1.0 if suffix in _LSB_WORDS else None)
+    if amount is None or not (per or scale):  # (LSB/kdps, LSB/(deg/min) do not read: attack pass 63 took them for deg/s)
         return key, f"a sensitivity (LSB per {'deg/s' if kind == 'sensitivity' else 'g'})"
     if not 0 < abs(amount) < math.inf:
         return key, None  # no sensitivity is 0, or beyond a float (1e400: attack pass 62, a traceback)
     amount = abs(amount)  # -70 mdps/LSB: an axis the other way round, 70 (attack pass 61: any passed)
     half = 0.5 * float(decimal.Decimal(1).scaleb(decimal.Decimal(number["number"]).as_tuple().exponent))  # as printed
     half = min(max(half, 1e-3 * amount), 1e-2 * amount)  # within 0.1 % to 1 % (0.02 dps/LSB is not 65.5)
-    low, high = amount - half, amount + half
+    low, high = (amount - half) / (per or 1.0), (amount + half) / (per or 1.0)
     if scale:  # 8.75 mdps/LSB, 0.000266 rad/s/LSB: 1 / (the number in deg/s)
         if not high * scale > 0:
             return key, None  # 4.9e-324 mdps/LSB: 0

@@ -91,5 +91,5 @@ class Comments:
                 option, otherwise = _SOURCES[fact]
                 raise RecordingError(f"{self.path}: line {number}: the comment {quote(text[:100])} disagrees with the conversion's "
                                      f"{fact} {quote(header[fact])} (from {option if fact in given else otherwise})"
-                                     + _BARE_SENSITIVITY.get(fact, "") * is_plain_number(normal_text(value).strip())
+                                     + _BARE_SENSITIVITY.get(fact, "") * is_plain_number(statement(key, value)[2])
                                      + "; correct " + ("the option or " if fact in given else "") + "the comment line")
