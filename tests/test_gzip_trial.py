@@ -165,7 +165,8 @@ def test_a_member_header_at_a_block_boundary_is_no_padding(tmp_path):
         path = tmp_path / "r.csv.gz"
         path.write_bytes(data)
         rec = read_recording(path)
-        assert len(rec) == 1000 + zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(second).count(b"\n"), shift
+        kept = second[:-gzipped.HOLD_BYTES]  # the text of a cut's last bytes is left out (attack pass 63)
+        assert len(rec) == 1000 + zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(kept).count(b"\n"), shift
         np.testing.assert_array_equal(rec.gyro, values[:len(rec)])
 
 
@@ -387,3 +388,96 @@ def test_a_file_of_many_cut_members_keeps_a_few_warnings_and_counts_the_rest(tmp
     np.testing.assert_array_equal(rec.gyro, values)
     assert len(rec.warnings) == gzipped.MAX_WARNINGS + 1 and rec.warnings[-1].startswith(f"{path}: ")
     assert "more warnings of its gzip data like these" in rec.warnings[-1]
+
+
+def _flushed(text, every, level=6):
+    """gzip bytes of ``text`` (zlib's header: a modification time of 0) with a sync flush every ``every`` lines, as a
+    recorder writes them."""
+    c = zlib.compressobj(level, zlib.DEFLATED, 31)
+    lines = text.splitlines(keepends=True)
+    return b"".join(c.compress("".join(lines[i:i + every]).encode()) + c.flush(zlib.Z_SYNC_FLUSH)
+                    for i in range(0, len(lines), every)) + c.flush()
+
+
+def _prefix_or_refused(path, values):
+    """The rows read from ``path``, each the row written, in order (or None: refused as damaged gzip data)."""
+    rec, _ = _read(path)
+    if rec is not None:
+        assert len(rec) <= len(values)
+        np.testing.assert_array_equal(rec.gyro, values[:len(rec)])
+    return rec
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_bytes_written_after_a_cut_make_no_row(tmp_path, seed):
+    """Attack pass 63: a recording cut short, then a few bytes (``echo >> rec.csv.gz``: a line end; ``\\0\\n``), was
+    read with a made-up last row (zlib decodes the bytes as more of the stream), the "no line end" warning gone. The
+    text of a cut stream's last HOLD_BYTES bytes is left out: no such tail makes a row, and a cut at a flush's end
+    keeps every row."""
+    rng = np.random.default_rng(600 + seed)
+    values, body = _timed_rows(rng, 3000)
+    data = _flushed(HEADER + "t,gx,gy,gz\n" + body, int(rng.choice([1, 10, 100])))
+    path = tmp_path / "r.csv.gz"
+    for _ in range(40):
+        cut = int(rng.integers(len(data) // 4, len(data) - 20))
+        tail = [b"\n", b"\0\n", b"\0\0\0\n", bytes(rng.integers(1, 256, int(rng.integers(1, gzipped.HOLD_BYTES + 1))).astype(np.uint8))][int(rng.integers(0, 4))]
+        path.write_bytes(data[:cut] + tail)
+        _prefix_or_refused(path, values)
+    flush_end = data.rfind(b"\0\0\xff\xff", 0, len(data) - 50) + 4  # a recorder killed after a flush
+    path.write_bytes(data[:flush_end])
+    rec = read_recording(path)
+    assert len(rec) == _rows_decoded(data[:flush_end]) and not any("left out" in w for w in rec.warnings)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_member_appended_right_after_a_cut_is_read_and_makes_no_row_of_its_header(tmp_path, seed):
+    """Attack pass 63: a stream cut short and a member right after it (a logger's ``gzip >> log.gz`` the next time;
+    zlib's header: 5 zeros) read the header's first bytes as the stream's (a made-up row) and its zeros as padding
+    (the member's rows lost). The stream now ends where the member begins, and the member is read."""
+    rng = np.random.default_rng(700 + seed)
+    values, body = _timed_rows(rng, 3000)
+    more, more_body = _timed_rows(rng, 200, 3500)
+    data = _flushed(HEADER + "t,gx,gy,gz\n" + body, 10)
+    for _ in range(10):
+        cut = int(rng.integers(len(data) // 4, len(data) - 20))
+        path = tmp_path / "r.csv.gz"
+        path.write_bytes(data[:cut] + _flushed(more_body, 10))
+        rec = read_recording(path)
+        kept = _rows_decoded(data[:cut])
+        assert len(rec) in (kept + 200, kept - 1 + 200), (cut, len(rec), kept)
+        np.testing.assert_array_equal(rec.gyro, np.vstack([values[:len(rec) - 200], more]))
+        assert any("where another gzip member begins" in w for w in rec.warnings)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_bit_flipped_in_a_whole_members_last_bytes_makes_no_row(tmp_path, seed):
+    """Attack pass 63: one bit flipped in a whole member's last deflate block (the trailer then read as more data)
+    made up rows, read as a stream cut short. Every flip of the last 24 bytes is refused or reads only rows written;
+    where the member's text is 64 KiB or more its trailer, at the file's end, tells a damaged member from a cut one."""
+    rng = np.random.default_rng(800 + seed)
+    rows = int(rng.choice([2000, 6000]))
+    values, body = _timed_rows(rng, rows)
+    data = _flushed(HEADER + "t,gx,gy,gz\n" + body, int(rng.choice([10, 100])))
+    path = tmp_path / "r.csv.gz"
+    for at in range(len(data) - 24, len(data) - 8):
+        for bit in rng.choice(8, 3, replace=False):
+            damaged = bytearray(data)
+            damaged[at] ^= 1 << int(bit)
+            path.write_bytes(damaged)
+            _prefix_or_refused(path, values)
+
+
+def test_constant_rows_with_a_bit_flipped_before_the_trailer_are_refused(tmp_path):
+    """Attack pass 63's case: 5000 constant rows, a bit of the last block flipped: 5001 rows read, the last made of
+    the trailer's bytes. The file's last bytes state the member's length: damaged, not cut short."""
+    text = HEADER + "gx,gy,gz\n" + "0.5,-0.25,100\n" * 5000
+    data = bytearray(_flushed(text, 100))
+    path = tmp_path / "r.csv.gz"
+    refused = 0
+    for at in range(len(data) - 14, len(data) - 8):
+        damaged = bytearray(data)
+        damaged[at] ^= 0x80
+        path.write_bytes(damaged)
+        rec = _prefix_or_refused(path, np.tile([0.5, -0.25, 100], (5000, 1)))
+        refused += rec is None
+    assert refused >= 3

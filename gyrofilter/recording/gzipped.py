@@ -11,7 +11,11 @@ in a block of constant rows are its code for "the same again": rows invented, at
   is on trial (:func:`_member`): its text is used only once it ends whole (checked by zlib: its checksum and
   length), else it ends at the run, a stream cut short. The compressed data of recordings with a time column hold
   no such run (``tools/gzip_runs.py``, a flush's marker and a member's header aside); constant rows without a time
-  column do, and a stream of them cut short is read to its first run, with a warning.
+  column do, and a stream of them cut short is read to its first run, with a warning;
+- bytes written after a cut decode as more of the stream: the text of a stream's last :data:`HOLD_BYTES` bytes is
+  left out where it is cut short at the file's end (not after a flush's marker or before padding), a member that
+  starts right after a cut ends it (:func:`_cut_at_run`), and a member whose last bytes state its length is damaged,
+  not cut (:func:`_states_length`; attack pass 63).
 """
 from __future__ import annotations
 
@@ -45,6 +49,12 @@ _MAX_HEADER_BYTES = 1 << 20
 _PIECE_BYTES = 100
 #: a flush's empty stored block after a run of zeros (LEN 00 00, NLEN FF FF), not more FF
 _FLUSH_MARK = re.compile(rb"\xff\xff(?!\xff)")
+#: the last bytes of a flush's marker (an empty stored block's LEN and NLEN): a writer's own last bytes
+_FLUSH_END = b"\x00\x00\xff\xff"
+#: the last compressed bytes held back from zlib till more follow (:func:`_member`): where the stream is cut short,
+#: their text is left out (a deflate code is at most 6 bytes: bytes written after a cut that are fewer than this make
+#: none of the text kept)
+HOLD_BYTES = 16
 
 
 class _GzipDamage(RecordingError):
@@ -269,25 +279,35 @@ def _member(source, raw, path, warnings, produced):
     length that does not match (the text may look fine: a changed digit in a stored block). From a run of padding
     (``source.run``) on, the member is on trial: decompressed on, its text not used, its bytes kept, until it ends
     whole (its checksum and length, RFC 1952, checked by zlib: then read again from the run, every byte its own) or
-    not (it ends at the run: :func:`_trial_failed`); at most :data:`TRIAL_BYTES` compressed bytes and
-    :data:`TRIAL_TEXT_BYTES` of text are tried (more: it ends at the run too, the rest unchecked)."""
+    not (it ends at the run: :func:`_cut_at_run`); at most :data:`TRIAL_BYTES` compressed bytes and
+    :data:`TRIAL_TEXT_BYTES` of text are tried (more: it ends at the run too, the rest unchecked).
+
+    The last :data:`HOLD_BYTES` bytes so far are held back from zlib: where the stream is cut short at the file's end,
+    their text is left out, for bytes written after a cut (``echo >> rec.csv.gz``) decode as more of the stream
+    (attack pass 63: a made-up last row), unless they end in a flush's marker (a recorder's own last write) or
+    padding follows them; where
+    it ends at a run, they are its own, or hold another member's first bytes (:func:`_cut_at_run`)."""
     d, line, header = zlib.decompressobj(16 + zlib.MAX_WBITS), _LastLine(), _Header()
-    first, trial, tried, sure, run, at = produced, None, 0, False, None, header.add(raw)  # trial: (d before the run, the run)
+    first, trial, tried, sure, run, at = produced, None, 0, False, None, header.add(raw)  # trial: (d, hold, the run)
+    hold, feed, ending, last = b"", None, b"", b""  # ending: the bytes held at the file's end, fed; last: their text
     while True:
-        if run and trial is None and not sure and not header.holds(at):
-            trial, tried = (d.copy(), source.keep()), 0
+        if feed is None:  # new bytes: the last HOLD_BYTES of them held back
+            if run and trial is None and not sure and not header.holds(at):
+                trial, tried = (d.copy(), hold, source.keep()), 0
+            data = hold + raw
+            feed, hold = data[:-HOLD_BYTES], data[-HOLD_BYTES:]
         prior = d.copy() if trial else None
         try:
-            out = d.decompress(raw, _TEXT_BYTES)
+            out = d.decompress(feed, _TEXT_BYTES)
         except zlib.error as exc:
             if trial is None:
                 raise _GzipDamage(path, str(exc), produced) from None
-            ended = "incorrect data check" in str(exc) and _own_end(prior, raw, produced - first + tried, source)
-            after = _trial_failed(source, trial[1], path, warnings, produced > first, f"does not decompress ({exc})",
-                                  (str(exc), produced) if ended else None)
-            yield from line.end(after is not None, path, warnings)
-            return after, produced
-        if trial is None:
+            ended = "incorrect data check" in str(exc) and _own_end(prior, feed + hold, produced - first + tried, source)
+            return (yield from _cut_at_run(trial, source, path, warnings, line, produced, first,
+                                           f"does not decompress ({exc})", (str(exc), produced) if ended else None))
+        if trial is None and ending:
+            last += out
+        elif trial is None:
             produced += len(out)
             yield from line.blocks(out)
         else:
@@ -295,33 +315,59 @@ def _member(source, raw, path, warnings, produced):
             if source.kept_bytes > TRIAL_BYTES or tried > TRIAL_TEXT_BYTES:  # (zeros after a cut may make TBs of text)
                 how = (f"goes on past what a trial holds ({TRIAL_BYTES >> 20} MiB of kept pieces or "
                        f"{TRIAL_TEXT_BYTES >> 30} GiB of text), unchecked")
-                after = _trial_failed(source, trial[1], path, warnings, True, how)
-                yield from line.end(after is not None, path, warnings)
-                return after, produced
+                return (yield from _cut_at_run(trial, source, path, warnings, line, produced, first, how))
         run = None
         if not d.eof:
             if d.unconsumed_tail or len(out) == _TEXT_BYTES:  # (text zlib holds back is the input's before more)
-                raw = d.unconsumed_tail
+                feed = d.unconsumed_tail
                 continue
-            raw = source.read()
+            feed, raw = None, source.read()
             if raw:
                 run, at = source.run, header.add(raw)
                 continue
+            if hold:  # the file's end: the bytes held fed now, their text kept apart till the stream is whole or cut
+                feed, ending, hold = hold, hold, b""
+                continue
             if trial is None:
-                out = _cut_end(d, source, path, warnings)
+                out = _cut_end(d, source, path, warnings, last, ending, produced - first)
                 yield from line.blocks(out)
                 yield from line.end(False, path, warnings)
                 return None, produced + len(out)
             if not _padded_end(d, _end_zeros(source))[0]:
-                after = _trial_failed(source, trial[1], path, warnings, produced > first, "ends cut short")
-                yield from line.end(after is not None, path, warnings)
-                return after, produced
+                return (yield from _cut_at_run(trial, source, path, warnings, line, produced, first, "ends cut short"))
         if trial is None:
+            yield from line.blocks(last)
             yield from line.end(False, path, warnings)
-            return d.unused_data, produced
-        d, trial, sure = trial[0], None, True  # it ends whole: read again from the run, every byte its own
+            return d.unused_data + hold, produced + len(last)
+        (d, hold, _), trial, sure, feed, ending, last = trial, None, True, None, b"", b""  # it ends whole: read again
         source.rewind()
         raw = source.read()
+
+
+def _cut_at_run(trial, source, path, warnings, line, produced, first, how, damage=None):
+    """The member on trial (``trial``: the decompressor before the run, the bytes held back before it, the run)
+    ``how`` (ends cut short, does not decompress): it ends at the run (:func:`_trial_failed`), the text of the bytes
+    held before it used (padding follows a writer's own bytes), or, where they hold a member's first bytes (a recorder
+    started again, its header's zeros the run: attack pass 63, a row made of that header), the stream ends there and
+    that member is read. Returns as :func:`_member` does."""
+    d, hold, run = trial
+    at = hold.find(GZIP_MAGIC + b"\x08")
+    if damage and at < 0:  # it reached its own end: whatever follows (attack pass 62: a member after padding excused it)
+        raise _GzipDamage(path, *damage)  # (not another member's end, read as its own)
+    try:
+        text = d.decompress(hold[:at] if at >= 0 else hold)
+    except zlib.error as exc:
+        raise _GzipDamage(path, str(exc), produced) from None
+    yield from line.blocks(text)
+    if at >= 0:
+        source.rewind()
+        warnings.append(f"{path}: gzip stream cut short (no end marker) at byte {run[0] - len(hold) + at}, where another "
+                        "gzip member begins")
+        yield from line.end(True, path, warnings)
+        return hold[at:], produced + len(text)
+    after = _trial_failed(source, run, path, warnings, produced + len(text) > first, how)
+    yield from line.end(after is not None, path, warnings)
+    return after, produced + len(text)
 
 
 class _Header:
@@ -437,15 +483,12 @@ def _end_zeros(source):
     return source.end_run[1] if source.end_run and source.end_run[0] == b"\0" else 0
 
 
-def _trial_failed(source, run, path, warnings, had_text, how, damage=None):
+def _trial_failed(source, run, path, warnings, had_text, how):
     """The member on trial since the run of padding ``run`` (offset, byte, count) ``how`` (ends cut short, does not
     decompress): it ends at the run, a stream cut short, with a warning. Returns the bytes of a member that starts
     after padding (a recorder started again: right after the run, or after padding further on), or None: the file
     ends in padding, or other bytes follow, left out. Damage (:class:`_GzipDamage`) when the member made no text before
-    the run (nothing in it to keep), or when it reached its own end and failed its checks (``damage``: (zlib's words,
-    the bytes of text so far), :func:`_own_end`)."""
-    if damage:  # it reached its own end: whatever follows (attack pass 62: a member after padding excused it)
-        raise _GzipDamage(path, *damage)
+    the run (nothing in it to keep)."""
     source.rewind()
     count, seen, raw = _skip_padding(source, b"")
     offset, byte, run_count = run
@@ -477,17 +520,43 @@ def _member_after_padding(source):
     return b"", None
 
 
-def _cut_end(d, source, path, warnings):
-    """The last text of the member of the decompressor ``d`` at the end of the file ``source`` read: what it makes
-    of the zero padding it takes to end whole (:func:`_padded_end`); the padding left out and a stream cut short
-    said in ``warnings``."""
+def _cut_end(d, source, path, warnings, last, held, produced):
+    """The last text of the member of the decompressor ``d`` at the end of the file ``source`` read, ``last`` the text
+    of the bytes ``held`` back (:data:`HOLD_BYTES`), fed: with what it makes of the zero padding it takes to end whole
+    (:func:`_padded_end`); cut short, ``last`` only where ``held`` ends in a flush's marker or padding follows, else
+    left out. The padding, the text left out and a stream cut short said in ``warnings``. A member whose last bytes
+    state its length (:func:`_states_length`; ``produced``: its text before ``last``) is whole and damaged, not cut."""
     byte, count = source.end_run or (b"\0", 0)
     whole, out = _padded_end(d, _end_zeros(source))
     if count > whole:
         warnings.append(_padding_warning(path, count - whole, {byte[0]}, whole))
-    if not whole:
-        warnings.append(cut_short_warning(path))
-    return out
+    if whole:
+        return last + out
+    if _states_length(held, _end_zeros(source), produced + len(last)):
+        raise _GzipDamage(path, "its last bytes state its length, but its data do not end there", produced)
+    warnings.append(cut_short_warning(path))
+    if last and not held.endswith(_FLUSH_END) and count < RUN_BYTES:  # (padding after them: they are its own)
+        warnings.append(f"{path}: the {len(last)} bytes of text its last {len(held)} compressed bytes decode to left "
+                        "out (bytes written after a cut decode as more of a stream)")
+        return b""
+    return last
+
+
+#: how far the length a damaged member's trailer states may be from the text its damaged data decode to
+_LENGTH_SLACK = 64
+
+
+def _states_length(held, zeros, length):
+    """Whether the last bytes of a member that does not end whole (``held``, then ``zeros`` zero bytes the file ends
+    in) are a trailer: its ISIZE (RFC 1952: the text's length mod 2^32, 4 bytes) within :data:`_LENGTH_SLACK` of
+    ``length`` (the text its damaged data decode to: a changed bit in its last block made up rows, attack pass 63),
+    of at least 2^16 (one or no high zero byte among the padding: a cut stream's last bytes so state a length about
+    one time in 2^24 / 129; with more, one time in 500)."""
+    for high in range(min(zeros, 1) + 1):
+        size = int.from_bytes((held + bytes(high))[-4:], "little") if len(held) >= 4 - high else -1
+        if size >= 1 << 16 and abs(size - length % (1 << 32)) <= _LENGTH_SLACK:
+            return True
+    return False
 
 
 def _padded_end(d, padding):
