@@ -481,3 +481,25 @@ def test_constant_rows_with_a_bit_flipped_before_the_trailer_are_refused(tmp_pat
         rec = _prefix_or_refused(path, np.tile([0.5, -0.25, 100], (5000, 1)))
         refused += rec is None
     assert refused >= 3
+
+
+@pytest.mark.parametrize("padding", [b"\0" * 5, b"\0" * 512, b"\xff" * 8])
+def test_a_member_killed_in_its_first_bytes_then_padding_then_a_recording_is_read(tmp_path, padding):
+    """Attack pass 64: a member whose run of padding starts within 16 bytes of its start held its own header among the
+    bytes before the run, read as another member's, again and again: every command hung."""
+    rng = np.random.default_rng(900)
+    values, body = _timed_rows(rng, 500)
+    whole = _flushed(HEADER + "t,gx,gy,gz\n" + body, 10)
+    path = tmp_path / "r.csv.gz"
+    for killed in (11, 12, 15):
+        path.write_bytes(whole[:killed] + padding + whole)
+        rec = read_recording(path)  # (hung)
+        assert len(rec) == 500
+        np.testing.assert_array_equal(rec.gyro, values)
+
+
+def test_a_flush_marker_and_padding_are_no_stated_length():
+    """Attack pass 64: a recording killed after a flush and padded with zeros, its text within 64 bytes of 16 776 960,
+    was refused as damaged: the marker's FF FF and a padding zero read as a length of 0x00FFFF00."""
+    assert not gzipped._states_length(b"\x12" * 12 + b"\0\0\xff\xff", 512, 0x00FFFF00)
+    assert gzipped._states_length(b"\x12" * 12 + b"\x00\xff\xff\x01", 0, 0x01FFFF00)

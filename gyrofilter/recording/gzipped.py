@@ -293,7 +293,7 @@ def _member(source, raw, path, warnings, produced):
     while True:
         if feed is None:  # new bytes: the last HOLD_BYTES of them held back
             if run and trial is None and not sure and not header.holds(at):
-                trial, tried = (d.copy(), hold, source.keep()), 0
+                trial, tried = (d.copy(), hold, source.keep(), at), 0
             data = hold + raw
             feed, hold = data[:-HOLD_BYTES], data[-HOLD_BYTES:]
         prior = d.copy() if trial else None
@@ -339,7 +339,7 @@ def _member(source, raw, path, warnings, produced):
             yield from line.blocks(last)
             yield from line.end(False, path, warnings)
             return d.unused_data + hold, produced + len(last)
-        (d, hold, _), trial, sure, feed, ending, last = trial, None, True, None, b"", b""  # it ends whole: read again
+        (d, hold, _, _), trial, sure, feed, ending, last = trial, None, True, None, b"", b""  # it ends whole: read again
         source.rewind()
         raw = source.read()
 
@@ -350,8 +350,8 @@ def _cut_at_run(trial, source, path, warnings, line, produced, first, how, damag
     held before it used (padding follows a writer's own bytes), or, where they hold a member's first bytes (a recorder
     started again, its header's zeros the run: attack pass 63, a row made of that header), the stream ends there and
     that member is read. Returns as :func:`_member` does."""
-    d, hold, run = trial
-    at = hold.find(GZIP_MAGIC + b"\x08")
+    d, hold, run, run_at = trial
+    at = hold.find(GZIP_MAGIC + b"\x08", max(0, len(hold) - run_at + 1))  # (not the member's own header: pass 64, a loop)
     if damage and at < 0:  # it reached its own end: whatever follows (attack pass 62: a member after padding excused it)
         raise _GzipDamage(path, *damage)  # (not another member's end, read as its own)
     try:
@@ -552,6 +552,8 @@ def _states_length(held, zeros, length):
     ``length`` (the text its damaged data decode to: a changed bit in its last block made up rows, attack pass 63),
     of at least 2^16 (one or no high zero byte among the padding: a cut stream's last bytes so state a length about
     one time in 2^24 / 129; with more, one time in 500)."""
+    if held.endswith(_FLUSH_END):
+        return False  # a flush's marker and a padding zero state 0x00FFFF00 (attack pass 64: a false refusal)
     for high in range(min(zeros, 1) + 1):
         size = int.from_bytes((held + bytes(high))[-4:], "little") if len(held) >= 4 - high else -1
         if size >= 1 << 16 and abs(size - length % (1 << 32)) <= _LENGTH_SLACK:
