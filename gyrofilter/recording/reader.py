@@ -254,8 +254,8 @@ def _parse_chunk(lines, first, head):
     return data, numbers
 
 
-#: a character no data line's numbers, commas and blanks hold
-_NOT_PLAIN = re.compile(r"[^0-9eE+\-., \t\r]")
+#: a character no data line's numbers, commas and blanks (:data:`~gyrofilter.inputs.BLANKS`) hold
+_NOT_PLAIN = re.compile(f"[^0-9eE+\\-.,{re.escape(BLANKS)}]")
 
 
 def _loadtxt(lines, n):

@@ -73,8 +73,6 @@ _ANY_COLUMNS = {"counts", "raw", "lsb"}
 #: deg/s (g) per unit of a sensitivity written inverse, per LSB (``8.75 mdps/LSB``, ``0.000266 rad/s/LSB``, ``0.061 mg/LSB``)
 _PER_LSB_SCALES = {"rate": {"dps": 1.0, "mdps": 1e-3, "rad/s": 180.0 / math.pi, "mrad/s": 0.18 / math.pi},
                    "accel": {"g": 1.0, "mg": 1e-3}}
-#: a sensitivity's word after its number that is an LSB (``65.5 LSB``, ``131 counts``)
-_LSB_WORDS = {"", "lsb", "lsbs", "count", "counts", "digit", "digits"}
 #: a remark in brackets at a value's end that names a filter (``Frequency: 42 Hz (DLPF)``: its cut-off, not a sample rate)
 _FILTER_REMARK = re.compile(r"\([^()]*\b(?:dlpf|lpf|low[- ]?pass|cut-?off|bandwidth|bw|filter)\b[^()]*\)\s*$", re.IGNORECASE)
 #: a value in Hz (``gyro rate: 200 Hz`` is a sample rate; ``gyro rate: 200`` may be a rate of turn)
@@ -257,8 +255,9 @@ def _sensitivity(kind, amount, number, suffix, facts):
         return None  # gyro_scale: ±2000 dps, a full scale (65.5 LSB, 65.5 LSB per dps: a sensitivity)
     over = re.fullmatch(r"\(?(.+?)\)?/(?:lsb|digits?|counts?)", suffix)  # 8.75 mdps/LSB, (deg/s)/LSB, mdps/count
     scale = _PER_LSB_SCALES[quantity].get(known_unit(quantity, over[1])) if over else None
-    under = re.fullmatch(r"(?:lsbs?|digits?|counts?)/\(?(.+?)\)?", suffix)  # 65.5 LSB/(deg/s), 131 LSB/mdps: 131 000
-    per = _PER_LSB_SCALES[quantity].get(known_unit(quantity, under[1])) if under else (1.0 if suffix in _LSB_WORDS else None)
+    under = re.fullmatch(_LSB_IN_KEY + r"/\(?(.+?)\)?", suffix)  # 65.5 LSB/(deg/s), 131 LSB/mdps: 131 000
+    lsb = not suffix or re.fullmatch(_LSB_IN_KEY, suffix)  # 65.5, 65.5 LSB, 131 counts
+    per = _PER_LSB_SCALES[quantity].get(known_unit(quantity, under[1])) if under else (1.0 if lsb else None)
     if amount is None or not (per or scale):  # (LSB/kdps, LSB/(deg/min) do not read: attack pass 63 took them for deg/s)
         return key, f"a sensitivity (LSB per {'deg/s' if kind == 'sensitivity' else 'g'})"
     if not 0 < abs(amount) < math.inf:

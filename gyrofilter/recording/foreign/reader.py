@@ -78,7 +78,7 @@ BARE_AXIS = re.compile(r"(?P<axis>[xyz])")
 #: time columns whose name, not a unit word (:mod:`~gyrofilter.recording.unit_words`), states their unit
 _NAME_TIME_UNITS = {"%time": "ns", "seconds_elapsed": "s"}
 #: the blanks between the cells of a log split at blanks (:data:`~gyrofilter.inputs.BLANKS`)
-_BLANK_RUN = re.compile(r"[ \t\r]+")
+_BLANK_RUN = re.compile(f"[{re.escape(BLANKS)}]+")
 _BRACKET = re.compile(r"\s*[(\[]\s*([^()\[\]]*?)\s*[)\]]\s*$")
 _COMMENT = ("#", "//")
 class Foreign(Closable):
