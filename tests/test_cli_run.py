@@ -33,7 +33,7 @@ import gyrofilter.sources.mpu6050.driver as mpu  # noqa: E402
 from gyrofilter import GyroFilter  # noqa: E402
 from gyrofilter.cli import main  # noqa: E402
 from gyrofilter.recording import Recording, read_recording, write_recording  # noqa: E402
-from support import REPO, lsb_recording, play_lossy_device
+from support import REPO, lsb_recording, play_lossy_device, wait_until_read
 
 REAL_OPEN_MPU6050 = mpu.open_mpu6050
 BUNDLED = str(REPO / "gyrofilter" / "data" / "mpu6050_static_100s.csv.gz")
@@ -175,11 +175,11 @@ SERIAL_HEADER = (f"# gyrofilter-serial: 1 gyro_unit=lsb lsb_per_dps=65.5 sample_
 class SerialDevice(threading.Thread):
     """A microcontroller at 100 Hz nominal: answers '?' with the header, then sends ``n`` lines
     in seeded bursts of 1 to 3 lines every 5 ms (faster than real time, in read-sized pieces);
-    closing the master end at the end is the cable being pulled."""
+    closing the master end once the reader took them is the cable being pulled."""
 
-    def __init__(self, master, n, seed=3):
+    def __init__(self, master, port, n, seed=3):
         super().__init__(daemon=True)
-        self.master, self.n, self.error = master, n, None
+        self.master, self.port, self.n, self.error = master, port, n, None
         lsb = np.round(still_then_turning(SERIAL_RATE_HZ, n / SERIAL_RATE_HZ, seed) * 65.5).astype(int)
         self.lines = [f"{i},{x},{y},{z}\n".encode() for i, (x, y, z) in enumerate(lsb.tolist())]
         self.bursts = np.random.default_rng(seed).integers(1, 4, n)
@@ -197,7 +197,7 @@ class SerialDevice(threading.Thread):
                 if i >= self.n:
                     break
                 time.sleep(0.005)
-            time.sleep(0.05)
+            wait_until_read(self.port)
         except Exception as exc:  # noqa: BLE001 - reported by the test
             self.error = exc
         finally:
@@ -209,7 +209,7 @@ def serial_session(argv_of_port, n):
     master, slave = os.openpty()
     tty.setraw(slave)
     try:
-        device = SerialDevice(master, n)
+        device = SerialDevice(master, os.ttyname(slave), n)
         device.start()
         code = main(argv_of_port(os.ttyname(slave)))
         device.join(10)

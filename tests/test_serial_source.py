@@ -17,6 +17,7 @@ from gyrofilter.errors import DeviceError, SourceEnded
 from gyrofilter.recording import read_recording
 from gyrofilter.sources import open_source
 from gyrofilter.sources.serial.port import SerialSource
+from support import wait_until_read
 
 pytest.importorskip("serial")
 
@@ -48,13 +49,14 @@ def accel_values(i):
 
 
 class Device(threading.Thread):
-    """Stream ``n`` lines at ``RATE_HZ`` into the master side of a pty, with faults injected."""
+    """Stream ``n`` lines at ``RATE_HZ`` into the master side of a pty (``pty_pair``), with faults
+    injected; it closes its side once the reader has taken every line."""
 
-    def __init__(self, master, n, *, header=True, wait_for_query=True, garbage_at=(), cut_at=(), split_every=97, beyond_at=(),
+    def __init__(self, pty_pair, n, *, header=True, wait_for_query=True, garbage_at=(), cut_at=(), split_every=97, beyond_at=(),
                  accel=False):
         super().__init__(daemon=True)
         self.accel = accel  # send HEADER_ACCEL and lines with the accelerometer
-        self.master, self.n, self.header, self.wait_for_query = master, n, header, wait_for_query
+        (self.master, self.port), self.n, self.header, self.wait_for_query = pty_pair, n, header, wait_for_query
         self.garbage_at, self.cut_at, self.split_every = set(garbage_at), set(cut_at), split_every
         self.beyond_at = set(beyond_at)  # these lines carry gx = 2**31 LSB (16 million deg/s): a corrupt value
         self.sent_good = []
@@ -100,7 +102,7 @@ class Device(threading.Thread):
             else:
                 os.write(self.master, data)
             self.sent_good.append(i)
-        time.sleep(0.05)
+        wait_until_read(self.port)
 
 
 @pytest.fixture
@@ -123,9 +125,9 @@ def drain(source, limit_s=60.0):
 
 
 def test_every_good_line_arrives_once_in_order_at_1khz(pty_pair):
-    master, name = pty_pair
+    name = pty_pair[1]
     n = 4000  # 4 s at 1 kHz
-    dev = Device(master, n, garbage_at=(700, 2500), cut_at=(1500,))
+    dev = Device(pty_pair, n, garbage_at=(700, 2500), cut_at=(1500,))
     dev.start()
     src = open_source(f"serial:{name},baud=115200,header_timeout=10")
     assert src.header["lsb_per_dps"] == "131" and src.header["sensor"] == "MPU6050"
@@ -149,8 +151,8 @@ def test_every_good_line_arrives_once_in_order_at_1khz(pty_pair):
 
 
 def test_device_without_header_uses_the_options(pty_pair):
-    master, name = pty_pair
-    dev = Device(master, 1500, header=False, wait_for_query=False, split_every=0)
+    name = pty_pair[1]
+    dev = Device(pty_pair, 1500, header=False, wait_for_query=False, split_every=0)
     dev.start()
     src = open_source(f"serial:{name}", gyro_unit="lsb", lsb_per_dps=131.0, sample_rate_hz=1000.0)
     rows, _ = drain(src)
@@ -182,8 +184,8 @@ def test_missing_port_is_a_clear_error(tmp_path):
 def test_record_from_serial_keeps_everything_when_the_cable_is_pulled(pty_pair, tmp_path, capsys):
     from gyrofilter.cli import main
 
-    master, name = pty_pair
-    dev = Device(master, 2000, cut_at=(999,))
+    name = pty_pair[1]
+    dev = Device(pty_pair, 2000, cut_at=(999,))
     dev.start()
     out = tmp_path / "serial.csv.gz"
     code = main(["record", "--source", f"serial:{name}", "--out", str(out)])
@@ -317,8 +319,8 @@ def test_record_from_serial_skips_a_value_beyond_the_range_and_goes_on(pty_pair,
     no end note, every later line lost); it is a bad line like any other: skipped, counted."""
     from gyrofilter.cli import main
 
-    master, name = pty_pair
-    dev = Device(master, 600, beyond_at=(300,), split_every=0)
+    name = pty_pair[1]
+    dev = Device(pty_pair, 600, beyond_at=(300,), split_every=0)
     dev.start()
     out = tmp_path / "serial.csv"
     code = main(["record", "--source", f"serial:{name}", "--out", str(out)])
@@ -356,9 +358,9 @@ def test_real_serial_device_streams_clean_lines():
 def test_six_axis_device_every_good_line_once_with_its_accelerometer(pty_pair):
     """ax, ay, az fields (issue 39) through a real pty at 1 kHz, with garbage and a cut line: every
     intact line's seven values arrive once, in order, in the columns the header names."""
-    master, name = pty_pair
+    name = pty_pair[1]
     n = 2000
-    dev = Device(master, n, garbage_at=(400,), cut_at=(1200,), accel=True)
+    dev = Device(pty_pair, n, garbage_at=(400,), cut_at=(1200,), accel=True)
     dev.start()
     src = open_source(f"serial:{name},baud=115200,header_timeout=10")
     assert src.columns == ["t", "gx", "gy", "gz", "temp", "ax", "ay", "az"]
@@ -377,8 +379,8 @@ def test_six_axis_device_every_good_line_once_with_its_accelerometer(pty_pair):
 def test_record_from_a_six_axis_device_writes_the_accelerometer(pty_pair, tmp_path, capsys):
     from gyrofilter.cli import main
 
-    master, name = pty_pair
-    dev = Device(master, 800, accel=True, split_every=0)
+    name = pty_pair[1]
+    dev = Device(pty_pair, 800, accel=True, split_every=0)
     dev.start()
     out = tmp_path / "serial.csv"
     code = main(["record", "--source", f"serial:{name}", "--out", str(out)])

@@ -90,6 +90,31 @@ def play_serial_then_stop(primary, secondary, proc, header, lines, out, rows, ti
         os.close(secondary)
 
 
+def wait_until_read(port, still_s=5.0):
+    """Return once the reader of the pseudo-terminal ``port`` has taken every byte its device sent,
+    or has taken none for ``still_s`` seconds (it stopped reading). A device that closes its side
+    hangs the terminal up and Linux drops the bytes not yet read: a test that closes right after
+    its last write loses lines whenever the reader is slow (CI on a loaded machine lost 598 of 600).
+    The count is asked after 50 ms: the terminal queues the last bytes written a moment later."""
+    import fcntl
+    import struct
+    import termios
+
+    time.sleep(0.05)
+    fd = os.open(port, os.O_RDONLY | os.O_NOCTTY | os.O_NONBLOCK)  # only to ask how much waits; reads nothing
+    try:
+        last, since = None, time.monotonic()
+        while True:
+            waiting = struct.unpack("i", fcntl.ioctl(fd, termios.FIONREAD, b"\0" * 4))[0]
+            if waiting == 0 or time.monotonic() - since > still_s:
+                return
+            if waiting != last:
+                last, since = waiting, time.monotonic()
+            time.sleep(0.01)
+    finally:
+        os.close(fd)
+
+
 def tool(name):
     """The module ``tools/<name>.py`` (the scripts beside the package are not installed), loaded once."""
     key = f"_tools_{name}"
