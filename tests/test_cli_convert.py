@@ -1287,6 +1287,8 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     ("# mdps_per_lsb: 70", ["--unit", "lsb", "--lsb-per-dps", "70"]),  # pass 63: the key's unit, 14.3 LSB per deg/s
     ("# counts per mdps: 14.2857", ["--unit", "lsb", "--lsb-per-dps", "14.2857"]),
     ("# sensitivity: 131 LSB/mdps", ["--unit", "lsb", "--lsb-per-dps", "131"]),
+    ("# sensitivity_mdps: 70", ["--unit", "lsb", "--lsb-per-dps", "70"]),  # pass 64: a unit alone, per LSB
+    ("# mdps_lsb: 70", ["--unit", "lsb", "--lsb-per-dps", "70"]), ("# Sensitivity (mdps): 70", ["--unit", "lsb", "--lsb-per-dps", "70"]),
 ])
 def test_a_comment_written_as_people_write_it_is_read(tmp_path, capsys, comment, options):
     """Attack pass 55 (issue 37): each of these, above a log converted at 100 Hz in dps (or mdps, mrad/s), went through
@@ -1358,6 +1360,8 @@ def test_a_sensitivity_without_a_unit_says_how_it_was_read(tmp_path, capsys, com
     ("# units: s, deg/s, counts", []),
     ("# mdps_per_lsb: 70", ["--unit", "lsb", "--lsb-per-dps", "14.2857"]),  # pass 63: an L3GD20 at 2000 deg/s
     ("# dps/LSB: 0.07", ["--unit", "lsb", "--lsb-per-dps", "14.2857"]),
+    ("# sensitivity_mdps: 70", ["--unit", "lsb", "--lsb-per-dps", "14.2857"]),  # pass 64: was 70 LSB per deg/s
+    ("# gyro_scale_dps: 2000", ["--unit", "lsb", "--lsb-per-dps", "16.4"]),  # a full scale in the key's unit
 ])
 def test_a_comment_that_states_the_same_or_nothing_is_kept(tmp_path, capsys, comment, options):
     """Attack pass 55: these were refused, the same unit (mdps, given and stated), a period in the key's unit (us read

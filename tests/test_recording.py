@@ -1880,10 +1880,15 @@ _L3GD20 = "# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n#
     ("sensitivity: 0.0142857 LSB/mdps", "sensitivity: 14.2857 LSB/mdps"),
     ("sensitivity: 0.0142857 counts per millidegree per second", "sensitivity: 14.2857 counts per millidegree per second"),
     ("sensitivity: 818.5 LSB/(rad/s)", "sensitivity: 14.2857 LSB/(rad/s)"),
+    ("sensitivity_mdps: 70", "sensitivity_mdps: 14.2857"), ("mdps_lsb: 70", "mdps_lsb: 14.2857"),  # pass 64
+    ("gyro_scale_mdps_lsb: 70", "gyro_scale_mdps_lsb: 14.2857"), ("sensitivity mdps: 70", "sensitivity mdps: 14.2857"),
+    ("sensitivity_dps: 0.07", "sensitivity_dps: 14.2857"), ("Sensitivity (mdps): 70", "Sensitivity (mdps): 14.2857"),
+    ("scale_factor_dps: 0.07", "scale_factor_dps: 14.2857"), ("lsb_dps: 14.2857", "lsb_dps: 0.07"),
 ])
 def test_a_sensitivity_key_or_value_is_read_the_way_round_it_is_written(tmp_path, same, other):
     """Attack pass 63: ``mdps_per_lsb: 70`` (an L3GD20 at 2000 deg/s: 14.3 LSB per deg/s) was read as 70 LSB per
-    deg/s, and ``131 LSB/mdps`` as 131 LSB per deg/s: the unit in a key was not read, the one under LSB not scaled."""
+    deg/s, and ``131 LSB/mdps`` as 131 LSB per deg/s: the unit in a key was not read, the one under LSB not scaled.
+    Pass 64: nor a unit without ``per`` (``mdps_lsb``) or alone after a sensitivity's word (``sensitivity_mdps``)."""
     body = "t,gx,gy,gz\n" + "".join(f"{i / 100},1,2,3\n" for i in range(20))
     assert len(read_recording(write(tmp_path, _L3GD20 + f"# {same}\n" + body))) == 20
     with pytest.raises(RecordingError, match="but lsb_per_dps is '14.2857'"):

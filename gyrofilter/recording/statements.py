@@ -50,6 +50,7 @@ STATES = {  # kind: (the other words its key may hold, its own words)
 #: the other words of a key stating the temperature's unit, besides a word of a temperature (:func:`_temperature`)
 _TEMP_UNIT_WORDS = ({"die", "imu", "sensor", "chip"}, {"unit", "units", "scale"})
 _ACCEL_WORDS = STATES["accel_unit"][0]
+_GYRO_WORDS = {"gyro", "gyr", "gyroscope"}
 _SAMPLING = {"sample", "samples", "sampling", "odr"}
 #: the slowest rate a period states: a longer one is a time stamp (``TS: 512.3``, s since boot), as no gyro samples
 #: once a second or slower (convert infers no rate below 5 Hz)
@@ -83,17 +84,22 @@ _PER_WORD = re.compile(r"\s+per\s+", re.IGNORECASE)
 _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
                      r"(?P<number>(?>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?))(?![,.]\d)\s*(?P<suffix>[a-zA-Zμ°/^()\d-]*)(?P<rest>.*)")
 #: a rate's or an acceleration's unit in a sensitivity's key (``mdps``, ``deg_s``, ``deg``: deg/s, ``mg``), an LSB's
-#: word, and ``per`` between them
+#: word, and ``per`` (or ``/``, or only ``_`` or a blank: ``mdps_lsb``) between them
 _UNIT_IN_KEY = r"m?(?:dps|deg|rad|g)(?:[_\s/](?:s|sec))?"
 _LSB_IN_KEY = r"(?:lsbs?|counts?|digits?)"
-_PER_IN_KEY = r"(?:[_\s]+per[_\s]+|\s*/\s*)"
+_PER_IN_KEY = r"(?:[_\s]+per[_\s]+|\s*/\s*|[_\s]+)"
 #: a key's unit in brackets at its end (``Sample rate (samples/s)``, ``Sample period [µs]``), or a sensitivity's
 #: in words, either way round, with other words before it or none (``gyro_sensitivity_mdps_per_lsb``, ``mdps_per_lsb``,
-#: ``deg_s/LSB``: mdps/lsb, deg/s/lsb; ``counts_per_mdps``: lsb/mdps; ``sensitivity in mdps/LSB``; attack pass 63: ``mdps_per_lsb: 70``, 14.3 LSB
-#: per deg/s, was read as 70, ``counts per mdps: 14.3`` as 14.3)
+#: ``deg_s/LSB``, ``mdps_lsb``: mdps/lsb, deg/s/lsb; ``counts_per_mdps``, ``lsb_dps``: lsb/mdps, lsb/dps;
+#: ``sensitivity in mdps/LSB``; attack pass 63: ``mdps_per_lsb: 70``, 14.3 LSB per deg/s, was read as 70,
+#: ``counts per mdps: 14.3`` as 14.3), or a unit alone after the words of a sensitivity or a scale
+#: (``sensitivity_mdps``, ``scale_factor_dps``: per LSB; ``gyro_scale_dps``: a full scale's)
 _BRACKETED = re.compile(rf"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*|(?:(?P<per_key>.*?)(?:[_\s]+in)?[_\s]+)?"
-                        rf"(?:(?P<over>{_UNIT_IN_KEY}){_PER_IN_KEY}{_LSB_IN_KEY}|{_LSB_IN_KEY}{_PER_IN_KEY}(?P<under>{_UNIT_IN_KEY}))",
+                        rf"(?:(?P<over>{_UNIT_IN_KEY}){_PER_IN_KEY}{_LSB_IN_KEY}|{_LSB_IN_KEY}{_PER_IN_KEY}(?P<under>{_UNIT_IN_KEY}))"
+                        rf"|(?P<alone_key>.*?(?<![a-z])(?:sensitivity|factor|scale))(?:[_\s]+in)?[_\s]+(?P<alone>{_UNIT_IN_KEY})",
                         re.IGNORECASE)
+#: the last word of a key whose unit alone (``sensitivity_mdps``, ``Sensitivity (mdps)``) is that unit per LSB
+_PER_LSB_WORDS = {"sensitivity", "factor"}
 #: where a text holds another ``key: value`` pair: at ``;``, at ``,`` before a key and its ``:`` (``Rate: 100 Hz, FS:
 #: 2000 dps``); within a value, at ``,`` before ``key=`` too (``Accel: range=2g, sensitivity=16384``: the accelerometer's)
 _PIECES = re.compile(r"\s*;\s*|\s*,\s*(?=[\"']?[A-Za-z_][\w.()\[\]/ -]{0,40}?[\"']?\s*(?::=|:))")
@@ -141,23 +147,34 @@ def normal_text(text):
 
 def key_unit(key, value):
     """``(key, value)`` with a unit in brackets at the key's end moved to a value that is a number alone
-    (``Sample rate (Hz): ~200``: ``Sample rate``, ``~200 Hz``)."""
+    (``Sample rate (Hz): ~200``: ``Sample rate``, ``~200 Hz``), a sensitivity's unit in its key's words too
+    (``mdps_per_lsb: 70``, ``sensitivity_mdps: 70``: ``sensitivity``, ``70 mdps/lsb``; attack pass 64: the latter
+    was 70 LSB per deg/s). A rate's or an acceleration's unit alone after a sensitivity's word is per LSB, as in a
+    datasheet's ``Sensitivity: 70 mdps/digit``; after a scale's (``gyro_scale_dps: 2000``) it is the value's own."""
     bracketed = _BRACKETED.fullmatch(key)
-    if not bracketed or not (bracketed["key"] or bracketed["over"] or bracketed["under"]):
+    if not bracketed or not (bracketed["key"] or bracketed["over"] or bracketed["under"] or bracketed["alone"]):
         return key, value
-    if bracketed["key"]:
-        if bracketed["unit"].strip(" .").lower() in _REMARKS:
-            return bracketed["key"], value  # Sample rate (nominal): 200
-        stem, unit = bracketed["key"], bracketed["unit"]
-    else:  # mdps_per_lsb, accel_mg_per_lsb, lsb_per_deg: a sensitivity, the accelerometer's in g
-        named = re.sub(r"[_\s]+", "/", (bracketed["over"] or bracketed["under"]).lower())
-        named += "/s" if named in ("deg", "mdeg") else ""  # lsb_per_deg: per deg/s
-        accel = "accel " if named in ("g", "mg") and not bracketed["per_key"] else ""
-        stem = f"{bracketed['per_key'] or ''} {accel}sensitivity".strip()
+    if bracketed["over"] or bracketed["under"]:  # mdps_per_lsb, accel_mg_per_lsb, lsb_per_deg, mdps_lsb
+        stem, named = f"{bracketed['per_key'] or ''} sensitivity".strip(), _key_unit_name(bracketed["over"] or bracketed["under"])
         unit = f"{named}/lsb" if bracketed["over"] else f"lsb/{named}"
+    else:  # Sample rate (Hz), Sensitivity (mdps), sensitivity_mdps, gyro_scale_dps
+        stem, unit = bracketed["key"] or bracketed["alone_key"], (bracketed["unit"] or bracketed["alone"]).strip()
+        if unit.strip(" .").lower() in _REMARKS:
+            return stem, value  # Sample rate (nominal): 200
+        last = re.findall(r"[a-z]+", stem.lower())[-1:]
+        if set(last) & _PER_LSB_WORDS and re.fullmatch(_UNIT_IN_KEY, unit, re.IGNORECASE):
+            unit = f"{_key_unit_name(unit)}/lsb"  # sensitivity_mdps: 70, a datasheet's 70 mdps/digit
+    if re.fullmatch(r"m?g/lsb|lsb/m?g", unit) and not set(re.findall(r"[a-z]+", stem.lower())) & (_ACCEL_WORDS | _GYRO_WORDS):
+        stem = f"accel {stem}"  # lsb_per_g, sensitivity_mg: the accelerometer's
     number = _NUMBER.fullmatch(clean(value))
     alone = number and not number["suffix"] and not number["rest"].strip()
     return stem, f"{clean(value)} {unit}" if alone else value
+
+
+def _key_unit_name(written):
+    """A unit of :data:`_UNIT_IN_KEY` as a value's: ``deg_s`` and ``deg`` (in a sensitivity) are deg/s."""
+    named = re.sub(r"[_\s]+", "/", written.lower())
+    return named + "/s" if named in ("deg", "mdeg") else named
 
 
 def stated_kind(words, value):
