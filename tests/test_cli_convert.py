@@ -21,7 +21,8 @@ import pytest
 
 from gyrofilter.cli import main
 from gyrofilter.recording import read_recording
-from gyrofilter.recording.gzipped import HOLD_BYTES, RUN_BYTES
+from gyrofilter.recording.gzip_bytes import RUN_BYTES
+from gyrofilter.recording.gzipped import HOLD_BYTES
 from gyrofilter.recording.foreign import TIME_UNITS
 from support import REPO
 

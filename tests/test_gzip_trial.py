@@ -11,8 +11,7 @@ import pytest
 
 from gyrofilter.errors import RecordingError
 from gyrofilter.inputs import READ_BYTES
-from gyrofilter.recording import gzipped, read_recording
-from gyrofilter.recording.gzipped import _pieces
+from gyrofilter.recording import gzip_bytes, gzipped, read_recording
 
 HEADER = "# gyrofilter-recording: 1\n# sample_rate_hz: 100\n# gyro_unit: lsb\n# lsb_per_dps: 131\n"
 
@@ -126,9 +125,9 @@ def _offsets(data):
     """(byte offset, piece) of each piece of the gzip bytes ``data`` after its 10-byte header (the reader parses a
     member's header: its zeros are no padding)."""
     offset = 10
-    for piece in _pieces(open(os.devnull, "rb"), data[offset:]):
+    for piece in gzip_bytes.pieces(open(os.devnull, "rb"), data[offset:]):
         yield offset, piece
-        offset += len(piece[1]) if piece[0] == "data" else piece[2]
+        offset += len(piece[1]) if piece[0] in ("data", "text") else piece[2]
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -262,7 +261,7 @@ def test_the_documented_bounds_of_a_trial_are_the_readers():
     from support import REPO
 
     text = " ".join((REPO / "docs" / "formats.md").read_text().split())
-    assert f"From a run of {gzipped.RUN_BYTES} or more zero or 0xFF bytes" in text
+    assert f"From a run of {gzip_bytes.RUN_BYTES} or more zero or 0xFF bytes" in text
     assert f"at most {gzipped.TRIAL_BYTES >> 20} MiB, and {gzipped.TRIAL_TEXT_BYTES >> 30} GiB of text" in text
 
 
@@ -503,3 +502,33 @@ def test_a_flush_marker_and_padding_are_no_stated_length():
     was refused as damaged: the marker's FF FF and a padding zero read as a length of 0x00FFFF00."""
     assert not gzipped._states_length(b"\x12" * 12 + b"\0\0\xff\xff", 512, 0x00FFFF00)
     assert gzipped._states_length(b"\x12" * 12 + b"\x00\xff\xff\x01", 0, 0x01FFFF00)
+
+
+_NOTES = ["# stopped by user at 10:42\n", "interrupted: power loss\n", "# arrêté à 10:42 par l’opérateur\n",
+          "note: the cable came loose here, ignore the rest of this run please\n", "END OF RUN 7"]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_note_written_after_a_cut_makes_no_row_and_is_named(tmp_path, seed):
+    """Attack pass 64: a note typed after a recording was killed (``echo "# stopped ..." >> rec.csv.gz``), longer
+    than HOLD_BYTES, decoded as more of the stream: a made-up row in 0.5 % of cuts. Text the file ends in is not
+    given to zlib (unless it ends the stream whole, or is a stored block's own): every cut reads only rows written,
+    the note named; a whole recording and one killed after a flush keep every row."""
+    rng = np.random.default_rng(900 + seed)
+    values, body = _timed_rows(rng, 3000)
+    data = _flushed(HEADER + "t,gx,gy,gz\n" + body, int(rng.choice([1, 10, 100])))
+    path = tmp_path / "r.csv.gz"
+    for _ in range(150):
+        note = _NOTES[int(rng.integers(0, len(_NOTES)))].encode()
+        path.write_bytes(data[:int(rng.integers(len(data) // 4, len(data) - 20))] + note)
+        rec = _prefix_or_refused(path, values)
+        assert rec is not None and any("bytes of text it ends in" in w for w in rec.warnings)  # (the cut's last
+        # bytes too where they read as text)
+    flush_end = data.rfind(b"\0\0\xff\xff", 0, len(data) - 50) + 4
+    for whole, end in ((True, len(data)), (False, flush_end)):
+        path.write_bytes(data[:end] + _NOTES[0].encode())
+        rec = read_recording(path)
+        assert len(rec) == (3000 if whole else _rows_decoded(data[:end]))
+        assert [w for w in rec.warnings if "left out" in w] == [
+            f"{path}: the {len(_NOTES[0])} bytes of text it ends in ('# stopped by user at 10:42') left out: text "
+            "written after its gzip data (a note), not gzip"]

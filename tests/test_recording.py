@@ -458,7 +458,7 @@ def test_an_empty_gzip_member_after_a_recording_adds_no_warning(tmp_path):
 
 
 def test_no_run_in_the_compressed_data_of_a_recording_with_a_time_column_is_as_long_as_padding():
-    """``recording.gzipped.RUN_BYTES``, the shortest run of 0x00 or 0xFF from which a stream is on trial, is longer
+    """``recording.gzip_bytes.RUN_BYTES``, the shortest run of 0x00 or 0xFF from which a stream is on trial, is longer
     than any run in deflate data of recordings with a time column (tools/gzip_runs.py measures it on more rows):
     shorter, such a recording cut short would be read only to the run (4 zeros come in the block headers of constant
     rows). Constant rows without a time column hold long runs (attack pass 60: a stream of them cut short is read to
@@ -468,7 +468,7 @@ def test_no_run_in_the_compressed_data_of_a_recording_with_a_time_column_is_as_l
         import gzip_runs
     finally:
         sys.path.remove(str(REPO / "tools"))
-    from gyrofilter.recording.gzipped import RUN_BYTES
+    from gyrofilter.recording.gzip_bytes import RUN_BYTES
     longest = gzip_runs.longest_runs(4000)
     assert max(n for name, n in longest.items() if gzip_runs.timed(name)) == RUN_BYTES - 1, longest
     assert min(n for name, n in longest.items() if not gzip_runs.timed(name)) > 10 * RUN_BYTES, longest

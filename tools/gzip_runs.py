@@ -23,7 +23,7 @@ import sys
 import zlib
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from gyrofilter.recording.gzipped import RUN_BYTES, _pieces  # noqa: E402
+from gyrofilter.recording.gzip_bytes import RUN_BYTES, pieces  # noqa: E402
 
 HEADER = "# gyrofilter-recording: 1\n# sample_rate_hz: 1000\n# gyro_unit: dps\n"
 FLUSHES = (1, 10, 100, 1000, None)
@@ -76,7 +76,7 @@ def runs(rows, seed=1, shortest=2):
         for level in LEVELS:
             for every in FLUSHES:
                 data = compressed(lines, level, every)[HEADER_BYTES:]  # (a member's header is parsed, its zeros no padding)
-                for kind, byte, count in _pieces(io.BytesIO(b""), data, shortest):
+                for kind, byte, count in pieces(io.BytesIO(b""), data, shortest):
                     if kind == "run":
                         found[name, byte, count] += 1
     return found

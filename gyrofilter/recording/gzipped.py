@@ -15,28 +15,25 @@ in a block of constant rows are its code for "the same again": rows invented, at
 - bytes written after a cut decode as more of the stream: the text of a stream's last :data:`HOLD_BYTES` bytes is
   left out where it is cut short at the file's end (not after a flush's marker or before padding), a member that
   starts right after a cut ends it (:func:`_cut_at_run`), and a member whose last bytes state its length is damaged,
-  not cut (:func:`_states_length`; attack pass 63).
+  not cut (:func:`_states_length`; attack pass 63); text the file ends in (:data:`TEXT_END_BYTES` or more: a note
+  written after it, attack pass 64) is never given to zlib, unless the stream ends whole with it or it is a stored
+  block's own (:func:`_own_text`).
 """
 from __future__ import annotations
 
-import collections
 import math
 import os
-import re
 import zlib
 
 from ..errors import RecordingError
-from ..inputs import READ_BYTES
+from ..inputs import READ_BYTES, quote
+from .gzip_bytes import RUN_BYTES, TEXT_END_BYTES, Padded, counted, end_zeros, skip_padding
 from .header import MAX_LINE_BYTES
 
 #: most decompressed bytes at a time (a block of text: about 36 000 lines of five columns); the
 #: longest line, so that only the line the blocks so far have not ended needs a length check
 _TEXT_BYTES = MAX_LINE_BYTES
 GZIP_MAGIC = b"\x1f\x8b"
-#: the shortest run of one byte, 0x00 or 0xFF, that starts a trial (deflate data of recordings with a time column,
-#: levels 1-9, flushed every 1 to 1000 lines, hold none, but for a flush's marker, a member's header and 4 zeros
-#: in the block headers of constant rows: measured, tools/gzip_runs.py)
-RUN_BYTES = 5
 #: most compressed bytes (runs aside, which are counted), and bytes of text, of a stream on trial: the bytes are
 #: kept to be read again once it ends whole; a stream longer on trial ends at its run (zeros after a cut decode to
 #: up to 2 kB of text a byte: 4 GB of them, TBs)
@@ -44,11 +41,6 @@ TRIAL_BYTES = 64 << 20
 TRIAL_TEXT_BYTES = 1 << 30
 #: the most bytes of a member's header looked at (a name or comment longer than this ends it there)
 _MAX_HEADER_BYTES = 1 << 20
-#: memory a kept piece costs beside its bytes (a tuple and a bytes object, in CPython): counted against TRIAL_BYTES
-#: (a run of 5 zeros and a byte, repeated, held 27 bytes a byte, attack pass 61)
-_PIECE_BYTES = 100
-#: a flush's empty stored block after a run of zeros (LEN 00 00, NLEN FF FF), not more FF
-_FLUSH_MARK = re.compile(rb"\xff\xff(?!\xff)")
 #: the last bytes of a flush's marker (an empty stored block's LEN and NLEN): a writer's own last bytes
 _FLUSH_END = b"\x00\x00\xff\xff"
 #: the last compressed bytes held back from zlib till more follow (:func:`_member`): where the stream is cut short,
@@ -105,7 +97,7 @@ def gunzipped(fh, first, path, warnings):
     gzip reader of recordings and of other tools' logs (``logtext.log_lines``)."""
     notes = _Notes()
     try:
-        yield from _gunzip(_Padded(fh, first), path, notes)
+        yield from _gunzip(Padded(fh, first), path, notes)
     finally:
         warnings.extend(notes + ([f"{path}: {notes.more} more warnings of its gzip data like these"] if notes.more else []))
 
@@ -133,141 +125,28 @@ class _Notes(list):
     __iadd__ = extend
 
 
-def _pieces(fh, first, shortest=RUN_BYTES):
-    """The file's bytes (``first``, then ``fh``'s blocks) as ``(kind, byte or bytes, count)``: ``("data", bytes,
-    0)``; ``("run", byte, count)``, a run of at least ``shortest`` bytes of one byte 0x00 or 0xFF that more bytes
-    follow (not a flush's marker: :func:`_run_ends`, told by the bytes after it, across blocks too); ``("end", byte,
-    count)``, the run of zeros (any count) or of 0xFF (at least ``shortest``) the file
-    ends in. A run is counted, never held: a GB of zeros costs a block. Each block is scanned once, by
-    ``bytes.find``; the next is read before it is given (its first bytes may tell a run's kind)."""
-    run_byte, run_count, block = None, 0, first  # the run the last block ended in (any count)
-    while block:
-        nxt, at = fh.read(READ_BYTES), 0
-        if run_count:  # does the run go on?
-            at = len(block) - len(block.lstrip(run_byte))
-            run_count += at
-            if at == len(block):
-                block = nxt
-                continue
-            yield from _run_ends(run_byte, run_count, (block[at:at + 3] + nxt[:3])[:3], shortest)
-            run_count = 0
-        for start, end in _runs(block, at, shortest):
-            if end == len(block):
-                break  # it may go on in the next block
-            if start > at:
-                yield "data", block[at:start], 0
-            yield from _run_ends(block[start:start + 1], end - start, (block[end:end + 3] + nxt[:3])[:3], shortest)
-            at = end
-        tail = block[at:]
-        last = tail[-1:]
-        if last in (b"\0", b"\xff"):  # the run the block ends in, any count: it may go on
-            kept = tail.rstrip(last)
-            run_byte, run_count, tail = last, len(tail) - len(kept), kept
-        if tail:
-            yield "data", tail, 0
-        block = nxt
-    if run_count >= shortest or run_byte == b"\0" and run_count:
-        yield "end", run_byte, run_count
-    elif run_count:
-        yield "data", run_byte * run_count, 0  # a flush's FF FF, the file's last bytes
-
-
-#: a run of one byte, from where it starts
-_SAME = {0: re.compile(rb"\x00+"), 0xFF: re.compile(rb"\xff+")}
-
-
-def _runs(block, at, shortest):
-    """(start, end) of each run of at least ``shortest`` bytes 0x00 or 0xFF in ``block`` from ``at``: found by
-    ``bytes.find`` (a regular expression of either run tries each position: 1 s for 20 MB), each byte's search
-    going on from where its last ended."""
-    found = {byte: block.find(bytes([byte]) * shortest, at) for byte in _SAME}
-    while any(i >= 0 for i in found.values()):
-        start, byte = min((i, byte) for byte, i in found.items() if i >= 0)
-        end = _SAME[byte].match(block, start).end()
-        yield start, end
-        for other, i in found.items():
-            if 0 <= i < end:
-                found[other] = block.find(bytes([other]) * shortest, end)
-
-
-def _run_ends(byte, count, after, shortest):
-    """The piece of a run of ``count`` bytes ``byte`` before the bytes ``after`` (their first three): data when
-    shorter than ``shortest`` or a zero run before a flush's marker (at most 6 zeros: a header byte, LEN, perhaps data
-    bytes of zeros), else a run (a member header's zeros are told by :class:`_Header`)."""
-    if count < shortest or byte == b"\0" and count <= 6 and _FLUSH_MARK.match(after):
-        yield "data", byte * count, 0
-    else:
-        yield "run", byte, count
-
-
-class _Padded:
-    """The bytes of a gzip file for :func:`_gunzip`, a piece of :func:`_pieces` (of a run: a block) at a time.
-
-    ``read()`` gives the next bytes (b"" at the end) and sets ``run`` to (offset, byte, count) when they start a run
-    of padding that more bytes follow, else None; ``offset`` counts the bytes given; ``end_run`` is (byte, count) of
-    the padding the file ends in, never given. ``keep()``, just after a run starts, keeps the pieces given from it on
-    (``kept_bytes``: the memory they take, runs counted, not held) and ``rewind()`` gives them again."""
-
-    def __init__(self, fh, first):
-        self._pieces = _pieces(fh, first)
-        self._again = collections.deque()  # pieces to give again, before the file's next
-        self._kept, self._from = None, None  # the pieces given since keep() (None: not kept), the run they start with
-        self.kept_bytes, self.offset, self.run, self.end_run = 0, 0, None, None
-        self._byte, self._left = b"\0", 0  # the run being given, its bytes still to give
-
-    def read(self):
-        self.run = None
-        if not self._left:
-            piece = self._again.popleft() if self._again else next(self._pieces, None)
-            if piece is None:
-                return b""
-            kind, data, count = piece
-            if self._kept is not None:
-                self._kept.append(piece)
-                self.kept_bytes += (len(data) if kind == "data" else 0) + _PIECE_BYTES
-            if kind == "end":
-                self.end_run = data, count
-                return b""
-            if kind == "data":
-                self.offset += len(data)
-                return data
-            self.run, self._byte, self._left = (self.offset, data, count), data, count
-        out = self._byte * min(self._left, READ_BYTES)
-        self._left -= len(out)
-        self.offset += len(out)
-        return out
-
-    def keep(self):
-        """Keep the pieces given from the run the last ``read()`` started (``run``) on; returns that run."""
-        offset, byte, count = self._from = self.run
-        self._kept, self.kept_bytes = [("run", byte, count)], 0
-        return self._from
-
-    def rewind(self):
-        """Give the pieces kept since ``keep()`` again, from the run's first byte; keep no more."""
-        self._again.extendleft(reversed(self._kept))
-        self.offset, self._left, self.end_run = self._from[0], 0, None
-        self._kept, self.kept_bytes = None, 0
-
-
 def _gunzip(source, path, warnings):
-    """The text of the gzip file read by ``source`` (:class:`_Padded`), every member (:func:`_member`), in blocks of
-    at most ``_TEXT_BYTES``. Padding (bytes 0x00, 0xFF) after a member, or between two, is left out with a warning;
-    other bytes after it that do not start a member are damage (:class:`_GzipDamage`)."""
+    """The text of the gzip file read by ``source`` (:class:`Padded`), every member (:func:`_member`), in blocks of
+    at most ``_TEXT_BYTES``. Padding (bytes 0x00, 0xFF) after a member, or between two, is left out with a warning,
+    and so is text the file ends in (``source.end_text``, not the stream's own); other bytes after it that do not
+    start a member are damage (:class:`_GzipDamage`)."""
     produced, raw = 0, source.read()
     while True:
         raw, produced = yield from _member(source, raw, path, warnings, produced)
         if raw is None:  # the file ended inside the member
-            return
-        count, seen, raw = _skip_padding(source, raw)
+            break
+        count, seen, raw = skip_padding(source, raw)
         if not raw:
             if count:
                 warnings.append(_padding_warning(path, count, seen, True))
-            return
+            break
         if raw[:2] != GZIP_MAGIC and not GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
             raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
         if count:
-            warnings.append(f"{path}: {_counted(count, seen)} between gzip members ignored (block padding)")
+            warnings.append(f"{path}: {counted(count, seen)} between gzip members ignored (block padding)")
+    if source.end_text:
+        warnings.append(f"{path}: the {len(source.end_text)} bytes of text it ends in ({quote(source.end_text.decode(errors='replace').strip())}) "
+                        "left out: text written after its gzip data (a note), not gzip")
 
 
 def _member(source, raw, path, warnings, produced):
@@ -325,6 +204,10 @@ def _member(source, raw, path, warnings, produced):
             if raw:
                 run, at = source.run, header.add(raw)
                 continue
+            if trial is None and _own_text(d, hold, source.end_text):
+                raw, source.end_text = source.end_text, b""
+                run, at = None, header.add(raw)
+                continue
             if hold:  # the file's end: the bytes held fed now, their text kept apart till the stream is whole or cut
                 feed, ending, hold = hold, hold, b""
                 continue
@@ -333,7 +216,7 @@ def _member(source, raw, path, warnings, produced):
                 yield from line.blocks(out)
                 yield from line.end(False, path, warnings)
                 return None, produced + len(out)
-            if not _padded_end(d, _end_zeros(source))[0]:
+            if not _padded_end(d, end_zeros(source))[0]:
                 return (yield from _cut_at_run(trial, source, path, warnings, line, produced, first, "ends cut short"))
         if trial is None:
             yield from line.blocks(last)
@@ -435,6 +318,22 @@ class _LastLine:
         return [held] if held and not dropped else []
 
 
+def _own_text(d, hold, text):
+    """Whether ``text``, the file's last bytes after ``hold`` (:data:`HOLD_BYTES`) of the stream of the decompressor
+    ``d``, is the stream's own: it ends the stream whole, or its last bytes decode to themselves (a stored block's,
+    level 0, whose header's bytes may read as text too); a note written after the data decodes to other text."""
+    if not text:
+        return False
+    try:
+        probe = d.copy()
+        probe.decompress(hold)
+        if probe.eof:
+            return False  # it ended before the text
+        return probe.decompress(text)[-TEXT_END_BYTES:] == text[-TEXT_END_BYTES:] or probe.eof
+    except zlib.error:
+        return False
+
+
 def _own_end(prior, raw, length, source):
     """Whether the end of a gzip member whose checksum zlib found wrong in ``raw`` (fed to the decompressor ``prior``,
     which had made ``length`` bytes of the member's text; the bytes after ``raw`` read from ``source``) is the
@@ -452,35 +351,11 @@ def _own_end(prior, raw, length, source):
             while len(after) < 6 and (more := source.read()):  # (kept: the trial's end rewinds them)
                 padding = padding or source.run is not None and len(after) <= 4  # padding from its ISIZE's end on
                 after += more
-            after += bytes(max(0, min(4 - len(after), _end_zeros(source))))  # its high bytes of zeros, held as padding
+            after += bytes(max(0, min(4 - len(after), end_zeros(source))))  # its high bytes of zeros, held as padding
             stated, follows = after[:4], after[4:]
             return len(stated) == 4 and (int.from_bytes(stated, "little") == length % (1 << 32) or padding
                                          or not follows or follows[:2] == GZIP_MAGIC)
     return False
-
-
-def _skip_padding(source, rest):
-    """(count, byte values) of the padding (bytes 0x00 and 0xFF) that ``rest``, then the file read by ``source``,
-    start with, and the bytes after it (b"": the file ends)."""
-    count, seen = 0, set()
-    while True:
-        kept = rest.lstrip(b"\0\xff")
-        skipped = rest[:len(rest) - len(kept)]
-        count += len(skipped)
-        seen |= {byte for byte in (0, 0xFF) if bytes([byte]) in skipped}
-        if kept:
-            return count, seen, kept
-        rest = source.read()
-        if not rest:
-            if source.end_run:
-                count += source.end_run[1]
-                seen.add(source.end_run[0][0])
-            return count, seen, b""
-
-
-def _end_zeros(source):
-    """How many zero bytes the file read by ``source`` ends in (its padding, never given)."""
-    return source.end_run[1] if source.end_run and source.end_run[0] == b"\0" else 0
 
 
 def _trial_failed(source, run, path, warnings, had_text, how):
@@ -490,19 +365,19 @@ def _trial_failed(source, run, path, warnings, had_text, how):
     ends in padding, or other bytes follow, left out. Damage (:class:`_GzipDamage`) when the member made no text before
     the run (nothing in it to keep)."""
     source.rewind()
-    count, seen, raw = _skip_padding(source, b"")
+    count, seen, raw = skip_padding(source, b"")
     offset, byte, run_count = run
     if raw[:3] == GZIP_MAGIC + b"\x08":
-        warnings.append(f"{path}: gzip stream cut short (no end marker) at byte {offset}, where {_counted(count, seen)} "
+        warnings.append(f"{path}: gzip stream cut short (no end marker) at byte {offset}, where {counted(count, seen)} "
                         "(padding, as a power cut leaves an SD card) and another gzip member begin")
         return raw
     if not raw:
         warnings += [_padding_warning(path, count, seen, False), cut_short_warning(path)]
         return None
     if not had_text:
-        raise _GzipDamage(path, f"{_counted(run_count, {byte[0]})} at byte {offset}, then a stream that {how}", 0)
+        raise _GzipDamage(path, f"{counted(run_count, {byte[0]})} at byte {offset}, then a stream that {how}", 0)
     after, at = _member_after_padding(source)  # its own run came first, the padding later (pass 61: the member lost)
-    warnings += [f"{path}: {_counted(run_count, {byte[0]})} at byte {offset}, then more bytes, in a gzip stream that "
+    warnings += [f"{path}: {counted(run_count, {byte[0]})} at byte {offset}, then more bytes, in a gzip stream that "
                  f"{how}: without its end marker its own bytes cannot be told from padding (as a power cut leaves an "
                  f"SD card) and what follows it, so its text is read to byte {offset} (zcat reads on, unchecked)",
                  cut_short_warning(path)] + ([f"{path}: another gzip member at byte {at}, after padding: read"] if after else [])
@@ -514,7 +389,7 @@ def _member_after_padding(source):
     the member's byte offset), the bytes before it passed over; or (b"", None): none."""
     while chunk := source.read():
         if source.run:
-            _, _, raw = _skip_padding(source, chunk)
+            _, _, raw = skip_padding(source, chunk)
             if raw[:3] == GZIP_MAGIC + b"\x08":
                 return raw, source.offset - len(raw)
     return b"", None
@@ -527,12 +402,12 @@ def _cut_end(d, source, path, warnings, last, held, produced):
     left out. The padding, the text left out and a stream cut short said in ``warnings``. A member whose last bytes
     state its length (:func:`_states_length`; ``produced``: its text before ``last``) is whole and damaged, not cut."""
     byte, count = source.end_run or (b"\0", 0)
-    whole, out = _padded_end(d, _end_zeros(source))
+    whole, out = _padded_end(d, end_zeros(source))
     if count > whole:
         warnings.append(_padding_warning(path, count - whole, {byte[0]}, whole))
     if whole:
         return last + out
-    if _states_length(held, _end_zeros(source), produced + len(last)):
+    if _states_length(held, end_zeros(source), produced + len(last)):
         raise _GzipDamage(path, "its last bytes state its length, but its data do not end there", produced)
     warnings.append(cut_short_warning(path))
     if last and not held.endswith(_FLUSH_END) and count < RUN_BYTES:  # (padding after them: they are its own)
@@ -576,16 +451,10 @@ def _padded_end(d, padding):
     return 0, b""
 
 
-def _counted(count, seen):
-    """``count`` bytes of the values ``seen`` (0x00, 0xFF), in words: ``5 zero bytes``, ``1 0xFF byte``."""
-    name = {frozenset({0}): "zero byte", frozenset({0xFF}): "0xFF byte"}.get(frozenset(seen), "byte 0x00 and 0xFF")
-    return f"{count} " + name.replace("byte", "byte" if count == 1 else "bytes", 1)
-
-
 def _padding_warning(path, count, seen, after_stream):
     """The warning of ``count`` bytes of padding (of the values ``seen``: 0x00, 0xFF) left out at the end of the gzip
     file ``path``, ``after_stream`` a whole one or after one cut short."""
-    return (f"{path}: {_counted(count, seen)} " + ("after the end of the gzip stream ignored (block padding, as gzip ignores it)"
+    return (f"{path}: {counted(count, seen)} " + ("after the end of the gzip stream ignored (block padding, as gzip ignores it)"
                                                   if after_stream else "at its end ignored (block padding, as a power cut leaves an SD card)"))
 
 
