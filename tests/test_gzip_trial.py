@@ -505,7 +505,7 @@ def test_a_flush_marker_and_padding_are_no_stated_length():
 
 
 _NOTES = ["# stopped by user at 10:42\n", "interrupted: power loss\n", "# arrêté à 10:42 par l’opérateur\n",
-          "note: the cable came loose here, ignore the rest of this run please\n", "END OF RUN 7"]
+          "note: the cable came loose here, ignore the rest of this run please\n", "END OF RUN 7\r\n"]
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -532,3 +532,21 @@ def test_a_note_written_after_a_cut_makes_no_row_and_is_named(tmp_path, seed):
         assert [w for w in rec.warnings if "left out" in w] == [
             f"{path}: the {len(_NOTES[0])} bytes of text it ends in ('# stopped by user at 10:42') left out: text "
             "written after its gzip data (a note), not gzip"]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_cut_streams_own_last_zeros_are_not_padding(tmp_path, seed):
+    """Attack pass 64: a stream cut just after 1 to 4 zero bytes of its own was read as padded (a false "zero bytes
+    at its end ignored") and lost the text of the 16 bytes before them too: 19 of 87 264 cuts lost a row. Fewer
+    zeros than RUN_BYTES are the stream's last bytes: every cut after one keeps what zlib decodes from all but its
+    last HOLD_BYTES bytes, and says nothing of padding."""
+    rng = np.random.default_rng(1000 + seed)
+    values, body = _timed_rows(rng, 3000)
+    data = _flushed(HEADER + "t,gx,gy,gz\n" + body, int(rng.choice([1, 10, 100])))
+    cuts = [n for n in range(len(data) // 4, len(data) - 20) if data[n - 1] == 0 and data[n] != 0][:40]
+    path = tmp_path / "r.csv.gz"
+    for n in cuts:
+        path.write_bytes(data[:n])
+        rec = _prefix_or_refused(path, values)
+        assert rec is not None and len(rec) >= _rows_decoded(data[:n - gzipped.HOLD_BYTES]), n
+        assert not any("at its end ignored" in w for w in rec.warnings), (n, rec.warnings)
