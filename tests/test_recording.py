@@ -1866,6 +1866,18 @@ def test_a_control_in_a_header_value_is_refused(tmp_path, blank):
             read_recording(write(tmp_path, text + "t,gx,gy,gz\n0,1,2,3\n"))
 
 
+@pytest.mark.parametrize("blank", ["\x1f", "\x0b", "\u3000"])
+def test_a_control_in_a_key_a_column_name_or_alone_on_a_line_is_not_a_blank(tmp_path, blank):
+    """Attack pass 64: a header key ``\x1csample_rate_hz`` and a column ``\x1fgx`` read as sample_rate_hz and gx, and a
+    line of a control alone, among the rows, was skipped as blank: the one rule of blanks (inputs.BLANKS) is theirs too."""
+    rows = "".join(f"{i / 100},1,2,3\n" for i in range(10))
+    for text, refused in ((HEADER.replace("# sample_rate_hz", "# " + blank + "sample_rate_hz") + "t,gx,gy,gz\n" + rows,
+                           "line 3: header key"), (HEADER + f"t,{blank}gx,gy,gz\n" + rows, "line 6: column"),
+                          (HEADER + "t,gx,gy,gz\n" + rows + blank + "\n" + rows, "line 17: 1 values")):
+        with pytest.raises(RecordingError, match=refused):
+            read_recording(write(tmp_path, text))
+
+
 def test_spaces_tabs_and_crlf_around_numbers_still_read(tmp_path):
     path = write(tmp_path, (HEADER + "t,gx,gy,gz\n0, 1 ,\t2,3\n0.01,4 , 5\t,6\n").replace("\n", "\r\n"))
     np.testing.assert_array_equal(read_recording(path).gyro, [[1, 2, 3], [4, 5, 6]])

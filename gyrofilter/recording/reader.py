@@ -172,10 +172,10 @@ def _read_header(parts, path, warnings):
     blank = True  # only blank lines so far
     for first, lines in parts:
         for j, ln in enumerate(lines):
-            blank = blank and not ln.strip()
+            blank = blank and not ln.strip(BLANKS)
             if not ln.startswith("#") and not blank:
                 header, line_of = _parse_header(header_lines, path)
-                names = [c.strip() for c in ln.split(",")]
+                names = [c.strip(BLANKS) for c in ln.split(",")]
                 check_columns(names, f"{path}: line {first + j}")
                 check_accelerometer(header, names, path, line_of, first + j)
                 head = RecordingHead(header=header, names=names, path=path, warnings=warnings)
@@ -203,7 +203,7 @@ def _parse_header(lines, path):
         if not body:
             continue
         key, sep, value = body.partition(":")
-        key = key.strip()
+        key = key.strip(BLANKS)
         if not sep or not key:
             hint = f"; {NOT_A_RECORDING}" if i == 0 else ""  # line 1 is the version's: another file altogether
             raise RecordingError(f"{path}: line {i + 1}: header line is not 'key: value': {quote(ln)}{hint}")
@@ -229,7 +229,7 @@ def _parse_chunk(lines, first, head):
     n = len(head.names)
     if not any(lines):  # empty lines only (a run of line ends): nothing to classify one by one
         return np.empty((0, n)), np.empty(0, dtype=np.int64)
-    if lines[0].strip() and not lines[0].startswith("#"):
+    if lines[0].strip(BLANKS) and not lines[0].startswith("#"):
         data = _loadtxt(lines, n)
         if data is not None:
             return data, np.arange(first, first + len(lines))
@@ -237,12 +237,12 @@ def _parse_chunk(lines, first, head):
     for j, ln in enumerate(lines):
         if ln.startswith("#"):
             if len(head.notes) < MAX_NOTES:
-                head.notes.append(Note(first + j, ln[1:].strip(), head.rows + len(rows)))
+                head.notes.append(Note(first + j, ln[1:].strip(BLANKS), head.rows + len(rows)))
             elif not head.notes_cut:
                 head.notes_cut = True
                 head.warnings.append(f"{head.path}: line {first + j}: more than {MAX_NOTES} annotation lines; "
                                      "the first are kept, the others skipped")
-        elif ln.strip():
+        elif ln.strip(BLANKS):
             rows.append(ln)
             numbers.append(first + j)
     numbers = np.array(numbers, dtype=np.int64)

@@ -140,7 +140,7 @@ def _normal(name):
     """A column name as the patterns match it, and the text in its brackets (or None), the unit
     it states: ``"Gyroscope x (rad/s)"`` -> ``("gyroscope_x", "rad/s")``, ``"field.angular_velocity.x"`` ->
     ``("angular_velocity_x", None)``."""
-    name = name.strip().strip('"').strip()
+    name = name.strip(BLANKS).strip('"').strip(BLANKS)
     unit = None
     bracket = _BRACKET.search(name)
     if bracket:
@@ -253,7 +253,7 @@ def _row_chunks(raw, path, plan, counts=None, *, again=False):
     for number, text, lines in log_lines(raw, path, None if counts is None else counts["warnings"]):
         if number <= plan.after_line:
             continue
-        if not text.strip() or text.lstrip().startswith(_COMMENT):
+        if not text.strip(BLANKS) or text.lstrip(BLANKS).startswith(_COMMENT):
             if counts is not None:
                 counts["skipped"] += lines
             if not rows_seen:
@@ -293,7 +293,7 @@ class _FirstRow:
         self.path, self.counts, self.named = path, {"before_rows": 0}, False
 
     def __call__(self, text, lines):
-        if not text.strip() or text.lstrip().startswith(_COMMENT):
+        if not text.strip(BLANKS) or text.lstrip(BLANKS).startswith(_COMMENT):
             _before_rows(self.counts, text, lines, self.path)
             return False
         if self.named:
@@ -350,7 +350,7 @@ def _read(raw, path, unit, lsb_per_dps, columns, sample_rate_hz, time_unit, opti
     given = {key for key, option in (("sample_rate_hz", sample_rate_hz), ("gyro_unit", unit), ("lsb_per_dps", lsb_per_dps),
                                      *((key, options.get(key)) for key in ("accel_unit", "lsb_per_g", "temp_unit"))) if option is not None}
     for number, text, lines in log_lines(raw, path):
-        if not text.strip() or text.lstrip().startswith(_COMMENT):
+        if not text.strip(BLANKS) or text.lstrip(BLANKS).startswith(_COMMENT):
             refuse_recording(text, number, path)
             _before_rows(counts, text, lines, path)
             counts["comments"].add(number, text)
