@@ -1,6 +1,7 @@
 """The gzip reader from a run of padding on (``recording.gzipped``): a stream is on trial, its text used only once
 it ends whole (attack pass 60). Cut points, padding, the bytes after it and the rows are drawn at random, seeded."""
 import gzip
+import itertools
 import os
 import struct
 import threading
@@ -505,7 +506,8 @@ def test_a_flush_marker_and_padding_are_no_stated_length():
 
 
 _NOTES = ["# stopped by user at 10:42\n", "interrupted: power loss\n", "# arrêté à 10:42 par l’opérateur\n",
-          "note: the cable came loose here, ignore the rest of this run please\n", "END OF RUN 7\r\n"]
+          "note: the cable came loose here, ignore the rest of this run please\n", "END OF RUN 7\r\n",
+          "# stopped by me at 10:42"]  # (printf: no line end)
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -525,13 +527,13 @@ def test_a_note_written_after_a_cut_makes_no_row_and_is_named(tmp_path, seed):
         assert rec is not None and any("bytes of text it ends in" in w for w in rec.warnings)  # (the cut's last
         # bytes too where they read as text)
     flush_end = data.rfind(b"\0\0\xff\xff", 0, len(data) - 50) + 4
-    for whole, end in ((True, len(data)), (False, flush_end)):
-        path.write_bytes(data[:end] + _NOTES[0].encode())
-        rec = read_recording(path)
-        assert len(rec) == (3000 if whole else _rows_decoded(data[:end]))
-        assert [w for w in rec.warnings if "left out" in w] == [
-            f"{path}: the {len(_NOTES[0])} bytes of text it ends in ('# stopped by user at 10:42') left out: text "
-            "written after its gzip data (a note), not gzip"]
+    for note, (whole, end) in itertools.product((_NOTES[0], "stopped"), ((True, len(data)), (False, flush_end))):
+        path.write_bytes(data[:end] + note.encode())
+        rec = _prefix_or_refused(path, values)
+        if whole or note == _NOTES[0]:  # (after a cut, a short note is among the last 16 bytes held back: said so)
+            assert len(rec) == (3000 if whole else _rows_decoded(data[:end]))
+            assert [w for w in rec.warnings if "left out" in w] == [f"{path}: the {len(note)} bytes of text it ends in ({note.strip()!r}) left out: text "
+                            "written after its gzip data (a note), not gzip"]
 
 
 @pytest.mark.parametrize("seed", range(3))

@@ -18,10 +18,12 @@ RUN_BYTES = 5
 _PIECE_BYTES = 100
 #: a flush's empty stored block after a run of zeros (LEN 00 00, NLEN FF FF), not more FF
 _FLUSH_MARK = re.compile(rb"\xff\xff(?!\xff)")
-#: the fewest bytes of text (printable ASCII, tab, CR, LF, UTF-8), ending in a line end, the file ends in that are a
-#: note written after its gzip data (``echo "stopped at 10:42" >> rec.csv.gz``), not the stream's: a cut stream's
-#: compressed bytes so end about one time in 10^7 (12 bytes of text, without the line end: 8 cuts in 87 264)
+#: the fewest bytes of text (printable ASCII, tab, CR, LF, UTF-8) the file ends in that are a note written after its
+#: gzip data (``echo "stopped at 10:42" >> rec.csv.gz``), not the stream's: ending in a line end, or without one
+#: (``printf``); a cut stream's compressed bytes so end about one time in 10^7 (measured: 12 bytes of text, a line
+#: end aside, end 151 of 3.1 million cuts, 17 bytes 1, 20 none)
 TEXT_END_BYTES = 12
+TEXT_END_BARE_BYTES = 20
 #: the file's last bytes that are text, read backwards (a UTF-8 sequence's continuation bytes before its lead byte)
 _TEXT_BACKWARDS = re.compile(rb"(?:[\t\n\r\x20-\x7e]|[\x80-\xbf][\xc2-\xdf]|[\x80-\xbf]{2}[\xe0-\xef]|[\x80-\xbf]{3}[\xf0-\xf4])*")
 
@@ -70,10 +72,15 @@ def pieces(fh, first, shortest=RUN_BYTES):
 
 
 def _text_end(block):
-    """The text ``block`` (the file's last) ends in, where it ends in a line end and is at least
-    :data:`TEXT_END_BYTES` long, else b"" (a note that begins in the block before is not seen)."""
-    size = _TEXT_BACKWARDS.match(block[::-1]).end() if block.endswith(b"\n") else 0
-    return block[len(block) - size:] if size >= TEXT_END_BYTES else b""
+    """The text ``block`` (the file's last) ends in, where it is at least :data:`TEXT_END_BYTES` long and ends in a
+    line end, or at least :data:`TEXT_END_BARE_BYTES`, else b"" (a note that begins in the block before is not seen)."""
+    size = _TEXT_BACKWARDS.match(block[::-1]).end()
+    return block[len(block) - size:] if size >= (TEXT_END_BYTES if block.endswith(b"\n") else TEXT_END_BARE_BYTES) else b""
+
+
+def is_text(data):
+    """Whether ``data`` are all text (printable ASCII, tab, CR, LF, UTF-8)."""
+    return _TEXT_BACKWARDS.fullmatch(data[::-1]) is not None
 
 
 #: a run of one byte, from where it starts

@@ -27,7 +27,7 @@ import zlib
 
 from ..errors import RecordingError
 from ..inputs import READ_BYTES, quote
-from .gzip_bytes import RUN_BYTES, TEXT_END_BYTES, Padded, counted, end_zeros, skip_padding
+from .gzip_bytes import RUN_BYTES, TEXT_END_BYTES, Padded, counted, end_zeros, is_text, skip_padding
 from .header import MAX_LINE_BYTES
 
 #: most decompressed bytes at a time (a block of text: about 36 000 lines of five columns); the
@@ -141,12 +141,30 @@ def _gunzip(source, path, warnings):
                 warnings.append(_padding_warning(path, count, seen, True))
             break
         if raw[:2] != GZIP_MAGIC and not GZIP_MAGIC.startswith(raw):  # (a 1f alone may start a member cut short)
-            raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
+            note = _text_to_end(source, raw)
+            if note is None:
+                raise _GzipDamage(path, "bytes after the end of the gzip stream that are not gzip", produced)
+            source.end_text = note  # a short note after a whole stream (``printf 'stopped' >> rec.csv.gz``)
+            break
         if count:
             warnings.append(f"{path}: {counted(count, seen)} between gzip members ignored (block padding)")
     if source.end_text:
-        warnings.append(f"{path}: the {len(source.end_text)} bytes of text it ends in ({quote(source.end_text.decode(errors='replace').strip())}) "
+        warnings.append(f"{path}: the {len(source.end_text)} byte{'s' * (len(source.end_text) != 1)} of text it ends in ({quote(source.end_text.decode(errors='replace').strip())}) "
                         "left out: text written after its gzip data (a note), not gzip")
+
+
+def _text_to_end(source, raw):
+    """``raw`` and the rest of the file read by ``source``, where all of it is text of at most ``_NOTE_BYTES``
+    (:func:`~gyrofilter.recording.gzip_bytes.is_text`), else None."""
+    note = raw
+    while len(note) <= _NOTE_BYTES and (more := source.read()):
+        note += more
+    note += source.end_text
+    return note if len(note) <= _NOTE_BYTES and not source.end_run and is_text(note) else None
+
+
+#: the most bytes of text after a whole gzip stream read as a note written after it (more: damage)
+_NOTE_BYTES = 4096
 
 
 def _member(source, raw, path, warnings, produced):
