@@ -1226,8 +1226,9 @@ def test_a_comment_that_states_the_rate_or_unit_otherwise_is_refused_naming_its_
     code, dst = _convert(tmp_path, log(disagrees), *options)
     err = capsys.readouterr().err
     assert code == 2 and not dst.exists()
+    read = " (read as '65.5 lsb/deg/s')" if key == "lsb_per_deg" else ""  # (the unit in the key, pass 64)
     assert err.startswith(f"gyrofilter: error: {tmp_path / 'log.csv'}: line {line}: the comment "
-                          f"'{style.format(key, disagrees)}' disagrees with the conversion's "), err  # as in the file
+                          f"'{style.format(key, disagrees)}'{read} disagrees with the conversion's "), err  # as in the file
     assert ("(from the time column's steps); correct the comment line" if stamped else
             "; correct the option or the comment line") in err.splitlines()[0]
     if agrees is not None:

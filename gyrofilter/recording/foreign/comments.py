@@ -87,9 +87,10 @@ class Comments:
         for (key, value), (number, text) in self.stated.items():
             meant = contradicts(key, value, header, rates, tolerance)
             if meant and meant[1] is None:  # a value that does not read (Sampling rate: Fastest) is prose
-                fact = meant[0]
+                fact, read = meant[0], statement(key, value)[2]
                 option, otherwise = _SOURCES[fact]
-                raise RecordingError(f"{self.path}: line {number}: the comment {quote(text[:100])} disagrees with the conversion's "
+                read = f" (read as {quote(read)})" if read != normal_text(value) else ""  # sensitivity_mdps: 70 mdps/lsb
+                raise RecordingError(f"{self.path}: line {number}: the comment {quote(text[:100])}{read} disagrees with the conversion's "
                                      f"{fact} {quote(header[fact])} (from {option if fact in given else otherwise})"
-                                     + _BARE_SENSITIVITY.get(fact, "") * is_plain_number(statement(key, value)[2])
+                                     + _BARE_SENSITIVITY.get(fact, "") * (not read and is_plain_number(normal_text(value)))
                                      + "; correct " + ("the option or " if fact in given else "") + "the comment line")
