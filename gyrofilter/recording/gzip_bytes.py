@@ -20,10 +20,10 @@ _PIECE_BYTES = 100
 _FLUSH_MARK = re.compile(rb"\xff\xff(?!\xff)")
 #: the fewest bytes of text (printable ASCII, tab, CR, LF, UTF-8) the file ends in that are a note written after its
 #: gzip data (``echo "stopped at 10:42" >> rec.csv.gz``), not the stream's: ending in a line end, or without one
-#: (``printf``); a cut stream's compressed bytes so end about one time in 10^7 (measured: 12 bytes of text, a line
-#: end aside, end 151 of 3.1 million cuts, 17 bytes 1, 20 none)
+#: (``printf``; a shorter note is among the last bytes held back, gzipped.HOLD_BYTES); a cut stream's compressed bytes
+#: so end about one time in 10^6 (measured: 12 bytes of text, a line end aside, end 151 of 3.1 million cuts, 17 bytes 1)
 TEXT_END_BYTES = 12
-TEXT_END_BARE_BYTES = 20
+TEXT_END_BARE_BYTES = 17
 #: the file's last bytes that are text, read backwards (a UTF-8 sequence's continuation bytes before its lead byte)
 _TEXT_BACKWARDS = re.compile(rb"(?:[\t\n\r\x20-\x7e]|[\x80-\xbf][\xc2-\xdf]|[\x80-\xbf]{2}[\xe0-\xef]|[\x80-\xbf]{3}[\xf0-\xf4])*")
 
@@ -36,9 +36,13 @@ def pieces(fh, first, shortest=RUN_BYTES):
     whole stream's last bytes, or a cut one's, whose text is left out, attack pass 64); ``("text", bytes, 0)``, the text the file ends in (:func:`_text_end`). A run is counted, never held: a GB
     of zeros costs a block. Each block is scanned once, by
     ``bytes.find``; the next is read before it is given (its first bytes may tell a run's kind)."""
-    run_byte, run_count, block = None, 0, first  # the run the last block ended in (any count)
+    run_byte, run_count, block, text = None, 0, first, b""  # the run the last block ended in (any count)
     while block:
         nxt, at = fh.read(READ_BYTES), 0
+        if 0 < len(nxt) < READ_BYTES and is_text(nxt.rstrip(b"\0\xff")):  # the last block, all text: a note may
+            size = len(trailing_text(block))  # begin in this one (attack pass 65)
+            if 0 < size < len(block):
+                block, nxt = block[:-size], block[-size:] + nxt
         if run_count:  # does the run go on?
             at = len(block) - len(block.lstrip(run_byte))
             run_count += at
@@ -56,16 +60,16 @@ def pieces(fh, first, shortest=RUN_BYTES):
             at = end
         tail = block[at:]
         last = tail[-1:]
-        text = _text_end(tail) if not nxt else b""  # (padding after text: the text may be a trailer's low bytes)
         if last in (b"\0", b"\xff"):  # the run the block ends in, any count: it may go on
             kept = tail.rstrip(last)
             run_byte, run_count, tail = last, len(tail) - len(kept), kept
+        text = _text_end(tail) if not nxt else b""  # (before padding too: a note a C writer ended with NUL)
         if len(tail) > len(text):
             yield "data", tail[:len(tail) - len(text)], 0
         if text:
             yield "text", text, 0
         block = nxt
-    if run_count >= shortest:
+    if run_count >= shortest or run_count and text:  # (after a note: its own)
         yield "end", run_byte, run_count
     elif run_count:  # a flush's FF FF, a trailer's high zeros, a cut stream's own: the file's last bytes
         yield "data", run_byte * run_count, 0
@@ -74,8 +78,13 @@ def pieces(fh, first, shortest=RUN_BYTES):
 def _text_end(block):
     """The text ``block`` (the file's last) ends in, where it is at least :data:`TEXT_END_BYTES` long and ends in a
     line end, or at least :data:`TEXT_END_BARE_BYTES`, else b"" (a note that begins in the block before is not seen)."""
-    size = _TEXT_BACKWARDS.match(block[::-1]).end()
-    return block[len(block) - size:] if size >= (TEXT_END_BYTES if block.endswith(b"\n") else TEXT_END_BARE_BYTES) else b""
+    text = trailing_text(block)
+    return text if len(text) >= (TEXT_END_BYTES if block.endswith(b"\n") else TEXT_END_BARE_BYTES) else b""
+
+
+def trailing_text(data):
+    """The text (printable ASCII, tab, CR, LF, UTF-8) ``data`` end in, of any length."""
+    return data[len(data) - _TEXT_BACKWARDS.match(data[::-1]).end():]
 
 
 def is_text(data):
@@ -138,10 +147,10 @@ class Padded:
                 self.kept_bytes += (len(data) if kind == "data" else 0) + _PIECE_BYTES
             if kind == "end":
                 self.end_run = data, count
-                return b""
+                return self.read()  # (the file's last pieces, each set before either is looked at)
             if kind == "text":
                 self.end_text = data
-                return b""
+                return self.read()
             if kind == "data":
                 self.offset += len(data)
                 return data

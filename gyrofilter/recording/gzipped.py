@@ -27,7 +27,7 @@ import zlib
 
 from ..errors import RecordingError
 from ..inputs import READ_BYTES, quote
-from .gzip_bytes import RUN_BYTES, TEXT_END_BYTES, Padded, counted, end_zeros, is_text, skip_padding
+from .gzip_bytes import RUN_BYTES, TEXT_END_BYTES, Padded, counted, end_zeros, is_text, skip_padding, trailing_text
 from .header import MAX_LINE_BYTES
 
 #: most decompressed bytes at a time (a block of text: about 36 000 lines of five columns); the
@@ -186,7 +186,8 @@ def _member(source, raw, path, warnings, produced):
     it ends at a run, they are its own, or hold another member's first bytes (:func:`_cut_at_run`)."""
     d, line, header = zlib.decompressobj(16 + zlib.MAX_WBITS), _LastLine(), _Header()
     first, trial, tried, sure, run, at = produced, None, 0, False, None, header.add(raw)  # trial: (d, hold, the run)
-    hold, feed, ending, last = b"", None, b"", b""  # ending: the bytes held at the file's end, fed; last: their text
+    hold, feed, ending, last, before_end = b"", None, b"", b"", None  # ending: the bytes held at the file's end, fed (to
+    # before_end, a copy of the decompressor); last: their text
     while True:
         if feed is None:  # new bytes: the last HOLD_BYTES of them held back
             if run and trial is None and not sure and not header.holds(at):
@@ -197,6 +198,11 @@ def _member(source, raw, path, warnings, produced):
         try:
             out = d.decompress(feed, _TEXT_BYTES)
         except zlib.error as exc:
+            if trial is None and ending and ("length check" in str(exc) or _appended(before_end, ending)):
+                # bytes written after a cut (attack pass 65), or a cut in the trailer (its text checked: the CRC)
+                _cut_end(None, source, path, warnings, last, ending, produced - first, str(exc))
+                yield from line.end(False, path, warnings)
+                return None, produced
             if trial is None:
                 raise _GzipDamage(path, str(exc), produced) from None
             ended = "incorrect data check" in str(exc) and _own_end(prior, feed + hold, produced - first + tried, source)
@@ -222,12 +228,12 @@ def _member(source, raw, path, warnings, produced):
             if raw:
                 run, at = source.run, header.add(raw)
                 continue
-            if trial is None and _own_text(d, hold, source.end_text):
+            if trial is None and _own_text(d, hold, source.end_text, end_zeros(source)):
                 raw, source.end_text = source.end_text, b""
                 run, at = None, header.add(raw)
                 continue
             if hold:  # the file's end: the bytes held fed now, their text kept apart till the stream is whole or cut
-                feed, ending, hold = hold, hold, b""
+                feed, ending, hold, before_end = hold, hold, b"", d.copy()
                 continue
             if trial is None:
                 out = _cut_end(d, source, path, warnings, last, ending, produced - first)
@@ -336,10 +342,32 @@ class _LastLine:
         return [held] if held and not dropped else []
 
 
-def _own_text(d, hold, text):
+def _appended(d, held):
+    """Whether the ``held`` bytes that the decompressor ``d`` fails on at the file's end end in bytes written after
+    a cut, without which they decode: a run of 0x00 or 0xFF (padding, 1 to 4 bytes), a line of text (a short note,
+    ``echo "# stopped" >> rec.csv.gz``: attack pass 65, refused as damage), or both; a bit changed in a member's
+    last block fails without them too (damage)."""
+    kept, tried = held, set()
+    while True:  # each shorter: its padding, its line of text, in turn as they come from the end
+        shorter = kept.rstrip(b"\0\xff")
+        if shorter == kept and kept.endswith(b"\n"):
+            shorter = kept[:len(kept) - len(trailing_text(kept))]
+        if shorter == kept or shorter in tried:
+            return False
+        kept = shorter
+        tried.add(kept)
+        try:
+            d.copy().decompress(kept)
+            return True
+        except zlib.error:
+            pass
+
+
+def _own_text(d, hold, text, zeros):
     """Whether ``text``, the file's last bytes after ``hold`` (:data:`HOLD_BYTES`) of the stream of the decompressor
-    ``d``, is the stream's own: it ends the stream whole, or its last bytes decode to themselves (a stored block's,
-    level 0, whose header's bytes may read as text too); a note written after the data decodes to other text."""
+    ``d``, before ``zeros`` zero bytes, is the stream's own: it ends the stream whole (with the zeros a trailer's
+    length may take), or its last bytes decode to themselves (a stored block's, level 0, whose header's bytes may read
+    as text too); a note written after the data decodes to other text."""
     if not text:
         return False
     try:
@@ -347,7 +375,9 @@ def _own_text(d, hold, text):
         probe.decompress(hold)
         if probe.eof:
             return False  # it ended before the text
-        return probe.decompress(text)[-TEXT_END_BYTES:] == text[-TEXT_END_BYTES:] or probe.eof
+        if probe.decompress(text)[-TEXT_END_BYTES:] == text[-TEXT_END_BYTES:] or probe.eof:
+            return True
+        return _padded_end(probe, zeros)[0] > 0
     except zlib.error:
         return False
 
@@ -413,14 +443,15 @@ def _member_after_padding(source):
     return b"", None
 
 
-def _cut_end(d, source, path, warnings, last, held, produced):
+def _cut_end(d, source, path, warnings, last, held, produced, failed=None):
     """The last text of the member of the decompressor ``d`` at the end of the file ``source`` read, ``last`` the text
     of the bytes ``held`` back (:data:`HOLD_BYTES`), fed: with what it makes of the zero padding it takes to end whole
     (:func:`_padded_end`); cut short, ``last`` only where ``held`` ends in a flush's marker or padding follows, else
-    left out. The padding, the text left out and a stream cut short said in ``warnings``. A member whose last bytes
-    state its length (:func:`_states_length`; ``produced``: its text before ``last``) is whole and damaged, not cut."""
+    left out, and none where zlib ``failed`` on them (its error: bytes written after a cut, attack pass 65, were
+    refused as damage). The padding, the text left out and a stream cut short said in ``warnings``. A member whose last
+    bytes state its length (:func:`_states_length`; ``produced``: its text before ``last``) is whole and damaged."""
     byte, count = source.end_run or (b"\0", 0)
-    whole, out = _padded_end(d, end_zeros(source))
+    whole, out = _padded_end(d, end_zeros(source)) if failed is None else (0, b"")
     if count > whole:
         warnings.append(_padding_warning(path, count - whole, {byte[0]}, whole))
     if whole:
@@ -428,7 +459,12 @@ def _cut_end(d, source, path, warnings, last, held, produced):
     if _states_length(held, end_zeros(source), produced + len(last)):
         raise _GzipDamage(path, "its last bytes state its length, but its data do not end there", produced)
     warnings.append(cut_short_warning(path))
-    if last and not held.endswith(_FLUSH_END) and count < RUN_BYTES:  # (padding after them: they are its own)
+    if failed is not None:
+        warnings.append(f"{path}: its last {len(held)} compressed bytes do not decompress ({failed}): left out (bytes "
+                        "written after a cut)")
+        return b""
+    note = held.endswith(b"\n") and is_text(held[-2:])  # (a short note before the padding: attack pass 65)
+    if last and not held.endswith(_FLUSH_END) and (count < RUN_BYTES or note):  # (padding after them: they are its own)
         warnings.append(f"{path}: the {len(last)} bytes of text its last {len(held)} compressed bytes decode to left "
                         "out (bytes written after a cut decode as more of a stream)")
         return b""

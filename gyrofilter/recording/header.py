@@ -12,7 +12,7 @@ import unicodedata
 
 from ..errors import RecordingError
 from ..inputs import CONTROL_CHARACTER, escape_controls, invisible_character, json_string, parse_number, quote
-from .statements import judge, key_unit, normal_text, stated_kind
+from .statements import judge, key_unit, name_words, normal_text, stated_kind
 from .unit_words import known_unit
 from ..units import ACCEL_UNITS, AXES, GYRO_UNITS, check_lsb_per_dps, check_lsb_per_g, check_sample_rate_hz, utf8_text
 
@@ -411,13 +411,6 @@ def check_facts(header, where):
             raise RecordingError(f"{where}: gyro_unit is lsb but header key 'lsb_per_dps' is missing")
         check_lsb_per_dps(parse_number(header["lsb_per_dps"], f"{where}: lsb_per_dps", error=RecordingError),
                           f"{where}: lsb_per_dps", RecordingError)
-
-
-def name_words(name):
-    """The words of a column name or header key, lower case: its runs of ASCII letters, split where a lower-case
-    letter meets an upper-case one (``TimeStamp_ns``: time, stamp, ns; ``Temperature(C)``: temperature, c;
-    ``temp2_unit``: temp, unit)."""
-    return re.findall(r"[a-z]+", re.sub(r"([a-z])([A-Z])", r"\1 \2", name).lower())
 
 
 #: words that make a column name one of time stamps (:func:`name_words`), as ``t`` alone does (``T``) or with a unit

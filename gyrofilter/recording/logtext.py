@@ -16,7 +16,7 @@ import tempfile
 import zlib
 
 from ..errors import RecordingError
-from ..inputs import READ_BYTES, open_input, quote
+from ..inputs import BLANKS, READ_BYTES, open_input, quote
 from .header import MAX_LINE_BYTES
 from .gzipped import cut_short_warning, gunzipped
 from .lines import refuse_cr_only, refuse_nul
@@ -212,7 +212,7 @@ def _numbered(fh, path, warnings):
         if not data:
             return
         number += 1
-        if number > 1 and not data.endswith(b"\n") and data.strip() and len(data) <= MAX_LINE_BYTES:
+        if number > 1 and not data.endswith(b"\n") and data.strip(BLANKS.encode()) and len(data) <= MAX_LINE_BYTES:
             refuse_cr_only(data, path, number)
             if warnings is not None:
                 warnings.append(f"{path}: line {number}: last line has no line end (log interrupted?); it is "

@@ -1,6 +1,6 @@
 """What a header key, a serial device's word or a log's comment states of the sample rate, the gyro's unit or
 sensitivity, or the accelerometer's unit or sensitivity, by its words
-(:func:`~gyrofilter.recording.header.name_words`), and whether its value states the same as the header
+(:func:`name_words`), and whether its value states the same as the header
 (:func:`judge`): the one rule behind :func:`~gyrofilter.recording.header.contradiction` and ``convert``'s comments
 (:mod:`~gyrofilter.recording.foreign.comments`). Pure: words and text in, a kind or a verdict out.
 
@@ -41,10 +41,12 @@ STATES = {  # kind: (the other words its key may hold, its own words)
                {"period", "interval", "dt", "ts", "timestep"}),
     "unit": ({"gyro", "gyr", "gyroscope", "rate", "angular", "velocity", "omega", "measurement", "rotation", "turn"},
              {"unit", "units", "scale"}),
-    "sensitivity": ({"gyro", "gyr", "per", "dps", "mdps", "deg", "degree", "degrees", "s", "sec", "second", "factor"},
+    "sensitivity": ({"gyro", "gyr", "per", "dps", "mdps", "deg", "degree", "degrees", "s", "sec", "second", "factor",
+                     "typ", "typical", "nominal", "nom"},
                     {"lsb", "sensitivity", "scale"}),
     "accel_unit": ({"acc", "accel", "accelerometer", "acceleration"}, {"unit", "units", "scale"}),
-    "accel_sensitivity": ({"acc", "accel", "accelerometer", "acceleration", "per", "g", "mg", "factor"},
+    "accel_sensitivity": ({"acc", "accel", "accelerometer", "acceleration", "per", "g", "mg", "factor", "typ", "typical",
+                           "nominal", "nom"},
                           {"lsb", "sensitivity", "scale"}),
 }
 #: the other words of a key stating the temperature's unit, besides a word of a temperature (:func:`_temperature`)
@@ -83,22 +85,18 @@ _PER_WORD = re.compile(r"\s+per\s+", re.IGNORECASE)
 #: a value's first number (a sign of range or about before it) and the word right after it
 _NUMBER = re.compile(r"\s*(?:approx\.?|about|ca\.|circa)?\s*(?P<range>±|\+-|\+/-)?\s*[~≈]?\s*"
                      r"(?P<number>(?>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?))(?![,.]\d)\s*(?P<suffix>[a-zA-Zμ°/^()\d-]*)(?P<rest>.*)")
-#: a rate's or an acceleration's unit in a sensitivity's key (``mdps``, ``deg_s``, ``deg``: deg/s, ``mg``), an LSB's
-#: word, and ``per`` (or ``/``, or only ``_`` or a blank: ``mdps_lsb``) between them
-_UNIT_IN_KEY = r"m?(?:dps|deg|rad|g)(?:[_\s/](?:s|sec))?"
+#: a key's unit in brackets at its end (``Sample rate (samples/s)``, ``Sample period [µs]``, ``Sensitivity (mdps)``)
+_BRACKETED = re.compile(r"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*")
+#: the longest key whose words are read for a unit (a key of 20 000 underscores took 29 s, attack pass 65)
+_MAX_KEY_CHARS = 256
+#: a rate's or an acceleration's unit among a key's words (:func:`name_words`), as a value's: ``deg`` and ``rad`` in a
+#: sensitivity are per second (``lsb_per_deg``), so are they with ``s``, ``sec`` or ``per second`` after them
+_KEY_UNITS = {"dps": "dps", "mdps": "mdps", "deg": "deg/s", "degree": "deg/s", "degrees": "deg/s", "mdeg": "mdeg/s",
+              "rad": "rad/s", "mrad": "mrad/s", "g": "g", "mg": "mg"}
+#: an LSB's word (in a key, or a value's unit: ``131 LSB/(deg/s)``, ``7.63 mdps/digit``)
 _LSB_IN_KEY = r"(?:lsbs?|counts?|digits?)"
-_PER_IN_KEY = r"(?:[_\s]+per[_\s]+|\s*/\s*|[_\s]+)"
-#: a key's unit in brackets at its end (``Sample rate (samples/s)``, ``Sample period [µs]``), or a sensitivity's
-#: in words, either way round, with other words before it or none (``gyro_sensitivity_mdps_per_lsb``, ``mdps_per_lsb``,
-#: ``deg_s/LSB``, ``mdps_lsb``: mdps/lsb, deg/s/lsb; ``counts_per_mdps``, ``lsb_dps``: lsb/mdps, lsb/dps;
-#: ``sensitivity in mdps/LSB``; attack pass 63: ``mdps_per_lsb: 70``, 14.3 LSB per deg/s, was read as 70,
-#: ``counts per mdps: 14.3`` as 14.3), or a unit alone after the words of a sensitivity or a scale
-#: (``sensitivity_mdps``, ``scale_factor_dps``: per LSB; ``gyro_scale_dps``: a full scale's)
-_BRACKETED = re.compile(rf"(?P<key>.*?)\s*[(\[](?P<unit>[^()\[\]]*)[)\]]\s*|(?:(?P<per_key>.*?)(?:[_\s]+in)?[_\s]+)?"
-                        rf"(?:(?P<over>{_UNIT_IN_KEY}){_PER_IN_KEY}{_LSB_IN_KEY}|{_LSB_IN_KEY}{_PER_IN_KEY}(?P<under>{_UNIT_IN_KEY}))"
-                        rf"|(?P<alone_key>.*?(?<![a-z])(?:sensitivity|factor|scale))(?:[_\s]+in)?[_\s]+(?P<alone>{_UNIT_IN_KEY})",
-                        re.IGNORECASE)
-#: the last word of a key whose unit alone (``sensitivity_mdps``, ``Sensitivity (mdps)``) is that unit per LSB
+#: a sensitivity's words: a unit alone after one is per LSB (``sensitivity_mdps``: mdps/LSB, a datasheet's
+#: ``70 mdps/digit``); after ``scale`` it is the value's own (``gyro_scale_dps: 2000``, a full scale)
 _PER_LSB_WORDS = {"sensitivity", "factor"}
 #: where a text holds another ``key: value`` pair: at ``;``, at ``,`` before a key and its ``:`` (``Rate: 100 Hz, FS:
 #: 2000 dps``); within a value, at ``,`` before ``key=`` too (``Accel: range=2g, sensitivity=16384``: the accelerometer's)
@@ -145,36 +143,72 @@ def normal_text(text):
     return " ".join(unicodedata.normalize("NFKC", text.replace("º", "°")).split())
 
 
+def name_words(name):
+    """The words of a column name or header key, lower case: its runs of ASCII letters, split where a lower-case
+    letter meets an upper-case one (``TimeStamp_ns``: time, stamp, ns; ``Temperature(C)``: temperature, c;
+    ``temp2_unit``: temp, unit)."""
+    return re.findall(r"[a-z]+", re.sub(r"([a-z])([A-Z])", r"\1 \2", name).lower())
+
+
 def key_unit(key, value):
-    """``(key, value)`` with a unit in brackets at the key's end moved to a value that is a number alone
-    (``Sample rate (Hz): ~200``: ``Sample rate``, ``~200 Hz``), a sensitivity's unit in its key's words too
-    (``mdps_per_lsb: 70``, ``sensitivity_mdps: 70``: ``sensitivity``, ``70 mdps/lsb``; attack pass 64: the latter
-    was 70 LSB per deg/s). A rate's or an acceleration's unit alone after a sensitivity's word is per LSB, as in a
-    datasheet's ``Sensitivity: 70 mdps/digit``; after a scale's (``gyro_scale_dps: 2000``) it is the value's own."""
-    bracketed = _BRACKETED.fullmatch(key)
-    if not bracketed or not (bracketed["key"] or bracketed["over"] or bracketed["under"] or bracketed["alone"]):
+    """``(key, value)`` with the unit a key states moved to a value that is a number alone: in brackets at its end
+    (``Sample rate (Hz): ~200``: ``Sample rate``, ``~200 Hz``), or a sensitivity's among its words
+    (:func:`_sensitivity_words`: ``mdps_per_lsb: 70``, ``sensitivity_mdps: 70``, ``Sensitivity (mdps): 70``:
+    ``sensitivity``, ``70 mdps/lsb``). A remark in brackets is dropped (``Sample rate (nominal): 200``)."""
+    if len(key) > _MAX_KEY_CHARS:
         return key, value
-    if bracketed["over"] or bracketed["under"]:  # mdps_per_lsb, accel_mg_per_lsb, lsb_per_deg, mdps_lsb
-        stem, named = f"{bracketed['per_key'] or ''} sensitivity".strip(), _key_unit_name(bracketed["over"] or bracketed["under"])
-        unit = f"{named}/lsb" if bracketed["over"] else f"lsb/{named}"
-    else:  # Sample rate (Hz), Sensitivity (mdps), sensitivity_mdps, gyro_scale_dps
-        stem, unit = bracketed["key"] or bracketed["alone_key"], (bracketed["unit"] or bracketed["alone"]).strip()
+    bracketed = _BRACKETED.fullmatch(key)
+    unit = None
+    if bracketed and bracketed["key"]:
+        key, unit = bracketed["key"], re.sub(r"\s*/\s*", "/", bracketed["unit"].strip())
         if unit.strip(" .").lower() in _REMARKS:
-            return stem, value  # Sample rate (nominal): 200
-        last = re.findall(r"[a-z]+", stem.lower())[-1:]
-        if set(last) & _PER_LSB_WORDS and re.fullmatch(_UNIT_IN_KEY, unit, re.IGNORECASE):
-            unit = f"{_key_unit_name(unit)}/lsb"  # sensitivity_mdps: 70, a datasheet's 70 mdps/digit
-    if re.fullmatch(r"m?g/lsb|lsb/m?g", unit) and not set(re.findall(r"[a-z]+", stem.lower())) & (_ACCEL_WORDS | _GYRO_WORDS):
-        stem = f"accel {stem}"  # lsb_per_g, sensitivity_mg: the accelerometer's
+            unit = None  # Sample rate (nominal): 200, mdps_per_lsb (typ): 70
+        elif unit.lower() in _KEY_UNITS:
+            key, unit = f"{key} {unit}", None  # Sensitivity (mdps): 70, a unit among its words
+    if unit is None:
+        key, unit = _sensitivity_words(key)
     number = _NUMBER.fullmatch(clean(value))
-    alone = number and not number["suffix"] and not number["rest"].strip()
-    return stem, f"{clean(value)} {unit}" if alone else value
+    alone = unit and number and not number["suffix"] and not number["rest"].strip()
+    return key, f"{clean(value)} {unit}" if alone else value
 
 
-def _key_unit_name(written):
-    """A unit of :data:`_UNIT_IN_KEY` as a value's: ``deg_s`` and ``deg`` (in a sensitivity) are deg/s."""
-    named = re.sub(r"[_\s]+", "/", written.lower())
-    return named + "/s" if named in ("deg", "mdeg") else named
+def _sensitivity_words(key):
+    """``(key, unit)``: a sensitivity's unit among ``key``'s words (:func:`name_words`, any separator or case) and the
+    key without it, or ``(key, None)``. With an LSB's word it is the way round they are written (``mdps_per_lsb``,
+    ``mdps_lsb``, ``mDPS per LSB``: mdps/lsb; ``counts_per_mdps``, ``lsb_dps``: lsb/mdps, lsb/dps; ``per`` before a
+    word puts that word under the other: ``per_lsb_mdps`` is mdps/lsb); without, per LSB after a sensitivity's word
+    (``sensitivity_mdps``, ``mdps_sensitivity``), the value's own after ``scale`` (``gyro_scale_dps``), else none
+    (``rate_dps``: a rate of turn). Attack passes 63 to 65: each spelling not read was read as LSB per deg/s."""
+    words, kept, unit, at, lsb = name_words(key), [], None, None, None  # at, lsb: the unit's and LSB's word
+    i = 0
+    while i < len(words):
+        word, after = words[i], words[i + 1:i + 3]
+        if word == "m" and after[:1] and "m" + after[0] in _KEY_UNITS:  # mDPS: m, dps
+            word, after, skip = "m" + after[0], words[i + 2:i + 4], 1
+        else:
+            skip = 0
+        if unit is None and word in _KEY_UNITS and after[:1] not in (["c"], ["f"], ["celsius"]):  # (deg_c: a temperature's)
+            unit, at = _KEY_UNITS[word], i
+            skip += 1 if after[:1] in (["s"], ["sec"], ["second"]) else 2 if after[:2] in (
+                ["per", "s"], ["per", "sec"], ["per", "second"]) else 0
+        elif lsb is None and re.fullmatch(_LSB_IN_KEY, word):
+            lsb = i
+        elif word not in ("per", "in"):
+            kept.append(word)
+        i += 1 + skip
+    if unit is None:
+        return key, None
+    if lsb is not None:  # per before a word puts it under the other (per_lsb_mdps: mdps/lsb), else their order does
+        under = False if words[lsb - 1:lsb] == ["per"] else True if words[at - 1:at] == ["per"] else lsb < at
+        unit = f"lsb/{unit}" if under else f"{unit}/lsb"
+    elif set(kept) & _PER_LSB_WORDS:
+        unit = f"{unit}/lsb"
+    elif "scale" not in kept:
+        return key, None
+    stem = " ".join(kept) if set(kept) & (_PER_LSB_WORDS | {"scale"}) else " ".join(kept + ["sensitivity"])
+    if unit in ("g/lsb", "mg/lsb", "lsb/g", "lsb/mg") and not set(kept) & (_ACCEL_WORDS | _GYRO_WORDS):
+        stem = f"accel {stem}"  # lsb_per_g, sensitivity_mg: the accelerometer's
+    return stem, unit
 
 
 def stated_kind(words, value):
