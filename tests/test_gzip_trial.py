@@ -459,7 +459,7 @@ def test_a_bit_flipped_in_a_whole_members_last_bytes_makes_no_row(tmp_path, seed
     values, body = _timed_rows(rng, rows)
     data = _flushed(HEADER + "t,gx,gy,gz\n" + body, int(rng.choice([10, 100])))
     path = tmp_path / "r.csv.gz"
-    for at in range(len(data) - 24, len(data) - 8):
+    for at in range(len(data) - 64, len(data) - 8):  # (pass 66: damage in the last 64 bytes of a small member)
         for bit in rng.choice(8, 3, replace=False):
             damaged = bytearray(data)
             damaged[at] ^= 1 << int(bit)
@@ -555,7 +555,8 @@ def test_a_cut_streams_own_last_zeros_are_not_padding(tmp_path, seed):
 
 
 _AFTER_A_CUT = [b"# stopped\n", b"x\n", b"\0", b"\0\0\0", b"\xff\xff", b"# stopped at 10:42\n\0", b"# stopped\n\0\0",
-                b"\0\0# stopped\n", b"# stopped at 10:42", b"# stopped by me at 10:42 " * 3 + b"\n" + bytes(600)]
+                b"\0\0# stopped\n", b"# stopped at 10:42", b"# stopped by me at 10:42 " * 3 + b"\n" + bytes(600),
+                b"stopped", b"stopped" + bytes(451)]  # (printf's short note, alone or before padding: attack pass 66)
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -589,3 +590,47 @@ def test_a_note_across_the_last_read_block_is_left_out(tmp_path):
         rec = read_recording(path)
         np.testing.assert_array_equal(rec.gyro, values[:len(rec)])
         assert any("bytes of text it ends in ('" in w and "stopped by the operator" in w for w in rec.warnings)
+
+
+def test_a_wrong_checksum_is_damage_whatever_the_trailer_looks_like(tmp_path):
+    """Attack pass 66: a whole member with a bit flipped (its checksum wrong) whose trailer ends in bytes that look
+    like text (a length of 0x0a09: ``\\t\\n``, then a checksum's printable last byte) was read as a cut stream with a
+    note after it: the damaged row kept. A wrong checksum is the stream's own end: damage, never bytes after a cut."""
+    rng = np.random.default_rng(66)
+    values, body = _timed_rows(rng, 60)
+    text = (HEADER + "t,gx,gy,gz\n" + body).encode()
+    for k in range(1000):  # a comment that makes the text 0x0a09 bytes and the checksum's last byte printable
+        head = text.replace(b"t,gx", b"# " + b"%d" % k + b" " * (0x0a09 - len(text) - 3 - len(b"%d" % k)) + b"\nt,gx", 1)
+        if len(head) == 0x0a09 and 0x20 <= zlib.crc32(head) >> 24 < 0x7f:
+            break
+    data = gzip.compress(head, mtime=0)
+    assert data[-8:].endswith(b"\x09\x0a\0\0")
+    path = tmp_path / "r.csv.gz"
+    flips = 0
+    for at in range(len(data) // 2, len(data) - 30):
+        damaged = bytearray(data)
+        damaged[at] ^= 0x04
+        try:
+            zlib.decompress(bytes(damaged), 31)
+        except zlib.error as exc:
+            if "data check" not in str(exc):
+                continue
+        else:
+            continue
+        path.write_bytes(bytes(damaged))
+        with pytest.raises(RecordingError, match="damaged gzip data"):
+            read_recording(path)
+        flips += 1
+    assert flips > 10
+
+
+@pytest.mark.parametrize("tail", [b"# stop\n\0", b"stopped\n\0\0\0", b"# stop\n\xff", b"# a\n\xff# b\n", b"stopped" + bytes(600)])
+def test_a_short_note_and_padding_after_a_whole_stream_are_left_out(tmp_path, tail):
+    """Attack pass 66: a whole recording, a short note and padding after it was refused as damaged gzip data (only
+    text alone after a whole stream was a note)."""
+    values, body = _timed_rows(np.random.default_rng(3), 500)
+    path = tmp_path / "r.csv.gz"
+    path.write_bytes(_flushed(HEADER + "t,gx,gy,gz\n" + body, 10) + tail)
+    rec = read_recording(path)
+    np.testing.assert_array_equal(rec.gyro, values)
+    assert any("of text it ends in" in w for w in rec.warnings), rec.warnings

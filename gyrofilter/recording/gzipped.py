@@ -154,13 +154,14 @@ def _gunzip(source, path, warnings):
 
 
 def _text_to_end(source, raw):
-    """``raw`` and the rest of the file read by ``source``, where all of it is text of at most ``_NOTE_BYTES``
-    (:func:`~gyrofilter.recording.gzip_bytes.is_text`), else None."""
+    """The text of ``raw`` and the rest of the file read by ``source``, where it is all text and padding (0x00, 0xFF),
+    at most ``_NOTE_BYTES`` (:func:`~gyrofilter.recording.gzip_bytes.is_text`), else None."""
     note = raw
     while len(note) <= _NOTE_BYTES and (more := source.read()):
         note += more
     note += source.end_text
-    return note if len(note) <= _NOTE_BYTES and not source.end_run and is_text(note) else None
+    text = note.replace(b"\0", b"").replace(b"\xff", b"")  # (padding after it, or between notes: attack pass 66)
+    return text if len(note) <= _NOTE_BYTES and text and is_text(text) else None
 
 
 #: the most bytes of text after a whole gzip stream read as a note written after it (more: damage)
@@ -198,7 +199,8 @@ def _member(source, raw, path, warnings, produced):
         try:
             out = d.decompress(feed, _TEXT_BYTES)
         except zlib.error as exc:
-            if trial is None and ending and ("length check" in str(exc) or _appended(before_end, ending)):
+            if trial is None and ending and "data check" not in str(exc) and (  # (the stream's end, its text wrong:
+                    "length check" in str(exc) or _appended(before_end, ending)):  # damage, attack pass 66)
                 # bytes written after a cut (attack pass 65), or a cut in the trailer (its text checked: the CRC)
                 _cut_end(None, source, path, warnings, last, ending, produced - first, str(exc))
                 yield from line.end(False, path, warnings)
@@ -344,13 +346,13 @@ class _LastLine:
 
 def _appended(d, held):
     """Whether the ``held`` bytes that the decompressor ``d`` fails on at the file's end end in bytes written after
-    a cut, without which they decode: a run of 0x00 or 0xFF (padding, 1 to 4 bytes), a line of text (a short note,
-    ``echo "# stopped" >> rec.csv.gz``: attack pass 65, refused as damage), or both; a bit changed in a member's
-    last block fails without them too (damage)."""
+    a cut, without which they decode: a run of 0x00 or 0xFF (padding, 1 to 4 bytes), text (a short note,
+    ``echo "# stopped" >> rec.csv.gz``: attack pass 65, refused as damage; ``printf``'s, pass 66), or both; a bit
+    changed in a member's last block fails without them too (damage; a wrong checksum is never asked here)."""
     kept, tried = held, set()
     while True:  # each shorter: its padding, its line of text, in turn as they come from the end
         shorter = kept.rstrip(b"\0\xff")
-        if shorter == kept and kept.endswith(b"\n"):
+        if shorter == kept:
             shorter = kept[:len(kept) - len(trailing_text(kept))]
         if shorter == kept or shorter in tried:
             return False
@@ -463,7 +465,7 @@ def _cut_end(d, source, path, warnings, last, held, produced, failed=None):
         warnings.append(f"{path}: its last {len(held)} compressed bytes do not decompress ({failed}): left out (bytes "
                         "written after a cut)")
         return b""
-    note = held.endswith(b"\n") and is_text(held[-2:])  # (a short note before the padding: attack pass 65)
+    note = len(trailing_text(held)) >= (2 if held.endswith(b"\n") else 6)  # (a short note before the padding, 65, 66)
     if last and not held.endswith(_FLUSH_END) and (count < RUN_BYTES or note):  # (padding after them: they are its own)
         warnings.append(f"{path}: the {len(last)} bytes of text its last {len(held)} compressed bytes decode to left "
                         "out (bytes written after a cut decode as more of a stream)")
@@ -479,13 +481,14 @@ def _states_length(held, zeros, length):
     """Whether the last bytes of a member that does not end whole (``held``, then ``zeros`` zero bytes the file ends
     in) are a trailer: its ISIZE (RFC 1952: the text's length mod 2^32, 4 bytes) within :data:`_LENGTH_SLACK` of
     ``length`` (the text its damaged data decode to: a changed bit in its last block made up rows, attack pass 63),
-    of at least 2^16 (one or no high zero byte among the padding: a cut stream's last bytes so state a length about
-    one time in 2^24 / 129; with more, one time in 500)."""
+    of at least 2^16 where a high zero byte is the padding's (a cut stream's last bytes so state a length about one
+    time in 2^24 / 129; with more, one time in 500), of any where its 4 bytes are its own (one time in 2^32 / 129:
+    a small member's, attack pass 66)."""
     if held.endswith(_FLUSH_END):
         return False  # a flush's marker and a padding zero state 0x00FFFF00 (attack pass 64: a false refusal)
     for high in range(min(zeros, 1) + 1):
         size = int.from_bytes((held + bytes(high))[-4:], "little") if len(held) >= 4 - high else -1
-        if size >= 1 << 16 and abs(size - length % (1 << 32)) <= _LENGTH_SLACK:
+        if (size >= 1 << 16 or not high and size > 0) and abs(size - length % (1 << 32)) <= _LENGTH_SLACK:
             return True
     return False
 
