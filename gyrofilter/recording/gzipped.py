@@ -481,14 +481,14 @@ def _states_length(held, zeros, length):
     """Whether the last bytes of a member that does not end whole (``held``, then ``zeros`` zero bytes the file ends
     in) are a trailer: its ISIZE (RFC 1952: the text's length mod 2^32, 4 bytes) within :data:`_LENGTH_SLACK` of
     ``length`` (the text its damaged data decode to: a changed bit in its last block made up rows, attack pass 63),
-    of at least 2^16 where a high zero byte is the padding's (a cut stream's last bytes so state a length about one
-    time in 2^24 / 129; with more, one time in 500), of any where its 4 bytes are its own (one time in 2^32 / 129:
-    a small member's, attack pass 66)."""
+    of at least 2^16 (one or no high zero byte among the padding: a cut stream's last bytes so state a length about
+    one time in 2^24 / 129; with more, one time in 500; a small length, read from a cut's own last bytes and 1 to 4
+    bytes after them, refused 1 % to 4 % of interrupted recordings: attack pass 67)."""
     if held.endswith(_FLUSH_END):
         return False  # a flush's marker and a padding zero state 0x00FFFF00 (attack pass 64: a false refusal)
     for high in range(min(zeros, 1) + 1):
         size = int.from_bytes((held + bytes(high))[-4:], "little") if len(held) >= 4 - high else -1
-        if (size >= 1 << 16 or not high and size > 0) and abs(size - length % (1 << 32)) <= _LENGTH_SLACK:
+        if size >= 1 << 16 and abs(size - length % (1 << 32)) <= _LENGTH_SLACK:
             return True
     return False
 
