@@ -349,15 +349,14 @@ def _appended(d, held):
     a cut, without which they decode: a run of 0x00 or 0xFF (padding, 1 to 4 bytes), text (a short note,
     ``echo "# stopped" >> rec.csv.gz``: attack pass 65, refused as damage; ``printf``'s, pass 66), or both; a bit
     changed in a member's last block fails without them too (damage; a wrong checksum is never asked here)."""
-    kept, tried = held, set()
-    while True:  # each shorter: its padding, its line of text, in turn as they come from the end
+    kept = held
+    while True:  # each shorter: its padding, its text, in turn as they come from the end
         shorter = kept.rstrip(b"\0\xff")
         if shorter == kept:
             shorter = kept[:len(kept) - len(trailing_text(kept))]
-        if shorter == kept or shorter in tried:
+        if shorter == kept:
             return False
         kept = shorter
-        tried.add(kept)
         try:
             d.copy().decompress(kept)
             return True
