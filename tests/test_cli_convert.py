@@ -1459,8 +1459,8 @@ def test_a_gzip_log_cut_short_then_padded_with_zeros_is_read_to_its_cut(tmp_path
     the rows up to the cut are converted, each its own, as many as without the zeros."""
     text = "gx,gy,gz\n" + "".join(f"{i},{i % 7},{i % 3}\n" for i in range(3000))
     data = gzip.compress(text.encode())[:2126]
-    # (a cut's last bytes' text left out, unless padding follows: fewer zeros than RUN_BYTES are its own, pass 64)
-    kept = (data + bytes(zeros))[:-HOLD_BYTES] if zeros < RUN_BYTES else data
+    # (a cut's last bytes' text left out, padding after them or not (pass 67): fewer zeros than RUN_BYTES are its own)
+    kept = (data + bytes(zeros) if zeros < RUN_BYTES else data)[:-HOLD_BYTES]
     complete = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(kept).count(b"\n") - 1  # whole rows before the cut
     src, dst = tmp_path / "log.csv.gz", tmp_path / "rec.csv"
     src.write_bytes(data + bytes(zeros))

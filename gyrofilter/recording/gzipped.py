@@ -13,7 +13,8 @@ in a block of constant rows are its code for "the same again": rows invented, at
   no such run (``tools/gzip_runs.py``, a flush's marker and a member's header aside); constant rows without a time
   column do, and a stream of them cut short is read to its first run, with a warning;
 - bytes written after a cut decode as more of the stream: the text of a stream's last :data:`HOLD_BYTES` bytes is
-  left out where it is cut short at the file's end (not after a flush's marker or before padding), a member that
+  left out where it is cut short at the file's end, padding after them or not (not after a flush's marker, nor
+  where the checksum in them checks out: :func:`_checks_out`), a member that
   starts right after a cut ends it (:func:`_cut_at_run`), and a member whose last bytes state its length is damaged,
   not cut (:func:`_states_length`; attack pass 63); text the file ends in (:data:`TEXT_END_BYTES` or more: a note
   written after it, attack pass 64) is never given to zlib, unless the stream ends whole with it or it is a stored
@@ -182,9 +183,9 @@ def _member(source, raw, path, warnings, produced):
 
     The last :data:`HOLD_BYTES` bytes so far are held back from zlib: where the stream is cut short at the file's end,
     their text is left out, for bytes written after a cut (``echo >> rec.csv.gz``) decode as more of the stream
-    (attack pass 63: a made-up last row), unless they end in a flush's marker (a recorder's own last write) or
-    padding follows them; where
-    it ends at a run, they are its own, or hold another member's first bytes (:func:`_cut_at_run`)."""
+    (attack pass 63: a made-up last row), padding after them or not (a note before padding, pass 67), unless they end
+    in a flush's marker (a recorder's own last write) or its checksum checks out (:func:`_checks_out`); where it ends
+    at a run that more bytes follow, they are its own, or hold another member's first bytes (:func:`_cut_at_run`)."""
     d, line, header = zlib.decompressobj(16 + zlib.MAX_WBITS), _LastLine(), _Header()
     first, trial, tried, sure, run, at = produced, None, 0, False, None, header.add(raw)  # trial: (d, hold, the run)
     hold, feed, ending, last, before_end = b"", None, b"", b"", None  # ending: the bytes held at the file's end, fed (to
@@ -447,9 +448,9 @@ def _member_after_padding(source):
 def _cut_end(d, source, path, warnings, last, held, produced, failed=None):
     """The last text of the member of the decompressor ``d`` at the end of the file ``source`` read, ``last`` the text
     of the bytes ``held`` back (:data:`HOLD_BYTES`), fed: with what it makes of the zero padding it takes to end whole
-    (:func:`_padded_end`); cut short, ``last`` only where ``held`` ends in a flush's marker or padding follows, else
-    left out, and none where zlib ``failed`` on them (its error: bytes written after a cut, attack pass 65, were
-    refused as damage). The padding, the text left out and a stream cut short said in ``warnings``. A member whose last
+    (:func:`_padded_end`); cut short, ``last`` only where ``held`` ends in a flush's marker or its checksum checks out
+    (:func:`_checks_out`), else left out (padding after them or not: attack pass 67), and none where zlib ``failed``
+    on them (its error: bytes written after a cut, attack pass 65, were refused as damage). The padding, the text left out and a stream cut short said in ``warnings``. A member whose last
     bytes state its length (:func:`_states_length`; ``produced``: its text before ``last``) is whole and damaged."""
     byte, count = source.end_run or (b"\0", 0)
     whole, out = _padded_end(d, end_zeros(source)) if failed is None else (0, b"")
@@ -464,8 +465,7 @@ def _cut_end(d, source, path, warnings, last, held, produced, failed=None):
         warnings.append(f"{path}: its last {len(held)} compressed bytes do not decompress ({failed}): left out (bytes "
                         "written after a cut)")
         return b""
-    note = len(trailing_text(held)) >= (2 if held.endswith(b"\n") else 6)  # (a short note before the padding, 65, 66)
-    if last and not held.endswith(_FLUSH_END) and (count < RUN_BYTES or note):  # (padding after them: they are its own)
+    if last and not held.endswith(_FLUSH_END) and not _checks_out(d, produced + len(last)):
         warnings.append(f"{path}: the {len(last)} bytes of text its last {len(held)} compressed bytes decode to left "
                         "out (bytes written after a cut decode as more of a stream)")
         return b""
@@ -488,6 +488,22 @@ def _states_length(held, zeros, length):
     for high in range(min(zeros, 1) + 1):
         size = int.from_bytes((held + bytes(high))[-4:], "little") if len(held) >= 4 - high else -1
         if size >= 1 << 16 and abs(size - length % (1 << 32)) <= _LENGTH_SLACK:
+            return True
+    return False
+
+
+def _checks_out(d, length):
+    """Whether the stream of the decompressor ``d``, fed up to its trailer's checksum (RFC 1952: CRC-32, then ISIZE,
+    the text's ``length`` mod 2^32), ends whole with the rest of its ISIZE: the checksum its bytes state is that of
+    its text (bytes after a cut pass so one time in 2^32). A member cut in its length keeps its last text."""
+    size = (length % (1 << 32)).to_bytes(4, "little")
+    for given in range(4):
+        trial = d.copy()
+        try:
+            trial.decompress(size[given:])
+        except zlib.error:
+            continue
+        if trial.eof and not trial.unused_data:
             return True
     return False
 
