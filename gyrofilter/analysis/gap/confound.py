@@ -526,7 +526,8 @@ def weigh_tones(inp, state, scorer):
         d_tone, d_band = scorer.discrepancy(i, tone_model, label), scorer.discrepancy(i, band_model, label)
         spread = CONFOUNDED_SPREADS * max(scorer.null_spread(i, tone_model, label),
                                           scorer.null_spread(i, band_model, label))
-        weighed = (f"axis {a}: one line weighed on D (at {c.params['center_hz']:.4g} Hz): as a wandering tone "
+        weighed = (f"axis {a}: one line weighed on D (the tone's {c.params['center_hz']:.4g} Hz, the band's "
+                   f"{band.params['center_hz']:.4g} Hz): as a wandering tone "
                    f"{d_tone:.3g}, as a narrow band {d_band:.3g}; {allowance_text(spread)}")
         if d_band < d_tone - spread:
             state = replace(band_state, excluded=band_state.excluded | {k, *k_colored}).with_notes(
