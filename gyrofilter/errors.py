@@ -27,6 +27,18 @@ class SampleError(SettingsError):
         self.reason = reason
 
 
+class FilterDiverged(GyroFilterError):
+    """The filter's output left the rates any gyro reads (beyond +-MAX_RATE_DPS deg/s, or not finite) on
+    samples it took (the paper's filter on fast motion: attack pass 68), raised by ``GyroFilter.update()`` /
+    ``filter()`` / ``filter_timed()`` once they have taken the call's samples. ``rows``: the call's rows before
+    that one, good (``t_rows_s``: their times, from ``filter_timed()``; else None); ``sample``: the index of that
+    row's block's last sample among all the filter took (0 for its first); ``reason``: the message without where."""
+
+    def __init__(self, reason, rows, sample):
+        super().__init__(f"sample {sample}: {reason}")
+        self.reason, self.rows, self.sample, self.t_rows_s = reason, rows, sample, None
+
+
 class RecordingError(GyroFilterError, ValueError):
     """A recording file is malformed: the message names the file, the line and the reason."""
 

@@ -4,6 +4,7 @@ never read) while requests that must be refused come in: the run writes exactly 
 `replay --out` writes, and a client that reads gets every one of them."""
 import argparse
 import ipaddress
+import json
 import os
 import re
 import socket
@@ -226,3 +227,60 @@ def test_the_address_bound_decides_in_every_spelling(spelling, everywhere):
             assert "listens on every network interface" in said and "http://0.0.0.0:" not in said, said
         else:
             assert said == f"gyrofilter run: live view on {server.url} (this machine only)"
+
+
+def test_a_filter_that_leaves_the_rates_any_gyro_reads_stops_every_outlet_at_its_good_rows(tmp_path, capsys):
+    """Attack pass 68: the paper's filter on a fast oscillation grew past +-100000 deg/s (then NaN): `run` to stdout
+    and to UDP (teleplot: `gx_dps:...:nan`) passed such rows on and exited 0; plotjuggler's JSON failed with "Out of
+    range float values are not JSON compliant", naming nothing; `replay` refused only with --out. Now the filter
+    raises at the first such row: every outlet gets the rows before it, those the API returns, and the command
+    exits 2 with one line naming the source (or the file's line) and the sample."""
+    from gyrofilter import GyroFilter
+    from gyrofilter.errors import FilterDiverged
+    from gyrofilter.recording import Recording, write_recording
+
+    rng = np.random.default_rng(1)
+    n = 40000
+    amp, w = rng.uniform(300, 3000), rng.uniform(0.3, 1.5)
+    x = rng.normal(0, 0.1, (n, 3))
+    x[300:] += amp * np.sin(w * np.arange(n - 300))[:, None]
+    x = np.round(x, 4)
+    rec_path = tmp_path / "fast.csv"
+    t = np.arange(n) / 100.0
+    write_recording(rec_path, Recording(columns={"t": t, "gx": x[:, 0], "gy": x[:, 1], "gz": x[:, 2]},
+                                        header={"sample_rate_hz": "100", "gyro_unit": "dps"}))
+    with pytest.raises(FilterDiverged) as api:
+        GyroFilter(100.0, preset="paper").filter(read_recording(rec_path).gyro_dps)
+    good, sample = api.value.rows, api.value.sample
+    source = f"replay:{rec_path}"
+    line = f"gyrofilter: error: source {source}: sample {sample}: the filter's output left the rates any gyro reads"
+    receiver = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    receiver.bind(("127.0.0.1", 0))
+    receiver.settimeout(1)
+    try:
+        for fmt in ("teleplot", "plotjuggler"):
+            out = tmp_path / f"run_{fmt}.csv"
+            code = main(["run", "--source", source, "--preset", "paper", "--quiet", "--out", str(out),
+                         "--udp", f"127.0.0.1:{receiver.getsockname()[1]}", "--udp-format", fmt])
+            err = capsys.readouterr().err.strip().splitlines()
+            assert code == 2 and err[-1].startswith(line) and f"kept the first {len(good)} filtered rows" in err[-1]
+            np.testing.assert_allclose(read_recording(out).gyro_dps, good, rtol=1e-8, atol=1e-12)  # (9 digits)
+            datagrams = []  # (the kernel may drop some: none is read while the run sends)
+            try:
+                while True:
+                    datagrams.append(receiver.recv(65536).decode())
+            except socket.timeout:
+                pass
+            values = [v for d in datagrams for v in (json.loads(d).values() if fmt == "plotjuggler" else
+                                                     (float(x) for line in d.splitlines() for x in line.split(":")[1:]))]
+            assert 0 < len(datagrams) <= len(good) and np.all(np.abs(values) <= 1e6), fmt  # one a row, none past them
+    finally:
+        receiver.close()
+    code = main(["run", "--source", source, "--preset", "paper", "--quiet", "--out", "-"])
+    printed, err = capsys.readouterr()
+    rows = np.array([[float(v) for v in r.split(",")] for r in printed.splitlines() if r[:1].isdigit()])
+    assert code == 2 and err.strip() == line + err.strip()[len(line):] and len(err.strip().splitlines()) == 1
+    assert len(rows) == len(good) and np.all(np.abs(rows[:, 1:]) <= 1e5)
+    code = main(["replay", str(rec_path), "--preset", "paper"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.startswith(f"gyrofilter: error: {rec_path}: line ") and "left the rates any gyro" in err

@@ -256,6 +256,50 @@ def test_bad_samples_name_the_problem():
 # ---------------------------------------------------------------------------------- issue 22 (part C)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_a_row_beyond_the_rates_any_gyro_reads_raises_with_the_rows_before_it(seed):
+    """Attack pass 68: the paper's filter on a fast oscillation (300 to 3000 deg/s, 5 to 24 Hz at 100 Hz) grew past
+    +-100000 deg/s within minutes and then gave NaN rows, with no error: stdout, --realtime and UDP passed them on
+    (exit 0). update(), filter() and filter_timed() now raise FilterDiverged once they have taken the call's samples,
+    with the call's good rows before the first bad one and that row's block's last sample: the same, whatever the
+    chunking. The default preset follows the same motion within range (it never diverges in motion)."""
+    from gyrofilter.errors import FilterDiverged
+    from gyrofilter.units import MAX_RATE_DPS
+
+    rng = np.random.default_rng(seed)
+    n = 40000
+    amp, w = rng.uniform(300, 3000), rng.uniform(0.3, 1.5)
+    x = rng.normal(0, 0.1, (n, 3))
+    x[300:] += amp * np.sin(w * np.arange(n - 300))[:, None]
+    default = GyroFilter(100.0).filter(x)
+    assert np.all(np.abs(default) <= MAX_RATE_DPS)
+    with pytest.raises(FilterDiverged) as whole:
+        GyroFilter(100.0, preset="paper").filter(x)
+    rows, sample = whole.value.rows, whole.value.sample
+    assert len(rows) > 100 and np.all(np.abs(rows) <= MAX_RATE_DPS)
+    assert f"sample {sample}: the filter's output left the rates any gyro reads: its row {len(rows)} has g" in str(whole.value)
+    f, got, at = GyroFilter(100.0, preset="paper"), [], 0
+    t = np.arange(n) / 100.0
+    with pytest.raises(FilterDiverged) as chunked:
+        while True:
+            size = int(rng.integers(1, 2000))
+            got.append(f.filter_timed(x[at:at + size], t[at:at + size])[1])
+            at += size
+    got.append(chunked.value.rows)
+    np.testing.assert_array_equal(np.concatenate(got), rows)
+    assert chunked.value.sample == sample and f.samples_in == at + min(size, n - at)  # the call's samples taken
+    ends = sample - f.settings.block_len * np.arange(len(chunked.value.rows), 0, -1)  # its good rows' blocks
+    np.testing.assert_array_equal(chunked.value.t_rows_s, t[ends])
+    g, one = GyroFilter(100.0, preset="paper"), []
+    with pytest.raises(FilterDiverged) as single:
+        for s in x.tolist():
+            r = g.update(s)
+            if r is not None:
+                one.append(r)
+    np.testing.assert_array_equal(np.array(one), rows)
+    assert single.value.sample == sample == g.samples_in - 1 and len(single.value.rows) == 0
+
+
 def test_a_sample_beyond_max_rate_is_refused_before_it_poisons_the_filter():
     """A finite but absurd sample (1e300 deg/s) used to reach the Kalman filter's squares: a block of
     them made every later row NaN/inf. Now update() and filter() refuse it, naming it (filter: its

@@ -22,7 +22,7 @@ from importlib import resources
 import numpy as np
 
 from .. import plots
-from ..errors import RecordingError, SampleError, SettingsError
+from ..errors import FilterDiverged, RecordingError, SampleError, SettingsError
 from ..filter.settings import SETTING_NAMES
 from ..filter.smoother import SMOOTHABLE_PRESETS, Smoother
 from ..recording import CHUNK_ROWS, COLUMNS, FILTERED_FROM_KEY, INPUT_RATE_KEY, T_FROM_KEY, RecordingWriter, dps_header, format_number, header_text, iter_recording, note_line, warn_about_gaps
@@ -108,6 +108,8 @@ def feed_recording(replay, chunks, realtime=False, way_through=f"give {CALIBRATI
             replay.feed(head.gyro_dps(chunk), head.t_s(chunk, filt.samples_in), head.column(chunk, "temp"), realtime)
         except SampleError as exc:  # the filter refused a sample (beyond its range): name the file's line
             raise RecordingError(f"{path}: line {head.line_of_row(filt.samples_in + exc.row)}: {exc.reason}") from None
+        except FilterDiverged as exc:  # the filter's row of the block that ends on this line
+            raise RecordingError(f"{path}: line {head.line_of_row(exc.sample)}: {exc.reason}") from None
     _refuse_nothing_filtered(path, head, filt, way_through)
     replay.finish()
 

@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from .. import __version__
-from ..errors import SampleError, SettingsError
+from ..errors import FilterDiverged, SampleError, SettingsError
 from ..recording import ACCEL_COLUMNS, COLUMNS, END_NOTE, FILTERED_FROM_KEY, INPUT_RATE_KEY, T_FROM_KEY, accel_header, dps_header, header_text, note_line
 from ..recording.writer import exact_format
 from . import console, filtering, live, options, outlets
@@ -172,17 +172,22 @@ def _run(args, source, sinks):
                     was_calibrating = filt.calibrating
                     temps = None if temp_idx is None else rows[:, temp_idx]
                     gyro = source.gyro_dps(rows)
+                    blocks_out, diverged = filt.blocks_out, None
                     try:
                         t_out, out = filt.filter_timed(gyro, rows[:, t_idx], temps)
                     except SampleError as exc:  # a sample beyond the filter's range: name the source and the sample
                         raise SettingsError(f"source {args.source}: sample {filt.samples_in + exc.row}: {exc.reason}") from None
+                    except FilterDiverged as exc:  # its rows before that one go out, then the run stops
+                        t_out, out, diverged = exc.t_rows_s, exc.rows, exc
                     if was_calibrating and not filt.calibrating and filt.bias_dps is not None:
                         writer.note(filtering.calibrated_note(filt))
                     if len(out):
-                        ends = filt.block_end_indices(len(out)) - (filt.samples_in - len(rows))
+                        ends = filt.block_end_indices(filt.blocks_out - blocks_out)[:len(out)] - (filt.samples_in - len(rows))
                         writer.write(np.column_stack([t_out, out, rows[ends][:, accel_idx]]))
                     sinks.feed(rows[:, t_idx], gyro, temps, t_out, out, samples_in=loop.samples,
                                rows_out=writer.rows_written, source=source, filt=filt)
+                    if diverged is not None:
+                        raise SettingsError(f"source {args.source}: sample {diverged.sample}: {diverged.reason}")
                 now = time.monotonic()
                 if now - last_flush >= live.FLUSH_INTERVAL_S or not out_file:
                     writer.flush()

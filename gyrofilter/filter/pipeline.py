@@ -25,7 +25,7 @@ from . import adaptive_kalman, kalman
 from .hold import SIGMA_B_FLOOR_DPS, block_noise_std, make_hold
 from .averaging import AVERAGERS, average_block_line_if_cut, average_blocks_line_if_cut
 from .calibration import Calibration, calibrate, calibration_samples, noise_calibration_samples, without_gross_errors
-from ..errors import CalibrationError, SampleError, SettingsError
+from ..errors import CalibrationError, FilterDiverged, SampleError, SettingsError
 from ..inputs import check_number, did_you_mean
 from ..recording.checks import first_step_back
 from .presets import DEFAULT_PRESET, PRESETS
@@ -34,7 +34,7 @@ from .settings import MAX_CALIBRATION_SAMPLES, SETTING_NAMES, FilterSettings
 from .tempcomp import compensate
 from .threshold import RangeThreshold
 from ..tempscreen import TEMP_MEDIAN_SAMPLES, latest_median, running_medians, temperature_history
-from ..units import RATE_TOLERANCE, TEMP_RANGE_C, check_sample_rate_hz, plain, rounding, shown
+from ..units import MAX_RATE_DPS, RATE_TOLERANCE, TEMP_RANGE_C, check_sample_rate_hz, plain, rounding, shown
 
 
 class GyroFilter:
@@ -229,10 +229,20 @@ class GyroFilter:
         SettingsError) before it touches the filter: the filter is as if it had not been sent.
         A start-up window that fails its check raises CalibrationError once no retry is left
         (``calibration_retry_s``); that window is dropped, and the next sample starts a new one.
+        A row beyond the rates any gyro reads raises :class:`~gyrofilter.errors.FilterDiverged`
+        (:func:`_check_rows`), the sample taken.
         """
         sample = check_sample(sample)
         if temp_c is not None or self._temp_on:
             temp_c = check_temperature(temp_c, self._temp_on, "update()")
+        row = self._update(sample, temp_c)
+        if row is not None and not (-_MAX_ROW_DPS <= row[0] <= _MAX_ROW_DPS and -_MAX_ROW_DPS <= row[1] <= _MAX_ROW_DPS
+                                    and -_MAX_ROW_DPS <= row[2] <= _MAX_ROW_DPS):  # (NaN fails each)
+            _check_rows(self, np.array([row]), self.samples_in - 1)
+        return row
+
+    def _update(self, sample, temp_c):
+        """:meth:`update` of the checked ``sample`` and ``temp_c``, its row unchecked."""
         self.samples_in += 1
         if self._cal_buf is not None:
             self._cal_buf[self._cal_fill] = sample
@@ -301,7 +311,7 @@ class GyroFilter:
                 self.samples_in = samples_in - len(x) + i  # counted before a refused window raises
                 self._finish_calibration()
         while self._block and i < len(x):
-            row = self.update(x[i], None if temps is None else float(temps[i]))
+            row = self._update(tuple(x[i].tolist()), None if temps is None else float(temps[i]))
             i += 1
             if row is not None:
                 outputs.append(np.array([row]))
@@ -339,7 +349,9 @@ class GyroFilter:
         self.samples_in = samples_in
         if not outputs:
             return np.empty((0, 3))
-        return np.concatenate(outputs)
+        rows = np.concatenate(outputs)
+        _check_rows(self, rows)
+        return rows
 
     def filter_timed(self, samples_dps, t_s, temp_c=None):
         """:meth:`filter` with time stamps: returns ``(t_rows_s, rows)``.
@@ -380,7 +392,13 @@ class GyroFilter:
                  "apart here: give them as float64")
             raise SampleError(f"t_s must increase strictly (s), got {float(t[row])!r} after {earlier}{why}",
                               row, f"t_s row {row}")
-        rows = self._filter(x, temp_c)
+        blocks_out = self.blocks_out
+        try:
+            rows = self._filter(x, temp_c)
+        except FilterDiverged as exc:  # every sample taken: the good rows' times too
+            self._t_last_s = float(t[-1])
+            exc.t_rows_s = t[self.block_end_indices(self.blocks_out - blocks_out)[:len(exc.rows)] - (self.samples_in - len(x))]
+            raise
         if len(t):
             self._t_last_s = float(t[-1])
         return t[self.block_end_indices(len(rows)) - (self.samples_in - len(x))], rows
@@ -493,6 +511,28 @@ class GyroFilter:
             self._pkf.start(cal.noise_std_dps)
         self._cal_buf = None
         self._cal_temp = None
+
+
+#: the greatest rate a row may have: MAX_RATE_DPS, and the filter's arithmetic on samples at it (5e-8 deg/s past it,
+#: the paper's filter); within 1e-5 deg/s past it, a row written (FILTERED_FORMAT, 9 digits) reads back within it
+_MAX_ROW_DPS = MAX_RATE_DPS * (1 + 1e-10)
+
+
+def _check_rows(filt, rows, end=None):
+    """Raise :class:`~gyrofilter.errors.FilterDiverged` at the first of the rows ``rows`` (M, 3) of the filter
+    ``filt`` with a value beyond +-MAX_RATE_DPS deg/s (:data:`_MAX_ROW_DPS`) or not finite (``end``: the index of the one row's block's
+    last sample; else they are its latest rows): a filter that diverged (the paper's on fast motion, attack pass 68) gave rates no
+    gyro reads, which every output refuses (a recording's check, :mod:`gyrofilter.recording.checks`) but a stream
+    would have passed on. One vectorised pass over the rows."""
+    bad = ~(np.abs(rows) <= _MAX_ROW_DPS)
+    if not bad.any():
+        return
+    row, axis = (int(v) for v in np.argwhere(bad)[0])
+    advice = (f"; preset {filt.preset!r} is the paper's filter, which does not follow fast motion: the default preset "
+              f"({DEFAULT_PRESET!r}) does" if filt.preset == "paper" else "")
+    raise FilterDiverged(f"the filter's output left the rates any gyro reads: its row {filt.blocks_out - len(rows) + row} "
+                         f"has g{'xyz'[axis]} {float(rows[row, axis]):.9g} deg/s, beyond +-{MAX_RATE_DPS:g} deg/s{advice}",
+                         rows[:row], int(filt.block_end_indices(len(rows))[row] if end is None else end))
 
 
 def _check_calibration_argument(calibration, calibration_s):
