@@ -32,11 +32,14 @@ class FilterDiverged(GyroFilterError):
     samples it took (the paper's filter on fast motion: attack pass 68), raised by ``GyroFilter.update()`` /
     ``filter()`` / ``filter_timed()`` once they have taken the call's samples. ``rows``: the call's rows before
     that one, good (``t_rows_s``: their times, from ``filter_timed()``; else None); ``sample``: the index of that
-    row's block's last sample among all the filter took (0 for its first); ``reason``: the message without where."""
+    row's block's last sample among all the filter took (0 for its first); ``reason``: the message without where;
+    ``rows_computed``: every row the call computed, that one and those after it too: what a diverged filter gave, to
+    measure how far it went (the evaluation's RMSE, ``gyrofilter.evaluation.filters``), never an output's."""
 
-    def __init__(self, reason, rows, sample):
+    def __init__(self, reason, rows, sample, rows_computed):
         super().__init__(f"sample {sample}: {reason}")
         self.reason, self.rows, self.sample, self.t_rows_s = reason, rows, sample, None
+        self.rows_computed = rows_computed
 
 
 class RecordingError(GyroFilterError, ValueError):

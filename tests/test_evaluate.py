@@ -143,6 +143,32 @@ def test_broad_metrics_against_reference(tmp_path):
 
 
 
+def test_a_filter_that_diverges_on_a_trial_is_scored_as_it_went(tmp_path):
+    """Attack pass 69: since the filter raises FilterDiverged at a row beyond +-100000 deg/s (pass 68), `evaluate`
+    stopped with that error, naming neither the trial nor the filter, on a trial of fast motion (1682 deg/s at
+    23 Hz) it had scored before (paper001: RMSE 45 710 deg/s in motion). The evaluation scores every row the filter
+    computed: the paper's filter as far off as it went, the others as before."""
+    from gyrofilter.errors import FilterDiverged
+    from gyrofilter import GyroFilter
+
+    rng = np.random.default_rng(1)
+    rest, n, tail = 1000, 40000, 1500
+    true = np.zeros((rest + n + tail, 3))
+    true[rest:rest + n] = (1681.9 * np.sin(1.44 * np.arange(n)))[:, None]
+    x = np.round(true + rng.normal(0, 0.1, true.shape), 4)
+    move = np.zeros(len(x), int)
+    move[rest:rest + n] = 1
+    cols = {"t": np.arange(len(x)) / 100.0, "gx": x[:, 0], "gy": x[:, 1], "gz": x[:, 2], "ref_x": true[:, 0],
+            "ref_y": true[:, 1], "ref_z": true[:, 2], "ref_valid": np.ones(len(x), int), "movement": move}
+    write_recording(tmp_path / "broad_99_fast.csv", Recording(columns=cols, header={"sample_rate_hz": "100", "gyro_unit": "dps"}))
+    rec = D.find_broad_recordings(str(tmp_path))[0]
+    with pytest.raises(FilterDiverged):
+        GyroFilter(100.0, M.broad_calibration_s(rec), preset="paper").filter(rec.gyro_dps)
+    paper = M.broad_metrics(F.FilterSpec("paper001", "paper", "", F.gyrofilter_run("paper")), rec)
+    recommended = M.broad_metrics(F.FilterSpec("recommended", "candidate", "", F.gyrofilter_run("recommended")), rec)
+    assert paper["rmse_motion_dps"] > 1e4 > 100 > recommended["rmse_motion_dps"]
+
+
 @pytest.mark.parametrize("case", ["no reference in motion", "no rest after the motion"])
 def test_a_broad_trial_without_motion_or_rest_to_score_is_refused(tmp_path, case):
     """Attack pass 24: a trial whose optical reference is missing wherever it moves (ref_x, ref_y,

@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 from .reference import block_mean_masked
-from ..errors import SettingsError
+from ..errors import FilterDiverged, SettingsError
 from ..filter.calibration import calibration_samples, noise_calibration_samples, without_gross_errors
 from ..filter.pipeline import GyroFilter
 from ..filter.smoother import Smoother
@@ -168,11 +168,15 @@ def cv_kalman(q_spectral_density, order=2):
 def gyrofilter_run(preset="paper", **settings):
     """The package pipeline :class:`gyrofilter.GyroFilter` (batch ``filter``) with ``preset`` and
     ``settings``; returns the filter's ``run``, whose rows start at the filter's
-    ``first_block_index``."""
+    ``first_block_index``; a filter that diverged gives every row it computed
+    (:class:`~gyrofilter.errors.FilterDiverged`), scored as they are."""
 
     def run(x_dps, sample_rate_hz, calibration_s):
         f = GyroFilter(sample_rate_hz, calibration_s, preset=preset, **settings)
-        y = f.filter(x_dps)
+        try:
+            y = f.filter(x_dps)
+        except FilterDiverged as exc:  # scored as it went (the paper's on fast motion: attack pass 69), never written
+            y = exc.rows_computed
         return FilterOutput(y, f.settings.block_len, f.first_block_index)
 
     return run

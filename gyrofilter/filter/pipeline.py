@@ -532,7 +532,7 @@ def _check_rows(filt, rows, end=None):
               f"({DEFAULT_PRESET!r}) does" if filt.preset == "paper" else "")
     raise FilterDiverged(f"the filter's output left the rates any gyro reads: its row {filt.blocks_out - len(rows) + row} "
                          f"has g{'xyz'[axis]} {float(rows[row, axis]):.9g} deg/s, beyond +-{MAX_RATE_DPS:g} deg/s{advice}",
-                         rows[:row], int(filt.block_end_indices(len(rows))[row] if end is None else end))
+                         rows[:row], int(filt.block_end_indices(len(rows))[row] if end is None else end), rows)
 
 
 def _check_calibration_argument(calibration, calibration_s):
