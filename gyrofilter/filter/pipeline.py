@@ -520,10 +520,10 @@ _MAX_ROW_DPS = MAX_RATE_DPS * (1 + 1e-10)
 
 def _check_rows(filt, rows, end=None):
     """Raise :class:`~gyrofilter.errors.FilterDiverged` at the first of the rows ``rows`` (M, 3) of the filter
-    ``filt`` with a value beyond +-MAX_RATE_DPS deg/s (:data:`_MAX_ROW_DPS`) or not finite (``end``: the index of the one row's block's
-    last sample; else they are its latest rows): a filter that diverged (the paper's on fast motion, attack pass 68) gave rates no
-    gyro reads, which every output refuses (a recording's check, :mod:`gyrofilter.recording.checks`) but a stream
-    would have passed on. One vectorised pass over the rows."""
+    ``filt`` with a value beyond +-MAX_RATE_DPS deg/s (:data:`_MAX_ROW_DPS`) or not finite (``end``: the index of
+    the one row's block's last sample; else they are its latest rows): a filter that diverged (the paper's on fast
+    motion, attack pass 68) gave rates no gyro reads, which every output refuses (a recording's check,
+    :mod:`gyrofilter.recording.checks`) but a stream would have passed on. One vectorised pass over the rows."""
     bad = ~(np.abs(rows) <= _MAX_ROW_DPS)
     if not bad.any():
         return

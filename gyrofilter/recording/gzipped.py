@@ -7,8 +7,8 @@ in a block of constant rows are its code for "the same again": rows invented, at
 
 - padding the file ends in is never given to zlib (but the zeros a whole stream's trailer takes: :func:`_padded_end`);
 - padding after a whole member is left out, with a warning; a member after it is read;
-- from a run of at least :data:`RUN_BYTES` bytes 0x00 or 0xFF that more bytes follow, inside a stream, the stream
-  is on trial (:func:`_member`): its text is used only once it ends whole (checked by zlib: its checksum and
+- from a run of at least :data:`~gyrofilter.recording.gzip_bytes.RUN_BYTES` bytes 0x00 or 0xFF that more bytes
+  follow, inside a stream, the stream is on trial (:func:`_member`): its text is used only once it ends whole (checked by zlib: its checksum and
   length), else it ends at the run, a stream cut short. The compressed data of recordings with a time column hold
   no such run (``tools/gzip_runs.py``, a flush's marker and a member's header aside); constant rows without a time
   column do, and a stream of them cut short is read to its first run, with a warning;
@@ -28,7 +28,7 @@ import zlib
 
 from ..errors import RecordingError
 from ..inputs import READ_BYTES, quote
-from .gzip_bytes import RUN_BYTES, TEXT_END_BYTES, Padded, counted, end_zeros, is_text, skip_padding, trailing_text
+from .gzip_bytes import TEXT_END_BYTES, Padded, counted, end_zeros, is_text, skip_padding, trailing_text
 from .header import MAX_LINE_BYTES
 
 #: most decompressed bytes at a time (a block of text: about 36 000 lines of five columns); the
@@ -450,8 +450,8 @@ def _cut_end(d, source, path, warnings, last, held, produced, failed=None):
     of the bytes ``held`` back (:data:`HOLD_BYTES`), fed: with what it makes of the zero padding it takes to end whole
     (:func:`_padded_end`); cut short, ``last`` only where ``held`` ends in a flush's marker or its checksum checks out
     (:func:`_checks_out`), else left out (padding after them or not: attack pass 67), and none where zlib ``failed``
-    on them (its error: bytes written after a cut, attack pass 65, were refused as damage). The padding, the text left out and a stream cut short said in ``warnings``. A member whose last
-    bytes state its length (:func:`_states_length`; ``produced``: its text before ``last``) is whole and damaged."""
+    on them (its error: bytes written after a cut, attack pass 65, were refused as damage). The padding, the text
+    left out and a stream cut short said in ``warnings``. A member whose last bytes state its length (:func:`_states_length`; ``produced``: its text before ``last``) is whole and damaged."""
     byte, count = source.end_run or (b"\0", 0)
     whole, out = _padded_end(d, end_zeros(source)) if failed is None else (0, b"")
     if count > whole:
