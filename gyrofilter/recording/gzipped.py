@@ -9,9 +9,9 @@ in a block of constant rows are its code for "the same again": rows invented, at
 - padding after a whole member is left out, with a warning; a member after it is read;
 - from a run of at least :data:`~gyrofilter.recording.gzip_bytes.RUN_BYTES` bytes 0x00 or 0xFF that more bytes
   follow, inside a stream, the stream is on trial (:func:`_member`): its text is used only once it ends whole
-  (checked by zlib: its checksum and length), else it ends at the run, a stream cut short. The compressed data of recordings with a time column hold
-  no such run (``tools/gzip_runs.py``, a flush's marker and a member's header aside); constant rows without a time
-  column do, and a stream of them cut short is read to its first run, with a warning;
+  (checked by zlib: its checksum and length), else it ends at the run, a stream cut short. The compressed data of
+  recordings with a time column hold no such run (``tools/gzip_runs.py``, a flush's marker and a member's header
+  aside); constant rows without a time column do, and a stream of them cut short is read to its first run, with a warning;
 - bytes written after a cut decode as more of the stream: the text of a stream's last :data:`HOLD_BYTES` bytes is
   left out where it is cut short at the file's end, padding after them or not (not after a flush's marker, nor
   where the checksum in them checks out: :func:`_checks_out`), a member that
